@@ -1,0 +1,10 @@
+"""The one exception type isoflow raises for bad input.
+
+The CLI turns it into a one-line message and exit code 2; the Python API lets
+it propagate. Its message always names the thing that is wrong (file, field,
+value) so that nobody has to read a traceback from inside numpy.
+"""
+
+
+class IsoflowError(ValueError):
+    """Bad input: a missing or unreadable file, an empty or open mesh, ..."""

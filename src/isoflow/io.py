@@ -1,0 +1,296 @@
+"""Reading volumes and point lists; writing volumes, PLY and OBJ.
+
+Every reader raises :class:`~isoflow.errors.IsoflowError` with the file name
+and what is wrong; every writer refuses to replace an existing file unless
+``force=True``.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .errors import IsoflowError
+from .lattice import DigitalObject
+
+VOLUME_SUFFIXES = (".npy", ".npz")
+POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
+
+
+def _check_readable(path: Path) -> None:
+    if not path.exists():
+        raise IsoflowError(f"{path}: no such file")
+    if path.is_dir() and path.suffix != ".zarr":
+        raise IsoflowError(f"{path}: is a directory, not a volume or point list")
+
+
+def as_binary(array: np.ndarray, where: str) -> np.ndarray:
+    """A boolean view of a 0/1 array, or a clear error saying why not."""
+    arr = np.asarray(array)
+    if arr.dtype == np.bool_:
+        return arr
+    if arr.dtype.kind not in "iuf":
+        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
+    if arr.dtype.kind == "f" and not np.isfinite(arr).all():
+        raise IsoflowError(f"{where}: array holds NaN or infinite values")
+    bad = (arr != 0) & (arr != 1)
+    if bad.any():
+        value = arr[bad].flat[0]
+        raise IsoflowError(
+            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1, e.g. {value})"
+        )
+    return arr.astype(bool)
+
+
+def read_volume(path: str | os.PathLike) -> DigitalObject:
+    """A 2D or 3D volume from ``.npy`` or ``.npz``.
+
+    An ``.npz`` written by :func:`write_volume` carries ``volume`` plus its
+    ``offset``, ``parity``, ``pitch`` and ``origin``; any other ``.npz`` must
+    hold exactly one array (or one named ``volume``).
+    """
+    path = Path(path)
+    _check_readable(path)
+    meta: dict = {}
+    try:
+        if path.suffix == ".npz":
+            with np.load(path, allow_pickle=False) as z:
+                names = list(z.files)
+                if "volume" in names:
+                    arr = z["volume"]
+                    for key in ("offset", "parity", "pitch", "origin"):
+                        if key in names:
+                            meta[key] = z[key]
+                elif len(names) == 1:
+                    arr = z[names[0]]
+                else:
+                    raise IsoflowError(
+                        f"{path}: holds arrays {names}; name the volume 'volume'"
+                    )
+        else:
+            arr = np.load(path, allow_pickle=False)
+    except IsoflowError:
+        raise
+    except Exception as exc:  # numpy raises several types for a bad file
+        raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
+    if arr.ndim not in (2, 3):
+        raise IsoflowError(f"{path}: a volume must be 2D or 3D, this array is {arr.ndim}D with shape {arr.shape}")
+    vol = as_binary(arr, str(path))
+    kw = {}
+    if "offset" in meta:
+        kw["offset"] = tuple(int(o) for o in meta["offset"])
+    if "parity" in meta:
+        kw["parity"] = int(meta["parity"])
+    if "pitch" in meta:
+        kw["pitch"] = float(meta["pitch"])
+    if "origin" in meta:
+        kw["origin"] = np.asarray(meta["origin"], float)
+    try:
+        return DigitalObject(vol, **kw)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{path}: {exc}") from None
+
+
+_SPLIT = re.compile(r"[,\s]+")
+
+
+def read_points(path: str | os.PathLike) -> np.ndarray:
+    """Integer lattice points from a text file: ``x y z`` (or ``x y``) per
+    line, ``#`` starts a comment, commas or blanks separate the numbers."""
+    path = Path(path)
+    _check_readable(path)
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise IsoflowError(f"{path}: cannot read as text ({exc})") from None
+    rows, width = [], None
+    for lineno, line in enumerate(text.splitlines(), 1):
+        line = line.split("#", 1)[0].strip()
+        if not line:
+            continue
+        fields = [f for f in _SPLIT.split(line) if f]
+        if width is None:
+            width = len(fields)
+            if width not in (2, 3):
+                raise IsoflowError(f"{path}:{lineno}: expected 2 or 3 coordinates, got {len(fields)}")
+        elif len(fields) != width:
+            raise IsoflowError(f"{path}:{lineno}: expected {width} coordinates, got {len(fields)}")
+        try:
+            values = [float(f) for f in fields]
+        except ValueError:
+            raise IsoflowError(f"{path}:{lineno}: not a number in {line!r}") from None
+        for f, v in zip(fields, values):
+            if not np.isfinite(v) or v != round(v):
+                raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
+        rows.append([int(round(v)) for v in values])
+    if not rows:
+        raise IsoflowError(f"{path}: no points")
+    return np.array(rows, dtype=np.int64)
+
+
+def read_object(path: str | os.PathLike, points_are: str = "corners") -> DigitalObject:
+    """A digital object from a volume file or a point list.
+
+    ``points_are='corners'`` reads a point list with the paper's point model
+    (Definitions 1-2); ``'voxels'`` takes each point as a voxel index.
+    """
+    path = Path(path)
+    if path.suffix.lower() in VOLUME_SUFFIXES:
+        return read_volume(path)
+    pts = read_points(path)
+    if points_are == "voxels":
+        return DigitalObject.from_voxels(pts)
+    return DigitalObject.from_points(pts)
+
+
+def _refuse_overwrite(path: Path, force: bool) -> None:
+    if path.exists() and not force:
+        raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+    if not path.parent.exists():
+        raise IsoflowError(f"{path.parent}: no such directory")
+
+
+def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
+    """Save an object as ``.npz`` with its offset, parity, pitch and origin."""
+    path = Path(path)
+    _refuse_overwrite(path, force)
+    with open(path, "wb") as fh:
+        np.savez_compressed(
+            fh,
+            volume=obj.volume,
+            offset=np.array(obj.offset, np.int64),
+            parity=np.int64(obj.parity),
+            pitch=np.float64(obj.pitch),
+            origin=obj.origin,
+        )
+    return path
+
+
+# --------------------------------------------------------------------------
+# Meshes
+# --------------------------------------------------------------------------
+
+def gamma_colours(gamma: np.ndarray, vertex_class: np.ndarray) -> np.ndarray:
+    """RGB (uint8) of the vertex angle gamma (-4..4 eighths): blue for concave,
+    white for flat, red for convex, linear in between; green marks vertices
+    that are not well-composed, grey the midpoints of doubled edges."""
+    t = np.clip(np.asarray(gamma, float) / 4.0, -1, 1)
+    white = np.array([255.0, 255.0, 255.0])
+    red = np.array([200.0, 30.0, 30.0])
+    blue = np.array([30.0, 60.0, 200.0])
+    pos = np.clip(t, 0, 1)[:, None]
+    neg = np.clip(-t, 0, 1)[:, None]
+    rgb = white * (1 - pos - neg) + red * pos + blue * neg
+    rgb[vertex_class == -1] = (20, 170, 60)
+    rgb[vertex_class == -2] = (150, 150, 150)
+    return np.round(rgb).astype(np.uint8)
+
+
+def mesh_vertex_table(mesh, obj: DigitalObject) -> dict[str, np.ndarray]:
+    """Per-vertex columns written to PLY: position (world), curvature data."""
+    xyz = obj.world(mesh.vertices)
+    cls = mesh.vertex_class
+    rgb = gamma_colours(mesh.gamma, cls)
+    return {
+        "x": xyz[:, 0].astype(np.float32),
+        "y": xyz[:, 1].astype(np.float32),
+        "z": xyz[:, 2].astype(np.float32),
+        "config": mesh.config.astype(np.uint8),
+        "class": cls.astype(np.int8),
+        "gamma": mesh.gamma.astype(np.int8),
+        "a": mesh.a.astype(np.int8),
+        "f": mesh.f.astype(np.int8),
+        "red": rgb[:, 0],
+        "green": rgb[:, 1],
+        "blue": rgb[:, 2],
+    }
+
+
+_PLY_TYPES = {"f4": "float", "u1": "uchar", "i1": "char", "i4": "int", "f8": "double"}
+
+
+def _size_groups(faces: np.ndarray):
+    """Faces padded with -1, grouped by their number of vertices."""
+    faces = np.asarray(faces, dtype=np.int64)
+    sizes = (faces >= 0).sum(axis=1) if faces.size else np.zeros(0, np.int64)
+    for size in np.unique(sizes):
+        rows = faces[sizes == size]
+        # -1 slots can sit between vertices (a missing midpoint): drop them
+        # keeping the cyclic order.
+        order = np.argsort(rows < 0, axis=1, kind="stable")[:, :size]
+        yield int(size), np.take_along_axis(rows, order, axis=1)
+
+
+def write_ply(
+    path: str | os.PathLike,
+    columns: dict[str, np.ndarray],
+    faces: np.ndarray,
+    *,
+    ascii: bool = False,
+    force: bool = False,
+    comments: tuple[str, ...] = (),
+) -> Path:
+    """Write a PLY with per-vertex scalar columns and polygon faces.
+
+    ``faces`` is (F, K) with -1 padding for faces with fewer than K vertices.
+    Binary little-endian by default. Quads stay quads (MeshLab and trimesh
+    read them); faces are written grouped by size.
+    """
+    path = Path(path)
+    _refuse_overwrite(path, force)
+    names = list(columns)
+    n = len(columns[names[0]])
+    groups = list(_size_groups(faces))
+    header = ["ply", f"format {'ascii' if ascii else 'binary_little_endian'} 1.0"]
+    header += [f"comment {c}" for c in comments]
+    header.append(f"element vertex {n}")
+    for k in names:
+        header.append(f"property {_PLY_TYPES[columns[k].dtype.str[1:]]} {k}")
+    header.append(f"element face {sum(len(g) for _, g in groups)}")
+    header.append("property list uchar int vertex_indices")
+    header.append("end_header")
+    with open(path, "wb") as fh:
+        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        if ascii:
+            fmt = " ".join("%.9g" if columns[k].dtype.kind == "f" else "%d" for k in names)
+            if n:
+                table = np.column_stack([columns[k].astype(np.float64) for k in names])
+                np.savetxt(fh, table, fmt=fmt)
+            for size, rows in groups:
+                np.savetxt(fh, np.column_stack([np.full(len(rows), size), rows]), fmt="%d")
+        else:
+            vrec = np.empty(n, dtype=[(k, columns[k].dtype.newbyteorder("<")) for k in names])
+            for k in names:
+                vrec[k] = columns[k]
+            fh.write(vrec.tobytes())
+            for size, rows in groups:
+                rec = np.empty(len(rows), dtype=[("n", "u1"), ("i", "<i4", (size,))])
+                rec["n"] = size
+                rec["i"] = rows
+                fh.write(rec.tobytes())
+    return path
+
+
+def write_obj(
+    path: str | os.PathLike,
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    *,
+    force: bool = False,
+    comments: tuple[str, ...] = (),
+) -> Path:
+    """Write an OBJ with polygon faces (quads stay quads); ``faces`` as in
+    :func:`write_ply`."""
+    path = Path(path)
+    _refuse_overwrite(path, force)
+    with open(path, "w") as fh:
+        for c in comments:
+            fh.write(f"# {c}\n")
+        if len(vertices):
+            np.savetxt(fh, vertices, fmt="v %.9g %.9g %.9g")
+        for size, rows in _size_groups(faces):
+            np.savetxt(fh, rows + 1, fmt="f" + " %d" * size)
+    return path

@@ -1,0 +1,107 @@
+"""Euler characteristic, Betti numbers and genus of digital objects.
+
+chi is the digital Gauss-Bonnet sum (Theorems 10-11, in the exact form
+``a^T n = 8 chi`` of DESIGN section 2): a histogram of vertex configurations
+weighted by :func:`isoflow.indices.euler_lut`. Betti numbers come from
+connected-component labelling (cc3d, several times faster than
+``scipy.ndimage.label`` here) of the object (b0) and of the background with the
+complementary connectivity (b2 in 3D, b1 in 2D); the remaining Betti number
+follows from chi.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .configurations import configuration_histogram
+from .errors import IsoflowError
+from .indices import euler_lut
+
+#: the object's connectivity -> the background's, per dimension
+COMPLEMENT = {6: 26, 26: 6, 4: 8, 8: 4}
+VALID = {2: (4, 8), 3: (6, 26)}
+
+
+def check_connectivity(ndim: int, connectivity: int) -> int:
+    """The object's connectivity, checked against the dimension."""
+    if connectivity not in VALID.get(ndim, ()):
+        allowed = " or ".join(map(str, VALID.get(ndim, ())))
+        raise IsoflowError(
+            f"connectivity {connectivity} is not valid in {ndim}D (use {allowed})"
+        )
+    return connectivity
+
+
+def default_connectivity(ndim: int) -> int:
+    """The paper's choice: 4-connectivity in the plane, 6 in space."""
+    return VALID[ndim][0]
+
+
+def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
+    """chi from the configuration histogram: ``sum_c hist[c] lut[c] / 2^n``."""
+    total = int(np.dot(hist, euler_lut(ndim, connectivity)))
+    scale = 1 << ndim
+    assert total % scale == 0, "local Euler shares must sum to a multiple of 2^n"
+    return total // scale
+
+
+def euler_characteristic(volume: np.ndarray, connectivity: int | None = None) -> int:
+    """Euler characteristic of a 2D or 3D binary volume (eq. 4.12-4.13)."""
+    v = np.asarray(volume, dtype=bool)
+    conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
+    return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
+
+
+def count_components(volume: np.ndarray, connectivity: int) -> int:
+    """Number of connected components of the True voxels."""
+    import cc3d
+
+    if not volume.any():
+        return 0
+    return int(cc3d.connected_components(volume, connectivity=connectivity, return_N=True)[1])
+
+
+def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
+    """Components of the background (with ``connectivity``) that do not reach
+    the array border: cavities in 3D, holes in 2D.
+
+    The region outside the array is background and touches every border
+    component, so those merge into one exterior; no padded copy is needed.
+    """
+    import cc3d
+
+    background = ~np.asarray(volume, dtype=bool)
+    if not background.any():
+        return 0
+    labels, n = cc3d.connected_components(background, connectivity=connectivity, return_N=True)
+    border = set()
+    for axis in range(labels.ndim):
+        for end in (0, -1):
+            border.update(np.unique(np.take(labels, end, axis=axis)).tolist())
+    border.discard(0)
+    return int(n) - len(border)
+
+
+def betti_numbers(
+    volume: np.ndarray, connectivity: int | None = None, chi: int | None = None
+) -> list[int]:
+    """Betti numbers ``[b0, b1, b2]`` (3D) or ``[b0, b1]`` (2D).
+
+    b0: components, b2: cavities, b1 = b0 + b2 - chi: tunnels (3D); in 2D b1
+    is the number of holes and ``chi = b0 - b1`` is checked.
+    """
+    v = np.asarray(volume, dtype=bool)
+    conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
+    if chi is None:
+        chi = euler_characteristic(v, conn)
+    b0 = count_components(v, conn)
+    enclosed = count_enclosed(v, COMPLEMENT[conn])
+    if v.ndim == 2:
+        assert b0 - enclosed == chi, "2D: chi must equal components minus holes"
+        return [b0, enclosed]
+    return [b0, b0 + enclosed - chi, enclosed]
+
+
+def genus_of_closed_surface(euler: int) -> int:
+    """Genus of a connected closed orientable surface: ``1 - chi/2``."""
+    return 1 - euler // 2

@@ -1,0 +1,32 @@
+"""Shared shapes for the tests: digital balls, tori and rings built from
+their defining inequalities, so that their topology is known exactly."""
+
+import numpy as np
+import pytest
+
+
+def ball(radius: float, size: int | None = None, centre=None) -> np.ndarray:
+    size = size or int(2 * radius + 4)
+    c = (size - 1) / 2 if centre is None else centre
+    x = np.indices((size,) * 3) - np.reshape(c, (-1, 1, 1, 1))
+    return (x**2).sum(0) <= radius**2
+
+
+def torus(R: float, r: float, size: int | None = None, axis: int = 2, centre=None) -> np.ndarray:
+    """Solid torus of major radius R and minor radius r, around ``axis``."""
+    size = size or int(2 * (R + r) + 4)
+    c = np.full(3, (size - 1) / 2) if centre is None else np.asarray(centre, float)
+    x = np.indices((size,) * 3).astype(float) - c.reshape(3, 1, 1, 1)
+    others = [i for i in range(3) if i != axis]
+    rho = np.sqrt(x[others[0]] ** 2 + x[others[1]] ** 2)
+    return (rho - R) ** 2 + x[axis] ** 2 <= r**2
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(20131122)
+
+
+def random_volume(rng, max_side: int = 7, ndim: int = 3) -> np.ndarray:
+    shape = rng.integers(1, max_side + 1, ndim)
+    return rng.random(shape) < rng.uniform(0.1, 0.9)

@@ -1,0 +1,122 @@
+"""The command line: JSON contract, outputs, and one-line errors (exit 2)."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from skimage.measure import euler_number
+
+from conftest import torus
+from isoflow.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(*args, cwd=None):
+    """Run the real console entry point in a subprocess."""
+    return subprocess.run(
+        [sys.executable, "-m", "isoflow.cli", *map(str, args)],
+        capture_output=True, text=True, cwd=cwd,
+    )
+
+
+def info_json(capsys, *args):
+    assert main(["info", *map(str, args), "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_info_json_contract(tmp_path, capsys):
+    v = torus(6, 2)
+    np.save(tmp_path / "t.npy", v)
+    r = info_json(capsys, tmp_path / "t.npy")
+    for key in ("voxels", "dimension", "connectivity", "euler_characteristic", "betti", "n",
+                "non_well_composed", "a_dot_n", "energy", "surfaces"):
+        assert key in r
+    assert r["voxels"] == int(v.sum())
+    assert r["dimension"] == 3 and r["connectivity"] == 6
+    assert r["euler_characteristic"] == euler_number(v, 1) == 0
+    assert r["betti"] == [1, 1, 0]
+    assert len(r["n"]) == 9 and sum(r["n"]) + r["non_well_composed"] > 0
+    assert r["a_dot_n"] == 8 * r["euler_characteristic"]
+    assert r["surfaces"] == [{"euler_characteristic": 0, "genus": 1, "faces": r["surfaces"][0]["faces"]}]
+
+
+def test_info_26_connectivity_and_2d(tmp_path, capsys):
+    rng = np.random.default_rng(3)
+    v = rng.random((9, 9, 9)) < 0.4
+    np.save(tmp_path / "r.npy", v.astype(np.uint8))
+    r = info_json(capsys, tmp_path / "r.npy", "--connectivity", "26")
+    assert r["euler_characteristic"] == euler_number(v, 3)
+    img = rng.random((20, 20)) < 0.5
+    np.savez(tmp_path / "p.npz", img)
+    r2 = info_json(capsys, tmp_path / "p.npz", "--connectivity", "8")
+    assert r2["dimension"] == 2 and len(r2["betti"]) == 2 and len(r2["n"]) == 3
+    assert r2["euler_characteristic"] == euler_number(img, 2) == r2["betti"][0] - r2["betti"][1]
+
+
+def test_info_of_empty_object_reports_zeros(tmp_path, capsys):
+    np.save(tmp_path / "e.npy", np.zeros((4, 4, 4), bool))
+    r = info_json(capsys, tmp_path / "e.npy")
+    assert r["voxels"] == 0 and r["euler_characteristic"] == 0
+    assert r["betti"] == [0, 0, 0] and r["n"] == [0] * 9 and r["surfaces"] == []
+
+
+def test_info_table_is_readable(capsys):
+    assert main(["info", str(ROOT / "meshes" / "example19.txt")]) == 0
+    out = capsys.readouterr().out
+    assert "Euler characteristic   1" in out and "(+,-,-)+" in out
+
+
+def test_surface_writes_ply_and_obj(tmp_path, capsys):
+    v = torus(5, 2)
+    np.save(tmp_path / "t.npy", v)
+    assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.ply")]) == 0
+    assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.obj"), "--triangulate"]) == 0
+    for name in ("t.ply", "t.obj"):
+        m = trimesh.load(tmp_path / name, process=False)
+        assert m.is_watertight and m.euler_number == 0
+        assert m.volume == pytest.approx(v.sum())
+
+
+def test_surface_png(tmp_path):
+    np.save(tmp_path / "t.npy", torus(5, 2))
+    assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.ply"),
+                 "--png", str(tmp_path / "t.png")]) == 0
+    assert (tmp_path / "t.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def _bad(tmp_path):
+    np.save(tmp_path / "nonbinary.npy", np.arange(27).reshape(3, 3, 3))
+    np.save(tmp_path / "line.npy", np.ones(5, bool))
+    np.save(tmp_path / "empty.npy", np.zeros((3, 3, 3), bool))
+    (tmp_path / "garbage.npy").write_bytes(b"not numpy at all")
+    (tmp_path / "frac.txt").write_text("0 0 0\n1 0.5 0\n")
+    (tmp_path / "exists.ply").write_text("keep me")
+    np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
+    return [
+        (["info", tmp_path / "missing.npy"], "no such file"),
+        (["info", tmp_path / "garbage.npy"], "not a readable numpy file"),
+        (["info", tmp_path / "nonbinary.npy"], "not a binary volume"),
+        (["info", tmp_path / "line.npy"], "1D"),
+        (["info", tmp_path / "frac.txt"], "0.5 is not an integer"),
+        (["surface", tmp_path / "empty.npy", "-o", tmp_path / "e.ply"], "empty"),
+        (["surface", tmp_path / "ok.npy", "-o", tmp_path / "exists.ply"], "--force"),
+        (["info", tmp_path / "ok.npy", "--connectivity", "8"], "connectivity 8"),
+    ]
+
+
+def test_bad_input_gives_one_line_and_exit_2(tmp_path):
+    for args, words in _bad(tmp_path):
+        p = run(*args)
+        assert p.returncode == 2, (args, p.stderr)
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+        assert words in lines[0]
+        files = [Path(str(a)).name for a in args if isinstance(a, Path)]
+        assert any(f in lines[0] for f in files) or "connectivity" in words
+    assert (tmp_path / "exists.ply").read_text() == "keep me"
+    assert not (tmp_path / "e.ply").exists()
