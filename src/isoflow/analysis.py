@@ -39,16 +39,57 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
     conn = check_connectivity(vol.ndim, connectivity or default_connectivity(vol.ndim))
     hist = configuration_histogram(vol)
     chi = euler_from_histogram(hist, vol.ndim, conn)
+    out = report_from_histogram(
+        hist,
+        vol.ndim,
+        conn,
+        voxels=obj.voxels,
+        shape=vol.shape,
+        betti=betti_numbers(vol, conn, chi=chi),
+        parity=obj.parity,
+    )
+    if vol.ndim == 3 and surfaces:
+        from .surface import boundary_mesh
+
+        mesh = boundary_mesh(vol, conn)
+        out["surfaces"] = [
+            {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}
+            for c in mesh.components()
+        ]
+        out["pinched_vertices"] = mesh.pinched
+        out["doubled_edges"] = mesh.midpoints // 2
+    return out
+
+
+def report_from_histogram(
+    hist: np.ndarray,
+    ndim: int,
+    conn: int,
+    voxels: int,
+    shape,
+    betti: list[int],
+    parity: int = 0,
+) -> dict:
+    """The report's histogram part, from numbers any pass over the volume gives.
+
+    Split out of :func:`analyze` so that the out-of-core pass
+    (:mod:`isoflow.outofcore`), which never holds the volume, builds the very
+    same dict from its block-wise histogram and component counts. In 2D the
+    (empty) ``surfaces`` list is part of the report; in 3D :func:`analyze`
+    appends the surfaces when asked.
+    """
+    hist = np.asarray(hist)
+    chi = euler_from_histogram(hist, ndim, conn)
     out: dict = {
-        "voxels": obj.voxels,
-        "dimension": vol.ndim,
-        "shape": list(vol.shape),
+        "voxels": int(voxels),
+        "dimension": ndim,
+        "shape": [int(s) for s in shape],
         "connectivity": conn,
-        "parity": obj.parity,
+        "parity": parity,
         "euler_characteristic": chi,
-        "betti": betti_numbers(vol, conn, chi=chi),
+        "betti": [int(b) for b in betti],
     }
-    if vol.ndim == 3:
+    if ndim == 3:
         cls = class_lut()
         n = class_histogram(hist)
         a = a_lut(conn)
@@ -62,16 +103,6 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
             a_dot_n_well_composed=int(np.dot(hist[on], a[on])),
             energy=int(np.dot(hist[on], k[on])),
         )
-        if surfaces:
-            from .surface import boundary_mesh
-
-            mesh = boundary_mesh(vol, conn)
-            out["surfaces"] = [
-                {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}
-                for c in mesh.components()
-            ]
-            out["pinched_vertices"] = mesh.pinched
-            out["doubled_edges"] = mesh.midpoints // 2
     else:
         pcls = planar_class_lut()
         n = np.bincount(pcls[pcls >= 0], weights=hist[pcls >= 0], minlength=3).astype(int)
@@ -84,4 +115,3 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
             surfaces=[],
         )
     return out
-

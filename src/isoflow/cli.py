@@ -14,6 +14,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .errors import IsoflowError
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
@@ -34,7 +36,7 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
     )
     grid = p.add_mutually_exclusive_group()
     grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
-    grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side")
+    grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
 
 
 def add_connectivity(p: argparse.ArgumentParser) -> None:
@@ -55,7 +57,7 @@ def load_input(args):
     if path.suffix.lower() in MESH_SUFFIXES:
         from .meshes import voxelize_file  # the mesh bridge (issue 3)
 
-        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution)
+        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, progress=progress_callback("voxelize"))
     if args.pitch is not None or args.resolution is not None:
         raise IsoflowError(f"{path}: --pitch/--resolution apply to meshes, not to {path.suffix or 'this'} input")
     return io.read_object(path, points_are=args.points_are)
@@ -153,6 +155,65 @@ def cmd_surface(args) -> int:
     return 0
 
 
+def cmd_voxelize(args) -> int:
+    from . import io
+    from .meshes import voxelize_file
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".npz":
+        raise IsoflowError(f"{out}: output must end in .npz")
+    if out.exists() and not args.force:
+        raise IsoflowError(f"{out}: exists; pass --force to overwrite")
+    obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
+                        progress=progress_callback("voxelize"))
+    io.write_volume(obj, out, force=args.force)
+    shape = "x".join(map(str, obj.volume.shape))
+    print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
+    return 0
+
+
+def cmd_genus(args) -> int:
+    from .meshes import DEFAULT_RESOLUTIONS, verify_genus
+
+    conn = args.connectivity or 6
+    res = args.resolution or list(DEFAULT_RESOLUTIONS)
+    report = verify_genus(args.mesh, res, conn, progress=progress_callback("voxelize"))
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
+    per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
+    lines = [
+        f"{args.mesh}: {m['vertices']} vertices, {m['faces']} faces",
+        f"  mesh        watertight {m['watertight']}, {m['components']} components, V-E+F {m['euler_number']}, "
+        f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
+        "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
+                           f"genus {m3['genus']} over {m3['components']} components (genus() of the whole mesh: {m3['genus_whole_mesh']})"),
+        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
+    ]
+    for d in report["digital"]:
+        b = d["betti"]
+        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn solid: {b[0]} components, {b[1]} tunnels, "
+                     f"{b[2]} cavities -> genus {d['genus']}")
+    lines.append(f"  verdict     {report['verdict']}")
+    print("\n".join(lines))
+    return 0
+
+
+def progress_callback(label: str):
+    """A one-line progress display on a terminal, nothing otherwise."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(done, total):
+        frac = done / total if total else 1.0
+        bar = "#" * int(30 * frac)
+        end = "\n" if done >= total else ""
+        print(f"\r{label} [{bar:<30}] {100 * frac:5.1f}%", end=end, file=sys.stderr, flush=True)
+
+    return show
+
+
 # --------------------------------------------------------------------------
 
 
@@ -180,6 +241,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
 
+    p = sub.add_parser("voxelize", help="voxelise a mesh's solid into an .npz volume (with pitch and origin)")
+    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    grid = p.add_mutually_exclusive_group(required=True)
+    grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
+    grid.add_argument("--resolution", type=int, help="voxels along the longest side")
+    p.add_argument("-o", "--output", required=True, help="OUT.npz")
+    p.add_argument("--allow-open", action="store_true",
+                   help="voxelise a mesh with holes by the generalised winding number (slow: small grids only)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.set_defaults(func=cmd_voxelize)
+
+    p = sub.add_parser("genus", help="verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
+    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    p.add_argument("--resolution", type=int, nargs="+", help="voxels along the longest side (default: 64 128)")
+    p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_genus)
+
     return parser
 
 
@@ -192,11 +271,17 @@ def main(argv: list[str] | None = None) -> int:
         print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except MemoryError:
-        print(f"isoflow {args.command}: error: out of memory on {args.input}", file=sys.stderr)
+        name = getattr(args, "input", None) or getattr(args, "mesh", "")
+        print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("isoflow: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # `isoflow info ... | head`: not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
 
 
 if __name__ == "__main__":

@@ -65,12 +65,17 @@ def configurations(volume: np.ndarray) -> np.ndarray:
 def configuration_histogram(volume: np.ndarray, slab: int = 64) -> np.ndarray:
     """Counts of the 256 (3D) or 16 (2D) configurations over all vertices.
 
-    Works slab by slab along axis 0 so that memory stays a small multiple of
-    one slab whatever the volume size; the slabs overlap by one voxel layer so
-    that every vertex is counted exactly once.
+    Large 3D volumes go through the streaming kernel of
+    :mod:`isoflow.kernels`; otherwise the work goes slab by slab along axis 0
+    so that memory stays a small multiple of one slab, the slabs overlapping
+    by one voxel layer so that every vertex is counted exactly once.
     """
     v = np.asarray(volume)
     size = 1 << (1 << v.ndim)
+    from . import kernels
+
+    if v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
+        return kernels.histogram3d(v)
     if v.shape[0] <= slab:
         return np.bincount(configurations(v).ravel(), minlength=size)
     hist = np.zeros(size, dtype=np.int64)

@@ -3,10 +3,9 @@
 chi is the digital Gauss-Bonnet sum (Theorems 10-11, in the exact form
 ``a^T n = 8 chi`` of DESIGN section 2): a histogram of vertex configurations
 weighted by :func:`isoflow.indices.euler_lut`. Betti numbers come from
-connected-component labelling (cc3d, several times faster than
-``scipy.ndimage.label`` here) of the object (b0) and of the background with the
-complementary connectivity (b2 in 3D, b1 in 2D); the remaining Betti number
-follows from chi.
+counting connected components of the object (b0) and of the background with
+the complementary connectivity (b2 in 3D, b1 in 2D); the remaining Betti
+number follows from chi.
 """
 
 from __future__ import annotations
@@ -52,13 +51,32 @@ def euler_characteristic(volume: np.ndarray, connectivity: int | None = None) ->
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
 
-def count_components(volume: np.ndarray, connectivity: int) -> int:
-    """Number of connected components of the True voxels."""
-    import cc3d
+def _structure(ndim: int, connectivity: int) -> np.ndarray:
+    from scipy.ndimage import generate_binary_structure
 
-    if not volume.any():
-        return 0
-    return int(cc3d.connected_components(volume, connectivity=connectivity, return_N=True)[1])
+    return generate_binary_structure(ndim, 1 if connectivity in (4, 6) else ndim)
+
+
+def _compiled(volume: np.ndarray) -> bool:
+    from . import kernels
+
+    return kernels.HAVE_NUMBA and volume.size >= kernels.MIN_VOXELS
+
+
+def count_components(volume: np.ndarray, connectivity: int) -> int:
+    """Number of connected components of the True voxels.
+
+    Large volumes use the run-based union-find of :mod:`isoflow.kernels`
+    (no label volume); small ones ``scipy.ndimage.label``.
+    """
+    volume = np.asarray(volume, dtype=bool)
+    if _compiled(volume):
+        from .kernels import count_components as compiled
+
+        return compiled(volume, connectivity)
+    from scipy.ndimage import label
+
+    return int(label(volume, _structure(volume.ndim, connectivity))[1])
 
 
 def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
@@ -68,12 +86,14 @@ def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
     The region outside the array is background and touches every border
     component, so those merge into one exterior; no padded copy is needed.
     """
-    import cc3d
+    volume = np.asarray(volume, dtype=bool)
+    if _compiled(volume):
+        from .kernels import count_enclosed as compiled
 
-    background = ~np.asarray(volume, dtype=bool)
-    if not background.any():
-        return 0
-    labels, n = cc3d.connected_components(background, connectivity=connectivity, return_N=True)
+        return compiled(volume, connectivity)
+    from scipy.ndimage import label
+
+    labels, n = label(~volume, _structure(volume.ndim, connectivity))
     border = set()
     for axis in range(labels.ndim):
         for end in (0, -1):

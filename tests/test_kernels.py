@@ -1,0 +1,49 @@
+"""The compiled kernels give the same numbers as the numpy / scipy paths."""
+
+import numpy as np
+import pytest
+from scipy.ndimage import generate_binary_structure, label
+from skimage.measure import euler_number
+
+from conftest import random_volume
+from isoflow import DigitalObject, analyze, kernels
+from isoflow.configurations import configurations
+
+pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed")
+
+
+def scipy_count(v, conn):
+    return label(v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))[1]
+
+
+def scipy_enclosed(v, conn):
+    lab, n = label(~v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))
+    border = set()
+    for ax in range(v.ndim):
+        border |= set(np.take(lab, 0, ax).ravel()) | set(np.take(lab, -1, ax).ravel())
+    return n - len(border - {0})
+
+
+def test_histogram_kernel(rng):
+    for _ in range(200):
+        v = random_volume(rng, 9)
+        want = np.bincount(configurations(v).ravel(), minlength=256)
+        assert (kernels.histogram3d(v) == want).all()
+
+
+def test_component_kernels(rng):
+    shapes = [(1, 1, 7), (7, 1, 1), (1, 7, 1)]  # thin shapes broke cc3d's 26-labelling
+    for t in range(400):
+        v = rng.random(shapes[t % 3]) < 0.5 if t < 30 else random_volume(rng, 8, ndim=2 + t % 2)
+        for conn in ((6, 26) if v.ndim == 3 else (4, 8)):
+            assert kernels.count_components(v, conn) == scipy_count(v, conn)
+            assert kernels.count_enclosed(v, conn) == scipy_enclosed(v, conn)
+
+
+def test_analyze_uses_kernels_above_threshold(monkeypatch, rng):
+    v = rng.random((30, 31, 29)) < 0.45
+    slow = analyze(DigitalObject(v), 26, surfaces=False)
+    monkeypatch.setattr(kernels, "MIN_VOXELS", 0)
+    fast = analyze(DigitalObject(v), 26, surfaces=False)
+    assert fast == slow
+    assert fast["euler_characteristic"] == euler_number(v, 3)
