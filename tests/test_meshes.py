@@ -70,6 +70,8 @@ def test_stl_needs_the_weld():
     weld all three tools say 9."""
     r = verify_genus(MESHES / "featuretype.STL", (64,))
     assert r["pymeshlab"]["genus"] == r["manifold3d"]["genus"] == r["mesh"]["genus"] == 9
+    assert "welded" in r["verdict"]
+    assert "welded" not in verify_genus(MESHES / "eight.off", (32,))["verdict"]
 
 
 def test_mesh_topology_counts_against_trimesh():

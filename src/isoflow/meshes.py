@@ -278,7 +278,8 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     from .voxelize import load_mesh, voxelize
 
     path = Path(path)
-    v, f = load_mesh(path)
+    stats: dict = {}
+    v, f = load_mesh(path, stats=stats)
     mesh = mesh_topology(v, f)
     out = {
         "input": str(path),
@@ -288,6 +289,12 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         "digital": [],
     }
     notes = []
+    welded = stats["exact_vertices"] - stats["welded_vertices"]
+    if welded:
+        notes.append(
+            f"{welded} vertices that differ only by rounding noise were welded before counting "
+            "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"
+        )
     balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
     if not balanced:
         notes.append(

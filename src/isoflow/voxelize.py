@@ -164,7 +164,7 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float) -> tuple[np.ndarray, np.nda
     return v[first[groups[order]]].copy(), remap[f]
 
 
-def load_mesh(path, *, merge_rtol: float = MERGE_RTOL) -> tuple[np.ndarray, np.ndarray]:
+def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh and weld vertices that coincide.
 
     Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted; the
@@ -177,7 +177,9 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL) -> tuple[np.ndarray, np.n
     closed after that weld.  Faces collapsed by the weld (zero area) are
     dropped.
 
-    Returns ``(vertices float64 (N, 3), faces int64 (M, 3))``.
+    Returns ``(vertices float64 (N, 3), faces int64 (M, 3))``. A dict passed
+    as ``stats`` receives ``exact_vertices`` (distinct positions as read) and
+    ``welded_vertices`` (after the weld), so callers can say what the weld did.
 
     Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
     read, a mesh without faces, NaN/inf coordinates and out-of-range faces.
@@ -208,7 +210,11 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL) -> tuple[np.ndarray, np.n
         raise IsoflowError(
             f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = _check_mesh(vertices, faces, where=str(p))
+    if stats is not None:
+        stats["exact_vertices"] = int(len(np.unique(vertices[np.unique(faces)], axis=0)))
     vertices, faces = _weld(vertices, faces, float(merge_rtol))
+    if stats is not None:
+        stats["welded_vertices"] = int(len(vertices))
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
