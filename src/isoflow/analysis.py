@@ -87,9 +87,11 @@ def report_from_histogram(
         "connectivity": conn,
         "parity": parity,
         "euler_characteristic": chi,
-        "betti": [int(b) for b in betti],
+        "betti": [None if b is None else int(b) for b in betti],
     }
-    if ndim == 3:
+    if ndim == 4:
+        out.update(_report_4d(hist, conn))
+    elif ndim == 3:
         cls = class_lut()
         n = class_histogram(hist)
         a = a_lut(conn)
@@ -115,3 +117,31 @@ def report_from_histogram(
             surfaces=[],
         )
     return out
+
+
+def _report_4d(hist: np.ndarray, conn: int) -> dict:
+    """4D (section 6): the histogram over the 45 classes of boundary
+    configurations where the boundary is a 3-manifold and both adjacencies give
+    the same Euler share (``isoflow.ndim``); everything else on the boundary is
+    counted as not well-composed. ``a`` is 16 x the Euler share, so
+    ``a_dot_n = 16 chi`` (the form of eq. 6.2 that holds)."""
+    from . import ndim as nd
+    from .topology import euler_weights
+
+    canon = nd.configuration_orbits(4)
+    manifold = nd.manifold_configurations(4)
+    boundary = np.ones(len(hist), bool)
+    boundary[[0, len(hist) - 1]] = False
+    classes = np.unique(canon[manifold & boundary])
+    counts = np.bincount(np.searchsorted(classes, canon[manifold & boundary]),
+                         weights=hist[manifold & boundary], minlength=len(classes)).astype(np.int64)
+    a = euler_weights(4, conn)
+    return {
+        "n": counts.tolist(),
+        "classes": {int(c): int(k) for c, k in zip(classes, counts) if k},
+        "non_well_composed": int(hist[boundary & ~manifold].sum()),
+        "a_dot_n": int(np.dot(hist, a)),
+        "a_dot_n_well_composed": int(np.dot(hist[manifold & boundary], a[manifold & boundary])),
+        "energy": int(np.dot(hist[manifold & boundary], a[manifold & boundary] ** 2)),
+        "surfaces": None,
+    }

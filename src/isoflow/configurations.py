@@ -76,6 +76,10 @@ def configuration_histogram(volume: np.ndarray, slab: int = 64) -> np.ndarray:
 
     if v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
         return kernels.histogram3d(v)
+    if v.ndim == 4:
+        from . import ndim
+
+        return ndim.configuration_histogram(v)
     if v.shape[0] <= slab:
         return np.bincount(configurations(v).ravel(), minlength=size)
     hist = np.zeros(size, dtype=np.int64)

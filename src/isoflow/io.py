@@ -76,8 +76,8 @@ def read_volume(path: str | os.PathLike) -> DigitalObject:
         raise
     except Exception as exc:  # numpy raises several types for a bad file
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
-    if arr.ndim not in (2, 3):
-        raise IsoflowError(f"{path}: a volume must be 2D or 3D, this array is {arr.ndim}D with shape {arr.shape}")
+    if arr.ndim not in (2, 3, 4):
+        raise IsoflowError(f"{path}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
     vol = as_binary(arr, str(path))
     kw = {}
     if "offset" in meta:

@@ -24,7 +24,10 @@ from .errors import IsoflowError
 
 @dataclass(frozen=True)
 class DigitalObject:
-    """A 2D or 3D binary volume with its place on the (dual) lattice."""
+    """A 2D or 3D binary volume with its place on the (dual) lattice.
+
+    4D volumes are accepted for the topology report (section 6 of the paper);
+    surfaces and the flow are 2D/3D only."""
 
     volume: np.ndarray
     offset: tuple[int, ...] = None  # type: ignore[assignment]
@@ -36,8 +39,8 @@ class DigitalObject:
         vol = np.asarray(self.volume)
         if vol.dtype != np.bool_:
             vol = vol.astype(bool)
-        if vol.ndim not in (2, 3):
-            raise IsoflowError(f"a digital object is 2D or 3D, got a {vol.ndim}D array")
+        if vol.ndim not in (2, 3, 4):
+            raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
         object.__setattr__(self, "volume", vol)
         offset = (0,) * vol.ndim if self.offset is None else tuple(int(o) for o in self.offset)
         if len(offset) != vol.ndim:

@@ -16,9 +16,16 @@ from .configurations import configuration_histogram
 from .errors import IsoflowError
 from .indices import euler_lut
 
-#: the object's connectivity -> the background's, per dimension
+#: the object's connectivity -> the background's, in 2D and 3D
 COMPLEMENT = {6: 26, 26: 6, 4: 8, 8: 4}
-VALID = {2: (4, 8), 3: (6, 26)}
+#: (2n-adjacency, (3^n - 1)-adjacency) per dimension
+VALID = {2: (4, 8), 3: (6, 26), 4: (8, 80)}
+
+
+def complement(ndim: int, connectivity: int) -> int:
+    """The background's connectivity for an object's (6 <-> 26, 4 <-> 8, 8 <-> 80)."""
+    low, high = VALID[ndim]
+    return high if connectivity == low else low
 
 
 def check_connectivity(ndim: int, connectivity: int) -> int:
@@ -36,9 +43,19 @@ def default_connectivity(ndim: int) -> int:
     return VALID[ndim][0]
 
 
+def euler_weights(ndim: int, connectivity: int) -> np.ndarray:
+    """``2^n x`` local Euler share of every configuration (eq. 4.10; the
+    n-dimensional tables of :mod:`isoflow.ndim` in 4D)."""
+    if ndim == 4:
+        from . import ndim as nd
+
+        return nd.euler_lut(4, "min" if connectivity == VALID[4][0] else "max").astype(np.int64)
+    return euler_lut(ndim, connectivity)
+
+
 def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
     """chi from the configuration histogram: ``sum_c hist[c] lut[c] / 2^n``."""
-    total = int(np.dot(hist, euler_lut(ndim, connectivity)))
+    total = int(np.dot(hist, euler_weights(ndim, connectivity)))
     scale = 1 << ndim
     assert total % scale == 0, "local Euler shares must sum to a multiple of 2^n"
     return total // scale
@@ -60,7 +77,7 @@ def _structure(ndim: int, connectivity: int) -> np.ndarray:
 def _compiled(volume: np.ndarray) -> bool:
     from . import kernels
 
-    return kernels.HAVE_NUMBA and volume.size >= kernels.MIN_VOXELS
+    return kernels.HAVE_NUMBA and volume.ndim <= 3 and volume.size >= kernels.MIN_VOXELS
 
 
 def count_components(volume: np.ndarray, connectivity: int) -> int:
@@ -108,14 +125,18 @@ def betti_numbers(
     """Betti numbers ``[b0, b1, b2]`` (3D) or ``[b0, b1]`` (2D).
 
     b0: components, b2: cavities, b1 = b0 + b2 - chi: tunnels (3D); in 2D b1
-    is the number of holes and ``chi = b0 - b1`` is checked.
+    is the number of holes and ``chi = b0 - b1`` is checked. In 4D only b0 and
+    b3 (enclosed background components) come from labelling; chi fixes
+    ``b1 - b2`` but not each, so they are None.
     """
     v = np.asarray(volume, dtype=bool)
     conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
     if chi is None:
         chi = euler_characteristic(v, conn)
     b0 = count_components(v, conn)
-    enclosed = count_enclosed(v, COMPLEMENT[conn])
+    enclosed = count_enclosed(v, complement(v.ndim, conn))
+    if v.ndim == 4:
+        return [b0, None, None, enclosed]
     if v.ndim == 2:
         assert b0 - enclosed == chi, "2D: chi must equal components minus holes"
         return [b0, enclosed]

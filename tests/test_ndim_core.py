@@ -1,0 +1,63 @@
+"""The general n-dimensional code (isoflow.ndim) against the dedicated 2D/3D
+core, and 4D volumes through `isoflow info`."""
+
+import json
+
+import numpy as np
+from scipy.ndimage import generate_binary_structure, label
+
+from conftest import random_volume
+from isoflow import configurations as C
+from isoflow import indices as I
+from isoflow import ndim as nd
+from isoflow.cli import main
+from isoflow.topology import euler_characteristic
+
+
+def test_tables_equal_the_dedicated_ones():
+    assert (nd.euler_lut(3, "min") == I.euler_lut(3, 6)).all()
+    assert (nd.euler_lut(3, "max") == I.euler_lut(3, 26)).all()
+    assert (nd.euler_lut(2, "min") == I.euler_lut(2, 4)).all()
+    assert (nd.euler_lut(2, "max") == I.euler_lut(2, 8)).all()
+    on = np.arange(1, 255)  # isoflow.indices also calls 0 and 255 well-composed
+    assert (nd.well_composed(3)[on] == I.well_composed(3)[on]).all()
+    # the nine classes are the general code's well-composed boundary classes
+    canon = C.orbits(3)
+    ours = sorted(set(canon[I.class_lut() >= 0].tolist()))
+    assert ours == sorted(nd.boundary_classes(3).tolist())
+
+
+def test_random_images_give_the_same_numbers(rng):
+    for _ in range(150):
+        ndim = 2 + int(rng.integers(0, 2))
+        v = random_volume(rng, 9 if ndim == 3 else 14, ndim=ndim)
+        assert (nd.configurations(v) == C.configurations(v)).all()
+        for adj, conn in zip(("min", "max"), ((4, 8) if ndim == 2 else (6, 26))):
+            assert nd.euler_characteristic(v, adj) == euler_characteristic(v, conn)
+
+
+def info(capsys, path, *extra):
+    assert main(["info", str(path), "--json", *extra]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_info_on_4d_volumes(tmp_path, capsys):
+    annulus = np.ones((5, 5), bool)
+    annulus[2, 2] = False
+    disc = np.ones((3, 4), bool)
+    cases = {
+        "annulus_x_disc": (nd.product_image(annulus, disc), 0),
+        "annulus_x_annulus": (nd.product_image(annulus, annulus), 0),
+        "ball": (nd.ball(3.5, 4), 1),
+        "box_minus_box": (nd.box_minus_box(6, 2, 4), 0),
+    }
+    for name, (vol, chi) in cases.items():
+        np.save(tmp_path / f"{name}.npy", vol)
+        for conn, full in ((8, False), (80, True)):
+            r = info(capsys, tmp_path / f"{name}.npy", "--connectivity", str(conn))
+            assert r["dimension"] == 4 and r["euler_characteristic"] == chi
+            assert r["a_dot_n"] == 16 * chi
+            structure = generate_binary_structure(4, 4 if full else 1)
+            assert r["betti"][0] == label(vol, structure)[1]
+    # the box minus an inner box encloses one background component (b3)
+    assert info(capsys, tmp_path / "box_minus_box.npy")["betti"][3] == 1
