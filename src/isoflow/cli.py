@@ -43,9 +43,9 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--connectivity",
         type=int,
-        choices=(4, 6, 8, 26),
+        choices=(4, 6, 8, 26, 80),
         default=None,
-        help="object connectivity: 6 or 26 in 3D, 4 or 8 in 2D (default: 6 / 4, the paper's)",
+        help="object connectivity: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default: 6 / 4 / 8, the paper's)",
     )
 
 
@@ -71,8 +71,19 @@ def load_input(args):
 def cmd_info(args) -> int:
     from .analysis import analyze
 
-    obj = load_input(args)
-    report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
+    if Path(args.input).suffix.lower() == ".zarr":
+        # out of core: block by block, never the whole volume in memory; the
+        # closed surfaces need the whole boundary mesh and are not computed
+        from .outofcore import analyze_zarr
+
+        if args.pitch is not None or args.resolution is not None:
+            raise IsoflowError(f"{args.input}: --pitch/--resolution apply to meshes, not to .zarr input")
+        report = analyze_zarr(args.input, args.connectivity)
+        if report["dimension"] == 3:
+            report["surfaces"] = None
+    else:
+        obj = load_input(args)
+        report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
     report["input"] = str(args.input)
     if args.json:
         print(json.dumps(report))
@@ -87,16 +98,17 @@ def format_info(r: dict) -> str:
         f"{r['voxels']} voxels, {r['connectivity']}-connectivity",
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
-    names = ["components", "tunnels", "cavities"] if r["dimension"] == 3 else ["components", "holes"]
+    names = {2: ["components", "holes"], 3: ["components", "tunnels", "cavities"],
+             4: ["components", "b1", "b2", "enclosed background"]}[r["dimension"]]
     lines.append(
         "  Betti numbers          "
-        + ", ".join(f"{b} {name}" for b, name in zip(r["betti"], names))
+        + ", ".join(f"{'?' if b is None else b} {name}" for b, name in zip(r["betti"], names))
     )
     lines.append("  vertex classes (eq. 4.9):")
     for label, count in r["classes"].items():
         lines.append(f"    {label:<10} {count:>12}")
     lines.append(f"    {'not well-composed':<10} {r['non_well_composed']:>5}")
-    scale = 8 if r["dimension"] == 3 else 4
+    scale = 1 << r["dimension"]
     lines.append(f"  a^T n                  {r['a_dot_n']}  (= {scale} chi)")
     lines.append(f"  energy E = k^T n       {r['energy']}")
     if r.get("surfaces"):
@@ -105,6 +117,8 @@ def format_info(r: dict) -> str:
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
+    if r.get("surfaces", []) is None:
+        lines.append("  closed surfaces        not computed (out-of-core input)")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
     return "\n".join(lines)
@@ -214,6 +228,62 @@ def progress_callback(label: str):
     return show
 
 
+def cmd_flow(args) -> int:
+    import time
+
+    from .flow import check_output_dir, export_flow, run_flow
+
+    obj = load_input(args)
+    if obj.voxels == 0:
+        raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
+    if args.steps is not None and args.steps < 0:
+        raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
+    if args.out:
+        check_output_dir(args.out, args.force)  # before a long run, not after
+    # a box of side s vanishes in s steps; the bar appears once the run lasts
+    total, show, start = args.steps or max(obj.volume.shape), progress_callback("flow"), time.monotonic()
+    drawn = []
+
+    def progress(step, state):
+        if show and time.monotonic() - start > 1.0:
+            show(min(step, total - 1), total)
+            drawn.append(step)
+
+    result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity, progress=progress)
+    if drawn:
+        show(total, total)
+    if args.out:
+        export_flow(result, args.out, force=args.force)
+    if args.json:
+        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+        return 0
+    print(format_flow(result, str(args.input)))
+    if args.out:
+        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png")
+    return 0
+
+
+def format_flow(result, name: str) -> str:
+    lines = [
+        f"{name}: digital curvature flow, {result.connectivity}-connectivity"
+        + (", guard" if result.guard else ""),
+        f"  {'step':>5} {'voxels':>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}",
+    ]
+    for s in result.steps:
+        lines.append(
+            f"  {s['step']:>5} {s['voxels']:>10} {s['parity']:>6}  {str(tuple(s['betti'])):<12} "
+            f"{s['euler_characteristic']:>4} {s['energy']:>8}"
+        )
+    lim = result.limit
+    lines.append(f"  stopped: {result.stop_reason}")
+    if lim["center"] is not None:
+        centre = ", ".join(f"{c:g}" for c in lim["center"])
+        lines.append(f"  limit: ({centre}), last non-empty state {lim['last_shape']} at step {lim['last_step']}")
+    for c in result.topology_changes:
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, in {c['where']}")
+    return "\n".join(lines)
+
+
 # --------------------------------------------------------------------------
 
 
@@ -258,6 +328,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)
+
+    p = sub.add_parser("flow", help="run the digital curvature flow (section 5) with topology control")
+    add_input_arguments(p)
+    add_connectivity(p)
+    p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
+    p.add_argument("--guard", action="store_true", help="refuse steps that change the Betti numbers (Theorem 21)")
+    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv and flow.png into DIR")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
+    p.set_defaults(func=cmd_flow)
 
     return parser
 

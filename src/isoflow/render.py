@@ -64,3 +64,38 @@ def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azi
     fig.savefig(path)
     plt.close(fig)
     return path
+
+
+def render_flow(result, path: Path, title: str = "") -> Path:
+    """Write a PNG of a digital curvature flow (:class:`isoflow.flow.FlowResult`):
+    voxels, energy ``E = k^T n`` and Betti numbers against the step, with the
+    steps where the Betti numbers changed marked."""
+    plt = _pyplot()
+    steps = [s["step"] for s in result.steps]
+    betti = np.array([s["betti"] for s in result.steps])
+    fig, axes = plt.subplots(3, 1, figsize=(7, 7.5), dpi=110, sharex=True)
+    axes[0].plot(steps, [s["voxels"] for s in result.steps], "o-", ms=3)
+    axes[0].set_ylabel("voxels")
+    axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
+    axes[1].set_ylabel("energy E = k^T n")
+    for i in range(betti.shape[1]):
+        axes[2].step(steps, betti[:, i], where="post", label=f"b{i}")
+    axes[2].set_ylabel("Betti numbers")
+    axes[2].set_xlabel("step")
+    from matplotlib.ticker import MaxNLocator
+
+    axes[2].xaxis.set_major_locator(MaxNLocator(integer=True))
+    axes[2].legend(loc="upper right", fontsize=8)
+    for change in result.topology_changes:
+        for ax in axes:
+            ax.axvline(change["step"], color="grey", lw=0.8, ls=":")
+    head = title or "digital curvature flow"
+    fig.suptitle(
+        f"{head}: {result.connectivity}-connectivity{', guard' if result.guard else ''}, "
+        f"stopped: {result.stop_reason}",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

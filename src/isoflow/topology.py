@@ -104,6 +104,8 @@ def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
     component, so those merge into one exterior; no padded copy is needed.
     """
     volume = np.asarray(volume, dtype=bool)
+    if volume.size == 0:
+        return 0
     if _compiled(volume):
         from .kernels import count_enclosed as compiled
 
