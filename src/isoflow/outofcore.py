@@ -41,9 +41,10 @@ module keeps; the tests check the two against each other.
 
 Zarr input is read block by block inside each block's task, a block being
 a chunk (or shard); a dask array is processed along its chunks. Each block
-task returns a few faces (labels and voxels) and 256 counts, so peak memory
-is a few blocks per worker plus the faces of the blocks in flight, whatever
-the volume's size.
+task returns its faces (labels and voxels) and 256 counts, and the blocks go
+layer by layer along the first axis, so peak memory is a few blocks per
+worker plus the faces of two layers of blocks (plus the cross-block edges,
+a few per component crossing a face), never the volume or a label volume.
 """
 
 from __future__ import annotations
@@ -225,17 +226,28 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
             labels = mask
         else:
             labels, counts[kind] = _label(mask, c)
-        outside = []
+        mine, outside = {}, []
         for axis in range(ndim):
             for side, end in ((0, 0), (1, -1)):
                 if not (last[axis] if side else first[axis]):
-                    faces[kind, axis, side] = _face(labels, axis, end)
+                    mine[kind, axis, side] = _face(labels, axis, end)
                 elif kind == "bg":
-                    outside.append(np.unique(_face(labels, axis, end)))
-        if kind == "bg" and outside:
-            border = np.unique(np.concatenate(outside)).astype(np.int64)
-            border = border[border > 0]
+                    outside.append(_face(labels, axis, end))
         del labels, mask
+        if kind == "vox":
+            faces.update(mine)
+            continue
+        # Only labels seen on a face can take part in a merge or touch the
+        # border: number those 1 .. m (the count n stays the block's), so that
+        # the faces held for the merge are as small as they can be.
+        seen = np.unique(np.concatenate([f.ravel() for f in (*mine.values(), *outside)] or [np.zeros(0, int)]))
+        seen = seen[seen > 0]
+        dtype = np.uint16 if len(seen) < (1 << 16) else np.uint32
+        for key, f in mine.items():
+            faces[key] = np.where(f > 0, np.searchsorted(seen, f) + 1, 0).astype(dtype)
+        if kind == "bg" and outside:
+            on_border = np.unique(np.concatenate([f.ravel() for f in outside]))
+            border = np.searchsorted(seen, on_border[on_border > 0]).astype(np.int64) + 1
     return {"hist": hist, "voxels": voxels, "counts": counts, "faces": faces, "border": border}
 
 
@@ -477,9 +489,11 @@ def analyze_chunked(
     0/1 numbers; the result equals
     ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces=False)``
     key for key. A dask array is processed along its own chunks; a zarr array
-    along its chunks (or shards), or along ``block_shape`` when given. Memory
-    is a few blocks per worker plus the labels on the faces of blocks in
-    flight; the voxels are read once.
+    along its chunks (or shards; tiny chunks are grouped), or along
+    ``block_shape`` when given (a dask array is rechunked to it). Memory is a
+    few blocks per worker plus the faces of two layers of blocks; the voxels
+    are read once. An array with no voxels raises IsoflowError (``analyze``
+    has no report for it either).
 
     ``scheduler`` is passed to ``dask.compute`` (default: dask's configured
     one, threads). The labelling holds the GIL, so threads overlap mostly
@@ -525,33 +539,48 @@ def analyze_chunked(
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
 
     delayed = dask.delayed
-    summaries = {}
-    if is_zarr:
-        for index in np.ndindex(*numblocks):
+    blocks = None if is_zarr else array.to_delayed()
+
+    def block_task(index):
+        if is_zarr:
             box = tuple(bounds[axis][i] for axis, i in enumerate(index))
-            summaries[index] = delayed(_read_zarr_block, pure=False)(array, index, box, numblocks, conn, where)
-    else:
-        blocks = array.to_delayed()
-        for index in np.ndindex(*numblocks):
-            origin = tuple(bounds[axis][i][0] for axis, i in enumerate(index))
-            summaries[index] = delayed(_dask_block, pure=False)(blocks[index], index, origin, numblocks, conn, where)
-    merged = []
-    for index in np.ndindex(*numblocks):
-        neighbours = [
-            summaries[tuple(i + di for i, di in zip(index, d))]
+            return delayed(_read_zarr_block, pure=False)(array, index, box, numblocks, conn, where)
+        origin = tuple(bounds[axis][i][0] for axis, i in enumerate(index))
+        return delayed(_dask_block, pure=False)(blocks[index], index, origin, numblocks, conn, where)
+
+    def layer(i):
+        rest = [range(n) for n in numblocks[1:]]
+        return {(i, *tail): block_task((i, *tail)) for tail in itertools.product(*rest)}
+
+    def uppers(index):
+        return [
+            tuple(i + di for i, di in zip(index, d))
             for d in itertools.product((0, 1), repeat=ndim)
             if all(i + di < n for i, di, n in zip(index, d, numblocks))
         ]
-        merged.append(delayed(_merge, pure=False)(index, numblocks, conn, *neighbours))
-    final = delayed(_finish, pure=False)(ndim, conn, list(shape), *merged)
 
+    # Layer by layer along axis 0: merging layer i needs the summaries of
+    # layers i and i+1 only, so at most two layers of faces are held,
+    # whatever order dask would pick for one big graph (it tends to read
+    # most blocks before merging any). Within a layer the blocks and merges
+    # run in parallel.
+    merged = []
     try:
-        (report,) = dask.compute(final, scheduler=scheduler)
+        (current,) = dask.compute(layer(0), scheduler=scheduler)
+        for i in range(numblocks[0]):
+            upper = layer(i + 1) if i + 1 < numblocks[0] else {}
+            both = {**current, **upper}
+            tasks = [
+                delayed(_merge, pure=False)(index, numblocks, conn, *(both[u] for u in uppers(index)))
+                for index in current
+            ]
+            done, current = dask.compute(tasks, upper, scheduler=scheduler)
+            merged.extend(done)
     except IsoflowError as exc:
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message
         raise IsoflowError(str(exc.args[0]) if exc.args else str(exc)) from None
-    return report
+    return _finish(ndim, conn, list(shape), *merged)
 
 
 def open_zarr(path) -> "object":

@@ -135,8 +135,13 @@ def betti_numbers(
     conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
     if chi is None:
         chi = euler_characteristic(v, conn)
-    b0 = count_components(v, conn)
-    enclosed = count_enclosed(v, complement(v.ndim, conn))
+    if _compiled(v):
+        from .kernels import count_object_and_enclosed
+
+        b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))
+    else:
+        b0 = count_components(v, conn)
+        enclosed = count_enclosed(v, complement(v.ndim, conn))
     if v.ndim == 4:
         return [b0, None, None, enclosed]
     if v.ndim == 2:
