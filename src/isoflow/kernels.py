@@ -9,8 +9,9 @@ a label volume:
   voxels of the next layer) per step: four reads per vertex, one pass.
 * :func:`count_components` is a run-based union-find: runs of equal voxels
   along the last axis are the nodes, runs in neighbouring rows that touch are
-  joined. Memory is three int32 per run (about one byte per voxel on real
-  data) instead of a 4-byte label per voxel.
+  joined. The background's runs are the gaps between the object's, so the
+  volume is read once for both. Memory is three int32 per run (about one
+  byte per voxel on real data) instead of a 4-byte label per voxel.
 
 They give the same numbers as :func:`isoflow.configurations.configurations`
 and cc3d (the tests check it). The numpy/cc3d paths stay in use for small
@@ -23,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 try:  # numba is a dependency, but keep isoflow importable without it
-    from numba import njit, prange
+    from numba import njit
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
@@ -55,49 +56,68 @@ if HAVE_NUMBA:
                     hist[code] += 1
                 hist[code >> 4] += 1  # the last vertex of the row, k = nz
 
-    @njit(cache=True, parallel=True)
-    def _hist_parallel(v, nchunks):
-        nx = v.shape[0]
-        out = np.zeros((nchunks, 256), dtype=np.int64)
-        for c in prange(nchunks):
-            i0 = (nx + 1) * c // nchunks
-            i1 = (nx + 1) * (c + 1) // nchunks
-            _hist_rows(v, i0, i1, out[c])
-        return out.sum(axis=0)
+    @njit(cache=True, nogil=True)
+    def _count_runs_rows(v, counts, i0, i1):
+        """Number of runs of True in every row (i, j), i0 <= i < i1."""
+        ny, nz = v.shape[1], v.shape[2]
+        for i in range(i0, i1):
+            for j in range(ny):
+                row = v[i, j]
+                c = 0
+                prev = 0
+                for k in range(nz):
+                    cur = row[k]
+                    c += cur & (1 - prev)
+                    prev = cur
+                counts[i * ny + j + 1] = c
 
     @njit(cache=True, nogil=True)
-    def _runs(v, value):
-        """Runs of ``value`` along the last axis: row offsets, starts, ends."""
-        nx, ny, nz = v.shape
-        count = 0
-        for i in range(nx):
+    def _fill_runs_rows(v, offsets, start, end, i0, i1):
+        """Starts and ends of the runs of True of rows i0 <= i < i1."""
+        ny, nz = v.shape[1], v.shape[2]
+        for i in range(i0, i1):
             for j in range(ny):
-                prev = False
+                r = offsets[i * ny + j]
+                row = v[i, j]
+                prev = 0
                 for k in range(nz):
-                    cur = v[i, j, k] == value
+                    cur = row[k]
                     if cur and not prev:
-                        count += 1
-                    prev = cur
-        offsets = np.zeros(nx * ny + 1, dtype=np.int64)
-        start = np.empty(count, dtype=np.int32)
-        end = np.empty(count, dtype=np.int32)
-        n = 0
-        for i in range(nx):
-            for j in range(ny):
-                prev = False
-                for k in range(nz):
-                    cur = v[i, j, k] == value
-                    if cur and not prev:
-                        start[n] = k
-                    if prev and not cur:
-                        end[n] = k
-                        n += 1
+                        start[r] = k
+                    elif prev and not cur:
+                        end[r] = k
+                        r += 1
                     prev = cur
                 if prev:
-                    end[n] = nz
-                    n += 1
-                offsets[i * ny + j + 1] = n
-        return offsets, start, end
+                    end[r] = nz
+
+    @njit(cache=True, nogil=True)
+    def _count_gaps_rows(offsets, start, end, nz, counts, r0, r1):
+        """Number of background runs (gaps between object runs) per row."""
+        for r in range(r0, r1):
+            a, b = offsets[r], offsets[r + 1]
+            if nz == 0:
+                c = 0
+            elif a == b:
+                c = 1
+            else:
+                c = (b - a) + 1 - (1 if start[a] == 0 else 0) - (1 if end[b - 1] == nz else 0)
+            counts[r + 1] = c
+
+    @njit(cache=True, nogil=True)
+    def _fill_gaps_rows(offsets, start, end, nz, goff, gstart, gend, r0, r1):
+        for r in range(r0, r1):
+            g = goff[r]
+            prev = 0
+            for q in range(offsets[r], offsets[r + 1]):
+                if start[q] > prev:
+                    gstart[g] = prev
+                    gend[g] = start[q]
+                    g += 1
+                prev = end[q]
+            if prev < nz:
+                gstart[g] = prev
+                gend[g] = nz
 
     @njit(cache=True, nogil=True, inline="always")
     def _find(parent, a):
@@ -128,27 +148,23 @@ if HAVE_NUMBA:
                 ib += 1
 
     @njit(cache=True, nogil=True)
-    def _count(v, value, full, border, planar):
-        """Components of voxels equal to ``value``; with ``border``, only
-        those that do not touch the array's border. ``planar``: ``v`` is a
-        2D image with a dummy first axis, whose ends are not a border."""
-        nx, ny, nz = v.shape
-        offsets, start, end = _runs(v, value)
-        n = len(start)
-        parent = np.arange(n).astype(np.int32)
+    def _join_range(shape, offsets, start, end, full, parent, i0, i1, seam):
+        """Join the runs of rows i0 <= i < i1 with their earlier neighbour
+        rows: (i, j-1) and (i-1, j), and with full connectivity (i-1, j-1),
+        (i-1, j+1), all with slack 1 (diagonal contact). Rows i0-1 are left
+        out unless ``seam``, so that two ranges can run at once on disjoint
+        parts of ``parent``; ``seam`` joins only row i0 to row i0-1."""
+        nx, ny, nz = shape
         slack = 1 if full else 0
-        for i in range(nx):
+        for i in range(i0, i1):
             for j in range(ny):
                 a0, a1 = offsets[i * ny + j], offsets[i * ny + j + 1]
                 if a0 == a1:
                     continue
-                # previous rows: (i, j-1) and (i-1, j) always; with full
-                # connectivity also (i-1, j-1) and (i-1, j+1), and all rows
-                # touch diagonally (slack 1).
-                if j >= 1:
+                if j >= 1 and not seam:
                     r = i * ny + j - 1
                     _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], slack)
-                if i >= 1:
+                if i >= 1 and (i > i0 or seam):
                     r = (i - 1) * ny + j
                     _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], slack)
                     if full:
@@ -158,24 +174,52 @@ if HAVE_NUMBA:
                         if j + 1 < ny:
                             r = (i - 1) * ny + j + 1
                             _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], 1)
-        if not border:
-            roots = 0
-            for r in range(n):
-                if parent[r] == r:
-                    roots += 1
-            return roots
+
+    @njit(cache=True, nogil=True)
+    def _roots(shape, offsets, start, end, parent, border, planar):
+        """Number of components; with ``border``, only those that do not
+        touch the array's border. ``planar``: a 2D image with a dummy first
+        axis, whose ends are not a border."""
+        nx, ny, nz = shape
+        n = len(start)
         touch = np.zeros(n, dtype=np.bool_)
-        for i in range(nx):
-            for j in range(ny):
-                edge_row = j == 0 or j == ny - 1 or (not planar and (i == 0 or i == nx - 1))
-                for r in range(offsets[i * ny + j], offsets[i * ny + j + 1]):
-                    if edge_row or start[r] == 0 or end[r] == nz:
-                        touch[_find(parent, r)] = True
-        inner = 0
+        if border:
+            for i in range(nx):
+                for j in range(ny):
+                    a0, a1 = offsets[i * ny + j], offsets[i * ny + j + 1]
+                    if a0 == a1:
+                        continue
+                    if j == 0 or j == ny - 1 or (not planar and (i == 0 or i == nx - 1)):
+                        for r in range(a0, a1):
+                            touch[_find(parent, r)] = True
+                    else:
+                        # inside rows only their first and last runs can
+                        # reach the ends of the row
+                        if start[a0] == 0:
+                            touch[_find(parent, a0)] = True
+                        if end[a1 - 1] == nz:
+                            touch[_find(parent, a1 - 1)] = True
+        roots = 0
         for r in range(n):
             if parent[r] == r and not touch[r]:
-                inner += 1
-        return inner
+                roots += 1
+        return roots
+
+
+def _halves(n: int):
+    mid = n // 2
+    return [(a, b) for a, b in ((0, mid), (mid, n)) if b > a]
+
+
+def _on_two_threads(calls) -> list:
+    """Run compiled calls (which release the GIL) on two threads. Plain
+    threads rather than numba's parallel=True: no OpenMP pool spinning
+    next to them, and no slow parallel compile."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        futures = [pool.submit(fn, *args) for fn, *args in calls]
+        return [f.result() for f in futures]
 
 
 def _as3d(volume: np.ndarray) -> np.ndarray:
@@ -187,30 +231,92 @@ def histogram3d(volume: np.ndarray) -> np.ndarray:
     """The 256 configuration counts of a 3D volume (same as
     ``np.bincount(configurations(volume).ravel(), minlength=256)``)."""
     v = np.ascontiguousarray(volume, dtype=bool).view(np.uint8)
-    return _hist_parallel(v, 8)
+    parts = [np.zeros(256, np.int64) for _ in range(2)]  # one per thread
+    _on_two_threads([(_hist_rows, v, a, b, h) for (a, b), h in zip(_halves(v.shape[0] + 1), parts)])
+    return parts[0] + parts[1]
+
+
+def _object_runs(v: np.ndarray):
+    """Runs of True along the last axis of a 3D uint8 array: row offsets,
+    starts, ends; runs numbered row by row in C order."""
+    counts = np.zeros(v.shape[0] * v.shape[1] + 1, dtype=np.int64)
+    halves = _halves(v.shape[0])
+    _on_two_threads([(_count_runs_rows, v, counts, a, b) for a, b in halves])
+    offsets = np.cumsum(counts)
+    start = np.empty(offsets[-1], dtype=np.int32)
+    end = np.empty(offsets[-1], dtype=np.int32)
+    _on_two_threads([(_fill_runs_rows, v, offsets, start, end, a, b) for a, b in halves])
+    return offsets, start, end
+
+
+def _gap_runs(offsets, start, end, nz: int):
+    """The background runs of every row: the gaps between the object's runs,
+    so the volume is not read a second time."""
+    nrows = len(offsets) - 1
+    counts = np.zeros(nrows + 1, dtype=np.int64)
+    halves = _halves(nrows)
+    _on_two_threads([(_count_gaps_rows, offsets, start, end, nz, counts, a, b) for a, b in halves])
+    goff = np.cumsum(counts)
+    gstart = np.empty(goff[-1], dtype=np.int32)
+    gend = np.empty(goff[-1], dtype=np.int32)
+    _on_two_threads([(_fill_gaps_rows, offsets, start, end, nz, goff, gstart, gend, a, b) for a, b in halves])
+    return goff, gstart, gend
+def _runs_of(volume: np.ndarray, value: bool):
+    v = _as3d(volume).view(np.uint8)
+    offsets, start, end = _object_runs(v)
+    if value:
+        return v.shape, offsets, start, end
+    return (v.shape,) + tuple(_gap_runs(offsets, start, end, v.shape[2]))
+
+
+def _count_runs(runs_list, fulls, borders, planar: bool) -> list[int]:
+    """Union-find over one or more run sets, on two threads.
+
+    Each run set is joined in two halves along the first axis at once (the
+    halves touch disjoint parts of the parent array), then along the seam
+    between them; the compiled passes release the GIL."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    jobs = []
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        for (shape, off, st, en), full in zip(runs_list, fulls):
+            parent = np.arange(len(st), dtype=np.int32)
+            mid = shape[0] // 2
+            parts = [pool.submit(_join_range, shape, off, st, en, full, parent, a, b, False)
+                     for a, b in ((0, mid), (mid, shape[0])) if b > a]
+            jobs.append((parent, parts, mid))
+        out = []
+        for ((shape, off, st, en), full, border), (parent, parts, mid) in zip(zip(runs_list, fulls, borders), jobs):
+            for f in parts:
+                f.result()
+            if 0 < mid < shape[0]:
+                _join_range(shape, off, st, en, full, parent, mid, mid + 1, True)
+            out.append(int(_roots(shape, off, st, en, parent, border, planar)))
+    return out
 
 
 def count_components(volume: np.ndarray, connectivity: int) -> int:
     """Number of components of the True voxels (6/26 in 3D, 4/8 in 2D)."""
-    full = connectivity in (26, 8)
-    return int(_count(_as3d(volume), True, full, False, volume.ndim == 2))
+    runs = _runs_of(volume, True)
+    return _count_runs([runs], [connectivity in (26, 8)], [False], volume.ndim == 2)[0]
 
 
 def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
     """Background components (with ``connectivity``) not touching the border."""
-    full = connectivity in (26, 8)
-    return int(_count(_as3d(volume), False, full, True, volume.ndim == 2))
+    runs = _runs_of(volume, False)
+    return _count_runs([runs], [connectivity in (26, 8)], [True], volume.ndim == 2)[0]
 
 
 def count_object_and_enclosed(volume: np.ndarray, connectivity: int, background_connectivity: int) -> tuple[int, int]:
-    """:func:`count_components` and :func:`count_enclosed` at once, on two
-    threads: the kernels release the GIL and each is a single-core pass, so
-    on a 2-core machine the Betti numbers cost the slower of the two."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    v = _as3d(volume)
-    planar = volume.ndim == 2
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        b0 = pool.submit(_count, v, True, connectivity in (26, 8), False, planar)
-        enclosed = pool.submit(_count, v, False, background_connectivity in (26, 8), True, planar)
-        return int(b0.result()), int(enclosed.result())
+    """:func:`count_components` and :func:`count_enclosed` together: the
+    object's runs are found once, the background's runs are their gaps, and
+    all four half union-finds share the two cores."""
+    shape, off, st, en = _runs_of(volume, True)
+    gaps = (shape,) + tuple(_gap_runs(off, st, en, shape[2]))
+    b0, enclosed = _count_runs(
+        [(shape, off, st, en), gaps],
+        [connectivity in (26, 8), background_connectivity in (26, 8)],
+        [False, True],
+        volume.ndim == 2,
+    )
+    return b0, enclosed
