@@ -39,7 +39,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from isoflow import DigitalObject  # noqa: E402
-from isoflow.flow import flow_step, guarded_step, run_flow  # noqa: E402
+from isoflow.flow import flow_step, run_flow  # noqa: E402
+from isoflow.guard import guarded_step  # noqa: E402
 
 
 def ball(n: int) -> np.ndarray:

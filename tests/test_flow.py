@@ -18,7 +18,8 @@ from conftest import ball
 from isoflow import DigitalObject, read_object
 from isoflow.cli import main
 from isoflow.configurations import configurations
-from isoflow.flow import flow_moves, flow_step, guarded_step, run_flow, simple_points
+from isoflow.flow import flow_moves, flow_step, run_flow
+from isoflow.guard import guarded_step, simple_points
 from isoflow.indices import CONVEX, FLAT, NONE, class_lut, code_lut, f_lut, planar_class_lut
 from isoflow.planar import planar_flow_step
 from isoflow.topology import betti_numbers

@@ -24,7 +24,9 @@ from .indices import (
     planar_index,
 )
 from .io import read_object, read_points, read_volume, write_volume
+from .flow import FlowResult, flow_step, run_flow
 from .lattice import DigitalObject
+from .meshes import from_manifold, to_manifold, verify_genus, voxelize_file, voxelize_mesh
 from .surface import QuadMesh, boundary_mesh
 from .topology import betti_numbers, euler_characteristic
 
@@ -33,6 +35,14 @@ __version__ = "0.1.0"
 __all__ = [
     "CLASS_LABELS",
     "DigitalObject",
+    "FlowResult",
+    "flow_step",
+    "from_manifold",
+    "run_flow",
+    "to_manifold",
+    "verify_genus",
+    "voxelize_file",
+    "voxelize_mesh",
     "IsoflowError",
     "QuadMesh",
     "a_lut",

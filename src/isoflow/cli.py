@@ -136,8 +136,9 @@ def cmd_surface(args) -> int:
         raise IsoflowError(f"{out}: output must end in .ply or .obj")
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
-    if out.exists() and not args.force:
-        raise IsoflowError(f"{out}: exists; pass --force to overwrite")
+    for target in (out, Path(args.png) if args.png else None):
+        if target is not None and target.exists() and not args.force:
+            raise IsoflowError(f"{target}: exists; pass --force to overwrite")
     if obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
     conn = args.connectivity or default_connectivity(3)
@@ -162,8 +163,6 @@ def cmd_surface(args) -> int:
         from .render import render_surface
 
         png = Path(args.png)
-        if png.exists() and not args.force:
-            raise IsoflowError(f"{png}: exists; pass --force to overwrite")
         render_surface(mesh, obj, png, title=Path(args.input).name)
         print(f"{png}: picture of the surface coloured by vertex angle")
     return 0

@@ -27,20 +27,22 @@ def _check_readable(path: Path) -> None:
         raise IsoflowError(f"{path}: is a directory, not a volume or point list")
 
 
-def as_binary(array: np.ndarray, where: str) -> np.ndarray:
-    """A boolean view of a 0/1 array, or a clear error saying why not."""
+def as_binary(array: np.ndarray, where: str, near=None) -> np.ndarray:
+    """A boolean view of a 0/1 array, or a clear error saying why not.
+
+    ``near``: the index of the block's first voxel, for errors found block by
+    block (out-of-core input)."""
     arr = np.asarray(array)
     if arr.dtype == np.bool_:
         return arr
     if arr.dtype.kind not in "iuf":
         raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
-    if arr.dtype.kind == "f" and not np.isfinite(arr).all():
-        raise IsoflowError(f"{where}: array holds NaN or infinite values")
-    bad = (arr != 0) & (arr != 1)
+    bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
     if bad.any():
         value = arr[bad].flat[0]
+        place = f" near voxel {tuple(int(o) for o in near)}" if near is not None else ""
         raise IsoflowError(
-            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1, e.g. {value})"
+            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1{place}, e.g. {value})"
         )
     return arr.astype(bool)
 

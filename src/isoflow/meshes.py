@@ -90,7 +90,7 @@ def from_manifold(manifold, pitch: float = 1.0, origin=(0.0, 0.0, 0.0)) -> Digit
     return DigitalObject(vol, offset=tuple(lo), pitch=pitch, origin=origin).cropped()
 
 
-def cube_union(voxels) -> "manifold3d.Manifold":  # noqa: F821
+def cube_union(voxels):
     """The union of unit cubes at integer voxel indices, as manifold3d builds
     it with ``batch_boolean`` (slow and sliver-prone for many cubes, see
     PEERS.md; :func:`to_manifold` is the fast, exact route)."""
@@ -167,7 +167,6 @@ def mesh_topology(vertices, faces) -> dict:
     skey = key[order]
     edge_start = np.flatnonzero(np.r_[True, skey[1:] != skey[:-1]])
     edge_count = np.diff(np.r_[edge_start, len(skey)])
-    edge_id = np.repeat(np.arange(len(edge_start)), edge_count)
     # faces sharing an edge are in one component (all of them at a
     # non-manifold edge): join each half-edge's face to its edge's first face
     first_face = face_of[order][np.repeat(edge_start, edge_count)]

@@ -58,6 +58,7 @@ import numpy as np
 from .analysis import report_from_histogram
 from .configurations import configuration_histogram, configurations
 from .errors import IsoflowError
+from .io import as_binary
 from .topology import COMPLEMENT, check_connectivity, default_connectivity, euler_from_histogram
 
 #: local labels live in the low 32 bits of a node key, the block in the high bits
@@ -140,21 +141,6 @@ def _label(mask: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
     return labels, int(n)
 
 
-def _as_binary(block: np.ndarray, where: str, origin) -> np.ndarray:
-    """The block as bool, or an IsoflowError naming the input and the place."""
-    block = np.asarray(block)
-    if block.dtype == np.bool_:
-        return block
-    bad = (block != 0) & (block != 1)  # NaN is caught too: NaN != 0 and NaN != 1
-    if bad.any():
-        value = block[bad].flat[0]
-        raise IsoflowError(
-            f"{where}: not a binary volume (values other than 0 and 1 near voxel "
-            f"{tuple(int(o) for o in origin)}, e.g. {value})"
-        )
-    return block.astype(bool)
-
-
 def _vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
     """Configuration counts of a box of vertices around ``vox``.
 
@@ -213,7 +199,7 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
     array's border faces.
     """
     ndim = len(index)
-    core = _as_binary(block, where, origin)
+    core = as_binary(block, where, near=origin)
     first = tuple(i == 0 for i in index)
     last = tuple(i == n - 1 for i, n in zip(index, numblocks))
     hist = _vertex_histogram(core, first, last)
@@ -625,5 +611,5 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
     if dtype.kind != "b" and 0 not in z.shape:
         first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
-        _as_binary(first, where, (0,) * z.ndim)
+        as_binary(first, where, near=(0,) * z.ndim)
     return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where)

@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .configurations import OCTANTS_3D, configurations, octant_bit
+from .configurations import configurations, octant_bit
 from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
 from .topology import check_connectivity
 
