@@ -134,6 +134,13 @@ def test_obj_export_loads(tmp_path):
     assert tm.is_watertight and tm.euler_number == 0
     assert tm.volume == pytest.approx(v.sum())
     assert sum(1 for line in path.read_text().splitlines() if line.startswith("f ")) == len(m.faces)
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    topo = ms.get_topological_measures()
+    assert ms.current_mesh().vertex_number() == len(m.vertices)
+    assert topo["boundary_edges"] == 0 and topo["genus"] == 1
 
 
 def test_refuses_to_overwrite(tmp_path):
