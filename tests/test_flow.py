@@ -380,6 +380,7 @@ def test_cli_flow_out_files(tmp_path, capsys):
     first = trimesh.load(plys[0], process=False)
     assert np.allclose(first.bounds, [[0, 0, 0], dumbbell().shape])
     assert (out / "flow.png").stat().st_size > 1000
+    assert (out / "shapes.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     # an existing non-empty directory is refused without --force
     assert main(["flow", str(tmp_path / "d.npy"), "--out", str(out)]) == 2
     assert "not empty" in capsys.readouterr().err

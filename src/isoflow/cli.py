@@ -258,7 +258,7 @@ def cmd_flow(args) -> int:
         return 0
     print(format_flow(result, str(args.input)))
     if args.out:
-        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png")
+        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)")
     return 0
 
 
@@ -333,7 +333,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_connectivity(p)
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
     p.add_argument("--guard", action="store_true", help="refuse steps that change the Betti numbers (Theorem 21)")
-    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv and flow.png into DIR")
+    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)

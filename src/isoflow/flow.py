@@ -536,8 +536,9 @@ def check_output_dir(directory, force: bool = False):
 def export_flow(result: FlowResult, directory, force: bool = False, plot: bool = True) -> list:
     """Write a flow's files into ``directory``: ``step_NNN.ply`` (the boundary
     surface of every non-empty 3D state, world coordinates, per-vertex
-    curvature data), ``flow.csv`` (one row per step) and ``flow.png``
-    (voxels, energy and Betti numbers against the step).
+    curvature data), ``flow.csv`` (one row per step), ``flow.png`` (voxels,
+    energy and Betti numbers against the step) and, in 3D, ``shapes.png``
+    (the object at a few steps).
 
     Refuses a directory that already holds files unless ``force``.
     """
@@ -568,7 +569,9 @@ def export_flow(result: FlowResult, directory, force: bool = False, plot: bool =
         w.writerows(rows)
     written.append(csv_path)
     if plot:
-        from .render import render_flow
+        from .render import render_flow, render_flow_shapes
 
         written.append(render_flow(result, out / "flow.png"))
+        if result.states and result.states[0].ndim == 3 and result.states[0].voxels:
+            written.append(render_flow_shapes(result, out / "shapes.png"))
     return written

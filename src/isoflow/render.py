@@ -24,42 +24,75 @@ def _pyplot():
     return plt
 
 
-def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azim: float = -55) -> Path:
-    """Write a PNG of the boundary mesh, faces coloured by the mean vertex
-    angle gamma of their corners (blue concave, white flat, red convex)."""
+def _draw_surface(ax, mesh, obj, elev: float, azim: float, budget: int, bounds=None) -> None:
+    """Draw a boundary mesh into a 3D axes: faces coloured by the mean vertex
+    angle gamma of their corners, shaded by their normal, back faces culled."""
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     from .io import gamma_colours
 
-    plt = _pyplot()
     xyz = obj.world(mesh.vertices)
     faces = mesh.faces
     # Back-face culling: the view direction of matplotlib's camera.
     e, a = np.radians(elev), np.radians(azim)
     view = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
-    keep = mesh.face_normals.astype(float) @ view > 0
-    idx = np.flatnonzero(keep)
-    if len(idx) > FACE_BUDGET:
-        idx = np.sort(np.random.default_rng(0).choice(idx, FACE_BUDGET, replace=False))
+    idx = np.flatnonzero(mesh.face_normals.astype(float) @ view > 0)
+    if len(idx) > budget:
+        idx = np.sort(np.random.default_rng(0).choice(idx, budget, replace=False))
     colours = gamma_colours(mesh.gamma, mesh.vertex_class).astype(float) / 255
     face_rgb = colours[faces[idx]].mean(axis=1)
     # Shade by the face normal so that the shape reads in a still picture.
     light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     shade = 0.55 + 0.45 * np.clip(mesh.face_normals[idx].astype(float) @ light, 0, 1)
-    fig = plt.figure(figsize=(7, 6), dpi=110)
-    ax = fig.add_subplot(projection="3d")
-    poly = Poly3DCollection(xyz[faces[idx]], facecolors=face_rgb * shade[:, None], edgecolors="none")
-    ax.add_collection3d(poly)
-    lo, hi = xyz.min(axis=0), xyz.max(axis=0)
+    ax.add_collection3d(Poly3DCollection(xyz[faces[idx]], facecolors=face_rgb * shade[:, None], edgecolors="none"))
+    lo, hi = bounds if bounds is not None else (xyz.min(axis=0), xyz.max(axis=0))
     centre, half = (lo + hi) / 2, (hi - lo).max() / 2
     for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre):
         setter(c - half, c + half)
     ax.set_box_aspect((1, 1, 1))
     ax.view_init(elev=elev, azim=azim)
+
+
+def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azim: float = -55) -> Path:
+    """Write a PNG of the boundary mesh, faces coloured by the mean vertex
+    angle gamma of their corners (blue concave, white flat, red convex)."""
+    plt = _pyplot()
+    fig = plt.figure(figsize=(7, 6), dpi=110)
+    ax = fig.add_subplot(projection="3d")
+    _draw_surface(ax, mesh, obj, elev, azim, FACE_BUDGET)
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
     ax.set_title(f"{title}\nvertex angle: blue concave, white flat, red convex", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def render_flow_shapes(result, path: Path, panels: int = 6, elev: float = 25, azim: float = -55) -> Path:
+    """Write a PNG of the flowing object itself: up to ``panels`` states of a
+    3D flow, evenly spaced from the input to the last non-empty state, all in
+    the input's frame so that the shrinking shows, coloured like
+    :func:`render_surface`."""
+    from .surface import boundary_mesh
+
+    plt = _pyplot()
+    shown = [i for i, st in enumerate(result.states) if st.voxels]
+    if len(shown) > panels:
+        shown = [shown[round(k * (len(shown) - 1) / (panels - 1))] for k in range(panels)]
+    box = result.states[0].bbox()
+    cols = min(3, len(shown))
+    rows = -(-len(shown) // cols)
+    fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
+    for k, i in enumerate(shown):
+        state, rec = result.states[i], result.steps[i]
+        ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
+        mesh = boundary_mesh(state.volume, result.connectivity)
+        _draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(shown), bounds=box)
+        ax.set_axis_off()
+        ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
+    fig.suptitle("digital curvature flow (blue concave, white flat, red convex)", fontsize=9)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
