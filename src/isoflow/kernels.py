@@ -14,7 +14,7 @@ a label volume:
   byte per voxel on real data) instead of a 4-byte label per voxel.
 
 They give the same numbers as :func:`isoflow.configurations.configurations`
-and cc3d (the tests check it). The numpy/cc3d paths stay in use for small
+and scipy (the tests check it). The numpy/scipy paths stay in use for small
 volumes, where compiling would cost more than it saves; compiled code is
 cached on disk after the first run.
 """

@@ -50,7 +50,6 @@ a few per component crossing a face), never the volume or a label volume.
 from __future__ import annotations
 
 import itertools
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -70,8 +69,6 @@ _MIN_BLOCK = 1 << 21
 _MAX_BLOCKS = 512
 #: below this many voxels a block's histogram is one configuration array
 _DIRECT_HISTOGRAM = 1 << 18
-#: the compiled histogram kernel runs its own threads; one call at a time
-_HIST_LOCK = threading.Lock()
 
 
 # --------------------------------------------------------------------------
@@ -160,8 +157,7 @@ def _vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
         # small (tiles, small blocks): one configuration array is cheapest
         keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
         return np.bincount(configurations(vox)[keep].ravel(), minlength=size).astype(np.int64)
-    with _HIST_LOCK:  # numba's workqueue layer aborts on concurrent parallel calls
-        hist = configuration_histogram(vox).astype(np.int64)
+    hist = configuration_histogram(vox).astype(np.int64)
     kept = []  # per axis, the kept index range of the axes already done
     for axis in range(ndim):
         end = vox.shape[axis]
