@@ -9,6 +9,7 @@ The core is array in / array out; :class:`DigitalObject` only adds where the
 array sits (offset, lattice parity, pitch, origin).
 """
 
+from . import arrays
 from .analysis import analyze
 from .configurations import configuration_histogram
 from .errors import IsoflowError

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import arrays
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -25,8 +26,13 @@ from .lattice import DigitalObject
 from .topology import betti_numbers, check_connectivity, default_connectivity, euler_from_histogram
 
 
-def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool = True) -> dict:
+def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict:
     """Everything ``isoflow info --json`` reports, as a JSON-ready dict.
+
+    ``obj`` is a :class:`DigitalObject` or a bare binary volume: a NumPy
+    array, or a CuPy (or other array-API) array whose histogram and Betti
+    numbers are computed on its device (:mod:`isoflow.arrays`); only the
+    surfaces, when asked, are meshed from a host copy.
 
     ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the 128
     configurations that are not well-composed included (with the weight of the
@@ -35,7 +41,10 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
     alone. ``energy`` is the paper's ``E = k^T n`` over the nine classes (in
     2D: convex plus concave vertices, ``k = r^2``).
     """
-    vol = obj.volume
+    if isinstance(obj, DigitalObject):
+        vol, parity = obj.volume, obj.parity
+    else:
+        vol, parity = arrays.as_volume(obj)[1], 0
     conn = check_connectivity(vol.ndim, connectivity or default_connectivity(vol.ndim))
     hist = configuration_histogram(vol)
     chi = euler_from_histogram(hist, vol.ndim, conn)
@@ -43,15 +52,15 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
         hist,
         vol.ndim,
         conn,
-        voxels=obj.voxels,
+        voxels=voxels_from_histogram(hist),
         shape=vol.shape,
         betti=betti_numbers(vol, conn, chi=chi),
-        parity=obj.parity,
+        parity=parity,
     )
     if vol.ndim == 3 and surfaces:
         from .surface import boundary_mesh
 
-        mesh = boundary_mesh(vol, conn)
+        mesh = boundary_mesh(arrays.to_host(vol), conn)
         out["surfaces"] = [
             {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}
             for c in mesh.components()
@@ -59,6 +68,16 @@ def analyze(obj: DigitalObject, connectivity: int | None = None, surfaces: bool 
         out["pinched_vertices"] = mesh.pinched
         out["doubled_edges"] = mesh.midpoints // 2
     return out
+
+
+def voxels_from_histogram(hist: np.ndarray) -> int:
+    """Object voxels: each is an octant of exactly ``2^n`` vertices, so the
+    octant bits set over all configurations count every voxel ``2^n`` times."""
+    hist = np.asarray(hist, dtype=np.int64)
+    octants = int(len(hist)).bit_length() - 1
+    codes = np.arange(len(hist))
+    bits = ((codes[:, None] >> np.arange(octants)) & 1).sum(axis=1)
+    return int(hist @ bits) // octants
 
 
 def report_from_histogram(

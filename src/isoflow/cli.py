@@ -78,12 +78,20 @@ def cmd_info(args) -> int:
 
         if args.pitch is not None or args.resolution is not None:
             raise IsoflowError(f"{args.input}: --pitch/--resolution apply to meshes, not to .zarr input")
+        if args.gpu:
+            raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         report = analyze_zarr(args.input, args.connectivity)
         if report["dimension"] == 3:
             report["surfaces"] = None
     else:
         obj = load_input(args)
-        report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
+        if args.gpu:
+            from .arrays import to_gpu
+
+            report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces)
+            report["parity"] = obj.parity  # a bare array has no lattice place
+        else:
+            report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
     report["input"] = str(args.input)
     if args.json:
         print(json.dumps(report))
@@ -298,6 +306,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus (faster on huge volumes)")
+    p.add_argument(
+        "--gpu",
+        action="store_true",
+        help="compute chi, Betti numbers and n on a CUDA GPU with CuPy (pip install 'isoflow[gpu]')",
+    )
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("surface", help="write the boundary quad mesh (PLY/OBJ) with curvature attributes")

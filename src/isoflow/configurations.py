@@ -29,6 +29,9 @@ from functools import lru_cache
 
 import numpy as np
 
+from . import arrays
+from .errors import IsoflowError
+
 #: octant d -> its bit index, for the 3D window
 OCTANTS_3D = [(dx, dy, dz) for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)]
 #: pixel d -> its bit index, for the 2D window
@@ -40,61 +43,66 @@ def octant_bit(d) -> int:
     return sum(int(b) << i for i, b in enumerate(d))
 
 
-def configurations(volume: np.ndarray) -> np.ndarray:
+def configurations(volume) -> np.ndarray:
     """Configuration byte of every lattice vertex of a 2D or 3D binary volume.
 
-    Returns a uint8 array of shape ``volume.shape + 1``. Three passes (one per
-    axis) build the code: first pairs along axis 0 (bits 0/1), then pairs of
-    pairs along axis 1 (bits 0-3), then along axis 2 (bits 0-7), which is
+    Returns a uint8 array of shape ``volume.shape + 1``, in the input's array
+    library (a CuPy volume gives a CuPy array on its GPU). Three passes (one
+    per axis) build the code: first pairs along axis 0 (bits 0/1), then pairs
+    of pairs along axis 1 (bits 0-3), then along axis 2 (bits 0-7), which is
     cheaper than or-ing the 8 shifted copies.
     """
-    v = np.asarray(volume)
-    if v.dtype != np.bool_:
-        v = v.astype(bool)
-    code = np.pad(v, 1).view(np.uint8)
+    xp, v = arrays.as_volume(volume)
+    # The one layer of background padding, written with the standard's
+    # zeros + slice assignment (``pad`` is not in the array API).
+    code = arrays.zeros(xp, tuple(s + 2 for s in v.shape), xp.uint8, like=v)
+    code[(slice(1, -1),) * v.ndim] = xp.astype(v, xp.uint8)
     for axis in range(v.ndim):
         lo = [slice(None)] * v.ndim
         hi = [slice(None)] * v.ndim
         lo[axis] = slice(None, -1)
         hi[axis] = slice(1, None)
-        shifted = code[tuple(hi)] << np.uint8(1 << axis)
-        code = code[tuple(lo)] | shifted
+        code = code[tuple(lo)] | (code[tuple(hi)] << (1 << axis))
     return code
 
 
-def configuration_histogram(volume: np.ndarray, slab: int = 64) -> np.ndarray:
+def configuration_histogram(volume, slab: int = 64) -> np.ndarray:
     """Counts of the 256 (3D) or 16 (2D) configurations over all vertices.
 
-    Large 3D volumes go through the streaming kernel of
-    :mod:`isoflow.kernels`; otherwise the work goes slab by slab along axis 0
-    so that memory stays a small multiple of one slab, the slabs overlapping
-    by one voxel layer so that every vertex is counted exactly once.
+    Always a host int64 vector. Large 3D host volumes go through the streaming
+    kernel of :mod:`isoflow.kernels`; otherwise (and for every device array:
+    CuPy, any array-API library) the work goes slab by slab along axis 0 so
+    that memory stays a small multiple of one slab, the slabs overlapping by
+    one voxel layer so that every vertex is counted exactly once.
     """
-    v = np.asarray(volume)
+    xp, v = arrays.as_volume(volume)
     size = 1 << (1 << v.ndim)
     from . import kernels
 
-    if v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
-        return kernels.histogram3d(v)
-    if v.ndim == 4:
-        from . import ndim
+    if arrays.is_host(xp):
+        if v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
+            return kernels.histogram3d(v)
+        if v.ndim == 4:
+            from . import ndim
 
-        return ndim.configuration_histogram(v)
-    if v.shape[0] <= slab:
-        return np.bincount(configurations(v).ravel(), minlength=size)
+            return ndim.configuration_histogram(v)
+    elif v.ndim == 4:
+        raise IsoflowError("4D volumes are read on the host: pass a NumPy array")
     hist = np.zeros(size, dtype=np.int64)
     n0 = v.shape[0]
-    for start in range(0, n0, slab):
-        stop = min(start + slab, n0)
-        # Vertices start..stop-1 (plus the last one n0 on the final slab) need
-        # voxels start-1..stop-1; take them and drop the duplicated vertex row.
-        lo = max(start - 1, 0)
-        part = configurations(v[lo:stop])
-        # part's vertex rows are lo .. stop; keep rows start .. stop-1, and
-        # row n0 on the last slab.
-        first = start - lo
-        last = part.shape[0] if stop == n0 else part.shape[0] - 1
-        hist += np.bincount(part[first:last].ravel(), minlength=size)
+    with arrays.on_device(v):
+        for start in range(0, max(n0, 1), slab):
+            stop = min(start + slab, n0)
+            # Vertices start..stop-1 (plus the last one n0 on the final slab)
+            # need voxels start-1..stop-1; take them and drop the duplicated
+            # vertex row.
+            lo = max(start - 1, 0)
+            part = configurations(v[lo:stop, ...])
+            # part's vertex rows are lo .. stop; keep rows start .. stop-1,
+            # and row n0 on the last slab.
+            first = start - lo
+            last = part.shape[0] if stop == n0 else part.shape[0] - 1
+            hist += arrays.count_codes(xp, part[first:last, ...], size)
     return hist
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import arrays
 from .configurations import configuration_histogram
 from .errors import IsoflowError
 from .indices import euler_lut
@@ -61,9 +62,12 @@ def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
     return total // scale
 
 
-def euler_characteristic(volume: np.ndarray, connectivity: int | None = None) -> int:
-    """Euler characteristic of a 2D or 3D binary volume (eq. 4.12-4.13)."""
-    v = np.asarray(volume, dtype=bool)
+def euler_characteristic(volume, connectivity: int | None = None) -> int:
+    """Euler characteristic of a 2D, 3D or 4D binary volume (eq. 4.12-4.13).
+
+    ``volume`` may be a NumPy array, a CuPy array (read on its GPU) or any
+    array-API array (see :mod:`isoflow.arrays`)."""
+    xp, v = arrays.as_volume(volume)
     conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
@@ -74,67 +78,85 @@ def _structure(ndim: int, connectivity: int) -> np.ndarray:
     return generate_binary_structure(ndim, 1 if connectivity in (4, 6) else ndim)
 
 
-def _compiled(volume: np.ndarray) -> bool:
+def _compiled(volume) -> bool:
     from . import kernels
 
-    return kernels.HAVE_NUMBA and volume.ndim <= 3 and volume.size >= kernels.MIN_VOXELS
+    return (
+        isinstance(volume, np.ndarray)
+        and kernels.HAVE_NUMBA
+        and volume.ndim <= 3
+        and volume.size >= kernels.MIN_VOXELS
+    )
 
 
-def count_components(volume: np.ndarray, connectivity: int) -> int:
+def _labelled(volume):
+    """``(xp, volume, label)``: the volume where its library can label it (host
+    NumPy, a CuPy GPU), otherwise copied to the host once."""
+    xp, v = arrays.as_volume(volume)
+    label = arrays.label_function(xp)
+    if label is None:
+        v = arrays.to_host(v)
+        xp, label = np, arrays.label_function(np)
+    return xp, v, label
+
+
+def count_components(volume, connectivity: int) -> int:
     """Number of connected components of the True voxels.
 
-    Large volumes use the run-based union-find of :mod:`isoflow.kernels`
-    (no label volume); small ones ``scipy.ndimage.label``.
+    Large host volumes use the run-based union-find of :mod:`isoflow.kernels`
+    (no label volume); small ones ``scipy.ndimage.label``, CuPy volumes
+    ``cupyx.scipy.ndimage.label`` on their GPU.
     """
-    volume = np.asarray(volume, dtype=bool)
-    if _compiled(volume):
+    xp, v, label = _labelled(volume)
+    if _compiled(v):
         from .kernels import count_components as compiled
 
-        return compiled(volume, connectivity)
-    from scipy.ndimage import label
+        return compiled(v, connectivity)
+    with arrays.on_device(v):
+        return int(label(v, _structure(v.ndim, connectivity))[1])
 
-    return int(label(volume, _structure(volume.ndim, connectivity))[1])
 
-
-def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
+def count_enclosed(volume, connectivity: int) -> int:
     """Components of the background (with ``connectivity``) that do not reach
     the array border: cavities in 3D, holes in 2D.
 
     The region outside the array is background and touches every border
     component, so those merge into one exterior; no padded copy is needed.
     """
-    volume = np.asarray(volume, dtype=bool)
-    if volume.size == 0:
+    xp, v, label = _labelled(volume)
+    if v.size == 0:
         return 0
-    if _compiled(volume):
+    if _compiled(v):
         from .kernels import count_enclosed as compiled
 
-        return compiled(volume, connectivity)
-    from scipy.ndimage import label
+        return compiled(v, connectivity)
+    with arrays.on_device(v):
+        labels, n = label(~v, _structure(v.ndim, connectivity))
+        faces = []
+        for axis in range(v.ndim):
+            for end in (0, -1):
+                index = [slice(None)] * v.ndim
+                index[axis] = end
+                faces.append(xp.reshape(labels[tuple(index)], (-1,)))
+        # unique_values/concatenate/count_nonzero: in both NumPy and CuPy
+        border = xp.unique_values(xp.concatenate(faces))
+        return int(n) - int(xp.count_nonzero(border))
 
-    labels, n = label(~volume, _structure(volume.ndim, connectivity))
-    border = set()
-    for axis in range(labels.ndim):
-        for end in (0, -1):
-            border.update(np.unique(np.take(labels, end, axis=axis)).tolist())
-    border.discard(0)
-    return int(n) - len(border)
 
-
-def betti_numbers(
-    volume: np.ndarray, connectivity: int | None = None, chi: int | None = None
-) -> list[int]:
+def betti_numbers(volume, connectivity: int | None = None, chi: int | None = None) -> list[int]:
     """Betti numbers ``[b0, b1, b2]`` (3D) or ``[b0, b1]`` (2D).
 
     b0: components, b2: cavities, b1 = b0 + b2 - chi: tunnels (3D); in 2D b1
     is the number of holes and ``chi = b0 - b1`` is checked. In 4D only b0 and
     b3 (enclosed background components) come from labelling; chi fixes
-    ``b1 - b2`` but not each, so they are None.
+    ``b1 - b2`` but not each, so they are None. Like
+    :func:`euler_characteristic`, it reads CuPy volumes on their GPU.
     """
-    v = np.asarray(volume, dtype=bool)
+    xp, v = arrays.as_volume(volume)
     conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
     if chi is None:
         chi = euler_characteristic(v, conn)
+    xp, v, _ = _labelled(v)  # one host copy, where the library cannot label
     if _compiled(v):
         from .kernels import count_object_and_enclosed
 

@@ -1,0 +1,135 @@
+"""Where a volume lives: host NumPy, a CuPy array on a GPU, or any array-API array.
+
+The array core (vertex configurations, their histogram, chi, the class vector
+and the Betti numbers) is written against the Python array API standard, so a
+CuPy volume is read on its GPU and never copied to the host: only the
+256-entry histogram comes back. The few operations the standard lacks are
+dispatched here, so the rest of the core names no library:
+
+* counting codes: ``bincount`` where the library has it (NumPy, CuPy), the
+  standard's ``unique_counts`` otherwise;
+* connected components: ``scipy.ndimage.label`` on the host,
+  ``cupyx.scipy.ndimage.label`` on a CuPy GPU; other libraries have no
+  labelling, so their volume is copied to the host for that step alone.
+
+Anything that is not an array-API array (lists, dask arrays, NumPy itself) is
+read with ``numpy.asarray`` as before.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+import numpy as np
+
+from .errors import IsoflowError
+
+
+def namespace(x):
+    """The array library of ``x``: ``numpy`` for host data, ``cupy`` for CuPy
+    arrays, else the array's own ``__array_namespace__()``."""
+    if isinstance(x, np.ndarray):
+        return np
+    if _is_cupy(x):
+        import cupy
+
+        # CuPy's main namespace has the standard's functions plus bincount;
+        # its __array_namespace__ may be a narrower compatibility module.
+        return cupy
+    get = getattr(x, "__array_namespace__", None)
+    return np if get is None else get()
+
+
+def _is_cupy(x) -> bool:
+    return type(x).__module__.partition(".")[0] in ("cupy", "cupyx")
+
+
+def is_host(xp) -> bool:
+    return xp is np
+
+
+def as_volume(volume):
+    """``(xp, boolean volume)``: host data through ``numpy.asarray``, device
+    arrays left where they are."""
+    xp = namespace(volume)
+    if is_host(xp):
+        v = np.asarray(volume)
+        return np, v if v.dtype == np.bool_ else v.astype(bool)
+    if volume.dtype != xp.bool:
+        volume = xp.astype(volume, xp.bool)
+    return xp, volume
+
+
+def on_device(volume):
+    """Context in which new arrays go to ``volume``'s device (CuPy allocates
+    on the *current* GPU, which need not be the input's)."""
+    return volume.device if _is_cupy(volume) else contextlib.nullcontext()
+
+
+def zeros(xp, shape, dtype, like):
+    """Zeros on the device of ``like``."""
+    if is_host(xp) or _is_cupy(like):
+        return xp.zeros(shape, dtype=dtype)
+    return xp.zeros(shape, dtype=dtype, device=like.device)
+
+
+def to_host(x) -> np.ndarray:
+    """An explicit copy to host memory (never an implicit ``numpy.asarray``,
+    which CuPy refuses)."""
+    if isinstance(x, np.ndarray):
+        return x
+    if _is_cupy(x):
+        return x.get()
+    return np.from_dlpack(x)
+
+
+def count_codes(xp, codes, size: int) -> np.ndarray:
+    """How often each value ``0 .. size-1`` occurs in ``codes``, as a host
+    int64 vector."""
+    flat = xp.reshape(codes, (-1,))
+    if hasattr(xp, "bincount"):
+        return to_host(xp.bincount(flat, minlength=size)).astype(np.int64)
+    values, counts = xp.unique_counts(flat)
+    out = np.zeros(size, dtype=np.int64)
+    out[to_host(values).astype(np.int64)] = to_host(counts)
+    return out
+
+
+def label_function(xp):
+    """``label(volume, structure) -> (labels, count)`` for ``xp``'s arrays,
+    or None where the library has no labelling."""
+    if is_host(xp):
+        from scipy.ndimage import label
+
+        return label
+    if xp.__name__ == "cupy":
+        from cupyx.scipy.ndimage import label
+
+        return label
+    return None
+
+
+#: bytes of GPU memory per voxel that ``analyze`` needs at most: the volume,
+#: its complement and the int32 labels of one labelling, plus slack
+GPU_BYTES_PER_VOXEL = 8
+
+
+def to_gpu(volume: np.ndarray):
+    """A host volume uploaded to the current CuPy GPU, after checking that
+    CuPy works and that the analysis will fit in the GPU's free memory."""
+    try:
+        import cupy
+
+        free, _total = cupy.cuda.runtime.memGetInfo()
+    except Exception as exc:  # no CuPy, no driver, no device
+        raise IsoflowError(
+            f"--gpu needs CuPy and a CUDA GPU ({type(exc).__name__}: {exc}); "
+            "install with: pip install 'isoflow[gpu]'"
+        ) from None
+    need = int(np.prod(volume.shape, dtype=np.int64)) * GPU_BYTES_PER_VOXEL
+    if need > free:
+        raise IsoflowError(
+            f"a {'x'.join(map(str, volume.shape))} volume needs about {need / 2**30:.1f} GiB "
+            f"of GPU memory and {free / 2**30:.1f} GiB is free; drop --gpu"
+        )
+    return cupy.asarray(volume)
