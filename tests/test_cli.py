@@ -120,3 +120,42 @@ def test_bad_input_gives_one_line_and_exit_2(tmp_path):
         assert any(f in lines[0] for f in files) or "connectivity" in words
     assert (tmp_path / "exists.ply").read_text() == "keep me"
     assert not (tmp_path / "e.ply").exists()
+
+
+def test_boundary_face_count_from_the_histogram(rng):
+    # faces counted from 256 configuration counts alone, against an
+    # independent count of object/background neighbour pairs on each axis
+    from isoflow.configurations import configuration_histogram
+    from isoflow.surface import boundary_faces
+
+    for _ in range(100):
+        v = rng.random(tuple(rng.integers(1, 10, 3))) < rng.random()
+        p = np.pad(v, 1)
+        pairs = sum(int(np.count_nonzero(np.diff(p, axis=a))) for a in range(3))
+        assert boundary_faces(configuration_histogram(v)) == pairs
+
+
+def test_surface_refuses_a_mesh_beyond_the_memory_budget(tmp_path, capsys, monkeypatch):
+    from isoflow import memory
+
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    monkeypatch.setattr(memory, "default_budget", lambda: 100_000)
+    out = tmp_path / "t.ply"
+    assert main(["surface", str(tmp_path / "t.npy"), "-o", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "t.npy" in err and "faces" in err and "budget" in err and len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_info_skips_surfaces_beyond_the_memory_budget_and_says_why(tmp_path, capsys, monkeypatch):
+    from isoflow import memory
+
+    v = torus(6, 2)
+    np.save(tmp_path / "t.npy", v)
+    monkeypatch.setattr(memory, "default_budget", lambda: 100_000)
+    r = info_json(capsys, tmp_path / "t.npy")
+    # the topology is still reported in full
+    assert r["betti"] == [1, 1, 0] and r["euler_characteristic"] == euler_number(v, connectivity=1)
+    assert r["surfaces"] is None and "faces" in r["surfaces_skipped"]
+    assert main(["info", str(tmp_path / "t.npy")]) == 0
+    assert "not computed (the boundary has" in capsys.readouterr().out

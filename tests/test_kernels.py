@@ -47,3 +47,29 @@ def test_analyze_uses_kernels_above_threshold(monkeypatch, rng):
     fast = analyze(DigitalObject(v), 26, surfaces=False)
     assert fast == slow
     assert fast["euler_characteristic"] == euler_number(v, 3)
+
+
+def test_mesh_components_equal_scipy_graph_components(rng):
+    # random noise: many surfaces, pinches and doubled edges (midpoint slots)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from isoflow.kernels import label_polygons
+    from isoflow.surface import boundary_mesh
+
+    for conn in (6, 26):
+        mesh = boundary_mesh(rng.random((14, 12, 13)) < 0.5, conn)
+        poly = mesh.polygons()
+        nv = len(mesh.vertices)
+        rows = np.repeat(np.arange(len(poly)), poly.shape[1])
+        cols = poly.ravel()
+        keep = cols >= 0
+        # bipartite face-vertex graph: independent of the kernel's union order
+        graph = coo_matrix((np.ones(keep.sum()), (rows[keep] + nv, cols[keep])),
+                           shape=(nv + len(poly),) * 2)
+        n, ref = connected_components(graph, directed=False)
+        label, count = label_polygons(poly, nv)
+        assert count == n and mesh.midpoints > 0
+        # same partition: the pairs (label, ref) are a bijection
+        pairs = np.unique(np.stack([label, ref[:nv]], 1), axis=0)
+        assert len(pairs) == n == len(np.unique(label)) == len(np.unique(ref[:nv]))

@@ -58,8 +58,19 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict
         parity=parity,
     )
     if vol.ndim == 3 and surfaces:
-        from .surface import boundary_mesh
+        from .memory import default_budget, gib
+        from .surface import boundary_mesh, boundary_faces, mesh_memory
 
+        need = mesh_memory(hist)
+        if need > default_budget():
+            # chi, Betti numbers and n are known; say why the genus per
+            # surface is missing rather than fail the whole report
+            out["surfaces"] = None
+            out["surfaces_skipped"] = (
+                f"the boundary has {boundary_faces(hist):,} faces; meshing it needs about "
+                f"{gib(need)}, more than the memory budget of {gib(default_budget())}"
+            )
+            return out
         mesh = boundary_mesh(arrays.to_host(vol), conn)
         out["surfaces"] = [
             {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}

@@ -126,7 +126,8 @@ def format_info(r: dict) -> str:
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
     if r.get("surfaces", []) is None:
-        lines.append("  closed surfaces        not computed (out-of-core input)")
+        why = r.get("surfaces_skipped", "out-of-core input")
+        lines.append(f"  closed surfaces        not computed ({why})")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
     return "\n".join(lines)
@@ -134,7 +135,9 @@ def format_info(r: dict) -> str:
 
 def cmd_surface(args) -> int:
     from . import io
-    from .surface import boundary_mesh
+    from .configurations import configuration_histogram
+    from .memory import check_fits
+    from .surface import boundary_faces, boundary_mesh, mesh_memory
     from .topology import default_connectivity
 
     obj = load_input(args)
@@ -150,6 +153,12 @@ def cmd_surface(args) -> int:
     if obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
     conn = args.connectivity or default_connectivity(3)
+    hist = configuration_histogram(obj.volume)
+    check_fits(
+        mesh_memory(hist),
+        f"{args.input}: the boundary mesh ({boundary_faces(hist):,} faces)",
+        hint="crop or coarsen the volume",
+    )
     mesh = boundary_mesh(obj.volume, conn)
     comments = (
         f"isoflow surface of {Path(args.input).name}, {conn}-connectivity",

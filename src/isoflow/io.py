@@ -179,16 +179,22 @@ def gamma_colours(gamma: np.ndarray, vertex_class: np.ndarray) -> np.ndarray:
     """RGB (uint8) of the vertex angle gamma (-4..4 eighths): blue for concave,
     white for flat, red for convex, linear in between; green marks vertices
     that are not well-composed, grey the midpoints of doubled edges."""
-    t = np.clip(np.asarray(gamma, float) / 4.0, -1, 1)
+    palette = _gamma_palette()
+    rgb = palette[np.clip(np.asarray(gamma, np.int64), -4, 4) + 4]  # a gather, not float math per vertex
+    rgb[vertex_class == -1] = (20, 170, 60)
+    rgb[vertex_class == -2] = (150, 150, 150)
+    return rgb
+
+
+def _gamma_palette() -> np.ndarray:
+    """Colour of gamma = -4 .. 4: blue - white - red, linear in between."""
+    t = np.arange(-4, 5) / 4.0
     white = np.array([255.0, 255.0, 255.0])
     red = np.array([200.0, 30.0, 30.0])
     blue = np.array([30.0, 60.0, 200.0])
     pos = np.clip(t, 0, 1)[:, None]
     neg = np.clip(-t, 0, 1)[:, None]
-    rgb = white * (1 - pos - neg) + red * pos + blue * neg
-    rgb[vertex_class == -1] = (20, 170, 60)
-    rgb[vertex_class == -2] = (150, 150, 150)
-    return np.round(rgb).astype(np.uint8)
+    return np.round(white * (1 - pos - neg) + red * pos + blue * neg).astype(np.uint8)
 
 
 def mesh_vertex_table(mesh, obj: DigitalObject) -> dict[str, np.ndarray]:
@@ -221,9 +227,9 @@ def _size_groups(faces: np.ndarray):
     for size in np.unique(sizes):
         rows = faces[sizes == size]
         # -1 slots can sit between vertices (a missing midpoint): drop them
-        # keeping the cyclic order.
-        order = np.argsort(rows < 0, axis=1, kind="stable")[:, :size]
-        yield int(size), np.take_along_axis(rows, order, axis=1)
+        # keeping the cyclic order. A boolean mask reads row by row, and
+        # every row of the group keeps exactly `size` slots.
+        yield int(size), rows[rows >= 0].reshape(len(rows), size)
 
 
 def write_ply(

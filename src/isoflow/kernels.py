@@ -205,6 +205,36 @@ if HAVE_NUMBA:
                 roots += 1
         return roots
 
+    @njit(cache=True, nogil=True)
+    def _label_polygons(polygons, nv):
+        """Vertex labels 0..n-1 of the connected components of a polygon
+        mesh (rows of vertex ids, -1 for an empty slot), numbered in order
+        of their smallest vertex."""
+        parent = np.arange(nv).astype(polygons.dtype)
+        for f in range(polygons.shape[0]):
+            a = _find(parent, polygons[f, 0])
+            for t in range(1, polygons.shape[1]):
+                if polygons[f, t] >= 0:
+                    b = _find(parent, polygons[f, t])
+                    if a != b:
+                        parent[b] = a
+        label = np.full(nv, -1, dtype=np.int32)
+        count = 0
+        for i in range(nv):
+            r = _find(parent, i)
+            if label[r] < 0:
+                label[r] = count
+                count += 1
+            label[i] = label[r]
+        return label, count
+
+
+def label_polygons(polygons: np.ndarray, nv: int) -> tuple[np.ndarray, int]:
+    """``(labels, count)``: connected components of a mesh's ``nv`` vertices
+    joined by its polygons (same partition as scipy's ``connected_components``
+    on the face graph; 4 bytes per vertex instead of a sparse matrix)."""
+    return _label_polygons(np.ascontiguousarray(polygons), nv)
+
 
 def _halves(n: int):
     mid = n // 2

@@ -66,6 +66,7 @@ from typing import Callable
 import numpy as np
 
 from isoflow.errors import IsoflowError
+from isoflow.memory import default_budget
 
 __all__ = ["load_mesh", "mesh_defects", "voxelize", "MERGE_RTOL"]
 
@@ -303,13 +304,6 @@ def mesh_defects(vertices, faces) -> dict:
 # grid
 # ---------------------------------------------------------------------------
 
-def _default_max_bytes() -> int:
-    try:
-        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")) // 2
-    except (ValueError, OSError, AttributeError):
-        return 4 << 30
-
-
 def _grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     """Pitch, origin and shape of the grid (see the module docstring)."""
     if (pitch is None) == (resolution is None):
@@ -360,7 +354,7 @@ def _grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
 
 def _check_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes):
     if max_bytes is None:
-        max_bytes = _default_max_bytes()
+        max_bytes = default_budget()
     nvox = shape[0] * shape[1] * shape[2]  # Python ints: no overflow
     need = int(nvox * bytes_per_voxel) + extra
     if need > max_bytes:
