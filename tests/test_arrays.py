@@ -22,6 +22,7 @@ from isoflow import DigitalObject, analyze, arrays, betti_numbers, euler_charact
 from isoflow.analysis import voxels_from_histogram
 from isoflow.cli import main
 from isoflow.configurations import configuration_histogram, configurations
+from isoflow.errors import IsoflowError
 
 xps = pytest.importorskip("array_api_strict")
 DEVICE = xps.Device("device1")
@@ -95,9 +96,18 @@ def test_betti_numbers_on_the_device():
     assert betti_numbers(on_device(np.concatenate([ring, ring]))) == [2, 2, 0]
 
 
-def test_non_boolean_device_volume_is_read_as_nonzero(rng):
-    v = (rng.random((9, 8, 7)) < 0.5).astype(np.uint8) * 3
-    assert euler_characteristic(on_device(v)) == euler_number(v > 0, connectivity=1)
+def test_device_volumes_follow_the_host_rule_for_values(rng):
+    # 0/1 in another dtype is read as the bool volume; other values are
+    # refused on the device as on the host
+    v = rng.random((9, 8, 7)) < 0.5
+    assert euler_characteristic(on_device(v.astype(np.uint8))) == euler_number(v, connectivity=1)
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        euler_characteristic(on_device(v.astype(np.uint8) * 3))
+
+
+def test_4d_histogram_on_the_device_equals_host(rng):
+    v = rng.random((5, 4, 6, 3)) < 0.4
+    assert (configuration_histogram(on_device(v)) == configuration_histogram(v)).all()
 
 
 @pytest.mark.parametrize("conn", [6, 26])

@@ -409,3 +409,46 @@ def test_cli_flow_of_a_2d_image(tmp_path, capsys):
     assert [s["voxels"] for s in r["steps"]] == [28, 18, 10, 4, 0] and r["connectivity"] == 4
     assert r["limit"] == {"center": [2.0, 3.5], "last_shape": "cuboid", "last_step": 3}
     assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"]  # no surfaces in 2D
+
+
+def test_cli_flow_force_removes_the_previous_runs_steps(tmp_path, capsys):
+    # a box of side s vanishes in s steps (Theorem 20): 10 PLYs, then 4
+    np.save(tmp_path / "b10.npy", np.ones((10, 10, 10), bool))
+    np.save(tmp_path / "b4.npy", np.ones((4, 4, 4), bool))
+    out = tmp_path / "run"
+    assert main(["flow", str(tmp_path / "b10.npy"), "--out", str(out)]) == 0
+    assert len(list(out.glob("step_*.ply"))) == 10
+    assert main(["flow", str(tmp_path / "b4.npy"), "--out", str(out), "--force"]) == 0
+    assert len(list(out.glob("step_*.ply"))) == 4
+
+
+def test_streamed_flow_files_equal_the_exported_ones(tmp_path, capsys):
+    # the CLI writes while the flow runs (keep_states=False); export_flow
+    # writes from the kept states: same PLYs byte for byte, same CSV
+    from isoflow.flow import export_flow, run_flow
+
+    v = dumbbell()
+    np.save(tmp_path / "d.npy", v)
+    assert main(["flow", str(tmp_path / "d.npy"), "--out", str(tmp_path / "cli")]) == 0
+    export_flow(run_flow(DigitalObject(v)), tmp_path / "api", plot=False)
+    cli = sorted(p.name for p in (tmp_path / "cli").glob("step_*.ply"))
+    api = sorted(p.name for p in (tmp_path / "api").glob("step_*.ply"))
+    assert len(cli) == len(api) > 3
+    for a, b in zip(cli, api):
+        assert (tmp_path / "cli" / a).read_bytes() == (tmp_path / "api" / b).read_bytes()
+    assert (tmp_path / "cli" / "flow.csv").read_text() == (tmp_path / "api" / "flow.csv").read_text()
+
+
+def test_flow_writer_keeps_a_bounded_evenly_spaced_sample(tmp_path):
+    # what replaces keeping every state: at most 2 x PANELS frames, evenly
+    # spaced from step 0, plus the last non-empty state (2D: no PLYs)
+    from isoflow.flow import FlowWriter
+
+    square = DigitalObject(np.ones((2, 2), bool))
+    writer = FlowWriter(tmp_path / "w", 4, last_step=1000)
+    for step in range(201):
+        writer.add(step, square)
+    steps = [s for s, _ in writer.frames]
+    assert len(steps) <= 2 * FlowWriter.PANELS and steps[0] == 0
+    assert len(set(np.diff(steps))) == 1 and steps[-1] + writer.stride > 200
+    assert writer.last[0] == 200

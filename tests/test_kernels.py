@@ -73,3 +73,15 @@ def test_mesh_components_equal_scipy_graph_components(rng):
         # same partition: the pairs (label, ref) are a bijection
         pairs = np.unique(np.stack([label, ref[:nv]], 1), axis=0)
         assert len(pairs) == n == len(np.unique(label)) == len(np.unique(ref[:nv]))
+
+
+def test_bool_arrays_with_bytes_other_than_one_are_read_as_true(rng):
+    # np.ndarray.view(bool) keeps the raw bytes (here 2); the kernels read
+    # bytes, and once wrote past their arrays on such input
+    u = (rng.random((130, 130, 130)) < 0.3).astype(np.uint8) * 2
+    v = u.view(bool)
+    assert v.size >= kernels.MIN_VOXELS
+    for conn, sk in ((6, 1), (26, 3)):
+        r = analyze(DigitalObject(v), conn, surfaces=False)
+        assert r["euler_characteristic"] == euler_number(u > 0, connectivity=sk)
+        assert r["betti"][0] == scipy_count(u > 0, conn)

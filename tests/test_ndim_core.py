@@ -11,7 +11,7 @@ from isoflow import configurations as C
 from isoflow import indices as I
 from isoflow import ndim as nd
 from isoflow.cli import main
-from isoflow.topology import euler_characteristic
+from isoflow.topology import betti_numbers, euler_characteristic
 
 
 def test_tables_equal_the_dedicated_ones():
@@ -61,3 +61,32 @@ def test_info_on_4d_volumes(tmp_path, capsys):
             assert r["betti"][0] == label(vol, structure)[1]
     # the box minus an inner box encloses one background component (b3)
     assert info(capsys, tmp_path / "box_minus_box.npy")["betti"][3] == 1
+
+
+def test_4d_betti_numbers_use_the_right_neighbourhoods(rng):
+    # b0 at 8-adjacency counts face-connected cells, at 80-adjacency cells
+    # touching anywhere: scipy's labelling with rank-1 / rank-4 structures
+    faces, full = generate_binary_structure(4, 1), generate_binary_structure(4, 4)
+    for _ in range(30):
+        v = rng.random(tuple(rng.integers(2, 6, 4))) < 0.3
+        assert betti_numbers(v, 8)[0] == label(v, faces)[1]
+        assert betti_numbers(v, 80)[0] == label(v, full)[1]
+    # two cells meeting at a corner: two components at 8, one at 80
+    corner = np.zeros((2, 2, 2, 2), bool)
+    corner[0, 0, 0, 0] = corner[1, 1, 1, 1] = True
+    assert betti_numbers(corner, 8)[0] == 2 and betti_numbers(corner, 80)[0] == 1
+    # two background cells meeting at a corner inside a solid block: under
+    # 80 the background is face-connected, so they are two enclosed pieces
+    block = np.ones((4, 4, 4, 4), bool)
+    block[1, 1, 1, 1] = block[2, 2, 2, 2] = False
+    assert betti_numbers(block, 80)[3] == 2 and betti_numbers(block, 8)[3] == 1
+
+
+def test_4d_info_refuses_a_volume_beyond_the_memory_budget(tmp_path, capsys, monkeypatch):
+    from isoflow import memory
+
+    np.save(tmp_path / "v4.npy", np.ones((6, 6, 6, 6), bool))
+    monkeypatch.setattr(memory, "default_budget", lambda: 6**4)  # 1 byte per voxel
+    assert main(["info", str(tmp_path / "v4.npy")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "6x6x6x6" in err and "budget" in err and len(err.splitlines()) == 1

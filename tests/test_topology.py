@@ -98,3 +98,22 @@ def test_betti_2d():
 def test_connectivity_checked():
     with pytest.raises(IsoflowError, match="connectivity 8 is not valid in 3D"):
         euler_characteristic(np.ones((2, 2, 2), bool), 8)
+
+
+def test_api_refuses_what_is_not_a_binary_volume():
+    # the CLI's rule for files holds for arrays too: no silent True for NaN
+    with pytest.raises(IsoflowError, match="not a binary volume.*nan"):
+        euler_characteristic(np.full((3, 3, 3), np.nan))
+    with pytest.raises(IsoflowError, match="values other than 0 and 1"):
+        betti_numbers(np.full((3, 3, 3), 2))
+    with pytest.raises(IsoflowError, match="2D, 3D or 4D, got a 1D"):
+        euler_characteristic(np.ones(5, bool))
+    with pytest.raises(IsoflowError, match="a path, not an array"):
+        analyze("volume.npy")
+    with pytest.raises(IsoflowError, match="connectivity 0 is not valid"):
+        euler_characteristic(np.ones((2, 2, 2), bool), 0)
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        DigitalObject(np.array([[0.5, 1.0]]))
+    # 0/1 in any numeric type is fine, and equals the bool result
+    v = random_volume(np.random.default_rng(5), 7)
+    assert euler_characteristic(v.astype(np.float32)) == euler_number(v, connectivity=1)

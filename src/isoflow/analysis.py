@@ -23,7 +23,7 @@ from .indices import (
     planar_class_lut,
 )
 from .lattice import DigitalObject
-from .topology import betti_numbers, check_connectivity, default_connectivity, euler_from_histogram
+from .topology import betti_numbers, euler_from_histogram, resolve_connectivity
 
 
 def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict:
@@ -45,7 +45,7 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict
         vol, parity = obj.volume, obj.parity
     else:
         vol, parity = arrays.as_volume(obj)[1], 0
-    conn = check_connectivity(vol.ndim, connectivity or default_connectivity(vol.ndim))
+    conn = resolve_connectivity(vol.ndim, connectivity)
     hist = configuration_histogram(vol)
     chi = euler_from_histogram(hist, vol.ndim, conn)
     out = report_from_histogram(

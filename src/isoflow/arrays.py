@@ -19,6 +19,7 @@ read with ``numpy.asarray`` as before.
 from __future__ import annotations
 
 import contextlib
+import os
 
 import numpy as np
 
@@ -48,16 +49,50 @@ def is_host(xp) -> bool:
     return xp is np
 
 
-def as_volume(volume):
-    """``(xp, boolean volume)``: host data through ``numpy.asarray``, device
-    arrays left where they are."""
+def binary(array, where: str = "volume", near=None) -> np.ndarray:
+    """A host boolean volume from a 0/1 array, or a clear error saying why not.
+
+    Other values (NaN, 2, -1, 255) are refused rather than read as True: a
+    label image or a probability map needs a threshold the caller chooses.
+    ``near``: the index of the block's first voxel, for errors found block by
+    block (out-of-core input)."""
+    if isinstance(array, (str, os.PathLike)):
+        raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
+    arr = np.asarray(array)
+    if arr.dtype == np.bool_:
+        # A bool array made by .view(bool) can hold bytes other than 0/1;
+        # the compiled kernels read bytes, so make them canonical.
+        if arr.size and arr.view(np.uint8).max() > 1:
+            arr = arr.view(np.uint8) != 0
+        return arr
+    if arr.dtype.kind not in "iuf":
+        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
+    bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
+    if bad.any():
+        value = arr[bad].flat[0]
+        place = f" near voxel {tuple(int(o) for o in near)}" if near is not None else ""
+        raise IsoflowError(
+            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1{place}, "
+            f"e.g. {value}); threshold it first, e.g. volume > 0"
+        )
+    return arr.astype(bool)
+
+
+def as_volume(volume, where: str = "volume"):
+    """``(xp, boolean volume)`` of a 2D, 3D or 4D 0/1 array: host data checked
+    by :func:`binary`, device arrays left where they are."""
     xp = namespace(volume)
     if is_host(xp):
-        v = np.asarray(volume)
-        return np, v if v.dtype == np.bool_ else v.astype(bool)
-    if volume.dtype != xp.bool:
-        volume = xp.astype(volume, xp.bool)
-    return xp, volume
+        v = binary(volume, where)
+    else:
+        v = volume
+        if v.dtype != xp.bool:
+            if bool(xp.any((v != 0) & (v != 1))):
+                raise IsoflowError(f"{where}: not a binary volume (values other than 0 and 1)")
+            v = xp.astype(v, xp.bool)
+    if v.ndim not in (2, 3, 4):
+        raise IsoflowError(f"{where}: a volume is 2D, 3D or 4D, got a {v.ndim}D array")
+    return xp, v
 
 
 def on_device(volume):

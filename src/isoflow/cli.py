@@ -60,6 +60,8 @@ def load_input(args):
         return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, progress=progress_callback("voxelize"))
     if args.pitch is not None or args.resolution is not None:
         raise IsoflowError(f"{path}: --pitch/--resolution apply to meshes, not to {path.suffix or 'this'} input")
+    if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
+        raise IsoflowError(f"{path}: only 'isoflow info' reads .zarr (block by block); save the volume as .npy or .npz")
     return io.read_object(path, points_are=args.points_are)
 
 
@@ -140,16 +142,15 @@ def cmd_surface(args) -> int:
     from .surface import boundary_faces, boundary_mesh, mesh_memory
     from .topology import default_connectivity
 
-    obj = load_input(args)
-    out = Path(args.output)
+    # both outputs checked before loading and before anything is written:
+    # a bad --png must not leave the mesh behind
+    out = io.check_output_path(args.output, args.force, suffixes=(".ply", ".obj"))
+    if args.png:
+        io.check_picture_path(args.png, args.force)
     suffix = out.suffix.lower()
-    if suffix not in (".ply", ".obj"):
-        raise IsoflowError(f"{out}: output must end in .ply or .obj")
+    obj = load_input(args)
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
-    for target in (out, Path(args.png) if args.png else None):
-        if target is not None and target.exists() and not args.force:
-            raise IsoflowError(f"{target}: exists; pass --force to overwrite")
     if obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
     conn = args.connectivity or default_connectivity(3)
@@ -189,11 +190,7 @@ def cmd_voxelize(args) -> int:
     from . import io
     from .meshes import voxelize_file
 
-    out = Path(args.output)
-    if out.suffix.lower() != ".npz":
-        raise IsoflowError(f"{out}: output must end in .npz")
-    if out.exists() and not args.force:
-        raise IsoflowError(f"{out}: exists; pass --force to overwrite")
+    out = io.check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
     obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
                         progress=progress_callback("voxelize"))
     io.write_volume(obj, out, force=args.force)
@@ -247,29 +244,38 @@ def progress_callback(label: str):
 def cmd_flow(args) -> int:
     import time
 
-    from .flow import check_output_dir, export_flow, run_flow
+    from .flow import FlowWriter, default_max_steps, flow_connectivity, run_flow
 
     obj = load_input(args)
     if obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
+    # files are written while the flow runs, so no state is kept in memory
+    # (every state of a box of side s would cost about s^4/4 bytes)
+    writer = None
     if args.out:
-        check_output_dir(args.out, args.force)  # before a long run, not after
+        last = args.steps if args.steps is not None else default_max_steps(obj)
+        conn = flow_connectivity(obj.ndim, args.connectivity)
+        writer = FlowWriter(args.out, conn, args.force, last_step=last)
+        writer.add(0, obj.cropped())
     # a box of side s vanishes in s steps; the bar appears once the run lasts
     total, show, start = args.steps or max(obj.volume.shape), progress_callback("flow"), time.monotonic()
     drawn = []
 
     def progress(step, state):
+        if writer is not None:
+            writer.add(step, state)
         if show and time.monotonic() - start > 1.0:
             show(min(step, total - 1), total)
             drawn.append(step)
 
-    result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity, progress=progress)
+    result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                      progress=progress, keep_states=False)
     if drawn:
         show(total, total)
-    if args.out:
-        export_flow(result, args.out, force=args.force)
+    if writer is not None:
+        writer.finish(result)
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
         return 0

@@ -25,12 +25,12 @@ geometry of the window, never typed in.
 from __future__ import annotations
 
 import itertools
+import math
 from functools import lru_cache
 
 import numpy as np
 
 from . import arrays
-from .errors import IsoflowError
 
 #: octant d -> its bit index, for the 3D window
 OCTANTS_3D = [(dx, dy, dz) for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)]
@@ -44,19 +44,21 @@ def octant_bit(d) -> int:
 
 
 def configurations(volume) -> np.ndarray:
-    """Configuration byte of every lattice vertex of a 2D or 3D binary volume.
+    """Configuration code of every lattice vertex of a 2D, 3D or 4D binary volume.
 
-    Returns a uint8 array of shape ``volume.shape + 1``, in the input's array
+    Returns a uint8 (uint16 in 4D) array of shape ``volume.shape + 1``, in the input's array
     library (a CuPy volume gives a CuPy array on its GPU). Three passes (one
     per axis) build the code: first pairs along axis 0 (bits 0/1), then pairs
     of pairs along axis 1 (bits 0-3), then along axis 2 (bits 0-7), which is
     cheaper than or-ing the 8 shifted copies.
     """
     xp, v = arrays.as_volume(volume)
+    # 8 octant bits up to 3D, 16 in 4D
+    dtype = xp.uint8 if v.ndim <= 3 else xp.uint16
     # The one layer of background padding, written with the standard's
     # zeros + slice assignment (``pad`` is not in the array API).
-    code = arrays.zeros(xp, tuple(s + 2 for s in v.shape), xp.uint8, like=v)
-    code[(slice(1, -1),) * v.ndim] = xp.astype(v, xp.uint8)
+    code = arrays.zeros(xp, tuple(s + 2 for s in v.shape), dtype, like=v)
+    code[(slice(1, -1),) * v.ndim] = xp.astype(v, dtype)
     for axis in range(v.ndim):
         lo = [slice(None)] * v.ndim
         hi = [slice(None)] * v.ndim
@@ -66,28 +68,25 @@ def configurations(volume) -> np.ndarray:
     return code
 
 
-def configuration_histogram(volume, slab: int = 64) -> np.ndarray:
-    """Counts of the 256 (3D) or 16 (2D) configurations over all vertices.
+def configuration_histogram(volume, slab: int | None = None) -> np.ndarray:
+    """Counts of the 2^(2^n) configurations over all vertices (256 in 3D).
 
     Always a host int64 vector. Large 3D host volumes go through the streaming
-    kernel of :mod:`isoflow.kernels`; otherwise (and for every device array:
-    CuPy, any array-API library) the work goes slab by slab along axis 0 so
-    that memory stays a small multiple of one slab, the slabs overlapping by
-    one voxel layer so that every vertex is counted exactly once.
+    kernel of :mod:`isoflow.kernels`; otherwise (4D, and every device array:
+    CuPy, any array-API library) the work goes slab by slab along axis 0, the
+    slabs overlapping by one voxel layer so that every vertex is counted
+    exactly once. A slab holds ``slab`` rows (default: about 8M voxels), so
+    memory stays a few bytes per slab voxel whatever the volume.
     """
     xp, v = arrays.as_volume(volume)
     size = 1 << (1 << v.ndim)
     from . import kernels
 
-    if arrays.is_host(xp):
-        if v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
-            return kernels.histogram3d(v)
-        if v.ndim == 4:
-            from . import ndim
-
-            return ndim.configuration_histogram(v)
-    elif v.ndim == 4:
-        raise IsoflowError("4D volumes are read on the host: pass a NumPy array")
+    if arrays.is_host(xp) and v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
+        return kernels.histogram3d(v)
+    if slab is None:
+        row = math.prod(v.shape[1:])
+        slab = max(1, (1 << 23) // max(row, 1))
     hist = np.zeros(size, dtype=np.int64)
     n0 = v.shape[0]
     with arrays.on_device(v):

@@ -140,7 +140,7 @@ _FLAT = 4
 # --------------------------------------------------------------------------
 
 
-def _object_connectivity(ndim: int, connectivity: int | None) -> int:
+def flow_connectivity(ndim: int, connectivity: int | None) -> int:
     """The object's connectivity for this dimension. In 2D, 6 and 26 (the 3D
     names of the smaller and the larger adjacency) read as 4 and 8."""
     if ndim not in (2, 3):
@@ -286,7 +286,7 @@ def flow_moves(obj: DigitalObject, connectivity: int | None = 6) -> tuple[np.nda
     True at the vertices that become voxels of the next object (interior or
     moving outward). ``cfg != 0 and cfg != full`` are the boundary vertices.
     """
-    conn = _object_connectivity(obj.ndim, connectivity)
+    conn = flow_connectivity(obj.ndim, connectivity)
     if obj.ndim == 2:
         from .planar import planar_moves
 
@@ -424,7 +424,7 @@ def run_flow(
     """
     from . import guard as control  # it builds on flow_moves, so it is imported here
 
-    conn = _object_connectivity(obj.ndim, connectivity)
+    conn = flow_connectivity(obj.ndim, connectivity)
     if steps is not None and steps < 0:
         raise IsoflowError(f"steps must be >= 0, got {steps}")
     cap = steps if steps is not None else (max_steps or default_max_steps(obj))
@@ -540,38 +540,86 @@ def export_flow(result: FlowResult, directory, force: bool = False, plot: bool =
     energy and Betti numbers against the step) and, in 3D, ``shapes.png``
     (the object at a few steps).
 
-    Refuses a directory that already holds files unless ``force``.
+    Refuses a directory that already holds files unless ``force``. Needs a
+    result run with ``keep_states=True``; :class:`FlowWriter` writes the same
+    files while the flow runs, without keeping the states.
     """
-    import csv
-
-    from . import io
-    from .surface import boundary_mesh
-
-    out = check_output_dir(directory, force)
     if not result.states and result.steps:
         raise IsoflowError("export_flow needs the states: run the flow with keep_states=True")
-    out.mkdir(parents=True, exist_ok=True)
-    written = []
-    width = max(3, len(str(len(result.steps) - 1)))
+    writer = FlowWriter(directory, result.connectivity, force, last_step=len(result.steps) - 1)
     for rec, state in zip(result.steps, result.states):
-        if state.ndim != 3 or state.voxels == 0:
-            continue
-        mesh = boundary_mesh(state.volume, result.connectivity)
-        path = out / f"step_{rec['step']:0{width}d}.ply"
-        comments = (f"isoflow flow step {rec['step']}, parity {rec['parity']}, {result.connectivity}-connectivity",)
-        io.write_ply(path, io.mesh_vertex_table(mesh, state), mesh.polygons(), force=True, comments=comments)
-        written.append(path)
-    header, rows = flow_table(result)
-    csv_path = out / "flow.csv"
-    with open(csv_path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        w.writerows(rows)
-    written.append(csv_path)
-    if plot:
-        from .render import render_flow, render_flow_shapes
+        writer.add(rec["step"], state)
+    return writer.finish(result, plot=plot)
 
-        written.append(render_flow(result, out / "flow.png"))
-        if result.states and result.states[0].ndim == 3 and result.states[0].voxels:
-            written.append(render_flow_shapes(result, out / "shapes.png"))
-    return written
+
+class FlowWriter:
+    """Writes a flow's files step by step (see :func:`export_flow`).
+
+    Pass :meth:`add` as (part of) ``run_flow``'s ``progress`` callback, after
+    adding the input as step 0, and run with ``keep_states=False``: memory
+    then stays that of one state plus the few kept for ``shapes.png``, where
+    keeping every state of a shrinking box of side s costs about s^4/4 bytes.
+    ``force`` also removes the files a previous flow left (``step_*.ply``, the
+    CSV and pictures), so that no stale step survives beside the new ones.
+    """
+
+    #: states kept for shapes.png: at most twice the panels, evenly spaced
+    PANELS = 6
+
+    def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999):
+        out = check_output_dir(directory, force)
+        out.mkdir(parents=True, exist_ok=True)
+        if force:
+            for old in [*out.glob("step_*.ply"), *(out / n for n in ("flow.csv", "flow.png", "shapes.png"))]:
+                if old.is_file():
+                    old.unlink()
+        self.out, self.connectivity = out, connectivity
+        self.width = max(3, len(str(last_step)))
+        self.written: list = []
+        self.frames: list = []  # (step, state), every `stride`-th step
+        self.stride = 1
+        self.last = None  # the last non-empty (step, state)
+
+    def add(self, step: int, state: DigitalObject) -> None:
+        from . import io
+        from .surface import boundary_mesh
+
+        if not state.voxels:
+            return
+        self.last = (step, state)
+        if step % self.stride == 0:
+            self.frames.append((step, state))
+            if len(self.frames) > 2 * self.PANELS:
+                self.frames = self.frames[::2]
+                self.stride *= 2
+        if state.ndim != 3:
+            return
+        mesh = boundary_mesh(state.volume, self.connectivity)
+        path = self.out / f"step_{step:0{self.width}d}.ply"
+        comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
+        io.write_ply(path, io.mesh_vertex_table(mesh, state), mesh.polygons(), force=True, comments=comments)
+        self.written.append(path)
+
+    def finish(self, result: FlowResult, plot: bool = True) -> list:
+        """Write flow.csv and the pictures; returns every path written."""
+        import csv
+
+        header, rows = flow_table(result)
+        csv_path = self.out / "flow.csv"
+        with open(csv_path, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(header)
+            w.writerows(rows)
+        self.written.append(csv_path)
+        if plot:
+            from .render import render_flow, render_flow_shapes
+
+            self.written.append(render_flow(result, self.out / "flow.png"))
+            frames = self.frames + ([self.last] if self.last and self.last not in self.frames else [])
+            if frames and frames[0][1].ndim == 3:
+                records = {rec["step"]: rec for rec in result.steps}
+                shown = [(state, records[step]) for step, state in frames]
+                self.written.append(
+                    render_flow_shapes(shown, self.out / "shapes.png", result.connectivity, self.PANELS)
+                )
+        return self.written

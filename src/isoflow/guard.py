@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .flow import _bbox_list, _is_min, _object_connectivity, _shifted_object, flow_moves
+from .flow import _bbox_list, _is_min, flow_connectivity, _shifted_object, flow_moves
 from .lattice import DigitalObject
 from .topology import betti_numbers
 
@@ -226,7 +226,7 @@ def guarded_step(obj: DigitalObject, connectivity: int | None = 6, betti: list[i
     when some vertex can go neither way, or (a safety net that the
     construction should never need) when the Betti numbers differ.
     """
-    conn = _object_connectivity(obj.ndim, connectivity)
+    conn = flow_connectivity(obj.ndim, connectivity)
     if betti is None:
         betti = betti_numbers(obj.volume, conn)
     cfg, keep = flow_moves(obj, conn)

@@ -23,28 +23,20 @@ POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
 def _check_readable(path: Path) -> None:
     if not path.exists():
         raise IsoflowError(f"{path}: no such file")
-    if path.is_dir() and path.suffix != ".zarr":
-        raise IsoflowError(f"{path}: is a directory, not a volume or point list")
+    if path.is_dir():
+        if path.suffix != ".zarr":
+            raise IsoflowError(f"{path}: is a directory, not a volume or point list")
+    elif not path.is_file():
+        # a device or FIFO would be read until memory runs out (/dev/zero)
+        raise IsoflowError(f"{path}: not a regular file (a device, pipe or socket)")
 
 
 def as_binary(array: np.ndarray, where: str, near=None) -> np.ndarray:
-    """A boolean view of a 0/1 array, or a clear error saying why not.
+    """A boolean view of a 0/1 array, or a clear error saying why not (see
+    :func:`isoflow.arrays.binary`)."""
+    from .arrays import binary
 
-    ``near``: the index of the block's first voxel, for errors found block by
-    block (out-of-core input)."""
-    arr = np.asarray(array)
-    if arr.dtype == np.bool_:
-        return arr
-    if arr.dtype.kind not in "iuf":
-        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
-    bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
-    if bad.any():
-        value = arr[bad].flat[0]
-        place = f" near voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        raise IsoflowError(
-            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1{place}, e.g. {value})"
-        )
-    return arr.astype(bool)
+    return binary(array, where, near)
 
 
 def read_volume(path: str | os.PathLike) -> DigitalObject:
@@ -58,8 +50,10 @@ def read_volume(path: str | os.PathLike) -> DigitalObject:
     _check_readable(path)
     meta: dict = {}
     try:
-        if path.suffix == ".npz":
-            with np.load(path, allow_pickle=False) as z:
+        loaded = np.load(path, allow_pickle=False)
+        # trust the content, not the name: an .npz may be called .npy or .NPZ
+        if isinstance(loaded, np.lib.npyio.NpzFile):
+            with loaded as z:
                 names = list(z.files)
                 if "volume" in names:
                     arr = z["volume"]
@@ -72,8 +66,10 @@ def read_volume(path: str | os.PathLike) -> DigitalObject:
                     raise IsoflowError(
                         f"{path}: holds arrays {names}; name the volume 'volume'"
                     )
+        elif isinstance(loaded, np.ndarray):
+            arr = loaded
         else:
-            arr = np.load(path, allow_pickle=False)
+            raise IsoflowError(f"{path}: not a numpy array or archive ({type(loaded).__name__})")
     except IsoflowError:
         raise
     except Exception as exc:  # numpy raises several types for a bad file
@@ -81,17 +77,8 @@ def read_volume(path: str | os.PathLike) -> DigitalObject:
     if arr.ndim not in (2, 3, 4):
         raise IsoflowError(f"{path}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
     vol = as_binary(arr, str(path))
-    kw = {}
-    if "offset" in meta:
-        kw["offset"] = tuple(int(o) for o in meta["offset"])
-    if "parity" in meta:
-        kw["parity"] = int(meta["parity"])
-    if "pitch" in meta:
-        kw["pitch"] = float(meta["pitch"])
-    if "origin" in meta:
-        kw["origin"] = np.asarray(meta["origin"], float)
-    try:
-        return DigitalObject(vol, **kw)
+    try:  # DigitalObject checks the metadata fields; its errors get the file's name
+        return DigitalObject(vol, **meta)
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
 
@@ -102,9 +89,20 @@ _SPLIT = re.compile(r"[,\s]+")
 def read_points(path: str | os.PathLike) -> np.ndarray:
     """Integer lattice points from a text file: ``x y z`` (or ``x y``) per
     line, ``#`` starts a comment, commas or blanks separate the numbers."""
+    from .lattice import MAX_COORDINATE
+
     path = Path(path)
     _check_readable(path)
     try:
+        # look at the head first: any file of unknown type lands here, and
+        # a big binary one should not be read whole before being refused
+        with open(path, "rb") as fh:
+            head = fh.read(1024)
+        if b"\0" in head:
+            raise IsoflowError(
+                f"{path}: binary data, not a text point list (x y z per line); "
+                f"volumes are .npy/.npz"
+            )
         text = path.read_text()
     except (OSError, UnicodeDecodeError) as exc:
         raise IsoflowError(f"{path}: cannot read as text ({exc})") from None
@@ -127,6 +125,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         for f, v in zip(fields, values):
             if not np.isfinite(v) or v != round(v):
                 raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
+            if abs(v) > MAX_COORDINATE:  # 1e300 or int64 extremes overflow later
+                raise IsoflowError(f"{path}:{lineno}: coordinate {f} is out of range (beyond +-{MAX_COORDINATE})")
         rows.append([int(round(v)) for v in values])
     if not rows:
         raise IsoflowError(f"{path}: no points")
@@ -143,16 +143,40 @@ def read_object(path: str | os.PathLike, points_are: str = "corners") -> Digital
     if path.suffix.lower() in VOLUME_SUFFIXES:
         return read_volume(path)
     pts = read_points(path)
-    if points_are == "voxels":
-        return DigitalObject.from_voxels(pts)
-    return DigitalObject.from_points(pts)
+    try:
+        if points_are == "voxels":
+            return DigitalObject.from_voxels(pts)
+        return DigitalObject.from_points(pts)
+    except IsoflowError as exc:  # e.g. the grid beyond the memory budget: say which file
+        raise IsoflowError(f"{path}: {exc}") from None
+
+
+def check_output_path(
+    path: str | os.PathLike, force: bool = False, suffixes: tuple[str, ...] = (), what: str = "output"
+) -> Path:
+    """The output file as a Path, checked before any work is done: it ends in
+    one of ``suffixes`` (any case; none: any name), is not a directory, does
+    not exist unless ``force``, and its directory exists."""
+    path = Path(path)
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
+    if path.is_dir():  # --force must not mean "replace a directory"
+        raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
+    if path.exists() and not force:
+        raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+    if not path.parent.is_dir():
+        raise IsoflowError(f"{path.parent}: no such directory (for the {what} {path.name})")
+    return path
+
+
+def check_picture_path(path: str | os.PathLike, force: bool = False) -> Path:
+    """A picture file (``--png``, matplotlib output) checked as
+    :func:`check_output_path`; call it before the work that the picture shows."""
+    return check_output_path(path, force, suffixes=(".png",), what="picture")
 
 
 def _refuse_overwrite(path: Path, force: bool) -> None:
-    if path.exists() and not force:
-        raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
-    if not path.parent.exists():
-        raise IsoflowError(f"{path.parent}: no such directory")
+    check_output_path(path, force)
 
 
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:

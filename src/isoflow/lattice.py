@@ -19,6 +19,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .arrays import binary
 from .errors import IsoflowError
 
 
@@ -36,24 +37,24 @@ class DigitalObject:
     origin: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self):
-        vol = np.asarray(self.volume)
-        if vol.dtype != np.bool_:
-            vol = vol.astype(bool)
+        vol = binary(self.volume, "DigitalObject volume")
         if vol.ndim not in (2, 3, 4):
             raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
         object.__setattr__(self, "volume", vol)
-        offset = (0,) * vol.ndim if self.offset is None else tuple(int(o) for o in self.offset)
-        if len(offset) != vol.ndim:
-            raise IsoflowError(f"offset {offset} does not match a {vol.ndim}D volume")
-        object.__setattr__(self, "offset", offset)
-        origin = np.zeros(vol.ndim) if self.origin is None else np.asarray(self.origin, float)
-        if origin.shape != (vol.ndim,):
-            raise IsoflowError(f"origin {origin.tolist()} does not match a {vol.ndim}D volume")
+        n = vol.ndim
+        offset = (0,) * n if self.offset is None else _field(
+            self.offset, "offset", n, integral=True, bound=MAX_COORDINATE)
+        object.__setattr__(self, "offset", tuple(int(o) for o in offset))
+        origin = np.zeros(n) if self.origin is None else _field(self.origin, "origin", n)
         object.__setattr__(self, "origin", origin)
-        if self.parity not in (0, 1):
-            raise IsoflowError(f"parity must be 0 (lattice) or 1 (dual lattice), got {self.parity}")
-        if not (np.isfinite(self.pitch) and self.pitch > 0):
-            raise IsoflowError(f"pitch must be a positive number, got {self.pitch}")
+        parity = _field(self.parity, "parity", None, integral=True)
+        if parity not in (0, 1):
+            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {parity!r}")
+        object.__setattr__(self, "parity", int(parity))
+        pitch = _field(self.pitch, "pitch", None)
+        if not pitch > 0:
+            raise IsoflowError(f"'pitch' must be a positive number, got {pitch!r}")
+        object.__setattr__(self, "pitch", float(pitch))
 
     # ------------------------------------------------------------ builders
     @classmethod
@@ -61,6 +62,7 @@ class DigitalObject:
         """Object made of the voxels with the given integer indices (N, n)."""
         idx = _integer_points(indices, "voxel index")
         lo = idx.min(axis=0)
+        _check_grid(lo, idx.max(axis=0), len(idx), "voxel indices", 1)
         vol = np.zeros(idx.max(axis=0) - lo + 1, dtype=bool)
         vol[tuple((idx - lo).T)] = True
         return cls(vol, offset=tuple(lo), **kw)
@@ -74,6 +76,7 @@ class DigitalObject:
         """
         pts = _integer_points(points, "lattice point")
         lo = pts.min(axis=0)
+        _check_grid(lo, pts.max(axis=0), len(pts), "lattice points", 2)  # the point grid and the cubes
         grid = np.zeros(pts.max(axis=0) - lo + 1, dtype=bool)
         grid[tuple((pts - lo).T)] = True
         n = grid.ndim
@@ -138,12 +141,57 @@ def _nonzero_bounds(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.array(lo), np.array(hi)
 
 
+#: Largest |coordinate| of a lattice point, voxel index or offset: exact in
+#: float64 and far from int64 overflow when extents are computed.
+MAX_COORDINATE = 2**40
+
+
 def _integer_points(points, what: str) -> np.ndarray:
     arr = np.asarray(points)
     if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
-        raise IsoflowError(f"expected a list of 2D or 3D {what}s, got shape {arr.shape}")
-    if not np.issubdtype(arr.dtype, np.integer):
-        if not np.all(np.isfinite(arr)) or not np.all(arr == np.round(arr)):
-            raise IsoflowError(f"{what}s must be integers")
-        arr = arr.astype(np.int64)
+        raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
+    if arr.dtype.kind not in "biuf":
+        raise IsoflowError(f"{what} coordinates must be integers, got an array of type {arr.dtype}")
+    if arr.dtype.kind == "f" and (not np.all(np.isfinite(arr)) or not np.all(arr == np.round(arr))):
+        raise IsoflowError(f"{what} coordinates must be integers")
+    # compare before converting: uint64 / huge floats would wrap in int64
+    out = (arr > MAX_COORDINATE) | (arr < -MAX_COORDINATE)
+    if out.any():
+        value = arr[out].flat[0]
+        raise IsoflowError(f"{what} coordinate {value} is out of range (beyond +-{MAX_COORDINATE})")
     return arr.astype(np.int64)
+
+
+def _check_grid(lo, hi, count: int, what: str, bytes_per_voxel: int) -> None:
+    """Refuse, before allocating, a grid spanning lo..hi beyond the memory budget."""
+    import math
+
+    from .memory import check_fits
+
+    extents = [int(h) - int(l) + 1 for l, h in zip(lo, hi)]
+    check_fits(
+        math.prod(extents) * bytes_per_voxel,
+        f"a {'x'.join(map(str, extents))} grid for {count} {what} from {tuple(map(int, lo))} to {tuple(map(int, hi))}",
+        hint="check for stray or far-apart points",
+    )
+
+
+def _field(value, name: str, length: int | None, integral: bool = False, bound: float | None = None):
+    """A finite number (``length`` None; a one-element array will do) or a
+    vector of ``length`` numbers, integers where ``integral``, within
+    ``+-bound``; otherwise an error naming the field and the value."""
+    arr = np.asarray(value)
+    shown = repr(arr.tolist()) if arr.size <= 8 else f"an array of shape {arr.shape}"
+    want = ("an integer" if integral else "a number") if length is None else (
+        f"{length} {'integers' if integral else 'numbers'}, one per axis")
+    bad = IsoflowError(f"'{name}' must be {want}, got {shown}")
+    if arr.dtype.kind not in "biuf":  # strings, complex, objects
+        raise bad
+    if (arr.size != 1) if length is None else (arr.shape != (length,)):
+        raise bad
+    f = arr.astype(np.float64)
+    if not np.isfinite(f).all() or (integral and (f != np.round(f)).any()):
+        raise bad
+    if bound is not None and (np.abs(f) > bound).any():
+        raise IsoflowError(f"'{name}' {shown} is out of range (beyond +-{bound})")
+    return f.item() if length is None else f

@@ -58,7 +58,7 @@ from .analysis import report_from_histogram
 from .configurations import configuration_histogram, configurations
 from .errors import IsoflowError
 from .io import as_binary
-from .topology import COMPLEMENT, check_connectivity, default_connectivity, euler_from_histogram
+from .topology import COMPLEMENT, euler_from_histogram, resolve_connectivity, structure
 
 #: local labels live in the low 32 bits of a node key, the block in the high bits
 _SHIFT = 32
@@ -128,10 +128,9 @@ def _label(mask: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
         except ImportError:  # pragma: no cover - cc3d is installed in the test env
             cc3d = None
     if cc3d is None:
-        from scipy.ndimage import generate_binary_structure, label
+        from scipy.ndimage import label
 
-        structure = generate_binary_structure(mask.ndim, 1 if connectivity in (4, 6) else mask.ndim)
-        labels, n = label(mask, structure)
+        labels, n = label(mask, structure(mask.ndim, connectivity))
         return labels, int(n)
     data = mask.view(np.uint8) if mask.dtype == np.bool_ else mask
     labels, n = cc3d.connected_components(data, connectivity=connectivity, return_N=True)
@@ -503,7 +502,7 @@ def analyze_chunked(
     dtype = np.dtype(array.dtype)
     if dtype.kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
-    conn = check_connectivity(ndim, connectivity or default_connectivity(ndim))
+    conn = resolve_connectivity(ndim, connectivity)
     if 0 in shape:
         raise IsoflowError(f"{where}: the array has no voxels (shape {shape})")
 

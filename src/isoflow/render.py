@@ -70,26 +70,25 @@ def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azi
     return path
 
 
-def render_flow_shapes(result, path: Path, panels: int = 6, elev: float = 25, azim: float = -55) -> Path:
-    """Write a PNG of the flowing object itself: up to ``panels`` states of a
-    3D flow, evenly spaced from the input to the last non-empty state, all in
-    the input's frame so that the shrinking shows, coloured like
-    :func:`render_surface`."""
+def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
+                       elev: float = 25, azim: float = -55) -> Path:
+    """Write a PNG of the flowing object itself: up to ``panels`` of the
+    ``(state, step record)`` frames of a 3D flow, evenly spaced from the first
+    to the last, all in the first frame's box so that the shrinking shows,
+    coloured like :func:`render_surface`."""
     from .surface import boundary_mesh
 
     plt = _pyplot()
-    shown = [i for i, st in enumerate(result.states) if st.voxels]
-    if len(shown) > panels:
-        shown = [shown[round(k * (len(shown) - 1) / (panels - 1))] for k in range(panels)]
-    box = result.states[0].bbox()
-    cols = min(3, len(shown))
-    rows = -(-len(shown) // cols)
+    if len(frames) > panels:
+        frames = [frames[round(k * (len(frames) - 1) / (panels - 1))] for k in range(panels)]
+    box = frames[0][0].bbox()
+    cols = min(3, len(frames))
+    rows = -(-len(frames) // cols)
     fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
-    for k, i in enumerate(shown):
-        state, rec = result.states[i], result.steps[i]
+    for k, (state, rec) in enumerate(frames):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
-        mesh = boundary_mesh(state.volume, result.connectivity)
-        _draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(shown), bounds=box)
+        mesh = boundary_mesh(state.volume, connectivity)
+        _draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(frames), bounds=box)
         ax.set_axis_off()
         ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle("digital curvature flow (blue concave, white flat, red convex)", fontsize=9)

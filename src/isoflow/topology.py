@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import arrays
+from .arrays import is_host
+from .memory import check_fits
 from .configurations import configuration_histogram
 from .errors import IsoflowError
 from .indices import euler_lut
@@ -37,6 +39,11 @@ def check_connectivity(ndim: int, connectivity: int) -> int:
             f"connectivity {connectivity} is not valid in {ndim}D (use {allowed})"
         )
     return connectivity
+
+
+def resolve_connectivity(ndim: int, connectivity: int | None) -> int:
+    """The connectivity asked (checked), or the paper's default when None."""
+    return check_connectivity(ndim, default_connectivity(ndim) if connectivity is None else connectivity)
 
 
 def default_connectivity(ndim: int) -> int:
@@ -68,14 +75,16 @@ def euler_characteristic(volume, connectivity: int | None = None) -> int:
     ``volume`` may be a NumPy array, a CuPy array (read on its GPU) or any
     array-API array (see :mod:`isoflow.arrays`)."""
     xp, v = arrays.as_volume(volume)
-    conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
+    conn = resolve_connectivity(v.ndim, connectivity)
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
 
-def _structure(ndim: int, connectivity: int) -> np.ndarray:
+def structure(ndim: int, connectivity: int) -> np.ndarray:
+    """scipy's neighbourhood for a connectivity: faces only for the 2n-
+    adjacency (4, 6, 8 in 4D), the whole 3^n block otherwise."""
     from scipy.ndimage import generate_binary_structure
 
-    return generate_binary_structure(ndim, 1 if connectivity in (4, 6) else ndim)
+    return generate_binary_structure(ndim, 1 if connectivity == VALID[ndim][0] else ndim)
 
 
 def _compiled(volume) -> bool:
@@ -97,7 +106,19 @@ def _labelled(volume):
     if label is None:
         v = arrays.to_host(v)
         xp, label = np, arrays.label_function(np)
+    if is_host(xp) and not _compiled(v):
+        # scipy writes an int32 label per voxel, next to the complement
+        check_fits(
+            LABEL_BYTES_PER_VOXEL * v.size,
+            f"labelling a {'x'.join(map(str, v.shape))} volume for its Betti numbers",
+            hint="2D/3D volumes can be stored as .zarr and read block by block",
+        )
     return xp, v, label
+
+
+#: peak bytes per voxel of a scipy labelling: int32 labels, the complement
+#: and scipy's own work arrays (about 8 measured on a 90^4 volume)
+LABEL_BYTES_PER_VOXEL = 10
 
 
 def count_components(volume, connectivity: int) -> int:
@@ -113,7 +134,7 @@ def count_components(volume, connectivity: int) -> int:
 
         return compiled(v, connectivity)
     with arrays.on_device(v):
-        return int(label(v, _structure(v.ndim, connectivity))[1])
+        return int(label(v, structure(v.ndim, connectivity))[1])
 
 
 def count_enclosed(volume, connectivity: int) -> int:
@@ -131,7 +152,7 @@ def count_enclosed(volume, connectivity: int) -> int:
 
         return compiled(v, connectivity)
     with arrays.on_device(v):
-        labels, n = label(~v, _structure(v.ndim, connectivity))
+        labels, n = label(~v, structure(v.ndim, connectivity))
         faces = []
         for axis in range(v.ndim):
             for end in (0, -1):
@@ -153,7 +174,7 @@ def betti_numbers(volume, connectivity: int | None = None, chi: int | None = Non
     :func:`euler_characteristic`, it reads CuPy volumes on their GPU.
     """
     xp, v = arrays.as_volume(volume)
-    conn = check_connectivity(v.ndim, connectivity or default_connectivity(v.ndim))
+    conn = resolve_connectivity(v.ndim, connectivity)
     if chi is None:
         chi = euler_characteristic(v, conn)
     xp, v, _ = _labelled(v)  # one host copy, where the library cannot label

@@ -46,6 +46,16 @@ surface behaves as the point ``(x + eta, y + eps, z - delta)`` with
 ``[x0, x1] x [y0, y1] x [z0, z1]`` holds exactly the centres with
 ``x0 <= x < x1, y0 <= y < y1, z0 < z <= z1``.
 
+Scale
+-----
+Results do not depend on the units: the grid arithmetic runs on the
+coordinates multiplied by a power of two that brings the mesh to about unit
+size (exact, see ``_grid``), so a mesh at 1e-200 or 1e200 gives the voxels it
+gives at 1, with no products underflowing to 0 or overflowing; the weld's
+distances are taken the same way.  Only a mesh whose bounding-box extent
+overflows the float range (coordinates near +-1.8e308 on both sides) is
+refused.
+
 Why a winding number and not parity
 -----------------------------------
 Overlapping watertight solids (trimesh's ``rabbit.obj`` is nine intersecting
@@ -68,7 +78,7 @@ import numpy as np
 from isoflow.errors import IsoflowError
 from isoflow.memory import default_budget
 
-__all__ = ["load_mesh", "mesh_defects", "voxelize", "MERGE_RTOL"]
+__all__ = ["load_mesh", "mesh_defects", "voxelize", "MERGE_RTOL", "MAX_RESOLUTION", "GWN_MAX_PAIRS"]
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
 #: vertex positions are welded by :func:`load_mesh`.
@@ -83,6 +93,45 @@ _PAIR_BYTES = 200
 # number, and their bytes (about 25 float64 temporaries each).
 _GWN_CHUNK = 1 << 16
 _GWN_BYTES = 200
+
+#: Largest ``resolution=`` accepted (voxels along the longest side).
+MAX_RESOLUTION = 2**31 - 1
+#: Largest number of (voxel centre, triangle) pairs the generalised winding
+#: number (``allow_open=True`` on a mesh with holes) may evaluate: about three
+#: minutes at the ~8 million pairs per second measured on a 2-core machine.
+GWN_MAX_PAIRS = 1_500_000_000
+_GWN_PAIRS_PER_S = 8e6
+#: ``pitch=`` may exceed the mesh's longest bounding-box side by at most this
+#: factor (beyond it the whole mesh is far inside one voxel, and the rounding
+#: error of the voxel centre, ~2**-53 pitch, nears the size of the mesh).
+_MAX_PITCH_RATIO = 2.0**40
+
+
+def _fmt_count(n: int, sep: bool = True) -> str:
+    """An exact integer (with thousands separators if ``sep``); scientific
+    beyond 10^18.  Python ints: no overflow however large."""
+    n = int(n)
+    if n < 10**18:
+        return f"{n:,}" if sep else str(n)
+    from decimal import Decimal
+
+    return format(Decimal(n), ".3e")  # exact rounding, no float conversion
+
+
+def _bbox(v: np.ndarray, f: np.ndarray, where: str):
+    """Lower corner, upper corner and extent of the vertices the faces use;
+    IsoflowError if the extent overflows to infinity."""
+    used = v[np.unique(f)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    with np.errstate(over="ignore"):
+        ext = hi - lo
+    if not np.all(np.isfinite(ext)):
+        a = int(np.argmin(np.isfinite(ext)))
+        raise IsoflowError(
+            f"{where}: coordinates too large: the bounding box's {'xyz'[a]} extent "
+            f"from {lo[a]:.6g} to {hi[a]:.6g} overflows the floating-point range "
+            "(rescale the mesh)")
+    return lo, hi, ext
 
 
 # ---------------------------------------------------------------------------
@@ -127,7 +176,7 @@ def _check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nd
 # loading
 # ---------------------------------------------------------------------------
 
-def _weld(v: np.ndarray, f: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
 
     Rounding coordinates to a grid (trimesh's approach) misses pairs that
@@ -140,14 +189,25 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float) -> tuple[np.ndarray, np.nda
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
-    used = np.unique(f)
-    diag = float(np.linalg.norm(np.ptp(v[used], axis=0)))
+    lo, _, ext = _bbox(v, f, where)  # refuses an extent that overflows
     uniq, inverse = np.unique(v, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
-    tol = rtol * diag
-    if tol > 0 and len(uniq) > 1:
-        pairs = cKDTree(uniq).query_pairs(tol, output_type="ndarray")
+    longest = float(ext.max())
+    if rtol > 0 and longest > 0 and len(uniq) > 1:
+        # Distances are taken relative to the bounding box's lower corner and
+        # in units of a power of two near its longest side (so the tolerance
+        # and squared distances neither overflow at 1e200 nor underflow at
+        # 1e-200: the weld is scale-invariant).  Positions more than 2**40
+        # boxes away (unused vertices only) are far beyond the tolerance
+        # (< the diagonal): left out, they get no pairs.
+        e = math.frexp(longest)[1]
+        with np.errstate(over="ignore", invalid="ignore"):
+            w = np.ldexp(uniq - lo, -e)
+        tol = rtol * float(np.linalg.norm(np.ldexp(ext, -e)))
+        near = np.nonzero(np.all(np.abs(w) <= 2.0**40, axis=1))[0]
+        pairs = cKDTree(w[near]).query_pairs(tol, output_type="ndarray")
         if len(pairs):
+            pairs = near[pairs]
             n = len(uniq)
             g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
             _, lab = connected_components(g, directed=False)
@@ -183,9 +243,16 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     ``welded_vertices`` (after the weld), so callers can say what the weld did.
 
     Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
-    read, a mesh without faces, NaN/inf coordinates and out-of-range faces.
+    read, a mesh without faces, NaN/inf coordinates, coordinates whose extent
+    overflows, out-of-range faces and a ``merge_rtol`` outside [0, 1).
     """
     p = Path(os.fspath(path))
+    try:
+        rtol = float(merge_rtol)
+    except (TypeError, ValueError):
+        rtol = math.nan
+    if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
+        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
     if not p.exists():
         raise IsoflowError(f"{p}: file not found")
     if not p.is_file():
@@ -213,7 +280,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     vertices, faces = _check_mesh(vertices, faces, where=str(p))
     if stats is not None:
         stats["exact_vertices"] = int(len(np.unique(vertices[np.unique(faces)], axis=0)))
-    vertices, faces = _weld(vertices, faces, float(merge_rtol))
+    vertices, faces = _weld(vertices, faces, rtol, where=str(p))
     if stats is not None:
         stats["welded_vertices"] = int(len(vertices))
     if len(faces) == 0:
@@ -305,62 +372,111 @@ def mesh_defects(vertices, faces) -> dict:
 # ---------------------------------------------------------------------------
 
 def _grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
-    """Pitch, origin and shape of the grid (see the module docstring)."""
+    """Pitch, origin and shape of the grid (see the module docstring), and the
+    scaled frame the arithmetic runs in.
+
+    Returns ``(pitch, origin, shape, what, frame)`` with
+    ``frame = (shift, e, origin_s, pitch_s)``: the scanline and the
+    generalised winding number work on coordinates ``ldexp(x - shift, -e)``,
+    where ``2**e`` is the power of two just above the longest side of the
+    bounding box (so the mesh spans about one unit), ``origin_s`` and
+    ``pitch_s`` being the grid in those units.  ``shift`` is zero except on an
+    axis where the mesh is flat and lies more than 2**60 sizes from zero (it
+    would overflow).  Multiplying by a power of two is exact, and rounded
+    sums, products and quotients commute with it (barring overflow and
+    underflow), so every comparison the scanline makes is bit-for-bit the one
+    the unscaled arithmetic makes wherever that neither overflows nor
+    underflows: results at ordinary scales are unchanged, a mesh scaled by a
+    power of two gives identical voxels, and one scaled by 1e-200 or 1e200
+    (whose edge-function products would underflow to 0 or overflow) gives
+    the voxels of the unscaled mesh up to the rounding of the scaling itself.
+    """
     if (pitch is None) == (resolution is None):
         raise IsoflowError("voxelize: give exactly one of pitch= or resolution=")
-    used = v[np.unique(f)]
-    lo, hi = used.min(axis=0), used.max(axis=0)
-    ext = hi - lo
+    lo, hi, ext = _bbox(v, f, "voxelize")
     longest = float(ext.max())
     if not longest > 0:
         raise IsoflowError("voxelize: mesh bounding box has zero size (all vertices coincide)")
+    e = math.frexp(longest)[1]
+    far_flat = (ext == 0) & (lo != 0)
+    far_flat[far_flat] = np.frexp(lo[far_flat])[1] - e > 60
+    shift = np.where(far_flat, lo, 0.0)
+    lo_s, hi_s = np.ldexp(lo - shift, -e), np.ldexp(hi - shift, -e)
+    ext_s = np.ldexp(ext, -e)
     if resolution is not None:
         if isinstance(resolution, (bool, np.bool_)) or not isinstance(
                 resolution, (int, np.integer, float, np.floating)):
             raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {resolution!r}")
-        if not (math.isfinite(resolution) and resolution == int(resolution) and resolution >= 1):
-            raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {resolution!r}")
+        if not (math.isfinite(resolution) and resolution == int(resolution)
+                and 1 <= resolution <= MAX_RESOLUTION):
+            raise IsoflowError(
+                f"voxelize: resolution must be an integer from 1 to {MAX_RESOLUTION}, "
+                f"got {resolution!r}")
         res = int(resolution)
-        pitch = longest / res
+        pitch_s = float(ext_s.max()) / res
+        pitch = math.ldexp(pitch_s, e)
         what = f"resolution={res}"
+        cells = ext_s / pitch_s
     else:
         try:
             pitch = float(pitch)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}") from None
         if not (math.isfinite(pitch) and pitch > 0):
             raise IsoflowError(f"voxelize: pitch must be a positive finite number, got {pitch!r}")
+        if pitch > _MAX_PITCH_RATIO * longest:
+            raise IsoflowError(
+                f"voxelize: pitch={pitch!r} is more than 2**40 times the mesh's size (longest "
+                f"bounding-box side {longest:.6g}): the whole mesh would lie inside one voxel")
         res = None
+        pitch_s = math.ldexp(pitch, -e)  # may underflow: then the grid is refused as too big
         what = f"pitch={pitch!r}"
-    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-        cells = ext / pitch
+        with np.errstate(over="ignore"):
+            cells = ext / pitch  # the exact quantities' ratio, correctly rounded
     shape = []
     for a in range(3):
         if resolution is not None and ext[a] == longest:
             n = res
         else:
             c = float(cells[a])
-            if not math.isfinite(c) or c > 2.0 ** 62:
-                n = 2 ** 62
-            else:
+            if math.isfinite(c) and c < 2.0**53:
                 # a relative 1e-9 guard so that an extent that is an exact
-                # multiple of the pitch up to rounding does not gain a voxel
-                n = max(1, math.ceil(c * (1 - 1e-9)))
+                # multiple of the pitch up to rounding does not gain a voxel,
+                # but never dropping more than 1e-6 of a voxel of extent (a
+                # huge c would otherwise lose whole layers)
+                n = max(1, math.ceil(c * (1 - 1e-9)), math.ceil(c - 1e-6))
+            else:  # the true count, in Python ints (it is refused as too big)
+                from fractions import Fraction
+
+                n = math.ceil(Fraction(float(ext[a])) / Fraction(pitch))
         shape.append(int(n))
-    centre = (lo + hi) / 2
-    origin = centre - np.asarray(shape, dtype=np.float64) * pitch / 2
-    return float(pitch), origin.astype(np.float64), tuple(shape), what
+    if max(shape) < 2**62:
+        centre_s = (lo_s + hi_s) / 2
+        origin_s = centre_s - np.asarray(shape, dtype=np.float64) * pitch_s / 2
+    else:  # no such grid can be allocated: _check_memory refuses it
+        origin_s = np.full(3, np.nan)
+    with np.errstate(over="ignore", invalid="ignore"):
+        origin = np.ldexp(origin_s, e) + shift
+    return float(pitch), origin.astype(np.float64), tuple(shape), what, (shift, e, origin_s, pitch_s)
 
 
 def _check_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes):
     if max_bytes is None:
         max_bytes = default_budget()
     nvox = shape[0] * shape[1] * shape[2]  # Python ints: no overflow
-    need = int(nvox * bytes_per_voxel) + extra
-    if need > max_bytes:
+    if nvox < 2**53:
+        need = int(nvox * bytes_per_voxel) + extra
+    else:
+        from fractions import Fraction
+
+        need = int(nvox * Fraction(bytes_per_voxel)) + extra
+    if need > max_bytes or nvox >= 2**62:
+        limit = (f"more than max_bytes={_fmt_count(max_bytes)}" if need > max_bytes
+                 else "more than one array can index")
+        dims = "x".join(_fmt_count(n, sep=False) for n in shape)
         raise IsoflowError(
-            f"voxelize: {what} needs a {shape[0]}x{shape[1]}x{shape[2]} grid "
-            f"({nvox:,} voxels, about {need:,} bytes), more than max_bytes={int(max_bytes):,}")
+            f"voxelize: {what} needs a {dims} grid "
+            f"({_fmt_count(nvox)} voxels, about {_fmt_count(need)} bytes), {limit}")
 
 
 # ---------------------------------------------------------------------------
@@ -520,7 +636,9 @@ def _gwn(v, f, origin, pitch, shape, progress):
     4 pi.  It equals the winding number on closed meshes and degrades
     gracefully across holes.  Cost is O(voxels x triangles) with memory held
     to ``_GWN_CHUNK`` point-triangle pairs at a time: fine for grids of a few
-    ten thousand voxels, slow beyond.
+    ten thousand voxels, slow beyond (:func:`voxelize` refuses more than
+    ``GWN_MAX_PAIRS`` pairs up front).  ``progress`` is called after every
+    chunk of points.
     """
     nx, ny, nz = shape
     xc = origin[0] + (np.arange(nx) + 0.5) * pitch
@@ -558,6 +676,48 @@ def _gwn(v, f, origin, pitch, shape, progress):
     return (np.abs(out) > 0.5).reshape(shape)
 
 
+def _fmt_seconds(s: float) -> str:
+    if s < 120:
+        return f"{s:.0f} s"
+    if s < 2 * 3600:
+        return f"{s / 60:.0f} min"
+    if s < 2 * 86400:
+        return f"{s / 3600:.1f} h"
+    return f"{s / 86400:.0f} days"
+
+
+def _check_gwn_cost(v, f, shape, what, pitch, resolution):
+    """Refuse a generalised winding number costing more than GWN_MAX_PAIRS
+    (voxel centre, triangle) pairs, before any O(grid) work, saying what it
+    would cost and the largest resolution (or smallest pitch) that fits."""
+    m = len(f)
+    nvox = shape[0] * shape[1] * shape[2]  # Python ints
+    pairs = nvox * m
+    if pairs <= GWN_MAX_PAIRS:
+        return
+    if m > GWN_MAX_PAIRS:
+        hint = "the mesh alone has more triangles than that: close its holes"
+    else:
+        _, _, ext = _bbox(v, f, "voxelize")
+        rel = ext / float(ext.max())
+        if resolution is not None:
+            # voxels grow as the cube of the resolution: start from that
+            # estimate and step down to one whose grid fits
+            r = max(1, int(int(resolution) * (GWN_MAX_PAIRS / pairs) ** (1 / 3)) + 1)
+            while r > 1 and math.prod(max(1, math.ceil(x * r * (1 - 1e-9))) for x in rel) * m > GWN_MAX_PAIRS:
+                r -= 1
+            hint = f"use a lower resolution (at most {r} here) or close the mesh's holes"
+        else:
+            p = pitch * (pairs / GWN_MAX_PAIRS) ** (1 / 3)
+            hint = f"use a larger pitch (about {p * 1.01:.3g} or more) or close the mesh's holes"
+    dims = "x".join(_fmt_count(n, sep=False) for n in shape)
+    raise IsoflowError(
+        f"voxelize: the generalised winding number for this open mesh at {what} would take "
+        f"{dims} = {_fmt_count(nvox)} voxels x {_fmt_count(m)} triangles = {_fmt_count(pairs)} "
+        f"pairs, about {_fmt_seconds(pairs / _GWN_PAIRS_PER_S)} at ~{_GWN_PAIRS_PER_S / 1e6:.0f} "
+        f"million pairs/s (limit {_fmt_count(GWN_MAX_PAIRS)} pairs, a few minutes): {hint}")
+
+
 # ---------------------------------------------------------------------------
 # public entry point
 # ---------------------------------------------------------------------------
@@ -573,8 +733,10 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
         ``(N, 3)`` float and ``(M, 3)`` integer arrays (weld coincident
         vertices first: :func:`load_mesh` does).
     pitch, resolution
-        Exactly one.  ``pitch``: voxel edge length.  ``resolution=R``: the
-        longest side of the bounding box gets exactly R voxels.  The grid is
+        Exactly one.  ``pitch``: voxel edge length (at most 2**40 times the
+        longest side).  ``resolution=R``: an integer from 1 to
+        ``MAX_RESOLUTION``; the longest side of the bounding box gets exactly
+        R voxels.  The grid is
         centred on the bounding box (module docstring).
     allow_open
         A mesh that is not watertight (see :func:`mesh_defects`) is refused
@@ -583,7 +745,9 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
         edge) the exact scanline is used; otherwise every voxel centre gets a
         generalised winding number and is in iff ``|GWN| > 0.5``.  That path
         costs O(voxels x triangles): keep it to modest grids (say up to
-        ~50^3 for a 10k-triangle mesh).
+        ~50^3 for a 10k-triangle mesh).  More than ``GWN_MAX_PAIRS``
+        (1.5e9, a few minutes) voxel-triangle pairs are refused up front with
+        the estimate and the largest resolution that fits.
     grid
         Optional ``(origin, shape)``: sample on this grid (with ``pitch``)
         instead of the one centred on the bounding box, e.g. to put voxel
@@ -612,14 +776,23 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
     with z0 < z <= z1.
     """
     v, f = _check_mesh(vertices, faces, where="voxelize")
-    pitch, origin, shape, what = _grid(v, f, pitch, resolution)
+    pitch, origin, shape, what, (shift, e, origin_s, pitch_s) = _grid(v, f, pitch, resolution)
     if grid is not None:
         if resolution is not None:
             raise IsoflowError("voxelize: grid= needs pitch=, not resolution=")
-        origin = np.asarray(grid[0], dtype=np.float64).reshape(3)
-        shape = tuple(int(n) for n in grid[1])
+        try:
+            origin = np.asarray(grid[0], dtype=np.float64).reshape(3)
+            shape = tuple(int(n) for n in grid[1])
+        except (TypeError, ValueError, IndexError, OverflowError):
+            raise IsoflowError(
+                f"voxelize: grid must be (origin, shape), three numbers each, got {grid!r}") from None
         if len(shape) != 3 or min(shape) < 1:
             raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {grid[1]!r}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            origin_s = np.ldexp(origin - shift, -e)
+        if not np.all(np.isfinite(origin_s)):
+            raise IsoflowError(
+                f"voxelize: grid origin {origin.tolist()} is not finite or too far from the mesh")
     defects = mesh_defects(v, f)
     balanced = defects["boundary_edges"] == 0 and defects["inconsistent_edges"] == 0
     if not defects["watertight"] and not allow_open:
@@ -633,11 +806,18 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
         # bool volume + difference array (one more slot per column)
         per_voxel = 1 + np.dtype(_diff_dtype(len(f))).itemsize * (shape[2] + 1) / shape[2]
         _check_memory(shape, what, per_voxel, 0, max_bytes)  # before any O(grid) work
-        plan = _scan_plan(v, f, origin, pitch, shape)
+    else:
+        # generalised winding number: the volume, a float64 result and three
+        # float64 coordinates per voxel centre, and one chunk of pairs
+        _check_memory(shape, what, 1 + 8 + 24, _GWN_CHUNK * _GWN_BYTES, max_bytes)
+        _check_gwn_cost(v, f, shape, what, pitch, resolution)
+    # the arithmetic runs in the scaled frame of _grid (exact power-of-two
+    # scaling: no overflow or underflow at any scale, same comparisons)
+    with np.errstate(over="ignore", invalid="ignore"):
+        vs = np.ldexp(v - shift, -e)  # unused far-off vertices may overflow: never read
+    if balanced:
+        plan = _scan_plan(vs, f, origin_s, pitch_s, shape)
         pairs = min(int(plan[-1][-1]), _PAIR_CHUNK)
         _check_memory(shape, what, per_voxel, pairs * _PAIR_BYTES, max_bytes)
         return _scanline(shape, plan, progress), origin, pitch
-    # generalised winding number: the volume, a float64 result and three
-    # float64 coordinates per voxel centre, and one chunk of pairs
-    _check_memory(shape, what, 1 + 8 + 24, _GWN_CHUNK * _GWN_BYTES, max_bytes)
-    return _gwn(v, f, origin, pitch, shape, progress), origin, pitch
+    return _gwn(vs, f, origin_s, pitch_s, shape, progress), origin, pitch

@@ -1,0 +1,152 @@
+"""Bad input found by fuzzing: one line naming the file/field, exit 2, no
+traceback, no silently wrong value, nothing written."""
+
+import os
+
+import numpy as np
+import pytest
+import trimesh
+
+from isoflow import io
+from isoflow.cli import main
+from isoflow.errors import IsoflowError
+from isoflow.lattice import DigitalObject
+
+
+def fails(capsys, *args, words=()):
+    """Run the CLI, expect exit 2 and one stderr line holding every word."""
+    assert main([*map(str, args)]) == 2
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+    return lines[0]
+
+
+def box_stl(tmp_path):
+    path = tmp_path / "box.stl"
+    trimesh.creation.box().export(path)
+    return path
+
+
+# -------------------------------------------------------------- .npz metadata
+
+@pytest.mark.parametrize(
+    "field, value, shown",
+    [
+        ("offset", [[1, 2, 3]], "[[1, 2, 3]]"),  # was TypeError
+        ("pitch", [1.0, 2.0], "[1.0, 2.0]"),  # was TypeError
+        ("parity", np.array("x"), "'x'"),  # was ValueError
+        ("origin", ["a", "b", "c"], "['a', 'b', 'c']"),  # was ValueError
+        ("offset", [np.nan, 0, 0], "nan"),  # was ValueError
+        ("offset", [1.5, 2, 3], "1.5"),  # was silently 1
+        ("parity", 0.5, "0.5"),  # was silently 0
+        ("pitch", -1.0, "-1.0"),
+        ("offset", [1e300, 0, 0], "1e+300"),  # would overflow later
+    ],
+)
+def test_npz_metadata_is_validated(tmp_path, capsys, field, value, shown):
+    path = tmp_path / "meta.npz"
+    np.savez(path, volume=np.ones((3, 3, 3), bool), **{field: value})
+    fails(capsys, "info", path, words=("meta.npz", f"'{field}'", shown))
+
+
+def test_npz_metadata_that_is_valid_is_kept(tmp_path):
+    path = tmp_path / "meta.npz"
+    np.savez(path, volume=np.ones((2, 2, 2), bool), offset=[1.0, -2, 3], parity=np.int64(1),
+             pitch=np.array([0.5]), origin=[1, 2, 3])
+    obj = io.read_volume(path)
+    assert obj.offset == (1, -2, 3) and obj.parity == 1 and obj.pitch == 0.5
+    assert obj.origin.tolist() == [1.0, 2.0, 3.0]
+
+
+# -------------------------------------------------- volume type by content
+
+def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
+    upper = tmp_path / "v.NPZ"
+    assert main(["voxelize", str(box_stl(tmp_path)), "--resolution", "8", "-o", str(upper)]) == 0
+    vol = np.ones((2, 3, 4), bool)
+    with open(tmp_path / "npz_named.npy", "wb") as fh:
+        np.savez(fh, volume=vol)
+    with open(tmp_path / "npy_named.npz", "wb") as fh:
+        np.save(fh, vol)
+    capsys.readouterr()
+    for name, voxels in (("v.NPZ", 512), ("npz_named.npy", 24), ("npy_named.npz", 24)):
+        assert main(["info", str(tmp_path / name), "--json", "--no-surfaces"]) == 0, name
+        assert f'"voxels": {voxels}' in capsys.readouterr().out
+
+
+# ------------------------------------------------------------- point lists
+
+@pytest.mark.parametrize("big", ["1e300", "9223372036854775807", "-9223372036854775808"])
+@pytest.mark.parametrize("points_are", ["corners", "voxels"])
+def test_point_coordinates_out_of_range(tmp_path, capsys, big, points_are):
+    path = tmp_path / "far.txt"
+    path.write_text(f"0 0 0\n{big} 0 0\n")
+    fails(capsys, "info", path, "--points-are", points_are, words=("far.txt:2", big, "out of range"))
+
+
+def test_point_builders_refuse_coordinates_out_of_range():
+    for pts in ([[0, 0, 0], [2**63 - 1, 0, 0]], [[0, 0, 0], [-(2**63), 0, 0]], [[0, 0, 0], [1e300, 0, 0]]):
+        for build in (DigitalObject.from_points, DigitalObject.from_voxels):
+            with pytest.raises(IsoflowError, match="out of range"):
+                build(np.array(pts))
+
+
+@pytest.mark.parametrize("points_are", ["corners", "voxels"])
+def test_point_grid_beyond_the_memory_budget(tmp_path, capsys, monkeypatch, points_are):
+    from isoflow import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000_000)
+    path = tmp_path / "spread.txt"
+    path.write_text("0 0 0\n200 200 200\n")  # 8 MB of grid for two points
+    fails(capsys, "info", path, "--points-are", points_are, words=("spread.txt", "201x201x201", "budget"))
+    with pytest.raises(IsoflowError, match="budget"):
+        DigitalObject.from_points([[0, 0, 0], [200, 200, 200]])
+
+
+# ------------------------------------------------------------ output paths
+
+def test_output_that_is_a_directory_is_refused_even_with_force(tmp_path, capsys):
+    np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
+    (tmp_path / "adir.ply").mkdir()
+    (tmp_path / "vdir.npz").mkdir()
+    fails(capsys, "surface", tmp_path / "ok.npy", "-o", tmp_path / "adir.ply", "--force",
+          words=("adir.ply", "is a directory"))
+    fails(capsys, "voxelize", box_stl(tmp_path), "--resolution", "4", "-o", tmp_path / "vdir.npz", "--force",
+          words=("vdir.npz", "is a directory"))
+
+
+@pytest.mark.parametrize(
+    "png, words",
+    [("nodir/p.png", ("nodir", "no such directory")),  # was FileNotFoundError after the mesh
+     ("pic.txt", ("pic.txt", ".png")),  # was a matplotlib ValueError after the mesh
+     ("pdir.png", ("pdir.png", "is a directory"))],
+)
+def test_bad_picture_path_is_refused_before_anything_is_written(tmp_path, capsys, png, words):
+    np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
+    (tmp_path / "pdir.png").mkdir()
+    out = tmp_path / "pp.obj"
+    fails(capsys, "surface", tmp_path / "ok.npy", "-o", out, "--png", tmp_path / png, "--force", words=words)
+    assert not out.exists()
+    with pytest.raises(IsoflowError, match="no such directory|.png|is a directory"):
+        io.check_picture_path(tmp_path / png, force=True)  # reusable for other commands' pictures
+
+
+# ------------------------------------------------------- non-regular input
+
+def test_device_input_is_refused(capsys):
+    # /dev/null stands in for /dev/zero (which would never end) and FIFOs
+    fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))
+
+
+def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
+    path = tmp_path / "data.bin"
+    path.write_bytes(b"0 0 0\n\0\0\0\0\n1 1 1\n" + bytes(range(256)) * 100)
+    fails(capsys, "info", path, words=("data.bin", "binary data"))
+
+
+def test_zarr_outside_info_says_so(tmp_path, capsys):
+    (tmp_path / "v.zarr").mkdir()
+    fails(capsys, "surface", tmp_path / "v.zarr", "-o", tmp_path / "s.ply", words=("v.zarr", "isoflow info"))
