@@ -159,3 +159,18 @@ def test_info_skips_surfaces_beyond_the_memory_budget_and_says_why(tmp_path, cap
     assert r["surfaces"] is None and "faces" in r["surfaces_skipped"]
     assert main(["info", str(tmp_path / "t.npy")]) == 0
     assert "not computed (the boundary has" in capsys.readouterr().out
+
+
+def test_allow_open_reaches_every_mesh_command(tmp_path, capsys):
+    # plane_holes.obj is open (manifest: 27 boundary loops): refused, with
+    # the option named; accepted with it, like `voxelize --allow-open`
+    mesh = ROOT / "meshes" / "plane_holes.obj"
+    assert main(["info", str(mesh), "--resolution", "12"]) == 2
+    assert "--allow-open" in capsys.readouterr().err
+    r = info_json(capsys, mesh, "--resolution", "12", "--allow-open")
+    assert main(["voxelize", str(mesh), "--resolution", "12", "--allow-open", "-o", str(tmp_path / "p.npz")]) == 0
+    capsys.readouterr()
+    assert info_json(capsys, tmp_path / "p.npz")["voxels"] == r["voxels"] > 0
+    np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
+    assert main(["info", str(tmp_path / "v.npy"), "--allow-open"]) == 2
+    assert "apply to meshes" in capsys.readouterr().err

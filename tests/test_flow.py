@@ -18,6 +18,7 @@ from conftest import ball
 from isoflow import DigitalObject, read_object
 from isoflow.cli import main
 from isoflow.configurations import configurations
+from isoflow.errors import IsoflowError
 from isoflow.flow import flow_moves, flow_step, run_flow
 from isoflow.guard import guarded_step, simple_points
 from isoflow.indices import CONVEX, FLAT, NONE, class_lut, code_lut, f_lut, planar_class_lut
@@ -452,3 +453,15 @@ def test_flow_writer_keeps_a_bounded_evenly_spaced_sample(tmp_path):
     assert len(steps) <= 2 * FlowWriter.PANELS and steps[0] == 0
     assert len(set(np.diff(steps))) == 1 and steps[-1] + writer.stride > 200
     assert writer.last[0] == 200
+
+
+def test_flow_api_takes_arrays_and_checks_its_counts():
+    # a bare array is the object at the origin: same run as its DigitalObject
+    box = np.ones((3, 4, 5), bool)
+    assert [s["voxels"] for s in run_flow(box).steps] == [60, 24, 6, 0]
+    assert flow_step(box).voxels == 24
+    for kw in ({"steps": 1.5}, {"steps": -1}, {"max_steps": -2}, {"steps": True}):
+        with pytest.raises(IsoflowError, match="must be an integer"):
+            run_flow(box, **kw)
+    # max_steps=0 means no step, not the default cap
+    assert run_flow(box, max_steps=0).stop_reason == "max-steps"

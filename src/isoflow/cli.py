@@ -37,6 +37,8 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
     grid = p.add_mutually_exclusive_group()
     grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
     grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
+    p.add_argument("--allow-open", action="store_true",
+                   help="a mesh with holes: voxelise by the generalised winding number (slow: small grids only)")
 
 
 def add_connectivity(p: argparse.ArgumentParser) -> None:
@@ -57,9 +59,10 @@ def load_input(args):
     if path.suffix.lower() in MESH_SUFFIXES:
         from .meshes import voxelize_file  # the mesh bridge (issue 3)
 
-        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, progress=progress_callback("voxelize"))
-    if args.pitch is not None or args.resolution is not None:
-        raise IsoflowError(f"{path}: --pitch/--resolution apply to meshes, not to {path.suffix or 'this'} input")
+        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
+                             progress=progress_callback("voxelize"))
+    if args.pitch is not None or args.resolution is not None or args.allow_open:
+        raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
     if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
         raise IsoflowError(f"{path}: only 'isoflow info' reads .zarr (block by block); save the volume as .npy or .npz")
     return io.read_object(path, points_are=args.points_are)
@@ -78,8 +81,8 @@ def cmd_info(args) -> int:
         # closed surfaces need the whole boundary mesh and are not computed
         from .outofcore import analyze_zarr
 
-        if args.pitch is not None or args.resolution is not None:
-            raise IsoflowError(f"{args.input}: --pitch/--resolution apply to meshes, not to .zarr input")
+        if args.pitch is not None or args.resolution is not None or args.allow_open:
+            raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         report = analyze_zarr(args.input, args.connectivity)

@@ -304,7 +304,9 @@ def flow_step(obj: DigitalObject, connectivity: int | None = 6) -> DigitalObject
     3D objects follow the table of the module docstring; 2D objects the
     planar flow of eq. 5.8 (:func:`isoflow.planar.planar_flow_step`). The
     result sits on the other lattice and is cropped to its bounding box.
+    ``obj`` may also be a bare binary array.
     """
+    obj = DigitalObject.of(obj)
     cfg, keep = flow_moves(obj, connectivity)
     return _shifted_object(obj, keep).cropped()
 
@@ -424,10 +426,12 @@ def run_flow(
     """
     from . import guard as control  # it builds on flow_moves, so it is imported here
 
+    obj = DigitalObject.of(obj)
     conn = flow_connectivity(obj.ndim, connectivity)
-    if steps is not None and steps < 0:
-        raise IsoflowError(f"steps must be >= 0, got {steps}")
-    cap = steps if steps is not None else (max_steps or default_max_steps(obj))
+    for name, value in (("steps", steps), ("max_steps", max_steps)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
+            raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
+    cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     current = obj.cropped()
     records = [_record(current, 0, conn)]
     states = [current] if keep_states else []

@@ -140,6 +140,8 @@ def read_object(path: str | os.PathLike, points_are: str = "corners") -> Digital
     (Definitions 1-2); ``'voxels'`` takes each point as a voxel index.
     """
     path = Path(path)
+    if points_are not in ("corners", "voxels"):
+        raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {points_are!r}")
     if path.suffix.lower() in VOLUME_SUFFIXES:
         return read_volume(path)
     pts = read_points(path)

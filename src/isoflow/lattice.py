@@ -58,6 +58,12 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
+    def of(cls, x) -> "DigitalObject":
+        """``x`` itself if it is a DigitalObject, else the object of the
+        binary array ``x`` at the origin: the API takes either."""
+        return x if isinstance(x, cls) else cls(x)
+
+    @classmethod
     def from_voxels(cls, indices, **kw) -> "DigitalObject":
         """Object made of the voxels with the given integer indices (N, n)."""
         idx = _integer_points(indices, "voxel index")

@@ -122,6 +122,7 @@ def to_manifold(obj: DigitalObject, connectivity: int = 6):
 
     from .surface import boundary_mesh
 
+    obj = DigitalObject.of(obj)
     if obj.ndim != 3:
         raise IsoflowError(f"to_manifold needs a 3D object, got {obj.ndim}D")
     mesh = boundary_mesh(obj.volume, connectivity)
@@ -277,6 +278,9 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     from .voxelize import load_mesh, voxelize
 
     path = Path(path)
+    resolutions = list(resolutions)
+    if not resolutions:
+        raise IsoflowError("verify_genus needs at least one resolution")
     stats: dict = {}
     v, f = load_mesh(path, stats=stats)
     mesh = mesh_topology(v, f)

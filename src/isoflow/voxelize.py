@@ -801,7 +801,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
             f"{defects['boundary_edges']} boundary edges, "
             f"{defects['nonmanifold_edges']} non-manifold edges, "
             f"{defects['inconsistent_edges']} inconsistently oriented edges "
-            "(pass allow_open=True to use the generalised winding number)")
+            "(--allow-open / allow_open=True reads it by the generalised winding number)")
     if balanced:
         # bool volume + difference array (one more slot per column)
         per_voxel = 1 + np.dtype(_diff_dtype(len(f))).itemsize * (shape[2] + 1) / shape[2]
