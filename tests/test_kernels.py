@@ -85,3 +85,6 @@ def test_bool_arrays_with_bytes_other_than_one_are_read_as_true(rng):
         r = analyze(DigitalObject(v), conn, surfaces=False)
         assert r["euler_characteristic"] == euler_number(u > 0, connectivity=sk)
         assert r["betti"][0] == scipy_count(u > 0, conn)
+    # the kernels themselves test bytes for nonzero
+    assert (kernels.histogram3d(v) == kernels.histogram3d(u > 0)).all()
+    assert kernels.count_components(v, 6) == scipy_count(u > 0, 6)

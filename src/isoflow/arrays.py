@@ -60,8 +60,9 @@ def binary(array, where: str = "volume", near=None) -> np.ndarray:
         raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     arr = np.asarray(array)
     if arr.dtype == np.bool_:
-        # A bool array made by .view(bool) can hold bytes other than 0/1;
-        # the compiled kernels read bytes, so make them canonical.
+        # A bool array made by .view(bool) can hold bytes other than 0/1,
+        # which numpy compares and cc3d labels as distinct values: make them
+        # canonical (the max is one fast pass, 10 ms at 512^3).
         if arr.size and arr.view(np.uint8).max() > 1:
             arr = arr.view(np.uint8) != 0
         return arr

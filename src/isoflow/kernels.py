@@ -51,7 +51,8 @@ if HAVE_NUMBA:
                 r11 = v[i, j] if i < nx and j < ny else zero
                 code = 0
                 for k in range(nz):
-                    nib = r00[k] | (r10[k] << 1) | (r01[k] << 2) | (r11[k] << 3)
+                    # != 0: a bool array made by .view(bool) may hold other bytes
+                    nib = (r00[k] != 0) | ((r10[k] != 0) << 1) | ((r01[k] != 0) << 2) | ((r11[k] != 0) << 3)
                     code = (code >> 4) | (nib << 4)
                     hist[code] += 1
                 hist[code >> 4] += 1  # the last vertex of the row, k = nz
@@ -66,7 +67,7 @@ if HAVE_NUMBA:
                 c = 0
                 prev = 0
                 for k in range(nz):
-                    cur = row[k]
+                    cur = 1 if row[k] else 0
                     c += cur & (1 - prev)
                     prev = cur
                 counts[i * ny + j + 1] = c
