@@ -13,7 +13,7 @@ dispatched here, so the rest of the core names no library:
   labelling, so their volume is copied to the host for that step alone.
 
 Anything that is not an array-API array (lists, dask arrays, NumPy itself) is
-read with ``numpy.asarray`` as before.
+read with ``numpy.asarray``; host volumes must hold 0/1 values (:func:`binary`).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ import os
 import numpy as np
 
 from .errors import IsoflowError
+from .memory import gib
 
 
 def namespace(x):
@@ -165,7 +166,7 @@ def to_gpu(volume: np.ndarray):
     need = int(np.prod(volume.shape, dtype=np.int64)) * GPU_BYTES_PER_VOXEL
     if need > free:
         raise IsoflowError(
-            f"a {'x'.join(map(str, volume.shape))} volume needs about {need / 2**30:.1f} GiB "
-            f"of GPU memory and {free / 2**30:.1f} GiB is free; drop --gpu"
+            f"a {'x'.join(map(str, volume.shape))} volume needs about {gib(need)} "
+            f"of GPU memory and {gib(free)} is free; drop --gpu"
         )
     return cupy.asarray(volume)

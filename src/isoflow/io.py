@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .arrays import binary
 from .errors import IsoflowError
 from .lattice import DigitalObject
 
@@ -29,14 +30,6 @@ def _check_readable(path: Path) -> None:
     elif not path.is_file():
         # a device or FIFO would be read until memory runs out (/dev/zero)
         raise IsoflowError(f"{path}: not a regular file (a device, pipe or socket)")
-
-
-def as_binary(array: np.ndarray, where: str, near=None) -> np.ndarray:
-    """A boolean view of a 0/1 array, or a clear error saying why not (see
-    :func:`isoflow.arrays.binary`)."""
-    from .arrays import binary
-
-    return binary(array, where, near)
 
 
 def read_volume(path: str | os.PathLike) -> DigitalObject:
@@ -76,7 +69,7 @@ def read_volume(path: str | os.PathLike) -> DigitalObject:
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     if arr.ndim not in (2, 3, 4):
         raise IsoflowError(f"{path}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
-    vol = as_binary(arr, str(path))
+    vol = binary(arr, str(path))
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         return DigitalObject(vol, **meta)
     except IsoflowError as exc:

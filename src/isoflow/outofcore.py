@@ -57,7 +57,7 @@ import numpy as np
 from .analysis import report_from_histogram
 from .configurations import configuration_histogram, configurations
 from .errors import IsoflowError
-from .io import as_binary
+from .arrays import binary
 from .topology import COMPLEMENT, euler_from_histogram, resolve_connectivity, structure
 
 #: local labels live in the low 32 bits of a node key, the block in the high bits
@@ -194,7 +194,7 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
     array's border faces.
     """
     ndim = len(index)
-    core = as_binary(block, where, near=origin)
+    core = binary(block, where, near=origin)
     first = tuple(i == 0 for i in index)
     last = tuple(i == n - 1 for i, n in zip(index, numblocks))
     hist = _vertex_histogram(core, first, last)
@@ -606,5 +606,5 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
     if dtype.kind != "b" and 0 not in z.shape:
         first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
-        as_binary(first, where, near=(0,) * z.ndim)
+        binary(first, where, near=(0,) * z.ndim)
     return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where)
