@@ -174,3 +174,13 @@ def test_allow_open_reaches_every_mesh_command(tmp_path, capsys):
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
     assert main(["info", str(tmp_path / "v.npy"), "--allow-open"]) == 2
     assert "apply to meshes" in capsys.readouterr().err
+
+
+def test_memory_budget_is_most_of_what_the_kernel_says_is_available():
+    from isoflow.memory import default_budget
+
+    if not Path("/proc/meminfo").exists():
+        pytest.skip("no /proc/meminfo (not Linux)")
+    fields = dict(line.split(":", 1) for line in open("/proc/meminfo"))
+    total = int(fields["MemTotal"].split()[0]) * 1024
+    assert 0 < default_budget() <= 0.9 * total

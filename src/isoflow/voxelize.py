@@ -755,7 +755,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, allow_open: bool =
     max_bytes
         Refuse (IsoflowError) before allocating if the grid would need more
         (bool volume + integer difference array + chunk buffers).  Default:
-        half the physical memory.
+        :func:`isoflow.memory.default_budget` (90 % of the available memory).
     progress
         Optional ``callable(done, total)``, called once per chunk of work.
 
