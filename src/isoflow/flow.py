@@ -619,7 +619,10 @@ class FlowWriter:
             from .render import render_flow, render_flow_shapes
 
             self.written.append(render_flow(result, self.out / "flow.png"))
-            frames = self.frames + ([self.last] if self.last and self.last not in self.frames else [])
+            # the last non-empty state closes the row unless it is sampled already
+            frames = list(self.frames)
+            if self.last is not None and (not frames or frames[-1][0] != self.last[0]):
+                frames.append(self.last)
             if frames and frames[0][1].ndim == 3:
                 records = {rec["step"]: rec for rec in result.steps}
                 shown = [(state, records[step]) for step, state in frames]
