@@ -98,10 +98,10 @@ def _compiled(volume) -> bool:
     )
 
 
-def _labelled(volume):
-    """``(xp, volume, label)``: the volume where its library can label it (host
-    NumPy, a CuPy GPU), otherwise copied to the host once."""
-    xp, v = arrays.as_volume(volume)
+def _labeller(xp, v):
+    """``(xp, volume, label)`` for a checked volume (:func:`arrays.as_volume`):
+    the volume where its library can label it (host NumPy, a CuPy GPU),
+    otherwise copied to the host once."""
     label = arrays.label_function(xp)
     if label is None:
         v = arrays.to_host(v)
@@ -128,7 +128,10 @@ def count_components(volume, connectivity: int) -> int:
     (no label volume); small ones ``scipy.ndimage.label``, CuPy volumes
     ``cupyx.scipy.ndimage.label`` on their GPU.
     """
-    xp, v, label = _labelled(volume)
+    return _count_components(*_labeller(*arrays.as_volume(volume)), connectivity)
+
+
+def _count_components(xp, v, label, connectivity: int) -> int:
     if _compiled(v):
         from .kernels import count_components as compiled
 
@@ -144,7 +147,10 @@ def count_enclosed(volume, connectivity: int) -> int:
     The region outside the array is background and touches every border
     component, so those merge into one exterior; no padded copy is needed.
     """
-    xp, v, label = _labelled(volume)
+    return _count_enclosed(*_labeller(*arrays.as_volume(volume)), connectivity)
+
+
+def _count_enclosed(xp, v, label, connectivity: int) -> int:
     if v.size == 0:
         return 0
     if _compiled(v):
@@ -176,15 +182,16 @@ def betti_numbers(volume, connectivity: int | None = None, chi: int | None = Non
     xp, v = arrays.as_volume(volume)
     conn = resolve_connectivity(v.ndim, connectivity)
     if chi is None:
-        chi = euler_characteristic(v, conn)
-    xp, v, _ = _labelled(v)  # one host copy, where the library cannot label
+        chi = euler_from_histogram(configuration_histogram(v), v.ndim, conn)
+    # the volume is checked once here; one host copy where the library cannot label
+    xp, v, label = _labeller(xp, v)
     if _compiled(v):
         from .kernels import count_object_and_enclosed
 
         b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))
     else:
-        b0 = count_components(v, conn)
-        enclosed = count_enclosed(v, complement(v.ndim, conn))
+        b0 = _count_components(xp, v, label, conn)
+        enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn))
     if v.ndim == 4:
         return [b0, None, None, enclosed]
     if v.ndim == 2:
