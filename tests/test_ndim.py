@@ -449,11 +449,13 @@ def test_codes_4d_box_corners():
 # 6. eqs. 6.2 and 6.3: the counterexamples of docs/ndim.md
 
 
-def _octahedron6():
-    x = np.zeros((3, 3, 3, 1), dtype=bool)
-    for i in range(3):
+def _cross_shell(k: int) -> np.ndarray:
+    """The 2k cells face-adjacent to an empty centre cell in a k-flat of 4D
+    (k = 3: an octahedral shell, a 2-sphere; k = 4: a 3-sphere)."""
+    x = np.zeros((3,) * k + (1,) * (4 - k), dtype=bool)
+    for i in range(k):
         for s in (0, 2):
-            idx = [1, 1, 1, 0]
+            idx = [1] * k + [0] * (4 - k)
             idx[i] = s
             x[tuple(idx)] = True
     return x
@@ -461,7 +463,7 @@ def _octahedron6():
 
 def test_eq62_counterexamples():
     # max: six cells around an empty one in a 3-flat: a 2-sphere, chi = 2
-    x = _octahedron6()
+    x = _cross_shell(3)
     assert nd.betti_numbers(x, "max") == (1, 0, 1, 0, 0)
     assert nd.gauss_bonnet_sum(x, "max") == 32  # = 2^4 chi, > 2^4 (1 - g) for every g >= 0
     # min: a 2x2x2x2 block minus two antipodal cells, 14 cells, chi = 2
@@ -470,12 +472,7 @@ def test_eq62_counterexamples():
     assert nd.betti_numbers(y, "min") == (1, 0, 1, 0, 0)
     assert nd.gauss_bonnet_sum(y, "min") == 32
     # max: eight cells around an empty one: a 3-sphere, b3 = 1, chi = 0
-    z = np.zeros((3, 3, 3, 3), dtype=bool)
-    for i in range(4):
-        for s in (0, 2):
-            idx = [1, 1, 1, 1]
-            idx[i] = s
-            z[tuple(idx)] = True
+    z = _cross_shell(4)
     assert nd.betti_numbers(z, "max") == (1, 0, 0, 1, 0)
     assert nd.gauss_bonnet_sum(z, "max") == 0
 
