@@ -39,8 +39,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from isoflow import DigitalObject  # noqa: E402
-from isoflow.flow import flow_step, run_flow  # noqa: E402
-from isoflow.guard import guarded_step  # noqa: E402
+from isoflow.flow.motion import flow_step  # noqa: E402
+from isoflow.flow.run import run_flow  # noqa: E402
+from isoflow.flow.guard import guarded_step  # noqa: E402
 
 
 def ball(n: int) -> np.ndarray:

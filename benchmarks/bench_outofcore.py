@@ -179,7 +179,7 @@ class TreeSampler:
 
 
 def child_analyze(path: str, connectivity: int, scheduler: str | None = None) -> dict:
-    from isoflow.outofcore import analyze_zarr
+    from isoflow.digital.outofcore import analyze_zarr
 
     with TreeSampler() as sampler:
         t0 = time.perf_counter()

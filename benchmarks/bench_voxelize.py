@@ -29,7 +29,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
-from isoflow.voxelize import load_mesh, mesh_defects, voxelize  # noqa: E402
+from isoflow.mesh.voxelize import load_mesh, mesh_defects, voxelize  # noqa: E402
 
 
 def find_meshes(arg: str | None) -> Path:

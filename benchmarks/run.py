@@ -147,7 +147,7 @@ def _border_labels(labels: np.ndarray) -> set:
 
 def t_isoflow_info(vol, measure):
     from isoflow import DigitalObject, analyze
-    from isoflow.topology import euler_characteristic
+    from isoflow.digital.topology import euler_characteristic
 
     rep = measure("info", lambda: analyze(DigitalObject(vol), 6, surfaces=False),
                   lambda r: {"chi6": r["euler_characteristic"], "betti": r["betti"], "n": r["n"]})
@@ -157,7 +157,8 @@ def t_isoflow_info(vol, measure):
 
 
 def w_isoflow(tiny):
-    from isoflow import DigitalObject, analyze, boundary_mesh, kernels
+    from isoflow import DigitalObject, analyze, boundary_mesh
+    from isoflow.scale import kernels
 
     analyze(DigitalObject(tiny), 6, surfaces=False)
     boundary_mesh(tiny, 6)

@@ -3,7 +3,7 @@
     python benchmarks/theorems.py                     # default sample, about 2-4 minutes
     python benchmarks/theorems.py --count 10 --no-guard   # a quick look
 
-Runs the flow (isoflow.flow.run_flow, the reading of DESIGN section 4) on
+Runs the flow (isoflow.flow.run.run_flow, the reading of DESIGN section 4) on
 many objects -- random unions of boxes, dumbbells, solid tori and square
 annulus prisms, digital balls, smoothed random blobs, and the sample meshes
 voxelised at 24-32 voxels across (when ``isoflow.voxelize`` is available) --
@@ -49,7 +49,7 @@ ROOT = HERE.parent
 sys.path.insert(0, str(ROOT / "src"))
 
 from isoflow import DigitalObject  # noqa: E402
-from isoflow.flow import run_flow  # noqa: E402
+from isoflow.flow.run import run_flow  # noqa: E402
 
 CLAIMS = ("T20-23 cuboid", "single voxel", "T21 (1,0,0)", "kept, other inputs", "T24", "T25", "guard")
 #: columns that are not claims of the paper: no counterexample is saved
@@ -127,7 +127,7 @@ FAMILIES = {
 def mesh_objects(directories, resolutions=(24, 32)):
     """(name, volume) of every sample mesh voxelised, if isoflow.voxelize exists."""
     try:
-        from isoflow import voxelize as vx
+        from isoflow.mesh import voxelize as vx
     except ImportError:
         print("isoflow.voxelize is not available: skipping the sample meshes", file=sys.stderr)
         return []

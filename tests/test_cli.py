@@ -125,8 +125,8 @@ def test_bad_input_gives_one_line_and_exit_2(tmp_path):
 def test_boundary_face_count_from_the_histogram(rng):
     # faces counted from 256 configuration counts alone, against an
     # independent count of object/background neighbour pairs on each axis
-    from isoflow.configurations import configuration_histogram
-    from isoflow.surface import boundary_faces
+    from isoflow.digital.configurations import configuration_histogram
+    from isoflow.digital.surface import boundary_faces
 
     for _ in range(100):
         v = rng.random(tuple(rng.integers(1, 10, 3))) < rng.random()
@@ -136,7 +136,7 @@ def test_boundary_face_count_from_the_histogram(rng):
 
 
 def test_surface_refuses_a_mesh_beyond_the_memory_budget(tmp_path, capsys, monkeypatch):
-    from isoflow import memory
+    from isoflow.scale import memory
 
     np.save(tmp_path / "t.npy", torus(6, 2))
     monkeypatch.setattr(memory, "default_budget", lambda: 100_000)
@@ -148,7 +148,7 @@ def test_surface_refuses_a_mesh_beyond_the_memory_budget(tmp_path, capsys, monke
 
 
 def test_info_skips_surfaces_beyond_the_memory_budget_and_says_why(tmp_path, capsys, monkeypatch):
-    from isoflow import memory
+    from isoflow.scale import memory
 
     v = torus(6, 2)
     np.save(tmp_path / "t.npy", v)
@@ -177,7 +177,7 @@ def test_allow_open_reaches_every_mesh_command(tmp_path, capsys):
 
 
 def test_memory_budget_is_most_of_what_the_kernel_says_is_available():
-    from isoflow.memory import default_budget
+    from isoflow.scale.memory import default_budget
 
     if not Path("/proc/meminfo").exists():
         pytest.skip("no /proc/meminfo (not Linux)")

@@ -7,10 +7,11 @@ import numpy as np
 import pytest
 import trimesh
 
-from isoflow import io
+from isoflow.mesh.outputs import check_picture_path
+from isoflow.mesh.volumes import read_volume
 from isoflow.cli import main
 from isoflow.errors import IsoflowError
-from isoflow.lattice import DigitalObject
+from isoflow.digital.lattice import DigitalObject
 
 
 def fails(capsys, *args, words=()):
@@ -56,7 +57,7 @@ def test_npz_metadata_that_is_valid_is_kept(tmp_path):
     path = tmp_path / "meta.npz"
     np.savez(path, volume=np.ones((2, 2, 2), bool), offset=[1.0, -2, 3], parity=np.int64(1),
              pitch=np.array([0.5]), origin=[1, 2, 3])
-    obj = io.read_volume(path)
+    obj = read_volume(path)
     assert obj.offset == (1, -2, 3) and obj.parity == 1 and obj.pitch == 0.5
     assert obj.origin.tolist() == [1.0, 2.0, 3.0]
 
@@ -96,7 +97,7 @@ def test_point_builders_refuse_coordinates_out_of_range():
 
 @pytest.mark.parametrize("points_are", ["corners", "voxels"])
 def test_point_grid_beyond_the_memory_budget(tmp_path, capsys, monkeypatch, points_are):
-    from isoflow import memory
+    from isoflow.scale import memory
 
     monkeypatch.setattr(memory, "default_budget", lambda: 1_000_000)
     path = tmp_path / "spread.txt"
@@ -131,7 +132,7 @@ def test_bad_picture_path_is_refused_before_anything_is_written(tmp_path, capsys
     fails(capsys, "surface", tmp_path / "ok.npy", "-o", out, "--png", tmp_path / png, "--force", words=words)
     assert not out.exists()
     with pytest.raises(IsoflowError, match="no such directory|.png|is a directory"):
-        io.check_picture_path(tmp_path / png, force=True)  # reusable for other commands' pictures
+        check_picture_path(tmp_path / png, force=True)  # reusable for other commands' pictures
 
 
 # ------------------------------------------------------- non-regular input

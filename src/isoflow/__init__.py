@@ -9,11 +9,9 @@ The core is array in / array out; :class:`DigitalObject` only adds where the
 array sits (offset, lattice parity, pitch, origin).
 """
 
-from . import arrays
-from .analysis import analyze
-from .configurations import configuration_histogram
-from .errors import IsoflowError
-from .indices import (
+from .digital.analysis import analyze
+from .digital.configurations import configuration_histogram
+from .digital.indices import (
     CLASS_LABELS,
     a_lut,
     class_histogram,
@@ -24,17 +22,24 @@ from .indices import (
     normal_lut,
     planar_index,
 )
-from .io import read_object, read_points, read_volume, write_volume
-from .flow import FlowResult, flow_step, run_flow
-from .lattice import DigitalObject
-from .meshes import from_manifold, to_manifold, verify_genus, voxelize_file, voxelize_mesh
-from .surface import QuadMesh, boundary_mesh
-from .topology import betti_numbers, euler_characteristic
+from .digital.lattice import DigitalObject
+from .digital.outofcore import analyze_chunked, analyze_zarr
+from .digital.surface import QuadMesh, boundary_mesh
+from .digital.topology import betti_numbers, euler_characteristic
+from .errors import IsoflowError
+from .flow.motion import flow_step
+from .flow.run import FlowResult, run_flow
+from .mesh.bridges import from_manifold, to_manifold
+from .mesh.genus import verify_genus
+from .mesh.volumes import read_object, read_points, read_volume, write_volume
+from .mesh.voxelize import voxelize_file, voxelize_mesh
 
 __version__ = "0.1.0"
 
 __all__ = [
     "CLASS_LABELS",
+    "analyze_chunked",
+    "analyze_zarr",
     "DigitalObject",
     "FlowResult",
     "flow_step",

@@ -53,11 +53,11 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
 
 def load_input(args):
     """The digital object named on the command line (volume, points or mesh)."""
-    from . import io
+    from .mesh.volumes import read_object
 
     path = Path(args.input)
     if path.suffix.lower() in MESH_SUFFIXES:
-        from .meshes import voxelize_file  # the mesh bridge (issue 3)
+        from .mesh.voxelize import voxelize_file
 
         return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
                              progress=progress_callback("voxelize"))
@@ -65,7 +65,7 @@ def load_input(args):
         raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
     if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
         raise IsoflowError(f"{path}: only 'isoflow info' reads .zarr (block by block); save the volume as .npy or .npz")
-    return io.read_object(path, points_are=args.points_are)
+    return read_object(path, points_are=args.points_are)
 
 
 # --------------------------------------------------------------------------
@@ -74,12 +74,12 @@ def load_input(args):
 
 
 def cmd_info(args) -> int:
-    from .analysis import analyze
+    from .digital.analysis import analyze
 
     if Path(args.input).suffix.lower() == ".zarr":
         # out of core: block by block, never the whole volume in memory; the
         # closed surfaces need the whole boundary mesh and are not computed
-        from .outofcore import analyze_zarr
+        from .digital.outofcore import analyze_zarr
 
         if args.pitch is not None or args.resolution is not None or args.allow_open:
             raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
@@ -91,7 +91,7 @@ def cmd_info(args) -> int:
     else:
         obj = load_input(args)
         if args.gpu:
-            from .arrays import to_gpu
+            from .scale.arrays import to_gpu
 
             report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces)
             report["parity"] = obj.parity  # a bare array has no lattice place
@@ -139,17 +139,18 @@ def format_info(r: dict) -> str:
 
 
 def cmd_surface(args) -> int:
-    from . import io
-    from .configurations import configuration_histogram
-    from .memory import check_fits
-    from .surface import boundary_faces, boundary_mesh, mesh_memory
-    from .topology import default_connectivity
+    from .digital.configurations import configuration_histogram
+    from .digital.surface import boundary_faces, boundary_mesh, mesh_memory
+    from .digital.topology import default_connectivity
+    from .mesh import export
+    from .mesh.outputs import check_output_path, check_picture_path
+    from .scale.memory import check_fits
 
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
-    out = io.check_output_path(args.output, args.force, suffixes=(".ply", ".obj"))
+    out = check_output_path(args.output, args.force, suffixes=(".ply", ".obj"))
     if args.png:
-        io.check_picture_path(args.png, args.force)
+        check_picture_path(args.png, args.force)
     suffix = out.suffix.lower()
     obj = load_input(args)
     if obj.ndim != 3:
@@ -171,9 +172,9 @@ def cmd_surface(args) -> int:
     )
     faces = mesh.triangles() if args.triangulate else mesh.polygons()
     if suffix == ".ply":
-        io.write_ply(out, io.mesh_vertex_table(mesh, obj), faces, ascii=args.ascii, force=args.force, comments=comments)
+        export.write_ply(out, export.mesh_vertex_table(mesh, obj), faces, ascii=args.ascii, force=args.force, comments=comments)
     else:
-        io.write_obj(out, obj.world(mesh.vertices), faces, force=args.force, comments=comments)
+        export.write_obj(out, obj.world(mesh.vertices), faces, force=args.force, comments=comments)
     chi = mesh.euler_characteristic
     print(
         f"{out}: {len(mesh.vertices)} vertices, {len(faces)} faces, "
@@ -181,7 +182,7 @@ def cmd_surface(args) -> int:
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
     if args.png:
-        from .render import render_surface
+        from .mesh.render import render_surface
 
         png = Path(args.png)
         render_surface(mesh, obj, png, title=Path(args.input).name)
@@ -190,20 +191,21 @@ def cmd_surface(args) -> int:
 
 
 def cmd_voxelize(args) -> int:
-    from . import io
-    from .meshes import voxelize_file
+    from .mesh.outputs import check_output_path
+    from .mesh.volumes import write_volume
+    from .mesh.voxelize import voxelize_file
 
-    out = io.check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
+    out = check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
     obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
                         progress=progress_callback("voxelize"))
-    io.write_volume(obj, out, force=args.force)
+    write_volume(obj, out, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
     return 0
 
 
 def cmd_genus(args) -> int:
-    from .meshes import DEFAULT_RESOLUTIONS, verify_genus
+    from .mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
 
     conn = args.connectivity or 6
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
@@ -247,7 +249,9 @@ def progress_callback(label: str):
 def cmd_flow(args) -> int:
     import time
 
-    from .flow import FlowWriter, default_max_steps, flow_connectivity, run_flow
+    from .flow.files import FlowWriter
+    from .flow.motion import flow_connectivity
+    from .flow.run import default_max_steps, run_flow
 
     obj = load_input(args)
     if obj.voxels == 0:

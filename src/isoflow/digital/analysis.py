@@ -1,0 +1,177 @@
+"""The shape report of a digital object: what ``isoflow info`` prints.
+
+One pass of configurations gives the histogram from which chi (Theorems
+10-11), the class vector ``n`` (eq. 4.9), ``a^T n`` (eq. 4.12-4.13) and the
+energy ``E = k^T n`` (eq. 5.22) all follow; two labellings give the Betti
+numbers, and the boundary mesh gives the closed surfaces and their genus.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scale import arrays
+from .configurations import configuration_histogram
+from .indices import (
+    CLASS_LABELS,
+    NOT_WELL_COMPOSED,
+    PLANAR_LABELS,
+    a_lut,
+    class_histogram,
+    class_lut,
+    euler_lut,
+    planar_class_lut,
+)
+from .lattice import DigitalObject
+from .topology import betti_numbers, euler_from_histogram, resolve_connectivity
+
+
+def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict:
+    """Everything ``isoflow info --json`` reports, as a JSON-ready dict.
+
+    ``obj`` is a :class:`DigitalObject` or a bare binary volume: a NumPy
+    array, or a CuPy (or other array-API) array whose histogram and Betti
+    numbers are computed on its device (:mod:`isoflow.scale.arrays`); only the
+    surfaces, when asked, are meshed from a host copy.
+
+    ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the 128
+    configurations that are not well-composed included (with the weight of the
+    connectivity asked), and so equals ``2^n chi`` on every object;
+    ``a_dot_n_well_composed`` is the paper's ``a^T n`` over the nine classes
+    alone. ``energy`` is the paper's ``E = k^T n`` over the nine classes (in
+    2D: convex plus concave vertices, ``k = r^2``).
+    """
+    if isinstance(obj, DigitalObject):
+        vol, parity = obj.volume, obj.parity
+    else:
+        vol, parity = arrays.as_volume(obj)[1], 0
+    conn = resolve_connectivity(vol.ndim, connectivity)
+    hist = configuration_histogram(vol)
+    chi = euler_from_histogram(hist, vol.ndim, conn)
+    out = report_from_histogram(
+        hist,
+        vol.ndim,
+        conn,
+        voxels=voxels_from_histogram(hist),
+        shape=vol.shape,
+        betti=betti_numbers(vol, conn, chi=chi),
+        parity=parity,
+    )
+    if vol.ndim == 3 and surfaces:
+        from ..scale.memory import default_budget, gib
+        from .surface import boundary_faces, boundary_mesh, mesh_memory
+
+        need = mesh_memory(hist)
+        if need > default_budget():
+            # chi, Betti numbers and n are known; say why the genus per
+            # surface is missing rather than fail the whole report
+            out["surfaces"] = None
+            out["surfaces_skipped"] = (
+                f"the boundary has {boundary_faces(hist):,} faces; meshing it needs about "
+                f"{gib(need)}, more than the memory budget of {gib(default_budget())}"
+            )
+            return out
+        mesh = boundary_mesh(arrays.to_host(vol), conn)
+        out["surfaces"] = [
+            {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}
+            for c in mesh.components()
+        ]
+        out["pinched_vertices"] = mesh.pinched
+        out["doubled_edges"] = mesh.midpoints // 2
+    return out
+
+
+def voxels_from_histogram(hist: np.ndarray) -> int:
+    """Object voxels: each is an octant of exactly ``2^n`` vertices, so the
+    octant bits set over all configurations count every voxel ``2^n`` times."""
+    hist = np.asarray(hist, dtype=np.int64)
+    octants = int(len(hist)).bit_length() - 1
+    codes = np.arange(len(hist))
+    bits = ((codes[:, None] >> np.arange(octants)) & 1).sum(axis=1)
+    return int(hist @ bits) // octants
+
+
+def report_from_histogram(
+    hist: np.ndarray,
+    ndim: int,
+    conn: int,
+    voxels: int,
+    shape,
+    betti: list[int],
+    parity: int = 0,
+) -> dict:
+    """The report's histogram part, from numbers any pass over the volume gives.
+
+    Split out of :func:`analyze` so that the out-of-core pass
+    (:mod:`isoflow.digital.outofcore`), which never holds the volume, builds the very
+    same dict from its block-wise histogram and component counts. In 2D the
+    (empty) ``surfaces`` list is part of the report; in 3D :func:`analyze`
+    appends the surfaces when asked.
+    """
+    hist = np.asarray(hist)
+    chi = euler_from_histogram(hist, ndim, conn)
+    out: dict = {
+        "voxels": int(voxels),
+        "dimension": ndim,
+        "shape": [int(s) for s in shape],
+        "connectivity": conn,
+        "parity": parity,
+        "euler_characteristic": chi,
+        "betti": [None if b is None else int(b) for b in betti],
+    }
+    if ndim == 4:
+        out.update(_report_4d(hist, conn))
+    elif ndim == 3:
+        cls = class_lut()
+        n = class_histogram(hist)
+        a = a_lut(conn)
+        k = a.astype(np.int64) ** 2
+        on = cls >= 0
+        out.update(
+            n=n.tolist(),
+            classes=dict(zip(CLASS_LABELS, n.tolist())),
+            non_well_composed=int(hist[cls == NOT_WELL_COMPOSED].sum()),
+            a_dot_n=int(np.dot(hist, a)),
+            a_dot_n_well_composed=int(np.dot(hist[on], a[on])),
+            energy=int(np.dot(hist[on], k[on])),
+        )
+    else:
+        pcls = planar_class_lut()
+        n = np.bincount(pcls[pcls >= 0], weights=hist[pcls >= 0], minlength=3).astype(int)
+        out.update(
+            n=n.tolist(),
+            classes=dict(zip(PLANAR_LABELS, n.tolist())),
+            non_well_composed=int(hist[pcls == NOT_WELL_COMPOSED].sum()),
+            a_dot_n=int(np.dot(hist, euler_lut(2, conn))),
+            energy=int(n[0] + n[2]),
+            surfaces=[],
+        )
+    return out
+
+
+def _report_4d(hist: np.ndarray, conn: int) -> dict:
+    """4D (section 6): the histogram over the 45 classes of boundary
+    configurations where the boundary is a 3-manifold and both adjacencies give
+    the same Euler share (``isoflow.digital.ndim``); everything else on the boundary is
+    counted as not well-composed. ``a`` is 16 x the Euler share, so
+    ``a_dot_n = 16 chi`` (the form of eq. 6.2 that holds)."""
+    from . import ndim as nd
+    from .topology import euler_weights
+
+    canon = nd.configuration_orbits(4)
+    manifold = nd.manifold_configurations(4)
+    boundary = np.ones(len(hist), bool)
+    boundary[[0, len(hist) - 1]] = False
+    classes = np.unique(canon[manifold & boundary])
+    counts = np.bincount(np.searchsorted(classes, canon[manifold & boundary]),
+                         weights=hist[manifold & boundary], minlength=len(classes)).astype(np.int64)
+    a = euler_weights(4, conn)
+    return {
+        "n": counts.tolist(),
+        "classes": {int(c): int(k) for c, k in zip(classes, counts) if k},
+        "non_well_composed": int(hist[boundary & ~manifold].sum()),
+        "a_dot_n": int(np.dot(hist, a)),
+        "a_dot_n_well_composed": int(np.dot(hist[manifold & boundary], a[manifold & boundary])),
+        "energy": int(np.dot(hist[manifold & boundary], a[manifold & boundary] ** 2)),
+        "surfaces": None,
+    }

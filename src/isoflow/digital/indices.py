@@ -1,0 +1,348 @@
+"""Curvature indices of vertices (section 4 of the paper) as lookup tables.
+
+Every table here is indexed by the configuration byte of
+:mod:`isoflow.digital.configurations` and derived from the geometry of the 2x2x2
+window: which octants are in the object, which of them share faces, how the
+window splits into layers. Nothing is typed in; the tests compare the derived
+tables with the paper's eqs. 4.4-4.11.
+
+The nine classes (DESIGN section 2) are numbered by their vertex angle: class
+``gamma + 4`` for ``gamma`` in ``-4..4`` eighths, so that the histogram of
+classes *is* the paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .configurations import OCTANTS_2D, OCTANTS_3D, octant_bit
+
+#: class value of a configuration that is not well-composed
+NOT_WELL_COMPOSED = -1
+#: class value of configurations 0 and 255 (not on the surface)
+OFF_SURFACE = -2
+
+#: paper's label of class ``gamma + 4`` (eq. 4.6, 4.7); the two classes with
+#: a = -2 are named by the paper's labels (+,-,-)+ and (-,-,-)-.
+CLASS_LABELS = (
+    "(-,-,-)-",  # gamma -4: saddle, a face-connected path turning in 3 axes
+    "(+,-,-)",  # gamma -3: 5 octants
+    "(-,0,0)",  # gamma -2: concave edge, 6 octants
+    "(-,-,-)",  # gamma -1: concave corner, 7 octants
+    "(0,0,∅)",  # gamma 0: flat, a 2x2 layer
+    "(+,+,+)",  # gamma 1: convex corner, 1 octant
+    "(+,0,0)",  # gamma 2: convex edge, 2 octants
+    "(+,+,-)",  # gamma 3: 3 octants
+    "(+,-,-)+",  # gamma 4: a cube and its three face neighbours
+)
+#: eq. 4.10 and 4.11 as functions of the class would be typed-in; they are
+#: instead derived (see ``a_lut``) and checked against these in the tests.
+
+#: per-axis planar code values (eq. 4.3): convex, flat, concave, undefined (∅)
+CONVEX, FLAT, CONCAVE, NONE = 1, 0, -1, 2
+#: code value for an axis of a configuration that is not well-composed
+UNDEFINED = -2
+_CODE_CHAR = {CONVEX: "+", FLAT: "0", CONCAVE: "-", NONE: "∅", UNDEFINED: "?"}
+
+
+def _bits(config: int, nbits: int) -> list[int]:
+    return [(config >> b) & 1 for b in range(nbits)]
+
+
+def _face_pairs(octants) -> list[tuple[int, int]]:
+    """Pairs of window cells that share a face (differ in one coordinate)."""
+    pairs = []
+    for a in octants:
+        for b in octants:
+            diff = [x != y for x, y in zip(a, b)]
+            if sum(diff) == 1 and octant_bit(a) < octant_bit(b):
+                pairs.append((octant_bit(a), octant_bit(b)))
+    return pairs
+
+
+def _connected(cells: list[int], octants) -> bool:
+    """Are ``cells`` (bit indices) connected through shared faces?"""
+    if not cells:
+        return True
+    adj = {b: set() for b in cells}
+    for a, b in _face_pairs(octants):
+        if a in adj and b in adj:
+            adj[a].add(b)
+            adj[b].add(a)
+    seen, todo = {cells[0]}, [cells[0]]
+    while todo:
+        for nb in adj[todo.pop()] - seen:
+            seen.add(nb)
+            todo.append(nb)
+    return len(seen) == len(cells)
+
+
+def _halves(octants, axis: int, side: int) -> list[int]:
+    return [octant_bit(d) for d in octants if d[axis] == side]
+
+
+# --------------------------------------------------------------------------
+# Euler characteristic shares (the digital Gauss-Bonnet weights, eq. 4.10)
+# --------------------------------------------------------------------------
+
+
+def _euler_share(config: int, octants, connectivity: str) -> int:
+    """``2^n`` times the vertex's share of chi, by counting window cells.
+
+    ``'max'`` (26 in 3D, 8 in 2D): the object is the union of closed cells, so
+    a lattice cell incident to the vertex counts when *any* voxel containing it
+    is in the object. A k-cell incident to the vertex corresponds to a block of
+    ``2^(n-k)`` window cells and has ``2^k`` vertices, hence weight
+    ``2^n / 2^k``.
+
+    ``'min'`` (6 in 3D, 4 in 2D): chi of the dual complex whose vertices are
+    voxel centres and whose k-cells are full ``2^k`` blocks of object voxels;
+    each block of ``2^k`` window cells counts when *all* are in the object,
+    with weight ``2^n / 2^(n-k)`` (it lies in ``2^(n-k)`` windows).
+    """
+    n = len(octants[0])
+    bits = _bits(config, 1 << n)
+    total = 0
+    # A block of the window: fix a subset of axes to given values, leave the
+    # other axes free; free axes = its dimension as a block of cells.
+    for free_mask in range(1 << n):
+        free = [i for i in range(n) if free_mask >> i & 1]
+        fixed = [i for i in range(n) if not free_mask >> i & 1]
+        for values in range(1 << len(fixed)):
+            cells = [
+                octant_bit(d)
+                for d in octants
+                if all(d[ax] == (values >> j & 1) for j, ax in enumerate(fixed))
+            ]
+            inside = [bits[c] for c in cells]
+            m = len(free)  # block of 2^m window cells
+            if connectivity == "max":
+                # lattice cell of dimension n - m, weight 2^n / 2^(n-m)
+                k = n - m
+                if any(inside):
+                    total += (-1) ** k * (1 << m)
+            else:
+                # dual cell of dimension m, weight 2^n / 2^(n-m) = 2^m
+                if all(inside):
+                    total += (-1) ** m * (1 << m)
+    return total
+
+
+@lru_cache(maxsize=None)
+def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
+    """``2^n x`` local Euler characteristic of every configuration (eq. 4.10).
+
+    ``connectivity`` is the object's: 6 or 26 in 3D, 4 or 8 in 2D. Summed over
+    all vertices the table gives ``2^n chi``; on well-composed boundary
+    configurations both connectivities agree with the paper's ``a``.
+    """
+    octants = OCTANTS_3D if ndim == 3 else OCTANTS_2D
+    kind = {6: "min", 26: "max", 4: "min", 8: "max"}[connectivity]
+    return np.array(
+        [_euler_share(c, octants, kind) for c in range(1 << (1 << ndim))],
+        dtype=np.int64,
+    )
+
+
+# --------------------------------------------------------------------------
+# Well-composedness and the nine classes
+# --------------------------------------------------------------------------
+
+
+@lru_cache(maxsize=None)
+def well_composed(ndim: int = 3) -> np.ndarray:
+    """True for configurations whose object and background cells are each
+    face-connected inside the window (no edge- or corner-only contacts)."""
+    octants = OCTANTS_3D if ndim == 3 else OCTANTS_2D
+    nbits = 1 << ndim
+    out = np.zeros(1 << nbits, dtype=bool)
+    for c in range(1 << nbits):
+        bits = _bits(c, nbits)
+        obj = [b for b in range(nbits) if bits[b]]
+        bg = [b for b in range(nbits) if not bits[b]]
+        out[c] = _connected(obj, octants) and _connected(bg, octants)
+    return out
+
+
+def _planar_code(cells: list[int], bits: list[int]) -> int:
+    """Code of a 2x2 layer as a planar configuration (eq. 4.2 classes)."""
+    inside = [c for c in cells if bits[c]]
+    if len(inside) in (0, 4):
+        return NONE
+    if len(inside) == 1:
+        return CONVEX
+    if len(inside) == 3:
+        return CONCAVE
+    a, b = inside
+    return FLAT if bin(a ^ b).count("1") == 1 else UNDEFINED
+
+
+def _hub(bits: list[int], octants) -> bool:
+    """Does one object octant share a face with every other object octant?
+
+    That makes the object, locally, a cube with some of its face neighbours:
+    a convex bump. It is what decides the sign of the vertex angle below.
+    """
+    obj = [b for b in range(len(bits)) if bits[b]]
+    for h in obj:
+        if all(o == h or bin(o ^ h).count("1") == 1 for o in obj):
+            return True
+    return False
+
+
+@lru_cache(maxsize=None)
+def _tables_3d():
+    wc = well_composed(3)
+    n_cfg = 256
+    gamma = np.zeros(n_cfg, dtype=np.int64)
+    cls = np.full(n_cfg, NOT_WELL_COMPOSED, dtype=np.int64)
+    codes = np.full((n_cfg, 3), UNDEFINED, dtype=np.int64)
+    normal2 = np.zeros((n_cfg, 3), dtype=np.int64)
+    for c in range(n_cfg):
+        bits = _bits(c, 8)
+        count = sum(bits)
+        # Definition 14 / eq. 5.13: n = 1/2 (a1 e1 + a2 e2 + a3 e3), a_i in
+        # {-1,0,1}: outward is where the window holds less object.
+        for ax in range(3):
+            lo = sum(bits[b] for b in _halves(OCTANTS_3D, ax, 0))
+            hi = sum(bits[b] for b in _halves(OCTANTS_3D, ax, 1))
+            normal2[c, ax] = np.sign(lo - hi)
+        if c in (0, 255):
+            cls[c] = OFF_SURFACE
+            continue
+        if not wc[c]:
+            continue
+        # Per-axis code: the more curved of the two layers across the axis
+        # (concave over convex over flat over none), DESIGN section 2.
+        rank = {CONCAVE: 3, CONVEX: 2, FLAT: 1, NONE: 0}
+        for ax in range(3):
+            layer = [_planar_code(_halves(OCTANTS_3D, ax, s), bits) for s in (0, 1)]
+            codes[c, ax] = max(layer, key=lambda v: rank[v])
+        flat = any(
+            sum(bits[b] for b in _halves(OCTANTS_3D, ax, 0)) in (0, 4) and count == 4
+            for ax in range(3)
+        )
+        # Eq. 4.6: gamma = i/8 or -(8-i)/8 "since i/8 = 1 - (8-i)/8". The
+        # positive form belongs to the convex bumps (a hub octant), the
+        # negative one to everything else; a flat layer has angle 0.
+        if flat:
+            gamma[c] = 0
+        elif _hub(bits, OCTANTS_3D):
+            gamma[c] = count
+        else:
+            gamma[c] = count - 8
+        cls[c] = gamma[c] + 4
+    # The two classes with a = -2 carry the paper's labels as codes.
+    for c in np.flatnonzero(cls == 8):
+        codes[c] = (CONVEX, CONCAVE, CONCAVE)
+    for c in np.flatnonzero(cls == 0):
+        codes[c] = (CONCAVE, CONCAVE, CONCAVE)
+    return gamma, cls, codes, normal2
+
+
+def gamma_lut() -> np.ndarray:
+    """Vertex angle in eighths (eq. 4.6) of every configuration; 0 off the
+    boundary and on configurations that are not well-composed."""
+    return _tables_3d()[0]
+
+
+def class_lut() -> np.ndarray:
+    """Class ``gamma + 4`` (0..8), :data:`NOT_WELL_COMPOSED` or :data:`OFF_SURFACE`."""
+    return _tables_3d()[1]
+
+
+def code_lut() -> np.ndarray:
+    """Per-axis codes ``(alpha_1, alpha_2, alpha_3)`` of eq. 4.3 / 4.7, shape (256, 3).
+
+    Values :data:`CONVEX`, :data:`FLAT`, :data:`CONCAVE`, :data:`NONE` (the
+    paper's ∅), :data:`UNDEFINED` off the well-composed boundary.
+    """
+    return _tables_3d()[2]
+
+
+def normal_lut() -> np.ndarray:
+    """Twice the normal vector of Definition 14, eq. 5.13: integer (256, 3)."""
+    return _tables_3d()[3]
+
+
+@lru_cache(maxsize=None)
+def f_lut() -> np.ndarray:
+    """Vertex index f of eq. 4.8: ``(sum s(alpha_i)) (sum |s(alpha_i)|)``."""
+    codes = code_lut()
+    s = np.where(np.isin(codes, (CONVEX, CONCAVE)), codes, 0)
+    return s.sum(axis=1) * np.abs(s).sum(axis=1)
+
+
+def a_lut(connectivity: int = 6) -> np.ndarray:
+    """Gauss-Bonnet weight ``a`` of eq. 4.10 for every configuration.
+
+    ``a = 8 x`` the vertex's share of the Euler characteristic, so that
+    ``a^T n = 8 chi`` for every object (Theorems 10-11). On the 126
+    well-composed boundary configurations it does not depend on the
+    connectivity; elsewhere it does.
+    """
+    return euler_lut(3, connectivity)
+
+
+def code_string(config: int) -> str:
+    """The configuration's code as the paper writes it, e.g. ``(+,0,0)``."""
+    cls = int(class_lut()[config])
+    if cls == OFF_SURFACE:
+        return "interior" if config else "exterior"
+    if cls == NOT_WELL_COMPOSED:
+        return "not-well-composed"
+    if cls in (0, 8):
+        return CLASS_LABELS[cls]
+    return "(" + ",".join(_CODE_CHAR[int(v)] for v in code_lut()[config]) + ")"
+
+
+def class_histogram(config_hist: np.ndarray) -> np.ndarray:
+    """The vector ``n`` of eq. 4.9 from the 256 configuration counts."""
+    cls = class_lut()
+    on = cls >= 0
+    return np.bincount(cls[on], weights=config_hist[on], minlength=9).astype(np.int64)
+
+
+# --------------------------------------------------------------------------
+# The plane (eq. 4.2)
+# --------------------------------------------------------------------------
+
+#: classes of a 2D boundary vertex, indexed by 1 - sign: convex, flat, concave
+PLANAR_LABELS = ("convex", "flat", "concave")
+
+
+@lru_cache(maxsize=None)
+def planar_class_lut() -> np.ndarray:
+    """0 convex (1 pixel of 4), 1 flat (2 adjacent), 2 concave (3 of 4),
+    :data:`NOT_WELL_COMPOSED` (2 diagonal), :data:`OFF_SURFACE` (0 or 4)."""
+    out = np.full(16, OFF_SURFACE, dtype=np.int64)
+    cells = [octant_bit(d) for d in OCTANTS_2D]
+    for c in range(1, 15):
+        code = _planar_code(cells, _bits(c, 4))
+        out[c] = NOT_WELL_COMPOSED if code == UNDEFINED else 1 - code
+    return out
+
+
+def planar_index(points: np.ndarray) -> np.ndarray:
+    """Four times the planar curvature index r of eq. 4.2, at every point.
+
+    ``points`` is a 2D binary array of lattice points; the result (int array
+    of the same shape) is ``4 r = 4 - 2 sum_k f_k + sum_k f_k f_k+1 f_k+2``
+    over the 4-neighbours k in {1,3,5,7} (the ``f_k f_k+1 f_k+2`` products are
+    the unit squares at the point). It is +1, 0, -1 at convex, flat, concave
+    boundary points, and summed over the points gives ``4 chi`` of the point
+    set with 4-connectivity (a point set read as vertices, 4-adjacent edges and
+    full unit squares). Zero off the set.
+    """
+    f = np.pad(np.asarray(points, dtype=bool), 1).astype(np.int8)
+    c = f[1:-1, 1:-1]
+    # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.
+    ring = [
+        f[2:, 1:-1], f[2:, 2:], f[1:-1, 2:], f[:-2, 2:],
+        f[:-2, 1:-1], f[:-2, :-2], f[1:-1, :-2], f[2:, :-2],
+    ]
+    four = ring[0] + ring[2] + ring[4] + ring[6]
+    squares = sum(ring[k] * ring[k + 1] * ring[(k + 2) % 8] for k in (0, 2, 4, 6))
+    return (c * (4 - 2 * four + squares)).astype(np.int64)

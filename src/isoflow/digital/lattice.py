@@ -1,0 +1,213 @@
+"""The digital object: a binary volume placed on the lattice or its dual.
+
+Definition 2 of the paper: a digital object is a finite complex of unit
+cubes. Here it is a boolean array plus where that array sits:
+
+* ``offset``: integer lattice position of voxel ``(0, 0, 0)``'s lowest corner;
+* ``parity``: 0 on the lattice Z^n, 1 on the dual lattice Z^n + e/2 (eq. 5.1),
+  which every step of the digital curvature flow switches;
+* ``pitch`` and ``origin``: world coordinates, so that an object voxelised
+  from a mesh exports back onto the mesh.
+
+Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
+``offset + v + parity/2`` and world coordinates ``origin + pitch * (that)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import IsoflowError
+from ..scale.arrays import binary
+
+
+@dataclass(frozen=True)
+class DigitalObject:
+    """A 2D or 3D binary volume with its place on the (dual) lattice.
+
+    4D volumes are accepted for the topology report (section 6 of the paper);
+    surfaces and the flow are 2D/3D only."""
+
+    volume: np.ndarray
+    offset: tuple[int, ...] = None  # type: ignore[assignment]
+    parity: int = 0
+    pitch: float = 1.0
+    origin: np.ndarray = field(default=None)  # type: ignore[assignment]
+
+    def __post_init__(self):
+        vol = binary(self.volume, "DigitalObject volume")
+        if vol.ndim not in (2, 3, 4):
+            raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
+        object.__setattr__(self, "volume", vol)
+        n = vol.ndim
+        offset = (0,) * n if self.offset is None else _field(
+            self.offset, "offset", n, integral=True, bound=MAX_COORDINATE)
+        object.__setattr__(self, "offset", tuple(int(o) for o in offset))
+        origin = np.zeros(n) if self.origin is None else _field(self.origin, "origin", n)
+        object.__setattr__(self, "origin", origin)
+        parity = _field(self.parity, "parity", None, integral=True)
+        if parity not in (0, 1):
+            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {parity!r}")
+        object.__setattr__(self, "parity", int(parity))
+        pitch = _field(self.pitch, "pitch", None)
+        if not pitch > 0:
+            raise IsoflowError(f"'pitch' must be a positive number, got {pitch!r}")
+        object.__setattr__(self, "pitch", float(pitch))
+
+    # ------------------------------------------------------------ builders
+    @classmethod
+    def of(cls, x) -> "DigitalObject":
+        """``x`` itself if it is a DigitalObject, else the object of the
+        binary array ``x`` at the origin: the API takes either."""
+        return x if isinstance(x, cls) else cls(x)
+
+    @classmethod
+    def from_voxels(cls, indices, **kw) -> "DigitalObject":
+        """Object made of the voxels with the given integer indices (N, n)."""
+        idx = _integer_points(indices, "voxel index")
+        lo = idx.min(axis=0)
+        _check_grid(lo, idx.max(axis=0), len(idx), "voxel indices", 1)
+        vol = np.zeros(idx.max(axis=0) - lo + 1, dtype=bool)
+        vol[tuple((idx - lo).T)] = True
+        return cls(vol, offset=tuple(lo), **kw)
+
+    @classmethod
+    def from_points(cls, points, **kw) -> "DigitalObject":
+        """The paper's point model (Definitions 1-2).
+
+        A set of lattice points defines the object made of every unit cube
+        (square in 2D) whose 2^n corners all belong to the set.
+        """
+        pts = _integer_points(points, "lattice point")
+        lo = pts.min(axis=0)
+        _check_grid(lo, pts.max(axis=0), len(pts), "lattice points", 2)  # the point grid and the cubes
+        grid = np.zeros(pts.max(axis=0) - lo + 1, dtype=bool)
+        grid[tuple((pts - lo).T)] = True
+        n = grid.ndim
+        shape = tuple(max(s - 1, 0) for s in grid.shape)
+        vol = np.ones(shape, dtype=bool)
+        for corner in np.ndindex(*(2,) * n):
+            vol &= grid[tuple(slice(c, c + s) for c, s in zip(corner, shape))]
+        return cls(vol, offset=tuple(lo), **kw)
+
+    # ------------------------------------------------------------ geometry
+    @property
+    def ndim(self) -> int:
+        return self.volume.ndim
+
+    @property
+    def voxels(self) -> int:
+        return int(np.count_nonzero(self.volume))
+
+    def lattice_coordinates(self, array_points: np.ndarray) -> np.ndarray:
+        """Lattice coordinates of points given in array-corner units."""
+        return np.asarray(array_points, float) + np.array(self.offset) + 0.5 * self.parity
+
+    def world(self, array_points: np.ndarray) -> np.ndarray:
+        """World coordinates of points given in array-corner units."""
+        return self.origin + self.pitch * self.lattice_coordinates(array_points)
+
+    def bbox(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """World [min corner, max corner] of the object's voxels; None if empty."""
+        if not self.volume.any():
+            return None
+        lo, hi = _nonzero_bounds(self.volume)
+        return self.world(lo), self.world(hi)
+
+    def cropped(self) -> "DigitalObject":
+        """The same object in the smallest array that holds it."""
+        if not self.volume.any():
+            return replace(self, volume=np.zeros((0,) * self.ndim, bool))
+        lo, hi = _nonzero_bounds(self.volume)
+        sl = tuple(slice(a, b) for a, b in zip(lo, hi))
+        return replace(
+            self,
+            volume=self.volume[sl],
+            offset=tuple(int(o + a) for o, a in zip(self.offset, lo)),
+        )
+
+    def on_dual_lattice(self, vertex_volume: np.ndarray) -> "DigitalObject":
+        """A volume indexed by this object's lattice vertices, as an object on
+        the other lattice (eq. 5.1): its voxel ``w`` is the cube centred at
+        vertex ``w``. ``vertex_volume`` has this volume's shape plus one per
+        axis, as :func:`isoflow.digital.configurations.configurations` gives;
+        ``parity' = 1 - parity``, and ``offset' = offset - 1`` from parity 0,
+        ``offset' = offset`` from parity 1. Not cropped."""
+        offset = tuple(o - 1 for o in self.offset) if self.parity == 0 else self.offset
+        return replace(self, volume=vertex_volume, offset=offset, parity=1 - self.parity)
+
+    def __repr__(self) -> str:
+        return (
+            f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
+            f"offset={self.offset}, parity={self.parity}, pitch={self.pitch}, "
+            f"origin={self.origin.tolist()})"
+        )
+
+
+def _nonzero_bounds(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest index and one past the largest index of True voxels, per axis."""
+    lo, hi = [], []
+    for axis in range(volume.ndim):
+        others = tuple(a for a in range(volume.ndim) if a != axis)
+        where = np.flatnonzero(volume.any(axis=others))
+        lo.append(where[0])
+        hi.append(where[-1] + 1)
+    return np.array(lo), np.array(hi)
+
+
+#: Largest |coordinate| of a lattice point, voxel index or offset: exact in
+#: float64 and far from int64 overflow when extents are computed.
+MAX_COORDINATE = 2**40
+
+
+def _integer_points(points, what: str) -> np.ndarray:
+    arr = np.asarray(points)
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
+        raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
+    if arr.dtype.kind not in "biuf":
+        raise IsoflowError(f"{what} coordinates must be integers, got an array of type {arr.dtype}")
+    if arr.dtype.kind == "f" and (not np.all(np.isfinite(arr)) or not np.all(arr == np.round(arr))):
+        raise IsoflowError(f"{what} coordinates must be integers")
+    # compare before converting: uint64 / huge floats would wrap in int64
+    out = (arr > MAX_COORDINATE) | (arr < -MAX_COORDINATE)
+    if out.any():
+        value = arr[out].flat[0]
+        raise IsoflowError(f"{what} coordinate {value} is out of range (beyond +-{MAX_COORDINATE})")
+    return arr.astype(np.int64)
+
+
+def _check_grid(lo, hi, count: int, what: str, bytes_per_voxel: int) -> None:
+    """Refuse, before allocating, a grid spanning lo..hi beyond the memory budget."""
+    import math
+
+    from ..scale.memory import check_fits
+
+    extents = [int(h) - int(l) + 1 for l, h in zip(lo, hi)]
+    check_fits(
+        math.prod(extents) * bytes_per_voxel,
+        f"a {'x'.join(map(str, extents))} grid for {count} {what} from {tuple(map(int, lo))} to {tuple(map(int, hi))}",
+        hint="check for stray or far-apart points",
+    )
+
+
+def _field(value, name: str, length: int | None, integral: bool = False, bound: float | None = None):
+    """A finite number (``length`` None; a one-element array will do) or a
+    vector of ``length`` numbers, integers where ``integral``, within
+    ``+-bound``; otherwise an error naming the field and the value."""
+    arr = np.asarray(value)
+    shown = repr(arr.tolist()) if arr.size <= 8 else f"an array of shape {arr.shape}"
+    want = ("an integer" if integral else "a number") if length is None else (
+        f"{length} {'integers' if integral else 'numbers'}, one per axis")
+    bad = IsoflowError(f"'{name}' must be {want}, got {shown}")
+    if arr.dtype.kind not in "biuf":  # strings, complex, objects
+        raise bad
+    if (arr.size != 1) if length is None else (arr.shape != (length,)):
+        raise bad
+    f = arr.astype(np.float64)
+    if not np.isfinite(f).all() or (integral and (f != np.round(f)).any()):
+        raise bad
+    if bound is not None and (np.abs(f) > bound).any():
+        raise IsoflowError(f"'{name}' {shown} is out of range (beyond +-{bound})")
+    return f.item() if length is None else f

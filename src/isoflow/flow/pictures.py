@@ -1,0 +1,73 @@
+"""Pictures of a flow: its figures against the step, and the object at a
+few steps (matplotlib is imported through :func:`isoflow.mesh.render.pyplot`,
+only when a picture is drawn)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..digital.surface import boundary_mesh
+from ..mesh.render import FACE_BUDGET, draw_surface, pyplot
+
+
+def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
+                       elev: float = 25, azim: float = -55) -> Path:
+    """Write a PNG of the flowing object itself: up to ``panels`` of the
+    ``(state, step record)`` frames of a 3D flow, evenly spaced from the first
+    to the last, all in the first frame's box so that the shrinking shows,
+    coloured like :func:`isoflow.mesh.render.render_surface`."""
+    plt = pyplot()
+    if len(frames) > panels:
+        frames = [frames[round(k * (len(frames) - 1) / (panels - 1))] for k in range(panels)]
+    box = frames[0][0].bbox()
+    cols = min(3, len(frames))
+    rows = -(-len(frames) // cols)
+    fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
+    for k, (state, rec) in enumerate(frames):
+        ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
+        mesh = boundary_mesh(state.volume, connectivity)
+        draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(frames), bounds=box)
+        ax.set_axis_off()
+        ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
+    fig.suptitle("digital curvature flow (blue concave, white flat, red convex)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def render_flow(result, path: Path, title: str = "") -> Path:
+    """Write a PNG of a digital curvature flow (:class:`isoflow.flow.run.FlowResult`):
+    voxels, energy ``E = k^T n`` and Betti numbers against the step, with the
+    steps where the Betti numbers changed marked."""
+    plt = pyplot()
+    steps = [s["step"] for s in result.steps]
+    betti = np.array([s["betti"] for s in result.steps])
+    fig, axes = plt.subplots(3, 1, figsize=(7, 7.5), dpi=110, sharex=True)
+    axes[0].plot(steps, [s["voxels"] for s in result.steps], "o-", ms=3)
+    axes[0].set_ylabel("voxels")
+    axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
+    axes[1].set_ylabel("energy E = k^T n")
+    for i in range(betti.shape[1]):
+        axes[2].step(steps, betti[:, i], where="post", label=f"b{i}")
+    axes[2].set_ylabel("Betti numbers")
+    axes[2].set_xlabel("step")
+    from matplotlib.ticker import MaxNLocator
+
+    axes[2].xaxis.set_major_locator(MaxNLocator(integer=True))
+    axes[2].legend(loc="upper right", fontsize=8)
+    for change in result.topology_changes:
+        for ax in axes:
+            ax.axvline(change["step"], color="grey", lw=0.8, ls=":")
+    head = title or "digital curvature flow"
+    fig.suptitle(
+        f"{head}: {result.connectivity}-connectivity{', guard' if result.guard else ''}, "
+        f"stopped: {result.stop_reason}",
+        fontsize=9,
+    )
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return Path(path)

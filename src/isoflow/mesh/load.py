@@ -1,0 +1,273 @@
+"""Reading triangle meshes, and the edge census that says whether they bound
+a solid.
+
+``load_mesh`` reads any format trimesh reads and welds vertices that differ
+only by rounding noise; ``mesh_defects`` counts boundary, non-manifold and
+inconsistently oriented edges from the vertex indices alone.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import IsoflowError
+
+#: Default relative tolerance (times the bounding-box diagonal) below which two
+#: vertex positions are welded by :func:`load_mesh`.
+MERGE_RTOL = 1e-10
+
+
+def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
+    """Lower corner, upper corner and extent of the vertices the faces use;
+    IsoflowError if the extent overflows to infinity."""
+    used = v[np.unique(f)]
+    lo, hi = used.min(axis=0), used.max(axis=0)
+    with np.errstate(over="ignore"):
+        ext = hi - lo
+    if not np.all(np.isfinite(ext)):
+        a = int(np.argmin(np.isfinite(ext)))
+        raise IsoflowError(
+            f"{where}: coordinates too large: the bounding box's {'xyz'[a]} extent "
+            f"from {lo[a]:.6g} to {hi[a]:.6g} overflows the floating-point range "
+            "(rescale the mesh)")
+    return lo, hi, ext
+
+
+# ---------------------------------------------------------------------------
+# input checking
+# ---------------------------------------------------------------------------
+
+def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+    """Vertices and triangles as float64 (N, 3) and int64 (M, 3) arrays
+    (copies or views), or IsoflowError naming ``where`` and what is wrong:
+    shapes, an empty mesh, non-integer faces, NaN or infinite coordinates,
+    out-of-range indices."""
+    try:
+        v = np.asarray(vertices, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise IsoflowError(f"{where}: vertices are not a numeric array ({exc})") from None
+    if v.ndim != 2 or v.shape[1] != 3:
+        raise IsoflowError(f"{where}: vertices must have shape (N, 3), got {v.shape}")
+    f = np.asarray(faces)
+    if f.ndim != 2 or f.shape[1] != 3:
+        raise IsoflowError(f"{where}: faces must have shape (M, 3) (triangles), got {f.shape}")
+    if f.shape[0] == 0:
+        raise IsoflowError(f"{where}: empty mesh (no faces)")
+    if f.dtype.kind not in "iu":
+        if f.dtype.kind == "f" and np.all(np.isfinite(f)) and np.all(f == np.round(f)):
+            pass
+        else:
+            raise IsoflowError(f"{where}: faces must be integer vertex indices, got dtype {f.dtype}")
+    f = f.astype(np.int64, copy=False)
+    bad = ~np.isfinite(v)
+    if bad.any():
+        nv = int(bad.any(axis=1).sum())
+        raise IsoflowError(
+            f"{where}: {nv} of {len(v)} vertices have NaN or infinite coordinates "
+            f"({int(bad.sum())} values)")
+    lo, hi = int(f.min()), int(f.max())
+    if lo < 0 or hi >= len(v):
+        nbad = int(((f < 0) | (f >= len(v))).sum())
+        worst = lo if lo < 0 else hi
+        raise IsoflowError(
+            f"{where}: {nbad} face indices out of range [0, {len(v)}) (e.g. {worst})")
+    return v, f
+
+
+# ---------------------------------------------------------------------------
+# loading
+# ---------------------------------------------------------------------------
+
+def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
+
+    Rounding coordinates to a grid (trimesh's approach) misses pairs that
+    straddle a rounding boundary, however close they are; a k-d tree radius
+    query plus connected components cannot.  Faces that lose a corner to the
+    weld have zero area: they are removed, and vertices no face uses are
+    dropped.  Output vertices keep the order of their first occurrence.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    lo, _, ext = mesh_bbox(v, f, where)  # refuses an extent that overflows
+    uniq, inverse = np.unique(v, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    longest = float(ext.max())
+    if rtol > 0 and longest > 0 and len(uniq) > 1:
+        # Distances are taken relative to the bounding box's lower corner and
+        # in units of a power of two near its longest side (so the tolerance
+        # and squared distances neither overflow at 1e200 nor underflow at
+        # 1e-200: the weld is scale-invariant).  Positions more than 2**40
+        # boxes away (unused vertices only) are far beyond the tolerance
+        # (< the diagonal): left out, they get no pairs.
+        e = math.frexp(longest)[1]
+        with np.errstate(over="ignore", invalid="ignore"):
+            w = np.ldexp(uniq - lo, -e)
+        tol = rtol * float(np.linalg.norm(np.ldexp(ext, -e)))
+        near = np.nonzero(np.all(np.abs(w) <= 2.0**40, axis=1))[0]
+        pairs = cKDTree(w[near]).query_pairs(tol, output_type="ndarray")
+        if len(pairs):
+            pairs = near[pairs]
+            n = len(uniq)
+            g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+            _, lab = connected_components(g, directed=False)
+            inverse = lab[inverse]
+    f = inverse[f]
+    keep = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
+    f = f[keep]
+    # compact + order by first use in the original vertex array
+    groups = np.unique(f)
+    first = np.full(inverse.max() + 1, len(v), dtype=np.int64)
+    np.minimum.at(first, inverse, np.arange(len(v)))
+    order = np.argsort(first[groups], kind="stable")
+    remap = np.empty(inverse.max() + 1, dtype=np.int64)
+    remap[groups[order]] = np.arange(len(groups))
+    return v[first[groups[order]]].copy(), remap[f]
+
+
+def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Read a triangle mesh and weld vertices that coincide.
+
+    Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted; the
+    file is loaded with ``force="mesh"`` so multi-solid STLs and glTF scenes
+    become one mesh (scene transforms applied).  OBJ files are loaded with
+    ``merge_tex=True, merge_norm=True`` (trimesh otherwise splits vertices at
+    UV / normal seams), then every file goes through a positional weld with
+    tolerance ``merge_rtol`` times the bounding-box diagonal: ASCII STLs such as
+    ``featuretype.STL`` store shared corners that differ by 1e-16 and are only
+    closed after that weld.  Faces collapsed by the weld (zero area) are
+    dropped.
+
+    Returns ``(vertices float64 (N, 3), faces int64 (M, 3))``. A dict passed
+    as ``stats`` receives ``exact_vertices`` (distinct positions as read) and
+    ``welded_vertices`` (after the weld), so callers can say what the weld did.
+
+    Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
+    read, a mesh without faces, NaN/inf coordinates, coordinates whose extent
+    overflows, out-of-range faces and a ``merge_rtol`` outside [0, 1).
+    """
+    p = Path(os.fspath(path))
+    try:
+        rtol = float(merge_rtol)
+    except (TypeError, ValueError):
+        rtol = math.nan
+    if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
+        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
+    if not p.exists():
+        raise IsoflowError(f"{p}: file not found")
+    if not p.is_file():
+        raise IsoflowError(f"{p}: not a regular file")
+    import trimesh  # lazy: keeps `import isoflow` cheap
+
+    ext = p.suffix.lower().lstrip(".")
+    kwargs: dict = {"process": False}
+    if ext == "obj":
+        kwargs.update(merge_tex=True, merge_norm=True)
+    try:
+        mesh = trimesh.load(str(p), force="mesh", **kwargs)
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces)
+    except IsoflowError:
+        raise
+    except Exception as exc:  # trimesh raises anything from KeyError to struct.error
+        msg = " ".join(str(exc).split())[:200] or "no detail"
+        raise IsoflowError(
+            f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+    if faces.size == 0 or faces.ndim != 2:
+        # trimesh returns an empty mesh rather than failing on many garbage files
+        raise IsoflowError(
+            f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
+    vertices, faces = check_mesh(vertices, faces, where=str(p))
+    if stats is not None:
+        stats["exact_vertices"] = int(len(np.unique(vertices[np.unique(faces)], axis=0)))
+    vertices, faces = _weld(vertices, faces, rtol, where=str(p))
+    if stats is not None:
+        stats["welded_vertices"] = int(len(vertices))
+    if len(faces) == 0:
+        raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
+    return vertices, faces
+
+
+# ---------------------------------------------------------------------------
+# combinatorial defects
+# ---------------------------------------------------------------------------
+
+def _edge_census(faces: np.ndarray, n_vertices: int):
+    """Undirected edges and how they are used.
+
+    Returns ``(inv, counts, fwd, bwd)`` where ``inv`` maps each of the 3M
+    directed half-edges (row-major over faces; -1 for a degenerate a->a edge)
+    to its undirected edge, ``counts`` is the number of uses per undirected
+    edge and ``fwd`` / ``bwd`` how many uses go low->high / high->low index.
+    """
+    a = faces.reshape(-1)
+    b = faces[:, [1, 2, 0]].reshape(-1)
+    lo = np.minimum(a, b)
+    hi = np.maximum(a, b)
+    key = lo * np.int64(max(n_vertices, 1)) + hi
+    ok = a != b
+    inv = np.full(len(a), -1, dtype=np.int64)
+    uniq, inv_ok, counts = np.unique(key[ok], return_inverse=True, return_counts=True)
+    inv[ok] = inv_ok.reshape(-1)
+    fwd = np.bincount(inv_ok.reshape(-1), weights=(a < b)[ok], minlength=len(uniq)).astype(np.int64)
+    bwd = counts - fwd
+    return inv, counts, fwd, bwd
+
+
+def mesh_defects(vertices, faces) -> dict:
+    """Count the combinatorial defects that make a mesh unfit to bound a solid.
+
+    Purely combinatorial (vertex indices only, no coordinates are compared;
+    weld coincident vertices first, e.g. with :func:`load_mesh`).  Returns::
+
+        boundary_edges     edges used by exactly one face
+        nonmanifold_edges  edges used by more than two faces
+        inconsistent_edges edges used by two or more faces whose directions do
+                           not balance (for a two-face edge: both faces run
+                           a->b; orientation cannot be consistent there)
+        components         face components, faces joined across shared edges
+        edges              number of distinct undirected edges
+        watertight         no boundary, non-manifold or inconsistent edge
+
+    Degenerate edges (a face repeating a vertex) are ignored.
+
+    A non-manifold edge whose uses balance (two faces a->b, two b->a: two
+    cubes sharing an edge) still bounds a solid; the scanline of
+    :func:`voxelize` is exact on it and ``allow_open=True`` uses the scanline
+    for such meshes.
+    """
+    v, f = check_mesh(vertices, faces, where="mesh_defects")
+    inv, counts, fwd, bwd = _edge_census(f, len(v))
+    boundary = int((counts == 1).sum())
+    nonmanifold = int((counts > 2).sum())
+    inconsistent = int(((counts >= 2) & (fwd != bwd)).sum())
+
+    # face components: chain consecutive faces that share an undirected edge
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    m = len(f)
+    ok = inv >= 0
+    he_face = (np.arange(3 * m) // 3)[ok]
+    he_edge = inv[ok]
+    order = np.lexsort((he_face, he_edge))
+    e_sorted = he_edge[order]
+    f_sorted = he_face[order]
+    link = e_sorted[1:] == e_sorted[:-1]
+    r, c = f_sorted[:-1][link], f_sorted[1:][link]
+    g = coo_matrix((np.ones(len(r)), (r, c)), shape=(m, m))
+    ncomp, _ = connected_components(g, directed=False)
+    return {
+        "boundary_edges": boundary,
+        "nonmanifold_edges": nonmanifold,
+        "inconsistent_edges": inconsistent,
+        "components": int(ncomp),
+        "edges": int(len(counts)),
+        "watertight": boundary == 0 and nonmanifold == 0 and inconsistent == 0,
+    }

@@ -1,0 +1,71 @@
+"""Pictures of a boundary surface, coloured by the vertex angle gamma.
+
+matplotlib is imported here only, so that the rest of isoflow does not pay
+for it. Large meshes are drawn with back faces culled and, past a budget,
+a random subset of faces, so that a picture never takes minutes.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .export import gamma_colours
+
+#: most faces drawn in one picture; beyond it a random subset is drawn
+FACE_BUDGET = 60_000
+
+
+def pyplot():
+    """matplotlib's pyplot on the Agg backend (files only, no screen needed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def draw_surface(ax, mesh, obj, elev: float, azim: float, budget: int, bounds=None) -> None:
+    """Draw a boundary mesh into a 3D axes: faces coloured by the mean vertex
+    angle gamma of their corners, shaded by their normal, back faces culled."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    xyz = obj.world(mesh.vertices)
+    faces = mesh.faces
+    # Back-face culling: the view direction of matplotlib's camera.
+    e, a = np.radians(elev), np.radians(azim)
+    view = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
+    idx = np.flatnonzero(mesh.face_normals.astype(float) @ view > 0)
+    if len(idx) > budget:
+        idx = np.sort(np.random.default_rng(0).choice(idx, budget, replace=False))
+    colours = gamma_colours(mesh.gamma, mesh.vertex_class).astype(float) / 255
+    face_rgb = colours[faces[idx]].mean(axis=1)
+    # Shade by the face normal so that the shape reads in a still picture.
+    light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    shade = 0.55 + 0.45 * np.clip(mesh.face_normals[idx].astype(float) @ light, 0, 1)
+    ax.add_collection3d(Poly3DCollection(xyz[faces[idx]], facecolors=face_rgb * shade[:, None], edgecolors="none"))
+    lo, hi = bounds if bounds is not None else (xyz.min(axis=0), xyz.max(axis=0))
+    centre, half = (lo + hi) / 2, (hi - lo).max() / 2
+    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre):
+        setter(c - half, c + half)
+    ax.set_box_aspect((1, 1, 1))
+    ax.view_init(elev=elev, azim=azim)
+
+
+def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azim: float = -55) -> Path:
+    """Write a PNG of the boundary mesh, faces coloured by the mean vertex
+    angle gamma of their corners (blue concave, white flat, red convex)."""
+    plt = pyplot()
+    fig = plt.figure(figsize=(7, 6), dpi=110)
+    ax = fig.add_subplot(projection="3d")
+    draw_surface(ax, mesh, obj, elev, azim, FACE_BUDGET)
+    ax.set_xlabel("x")
+    ax.set_ylabel("y")
+    ax.set_zlabel("z")
+    ax.set_title(f"{title}\nvertex angle: blue concave, white flat, red convex", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path)
+    plt.close(fig)
+    return path

@@ -1,0 +1,172 @@
+"""Where a volume lives: host NumPy, a CuPy array on a GPU, or any array-API array.
+
+The array core (vertex configurations, their histogram, chi, the class vector
+and the Betti numbers) is written against the Python array API standard, so a
+CuPy volume is read on its GPU and never copied to the host: only the
+256-entry histogram comes back. The few operations the standard lacks are
+dispatched here, so the rest of the core names no library:
+
+* counting codes: ``bincount`` where the library has it (NumPy, CuPy), the
+  standard's ``unique_counts`` otherwise;
+* connected components: ``scipy.ndimage.label`` on the host,
+  ``cupyx.scipy.ndimage.label`` on a CuPy GPU; other libraries have no
+  labelling, so their volume is copied to the host for that step alone.
+
+Anything that is not an array-API array (lists, dask arrays, NumPy itself) is
+read with ``numpy.asarray``; host volumes must hold 0/1 values (:func:`binary`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+import numpy as np
+
+from ..errors import IsoflowError
+from .memory import gib
+
+
+def namespace(x):
+    """The array library of ``x``: ``numpy`` for host data, ``cupy`` for CuPy
+    arrays, else the array's own ``__array_namespace__()``."""
+    if isinstance(x, np.ndarray):
+        return np
+    if _is_cupy(x):
+        import cupy
+
+        # CuPy's main namespace has the standard's functions plus bincount;
+        # its __array_namespace__ may be a narrower compatibility module.
+        return cupy
+    get = getattr(x, "__array_namespace__", None)
+    return np if get is None else get()
+
+
+def _is_cupy(x) -> bool:
+    return type(x).__module__.partition(".")[0] in ("cupy", "cupyx")
+
+
+def is_host(xp) -> bool:
+    return xp is np
+
+
+def binary(array, where: str = "volume", near=None) -> np.ndarray:
+    """A host boolean volume from a 0/1 array, or a clear error saying why not.
+
+    Other values (NaN, 2, -1, 255) are refused rather than read as True: a
+    label image or a probability map needs a threshold the caller chooses.
+    ``near``: the index of the block's first voxel, for errors found block by
+    block (out-of-core input)."""
+    if isinstance(array, (str, os.PathLike)):
+        raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
+    arr = np.asarray(array)
+    if arr.dtype == np.bool_:
+        # A bool array made by .view(bool) can hold bytes other than 0/1,
+        # which numpy compares and cc3d labels as distinct values: make them
+        # canonical (the max is one fast pass, 10 ms at 512^3).
+        if arr.size and arr.view(np.uint8).max() > 1:
+            arr = arr.view(np.uint8) != 0
+        return arr
+    if arr.dtype.kind not in "iuf":
+        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
+    bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
+    if bad.any():
+        value = arr[bad].flat[0]
+        place = f" near voxel {tuple(int(o) for o in near)}" if near is not None else ""
+        raise IsoflowError(
+            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1{place}, "
+            f"e.g. {value}); threshold it first, e.g. volume > 0"
+        )
+    return arr.astype(bool)
+
+
+def as_volume(volume, where: str = "volume"):
+    """``(xp, boolean volume)`` of a 2D, 3D or 4D 0/1 array: host data checked
+    by :func:`binary`, device arrays left where they are."""
+    xp = namespace(volume)
+    if is_host(xp):
+        v = binary(volume, where)
+    else:
+        v = volume
+        if v.dtype != xp.bool:
+            if bool(xp.any((v != 0) & (v != 1))):
+                raise IsoflowError(f"{where}: not a binary volume (values other than 0 and 1)")
+            v = xp.astype(v, xp.bool)
+    if v.ndim not in (2, 3, 4):
+        raise IsoflowError(f"{where}: a volume is 2D, 3D or 4D, got a {v.ndim}D array")
+    return xp, v
+
+
+def on_device(volume):
+    """Context in which new arrays go to ``volume``'s device (CuPy allocates
+    on the *current* GPU, which need not be the input's)."""
+    return volume.device if _is_cupy(volume) else contextlib.nullcontext()
+
+
+def zeros(xp, shape, dtype, like):
+    """Zeros on the device of ``like``."""
+    if is_host(xp) or _is_cupy(like):
+        return xp.zeros(shape, dtype=dtype)
+    return xp.zeros(shape, dtype=dtype, device=like.device)
+
+
+def to_host(x) -> np.ndarray:
+    """An explicit copy to host memory (never an implicit ``numpy.asarray``,
+    which CuPy refuses)."""
+    if isinstance(x, np.ndarray):
+        return x
+    if _is_cupy(x):
+        return x.get()
+    return np.from_dlpack(x)
+
+
+def count_codes(xp, codes, size: int) -> np.ndarray:
+    """How often each value ``0 .. size-1`` occurs in ``codes``, as a host
+    int64 vector."""
+    flat = xp.reshape(codes, (-1,))
+    if hasattr(xp, "bincount"):
+        return to_host(xp.bincount(flat, minlength=size)).astype(np.int64)
+    values, counts = xp.unique_counts(flat)
+    out = np.zeros(size, dtype=np.int64)
+    out[to_host(values).astype(np.int64)] = to_host(counts)
+    return out
+
+
+def label_function(xp):
+    """``label(volume, structure) -> (labels, count)`` for ``xp``'s arrays,
+    or None where the library has no labelling."""
+    if is_host(xp):
+        from scipy.ndimage import label
+
+        return label
+    if xp.__name__ == "cupy":
+        from cupyx.scipy.ndimage import label
+
+        return label
+    return None
+
+
+#: bytes of GPU memory per voxel that ``analyze`` needs at most: the volume,
+#: its complement and the int32 labels of one labelling, plus slack
+GPU_BYTES_PER_VOXEL = 8
+
+
+def to_gpu(volume: np.ndarray):
+    """A host volume uploaded to the current CuPy GPU, after checking that
+    CuPy works and that the analysis will fit in the GPU's free memory."""
+    try:
+        import cupy
+
+        free, _total = cupy.cuda.runtime.memGetInfo()
+    except Exception as exc:  # no CuPy, no driver, no device
+        raise IsoflowError(
+            f"--gpu needs CuPy and a CUDA GPU ({type(exc).__name__}: {exc}); "
+            "install with: pip install 'isoflow[gpu]'"
+        ) from None
+    need = int(np.prod(volume.shape, dtype=np.int64)) * GPU_BYTES_PER_VOXEL
+    if need > free:
+        raise IsoflowError(
+            f"a {'x'.join(map(str, volume.shape))} volume needs about {gib(need)} "
+            f"of GPU memory and {gib(free)} is free; drop --gpu"
+        )
+    return cupy.asarray(volume)

@@ -1,0 +1,114 @@
+"""Volumes in blocks: dask and zarr, imported only when used.
+
+What the out-of-core passes share and that knows nothing of digital
+topology: the optional imports with the message that names the extra, a
+zarr store's volume array, and the block grid over an array (zarr chunks or
+shards grouped into blocks big enough to be worth a task).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import IsoflowError
+
+#: zarr chunks smaller than this (voxels) are grouped into larger blocks when
+#: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
+#: overhead, not memory, is what small chunks cost
+MIN_BLOCK = 1 << 21
+MAX_BLOCKS = 512
+
+
+def import_dask():
+    """dask is optional for isoflow; say how to get it when it is missing."""
+    try:
+        import dask
+        import dask.array as da
+    except ImportError as exc:
+        raise IsoflowError(
+            f"out-of-core analysis needs dask: install isoflow[dask] (pip install 'isoflow[dask]'; {exc})"
+        ) from None
+    return dask, da
+
+
+def import_zarr():
+    try:
+        import zarr
+    except ImportError as exc:
+        raise IsoflowError(
+            f"reading .zarr volumes needs zarr: install isoflow[dask] (pip install 'isoflow[dask]'; {exc})"
+        ) from None
+    return zarr
+
+
+def is_zarr_array(array) -> bool:
+    """A zarr array, recognised without importing zarr (it may be missing)."""
+    return type(array).__module__.split(".")[0] == "zarr" and all(
+        hasattr(array, name) for name in ("chunks", "shape", "dtype", "__getitem__")
+    )
+
+
+def block_bounds(chunks) -> list[list[tuple[int, int]]]:
+    """Per axis, the [start, stop) of every block."""
+    out = []
+    for sizes in chunks:
+        stops = np.cumsum(sizes)
+        out.append([(int(b - s), int(b)) for s, b in zip(sizes, stops)])
+    return out
+
+
+def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
+    """Regular chunks of a zarr array: its shards (or chunks), grown by whole
+    chunks to at least MIN_BLOCK voxels when they would make too many blocks."""
+    shape = tuple(int(s) for s in z.shape)
+    if block_shape is None:
+        base = getattr(z, "shards", None) or z.chunks
+        block = [max(1, min(int(c), s)) for c, s in zip(base, shape)]
+
+        def count(b):
+            return int(np.prod([-(-s // c) for s, c in zip(shape, b)]))
+
+        while np.prod(block) < MIN_BLOCK and count(block) > MAX_BLOCKS:
+            grow = [i for i in range(len(block)) if block[i] < shape[i]]
+            if not grow:
+                break
+            i = min(grow, key=lambda j: block[j])
+            block[i] = min(2 * block[i], shape[i])
+    else:
+        if len(block_shape) != len(shape) or any(int(b) < 1 for b in block_shape):
+            raise IsoflowError(f"block_shape {tuple(block_shape)} does not fit a {len(shape)}D array")
+        block = [min(int(b), s) for b, s in zip(block_shape, shape)]
+    return tuple(
+        tuple([b] * (s // b) + ([s % b] if s % b else [])) for b, s in zip(block, shape)
+    )
+
+
+
+def open_zarr(path) -> "object":
+    """The volume array of a zarr store: the array at ``path``, or in a group
+    its array named ``volume`` or its only array."""
+    zarr = import_zarr()
+    path = Path(path)
+    if not path.exists():
+        raise IsoflowError(f"{path}: no such file or directory")
+    try:
+        node = zarr.open(str(path), mode="r")
+    except Exception as exc:  # zarr raises several types for what is not a store
+        raise IsoflowError(
+            f"{path}: not a zarr array or group ({exc.__class__.__name__}: {exc})"
+        ) from None
+    if isinstance(node, zarr.Group):
+        arrays = dict(node.arrays())
+        if "volume" in arrays:
+            node = arrays["volume"]
+        elif len(arrays) == 1:
+            node = next(iter(arrays.values()))
+        elif not arrays:
+            raise IsoflowError(f"{path}: a zarr group without arrays")
+        else:
+            raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name the volume 'volume'")
+    return node
+
+

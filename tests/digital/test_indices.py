@@ -1,0 +1,138 @@
+"""The lookup tables of section 4 against the paper's equations."""
+
+import numpy as np
+import pytest
+from skimage.measure import euler_number
+
+from isoflow.digital import configurations as C
+from isoflow.digital import indices as I
+
+# The paper's values per class, indexed by class = gamma + 4 (eq. 4.6):
+# octant counts n(alpha) (eqs. 4.4-4.5), a (eq. 4.10), k (eq. 4.11) and the
+# code whose f (eq. 4.8) the class carries.
+PAPER_OCTANTS = {0: 4, 1: 5, 2: 6, 3: 7, 4: 4, 5: 1, 6: 2, 7: 3, 8: 4}
+PAPER_A = (-2, -1, 0, 1, 0, 1, 0, -1, -2)
+PAPER_K = (4, 1, 0, 1, 0, 1, 0, 1, 4)
+PAPER_CODE = {
+    0: "---", 1: "+--", 2: "-00", 3: "---", 4: "00∅", 5: "+++", 6: "+00", 7: "++-", 8: "+--",
+}
+
+
+def paper_f(code: str) -> int:
+    s = [{"+": 1, "-": -1, "0": 0, "∅": 0}[c] for c in code]
+    return sum(s) * sum(abs(v) for v in s)
+
+
+def test_126_well_composed_boundary_configurations_in_nine_classes():
+    cls = I.class_lut()
+    boundary_wc = I.well_composed(3) & (cls != I.OFF_SURFACE)
+    assert boundary_wc.sum() == 126
+    assert (cls == I.NOT_WELL_COMPOSED).sum() == 128
+    canon = C.orbits(3)
+    assert len(set(canon[boundary_wc])) == 9
+    # classes are unions of orbits and every class is exactly one orbit
+    for k in range(9):
+        assert len(set(canon[cls == k])) == 1
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_class_values_match_paper_table(conn):
+    cls, gamma, a, f = I.class_lut(), I.gamma_lut(), I.a_lut(conn), I.f_lut()
+    popcount = np.array([bin(c).count("1") for c in range(256)])
+    for k in range(9):
+        members = cls == k
+        assert set(gamma[members]) == {k - 4}
+        assert set(popcount[members]) == {PAPER_OCTANTS[k]}
+        assert set(a[members]) == {PAPER_A[k]}
+        assert set(a[members] ** 2) == {PAPER_K[k]}
+        assert set(f[members]) == {paper_f(PAPER_CODE[k])}
+
+
+def test_per_axis_codes_are_the_paper_codes_up_to_permutation():
+    """Eq. 4.3: seven classes get the paper's code (in some axis order) from
+    the per-axis rule; the two with a = -2 carry the paper's labels."""
+    cls = I.class_lut()
+    for k in range(9):
+        for c in np.flatnonzero(cls == k):
+            text = I.code_string(int(c))
+            if k in (0, 8):
+                assert text == I.CLASS_LABELS[k]
+            else:
+                assert sorted(text[1:-1].split(",")) == sorted(PAPER_CODE[k])
+
+
+def test_f_takes_the_values_listed_after_definition_9():
+    vals = set(I.f_lut()[I.class_lut() >= 0].tolist())
+    assert vals == {0, 1, -1, 3, -3, 9, -9}
+
+
+def test_tables_are_invariant_under_the_48_symmetries():
+    sym = C.configuration_symmetries(3)
+    assert sym.shape == (48, 256)
+    for lut in (I.class_lut(), I.gamma_lut(), I.a_lut(6), I.a_lut(26), I.f_lut(), I.well_composed(3)):
+        assert (lut[sym] == lut[None, :]).all()
+
+
+def test_symmetry_of_a_volume_permutes_its_configurations(rng):
+    v = rng.random((4, 5, 6)) < 0.5
+    hist = np.bincount(C.configurations(v).ravel(), minlength=256)
+    sym = C.configuration_symmetries(3)
+    for g in range(48):
+        moved = np.bincount(C.configurations(C.transform_volume(v, g)).ravel(), minlength=256)
+        expected = np.zeros(256, np.int64)
+        np.add.at(expected, sym[g], hist)
+        assert (moved == expected).all()
+
+
+def test_normal_points_to_the_background():
+    """Definition 14: the normal of a well-composed boundary vertex has the
+    signs of the summed outward normals of its boundary faces."""
+    from isoflow.digital.surface import _slot_octants
+
+    normals = I.normal_lut()
+    for c in np.flatnonzero(I.class_lut() >= 0):
+        total = np.zeros(3)
+        for slot in range(12):
+            lo, hi = _slot_octants(slot)
+            inside_lo, inside_hi = (c >> lo) & 1, (c >> hi) & 1
+            if inside_lo != inside_hi:
+                total[slot // 4] += 1 if inside_lo else -1
+        assert (np.sign(total) == normals[c]).all(), c
+        assert set(np.abs(normals[c])) <= {0, 1}
+
+
+def test_a_is_two_minus_abs_gamma_off_the_flat_class():
+    """The vertex angle and the angle defect agree: a = 2 - |gamma| (eqs. 4.6,
+    4.10), gamma in eighths, for every non-flat class."""
+    cls, gamma, a = I.class_lut(), I.gamma_lut(), I.a_lut()
+    curved = (cls >= 0) & (cls != 4)
+    assert (a[curved] == 2 - np.abs(gamma[curved])).all()
+
+
+# ---------------------------------------------------------------- plane
+
+
+def test_planar_classes():
+    pcls = I.planar_class_lut()
+    assert (pcls == 0).sum() == 4  # one pixel of four: convex
+    assert (pcls == 1).sum() == 4  # two adjacent: flat
+    assert (pcls == 2).sum() == 4  # three: concave
+    assert (pcls == I.NOT_WELL_COMPOSED).sum() == 2  # the two diagonals
+
+
+def test_planar_index_eq_4_2_values():
+    square = np.ones((3, 3), bool)  # the points of a 2x2 block of squares
+    r4 = I.planar_index(square)
+    assert r4[0, 0] == 1 and r4[2, 2] == 1  # corners: r = 1/4, convex
+    assert r4[0, 1] == 0  # edge midpoint: flat
+    assert r4[1, 1] == 0  # interior point
+    ell = np.ones((3, 3), bool)
+    ell[2, 2] = False
+    ell4 = I.planar_index(ell)
+    assert ell4[1, 1] == -1  # the re-entrant corner: r = -1/4, concave
+
+
+def test_planar_index_sums_to_four_chi(rng):
+    for _ in range(200):
+        pts = rng.random(rng.integers(1, 12, 2)) < rng.uniform(0.2, 0.9)
+        assert I.planar_index(pts).sum() == 4 * euler_number(pts, connectivity=1)

@@ -1,0 +1,303 @@
+"""Out-of-core analysis: block-wise results equal the in-memory report exactly.
+
+Every comparison is the whole ``analyze(..., surfaces=False)`` dict (histogram
+classes, chi, Betti numbers, energy ...), on volumes split into odd-sized
+chunks so that objects, tunnels and cavities cross block faces, edges and
+corners.
+"""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from scipy.ndimage import gaussian_filter
+
+from conftest import ball, torus
+from isoflow import DigitalObject, IsoflowError, analyze
+from isoflow.cli import main
+
+da = pytest.importorskip("dask.array")
+zarr = pytest.importorskip("zarr")
+from isoflow.digital import outofcore  # noqa: E402
+from isoflow.scale import chunks as chunks_mod  # noqa: E402
+from isoflow.digital.outofcore import analyze_chunked, analyze_zarr  # noqa: E402
+
+CHUNKS3 = (7, 5, 9)
+CHUNKS2 = (7, 5)
+
+
+def reference(v, conn):
+    return analyze(DigitalObject(v), conn, surfaces=False)
+
+
+def check(v, conn, chunks=None):
+    chunks = chunks or (CHUNKS3 if v.ndim == 3 else CHUNKS2)
+    got = analyze_chunked(da.from_array(v, chunks=chunks), conn)
+    want = reference(v, conn)
+    assert got == want
+    assert list(got) == list(want)  # same keys in the same order (JSON output)
+    return got
+
+
+def smooth(rng, shape, sigma=1.5, level=0.5):
+    return gaussian_filter(rng.random(shape), sigma) > level
+
+
+def hollow_ball(r_out, r_in, size=None):
+    size = size or int(2 * r_out + 4)
+    return ball(r_out, size) & ~ball(r_in, size)
+
+
+# --------------------------------------------------------------------------
+# equal to the in-memory report
+# --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_random_volumes_3d(rng, conn):
+    for density in (0.2, 0.5, 0.8):
+        shape = tuple(rng.integers(20, 33, 3))
+        check(rng.random(shape) < density, conn)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_smoothed_random_fields_3d(rng, conn):
+    for level in (0.45, 0.5, 0.55):
+        check(smooth(rng, (31, 26, 37), level=level), conn)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_known_shapes_across_chunk_borders(conn):
+    r = check(ball(11), conn)
+    assert r["betti"] == [1, 0, 0]
+    r = check(hollow_ball(12, 7), conn)  # the cavity spans several chunks
+    assert r["betti"] == [1, 0, 1]
+    r = check(torus(9, 3), conn)
+    assert r["betti"] == [1, 1, 0] and r["euler_characteristic"] == 0
+    # a torus off-centre, around another axis, and a ball inside a hollow ball
+    t = torus(8, 2.5, size=30, axis=0, centre=(13, 16, 14))
+    check(t, conn)
+    nested = hollow_ball(13, 9, size=30) | ball(4, 30)
+    r = check(nested, conn)
+    assert r["betti"] == [2, 0, 1]
+
+
+def test_a_box_whose_cavity_and_walls_cross_every_block():
+    v = np.ones((29, 33, 31), dtype=bool)
+    v[3:-3, 2:-4, 5:-2] = False  # one cavity through all interior blocks
+    v[10:12, 10:20, 8:25] = True  # a plate floating inside it
+    for conn in (6, 26):
+        r = check(v, conn)
+        assert r["betti"] == [2, 0, 1]
+
+
+def test_diagonal_contacts_across_block_corners():
+    """Voxels touching only by an edge or a corner, right at block corners:
+    one component with 26-connectivity, several with 6."""
+    v = np.zeros((21, 20, 27), dtype=bool)
+    v[6, 4, 8] = v[7, 5, 9] = True  # corner contact across the (7, 5, 9) block corner
+    v[13, 9, 3] = v[14, 10, 3] = True  # edge contact across two block faces
+    v[0, 0, 0] = v[20, 19, 26] = True  # the array's own corners
+    r6 = check(v, 6)
+    r26 = check(v, 26)
+    assert r6["betti"][0] == 6 and r26["betti"][0] == 4
+    # and the background seen with 6 / 26 around a corner-thin shell
+    check(hollow_ball(9, 6, size=24), 26)
+
+
+@pytest.mark.parametrize("conn", [4, 8])
+def test_2d(rng, conn):
+    for density in (0.3, 0.5, 0.7):
+        check(rng.random(tuple(rng.integers(25, 41, 2))) < density, conn)
+    check(smooth(rng, (37, 29)), conn)
+    yy, xx = np.indices((33, 35))
+    ring = ((yy - 16) ** 2 + (xx - 17) ** 2 <= 13**2) & ((yy - 16) ** 2 + (xx - 17) ** 2 > 6**2)
+    r = check(ring, conn)
+    assert r["betti"] == [1, 1]
+
+
+def test_irregular_and_thin_chunks(rng):
+    v = smooth(rng, (24, 20, 18))
+    for chunks in (((3, 10, 11), (7, 1, 12), (18,)), (1, 20, 6), (24, 20, 1), (5, 3, 4)):
+        for conn in (6, 26):
+            check(v, conn, chunks)
+    img = rng.random((30, 25)) < 0.5
+    for conn in (4, 8):
+        check(img, conn, (1, 25))
+        check(img, conn, ((5, 1, 24), (2, 23)))
+
+
+def test_trivial_volumes():
+    for v in (np.zeros((9, 8, 10), bool), np.ones((9, 8, 10), bool), np.ones((1, 1, 1), bool)):
+        for conn in (6, 26):
+            check(v, conn, (4, 3, 5))
+    check(np.ones((12, 9), bool), 8, (5, 4))
+
+
+def test_numeric_0_1_dtypes(rng):
+    v = smooth(rng, (22, 19, 25))
+    for dtype in (np.uint8, np.int32, np.float32):
+        got = analyze_chunked(da.from_array(v.astype(dtype), chunks=CHUNKS3), 26)
+        assert got == reference(v, 26)
+
+
+def test_block_counts_agree_with_dask_image(rng):
+    """b0 against dask-image's chunked labelling (few blocks: it is slow)."""
+    from dask_image.ndmeasure import label
+    from scipy.ndimage import generate_binary_structure
+
+    v = smooth(rng, (26, 22, 30), level=0.55)
+    x = da.from_array(v, chunks=(13, 11, 15))
+    for conn, full in ((6, 1), (26, 3)):
+        r = analyze_chunked(x, conn)
+        _, n = label(x, generate_binary_structure(3, full))
+        assert r["betti"][0] == int(n.compute()) == reference(v, conn)["betti"][0]
+
+
+def test_blocks_hand_on_faces_and_own_each_vertex_once(rng):
+    """What a block hands on is faces and counts, never voxel-sized (the
+    reason memory stays bounded), and the vertices split exactly between
+    the block pass and the merge across upper faces."""
+    from isoflow.digital.configurations import configuration_histogram
+
+    v = rng.random((40, 30, 20)) < 0.5
+    s = outofcore._summarize(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), 6, "test")
+    assert sorted({a.shape for a in s["faces"].values()}) == [(30, 20), (40, 20), (40, 30)]
+    assert len(s["faces"]) == 3 * 6  # voxels, object and background labels on 6 faces
+    assert s["hist"].sum() == 39 * 29 * 19  # vertices a+1 .. b-1; those at b are merged
+    parts = [(v[:17], (0, 0, 0)), (v[17:], (1, 0, 0))]
+    sums = [outofcore._summarize(b, i, (2, 1, 1), (0, 0, 0), 6, "test") for b, i in parts]
+    total = outofcore._merge((0, 0, 0), (2, 1, 1), 6, *sums)["hist"]
+    total += outofcore._merge((1, 0, 0), (2, 1, 1), 6, sums[1])["hist"]
+    assert (total == configuration_histogram(v)).all()
+
+
+# --------------------------------------------------------------------------
+# zarr
+# --------------------------------------------------------------------------
+
+
+def write_zarr(path, v, chunks, dtype=None, zarr_format=3, group=None):
+    data = v.astype(dtype or v.dtype)
+    if group is None:
+        z = zarr.create_array(store=str(path), shape=v.shape, chunks=chunks, dtype=data.dtype,
+                              zarr_format=zarr_format)
+    else:
+        g = zarr.open_group(str(path), mode="w", zarr_format=zarr_format)
+        z = g.create_array(group, shape=v.shape, chunks=chunks, dtype=data.dtype)
+    z[...] = data
+    return path
+
+
+def test_zarr_v3_and_v2_and_groups(tmp_path, rng):
+    v = smooth(rng, (23, 27, 19))
+    want6, want26 = reference(v, 6), reference(v, 26)
+    p3 = write_zarr(tmp_path / "v3.zarr", v, CHUNKS3)
+    assert analyze_zarr(p3, 6) == want6
+    assert analyze_zarr(p3, 26) == want26
+    p2 = write_zarr(tmp_path / "v2.zarr", v, CHUNKS3, dtype=np.uint8, zarr_format=2)
+    assert analyze_zarr(p2) == want6  # default connectivity 6
+    pg = write_zarr(tmp_path / "group.zarr", v, (8, 9, 10), group="volume")
+    zarr.open_group(str(pg), mode="a").create_array("mask_other", shape=(2, 2), dtype=bool)
+    assert analyze_zarr(pg, 26) == want26
+    ps = write_zarr(tmp_path / "single.zarr", v, (12, 12, 12), group="anything")
+    assert analyze_zarr(ps, 6) == want6
+    img = rng.random((31, 22)) < 0.5
+    p2d = write_zarr(tmp_path / "img.zarr", img, (6, 7))
+    assert analyze_zarr(p2d, 8) == reference(img, 8)
+
+
+def test_zarr_blocks_follow_the_chunks(tmp_path):
+    z = zarr.create_array(store=str(tmp_path / "big.zarr"), shape=(1000, 1000, 1000), chunks=(16, 16, 16), dtype=bool)
+    chunks = chunks_mod.zarr_blocks(z, None)  # metadata only: nothing is written or read
+    block = [c[0] for c in chunks]
+    assert all(b % 16 == 0 for b in block) and np.prod(block) >= chunks_mod.MIN_BLOCK
+    assert np.prod([len(c) for c in chunks]) <= chunks_mod.MAX_BLOCKS
+    assert [sum(c) for c in chunks] == [1000] * 3
+    small = zarr.create_array(store=str(tmp_path / "small.zarr"), shape=(30, 30, 30), chunks=CHUNKS3, dtype=bool)
+    assert [c[0] for c in chunks_mod.zarr_blocks(small, None)] == list(CHUNKS3)
+    assert [c[0] for c in chunks_mod.zarr_blocks(small, (10, 30, 4))] == [10, 30, 4]
+
+
+def test_cli_info_on_zarr(tmp_path, capsys):
+    v = torus(9, 3) | ball(3, torus(9, 3).shape[0])
+    path = write_zarr(tmp_path / "t.zarr", v, CHUNKS3)
+    np.save(tmp_path / "t.npy", v)
+    assert main(["info", str(path), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)
+    assert main(["info", str(tmp_path / "t.npy"), "--json", "--no-surfaces"]) == 0
+    want = json.loads(capsys.readouterr().out)
+    assert got.pop("surfaces") is None
+    assert got.pop("input").endswith("t.zarr") and want.pop("input").endswith("t.npy")
+    assert got == want and got["betti"] == [2, 1, 0]
+    assert main(["info", str(path), "--connectivity", "26"]) == 0
+    out = capsys.readouterr().out
+    assert "2 components, 1 tunnels" in out and "not computed (out-of-core input)" in out
+
+
+# --------------------------------------------------------------------------
+# errors
+# --------------------------------------------------------------------------
+
+
+def test_bad_arrays_raise_isoflow_error(rng):
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        v = rng.integers(0, 3, (12, 13, 14))
+        analyze_chunked(da.from_array(v, chunks=CHUNKS3))
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        v = np.zeros((12, 13, 14), np.float32)
+        v[11, 12, 13] = np.nan  # in the last block only
+        analyze_chunked(da.from_array(v, chunks=CHUNKS3))
+    with pytest.raises(IsoflowError, match="2D or 3D"):
+        analyze_chunked(da.zeros((4, 4, 4, 4), chunks=2))
+    with pytest.raises(IsoflowError, match="connectivity 8"):
+        analyze_chunked(da.zeros((4, 4, 4), chunks=2, dtype=bool), 8)
+    with pytest.raises(IsoflowError, match="no voxels"):
+        analyze_chunked(da.zeros((0, 4, 5), chunks=2, dtype=bool))
+    with pytest.raises(IsoflowError, match="dask or zarr array"):
+        analyze_chunked(np.zeros((4, 4, 4), bool))
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        analyze_chunked(da.from_array(np.array([["a", "b"], ["c", "d"]]), chunks=1))
+
+
+def test_bad_zarr_inputs_raise_with_the_path(tmp_path, rng):
+    with pytest.raises(IsoflowError, match="missing.zarr: no such file"):
+        analyze_zarr(tmp_path / "missing.zarr")
+    (tmp_path / "plain.zarr").mkdir()
+    with pytest.raises(IsoflowError, match="plain.zarr: not a zarr array or group"):
+        analyze_zarr(tmp_path / "plain.zarr")
+    g = zarr.open_group(str(tmp_path / "two.zarr"), mode="w")
+    g.create_array("a", shape=(3, 3, 3), dtype=bool)
+    g.create_array("b", shape=(3, 3, 3), dtype=bool)
+    with pytest.raises(IsoflowError, match=r"two.zarr: a zarr group with arrays \['a', 'b'\]"):
+        analyze_zarr(tmp_path / "two.zarr")
+    write_zarr(tmp_path / "values.zarr", rng.integers(0, 5, (10, 10, 10)), (5, 5, 5), dtype=np.int16)
+    with pytest.raises(IsoflowError, match="values.zarr: not a binary volume"):
+        analyze_zarr(tmp_path / "values.zarr")
+    write_zarr(tmp_path / "line.zarr", np.zeros(10, bool), (5,))
+    with pytest.raises(IsoflowError, match="line.zarr: a volume must be 2D or 3D"):
+        analyze_zarr(tmp_path / "line.zarr")
+
+
+def test_cli_errors_are_one_line_with_the_path(tmp_path):
+    bad = np.zeros((10, 10, 10), np.uint8)
+    bad[9, 9, 9] = 7  # not in the first chunk: found while streaming
+    write_zarr(tmp_path / "bad.zarr", bad, (4, 4, 4))
+    for name, words in (("bad.zarr", "not a binary volume"), ("nothere.zarr", "no such file")):
+        p = subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / name)],
+                           capture_output=True, text=True)
+        assert p.returncode == 2, p.stderr
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and name in lines[0] and words in lines[0], p.stderr
+
+
+def test_missing_dask_says_what_to_install(monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask", None)
+    monkeypatch.setitem(sys.modules, "dask.array", None)
+    with pytest.raises(IsoflowError, match=r"isoflow\[dask\]"):
+        analyze_chunked(object())
+    monkeypatch.setitem(sys.modules, "zarr", None)
+    with pytest.raises(IsoflowError, match=r"isoflow\[dask\]"):
+        outofcore.open_zarr(".")

@@ -1,0 +1,91 @@
+"""The compiled kernels give the same numbers as the numpy / scipy paths."""
+
+import numpy as np
+import pytest
+from scipy.ndimage import generate_binary_structure, label
+from skimage.measure import euler_number
+
+from conftest import random_volume
+from isoflow import DigitalObject, analyze
+from isoflow.scale import kernels
+from isoflow.digital.configurations import configurations
+
+pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed")
+
+
+def scipy_count(v, conn):
+    return label(v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))[1]
+
+
+def scipy_enclosed(v, conn):
+    lab, n = label(~v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))
+    border = set()
+    for ax in range(v.ndim):
+        border |= set(np.take(lab, 0, ax).ravel()) | set(np.take(lab, -1, ax).ravel())
+    return n - len(border - {0})
+
+
+def test_histogram_kernel(rng):
+    for _ in range(200):
+        v = random_volume(rng, 9)
+        want = np.bincount(configurations(v).ravel(), minlength=256)
+        assert (kernels.histogram3d(v) == want).all()
+
+
+def test_component_kernels(rng):
+    shapes = [(1, 1, 7), (7, 1, 1), (1, 7, 1)]  # thin shapes broke cc3d's 26-labelling
+    for t in range(400):
+        v = rng.random(shapes[t % 3]) < 0.5 if t < 30 else random_volume(rng, 8, ndim=2 + t % 2)
+        for conn in ((6, 26) if v.ndim == 3 else (4, 8)):
+            assert kernels.count_components(v, conn) == scipy_count(v, conn)
+            assert kernels.count_enclosed(v, conn) == scipy_enclosed(v, conn)
+
+
+def test_analyze_uses_kernels_above_threshold(monkeypatch, rng):
+    v = rng.random((30, 31, 29)) < 0.45
+    slow = analyze(DigitalObject(v), 26, surfaces=False)
+    monkeypatch.setattr(kernels, "MIN_VOXELS", 0)
+    fast = analyze(DigitalObject(v), 26, surfaces=False)
+    assert fast == slow
+    assert fast["euler_characteristic"] == euler_number(v, 3)
+
+
+def test_mesh_components_equal_scipy_graph_components(rng):
+    # random noise: many surfaces, pinches and doubled edges (midpoint slots)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from isoflow.scale.kernels import label_polygons
+    from isoflow.digital.surface import boundary_mesh
+
+    for conn in (6, 26):
+        mesh = boundary_mesh(rng.random((14, 12, 13)) < 0.5, conn)
+        poly = mesh.polygons()
+        nv = len(mesh.vertices)
+        rows = np.repeat(np.arange(len(poly)), poly.shape[1])
+        cols = poly.ravel()
+        keep = cols >= 0
+        # bipartite face-vertex graph: independent of the kernel's union order
+        graph = coo_matrix((np.ones(keep.sum()), (rows[keep] + nv, cols[keep])),
+                           shape=(nv + len(poly),) * 2)
+        n, ref = connected_components(graph, directed=False)
+        label, count = label_polygons(poly, nv)
+        assert count == n and mesh.midpoints > 0
+        # same partition: the pairs (label, ref) are a bijection
+        pairs = np.unique(np.stack([label, ref[:nv]], 1), axis=0)
+        assert len(pairs) == n == len(np.unique(label)) == len(np.unique(ref[:nv]))
+
+
+def test_bool_arrays_with_bytes_other_than_one_are_read_as_true(rng):
+    # np.ndarray.view(bool) keeps the raw bytes (here 2); the kernels read
+    # bytes, and once wrote past their arrays on such input
+    u = (rng.random((130, 130, 130)) < 0.3).astype(np.uint8) * 2
+    v = u.view(bool)
+    assert v.size >= kernels.MIN_VOXELS
+    for conn, sk in ((6, 1), (26, 3)):
+        r = analyze(DigitalObject(v), conn, surfaces=False)
+        assert r["euler_characteristic"] == euler_number(u > 0, connectivity=sk)
+        assert r["betti"][0] == scipy_count(u > 0, conn)
+    # the kernels themselves test bytes for nonzero
+    assert (kernels.histogram3d(v) == kernels.histogram3d(u > 0)).all()
+    assert kernels.count_components(v, 6) == scipy_count(u > 0, 6)
