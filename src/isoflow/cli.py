@@ -4,12 +4,14 @@ Every command reads its input through :func:`load_input`, hands arrays to the
 core, and prints either a readable table or one JSON object. Bad input
 becomes one line on stderr and exit status 2; heavy libraries (trimesh,
 matplotlib) are imported only by the commands that need them, so that
-``isoflow info`` starts fast.
+``isoflow info`` starts fast; so are tqdm (the progress bars, only on a
+terminal) and shtab (only by ``isoflow completion``).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -59,8 +61,9 @@ def load_input(args):
     if path.suffix.lower() in MESH_SUFFIXES:
         from .mesh.voxelize import voxelize_file
 
-        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                             progress=progress_callback("voxelize"))
+        with progress_bar(args, "voxelize") as show:
+            return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
+                                 progress=show)
     if args.pitch is not None or args.resolution is not None or args.allow_open:
         raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
     if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
@@ -85,7 +88,8 @@ def cmd_info(args) -> int:
             raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
-        report = analyze_zarr(args.input, args.connectivity)
+        with progress_bar(args, "blocks") as show:
+            report = analyze_zarr(args.input, args.connectivity, progress=show)
         if report["dimension"] == 3:
             report["surfaces"] = None
     else:
@@ -196,8 +200,9 @@ def cmd_voxelize(args) -> int:
     from .mesh.voxelize import voxelize_file
 
     out = check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
-    obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                        progress=progress_callback("voxelize"))
+    with progress_bar(args, "voxelize") as show:
+        obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
+                            progress=show)
     write_volume(obj, out, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
@@ -209,7 +214,8 @@ def cmd_genus(args) -> int:
 
     conn = args.connectivity or 6
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
-    report = verify_genus(args.mesh, res, conn, progress=progress_callback("voxelize"))
+    with progress_bar(args, f"genus at {', '.join(map(str, sorted(res)))}") as show:
+        report = verify_genus(args.mesh, res, conn, progress=show)
     if args.json:
         print(json.dumps(report))
         return 0
@@ -232,23 +238,43 @@ def cmd_genus(args) -> int:
     return 0
 
 
-def progress_callback(label: str):
-    """A one-line progress display on a terminal, nothing otherwise."""
-    if not sys.stderr.isatty():
-        return None
+#: the bar once the total is known: the share done and the time left (the
+#: core's units, chunks of columns or layers of blocks, mean nothing to a user)
+BAR_FORMAT = "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]"
+
+
+@contextlib.contextmanager
+def progress_bar(args, label: str, unit: str = "it"):
+    """A tqdm bar on stderr fed by a core ``progress(done, total)`` callback.
+
+    Yields the callback, or None (no bar, and tqdm not imported) when
+    ``--quiet`` is given or stderr is not a terminal, so that logs and pipes
+    get no carriage returns. The bar appears at the first report (not while
+    a mesh is still being read) and is cleared when the work ends, so the
+    terminal keeps only the results. A ``total`` of None gives a counter
+    (the flow, whose length is not known in advance).
+    """
+    if args.quiet or not sys.stderr.isatty():
+        yield None
+        return
+    from tqdm import tqdm
+
+    bars = []
 
     def show(done, total):
-        frac = done / total if total else 1.0
-        bar = "#" * int(30 * frac)
-        end = "\n" if done >= total else ""
-        print(f"\r{label} [{bar:<30}] {100 * frac:5.1f}%", end=end, file=sys.stderr, flush=True)
+        if not bars:
+            bars.append(tqdm(desc=label, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
+                             dynamic_ncols=True, bar_format=None if total is None else BAR_FORMAT))
+        bars[0].update(done - bars[0].n)
 
-    return show
+    try:
+        yield show
+    finally:
+        for bar in bars:
+            bar.close()
 
 
 def cmd_flow(args) -> int:
-    import time
-
     from .flow.files import FlowWriter
     from .flow.motion import flow_connectivity
     from .flow.run import default_max_steps, run_flow
@@ -266,21 +292,16 @@ def cmd_flow(args) -> int:
         conn = flow_connectivity(obj.ndim, args.connectivity)
         writer = FlowWriter(args.out, conn, args.force, last_step=last)
         writer.add(0, obj.cropped())
-    # a box of side s vanishes in s steps; the bar appears once the run lasts
-    total, show, start = args.steps or max(obj.volume.shape), progress_callback("flow"), time.monotonic()
-    drawn = []
+    with progress_bar(args, "flow", unit=" steps") as show:
 
-    def progress(step, state):
-        if writer is not None:
-            writer.add(step, state)
-        if show and time.monotonic() - start > 1.0:
-            show(min(step, total - 1), total)
-            drawn.append(step)
+        def progress(step, state):
+            if writer is not None:
+                writer.add(step, state)
+            if show is not None:  # a counter unless --steps says how many
+                show(step, args.steps)
 
-    result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
-                      progress=progress, keep_states=False)
-    if drawn:
-        show(total, total)
+        result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                          progress=progress, keep_states=False)
     if writer is not None:
         writer.finish(result)
     if args.json:
@@ -316,14 +337,72 @@ def format_flow(result, name: str) -> str:
 # --------------------------------------------------------------------------
 
 
+def installed_version() -> str:
+    """The installed package's version (its metadata, as pip sees it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("isoflow")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "(not installed: no package metadata; pip install -e .)"
+
+
+class VersionAction(argparse.Action):
+    """``--version``: the metadata is read only when asked, not at every start."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"isoflow {installed_version()}")
+        parser.exit()
+
+
+def cmd_completion(args) -> int:
+    """Print a completion script made by shtab from this very parser."""
+    try:
+        import shtab
+    except ImportError as exc:
+        raise IsoflowError(f"shell completion needs shtab: pip install shtab ({exc})") from None
+    parser = build_parser()
+    # paths complete as files (or directories for --out); everything else
+    # (commands, options, choices) shtab reads from the parser itself
+    for command in parser.commands.values():
+        for action in command._actions:
+            if action.dest in ("input", "mesh", "output", "png"):
+                action.complete = shtab.FILE
+            elif action.dest == "out":
+                action.complete = shtab.DIRECTORY
+    print(shtab.complete(parser, shell=args.shell), end="")
+    return 0
+
+
+def command_list(parser: argparse.ArgumentParser) -> str:
+    """What ``isoflow`` alone prints: usage and one line per command."""
+    commands = parser.commands
+    width = max(map(len, commands))
+    lines = [parser.format_usage().rstrip(), "", parser.description, "", "commands:"]
+    lines += [f"  {name:<{width}}  {p.description}" for name, p in commands.items()]
+    lines += ["", "'isoflow COMMAND -h' lists a command's options; 'isoflow --version' prints the version."]
+    return "\n".join(lines)
+
+
+def add_command(sub, name: str, summary: str) -> argparse.ArgumentParser:
+    """A sub-command whose one-line summary is both its entry in the command
+    list and the description of its own -h."""
+    return sub.add_parser(name, help=summary, description=summary)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="isoflow",
         description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
     )
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
+    parser.commands = sub.choices  # name -> sub-command parser, in order
 
-    p = sub.add_parser("info", help="topology and curvature-index histogram of an object")
+    p = add_command(sub, "info", "topology and curvature-index histogram of an object")
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -335,7 +414,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_info)
 
-    p = sub.add_parser("surface", help="write the boundary quad mesh (PLY/OBJ) with curvature attributes")
+    p = add_command(sub, "surface", "write the boundary quad mesh (PLY/OBJ) with curvature attributes")
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("-o", "--output", required=True, help="OUT.ply or OUT.obj")
@@ -345,7 +424,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
 
-    p = sub.add_parser("voxelize", help="voxelise a mesh's solid into an .npz volume (with pitch and origin)")
+    p = add_command(sub, "voxelize", "voxelise a mesh's solid into an .npz volume (with pitch and origin)")
     p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
     grid = p.add_mutually_exclusive_group(required=True)
     grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
@@ -356,14 +435,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(func=cmd_voxelize)
 
-    p = sub.add_parser("genus", help="verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
+    p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
     p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
     p.add_argument("--resolution", type=int, nargs="+", help="voxels along the longest side (default: 64 128)")
     p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)
 
-    p = sub.add_parser("flow", help="run the digital curvature flow (section 5) with topology control")
+    p = add_command(sub, "flow", "run the digital curvature flow (section 5) with topology control")
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
@@ -373,14 +452,46 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)
 
+    p = add_command(sub, "completion", "print a shell completion script (bash, zsh, tcsh) made from these options")
+    p.add_argument("shell", choices=("bash", "zsh", "tcsh"), help="the shell to complete in")
+    p.set_defaults(func=cmd_completion)
+
+    for p in parser.commands.values():
+        p.add_argument("-q", "--quiet", action="store_true",
+                       help="no progress bars or warnings on stderr (errors are still printed)")
     return parser
+
+
+@contextlib.contextmanager
+def quiet_stderr(quiet: bool):
+    """--quiet: informational stderr (library warnings, log records below
+    ERROR) is dropped while the command runs; errors still reach stderr as
+    one line. Restored afterwards, for callers of :func:`main` in-process."""
+    if not quiet:
+        yield
+        return
+    import logging
+    import warnings
+
+    before = logging.root.manager.disable
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        logging.disable(logging.WARNING)
+        try:
+            yield
+        finally:
+            logging.disable(before)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if args.command is None:  # `isoflow` alone: what it can do, not an error
+        print(command_list(parser))
+        return 0
     try:
-        return args.func(args)
+        with quiet_stderr(args.quiet):
+            return args.func(args)
     except IsoflowError as exc:
         print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -388,6 +388,7 @@ def analyze_chunked(
     block_shape=None,
     scheduler=None,
     where: str | None = None,
+    progress=None,
 ) -> dict:
     """The report of :func:`isoflow.digital.analysis.analyze` (``surfaces=False``),
     computed block by block.
@@ -407,8 +408,10 @@ def analyze_chunked(
     the reading and the histogram; ``"processes"`` runs blocks truly in
     parallel at the cost of starting workers and pickling the face labels
     (worth it only for large volumes on idle cores, and only from code
-    under ``if __name__ == "__main__":``). ``where`` names the input in
-    error messages.
+    under ``if __name__ == "__main__":``); a ``dask.distributed`` client's
+    ``get`` works the same way. ``where`` names the input in error messages.
+    ``progress(done, total)`` is called after each layer of blocks along the
+    first axis (``total`` layers), the unit of work between two computes.
     """
     dask, da = import_dask()
     is_zarr = is_zarr_array(array)
@@ -483,6 +486,8 @@ def analyze_chunked(
             ]
             done, current = dask.compute(tasks, upper, scheduler=scheduler)
             merged.extend(done)
+            if progress is not None:
+                progress(i + 1, numblocks[0])
     except IsoflowError as exc:
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message
@@ -490,7 +495,7 @@ def analyze_chunked(
     return _finish(ndim, conn, list(shape), *merged)
 
 
-def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None) -> dict:
+def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None, progress=None) -> dict:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
     Before the full pass, the dtype and the first block's values are
@@ -507,4 +512,5 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
     if dtype.kind != "b" and 0 not in z.shape:
         first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         binary(first, where, near=(0,) * z.ndim)
-    return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where)
+    return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
+                           progress=progress)

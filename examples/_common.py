@@ -1,0 +1,39 @@
+"""What every example shares: its command line (an output directory, --force),
+one-line errors, and where the sample meshes are. Not an example itself."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import isoflow
+
+#: the repository's sample meshes (meshes/README.md: sources, licences, genus)
+MESHES = Path(__file__).resolve().parents[1] / "meshes"
+
+
+def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
+    """``OUT`` (default: a new temporary directory) and ``--force``, plus the
+    example's own arguments. ``args.out`` is an existing directory."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("out", nargs="?", help="directory for the outputs (default: a new temporary directory)")
+    parser.add_argument("--force", action="store_true", help="overwrite outputs already in OUT")
+    if add_arguments is not None:
+        add_arguments(parser)
+    args = parser.parse_args()
+    args.out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="isoflow-example-"))
+    args.out.mkdir(parents=True, exist_ok=True)
+    return args
+
+
+def run(main) -> None:
+    """Run an example's ``main``; bad input (an existing output without
+    --force, a mesh that is not closed ...) is one line and exit status 2,
+    as from the ``isoflow`` command."""
+    try:
+        main()
+    except isoflow.IsoflowError as exc:
+        print(f"{Path(sys.argv[0]).name}: error: {exc}", file=sys.stderr)
+        sys.exit(2)

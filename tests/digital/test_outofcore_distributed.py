@@ -1,0 +1,64 @@
+"""analyze_chunked on a real cluster engine: a dask.distributed LocalCluster
+of two worker processes, one thread each, with the client's scheduler. Every
+block task and merge is pickled to another process and its result pickled
+back; the report must equal the in-memory one key for key.
+
+One cluster for the module (starting one costs a few seconds); volumes
+small, chunkings odd, so that objects, tunnels, cavities and edge/vertex
+contacts cross block faces, edges and corners."""
+
+import numpy as np
+import pytest
+
+from conftest import ball, torus
+from isoflow import DigitalObject, IsoflowError, analyze, analyze_chunked
+
+distributed = pytest.importorskip("distributed")
+da = pytest.importorskip("dask.array")
+zarr = pytest.importorskip("zarr")
+
+
+@pytest.fixture(scope="module")
+def client():
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as c:
+        yield c
+
+
+def test_workers_are_two_processes(client):
+    pids = client.run(lambda: __import__("os").getpid())
+    assert len(pids) == 2 and len(set(pids.values())) == 2
+    assert __import__("os").getpid() not in pids.values()
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_dask_array_on_process_workers(client, conn):
+    rng = np.random.default_rng(20131122)
+    v = rng.random((23, 19, 26)) < 0.45  # many edge and vertex contacts
+    v[:12] |= torus(8, 3, size=26, axis=0)[:12, 3:22, :]  # a tunnel across blocks
+    layers = []
+    got = analyze_chunked(da.from_array(v, chunks=(7, 5, 9)), conn, scheduler=client.get,
+                          progress=lambda done, total: layers.append((done, total)))
+    assert got == analyze(DigitalObject(v), conn, surfaces=False)
+    assert layers == [(i, 4) for i in range(1, 5)]  # one report per layer of blocks along axis 0
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_zarr_store_on_process_workers(client, tmp_path, conn):
+    v = ball(12, 30) & ~ball(7, 30)  # a cavity spanning blocks
+    v |= torus(4, 1.5, size=30, centre=(14.5, 14.5, 14.5))  # a torus floating in the cavity
+    z = zarr.open_array(str(tmp_path / "v.zarr"), mode="w", shape=v.shape, chunks=(11, 7, 13), dtype=bool)
+    z[:] = v
+    got = analyze_chunked(zarr.open_array(str(tmp_path / "v.zarr"), mode="r"), conn, scheduler=client.get)
+    want = analyze(DigitalObject(v), conn, surfaces=False)
+    assert got == want
+    assert got["betti"] == [2, 1, 1]
+
+
+def test_a_bad_block_is_one_line_from_a_worker(client):
+    v = np.zeros((20, 20, 20), np.uint8)
+    v[15, 3, 3] = 2  # in a block that only a worker reads
+    with pytest.raises(IsoflowError) as err:
+        analyze_chunked(da.from_array(v, chunks=(7, 5, 9)), 6, scheduler=client.get)
+    message = str(err.value)
+    assert "\n" not in message and "not a binary volume" in message and "(14, 0, 0)" in message
