@@ -8,6 +8,7 @@ import sys
 import numpy as np
 import pytest
 import trimesh
+from test_input_errors import fails  # one line on stderr, exit 2
 
 import isoflow
 from isoflow.cli import main
@@ -19,16 +20,6 @@ tifffile = pytest.importorskip("tifffile")
 def run(capsys, *args):
     assert main([*map(str, args)]) == 0, capsys.readouterr().err
     return capsys.readouterr().out
-
-
-def fails(capsys, *args, words=()):
-    assert main([*map(str, args)]) == 2
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in err, err
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    return lines[0]
 
 
 def info(capsys, *args):

@@ -65,7 +65,7 @@ def label_value(text: str):
 
 def load_input(args):
     """The digital object named on the command line (volume, points or mesh)."""
-    from .mesh.volumes import is_volume, read_object
+    from .mesh.volumes import read_object
 
     path = Path(args.input)
     if path.suffix.lower() in MESH_SUFFIXES:
@@ -77,9 +77,8 @@ def load_input(args):
                              progress=progress_callback("voxelize"))
     if args.pitch is not None or args.resolution is not None or args.allow_open:
         raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
-    if is_volume(args.input):  # every volume format, FILE.h5:/dataset and IMAGE.zarr:LEVEL too
-        return read_object(args.input, label=args.label)
-    return read_object(path, points_are=args.points_are, label=args.label)
+    # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
+    return read_object(args.input, points_are=args.points_are, label=args.label)
 
 
 # --------------------------------------------------------------------------

@@ -30,12 +30,11 @@ DEFAULT_DATASET = "volume"
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     h5py = import_library("h5py", "HDF5")
     where = str(path) if dataset is None else f"{path}:{dataset}"
-    with reading(path, "HDF5"):
-        with h5py.File(path, "r") as f:
-            ds = f[_choose(f, h5py, path, dataset)]
-            check_shape(ds.shape, ds.dtype, where)
-            array = ds[()]
-            attrs = dict(ds.attrs)
+    with reading(path, "HDF5"), h5py.File(path, "r") as f:
+        ds = f[_choose(f, h5py, path, dataset)]
+        check_shape(ds.shape, ds.dtype, where)
+        array = ds[()]
+        attrs = dict(ds.attrs)
     pitch = attrs.get("pitch", attrs.get("element_size_um", 1.0))
     offset = attrs.get("offset")
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0))

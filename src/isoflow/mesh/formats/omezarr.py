@@ -32,7 +32,16 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from ...scale.chunks import open_zarr_node
-from .registry import RawVolume, check_shape, import_library, placement, reading, spatial_axes, split_dataset, to_xyz
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    placement,
+    reading,
+    spatial_axes,
+    split_dataset,
+    to_xyz,
+)
 
 CHUNK = 128
 NGFF_VERSION = "0.4"
@@ -128,9 +137,9 @@ def check_output(path, force: bool = False) -> Path:
     if path.exists() or path.is_symlink():
         if not force:
             raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
-        if path.is_dir() and not path.is_symlink():
-            if not any((path / m).exists() for m in (".zgroup", ".zarray", "zarr.json")):
-                raise IsoflowError(f"{path}: a directory that is not a zarr store; not replaced")
+        is_store = any((path / m).exists() for m in (".zgroup", ".zarray", "zarr.json"))
+        if path.is_dir() and not path.is_symlink() and not is_store:
+            raise IsoflowError(f"{path}: a directory that is not a zarr store; not replaced")
     return path
 
 

@@ -24,7 +24,15 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, import_library, note, placement, reading, to_xyz
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    note,
+    placement,
+    reading,
+    to_xyz,
+)
 
 X_RESOLUTION, Y_RESOLUTION = 282, 283
 
