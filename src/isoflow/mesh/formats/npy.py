@@ -21,7 +21,7 @@ from .registry import RawVolume, note
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     meta: dict = {}
     try:
-        loaded = np.load(path, allow_pickle=False, mmap_mode=None)
+        loaded = np.load(path, allow_pickle=False)
         # trust the content, not the name: an .npz may be called .npy or .NPZ
         if isinstance(loaded, np.lib.npyio.NpzFile):
             with loaded as z:

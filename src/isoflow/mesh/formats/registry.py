@@ -1,7 +1,7 @@
 """Which module reads and writes which volume format, chosen by suffix.
 
-Every format module has ``read(path, dataset) -> RawVolume`` and, where the
-format can be written, ``write(path, obj, dataset)``; it imports its library
+Every format module has ``read(path, dataset) -> RawVolume`` and
+``write(path, obj, dataset)``; it imports its library
 only inside those functions, so ``import isoflow`` stays cheap and a missing
 library costs nothing until its suffix is used. :func:`isoflow.mesh.volumes.read_volume`
 and :func:`~isoflow.mesh.volumes.write_volume` dispatch through
@@ -39,7 +39,6 @@ class VolumeFormat:
     suffixes: tuple[str, ...]
     module: str  # under isoflow.mesh.formats
     library: str | None  # the pip package it needs beyond isoflow's own dependencies
-    writes: bool = True
     #: a path may name a dataset inside the file: FILE.h5:/group/volume
     datasets: bool = False
     #: the module the library installs, when it differs from the package name
@@ -72,7 +71,7 @@ FORMATS = (
 
 def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     """Every volume suffix isoflow reads (or writes)."""
-    return tuple(s for f in FORMATS for s in f.suffixes if not writable or (f.writes and s not in f.read_only))
+    return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
 _DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr)):(?P<dataset>[^:]*)$", re.IGNORECASE)
@@ -98,7 +97,7 @@ def format_for(path, writing: bool = False) -> VolumeFormat | None:
     best = None
     for f in FORMATS:
         for s in f.suffixes:
-            if writing and (not f.writes or s in f.read_only):
+            if writing and s in f.read_only:
                 continue
             if name.endswith(s) and (best is None or len(s) > len(best[1])):
                 best = (f, s)
@@ -160,7 +159,7 @@ def check_shape(shape, dtype, where: str) -> None:
 
     voxels = math.prod(int(s) for s in shape)
     check_fits(
-        voxels * (np.dtype(dtype).itemsize + 1),
+        voxels * (np.dtype(dtype).itemsize + 2),  # the file's array, the boolean volume, its C-ordered copy
         f"{where}: a {'x'.join(map(str, shape))} volume of {np.dtype(dtype)}",
         hint="crop it, or use a .zarr store with 'isoflow info' (read block by block)",
     )
