@@ -148,6 +148,7 @@ def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
     fails(capsys, "info", path, words=("data.bin", "binary data"))
 
 
-def test_zarr_outside_info_says_so(tmp_path, capsys):
+def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):
+    # every command reads .zarr now (info block by block, the others in memory)
     (tmp_path / "v.zarr").mkdir()
-    fails(capsys, "surface", tmp_path / "v.zarr", "-o", tmp_path / "s.ply", words=("v.zarr", "isoflow info"))
+    fails(capsys, "surface", tmp_path / "v.zarr", "-o", tmp_path / "s.ply", words=("v.zarr", "not a zarr"))

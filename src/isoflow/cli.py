@@ -29,7 +29,10 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", help="volume (.npy/.npz), point list (.txt: x y z per line) or mesh")
+    p.add_argument("input", help="volume (.npy/.npz, .tif, .nii(.gz), .nrrd, FILE.h5:/dataset, .binvox, .vox, "
+                                 ".zarr), point list (.txt: x y z per line) or mesh")
+    p.add_argument("--label", type=label_value, metavar="N",
+                   help="a label image: the voxels of value N are the object (MagicaVoxel: colour index N)")
     p.add_argument(
         "--points-are",
         choices=("corners", "voxels"),
@@ -53,6 +56,15 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
     )
 
 
+def label_value(text: str):
+    """``--label N``: a number, kept an int when it is one."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    return int(value) if value.is_integer() else value
+
+
 def load_input(args):
     """The digital object named on the command line (volume, points or mesh)."""
     from .mesh.volumes import read_object
@@ -61,14 +73,15 @@ def load_input(args):
     if path.suffix.lower() in MESH_SUFFIXES:
         from .mesh.voxelize import voxelize_file
 
+        if args.label is not None:
+            raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
         with progress_bar(args, "voxelize") as show:
             return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
                                  progress=show)
     if args.pitch is not None or args.resolution is not None or args.allow_open:
         raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
-    if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
-        raise IsoflowError(f"{path}: only 'isoflow info' reads .zarr (block by block); save the volume as .npy or .npz")
-    return read_object(path, points_are=args.points_are)
+    # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
+    return read_object(args.input, points_are=args.points_are, label=args.label)
 
 
 # --------------------------------------------------------------------------
@@ -79,17 +92,19 @@ def load_input(args):
 def cmd_info(args) -> int:
     from .digital.analysis import analyze
 
-    if Path(args.input).suffix.lower() == ".zarr":
+    from .mesh.formats.registry import split_dataset
+
+    if split_dataset(args.input)[0].suffix.lower() == ".zarr":
         # out of core: block by block, never the whole volume in memory; the
         # closed surfaces need the whole boundary mesh and are not computed
-        from .digital.outofcore import analyze_zarr
+        from .mesh.formats.omezarr import analyze_store
 
         if args.pitch is not None or args.resolution is not None or args.allow_open:
             raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         with progress_bar(args, "blocks") as show:
-            report = analyze_zarr(args.input, args.connectivity, progress=show)
+            report = analyze_store(args.input, args.connectivity, label=args.label, progress=show)
         if report["dimension"] == 3:
             report["surfaces"] = None
     else:
@@ -195,15 +210,14 @@ def cmd_surface(args) -> int:
 
 
 def cmd_voxelize(args) -> int:
-    from .mesh.outputs import check_output_path
-    from .mesh.volumes import write_volume
+    from .mesh.volumes import check_volume_output, write_volume
     from .mesh.voxelize import voxelize_file
 
-    out = check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
+    check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
     with progress_bar(args, "voxelize") as show:
         obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
                             progress=show)
-    write_volume(obj, out, force=args.force)
+    out = write_volume(obj, args.output, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
     return 0
@@ -287,10 +301,14 @@ def cmd_flow(args) -> int:
     # files are written while the flow runs, so no state is kept in memory
     # (every state of a box of side s would cost about s^4/4 bytes)
     writer = None
+    if args.volumes and not args.out:
+        raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
     if args.out:
         last = args.steps if args.steps is not None else default_max_steps(obj)
         conn = flow_connectivity(obj.ndim, args.connectivity)
         writer = FlowWriter(args.out, conn, args.force, last_step=last)
+        if args.volumes:
+            writer.write_volumes(args.volumes)
         writer.add(0, obj.cropped())
     with progress_bar(args, "flow", unit=" steps") as show:
 
@@ -309,7 +327,8 @@ def cmd_flow(args) -> int:
         return 0
     print(format_flow(result, str(args.input)))
     if args.out:
-        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)")
+        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
+              + (f", volumes (step_*{args.volumes})" if args.volumes else ""))
     return 0
 
 
@@ -424,12 +443,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
 
-    p = add_command(sub, "voxelize", "voxelise a mesh's solid into an .npz volume (with pitch and origin)")
+    p = add_command(sub, "voxelize", "voxelise a mesh's solid into a volume file (with pitch and origin)")
     p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
     grid = p.add_mutually_exclusive_group(required=True)
     grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
     grid.add_argument("--resolution", type=int, help="voxels along the longest side")
-    p.add_argument("-o", "--output", required=True, help="OUT.npz")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox, .zarr)")
     p.add_argument("--allow-open", action="store_true",
                    help="voxelise a mesh with holes by the generalised winding number (slow: small grids only)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
@@ -448,6 +468,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
     p.add_argument("--guard", action="store_true", help="refuse steps that change the Betti numbers (Theorem 21)")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv, flow.png and shapes.png into DIR")
+    p.add_argument("--volumes", metavar="SUFFIX",
+                   help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)
@@ -484,13 +506,28 @@ def quiet_stderr(quiet: bool):
 
 
 def main(argv: list[str] | None = None) -> int:
+    import warnings
+
+    from .errors import IsoflowWarning
+
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:  # `isoflow` alone: what it can do, not an error
         print(command_list(parser))
         return 0
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, IsoflowWarning):  # one line, without the source line
+            print(f"isoflow {args.command}: warning: {message}", file=sys.stderr)
+        else:
+            shown(message, category, filename, lineno, file, line)
+
     try:
-        with quiet_stderr(args.quiet):
+        with quiet_stderr(args.quiet), warnings.catch_warnings():
+            shown = warnings.showwarning
+            if not args.quiet:
+                warnings.simplefilter("always", IsoflowWarning)
+                warnings.showwarning = show
             return args.func(args)
     except IsoflowError as exc:
         print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)

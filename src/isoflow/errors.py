@@ -8,3 +8,9 @@ value) so that nobody has to read a traceback from inside numpy.
 
 class IsoflowError(ValueError):
     """Bad input: a missing or unreadable file, an empty or open mesh, ..."""
+
+
+class IsoflowWarning(UserWarning):
+    """Something a user should know that is not an error: a file format that
+    cannot keep the voxel size, an affine's rotation left out. The command
+    line prints it as one ``warning:`` line."""

@@ -7,10 +7,13 @@ cubes. Here it is a boolean array plus where that array sits:
 * ``parity``: 0 on the lattice Z^n, 1 on the dual lattice Z^n + e/2 (eq. 5.1),
   which every step of the digital curvature flow switches;
 * ``pitch`` and ``origin``: world coordinates, so that an object voxelised
-  from a mesh exports back onto the mesh.
+  from a mesh exports back onto the mesh. ``pitch`` is one number, or one
+  per axis for anisotropic voxels (a CT scan's 0.5 x 0.5 x 2 mm); the
+  digital topology never looks at it, the exported coordinates do.
 
 Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
-``offset + v + parity/2`` and world coordinates ``origin + pitch * (that)``.
+``offset + v + parity/2`` and world coordinates ``origin + pitch * (that)``
+(per axis when ``pitch`` is a vector).
 """
 
 from __future__ import annotations
@@ -33,7 +36,7 @@ class DigitalObject:
     volume: np.ndarray
     offset: tuple[int, ...] = None  # type: ignore[assignment]
     parity: int = 0
-    pitch: float = 1.0
+    pitch: float | np.ndarray = 1.0
     origin: np.ndarray = field(default=None)  # type: ignore[assignment]
 
     def __post_init__(self):
@@ -51,10 +54,7 @@ class DigitalObject:
         if parity not in (0, 1):
             raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {parity!r}")
         object.__setattr__(self, "parity", int(parity))
-        pitch = _field(self.pitch, "pitch", None)
-        if not pitch > 0:
-            raise IsoflowError(f"'pitch' must be a positive number, got {pitch!r}")
-        object.__setattr__(self, "pitch", float(pitch))
+        object.__setattr__(self, "pitch", _pitch(self.pitch, n))
 
     # ------------------------------------------------------------ builders
     @classmethod
@@ -105,9 +105,14 @@ class DigitalObject:
         """Lattice coordinates of points given in array-corner units."""
         return np.asarray(array_points, float) + np.array(self.offset) + 0.5 * self.parity
 
+    @property
+    def spacing(self) -> np.ndarray:
+        """The voxel size along each axis (``pitch`` as a vector)."""
+        return np.broadcast_to(np.asarray(self.pitch, np.float64), (self.ndim,)).copy()
+
     def world(self, array_points: np.ndarray) -> np.ndarray:
         """World coordinates of points given in array-corner units."""
-        return self.origin + self.pitch * self.lattice_coordinates(array_points)
+        return self.origin + self.spacing * self.lattice_coordinates(array_points)
 
     def bbox(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World [min corner, max corner] of the object's voxels; None if empty."""
@@ -141,7 +146,7 @@ class DigitalObject:
     def __repr__(self) -> str:
         return (
             f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
-            f"offset={self.offset}, parity={self.parity}, pitch={self.pitch}, "
+            f"offset={self.offset}, parity={self.parity}, pitch={np.round(self.pitch, 12).tolist()}, "
             f"origin={self.origin.tolist()})"
         )
 
@@ -190,6 +195,27 @@ def _check_grid(lo, hi, count: int, what: str, bytes_per_voxel: int) -> None:
         f"a {'x'.join(map(str, extents))} grid for {count} {what} from {tuple(map(int, lo))} to {tuple(map(int, hi))}",
         hint="check for stray or far-apart points",
     )
+
+
+def _pitch(value, ndim: int):
+    """A positive float, or a vector of ``ndim`` positive floats (a
+    read-only array) when the voxels are anisotropic; a vector whose entries
+    are all equal becomes one number, so that isotropic stays a scalar."""
+    arr = np.asarray(value)
+    if arr.dtype.kind in "biuf" and arr.size == 1 and arr.ndim <= 1:
+        pitch = _field(arr.reshape(()), "pitch", None)
+    else:
+        pitch = _field(value, "pitch", ndim)
+    if not np.all(np.asarray(pitch) > 0):
+        shown = np.asarray(pitch).tolist()
+        raise IsoflowError(f"'pitch' must be positive (one number, or one per axis), got {shown!r}")
+    if np.ndim(pitch) == 0:
+        return float(pitch)
+    if np.all(pitch == pitch[0]):
+        return float(pitch[0])
+    pitch = pitch.copy()
+    pitch.flags.writeable = False
+    return pitch
 
 
 def _field(value, name: str, length: int | None, integral: bool = False, bound: float | None = None):

@@ -82,7 +82,8 @@ class FlowWriter:
             for old in [*out.glob("step_*.ply"), *(out / n for n in ("flow.csv", "flow.png", "shapes.png"))]:
                 if old.is_file():
                     old.unlink()
-        self.out, self.connectivity = out, connectivity
+        self.out, self.connectivity, self.force = out, connectivity, force
+        self.volume_suffix = None  # set by write_volumes
         self.width = max(3, len(str(last_step)))
         self.written: list = []
         self.frames: list = []  # (step, state), every `stride`-th step
@@ -98,6 +99,8 @@ class FlowWriter:
             if len(self.frames) > 2 * self.PANELS:
                 self.frames = self.frames[::2]
                 self.stride *= 2
+        if self.volume_suffix:
+            self.add_volume(step, state)
         if state.ndim != 3:
             return
         mesh = boundary_mesh(state.volume, self.connectivity)
@@ -105,6 +108,30 @@ class FlowWriter:
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
         export.write_ply(path, export.mesh_vertex_table(mesh, state), mesh.polygons(), force=True, comments=comments)
         self.written.append(path)
+
+    # ------------------------------------------------ per-step volumes (--volumes)
+    def write_volumes(self, suffix: str) -> None:
+        """Also write every non-empty step's volume as ``step_NNN{suffix}``
+        (any format :func:`isoflow.mesh.volumes.write_volume` writes, with
+        voxel size and origin; ``.npz`` keeps the lattice parity too).
+        Checked now, before the flow runs; with ``force`` the volumes an
+        earlier run left with that suffix are removed."""
+        import shutil
+
+        from ..mesh.volumes import check_volume_output
+
+        suffix = suffix if suffix.startswith(".") else "." + suffix
+        check_volume_output(self.out / f"step_{0:0{self.width}d}{suffix}", force=True)
+        if self.force:
+            for old in self.out.glob(f"step_*{suffix}"):
+                shutil.rmtree(old) if old.is_dir() else old.unlink()
+        self.volume_suffix = suffix
+
+    def add_volume(self, step: int, state: DigitalObject) -> None:
+        from ..mesh.volumes import write_volume
+
+        path = self.out / f"step_{step:0{self.width}d}{self.volume_suffix}"
+        self.written.append(write_volume(state, path, force=True))
 
     def finish(self, result: FlowResult, plot: bool = True) -> list:
         """Write flow.csv and the pictures; returns every path written."""

@@ -16,65 +16,98 @@ import numpy as np
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.arrays import binary
+from .formats.registry import RawVolume, format_for, split_dataset, volume_suffixes
 from .outputs import check_output_path
 
-VOLUME_SUFFIXES = (".npy", ".npz")
+#: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
+VOLUME_SUFFIXES = volume_suffixes()
 POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
 
 
-def _check_readable(path: Path) -> None:
+def _check_readable(path: Path, directory_ok: bool = False) -> None:
     if not path.exists():
         raise IsoflowError(f"{path}: no such file")
     if path.is_dir():
-        if path.suffix != ".zarr":
+        if not directory_ok:
             raise IsoflowError(f"{path}: is a directory, not a volume or point list")
     elif not path.is_file():
         # a device or FIFO would be read until memory runs out (/dev/zero)
         raise IsoflowError(f"{path}: not a regular file (a device, pipe or socket)")
 
 
-def read_volume(path: str | os.PathLike) -> DigitalObject:
-    """A 2D or 3D volume from ``.npy`` or ``.npz``.
+def is_volume(path) -> bool:
+    """Whether ``path`` (``FILE.h5:/dataset`` too) names a volume file by its suffix."""
+    return format_for(split_dataset(path)[0]) is not None
+
+
+def read_volume(path: str | os.PathLike, label: int | float | None = None) -> DigitalObject:
+    """A 2D, 3D (or 4D) volume from any format of :mod:`isoflow.mesh.formats`,
+    with its voxel size and origin where the format has them.
+
+    ``path`` may name a dataset inside the file: ``FILE.h5:/group/volume``,
+    ``IMAGE.zarr:1`` (an OME-Zarr resolution level). The volume must hold
+    0/1 values; a label image is refused unless ``label`` selects one value
+    (its voxels become the object). MagicaVoxel colours are not labels: any
+    coloured voxel is in the object unless ``label`` picks one colour index.
 
     An ``.npz`` written by :func:`write_volume` carries ``volume`` plus its
     ``offset``, ``parity``, ``pitch`` and ``origin``; any other ``.npz`` must
     hold exactly one array (or one named ``volume``).
     """
-    path = Path(path)
-    _check_readable(path)
-    meta: dict = {}
-    try:
-        loaded = np.load(path, allow_pickle=False)
-        # trust the content, not the name: an .npz may be called .npy or .NPZ
-        if isinstance(loaded, np.lib.npyio.NpzFile):
-            with loaded as z:
-                names = list(z.files)
-                if "volume" in names:
-                    arr = z["volume"]
-                    for key in ("offset", "parity", "pitch", "origin"):
-                        if key in names:
-                            meta[key] = z[key]
-                elif len(names) == 1:
-                    arr = z[names[0]]
-                else:
-                    raise IsoflowError(
-                        f"{path}: holds arrays {names}; name the volume 'volume'"
-                    )
-        elif isinstance(loaded, np.ndarray):
-            arr = loaded
-        else:
-            raise IsoflowError(f"{path}: not a numpy array or archive ({type(loaded).__name__})")
-    except IsoflowError:
-        raise
-    except Exception as exc:  # numpy raises several types for a bad file
-        raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
+    file, dataset = split_dataset(path)
+    fmt = format_for(file)
+    if fmt is None:
+        raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
+    _check_readable(file, directory_ok=fmt.module == "omezarr")
+    if dataset is not None and not fmt.datasets:
+        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5 and zarr")
+    raw = fmt.load().read(file, dataset)
+    return as_object(raw, str(path), label)
+
+
+def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
+    """The DigitalObject of what a format reader found: one label selected,
+    or the 0/1 check (``binary``), and the metadata checked."""
+    arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3, 4):
-        raise IsoflowError(f"{path}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
-    vol = binary(arr, str(path))
+        raise IsoflowError(f"{where}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
+    if label is not None:
+        vol = select_label(arr, label, where)
+    elif raw.paint:
+        vol = arr != 0
+    else:
+        if arr.dtype == np.uint8 and arr.size and arr.max() <= 1:
+            arr = arr.view(np.bool_)  # a 0/1 mask, as every format is written: no comparisons, no copy
+        try:
+            vol = binary(arr, where)
+        except IsoflowError as exc:
+            if "threshold it first" not in str(exc):
+                raise
+            raise IsoflowError(f"{exc}, or select one label with --label N (label=N)") from None
+    # a format stored (z, y, x) comes back turned, in Fortran order: the
+    # kernels run about five times faster on C order than on that view
+    vol = np.ascontiguousarray(vol)
+    meta = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
-        return DigitalObject(vol, **meta)
+        return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
-        raise IsoflowError(f"{path}: {exc}") from None
+        raise IsoflowError(f"{where}: {exc}") from None
+
+
+def select_label(array, label, where: str) -> np.ndarray:
+    """The voxels of ``array`` equal to ``label``; an error listing the
+    values present when there are none."""
+    arr = np.asarray(array)
+    if arr.dtype.kind not in "biuf":
+        raise IsoflowError(f"{where}: array of type {arr.dtype} holds no labels")
+    if not np.isscalar(label) or isinstance(label, (str, bytes)) or not np.isfinite(label):
+        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+    vol = arr == label
+    if not vol.any():
+        values = np.unique(arr)
+        shown = ", ".join(f"{v:g}" for v in values[:20]) + (", ..." if len(values) > 20 else "")
+        raise IsoflowError(f"{where}: no voxel has label {label:g} (values present: {shown})")
+    return vol
 
 
 _SPLIT = re.compile(r"[,\s]+")
@@ -125,17 +158,20 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     return np.array(rows, dtype=np.int64)
 
 
-def read_object(path: str | os.PathLike, points_are: str = "corners") -> DigitalObject:
-    """A digital object from a volume file or a point list.
+def read_object(path: str | os.PathLike, points_are: str = "corners", label=None) -> DigitalObject:
+    """A digital object from a volume file (any format of :func:`read_volume`,
+    ``label`` selecting one value of a label image) or a point list.
 
     ``points_are='corners'`` reads a point list with the paper's point model
     (Definitions 1-2); ``'voxels'`` takes each point as a voxel index.
     """
-    path = Path(path)
     if points_are not in ("corners", "voxels"):
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {points_are!r}")
-    if path.suffix.lower() in VOLUME_SUFFIXES:
-        return read_volume(path)
+    if is_volume(path):
+        return read_volume(path, label=label)
+    path = Path(path)
+    if label is not None:
+        raise IsoflowError(f"{path}: a label selects voxels of a volume, not of a point list")
     pts = read_points(path)
     try:
         if points_are == "voxels":
@@ -146,17 +182,32 @@ def read_object(path: str | os.PathLike, points_are: str = "corners") -> Digital
 
 
 
+def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[Path, str | None]:
+    """The file (and dataset) a volume will be written to, checked before
+    any work: a suffix isoflow writes, its library installed, the path free
+    (or ``force``). Returns ``(file, dataset)``."""
+    file, dataset = split_dataset(path)
+    fmt = format_for(file, writing=True)
+    if fmt is None:
+        raise IsoflowError(f"{path}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+    if dataset is not None and not fmt.datasets:
+        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5 and zarr")
+    fmt.require()  # a missing library fails before anything is written
+    # a zarr store is a directory: its module checks (and with force clears) it
+    getattr(fmt.load(), "check_output", check_output_path)(file, force)
+    return file, dataset
+
+
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
-    """Save an object as ``.npz`` with its offset, parity, pitch and origin."""
-    path = Path(path)
-    check_output_path(path, force)
-    with open(path, "wb") as fh:
-        np.savez_compressed(
-            fh,
-            volume=obj.volume,
-            offset=np.array(obj.offset, np.int64),
-            parity=np.int64(obj.parity),
-            pitch=np.float64(obj.pitch),
-            origin=obj.origin,
-        )
-    return path
+    """Save an object in the format its suffix names (``FILE.h5:/dataset``
+    for a dataset inside a new HDF5 file), with its voxel size and origin
+    where the format has room for them; a warning says what a format cannot
+    keep. Refuses an existing file unless ``force``. Returns the file's path.
+
+    ``.npz`` keeps everything (offset and parity too); the other formats
+    keep the world position of every voxel (see the README's table).
+    """
+    obj = DigitalObject.of(obj)
+    file, dataset = check_volume_output(path, force)
+    format_for(file, writing=True).load().write(file, obj, dataset)
+    return file

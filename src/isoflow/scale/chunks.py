@@ -86,9 +86,17 @@ def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
 
 
 
-def open_zarr(path) -> "object":
-    """The volume array of a zarr store: the array at ``path``, or in a group
-    its array named ``volume`` or its only array."""
+def open_zarr(path, level: str | None = None) -> "object":
+    """The volume array of a zarr store: the array at ``path``; in an
+    OME-Zarr image (a group with NGFF ``multiscales``) its first resolution
+    level, or ``level`` (a dataset path such as ``'1'``, or an index); in any
+    other group its array named ``volume`` or its only array."""
+    return open_zarr_node(path, level)[0]
+
+
+def open_zarr_node(path, level: str | None = None) -> tuple:
+    """``(array, multiscales entry or None, that level's dataset entry or
+    None)`` of a zarr store, chosen as :func:`open_zarr` says."""
     zarr = import_zarr()
     path = Path(path)
     if not path.exists():
@@ -99,16 +107,47 @@ def open_zarr(path) -> "object":
         raise IsoflowError(
             f"{path}: not a zarr array or group ({exc.__class__.__name__}: {exc})"
         ) from None
-    if isinstance(node, zarr.Group):
-        arrays = dict(node.arrays())
-        if "volume" in arrays:
-            node = arrays["volume"]
-        elif len(arrays) == 1:
-            node = next(iter(arrays.values()))
-        elif not arrays:
-            raise IsoflowError(f"{path}: a zarr group without arrays")
+    if not isinstance(node, zarr.Group):
+        if level is not None:
+            raise IsoflowError(f"{path}: a zarr array has no resolution level {level!r}")
+        return node, None, None
+    multiscale = ome_multiscales(node.attrs)
+    if multiscale is not None:
+        datasets = [d for d in multiscale.get("datasets") or [] if isinstance(d, dict)]
+        paths = [str(d.get("path")) for d in datasets]
+        if level is None and paths:
+            i = 0
+        elif level in paths:
+            i = paths.index(level)
+        elif level is not None and level.isdigit() and int(level) < len(paths):
+            i = int(level)
         else:
-            raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name the volume 'volume'")
-    return node
+            raise IsoflowError(f"{path}: no resolution level {level!r} in the OME-Zarr image (levels: {paths})")
+        try:
+            array = node[paths[i]]
+        except Exception as exc:
+            raise IsoflowError(f"{path}: OME-Zarr level {paths[i]!r} cannot be opened ({exc.__class__.__name__})") from None
+        return array, multiscale, datasets[i]
+    if level is not None:
+        raise IsoflowError(f"{path}: not an OME-Zarr image (no 'multiscales'), so it has no level {level!r}")
+    arrays = dict(node.arrays())
+    if "volume" in arrays:
+        node = arrays["volume"]
+    elif len(arrays) == 1:
+        node = next(iter(arrays.values()))
+    elif not arrays:
+        raise IsoflowError(f"{path}: a zarr group without arrays")
+    else:
+        raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name the volume 'volume'")
+    return node, None, None
 
 
+def ome_multiscales(attrs) -> dict | None:
+    """The first ``multiscales`` entry of a group's attributes: at the top in
+    OME-Zarr (NGFF) 0.4 and before, under ``ome`` in 0.5; None if absent."""
+    attrs = dict(attrs)
+    ome = attrs.get("ome")
+    found = attrs.get("multiscales") or (ome.get("multiscales") if isinstance(ome, dict) else None)
+    if isinstance(found, list) and found and isinstance(found[0], dict):
+        return found[0]
+    return None

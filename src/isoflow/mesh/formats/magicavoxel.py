@@ -1,0 +1,100 @@
+"""MagicaVoxel ``.vox`` (read and written here: a RIFF-like chunk file).
+
+Axes: a model's ``SIZE`` is (x, y, z), z up, and each ``XYZI`` voxel has
+its (x, y, z) and a colour index 1-255; voxel ``(x, y, z)`` of isoflow's
+array is that voxel. Colours are paint, not labels: every coloured voxel is
+in the object, or one colour index with ``--label``. A file with several
+models (a scene) is refused: isoflow reads one model. MagicaVoxel has no
+voxel size or origin (1 and 0 on reading; a warning when writing an object
+that has others) and models of at most 256 voxels a side.
+
+Written as version 150 with one model, every voxel colour index 1 (the
+default palette's white), which MagicaVoxel and the other .vox readers open.
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from .registry import RawVolume, note, placement, reading
+
+MAX_SIDE = 256
+VERSION = 150
+
+
+def _chunks(data: bytes, start: int, end: int, where: str):
+    """(id, content bytes, children start, children end) of the chunks in data[start:end]."""
+    pos = start
+    while pos < end:
+        if pos + 12 > end:
+            raise IsoflowError(f"{where}: truncated .vox chunk header at byte {pos}")
+        cid, n, m = data[pos:pos + 4], *struct.unpack_from("<ii", data, pos + 4)
+        body = pos + 12
+        if n < 0 or m < 0 or body + n + m > end:
+            raise IsoflowError(f"{where}: .vox chunk {cid!r} at byte {pos} runs past the end of the file")
+        yield cid, data[body:body + n], body + n, body + n + m
+        pos = body + n + m
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    where = str(path)
+    with reading(path, "MagicaVoxel"):
+        data = path.read_bytes()
+    if data[:4] != b"VOX " or len(data) < 20:
+        raise IsoflowError(f"{where}: not a MagicaVoxel file (it does not start with 'VOX ')")
+    main = next(_chunks(data, 8, len(data), where))
+    if main[0] != b"MAIN":
+        raise IsoflowError(f"{where}: .vox without a MAIN chunk (found {main[0]!r})")
+    sizes, models = [], []
+    for cid, content, _, _ in _chunks(data, main[2], main[3], where):
+        if cid == b"SIZE":
+            sizes.append(struct.unpack_from("<3i", content))
+        elif cid == b"XYZI":
+            (count,) = struct.unpack_from("<i", content)
+            if count < 0 or 4 + 4 * count > len(content):
+                raise IsoflowError(f"{where}: .vox XYZI chunk says {count} voxels in {len(content)} bytes")
+            models.append(np.frombuffer(content, np.uint8, 4 * count, 4).reshape(count, 4))
+    if not models or len(sizes) != len(models):
+        raise IsoflowError(f"{where}: .vox has {len(sizes)} SIZE and {len(models)} XYZI chunks; expected one model")
+    if len(models) > 1:
+        raise IsoflowError(f"{where}: a scene of {len(models)} models; isoflow reads a .vox with one model "
+                           "(export each model on its own)")
+    size, xyzi = sizes[0], models[0]
+    if min(size) < 0 or max(size) > MAX_SIDE:
+        raise IsoflowError(f"{where}: .vox model size {size} (MagicaVoxel models are 0-{MAX_SIDE} a side)")
+    vol = np.zeros(size, np.uint8)
+    xyz = xyzi[:, :3].astype(np.int64)
+    if len(xyz) and (xyz >= np.array(size)).any():
+        raise IsoflowError(f"{where}: .vox voxel {xyz[(xyz >= np.array(size)).any(1)][0].tolist()} "
+                           f"lies outside the model's size {size}")
+    vol[tuple(xyz.T)] = xyzi[:, 3]
+    return RawVolume(vol, paint=True)
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    if obj.ndim != 3:
+        raise IsoflowError(f"{path}: MagicaVoxel holds 3D models, this object is {obj.ndim}D")
+    if max(obj.volume.shape, default=0) > MAX_SIDE:
+        raise IsoflowError(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
+                           f"{'x'.join(map(str, obj.volume.shape))}; voxelise it coarser (--resolution {MAX_SIDE})")
+    spacing, corner = placement(obj)
+    if (spacing != 1).any() or corner.any():
+        note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "
+             f"and origin {np.round(corner, 9).tolist()} are not written")
+    xyz = np.argwhere(obj.volume).astype(np.uint8)
+    xyzi = np.column_stack([xyz, np.ones(len(xyz), np.uint8)]) if len(xyz) else np.zeros((0, 4), np.uint8)
+    size = struct.pack("<3i", *obj.volume.shape)
+    voxels = struct.pack("<i", len(xyzi)) + xyzi.tobytes()
+    children = _chunk(b"SIZE", size) + _chunk(b"XYZI", voxels)
+    with open(path, "wb") as fh:
+        fh.write(b"VOX " + struct.pack("<i", VERSION))
+        fh.write(b"MAIN" + struct.pack("<ii", 0, len(children)) + children)
+
+
+def _chunk(cid: bytes, content: bytes) -> bytes:
+    return cid + struct.pack("<ii", len(content), 0) + content

@@ -1,0 +1,72 @@
+"""NIfTI-1 and NIfTI-2, ``.nii`` and ``.nii.gz`` (nibabel).
+
+Axes: the data array's axes (i, j, k) are placed by the image's affine
+(nibabel's ``img.affine``: the sform, else the qform), which maps a voxel's
+*centre* index to world (scanner) coordinates, usually RAS+ millimetres.
+isoflow turns the array so that axis 0 runs along world x, 1 along y, 2
+along z, each with a positive step (:mod:`isoflow.mesh.formats.affine`:
+flips and permutations are exact, a rotation or shear is kept as its axis-
+aligned part with a warning). A fourth axis of length 1 is dropped; a 4D
+image is read as 4D (``info`` only) with voxel size 1 along the fourth axis.
+
+Written as NIfTI-1 (uint8 0/1) with a diagonal affine (the voxel sizes)
+whose translation is voxel 0's centre, sform and qform code 1 (scanner).
+NIfTI stores the affine in float32: pitch and origin are kept to float32
+precision.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from .affine import axis_aligned, centre_affine
+from .registry import RawVolume, check_shape, import_library, placement, reading
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    nib = import_library("nibabel", "NIfTI")
+    where = str(path)
+    with reading(path, "NIfTI"):
+        img = nib.load(path)
+        if not isinstance(img, (nib.Nifti1Image, nib.Nifti2Image)):
+            raise IsoflowError(f"{where}: not a NIfTI image ({type(img).__name__})")
+        shape = img.shape
+        check_shape(shape, img.get_data_dtype(), where)
+        data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
+        affine = np.asarray(img.affine, np.float64)
+    while data.ndim > 3 and data.shape[-1] == 1:
+        data = data[..., 0]
+    if data.ndim not in (2, 3, 4):
+        raise IsoflowError(f"{where}: a volume must be 2D, 3D or 4D, this image has shape {tuple(data.shape)}")
+    spatial = min(data.ndim, 3)  # the affine places the first three axes; time keeps step 1
+    vol, pitch, origin = axis_aligned(data, affine[:3, :spatial], affine[:3, 3], where)
+    if data.ndim == 4:
+        pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
+    return RawVolume(vol, pitch, origin)
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    nib = import_library("nibabel", "NIfTI")
+    spacing, corner = placement_3d(obj)
+    steps, centre0 = centre_affine(spacing, corner)
+    affine = np.eye(4)
+    n = len(spacing)
+    affine[:n, :n] = steps
+    affine[:n, 3] = centre0
+    img = nib.Nifti1Image(obj.volume.astype(np.uint8), affine)
+    img.set_sform(affine, code=1)
+    img.set_qform(affine, code=1)
+    img.header.set_xyzt_units("unknown")
+    nib.save(img, path)
+
+
+def placement_3d(obj: DigitalObject):
+    """Voxel size and corner origin of the spatial axes (at most three)."""
+    spacing, corner = placement(obj)
+    if obj.ndim == 4:
+        return spacing[:3], corner[:3]
+    return spacing, corner

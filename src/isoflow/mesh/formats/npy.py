@@ -1,0 +1,64 @@
+"""NumPy ``.npy`` and ``.npz``: isoflow's own format.
+
+The array's axes are isoflow's (axis 0 is x). An ``.npz`` written by isoflow
+carries ``volume`` plus ``offset``, ``parity``, ``pitch`` (one number or one
+per axis) and ``origin``, so that it round-trips exactly, the lattice parity
+of a flow's step included; any other ``.npz`` must hold exactly one array
+(or one named ``volume``). A ``.npy`` holds the array alone.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from .registry import RawVolume, note
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    meta: dict = {}
+    try:
+        loaded = np.load(path, allow_pickle=False)
+        # trust the content, not the name: an .npz may be called .npy or .NPZ
+        if isinstance(loaded, np.lib.npyio.NpzFile):
+            with loaded as z:
+                names = list(z.files)
+                if "volume" in names:
+                    arr = z["volume"]
+                    for key in ("offset", "parity", "pitch", "origin"):
+                        if key in names:
+                            meta[key] = z[key]
+                elif len(names) == 1:
+                    arr = z[names[0]]
+                else:
+                    raise IsoflowError(f"{path}: holds arrays {names}; name the volume 'volume'")
+        elif isinstance(loaded, np.ndarray):
+            arr = loaded
+        else:
+            raise IsoflowError(f"{path}: not a numpy array or archive ({type(loaded).__name__})")
+    except IsoflowError:
+        raise
+    except Exception as exc:  # numpy raises several types for a bad file
+        raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
+    return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0))
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    with open(path, "wb") as fh:
+        if path.name.lower().endswith(".npy"):
+            if np.any(obj.spacing != 1.0) or obj.origin.any() or any(obj.offset) or obj.parity:
+                note(f"{path}: a .npy holds the array alone; pitch, origin, offset and parity are not kept "
+                     "(use .npz to keep them)")
+            np.save(fh, obj.volume)
+            return
+        np.savez_compressed(
+            fh,
+            volume=obj.volume,
+            offset=np.array(obj.offset, np.int64),
+            parity=np.int64(obj.parity),
+            pitch=np.asarray(obj.pitch, np.float64),
+            origin=obj.origin,
+        )

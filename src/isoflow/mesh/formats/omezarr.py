@@ -1,0 +1,171 @@
+"""OME-Zarr (NGFF 0.1-0.5) and plain zarr stores (zarr-python).
+
+An OME-Zarr image is a zarr group whose ``multiscales`` metadata lists its
+resolution levels; ``IMAGE.zarr`` reads the first (full) level and
+``IMAGE.zarr:1`` the level whose path is ``1`` (or the level of that index).
+Axes are matched by name: x, y, z go to isoflow's axes 0, 1, 2, whatever
+order the file stores them in (NGFF stores z, y, x); a time or channel axis
+must have length 1. The level's ``coordinateTransformations`` (scale, then
+translation, then those of the whole image) place voxel *centres*, as napari
+and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
+corner is the translation less half a voxel. A zarr store without
+``multiscales`` is read as before: the array at the path, or a group's array
+named ``volume`` or its only array, axes as stored (axis 0 is x), no
+placement.
+
+``isoflow info`` reads a zarr store block by block (:func:`analyze_store`);
+the other commands read the level into memory, refused up front when it
+would not fit.
+
+Written as NGFF 0.4 (zarr format 2, which the most viewers read): one level
+``0`` of uint8 0/1 in (z, y, x) order, chunks of at most 128 a side, with
+the scale and translation that put every voxel where it was.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from ...scale.chunks import open_zarr_node
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    placement,
+    reading,
+    spatial_axes,
+    split_dataset,
+    to_xyz,
+)
+
+CHUNK = 128
+NGFF_VERSION = "0.4"
+
+
+def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
+    """The level's axis names; NGFF 0.1-0.2 had none and meant (t, c, z, y, x)."""
+    axes = multiscale.get("axes")
+    if axes is None:
+        names = list("tczyx"[-ndim:]) if ndim <= 5 else []
+    else:
+        names = [str(a.get("name")) if isinstance(a, dict) else str(a) for a in axes]
+    if len(names) != ndim:
+        raise IsoflowError(f"{where}: OME-Zarr axes {names} do not fit a {ndim}D array")
+    return [n.lower() for n in names]
+
+
+def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """(scale, translation) per stored axis: the level's transformations,
+    then the image's."""
+    scale, shift = np.ones(ndim), np.zeros(ndim)
+    steps = list(dataset.get("coordinateTransformations") or []) + list(
+        multiscale.get("coordinateTransformations") or [])
+    for t in steps:
+        kind = t.get("type") if isinstance(t, dict) else None
+        if kind == "identity":
+            continue
+        values = t.get(kind) if kind in ("scale", "translation") else None
+        if values is None or len(values) != ndim:
+            raise IsoflowError(f"{where}: OME-Zarr coordinate transformation {t} is not a scale or "
+                               f"translation of {ndim} numbers (isoflow does not read transformations by path)")
+        values = np.asarray(values, np.float64)
+        if kind == "scale":
+            scale, shift = scale * values, shift * values
+        else:
+            shift = shift + values
+    return scale, shift
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    import_library("zarr", "OME-Zarr")
+    where = str(path) if dataset is None else f"{path}:{dataset}"
+    array, multiscale, level = open_zarr_node(path, dataset)
+    check_shape(array.shape, array.dtype, where)
+    with reading(where, "zarr"):
+        data = np.asarray(array[...])
+    if multiscale is None:
+        return RawVolume(data)
+    names = axis_names(multiscale, data.ndim, where)
+    scale, shift = placement_of(multiscale, level, data.ndim, where)
+    xyz, _ = spatial_axes(names, data.shape, where)
+    pitch = scale[xyz]
+    return RawVolume(to_xyz(data, names, where), pitch, shift[xyz] - pitch / 2)
+
+
+def analyze_store(path, connectivity: int | None = None, label=None, progress=None) -> dict:
+    """``isoflow info``'s report of a zarr store (``IMAGE.zarr:LEVEL`` too),
+    block by block (:func:`isoflow.digital.outofcore.analyze_chunked`), with
+    ``shape`` in isoflow's (x, y, z) order. ``label`` selects one value;
+    ``progress(done, total)`` is called once per layer of blocks."""
+    from ...digital.outofcore import analyze_chunked, analyze_zarr
+    from ...scale.chunks import import_dask
+
+    import_library("zarr", "OME-Zarr")
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, _ = open_zarr_node(file, level)
+    if multiscale is None:
+        names, order, other = None, list(range(array.ndim)), []
+    else:
+        names = axis_names(multiscale, array.ndim, where)
+        order, other = spatial_axes(names, array.shape, where)
+    if label is None and not other:
+        report = analyze_zarr(file, connectivity, progress=progress) if multiscale is None and level is None else \
+            analyze_chunked(array, connectivity, where=where, progress=progress)
+    else:
+        _, da = import_dask()
+        lazy = da.from_zarr(array)[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+        if label is not None:
+            lazy = lazy == label
+        report = analyze_chunked(lazy, connectivity, where=where, progress=progress)
+    if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
+        report["shape"] = [int(array.shape[i]) for i in order]
+    return report
+
+
+def check_output(path, force: bool = False) -> Path:
+    """An output zarr store (a directory), checked before any work: refused
+    when it exists, unless ``force`` and it is a zarr store (which
+    :func:`write` replaces)."""
+    path = Path(path)
+    if not path.parent.is_dir():
+        raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
+    if path.exists() or path.is_symlink():
+        if not force:
+            raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+        is_store = any((path / m).exists() for m in (".zgroup", ".zarray", "zarr.json"))
+        if path.is_dir() and not path.is_symlink() and not is_store:
+            raise IsoflowError(f"{path}: a directory that is not a zarr store; not replaced")
+    return path
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    zarr = import_library("zarr", "OME-Zarr")
+    if dataset is not None:
+        raise IsoflowError(f"{path}:{dataset}: a level is named to read an OME-Zarr image; write to {path}")
+    if obj.ndim not in (2, 3):
+        raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D")
+    spacing, corner = placement(obj)
+    centre = corner + spacing / 2
+    names = "zyx"[3 - obj.ndim:]
+    data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (x, y, z) -> (z, y, x)
+    if path.is_dir() and not path.is_symlink():  # checked by check_output: an old store, --force given
+        shutil.rmtree(path)
+    elif path.exists() or path.is_symlink():
+        path.unlink()
+    root = zarr.open_group(str(path), mode="w", zarr_format=2)
+    root.create_array("0", data=data, chunks=tuple(max(1, min(s, CHUNK)) for s in data.shape))
+    root.attrs["multiscales"] = [{
+        "version": NGFF_VERSION,
+        "name": path.name,
+        "axes": [{"name": a, "type": "space"} for a in names],
+        "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": spacing[::-1].tolist()},
+            {"type": "translation", "translation": centre[::-1].tolist()},
+        ]}],
+    }]

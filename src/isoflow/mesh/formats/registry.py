@@ -1,0 +1,195 @@
+"""Which module reads and writes which volume format, chosen by suffix.
+
+Every format module has ``read(path, dataset) -> RawVolume`` and
+``write(path, obj, dataset)``; it imports its library
+only inside those functions, so ``import isoflow`` stays cheap and a missing
+library costs nothing until its suffix is used. :func:`isoflow.mesh.volumes.read_volume`
+and :func:`~isoflow.mesh.volumes.write_volume` dispatch through
+:func:`format_for`, so every command gets every format at once.
+
+A reader returns the array in isoflow's axis order (axis 0 is x, 1 is y, 2
+is z: what ``DigitalObject.world`` maps to world x, y, z), the voxel size per
+axis and the world position of voxel ``(0, 0, 0)``'s lowest corner; each
+module's docstring says how the format's own axes map to these.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError, IsoflowWarning
+
+#: the extra that brings every format library (pip install 'isoflow[formats]')
+EXTRA = "formats"
+
+
+@dataclass(frozen=True)
+class VolumeFormat:
+    """A volume format: its name, suffixes, module and library."""
+
+    name: str
+    suffixes: tuple[str, ...]
+    module: str  # under isoflow.mesh.formats
+    library: str | None  # the pip package it needs beyond isoflow's own dependencies
+    #: a path may name a dataset inside the file: FILE.h5:/group/volume
+    datasets: bool = False
+    #: the module the library installs, when it differs from the package name
+    imports: str | None = None
+    #: suffixes read but not written (a detached header needs a second file)
+    read_only: tuple[str, ...] = ()
+
+    def load(self):
+        """The format's module (its library is imported only when used)."""
+        return importlib.import_module(f"{__package__}.{self.module}")
+
+    def require(self):
+        """The format's library, or one line naming the extra that brings it."""
+        if self.library is not None:
+            return import_library(self.imports or self.library, self.name, self.library)
+        return None
+
+
+FORMATS = (
+    VolumeFormat("NumPy", (".npy", ".npz"), "npy", None),
+    VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile"),
+    VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
+    VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", imports="nrrd", read_only=(".nhdr",)),
+    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
+    VolumeFormat("binvox", (".binvox",), "binvox", None),
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None),
+    VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True),
+)
+
+
+def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
+    """Every volume suffix isoflow reads (or writes)."""
+    return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
+
+
+_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr)):(?P<dataset>[^:]*)$", re.IGNORECASE)
+
+
+def split_dataset(path) -> tuple[Path, str | None]:
+    """``FILE.h5:/group/volume`` -> (FILE.h5, '/group/volume'); ``IMG.zarr:1``
+    -> (IMG.zarr, '1'), a resolution level; any other path -> (path, None).
+
+    Only after an HDF5 or zarr suffix, so that ``C:\\data\\a.nii`` stays a path."""
+    text = str(path)
+    m = _DATASET.match(text)
+    if m is None:
+        return Path(text), None
+    return Path(m["file"]), (m["dataset"] or None)
+
+
+def format_for(path, writing: bool = False) -> VolumeFormat | None:
+    """The format of ``path`` by its suffix (longest match, any case); None
+    for what is not a volume (a point list, a mesh), or, ``writing``, not a
+    volume isoflow writes."""
+    name = Path(path).name.lower()
+    best = None
+    for f in FORMATS:
+        for s in f.suffixes:
+            if writing and s in f.read_only:
+                continue
+            if name.endswith(s) and (best is None or len(s) > len(best[1])):
+                best = (f, s)
+    return None if best is None else best[0]
+
+
+def import_library(module: str, fmt: str, package: str | None = None):
+    """``module`` imported, or one line naming the extra that brings it."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        raise IsoflowError(
+            f"{fmt} files need {package or module}: pip install 'isoflow[{EXTRA}]' ({exc})"
+        ) from None
+
+
+@contextlib.contextmanager
+def reading(path, what: str):
+    """Turn whatever a library raises on a damaged or foreign file into one
+    IsoflowError line naming the file and the format."""
+    try:
+        yield
+    except (IsoflowError, MemoryError):
+        raise
+    except Exception as exc:  # libraries raise many types for a bad file
+        detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        raise IsoflowError(
+            f"{path}: not a readable {what} file ({exc.__class__.__name__}{': ' + detail if detail else ''})"
+        ) from None
+
+
+@dataclass
+class RawVolume:
+    """What a reader found: the array in isoflow's (x, y, z) order and where
+    it sits. ``paint``: the values are colours, not labels, so any nonzero
+    voxel is in the object unless one value is selected (MagicaVoxel)."""
+
+    array: np.ndarray
+    pitch: float | np.ndarray = 1.0
+    origin: np.ndarray | None = None
+    offset: tuple[int, ...] | None = None
+    parity: int = 0
+    paint: bool = False
+
+
+def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
+    """(voxel size per axis, world position of array voxel 0's lowest
+    corner) of ``obj``: what formats without a lattice offset or parity
+    store, so that every voxel lands where it was."""
+    return obj.spacing, obj.world(np.zeros(obj.ndim))
+
+
+def check_shape(shape, dtype, where: str) -> None:
+    """Refuse, before reading, an array that will not fit in memory (the
+    file's array plus the boolean volume)."""
+    import math
+
+    from ...scale.memory import check_fits
+
+    voxels = math.prod(int(s) for s in shape)
+    check_fits(
+        voxels * (np.dtype(dtype).itemsize + 2),  # the file's array, the boolean volume, its C-ordered copy
+        f"{where}: a {'x'.join(map(str, shape))} volume of {np.dtype(dtype)}",
+        hint="crop it, or use a .zarr store with 'isoflow info' (read block by block)",
+    )
+
+
+def note(message: str) -> None:
+    """A one-line warning (metadata a format cannot keep, an affine's
+    rotation dropped); the command line prints it as ``warning: ...``."""
+    warnings.warn(message, IsoflowWarning, stacklevel=3)
+
+
+def spatial_axes(names, shape, where: str) -> tuple[list[int], list[int]]:
+    """Given the format's axis names (letters), the indices of x, y and z
+    (those present, in that order) and of the other axes, which must have
+    length 1 (a time point or channel among several is refused)."""
+    names = [n.lower() for n in names]
+    xyz = [names.index(a) for a in "xyz" if a in names]
+    other = [i for i in range(len(names)) if i not in xyz]
+    for i in other:
+        if shape[i] != 1:
+            raise IsoflowError(
+                f"{where}: axis '{names[i]}' has {shape[i]} entries (axes {''.join(names)}, shape "
+                f"{tuple(shape)}); isoflow reads one volume: save one time point or channel"
+            )
+    if len(xyz) < 2:
+        raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
+    return xyz, other
+
+
+def to_xyz(array: np.ndarray, names, where: str) -> np.ndarray:
+    """``array`` with axes named ``names`` (e.g. 'tczyx') as isoflow's (x, y, z)."""
+    xyz, other = spatial_axes(names, array.shape, where)
+    return np.transpose(array, xyz + other).reshape([array.shape[i] for i in xyz])

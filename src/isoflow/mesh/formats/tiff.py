@@ -1,0 +1,88 @@
+"""TIFF: single images and multi-page stacks (tifffile).
+
+Axes: a stack is read by tifffile as (pages, rows, columns) = (z, y, x) and
+turned into isoflow's (x, y, z): column ``i``, row ``j``, page ``k`` is voxel
+``(i, j, k)``; a single page is the 2D image (x, y). A stack without
+ImageJ's axis names (tifffile's 'Q' or 'I' axis) is taken as z; other axes
+(time, channels, RGB samples) must have length 1.
+
+Voxel size: x and y from the XResolution and YResolution tags (pitch =
+1 / pixels per unit, in the file's resolution unit) where present, z from
+ImageJ's ``spacing``; 1 where absent. TIFF has no origin (0 on reading; a
+warning when writing an object whose origin is not 0). Written as an ImageJ
+hyperstack of uint8 0/1 with those tags, so that Fiji opens it calibrated.
+Resolutions are rationals in TIFF: a pitch is kept to about 9 digits.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    note,
+    placement,
+    reading,
+    to_xyz,
+)
+
+X_RESOLUTION, Y_RESOLUTION = 282, 283
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    tifffile = import_library("tifffile", "TIFF")
+    where = str(path)
+    with reading(path, "TIFF"), _quiet(), tifffile.TiffFile(path) as tif:
+        if not tif.series:
+            raise IsoflowError(f"{where}: a TIFF without an image (damaged, or no pages)")
+        series = tif.series[0]
+        axes = list(series.axes.upper())
+        check_shape(series.shape, series.dtype, where)
+        data = series.asarray()
+        page = series.keyframe
+        res = [page.tags[t].value for t in (X_RESOLUTION, Y_RESOLUTION) if t in page.tags]
+        resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
+        spacing = (tif.imagej_metadata or {}).get("spacing")
+    if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
+        stack = [i for i, a in enumerate(axes) if a in "QIT" and data.shape[i] > 1]
+        if len(stack) == 1:
+            axes[stack[0]] = "Z"
+    names = ["x" if a == "X" else "y" if a == "Y" else "z" if a == "Z" else a for a in axes]
+    vol = to_xyz(data, names, where)
+    pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
+    if vol.ndim == 3:
+        pitch.append(float(spacing) if spacing else 1.0)
+    return RawVolume(vol, np.array(pitch))
+
+
+@contextlib.contextmanager
+def _quiet():
+    """tifffile logs what it finds wrong before raising: the error line says it."""
+    logger = logging.getLogger("tifffile")
+    disabled, logger.disabled = logger.disabled, True
+    try:
+        yield
+    finally:
+        logger.disabled = disabled
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    tifffile = import_library("tifffile", "TIFF")
+    if obj.ndim not in (2, 3):
+        raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
+    spacing, origin = placement(obj)
+    if origin.any():
+        note(f"{path}: TIFF keeps no origin; the origin {np.round(origin, 9).tolist()} is not written")
+    data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (z,) y, x
+    metadata = {"axes": "ZYX"[3 - obj.ndim:]}
+    if obj.ndim == 3:
+        metadata["spacing"] = float(spacing[2])
+    tifffile.imwrite(path, data, imagej=True, resolution=(1 / spacing[0], 1 / spacing[1]), metadata=metadata)

@@ -1,0 +1,343 @@
+"""Volume formats (issue 12): every format written by isoflow is read back
+by isoflow and by the format's own library with equal voxels, voxel size
+and origin; files written by the other tools are read with their placement.
+
+Volumes are small and seeded, with edge and vertex contacts (random fill).
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.digital.lattice import DigitalObject
+from isoflow.errors import IsoflowError, IsoflowWarning
+from isoflow.mesh.formats.registry import format_for, split_dataset
+
+
+@pytest.fixture
+def vol(rng):
+    v = rng.random((5, 6, 7)) < 0.45
+    v[0, 0, 0], v[1, 1, 1], v[1, 1, 0] = True, True, False  # a vertex contact
+    v[3, 0, 0], v[4, 1, 0], v[4, 0, 0], v[3, 1, 0] = True, True, False, False  # an edge contact
+    return v
+
+
+# values exact in float32 (NIfTI stores its affine in float32)
+PITCH = np.array([0.5, 0.25, 2.0])
+OFFSET, PARITY, ORIGIN = (1, -2, 3), 1, np.array([1.5, -2.0, 10.0])
+
+
+def placed(vol, pitch=PITCH):
+    return DigitalObject(vol, pitch=pitch, origin=ORIGIN, offset=OFFSET, parity=PARITY)
+
+
+def corner(obj):
+    """World position of array voxel 0's lowest corner."""
+    return obj.world(np.zeros(obj.ndim))
+
+
+def centre0(obj):
+    return corner(obj) + obj.spacing / 2
+
+
+def check_same_place(back, obj):
+    assert np.array_equal(back.volume, obj.volume)
+    np.testing.assert_allclose(back.spacing, obj.spacing, rtol=1e-12)
+    np.testing.assert_allclose(corner(back), corner(obj), rtol=1e-12, atol=1e-12)
+
+
+# --------------------------------------------------------------- registry
+
+@pytest.mark.parametrize("name, module", [
+    ("a.npy", "npy"), ("a.NPZ", "npy"), ("a.tif", "tiff"), ("a.TIFF", "tiff"), ("scan.nii.gz", "nifti"),
+    ("a.nii", "nifti"), ("a.nrrd", "nrrd"), ("a.nhdr", "nrrd"), ("a.h5", "hdf5"), ("a.hdf5", "hdf5"),
+    ("a.binvox", "binvox"), ("a.vox", "magicavoxel"), ("a.zarr", "omezarr"), ("a.ome.zarr", "omezarr"),
+])
+def test_suffix_finds_the_format(name, module):
+    assert format_for(name).module == module
+
+
+def test_points_and_meshes_are_no_volume_format():
+    assert format_for("p.txt") is None and format_for("m.stl") is None and format_for("a.gz") is None
+
+
+def test_dataset_syntax():
+    assert split_dataset("d/f.h5:/seg/mask") == (split_dataset("d/f.h5")[0], "/seg/mask")
+    assert split_dataset("img.ome.zarr:1")[1] == "1"
+    assert split_dataset("C:/data/scan.nii.gz")[1] is None  # a drive letter is no dataset
+
+
+# --------------------------------------------------------------- pitch as a 3-vector
+
+def test_vector_pitch_places_every_axis():
+    obj = DigitalObject(np.ones((2, 2, 2), bool), pitch=[0.5, 1, 3], origin=[1, 2, 3])
+    np.testing.assert_allclose(obj.world([[2, 2, 2]]), [[2.0, 4.0, 9.0]])
+    assert DigitalObject(obj.volume, pitch=[2, 2, 2]).pitch == 2.0  # isotropic stays a number
+    with pytest.raises(IsoflowError, match="'pitch'"):
+        DigitalObject(obj.volume, pitch=[1, 0, 1])
+
+
+def test_npz_keeps_a_vector_pitch(tmp_path, vol):
+    obj = placed(vol)
+    back = isoflow.read_volume(isoflow.write_volume(obj, tmp_path / "v.npz"))
+    assert back.offset == OFFSET and back.parity == PARITY
+    np.testing.assert_array_equal(back.pitch, PITCH)
+
+
+# --------------------------------------------------------------- written by isoflow, read by the library
+
+def test_tiff_round_trip(tmp_path, vol):
+    tifffile = pytest.importorskip("tifffile")
+    obj = placed(vol)
+    path = tmp_path / "v.tif"
+    with pytest.warns(IsoflowWarning, match="no origin"):
+        isoflow.write_volume(obj, path)
+    with tifffile.TiffFile(path) as tif:
+        assert np.array_equal(tif.asarray(), vol.transpose(2, 1, 0))  # pages, rows, columns = z, y, x
+        np.testing.assert_allclose(1 / np.array(tif.pages[0].get_resolution()), PITCH[:2])
+        assert tif.imagej_metadata["spacing"] == PITCH[2]
+    back = isoflow.read_volume(path)
+    assert np.array_equal(back.volume, vol)
+    np.testing.assert_allclose(back.pitch, PITCH)
+
+
+def test_nifti_round_trip(tmp_path, vol):
+    nib = pytest.importorskip("nibabel")
+    obj = placed(vol)
+    path = isoflow.write_volume(obj, tmp_path / "v.nii.gz")
+    img = nib.load(path)
+    assert np.array_equal(np.asanyarray(img.dataobj), vol)
+    np.testing.assert_allclose(img.header.get_zooms(), PITCH)
+    np.testing.assert_allclose(nib.affines.apply_affine(img.affine, [0, 0, 0]), centre0(obj))
+    check_same_place(isoflow.read_volume(path), obj)
+
+
+def test_nrrd_round_trip(tmp_path, vol):
+    nrrd = pytest.importorskip("nrrd")
+    obj = placed(vol, pitch=[0.1, 0.3, 0.7])  # NRRD's text header keeps float64 exactly
+    path = isoflow.write_volume(obj, tmp_path / "v.nrrd")
+    data, header = nrrd.read(str(path), index_order="F")
+    assert np.array_equal(data, vol)
+    np.testing.assert_allclose(header["space directions"], np.diag([0.1, 0.3, 0.7]))
+    np.testing.assert_allclose(header["space origin"], centre0(obj))
+    check_same_place(isoflow.read_volume(path), obj)
+
+
+def test_hdf5_round_trip_with_a_dataset_path(tmp_path, vol):
+    h5py = pytest.importorskip("h5py")
+    obj = placed(vol)
+    isoflow.write_volume(obj, f"{tmp_path / 'v.h5'}:/seg/mask")
+    with h5py.File(tmp_path / "v.h5", "r") as f:
+        assert np.array_equal(f["seg/mask"][()], vol)
+        np.testing.assert_allclose(f["seg/mask"].attrs["pitch"], PITCH)
+    back = isoflow.read_volume(f"{tmp_path / 'v.h5'}:/seg/mask")
+    assert back.offset == OFFSET and back.parity == PARITY  # exact: isoflow's own attributes
+    check_same_place(back, obj)
+    check_same_place(isoflow.read_volume(tmp_path / "v.h5"), obj)  # the file's only dataset
+
+
+def test_omezarr_round_trip_read_by_ome_zarr_py(tmp_path, vol):
+    pytest.importorskip("ome_zarr")
+    from ome_zarr.io import parse_url
+    from ome_zarr.reader import Reader
+
+    obj = placed(vol)
+    path = isoflow.write_volume(obj, tmp_path / "v.ome.zarr")
+    node = list(Reader(parse_url(str(path)))())[0]
+    assert [a["name"] for a in node.metadata["axes"]] == ["z", "y", "x"]
+    assert np.array_equal(np.asarray(node.data[0]), vol.transpose(2, 1, 0))
+    scale, shift = node.metadata["coordinateTransformations"][0]
+    np.testing.assert_allclose(scale["scale"], PITCH[::-1])
+    np.testing.assert_allclose(shift["translation"], centre0(obj)[::-1])
+    check_same_place(isoflow.read_volume(path), obj)
+
+
+def test_binvox_round_trip_read_by_trimesh(tmp_path, vol):
+    from trimesh.exchange.binvox import load_binvox, parse_binvox
+
+    obj = placed(vol, pitch=0.5)
+    path = isoflow.write_volume(obj, tmp_path / "v.binvox")
+    with open(path, "rb") as fh:
+        parsed = parse_binvox(fh)
+    assert list(parsed.shape) == [7, 7, 7]  # padded to the cube the spec asks for
+    np.testing.assert_allclose(parsed.translate, corner(obj))
+    assert parsed.scale == 0.5 * 7
+    with open(path, "rb") as fh:
+        grid = load_binvox(fh)
+    padded = np.zeros((7, 7, 7), bool)
+    padded[:5, :6, :7] = vol
+    assert np.array_equal(grid.matrix, padded)
+    back = isoflow.read_volume(path)
+    assert np.array_equal(back.volume, padded)
+    assert back.pitch == 0.5
+    np.testing.assert_allclose(corner(back), corner(obj))
+
+
+def test_binvox_refuses_anisotropic_voxels(tmp_path, vol):
+    with pytest.raises(IsoflowError, match="one voxel size"):
+        isoflow.write_volume(placed(vol), tmp_path / "v.binvox")
+    assert not (tmp_path / "v.binvox").exists()
+
+
+def test_vox_round_trip_read_by_py_vox_io(tmp_path, vol):
+    pytest.importorskip("pyvox")
+    from pyvox.parser import VoxParser
+
+    path = tmp_path / "v.vox"
+    isoflow.write_volume(DigitalObject(vol), path)
+    model = VoxParser(str(path)).parse().models[0]
+    assert tuple(model.size) == vol.shape
+    assert sorted((v.x, v.y, v.z) for v in model.voxels) == sorted(map(tuple, np.argwhere(vol).tolist()))
+    assert np.array_equal(isoflow.read_volume(path).volume, vol)
+
+
+def test_vox_refuses_more_than_256_a_side(tmp_path):
+    with pytest.raises(IsoflowError, match="at most 256"):
+        isoflow.write_volume(DigitalObject(np.ones((257, 1, 1), bool)), tmp_path / "v.vox")
+
+
+# --------------------------------------------------------------- written by the other tools
+
+def test_nifti_from_nibabel_with_flips_and_a_permutation(tmp_path, rng):
+    """Every voxel lands where nibabel's own apply_affine puts it."""
+    nib = pytest.importorskip("nibabel")
+    data = (rng.random((4, 5, 6)) < 0.5).astype(np.uint8)
+    affine = np.array([[0, 0, -2.0, 30], [0.5, 0, 0, -12], [0, -1.5, 0, 7], [0, 0, 0, 1]])
+    nib.save(nib.Nifti1Image(data, affine), tmp_path / "s.nii.gz")
+    obj = isoflow.read_volume(tmp_path / "s.nii.gz")
+    np.testing.assert_allclose(obj.pitch, [2.0, 0.5, 1.5])
+    mine = obj.world(np.argwhere(obj.volume) + 0.5)  # voxel centres
+    theirs = nib.affines.apply_affine(affine, np.argwhere(data))
+    np.testing.assert_allclose(np.sort(mine, axis=0), np.sort(theirs, axis=0))
+    assert sorted(map(tuple, np.round(mine, 9))) == sorted(map(tuple, np.round(theirs, 9)))
+
+
+def test_oblique_nifti_keeps_the_voxel_sizes_and_warns(tmp_path):
+    nib = pytest.importorskip("nibabel")
+    c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
+    affine = np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]) @ np.diag([2.0, 3.0, 4.0, 1])
+    nib.save(nib.Nifti1Image(np.ones((2, 2, 2), np.uint8), affine), tmp_path / "o.nii")
+    with pytest.warns(IsoflowWarning, match="rotated or sheared by up to 10 degrees"):
+        obj = isoflow.read_volume(tmp_path / "o.nii")
+    np.testing.assert_allclose(obj.pitch, [2.0, 3.0, 4.0])
+
+
+def test_tiff_stack_from_tifffile(tmp_path, vol):
+    tifffile = pytest.importorskip("tifffile")
+    stack = vol.transpose(2, 1, 0).astype(np.uint8)  # z, y, x
+    tifffile.imwrite(tmp_path / "ij.tif", stack, imagej=True, resolution=(1 / 0.2, 1 / 0.4),
+                     metadata={"spacing": 1.5, "unit": "um", "axes": "ZYX"})
+    obj = isoflow.read_volume(tmp_path / "ij.tif")
+    assert np.array_equal(obj.volume, vol)
+    np.testing.assert_allclose(obj.pitch, [0.2, 0.4, 1.5])
+    tifffile.imwrite(tmp_path / "plain.tif", stack)  # no ImageJ metadata: a page stack
+    plain = isoflow.read_volume(tmp_path / "plain.tif")
+    assert np.array_equal(plain.volume, vol) and plain.pitch == 1.0
+    tifffile.imwrite(tmp_path / "page.tif", stack[0])  # one page: 2D (x, y)
+    assert np.array_equal(isoflow.read_volume(tmp_path / "page.tif").volume, vol[:, :, 0])
+
+
+@pytest.mark.parametrize("version", ["0.4", "0.5"])
+def test_omezarr_from_ome_zarr_py(tmp_path, version, rng):
+    pytest.importorskip("ome_zarr")
+    import zarr
+    from ome_zarr.format import FormatV04, FormatV05
+    from ome_zarr.io import parse_url
+    from ome_zarr.reader import Reader
+    from ome_zarr.writer import write_image
+
+    fmt = FormatV04() if version == "0.4" else FormatV05()
+    data = (rng.random((1, 4, 8, 8)) < 0.5).astype(np.uint8)  # c, z, y, x
+    path = tmp_path / "img.zarr"
+    root = zarr.group(store=parse_url(str(path), mode="w", fmt=fmt).store, zarr_format=fmt.zarr_format)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        write_image(data, root, axes="czyx", fmt=fmt, scale={"z": 2.0, "y": 0.5, "x": 0.25},
+                    scale_factors=[2], method="nearest")
+    obj = isoflow.read_volume(path)
+    assert np.array_equal(obj.volume, data[0].transpose(2, 1, 0))
+    np.testing.assert_allclose(obj.pitch, [0.25, 0.5, 2.0])
+    node = list(Reader(parse_url(str(path)))())[0]
+    levels = [d["path"] for d in (node.zarr.root_attrs.get("ome", node.zarr.root_attrs)["multiscales"][0]["datasets"])]
+    low = isoflow.read_volume(f"{path}:{levels[1]}")  # the second level, by its path
+    assert np.array_equal(low.volume, np.asarray(node.data[1])[0].transpose(2, 1, 0))
+    (scale, shift), = [node.metadata["coordinateTransformations"][1]]
+    np.testing.assert_allclose(low.spacing, scale["scale"][:0:-1])
+    np.testing.assert_allclose(low.world(np.zeros(3)) + low.spacing / 2, shift["translation"][:0:-1])
+    assert np.array_equal(isoflow.read_volume(f"{path}:1").volume, low.volume)  # by index
+
+
+def test_binvox_from_trimesh(tmp_path, rng):
+    """trimesh's export; isoflow places voxels by the binvox spec
+    (centre = translate + scale * (index + 0.5) / dim)."""
+    import trimesh
+    from trimesh.exchange.binvox import export_binvox
+
+    dense = rng.random((6, 6, 6)) < 0.5
+    grid = trimesh.voxel.VoxelGrid(dense, transform=trimesh.transformations.scale_and_translate(0.5, [1, 2, 3]))
+    (tmp_path / "t.binvox").write_bytes(export_binvox(grid))
+    obj = isoflow.read_volume(tmp_path / "t.binvox")
+    assert np.array_equal(obj.volume, dense)
+    header = (tmp_path / "t.binvox").read_bytes().split(b"data\n")[0].decode().split("\n")
+    fields = {line.split()[0]: [float(x) for x in line.split()[1:]] for line in header[1:] if line.strip()
+              and not line.startswith("#")}
+    (scale,), translate = fields["scale"], np.array(fields["translate"])
+    np.testing.assert_allclose(obj.world([[2, 3, 4]]) + obj.spacing / 2, [translate + scale * (np.array([2, 3, 4]) + 0.5) / 6])
+
+
+def test_nrrd_from_pynrrd_with_a_flipped_space(tmp_path, vol):
+    nrrd = pytest.importorskip("nrrd")
+    directions = np.array([[-0.5, 0, 0], [0, 0, 2.0], [0, 0.25, 0]])  # axis 1 runs along z, axis 2 along y
+    header = {"space": "left-posterior-superior", "space directions": directions, "space origin": [10.0, 20.0, 30.0]}
+    nrrd.write(str(tmp_path / "s.nrrd"), vol.astype(np.uint8), header, index_order="F")
+    obj = isoflow.read_volume(tmp_path / "s.nrrd")
+    np.testing.assert_allclose(obj.pitch, [0.5, 0.25, 2.0])
+    mine = obj.world(np.argwhere(obj.volume) + 0.5)
+    theirs = np.argwhere(vol) @ directions + [10.0, 20.0, 30.0]
+    assert sorted(map(tuple, np.round(mine, 9))) == sorted(map(tuple, np.round(theirs, 9)))
+
+
+def test_hdf5_from_h5py_with_element_size(tmp_path, vol):
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(tmp_path / "d.h5", "w") as f:
+        f.create_dataset("raw", data=np.zeros((2, 2)))
+        f.create_dataset("seg/mask", data=vol.astype(np.uint16)).attrs["element_size_um"] = [1.0, 0.5, 0.5]
+    obj = isoflow.read_volume(f"{tmp_path / 'd.h5'}:/seg/mask")
+    assert np.array_equal(obj.volume, vol)
+    np.testing.assert_allclose(obj.pitch, [1.0, 0.5, 0.5])
+    with pytest.raises(IsoflowError, match="holds datasets /raw, /seg/mask; name one"):
+        isoflow.read_volume(tmp_path / "d.h5")
+
+
+def test_vox_from_py_vox_io_colours_are_paint(tmp_path):
+    pytest.importorskip("pyvox")
+    from pyvox.models import Vox
+    from pyvox.writer import VoxWriter
+
+    dense = np.zeros((3, 4, 5), np.uint8)
+    dense[0, 1, 2], dense[2, 3, 4], dense[1, 1, 1] = 1, 7, 7
+    VoxWriter(str(tmp_path / "p.vox"), Vox.from_dense(dense)).write()
+    # py-vox-io's from_dense takes (y, z, x) with z flipped: map our voxels through its parser
+    from pyvox.parser import VoxParser
+
+    model = VoxParser(str(tmp_path / "p.vox")).parse().models[0]
+    expect = {(v.x, v.y, v.z): v.c for v in model.voxels}
+    obj = isoflow.read_volume(tmp_path / "p.vox")
+    assert {tuple(p): 1 for p in np.argwhere(obj.volume).tolist()} == {k: 1 for k in expect}
+    seven = isoflow.read_volume(tmp_path / "p.vox", label=7)
+    assert sorted(map(tuple, np.argwhere(seven.volume).tolist())) == sorted(k for k, c in expect.items() if c == 7)
+
+
+# --------------------------------------------------------------- labels
+
+def test_label_selects_one_value_and_a_label_image_is_refused(tmp_path, vol):
+    labels = vol.astype(np.uint8) * 3
+    labels[0, :, :] = 5
+    np.save(tmp_path / "l.npy", labels)
+    assert np.array_equal(isoflow.read_volume(tmp_path / "l.npy", label=3).volume, labels == 3)
+    with pytest.raises(IsoflowError, match="threshold it first.*--label N"):
+        isoflow.read_volume(tmp_path / "l.npy")
+    with pytest.raises(IsoflowError, match=r"no voxel has label 4 \(values present: 0, 3, 5\)"):
+        isoflow.read_object(tmp_path / "l.npy", label=4)

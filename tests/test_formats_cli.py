@@ -1,0 +1,192 @@
+"""Volume formats from the shell (issue 12): the acceptance commands give
+the numbers of the same volume as .npy, exported PLYs land in the file's
+world coordinates, writing by suffix, and bad files give one line, exit 2."""
+
+import json
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+from test_input_errors import fails  # one line on stderr, exit 2
+
+import isoflow
+from isoflow.cli import main
+
+nib = pytest.importorskip("nibabel")
+tifffile = pytest.importorskip("tifffile")
+
+
+def run(capsys, *args):
+    assert main([*map(str, args)]) == 0, capsys.readouterr().err
+    return capsys.readouterr().out
+
+
+def info(capsys, *args):
+    report = json.loads(run(capsys, "info", *args, "--json"))
+    report.pop("input")
+    return report
+
+
+def ply_vertices(path):
+    mesh = trimesh.load(path, process=False)
+    return np.asarray(mesh.vertices, np.float64)
+
+
+def same_points(a, b, decimals=4):
+    assert len(a) == len(b)
+    assert sorted(map(tuple, np.round(a, decimals))) == sorted(map(tuple, np.round(b, decimals)))
+
+
+@pytest.fixture
+def labels(rng):
+    """A label image: 3 is a thick torus with random bumps (edge and vertex
+    contacts), 5 a slab, 0 the rest."""
+    x, y, z = np.indices((14, 16, 12)) - np.array([6.5, 7.5, 5.5]).reshape(3, 1, 1, 1)
+    torus = (np.hypot(x, y) - 4.5) ** 2 + z**2 <= 2.2**2
+    lab = np.where(torus | (rng.random(torus.shape) < 0.04), 3, 0).astype(np.int16)
+    lab[:, :, -1] = 5
+    return lab
+
+
+# --------------------------------------------------------------- the acceptance commands
+
+def test_info_nifti_label_equals_npy_and_its_ply_lands_in_scanner_coordinates(tmp_path, capsys, labels):
+    affine = np.array([[-0.8, 0, 0, 40.0], [0, 0.8, 0, -25.0], [0, 0, 2.5, 12.0], [0, 0, 0, 1]])  # LAS, anisotropic
+    nib.save(nib.Nifti1Image(labels, affine), tmp_path / "scan.nii.gz")
+    np.save(tmp_path / "label3.npy", labels == 3)
+    a, b = info(capsys, tmp_path / "scan.nii.gz", "--label", "3"), info(capsys, tmp_path / "label3.npy")
+    assert a == b and a["betti"][1] >= 1
+    run(capsys, "surface", tmp_path / "scan.nii.gz", "--label", "3", "-o", tmp_path / "s.ply")
+    run(capsys, "surface", tmp_path / "label3.npy", "-o", tmp_path / "n.ply")
+    # the .npy mesh is in voxel-corner index units; nibabel maps centres, so corners are index - 0.5
+    expect = nib.affines.apply_affine(affine, ply_vertices(tmp_path / "n.ply") - 0.5)
+    same_points(ply_vertices(tmp_path / "s.ply"), expect)
+
+
+def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
+    mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
+    tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),
+                     metadata={"spacing": 2.0, "unit": "um", "axes": "ZYX"})
+    np.save(tmp_path / "stack.npy", tifffile.imread(tmp_path / "stack.tif"))
+    s = run(capsys, "surface", tmp_path / "stack.tif", "-o", tmp_path / "s.ply")
+    n = run(capsys, "surface", tmp_path / "stack.npy", "-o", tmp_path / "n.ply")
+    assert s.split(":", 1)[1] == n.split(":", 1)[1]  # vertices, faces, surfaces, V-E+F
+    # .npy axes are (z, y, x) in index units; the TIFF's are x, y, z in micrometres
+    same_points(ply_vertices(tmp_path / "s.ply"), ply_vertices(tmp_path / "n.ply")[:, ::-1] * [0.5, 0.25, 2.0])
+    assert info(capsys, tmp_path / "stack.tif")["euler_characteristic"] == \
+        info(capsys, tmp_path / "stack.npy")["euler_characteristic"]
+
+
+def test_info_on_omezarr_block_by_block_with_a_label(tmp_path, capsys, labels):
+    isoflow.write_volume(isoflow.DigitalObject(labels == 3), tmp_path / "m.npz")
+    import zarr
+
+    root = zarr.open_group(str(tmp_path / "l.zarr"), mode="w", zarr_format=2)
+    root.create_array("0", data=labels[None].transpose(0, 3, 2, 1), chunks=(1, 5, 5, 5))  # c, z, y, x
+    root.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": n} for n in "czyx"],
+                                  "datasets": [{"path": "0", "coordinateTransformations": [
+                                      {"type": "scale", "scale": [1, 1, 1, 1]}]}]}]
+    a = info(capsys, tmp_path / "l.zarr", "--label", "3")
+    b = info(capsys, tmp_path / "m.npz", "--no-surfaces")
+    assert a["shape"] == b["shape"] == list(labels.shape)
+    for key in ("euler_characteristic", "betti", "n", "a_dot_n", "energy", "voxels"):
+        assert a[key] == b[key], key
+
+
+# --------------------------------------------------------------- writing by suffix
+
+@pytest.mark.parametrize("suffix", [".nii.gz", ".tif", ".nrrd", ".h5", ".binvox", ".vox", ".zarr"])
+def test_voxelize_writes_every_format(tmp_path, capsys, suffix):
+    pytest.importorskip({".nrrd": "nrrd", ".h5": "h5py", ".zarr": "zarr"}.get(suffix, "numpy"))
+    mesh = tmp_path / "t.stl"
+    trimesh.creation.torus(2.0, 0.8).export(mesh)
+    run(capsys, "voxelize", mesh, "--resolution", "24", "-o", tmp_path / "ref.npz")
+    run(capsys, "voxelize", mesh, "--resolution", "24", "-o", tmp_path / f"v{suffix}")
+    ref, back = isoflow.read_volume(tmp_path / "ref.npz"), isoflow.read_volume(tmp_path / f"v{suffix}")
+    assert back.voxels == ref.voxels and ref.voxels > 0
+    if suffix not in (".tif", ".vox"):  # formats with an origin put the solid where the mesh is
+        np.testing.assert_allclose(back.bbox(), ref.bbox(), rtol=1e-6, atol=1e-6)
+    if suffix == ".nii.gz":
+        img = nib.load(tmp_path / "v.nii.gz")
+        assert int(np.asarray(img.dataobj).sum()) == ref.voxels
+        np.testing.assert_allclose(img.header.get_zooms(), [ref.pitch] * 3, rtol=1e-6)
+    fails(capsys, "voxelize", mesh, "--resolution", "24", "-o", tmp_path / f"v{suffix}", words=("exists", "--force"))
+
+
+def test_voxelize_refuses_an_unknown_suffix_before_working(tmp_path, capsys):
+    fails(capsys, "voxelize", tmp_path / "missing.stl", "--resolution", "8", "-o", tmp_path / "v.xyz",
+          words=("v.xyz", ".nii.gz", ".binvox"))
+
+
+def test_flow_writes_step_volumes(tmp_path, capsys):
+    obj = isoflow.DigitalObject(np.ones((3, 4, 5), bool), pitch=[0.5, 1.0, 2.0], origin=[1.0, 2.0, 3.0])
+    isoflow.write_volume(obj, tmp_path / "box.nii.gz")
+    run(capsys, "flow", tmp_path / "box.nii.gz", "--out", tmp_path / "out", "--volumes", ".nii.gz")
+    steps = sorted((tmp_path / "out").glob("step_*.nii.gz"))
+    rows = (tmp_path / "out" / "flow.csv").read_text().splitlines()[1:]
+    voxels = [int(r.split(",")[1]) for r in rows if int(r.split(",")[1])]
+    assert [isoflow.read_volume(p).voxels for p in steps] == voxels == [60, 24, 6]  # the 3x4x5 box
+    for p in steps:  # every step keeps the voxel size; its PLY and its volume sit in the same place
+        state = isoflow.read_volume(p)
+        np.testing.assert_allclose(state.pitch, [0.5, 1.0, 2.0])
+        lo, hi = state.bbox()
+        verts = ply_vertices(p.with_name(p.name.replace(".nii.gz", ".ply")))
+        np.testing.assert_allclose([verts.min(0), verts.max(0)], [lo, hi], atol=1e-5)
+    fails(capsys, "flow", tmp_path / "box.nii.gz", "--volumes", ".nii.gz", words=("--out",))
+    fails(capsys, "flow", tmp_path / "box.nii.gz", "--out", tmp_path / "o2", "--volumes", ".xyz", words=(".xyz",))
+
+
+# --------------------------------------------------------------- bad input: one line, exit 2
+
+def test_label_image_without_label_says_threshold_or_label(tmp_path, capsys, labels):
+    nib.save(nib.Nifti1Image(labels, np.eye(4)), tmp_path / "l.nii.gz")
+    fails(capsys, "info", tmp_path / "l.nii.gz", words=("l.nii.gz", "threshold it first", "--label N"))
+    fails(capsys, "info", tmp_path / "l.nii.gz", "--label", "4", words=("no voxel has label 4", "0, 3, 5"))
+
+
+def corrupt_files(tmp_path):
+    (tmp_path / "junk.tif").write_bytes(b"II*\x00" + b"\xff" * 40)
+    (tmp_path / "junk.nii.gz").write_bytes(b"\x1f\x8b\x08\x00garbage")
+    (tmp_path / "junk.nrrd").write_bytes(b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 4 4\nencoding: raw\n\n12")
+    (tmp_path / "junk.h5").write_bytes(b"not hdf5 at all")
+    (tmp_path / "junk.binvox").write_bytes(b"#binvox 1\ndim 4 4 4\ndata\n\x01\x05")
+    (tmp_path / "junk.vox").write_bytes(b"VOX \x96\x00\x00\x00MAIN\x00\x00\x00\x00\xff\x00\x00\x00")
+    (tmp_path / "junk.zarr").mkdir()
+    (tmp_path / "junk.zarr" / "zarr.json").write_text("{not json")
+    return ["junk.tif", "junk.nii.gz", "junk.nrrd", "junk.h5", "junk.binvox", "junk.vox", "junk.zarr"]
+
+
+@pytest.mark.parametrize("command", ["info", "surface"])
+def test_corrupt_files_give_one_line(tmp_path, capsys, command):
+    for name in corrupt_files(tmp_path):
+        out = ["-o", tmp_path / "s.ply"] if command == "surface" else []
+        fails(capsys, command, tmp_path / name, *out, words=(name,))
+    assert not (tmp_path / "s.ply").exists()
+
+
+def test_wrong_dataset_or_level(tmp_path, capsys, labels):
+    pytest.importorskip("h5py")
+    isoflow.write_volume(isoflow.DigitalObject(labels == 3), f"{tmp_path / 'v.h5'}:/a/b")
+    fails(capsys, "info", f"{tmp_path / 'v.h5'}:/nope", words=("no dataset '/nope'", "/a/b"))
+    fails(capsys, "info", f"{tmp_path / 'v.h5'}:/a", words=("is a group",))
+    isoflow.write_volume(isoflow.DigitalObject(labels == 3), tmp_path / "v.zarr")
+    fails(capsys, "surface", f"{tmp_path / 'v.zarr'}:7", "-o", tmp_path / "s.ply", words=("no resolution level '7'",))
+    fails(capsys, "info", f"{tmp_path / 'v.zarr'}:7", words=("no resolution level '7'",))
+
+
+def test_a_missing_library_names_the_extra(tmp_path, capsys, monkeypatch, labels):
+    nib.save(nib.Nifti1Image(labels, np.eye(4)), tmp_path / "l.nii.gz")
+    monkeypatch.setitem(sys.modules, "nibabel", None)  # import nibabel now raises ImportError
+    fails(capsys, "info", tmp_path / "l.nii.gz", "--label", "3", words=("nibabel", "pip install 'isoflow[formats]'"))
+    fails(capsys, "voxelize", tmp_path / "m.stl", "--resolution", "8", "-o", tmp_path / "v.nii",
+          words=("isoflow[formats]",))
+    assert not (tmp_path / "v.nii").exists()
+
+
+def test_metadata_a_format_cannot_keep_is_one_warning_line(tmp_path, capsys):
+    isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5), tmp_path / "v.npz")
+    assert main(["flow", str(tmp_path / "v.npz"), "--out", str(tmp_path / "o"), "--volumes", "vox", "--steps", "1"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err and all(line.startswith("isoflow flow: warning: ") and "MagicaVoxel keeps no voxel size" in line
+                       for line in err)
