@@ -41,15 +41,21 @@ def square_ring(lo, side: int, thick: int, plane_axes, shape) -> np.ndarray:
     return v
 
 
-def linked_rings(side: int = 7, thick: int = 1) -> np.ndarray:
-    """Two square rings through each other's hole (a Hopf link): b = (2, 2, 0)."""
+def linked_rings(side: int = 7, thick: int = 1, a: int | None = None) -> np.ndarray:
+    """Two square rings through each other's hole, apart (a Hopf link):
+    b = (2, 2, 0). Each ring's wall passes through the other's hole with a
+    gap of at least one voxel on each side; ``a`` is where ring 2's near
+    wall starts along axis 0 (inside ring 1's hole)."""
+    assert side >= 3 * thick + 4
     n = 2 * side
     shape = (n, n, n)
-    mid = side // 2
+    mid = (side - thick) // 2
+    a = thick + 1 if a is None else a
     r1 = square_ring((0, 0, mid), side, thick, (0, 1), shape)
-    r2 = square_ring((side - thick - mid + thick, mid, 0), side, thick, (0, 2), shape)
+    r2 = square_ring((a, mid, 0), side, thick, (0, 2), shape)
+    assert not (r1 & r2).any()
     v = r1 | r2
-    return v[tuple(slice(0, int(np.flatnonzero(v.any(axis=tuple(j for j in range(3) if j != i)))[-1]) + 1) for i in range(3))]
+    return v[: a + side, :side, :side]
 
 
 def figure_eight(side: int = 7, thick: int = 2, height: int = 2) -> np.ndarray:
@@ -121,7 +127,7 @@ def plain_reference_objects():
         ("torus-6-2.5", solid_torus(6, 2.5, axis=0)),
         ("annulus-1", annulus_prism(8, 1, 3)),
         ("annulus-2", annulus_prism(10, 2, 4)),
-        ("linked", linked_rings()),
+        ("linked", linked_rings(7, 1, a=4)),
         ("eight", figure_eight()),
         ("hollow", hollow_ball()),
         ("contacts", contacts()),

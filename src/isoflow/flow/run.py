@@ -91,6 +91,7 @@ class FlowResult:
     connectivity: int
     guard: bool
     reversed_moves: int = 0
+    guard_steps: dict | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -101,6 +102,7 @@ class FlowResult:
             "limit": self.limit,
             "topology_changes": self.topology_changes,
             "reversed_moves": self.reversed_moves,
+            **({"guard_steps": self.guard_steps} if self.guard else {}),
         }
 
 
@@ -147,11 +149,18 @@ def run_flow(
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
             raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
     cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
+    if guard and steps is None and max_steps is None:
+        cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
+    # guarded: flow steps that do not shrink the object, and the shapes seen
+    allowance, seen = default_max_steps(obj), set()
     current = obj.cropped()
     records = [_record(current, 0, conn)]
     states = [current] if keep_states else []
     changes: list[dict] = []
     reversed_moves = 0
+    kinds = {"flow": 0, "partial": 0, "thinning": 0}
+    if guard:
+        seen.add(control.shape_key(current))
     history = [current.volume]
     last_nonempty = current.volume if current.voxels else None
     stop = None
@@ -160,25 +169,30 @@ def run_flow(
         if current.voxels == 0:
             stop = "vanished"
             break
-        if step >= cap:
+        if cap is not None and step >= cap:
             stop = "steps" if steps is not None else "max-steps"
             break
         before = records[-1]["betti"]
         if guard:
-            got = control.guarded_step(current, conn, before)
-            if got is None:
-                stop = "guard-blocked"
-                break
-            new, n_reversed = got
-            reversed_moves += n_reversed
-            if _same(new.volume, current.volume):
+            got = control.guarded_step(current, conn, before, seen=seen, may_grow=allowance > 0)
+            if got.kind == "fixed-point":
                 stop = "converged"
                 break
+            new = got.new
+            reversed_moves += got.reversed_moves
+            kinds[got.kind] += 1
+            if new.voxels >= current.voxels:
+                allowance -= 1
+            seen.add(control.shape_key(new))
         else:
             cfg, keep = flow_moves(current, conn)
             new = current.on_dual_lattice(keep).cropped()
         rec = _record(new, step + 1, conn)
-        if rec["betti"] != before and not guard and new.voxels:
+        if guard:
+            rec["move"] = got.kind
+            if rec["betti"] != before:  # simple deformations cannot do this
+                raise RuntimeError(f"guarded {got.kind} step {step + 1} changed the Betti numbers {before} -> {rec['betti']}")
+        elif rec["betti"] != before and new.voxels:
             change = {
                 "step": step + 1,
                 "before": before,
@@ -199,7 +213,7 @@ def run_flow(
             last_nonempty = new.volume
         if progress is not None:
             progress(step, new)
-        if len(history) >= 2 and _same(history[-2], new.volume) and new.voxels:
+        if not guard and len(history) >= 2 and _same(history[-2], new.volume) and new.voxels:
             stop = "cycle"
         history = (history + [new.volume])[-2:]
     reached = stop in ("vanished", "converged")
@@ -212,6 +226,7 @@ def run_flow(
         connectivity=conn,
         guard=guard,
         reversed_moves=reversed_moves,
+        guard_steps=kinds if guard else None,
     )
 
 
