@@ -22,8 +22,8 @@ One guarded step is the first of these that makes progress (see docs/flow.md):
    moved outward or all inward, whichever first keeps the Betti numbers.
 3. **A thinning step** on the same lattice (:func:`thinning_step`): simple
    voxels are deleted, subfield by subfield, the most convex first (the
-   vertex index ``f`` of eq. 4.8 summed over a voxel's corners): all convex
-   ones in one step, else the flat ones, else the least concave level.
+   vertex index ``f`` of eq. 4.8 summed over a voxel's corners): the convex
+   and flat ones in one step, the concave ones only when none of those is.
 
 A flow step (1 or 2) is progress when it removes voxels, or, while the run's
 allowance of non-shrinking steps lasts (the bar rule and a ball's first
@@ -206,14 +206,14 @@ def thinning_step(volume: np.ndarray, connectivity: int) -> np.ndarray | None:
     """Delete simple voxels, the most convex first.
 
     The voxels next to the background are ordered by :func:`convexity`; the
-    convex ones (above 0) go first, level by level from the most convex
-    down, each level subfield by subfield
+    convex and flat ones (0 and above: where the flow moves inward) go level
+    by level from the most convex down, each level subfield by subfield
     (:func:`isoflow.digital.simple.delete_simple`), the test always on the
-    volume left so far. Only when no convex voxel is simple do the flat ones
-    (0), and then the concave ones (one level, the least concave first), get
-    their turn. The step is a sequence of simple deletions and keeps every
-    Betti number. Returns the thinned volume (same shape), or None when no
-    voxel is simple.
+    volume left so far. Only when none of them is simple do the concave ones
+    (where the flow moves outward) get their turn, the least concave level
+    first. The step is a sequence of simple deletions and keeps every Betti
+    number. Returns the thinned volume (same shape), or None when no voxel
+    is simple.
     """
     padded = np.pad(np.asarray(volume, bool), 1)
     conv = np.pad(convexity(volume), 1)
@@ -224,14 +224,11 @@ def thinning_step(volume: np.ndarray, connectivity: int) -> np.ndarray | None:
     flat = np.flatnonzero(np.pad(volume & ~inner, 1))
     level = conv.ravel()[flat]
     values = np.unique(level)[::-1]
-    deleted = 0
-    for value in values[values > 0]:
-        deleted += len(delete_simple(padded, flat[level == value], connectivity))
-    for value in values[values <= 0]:
+    for tier in (values[values >= 0], values[values < 0]):
+        deleted = sum(len(delete_simple(padded, flat[level == v], connectivity)) for v in tier)
         if deleted:
-            break
-        deleted += len(delete_simple(padded, flat[level == value], connectivity))
-    return padded[(slice(1, -1),) * volume.ndim] if deleted else None
+            return padded[(slice(1, -1),) * volume.ndim]
+    return None
 
 
 # --------------------------------------------------------------------------
