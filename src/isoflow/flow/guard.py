@@ -180,15 +180,14 @@ def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):
 # --------------------------------------------------------------------------
 
 
-def convexity(volume: np.ndarray, connectivity: int | None = None) -> np.ndarray:
+def convexity(volume: np.ndarray) -> np.ndarray:
     """Per voxel: the vertex index ``f`` of its ``2^n`` corners summed
     (eq. 4.8 in 3D, ``f = (sum s(alpha_i)) (sum |s(alpha_i)|)``: 9 at a
     convex corner (+,+,+), 1 on a convex edge, 0 on a flat, -1 on a concave
     edge, -9 at a concave corner; the sign of eq. 4.2 in 2D: 1 convex, 0
     flat, -1 concave). It is the signed curvature concentrated at the voxel:
     72 for an isolated voxel, 12 for a box corner, 2 on a box edge, 0 on a
-    face, -9 at a concave corner. Not-well-composed corners count 0.
-    ``connectivity`` is not used: the index does not depend on it."""
+    face, -9 at a concave corner. Not-well-composed corners count 0."""
     nd = volume.ndim
     if nd == 3:
         lut = f_lut()

@@ -12,13 +12,13 @@ and records per step the voxels, parity, Betti numbers, chi, energy
   object when none is found. The last step, to the empty set, is the limit
   of the flow and not reported.
 * **With** ``guard=True`` every step is
-  :func:`isoflow.flow.guard.guarded_step`: the plain moves carried out by
-  simple deformations, the stuck ones reversed, every step checked with the
-  full Betti numbers, so **no guarded step changes them**. If no repair
-  keeps them the run stops, ``guard-blocked``, before that step. Under the
-  guard the object never vanishes (that would change b0): when a guarded
-  step gives back the same shape (typically one voxel per component, on one
-  corner of the last box) the run ends ``converged``.
+  :func:`isoflow.flow.guard.guarded_step`: the flow step carried out by
+  simple deformations, else the part of it that keeps the Betti numbers,
+  else a curvature-ordered thinning step on the same lattice; **no guarded
+  step changes the Betti numbers**, and the run never stops half-way: it
+  ends ``converged`` at a fixed point, a state with no simple voxel left
+  that no flow step makes smaller or new (docs/flow.md). Each guarded
+  step's record says which kind of step it was (``move``).
 """
 
 from __future__ import annotations
@@ -72,15 +72,16 @@ class FlowResult:
     ``states``: the objects themselves (when kept). ``stop_reason``:
     ``vanished`` (the object became empty), ``steps`` (the number of steps
     asked was done), ``topology-change`` (``until_topology_change``: stopped
-    before the step that would change the Betti numbers), ``guard-blocked``
-    (no repair restores them), ``converged`` (guarded: the step would give
-    back the same shape), ``cycle`` (the shape repeats with period 2) or
-    ``max-steps`` (safety cap). ``limit``: ``center`` (world coordinates of
+    before the step that would change the Betti numbers), ``converged``
+    (guarded: a fixed point, see :mod:`isoflow.flow.guard`), ``cycle``
+    (plain: the shape repeats with period 2) or ``max-steps`` (safety cap of
+    plain runs). ``limit``: ``center`` (world coordinates of
     the centre of the last non-empty state's bbox) and ``last_shape``
     (``cuboid`` when that state is a full box, ``other`` otherwise,
     ``not-reached`` when the run stopped before vanishing or converging).
     ``topology_changes``: one dict per change of the Betti numbers (step,
-    before, after, where = world bbox, applied).
+    before, after, where = world bbox, applied). ``guard_steps`` (guarded
+    runs): how many steps were ``flow``, ``partial`` and ``thinning``.
     """
 
     steps: list[dict]
