@@ -5,11 +5,11 @@ Everything is checked independently of isoflow's own topology code: the
 Betti numbers of every state come from scipy.ndimage.label (components of
 the object and of the background) and skimage.measure.euler_number (b1 from
 chi = b0 - b1 + b2); the end state must have no simple point (Bertrand's
-test, itself checked against the Betti numbers in test_flow.py) and the size
-its Betti numbers allow: one voxel per component without tunnels or
-cavities, closed one-voxel-thick curves (an adjacency graph with exactly b1
-independent cycles) for tori and rings, a shell without interior voxels for a
-hollow ball.
+test, itself checked against the Betti numbers in test_flow.py) and each
+component the size its own Betti numbers allow: one voxel without tunnels or
+cavities; closed curves one voxel thick with tunnels (every voxel has at
+least two neighbours, no full 2x2x2 block, and a ring's voxels exactly two);
+a shell without interior voxels around a cavity.
 """
 
 import json
