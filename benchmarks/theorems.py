@@ -1,13 +1,14 @@
 """How often do the paper's claims about the digital curvature flow hold?
 
-    python benchmarks/theorems.py                     # default sample, about 2-4 minutes
+    python benchmarks/theorems.py                     # default sample, about 15-30 minutes
     python benchmarks/theorems.py --count 10 --no-guard   # a quick look
 
 Runs the flow (isoflow.flow.run.run_flow, the reading of DESIGN section 4) on
 many objects -- random unions of boxes, dumbbells, solid tori and square
-annulus prisms, digital balls, smoothed random blobs, and the sample meshes
-voxelised at 24-32 voxels across (when ``isoflow.voxelize`` is available) --
-and counts, per family and connectivity, how often each claim holds:
+annulus prisms, digital balls, smoothed random blobs, two linked square rings,
+and the sample meshes voxelised at 32 and 64 voxels across (when
+``isoflow.mesh.voxelize`` is available) -- and counts, per family and
+connectivity, how often each claim holds:
 
 * **T20/22/23** -- the flow ends in a cuboid, then a point: the run vanishes
   and its last non-empty state is a full box (``cuboid``); also the share
@@ -22,9 +23,12 @@ and counts, per family and connectivity, how often each claim holds:
   component without cavities (g = b1).
 * **T25** -- the energy ``E = k^T n`` never increases from one step to the
   next (non-empty states).
-* **guard** -- with topology control, how often the run converges (one
-  shape kept) rather than being blocked; the stop reasons of the plain and
-  the guarded runs are tabulated too.
+* **guard** -- with topology control (issue 10), how often the run ends
+  ``converged`` at a fixed point; **guard minimal** -- how often that end
+  state is minimal: no simple voxel left, and one voxel for every component
+  without tunnels or cavities. Every guarded state's Betti numbers are
+  asserted equal to the input's. The stop reasons of the plain and the
+  guarded runs, and the guarded steps by kind, are tabulated too.
 
 For every claim the smallest failing input (fewest voxels) is saved as
 ``results/counterexamples/<claim>_<connectivity>.npy`` (a boolean array; run
@@ -51,7 +55,8 @@ sys.path.insert(0, str(ROOT / "src"))
 from isoflow import DigitalObject  # noqa: E402
 from isoflow.flow.run import run_flow  # noqa: E402
 
-CLAIMS = ("T20-23 cuboid", "single voxel", "T21 (1,0,0)", "kept, other inputs", "T24", "T25", "guard")
+CLAIMS = ("T20-23 cuboid", "single voxel", "T21 (1,0,0)", "kept, other inputs", "T24", "T25", "guard",
+          "guard minimal")
 #: columns that are not claims of the paper: no counterexample is saved
 INFO = ("single voxel", "kept, other inputs")
 
@@ -114,6 +119,33 @@ def blob(rng, size=14):
     return f > np.quantile(f, rng.uniform(0.4, 0.8))
 
 
+def linked_rings(rng):
+    """Two square rings, each through the other's hole (a Hopf link), apart,
+    in a random orientation: b = (2, 2, 0) at 6 and at 26."""
+    thick = int(rng.integers(1, 3))
+    side = int(rng.integers(3 * thick + 4, 3 * thick + 10))
+    mid = (side - thick) // 2
+    a = int(rng.integers(thick + 1, side - 2 * thick))  # ring 2's wall inside ring 1's hole
+    v = np.zeros((a + side, side, side), bool)
+
+    def ring(lo, axes):
+        sl = [slice(None)] * 3
+        c = 3 - sum(axes)
+        for ax in axes:
+            sl[ax] = slice(lo[ax], lo[ax] + side)
+        sl[c] = slice(lo[c], lo[c] + thick)
+        v[tuple(sl)] = True
+        for ax in axes:
+            sl[ax] = slice(lo[ax] + thick, lo[ax] + side - thick)
+        v[tuple(sl)] = False
+
+    ring((0, 0, mid), (0, 1))
+    first = v.copy()
+    ring((a, mid, 0), (0, 2))
+    v[first] = True
+    return np.transpose(v, rng.permutation(3))
+
+
 FAMILIES = {
     "union of boxes": union_of_boxes,
     "dumbbell": dumbbell,
@@ -121,10 +153,11 @@ FAMILIES = {
     "annulus prism": annulus_prism,
     "digital ball": digital_ball,
     "random blob": blob,
+    "linked rings": linked_rings,
 }
 
 
-def mesh_objects(directories, resolutions=(24, 32)):
+def mesh_objects(directories, resolutions=(32, 64)):
     """(name, volume) of every sample mesh voxelised, if isoflow.voxelize exists."""
     try:
         from isoflow.mesh import voxelize as vx
@@ -156,6 +189,25 @@ def mesh_objects(directories, resolutions=(24, 32)):
 # --------------------------------------------------------------------------
 
 
+def minimal_end(volume, connectivity) -> bool:
+    """No simple voxel left, and one voxel per component without tunnels or
+    cavities."""
+    from scipy import ndimage
+
+    from isoflow.digital.simple import simple_points
+    from isoflow.digital.topology import betti_numbers
+
+    if simple_points(volume, np.argwhere(volume), connectivity).any():
+        return False
+    full = connectivity == 26
+    labels, n = ndimage.label(volume, ndimage.generate_binary_structure(3, 3 if full else 1))
+    for c in range(1, n + 1):
+        comp = labels == c
+        if betti_numbers(comp, connectivity)[1:] == [0, 0] and comp.sum() != 1:
+            return False
+    return True
+
+
 def check(volume, connectivity, guard):
     """Which claims apply to this input and whether they hold."""
     obj = DigitalObject(volume)
@@ -178,7 +230,10 @@ def check(volume, connectivity, guard):
         g = run_flow(obj, connectivity=connectivity, guard=True)
         assert all(s["betti"] == first for s in g.steps), "the guard let the Betti numbers change"
         out["guard"] = g.stop_reason == "converged"
+        out["guard minimal"] = out["guard"] and minimal_end(g.states[-1].volume, connectivity)
         info["guarded"] = g.stop_reason
+        info["kinds"] = g.guard_steps
+        info["end"] = (g.steps[-1]["voxels"], tuple(first))
     return out, info
 
 
@@ -192,8 +247,10 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=2013)
     ap.add_argument("--connectivity", type=int, nargs="+", default=[6, 26])
     ap.add_argument("--no-guard", action="store_true", help="skip the guarded runs")
-    ap.add_argument("--guard-max-voxels", type=int, default=20000, help="guarded runs only below this size")
-    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes"), str(ROOT.parent / "shared" / "meshes")])
+    ap.add_argument("--guard-max-voxels", type=int, default=10**6, help="guarded runs only below this size")
+    # the project's shared meshes sit beside the checkout (/work/shared) or two up from a worktree
+    shared = [str(p / "shared" / "meshes") for p in (ROOT.parent, ROOT.parent.parent) if (p / "shared" / "meshes").is_dir()]
+    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes"), *shared])
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
 
@@ -212,13 +269,21 @@ def main(argv=None):
     tally = defaultdict(lambda: defaultdict(lambda: [0, 0]))  # (conn, family) -> claim -> [holds, applies]
     smallest = {}  # (claim, conn) -> (voxels, name, volume)
     stops = defaultdict(lambda: defaultdict(int))  # (conn, plain/guarded) -> reason -> count
+    kinds = defaultdict(lambda: defaultdict(int))  # (conn, family) -> guarded step kind -> count
+    ends = defaultdict(list)  # (conn, family) -> [(end voxels, betti)]
     t0 = time.time()
     for conn in args.connectivity:
         for family, name, v in objects:
             guard = not args.no_guard and v.sum() <= args.guard_max_voxels
             res, info = check(v, conn, guard)
-            for run, reason in info.items():
-                stops[(conn, run)][reason] += 1
+            for run in ("plain", "guarded"):
+                if run in info:
+                    stops[(conn, run)][info[run]] += 1
+            for key in (family, "all"):
+                for kind, n in (info.get("kinds") or {}).items():
+                    kinds[(conn, key)][kind] += n
+                if "end" in info:
+                    ends[(conn, key)].append(info["end"])
             for claim, ok in res.items():
                 for key in (family, "all"):
                     tally[(conn, key)][claim][1] += 1
@@ -229,6 +294,9 @@ def main(argv=None):
                         smallest[(claim, conn)] = (n, name, v)
     elapsed = time.time() - t0
 
+    for conn in args.connectivity:  # counterexamples of an earlier run that no longer fail
+        for old in (out / "counterexamples").glob(f"*_{conn}.npy"):
+            old.unlink()
     for (claim, conn), (n, name, v) in smallest.items():
         slug = _slug(claim)
         np.save(out / "counterexamples" / f"{slug}_{conn}.npy", v)
@@ -259,6 +327,32 @@ def main(argv=None):
         text = ", ".join(f"{k} {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
         lines.append(f"| {conn} | {run} | {text} |")
     lines.append("")
+    if kinds:
+        lines += [
+            "## Guarded runs: steps by kind and end states",
+            "",
+            "Steps: the whole flow step / the flow step with its stuck blocks resolved / thinning on the same "
+            "lattice. End voxels: median and largest over the family; for inputs without tunnels or cavities "
+            "the end is one voxel per component.",
+            "",
+            "| connectivity | family | flow | partial | thinning | end voxels (median, max) | "
+            "end voxels = b0, inputs without tunnels or cavities |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for conn in args.connectivity:
+            for fam in families:
+                k, e = kinds[(conn, fam)], ends[(conn, fam)]
+                if not e:
+                    continue
+                vox = np.array([n for n, _ in e])
+                trivial = [(n, b) for n, b in e if b[1:] == (0, 0)]
+                ok = sum(n == b[0] for n, b in trivial)
+                name = f"**{fam}**" if fam == "all" else fam
+                lines.append(
+                    f"| {conn} | {name} | {k['flow']} | {k['partial']} | {k['thinning']} | "
+                    f"{int(np.median(vox))}, {int(vox.max())} | {f'{ok}/{len(trivial)}' if trivial else '-'} |"
+                )
+        lines.append("")
     lines += ["## Smallest counterexamples", "", "| claim | connectivity | input | voxels | file |", "|---|---|---|---|---|"]
     for (claim, conn), (n, name, v) in sorted(smallest.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         slug = _slug(claim)

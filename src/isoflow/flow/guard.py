@@ -1,41 +1,56 @@
 """Topology control for the digital curvature flow (introduction and
-Theorem 21 of the paper): a step carried out as a sequence of simple
-deformations, so that it keeps the Betti numbers.
+Theorem 21 of the paper): a flow that keeps the Betti numbers and always
+goes on until nothing simple is left to change.
 
-Refine the grid twice: old voxel ``v`` is a block of ``2^n`` fine cells, and
-so is the new voxel centred at vertex ``w``; the fine cell of the new block
-in octant ``e`` of ``w`` lies in old voxel ``w - 1 + e``. The old object is
-thus the new blocks each holding the octants of its configuration, and a
-step fills the blocks of the outward moves and empties those of the inward
-moves. :func:`realise_moves` does that **one fine cell at a time, a cell only
-when it is a simple point** (Bertrand's topological numbers in its 3^n
-neighbourhood are 1 for the object and for the background, with the
-connectivity pair asked; :mod:`isoflow.digital.simple`). Blocks of one
-sub-lattice class (``w`` modulo 2) are two fine cells apart, so a whole class
-is tested at once, and a block's ``2^n`` octants go one after the other;
-sweeps repeat until nothing changes. A block that cannot reach its move is
-*stuck*: its move is reversed (inward <-> outward) once and the sweeps go on.
-When no block is left stuck, the new object is reached from the old one by
-simple deformations only, so nothing was split, merged, opened or closed --
-not even a split and a merge at once that would leave the Betti numbers
-equal. When blocks stay stuck, :func:`guarded_step` tries three last resorts
-checked by the Betti numbers, and refuses the step (returns None) when none
-keeps them: the run stops as ``guard-blocked``. See docs/flow.md.
+One guarded step is the first of these that makes progress (see docs/flow.md):
+
+1. **The flow step** (Definition 18, eqs. 5.15-5.18), carried out on the
+   grid refined twice by simple deformations only (:func:`realise_moves`):
+   old voxel ``v`` is a block of ``2^n`` fine cells, and so is the new voxel
+   centred at vertex ``w``; the fine cell of the new block in octant ``e`` of
+   ``w`` lies in old voxel ``w - 1 + e``. The old object is thus the new
+   blocks each holding the octants of its configuration, and a step fills
+   the blocks of the outward moves and empties those of the inward moves,
+   **one fine cell at a time, a cell only when it is a simple point**
+   (:mod:`isoflow.digital.simple`). A block that cannot reach its move is
+   *stuck*: its move is reversed (inward <-> outward) once. When no block
+   stays stuck, the new object is reached from the old one by simple
+   deformations: nothing was split, merged, opened or closed -- not even a
+   split and a merge at once that would leave the Betti numbers equal.
+2. **The largest part of it that keeps the topology** (``partial``): when
+   blocks stay stuck both ways, they are all given their plain move, all
+   moved outward or all inward, whichever first keeps the Betti numbers.
+3. **A thinning step** on the same lattice (:func:`thinning_step`): simple
+   voxels are deleted, subfield by subfield, the most convex first (the
+   vertex index ``f`` of eq. 4.8 summed over a voxel's corners): the convex
+   and flat ones in one step, the concave ones only when none of those is.
+
+A flow step (1 or 2) is progress when it removes voxels, or, while the run's
+allowance of non-shrinking steps lasts (the bar rule and a ball's first
+steps grow), when it reaches a shape (up to translation) the run has not had
+before. When neither flow nor thinning makes progress, the state is a fixed
+point: no simple voxel is left, and the run ends ``converged``.
 """
 
 from __future__ import annotations
 
+import hashlib
 import itertools
+import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..digital.configurations import configurations
+from ..digital.indices import f_lut, planar_class_lut
 from ..digital.lattice import DigitalObject
-from ..digital.simple import neighbour_bits, topological_numbers
+from ..digital.simple import delete_simple, neighbourhood_codes, simple_codes
 from ..digital.topology import betti_numbers
+from ..scale.memory import check_fits
 from .motion import flow_connectivity, flow_moves
 
 # --------------------------------------------------------------------------
-# Topology control: the step as a sequence of simple deformations
+# The flow step as a sequence of simple deformations
 # --------------------------------------------------------------------------
 #
 # On the grid refined twice, old voxel v is the 2^n block of fine cells
@@ -45,19 +60,48 @@ from .motion import flow_connectivity, flow_moves
 # same blocks holding exactly the octants of their configuration. Changing
 # the blocks one fine cell at a time, each cell only when it is simple,
 # deforms the old object into the new one without changing its topology.
+# The cells 2w+1+e of one octant e all have the same coordinates modulo 2:
+# they are two apart, outside each other's 3^n neighbourhood, so the cells
+# of one octant are tested and changed together (8 batches per sweep in 3D).
 
 
-def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bool = True, max_sweeps: int = 256):
+def _octants(nd: int) -> list[tuple[int, ...]]:
+    """Octant ``e`` of configuration bit ``b = e_0 + 2 e_1 + 4 e_2``, in bit order."""
+    return [tuple((b >> i) & 1 for i in range(nd)) for b in range(1 << nd)]
+
+
+def fine_grid(cfg: np.ndarray) -> np.ndarray:
+    """The old object on the grid refined twice, indexed so that the block
+    of new voxel (vertex) ``w`` is cells ``2w+1 .. 2w+2``: octant ``e`` of
+    ``w`` is full iff bit ``e`` of ``cfg[w]`` is set. One cell of pad."""
+    nd = cfg.ndim
+    shape = tuple(2 * n + 2 for n in cfg.shape)
+    check_fits(2 * math.prod(shape), f"topology control's refined grid ({'x'.join(map(str, shape))} cells)",
+               hint="run the guarded flow on a smaller or cropped volume")
+    fine = np.zeros(shape, bool)
+    for b, e in enumerate(_octants(nd)):
+        sl = tuple(slice(1 + ei, 1 + ei + 2 * s, 2) for ei, s in zip(e, cfg.shape))
+        fine[sl] = (cfg >> b) & 1
+    return fine
+
+
+def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bool = True, max_sweeps: int = 256,
+                  by_class: bool = False):
     """Carry out the moves ``keep`` of one step by simple deformations.
 
     Every boundary vertex's block of fine cells is filled (outward) or
     emptied (inward) one cell at a time, a cell only when it is a simple
-    point of the current fine object; blocks of one sub-lattice class (``w``
-    modulo 2) are 2 fine cells apart, so a whole class is tested at once, and
-    the 2^n octants of a block go one after the other. Sweeps repeat until
-    nothing changes. A block that cannot reach its move is *stuck*; with
-    ``flip`` its move is reversed once (inward <-> outward) and the sweeps go
-    on.
+    point of the current fine object; the cells of one octant of all blocks
+    are two fine cells apart, so they are tested at once, and the ``2^n``
+    octants go one after the other. Sweeps repeat until nothing changes. A
+    block that cannot reach its move is *stuck*; with ``flip`` its move is
+    reversed once (inward <-> outward) and the sweeps go on.
+
+    ``by_class`` keeps the order of the first implementation: the blocks of
+    one sub-lattice class (``w`` modulo 2) after the other, each class octant
+    by octant (64 batches a sweep instead of 8). The greedy order decides
+    which vertex of a vanishing part is left stuck, so :func:`change_region`
+    uses it to report the same place as before for plain runs.
 
     Returns ``(done, stuck)``: ``done`` is the realised keep-mask (valid when
     ``stuck`` is empty: the new object is then homotopy equivalent to the old
@@ -66,80 +110,177 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     nd = cfg.ndim
     full = (1 << (1 << nd)) - 1
     target = keep.copy()
-    boundary = (cfg != 0) & (cfg != full)
-    fine = np.zeros(tuple(2 * n + 2 for n in cfg.shape), bool)  # one fine cell of pad
-    octs = [tuple((b >> i) & 1 for i in range(nd)) for b in range(1 << nd)]
-    # the fine object of the old volume: block w holds the octants of cfg[w]
-    for b, e in enumerate(octs):
-        sl = tuple(slice(1 + ei, 1 + ei + 2 * s, 2) for ei, s in zip(e, cfg.shape))
-        fine[sl] = (cfg >> b) & 1
-    pending = boundary.copy()
-    flipped = np.zeros(cfg.shape, bool)
-    classes = list(itertools.product((0, 1), repeat=nd))
+    fine = fine_grid(cfg)
+    cells = fine.ravel()
+    strides = np.array([int(np.prod(fine.shape[d + 1:])) for d in range(nd)], np.int64)
+    octants = [np.array(e) @ strides for e in _octants(nd)]
+    pending = np.flatnonzero((cfg != 0) & (cfg != full))
+    w = np.stack(np.unravel_index(pending, cfg.shape), axis=1)
+    base = (2 * w + 1) @ strides
+    klass = (w & 1) @ (1 << np.arange(nd))[::-1]  # the classes in itertools.product order
+    goal = target.ravel()[pending]
+    flipped = np.zeros(len(pending), bool)
+    batches = [(k, off) for k in range(1 << nd) for off in octants] if by_class else [(None, off) for off in octants]
     for _ in range(max_sweeps):
         changed = False
-        for cls in classes:
-            sub = tuple(slice(c, None, 2) for c in cls)
-            w_cls = np.argwhere(pending[sub]) * 2 + np.array(cls)
-            if len(w_cls) == 0:
-                continue
-            tgt = target[tuple(w_cls.T)]
-            for e in octs:
-                cells = 2 * w_cls + 1 + np.array(e)
-                state = fine[tuple(cells.T)]
-                todo = state != tgt
-                if not todo.any():
-                    continue
-                c = cells[todo]
-                t_obj, t_bg = topological_numbers(neighbour_bits(fine, c), connectivity)
-                ok = (t_obj == 1) & (t_bg == 1)
-                if ok.any():
-                    fine[tuple(c[ok].T)] = tgt[todo][ok]
-                    changed = True
-            # blocks now uniform are done
-            blocks = np.stack([fine[tuple((2 * w_cls + 1 + np.array(e)).T)] for e in octs], axis=1)
-            uniform = (blocks == tgt[:, None]).all(axis=1)
-            pending[tuple(w_cls[uniform].T)] = False
-        if not changed:
-            if not flip:
-                break
-            todo = pending & ~flipped
+        for k, off in batches:
+            c, want = base + off, goal
+            if k is not None:
+                c, want = c[klass == k], goal[klass == k]
+            todo = cells[c] != want
             if not todo.any():
+                continue
+            c, want = c[todo], want[todo]
+            ok = simple_codes(neighbourhood_codes(fine, c), nd, connectivity)
+            if ok.any():
+                cells[c[ok]] = want[ok]
+                changed = True
+        # blocks now uniform are done
+        left = np.zeros(len(base), bool)
+        for off in octants:
+            left |= cells[base + off] != goal
+        pending, base, klass, goal, flipped = pending[left], base[left], klass[left], goal[left], flipped[left]
+        if not changed:
+            if not flip or flipped.all():
                 break
-            target[todo] = ~target[todo]
-            flipped |= todo
-    return target, pending
-
-
-def guarded_step(obj: DigitalObject, connectivity: int | None = 6, betti: list[int] | None = None):
-    """One step that keeps the topology, or None when the guard blocks.
-
-    Returns ``(new_object, moves_reversed)``: the plain moves carried out as
-    simple deformations (:func:`realise_moves`), with the moves that could not
-    be carried out reversed; ``moves_reversed`` counts those vertices. None
-    when some vertex can go neither way, or (a safety net that the
-    construction should never need) when the Betti numbers differ.
-    """
-    conn = flow_connectivity(obj.ndim, connectivity)
-    if betti is None:
-        betti = betti_numbers(obj.volume, conn)
-    cfg, keep = flow_moves(obj, conn)
-    done, stuck = realise_moves(cfg, keep, conn)
-    tries = [done]
-    if stuck.any():
-        # last resort, checked by the Betti numbers only: the stuck vertices
-        # all with their plain move, all outward, all inward
-        tries = [np.where(stuck, keep, done), done | stuck, done & ~stuck]
-    for vol in tries:
-        if betti_numbers(vol, conn) == betti:
-            return obj.on_dual_lattice(vol).cropped(), int((vol != keep).sum())
-    return None
+            goal = np.where(flipped, goal, ~goal)
+            target.ravel()[pending] = goal
+            flipped[:] = True
+    stuck = np.zeros(cfg.shape, bool)
+    stuck.ravel()[pending] = True
+    return target, stuck
 
 
 def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int):
     """World bbox [min, max] of the vertices whose plain move is not a simple
     deformation (module docstring), or of the new object when none is."""
-    _, stuck = realise_moves(cfg, keep, conn, flip=False)
+    _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
     where = stuck if stuck.any() else keep
     box = obj.on_dual_lattice(where).bbox()
     return None if box is None else [box[0].tolist(), box[1].tolist()]
+
+
+def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):
+    """The flow step to the other lattice under topology control (steps 1-2
+    of the module docstring): ``(new object, kind, moves reversed)`` with
+    kind ``flow`` or ``partial``, or None when no resolution of the stuck
+    blocks keeps the Betti numbers."""
+    cfg, keep = flow_moves(obj, conn)
+    done, stuck = realise_moves(cfg, keep, conn)
+    if not stuck.any():
+        return obj.on_dual_lattice(done).cropped(), "flow", int((done != keep).sum())
+    for vol in (np.where(stuck, keep, done), done | stuck, done & ~stuck):
+        if vol.any() and betti_numbers(vol, conn) == betti:
+            return obj.on_dual_lattice(vol).cropped(), "partial", int((vol != keep).sum())
+    return None
+
+
+# --------------------------------------------------------------------------
+# Thinning on the same lattice
+# --------------------------------------------------------------------------
+
+
+def convexity(volume: np.ndarray) -> np.ndarray:
+    """Per voxel: the vertex index ``f`` of its ``2^n`` corners summed
+    (eq. 4.8 in 3D, ``f = (sum s(alpha_i)) (sum |s(alpha_i)|)``: 9 at a
+    convex corner (+,+,+), 1 on a convex edge, 0 on a flat, -1 on a concave
+    edge, -9 at a concave corner; the sign of eq. 4.2 in 2D: 1 convex, 0
+    flat, -1 concave). It is the signed curvature concentrated at the voxel:
+    72 for an isolated voxel, 12 for a box corner, 2 on a box edge, 0 on a
+    face, -9 at a concave corner. Not-well-composed corners count 0."""
+    nd = volume.ndim
+    if nd == 3:
+        lut = f_lut()
+    else:
+        cls = planar_class_lut()
+        lut = np.where(cls >= 0, 1 - cls, 0)
+    f = lut[configurations(volume)]
+    out = np.zeros(volume.shape, np.int64)
+    for e in itertools.product((0, 1), repeat=nd):
+        out += f[tuple(slice(ei, ei + s) for ei, s in zip(e, volume.shape))]
+    return out
+
+
+def thinning_step(volume: np.ndarray, connectivity: int) -> np.ndarray | None:
+    """Delete simple voxels, the most convex first.
+
+    The voxels next to the background are ordered by :func:`convexity`; the
+    convex and flat ones (0 and above: where the flow moves inward) go level
+    by level from the most convex down, each level subfield by subfield
+    (:func:`isoflow.digital.simple.delete_simple`), the test always on the
+    volume left so far. Only when none of them is simple do the concave ones
+    (where the flow moves outward) get their turn, the least concave level
+    first. The step is a sequence of simple deletions and keeps every Betti
+    number. Returns the thinned volume (same shape), or None when no voxel
+    is simple.
+    """
+    padded = np.pad(np.asarray(volume, bool), 1)
+    conv = np.pad(convexity(volume), 1)
+    # only voxels next to the background can be simple
+    inner = np.ones(volume.shape, bool)
+    for e in itertools.product((0, 1, 2), repeat=volume.ndim):
+        inner &= padded[tuple(slice(ei, ei + s) for ei, s in zip(e, volume.shape))]
+    flat = np.flatnonzero(np.pad(volume & ~inner, 1))
+    level = conv.ravel()[flat]
+    values = np.unique(level)[::-1]
+    for tier in (values[values >= 0], values[values < 0]):
+        deleted = sum(len(delete_simple(padded, flat[level == v], connectivity)) for v in tier)
+        if deleted:
+            return padded[(slice(1, -1),) * volume.ndim]
+    return None
+
+
+# --------------------------------------------------------------------------
+# One guarded step
+# --------------------------------------------------------------------------
+
+
+def shape_key(obj: DigitalObject) -> bytes:
+    """A digest of the object's shape up to translation (and lattice)."""
+    h = hashlib.sha1(repr(obj.volume.shape).encode())
+    h.update(np.packbits(obj.volume).tobytes())
+    return h.digest()
+
+
+@dataclass(frozen=True)
+class GuardedStep:
+    """What :func:`guarded_step` did: ``new`` is the next state (the same
+    object at a fixed point); ``kind`` is ``flow`` (the whole flow step),
+    ``partial`` (the flow step with its stuck blocks resolved), ``thinning``
+    (same lattice) or ``fixed-point``; ``reversed_moves`` counts the vertices
+    whose move was reversed."""
+
+    new: DigitalObject
+    kind: str
+    reversed_moves: int = 0
+
+
+def guarded_step(
+    obj: DigitalObject,
+    connectivity: int | None = 6,
+    betti: list[int] | None = None,
+    *,
+    seen: set | None = None,
+    may_grow: bool = True,
+) -> GuardedStep:
+    """One step that keeps the topology (module docstring); never refuses.
+
+    ``seen`` holds the :func:`shape_key` of the states a run has had; a flow
+    step that does not remove voxels is taken only with ``may_grow`` and
+    when its shape is new (not in ``seen`` and not the current shape).
+    """
+    obj = DigitalObject.of(obj)
+    conn = flow_connectivity(obj.ndim, connectivity)
+    if betti is None:
+        betti = betti_numbers(obj.volume, conn)
+    got = lattice_step(obj, conn, betti)
+    if got is not None:
+        new, kind, n_reversed = got
+        if new.voxels < obj.voxels or (
+            may_grow and shape_key(new) != shape_key(obj) and (seen is None or shape_key(new) not in seen)
+        ):
+            return GuardedStep(new, kind, n_reversed)
+    thinned = thinning_step(obj.volume, conn)
+    if thinned is not None:
+        return GuardedStep(replace(obj, volume=thinned).cropped(), "thinning")
+    return GuardedStep(obj, "fixed-point")

@@ -12,13 +12,13 @@ and records per step the voxels, parity, Betti numbers, chi, energy
   object when none is found. The last step, to the empty set, is the limit
   of the flow and not reported.
 * **With** ``guard=True`` every step is
-  :func:`isoflow.flow.guard.guarded_step`: the plain moves carried out by
-  simple deformations, the stuck ones reversed, every step checked with the
-  full Betti numbers, so **no guarded step changes them**. If no repair
-  keeps them the run stops, ``guard-blocked``, before that step. Under the
-  guard the object never vanishes (that would change b0): when a guarded
-  step gives back the same shape (typically one voxel per component, on one
-  corner of the last box) the run ends ``converged``.
+  :func:`isoflow.flow.guard.guarded_step`: the flow step carried out by
+  simple deformations, else the part of it that keeps the Betti numbers,
+  else a curvature-ordered thinning step on the same lattice; **no guarded
+  step changes the Betti numbers**, and the run never stops half-way: it
+  ends ``converged`` at a fixed point, a state with no simple voxel left
+  that no flow step makes smaller or new (docs/flow.md). Each guarded
+  step's record says which kind of step it was (``move``).
 """
 
 from __future__ import annotations
@@ -72,15 +72,16 @@ class FlowResult:
     ``states``: the objects themselves (when kept). ``stop_reason``:
     ``vanished`` (the object became empty), ``steps`` (the number of steps
     asked was done), ``topology-change`` (``until_topology_change``: stopped
-    before the step that would change the Betti numbers), ``guard-blocked``
-    (no repair restores them), ``converged`` (guarded: the step would give
-    back the same shape), ``cycle`` (the shape repeats with period 2) or
-    ``max-steps`` (safety cap). ``limit``: ``center`` (world coordinates of
+    before the step that would change the Betti numbers), ``converged``
+    (guarded: a fixed point, see :mod:`isoflow.flow.guard`), ``cycle``
+    (plain: the shape repeats with period 2) or ``max-steps`` (safety cap of
+    plain runs). ``limit``: ``center`` (world coordinates of
     the centre of the last non-empty state's bbox) and ``last_shape``
     (``cuboid`` when that state is a full box, ``other`` otherwise,
     ``not-reached`` when the run stopped before vanishing or converging).
     ``topology_changes``: one dict per change of the Betti numbers (step,
-    before, after, where = world bbox, applied).
+    before, after, where = world bbox, applied). ``guard_steps`` (guarded
+    runs): how many steps were ``flow``, ``partial`` and ``thinning``.
     """
 
     steps: list[dict]
@@ -91,6 +92,7 @@ class FlowResult:
     connectivity: int
     guard: bool
     reversed_moves: int = 0
+    guard_steps: dict | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -101,6 +103,7 @@ class FlowResult:
             "limit": self.limit,
             "topology_changes": self.topology_changes,
             "reversed_moves": self.reversed_moves,
+            **({"guard_steps": self.guard_steps} if self.guard else {}),
         }
 
 
@@ -147,11 +150,18 @@ def run_flow(
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
             raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
     cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
+    if guard and steps is None and max_steps is None:
+        cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
+    # guarded: flow steps that do not shrink the object, and the shapes seen
+    allowance, seen = default_max_steps(obj), set()
     current = obj.cropped()
     records = [_record(current, 0, conn)]
     states = [current] if keep_states else []
     changes: list[dict] = []
     reversed_moves = 0
+    kinds = {"flow": 0, "partial": 0, "thinning": 0}
+    if guard:
+        seen.add(control.shape_key(current))
     history = [current.volume]
     last_nonempty = current.volume if current.voxels else None
     stop = None
@@ -160,25 +170,30 @@ def run_flow(
         if current.voxels == 0:
             stop = "vanished"
             break
-        if step >= cap:
+        if cap is not None and step >= cap:
             stop = "steps" if steps is not None else "max-steps"
             break
         before = records[-1]["betti"]
         if guard:
-            got = control.guarded_step(current, conn, before)
-            if got is None:
-                stop = "guard-blocked"
-                break
-            new, n_reversed = got
-            reversed_moves += n_reversed
-            if _same(new.volume, current.volume):
+            got = control.guarded_step(current, conn, before, seen=seen, may_grow=allowance > 0)
+            if got.kind == "fixed-point":
                 stop = "converged"
                 break
+            new = got.new
+            reversed_moves += got.reversed_moves
+            kinds[got.kind] += 1
+            if new.voxels >= current.voxels:
+                allowance -= 1
+            seen.add(control.shape_key(new))
         else:
             cfg, keep = flow_moves(current, conn)
             new = current.on_dual_lattice(keep).cropped()
         rec = _record(new, step + 1, conn)
-        if rec["betti"] != before and not guard and new.voxels:
+        if guard:
+            rec["move"] = got.kind
+            if rec["betti"] != before:  # simple deformations cannot do this
+                raise RuntimeError(f"guarded {got.kind} step {step + 1} changed the Betti numbers {before} -> {rec['betti']}")
+        elif rec["betti"] != before and new.voxels:
             change = {
                 "step": step + 1,
                 "before": before,
@@ -199,7 +214,7 @@ def run_flow(
             last_nonempty = new.volume
         if progress is not None:
             progress(step, new)
-        if len(history) >= 2 and _same(history[-2], new.volume) and new.voxels:
+        if not guard and len(history) >= 2 and _same(history[-2], new.volume) and new.voxels:
             stop = "cycle"
         history = (history + [new.volume])[-2:]
     reached = stop in ("vanished", "converged")
@@ -212,6 +227,7 @@ def run_flow(
         connectivity=conn,
         guard=guard,
         reversed_moves=reversed_moves,
+        guard_steps=kinds if guard else None,
     )
 
 

@@ -1,0 +1,34 @@
+"""Plain (unguarded) runs stay state for state what they were before topology
+control was reworked (issue 10).
+
+``plain_reference.json`` was written by ``python tests/flow/shapes.py`` from
+the code of commit 0b245b6, before any change to the guard: per object and
+connectivity, a digest of every state (shape, offset, parity, voxels), the
+stop reason, the limit and the topology changes with their place. The objects
+are seeded (tori, annulus prisms, linked rings, a figure eight, a hollow
+ball, edge and vertex contacts, random unions of boxes and noise, in 3D and
+2D).
+"""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from shapes import plain_runs
+
+REFERENCE = json.loads(Path(__file__).with_name("plain_reference.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def now():
+    return plain_runs()
+
+
+def test_same_objects(now):
+    assert sorted(now) == sorted(REFERENCE) and len(REFERENCE) == 64
+
+
+@pytest.mark.parametrize("key", sorted(REFERENCE))
+def test_plain_run_is_unchanged(now, key):
+    assert now[key] == REFERENCE[key]
