@@ -144,14 +144,17 @@ def cmd_surface(args) -> int:
     from .digital.topology import default_connectivity
     from .mesh import export
     from .mesh.outputs import check_output_path, check_picture_path
+    from .mesh.readback import check_surface_file
     from .scale.memory import check_fits
 
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
-    out = check_output_path(args.output, args.force, suffixes=(".ply", ".obj"))
+    out = check_output_path(args.output, args.force, suffixes=export.SURFACE_SUFFIXES, what="surface")
+    suffix = out.suffix.lower()
+    if args.ascii and suffix != ".ply":
+        raise IsoflowError(f"{out}: --ascii applies to .ply output only")
     if args.png:
         check_picture_path(args.png, args.force)
-    suffix = out.suffix.lower()
     obj = load_input(args)
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
@@ -170,17 +173,26 @@ def cmd_surface(args) -> int:
         "per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
         "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)",
     )
-    faces = mesh.triangles() if args.triangulate else mesh.polygons()
-    if suffix == ".ply":
-        export.write_ply(out, export.mesh_vertex_table(mesh, obj), faces, ascii=args.ascii, force=args.force, comments=comments)
-    else:
-        export.write_obj(out, obj.world(mesh.vertices), faces, force=args.force, comments=comments)
-    chi = mesh.euler_characteristic
+    written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                   force=args.force, comments=comments)
     print(
-        f"{out}: {len(mesh.vertices)} vertices, {len(faces)} faces, "
-        f"{len(mesh.components())} closed surfaces, V-E+F = {chi}"
+        f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
+        f"{len(mesh.components())} closed surfaces, V-E+F = {mesh.euler_characteristic}"
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
+    welded = export.shared_positions(mesh) if suffix == ".stl" else 0
+    if welded:
+        print(f"isoflow surface: note: {out}: STL keeps no shared vertices, so readers weld the split copies at "
+              f"{welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart",
+              file=sys.stderr)
+    check = check_surface_file(out, mesh, obj, topology=not welded)
+    if not check["agree"]:
+        print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
+        return 1
+    t = check["trimesh"]
+    print(f"{out}: trimesh reads it back {'watertight' if t['watertight'] else 'welded'}, V-E+F = {t['euler_number']}, "
+          f"genus {t['genus']}, volume {t['volume']:.6g}: as isoflow counts"
+          + (" (volume only: welded contacts)" if welded else ""))
     if args.png:
         from .mesh.render import render_surface
 
@@ -335,12 +347,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_info)
 
-    p = sub.add_parser("surface", help="write the boundary quad mesh (PLY/OBJ) with curvature attributes")
+    p = sub.add_parser("surface", help="write the boundary quad mesh (PLY/OBJ/STL/GLB) with curvature attributes")
     add_input_arguments(p)
     add_connectivity(p)
-    p.add_argument("-o", "--output", required=True, help="OUT.ply or OUT.obj")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.ply, OUT.obj, OUT.stl (binary, triangles) or OUT.glb (triangles, vertex colours)")
     p.add_argument("--ascii", action="store_true", help="ASCII PLY instead of binary")
-    p.add_argument("--triangulate", action="store_true", help="two triangles per quad")
+    p.add_argument("--triangulate", action="store_true", help="triangles in every format (two per plain quad)")
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
