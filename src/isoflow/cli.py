@@ -277,7 +277,6 @@ def cmd_flow(args) -> int:
         last = args.steps if args.steps is not None else default_max_steps(obj)
         conn = flow_connectivity(obj.ndim, args.connectivity)
         writer = FlowWriter(args.out, conn, args.force, last_step=last)
-        writer.add(0, obj.cropped())
     # a box of side s vanishes in s steps; the bar appears once the run lasts
     total, show, start = args.steps or max(obj.volume.shape), progress_callback("flow"), time.monotonic()
     drawn = []
@@ -289,18 +288,32 @@ def cmd_flow(args) -> int:
             show(min(step, total - 1), total)
             drawn.append(step)
 
-    result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
-                      progress=progress, keep_states=False)
-    if drawn:
-        show(total, total)
-    if writer is not None:
-        writer.finish(result)
+    try:
+        if writer is not None:
+            writer.add(0, obj.cropped())
+        result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                          progress=progress, keep_states=False)
+        if drawn:
+            show(total, total)
+        if writer is not None:
+            writer.finish(result)
+    except BaseException:
+        if writer is not None:  # the previous run's files stay as they were
+            writer.abort()
+        raise
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
-        return 0
-    print(format_flow(result, str(args.input)))
-    if args.out:
-        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)")
+    else:
+        print(format_flow(result, str(args.input)))
+        if args.out:
+            print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)")
+            if writer.checks:
+                print(f"{args.out}: {len(writer.checks) - len(writer.problems)} of {len(writer.checks)} step surfaces "
+                      "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)")
+    if writer is not None and writer.problems:
+        for line in writer.problems:
+            print(f"isoflow flow: error: {line}", file=sys.stderr)
+        return 1
     return 0
 
 
@@ -401,8 +414,8 @@ def main(argv: list[str] | None = None) -> int:
         name = getattr(args, "input", None) or getattr(args, "mesh", "")
         print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("isoflow: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
+        print("isoflow: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         return 130
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
         import os

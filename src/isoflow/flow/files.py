@@ -3,42 +3,75 @@
 :class:`FlowWriter` writes them while the flow runs (``isoflow flow --out``),
 so that no state is kept in memory; :func:`export_flow` writes them from a
 finished :class:`~isoflow.flow.run.FlowResult` that kept its states.
+
+Every step file is read back with trimesh as soon as it is written
+(:func:`isoflow.mesh.readback.check_surface_file`); the CSV records
+trimesh's watertightness, Euler number and genus next to isoflow's own.
+
+A run is written into a hidden staging directory inside the output
+directory and moved into place only when complete: an error or an
+interruption leaves the previous run's files as they were, and the old
+run's step files are removed only after the new run has finished writing.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import shutil
 from pathlib import Path
 
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from ..mesh import export
+from ..mesh.outputs import atomic_write, check_writable_dir, sync_directory, temp_sibling, write_error
+from ..mesh.readback import check_surface_file
 from .run import FlowResult
 
+#: the CSV's per-step columns on the step's surface file (3D flows)
+CHECK_COLUMNS = ["mesh_euler", "mesh_genus", "trimesh_watertight", "trimesh_euler", "trimesh_genus"]
 
-def flow_table(result: FlowResult) -> tuple[list[str], list[list]]:
-    """The per-step figures as CSV columns and rows (bbox as min/max per axis)."""
+#: names a run writes besides its step files; --force replaces them
+RUN_FILES = ("flow.csv", "flow.png", "shapes.png")
+
+
+def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
+    """The per-step figures as CSV columns and rows (bbox as min/max per
+    axis); with ``checks`` (step -> :func:`check_surface_file` result, 3D),
+    isoflow's and trimesh's reading of each step's surface file."""
     nd = len(result.steps[0]["betti"])
     ndim = 3 if nd == 3 else 2
     axes = "xyz"[:ndim]
     header = ["step", "voxels", "parity"] + [f"b{i}" for i in range(nd)]
     header += ["euler_characteristic", "energy"]
     header += [f"bbox_min_{a}" for a in axes] + [f"bbox_max_{a}" for a in axes]
+    if checks is not None:
+        header += CHECK_COLUMNS
     rows = []
     for s in result.steps:
         box = s["bbox"] or [[""] * ndim, [""] * ndim]
-        rows.append([s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]])
+        row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]]
+        if checks is not None:
+            c = checks.get(s["step"])
+            row += [""] * len(CHECK_COLUMNS) if c is None else [
+                c["isoflow"]["euler_number"], c["isoflow"]["genus"],
+                c["trimesh"]["watertight"], c["trimesh"]["euler_number"], c["trimesh"]["genus"],
+            ]
+        rows.append(row)
     return header, rows
 
 
 def check_output_dir(directory, force: bool = False):
-    """The output directory as a Path; refuses a file, or a directory that
-    already holds files unless ``force``."""
+    """The output directory as a Path; refuses a file, a directory that
+    already holds files unless ``force``, or one that cannot be written."""
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
     if out.is_dir() and any(out.iterdir()) and not force:
         raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
+    parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
+    check_writable_dir(parent, f"the flow's files ({out})")
     return out
 
 
@@ -51,14 +84,23 @@ def export_flow(result: FlowResult, directory, force: bool = False, plot: bool =
 
     Refuses a directory that already holds files unless ``force``. Needs a
     result run with ``keep_states=True``; :class:`FlowWriter` writes the same
-    files while the flow runs, without keeping the states.
+    files while the flow runs, without keeping the states. Raises
+    :class:`IsoflowError` when trimesh reads a step file differently from
+    isoflow's counts (the files are written all the same).
     """
     if not result.states and result.steps:
         raise IsoflowError("export_flow needs the states: run the flow with keep_states=True")
     writer = FlowWriter(directory, result.connectivity, force, last_step=len(result.steps) - 1)
-    for rec, state in zip(result.steps, result.states):
-        writer.add(rec["step"], state)
-    return writer.finish(result, plot=plot)
+    try:
+        for rec, state in zip(result.steps, result.states):
+            writer.add(rec["step"], state)
+        written = writer.finish(result, plot=plot)
+    except BaseException:
+        writer.abort()
+        raise
+    if writer.problems:
+        raise IsoflowError(f"{writer.problems[0]} ({len(writer.problems)} step file(s) disagree)")
+    return written
 
 
 class FlowWriter:
@@ -68,8 +110,14 @@ class FlowWriter:
     adding the input as step 0, and run with ``keep_states=False``: memory
     then stays that of one state plus the few kept for ``shapes.png``, where
     keeping every state of a shrinking box of side s costs about s^4/4 bytes.
-    ``force`` also removes the files a previous flow left (``step_*.ply``, the
-    CSV and pictures), so that no stale step survives beside the new ones.
+
+    Files go to a staging directory inside the output directory;
+    :meth:`finish` moves them into place and only then removes what a
+    previous run left (``step_*.ply``, the CSV and pictures) when ``force``;
+    :meth:`abort` (on an error or interruption) removes the staging
+    directory and leaves the previous run untouched. ``checks`` holds
+    trimesh's reading of every step file, ``problems`` one line per file
+    that reads differently from isoflow's counts.
     """
 
     #: states kept for shapes.png: at most twice the panels, evenly spaced
@@ -77,14 +125,17 @@ class FlowWriter:
 
     def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999):
         out = check_output_dir(directory, force)
-        out.mkdir(parents=True, exist_ok=True)
-        if force:
-            for old in [*out.glob("step_*.ply"), *(out / n for n in ("flow.csv", "flow.png", "shapes.png"))]:
-                if old.is_file():
-                    old.unlink()
+        self.created = not out.exists()
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            self.stage = temp_sibling(out / "run", directory=True)
+        except OSError as exc:
+            raise write_error(out, exc, existed=not self.created) from None
         self.out, self.connectivity = out, connectivity
         self.width = max(3, len(str(last_step)))
-        self.written: list = []
+        self.staged: list[str] = []  # names written into the staging directory
+        self.checks: dict[int, dict] = {}
+        self.problems: list[str] = []
         self.frames: list = []  # (step, state), every `stride`-th step
         self.stride = 1
         self.last = None  # the last non-empty (step, state)
@@ -101,26 +152,33 @@ class FlowWriter:
         if state.ndim != 3:
             return
         mesh = boundary_mesh(state.volume, self.connectivity)
-        path = self.out / f"step_{step:0{self.width}d}.ply"
+        name = f"step_{step:0{self.width}d}.ply"
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
-        export.write_ply(path, export.mesh_vertex_table(mesh, state), mesh.polygons(), force=True, comments=comments)
-        self.written.append(path)
+        with self._named():
+            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments)
+        self.staged.append(name)
+        check = check_surface_file(written["path"], mesh, state)
+        self.checks[step] = check
+        if not check["agree"]:
+            self.problems.append(check["problem"].replace(str(self.stage / name), str(self.out / name)))
 
     def finish(self, result: FlowResult, plot: bool = True) -> list:
-        """Write flow.csv and the pictures; returns every path written."""
+        """Write flow.csv and the pictures, move the run into place and
+        remove what a previous run left; returns every path written."""
         import csv
 
-        header, rows = flow_table(result)
-        csv_path = self.out / "flow.csv"
-        with open(csv_path, "w", newline="") as fh:
+        header, rows = flow_table(result, self.checks if result.steps and len(result.steps[0]["betti"]) == 3 else None)
+        with self._named(), atomic_write(self.stage / "flow.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(header)
             w.writerows(rows)
-        self.written.append(csv_path)
+        self.staged.append("flow.csv")
         if plot:
             from .pictures import render_flow, render_flow_shapes
 
-            self.written.append(render_flow(result, self.out / "flow.png"))
+            with self._named():
+                render_flow(result, self.stage / "flow.png")
+            self.staged.append("flow.png")
             # the last non-empty state closes the row unless it is sampled already
             frames = list(self.frames)
             if self.last is not None and (not frames or frames[-1][0] != self.last[0]):
@@ -128,7 +186,47 @@ class FlowWriter:
             if frames and frames[0][1].ndim == 3:
                 records = {rec["step"]: rec for rec in result.steps}
                 shown = [(state, records[step]) for step, state in frames]
-                self.written.append(
-                    render_flow_shapes(shown, self.out / "shapes.png", result.connectivity, self.PANELS)
-                )
-        return self.written
+                with self._named():
+                    render_flow_shapes(shown, self.stage / "shapes.png", result.connectivity, self.PANELS)
+                self.staged.append("shapes.png")
+        return self._commit()
+
+    @contextlib.contextmanager
+    def _named(self):
+        """A failed write names the file it was for, not its staging copy,
+        and says that the previous run is kept."""
+        try:
+            yield
+        except (OSError, IsoflowError, KeyboardInterrupt) as exc:
+            if isinstance(exc, OSError):
+                exc = write_error(Path(exc.filename or self.stage), exc, existed=False)
+            msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
+            msg = msg.rstrip("; ") + "; the previous run's files in the directory are unchanged"
+            raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
+
+    def _commit(self) -> list:
+        """Move the staged files over the output directory's, then remove the
+        previous run's files that this run did not replace."""
+        new = set(self.staged)
+        try:
+            for name in self.staged:
+                os.replace(self.stage / name, self.out / name)
+            sync_directory(self.out)
+            for old in [*self.out.glob("step_*.ply"), *(self.out / n for n in RUN_FILES)]:
+                if old.name not in new and old.is_file():
+                    old.unlink()
+        except OSError as exc:
+            raise write_error(self.out, exc, existed=True) from None
+        finally:
+            shutil.rmtree(self.stage, ignore_errors=True)
+        return [self.out / name for name in self.staged]
+
+    def abort(self) -> None:
+        """Remove the staging directory (and the output directory when this
+        writer made it and nothing else is in it): the previous run stays."""
+        shutil.rmtree(self.stage, ignore_errors=True)
+        if self.created:
+            try:
+                self.out.rmdir()
+            except OSError:
+                pass

@@ -122,11 +122,14 @@ def atomic_path(path: str | os.PathLike, directory: bool = False):
         yield tmp
         _fsync_tree(tmp) if directory else _fsync_file(tmp)
         _replace(tmp, path, directory)
-        _fsync_dir(path.parent)
+        sync_directory(path.parent)
     except BaseException as exc:
         _remove(tmp)
         if isinstance(exc, OSError):
             raise write_error(path, exc, existed) from None
+        if isinstance(exc, KeyboardInterrupt):  # say which file, keep the exit status of an interrupt
+            kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
+            raise KeyboardInterrupt(f"{path}: interrupted while writing; {kept}") from None
         raise
 
 
@@ -155,11 +158,12 @@ def _fsync_tree(root: Path) -> None:
     for parent, _, files in os.walk(root):
         for name in files:
             _fsync_file(Path(parent) / name)
-        _fsync_dir(Path(parent))
+        sync_directory(Path(parent))
 
 
-def _fsync_dir(directory: Path) -> None:
-    """Make a rename durable; some file systems cannot sync a directory."""
+def sync_directory(directory: str | os.PathLike) -> None:
+    """Make the renames in a directory durable (``fsync`` of the directory;
+    some file systems cannot sync one, and that is not an error)."""
     try:
         fd = os.open(directory, os.O_RDONLY)
     except OSError:

@@ -37,15 +37,39 @@ def trimesh_figures(path, weld: bool = False) -> dict:
     """Watertightness (every edge in two faces, consistently wound), Euler
     number, genus and volume of a mesh file as trimesh reads it: with
     ``process=False`` (no vertex merge, the file's own vertices), or with
-    trimesh's default merge when ``weld`` (STL stores no shared vertices)."""
+    trimesh's default merge when ``weld`` (STL stores no shared vertices).
+
+    A PLY is parsed by trimesh's PLY reader and the mesh built without its
+    colours, which cost a third of the read (measured on flow steps) and do
+    not touch the topology. The volume is the signed volume of the
+    triangles trimesh read (``trimesh.volume`` also integrates the inertia:
+    another third).
+    """
     import trimesh
 
-    tm = trimesh.load(Path(path), force="mesh", process=weld)
+    path = Path(path)
+    if path.suffix.lower() == ".ply" and not weld:
+        from trimesh.exchange.ply import load_ply
+
+        with open(path, "rb") as fh:
+            kw = load_ply(fh)
+        tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
+    else:
+        tm = trimesh.load(path, force="mesh", process=weld)
     closed = bool(len(tm.faces) and tm.is_watertight and tm.is_winding_consistent)
     euler = int(tm.euler_number)
     bodies = int(tm.body_count) - int(np.count_nonzero(~tm.referenced_vertices))
     genus = bodies - euler // 2 if closed and euler % 2 == 0 else None
-    return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": float(tm.volume) if len(tm.faces) else 0.0}
+    return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": signed_volume(tm.vertices, tm.faces)}
+
+
+def signed_volume(vertices, triangles) -> float:
+    """The volume a closed, outward-oriented triangle mesh encloses (the
+    divergence theorem: a sixth of the sum of ``v0 . (v1 x v2)``)."""
+    v = np.asarray(vertices, np.float64)[np.asarray(triangles)]
+    if not len(v):
+        return 0.0
+    return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6)
 
 
 def check_surface_file(path, mesh, obj, *, topology: bool = True) -> dict:

@@ -16,7 +16,7 @@ import numpy as np
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.arrays import binary
-from .outputs import check_output_path
+from .outputs import atomic_write, check_output_path
 
 VOLUME_SUFFIXES = (".npy", ".npz")
 POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
@@ -150,7 +150,7 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     """Save an object as ``.npz`` with its offset, parity, pitch and origin."""
     path = Path(path)
     check_output_path(path, force)
-    with open(path, "wb") as fh:
+    with atomic_write(path) as fh:  # whole or not at all: never a truncated .npz
         np.savez_compressed(
             fh,
             volume=obj.volume,
