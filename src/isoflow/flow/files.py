@@ -5,8 +5,11 @@ so that no state is kept in memory; :func:`export_flow` writes them from a
 finished :class:`~isoflow.flow.run.FlowResult` that kept its states.
 
 Every step file is read back with trimesh as soon as it is written
-(:func:`isoflow.mesh.readback.check_surface_file`); the CSV records
-trimesh's watertightness, Euler number and genus next to isoflow's own.
+(:func:`isoflow.mesh.readback.check_surface_file`), on a worker thread while
+the flow computes the next step (numpy, numba and trimesh's sorts release
+the GIL: on a machine with a free core the check costs little wall time);
+the CSV records trimesh's watertightness, Euler number and genus next to
+isoflow's own.
 
 A run is written into a hidden staging directory inside the output
 directory and moved into place only when complete: an error or an
@@ -54,7 +57,7 @@ def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str
         row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]]
         if checks is not None:
             c = checks.get(s["step"])
-            row += [""] * len(CHECK_COLUMNS) if c is None else [
+            row += [""] * len(CHECK_COLUMNS) if c is None or c.get("skipped") else [
                 c["isoflow"]["euler_number"], c["isoflow"]["genus"],
                 c["trimesh"]["watertight"], c["trimesh"]["euler_number"], c["trimesh"]["genus"],
             ]
@@ -122,8 +125,10 @@ class FlowWriter:
 
     #: states kept for shapes.png: at most twice the panels, evenly spaced
     PANELS = 6
+    #: step files waiting for their check: bounds the meshes kept in memory
+    PENDING = 2
 
-    def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999):
+    def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999, check: bool = True):
         out = check_output_dir(directory, force)
         self.created = not out.exists()
         try:
@@ -136,6 +141,9 @@ class FlowWriter:
         self.staged: list[str] = []  # names written into the staging directory
         self.checks: dict[int, dict] = {}
         self.problems: list[str] = []
+        self.check = check  # read every step file back with trimesh
+        self._pool = None  # the checking thread, started with the first step file
+        self._pending: list = []  # (step, name, future), oldest first
         self.frames: list = []  # (step, state), every `stride`-th step
         self.stride = 1
         self.last = None  # the last non-empty (step, state)
@@ -157,9 +165,22 @@ class FlowWriter:
         with self._named():
             written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments)
         self.staged.append(name)
-        check = check_surface_file(written["path"], mesh, state)
+        if not self.check:
+            return
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="isoflow-readback")
+        self._pending.append((step, name, self._pool.submit(check_surface_file, written["path"], mesh, state)))
+        while len(self._pending) > self.PENDING:
+            self._collect()
+
+    def _collect(self) -> None:
+        """Wait for the oldest check and record it."""
+        step, name, future = self._pending.pop(0)
+        check = future.result()
         self.checks[step] = check
-        if not check["agree"]:
+        if check["agree"] is False:
             self.problems.append(check["problem"].replace(str(self.stage / name), str(self.out / name)))
 
     def finish(self, result: FlowResult, plot: bool = True) -> list:
@@ -167,7 +188,11 @@ class FlowWriter:
         remove what a previous run left; returns every path written."""
         import csv
 
-        header, rows = flow_table(result, self.checks if result.steps and len(result.steps[0]["betti"]) == 3 else None)
+        while self._pending:
+            self._collect()
+        self._stop_checks()
+        three_d = result.steps and len(result.steps[0]["betti"]) == 3
+        header, rows = flow_table(result, self.checks if three_d and self.check else None)
         with self._named(), atomic_write(self.stage / "flow.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(header)
@@ -221,9 +246,15 @@ class FlowWriter:
             shutil.rmtree(self.stage, ignore_errors=True)
         return [self.out / name for name in self.staged]
 
+    def _stop_checks(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool, self._pending = None, []
+
     def abort(self) -> None:
         """Remove the staging directory (and the output directory when this
         writer made it and nothing else is in it): the previous run stays."""
+        self._stop_checks()
         shutil.rmtree(self.stage, ignore_errors=True)
         if self.created:
             try:
