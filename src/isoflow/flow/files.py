@@ -28,7 +28,7 @@ from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from ..mesh import export
-from ..mesh.outputs import atomic_write, check_writable_dir, sync_directory, temp_sibling, write_error
+from ..mesh.outputs import atomic_write, check_writable_dir, sync_directory, sync_file, temp_sibling, write_error
 from ..mesh.readback import check_surface_file
 from .run import FlowResult
 
@@ -118,7 +118,9 @@ class FlowWriter:
     :meth:`finish` moves them into place and only then removes what a
     previous run left (``step_*.ply``, the CSV and pictures) when ``force``;
     :meth:`abort` (on an error or interruption) removes the staging
-    directory and leaves the previous run untouched. ``checks`` holds
+    directory and leaves the previous run untouched. Step files are flushed
+    to the disk (``fsync``) on the worker thread that reads them back, before
+    they are moved into place. ``checks`` holds
     trimesh's reading of every step file, ``problems`` one line per file
     that reads differently from isoflow's counts.
     """
@@ -162,23 +164,28 @@ class FlowWriter:
         mesh = boundary_mesh(state.volume, self.connectivity)
         name = f"step_{step:0{self.width}d}.ply"
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
-        with self._named():
-            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments)
+        with self._named():  # flushed to the disk on the worker thread
+            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
         self.staged.append(name)
-        if not self.check:
-            return
         if self._pool is None:
             from concurrent.futures import ThreadPoolExecutor
 
             self._pool = ThreadPoolExecutor(1, thread_name_prefix="isoflow-readback")
-        self._pending.append((step, name, self._pool.submit(check_surface_file, written["path"], mesh, state)))
+        self._pending.append((step, name, self._pool.submit(self._sync_and_check, written["path"], mesh, state)))
         while len(self._pending) > self.PENDING:
             self._collect()
 
+    def _sync_and_check(self, path, mesh, state):
+        sync_file(path)  # before the file is moved into place
+        return check_surface_file(path, mesh, state) if self.check else None
+
     def _collect(self) -> None:
-        """Wait for the oldest check and record it."""
+        """Wait for the oldest worker task and record its check."""
         step, name, future = self._pending.pop(0)
-        check = future.result()
+        with self._named():
+            check = future.result()
+        if check is None:
+            return
         self.checks[step] = check
         if check["agree"] is False:
             self.problems.append(check["problem"].replace(str(self.stage / name), str(self.out / name)))

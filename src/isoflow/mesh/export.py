@@ -102,6 +102,7 @@ def write_ply(
     ascii: bool = False,
     force: bool = False,
     comments: tuple[str, ...] = (),
+    sync: bool = True,
 ) -> Path:
     """Write a PLY with per-vertex scalar columns and polygon faces.
 
@@ -109,7 +110,8 @@ def write_ply(
     faces are written grouped by size, each in its row's cyclic order.
     Binary little-endian by default; a binary PLY takes faces of one size
     only (trimesh's binary reader cannot read a mixed list), so mixed sizes
-    raise ``ValueError``: triangulate them first.
+    raise ``ValueError``: triangulate them first. ``sync``: see
+    :func:`isoflow.mesh.outputs.atomic_path`.
     """
     path = check_output_path(path, force)
     names = list(columns)
@@ -125,7 +127,7 @@ def write_ply(
     header.append(f"element face {sum(len(g) for _, g in groups)}")
     header.append("property list uchar int vertex_indices")
     header.append("end_header")
-    with atomic_write(path) as fh:
+    with atomic_write(path, sync=sync) as fh:
         fh.write(("\n".join(header) + "\n").encode("ascii"))
         if ascii:
             fmt = " ".join("%.9g" if columns[k].dtype.kind == "f" else "%d" for k in names)
@@ -154,11 +156,12 @@ def write_obj(
     *,
     force: bool = False,
     comments: tuple[str, ...] = (),
+    sync: bool = True,
 ) -> Path:
     """Write an OBJ with polygon faces (quads stay quads); ``faces`` as in
     :func:`write_ply`, each row in its cyclic order."""
     path = check_output_path(path, force)
-    with atomic_write(path, "w") as fh:
+    with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
             fh.write(f"# {c}\n")
         if len(vertices):
@@ -168,7 +171,8 @@ def write_obj(
     return path
 
 
-def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False) -> Path:
+def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False,
+              sync: bool = True) -> Path:
     """Write a binary STL (trimesh's exporter): one record per triangle with
     its normal and three corner positions; STL keeps no shared vertices."""
     import trimesh
@@ -176,7 +180,7 @@ def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarr
     path = check_output_path(path, force)
     mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), triangles, process=False)
     data = trimesh.exchange.stl.export_stl(mesh)
-    with atomic_write(path) as fh:
+    with atomic_write(path, sync=sync) as fh:
         fh.write(data)
     return path
 
@@ -188,6 +192,7 @@ def write_glb(
     *,
     force: bool = False,
     comment: str = "",
+    sync: bool = True,
 ) -> Path:
     """Write a binary glTF (trimesh's exporter): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
@@ -203,7 +208,7 @@ def write_glb(
     if comment:
         mesh.metadata["isoflow"] = comment
     data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=False)
-    with atomic_write(path) as fh:
+    with atomic_write(path, sync=sync) as fh:
         fh.write(data)
     return path
 
@@ -225,22 +230,24 @@ def write_surface(
     triangulate: bool = False,
     force: bool = False,
     comments: tuple[str, ...] = (),
+    sync: bool = True,
 ) -> dict:
     """Write a boundary mesh in the format its suffix names (PLY, OBJ, STL,
     GLB), in world coordinates. Returns what was written: ``path``,
-    ``faces`` (the kind) and ``face_count``."""
+    ``faces`` (the kind) and ``face_count``. ``sync=False`` leaves the
+    ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`)."""
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
     kind, faces = surface_faces(mesh, suffix, ascii=ascii, triangulate=triangulate)
     comments = (*comments, f"faces: {kind}")
     if suffix == ".ply":
-        write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments)
+        write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments, sync=sync)
     elif suffix == ".obj":
-        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments)
+        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments, sync=sync)
     elif suffix == ".stl":
-        write_stl(path, obj.world(mesh.vertices), faces, force=force)
+        write_stl(path, obj.world(mesh.vertices), faces, force=force, sync=sync)
     else:
-        write_glb(path, mesh_vertex_table(mesh, obj), faces, force=force, comment="; ".join(comments))
+        write_glb(path, mesh_vertex_table(mesh, obj), faces, force=force, comment="; ".join(comments), sync=sync)
     return {"path": path, "faces": kind, "face_count": len(faces)}
 
 

@@ -101,7 +101,7 @@ def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike, directory: bool = False):
+def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = True):
     """Give a temporary path beside ``path`` to write to; rename it over
     ``path`` when the block ends without error.
 
@@ -110,7 +110,9 @@ def atomic_path(path: str | os.PathLike, directory: bool = False):
     flushed to the disk before the rename and the directory after it. On
     any error, or an interruption, the temporary file is removed and the
     target left as it was; an ``OSError`` becomes an :class:`IsoflowError`
-    naming ``path``, anything else propagates.
+    naming ``path``, anything else propagates. ``sync=False`` leaves the
+    flushing to the caller (:func:`sync_file`, :func:`sync_directory`): a
+    flow's step files are flushed on its worker thread.
     """
     path = Path(path)
     existed = path.exists()
@@ -120,9 +122,11 @@ def atomic_path(path: str | os.PathLike, directory: bool = False):
         raise write_error(path, exc, existed) from None
     try:
         yield tmp
-        _fsync_tree(tmp) if directory else _fsync_file(tmp)
+        if sync:
+            _fsync_tree(tmp) if directory else sync_file(tmp)
         _replace(tmp, path, directory)
-        sync_directory(path.parent)
+        if sync:
+            sync_directory(path.parent)
     except BaseException as exc:
         _remove(tmp)
         if isinstance(exc, OSError):
@@ -134,19 +138,20 @@ def atomic_path(path: str | os.PathLike, directory: bool = False):
 
 
 @contextlib.contextmanager
-def atomic_write(path: str | os.PathLike, mode: str = "wb", **open_kwargs):
+def atomic_write(path: str | os.PathLike, mode: str = "wb", sync: bool = True, **open_kwargs):
     """Open a temporary file beside ``path`` for writing (``mode`` "w" or
     "wb", ``open`` keywords such as ``newline``) and rename it over
     ``path`` when the block ends without error (see :func:`atomic_path`)."""
     if mode not in ("w", "wb"):
         raise ValueError(f"atomic_write writes new files: mode 'w' or 'wb', not {mode!r}")
     path = Path(path)
-    with atomic_path(path) as tmp, open(tmp, mode, **open_kwargs) as fh:
+    with atomic_path(path, sync=sync) as tmp, open(tmp, mode, **open_kwargs) as fh:
         yield fh
         fh.flush()  # an error here, or in closing, is reported like one in writing
 
 
-def _fsync_file(path: Path) -> None:
+def sync_file(path: str | os.PathLike) -> None:
+    """Flush a written file to the disk (``fsync``)."""
     fd = os.open(path, os.O_RDONLY)
     try:
         os.fsync(fd)
@@ -157,7 +162,7 @@ def _fsync_file(path: Path) -> None:
 def _fsync_tree(root: Path) -> None:
     for parent, _, files in os.walk(root):
         for name in files:
-            _fsync_file(Path(parent) / name)
+            sync_file(Path(parent) / name)
         sync_directory(Path(parent))
 
 
