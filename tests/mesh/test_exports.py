@@ -14,9 +14,9 @@ import numpy as np
 import pymeshlab
 import pytest
 import trimesh
+from conftest import random_volume, torus
 from skimage.measure import euler_number
 
-from conftest import random_volume, torus
 from isoflow import boundary_mesh
 from isoflow.cli import main
 
@@ -77,9 +77,9 @@ def test_random_volumes_every_format_opens_in_trimesh_and_pymeshlab(tmp_path, rn
         euler = 2 * euler_number(np.pad(v, 1), SKIMAGE_CONN[conn]) + 2 * m.pinched
         seen["doubled edges"] += m.midpoints > 0
         seen["pinched"] += m.pinched > 0
-        seen["split vertices"] += int(((m.sheet > 0).any()))
+        seen["split vertices"] += int((m.sheet > 0).any())
         for suffix, options in (FORMATS[i % 5], FORMATS[(i + 2) % 5]):  # two formats per volume
-            rc, path, out, err = surface(tmp_path, v, conn, suffix, options)
+            rc, path, _, err = surface(tmp_path, v, conn, suffix, options)
             assert rc == 0, err
             if suffix != ".stl":
                 assert_reads_as(path, v, conn, euler)
@@ -109,7 +109,7 @@ def test_ring_of_eight_voxels(tmp_path, suffix, options):
     m = boundary_mesh(v, 6)
     assert np.count_nonzero((m.polygons() >= 0).sum(axis=1) == 5) == 4
     assert m.euler_characteristic == 0 and [c["genus"] for c in m.components()] == [1]
-    rc, path, out, err = surface(tmp_path, v, 6, suffix, options)
+    rc, path, _, err = surface(tmp_path, v, 6, suffix, options)
     assert rc == 0, err
     if suffix == ".stl":  # the ring's doubled edges are welded by every STL reader
         assert "STL keeps no shared vertices" in err
@@ -122,7 +122,7 @@ def test_ring_of_eight_voxels(tmp_path, suffix, options):
 def test_two_voxels_sharing_an_edge_at_26(tmp_path, suffix, options):
     v = np.zeros((2, 2, 1), bool)
     v[0, 0, 0] = v[1, 1, 0] = True
-    rc, path, out, err = surface(tmp_path, v, 26, suffix, options)
+    rc, path, _, err = surface(tmp_path, v, 26, suffix, options)
     assert rc == 0, err
     assert_reads_as(path, v, 26, 2)  # one sphere through the shared edge
     assert len(read_trimesh(path).split(only_watertight=False)) == 1
@@ -131,7 +131,7 @@ def test_two_voxels_sharing_an_edge_at_26(tmp_path, suffix, options):
 def test_well_composed_stl_opens_watertight_after_the_weld(tmp_path):
     v = torus(6, 2.5)
     assert boundary_mesh(v).midpoints == 0 and not (boundary_mesh(v).sheet > 0).any()
-    rc, path, out, err = surface(tmp_path, v, 6, ".stl")
+    rc, path, _, err = surface(tmp_path, v, 6, ".stl")
     assert rc == 0 and err == ""
     assert_reads_as(path, v, 6, 0)
     assert read_pymeshlab(path)["genus"] == 1
@@ -166,7 +166,7 @@ def test_file_contents_per_format(tmp_path):
 
 
 def test_ascii_only_for_ply(tmp_path):
-    rc, path, out, err = surface(tmp_path, np.ones((1, 1, 1), bool), 6, ".obj", ("--ascii",))
+    rc, path, _, err = surface(tmp_path, np.ones((1, 1, 1), bool), 6, ".obj", ("--ascii",))
     assert rc == 2 and "--ascii applies to .ply" in err and not path.exists()
 
 
@@ -181,7 +181,7 @@ def test_readback_disagreement_exits_1_naming_the_file(tmp_path, monkeypatch):
         return kind, faces[1:]
 
     monkeypatch.setattr(export, "surface_faces", lossy)
-    rc, path, out, err = surface(tmp_path, np.ones((2, 2, 2), bool), 6, ".ply")
+    rc, path, _, err = surface(tmp_path, np.ones((2, 2, 2), bool), 6, ".ply")
     assert rc == 1
     line, = err.strip().splitlines()
     assert str(path) in line and "trimesh reads" in line and "watertight False" in line

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import torus
+
 from isoflow.cli import main
 from isoflow.errors import IsoflowError
 from isoflow.mesh import outputs

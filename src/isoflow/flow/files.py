@@ -28,7 +28,14 @@ from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from ..mesh import export
-from ..mesh.outputs import atomic_write, check_writable_dir, sync_directory, sync_file, temp_sibling, write_error
+from ..mesh.outputs import (
+    atomic_write,
+    check_writable_dir,
+    sync_directory,
+    sync_file,
+    temp_sibling,
+    write_error,
+)
 from ..mesh.readback import check_surface_file
 from .run import FlowResult
 

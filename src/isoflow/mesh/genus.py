@@ -26,7 +26,6 @@ from ..scale.memory import default_budget, gib
 from .load import load_mesh, mesh_defects
 from .voxelize import voxelize
 
-
 # --------------------------------------------------------------------------
 # the mesh's own topology
 # --------------------------------------------------------------------------
@@ -109,7 +108,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
         "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex > 1)),
-        "vertices": int(len(used)),
+        "vertices": len(used),
         "faces": int(nf),
         # vertices on faces of more than one component: components touching
         "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
@@ -282,7 +281,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
             if need > default_budget():
                 return out, f"the memory budget: {res} would need about {gib(need)}"
         t = time.monotonic()
-        vol, origin, pitch = voxelize(vertices, faces, resolution=res, allow_open=True, progress=progress)
+        vol, _, pitch = voxelize(vertices, faces, resolution=res, allow_open=True, progress=progress)
         betti = betti_numbers(vol, connectivity)
         entry = {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
                  "connectivity": connectivity, "betti": betti, "genus": betti[1],
