@@ -119,7 +119,7 @@ def test_progress_bars_on_a_terminal_only(tmp_path, monkeypatch):
     z[:] = torus(6, 2)[:16, :16, :10]
     runs = {
         "voxelize:": ["voxelize", TORUS, "--resolution", 24, "-o", tmp_path / "v.npz", "--force"],
-        "genus at 16, 24:": ["genus", TORUS, "--resolution", 24, 16],
+        "genus:": ["genus", TORUS, "--resolution", 24, 16],
         "flow: ": ["flow", tmp_path / "t.npy"],  # a counter: the length is not known in advance
         "blocks:": ["info", tmp_path / "t.zarr"],  # out of core, per layer of blocks
     }

@@ -71,7 +71,8 @@ def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys
     np.save(tmp_path / "stack.npy", tifffile.imread(tmp_path / "stack.tif"))
     s = run(capsys, "surface", tmp_path / "stack.tif", "-o", tmp_path / "s.ply")
     n = run(capsys, "surface", tmp_path / "stack.npy", "-o", tmp_path / "n.ply")
-    assert s.split(":", 1)[1] == n.split(":", 1)[1]  # vertices, faces, surfaces, V-E+F
+    first = [out.splitlines()[0].split(":", 1)[1] for out in (s, n)]
+    assert first[0] == first[1]  # vertices, faces, surfaces, V-E+F (the read-back's volume is in um^3)
     # .npy axes are (z, y, x) in index units; the TIFF's are x, y, z in micrometres
     same_points(ply_vertices(tmp_path / "s.ply"), ply_vertices(tmp_path / "n.ply")[:, ::-1] * [0.5, 0.25, 2.0])
     assert info(capsys, tmp_path / "stack.tif")["euler_characteristic"] == \

@@ -163,14 +163,17 @@ def cmd_surface(args) -> int:
     from .digital.topology import default_connectivity
     from .mesh import export
     from .mesh.outputs import check_output_path, check_picture_path
+    from .mesh.readback import check_surface_file
     from .scale.memory import check_fits
 
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
-    out = check_output_path(args.output, args.force, suffixes=(".ply", ".obj"))
+    out = check_output_path(args.output, args.force, suffixes=export.SURFACE_SUFFIXES, what="surface")
+    suffix = out.suffix.lower()
+    if args.ascii and suffix != ".ply":
+        raise IsoflowError(f"{out}: --ascii applies to .ply output only")
     if args.png:
         check_picture_path(args.png, args.force)
-    suffix = out.suffix.lower()
     obj = load_input(args)
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
@@ -189,17 +192,33 @@ def cmd_surface(args) -> int:
         "per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
         "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)",
     )
-    faces = mesh.triangles() if args.triangulate else mesh.polygons()
-    if suffix == ".ply":
-        export.write_ply(out, export.mesh_vertex_table(mesh, obj), faces, ascii=args.ascii, force=args.force, comments=comments)
-    else:
-        export.write_obj(out, obj.world(mesh.vertices), faces, force=args.force, comments=comments)
-    chi = mesh.euler_characteristic
+    written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                   force=args.force, comments=comments)
+    comps = mesh.components()
     print(
-        f"{out}: {len(mesh.vertices)} vertices, {len(faces)} faces, "
-        f"{len(mesh.components())} closed surfaces, V-E+F = {chi}"
+        f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
+        f"{len(comps)} closed surfaces, V-E+F = {mesh.euler_characteristic}"
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
+    welded = export.shared_positions(mesh) if suffix == ".stl" else 0
+    if welded:
+        print(f"isoflow surface: note: {out}: STL keeps no shared vertices, so readers weld the split copies at "
+              f"{welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart",
+              file=sys.stderr)
+    check = None if args.no_check else check_surface_file(out, mesh, obj, topology=not welded, components=comps)
+    if check is not None and check.get("skipped"):
+        print(f"isoflow surface: note: {out}: not read back ({check['skipped']})", file=sys.stderr)
+    elif check is not None and not check["agree"]:
+        print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
+        return 1
+    elif check is not None:
+        t = check["trimesh"]
+        if welded:
+            print(f"{out}: trimesh reads back volume {t['volume']:.6g} after its weld, as isoflow counts "
+                  "(the welded contacts leave no manifold to compare)")
+        else:
+            print(f"{out}: trimesh reads it back watertight, V-E+F = {t['euler_number']}, genus {t['genus']}, "
+                  f"volume {t['volume']:.6g}: as isoflow counts")
     if args.png:
         from .mesh.render import render_surface
 
@@ -228,19 +247,40 @@ def cmd_genus(args) -> int:
 
     conn = args.connectivity or 6
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
-    with progress_bar(args, f"genus at {', '.join(map(str, sorted(res)))}") as show:
-        report = verify_genus(args.mesh, res, conn, progress=show)
+    for name in ("resolution", "max_resolution"):
+        values = getattr(args, name)
+        for r in values if isinstance(values, list) else [values]:
+            if r is not None and r < 1:
+                raise IsoflowError(f"--{name.replace('_', '-')} must be a positive integer, got {r}")
+    if args.time_limit is not None and not args.time_limit > 0:
+        raise IsoflowError(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
+    kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
+    with progress_bar(args, "genus") as show:
+
+        def stepped(entry):  # the automatic stepping, one line per resolution on a terminal
+            if show is not None:
+                print(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
+                      f"({entry['seconds']:.1f} s)", file=sys.stderr)
+
+        report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped, **kw)
     if args.json:
         print(json.dumps(report))
         return 0
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
     per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
+    solid = report["solid"]
+    crossings = ("?" if report["self_intersecting_faces"] is None else
+                 f"{report['self_intersecting_faces']} faces cross their own component, "
+                 f"{report['faces_crossing_other_components']} cross another component")
     lines = [
         f"{args.mesh}: {m['vertices']} vertices, {m['faces']} faces",
         f"  mesh        watertight {m['watertight']}, {m['components']} components, V-E+F {m['euler_number']}, "
         f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
+        f"  crossings   {crossings} (pymeshlab)",
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
                            f"genus {m3['genus']} over {m3['components']} components (genus() of the whole mesh: {m3['genus_whole_mesh']})"),
+        "  solid       " + (f"genus {solid['genus']}, {solid['surfaces']} boundary surfaces, volume {solid['volume']:.6g} "
+                            "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
     ]
     for d in report["digital"]:
@@ -279,6 +319,8 @@ def progress_bar(args, label: str, unit: str = "it"):
         if not bars:
             bars.append(tqdm(desc=label, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
                              dynamic_ncols=True, bar_format=None if total is None else BAR_FORMAT))
+        if total != bars[0].total:  # genus: the stepping adds a resolution
+            bars[0].total = total
         bars[0].update(done - bars[0].n)
 
     try:
@@ -306,10 +348,9 @@ def cmd_flow(args) -> int:
     if args.out:
         last = args.steps if args.steps is not None else default_max_steps(obj)
         conn = flow_connectivity(obj.ndim, args.connectivity)
-        writer = FlowWriter(args.out, conn, args.force, last_step=last)
+        writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
         if args.volumes:
             writer.write_volumes(args.volumes)
-        writer.add(0, obj.cropped())
     with progress_bar(args, "flow", unit=" steps") as show:
 
         def progress(step, state):
@@ -318,18 +359,36 @@ def cmd_flow(args) -> int:
             if show is not None:  # a counter unless --steps says how many
                 show(step, args.steps)
 
-        result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
-                          progress=progress, keep_states=False)
-    if writer is not None:
-        writer.finish(result)
+        try:
+            if writer is not None:
+                writer.add(0, obj.cropped())
+            result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                              progress=progress, keep_states=False)
+            if writer is not None:
+                writer.finish(result)
+        except BaseException:
+            if writer is not None:  # the previous run's files stay as they were
+                writer.abort()
+            raise
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
+    else:
+        print(format_flow(result, str(args.input)))
+        if args.out:
+            print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
+                  + (f", volumes (step_*{args.volumes})" if args.volumes else ""))
+    if writer is None:
         return 0
-    print(format_flow(result, str(args.input)))
-    if args.out:
-        print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
-              + (f", volumes (step_*{args.volumes})" if args.volumes else ""))
-    return 0
+    read = [c for c in writer.checks.values() if not c.get("skipped")]
+    skipped = [c["skipped"] for c in writer.checks.values() if c.get("skipped")]
+    if read and not args.json:
+        print(f"{args.out}: {len(read) - len(writer.problems)} of {len(read)} step surfaces "
+              "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)")
+    if skipped:
+        print(f"isoflow flow: note: {len(skipped)} step files not read back ({skipped[0]})", file=sys.stderr)
+    for line in writer.problems:
+        print(f"isoflow flow: error: {line}", file=sys.stderr)
+    return 1 if writer.problems else 0
 
 
 def format_flow(result, name: str) -> str:
@@ -433,13 +492,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_info)
 
-    p = add_command(sub, "surface", "write the boundary quad mesh (PLY/OBJ) with curvature attributes")
+    p = add_command(sub, "surface", "write the boundary quad mesh (PLY/OBJ/STL/GLB) with curvature attributes")
     add_input_arguments(p)
     add_connectivity(p)
-    p.add_argument("-o", "--output", required=True, help="OUT.ply or OUT.obj")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.ply, OUT.obj, OUT.stl (binary, triangles) or OUT.glb (triangles, vertex colours)")
     p.add_argument("--ascii", action="store_true", help="ASCII PLY instead of binary")
-    p.add_argument("--triangulate", action="store_true", help="two triangles per quad")
+    p.add_argument("--triangulate", action="store_true", help="triangles in every format (two per plain quad)")
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
+    p.add_argument("--no-check", action="store_true", help="do not read the written file back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
 
@@ -457,7 +518,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
     p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
-    p.add_argument("--resolution", type=int, nargs="+", help="voxels along the longest side (default: 64 128)")
+    p.add_argument("--resolution", type=int, nargs="+",
+                   help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
+                        "digital Betti numbers of the last two agree")
+    p.add_argument("--max-resolution", type=int, help="stop doubling beyond this (default 1024)")
+    p.add_argument("--time-limit", type=float, metavar="SECONDS",
+                   help="stop doubling when the next resolution would end past this (default 60)")
+    p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
     p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)
@@ -471,6 +538,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)
 
@@ -536,8 +604,8 @@ def main(argv: list[str] | None = None) -> int:
         name = getattr(args, "input", None) or getattr(args, "mesh", "")
         print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("isoflow: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
+        print("isoflow: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         return 130
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
         import os

@@ -19,10 +19,11 @@ from isoflow.mesh.voxelize import voxelize_file
 
 MESHES = Path(__file__).resolve().parents[2] / "meshes"
 MANIFEST = {e["filename"]: e for e in json.loads((MESHES / "manifest.json").read_text())["meshes"]}
-# resolutions per mesh (coarse, fine); the verdict uses the finest
+# resolutions tried first per mesh (the verdict steps on until the Betti
+# numbers of the last two agree)
 RESOLUTIONS = {
     "spot.ply": (32, 64), "bob_small.ply": (32, 64), "torus.obj": (32, 64), "eight.off": (32, 64),
-    "featuretype.STL": (64, 128), "platonic_shelf.obj": (32, 64), "rabbit.obj": (128,),
+    "featuretype.STL": (64, 128), "platonic_shelf.obj": (32, 64),
     "hourglass_ico.obj": (32, 64), "plate_holes.STL": (64, 128),
 }
 
@@ -35,8 +36,10 @@ def test_genus_agrees_with_manifest(name):
     assert r["mesh"]["components"] == known["components"]
     assert r["mesh"]["euler_number"] == known["euler"]
     assert r["digital"][-1]["genus"] == known["genus"]
+    assert r["digital"][-1]["betti"] == r["digital"][-2]["betti"] and r["converged"]
     assert r["agree"] is True
-    assert r["verdict"].startswith(f"agree: genus {known['genus']}")
+    assert r["verdict"].startswith(f"agree: {'solid genus' if name == 'hourglass_ico.obj' else 'genus'} {known['genus']}")
+    assert r["self_intersecting_faces"] == 0 and r["solid_genus"] == known["genus"]
     if "genus" in known["tool_results"]["manifold3d"] and known["components"] == 1:
         assert r["manifold3d"]["genus"] == known["tool_results"]["manifold3d"]["genus"]
 
@@ -55,15 +58,89 @@ def test_pinched_vertex_is_explained():
     assert "error" in r["pymeshlab"]  # pymeshlab's genus is -1 there
 
 
-def test_overlapping_solids_are_explained():
-    r = verify_genus(MESHES / "rabbit.obj", (128,))
-    assert r["mesh"]["components"] == 9 and r["digital"][-1]["betti"][0] == 1
-    assert "9 components bound 1 solid" in r["verdict"]
+def test_overlapping_primitives_get_no_false_agree():
+    """rabbit.obj: 9 primitives, some overlapping by a sliver (6e-5 of a
+    volume of 6.5). At 128 across the digital genus happened to be 0 (the
+    old verdict: agree); 64, 128 and 256 give b1 = 2, 0, 4: not converged."""
+    r = verify_genus(MESHES / "rabbit.obj", (64, 128), max_resolution=256)
+    assert r["mesh"]["components"] == 9 and r["faces_crossing_other_components"] > 0
+    assert r["self_intersecting_faces"] == 0
+    import manifold3d as m3
+
+    from isoflow.mesh.load import load_mesh
+
+    v, f = load_mesh(MESHES / "rabbit.obj")  # welded (trimesh's own load leaves it open)
+    parts = m3.Manifold(m3.Mesh(vert_properties=np.asarray(v, np.float32),
+                                tri_verts=np.asarray(f, np.uint32))).decompose()
+    union = m3.Manifold.batch_boolean(parts, m3.OpType.Add)
+    assert r["solid_genus"] == sum(p.genus() for p in union.decompose()) == MANIFEST["rabbit.obj"]["genus"]
+    assert [d["resolution"] for d in r["digital"]] == [64, 128, 256]
+    assert r["agree"] is False and not r["converged"]
+    assert r["verdict"].startswith("not converged at 256")
+    assert "largest resolution allowed (256" in r["verdict"] and "9 components overlap" in r["verdict"]
+
+
+def two_tori(path):
+    """Two rings in one plane crossing at two points: each genus 1, their
+    union genus 3 (the lens between them is a third hole)."""
+    a = trimesh.creation.torus(1.0, 0.3, major_sections=48, minor_sections=16)
+    b = a.copy()
+    b.apply_translation([1.27, 0.03, 0.0])
+    trimesh.util.concatenate([a, b]).export(path)
+    return a, b
+
+
+def test_overlapping_components_compare_with_the_solid_genus(tmp_path):
+    a, b = two_tori(tmp_path / "two_tori.obj")
+    r = verify_genus(tmp_path / "two_tori.obj", (48, 96))
+    import manifold3d as m3
+
+    def manifold(t):
+        return m3.Manifold(m3.Mesh(vert_properties=np.asarray(t.vertices, np.float32),
+                                   tri_verts=np.asarray(t.faces, np.uint32)))
+
+    union = manifold(a) + manifold(b)
+    assert r["mesh"]["genus"] == 2 and r["faces_crossing_other_components"] > 0
+    assert r["solid_genus"] == union.genus() == 3
+    assert r["digital"][-1]["betti"] == r["digital"][-2]["betti"] == [1, 3, 0]
+    assert r["agree"] and r["verdict"].startswith("agree: solid genus 3")
+
+
+def test_self_intersecting_mesh_is_named(tmp_path):
+    """A spindle torus (tube radius above the ring's) passes through itself:
+    its one component has genus 1, the solid it wraps none of that."""
+    trimesh.creation.torus(1.0, 1.5, major_sections=48, minor_sections=24).export(tmp_path / "spindle.obj")
+    r = verify_genus(tmp_path / "spindle.obj", (32, 64))
+    assert r["mesh"]["genus"] == 1 and r["mesh"]["components"] == 1
+    assert r["self_intersecting_faces"] > 0 and r["solid_genus"] is None
+    assert r["agree"] is False and r["verdict"].startswith("self-intersecting")
+    assert "--resolution" not in r["verdict"] and [d["resolution"] for d in r["digital"]] == [32, 64]
+
+
+def test_not_converged_names_the_resolution_and_the_budget():
+    r = verify_genus(MESHES / "plate_holes.STL", (16,), step=False)
+    assert r["verdict"].startswith("not converged at 16") and not r["agree"]
+    r = verify_genus(MESHES / "rabbit.obj", (32, 64), time_limit=1e-6)
+    assert [d["resolution"] for d in r["digital"]] == [32, 64]
+    assert "not converged at 64" in r["verdict"] and "time limit (1e-06 s" in r["verdict"]
+
+
+def test_two_coarse_grids_that_agree_on_a_wrong_genus_are_not_the_end():
+    """plate_holes.STL at 16 and 32 across: both close all five holes
+    (Betti numbers (1, 0, 0) twice); the stepping goes on until the genus
+    is the mesh's, or says it disagrees when the budget ends."""
+    r = verify_genus(MESHES / "plate_holes.STL", (16, 32))
+    assert r["digital"][0]["betti"] == r["digital"][1]["betti"] == [1, 0, 0]
+    assert len(r["digital"]) > 2 and r["agree"] and r["digital"][-1]["genus"] == 5
+    r = verify_genus(MESHES / "plate_holes.STL", (16, 32), max_resolution=32)
+    assert r["verdict"].startswith("disagree: mesh genus 5, digital genus 0 (the same at 16 and 32)")
+    assert "largest resolution allowed (32" in r["verdict"] and not r["agree"]
 
 
 def test_coarse_grid_is_named():
     r = verify_genus(MESHES / "plate_holes.STL", (16, 128))
-    assert r["digital"][0]["genus"] != 5 and r["digital"][1]["genus"] == 5
+    assert r["digital"][0]["genus"] != 5 and r["digital"][-1]["genus"] == 5 and r["agree"]
+    assert [d["resolution"] for d in r["digital"]] == [16, 128, 256]  # 16 and 128 differ: one more step
     assert "at resolution 16 the grid is too coarse" in r["verdict"]
 
 
@@ -135,11 +212,22 @@ def test_edge_and_corner_contacts_agree_under_matching_connectivity():
 def test_cli_genus_json(capsys):
     assert main(["genus", str(MESHES / "eight.off"), "--resolution", "48", "--json"]) == 0
     r = json.loads(capsys.readouterr().out)
-    for key in ("mesh", "manifold3d", "pymeshlab", "digital", "agree"):
+    for key in ("mesh", "manifold3d", "pymeshlab", "digital", "agree", "self_intersecting_faces", "solid_genus",
+                "converged"):
         assert key in r
     for key in ("watertight", "components", "euler_number", "genus", "genus_per_component"):
         assert key in r["mesh"]
-    assert r["digital"][0]["resolution"] == 48 and r["digital"][0]["genus"] == 2 and r["agree"]
+    # 48 alone cannot be stable: the command doubles it once
+    assert [d["resolution"] for d in r["digital"]] == [48, 96] and r["digital"][0]["genus"] == 2 and r["agree"]
+    assert r["solid_genus"] == 2 and r["self_intersecting_faces"] == 0
+
+
+def test_cli_genus_options(capsys):
+    assert main(["genus", str(MESHES / "eight.off"), "--resolution", "24", "--no-step"]) == 0
+    out = capsys.readouterr().out
+    assert "verdict     not converged at 24" in out and "crossings   0 faces" in out and "solid       genus 2" in out
+    assert main(["genus", str(MESHES / "eight.off"), "--max-resolution", "0"]) == 2
+    assert "--max-resolution must be a positive integer" in capsys.readouterr().err
 
 
 def test_cli_voxelize_and_surface_in_world_coordinates(tmp_path, capsys):

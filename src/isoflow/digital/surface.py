@@ -219,41 +219,39 @@ class QuadMesh:
         return np.where(self.sheet == 0, a_lut(self.connectivity)[self.config], 0)
 
     def polygons(self) -> np.ndarray:
-        """Faces with their midpoints: (F, 4) when there are none, else
-        (F, 8) cyclic rows of corner, midpoint or -1, corner, ..."""
+        """Faces with their midpoints (DESIGN section 6): (F, 4) when there are
+        none, else (F, 8) cyclic rows of corner, midpoint or -1, corner, ...
+
+        A row with a midpoint starts at its first midpoint. Readers
+        (trimesh, MeshLab) triangulate a polygon by a fan from its first
+        vertex; from a corner next to a midpoint that fan would draw the
+        lattice edge the midpoint splits (a non-manifold edge) and a
+        zero-area triangle along it. From the midpoint every fan triangle
+        has area and every fan diagonal lies inside the face.
+        """
         if not self.midpoints:
             return self.faces
-        return self._cyclic()
-
-    def _cyclic(self) -> np.ndarray:
-        """(F, 8): corner, midpoint-or--1, corner, ... around every face."""
         seq = np.full((len(self.faces), 8), -1, dtype=np.int64)
         seq[:, 0::2] = self.faces
         seq[:, 1::2] = self.edge_midpoint
-        return seq
+        split = (self.edge_midpoint >= 0).any(axis=1)
+        first = np.where(split, np.argmax(self.edge_midpoint >= 0, axis=1) * 2 + 1, 0)
+        rows = np.arange(len(seq))[:, None]
+        return seq[rows, (first[:, None] + np.arange(8)) % 8]
 
     def triangles(self) -> np.ndarray:
-        """Triangles with the faces' orientation and no degenerate ones.
-
-        A plain quad gives two; a face with midpoints is fanned from its first
-        midpoint (a fan from a corner would put a zero-area triangle along the
-        split edge).
-        """
+        """Triangles with the faces' orientation and no degenerate ones: two
+        per plain quad, a fan from the first midpoint (see :meth:`polygons`)
+        for a face with midpoints."""
         plain = (self.edge_midpoint < 0).all(axis=1)
         q = self.faces[plain]
         tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
-        seq = self._cyclic()[~plain]
-        if len(seq):
-            # rotate every row so that its first midpoint comes first
-            first = np.argmax(seq[:, 1::2] >= 0, axis=1) * 2 + 1
-            rows = np.arange(len(seq))[:, None]
-            seq = seq[rows, (first[:, None] + np.arange(8)) % 8]
+        if not plain.all():
+            seq = self.polygons()[~plain]
             count = (seq >= 0).sum(axis=1)
             for size in np.unique(count):
                 grp = seq[count == size]
-                # drop the -1 slots, keeping order (stable sort on "missing")
-                order = np.argsort(grp < 0, axis=1, kind="stable")[:, :size]
-                poly = np.take_along_axis(grp, order, axis=1)
+                poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
                 for t in range(1, size - 1):
                     tris.append(poly[:, [0, t, t + 1]])
         return np.concatenate(tris)

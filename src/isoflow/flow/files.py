@@ -3,42 +3,85 @@
 :class:`FlowWriter` writes them while the flow runs (``isoflow flow --out``),
 so that no state is kept in memory; :func:`export_flow` writes them from a
 finished :class:`~isoflow.flow.run.FlowResult` that kept its states.
+
+Every step file is read back with trimesh as soon as it is written
+(:func:`isoflow.mesh.readback.check_surface_file`), on a worker thread while
+the flow computes the next step (numpy, numba and trimesh's sorts release
+the GIL: on a machine with a free core the check costs little wall time);
+the CSV records trimesh's watertightness, Euler number and genus next to
+isoflow's own.
+
+A run is written into a hidden staging directory inside the output
+directory and moved into place only when complete: an error or an
+interruption leaves the previous run's files as they were, and the old
+run's step files are removed only after the new run has finished writing.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
+import shutil
 from pathlib import Path
 
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from ..mesh import export
+from ..mesh.outputs import (
+    atomic_write,
+    check_writable_dir,
+    sync_directory,
+    sync_file,
+    temp_sibling,
+    write_error,
+)
+from ..mesh.readback import check_surface_file
 from .run import FlowResult
 
+#: the CSV's per-step columns on the step's surface file (3D flows)
+CHECK_COLUMNS = ["mesh_euler", "mesh_genus", "trimesh_watertight", "trimesh_euler", "trimesh_genus"]
 
-def flow_table(result: FlowResult) -> tuple[list[str], list[list]]:
-    """The per-step figures as CSV columns and rows (bbox as min/max per axis)."""
+#: names a run writes besides its step files; --force replaces them
+RUN_FILES = ("flow.csv", "flow.png", "shapes.png")
+
+
+def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
+    """The per-step figures as CSV columns and rows (bbox as min/max per
+    axis); with ``checks`` (step -> :func:`check_surface_file` result, 3D),
+    isoflow's and trimesh's reading of each step's surface file."""
     nd = len(result.steps[0]["betti"])
     ndim = 3 if nd == 3 else 2
     axes = "xyz"[:ndim]
     header = ["step", "voxels", "parity"] + [f"b{i}" for i in range(nd)]
     header += ["euler_characteristic", "energy"]
     header += [f"bbox_min_{a}" for a in axes] + [f"bbox_max_{a}" for a in axes]
+    if checks is not None:
+        header += CHECK_COLUMNS
     rows = []
     for s in result.steps:
         box = s["bbox"] or [[""] * ndim, [""] * ndim]
-        rows.append([s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]])
+        row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]]
+        if checks is not None:
+            c = checks.get(s["step"])
+            row += [""] * len(CHECK_COLUMNS) if c is None or c.get("skipped") else [
+                c["isoflow"]["euler_number"], c["isoflow"]["genus"],
+                c["trimesh"]["watertight"], c["trimesh"]["euler_number"], c["trimesh"]["genus"],
+            ]
+        rows.append(row)
     return header, rows
 
 
 def check_output_dir(directory, force: bool = False):
-    """The output directory as a Path; refuses a file, or a directory that
-    already holds files unless ``force``."""
+    """The output directory as a Path; refuses a file, a directory that
+    already holds files unless ``force``, or one that cannot be written."""
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
     if out.is_dir() and any(out.iterdir()) and not force:
         raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
+    parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
+    check_writable_dir(parent, f"the flow's files ({out})")
     return out
 
 
@@ -51,14 +94,23 @@ def export_flow(result: FlowResult, directory, force: bool = False, plot: bool =
 
     Refuses a directory that already holds files unless ``force``. Needs a
     result run with ``keep_states=True``; :class:`FlowWriter` writes the same
-    files while the flow runs, without keeping the states.
+    files while the flow runs, without keeping the states. Raises
+    :class:`IsoflowError` when trimesh reads a step file differently from
+    isoflow's counts (the files are written all the same).
     """
     if not result.states and result.steps:
         raise IsoflowError("export_flow needs the states: run the flow with keep_states=True")
     writer = FlowWriter(directory, result.connectivity, force, last_step=len(result.steps) - 1)
-    for rec, state in zip(result.steps, result.states):
-        writer.add(rec["step"], state)
-    return writer.finish(result, plot=plot)
+    try:
+        for rec, state in zip(result.steps, result.states):
+            writer.add(rec["step"], state)
+        written = writer.finish(result, plot=plot)
+    except BaseException:
+        writer.abort()
+        raise
+    if writer.problems:
+        raise IsoflowError(f"{writer.problems[0]} ({len(writer.problems)} step file(s) disagree)")
+    return written
 
 
 class FlowWriter:
@@ -68,24 +120,40 @@ class FlowWriter:
     adding the input as step 0, and run with ``keep_states=False``: memory
     then stays that of one state plus the few kept for ``shapes.png``, where
     keeping every state of a shrinking box of side s costs about s^4/4 bytes.
-    ``force`` also removes the files a previous flow left (``step_*.ply``, the
-    CSV and pictures), so that no stale step survives beside the new ones.
+
+    Files go to a staging directory inside the output directory;
+    :meth:`finish` moves them into place and only then removes what a
+    previous run left (``step_*.ply``, the CSV and pictures) when ``force``;
+    :meth:`abort` (on an error or interruption) removes the staging
+    directory and leaves the previous run untouched. Step files are flushed
+    to the disk (``fsync``) on the worker thread that reads them back, before
+    they are moved into place. ``checks`` holds
+    trimesh's reading of every step file, ``problems`` one line per file
+    that reads differently from isoflow's counts.
     """
 
     #: states kept for shapes.png: at most twice the panels, evenly spaced
     PANELS = 6
+    #: step files waiting for their check: bounds the meshes kept in memory
+    PENDING = 2
 
-    def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999):
+    def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999, check: bool = True):
         out = check_output_dir(directory, force)
-        out.mkdir(parents=True, exist_ok=True)
-        if force:
-            for old in [*out.glob("step_*.ply"), *(out / n for n in ("flow.csv", "flow.png", "shapes.png"))]:
-                if old.is_file():
-                    old.unlink()
-        self.out, self.connectivity, self.force = out, connectivity, force
+        self.created = not out.exists()
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            self.stage = temp_sibling(out / "run", directory=True)
+        except OSError as exc:
+            raise write_error(out, exc, existed=not self.created) from None
+        self.out, self.connectivity = out, connectivity
         self.volume_suffix = None  # set by write_volumes
         self.width = max(3, len(str(last_step)))
-        self.written: list = []
+        self.staged: list[str] = []  # names written into the staging directory
+        self.checks: dict[int, dict] = {}
+        self.problems: list[str] = []
+        self.check = check  # read every step file back with trimesh
+        self._pool = None  # the checking thread, started with the first step file
+        self._pending: list = []  # (step, name, future), oldest first
         self.frames: list = []  # (step, state), every `stride`-th step
         self.stride = 1
         self.last = None  # the last non-empty (step, state)
@@ -104,50 +172,77 @@ class FlowWriter:
         if state.ndim != 3:
             return
         mesh = boundary_mesh(state.volume, self.connectivity)
-        path = self.out / f"step_{step:0{self.width}d}.ply"
+        name = f"step_{step:0{self.width}d}.ply"
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
-        export.write_ply(path, export.mesh_vertex_table(mesh, state), mesh.polygons(), force=True, comments=comments)
-        self.written.append(path)
+        with self._named():  # flushed to the disk on the worker thread
+            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
+        self.staged.append(name)
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="isoflow-readback")
+        self._pending.append((step, name, self._pool.submit(self._sync_and_check, written["path"], mesh, state)))
+        while len(self._pending) > self.PENDING:
+            self._collect()
+
+    def _sync_and_check(self, path, mesh, state):
+        sync_file(path)  # before the file is moved into place
+        return check_surface_file(path, mesh, state) if self.check else None
+
+    def _collect(self) -> None:
+        """Wait for the oldest worker task and record its check."""
+        step, name, future = self._pending.pop(0)
+        with self._named():
+            check = future.result()
+        if check is None:
+            return
+        self.checks[step] = check
+        if check["agree"] is False:
+            self.problems.append(check["problem"].replace(str(self.stage / name), str(self.out / name)))
 
     # ------------------------------------------------ per-step volumes (--volumes)
     def write_volumes(self, suffix: str) -> None:
         """Also write every non-empty step's volume as ``step_NNN{suffix}``
         (any format :func:`isoflow.mesh.volumes.write_volume` writes, with
         voxel size and origin; ``.npz`` keeps the lattice parity too).
-        Checked now, before the flow runs; with ``force`` the volumes an
-        earlier run left with that suffix are removed."""
-        import shutil
-
+        Checked now, before the flow runs; like the step surfaces they are
+        staged, and the volumes an earlier run left with that suffix are
+        removed only when this run is complete (:meth:`finish`)."""
         from ..mesh.volumes import check_volume_output
 
         suffix = suffix if suffix.startswith(".") else "." + suffix
-        check_volume_output(self.out / f"step_{0:0{self.width}d}{suffix}", force=True)
-        if self.force:
-            for old in self.out.glob(f"step_*{suffix}"):
-                shutil.rmtree(old) if old.is_dir() else old.unlink()
+        check_volume_output(self.stage / f"step_{0:0{self.width}d}{suffix}", force=True)
         self.volume_suffix = suffix
 
     def add_volume(self, step: int, state: DigitalObject) -> None:
         from ..mesh.volumes import write_volume
 
-        path = self.out / f"step_{step:0{self.width}d}{self.volume_suffix}"
-        self.written.append(write_volume(state, path, force=True))
+        name = f"step_{step:0{self.width}d}{self.volume_suffix}"
+        with self._named():
+            write_volume(state, self.stage / name, force=True)
+        self.staged.append(name)
 
     def finish(self, result: FlowResult, plot: bool = True) -> list:
-        """Write flow.csv and the pictures; returns every path written."""
+        """Write flow.csv and the pictures, move the run into place and
+        remove what a previous run left; returns every path written."""
         import csv
 
-        header, rows = flow_table(result)
-        csv_path = self.out / "flow.csv"
-        with open(csv_path, "w", newline="") as fh:
+        while self._pending:
+            self._collect()
+        self._stop_checks()
+        three_d = result.steps and len(result.steps[0]["betti"]) == 3
+        header, rows = flow_table(result, self.checks if three_d and self.check else None)
+        with self._named(), atomic_write(self.stage / "flow.csv", "w", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(header)
             w.writerows(rows)
-        self.written.append(csv_path)
+        self.staged.append("flow.csv")
         if plot:
             from .pictures import render_flow, render_flow_shapes
 
-            self.written.append(render_flow(result, self.out / "flow.png"))
+            with self._named():
+                render_flow(result, self.stage / "flow.png")
+            self.staged.append("flow.png")
             # the last non-empty state closes the row unless it is sampled already
             frames = list(self.frames)
             if self.last is not None and (not frames or frames[-1][0] != self.last[0]):
@@ -155,7 +250,56 @@ class FlowWriter:
             if frames and frames[0][1].ndim == 3:
                 records = {rec["step"]: rec for rec in result.steps}
                 shown = [(state, records[step]) for step, state in frames]
-                self.written.append(
-                    render_flow_shapes(shown, self.out / "shapes.png", result.connectivity, self.PANELS)
-                )
-        return self.written
+                with self._named():
+                    render_flow_shapes(shown, self.stage / "shapes.png", result.connectivity, self.PANELS)
+                self.staged.append("shapes.png")
+        return self._commit()
+
+    @contextlib.contextmanager
+    def _named(self):
+        """A failed write names the file it was for, not its staging copy,
+        and says that the previous run is kept."""
+        try:
+            yield
+        except (OSError, IsoflowError, KeyboardInterrupt) as exc:
+            if isinstance(exc, OSError):
+                exc = write_error(Path(exc.filename or self.stage), exc, existed=False)
+            msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
+            msg = msg.rstrip("; ") + "; the previous run's files in the directory are unchanged"
+            raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
+
+    def _commit(self) -> list:
+        """Move the staged files over the output directory's, then remove the
+        previous run's files that this run did not replace."""
+        new = set(self.staged)
+        try:
+            for name in self.staged:
+                if (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename
+                    shutil.rmtree(self.out / name)
+                os.replace(self.stage / name, self.out / name)
+            sync_directory(self.out)
+            volumes = self.out.glob(f"step_*{self.volume_suffix}") if self.volume_suffix else ()
+            for old in [*self.out.glob("step_*.ply"), *volumes, *(self.out / n for n in RUN_FILES)]:
+                if old.name not in new and old.exists():
+                    shutil.rmtree(old) if old.is_dir() else old.unlink()
+        except OSError as exc:
+            raise write_error(self.out, exc, existed=True) from None
+        finally:
+            shutil.rmtree(self.stage, ignore_errors=True)
+        return [self.out / name for name in self.staged]
+
+    def _stop_checks(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+            self._pool, self._pending = None, []
+
+    def abort(self) -> None:
+        """Remove the staging directory (and the output directory when this
+        writer made it and nothing else is in it): the previous run stays."""
+        self._stop_checks()
+        shutil.rmtree(self.stage, ignore_errors=True)
+        if self.created:
+            try:
+                self.out.rmdir()
+            except OSError:
+                pass

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.surface import boundary_mesh
-from ..mesh.render import FACE_BUDGET, draw_surface, pyplot
+from ..mesh.render import FACE_BUDGET, draw_surface, pyplot, save_figure
 
 
 def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
@@ -33,9 +33,7 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
         ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle("digital curvature flow (blue concave, white flat, red convex)", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def render_flow(result, path: Path, title: str = "") -> Path:
@@ -68,6 +66,4 @@ def render_flow(result, path: Path, title: str = "") -> Path:
         fontsize=9,
     )
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return Path(path)
+    return save_figure(fig, path)

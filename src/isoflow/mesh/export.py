@@ -1,8 +1,26 @@
-"""Writing the boundary mesh: PLY with per-vertex curvature data, and OBJ.
+"""Writing the boundary mesh: PLY, OBJ, STL and GLB (DESIGN section 6).
 
 The writers take plain arrays (vertex columns, faces padded with -1) so that
 any polygon mesh can be written; :func:`mesh_vertex_table` makes the columns
-of a boundary quad mesh (:class:`isoflow.digital.surface.QuadMesh`).
+of a boundary quad mesh (:class:`isoflow.digital.surface.QuadMesh`) and
+:func:`write_surface` picks, per format, what the file holds so that every
+reader opens it as the closed, oriented 2-manifold isoflow counts:
+
+========================  =========================================  =======================================
+format                    faces                                      per vertex
+========================  =========================================  =======================================
+PLY, binary (default)     quads; triangles for the whole file when   position, config, class, gamma, a, f,
+                          the surface has doubled edges (trimesh's   red/green/blue
+                          binary reader needs faces of one size)
+PLY ``--ascii``, OBJ      quads, and polygons starting at a midpoint  PLY: as binary; OBJ: position
+                          where an edge is doubled (readers fan them)
+STL (binary)              triangles, no shared vertices              none (a normal per triangle)
+GLB                       triangles, shared vertices                 position, COLOR_0, _config, _class,
+                                                                     _gamma, _a, _f
+========================  =========================================  =======================================
+
+``triangulate`` writes triangles in every format. Every file goes through
+:func:`isoflow.mesh.outputs.atomic_write`: written whole or not at all.
 """
 
 from __future__ import annotations
@@ -13,7 +31,10 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from .outputs import check_output_path
+from .outputs import atomic_write, check_output_path
+
+#: the surface formats ``isoflow surface`` writes, by suffix
+SURFACE_SUFFIXES = (".ply", ".obj", ".stl", ".glb")
 
 
 def gamma_colours(gamma: np.ndarray, vertex_class: np.ndarray) -> np.ndarray:
@@ -81,18 +102,23 @@ def write_ply(
     ascii: bool = False,
     force: bool = False,
     comments: tuple[str, ...] = (),
+    sync: bool = True,
 ) -> Path:
     """Write a PLY with per-vertex scalar columns and polygon faces.
 
-    ``faces`` is (F, K) with -1 padding for faces with fewer than K vertices.
-    Binary little-endian by default. Quads stay quads (MeshLab and trimesh
-    read them); faces are written grouped by size.
+    ``faces`` is (F, K) with -1 padding for faces with fewer than K vertices;
+    faces are written grouped by size, each in its row's cyclic order.
+    Binary little-endian by default; a binary PLY takes faces of one size
+    only (trimesh's binary reader cannot read a mixed list), so mixed sizes
+    raise ``ValueError``: triangulate them first. ``sync``: see
+    :func:`isoflow.mesh.outputs.atomic_path`.
     """
-    path = Path(path)
-    check_output_path(path, force)
+    path = check_output_path(path, force)
     names = list(columns)
     n = len(columns[names[0]])
     groups = list(_size_groups(faces))
+    if not ascii and len(groups) > 1:
+        raise ValueError(f"{path}: a binary PLY needs faces of one size, got sizes {[k for k, _ in groups]}")
     header = ["ply", f"format {'ascii' if ascii else 'binary_little_endian'} 1.0"]
     header += [f"comment {c}" for c in comments]
     header.append(f"element vertex {n}")
@@ -101,7 +127,7 @@ def write_ply(
     header.append(f"element face {sum(len(g) for _, g in groups)}")
     header.append("property list uchar int vertex_indices")
     header.append("end_header")
-    with open(path, "wb") as fh:
+    with atomic_write(path, sync=sync) as fh:
         fh.write(("\n".join(header) + "\n").encode("ascii"))
         if ascii:
             fmt = " ".join("%.9g" if columns[k].dtype.kind == "f" else "%d" for k in names)
@@ -130,12 +156,12 @@ def write_obj(
     *,
     force: bool = False,
     comments: tuple[str, ...] = (),
+    sync: bool = True,
 ) -> Path:
     """Write an OBJ with polygon faces (quads stay quads); ``faces`` as in
-    :func:`write_ply`."""
-    path = Path(path)
-    check_output_path(path, force)
-    with open(path, "w") as fh:
+    :func:`write_ply`, each row in its cyclic order."""
+    path = check_output_path(path, force)
+    with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
             fh.write(f"# {c}\n")
         if len(vertices):
@@ -143,3 +169,96 @@ def write_obj(
         for size, rows in _size_groups(faces):
             np.savetxt(fh, rows + 1, fmt="f" + " %d" * size)
     return path
+
+
+def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False,
+              sync: bool = True) -> Path:
+    """Write a binary STL (trimesh's exporter): one record per triangle with
+    its normal and three corner positions; STL keeps no shared vertices."""
+    import trimesh
+
+    path = check_output_path(path, force)
+    mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), triangles, process=False)
+    data = trimesh.exchange.stl.export_stl(mesh)
+    with atomic_write(path, sync=sync) as fh:
+        fh.write(data)
+    return path
+
+
+def write_glb(
+    path: str | os.PathLike,
+    columns: dict[str, np.ndarray],
+    triangles: np.ndarray,
+    *,
+    force: bool = False,
+    comment: str = "",
+    sync: bool = True,
+) -> Path:
+    """Write a binary glTF (trimesh's exporter): triangles on shared
+    vertices, the ``red/green/blue`` columns as the vertex colours
+    (``COLOR_0``) and the other columns but the position as custom vertex
+    attributes (``_config``, ``_class``, ...)."""
+    import trimesh
+
+    path = check_output_path(path, force)
+    xyz = np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(np.float64)
+    rgb = np.column_stack([columns["red"], columns["green"], columns["blue"], np.full(len(xyz), 255, np.uint8)])
+    extra = {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
+    mesh = trimesh.Trimesh(xyz, triangles, vertex_colors=rgb, vertex_attributes=extra, process=False)
+    if comment:
+        mesh.metadata["isoflow"] = comment
+    data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=False)
+    with atomic_write(path, sync=sync) as fh:
+        fh.write(data)
+    return path
+
+
+def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool = False) -> tuple[str, np.ndarray]:
+    """What a surface file of this suffix holds: ``("quads" | "polygons" |
+    "triangles", faces)`` (see the table in this module's docstring)."""
+    if triangulate or suffix in (".stl", ".glb") or (suffix == ".ply" and not ascii and mesh.midpoints):
+        return "triangles", mesh.triangles()
+    return ("polygons" if mesh.midpoints else "quads"), mesh.polygons()
+
+
+def write_surface(
+    path: str | os.PathLike,
+    mesh,
+    obj: DigitalObject,
+    *,
+    ascii: bool = False,
+    triangulate: bool = False,
+    force: bool = False,
+    comments: tuple[str, ...] = (),
+    sync: bool = True,
+) -> dict:
+    """Write a boundary mesh in the format its suffix names (PLY, OBJ, STL,
+    GLB), in world coordinates. Returns what was written: ``path``,
+    ``faces`` (the kind) and ``face_count``. ``sync=False`` leaves the
+    ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`)."""
+    path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
+    suffix = path.suffix.lower()
+    kind, faces = surface_faces(mesh, suffix, ascii=ascii, triangulate=triangulate)
+    comments = (*comments, f"faces: {kind}")
+    if suffix == ".ply":
+        write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments, sync=sync)
+    elif suffix == ".obj":
+        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments, sync=sync)
+    elif suffix == ".stl":
+        write_stl(path, obj.world(mesh.vertices), faces, force=force, sync=sync)
+    else:
+        write_glb(path, mesh_vertex_table(mesh, obj), faces, force=force, comment="; ".join(comments), sync=sync)
+    return {"path": path, "faces": kind, "face_count": len(faces)}
+
+
+def shared_positions(mesh) -> int:
+    """Positions that carry more than one mesh vertex: the split copies at
+    edge and vertex contacts and the two midpoints of a doubled edge. A
+    format without shared vertices (STL) cannot keep them apart: readers
+    weld them by position."""
+    if len(mesh.vertices) == 0:
+        return 0
+    # lattice points and edge midpoints are multiples of 1/2: exact keys
+    keys = np.round(2 * mesh.vertices).astype(np.int64)
+    _, counts = np.unique(keys, axis=0, return_counts=True)
+    return int(np.count_nonzero(counts > 1))

@@ -20,21 +20,18 @@ from pathlib import Path
 
 import numpy as np
 
-from ..digital.topology import betti_numbers
+from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
+from ..scale.memory import default_budget, gib
 from .load import load_mesh, mesh_defects
 from .voxelize import voxelize
-
-#: resolutions ``isoflow genus`` uses when none is asked
-DEFAULT_RESOLUTIONS = (64, 128)
-
 
 # --------------------------------------------------------------------------
 # the mesh's own topology
 # --------------------------------------------------------------------------
 
 
-def mesh_topology(vertices, faces) -> dict:
+def mesh_topology(vertices, faces, return_components: bool = False):
     """Components, Euler number and genus of a triangle mesh, with its defects.
 
     Components are edge-connected face sets. A component's genus is
@@ -42,6 +39,7 @@ def mesh_topology(vertices, faces) -> dict:
     two faces, and every vertex has one fan of faces in it; otherwise None.
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
     closed surfaces touching at a point, like ``hourglass_ico.obj``).
+    With ``return_components``, also each face's component number.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -100,7 +98,7 @@ def mesh_topology(vertices, faces) -> dict:
     used = np.unique(f)
     euler = int(len(used) - len(edge_start) + nf)
     total = sum(genus_c) if genus_c and all(g is not None for g in genus_c) and defects["inconsistent_edges"] == 0 else None
-    return {
+    report = {
         "watertight": bool(defects["watertight"]),
         "components": int(ncomp),
         "euler_number": euler,
@@ -110,9 +108,12 @@ def mesh_topology(vertices, faces) -> dict:
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
         "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex > 1)),
-        "vertices": int(len(used)),
+        "vertices": len(used),
         "faces": int(nf),
+        # vertices on faces of more than one component: components touching
+        "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
     }
+    return (report, comp) if return_components else report
 
 
 def manifold3d_report(vertices, faces) -> dict:
@@ -153,37 +154,173 @@ def pymeshlab_report(vertices, faces) -> dict:
     return out
 
 
+def self_intersections(vertices, faces, component) -> dict:
+    """Faces that cross other faces (pymeshlab's
+    ``compute_selection_by_self_intersections_per_face``), split into those
+    crossing a face of their own component (``self_intersecting_faces``: the
+    component is no embedded surface) and those crossing only other
+    components (``faces_crossing_other_components``: components overlap).
+
+    The whole mesh is tested once; only components with a selected face are
+    tested again on their own.
+    """
+    try:
+        import pymeshlab
+
+        v = np.asarray(vertices, np.float64)
+        f = np.asarray(faces, np.int32)
+        hit = _intersecting_faces(pymeshlab, v, f)
+        own = np.zeros(len(f), dtype=bool)
+        for c in np.unique(component[hit]):
+            rows = np.flatnonzero(component == c)
+            used, local = np.unique(f[rows], return_inverse=True)
+            own[rows] = _intersecting_faces(pymeshlab, v[used], local.reshape(-1, 3).astype(np.int32))
+    except Exception as exc:  # pymeshlab raises its own types for degenerate input
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    return {
+        "self_intersecting_faces": int(np.count_nonzero(own)),
+        "faces_crossing_other_components": int(np.count_nonzero(hit & ~own)),
+    }
+
+
+def _intersecting_faces(pymeshlab, v, f) -> np.ndarray:
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(v, f))
+    ms.compute_selection_by_self_intersections_per_face()
+    return np.asarray(ms.current_mesh().face_selection_array(), dtype=bool)
+
+
+def solid_report(vertices, faces) -> dict:
+    """The solid the mesh bounds, as manifold3d's union of its components.
+
+    Components with positive volume are united (``batch_boolean`` Add);
+    inside-out ones (negative volume: the walls of cavities) are united and
+    subtracted, so that a hollow ball stays hollow. ``genus`` is the total
+    number of handles of the union's boundary, which for a solid is its b1,
+    what the digital genus measures. ``{"error": ...}`` where manifold3d
+    refuses the mesh.
+    """
+    import manifold3d as m3
+
+    try:
+        whole = m3.Manifold(
+            m3.Mesh(vert_properties=np.asarray(vertices, np.float32), tri_verts=np.asarray(faces, np.uint32))
+        )
+        if whole.status() != m3.Error.NoError:
+            return {"error": whole.status().name}
+        parts = whole.decompose()
+        inside = [p for p in parts if p.volume() >= 0]
+        cavities = [_inside_out(m3, p) for p in parts if p.volume() < 0]
+        solid = m3.Manifold.batch_boolean(inside, m3.OpType.Add) if inside else m3.Manifold()
+        if cavities:
+            solid = solid - m3.Manifold.batch_boolean(cavities, m3.OpType.Add)
+        pieces = solid.decompose()
+    except Exception as exc:  # the binding raises for malformed input
+        return {"error": f"{type(exc).__name__}: {exc}"}
+    return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "volume": float(solid.volume())}
+
+
+def _inside_out(m3, part):
+    mesh = part.to_mesh()
+    tris = np.asarray(mesh.tri_verts)[:, ::-1].copy()
+    return m3.Manifold(m3.Mesh(vert_properties=np.asarray(mesh.vert_properties), tri_verts=tris))
+
+
+# --------------------------------------------------------------------------
+# the digital genus, resolution after resolution
+# --------------------------------------------------------------------------
+
+#: resolutions ``isoflow genus`` tries first; then it doubles the last
+DEFAULT_RESOLUTIONS = (64, 128)
+#: the automatic stepping stops before a resolution beyond this ...
+MAX_RESOLUTION = 1024
+#: ... or one whose predicted time (8x the last: cubic) would end past this
+TIME_LIMIT = 60.0
+#: peak bytes per grid voxel of one resolution: the volume, the voxeliser's
+#: difference array (int32) and the labelling of the Betti numbers
+DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
+
+
+def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
+                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
+                  target: int | None = None, progress=None, on_resolution=None) -> tuple[list, str | None]:
+    """Digital topology of the voxelised solid at ``resolutions`` and then,
+    while ``step`` and the Betti numbers of the last two differ (or agree on
+    a genus other than ``target``: two coarse grids can both close the
+    same thin hole), at twice the last, within ``max_resolution``,
+    ``time_limit`` seconds and the memory budget.
+
+    Returns the entries (resolution, pitch, shape, voxels, Betti numbers,
+    genus, seconds) and why the stepping stopped early (None when it ended
+    with stable Betti numbers and the target genus).
+    ``progress(done, total)`` follows the voxelisations as one count that
+    only grows: each resolution tried weighs ``resolution**3`` (what its grid
+    costs), and ``total`` grows by that weight when the stepping adds a
+    resolution. ``on_resolution(entry)`` is called after each.
+    """
+    import time
+
+    todo = sorted({int(r) for r in resolutions})
+    out: list = []
+    finished = 0  # weight of the resolutions done
+    start = time.monotonic()
+    while True:
+        if todo:
+            res = todo.pop(0)
+        else:
+            stable = len(out) >= 2 and out[-1]["betti"] == out[-2]["betti"]
+            if stable and (target is None or out[-1]["genus"] == target):
+                return out, None
+            if not step:
+                return out, "the resolutions asked"
+            last = out[-1]
+            res = 2 * last["resolution"]
+            grow = (res / last["resolution"]) ** 3
+            if res > max_resolution:
+                return out, f"the largest resolution allowed ({max_resolution}, --max-resolution)"
+            if time.monotonic() - start + last["seconds"] * grow > time_limit:
+                return out, f"the time limit ({time_limit:g} s, --time-limit): {res} would take about {last['seconds'] * grow:.0f} s"
+            need = int(np.prod(last["shape"]) * grow * DIGITAL_BYTES_PER_VOXEL)
+            if need > default_budget():
+                return out, f"the memory budget: {res} would need about {gib(need)}"
+        t = time.monotonic()
+        weight = res**3
+        ahead = finished + weight + sum(r**3 for r in todo)  # the resolutions known now
+
+        def rung(done, total, finished=finished, weight=weight, ahead=ahead):
+            progress(finished + round(weight * (done / total if total else 1.0)), ahead)
+
+        vol, _, pitch = voxelize(vertices, faces, resolution=res, allow_open=True,
+                                 progress=None if progress is None else rung)
+        finished += weight
+        betti = betti_numbers(vol, connectivity)
+        entry = {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
+                 "connectivity": connectivity, "betti": betti, "genus": betti[1],
+                 "seconds": round(time.monotonic() - t, 3)}
+        out.append(entry)
+        if on_resolution is not None:
+            on_resolution(entry)
+
+
 # --------------------------------------------------------------------------
 # genus verification
 # --------------------------------------------------------------------------
 
 
-def _rung(progress, ladder, k):
-    """The voxeliser's ``progress`` for rung ``k`` of the ladder, reported as
-    a share of the whole ladder: a rung weighs resolution**3, what its grid
-    costs, so that 64 then 128 reads 11 % then 100 %."""
-    if progress is None:
-        return None
-    weights = [r**3 for r in ladder]
-    before, whole = sum(weights[:k]), sum(weights)
-    total = 1000
+def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None, *,
+                 step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
+                 on_resolution=None) -> dict:
+    """The mesh's topology, manifold3d's and pymeshlab's, its self-
+    intersections, the genus of the solid it bounds, and the digital
+    topology of that solid voxelised at growing resolutions, with a verdict.
 
-    def report(done, rung_total):
-        share = (before + weights[k] * (done / rung_total if rung_total else 1.0)) / whole
-        progress(round(total * share), total)
-
-    return report
-
-
-def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None) -> dict:
-    """The mesh's topology, manifold3d's and pymeshlab's, and the digital
-    topology of its voxelised solid at each resolution, with a verdict.
-
-    ``progress(done, total)`` follows the voxelisations of the whole
-    resolution ladder as one count from 0 to ``total``.
-
-    ``agree`` is true when the mesh is a closed surface and the digital genus
-    (b1 of the solid) at the finest resolution equals the mesh's genus.
+    The verdict compares the digital genus (b1 of the voxelised solid) with
+    the solid's genus (manifold3d's union) where components overlap or
+    touch, and with the mesh's own genus otherwise. It is ``agree`` only
+    when the digital Betti numbers are the same at the last two resolutions
+    tried (:func:`digital_steps` doubles the resolution until they are, or
+    says "not converged at R"), and never for a self-intersecting mesh: its
+    surface bounds no well-defined solid, and no grid settles that.
     """
     path = Path(path)
     resolutions = list(resolutions)
@@ -191,12 +328,16 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         raise IsoflowError("verify_genus needs at least one resolution")
     stats: dict = {}
     v, f = load_mesh(path, stats=stats)
-    mesh = mesh_topology(v, f)
+    mesh, comp = mesh_topology(v, f, return_components=True)
+    crossings = self_intersections(v, f, comp)
     out = {
         "input": str(path),
         "mesh": mesh,
         "manifold3d": manifold3d_report(v, f),
         "pymeshlab": pymeshlab_report(v, f),
+        "self_intersecting_faces": crossings.get("self_intersecting_faces"),
+        "faces_crossing_other_components": crossings.get("faces_crossing_other_components"),
+        "solid_genus": None,
         "digital": [],
     }
     notes = []
@@ -206,6 +347,10 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
             f"{welded} vertices that differ only by rounding noise were welded before counting "
             "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"
         )
+    if "error" in crossings:
+        notes.append(f"pymeshlab could not test for self-intersections ({crossings['error']})")
+    crossing_self = bool(out["self_intersecting_faces"])
+    overlap = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
     balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
     if not balanced:
         notes.append(
@@ -213,20 +358,21 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
             + (f", {mesh['inconsistent_edges']} inconsistently oriented" if mesh["inconsistent_edges"] else "")
             + "): it bounds no solid, so it has no genus as a closed surface and is not voxelised"
         )
-    ladder = sorted(resolutions)
-    for k, res in enumerate(ladder):
-        if not balanced:
-            break
-        vol, origin, pitch = voxelize(v, f, resolution=res, allow_open=True, progress=_rung(progress, ladder, k))
-        betti = betti_numbers(vol, connectivity)
-        out["digital"].append(
-            {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
-             "connectivity": connectivity, "betti": betti, "genus": betti[1]}
-        )
+    solid = solid_report(v, f) if balanced and not crossing_self else {"error": "not computed"}
+    out["solid"] = solid
+    if "genus" in solid:
+        out["solid_genus"] = solid["genus"]
     g = mesh["genus"]
+    reference, ref_name = (out["solid_genus"], "solid genus") if overlap else (g, "mesh genus")
+    stop = None
+    if balanced:
+        out["digital"], stop = digital_steps(
+            v, f, resolutions, connectivity, step=step and not crossing_self, max_resolution=max_resolution,
+            time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution)
     digital = out["digital"]
-    agree = bool(g is not None and digital and digital[-1]["genus"] == g)
-    out["agree"] = agree
+    stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
+    out["converged"] = stable
+
     if mesh["nonmanifold_edges"]:
         notes.append(f"{mesh['nonmanifold_edges']} non-manifold edges (more than two faces): not a 2-manifold, genus undefined")
     if mesh["nonmanifold_vertices"]:
@@ -234,38 +380,48 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
             f"{mesh['nonmanifold_vertices']} non-manifold vertices where separate sheets touch at a point; "
             "genus counted per edge-connected component"
         )
+    if overlap:
+        notes.append(
+            f"the mesh's {mesh['components']} components overlap or touch "
+            f"({out['faces_crossing_other_components'] or 0} faces cross other components, "
+            f"{mesh['shared_vertices']} vertices shared): the solid they bound is their union, "
+            + (f"genus {out['solid_genus']} (manifold3d)" if out["solid_genus"] is not None
+               else f"which manifold3d could not build ({solid.get('error')})")
+        )
     if digital:
         last = digital[-1]
-        if mesh["components"] != last["betti"][0] and g is not None:
-            notes.append(
-                f"the mesh's {mesh['components']} components bound {last['betti'][0]} solid piece(s): "
-                "components overlap or touch" if mesh["components"] > last["betti"][0]
-                else f"the solid splits into {last['betti'][0]} pieces at resolution {last['resolution']}"
-            )
         if last["betti"][2]:
             notes.append(f"the solid has {last['betti'][2]} cavities (nested shells) at resolution {last['resolution']}")
-        if g is not None:
-            for d in digital[:-1]:
-                if d["genus"] != g:
+        if reference is not None and stable:
+            for d in digital[:-2]:
+                if d["genus"] != reference:
                     notes.append(
                         f"at resolution {d['resolution']} the grid is too coarse: digital genus {d['genus']} "
                         f"(pitch {d['pitch']:.4g}; handles thinner than a voxel close or open)"
                     )
-            if last["genus"] != g:
-                notes.append(
-                    f"at the finest resolution asked ({last['resolution']}) the digital genus is {last['genus']}, "
-                    f"the mesh's {g}: try a finer --resolution"
-                )
     m3 = out["manifold3d"]
     if "error" in m3:
         notes.append(f"manifold3d refused the mesh ({m3['error']})")
     if g is None and balanced and not mesh["nonmanifold_edges"]:
         notes.append("the mesh is not a closed oriented manifold, so it has no genus")
-    if agree:
-        head = f"agree: genus {g}"
-    elif g is None:
-        head = "no mesh genus to compare"
+
+    agree = False
+    if crossing_self:
+        head = (f"self-intersecting: {out['self_intersecting_faces']} faces cross faces of their own component, "
+                "so the surface bounds no well-defined solid and no finer grid settles its genus")
+    elif not digital or reference is None:
+        head = f"no {ref_name} to compare" if digital else "no mesh genus to compare"
+    elif not stable:
+        trail = ", ".join(f"{d['resolution']}: {tuple(d['betti'])}" for d in digital[-3:])
+        head = (f"not converged at {digital[-1]['resolution']}: the digital Betti numbers still change ({trail})"
+                + (f"; stopped by {stop}" if stop else ""))
+    elif digital[-1]["genus"] == reference:
+        agree = True
+        head = f"agree: {'solid genus' if overlap else 'genus'} {reference}"
     else:
-        head = f"disagree: mesh genus {g}, digital genus {digital[-1]['genus'] if digital else None}"
+        head = (f"disagree: {ref_name} {reference}, digital genus {digital[-1]['genus']} "
+                f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})"
+                + (f"; stopped by {stop}" if stop else ""))
+    out["agree"] = agree
     out["verdict"] = head + ("; " + "; ".join(notes) if notes else "")
     return out

@@ -1,16 +1,32 @@
-"""Output paths, checked before any work is done.
+"""Output files: checked before any work, written whole or not at all.
 
 Every command checks each file it will write (``-o``, ``--png``, ``--out``)
 up front: a bad picture path must not be found after minutes of meshing,
 and an existing file is never replaced without ``force``.
+
+Every file is then written through :func:`atomic_path` or
+:func:`atomic_write`: into a temporary file beside the target, flushed to
+the disk (``fsync``), and renamed over the target only when complete. A
+full disk, a read-only or vanished directory or an interruption therefore
+leaves the previous file byte for byte as it was and no partial or
+temporary file behind; the error becomes one :class:`IsoflowError` line
+naming the file and the cause. Writers of new formats (volumes, pictures,
+zarr stores) should go through the same two functions.
 """
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
+import secrets
+import shutil
 from pathlib import Path
 
 from ..errors import IsoflowError
+
+#: marks temporary files and directories (``.NAME.isoflow-tmp-XXXXXXXX.SUFFIX``)
+TEMP_MARK = ".isoflow-tmp-"
 
 
 def check_output_path(
@@ -18,7 +34,7 @@ def check_output_path(
 ) -> Path:
     """The output file as a Path, checked before any work is done: it ends in
     one of ``suffixes`` (any case; none: any name), is not a directory, does
-    not exist unless ``force``, and its directory exists."""
+    not exist unless ``force``, and its directory exists and is writable."""
     path = Path(path)
     if suffixes and path.suffix.lower() not in suffixes:
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
@@ -26,12 +42,168 @@ def check_output_path(
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
     if path.exists() and not force:
         raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
-    if not path.parent.is_dir():
-        raise IsoflowError(f"{path.parent}: no such directory (for the {what} {path.name})")
+    check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def check_writable_dir(directory: str | os.PathLike, purpose: str) -> Path:
+    """Refuse a missing directory or one that cannot take new files (a
+    read-only file system, no write permission) before any work is done.
+
+    ``os.access`` answers for the real user: root passes permission bits
+    but not a read-only mount, which the write itself then reports.
+    """
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise IsoflowError(f"{directory}: no such directory (for {purpose})")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        why = "read-only file system" if _read_only_fs(directory) else "permission denied"
+        raise IsoflowError(f"{directory}: cannot write {purpose} here ({why})")
+    return directory
 
 
 def check_picture_path(path: str | os.PathLike, force: bool = False) -> Path:
     """A picture file (``--png``, matplotlib output) checked as
     :func:`check_output_path`; call it before the work that the picture shows."""
     return check_output_path(path, force, suffixes=(".png",), what="picture")
+
+
+def _read_only_fs(directory: Path) -> bool:
+    try:
+        return bool(os.statvfs(directory).f_flag & os.ST_RDONLY)
+    except OSError:
+        return False
+
+
+def temp_sibling(path: Path, directory: bool = False) -> Path:
+    """A new, reserved temporary name beside ``path`` that keeps its suffix
+    (writers such as ``np.savez`` and matplotlib choose the format by it).
+    The file is created empty with the usual permissions (0666 less the
+    umask), or the directory made, so that no other writer can take it."""
+    for _ in range(100):
+        # all suffixes kept: nibabel reads ".nii.gz", not only ".gz"
+        suffix = "".join(path.suffixes)
+        stem = path.name[: len(path.name) - len(suffix)] if suffix else path.name
+        tmp = path.with_name(f".{stem}{TEMP_MARK}{secrets.token_hex(4)}{suffix}")
+        try:
+            if directory:
+                tmp.mkdir()
+            else:
+                os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            return tmp
+        except FileExistsError:
+            continue
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(path))
+
+
+def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
+    """One line naming the file and the cause of a failed write."""
+    cause = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
+    kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
+    return IsoflowError(f"{path}: could not write ({cause}); {kept}")
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = True):
+    """Give a temporary path beside ``path`` to write to; rename it over
+    ``path`` when the block ends without error.
+
+    For writers that take a file name (``np.savez``, ``fig.savefig``,
+    trimesh's exporters, a zarr store with ``directory=True``). The file is
+    flushed to the disk before the rename and the directory after it. On
+    any error, or an interruption, the temporary file is removed and the
+    target left as it was; an ``OSError`` becomes an :class:`IsoflowError`
+    naming ``path``, anything else propagates. ``sync=False`` leaves the
+    flushing to the caller (:func:`sync_file`, :func:`sync_directory`): a
+    flow's step files are flushed on its worker thread.
+    """
+    path = Path(path)
+    existed = path.exists()
+    try:
+        tmp = temp_sibling(path, directory)
+    except OSError as exc:
+        raise write_error(path, exc, existed) from None
+    try:
+        yield tmp
+        if sync:
+            _fsync_tree(tmp) if directory else sync_file(tmp)
+        _replace(tmp, path, directory)
+        if sync:
+            sync_directory(path.parent)
+    except BaseException as exc:
+        _remove(tmp)
+        if isinstance(exc, OSError):
+            raise write_error(path, exc, existed) from None
+        if isinstance(exc, KeyboardInterrupt):  # say which file, keep the exit status of an interrupt
+            kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
+            raise KeyboardInterrupt(f"{path}: interrupted while writing; {kept}") from None
+        raise
+
+
+@contextlib.contextmanager
+def atomic_write(path: str | os.PathLike, mode: str = "wb", sync: bool = True, **open_kwargs):
+    """Open a temporary file beside ``path`` for writing (``mode`` "w" or
+    "wb", ``open`` keywords such as ``newline``) and rename it over
+    ``path`` when the block ends without error (see :func:`atomic_path`)."""
+    if mode not in ("w", "wb"):
+        raise ValueError(f"atomic_write writes new files: mode 'w' or 'wb', not {mode!r}")
+    path = Path(path)
+    with atomic_path(path, sync=sync) as tmp, open(tmp, mode, **open_kwargs) as fh:
+        yield fh
+        fh.flush()  # an error here, or in closing, is reported like one in writing
+
+
+def sync_file(path: str | os.PathLike) -> None:
+    """Flush a written file to the disk (``fsync``)."""
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def _fsync_tree(root: Path) -> None:
+    for parent, _, files in os.walk(root):
+        for name in files:
+            sync_file(Path(parent) / name)
+        sync_directory(Path(parent))
+
+
+def sync_directory(directory: str | os.PathLike) -> None:
+    """Make the renames in a directory durable (``fsync`` of the directory;
+    some file systems cannot sync one, and that is not an error)."""
+    try:
+        fd = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def _replace(tmp: Path, path: Path, directory: bool) -> None:
+    if not (directory and path.is_dir()):
+        os.replace(tmp, path)
+        return
+    # a directory cannot be renamed over a non-empty one: move the old one
+    # aside, move the new one in, then delete the old one
+    old = temp_sibling(path, directory=True)
+    old.rmdir()
+    os.replace(path, old)
+    try:
+        os.replace(tmp, path)
+    except BaseException:
+        os.replace(old, path)
+        raise
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _remove(tmp: Path) -> None:
+    with contextlib.suppress(OSError):
+        if tmp.is_dir() and not tmp.is_symlink():
+            shutil.rmtree(tmp)
+        else:
+            tmp.unlink()

@@ -27,6 +27,19 @@ def pyplot():
     return plt
 
 
+def save_figure(fig, path) -> Path:
+    """Save and close a matplotlib figure, written whole or not at all
+    (:func:`isoflow.mesh.outputs.atomic_path`; the format follows the suffix)."""
+    from .outputs import atomic_path
+
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp)
+    finally:
+        pyplot().close(fig)
+    return Path(path)
+
+
 def draw_surface(ax, mesh, obj, elev: float, azim: float, budget: int, bounds=None) -> None:
     """Draw a boundary mesh into a 3D axes: faces coloured by the mean vertex
     angle gamma of their corners, shaded by their normal, back faces culled."""
@@ -66,6 +79,4 @@ def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azi
     ax.set_zlabel("z")
     ax.set_title(f"{title}\nvertex angle: blue concave, white flat, red convex", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

@@ -17,7 +17,7 @@ from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.arrays import binary
 from .formats.registry import RawVolume, format_for, split_dataset, volume_suffixes
-from .outputs import check_output_path
+from .outputs import atomic_path, check_output_path
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -209,5 +209,7 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     """
     obj = DigitalObject.of(obj)
     file, dataset = check_volume_output(path, force)
-    format_for(file, writing=True).load().write(file, obj, dataset)
+    # whole or not at all: written beside the target, renamed when complete
+    with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
+        format_for(file, writing=True).load().write(tmp, obj, dataset)
     return file

@@ -1,0 +1,90 @@
+"""A flow's step files open in trimesh and pymeshlab as the surfaces isoflow
+counts, and flow.csv records trimesh's reading of each (issue 15, item 3)."""
+
+import contextlib
+import csv
+import io
+
+import numpy as np
+import pymeshlab
+import pytest
+import trimesh
+from skimage.measure import euler_number
+
+from isoflow import boundary_mesh
+from isoflow.cli import main
+
+
+def run(*args):
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        rc = main([str(a) for a in args])
+    return rc, o.getvalue(), e.getvalue()
+
+
+def noisy_block(seed=0, n=10):
+    """Random voxels on a slab: edge and vertex contacts (doubled edges at
+    26-connectivity) in the first steps of a 26-connected flow."""
+    rng = np.random.default_rng(seed)
+    v = rng.random((n, n, n)) < 0.45
+    v[n // 2 - 1 : n // 2 + 2, :, :] = True  # keeps the flow going for a few steps
+    return v
+
+
+def test_26_connected_flow_step_files_and_their_check_columns(tmp_path):
+    v = noisy_block()
+    np.save(tmp_path / "v.npy", v)
+    out = tmp_path / "run"
+    rc, stdout, err = run("flow", tmp_path / "v.npy", "--connectivity", 26, "--out", out)
+    assert rc == 0, err
+    with open(out / "flow.csv") as fh:
+        rows = {int(r["step"]): r for r in csv.DictReader(fh)}
+    plys = sorted(out.glob("step_*.ply"))
+    assert len(plys) == sum(int(r["voxels"]) > 0 for r in rows.values()) >= 3
+    seen_doubled = 0
+    for ply in plys:
+        step = int(ply.stem.split("_")[1])
+        row = rows[step]
+        # the object of this step, read back from its surface: voxel count and chi
+        tm = trimesh.load(ply, process=False)
+        assert tm.is_watertight and tm.is_winding_consistent, ply
+        assert tm.volume == pytest.approx(int(row["voxels"]))
+        header = ply.read_bytes()[:600].decode("ascii", "replace")
+        n_faces = int(header.split("element face ")[1].split()[0])
+        triangles = "comment faces: triangles" in header  # where an edge is doubled (README)
+        assert len(tm.faces) == (n_faces if triangles else 2 * n_faces)
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(ply))
+        t = ms.get_topological_measures()
+        assert t["is_mesh_two_manifold"] and t["boundary_edges"] == 0, ply
+        euler = t["vertices_number"] - t["edges_number"] + t["faces_number"]
+        assert euler == tm.euler_number == int(row["mesh_euler"])
+        # the CSV's check columns: trimesh's reading next to isoflow's
+        assert row["trimesh_watertight"] == "True"
+        assert row["trimesh_euler"] == row["mesh_euler"] and row["trimesh_genus"] == row["mesh_genus"]
+        assert int(row["euler_characteristic"]) == int(row["b0"]) - int(row["b1"]) + int(row["b2"])
+        seen_doubled += triangles
+    assert seen_doubled  # some steps had doubled edges (triangles in the binary PLY)
+    # Euler number as documented, V - E + F = 2 chi + 2 p, on the first step
+    first = boundary_mesh(v, 26)
+    assert int(rows[0]["mesh_euler"]) == 2 * euler_number(np.pad(v, 1), 3) + 2 * first.pinched
+    assert f"{len(plys)} of {len(plys)} step surfaces read back by trimesh" in stdout
+
+
+def test_flow_step_file_that_reads_differently_exits_1(tmp_path, monkeypatch):
+    from isoflow.mesh import export
+
+    real = export.surface_faces
+
+    def lossy(mesh, suffix, **kw):  # a writer that loses a face
+        kind, faces = real(mesh, suffix, **kw)
+        return kind, faces[1:]
+
+    monkeypatch.setattr(export, "surface_faces", lossy)
+    np.save(tmp_path / "b.npy", np.ones((3, 3, 3), bool))
+    rc, _, err = run("flow", tmp_path / "b.npy", "--out", tmp_path / "run")
+    assert rc == 1
+    lines = err.strip().splitlines()
+    assert len(lines) == 3 and f"{tmp_path / 'run' / 'step_000.ply'}: trimesh reads watertight False" in lines[0]
+    with open(tmp_path / "run" / "flow.csv") as fh:
+        assert {r["trimesh_watertight"] for r in csv.DictReader(fh) if r["mesh_euler"]} == {"False"}

@@ -1,0 +1,204 @@
+"""Every surface file isoflow writes opens as the surface it describes.
+
+Written through the command line, read back by trimesh (``process=False``:
+the file's own vertices) and pymeshlab, as a user would: closed, 2-manifold,
+consistently oriented, Euler number ``2 chi + 2 p`` (README "The boundary
+mesh"; chi from scikit-image, independent of isoflow), exact voxel volume.
+"""
+
+import contextlib
+import io
+from pathlib import Path
+
+import numpy as np
+import pymeshlab
+import pytest
+import trimesh
+from conftest import random_volume, torus
+from skimage.measure import euler_number
+
+from isoflow import boundary_mesh
+from isoflow.cli import main
+
+# the formats written by default, and ASCII PLY, by suffix and extra option
+FORMATS = [(".ply", ()), (".ply", ("--ascii",)), (".obj", ()), (".glb", ()), (".stl", ())]
+SKIMAGE_CONN = {6: 1, 26: 3}
+
+RING = [(0, 0, 0), (0, 1, 0), (0, 1, 1), (0, 1, 2), (1, 0, 0), (1, 0, 1), (1, 0, 2), (1, 1, 2)]
+
+
+def surface(tmp_path, volume, conn, suffix, options=(), name="s"):
+    """Run ``isoflow surface`` on a volume; returns (exit code, file, stdout, stderr)."""
+    src = tmp_path / f"{name}.npy"
+    np.save(src, volume)
+    out = tmp_path / f"{name}{'_ascii' if options else ''}{suffix}"
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        rc = main(["surface", str(src), "-o", str(out), "--connectivity", str(conn), "--force", *options])
+    return rc, out, o.getvalue(), e.getvalue()
+
+
+def read_trimesh(path: Path):
+    # STL stores no shared vertices: read it with trimesh's usual merge
+    return trimesh.load(path, force="mesh", process=path.suffix == ".stl")
+
+
+def read_pymeshlab(path: Path) -> dict:
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    if path.suffix == ".stl":
+        ms.meshing_remove_duplicate_vertices()  # MeshLab's usual weld of an STL
+    t = ms.get_topological_measures()
+    t["volume"] = ms.get_geometric_measures().get("mesh_volume")
+    t["euler"] = t["vertices_number"] - t["edges_number"] + t["faces_number"]
+    return t
+
+
+def assert_reads_as(path: Path, volume, conn, euler):
+    tm = read_trimesh(path)
+    assert tm.is_watertight and tm.is_winding_consistent, path
+    assert tm.euler_number == euler, (path, tm.euler_number, euler)
+    assert tm.volume == pytest.approx(volume.sum(), rel=1e-9)
+    pm = read_pymeshlab(path)
+    assert pm["is_mesh_two_manifold"] and pm["boundary_edges"] == 0, (path, pm)
+    assert pm["non_two_manifold_edges"] == pm["non_two_manifold_vertices"] == 0
+    assert pm["euler"] == euler, (path, pm["euler"], euler)
+    assert pm["volume"] == pytest.approx(volume.sum(), rel=1e-9)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_random_volumes_every_format_opens_in_trimesh_and_pymeshlab(tmp_path, rng, conn):
+    seen = {"doubled edges": 0, "pinched": 0, "split vertices": 0, "stl welded": 0, "stl watertight": 0}
+    for i in range(300):
+        v = random_volume(rng, 5)
+        if not v.any():
+            continue
+        m = boundary_mesh(v, conn)
+        euler = 2 * euler_number(np.pad(v, 1), SKIMAGE_CONN[conn]) + 2 * m.pinched
+        seen["doubled edges"] += m.midpoints > 0
+        seen["pinched"] += m.pinched > 0
+        seen["split vertices"] += int((m.sheet > 0).any())
+        for suffix, options in (FORMATS[i % 5], FORMATS[(i + 2) % 5]):  # two formats per volume
+            rc, path, _, err = surface(tmp_path, v, conn, suffix, options)
+            assert rc == 0, err
+            if suffix != ".stl":
+                assert_reads_as(path, v, conn, euler)
+                continue
+            # STL: readers weld by position; exact where nothing is split,
+            # else one note on stderr with the count, and the volume still exact
+            split = (m.sheet > 0).any() or m.midpoints
+            if split:
+                seen["stl welded"] += 1
+                line, = err.strip().splitlines()
+                assert "STL keeps no shared vertices" in line and "PLY, OBJ or GLB" in line
+                assert read_trimesh(path).volume == pytest.approx(v.sum())
+            else:
+                seen["stl watertight"] += 1
+                assert err == ""
+                assert_reads_as(path, v, conn, euler)
+    assert all(seen.values()), seen  # every hard case occurred
+
+
+@pytest.mark.parametrize("suffix,options", FORMATS)
+def test_ring_of_eight_voxels(tmp_path, suffix, options):
+    """The issue's ring: genus 1 at 6-connectivity, with four pentagons
+    (trimesh read its OBJ as not watertight with Euler 2, and could not read
+    its binary PLY at all)."""
+    v = np.zeros((2, 2, 3), bool)
+    v[tuple(np.array(RING).T)] = True
+    m = boundary_mesh(v, 6)
+    assert np.count_nonzero((m.polygons() >= 0).sum(axis=1) == 5) == 4
+    assert m.euler_characteristic == 0 and [c["genus"] for c in m.components()] == [1]
+    rc, path, _, err = surface(tmp_path, v, 6, suffix, options)
+    assert rc == 0, err
+    if suffix == ".stl":  # the ring's doubled edges are welded by every STL reader
+        assert "STL keeps no shared vertices" in err
+        return
+    assert_reads_as(path, v, 6, 0)
+    assert read_pymeshlab(path)["genus"] == 1
+
+
+@pytest.mark.parametrize("suffix,options", FORMATS[:4])
+def test_two_voxels_sharing_an_edge_at_26(tmp_path, suffix, options):
+    v = np.zeros((2, 2, 1), bool)
+    v[0, 0, 0] = v[1, 1, 0] = True
+    rc, path, _, err = surface(tmp_path, v, 26, suffix, options)
+    assert rc == 0, err
+    assert_reads_as(path, v, 26, 2)  # one sphere through the shared edge
+    assert len(read_trimesh(path).split(only_watertight=False)) == 1
+
+
+def test_well_composed_stl_opens_watertight_after_the_weld(tmp_path):
+    v = torus(6, 2.5)
+    assert boundary_mesh(v).midpoints == 0 and not (boundary_mesh(v).sheet > 0).any()
+    rc, path, _, err = surface(tmp_path, v, 6, ".stl")
+    assert rc == 0 and err == ""
+    assert_reads_as(path, v, 6, 0)
+    assert read_pymeshlab(path)["genus"] == 1
+
+
+def test_file_contents_per_format(tmp_path):
+    """What README says each format holds: binary PLY quads (triangles when an
+    edge is doubled), OBJ polygons starting at a midpoint, GLB triangles with
+    vertex colours and the curvature columns."""
+    edge = np.zeros((2, 2, 1), bool)
+    edge[0, 0, 0] = edge[1, 1, 0] = True
+    cube = np.ones((2, 2, 2), bool)
+    _, ply, out, _ = surface(tmp_path, cube, 6, ".ply", name="cube")
+    assert "faces: quads" in ply.read_bytes()[:2000].decode("ascii", "replace")
+    assert "(quads)" in out
+    _, ply, out, _ = surface(tmp_path, edge, 26, ".ply", name="edge")
+    assert "faces: triangles" in ply.read_bytes()[:2000].decode("ascii", "replace")
+    _, obj, _, _ = surface(tmp_path, edge, 26, ".obj", name="edge")
+    rows = [line.split()[1:] for line in obj.read_text().splitlines() if line.startswith("f ")]
+    verts = [line.split()[1:] for line in obj.read_text().splitlines() if line.startswith("v ")]
+    pentagons = [r for r in rows if len(r) == 5]
+    assert len(pentagons) == 4
+    for r in pentagons:  # the first corner is the midpoint: not a lattice point
+        x = np.array(verts[int(r[0]) - 1], float)
+        assert (np.abs(x - np.round(x)) > 0.25).any()
+    _, glb, _, _ = surface(tmp_path, cube, 6, ".glb", name="cube")
+    tm = read_trimesh(glb)
+    assert len(tm.faces) == 2 * 24 and len(tm.vertices) == 26
+    assert tm.visual.kind == "vertex" and len(np.unique(tm.visual.vertex_colors, axis=0)) > 1
+    assert {"_config", "_gamma", "_a"} <= set(tm.vertex_attributes)
+    assert tm.vertex_attributes["_a"].sum() == 8  # a^T n = 8 chi on the cube
+
+
+def test_ascii_only_for_ply(tmp_path):
+    rc, path, _, err = surface(tmp_path, np.ones((1, 1, 1), bool), 6, ".obj", ("--ascii",))
+    assert rc == 2 and "--ascii applies to .ply" in err and not path.exists()
+
+
+def test_readback_disagreement_exits_1_naming_the_file(tmp_path, monkeypatch):
+    """A writer that loses a face: the read-back check catches it."""
+    from isoflow.mesh import export
+
+    real = export.surface_faces
+
+    def lossy(mesh, suffix, **kw):
+        kind, faces = real(mesh, suffix, **kw)
+        return kind, faces[1:]
+
+    monkeypatch.setattr(export, "surface_faces", lossy)
+    rc, path, _, err = surface(tmp_path, np.ones((2, 2, 2), bool), 6, ".ply")
+    assert rc == 1
+    line, = err.strip().splitlines()
+    assert str(path) in line and "trimesh reads" in line and "watertight False" in line
+
+
+def test_readback_beyond_the_memory_budget_is_skipped_and_said(tmp_path, monkeypatch):
+    """The file is written; trimesh's read-back (about 320 bytes a triangle)
+    is skipped with one note when it would not fit."""
+    from isoflow.scale import memory
+
+    v = np.ones((3, 3, 3), bool)
+    # meshing needs about 17 kB (16 B a lattice point, 300 a face), the read-back 43 kB (108 triangles)
+    monkeypatch.setattr(memory, "default_budget", lambda: 30_000)
+    rc, path, out, err = surface(tmp_path, v, 6, ".ply")
+    assert rc == 0 and path.exists() and "trimesh reads" not in out
+    line, = err.strip().splitlines()
+    assert "not read back" in line and "budget" in line and str(path) in line
+    monkeypatch.undo()
+    rc, path, out, err = surface(tmp_path, v, 6, ".ply", ("--no-check",))
+    assert rc == 0 and err == "" and "trimesh reads" not in out

@@ -1,0 +1,290 @@
+"""No file is ever lost or left half-written (issue 15, item 5).
+
+A full disk is a tiny tmpfs where the test can mount one (root in a
+sandbox), else skipped; the same failure half-way through a write is also
+simulated everywhere by a write that raises ENOSPC. A read-only directory is
+a tmpfs remounted read-only (root ignores permission bits), or a directory
+without write permission when not root. After every failure: exit 2, one
+line naming the file and the cause, the old file byte for byte, no
+temporary file.
+"""
+
+import contextlib
+import errno
+import io
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import torus
+
+from isoflow.cli import main
+from isoflow.errors import IsoflowError
+from isoflow.mesh import outputs
+from isoflow.mesh.formats import npy as npy_format
+
+MESHES = Path(__file__).resolve().parents[2] / "meshes"
+
+
+def run(*args):
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        rc = main([str(a) for a in args])
+    return rc, o.getvalue(), e.getvalue()
+
+
+def listing(directory: Path) -> dict:
+    return {p.name: p.read_bytes() for p in sorted(directory.iterdir()) if p.is_file()}
+
+
+@contextlib.contextmanager
+def tmpfs(path: Path, size: str):
+    path.mkdir()
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    p = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)], capture_output=True)
+    if p.returncode:
+        pytest.skip(f"cannot mount a tmpfs here: {p.stderr.decode().strip()}")
+    try:
+        yield path
+    finally:
+        subprocess.run(["umount", "-l", str(path)], check=False)
+
+
+def fill(directory: Path, leave: int) -> None:
+    """Fill a file system but ``leave`` bytes."""
+    free = os.statvfs(directory).f_bavail * os.statvfs(directory).f_frsize
+    with open(directory / "filler", "wb") as fh:
+        fh.write(b"\0" * max(0, free - leave))
+
+
+class HalfWayFull:
+    """A file whose writes stop at ``limit`` bytes with ENOSPC, as a full disk does."""
+
+    def __init__(self, fh, limit):
+        self.fh, self.left = fh, limit
+
+    def write(self, data):
+        if len(data) > self.left:
+            self.fh.write(data[: self.left])
+            self.left = 0
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        self.left -= len(data)
+        return self.fh.write(data)
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.fh.close()
+
+
+def full_after(monkeypatch, limit: int, exc=None):
+    real = open
+
+    def fake_open(path, mode="r", *a, **kw):
+        fh = real(path, mode, *a, **kw)
+        return HalfWayFull(fh, limit) if "w" in mode else fh
+
+    # every writer that opens its file by name: the atomic writes' own, and
+    # the volume formats' (an .npz goes through isoflow.mesh.formats.npy)
+    for module in (outputs, npy_format):
+        monkeypatch.setattr(module, "open", fake_open, raising=False)
+
+
+def assert_failed_cleanly(rc, err, target: Path, before: dict, cause: str, code: int = 2):
+    assert rc == code, err
+    line, = err.strip().splitlines()
+    assert str(target) in line and cause in line and "Traceback" not in err, line
+    assert listing(target.parent) == before  # the old file byte for byte, nothing added
+    assert not [p for p in target.parent.iterdir() if outputs.TEMP_MARK in p.name]
+
+
+# ------------------------------------------------------------ a full disk
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".stl", ".glb"])
+def test_surface_write_fails_half_way_old_file_kept(tmp_path, monkeypatch, suffix):
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / f"out{suffix}"
+    out.write_bytes(b"the user's previous file")
+    before = listing(tmp_path)
+    full_after(monkeypatch, 1000)
+    rc, _, err = run("surface", tmp_path / "t.npy", "-o", out, "--force")
+    assert_failed_cleanly(rc, err, out, before, "No space left on device")
+    assert "previous out" in err and "unchanged" in err
+
+
+def test_voxelize_write_fails_half_way_leaves_no_file(tmp_path, monkeypatch):
+    full_after(monkeypatch, 100)
+    rc, _, err = run("voxelize", MESHES / "torus.obj", "--resolution", 24, "-o", tmp_path / "v.npz")
+    assert_failed_cleanly(rc, err, tmp_path / "v.npz", {}, "No space left on device")
+    assert "nothing was written" in err
+
+
+def test_interrupted_write_keeps_the_old_file(tmp_path, monkeypatch):
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / "out.ply"
+    out.write_bytes(b"old")
+    before = listing(tmp_path)
+    real = open
+
+    class Interrupted(HalfWayFull):
+        def write(self, data):
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(outputs, "open", lambda p, m="r", *a, **k: Interrupted(real(p, m, *a, **k), 0), raising=False)
+    rc, _, err = run("surface", tmp_path / "t.npy", "-o", out, "--force")
+    # an interrupt keeps its usual exit status (130), and names the file
+    assert_failed_cleanly(rc, err, out, before, "interrupted while writing", code=130)
+
+
+def test_surface_on_a_full_tmpfs(tmp_path):
+    np.save(tmp_path / "t.npy", torus(8, 3))
+    with tmpfs(tmp_path / "disk", "256k") as disk:
+        out = disk / "out.ply"
+        assert run("surface", tmp_path / "t.npy", "-o", out)[0] == 0  # it fits on an empty disk
+        np.save(tmp_path / "small.npy", np.ones((1, 1, 1), bool))
+        assert run("surface", tmp_path / "small.npy", "-o", out, "--force")[0] == 0
+        fill(disk, 8192)
+        before = listing(disk)
+        rc, _, err = run("surface", tmp_path / "t.npy", "-o", out, "--force")
+        assert_failed_cleanly(rc, err, out, before, "No space left on device")
+
+
+def test_voxelize_on_a_full_tmpfs(tmp_path):
+    with tmpfs(tmp_path / "disk", "64k") as disk:
+        fill(disk, 1024)
+        before = listing(disk)
+        rc, _, err = run("voxelize", MESHES / "torus.obj", "--resolution", 48, "-o", disk / "v.npz")
+        assert_failed_cleanly(rc, err, disk / "v.npz", before, "No space left on device")
+
+
+# ------------------------------------------------------------ a read-only directory
+
+
+def test_read_only_directory_refused_up_front(tmp_path):
+    """A read-only tmpfs as root, a directory without write permission otherwise."""
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    if os.geteuid() == 0:
+        ctx = tmpfs(tmp_path / "ro", "64k")
+    else:
+        (tmp_path / "ro").mkdir()
+        ctx = contextlib.nullcontext(tmp_path / "ro")
+    with ctx as ro:
+        (ro / "out.ply").write_bytes(b"old")
+        if os.geteuid() == 0:
+            subprocess.run(["mount", "-o", "remount,ro", str(ro)], check=True)
+            cause = "read-only file system"
+        else:
+            ro.chmod(0o500)
+            cause = "permission denied"
+        try:
+            before = listing(ro)
+            rc, _, err = run("surface", tmp_path / "t.npy", "-o", ro / "out.ply", "--force")
+            assert rc == 2 and cause in err and str(ro) in err and len(err.strip().splitlines()) == 1
+            assert listing(ro) == before
+            rc, _, err = run("flow", tmp_path / "t.npy", "--steps", 1, "--out", ro / "run")
+            assert rc == 2 and cause in err and not (ro / "run").exists()
+        finally:
+            if os.geteuid() != 0:
+                ro.chmod(0o700)
+
+
+def test_write_denied_while_writing(tmp_path, monkeypatch):
+    """The directory passes the up-front check but the write is refused
+    (permissions changed meanwhile, an ACL, a read-only bind mount)."""
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / "out.obj"
+    out.write_bytes(b"old")
+    before = listing(tmp_path)
+
+    def denied(*a, **k):
+        raise PermissionError(errno.EACCES, os.strerror(errno.EACCES))
+
+    monkeypatch.setattr(outputs.os, "replace", denied)
+    rc, _, err = run("surface", tmp_path / "t.npy", "-o", out, "--force")
+    assert_failed_cleanly(rc, err, out, before, "Permission denied")
+
+
+def test_vanished_directory(tmp_path):
+    d = tmp_path / "gone"
+    d.mkdir()
+    with pytest.raises(IsoflowError, match=r"gone/x.csv: could not write \(No such file or directory\)"):
+        with outputs.atomic_write(d / "x.csv", "w") as fh:
+            fh.write("a,b\n")
+            for p in d.iterdir():
+                p.unlink()
+            d.rmdir()
+    assert not d.exists()
+
+
+def test_atomic_path_for_directories(tmp_path):
+    """A store written as a directory (zarr) replaces the old one whole."""
+    store = tmp_path / "v.zarr"
+    store.mkdir()
+    (store / "old").write_text("old")
+    with outputs.atomic_path(store, directory=True) as tmp:
+        (tmp / "new").write_text("new")
+    assert [p.name for p in store.iterdir()] == ["new"]
+    assert [p.name for p in tmp_path.iterdir()] == ["v.zarr"]
+    with pytest.raises(RuntimeError):
+        with outputs.atomic_path(store, directory=True) as tmp:
+            (tmp / "half").write_text("x")
+            raise RuntimeError("writer failed")
+    assert [p.name for p in store.iterdir()] == ["new"] and len(list(tmp_path.iterdir())) == 1
+
+
+def test_new_files_get_the_usual_permissions(tmp_path):
+    np.save(tmp_path / "t.npy", np.ones((2, 2, 2), bool))
+    umask = os.umask(0o022)
+    os.umask(umask)
+    assert run("surface", tmp_path / "t.npy", "-o", tmp_path / "o.ply")[0] == 0
+    assert (tmp_path / "o.ply").stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+# ------------------------------------------------------------ flow --out
+
+
+def test_flow_force_keeps_the_old_run_until_the_new_one_is_written(tmp_path, monkeypatch):
+    np.save(tmp_path / "b6.npy", np.ones((6, 6, 6), bool))
+    np.save(tmp_path / "b3.npy", np.ones((3, 3, 3), bool))
+    out = tmp_path / "run"
+    assert run("flow", tmp_path / "b6.npy", "--out", out)[0] == 0
+    before = listing(out)
+    assert len([n for n in before if n.startswith("step_")]) == 6
+    # the new run fails while writing its second step file
+    from isoflow.flow import files
+
+    real = files.export.write_surface
+    calls = []
+
+    def failing(path, *a, **k):
+        calls.append(path)
+        if len(calls) == 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+        return real(path, *a, **k)
+
+    monkeypatch.setattr(files.export, "write_surface", failing)
+    rc, _, err = run("flow", tmp_path / "b3.npy", "--out", out, "--force")
+    line, = err.strip().splitlines()
+    assert rc == 2 and "No space left on device" in line and f"{out}/step_001.ply" in line, line
+    assert listing(out) == before and sorted(p.name for p in out.iterdir()) == sorted(before)
+    monkeypatch.undo()
+    # finished: the new run's three steps, none of the old six
+    assert run("flow", tmp_path / "b3.npy", "--out", out, "--force")[0] == 0
+    assert sorted(n for n in listing(out) if n.startswith("step_")) == ["step_000.ply", "step_001.ply", "step_002.ply"]
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+
+
+def test_flow_into_a_new_directory_leaves_nothing_on_failure(tmp_path, monkeypatch):
+    np.save(tmp_path / "b3.npy", np.ones((3, 3, 3), bool))
+    full_after(monkeypatch, 10)
+    rc, _, err = run("flow", tmp_path / "b3.npy", "--out", tmp_path / "new")
+    assert rc == 2 and "No space left on device" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "new").exists()
