@@ -77,32 +77,40 @@ def cmd_info(args) -> int:
     from .digital.analysis import analyze
 
     if Path(args.input).suffix.lower() == ".zarr":
-        # out of core: block by block, never the whole volume in memory; the
-        # closed surfaces need the whole boundary mesh and are not computed
+        # out of core: block by block, never the whole volume in memory
         from .digital.outofcore import analyze_zarr
 
         if args.pitch is not None or args.resolution is not None or args.allow_open:
             raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
-        report = analyze_zarr(args.input, args.connectivity)
-        if report["dimension"] == 3:
-            report["surfaces"] = None
+        report = analyze_zarr(args.input, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
     else:
         obj = load_input(args)
         if args.gpu:
             from .scale.arrays import to_gpu
 
-            report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces)
+            report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
             report["parity"] = obj.parity  # a bare array has no lattice place
         else:
-            report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
+            report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
     report["input"] = str(args.input)
     if args.json:
         print(json.dumps(report))
         return 0
     print(format_info(report))
     return 0
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
+    return value
 
 
 def format_info(r: dict) -> str:
@@ -327,7 +335,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus (faster on huge volumes)")
+    p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
+    p.add_argument("--threads", type=positive_int, metavar="N",
+                   help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
     p.add_argument(
         "--gpu",
         action="store_true",

@@ -490,7 +490,8 @@ def analyze_chunked(
     return _finish(ndim, conn, list(shape), *merged)
 
 
-def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None) -> dict:
+def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None,
+                 surfaces: bool = True, threads: int | None = None) -> dict:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
     Before the full pass, the dtype and the first block's values are
@@ -507,4 +508,7 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
     if dtype.kind != "b" and 0 not in z.shape:
         first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         binary(first, where, near=(0,) * z.ndim)
-    return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where)
+    report = analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where)
+    if report["dimension"] == 3 and surfaces:
+        report["surfaces"] = None  # TODO
+    return report
