@@ -48,7 +48,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..scale.compiled import use_compiled
+from ..scale.compiled import have_numba, use_compiled
 from .configurations import configurations
 from .surface import doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 from .topology import check_connectivity
@@ -144,35 +144,19 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
 
 
 def _small(vol: np.ndarray, conn: int) -> dict:
-    """numpy and scipy: labels of the padded volume (the outside is one
-    background component) and the configuration of every vertex."""
+    """numpy and scipy: labels of the volume and of its background padded by
+    one layer (the outside is one background component), and the
+    configuration of every vertex."""
     from scipy.ndimage import label
 
-    nsheet, sheet_obj, sheet_bg, quarters, spokes, _ = sweep_tables(conn)
-    cfg = configurations(vol)
-    padded = np.pad(vol, 1)
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    obj_labels = label(padded, _structure(obj_adj))[0].ravel()
-    bg_labels, nbg = label(~padded, _structure(bg_adj))
-    bg_labels = bg_labels.ravel()
-    # vertex w's octant d is the padded voxel w + d
-    strides = np.array([padded.shape[1] * padded.shape[2], padded.shape[2], 1])
-    octant_offset = np.array([np.dot([o & 1, (o >> 1) & 1, o >> 2], strides) for o in range(8)])
-    flat = cfg.ravel()
-    on = np.flatnonzero(nsheet[flat])
-    corner = np.stack(np.unravel_index(on, cfg.shape), axis=1) @ strides
-    keys, counts, quarter = [], [], []
-    for s in range(int(nsheet.max(initial=0))):
-        has = nsheet[flat[on]] > s
-        c, at = flat[on[has]], corner[has]
-        obj = obj_labels[at + octant_offset[sheet_obj[c, s]]].astype(np.int64)
-        bg = bg_labels[at + octant_offset[sheet_bg[c, s]]]
-        keys.append(obj * (nbg + 1) + bg)
-        quarter.append(quarters[c, s].astype(np.int64))
-    keys = np.concatenate(keys) if keys else np.zeros(0, np.int64)
-    uniq, inverse = np.unique(keys, return_inverse=True)
-    vertices = np.bincount(inverse, minlength=len(uniq))
-    q = np.bincount(inverse, weights=np.concatenate(quarter) if quarter else None, minlength=len(uniq))
+    obj_labels = label(vol, _structure(obj_adj))[0]
+    bg_padded = label(np.pad(~vol, 1, constant_values=True), _structure(bg_adj))[0]
+    outside = int(bg_padded[0, 0, 0])
+    whole = tuple(slice(None) for _ in range(3))
+    found = box_sheets(vol, obj_labels, bg_padded[1:-1, 1:-1, 1:-1], whole, conn, outside)
+    spokes = sweep_tables(conn)[4]
+    cfg = configurations(vol)
     doubled = 0
     for axis in range(3):
         lo = [slice(None)] * 3
@@ -180,9 +164,77 @@ def _small(vol: np.ndarray, conn: int) -> dict:
         lo[axis], hi[axis] = slice(None, -1), slice(1, None)
         doubled += int(np.count_nonzero((spokes[cfg[tuple(lo)]] >> (2 * axis + 1)) & (spokes[cfg[tuple(hi)]] >> (2 * axis)) & 1))
     return {
-        "surfaces": surfaces_from_counts(vertices, q.astype(np.int64)),
-        "pinched_vertices": int(np.count_nonzero(pinch_lut(conn)[flat])),
+        "surfaces": surfaces_from_counts(found["vertices"], found["quarters"]),
+        "pinched_vertices": int(np.count_nonzero(pinch_lut(conn)[cfg])),
         "doubled_edges": doubled,
+    }
+
+
+def _compiled_box(vox, outside) -> bool:
+    """The compiled box pass packs an object and a background label in 64
+    bits (both below 2^32; labels are below the voxel count); it is worth
+    loading numba for blocks of 2^18 voxels on."""
+    return vox.ndim == 3 and 1 << 18 <= vox.size < 1 << 31 and 0 <= int(outside) < 1 << 32 and have_numba()
+
+
+def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside) -> dict:
+    """Sheets of some vertices of a box of voxels, summed per label pair.
+
+    ``vox``: the box (bool); ``obj_labels``/``bg_labels``: integer labels of
+    its object / background voxels (any numbering: local labels, node keys);
+    ``keep``: slices of the box's vertex array (shape ``vox.shape + 1``)
+    choosing the vertices to count; octants outside the box are background
+    labelled ``outside`` (only vertices whose octants outside the box really
+    are outside the volume may be kept). Returns the distinct pairs
+    (``obj``, ``bg`` label arrays), their mesh ``vertices`` and ``quarters``
+    of faces, and the pinch ``pairs`` (labels of the two octants to join for
+    the connectivity's components: object labels under 26, background under
+    6). Used whole by the small path and block by block out of core.
+    """
+    if _compiled_box(vox, outside):
+        from ..scale.sweep import box_sweep
+
+        bounds = [k.indices(n + 1)[:2] for k, n in zip(keep, vox.shape)]
+        return box_sweep(vox, obj_labels, bg_labels, [a for a, _ in bounds], [b for _, b in bounds],
+                         int(outside), sweep_tables(conn))
+    nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
+    cfg = configurations(vox)[keep]
+    origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])
+    obj_padded = np.pad(obj_labels, 1)
+    bg_padded = np.pad(bg_labels, 1, constant_values=outside)
+    # vertex w's octant d is the padded voxel w + d
+    strides = np.array(obj_padded.strides) // obj_padded.itemsize
+    bg_strides = np.array(bg_padded.strides) // bg_padded.itemsize
+    octant = np.array([[o & 1, (o >> 1) & 1, o >> 2] for o in range(8)])
+    flat = cfg.ravel()
+    on = np.flatnonzero(nsheet[flat])
+    corner = np.stack(np.unravel_index(on, cfg.shape), axis=1) + origin
+    obj_flat, bg_flat = obj_padded.ravel(), bg_padded.ravel()
+    objs, bgs, quarter = [], [], []
+    for s in range(int(nsheet.max(initial=0))):
+        has = nsheet[flat[on]] > s
+        c, at = flat[on[has]], corner[has]
+        objs.append(obj_flat[(at + octant[sheet_obj[c, s]]) @ strides])
+        bgs.append(bg_flat[(at + octant[sheet_bg[c, s]]) @ bg_strides])
+        quarter.append(quarters[c, s].astype(np.int64))
+    obj, bg = np.concatenate(objs).astype(np.int64), np.concatenate(bgs).astype(np.int64)
+    uo, io = np.unique(obj, return_inverse=True)
+    ub, ib = np.unique(bg, return_inverse=True)
+    pair, inverse = np.unique(io.astype(np.int64) * len(ub) + ib, return_inverse=True)
+    pinched = on[pinch[flat[on], 0] >= 0]
+    ends = []
+    for e in (0, 1):
+        oct_ = pinch[flat[pinched], e]
+        at = (np.stack(np.unravel_index(pinched, cfg.shape), axis=1) + origin + octant[oct_])
+        side_obj = conn == 26  # the pinch joins two object octants under 26
+        ends.append(obj_flat[at @ strides] if side_obj else bg_flat[at @ bg_strides])
+    ends = np.stack(ends, axis=1).astype(np.int64).reshape(-1, 2)
+    return {
+        "obj": uo[pair // len(ub)] if len(ub) else uo[:0],
+        "bg": ub[pair % len(ub)] if len(ub) else ub[:0],
+        "vertices": np.bincount(inverse, minlength=len(pair)).astype(np.int64),
+        "quarters": np.bincount(inverse, weights=np.concatenate(quarter), minlength=len(pair)).astype(np.int64),
+        "pairs": ends[ends[:, 0] != ends[:, 1]],  # only those that join two pieces
     }
 
 

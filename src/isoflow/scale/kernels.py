@@ -1,5 +1,5 @@
-"""Compiled kernels (numba) for the two passes that dominate ``isoflow info``
-on large volumes: the configuration histogram and component counting.
+"""Compiled kernels (numba) for the passes that dominate ``isoflow info``
+on large volumes: the configuration histogram and component labelling.
 
 Both stream over the volume without materialising a configuration array or
 a label volume:
@@ -7,16 +7,22 @@ a label volume:
 * :func:`histogram3d` keeps, along every row of the last axis, the 8-bit
   configuration of the current vertex and shifts in one nibble (the four
   voxels of the next layer) per step: four reads per vertex, one pass.
-* :func:`count_components` is a run-based union-find: runs of equal voxels
-  along the last axis are the nodes, runs in neighbouring rows that touch are
-  joined. The background's runs are the gaps between the object's, so the
-  volume is read once for both. Memory is three int32 per run (about one
-  byte per voxel on real data) instead of a 4-byte label per voxel.
+* :func:`join_runs` is a run-based union-find: runs of equal voxels along
+  the last axis are the nodes, runs in neighbouring rows that touch (under
+  6-, 18- or 26-adjacency, 4 or 8 in 2D) are joined. The background's runs
+  are the gaps between the object's (:func:`gap_runs`), so the volume is read
+  once for both; one extra node stands for the region outside the array.
+  Memory is three int32 per run (about one byte per voxel on real data)
+  instead of a 4-byte label per voxel, and the parents, flattened, are the
+  labels that :mod:`isoflow.scale.sweep` reads.
 
-They give the same numbers as :func:`isoflow.digital.configurations.configurations`
-and scipy (the tests check it). The numpy/scipy paths stay in use for small
-volumes, where compiling would cost more than it saves; compiled code is
-cached on disk after the first run.
+Every pass splits the volume into slabs along the first axis, one per
+thread (:mod:`isoflow.scale.compiled`); the union-find joins the seams
+between slabs afterwards. They give the same numbers as
+:func:`isoflow.digital.configurations.configurations` and scipy (the tests
+check it). The numpy/scipy paths stay in use for small volumes, where
+loading numba would cost more than it saves; compiled code is cached on
+disk after the first run.
 """
 
 from __future__ import annotations
@@ -24,6 +30,10 @@ from __future__ import annotations
 import numpy as np
 
 from .compiled import run, slabs, thread_count
+from .memory import check_fits
+
+#: bytes per run held by the union-find: start, end and parent (int32)
+RUN_BYTES = 12
 
 try:  # numba is a dependency, but keep isoflow importable without it
     from numba import njit
@@ -280,8 +290,16 @@ def object_runs(v: np.ndarray):
     parts = slabs(v.shape[0], thread_count())
     run([(_count_runs_rows, v, counts, a, b) for a, b in parts])
     offsets = np.cumsum(counts)
-    start = np.empty(offsets[-1], dtype=np.int32)
-    end = np.empty(offsets[-1], dtype=np.int32)
+    nruns, rows = int(offsets[-1]), len(counts)
+    # refuse up front what will not fit: the runs, their gaps (at most one
+    # more per row), a parent for each and the row offsets of both
+    check_fits(
+        RUN_BYTES * (2 * nruns + rows) + 16 * rows,
+        f"labelling the {nruns:,} runs of a {'x'.join(map(str, v.shape))} volume",
+        hint="store it as .zarr and run isoflow info on that (block by block)",
+    )
+    start = np.empty(nruns, dtype=np.int32)
+    end = np.empty(nruns, dtype=np.int32)
     run([(_fill_runs_rows, v, offsets, start, end, a, b) for a, b in parts])
     return offsets, start, end
 

@@ -32,10 +32,10 @@ neighbouring vertices mostly lie on the same surface.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .compiled import run, slabs, thread_count
-
-from numba import njit
+from .memory import check_fits
 
 _EMPTY = -1
 _GOLDEN = -7046029254386353131  # 0x9E3779B97F4A7C15 as int64: Fibonacci hashing
@@ -265,6 +265,8 @@ def sweep(v: np.ndarray, runs, goff: np.ndarray, pobj: np.ndarray, pbg: np.ndarr
     # a slab sees about its share of the surfaces, and those crossing it
     expect = surfaces // len(parts) + surfaces // 8 + 256
     capacity = 1 << int(2 * expect).bit_length()
+    check_fits(len(parts) * capacity * 3 * 8, f"counting {surfaces:,} closed surfaces on {len(parts)} threads",
+               hint="use fewer threads (--threads)")
     found = run([(_slab, v, runs, goff, pobj, pbg, a, b, tables, capacity, pair_capacity) for a, b in parts])
     keys = np.concatenate([f[1] for f in found])
     uniq, inverse = np.unique(keys, return_inverse=True)
@@ -282,3 +284,81 @@ def sweep(v: np.ndarray, runs, goff: np.ndarray, pobj: np.ndarray, pbg: np.ndarr
         "doubled": int(sum(f[4] for f in found)),
         "pairs": np.concatenate([f[5] for f in found]),
     }
+
+
+# --------------------------------------------------------------------------
+# The same counts on a block of labelled voxels (out of core)
+# --------------------------------------------------------------------------
+
+
+@njit(cache=True, nogil=True)
+def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, sheet_quarters, pinch):
+    """Sheets of the vertices ``lo <= w < hi`` of a block, per pair of the
+    block's labels (``fg << 32 | bg``), from its label volumes; octants
+    outside the block are background labelled ``outside``. Returns the
+    number of pinch pairs found and whether the table filled up."""
+    nx, ny, nz = vox.shape
+    used = 0
+    full = len(keys) // 2
+    npairs = 0
+    ck, cv, cq = _EMPTY, 0, 0
+    lab = np.zeros(8, np.int64)  # the octants' labels at one vertex
+    for i in range(lo[0], hi[0]):
+        for j in range(lo[1], hi[1]):
+            for k in range(lo[2], hi[2]):
+                c = 0
+                for o in range(8):
+                    x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
+                    if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
+                        if vox[x, y, z]:
+                            c |= 1 << o
+                            lab[o] = fg[x, y, z]
+                        else:
+                            lab[o] = bg[x, y, z]
+                    else:
+                        lab[o] = outside
+                for s in range(nsheet[c]):
+                    key = (lab[sheet_obj[c, s]] << 32) | lab[sheet_bg[c, s]]
+                    if key != ck:
+                        if ck != _EMPTY:
+                            used += _add(keys, vs, qs, ck, cv, cq)
+                            if used > full:
+                                return npairs, True
+                        ck, cv, cq = key, 0, 0
+                    cv += 1
+                    cq += sheet_quarters[c, s]
+                if pinch[c, 0] >= 0:
+                    la, lb = lab[pinch[c, 0]], lab[pinch[c, 1]]
+                    if la != lb:
+                        if npairs < len(pairs):
+                            pairs[npairs, 0], pairs[npairs, 1] = la, lb
+                        npairs += 1
+    if ck != _EMPTY:
+        _add(keys, vs, qs, ck, cv, cq)
+    return npairs, False
+
+
+def box_sweep(vox: np.ndarray, fg: np.ndarray, bg: np.ndarray, lo, hi, outside: int, tables) -> dict:
+    """:func:`isoflow.digital.closed_surfaces.box_sheets` compiled, for one
+    block: ``fg``/``bg`` are its label volumes (labels below 2^31, as
+    ``outside``), ``lo``/``hi`` the vertex box to count. Returns ``obj``,
+    ``bg`` (the pairs), ``vertices``, ``quarters`` and the pinch ``pairs``."""
+    nsheet, sheet_obj, sheet_bg, quarters, _, pinch = tables
+    capacity, pair_capacity = 1 << 12, 1 << 10
+    while True:
+        keys = np.full(capacity, _EMPTY, np.int64)
+        vs = np.zeros(capacity, np.int64)
+        qs = np.zeros(capacity, np.int64)
+        pairs = np.empty((pair_capacity, 2), np.int64)
+        npairs, overflow = _box_rows(vox.view(np.uint8), fg, bg, np.asarray(lo, np.int64), np.asarray(hi, np.int64),
+                                     outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, quarters, pinch)
+        if overflow:
+            capacity *= 4
+        elif npairs > pair_capacity:
+            pair_capacity = npairs
+        else:
+            filled = keys != _EMPTY
+            k = keys[filled]
+            return {"obj": k >> 32, "bg": k & 0xFFFFFFFF, "vertices": vs[filled], "quarters": qs[filled],
+                    "pairs": pairs[:npairs]}
+
