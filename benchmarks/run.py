@@ -4,6 +4,8 @@ a check that everyone computes the same numbers.
     python benchmarks/run.py                          # 128^3 and 256^3
     python benchmarks/run.py --sizes 128 256 512 --repeat 3
     python benchmarks/run.py --sizes 64 --inputs ball --tools isoflow.info skimage.euler6
+    python benchmarks/run.py --sizes 128 256 512 --tools isoflow.info isoflow.info.nosurf \
+        skimage.euler6 skimage.euler26 --md benchmarks/results/info.md --json benchmarks/results/info.json
 
 Inputs (generated once, cached as .npy in benchmarks/.cache/): a ball, a torus
 and a smoothed random porous field (uniform noise, gaussian sigma 2, > 0.5,
@@ -11,14 +13,18 @@ seed 0), each ``size^3`` voxels.
 
 Tasks, each measured in the same run on the same arrays:
 
-``info`` (what ``isoflow info`` computes: ``analyze(obj, 6, surfaces=False)``,
-  i.e. chi, Betti numbers and the class histogram n) against
+``info`` (what ``isoflow info`` computes with its default flags:
+  ``analyze(obj, 6)``, i.e. chi, Betti numbers, the class histogram n and
+  every closed surface with its genus; ``isoflow.info.nosurf`` is
+  ``surfaces=False``) against
   * ``skimage.measure.euler_number`` at connectivity 1 (6) and 3 (26): chi only;
   * the usual way to get Betti numbers: ``scipy.ndimage.label`` of the object
     (6-structure) and of the background (26-structure; cavities are background
     components off the array border) plus ``euler_number`` for chi;
   * the same with ``cc3d.connected_components`` (optional dependency).
-  isoflow's chi (6 and 26) and Betti numbers must equal the others' numbers.
+  isoflow's chi (6 and 26) and Betti numbers must equal the others' numbers,
+  and its surfaces (count, faces, genus sum) the mesh's components when
+  ``isoflow.mesh`` runs too.
 
 ``surface`` (the boundary quads: ``boundary_mesh(vol, 6)``) against
   * ``trimesh.voxel.VoxelGrid(vol).as_boxes()`` (12 triangles per voxel; only
@@ -41,8 +47,17 @@ extra peak memory (its result included), given in bytes per voxel.
 Seconds are the best of ``--repeat`` runs, fewer once a measurement has used
 ``--max-seconds`` (the slow peers run once at large sizes; the run count is
 reported). ``ratio`` = other tool's seconds / isoflow's seconds on the same
-input: > 1 means isoflow is faster. isoflow's numba kernels use all cores
-(they apply above 4M voxels); the peers run on one.
+input: > 1 means isoflow is faster. isoflow's numba kernels use every CPU
+(they apply from 2M voxels); the peers run on one.
+
+Whole commands (``--commands PAIRS``, default 3): ``isoflow info FILE --json``
+as installed, with its default flags, against ``python -c "...
+euler_number(np.load(FILE), connectivity=1)"``, each a fresh process
+(imports, loading and all), alternated A B A B; medians, the median of the
+pairs' ratios, each process's own peak RSS (``wait4``), and their printed chi
+checked equal. Threads (``--threads N ...``, default 1 .. CPUs): the
+in-process ``isoflow.info`` at the largest size with ``ISOFLOW_THREADS=N``,
+interleaved, medians.
 
 Writes the table to stdout, JSON (``--json``, with machine information) and a
 markdown table (``--md``). Exits with 1 if any check fails.
@@ -56,6 +71,7 @@ import math
 import os
 import platform
 import resource
+import shlex
 import subprocess
 import sys
 import time
@@ -464,7 +480,7 @@ def run_commands(name: str, size: int, path: Path, repeat: int) -> dict:
     for _ in range(repeat):
         for k, cmd in cmds.items():
             runs[k].append(timed(cmd))
-    res = {"input": name, "size": size, "pairs": repeat, "commands": {k: " ".join(c) for k, c in cmds.items()}}
+    res = {"input": name, "size": size, "pairs": repeat, "commands": {k: shlex.join(c) for k, c in cmds.items()}}
     for k, rs in runs.items():
         ok = [r for r in rs if "error" not in r]
         res[k] = {

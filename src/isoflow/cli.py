@@ -102,15 +102,14 @@ def cmd_info(args) -> int:
     return 0
 
 
-def positive_int(text: str) -> int:
-    """argparse type: an integer of at least 1."""
+def thread_count(text: str) -> int:
+    """argparse type of ``--threads``: a positive integer."""
+    from .scale.compiled import check_threads
+
     try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text!r}")
-    return value
+        return check_threads(text, "N")
+    except IsoflowError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def format_info(r: dict) -> str:
@@ -336,7 +335,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
-    p.add_argument("--threads", type=positive_int, metavar="N",
+    p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
     p.add_argument(
         "--gpu",

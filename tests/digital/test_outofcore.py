@@ -135,9 +135,10 @@ def test_irregular_and_thin_chunks(rng):
 
 @pytest.mark.parametrize("conn", [6, 26])
 def test_large_blocks_count_their_sheets_compiled(rng, conn):
-    # blocks of 2^18 voxels and more count their own vertices' sheets with
-    # the compiled pass, smaller blocks and the face tiles with numpy: the
-    # two meet in the same report, equal to the in-memory one
+    # blocks and face tiles of 2^12 voxels and more count their vertices'
+    # sheets with the compiled pass (tiles number their node keys first),
+    # smaller ones with numpy: the two meet in the same report, equal to the
+    # in-memory one
     from isoflow.digital import closed_surfaces as cs
     from isoflow.scale import compiled
 
@@ -145,7 +146,7 @@ def test_large_blocks_count_their_sheets_compiled(rng, conn):
         pytest.skip("numba not installed")
     v = smooth(rng, (90, 70, 66), sigma=1.2)
     v[rng.random(v.shape) < 0.02] ^= True  # edge and vertex contacts
-    assert cs._compiled_box(v[:64, :64, :64], 0) and not cs._compiled_box(v[64:, :64, :64], 0)
+    assert cs._compiled_box(v[:64, :64, :64]) and not cs._compiled_box(v[:2, :2, :2])
     check(v, conn, (64, 64, 64))
     # and the compiled box pass itself equals the numpy one on a block
     fg = outofcore._label(v, cs.MESH_ADJACENCY[conn][0])[0]
@@ -161,6 +162,14 @@ def test_large_blocks_count_their_sheets_compiled(rng, conn):
         return sorted(zip(*(r[k].tolist() for k in ("obj", "bg", "vertices", "quarters"))))
 
     assert rows(fast) == rows(slow) and len(rows(fast)) > 10
+    assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
+    # labels beyond 32 bits (node keys), and an outside key beyond them
+    big = np.int64(1) << 40
+    fast = cs.box_sheets(v, fg.astype(np.int64) + big, bg.astype(np.int64) + big, keep, conn, np.int64(1) << 62)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(cs, "_compiled_box", lambda *a: False)
+        slow = cs.box_sheets(v, fg.astype(np.int64) + big, bg.astype(np.int64) + big, keep, conn, np.int64(1) << 62)
+    assert rows(fast) == rows(slow)
     assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scale import arrays
-from ..scale.compiled import use_compiled
+from ..scale.compiled import use_compiled, using
 from .closed_surfaces import closed_surfaces
 from .configurations import configuration_histogram
 from .indices import (
@@ -52,8 +52,6 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads
     ``threads``: how many threads the compiled passes use (default: the
     ``ISOFLOW_THREADS`` environment variable, else every CPU).
     """
-    from ..scale.compiled import using
-
     with using(threads):
         return _analyze(obj, connectivity, surfaces)
 

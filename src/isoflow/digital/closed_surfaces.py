@@ -170,11 +170,43 @@ def _small(vol: np.ndarray, conn: int) -> dict:
     }
 
 
-def _compiled_box(vox, outside) -> bool:
-    """The compiled box pass packs an object and a background label in 64
-    bits (both below 2^32; labels are below the voxel count); it is worth
-    loading numba for blocks of 2^18 voxels on."""
-    return vox.ndim == 3 and 1 << 18 <= vox.size < 1 << 31 and 0 <= int(outside) < 1 << 32 and have_numba()
+def _compiled_box(vox) -> bool:
+    """The compiled box pass is worth loading numba for from boxes of 2^12
+    voxels (the face tiles of 256^3 blocks have 2^17)."""
+    return vox.ndim == 3 and 1 << 12 <= vox.size < 1 << 31 and have_numba()
+
+
+def _fits_32_bits(labels: np.ndarray, outside) -> bool:
+    """Labels that the compiled pass can pack two by two into 64 bits."""
+    return labels.dtype in (np.uint16, np.uint32, np.int32) and 0 <= int(outside) < 1 << 32
+
+
+def _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside) -> dict:
+    """:func:`box_sheets` by the compiled pass. Labels that do not fit in
+    32 bits (node keys, in the face tiles out of core) are numbered first
+    and the numbers mapped back."""
+    from ..scale.sweep import box_sweep
+
+    values = {}
+    if not _fits_32_bits(obj_labels, 0):
+        values["obj"], obj_labels = np.unique(obj_labels, return_inverse=True)
+        obj_labels = obj_labels.reshape(vox.shape).astype(np.uint32)
+    if not _fits_32_bits(bg_labels, outside):
+        values["bg"], bg_labels = np.unique(np.append(bg_labels.ravel(), outside), return_inverse=True)
+        outside = int(bg_labels[-1])
+        bg_labels = bg_labels[:-1].reshape(vox.shape).astype(np.uint32)
+    bounds = [k.indices(n + 1)[:2] for k, n in zip(keep, vox.shape)]
+    found = box_sweep(vox, obj_labels, bg_labels, [a for a, _ in bounds], [b for _, b in bounds],
+                      int(outside), sweep_tables(conn))
+    if "obj" in values:
+        found["obj"] = values["obj"][found["obj"]]
+    if "bg" in values:
+        found["bg"] = values["bg"][found["bg"]]
+    if values:  # pinch pairs: object labels under 26, background ones under 6
+        kind = "obj" if conn == 26 else "bg"
+        if kind in values:
+            found["pairs"] = values[kind][found["pairs"]]
+    return found
 
 
 def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside) -> dict:
@@ -191,12 +223,8 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     the connectivity's components: object labels under 26, background under
     6). Used whole by the small path and block by block out of core.
     """
-    if _compiled_box(vox, outside):
-        from ..scale.sweep import box_sweep
-
-        bounds = [k.indices(n + 1)[:2] for k, n in zip(keep, vox.shape)]
-        return box_sweep(vox, obj_labels, bg_labels, [a for a, _ in bounds], [b for _, b in bounds],
-                         int(outside), sweep_tables(conn))
+    if _compiled_box(vox):
+        return _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside)
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
     cfg = configurations(vox)[keep]
     origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])

@@ -224,23 +224,36 @@ def _sweep_rows(v, offsets, start, end, goff, pobj, pbg, i0, i1, hist, keys, vs,
     return doubled, npairs, False
 
 
-def _slab(v, runs, goff, pobj, pbg, i0, i1, tables, capacity, pair_capacity):
-    """One slab of vertex layers, run again with larger buffers until its
-    surfaces and pinches fit."""
+def _until_it_fits(call, capacity: int, pair_capacity: int):
+    """Run ``call(keys, vs, qs, pairs) -> (npairs, overflow, extra)`` on
+    fresh buffers, larger ones until the surfaces and the pinches fit.
+    Returns ``extra``, the table's filled keys, vertices, quarters and the
+    pinch pairs."""
     while True:
-        hist = np.zeros(256, np.int64)
         keys = np.full(capacity, _EMPTY, np.int64)
         vs = np.zeros(capacity, np.int64)
         qs = np.zeros(capacity, np.int64)
         pairs = np.empty((pair_capacity, 2), np.int64)
-        doubled, npairs, overflow = _sweep_rows(v, *runs, goff, pobj, pbg, i0, i1, hist, keys, vs, qs, pairs, *tables)
+        npairs, overflow, extra = call(keys, vs, qs, pairs)
         if overflow:
             capacity *= 4
         elif npairs > pair_capacity:
             pair_capacity = npairs
         else:
             filled = keys != _EMPTY
-            return hist, keys[filled], vs[filled], qs[filled], doubled, pairs[:npairs]
+            return extra, keys[filled], vs[filled], qs[filled], pairs[:npairs]
+
+
+def _slab(v, runs, goff, pobj, pbg, i0, i1, tables, capacity, pair_capacity):
+    """One slab of vertex layers: ``(hist, doubled)``, keys, vertices,
+    quarters, pinch pairs."""
+
+    def call(keys, vs, qs, pairs):
+        hist = np.zeros(256, np.int64)
+        doubled, npairs, overflow = _sweep_rows(v, *runs, goff, pobj, pbg, i0, i1, hist, keys, vs, qs, pairs, *tables)
+        return npairs, overflow, (hist, doubled)
+
+    return _until_it_fits(call, capacity, pair_capacity)
 
 
 def sweep(v: np.ndarray, runs, goff: np.ndarray, pobj: np.ndarray, pbg: np.ndarray, surfaces: int, tables,
@@ -277,12 +290,12 @@ def sweep(v: np.ndarray, runs, goff: np.ndarray, pobj: np.ndarray, pbg: np.ndarr
         return out
 
     return {
-        "hist": np.sum([f[0] for f in found], axis=0),
+        "hist": np.sum([f[0][0] for f in found], axis=0),
         "keys": uniq,
         "vertices": total(2),
         "quarters": total(3),
-        "doubled": int(sum(f[4] for f in found)),
-        "pairs": np.concatenate([f[5] for f in found]),
+        "doubled": int(sum(f[0][1] for f in found)),
+        "pairs": np.concatenate([f[4] for f in found]),
     }
 
 
@@ -291,34 +304,65 @@ def sweep(v: np.ndarray, runs, goff: np.ndarray, pobj: np.ndarray, pbg: np.ndarr
 # --------------------------------------------------------------------------
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _box_label(vox, fg, bg, x, y, z, outside):
+    """Label of voxel (x, y, z): its object or background label, ``outside``
+    beyond the block."""
+    nx, ny, nz = vox.shape
+    if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
+        return np.int64(fg[x, y, z]) if vox[x, y, z] else np.int64(bg[x, y, z])
+    return np.int64(outside)
+
+
 @njit(cache=True, nogil=True)
 def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, sheet_quarters, pinch):
     """Sheets of the vertices ``lo <= w < hi`` of a block, per pair of the
     block's labels (``fg << 32 | bg``), from its label volumes; octants
-    outside the block are background labelled ``outside``. Returns the
+    outside the block are background labelled ``outside``. Along each row
+    the configuration shifts in one nibble per vertex (as in the histogram
+    kernel); labels are read only for the octants a sheet names. Returns the
     number of pinch pairs found and whether the table filled up."""
     nx, ny, nz = vox.shape
     used = 0
     full = len(keys) // 2
     npairs = 0
     ck, cv, cq = _EMPTY, 0, 0
-    lab = np.zeros(8, np.int64)  # the octants' labels at one vertex
+    zero = np.zeros(nz, np.uint8)
+    last = np.zeros(4, np.int64)  # the keys of the previous vertex's sheets
     for i in range(lo[0], hi[0]):
         for j in range(lo[1], hi[1]):
-            for k in range(lo[2], hi[2]):
-                c = 0
-                for o in range(8):
-                    x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
-                    if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
-                        if vox[x, y, z]:
-                            c |= 1 << o
-                            lab[o] = fg[x, y, z]
-                        else:
-                            lab[o] = bg[x, y, z]
+            # octant (dx, dy) is voxel row (i-1+dx, j-1+dy)
+            r00 = vox[i - 1, j - 1] if i >= 1 and j >= 1 else zero
+            r10 = vox[i, j - 1] if i < nx and j >= 1 else zero
+            r01 = vox[i - 1, j] if i >= 1 and j < ny else zero
+            r11 = vox[i, j] if i < nx and j < ny else zero
+            k0 = lo[2]
+            code = 0
+            if k0 >= 1:  # the nibble of voxel k0 - 1
+                code = ((r00[k0 - 1] != 0) | ((r10[k0 - 1] != 0) << 1) | ((r01[k0 - 1] != 0) << 2)
+                        | ((r11[k0 - 1] != 0) << 3)) << 4
+            prev = -1
+            for k in range(k0, hi[2]):
+                nib = 0
+                if k < nz:
+                    nib = (r00[k] != 0) | ((r10[k] != 0) << 1) | ((r01[k] != 0) << 2) | ((r11[k] != 0) << 3)
+                code = (code >> 4) | (nib << 4)
+                # A "layer" (the same four voxels on both sides) repeated:
+                # voxel k has the label of voxel k-1, so the sheets' keys are
+                # those of the vertex before; no label to read.
+                same = code == prev and (code >> 4) == (code & 15)
+                prev = code
+                if code == 0 or code == 255:  # most vertices: off the boundary
+                    continue
+                for s in range(nsheet[code]):
+                    if same:
+                        key = last[s]
                     else:
-                        lab[o] = outside
-                for s in range(nsheet[c]):
-                    key = (lab[sheet_obj[c, s]] << 32) | lab[sheet_bg[c, s]]
+                        o, b = sheet_obj[code, s], sheet_bg[code, s]
+                        lo_ = _box_label(vox, fg, bg, i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2), outside)
+                        lb = _box_label(vox, fg, bg, i - 1 + (b & 1), j - 1 + ((b >> 1) & 1), k - 1 + (b >> 2), outside)
+                        key = (lo_ << 32) | lb
+                        last[s] = key
                     if key != ck:
                         if ck != _EMPTY:
                             used += _add(keys, vs, qs, ck, cv, cq)
@@ -326,9 +370,11 @@ def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_o
                                 return npairs, True
                         ck, cv, cq = key, 0, 0
                     cv += 1
-                    cq += sheet_quarters[c, s]
-                if pinch[c, 0] >= 0:
-                    la, lb = lab[pinch[c, 0]], lab[pinch[c, 1]]
+                    cq += sheet_quarters[code, s]
+                if pinch[code, 0] >= 0:
+                    a, b = pinch[code, 0], pinch[code, 1]
+                    la = _box_label(vox, fg, bg, i - 1 + (a & 1), j - 1 + ((a >> 1) & 1), k - 1 + (a >> 2), outside)
+                    lb = _box_label(vox, fg, bg, i - 1 + (b & 1), j - 1 + ((b >> 1) & 1), k - 1 + (b >> 2), outside)
                     if la != lb:
                         if npairs < len(pairs):
                             pairs[npairs, 0], pairs[npairs, 1] = la, lb
@@ -344,21 +390,12 @@ def box_sweep(vox: np.ndarray, fg: np.ndarray, bg: np.ndarray, lo, hi, outside: 
     ``outside``), ``lo``/``hi`` the vertex box to count. Returns ``obj``,
     ``bg`` (the pairs), ``vertices``, ``quarters`` and the pinch ``pairs``."""
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = tables
-    capacity, pair_capacity = 1 << 12, 1 << 10
-    while True:
-        keys = np.full(capacity, _EMPTY, np.int64)
-        vs = np.zeros(capacity, np.int64)
-        qs = np.zeros(capacity, np.int64)
-        pairs = np.empty((pair_capacity, 2), np.int64)
-        npairs, overflow = _box_rows(vox.view(np.uint8), fg, bg, np.asarray(lo, np.int64), np.asarray(hi, np.int64),
-                                     outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, quarters, pinch)
-        if overflow:
-            capacity *= 4
-        elif npairs > pair_capacity:
-            pair_capacity = npairs
-        else:
-            filled = keys != _EMPTY
-            k = keys[filled]
-            return {"obj": k >> 32, "bg": k & 0xFFFFFFFF, "vertices": vs[filled], "quarters": qs[filled],
-                    "pairs": pairs[:npairs]}
+    lo, hi = np.asarray(lo, np.int64), np.asarray(hi, np.int64)
 
+    def call(keys, vs, qs, pairs):
+        npairs, overflow = _box_rows(vox.view(np.uint8), fg, bg, lo, hi, outside, keys, vs, qs, pairs,
+                                     nsheet, sheet_obj, sheet_bg, quarters, pinch)
+        return npairs, overflow, None
+
+    _, keys, vertices, quarter, pairs = _until_it_fits(call, 1 << 12, 1 << 10)
+    return {"obj": keys >> 32, "bg": keys & 0xFFFFFFFF, "vertices": vertices, "quarters": quarter, "pairs": pairs}
