@@ -226,3 +226,20 @@ def test_memory_budget_is_most_of_what_the_kernel_says_is_available():
     fields = dict(line.split(":", 1) for line in open("/proc/meminfo"))
     total = int(fields["MemTotal"].split()[0]) * 1024
     assert 0 < default_budget() <= 0.9 * total
+
+
+def test_info_on_a_small_volume_never_loads_numba(tmp_path):
+    # importing numba and loading its kernels costs about half a second per
+    # process: below MIN_VOXELS the command must answer without it (the
+    # whole command's time is measured in benchmarks/run.py, not here)
+    v = np.random.default_rng(5).random((30, 31, 29)) < 0.5
+    np.save(tmp_path / "v.npy", v)
+    code = ("import sys, json, io, contextlib; from isoflow.cli import main; out = io.StringIO()\n"
+            "with contextlib.redirect_stdout(out): rc = main(['info', sys.argv[1], '--json'])\n"
+            "r = json.loads(out.getvalue()); print(rc, 'numba' in sys.modules, len(r['surfaces']))")
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path / "v.npy")], capture_output=True, text=True)
+    rc, loaded, surfaces = p.stdout.split()
+    assert (rc, loaded) == ("0", "False"), p.stderr
+    from isoflow import boundary_mesh
+
+    assert int(surfaces) == len(boundary_mesh(v, 6).components()) > 1

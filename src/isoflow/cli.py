@@ -137,9 +137,8 @@ def format_info(r: dict) -> str:
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
-    if r.get("surfaces", []) is None:
-        why = r.get("surfaces_skipped", "out-of-core input")
-        lines.append(f"  closed surfaces        not computed ({why})")
+    if r.get("surfaces", []) is None:  # 4D: the boundary is a 3-manifold, not a surface
+        lines.append(f"  closed surfaces        not computed in {r['dimension']}D")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
     return "\n".join(lines)

@@ -153,10 +153,8 @@ def test_large_blocks_count_their_sheets_compiled(rng, conn):
     bg = outofcore._label(~v, cs.MESH_ADJACENCY[conn][1])[0]
     keep = (slice(0, -1), slice(1, None), slice(1, -1))
     marker = int(np.iinfo(bg.dtype).max)
-    fast = cs.box_sheets(v, fg, bg, keep, conn, marker)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(cs, "_compiled_box", lambda *a: False)
-        slow = cs.box_sheets(v, fg, bg, keep, conn, marker)
+    fast = cs.box_sheets(v, fg, bg, keep, conn, marker, compiled=True)
+    slow = cs.box_sheets(v, fg, bg, keep, conn, marker)
 
     def rows(r):
         return sorted(zip(*(r[k].tolist() for k in ("obj", "bg", "vertices", "quarters"))))
@@ -165,10 +163,9 @@ def test_large_blocks_count_their_sheets_compiled(rng, conn):
     assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
     # labels beyond 32 bits (node keys), and an outside key beyond them
     big = np.int64(1) << 40
-    fast = cs.box_sheets(v, fg.astype(np.int64) + big, bg.astype(np.int64) + big, keep, conn, np.int64(1) << 62)
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(cs, "_compiled_box", lambda *a: False)
-        slow = cs.box_sheets(v, fg.astype(np.int64) + big, bg.astype(np.int64) + big, keep, conn, np.int64(1) << 62)
+    fg, bg = fg.astype(np.int64) + big, bg.astype(np.int64) + big
+    fast = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62, compiled=True)
+    slow = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62)
     assert rows(fast) == rows(slow)
     assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
 

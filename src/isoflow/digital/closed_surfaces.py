@@ -209,7 +209,8 @@ def _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside) -> dic
     return found
 
 
-def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside) -> dict:
+def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside,
+               compiled: bool = False) -> dict:
     """Sheets of some vertices of a box of voxels, summed per label pair.
 
     ``vox``: the box (bool); ``obj_labels``/``bg_labels``: integer labels of
@@ -221,9 +222,12 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     (``obj``, ``bg`` label arrays), their mesh ``vertices`` and ``quarters``
     of faces, and the pinch ``pairs`` (labels of the two octants to join for
     the connectivity's components: object labels under 26, background under
-    6). Used whole by the small path and block by block out of core.
+    6). Used whole by the small path (numpy: no numba below
+    :data:`~isoflow.scale.compiled.MIN_VOXELS`) and block by block out of
+    core, where ``compiled`` lets boxes from 2^12 voxels on take the
+    compiled pass.
     """
-    if _compiled_box(vox):
+    if compiled and _compiled_box(vox):
         return _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside)
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
     cfg = configurations(vox)[keep]

@@ -227,7 +227,7 @@ def _summarize_block(block, index, numblocks, origin, conn, where, surfaces) -> 
         (fg, fg_seen), (bg, bg_seen) = kept["fg"], kept["bg"]
         marker = np.iinfo(bg.dtype).max  # no label: the outside, in the block's numbering
         keep = tuple(slice(0 if f else 1, None if lst else -1) for f, lst in zip(first, last))
-        found = box_sheets(core, fg, bg, keep, conn, marker)
+        found = box_sheets(core, fg, bg, keep, conn, marker, compiled=True)
         del kept, fg, bg
         out["sheets"] = [(_node_keys(found["obj"], fg_seen, block_id),
                           _node_keys(found["bg"], bg_seen, block_id, marker),
@@ -390,7 +390,7 @@ def _merge(index, numblocks, conn, surfaces, *summaries) -> dict:
         hist += _vertex_histogram(vox, keep_low, keep_high)
         if surfaces:
             keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
-            found = box_sheets(vox, tiles["fg"][cut], tiles["bg"][cut], keep, conn, OUTSIDE)
+            found = box_sheets(vox, tiles["fg"][cut], tiles["bg"][cut], keep, conn, OUTSIDE, compiled=True)
             out["sheets"].append((found["obj"], found["bg"], found["vertices"], found["quarters"]))
             out["pinches"].append(found["pairs"].T)
     out["hist"] = hist
