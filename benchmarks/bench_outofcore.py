@@ -178,12 +178,12 @@ class TreeSampler:
         self._thread.join()
 
 
-def child_analyze(path: str, connectivity: int, scheduler: str | None = None) -> dict:
+def child_analyze(path: str, connectivity: int, scheduler: str | None = None, surfaces: bool = True) -> dict:
     from isoflow.digital.outofcore import analyze_zarr
 
     with TreeSampler() as sampler:
         t0 = time.perf_counter()
-        report = analyze_zarr(path, connectivity, scheduler=scheduler)
+        report = analyze_zarr(path, connectivity, scheduler=scheduler, surfaces=surfaces)
         seconds = time.perf_counter() - t0
     return {
         "seconds": round(seconds, 2),
@@ -205,7 +205,8 @@ def child_inmemory(path: str, connectivity: int, scheduler=None) -> dict:
     vol = np.asarray(zarr.open_array(path, mode="r")[...])
     load = time.perf_counter() - t0
     t0 = time.perf_counter()
-    report = analyze(DigitalObject(vol), connectivity, surfaces=False)
+    report = analyze(DigitalObject(vol), connectivity)
+    report["doubled_edges"] = None  # not counted out of core
     return {
         "load_s": round(load, 2),
         "seconds": round(time.perf_counter() - t0, 2),
@@ -237,13 +238,16 @@ def main(argv=None) -> int:
     ap.add_argument("--check-max", type=int, default=512, help="check against in-memory analyze up to this size")
     ap.add_argument("--scheduler", choices=("threads", "sync", "processes"),
                     help="dask scheduler for analyze_zarr (default: dask's, threads)")
+    ap.add_argument("--pairs", type=int, default=1,
+                    help="runs of analyze_zarr with and without surfaces, alternated; medians (default 1)")
     ap.add_argument("--json", type=Path, default=HERE / "results" / "outofcore.json")
     ap.add_argument("--child", nargs=2, metavar=("KIND", "PATH"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
 
     if args.child:
         kind, path = args.child
-        fn = {"analyze": child_analyze, "inmemory": child_inmemory}[kind]
+        fn = {"analyze": child_analyze, "inmemory": child_inmemory,
+              "analyze-nosurf": lambda *a: child_analyze(*a, surfaces=False)}[kind]
         print(json.dumps(fn(path, args.connectivity, args.scheduler)))
         return 0
 
@@ -257,10 +261,23 @@ def main(argv=None) -> int:
         row = {"size": n, "shape": [n, n, n], "chunks": [CHUNK] * 3, "connectivity": args.connectivity}
         row.update(write_volume(path, n, args.feature, args.level, args.seed))
         print(f"  written in {row['write_s']} s, {row['zarr_bytes'] / 2**20:.0f} MiB on disk", flush=True)
-        res = run_child("analyze", path, args.connectivity, args.scheduler)
+        runs = {"analyze": [], "analyze-nosurf": []}
+        for _ in range(args.pairs):  # alternated: A B A B
+            for kind in runs:
+                runs[kind].append(run_child(kind, path, args.connectivity, args.scheduler))
+        nosurf = runs["analyze-nosurf"]
+        res = runs["analyze"][0]
+        res["seconds"] = float(np.median([r["seconds"] for r in runs["analyze"]]))
+        res["peak_rss_mb"] = max(r["peak_rss_mb"] for r in runs["analyze"])
         res["scheduler"] = args.scheduler or "threads (dask default)"
         report = res.pop("report")
         row["analyze_zarr"] = res
+        row["analyze_zarr_no_surfaces"] = {"seconds": float(np.median([r["seconds"] for r in nosurf])),
+                                           "peak_rss_mb": max(r["peak_rss_mb"] for r in nosurf)}
+        row["surfaces_cost_ratio"] = res["seconds"] / row["analyze_zarr_no_surfaces"]["seconds"]
+        row["surfaces"] = len(report["surfaces"])
+        print(f"  without surfaces: {row['analyze_zarr_no_surfaces']['seconds']} s; with them "
+              f"{row['surfaces_cost_ratio']:.2f}x that ({row['surfaces']} surfaces)", flush=True)
         row["result"] = {k: report[k] for k in ("voxels", "euler_characteristic", "betti", "a_dot_n", "energy")}
         print(f"  analyze_zarr: {res['seconds']} s, peak RSS {res['peak_rss_mb']} MB "
               f"(largest worker {res['peak_worker_rss_mb']} MB, whole tree {res['peak_tree_rss_mb']} MB); "

@@ -4,6 +4,8 @@ a check that everyone computes the same numbers.
     python benchmarks/run.py                          # 128^3 and 256^3
     python benchmarks/run.py --sizes 128 256 512 --repeat 3
     python benchmarks/run.py --sizes 64 --inputs ball --tools isoflow.info skimage.euler6
+    python benchmarks/run.py --sizes 128 256 512 --tools isoflow.info isoflow.info.nosurf \
+        skimage.euler6 skimage.euler26 --md benchmarks/results/info.md --json benchmarks/results/info.json
 
 Inputs (generated once, cached as .npy in benchmarks/.cache/): a ball, a torus
 and a smoothed random porous field (uniform noise, gaussian sigma 2, > 0.5,
@@ -11,14 +13,18 @@ seed 0), each ``size^3`` voxels.
 
 Tasks, each measured in the same run on the same arrays:
 
-``info`` (what ``isoflow info`` computes: ``analyze(obj, 6, surfaces=False)``,
-  i.e. chi, Betti numbers and the class histogram n) against
+``info`` (what ``isoflow info`` computes with its default flags:
+  ``analyze(obj, 6)``, i.e. chi, Betti numbers, the class histogram n and
+  every closed surface with its genus; ``isoflow.info.nosurf`` is
+  ``surfaces=False``) against
   * ``skimage.measure.euler_number`` at connectivity 1 (6) and 3 (26): chi only;
   * the usual way to get Betti numbers: ``scipy.ndimage.label`` of the object
     (6-structure) and of the background (26-structure; cavities are background
     components off the array border) plus ``euler_number`` for chi;
   * the same with ``cc3d.connected_components`` (optional dependency).
-  isoflow's chi (6 and 26) and Betti numbers must equal the others' numbers.
+  isoflow's chi (6 and 26) and Betti numbers must equal the others' numbers,
+  and its surfaces (count, faces, genus sum) the mesh's components when
+  ``isoflow.mesh`` runs too.
 
 ``surface`` (the boundary quads: ``boundary_mesh(vol, 6)``) against
   * ``trimesh.voxel.VoxelGrid(vol).as_boxes()`` (12 triangles per voxel; only
@@ -41,8 +47,17 @@ extra peak memory (its result included), given in bytes per voxel.
 Seconds are the best of ``--repeat`` runs, fewer once a measurement has used
 ``--max-seconds`` (the slow peers run once at large sizes; the run count is
 reported). ``ratio`` = other tool's seconds / isoflow's seconds on the same
-input: > 1 means isoflow is faster. isoflow's numba kernels use all cores
-(they apply above 4M voxels); the peers run on one.
+input: > 1 means isoflow is faster. isoflow's numba kernels use every CPU
+(they apply from 2M voxels); the peers run on one.
+
+Whole commands (``--commands PAIRS``, default 3): ``isoflow info FILE --json``
+as installed, with its default flags, against ``python -c "...
+euler_number(np.load(FILE), connectivity=1)"``, each a fresh process
+(imports, loading and all), alternated A B A B; medians, the median of the
+pairs' ratios, each process's own peak RSS (``wait4``), and their printed chi
+checked equal. Threads (``--threads N ...``, default 1 .. CPUs): the
+in-process ``isoflow.info`` at the largest size with ``ISOFLOW_THREADS=N``,
+interleaved, medians.
 
 Writes the table to stdout, JSON (``--json``, with machine information) and a
 markdown table (``--md``). Exits with 1 if any check fails.
@@ -56,6 +71,7 @@ import math
 import os
 import platform
 import resource
+import shlex
 import subprocess
 import sys
 import time
@@ -145,28 +161,43 @@ def _border_labels(labels: np.ndarray) -> set:
     return out
 
 
+def _info_summary(r):
+    out = {"chi6": r["euler_characteristic"], "betti": r["betti"], "n": r["n"]}
+    if r.get("surfaces") is not None:
+        out["surfaces"] = len(r["surfaces"])
+        out["faces"] = sum(s["faces"] for s in r["surfaces"])
+        out["genus_sum"] = sum(s["genus"] for s in r["surfaces"])
+    return out
+
+
 def t_isoflow_info(vol, measure):
     from isoflow import DigitalObject, analyze
     from isoflow.digital.topology import euler_characteristic
 
-    rep = measure("info", lambda: analyze(DigitalObject(vol), 6, surfaces=False),
-                  lambda r: {"chi6": r["euler_characteristic"], "betti": r["betti"], "n": r["n"]})
+    rep = measure("info", lambda: analyze(DigitalObject(vol), 6), _info_summary)
     del rep
     # not timed: chi at 26-connectivity, to check skimage's connectivity 3
     return {"chi26": int(euler_characteristic(vol, 26))}
 
 
+def t_isoflow_info_nosurf(vol, measure):
+    from isoflow import DigitalObject, analyze
+
+    measure("info", lambda: analyze(DigitalObject(vol), 6, surfaces=False), _info_summary)
+
+
 def w_isoflow(tiny):
     from isoflow import DigitalObject, analyze, boundary_mesh
-    from isoflow.scale import kernels
+    from isoflow.scale import compiled
 
-    analyze(DigitalObject(tiny), 6, surfaces=False)
-    boundary_mesh(tiny, 6)
-    if kernels.HAVE_NUMBA:  # load (or compile) the kernels used above 4M voxels
-        kernels.histogram3d(tiny)
+    analyze(DigitalObject(tiny), 6)
+    boundary_mesh(tiny, 6).components()
+    if compiled.have_numba():  # load (or compile) the kernels used above MIN_VOXELS
+        old, compiled.MIN_VOXELS = compiled.MIN_VOXELS, 0
         for c in (6, 26):
-            kernels.count_components(tiny, c)
-            kernels.count_enclosed(tiny, c)
+            analyze(DigitalObject(tiny), c)
+            analyze(DigitalObject(tiny), c, surfaces=False)
+        compiled.MIN_VOXELS = old
 
 
 def t_euler(conn):
@@ -228,8 +259,12 @@ def w_cc3d(tiny):
 def t_isoflow_mesh(vol, measure):
     from isoflow import boundary_mesh
 
-    measure("mesh", lambda: boundary_mesh(vol, 6),
-            lambda m: {"faces": int(len(m.faces)), "vertices": int(len(m.vertices))})
+    def summary(m):  # not timed: the mesh's own components, to check info's surfaces
+        comps = m.components()
+        return {"faces": int(len(m.faces)), "vertices": int(len(m.vertices)), "surfaces": len(comps),
+                "genus_sum": sum(c["genus"] for c in comps)}
+
+    measure("mesh", lambda: boundary_mesh(vol, 6), summary)
 
 
 def t_boxes(vol, measure):
@@ -284,7 +319,9 @@ def w_dgtal(tiny):
 
 #: name -> (group, label, run, warmup, module needed)
 TOOLS = {
-    "isoflow.info": ("info", "isoflow analyze (chi, betti, n)", t_isoflow_info, w_isoflow, "isoflow"),
+    "isoflow.info": ("info", "isoflow analyze, default (chi, betti, n, surfaces)", t_isoflow_info, w_isoflow,
+                     "isoflow"),
+    "isoflow.info.nosurf": ("info", "isoflow analyze surfaces=False", t_isoflow_info_nosurf, w_isoflow, "isoflow"),
     "skimage.euler6": ("info", "skimage euler_number conn=1 (chi only)", t_euler(1), w_skimage, "skimage"),
     "skimage.euler26": ("info", "skimage euler_number conn=3 (chi only)", t_euler(3), w_skimage, "skimage"),
     "scipy.betti": ("info", "scipy label obj+bg + euler_number", t_scipy, w_scipy, "scipy"),
@@ -376,13 +413,13 @@ def child(tool: str, path: Path, repeat: int, max_seconds: float) -> dict:
 # --------------------------------------------------------------------------
 
 
-def run_child(tool, path, args) -> dict:
-    cmd = [sys.executable, __file__, "--child", tool, str(path), "--repeat", str(args.repeat),
+def run_child(tool, path, args, env=None, repeat=None) -> dict:
+    cmd = [sys.executable, __file__, "--child", tool, str(path), "--repeat", str(repeat or args.repeat),
            "--max-seconds", str(args.max_seconds)]
     load = os.getloadavg()[0]
     t = time.perf_counter()
     try:
-        p = subprocess.run(cmd, capture_output=True, text=True, timeout=args.child_timeout)
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=args.child_timeout, env=env)
     except subprocess.TimeoutExpired:
         return {"tool": tool, "steps": [], "error": f"timeout after {args.child_timeout} s"}
     wall = time.perf_counter() - t
@@ -394,6 +431,105 @@ def run_child(tool, path, args) -> dict:
     res["child_wall_s"] = wall
     res["loadavg_1min_before"] = load
     return res
+
+
+# --------------------------------------------------------------------------
+# Whole commands, as a user runs them: a fresh process each, default flags
+# --------------------------------------------------------------------------
+
+SKIMAGE_CODE = ("import sys, numpy as np; from skimage.measure import euler_number; "
+                "print(euler_number(np.load(sys.argv[1]), connectivity=1))")
+
+
+def commands(path: Path) -> dict:
+    """name -> argv: ``isoflow info`` as installed (the console script next
+    to this Python), and scikit-image's ``euler_number`` on the same file
+    (connectivity 1 = isoflow's default 6, so that the numbers can be
+    checked against each other)."""
+    script = Path(sys.executable).with_name("isoflow")
+    iso = [str(script)] if script.exists() else [sys.executable, "-m", "isoflow.cli"]
+    return {"isoflow": iso + ["info", str(path), "--json"],
+            "skimage": [sys.executable, "-c", SKIMAGE_CODE, str(path)]}
+
+
+def timed(cmd, env=None, timeout=None) -> dict:
+    """Wall seconds and peak RSS of one process (its own rusage, from wait4)."""
+    import tempfile
+
+    with tempfile.TemporaryFile() as out, tempfile.TemporaryFile() as err:
+        t = time.perf_counter()
+        p = subprocess.Popen(cmd, stdout=out, stderr=err, env=env)
+        _, status, usage = os.wait4(p.pid, 0)
+        wall = time.perf_counter() - t
+        p.returncode = os.waitstatus_to_exitcode(status)
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read().decode(), err.read().decode()
+    rec = {"seconds": wall, "peak_rss": usage.ru_maxrss * 1024, "cpu_seconds": usage.ru_utime + usage.ru_stime}
+    if p.returncode != 0:
+        rec["error"] = (stderr.strip().splitlines() or [f"exit {p.returncode}"])[-1][:300]
+    rec["stdout"] = stdout
+    return rec
+
+
+def run_commands(name: str, size: int, path: Path, repeat: int) -> dict:
+    """isoflow and skimage alternately (A B A B ...), ``repeat`` pairs;
+    medians, and the median of the pairs' ratios."""
+    cmds = commands(path)
+    runs = {k: [] for k in cmds}
+    for _ in range(repeat):
+        for k, cmd in cmds.items():
+            runs[k].append(timed(cmd))
+    res = {"input": name, "size": size, "pairs": repeat, "commands": {k: shlex.join(c) for k, c in cmds.items()}}
+    for k, rs in runs.items():
+        ok = [r for r in rs if "error" not in r]
+        res[k] = {
+            "times": [r["seconds"] for r in rs],
+            "seconds": float(np.median([r["seconds"] for r in ok])) if ok else None,
+            "peak_rss": max(r["peak_rss"] for r in rs),
+            "error": next((r["error"] for r in rs if "error" in r), None),
+        }
+    voxels = size**3
+    input_bytes = path.stat().st_size
+    for k in cmds:
+        res[k]["beyond_input_b_per_voxel"] = (res[k]["peak_rss"] - input_bytes) / voxels
+    ratios = [s["seconds"] / i["seconds"] for i, s in zip(runs["isoflow"], runs["skimage"])
+              if "error" not in i and "error" not in s]
+    res["ratio"] = float(np.median(ratios)) if ratios else None
+    # the numbers they print agree
+    try:
+        report = json.loads(runs["isoflow"][0]["stdout"])
+        res["isoflow_result"] = {"chi6": report["euler_characteristic"], "betti": report["betti"],
+                                 "surfaces": None if report.get("surfaces") is None else len(report["surfaces"])}
+        res["skimage_result"] = {"chi6": int(runs["skimage"][0]["stdout"].split()[-1])}
+    except (ValueError, KeyError, IndexError) as e:
+        res["check_error"] = f"{type(e).__name__}: {e}"
+    return res
+
+
+def print_command(c):
+    iso, sk = c["isoflow"], c["skimage"]
+    print(f"command {c['input']:<7}{c['size']:>5}^3  isoflow info {fmt_s(iso['seconds']):>8} s "
+          f"({iso['beyond_input_b_per_voxel']:.2f} B/voxel beyond input)   skimage {fmt_s(sk['seconds']):>8} s   "
+          f"ratio {c['ratio'] or 0:.2f}x", flush=True)
+
+
+def run_threads(name: str, size: int, path: Path, counts, repeat: int, args) -> dict:
+    """In-process ``analyze(vol, 6)`` with ``ISOFLOW_THREADS`` = each count,
+    interleaved (1 2 ... 1 2 ...), ``repeat`` times; medians."""
+    times = {t: [] for t in counts}
+    for _ in range(repeat):
+        for t in counts:
+            env = dict(os.environ, ISOFLOW_THREADS=str(t))
+            res = run_child("isoflow.info", path, args, env=env, repeat=1)
+            st = (res.get("steps") or [{}])[0]
+            if st.get("seconds"):
+                times[t].append(st["seconds"])
+    med = {t: float(np.median(v)) if v else None for t, v in times.items()}
+    one = med.get(1)
+    return {"input": name, "size": size, "times": {str(t): v for t, v in times.items()},
+            "seconds": {str(t): v for t, v in med.items()},
+            "speedup": {str(t): (one / v if one and v else None) for t, v in med.items()}}
 
 
 def machine_info() -> dict:
@@ -523,6 +659,20 @@ def build_rows(results, args):
     return rows
 
 
+def check_commands(cmds) -> list[str]:
+    fails = []
+    for c in cmds:
+        where = f"command {c['input']} {c['size']}"
+        for k in ("isoflow", "skimage"):
+            if c[k]["error"]:
+                fails.append(f"{where}: {k} failed: {c[k]['error']}")
+        if "check_error" in c:
+            fails.append(f"{where}: output not read ({c['check_error']})")
+        elif c["isoflow_result"]["chi6"] != c["skimage_result"]["chi6"]:
+            fails.append(f"{where}: isoflow chi {c['isoflow_result']['chi6']} != skimage {c['skimage_result']['chi6']}")
+    return fails
+
+
 def check(results, sizes, names) -> list[str]:
     """isoflow's numbers against every other tool's, per input and size."""
     fails = []
@@ -544,6 +694,10 @@ def check(results, sizes, names) -> list[str]:
                     if other is not None and other[key] != info[key]:
                         fails.append(f"{name} {size}: {tool} {key} {other[key]} != isoflow {info[key]}")
             mesh = res("isoflow.mesh", "mesh")
+            if info and mesh:
+                for key in ("faces", "surfaces", "genus_sum"):
+                    if info.get(key) != mesh.get(key):
+                        fails.append(f"{name} {size}: isoflow info {key} {info.get(key)} != mesh {mesh.get(key)}")
             if mesh:
                 dg = res("dgtal.surface", "surface")
                 if dg is not None and dg["faces"] != mesh["faces"]:
@@ -562,8 +716,10 @@ def table_cells(r):
     sec = fmt_s(r["seconds"])
     note = r.get("error") or r.get("note") or ""
     res = r.get("result") or {}
-    if not note and r["tool"] in ("isoflow.info",):
+    if not note and r["tool"] in ("isoflow.info", "isoflow.info.nosurf"):
         note = f"chi {res.get('chi6')}, betti {res.get('betti')}"
+        if "surfaces" in res:
+            note += f", {res['surfaces']} surfaces, {res['faces']} faces"
     elif not note and "faces" in res:
         note = f"{res['faces']} faces" + (f", {res['components']} components" if "components" in res else "")
     elif not note and "triangles" in res:
@@ -587,6 +743,47 @@ def print_row(r):
 def _load_range(rows) -> str:
     loads = [r["loadavg_1min_before"] for r in rows if r.get("loadavg_1min_before") is not None]
     return f"{min(loads):.1f} to {max(loads):.1f}" if loads else "-"
+
+
+def markdown_commands(cmds, meta) -> list[str]:
+    if not cmds:
+        return []
+    lines = [
+        "## Whole commands",
+        "",
+        "Each a fresh process, as a user runs it, alternated (isoflow, skimage, isoflow, ...) "
+        f"{cmds[0]['pairs']} times; median seconds, median of the pairs' ratios; peak RSS of the process "
+        "(interpreter, imports and input included) and that peak less the input file's size, per voxel.",
+        "",
+        f"* isoflow: `{cmds[0]['commands']['isoflow'].replace(str(CACHE) + '/', '')}`",
+        f"* skimage: `{cmds[0]['commands']['skimage'].replace(str(CACHE) + '/', '')}`",
+        "",
+        "| input | size | isoflow info (default flags) | skimage euler_number | ratio | isoflow peak RSS | "
+        "isoflow beyond input | skimage peak RSS | surfaces |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for c in cmds:
+        iso, sk = c["isoflow"], c["skimage"]
+        lines.append(
+            f"| {c['input']} | {c['size']}^3 | {fmt_s(iso['seconds'])} s | {fmt_s(sk['seconds'])} s | "
+            f"{c['ratio'] or 0:.2f}x | {iso['peak_rss'] / 2**20:.0f} MiB | {iso['beyond_input_b_per_voxel']:.2f} B/voxel | "
+            f"{sk['peak_rss'] / 2**20:.0f} MiB | {(c.get('isoflow_result') or {}).get('surfaces')} |")
+    return lines + [""]
+
+
+def markdown_threads(scans) -> list[str]:
+    if not scans:
+        return []
+    counts = list(scans[0]["seconds"])
+    lines = ["## Threads", "",
+             "In-process `analyze(vol, 6)` with `ISOFLOW_THREADS` set, interleaved; median seconds (speed-up "
+             "over one thread).", "",
+             "| input | size | " + " | ".join(f"{t} thread{'s' if t != '1' else ''}" for t in counts) + " |",
+             "|---|---:|" + "---:|" * len(counts)]
+    for sc in scans:
+        cells = [f"{fmt_s(sc['seconds'][t])} s ({sc['speedup'][t] or 0:.2f}x)" for t in counts]
+        lines.append(f"| {sc['input']} | {sc['size']}^3 | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def markdown(rows, meta, fails) -> str:
@@ -615,8 +812,10 @@ def markdown(rows, meta, fails) -> str:
     ]
     for r in rows:
         lines.append("| " + " | ".join(c.replace("|", "/") for c in table_cells(r)) + " |")
-    lines += ["", "Checks: " + ("all tools agree with isoflow (chi at 6 and 26, Betti numbers, DGtal surfels = "
-                                "isoflow faces, as_boxes = 12 triangles per voxel)." if not fails else
+    lines += [""] + markdown_commands(meta.get("commands", []), meta) + markdown_threads(meta.get("threads", []))
+    lines += ["Checks: " + ("all tools agree with isoflow (chi at 6 and 26, Betti numbers, DGtal surfels = "
+                                "isoflow faces, isoflow info's surfaces = the mesh's components, as_boxes = 12 triangles "
+                                "per voxel, the commands' chi)." if not fails else
                                 "FAILED:\n\n" + "\n".join(f"* {f}" for f in fails))]
     return "\n".join(lines) + "\n"
 
@@ -634,6 +833,10 @@ def main(argv=None) -> int:
     ap.add_argument("--child-timeout", type=float, default=900.0, help="seconds before a child is killed")
     ap.add_argument("--json", type=Path, default=RESULTS / "run.json")
     ap.add_argument("--md", type=Path, default=RESULTS / "run.md", help="markdown table")
+    ap.add_argument("--commands", type=int, default=3, metavar="PAIRS",
+                    help="whole-command pairs (isoflow info / skimage) per input and size; 0: none (default 3)")
+    ap.add_argument("--threads", type=int, nargs="*", default=None, metavar="N",
+                    help="thread counts for the in-process scan (default: 1 .. CPUs, largest size only)")
     ap.add_argument("--child", nargs=2, metavar=("TOOL", "NPY"), help=argparse.SUPPRESS)
     ap.add_argument("--make-input", nargs=3, metavar=("NAME", "SIZE", "NPY"), help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -690,8 +893,26 @@ def main(argv=None) -> int:
                 for r in build_rows({key: results[key]}, args):
                     r["ratio"] = None
                     print_row(r)
+    cmds = []
+    if args.commands:
+        print("\nWhole commands (a fresh process each, default flags):", flush=True)
+        for size in args.sizes:
+            for name in args.inputs:
+                cmds.append(run_commands(name, size, ensure_input(name, size), args.commands))
+                print_command(cmds[-1])
+    meta["commands"] = cmds
+    counts = args.threads if args.threads is not None else list(range(1, (os.cpu_count() or 1) + 1))
+    scans = []
+    if len(counts) > 1 and "isoflow.info" in args.tools:
+        size = max(args.sizes)
+        print(f"\nThreads ({size}^3, in process):", flush=True)
+        for name in args.inputs:
+            scans.append(run_threads(name, size, ensure_input(name, size), counts, args.repeat, args))
+            print(f"threads {name:<7}{size:>5}^3  " + "  ".join(
+                f"{t}: {fmt_s(v)} s" for t, v in scans[-1]["seconds"].items()), flush=True)
+    meta["threads"] = scans
     rows = build_rows(results, args)
-    fails = check(results, args.sizes, args.inputs)
+    fails = check(results, args.sizes, args.inputs) + check_commands(cmds)
     meta["total_seconds"] = time.time() - t_start
     meta["loadavg_at_end"] = list(os.getloadavg())
 

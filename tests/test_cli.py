@@ -147,18 +147,60 @@ def test_surface_refuses_a_mesh_beyond_the_memory_budget(tmp_path, capsys, monke
     assert not out.exists()
 
 
-def test_info_skips_surfaces_beyond_the_memory_budget_and_says_why(tmp_path, capsys, monkeypatch):
+def test_info_counts_surfaces_without_the_mesh_memory(tmp_path, capsys, monkeypatch):
+    # the per-surface genus no longer builds the mesh: with a budget far
+    # below the mesh's estimate, info still reports every surface, and they
+    # are the mesh's own components
+    from isoflow import boundary_mesh
+    from isoflow.digital.surface import mesh_memory
     from isoflow.scale import memory
 
     v = torus(6, 2)
+    v[0:3, 0:3, 0:3] = True  # a second surface, a cube in the corner
+    want = sorted((c["euler_characteristic"], c["genus"], c["faces"]) for c in boundary_mesh(v).components())
     np.save(tmp_path / "t.npy", v)
     monkeypatch.setattr(memory, "default_budget", lambda: 100_000)
+    assert mesh_memory(np.bincount(np.zeros(1, int), minlength=256)) < 100_000 < 16 * v.size
     r = info_json(capsys, tmp_path / "t.npy")
-    # the topology is still reported in full
-    assert r["betti"] == [1, 1, 0] and r["euler_characteristic"] == euler_number(v, connectivity=1)
-    assert r["surfaces"] is None and "faces" in r["surfaces_skipped"]
-    assert main(["info", str(tmp_path / "t.npy")]) == 0
-    assert "not computed (the boundary has" in capsys.readouterr().out
+    assert r["betti"] == [2, 1, 0] and r["euler_characteristic"] == euler_number(v, connectivity=1)
+    assert sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in r["surfaces"]) == want
+    assert [s["genus"] for s in r["surfaces"]] == [1, 0]  # largest first
+
+
+def test_info_threads_option_and_environment(tmp_path):
+    # a volume above the compiled passes' threshold, as the user runs it:
+    # a subprocess, with --threads and ISOFLOW_THREADS; same report on 1 and
+    # 3 threads, and the surfaces the mesh has
+    import os
+
+    from conftest import ball
+    from isoflow import boundary_mesh
+    from isoflow.scale.compiled import MIN_VOXELS
+
+    v = np.zeros((130, 130, 130), bool)
+    v[:60, :60, :60] = torus(20, 8, size=60)
+    v[70:, 70:, 70:] = ball(25, size=60) & ~ball(12, size=60)  # a shell: two spheres
+    v[5, 100, 100] = v[6, 101, 101] = True  # a vertex contact
+    assert v.size >= MIN_VOXELS
+    np.save(tmp_path / "v.npy", v)
+    out = {}
+    for threads in (1, 3):
+        p = run("info", tmp_path / "v.npy", "--json", "--connectivity", "26", "--threads", threads)
+        assert p.returncode == 0, p.stderr
+        out[threads] = json.loads(p.stdout)
+    env = dict(os.environ, ISOFLOW_THREADS="2")
+    p = subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "v.npy"), "--json",
+                        "--connectivity", "26"], capture_output=True, text=True, env=env)
+    assert json.loads(p.stdout) == out[1] == out[3]
+    mesh = boundary_mesh(v, 26)
+    want = sorted((c["euler_characteristic"], c["genus"], c["faces"]) for c in mesh.components())
+    assert sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in out[1]["surfaces"]) == want
+    assert out[1]["pinched_vertices"] == mesh.pinched == 1
+    # 26: the two voxels of the vertex contact are one component, which the
+    # mesh splits into two cubes (the pinch)
+    assert len(want) == 5 and out[1]["betti"] == [3, 1, 1] and out[1]["euler_characteristic"] == euler_number(v, connectivity=3)
+    bad = run("info", tmp_path / "v.npy", "--threads", "0")
+    assert bad.returncode == 2 and "--threads" in bad.stderr
 
 
 def test_allow_open_reaches_every_mesh_command(tmp_path, capsys):
@@ -184,3 +226,20 @@ def test_memory_budget_is_most_of_what_the_kernel_says_is_available():
     fields = dict(line.split(":", 1) for line in open("/proc/meminfo"))
     total = int(fields["MemTotal"].split()[0]) * 1024
     assert 0 < default_budget() <= 0.9 * total
+
+
+def test_info_on_a_small_volume_never_loads_numba(tmp_path):
+    # importing numba and loading its kernels costs about half a second per
+    # process: below MIN_VOXELS the command must answer without it (the
+    # whole command's time is measured in benchmarks/run.py, not here)
+    v = np.random.default_rng(5).random((30, 31, 29)) < 0.5
+    np.save(tmp_path / "v.npy", v)
+    code = ("import sys, json, io, contextlib; from isoflow.cli import main; out = io.StringIO()\n"
+            "with contextlib.redirect_stdout(out): rc = main(['info', sys.argv[1], '--json'])\n"
+            "r = json.loads(out.getvalue()); print(rc, 'numba' in sys.modules, len(r['surfaces']))")
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path / "v.npy")], capture_output=True, text=True)
+    rc, loaded, surfaces = p.stdout.split()
+    assert (rc, loaded) == ("0", "False"), p.stderr
+    from isoflow import boundary_mesh
+
+    assert int(surfaces) == len(boundary_mesh(v, 6).components()) > 1

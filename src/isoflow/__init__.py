@@ -9,34 +9,63 @@ The core is array in / array out; :class:`DigitalObject` only adds where the
 array sits (offset, lattice parity, pitch, origin).
 """
 
-from .digital.analysis import analyze
-from .digital.configurations import configuration_histogram
-from .digital.indices import (
-    CLASS_LABELS,
-    a_lut,
-    class_histogram,
-    class_lut,
-    code_lut,
-    f_lut,
-    gamma_lut,
-    normal_lut,
-    planar_index,
-)
-from .digital.lattice import DigitalObject
-from .digital.outofcore import analyze_chunked, analyze_zarr
-from .digital.surface import QuadMesh, boundary_mesh
-from .digital.topology import betti_numbers, euler_characteristic
-from .errors import IsoflowError
-from .flow.motion import flow_step
-from .flow.run import FlowResult, run_flow
-from .mesh.bridges import from_manifold, to_manifold
-from .mesh.genus import verify_genus
-from .mesh.volumes import read_object, read_points, read_volume, write_volume
-from .mesh.voxelize import voxelize_file, voxelize_mesh
+from importlib import import_module
+
+# The public API, loaded on first use (PEP 562): ``import isoflow`` and the
+# command line then pay only for the modules a command needs (``isoflow
+# info`` never loads the voxeliser, the flow or the mesh bridges).
+_WHERE = {
+    "analyze": ".digital.analysis",
+    "configuration_histogram": ".digital.configurations",
+    "CLASS_LABELS": ".digital.indices",
+    "a_lut": ".digital.indices",
+    "class_histogram": ".digital.indices",
+    "class_lut": ".digital.indices",
+    "code_lut": ".digital.indices",
+    "f_lut": ".digital.indices",
+    "gamma_lut": ".digital.indices",
+    "normal_lut": ".digital.indices",
+    "planar_index": ".digital.indices",
+    "DigitalObject": ".digital.lattice",
+    "analyze_chunked": ".digital.outofcore",
+    "analyze_zarr": ".digital.outofcore",
+    "QuadMesh": ".digital.surface",
+    "boundary_mesh": ".digital.surface",
+    "closed_surfaces": ".digital.closed_surfaces",
+    "betti_numbers": ".digital.topology",
+    "euler_characteristic": ".digital.topology",
+    "IsoflowError": ".errors",
+    "flow_step": ".flow.motion",
+    "FlowResult": ".flow.run",
+    "run_flow": ".flow.run",
+    "from_manifold": ".mesh.bridges",
+    "to_manifold": ".mesh.bridges",
+    "verify_genus": ".mesh.genus",
+    "read_object": ".mesh.volumes",
+    "read_points": ".mesh.volumes",
+    "read_volume": ".mesh.volumes",
+    "write_volume": ".mesh.volumes",
+    "voxelize_file": ".mesh.voxelize",
+    "voxelize_mesh": ".mesh.voxelize",
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        value = getattr(import_module(_WHERE[name], __name__), name)
+        globals()[name] = value  # the next lookup is a plain attribute
+        return value
+    raise AttributeError(f"module 'isoflow' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
+
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "closed_surfaces",
     "CLASS_LABELS",
     "analyze_chunked",
     "analyze_zarr",

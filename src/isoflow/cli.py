@@ -95,8 +95,7 @@ def cmd_info(args) -> int:
     from .mesh.formats.registry import split_dataset
 
     if split_dataset(args.input)[0].suffix.lower() == ".zarr":
-        # out of core: block by block, never the whole volume in memory; the
-        # closed surfaces need the whole boundary mesh and are not computed
+        # out of core: block by block, never the whole volume in memory
         from .mesh.formats.omezarr import analyze_store
 
         if args.pitch is not None or args.resolution is not None or args.allow_open:
@@ -104,24 +103,33 @@ def cmd_info(args) -> int:
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         with progress_bar(args, "blocks") as show:
-            report = analyze_store(args.input, args.connectivity, label=args.label, progress=show)
-        if report["dimension"] == 3:
-            report["surfaces"] = None
+            report = analyze_store(args.input, args.connectivity, label=args.label, progress=show,
+                                   surfaces=not args.no_surfaces, threads=args.threads)
     else:
         obj = load_input(args)
         if args.gpu:
             from .scale.arrays import to_gpu
 
-            report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces)
+            report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
             report["parity"] = obj.parity  # a bare array has no lattice place
         else:
-            report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces)
+            report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
     report["input"] = str(args.input)
     if args.json:
         print(json.dumps(report))
         return 0
     print(format_info(report))
     return 0
+
+
+def thread_count(text: str) -> int:
+    """argparse type of ``--threads``: a positive integer."""
+    from .scale.compiled import check_threads
+
+    try:
+        return check_threads(text, "N")
+    except IsoflowError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def format_info(r: dict) -> str:
@@ -149,9 +157,8 @@ def format_info(r: dict) -> str:
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
-    if r.get("surfaces", []) is None:
-        why = r.get("surfaces_skipped", "out-of-core input")
-        lines.append(f"  closed surfaces        not computed ({why})")
+    if r.get("surfaces", []) is None:  # 4D: the boundary is a 3-manifold, not a surface
+        lines.append(f"  closed surfaces        not computed in {r['dimension']}D")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
     return "\n".join(lines)
@@ -484,7 +491,9 @@ def build_parser() -> argparse.ArgumentParser:
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus (faster on huge volumes)")
+    p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
+    p.add_argument("--threads", type=thread_count, metavar="N",
+                   help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
     p.add_argument(
         "--gpu",
         action="store_true",

@@ -87,13 +87,13 @@ def test_symmetry_of_a_volume_permutes_its_configurations(rng):
 def test_normal_points_to_the_background():
     """Definition 14: the normal of a well-composed boundary vertex has the
     signs of the summed outward normals of its boundary faces."""
-    from isoflow.digital.surface import _slot_octants
+    from isoflow.digital.surface import slot_octants
 
     normals = I.normal_lut()
     for c in np.flatnonzero(I.class_lut() >= 0):
         total = np.zeros(3)
         for slot in range(12):
-            lo, hi = _slot_octants(slot)
+            lo, hi = slot_octants(slot)
             inside_lo, inside_hi = (c >> lo) & 1, (c >> hi) & 1
             if inside_lo != inside_hi:
                 total[slot // 4] += 1 if inside_lo else -1

@@ -1,9 +1,10 @@
 """Out-of-core analysis: block-wise results equal the in-memory report exactly.
 
-Every comparison is the whole ``analyze(..., surfaces=False)`` dict (histogram
-classes, chi, Betti numbers, energy ...), on volumes split into odd-sized
-chunks so that objects, tunnels and cavities cross block faces, edges and
-corners.
+Every comparison is the whole ``analyze(...)`` dict (histogram classes, chi,
+Betti numbers, energy, the closed surfaces and their genus ...; all but
+``doubled_edges``, which out of core is None), on volumes split into
+odd-sized chunks so that objects, tunnels, cavities and surfaces cross
+block faces, edges and corners.
 """
 
 import json
@@ -28,8 +29,11 @@ CHUNKS3 = (7, 5, 9)
 CHUNKS2 = (7, 5)
 
 
-def reference(v, conn):
-    return analyze(DigitalObject(v), conn, surfaces=False)
+def reference(v, conn, surfaces=True):
+    r = analyze(DigitalObject(v), conn, surfaces=surfaces)
+    if "doubled_edges" in r:
+        r["doubled_edges"] = None  # out of core: not counted
+    return r
 
 
 def check(v, conn, chunks=None):
@@ -129,6 +133,43 @@ def test_irregular_and_thin_chunks(rng):
         check(img, conn, ((5, 1, 24), (2, 23)))
 
 
+@pytest.mark.parametrize("conn", [6, 26])
+def test_large_blocks_count_their_sheets_compiled(rng, conn):
+    # blocks and face tiles of 2^12 voxels and more count their vertices'
+    # sheets with the compiled pass (tiles number their node keys first),
+    # smaller ones with numpy: the two meet in the same report, equal to the
+    # in-memory one
+    from isoflow.digital import closed_surfaces as cs
+    from isoflow.scale import compiled
+
+    if not compiled.have_numba():
+        pytest.skip("numba not installed")
+    v = smooth(rng, (90, 70, 66), sigma=1.2)
+    v[rng.random(v.shape) < 0.02] ^= True  # edge and vertex contacts
+    assert cs._compiled_box(v[:64, :64, :64]) and not cs._compiled_box(v[:2, :2, :2])
+    check(v, conn, (64, 64, 64))
+    # and the compiled box pass itself equals the numpy one on a block
+    fg = outofcore._label(v, cs.MESH_ADJACENCY[conn][0])[0]
+    bg = outofcore._label(~v, cs.MESH_ADJACENCY[conn][1])[0]
+    keep = (slice(0, -1), slice(1, None), slice(1, -1))
+    marker = int(np.iinfo(bg.dtype).max)
+    fast = cs.box_sheets(v, fg, bg, keep, conn, marker, compiled=True)
+    slow = cs.box_sheets(v, fg, bg, keep, conn, marker)
+
+    def rows(r):
+        return sorted(zip(*(r[k].tolist() for k in ("obj", "bg", "vertices", "quarters"))))
+
+    assert rows(fast) == rows(slow) and len(rows(fast)) > 10
+    assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
+    # labels beyond 32 bits (node keys), and an outside key beyond them
+    big = np.int64(1) << 40
+    fg, bg = fg.astype(np.int64) + big, bg.astype(np.int64) + big
+    fast = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62, compiled=True)
+    slow = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62)
+    assert rows(fast) == rows(slow)
+    assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
+
+
 def test_trivial_volumes():
     for v in (np.zeros((9, 8, 10), bool), np.ones((9, 8, 10), bool), np.ones((1, 1, 1), bool)):
         for conn in (6, 26):
@@ -168,10 +209,17 @@ def test_blocks_hand_on_faces_and_own_each_vertex_once(rng):
     assert len(s["faces"]) == 3 * 6  # voxels, object and background labels on 6 faces
     assert s["hist"].sum() == 39 * 29 * 19  # vertices a+1 .. b-1; those at b are merged
     parts = [(v[:17], (0, 0, 0)), (v[17:], (1, 0, 0))]
-    sums = [outofcore._summarize(b, i, (2, 1, 1), (0, 0, 0), 6, "test") for b, i in parts]
-    total = outofcore._merge((0, 0, 0), (2, 1, 1), 6, *sums)["hist"]
-    total += outofcore._merge((1, 0, 0), (2, 1, 1), 6, sums[1])["hist"]
-    assert (total == configuration_histogram(v)).all()
+    for surfaces in (False, True):
+        sums = [outofcore._summarize(b, i, (2, 1, 1), (0, 0, 0), 6, "test", surfaces) for b, i in parts]
+        total = outofcore._merge((0, 0, 0), (2, 1, 1), 6, surfaces, *sums)["hist"]
+        total += outofcore._merge((1, 0, 0), (2, 1, 1), 6, surfaces, sums[1])["hist"]
+        assert (total == configuration_histogram(v)).all()
+    # with surfaces a block also hands on one entry per pair of labels its
+    # vertices' sheets separate (a few per surface piece), and its pinches
+    s = outofcore._summarize(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), 6, "test", True)
+    (obj, bg, vertices, quarters), = s["sheets"]
+    assert len(obj) == len(bg) == len(vertices) < v.size // 20
+    assert vertices.sum() >= s["hist"][1:255].sum()  # a sheet or more per boundary vertex
 
 
 # --------------------------------------------------------------------------
@@ -227,14 +275,17 @@ def test_cli_info_on_zarr(tmp_path, capsys):
     np.save(tmp_path / "t.npy", v)
     assert main(["info", str(path), "--json"]) == 0
     got = json.loads(capsys.readouterr().out)
-    assert main(["info", str(tmp_path / "t.npy"), "--json", "--no-surfaces"]) == 0
+    assert main(["info", str(tmp_path / "t.npy"), "--json"]) == 0
     want = json.loads(capsys.readouterr().out)
-    assert got.pop("surfaces") is None
+    assert got.pop("doubled_edges") is None and want.pop("doubled_edges") == 0
     assert got.pop("input").endswith("t.zarr") and want.pop("input").endswith("t.npy")
     assert got == want and got["betti"] == [2, 1, 0]
+    assert sorted(s["genus"] for s in got["surfaces"]) == [0, 1]  # the ball, the torus
     assert main(["info", str(path), "--connectivity", "26"]) == 0
     out = capsys.readouterr().out
-    assert "2 components, 1 tunnels" in out and "not computed (out-of-core input)" in out
+    assert "2 components, 1 tunnels" in out and "#0: genus 1" in out
+    assert main(["info", str(path), "--json", "--no-surfaces"]) == 0
+    assert "surfaces" not in json.loads(capsys.readouterr().out)
 
 
 # --------------------------------------------------------------------------

@@ -39,7 +39,10 @@ def test_dask_array_on_process_workers(client, conn):
     layers = []
     got = analyze_chunked(da.from_array(v, chunks=(7, 5, 9)), conn, scheduler=client.get,
                           progress=lambda done, total: layers.append((done, total)))
-    assert got == analyze(DigitalObject(v), conn, surfaces=False)
+    want = analyze(DigitalObject(v), conn)
+    # out of core an edge across a block face has its ends in two tasks: no doubled-edge count
+    assert got.pop("doubled_edges") is None and want.pop("doubled_edges") is not None
+    assert got == want  # the closed surfaces and their genus included
     assert layers == [(i, 4) for i in range(1, 5)]  # one report per layer of blocks along axis 0
 
 
@@ -50,7 +53,8 @@ def test_zarr_store_on_process_workers(client, tmp_path, conn):
     z = zarr.open_array(str(tmp_path / "v.zarr"), mode="w", shape=v.shape, chunks=(11, 7, 13), dtype=bool)
     z[:] = v
     got = analyze_chunked(zarr.open_array(str(tmp_path / "v.zarr"), mode="r"), conn, scheduler=client.get)
-    want = analyze(DigitalObject(v), conn, surfaces=False)
+    want = analyze(DigitalObject(v), conn)
+    assert got.pop("doubled_edges") is None and want.pop("doubled_edges") is not None
     assert got == want
     assert got["betti"] == [2, 1, 1]
 

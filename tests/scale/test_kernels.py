@@ -7,44 +7,71 @@ from skimage.measure import euler_number
 
 from conftest import random_volume
 from isoflow import DigitalObject, analyze
-from isoflow.scale import kernels
+from isoflow.scale import compiled, kernels
 from isoflow.digital.configurations import configurations
 
 pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed")
 
+#: adjacency -> scipy's neighbourhood rank (6 and 4 faces, 18 edges, 26 and 8 all)
+RANK = {4: 1, 6: 1, 18: 2, 8: 2, 26: 3}
+
 
 def scipy_count(v, conn):
-    return label(v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))[1]
+    return label(v, generate_binary_structure(v.ndim, RANK[conn]))[1]
 
 
 def scipy_enclosed(v, conn):
-    lab, n = label(~v, generate_binary_structure(v.ndim, 1 if conn in (4, 6) else v.ndim))
+    lab, n = label(~v, generate_binary_structure(v.ndim, RANK[conn]))
     border = set()
     for ax in range(v.ndim):
         border |= set(np.take(lab, 0, ax).ravel()) | set(np.take(lab, -1, ax).ravel())
     return n - len(border - {0})
 
 
-def test_histogram_kernel(rng):
-    for _ in range(200):
-        v = random_volume(rng, 9)
-        want = np.bincount(configurations(v).ravel(), minlength=256)
-        assert (kernels.histogram3d(v) == want).all()
+@pytest.mark.parametrize("threads", [1, 2, 3, 7])
+def test_histogram_kernel(rng, threads):
+    with compiled.using(threads):
+        for _ in range(60):
+            v = random_volume(rng, 9)
+            want = np.bincount(configurations(v).ravel(), minlength=256)
+            assert (kernels.histogram3d(v) == want).all()
 
 
-def test_component_kernels(rng):
+@pytest.mark.parametrize("threads", [1, 2, 3, 7])
+def test_component_kernels(rng, threads):
+    # more slabs than layers too: (1, 1, 7) on 7 threads; the seams between
+    # slabs are joined after the slabs
     shapes = [(1, 1, 7), (7, 1, 1), (1, 7, 1)]  # thin shapes broke cc3d's 26-labelling
-    for t in range(400):
-        v = rng.random(shapes[t % 3]) < 0.5 if t < 30 else random_volume(rng, 8, ndim=2 + t % 2)
-        for conn in ((6, 26) if v.ndim == 3 else (4, 8)):
-            assert kernels.count_components(v, conn) == scipy_count(v, conn)
-            assert kernels.count_enclosed(v, conn) == scipy_enclosed(v, conn)
+    with compiled.using(threads):
+        for t in range(120):
+            v = rng.random(shapes[t % 3]) < 0.5 if t < 30 else random_volume(rng, 8, ndim=2 + t % 2)
+            for conn in ((6, 18, 26) if v.ndim == 3 else (4, 8)):
+                assert kernels.count_components(v, conn) == scipy_count(v, conn)
+                assert kernels.count_enclosed(v, conn) == scipy_enclosed(v, conn)
+
+
+def test_thread_count_from_the_environment_and_the_option(monkeypatch):
+    from isoflow.errors import IsoflowError
+
+    monkeypatch.setenv("ISOFLOW_THREADS", "3")
+    assert compiled.thread_count() == 3
+    with compiled.using(5):
+        assert compiled.thread_count() == 5
+    assert compiled.thread_count() == 3
+    monkeypatch.delenv("ISOFLOW_THREADS")
+    assert compiled.thread_count() == compiled.available_cpus() >= 1
+    for bad in ("0", "-2", "two", "1.5"):
+        monkeypatch.setenv("ISOFLOW_THREADS", bad)
+        with pytest.raises(IsoflowError, match="ISOFLOW_THREADS"):
+            compiled.thread_count()
+    assert compiled.slabs(3, 7) == [(0, 1), (1, 2), (2, 3)]
+    assert compiled.slabs(10, 3) == [(0, 3), (3, 6), (6, 10)]
 
 
 def test_analyze_uses_kernels_above_threshold(monkeypatch, rng):
     v = rng.random((30, 31, 29)) < 0.45
     slow = analyze(DigitalObject(v), 26, surfaces=False)
-    monkeypatch.setattr(kernels, "MIN_VOXELS", 0)
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
     fast = analyze(DigitalObject(v), 26, surfaces=False)
     assert fast == slow
     assert fast["euler_characteristic"] == euler_number(v, 3)
@@ -81,7 +108,7 @@ def test_bool_arrays_with_bytes_other_than_one_are_read_as_true(rng):
     # bytes, and once wrote past their arrays on such input
     u = (rng.random((130, 130, 130)) < 0.3).astype(np.uint8) * 2
     v = u.view(bool)
-    assert v.size >= kernels.MIN_VOXELS
+    assert v.size >= compiled.MIN_VOXELS
     for conn, sk in ((6, 1), (26, 3)):
         r = analyze(DigitalObject(v), conn, surfaces=False)
         assert r["euler_characteristic"] == euler_number(u > 0, connectivity=sk)

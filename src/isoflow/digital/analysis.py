@@ -3,7 +3,9 @@
 One pass of configurations gives the histogram from which chi (Theorems
 10-11), the class vector ``n`` (eq. 4.9), ``a^T n`` (eq. 4.12-4.13) and the
 energy ``E = k^T n`` (eq. 5.22) all follow; two labellings give the Betti
-numbers, and the boundary mesh gives the closed surfaces and their genus.
+numbers, and the labels of the object and background pieces on either side
+of every boundary face give the closed surfaces and their genus
+(:mod:`isoflow.digital.closed_surfaces`, without building the mesh).
 """
 
 from __future__ import annotations
@@ -11,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..scale import arrays
+from ..scale.compiled import use_compiled, using
+from .closed_surfaces import closed_surfaces
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -26,13 +30,13 @@ from .lattice import DigitalObject
 from .topology import betti_numbers, euler_from_histogram, resolve_connectivity
 
 
-def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict:
+def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads: int | None = None) -> dict:
     """Everything ``isoflow info --json`` reports, as a JSON-ready dict.
 
     ``obj`` is a :class:`DigitalObject` or a bare binary volume: a NumPy
     array, or a CuPy (or other array-API) array whose histogram and Betti
     numbers are computed on its device (:mod:`isoflow.scale.arrays`); only the
-    surfaces, when asked, are meshed from a host copy.
+    surfaces, when asked, are counted from a host copy.
 
     ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the 128
     configurations that are not well-composed included (with the weight of the
@@ -40,44 +44,53 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True) -> dict
     ``a_dot_n_well_composed`` is the paper's ``a^T n`` over the nine classes
     alone. ``energy`` is the paper's ``E = k^T n`` over the nine classes (in
     2D: convex plus concave vertices, ``k = r^2``).
+
+    In 3D, ``surfaces`` lists the closed surfaces of the boundary mesh with
+    their Euler characteristic, genus and face count, counted without
+    building the mesh (:mod:`isoflow.digital.closed_surfaces`); on large
+    host volumes the same pass gives the histogram and the Betti numbers.
+    ``threads``: how many threads the compiled passes use (default: the
+    ``ISOFLOW_THREADS`` environment variable, else every CPU).
     """
+    with using(threads):
+        return _analyze(obj, connectivity, surfaces)
+
+
+def _analyze(obj, connectivity, surfaces: bool) -> dict:
     if isinstance(obj, DigitalObject):
         vol, parity = obj.volume, obj.parity
     else:
         vol, parity = arrays.as_volume(obj)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
-    hist = configuration_histogram(vol)
-    chi = euler_from_histogram(hist, vol.ndim, conn)
+    census = None
+    if vol.ndim == 3 and surfaces and use_compiled(vol):
+        # one pass over the runs gives the histogram, Betti counts and surfaces
+        census = closed_surfaces(vol, conn)
+        hist = census["hist"]
+        chi = euler_from_histogram(hist, 3, conn)
+        b0, enclosed = census["betti_counts"]
+        betti = [b0, b0 + enclosed - chi, enclosed]
+    else:
+        hist = configuration_histogram(vol)
+        chi = euler_from_histogram(hist, vol.ndim, conn)
+        betti = betti_numbers(vol, conn, chi=chi)
     out = report_from_histogram(
         hist,
         vol.ndim,
         conn,
         voxels=voxels_from_histogram(hist),
         shape=vol.shape,
-        betti=betti_numbers(vol, conn, chi=chi),
+        betti=betti,
         parity=parity,
     )
     if vol.ndim == 3 and surfaces:
-        from ..scale.memory import default_budget, gib
-        from .surface import boundary_faces, boundary_mesh, mesh_memory
-
-        need = mesh_memory(hist)
-        if need > default_budget():
-            # chi, Betti numbers and n are known; say why the genus per
-            # surface is missing rather than fail the whole report
-            out["surfaces"] = None
-            out["surfaces_skipped"] = (
-                f"the boundary has {boundary_faces(hist):,} faces; meshing it needs about "
-                f"{gib(need)}, more than the memory budget of {gib(default_budget())}"
-            )
-            return out
-        mesh = boundary_mesh(arrays.to_host(vol), conn)
-        out["surfaces"] = [
-            {"euler_characteristic": c["euler_characteristic"], "genus": c["genus"], "faces": c["faces"]}
-            for c in mesh.components()
-        ]
-        out["pinched_vertices"] = mesh.pinched
-        out["doubled_edges"] = mesh.midpoints // 2
+        if census is None:
+            census = closed_surfaces(arrays.to_host(vol), conn)
+        out["surfaces"] = census["surfaces"]
+        out["pinched_vertices"] = census["pinched_vertices"]
+        out["doubled_edges"] = census["doubled_edges"]
+        # DESIGN section 3: the split mesh has V - E + F = 2 chi + 2 p
+        assert sum(s["euler_characteristic"] for s in out["surfaces"]) == 2 * chi + 2 * census["pinched_vertices"]
     return out
 
 

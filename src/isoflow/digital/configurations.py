@@ -31,6 +31,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scale import arrays
+from ..scale.compiled import use_compiled
 
 #: octant d -> its bit index, for the 3D window
 OCTANTS_3D = [(dx, dy, dz) for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)]
@@ -80,10 +81,10 @@ def configuration_histogram(volume, slab: int | None = None) -> np.ndarray:
     """
     xp, v = arrays.as_volume(volume)
     size = 1 << (1 << v.ndim)
-    from ..scale import kernels
+    if v.ndim == 3 and use_compiled(v):
+        from ..scale.kernels import histogram3d
 
-    if arrays.is_host(xp) and v.ndim == 3 and kernels.HAVE_NUMBA and v.size >= kernels.MIN_VOXELS:
-        return kernels.histogram3d(v)
+        return histogram3d(v)
     if slab is None:
         row = math.prod(v.shape[1:])
         slab = max(1, (1 << 23) // max(row, 1))

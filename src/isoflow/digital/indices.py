@@ -53,6 +53,11 @@ def _bits(config: int, nbits: int) -> list[int]:
 
 def _face_pairs(octants) -> list[tuple[int, int]]:
     """Pairs of window cells that share a face (differ in one coordinate)."""
+    return _face_pairs_of(tuple(map(tuple, octants)))
+
+
+@lru_cache(maxsize=None)
+def _face_pairs_of(octants: tuple) -> list[tuple[int, int]]:
     pairs = []
     for a in octants:
         for b in octants:
@@ -80,6 +85,11 @@ def _connected(cells: list[int], octants) -> bool:
 
 
 def _halves(octants, axis: int, side: int) -> list[int]:
+    return _halves_of(tuple(map(tuple, octants)), axis, side)
+
+
+@lru_cache(maxsize=None)
+def _halves_of(octants: tuple, axis: int, side: int) -> list[int]:
     return [octant_bit(d) for d in octants if d[axis] == side]
 
 
@@ -105,10 +115,26 @@ def _euler_share(config: int, octants, connectivity: str) -> int:
     n = len(octants[0])
     bits = _bits(config, 1 << n)
     total = 0
-    # A block of the window: fix a subset of axes to given values, leave the
-    # other axes free; free axes = its dimension as a block of cells.
+    for cells, m in _blocks(tuple(map(tuple, octants))):
+        inside = [bits[c] for c in cells]
+        if connectivity == "max":
+            # lattice cell of dimension k = n - m, weight 2^n / 2^(n-m)
+            if any(inside):
+                total += (-1) ** (n - m) * (1 << m)
+        else:
+            # dual cell of dimension m, weight 2^n / 2^(n-m) = 2^m
+            if all(inside):
+                total += (-1) ** m * (1 << m)
+    return total
+
+
+@lru_cache(maxsize=None)
+def _blocks(octants: tuple) -> list[tuple[list[int], int]]:
+    """The blocks of the window: a subset of axes fixed to given values, the
+    other ``m`` axes free (a block of ``2^m`` cells); their cells as bits."""
+    n = len(octants[0])
+    out = []
     for free_mask in range(1 << n):
-        free = [i for i in range(n) if free_mask >> i & 1]
         fixed = [i for i in range(n) if not free_mask >> i & 1]
         for values in range(1 << len(fixed)):
             cells = [
@@ -116,18 +142,8 @@ def _euler_share(config: int, octants, connectivity: str) -> int:
                 for d in octants
                 if all(d[ax] == (values >> j & 1) for j, ax in enumerate(fixed))
             ]
-            inside = [bits[c] for c in cells]
-            m = len(free)  # block of 2^m window cells
-            if connectivity == "max":
-                # lattice cell of dimension n - m, weight 2^n / 2^(n-m)
-                k = n - m
-                if any(inside):
-                    total += (-1) ** k * (1 << m)
-            else:
-                # dual cell of dimension m, weight 2^n / 2^(n-m) = 2^m
-                if all(inside):
-                    total += (-1) ** m * (1 << m)
-    return total
+            out.append((cells, n - len(fixed)))
+    return out
 
 
 @lru_cache(maxsize=None)

@@ -55,15 +55,34 @@ import numpy as np
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary
+from ..scale.compiled import thread_count, using
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from .analysis import report_from_histogram
+from .closed_surfaces import MESH_ADJACENCY, box_sheets, surfaces_from_counts
 from .configurations import configuration_histogram, configurations
-from .topology import COMPLEMENT, euler_from_histogram, resolve_connectivity, structure
+from .surface import pinch_lut
+from .topology import COMPLEMENT, euler_from_histogram, resolve_connectivity
 
 #: local labels live in the low 32 bits of a node key, the block in the high bits
 _SHIFT = 32
 #: below this many voxels a block's histogram is one configuration array
 _DIRECT_HISTOGRAM = 1 << 18
+#: the node of the region outside the array (background), when surfaces are
+#: counted: no block has this number
+OUTSIDE = np.int64(1) << 62
+#: scipy's neighbourhood rank of each adjacency
+_RANK = {4: 1, 6: 1, 8: 2, 18: 2, 26: 3}
+
+
+def adjacencies(ndim: int, conn: int, surfaces: bool) -> dict:
+    """The adjacencies the blocks are labelled with: the connectivity and its
+    complement, or, when the surfaces are counted (3D), those of the
+    boundary mesh's solid (:data:`~isoflow.digital.closed_surfaces.MESH_ADJACENCY`);
+    the pinches then join the labels into the connectivity's components."""
+    if surfaces and ndim == 3:
+        fg, bg = MESH_ADJACENCY[conn]
+        return {"fg": fg, "bg": bg}
+    return {"fg": conn, "bg": COMPLEMENT[conn]}
 
 
 # --------------------------------------------------------------------------
@@ -89,9 +108,9 @@ def _label(mask: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
         except ImportError:  # pragma: no cover - cc3d is installed in the test env
             cc3d = None
     if cc3d is None:
-        from scipy.ndimage import label
+        from scipy.ndimage import generate_binary_structure, label
 
-        labels, n = label(mask, structure(mask.ndim, connectivity))
+        labels, n = label(mask, generate_binary_structure(mask.ndim, _RANK[connectivity]))
         return labels, int(n)
     data = mask.view(np.uint8) if mask.dtype == np.bool_ else mask
     labels, n = cc3d.connected_components(data, connectivity=connectivity, return_N=True)
@@ -139,7 +158,7 @@ def _face(labels: np.ndarray, axis: int, end: int) -> np.ndarray:
     return np.ascontiguousarray(np.take(labels, end, axis=axis))
 
 
-def _summarize(block, index, numblocks, origin, conn, where) -> dict:
+def _summarize(block, index, numblocks, origin, conn, where, surfaces=False) -> dict:
     """Everything the report needs from one block, and nothing voxel-sized.
 
     Vertex ``w`` needs the voxels ``w-1`` and ``w``; the block ``[a, b)``
@@ -152,22 +171,32 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
     Returns that histogram and the voxel count, the number of object and
     background labels, the labels and voxels on the block's internal faces
     (for the merge with its neighbours) and the background labels on the
-    array's border faces.
+    array's border faces. With ``surfaces`` (3D), also the sheets of the
+    block's own vertices per pair of node keys and the pinches
+    (:func:`isoflow.digital.closed_surfaces.box_sheets`).
     """
+    with using(1):  # the blocks run in parallel; one thread each
+        return _summarize_block(block, index, numblocks, origin, conn, where, surfaces)
+
+
+def _summarize_block(block, index, numblocks, origin, conn, where, surfaces) -> dict:
     ndim = len(index)
+    surfaces = surfaces and ndim == 3
     core = binary(block, where, near=origin)
     first = tuple(i == 0 for i in index)
     last = tuple(i == n - 1 for i, n in zip(index, numblocks))
     hist = _vertex_histogram(core, first, last)
     voxels = int(np.count_nonzero(core))
+    adj = adjacencies(ndim, conn, surfaces)
     faces: dict = {}
     counts = {}
+    kept = {}
     border = np.zeros(0, dtype=np.int64)
-    for kind, c, mask in (("vox", None, core), ("fg", conn, core), ("bg", COMPLEMENT[conn], ~core)):
-        if c is None:
+    for kind, mask in (("vox", core), ("fg", core), ("bg", ~core)):
+        if kind == "vox":
             labels = mask
         else:
-            labels, counts[kind] = _label(mask, c)
+            labels, counts[kind] = _label(mask, adj[kind])
         mine, outside = {}, []
         for axis in range(ndim):
             for side, end in ((0, 0), (1, -1)):
@@ -175,7 +204,6 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
                     mine[kind, axis, side] = _face(labels, axis, end)
                 elif kind == "bg":
                     outside.append(_face(labels, axis, end))
-        del labels, mask
         if kind == "vox":
             faces.update(mine)
             continue
@@ -190,10 +218,42 @@ def _summarize(block, index, numblocks, origin, conn, where) -> dict:
         if kind == "bg" and outside:
             on_border = np.unique(np.concatenate([f.ravel() for f in outside]))
             border = np.searchsorted(seen, on_border[on_border > 0]).astype(np.int64) + 1
-    return {"hist": hist, "voxels": voxels, "counts": counts, "faces": faces, "border": border}
+        if surfaces:
+            kept[kind] = (labels, seen)
+        del labels, mask
+    out = {"hist": hist, "voxels": voxels, "counts": counts, "faces": faces, "border": border}
+    if surfaces:
+        block_id = int(np.ravel_multi_index(index, numblocks))
+        (fg, fg_seen), (bg, bg_seen) = kept["fg"], kept["bg"]
+        marker = np.iinfo(bg.dtype).max  # no label: the outside, in the block's numbering
+        keep = tuple(slice(0 if f else 1, None if lst else -1) for f, lst in zip(first, last))
+        found = box_sheets(core, fg, bg, keep, conn, marker, compiled=True)
+        del kept, fg, bg
+        out["sheets"] = [(_node_keys(found["obj"], fg_seen, block_id),
+                          _node_keys(found["bg"], bg_seen, block_id, marker),
+                          found["vertices"], found["quarters"])]
+        pinch_seen, pinch_marker = (fg_seen, None) if conn == 26 else (bg_seen, marker)
+        out["pinches"] = [_node_keys(found["pairs"].ravel(), pinch_seen, block_id, pinch_marker).reshape(2, -1, order="F")]
+    return out
 
 
-def _read_zarr_block(z, index, box, numblocks, conn, where) -> dict:
+def _node_keys(local: np.ndarray, seen: np.ndarray, block: int, outside=None) -> np.ndarray:
+    """Global node keys of a block's own labels: a label seen on a face is
+    ``block << 32 | its number among those + 1``, as in the face arrays (and
+    so in the merge's edges); any other label is private to the block and
+    gets ``-(block << 32 | label) - 1``; ``outside`` becomes :data:`OUTSIDE`."""
+    local = np.asarray(local, dtype=np.int64)
+    pos = np.searchsorted(seen, local)
+    hit = pos < len(seen)
+    hit[hit] = seen[pos[hit]] == local[hit]
+    base = np.int64(block) << _SHIFT
+    keys = np.where(hit, (pos + 1) | base, -(local | base) - 1)
+    if outside is not None:
+        keys[local == outside] = OUTSIDE
+    return keys
+
+
+def _read_zarr_block(z, index, box, numblocks, conn, where, surfaces=False) -> dict:
     """Read one block of a zarr array and summarise it.
 
     Reading inside the task (rather than through dask-array chunks) means a
@@ -207,12 +267,12 @@ def _read_zarr_block(z, index, box, numblocks, conn, where) -> dict:
         data = np.asarray(z[region])
     except Exception as exc:  # a damaged or missing chunk
         raise IsoflowError(f"{where}: cannot read the block at voxel {origin} ({exc})") from None
-    return _summarize(data, index, numblocks, origin, conn, where)
+    return _summarize(data, index, numblocks, origin, conn, where, surfaces)
 
 
-def _dask_block(chunk, index, origin, numblocks, conn, where) -> dict:
+def _dask_block(chunk, index, origin, numblocks, conn, where, surfaces=False) -> dict:
     """Summarise one chunk of a dask array (no halo needed, see _summarize)."""
-    return _summarize(chunk, index, numblocks, origin, conn, where)
+    return _summarize(chunk, index, numblocks, origin, conn, where, surfaces)
 
 
 def _keys(labels: np.ndarray, block: int) -> np.ndarray:
@@ -277,7 +337,7 @@ def _tile(by_offset, block_id, kind: str, axis: int, ndim: int) -> np.ndarray:
     return tile
 
 
-def _merge(index, numblocks, conn, *summaries) -> dict:
+def _merge(index, numblocks, conn, surfaces, *summaries) -> dict:
     """What crosses the upper faces of one block, plus its small numbers.
 
     ``summaries`` are those of the block and of its existing upper
@@ -285,11 +345,13 @@ def _merge(index, numblocks, conn, *summaries) -> dict:
     each axis with an upper neighbour, the tile across that face (see
     :func:`_tile`) gives the edges between object labels, between background
     labels, and the configurations of the block's vertices on that face
-    (those :func:`_summarize` left out). The block's own numbers are passed
-    on so that the final step never needs the (larger) summaries, which the
-    scheduler can then drop.
+    (those :func:`_summarize` left out), with their sheets when ``surfaces``
+    (the tile's labels are node keys already). The block's own numbers are
+    passed on so that the final step never needs the (larger) summaries,
+    which the scheduler can then drop.
     """
     ndim = len(index)
+    surfaces = surfaces and ndim == 3
     offsets = [
         d for d in itertools.product((0, 1), repeat=ndim)
         if all(i + di < n for i, di, n in zip(index, d, numblocks))
@@ -300,30 +362,69 @@ def _merge(index, numblocks, conn, *summaries) -> dict:
     first = [i == 0 for i in index]
     last = [i == n - 1 for i, n in zip(index, numblocks)]
     hist = own["hist"].copy()
+    adj = adjacencies(ndim, conn, surfaces)
     out = {
         "voxels": own["voxels"],
         "counts": own["counts"],
         "border": own["border"] | (np.int64(block_id[(0,) * ndim]) << _SHIFT),
         "fg": [],
         "bg": [],
+        "sheets": list(own.get("sheets", [])),
+        "pinches": list(own.get("pinches", [])),
     }
     for axis in range(ndim):
         if last[axis]:
             continue  # no upper neighbour: an array border
-        for kind, c in (("fg", conn), ("bg", COMPLEMENT[conn])):
-            out[kind].append(_tile_edges(_tile(by_offset, block_id, kind, axis, ndim), c))
+        tiles = {kind: _tile(by_offset, block_id, kind, axis, ndim) for kind in ("fg", "bg", "vox")}
+        for kind in ("fg", "bg"):
+            out[kind].append(_tile_edges(tiles[kind], adj[kind]))
         # Vertices at the upper face along this axis (index 1 of the tile's
         # vertex layers). Along an earlier axis the face vertices were
         # counted by that axis's tile: drop the tile's extra voxel there, so
         # that index E is left out; along a later axis keep it, it is the
         # voxel the vertex at the block's end needs.
-        vox = _tile(by_offset, block_id, "vox", axis, ndim)
-        vox = vox[tuple(slice(0, None if m >= axis or last[m] else -1) for m in range(ndim))]
+        cut = tuple(slice(0, None if m >= axis or last[m] else -1) for m in range(ndim))
+        vox = tiles["vox"][cut]
         keep_low = [False if m == axis else first[m] for m in range(ndim)]
         keep_high = [False if m == axis else last[m] for m in range(ndim)]
         hist += _vertex_histogram(vox, keep_low, keep_high)
+        if surfaces:
+            keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
+            found = box_sheets(vox, tiles["fg"][cut], tiles["bg"][cut], keep, conn, OUTSIDE, compiled=True)
+            out["sheets"].append((found["obj"], found["bg"], found["vertices"], found["quarters"]))
+            out["pinches"].append(found["pairs"].T)
     out["hist"] = hist
     return out
+
+
+def _component_ids(edges: list[np.ndarray], keys: np.ndarray) -> np.ndarray:
+    """The component of every node key in ``keys`` under the cross-block
+    ``edges`` (2, E); a key in no edge is a component by itself."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pairs = np.concatenate(edges, axis=1) if edges else np.zeros((2, 0), np.int64)
+    nodes, inverse = np.unique(np.concatenate([pairs.ravel(), keys]), return_inverse=True)
+    e = pairs.shape[1]
+    graph = coo_matrix((np.ones(e, dtype=np.int8), (inverse[:e], inverse[e:2 * e])), shape=(len(nodes),) * 2)
+    return connected_components(graph, directed=False)[1][inverse[2 * e:]]
+
+
+def _closed_surfaces(merged, conn: int) -> list[dict]:
+    """The surfaces: every sheet's pair of node keys becomes the pair of
+    their components (under the mesh's adjacencies: the edges found in the
+    tiles, and the border background joined with the outside), summed."""
+    sheets = [t for m in merged for t in m["sheets"]]
+    if not sheets:
+        return []
+    obj, bg, vertices, quarters = (np.concatenate(col) for col in zip(*sheets))
+    border = np.concatenate([m["border"] for m in merged])
+    outside = np.stack([border, np.full(len(border), OUTSIDE)])
+    obj = _component_ids([e for m in merged for e in m["fg"]], obj)
+    bg = _component_ids([e for m in merged for e in m["bg"]] + [outside], bg)
+    pair, inverse = np.unique(obj.astype(np.int64) * (int(bg.max(initial=0)) + 1) + bg, return_inverse=True)
+    return surfaces_from_counts(np.bincount(inverse, weights=vertices, minlength=len(pair)).astype(np.int64),
+                                np.bincount(inverse, weights=quarters, minlength=len(pair)).astype(np.int64))
 
 
 def _components(nodes: int, edges: list[np.ndarray], border: np.ndarray | None = None) -> int:
@@ -356,14 +457,23 @@ def _components(nodes: int, edges: list[np.ndarray], border: np.ndarray | None =
     return int(total - touching)
 
 
-def _finish(ndim, conn, shape, *merged) -> dict:
+def _finish(ndim, conn, shape, surfaces, *merged) -> dict:
     """Add up the blocks and build the report."""
+    surfaces = surfaces and ndim == 3
     hist = np.sum([m["hist"] for m in merged], axis=0)
     voxels = sum(m["voxels"] for m in merged)
-    b0 = _components(sum(m["counts"]["fg"] for m in merged), [e for m in merged for e in m["fg"]])
+    fg_edges = [e for m in merged for e in m["fg"]]
+    bg_edges = [e for m in merged for e in m["bg"]]
+    if surfaces:
+        found = _closed_surfaces(merged, conn)
+        # the pinches join what the mesh's adjacencies split: object pieces
+        # under 26, background pieces under 6
+        pinches = [p for m in merged for p in m["pinches"]]
+        (fg_edges if conn == 26 else bg_edges).extend(pinches)
+    b0 = _components(sum(m["counts"]["fg"] for m in merged), fg_edges)
     enclosed = _components(
         sum(m["counts"]["bg"] for m in merged),
-        [e for m in merged for e in m["bg"]],
+        bg_edges,
         np.concatenate([m["border"] for m in merged]),
     )
     chi = euler_from_histogram(hist, ndim, conn)
@@ -373,7 +483,14 @@ def _finish(ndim, conn, shape, *merged) -> dict:
         betti = [b0, enclosed]
     else:
         betti = [b0, b0 + enclosed - chi, enclosed]
-    return report_from_histogram(hist, ndim, conn, voxels=voxels, shape=shape, betti=betti, parity=0)
+    report = report_from_histogram(hist, ndim, conn, voxels=voxels, shape=shape, betti=betti, parity=0)
+    if surfaces:
+        pinched = int(hist[pinch_lut(conn)].sum())
+        assert sum(s["euler_characteristic"] for s in found) == 2 * chi + 2 * pinched
+        # doubled edges need the configurations at both ends of an edge,
+        # which for an edge across a block face no single task has
+        report.update(surfaces=found, pinched_vertices=pinched, doubled_edges=None)
+    return report
 
 
 # --------------------------------------------------------------------------
@@ -389,14 +506,21 @@ def analyze_chunked(
     scheduler=None,
     where: str | None = None,
     progress=None,
+    surfaces: bool = True,
+    threads: int | None = None,
 ) -> dict:
-    """The report of :func:`isoflow.digital.analysis.analyze` (``surfaces=False``),
-    computed block by block.
+    """The report of :func:`isoflow.digital.analysis.analyze`, computed block
+    by block.
 
     ``array`` is a 2D or 3D ``dask.array.Array`` or zarr array of bools or
     0/1 numbers; the result equals
-    ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces=False)``
-    key for key. A dask array is processed along its own chunks; a zarr array
+    ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``
+    key for key, except that ``doubled_edges`` is None (an edge across a
+    block face has its two ends in different tasks). With ``surfaces`` (3D)
+    the blocks are labelled under the boundary mesh's adjacencies and every
+    vertex's sheets are counted per pair of labels where the vertex is
+    counted in the histogram (:func:`isoflow.digital.closed_surfaces.box_sheets`);
+    the pairs become the surfaces once the labels are joined across blocks. A dask array is processed along its own chunks; a zarr array
     along its chunks (or shards; tiny chunks are grouped), or along
     ``block_shape`` when given (a dask array is rechunked to it). Memory is a
     few blocks per worker plus the faces of two layers of blocks; the voxels
@@ -408,8 +532,10 @@ def analyze_chunked(
     the reading and the histogram; ``"processes"`` runs blocks truly in
     parallel at the cost of starting workers and pickling the face labels
     (worth it only for large volumes on idle cores, and only from code
-    under ``if __name__ == "__main__":``); a ``dask.distributed`` client's
-    ``get`` works the same way. ``where`` names the input in error messages.
+    under ``if __name__ == "__main__":``), on ``threads`` workers (default:
+    :func:`isoflow.scale.compiled.thread_count`); each block's own passes
+    then run on one thread. A ``dask.distributed`` client's ``get`` works as
+    a scheduler too. ``where`` names the input in error messages.
     ``progress(done, total)`` is called after each layer of blocks along the
     first axis (``total`` layers), the unit of work between two computes.
     """
@@ -450,13 +576,15 @@ def analyze_chunked(
 
     delayed = dask.delayed
     blocks = None if is_zarr else array.to_delayed()
+    with using(threads):
+        workers = thread_count()
 
     def block_task(index):
         if is_zarr:
             box = tuple(bounds[axis][i] for axis, i in enumerate(index))
-            return delayed(_read_zarr_block, pure=False)(array, index, box, numblocks, conn, where)
+            return delayed(_read_zarr_block, pure=False)(array, index, box, numblocks, conn, where, surfaces)
         origin = tuple(bounds[axis][i][0] for axis, i in enumerate(index))
-        return delayed(_dask_block, pure=False)(blocks[index], index, origin, numblocks, conn, where)
+        return delayed(_dask_block, pure=False)(blocks[index], index, origin, numblocks, conn, where, surfaces)
 
     def layer(i):
         rest = [range(n) for n in numblocks[1:]]
@@ -476,15 +604,15 @@ def analyze_chunked(
     # run in parallel.
     merged = []
     try:
-        (current,) = dask.compute(layer(0), scheduler=scheduler)
+        (current,) = dask.compute(layer(0), scheduler=scheduler, num_workers=workers)
         for i in range(numblocks[0]):
             upper = layer(i + 1) if i + 1 < numblocks[0] else {}
             both = {**current, **upper}
             tasks = [
-                delayed(_merge, pure=False)(index, numblocks, conn, *(both[u] for u in uppers(index)))
+                delayed(_merge, pure=False)(index, numblocks, conn, surfaces, *(both[u] for u in uppers(index)))
                 for index in current
             ]
-            done, current = dask.compute(tasks, upper, scheduler=scheduler)
+            done, current = dask.compute(tasks, upper, scheduler=scheduler, num_workers=workers)
             merged.extend(done)
             if progress is not None:
                 progress(i + 1, numblocks[0])
@@ -492,10 +620,11 @@ def analyze_chunked(
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message
         raise IsoflowError(str(exc.args[0]) if exc.args else str(exc)) from None
-    return _finish(ndim, conn, list(shape), *merged)
+    return _finish(ndim, conn, list(shape), surfaces, *merged)
 
 
-def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None, progress=None) -> dict:
+def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None,
+                 surfaces: bool = True, threads: int | None = None, progress=None) -> dict:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
     Before the full pass, the dtype and the first block's values are
@@ -513,4 +642,4 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
         first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         binary(first, where, near=(0,) * z.ndim)
     return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
-                           progress=progress)
+                           surfaces=surfaces, threads=threads, progress=progress)

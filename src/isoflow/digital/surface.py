@@ -46,7 +46,9 @@ from .topology import check_connectivity
 # the octants with d_i = 0 and d_i = 1 and those (d_j, d_k).
 
 
-def _slot_octants(slot: int) -> tuple[int, int]:
+def slot_octants(slot: int) -> tuple[int, int]:
+    """The two octants (bits) that face slot ``slot`` separates, the one
+    with ``d_i = 0`` first."""
     i, dj, dk = slot // 4, slot & 1, (slot >> 1) & 1
     j, k = (i + 1) % 3, (i + 2) % 3
     d = [0, 0, 0]
@@ -81,7 +83,7 @@ def sheet_lut(connectivity: int = 6) -> np.ndarray:
     """
     check_connectivity(3, connectivity)
     out = np.full((256, 12), -1, dtype=np.int8)
-    slot_oct = [_slot_octants(s) for s in range(12)]
+    slot_oct = [slot_octants(s) for s in range(12)]
     spokes = [_spoke_slots(ax, side) for ax in range(3) for side in (0, 1)]
     for c in range(256):
         bit = [(c >> b) & 1 for b in range(8)]
@@ -312,7 +314,7 @@ MESH_BYTES_PER_FACE = 300
 @lru_cache(maxsize=None)
 def face_slots() -> np.ndarray:
     """Boundary face slots (0..12) of each of the 256 configurations."""
-    pairs = [_slot_octants(s) for s in range(12)]
+    pairs = [slot_octants(s) for s in range(12)]
     codes = np.arange(256)
     return sum(((codes >> lo) & 1) != ((codes >> hi) & 1) for lo, hi in pairs).astype(np.int64)
 

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale import arrays
 from ..scale.arrays import is_host
+from ..scale.compiled import use_compiled
 from ..scale.memory import check_fits
 from .configurations import configuration_histogram
 from .indices import euler_lut
@@ -94,17 +95,6 @@ def structure(ndim: int, connectivity: int) -> np.ndarray:
     return generate_binary_structure(ndim, 1 if connectivity == VALID[ndim][0] else ndim)
 
 
-def _compiled(volume) -> bool:
-    from ..scale import kernels
-
-    return (
-        isinstance(volume, np.ndarray)
-        and kernels.HAVE_NUMBA
-        and volume.ndim <= 3
-        and volume.size >= kernels.MIN_VOXELS
-    )
-
-
 def _labeller(xp, v):
     """``(xp, volume, label)`` for a checked volume (:func:`arrays.as_volume`):
     the volume where its library can label it (host NumPy, a CuPy GPU),
@@ -113,7 +103,7 @@ def _labeller(xp, v):
     if label is None:
         v = arrays.to_host(v)
         xp, label = np, arrays.label_function(np)
-    if is_host(xp) and not _compiled(v):
+    if is_host(xp) and not use_compiled(v):
         # scipy writes an int32 label per voxel, next to the complement
         check_fits(
             LABEL_BYTES_PER_VOXEL * v.size,
@@ -139,7 +129,7 @@ def count_components(volume, connectivity: int) -> int:
 
 
 def _count_components(xp, v, label, connectivity: int) -> int:
-    if _compiled(v):
+    if use_compiled(v):
         from ..scale.kernels import count_components as compiled
 
         return compiled(v, connectivity)
@@ -160,7 +150,7 @@ def count_enclosed(volume, connectivity: int) -> int:
 def _count_enclosed(xp, v, label, connectivity: int) -> int:
     if v.size == 0:
         return 0
-    if _compiled(v):
+    if use_compiled(v):
         from ..scale.kernels import count_enclosed as compiled
 
         return compiled(v, connectivity)
@@ -192,7 +182,7 @@ def betti_numbers(volume, connectivity: int | None = None, chi: int | None = Non
         chi = euler_from_histogram(configuration_histogram(v), v.ndim, conn)
     # the volume is checked once here; one host copy where the library cannot label
     xp, v, label = _labeller(xp, v)
-    if _compiled(v):
+    if use_compiled(v):
         from ..scale.kernels import count_object_and_enclosed
 
         b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))

@@ -1,5 +1,5 @@
-"""Compiled kernels (numba) for the two passes that dominate ``isoflow info``
-on large volumes: the configuration histogram and component counting.
+"""Compiled kernels (numba) for the passes that dominate ``isoflow info``
+on large volumes: the configuration histogram and component labelling.
 
 Both stream over the volume without materialising a configuration array or
 a label volume:
@@ -7,21 +7,33 @@ a label volume:
 * :func:`histogram3d` keeps, along every row of the last axis, the 8-bit
   configuration of the current vertex and shifts in one nibble (the four
   voxels of the next layer) per step: four reads per vertex, one pass.
-* :func:`count_components` is a run-based union-find: runs of equal voxels
-  along the last axis are the nodes, runs in neighbouring rows that touch are
-  joined. The background's runs are the gaps between the object's, so the
-  volume is read once for both. Memory is three int32 per run (about one
-  byte per voxel on real data) instead of a 4-byte label per voxel.
+* :func:`join_runs` is a run-based union-find: runs of equal voxels along
+  the last axis are the nodes, runs in neighbouring rows that touch (under
+  6-, 18- or 26-adjacency, 4 or 8 in 2D) are joined. The background's runs
+  are the gaps between the object's (:func:`gap_runs`), so the volume is read
+  once for both; one extra node stands for the region outside the array.
+  Memory is three int32 per run (about one byte per voxel on real data)
+  instead of a 4-byte label per voxel, and the parents, flattened, are the
+  labels that :mod:`isoflow.scale.sweep` reads.
 
-They give the same numbers as :func:`isoflow.digital.configurations.configurations`
-and scipy (the tests check it). The numpy/scipy paths stay in use for small
-volumes, where compiling would cost more than it saves; compiled code is
-cached on disk after the first run.
+Every pass splits the volume into slabs along the first axis, one per
+thread (:mod:`isoflow.scale.compiled`); the union-find joins the seams
+between slabs afterwards. They give the same numbers as
+:func:`isoflow.digital.configurations.configurations` and scipy (the tests
+check it). The numpy/scipy paths stay in use for small volumes, where
+loading numba would cost more than it saves; compiled code is cached on
+disk after the first run.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from .compiled import run, slabs, thread_count
+from .memory import check_fits
+
+#: bytes per run held by the union-find: start, end and parent (int32)
+RUN_BYTES = 12
 
 try:  # numba is a dependency, but keep isoflow importable without it
     from numba import njit
@@ -29,9 +41,6 @@ try:  # numba is a dependency, but keep isoflow importable without it
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba
     HAVE_NUMBA = False
-
-#: volumes with at least this many voxels (128^3) use the compiled kernels
-MIN_VOXELS = 2_000_000
 
 
 if HAVE_NUMBA:
@@ -149,14 +158,16 @@ if HAVE_NUMBA:
                 ib += 1
 
     @njit(cache=True, nogil=True)
-    def _join_range(shape, offsets, start, end, full, parent, i0, i1, seam):
+    def _join_range(shape, offsets, start, end, slack, diagonal, parent, i0, i1, seam):
         """Join the runs of rows i0 <= i < i1 with their earlier neighbour
-        rows: (i, j-1) and (i-1, j), and with full connectivity (i-1, j-1),
-        (i-1, j+1), all with slack 1 (diagonal contact). Rows i0-1 are left
-        out unless ``seam``, so that two ranges can run at once on disjoint
-        parts of ``parent``; ``seam`` joins only row i0 to row i0-1."""
+        rows: (i, j-1) and (i-1, j) with ``slack`` (0: face contact only,
+        1: also edge contact across the row), and when ``diagonal >= 0`` the
+        rows (i-1, j-1), (i-1, j+1) with slack ``diagonal`` (0: edge
+        contact, 1: also vertex contact). 6-adjacency is (0, -1), 18 is
+        (1, 0), 26 is (1, 1). Rows i0-1 are left out unless ``seam``, so that
+        slabs can run at once on disjoint parts of ``parent``; ``seam`` joins
+        only row i0 to row i0-1."""
         nx, ny, nz = shape
-        slack = 1 if full else 0
         for i in range(i0, i1):
             for j in range(ny):
                 a0, a1 = offsets[i * ny + j], offsets[i * ny + j + 1]
@@ -168,42 +179,60 @@ if HAVE_NUMBA:
                 if i >= 1 and (i > i0 or seam):
                     r = (i - 1) * ny + j
                     _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], slack)
-                    if full:
+                    if diagonal >= 0:
                         if j >= 1:
                             r = (i - 1) * ny + j - 1
-                            _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], 1)
+                            _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], diagonal)
                         if j + 1 < ny:
                             r = (i - 1) * ny + j + 1
-                            _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], 1)
+                            _join_rows(parent, start, end, a0, a1, offsets[r], offsets[r + 1], diagonal)
 
     @njit(cache=True, nogil=True)
-    def _roots(shape, offsets, start, end, parent, border, planar):
-        """Number of components; with ``border``, only those that do not
-        touch the array's border. ``planar``: a 2D image with a dummy first
-        axis, whose ends are not a border."""
+    def _join_outside(shape, offsets, start, end, parent, outside, planar):
+        """Join every run on the array's border with the node ``outside``:
+        the region outside the array is background and touches them all."""
         nx, ny, nz = shape
-        n = len(start)
-        touch = np.zeros(n, dtype=np.bool_)
-        if border:
-            for i in range(nx):
-                for j in range(ny):
-                    a0, a1 = offsets[i * ny + j], offsets[i * ny + j + 1]
-                    if a0 == a1:
-                        continue
-                    if j == 0 or j == ny - 1 or (not planar and (i == 0 or i == nx - 1)):
-                        for r in range(a0, a1):
-                            touch[_find(parent, r)] = True
-                    else:
-                        # inside rows only their first and last runs can
-                        # reach the ends of the row
-                        if start[a0] == 0:
-                            touch[_find(parent, a0)] = True
-                        if end[a1 - 1] == nz:
-                            touch[_find(parent, a1 - 1)] = True
+        for i in range(nx):
+            for j in range(ny):
+                a0, a1 = offsets[i * ny + j], offsets[i * ny + j + 1]
+                if a0 == a1:
+                    continue
+                if j == 0 or j == ny - 1 or (not planar and (i == 0 or i == nx - 1)):
+                    for r in range(a0, a1):
+                        _union(parent, r, outside)
+                else:
+                    # inside rows only their first and last runs can reach
+                    # the ends of the row
+                    if start[a0] == 0:
+                        _union(parent, a0, outside)
+                    if end[a1 - 1] == nz:
+                        _union(parent, a1 - 1, outside)
+
+    @njit(cache=True, nogil=True, inline="always")
+    def _union(parent, a, b):
+        ra, rb = _find(parent, a), _find(parent, b)
+        if ra < rb:
+            parent[rb] = ra
+        elif rb < ra:
+            parent[ra] = rb
+
+    @njit(cache=True, nogil=True)
+    def _join_pairs(parent, pairs):
+        for p in range(len(pairs)):
+            _union(parent, pairs[p, 0], pairs[p, 1])
+
+    @njit(cache=True, nogil=True)
+    def _flatten(parent):
+        """Point every node at its root. Unions always hang the larger root
+        under the smaller, so ``parent[r] <= r`` and one pass in index order
+        suffices. Returns the number of roots."""
         roots = 0
-        for r in range(n):
-            if parent[r] == r and not touch[r]:
+        for r in range(len(parent)):
+            p = parent[r]
+            if p == r:
                 roots += 1
+            else:
+                parent[r] = parent[p]
         return roots
 
     @njit(cache=True, nogil=True)
@@ -237,117 +266,126 @@ def label_polygons(polygons: np.ndarray, nv: int) -> tuple[np.ndarray, int]:
     return _label_polygons(np.ascontiguousarray(polygons), nv)
 
 
-def _halves(n: int):
-    mid = n // 2
-    return [(a, b) for a, b in ((0, mid), (mid, n)) if b > a]
-
-
-def _on_two_threads(calls) -> list:
-    """Run compiled calls (which release the GIL) on two threads. Plain
-    threads rather than numba's parallel=True: no OpenMP pool spinning
-    next to them, and no slow parallel compile."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        futures = [pool.submit(fn, *args) for fn, *args in calls]
-        return [f.result() for f in futures]
-
-
-def _as3d(volume: np.ndarray) -> np.ndarray:
+def volume_view(volume: np.ndarray) -> np.ndarray:
+    """A C-contiguous uint8 view of a 2D or 3D volume; 2D gets a dummy first axis."""
     v = np.ascontiguousarray(volume, dtype=bool)
-    return v.reshape((1,) + v.shape) if v.ndim == 2 else v
+    return (v.reshape((1,) + v.shape) if v.ndim == 2 else v).view(np.uint8)
 
 
 def histogram3d(volume: np.ndarray) -> np.ndarray:
     """The 256 configuration counts of a 3D volume (same as
     ``np.bincount(configurations(volume).ravel(), minlength=256)``)."""
-    v = np.ascontiguousarray(volume, dtype=bool).view(np.uint8)
-    parts = [np.zeros(256, np.int64) for _ in range(2)]  # one per thread
-    _on_two_threads([(_hist_rows, v, a, b, h) for (a, b), h in zip(_halves(v.shape[0] + 1), parts)])
-    return parts[0] + parts[1]
+    v = volume_view(volume)
+    parts = slabs(v.shape[0] + 1, thread_count())
+    hists = [np.zeros(256, np.int64) for _ in parts]  # one per thread
+    run([(_hist_rows, v, a, b, h) for (a, b), h in zip(parts, hists)])
+    return np.sum(hists, axis=0)
 
 
-def _object_runs(v: np.ndarray):
-    """Runs of True along the last axis of a 3D uint8 array: row offsets,
-    starts, ends; runs numbered row by row in C order."""
+def object_runs(v: np.ndarray):
+    """Runs of True along the last axis of a 3D uint8 array: row offsets
+    (int64, one more than rows), starts and ends (int32); runs numbered row
+    by row in C order."""
     counts = np.zeros(v.shape[0] * v.shape[1] + 1, dtype=np.int64)
-    halves = _halves(v.shape[0])
-    _on_two_threads([(_count_runs_rows, v, counts, a, b) for a, b in halves])
+    parts = slabs(v.shape[0], thread_count())
+    run([(_count_runs_rows, v, counts, a, b) for a, b in parts])
     offsets = np.cumsum(counts)
-    start = np.empty(offsets[-1], dtype=np.int32)
-    end = np.empty(offsets[-1], dtype=np.int32)
-    _on_two_threads([(_fill_runs_rows, v, offsets, start, end, a, b) for a, b in halves])
+    nruns, rows = int(offsets[-1]), len(counts)
+    # refuse up front what will not fit: the runs, their gaps (at most one
+    # more per row), a parent for each and the row offsets of both
+    check_fits(
+        RUN_BYTES * (2 * nruns + rows) + 16 * rows,
+        f"labelling the {nruns:,} runs of a {'x'.join(map(str, v.shape))} volume",
+        hint="store it as .zarr and run isoflow info on that (block by block)",
+    )
+    start = np.empty(nruns, dtype=np.int32)
+    end = np.empty(nruns, dtype=np.int32)
+    run([(_fill_runs_rows, v, offsets, start, end, a, b) for a, b in parts])
     return offsets, start, end
 
 
-def _gap_runs(offsets, start, end, nz: int):
+def gap_runs(offsets, start, end, nz: int):
     """The background runs of every row: the gaps between the object's runs,
     so the volume is not read a second time."""
     nrows = len(offsets) - 1
     counts = np.zeros(nrows + 1, dtype=np.int64)
-    halves = _halves(nrows)
-    _on_two_threads([(_count_gaps_rows, offsets, start, end, nz, counts, a, b) for a, b in halves])
+    parts = slabs(nrows, thread_count())
+    run([(_count_gaps_rows, offsets, start, end, nz, counts, a, b) for a, b in parts])
     goff = np.cumsum(counts)
     gstart = np.empty(goff[-1], dtype=np.int32)
     gend = np.empty(goff[-1], dtype=np.int32)
-    _on_two_threads([(_fill_gaps_rows, offsets, start, end, nz, goff, gstart, gend, a, b) for a, b in halves])
+    run([(_fill_gaps_rows, offsets, start, end, nz, goff, gstart, gend, a, b) for a, b in parts])
     return goff, gstart, gend
-def _runs_of(volume: np.ndarray, value: bool):
-    v = _as3d(volume).view(np.uint8)
-    offsets, start, end = _object_runs(v)
-    if value:
-        return v.shape, offsets, start, end
-    return (v.shape,) + tuple(_gap_runs(offsets, start, end, v.shape[2]))
 
 
-def _count_runs(runs_list, fulls, borders, planar: bool) -> list[int]:
-    """Union-find over one or more run sets, on two threads.
+#: adjacency -> (slack between neighbour rows, slack between diagonal rows
+#: or -1 for none); see ``_join_range``. 4 and 8 are the planar ones.
+ADJACENCY = {6: (0, -1), 18: (1, 0), 26: (1, 1), 4: (0, -1), 8: (1, -1)}
 
-    Each run set is joined in two halves along the first axis at once (the
-    halves touch disjoint parts of the parent array), then along the seam
-    between them; the compiled passes release the GIL."""
-    from concurrent.futures import ThreadPoolExecutor
 
-    jobs = []
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        for (shape, off, st, en), full in zip(runs_list, fulls):
-            parent = np.arange(len(st), dtype=np.int32)
-            mid = shape[0] // 2
-            parts = [pool.submit(_join_range, shape, off, st, en, full, parent, a, b, False)
-                     for a, b in ((0, mid), (mid, shape[0])) if b > a]
-            jobs.append((parent, parts, mid))
-        out = []
-        for ((shape, off, st, en), full, border), (parent, parts, mid) in zip(zip(runs_list, fulls, borders), jobs):
-            for f in parts:
-                f.result()
-            if 0 < mid < shape[0]:
-                _join_range(shape, off, st, en, full, parent, mid, mid + 1, True)
-            out.append(int(_roots(shape, off, st, en, parent, border, planar)))
-    return out
+def join_runs(runs_list, adjacencies, outside, planar: bool = False) -> list[tuple[np.ndarray, int]]:
+    """Union-find over one or more run sets ``(shape, offsets, start, end)``:
+    for each, the parent array, every node pointing at its root, and the
+    number of components.
+
+    Each run set is joined in slabs along the first axis at once (slabs
+    touch disjoint parts of the parent array, so they need no lock), then
+    along the seams between slabs; the compiled passes release the GIL. A
+    run set with ``outside`` true gets one more node, the last, standing for
+    the region outside the array, joined with every run on the border
+    (``planar``: a 2D image with a dummy first axis, whose ends are not a
+    border)."""
+    calls, seams, parents = [], [], []
+    threads = thread_count()
+    for (shape, off, st, en), adjacency, out in zip(runs_list, adjacencies, outside):
+        slack, diagonal = ADJACENCY[adjacency]
+        parent = np.arange(len(st) + (1 if out else 0), dtype=np.int32)
+        parents.append(parent)
+        parts = slabs(shape[0], threads)
+        calls += [(_join_range, shape, off, st, en, slack, diagonal, parent, a, b, False) for a, b in parts]
+        seams.append([(shape, off, st, en, slack, diagonal, parent, a, a + 1, True) for a, _ in parts[1:]])
+    run(calls)
+    out_list = []
+    for (shape, off, st, en), parent, out, seam in zip(runs_list, parents, outside, seams):
+        for args in seam:
+            _join_range(*args)
+        if out:
+            _join_outside(shape, off, st, en, parent, len(st), planar)
+        out_list.append((parent, int(_flatten(parent))))
+    return out_list
+
+
+def join_pairs(parent: np.ndarray, pairs: np.ndarray) -> int:
+    """Join the node pairs ``(n, 2)`` in a parent array (pinches found by the
+    vertex sweep); returns the number of components after."""
+    _join_pairs(parent, np.ascontiguousarray(pairs, dtype=np.int64))
+    return int(_flatten(parent))
 
 
 def count_components(volume: np.ndarray, connectivity: int) -> int:
-    """Number of components of the True voxels (6/26 in 3D, 4/8 in 2D)."""
-    runs = _runs_of(volume, True)
-    return _count_runs([runs], [connectivity in (26, 8)], [False], volume.ndim == 2)[0]
+    """Number of components of the True voxels (6/18/26 in 3D, 4/8 in 2D)."""
+    v = volume_view(volume)
+    runs = (v.shape, *object_runs(v))
+    return join_runs([runs], [connectivity], [False], volume.ndim == 2)[0][1]
 
 
 def count_enclosed(volume: np.ndarray, connectivity: int) -> int:
     """Background components (with ``connectivity``) not touching the border."""
-    runs = _runs_of(volume, False)
-    return _count_runs([runs], [connectivity in (26, 8)], [True], volume.ndim == 2)[0]
+    return count_object_and_enclosed(volume, None, connectivity)[1]
 
 
-def count_object_and_enclosed(volume: np.ndarray, connectivity: int, background_connectivity: int) -> tuple[int, int]:
+def count_object_and_enclosed(volume: np.ndarray, connectivity, background_connectivity: int) -> tuple[int, int]:
     """:func:`count_components` and :func:`count_enclosed` together: the
     object's runs are found once, the background's runs are their gaps, and
-    all four half union-finds share the two cores."""
-    shape, off, st, en = _runs_of(volume, True)
-    gaps = (shape,) + tuple(_gap_runs(off, st, en, shape[2]))
-    b0, enclosed = _count_runs(
-        [(shape, off, st, en), gaps],
-        [connectivity in (26, 8), background_connectivity in (26, 8)],
-        [False, True],
-        volume.ndim == 2,
-    )
-    return b0, enclosed
+    all the slabs of both union-finds share the threads. The enclosed
+    background components are all but the one holding the outside node.
+    ``connectivity`` None skips the object's count (returned as None)."""
+    v = volume_view(volume)
+    off, st, en = object_runs(v)
+    gaps = (v.shape, *gap_runs(off, st, en, v.shape[2]))
+    sets, adj, out = [gaps], [background_connectivity], [True]
+    if connectivity is not None:
+        sets, adj, out = [(v.shape, off, st, en), gaps], [connectivity, background_connectivity], [False, True]
+    joined = join_runs(sets, adj, out, volume.ndim == 2)
+    b0 = joined[0][1] if connectivity is not None else None
+    return b0, joined[-1][1] - 1

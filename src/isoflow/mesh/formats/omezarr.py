@@ -97,11 +97,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(to_xyz(data, names, where), pitch, shift[xyz] - pitch / 2)
 
 
-def analyze_store(path, connectivity: int | None = None, label=None, progress=None) -> dict:
+def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
+                  surfaces: bool = True, threads: int | None = None) -> dict:
     """``isoflow info``'s report of a zarr store (``IMAGE.zarr:LEVEL`` too),
     block by block (:func:`isoflow.digital.outofcore.analyze_chunked`), with
     ``shape`` in isoflow's (x, y, z) order. ``label`` selects one value;
-    ``progress(done, total)`` is called once per layer of blocks."""
+    ``progress(done, total)`` is called once per layer of blocks;
+    ``surfaces`` and ``threads`` as in :func:`~isoflow.digital.outofcore.analyze_chunked`."""
     from ...digital.outofcore import analyze_chunked, analyze_zarr
     from ...scale.chunks import import_dask
 
@@ -115,14 +117,16 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
         names = axis_names(multiscale, array.ndim, where)
         order, other = spatial_axes(names, array.shape, where)
     if label is None and not other:
-        report = analyze_zarr(file, connectivity, progress=progress) if multiscale is None and level is None else \
-            analyze_chunked(array, connectivity, where=where, progress=progress)
+        options = {"progress": progress, "surfaces": surfaces, "threads": threads}
+        report = analyze_zarr(file, connectivity, **options) if multiscale is None and level is None else \
+            analyze_chunked(array, connectivity, where=where, **options)
     else:
         _, da = import_dask()
         lazy = da.from_zarr(array)[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
         if label is not None:
             lazy = lazy == label
-        report = analyze_chunked(lazy, connectivity, where=where, progress=progress)
+        report = analyze_chunked(lazy, connectivity, where=where, progress=progress, surfaces=surfaces,
+                                 threads=threads)
     if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report["shape"] = [int(array.shape[i]) for i in order]
     return report

@@ -1,0 +1,120 @@
+"""When the compiled passes run, and on how many threads.
+
+The passes of :mod:`isoflow.scale.kernels` and :mod:`isoflow.scale.sweep`
+are compiled with numba. They are used for host volumes from
+:data:`MIN_VOXELS` on; below that, numpy and scipy answer sooner than numba
+can start (importing numba and loading its cached machine code costs about
+0.7 s once per process), so a small volume never imports numba at all.
+
+The passes release the GIL, so plain Python threads run them in parallel
+(no OpenMP pool, no parallel compile). Each pass splits the volume into as
+many slabs along its first axis as there are threads and joins what crosses
+the seams afterwards.
+
+The number of threads is, in order of precedence: the ``threads`` given to
+:func:`using` (``isoflow info --threads N``, ``analyze(..., threads=N)``),
+the environment variable ``ISOFLOW_THREADS``, the CPUs this process may run
+on (``os.sched_getaffinity``, which honours ``taskset`` and container CPU
+sets; ``os.cpu_count()`` where that is missing).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import os
+from functools import lru_cache
+
+from ..errors import IsoflowError
+
+#: host volumes with at least this many voxels (128^3) use the compiled passes
+MIN_VOXELS = 2_000_000
+
+#: the environment variable that overrides the CPU count
+ENV = "ISOFLOW_THREADS"
+
+_asked: contextvars.ContextVar[int | None] = contextvars.ContextVar("isoflow_threads", default=None)
+
+
+@lru_cache(maxsize=None)
+def have_numba() -> bool:
+    """numba is installed (found without importing it: that is the slow part)."""
+    from importlib.util import find_spec
+
+    return find_spec("numba") is not None
+
+
+def use_compiled(volume) -> bool:
+    """True for a host NumPy volume of 2 or 3 dimensions and at least
+    :data:`MIN_VOXELS` voxels, where numba is installed."""
+    import numpy as np
+
+    return (
+        isinstance(volume, np.ndarray)
+        and volume.ndim in (2, 3)
+        and volume.size >= MIN_VOXELS
+        and have_numba()
+    )
+
+
+def check_threads(n, where: str = "threads") -> int:
+    """A thread count: a positive integer, or a clear error."""
+    try:
+        value = int(n)
+    except (TypeError, ValueError):
+        value = 0
+    if value < 1 or str(n).strip() != str(value):
+        raise IsoflowError(f"{where} must be a positive integer, got {n!r}")
+    return value
+
+
+def available_cpus() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def thread_count() -> int:
+    """The number of threads the compiled passes use now (see the module docs)."""
+    asked = _asked.get()
+    if asked is not None:
+        return asked
+    env = os.environ.get(ENV, "").strip()
+    if env:
+        return check_threads(env, f"the environment variable {ENV}")
+    return available_cpus()
+
+
+@contextlib.contextmanager
+def using(threads: int | None):
+    """Run the enclosed passes on ``threads`` threads (None: the default)."""
+    if threads is None:
+        yield
+        return
+    token = _asked.set(check_threads(threads))
+    try:
+        yield
+    finally:
+        _asked.reset(token)
+
+
+def slabs(n: int, parts: int) -> list[tuple[int, int]]:
+    """``[a, b)`` ranges splitting ``range(n)`` into at most ``parts`` nearly
+    equal, non-empty pieces, in order."""
+    parts = max(1, min(parts, n))
+    cuts = [n * t // parts for t in range(parts + 1)]
+    return [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
+
+
+def run(calls: list) -> list:
+    """Run ``(fn, *args)`` calls, each on its own thread when there are
+    several; results in order. The calls are compiled passes that release
+    the GIL; one call runs on the calling thread."""
+    if len(calls) <= 1:
+        return [fn(*args) for fn, *args in calls]
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(max_workers=len(calls)) as pool:
+        futures = [pool.submit(fn, *args) for fn, *args in calls]
+        return [f.result() for f in futures]

@@ -1,0 +1,153 @@
+"""The closed surfaces counted without the mesh equal the mesh's own
+components (``boundary_mesh(...).components()``), on random volumes full of
+edge and vertex contacts and on shapes of known genus, along both paths
+(numpy/scipy for small volumes, the compiled sweep for large ones) and on
+any number of threads."""
+
+import numpy as np
+import pytest
+
+from conftest import ball, torus
+from isoflow import analyze, boundary_mesh, euler_characteristic
+from isoflow.digital.closed_surfaces import closed_surfaces, sweep_tables
+from isoflow.digital.topology import betti_numbers
+from isoflow.scale import compiled
+
+
+def mesh_answer(v, conn):
+    m = boundary_mesh(v, conn)
+    comps = sorted((c["euler_characteristic"], c["genus"], c["faces"]) for c in m.components())
+    return comps, m.pinched, m.midpoints // 2
+
+
+def counted(r):
+    surfaces = sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in r["surfaces"])
+    return surfaces, r["pinched_vertices"], r["doubled_edges"]
+
+
+@pytest.fixture
+def compiled_always(monkeypatch):
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_random_volumes_small_path(rng, conn):
+    seen = np.zeros(3, int)
+    for _ in range(700):
+        shape = rng.integers(1, 8, 3)
+        v = rng.random(shape) < rng.uniform(0.1, 0.9)
+        want = mesh_answer(v, conn)
+        assert counted(closed_surfaces(v, conn)) == want
+        seen += [want[1] > 0, want[2] > 0, len(want[0]) > 1]
+    # vertex contacts split against the connectivity, doubled edges (from
+    # edge contacts) and several surfaces all occurred, many times
+    assert (seen > 50).all(), seen
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+@pytest.mark.parametrize("conn", [6, 26])
+def test_random_volumes_compiled_path_on_1_2_3_7_threads(rng, conn, compiled_always):
+    seen = np.zeros(3, int)
+    for t in range(700):
+        shape = rng.integers(1, 10, 3)
+        v = rng.random(shape) < rng.uniform(0.1, 0.9)
+        want = mesh_answer(v, conn)
+        with compiled.using((1, 2, 3, 7)[t % 4]):
+            r = closed_surfaces(v, conn)
+        assert counted(r) == want
+        # the same pass gives the Betti counts: components, enclosed background
+        b = betti_numbers(v, conn)
+        assert list(r["betti_counts"]) == [b[0], b[2]]
+        assert (r["hist"] == np.bincount(_configs(v), minlength=256)).all()
+        seen += [want[1] > 0, want[2] > 0, len(want[0]) > 1]
+    assert (seen > 50).all(), seen
+
+
+def _configs(v):
+    from isoflow.digital.configurations import configurations
+
+    return configurations(v).ravel()
+
+
+def shapes():
+    solid = ball(9)
+    n = solid.shape[0]
+    hollow = solid & ~ball(5, size=n)  # two spheres: outer and cavity
+    ring = torus(8, 3)
+    two = np.zeros((40, 24, 24), bool)
+    two[:22, :22, :22] = torus(7, 3, size=22)
+    two[20:, 2:22, 2:22] = torus(7, 3, size=20, axis=0)  # linked-ish, touching
+    nested = ball(14) & ~ball(11, size=32)
+    nested |= ball(6, size=32)  # a ball inside a shell: three spheres
+    return {"ball": (solid, [0]), "hollow": (hollow, [0, 0]), "torus": (ring, [1]),
+            "nested": (nested, [0, 0, 0]), "two tori": (two, None)}
+
+
+@pytest.mark.parametrize("path", ["small", "compiled"])
+@pytest.mark.parametrize("conn", [6, 26])
+def test_known_shapes(path, conn, monkeypatch):
+    if path == "compiled":
+        if not compiled.have_numba():
+            pytest.skip("numba not installed")
+        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
+    for name, (v, genus) in shapes().items():
+        r = closed_surfaces(v, conn)
+        assert counted(r) == mesh_answer(v, conn), name
+        if genus is not None:
+            assert sorted(s["genus"] for s in r["surfaces"]) == genus, name
+        chi = euler_characteristic(v, conn)
+        # DESIGN section 3: the surfaces' chi add up to 2 chi + 2 p
+        assert sum(s["euler_characteristic"] for s in r["surfaces"]) == 2 * chi + 2 * r["pinched_vertices"]
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+def test_sweep_runs_a_slab_again_when_its_buffers_are_too_small(rng, compiled_always, monkeypatch):
+    # many surfaces and pinches in one slab: a table sized for none, and a
+    # pinch buffer of one pair, must give the same answer after the reruns
+    from isoflow.scale import sweep
+
+    for conn, density in ((6, 0.2), (26, 0.1)):
+        v = rng.random((12, 40, 40)) < density
+        want = mesh_answer(v, conn)
+        real = sweep.sweep
+
+        def tiny(*args, **kw):
+            return real(*args[:5], 0, *args[6:], pair_capacity=1)
+
+        monkeypatch.setattr(sweep, "sweep", tiny)
+        with compiled.using(1):
+            assert counted(closed_surfaces(v, conn)) == want
+        monkeypatch.setattr(sweep, "sweep", real)
+        # the buffers did overflow: a table sized for no surface holds 512
+        assert len(want[0]) > 600 and want[1] > 1
+
+
+def test_analyze_reports_the_surfaces_of_both_paths(rng, monkeypatch):
+    v = rng.random((20, 21, 19)) < 0.5
+    small = analyze(v, 26)
+    if compiled.have_numba():
+        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
+        assert analyze(v, 26, threads=3) == small
+    comps, pinched, doubled = mesh_answer(v, 26)
+    assert sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in small["surfaces"]) == comps
+    assert small["pinched_vertices"] == pinched and small["doubled_edges"] == doubled
+    faces = [s["faces"] for s in small["surfaces"]]
+    assert faces == sorted(faces, reverse=True)  # largest first
+
+
+def test_tables_follow_the_mesh_rules():
+    # every sheet of every configuration has at least three faces, the
+    # octants it names are an object and a background one, and the face
+    # slots add up to the configuration's boundary faces
+    from isoflow.digital.surface import face_slots
+
+    for conn in (6, 26):
+        nsheet, obj, bg, quarters, spokes, pinch = sweep_tables(conn)
+        for c in range(256):
+            n = nsheet[c]
+            assert quarters[c, :n].sum() == face_slots()[c]
+            assert (quarters[c, :n] >= 3).all()
+            for s in range(n):
+                assert (c >> int(obj[c, s])) & 1 and not (c >> int(bg[c, s])) & 1
+        assert (nsheet[[0, 255]] == 0).all()
+        assert np.count_nonzero(pinch[:, 0] >= 0) == 4  # four pairs of opposite octants
