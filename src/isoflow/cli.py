@@ -18,7 +18,6 @@ import numpy as np
 
 from .errors import IsoflowError
 
-MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 
 # --------------------------------------------------------------------------
@@ -27,7 +26,7 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("input", help="volume (.npy/.npz), point list (.txt: x y z per line) or mesh")
+    p.add_argument("input", help="volume (.npy/.npz), point list (.txt: x y z per line) or mesh (any format trimesh reads)")
     p.add_argument(
         "--points-are",
         choices=("corners", "voxels"),
@@ -37,8 +36,14 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
     grid = p.add_mutually_exclusive_group()
     grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
     grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
+    add_mesh_rule(p)
+
+
+def add_mesh_rule(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a mesh that is not watertight (by default it is read by the generalised winding number)")
     p.add_argument("--allow-open", action="store_true",
-                   help="a mesh with holes: voxelise by the generalised winding number (slow: small grids only)")
+                   help="accepted for compatibility: open meshes are read by default")
 
 
 def add_connectivity(p: argparse.ArgumentParser) -> None:
@@ -51,18 +56,30 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
     )
 
 
+def voxelize_input(path, args, resolution=None):
+    """A mesh file voxelised by the one mesh reader of every command; what
+    is unusual about the mesh is said in one line on stderr."""
+    from .mesh.voxelize import voxelize_file
+
+    report: dict = {}
+    obj = voxelize_file(path, pitch=args.pitch, resolution=resolution or args.resolution, strict=args.strict,
+                        progress=progress_callback("voxelize"), report=report)
+    if report.get("note"):
+        print(f"isoflow {args.command}: note: {path}: {report['note']}", file=sys.stderr)
+    return obj
+
+
 def load_input(args):
     """The digital object named on the command line (volume, points or mesh)."""
+    from .mesh.load import is_mesh_path
     from .mesh.volumes import read_object
 
     path = Path(args.input)
-    if path.suffix.lower() in MESH_SUFFIXES:
-        from .mesh.voxelize import voxelize_file
-
-        return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                             progress=progress_callback("voxelize"))
-    if args.pitch is not None or args.resolution is not None or args.allow_open:
-        raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
+    if is_mesh_path(path):
+        return voxelize_input(path, args)
+    if args.pitch is not None or args.resolution is not None or args.allow_open or args.strict:
+        raise IsoflowError(
+            f"{path}: --pitch/--resolution/--strict/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
     if path.suffix.lower() == ".zarr":  # would otherwise be read as a point list
         raise IsoflowError(f"{path}: only 'isoflow info' reads .zarr (block by block); save the volume as .npy or .npz")
     return read_object(path, points_are=args.points_are)
@@ -81,8 +98,8 @@ def cmd_info(args) -> int:
         # closed surfaces need the whole boundary mesh and are not computed
         from .digital.outofcore import analyze_zarr
 
-        if args.pitch is not None or args.resolution is not None or args.allow_open:
-            raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
+        if args.pitch is not None or args.resolution is not None or args.allow_open or args.strict:
+            raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         report = analyze_zarr(args.input, args.connectivity)
@@ -193,11 +210,22 @@ def cmd_surface(args) -> int:
 def cmd_voxelize(args) -> int:
     from .mesh.outputs import check_output_path
     from .mesh.volumes import write_volume
-    from .mesh.voxelize import voxelize_file
 
-    out = check_output_path(args.output, args.force, suffixes=(".npz",))  # before the voxelisation
-    obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                        progress=progress_callback("voxelize"))
+    if Path(args.output).suffix.lower() == ".zarr":
+        from .mesh.slabs import voxelize_to_zarr
+
+        report: dict = {}
+        out = Path(args.output)
+        z = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
+                             force=args.force, progress=progress_callback("voxelize"), report=report)
+        if report.get("note"):
+            print(f"isoflow voxelize: note: {args.mesh}: {report['note']}", file=sys.stderr)
+        shape = "x".join(map(str, z["shape"]))
+        print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
+              f"pitch {z['pitch']:.6g}, origin {np.round(z['origin'], 6).tolist()}")
+        return 0
+    out = check_output_path(args.output, args.force, suffixes=(".npz", ".zarr"))  # before the voxelisation
+    obj = voxelize_input(args.mesh, args)
     write_volume(obj, out, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
@@ -209,7 +237,7 @@ def cmd_genus(args) -> int:
 
     conn = args.connectivity or 6
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
-    report = verify_genus(args.mesh, res, conn, progress=progress_callback("voxelize"))
+    report = verify_genus(args.mesh, res, conn, progress=progress_callback("voxelize"), strict=args.strict)
     if args.json:
         print(json.dumps(report))
         return 0
@@ -345,20 +373,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.set_defaults(func=cmd_surface)
 
-    p = sub.add_parser("voxelize", help="voxelise a mesh's solid into an .npz volume (with pitch and origin)")
-    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    p = sub.add_parser("voxelize", help="voxelise a mesh's solid into an .npz volume or a .zarr store (with pitch and origin)")
+    p.add_argument("mesh", help="a mesh file: any format trimesh reads (STL, OBJ, PLY, OFF, GLB, 3MF, DAE, ZIP, ...)")
     grid = p.add_mutually_exclusive_group(required=True)
     grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
     grid.add_argument("--resolution", type=int, help="voxels along the longest side")
-    p.add_argument("-o", "--output", required=True, help="OUT.npz")
-    p.add_argument("--allow-open", action="store_true",
-                   help="voxelise a mesh with holes by the generalised winding number (slow: small grids only)")
+    p.add_argument("-o", "--output", required=True,
+                   help="OUT.npz, or OUT.zarr: written slab by slab as dask tasks, never held in memory")
+    add_mesh_rule(p)
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(func=cmd_voxelize)
 
     p = sub.add_parser("genus", help="verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
-    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    p.add_argument("mesh", help="a mesh file: any format trimesh reads")
     p.add_argument("--resolution", type=int, nargs="+", help="voxels along the longest side (default: 64 128)")
+    add_mesh_rule(p)
     p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)

@@ -158,7 +158,8 @@ def pymeshlab_report(vertices, faces) -> dict:
 # --------------------------------------------------------------------------
 
 
-def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None) -> dict:
+def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None,
+                 strict: bool = False) -> dict:
     """The mesh's topology, manifold3d's and pymeshlab's, and the digital
     topology of its voxelised solid at each resolution, with a verdict.
 
@@ -191,12 +192,14 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         notes.append(
             f"the mesh is open ({mesh['boundary_edges']} boundary edges"
             + (f", {mesh['inconsistent_edges']} inconsistently oriented" if mesh["inconsistent_edges"] else "")
-            + "): it bounds no solid, so it has no genus as a closed surface and is not voxelised"
+            + "): it bounds no solid, so it has no genus as a closed surface; its solid is read by the "
+            "generalised winding number (|w| > 1/2)"
         )
     for res in sorted(resolutions):
-        if not balanced:
-            break
-        vol, origin, pitch = voxelize(v, f, resolution=res, allow_open=True, progress=progress)
+        try:
+            vol, origin, pitch = voxelize(v, f, resolution=res, strict=strict, progress=progress)
+        except IsoflowError as exc:
+            raise IsoflowError(f"{path}: {exc}") from None
         betti = betti_numbers(vol, connectivity)
         out["digital"].append(
             {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
