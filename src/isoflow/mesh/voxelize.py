@@ -165,9 +165,10 @@ class VoxelPlan:
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
 
 
-def plan_voxels(vertices, faces, *, pitch=None, resolution=None, strict=False, grid=None):
-    """Check the mesh and lay out the grid: ``(solid, plan, origin, pitch, what)``
-    where ``plan`` fills any slab of the volume (nothing O(grid) is done)."""
+def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
+    """Check the mesh and lay out the grid (nothing O(grid) is done):
+    ``(v, f, shape, what, frame, origin, pitch)`` with the checked arrays and
+    the scaled frame of :func:`isoflow.mesh.grid.voxel_grid`."""
     v, f = check_mesh(vertices, faces, where="voxelize")
     pitch, origin, shape, what, frame = voxel_grid(v, f, pitch, resolution)
     shift, e, origin_s, pitch_s = frame
@@ -247,7 +248,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     rounding of 1/2 (:mod:`isoflow.mesh.winding`).
     """
     v, f, shape, what, frame, origin, pitch = plan_voxels(
-        vertices, faces, pitch=pitch, resolution=resolution, strict=strict, grid=grid)
+        vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     # the volume itself, before anything O(grid): one byte per voxel
     check_grid_memory(shape, what, 1, 0, max_bytes, hint=ZARR_HINT)
     solid = Solid(v, f, strict=strict)
