@@ -19,7 +19,6 @@ import numpy as np
 from .errors import IsoflowError
 
 
-
 # --------------------------------------------------------------------------
 # input
 # --------------------------------------------------------------------------
@@ -56,13 +55,13 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
     )
 
 
-def voxelize_input(path, args, resolution=None):
+def voxelize_input(path, args):
     """A mesh file voxelised by the one mesh reader of every command; what
     is unusual about the mesh is said in one line on stderr."""
     from .mesh.voxelize import voxelize_file
 
     report: dict = {}
-    obj = voxelize_file(path, pitch=args.pitch, resolution=resolution or args.resolution, strict=args.strict,
+    obj = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
                         progress=progress_callback("voxelize"), report=report)
     if report.get("note"):
         print(f"isoflow {args.command}: note: {path}: {report['note']}", file=sys.stderr)

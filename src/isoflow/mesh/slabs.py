@@ -95,21 +95,21 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
 
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, Path)) else "mesh"
+    v, f = load_mesh(source) if isinstance(source, (str, Path)) else source  # names the file itself
     try:
-        v, f = load_mesh(source) if isinstance(source, (str, Path)) else source
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
         chunks, slabs = slab_layout(shape, chunks)
         if max(shape[0] * shape[1], shape[1] * shape[2]) >= 2**40:
             raise IsoflowError(f"voxelize: {what} needs a {'x'.join(fmt_count(n, False) for n in shape)} grid: "
                                "too many columns even for a zarr store")
+        what = f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels"
+        hint = f"give smaller chunks (a slab of one row holds {gib(shape[1] * shape[2])})"
+        check_fits(WORKERS * chunks[0] * shape[1] * shape[2], what, hint=hint, budget=max_bytes)  # before any work
         solid = Solid(v, f, strict=strict)
         _, _, origin_s, pitch_s = frame
         plan = solid.prepare(frame, origin_s, pitch_s, shape)
-        slab = max((b - a) * shape[1] * shape[2] + plan.slab_bytes(a, b) for a, b in slabs)
-        check_fits(WORKERS * slab + 2 * plan.Tm.nbytes,
-                   f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels",
-                   hint=f"give smaller chunks (a slab of one row needs {gib(slab // chunks[0])})",
-                   budget=max_bytes)
+        slab = chunks[0] * shape[1] * shape[2] + plan.slab_bytes(chunks[0])
+        check_fits(WORKERS * slab + 2 * plan.Tm.nbytes, what, hint=hint, budget=max_bytes)
     except IsoflowError as exc:
         raise IsoflowError(f"{where}: {exc}") from None
     dask, _ = import_dask()

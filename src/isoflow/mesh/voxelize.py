@@ -155,9 +155,10 @@ class VoxelPlan:
         rule = winding_rule(self.Tc, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads)
         return fill_slab(self.grid, xa, xb, rule=rule, out=out, stats=stats, threads=threads)
 
-    def slab_bytes(self, xa: int, xb: int) -> int:
-        """Temporaries of one slab beyond its volume: crossings and columns."""
-        return self.grid.pairs(xa, xb) * PAIR_BYTES + 16 * (xb - xa) * self.shape[1]
+    def slab_bytes(self, rows: int) -> int:
+        """Temporaries of a slab of ``rows`` rows beyond its volume, at most:
+        the crossings (bounded by the whole grid's pairs) and its columns."""
+        return self.grid.pairs() * PAIR_BYTES + 16 * rows * self.shape[1]
 
     def slabs(self, voxels: int = SLAB_VOXELS) -> list[tuple[int, int]]:
         nx, ny, nz = self.shape
@@ -255,7 +256,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     _, _, origin_s, pitch_s = frame
     plan = solid.prepare(frame, origin_s, pitch_s, shape)
     slabs = plan.slabs()
-    temp = max(plan.slab_bytes(a, b) for a, b in slabs)
+    temp = plan.slab_bytes(max(b - a for a, b in slabs))
     check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
     vol = np.empty(shape, dtype=bool)
     stats = np.zeros(3, dtype=np.int64)
