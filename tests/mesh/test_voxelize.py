@@ -569,7 +569,7 @@ def test_open_mesh_refused_only_when_strict():
     assert "341 boundary edges" in _oneline(e)
     report = {}
     vol, _, _ = voxelize(v, f, resolution=16, report=report)
-    assert vol.any() and report["defects"]["boundary_edges"] == 341 and report["cap_triangles"] == 341
+    assert vol.any() and report["defects"]["boundary_edges"] == 341 and report["chain_edges"] == 341
     assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
 
@@ -587,7 +587,7 @@ def test_inconsistent_and_nonmanifold_counts():
     # by default the flipped face is turned back (trimesh.repair.fix_winding)
     report = {}
     vol, _, _ = voxelize(v, flipped, resolution=8, report=report)
-    assert vol.all() and report["flipped_faces"] == 1 and report["cap_triangles"] == 0
+    assert vol.all() and report["flipped_faces"] == 1 and report["chain_edges"] == 0
     assert "1 flipped faces" in report["note"] and "fix_winding" in report["note"]
     # one triangle; three triangles on one edge
     assert mesh_defects(v, f[:1])["boundary_edges"] == 3
@@ -611,7 +611,7 @@ def test_edge_contact_cubes_use_exact_scanline():
         voxelize(u, f, pitch=0.25, strict=True)
     report = {}
     vol, _, _ = voxelize(u, f, pitch=0.25, allow_open=True, report=report)
-    assert report["cap_triangles"] == 0 and "1 non-manifold edges" in report["note"]
+    assert report["chain_edges"] == 0 and "1 non-manifold edges" in report["note"]
     assert "edges balance" in report["note"]
     assert vol.shape == (8, 8, 4) and vol.sum() == 2 * 4 * 4 * 4
     assert vol[:4, :4].all() and vol[4:, 4:].all()

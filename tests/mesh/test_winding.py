@@ -62,7 +62,7 @@ def test_closed_meshes_bit_identical_to_before(entry):
     vol, _, _ = voxelize(v, f, resolution=entry["resolution"], report=report)
     assert list(vol.shape) == entry["shape"] and int(vol.sum()) == entry["voxels"]
     assert hashlib.sha256(np.packbits(vol).tobytes()).hexdigest() == entry["sha256"]
-    assert report["cap_triangles"] == 0
+    assert report["chain_edges"] == 0
 
 
 def test_every_closed_sample_mesh_has_digests():
@@ -91,7 +91,7 @@ def test_open_meshes_match_libigl_winding_number(name, res, rng):
     assert d["boundary_edges"] == len(trimesh.grouping.group_rows(tm.edges_sorted, require_count=1)) > 0
     report = {}
     vol, origin, pitch = voxelize(v, f, resolution=res, report=report)
-    assert report["cap_triangles"] == d["boundary_edges"]
+    assert report["chain_edges"] == d["boundary_edges"]
     assert f"{d['boundary_edges']} boundary edges" in report["note"]
     assert assert_gwn_rule(v, f, vol, origin, pitch, rng) > 1000
 
@@ -174,7 +174,7 @@ def test_triangle_soup_is_the_welded_solid():
     report = {}
     vol, _, _ = voxelize(soup_v, soup_f, resolution=20, report=report)
     ref, _, _ = voxelize(m.vertices, m.faces, resolution=20)
-    assert np.array_equal(vol, ref) and report["cap_triangles"] == 0
+    assert np.array_equal(vol, ref) and report["chain_edges"] == 0
     assert "triangle soup" in report["note"]
 
 

@@ -140,7 +140,7 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
     voxels = sum(r[0] for r in results)
     stats = np.sum([r[1] for r in results], axis=0)
     if report is not None:
-        report.update(defects=solid.defects, flipped_faces=solid.flipped, cap_triangles=len(plan.Tc),
+        report.update(defects=solid.defects, flipped_faces=solid.flipped, chain_edges=len(plan.E),
                       overlap_voxels=int(stats[0]), note=solid.note(stats))
     return {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
             "origin": np.asarray(origin, dtype=np.float64)}

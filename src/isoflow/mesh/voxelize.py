@@ -95,8 +95,8 @@ class Solid:
         with np.errstate(over="ignore", invalid="ignore"):
             vs = np.ldexp(self.v - shift, -e)  # unused far-off vertices may overflow: never read
         Tm = vs[self.faces]
-        Tc = cap_triangles(vs, *self.chain)
-        return VoxelPlan(Tm, Tc, origin_s, pitch_s, shape)
+        Tc, E = cap_triangles(vs, *self.chain)
+        return VoxelPlan(Tm, Tc, E, origin_s, pitch_s, shape)
 
     def note(self, stats=None) -> str | None:
         """One line on what is unusual about the mesh and the rule that read
@@ -135,7 +135,7 @@ class VoxelPlan:
     mesh and its cap, and the cap's own triangles for the rule.  Small
     (O(triangles)) and picklable, so dask can ship it to workers."""
 
-    def __init__(self, Tm, Tc, origin_s, pitch_s, shape):
+    def __init__(self, Tm, Tc, E, origin_s, pitch_s, shape):
         from .scanline import ScanGrid
 
         self.shape = tuple(int(n) for n in shape)
@@ -143,6 +143,7 @@ class VoxelPlan:
         self.pitch = float(pitch_s)
         self.Tm = Tm
         self.Tc = Tc
+        self.E = E
         T = np.concatenate([Tm, Tc]) if len(Tc) else Tm
         self.grid = ScanGrid(T, self.origin, self.pitch, self.shape)
 
@@ -152,7 +153,7 @@ class VoxelPlan:
         from .winding import winding_rule
 
         _, ny, nz = self.shape
-        rule = winding_rule(self.Tc, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads)
+        rule = winding_rule(self.Tc, self.E, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads)
         return fill_slab(self.grid, xa, xb, rule=rule, out=out, stats=stats, threads=threads)
 
     def slab_bytes(self, rows: int) -> int:
@@ -227,7 +228,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         Optional ``callable(done, total)``, called once per slab.
     report
         Optional dict that receives ``defects`` (the edge census of the faces
-        as given), ``flipped_faces``, ``cap_triangles`` (0 when the exact
+        as given), ``flipped_faces``, ``chain_edges`` (edges the cap closes; 0 when the exact
         scanline alone decides), ``overlap_voxels`` (voxels inside two or
         more layers) and ``note`` (one line for the user, or None).
 
@@ -266,7 +267,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
             progress(n, len(slabs))
     if report is not None:
         report.update(defects=solid.defects, flipped_faces=solid.flipped,
-                      cap_triangles=len(plan.Tc), overlap_voxels=int(stats[0]),
+                      chain_edges=len(plan.E), overlap_voxels=int(stats[0]),
                       note=solid.note(stats))
     return vol, origin, pitch
 

@@ -55,11 +55,17 @@ _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 
 # caps
 # ---------------------------------------------------------------------------
 
-def cap_triangles(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Corners (K, 3, 3) of the cap over the boundary chain ``a[e] -> b[e]``
-    (edges repeated by multiplicity): one cone per connected piece."""
+def cap_triangles(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The cap over the boundary chain ``a[e] -> b[e]`` (edges repeated by
+    multiplicity): corners (K, 3, 3) of its triangles, one cone per
+    connected piece, and the chain's edges (E, 2, 3) (the cap's boundary,
+    for the bound on its variation).
+
+    A piece that is the boundary of one lone triangle (a soup) is capped by
+    that triangle reversed (the cone from one of its corners, less its two
+    flat triangles): one cap triangle instead of three."""
     if len(a) == 0:
-        return np.zeros((0, 3, 3))
+        return np.zeros((0, 3, 3)), np.zeros((0, 2, 3))
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -83,11 +89,19 @@ def cap_triangles(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     flat = nlen <= 1e-12 * size**2
     unit = np.where(flat[:, None], _GENERIC, normal / np.where(flat, 1.0, nlen)[:, None])
     apex = centroid + size[:, None] * (0.01 * unit + 0.001 * _GENERIC)
+    # a lone triangle's boundary (three edges, three vertices): apex on a corner
+    ecount = np.bincount(ce, minlength=ncomp)
+    lone = (ecount == 3) & (cnt == 3)
+    first = np.full(ncomp, -1, dtype=np.int64)
+    first[ce[::-1]] = ia[::-1]  # some vertex of each piece
+    apex[lone] = pts[first[lone]]
     T = np.empty((len(a), 3, 3))
     T[:, 0] = apex[ce]
     T[:, 1] = v[b]
     T[:, 2] = v[a]
-    return T
+    flat = lone[ce] & ((ia == first[ce]) | (ib == first[ce]))  # cap triangles with two equal corners
+    E = np.stack([v[a], v[b]], axis=1)
+    return T[~flat], E
 
 
 # ---------------------------------------------------------------------------
@@ -163,10 +177,10 @@ def _dist2_triangle(T, t, px, py, pz):
 
 
 @njit(cache=True, nogil=True)
-def _dist_segment(T, t, px, py, pz):
-    """Distance from p to the side b -> a of cap triangle t (its chain edge)."""
-    bx, by, bz = T[t, 1, 0], T[t, 1, 1], T[t, 1, 2]
-    ex, ey, ez = T[t, 2, 0] - bx, T[t, 2, 1] - by, T[t, 2, 2] - bz
+def _dist_segment(E, e, px, py, pz):
+    """Distance from p to the segment E[e, 0] - E[e, 1]."""
+    bx, by, bz = E[e, 0, 0], E[e, 0, 1], E[e, 0, 2]
+    ex, ey, ez = E[e, 1, 0] - bx, E[e, 1, 1] - by, E[e, 1, 2] - bz
     wx, wy, wz = px - bx, py - by, pz - bz
     ee = ex * ex + ey * ey + ez * ez
     s = 0.0 if ee == 0 else min(max((wx * ex + wy * ey + wz * ez) / ee, 0.0), 1.0)
@@ -175,7 +189,7 @@ def _dist_segment(T, t, px, py, pz):
 
 
 @njit(cache=True, nogil=True)
-def _eval_blocks(blocks, origin, pitch, Tc, nlen, elen, tol, status, rvals):
+def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
     """Evaluate round(w_C) on blocks ``[i0, i1) x [j0, j1) x [k0, k1)``.
 
     status 0: ``rvals`` holds R for the whole block; 1: split it; 2: a single
@@ -212,12 +226,17 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, elen, tol, status, rvals):
             den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
                    + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
             w += 2.0 * math.atan2(det, den)
-            if h > 0:
-                # distance to the chain edge b-c >= (|b| + |c| - |c - b|) / 2
-                d = 0.5 * (lb + lc - elen[t]) - h
+        if h > 0 and not hit:
+            for e in range(E.shape[0]):
+                ax, ay, az = E[e, 0, 0] - px, E[e, 0, 1] - py, E[e, 0, 2] - pz
+                bx, by, bz = E[e, 1, 0] - px, E[e, 1, 1] - py, E[e, 1, 2] - pz
+                # distance to the edge >= (|a| + |b| - |b - a|) / 2
+                la = math.sqrt(ax * ax + ay * ay + az * az)
+                lb = math.sqrt(bx * bx + by * by + bz * bz)
+                d = 0.5 * (la + lb - elen[e]) - h
                 if d <= 0:
-                    d = _dist_segment(Tc, t, px, py, pz) - h
-                var += elen[t] / (d * d)
+                    d = _dist_segment(E, e, px, py, pz) - h
+                var += elen[e] / (d * d)
         if hit:
             status[q] = 2 if h == 0 else 1
             continue
@@ -274,20 +293,22 @@ def _split(blocks: np.ndarray) -> np.ndarray:
     return out[-1]
 
 
-def winding_rule(Tc, Tm, origin, pitch, box, threads: int = 1):
+def winding_rule(Tc, E, Tm, origin, pitch, box, threads: int = 1):
     """``R = round(w_C)`` for every centre of ``box = (i0, i1, j0, j1, k0, k1)``
     where it is not 0, as ``(array, (i0, j0, k0))`` (int8, with the codes
     FORCE_IN / FORCE_OUT where the centre is so close to the cap that the
     mesh's own winding number decided), or None where R is 0 everywhere.
 
-    ``Tc`` are the cap's triangles, ``Tm`` the mesh's (for the ties), both
-    (n, 3, 3) in the frame of ``origin`` and ``pitch``.
+    ``Tc`` are the cap's triangles, ``E`` its boundary edges (E, 2, 3), ``Tm``
+    the mesh's triangles (for the ties), all in the frame of ``origin`` and
+    ``pitch``.
     """
-    if len(Tc) == 0:
+    if len(E) == 0:
         return None
     Tc = np.ascontiguousarray(Tc, dtype=np.float64)
+    E = np.ascontiguousarray(E, dtype=np.float64)
     origin = np.asarray(origin, dtype=np.float64)
-    elen = np.linalg.norm(Tc[:, 2] - Tc[:, 1], axis=1)
+    elen = np.linalg.norm(E[:, 1] - E[:, 0], axis=1)
     nlen = np.linalg.norm(np.cross(Tc[:, 1] - Tc[:, 0], Tc[:, 2] - Tc[:, 0]), axis=1)
     tol = TIE_PITCHES * pitch
     i0, i1, j0, j1, k0, k1 = (int(x) for x in box)
@@ -303,7 +324,7 @@ def winding_rule(Tc, Tm, origin, pitch, box, threads: int = 1):
     while len(blocks):
         status = np.empty(len(blocks), dtype=np.int8)
         rvals = np.zeros(len(blocks), dtype=np.int64)
-        _run_split(_eval_blocks, blocks, origin, pitch, Tc, nlen, elen, tol, status, rvals, threads)
+        _run_split(_eval_blocks, blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals, threads)
         keep = (status == 0) & (rvals != 0)
         done_b.append(blocks[keep])
         done_r.append(rvals[keep])
@@ -337,17 +358,17 @@ def _paint(rule, blocks, vals):
         rule[blocks[q, 0]:blocks[q, 1], blocks[q, 2]:blocks[q, 3], blocks[q, 4]:blocks[q, 5]] = vals[q]
 
 
-def _run_split(kernel, blocks, origin, pitch, Tc, nlen, elen, tol, status, rvals, threads):
+def _run_split(kernel, blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals, threads):
     """The kernel over the blocks, in two halves on two threads if asked."""
     n = len(blocks)
     if threads <= 1 or n < 64:
-        kernel(blocks, origin, pitch, Tc, nlen, elen, tol, status, rvals)
+        kernel(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals)
         return
     from concurrent.futures import ThreadPoolExecutor
 
     h = n // 2
     with ThreadPoolExecutor(max_workers=2) as pool:
-        futs = [pool.submit(kernel, blocks[a:b], origin, pitch, Tc, nlen, elen, tol, status[a:b], rvals[a:b])
+        futs = [pool.submit(kernel, blocks[a:b], origin, pitch, Tc, nlen, E, elen, tol, status[a:b], rvals[a:b])
                 for a, b in ((0, h), (h, n))]
         for fu in futs:
             fu.result()
