@@ -231,10 +231,11 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
 def _edge_census(faces: np.ndarray, n_vertices: int):
     """Undirected edges and how they are used.
 
-    Returns ``(inv, counts, fwd, bwd)`` where ``inv`` maps each of the 3M
-    directed half-edges (row-major over faces; -1 for a degenerate a->a edge)
-    to its undirected edge, ``counts`` is the number of uses per undirected
-    edge and ``fwd`` / ``bwd`` how many uses go low->high / high->low index.
+    Returns ``(inv, counts, fwd, bwd, lo, hi)`` where ``inv`` maps each of
+    the 3M directed half-edges (row-major over faces; -1 for a degenerate
+    a->a edge) to its undirected edge ``lo -> hi`` (lo < hi), ``counts`` is
+    the number of uses per undirected edge and ``fwd`` / ``bwd`` how many
+    uses go low->high / high->low index.
     """
     a = faces.reshape(-1)
     b = faces[:, [1, 2, 0]].reshape(-1)
@@ -247,7 +248,8 @@ def _edge_census(faces: np.ndarray, n_vertices: int):
     inv[ok] = inv_ok.reshape(-1)
     fwd = np.bincount(inv_ok.reshape(-1), weights=(a < b)[ok], minlength=len(uniq)).astype(np.int64)
     bwd = counts - fwd
-    return inv, counts, fwd, bwd
+    n = np.int64(max(n_vertices, 1))
+    return inv, counts, fwd, bwd, uniq // n, uniq % n
 
 
 def mesh_defects(vertices, faces) -> dict:
@@ -273,7 +275,7 @@ def mesh_defects(vertices, faces) -> dict:
     for such meshes.
     """
     v, f = check_mesh(vertices, faces, where="mesh_defects")
-    inv, counts, fwd, bwd = _edge_census(f, len(v))
+    inv, counts, fwd, bwd, _, _ = _edge_census(f, len(v))
     boundary = int((counts == 1).sum())
     nonmanifold = int((counts > 2).sum())
     inconsistent = int(((counts >= 2) & (fwd != bwd)).sum())
@@ -351,17 +353,11 @@ def boundary_chain(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.n
     minus uses b -> a).  Empty iff every edge's uses balance (the mesh bounds
     a solid).  The chain is a cycle: every vertex has as many chain edges in
     as out."""
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    ok = a != b
-    lo, hi = np.minimum(a, b)[ok], np.maximum(a, b)[ok]
-    key = lo * np.int64(max(n_vertices, 1)) + hi
-    uniq, inv = np.unique(key, return_inverse=True)
-    net = np.bincount(inv.reshape(-1), weights=np.where(a[ok] < b[ok], 1, -1), minlength=len(uniq)).astype(np.int64)
+    _, _, fwd, bwd, lo, hi = _edge_census(np.asarray(faces, dtype=np.int64), n_vertices)
+    net = fwd - bwd
     sel = np.nonzero(net)[0]
-    elo, ehi = uniq[sel] // max(n_vertices, 1), uniq[sel] % max(n_vertices, 1)
     k = net[sel]
-    src = np.where(k > 0, elo, ehi)
-    dst = np.where(k > 0, ehi, elo)
+    src = np.where(k > 0, lo[sel], hi[sel])
+    dst = np.where(k > 0, hi[sel], lo[sel])
     rep = np.abs(k)
     return np.repeat(src, rep), np.repeat(dst, rep)

@@ -1,20 +1,54 @@
 """The exact scanline: the winding number of every voxel centre of a closed
 triangle chain, by z-columns.
 
-Ties are broken by a fixed rule (see :func:`scanline`): a centre exactly on the
-surface behaves as the point ``(x + eta, y + eps, z - delta)`` with
-``0 < eps << eta << delta`` infinitesimal, so an axis-aligned box
+For each triangle and each voxel column ``(x_i, y_j)`` under it, the
+triangle's contribution to the column is the 2-D winding number of the
+column point around the triangle's xy-projection (+1 for a counter-clockwise
+projection, i.e. normal z > 0; -1 for clockwise; 0 outside).  The 3-D
+winding number of a point is the sum of these over the triangles the column
+crosses *above* it (ray casting along +z); since a column's contributions
+sum to zero, that is minus the sum over those *below* it.  So each
+contribution is kept, negated, as a crossing at the first voxel of the
+column whose centre lies strictly above it, and a running sum up the column
+yields every centre's winding number.
+
+Tie rule (why this exact formulation).  The 2-D winding number of the column
+point around a triangle is itself computed by casting a ray along +x and
+counting signed edge crossings, where each *edge* decides alone whether it
+is crossed: with the edge written from its lower endpoint to its upper one
+(a fixed order that depends only on the two endpoint coordinates, not on
+which triangle asks), it is crossed iff ``y_lo <= y < y_hi`` and the point is
+strictly left of it (``w = dx*(y - y_lo) - dy*(x - x_lo) > 0``, evaluated
+with exactly these floating-point operations).  Two triangles that share an
+edge therefore get bit-identical answers for it, and since in a closed,
+consistently oriented chain every edge is traversed once in each direction,
+the contributions of all triangles to a column sum to exactly zero, in
+floating point, whatever the column hits: edges, vertices, vertical walls.
+A column through a shared edge is counted by exactly one of its two
+triangles (the half-open rules act as the symbolic perturbation
+``(x + eta, y + eps)``, 0 < eps << eta); a column through a vertex by
+exactly one triangle of its fan; a column on a silhouette fold by both (+1
+and -1 at the same height, cancelling).  Evaluating the edge function per
+triangle in the triangle's own vertex order would give the two neighbours
+rounding errors of different sign, so a column exactly on the shared edge
+could be counted twice or not at all, leaving a spurious line of voxels of
+winding +-1 above it.  A centre exactly at a crossing height is not
+"strictly above" it, which acts as moving the centre down by delta >> eta.
+So a centre exactly on the surface behaves as the point
+``(x + eta, y + eps, z - delta)``, and an axis-aligned box
 ``[x0, x1] x [y0, y1] x [z0, z1]`` holds exactly the centres with
 ``x0 <= x < x1, y0 <= y < y1, z0 < z <= z1``.
 
-The work is split in three compiled passes (numba, no Python per triangle or
-per voxel): every (triangle, column) pair is tested and the crossings are
-kept as a sparse list (column, first centre above, +-1); the list is grouped
-by column; each column is swept once upward with a running sum, writing the
+The work is split in compiled passes (numba, no Python per triangle or per
+voxel): every (triangle, column) pair is tested and the crossings are kept
+as a sparse list (column, first centre above, -+1); the list is grouped by
+column; each column is swept once upward with a running sum, writing the
 volume directly.  Memory is the boolean volume plus the crossings (a few
-bytes each): no integer volume is ever held.  Any range of the first axis (a
+bytes each): no integer volume is held.  Any range of the first axis (a
 *slab*) can be filled on its own, which is how volumes beyond memory are
 written (:mod:`isoflow.mesh.slabs`) and how two threads share the work.
+These are the arithmetic and the tie rule of the earlier numpy scanline,
+operation for operation: its volumes are reproduced bit for bit.
 """
 
 from __future__ import annotations

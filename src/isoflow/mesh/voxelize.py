@@ -243,9 +243,9 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     pitch : float
 
     Exactness: on a closed, consistently oriented mesh the volume is the
-    exact nonzero winding number of :func:`isoflow.mesh.scanline.scanline`'s
-    tie rule (a centre on a horizontal-ish face counts as below it: a box
-    [z0, z1] holds the centres with z0 < z <= z1).  On any other mesh it is
+    exact nonzero winding number with the tie rule of
+    :mod:`isoflow.mesh.scanline` (a centre on a horizontal-ish face counts as
+    below it: a box [z0, z1] holds the centres with z0 < z <= z1).  On any other mesh it is
     the generalised winding number rule, exact except where |w| is within
     rounding of 1/2 (:mod:`isoflow.mesh.winding`).
     """
