@@ -231,7 +231,9 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
     ``W != R`` where R is 0, or ``rule[...]`` inside the box
     ``rbox = (i0, i1, j0, j1, k0, k1)`` (slab-local).  Codes 127 / -128 in
     ``rule`` force a voxel in / out.  ``stats`` counts voxels with
-    ``|W - R| >= 2`` and with ``W - R`` positive and negative.
+    ``|W - R| >= 2`` and with ``W - R`` positive and negative.  ``vol`` must
+    be all False: only voxels inside are written (pages of a fresh
+    ``np.zeros`` array that stay outside are never touched).
     """
     ny, nz = vol.shape[1], vol.shape[2]
     bi0, bi1, bj0, bj1, bk0, bk1 = rbox[0], rbox[1], rbox[2], rbox[3], rbox[4], rbox[5]
@@ -255,28 +257,25 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
                                 r = rule[i - bi0, j - bj0, k - bk0]
                             if r == 127:
                                 vol[i, j, k] = True
-                            elif r == -128:
-                                vol[i, j, k] = False
-                            else:
+                            elif r != -128:
                                 d = s - r
-                                vol[i, j, k] = d != 0
+                                if d != 0:
+                                    vol[i, j, k] = True
                                 if d >= 2 or d <= -2:
                                     over += 1
                                 if d > 0:
                                     pos_n += 1
                                 elif d < 0:
                                     neg_n += 1
-                    else:
-                        inside = s != 0
-                        vol[i, j, pos:top] = inside
-                        if inside:
-                            n = top - pos
-                            if s >= 2 or s <= -2:
-                                over += n
-                            if s > 0:
-                                pos_n += n
-                            else:
-                                neg_n += n
+                    elif s != 0:  # the volume is zero: only runs inside are written
+                        vol[i, j, pos:top] = True
+                        n = top - pos
+                        if s >= 2 or s <= -2:
+                            over += n
+                        if s > 0:
+                            pos_n += n
+                        else:
+                            neg_n += n
                     pos = top
                 if e < b:
                     s += val[e]
@@ -295,14 +294,14 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     ``rule`` is None (R = 0: the nonzero rule of a closed chain) or
     ``(array, (i0, j0, k0))``: R on a box of the grid, in grid coordinates
     (see :func:`_sweep` for the codes).  ``out`` is an optional boolean
-    array of shape (xb - xa, ny, nz) to fill.  ``stats`` (int64 (3,)) is
+    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (3,)) is
     incremented with the counts of :func:`_sweep`.  With ``threads=2`` the
     slab is split in two halves filled at once (compiled code runs without
     the GIL).
     """
     nx, ny, nz = grid.shape
     if out is None:
-        out = np.empty((xb - xa, ny, nz), dtype=bool)
+        out = np.zeros((xb - xa, ny, nz), dtype=bool)
     if stats is None:
         stats = np.zeros(3, dtype=np.int64)
     if rule is None:

@@ -259,7 +259,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     slabs = plan.slabs()
     temp = plan.slab_bytes(max(b - a for a, b in slabs))
     check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
-    vol = np.empty(shape, dtype=bool)
+    vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
     stats = np.zeros(3, dtype=np.int64)
     for n, (a, b) in enumerate(slabs, 1):
         plan.fill(a, b, out=vol[a:b], stats=stats, threads=2)
