@@ -282,6 +282,8 @@ def test_cli_voxelize_to_zarr_then_info(tmp_path, capsys):
     assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "t.zarr")]) == 2
     assert "exists; pass --force" in capsys.readouterr().err
     assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "t.zarr"), "--force"]) == 0
+    assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "s.zarr"), "--strict"]) == 2
+    assert "not watertight: 120 boundary edges" in capsys.readouterr().err and not (tmp_path / "s.zarr").exists()
     (tmp_path / "d.zarr").mkdir()
     (tmp_path / "d.zarr" / "keep.txt").write_text("mine")
     assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "d.zarr"), "--force"]) == 2

@@ -323,10 +323,21 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     if len(halves) == 1:
         stats += run(xa, xb)
     else:
+        for st in two_threads().map(lambda ab: run(*ab), halves):
+            stats += st
+    return out
+
+
+_POOL = []
+
+
+def two_threads():
+    """One pool of two threads for the compiled passes (which release the
+    GIL), kept for the process: starting threads per slab cost more than a
+    slab's work on a busy machine."""
+    if not _POOL:
         from concurrent.futures import ThreadPoolExecutor
 
-        with ThreadPoolExecutor(max_workers=2) as pool:
-            for st in pool.map(lambda ab: run(*ab), halves):
-                stats += st
-    return out
+        _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="isoflow-voxelize"))
+    return _POOL[0]
 

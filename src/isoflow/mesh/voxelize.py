@@ -158,8 +158,10 @@ class VoxelPlan:
 
     def slab_bytes(self, rows: int) -> int:
         """Temporaries of a slab of ``rows`` rows beyond its volume, at most:
-        the crossings (bounded by the whole grid's pairs) and its columns."""
-        return self.grid.pairs() * PAIR_BYTES + 16 * rows * self.shape[1]
+        the crossings (bounded by the whole grid's pairs), its columns, and
+        the rule's box (one byte per voxel of the slab)."""
+        _, ny, nz = self.shape
+        return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rows * ny * nz
 
     def slabs(self, voxels: int = SLAB_VOXELS) -> list[tuple[int, int]]:
         nx, ny, nz = self.shape

@@ -32,7 +32,13 @@ How it is computed (no approximation that can flip a voxel):
 Caps are cones over each boundary piece from its centroid, lifted by 1 % of
 its size along its vector area and by 0.1 % along a fixed generic direction,
 so that a planar hole lying in a plane of voxel centres does not put a whole
-layer of centres on the cap.
+layer of centres on the cap; the boundary of a lone triangle (a soup) is
+capped by the triangle itself, reversed.
+
+Cost: the scanline's, plus (blocks evaluated) x (cap triangles + chain
+edges).  Near a hole, w passes 1/2 on a soap-film-like sheet across it, and
+there every voxel needs its exact value: a hole n voxels wide costs about
+n^2 such voxels.
 """
 
 from __future__ import annotations
@@ -364,11 +370,10 @@ def _run_split(kernel, blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rv
     if threads <= 1 or n < 64:
         kernel(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals)
         return
-    from concurrent.futures import ThreadPoolExecutor
+    from .scanline import two_threads
 
     h = n // 2
-    with ThreadPoolExecutor(max_workers=2) as pool:
-        futs = [pool.submit(kernel, blocks[a:b], origin, pitch, Tc, nlen, E, elen, tol, status[a:b], rvals[a:b])
-                for a, b in ((0, h), (h, n))]
-        for fu in futs:
-            fu.result()
+    futs = [two_threads().submit(kernel, blocks[a:b], origin, pitch, Tc, nlen, E, elen, tol, status[a:b], rvals[a:b])
+            for a, b in ((0, h), (h, n))]
+    for fu in futs:
+        fu.result()
