@@ -67,9 +67,12 @@ def exact_volume(v, f, components: int) -> tuple[float, str]:
 
 
 def _pairs(a, b, repeat):
-    """Time a() and b() alternately (A B A B ...): medians and results."""
+    """Time a() and b() alternately (A B A B ...): medians, and the results
+    of the last pair (earlier results are dropped before the next call, so
+    that at most one result of each is alive)."""
     ta, tb, ra, rb = [], [], None, None
     for _ in range(repeat):
+        ra = rb = None
         t = time.perf_counter()
         ra = a()
         ta.append(time.perf_counter() - t)
