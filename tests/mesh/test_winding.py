@@ -153,6 +153,21 @@ def test_random_soups_of_open_sheets_match_libigl(rng):
         assert_gwn_rule(v, f, vol, origin, pitch, rng)
 
 
+def test_nested_open_shells_with_winding_numbers_beyond_one(rng):
+    """Four nested open bowls (a sphere less its top, scaled): |w| reaches
+    about 3.7, so the cap's solid angles sum over several turns; then half of
+    them inverted."""
+    m = trimesh.creation.icosphere(subdivisions=3)
+    faces = m.faces[m.triangles_center[:, 2] < 0.5]
+    v = np.concatenate([m.vertices * (1 + 0.1 * k) + rng.normal(0, 0.01, 3) for k in range(4)])
+    f = np.concatenate([faces + k * len(m.vertices) for k in range(4)])
+    for ff in (f, np.concatenate([f[: len(f) // 2], f[len(f) // 2:, ::-1]])):
+        vol, origin, pitch = voxelize(v, ff, resolution=40)
+        assert_gwn_rule(v, ff, vol, origin, pitch, rng)
+    w = igl.winding_number(v, f, np.zeros((1, 3)) + [0, 0, -0.2])
+    assert abs(w[0]) > 3
+
+
 # ---------------------------------------------------------------------------
 # the acceptance cases, each with its note
 # ---------------------------------------------------------------------------

@@ -25,7 +25,9 @@ How it is computed (no approximation that can flip a voxel):
    voxels are evaluated at their centre with this bound; a block whose
    interval ``w_C(q) +- bound`` holds no half-integer gets one R; the others
    (and blocks that meet C) are split in eight, down to single voxels,
-   which get ``w_C`` exactly.  A centre within ``1e-6`` pitch of the cap
+   which get ``w_C`` exactly (the sum of the triangles' ``atan2`` terms is
+   taken as the argument of a product of complex numbers, counting whole
+   turns: one ``atan2`` per point).  A centre within ``1e-6`` pitch of the cap
    (where the scanline's tie rule and the sign of a solid angle could
    disagree) gets ``w_M`` summed over M's own triangles instead.
 
@@ -214,7 +216,7 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
         di, dj, dk = i1 - i0 - 1, j1 - j0 - 1, k1 - k0 - 1
         h = 0.5 * pitch * math.sqrt(di * di + dj * dj + dk * dk)
         reach = h if h > 0 else tol
-        w = 0.0
+        zx, zy, turns = 1.0, 0.0, 0
         var = 0.0
         hit = False
         for t in range(Tc.shape[0]):
@@ -231,7 +233,18 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
             lc = math.sqrt(cx * cx + cy * cy + cz * cz)
             den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
                    + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-            w += 2.0 * math.atan2(det, den)
+            # sum of atan2(det, den) as the argument of a product of complex
+            # numbers, counting the turns: one atan2 per block, not per triangle
+            nx = zx * den - zy * det
+            ny = zx * det + zy * den
+            if _upper(zx, zy) and _upper(den, det) and not _upper(nx, ny):
+                turns += 1
+            elif zy < 0 and det < 0 and _upper(nx, ny):
+                turns -= 1
+            m = max(abs(nx), abs(ny))
+            if m > 0:  # 0 only for a centre on a corner: within tol, not used
+                zx, zy = nx / m, ny / m
+        w = 2.0 * (math.atan2(zy, zx) + 2.0 * math.pi * turns)  # the sum of 2 atan2(det, den)
         if h > 0 and not hit:
             for e in range(E.shape[0]):
                 ax, ay, az = E[e, 0, 0] - px, E[e, 0, 1] - py, E[e, 0, 2] - pz
@@ -254,6 +267,12 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
             rvals[q] = int(lo)
         else:  # a single centre never splits (a NaN would loop forever)
             status[q] = 1 if h > 0 else 2
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _upper(x, y):
+    """The argument of x + iy lies in (0, pi]."""
+    return y > 0 or (y == 0 and x < 0)
 
 
 @njit(cache=True, nogil=True)
