@@ -271,8 +271,7 @@ def mesh_defects(vertices, faces) -> dict:
 
     A non-manifold edge whose uses balance (two faces a->b, two b->a: two
     cubes sharing an edge) still bounds a solid; the scanline of
-    :func:`voxelize` is exact on it and ``allow_open=True`` uses the scanline
-    for such meshes.
+    :func:`voxelize` is exact on it without a cap.
     """
     v, f = check_mesh(vertices, faces, where="mesh_defects")
     inv, counts, fwd, bwd, _, _ = _edge_census(f, len(v))
