@@ -281,6 +281,21 @@ def test_zarr_store_equals_the_in_memory_volume(tmp_path, name, res, chunks):
     assert calls and calls[-1][0] == calls[-1][1] == -(-ref.shape[0] // z.chunks[0])
 
 
+def test_zarr_store_on_a_distributed_cluster(tmp_path):
+    """The slab tasks run in worker processes of a dask.distributed cluster
+    (the plan is pickled to them) and write the same store."""
+    distributed = pytest.importorskip("distributed")
+    from isoflow.mesh.slabs import voxelize_to_zarr
+
+    ref, _, _ = voxelize(*load_mesh(MESHES / "target.obj"), resolution=37)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        out = voxelize_to_zarr(MESHES / "target.obj", tmp_path / "d.zarr", resolution=37, chunks=(7, 5, 9),
+                               scheduler=client)
+    assert out["voxels"] == int(ref.sum())
+    assert np.array_equal(zarr.open_array(str(tmp_path / "d.zarr"), mode="r")[:], ref)
+
+
 def test_cli_voxelize_to_zarr_then_info(tmp_path, capsys):
     mesh = MESHES / "target.obj"
     assert main(["voxelize", str(mesh), "--resolution", "33", "-o", str(tmp_path / "t.npz")]) == 0
