@@ -588,7 +588,7 @@ def test_inconsistent_and_nonmanifold_counts():
     report = {}
     vol, _, _ = voxelize(v, flipped, resolution=8, report=report)
     assert vol.all() and report["flipped_faces"] == 1 and report["chain_edges"] == 0
-    assert "1 flipped faces" in report["note"] and "fix_winding" in report["note"]
+    assert "1 flipped face " in report["note"] and "fix_winding" in report["note"]
     # one triangle; three triangles on one edge
     assert mesh_defects(v, f[:1])["boundary_edges"] == 3
     fan = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
@@ -611,7 +611,7 @@ def test_edge_contact_cubes_use_exact_scanline():
         voxelize(u, f, pitch=0.25, strict=True)
     report = {}
     vol, _, _ = voxelize(u, f, pitch=0.25, allow_open=True, report=report)
-    assert report["chain_edges"] == 0 and "1 non-manifold edges" in report["note"]
+    assert report["chain_edges"] == 0 and "1 non-manifold edge;" in report["note"]
     assert "edges balance" in report["note"]
     assert vol.shape == (8, 8, 4) and vol.sum() == 2 * 4 * 4 * 4
     assert vol[:4, :4].all() and vol[4:, 4:].all()

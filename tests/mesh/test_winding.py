@@ -240,7 +240,7 @@ def test_non_manifold_fin_on_a_box(rng):
     assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 2
     report = {}
     vol, origin, pitch = voxelize(v, f, resolution=16, report=report)
-    assert "1 non-manifold edges" in report["note"] and "|w| > 1/2" in report["note"]
+    assert "1 non-manifold edge;" in report["note"] and "|w| > 1/2" in report["note"]
     assert_gwn_rule(v, f, vol, origin, pitch, rng)
 
 

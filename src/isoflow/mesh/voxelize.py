@@ -104,19 +104,19 @@ class Solid:
         c = self.census
         what = []
         if c is not self.defects and self.defects["boundary_edges"] > c["boundary_edges"]:
-            what.append(f"{self.defects['boundary_edges'] - c['boundary_edges']} edges joined by merging "
-                        "vertices at equal positions (a triangle soup)")
+            what.append(_count(self.defects["boundary_edges"] - c["boundary_edges"], "edge")
+                        + " joined by merging vertices at equal positions (a triangle soup)")
         if c["boundary_edges"]:
-            what.append(f"{c['boundary_edges']} boundary edges")
+            what.append(_count(c["boundary_edges"], "boundary edge"))
         if c["nonmanifold_edges"]:
-            what.append(f"{c['nonmanifold_edges']} non-manifold edges")
+            what.append(_count(c["nonmanifold_edges"], "non-manifold edge"))
         if self.flipped:
-            what.append(f"{self.flipped} flipped faces (turned over with trimesh.repair.fix_winding)")
+            what.append(_count(self.flipped, "flipped face") + " (turned over with trimesh.repair.fix_winding)")
         elif c["inconsistent_edges"] and not c["nonmanifold_edges"]:
-            what.append(f"{c['inconsistent_edges']} inconsistently oriented edges")
+            what.append(_count(c["inconsistent_edges"], "inconsistently oriented edge"))
         if stats is not None and stats[0]:
-            what.append(f"{int(stats[0])} voxels inside two or more layers (self-intersecting or "
-                        "overlapping shells: counted once, the union)")
+            what.append(_count(int(stats[0]), "voxel") + " inside two or more layers (self-intersecting "
+                        "or overlapping shells: counted once, the union)")
         if stats is not None and stats[1] and stats[2]:
             what.append("both positive and negative winding numbers (inverted or "
                         "self-intersecting parts)")
@@ -128,6 +128,10 @@ class Solid:
         else:
             rule = "its edges balance, so it bounds a solid: read by the exact nonzero winding number"
         return "mesh has " + ", ".join(what) + "; " + rule
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 class VoxelPlan:
