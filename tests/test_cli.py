@@ -203,19 +203,36 @@ def test_info_threads_option_and_environment(tmp_path):
     assert bad.returncode == 2 and "--threads" in bad.stderr
 
 
-def test_allow_open_reaches_every_mesh_command(tmp_path, capsys):
-    # plane_holes.obj is open (manifest: 27 boundary loops): refused, with
-    # the option named; accepted with it, like `voxelize --allow-open`
+def test_open_meshes_by_default_strict_refuses_on_every_mesh_command(tmp_path, capsys):
+    # plane_holes.obj is open (manifest: 27 boundary loops, 341 boundary
+    # edges): read by default with one note line on stderr; --strict refuses
+    # it on every command; --allow-open is accepted and changes nothing
     mesh = ROOT / "meshes" / "plane_holes.obj"
-    assert main(["info", str(mesh), "--resolution", "12"]) == 2
-    assert "--allow-open" in capsys.readouterr().err
-    r = info_json(capsys, mesh, "--resolution", "12", "--allow-open")
+    r = info_json(capsys, mesh, "--resolution", "12")
+    err = capsys.readouterr().err
+    assert r["voxels"] > 0
+    assert main(["info", str(mesh), "--resolution", "12"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "note" in err[0] and "341 boundary edges" in err[0] and "|w| > 1/2" in err[0]
+    assert info_json(capsys, mesh, "--resolution", "12", "--allow-open")["voxels"] == r["voxels"]
+    out = tmp_path / "o"
+    out.mkdir()
+    for cmd in (["info", str(mesh), "--resolution", "12"],
+                ["surface", str(mesh), "--resolution", "12", "-o", str(out / "s.ply")],
+                ["flow", str(mesh), "--resolution", "12", "--steps", "1"],
+                ["voxelize", str(mesh), "--resolution", "12", "-o", str(out / "v.npz")],
+                ["genus", str(mesh), "--resolution", "12"]):
+        assert main(cmd + ["--strict"]) == 2, cmd
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "not watertight: 341 boundary edges" in err[0], (cmd, err)
+    assert not any(out.iterdir())
     assert main(["voxelize", str(mesh), "--resolution", "12", "--allow-open", "-o", str(tmp_path / "p.npz")]) == 0
     capsys.readouterr()
-    assert info_json(capsys, tmp_path / "p.npz")["voxels"] == r["voxels"] > 0
+    assert info_json(capsys, tmp_path / "p.npz")["voxels"] == r["voxels"]
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
-    assert main(["info", str(tmp_path / "v.npy"), "--allow-open"]) == 2
-    assert "apply to meshes" in capsys.readouterr().err
+    for flag in ("--allow-open", "--strict"):
+        assert main(["info", str(tmp_path / "v.npy"), flag]) == 2
+        assert "apply to meshes" in capsys.readouterr().err
 
 
 def test_memory_budget_is_most_of_what_the_kernel_says_is_available():

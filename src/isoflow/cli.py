@@ -20,8 +20,6 @@ import numpy as np
 
 from .errors import IsoflowError
 
-MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
-
 
 # --------------------------------------------------------------------------
 # input
@@ -30,7 +28,7 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("input", help="volume (.npy/.npz, .tif, .nii(.gz), .nrrd, FILE.h5:/dataset, .binvox, .vox, "
-                                 ".zarr), point list (.txt: x y z per line) or mesh")
+                                 ".zarr), point list (.txt: x y z per line) or mesh (any format trimesh reads)")
     p.add_argument("--label", type=label_value, metavar="N",
                    help="a label image: the voxels of value N are the object (MagicaVoxel: colour index N)")
     p.add_argument(
@@ -42,8 +40,14 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
     grid = p.add_mutually_exclusive_group()
     grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
     grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
+    add_mesh_rule(p)
+
+
+def add_mesh_rule(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a mesh that is not watertight (by default it is read by the generalised winding number)")
     p.add_argument("--allow-open", action="store_true",
-                   help="a mesh with holes: voxelise by the generalised winding number (slow: small grids only)")
+                   help="accepted for compatibility: open meshes are read by default")
 
 
 def add_connectivity(p: argparse.ArgumentParser) -> None:
@@ -65,21 +69,38 @@ def label_value(text: str):
     return int(value) if value.is_integer() else value
 
 
+def say_note(args, path, report: dict) -> None:
+    """What is unusual about a mesh, and the rule used: one line on stderr
+    (dropped by --quiet)."""
+    if report.get("note") and not args.quiet:
+        print(f"isoflow {args.command}: note: {path}: {report['note']}", file=sys.stderr)
+
+
+def voxelize_input(path, args):
+    """A mesh file voxelised by the one mesh reader of every command."""
+    from .mesh.voxelize import voxelize_file
+
+    report: dict = {}
+    with progress_bar(args, "voxelize") as show:
+        obj = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
+                            progress=show, report=report)
+    say_note(args, path, report)
+    return obj
+
+
 def load_input(args):
     """The digital object named on the command line (volume, points or mesh)."""
+    from .mesh.load import is_mesh_path
     from .mesh.volumes import read_object
 
     path = Path(args.input)
-    if path.suffix.lower() in MESH_SUFFIXES:
-        from .mesh.voxelize import voxelize_file
-
-        if args.label is not None:
+    if is_mesh_path(path):
+        if getattr(args, "label", None) is not None:
             raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
-        with progress_bar(args, "voxelize") as show:
-            return voxelize_file(path, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                                 progress=show)
-    if args.pitch is not None or args.resolution is not None or args.allow_open:
-        raise IsoflowError(f"{path}: --pitch/--resolution/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
+        return voxelize_input(path, args)
+    if args.pitch is not None or args.resolution is not None or args.allow_open or args.strict:
+        raise IsoflowError(
+            f"{path}: --pitch/--resolution/--strict/--allow-open apply to meshes, not to {path.suffix or 'this'} input")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
     return read_object(args.input, points_are=args.points_are, label=args.label)
 
@@ -98,8 +119,8 @@ def cmd_info(args) -> int:
         # out of core: block by block, never the whole volume in memory
         from .mesh.formats.omezarr import analyze_store
 
-        if args.pitch is not None or args.resolution is not None or args.allow_open:
-            raise IsoflowError(f"{args.input}: --pitch/--resolution/--allow-open apply to meshes, not to .zarr input")
+        if args.pitch is not None or args.resolution is not None or args.allow_open or args.strict:
+            raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict/--allow-open apply to meshes, not to .zarr input")
         if args.gpu:
             raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
         with progress_bar(args, "blocks") as show:
@@ -237,12 +258,23 @@ def cmd_surface(args) -> int:
 
 def cmd_voxelize(args) -> int:
     from .mesh.volumes import check_volume_output, write_volume
-    from .mesh.voxelize import voxelize_file
 
+    if Path(args.output).suffix.lower() == ".zarr":
+        # beyond memory: slab by slab into a chunked zarr array, as dask tasks
+        from .mesh.slabs import voxelize_to_zarr
+
+        report: dict = {}
+        out = Path(args.output)
+        with progress_bar(args, "voxelize") as show:
+            z = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
+                                 force=args.force, progress=show, report=report)
+        say_note(args, args.mesh, report)
+        shape = "x".join(map(str, z["shape"]))
+        print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
+              f"pitch {z['pitch']:.6g}, origin {np.round(z['origin'], 6).tolist()}")
+        return 0
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
-    with progress_bar(args, "voxelize") as show:
-        obj = voxelize_file(args.mesh, pitch=args.pitch, resolution=args.resolution, allow_open=args.allow_open,
-                            progress=show)
+    obj = voxelize_input(args.mesh, args)
     out = write_volume(obj, args.output, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
@@ -269,7 +301,8 @@ def cmd_genus(args) -> int:
                 print(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
                       f"({entry['seconds']:.1f} s)", file=sys.stderr)
 
-        report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped, **kw)
+        report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped,
+                              strict=args.strict, **kw)
     if args.json:
         print(json.dumps(report))
         return 0
@@ -514,19 +547,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_surface)
 
     p = add_command(sub, "voxelize", "voxelise a mesh's solid into a volume file (with pitch and origin)")
-    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    p.add_argument("mesh", help="a mesh file: any format trimesh reads (STL, OBJ, PLY, OFF, GLB, 3MF, DAE, ZIP, ...)")
     grid = p.add_mutually_exclusive_group(required=True)
     grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
     grid.add_argument("--resolution", type=int, help="voxels along the longest side")
     p.add_argument("-o", "--output", required=True,
-                   help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox, .zarr)")
-    p.add_argument("--allow-open", action="store_true",
-                   help="voxelise a mesh with holes by the generalised winding number (slow: small grids only)")
+                   help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox), or "
+                        "OUT.zarr: written slab by slab as dask tasks, never held in memory")
+    add_mesh_rule(p)
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(func=cmd_voxelize)
 
     p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
-    p.add_argument("mesh", help="STL, OBJ, PLY, OFF or GLB")
+    p.add_argument("mesh", help="a mesh file: any format trimesh reads")
     p.add_argument("--resolution", type=int, nargs="+",
                    help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
                         "digital Betti numbers of the last two agree")
@@ -534,6 +567,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
                    help="stop doubling when the next resolution would end past this (default 60)")
     p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
+    add_mesh_rule(p)
     p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)

@@ -15,7 +15,9 @@ from isoflow import DigitalObject, betti_numbers, boundary_mesh
 from isoflow.cli import main
 from isoflow.mesh.bridges import cube_union, from_manifold, to_manifold
 from isoflow.mesh.genus import mesh_topology, verify_genus
-from isoflow.mesh.voxelize import voxelize_file
+from isoflow.errors import IsoflowError
+from isoflow.mesh.load import load_mesh
+from isoflow.mesh.voxelize import voxelize, voxelize_file
 
 MESHES = Path(__file__).resolve().parents[2] / "meshes"
 MANIFEST = {e["filename"]: e for e in json.loads((MESHES / "manifest.json").read_text())["meshes"]}
@@ -44,11 +46,18 @@ def test_genus_agrees_with_manifest(name):
         assert r["manifold3d"]["genus"] == known["tool_results"]["manifold3d"]["genus"]
 
 
-def test_open_mesh_has_no_genus():
-    r = verify_genus(MESHES / "plane_holes.obj")
+def test_open_mesh_has_no_genus_but_a_solid():
+    """An open mesh has no genus as a closed surface, but its solid (by the
+    generalised winding number) is voxelised and reported, and --strict
+    refuses it as before."""
+    r = verify_genus(MESHES / "plane_holes.obj", (32,))
     assert r["mesh"]["genus"] is None and r["mesh"]["boundary_edges"] == MANIFEST["plane_holes.obj"]["boundary_edges"]
-    assert r["agree"] is False and r["digital"] == []
-    assert "open (341 boundary edges)" in r["verdict"]
+    assert r["agree"] is False and r["verdict"].startswith("no mesh genus to compare")
+    assert "open (341 boundary edges)" in r["verdict"] and "generalised winding number" in r["verdict"]
+    vol, _, _ = voxelize(*load_mesh(MESHES / "plane_holes.obj"), resolution=32)
+    assert r["digital"][0]["voxels"] == int(vol.sum()) > 0
+    with pytest.raises(IsoflowError, match="plane_holes.obj: voxelize: mesh is not watertight: 341 boundary edges"):
+        verify_genus(MESHES / "plane_holes.obj", (32,), strict=True)
 
 
 def test_pinched_vertex_is_explained():
@@ -263,7 +272,8 @@ def _bad(tmp_path):
         (["genus", tmp_path / "empty.obj"], "empty.obj"),
         (["info", tmp_path / "nan.obj"], "NaN"),
         (["voxelize", MESHES / "torus.obj", "--resolution", "100000", "-o", tmp_path / "o.npz"], "100000"),
-        (["info", MESHES / "plane_holes.obj"], "not watertight"),
+        (["voxelize", MESHES / "torus.obj", "--resolution", "100000", "-o", tmp_path / "o.npz"], "-o OUT.zarr"),
+        (["info", MESHES / "plane_holes.obj", "--strict"], "not watertight"),
     ]
 
 

@@ -433,6 +433,8 @@ def test_load_featuretype_weld_closes_it():
 @needs_meshes
 def test_load_manifest_counts():
     for name, e in _manifest().items():
+        if "edges" not in e:  # the open meshes: edge counts checked in test_winding.py
+            continue
         v, f = load_mesh(MESH_DIR / name)
         d = mesh_defects(v, f)
         assert (len(v), len(f), d["edges"]) == (e["vertices"], e["faces"], e["edges"]), name
@@ -560,11 +562,15 @@ def test_error_too_big_raises_before_allocating():
 
 
 @needs_meshes
-def test_open_mesh_refused():
+def test_open_mesh_refused_only_when_strict():
     v, f = load_mesh(MESH_DIR / "plane_holes.obj")
     with pytest.raises(IsoflowError) as e:
-        voxelize(v, f, resolution=16)
+        voxelize(v, f, resolution=16, strict=True)
     assert "341 boundary edges" in _oneline(e)
+    report = {}
+    vol, _, _ = voxelize(v, f, resolution=16, report=report)
+    assert vol.any() and report["defects"]["boundary_edges"] == 341 and report["chain_edges"] == 341
+    assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
 
 def test_inconsistent_and_nonmanifold_counts():
@@ -577,7 +583,12 @@ def test_inconsistent_and_nonmanifold_counts():
     d = mesh_defects(v, flipped)
     assert d["inconsistent_edges"] == 3 and not d["watertight"]
     with pytest.raises(IsoflowError, match="3 inconsistently oriented edges"):
-        voxelize(v, flipped, resolution=8)
+        voxelize(v, flipped, resolution=8, strict=True)
+    # by default the flipped face is turned back (trimesh.repair.fix_winding)
+    report = {}
+    vol, _, _ = voxelize(v, flipped, resolution=8, report=report)
+    assert vol.all() and report["flipped_faces"] == 1 and report["chain_edges"] == 0
+    assert "1 flipped face " in report["note"] and "fix_winding" in report["note"]
     # one triangle; three triangles on one edge
     assert mesh_defects(v, f[:1])["boundary_edges"] == 3
     fan = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
@@ -585,10 +596,10 @@ def test_inconsistent_and_nonmanifold_counts():
     assert d["nonmanifold_edges"] == 1 and d["inconsistent_edges"] == 1 and d["boundary_edges"] == 6
 
 
-def test_edge_contact_cubes_allow_open_uses_exact_scanline():
+def test_edge_contact_cubes_use_exact_scanline():
     """Two cubes sharing one edge (after welding): 4 faces on that edge, but
-    balanced orientation -> still a solid; refused by default, exact with
-    allow_open=True."""
+    balanced orientation -> still a solid: the exact scanline, no cap, a
+    note naming the non-manifold edge; refused with strict=True."""
     va, fa = box_mesh([0, 0, 0], [1, 1, 1])
     vb, fb = box_mesh([1, 1, 0], [2, 2, 1])
     v, f = concat((va, fa), (vb, fb))
@@ -597,13 +608,16 @@ def test_edge_contact_cubes_allow_open_uses_exact_scanline():
     d = mesh_defects(u, f)
     assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 0 and not d["watertight"]
     with pytest.raises(IsoflowError, match="1 non-manifold"):
-        voxelize(u, f, pitch=0.25)
-    vol, _, _ = voxelize(u, f, pitch=0.25, allow_open=True)
+        voxelize(u, f, pitch=0.25, strict=True)
+    report = {}
+    vol, _, _ = voxelize(u, f, pitch=0.25, allow_open=True, report=report)
+    assert report["chain_edges"] == 0 and "1 non-manifold edge;" in report["note"]
+    assert "edges balance" in report["note"]
     assert vol.shape == (8, 8, 4) and vol.sum() == 2 * 4 * 4 * 4
     assert vol[:4, :4].all() and vol[4:, 4:].all()
 
 
-def test_allow_open_generalised_winding_number():
+def test_open_mesh_generalised_winding_number():
     """A box without its top face: the missing square subtends less than a
     hemisphere from every point below it, so GWN > 1/2 in the whole box and
     the result equals the closed box's."""
@@ -612,10 +626,9 @@ def test_allow_open_generalised_winding_number():
     open_f = f[normals[:, 2] < 0.5]
     assert mesh_defects(v, open_f)["boundary_edges"] == 4
     with pytest.raises(IsoflowError, match="4 boundary edges"):
-        voxelize(v, open_f, resolution=10)
+        voxelize(v, open_f, resolution=10, strict=True)
     calls = []
-    vol, origin, pitch = voxelize(v, open_f, resolution=10, allow_open=True,
-                                  progress=lambda d, t: calls.append((d, t)))
+    vol, origin, pitch = voxelize(v, open_f, resolution=10, progress=lambda d, t: calls.append((d, t)))
     closed, origin2, pitch2 = voxelize(v, f, resolution=10)
     assert np.array_equal(vol, closed) and vol.all()
     assert calls and calls[-1][0] == calls[-1][1]
@@ -626,7 +639,7 @@ def test_allow_open_generalised_winding_number():
     m = trimesh.creation.uv_sphere(radius=1.0, count=[24, 24])
     z0 = np.unique(m.vertices[:, 2])[-4]
     keep = m.vertices[m.faces][:, :, 2].max(axis=1) <= z0
-    vol, origin, pitch = voxelize(m.vertices, m.faces[keep], resolution=14, allow_open=True)
+    vol, origin, pitch = voxelize(m.vertices, m.faces[keep], resolution=14)
     c = centres(vol, origin, pitch)
     # the closed UV sphere is convex: inside = behind every face plane
     s = np.einsum("fk,pfk->pf", m.face_normals, c[:, None, :] - m.triangles[None, :, 0, :])
@@ -637,9 +650,9 @@ def test_allow_open_generalised_winding_number():
 
 
 @needs_meshes
-def test_allow_open_plane_holes_small_grid():
+def test_plane_holes_small_grid():
     v, f = load_mesh(MESH_DIR / "plane_holes.obj")
-    vol, origin, pitch = voxelize(v, f, resolution=8, allow_open=True)
+    vol, origin, pitch = voxelize(v, f, resolution=8)
     assert vol.shape == (8, 8, 3) and vol.dtype == bool
 
 
@@ -779,46 +792,3 @@ def test_big_grid_keeps_covering_the_bounding_box():
     with pytest.raises(IsoflowError) as e:
         voxelize(v, f, pitch=1.0, max_bytes=1000)
     assert "1000000001x1x1 grid" in _oneline(e)
-
-
-def _open_box():
-    v, f = box_mesh([0, 0, 0], [1, 1, 1])
-    normals = trimesh.Trimesh(v, f, process=False).face_normals
-    return v, f[normals[:, 2] < 0.5]
-
-
-def test_gwn_cost_is_estimated_and_refused(monkeypatch):
-    """With the limit lowered to 10^6 pairs, a 10-triangle open box fits at
-    resolution 46 (46^3 * 10 = 973,360 pairs) but not at 47 (1,038,230) or 100:
-    refused up front, naming the cost and the largest resolution that fits,
-    which then works (and equals the closed box: all inside)."""
-    import isoflow.mesh.winding as vx
-
-    v, f = _open_box()
-    monkeypatch.setattr(vx, "GWN_MAX_PAIRS", 10**6, raising=False)
-    for r in (100, 47):
-        with pytest.raises(IsoflowError) as e:
-            voxelize(v, f, resolution=r, allow_open=True)
-        msg = _oneline(e)
-        assert f"resolution={r}" in msg and f"{r ** 3:,} voxels x 10 triangles" in msg
-        assert "at most 46 here" in msg
-    vol, _, _ = voxelize(v, f, resolution=46, allow_open=True)
-    assert vol.shape == (46, 46, 46) and vol.all()
-    with pytest.raises(IsoflowError, match=r"larger pitch"):
-        voxelize(v, f, pitch=0.01, allow_open=True)
-
-
-@needs_meshes
-def test_gwn_refuses_hours_of_work_before_starting_it():
-    """plane_holes.obj (16,747 triangles) at resolution 400 would take hours
-    by the generalised winding number; it is refused before any of it runs
-    (the first progress report comes after the first chunk of work)."""
-    v, f = load_mesh(MESH_DIR / "plane_holes.obj")
-
-    def progress(done, total):
-        raise RuntimeError("the GWN ran instead of being refused")
-
-    with pytest.raises(IsoflowError) as e:
-        voxelize(v, f, resolution=400, allow_open=True, progress=progress)
-    msg = _oneline(e)
-    assert "resolution=400" in msg and "16,747 triangles" in msg and "lower resolution" in msg

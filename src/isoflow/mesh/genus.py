@@ -243,7 +243,8 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
-                  target: int | None = None, progress=None, on_resolution=None) -> tuple[list, str | None]:
+                  target: int | None = None, progress=None, on_resolution=None,
+                  strict: bool = False) -> tuple[list, str | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``: two coarse grids can both close the
@@ -290,7 +291,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
         def rung(done, total, finished=finished, weight=weight, ahead=ahead):
             progress(finished + round(weight * (done / total if total else 1.0)), ahead)
 
-        vol, _, pitch = voxelize(vertices, faces, resolution=res, allow_open=True,
+        vol, _, pitch = voxelize(vertices, faces, resolution=res, strict=strict,
                                  progress=None if progress is None else rung)
         finished += weight
         betti = betti_numbers(vol, connectivity)
@@ -309,7 +310,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None, *,
                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
-                 on_resolution=None) -> dict:
+                 on_resolution=None, strict: bool = False) -> dict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
     intersections, the genus of the solid it bounds, and the digital
     topology of that solid voxelised at growing resolutions, with a verdict.
@@ -321,6 +322,10 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     tried (:func:`digital_steps` doubles the resolution until they are, or
     says "not converged at R"), and never for a self-intersecting mesh: its
     surface bounds no well-defined solid, and no grid settles that.
+
+    An open or inconsistently oriented mesh has no genus of its own; its
+    solid is read by the generalised winding number (|w| > 1/2) and its
+    digital topology reported; ``strict`` refuses it (IsoflowError).
     """
     path = Path(path)
     resolutions = list(resolutions)
@@ -356,7 +361,8 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         notes.append(
             f"the mesh is open ({mesh['boundary_edges']} boundary edges"
             + (f", {mesh['inconsistent_edges']} inconsistently oriented" if mesh["inconsistent_edges"] else "")
-            + "): it bounds no solid, so it has no genus as a closed surface and is not voxelised"
+            + "): it bounds no solid, so it has no genus as a closed surface; its solid is read by the "
+            "generalised winding number (|w| > 1/2)"
         )
     solid = solid_report(v, f) if balanced and not crossing_self else {"error": "not computed"}
     out["solid"] = solid
@@ -365,10 +371,13 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     g = mesh["genus"]
     reference, ref_name = (out["solid_genus"], "solid genus") if overlap else (g, "mesh genus")
     stop = None
-    if balanced:
+    try:  # with strict, a mesh that is not watertight is refused here
         out["digital"], stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not crossing_self, max_resolution=max_resolution,
-            time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution)
+            time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
+            strict=strict)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{path}: {exc}") from None
     digital = out["digital"]
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
     out["converged"] = stable

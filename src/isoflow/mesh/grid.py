@@ -160,7 +160,10 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     return float(pitch), origin.astype(np.float64), tuple(shape), what, (shift, e, origin_s, pitch_s)
 
 
-def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes):
+def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes, hint: str = ""):
+    """Refuse a grid whose volume (``bytes_per_voxel`` per voxel) and ``extra``
+    bytes of temporaries exceed ``max_bytes`` (default: the memory budget),
+    naming its size; ``hint`` says what to do instead."""
     if max_bytes is None:
         max_bytes = default_budget()
     nvox = shape[0] * shape[1] * shape[2]  # Python ints: no overflow
@@ -176,4 +179,5 @@ def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes
         dims = "x".join(fmt_count(n, sep=False) for n in shape)
         raise IsoflowError(
             f"voxelize: {what} needs a {dims} grid "
-            f"({fmt_count(nvox)} voxels, about {fmt_count(need)} bytes), {limit}")
+            f"({fmt_count(nvox)} voxels, about {fmt_count(need)} bytes), {limit}"
+            + (f": {hint}" if hint else ""))

@@ -20,6 +20,35 @@ from ..errors import IsoflowError
 #: vertex positions are welded by :func:`load_mesh`.
 MERGE_RTOL = 1e-10
 
+#: File name endings read as meshes: every mesh and scene format trimesh
+#: reads, and its archives (a test checks this against
+#: ``trimesh.available_formats()``; ``.xyz`` is a point list here).
+MESH_SUFFIXES = (".stl", ".stl_ascii", ".obj", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae", ".zae",
+                 ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
+#: Formats whose reader needs an optional library: ``isoflow[formats]``.
+FORMAT_NEEDS = {".3mf": ("lxml",), ".dae": ("collada",), ".zae": ("collada",),
+                ".3dxml": ("lxml",), ".xaml": ("lxml",)}
+_PACKAGE = {"lxml": "lxml", "collada": "pycollada"}
+
+
+def is_mesh_path(path) -> bool:
+    """Whether a file name ends in one of :data:`MESH_SUFFIXES` (any case)."""
+    name = Path(os.fspath(path)).name.lower()
+    return any(name.endswith(s) for s in MESH_SUFFIXES)
+
+
+def check_format_libraries(path: Path) -> None:
+    """One clear line naming the extra when a format's reader is missing."""
+    import importlib.util
+
+    suffix = path.suffix.lower()
+    missing = [m for m in FORMAT_NEEDS.get(suffix, ()) if importlib.util.find_spec(m) is None]
+    if missing:
+        names = " and ".join(_PACKAGE[m] for m in missing)
+        raise IsoflowError(
+            f"{path}: reading {suffix.lstrip('.').upper()} files needs {names}: "
+            "pip install 'isoflow[formats]'")
+
 
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
     """Lower corner, upper corner and extent of the vertices the faces use;
@@ -163,6 +192,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         raise IsoflowError(f"{p}: file not found")
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
+    check_format_libraries(p)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     ext = p.suffix.lower().lstrip(".")
@@ -201,10 +231,11 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
 def _edge_census(faces: np.ndarray, n_vertices: int):
     """Undirected edges and how they are used.
 
-    Returns ``(inv, counts, fwd, bwd)`` where ``inv`` maps each of the 3M
-    directed half-edges (row-major over faces; -1 for a degenerate a->a edge)
-    to its undirected edge, ``counts`` is the number of uses per undirected
-    edge and ``fwd`` / ``bwd`` how many uses go low->high / high->low index.
+    Returns ``(inv, counts, fwd, bwd, lo, hi)`` where ``inv`` maps each of
+    the 3M directed half-edges (row-major over faces; -1 for a degenerate
+    a->a edge) to its undirected edge ``lo -> hi`` (lo < hi), ``counts`` is
+    the number of uses per undirected edge and ``fwd`` / ``bwd`` how many
+    uses go low->high / high->low index.
     """
     a = faces.reshape(-1)
     b = faces[:, [1, 2, 0]].reshape(-1)
@@ -217,7 +248,8 @@ def _edge_census(faces: np.ndarray, n_vertices: int):
     inv[ok] = inv_ok.reshape(-1)
     fwd = np.bincount(inv_ok.reshape(-1), weights=(a < b)[ok], minlength=len(uniq)).astype(np.int64)
     bwd = counts - fwd
-    return inv, counts, fwd, bwd
+    n = np.int64(max(n_vertices, 1))
+    return inv, counts, fwd, bwd, uniq // n, uniq % n
 
 
 def mesh_defects(vertices, faces) -> dict:
@@ -239,11 +271,10 @@ def mesh_defects(vertices, faces) -> dict:
 
     A non-manifold edge whose uses balance (two faces a->b, two b->a: two
     cubes sharing an edge) still bounds a solid; the scanline of
-    :func:`voxelize` is exact on it and ``allow_open=True`` uses the scanline
-    for such meshes.
+    :func:`voxelize` is exact on it without a cap.
     """
     v, f = check_mesh(vertices, faces, where="mesh_defects")
-    inv, counts, fwd, bwd = _edge_census(f, len(v))
+    inv, counts, fwd, bwd, _, _ = _edge_census(f, len(v))
     boundary = int((counts == 1).sum())
     nonmanifold = int((counts > 2).sum())
     inconsistent = int(((counts >= 2) & (fwd != bwd)).sum())
@@ -271,3 +302,61 @@ def mesh_defects(vertices, faces) -> dict:
         "edges": int(len(counts)),
         "watertight": boundary == 0 and nonmanifold == 0 and inconsistent == 0,
     }
+
+
+def merge_coincident(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Faces re-indexed so that vertices with identical coordinates share one
+    index (a triangle soup becomes a mesh whose edges can be counted).
+    Coordinates are not changed; only the indices are."""
+    _, first, inverse = np.unique(np.asarray(vertices), axis=0, return_index=True, return_inverse=True)
+    return first[inverse.reshape(-1)][faces]  # each position's first vertex
+
+
+def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, int]:
+    """Faces with a consistent orientation across every edge two faces share,
+    and how many faces were turned over.
+
+    trimesh's ``repair.fix_winding`` propagates the orientation of one seed
+    face through each component (faces joined across two-face edges); where
+    the seed was itself the flipped face, the whole component comes out
+    inverted, which for nested shells would turn a cavity into solid.  So
+    each component then keeps the orientation of most of its original area:
+    a component whose flipped faces outweigh the others is turned back.
+    """
+    import trimesh
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False, validate=False)
+    if mesh.is_winding_consistent:
+        return faces, 0
+    trimesh.repair.fix_winding(mesh)
+    fixed = np.asarray(mesh.faces, dtype=np.int64)
+    flipped = np.any(fixed != faces, axis=1)
+    adj = np.asarray(mesh.face_adjacency, dtype=np.int64).reshape(-1, 2)
+    m = len(faces)
+    g = coo_matrix((np.ones(len(adj)), (adj[:, 0], adj[:, 1])), shape=(m, m))
+    ncomp, comp = connected_components(g, directed=False)
+    area = np.asarray(mesh.area_faces, dtype=np.float64)
+    turned = np.bincount(comp, weights=area * flipped, minlength=ncomp)
+    total = np.bincount(comp, weights=area, minlength=ncomp)
+    back = (turned > total / 2)[comp]
+    fixed[back] = fixed[back][:, ::-1]
+    flipped ^= back
+    return fixed, int(flipped.sum())
+
+
+def boundary_chain(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary of the faces as an integer 1-chain: directed edges
+    ``a[e] -> b[e]``, each repeated by its net multiplicity (uses a -> b
+    minus uses b -> a).  Empty iff every edge's uses balance (the mesh bounds
+    a solid).  The chain is a cycle: every vertex has as many chain edges in
+    as out."""
+    _, _, fwd, bwd, lo, hi = _edge_census(np.asarray(faces, dtype=np.int64), n_vertices)
+    net = fwd - bwd
+    sel = np.nonzero(net)[0]
+    k = net[sel]
+    src = np.where(k > 0, lo[sel], hi[sel])
+    dst = np.where(k > 0, hi[sel], lo[sel])
+    rep = np.abs(k)
+    return np.repeat(src, rep), np.repeat(dst, rep)

@@ -1,159 +1,343 @@
 """The exact scanline: the winding number of every voxel centre of a closed
-mesh, by z-columns.
+triangle chain, by z-columns.
 
-Ties are broken by a fixed rule (see :func:`scanline`): a centre exactly on the
-surface behaves as the point ``(x + eta, y + eps, z - delta)`` with
-``0 < eps << eta << delta`` infinitesimal, so an axis-aligned box
+For each triangle and each voxel column ``(x_i, y_j)`` under it, the
+triangle's contribution to the column is the 2-D winding number of the
+column point around the triangle's xy-projection (+1 for a counter-clockwise
+projection, i.e. normal z > 0; -1 for clockwise; 0 outside).  The 3-D
+winding number of a point is the sum of these over the triangles the column
+crosses *above* it (ray casting along +z); since a column's contributions
+sum to zero, that is minus the sum over those *below* it.  So each
+contribution is kept, negated, as a crossing at the first voxel of the
+column whose centre lies strictly above it, and a running sum up the column
+yields every centre's winding number.
+
+Tie rule (why this exact formulation).  The 2-D winding number of the column
+point around a triangle is itself computed by casting a ray along +x and
+counting signed edge crossings, where each *edge* decides alone whether it
+is crossed: with the edge written from its lower endpoint to its upper one
+(a fixed order that depends only on the two endpoint coordinates, not on
+which triangle asks), it is crossed iff ``y_lo <= y < y_hi`` and the point is
+strictly left of it (``w = dx*(y - y_lo) - dy*(x - x_lo) > 0``, evaluated
+with exactly these floating-point operations).  Two triangles that share an
+edge therefore get bit-identical answers for it, and since in a closed,
+consistently oriented chain every edge is traversed once in each direction,
+the contributions of all triangles to a column sum to exactly zero, in
+floating point, whatever the column hits: edges, vertices, vertical walls.
+A column through a shared edge is counted by exactly one of its two
+triangles (the half-open rules act as the symbolic perturbation
+``(x + eta, y + eps)``, 0 < eps << eta); a column through a vertex by
+exactly one triangle of its fan; a column on a silhouette fold by both (+1
+and -1 at the same height, cancelling).  Evaluating the edge function per
+triangle in the triangle's own vertex order would give the two neighbours
+rounding errors of different sign, so a column exactly on the shared edge
+could be counted twice or not at all, leaving a spurious line of voxels of
+winding +-1 above it.  A centre exactly at a crossing height is not
+"strictly above" it, which acts as moving the centre down by delta >> eta.
+So a centre exactly on the surface behaves as the point
+``(x + eta, y + eps, z - delta)``, and an axis-aligned box
 ``[x0, x1] x [y0, y1] x [z0, z1]`` holds exactly the centres with
 ``x0 <= x < x1, y0 <= y < y1, z0 < z <= z1``.
+
+The work is split in compiled passes (numba, no Python per triangle or per
+voxel): every (triangle, column) pair is tested and the crossings are kept
+as a sparse list (column, first centre above, -+1); the list is grouped by
+column; each column is swept once upward with a running sum, writing the
+volume directly.  Memory is the boolean volume plus the crossings (a few
+bytes each): no integer volume is held.  Any range of the first axis (a
+*slab*) can be filled on its own, which is how volumes beyond memory are
+written (:mod:`isoflow.mesh.slabs`) and how two threads share the work.
+These are the arithmetic and the tie rule of the earlier numpy scanline,
+operation for operation: its volumes are reproduced bit for bit.
 """
 
 from __future__ import annotations
 
 import numpy as np
-
-# Number of (triangle, column) pairs handled at once by the scanline, and the
-# bytes of temporaries each costs at most (int64 indices, float64 coordinates
-# and edge values for the pairs of one chunk).
-PAIR_CHUNK = 1 << 20
-PAIR_BYTES = 200
+from numba import njit
 
 
-def diff_dtype(m: int):
-    """Smallest integer type for the difference array: a column's partial sums
-    are bounded by the number of triangles."""
-    return np.int8 if m < 127 else (np.int16 if m < 32767 else np.int32)
 
+class ScanGrid:
+    """The per-triangle data of the scanline, computed once (O(triangles)).
 
-def scan_plan(v, f, origin, pitch, shape):
-    """Voxel-centre coordinates and, per triangle, the columns to test.
-
-    Rows: exactly the y_j with ymin <= y_j < ymax (only those can straddle an
-    edge under the half-open rule of :func:`scanline`).  Columns: the
-    triangle's x-range plus one spare column on each side; farther columns are
-    robustly outside (left of the triangle both straddled edges are crossed
-    and cancel, right of it neither is), so clipping the range changes no sum.
-    Returns ``(xc, yc, zc, T, tri, i0, j0, width, cum)``: centres, corner
-    coordinates, the triangles with work, their first column and row, row
-    width, and the running total of (triangle, column) pairs.
+    ``T`` is the (M, 3, 3) array of triangle corners in the scaled frame,
+    ``origin``, ``pitch`` and ``shape`` the grid in that frame.  Everything a
+    slab needs is here; a ScanGrid is small enough to ship to dask workers.
     """
-    nx, ny, nz = shape
-    xc = origin[0] + (np.arange(nx) + 0.5) * pitch
-    yc = origin[1] + (np.arange(ny) + 0.5) * pitch
-    zc = origin[2] + (np.arange(nz) + 0.5) * pitch
-    T = v[f]  # (M, 3, 3)
-    x, y = T[:, :, 0], T[:, :, 1]
-    j0 = np.searchsorted(yc, y.min(axis=1), side="left")
-    j1 = np.searchsorted(yc, y.max(axis=1), side="left")
-    i0 = np.maximum(np.searchsorted(xc, x.min(axis=1), side="left") - 1, 0)
-    i1 = np.minimum(np.searchsorted(xc, x.max(axis=1), side="right") + 1, nx)
-    width = np.maximum(i1 - i0, 0)
-    count = np.maximum(j1 - j0, 0) * width
-    tri = np.nonzero(count)[0]
-    cum = np.concatenate([[0], np.cumsum(count[tri])]).astype(np.int64)
-    return xc, yc, zc, T, tri, i0, j0, width, cum
+
+    def __init__(self, T: np.ndarray, origin, pitch: float, shape):
+        nx, ny, nz = (int(n) for n in shape)
+        self.shape = (nx, ny, nz)
+        self.xc = origin[0] + (np.arange(nx) + 0.5) * pitch
+        self.yc = origin[1] + (np.arange(ny) + 0.5) * pitch
+        self.zc = origin[2] + (np.arange(nz) + 0.5) * pitch
+        x, y = T[:, :, 0], T[:, :, 1]
+        # Rows: exactly the y_j with ymin <= y_j < ymax (only those can
+        # straddle an edge under the half-open rule).  Columns: the triangle's
+        # x-range plus one spare column on each side; farther columns are
+        # robustly outside (left of the triangle both straddled edges are
+        # crossed and cancel, right of it neither is).
+        self.j0 = np.searchsorted(self.yc, y.min(axis=1), side="left")
+        self.j1 = np.searchsorted(self.yc, y.max(axis=1), side="left")
+        self.i0 = np.maximum(np.searchsorted(self.xc, x.min(axis=1), side="left") - 1, 0)
+        self.i1 = np.minimum(np.searchsorted(self.xc, x.max(axis=1), side="right") + 1, nx)
+        # edge k runs from corner k to corner k+1, stored low-to-high in y so
+        # that two triangles sharing an edge evaluate it bit for bit alike
+        P = T[:, :, :2]
+        Pn = P[:, [1, 2, 0], :]
+        up = P[:, :, 1] < Pn[:, :, 1]
+        lo = np.where(up[:, :, None], P, Pn)
+        hi = np.where(up[:, :, None], Pn, P)
+        self.e_lox = np.ascontiguousarray(lo[:, :, 0])
+        self.e_loy = np.ascontiguousarray(lo[:, :, 1])
+        self.e_hiy = np.ascontiguousarray(hi[:, :, 1])
+        self.e_dx = np.ascontiguousarray(hi[:, :, 0] - lo[:, :, 0])
+        self.e_dy = np.ascontiguousarray(hi[:, :, 1] - lo[:, :, 1])
+        self.e_dir = np.where(up, 1, -1).astype(np.int8)
+        # plane of each triangle: z = A.z - (n.x (x - A.x) + n.y (y - A.y)) / n.z
+        self.A = np.ascontiguousarray(T[:, 0, :])
+        self.n = np.ascontiguousarray(np.cross(T[:, 1, :] - self.A, T[:, 2, :] - self.A))
+        self.zmin = T[:, :, 2].min(axis=1)
+        self.zmax = T[:, :, 2].max(axis=1)
+
+    def pairs(self, xa: int = 0, xb: int | None = None) -> int:
+        """Number of (triangle, column) pairs tested for the slab [xa, xb)."""
+        xb = self.shape[0] if xb is None else xb
+        w = np.maximum(np.minimum(self.i1, xb) - np.maximum(self.i0, xa), 0)
+        return int((w * np.maximum(self.j1 - self.j0, 0)).sum())
+
+    def crossings(self, xa: int, xb: int):
+        """The crossings of the columns of slab [xa, xb), grouped by column.
+
+        Returns ``(start, kz, val)``: the crossings of local column
+        ``c = (i - xa) * ny + j`` are ``kz[start[c]:start[c+1]]`` (index of
+        the first centre strictly above the crossing, nz if none) with values
+        ``val`` (minus the triangle's 2-D winding number around the column).
+        """
+        nx, ny, nz = self.shape
+        lo = np.maximum(self.i0, xa)
+        hi = np.minimum(self.i1, xb)
+        tri = np.nonzero((hi > lo) & (self.j1 > self.j0))[0]
+        counts = np.zeros(len(tri) + 1, dtype=np.int64)
+        args = (tri, lo, hi, self.j0, self.j1, self.xc, self.yc, self.e_lox, self.e_loy,
+                self.e_hiy, self.e_dx, self.e_dy, self.e_dir)
+        _count_hits(*args, counts)
+        offsets = np.cumsum(counts)
+        offsets[1:] = offsets[:-1].copy()
+        offsets[0] = 0
+        total = int(counts.sum())
+        col = np.empty(total, dtype=np.int64)
+        kz = np.empty(total, dtype=np.int32)
+        val = np.empty(total, dtype=np.int8)
+        _write_hits(*args, offsets, self.zc, self.A, self.n, self.zmin, self.zmax, xa, ny,
+                    col, kz, val)
+        ncol = (xb - xa) * ny
+        start = np.zeros(ncol + 1, dtype=np.int64)
+        skz = np.empty(total, dtype=np.int32)
+        sval = np.empty(total, dtype=np.int8)
+        _group_by_column(col, kz, val, start, skz, sval)
+        return start, skz, sval
 
 
-def scanline(shape, plan, progress):
-    """Winding number of every voxel centre by a z-column scanline.
+# ---------------------------------------------------------------------------
+# compiled passes
+# ---------------------------------------------------------------------------
 
-    For each triangle and each voxel column ``(x_i, y_j)`` under it, the
-    triangle's contribution to the column is the 2-D winding number of the
-    column point around the triangle's xy-projection (+1 for a counter-
-    clockwise projection, i.e. normal z > 0; -1 for clockwise; 0 outside).
-    The 3-D winding number of a point is the sum of these over the triangles
-    the column crosses *above* it (ray casting along +z); since a column's
-    contributions sum to zero, that is minus the sum over those *below* it.
-    So each contribution is stored, negated, in a difference array at the
-    first voxel of the column whose centre lies strictly above the crossing,
-    and a cumulative sum along z yields every centre's winding number.
+@njit(cache=True, nogil=True)
+def _winding_2d(t, px, py, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir):
+    """2-D winding number of the column point around triangle t's projection:
+    signed crossings of the ray along +x, each edge deciding alone (exactly
+    these floating-point operations, so shared edges agree bit for bit)."""
+    wn = 0
+    for k in range(3):
+        loy = e_loy[t, k]
+        if loy <= py and py < e_hiy[t, k]:
+            w = e_dx[t, k] * (py - loy) - e_dy[t, k] * (px - e_lox[t, k])
+            if w > 0:
+                wn += e_dir[t, k]
+    return wn
 
-    Tie rule (why this exact formulation).  The 2-D winding number of the
-    column point around a triangle is itself computed by casting a ray along
-    +x and counting signed edge crossings, where each *edge* decides alone
-    whether it is crossed: with the edge written from its lower endpoint to
-    its upper one (a fixed order that depends only on the two endpoint
-    coordinates, not on which triangle asks), it is crossed iff
-    ``y_lo <= y < y_hi`` and the point is strictly left of it
-    (``w = dx*(y - y_lo) - dy*(x - x_lo) > 0``, evaluated with exactly these
-    floating-point operations).  Two triangles that share an edge therefore
-    get bit-identical answers for it, and since in a closed, consistently
-    oriented mesh every edge is traversed once in each direction, the
-    contributions of all triangles to a column sum to exactly zero, in
-    floating point, whatever the column hits: edges, vertices, vertical walls.
-    A column through a shared edge is counted by exactly one of its two
-    triangles (the half-open rules act as the symbolic perturbation
-    ``(x + eta, y + eps)``, 0 < eps << eta); a column through a vertex by
-    exactly one triangle of its fan; a column on a silhouette fold by both
-    (+1 and -1 at the same height, cancelling).  Evaluating the edge function
-    per triangle in the triangle's own vertex order would give the two
-    neighbours rounding errors of different sign, so a column exactly on the
-    shared edge could be counted twice or not at all, leaving a spurious
-    line of voxels of winding +-1 above it.  A centre exactly at a crossing
-    height is not "strictly above" it, which acts as moving the centre down by
-    delta >> eta: a box [z0, z1] holds the centres with z0 < z <= z1.
-    """
-    nx, ny, nz = shape
-    xc, yc, zc, T, tri, i0, j0, width, cum = plan
-    total = int(cum[-1])
-    dtype = diff_dtype(len(T))
-    diff = np.zeros(nx * ny * (nz + 1), dtype=dtype)
 
-    # per-triangle edge data, edge k from corner k to corner k+1, stored in
-    # the fixed low-to-high (in y) order
-    P = T[:, :, :2]
-    Pn = P[:, [1, 2, 0], :]
-    up = P[:, :, 1] < Pn[:, :, 1]
-    lo = np.where(up[:, :, None], P, Pn)
-    hi = np.where(up[:, :, None], Pn, P)
-    e_lox, e_loy, e_hiy = lo[:, :, 0], lo[:, :, 1], hi[:, :, 1]
-    e_dx = hi[:, :, 0] - lo[:, :, 0]
-    e_dy = hi[:, :, 1] - lo[:, :, 1]
-    e_dir = np.where(up, 1, -1).astype(np.int8)
-
-    # plane of each triangle: z = A.z - (n.x (x - A.x) + n.y (y - A.y)) / n.z
-    A = T[:, 0, :]
-    n = np.cross(T[:, 1, :] - A, T[:, 2, :] - A)
-    zmin, zmax = T[:, :, 2].min(axis=1), T[:, :, 2].max(axis=1)
-
-    nchunks = max(1, -(-total // PAIR_CHUNK))
-    for c in range(nchunks):
-        s, e = c * PAIR_CHUNK, min(total, (c + 1) * PAIR_CHUNK)
-        if e > s:
-            gid = np.arange(s, e, dtype=np.int64)
-            slot = np.searchsorted(cum, gid, side="right") - 1
-            t = tri[slot]
-            local = gid - cum[slot]
-            w_t = width[t]
-            i = i0[t] + local % w_t
-            j = j0[t] + local // w_t
+@njit(cache=True, nogil=True)
+def _count_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, counts):
+    for q in range(len(tri)):
+        t = tri[q]
+        c = 0
+        for i in range(lo[t], hi[t]):
             px = xc[i]
-            py = yc[j]
-            wn = np.zeros(len(t), dtype=np.int8)
-            for k in range(3):
-                loy = e_loy[t, k]
-                crossed = (loy <= py) & (py < e_hiy[t, k])
-                w = e_dx[t, k] * (py - loy) - e_dy[t, k] * (px - e_lox[t, k])
-                crossed &= w > 0
-                wn += np.where(crossed, e_dir[t, k], np.int8(0)).astype(np.int8)
-            hit = np.nonzero(wn)[0]
-            if len(hit):
-                t, i, j, px, py, wn = t[hit], i[hit], j[hit], px[hit], py[hit], wn[hit]
-                with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for j in range(j0[t], j1[t]):
+                if _winding_2d(t, px, yc[j], e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir) != 0:
+                    c += 1
+        counts[q] = c
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _write_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, offsets,
+                zc, A, n, zmin, zmax, xa, ny, col, kz, val):
+    for q in range(len(tri)):
+        t = tri[q]
+        o = offsets[q]
+        for i in range(lo[t], hi[t]):
+            px = xc[i]
+            for j in range(j0[t], j1[t]):
+                py = yc[j]
+                wn = _winding_2d(t, px, py, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir)
+                if wn != 0:
                     z = A[t, 2] - (n[t, 0] * (px - A[t, 0]) + n[t, 1] * (py - A[t, 1])) / n[t, 2]
-                # a (nearly) vertical triangle can be hit through rounding only;
-                # its crossing lies somewhere on it: clamp to its z-range
-                z = np.where(np.isfinite(z), z, 0.5 * (zmin[t] + zmax[t]))
-                z = np.clip(z, zmin[t], zmax[t])
-                kz = np.searchsorted(zc, z, side="right")  # first centre strictly above
-                idx = (i * ny + j) * (nz + 1) + kz
-                np.add.at(diff, idx, (-wn).astype(dtype))
-        if progress is not None:
-            progress(c + 1, nchunks + 1)
-    diff = diff.reshape(nx, ny, nz + 1)
-    np.cumsum(diff, axis=2, dtype=dtype, out=diff)
-    vol = diff[:, :, :nz] != 0
-    del diff
-    if progress is not None:
-        progress(nchunks + 1, nchunks + 1)
-    return vol
+                    # a (nearly) vertical triangle can be hit through rounding
+                    # only; its crossing lies somewhere on it: clamp to its z-range
+                    if not np.isfinite(z):
+                        z = 0.5 * (zmin[t] + zmax[t])
+                    z = min(max(z, zmin[t]), zmax[t])
+                    col[o] = (i - xa) * ny + j
+                    kz[o] = np.searchsorted(zc, z, side="right")  # first centre strictly above
+                    val[o] = -wn
+                    o += 1
+
+
+@njit(cache=True, nogil=True)
+def _group_by_column(col, kz, val, start, skz, sval):
+    """Counting sort of the crossings by column; within a column by kz."""
+    ncol = len(start) - 1
+    for e in range(len(col)):
+        start[col[e] + 1] += 1
+    for c in range(ncol):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    for e in range(len(col)):
+        c = col[e]
+        skz[fill[c]] = kz[e]
+        sval[fill[c]] = val[e]
+        fill[c] += 1
+    for c in range(ncol):  # insertion sort: a column has a handful of crossings
+        for a in range(start[c] + 1, start[c + 1]):
+            k, v = skz[a], sval[a]
+            b = a - 1
+            while b >= start[c] and skz[b] > k:
+                skz[b + 1] = skz[b]
+                sval[b + 1] = sval[b]
+                b -= 1
+            skz[b + 1] = k
+            sval[b + 1] = v
+
+
+@njit(cache=True, nogil=True)
+def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
+    """Fill local rows r0 <= i < r1 of ``vol`` (slab-local first index).
+
+    Each column is swept upward with the running winding number W (the sum
+    of the values of the crossings below each centre).  A voxel is in iff
+    ``W != R`` where R is 0, or ``rule[...]`` inside the box
+    ``rbox = (i0, i1, j0, j1, k0, k1)`` (slab-local).  Codes 127 / -128 in
+    ``rule`` force a voxel in / out.  ``stats`` counts voxels with
+    ``|W - R| >= 2`` and with ``W - R`` positive and negative.  ``vol`` must
+    be all False: only voxels inside are written (pages of a fresh
+    ``np.zeros`` array that stay outside are never touched).
+    """
+    ny, nz = vol.shape[1], vol.shape[2]
+    bi0, bi1, bj0, bj1, bk0, bk1 = rbox[0], rbox[1], rbox[2], rbox[3], rbox[4], rbox[5]
+    over = 0
+    pos_n = 0
+    neg_n = 0
+    for i in range(r0, r1):
+        for j in range(ny):
+            c = i * ny + j
+            a, b = start[c], start[c + 1]
+            ruled = bi0 <= i and i < bi1 and bj0 <= j and j < bj1
+            s = 0
+            pos = 0
+            for e in range(a, b + 1):
+                top = nz if e == b else min(kz[e], nz)
+                if top > pos:
+                    if ruled and pos < bk1 and top > bk0:
+                        for k in range(pos, top):
+                            r = 0
+                            if bk0 <= k and k < bk1:
+                                r = rule[i - bi0, j - bj0, k - bk0]
+                            if r == 127:
+                                vol[i, j, k] = True
+                            elif r != -128:
+                                d = s - r
+                                if d != 0:
+                                    vol[i, j, k] = True
+                                if d >= 2 or d <= -2:
+                                    over += 1
+                                if d > 0:
+                                    pos_n += 1
+                                elif d < 0:
+                                    neg_n += 1
+                    elif s != 0:  # the volume is zero: only runs inside are written
+                        vol[i, j, pos:top] = True
+                        n = top - pos
+                        if s >= 2 or s <= -2:
+                            over += n
+                        if s > 0:
+                            pos_n += n
+                        else:
+                            neg_n += n
+                    pos = top
+                if e < b:
+                    s += val[e]
+    stats[0] += over
+    stats[1] += pos_n
+    stats[2] += neg_n
+
+
+# ---------------------------------------------------------------------------
+# entry point
+# ---------------------------------------------------------------------------
+
+def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None, threads: int = 1):
+    """The volume of slab [xa, xb) of ``grid``: voxel in iff ``W != R``.
+
+    ``rule`` is None (R = 0: the nonzero rule of a closed chain) or
+    ``(array, (i0, j0, k0))``: R on a box of the grid, in grid coordinates
+    (see :func:`_sweep` for the codes).  ``out`` is an optional boolean
+    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (3,)) is
+    incremented with the counts of :func:`_sweep`.  With ``threads=2`` the
+    slab is split in two halves filled at once (compiled code runs without
+    the GIL).
+    """
+    nx, ny, nz = grid.shape
+    if out is None:
+        out = np.zeros((xb - xa, ny, nz), dtype=bool)
+    if stats is None:
+        stats = np.zeros(3, dtype=np.int64)
+    if rule is None:
+        rarr, rbox = np.zeros((1, 1, 1), dtype=np.int8), np.zeros(6, dtype=np.int64)
+    else:
+        rarr, (ri, rj, rk) = rule
+        # the rule box in slab-local coordinates (may be empty or clipped)
+        rbox = np.array([ri - xa, ri - xa + rarr.shape[0], rj, rj + rarr.shape[1],
+                         rk, rk + rarr.shape[2]], dtype=np.int64)
+    halves = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, (xa + xb) // 2), ((xa + xb) // 2, xb)]
+
+    def run(a, b):
+        start, kz, val = grid.crossings(a, b)
+        st = np.zeros(3, dtype=np.int64)
+        shift = np.array([a - xa, a - xa, 0, 0, 0, 0], dtype=np.int64)  # to this half's rows
+        _sweep(out[a - xa:b - xa], start, kz, val, 0, b - a, rarr, rbox - shift, st)
+        return st
+
+    if len(halves) == 1:
+        stats += run(xa, xb)
+    else:
+        for st in two_threads().map(lambda ab: run(*ab), halves):
+            stats += st
+    return out
+
+
+_POOL = []
+
+
+def two_threads():
+    """One pool of two threads for the compiled passes (which release the
+    GIL), kept for the process: starting threads per slab cost more than a
+    slab's work on a busy machine."""
+    if not _POOL:
+        from concurrent.futures import ThreadPoolExecutor
+
+        _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="isoflow-voxelize"))
+    return _POOL[0]
+

@@ -89,6 +89,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     with reading(where, "zarr"):
         data = np.asarray(array[...])
     if multiscale is None:
+        # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
+        # the grid in the attributes ``pitch`` and ``origin`` (x, y, z order)
+        attrs = dict(getattr(array, "attrs", {}) or {})
+        if "pitch" in attrs and "origin" in attrs:
+            return RawVolume(data, np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64))
         return RawVolume(data)
     names = axis_names(multiscale, data.ndim, where)
     scale, shift = placement_of(multiscale, level, data.ndim, where)

@@ -1,0 +1,147 @@
+"""Voxelising beyond memory: the volume written slab by slab into a chunked
+zarr array, as dask tasks.
+
+A slab is a range of the first axis, a whole number of zarr chunks thick and
+spanning the other two axes, so that no two tasks write the same chunk.
+Every task gets the :class:`~isoflow.mesh.voxelize.VoxelPlan` (O(triangles):
+the mesh, its cap and the grid) and fills its slab exactly as the in-memory
+voxeliser fills the same rows (same crossings, same rule), so the store
+equals :func:`~isoflow.mesh.voxelize.voxelize`'s volume voxel for voxel.
+Memory is bounded by a slab per worker plus the mesh.  The tasks are plain
+``dask.delayed`` calls, so the same code runs on a ``dask.distributed``
+cluster (``scheduler=client``) when the store is on a shared file system.
+"""
+
+from __future__ import annotations
+
+import shutil
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import IsoflowError
+from ..scale.chunks import import_dask, import_zarr
+from ..scale.memory import check_fits, gib
+from .grid import fmt_count
+from .load import load_mesh
+
+#: a slab (and so a zarr chunk's first side) holds at most this many voxels
+SLAB_BYTES = 1 << 27
+#: zarr chunk sides along the second and third axes
+CHUNK_YZ = 256
+#: slabs in flight with the default (threaded) scheduler
+WORKERS = 2
+
+
+def check_store_path(path, force: bool) -> Path:
+    """A ``.zarr`` output checked before any work: an existing store is
+    replaced only with ``force``, and only if it is a zarr store (never an
+    arbitrary directory)."""
+    path = Path(path)
+    if path.suffix.lower() != ".zarr":
+        raise IsoflowError(f"{path}: a zarr store must end in .zarr")
+    if path.exists():
+        if not force:
+            raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+        marks = ("zarr.json", ".zarray", ".zgroup")
+        if not path.is_dir() or not (any((path / m).exists() for m in marks) or not any(path.iterdir())):
+            raise IsoflowError(f"{path}: exists and is not a zarr store; not replacing it")
+    if not path.parent.is_dir():
+        raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
+    return path
+
+
+def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[int, int]]]:
+    """Zarr chunks and slabs: a slab is one chunk thick along the first axis,
+    at most SLAB_BYTES voxels (a power of two rows, at most 64)."""
+    nx, ny, nz = shape
+    if chunks is None:
+        rows = max(1, min(64, SLAB_BYTES // max(1, ny * nz)))
+        rows = 1 << (rows.bit_length() - 1)
+        chunks = (min(rows, nx), min(CHUNK_YZ, ny), min(CHUNK_YZ, nz))
+    chunks = tuple(int(c) for c in chunks)
+    if len(chunks) != 3 or min(chunks) < 1:
+        raise IsoflowError(f"chunks must be three positive integers, got {chunks}")
+    return chunks, [(a, min(a + chunks[0], nx)) for a in range(0, nx, chunks[0])]
+
+
+def _slab_task(plan, store: str, xa: int, xb: int):
+    """Fill rows [xa, xb) and write them to the store; the slab's counts."""
+    zarr = import_zarr()
+    stats = np.zeros(3, dtype=np.int64)
+    vol = plan.fill(xa, xb, stats=stats, threads=1)
+    z = zarr.open_array(store, mode="r+")
+    z[xa:xb] = vol
+    return int(np.count_nonzero(vol)), stats
+
+
+def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool = False, force: bool = False,
+                     chunks=None, scheduler=None, max_bytes: int | None = None, progress=None,
+                     report: dict | None = None) -> dict:
+    """Voxelise a mesh into a chunked zarr array at ``path`` without holding
+    the volume.
+
+    ``source`` is a mesh file or ``(vertices, faces)``; the grid, the rule
+    and ``strict`` are those of :func:`~isoflow.mesh.voxelize.voxelize`.
+    The array (bool, at the root of the store) carries ``pitch`` and
+    ``origin`` as attributes.  ``chunks`` defaults to slabs of at most 128
+    MiB by 256 x 256; ``scheduler`` is any dask scheduler (default: two
+    threads).  ``progress(done, total)`` is called per slab (local
+    schedulers).  Returns ``shape``, ``chunks``, ``voxels``, ``pitch``,
+    ``origin``.
+    """
+    from .voxelize import Solid, plan_voxels
+
+    path = check_store_path(path, force)
+    where = str(source) if isinstance(source, (str, Path)) else "mesh"
+    v, f = load_mesh(source) if isinstance(source, (str, Path)) else source  # names the file itself
+    try:
+        v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
+        chunks, slabs = slab_layout(shape, chunks)
+        if max(shape[0] * shape[1], shape[1] * shape[2]) >= 2**40:
+            raise IsoflowError(f"voxelize: {what} needs a {'x'.join(fmt_count(n, False) for n in shape)} grid: "
+                               "too many columns even for a zarr store")
+        what = f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels"
+        hint = f"give smaller chunks (a slab of one row holds {gib(shape[1] * shape[2])})"
+        check_fits(WORKERS * chunks[0] * shape[1] * shape[2], what, hint=hint, budget=max_bytes)  # before any work
+        solid = Solid(v, f, strict=strict)
+        _, _, origin_s, pitch_s = frame
+        plan = solid.prepare(frame, origin_s, pitch_s, shape)
+        slab = chunks[0] * shape[1] * shape[2] + plan.slab_bytes(chunks[0])
+        check_fits(WORKERS * slab + 2 * plan.Tm.nbytes, what, hint=hint, budget=max_bytes)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{where}: {exc}") from None
+    dask, _ = import_dask()
+    zarr = import_zarr()
+    if path.exists():
+        shutil.rmtree(path)
+    z = zarr.open_array(store=str(path), mode="w", shape=shape, chunks=chunks, dtype=bool)
+    z.attrs.update({"pitch": float(pitch), "origin": [float(x) for x in origin],
+                    "source": where, "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
+    from dask import delayed
+
+    plan_d = delayed(plan, pure=True)
+    tasks = [delayed(_slab_task, pure=False)(plan_d, str(path), a, b, dask_key_name=("voxelize-slab", n))
+             for n, (a, b) in enumerate(slabs)]
+    done = [0]
+
+    def posttask(key, result, dsk, state, worker_id):
+        if isinstance(key, tuple) and key and key[0] == "voxelize-slab":
+            done[0] += 1
+            progress(done[0], len(slabs))
+
+    from dask.callbacks import Callback
+
+    sched = scheduler if scheduler is not None else "threads"
+    kwargs = {"num_workers": WORKERS} if sched == "threads" else {}
+    with Callback(posttask=posttask) if progress is not None else nullcontext():
+        results = dask.compute(*tasks, scheduler=sched, **kwargs)
+    voxels = sum(r[0] for r in results)
+    stats = np.sum([r[1] for r in results], axis=0)
+    if report is not None:
+        report.update(defects=solid.defects, flipped_faces=solid.flipped, chain_edges=len(plan.E),
+                      overlap_voxels=int(stats[0]), note=solid.note(stats))
+    return {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
+            "origin": np.asarray(origin, dtype=np.float64)}
+

@@ -1,0 +1,381 @@
+"""Meshes that are open, non-manifold, inconsistently oriented, overlapping or
+a soup: voxelised by the generalised winding number by default.
+
+References from outside the code under test: libigl's exact
+``igl.winding_number`` (the GWN rule |w| > 1/2 on sampled voxel centres,
+excluding centres within 0.02 of |w| = 1/2), the digests of the volumes that
+the scanline gave before this change on every closed sample mesh
+(tests/mesh/data/closed_digests.json, written from commit 0b245b6 by
+make_closed_digests.py), trimesh (edge counts, file export), and the
+in-memory voxeliser for the zarr store written slab by slab.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from isoflow.cli import main
+from isoflow.errors import IsoflowError
+from isoflow.mesh.load import MESH_SUFFIXES, load_mesh, mesh_defects
+from isoflow.mesh.voxelize import voxelize
+
+igl = pytest.importorskip("igl")
+trimesh = pytest.importorskip("trimesh")
+
+ROOT = Path(__file__).resolve().parents[2]
+MESHES = ROOT / "meshes"
+DIGESTS = json.loads((Path(__file__).with_name("data") / "closed_digests.json").read_text())
+
+
+def centres(idx, origin, pitch):
+    return origin + (np.asarray(idx, dtype=np.float64) + 0.5) * pitch
+
+
+def assert_gwn_rule(v, f, vol, origin, pitch, rng, n=4000):
+    """The volume equals |igl.winding_number| > 1/2 on sampled centres (all
+    of them for small grids), away from |w| = 1/2; returns how many counted."""
+    idx = np.argwhere(np.ones(vol.shape, dtype=bool))
+    if len(idx) > n:
+        idx = idx[rng.choice(len(idx), n, replace=False)]
+    w = igl.winding_number(np.asarray(v, np.float64), np.asarray(f, np.int64), centres(idx, origin, pitch))
+    far = np.abs(np.abs(w) - 0.5) > 0.02
+    got = vol[tuple(idx.T)]
+    bad = far & (got != (np.abs(w) > 0.5))
+    assert not bad.any(), (int(bad.sum()), w[bad][:5], got[bad][:5])
+    assert got[far].any()
+    return int(far.sum())
+
+
+# ---------------------------------------------------------------------------
+# closed meshes: not a voxel changes
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("entry", DIGESTS["volumes"], ids=lambda e: f"{e['mesh']}@{e['resolution']}")
+def test_closed_meshes_bit_identical_to_before(entry):
+    v, f = load_mesh(MESHES / entry["mesh"])
+    report = {}
+    vol, _, _ = voxelize(v, f, resolution=entry["resolution"], report=report)
+    assert list(vol.shape) == entry["shape"] and int(vol.sum()) == entry["voxels"]
+    assert hashlib.sha256(np.packbits(vol).tobytes()).hexdigest() == entry["sha256"]
+    assert report["chain_edges"] == 0
+
+
+def test_every_closed_sample_mesh_has_digests():
+    closed = set()
+    for p in MESHES.iterdir():
+        if p.suffix.lower() in (".obj", ".ply", ".off", ".stl"):
+            d = mesh_defects(*load_mesh(p))
+            if not d["boundary_edges"] and not d["inconsistent_edges"]:
+                closed.add(p.name)
+    assert closed == {e["mesh"] for e in DIGESTS["volumes"]} and len(closed) == 12
+
+
+# ---------------------------------------------------------------------------
+# real open meshes against libigl
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("name,res", [("cube_no_bottom.obj", 13), ("cube_no_bottom.obj", 40),
+                                      ("target.obj", 24), ("target.obj", 61),
+                                      ("plane_holes.obj", 32), ("plane_holes.obj", 80)])
+def test_open_meshes_match_libigl_winding_number(name, res, rng):
+    v, f = load_mesh(MESHES / name)
+    d = mesh_defects(v, f)
+    # isoflow's weld agrees with trimesh's merge of positions on the open edges
+    tm = trimesh.load(MESHES / name, force="mesh", process=False)
+    tm.merge_vertices(merge_tex=True, merge_norm=True)
+    assert d["boundary_edges"] == len(trimesh.grouping.group_rows(tm.edges_sorted, require_count=1)) > 0
+    report = {}
+    vol, origin, pitch = voxelize(v, f, resolution=res, report=report)
+    assert report["chain_edges"] == d["boundary_edges"]
+    assert f"{d['boundary_edges']} boundary edges" in report["note"]
+    assert assert_gwn_rule(v, f, vol, origin, pitch, rng) > 1000
+
+
+def test_scanned_bunny_with_holes_matches_libigl(rng):
+    """The Stanford bunny scan as pymeshlab ships it (holes in its base)."""
+    pymeshlab = pytest.importorskip("pymeshlab")
+    path = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny10k_textured.obj"
+    if not path.is_file():
+        pytest.skip("pymeshlab's sample bunny is not installed")
+    v, f = load_mesh(path)
+    assert mesh_defects(v, f)["boundary_edges"] > 0
+    vol, origin, pitch = voxelize(v, f, resolution=48)
+    assert_gwn_rule(v, f, vol, origin, pitch, rng)
+
+
+def test_centres_on_the_hole_its_rim_and_faces():
+    """cube_no_bottom (the cube [-1, 1]^3 without one face) on a grid whose
+    centres lie on the missing face's plane, on its rim and on the other
+    faces: ties everywhere; away from |w| = 1/2 the GWN rule holds."""
+    v, f = load_mesh(MESHES / "cube_no_bottom.obj")
+    assert np.array_equal(v.min(0), [-1, -1, -1]) and np.array_equal(v.max(0), [1, 1, 1])
+    vol, origin, pitch = voxelize(v, f, pitch=0.25, grid=([-1.625] * 3, (14, 14, 14)))
+    c = centres(np.argwhere(np.ones(vol.shape, bool)), origin, pitch)
+    assert (c == -1).any() and (c == 1).any()  # layers of centres on every face's plane
+    # a centre on the surface itself is decided by the scanline's tie rule:
+    # as the point (x + eta, y + eps, z - delta), 0 < eps << eta << delta
+    # (libigl gives the mean of the two sides there); so compare there
+    w = igl.winding_number(v, f, c + np.array([1e-7, 1e-9, -1e-5]) * pitch)
+    far = np.abs(np.abs(w) - 0.5) > 0.02
+    on = igl.point_mesh_squared_distance(c, v, f)[0] == 0
+    assert on[far].sum() > 100 and far.sum() > 2000
+    assert np.array_equal(vol.reshape(-1)[far], np.abs(w[far]) > 0.5)
+    assert not vol.all() and vol.any()
+
+
+def test_random_soups_of_open_sheets_match_libigl(rng):
+    """Random open sheets (pieces of spheres and random triangles, some
+    overlapping, some inverted): exact against libigl."""
+    for _ in range(6):
+        parts = []
+        for _ in range(rng.integers(1, 4)):
+            m = trimesh.creation.icosphere(subdivisions=2, radius=rng.uniform(0.3, 1.0))
+            m.apply_translation(rng.uniform(-0.5, 0.5, 3))
+            keep = rng.random(len(m.faces)) < rng.uniform(0.5, 0.95)
+            faces = m.faces[keep]
+            if rng.random() < 0.3:
+                faces = faces[:, ::-1]
+            parts.append((m.vertices, faces))
+        tri = rng.uniform(-1, 1, (3, 3, 3))
+        parts.append((tri.reshape(-1, 3), np.arange(9).reshape(3, 3)))
+        vs, fs, n = [], [], 0
+        for pv, pf in parts:
+            vs.append(pv)
+            fs.append(pf + n)
+            n += len(pv)
+        v, f = np.concatenate(vs), np.concatenate(fs)
+        vol, origin, pitch = voxelize(v, f, resolution=int(rng.integers(12, 30)))
+        assert_gwn_rule(v, f, vol, origin, pitch, rng)
+
+
+def test_nested_open_shells_with_winding_numbers_beyond_one(rng):
+    """Four nested open bowls (a sphere less its top, scaled): |w| reaches
+    about 3.7, so the cap's solid angles sum over several turns; then half of
+    them inverted."""
+    m = trimesh.creation.icosphere(subdivisions=3)
+    faces = m.faces[m.triangles_center[:, 2] < 0.5]
+    v = np.concatenate([m.vertices * (1 + 0.1 * k) + rng.normal(0, 0.01, 3) for k in range(4)])
+    f = np.concatenate([faces + k * len(m.vertices) for k in range(4)])
+    for ff in (f, np.concatenate([f[: len(f) // 2], f[len(f) // 2:, ::-1]])):
+        vol, origin, pitch = voxelize(v, ff, resolution=40)
+        assert_gwn_rule(v, ff, vol, origin, pitch, rng)
+    w = igl.winding_number(v, f, np.zeros((1, 3)) + [0, 0, -0.2])
+    assert abs(w[0]) > 3
+
+
+# ---------------------------------------------------------------------------
+# the acceptance cases, each with its note
+# ---------------------------------------------------------------------------
+
+def _concat(*meshes):
+    vs, fs, n = [], [], 0
+    for v, f in meshes:
+        vs.append(np.asarray(v, np.float64))
+        fs.append(np.asarray(f, np.int64) + n)
+        n += len(v)
+    return np.concatenate(vs), np.concatenate(fs)
+
+
+def test_triangle_soup_is_the_welded_solid():
+    m = trimesh.creation.icosphere(subdivisions=2)
+    soup_v = m.vertices[m.faces].reshape(-1, 3)
+    soup_f = np.arange(len(soup_v)).reshape(-1, 3)
+    assert mesh_defects(soup_v, soup_f)["boundary_edges"] == 3 * len(m.faces)
+    report = {}
+    vol, _, _ = voxelize(soup_v, soup_f, resolution=20, report=report)
+    ref, _, _ = voxelize(m.vertices, m.faces, resolution=20)
+    assert np.array_equal(vol, ref) and report["chain_edges"] == 0
+    assert "triangle soup" in report["note"]
+
+
+def test_flipped_faces_are_turned_back_and_cavities_kept(rng):
+    """A hollow ball (outer shell outward, inner shell inward: a cavity) with
+    a few faces of each shell flipped: repaired per shell by the orientation
+    of most of its area, so the cavity stays (b2 = 1) and the result equals
+    the consistent mesh's."""
+    outer = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
+    inner = trimesh.creation.icosphere(subdivisions=3, radius=0.5)
+    v, f = _concat((outer.vertices, outer.faces), (inner.vertices, inner.faces[:, ::-1]))
+    ref, _, _ = voxelize(v, f, resolution=24)
+    bad = f.copy()
+    flip = rng.choice(len(f), 9, replace=False)
+    bad[flip] = bad[flip][:, ::-1]
+    report = {}
+    vol, _, _ = voxelize(v, bad, resolution=24, report=report)
+    assert np.array_equal(vol, ref)
+    assert report["flipped_faces"] == 9 and "9 flipped faces" in report["note"]
+    from scipy import ndimage
+
+    assert ndimage.label(~np.pad(vol, 1))[1] == 2  # outside and the cavity
+
+
+def test_overlapping_closed_shells_give_their_union(rng):
+    a = trimesh.creation.icosphere(subdivisions=3, radius=0.6)
+    b = trimesh.creation.icosphere(subdivisions=3, radius=0.6)
+    b.apply_translation([0.5, 0.1, 0.0])
+    v, f = _concat((a.vertices, a.faces), (b.vertices, b.faces))
+    report = {}
+    vol, origin, pitch = voxelize(v, f, resolution=30, report=report)
+    c = centres(np.argwhere(np.ones(vol.shape, bool)), origin, pitch)
+    in_a = igl.winding_number(a.vertices, a.faces, c) > 0.5  # each shell alone is closed
+    in_b = igl.winding_number(b.vertices, b.faces, c) > 0.5
+    assert np.array_equal(vol.reshape(-1), in_a | in_b)
+    assert report["overlap_voxels"] == int((in_a & in_b).sum()) > 0
+    assert "two or more layers" in report["note"] and "union" in report["note"]
+
+
+def test_non_manifold_fin_on_a_box(rng):
+    """A box with a fin: a triangle on one of its edges (three faces on that
+    edge, uses unbalanced): read by the GWN, exactly as libigl."""
+    box = trimesh.creation.box(extents=[1, 1, 1])
+    v = np.concatenate([box.vertices, [[1.2, 0.9, 0.1]]])
+    e = box.edges_unique[0]
+    f = np.concatenate([box.faces, [[e[0], e[1], len(v) - 1]]])
+    d = mesh_defects(v, f)
+    assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 2
+    report = {}
+    vol, origin, pitch = voxelize(v, f, resolution=16, report=report)
+    assert "1 non-manifold edge;" in report["note"] and "|w| > 1/2" in report["note"]
+    assert_gwn_rule(v, f, vol, origin, pitch, rng)
+
+
+def test_inverted_and_outward_shells_are_named():
+    a = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    b = trimesh.creation.icosphere(subdivisions=2, radius=0.5)
+    b.apply_translation([2, 0, 0])
+    v, f = _concat((a.vertices, a.faces), (b.vertices, b.faces[:, ::-1]))
+    report = {}
+    vol, _, _ = voxelize(v, f, resolution=24, report=report)
+    ref, _, _ = voxelize(v, np.concatenate([a.faces, b.faces + len(a.vertices)]), resolution=24)
+    assert np.array_equal(vol, ref)
+    assert "both positive and negative" in report["note"]
+
+
+# ---------------------------------------------------------------------------
+# beyond memory: a zarr store slab by slab
+# ---------------------------------------------------------------------------
+
+zarr = pytest.importorskip("zarr")
+
+
+@pytest.mark.parametrize("name,res,chunks", [("target.obj", 37, (7, 5, 9)), ("target.obj", 37, (1, 13, 4)),
+                                             ("bob_small.ply", 29, (5, 29, 3)), ("plane_holes.obj", 40, None)])
+def test_zarr_store_equals_the_in_memory_volume(tmp_path, name, res, chunks):
+    from isoflow.mesh.slabs import voxelize_to_zarr
+
+    v, f = load_mesh(MESHES / name)
+    ref, origin, pitch = voxelize(v, f, resolution=res)
+    calls = []
+    out = voxelize_to_zarr(MESHES / name, tmp_path / "v.zarr", resolution=res, chunks=chunks,
+                           progress=lambda d, t: calls.append((d, t)))
+    z = zarr.open_array(str(tmp_path / "v.zarr"), mode="r")
+    assert z.dtype == bool and tuple(z.shape) == ref.shape and out["voxels"] == int(ref.sum())
+    if chunks:
+        assert tuple(z.chunks) == chunks
+    assert np.array_equal(z[:], ref)
+    assert z.attrs["pitch"] == pitch and np.allclose(z.attrs["origin"], origin, rtol=0, atol=0)
+    assert calls and calls[-1][0] == calls[-1][1] == -(-ref.shape[0] // z.chunks[0])
+
+
+def test_zarr_store_on_a_distributed_cluster(tmp_path):
+    """The slab tasks run in worker processes of a dask.distributed cluster
+    (the plan is pickled to them) and write the same store."""
+    distributed = pytest.importorskip("distributed")
+    from isoflow.mesh.slabs import voxelize_to_zarr
+
+    ref, _, _ = voxelize(*load_mesh(MESHES / "target.obj"), resolution=37)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        out = voxelize_to_zarr(MESHES / "target.obj", tmp_path / "d.zarr", resolution=37, chunks=(7, 5, 9),
+                               scheduler=client)
+    assert out["voxels"] == int(ref.sum())
+    assert np.array_equal(zarr.open_array(str(tmp_path / "d.zarr"), mode="r")[:], ref)
+
+
+def test_cli_voxelize_to_zarr_then_info(tmp_path, capsys):
+    mesh = MESHES / "target.obj"
+    assert main(["voxelize", str(mesh), "--resolution", "33", "-o", str(tmp_path / "t.npz")]) == 0
+    assert main(["voxelize", str(mesh), "--resolution", "33", "-o", str(tmp_path / "t.zarr")]) == 0
+    io = capsys.readouterr()
+    assert io.err.count("120 boundary edges") == 2
+    assert main(["info", str(tmp_path / "t.zarr"), "--json"]) == 0
+    from_zarr = json.loads(capsys.readouterr().out)
+    assert main(["info", str(tmp_path / "t.npz"), "--json", "--no-surfaces"]) == 0
+    from_npz = json.loads(capsys.readouterr().out)
+    for key in ("voxels", "euler_characteristic", "betti", "n"):
+        assert from_zarr[key] == from_npz[key], key
+    # an existing store needs --force; a directory that is not a store is never replaced
+    assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "t.zarr")]) == 2
+    assert "exists; pass --force" in capsys.readouterr().err
+    assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "t.zarr"), "--force"]) == 0
+    assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "s.zarr"), "--strict"]) == 2
+    assert "not watertight: 120 boundary edges" in capsys.readouterr().err and not (tmp_path / "s.zarr").exists()
+    (tmp_path / "d.zarr").mkdir()
+    (tmp_path / "d.zarr" / "keep.txt").write_text("mine")
+    assert main(["voxelize", str(mesh), "--resolution", "9", "-o", str(tmp_path / "d.zarr"), "--force"]) == 2
+    assert "not a zarr store" in capsys.readouterr().err and (tmp_path / "d.zarr" / "keep.txt").exists()
+
+
+def test_too_big_for_memory_suggests_zarr():
+    v, f = load_mesh(MESHES / "target.obj")
+    with pytest.raises(IsoflowError, match=r"135,168 voxels.*more than max_bytes=100,000.*-o OUT\.zarr"):
+        voxelize(v, f, resolution=64, max_bytes=100_000)
+
+
+# ---------------------------------------------------------------------------
+# one loader for every format trimesh reads, on every command
+# ---------------------------------------------------------------------------
+
+def test_mesh_suffixes_cover_what_trimesh_reads():
+    formats = {"." + x for x in trimesh.available_formats()} - {".xyz", ".dxf"}  # points, 2-D drawings
+    assert formats <= set(MESH_SUFFIXES)
+
+
+@pytest.mark.parametrize("suffix", [".3mf", ".dae", ".glb", ".zip", ".stl"])
+def test_every_command_reads_every_format(tmp_path, capsys, suffix):
+    pytest.importorskip("lxml")
+    pytest.importorskip("collada")
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(extents=[1, 1, 1]))
+    scene.add_geometry(trimesh.creation.icosphere(2, radius=0.4),
+                       transform=trimesh.transformations.translation_matrix([1.5, 0, 0]))
+    whole = scene.to_geometry()
+    ref, _, _ = voxelize(whole.vertices, whole.faces, resolution=16)
+    path = tmp_path / f"m{suffix}"
+    if suffix == ".zip":
+        import zipfile
+
+        with zipfile.ZipFile(path, "w") as z:
+            z.writestr("m.stl", trimesh.exchange.stl.export_stl(whole))
+    elif suffix == ".dae":  # trimesh writes COLLADA from a mesh, not a scene
+        path.write_bytes(trimesh.exchange.dae.export_collada(whole))
+    else:
+        scene.export(path)
+    for cmd in (["info", str(path), "--resolution", "16", "--json", "--no-surfaces"],
+                ["flow", str(path), "--resolution", "16", "--steps", "0", "--json"]):
+        assert main(cmd) == 0, (cmd, capsys.readouterr().err)
+        r = json.loads(capsys.readouterr().out)
+        voxels = r["voxels"] if "voxels" in r else r["steps"][0]["voxels"]
+        assert voxels == int(ref.sum()), cmd
+    assert main(["surface", str(path), "--resolution", "16", "-o", str(tmp_path / "s.ply")]) == 0
+    assert main(["voxelize", str(path), "--resolution", "16", "-o", str(tmp_path / "v.npz")]) == 0
+    assert np.array_equal(np.load(tmp_path / "v.npz")["volume"], ref)
+    assert main(["genus", str(path), "--resolution", "16", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out.strip().splitlines()[-1])["digital"][0]["voxels"] == int(ref.sum())
+
+
+def test_missing_format_library_names_the_extra(tmp_path, capsys, monkeypatch):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name in ("lxml", "collada") else real(name, *a))
+    for name in ("m.3mf", "m.dae"):
+        (tmp_path / name).write_bytes(b"whatever")
+        assert main(["info", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and name in err[0] and "pip install 'isoflow[formats]'" in err[0]
