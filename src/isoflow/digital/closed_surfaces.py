@@ -59,7 +59,7 @@ import numpy as np
 
 from ..scale.compiled import have_numba, use_compiled
 from .configurations import configurations
-from .surface import doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
+from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 from .topology import check_connectivity
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
@@ -309,8 +309,11 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
     hist = found["hist"]
     out = {"hist": hist, "betti_counts": (b0, enclosed)}
     if surfaces:
-        vertices, quarters = surface_tree(found["roots"], found["parents"], found["sums"], off, goff, starts)
-        out.update(surfaces=surfaces_from_counts(vertices, quarters),
+        vertices, faces = surface_tree(found["roots"], found["parents"], found["sums"], off, goff, starts)
+        # every face is on one surface (the Euler characteristics are
+        # checked by the caller: they add up to 2 chi + 2 pinched)
+        assert faces.sum() == boundary_faces(hist), "the surfaces' faces do not add up"
+        out.update(surfaces=surfaces_from_counts(vertices, 4 * faces),
                    pinched_vertices=int(hist[pinch_lut(conn)].sum()), doubled_edges=found["doubled"])
     return out
 
@@ -325,26 +328,27 @@ def warm_up(surfaces: bool = True) -> None:
 
 
 def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
-    """The surfaces' mesh vertices and quarter faces from the sums over the
-    whole boundary of every component.
+    """The surfaces' mesh vertices and faces from sums over the whole
+    boundary of every component.
 
     The components of the object and of the background (the sets of runs
     and gaps of :func:`isoflow.scale.sweep.sweep`: ``roots``, each one's
     smallest node, ``parents``, the set of every node, ``sums``, per set
-    ``4 chi`` and ``4 F`` of its boundary) form a tree whose edges are the
+    ``4 chi`` and ``F`` of its boundary) form a tree whose edges are the
     surfaces, rooted at the outside's component. A component's parent is
     the one holding the voxel just before its first voxel in C order: that
-    voxel lies outside the component and everything it encloses, and is
-    face-adjacent to it. A component's boundary is its parent surface and
-    its children's, so from the leaves up, a surface's sums are its child's
-    less those of the child's own children; equivalently, the signed sum
-    (object +, background -) over the child's subtree. The root's must be
-    zero, which checks the whole count.
+    voxel lies outside the component and everything it encloses (else one of
+    those would come first), and is face-adjacent to it. A component's
+    boundary is its parent surface and its children's, so from the leaves
+    up, a surface's sums are its child's less those of the child's own
+    children: the signed sum (object +, background -) over the child's
+    subtree. The root's sums are not needed (nor counted right: the sweep's
+    formulas see only the array).
 
     ``off``, ``goff``: where each row's runs and gaps start in their
-    numbering (the outside is the last gap node); ``starts``: the rows that
-    start with a run. Returns per surface (as many as non-root components)
-    its mesh vertices and quarter faces.
+    numbering (the outside is the last gap node); ``starts``: 1 for the rows
+    that start with a run. Returns per surface (as many as non-root
+    components) its mesh vertices and faces.
     """
     (obj_roots, bg_roots), (pobj, pbg) = roots, parents
     nobj = len(obj_roots)
@@ -366,13 +370,13 @@ def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, n
     up = np.concatenate([up_obj, up_bg])
     up[outside] = outside
     signed = np.concatenate([sums[0], -sums[1]])
+    signed[outside] = 0
     total = subtree_sums(up, outside, signed)
-    assert (total[outside] == 0).all(), "the boundaries' sums do not add up"
     total[nobj:] *= -1
     edges = np.arange(len(up)) != outside
-    chi4, quarters = total[edges, 0], total[edges, 1]
-    assert (quarters % 4 == 0).all() and ((chi4 + quarters) % 4 == 0).all()
-    return (chi4 + quarters) // 4, quarters
+    chi4, faces = total[edges, 0], total[edges, 1]
+    assert (chi4 % 4 == 0).all(), "a surface's Euler characteristic is an integer"
+    return chi4 // 4 + faces, faces
 
 
 def subtree_sums(up: np.ndarray, root: int, values: np.ndarray) -> np.ndarray:

@@ -173,21 +173,29 @@ def _node(o, c, k, nz, b, base, runs, gbase, gruns, outside):
 
 
 @njit(cache=True, nogil=True)
-def _rare_event(bits, nx, ny, nz, i, j, k, b, c, span, base, runs, gbase, gruns, acc_obj, acc_bg, outside,
-                nsheet, rows_of, sides, values, spokes):
-    """An event with several sheets (or after a layer with two), a doubled
-    spoke or at an end of the row: its sheets and the layer's, as in the
-    common case; returns the doubled edges that end here."""
+def _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_obj, acc_bg, outside, nsheet,
+                octant, values, spokes, pinch, formula_obj):
+    """An event with several sheets, a pinch or a doubled spoke, or at an
+    end of the row: its sheets as in the common case (on the side that
+    counts sheets); a pinch adds one to the Euler characteristic of the
+    formula side's component around it (see :func:`_pieces`). Returns the
+    doubled edges that end here."""
     for s in range(nsheet[c]):
-        o = 4 * np.int64(sides[c, s, 0]) + rows_of[c, s, 0]
-        g = 4 * np.int64(sides[c, s, 1]) + rows_of[c, s, 1]
-        acc_obj[_node(o, c, k, nz, b, base, runs, gbase, gruns, outside)] += values[c, s]
-        acc_bg[_node(g, c, k, nz, b, base, runs, gbase, gruns, outside)] += values[c, s]
-    layer = (c & 15) * 17
-    value = (values[layer, 0] >> 32) * span << 32
-    for s in range(nsheet[layer]):
-        acc_obj[_node(rows_of[layer, s, 0], layer, k, nz, b, base, runs, gbase, gruns, outside)] += value
-        acc_bg[_node(rows_of[layer, s, 1], layer, k, nz, b, base, runs, gbase, gruns, outside)] += value
+        node = _node(octant[c, s], c, k, nz, b, base, runs, gbase, gruns, outside)
+        if formula_obj:
+            acc_bg[node] += values[c, s]
+        else:
+            acc_obj[node] += values[c, s]
+    if pinch[c, 0] >= 0:
+        # the six other octants are one component of the formula side
+        o = 0
+        while ((c >> o) & 1) != formula_obj:
+            o += 1
+        node = _node(o, c, k, nz, b, base, runs, gbase, gruns, outside)
+        if formula_obj:
+            acc_obj[node] += 8
+        else:
+            acc_bg[node] += 8
     doubled = 0
     sp = spokes[c]
     if sp != 0:
@@ -201,6 +209,50 @@ def _rare_event(bits, nx, ny, nz, i, j, k, b, c, span, base, runs, gbase, gruns,
         if (sp >> 3) & 1 and j < ny:
             doubled += (spokes[_config(bits, nx, ny, nz, i, j + 1, k)] >> 2) & 1
     return doubled
+
+
+@njit(cache=True, nogil=True)
+def _pieces(acc, x0, x1, x2, x3, p0, p1, p2, p3, starts, base, formula):
+    """The faces, and on the formula side the Euler characteristic, of the
+    runs (or gaps, given gap bits) of a block's row 3 in one word, added to
+    their nodes. ``x``: the rows' bits, ``p``: those of the voxels before,
+    ``starts``: where row 3's runs start, ``base``: its runs numbered before
+    the word, less one.
+
+    A piece is a run's part in the word. Faces: a component's voxels have
+    six each, less two for each pair of face neighbours inside it, so a run
+    of length L adds 4 L + 2, less two per voxel it shares with a run of a
+    face-neighbouring row; row 3 takes the pairs it makes with rows 2 and 1
+    (each pair of rows is row 3's in one block). Euler characteristic under
+    6-adjacency (the formula side): the runs, less the overlaps of runs of
+    face-neighbouring rows, plus the stretches where the four rows around a
+    line all are set (V - E + F - C of the voxels, their face pairs, the
+    squares and cubes of four and eight: each overlap of length m is m edges
+    and m - 1 squares, each four-row stretch m squares and m - 1 cubes);
+    the mesh's solid adds one per pinch (:func:`_rare_event`). Both are
+    sums over the boundary's surfaces once doubled (chi of a solid's
+    boundary is twice its own), so the low half gets 8 chi to match the
+    sheets' 4 chi of the other side.
+    """
+    one = np.uint64(1)
+    left = starts | (x3 & p3 & one)  # and the run going on from the word before
+    # where the overlaps with rows 2 and 1 and the four-row stretches begin
+    over2 = x3 & x2 & ~(p3 & p2)
+    over1 = x3 & x1 & ~(p3 & p1)
+    four = x0 & x1 & x2 & x3 & ~(p0 & p1 & p2 & p3)
+    while left != 0:
+        p = trailing_zeros(left)
+        left &= left - one
+        rest = ~(x3 >> p)  # the piece ends at its first clear bit
+        length = np.int64(trailing_zeros(rest)) if rest != 0 else 64
+        piece = ((one << np.uint64(length)) - one if length < 64 else ~np.uint64(0)) << p
+        start = np.int64((starts >> p) & one)
+        faces = 4 * length + 2 * start - 2 * np.int64(popcount(piece & x2) + popcount(piece & x1))
+        value = faces << 32
+        if formula:
+            value += 8 * (start - np.int64(popcount(piece & over2) + popcount(piece & over1))
+                          + np.int64(popcount(piece & four)))
+        acc[base + np.int64(popcount(starts & ((one << p << one) - one)))] += value
 
 
 @njit(cache=True, nogil=True)
@@ -220,7 +272,7 @@ def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_ob
 
 @njit(cache=True, nogil=True)
 def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pbg, acc_obj, acc_bg, spare, rep,
-                  hist, pairs, mode, nsheet, rows_of, sides, values, spokes, pinch, rare, pinch_objects):
+                  hist, pairs, mode, nsheet, octant, values, spokes, pinch, rare, pinch_objects, formula_obj):
     """Sweep the vertex layers lo <= i < hi (see the module docs and
     :func:`sweep`), after setting up the nodes of the voxel rows ``rows``
     (start, end: the slab's own; touched first by the thread that uses
@@ -244,14 +296,12 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
     zero, one, top = np.uint64(0), np.uint64(1), np.uint64(63)
     npairs = 0
     doubled = 0
-    # per row of the block, and a fifth for no sheet (value 0, added to the
-    # slab's spare nodes), at events: runs and gaps numbered before the
+    # per row of the block, at events: runs and gaps numbered before the
     # word, less one, and where they start in the word
-    base = np.zeros(5, np.int64)
-    runs = np.zeros(5, np.uint64)
-    gbase = np.zeros(5, np.int64)
-    gruns = np.zeros(5, np.uint64)
-    base[4], gbase[4] = len(pobj) + spare, outside
+    base = np.zeros(4, np.int64)
+    runs = np.zeros(4, np.uint64)
+    gbase = np.zeros(4, np.int64)
+    gruns = np.zeros(4, np.uint64)
     for i in range(lo, hi):
         for j in range(ny + 1):
             # the rows, their runs and gaps numbered before the word (less
@@ -324,6 +374,11 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
                     _join_rows(pbg, bgslack, bgdiag, ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2,
                                ~x3 & valid & in3, ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2,
                                ~p3 & ~first & in3, t0, t1, t2, t3, g0, g1, g2, g3)
+                if mode == ALL and in3:
+                    _pieces(acc_obj, x0, x1, x2, x3, p0, p1, p2, p3, s3, b3, formula_obj)
+                    _pieces(acc_bg, ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2, ~x3 & valid,
+                            ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2, ~p3 & ~first, t3, g3,
+                            not formula_obj)
                 t = (x0 ^ p0) | (x1 ^ p1) | (x2 ^ p2) | (x3 ^ p3)
                 if t == 0:
                     continue
@@ -345,34 +400,27 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
                         old = new
                         continue
                     # the layer since the last event: its voxels are those
-                    # before k
-                    span = k - last - 1
-                    layer = old | (old << 4)
-                    hist[layer] += span
+                    # before k (flat: no curvature; its faces are counted
+                    # with the runs, see _pieces)
+                    hist[old | (old << 4)] += k - last - 1
                     hist[c] += 1
                     if rare[c] or k == 0 or k == nz:
                         if mode == ALL:
-                            doubled += _rare_event(bits, nx, ny, nz, i, j, k, b, c, span, base, runs, gbase, gruns,
-                                                   acc_obj, acc_bg, outside, nsheet, rows_of, sides, values, spokes)
+                            doubled += _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_obj,
+                                                   acc_bg, outside, nsheet, octant, values, spokes, pinch, formula_obj)
                         if pinch[c, 0] >= 0:
                             npairs = _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch,
                                             pinch_objects, pairs, npairs)
                     elif mode == ALL:
-                        # the event's one sheet: one mesh vertex less a
-                        # quarter of each face, its share of chi = V - F
-                        # times 4 (low half), and the quarters (high half)
-                        below = (one << b) - one
-                        q, m = rows_of[c, 0, 0], below | (sides[c, 0, 0] << b)
-                        acc_obj[base[q] + np.int64(popcount(runs[q] & m))] += values[c, 0]
-                        q, m = rows_of[c, 0, 1], below | (sides[c, 0, 1] << b)
-                        acc_bg[gbase[q] + np.int64(popcount(gruns[q] & m))] += values[c, 0]
-                        # the layer's sheet (one at most here), four quarters
-                        # at each vertex, no curvature (row 4: no sheet)
-                        value = (values[layer, 0] >> 32) * span << 32
-                        q = rows_of[layer, 0, 0]
-                        acc_obj[base[q] + np.int64(popcount(runs[q] & below))] += value
-                        q = rows_of[layer, 0, 1]
-                        acc_bg[gbase[q] + np.int64(popcount(gruns[q] & below))] += value
+                        # the event's one sheet, on the side that counts
+                        # sheets: one mesh vertex less a quarter of each face,
+                        # its share of chi = V - F, times 4
+                        o = octant[c, 0]
+                        q, m = o & 3, ((one << b) - one) | (np.uint64(o >> 2) << b)
+                        if formula_obj:
+                            acc_bg[gbase[q] + np.int64(popcount(gruns[q] & m))] += values[c, 0]
+                        else:
+                            acc_obj[base[q] + np.int64(popcount(runs[q] & m))] += values[c, 0]
                     old = new
                     last = k
             if mode != PINCHES:
@@ -388,71 +436,93 @@ def _join_reps(pbg, reps, outside):
 
 
 @njit(cache=True, nogil=True)
+def _add_up(sums, node, value):
+    """Add a node's value (two halves, see :func:`sweep`) to its set's sums."""
+    # the low half is signed: value = high * 2^32 + low, |low| < 2^31
+    low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
+    sums[node, 0] += low
+    sums[node, 1] += (value - low) >> 32
+
+
+@njit(cache=True, nogil=True)
 def _number(parent, acc, lo, hi, phase, base, roots, sums):
     """One phase of numbering the sets of a finished union-find in place,
-    for the nodes lo <= x < hi (the phases run on the threads, each after
-    the last has finished everywhere):
+    for the nodes lo <= x < hi; afterwards ``parent[x]`` is ``-1 - n`` for
+    x in set n (sets numbered in order of their smallest node, their root:
+    unions hang the larger root under the smaller, so ``parent[x] <= x``).
+    Phases run on the threads, each after the last has finished everywhere:
 
-    0. point every node at its root (reading other nodes is safe: while
-       they change they still point at an ancestor); returns the roots;
-    1. number the roots from ``base`` on, as ``-1 - number``, and list them
-       in ``roots``;
-    2. give every other node its root's number;
-    3. make the numbers plain and add each node's ``acc`` (two halves, see
-       :func:`sweep`) to its set's ``sums``; entries of ``acc`` past the
-       parents' (spare nodes) count as the last node's.
+    0. point every node at its root (reading other threads' nodes is safe:
+       while they change they still point at an ancestor); returns the
+       number of roots;
+    1. number the roots from ``base`` on and list them in ``roots``;
+    2. give every other node its root's number, and add every node's
+       ``acc`` to its set's ``sums``;
+    3. all three at once, in one pass in node order (one thread), after
+    4. counting the roots.
+
+    Entries of ``acc`` past the parents' (spare nodes) count as the last
+    node's.
     """
     n = 0
+    last = len(parent) - 1
     if phase == 0:
         for x in range(lo, hi):
             r = parent[x]
-            if r >= lo:  # parent[x] <= x: done already
+            if r >= lo:  # a node of this range: done already
                 r = parent[r]
             else:
                 while parent[r] != r:
                     r = parent[r]
             parent[x] = r
             n += r == x
+    elif phase == 4:
+        for x in range(lo, hi):
+            n += parent[x] == x
     elif phase == 1:
         for x in range(lo, hi):
             if parent[x] == x:
                 roots[base + n] = x
                 parent[x] = -1 - (base + n)
                 n += 1
-    elif phase == 2:
-        for x in range(lo, hi):
-            if parent[x] >= 0:
-                parent[x] = parent[parent[x]]
     else:
-        last = len(parent) - 1
         for x in range(lo, hi):
-            parent[x] = -1 - parent[x]
-        for x in range(lo, hi if hi <= last else len(acc)):
-            value = acc[x]
-            # the low half is signed: value = high * 2^32 + low, |low| < 2^31
-            low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
-            s = parent[min(x, last)]
-            sums[s, 0] += low
-            sums[s, 1] += (value - low) >> 32
+            r = parent[x]
+            if phase == 3 and r == x:
+                roots[n] = x
+                parent[x] = -1 - n
+                n += 1
+            elif r >= 0:
+                parent[x] = parent[r]  # r numbered already (r < x, or phase 1)
+            _add_up(sums, -1 - parent[x], acc[x])
+        if hi > last:
+            for x in range(last + 1, len(acc)):
+                _add_up(sums, -1 - parent[last], acc[x])
     return n
 
 
 def _components(parent, acc, parts):
-    """Number the sets of a union-find in place, node ranges ``parts`` on
-    the threads: afterwards ``parent[x]`` is the number of x's set (sets in
-    order of their smallest node, the roots: unions hang the larger root
-    under the smaller). Returns every set's smallest node and (sets, 2) its
-    totals of the two halves of ``acc``."""
+    """Number the sets of a union-find in place (node ranges ``parts`` on
+    the threads): afterwards ``parent[x]`` is the number of x's set, sets
+    in order of their smallest node. Returns every set's smallest node and
+    (sets, 2) its totals of the two halves of ``acc``."""
     phase = [(a, b) for a, b in parts if b > a]
-    roots, sums = np.empty(0, np.int64), np.empty((0, 2), np.int64)  # (one signature)
-    counts = run([(_number, parent, acc, a, b, 0, 0, roots, sums) for a, b in phase])
-    bases = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    roots = np.empty(int(bases[-1]), np.int64)
-    run([(_number, parent, acc, a, b, 1, int(base), roots, sums) for (a, b), base in zip(phase, bases)])
-    run([(_number, parent, acc, a, b, 2, 0, roots, sums) for a, b in phase])
-    sums = [np.zeros((len(roots), 2), np.int64) for _ in phase]
-    run([(_number, parent, acc, a, b, 3, 0, roots, s) for (a, b), s in zip(phase, sums)])
-    return roots, np.sum(sums, axis=0) if sums else np.zeros((0, 2), np.int64)
+    if len(phase) <= 1:  # counted, then one pass
+        none = np.empty(0, np.int64), np.empty((0, 2), np.int64)
+        n = _number(parent, acc, 0, len(parent), 4, 0, *none)
+        roots, sums = np.empty(n, np.int64), np.zeros((n, 2), np.int64)
+        _number(parent, acc, 0, len(parent), 3, 0, roots, sums)
+    else:
+        none = np.empty(0, np.int64), np.empty((0, 2), np.int64)  # (one signature)
+        counts = run([(_number, parent, acc, a, b, 0, 0, *none) for a, b in phase])
+        bases = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        roots = np.empty(int(bases[-1]), np.int64)
+        run([(_number, parent, acc, a, b, 1, int(base), roots, none[1]) for (a, b), base in zip(phase, bases)])
+        sums = [np.zeros((len(roots), 2), np.int64) for _ in phase]
+        run([(_number, parent, acc, a, b, 2, 0, roots, s) for (a, b), s in zip(phase, sums)])
+        sums = np.sum(sums, axis=0)
+    np.subtract(-1, parent, out=parent)
+    return roots, sums
 
 
 def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfaces: bool = True,
@@ -491,18 +561,17 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
     pbg[gaps] = gaps
     acc_obj[runs:] = acc_bg[gaps:] = 0
     nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch = tables
-    # per sheet: its object and its background octant as row and side
-    # (row 4: no such sheet), and what it adds, 4 - q and q (0: no sheet)
-    octants = np.stack([sheet_obj, sheet_bg], axis=-1).astype(np.int64)
-    rows_of = np.where(octants < 0, 4, octants & 3)
-    sides = np.where(octants < 0, 0, octants >> 2).astype(np.uint64)
-    q = quarters.astype(np.int64)
+    # the object's components under 6-adjacency (else the background's) get
+    # their Euler characteristic from a formula over runs (see _pieces), the
+    # other side's from the sheets: per sheet its octant on that side, and
+    # what it adds, 4 - q for q quarters of faces
+    formula_obj = tuple(adjacency[:2]) == (0, -1)
+    octant = np.where(nsheet[:, None] > np.arange(4), sheet_bg if formula_obj else sheet_obj, 0).astype(np.int64)
     nsheet = nsheet.astype(np.int64)
-    values = np.where(np.arange(4) < nsheet[:, None], (q << 32) + 4 - q, 0)
-    # the events that take the slower path: several sheets (or two in the
-    # layer before), a pinch, a doubled spoke
-    layer = (np.arange(256) & 15) * 17
-    rare = (nsheet > 1) | (nsheet[layer] > 1) | (pinch[:, 0] >= 0) | (spokes != 0)
+    values = np.where(np.arange(4) < nsheet[:, None], 4 - quarters.astype(np.int64), 0)
+    # the events that take the slower path: several sheets, a pinch, a
+    # doubled spoke
+    rare = (nsheet > 1) | (pinch[:, 0] >= 0) | (spokes != 0)
     layers = [(a + (s > 0), b + (s == len(parts) - 1)) for s, (a, b) in enumerate(parts)]
     layers += [(a, a + 1) for a, _ in parts[1:]]  # the seams, after the slabs
     reps = np.full(_SPREAD * len(layers), -1, np.int64)[::_SPREAD]
@@ -518,8 +587,8 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
     def call(t, mode=mode):
         lo, hi = layers[t]
         return _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows[t], adj, pobj, pbg, acc_obj, acc_bg,
-                             _SPREAD * min(t, len(parts)), reps[t:t + 1], hists[t], pairs[t], mode, nsheet, rows_of,
-                             sides, values, spokes, pinch, rare, pinch_objects)
+                             _SPREAD * min(t, len(parts)), reps[t:t + 1], hists[t], pairs[t], mode, nsheet, octant,
+                             values, spokes, pinch, rare, pinch_objects, formula_obj)
 
     found = run([(call, t) for t in range(len(parts))])
     found += [call(t) for t in range(len(parts), len(layers))]
