@@ -28,7 +28,7 @@ def _slot(key, mask):
     return (h ^ (h >> 29)) & mask
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _add(keys, vs, qs, key, dv, dq):
     """Add (dv, dq) to ``key``'s entry of the table; returns 1 for a new
     key. The table never grows here (reassigning arrays inside the sweep's
@@ -75,8 +75,9 @@ def _box_label(vox, fg, bg, x, y, z, outside):
     return np.int64(outside)
 
 
-@njit(cache=True, nogil=True)
-def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, sheet_quarters, pinch):
+@njit(cache=True, nogil=True, _nrt=False)
+def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_obj, sheet_bg, sheet_quarters, pinch,
+              zero, last):
     """Sheets of the vertices ``lo <= w < hi`` of a block, per pair of the
     block's labels (``fg << 32 | bg``), from its label volumes; octants
     outside the block are background labelled ``outside``. Along each row
@@ -88,8 +89,6 @@ def _box_rows(vox, fg, bg, lo, hi, outside, keys, vs, qs, pairs, nsheet, sheet_o
     full = len(keys) // 2
     npairs = 0
     ck, cv, cq = _EMPTY, 0, 0
-    zero = np.zeros(nz, np.uint8)
-    last = np.zeros(4, np.int64)  # the keys of the previous vertex's sheets
     for i in range(lo[0], hi[0]):
         for j in range(lo[1], hi[1]):
             # octant (dx, dy) is voxel row (i-1+dx, j-1+dy)
@@ -155,7 +154,8 @@ def box_sweep(vox: np.ndarray, fg: np.ndarray, bg: np.ndarray, lo, hi, outside: 
 
     def call(keys, vs, qs, pairs):
         npairs, overflow = _box_rows(vox.view(np.uint8), fg, bg, lo, hi, outside, keys, vs, qs, pairs,
-                                     nsheet, sheet_obj, sheet_bg, quarters, pinch)
+                                     nsheet, sheet_obj, sheet_bg, quarters, pinch, np.zeros(vox.shape[2], np.uint8),
+                                     np.zeros(4, np.int64))
         return npairs, overflow, None
 
     _, keys, vertices, quarter, pairs = _until_it_fits(call, 1 << 12, 1 << 10)

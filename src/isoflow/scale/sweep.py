@@ -58,7 +58,7 @@ ALL, NO_SURFACES, PINCHES = 0, 1, 2
 _SPREAD = 16
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _config(bits, nx, ny, nz, i, j, k):
     """Configuration of vertex (i, j, k) read from the bit rows (zeros
     outside the array)."""
@@ -70,7 +70,7 @@ def _config(bits, nx, ny, nz, i, j, k):
     return c
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _join_outside(parent, gap, rep):
     """Join a gap to the region outside the array, which a slab stands for
     by the first gap it joins to it (``rep[0]``), so that slabs running at
@@ -82,7 +82,7 @@ def _join_outside(parent, gap, rep):
         union(parent, gap, rep[0])
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _join_mask(parent, mask, sa, base_a, before_a, sb, base_b, before_b):
     """For every set bit p of ``mask``, join the run (gap) of row a holding
     voxel p (p - 1 if ``before_a``) with row b's holding voxel p (p - 1 if
@@ -100,7 +100,7 @@ def _join_mask(parent, mask, sa, base_a, before_a, sb, base_b, before_b):
         union(parent, na, nb)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _join_rows(parent, slack, diag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, s3, b0, b1, b2, b3):
     """Join the runs (or gaps, given the rows' gap bits) that touch in one
     word of a block's four rows, under an adjacency (``slack``, ``diag``:
@@ -158,7 +158,7 @@ def _join_rows(parent, slack, diag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, 
             _join_mask(parent, m, s1, b1, True, s2, b2, False)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _node(o, c, k, nz, b, base, runs, gbase, gruns, outside):
     """The node of octant ``o`` of configuration ``c`` at the event k (bit
     b of the word): the run or gap of its voxel, the outside for voxels -1
@@ -172,7 +172,7 @@ def _node(o, c, k, nz, b, base, runs, gbase, gruns, outside):
     return gbase[q] + np.int64(popcount(gruns[q] & mask))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_obj, acc_bg, outside, nsheet,
                 octant, values, spokes, pinch, formula_obj):
     """An event with several sheets, a pinch or a doubled spoke, or at an
@@ -211,7 +211,7 @@ def _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_o
     return doubled
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _pieces(acc, x0, x1, x2, x3, p0, p1, p2, p3, starts, base, formula):
     """The faces, and on the formula side the Euler characteristic, of the
     runs (or gaps, given gap bits) of a block's row 3 in one word, added to
@@ -255,7 +255,7 @@ def _pieces(acc, x0, x1, x2, x3, p0, p1, p2, p3, starts, base, formula):
         acc[base + np.int64(popcount(starts & ((one << p << one) - one)))] += value
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_objects, pairs, npairs):
     """Record the pinch at an event: the nodes of its two octants (the
     outside as the last gap node) where they differ. Returns the count."""
@@ -270,9 +270,10 @@ def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_ob
     return npairs
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, _nrt=False)
 def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pbg, acc_obj, acc_bg, spare, rep,
-                  hist, pairs, mode, nsheet, octant, values, spokes, pinch, rare, pinch_objects, formula_obj):
+                  hist, pairs, mode, nsheet, octant, values, spokes, pinch, rare, pinch_objects, formula_obj, scratch,
+                  uscratch):
     """Sweep the vertex layers lo <= i < hi (see the module docs and
     :func:`sweep`), after setting up the nodes of the voxel rows ``rows``
     (start, end: the slab's own; touched first by the thread that uses
@@ -298,10 +299,8 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
     doubled = 0
     # per row of the block, at events: runs and gaps numbered before the
     # word, less one, and where they start in the word
-    base = np.zeros(4, np.int64)
-    runs = np.zeros(4, np.uint64)
-    gbase = np.zeros(4, np.int64)
-    gruns = np.zeros(4, np.uint64)
+    base, gbase = scratch[0], scratch[1]
+    runs, gruns = uscratch[0], uscratch[1]
     for i in range(lo, hi):
         for j in range(ny + 1):
             # the rows, their runs and gaps numbered before the word (less
@@ -588,7 +587,8 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
         lo, hi = layers[t]
         return _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows[t], adj, pobj, pbg, acc_obj, acc_bg,
                              _SPREAD * min(t, len(parts)), reps[t:t + 1], hists[t], pairs[t], mode, nsheet, octant,
-                             values, spokes, pinch, rare, pinch_objects, formula_obj)
+                             values, spokes, pinch, rare, pinch_objects, formula_obj, np.zeros((2, 4), np.int64),
+                             np.zeros((2, 4), np.uint64))
 
     found = run([(call, t) for t in range(len(parts))])
     found += [call(t) for t in range(len(parts), len(layers))]
