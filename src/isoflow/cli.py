@@ -127,7 +127,10 @@ def cmd_info(args) -> int:
             report = analyze_store(args.input, args.connectivity, label=args.label, progress=show,
                                    surfaces=not args.no_surfaces, threads=args.threads)
     else:
+        warming = warm_up_while_reading(args)
         obj = load_input(args)
+        if warming is not None:
+            warming.join()
         if args.gpu:
             from .scale.arrays import to_gpu
 
@@ -141,6 +144,35 @@ def cmd_info(args) -> int:
         return 0
     print(format_info(report))
     return 0
+
+
+def warm_up_while_reading(args):
+    """A thread that loads the compiled passes (numba and its cached code:
+    about half a second once per process) while the input is read, which
+    releases the GIL; only for volume files large enough to use them."""
+    from .mesh.formats.registry import split_dataset
+    from .mesh.load import is_mesh_path
+    from .scale.compiled import MIN_VOXELS, have_numba
+
+    path = split_dataset(args.input)[0]
+    try:
+        # a bit per voxel at the least (binvox); compressed files: no matter
+        big = path.stat().st_size >= MIN_VOXELS // 8
+    except OSError:
+        return None
+    if args.gpu or not big or is_mesh_path(path) or not have_numba():
+        return None
+    import threading
+
+    from .digital.closed_surfaces import warm_up
+
+    def quietly():
+        with contextlib.suppress(Exception):  # the command itself says what fails
+            warm_up(surfaces=not args.no_surfaces)
+
+    thread = threading.Thread(target=quietly, daemon=True)
+    thread.start()
+    return thread
 
 
 def thread_count(text: str) -> int:
@@ -657,5 +689,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
+def console() -> None:
+    """The ``isoflow`` command: :func:`main`, then exit without the
+    interpreter's last garbage collection, which walks every object (numba's
+    many, once it is loaded: 0.2 s) only to find nothing to collect."""
+    import gc
+
+    code = main()
+    gc.freeze()
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    console()

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..scale import arrays
 from ..scale.compiled import use_compiled, using
-from .closed_surfaces import closed_surfaces
+from .closed_surfaces import closed_surfaces, compiled_census
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -48,7 +48,8 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads
     In 3D, ``surfaces`` lists the closed surfaces of the boundary mesh with
     their Euler characteristic, genus and face count, counted without
     building the mesh (:mod:`isoflow.digital.closed_surfaces`); on large
-    host volumes the same pass gives the histogram and the Betti numbers.
+    host volumes one pass gives the histogram, the Betti numbers and the
+    surfaces (the surfaces' part left out with ``surfaces=False``).
     ``threads``: how many threads the compiled passes use (default: the
     ``ISOFLOW_THREADS`` environment variable, else every CPU).
     """
@@ -63,9 +64,9 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
         vol, parity = arrays.as_volume(obj)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
     census = None
-    if vol.ndim == 3 and surfaces and use_compiled(vol):
-        # one pass over the runs gives the histogram, Betti counts and surfaces
-        census = closed_surfaces(vol, conn)
+    if vol.ndim == 3 and use_compiled(vol):
+        # one pass gives the histogram, the Betti counts and the surfaces
+        census = compiled_census(vol, conn, surfaces)
         hist = census["hist"]
         chi = euler_from_histogram(hist, 3, conn)
         b0, enclosed = census["betti_counts"]

@@ -35,10 +35,19 @@ faces (a quarter at each of their four corners). The midpoints that the mesh
 puts on doubled edges add one vertex and one edge each, which cancel.
 ``genus = 1 - chi / 2`` since every surface is a closed orientable manifold.
 
-Large host volumes go through the compiled pass of :mod:`isoflow.scale.sweep`
-on the runs of the volume (about 1.5 bytes per voxel on a porous field, no
-label volume); small ones through scipy labels and the configuration array.
-Both equal ``boundary_mesh(volume, connectivity).components()`` exactly
+The surfaces and the components of ``M`` and of its complement form a
+tree: every closed surface splits the 3-sphere in two, so it is an edge
+between the two components it separates. Large host volumes use that
+(:func:`surface_tree`): the compiled sweep of :mod:`isoflow.scale.sweep`, on
+the volume as bit rows, labels the runs and gaps under the adjacencies
+above and adds up, per component, the mesh vertices and faces of its whole
+boundary (every sheet counts for its object and its background component);
+a surface's counts are then those of the component below it in the tree
+less those of the surfaces below that one. About 1.5 bytes per voxel on a
+porous field, no label volume, no table of pairs. Small volumes (scipy
+labels and the configuration array) and the blocks of the out-of-core pass
+count per label pair. All equal
+``boundary_mesh(volume, connectivity).components()`` exactly
 (the tests check it on thousands of random volumes).
 """
 
@@ -50,7 +59,7 @@ import numpy as np
 
 from ..scale.compiled import have_numba, use_compiled
 from .configurations import configurations
-from .surface import doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
+from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 from .topology import check_connectivity
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
@@ -139,7 +148,7 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
         raise ValueError("closed_surfaces needs a 3D volume")
     check_connectivity(3, connectivity)
     if use_compiled(vol):
-        return _compiled(vol, connectivity)
+        return compiled_census(vol, connectivity)
     return _small(vol, connectivity)
 
 
@@ -185,7 +194,7 @@ def _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside) -> dic
     """:func:`box_sheets` by the compiled pass. Labels that do not fit in
     32 bits (node keys, in the face tiles out of core) are numbered first
     and the numbers mapped back."""
-    from ..scale.sweep import box_sweep
+    from ..scale.boxes import box_sweep
 
     values = {}
     if not _fits_32_bits(obj_labels, 0):
@@ -270,38 +279,119 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     }
 
 
-def _compiled(vol: np.ndarray, conn: int) -> dict:
-    """The run-based passes: runs of the object and their gaps, labelled by
-    union-find under the mesh's adjacencies, then the vertex sweep; the
-    pinches found by the sweep join the labels into the connectivity's own
-    components for the Betti numbers."""
-    from ..scale import kernels, sweep
+def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
+    """One compiled pass over a large host volume (:func:`use_compiled`):
+    ``hist`` (the 256 configuration counts), ``betti_counts`` (b0 and the
+    enclosed background components under ``conn``) and, with ``surfaces``,
+    what :func:`closed_surfaces` returns.
 
-    v = kernels.volume_view(vol)
-    runs = kernels.object_runs(v)
-    gaps = kernels.gap_runs(*runs, v.shape[2])
+    The volume as bit rows, then the sweep, which labels the runs and gaps
+    under the mesh's adjacencies and adds up, per component, the vertices
+    and faces of its whole boundary; the surfaces follow from the tree of
+    components (:func:`surface_tree`). The pinches found by the sweep join
+    the components into the connectivity's own for the Betti numbers."""
+    from ..scale import bitrows, kernels, sweep
+
+    bits, off, goff = bitrows.pack(vol)
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    (pobj, nobj), (pbg, nbg) = kernels.join_runs(
-        [(v.shape, *runs), (v.shape, *gaps)], [obj_adj, bg_adj], [False, True]
-    )
-    goff = gaps[0]
-    del gaps  # the sweep needs the gaps' row offsets only
-    found = sweep.sweep(v, runs, goff, pobj, pbg, nobj + nbg - 1, sweep_tables(conn))
-    # the components of M and of its complement form a tree whose edges
-    # are the surfaces (each closed surface splits the 3-sphere in two)
-    assert len(found["keys"]) == nobj + nbg - 1
-    del runs, goff
-    if conn == 26:  # the pinches join object components
-        b0 = kernels.join_pairs(pobj, found["pairs"])
-        enclosed = nbg - 1
-    else:  # they join background components
-        b0 = nobj
-        enclosed = kernels.join_pairs(pbg, found["pairs"]) - 1
+    found = sweep.sweep(bits, vol.shape, off, goff, kernels.ADJACENCY[obj_adj] + kernels.ADJACENCY[bg_adj],
+                        sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces)
+    starts = (bits[:-1, 0] & 1).astype(np.int64)  # 1: the row starts with a run
+    del bits
+    (pobj, pbg), pairs = found["parents"], found["pairs"]
+    nobj, nbg = (len(r) for r in found["roots"])
+    # the pinches join components into the connectivity's own: object ones
+    # under 26, background ones under 6
+    if conn == 26:
+        b0, enclosed = kernels.join_pairs(np.arange(nobj, dtype=np.int32), pobj[pairs]), nbg - 1
+    else:
+        b0, enclosed = nobj, kernels.join_pairs(np.arange(nbg, dtype=np.int32), pbg[pairs]) - 1
     hist = found["hist"]
-    return {
-        "surfaces": surfaces_from_counts(found["vertices"], found["quarters"]),
-        "pinched_vertices": int(hist[pinch_lut(conn)].sum()),
-        "doubled_edges": found["doubled"],
-        "hist": hist,
-        "betti_counts": (b0, enclosed),
-    }
+    out = {"hist": hist, "betti_counts": (b0, enclosed)}
+    if surfaces:
+        vertices, faces = surface_tree(found["roots"], found["parents"], found["sums"], off, goff, starts)
+        # every face is on one surface (the Euler characteristics are
+        # checked by the caller: they add up to 2 chi + 2 pinched)
+        assert faces.sum() == boundary_faces(hist), "the surfaces' faces do not add up"
+        out.update(surfaces=surfaces_from_counts(vertices, 4 * faces),
+                   pinched_vertices=int(hist[pinch_lut(conn)].sum()), doubled_edges=found["doubled"])
+    return out
+
+
+def warm_up(surfaces: bool = True) -> None:
+    """Load the compiled pass now, on a tiny volume: importing numba and
+    loading its cached machine code takes about half a second once per
+    process, which a command spends while it reads its input."""
+    vol = np.zeros((2, 2, 3), bool)
+    vol[0, 0, 1] = True
+    compiled_census(vol, 6, surfaces)
+
+
+def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
+    """The surfaces' mesh vertices and faces from sums over the whole
+    boundary of every component.
+
+    The components of the object and of the background (the sets of runs
+    and gaps of :func:`isoflow.scale.sweep.sweep`: ``roots``, each one's
+    smallest node, ``parents``, the set of every node, ``sums``, per set
+    ``4 chi`` and ``F`` of its boundary) form a tree whose edges are the
+    surfaces, rooted at the outside's component. A component's parent is
+    the one holding the voxel just before its first voxel in C order: that
+    voxel lies outside the component and everything it encloses (else one of
+    those would come first), and is face-adjacent to it. A component's
+    boundary is its parent surface and its children's, so from the leaves
+    up, a surface's sums are its child's less those of the child's own
+    children: the signed sum (object +, background -) over the child's
+    subtree. The root's sums are not needed (nor counted right: the sweep's
+    formulas see only the array).
+
+    ``off``, ``goff``: where each row's runs and gaps start in their
+    numbering (the outside is the last gap node); ``starts``: 1 for the rows
+    that start with a run. Returns per surface (as many as non-root
+    components) its mesh vertices and faces.
+    """
+    (obj_roots, bg_roots), (pobj, pbg) = roots, parents
+    nobj = len(obj_roots)
+    outside = nobj + int(pbg[-1])
+    # the object component's first run is the m-th of its row: the gap
+    # before it is the row's m-th (less one if the row starts with a run),
+    # or the outside where m = 0 and the row starts with a run
+    row = np.searchsorted(off, obj_roots, side="right") - 1
+    gap = goff[row] + (obj_roots - off[row]) - starts[row]
+    up_obj = np.where(gap < goff[row], outside, nobj + pbg[np.maximum(gap, 0)])
+    # a background component's first gap (not at a row's start: it would
+    # touch the outside) follows the row's m-th run (m-1-th if the row
+    # starts with a gap)
+    row = np.minimum(np.searchsorted(goff, bg_roots, side="right"), len(starts)) - 1  # the outside: any
+    run = off[row] + (bg_roots - goff[row]) - (1 - starts[row])
+    inner = np.arange(len(bg_roots)) != outside - nobj
+    up_bg = np.full(len(bg_roots), outside)
+    up_bg[inner] = pobj[run[inner]]
+    up = np.concatenate([up_obj, up_bg])
+    up[outside] = outside
+    signed = np.concatenate([sums[0], -sums[1]])
+    signed[outside] = 0
+    total = subtree_sums(up, outside, signed)
+    total[nobj:] *= -1
+    edges = np.arange(len(up)) != outside
+    chi4, faces = total[edges, 0], total[edges, 1]
+    assert (chi4 % 4 == 0).all(), "a surface's Euler characteristic is an integer"
+    return chi4 // 4 + faces, faces
+
+
+def subtree_sums(up: np.ndarray, root: int, values: np.ndarray) -> np.ndarray:
+    """Sums of ``values`` (rows) over every node's subtree in the tree given
+    by each node's parent ``up`` (the root its own), level by level from
+    the deepest."""
+    depth = (np.arange(len(up)) != root).astype(np.int64)
+    anc = up.copy()
+    while (anc != root).any():  # pointer jumping: log(depth) steps
+        depth += depth[anc]  # the root's depth stays 0
+        anc = anc[anc]
+    total = np.array(values, np.int64)
+    order = np.argsort(depth, kind="stable")
+    ends = np.searchsorted(depth[order], np.arange(depth.max(initial=0) + 2))
+    for d in range(depth.max(initial=0), 0, -1):
+        nodes = order[ends[d]:ends[d + 1]]
+        np.add.at(total, up[nodes], total[nodes])
+    return total

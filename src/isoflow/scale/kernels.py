@@ -130,7 +130,8 @@ if HAVE_NUMBA:
                 gend[g] = nz
 
     @njit(cache=True, nogil=True, inline="always")
-    def _find(parent, a):
+    def find(parent, a):
+        """The root of node a in a union-find's parent array (path halving)."""
         while parent[a] != a:
             parent[a] = parent[parent[a]]
             a = parent[a]
@@ -145,7 +146,7 @@ if HAVE_NUMBA:
         ia, ib = a0, b0
         while ia < a1 and ib < b1:
             if start[ia] < end[ib] + slack and start[ib] < end[ia] + slack:
-                ra, rb = _find(parent, ia), _find(parent, ib)
+                ra, rb = find(parent, ia), find(parent, ib)
                 if ra != rb:
                     if ra < rb:
                         parent[rb] = ra
@@ -199,18 +200,21 @@ if HAVE_NUMBA:
                     continue
                 if j == 0 or j == ny - 1 or (not planar and (i == 0 or i == nx - 1)):
                     for r in range(a0, a1):
-                        _union(parent, r, outside)
+                        union(parent, r, outside)
                 else:
                     # inside rows only their first and last runs can reach
                     # the ends of the row
                     if start[a0] == 0:
-                        _union(parent, a0, outside)
+                        union(parent, a0, outside)
                     if end[a1 - 1] == nz:
-                        _union(parent, a1 - 1, outside)
+                        union(parent, a1 - 1, outside)
 
     @njit(cache=True, nogil=True, inline="always")
-    def _union(parent, a, b):
-        ra, rb = _find(parent, a), _find(parent, b)
+    def union(parent, a, b):
+        """Join the sets of nodes a and b: the larger root hangs under the
+        smaller, so that every root is the smallest node of its set and
+        ``parent[x] <= x`` always."""
+        ra, rb = find(parent, a), find(parent, b)
         if ra < rb:
             parent[rb] = ra
         elif rb < ra:
@@ -219,7 +223,7 @@ if HAVE_NUMBA:
     @njit(cache=True, nogil=True)
     def _join_pairs(parent, pairs):
         for p in range(len(pairs)):
-            _union(parent, pairs[p, 0], pairs[p, 1])
+            union(parent, pairs[p, 0], pairs[p, 1])
 
     @njit(cache=True, nogil=True)
     def _flatten(parent):
@@ -242,16 +246,16 @@ if HAVE_NUMBA:
         of their smallest vertex."""
         parent = np.arange(nv).astype(polygons.dtype)
         for f in range(polygons.shape[0]):
-            a = _find(parent, polygons[f, 0])
+            a = find(parent, polygons[f, 0])
             for t in range(1, polygons.shape[1]):
                 if polygons[f, t] >= 0:
-                    b = _find(parent, polygons[f, t])
+                    b = find(parent, polygons[f, t])
                     if a != b:
                         parent[b] = a
         label = np.full(nv, -1, dtype=np.int32)
         count = 0
         for i in range(nv):
-            r = _find(parent, i)
+            r = find(parent, i)
             if label[r] < 0:
                 label[r] = count
                 count += 1
