@@ -648,6 +648,36 @@ def quiet_stderr(quiet: bool):
             logging.disable(before)
 
 
+@contextlib.contextmanager
+def termination_as_interrupt(received: list):
+    """Treat SIGTERM (``kill``, a batch system's time limit, a closing
+    terminal's SIGHUP) as Ctrl-C while a command runs: the same clean-up
+    runs (temporary files and the flow's staging directory are removed, an
+    existing output stays as it was) and the signal's number is appended
+    to ``received``. Python's default for SIGTERM is to die at once, which
+    leaves the temporary files behind. Only the main thread may set
+    handlers; elsewhere (a command run from a library thread) nothing
+    changes."""
+    import signal
+    import threading
+
+    wanted = [signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        received.append(signum)
+        raise KeyboardInterrupt
+
+    before = {sig: signal.signal(sig, interrupt) for sig in wanted}
+    try:
+        yield
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+
+
 def main(argv: list[str] | None = None) -> int:
     import warnings
 
@@ -665,8 +695,9 @@ def main(argv: list[str] | None = None) -> int:
         else:
             shown(message, category, filename, lineno, file, line)
 
+    terminated: list[int] = []
     try:
-        with quiet_stderr(args.quiet), warnings.catch_warnings():
+        with quiet_stderr(args.quiet), warnings.catch_warnings(), termination_as_interrupt(terminated):
             shown = warnings.showwarning
             if not args.quiet:
                 warnings.simplefilter("always", IsoflowWarning)
@@ -680,8 +711,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
-        print("isoflow: interrupted" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
-        return 130
+        how = "terminated" if terminated else "interrupted"
+        print(f"isoflow: {how}" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
+        # the shell's convention: 128 + the signal's number
+        return 128 + (terminated[0] if terminated else 2)
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
         import os
 

@@ -1,0 +1,104 @@
+"""A flow run that is killed leaves the output directory as it was.
+
+SIGTERM (``kill``, a batch system's time limit) cleans up as Ctrl-C does;
+SIGKILL cannot be caught, so the next run into the directory removes what
+a killed run left. Both are tested on real processes."""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from isoflow.flow.files import STAGE, STAGE_OWNER
+from isoflow.mesh.outputs import TEMP_MARK
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+
+
+def ball(n: int = 48) -> np.ndarray:
+    g = np.indices((n, n, n)) - n / 2 + 0.5
+    return (g**2).sum(0) < (0.42 * n) ** 2
+
+
+def stages(directory):
+    return sorted(directory.glob(f".{STAGE}{TEMP_MARK}*"))
+
+
+def start_flow(tmp_path, out, *extra):
+    np.save(tmp_path / "ball.npy", ball())
+    return subprocess.Popen([sys.executable, "-m", "isoflow.cli", "flow", str(tmp_path / "ball.npy"), "--out",
+                             str(out), *extra], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for_step_files(proc, out, timeout=60.0):
+    """Wait until the run has written step files into its staging directory."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        if any(s.glob("step_*.ply") for s in stages(out)):
+            return
+        assert proc.poll() is None, proc.stderr.read()
+        time.sleep(0.02)
+    raise AssertionError("the flow wrote no step file in time")
+
+
+def test_sigterm_leaves_the_previous_run_and_no_staging_directory(tmp_path):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "flow.csv").write_text("the previous run\n")
+    (out / "step_000.ply").write_text("previous\n")
+    proc = start_flow(tmp_path, out, "--force")
+    wait_for_step_files(proc, out)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    # the shell's convention for a process ended by SIGTERM: 128 + 15
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert err.startswith("isoflow: terminated") and len(err.strip().splitlines()) == 1, err
+    assert "Traceback" not in err
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "step_000.ply"]
+    assert (out / "flow.csv").read_text() == "the previous run\n"
+    assert stages(out) == []
+
+
+def test_a_killed_runs_staging_directory_is_removed_by_the_next_run(tmp_path):
+    out = tmp_path / "run"
+    proc = start_flow(tmp_path, out)
+    wait_for_step_files(proc, out)
+    proc.send_signal(signal.SIGKILL)  # no clean-up can run
+    proc.communicate(timeout=60)
+    (left,) = stages(out)
+    assert (left / STAGE_OWNER).read_text().split() == [socket.gethostname(), str(proc.pid)]
+    # the next run into the directory: it is empty but for the abandoned
+    # staging directory, so no --force is needed, and nothing is left of it
+    rerun = subprocess.run([sys.executable, "-m", "isoflow.cli", "flow", str(tmp_path / "ball.npy"), "--out",
+                            str(out), "--steps", "2", "-q"], capture_output=True, text=True)
+    assert rerun.returncode == 0, rerun.stderr
+    assert stages(out) == []
+    assert sorted(p.name for p in out.glob("step_*.ply")) == ["step_000.ply", "step_001.ply", "step_002.ply"]
+
+
+def test_staging_directories_of_running_or_unknown_runs_are_kept(tmp_path):
+    from isoflow.flow.files import remove_abandoned_stages
+
+    live = tmp_path / f".{STAGE}{TEMP_MARK}live"
+    live.mkdir()
+    (live / STAGE_OWNER).write_text(f"{socket.gethostname()} {os.getpid()}\n")
+    other_host = tmp_path / f".{STAGE}{TEMP_MARK}host"
+    other_host.mkdir()
+    (other_host / STAGE_OWNER).write_text("some-other-machine 1\n")
+    unknown = tmp_path / f".{STAGE}{TEMP_MARK}none"
+    unknown.mkdir()
+    # a process that has ended: its pid is free (until reused)
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()
+    dead = tmp_path / f".{STAGE}{TEMP_MARK}dead"
+    dead.mkdir()
+    (dead / STAGE_OWNER).write_text(f"{socket.gethostname()} {ended.pid}\n")
+    assert remove_abandoned_stages(tmp_path) == [dead]
+    assert sorted(stages(tmp_path)) == sorted([live, other_host, unknown])
