@@ -37,7 +37,7 @@ def popcount(typingctx, x):
 
 @intrinsic
 def trailing_zeros(typingctx, x):
-    """Clear bits below the lowest set bit (x != 0)."""
+    """The number of clear bits below the lowest set bit (undefined for x = 0)."""
     if not isinstance(x, types.Integer):
         return None
 
