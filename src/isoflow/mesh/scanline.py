@@ -54,7 +54,7 @@ operation for operation: its volumes are reproduced bit for bit.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..scale.jit import njit
 
 
 

@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from ..scale.jit import njit
 
 from ..errors import IsoflowError
 

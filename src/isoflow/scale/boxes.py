@@ -16,7 +16,7 @@ counted again.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 _EMPTY = -1
 _GOLDEN = -7046029254386353131  # 0x9E3779B97F4A7C15 as int64: Fibonacci hashing

@@ -36,7 +36,7 @@ from .memory import check_fits
 RUN_BYTES = 12
 
 try:  # numba is a dependency, but keep isoflow importable without it
-    from numba import njit
+    from .jit import njit
 
     HAVE_NUMBA = True
 except ImportError:  # pragma: no cover - exercised only without numba

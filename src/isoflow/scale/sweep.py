@@ -42,7 +42,7 @@ thread.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 from .bitrows import popcount, trailing_zeros
 from .compiled import run, slabs, thread_count

@@ -1,0 +1,49 @@
+"""numba's ``njit``, for every compiled pass of isoflow, with one start-up
+cost taken off.
+
+numba's first call of any function, even one loaded from its disk cache,
+imports every implementation module it has. One of them
+(``numba.np.arraymath``) imports ``scipy.linalg`` at import time only to
+check that BLAS exists. That import costs about 0.13-0.24 s, a tenth of
+``isoflow info`` on a 512^3 volume. isoflow's kernels use no BLAS, and
+scipy, a dependency, provides it. So that module is imported here with the
+check answered "yes" without the import, and the real check is put back at
+once. numba's linear algebra, where anyone uses it, still imports scipy and
+checks it when the function is compiled (``numba.np.linalg`` calls the
+check there).
+
+If numba has already been started in this process, or a numba version
+lacks these names, nothing changes.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+__all__ = ["njit"]
+
+
+def _import_arraymath_without_blas_probe() -> None:
+    import sys
+
+    if "numba.np.arraymath" in sys.modules:  # numba started already
+        return
+    try:
+        from numba.np import linalg
+    except ImportError:  # pragma: no cover - another numba layout
+        return
+    probe = getattr(linalg, "ensure_blas", None)
+    if probe is None:  # pragma: no cover
+        return
+    linalg.ensure_blas = lambda: None
+    try:
+        from numba.np import arraymath
+    except ImportError:  # pragma: no cover
+        return
+    finally:
+        linalg.ensure_blas = probe
+    if getattr(arraymath, "ensure_blas", None) is not None:
+        arraymath.ensure_blas = probe  # later calls check for real
+
+
+_import_arraymath_without_blas_probe()
