@@ -95,6 +95,54 @@ def test_point_builders_refuse_coordinates_out_of_range():
                 build(np.array(pts))
 
 
+
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("0 0 0\n1_000 0 0\n", ("bad.txt:2", "not a number", "1_000")),  # Python's float() takes it
+        ("0,,0,0\n", ("bad.txt:1", "empty coordinate")),
+        ("1 2 3,\n", ("bad.txt:1", "empty coordinate")),
+        ("nan 0 0\n", ("bad.txt:1", "nan")),
+        ("0 0 0\ninf 1 1\n", ("bad.txt:2", "inf")),
+        ("0x10 0 0\n", ("bad.txt:1", "0x10")),
+        ("1,2,3\n4,5\n", ("bad.txt:2", "expected 3 coordinates")),
+        ("1 2 3\n4 5 6.5\n", ("bad.txt:2", "6.5 is not an integer")),
+    ],
+)
+def test_point_list_fields_are_plain_numbers(tmp_path, capsys, text, words):
+    path = tmp_path / "bad.txt"
+    path.write_text(text)
+    fails(capsys, "info", path, words=words)
+
+
+def test_point_list_read_whole_equals_line_by_line(tmp_path):
+    """numpy's reader (the fast path) and the line-by-line one read the
+    same points, with comments, blank lines, signs, exponents and every
+    separator."""
+    from isoflow.mesh.volumes import _read_points_by_line, read_points
+
+    rng = np.random.default_rng(3)
+    pts = rng.integers(-50, 50, (500, 3))
+    seps = [" ", "  ", "\t", ",", ", ", " , "]
+    for k, sep in enumerate(seps):
+        lines = []
+        for i, p in enumerate(pts):
+            fields = [f"{v:+d}" if i % 7 == 0 else (f"{v}e0" if i % 11 == 0 else str(v)) for v in p]
+            lines.append(sep.join(fields) + ("  # a comment" if i % 5 == 0 else ""))
+            if i % 13 == 0:
+                lines.append("# a line of comment" if i % 2 else "")
+        path = tmp_path / f"p{k}.txt"
+        path.write_text("\n".join(lines) + "\n")
+        got = read_points(path)
+        assert got.dtype == np.int64
+        assert (got == pts).all()
+        assert (got == _read_points_by_line(path, path.read_text())).all()
+    # blanks and commas mixed: numpy refuses, the line reader takes it
+    path = tmp_path / "mixed.txt"
+    path.write_text("1 2 3\n4,5,6\n")
+    assert read_points(path).tolist() == [[1, 2, 3], [4, 5, 6]]
+
+
 @pytest.mark.parametrize("points_are", ["corners", "voxels"])
 def test_point_grid_beyond_the_memory_budget(tmp_path, capsys, monkeypatch, points_are):
     from isoflow.scale import memory
