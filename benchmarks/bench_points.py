@@ -31,7 +31,7 @@ from isoflow.mesh.volumes import _read_points_by_line, read_points  # noqa: E402
 READERS = {
     "isoflow read_points": read_points,
     "np.loadtxt(dtype=int64)": lambda p: np.loadtxt(p, dtype=np.int64),
-    "isoflow line by line": lambda p: _read_points_by_line(p, p.read_text()),
+    "isoflow line by line": _read_points_by_line,
 }
 
 

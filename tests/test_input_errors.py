@@ -136,12 +136,24 @@ def test_point_list_read_whole_equals_line_by_line(tmp_path):
         got = read_points(path)
         assert got.dtype == np.int64
         assert (got == pts).all()
-        assert (got == _read_points_by_line(path, path.read_text())).all()
+        assert (got == _read_points_by_line(path)).all()
     # blanks and commas mixed: numpy refuses, the line reader takes it
     path = tmp_path / "mixed.txt"
     path.write_text("1 2 3\n4,5,6\n")
     assert read_points(path).tolist() == [[1, 2, 3], [4, 5, 6]]
 
+
+
+def test_point_list_beyond_the_memory_budget_is_refused_before_reading(tmp_path, capsys, monkeypatch):
+    from isoflow.scale import memory
+
+    path = tmp_path / "many.txt"
+    path.write_text("0 0 0\n" * 200_000)  # 1.2 MB of text: about 4.8 MB read
+    monkeypatch.setattr(memory, "default_budget", lambda: 2_000_000)
+    read = []
+    monkeypatch.setattr(np, "loadtxt", lambda *a, **k: read.append(1))
+    fails(capsys, "info", path, words=("many.txt", "point list", "budget"))
+    assert not read
 
 @pytest.mark.parametrize("points_are", ["corners", "voxels"])
 def test_point_grid_beyond_the_memory_budget(tmp_path, capsys, monkeypatch, points_are):

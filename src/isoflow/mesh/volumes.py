@@ -15,6 +15,7 @@ import numpy as np
 
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
+from ..scale.memory import check_fits
 from ..scale.arrays import binary
 from .formats.registry import RawVolume, format_for, split_dataset, volume_suffixes
 from .outputs import atomic_path, check_output_path
@@ -122,8 +123,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     line, ``#`` starts a comment, blanks or commas separate the numbers.
 
     numpy's compiled reader takes the file when it can: level with
-    ``np.loadtxt``, 70x faster than parsing line by line in Python and a
-    ninth of its memory (``benchmarks/bench_points.py``). A file it refuses,
+    ``np.loadtxt``, about 40x faster than parsing line by line in Python
+    (``benchmarks/bench_points.py``). A file it refuses,
     or whose numbers are not all integers in range, is read again line by
     line, for the one-line error that names the line."""
     path = Path(path)
@@ -138,8 +139,12 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
                 f"{path}: binary data, not a text point list (x y z per line); "
                 f"volumes are .npy/.npz"
             )
+        # a point takes at least 4 bytes of text ("0 0" and a line end) and
+        # 8 bytes a coordinate once read: 4 to 6 bytes per byte of text
+        check_fits(6 * path.stat().st_size, f"reading the point list {path}",
+                   hint="a volume file (.npy, .zarr) holds points far more compactly")
         points = _read_points_fast(path, b"," in head)
-        return points if points is not None else _read_points_by_line(path, path.read_text())
+        return points if points is not None else _read_points_by_line(path)
     except (OSError, UnicodeDecodeError) as exc:
         raise IsoflowError(f"{path}: cannot read as text ({exc})") from None
 
@@ -173,33 +178,48 @@ def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
     return values.astype(np.int64, copy=False)
 
 
-def _read_points_by_line(path: Path, text: str) -> np.ndarray:
-    rows, width = [], None
-    for lineno, line in enumerate(text.splitlines(), 1):
-        line = line.split("#", 1)[0].strip()
-        if not line:
-            continue
-        fields = _SPLIT.split(line)
-        for f in fields:
-            if not _NUMBER.fullmatch(f):
-                shown = f"empty coordinate in {line!r}" if not f else f"not a number: {f!r}"
-                raise IsoflowError(f"{path}:{lineno}: {shown}")
-        if width is None:
-            width = len(fields)
-            if width not in (2, 3):
-                raise IsoflowError(f"{path}:{lineno}: expected 2 or 3 coordinates, got {len(fields)}")
-        elif len(fields) != width:
-            raise IsoflowError(f"{path}:{lineno}: expected {width} coordinates, got {len(fields)}")
-        values = [float(f) for f in fields]
-        for f, v in zip(fields, values):
-            if not np.isfinite(v) or v != round(v):
-                raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
-            if abs(v) > MAX_COORDINATE:  # 1e300 or int64 extremes overflow later
-                raise IsoflowError(f"{path}:{lineno}: coordinate {f} is out of range (beyond +-{MAX_COORDINATE})")
-        rows.append([int(round(v)) for v in values])
-    if not rows:
+def _read_points_by_line(path: Path) -> np.ndarray:
+    """The points, read line by line as a stream (8 bytes a coordinate, as
+    loadtxt); the first bad line is refused with its number."""
+    from array import array
+
+    coords, width = array("q"), None
+    with open(path, encoding="utf-8") as fh:
+        for lineno, line in enumerate(fh, 1):
+            point = _point(path, lineno, line, width)
+            if point:
+                width = len(point)
+                coords.extend(point)
+    if not coords:
         raise IsoflowError(f"{path}: no points")
-    return np.array(rows, dtype=np.int64)
+    return np.frombuffer(coords, dtype=np.int64).reshape(-1, width).copy()
+
+
+def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
+    """The coordinates on one line of a point list (none for a blank or
+    comment line), or the error naming the line; ``width``: the number of
+    coordinates of the lines before (None for the first point)."""
+    line = line.split("#", 1)[0].strip()
+    if not line:
+        return []
+    fields = _SPLIT.split(line)
+    for f in fields:
+        if not _NUMBER.fullmatch(f):
+            shown = f"empty coordinate in {line!r}" if not f else f"not a number: {f!r}"
+            raise IsoflowError(f"{path}:{lineno}: {shown}")
+    if width is None and len(fields) not in (2, 3):
+        raise IsoflowError(f"{path}:{lineno}: expected 2 or 3 coordinates, got {len(fields)}")
+    if width is not None and len(fields) != width:
+        raise IsoflowError(f"{path}:{lineno}: expected {width} coordinates, got {len(fields)}")
+    point = []
+    for f in fields:
+        v = float(f)
+        if v != round(v):
+            raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
+        if abs(v) > MAX_COORDINATE:  # 1e300 or int64 extremes overflow later
+            raise IsoflowError(f"{path}:{lineno}: coordinate {f} is out of range (beyond +-{MAX_COORDINATE})")
+        point.append(int(round(v)))
+    return point
 
 
 def read_object(path: str | os.PathLike, points_are: str = "corners", label=None) -> DigitalObject:
