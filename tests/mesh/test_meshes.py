@@ -126,6 +126,18 @@ def test_self_intersecting_mesh_is_named(tmp_path):
     assert "--resolution" not in r["verdict"] and [d["resolution"] for d in r["digital"]] == [32, 64]
 
 
+
+def test_a_flat_closed_mesh_bounds_no_solid_and_agrees_with_nothing(tmp_path):
+    """A closed box of zero height: trimesh calls it watertight with
+    genus 0, but it encloses no voxel at any resolution, and an empty grid
+    (genus 0 too) is no evidence for anything."""
+    flat = trimesh.creation.box(extents=[1.0, 1.0, 0.0])
+    assert flat.is_watertight and flat.euler_number == 2
+    flat.export(tmp_path / "flat.stl")
+    r = verify_genus(tmp_path / "flat.stl", (16, 32))
+    assert all(d["betti"] == [0, 0, 0] for d in r["digital"])
+    assert r["agree"] is False and r["verdict"].startswith("no solid: the mesh encloses no voxel at resolution")
+
 def test_not_converged_names_the_resolution_and_the_budget():
     r = verify_genus(MESHES / "plate_holes.STL", (16,), step=False)
     assert r["verdict"].startswith("not converged at 16") and not r["agree"]

@@ -418,6 +418,13 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     if crossing_self:
         head = (f"self-intersecting: {out['self_intersecting_faces']} faces cross faces of their own component, "
                 "so the surface bounds no well-defined solid and no finer grid settles its genus")
+    elif digital and digital[-1]["betti"][0] == 0:
+        # a flat or zero-volume mesh: an empty grid has genus 0 and would
+        # "agree" with the surface's genus 0 for nothing
+        volume = solid.get("volume")
+        head = (f"no solid: the mesh encloses no voxel at resolution {digital[-1]['resolution']}"
+                + (f" (its enclosed volume is {volume:.3g})" if volume is not None else "")
+                + ", so there is no solid genus to check")
     elif not digital or reference is None:
         head = f"no {ref_name} to compare" if digital else "no mesh genus to compare"
     elif not stable:
