@@ -80,7 +80,7 @@ def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
 
 # ------------------------------------------------------------- point lists
 
-@pytest.mark.parametrize("big", ["1e300", "9223372036854775807", "-9223372036854775808"])
+@pytest.mark.parametrize("big", ["1e300", "1e999", "-1e999", "9223372036854775807", "-9223372036854775808"])
 @pytest.mark.parametrize("points_are", ["corners", "voxels"])
 def test_point_coordinates_out_of_range(tmp_path, capsys, big, points_are):
     path = tmp_path / "far.txt"

@@ -102,7 +102,9 @@ def remove_abandoned_stages(out: Path) -> list[Path]:
     for stage in out.glob(f".{STAGE}{TEMP_MARK}*"):
         try:
             owner_host, pid = (stage / STAGE_OWNER).read_text().split()
-            if owner_host != host or _running(int(pid)):
+            pid = int(pid)
+            # (kill(0) and kill(-1) would ask about process groups)
+            if owner_host != host or pid <= 0 or _running(pid):
                 continue
         except (OSError, ValueError):
             continue

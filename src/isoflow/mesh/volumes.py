@@ -213,11 +213,11 @@ def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
         raise IsoflowError(f"{path}:{lineno}: expected {width} coordinates, got {len(fields)}")
     point = []
     for f in fields:
-        v = float(f)
-        if v != round(v):
-            raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
+        v = float(f)  # "1e999" is inf: out of range, before round() fails on it
         if abs(v) > MAX_COORDINATE:  # 1e300 or int64 extremes overflow later
             raise IsoflowError(f"{path}:{lineno}: coordinate {f} is out of range (beyond +-{MAX_COORDINATE})")
+        if v != round(v):
+            raise IsoflowError(f"{path}:{lineno}: coordinate {f} is not an integer")
         point.append(int(round(v)))
     return point
 
