@@ -288,3 +288,42 @@ def test_flow_into_a_new_directory_leaves_nothing_on_failure(tmp_path, monkeypat
     rc, _, err = run("flow", tmp_path / "b3.npy", "--out", tmp_path / "new")
     assert rc == 2 and "No space left on device" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "new").exists()
+
+
+# ------------------------------------------------- what killed writers left
+
+def test_a_killed_writers_temporaries_are_removed_by_the_next_write(tmp_path):
+    """A process killed outright (SIGKILL) while writing leaves its
+    temporary file or directory; the next write of that file removes it,
+    and only it: not a running process's, another host's, or a stranger's
+    file of another form."""
+    import hashlib
+    import socket
+    import sys
+
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / "out.ply"
+    host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+    ended = subprocess.Popen([sys.executable, "-c", "pass"])
+    ended.wait()  # its pid is free now (until reused)
+    dead_file = tmp_path / f".out{outputs.TEMP_MARK}{host}-{ended.pid}-0123abcd.ply"
+    dead_file.write_bytes(b"half a mesh")
+    dead_dir = tmp_path / f".out{outputs.TEMP_MARK}{host}-{ended.pid}-4567abcd.ply"
+    dead_dir.mkdir()  # (a zarr store is a directory)
+    (dead_dir / "chunk").write_bytes(b"x")
+    kept = [
+        tmp_path / f".out{outputs.TEMP_MARK}{host}-{os.getpid()}-89abcdef.ply",  # a running writer's
+        tmp_path / f".out{outputs.TEMP_MARK}0000ffff-{ended.pid}-01234567.ply",  # another host's
+        tmp_path / f".out{outputs.TEMP_MARK}12345678.ply",  # no owner in its name
+        tmp_path / f".other{outputs.TEMP_MARK}{host}-{ended.pid}-0123abcd.ply",  # another file's
+    ]
+    for k in kept:
+        k.write_bytes(b"keep")
+    rc, _, err = run("surface", tmp_path / "t.npy", "-o", out)
+    assert rc == 0, err
+    assert not dead_file.exists() and not dead_dir.exists()
+    assert all(k.read_bytes() == b"keep" for k in kept)
+    # and the surface itself is whole
+    import trimesh
+
+    assert trimesh.load(out, process=False).is_watertight

@@ -22,7 +22,6 @@ from __future__ import annotations
 import contextlib
 import os
 import shutil
-import socket
 from pathlib import Path
 
 from ..digital.lattice import DigitalObject
@@ -30,9 +29,9 @@ from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from ..mesh import export
 from ..mesh.outputs import (
-    TEMP_MARK,
     atomic_write,
     check_writable_dir,
+    remove_abandoned,
     sync_directory,
     sync_file,
     temp_sibling,
@@ -74,43 +73,9 @@ def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str
     return header, rows
 
 
-#: a run's staging directory is ``.run`` + TEMP_MARK + a random part
-#: (:func:`~isoflow.mesh.outputs.temp_sibling` of this name)
+#: a run's staging directory: :func:`~isoflow.mesh.outputs.temp_sibling`
+#: of this name in the output directory
 STAGE = "run"
-#: in a staging directory: "HOST PID" of the process writing into it
-STAGE_OWNER = "owner"
-
-
-def _running(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)  # signal 0: only asks whether the process exists
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # it exists, as another user's
-        return True
-    return True
-
-
-def remove_abandoned_stages(out: Path) -> list[Path]:
-    """Remove the staging directories in ``out`` that a killed run left
-    (SIGKILL, a crash, a power cut: no clean-up ran), so that they neither
-    pile up nor make the directory look taken. A staging directory is
-    abandoned when its owner file names a process of this host that no
-    longer runs; one without an owner file, or another host's (a shared
-    file system), is left alone. Returns the removed ones."""
-    host, removed = socket.gethostname(), []
-    for stage in out.glob(f".{STAGE}{TEMP_MARK}*"):
-        try:
-            owner_host, pid = (stage / STAGE_OWNER).read_text().split()
-            pid = int(pid)
-            # (kill(0) and kill(-1) would ask about process groups)
-            if owner_host != host or pid <= 0 or _running(pid):
-                continue
-        except (OSError, ValueError):
-            continue
-        shutil.rmtree(stage, ignore_errors=True)
-        removed.append(stage)
-    return removed
 
 
 def check_output_dir(directory, force: bool = False):
@@ -119,8 +84,8 @@ def check_output_dir(directory, force: bool = False):
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
-    if out.is_dir():
-        remove_abandoned_stages(out)
+    if out.is_dir():  # a killed run's staging directory does not make it taken
+        remove_abandoned(out / STAGE)
     if out.is_dir() and any(out.iterdir()) and not force:
         raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
     parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
@@ -186,7 +151,6 @@ class FlowWriter:
         try:
             out.mkdir(parents=True, exist_ok=True)
             self.stage = temp_sibling(out / STAGE, directory=True)
-            (self.stage / STAGE_OWNER).write_text(f"{socket.gethostname()} {os.getpid()}\n")
         except OSError as exc:
             raise write_error(out, exc, existed=not self.created) from None
         self.out, self.connectivity = out, connectivity

@@ -18,14 +18,17 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import glob
+import hashlib
 import os
 import secrets
 import shutil
+import socket
 from pathlib import Path
 
 from ..errors import IsoflowError
 
-#: marks temporary files and directories (``.NAME.isoflow-tmp-XXXXXXXX.SUFFIX``)
+#: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"
 
 
@@ -75,16 +78,32 @@ def _read_only_fs(directory: Path) -> bool:
         return False
 
 
+def _temp_parts(path: Path) -> tuple[str, str]:
+    """(prefix, suffix) of the temporary names beside ``path``: all its
+    suffixes are kept (nibabel reads ".nii.gz", not only ".gz")."""
+    suffix = "".join(path.suffixes)
+    stem = path.name[: len(path.name) - len(suffix)] if suffix else path.name
+    return f".{stem}{TEMP_MARK}", suffix
+
+
+def _owner() -> str:
+    """This process in a temporary name: its host (8 hex digits of a hash
+    of the host name) and its pid."""
+    host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+    return f"{host}-{os.getpid()}"
+
+
 def temp_sibling(path: Path, directory: bool = False) -> Path:
     """A new, reserved temporary name beside ``path`` that keeps its suffix
-    (writers such as ``np.savez`` and matplotlib choose the format by it).
-    The file is created empty with the usual permissions (0666 less the
-    umask), or the directory made, so that no other writer can take it."""
+    (writers such as ``np.savez`` and matplotlib choose the format by it):
+    ``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``. The file is created empty
+    with the usual permissions (0666 less the umask), or the directory made,
+    so that no other writer can take it. What killed writers left beside
+    ``path`` is removed first (:func:`remove_abandoned`)."""
+    remove_abandoned(path)
+    prefix, suffix = _temp_parts(path)
     for _ in range(100):
-        # all suffixes kept: nibabel reads ".nii.gz", not only ".gz"
-        suffix = "".join(path.suffixes)
-        stem = path.name[: len(path.name) - len(suffix)] if suffix else path.name
-        tmp = path.with_name(f".{stem}{TEMP_MARK}{secrets.token_hex(4)}{suffix}")
+        tmp = path.with_name(f"{prefix}{_owner()}-{secrets.token_hex(4)}{suffix}")
         try:
             if directory:
                 tmp.mkdir()
@@ -94,6 +113,45 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
         except FileExistsError:
             continue
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(path))
+
+
+def remove_abandoned(path: str | os.PathLike) -> list[Path]:
+    """Remove the temporary files and directories beside ``path`` that a
+    writer killed outright left (SIGKILL, a crash, a power cut: no
+    clean-up ran; SIGTERM and Ctrl-C clean up), so that a killed 10 GB zarr
+    write does not stay on the disk, hidden. A temporary is abandoned when
+    its name says it belongs to a process of this host that no longer
+    runs; another host's (a shared file system) or one of another form is
+    left alone. Returns the removed ones."""
+    path = Path(path)
+    prefix, suffix = _temp_parts(path)
+    host = _owner().split("-")[0]
+    removed = []
+    try:
+        found = list(path.parent.glob(glob.escape(prefix) + "*" + glob.escape(suffix)))
+    except OSError:
+        return removed
+    for tmp in found:
+        owner = tmp.name[len(prefix): len(tmp.name) - len(suffix)].split("-")
+        if len(owner) != 3 or owner[0] != host or not owner[1].isdigit():
+            continue
+        pid = int(owner[1])
+        # (kill(0) would ask about the process group)
+        if pid <= 0 or _running(pid):
+            continue
+        _remove(tmp)
+        removed.append(tmp)
+    return removed
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # it exists, as another user's
+        return True
+    return True
 
 
 def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
