@@ -19,11 +19,9 @@ from __future__ import annotations
 import contextlib
 import errno
 import glob
-import hashlib
 import os
 import secrets
 import shutil
-import socket
 from pathlib import Path
 
 from ..errors import IsoflowError
@@ -89,6 +87,9 @@ def _temp_parts(path: Path) -> tuple[str, str]:
 def _owner() -> str:
     """This process in a temporary name: its host (8 hex digits of a hash
     of the host name) and its pid."""
+    import hashlib  # (socket alone costs 10 ms at the start of every command)
+    import socket
+
     host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
     return f"{host}-{os.getpid()}"
 
