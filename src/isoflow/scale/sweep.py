@@ -101,6 +101,45 @@ def _join_mask(parent, mask, sa, base_a, before_a, sb, base_b, before_b):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _join_face_rows(parent, slack, x3, p3, s3, b3, xn, pn, sn, bn):
+    """Join the runs of row 3 and of a face-neighbouring row n (2 or 1 of a
+    block) that touch in one word: where they overlap, and with ``slack``
+    (18 and 26) where voxel k of one meets voxel k - 1 of the other across
+    the edge, while the other voxels of that edge's square are clear (see
+    :func:`_join_rows` for the arguments)."""
+    m = x3 & xn & ~(p3 & pn)  # where an overlap begins
+    if m:
+        _join_mask(parent, m, s3, b3, False, sn, bn, False)
+    if slack > 0:
+        m = s3 & pn & ~xn
+        if m:
+            _join_mask(parent, m, s3, b3, False, sn, bn, True)
+        m = sn & p3 & ~x3
+        if m:
+            _join_mask(parent, m, s3, b3, True, sn, bn, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_diagonal_rows(parent, diag, xa, pa, sa, ba, xb, pb, sb, bb, xc, pc, xd, pd):
+    """Join the runs of two diagonal rows a and b of a block (3 and 0, or 1
+    and 2; c and d are the other two) that touch in one word: along the
+    edge between them where c and d are clear there (``diag`` >= 0: 18 and
+    26), and with ``diag`` > 0 (26) at a vertex, voxel k of one and k - 1
+    of the other, where the rest of that cube is clear (see
+    :func:`_join_rows`)."""
+    m = xa & xb & ~xc & ~xd & ~(pa & pb & ~pc & ~pd)
+    if m:
+        _join_mask(parent, m, sa, ba, False, sb, bb, False)
+    if diag > 0:  # vertex contacts: two opposite voxels of a cube alone
+        m = xa & pb & ~pa & ~xb & ~(xc | pc | xd | pd)
+        if m:
+            _join_mask(parent, m, sa, ba, False, sb, bb, True)
+        m = pa & xb & ~xa & ~pb & ~(xc | pc | xd | pd)
+        if m:
+            _join_mask(parent, m, sa, ba, True, sb, bb, False)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _join_rows(parent, slack, diag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, s3, b0, b1, b2, b3):
     """Join the runs (or gaps, given the rows' gap bits) that touch in one
     word of a block's four rows, under an adjacency (``slack``, ``diag``:
@@ -117,45 +156,11 @@ def _join_rows(parent, slack, diag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, 
     the two other rows is set, a contact across the rows (voxel k of one,
     k - 1 of the other) where either is set at its other voxel, a vertex
     contact where any other voxel of its cube is set."""
-    m = x3 & x2 & ~(p3 & p2)  # the face pairs' overlaps
-    if m:
-        _join_mask(parent, m, s3, b3, False, s2, b2, False)
-    m = x3 & x1 & ~(p3 & p1)
-    if m:
-        _join_mask(parent, m, s3, b3, False, s1, b1, False)
-    if slack > 0:
-        m = s3 & p2 & ~x2
-        if m:
-            _join_mask(parent, m, s3, b3, False, s2, b2, True)
-        m = s2 & p3 & ~x3
-        if m:
-            _join_mask(parent, m, s3, b3, True, s2, b2, False)
-        m = s3 & p1 & ~x1
-        if m:
-            _join_mask(parent, m, s3, b3, False, s1, b1, True)
-        m = s1 & p3 & ~x3
-        if m:
-            _join_mask(parent, m, s3, b3, True, s1, b1, False)
+    _join_face_rows(parent, slack, x3, p3, s3, b3, x2, p2, s2, b2)
+    _join_face_rows(parent, slack, x3, p3, s3, b3, x1, p1, s1, b1)
     if diag >= 0:
-        m = x3 & x0 & ~x1 & ~x2 & ~(p3 & p0 & ~p1 & ~p2)
-        if m:
-            _join_mask(parent, m, s3, b3, False, s0, b0, False)
-        m = x1 & x2 & ~x0 & ~x3 & ~(p1 & p2 & ~p0 & ~p3)
-        if m:
-            _join_mask(parent, m, s1, b1, False, s2, b2, False)
-    if diag > 0:  # vertex contacts: two opposite voxels of a cube alone
-        m = x3 & p0 & ~p3 & ~x0 & ~(x1 | p1 | x2 | p2)
-        if m:
-            _join_mask(parent, m, s3, b3, False, s0, b0, True)
-        m = p3 & x0 & ~x3 & ~p0 & ~(x1 | p1 | x2 | p2)
-        if m:
-            _join_mask(parent, m, s3, b3, True, s0, b0, False)
-        m = x1 & p2 & ~p1 & ~x2 & ~(x0 | p0 | x3 | p3)
-        if m:
-            _join_mask(parent, m, s1, b1, False, s2, b2, True)
-        m = p1 & x2 & ~x1 & ~p2 & ~(x0 | p0 | x3 | p3)
-        if m:
-            _join_mask(parent, m, s1, b1, True, s2, b2, False)
+        _join_diagonal_rows(parent, diag, x3, p3, s3, b3, x0, p0, s0, b0, x1, p1, x2, p2)
+        _join_diagonal_rows(parent, diag, x1, p1, s1, b1, x2, p2, s2, b2, x0, p0, x3, p3)
 
 
 @njit(cache=True, nogil=True, inline="always")
