@@ -260,3 +260,59 @@ def test_info_on_a_small_volume_never_loads_numba(tmp_path):
     from isoflow import boundary_mesh
 
     assert int(surfaces) == len(boundary_mesh(v, 6).components()) > 1
+
+
+def _imported(args, cwd=None):
+    """The modules an ``isoflow`` command imports (``python -X importtime``),
+    and its result."""
+    p = subprocess.run([sys.executable, "-X", "importtime", "-m", "isoflow.cli", *map(str, args)],
+                       capture_output=True, text=True, cwd=cwd)
+    modules = {line.split("|")[-1].strip() for line in p.stderr.splitlines() if line.startswith("import time:")}
+    return p, modules
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
+    # a volume below the compiled passes' threshold answers in the NumPy
+    # passes without numba's half-second start; one above it loads numba;
+    # both reports equal the in-process one and scikit-image's chi
+    from isoflow.digital.analysis import analyze
+    from isoflow.scale.compiled import MIN_VOXELS, have_numba
+
+    rng = np.random.default_rng(conn)
+    # more than a bit per voxel would make MIN_VOXELS, fewer voxels
+    small = rng.random((80, 77, 83)) < 0.3  # edge and vertex contacts everywhere
+    big = np.zeros((130, 130, 130), bool)
+    big[:80, :77, :83] = small
+    assert MIN_VOXELS // 8 < small.size < MIN_VOXELS <= big.size
+    for name, vol, numba_loaded in (("small", small, False), ("big", big, have_numba())):
+        np.save(tmp_path / f"{name}.npy", vol)
+        p, modules = _imported(["info", tmp_path / f"{name}.npy", "--json", "--connectivity", conn])
+        assert p.returncode == 0, p.stderr
+        assert ("numba" in modules) == numba_loaded, name
+        report = json.loads(p.stdout)
+        assert report["euler_characteristic"] == euler_number(vol, connectivity=1 if conn == 6 else 3)
+        want = analyze(vol, conn)
+        assert {k: report[k] for k in want} == json.loads(json.dumps(want))
+
+
+def test_census_once_loaded_takes_small_volumes_too(monkeypatch):
+    # once warm (a command warms it while reading a file that may be
+    # large), the compiled pass answers for small volumes: the same report
+    # as the NumPy passes, at both connectivities
+    from isoflow.digital import closed_surfaces
+    from isoflow.digital.analysis import analyze
+    from isoflow.scale.compiled import have_numba
+
+    if not have_numba():
+        pytest.skip("numba not installed")
+    rng = np.random.default_rng(5)
+    vols = [rng.random((9, 11, 7)) < 0.4, np.zeros((3, 3, 3), bool), np.ones((1, 1, 1), bool)]
+    monkeypatch.setattr(closed_surfaces, "_warm", False)  # (another test may have warmed it)
+    assert not any(closed_surfaces.use_census(v) for v in vols)
+    cold = {(i, c): analyze(v, c) for i, v in enumerate(vols) for c in (6, 26)}
+    closed_surfaces.warm_up()
+    assert all(closed_surfaces.use_census(v) for v in vols)
+    assert not closed_surfaces.use_census(vols[0][0])  # 2D: not this pass
+    for (i, c), want in cold.items():
+        assert analyze(vols[i], c) == want

@@ -149,15 +149,19 @@ def cmd_info(args) -> int:
 def warm_up_while_reading(args):
     """A thread that loads the compiled passes (numba and its cached code:
     about half a second once per process) while the input is read, which
-    releases the GIL; only for volume files large enough to use them."""
+    releases the GIL; only for volumes large enough to use them (a small
+    one answers in the NumPy passes, without numba's start)."""
+    from .mesh.formats.npy import voxel_count
     from .mesh.formats.registry import split_dataset
     from .mesh.load import is_mesh_path
     from .scale.compiled import MIN_VOXELS, have_numba
 
     path = split_dataset(args.input)[0]
     try:
-        # a bit per voxel at the least (binvox); compressed files: no matter
-        big = path.stat().st_size >= MIN_VOXELS // 8
+        # the voxels from a .npy's header; elsewhere a bit per voxel at the
+        # least (binvox; compressed files: no matter)
+        voxels = voxel_count(path) if path.suffix.lower() == ".npy" else None
+        big = path.stat().st_size >= MIN_VOXELS // 8 if voxels is None else voxels >= MIN_VOXELS
     except OSError:
         return None
     if args.gpu or not big or is_mesh_path(path) or not have_numba():

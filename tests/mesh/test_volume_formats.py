@@ -341,3 +341,18 @@ def test_label_selects_one_value_and_a_label_image_is_refused(tmp_path, vol):
         isoflow.read_volume(tmp_path / "l.npy")
     with pytest.raises(IsoflowError, match=r"no voxel has label 4 \(values present: 0, 3, 5\)"):
         isoflow.read_object(tmp_path / "l.npy", label=4)
+
+
+def test_npy_voxel_count_from_the_header_alone(tmp_path):
+    from isoflow.mesh.formats.npy import voxel_count
+
+    a = np.zeros((3, 4, 5), bool)
+    np.save(tmp_path / "v1.npy", a)
+    with open(tmp_path / "v2.npy", "wb") as fh:
+        np.lib.format.write_array(fh, a, version=(2, 0))
+    np.savez(tmp_path / "z.npy", volume=a)  # an .npz by another name
+    (tmp_path / "bad.npy").write_bytes(b"not numpy")
+    assert voxel_count(tmp_path / "v1.npy") == voxel_count(tmp_path / "v2.npy") == 60
+    assert voxel_count(tmp_path / "z.npy.npz") is None
+    assert voxel_count(tmp_path / "bad.npy") is None
+    assert voxel_count(tmp_path / "missing.npy") is None

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..scale import arrays
-from ..scale.compiled import use_compiled, using
-from .closed_surfaces import closed_surfaces, compiled_census
+from ..scale.compiled import using
+from .closed_surfaces import closed_surfaces, compiled_census, use_census
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -64,7 +64,7 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
         vol, parity = arrays.as_volume(obj)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
     census = None
-    if vol.ndim == 3 and use_compiled(vol):
+    if use_census(vol):
         # one pass gives the histogram, the Betti counts and the surfaces
         census = compiled_census(vol, conn, surfaces)
         hist = census["hist"]

@@ -318,13 +318,27 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
     return out
 
 
+#: set once :func:`warm_up` has loaded the compiled pass in this process
+_warm = False
+
+
 def warm_up(surfaces: bool = True) -> None:
     """Load the compiled pass now, on a tiny volume: importing numba and
     loading its cached machine code takes about half a second once per
     process, which a command spends while it reads its input."""
+    global _warm
     vol = np.zeros((2, 2, 3), bool)
     vol[0, 0, 1] = True
     compiled_census(vol, 6, surfaces)
+    _warm = True
+
+
+def use_census(vol) -> bool:
+    """Whether :func:`compiled_census` is the faster way for a 3D volume:
+    a large host volume (:func:`use_compiled`), or any host volume once
+    the pass is loaded (:func:`warm_up`): its start is paid, and it is
+    faster than the NumPy passes at every size."""
+    return vol.ndim == 3 and (use_compiled(vol) or (_warm and isinstance(vol, np.ndarray)))
 
 
 def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:

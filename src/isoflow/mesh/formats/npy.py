@@ -46,6 +46,23 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0))
 
 
+def voxel_count(path: Path) -> int | None:
+    """The number of voxels of a ``.npy`` file from its header alone (None
+    when the file is not a plain ``.npy``), so that a command can choose its
+    path before reading the array."""
+    try:
+        with open(path, "rb") as fh:
+            version = np.lib.format.read_magic(fh)
+            header = {(1, 0): np.lib.format.read_array_header_1_0,
+                      (2, 0): np.lib.format.read_array_header_2_0}.get(version)
+            if header is None:  # (3.0: the same header in UTF-8; rare)
+                return None
+            shape = header(fh)[0]
+    except Exception:  # not an .npy (an .npz by another name, a bad file): the reader says what
+        return None
+    return int(np.prod(shape, dtype=np.int64))
+
+
 def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     with open(path, "wb") as fh:
         if path.name.lower().endswith(".npy"):
