@@ -131,11 +131,16 @@ if HAVE_NUMBA:
 
     @njit(cache=True, nogil=True, inline="always")
     def find(parent, a):
-        """The root of node a in a union-find's parent array (path halving)."""
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
+        """The root of node a in a union-find's parent array (path halving).
+
+        Indices are cast to unsigned: numba then skips the test for a
+        negative index (counted from the end) on every step of the chain,
+        which made the sweep's unions about 10% slower."""
+        a = np.uint64(a)
+        while np.uint64(parent[a]) != a:
+            parent[a] = parent[np.uint64(parent[a])]
+            a = np.uint64(parent[a])
+        return np.int64(a)
 
     @njit(cache=True, nogil=True)
     def _join_rows(parent, start, end, a0, a1, b0, b1, slack):
@@ -216,9 +221,9 @@ if HAVE_NUMBA:
         ``parent[x] <= x`` always."""
         ra, rb = find(parent, a), find(parent, b)
         if ra < rb:
-            parent[rb] = ra
+            parent[np.uint64(rb)] = ra
         elif rb < ra:
-            parent[ra] = rb
+            parent[np.uint64(ra)] = rb
 
     @njit(cache=True, nogil=True)
     def _join_pairs(parent, pairs):

@@ -257,7 +257,7 @@ def _pieces(acc, x0, x1, x2, x3, p0, p1, p2, p3, starts, base, formula):
         if formula:
             value += 8 * (start - np.int64(popcount(piece & over2) + popcount(piece & over1))
                           + np.int64(popcount(piece & four)))
-        acc[base + np.int64(popcount(starts & ((one << p << one) - one)))] += value
+        acc[np.uint64(base + np.int64(popcount(starts & ((one << p << one) - one))))] += value
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -275,9 +275,17 @@ def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_ob
     return npairs
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _set_up(parent, acc, a, b):
+    """Nodes a <= x < b, each a set of its own with nothing added yet."""
+    for x in range(a, b):
+        parent[np.uint64(x)] = x
+        acc[np.uint64(x)] = 0
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pbg, acc_obj, acc_bg, spare, rep,
-                  hist, pairs, mode, nsheet, octant, values, spokes, pinch, rare, pinch_objects, formula_obj, scratch,
+                  hist, pairs, mode, nsheet, octant, values, spokes, pinch, info, pinch_objects, formula_obj, scratch,
                   uscratch):
     """Sweep the vertex layers lo <= i < hi (see the module docs and
     :func:`sweep`), after setting up the nodes of the voxel rows ``rows``
@@ -285,13 +293,10 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
     them); ``spare``: the slab's spare nodes, past the nodes of ``acc_obj``
     and ``acc_bg``. Returns the doubled edges and the number of pinch pairs
     (also those beyond ``pairs``' length)."""
-    if mode != PINCHES:
-        for x in range(off[rows[0]], off[rows[1]]):
-            pobj[x] = x
-            acc_obj[x] = 0
-        for x in range(goff[rows[0]], goff[rows[1]]):
-            pbg[x] = x
-            acc_bg[x] = 0
+    if mode != PINCHES and rows[1] > rows[0] and lo * ny > rows[0]:
+        # the slab's first voxel layer, which its blocks never take as row 3
+        _set_up(pobj, acc_obj, off[rows[0]], off[lo * ny])
+        _set_up(pbg, acc_bg, goff[rows[0]], goff[lo * ny])
     words = bits.shape[1]
     zero_row = len(bits) - 1  # the rows outside the array read this one
     gaps = len(pbg) - 1
@@ -327,6 +332,11 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
             if i < nx and j < ny:
                 r3 = i * ny + j
                 b3, g3, in3 = off[r3] - 1, goff[r3] - 1, ~zero
+                if mode != PINCHES and rows[0] <= r3 < rows[1]:
+                    # the row's nodes, set up by the first block that uses
+                    # them (and in cache for the three others that do)
+                    _set_up(pobj, acc_obj, off[r3], off[r3 + 1])
+                    _set_up(pbg, acc_bg, goff[r3], goff[r3 + 1])
                 if mode != PINCHES and goff[r3 + 1] > goff[r3]:
                     # gaps that touch the outside: all of a row on the
                     # array's side, else those at the row's ends
@@ -358,11 +368,14 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
                 g2 += np.int64(popcount(t2))
                 g3 += np.int64(popcount(t3))
                 # bit k of p: voxel k - 1
-                p0 = (bits[r0, w] << one) | (x0 >> top)
-                p1 = (bits[r1, w] << one) | (x1 >> top)
-                p2 = (bits[r2, w] << one) | (x2 >> top)
-                p3 = (bits[r3, w] << one) | (x3 >> top)
-                x0, x1, x2, x3 = bits[r0, w], bits[r1, w], bits[r2, w], bits[r3, w]
+                uw = np.uint64(w)
+                y0, y1, y2, y3 = bits[np.uint64(r0), uw], bits[np.uint64(r1), uw], bits[np.uint64(r2), uw], \
+                    bits[np.uint64(r3), uw]
+                p0 = (y0 << one) | (x0 >> top)
+                p1 = (y1 << one) | (x1 >> top)
+                p2 = (y2 << one) | (x2 >> top)
+                p3 = (y3 << one) | (x3 >> top)
+                x0, x1, x2, x3 = y0, y1, y2, y3
                 s0, s1, s2, s3 = x0 & ~p0, x1 & ~p1, x2 & ~p2, x3 & ~p3
                 # gaps: voxels inside the array; before voxel 0 counts as a
                 # run's end for numbering them, as no gap for joining them
@@ -406,9 +419,10 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
                     # the layer since the last event: its voxels are those
                     # before k (flat: no curvature; its faces are counted
                     # with the runs, see _pieces)
-                    hist[old | (old << 4)] += k - last - 1
-                    hist[c] += 1
-                    if rare[c] or k == 0 or k == nz:
+                    hist[np.uint64(old * 17)] += k - last - 1  # (old | old << 4)
+                    hist[np.uint64(c)] += 1
+                    common = info[np.uint64(c)]
+                    if common < 0 or k == 0 or k == nz:
                         if mode == ALL:
                             doubled += _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_obj,
                                                    acc_bg, outside, nsheet, octant, values, spokes, pinch, formula_obj)
@@ -419,12 +433,12 @@ def _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows, adjacency, pobj, pb
                         # the event's one sheet, on the side that counts
                         # sheets: one mesh vertex less a quarter of each face,
                         # its share of chi = V - F, times 4
-                        o = octant[c, 0]
-                        q, m = o & 3, ((one << b) - one) | (np.uint64(o >> 2) << b)
+                        q, m = np.uint64(common & 3), ((one << b) - one) | (np.uint64((common >> 2) & 1) << b)
+                        value = (common >> 8) - 128
                         if formula_obj:
-                            acc_bg[gbase[q] + np.int64(popcount(gruns[q] & m))] += values[c, 0]
+                            acc_bg[np.uint64(gbase[q] + np.int64(popcount(gruns[q] & m)))] += value
                         else:
-                            acc_obj[base[q] + np.int64(popcount(runs[q] & m))] += values[c, 0]
+                            acc_obj[np.uint64(base[q] + np.int64(popcount(runs[q] & m)))] += value
                     old = new
                     last = k
             if mode != PINCHES:
@@ -444,16 +458,16 @@ def _add_up(sums, node, value):
     """Add a node's value (two halves, see :func:`sweep`) to its set's sums."""
     # the low half is signed: value = high * 2^32 + low, |low| < 2^31
     low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
-    sums[node, 0] += low
-    sums[node, 1] += (value - low) >> 32
+    sums[np.uint64(node), 0] += low
+    sums[np.uint64(node), 1] += (value - low) >> 32
 
 
 @njit(cache=True, nogil=True)
 def _number(parent, acc, lo, hi, phase, base, roots, sums):
     """One phase of numbering the sets of a finished union-find in place,
-    for the nodes lo <= x < hi; afterwards ``parent[x]`` is ``-1 - n`` for
+    for the nodes lo <= x < hi; afterwards ``parent[np.uint64(x)]`` is ``-1 - n`` for
     x in set n (sets numbered in order of their smallest node, their root:
-    unions hang the larger root under the smaller, so ``parent[x] <= x``).
+    unions hang the larger root under the smaller, so ``parent[np.uint64(x)] <= x``).
     Phases run on the threads, each after the last has finished everywhere:
 
     0. point every node at its root (reading other threads' nodes is safe:
@@ -472,36 +486,36 @@ def _number(parent, acc, lo, hi, phase, base, roots, sums):
     last = len(parent) - 1
     if phase == 0:
         for x in range(lo, hi):
-            r = parent[x]
+            r = parent[np.uint64(x)]
             if r >= lo:  # a node of this range: done already
-                r = parent[r]
+                r = parent[np.uint64(r)]
             else:
-                while parent[r] != r:
-                    r = parent[r]
-            parent[x] = r
+                while parent[np.uint64(r)] != r:
+                    r = parent[np.uint64(r)]
+            parent[np.uint64(x)] = r
             n += r == x
     elif phase == 4:
         for x in range(lo, hi):
-            n += parent[x] == x
+            n += parent[np.uint64(x)] == x
     elif phase == 1:
         for x in range(lo, hi):
-            if parent[x] == x:
+            if parent[np.uint64(x)] == x:
                 roots[base + n] = x
-                parent[x] = -1 - (base + n)
+                parent[np.uint64(x)] = -1 - (base + n)
                 n += 1
     else:
         for x in range(lo, hi):
-            r = parent[x]
+            r = parent[np.uint64(x)]
             if phase == 3 and r == x:
                 roots[n] = x
-                parent[x] = -1 - n
+                parent[np.uint64(x)] = -1 - n
                 n += 1
             elif r >= 0:
-                parent[x] = parent[r]  # r numbered already (r < x, or phase 1)
-            _add_up(sums, -1 - parent[x], acc[x])
+                parent[np.uint64(x)] = parent[np.uint64(r)]  # r numbered already (r < x, or phase 1)
+            _add_up(sums, -1 - parent[np.uint64(x)], acc[np.uint64(x)])
         if hi > last:
             for x in range(last + 1, len(acc)):
-                _add_up(sums, -1 - parent[last], acc[x])
+                _add_up(sums, -1 - parent[np.uint64(last)], acc[np.uint64(x)])
     return n
 
 
@@ -576,6 +590,9 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
     # the events that take the slower path: several sheets, a pinch, a
     # doubled spoke
     rare = (nsheet > 1) | (pinch[:, 0] >= 0) | (spokes != 0)
+    # the common events' one sheet in one number: its octant (3 bits) and
+    # 128 + what it adds (from bit 8); -1: the slower path
+    info = np.where(rare, -1, octant[:, 0] | ((values[:, 0] + 128) << 8)).astype(np.int64)
     layers = [(a + (s > 0), b + (s == len(parts) - 1)) for s, (a, b) in enumerate(parts)]
     layers += [(a, a + 1) for a, _ in parts[1:]]  # the seams, after the slabs
     reps = np.full(_SPREAD * len(layers), -1, np.int64)[::_SPREAD]
@@ -592,7 +609,7 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
         lo, hi = layers[t]
         return _sweep_layers(bits, nx, ny, nz, off, goff, lo, hi, rows[t], adj, pobj, pbg, acc_obj, acc_bg,
                              _SPREAD * min(t, len(parts)), reps[t:t + 1], hists[t], pairs[t], mode, nsheet, octant,
-                             values, spokes, pinch, rare, pinch_objects, formula_obj, np.zeros((2, 4), np.int64),
+                             values, spokes, pinch, info, pinch_objects, formula_obj, np.zeros((2, 4), np.int64),
                              np.zeros((2, 4), np.uint64))
 
     found = run([(call, t) for t in range(len(parts))])
