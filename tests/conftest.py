@@ -30,3 +30,14 @@ def rng():
 def random_volume(rng, max_side: int = 7, ndim: int = 3) -> np.ndarray:
     shape = rng.integers(1, max_side + 1, ndim)
     return rng.random(shape) < rng.uniform(0.1, 0.9)
+
+
+@pytest.fixture(autouse=True)
+def _numpy_passes_stay_numpy(monkeypatch):
+    """Each test's small volumes take the path a single call takes: the
+    NumPy passes, not the compiled pass that a process loads once the
+    NumPy passes have taken half a second in all (tested on its own in
+    test_cli.py)."""
+    from isoflow.digital import closed_surfaces
+
+    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", float("inf"))

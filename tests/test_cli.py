@@ -307,12 +307,46 @@ def test_census_once_loaded_takes_small_volumes_too(monkeypatch):
     if not have_numba():
         pytest.skip("numba not installed")
     rng = np.random.default_rng(5)
-    vols = [rng.random((9, 11, 7)) < 0.4, np.zeros((3, 3, 3), bool), np.ones((1, 1, 1), bool)]
+    vols = [rng.random((9, 11, 7)) < 0.4, np.zeros((3, 3, 3), bool), np.ones((1, 1, 1), bool),
+            np.zeros((0, 0, 0), bool), np.zeros((4, 0, 2), bool)]  # (a flow shrinks to nothing)
     monkeypatch.setattr(closed_surfaces, "_warm", False)  # (another test may have warmed it)
     assert not any(closed_surfaces.use_census(v) for v in vols)
     cold = {(i, c): analyze(v, c) for i, v in enumerate(vols) for c in (6, 26)}
     closed_surfaces.warm_up()
-    assert all(closed_surfaces.use_census(v) for v in vols)
+    assert all(closed_surfaces.use_census(v) for v in vols if v.size)
     assert not closed_surfaces.use_census(vols[0][0])  # 2D: not this pass
     for (i, c), want in cold.items():
         assert analyze(vols[i], c) == want
+
+
+def test_many_small_volumes_load_the_compiled_pass_once_their_numpy_time_adds_up(monkeypatch):
+    # ski rental: small volumes go to the NumPy passes until those have
+    # taken RENT_SECONDS in one process, then the compiled pass takes them;
+    # the reports are the same either way (edge and vertex contacts, both
+    # connectivities)
+    from isoflow.digital import closed_surfaces
+    from isoflow.digital.analysis import analyze
+    from isoflow.scale import compiled
+
+    if not compiled.have_numba():
+        pytest.skip("numba not installed")
+    monkeypatch.setattr(closed_surfaces, "_warm", False)
+    monkeypatch.setattr(closed_surfaces, "_numpy_seconds", 0.0)
+    rng = np.random.default_rng(11)
+    vols = [rng.random((12, 11, 10)) < 0.35 for _ in range(8)]
+    one = analyze(vols[0], 6)
+    spent = closed_surfaces._numpy_seconds
+    assert spent > 0 and not closed_surfaces._warm  # one NumPy pass, counted
+    # the rent is spent after about three more volumes
+    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", 3.5 * spent)
+    reports, warm = [], []
+    for v in vols:
+        reports.append([analyze(v, c) for c in (6, 26)])
+        warm.append(closed_surfaces._warm)
+    assert reports[0][0] == one
+    assert not warm[0] and warm[-1] and warm == sorted(warm)  # loaded once, at some call
+    monkeypatch.setattr(compiled, "MIN_VOXELS", 10**12)
+    monkeypatch.setattr(closed_surfaces, "_warm", False)
+    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", float("inf"))
+    for v, want in zip(vols, reports):
+        assert [analyze(v, c) for c in (6, 26)] == want  # the NumPy passes throughout

@@ -320,6 +320,11 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
 
 #: set once :func:`warm_up` has loaded the compiled pass in this process
 _warm = False
+#: seconds this process spent in the NumPy passes on 3D volumes (see use_census)
+_numpy_seconds = 0.0
+#: NumPy seconds after which the compiled pass is loaded: about its start
+#: (importing numba and loading its cached code), see use_census
+RENT_SECONDS = 0.5
 
 
 def warm_up(surfaces: bool = True) -> None:
@@ -337,8 +342,30 @@ def use_census(vol) -> bool:
     """Whether :func:`compiled_census` is the faster way for a 3D volume:
     a large host volume (:func:`use_compiled`), or any host volume once
     the pass is loaded (:func:`warm_up`): its start is paid, and it is
-    faster than the NumPy passes at every size."""
-    return vol.ndim == 3 and (use_compiled(vol) or (_warm and isinstance(vol, np.ndarray)))
+    faster than the NumPy passes at every size.
+
+    Small volumes go to the NumPy passes until, in one process, those have
+    taken :data:`RENT_SECONDS` (:func:`paid_numpy` adds them up); then the
+    pass is loaded. A loop over many small volumes so pays numba's start
+    once and runs at the compiled speed afterwards, while one small volume
+    never pays it; no sequence of calls takes much more than twice the
+    better of the two ways (the rule of renting skis until their price is
+    spent)."""
+    if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
+        return False  # (an empty volume: nothing to sweep, no slab to split)
+    if _warm or use_compiled(vol):
+        return True
+    if _numpy_seconds >= RENT_SECONDS and have_numba():
+        warm_up()
+        return True
+    return False
+
+
+def paid_numpy(seconds: float) -> None:
+    """Count time spent in the NumPy passes on a 3D volume (see
+    :func:`use_census`)."""
+    global _numpy_seconds
+    _numpy_seconds += seconds
 
 
 def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
