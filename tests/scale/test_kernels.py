@@ -68,6 +68,21 @@ def test_thread_count_from_the_environment_and_the_option(monkeypatch):
     assert compiled.slabs(10, 3) == [(0, 3), (3, 6), (6, 10)]
 
 
+def test_small_passes_take_fewer_threads_unless_asked(monkeypatch):
+    # a thread per VOXELS_PER_THREAD voxels at most, unless asked by the
+    # option or the environment (the tests of seams ask for theirs)
+    monkeypatch.delenv("ISOFLOW_THREADS", raising=False)
+    monkeypatch.setattr(compiled, "available_cpus", lambda: 16)
+    per = compiled.VOXELS_PER_THREAD
+    assert [compiled.thread_count(v) for v in (0, 64**3, per - 1, per, 2 * per, 5 * per + 7, 10**12)] == \
+        [1, 1, 1, 1, 2, 5, 16]
+    assert compiled.thread_count() == 16
+    with compiled.using(3):
+        assert compiled.thread_count(10) == 3
+    monkeypatch.setenv("ISOFLOW_THREADS", "7")
+    assert compiled.thread_count(10) == 7
+
+
 def test_analyze_uses_kernels_above_threshold(monkeypatch, rng):
     v = rng.random((30, 31, 29)) < 0.45
     slow = analyze(DigitalObject(v), 26, surfaces=False)

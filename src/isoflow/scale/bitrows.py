@@ -108,5 +108,5 @@ def pack(volume: np.ndarray):
     bits[-1] = 0
     nruns = np.zeros(nx * ny + 2, np.int64)
     ngaps = np.zeros(nx * ny + 2, np.int64)
-    run([(_pack_rows, v, bits, nruns, ngaps, a, b) for a, b in slabs(nx, thread_count())])
+    run([(_pack_rows, v, bits, nruns, ngaps, a, b) for a, b in slabs(nx, thread_count(v.size))])
     return bits, np.cumsum(nruns), np.cumsum(ngaps)

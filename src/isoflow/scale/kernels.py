@@ -285,7 +285,7 @@ def histogram3d(volume: np.ndarray) -> np.ndarray:
     """The 256 configuration counts of a 3D volume (same as
     ``np.bincount(configurations(volume).ravel(), minlength=256)``)."""
     v = volume_view(volume)
-    parts = slabs(v.shape[0] + 1, thread_count())
+    parts = slabs(v.shape[0] + 1, thread_count(v.size))
     hists = [np.zeros(256, np.int64) for _ in parts]  # one per thread
     run([(_hist_rows, v, a, b, h) for (a, b), h in zip(parts, hists)])
     return np.sum(hists, axis=0)
@@ -296,7 +296,7 @@ def object_runs(v: np.ndarray):
     (int64, one more than rows), starts and ends (int32); runs numbered row
     by row in C order."""
     counts = np.zeros(v.shape[0] * v.shape[1] + 1, dtype=np.int64)
-    parts = slabs(v.shape[0], thread_count())
+    parts = slabs(v.shape[0], thread_count(v.size))
     run([(_count_runs_rows, v, counts, a, b) for a, b in parts])
     offsets = np.cumsum(counts)
     nruns, rows = int(offsets[-1]), len(counts)
@@ -318,7 +318,7 @@ def gap_runs(offsets, start, end, nz: int):
     so the volume is not read a second time."""
     nrows = len(offsets) - 1
     counts = np.zeros(nrows + 1, dtype=np.int64)
-    parts = slabs(nrows, thread_count())
+    parts = slabs(nrows, thread_count(nrows * nz))
     run([(_count_gaps_rows, offsets, start, end, nz, counts, a, b) for a, b in parts])
     goff = np.cumsum(counts)
     gstart = np.empty(goff[-1], dtype=np.int32)
@@ -345,7 +345,7 @@ def join_runs(runs_list, adjacencies, outside, planar: bool = False) -> list[tup
     (``planar``: a 2D image with a dummy first axis, whose ends are not a
     border)."""
     calls, seams, parents = [], [], []
-    threads = thread_count()
+    threads = thread_count(max(int(np.prod(shape)) for shape, *_ in runs_list))
     for (shape, off, st, en), adjacency, out in zip(runs_list, adjacencies, outside):
         slack, diagonal = ADJACENCY[adjacency]
         parent = np.arange(len(st) + (1 if out else 0), dtype=np.int32)

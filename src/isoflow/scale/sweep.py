@@ -569,7 +569,8 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
     """
     nx, ny, nz = shape
     runs, gaps = int(off[-1]), int(goff[-1])
-    parts = slabs(nx, thread_count())
+    threads = thread_count(nx * ny * nz)
+    parts = slabs(nx, threads)
     # per node: a parent (int32) and a sum (int64)
     check_fits(12 * (runs + gaps), f"labelling the {runs + gaps:,} runs and gaps of a {nx}x{ny}x{nz} volume",
                hint="store it as .zarr and run isoflow info on that (block by block)")
@@ -622,8 +623,8 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
             pairs[t] = np.empty((npairs, 2), np.int64)
             call(t, PINCHES)
     # the sets numbered on the threads, node ranges of about equal size
-    obj_roots, obj_sums = _components(pobj, acc_obj, slabs(runs, thread_count()))
-    bg_roots, bg_sums = _components(pbg, acc_bg, slabs(gaps + 1, thread_count()))
+    obj_roots, obj_sums = _components(pobj, acc_obj, slabs(runs, threads))
+    bg_roots, bg_sums = _components(pbg, acc_bg, slabs(gaps + 1, threads))
     return {
         "hist": hists.sum(axis=0),
         "doubled": int(sum(d for d, _ in found)),
