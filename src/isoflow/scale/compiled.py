@@ -4,7 +4,9 @@ The passes of :mod:`isoflow.scale.kernels` and :mod:`isoflow.scale.sweep`
 are compiled with numba. They are used for host volumes from
 :data:`MIN_VOXELS` on; below that, numpy and scipy answer sooner than numba
 can start (importing numba and loading its cached machine code costs about
-0.7 s once per process), so a small volume never imports numba at all.
+0.5 s once per process), so one small volume never imports numba at all
+(a process that has spent as long in the NumPy passes loads it: see
+:func:`isoflow.digital.closed_surfaces.use_census`).
 
 The passes release the GIL, so plain Python threads run them in parallel
 (no OpenMP pool, no parallel compile). Each pass splits the volume into as
