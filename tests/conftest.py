@@ -36,8 +36,9 @@ def random_volume(rng, max_side: int = 7, ndim: int = 3) -> np.ndarray:
 def _numpy_passes_stay_numpy(monkeypatch):
     """Each test's small volumes take the path a single call takes: the
     NumPy passes, not the compiled pass that a process loads once the
-    NumPy passes have taken half a second in all (tested on its own in
-    test_cli.py)."""
+    NumPy passes have taken half a second in all, or that an earlier test
+    loaded (both tested on their own in test_cli.py)."""
     from isoflow.digital import closed_surfaces
 
     monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", float("inf"))
+    monkeypatch.setattr(closed_surfaces, "_warm", False)

@@ -140,14 +140,15 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
     ``faces``, largest first: the same multiset as
     ``boundary_mesh(volume, connectivity).components()``), ``pinched_vertices``
     and ``doubled_edges`` (the mesh's ``pinched`` and ``midpoints // 2``).
-    Large volumes also give ``hist`` and ``betti_counts`` (b0 and the
+    Volumes that take the compiled pass (:func:`use_census`) also give
+    ``hist`` and ``betti_counts`` (b0 and the
     enclosed background components), which come with the same pass.
     """
     vol = np.asarray(volume, dtype=bool)
     if vol.ndim != 3:
         raise ValueError("closed_surfaces needs a 3D volume")
     check_connectivity(3, connectivity)
-    if use_compiled(vol):
+    if use_census(vol):
         return compiled_census(vol, connectivity)
     return _small(vol, connectivity)
 
