@@ -63,11 +63,15 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
     if isinstance(obj, DigitalObject):
         vol, parity = obj.volume, obj.parity
     else:
-        vol, parity = arrays.as_volume(obj)[1], 0
+        # a bool array's bytes are made 0/1 only for the NumPy passes: the
+        # compiled pass reads any nonzero byte as set
+        vol, parity = arrays.as_volume(obj, canonical=False)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
     census = None
     started = time.perf_counter()
     compiled = use_census(vol)
+    if not compiled and isinstance(vol, np.ndarray):
+        vol = arrays.binary(vol)
     if compiled:
         # one pass gives the histogram, the Betti counts and the surfaces
         census = compiled_census(vol, conn, surfaces)

@@ -50,16 +50,21 @@ def is_host(xp) -> bool:
     return xp is np
 
 
-def binary(array, where: str = "volume", near=None) -> np.ndarray:
+def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
     """A host boolean volume from a 0/1 array, or a clear error saying why not.
 
     Other values (NaN, 2, -1, 255) are refused rather than read as True: a
     label image or a probability map needs a threshold the caller chooses.
     ``near``: the index of the block's first voxel, for errors found block by
-    block (out-of-core input)."""
+    block (out-of-core input). ``canonical=False`` returns a bool array as it
+    is, for a pass that reads every nonzero byte as set
+    (:func:`isoflow.scale.bitrows.pack`): its check is a tenth of a 512^3
+    ``analyze``."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     arr = np.asarray(array)
+    if arr.dtype == np.bool_ and not canonical:
+        return arr
     if arr.dtype == np.bool_:
         # A bool array made by .view(bool) can hold bytes other than 0/1,
         # which numpy compares and cc3d labels as distinct values: make them
@@ -80,12 +85,13 @@ def binary(array, where: str = "volume", near=None) -> np.ndarray:
     return arr.astype(bool)
 
 
-def as_volume(volume, where: str = "volume"):
+def as_volume(volume, where: str = "volume", canonical: bool = True):
     """``(xp, boolean volume)`` of a 2D, 3D or 4D 0/1 array: host data checked
-    by :func:`binary`, device arrays left where they are."""
+    by :func:`binary` (``canonical``: see there), device arrays left where
+    they are."""
     xp = namespace(volume)
     if is_host(xp):
-        v = binary(volume, where)
+        v = binary(volume, where, canonical=canonical)
     else:
         v = volume
         if v.dtype != xp.bool:

@@ -456,93 +456,88 @@ def _join_reps(pbg, reps, outside):
 
 
 @njit(cache=True, nogil=True)
-def _add_up(sums, node, value):
-    """Add a node's value (two halves, see :func:`sweep`) to its set's sums."""
-    # the low half is signed: value = high * 2^32 + low, |low| < 2^31
-    low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
-    sums[np.uint64(node), 0] += low
-    sums[np.uint64(node), 1] += (value - low) >> 32
+def _mark_roots(parent, lo, hi):
+    """First phase of numbering the sets of a finished union-find (see
+    :func:`_components`), for the nodes lo <= x < hi: point every node at
+    its root, and mark the roots, numbered in this range from 0 on, as
+    ``-1 - n``. Returns the number of roots.
+
+    Unions hang the larger root under the smaller, so ``parent[x] <= x``
+    and a node's root is marked before the node is reached. Chains into
+    earlier ranges are read while their threads change them: a node there
+    still points at an ancestor, and its root reads as itself or as marked
+    (negative)."""
+    n = 0
+    for x in range(lo, hi):
+        r = parent[np.uint64(x)]
+        if r == x:
+            parent[np.uint64(x)] = -1 - n
+            n += 1
+            continue
+        if r >= lo:  # a node of this range: done already
+            up = parent[np.uint64(r)]
+            if up >= 0:
+                r = up
+        else:
+            up = parent[np.uint64(r)]
+            while up >= 0 and up != r:
+                r = up
+                up = parent[np.uint64(r)]
+        parent[np.uint64(x)] = r
+    return n
 
 
 @njit(cache=True, nogil=True)
-def _number(parent, acc, lo, hi, phase, base, roots, sums):
-    """One phase of numbering the sets of a finished union-find in place,
-    for the nodes lo <= x < hi; afterwards ``parent[x]`` is ``-1 - n`` for
-    x in set n (sets numbered in order of their smallest node, their root:
-    unions hang the larger root under the smaller, so ``parent[x] <= x``).
-    Phases run on the threads, each after the last has finished everywhere:
+def _add_up(sums, n, value):
+    """Add a node's value (two halves, see :func:`sweep`) to set n's sums."""
+    # the low half is signed: value = high * 2^32 + low, |low| < 2^31
+    low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
+    sums[np.uint64(n), 0] += low
+    sums[np.uint64(n), 1] += (value - low) >> 32
 
-    0. point every node at its root (reading other threads' nodes is safe:
-       while they change they still point at an ancestor); returns the
-       number of roots;
-    1. number the roots from ``base`` on and list them in ``roots``;
-    2. give every other node its root's number, and add every node's
-       ``acc`` to its set's ``sums``;
-    3. all three at once, in one pass in node order (one thread), after
-    4. counting the roots.
 
-    Entries of ``acc`` past the parents' (spare nodes) count as the last
-    node's.
-    """
-    n = 0
+@njit(cache=True, nogil=True)
+def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
+    """Second phase (after :func:`_mark_roots` everywhere): give every node
+    of lo <= x < hi that is not a root its set's number (the sets of the
+    range starting at ``starts[t]`` are numbered from ``bases[t]`` on), list
+    the roots in ``roots``, and add every node's ``acc`` to its set's
+    ``sums``. The roots keep their marks, which other ranges read; entries
+    of ``acc`` past the parents' (spare nodes) count as the last node's."""
+    own = np.searchsorted(starts, lo, side="right") - 1
     last = len(parent) - 1
-    if phase == 0:
-        for x in range(lo, hi):
-            r = parent[np.uint64(x)]
-            if r >= lo:  # a node of this range: done already
-                r = parent[np.uint64(r)]
-            else:
-                while parent[np.uint64(r)] != r:
-                    r = parent[np.uint64(r)]
-            parent[np.uint64(x)] = r
-            n += r == x
-    elif phase == 4:
-        for x in range(lo, hi):
-            n += parent[np.uint64(x)] == x
-    elif phase == 1:
-        for x in range(lo, hi):
-            if parent[np.uint64(x)] == x:
-                roots[base + n] = x
-                parent[np.uint64(x)] = -1 - (base + n)
-                n += 1
-    else:
-        for x in range(lo, hi):
-            r = parent[np.uint64(x)]
-            if phase == 3 and r == x:
-                roots[n] = x
-                parent[np.uint64(x)] = -1 - n
-                n += 1
-            elif r >= 0:
-                parent[np.uint64(x)] = parent[np.uint64(r)]  # r numbered already (r < x, or phase 1)
-            _add_up(sums, -1 - parent[np.uint64(x)], acc[np.uint64(x)])
-        if hi > last:
-            for x in range(last + 1, len(acc)):
-                _add_up(sums, -1 - parent[np.uint64(last)], acc[np.uint64(x)])
-    return n
+    for x in range(lo, hi):
+        r = parent[np.uint64(x)]
+        if r < 0:  # a root
+            n = bases[own] - 1 - r
+            roots[n] = x
+        else:
+            t = own
+            while starts[t] > r:
+                t -= 1
+            n = bases[t] - 1 - parent[np.uint64(r)]
+            parent[np.uint64(x)] = n
+        _add_up(sums, n, acc[np.uint64(x)])
+        if x == last:
+            for y in range(last + 1, len(acc)):
+                _add_up(sums, n, acc[np.uint64(y)])
 
 
 def _components(parent, acc, parts):
     """Number the sets of a union-find in place (node ranges ``parts`` on
     the threads): afterwards ``parent[x]`` is the number of x's set, sets
-    in order of their smallest node. Returns every set's smallest node and
-    (sets, 2) its totals of the two halves of ``acc``."""
-    phase = [(a, b) for a, b in parts if b > a]
-    if len(phase) <= 1:  # counted, then one pass
-        none = np.empty(0, np.int64), np.empty((0, 2), np.int64)
-        n = _number(parent, acc, 0, len(parent), 4, 0, *none)
-        roots, sums = np.empty(n, np.int64), np.zeros((n, 2), np.int64)
-        _number(parent, acc, 0, len(parent), 3, 0, roots, sums)
-    else:
-        none = np.empty(0, np.int64), np.empty((0, 2), np.int64)  # (one signature)
-        counts = run([(_number, parent, acc, a, b, 0, 0, *none) for a, b in phase])
-        bases = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        roots = np.empty(int(bases[-1]), np.int64)
-        run([(_number, parent, acc, a, b, 1, int(base), roots, none[1]) for (a, b), base in zip(phase, bases)])
-        sums = [np.zeros((len(roots), 2), np.int64) for _ in phase]
-        run([(_number, parent, acc, a, b, 2, 0, roots, s) for (a, b), s in zip(phase, sums)])
-        sums = np.sum(sums, axis=0)
-    np.subtract(-1, parent, out=parent)
-    return roots, sums
+    in order of their smallest node (their root). Returns every set's
+    smallest node and (sets, 2) its totals of the two halves of ``acc``.
+    Two passes over the nodes: mark the roots, then number the others."""
+    parts = [(a, b) for a, b in parts if b > a]
+    counts = run([(_mark_roots, parent, a, b) for a, b in parts])
+    starts = np.array([a for a, _ in parts], np.int64)
+    bases = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+    roots = np.empty(int(bases[-1]), np.int64)
+    sums = [np.zeros((len(roots), 2), np.int64) for _ in parts] or [np.zeros((0, 2), np.int64)]
+    run([(_give_numbers, parent, acc, a, b, starts, bases, roots, s) for (a, b), s in zip(parts, sums)])
+    parent[roots] = np.arange(len(roots), dtype=parent.dtype)
+    return roots, (sums[0] if len(sums) == 1 else np.sum(sums, axis=0))
 
 
 def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfaces: bool = True,
