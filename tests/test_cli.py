@@ -296,6 +296,49 @@ def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
         assert {k: report[k] for k in want} == json.loads(json.dumps(want))
 
 
+def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
+    # numba compiles the passes only where its cache has none: an empty
+    # cache directory stands for a fresh install. The first run says so
+    # once on stderr (it waits seconds otherwise in silence), the next one
+    # loads the cache and says nothing; both report the same
+    import os
+
+    from isoflow.scale.compiled import COMPILE_NOTE, MIN_VOXELS, have_numba
+
+    if not have_numba():
+        pytest.skip("numba not installed")
+    vol = np.random.default_rng(3).random((130, 130, 130)) < 0.3  # edge and vertex contacts
+    assert vol.size >= MIN_VOXELS
+    np.save(tmp_path / "v.npy", vol)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "v.npy"), "--json"],
+                           capture_output=True, text=True, env=env) for _ in range(2)]
+    assert [p.returncode for p in runs] == [0, 0], runs[0].stderr
+    assert runs[0].stderr.splitlines() == [f"isoflow info: note: {COMPILE_NOTE}"]
+    assert runs[1].stderr == ""
+    first, second = (json.loads(p.stdout) for p in runs)
+    assert first == second and first["euler_characteristic"] == euler_number(vol, connectivity=1)
+
+
+def test_the_compile_note_is_said_once_and_logged_without_a_listener(monkeypatch, caplog):
+    import logging
+
+    from isoflow.scale import compiled
+
+    said = []
+    monkeypatch.setattr(compiled, "_compile_noted", False)
+    monkeypatch.setattr(compiled, "on_first_compile", said.append)
+    compiled.note_compile()
+    compiled.note_compile()
+    assert said == [compiled.COMPILE_NOTE]
+    monkeypatch.setattr(compiled, "_compile_noted", False)
+    monkeypatch.setattr(compiled, "on_first_compile", None)
+    with caplog.at_level(logging.INFO, logger="isoflow"):
+        compiled.note_compile()
+        compiled.note_compile()
+    assert [r.getMessage() for r in caplog.records] == [compiled.COMPILE_NOTE]
+
+
 def test_census_once_loaded_takes_small_volumes_too(monkeypatch):
     # once warm (a command warms it while reading a file that may be
     # large), the compiled pass answers for small volumes: the same report
@@ -334,6 +377,9 @@ def test_many_small_volumes_load_the_compiled_pass_once_their_numpy_time_adds_up
     monkeypatch.setattr(closed_surfaces, "_numpy_seconds", 0.0)
     rng = np.random.default_rng(11)
     vols = [rng.random((12, 11, 10)) < 0.35 for _ in range(8)]
+    for c in (6, 26):  # the first call's imports and tables (when this test runs alone)
+        analyze(vols[0], c)
+    monkeypatch.setattr(closed_surfaces, "_numpy_seconds", 0.0)
     one = analyze(vols[0], 6)
     spent = closed_surfaces._numpy_seconds
     assert spent > 0 and not closed_surfaces._warm  # one NumPy pass, counted

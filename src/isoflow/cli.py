@@ -700,6 +700,13 @@ def main(argv: list[str] | None = None) -> int:
             shown(message, category, filename, lineno, file, line)
 
     terminated: list[int] = []
+    from .scale import compiled
+
+    def compiling(message):  # numba's first run after installing: a note, not silence
+        print(f"isoflow {args.command}: note: {message}", file=sys.stderr, flush=True)
+
+    before = compiled.on_first_compile
+    compiled.on_first_compile = None if args.quiet else compiling
     try:
         with quiet_stderr(args.quiet), warnings.catch_warnings(), termination_as_interrupt(terminated):
             shown = warnings.showwarning
@@ -724,6 +731,8 @@ def main(argv: list[str] | None = None) -> int:
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    finally:
+        compiled.on_first_compile = before
 
 
 def console() -> None:

@@ -23,7 +23,6 @@ the same coordinates modulo 2) can be tested and changed at once
 
 from __future__ import annotations
 
-import itertools
 from functools import lru_cache
 
 import numpy as np

@@ -44,6 +44,34 @@ ENV = "ISOFLOW_THREADS"
 
 _asked: contextvars.ContextVar[int | None] = contextvars.ContextVar("isoflow_threads", default=None)
 
+#: what a process says, once, when numba starts compiling one of isoflow's
+#: passes instead of loading it from its cache: the first run after
+#: installing (or on a new CPU, or after an upgrade) waits seconds per pass,
+#: about 12 s for ``isoflow info`` here, with nothing else to show
+COMPILE_NOTE = ("numba is compiling isoflow's passes for this CPU, once after installing (up to 15 s; "
+                "later runs load them from its cache)")
+
+#: called with :data:`COMPILE_NOTE` in its place when set (the command line
+#: prints it on stderr); else the note is logged to the ``isoflow`` logger
+on_first_compile = None
+_compile_noted = False
+
+
+def note_compile() -> None:
+    """Say :data:`COMPILE_NOTE` once per process (called by
+    :mod:`isoflow.scale.jit` when numba starts compiling a pass of
+    isoflow's, which it does only where its cache has none)."""
+    global _compile_noted
+    if _compile_noted:
+        return
+    _compile_noted = True
+    if on_first_compile is not None:
+        on_first_compile(COMPILE_NOTE)
+    else:
+        import logging
+
+        logging.getLogger("isoflow").info(COMPILE_NOTE)
+
 
 @lru_cache(maxsize=None)
 def have_numba() -> bool:

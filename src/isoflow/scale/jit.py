@@ -14,6 +14,11 @@ check there).
 
 If numba has already been started in this process, or a numba version
 lacks these names, nothing changes.
+
+It also listens for numba's compile events: numba compiles a function only
+where its disk cache has none, so the first one of isoflow's says
+:data:`isoflow.scale.compiled.COMPILE_NOTE` (the command line prints it;
+the first run after installing otherwise waits in silence).
 """
 
 from __future__ import annotations
@@ -46,4 +51,25 @@ def _import_arraymath_without_blas_probe() -> None:
         arraymath.ensure_blas = probe  # later calls check for real
 
 
+def _note_compiles() -> None:
+    try:
+        from numba.core import event
+    except ImportError:  # pragma: no cover - another numba layout
+        return
+
+    from .compiled import note_compile
+
+    class FirstCompile(event.Listener):
+        def on_start(self, ev):
+            func = getattr(ev.data.get("dispatcher"), "py_func", None)
+            if getattr(func, "__module__", "").startswith("isoflow."):
+                note_compile()
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", FirstCompile())
+
+
 _import_arraymath_without_blas_probe()
+_note_compiles()

@@ -36,9 +36,15 @@ Slabs of layers run at once on the threads: a slab touches only the nodes
 of its own voxel rows, and the layer on each seam between slabs runs
 afterwards. Array indices in the loops are cast to unsigned integers
 (``np.uint64``): numba then leaves out its test for a negative index
-(counted from the end) on every access, which cost 10-15% of the sweep. Work per event is a few word operations and two additions, so
-that a 512^3 porous field (36 million events) takes about 0.5 s on one
-thread.
+(counted from the end) on every access, which cost 10-15% of the sweep.
+Work per event is a few word operations and two additions, so that a
+512^3 porous field (36 million events) takes about 0.5 s on one thread.
+
+Only the helpers that run on every word (the joins of a block's rows and
+the surface pieces) are inlined by numba (``inline="always"``); the others
+are ordinary calls, which LLVM inlines where it pays. Inlining the twelve
+copies of :func:`_join_mask` at numba's level made the sweep's first
+compile (once per install) take 37 s instead of 7 s, for no measured gain.
 """
 
 from __future__ import annotations
@@ -60,7 +66,7 @@ ALL, NO_SURFACES, PINCHES = 0, 1, 2
 _SPREAD = 16
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _config(bits, nx, ny, nz, i, j, k):
     """Configuration of vertex (i, j, k) read from the bit rows (zeros
     outside the array)."""
@@ -72,7 +78,7 @@ def _config(bits, nx, ny, nz, i, j, k):
     return c
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _join_outside(parent, gap, rep):
     """Join a gap to the region outside the array, which a slab stands for
     by the first gap it joins to it (``rep[0]``), so that slabs running at
@@ -84,7 +90,7 @@ def _join_outside(parent, gap, rep):
         union(parent, gap, rep[0])
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _join_mask(parent, mask, sa, base_a, before_a, sb, base_b, before_b):
     """For every set bit p of ``mask``, join the run (gap) of row a holding
     voxel p (p - 1 if ``before_a``) with row b's holding voxel p (p - 1 if
@@ -165,7 +171,7 @@ def _join_rows(parent, slack, diag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, 
         _join_diagonal_rows(parent, diag, x1, p1, s1, b1, x2, p2, s2, b2, x0, p0, x3, p3)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _node(o, c, k, nz, b, base, runs, gbase, gruns, outside):
     """The node of octant ``o`` of configuration ``c`` at the event k (bit
     b of the word): the run or gap of its voxel, the outside for voxels -1
@@ -179,7 +185,7 @@ def _node(o, c, k, nz, b, base, runs, gbase, gruns, outside):
     return gbase[q] + np.int64(popcount(gruns[q] & mask))
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _rare_event(bits, nx, ny, nz, i, j, k, b, c, base, runs, gbase, gruns, acc_obj, acc_bg, outside, nsheet,
                 octant, values, spokes, pinch, formula_obj):
     """An event with several sheets, a pinch or a doubled spoke, or at an
@@ -262,7 +268,7 @@ def _pieces(acc, x0, x1, x2, x3, p0, p1, p2, p3, starts, base, formula):
         acc[np.uint64(base + np.int64(popcount(starts & ((one << p << one) - one))))] += value
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_objects, pairs, npairs):
     """Record the pinch at an event: the nodes of its two octants (the
     outside as the last gap node) where they differ. Returns the count."""
@@ -277,7 +283,7 @@ def _pinch(c, k, nz, b, base, runs, gbase, gruns, outside, gaps, pinch, pinch_ob
     return npairs
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _set_up(parent, acc, a, b):
     """Nodes a <= x < b, each a set of its own with nothing added yet."""
     for x in range(a, b):
