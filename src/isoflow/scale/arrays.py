@@ -58,8 +58,8 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     ``near``: the index of the block's first voxel, for errors found block by
     block (out-of-core input). ``canonical=False`` returns a bool array as it
     is, for a pass that reads every nonzero byte as set
-    (:func:`isoflow.scale.bitrows.pack`): its check is a tenth of a 512^3
-    ``analyze``."""
+    (:func:`isoflow.scale.bitrows.pack`): the check costs 9 ms on a 512^3
+    volume, 3% of ``analyze`` there."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     arr = np.asarray(array)
