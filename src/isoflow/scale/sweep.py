@@ -44,7 +44,8 @@ Only the helpers that run on every word (the joins of a block's rows and
 the surface pieces) are inlined by numba (``inline="always"``); the others
 are ordinary calls, which LLVM inlines where it pays. Inlining the twelve
 copies of :func:`_join_mask` at numba's level made the sweep's first
-compile (once per install) take 37 s instead of 7 s, for no measured gain.
+compile (once per install) take 37 s instead of about 8 s, for no measured
+gain.
 """
 
 from __future__ import annotations
