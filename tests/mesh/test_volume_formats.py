@@ -246,7 +246,10 @@ def test_omezarr_from_ome_zarr_py(tmp_path, version, rng):
     from ome_zarr.format import FormatV04, FormatV05
     from ome_zarr.io import parse_url
     from ome_zarr.reader import Reader
-    from ome_zarr.writer import write_image
+
+    with warnings.catch_warnings():  # ome_zarr's own default Scaler(), deprecated by ome_zarr
+        warnings.simplefilter("ignore", DeprecationWarning)
+        from ome_zarr.writer import write_image
 
     fmt = FormatV04() if version == "0.4" else FormatV05()
     data = (rng.random((1, 4, 8, 8)) < 0.5).astype(np.uint8)  # c, z, y, x
