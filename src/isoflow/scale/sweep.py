@@ -512,7 +512,7 @@ def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
     ``sums``. The roots keep their marks, which other ranges read; entries
     of ``acc`` past the parents' (spare nodes) count as the last node's."""
     own = np.searchsorted(starts, lo, side="right") - 1
-    last = len(parent) - 1
+    n = 0
     for x in range(lo, hi):
         r = parent[np.uint64(x)]
         if r < 0:  # a root
@@ -525,9 +525,9 @@ def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
             n = bases[t] - 1 - parent[np.uint64(r)]
             parent[np.uint64(x)] = n
         _add_up(sums, n, acc[np.uint64(x)])
-        if x == last:
-            for y in range(last + 1, len(acc)):
-                _add_up(sums, n, acc[np.uint64(y)])
+    if lo < hi == len(parent):  # n: the last node's set
+        for y in range(hi, len(acc)):
+            _add_up(sums, n, acc[np.uint64(y)])
 
 
 def _components(parent, acc, parts):
