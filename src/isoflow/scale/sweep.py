@@ -495,12 +495,11 @@ def _mark_roots(parent, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _add_up(sums, n, value):
-    """Add a node's value (two halves, see :func:`sweep`) to set n's sums."""
-    # the low half is signed: value = high * 2^32 + low, |low| < 2^31
+def _halves(value):
+    """The two halves of a node's value (see :func:`sweep`): ``value = high
+    * 2^32 + low``, the low half signed, ``|low| < 2^31``."""
     low = ((value + (1 << 31)) & 0xFFFFFFFF) - (1 << 31)
-    sums[np.uint64(n), 0] += low
-    sums[np.uint64(n), 1] += (value - low) >> 32
+    return low, (value - low) >> 32
 
 
 @njit(cache=True, nogil=True)
@@ -510,24 +509,43 @@ def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
     range starting at ``starts[t]`` are numbered from ``bases[t]`` on), list
     the roots in ``roots``, and add every node's ``acc`` to its set's
     ``sums``. The roots keep their marks, which other ranges read; entries
-    of ``acc`` past the parents' (spare nodes) count as the last node's."""
-    own = np.searchsorted(starts, lo, side="right") - 1
-    n = 0
+    of ``acc`` past the parents' (spare nodes) count as the last node's.
+
+    Neighbouring nodes are mostly of one set (a large one), so the halves
+    are added up in two locals while the set stays the same, and into
+    ``sums`` when it changes: adding every node to its row of ``sums``
+    made each addition wait for the one before (the same memory), and this
+    pass took 45% longer."""
+    own = np.uint64(np.searchsorted(starts, lo, side="right") - 1)
+    n = cur = 0
+    low = high = 0  # set cur's halves since they were last added to sums
     for x in range(lo, hi):
-        r = parent[np.uint64(x)]
+        ux = np.uint64(x)
+        r = parent[ux]
         if r < 0:  # a root
             n = bases[own] - 1 - r
-            roots[n] = x
+            roots[np.uint64(n)] = x
         else:
             t = own
             while starts[t] > r:
-                t -= 1
+                t -= np.uint64(1)
             n = bases[t] - 1 - parent[np.uint64(r)]
-            parent[np.uint64(x)] = n
-        _add_up(sums, n, acc[np.uint64(x)])
-    if lo < hi == len(parent):  # n: the last node's set
+            parent[ux] = n
+        if n != cur:
+            sums[np.uint64(cur), 0] += low
+            sums[np.uint64(cur), 1] += high
+            cur, low, high = n, 0, 0
+        a, b = _halves(acc[ux])
+        low += a
+        high += b
+    if lo < hi == len(parent):  # cur: the last node's set
         for y in range(hi, len(acc)):
-            _add_up(sums, n, acc[np.uint64(y)])
+            a, b = _halves(acc[np.uint64(y)])
+            low += a
+            high += b
+    if lo < hi:
+        sums[np.uint64(cur), 0] += low
+        sums[np.uint64(cur), 1] += high
 
 
 def _components(parent, acc, parts):
