@@ -112,12 +112,6 @@ def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     return nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch
 
 
-def _structure(adjacency: int) -> np.ndarray:
-    from scipy.ndimage import generate_binary_structure
-
-    return generate_binary_structure(3, {6: 1, 18: 2, 26: 3}[adjacency])
-
-
 def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dict]:
     """The report's surfaces from each pair's mesh vertices and quarter
     faces, largest first."""
@@ -154,14 +148,14 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
 
 
 def _small(vol: np.ndarray, conn: int) -> dict:
-    """numpy and scipy: labels of the volume and of its background padded by
+    """NumPy and cc3d: labels of the volume and of its background padded by
     one layer (the outside is one background component), and the
     configuration of every vertex."""
-    from scipy.ndimage import label
+    from ..scale.labels import label
 
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    obj_labels = label(vol, _structure(obj_adj))[0]
-    bg_padded = label(np.pad(~vol, 1, constant_values=True), _structure(bg_adj))[0]
+    obj_labels = label(vol, obj_adj)[0]
+    bg_padded = label(np.pad(~vol, 1, constant_values=True), bg_adj)[0]
     outside = int(bg_padded[0, 0, 0])
     whole = tuple(slice(None) for _ in range(3))
     found = box_sheets(vol, obj_labels, bg_padded[1:-1, 1:-1, 1:-1], whole, conn, outside)

@@ -57,6 +57,7 @@ from ..errors import IsoflowError
 from ..scale.arrays import binary
 from ..scale.compiled import thread_count, using
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
+from ..scale.labels import label
 from .analysis import report_from_histogram
 from .closed_surfaces import MESH_ADJACENCY, box_sheets, surfaces_from_counts
 from .configurations import configuration_histogram, configurations
@@ -70,8 +71,6 @@ _DIRECT_HISTOGRAM = 1 << 18
 #: the node of the region outside the array (background), when surfaces are
 #: counted: no block has this number
 OUTSIDE = np.int64(1) << 62
-#: scipy's neighbourhood rank of each adjacency
-_RANK = {4: 1, 6: 1, 8: 2, 18: 2, 26: 3}
 
 
 def adjacencies(ndim: int, conn: int, surfaces: bool) -> dict:
@@ -91,30 +90,10 @@ def adjacencies(ndim: int, conn: int, surfaces: bool) -> dict:
 
 
 def _label(mask: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
-    """Connected-component labels of a 2D/3D boolean array.
-
-    cc3d is several times faster than ``scipy.ndimage.label`` on blocks; use
-    it when it is installed, scipy otherwise (the labels are the same). Two
-    cc3d 4.1 bugs shape this: on *bool* input with 8-connectivity it may give
-    a background pixel a label (the count stays right, so only code that uses
-    the labels sees it), hence the uint8 view; and on arrays that are one
-    voxel thick with 8/26-connectivity it may miscount or fail, hence scipy
-    for those (thin blocks occur at an array's end).
-    """
-    cc3d = None
-    if min(mask.shape) >= 2:
-        try:
-            import cc3d
-        except ImportError:  # pragma: no cover - cc3d is installed in the test env
-            cc3d = None
-    if cc3d is None:
-        from scipy.ndimage import generate_binary_structure, label
-
-        labels, n = label(mask, generate_binary_structure(mask.ndim, _RANK[connectivity]))
-        return labels, int(n)
-    data = mask.view(np.uint8) if mask.dtype == np.bool_ else mask
-    labels, n = cc3d.connected_components(data, connectivity=connectivity, return_N=True)
-    return labels, int(n)
+    """Connected-component labels of a 2D/3D boolean block, in the smallest
+    type that holds them (a block keeps the labels of its faces until the
+    merge)."""
+    return label(mask, connectivity, smallest=True)
 
 
 def _vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:

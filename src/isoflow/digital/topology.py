@@ -87,14 +87,6 @@ def euler_characteristic(volume, connectivity: int | None = None) -> int:
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
 
-def structure(ndim: int, connectivity: int) -> np.ndarray:
-    """scipy's neighbourhood for a connectivity: faces only for the 2n-
-    adjacency (4, 6, 8 in 4D), the whole 3^n block otherwise."""
-    from scipy.ndimage import generate_binary_structure
-
-    return generate_binary_structure(ndim, 1 if connectivity == VALID[ndim][0] else ndim)
-
-
 def _labeller(xp, v):
     """``(xp, volume, label)`` for a checked volume (:func:`arrays.as_volume`):
     the volume where its library can label it (host NumPy, a CuPy GPU),
@@ -104,7 +96,7 @@ def _labeller(xp, v):
         v = arrays.to_host(v)
         xp, label = np, arrays.label_function(np)
     if is_host(xp) and not use_compiled(v):
-        # scipy writes an int32 label per voxel, next to the complement
+        # an int32 label per voxel, next to the complement
         check_fits(
             LABEL_BYTES_PER_VOXEL * v.size,
             f"labelling a {'x'.join(map(str, v.shape))} volume for its Betti numbers",
@@ -113,8 +105,8 @@ def _labeller(xp, v):
     return xp, v, label
 
 
-#: peak bytes per voxel of a scipy labelling: int32 labels, the complement
-#: and scipy's own work arrays (about 8 measured on a 90^4 volume)
+#: peak bytes per voxel of a labelling: int32 labels, the complement and the
+#: labeller's own work arrays (about 8 measured with scipy on a 90^4 volume)
 LABEL_BYTES_PER_VOXEL = 10
 
 
@@ -122,8 +114,8 @@ def count_components(volume, connectivity: int) -> int:
     """Number of connected components of the True voxels.
 
     Large host volumes use the run-based union-find of :mod:`isoflow.scale.kernels`
-    (no label volume); small ones ``scipy.ndimage.label``, CuPy volumes
-    ``cupyx.scipy.ndimage.label`` on their GPU.
+    (no label volume); small ones :func:`isoflow.scale.labels.label`, CuPy
+    volumes ``cupyx.scipy.ndimage.label`` on their GPU.
     """
     return _count_components(*_labeller(*arrays.as_volume(volume)), connectivity)
 
@@ -134,7 +126,7 @@ def _count_components(xp, v, label, connectivity: int) -> int:
 
         return compiled(v, connectivity)
     with arrays.on_device(v):
-        return int(label(v, structure(v.ndim, connectivity))[1])
+        return int(label(v, connectivity)[1])
 
 
 def count_enclosed(volume, connectivity: int) -> int:
@@ -155,7 +147,7 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
 
         return compiled(v, connectivity)
     with arrays.on_device(v):
-        labels, n = label(~v, structure(v.ndim, connectivity))
+        labels, n = label(~v, connectivity)
         faces = []
         for axis in range(v.ndim):
             for end in (0, -1):

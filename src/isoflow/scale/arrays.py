@@ -139,16 +139,16 @@ def count_codes(xp, codes, size: int) -> np.ndarray:
 
 
 def label_function(xp):
-    """``label(volume, structure) -> (labels, count)`` for ``xp``'s arrays,
-    or None where the library has no labelling."""
-    if is_host(xp):
-        from scipy.ndimage import label
+    """``label(volume, connectivity) -> (labels, count)`` for ``xp``'s
+    arrays, or None where the library has no labelling."""
+    from .labels import label, structure
 
+    if is_host(xp):
         return label
     if xp.__name__ == "cupy":
-        from cupyx.scipy.ndimage import label
+        from cupyx.scipy.ndimage import label as cupy_label
 
-        return label
+        return lambda volume, connectivity: cupy_label(volume, structure(volume.ndim, connectivity))
     return None
 
 
