@@ -236,8 +236,9 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
     cfg = configurations(vox)[keep]
     origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])
-    obj_padded = np.pad(obj_labels, 1)
-    bg_padded = np.pad(bg_labels, 1, constant_values=outside)
+    # (C order: the flat views below are indexed with these strides)
+    obj_padded = np.ascontiguousarray(np.pad(obj_labels, 1))
+    bg_padded = np.ascontiguousarray(np.pad(bg_labels, 1, constant_values=outside))
     # vertex w's octant d is the padded voxel w + d
     strides = np.array(obj_padded.strides) // obj_padded.itemsize
     bg_strides = np.array(bg_padded.strides) // bg_padded.itemsize

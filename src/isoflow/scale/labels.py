@@ -45,10 +45,12 @@ def structure(ndim: int, connectivity: int) -> np.ndarray:
 
 def label(mask: np.ndarray, connectivity: int, smallest: bool = False) -> tuple[np.ndarray, int]:
     """``(labels, n)``: the components of a boolean host array's True
-    voxels under ``connectivity``, numbered 1..n (0 elsewhere). The labels
-    are int32 (as scipy's; the compiled passes that read them are compiled
-    for it), or with ``smallest`` the smallest unsigned type that holds
-    them (cc3d's choice; scipy's int32 where scipy labels)."""
+    voxels under ``connectivity``, numbered 1..n (0 elsewhere), in C order
+    whatever the mask's layout (as scipy's; cc3d keeps a Fortran-ordered
+    mask's order). The labels are int32 (as scipy's; the compiled passes
+    that read them are compiled for it), or with ``smallest`` the smallest
+    unsigned type that holds them (cc3d's choice; scipy's int32 where scipy
+    labels)."""
     mask = np.asarray(mask, dtype=bool)
     if mask.ndim in (2, 3) and min(mask.shape) >= 2:
         import cc3d
@@ -57,7 +59,7 @@ def label(mask: np.ndarray, connectivity: int, smallest: bool = False) -> tuple[
                                               out_dtype=None if smallest else np.uint32)
         if not smallest:  # signed, so that label arithmetic never wraps around
             labels = labels.view(np.int32) if n < 2**31 else labels.astype(np.int64)
-        return labels, int(n)
+        return np.ascontiguousarray(labels), int(n)
     from scipy.ndimage import label as scipy_label
 
     labels, n = scipy_label(mask, structure(mask.ndim, connectivity))
