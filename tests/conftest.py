@@ -22,6 +22,15 @@ def torus(R: float, r: float, size: int | None = None, axis: int = 2, centre=Non
     return (rho - R) ** 2 + x[axis] ** 2 <= r**2
 
 
+def compiled_side() -> int:
+    """The side of the smallest cube of voxels that takes the compiled
+    passes (:data:`isoflow.scale.compiled.MIN_VOXELS`), for tests that run
+    them as a user would, in a fresh process."""
+    from isoflow.scale.compiled import MIN_VOXELS
+
+    return int(round(MIN_VOXELS ** (1 / 3))) + 2
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(20131122)

@@ -152,6 +152,7 @@ def test_info_counts_surfaces_without_the_mesh_memory(tmp_path, capsys, monkeypa
     # below the mesh's estimate, info still reports every surface, and they
     # are the mesh's own components
     from isoflow import boundary_mesh
+    from isoflow.digital.configurations import configuration_histogram
     from isoflow.digital.surface import mesh_memory
     from isoflow.scale import memory
 
@@ -159,8 +160,8 @@ def test_info_counts_surfaces_without_the_mesh_memory(tmp_path, capsys, monkeypa
     v[0:3, 0:3, 0:3] = True  # a second surface, a cube in the corner
     want = sorted((c["euler_characteristic"], c["genus"], c["faces"]) for c in boundary_mesh(v).components())
     np.save(tmp_path / "t.npy", v)
-    monkeypatch.setattr(memory, "default_budget", lambda: 100_000)
-    assert mesh_memory(np.bincount(np.zeros(1, int), minlength=256)) < 100_000 < 16 * v.size
+    monkeypatch.setattr(memory, "default_budget", lambda: 300_000)
+    assert 300_000 < mesh_memory(configuration_histogram(v))
     r = info_json(capsys, tmp_path / "t.npy")
     assert r["betti"] == [2, 1, 0] and r["euler_characteristic"] == euler_number(v, connectivity=1)
     assert sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in r["surfaces"]) == want
@@ -173,13 +174,13 @@ def test_info_threads_option_and_environment(tmp_path):
     # 3 threads, and the surfaces the mesh has
     import os
 
-    from conftest import ball
+    from conftest import ball, compiled_side
     from isoflow import boundary_mesh
     from isoflow.scale.compiled import MIN_VOXELS
 
-    v = np.zeros((130, 130, 130), bool)
+    v = np.zeros((compiled_side(),) * 3, bool)
     v[:60, :60, :60] = torus(20, 8, size=60)
-    v[70:, 70:, 70:] = ball(25, size=60) & ~ball(12, size=60)  # a shell: two spheres
+    v[70:130, 70:130, 70:130] = ball(25, size=60) & ~ball(12, size=60)  # a shell: two spheres
     v[5, 100, 100] = v[6, 101, 101] = True  # a vertex contact
     assert v.size >= MIN_VOXELS
     np.save(tmp_path / "v.npy", v)
@@ -282,7 +283,9 @@ def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
     rng = np.random.default_rng(conn)
     # more than a bit per voxel would make MIN_VOXELS, fewer voxels
     small = rng.random((80, 77, 83)) < 0.3  # edge and vertex contacts everywhere
-    big = np.zeros((130, 130, 130), bool)
+    from conftest import compiled_side
+
+    big = np.zeros((compiled_side(),) * 3, bool)
     big[:80, :77, :83] = small
     assert MIN_VOXELS // 8 < small.size < MIN_VOXELS <= big.size
     for name, vol, numba_loaded in (("small", small, False), ("big", big, have_numba())):
@@ -307,7 +310,9 @@ def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
 
     if not have_numba():
         pytest.skip("numba not installed")
-    vol = np.random.default_rng(3).random((130, 130, 130)) < 0.3  # edge and vertex contacts
+    from conftest import compiled_side
+
+    vol = np.random.default_rng(3).random((compiled_side(),) * 3) < 0.3  # edge and vertex contacts
     assert vol.size >= MIN_VOXELS
     np.save(tmp_path / "v.npy", vol)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))

@@ -172,3 +172,32 @@ def test_tables_follow_the_mesh_rules():
                 assert (c >> int(obj[c, s])) & 1 and not (c >> int(bg[c, s])) & 1
         assert (nsheet[[0, 255]] == 0).all()
         assert np.count_nonzero(pinch[:, 0] >= 0) == 4  # four pairs of opposite octants
+
+
+def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(monkeypatch):
+    # small_census checks its peak up front (bytes per voxel and per mesh
+    # vertex): the estimate must bound what tracemalloc measures, on shapes
+    # with little and much boundary per voxel, and a budget below it is
+    # refused with one line naming the volume, before any labelling
+    import tracemalloc
+
+    from isoflow.digital import closed_surfaces as cs
+    from isoflow.errors import IsoflowError
+    from isoflow.scale import memory
+
+    rng = np.random.default_rng(11)
+    vols = {"ball": ball(30), "torus": torus(20, 6), "noise": rng.random((50, 45, 40)) < 0.3,
+            "empty": np.zeros((40, 40, 40), bool), "full": np.ones((40, 40, 40), bool)}
+    for name, v in vols.items():
+        for conn in (6, 26):
+            hist = np.bincount(cs.configurations(v).ravel(), minlength=256)
+            estimate = cs.SMALL_BYTES_PER_VOXEL * v.size + cs.SMALL_BYTES_PER_SHEET * int(hist @ sweep_tables(conn)[0])
+            tracemalloc.start()
+            got = cs.small_census(v, conn)
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+            assert peak <= estimate, (name, conn, peak / v.size, estimate / v.size)
+            assert counted(got) == mesh_answer(v, conn)
+            with monkeypatch.context() as m, pytest.raises(IsoflowError, match="x".join(map(str, v.shape))):
+                m.setattr(memory, "default_budget", lambda: estimate - 1)
+                cs.small_census(v, conn)

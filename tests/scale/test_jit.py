@@ -24,7 +24,7 @@ def test_compiled_report_does_not_import_scipy_linalg_and_numba_blas_still_works
         from isoflow.scale.compiled import use_compiled
 
         rng = np.random.default_rng(7)
-        vol = rng.random((130, 130, 130)) < 0.3  # edge and vertex contacts everywhere
+        vol = rng.random((SIDE,) * 3) < 0.3  # edge and vertex contacts everywhere
         assert use_compiled(vol)
         report = analyze(vol, 6, surfaces=False)
         print("scipy.linalg" in sys.modules)
@@ -43,6 +43,9 @@ def test_compiled_report_does_not_import_scipy_linalg_and_numba_blas_still_works
         assert np.allclose(njit(lambda x, y: np.dot(x, y))(a, b), a @ b)
         print("scipy.linalg" in sys.modules)
     """)
+    from conftest import compiled_side
+
+    script = script.replace("SIDE", str(compiled_side()))
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["False", "True"]

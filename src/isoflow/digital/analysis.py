@@ -16,7 +16,7 @@ import numpy as np
 
 from ..scale import arrays
 from ..scale.compiled import using
-from .closed_surfaces import closed_surfaces, compiled_census, paid_numpy, use_census
+from .closed_surfaces import closed_surfaces, compiled_census, paid_numpy, small_census, use_census
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -72,9 +72,14 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
     compiled = use_census(vol)
     if not compiled and isinstance(vol, np.ndarray):
         vol = arrays.binary(vol)
+        if vol.ndim == 3 and surfaces:
+            # one configuration array and its labellings give the histogram,
+            # the Betti counts and the surfaces
+            census = small_census(vol, conn)
     if compiled:
         # one pass gives the histogram, the Betti counts and the surfaces
         census = compiled_census(vol, conn, surfaces)
+    if census is not None:
         hist = census["hist"]
         chi = euler_from_histogram(hist, 3, conn)
         b0, enclosed = census["betti_counts"]

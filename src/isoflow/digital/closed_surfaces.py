@@ -58,6 +58,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scale.compiled import have_numba, use_compiled
+from ..scale.memory import check_fits
 from .configurations import configurations
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 from .topology import check_connectivity
@@ -133,10 +134,10 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
     Returns ``surfaces`` (each with ``euler_characteristic``, ``genus`` and
     ``faces``, largest first: the same multiset as
     ``boundary_mesh(volume, connectivity).components()``), ``pinched_vertices``
-    and ``doubled_edges`` (the mesh's ``pinched`` and ``midpoints // 2``).
-    Volumes that take the compiled pass (:func:`use_census`) also give
-    ``hist`` and ``betti_counts`` (b0 and the
-    enclosed background components), which come with the same pass.
+    and ``doubled_edges`` (the mesh's ``pinched`` and ``midpoints // 2``),
+    and what comes with the same pass: ``hist`` (the 256 configuration
+    counts) and ``betti_counts`` (b0 and the enclosed background
+    components under ``connectivity``).
     """
     vol = np.asarray(volume, dtype=bool)
     if vol.ndim != 3:
@@ -144,32 +145,60 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
     check_connectivity(3, connectivity)
     if use_census(vol):
         return compiled_census(vol, connectivity)
-    return _small(vol, connectivity)
+    return small_census(vol, connectivity)
 
 
-def _small(vol: np.ndarray, conn: int) -> dict:
-    """NumPy and cc3d: labels of the volume and of its background padded by
-    one layer (the outside is one background component), and the
-    configuration of every vertex."""
+#: peak bytes of :func:`small_census`: per voxel (the int32 labels of both
+#: sides, their padded copies, the configurations) and per mesh vertex (the
+#: sheets' labels, octants and flat indices); measured with tracemalloc at
+#: 20-23 and 81-85 on a ball, a torus, porous fields and noise
+SMALL_BYTES_PER_VOXEL = 24
+SMALL_BYTES_PER_SHEET = 96
+
+
+def small_census(vol: np.ndarray, conn: int) -> dict:
+    """What :func:`compiled_census` gives, by NumPy and cc3d, for a 3D host
+    volume (bool, 0/1 bytes) below the compiled pass's size: one
+    configuration array, the labels of the volume and of its background
+    padded by one layer (the outside is one background component) under the
+    mesh's adjacencies, and one more labelling for the Betti counts. The
+    mesh's adjacency is the connectivity's on one side (the object's under
+    6, the background's under 26); the other side is labelled again under
+    the connectivity's own (26 for the background under 6, for the object
+    under 26) rather than joined through the pinches."""
     from ..scale.labels import label
 
+    cfg = configurations(vol)
+    hist = np.bincount(cfg.ravel(), minlength=256).astype(np.int64)
+    sheets = int(hist @ sweep_tables(conn)[0])
+    check_fits(SMALL_BYTES_PER_VOXEL * vol.size + SMALL_BYTES_PER_SHEET * sheets,
+               f"labelling a {'x'.join(map(str, vol.shape))} volume for its surfaces and Betti numbers",
+               hint="store it as .zarr and run isoflow info on that (block by block)")
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    obj_labels = label(vol, obj_adj)[0]
-    bg_padded = label(np.pad(~vol, 1, constant_values=True), bg_adj)[0]
+    obj_labels, nobj = label(vol, obj_adj)
+    background = np.pad(~vol, 1, constant_values=True)
+    bg_padded, nbg = label(background, bg_adj)
+    if conn == 6:
+        b0, enclosed = nobj, label(background, 26)[1] - 1
+    else:
+        b0, enclosed = label(vol, 26)[1], nbg - 1
     outside = int(bg_padded[0, 0, 0])
     whole = tuple(slice(None) for _ in range(3))
-    found = box_sheets(vol, obj_labels, bg_padded[1:-1, 1:-1, 1:-1], whole, conn, outside)
-    spokes = sweep_tables(conn)[4]
-    cfg = configurations(vol)
+    found = box_sheets(vol, obj_labels, bg_padded[1:-1, 1:-1, 1:-1], whole, conn, outside, cfg=cfg)
+    # doubled lattice edges: a spoke doubled at both ends (bit 2 axis + 1 of
+    # the lower end, bit 2 axis of the upper), on small uint8 arrays
+    spokes = sweep_tables(conn)[4][cfg]
     doubled = 0
     for axis in range(3):
         lo = [slice(None)] * 3
         hi = [slice(None)] * 3
         lo[axis], hi[axis] = slice(None, -1), slice(1, None)
-        doubled += int(np.count_nonzero((spokes[cfg[tuple(lo)]] >> (2 * axis + 1)) & (spokes[cfg[tuple(hi)]] >> (2 * axis)) & 1))
+        doubled += int(np.count_nonzero((spokes[tuple(lo)] >> (2 * axis + 1)) & (spokes[tuple(hi)] >> (2 * axis)) & 1))
     return {
+        "hist": hist,
+        "betti_counts": (b0, enclosed),
         "surfaces": surfaces_from_counts(found["vertices"], found["quarters"]),
-        "pinched_vertices": int(np.count_nonzero(pinch_lut(conn)[cfg])),
+        "pinched_vertices": int(hist[pinch_lut(conn)].sum()),
         "doubled_edges": doubled,
     }
 
@@ -214,7 +243,7 @@ def _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside) -> dic
 
 
 def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside,
-               compiled: bool = False) -> dict:
+               compiled: bool = False, cfg: np.ndarray | None = None) -> dict:
     """Sheets of some vertices of a box of voxels, summed per label pair.
 
     ``vox``: the box (bool); ``obj_labels``/``bg_labels``: integer labels of
@@ -229,12 +258,12 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     6). Used whole by the small path (numpy: no numba below
     :data:`~isoflow.scale.compiled.MIN_VOXELS`) and block by block out of
     core, where ``compiled`` lets boxes from 2^12 voxels on take the
-    compiled pass.
+    compiled pass. ``cfg``: ``configurations(vox)``, where the caller has it.
     """
     if compiled and _compiled_box(vox):
         return _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside)
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
-    cfg = configurations(vox)[keep]
+    cfg = (configurations(vox) if cfg is None else cfg)[keep]
     origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])
     # (C order: the flat views below are indexed with these strides)
     obj_padded = np.ascontiguousarray(np.pad(obj_labels, 1))

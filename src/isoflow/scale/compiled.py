@@ -2,7 +2,7 @@
 
 The passes of :mod:`isoflow.scale.kernels` and :mod:`isoflow.scale.sweep`
 are compiled with numba. They are used for host volumes from
-:data:`MIN_VOXELS` on; below that, numpy and scipy answer sooner than numba
+:data:`MIN_VOXELS` on; below that, numpy and cc3d answer sooner than numba
 can start (importing numba and loading its cached machine code costs about
 0.5 s once per process), so one small volume never imports numba at all
 (a process that has spent as long in the NumPy passes loads it: see
@@ -33,8 +33,12 @@ from functools import lru_cache
 
 from ..errors import IsoflowError
 
-#: host volumes with at least this many voxels (128^3) use the compiled passes
-MIN_VOXELS = 2_000_000
+#: host volumes with at least this many voxels (159^3) use the compiled
+#: passes. As whole commands on smoothed porous fields (the most boundary
+#: per voxel of the benchmark's inputs) the NumPy passes took 0.71x the
+#: compiled command's time at 128^3, 0.90x at 160^3 and 1.28x at 192^3
+#: (medians of 5 pairs); on a ball they are faster still
+MIN_VOXELS = 4_000_000
 
 #: unless asked, a pass takes at most one thread per this many voxels
 VOXELS_PER_THREAD = 1_000_000
