@@ -1,7 +1,7 @@
 """Benchmark: many small volumes in one process.
 
 A script that reports on N small volumes (64^3 by default, below the
-2 million voxels from which ``analyze`` starts with numba) in a loop, as a
+4 million voxels from which ``analyze`` starts with numba) in a loop, as a
 fresh process each, the way a user runs it: ``isoflow.analyze(vol, 6)``
 against scikit-image's ``euler_number(vol, connectivity=1)`` (chi alone),
 and against ``analyze`` held to the NumPy passes (``RENT_SECONDS``

@@ -24,11 +24,12 @@ def torus(R: float, r: float, size: int | None = None, axis: int = 2, centre=Non
 
 def compiled_side() -> int:
     """The side of the smallest cube of voxels that takes the compiled
-    passes (:data:`isoflow.scale.compiled.MIN_VOXELS`), for tests that run
-    them as a user would, in a fresh process."""
-    from isoflow.scale.compiled import MIN_VOXELS
+    passes with and without the surfaces
+    (:func:`isoflow.scale.compiled.least_voxels`), for tests that run them
+    as a user would, in a fresh process."""
+    from isoflow.scale.compiled import least_voxels
 
-    return int(round(MIN_VOXELS ** (1 / 3))) + 2
+    return int(round(least_voxels(surfaces=True) ** (1 / 3))) + 2
 
 
 @pytest.fixture

@@ -176,13 +176,13 @@ def test_info_threads_option_and_environment(tmp_path):
 
     from conftest import ball, compiled_side
     from isoflow import boundary_mesh
-    from isoflow.scale.compiled import MIN_VOXELS
+    from isoflow.scale.compiled import least_voxels
 
     v = np.zeros((compiled_side(),) * 3, bool)
     v[:60, :60, :60] = torus(20, 8, size=60)
     v[70:130, 70:130, 70:130] = ball(25, size=60) & ~ball(12, size=60)  # a shell: two spheres
     v[5, 100, 100] = v[6, 101, 101] = True  # a vertex contact
-    assert v.size >= MIN_VOXELS
+    assert v.size >= least_voxels(surfaces=True)
     np.save(tmp_path / "v.npy", v)
     out = {}
     for threads in (1, 3):
@@ -276,27 +276,33 @@ def _imported(args, cwd=None):
 def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
     # a volume below the compiled passes' threshold answers in the NumPy
     # passes without numba's half-second start; one above it loads numba;
-    # both reports equal the in-process one and scikit-image's chi
+    # one between the thresholds with and without the surfaces loads it
+    # only for --no-surfaces. Every report equals the in-process one and
+    # scikit-image's chi
+    from conftest import compiled_side
     from isoflow.digital.analysis import analyze
-    from isoflow.scale.compiled import MIN_VOXELS, have_numba
+    from isoflow.scale.compiled import have_numba, least_voxels
 
     rng = np.random.default_rng(conn)
-    # more than a bit per voxel would make MIN_VOXELS, fewer voxels
+    # more than a bit per voxel would make the threshold, fewer voxels
     small = rng.random((80, 77, 83)) < 0.3  # edge and vertex contacts everywhere
-    from conftest import compiled_side
-
     big = np.zeros((compiled_side(),) * 3, bool)
     big[:80, :77, :83] = small
-    assert MIN_VOXELS // 8 < small.size < MIN_VOXELS <= big.size
-    for name, vol, numba_loaded in (("small", small, False), ("big", big, have_numba())):
+    mid = big[:141, :141, :141]
+    least = least_voxels(surfaces=True)  # (info's default)
+    assert least // 8 < small.size < least <= big.size
+    assert least_voxels(surfaces=False) <= mid.size < least
+    for name, vol, flags, numba_loaded in (("small", small, [], False), ("big", big, [], have_numba()),
+                                           ("mid", mid, [], False), ("mid", mid, ["--no-surfaces"], have_numba())):
         np.save(tmp_path / f"{name}.npy", vol)
-        p, modules = _imported(["info", tmp_path / f"{name}.npy", "--json", "--connectivity", conn])
+        p, modules = _imported(["info", tmp_path / f"{name}.npy", "--json", "--connectivity", conn, *flags])
         assert p.returncode == 0, p.stderr
         assert ("numba" in modules) == numba_loaded, name
         report = json.loads(p.stdout)
         assert report["euler_characteristic"] == euler_number(vol, connectivity=1 if conn == 6 else 3)
-        want = analyze(vol, conn)
+        want = analyze(vol, conn, surfaces=not flags)
         assert {k: report[k] for k in want} == json.loads(json.dumps(want))
+        assert ("surfaces" in report) == (not flags)
 
 
 def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
@@ -306,14 +312,13 @@ def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
     # loads the cache and says nothing; both report the same
     import os
 
-    from isoflow.scale.compiled import COMPILE_NOTE, MIN_VOXELS, have_numba
+    from conftest import compiled_side
+    from isoflow.scale.compiled import COMPILE_NOTE, have_numba, least_voxels
 
     if not have_numba():
         pytest.skip("numba not installed")
-    from conftest import compiled_side
-
     vol = np.random.default_rng(3).random((compiled_side(),) * 3) < 0.3  # edge and vertex contacts
-    assert vol.size >= MIN_VOXELS
+    assert vol.size >= least_voxels(surfaces=True)
     np.save(tmp_path / "v.npy", vol)
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     runs = [subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "v.npy"), "--json"],

@@ -154,14 +154,15 @@ def warm_up_while_reading(args):
     from .mesh.formats.npy import voxel_count
     from .mesh.formats.registry import split_dataset
     from .mesh.load import is_mesh_path
-    from .scale.compiled import MIN_VOXELS, have_numba
+    from .scale.compiled import have_numba, least_voxels
 
     path = split_dataset(args.input)[0]
+    least = least_voxels(surfaces=not args.no_surfaces)
     try:
         # the voxels from a .npy's header; elsewhere a bit per voxel at the
         # least (binvox; compressed files: no matter)
         voxels = voxel_count(path) if path.suffix.lower() == ".npy" else None
-        big = path.stat().st_size >= MIN_VOXELS // 8 if voxels is None else voxels >= MIN_VOXELS
+        big = path.stat().st_size >= least // 8 if voxels is None else voxels >= least
     except OSError:
         return None
     if args.gpu or not big or is_mesh_path(path) or not have_numba():

@@ -125,7 +125,7 @@ def test_bool_arrays_with_bytes_other_than_one_are_read_as_true(rng):
 
     u = (rng.random((compiled_side(),) * 3) < 0.3).astype(np.uint8) * 2
     v = u.view(bool)
-    assert v.size >= compiled.MIN_VOXELS
+    assert v.size >= compiled.least_voxels(surfaces=True)
     for conn, sk in ((6, 1), (26, 3)):
         r = analyze(DigitalObject(v), conn, surfaces=False)
         assert r["euler_characteristic"] == euler_number(u > 0, connectivity=sk)

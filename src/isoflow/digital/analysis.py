@@ -69,7 +69,7 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
     conn = resolve_connectivity(vol.ndim, connectivity)
     census = None
     started = time.perf_counter()
-    compiled = use_census(vol)
+    compiled = use_census(vol, surfaces)
     if not compiled and isinstance(vol, np.ndarray):
         vol = arrays.binary(vol)
         if vol.ndim == 3 and surfaces:

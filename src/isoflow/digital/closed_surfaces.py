@@ -57,7 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..scale.compiled import have_numba, use_compiled
+from ..scale.compiled import have_numba, numba_started, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
@@ -389,11 +389,15 @@ def warm_up(surfaces: bool = True) -> None:
     _warm = True
 
 
-def use_census(vol) -> bool:
-    """Whether :func:`compiled_census` is the faster way for a 3D volume:
-    a large host volume (:func:`use_compiled`), or any host volume once
-    the pass is loaded (:func:`warm_up`): its start is paid, and it is
-    faster than the NumPy passes at every size.
+def use_census(vol, surfaces: bool = True) -> bool:
+    """Whether :func:`compiled_census` is the faster way for a 3D volume,
+    with or without the ``surfaces``: a large host volume
+    (:func:`use_compiled`; the NumPy census with the surfaces holds out to
+    a larger size than the passes without, as numba's start is then the
+    larger part of the compiled one's time, unless numba is imported
+    already), or any host volume once the pass is loaded (:func:`warm_up`):
+    its start is paid, and it is faster than the NumPy passes at every
+    size.
 
     Small volumes go to the NumPy passes until, in one process, those have
     taken :data:`RENT_SECONDS` (:func:`paid_numpy` adds them up); then the
@@ -404,7 +408,7 @@ def use_census(vol) -> bool:
     spent)."""
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    if _warm or use_compiled(vol):
+    if _warm or use_compiled(vol, surfaces) or (numba_started() and use_compiled(vol)):
         return True
     if _numpy_seconds >= RENT_SECONDS and have_numba():
         warm_up()

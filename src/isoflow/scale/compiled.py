@@ -33,12 +33,24 @@ from functools import lru_cache
 
 from ..errors import IsoflowError
 
-#: host volumes with at least this many voxels (159^3) use the compiled
-#: passes. As whole commands on smoothed porous fields (the most boundary
-#: per voxel of the benchmark's inputs) the NumPy passes took 0.71x the
-#: compiled command's time at 128^3, 0.90x at 160^3 and 1.28x at 192^3
-#: (medians of 5 pairs); on a ball they are faster still
-MIN_VOXELS = 4_000_000
+#: host volumes with at least this many voxels (128^3) use the compiled
+#: passes (the histogram, the Betti numbers)
+MIN_VOXELS = 2_000_000
+
+#: with the surfaces, host volumes take the compiled census (histogram,
+#: Betti numbers and surfaces in one sweep) from this many times
+#: MIN_VOXELS on (4 million, 159^3): below it the NumPy census is the
+#: faster command. As whole commands on smoothed porous fields (the most
+#: boundary per voxel of the benchmark's inputs) it took 0.71x the compiled
+#: command's time at 128^3, 0.90x at 160^3 and 1.28x at 192^3 (medians of
+#: 5 pairs); on a ball it is faster still (0.52x at 128^3)
+CENSUS_FACTOR = 2
+
+
+def least_voxels(surfaces: bool = False) -> int:
+    """The voxels from which a host volume takes the compiled passes, for a
+    pass with or without the surfaces."""
+    return MIN_VOXELS * (CENSUS_FACTOR if surfaces else 1)
 
 #: unless asked, a pass takes at most one thread per this many voxels
 VOXELS_PER_THREAD = 1_000_000
@@ -85,15 +97,23 @@ def have_numba() -> bool:
     return find_spec("numba") is not None
 
 
-def use_compiled(volume) -> bool:
+def numba_started() -> bool:
+    """Whether numba is imported in this process already: most of the
+    compiled passes' start (importing it, 0.3 s) is paid."""
+    import sys
+
+    return "numba" in sys.modules
+
+
+def use_compiled(volume, surfaces: bool = False) -> bool:
     """True for a host NumPy volume of 2 or 3 dimensions and at least
-    :data:`MIN_VOXELS` voxels, where numba is installed."""
+    :func:`least_voxels` voxels, where numba is installed."""
     import numpy as np
 
     return (
         isinstance(volume, np.ndarray)
         and volume.ndim in (2, 3)
-        and volume.size >= MIN_VOXELS
+        and volume.size >= least_voxels(surfaces)
         and have_numba()
     )
 
