@@ -255,8 +255,8 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     (``obj``, ``bg`` label arrays), their mesh ``vertices`` and ``quarters``
     of faces, and the pinch ``pairs`` (labels of the two octants to join for
     the connectivity's components: object labels under 26, background under
-    6). Used whole by the small path (numpy: no numba below
-    :data:`~isoflow.scale.compiled.MIN_VOXELS`) and block by block out of
+    6). Used whole by the small path (:func:`small_census`: no numba below
+    :func:`~isoflow.scale.compiled.least_voxels`) and block by block out of
     core, where ``compiled`` lets boxes from 2^12 voxels on take the
     compiled pass. ``cfg``: ``configurations(vox)``, where the caller has it.
     """
