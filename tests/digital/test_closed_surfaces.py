@@ -201,3 +201,31 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
             with monkeypatch.context() as m, pytest.raises(IsoflowError, match="x".join(map(str, v.shape))):
                 m.setattr(memory, "default_budget", lambda: estimate - 1)
                 cs.small_census(v, conn)
+
+
+def test_between_the_thresholds_the_census_is_compiled_once_numba_is_imported(monkeypatch):
+    # with the surfaces, a volume between 2 and 4 million voxels takes the
+    # NumPy census in a fresh process (numba's start would cost more than
+    # it saves) but the compiled one where numba is imported already; both
+    # give the same report, and the mesh's surfaces
+    from isoflow.digital import closed_surfaces as cs
+    from isoflow.scale.compiled import have_numba, least_voxels
+
+    if not have_numba():
+        pytest.skip("numba not installed")
+    import numba  # noqa: F401  (imported, as in a process that used it)
+
+    v = np.zeros((141, 141, 141), bool)
+    assert least_voxels() <= v.size < least_voxels(surfaces=True)
+    v[:40, :40, :40] = torus(12, 5, size=40)
+    v[60:90, 60:90, 60:90] = ball(14, size=30)
+    v[100, 100, 100] = v[101, 101, 101] = True  # a vertex contact
+    assert cs.use_census(v) and cs.use_census(v, surfaces=False)
+    compiled_report = analyze(v, 26)
+    monkeypatch.setattr(cs, "numba_started", lambda: False)
+    assert not cs.use_census(v) and cs.use_census(v, surfaces=False)
+    for conn in (6, 26):
+        report = analyze(v, conn)
+        assert counted(report)[0] == mesh_answer(v, conn)[0]
+        if conn == 26:
+            assert report == compiled_report
