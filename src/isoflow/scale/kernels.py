@@ -216,9 +216,9 @@ if HAVE_NUMBA:
 
     @njit(cache=True, nogil=True, inline="always")
     def union(parent, a, b):
-        """Join the sets of nodes a and b: the larger root hangs under the
-        smaller, so that every root is the smallest node of its set and
-        ``parent[x] <= x`` always.
+        """Join the sets of nodes a and b: the larger root is hung in the
+        other set (under a node of it, whose root is smaller), so that every
+        root is the smallest node of its set and ``parent[x] <= x`` always.
 
         Rem's algorithm with splicing (Patwary, Blair and Manne, *Experiments
         on union-find algorithms for the disjoint-set data structure*, 2010):
