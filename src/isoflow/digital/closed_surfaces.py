@@ -57,6 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..scale.arrays import count_codes
 from ..scale.compiled import have_numba, numba_started, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
@@ -169,7 +170,7 @@ def small_census(vol: np.ndarray, conn: int) -> dict:
     from ..scale.labels import label
 
     cfg = configurations(vol)
-    hist = np.bincount(cfg.ravel(), minlength=256).astype(np.int64)
+    hist = count_codes(np, cfg, 256)
     sheets = int(hist @ sweep_tables(conn)[0])
     check_fits(SMALL_BYTES_PER_VOXEL * vol.size + SMALL_BYTES_PER_SHEET * sheets,
                f"labelling a {'x'.join(map(str, vol.shape))} volume for its surfaces and Betti numbers",
@@ -408,7 +409,7 @@ def use_census(vol, surfaces: bool = True) -> bool:
     spent)."""
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    if _warm or use_compiled(vol, surfaces) or (numba_started() and use_compiled(vol)):
+    if _warm or use_compiled(vol, surfaces and not numba_started()):
         return True
     if _numpy_seconds >= RENT_SECONDS and have_numba():
         warm_up()
