@@ -191,3 +191,203 @@ def test_metadata_a_format_cannot_keep_is_one_warning_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err and all(line.startswith("isoflow flow: warning: ") and "MagicaVoxel keeps no voxel size" in line
                        for line in err)
+
+
+# --------------------------------------------------------------- damaged and unusual files (found by fuzzing)
+
+def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
+    frames = (labels[:5] == 3).astype(np.uint8)  # five frames of a 16x12 image
+    tifffile.imwrite(tmp_path / "tyx_imagej.tif", frames, imagej=True, metadata={"axes": "TYX"})
+    tifffile.imwrite(tmp_path / "tyx.ome.tif", frames, metadata={"axes": "TYX"})
+    for name in ("tyx_imagej.tif", "tyx.ome.tif"):
+        assert tifffile.TiffFile(tmp_path / name).series[0].axes == "TYX"
+        fails(capsys, "info", tmp_path / name, words=(name, "axis 't' has 5 entries"))
+    # a plain page stack (pages without axis names) is still z
+    tifffile.imwrite(tmp_path / "pages.tif", frames, metadata=None)
+    assert tifffile.TiffFile(tmp_path / "pages.tif").series[0].axes[0] in "QI"
+    assert info(capsys, tmp_path / "pages.tif")["shape"] == [12, 16, 5]
+
+
+def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
+    with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
+        tif.write(np.ones((3, 4, 5), np.uint8))
+        tif.write(np.ones((6, 7), np.uint8))
+    assert len(tifffile.TiffFile(tmp_path / "two.tif").series) == 2
+    fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
+
+
+def test_tiff_spacing_that_is_not_a_number(tmp_path, capsys, labels):
+    description = "ImageJ=1.54f\nimages=5\nslices=5\nspacing=abc\n"
+    tifffile.imwrite(tmp_path / "s.tif", (labels[:5] == 3).astype(np.uint8), description=description, metadata=None)
+    fails(capsys, "info", tmp_path / "s.tif", words=("s.tif", "spacing 'abc' is not a number"))
+
+
+def test_nibabel_says_nothing_beside_the_error_line(tmp_path):
+    import struct
+    import subprocess
+
+    nib.save(nib.Nifti1Image(np.ones((3, 4, 5), np.uint8), np.eye(4)), tmp_path / "ok.nii")
+    raw = bytearray((tmp_path / "ok.nii").read_bytes())
+    struct.pack_into("<h", raw, 70, 1234)  # datatype: no such code
+    (tmp_path / "bad.nii").write_bytes(bytes(raw))
+    for quiet in ([], ["-q"]):
+        p = subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "bad.nii"), *quiet],
+                           capture_output=True, text=True)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and "bad.nii" in lines[0], p.stderr
+
+
+def nrrd_file(path, fields: str, data: np.ndarray):
+    """An NRRD with a hand-written header (pynrrd's writer checks its fields)."""
+    sizes = " ".join(map(str, data.shape[::-1]))  # the file lists the fastest axis first
+    header = f"NRRD0004\ntype: uint8\ndimension: {data.ndim}\nsizes: {sizes}\nencoding: raw\n{fields}\n\n"
+    path.write_bytes(header.encode() + np.ascontiguousarray(data, np.uint8).tobytes())
+    return path
+
+
+@pytest.mark.parametrize("fields, words", [
+    ("space dimension: 3\nspace directions: (1,0,0) (0,1,0)", ("'space directions'",)),
+    ("space dimension: 3\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (1,2)", ("'space origin'",)),
+    ("spacings: 1 nan 3", ("axis 1 has no spacing and 4 entries",)),
+])
+def test_nrrd_fields_that_do_not_fit_the_array(tmp_path, capsys, fields, words):
+    pytest.importorskip("nrrd")
+    path = nrrd_file(tmp_path / "v.nrrd", fields, np.ones((5, 4, 3), np.uint8))
+    fails(capsys, "info", path, words=("v.nrrd", *words))
+
+
+def test_nrrd_spacings_and_origin_that_are_not_numbers(tmp_path, capsys, recwarn):
+    pytest.importorskip("nrrd")
+    vol = np.zeros((5, 1, 3), np.uint8)
+    vol[1:4, 0, 1] = 1
+    # a nan spacing marks an axis that is not spatial: of length 1, it is dropped
+    obj = isoflow.read_volume(nrrd_file(tmp_path / "s.nrrd", "spacings: 2 nan 3", vol))
+    assert obj.volume.shape == (3, 5) and obj.voxels == 3
+    np.testing.assert_allclose(obj.pitch, [2.0, 3.0])
+    moved = "space dimension: 3\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (inf,0,0)"
+    obj = isoflow.read_volume(nrrd_file(tmp_path / "o.nrrd", moved, np.ones((2, 2, 2), np.uint8)))
+    assert obj.voxels == 8
+    np.testing.assert_allclose(obj.origin, -0.5)  # voxel 0's centre at the space origin taken as 0
+    assert any("space origin" in str(w.message) and "not finite" in str(w.message) for w in recwarn)
+
+
+@pytest.mark.parametrize("chunk, content", [(b"SIZE", b"\x02\x00\x00\x00\x02\x00\x00\x00"), (b"XYZI", b"\x01\x00")])
+def test_vox_chunks_too_short_for_what_they_hold(tmp_path, capsys, chunk, content):
+    import struct
+
+    size = struct.pack("<3i", 2, 2, 2)
+    children = {b"SIZE": b"SIZE" + struct.pack("<ii", len(content), 0) + content,
+                b"XYZI": b"SIZE" + struct.pack("<ii", 12, 0) + size + b"XYZI" + struct.pack("<ii", len(content), 0)
+                + content}[chunk]
+    (tmp_path / "v.vox").write_bytes(b"VOX " + struct.pack("<i", 150) + b"MAIN" + struct.pack("<ii", 0, len(children))
+                                     + children)
+    fails(capsys, "info", tmp_path / "v.vox", words=("v.vox", f"{chunk.decode()} chunk of {len(content)} bytes"))
+
+
+def ome_group(path, transforms, level="0", data=None):
+    import zarr
+
+    root = zarr.open_group(str(path), mode="w", zarr_format=2)
+    if data is not None:
+        root.create_array(level, data=data, chunks=(2, 2, 2))
+    root.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": n, "type": "space"} for n in "zyx"],
+                                  "datasets": [{"path": level, "coordinateTransformations": transforms}]}]
+    return root
+
+
+def test_omezarr_levels_and_transformations_that_are_not_what_they_must_be(tmp_path, capsys):
+    pytest.importorskip("zarr")
+    data = np.ones((3, 4, 5), np.uint8)
+    root = ome_group(tmp_path / "g.zarr", [{"type": "scale", "scale": [1, 1, 1]}], level="grp")
+    root.create_group("grp")
+    fails(capsys, "info", tmp_path / "g.zarr", words=("g.zarr", "level 'grp' is a group"))
+    fails(capsys, "surface", tmp_path / "g.zarr", "-o", tmp_path / "g.ply", words=("level 'grp' is a group",))
+    ome_group(tmp_path / "s.zarr", [{"type": "scale", "scale": ["a", 1, 1]}], data=data)
+    for command in (["surface", "-o", tmp_path / "s.ply"], ["flow", "--steps", "1"]):
+        fails(capsys, command[0], tmp_path / "s.zarr", *command[1:], words=("s.zarr", "scale", "finite numbers"))
+    assert not (tmp_path / "s.ply").exists()
+
+
+def damaged_store(path, data, chunks=(4, 4, 4), ome=False):
+    """A zarr store whose chunk 0.0.0 (0.0.0 of level 0) is garbage."""
+    import zarr
+
+    if ome:
+        root = ome_group(path, [{"type": "scale", "scale": [1, 1, 1]}])
+        root.create_array("0", data=data, chunks=chunks)
+        chunk = path / "0" / "0.0.0"
+    else:
+        zarr.create_array(str(path), data=data, chunks=chunks, zarr_format=2)
+        chunk = path / "0.0.0"
+    assert chunk.exists()
+    chunk.write_bytes(b"garbage")
+    return path
+
+
+@pytest.mark.parametrize("ome", [False, True])
+def test_info_on_a_zarr_store_with_a_damaged_chunk(tmp_path, capsys, labels, ome):
+    pytest.importorskip("zarr")
+    store = damaged_store(tmp_path / "d.zarr", (labels == 3).astype(np.uint8), ome=ome)
+    for extra in ([], ["--no-surfaces"], ["--label", "1"]):
+        fails(capsys, "info", store, *extra, words=("d.zarr", "cannot read"))
+    fails(capsys, "surface", store, "-o", tmp_path / "d.ply", words=("d.zarr",))
+
+
+def test_info_on_a_zarr_store_refuses_a_label_no_voxel_has(tmp_path, capsys, labels):
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(5, 5, 5), zarr_format=2)
+    np.save(tmp_path / "l.npy", labels)
+    for name in ("l.zarr", "l.npy"):
+        fails(capsys, "info", tmp_path / name, "--label", "9", words=(name, "no voxel has label 9", "0, 3, 5"))
+    assert info(capsys, tmp_path / "l.zarr", "--label", "5")["voxels"] == int((labels == 5).sum())
+
+
+def test_a_4d_zarr_array_is_read_whole_by_info(tmp_path, capsys, rng):
+    zarr = pytest.importorskip("zarr")
+    vol = rng.random((4, 5, 3, 6)) < 0.4  # edge and vertex contacts in 4D
+    zarr.create_array(str(tmp_path / "v.zarr"), data=vol, chunks=(2, 2, 2, 2), zarr_format=2)
+    np.save(tmp_path / "v.npy", vol)
+    a, b = info(capsys, tmp_path / "v.zarr"), info(capsys, tmp_path / "v.npy")
+    assert a == b and a["dimension"] == 4
+
+
+def test_writing_names_the_output_not_its_temporary_file(tmp_path, capsys):
+    mesh = tmp_path / "t.stl"
+    trimesh.creation.torus(2.0, 0.8).export(mesh)
+    assert main(["voxelize", str(mesh), "--resolution", "12", "-o", str(tmp_path / "t.tif")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{tmp_path / 't.tif'}: TIFF keeps no origin" in err[0] and "isoflow-tmp" not in err[0]
+    fails(capsys, "voxelize", mesh, "--resolution", "300", "-o", tmp_path / "big.vox",
+          words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256",))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["t.stl", "t.tif"]  # nothing else left
+    pytest.importorskip("zarr")
+    isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 3, 4), bool)), tmp_path / "img.zarr")
+    import zarr
+
+    assert zarr.open_group(str(tmp_path / "img.zarr"), mode="r").attrs["multiscales"][0]["name"] == "img.zarr"
+
+
+def test_flow_refuses_a_volume_suffix_before_making_the_output_directory(tmp_path, capsys):
+    np.save(tmp_path / "b.npy", np.ones((3, 3, 3), bool))
+    for suffix in (".nhdr", ".foo"):
+        fails(capsys, "flow", tmp_path / "b.npy", "--steps", "1", "--out", tmp_path / "fo", "--volumes", suffix,
+              words=(f"--volumes {suffix}", ".nii.gz"))
+        assert not (tmp_path / "fo").exists()
+
+
+def test_flow_of_a_4d_volume_names_the_file(tmp_path, capsys):
+    np.save(tmp_path / "4d.npy", np.ones((2, 2, 2, 2), bool))
+    fails(capsys, "flow", tmp_path / "4d.npy", words=("4d.npy", "2D and 3D", "4D"))
+
+
+def test_axis_names_and_dataset_paths(tmp_path, capsys):
+    zarr = pytest.importorskip("zarr")
+    root = zarr.open_group(str(tmp_path / "a.zarr"), mode="w", zarr_format=2)
+    root.create_array("0", data=np.ones((2, 3, 4), np.uint8), chunks=(2, 2, 2))
+    root.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": n} for n in "xxy"], "datasets": [{"path": "0"}]}]
+    fails(capsys, "info", tmp_path / "a.zarr", words=("axes xxy name a spatial axis twice",))
+    root.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": n} for n in "abc"], "datasets": [{"path": "0"}]}]
+    fails(capsys, "info", tmp_path / "a.zarr", words=("axes abc hold fewer than two of x, y, z",))
+    pytest.importorskip("h5py")
+    isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 3, 4), bool)), f"{tmp_path / 'v.h5'}:/a:b")
+    assert isoflow.read_volume(f"{tmp_path / 'v.h5'}:/a:b").voxels == 24

@@ -113,10 +113,12 @@ def load_input(args):
 def cmd_info(args) -> int:
     from .digital.analysis import analyze
 
+    from .mesh.formats.omezarr import stored_ndim
     from .mesh.formats.registry import split_dataset
 
-    if split_dataset(args.input)[0].suffix.lower() == ".zarr":
-        # out of core: block by block, never the whole volume in memory
+    if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
+        # out of core: block by block, never the whole volume in memory (4D
+        # arrays are read whole, as from the other formats)
         from .mesh.formats.omezarr import analyze_store
 
         if args.pitch is not None or args.resolution is not None or args.allow_open or args.strict:
@@ -413,6 +415,9 @@ def cmd_flow(args) -> int:
     from .flow.run import default_max_steps, run_flow
 
     obj = load_input(args)
+    if obj.ndim not in (2, 3):
+        raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
+                           f"this one is {obj.ndim}D")
     if obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
     if args.steps is not None and args.steps < 0:
@@ -422,6 +427,10 @@ def cmd_flow(args) -> int:
     writer = None
     if args.volumes and not args.out:
         raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
+    if args.volumes:
+        from .mesh.volumes import check_volume_suffix
+
+        check_volume_suffix(args.volumes)  # before the output directory is made
     if args.out:
         last = args.steps if args.steps is not None else default_max_steps(obj)
         conn = flow_connectivity(obj.ndim, args.connectivity)

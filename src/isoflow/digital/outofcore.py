@@ -618,7 +618,10 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
     if dtype.kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
     if dtype.kind != "b" and 0 not in z.shape:
-        first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
+        try:
+            first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
+        except Exception as exc:  # a damaged or missing chunk, as _read_zarr_block says
+            raise IsoflowError(f"{where}: cannot read the block at voxel {(0,) * z.ndim} ({exc})") from None
         binary(first, where, near=(0,) * z.ndim)
     return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
                            surfaces=surfaces, threads=threads, progress=progress)

@@ -216,11 +216,9 @@ class FlowWriter:
         Checked now, before the flow runs; like the step surfaces they are
         staged, and the volumes an earlier run left with that suffix are
         removed only when this run is complete (:meth:`finish`)."""
-        from ..mesh.volumes import check_volume_output
+        from ..mesh.volumes import check_volume_suffix
 
-        suffix = suffix if suffix.startswith(".") else "." + suffix
-        check_volume_output(self.stage / f"step_{0:0{self.width}d}{suffix}", force=True)
-        self.volume_suffix = suffix
+        self.volume_suffix = check_volume_suffix(suffix)
 
     def add_volume(self, step: int, state: DigitalObject) -> None:
         from ..mesh.volumes import write_volume

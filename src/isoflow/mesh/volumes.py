@@ -17,7 +17,7 @@ from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.memory import check_fits
 from ..scale.arrays import binary
-from .formats.registry import RawVolume, format_for, split_dataset, volume_suffixes
+from .formats.registry import RawVolume, check_label, format_for, no_such_label, split_dataset, volume_suffixes
 from .outputs import atomic_path, check_output_path
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
@@ -99,15 +99,10 @@ def select_label(array, label, where: str) -> np.ndarray:
     """The voxels of ``array`` equal to ``label``; an error listing the
     values present when there are none."""
     arr = np.asarray(array)
-    if arr.dtype.kind not in "biuf":
-        raise IsoflowError(f"{where}: array of type {arr.dtype} holds no labels")
-    if not np.isscalar(label) or isinstance(label, (str, bytes)) or not np.isfinite(label):
-        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+    check_label(label, arr.dtype, where)
     vol = arr == label
     if not vol.any():
-        values = np.unique(arr)
-        shown = ", ".join(f"{v:g}" for v in values[:20]) + (", ..." if len(values) > 20 else "")
-        raise IsoflowError(f"{where}: no voxel has label {label:g} (values present: {shown})")
+        raise no_such_label(label, np.unique(arr), where)
     return vol
 
 
@@ -262,6 +257,18 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     return file, dataset
 
 
+def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
+    """A suffix volumes are written with (``.nii.gz``; the dot may be left
+    out), its library installed: checked before any work. Returns it with
+    its dot."""
+    suffix = suffix if suffix.startswith(".") else "." + suffix
+    fmt = format_for("step" + suffix, writing=True)
+    if fmt is None:
+        raise IsoflowError(f"{where} {suffix}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+    fmt.require()
+    return suffix
+
+
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``
     for a dataset inside a new HDF5 file), with its voxel size and origin
@@ -273,7 +280,10 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     """
     obj = DigitalObject.of(obj)
     file, dataset = check_volume_output(path, force)
+    module = format_for(file, writing=True).load()
+    if hasattr(module, "check"):  # refusals and warnings name the output, before it is written
+        module.check(file, obj, dataset)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
-        format_for(file, writing=True).load().write(tmp, obj, dataset)
+        module.write(tmp, obj, dataset, name=file.name)
     return file

@@ -127,6 +127,8 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
             array = node[paths[i]]
         except Exception as exc:
             raise IsoflowError(f"{path}: OME-Zarr level {paths[i]!r} cannot be opened ({exc.__class__.__name__})") from None
+        if isinstance(array, zarr.Group):
+            raise IsoflowError(f"{path}: OME-Zarr level {paths[i]!r} is a group, not an array")
         return array, multiscale, datasets[i]
     if level is not None:
         raise IsoflowError(f"{path}: not an OME-Zarr image (no 'multiscales'), so it has no level {level!r}")

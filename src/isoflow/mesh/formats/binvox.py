@@ -76,12 +76,15 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, scale / side, np.array(translate))
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: binvox holds 3D voxels, this object is {obj.ndim}D")
     if np.ndim(obj.pitch):
         raise IsoflowError(f"{path}: binvox holds one voxel size and this object's pitch is "
                            f"{np.round(obj.pitch, 9).tolist()}; write .nii.gz, .nrrd or .h5 to keep it")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     spacing, corner = placement(obj)
     side = max(obj.volume.shape)
     cube = np.zeros((side,) * 3, np.uint8)

@@ -64,7 +64,7 @@ def _listed(names: list[str]) -> str:
     return (shown + f", ... ({len(names)} in all)" if len(names) > 10 else shown) or "none"
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     h5py = import_library("h5py", "HDF5")
     name = (dataset or DEFAULT_DATASET).strip("/") or DEFAULT_DATASET
     with h5py.File(path, "w") as f:

@@ -25,6 +25,8 @@ from .registry import RawVolume, note, placement, reading
 
 MAX_SIDE = 256
 VERSION = 150
+#: the bytes a chunk's content holds at least: SIZE three int32, XYZI its count
+_LEAST = {b"SIZE": 12, b"XYZI": 4}
 
 
 def _chunks(data: bytes, start: int, end: int, where: str):
@@ -52,6 +54,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         raise IsoflowError(f"{where}: .vox without a MAIN chunk (found {main[0]!r})")
     sizes, models = [], []
     for cid, content, _, _ in _chunks(data, main[2], main[3], where):
+        if cid in _LEAST and len(content) < _LEAST[cid]:
+            raise IsoflowError(f"{where}: .vox {cid.decode()} chunk of {len(content)} bytes "
+                               f"(it holds at least {_LEAST[cid]})")
         if cid == b"SIZE":
             sizes.append(struct.unpack_from("<3i", content))
         elif cid == b"XYZI":
@@ -76,7 +81,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, paint=True)
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: MagicaVoxel holds 3D models, this object is {obj.ndim}D")
     if max(obj.volume.shape, default=0) > MAX_SIDE:
@@ -86,6 +91,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if (spacing != 1).any() or corner.any():
         note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "
              f"and origin {np.round(corner, 9).tolist()} are not written")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     xyz = np.argwhere(obj.volume).astype(np.uint8)
     xyzi = np.column_stack([xyz, np.ones(len(xyz), np.uint8)]) if len(xyz) else np.zeros((0, 4), np.uint8)
     size = struct.pack("<3i", *obj.volume.shape)

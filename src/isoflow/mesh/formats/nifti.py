@@ -24,13 +24,13 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, placement, reading
+from .registry import RawVolume, check_shape, import_library, placement, quiet_logs, reading
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     nib = import_library("nibabel", "NIfTI")
     where = str(path)
-    with reading(path, "NIfTI"):
+    with reading(path, "NIfTI"), quiet_logs("nibabel.global"):
         img = nib.load(path)
         if not isinstance(img, (nib.Nifti1Image, nib.Nifti2Image)):
             raise IsoflowError(f"{where}: not a NIfTI image ({type(img).__name__})")
@@ -49,7 +49,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, pitch, origin)
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     nib = import_library("nibabel", "NIfTI")
     spacing, corner = placement_3d(obj)
     steps, centre0 = centre_affine(spacing, corner)

@@ -63,12 +63,16 @@ def voxel_count(path: Path) -> int | None:
     return int(np.prod(shape, dtype=np.int64))
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    if path.name.lower().endswith(".npy") and (
+            np.any(obj.spacing != 1.0) or obj.origin.any() or any(obj.offset) or obj.parity):
+        note(f"{path}: a .npy holds the array alone; pitch, origin, offset and parity are not kept "
+             "(use .npz to keep them)")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     with open(path, "wb") as fh:
         if path.name.lower().endswith(".npy"):
-            if np.any(obj.spacing != 1.0) or obj.origin.any() or any(obj.offset) or obj.parity:
-                note(f"{path}: a .npy holds the array alone; pitch, origin, offset and parity are not kept "
-                     "(use .npz to keep them)")
             np.save(fh, obj.volume)
             return
         np.savez_compressed(

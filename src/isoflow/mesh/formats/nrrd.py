@@ -8,7 +8,10 @@ isoflow's x, y, z with positive steps; a rotation is kept as its axis-aligned
 part with a warning). World coordinates are the file's ``space`` (3D Slicer
 writes LPS). Axes without a direction (``none``: a vector or list axis) must
 have length 1. A file with ``spacings`` instead of a space keeps them as the
-voxel sizes, origin 0.
+voxel sizes, origin 0; an axis whose spacing is ``nan`` (the format's "not
+a space axis") must have length 1 too. A header whose lists do not fit the
+array (fewer directions than axes, an origin of another dimension) is
+refused; a non-finite ``space origin`` is read as 0 with a warning.
 
 Written with ``space dimension``, diagonal ``space directions`` (the voxel
 sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
@@ -24,7 +27,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, placement, reading
+from .registry import RawVolume, check_shape, import_library, note, placement, reading
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -37,31 +40,53 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         data, header = nrrd.read(str(path), index_order="F")
     directions = header.get("space directions")
     if directions is not None:
-        directions = np.asarray(directions, np.float64)
+        directions = _field(header, "space directions", (data.ndim, None), where)
         placed = [i for i in range(data.ndim) if np.isfinite(directions[i]).all()]
-        others = [i for i in range(data.ndim) if i not in placed]
-        for i in others:
-            if data.shape[i] != 1:
-                raise IsoflowError(
-                    f"{where}: axis {i} has no space direction and {data.shape[i]} entries "
-                    f"(shape {data.shape}); isoflow reads one scalar volume"
-                )
-        data = np.transpose(data, placed + others).reshape([data.shape[i] for i in placed])
-        origin = np.asarray(header.get("space origin", np.zeros(directions.shape[1])), np.float64)
+        data = _scalar_axes(data, placed, "space direction", where)
+        dim = directions.shape[1]
+        origin = _field(header, "space origin", (dim,), where) if "space origin" in header else np.zeros(dim)
         if not np.isfinite(origin).all():
-            origin = np.zeros(directions.shape[1])
+            note(f"{where}: space origin {origin.tolist()} is not finite; the origin is taken as 0")
+            origin = np.zeros(dim)
         vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
         return RawVolume(vol, pitch, corner)
-    spacings = header.get("spacings")
     pitch = 1.0
-    if spacings is not None:
-        spacings = np.asarray(spacings, np.float64)
-        if np.isfinite(spacings).all():
-            pitch = np.abs(spacings)
+    if "spacings" in header:
+        spacings = _field(header, "spacings", (data.ndim,), where)
+        placed = [i for i in range(data.ndim) if np.isfinite(spacings[i])]
+        data = _scalar_axes(data, placed, "spacing", where)
+        pitch = np.abs(spacings[placed])
     return RawVolume(data, pitch)
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def _field(header: dict, name: str, shape: tuple, where: str) -> np.ndarray:
+    """A header field as float64 of ``shape`` (None: any length), or one line
+    saying what it holds instead."""
+    try:
+        value = np.asarray(header[name], np.float64)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or value.ndim != len(shape) or any(s is not None and n != s for n, s in zip(value.shape, shape)):
+        shown = header[name].tolist() if isinstance(header[name], np.ndarray) else header[name]
+        raise IsoflowError(f"{where}: NRRD field '{name}' {shown!r} does not fit the array "
+                           f"(sizes {[int(n) for n in header.get('sizes', [])]})")
+    return value
+
+
+def _scalar_axes(data: np.ndarray, placed: list[int], what: str, where: str) -> np.ndarray:
+    """``data`` with only its ``placed`` axes; the others (no ``what``: a
+    vector or list axis) must have length 1."""
+    others = [i for i in range(data.ndim) if i not in placed]
+    for i in others:
+        if data.shape[i] != 1:
+            raise IsoflowError(
+                f"{where}: axis {i} has no {what} and {data.shape[i]} entries "
+                f"(shape {data.shape}); isoflow reads one scalar volume"
+            )
+    return np.transpose(data, placed + others).reshape([data.shape[i] for i in placed])
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     nrrd = import_library("nrrd", "NRRD", "pynrrd")
     spacing, corner = placement(obj)
     steps, centre0 = centre_affine(spacing, corner)

@@ -34,8 +34,10 @@ from ...errors import IsoflowError
 from ...scale.chunks import open_zarr_node
 from .registry import (
     RawVolume,
+    check_label,
     check_shape,
     import_library,
+    no_such_label,
     placement,
     reading,
     spatial_axes,
@@ -70,10 +72,14 @@ def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tupl
         if kind == "identity":
             continue
         values = t.get(kind) if kind in ("scale", "translation") else None
-        if values is None or len(values) != ndim:
+        try:
+            values = np.asarray(values, np.float64)
+        except (TypeError, ValueError):
+            values = None
+        if values is None or values.shape != (ndim,) or not np.isfinite(values).all():
             raise IsoflowError(f"{where}: OME-Zarr coordinate transformation {t} is not a scale or "
-                               f"translation of {ndim} numbers (isoflow does not read transformations by path)")
-        values = np.asarray(values, np.float64)
+                               f"translation of {ndim} finite numbers (isoflow does not read "
+                               "transformations by path)")
         if kind == "scale":
             scale, shift = scale * values, shift * values
         else:
@@ -93,7 +99,12 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         # the grid in the attributes ``pitch`` and ``origin`` (x, y, z order)
         attrs = dict(getattr(array, "attrs", {}) or {})
         if "pitch" in attrs and "origin" in attrs:
-            return RawVolume(data, np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64))
+            try:
+                return RawVolume(data, np.asarray(attrs["pitch"], np.float64),
+                                 np.asarray(attrs["origin"], np.float64))
+            except (TypeError, ValueError):
+                raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
+                                   f"{attrs['origin']!r} are not numbers") from None
         return RawVolume(data)
     names = axis_names(multiscale, data.ndim, where)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
@@ -102,13 +113,26 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(to_xyz(data, names, where), pitch, shift[xyz] - pitch / 2)
 
 
+def stored_ndim(path) -> int:
+    """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
+    its x, y and z axes in an OME-Zarr image, every axis of a plain array."""
+    import_library("zarr", "OME-Zarr")
+    file, level = split_dataset(path)
+    array, multiscale, _ = open_zarr_node(file, level)
+    if multiscale is None:
+        return array.ndim
+    return len(spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path))[0])
+
+
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
                   surfaces: bool = True, threads: int | None = None) -> dict:
     """``isoflow info``'s report of a zarr store (``IMAGE.zarr:LEVEL`` too),
     block by block (:func:`isoflow.digital.outofcore.analyze_chunked`), with
     ``shape`` in isoflow's (x, y, z) order. ``label`` selects one value;
     ``progress(done, total)`` is called once per layer of blocks;
-    ``surfaces`` and ``threads`` as in :func:`~isoflow.digital.outofcore.analyze_chunked`."""
+    ``surfaces`` and ``threads`` as in :func:`~isoflow.digital.outofcore.analyze_chunked`.
+    A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
+    refuses it (the values present are then read in a second pass)."""
     from ...digital.outofcore import analyze_chunked, analyze_zarr
     from ...scale.chunks import import_dask
 
@@ -127,14 +151,35 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
             analyze_chunked(array, connectivity, where=where, **options)
     else:
         _, da = import_dask()
-        lazy = da.from_zarr(array)[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
         if label is not None:
-            lazy = lazy == label
+            check_label(label, array.dtype, where)
+        # chunks read through a guard, so that a damaged one is one line
+        raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+        raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+        lazy = raw if label is None else raw == label
         report = analyze_chunked(lazy, connectivity, where=where, progress=progress, surfaces=surfaces,
                                  threads=threads)
+        if label is not None and report["voxels"] == 0:
+            raise no_such_label(label, np.unique(da.unique(raw).compute()), where)
     if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report["shape"] = [int(array.shape[i]) for i in order]
     return report
+
+
+class _Guarded:
+    """A zarr array whose reads raise one IsoflowError line naming the
+    store (a damaged chunk), for ``dask.array.from_array``."""
+
+    def __init__(self, array, where: str):
+        self.array, self.where = array, where
+        self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
+
+    def __getitem__(self, key):
+        try:
+            return np.asarray(self.array[key])
+        except Exception as exc:  # zarr and its codecs raise many types
+            raise IsoflowError(f"{self.where}: cannot read the chunk at {key} "
+                               f"({exc.__class__.__name__}: {exc})") from None
 
 
 def check_output(path, force: bool = False) -> Path:
@@ -153,12 +198,15 @@ def check_output(path, force: bool = False) -> Path:
     return path
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
-    zarr = import_library("zarr", "OME-Zarr")
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if dataset is not None:
         raise IsoflowError(f"{path}:{dataset}: a level is named to read an OME-Zarr image; write to {path}")
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+    zarr = import_library("zarr", "OME-Zarr")
     spacing, corner = placement(obj)
     centre = corner + spacing / 2
     names = "zyx"[3 - obj.ndim:]
@@ -171,7 +219,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     root.create_array("0", data=data, chunks=tuple(max(1, min(s, CHUNK)) for s in data.shape))
     root.attrs["multiscales"] = [{
         "version": NGFF_VERSION,
-        "name": path.name,
+        "name": name or path.name,
         "axes": [{"name": a, "type": "space"} for a in names],
         "datasets": [{"path": "0", "coordinateTransformations": [
             {"type": "scale", "scale": spacing[::-1].tolist()},

@@ -1,7 +1,11 @@
 """Which module reads and writes which volume format, chosen by suffix.
 
 Every format module has ``read(path, dataset) -> RawVolume`` and
-``write(path, obj, dataset)``; it imports its library
+``write(path, obj, dataset, name)``, and may have ``check(path, obj,
+dataset)``: what the format cannot hold refused, and what it drops said,
+before anything is written and naming the output as given (``write`` gets
+a temporary path beside it, and ``name``, the output's file name, for
+formats that store one). It imports its library
 only inside those functions, so ``import isoflow`` stays cheap and a missing
 library costs nothing until its suffix is used. :func:`isoflow.mesh.volumes.read_volume`
 and :func:`~isoflow.mesh.volumes.write_volume` dispatch through
@@ -17,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import logging
 import re
 import warnings
 from dataclasses import dataclass
@@ -74,7 +79,7 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
-_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr)):(?P<dataset>[^:]*)$", re.IGNORECASE)
+_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr)):(?P<dataset>.*)$", re.IGNORECASE)
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
@@ -129,6 +134,20 @@ def reading(path, what: str):
         ) from None
 
 
+@contextlib.contextmanager
+def quiet_logs(logger: str):
+    """Silence a library's logger while it reads a file: what it logs about
+    a damaged file (nibabel prints its checks on stderr, tifffile logs
+    before raising) is said by the one error line, or is no concern of the
+    user's when the file reads."""
+    log = logging.getLogger(logger)
+    disabled, log.disabled = log.disabled, True
+    try:
+        yield
+    finally:
+        log.disabled = disabled
+
+
 @dataclass
 class RawVolume:
     """What a reader found: the array in isoflow's (x, y, z) order and where
@@ -165,6 +184,20 @@ def check_shape(shape, dtype, where: str) -> None:
     )
 
 
+def check_label(label, dtype, where: str) -> None:
+    """A label selects voxels of an array of numbers by one finite number."""
+    if np.dtype(dtype).kind not in "biuf":
+        raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
+    if not np.isscalar(label) or isinstance(label, (str, bytes)) or not np.isfinite(label):
+        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+
+
+def no_such_label(label, values, where: str) -> IsoflowError:
+    """The error for a label no voxel has, listing the ``values`` present."""
+    shown = ", ".join(f"{v:g}" for v in values[:20]) + (", ..." if len(values) > 20 else "")
+    return IsoflowError(f"{where}: no voxel has label {label:g} (values present: {shown})")
+
+
 def note(message: str) -> None:
     """A one-line warning (metadata a format cannot keep, an affine's
     rotation dropped); the command line prints it as ``warning: ...``."""
@@ -176,7 +209,12 @@ def spatial_axes(names, shape, where: str) -> tuple[list[int], list[int]]:
     (those present, in that order) and of the other axes, which must have
     length 1 (a time point or channel among several is refused)."""
     names = [n.lower() for n in names]
+    spatial = [n for n in names if n in ("x", "y", "z")]
+    if len(set(spatial)) != len(spatial):
+        raise IsoflowError(f"{where}: axes {''.join(names)} name a spatial axis twice")
     xyz = [names.index(a) for a in "xyz" if a in names]
+    if len(xyz) < 2:
+        raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
     other = [i for i in range(len(names)) if i not in xyz]
     for i in other:
         if shape[i] != 1:
@@ -184,8 +222,6 @@ def spatial_axes(names, shape, where: str) -> tuple[list[int], list[int]]:
                 f"{where}: axis '{names[i]}' has {shape[i]} entries (axes {''.join(names)}, shape "
                 f"{tuple(shape)}); isoflow reads one volume: save one time point or channel"
             )
-    if len(xyz) < 2:
-        raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
     return xyz, other
 
 

@@ -4,7 +4,10 @@ Axes: a stack is read by tifffile as (pages, rows, columns) = (z, y, x) and
 turned into isoflow's (x, y, z): column ``i``, row ``j``, page ``k`` is voxel
 ``(i, j, k)``; a single page is the 2D image (x, y). A stack without
 ImageJ's axis names (tifffile's 'Q' or 'I' axis) is taken as z; other axes
-(time, channels, RGB samples) must have length 1.
+(time, channels, RGB samples) must have length 1: a time series is not a
+z-stack, however alike their pages look. A file of several image series
+(pages of different shapes, a second stack) is refused: which one is the
+volume is not said by the file.
 
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) where present, z from
@@ -16,8 +19,6 @@ Resolutions are rationals in TIFF: a pitch is kept to about 9 digits.
 
 from __future__ import annotations
 
-import contextlib
-import logging
 from pathlib import Path
 
 import numpy as np
@@ -30,6 +31,7 @@ from .registry import (
     import_library,
     note,
     placement,
+    quiet_logs,
     reading,
     to_xyz,
 )
@@ -40,9 +42,15 @@ X_RESOLUTION, Y_RESOLUTION = 282, 283
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     tifffile = import_library("tifffile", "TIFF")
     where = str(path)
-    with reading(path, "TIFF"), _quiet(), tifffile.TiffFile(path) as tif:
+    # tifffile logs what it finds wrong before raising: the error line says it
+    with reading(path, "TIFF"), quiet_logs("tifffile"), tifffile.TiffFile(path) as tif:
         if not tif.series:
             raise IsoflowError(f"{where}: a TIFF without an image (damaged, or no pages)")
+        if len(tif.series) > 1:
+            shapes = ", ".join("x".join(map(str, s.shape)) for s in tif.series[:5])
+            raise IsoflowError(f"{where}: holds {len(tif.series)} image series (shapes {shapes}"
+                               f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
+                               "save the stack on its own")
         series = tif.series[0]
         axes = list(series.axes.upper())
         check_shape(series.shape, series.dtype, where)
@@ -52,35 +60,38 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
         spacing = (tif.imagej_metadata or {}).get("spacing")
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
-        stack = [i for i, a in enumerate(axes) if a in "QIT" and data.shape[i] > 1]
+        stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
             axes[stack[0]] = "Z"
     names = ["x" if a == "X" else "y" if a == "Y" else "z" if a == "Z" else a for a in axes]
     vol = to_xyz(data, names, where)
     pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
     if vol.ndim == 3:
-        pitch.append(float(spacing) if spacing else 1.0)
+        pitch.append(_spacing(spacing, where))
     return RawVolume(vol, np.array(pitch))
 
 
-@contextlib.contextmanager
-def _quiet():
-    """tifffile logs what it finds wrong before raising: the error line says it."""
-    logger = logging.getLogger("tifffile")
-    disabled, logger.disabled = logger.disabled, True
+def _spacing(value, where: str) -> float:
+    """The z voxel size from ImageJ's ``spacing`` (1 where absent)."""
+    if value is None or value == "":
+        return 1.0
     try:
-        yield
-    finally:
-        logger.disabled = disabled
+        return float(value)
+    except (TypeError, ValueError):
+        raise IsoflowError(f"{where}: ImageJ's spacing {value!r} is not a number") from None
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
-    tifffile = import_library("tifffile", "TIFF")
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
-    spacing, origin = placement(obj)
+    origin = placement(obj)[1]
     if origin.any():
         note(f"{path}: TIFF keeps no origin; the origin {np.round(origin, 9).tolist()} is not written")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+    tifffile = import_library("tifffile", "TIFF")
+    spacing = placement(obj)[0]
     data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (z,) y, x
     metadata = {"axes": "ZYX"[3 - obj.ndim:]}
     if obj.ndim == 3:
