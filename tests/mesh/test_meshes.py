@@ -115,6 +115,29 @@ def test_overlapping_components_compare_with_the_solid_genus(tmp_path):
     assert r["agree"] and r["verdict"].startswith("agree: solid genus 3")
 
 
+def test_a_cavity_is_subtracted_from_the_solid(tmp_path):
+    """Two crossing tori (a solid of genus 3) around a small inside-out
+    sphere (a cavity): manifold3d's union less the cavity keeps genus 3,
+    and the hollow ball alone (a sphere and an inside-out one inside it) is a
+    solid of genus 0 with one cavity, as the voxels say."""
+    a, b = two_tori(tmp_path / "two_tori.obj")
+    cavity = trimesh.creation.icosphere(2, radius=0.08)
+    cavity.apply_translation([1.0, 0.0, 0.0])  # inside the tube of torus a
+    assert a.contains([[1.0, 0.0, 0.0]])[0]
+    cavity.invert()
+    trimesh.util.concatenate([a, b, cavity]).export(tmp_path / "cavity.obj")
+    r = verify_genus(tmp_path / "cavity.obj", (48, 96))
+    assert r["solid"].get("error") is None and r["solid_genus"] == 3
+    assert r["verdict"].startswith("agree: solid genus 3")
+    outer, inner = trimesh.creation.icosphere(3, radius=1.0), trimesh.creation.icosphere(3, radius=0.5)
+    inner.invert()
+    trimesh.util.concatenate([outer, inner]).export(tmp_path / "hollow.ply")
+    r = verify_genus(tmp_path / "hollow.ply", (32,))
+    assert r["solid"].get("error") is None and r["solid_genus"] == 0
+    assert r["solid"]["volume"] < trimesh.creation.icosphere(3, radius=1.0).volume * 0.9  # hollow
+    assert r["digital"][-1]["betti"] == [1, 0, 1]
+
+
 def test_self_intersecting_mesh_is_named(tmp_path):
     """A spindle torus (tube radius above the ring's) passes through itself:
     its one component has genus 1, the solid it wraps none of that."""

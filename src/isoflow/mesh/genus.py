@@ -215,15 +215,19 @@ def solid_report(vertices, faces) -> dict:
         if cavities:
             solid = solid - m3.Manifold.batch_boolean(cavities, m3.OpType.Add)
         pieces = solid.decompose()
-    except Exception as exc:  # the binding raises for malformed input
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    except Exception as exc:  # the binding raises for malformed input (its first line says what)
+        detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        return {"error": f"{type(exc).__name__}: {detail}"}
     return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "volume": float(solid.volume())}
 
 
 def _inside_out(m3, part):
+    """The part with its triangles turned (a cavity's wall as a solid).
+    ``to_mesh`` gives read-only arrays and int32 indices, and ``Mesh``
+    refuses both (manifold3d 3.5): it takes writable float32 and uint32."""
     mesh = part.to_mesh()
-    tris = np.asarray(mesh.tri_verts)[:, ::-1].copy()
-    return m3.Manifold(m3.Mesh(vert_properties=np.asarray(mesh.vert_properties), tri_verts=tris))
+    tris = np.array(np.asarray(mesh.tri_verts)[:, ::-1], np.uint32)
+    return m3.Manifold(m3.Mesh(vert_properties=np.array(mesh.vert_properties, np.float32), tri_verts=tris))
 
 
 # --------------------------------------------------------------------------
