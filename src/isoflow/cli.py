@@ -45,7 +45,8 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_mesh_rule(p: argparse.ArgumentParser) -> None:
     p.add_argument("--strict", action="store_true",
-                   help="refuse a mesh that is not watertight (by default it is read by the generalised winding number)")
+                   help="refuse a mesh that is not watertight, or whose voxels lie in overlapping layers "
+                        "(by default it is read by the generalised winding number)")
     p.add_argument("--allow-open", action="store_true",
                    help="accepted for compatibility: open meshes are read by default")
 

@@ -573,6 +573,36 @@ def test_open_mesh_refused_only_when_strict():
     assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
 
+def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
+    """Two closed spheres that overlap: watertight, but the voxels where
+    they overlap are inside two layers (trimesh says those centres are in
+    both). By default their union; strict refuses them, also when writing a
+    zarr store (which is then removed); one sphere alone passes."""
+    from isoflow.cli import main
+
+    a = trimesh.creation.icosphere(3, radius=1.0)
+    b = a.copy()
+    b.apply_translation([1.0, 0, 0])
+    both = trimesh.util.concatenate([a, b])
+    v, f = np.asarray(both.vertices), np.asarray(both.faces)
+    assert mesh_defects(v, f)["watertight"]
+    report = {}
+    vol, origin, pitch = voxelize(v, f, resolution=24, report=report)
+    c = origin + (np.argwhere(np.ones(vol.shape, bool)) + 0.5) * pitch
+    twice = int((a.contains(c) & b.contains(c)).sum())
+    assert report["overlap_voxels"] == twice > 0
+    with pytest.raises(IsoflowError, match=f"{twice} voxels inside two or more layers"):
+        voxelize(v, f, resolution=24, strict=True)
+    voxelize(np.asarray(a.vertices), np.asarray(a.faces), resolution=24, strict=True)
+    both.export(tmp_path / "two.ply")
+    pytest.importorskip("zarr")
+    assert main(["voxelize", str(tmp_path / "two.ply"), "--resolution", "24", "--strict",
+                 "-o", str(tmp_path / "two.zarr")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "two.ply" in err[0] and "overlaps or intersects itself" in err[0]
+    assert not (tmp_path / "two.zarr").exists()
+
+
 def test_inconsistent_and_nonmanifold_counts():
     v, f = box_mesh([0, 0, 0], [1, 1, 1])
     d = mesh_defects(v, f)

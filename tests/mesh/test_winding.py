@@ -128,6 +128,40 @@ def test_centres_on_the_hole_its_rim_and_faces():
     assert not vol.all() and vol.any()
 
 
+@pytest.mark.parametrize("flip", [False, True])
+def test_planar_sheets_in_a_plane_of_centres_hold_no_voxel(flip):
+    """An open planar sheet whose plane holds a layer of voxel centres: there
+    |w| tends to 1/2 from both sides and the cap's w_C is exactly 1/2, so
+    rounding it decided by floating-point noise, and a square gave a
+    different scatter of voxels per orientation (58 or 965 at resolution
+    32). At the tie rule's point |w| is just under 1/2 (libigl): no voxel,
+    either way round; a fin in such a plane on a closed box adds nothing to
+    the box's own voxels."""
+    square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    f = np.array([[0, 1, 2], [0, 2, 3]])
+    f = f[:, ::-1] if flip else f
+    for n in (8, 16, 31, 32):
+        pitch = 1.0 / n
+        grid = ([-2 * pitch, -2 * pitch, -2.5 * pitch], (n + 4, n + 4, 5))  # centres on z = 0
+        vol, origin, _ = voxelize(square, f, pitch=pitch, grid=grid)
+        c = centres(np.argwhere(np.ones(vol.shape, bool)), origin, pitch)
+        assert (c[:, 2] == 0).sum() == (n + 4) ** 2
+        w = igl.winding_number(square, f, c + np.array([1e-7, 1e-9, -1e-5]) * pitch)
+        assert (np.abs(w) < 0.5).all() and np.abs(w).max() > 0.49
+        assert not vol.any(), (n, int(vol.sum()))
+    box = trimesh.creation.box(bounds=[[0, 0, 0], [1, 1, 1]])
+    fin = np.array([[1, 0.2, 0.5], [2, 0.2, 0.5], [2, 0.8, 0.5], [1, 0.8, 0.5]])  # z = 0.5: centres at n = 16
+    fin_faces = np.array([[0, 1, 2], [0, 2, 3]]) + len(box.vertices)
+    v = np.concatenate([box.vertices, fin])
+    faces = np.concatenate([box.faces, fin_faces[:, ::-1] if flip else fin_faces])
+    pitch = 1.0 / 16
+    grid = ([-1.5 * pitch] * 3, (36, 20, 20))  # centres on every plane k / 16: the box's faces, the fin's
+    with_fin, origin, _ = voxelize(v, faces, pitch=pitch, grid=grid)
+    alone, _, _ = voxelize(box.vertices, box.faces, pitch=pitch, grid=grid)
+    assert centres([[0, 0, 9]], origin, pitch)[0, 2] == 0.5 and alone.sum() == 16**3
+    assert np.array_equal(with_fin, alone)
+
+
 def test_random_soups_of_open_sheets_match_libigl(rng):
     """Random open sheets (pieces of spheres and random triangles, some
     overlapping, some inverted): exact against libigl."""
@@ -379,3 +413,71 @@ def test_missing_format_library_names_the_extra(tmp_path, capsys, monkeypatch):
         assert main(["info", str(tmp_path / name)]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and name in err[0] and "pip install 'isoflow[formats]'" in err[0]
+
+
+def polygon_prism(sides: int):
+    """A prism over a regular polygon: two polygon faces, quads around."""
+    t = 2 * np.pi * np.arange(sides) / sides
+    ring = np.column_stack([np.cos(t), np.sin(t), np.zeros(sides)])
+    v = np.concatenate([ring, ring + [0, 0, 1]])
+    faces = [list(range(sides))[::-1], list(range(sides, 2 * sides))]
+    faces += [[i, (i + 1) % sides, sides + (i + 1) % sides, sides + i] for i in range(sides)]
+    return v, faces
+
+
+def write_off(path, v, faces, header="OFF", extra=""):
+    lines = [header, f"{len(v)} {len(faces)} 0"] + [" ".join(map(repr, p)) + extra for p in v.tolist()]
+    lines += [f"{len(f)} " + " ".join(map(str, f)) + extra for f in faces]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def write_obj(path, v, faces):
+    path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist())
+                    + "".join("f " + " ".join(str(i + 1) for i in f) + "\n" for f in faces))
+
+
+@pytest.mark.parametrize("sides", [5, 6, 9])
+def test_off_polygons_of_any_size_read_as_the_same_obj(tmp_path, sides):
+    """trimesh's OFF reader fails on faces of five or more corners (NumPy 2);
+    isoflow's reads them as trimesh reads the same polygons from an OBJ, with
+    colours after the corners and a COFF header too."""
+    v, faces = polygon_prism(sides)
+    write_obj(tmp_path / "p.obj", v, faces)
+    write_off(tmp_path / "p.off", v, faces)
+    write_off(tmp_path / "c.off", v, faces, header="COFF", extra=" 255 0 0 255")
+    ref = trimesh.load(tmp_path / "p.obj", force="mesh")
+    assert ref.is_watertight and ref.euler_number == 2
+    vol, _, _ = voxelize(*load_mesh(tmp_path / "p.obj"), resolution=20)
+    for name in ("p.off", "c.off"):
+        got_v, got_f = load_mesh(tmp_path / name)
+        assert len(got_f) == len(ref.faces) and mesh_defects(got_v, got_f)["watertight"]
+        assert np.array_equal(voxelize(got_v, got_f, resolution=20)[0], vol)
+
+
+@pytest.mark.parametrize("text, words", [
+    ("OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n", ("4 vertices and 3 faces",)),
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n", ("vertex 7", "3 vertices")),
+    ("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4 0 1 2\n", ("face 0",)),
+    ("OFF BINARY\n", ("binary OFF",)),
+    ("4OFF\n1 0 0\n0 0 0 0\n", ("3D OFF",)),
+    ("OFF\n3 1 0\n0 0 zero\n1 0 0\n0 1 0\n3 0 1 2\n", ("vertex 0",)),
+])
+def test_off_files_that_are_not_what_they_say(tmp_path, capsys, text, words):
+    (tmp_path / "m.off").write_text(text)
+    assert main(["info", str(tmp_path / "m.off"), "--resolution", "8"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "m.off" in err[0] and all(w in err[0] for w in words), err
+
+
+def test_stl_with_an_infinite_coordinate_is_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    m = trimesh.creation.icosphere(2)
+    data = bytearray(trimesh.exchange.stl.export_stl(m))
+    data[84 + 12:84 + 16] = np.array([np.inf], "<f4").tobytes()  # first triangle's first corner: x
+    (tmp_path / "inf.stl").write_bytes(bytes(data))
+    p = subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "inf.stl")],
+                       capture_output=True, text=True)
+    lines = p.stderr.strip().splitlines()
+    assert p.returncode == 2 and len(lines) == 1 and "infinite" in lines[0], p.stderr

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -163,7 +164,8 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tup
 def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh and weld vertices that coincide.
 
-    Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted; the
+    Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted (OFF
+    by :mod:`isoflow.mesh.off`, which takes polygons of any size); the
     file is loaded with ``force="mesh"`` so multi-solid STLs and glTF scenes
     become one mesh (scene transforms applied).  OBJ files are loaded with
     ``merge_tex=True, merge_norm=True`` (trimesh otherwise splits vertices at
@@ -200,9 +202,18 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if ext == "obj":
         kwargs.update(merge_tex=True, merge_norm=True)
     try:
-        mesh = trimesh.load(str(p), force="mesh", **kwargs)
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces)
+        if ext == "off":  # trimesh's reader fails on polygons of 5+ corners (see isoflow.mesh.off)
+            from .off import read_off
+
+            vertices, faces = read_off(p)
+        else:
+            with warnings.catch_warnings():
+                # NumPy's overflow warnings on inf or huge coordinates: the
+                # one error line of check_mesh says what is wrong
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mesh = trimesh.load(str(p), force="mesh", **kwargs)
+            vertices = np.asarray(mesh.vertices, dtype=np.float64)
+            faces = np.asarray(mesh.faces)
     except IsoflowError:
         raise
     except Exception as exc:  # trimesh raises anything from KeyError to struct.error

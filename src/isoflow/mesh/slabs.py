@@ -139,6 +139,11 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
         results = dask.compute(*tasks, scheduler=sched, **kwargs)
     voxels = sum(r[0] for r in results)
     stats = np.sum([r[1] for r in results], axis=0)
+    try:
+        solid.check_layers(stats)
+    except IsoflowError as exc:  # refused: the store this call wrote goes
+        shutil.rmtree(path, ignore_errors=True)
+        raise IsoflowError(f"{where}: {exc}") from None
     if report is not None:
         report.update(defects=solid.defects, flipped_faces=solid.flipped, chain_edges=len(plan.E),
                       overlap_voxels=int(stats[0]), note=solid.note(stats))

@@ -65,6 +65,7 @@ class Solid:
     """
 
     def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False):
+        self.strict = strict
         self.defects = mesh_defects(v, f)
         if strict and not self.defects["watertight"]:
             d = self.defects
@@ -97,6 +98,23 @@ class Solid:
         Tm = vs[self.faces]
         Tc, E = cap_triangles(vs, *self.chain)
         return VoxelPlan(Tm, Tc, E, origin_s, pitch_s, shape)
+
+    def check_layers(self, stats) -> None:
+        """With ``strict``, refuse a mesh whose voxels lie inside two or more
+        layers or have winding numbers of both signs (overlapping or
+        self-intersecting shells, as far as the voxel centres see them:
+        ``isoflow genus`` tests every pair of faces); ``stats`` as
+        :meth:`note` takes them."""
+        if not self.strict:
+            return
+        what = []
+        if stats[0]:
+            what.append(_count(int(stats[0]), "voxel") + " inside two or more layers")
+        if stats[1] and stats[2]:
+            what.append("both positive and negative winding numbers")
+        if what:
+            raise IsoflowError("voxelize: mesh overlaps or intersects itself: " + " and ".join(what)
+                               + " (without --strict / strict=True the union is taken)")
 
     def note(self, stats=None) -> str | None:
         """One line on what is unusual about the mesh and the rule that read
@@ -218,7 +236,10 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         :mod:`isoflow.mesh.grid`).
     strict
         Refuse a mesh that is not watertight (see :func:`mesh_defects`)
-        instead of reading it by the generalised winding number.
+        instead of reading it by the generalised winding number, and one
+        whose voxels lie inside two or more layers or have winding numbers
+        of both signs (overlapping or self-intersecting shells, as far as
+        the voxel centres see them).
     allow_open
         Accepted and ignored (open meshes are read by default now).
     grid
@@ -271,6 +292,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         plan.fill(a, b, out=vol[a:b], stats=stats, threads=2)
         if progress is not None:
             progress(n, len(slabs))
+    solid.check_layers(stats)
     if report is not None:
         report.update(defects=solid.defects, flipped_faces=solid.flipped,
                       chain_edges=len(plan.E), overlap_voxels=int(stats[0]),

@@ -29,7 +29,14 @@ How it is computed (no approximation that can flip a voxel):
    taken as the argument of a product of complex numbers, counting whole
    turns: one ``atan2`` per point).  A centre within ``1e-6`` pitch of the cap
    (where the scanline's tie rule and the sign of a solid angle could
-   disagree) gets ``w_M`` summed over M's own triangles instead.
+   disagree), and one whose ``w_C`` is within ``1e-9`` of a half-integer
+   (where rounding it decides nothing: on a planar part of M that lies in
+   a plane of centres, ``w_C`` is exactly 1/2 inside the boundary, and
+   ``|w_M| -> 1/2`` from both sides), gets ``w_M`` summed over M's own
+   triangles instead, at the point the scanline's tie rule stands for
+   (the centre moved by ``(eta, eps, -delta)``, ``0 < eps << eta << delta``,
+   here 1e-9, 1e-7 and 1e-5 pitch): on a planar sheet ``|w_M|`` is then
+   just under 1/2, so its centres are out, whichever way it faces.
 
 Caps are cones over each boundary piece from its centroid, lifted by 1 % of
 its size along its vector area and by 0.1 % along a fixed generic direction,
@@ -54,6 +61,11 @@ from ..errors import IsoflowError
 
 #: centres closer than this (in pitches) to the cap are summed over M itself
 TIE_PITCHES = 1e-6
+#: ... and those whose w_C is this close to a half-integer
+TIE_WINDING = 1e-9
+#: where they are summed: the centre moved as the scanline's tie rule moves
+#: it, (x + eta, y + eps, z - delta) with 0 < eps << eta << delta (pitches)
+TIE_STEP = np.array([1e-7, 1e-9, -1e-5])
 #: blocks at the coarsest level are about this many per axis
 TOP_BLOCKS = 16
 _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 0.7537])
@@ -201,7 +213,8 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
     """Evaluate round(w_C) on blocks ``[i0, i1) x [j0, j1) x [k0, k1)``.
 
     status 0: ``rvals`` holds R for the whole block; 1: split it; 2: a single
-    centre within ``tol`` of the cap (sum over the mesh instead).  One pass
+    centre within ``tol`` of the cap, or whose w_C is a half-integer within
+    :data:`TIE_WINDING` (sum over the mesh instead).  One pass
     over the cap's triangles: the solid angle, the distance to the
     triangle's plane (``|det| / |n|``, a lower bound of the distance to the
     triangle, which is computed only when the plane is near), and a lower
@@ -262,7 +275,9 @@ def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
         w *= inv4pi
         var *= h * inv4pi
         lo = math.floor(w - var + 0.5)
-        if lo == math.floor(w + var + 0.5):
+        if h == 0 and abs(w - math.floor(w) - 0.5) <= TIE_WINDING:
+            status[q] = 2  # a half-integer: its rounding would be the noise's
+        elif lo == math.floor(w + var + 0.5):
             status[q] = 0
             rvals[q] = int(lo)
         else:  # a single centre never splits (a NaN would loop forever)
@@ -359,7 +374,7 @@ def winding_rule(Tc, E, Tm, origin, pitch, box, threads: int = 1):
     done_r = np.concatenate(done_r)
     ties = np.concatenate(ties)
     if len(ties):
-        P = origin + pitch * (ties[:, [0, 2, 4]] + 0.5)
+        P = origin + pitch * (ties[:, [0, 2, 4]] + 0.5 + TIE_STEP)
         w = gwn(P, Tm)
         done_b = np.concatenate([done_b, ties])
         done_r = np.concatenate([done_r, np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)])

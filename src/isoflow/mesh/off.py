@@ -1,0 +1,84 @@
+"""Object File Format (``.off``), read here rather than by trimesh.
+
+trimesh 4-5's OFF reader keeps face indices as strings and fails on any
+face of five or more corners under NumPy 2 (its fan triangulation
+multiplies strings), and it reads a file that lists fewer faces or vertices
+than its header says without a word. This reader takes the ASCII variants
+people write (``OFF``, ``COFF``, ``NOFF``, ``CNOFF``, ``STOFF``..., the
+counts on the header line or the next, ``#`` comments, colours or normals
+after the coordinates and after a face's corners) and refuses the rest in
+one line: binary OFF, 4D or n-D OFF, counts that do not match the lines, a
+corner that is not a vertex.
+
+Polygons are cut into fans from their first corner, as trimesh does; a
+polygon that runs along one of its edges twice (``4 1 2 3 2``: a spike)
+gives two triangles that cancel in the winding number.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import IsoflowError
+
+#: the header keyword: ST (texture), C (colour), N (normal) prefixes
+_HEADER = re.compile(r"^(ST)?C?N?(4?)(n?)OFF$")
+
+
+def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices float64 (N, 3), triangles int64 (M, 3))`` of an ASCII OFF file."""
+    try:
+        text = path.read_bytes().decode("utf-8", errors="replace")
+    except OSError as exc:
+        raise IsoflowError(f"{path}: cannot read ({exc})") from None
+    lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
+    lines = [ln for ln in lines if ln]
+    if not lines:
+        raise IsoflowError(f"{path}: empty OFF file")
+    head = lines[0]
+    m = _HEADER.match(head[0])
+    if m is None:
+        raise IsoflowError(f"{path}: not an OFF file (its first word is not OFF, COFF, NOFF or the like)")
+    if m.group(2) or m.group(3):
+        raise IsoflowError(f"{path}: {head[0]} holds points of other than three coordinates; isoflow reads 3D OFF")
+    if "BINARY" in (w.upper() for w in head[1:]):
+        raise IsoflowError(f"{path}: binary OFF is not read; save it as ASCII OFF, PLY or OBJ")
+    counts, body = (head[1:], lines[1:]) if len(head) > 1 else (lines[1] if len(lines) > 1 else [], lines[2:])
+    try:
+        nv, nf = int(counts[0]), int(counts[1])
+    except (IndexError, ValueError):
+        raise IsoflowError(f"{path}: OFF counts line {' '.join(counts)!r} is not 'vertices faces edges'") from None
+    if nv < 0 or nf < 0 or nv + nf > len(body):
+        raise IsoflowError(f"{path}: the OFF header says {nv} vertices and {nf} faces, "
+                           f"the file holds {len(body)} lines after it")
+    try:
+        vertices = np.array([ln[:3] for ln in body[:nv]], dtype=np.float64).reshape(nv, 3)
+    except ValueError:
+        bad = next(i for i, ln in enumerate(body[:nv]) if len(ln) < 3 or not _numbers(ln[:3]))
+        raise IsoflowError(f"{path}: OFF vertex {bad} is {' '.join(body[bad])!r}, not three numbers") from None
+    triangles = []
+    for i, ln in enumerate(body[nv:nv + nf]):
+        try:
+            k = int(ln[0])
+            corners = [int(c) for c in ln[1:1 + k]]
+        except ValueError:
+            corners, k = [], -1
+        if k < 3 or len(corners) != k:
+            raise IsoflowError(f"{path}: OFF face {i} is {' '.join(ln)!r}, not a corner count and that many indices")
+        triangles.extend((corners[0], corners[j], corners[j + 1]) for j in range(1, k - 1))
+    faces = np.array(triangles, dtype=np.int64).reshape(-1, 3)
+    if len(faces) and (faces.min() < 0 or faces.max() >= nv):
+        raise IsoflowError(f"{path}: an OFF face uses vertex {int(faces.max() if faces.max() >= nv else faces.min())}, "
+                           f"beyond the {nv} vertices")
+    return vertices, faces
+
+
+def _numbers(fields) -> bool:
+    try:
+        [float(x) for x in fields]
+    except ValueError:
+        return False
+    return True
