@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import isoflow
 from isoflow.cli import main
 from isoflow.errors import IsoflowError
 from isoflow.mesh.load import MESH_SUFFIXES, load_mesh, mesh_defects
@@ -307,12 +308,19 @@ def test_zarr_store_equals_the_in_memory_volume(tmp_path, name, res, chunks):
     calls = []
     out = voxelize_to_zarr(MESHES / name, tmp_path / "v.zarr", resolution=res, chunks=chunks,
                            progress=lambda d, t: calls.append((d, t)))
-    z = zarr.open_array(str(tmp_path / "v.zarr"), mode="r")
-    assert z.dtype == bool and tuple(z.shape) == ref.shape and out["voxels"] == int(ref.sum())
+    # an OME-Zarr image (NGFF 0.4): level 0 of uint8, axes named x, y, z in
+    # that order, placed by the scale and the translation of voxel 0's centre
+    root = zarr.open_group(str(tmp_path / "v.zarr"), mode="r")
+    z, ms = root["0"], root.attrs["multiscales"][0]
+    assert z.dtype == np.uint8 and tuple(z.shape) == ref.shape and out["voxels"] == int(ref.sum())
     if chunks:
         assert tuple(z.chunks) == chunks
     assert np.array_equal(z[:], ref)
-    assert z.attrs["pitch"] == pitch and np.allclose(z.attrs["origin"], origin, rtol=0, atol=0)
+    assert ms["version"] == "0.4" and [a["name"] for a in ms["axes"]] == ["x", "y", "z"]
+    scale, shift = ms["datasets"][0]["coordinateTransformations"]
+    assert scale["scale"] == [pitch] * 3 and np.allclose(shift["translation"], origin + pitch / 2, rtol=0, atol=1e-12)
+    back = isoflow.read_volume(tmp_path / "v.zarr")
+    assert np.array_equal(back.volume, ref) and np.allclose(back.origin, origin, rtol=0, atol=1e-12)
     assert calls and calls[-1][0] == calls[-1][1] == -(-ref.shape[0] // z.chunks[0])
 
 
@@ -328,7 +336,7 @@ def test_zarr_store_on_a_distributed_cluster(tmp_path):
         out = voxelize_to_zarr(MESHES / "target.obj", tmp_path / "d.zarr", resolution=37, chunks=(7, 5, 9),
                                scheduler=client)
     assert out["voxels"] == int(ref.sum())
-    assert np.array_equal(zarr.open_array(str(tmp_path / "d.zarr"), mode="r")[:], ref)
+    assert np.array_equal(zarr.open_group(str(tmp_path / "d.zarr"), mode="r")["0"][:], ref)
 
 
 def test_cli_voxelize_to_zarr_then_info(tmp_path, capsys):

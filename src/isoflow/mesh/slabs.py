@@ -1,8 +1,16 @@
 """Voxelising beyond memory: the volume written slab by slab into a chunked
-zarr array, as dask tasks.
+OME-Zarr image, as dask tasks.
 
-A slab is a range of the first axis, a whole number of zarr chunks thick and
-spanning the other two axes, so that no two tasks write the same chunk.
+The store is an OME-Zarr image (NGFF 0.4, zarr format 2: one level ``0``
+of uint8 0/1 with named axes and the scale and translation that place
+every voxel), which the OME-Zarr readers open by axis name. Unlike
+:func:`isoflow.write_volume`'s (z, y, x), its axes are stored (x, y, z), as
+NGFF allows (it recommends z, y, x): a slab is a range of the first axis
+(the scanline fills x-ranges of z-columns), a whole number of zarr chunks
+thick and spanning the other two axes, so that no two tasks write the same
+chunk, and ``isoflow info`` reads the store in layers of thin blocks along
+that same axis, holding the faces of two layers only. Stored (z, y, x), a
+slab would be a range of the last axis and those layers 8 times thicker.
 Every task gets the :class:`~isoflow.mesh.voxelize.VoxelPlan` (O(triangles):
 the mesh, its cap and the grid) and fills its slab exactly as the in-memory
 voxeliser fills the same rows (same crossings, same rule), so the store
@@ -23,6 +31,7 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.chunks import import_dask, import_zarr
 from ..scale.memory import check_fits, gib
+from .formats.omezarr import multiscales
 from .grid import fmt_count
 from .load import load_mesh
 
@@ -67,12 +76,13 @@ def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[in
 
 
 def _slab_task(plan, store: str, xa: int, xb: int):
-    """Fill rows [xa, xb) and write them to the store; the slab's counts."""
+    """Fill rows [xa, xb) and write them to the store's level; the slab's
+    counts."""
     zarr = import_zarr()
     stats = np.zeros(3, dtype=np.int64)
     vol = plan.fill(xa, xb, stats=stats, threads=1)
-    z = zarr.open_array(store, mode="r+")
-    z[xa:xb] = vol
+    z = zarr.open_group(store, mode="r+")["0"]
+    z[xa:xb] = vol.view(np.uint8)
     return int(np.count_nonzero(vol)), stats
 
 
@@ -84,10 +94,10 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
 
     ``source`` is a mesh file or ``(vertices, faces)``; the grid, the rule
     and ``strict`` are those of :func:`~isoflow.mesh.voxelize.voxelize`.
-    The array (bool, at the root of the store) carries ``pitch`` and
-    ``origin`` as attributes.  ``chunks`` defaults to slabs of at most 128
-    MiB by 256 x 256; ``scheduler`` is any dask scheduler (default: two
-    threads).  ``progress(done, total)`` is called per slab (local
+    The store is an OME-Zarr image (see the module docs; read it back with
+    :func:`isoflow.read_volume`), its level ``0`` chunked as ``chunks``,
+    by default slabs of at most 128 MiB by 256 x 256; ``scheduler`` is any
+    dask scheduler (default: two threads).  ``progress(done, total)`` is called per slab (local
     schedulers).  Returns ``shape``, ``chunks``, ``voxels``, ``pitch``,
     ``origin``.
     """
@@ -116,9 +126,11 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
     zarr = import_zarr()
     if path.exists():
         shutil.rmtree(path)
-    z = zarr.open_array(store=str(path), mode="w", shape=shape, chunks=chunks, dtype=bool)
-    z.attrs.update({"pitch": float(pitch), "origin": [float(x) for x in origin],
-                    "source": where, "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
+    root = zarr.open_group(str(path), mode="w", zarr_format=2)
+    root.create_array("0", shape=shape, chunks=chunks, dtype=np.uint8, fill_value=0)
+    root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz"),
+                       "source": where,
+                       "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
     from dask import delayed
 
     plan_d = delayed(plan, pure=True)

@@ -208,8 +208,6 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     zarr = import_library("zarr", "OME-Zarr")
     spacing, corner = placement(obj)
-    centre = corner + spacing / 2
-    names = "zyx"[3 - obj.ndim:]
     data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (x, y, z) -> (z, y, x)
     if path.is_dir() and not path.is_symlink():  # checked by check_output: an old store, --force given
         shutil.rmtree(path)
@@ -217,12 +215,27 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         path.unlink()
     root = zarr.open_group(str(path), mode="w", zarr_format=2)
     root.create_array("0", data=data, chunks=tuple(max(1, min(s, CHUNK)) for s in data.shape))
-    root.attrs["multiscales"] = [{
+    root.attrs["multiscales"] = multiscales(name or path.name, spacing, corner)
+
+
+def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
+    """NGFF 0.4 ``multiscales`` of one level ``0`` for a grid of voxel size
+    ``spacing`` whose voxel 0 has its lowest corner at ``corner`` (both in
+    isoflow's x, y, z order): the scale and the translation of voxel 0's
+    centre, as NGFF places voxels, listed in the ``stored`` order of the
+    axes (``"zyx"``, NGFF's usual order, ``"yx"`` in 2D, or ``"xyz"``: the
+    spec asks that axes be named and space last, and only recommends z, y,
+    x)."""
+    spacing, corner = np.asarray(spacing, np.float64), np.asarray(corner, np.float64)
+    centre = corner + spacing / 2
+    stored = stored[-len(spacing):] if stored == "zyx" else stored
+    order = ["xyz".index(a) for a in stored]
+    return [{
         "version": NGFF_VERSION,
-        "name": name or path.name,
-        "axes": [{"name": a, "type": "space"} for a in names],
+        "name": name,
+        "axes": [{"name": a, "type": "space"} for a in stored],
         "datasets": [{"path": "0", "coordinateTransformations": [
-            {"type": "scale", "scale": spacing[::-1].tolist()},
-            {"type": "translation", "translation": centre[::-1].tolist()},
+            {"type": "scale", "scale": spacing[order].tolist()},
+            {"type": "translation", "translation": centre[order].tolist()},
         ]}],
     }]
