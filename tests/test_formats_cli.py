@@ -391,3 +391,19 @@ def test_axis_names_and_dataset_paths(tmp_path, capsys):
     pytest.importorskip("h5py")
     isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 3, 4), bool)), f"{tmp_path / 'v.h5'}:/a:b")
     assert isoflow.read_volume(f"{tmp_path / 'v.h5'}:/a:b").voxels == 24
+
+
+def test_a_grid_turned_by_exactly_45_degrees_is_read_with_the_warning(tmp_path, capsys, labels):
+    """A rotation of 45 degrees runs two array axes equally along two world
+    axes: they keep their order (the first of the tied assignments), and
+    the warning names the angle, as for any other rotation."""
+    c = np.cos(np.pi / 4)
+    affine = np.array([[c, -c, 0, 0], [c, c, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    nib.save(nib.Nifti1Image((labels == 3).astype(np.uint8), affine), tmp_path / "rot45.nii.gz")
+    np.save(tmp_path / "l.npy", labels == 3)
+    assert main(["info", str(tmp_path / "rot45.nii.gz"), "--json"]) == 0
+    io = capsys.readouterr()
+    got = json.loads(io.out)
+    assert "rotated or sheared by up to 45 degrees" in io.err and len(io.err.strip().splitlines()) == 1
+    want = info(capsys, tmp_path / "l.npy")
+    assert got["shape"] == want["shape"] and got["betti"] == want["betti"] and got["voxels"] == want["voxels"]

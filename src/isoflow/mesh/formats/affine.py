@@ -44,8 +44,8 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
     norms = np.linalg.norm(m, axis=0)
     if not (norms > 0).all():
         raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} has a zero voxel size")
-    rows = np.abs(m).argmax(axis=0)  # the world axis each array axis runs along
-    if len(set(rows.tolist())) != n:
+    rows = _world_axes(m, norms)  # the world axis each array axis runs along
+    if rows is None:
         raise IsoflowError(
             f"{where}: two array axes run along the same world axis in {np.round(m, 6).tolist()}"
         )
@@ -69,6 +69,24 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
     pitch = norms[order]
     origin = centre[rows[order]] - pitch / 2
     return out, pitch, origin
+
+
+def _world_axes(m: np.ndarray, norms: np.ndarray):
+    """The world axis of each array axis (column): distinct axes with the
+    largest sum of |cosines|, the first such assignment where several tie
+    (a grid turned by exactly 45 degrees runs along two world axes
+    equally), or None where every assignment has an axis at right angles
+    to its world axis."""
+    from itertools import permutations
+
+    cos = np.abs(m) / norms
+    d, n = m.shape
+    best, rows = -1.0, None
+    for perm in permutations(range(d), n):
+        picked = cos[list(perm), np.arange(n)]
+        if (picked > 0).all() and picked.sum() > best + 1e-12:
+            best, rows = picked.sum(), np.array(perm)
+    return rows
 
 
 def centre_affine(pitch, origin) -> tuple[np.ndarray, np.ndarray]:
