@@ -229,3 +229,33 @@ def test_between_the_thresholds_the_census_is_compiled_once_numba_is_imported(mo
         assert counted(report)[0] == mesh_answer(v, conn)[0]
         if conn == 26:
             assert report == compiled_report
+
+
+def odd_bools(rng, shape, density):
+    """A bool array whose set bytes are 1, 2, 4, ... 255 (as ``.view(bool)``
+    of an integer array gives), and the same array with canonical bytes."""
+    u = np.where(rng.random(shape) < density, rng.choice([1, 2, 4, 8, 128, 255], shape), 0).astype(np.uint8)
+    return u.view(bool), u != 0
+
+
+@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("conn", [6, 26])
+def test_bool_bytes_other_than_one_and_read_only_arrays(rng, monkeypatch, conn, path):
+    """numpy reads any nonzero byte of a bool array as True; the passes read
+    them so too (cc3d labelled each byte value apart, and the NumPy census
+    gave odd Euler characteristics), and take read-only arrays (cc3d wants
+    a writable buffer): the answers are those of the canonical array,
+    which the mesh's components check."""
+    if path == "compiled":
+        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
+    for _ in range(60):
+        odd, v = odd_bools(rng, rng.integers(2, 8, 3), rng.uniform(0.2, 0.8))
+        assert (odd.view(np.uint8) > 1).any() or not v.any()
+        want = analyze(v, conn)
+        frozen = v.copy()
+        frozen.setflags(write=False)
+        for x in (odd, frozen):
+            assert counted(closed_surfaces(x, conn)) == mesh_answer(v, conn)
+            assert analyze(x, conn) == want
+            assert betti_numbers(x, conn) == want["betti"]
+        assert (odd.view(np.uint8) > 1).any() or not v.any()  # the input is left as it was

@@ -54,6 +54,14 @@ def test_labels_split_the_voxels_as_scipy_does(ndim, conn, scipy_rank):
         small, k = label(vol, conn, smallest=True)
         assert k == n
         _same_partition(small, theirs, vol)
+        # bytes other than 1 (a .view(bool) of integers) and a read-only
+        # array (cc3d wants a writable buffer) split the same way
+        odd = np.where(vol, rng.choice(np.array([1, 2, 64, 255], np.uint8), vol.shape), 0).astype(np.uint8)
+        frozen = odd.view(bool)
+        frozen.setflags(write=False)
+        again, k = label(frozen, conn)
+        assert k == n
+        _same_partition(again, theirs, vol)
 
 
 def test_a_small_info_command_never_imports_scipy_ndimage(tmp_path):

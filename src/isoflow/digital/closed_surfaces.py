@@ -57,7 +57,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..scale.arrays import count_codes
+from ..scale.arrays import binary, count_codes
 from ..scale.compiled import have_numba, numba_started, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
@@ -140,7 +140,9 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
     counts) and ``betti_counts`` (b0 and the enclosed background
     components under ``connectivity``).
     """
-    vol = np.asarray(volume, dtype=bool)
+    # canonical bools: a bool array made by .view(bool) may hold bytes other
+    # than 0/1, which the configurations and cc3d would read as values
+    vol = binary(np.asarray(volume, dtype=bool))
     if vol.ndim != 3:
         raise ValueError("closed_surfaces needs a 3D volume")
     check_connectivity(3, connectivity)

@@ -55,7 +55,13 @@ def label(mask: np.ndarray, connectivity: int, smallest: bool = False) -> tuple[
     if mask.ndim in (2, 3) and min(mask.shape) >= 2:
         import cc3d
 
-        labels, n = cc3d.connected_components(mask.view(np.uint8), connectivity=connectivity, return_N=True,
+        data = mask.view(np.uint8)
+        # cc3d labels each nonzero value apart (a bool array made by
+        # .view(bool) may hold bytes other than 1), and takes only writable
+        # buffers (read-only arrays, np.load's memory maps)
+        if not data.flags.writeable or (data.size and data.max() > 1):
+            data = (data != 0).view(np.uint8)
+        labels, n = cc3d.connected_components(data, connectivity=connectivity, return_N=True,
                                               out_dtype=None if smallest else np.uint32)
         if not smallest:  # signed, so that label arithmetic never wraps around
             labels = labels.view(np.int32) if n < 2**31 else labels.astype(np.int64)
