@@ -202,3 +202,55 @@ def test_readback_beyond_the_memory_budget_is_skipped_and_said(tmp_path, monkeyp
     monkeypatch.undo()
     rc, path, out, err = surface(tmp_path, v, 6, ".ply", ("--no-check",))
     assert rc == 0 and err == "" and "trimesh reads" not in out
+
+
+PLACEMENTS = [  # (pitch, origin): tiny and huge units, map coordinates, far from the origin in thin voxels
+    (1e-120, (0.0, 0.0, 0.0)), (1e40, (0.0, 0.0, 0.0)), (0.1, (500000.0, 4000000.0, 0.0)),
+    (0.001, (1e6, 0.0, 0.0)), (1.0, (0.0, 0.0, 0.0)),
+]
+
+
+@pytest.mark.parametrize("pitch, origin", PLACEMENTS)
+def test_positions_stay_on_the_voxel_grid_in_any_units(tmp_path, capsys, rng, pitch, origin):
+    """float32 (PLY's and GLB's positions until now, OBJ's 9 digits) put
+    vertices of tiny units at 0, of huge units at inf, and of map
+    coordinates off the grid (and the read-back's volume, summed far from
+    the origin, refused right files). Every file now holds the world
+    positions to a millionth of a voxel, as trimesh and pymeshlab read
+    them; the usual units keep float32 PLYs."""
+    from isoflow import DigitalObject, write_volume
+
+    vol = rng.random((4, 5, 3)) < 0.5  # edge and vertex contacts
+    obj = DigitalObject(vol, pitch=pitch, origin=origin)
+    write_volume(obj, tmp_path / "v.npz")
+    want = obj.world(boundary_mesh(vol, 6).vertices)
+    key = {tuple(p) for p in np.round((want - obj.world(np.zeros((1, 3)))) / pitch, 6).tolist()}
+    for out in ("s.ply", "a.ply", "s.obj", "s.glb"):
+        extra = ["--ascii"] if out == "a.ply" else []
+        assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / out), *extra]) == 0, capsys.readouterr()
+        got = np.asarray(trimesh.load(tmp_path / out, force="mesh", process=False).vertices, np.float64)
+        assert np.isfinite(got).all()
+        on_grid = np.round((got - obj.world(np.zeros((1, 3)))) / pitch, 6)
+        assert np.abs(on_grid - np.round(on_grid * 2) / 2).max() < 1e-6, out
+        assert {tuple(p) for p in on_grid.tolist()} == key, out
+        if out != "s.glb":
+            ms = pymeshlab.MeshSet()
+            ms.load_new_mesh(str(tmp_path / out))
+            mine = np.round((ms.current_mesh().vertex_matrix() - obj.world(np.zeros((1, 3)))) / pitch, 6)
+            assert {tuple(p) for p in mine.tolist()} == key, out
+    header = (tmp_path / "s.ply").read_bytes().split(b"end_header")[0]
+    assert (b"property float x" in header) == (pitch == 1.0)  # doubles only where float32 would not hold them
+    err = capsys.readouterr().err
+    assert "Warning" not in err and "warning" not in err, err
+
+
+def test_stl_that_cannot_hold_the_positions_is_refused(tmp_path, capsys):
+    from isoflow import DigitalObject, write_volume
+
+    vol = np.zeros((3, 3, 3), bool)
+    vol[1, 1, 1] = True
+    write_volume(DigitalObject(vol, pitch=0.1, origin=(500000.0, 4000000.0, 0.0)), tmp_path / "utm.npz")
+    assert main(["surface", str(tmp_path / "utm.npz"), "-o", str(tmp_path / "utm.stl")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "float32" in err[0] and ".ply" in err[0]
+    assert not (tmp_path / "utm.stl").exists()

@@ -21,6 +21,16 @@ GLB                       triangles, shared vertices                 position, C
 
 ``triangulate`` writes triangles in every format. Every file goes through
 :func:`isoflow.mesh.outputs.atomic_write`: written whole or not at all.
+
+Positions are where the voxels are, to a millionth of a voxel, whatever the
+units (a mesh in units of 1e-200, map coordinates of 4e6 with a pitch of
+0.1): PLY stores them as float32 where that holds them so (the usual case:
+smaller files) and as double otherwise; OBJ prints as many digits as they
+need (9 at least); GLB, whose positions are float32 by its spec, then stores
+them in voxel units with the voxel size and the origin as its node's
+transform (float64 in the JSON), which readers apply. Binary STL holds
+float32 only: where that would move a vertex, the STL is refused (nothing
+is written) with the formats that keep them.
 """
 
 from __future__ import annotations
@@ -31,7 +41,11 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.lattice import DigitalObject
+from ..errors import IsoflowError
 from .outputs import atomic_write, check_output_path
+
+#: a position is held exactly enough when it is off by at most this many voxels
+POSITION_TOLERANCE = 1e-6
 
 #: the surface formats ``isoflow surface`` writes, by suffix
 SURFACE_SUFFIXES = (".ply", ".obj", ".stl", ".glb")
@@ -59,15 +73,28 @@ def _gamma_palette() -> np.ndarray:
     return np.round(white * (1 - pos - neg) + red * pos + blue * neg).astype(np.uint8)
 
 
+def float32_holds(xyz: np.ndarray, spacing) -> bool:
+    """Whether float32 holds the positions ``xyz`` to
+    :data:`POSITION_TOLERANCE` voxels (of size ``spacing`` per axis)."""
+    xyz = np.asarray(xyz, np.float64)
+    if not len(xyz):
+        return True
+    with np.errstate(over="ignore", invalid="ignore"):
+        error = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz)
+    return bool(np.all(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64)))
+
+
 def mesh_vertex_table(mesh, obj: DigitalObject) -> dict[str, np.ndarray]:
-    """Per-vertex columns written to PLY: position (world), curvature data."""
+    """Per-vertex columns written to PLY: position (world; float32 where it
+    holds them, see the module docs), curvature data."""
     xyz = obj.world(mesh.vertices)
+    position = np.float32 if float32_holds(xyz, obj.spacing) else np.float64
     cls = mesh.vertex_class
     rgb = gamma_colours(mesh.gamma, cls)
     return {
-        "x": xyz[:, 0].astype(np.float32),
-        "y": xyz[:, 1].astype(np.float32),
-        "z": xyz[:, 2].astype(np.float32),
+        "x": xyz[:, 0].astype(position),
+        "y": xyz[:, 1].astype(position),
+        "z": xyz[:, 2].astype(position),
         "config": mesh.config.astype(np.uint8),
         "class": cls.astype(np.int8),
         "gamma": mesh.gamma.astype(np.int8),
@@ -130,7 +157,7 @@ def write_ply(
     with atomic_write(path, sync=sync) as fh:
         fh.write(("\n".join(header) + "\n").encode("ascii"))
         if ascii:
-            fmt = " ".join("%.9g" if columns[k].dtype.kind == "f" else "%d" for k in names)
+            fmt = " ".join(f"%.{_digits(columns[k])}g" if columns[k].dtype.kind == "f" else "%d" for k in names)
             if n:
                 table = np.column_stack([columns[k].astype(np.float64) for k in names])
                 np.savetxt(fh, table, fmt=fmt)
@@ -149,6 +176,19 @@ def write_ply(
     return path
 
 
+def _digits(values: np.ndarray, step: float | None = None) -> int:
+    """Significant digits that print ``values`` to a step of ``step`` (the
+    smallest voxel size times :data:`POSITION_TOLERANCE`; None: the values'
+    own precision, 9 for float32 and 17 for double): 9 at least, 17 at most."""
+    values = np.asarray(values)
+    if step is None:
+        return 9 if values.dtype == np.float32 else 17
+    largest = float(np.max(np.abs(values))) if values.size else 0.0
+    if not largest > step > 0 or not np.isfinite(largest):
+        return 9
+    return int(np.clip(np.ceil(np.log10(largest / step)) + 1, 9, 17))
+
+
 def write_obj(
     path: str | os.PathLike,
     vertices: np.ndarray,
@@ -157,15 +197,20 @@ def write_obj(
     force: bool = False,
     comments: tuple[str, ...] = (),
     sync: bool = True,
+    spacing=None,
 ) -> Path:
     """Write an OBJ with polygon faces (quads stay quads); ``faces`` as in
-    :func:`write_ply`, each row in its cyclic order."""
+    :func:`write_ply`, each row in its cyclic order. ``spacing``: the voxel
+    size, so that positions are printed with the digits that keep them to
+    :data:`POSITION_TOLERANCE` voxels (17, round-trip, without it)."""
     path = check_output_path(path, force)
+    step = None if spacing is None else POSITION_TOLERANCE * float(np.min(spacing))
+    d = _digits(vertices, step)
     with atomic_write(path, "w", sync=sync) as fh:
         for c in comments:
             fh.write(f"# {c}\n")
         if len(vertices):
-            np.savetxt(fh, vertices, fmt="v %.9g %.9g %.9g")
+            np.savetxt(fh, vertices, fmt=f"v %.{d}g %.{d}g %.{d}g")
         for size, rows in _size_groups(faces):
             np.savetxt(fh, rows + 1, fmt="f" + " %d" * size)
     return path
@@ -179,7 +224,8 @@ def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarr
 
     path = check_output_path(path, force)
     mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), triangles, process=False)
-    data = trimesh.exchange.stl.export_stl(mesh)
+    with np.errstate(over="ignore"):  # said below, in one line
+        data = trimesh.exchange.stl.export_stl(mesh)
     with atomic_write(path, sync=sync) as fh:
         fh.write(data)
     return path
@@ -193,21 +239,30 @@ def write_glb(
     force: bool = False,
     comment: str = "",
     sync: bool = True,
+    frame=None,
 ) -> Path:
     """Write a binary glTF (trimesh's exporter): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
     (``COLOR_0``) and the other columns but the position as custom vertex
-    attributes (``_config``, ``_class``, ...)."""
+    attributes (``_config``, ``_class``, ...). ``frame``: ``(positions,
+    transform)``, positions in the file's float32 with the 4x4 transform
+    that puts them in place as the node's matrix (where float32 cannot
+    hold the world positions; see the module docs)."""
     import trimesh
 
     path = check_output_path(path, force)
     xyz = np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(np.float64)
+    transform = None
+    if frame is not None:
+        xyz, transform = np.asarray(frame[0], np.float64), frame[1]
     rgb = np.column_stack([columns["red"], columns["green"], columns["blue"], np.full(len(xyz), 255, np.uint8)])
     extra = {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
     mesh = trimesh.Trimesh(xyz, triangles, vertex_colors=rgb, vertex_attributes=extra, process=False)
     if comment:
         mesh.metadata["isoflow"] = comment
-    data = trimesh.exchange.gltf.export_glb(trimesh.Scene(mesh), include_normals=False)
+    scene = trimesh.Scene()
+    scene.add_geometry(mesh, transform=transform)
+    data = trimesh.exchange.gltf.export_glb(scene, include_normals=False)
     with atomic_write(path, sync=sync) as fh:
         fh.write(data)
     return path
@@ -243,12 +298,31 @@ def write_surface(
     if suffix == ".ply":
         write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments, sync=sync)
     elif suffix == ".obj":
-        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments, sync=sync)
+        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments, sync=sync,
+                  spacing=obj.spacing)
     elif suffix == ".stl":
-        write_stl(path, obj.world(mesh.vertices), faces, force=force, sync=sync)
+        xyz = obj.world(mesh.vertices)
+        if not float32_holds(xyz, obj.spacing):  # the file would not hold the surface: nothing written
+            raise IsoflowError(f"{path}: binary STL holds float32 positions, which would move this surface's "
+                               "vertices off the voxel grid (units far from 1, or far from the origin); "
+                               "write .ply, .obj or .glb, which keep them")
+        write_stl(path, xyz, faces, force=force, sync=sync)
     else:
-        write_glb(path, mesh_vertex_table(mesh, obj), faces, force=force, comment="; ".join(comments), sync=sync)
+        table = mesh_vertex_table(mesh, obj)
+        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync,
+                  frame=None if table["x"].dtype == np.float32 else grid_frame(mesh, obj))
     return {"path": path, "faces": kind, "face_count": len(faces)}
+
+
+def grid_frame(mesh, obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh's vertices in array-corner units (multiples of 1/2: exact
+    in float32) and the 4x4 affine map that :meth:`DigitalObject.world`
+    applies to them (a diagonal of voxel sizes, a translation)."""
+    corner = obj.world(np.zeros((1, 3)))[0]
+    transform = np.eye(4)
+    transform[:3, :3] = np.diag(obj.spacing)
+    transform[:3, 3] = corner
+    return np.asarray(mesh.vertices, np.float64), transform
 
 
 def shared_positions(mesh) -> int:

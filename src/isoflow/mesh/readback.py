@@ -23,8 +23,16 @@ from pathlib import Path
 
 import numpy as np
 
-#: relative tolerance on the volume: coordinates are stored as float32
+#: relative tolerance on the volume: coordinates may be stored as float32
 VOLUME_RTOL = 1e-4
+
+
+def volume_unit(obj) -> float:
+    """The length unit the volumes are compared in: the power of two
+    nearest the largest voxel size, so that a mesh in units of 1e-200 or
+    1e200 neither underflows nor overflows (its volume in world units
+    may: 1e600 is no float)."""
+    return float(2.0 ** np.round(np.log2(np.max(obj.spacing))))
 #: peak bytes of trimesh's read-back per triangle (measured 320, rounded up)
 READBACK_BYTES_PER_TRIANGLE = 400
 
@@ -40,17 +48,23 @@ def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
     """What the file must read as: isoflow's own counts of the boundary mesh
     (``components``: ``mesh.components()`` when the caller has them)."""
     comps = mesh.components() if components is None else components
+    unit = volume_unit(obj)
+    with np.errstate(over="ignore", under="ignore"):
+        volume = float(obj.voxels) * float(np.prod(obj.spacing))
     return {
         "watertight": True,
         "euler_number": int(mesh.euler_characteristic),
         "genus": int(sum(c["genus"] for c in comps)),
-        "volume": float(obj.voxels) * float(np.prod(obj.spacing)),
+        "volume": volume,
+        "volume_units": float(obj.voxels) * float(np.prod(obj.spacing / unit)),
     }
 
 
-def trimesh_figures(path, weld: bool = False) -> dict:
+def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
     """Watertightness (every edge in two faces, consistently wound), Euler
-    number, genus and volume of a mesh file as trimesh reads it: with
+    number, genus and volume (``volume_units``: in ``unit`` cubed, about
+    the vertices' mean: far from the origin, the triple products in world
+    coordinates cancel to a few digits) of a mesh file as trimesh reads it: with
     ``process=False`` (no vertex merge, the file's own vertices), or with
     trimesh's default merge when ``weld`` (STL stores no shared vertices).
 
@@ -70,7 +84,11 @@ def trimesh_figures(path, weld: bool = False) -> dict:
             kw = load_ply(fh)
         tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
     else:
-        tm = trimesh.load(path, force="mesh", process=weld)
+        import warnings
+
+        with warnings.catch_warnings():  # NumPy's, on degenerate triangles: the verdict says what is wrong
+            warnings.simplefilter("ignore", RuntimeWarning)
+            tm = trimesh.load(path, force="mesh", process=weld)
     closed = bool(len(tm.faces) and tm.is_watertight and tm.is_winding_consistent)
     if closed:
         # trimesh's watertight test found every edge in exactly two faces:
@@ -81,7 +99,11 @@ def trimesh_figures(path, weld: bool = False) -> dict:
         euler = int(tm.euler_number)
     bodies = int(tm.body_count) - int(np.count_nonzero(~tm.referenced_vertices))
     genus = bodies - euler // 2 if closed and euler % 2 == 0 else None
-    return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": signed_volume(tm.vertices, tm.faces)}
+    v = np.asarray(tm.vertices, np.float64)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        units = signed_volume((v - (v.mean(axis=0) if len(v) else 0.0)) / unit, tm.faces)
+        volume = units * np.float64(unit) ** 3
+    return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": volume, "volume_units": units}
 
 
 def signed_volume(vertices, triangles) -> float:
@@ -117,14 +139,14 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
     ours = isoflow_figures(mesh, obj, components)
     try:
-        theirs = trimesh_figures(path, weld=path.suffix.lower() == ".stl")
+        theirs = trimesh_figures(path, weld=path.suffix.lower() == ".stl", unit=volume_unit(obj))
     except Exception as exc:  # a file trimesh cannot read is the worst disagreement
         return {"isoflow": ours, "trimesh": {k: None for k in ours}, "agree": False,
                 "problem": f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"}
     keys = ("watertight", "euler_number", "genus") if topology else ()
     problems = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in keys if theirs[k] != ours[k]]
     # the signed volume needs no manifold: a welded STL still encloses it
-    if not np.isclose(theirs["volume"], ours["volume"], rtol=VOLUME_RTOL, atol=0):
+    if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=0):
         problems.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
     problem = f"{path}: trimesh reads " + ", ".join(problems) if problems else None
     return {"isoflow": ours, "trimesh": theirs, "agree": not problems, "problem": problem}
