@@ -407,3 +407,35 @@ def test_a_grid_turned_by_exactly_45_degrees_is_read_with_the_warning(tmp_path, 
     assert "rotated or sheared by up to 45 degrees" in io.err and len(io.err.strip().splitlines()) == 1
     want = info(capsys, tmp_path / "l.npy")
     assert got["shape"] == want["shape"] and got["betti"] == want["betti"] and got["voxels"] == want["voxels"]
+
+
+def test_flow_force_replaces_step_volumes_of_any_suffix_and_warns_once(tmp_path, capsys):
+    """A --force run removes the step volumes of an earlier run that wrote
+    another --volumes suffix (or whose volumes this run does not write), and
+    a warning every step's file would repeat is said once, naming the
+    output's files, not their staging copies."""
+    big = np.zeros((10, 10, 10), bool)
+    big[1:9, 1:9, 1:9] = True
+    np.save(tmp_path / "big.npy", big)
+    isoflow.write_volume(isoflow.DigitalObject(np.ones((3, 3, 3), bool), origin=(1.0, 2.0, 3.0)),
+                         tmp_path / "small.npz")
+    out = tmp_path / "R"
+    run(capsys, "flow", tmp_path / "big.npy", "--out", out, "--volumes", ".npz")
+    assert len(list(out.glob("step_*.npz"))) > 3
+    (out / "step_notes.txt").write_text("mine")  # not a step file: kept
+    assert main(["flow", str(tmp_path / "small.npz"), "--out", str(out), "--force", "--volumes", "tif"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow flow: warning: {out}/step_000.tif: TIFF keeps no origin; the origin [1.0, 2.0, 3.0] "
+                   "is not written"], err
+    steps = sorted(p.name for p in out.glob("step_*"))
+    plys = sorted(p.name for p in out.glob("step_*.ply"))
+    assert steps == sorted([*plys, *(n.replace(".ply", ".tif") for n in plys), "step_notes.txt"])
+    run(capsys, "flow", tmp_path / "small.npz", "--out", out, "--force")  # no volumes now: none left
+    assert sorted(p.name for p in out.glob("step_*")) == sorted([*plys, "step_notes.txt"])
+
+
+def test_flow_refuses_an_empty_volume_suffix(tmp_path, capsys):
+    np.save(tmp_path / "b.npy", np.ones((3, 3, 3), bool))
+    fails(capsys, "flow", tmp_path / "b.npy", "--out", tmp_path / "V", "--volumes", "", words=("--volumes",))
+    fails(capsys, "flow", tmp_path / "b.npy", "--volumes", "", words=("--out",))
+    assert not (tmp_path / "V").exists()

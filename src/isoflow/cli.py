@@ -426,17 +426,17 @@ def cmd_flow(args) -> int:
     # files are written while the flow runs, so no state is kept in memory
     # (every state of a box of side s would cost about s^4/4 bytes)
     writer = None
-    if args.volumes and not args.out:
+    if args.volumes is not None and not args.out:
         raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
-    if args.volumes:
+    if args.volumes is not None:  # ("" too: refused, not ignored)
         from .mesh.volumes import check_volume_suffix
 
-        check_volume_suffix(args.volumes)  # before the output directory is made
+        args.volumes = check_volume_suffix(args.volumes)  # before the output directory is made
     if args.out:
         last = args.steps if args.steps is not None else default_max_steps(obj)
         conn = flow_connectivity(obj.ndim, args.connectivity)
         writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
-        if args.volumes:
+        if args.volumes is not None:
             writer.write_volumes(args.volumes)
     with progress_bar(args, "flow", unit=" steps") as show:
 
@@ -463,7 +463,7 @@ def cmd_flow(args) -> int:
         print(format_flow(result, str(args.input)))
         if args.out:
             print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
-                  + (f", volumes (step_*{args.volumes})" if args.volumes else ""))
+                  + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
     if writer is None:
         return 0
     read = [c for c in writer.checks.values() if not c.get("skipped")]

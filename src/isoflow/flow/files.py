@@ -21,7 +21,9 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
 import shutil
+import warnings
 from pathlib import Path
 
 from ..digital.lattice import DigitalObject
@@ -45,6 +47,16 @@ CHECK_COLUMNS = ["mesh_euler", "mesh_genus", "trimesh_watertight", "trimesh_eule
 
 #: names a run writes besides its step files; --force replaces them
 RUN_FILES = ("flow.csv", "flow.png", "shapes.png")
+
+
+def _step_file_pattern() -> re.Pattern:
+    """The names of step files a run writes: ``step_NNN`` and ``.ply`` or
+    any volume suffix (so that a run replaces what an earlier one wrote
+    with another ``--volumes`` suffix, or with none)."""
+    from ..mesh.formats.registry import volume_suffixes
+
+    suffixes = sorted({".ply", *volume_suffixes(writable=True)}, key=len, reverse=True)
+    return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
 
 
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
@@ -155,6 +167,7 @@ class FlowWriter:
             raise write_error(out, exc, existed=not self.created) from None
         self.out, self.connectivity = out, connectivity
         self.volume_suffix = None  # set by write_volumes
+        self._said: set[str] = set()  # warnings said already (see _named)
         self.width = max(3, len(str(last_step)))
         self.staged: list[str] = []  # names written into the staging directory
         self.checks: dict[int, dict] = {}
@@ -264,9 +277,20 @@ class FlowWriter:
     @contextlib.contextmanager
     def _named(self):
         """A failed write names the file it was for, not its staging copy,
-        and says that the previous run is kept."""
+        and says that the previous run is kept; a warning names it too, and
+        what every step's file would repeat (``TIFF keeps no origin``) is
+        said once per run, of the first step's file."""
         try:
-            yield
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                yield
+            for w in caught:
+                text = str(w.message).replace(str(self.stage), str(self.out))
+                # the same warning for another step: other file, other numbers
+                key = re.sub(r"step_\d+|\[[^]]*\]", "*", text.replace(str(self.out), ""))
+                if key not in self._said:
+                    self._said.add(key)
+                    warnings.warn(text, w.category, stacklevel=3)
         except (OSError, IsoflowError, KeyboardInterrupt) as exc:
             if isinstance(exc, OSError):
                 exc = write_error(Path(exc.filename or self.stage), exc, existed=False)
@@ -284,8 +308,9 @@ class FlowWriter:
                     shutil.rmtree(self.out / name)
                 os.replace(self.stage / name, self.out / name)
             sync_directory(self.out)
-            volumes = self.out.glob(f"step_*{self.volume_suffix}") if self.volume_suffix else ()
-            for old in [*self.out.glob("step_*.ply"), *volumes, *(self.out / n for n in RUN_FILES)]:
+            steps = _step_file_pattern()
+            earlier = [p for p in self.out.glob("step_*") if steps.fullmatch(p.name)]
+            for old in [*earlier, *(self.out / n for n in RUN_FILES)]:
                 if old.name not in new and old.exists():
                     shutil.rmtree(old) if old.is_dir() else old.unlink()
         except OSError as exc:
