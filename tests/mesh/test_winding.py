@@ -489,3 +489,16 @@ def test_stl_with_an_infinite_coordinate_is_one_line(tmp_path):
                        capture_output=True, text=True)
     lines = p.stderr.strip().splitlines()
     assert p.returncode == 2 and len(lines) == 1 and "infinite" in lines[0], p.stderr
+
+
+def test_obj_vertex_index_0_is_refused_naming_the_line(tmp_path, capsys):
+    """OBJ numbers vertices from 1: trimesh turns 'f 0 1 2' into a degenerate
+    face without a word; a degenerate face written as such still reads."""
+    tet = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+    (tmp_path / "zero.obj").write_text(tet + "f 1 3 2\nf 1 2 4\nf 1 4 3\n# the last face\nf 0 1 2\n")
+    assert main(["info", str(tmp_path / "zero.obj"), "--resolution", "8"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "zero.obj:9" in err[0] and "index 0" in err[0], err
+    (tmp_path / "degenerate.obj").write_text(tet + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\nf 1 1 2\n")
+    v, f = load_mesh(tmp_path / "degenerate.obj")
+    assert len(f) == 4 and mesh_defects(v, f)["watertight"]

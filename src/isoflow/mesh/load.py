@@ -214,6 +214,8 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
                 mesh = trimesh.load(str(p), force="mesh", **kwargs)
             vertices = np.asarray(mesh.vertices, dtype=np.float64)
             faces = np.asarray(mesh.faces)
+            if ext == "obj" and faces.ndim == 2 and len(faces):
+                _check_obj_indices(p, faces)
     except IsoflowError:
         raise
     except Exception as exc:  # trimesh raises anything from KeyError to struct.error
@@ -233,6 +235,20 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def _check_obj_indices(path: Path, faces: np.ndarray) -> None:
+    """OBJ numbers vertices from 1; trimesh reads a face with an index 0 as
+    a degenerate face (a corner repeated), without a word. Only where a face
+    repeats a corner (cheap to see) is the file searched for a 0 index."""
+    if not ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])).any():
+        return
+    with open(path, "rb") as fh:
+        for lineno, line in enumerate(fh, 1):
+            words = line.split(b"#", 1)[0].split()
+            if words[:1] == [b"f"] and any(w.split(b"/", 1)[0] == b"0" for w in words[1:]):
+                raise IsoflowError(f"{path}:{lineno}: face {line.strip().decode(errors='replace')!r} uses vertex "
+                                   "index 0; OBJ numbers vertices from 1 (-1 for the last)")
 
 
 # ---------------------------------------------------------------------------
