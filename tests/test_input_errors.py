@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from isoflow.mesh.outputs import check_picture_path
-from isoflow.mesh.volumes import read_volume
+from isoflow.mesh.volumes import read_points, read_volume
 from isoflow.cli import main
 from isoflow.errors import IsoflowError
 from isoflow.digital.lattice import DigitalObject
@@ -96,6 +96,14 @@ def test_point_builders_refuse_coordinates_out_of_range():
 
 
 
+def test_point_list_with_a_byte_order_mark_reads(tmp_path):
+    """Windows editors start a UTF-8 file with a byte-order mark: it is no
+    coordinate, on either reader (the second file needs the line reader)."""
+    for text, want in (("0 0 0\n1 2 3\n", [[0, 0, 0], [1, 2, 3]]), ("0 0 0\n1, 2 3\n", [[0, 0, 0], [1, 2, 3]])):
+        (tmp_path / "bom.txt").write_bytes(b"\xef\xbb\xbf" + text.encode())
+        assert read_points(tmp_path / "bom.txt").tolist() == want
+
+
 @pytest.mark.parametrize(
     "text, words",
     [
@@ -107,6 +115,8 @@ def test_point_builders_refuse_coordinates_out_of_range():
         ("0x10 0 0\n", ("bad.txt:1", "0x10")),
         ("1,2,3\n4,5\n", ("bad.txt:2", "expected 3 coordinates")),
         ("1 2 3\n4 5 6.5\n", ("bad.txt:2", "6.5 is not an integer")),
+        ("0 0 0\n\u0661 \u0662 \u0663\n", ("bad.txt:2", "not a number")),  # float() takes Arabic-Indic digits
+        ("\uff11 0 0\n", ("bad.txt:1", "not a number")),  # and full-width ones
     ],
 )
 def test_point_list_fields_are_plain_numbers(tmp_path, capsys, text, words):

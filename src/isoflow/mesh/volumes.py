@@ -109,8 +109,9 @@ def select_label(array, label, where: str) -> np.ndarray:
 #: numbers of a point list are separated by blanks, or by one comma with
 #: blanks around it allowed ("0,,0" has an empty coordinate)
 _SPLIT = re.compile(r"\s*,\s*|\s+")
-#: a decimal number as people write coordinates: no "1_000", "0x10", "nan"
-_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+#: a decimal number as people write coordinates: no "1_000", "0x10", "nan",
+#: and ASCII digits only (float() takes Arabic-Indic and full-width ones)
+_NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 
 def read_points(path: str | os.PathLike) -> np.ndarray:
@@ -158,7 +159,7 @@ def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "empty input file": said by the line reader
                 values = np.loadtxt(path, comments="#", delimiter="," if commas else None, ndmin=2, dtype=dtype,
-                                    encoding="utf-8")
+                                    encoding="utf-8-sig")
             break
         except (ValueError, UnicodeDecodeError):
             continue
@@ -179,7 +180,7 @@ def _read_points_by_line(path: Path) -> np.ndarray:
     from array import array
 
     coords, width = array("q"), None
-    with open(path, encoding="utf-8") as fh:
+    with open(path, encoding="utf-8-sig") as fh:  # a byte-order mark (Windows editors) is no coordinate
         for lineno, line in enumerate(fh, 1):
             point = _point(path, lineno, line, width)
             if point:
