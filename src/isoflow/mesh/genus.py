@@ -257,6 +257,10 @@ def solid_report(vertices, faces) -> dict:
 
 #: relative volume below which two solids are taken not to overlap (float32 booleans)
 _OVERLAP_RTOL = 1e-6
+#: pairs of components whose boxes meet, beyond which the nesting is not
+#: worked out (a boolean each): the outward ones are united and the
+#: inside-out ones subtracted, ``approximate``
+MAX_PAIRS = 5000
 
 
 def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
@@ -266,7 +270,11 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
     if n == 0:
         return m3.Manifold(), True, False
     vols = [s.volume() for s in solids]
-    boxes = [np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids]
+    boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
+    lo, hi = boxes[:, 0], boxes[:, 1]
+    meet = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
+    if n > 1 and (np.count_nonzero(meet) - n) // 2 > MAX_PAIRS:
+        return _outward_less_inside_out(m3, solids, signs), False, True
     group = list(range(n))  # union-find of crossing components
 
     def root(i):
@@ -278,7 +286,7 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
     inside = {}  # i -> components j whose solid holds solid i
     for i in range(n):
         for j in range(i + 1, n):
-            if (boxes[i][1] < boxes[j][0]).any() or (boxes[j][1] < boxes[i][0]).any():
+            if not meet[i, j]:
                 continue
             common = (solids[i] ^ solids[j]).volume()
             small = min(vols[i], vols[j])
@@ -289,12 +297,7 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
                 inside.setdefault(a, []).append(b)
                 continue
             if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
-                pos = [s for s, w in zip(solids, signs) if w > 0]
-                neg = [s for s, w in zip(solids, signs) if w < 0]
-                solid = m3.Manifold.batch_boolean(pos, m3.OpType.Add) if pos else m3.Manifold()
-                if neg:
-                    solid = solid - m3.Manifold.batch_boolean(neg, m3.OpType.Add)
-                return solid, False, True
+                return _outward_less_inside_out(m3, solids, signs), False, True
             group[root(i)] = root(j)
     # bodies: crossing components of one way united
     members: dict[int, list[int]] = {}
@@ -333,6 +336,16 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
             regions.append(region)
     solid = m3.Manifold.batch_boolean(regions, m3.OpType.Add) if regions else m3.Manifold()
     return solid, boundary, False
+
+
+def _outward_less_inside_out(m3, solids: list, signs: list):
+    """The outward components united, less the inside-out ones united."""
+    pos = [s for s, w in zip(solids, signs) if w > 0]
+    neg = [s for s, w in zip(solids, signs) if w < 0]
+    solid = m3.Manifold.batch_boolean(pos, m3.OpType.Add) if pos else m3.Manifold()
+    if neg:
+        solid = solid - m3.Manifold.batch_boolean(neg, m3.OpType.Add)
+    return solid
 
 
 def _inside_out(m3, part):
