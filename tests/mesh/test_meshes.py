@@ -197,6 +197,19 @@ def test_stl_needs_the_weld():
     assert "welded" not in verify_genus(MESHES / "eight.off", (32,))["verdict"]
 
 
+def test_a_degenerate_face_is_said_as_such_not_as_a_weld(tmp_path):
+    """A torus plus a triangle with two corners at one position (exact
+    duplicates, nothing for the tolerance to weld): the note says the face
+    was dropped, where it said two vertices were welded."""
+    t = trimesh.creation.torus(1.0, 0.35, 48, 24)
+    v = np.concatenate([t.vertices, [[5.0, 5, 5], [5, 5, 5], [6, 6, 6]]])
+    f = np.concatenate([t.faces, [[len(t.vertices), len(t.vertices) + 1, len(t.vertices) + 2]]])
+    write_off_exact(tmp_path / "t.off", v, f)
+    r = verify_genus(tmp_path / "t.off", (32,), step=False)
+    assert "1 degenerate face (two corners at one position) dropped" in r["verdict"]
+    assert "welded" not in r["verdict"] and r["mesh"]["genus"] == 1
+
+
 def test_mesh_topology_counts_against_trimesh():
     for name in ("spot.ply", "eight.off", "platonic_shelf.obj"):
         tm = trimesh.load(MESHES / name, force="mesh")

@@ -477,7 +477,10 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         "digital": [],
     }
     notes = []
-    welded = stats["exact_vertices"] - stats["welded_vertices"]
+    welded = stats["welded"]
+    if stats["dropped_faces"]:
+        n = stats["dropped_faces"]
+        notes.append(f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped")
     if welded:
         notes.append(
             f"{welded} vertices that differ only by rounding noise were welded before counting "

@@ -112,7 +112,8 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
 # loading
 # ---------------------------------------------------------------------------
 
-def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tuple[np.ndarray, np.ndarray]:
+def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh",
+          stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
 
     Rounding coordinates to a grid (trimesh's approach) misses pairs that
@@ -120,6 +121,10 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tup
     query plus connected components cannot.  Faces that lose a corner to the
     weld have zero area: they are removed, and vertices no face uses are
     dropped.  Output vertices keep the order of their first occurrence.
+    ``stats`` receives ``welded``: the distinct positions of the faces'
+    corners merged into others by the tolerance (not exact duplicates), and
+    ``dropped_faces``: faces left with two equal corners (by the weld, or
+    as read).
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -147,10 +152,16 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh") -> tup
             n = len(uniq)
             g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
             _, lab = connected_components(g, directed=False)
+            if stats is not None:
+                used = np.unique(inverse[f])
+                stats["welded"] = int(len(used) - len(np.unique(lab[used])))
             inverse = lab[inverse]
     f = inverse[f]
     keep = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
     f = f[keep]
+    if stats is not None:
+        stats.setdefault("welded", 0)
+        stats["dropped_faces"] = int(len(keep) - np.count_nonzero(keep))
     # compact + order by first use in the original vertex array
     groups = np.unique(f)
     first = np.full(inverse.max() + 1, len(v), dtype=np.int64)
@@ -176,8 +187,10 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     dropped.
 
     Returns ``(vertices float64 (N, 3), faces int64 (M, 3))``. A dict passed
-    as ``stats`` receives ``exact_vertices`` (distinct positions as read) and
-    ``welded_vertices`` (after the weld), so callers can say what the weld did.
+    as ``stats`` receives ``exact_vertices`` (distinct positions as read),
+    ``welded_vertices`` (after the weld), ``welded`` (positions merged into
+    others by the tolerance) and ``dropped_faces`` (faces with two equal
+    corners, dropped), so callers can say what the weld did.
 
     Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
     read, a mesh without faces, NaN/inf coordinates, coordinates whose extent
@@ -229,7 +242,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     vertices, faces = check_mesh(vertices, faces, where=str(p))
     if stats is not None:
         stats["exact_vertices"] = int(len(np.unique(vertices[np.unique(faces)], axis=0)))
-    vertices, faces = _weld(vertices, faces, rtol, where=str(p))
+    vertices, faces = _weld(vertices, faces, rtol, where=str(p), stats=stats)
     if stats is not None:
         stats["welded_vertices"] = int(len(vertices))
     if len(faces) == 0:
