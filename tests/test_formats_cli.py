@@ -3,6 +3,7 @@ the numbers of the same volume as .npy, exported PLYs land in the file's
 world coordinates, writing by suffix, and bad files give one line, exit 2."""
 
 import json
+import re
 import sys
 
 import numpy as np
@@ -439,3 +440,28 @@ def test_flow_refuses_an_empty_volume_suffix(tmp_path, capsys):
     fails(capsys, "flow", tmp_path / "b.npy", "--out", tmp_path / "V", "--volumes", "", words=("--volumes",))
     fails(capsys, "flow", tmp_path / "b.npy", "--volumes", "", words=("--out",))
     assert not (tmp_path / "V").exists()
+
+
+def test_the_extras_the_messages_name_bring_those_libraries():
+    """Every 'pip install isoflow[formats]' message must name an extra that
+    brings the library (it had been lost in a merge): each volume format's
+    library and each mesh format's reader are in the formats extra of
+    pyproject.toml, and zarr's version is the one its code calls (zarr 3's
+    create_array and open_group(zarr_format=...))."""
+    import tomllib
+    from pathlib import Path
+
+    from isoflow.mesh.formats.registry import EXTRA, FORMATS
+    from isoflow.mesh.load import _PACKAGE, FORMAT_NEEDS
+
+    meta = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text())
+    extras = meta["project"]["optional-dependencies"]
+
+    def names(extra):
+        return {re.split(r"[<>=\[]", req)[0].strip().lower() for req in extras[extra]}
+
+    wanted = {f.library for f in FORMATS if f.library} | {_PACKAGE[m] for ms in FORMAT_NEEDS.values() for m in ms}
+    assert wanted <= names(EXTRA), wanted - names(EXTRA)
+    for extra in (EXTRA, "dask"):
+        zarr_req = next(r for r in extras[extra] if r.startswith("zarr"))
+        assert zarr_req == "zarr>=3", (extra, zarr_req)

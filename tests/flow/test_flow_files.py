@@ -88,3 +88,40 @@ def test_flow_step_file_that_reads_differently_exits_1(tmp_path, monkeypatch):
     assert len(lines) == 3 and f"{tmp_path / 'run' / 'step_000.ply'}: trimesh reads watertight False" in lines[0]
     with open(tmp_path / "run" / "flow.csv") as fh:
         assert {r["trimesh_watertight"] for r in csv.DictReader(fh) if r["mesh_euler"]} == {"False"}
+
+
+def test_flow_out_in_a_missing_directory_is_refused(tmp_path, capsys):
+    """--out is checked as -o is: a missing parent is a mistyped path, not
+    one to make, parents and all."""
+    from isoflow.cli import main
+
+    np.save(tmp_path / "b.npy", np.ones((3, 3, 3), bool))
+    assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "nodir" / "sub")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "nodir: no such directory" in err[0]
+    assert not (tmp_path / "nodir").exists()
+    assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "new")]) == 0  # one level is made
+    assert (tmp_path / "new" / "flow.csv").exists()
+
+
+def test_an_interrupt_while_writing_names_the_directory(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while a step file is written: one line naming the run's
+    directory (it was ': ; the previous run's ...'), exit 130, the earlier
+    run's files unchanged."""
+    from isoflow.cli import main
+    from isoflow.mesh import export
+
+    np.save(tmp_path / "b.npy", np.ones((4, 4, 4), bool))
+    assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o")]) == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir()}
+    capsys.readouterr()
+
+    def stop(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(export, "write_surface", stop)
+    assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o"), "--force"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while writing the flow's files; the previous "
+                   "run's files in the directory are unchanged"], err
+    assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir()} == before

@@ -92,10 +92,14 @@ STAGE = "run"
 
 def check_output_dir(directory, force: bool = False):
     """The output directory as a Path; refuses a file, a directory that
-    already holds files unless ``force``, or one that cannot be written."""
+    already holds files unless ``force``, one that cannot be written, or one
+    whose parent is missing (as ``-o`` refuses a file there: a mistyped
+    path is not made, parents and all)."""
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
+    if not out.exists() and not out.parent.is_dir():
+        raise IsoflowError(f"{out.parent}: no such directory (for the output directory {out.name})")
     if out.is_dir():  # a killed run's staging directory does not make it taken
         remove_abandoned(out / STAGE)
     if out.is_dir() and any(out.iterdir()) and not force:
@@ -161,7 +165,7 @@ class FlowWriter:
         out = check_output_dir(directory, force)
         self.created = not out.exists()
         try:
-            out.mkdir(parents=True, exist_ok=True)
+            out.mkdir(exist_ok=True)
             self.stage = temp_sibling(out / STAGE, directory=True)
         except OSError as exc:
             raise write_error(out, exc, existed=not self.created) from None
@@ -295,6 +299,8 @@ class FlowWriter:
             if isinstance(exc, OSError):
                 exc = write_error(Path(exc.filename or self.stage), exc, existed=False)
             msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
+            if not msg.strip():  # an interrupt between two writes: name the run's directory
+                msg = f"{self.out}: stopped while writing the flow's files"
             msg = msg.rstrip("; ") + "; the previous run's files in the directory are unchanged"
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
 
