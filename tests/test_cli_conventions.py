@@ -194,3 +194,65 @@ def test_zsh_and_tcsh_scripts(capsys):
     with pytest.raises(SystemExit) as bad:
         main(["completion", "cmd.exe"])
     assert bad.value.code == 2 and "invalid choice" in capsys.readouterr().err
+
+
+def test_a_signal_a_library_swallows_still_stops_the_output(tmp_path, capsys, monkeypatch):
+    """The handlers raise KeyboardInterrupt, which trimesh's import guards
+    (except BaseException) can swallow: the command then finished, exited 0
+    and replaced the output. The signal is kept as well, so nothing is
+    renamed into place after it and the command ends as terminated."""
+    from isoflow.mesh import export, outputs
+
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply")]) == 0
+    before = (tmp_path / "s.ply").read_bytes()
+    table = export.mesh_vertex_table
+
+    def swallowed(*args):  # a SIGTERM that arrived and was swallowed while the file was made
+        outputs.SIGNALS.append(15)
+        return table(*args)
+
+    monkeypatch.setattr(export, "mesh_vertex_table", swallowed)
+    capsys.readouterr()
+    np.save(tmp_path / "v.npy", np.ones((4, 4, 4), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; the previous s.ply "
+                   "is unchanged"], err
+    assert (tmp_path / "s.ply").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.ply", "v.npy"]  # no temporary file left
+    assert not outputs.SIGNALS  # and the next command starts afresh
+    monkeypatch.undo()
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 0
+
+
+def test_quiet_drops_every_note(tmp_path, capsys):
+    vol = np.zeros((3, 3, 4), bool)
+    vol[1, 1, 1] = vol[2, 2, 1] = True  # an edge contact: the STL note
+    np.save(tmp_path / "e.npy", vol)
+    assert main(["surface", str(tmp_path / "e.npy"), "-o", str(tmp_path / "e.stl")]) == 0
+    assert "STL keeps no shared vertices" in capsys.readouterr().err
+    assert main(["surface", str(tmp_path / "e.npy"), "-o", str(tmp_path / "e.stl"), "--force", "-q"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_outputs_and_labels_checked_before_any_work(tmp_path, capsys, monkeypatch):
+    """flow --out is checked before the input is read (an open mesh's note
+    came first); a label beyond the array's type is one line; a .zarr
+    output in a directory that takes no files is one line (a traceback)."""
+    (tmp_path / "afile").write_text("x")
+    assert main(["flow", str(ROOT / "meshes" / "cube_no_bottom.obj"), "--resolution", "8",
+                 "--out", str(tmp_path / "afile")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "afile: exists and is not a directory" in err[0], err
+    np.save(tmp_path / "l.npy", np.arange(8, dtype=np.int16).reshape(2, 2, 2))
+    for label in ("99999999999999999999999", "1e20", "18446744073709551615"):
+        assert main(["info", str(tmp_path / "l.npy"), f"--label={label}"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "beyond the values a int16 array holds" in err[0], err
+    from isoflow.mesh import outputs
+
+    monkeypatch.setattr(outputs.os, "access", lambda *a, **k: False)
+    assert main(["voxelize", str(TORUS), "--resolution", "8", "-o", str(tmp_path / "t.zarr")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write the zarr store t.zarr here" in err[0], err

@@ -64,6 +64,10 @@ def add_connectivity(p: argparse.ArgumentParser) -> None:
 def label_value(text: str):
     """``--label N``: a number, kept an int when it is one."""
     try:
+        return int(text)  # exactly, however large (checked against the array's type)
+    except ValueError:
+        pass
+    try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
@@ -269,12 +273,12 @@ def cmd_surface(args) -> int:
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
     welded = export.shared_positions(mesh) if suffix == ".stl" else 0
-    if welded:
+    if welded and not args.quiet:
         print(f"isoflow surface: note: {out}: STL keeps no shared vertices, so readers weld the split copies at "
               f"{welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart",
               file=sys.stderr)
     check = None if args.no_check else check_surface_file(out, mesh, obj, topology=not welded, components=comps)
-    if check is not None and check.get("skipped"):
+    if check is not None and check.get("skipped") and not args.quiet:
         print(f"isoflow surface: note: {out}: not read back ({check['skipped']})", file=sys.stderr)
     elif check is not None and not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
@@ -415,6 +419,10 @@ def cmd_flow(args) -> int:
     from .flow.motion import flow_connectivity
     from .flow.run import default_max_steps, run_flow
 
+    if args.out:  # before any work (the FlowWriter checks it again when it makes the directory)
+        from .flow.files import check_output_dir
+
+        check_output_dir(args.out, args.force)
     obj = load_input(args)
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
@@ -471,7 +479,7 @@ def cmd_flow(args) -> int:
     if read and not args.json:
         print(f"{args.out}: {len(read) - len(writer.problems)} of {len(read)} step surfaces "
               "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)")
-    if skipped:
+    if skipped and not args.quiet:
         print(f"isoflow flow: note: {len(skipped)} step files not read back ({skipped[0]})", file=sys.stderr)
     for line in writer.problems:
         print(f"isoflow flow: error: {line}", file=sys.stderr)
@@ -676,12 +684,16 @@ def termination_as_interrupt(received: list):
     import signal
     import threading
 
-    wanted = [signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    wanted = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def interrupt(signum, frame):
+        # kept as well as raised: a library may swallow the KeyboardInterrupt
+        # (trimesh's import guards), and no output is then renamed into place
+        # (isoflow.mesh.outputs.SIGNALS) and the command still ends as
+        # interrupted
         received.append(signum)
         raise KeyboardInterrupt
 
@@ -710,8 +722,13 @@ def main(argv: list[str] | None = None) -> int:
         else:
             shown(message, category, filename, lineno, file, line)
 
-    terminated: list[int] = []
+    import signal
+
+    from .mesh.outputs import SIGNALS
     from .scale import compiled
+
+    terminated = SIGNALS  # the signals received (what the writers look at before renaming)
+    terminated.clear()
 
     def compiling(message):  # numba's first run after installing: a note, not silence
         print(f"isoflow {args.command}: note: {message}", file=sys.stderr, flush=True)
@@ -724,7 +741,10 @@ def main(argv: list[str] | None = None) -> int:
             if not args.quiet:
                 warnings.simplefilter("always", IsoflowWarning)
                 warnings.showwarning = show
-            return args.func(args)
+            status = args.func(args)
+            if terminated:  # a signal a library swallowed: the command still ends as interrupted
+                raise KeyboardInterrupt
+            return status
     except IsoflowError as exc:
         print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -733,10 +753,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
-        how = "terminated" if terminated else "interrupted"
+        sig = terminated[0] if terminated else signal.SIGINT
+        how = "interrupted" if sig == signal.SIGINT else "terminated"
         print(f"isoflow: {how}" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
         # the shell's convention: 128 + the signal's number
-        return 128 + (terminated[0] if terminated else 2)
+        return 128 + int(sig)
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
         import os
 
@@ -744,6 +765,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     finally:
         compiled.on_first_compile = before
+        terminated.clear()  # said: later writes in this process (a library's caller) are not held back
 
 
 def console() -> None:

@@ -601,6 +601,13 @@ def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "two.ply" in err[0] and "overlaps or intersects itself" in err[0]
     assert not (tmp_path / "two.zarr").exists()
+    # the store is written whole or not at all: a refusal leaves the previous one as it was
+    assert main(["voxelize", str(tmp_path / "two.ply"), "--resolution", "12", "-o", str(tmp_path / "two.zarr")]) == 0
+    before = sorted((p.relative_to(tmp_path), p.read_bytes()) for p in (tmp_path / "two.zarr").rglob("*") if p.is_file())
+    assert main(["voxelize", str(tmp_path / "two.ply"), "--resolution", "24", "--strict", "--force",
+                 "-o", str(tmp_path / "two.zarr")]) == 2
+    after = sorted((p.relative_to(tmp_path), p.read_bytes()) for p in (tmp_path / "two.zarr").rglob("*") if p.is_file())
+    assert after == before and sorted(p.name for p in tmp_path.iterdir()) == ["two.ply", "two.zarr"]
 
 
 def test_inconsistent_and_nonmanifold_counts():

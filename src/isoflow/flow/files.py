@@ -33,6 +33,7 @@ from ..mesh import export
 from ..mesh.outputs import (
     atomic_write,
     check_writable_dir,
+    interrupted_by_signal,
     remove_abandoned,
     sync_directory,
     sync_file,
@@ -308,6 +309,8 @@ class FlowWriter:
         """Move the staged files over the output directory's, then remove the
         previous run's files that this run did not replace."""
         new = set(self.staged)
+        with self._named():  # a signal a library swallowed: the previous run stays
+            interrupted_by_signal()
         try:
             for name in self.staged:
                 if (self.out / name).is_dir():  # a zarr step volume: a directory is not replaced by a rename

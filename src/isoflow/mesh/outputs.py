@@ -162,6 +162,20 @@ def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
     return IsoflowError(f"{path}: could not write ({cause}); {kept}")
 
 
+#: the signals a command has received (the command line's handlers append
+#: them, :func:`isoflow.cli.termination_as_interrupt`). The handler raises
+#: KeyboardInterrupt, but a library can swallow it (trimesh guards its
+#: imports with ``except BaseException``), so no file is renamed into place
+#: once a signal has come: the previous one stays, as the signal asks.
+SIGNALS: list[int] = []
+
+
+def interrupted_by_signal() -> None:
+    """Raise KeyboardInterrupt if a signal came (see :data:`SIGNALS`)."""
+    if SIGNALS:
+        raise KeyboardInterrupt
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = True):
     """Give a temporary path beside ``path`` to write to; rename it over
@@ -186,6 +200,7 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
         yield tmp
         if sync:
             _fsync_tree(tmp) if directory else sync_file(tmp)
+        interrupted_by_signal()  # one a library swallowed while the file was written
         _replace(tmp, path, directory)
         if sync:
             sync_directory(path.parent)

@@ -22,7 +22,6 @@ cluster (``scheduler=client``) when the store is on a shared file system.
 
 from __future__ import annotations
 
-import shutil
 from contextlib import nullcontext
 from pathlib import Path
 
@@ -34,6 +33,7 @@ from ..scale.memory import check_fits, gib
 from .formats.omezarr import multiscales
 from .grid import fmt_count
 from .load import load_mesh
+from .outputs import atomic_path, check_writable_dir
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
 SLAB_BYTES = 1 << 27
@@ -58,6 +58,7 @@ def check_store_path(path, force: bool) -> Path:
             raise IsoflowError(f"{path}: exists and is not a zarr store; not replacing it")
     if not path.parent.is_dir():
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
+    check_writable_dir(path.parent, f"the zarr store {path.name}")
     return path
 
 
@@ -124,38 +125,38 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
         raise IsoflowError(f"{where}: {exc}") from None
     dask, _ = import_dask()
     zarr = import_zarr()
-    if path.exists():
-        shutil.rmtree(path)
-    root = zarr.open_group(str(path), mode="w", zarr_format=2)
-    root.create_array("0", shape=shape, chunks=chunks, dtype=np.uint8, fill_value=0)
-    root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz"),
-                       "source": where,
-                       "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
     from dask import delayed
-
-    plan_d = delayed(plan, pure=True)
-    tasks = [delayed(_slab_task, pure=False)(plan_d, str(path), a, b, dask_key_name=("voxelize-slab", n))
-             for n, (a, b) in enumerate(slabs)]
-    done = [0]
-
-    def posttask(key, result, dsk, state, worker_id):
-        if isinstance(key, tuple) and key and key[0] == "voxelize-slab":
-            done[0] += 1
-            progress(done[0], len(slabs))
-
     from dask.callbacks import Callback
 
-    sched = scheduler if scheduler is not None else "threads"
-    kwargs = {"num_workers": WORKERS} if sched == "threads" else {}
-    with Callback(posttask=posttask) if progress is not None else nullcontext():
-        results = dask.compute(*tasks, scheduler=sched, **kwargs)
-    voxels = sum(r[0] for r in results)
-    stats = np.sum([r[1] for r in results], axis=0)
-    try:
-        solid.check_layers(stats)
-    except IsoflowError as exc:  # refused: the store this call wrote goes
-        shutil.rmtree(path, ignore_errors=True)
-        raise IsoflowError(f"{where}: {exc}") from None
+    # whole or not at all: the store is written beside the target and
+    # renamed over it when complete (an interrupt, an error or a --strict
+    # refusal leave the previous store as it was)
+    with atomic_path(path, directory=True) as tmp:
+        root = zarr.open_group(str(tmp), mode="w", zarr_format=2)
+        root.create_array("0", shape=shape, chunks=chunks, dtype=np.uint8, fill_value=0)
+        root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz"),
+                           "source": where,
+                           "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
+        plan_d = delayed(plan, pure=True)
+        tasks = [delayed(_slab_task, pure=False)(plan_d, str(tmp), a, b, dask_key_name=("voxelize-slab", n))
+                 for n, (a, b) in enumerate(slabs)]
+        done = [0]
+
+        def posttask(key, result, dsk, state, worker_id):
+            if isinstance(key, tuple) and key and key[0] == "voxelize-slab":
+                done[0] += 1
+                progress(done[0], len(slabs))
+
+        sched = scheduler if scheduler is not None else "threads"
+        kwargs = {"num_workers": WORKERS} if sched == "threads" else {}
+        with Callback(posttask=posttask) if progress is not None else nullcontext():
+            results = dask.compute(*tasks, scheduler=sched, **kwargs)
+        voxels = sum(r[0] for r in results)
+        stats = np.sum([r[1] for r in results], axis=0)
+        try:
+            solid.check_layers(stats)
+        except IsoflowError as exc:  # refused: nothing replaces the previous store
+            raise IsoflowError(f"{where}: {exc}") from None
     if report is not None:
         report.update(defects=solid.defects, flipped_faces=solid.flipped, chain_edges=len(plan.E),
                       overlap_voxels=int(stats[0]), note=solid.note(stats))

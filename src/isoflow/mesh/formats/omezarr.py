@@ -186,9 +186,12 @@ def check_output(path, force: bool = False) -> Path:
     """An output zarr store (a directory), checked before any work: refused
     when it exists, unless ``force`` and it is a zarr store (which
     :func:`write` replaces)."""
+    from ..outputs import check_writable_dir
+
     path = Path(path)
     if not path.parent.is_dir():
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
+    check_writable_dir(path.parent, f"the zarr store {path.name}")
     if path.exists() or path.is_symlink():
         if not force:
             raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")

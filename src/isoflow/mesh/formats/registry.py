@@ -188,8 +188,22 @@ def check_label(label, dtype, where: str) -> None:
     """A label selects voxels of an array of numbers by one finite number."""
     if np.dtype(dtype).kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
-    if not np.isscalar(label) or isinstance(label, (str, bytes)) or not np.isfinite(label):
+    if not np.isscalar(label) or isinstance(label, (str, bytes)):
         raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+    dtype = np.dtype(dtype)
+    try:
+        value = float(label)
+    except OverflowError:  # an int beyond every float
+        value = np.inf if label > 0 else -np.inf
+    if not np.isfinite(value) and not isinstance(label, (int, np.integer)):
+        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+    if dtype.kind in "iu" and value.is_integer() if np.isfinite(value) else dtype.kind in "iu":
+        info = np.iinfo(dtype)
+        if not info.min <= int(label) <= info.max:
+            raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds "
+                               f"({info.min} to {info.max})")
+    elif not np.isfinite(value):
+        raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
 
 
 def no_such_label(label, values, where: str) -> IsoflowError:
