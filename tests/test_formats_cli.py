@@ -211,8 +211,8 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
 
 def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
-        tif.write(np.ones((3, 4, 5), np.uint8))
-        tif.write(np.ones((6, 7), np.uint8))
+        tif.write(np.ones((3, 4, 5), np.uint8), photometric="minisblack")
+        tif.write(np.ones((6, 7), np.uint8), photometric="minisblack")
     assert len(tifffile.TiffFile(tmp_path / "two.tif").series) == 2
     fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
 
