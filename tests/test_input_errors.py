@@ -222,3 +222,14 @@ def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):
     # every command reads .zarr now (info block by block, the others in memory)
     (tmp_path / "v.zarr").mkdir()
     fails(capsys, "surface", tmp_path / "v.zarr", "-o", tmp_path / "s.ply", words=("v.zarr", "not a zarr"))
+
+
+def test_a_dangling_symlink_output_needs_force(tmp_path, capsys):
+    """A link to nothing is an entry all the same: replaced only with
+    --force (Path.exists() is False for it, and it was replaced without)."""
+    np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
+    (tmp_path / "s.ply").symlink_to(tmp_path / "nowhere.ply")
+    fails(capsys, "surface", tmp_path / "v.npy", "-o", tmp_path / "s.ply", words=("s.ply", "exists", "--force"))
+    assert (tmp_path / "s.ply").is_symlink()
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 0
+    assert (tmp_path / "s.ply").is_file() and not (tmp_path / "s.ply").is_symlink()

@@ -41,7 +41,7 @@ def check_output_path(
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
-    if path.exists() and not force:
+    if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
         raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
