@@ -187,10 +187,9 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     dropped.
 
     Returns ``(vertices float64 (N, 3), faces int64 (M, 3))``. A dict passed
-    as ``stats`` receives ``exact_vertices`` (distinct positions as read),
-    ``welded_vertices`` (after the weld), ``welded`` (positions merged into
-    others by the tolerance) and ``dropped_faces`` (faces with two equal
-    corners, dropped), so callers can say what the weld did.
+    as ``stats`` receives ``welded`` (positions merged into others by the
+    tolerance) and ``dropped_faces`` (faces with two equal corners,
+    dropped), so callers can say what the weld did.
 
     Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
     read, a mesh without faces, NaN/inf coordinates, coordinates whose extent
@@ -240,11 +239,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         raise IsoflowError(
             f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
-    if stats is not None:
-        stats["exact_vertices"] = int(len(np.unique(vertices[np.unique(faces)], axis=0)))
     vertices, faces = _weld(vertices, faces, rtol, where=str(p), stats=stats)
-    if stats is not None:
-        stats["welded_vertices"] = int(len(vertices))
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
