@@ -157,7 +157,7 @@ def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh",
                 stats["welded"] = int(len(used) - len(np.unique(lab[used])))
             inverse = lab[inverse]
     f = inverse[f]
-    keep = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
+    keep = ~_repeats_a_corner(f)
     f = f[keep]
     if stats is not None:
         stats.setdefault("welded", 0)
@@ -245,11 +245,16 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     return vertices, faces
 
 
+def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:
+    """Which triangles name one vertex twice (zero area, nothing to bound)."""
+    return (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+
+
 def _check_obj_indices(path: Path, faces: np.ndarray) -> None:
     """OBJ numbers vertices from 1; trimesh reads a face with an index 0 as
     a degenerate face (a corner repeated), without a word. Only where a face
     repeats a corner (cheap to see) is the file searched for a 0 index."""
-    if not ((faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 0] == faces[:, 2])).any():
+    if not _repeats_a_corner(faces).any():
         return
     with open(path, "rb") as fh:
         for lineno, line in enumerate(fh, 1):
