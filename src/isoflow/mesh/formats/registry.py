@@ -197,7 +197,8 @@ def check_label(label, dtype, where: str) -> None:
         value = np.inf if label > 0 else -np.inf
     if not np.isfinite(value) and not isinstance(label, (int, np.integer)):
         raise IsoflowError(f"{where}: label must be a number, got {label!r}")
-    if dtype.kind in "iu" and value.is_integer() if np.isfinite(value) else dtype.kind in "iu":
+    whole = not np.isfinite(value) or value.is_integer()  # (an int beyond every float is whole)
+    if dtype.kind in "iu" and whole:
         info = np.iinfo(dtype)
         if not info.min <= int(label) <= info.max:
             raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds "
