@@ -210,8 +210,9 @@ PLACEMENTS = [  # (pitch, origin): tiny and huge units, map coordinates, far fro
 ]
 
 
+@pytest.mark.parametrize("conn", [6, 26])
 @pytest.mark.parametrize("pitch, origin", PLACEMENTS)
-def test_positions_stay_on_the_voxel_grid_in_any_units(tmp_path, capsys, rng, pitch, origin):
+def test_positions_stay_on_the_voxel_grid_in_any_units(tmp_path, capsys, rng, pitch, origin, conn):
     """float32 (PLY's and GLB's positions until now, OBJ's 9 digits) put
     vertices of tiny units at 0, of huge units at inf, and of map
     coordinates off the grid (and the read-back's volume, summed far from
@@ -223,11 +224,12 @@ def test_positions_stay_on_the_voxel_grid_in_any_units(tmp_path, capsys, rng, pi
     vol = rng.random((4, 5, 3)) < 0.5  # edge and vertex contacts
     obj = DigitalObject(vol, pitch=pitch, origin=origin)
     write_volume(obj, tmp_path / "v.npz")
-    want = obj.world(boundary_mesh(vol, 6).vertices)
+    want = obj.world(boundary_mesh(vol, conn).vertices)
     key = {tuple(p) for p in np.round((want - obj.world(np.zeros((1, 3)))) / pitch, 6).tolist()}
     for out in ("s.ply", "a.ply", "s.obj", "s.glb"):
         extra = ["--ascii"] if out == "a.ply" else []
-        assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / out), *extra]) == 0, capsys.readouterr()
+        assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / out), "--connectivity", str(conn),
+                     "--force", *extra]) == 0, capsys.readouterr()
         got = np.asarray(trimesh.load(tmp_path / out, force="mesh", process=False).vertices, np.float64)
         assert np.isfinite(got).all()
         on_grid = np.round((got - obj.world(np.zeros((1, 3)))) / pitch, 6)
