@@ -56,7 +56,7 @@ def main():
         print(f"{paths[name]}: 4D, shape {'x'.join(map(str, vol.shape))}, {int(vol.sum())} cells")
         for conn in (8, 80):
             r = isoflow.analyze(vol, connectivity=conn)
-            reports[f"{name}_{conn}"] = r
+            reports[f"{name}_{conn}"] = r.to_dict()
             b0, _, _, b3 = r["betti"]
             print(f"  {conn:>2}-connectivity: chi {r['euler_characteristic']:>2}, b0 {b0}, b3 {b3}, "
                   f"b1 - b2 = {b0 - b3 - r['euler_characteristic']}, a^T n = {r['a_dot_n']} (16 chi)")

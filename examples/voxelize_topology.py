@@ -28,7 +28,7 @@ def main():
     solid = isoflow.voxelize_file(args.mesh, resolution=args.resolution)
     report = isoflow.analyze(solid, connectivity=6)
     isoflow.write_volume(solid, volume_path, force=args.force)
-    report_path.write_text(json.dumps(report, indent=1))
+    report_path.write_text(json.dumps(report.to_dict(), indent=1))
 
     b0, b1, b2 = report["betti"]
     print(f"{args.mesh} at {args.resolution} voxels across: {report['voxels']} voxels, pitch {solid.pitch:.4g}")

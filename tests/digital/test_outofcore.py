@@ -7,6 +7,7 @@ odd-sized chunks so that objects, tunnels, cavities and surfaces cross
 block faces, edges and corners.
 """
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -31,9 +32,7 @@ CHUNKS2 = (7, 5)
 
 def reference(v, conn, surfaces=True):
     r = analyze(DigitalObject(v), conn, surfaces=surfaces)
-    if "doubled_edges" in r:
-        r["doubled_edges"] = None  # out of core: not counted
-    return r
+    return dataclasses.replace(r, doubled_edges=None)  # out of core: not counted
 
 
 def check(v, conn, chunks=None):
@@ -277,7 +276,7 @@ def test_cli_info_on_zarr(tmp_path, capsys):
     got = json.loads(capsys.readouterr().out)
     assert main(["info", str(tmp_path / "t.npy"), "--json"]) == 0
     want = json.loads(capsys.readouterr().out)
-    assert got.pop("doubled_edges") is None and want.pop("doubled_edges") == 0
+    assert "doubled_edges" not in got and want.pop("doubled_edges") == 0  # not counted out of core
     assert got.pop("input").endswith("t.zarr") and want.pop("input").endswith("t.npy")
     assert got == want and got["betti"] == [2, 1, 0]
     assert sorted(s["genus"] for s in got["surfaces"]) == [0, 1]  # the ball, the torus

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import threading
 
+from ..digital.report import Report
 from ..errors import IsoflowError
 from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
 from .progress import progress_bar
@@ -36,15 +38,14 @@ def cmd_info(args: argparse.Namespace) -> int:
         report = info_of_store(args)
     else:
         report = info_in_memory(args)
-    report["input"] = str(args.input)
     if args.json:
-        print(json.dumps(report))
+        print(json.dumps({**report.to_dict(), "input": str(args.input)}))
         return 0
-    print(format_info(report))
+    print(format_info(report, str(args.input)))
     return 0
 
 
-def info_of_store(args: argparse.Namespace) -> dict:
+def info_of_store(args: argparse.Namespace) -> Report:
     """Out of core: block by block, never the whole volume in memory (4D
     arrays are read whole, as from the other formats)."""
     from ..mesh.formats.omezarr import analyze_store
@@ -57,7 +58,7 @@ def info_of_store(args: argparse.Namespace) -> dict:
                              surfaces=not args.no_surfaces, threads=args.threads)
 
 
-def info_in_memory(args: argparse.Namespace) -> dict:
+def info_in_memory(args: argparse.Namespace) -> Report:
     from ..digital.analysis import analyze
 
     warming = warm_up_while_reading(args)
@@ -68,8 +69,7 @@ def info_in_memory(args: argparse.Namespace) -> dict:
         from ..scale.arrays import to_gpu
 
         report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
-        report["parity"] = obj.parity  # a bare array has no lattice place
-        return report
+        return dataclasses.replace(report, parity=obj.parity)  # a bare array has no lattice place
     return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
 
 
@@ -105,10 +105,10 @@ def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
     return thread
 
 
-def format_info(r) -> str:
+def format_info(r: Report, name: str) -> str:
     """The report as a terminal reads it."""
     lines = [
-        f"{r['input']}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
+        f"{name}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
         f"{r['voxels']} voxels, {r['connectivity']}-connectivity",
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
@@ -129,7 +129,7 @@ def format_info(r) -> str:
     return "\n".join(lines)
 
 
-def format_surfaces(r) -> list[str]:
+def format_surfaces(r: Report) -> list[str]:
     lines = []
     if r.get("surfaces"):
         lines.append(f"  closed surfaces        {len(r['surfaces'])}")
@@ -137,7 +137,7 @@ def format_surfaces(r) -> list[str]:
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
-    if r.get("surfaces", []) is None:  # 4D: the boundary is a 3-manifold, not a surface
+    if r.dimension == 4:  # the boundary is a 3-manifold, not a surface
         lines.append(f"  closed surfaces        not computed in {r['dimension']}D")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")

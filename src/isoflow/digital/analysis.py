@@ -29,10 +29,11 @@ from .indices import (
     planar_class_lut,
 )
 from .lattice import DigitalObject
+from .report import Report
 from .topology import betti_numbers, euler_from_histogram, resolve_connectivity
 
 
-def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads: int | None = None) -> dict:
+def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads: int | None = None) -> Report:
     """Everything ``isoflow info --json`` reports, as a JSON-ready dict.
 
     ``obj`` is a :class:`DigitalObject` or a bare binary volume: a NumPy
@@ -56,7 +57,7 @@ def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads
     ``ISOFLOW_THREADS`` environment variable, else every CPU).
     """
     with using(threads):
-        return _analyze(obj, connectivity, surfaces)
+        return Report.from_dict(_analyze(obj, connectivity, surfaces))
 
 
 def _analyze(obj, connectivity, surfaces: bool) -> dict:

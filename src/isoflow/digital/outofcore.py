@@ -59,6 +59,7 @@ from ..scale.compiled import thread_count, using
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from ..scale.labels import label
 from .analysis import report_from_histogram
+from .report import Report
 from .closed_surfaces import MESH_ADJACENCY, box_sheets, surfaces_from_counts
 from .configurations import configuration_histogram, configurations
 from .surface import pinch_lut
@@ -599,7 +600,7 @@ def analyze_chunked(
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message
         raise IsoflowError(str(exc.args[0]) if exc.args else str(exc)) from None
-    return _finish(ndim, conn, list(shape), surfaces, *merged)
+    return Report.from_dict(_finish(ndim, conn, list(shape), surfaces, *merged))
 
 
 def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None,

@@ -24,6 +24,7 @@ the scale and translation that put every voxel where it was.
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
 from pathlib import Path
 
@@ -162,7 +163,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
         if label is not None and report["voxels"] == 0:
             raise no_such_label(label, np.unique(da.unique(raw).compute()), where)
     if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
-        report["shape"] = [int(array.shape[i]) for i in order]
+        report = dataclasses.replace(report, shape=[int(array.shape[i]) for i in order])
     return report
 
 

@@ -1,0 +1,84 @@
+"""The shape report of a digital object as a typed result (``isoflow info``)."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TypedDict
+
+from ..results import OMIT_NONE, Result
+
+
+class ClosedSurface(TypedDict):
+    """One closed surface of the boundary mesh (DESIGN section 3): its Euler
+    characteristic ``V - E + F``, its genus ``1 - chi / 2`` and its number
+    of quads."""
+
+    euler_characteristic: int
+    genus: int
+    faces: int
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Report(Result):
+    """Everything ``isoflow info --json`` prints about one object.
+
+    Attributes
+    ----------
+    voxels : int
+        Object voxels.
+    dimension : int
+        2, 3 or 4.
+    shape : list of int
+        The array's shape.
+    connectivity : int
+        The object's connectivity (the background takes the complementary one).
+    parity : int
+        The lattice the object sits on (eq. 5.1): 0 the lattice, 1 the dual.
+    euler_characteristic : int
+        chi, by the digital Gauss-Bonnet sum (Theorems 10-11).
+    betti : list of int or None
+        ``[b0, b1, b2]`` in 3D (components, tunnels, cavities), ``[b0, b1]``
+        in 2D; in 4D the Betti numbers that components give (the others None).
+    n : list of int
+        The class histogram of eq. 4.9: nine counts ``n_-4 .. n_4`` in 3D;
+        convex, flat, concave in 2D; the 45 manifold classes in 4D.
+    classes : dict
+        ``n`` by class label.
+    non_well_composed : int
+        Boundary vertices whose configuration is not well-composed.
+    a_dot_n : int
+        ``sum_v a(v)`` over every vertex, equal to ``2^n chi``.
+    energy : int
+        ``E = k^T n`` (eq. 5.22).
+    a_dot_n_well_composed : int or None
+        The paper's ``a^T n`` over the nine classes alone (3D and 4D).
+    surfaces : list of ClosedSurface or None
+        Each closed surface of the boundary mesh, largest first (3D, when
+        asked; ``[]`` in 2D).
+    pinched_vertices : int or None
+        Vertex contacts the mesh splits although the connectivity joins them.
+    doubled_edges : int or None
+        Lattice edges one sheet of the surface passes twice.
+    """
+
+    voxels: int
+    dimension: int
+    shape: list[int]
+    connectivity: int
+    parity: int
+    euler_characteristic: int
+    betti: list[int | None]
+    n: list[int]
+    classes: dict
+    non_well_composed: int
+    a_dot_n: int
+    a_dot_n_well_composed: int | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    energy: int
+    surfaces: list[ClosedSurface] | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    pinched_vertices: int | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    doubled_edges: int | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+
+    @property
+    def genus(self) -> list[int]:
+        """The genus of each closed surface (3D, when the surfaces were asked)."""
+        return [s["genus"] for s in self.surfaces or []]
