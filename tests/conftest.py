@@ -44,16 +44,10 @@ def random_volume(rng, max_side: int = 7, ndim: int = 3) -> np.ndarray:
 
 @pytest.fixture(autouse=True)
 def _as_in_a_single_call(monkeypatch):
-    """Each test runs as a single call in its own process would, whatever
-    ran before it: its small volumes take the NumPy passes, not the
-    compiled pass that a process loads once the NumPy passes have taken
-    half a second in all, or that an earlier test loaded; and no compile
-    note is said (all tested on their own in test_cli.py)."""
-    from isoflow.digital import closed_surfaces
+    """No compile note is said in a test: a command run in-process whose
+    pass numba compiles for the first time, in a fresh cache, would add the
+    note to the stderr a test reads (the note is tested on its own in
+    test_cli.py)."""
     from isoflow.scale import compiled
 
-    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", float("inf"))
-    monkeypatch.setattr(closed_surfaces, "_warm", False)
-    # (a command run in-process whose pass numba compiles for the first
-    # time, in a fresh cache, would add the note to the stderr a test reads)
     monkeypatch.setattr(compiled, "_compile_noted", True)

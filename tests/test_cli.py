@@ -351,60 +351,38 @@ def test_the_compile_note_is_said_once_and_logged_without_a_listener(monkeypatch
     assert [r.getMessage() for r in caplog.records] == [compiled.COMPILE_NOTE]
 
 
-def test_census_once_loaded_takes_small_volumes_too(monkeypatch):
-    # once warm (a command warms it while reading a file that may be
-    # large), the compiled pass answers for small volumes: the same report
-    # as the NumPy passes, at both connectivities
+def test_method_chooses_the_passes_not_the_report():
+    # method= picks the NumPy or the compiled passes explicitly; "auto"
+    # decides by the input alone (no state: a large volume analysed before
+    # does not change how a small one is counted); the report is the same
+    # every way, at both connectivities, with edge and vertex contacts and
+    # empty volumes (a flow shrinks to nothing)
     from isoflow.digital import closed_surfaces
     from isoflow.digital.analysis import analyze
-    from isoflow.scale.compiled import have_numba
+    from isoflow.scale.compiled import have_numba, least_voxels
 
     if not have_numba():
         pytest.skip("numba not installed")
     rng = np.random.default_rng(5)
     vols = [rng.random((9, 11, 7)) < 0.4, np.zeros((3, 3, 3), bool), np.ones((1, 1, 1), bool),
-            np.zeros((0, 0, 0), bool), np.zeros((4, 0, 2), bool)]  # (a flow shrinks to nothing)
-    monkeypatch.setattr(closed_surfaces, "_warm", False)  # (another test may have warmed it)
-    assert not any(closed_surfaces.use_census(v) for v in vols)
-    cold = {(i, c): analyze(v, c) for i, v in enumerate(vols) for c in (6, 26)}
-    closed_surfaces.warm_up()
-    assert all(closed_surfaces.use_census(v) for v in vols if v.size)
-    assert not closed_surfaces.use_census(vols[0][0])  # 2D: not this pass
-    for (i, c), want in cold.items():
-        assert analyze(vols[i], c) == want
-
-
-def test_many_small_volumes_load_the_compiled_pass_once_their_numpy_time_adds_up(monkeypatch):
-    # ski rental: small volumes go to the NumPy passes until those have
-    # taken RENT_SECONDS in one process, then the compiled pass takes them;
-    # the reports are the same either way (edge and vertex contacts, both
-    # connectivities)
-    from isoflow.digital import closed_surfaces
-    from isoflow.digital.analysis import analyze
-    from isoflow.scale import compiled
-
-    if not compiled.have_numba():
-        pytest.skip("numba not installed")
-    monkeypatch.setattr(closed_surfaces, "_warm", False)
-    monkeypatch.setattr(closed_surfaces, "_numpy_seconds", 0.0)
-    rng = np.random.default_rng(11)
-    vols = [rng.random((12, 11, 10)) < 0.35 for _ in range(8)]
-    for c in (6, 26):  # the first call's imports and tables (when this test runs alone)
-        analyze(vols[0], c)
-    monkeypatch.setattr(closed_surfaces, "_numpy_seconds", 0.0)
-    one = analyze(vols[0], 6)
-    spent = closed_surfaces._numpy_seconds
-    assert spent > 0 and not closed_surfaces._warm  # one NumPy pass, counted
-    # the rent is spent after about three more volumes
-    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", 3.5 * spent)
-    reports, warm = [], []
+            np.zeros((0, 0, 0), bool), np.zeros((4, 0, 2), bool), rng.random((13, 17)) < 0.5]
     for v in vols:
-        reports.append([analyze(v, c) for c in (6, 26)])
-        warm.append(closed_surfaces._warm)
-    assert reports[0][0] == one
-    assert not warm[0] and warm[-1] and warm == sorted(warm)  # loaded once, at some call
-    monkeypatch.setattr(compiled, "MIN_VOXELS", 10**12)
-    monkeypatch.setattr(closed_surfaces, "_warm", False)
-    monkeypatch.setattr(closed_surfaces, "RENT_SECONDS", float("inf"))
-    for v, want in zip(vols, reports):
-        assert [analyze(v, c) for c in (6, 26)] == want  # the NumPy passes throughout
+        for c in ((6, 26) if v.ndim == 3 else (4, 8)):
+            want = analyze(v, c, method="numpy")
+            assert analyze(v, c, method="compiled") == want == analyze(v, c)
+    big = np.zeros((least_voxels(surfaces=True) // 10_000 + 1, 100, 100), bool)
+    assert closed_surfaces.use_census(big) and not closed_surfaces.use_census(vols[0])
+    analyze(big)
+    assert not closed_surfaces.use_census(vols[0])  # still by its size alone
+    assert closed_surfaces.use_census(vols[0], method="compiled")
+    assert not closed_surfaces.use_census(big, method="numpy")
+
+
+def test_method_refuses_what_it_cannot_do():
+    from isoflow import IsoflowError
+    from isoflow.digital.analysis import analyze
+
+    with pytest.raises(IsoflowError, match="method must be one of auto, numpy, compiled, got 'fast'"):
+        analyze(np.ones((2, 2, 2), bool), method="fast")
+    with pytest.raises(IsoflowError, match="method='compiled' takes 2D and 3D NumPy volumes"):
+        analyze(np.ones((2, 2, 2, 2), bool), method="compiled")

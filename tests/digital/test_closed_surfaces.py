@@ -25,11 +25,6 @@ def counted(r):
     return surfaces, r["pinched_vertices"], r["doubled_edges"]
 
 
-@pytest.fixture
-def compiled_always(monkeypatch):
-    monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
-
-
 @pytest.mark.parametrize("conn", [6, 26])
 def test_random_volumes_small_path(rng, conn):
     seen = np.zeros(3, int)
@@ -46,7 +41,7 @@ def test_random_volumes_small_path(rng, conn):
 
 @pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
 @pytest.mark.parametrize("conn", [6, 26])
-def test_random_volumes_compiled_path_on_1_2_3_7_threads(rng, conn, compiled_always):
+def test_random_volumes_compiled_path_on_1_2_3_7_threads(rng, conn):
     seen = np.zeros(3, int)
     for t in range(700):
         shape = rng.integers(1, 10, 3)
@@ -61,7 +56,7 @@ def _check_compiled(v, conn, threads):
     returns which of cavities, tunnels, several surfaces the volume has."""
     want = mesh_answer(v, conn)
     with compiled.using(threads):
-        r = closed_surfaces(v, conn)
+        r = closed_surfaces(v, conn, method="compiled")
     assert counted(r) == want
     # the same pass gives the Betti counts: components, enclosed background
     b = betti_numbers(v, conn)
@@ -90,15 +85,13 @@ def shapes():
             "nested": (nested, [0, 0, 0]), "two tori": (two, None)}
 
 
-@pytest.mark.parametrize("path", ["small", "compiled"])
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
 @pytest.mark.parametrize("conn", [6, 26])
-def test_known_shapes(path, conn, monkeypatch):
-    if path == "compiled":
-        if not compiled.have_numba():
-            pytest.skip("numba not installed")
-        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
+def test_known_shapes(method, conn):
+    if method == "compiled" and not compiled.have_numba():
+        pytest.skip("numba not installed")
     for name, (v, genus) in shapes().items():
-        r = closed_surfaces(v, conn)
+        r = closed_surfaces(v, conn, method=method)
         assert counted(r) == mesh_answer(v, conn), name
         if genus is not None:
             assert sorted(s["genus"] for s in r["surfaces"]) == genus, name
@@ -109,7 +102,7 @@ def test_known_shapes(path, conn, monkeypatch):
 
 @pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
 @pytest.mark.parametrize("conn", [6, 26])
-def test_random_volumes_with_rows_of_several_words(rng, conn, compiled_always):
+def test_random_volumes_with_rows_of_several_words(rng, conn):
     # the sweep reads rows 64 voxels to a word: rows that end inside a word,
     # on its last bit, one past it, and runs across words, on 1, 2, 3 and 7
     # threads, with edge and vertex contacts
@@ -124,7 +117,7 @@ def test_random_volumes_with_rows_of_several_words(rng, conn, compiled_always):
 
 
 @pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
-def test_sweep_finds_the_pinches_again_when_a_slab_has_more_than_its_buffer(rng, compiled_always, monkeypatch):
+def test_sweep_finds_the_pinches_again_when_a_slab_has_more_than_its_buffer(rng, monkeypatch):
     # many pinches in one slab and a buffer of one pair: the slab is swept
     # again for its pinches alone, and the answer is the same
     from isoflow.scale import sweep
@@ -136,19 +129,18 @@ def test_sweep_finds_the_pinches_again_when_a_slab_has_more_than_its_buffer(rng,
         b = betti_numbers(v, conn)
         monkeypatch.setattr(sweep, "sweep", lambda *args, **kw: real(*args, **kw, pair_capacity=1))
         with compiled.using(2):
-            r = closed_surfaces(v, conn)
+            r = closed_surfaces(v, conn, method="compiled")
         monkeypatch.setattr(sweep, "sweep", real)
         assert counted(r) == want
         assert list(r["betti_counts"]) == [b[0], b[2]]
         assert want[1] > 20  # the buffers did overflow
 
 
-def test_analyze_reports_the_surfaces_of_both_paths(rng, monkeypatch):
+def test_analyze_reports_the_surfaces_of_both_paths(rng):
     v = rng.random((20, 21, 19)) < 0.5
     small = analyze(v, 26)
     if compiled.have_numba():
-        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
-        assert analyze(v, 26, threads=3) == small
+        assert analyze(v, 26, threads=3, method="compiled") == small
     comps, pinched, doubled = mesh_answer(v, 26)
     assert sorted((s["euler_characteristic"], s["genus"], s["faces"]) for s in small["surfaces"]) == comps
     assert small["pinched_vertices"] == pinched and small["doubled_edges"] == doubled
@@ -203,27 +195,23 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
                 cs.small_census(v, conn)
 
 
-def test_between_the_thresholds_the_census_is_compiled_once_numba_is_imported(monkeypatch):
+def test_between_the_thresholds_the_census_is_the_numpy_one_with_the_surfaces():
     # with the surfaces, a volume between 2 and 4 million voxels takes the
-    # NumPy census in a fresh process (numba's start would cost more than
-    # it saves) but the compiled one where numba is imported already; both
-    # give the same report, and the mesh's surfaces
+    # NumPy census by default (numba's start would cost more than it
+    # saves), the passes without the surfaces the compiled ones; both
+    # methods give the same report, and the mesh's surfaces
     from isoflow.digital import closed_surfaces as cs
     from isoflow.scale.compiled import have_numba, least_voxels
 
     if not have_numba():
         pytest.skip("numba not installed")
-    import numba  # noqa: F401  (imported, as in a process that used it)
-
     v = np.zeros((141, 141, 141), bool)
     assert least_voxels() <= v.size < least_voxels(surfaces=True)
     v[:40, :40, :40] = torus(12, 5, size=40)
     v[60:90, 60:90, 60:90] = ball(14, size=30)
     v[100, 100, 100] = v[101, 101, 101] = True  # a vertex contact
-    assert cs.use_census(v) and cs.use_census(v, surfaces=False)
-    compiled_report = analyze(v, 26)
-    monkeypatch.setattr(cs, "numba_started", lambda: False)
     assert not cs.use_census(v) and cs.use_census(v, surfaces=False)
+    compiled_report = analyze(v, 26, method="compiled")
     for conn in (6, 26):
         report = analyze(v, conn)
         assert counted(report)[0] == mesh_answer(v, conn)[0]
@@ -238,16 +226,14 @@ def odd_bools(rng, shape, density):
     return u.view(bool), u != 0
 
 
-@pytest.mark.parametrize("path", ["numpy", "compiled"])
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
 @pytest.mark.parametrize("conn", [6, 26])
-def test_bool_bytes_other_than_one_and_read_only_arrays(rng, monkeypatch, conn, path):
+def test_bool_bytes_other_than_one_and_read_only_arrays(rng, conn, method):
     """numpy reads any nonzero byte of a bool array as True; the passes read
     them so too (cc3d labelled each byte value apart, and the NumPy census
     gave odd Euler characteristics), and take read-only arrays (cc3d wants
     a writable buffer): the answers are those of the canonical array,
     which the mesh's components check."""
-    if path == "compiled":
-        monkeypatch.setattr(compiled, "MIN_VOXELS", 0)
     for _ in range(60):
         odd, v = odd_bools(rng, rng.integers(2, 8, 3), rng.uniform(0.2, 0.8))
         assert (odd.view(np.uint8) > 1).any() or not v.any()
@@ -255,7 +241,7 @@ def test_bool_bytes_other_than_one_and_read_only_arrays(rng, monkeypatch, conn, 
         frozen = v.copy()
         frozen.setflags(write=False)
         for x in (odd, frozen):
-            assert counted(closed_surfaces(x, conn)) == mesh_answer(v, conn)
-            assert analyze(x, conn) == want
-            assert betti_numbers(x, conn) == want["betti"]
+            assert counted(closed_surfaces(x, conn, method=method)) == mesh_answer(v, conn)
+            assert analyze(x, conn, method=method) == want
+            assert betti_numbers(x, conn, method=method) == want["betti"]
         assert (odd.view(np.uint8) > 1).any() or not v.any()  # the input is left as it was

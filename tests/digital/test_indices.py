@@ -6,6 +6,7 @@ from skimage.measure import euler_number
 
 from isoflow.digital import configurations as C
 from isoflow.digital import indices as I
+from isoflow.digital import symmetry as S
 
 # The paper's values per class, indexed by class = gamma + 4 (eq. 4.6):
 # octant counts n(alpha) (eqs. 4.4-4.5), a (eq. 4.10), k (eq. 4.11) and the
@@ -28,7 +29,7 @@ def test_126_well_composed_boundary_configurations_in_nine_classes():
     boundary_wc = I.well_composed(3) & (cls != I.OFF_SURFACE)
     assert boundary_wc.sum() == 126
     assert (cls == I.NOT_WELL_COMPOSED).sum() == 128
-    canon = C.orbits(3)
+    canon = S.configuration_orbits(3)
     assert len(set(canon[boundary_wc])) == 9
     # classes are unions of orbits and every class is exactly one orbit
     for k in range(9):
@@ -67,7 +68,7 @@ def test_f_takes_the_values_listed_after_definition_9():
 
 
 def test_tables_are_invariant_under_the_48_symmetries():
-    sym = C.configuration_symmetries(3)
+    sym = S.hyperoctahedral_group(3).configuration_permutations
     assert sym.shape == (48, 256)
     for lut in (I.class_lut(), I.gamma_lut(), I.a_lut(6), I.a_lut(26), I.f_lut(), I.well_composed(3)):
         assert (lut[sym] == lut[None, :]).all()
@@ -76,9 +77,9 @@ def test_tables_are_invariant_under_the_48_symmetries():
 def test_symmetry_of_a_volume_permutes_its_configurations(rng):
     v = rng.random((4, 5, 6)) < 0.5
     hist = np.bincount(C.configurations(v).ravel(), minlength=256)
-    sym = C.configuration_symmetries(3)
+    sym = S.hyperoctahedral_group(3).configuration_permutations
     for g in range(48):
-        moved = np.bincount(C.configurations(C.transform_volume(v, g)).ravel(), minlength=256)
+        moved = np.bincount(C.configurations(S.apply_symmetry(v, g)).ravel(), minlength=256)
         expected = np.zeros(256, np.int64)
         np.add.at(expected, sym[g], hist)
         assert (moved == expected).all()

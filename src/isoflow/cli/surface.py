@@ -25,7 +25,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_surface(args: argparse.Namespace) -> int:
-    from ..digital.topology import default_connectivity
+    from ..digital.connectivity import default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path
 

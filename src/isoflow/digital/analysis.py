@@ -10,13 +10,12 @@ of every boundary face give the closed surfaces and their genus
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..scale import arrays
-from ..scale.compiled import using
-from .closed_surfaces import closed_surfaces, compiled_census, paid_numpy, small_census, use_census
+from ..scale.compiled import Method, using
+from .closed_surfaces import closed_surfaces, compiled_census, small_census, use_census
 from .configurations import configuration_histogram
 from .indices import (
     CLASS_LABELS,
@@ -30,37 +29,76 @@ from .indices import (
 )
 from .lattice import DigitalObject
 from .report import Report
-from .topology import betti_numbers, euler_from_histogram, resolve_connectivity
+from .connectivity import resolve_connectivity
+from .topology import betti_numbers, euler_from_histogram
 
 
-def analyze(obj, connectivity: int | None = None, surfaces: bool = True, threads: int | None = None) -> Report:
-    """Everything ``isoflow info --json`` reports, as a JSON-ready dict.
+def analyze(
+    obj: DigitalObject | ArrayLike,
+    connectivity: int | None = None,
+    surfaces: bool = True,
+    threads: int | None = None,
+    method: Method = "auto",
+) -> Report:
+    """Everything ``isoflow info`` reports about a 2D, 3D or 4D object.
 
-    ``obj`` is a :class:`DigitalObject` or a bare binary volume: a NumPy
-    array, or a CuPy (or other array-API) array whose histogram and Betti
-    numbers are computed on its device (:mod:`isoflow.scale.arrays`); only the
-    surfaces, when asked, are counted from a host copy.
+    One pass of configurations gives the histogram from which chi (Theorems
+    10-11), the class vector ``n`` (eq. 4.9), ``a^T n`` (eqs. 4.12-4.13) and
+    the energy ``E = k^T n`` (eq. 5.22) all follow; labellings of the object
+    and of the background give the Betti numbers; and, in 3D, the labels on
+    either side of every boundary face give the closed surfaces of the
+    boundary mesh and their genus, without building the mesh.
 
-    ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the 128
-    configurations that are not well-composed included (with the weight of the
-    connectivity asked), and so equals ``2^n chi`` on every object;
-    ``a_dot_n_well_composed`` is the paper's ``a^T n`` over the nine classes
-    alone. ``energy`` is the paper's ``E = k^T n`` over the nine classes (in
-    2D: convex plus concave vertices, ``k = r^2``).
+    Parameters
+    ----------
+    obj : DigitalObject or array_like of bool
+        A digital object, or a bare binary volume: a NumPy array, or a CuPy
+        (or other array-API) array whose histogram and Betti numbers are
+        computed on its device (only the surfaces, when asked, are counted
+        from a host copy).
+    connectivity : int, optional
+        The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default:
+        the paper's 6, 4, 8); the background takes the other.
+    surfaces : bool
+        Count the closed surfaces and their genus (3D).
+    threads : int, optional
+        Threads of the compiled passes (default: the ``ISOFLOW_THREADS``
+        environment variable, else every CPU).
+    method : {"auto", "numpy", "compiled"}
+        The NumPy passes, the compiled ones (numba), or by the volume's size.
+        The report is the same either way.
 
-    In 3D, ``surfaces`` lists the closed surfaces of the boundary mesh with
-    their Euler characteristic, genus and face count, counted without
-    building the mesh (:mod:`isoflow.digital.closed_surfaces`); on large
-    host volumes one pass gives the histogram, the Betti numbers and the
-    surfaces (the surfaces' part left out with ``surfaces=False``).
-    ``threads``: how many threads the compiled passes use (default: the
-    ``ISOFLOW_THREADS`` environment variable, else every CPU).
+    Returns
+    -------
+    Report
+        ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the
+        configurations that are not well-composed included, and so equals
+        ``2^n chi`` on every object; ``a_dot_n_well_composed`` is the paper's
+        ``a^T n`` over the nine classes alone.
+
+    Raises
+    ------
+    IsoflowError
+        When the volume is not binary, not 2D to 4D, or would not fit in
+        memory.
+
+    Examples
+    --------
+    A solid torus: one component, one tunnel, no cavity, its boundary one
+    surface of genus 1, and ``a^T n = 8 chi = 0`` (Theorem 10):
+
+    >>> import numpy as np
+    >>> x, y, z = np.indices((12, 12, 5)) - np.array([5.5, 5.5, 2]).reshape(3, 1, 1, 1)
+    >>> torus = ((np.hypot(x, y) - 3.5) ** 2 + z**2) <= 2.5**2
+    >>> r = analyze(torus)
+    >>> r.betti, r.euler_characteristic, r.a_dot_n, r.genus
+    ([1, 1, 0], 0, 0, [1])
     """
     with using(threads):
-        return Report.from_dict(_analyze(obj, connectivity, surfaces))
+        return Report.from_dict(_analyze(obj, connectivity, surfaces, method))
 
 
-def _analyze(obj, connectivity, surfaces: bool) -> dict:
+def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
     if isinstance(obj, DigitalObject):
         vol, parity = obj.volume, obj.parity
     else:
@@ -68,47 +106,38 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
         # compiled pass reads any nonzero byte as set
         vol, parity = arrays.as_volume(obj, canonical=False)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
-    census = None
-    started = time.perf_counter()
-    compiled = use_census(vol, surfaces)
-    if not compiled and isinstance(vol, np.ndarray):
-        vol = arrays.binary(vol)
-        if vol.ndim == 3 and surfaces:
-            # one configuration array and its labellings give the histogram,
-            # the Betti counts and the surfaces
-            census = small_census(vol, conn)
-    if compiled:
-        # one pass gives the histogram, the Betti counts and the surfaces
-        census = compiled_census(vol, conn, surfaces)
+    census = _census(vol, conn, surfaces, method)
     if census is not None:
         hist = census["hist"]
         chi = euler_from_histogram(hist, 3, conn)
         b0, enclosed = census["betti_counts"]
         betti = [b0, b0 + enclosed - chi, enclosed]
     else:
-        hist = configuration_histogram(vol)
+        vol = arrays.binary(vol) if isinstance(vol, np.ndarray) else vol
+        hist = configuration_histogram(vol, method=method)
         chi = euler_from_histogram(hist, vol.ndim, conn)
-        betti = betti_numbers(vol, conn, chi=chi)
-    out = report_from_histogram(
-        hist,
-        vol.ndim,
-        conn,
-        voxels=voxels_from_histogram(hist),
-        shape=vol.shape,
-        betti=betti,
-        parity=parity,
-    )
+        betti = betti_numbers(vol, conn, chi=chi, method=method)
+    out = report_from_histogram(hist, vol.ndim, conn, voxels=voxels_from_histogram(hist), shape=vol.shape,
+                                betti=betti, parity=parity)
     if vol.ndim == 3 and surfaces:
-        if census is None:
+        if census is None:  # a device volume: its surfaces from a host copy
             census = closed_surfaces(arrays.to_host(vol), conn)
-        out["surfaces"] = census["surfaces"]
-        out["pinched_vertices"] = census["pinched_vertices"]
-        out["doubled_edges"] = census["doubled_edges"]
+        out.update(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
+                   doubled_edges=census["doubled_edges"])
         # DESIGN section 3: the split mesh has V - E + F = 2 chi + 2 p
         assert sum(s["euler_characteristic"] for s in out["surfaces"]) == 2 * chi + 2 * census["pinched_vertices"]
-    if vol.ndim == 3 and not compiled and isinstance(vol, np.ndarray):
-        paid_numpy(time.perf_counter() - started)  # (the NumPy passes)
     return out
+
+
+def _census(vol, conn: int, surfaces: bool, method: Method) -> dict | None:
+    """One pass that gives the histogram, the Betti counts and (when asked)
+    the surfaces of a 3D host volume: compiled, or from one configuration
+    array and its labellings; None where the passes go one by one."""
+    if use_census(vol, surfaces, method):
+        return compiled_census(vol, conn, surfaces)
+    if vol.ndim == 3 and surfaces and isinstance(vol, np.ndarray):
+        return small_census(arrays.binary(vol), conn)
+    return None
 
 
 def voxels_from_histogram(hist: np.ndarray) -> int:
@@ -185,17 +214,17 @@ def _report_4d(hist: np.ndarray, conn: int) -> dict:
     the same Euler share (``isoflow.digital.ndim``); everything else on the boundary is
     counted as not well-composed. ``a`` is 16 x the Euler share, so
     ``a_dot_n = 16 chi`` (the form of eq. 6.2 that holds)."""
-    from . import ndim as nd
-    from .topology import euler_weights
+    from .ndim import manifold_configurations
+    from .symmetry import configuration_orbits
 
-    canon = nd.configuration_orbits(4)
-    manifold = nd.manifold_configurations(4)
+    canon = configuration_orbits(4)
+    manifold = manifold_configurations(4)
     boundary = np.ones(len(hist), bool)
     boundary[[0, len(hist) - 1]] = False
     classes = np.unique(canon[manifold & boundary])
     counts = np.bincount(np.searchsorted(classes, canon[manifold & boundary]),
                          weights=hist[manifold & boundary], minlength=len(classes)).astype(np.int64)
-    a = euler_weights(4, conn)
+    a = euler_lut(4, conn)
     return {
         "n": counts.tolist(),
         "classes": {int(c): int(k) for c, k in zip(classes, counts) if k},

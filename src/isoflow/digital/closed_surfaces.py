@@ -58,11 +58,11 @@ from functools import lru_cache
 import numpy as np
 
 from ..scale.arrays import binary, count_codes
-from ..scale.compiled import have_numba, numba_started, use_compiled
+from ..scale.compiled import Method, have_numba, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
-from .topology import check_connectivity
+from .connectivity import check_connectivity
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
 MESH_ADJACENCY = {6: (6, 18), 26: (18, 6)}
@@ -129,7 +129,7 @@ def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dic
     ]
 
 
-def closed_surfaces(volume, connectivity: int = 6) -> dict:
+def closed_surfaces(volume, connectivity: int = 6, method: Method = "auto") -> dict:
     """The closed surfaces of the boundary of a 3D host volume.
 
     Returns ``surfaces`` (each with ``euler_characteristic``, ``genus`` and
@@ -146,7 +146,7 @@ def closed_surfaces(volume, connectivity: int = 6) -> dict:
     if vol.ndim != 3:
         raise ValueError("closed_surfaces needs a 3D volume")
     check_connectivity(3, connectivity)
-    if use_census(vol):
+    if use_census(vol, method=method):
         return compiled_census(vol, connectivity)
     return small_census(vol, connectivity)
 
@@ -372,58 +372,25 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
     return out
 
 
-#: set once :func:`warm_up` has loaded the compiled pass in this process
-_warm = False
-#: seconds this process spent in the NumPy passes on 3D volumes (see use_census)
-_numpy_seconds = 0.0
-#: NumPy seconds after which the compiled pass is loaded: about its start
-#: (importing numba and loading its cached code), see use_census
-RENT_SECONDS = 0.5
-
-
 def warm_up(surfaces: bool = True) -> None:
     """Load the compiled pass now, on a tiny volume: importing numba and
     loading its cached machine code takes about half a second once per
     process, which a command spends while it reads its input."""
-    global _warm
     vol = np.zeros((2, 2, 3), bool)
     vol[0, 0, 1] = True
     compiled_census(vol, 6, surfaces)
-    _warm = True
 
 
-def use_census(vol, surfaces: bool = True) -> bool:
-    """Whether :func:`compiled_census` is the faster way for a 3D volume,
-    with or without the ``surfaces``: a large host volume
-    (:func:`use_compiled`; the NumPy census with the surfaces holds out to
-    a larger size than the passes without, as numba's start is then the
-    larger part of the compiled one's time, unless numba is imported
-    already), or any host volume once the pass is loaded (:func:`warm_up`):
-    its start is paid, and it is faster than the NumPy passes at every
-    size.
-
-    Small volumes go to the NumPy passes until, in one process, those have
-    taken :data:`RENT_SECONDS` (:func:`paid_numpy` adds them up); then the
-    pass is loaded. A loop over many small volumes so pays numba's start
-    once and runs at the compiled speed afterwards, while one small volume
-    never pays it; no sequence of calls takes much more than twice the
-    better of the two ways (the rule of renting skis until their price is
-    spent)."""
+def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto") -> bool:
+    """Whether :func:`compiled_census` counts a 3D volume, with or without
+    the ``surfaces``: by :func:`~isoflow.scale.compiled.use_compiled`, whose
+    ``"auto"`` threshold is higher with the surfaces (the NumPy census holds
+    out to a larger size, as numba's start is then the larger part of the
+    compiled one's time). Never for an empty or a device volume."""
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
+        use_compiled(vol, surfaces, method)  # (refuses "compiled" where it cannot be)
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    if _warm or use_compiled(vol, surfaces and not numba_started()):
-        return True
-    if _numpy_seconds >= RENT_SECONDS and have_numba():
-        warm_up()
-        return True
-    return False
-
-
-def paid_numpy(seconds: float) -> None:
-    """Count time spent in the NumPy passes on a 3D volume (see
-    :func:`use_census`)."""
-    global _numpy_seconds
-    _numpy_seconds += seconds
+    return use_compiled(vol, surfaces, method)
 
 
 def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:

@@ -26,34 +26,177 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Sequence
 from functools import lru_cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..errors import IsoflowError
 from ..scale import arrays
-from ..scale.compiled import use_compiled
+from ..scale.compiled import Method, use_compiled
 
-#: octant d -> its bit index, for the 3D window
-OCTANTS_3D = [(dx, dy, dz) for dz in (0, 1) for dy in (0, 1) for dx in (0, 1)]
-#: pixel d -> its bit index, for the 2D window
-OCTANTS_2D = [(dx, dy) for dy in (0, 1) for dx in (0, 1)]
+#: the largest dimension of a window (4D already has 2^16 configurations)
+MAX_DIM = 4
+#: the dimensions whose configurations isoflow computes
+DIMENSIONS = (1, 2, 3, 4)
 
 
-def octant_bit(d) -> int:
-    """Bit index of octant ``d`` (a 0/1 tuple): ``d_0 + 2 d_1 + 4 d_2 + ...``."""
+def check_dimension(n: object) -> int:
+    """The dimension of a window, an integer 1..4, or one line saying why not."""
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
+        raise IsoflowError(f"dimension n must be an integer 1..{MAX_DIM}, got {n!r}")
+    if not 1 <= int(n) <= MAX_DIM:
+        raise IsoflowError(f"dimension n must be 1..{MAX_DIM}, got {n}")
+    return int(n)
+
+
+def octant_bit(d: Sequence[int]) -> int:
+    """Bit index of octant ``d`` (a 0/1 tuple): ``d_0 + 2 d_1 + 4 d_2 + ...``.
+
+    Examples
+    --------
+    >>> octant_bit((1, 0, 1))
+    5
+    """
     return sum(int(b) << i for i, b in enumerate(d))
 
 
-def configurations(volume) -> np.ndarray:
-    """Configuration code of every lattice vertex of a 2D, 3D or 4D binary volume.
+def read_only(a: np.ndarray) -> np.ndarray:
+    """``a``, made read-only: the tables are cached and shared."""
+    a.flags.writeable = False
+    return a
 
-    Returns a uint8 (uint16 in 4D) array of shape ``volume.shape + 1``, in the input's array
-    library (a CuPy volume gives a CuPy array on its GPU). Three passes (one
-    per axis) build the code: first pairs along axis 0 (bits 0/1), then pairs
-    of pairs along axis 1 (bits 0-3), then along axis 2 (bits 0-7), which is
-    cheaper than or-ing the 8 shifted copies.
+
+@lru_cache(maxsize=None)
+def octants(n: int) -> np.ndarray:
+    """Offsets ``d`` of the ``2^n`` cells of the window, row ``b`` = bit ``b``.
+
+    Bit ``b`` is ``d_0 + 2 d_1 + 4 d_2 + 8 d_3``, i.e. ``d_i = (b >> i) & 1``:
+    the one octant table of isoflow (read-only int8, shape ``(2^n, n)``).
+
+    Examples
+    --------
+    >>> octants(2).tolist()
+    [[0, 0], [1, 0], [0, 1], [1, 1]]
     """
-    xp, v = arrays.as_volume(volume)
+    n = check_dimension(n)
+    b = np.arange(1 << n)
+    return read_only(((b[:, None] >> np.arange(n)) & 1).astype(np.int8))
+
+
+def full_window(n: int) -> int:
+    """The configuration whose every cell is in the object: ``2^(2^n) - 1``."""
+    return (1 << (1 << n)) - 1
+
+
+def half_mask(n: int, axis: int, side: int) -> int:
+    """Bitmask of the window cells with ``d_axis == side`` (one half)."""
+    d = octants(n)
+    return int(sum(1 << b for b in range(1 << n) if d[b, axis] == side))
+
+
+@lru_cache(maxsize=None)
+def window_faces(n: int) -> tuple[tuple[int, int], ...]:
+    """The ``3^n`` faces of the lattice incident to a vertex, as (mask, k).
+
+    A face incident to vertex ``w`` is ``w + prod_i F_i`` with ``F_i`` one of
+    ``{0}``, ``[-1, 0]``, ``[0, 1]`` (``e_i = 0, -1, +1``); ``k`` is its
+    dimension (the number of ``e_i != 0``). ``mask`` is the set of window
+    cells that contain it: ``d_i = (e_i > 0)`` where ``e_i != 0``, ``d_i``
+    free where ``e_i = 0``. The same masks are exactly the blocks of
+    ``2^(n-k)`` face-adjacent cells of the window (the faces of the dual
+    complex), which is why both Euler tables come from one list
+    (:func:`isoflow.digital.indices.euler_lut`).
+
+    Examples
+    --------
+    >>> window_faces(1)  # the edge to the left (cell 0), the vertex (both cells), the edge to the right
+    ((1, 1), (3, 0), (2, 1))
+    """
+    n = check_dimension(n)
+    d = octants(n)
+    faces = []
+    for e in itertools.product((-1, 0, 1), repeat=n):
+        ok = np.ones(1 << n, dtype=bool)
+        for i, ei in enumerate(e):
+            if ei != 0:
+                ok &= d[:, i] == (1 if ei > 0 else 0)
+        mask = int(sum(1 << int(b) for b in np.flatnonzero(ok)))
+        faces.append((mask, sum(1 for ei in e if ei != 0)))
+    return tuple(faces)
+
+
+def face_neighbours(sets: np.ndarray, n: int, axis: int) -> np.ndarray:
+    """The face neighbours across ``axis`` of sets of window cells (bitmasks)."""
+    step = 1 << axis  # bit distance between d and d xor e_axis
+    return ((sets & half_mask(n, axis, 0)) << step) | ((sets & half_mask(n, axis, 1)) >> step)
+
+
+def face_connected(sets: np.ndarray, n: int) -> np.ndarray:
+    """Whether each non-empty set of window cells (a bitmask) is connected
+    under the face adjacency of the cells; breadth-first growth from the
+    lowest cell, vectorised over all sets.
+
+    Examples
+    --------
+    >>> face_connected(np.array([0b0011, 0b1001]), 2).tolist()  # a domino; a diagonal pair
+    [True, False]
+    """
+    sets = np.asarray(sets, dtype=np.int64)
+    reach = sets & -sets  # lowest set bit
+    while True:
+        grown = reach.copy()
+        for axis in range(n):
+            grown |= face_neighbours(reach, n, axis)
+        grown &= sets
+        if np.array_equal(grown, reach):
+            return reach == sets
+        reach = grown
+
+
+def configurations(volume: ArrayLike) -> np.ndarray:
+    """The configuration of every lattice vertex of a binary image (section 4).
+
+    Vertex ``w`` is the common corner of the ``2^n`` cells ``w - 1 + d``,
+    ``d`` in ``{0,1}^n``; cell ``d`` is bit ``d_0 + 2 d_1 + 4 d_2 + 8 d_3``
+    of the vertex's configuration (:func:`octants`). The image is padded
+    with one layer of background, so every boundary vertex is counted.
+
+    Parameters
+    ----------
+    volume : array_like of bool or 0/1, 1 to 4 dimensions
+        A NumPy array, or a CuPy (or other array-API) array, whose
+        configurations are then computed on its device.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 (uint16 in 4D), of shape ``volume.shape + 1`` on every axis,
+        in the input's array library.
+
+    Raises
+    ------
+    IsoflowError
+        When the volume is not binary or not 1D to 4D.
+
+    Notes
+    -----
+    One pass per axis: pairs of cells along axis 0 (bits 0-1), pairs of
+    pairs along axis 1 (bits 0-3), and so on, which is cheaper than or-ing
+    the ``2^n`` shifted copies.
+
+    Examples
+    --------
+    A single voxel is the convex corner (one octant, eq. 4.6) of each of its
+    eight corners:
+
+    >>> import numpy as np
+    >>> c = configurations(np.ones((1, 1, 1), bool))
+    >>> c.shape, sorted(int(v) for v in c.ravel())
+    ((2, 2, 2), [1, 2, 4, 8, 16, 32, 64, 128])
+    """
+    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     # 8 octant bits up to 3D, 16 in 4D
     dtype = xp.uint8 if v.ndim <= 3 else xp.uint16
     # The one layer of background padding, written with the standard's
@@ -69,19 +212,45 @@ def configurations(volume) -> np.ndarray:
     return code
 
 
-def configuration_histogram(volume, slab: int | None = None) -> np.ndarray:
-    """Counts of the 2^(2^n) configurations over all vertices (256 in 3D).
+def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: Method = "auto") -> np.ndarray:
+    """How many vertices have each configuration: the counts behind eq. 4.9.
 
-    Always a host int64 vector. Large 3D host volumes go through the streaming
-    kernel of :mod:`isoflow.scale.kernels`; otherwise (4D, and every device array:
-    CuPy, any array-API library) the work goes slab by slab along axis 0, the
-    slabs overlapping by one voxel layer so that every vertex is counted
-    exactly once. A slab holds ``slab`` rows (default: about 8M voxels), so
-    memory stays a few bytes per slab voxel whatever the volume.
+    Parameters
+    ----------
+    volume : array_like of bool or 0/1, 1 to 4 dimensions
+        As for :func:`configurations`.
+    slab : int, optional
+        Rows of axis 0 taken at a time where the work goes slab by slab
+        (default: about 8M voxels), so that memory stays a few bytes per
+        slab voxel whatever the volume.
+    method : {"auto", "numpy", "compiled"}
+        The streaming compiled kernel (3D host volumes), the NumPy passes, or
+        by the volume's size (:func:`~isoflow.scale.compiled.use_compiled`).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2^(2^n)`` host int64 counts (256 in 3D), indexed by configuration.
+
+    Notes
+    -----
+    Large 3D host volumes go through the streaming kernel of
+    :mod:`isoflow.scale.kernels`; otherwise (4D, device arrays) slab by slab
+    along axis 0, the slabs overlapping by one voxel layer so that every
+    vertex is counted once. Every table of the paper is a function of the
+    configuration, so this histogram gives chi (Theorems 10-11), the class
+    vector ``n`` (eq. 4.9) and the energy (eq. 5.22).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> h = configuration_histogram(np.ones((2, 2, 2), bool))
+    >>> int(h.sum()), int(h[255])  # 27 vertices, one of them inside
+    (27, 1)
     """
-    xp, v = arrays.as_volume(volume)
+    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     size = 1 << (1 << v.ndim)
-    if v.ndim == 3 and use_compiled(v):
+    if use_compiled(v, method=method) and v.ndim == 3:
         from ..scale.kernels import histogram3d
 
         return histogram3d(v)
@@ -104,65 +273,3 @@ def configuration_histogram(volume, slab: int | None = None) -> np.ndarray:
             last = part.shape[0] if stop == n0 else part.shape[0] - 1
             hist += arrays.count_codes(xp, part[first:last, ...], size)
     return hist
-
-
-@lru_cache(maxsize=None)
-def cube_symmetries(ndim: int = 3) -> np.ndarray:
-    """The ``2^n n!`` symmetries of the n-cube as permutations of the octant bits.
-
-    Row ``g`` maps octant bit ``b`` to octant bit ``perm[g, b]``: every axis
-    permutation combined with every set of reflections (48 in 3D, 8 in 2D).
-    """
-    octs = list(itertools.product((0, 1), repeat=ndim))
-    perms = []
-    for axes in itertools.permutations(range(ndim)):
-        for flips in itertools.product((0, 1), repeat=ndim):
-            row = [0] * (1 << ndim)
-            for d in octs:
-                image = tuple(d[axes[i]] ^ flips[i] for i in range(ndim))
-                row[octant_bit(d)] = octant_bit(image)
-            perms.append(row)
-    return np.array(perms, dtype=np.int64)
-
-
-@lru_cache(maxsize=None)
-def configuration_symmetries(ndim: int = 3) -> np.ndarray:
-    """The cube's symmetries acting on whole configurations.
-
-    Row ``g`` maps configuration ``c`` to ``table[g, c]``; shape (48, 256) in
-    3D and (8, 16) in 2D.
-    """
-    perms = cube_symmetries(ndim)
-    nbits = 1 << ndim
-    configs = np.arange(1 << nbits)
-    bits = (configs[:, None] >> np.arange(nbits)) & 1  # (256, 8)
-    out = np.zeros((len(perms), len(configs)), dtype=np.int64)
-    for g, perm in enumerate(perms):
-        out[g] = (bits << perm[None, :]).sum(axis=1)
-    return out
-
-
-def orbits(ndim: int = 3) -> np.ndarray:
-    """Canonical representative (smallest image) of every configuration."""
-    return configuration_symmetries(ndim).min(axis=0)
-
-
-def transform_volume(volume: np.ndarray, g: int) -> np.ndarray:
-    """Apply symmetry ``g`` of :func:`cube_symmetries` to a whole volume.
-
-    Used by tests: the configuration of the transformed volume at the image
-    vertex is the transformed configuration.
-    """
-    ndim = volume.ndim
-    combos = [
-        (axes, flips)
-        for axes in itertools.permutations(range(ndim))
-        for flips in itertools.product((0, 1), repeat=ndim)
-    ]
-    axes, flips = combos[g]
-    # new axis i takes old axis axes[i], reflected when flips[i]
-    out = np.transpose(volume, axes)
-    for i, f in enumerate(flips):
-        if f:
-            out = np.flip(out, axis=i)
-    return out

@@ -1,7 +1,8 @@
 """Exact Betti numbers of small 1D..4D images by GF(2) cubical homology, and
 small images whose topology is known.
 
-An independent check of the local tables of :mod:`isoflow.digital.ndim`:
+An independent check of the local tables (:mod:`isoflow.digital.indices`,
+:mod:`isoflow.digital.ndim`):
 ``sum (-1)^i b_i`` from the boundary matrices of the cubical complex must
 equal the Euler characteristic that the tables sum (eq. 6.2's exact form).
 """
@@ -13,22 +14,27 @@ import math
 
 import numpy as np
 
+from numpy.typing import ArrayLike
+
 from ..errors import IsoflowError
-from .ndim import as_binary, check_adjacency, check_dim, gf2_rank
+from ..scale import arrays
+from .configurations import DIMENSIONS, check_dimension
+from .connectivity import is_face_connectivity, resolve_connectivity
+from .ndim import gf2_rank
 
 
-def _cubical_faces(x: np.ndarray, adjacency: str) -> dict:
+def _cubical_faces(x: np.ndarray, face: bool) -> dict:
     """Present faces of the complex of ``x``: {axis subset A: bool grid}.
 
     A face is ``(p, A)``: base point ``p`` spanning the unit steps in the
-    axes ``A``. For ``'max'`` the complex is the union of the closed cells
-    (lattice faces, present iff ANY cell containing them is in X); for
-    ``'min'`` it is the block complex on the cell centres (present iff ALL
-    ``2^|A|`` cells are in X).
+    axes ``A``. Under the full adjacency the complex is the union of the
+    closed cells (lattice faces, present iff ANY cell containing them is in
+    X); under the face adjacency (``face``) it is the block complex on the
+    cell centres (present iff ALL ``2^|A|`` cells are in X).
     """
     n = x.ndim
     faces = {}
-    if adjacency == "max":
+    if not face:
         p = np.pad(x, 1)
         for A in itertools.product((0, 1), repeat=n):
             # base point p in original vertex coordinates. Along i in A the
@@ -53,20 +59,49 @@ def _cubical_faces(x: np.ndarray, adjacency: str) -> dict:
     return faces
 
 
-def betti_numbers(volume, adjacency: str = "min", max_faces: int = 200_000) -> tuple:
+def gf2_betti_numbers(volume: ArrayLike, connectivity: int | None = None,
+                      max_faces: int = 200_000) -> tuple[int, ...]:
     """Betti numbers ``(b_0, ..., b_n)`` over GF(2) of a small 1D..4D image.
 
-    Computed globally from the boundary matrices of the cubical complex of
-    :func:`isoflow.digital.ndim.euler_lut`'s two readings (no local table involved), so that
-    ``sum (-1)^i b_i == euler_characteristic(X)`` is an independent check.
-    Over GF(2) a 2-complex in R^4 can have torsion-dependent b_1, b_2 (e.g.
-    a projective plane); chi never depends on the field. Cost grows like the
-    cube of the number of faces: refuse more than ``max_faces``.
+    Computed globally from the boundary matrices of the cubical complex that
+    each connectivity reads (the two readings of
+    :func:`isoflow.digital.indices.euler_lut`; no local table involved), so
+    that ``sum (-1)^i b_i == euler_characteristic(X)`` is an independent
+    check of the tables. Over GF(2) a 2-complex in R^4 can have
+    torsion-dependent b_1, b_2 (e.g. a projective plane); chi never depends
+    on the field. For 2D and 3D volumes of any size use
+    :func:`isoflow.digital.topology.betti_numbers`.
+
+    Parameters
+    ----------
+    volume : array_like of bool, 1 to 4 dimensions
+    connectivity : int, optional
+        The object's: ``2n`` (default) or ``3^n - 1``.
+    max_faces : int
+        The cost grows like the cube of the number of faces: more are refused.
+
+    Returns
+    -------
+    tuple of int
+        ``n + 1`` Betti numbers.
+
+    Raises
+    ------
+    IsoflowError
+        When the complex has more than ``max_faces`` faces.
+
+    Examples
+    --------
+    A 4D box with a box-shaped hole through its middle: one component and one
+    enclosed 4D cavity.
+
+    >>> gf2_betti_numbers(box_minus_box(5, 1, 4))
+    (1, 0, 0, 1, 0)
     """
-    x = as_binary(volume)
-    check_adjacency(adjacency)
-    n = x.ndim
-    faces = _cubical_faces(x, adjacency)
+    x = np.asarray(arrays.to_host(arrays.as_volume(volume, dims=DIMENSIONS)[1]))
+    n = check_dimension(x.ndim)
+    face = is_face_connectivity(resolve_connectivity(n, connectivity), n)
+    faces = _cubical_faces(x, face)
     total = sum(int(f.sum()) for f in faces.values())
     if total > max_faces:
         raise IsoflowError(f"complex has {total} faces, more than max_faces={max_faces}")
@@ -113,14 +148,14 @@ def product_image(*images) -> np.ndarray:
     """Cartesian product of binary images (dimensions add, chi multiplies)."""
     out = np.ones((), dtype=bool)
     for im in images:
-        x = as_binary(im) if np.ndim(im) else np.asarray(im, dtype=bool)
-        out = np.logical_and.outer(out, x)
-    return as_binary(out)
+        out = np.logical_and.outer(out, np.asarray(im, dtype=bool))
+    check_dimension(out.ndim)
+    return out
 
 
 def box_minus_box(outer: int, inner: int, n: int) -> np.ndarray:
     """An ``outer^n`` box with a centred ``inner^n`` box removed (a cavity)."""
-    n = check_dim(n)
+    n = check_dimension(n)
     if not 0 < inner <= outer - 2 or (outer - inner) % 2:
         raise IsoflowError("need 0 < inner <= outer - 2 with outer - inner even")
     x = np.ones((outer,) * n, dtype=bool)
@@ -131,7 +166,7 @@ def box_minus_box(outer: int, inner: int, n: int) -> np.ndarray:
 
 def ball(radius: float, n: int) -> np.ndarray:
     """Cells whose centres lie within ``radius`` of the centre of the array."""
-    n = check_dim(n)
+    n = check_dimension(n)
     size = 2 * math.ceil(radius) + 1
     g = np.indices((size,) * n) - (size - 1) / 2
     return (g**2).sum(axis=0) <= radius**2

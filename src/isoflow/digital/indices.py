@@ -17,7 +17,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from .configurations import OCTANTS_2D, OCTANTS_3D, octant_bit
+from .connectivity import check_connectivity, is_face_connectivity
+from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 
 #: class value of a configuration that is not well-composed
 NOT_WELL_COMPOSED = -1
@@ -44,53 +45,18 @@ CLASS_LABELS = (
 CONVEX, FLAT, CONCAVE, NONE = 1, 0, -1, 2
 #: code value for an axis of a configuration that is not well-composed
 UNDEFINED = -2
-_CODE_CHAR = {CONVEX: "+", FLAT: "0", CONCAVE: "-", NONE: "∅", UNDEFINED: "?"}
+#: how the paper writes each code value
+CODE_CHARS = {CONVEX: "+", FLAT: "0", CONCAVE: "-", NONE: "∅", UNDEFINED: "?"}
 
 
 def _bits(config: int, nbits: int) -> list[int]:
     return [(config >> b) & 1 for b in range(nbits)]
 
 
-def _face_pairs(octants) -> list[tuple[int, int]]:
-    """Pairs of window cells that share a face (differ in one coordinate)."""
-    return _face_pairs_of(tuple(map(tuple, octants)))
-
-
 @lru_cache(maxsize=None)
-def _face_pairs_of(octants: tuple) -> list[tuple[int, int]]:
-    pairs = []
-    for a in octants:
-        for b in octants:
-            diff = [x != y for x, y in zip(a, b)]
-            if sum(diff) == 1 and octant_bit(a) < octant_bit(b):
-                pairs.append((octant_bit(a), octant_bit(b)))
-    return pairs
-
-
-def _connected(cells: list[int], octants) -> bool:
-    """Are ``cells`` (bit indices) connected through shared faces?"""
-    if not cells:
-        return True
-    adj = {b: set() for b in cells}
-    for a, b in _face_pairs(octants):
-        if a in adj and b in adj:
-            adj[a].add(b)
-            adj[b].add(a)
-    seen, todo = {cells[0]}, [cells[0]]
-    while todo:
-        for nb in adj[todo.pop()] - seen:
-            seen.add(nb)
-            todo.append(nb)
-    return len(seen) == len(cells)
-
-
-def _halves(octants, axis: int, side: int) -> list[int]:
-    return _halves_of(tuple(map(tuple, octants)), axis, side)
-
-
-@lru_cache(maxsize=None)
-def _halves_of(octants: tuple, axis: int, side: int) -> list[int]:
-    return [octant_bit(d) for d in octants if d[axis] == side]
+def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
+    """The bits of the window cells on one side of ``axis`` (a 2x2 layer in 3D)."""
+    return tuple(int(b) for b in np.flatnonzero(octants(ndim)[:, axis] == side))
 
 
 # --------------------------------------------------------------------------
@@ -98,68 +64,58 @@ def _halves_of(octants: tuple, axis: int, side: int) -> list[int]:
 # --------------------------------------------------------------------------
 
 
-def _euler_share(config: int, octants, connectivity: str) -> int:
-    """``2^n`` times the vertex's share of chi, by counting window cells.
-
-    ``'max'`` (26 in 3D, 8 in 2D): the object is the union of closed cells, so
-    a lattice cell incident to the vertex counts when *any* voxel containing it
-    is in the object. A k-cell incident to the vertex corresponds to a block of
-    ``2^(n-k)`` window cells and has ``2^k`` vertices, hence weight
-    ``2^n / 2^k``.
-
-    ``'min'`` (6 in 3D, 4 in 2D): chi of the dual complex whose vertices are
-    voxel centres and whose k-cells are full ``2^k`` blocks of object voxels;
-    each block of ``2^k`` window cells counts when *all* are in the object,
-    with weight ``2^n / 2^(n-k)`` (it lies in ``2^(n-k)`` windows).
-    """
-    n = len(octants[0])
-    bits = _bits(config, 1 << n)
-    total = 0
-    for cells, m in _blocks(tuple(map(tuple, octants))):
-        inside = [bits[c] for c in cells]
-        if connectivity == "max":
-            # lattice cell of dimension k = n - m, weight 2^n / 2^(n-m)
-            if any(inside):
-                total += (-1) ** (n - m) * (1 << m)
-        else:
-            # dual cell of dimension m, weight 2^n / 2^(n-m) = 2^m
-            if all(inside):
-                total += (-1) ** m * (1 << m)
-    return total
-
-
-@lru_cache(maxsize=None)
-def _blocks(octants: tuple) -> list[tuple[list[int], int]]:
-    """The blocks of the window: a subset of axes fixed to given values, the
-    other ``m`` axes free (a block of ``2^m`` cells); their cells as bits."""
-    n = len(octants[0])
-    out = []
-    for free_mask in range(1 << n):
-        fixed = [i for i in range(n) if not free_mask >> i & 1]
-        for values in range(1 << len(fixed)):
-            cells = [
-                octant_bit(d)
-                for d in octants
-                if all(d[ax] == (values >> j & 1) for j, ax in enumerate(fixed))
-            ]
-            out.append((cells, n - len(fixed)))
-    return out
-
-
 @lru_cache(maxsize=None)
 def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
-    """``2^n x`` local Euler characteristic of every configuration (eq. 4.10).
+    """``2^n`` times every configuration's share of chi: the vector ``a``.
 
-    ``connectivity`` is the object's: 6 or 26 in 3D, 4 or 8 in 2D. Summed over
-    all vertices the table gives ``2^n chi``; on well-composed boundary
-    configurations both connectivities agree with the paper's ``a``.
+    Summed over all vertices the table gives ``2^n chi`` on every image,
+    whatever its connectivity: the exact digital Gauss-Bonnet identity
+    ``a^T n = 2^n chi`` (eqs. 4.10-4.13 and 6.2). On the well-composed
+    boundary configurations both connectivities give the paper's ``a``.
+
+    Parameters
+    ----------
+    ndim : int
+        1 to 4.
+    connectivity : int
+        The object's: ``2n`` (4, 6, 8 in 2D, 3D, 4D) or ``3^n - 1`` (8, 26,
+        80); the background takes the other.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64, read-only, indexed by configuration (:func:`~isoflow.digital.configurations.configurations`).
+
+    Notes
+    -----
+    Each incident lattice face (mask, k) of
+    :func:`~isoflow.digital.configurations.window_faces` contributes:
+
+    * full adjacency: chi of the union of the closed cells. A k-face is in
+      the union iff ANY window cell containing it is in X, and it has
+      ``2^k`` vertices, so ``lut = sum (-1)^k 2^(n-k) [c & mask != 0]``;
+    * face adjacency: chi of the cubical complex whose vertices are the
+      cell centres and whose j-faces are the blocks of ``2^j`` cells ALL in
+      X, each seen by ``2^(n-j)`` vertices, so
+      ``lut = sum (-1)^j 2^j [c & mask == mask]`` (``j = n - k``).
+
+    Examples
+    --------
+    A single voxel's eight corners each hold one eighth of its chi = 1:
+
+    >>> euler_lut(3, 6)[1], euler_lut(3, 26)[1]
+    (np.int64(1), np.int64(1))
     """
-    octants = OCTANTS_3D if ndim == 3 else OCTANTS_2D
-    kind = {6: "min", 26: "max", 4: "min", 8: "max"}[connectivity]
-    return np.array(
-        [_euler_share(c, octants, kind) for c in range(1 << (1 << ndim))],
-        dtype=np.int64,
-    )
+    n = check_dimension(ndim)
+    face = is_face_connectivity(check_connectivity(n, connectivity), n)
+    c = np.arange(1 << (1 << n), dtype=np.int64)
+    lut = np.zeros(c.shape, dtype=np.int64)
+    for mask, k in window_faces(n):
+        if face:
+            lut += (-1) ** (n - k) * (1 << (n - k)) * ((c & mask) == mask)
+        else:
+            lut += (-1) ** k * (1 << (n - k)) * ((c & mask) != 0)
+    return read_only(lut)
 
 
 # --------------------------------------------------------------------------
@@ -169,17 +125,27 @@ def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
 
 @lru_cache(maxsize=None)
 def well_composed(ndim: int = 3) -> np.ndarray:
-    """True for configurations whose object and background cells are each
-    face-connected inside the window (no edge- or corner-only contacts)."""
-    octants = OCTANTS_3D if ndim == 3 else OCTANTS_2D
-    nbits = 1 << ndim
-    out = np.zeros(1 << nbits, dtype=bool)
-    for c in range(1 << nbits):
-        bits = _bits(c, nbits)
-        obj = [b for b in range(nbits) if bits[b]]
-        bg = [b for b in range(nbits) if not bits[b]]
-        out[c] = _connected(obj, octants) and _connected(bg, octants)
-    return out
+    """Which configurations are well-composed boundary configurations.
+
+    Both the object cells and the background cells of the window are
+    non-empty and each is connected under the face adjacency of the cells:
+    no edge- or corner-only contact. For n <= 3 these are exactly the
+    configurations where the boundary is locally a manifold (section 4.2;
+    126 of the 256 in 3D, the paper's nine classes up to symmetry); in 4D
+    the condition is weaker (:func:`isoflow.digital.ndim.manifold_configurations`).
+
+    Examples
+    --------
+    >>> int(well_composed(3).sum()), int(well_composed(2).sum())
+    (126, 12)
+    """
+    n = check_dimension(ndim)
+    c = np.arange(1 << (1 << n), dtype=np.int64)
+    bg = full_window(n) ^ c
+    boundary = (c != 0) & (bg != 0)
+    ok = np.zeros(c.shape, dtype=bool)
+    ok[boundary] = face_connected(c[boundary], n) & face_connected(bg[boundary], n)
+    return read_only(ok)
 
 
 def _planar_code(cells: list[int], bits: list[int]) -> int:
@@ -195,7 +161,7 @@ def _planar_code(cells: list[int], bits: list[int]) -> int:
     return FLAT if bin(a ^ b).count("1") == 1 else UNDEFINED
 
 
-def _hub(bits: list[int], octants) -> bool:
+def _hub(bits: list[int]) -> bool:
     """Does one object octant share a face with every other object octant?
 
     That makes the object, locally, a cube with some of its face neighbours:
@@ -222,8 +188,8 @@ def _tables_3d():
         # Definition 14 / eq. 5.13: n = 1/2 (a1 e1 + a2 e2 + a3 e3), a_i in
         # {-1,0,1}: outward is where the window holds less object.
         for ax in range(3):
-            lo = sum(bits[b] for b in _halves(OCTANTS_3D, ax, 0))
-            hi = sum(bits[b] for b in _halves(OCTANTS_3D, ax, 1))
+            lo = sum(bits[b] for b in _halves(3, ax, 0))
+            hi = sum(bits[b] for b in _halves(3, ax, 1))
             normal2[c, ax] = np.sign(lo - hi)
         if c in (0, 255):
             cls[c] = OFF_SURFACE
@@ -234,10 +200,10 @@ def _tables_3d():
         # (concave over convex over flat over none), DESIGN section 2.
         rank = {CONCAVE: 3, CONVEX: 2, FLAT: 1, NONE: 0}
         for ax in range(3):
-            layer = [_planar_code(_halves(OCTANTS_3D, ax, s), bits) for s in (0, 1)]
+            layer = [_planar_code(_halves(3, ax, s), bits) for s in (0, 1)]
             codes[c, ax] = max(layer, key=lambda v: rank[v])
         flat = any(
-            sum(bits[b] for b in _halves(OCTANTS_3D, ax, 0)) in (0, 4) and count == 4
+            sum(bits[b] for b in _halves(3, ax, 0)) in (0, 4) and count == 4
             for ax in range(3)
         )
         # Eq. 4.6: gamma = i/8 or -(8-i)/8 "since i/8 = 1 - (8-i)/8". The
@@ -245,7 +211,7 @@ def _tables_3d():
         # negative one to everything else; a flat layer has angle 0.
         if flat:
             gamma[c] = 0
-        elif _hub(bits, OCTANTS_3D):
+        elif _hub(bits):
             gamma[c] = count
         else:
             gamma[c] = count - 8
@@ -311,7 +277,7 @@ def code_string(config: int) -> str:
         return "not-well-composed"
     if cls in (0, 8):
         return CLASS_LABELS[cls]
-    return "(" + ",".join(_CODE_CHAR[int(v)] for v in code_lut()[config]) + ")"
+    return "(" + ",".join(CODE_CHARS[int(v)] for v in code_lut()[config]) + ")"
 
 
 def class_histogram(config_hist: np.ndarray) -> np.ndarray:
@@ -334,7 +300,7 @@ def planar_class_lut() -> np.ndarray:
     """0 convex (1 pixel of 4), 1 flat (2 adjacent), 2 concave (3 of 4),
     :data:`NOT_WELL_COMPOSED` (2 diagonal), :data:`OFF_SURFACE` (0 or 4)."""
     out = np.full(16, OFF_SURFACE, dtype=np.int64)
-    cells = [octant_bit(d) for d in OCTANTS_2D]
+    cells = list(range(4))  # the 2x2 window's bits
     for c in range(1, 15):
         code = _planar_code(cells, _bits(c, 4))
         out[c] = NOT_WELL_COMPOSED if code == UNDEFINED else 1 - code

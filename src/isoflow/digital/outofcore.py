@@ -63,7 +63,8 @@ from .report import Report
 from .closed_surfaces import MESH_ADJACENCY, box_sheets, surfaces_from_counts
 from .configurations import configuration_histogram, configurations
 from .surface import pinch_lut
-from .topology import COMPLEMENT, euler_from_histogram, resolve_connectivity
+from .connectivity import complement, resolve_connectivity
+from .topology import euler_from_histogram
 
 #: local labels live in the low 32 bits of a node key, the block in the high bits
 _SHIFT = 32
@@ -82,7 +83,7 @@ def adjacencies(ndim: int, conn: int, surfaces: bool) -> dict:
     if surfaces and ndim == 3:
         fg, bg = MESH_ADJACENCY[conn]
         return {"fg": fg, "bg": bg}
-    return {"fg": conn, "bg": COMPLEMENT[conn]}
+    return {"fg": conn, "bg": complement(ndim, conn)}
 
 
 # --------------------------------------------------------------------------

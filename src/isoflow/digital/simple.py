@@ -27,7 +27,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .topology import is_face_connectivity
+from .connectivity import is_face_connectivity
 
 
 @lru_cache(maxsize=None)

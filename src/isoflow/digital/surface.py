@@ -35,7 +35,7 @@ import numpy as np
 
 from .configurations import configurations, octant_bit
 from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
-from .topology import check_connectivity
+from .connectivity import check_connectivity
 
 # --------------------------------------------------------------------------
 # The 12 face slots of a vertex window and how they join into sheets

@@ -15,63 +15,15 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale import arrays
 from ..scale.arrays import is_host
-from ..scale.compiled import use_compiled
+from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
-from .configurations import configuration_histogram
+from .configurations import DIMENSIONS, configuration_histogram
+from .connectivity import complement, resolve_connectivity
 from .indices import euler_lut
-
-#: the object's connectivity -> the background's, in 2D and 3D
-COMPLEMENT = {6: 26, 26: 6, 4: 8, 8: 4}
-#: (2n-adjacency, (3^n - 1)-adjacency) per dimension
-VALID = {2: (4, 8), 3: (6, 26), 4: (8, 80)}
-
-
-def complement(ndim: int, connectivity: int) -> int:
-    """The background's connectivity for an object's (6 <-> 26, 4 <-> 8, 8 <-> 80)."""
-    low, high = VALID[ndim]
-    return high if connectivity == low else low
-
-
-def check_connectivity(ndim: int, connectivity: int) -> int:
-    """The object's connectivity, checked against the dimension."""
-    if connectivity not in VALID.get(ndim, ()):
-        allowed = " or ".join(map(str, VALID.get(ndim, ())))
-        raise IsoflowError(
-            f"connectivity {connectivity} is not valid in {ndim}D (use {allowed})"
-        )
-    return connectivity
-
-
-def is_face_connectivity(connectivity: int) -> bool:
-    """True for the face adjacency of 2D and 3D objects (4 and 6): the
-    object's pieces that meet only along an edge or at a vertex are apart.
-    (8 is the face adjacency in 4D but the full one in 2D: ask ``VALID``.)"""
-    return connectivity in (4, 6)
-
-
-def resolve_connectivity(ndim: int, connectivity: int | None) -> int:
-    """The connectivity asked (checked), or the paper's default when None."""
-    return check_connectivity(ndim, default_connectivity(ndim) if connectivity is None else connectivity)
-
-
-def default_connectivity(ndim: int) -> int:
-    """The paper's choice: 4-connectivity in the plane, 6 in space."""
-    return VALID[ndim][0]
-
-
-def euler_weights(ndim: int, connectivity: int) -> np.ndarray:
-    """``2^n x`` local Euler share of every configuration (eq. 4.10; the
-    n-dimensional tables of :mod:`isoflow.digital.ndim` in 4D)."""
-    if ndim == 4:
-        from . import ndim as nd
-
-        return nd.euler_lut(4, "min" if connectivity == VALID[4][0] else "max").astype(np.int64)
-    return euler_lut(ndim, connectivity)
-
 
 def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
     """chi from the configuration histogram: ``sum_c hist[c] lut[c] / 2^n``."""
-    total = int(np.dot(hist, euler_weights(ndim, connectivity)))
+    total = int(np.dot(hist, euler_lut(ndim, connectivity)))
     scale = 1 << ndim
     assert total % scale == 0, "local Euler shares must sum to a multiple of 2^n"
     return total // scale
@@ -82,12 +34,12 @@ def euler_characteristic(volume, connectivity: int | None = None) -> int:
 
     ``volume`` may be a NumPy array, a CuPy array (read on its GPU) or any
     array-API array (see :mod:`isoflow.scale.arrays`)."""
-    xp, v = arrays.as_volume(volume)
+    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
 
-def _labeller(xp, v):
+def _labeller(xp, v, method: Method = "auto"):
     """``(xp, volume, label)`` for a checked volume (:func:`arrays.as_volume`):
     the volume where its library can label it (host NumPy, a CuPy GPU),
     otherwise copied to the host once."""
@@ -95,7 +47,7 @@ def _labeller(xp, v):
     if label is None:
         v = arrays.to_host(v)
         xp, label = np, arrays.label_function(np)
-    if is_host(xp) and not use_compiled(v):
+    if is_host(xp) and not use_compiled(v, method=method):
         # an int32 label per voxel, next to the complement
         check_fits(
             LABEL_BYTES_PER_VOXEL * v.size,
@@ -159,7 +111,8 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
         return int(n) - int(xp.count_nonzero(border))
 
 
-def betti_numbers(volume, connectivity: int | None = None, chi: int | None = None) -> list[int]:
+def betti_numbers(volume, connectivity: int | None = None, chi: int | None = None,
+                  method: Method = "auto") -> list[int]:
     """Betti numbers ``[b0, b1, b2]`` (3D) or ``[b0, b1]`` (2D).
 
     b0: components, b2: cavities, b1 = b0 + b2 - chi: tunnels (3D); in 2D b1
@@ -171,10 +124,10 @@ def betti_numbers(volume, connectivity: int | None = None, chi: int | None = Non
     xp, v = arrays.as_volume(volume)
     conn = resolve_connectivity(v.ndim, connectivity)
     if chi is None:
-        chi = euler_from_histogram(configuration_histogram(v), v.ndim, conn)
+        chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)
     # the volume is checked once here; one host copy where the library cannot label
-    xp, v, label = _labeller(xp, v)
-    if use_compiled(v):
+    xp, v, label = _labeller(xp, v, method)
+    if use_compiled(v, method=method):
         from ..scale.kernels import count_object_and_enclosed
 
         b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))

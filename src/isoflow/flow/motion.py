@@ -75,7 +75,7 @@ from ..digital.indices import (
     f_lut,
 )
 from ..digital.lattice import DigitalObject
-from ..digital.topology import check_connectivity, is_face_connectivity
+from ..digital.connectivity import check_connectivity, is_face_connectivity
 from ..errors import IsoflowError
 from .planar import planar_moves
 from .segments import segment_moves

@@ -85,10 +85,10 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     return arr.astype(bool)
 
 
-def as_volume(volume, where: str = "volume", canonical: bool = True):
-    """``(xp, boolean volume)`` of a 2D, 3D or 4D 0/1 array: host data checked
-    by :func:`binary` (``canonical``: see there), device arrays left where
-    they are."""
+def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):
+    """``(xp, boolean volume)`` of a 0/1 array of a dimension in ``dims``:
+    host data checked by :func:`binary` (``canonical``: see there), device
+    arrays left where they are."""
     xp = namespace(volume)
     if is_host(xp):
         v = binary(volume, where, canonical=canonical)
@@ -98,8 +98,9 @@ def as_volume(volume, where: str = "volume", canonical: bool = True):
             if bool(xp.any((v != 0) & (v != 1))):
                 raise IsoflowError(f"{where}: not a binary volume (values other than 0 and 1)")
             v = xp.astype(v, xp.bool)
-    if v.ndim not in (2, 3, 4):
-        raise IsoflowError(f"{where}: a volume is 2D, 3D or 4D, got a {v.ndim}D array")
+    if v.ndim not in dims:
+        allowed = ", ".join(f"{d}D" for d in dims[:-1]) + f" or {dims[-1]}D"
+        raise IsoflowError(f"{where}: a volume is {allowed}, got a {v.ndim}D array")
     return xp, v
 
 

@@ -4,9 +4,11 @@ The passes of :mod:`isoflow.scale.kernels` and :mod:`isoflow.scale.sweep`
 are compiled with numba. They are used for host volumes from
 :data:`MIN_VOXELS` on; below that, numpy and cc3d answer sooner than numba
 can start (importing numba and loading its cached machine code costs about
-0.5 s once per process), so one small volume never imports numba at all
-(a process that has spent as long in the NumPy passes loads it: see
-:func:`isoflow.digital.closed_surfaces.use_census`).
+0.5 s once per process), so one small volume never imports numba at all.
+The choice is a function of the input alone (:func:`use_compiled`); a
+caller that knows better (a loop over many small volumes, which pays
+numba's start once) says so with ``method="compiled"``, as scikit-image's
+functions take ``method=``.
 
 The passes release the GIL, so plain Python threads run them in parallel
 (no OpenMP pool, no parallel compile). Each pass splits the volume into as
@@ -30,6 +32,7 @@ import contextlib
 import contextvars
 import os
 from functools import lru_cache
+from typing import Literal
 
 from ..errors import IsoflowError
 
@@ -97,25 +100,40 @@ def have_numba() -> bool:
     return find_spec("numba") is not None
 
 
-def numba_started() -> bool:
-    """Whether numba is imported in this process already: most of the
-    compiled passes' start (importing it, 0.3 s) is paid."""
-    import sys
-
-    return "numba" in sys.modules
+#: how a pass is computed: chosen by the input's size (``"auto"``), the
+#: NumPy passes, or the compiled ones
+Method = Literal["auto", "numpy", "compiled"]
+METHODS = ("auto", "numpy", "compiled")
 
 
-def use_compiled(volume, surfaces: bool = False) -> bool:
-    """True for a host NumPy volume of 2 or 3 dimensions and at least
-    :func:`least_voxels` voxels, where numba is installed."""
+def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto") -> bool:
+    """Whether a pass over ``volume`` takes the compiled path.
+
+    ``"auto"``: a host NumPy volume of 2 or 3 dimensions with at least
+    :func:`least_voxels` voxels, where numba is installed. ``"numpy"``:
+    never. ``"compiled"``: always, or one line saying why it cannot (no
+    numba, a device array, a 4D volume).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> use_compiled(np.zeros((8, 8, 8), bool)), use_compiled(np.zeros((8, 8, 8), bool), method="numpy")
+    (False, False)
+    """
     import numpy as np
 
-    return (
-        isinstance(volume, np.ndarray)
-        and volume.ndim in (2, 3)
-        and volume.size >= least_voxels(surfaces)
-        and have_numba()
-    )
+    if method not in METHODS:
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if method == "numpy":
+        return False
+    host = isinstance(volume, np.ndarray) and volume.ndim in (2, 3)
+    if method == "compiled":
+        if not host:
+            raise IsoflowError("method='compiled' takes 2D and 3D NumPy volumes (use 'numpy' or 'auto')")
+        if not have_numba():
+            raise IsoflowError("method='compiled' needs numba: pip install numba")
+        return True
+    return host and volume.size >= least_voxels(surfaces) and have_numba()  # type: ignore[attr-defined]
 
 
 def check_threads(n, where: str = "threads") -> int:
