@@ -248,9 +248,7 @@ def main(argv=None):
     ap.add_argument("--connectivity", type=int, nargs="+", default=[6, 26])
     ap.add_argument("--no-guard", action="store_true", help="skip the guarded runs")
     ap.add_argument("--guard-max-voxels", type=int, default=10**6, help="guarded runs only below this size")
-    # the project's shared meshes sit beside the checkout (/work/shared) or two up from a worktree
-    shared = [str(p / "shared" / "meshes") for p in (ROOT.parent, ROOT.parent.parent) if (p / "shared" / "meshes").is_dir()]
-    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes"), *shared])
+    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes")])
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
 
