@@ -455,7 +455,7 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     surface bounds no well-defined solid, and no grid settles that.
 
     An open or inconsistently oriented mesh has no genus of its own; its
-    solid is read by the generalised winding number (|w| > 1/2) and its
+    solid is read by the generalised winding number (``|w| > 1/2``) and its
     digital topology reported; ``strict`` refuses it (IsoflowError).
     """
     path = Path(path)
