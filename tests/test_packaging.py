@@ -80,3 +80,38 @@ def test_wheel_installs_and_runs_the_readme_command(tmp_path):
                           capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "runs the README's first command" in proc.stdout
+
+
+def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):
+    """At most 150 lines; its first commands are what .ci/run runs; its
+    Python quick start runs as written and says what it prints."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 150
+    first, second = readme.split("```bash\n")[1].splitlines()[:2]
+    assert first.startswith("pip install -e . && isoflow ") and "meshes/bob_small.ply" in first
+    assert second == "pip install -e '.[test]' && python -m pytest"
+    assert (ROOT / ".ci" / "run").read_text().rstrip().splitlines()[-1] == second
+    code = readme.split("```python\n")[1].split("```")[0]
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    report = namespace["report"]
+    assert [report["betti"], report["euler_characteristic"]] == [[1, 1, 0], 0]  # as its comment says
+    assert (tmp_path / "bob.nii.gz").is_file()
+
+
+def test_no_path_outside_the_repository():
+    """No file of the repository names a folder of the machine it was made on."""
+    roots = ("/" + "work/", "/" + "tmp/", "/" + "root/", "../" + "shared")
+    places = [ROOT / "README.md", ROOT / "CHANGELOG.md", ROOT / "pyproject.toml"]
+    for folder in ("docs", "benchmarks", "tests", "examples", "meshes", "src", ".ci"):
+        places += [p for p in (ROOT / folder).rglob("*") if p.is_file() and not any(
+            part in ("_build", "generated", "auto_examples", ".cache", "__pycache__") or part.endswith(".egg-info")
+            for part in p.relative_to(ROOT).parts)]
+    found = []
+    for path in places:
+        if path.suffix in (".npy", ".npz", ".png", ".ply", ".stl", ".STL", ".pyc"):
+            continue
+        text = path.read_text(errors="replace")
+        found += [f"{path.relative_to(ROOT)}: {root}" for root in roots if root in text]
+    assert not found, found
