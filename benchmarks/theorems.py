@@ -3,7 +3,7 @@
     python benchmarks/theorems.py                     # default sample, about 15-30 minutes
     python benchmarks/theorems.py --count 10 --no-guard   # a quick look
 
-Runs the flow (isoflow.flow.run.run_flow, the reading of DESIGN section 4) on
+Runs the flow (isoflow.flow.run.run_flow, the reading of docs/flow.md) on
 many objects -- random unions of boxes, dumbbells, solid tori and square
 annulus prisms, digital balls, smoothed random blobs, two linked square rings,
 and the sample meshes voxelised at 32 and 64 voxels across (when

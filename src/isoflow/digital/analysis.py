@@ -103,7 +103,7 @@ def _analyze(obj, connectivity, surfaces: bool) -> dict:
         out["surfaces"] = census["surfaces"]
         out["pinched_vertices"] = census["pinched_vertices"]
         out["doubled_edges"] = census["doubled_edges"]
-        # DESIGN section 3: the split mesh has V - E + F = 2 chi + 2 p
+        # docs/mathematics.md: the split mesh has V - E + F = 2 chi + 2 p
         assert sum(s["euler_characteristic"] for s in out["surfaces"]) == 2 * chi + 2 * census["pinched_vertices"]
     if vol.ndim == 3 and not compiled and isinstance(vol, np.ndarray):
         paid_numpy(time.perf_counter() - started)  # (the NumPy passes)
