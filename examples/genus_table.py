@@ -15,7 +15,7 @@ draws the genus each tool finds (``OUT/genus.png``).
 
 .. code-block:: bash
 
-    python examples/genus_table.py [OUT] [--folder F] [--resolution R ...] [--force]
+    python examples/genus_table.py [OUT] [--folder F] [--resolution R ...] [--max-resolution M] [--force]
 """
 
 import csv
@@ -33,6 +33,8 @@ SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
 def arguments(parser):
     parser.add_argument("--folder", help="folder of meshes (STL, OBJ, PLY, OFF, GLB; default: isoflow.data's)")
     parser.add_argument("--resolution", type=int, nargs="+", default=[32, 64], help="voxels along the longest side")
+    parser.add_argument("--max-resolution", type=int, default=256,
+                        help="finest grid tried while the digital genus still changes")
 
 
 def show(value):
@@ -65,7 +67,7 @@ def main():
               *(f"digital_{r}" for r in args.resolution), "agree", "verdict"]
     rows = []
     for path in paths:
-        r = isoflow.verify_genus(path, args.resolution, connectivity=6)
+        r = isoflow.verify_genus(path, args.resolution, connectivity=6, max_resolution=args.max_resolution)
         digital = {d["resolution"]: d["genus"] for d in r["digital"]}
         rows.append([path.name, r["mesh"]["faces"], r["mesh"]["components"], show(r["mesh"]["genus"]),
                      show(r["manifold3d"].get("genus")), show(r["pymeshlab"].get("genus")),
