@@ -65,7 +65,7 @@ templates_path = ["_templates"]  # autosummary/class.rst: a class's page documen
 # documented as API, and those references still read as code.
 nitpicky = True
 nitpick_ignore_regex = [
-    (r"py:.*", r"isoflow\.(cli|digital|flow|mesh|scale)(\..*)?"),
+    (r"py:.*", r"isoflow\.(cli|digital|errors|flow|mesh|results|scale)(\..*)?"),
     (r"py:.*", r"_?[A-Za-z][A-Za-z0-9_]*"),
 ]
 api_pages.write(DOCS / "api.rst", isoflow)
