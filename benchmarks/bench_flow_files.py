@@ -1,8 +1,8 @@
 """What ``flow --out`` pays for its files and for reading each back with trimesh.
 
     python benchmarks/bench_flow_files.py                      # 64^3 ball (6) and 48^3 porous (26)
-    git archive main src | tar -x -C /tmp/base                 # another version to compare with
-    python benchmarks/bench_flow_files.py --baseline-src /tmp/base/src --repeat 5
+    mkdir -p benchmarks/.cache/base && git archive main src | tar -x -C benchmarks/.cache/base   # another version
+    python benchmarks/bench_flow_files.py --baseline-src benchmarks/.cache/base/src --repeat 5
 
 Whole command (what a user waits for): ``isoflow flow X --out D`` of this
 tree against ``--baseline-src`` when given (paired: A B A B ..., medians of

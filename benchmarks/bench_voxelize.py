@@ -44,7 +44,7 @@ from isoflow.mesh.voxelize import load_mesh, mesh_defects, voxelize  # noqa: E40
 
 
 def find_meshes(arg: str | None) -> Path:
-    for d in ([Path(arg)] if arg else []) + [ROOT / "meshes", Path("/work/shared/meshes")]:
+    for d in ([Path(arg)] if arg else []) + [ROOT / "meshes"]:
         if (d / "manifest.json").is_file():
             return d
     sys.exit("no mesh directory with a manifest.json found (use --meshes)")

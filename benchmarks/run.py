@@ -452,6 +452,15 @@ def commands(path: Path) -> dict:
             "skimage": [sys.executable, "-c", SKIMAGE_CODE, str(path)]}
 
 
+def shown(cmd: list[str]) -> str:
+    """The command as a user types it, for the results: the program by its
+    name and files relative to the repository, so that no path of the
+    machine that ran it is recorded."""
+    program = Path(cmd[0]).name
+    program = "python" if program.startswith("python") else program
+    return shlex.join([program, *(c.replace(f"{HERE.parent}{os.sep}", "") for c in cmd[1:])])
+
+
 def timed(cmd, env=None, timeout=None) -> dict:
     """Wall seconds and peak RSS of one process (its own rusage, from wait4)."""
     import tempfile
@@ -480,7 +489,7 @@ def run_commands(name: str, size: int, path: Path, repeat: int) -> dict:
     for _ in range(repeat):
         for k, cmd in cmds.items():
             runs[k].append(timed(cmd))
-    res = {"input": name, "size": size, "pairs": repeat, "commands": {k: shlex.join(c) for k, c in cmds.items()}}
+    res = {"input": name, "size": size, "pairs": repeat, "commands": {k: shown(c) for k, c in cmds.items()}}
     for k, rs in runs.items():
         ok = [r for r in rs if "error" not in r]
         res[k] = {
@@ -755,8 +764,8 @@ def markdown_commands(cmds, meta) -> list[str]:
         f"{cmds[0]['pairs']} times; median seconds, median of the pairs' ratios; peak RSS of the process "
         "(interpreter, imports and input included) and that peak less the input file's size, per voxel.",
         "",
-        f"* isoflow: `{cmds[0]['commands']['isoflow'].replace(str(CACHE) + '/', '')}`",
-        f"* skimage: `{cmds[0]['commands']['skimage'].replace(str(CACHE) + '/', '')}`",
+        f"* isoflow: `{cmds[0]['commands']['isoflow'].replace('benchmarks/.cache/', '')}`",
+        f"* skimage: `{cmds[0]['commands']['skimage'].replace('benchmarks/.cache/', '')}`",
         "",
         "| input | size | isoflow info (default flags) | skimage euler_number | ratio | isoflow peak RSS | "
         "isoflow beyond input | skimage peak RSS | surfaces |",

@@ -3,7 +3,7 @@
     python benchmarks/theorems.py                     # default sample, about 15-30 minutes
     python benchmarks/theorems.py --count 10 --no-guard   # a quick look
 
-Runs the flow (isoflow.flow.run.run_flow, the reading of DESIGN section 4) on
+Runs the flow (isoflow.flow.run.run_flow, the reading of docs/flow.md) on
 many objects -- random unions of boxes, dumbbells, solid tori and square
 annulus prisms, digital balls, smoothed random blobs, two linked square rings,
 and the sample meshes voxelised at 32 and 64 voxels across (when
@@ -248,9 +248,7 @@ def main(argv=None):
     ap.add_argument("--connectivity", type=int, nargs="+", default=[6, 26])
     ap.add_argument("--no-guard", action="store_true", help="skip the guarded runs")
     ap.add_argument("--guard-max-voxels", type=int, default=10**6, help="guarded runs only below this size")
-    # the project's shared meshes sit beside the checkout (/work/shared) or two up from a worktree
-    shared = [str(p / "shared" / "meshes") for p in (ROOT.parent, ROOT.parent.parent) if (p / "shared" / "meshes").is_dir()]
-    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes"), *shared])
+    ap.add_argument("--meshes", nargs="*", default=[str(ROOT / "meshes")])
     ap.add_argument("--out", default=str(HERE / "results"))
     args = ap.parse_args(argv)
 

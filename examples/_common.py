@@ -1,5 +1,6 @@
-"""What every example shares: its command line (an output directory, --force),
-one-line errors, and where the sample meshes are. Not an example itself."""
+"""What every example shares: its command line (an output directory,
+--force), outputs that are not overwritten without --force, and one-line
+errors. Not an example itself (the gallery skips files starting with _)."""
 
 from __future__ import annotations
 
@@ -9,9 +10,6 @@ import tempfile
 from pathlib import Path
 
 import isoflow
-
-#: the repository's sample meshes (meshes/README.md: sources, licences, genus)
-MESHES = Path(__file__).resolve().parents[1] / "meshes"
 
 
 def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
@@ -26,6 +24,16 @@ def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
     args.out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="isoflow-example-"))
     args.out.mkdir(parents=True, exist_ok=True)
     return args
+
+
+def outputs(args: argparse.Namespace, *names: str) -> list[Path]:
+    """The paths of the example's outputs in OUT, checked before any work:
+    one that exists is refused unless --force."""
+    paths = [args.out / name for name in names]
+    for path in paths:
+        if path.exists() and not args.force:
+            raise isoflow.IsoflowError(f"{path}: exists; pass --force to overwrite")
+    return paths
 
 
 def run(main) -> None:

@@ -1,42 +1,115 @@
-"""Run the digital curvature flow on a voxelised mesh and export every step.
+"""
+The digital curvature flow, step by step
+========================================
 
-    python examples/flow_export.py [OUT] [--mesh M] [--resolution R] [--guard]
+Each step of the digital curvature flow (Definition 18) moves the object to
+the other lattice (eq. 5.1): a voxel is kept at every old lattice vertex
+that is interior or moves outward, so convex parts shrink and concave parts
+fill. A voxelised torus (from :mod:`isoflow.data`) shrinks until it
+vanishes at its limit point; the step where the tunnel closes is a change
+of the Betti numbers, reported with where it happened. With ``--guard``, no
+step may change them (Theorem 21).
 
-Each step of the flow (Definition 18) moves the object to the other lattice
-(eq. 5.1), shrinking it until it vanishes at its limit point. Prints the
-figures of every step and writes OUT/step_NNN.ply (the boundary surface of
-each step, curvature-coloured), OUT/flow.csv (voxels, parity, Betti numbers,
-chi, energy and bounding box per step), OUT/flow.png and OUT/shapes.png.
-With --guard, no step may change the Betti numbers (Theorem 21).
+Prints every step's figures and writes ``OUT/flow.csv`` (voxels, parity,
+Betti numbers, chi and energy per step), ``OUT/step_NNN.ply`` (each step's
+boundary surface, in the mesh's coordinates), ``OUT/flow.png`` (the figures
+against the step) and ``OUT/shapes.png`` (the object at a few steps).
+``isoflow flow MESH --out DIR`` writes the same from the command line,
+while the flow runs.
+
+.. code-block:: bash
+
+    python examples/flow_export.py [OUT] [--mesh M] [--resolution R] [--guard] [--force]
 """
 
+import csv
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import trimesh
+
 import isoflow
-from isoflow.flow.files import export_flow
-from _common import MESHES, parse_args, run
+from isoflow import data
+from _common import outputs, parse_args, run
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(MESHES / "torus.obj"), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.torus()), help="a closed triangle mesh")
     parser.add_argument("--resolution", type=int, default=24, help="voxels along the longest side")
     parser.add_argument("--guard", action="store_true", help="topology control (Theorem 21)")
 
 
-def main():
-    args = parse_args(__doc__.splitlines()[0], arguments)
-    solid = isoflow.voxelize_file(args.mesh, resolution=args.resolution)
-    result = isoflow.run_flow(solid, guard=args.guard, connectivity=6)  # keeps every state for the export
-    written = export_flow(result, args.out, force=args.force)
+def write_table(result, path):
+    """One row per step; the Betti numbers as columns b0, b1, b2."""
+    with open(path, "w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["step", "voxels", "parity", "b0", "b1", "b2", "euler_characteristic", "energy"])
+        for s in result.steps:
+            writer.writerow([s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"]])
 
-    print(f"{args.mesh} at {args.resolution} voxels across, flow with 6-connectivity{', guarded' if args.guard else ''}")
+
+def plot_figures(result):
+    steps = [s["step"] for s in result.steps]
+    fig, axes = plt.subplots(1, 3, figsize=(12, 3.5))
+    axes[0].plot(steps, [s["voxels"] for s in result.steps], "o-")
+    axes[0].set_title("voxels")
+    axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", color="tab:red")
+    axes[1].set_title("energy E = k^T n")
+    for i in range(3):
+        axes[2].plot(steps, [s["betti"][i] for s in result.steps], "o-", label=f"b{i}")
+    axes[2].legend()
+    axes[2].set_title("Betti numbers")
+    for ax in axes:
+        ax.set_xlabel("step")
+    fig.tight_layout()
+    return fig
+
+
+def plot_shapes(result, count=4):
+    """The object at ``count`` steps from the first to the last non-empty one."""
+    steps = [i for i, s in enumerate(result.states) if s.voxels]
+    shown = steps[:: max(1, len(steps) // count)][:count]
+    fig = plt.figure(figsize=(3 * len(shown), 3.2))
+    for i, step in enumerate(shown):
+        state = result.states[step]
+        ax = fig.add_subplot(1, len(shown), i + 1, projection="3d")
+        ax.voxels(state.volume, facecolors="tab:orange", edgecolors="k", linewidth=0.1)
+        ax.set_title(f"step {step}: {state.voxels} voxels", fontsize=9)
+        ax.set_box_aspect(state.volume.shape)
+        ax.set_axis_off()
+    fig.tight_layout()
+    return fig
+
+
+def main():
+    args = parse_args("Run the digital curvature flow on a voxelised mesh and export every step.", arguments)
+    table, figures, shapes = outputs(args, "flow.csv", "flow.png", "shapes.png")
+    if any(args.out.glob("step_*.ply")) and not args.force:
+        raise isoflow.IsoflowError(f"{args.out}: holds step_*.ply files; pass --force to overwrite")
+    solid = isoflow.voxelize_file(args.mesh, resolution=args.resolution)
+    result = isoflow.run_flow(solid, guard=args.guard, connectivity=6)  # keeps every state
+
+    print(f"{Path(args.mesh).name} at {args.resolution} voxels across, flow with 6-connectivity"
+          f"{', guarded' if args.guard else ''}")
     print(f"  {'step':>4} {'voxels':>7}  betti      chi  energy")
-    for s in result.steps:
-        print(f"  {s['step']:>4} {s['voxels']:>7}  {str(tuple(s['betti'])):<10} {s['euler_characteristic']:>3} {s['energy']:>7}")
+    for s, state in zip(result.steps, result.states):
+        print(f"  {s['step']:>4} {s['voxels']:>7}  {str(tuple(s['betti'])):<10} {s['euler_characteristic']:>3} "
+              f"{s['energy']:>7}")
+        if state.voxels:  # the step's boundary, in the mesh's coordinates
+            mesh = isoflow.boundary_mesh(state.volume, 6)
+            ply = args.out / f"step_{s['step']:03d}.ply"
+            trimesh.Trimesh(state.world(mesh.vertices), mesh.triangles(), process=False).export(ply)
     centre = result.limit["center"]
-    where = "none" if centre is None else "(" + ", ".join(f"{c:.3g}" for c in centre) + ")"
+    where = "none" if centre is None else "(" + ", ".join(f"{c + 0:.3g}" for c in np.round(centre, 9)) + ")"
     print(f"  stopped: {result.stop_reason}; limit point {where}")
     for c in result.topology_changes:
         print(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}")
-    print(f"wrote {len(written)} files to {args.out}")
+
+    write_table(result, table)
+    plot_figures(result).savefig(figures)
+    plot_shapes(result).savefig(shapes)
+    print(f"wrote {table.name}, {figures.name}, {shapes.name} and the steps' surfaces to {args.out}")
 
 
 if __name__ == "__main__":

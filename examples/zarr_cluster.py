@@ -1,78 +1,87 @@
-"""A chunked zarr volume analysed out of core on a dask.distributed cluster.
+"""
+Out of core: a zarr volume on a dask.distributed cluster
+========================================================
 
-    python examples/zarr_cluster.py [OUT] [--mesh M] [--resolution R]
+A volume that does not fit in memory is written and read block by block.
+:func:`isoflow.voxelize_to_zarr` voxelises a mesh (the genus-2 "eight" of
+:mod:`isoflow.data`) slab by slab into an OME-Zarr store (``OUT/solid.zarr``,
+chunks of odd sizes, so that the object, its tunnels and its boundary cross
+block faces, edges and corners), and :func:`isoflow.analyze_zarr` computes
+its report block by block on a ``LocalCluster`` of two worker processes:
+configuration histograms per block, components and closed surfaces joined
+across block faces. Both take any dask scheduler, so the same code runs on
+a real cluster.
 
-The mesh is voxelised slab by slab straight into a zarr store (OUT/solid.zarr,
-chunks of odd sizes), so the whole volume is never in memory; then a
-LocalCluster of two worker processes computes its report block by block
-(isoflow.analyze_chunked: configuration histograms per block, components
-and closed surfaces joined across block faces). Because this sample is small, the script also
-loads the volume and checks the report against the in-memory one. Prints
-both and writes OUT/report.json. Needs isoflow[dask] (dask, distributed, zarr).
+Because this sample is small, the script also loads the volume and checks
+that the report equals the in-memory one. Prints both and writes
+``OUT/report.json``. Needs ``pip install 'isoflow[dask]'``.
+
+.. code-block:: bash
+
+    python examples/zarr_cluster.py [OUT] [--mesh M] [--resolution R] [--force]
 """
 
 import dataclasses
 import json
 import math
 
+import matplotlib.pyplot as plt
 import numpy as np
-import zarr
 from dask.distributed import Client, LocalCluster
 
 import isoflow
-from isoflow.mesh.load import load_mesh
-from isoflow.mesh.outputs import check_output_path
-from isoflow.mesh.voxelize import voxelize
-from _common import MESHES, parse_args, run
+from isoflow import data
+from _common import outputs, parse_args, run
 
 CHUNKS = (19, 29, 13)  # odd sizes: objects, tunnels and cavities cross block faces, edges and corners
 
 
 def arguments(parser):
-    parser.add_argument("--mesh", default=str(MESHES / "eight.off"), help="a closed triangle mesh")
+    parser.add_argument("--mesh", default=str(data.eight()), help="a closed triangle mesh")
     parser.add_argument("--resolution", type=int, default=96, help="voxels along the longest side")
 
 
-def voxelize_to_zarr(mesh, resolution, path):
-    """Voxelise slab by slab (one chunk thick along x) into a new zarr array."""
-    v, f = load_mesh(mesh)
-    lo, hi = v.min(axis=0), v.max(axis=0)
-    pitch = float((hi - lo).max()) / resolution
-    shape = tuple(math.ceil(e / pitch) + 2 for e in hi - lo)  # one empty voxel around
-    origin = (lo + hi) / 2 - pitch * np.array(shape) / 2
-    z = zarr.open_array(str(path), mode="w", shape=shape, chunks=CHUNKS, dtype=bool)
-    for x0 in range(0, shape[0], CHUNKS[0]):
-        nx = min(CHUNKS[0], shape[0] - x0)
-        grid = (origin + [x0 * pitch, 0, 0], (nx, *shape[1:]))
-        z[x0:x0 + nx], _, _ = voxelize(v, f, pitch=pitch, grid=grid)
-    return z
+def plot_blocks(volume, chunks):
+    """The middle slice across z, with the block faces the report was joined across."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.imshow(volume[:, :, volume.shape[2] // 2], origin="lower", cmap="Greys")  # x up, y across
+    for x in range(chunks[0], volume.shape[0], chunks[0]):
+        ax.axhline(x - 0.5, color="tab:red", linewidth=0.8)
+    for y in range(chunks[1], volume.shape[1], chunks[1]):
+        ax.axvline(y - 0.5, color="tab:red", linewidth=0.8)
+    ax.set_xlabel("y")
+    ax.set_ylabel("x")
+    ax.set_title(f"slice z = {volume.shape[2] // 2}: blocks of {chunks} voxels (red faces)")
+    fig.tight_layout()
+    return fig
 
 
 def main():
-    args = parse_args(__doc__.splitlines()[0], arguments)
-    store = args.out / "solid.zarr"
-    if store.exists() and not args.force:
-        raise isoflow.IsoflowError(f"{store}: exists; pass --force to overwrite")
-    report_path = check_output_path(args.out / "report.json", args.force)
-    z = voxelize_to_zarr(args.mesh, args.resolution, store)
+    args = parse_args("A chunked zarr volume analysed out of core on a dask.distributed cluster.", arguments)
+    store, report_path, picture = outputs(args, "solid.zarr", "report.json", "blocks.png")
 
-    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster, \
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \
             Client(cluster) as client:
-        chunked = isoflow.analyze_chunked(z, connectivity=6, scheduler=client.get)
-    in_memory = isoflow.analyze(np.asarray(z[:]), connectivity=6)
+        written = isoflow.voxelize_to_zarr(args.mesh, store, resolution=args.resolution, chunks=CHUNKS,
+                                           scheduler=client.get, force=args.force)
+        chunked = isoflow.analyze_zarr(store, connectivity=6, scheduler=client.get)
+    volume = isoflow.read_volume(store).volume
+    in_memory = isoflow.analyze(volume, connectivity=6)
     # out of core an edge across a block face has its ends in two tasks, so
     # the doubled edges are not counted there (null): compare the rest
     in_memory = dataclasses.replace(in_memory, doubled_edges=None)
     report_path.write_text(json.dumps({"chunked": chunked.to_dict(), "in_memory": in_memory.to_dict()}, indent=1))
+    plot_blocks(volume, CHUNKS).savefig(picture)
 
-    blocks = math.prod(math.ceil(s / c) for s, c in zip(z.shape, CHUNKS))
-    print(f"{store}: shape {z.shape}, {blocks} blocks of up to {CHUNKS}, 2 worker processes")
+    shape = tuple(written["shape"])
+    blocks = math.prod(math.ceil(s / c) for s, c in zip(shape, CHUNKS))
+    print(f"{store.name}: shape {shape}, {blocks} blocks of up to {CHUNKS}, 2 worker processes")
     for name, r in (("out of core", chunked), ("in memory", in_memory)):
         print(f"  {name:<12} voxels {r['voxels']}, chi {r['euler_characteristic']}, betti {r['betti']}, "
               f"energy {r['energy']}, {len(r['surfaces'])} closed surfaces")
     print(f"  the two reports are {'identical' if chunked == in_memory else 'DIFFERENT'}")
-    print(f"wrote {report_path}")
-    if chunked != in_memory:
+    print(f"wrote {report_path.name} and {picture.name} to {args.out}")
+    if chunked != in_memory or int(np.count_nonzero(volume)) != written["voxels"]:
         raise SystemExit(1)
 
 

@@ -4,6 +4,9 @@ their defining inequalities, so that their topology is known exactly."""
 import numpy as np
 import pytest
 
+# the documentation built once per session, and the examples' runs in its gallery
+pytest_plugins = ["docs_site"]
+
 
 def ball(radius: float, size: int | None = None, centre=None) -> np.ndarray:
     size = size or int(2 * radius + 4)

@@ -1,12 +1,19 @@
-"""The scripts in examples/ run as a user runs them, and what they print and
+"""The scripts in examples/ do what they say, and what they print and
 write agrees with independently known values: the genus in
-meshes/manifest.json, trimesh's V - E + F of the files written, and
-scikit-image's Euler number of the volumes written."""
+meshes/manifest.json (isoflow.data.info), trimesh's V - E + F of the files
+written, and scikit-image's Euler number of the volumes written.
+
+Each example runs once per test session: in the documentation's gallery
+when Sphinx is installed (the ``example_run`` fixture of
+tests/docs_site.py reads the files it wrote and what the gallery shows it
+printing), else on its own, as a user runs it. One test runs a script as a
+user does, from another directory, with its options."""
 
 from __future__ import annotations
 
 import csv
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -16,122 +23,132 @@ import pytest
 import trimesh
 from skimage.measure import euler_number
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "examples"
-MANIFEST = {m["filename"]: m for m in json.loads((ROOT / "meshes" / "manifest.json").read_text())["meshes"]}
+from docs_site import EXAMPLES, example_names
+from isoflow import data
 
 
 def genus(name: str) -> int:
-    return MANIFEST[name]["genus"]
-
-
-def run_example(name: str, out: Path, *args) -> str:
-    """Run examples/NAME.py OUT ARGS from another directory; its stdout."""
-    proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(out), *map(str, args)],
-                          capture_output=True, text=True, cwd=out.parent)
-    assert proc.returncode == 0, proc.stderr
-    return proc.stdout
+    return data.info(name)["genus"]
 
 
 def test_every_example_is_tested_and_listed():
-    scripts = {p.name for p in EXAMPLES.glob("[a-z]*.py")}
+    scripts = example_names()
     tested = {n for n in globals() if n.startswith("test_")}
-    assert {f"test_{Path(s).stem}" for s in scripts} <= tested
+    assert {f"test_{s}" for s in scripts} <= tested
     listing = (EXAMPLES / "README.md").read_text()
-    assert all(f"`{s}`" in listing for s in scripts)
+    assert all(f"`{s}.py`" in listing for s in scripts)
     assert len(scripts) >= 6
+    for script in scripts:  # the public API and the installed samples only
+        text = (EXAMPLES / f"{script}.py").read_text()
+        assert "from isoflow." not in text and "import isoflow." not in text, script
+        assert "meshes/" not in text and "parents[" not in text, script
 
 
-def test_voxelize_topology(tmp_path):
-    g = genus("torus.obj")
-    out = run_example("voxelize_topology.py", tmp_path / "out")
-    report = json.loads((tmp_path / "out" / "report.json").read_text())
-    assert report["betti"] == [1, g, 0]
-    assert report["euler_characteristic"] == 1 - g and report["a_dot_n"] == 8 * (1 - g)
-    assert [s["genus"] for s in report["surfaces"]] == [g]
-    assert f"1 components, {g} tunnels, 0 cavities" in out
-    with np.load(tmp_path / "out" / "solid.npz") as z:
-        volume = z["volume"]
-    assert int(volume.sum()) == report["voxels"]
-    assert euler_number(volume, 1) == 1 - g
-    # a second run does not replace the outputs: one line, exit 2
-    again = subprocess.run([sys.executable, str(EXAMPLES / "voxelize_topology.py"), str(tmp_path / "out")],
-                           capture_output=True, text=True)
+def test_an_example_run_as_a_user_runs_it(tmp_path):
+    """From another directory, with its options; a second run does not
+    replace the outputs: one line, exit 2."""
+    out = tmp_path / "out"
+    command = [sys.executable, str(EXAMPLES / "voxelize_topology.py"), str(out), "--mesh", str(data.eight()),
+               "--resolution", "20"]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    first = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert first.returncode == 0, first.stderr
+    assert "1 components, 2 tunnels, 0 cavities" in first.stdout
+    with np.load(out / "solid.npz") as z:
+        assert euler_number(z["volume"], 1) == 1 - genus("eight.off")
+    again = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
 
 
-def test_curvature_surface(tmp_path):
-    g = genus("eight.off")  # genus 2: V - E + F = -2, sum of a = 8 chi = -8
-    out = run_example("curvature_surface.py", tmp_path / "out", "--mesh", ROOT / "meshes" / "eight.off",
-                      "--resolution", 32)
-    ply = trimesh.load(tmp_path / "out" / "surface.ply", process=False)
-    assert ply.euler_number == 2 - 2 * g
+def test_voxelize_topology(example_run):
+    out, printed = example_run("voxelize_topology")
+    g = genus("torus.obj")
+    report = json.loads((out / "report.json").read_text())
+    assert report["betti"] == [1, g, 0]
+    assert report["euler_characteristic"] == 1 - g and report["a_dot_n"] == 8 * (1 - g)
+    assert [s["genus"] for s in report["surfaces"]] == [g]
+    assert f"1 components, {g} tunnels, 0 cavities" in printed
+    with np.load(out / "solid.npz") as z:
+        volume = z["volume"]
+    assert int(volume.sum()) == report["voxels"]
+    assert euler_number(volume, 1) == 1 - g
+    assert (out / "topology.png").stat().st_size > 0
+
+
+def test_curvature_surface(example_run):
+    out, printed = example_run("curvature_surface")
+    g = genus("bob_small.ply")  # genus 1: V - E + F = 0, sum of a = 8 chi = 0
+    ply = trimesh.load(out / "surface.ply", process=False)
+    assert ply.euler_number == 2 - 2 * g and ply.is_watertight
     columns = ply.metadata["_ply_raw"]["vertex"]["data"]
     assert int(columns["a"].sum()) == 8 * (1 - g)
     assert {"config", "class", "gamma", "a", "f", "red", "green", "blue"} <= set(columns.dtype.names)
     assert ply.visual.kind == "vertex"
-    lo, hi = trimesh.load(ROOT / "meshes" / "eight.off").bounds
+    lo, hi = trimesh.load(data.bob()).bounds
     assert np.all(ply.bounds[0] > lo - 0.1 * (hi - lo)) and np.all(ply.bounds[1] < hi + 0.1 * (hi - lo))
     import matplotlib.image
 
-    assert matplotlib.image.imread(tmp_path / "out" / "surface.png").ndim == 3
-    assert f"= {8 * (1 - g)} = 8 chi" in out and f"genus {g}" in out
+    assert matplotlib.image.imread(out / "surface.png").ndim == 3
+    assert f"= {8 * (1 - g)} = 8 chi" in printed and f"genus {g}" in printed
 
 
-def test_flow_export(tmp_path):
+def test_flow_export(example_run):
+    out, printed = example_run("flow_export")
     g = genus("torus.obj")
-    out = run_example("flow_export.py", tmp_path / "out")
-    with open(tmp_path / "out" / "flow.csv") as fh:
+    with open(out / "flow.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert [int(rows[0][k]) for k in ("b0", "b1", "b2")] == [1, g, 0]
-    assert int(rows[-1]["voxels"]) == 0 and "stopped: vanished" in out
+    assert int(rows[-1]["voxels"]) == 0 and "stopped: vanished" in printed
     assert [int(r["step"]) for r in rows] == list(range(len(rows)))
-    assert len(out.splitlines()) >= len(rows) + 3  # a line per step
-    plys = sorted((tmp_path / "out").glob("step_*.ply"))
+    assert len(printed.splitlines()) >= len(rows) + 3  # a line per step
+    plys = sorted(out.glob("step_*.ply"))
     assert len(plys) == sum(int(r["voxels"]) > 0 for r in rows)
     assert trimesh.load(plys[0], process=False).euler_number == 2 - 2 * g
     for name in ("flow.png", "shapes.png"):
-        assert (tmp_path / "out" / name).stat().st_size > 0
+        assert (out / name).stat().st_size > 0
     # the torus is symmetric: the flow ends at its centre (in mesh units)
-    centre = trimesh.load(ROOT / "meshes" / "torus.obj").bounds.mean(axis=0)
-    limit = [float(c) for c in out.split("limit point (")[1].split(")")[0].split(",")]
+    centre = trimesh.load(data.torus()).bounds.mean(axis=0)
+    limit = [float(c) for c in printed.split("limit point (")[1].split(")")[0].split(",")]
     assert np.allclose(limit, centre, atol=0.1)
 
 
-def test_genus_table(tmp_path):
-    run_example("genus_table.py", tmp_path / "out")
-    with open(tmp_path / "out" / "genus.csv") as fh:
+def test_genus_table(example_run):
+    out, _ = example_run("genus_table")
+    with open(out / "genus.csv") as fh:
         rows = {r["mesh"]: r for r in csv.DictReader(fh)}
-    meshes = {p.name for p in (ROOT / "meshes").iterdir() if p.suffix.lower() in (".stl", ".obj", ".ply", ".off")}
-    assert set(rows) == meshes == set(MANIFEST)
-    for name, m in MANIFEST.items():
+    meshes = {n for n in data.names() if Path(n).suffix.lower() in (".stl", ".obj", ".ply", ".off")}
+    assert set(rows) == meshes
+    for name in meshes:
+        m = data.info(name)
         assert rows[name]["genus"] == ("-" if m["genus"] is None else str(m["genus"])), name
         assert rows[name]["components"] == str(m["components"]), name
     for name in ("bob_small.ply", "torus.obj", "eight.off", "spot.ply"):
         assert rows[name]["digital_64"] == str(genus(name)) and rows[name]["agree"] == "True"
     assert rows["plane_holes.obj"]["agree"] == "False"  # open: no genus to agree with
+    assert (out / "genus.png").stat().st_size > 0
 
 
-def test_zarr_cluster(tmp_path):
-    pytest.importorskip("distributed")
+def test_zarr_cluster(example_run):
     zarr = pytest.importorskip("zarr")
+    pytest.importorskip("distributed")
+    out, printed = example_run("zarr_cluster")
     g = genus("eight.off")
-    out = run_example("zarr_cluster.py", tmp_path / "out")
-    report = json.loads((tmp_path / "out" / "report.json").read_text())
+    report = json.loads((out / "report.json").read_text())
     assert report["chunked"] == report["in_memory"]
     assert report["chunked"]["betti"] == [1, g, 0]
-    z = zarr.open_array(str(tmp_path / "out" / "solid.zarr"), mode="r")
-    assert tuple(z.chunks) == (19, 29, 13) and all(s % c for s, c in zip(z.shape, z.chunks))
-    volume = np.asarray(z[:])
+    level = zarr.open_group(str(out / "solid.zarr"), mode="r")["0"]  # OME-Zarr: its full-resolution level
+    assert tuple(level.chunks) == (19, 29, 13) and all(s % c for s, c in zip(level.shape, level.chunks))
+    volume = np.asarray(level[:]).astype(bool)
     assert euler_number(volume, 1) == 1 - g == report["chunked"]["euler_characteristic"]
-    assert "identical" in out and "2 worker processes" in out
+    assert int(volume.sum()) == report["chunked"]["voxels"]
+    assert "identical" in printed and "2 worker processes" in printed
 
 
-def test_four_d(tmp_path):
+def test_four_d(example_run):
+    out, _ = example_run("four_d")
     g = genus("eight.off")
-    run_example("four_d.py", tmp_path / "out")
-    reports = json.loads((tmp_path / "out" / "report.json").read_text())
-    moving = np.load(tmp_path / "out" / "moving.npy")
+    reports = json.loads((out / "report.json").read_text())
+    moving = np.load(out / "moving.npy")
     assert moving.ndim == 4 and all(euler_number(frame, 1) == 1 - g for frame in moving)
     for conn in (8, 80):
         m, s = reports[f"moving_{conn}"], reports[f"shell_{conn}"]

@@ -47,6 +47,7 @@ _WHERE = {
     "write_volume": ".mesh.volumes",
     "voxelize_file": ".mesh.voxelize",
     "voxelize_mesh": ".mesh.voxelize",
+    "voxelize_to_zarr": ".mesh.slabs",
 }
 
 

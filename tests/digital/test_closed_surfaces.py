@@ -96,7 +96,7 @@ def test_known_shapes(method, conn):
         if genus is not None:
             assert sorted(s["genus"] for s in r["surfaces"]) == genus, name
         chi = euler_characteristic(v, conn)
-        # DESIGN section 3: the surfaces' chi add up to 2 chi + 2 p
+        # docs/mathematics.md: the surfaces' chi add up to 2 chi + 2 p
         assert sum(s["euler_characteristic"] for s in r["surfaces"]) == 2 * chi + 2 * r["pinched_vertices"]
 
 

@@ -141,7 +141,7 @@ def test_shares_agree_where_boundary_is_a_manifold(n):
 
 
 def test_lut_3d_classes_match_design_table():
-    """a (eq. 4.10) of the nine 3D classes, by octant count (DESIGN section 2)."""
+    """a (eq. 4.10) of the nine 3D classes, by octant count (docs/mathematics.md)."""
     lut = euler_table(3, "face")
     got = sorted((bin(int(r)).count("1"), int(lut[r])) for r in nd.boundary_classes(3))
     assert got == [(1, 1), (2, 0), (3, -1), (4, -2), (4, -2), (4, 0), (5, -1), (6, 0), (7, 1)]
@@ -411,7 +411,7 @@ def test_codes_3d_reproduce_paper_for_seven_classes():
     assert got[(6, 0)] == [("-00", -1.0)]  # (-,0,0) concave edge
     assert got[(7, 1)] == [("---", -9.0)]  # (-,-,-) concave corner
     # the two a = -2 classes: the per-axis rule gives (-,-,-) and (-,0,-);
-    # the paper labels them (+,-,-)+ and (-,-,-)- (DESIGN section 2)
+    # the paper labels them (+,-,-)+ and (-,-,-)- (docs/mathematics.md)
     assert sorted(got[(4, -2)]) == [("---", -9.0), ("--0", -4.0)]
 
 

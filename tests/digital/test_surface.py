@@ -27,7 +27,7 @@ def test_random_volumes_give_closed_manifolds(rng, conn):
         assert tm.is_watertight and tm.is_winding_consistent
         assert tm.volume == pytest.approx(v.sum())
         assert (tm.area_faces > 0).all()
-        # DESIGN section 3: V - E + F = 2 chi + 2 p with the pinches split
+        # docs/mathematics.md: V - E + F = 2 chi + 2 p with the pinches split
         assert tm.euler_number == m.euler_characteristic == 2 * chi + 2 * m.pinched
         assert m.a.sum() == 8 * chi
         seen_pinch += m.pinched > 0

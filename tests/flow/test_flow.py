@@ -1,4 +1,4 @@
-"""The digital curvature flow (section 5, DESIGN section 4) and topology control.
+"""The digital curvature flow (section 5, docs/flow.md) and topology control.
 
 Expected values are known independently of the code: Example 19 of the paper,
 boxes and rectangles (one layer per axis per step), the L of five squares,
@@ -160,7 +160,7 @@ def test_offset_follows_the_half_voxel_shift():
 
 
 def _slow_keep(volume, connectivity):
-    """Per-vertex loops over DESIGN section 4's table (3D) or eq. 5.8 (2D)."""
+    """Per-vertex loops over the table of docs/flow.md (3D) or eq. 5.8 (2D)."""
     cfg = configurations(volume)
     nd = volume.ndim
     if nd == 3:

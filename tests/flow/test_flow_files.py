@@ -51,7 +51,7 @@ def test_26_connected_flow_step_files_and_their_check_columns(tmp_path):
         assert tm.volume == pytest.approx(int(row["voxels"]))
         header = ply.read_bytes()[:600].decode("ascii", "replace")
         n_faces = int(header.split("element face ")[1].split()[0])
-        triangles = "comment faces: triangles" in header  # where an edge is doubled (README)
+        triangles = "comment faces: triangles" in header  # where an edge is doubled (docs/formats.md)
         assert len(tm.faces) == (n_faces if triangles else 2 * n_faces)
         ms = pymeshlab.MeshSet()
         ms.load_new_mesh(str(ply))

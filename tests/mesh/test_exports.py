@@ -2,8 +2,8 @@
 
 Written through the command line, read back by trimesh (``process=False``:
 the file's own vertices) and pymeshlab, as a user would: closed, 2-manifold,
-consistently oriented, Euler number ``2 chi + 2 p`` (README "The boundary
-mesh"; chi from scikit-image, independent of isoflow), exact voxel volume.
+consistently oriented, Euler number ``2 chi + 2 p`` (docs/mathematics.md, "The
+boundary mesh"; chi from scikit-image, independent of isoflow), exact voxel volume.
 """
 
 import contextlib
@@ -138,7 +138,7 @@ def test_well_composed_stl_opens_watertight_after_the_weld(tmp_path):
 
 
 def test_file_contents_per_format(tmp_path):
-    """What README says each format holds: binary PLY quads (triangles when an
+    """What docs/formats.md says each format holds: binary PLY quads (triangles when an
     edge is doubled), OBJ polygons starting at a midpoint, GLB triangles with
     vertex colours and the curvature columns."""
     edge = np.zeros((2, 2, 1), bool)

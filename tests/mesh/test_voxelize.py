@@ -3,7 +3,7 @@
 Reference values come from outside the code under test: analytic volumes,
 exact integer predicates on lattice solids (ties resolved by the symbolic
 perturbation the scanline documents), trimesh's ray-based ``contains``, the
-topology in /work/shared/meshes/manifest.json, and scikit-image / scipy for
+topology in meshes/manifest.json, and scikit-image / scipy for
 the topology of voxel sets.
 """
 

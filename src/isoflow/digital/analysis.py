@@ -124,7 +124,7 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
             census = closed_surfaces(arrays.to_host(vol), conn)
         out.update(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                    doubled_edges=census["doubled_edges"])
-        # DESIGN section 3: the split mesh has V - E + F = 2 chi + 2 p
+        # docs/mathematics.md: the split mesh has V - E + F = 2 chi + 2 p
         assert sum(s["euler_characteristic"] for s in out["surfaces"]) == 2 * chi + 2 * census["pinched_vertices"]
     return out
 

@@ -2,7 +2,7 @@
 building the boundary mesh.
 
 :func:`isoflow.digital.surface.boundary_mesh` splits the boundary into
-closed surfaces by its local rules (DESIGN section 3): edge contacts are
+closed surfaces by its local rules (docs/mathematics.md): edge contacts are
 paired inside the object voxel under 6-connectivity and across the edge
 under 26, and every vertex contact is split. Those rules make the mesh the
 boundary of a solid ``M`` whose pieces are the object's components under an

@@ -6,7 +6,7 @@ window: which octants are in the object, which of them share faces, how the
 window splits into layers. Nothing is typed in; the tests compare the derived
 tables with the paper's eqs. 4.4-4.11.
 
-The nine classes (DESIGN section 2) are numbered by their vertex angle: class
+The nine classes (docs/mathematics.md) are numbered by their vertex angle: class
 ``gamma + 4`` for ``gamma`` in ``-4..4`` eighths, so that the histogram of
 classes *is* the paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
 """
@@ -197,7 +197,7 @@ def _tables_3d():
         if not wc[c]:
             continue
         # Per-axis code: the more curved of the two layers across the axis
-        # (concave over convex over flat over none), DESIGN section 2.
+        # (concave over convex over flat over none), docs/mathematics.md.
         rank = {CONCAVE: 3, CONVEX: 2, FLAT: 1, NONE: 0}
         for ax in range(3):
             layer = [_planar_code(_halves(3, ax, s), bits) for s in (0, 1)]

@@ -348,7 +348,7 @@ def index_48(codes) -> np.ndarray:
 def _merge(a: np.ndarray, b: np.ndarray, rule: str) -> np.ndarray:
     """Code of an axis from the section codes of its two halves.
 
-    ``'paper'`` (DESIGN section 2): the more curved half wins, concave over
+    ``'paper'`` (docs/mathematics.md): the more curved half wins, concave over
     convex over flat over none. ``'symmetric'``: a convex half against a
     concave half gives flat (0); otherwise the more curved half wins. Either
     way an UNDEFINED half makes the axis UNDEFINED.

@@ -1,4 +1,4 @@
-"""The boundary of a digital object as a closed quad mesh (DESIGN section 3).
+"""The boundary of a digital object as a closed quad mesh (docs/mathematics.md).
 
 Faces are the unit squares between an object voxel and a background voxel,
 oriented outward; vertices are lattice points. Where the object is not
@@ -221,7 +221,7 @@ class QuadMesh:
         return np.where(self.sheet == 0, a_lut(self.connectivity)[self.config], 0)
 
     def polygons(self) -> np.ndarray:
-        """Faces with their midpoints (DESIGN section 6): (F, 4) when there are
+        """Faces with their midpoints (docs/formats.md, "Surface files"): (F, 4) when there are
         none, else (F, 8) cyclic rows of corner, midpoint or -1, corner, ...
 
         A row with a midpoint starts at its first midpoint. Readers
@@ -339,7 +339,7 @@ def _empty_mesh(connectivity: int) -> QuadMesh:
 
 
 def boundary_mesh(volume: np.ndarray, connectivity: int = 6) -> QuadMesh:
-    """The closed quad mesh of a 3D object's boundary (DESIGN section 3).
+    """The closed quad mesh of a 3D object's boundary (docs/mathematics.md).
 
     ``volume`` is a 3D boolean array; vertices come out in array-corner units
     (voxel ``v`` spans ``[v, v+1]``), ordered by lattice position and sheet.

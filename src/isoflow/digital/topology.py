@@ -1,7 +1,7 @@
 """Euler characteristic, Betti numbers and genus of digital objects.
 
 chi is the digital Gauss-Bonnet sum (Theorems 10-11, in the exact form
-``a^T n = 8 chi`` of DESIGN section 2): a histogram of vertex configurations
+``a^T n = 8 chi``, docs/mathematics.md): a histogram of vertex configurations
 weighted by :func:`isoflow.digital.indices.euler_lut`. Betti numbers come from
 counting connected components of the object (b0) and of the background with
 the complementary connectivity (b2 in 3D, b1 in 2D); the remaining Betti

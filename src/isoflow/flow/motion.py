@@ -3,7 +3,7 @@
 One step (Definition 18, eq. 5.15-5.18) maps an object on one lattice to an
 object on the other: the new voxels are centred at the old lattice vertices,
 and vertex ``w`` becomes a voxel iff its configuration is 255 (interior) or it
-is a boundary vertex that *moves outward* (DESIGN section 4):
+is a boundary vertex that *moves outward* (docs/flow.md, "One step"):
 
 =====================================================  =========================
 class                                                  moves
@@ -104,7 +104,7 @@ def flow_connectivity(ndim: int, connectivity: int | None) -> int:
 
 
 # --------------------------------------------------------------------------
-# Lookup tables of the motion (DESIGN section 4)
+# Lookup tables of the motion (docs/flow.md, "One step")
 # --------------------------------------------------------------------------
 
 

@@ -5,7 +5,7 @@
 * :func:`to_manifold`: the union of the voxels as a ``manifold3d.Manifold``,
   built from isoflow's own boundary mesh;
 * :func:`cube_union`: the same union as manifold3d builds it from cubes (a
-  reference, slow and sliver-prone; PEERS.md).
+  reference, slow and sliver-prone; docs/voxelisation.md, "manifold3d").
 """
 
 from __future__ import annotations
@@ -41,7 +41,7 @@ def from_manifold(manifold, pitch: float = 1.0, origin=(0.0, 0.0, 0.0)) -> Digit
 def cube_union(voxels):
     """The union of unit cubes at integer voxel indices, as manifold3d builds
     it with ``batch_boolean`` (slow and sliver-prone for many cubes, see
-    PEERS.md; :func:`to_manifold` is the fast, exact route)."""
+    docs/voxelisation.md; :func:`to_manifold` is the fast, exact route)."""
     import manifold3d as m3
 
     cubes = [m3.Manifold.cube([1.0, 1.0, 1.0]).translate([float(c) for c in v]) for v in np.asarray(voxels)]
@@ -64,7 +64,7 @@ def to_manifold(obj: DigitalObject, connectivity: int = 6):
     boundary mesh, manifold3d sees exactly the surface of the connectivity
     asked: its ``decompose()`` gives the components of that connectivity (edge
     contacts joined under 26, split under 6) and ``volume()`` the voxel volume.
-    Vertex contacts are split in the mesh (DESIGN section 3).
+    Vertex contacts are split in the mesh (docs/mathematics.md, "The boundary mesh").
     """
     import manifold3d as m3
 

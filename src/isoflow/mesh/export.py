@@ -1,4 +1,4 @@
-"""Writing the boundary mesh: PLY, OBJ, STL and GLB (DESIGN section 6).
+"""Writing the boundary mesh: PLY, OBJ, STL and GLB (docs/formats.md, "Surface files").
 
 The writers take plain arrays (vertex columns, faces padded with -1) so that
 any polygon mesh can be written; :func:`mesh_vertex_table` makes the columns

@@ -6,7 +6,7 @@ number, genus per component, defects); :func:`verify_genus` puts it beside
 manifold3d's, pymeshlab's and the digital topology of the voxelised solid
 at each resolution, with one verdict.
 
-What "genus" means differs between tools (see PEERS.md): trimesh's Euler
+What "genus" means differs between tools (docs/voxelisation.md): trimesh's Euler
 number is ``V - E + F`` of the whole mesh, manifold3d's ``genus()`` is
 ``1 - chi/2`` of the whole mesh (negative for several components), pymeshlab
 sums genera over components. Here ``genus`` always means the total number of
@@ -455,7 +455,7 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     surface bounds no well-defined solid, and no grid settles that.
 
     An open or inconsistently oriented mesh has no genus of its own; its
-    solid is read by the generalised winding number (|w| > 1/2) and its
+    solid is read by the generalised winding number (``|w| > 1/2``) and its
     digital topology reported; ``strict`` refuses it (IsoflowError).
     """
     path = Path(path)

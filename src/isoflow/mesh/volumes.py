@@ -277,7 +277,7 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     keep. Refuses an existing file unless ``force``. Returns the file's path.
 
     ``.npz`` keeps everything (offset and parity too); the other formats
-    keep the world position of every voxel (see the README's table).
+    keep the world position of every voxel (see the table of docs/formats.md).
     """
     obj = DigitalObject.of(obj)
     file, dataset = check_volume_output(path, force)

@@ -20,7 +20,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[3]
 COMMIT = "0b245b6"
 RESOLUTIONS = (24, 64, 101)
-DIRS = (ROOT / "meshes", Path("/work/shared/meshes"))
+DIRS = (ROOT / "meshes",)
 
 
 def main():

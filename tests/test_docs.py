@@ -1,0 +1,84 @@
+"""The documentation builds with warnings as errors (a broken link, a
+missing page, a docstring Sphinx cannot read, an unresolved reference to
+the public API all fail), its command line page is generated from the
+parser, its API page lists ``isoflow.__all__``, and its gallery shows a
+picture of every example. Skipped, with the reason, when Sphinx and its
+extensions are not installed (``pip install -e '.[docs]'``)."""
+
+from __future__ import annotations
+
+import argparse
+from html.parser import HTMLParser
+
+import isoflow
+from docs_site import example_names, script_output_pictures
+from isoflow.cli.main import build_parser
+
+
+class _Text(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.parts, self.skip = [], 0
+
+    def handle_starttag(self, tag, attrs):
+        self.skip += tag in ("script", "style")
+
+    def handle_endtag(self, tag):
+        self.skip -= tag in ("script", "style")
+
+    def handle_data(self, data):
+        if not self.skip:
+            self.parts.append(data)
+
+
+def text_of(page) -> str:
+    """A page's text as a reader sees it, whitespace collapsed."""
+    parser = _Text()
+    parser.feed(page.read_text())
+    return " ".join(" ".join(parser.parts).split())
+
+
+def test_the_site_builds_without_a_warning(site):
+    assert site.returncode == 0 and not site.warnings(), "\n".join(site.warnings()) or site.log[-3000:]
+    for page in ("index", "getting-started", "cli", "api", "mathematics", "formats", "voxelisation",
+                 "large-volumes", "flow", "ndim", "performance", "architecture", "changelog", "auto_examples/index"):
+        assert (site.html / f"{page}.html").is_file(), page
+
+
+def test_the_command_line_page_is_the_parser(site):
+    """Every command, option and choice of build_parser() is on the page."""
+    page = text_of(site.html / "cli.html")
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert set(commands) == {"info", "surface", "voxelize", "genus", "flow", "completion"}
+    for name, sub in commands.items():
+        assert f"isoflow {name} " in page, name
+        for action in sub._actions:
+            if isinstance(action, argparse._HelpAction):  # -h is every command's, not listed
+                continue
+            for option in action.option_strings:
+                assert option in page, (name, option)
+            assert action.help is None or action.help == argparse.SUPPRESS or \
+                " ".join(action.help.split()[:4]) in page, (name, action.dest)
+
+
+def test_the_api_page_is_the_public_api(site):
+    page = text_of(site.html / "api.html")
+    for name in isoflow.__all__:
+        assert name in page, name
+        generated = site.html / "generated" / f"isoflow.{name}.html"
+        assert generated.is_file(), name
+    for name in ("path", "names", "info", "bob", "example19"):
+        assert (site.html / "generated" / f"isoflow.data.{name}.html").is_file(), name
+
+
+def test_the_gallery_shows_every_example_with_its_picture(site):
+    names = example_names()
+    assert len(names) >= 6
+    index = (site.html / "auto_examples" / "index.html").read_text()
+    for name in names:
+        assert f"{name}.html" in index, name
+        pictures = script_output_pictures(site, name)
+        assert pictures, f"{name}: the gallery shows no picture"
+        for src in pictures:
+            assert (site.html / "auto_examples" / src).resolve().is_file(), (name, src)

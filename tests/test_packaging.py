@@ -1,0 +1,117 @@
+"""What a user installs: the package list in pyproject.toml, the sample data
+of ``isoflow.data`` (checked against the sha256 sums of meshes/manifest.json),
+``python -m isoflow``, and a wheel built and installed in a fresh virtual
+environment that runs the README's first command (.ci/check-wheel)."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from isoflow import data
+from isoflow.errors import IsoflowError
+
+ROOT = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
+MANIFEST = json.loads((ROOT / "meshes" / "manifest.json").read_text())["meshes"]
+
+
+def test_every_package_is_listed():
+    """setuptools is given the packages by name (the meshes are a mapped
+    folder, which packages.find cannot see): a new subpackage must be added."""
+    src = ROOT / "src"
+    found = {".".join(p.parent.relative_to(src).parts) for p in src.rglob("__init__.py")}
+    listed = set(PYPROJECT["tool"]["setuptools"]["packages"])
+    assert listed == found | {"isoflow.data.meshes"}
+    assert PYPROJECT["tool"]["setuptools"]["package-dir"]["isoflow.data.meshes"] == "meshes"
+
+
+def test_package_data_takes_every_sample_file():
+    patterns = PYPROJECT["tool"]["setuptools"]["package-data"]["isoflow.data.meshes"]
+    files = [p for p in (ROOT / "meshes").iterdir() if p.is_file()]
+    assert all(any(p.match(pattern) for pattern in patterns) for p in files), files
+
+
+def test_samples_are_the_manifest_files():
+    assert set(data.names()) == {m["filename"] for m in MANIFEST} | {"example19.txt"}
+    for m in MANIFEST:
+        path = data.path(m["filename"])
+        assert hashlib.sha256(path.read_bytes()).hexdigest() == m["sha256"], path
+        assert data.info(m["filename"])["genus"] == m["genus"]
+    assert data.folder().samefile(ROOT / "meshes")  # a checkout reads the repository's own copy
+
+
+def test_named_samples_and_their_genus():
+    import trimesh
+
+    for get, genus in ((data.bob, 1), (data.spot, 0), (data.torus, 1), (data.eight, 2)):
+        mesh = trimesh.load(get(), force="mesh")
+        assert mesh.is_watertight and mesh.euler_number == 2 - 2 * genus, get.__name__
+    points = [line for line in data.example19().read_text().splitlines() if not line.startswith("#")]
+    assert len(points) == 20  # the paper's P10, P11 and P12 (eq. 5.19)
+
+
+def test_unknown_sample_is_one_line():
+    with pytest.raises(IsoflowError, match="'nope.ply': no such sample file; the samples are bob_small.ply"):
+        data.path("nope.ply")
+    with pytest.raises(IsoflowError, match="no such sample mesh"):
+        data.info("example19.txt")
+
+
+def test_python_m_isoflow_is_the_command():
+    proc = subprocess.run([sys.executable, "-m", "isoflow", "info", str(data.example19()), "--json"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["voxels"] == 4
+
+
+def test_wheel_installs_and_runs_the_readme_command(tmp_path):
+    """python -m build, a fresh venv, the wheel's isoflow, README line 1."""
+    pytest.importorskip("build", reason="the wheel check needs `build` (pip install -e '.[test]')")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    proc = subprocess.run([sys.executable, str(ROOT / ".ci" / "check-wheel"), str(tmp_path)],
+                          capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    assert "runs the README's first command" in proc.stdout
+
+
+def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):
+    """At most 150 lines; its first commands are what .ci/run runs; its
+    Python quick start runs as written and says what it prints."""
+    readme = (ROOT / "README.md").read_text()
+    assert len(readme.splitlines()) <= 150
+    first, second = readme.split("```bash\n")[1].splitlines()[:2]
+    assert first.startswith("pip install -e . && isoflow ") and "meshes/bob_small.ply" in first
+    assert second == "pip install -e '.[test]' && python -m pytest"
+    assert (ROOT / ".ci" / "run").read_text().rstrip().splitlines()[-1] == second
+    code = readme.split("```python\n")[1].split("```")[0]
+    monkeypatch.chdir(tmp_path)
+    namespace: dict = {}
+    exec(compile(code, "README.md", "exec"), namespace)
+    report = namespace["report"]
+    assert [report["betti"], report["euler_characteristic"]] == [[1, 1, 0], 0]  # as its comment says
+    assert (tmp_path / "bob.nii.gz").is_file()
+
+
+def test_no_path_outside_the_repository():
+    """No file of the repository names a folder of the machine it was made on."""
+    roots = ("/" + "work/", "/" + "tmp/", "/" + "root/", "../" + "shared")
+    places = [ROOT / "README.md", ROOT / "CHANGELOG.md", ROOT / "pyproject.toml"]
+    for folder in ("docs", "benchmarks", "tests", "examples", "meshes", "src", ".ci"):
+        places += [p for p in (ROOT / folder).rglob("*") if p.is_file() and not any(
+            part in ("_build", "generated", "auto_examples", ".cache", "__pycache__") or part.endswith(".egg-info")
+            for part in p.relative_to(ROOT).parts)]
+    found = []
+    for path in places:
+        if path.suffix in (".npy", ".npz", ".png", ".ply", ".stl", ".STL", ".pyc"):
+            continue
+        text = path.read_text(errors="replace")
+        found += [f"{path.relative_to(ROOT)}: {root}" for root in roots if root in text]
+    assert not found, found
