@@ -467,8 +467,8 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     digital topology reported; ``strict`` refuses it (IsoflowError).
 
     Returns a :class:`~isoflow.mesh.verdict.GenusVerdict`: the witnesses,
-    the verdict's kind and the facts it rests on; ``to_dict()`` is what
-    ``isoflow genus --json`` prints.
+    the verdict's kind and the facts it rests on; ``to_dict()`` is
+    the JSON the ``genus`` command prints.
     """
     path = Path(path)
     resolutions = list(resolutions)
