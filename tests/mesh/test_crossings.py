@@ -31,7 +31,10 @@ def cgal_pairs(v, f) -> set:
 
 
 def mine(v, f) -> set:
-    return {tuple(p) for p in crossing_pairs(v, f).tolist()}
+    """The crossing pairs, found alike by the NumPy and the compiled pass."""
+    numpy, compiled = ({tuple(p) for p in crossing_pairs(v, f, method=m).tolist()} for m in ("numpy", "compiled"))
+    assert numpy == compiled
+    return numpy
 
 
 def q(p):
@@ -208,6 +211,19 @@ def test_self_intersections_split_by_component():
     r = self_intersections(v, f, comp)
     faces = np.unique(np.array(sorted(cgal_pairs(v, f))))
     assert r == {"self_intersecting_faces": 0, "faces_crossing_other_components": len(faces)}
+
+
+def test_a_voxel_surface_has_no_crossing(rng):
+    """isoflow's own boundary surfaces (triangulated, corners welded by
+    position) are embedded: every face pair on them is coplanar or meets
+    along what they share (int64 decides in the compiled pass)."""
+    from isoflow import boundary_mesh
+
+    vol = np.zeros((12, 12, 12), bool)
+    vol[2:10, 2:10, 2:10] = rng.random((8, 8, 8)) < 0.6
+    m = boundary_mesh(vol, 26)
+    tri = m.triangles()
+    assert mine(np.asarray(m.vertices, float) * 0.37 + 1e3, tri) == set() == cgal_pairs(np.asarray(m.vertices, float), tri)
 
 
 def test_orientation_signs_are_exact():

@@ -24,16 +24,22 @@ a crossing.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from typing import Literal
 
 import numpy as np
 
+from ..scale.compiled import have_numba
 from .predicates import ExactPoints
+
+#: from this many faces on, ``method="auto"`` takes the compiled pass
+COMPILED_FACES = 2000
 
 #: candidate pairs handled at once (memory: about 200 bytes each)
 CHUNK_PAIRS = 1 << 21
 
 
-def crossing_pairs(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
+                   method: Literal["auto", "numpy", "compiled"] = "auto") -> np.ndarray:
     """Pairs of faces that cross, by the rules of this module's docstring.
 
     Parameters
@@ -42,6 +48,11 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
         Positions (float64; any units, any placement).
     faces : ndarray, shape (M, 3)
         Vertex indices of each triangle.
+    method : {"auto", "numpy", "compiled"}
+        ``"compiled"`` decides the pairs whose float64 signs are certified
+        with numba and the rest in NumPy with integers; ``"numpy"`` decides
+        all in NumPy; ``"auto"`` compiles from :data:`COMPILED_FACES` faces
+        on, where numba is installed. The answer is the same.
 
     Returns
     -------
@@ -61,23 +72,41 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """
     v = np.asarray(vertices, np.float64)
     f = np.asarray(faces, np.int64)
-    if len(f) < 2:
-        return np.zeros((0, 2), np.int64)
     points, position = np.unique(v, axis=0, return_inverse=True)
-    tri = position.reshape(-1)[f]
     exact = ExactPoints(points)
-    axis = projection_axis(exact, tri)
-    tested = np.flatnonzero(axis >= 0)
+    tri = position.reshape(-1)[f]
+    axis = projection_axis(exact, tri) if len(f) else np.zeros(0, np.int64)
+    tested = np.flatnonzero(axis >= 0)  # collinear corners: nothing to cross
     if len(tested) < 2:
         return np.zeros((0, 2), np.int64)
-    corners = exact.xyz[tri[tested]]
-    found = []
-    for pairs in box_pairs(corners.min(axis=1), corners.max(axis=1)):
-        pairs = tested[pairs]
-        found.append(pairs[_cross(exact, tri, axis, pairs)])
-    out = np.concatenate(found) if found else np.zeros((0, 2), np.int64)
-    out = np.sort(out, axis=1)
+    tri, axis = tri[tested], axis[tested]
+    corners = exact.xyz[tri]
+    grid = CubeGrid(corners.min(axis=1), corners.max(axis=1))
+    if method == "compiled" or (method == "auto" and len(f) >= COMPILED_FACES and have_numba()):
+        found = _compiled_pairs(exact, tri, axis, grid)
+    else:
+        found = [pairs[_cross(exact, tri, axis, pairs)] for pairs in grid.pairs()]
+    out = tested[np.concatenate(found)] if found else np.zeros((0, 2), np.int64)
     return out[np.lexsort((out[:, 1], out[:, 0]))]
+
+
+def _compiled_pairs(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, grid: CubeGrid) -> list:
+    """The crossing pairs: decided by the compiled pass where its float64
+    signs are certified, the others here, in integers."""
+    from .crossing_kernels import cube_pairs
+
+    small = exact.small if exact.small is not None else np.zeros((1, 3), np.int64)
+    found = np.zeros((1024, 2), np.int64)
+    undecided = np.zeros((1 << 16, 2), np.int64)
+    while True:
+        nf, nu = cube_pairs(exact.xyz, small, tri, axis, grid.box, grid.key, grid.start, grid.size, grid.cl,
+                            grid.lo, grid.hi, grid.dims, found, undecided)
+        if nf <= len(found) and nu <= len(undecided):
+            break
+        found = np.zeros((max(nf, len(found)), 2), np.int64)
+        undecided = np.zeros((max(nu, len(undecided)), 2), np.int64)
+    rest = undecided[:nu]
+    return [found[:nf], rest[_cross(exact, tri, axis, rest)]]
 
 
 def projection_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
@@ -95,35 +124,43 @@ def projection_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
     return axis
 
 
-def box_pairs(lo: np.ndarray, hi: np.ndarray) -> Iterator[np.ndarray]:
-    """Pairs ``(i, j)``, ``i < j``, of the closed boxes ``[lo, hi]`` that
-    overlap, in chunks.
+class CubeGrid:
+    """Closed boxes ``[lo, hi]`` hashed into a grid of cubes about the size
+    of a typical box: ``box`` (box numbers) sorted by ``key`` (their cubes),
+    the cubes' ``start`` and ``size`` in it, each box's lowest cube ``cl``.
+    A pair of overlapping boxes belongs to the one cube that holds the lower
+    corner of their common box, so no pair is seen twice."""
 
-    The boxes are hashed into a grid of cubes about the size of a typical
-    box; each overlapping pair is emitted by the one cube that holds the
-    lower corner of the pair's common box, so no pair is emitted twice.
-    """
-    cl, ch = _grid_cells(lo, hi)
-    span = ch - cl + 1
-    count = np.prod(span, axis=1)
-    box = np.repeat(np.arange(len(lo)), count)
-    local = np.arange(len(box)) - np.repeat(np.cumsum(count) - count, count)
-    sx, sy = span[box, 0], span[box, 1]
-    cell = cl[box] + np.stack([local % sx, (local // sx) % sy, local // (sx * sy)], axis=1)
-    dims = ch.max(axis=0) + 1
-    key = (cell[:, 2] * dims[1] + cell[:, 1]) * dims[0] + cell[:, 0]
-    order = np.argsort(key, kind="stable")
-    box, key = box[order], key[order]
-    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    size = np.diff(np.r_[start, len(key)])
-    after = np.repeat(start + size, size) - np.arange(len(key)) - 1  # partners after each entry in its cube
-    for first, second in _index_pairs(after):
-        i, j = box[first], box[second]
-        ref = np.maximum(cl[i], cl[j])
-        mine = (ref[:, 2] * dims[1] + ref[:, 1]) * dims[0] + ref[:, 0] == key[first]
-        meet = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-        keep = mine & meet
-        yield np.stack([np.minimum(i, j)[keep], np.maximum(i, j)[keep]], axis=1)
+    def __init__(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        self.lo, self.hi = lo, hi
+        cl, ch = _grid_cells(lo, hi)
+        span = ch - cl + 1
+        count = np.prod(span, axis=1)
+        box = np.repeat(np.arange(len(lo)), count)
+        local = np.arange(len(box)) - np.repeat(np.cumsum(count) - count, count)
+        sx, sy = span[box, 0], span[box, 1]
+        cell = cl[box] + np.stack([local % sx, (local // sx) % sy, local // (sx * sy)], axis=1)
+        self.dims = ch.max(axis=0) + 1
+        key = self.cube_key(cell)
+        order = np.argsort(key, kind="stable")
+        self.box, self.key, self.cl = box[order], key[order], cl
+        self.start = np.flatnonzero(np.r_[True, self.key[1:] != self.key[:-1]])
+        self.size = np.diff(np.r_[self.start, len(self.key)])
+
+    def cube_key(self, cell: np.ndarray) -> np.ndarray:
+        """One integer per cube (x fastest)."""
+        return (cell[:, 2] * self.dims[1] + cell[:, 1]) * self.dims[0] + cell[:, 0]
+
+    def pairs(self) -> Iterator[np.ndarray]:
+        """Pairs ``(i, j)``, ``i < j``, of the boxes that overlap, in chunks."""
+        after = np.repeat(self.start + self.size, self.size) - np.arange(len(self.key)) - 1
+        lo, hi = self.lo, self.hi
+        for first, second in _index_pairs(after):
+            i, j = self.box[first], self.box[second]
+            mine = self.cube_key(np.maximum(self.cl[i], self.cl[j])) == self.key[first]
+            meet = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+            keep = mine & meet
+            yield np.stack([np.minimum(i, j)[keep], np.maximum(i, j)[keep]], axis=1)
 
 
 def _grid_cells(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -134,7 +171,7 @@ def _grid_cells(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     if not extent > 0:
         zero = np.zeros(lo.shape, np.int64)
         return zero, zero
-    size = max(2 * float(np.median(np.max(hi - lo, axis=1))), extent / 2**20)
+    size = max(float(np.median(np.max(hi - lo, axis=1))), extent / 2**20)
     while True:
         cl = np.floor((lo - origin) / size).astype(np.int64)
         ch = np.floor((hi - origin) / size).astype(np.int64)

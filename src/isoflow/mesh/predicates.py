@@ -56,10 +56,31 @@ class ExactPoints:
         # underflow the float filter runs on the points as given
         self.xyz = scaled if np.array_equal(np.ldexp(scaled, e), p) else p
         mant, expo = np.frexp(p)
-        self._mant = np.ldexp(mant, 53).astype(np.int64)  # exact: 53 bits
+        m = np.ldexp(mant, 53).astype(np.int64)  # exact: 53 bits
         shift = expo.astype(np.int64) - 53
-        nonzero = self._mant != 0
+        nonzero = m != 0
+        # drop each mantissa's trailing zero bits, so that the common unit
+        # is the lowest bit any coordinate sets
+        zeros = np.zeros_like(m)
+        zeros[nonzero] = np.log2((m & -m)[nonzero].astype(np.float64)).astype(np.int64)
+        self._mant = m >> zeros
+        shift = shift + zeros
         self._shift = shift - (int(shift[nonzero].min()) if nonzero.any() else 0)
+        self.small = self._small_ints()
+
+    def _small_ints(self) -> np.ndarray | None:
+        """The points as int64 in the unit of :meth:`ints` where every
+        coordinate is below 2**19 there (a voxel surface's corners, a part
+        on a coarse grid): then every orientation determinant is exact in
+        int64 (differences below 2**20, six products of three below 2**60).
+        None otherwise."""
+        if not self._mant.size:
+            return None
+        m = np.abs(self._mant)
+        bits = np.where(m > 0, np.floor(np.log2(np.maximum(m, 1))).astype(np.int64) + 1 + self._shift, 0)
+        if int(bits.max()) > 19:
+            return None
+        return np.left_shift(self._mant, np.maximum(self._shift, 0))
 
     def ints(self, index: np.ndarray) -> np.ndarray:
         """The points ``index`` as Python integers (object array, (K, 3)),
