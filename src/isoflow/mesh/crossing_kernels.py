@@ -73,14 +73,7 @@ def _o3_float(x, a, b, c, d):
     det = adx * (bc1 - bc2) + bdx * (ca1 - ca2) + cdx * (ab1 - ab2)
     perm = ((abs(bc1) + abs(bc2)) * abs(adx) + (abs(ca1) + abs(ca2)) * abs(bdx)
             + (abs(ab1) + abs(ab2)) * abs(cdx))
-    if not (perm > _TINY and perm < np.inf):
-        return UNDECIDED
-    bound = O3_BOUND * perm
-    if det > bound:
-        return 1
-    if -det > bound:
-        return -1
-    return UNDECIDED
+    return _certified(det, perm, O3_BOUND)
 
 
 @njit(cache=True, nogil=True)
@@ -92,10 +85,17 @@ def _o2_float(x, a, b, c, k):
         return 0
     left, right = acx * bcy, acy * bcx
     det = left - right
-    perm = abs(left) + abs(right)
-    if not (perm > _TINY and perm < np.inf):
+    return _certified(det, abs(left) + abs(right), O2_BOUND)
+
+
+@njit(cache=True, nogil=True)
+def _certified(det, permanent, relative):
+    """The sign of ``det`` where the error bound ``relative * permanent``
+    certifies it, else UNDECIDED (also where products may be subnormal or
+    overflowed)."""
+    if not (permanent > _TINY and permanent < np.inf):
         return UNDECIDED
-    bound = O2_BOUND * perm
+    bound = relative * permanent
     if det > bound:
         return 1
     if -det > bound:
@@ -138,7 +138,13 @@ def _segments_meet_2d(x, n, p, q, r, s, k):
 
 @njit(cache=True, nogil=True)
 def _inside_2d(x, n, p, t0, t1, t2, k):
-    s1, s2, s3 = _o2(x, n, t0, t1, p, k), _o2(x, n, t1, t2, p, k), _o2(x, n, t2, t0, p, k)
+    return _one_side(_o2(x, n, t0, t1, p, k), _o2(x, n, t1, t2, p, k), _o2(x, n, t2, t0, p, k))
+
+
+@njit(cache=True, nogil=True)
+def _one_side(s1, s2, s3):
+    """1 where three signs have no two opposite (a point in a triangle, a
+    line through it), 0 where they do, UNDECIDED where one is."""
     if s1 == UNDECIDED or s2 == UNDECIDED or s3 == UNDECIDED:
         return UNDECIDED
     if (s1 > 0 or s2 > 0 or s3 > 0) and (s1 < 0 or s2 < 0 or s3 < 0):
@@ -157,12 +163,7 @@ def _segment_meets_triangle(x, n, p, q, t0, t1, t2, k, sp, sq):
         r = _either(r, _segments_meet_2d(x, n, p, q, t0, t1, k))
         r = _either(r, _segments_meet_2d(x, n, p, q, t1, t2, k))
         return _either(r, _segments_meet_2d(x, n, p, q, t2, t0, k))
-    w1, w2, w3 = _o3(x, n, p, q, t0, t1), _o3(x, n, p, q, t1, t2), _o3(x, n, p, q, t2, t0)
-    if w1 == UNDECIDED or w2 == UNDECIDED or w3 == UNDECIDED:
-        return UNDECIDED
-    if (w1 > 0 or w2 > 0 or w3 > 0) and (w1 < 0 or w2 < 0 or w3 < 0):
-        return 0
-    return 1
+    return _one_side(_o3(x, n, p, q, t0, t1), _o3(x, n, p, q, t1, t2), _o3(x, n, p, q, t2, t0))
 
 
 @njit(cache=True, nogil=True)

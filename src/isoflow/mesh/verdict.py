@@ -111,12 +111,24 @@ class GenusVerdict(Mapping):
 
 
 def option_flag(option: str) -> str:
-    """The command line's spelling of a parameter: ``time_limit`` -> ``--time-limit``."""
+    """The command line's spelling of a parameter.
+
+    Examples
+    --------
+    >>> option_flag("time_limit")
+    '--time-limit'
+    """
     return "--" + option.replace("_", "-")
 
 
 def stop_text(stop: Stop) -> str:
-    """Why the stepping stopped, as the verdict says it."""
+    """Why the stepping stopped, as the verdict says it.
+
+    Examples
+    --------
+    >>> stop_text(Stop("max_resolution", limit=256, resolution=512, option="max_resolution"))
+    'the largest resolution allowed (256, --max-resolution)'
+    """
     if stop.kind == "asked":
         return "the resolutions asked"
     flag = option_flag(stop.option) if stop.option else ""
