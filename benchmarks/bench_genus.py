@@ -130,7 +130,8 @@ def sweep(paths: list[Path], resolution: int) -> dict:
                 counts["ply"] += rc_ply == 0
                 counts["stl"] += rc_stl == 0
                 if rc_ply == 0 and rc_stl != 0:
-                    counts["stl_refused"].append(f"{path.name} ({move}): {err_stl.split(': ', 2)[-1]}")
+                    why = err_stl.split(f"{tmp / 'out.stl'}: ", 1)[-1]  # no temporary path in the results
+                    counts["stl_refused"].append(f"{path.name} ({move}): {why}")
                 if rc_ply != 0:
                     counts["ply_failed"].append(f"{path.name} ({move})")
     return counts

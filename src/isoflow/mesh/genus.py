@@ -23,6 +23,7 @@ import numpy as np
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
 from ..scale.memory import default_budget
+from .crossings import crossing_pairs
 from .load import load_mesh, mesh_defects
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import voxelize
@@ -160,12 +161,10 @@ def pymeshlab_report(vertices, faces) -> dict:
 
 def self_intersections(vertices, faces, component) -> dict:
     """Faces that cross other faces (:func:`isoflow.mesh.crossings.crossing_pairs`:
-    exact, on the coordinates as given), split into those crossing a face of
+    exact, on the coordinates as given, never a centred or scaled copy), split into those crossing a face of
     their own component (``self_intersecting_faces``: the component is no
     embedded surface) and those crossing only other components
     (``faces_crossing_other_components``: components overlap or touch)."""
-    from .crossings import crossing_pairs
-
     pairs = crossing_pairs(vertices, faces)
     component = np.asarray(component)
     nf = len(np.asarray(faces))
@@ -183,8 +182,7 @@ def self_intersections(vertices, faces, component) -> dict:
 def normalized(vertices) -> tuple[np.ndarray, int]:
     """``(vertices, e)``: the vertices centred on their bounding box and
     scaled by ``2**-e`` to a size near 1 (exact in binary), for the tools
-    that take float32 or absolute tolerances (manifold3d, pymeshlab's
-    intersection test): a mesh in units of 1e-35 or 1e36, or placed at 1e7,
+    that take float32 or absolute tolerances (manifold3d, pymeshlab): a mesh in units of 1e-35 or 1e36, or placed at 1e7,
     then reads as it does at 1. Topology does not change; lengths scale by
     ``2**e``."""
     v = np.asarray(vertices, np.float64)

@@ -69,7 +69,8 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
     ``weld`` (STL stores no shared vertices) with equal positions welded
     into one vertex (trimesh's own merge rounds positions to 1e-8 in any
     units, which joins distinct corners of a surface in units of 1e-6).
-    ``area_units``: the surface's area in ``unit`` squared.
+    ``area_units``: the surface's area in ``unit`` squared (STL only:
+    the volume's tolerance for float32's move; None otherwise).
 
     A PLY is parsed by trimesh's PLY reader and the mesh built without its
     colours, which cost a third of the read (measured on flow steps) and do
@@ -110,7 +111,8 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
         units = signed_volume(local, tm.faces)
         volume = units * np.float64(unit) ** 3
         area = float(np.linalg.norm(np.cross(local[tm.faces[:, 1]] - local[tm.faces[:, 0]],
-                                             local[tm.faces[:, 2]] - local[tm.faces[:, 0]]), axis=1).sum() / 2)
+                                             local[tm.faces[:, 2]] - local[tm.faces[:, 0]]), axis=1).sum() / 2
+                     ) if weld else None
     return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": volume, "volume_units": units,
             "area_units": area}
 
@@ -167,13 +169,13 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     keys = ("watertight", "euler_number", "genus") if topology else ()
     problems = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in keys if theirs[k] != ours[k]]
     # the signed volume needs no manifold: a welded STL still encloses it
-    moved = 0.0
+    slack = 0.0
     if path.suffix.lower() == ".stl":
         from .export import float32_effect
 
         moved = (float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0) / volume_unit(obj)
-    if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL,
-                      atol=2 * moved * theirs["area_units"]):
+        slack = 2 * moved * theirs["area_units"]
+    if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=slack):
         problems.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
     problem = f"{path}: trimesh reads " + ", ".join(problems) if problems else None
     return {"isoflow": ours, "trimesh": theirs, "agree": not problems, "problem": problem}
