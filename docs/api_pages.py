@@ -36,6 +36,8 @@ def part(package: ModuleType, name: str) -> str:
 def page(package: ModuleType) -> str:
     groups: dict[str, list[str]] = {p: [] for p in PARTS}
     for name in sorted(package.__all__, key=str.lower):
+        if inspect.ismodule(getattr(package, name)):
+            continue  # a public subpackage (isoflow.data) has its own section
         groups[part(package, name)].append(name)
     lines = [
         ".. This file is written by docs/api_pages.py from isoflow.__all__; do not edit it.",

@@ -249,10 +249,12 @@ def test_positions_stay_on_the_voxel_grid_in_any_units(tmp_path, capsys, rng, pi
 def test_stl_that_cannot_hold_the_positions_is_refused(tmp_path, capsys):
     from isoflow import DigitalObject, write_volume
 
-    vol = np.zeros((3, 3, 3), bool)
-    vol[1, 1, 1] = True
+    # 0.1 m voxels at 4e6 m, where float32 positions are 0.25 apart: of the
+    # corners at 0.1, 0.2, 0.3, 0.4 m two become one
+    vol = np.zeros((3, 5, 3), bool)
+    vol[1, 1:4, 1] = True
     write_volume(DigitalObject(vol, pitch=0.1, origin=(500000.0, 4000000.0, 0.0)), tmp_path / "utm.npz")
     assert main(["surface", str(tmp_path / "utm.npz"), "-o", str(tmp_path / "utm.stl")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "float32" in err[0] and ".ply" in err[0]
+    assert len(err) == 1 and "float32" in err[0] and "would merge" in err[0] and ".ply" in err[0]
     assert not (tmp_path / "utm.stl").exists()

@@ -55,7 +55,7 @@ def cmd_genus(args: argparse.Namespace) -> int:
         report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped,
                               strict=args.strict, **kw)
     if args.json:
-        print(json.dumps(report))
+        print(json.dumps(report.to_dict()))
     else:
         print(format_genus(report, args.mesh))
     return 0
@@ -73,7 +73,7 @@ def format_genus(report, name: str) -> str:
         f"{name}: {m['vertices']} vertices, {m['faces']} faces",
         f"  mesh        watertight {m['watertight']}, {m['components']} components, V-E+F {m['euler_number']}, "
         f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
-        f"  crossings   {crossings} (pymeshlab)",
+        f"  crossings   {crossings} (exact test)",
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
                            f"genus {m3['genus']} over {m3['components']} components (genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {solid['surfaces']} boundary surfaces, volume {solid['volume']:.6g} "

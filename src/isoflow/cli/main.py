@@ -99,6 +99,42 @@ def quiet_stderr(quiet: bool) -> Iterator[None]:
             logging.disable(before)
 
 
+def log_note(record) -> str:
+    """A library's log record in one line: its logger, the message's first
+    line and the exception it carried (never the traceback)."""
+    lines = record.getMessage().strip().splitlines()
+    text = f"{record.name}: {lines[0] if lines else record.levelname.lower()}"
+    exc = record.exc_info[1] if record.exc_info else None
+    return text + (f" ({type(exc).__name__}: {exc})" if exc is not None else "")
+
+
+@contextlib.contextmanager
+def log_records_as_notes(args: argparse.Namespace) -> Iterator[None]:
+    """Log records of the libraries a command uses (trimesh's "unable to
+    load image!" for a texture that is missing, with its traceback) as one
+    ``note:`` line each, each said once; --quiet drops them. Without a
+    handler, Python's last resort prints every record and its traceback."""
+    import logging
+
+    class Notes(logging.Handler):
+        def __init__(self) -> None:
+            super().__init__(logging.WARNING)
+            self.said: set[str] = set()
+
+        def emit(self, record: logging.LogRecord) -> None:
+            text = log_note(record)
+            if not args.quiet and text not in self.said:
+                self.said.add(text)
+                print(f"isoflow {args.command}: note: {text}", file=sys.stderr)
+
+    handler = Notes()
+    logging.root.addHandler(handler)
+    try:
+        yield
+    finally:
+        logging.root.removeHandler(handler)
+
+
 @contextlib.contextmanager
 def termination_as_interrupt(received: list) -> Iterator[None]:
     """Treat SIGTERM (``kill``, a batch system's time limit, a closing
@@ -181,7 +217,8 @@ def main(argv: list[str] | None = None) -> int:
     before = compiled.on_first_compile
     compiled.on_first_compile = None if args.quiet else compiling
     try:
-        with quiet_stderr(args.quiet), warnings_as_lines(args), termination_as_interrupt(terminated):
+        with quiet_stderr(args.quiet), warnings_as_lines(args), log_records_as_notes(args), \
+                termination_as_interrupt(terminated):
             status = args.func(args)
             if terminated:  # a signal a library swallowed: the command still ends as interrupted
                 raise KeyboardInterrupt

@@ -56,6 +56,8 @@ def cmd_surface(args: argparse.Namespace) -> int:
         f"{len(comps)} closed surfaces, V-E+F = {mesh.euler_characteristic}"
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
+    if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:
+        print(f"isoflow surface: note: {stl_move_note(out, written)}", file=sys.stderr)
     status = read_back(args, out, mesh, obj, comps)
     if status == 0 and args.png:
         from ..mesh.render import render_surface
@@ -64,6 +66,17 @@ def cmd_surface(args: argparse.Namespace) -> int:
         render_surface(mesh, obj, png, title=Path(args.input).name)
         print(f"{png}: picture of the surface coloured by vertex angle")
     return status
+
+
+#: an STL's float32 positions are said to move the surface when they move a
+#: corner by more than this many voxels (below it, nothing a user can see)
+STL_NOTE_VOXELS = 1e-3
+
+
+def stl_move_note(out: Path, written: dict) -> str:
+    """How far an STL's float32 positions moved the surface."""
+    return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
+            f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
 
 
 def checked_mesh(name: str, obj, conn: int):

@@ -56,11 +56,14 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
+from ..errors import IsoflowError
 from ..scale.arrays import binary, count_codes
 from ..scale.compiled import Method, have_numba, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
+from .report import SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 from .connectivity import check_connectivity
 
@@ -129,26 +132,53 @@ def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dic
     ]
 
 
-def closed_surfaces(volume, connectivity: int = 6, method: Method = "auto") -> dict:
-    """The closed surfaces of the boundary of a 3D host volume.
+def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "auto") -> SurfaceCensus:
+    """The closed surfaces of the boundary of a 3D host volume and their genus.
 
-    Returns ``surfaces`` (each with ``euler_characteristic``, ``genus`` and
-    ``faces``, largest first: the same multiset as
-    ``boundary_mesh(volume, connectivity).components()``), ``pinched_vertices``
-    and ``doubled_edges`` (the mesh's ``pinched`` and ``midpoints // 2``),
-    and what comes with the same pass: ``hist`` (the 256 configuration
-    counts) and ``betti_counts`` (b0 and the enclosed background
-    components under ``connectivity``).
+    The surfaces are read off the labels of the object and background
+    pieces on either side of every boundary face, under the adjacencies
+    the boundary mesh's own pairing rules give (see the module), so the
+    mesh is never built.
+
+    Parameters
+    ----------
+    volume : array_like of bool, 3D
+    connectivity : {6, 26}
+        The object's.
+    method : {"auto", "numpy", "compiled"}
+        One compiled sweep, the NumPy census, or by the volume's size.
+
+    Returns
+    -------
+    SurfaceCensus
+        Each surface's Euler characteristic, genus and faces, the pinched
+        vertices and doubled edges, the configuration histogram and the
+        Betti counts of the same pass.
+
+    Examples
+    --------
+    Two voxels meeting along an edge are two spheres under 6-connectivity;
+    under 26 one surface passes the edge twice (a doubled edge):
+
+    >>> import numpy as np
+    >>> v = np.zeros((2, 2, 1), bool)
+    >>> v[0, 0, 0] = v[1, 1, 0] = True
+    >>> [s["genus"] for s in closed_surfaces(v, 6).surfaces]
+    [0, 0]
+    >>> c = closed_surfaces(v, 26)
+    >>> [s["genus"] for s in c.surfaces], c.doubled_edges
+    ([0], 1)
     """
     # canonical bools: a bool array made by .view(bool) may hold bytes other
     # than 0/1, which the configurations and cc3d would read as values
     vol = binary(np.asarray(volume, dtype=bool))
     if vol.ndim != 3:
-        raise ValueError("closed_surfaces needs a 3D volume")
+        raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
     check_connectivity(3, connectivity)
-    if use_census(vol, method=method):
-        return compiled_census(vol, connectivity)
-    return small_census(vol, connectivity)
+    census = compiled_census(vol, connectivity) if use_census(vol, method=method) else small_census(vol, connectivity)
+    return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
+                         doubled_edges=census["doubled_edges"], hist=census["hist"],
+                         betti_counts=tuple(census["betti_counts"]))
 
 
 #: peak bytes of :func:`small_census`: per voxel (the int32 labels of both

@@ -225,51 +225,160 @@ def _tables_3d():
 
 
 def gamma_lut() -> np.ndarray:
-    """Vertex angle in eighths (eq. 4.6) of every configuration; 0 off the
-    boundary and on configurations that are not well-composed."""
+    """The vertex angle ``gamma`` of eq. 4.6, in eighths, of every configuration.
+
+    ``gamma = i/8`` for a convex bump of ``i`` octants (one octant sharing a
+    face with every other) and ``-(8 - i)/8`` otherwise; 0 on a flat layer,
+    off the boundary and on configurations that are not well-composed.
+
+    Returns
+    -------
+    numpy.ndarray
+        256 int64 values in ``-4 .. 4``, indexed by configuration.
+
+    Examples
+    --------
+    A convex corner (one octant) and a concave corner (seven):
+
+    >>> int(gamma_lut()[0b00000001]), int(gamma_lut()[0b11111110])
+    (1, -1)
+    """
     return _tables_3d()[0]
 
 
 def class_lut() -> np.ndarray:
-    """Class ``gamma + 4`` (0..8), :data:`NOT_WELL_COMPOSED` or :data:`OFF_SURFACE`."""
+    """The class of every configuration: ``gamma + 4`` (eq. 4.6), so that the
+    classes' histogram is the paper's ``n = (n_-4, ..., n_4)`` of eq. 4.9.
+
+    Returns
+    -------
+    numpy.ndarray
+        256 int64 values: 0..8 on the 126 well-composed boundary
+        configurations (labels in :data:`CLASS_LABELS`),
+        :data:`NOT_WELL_COMPOSED` (-1) on the other 128 boundary ones,
+        :data:`OFF_SURFACE` (-2) on 0 and 255.
+
+    Examples
+    --------
+    >>> c = class_lut()
+    >>> CLASS_LABELS[c[0b00000011]], int(c[0b10000001]), int(c[255])
+    ('(+,0,0)', -1, -2)
+    """
     return _tables_3d()[1]
 
 
 def code_lut() -> np.ndarray:
-    """Per-axis codes ``(alpha_1, alpha_2, alpha_3)`` of eq. 4.3 / 4.7, shape (256, 3).
+    """The per-axis codes ``(alpha_1, alpha_2, alpha_3)`` of eqs. 4.3 and 4.7.
 
-    Values :data:`CONVEX`, :data:`FLAT`, :data:`CONCAVE`, :data:`NONE` (the
-    paper's ∅), :data:`UNDEFINED` off the well-composed boundary.
+    Across each axis the window splits into two 2x2 layers; each is, as a
+    planar configuration, convex (1 of 4), flat (2 adjacent), concave (3 of
+    4) or not on the boundary, and the more curved of the two gives the
+    axis's code (the reading of docs/mathematics.md).
+
+    Returns
+    -------
+    numpy.ndarray
+        int64, shape (256, 3): :data:`CONVEX` (1), :data:`FLAT` (0),
+        :data:`CONCAVE` (-1), :data:`NONE` (2, the paper's ∅), and
+        :data:`UNDEFINED` (-2) off the well-composed boundary.
+
+    Examples
+    --------
+    A convex edge, two octants along axis 0, is ``(+,0,0)`` up to the order
+    of the axes:
+
+    >>> sorted(code_lut()[0b00000011].tolist())
+    [0, 0, 1]
     """
     return _tables_3d()[2]
 
 
 def normal_lut() -> np.ndarray:
-    """Twice the normal vector of Definition 14, eq. 5.13: integer (256, 3)."""
+    """Twice the normal vector of Definition 14 (eq. 5.13) of every configuration.
+
+    ``n = 1/2 (a_1 e_1 + a_2 e_2 + a_3 e_3)`` with ``a_i`` in ``{-1, 0, 1}``:
+    outward is where the window holds less object.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64, shape (256, 3): ``2 n``.
+
+    Examples
+    --------
+    A single voxel in the window's octant 0 (below the vertex on every
+    axis): the normal at its far corner points away from it, up every axis.
+
+    >>> normal_lut()[0b00000001].tolist()
+    [1, 1, 1]
+    """
     return _tables_3d()[3]
 
 
 @lru_cache(maxsize=None)
 def f_lut() -> np.ndarray:
-    """Vertex index f of eq. 4.8: ``(sum s(alpha_i)) (sum |s(alpha_i)|)``."""
+    """The vertex index ``f`` of eq. 4.8 of every configuration.
+
+    ``f = (sum_i s(alpha_i)) (sum_i |s(alpha_i)|)`` with ``s(+) = 1``,
+    ``s(-) = -1`` and ``s(0) = s(∅) = 0`` (Definition 9); its values are
+    0, ±1, ±3, ±9. The flow reads "negative" as ``f < 0`` (section 5).
+
+    Returns
+    -------
+    numpy.ndarray
+        256 int64 values.
+
+    Examples
+    --------
+    >>> int(f_lut()[0b00000001]), int(f_lut()[0b11111110])  # convex and concave corners
+    (9, -9)
+    """
     codes = code_lut()
     s = np.where(np.isin(codes, (CONVEX, CONCAVE)), codes, 0)
     return s.sum(axis=1) * np.abs(s).sum(axis=1)
 
 
 def a_lut(connectivity: int = 6) -> np.ndarray:
-    """Gauss-Bonnet weight ``a`` of eq. 4.10 for every configuration.
+    """The Gauss-Bonnet weight ``a`` of eq. 4.10 of every 3D configuration.
 
     ``a = 8 x`` the vertex's share of the Euler characteristic, so that
     ``a^T n = 8 chi`` for every object (Theorems 10-11). On the 126
     well-composed boundary configurations it does not depend on the
-    connectivity; elsewhere it does.
+    connectivity; elsewhere it does (:func:`euler_lut` in any dimension).
+
+    Parameters
+    ----------
+    connectivity : {6, 26}
+        The object's.
+
+    Returns
+    -------
+    numpy.ndarray
+        256 int64 values.
+
+    Examples
+    --------
+    Two voxels sharing only an edge: two components under 6, one under 26.
+
+    >>> import numpy as np
+    >>> from isoflow.digital.configurations import configuration_histogram
+    >>> v = np.zeros((2, 2, 1), bool)
+    >>> v[0, 0, 0] = v[1, 1, 0] = True
+    >>> h = configuration_histogram(v)
+    >>> int(h @ a_lut(6)) // 8, int(h @ a_lut(26)) // 8
+    (2, 1)
     """
     return euler_lut(3, connectivity)
 
 
 def code_string(config: int) -> str:
-    """The configuration's code as the paper writes it, e.g. ``(+,0,0)``."""
+    """The configuration's code as the paper writes it.
+
+    Examples
+    --------
+    >>> code_string(0b00000011), code_string(0), code_string(0b10000001)
+    ('(+,0,0)', 'exterior', 'not-well-composed')
+    """
     cls = int(class_lut()[config])
     if cls == OFF_SURFACE:
         return "interior" if config else "exterior"
@@ -281,7 +390,31 @@ def code_string(config: int) -> str:
 
 
 def class_histogram(config_hist: np.ndarray) -> np.ndarray:
-    """The vector ``n`` of eq. 4.9 from the 256 configuration counts."""
+    """The paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
+
+    Parameters
+    ----------
+    config_hist : numpy.ndarray
+        The 256 configuration counts
+        (:func:`~isoflow.digital.configurations.configuration_histogram`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Nine int64 counts, indexed by class ``gamma + 4``
+        (:data:`CLASS_LABELS`).
+
+    Examples
+    --------
+    A box has 8 convex corners, convex edges along its 12 edges and flat
+    vertices on its faces:
+
+    >>> import numpy as np
+    >>> from isoflow.digital.configurations import configuration_histogram
+    >>> n = class_histogram(configuration_histogram(np.ones((3, 3, 3), bool)))
+    >>> dict(zip(CLASS_LABELS, n.tolist()))["(+,+,+)"], int(n[6]), int(n[4])
+    (8, 24, 24)
+    """
     cls = class_lut()
     on = cls >= 0
     return np.bincount(cls[on], weights=config_hist[on], minlength=9).astype(np.int64)
@@ -308,15 +441,35 @@ def planar_class_lut() -> np.ndarray:
 
 
 def planar_index(points: np.ndarray) -> np.ndarray:
-    """Four times the planar curvature index r of eq. 4.2, at every point.
+    """Four times the planar curvature index ``r`` of eq. 4.2, at every point.
 
-    ``points`` is a 2D binary array of lattice points; the result (int array
-    of the same shape) is ``4 r = 4 - 2 sum_k f_k + sum_k f_k f_k+1 f_k+2``
-    over the 4-neighbours k in {1,3,5,7} (the ``f_k f_k+1 f_k+2`` products are
-    the unit squares at the point). It is +1, 0, -1 at convex, flat, concave
-    boundary points, and summed over the points gives ``4 chi`` of the point
-    set with 4-connectivity (a point set read as vertices, 4-adjacent edges and
-    full unit squares). Zero off the set.
+    Parameters
+    ----------
+    points : numpy.ndarray
+        A 2D binary array of lattice points.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 of the same shape: ``4 r = 4 - 2 sum_k f_k + sum_k f_k f_k+1
+        f_k+2`` over the 4-neighbours ``k`` in {1, 3, 5, 7} (the products are
+        the unit squares at the point): +1, 0, -1 at convex, flat, concave
+        boundary points, 0 inside and off the set.
+
+    Notes
+    -----
+    Summed over the points it gives ``4 chi`` of the point set read with
+    4-connectivity (vertices, 4-adjacent edges and full unit squares): the
+    planar Gauss-Bonnet theorem.
+
+    Examples
+    --------
+    A 3x3 square of points: four convex corners, four flat edge midpoints.
+
+    >>> import numpy as np
+    >>> r = planar_index(np.ones((3, 3), bool))
+    >>> r.tolist(), int(r.sum()) // 4
+    ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
     """
     f = np.pad(np.asarray(points, dtype=bool), 1).astype(np.int8)
     c = f[1:-1, 1:-1]

@@ -28,10 +28,46 @@ from ..scale.arrays import binary
 
 @dataclass(frozen=True)
 class DigitalObject:
-    """A 2D or 3D binary volume with its place on the (dual) lattice.
+    """A binary volume with its place on the lattice or its dual (eq. 5.1).
 
-    4D volumes are accepted for the topology report (section 6 of the paper);
-    surfaces and the flow are 2D/3D only."""
+    Voxel ``i`` of the array is the closed cube ``[i, i+1]`` shifted by
+    ``offset``, and by ``(1/2, ..., 1/2)`` on the dual lattice (``parity``
+    1): each flow step moves the object from one lattice to the other and
+    back. ``pitch`` and ``origin`` put it in world coordinates (those of the
+    mesh it came from), so its surfaces and flows export where the mesh is.
+    2D and 3D objects take every operation; 4D ones the topology report
+    (section 6).
+
+    Parameters
+    ----------
+    volume : numpy.ndarray of bool or 0/1
+    offset : tuple of int, optional
+        Lattice index of voxel ``(0, ..., 0)`` (default zeros).
+    parity : {0, 1}
+        The lattice (0) or the dual lattice (1).
+    pitch : float or array of float
+        The voxel size, one number or one per axis.
+    origin : array of float, optional
+        World position of lattice point 0 (default zeros).
+
+    Raises
+    ------
+    IsoflowError
+        When the volume is not binary or not 2D to 4D, or a field is not
+        what it must be.
+
+    Examples
+    --------
+    The paper's Example 19 given by its 20 lattice points (Definitions 1-2):
+    a corner cube and its three face neighbours.
+
+    >>> import numpy as np
+    >>> corner = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+    >>> points = {tuple(np.add(p, d)) for p in corner for d in [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]}
+    >>> obj = DigitalObject.from_points(sorted(points))
+    >>> len(points), obj.voxels, obj.volume.shape
+    (20, 4, (2, 2, 2))
+    """
 
     volume: np.ndarray
     offset: tuple[int, ...] = None  # type: ignore[assignment]
@@ -95,10 +131,12 @@ class DigitalObject:
     # ------------------------------------------------------------ geometry
     @property
     def ndim(self) -> int:
+        """The dimension: 2, 3 or 4."""
         return self.volume.ndim
 
     @property
     def voxels(self) -> int:
+        """How many voxels the object has."""
         return int(np.count_nonzero(self.volume))
 
     def lattice_coordinates(self, array_points: np.ndarray) -> np.ndarray:

@@ -489,7 +489,7 @@ def analyze_chunked(
     progress=None,
     surfaces: bool = True,
     threads: int | None = None,
-) -> dict:
+) -> Report:
     """The report of :func:`isoflow.digital.analysis.analyze`, computed block
     by block.
 
@@ -605,7 +605,7 @@ def analyze_chunked(
 
 
 def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None,
-                 surfaces: bool = True, threads: int | None = None, progress=None) -> dict:
+                 surfaces: bool = True, threads: int | None = None, progress=None) -> Report:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
     Before the full pass, the dtype and the first block's values are

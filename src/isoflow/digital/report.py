@@ -5,6 +5,8 @@ from __future__ import annotations
 import dataclasses
 from typing import TypedDict
 
+import numpy as np
+
 from ..results import OMIT_NONE, Result
 
 
@@ -59,6 +61,16 @@ class Report(Result):
         Vertex contacts the mesh splits although the connectivity joins them.
     doubled_edges : int or None
         Lattice edges one sheet of the surface passes twice.
+
+    Examples
+    --------
+    Fields read as attributes and as keys; ``to_dict()`` is the JSON:
+
+    >>> import numpy as np
+    >>> from isoflow import analyze
+    >>> r = analyze(np.ones((2, 2, 2), bool))
+    >>> r.voxels, r["euler_characteristic"], r.to_dict()["betti"]
+    (8, 1, [1, 0, 0])
     """
 
     voxels: int
@@ -82,3 +94,31 @@ class Report(Result):
     def genus(self) -> list[int]:
         """The genus of each closed surface (3D, when the surfaces were asked)."""
         return [s["genus"] for s in self.surfaces or []]
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
+class SurfaceCensus(Result):
+    """The closed surfaces of a 3D object's boundary mesh, counted without
+    the mesh (:func:`~isoflow.digital.closed_surfaces.closed_surfaces`), and
+    what the same pass gives.
+
+    Attributes
+    ----------
+    surfaces : list of ClosedSurface
+        Largest first: the same multiset as the components of
+        ``boundary_mesh(volume, connectivity)``.
+    pinched_vertices : int
+        The mesh's ``pinched``.
+    doubled_edges : int
+        The mesh's ``midpoints // 2``.
+    hist : numpy.ndarray
+        The 256 configuration counts.
+    betti_counts : tuple of int
+        b0 and the enclosed background components under the connectivity.
+    """
+
+    surfaces: list[ClosedSurface]
+    pinched_vertices: int
+    doubled_edges: int
+    hist: np.ndarray
+    betti_counts: tuple[int, int]

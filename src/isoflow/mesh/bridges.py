@@ -10,20 +10,50 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from .voxelize import voxelize
 
+if TYPE_CHECKING:
+    from manifold3d import Manifold
 
-def from_manifold(manifold, pitch: float = 1.0, origin=(0.0, 0.0, 0.0)) -> DigitalObject:
+
+def from_manifold(manifold: Manifold, pitch: float = 1.0,
+                  origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> DigitalObject:
     """Digitise a manifold3d solid on the grid ``origin + pitch * Z^3``.
 
     Voxel ``v`` (the cube ``[origin + pitch v, origin + pitch (v+1)]``) is in
     iff its centre is inside. A solid made of unit cubes and boxes with
     integer corners is reproduced exactly at pitch 1.
+
+    Parameters
+    ----------
+    manifold : manifold3d.Manifold
+    pitch : float
+        The voxel size.
+    origin : tuple of float
+        A corner of the grid.
+
+    Returns
+    -------
+    DigitalObject
+        Cropped to the solid, its ``offset`` the lattice index of its first voxel.
+
+    Examples
+    --------
+    A 2x3x4 box less a unit cube at a corner:
+
+    >>> import manifold3d as m3
+    >>> solid = m3.Manifold.cube([2.0, 3.0, 4.0]) - m3.Manifold.cube([1.0, 1.0, 1.0])
+    >>> obj = from_manifold(solid)
+    >>> obj.voxels, obj.volume.shape
+    (23, (2, 3, 4))
     """
     mesh = manifold.to_mesh()
     verts = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
@@ -53,7 +83,7 @@ def cube_union(voxels):
 # --------------------------------------------------------------------------
 
 
-def to_manifold(obj: DigitalObject, connectivity: int = 6):
+def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int = 6) -> Manifold:
     """The union of the object's voxels as a ``manifold3d.Manifold`` in world
     coordinates.
 
@@ -65,6 +95,32 @@ def to_manifold(obj: DigitalObject, connectivity: int = 6):
     asked: its ``decompose()`` gives the components of that connectivity (edge
     contacts joined under 26, split under 6) and ``volume()`` the voxel volume.
     Vertex contacts are split in the mesh (docs/mathematics.md, "The boundary mesh").
+
+    Parameters
+    ----------
+    obj : DigitalObject or array_like of bool, 3D
+    connectivity : {6, 26}
+        The object's.
+
+    Returns
+    -------
+    manifold3d.Manifold
+        Empty for an empty object.
+
+    Raises
+    ------
+    IsoflowError
+        When the object is not 3D, or manifold3d refuses the mesh.
+
+    Examples
+    --------
+    Two voxels sharing an edge: two solids under 6-connectivity, one under 26.
+
+    >>> import numpy as np
+    >>> v = np.zeros((2, 2, 1), bool)
+    >>> v[0, 0, 0] = v[1, 1, 0] = True
+    >>> len(to_manifold(v, 6).decompose()), len(to_manifold(v, 26).decompose()), to_manifold(v).volume()
+    (2, 1, 2.0)
     """
     import manifold3d as m3
 

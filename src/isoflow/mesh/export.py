@@ -29,8 +29,11 @@ smaller files) and as double otherwise; OBJ prints as many digits as they
 need (9 at least); GLB, whose positions are float32 by its spec, then stores
 them in voxel units with the voxel size and the origin as its node's
 transform (float64 in the JSON), which readers apply. Binary STL holds
-float32 only: where that would move a vertex, the STL is refused (nothing
-is written) with the formats that keep them.
+float32 only, and no shared vertices (readers weld equal positions): it is
+written wherever float32 keeps the surface's distinct positions distinct,
+so that the weld gives back the same closed surface, and refused (nothing
+written) only where float32 would merge some, with the numbers;
+:func:`float32_effect` says how far float32 moves the positions.
 """
 
 from __future__ import annotations
@@ -82,6 +85,65 @@ def float32_holds(xyz: np.ndarray, spacing) -> bool:
     with np.errstate(over="ignore", invalid="ignore"):
         error = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz)
     return bool(np.all(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64)))
+
+
+def float32_effect(xyz: np.ndarray, spacing) -> dict:
+    """What storing the positions ``xyz`` (world units, voxel size
+    ``spacing``) as float32 does to them.
+
+    Parameters
+    ----------
+    xyz : ndarray, shape (N, 3)
+        Positions, float64.
+    spacing : array_like
+        Voxel size per axis.
+
+    Returns
+    -------
+    dict
+        ``positions``: distinct positions; ``merged``: how many of them
+        float32 makes equal to another (0: a reader's weld of equal
+        positions gives the same surface back); ``finite``: whether every
+        coordinate stays within float32's range; ``moved``: the largest
+        change of a coordinate, and ``moved_voxels`` in voxels of its axis;
+        ``largest``: the largest coordinate magnitude, and ``step``:
+        float32's spacing there.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> e = float32_effect(np.array([[1e6, 0, 0], [1e6 + 0.1, 0, 0]]), 0.1)
+    >>> e["merged"], e["moved"] <= e["step"] / 2, e["step"]
+    (0, True, 0.0625)
+    """
+    xyz = np.asarray(xyz, np.float64).reshape(-1, 3)
+    with np.errstate(over="ignore", invalid="ignore"):
+        xyz32 = xyz.astype(np.float32)
+    finite = bool(np.all(np.isfinite(xyz32)))
+    largest = float(np.max(np.abs(xyz))) if len(xyz) else 0.0
+    step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
+    positions = len(np.unique(xyz, axis=0)) if len(xyz) else 0
+    if not finite:
+        return {"positions": positions, "merged": None, "finite": False, "moved": None, "moved_voxels": None,
+                "largest": largest, "step": step}
+    change = np.abs(xyz32.astype(np.float64) - xyz)
+    moved = float(change.max()) if len(xyz) else 0.0
+    moved_voxels = float((change / np.asarray(spacing, np.float64)).max()) if len(xyz) else 0.0
+    merged = positions - (len(np.unique(xyz32, axis=0)) if len(xyz) else 0)
+    return {"positions": positions, "merged": int(merged), "finite": True, "moved": moved,
+            "moved_voxels": moved_voxels, "largest": largest, "step": step}
+
+
+def stl_refusal(path, effect: dict, spacing) -> str:
+    """Why a binary STL cannot hold the surface, with the numbers."""
+    if not effect["finite"]:
+        return (f"{path}: binary STL holds float32 positions, and this surface's coordinates (up to "
+                f"{effect['largest']:.3g}) exceed float32's range ({float(np.finfo(np.float32).max):.3g}); "
+                "write .ply, .obj or .glb, which keep them")
+    return (f"{path}: binary STL holds float32 positions, which would merge {effect['merged']} of this "
+            f"surface's {effect['positions']} distinct corner positions into others (voxel size "
+            f"{float(np.min(spacing)):.3g}, coordinates up to {effect['largest']:.3g}, where float32 positions "
+            f"are {effect['step']:.3g} apart); write .ply, .obj or .glb, which keep them")
 
 
 def mesh_vertex_table(mesh, obj: DigitalObject) -> dict[str, np.ndarray]:
@@ -289,7 +351,10 @@ def write_surface(
 ) -> dict:
     """Write a boundary mesh in the format its suffix names (PLY, OBJ, STL,
     GLB), in world coordinates. Returns what was written: ``path``,
-    ``faces`` (the kind) and ``face_count``. ``sync=False`` leaves the
+    ``faces`` (the kind) and ``face_count``; for STL also ``moved`` and
+    ``moved_voxels``, how far float32 moved the positions
+    (:func:`float32_effect`). Raises IsoflowError, writing nothing, for an
+    STL in which float32 would merge distinct positions. ``sync=False`` leaves the
     ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`)."""
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
@@ -302,11 +367,12 @@ def write_surface(
                   spacing=obj.spacing)
     elif suffix == ".stl":
         xyz = obj.world(mesh.vertices)
-        if not float32_holds(xyz, obj.spacing):  # the file would not hold the surface: nothing written
-            raise IsoflowError(f"{path}: binary STL holds float32 positions, which would move this surface's "
-                               "vertices off the voxel grid (units far from 1, or far from the origin); "
-                               "write .ply, .obj or .glb, which keep them")
+        effect = float32_effect(xyz, obj.spacing)
+        if effect["merged"] != 0:  # a reader's weld would not give the surface back: nothing written
+            raise IsoflowError(stl_refusal(path, effect, obj.spacing))
         write_stl(path, xyz, faces, force=force, sync=sync)
+        return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
+                "moved_voxels": effect["moved_voxels"]}
     else:
         table = mesh_vertex_table(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync,

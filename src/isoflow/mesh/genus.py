@@ -16,14 +16,18 @@ this is its number of tunnels b1.
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
-from ..scale.memory import default_budget, gib
+from ..scale.memory import default_budget
+from .crossings import crossing_pairs
 from .load import load_mesh, mesh_defects
+from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import voxelize
 
 # --------------------------------------------------------------------------
@@ -158,48 +162,29 @@ def pymeshlab_report(vertices, faces) -> dict:
 
 
 def self_intersections(vertices, faces, component) -> dict:
-    """Faces that cross other faces (pymeshlab's
-    ``compute_selection_by_self_intersections_per_face``), split into those
-    crossing a face of their own component (``self_intersecting_faces``: the
-    component is no embedded surface) and those crossing only other
-    components (``faces_crossing_other_components``: components overlap).
-
-    The whole mesh is tested once; only components with a selected face are
-    tested again on their own. The vertices are normalised first: the test's
-    tolerances are absolute, so tiny or huge units, or a mesh far from the
-    origin, gave false crossings or missed real ones.
-    """
-    try:
-        import pymeshlab
-
-        v = normalized(vertices)[0]
-        f = np.asarray(faces, np.int32)
-        hit = _intersecting_faces(pymeshlab, v, f)
-        own = np.zeros(len(f), dtype=bool)
-        for c in np.unique(component[hit]):
-            rows = np.flatnonzero(component == c)
-            used, local = np.unique(f[rows], return_inverse=True)
-            own[rows] = _intersecting_faces(pymeshlab, v[used], local.reshape(-1, 3).astype(np.int32))
-    except Exception as exc:  # pymeshlab raises its own types for degenerate input
-        return {"error": f"{type(exc).__name__}: {exc}"}
+    """Faces that cross other faces (:func:`isoflow.mesh.crossings.crossing_pairs`:
+    exact, on the coordinates as given, never a centred or scaled copy), split into those crossing a face of
+    their own component (``self_intersecting_faces``: the component is no
+    embedded surface) and those crossing only other components
+    (``faces_crossing_other_components``: components overlap or touch)."""
+    pairs = crossing_pairs(vertices, faces)
+    component = np.asarray(component)
+    nf = len(np.asarray(faces))
+    hit = np.zeros(nf, dtype=bool)
+    own = np.zeros(nf, dtype=bool)
+    hit[pairs.ravel()] = True
+    same = pairs[component[pairs[:, 0]] == component[pairs[:, 1]]]
+    own[same.ravel()] = True
     return {
         "self_intersecting_faces": int(np.count_nonzero(own)),
         "faces_crossing_other_components": int(np.count_nonzero(hit & ~own)),
     }
 
 
-def _intersecting_faces(pymeshlab, v, f) -> np.ndarray:
-    ms = pymeshlab.MeshSet()
-    ms.add_mesh(pymeshlab.Mesh(v, f))
-    ms.compute_selection_by_self_intersections_per_face()
-    return np.asarray(ms.current_mesh().face_selection_array(), dtype=bool)
-
-
 def normalized(vertices) -> tuple[np.ndarray, int]:
     """``(vertices, e)``: the vertices centred on their bounding box and
     scaled by ``2**-e`` to a size near 1 (exact in binary), for the tools
-    that take float32 or absolute tolerances (manifold3d, pymeshlab's
-    intersection test): a mesh in units of 1e-35 or 1e36, or placed at 1e7,
+    that take float32 or absolute tolerances (manifold3d, pymeshlab): a mesh in units of 1e-35 or 1e36, or placed at 1e7,
     then reads as it does at 1. Topology does not change; lengths scale by
     ``2**e``."""
     v = np.asarray(vertices, np.float64)
@@ -375,7 +360,7 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False) -> tuple[list, str | None]:
+                  strict: bool = False) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``: two coarse grids can both close the
@@ -383,8 +368,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     ``time_limit`` seconds and the memory budget.
 
     Returns the entries (resolution, pitch, shape, voxels, Betti numbers,
-    genus, seconds) and why the stepping stopped early (None when it ended
-    with stable Betti numbers and the target genus).
+    genus, seconds) and why the stepping stopped early (a :class:`Stop`;
+    None when it ended with stable Betti numbers and the target genus).
     ``progress(done, total)`` follows the voxelisations as one count that
     only grows: each resolution tried weighs ``resolution**3`` (what its grid
     costs), and ``total`` grows by that weight when the stepping adds a
@@ -396,42 +381,65 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     out: list = []
     finished = 0  # weight of the resolutions done
     start = time.monotonic()
-    while True:
+    while todo or out:
         if todo:
             res = todo.pop(0)
         else:
-            stable = len(out) >= 2 and out[-1]["betti"] == out[-2]["betti"]
-            if stable and (target is None or out[-1]["genus"] == target):
-                return out, None
-            if not step:
-                return out, "the resolutions asked"
-            last = out[-1]
-            res = 2 * last["resolution"]
-            grow = (res / last["resolution"]) ** 3
-            if res > max_resolution:
-                return out, f"the largest resolution allowed ({max_resolution}, --max-resolution)"
-            if time.monotonic() - start + last["seconds"] * grow > time_limit:
-                return out, f"the time limit ({time_limit:g} s, --time-limit): {res} would take about {last['seconds'] * grow:.0f} s"
-            need = int(np.prod(last["shape"]) * grow * DIGITAL_BYTES_PER_VOXEL)
-            if need > default_budget():
-                return out, f"the memory budget: {res} would need about {gib(need)}"
-        t = time.monotonic()
+            res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
+                                        time_limit=time_limit, elapsed=time.monotonic() - start)
+            if res is None:
+                return out, stop
         weight = res**3
         ahead = finished + weight + sum(r**3 for r in todo)  # the resolutions known now
 
         def rung(done, total, finished=finished, weight=weight, ahead=ahead):
             progress(finished + round(weight * (done / total if total else 1.0)), ahead)
 
-        vol, _, pitch = voxelize(vertices, faces, resolution=res, strict=strict,
-                                 progress=None if progress is None else rung)
+        entry = digital_entry(vertices, faces, res, connectivity, strict=strict,
+                              progress=None if progress is None else rung)
         finished += weight
-        betti = betti_numbers(vol, connectivity)
-        entry = {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
-                 "connectivity": connectivity, "betti": betti, "genus": betti[1],
-                 "seconds": round(time.monotonic() - t, 3)}
         out.append(entry)
         if on_resolution is not None:
             on_resolution(entry)
+    return out, None
+
+
+def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
+                    elapsed: float) -> tuple[int | None, Stop | None]:
+    """The resolution to try after ``done`` (twice the last), or None with
+    why not: the Betti numbers settled on ``target`` (no :class:`Stop`), or
+    a limit (the time that ``elapsed`` seconds leave, the memory budget)."""
+    stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
+    if stable and (target is None or done[-1]["genus"] == target):
+        return None, None
+    if not step:
+        return None, Stop("asked")
+    last = done[-1]
+    res = 2 * last["resolution"]
+    grow = (res / last["resolution"]) ** 3
+    if res > max_resolution:
+        return None, Stop("max_resolution", limit=max_resolution, resolution=res, option="max_resolution")
+    if elapsed + last["seconds"] * grow > time_limit:
+        return None, Stop("time_limit", limit=time_limit, resolution=res, estimate=last["seconds"] * grow,
+                          option="time_limit")
+    need = int(np.prod(last["shape"]) * grow * DIGITAL_BYTES_PER_VOXEL)
+    if need > default_budget():
+        return None, Stop("memory", resolution=res, estimate=need)
+    return res, None
+
+
+def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict: bool = False,
+                  progress=None) -> dict:
+    """The solid voxelised at ``resolution`` and its Betti numbers: one
+    entry of :func:`digital_steps`."""
+    import time
+
+    t = time.monotonic()
+    vol, _, pitch = voxelize(vertices, faces, resolution=resolution, strict=strict, progress=progress)
+    betti = betti_numbers(vol, connectivity)
+    return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
+            "connectivity": connectivity, "betti": betti, "genus": betti[1],
+            "seconds": round(time.monotonic() - t, 3)}
 
 
 # --------------------------------------------------------------------------
@@ -439,24 +447,56 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 # --------------------------------------------------------------------------
 
 
-def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None, *,
+def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
+                 connectivity: int = 6, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
-                 on_resolution=None, strict: bool = False) -> dict:
+                 on_resolution: Callable[[dict], object] | None = None, strict: bool = False) -> GenusVerdict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
     intersections, the genus of the solid it bounds, and the digital
     topology of that solid voxelised at growing resolutions, with a verdict.
 
     The verdict compares the digital genus (b1 of the voxelised solid) with
-    the solid's genus (manifold3d's union) where components overlap or
-    touch, and with the mesh's own genus otherwise. It is ``agree`` only
+    the solid's genus (manifold3d's union) where components overlap, touch
+    or nest, and with the mesh's own genus otherwise. It is ``agree`` only
     when the digital Betti numbers are the same at the last two resolutions
-    tried (:func:`digital_steps` doubles the resolution until they are, or
-    says "not converged at R"), and never for a self-intersecting mesh: its
-    surface bounds no well-defined solid, and no grid settles that.
+    tried (:func:`digital_steps` doubles the resolution until they are),
+    and never for a self-intersecting mesh: its surface bounds no
+    well-defined solid, and no grid settles that.
 
     An open or inconsistently oriented mesh has no genus of its own; its
     solid is read by the generalised winding number (``|w| > 1/2``) and its
     digital topology reported; ``strict`` refuses it (IsoflowError).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A mesh file of any format trimesh reads.
+    resolutions : sequence of int
+        Voxels along the longest side, tried first.
+    connectivity : {6, 26}
+        The digital solid's.
+    progress : callable, optional
+        ``progress(done, total)`` per resolution.
+    step : bool
+        Double the resolution until the Betti numbers of the last two agree,
+        within ``max_resolution``, ``time_limit`` (seconds) and the memory.
+    on_resolution : callable, optional
+        Called with each resolution's entry as it is done.
+    strict : bool
+        Refuse a mesh that is not watertight.
+
+    Returns
+    -------
+    GenusVerdict
+        The witnesses, the verdict's kind and the facts it rests on;
+        ``to_dict()`` is the JSON the ``genus`` command prints.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> v = verify_genus(data.torus(), resolutions=[24, 48], step=False)
+    >>> v.kind, v.reference, [d["genus"] for d in v.digital]
+    ('agree', 1, [1, 1])
     """
     path = Path(path)
     resolutions = list(resolutions)
@@ -464,126 +504,110 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         raise IsoflowError("verify_genus needs at least one resolution")
     stats: dict = {}
     v, f = load_mesh(path, stats=stats)
-    mesh, comp = mesh_topology(v, f, return_components=True)
-    crossings = self_intersections(v, f, comp)
-    out = {
-        "input": str(path),
-        "mesh": mesh,
-        "manifold3d": manifold3d_report(v, f),
-        "pymeshlab": pymeshlab_report(v, f),
-        "self_intersecting_faces": crossings.get("self_intersecting_faces"),
-        "faces_crossing_other_components": crossings.get("faces_crossing_other_components"),
-        "solid_genus": None,
-        "digital": [],
-    }
-    notes = []
-    welded = stats["welded"]
-    if stats["dropped_faces"]:
-        n = stats["dropped_faces"]
-        notes.append(f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped")
-    if welded:
-        notes.append(
-            f"{welded} vertices that differ only by rounding noise were welded before counting "
-            "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"
-        )
-    if "error" in crossings:
-        notes.append(f"pymeshlab could not test for self-intersections ({crossings['error']})")
-    crossing_self = bool(out["self_intersecting_faces"])
-    overlap = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
-    balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
-    if not balanced:
-        notes.append(
-            f"the mesh is open ({mesh['boundary_edges']} boundary edges"
-            + (f", {mesh['inconsistent_edges']} inconsistently oriented" if mesh["inconsistent_edges"] else "")
-            + "): it bounds no solid, so it has no genus as a closed surface; its solid is read by the "
-            "generalised winding number (|w| > 1/2)"
-        )
-    solid = solid_report(v, f) if balanced and not crossing_self else {"error": "not computed"}
-    out["solid"] = solid
-    if "genus" in solid:
-        out["solid_genus"] = solid["genus"]
-    # shells nested facing the same way: the solid swallows the inner ones,
-    # so the mesh is not its boundary and the solid's genus is the reference
-    nested = solid.get("boundary") is False and not overlap
-    overlap = overlap or nested
-    g = mesh["genus"]
-    reference, ref_name = (out["solid_genus"], "solid genus") if overlap else (g, "mesh genus")
-    stop = None
+    w = witnesses(v, f)
+    reference = w["solid_genus"] if w["overlap"] else w["mesh"]["genus"]
     try:  # with strict, a mesh that is not watertight is refused here
-        out["digital"], stop = digital_steps(
-            v, f, resolutions, connectivity, step=step and not crossing_self, max_resolution=max_resolution,
+        digital, stop = digital_steps(
+            v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
             strict=strict)
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
-    digital = out["digital"]
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
-    out["converged"] = stable
+    kind = verdict_kind(w, digital, reference, stable)
+    return GenusVerdict(
+        input=str(path), mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
+        self_intersecting_faces=w["self_intersecting_faces"],
+        faces_crossing_other_components=w["faces_crossing_other_components"],
+        solid_genus=w["solid_genus"], digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
+        kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
+        stop=stop,
+        notes=tuple(load_notes(stats) + shape_notes(w, kind) + digital_notes(w, digital, reference, stable)))
 
+
+def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
+    """What the mesh, the exact crossing test, manifold3d and pymeshlab say
+    of a loaded mesh, and the flags the verdict reads: ``crossing_self``
+    (faces cross faces of their own component), ``balanced`` (closed and
+    consistently oriented), ``nested`` (shells nest facing the same way, so
+    the mesh is not the solid's boundary) and ``overlap`` (the solid's genus
+    is the reference: components overlap, touch or nest)."""
+    mesh, comp = mesh_topology(v, f, return_components=True)
+    out = {"mesh": mesh, "manifold3d": manifold3d_report(v, f), "pymeshlab": pymeshlab_report(v, f)}
+    out.update(self_intersections(v, f, comp))
+    crossing_self = bool(out["self_intersecting_faces"])
+    balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
+    solid = solid_report(v, f) if balanced and not crossing_self else {"error": "not computed"}
+    touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
+    nested = solid.get("boundary") is False and not touching
+    out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
+               nested=nested, overlap=touching or nested)
+    return out
+
+
+def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) -> VerdictKind:
+    """What the verdict says first (see :data:`~isoflow.mesh.verdict.VerdictKind`).
+    An empty grid comes first: it has genus 0 and would "agree" with a
+    surface's genus 0 for nothing (a flat or zero-volume mesh, whose faces
+    may also lie on each other)."""
+    if digital and digital[-1]["betti"][0] == 0:
+        return "no_solid"
+    if w["crossing_self"]:
+        return "self_intersecting"
+    if not digital or reference is None:
+        return "no_reference"
+    if not stable:
+        return "not_converged"
+    return "agree" if digital[-1]["genus"] == reference else "disagree"
+
+
+def load_notes(stats: dict) -> list[Note]:
+    """What the weld did: faces dropped, positions merged."""
+    notes = []
+    if stats.get("dropped_faces"):
+        notes.append(Note("dropped_faces", {"n": stats["dropped_faces"]}))
+    if stats.get("welded"):
+        notes.append(Note("welded", {"n": stats["welded"]}))
+    return notes
+
+
+def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
+    """What the mesh is: open, non-manifold, nested or overlapping, and,
+    where the verdict does not start with it, self-intersecting."""
+    mesh = w["mesh"]
+    notes = []
+    if not w["balanced"]:
+        notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
+                                   "inconsistent_edges": mesh["inconsistent_edges"]}))
     if mesh["nonmanifold_edges"]:
-        notes.append(f"{mesh['nonmanifold_edges']} non-manifold edges (more than two faces): not a 2-manifold, genus undefined")
+        notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:
-        notes.append(
-            f"{mesh['nonmanifold_vertices']} non-manifold vertices where separate sheets touch at a point; "
-            "genus counted per edge-connected component"
-        )
-    if nested:
-        notes.append(
-            f"the mesh's {mesh['components']} components nest with shells facing the same way (a winding "
-            "number of 2 or more inside): the solid they bound by the nonzero rule swallows the inner ones, "
-            f"genus {out['solid_genus']} (manifold3d)"
-        )
-    elif overlap:
-        notes.append(
-            f"the mesh's {mesh['components']} components overlap or touch "
-            f"({out['faces_crossing_other_components'] or 0} faces cross other components, "
-            f"{mesh['shared_vertices']} vertices shared): the solid they bound is their union, "
-            + (f"genus {out['solid_genus']} (manifold3d)" if out["solid_genus"] is not None
-               else f"which manifold3d could not build ({solid.get('error')})")
-        )
+        notes.append(Note("nonmanifold_vertices", {"n": mesh["nonmanifold_vertices"]}))
+    if w["nested"]:
+        notes.append(Note("nested", {"components": mesh["components"], "solid_genus": w["solid_genus"]}))
+    elif w["overlap"]:
+        notes.append(Note("overlap", {
+            "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
+            "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error")}))
+    if w["crossing_self"] and kind != "self_intersecting":
+        notes.append(Note("self_intersecting", {"n": w["self_intersecting_faces"]}))
+    return notes
+
+
+def digital_notes(w: dict, digital: list, reference: int | None, stable: bool) -> list[Note]:
+    """What the grids showed (cavities, resolutions too coarse) and what
+    the peers could not say."""
+    notes = []
     if digital:
         last = digital[-1]
         if last["betti"][2]:
-            notes.append(f"the solid has {last['betti'][2]} cavities (nested shells) at resolution {last['resolution']}")
+            notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:
-            for d in digital[:-2]:
-                if d["genus"] != reference:
-                    notes.append(
-                        f"at resolution {d['resolution']} the grid is too coarse: digital genus {d['genus']} "
-                        f"(pitch {d['pitch']:.4g}; handles thinner than a voxel close or open)"
-                    )
-    m3 = out["manifold3d"]
-    if "error" in m3:
-        notes.append(f"manifold3d refused the mesh ({m3['error']})")
-    if g is None and balanced and not mesh["nonmanifold_edges"]:
-        notes.append("the mesh is not a closed oriented manifold, so it has no genus")
-
-    agree = False
-    if crossing_self:
-        head = (f"self-intersecting: {out['self_intersecting_faces']} faces cross faces of their own component, "
-                "so the surface bounds no well-defined solid and no finer grid settles its genus")
-    elif digital and digital[-1]["betti"][0] == 0:
-        # a flat or zero-volume mesh: an empty grid has genus 0 and would
-        # "agree" with the surface's genus 0 for nothing
-        volume = solid.get("volume")
-        head = (f"no solid: the mesh encloses no voxel at resolution {digital[-1]['resolution']}"
-                + (f" (its enclosed volume is {volume:.3g})" if volume is not None else "")
-                + ", so there is no solid genus to check")
-    elif not digital or reference is None:
-        head = f"no {ref_name} to compare" if digital else "no mesh genus to compare"
-    elif not stable:
-        trail = ", ".join(f"{d['resolution']}: {tuple(d['betti'])}" for d in digital[-3:])
-        why = ("the digital Betti numbers still change" if len(digital) > 1 else
-               "one resolution cannot show that the digital Betti numbers have settled")
-        head = (f"not converged at {digital[-1]['resolution']}: {why} ({trail})"
-                + (f"; stopped by {stop}" if stop else ""))
-    elif digital[-1]["genus"] == reference:
-        agree = True
-        head = f"agree: {'solid genus' if overlap else 'genus'} {reference}"
-    else:
-        head = (f"disagree: {ref_name} {reference}, digital genus {digital[-1]['genus']} "
-                f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})"
-                + (f"; stopped by {stop}" if stop else ""))
-    out["agree"] = agree
-    out["verdict"] = head + ("; " + "; ".join(notes) if notes else "")
-    return out
+            notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})
+                      for d in digital[:-2] if d["genus"] != reference]
+    if "error" in w["manifold3d"]:
+        notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))
+    mesh = w["mesh"]
+    if mesh["genus"] is None and w["balanced"] and not mesh["nonmanifold_edges"]:
+        notes.append(Note("no_mesh_genus"))
+    return notes

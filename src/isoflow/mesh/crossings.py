@@ -1,0 +1,307 @@
+"""Which triangles of a mesh meet other than at the corners they share.
+
+Two faces *cross* when their closed triangles have a point in common that
+their shared corners do not explain (libigl's ``remesh_self_intersections``
+rules, whose CGAL predicates are exact):
+
+* faces with no common corner cross when the triangles meet at all
+  (touching counts);
+* faces with one common corner cross when the edge of either opposite that
+  corner meets the other face;
+* faces with a common edge cross when they lie in one plane on the same
+  side of that edge (they overlap); otherwise they meet only along it;
+* faces with the same three corners (a duplicate, or the two sides of a
+  double-sided face) are not tested, nor faces whose corners are collinear
+  (no area, nothing to cross).
+
+Corners are common when they are at the same position. Every decision is
+the sign of an exact determinant of the float64 coordinates as stored
+(:mod:`isoflow.mesh.predicates`), so the answer depends on no unit,
+placement or tolerance: moving or scaling the mesh cannot create or remove
+a crossing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Literal
+
+import numpy as np
+
+from ..scale.compiled import have_numba
+from .predicates import ExactPoints
+
+#: from this many faces on, ``method="auto"`` takes the compiled pass
+COMPILED_FACES = 2000
+
+#: candidate pairs handled at once (memory: about 200 bytes each)
+CHUNK_PAIRS = 1 << 21
+
+
+def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
+                   method: Literal["auto", "numpy", "compiled"] = "auto") -> np.ndarray:
+    """Pairs of faces that cross, by the rules of this module's docstring.
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (N, 3)
+        Positions (float64; any units, any placement).
+    faces : ndarray, shape (M, 3)
+        Vertex indices of each triangle.
+    method : {"auto", "numpy", "compiled"}
+        ``"compiled"`` decides the pairs whose float64 signs are certified
+        with numba and the rest in NumPy with integers; ``"numpy"`` decides
+        all in NumPy; ``"auto"`` compiles from :data:`COMPILED_FACES` faces
+        on, where numba is installed. The answer is the same.
+
+    Returns
+    -------
+    ndarray, shape (K, 2), int64
+        Face index pairs ``(i, j)`` with ``i < j``, sorted.
+
+    Examples
+    --------
+    Two triangles through each other, and one apart:
+
+    >>> import numpy as np
+    >>> v = np.array([[0, 0, 0], [2, 0, 0], [0, 2, 0],
+    ...               [0.5, 0.5, -1], [0.5, 0.5, 1], [1.5, 1.5, 0],
+    ...               [5, 5, 5], [6, 5, 5], [5, 6, 5]], float)
+    >>> crossing_pairs(v, np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]])).tolist()
+    [[0, 1]]
+    """
+    v = np.asarray(vertices, np.float64)
+    f = np.asarray(faces, np.int64)
+    points, position = np.unique(v, axis=0, return_inverse=True)
+    exact = ExactPoints(points)
+    tri = position.reshape(-1)[f]
+    axis = projection_axis(exact, tri) if len(f) else np.zeros(0, np.int64)
+    tested = np.flatnonzero(axis >= 0)  # collinear corners: nothing to cross
+    if len(tested) < 2:
+        return np.zeros((0, 2), np.int64)
+    tri, axis = tri[tested], axis[tested]
+    corners = exact.xyz[tri]
+    grid = CubeGrid(corners.min(axis=1), corners.max(axis=1))
+    if method == "compiled" or (method == "auto" and len(f) >= COMPILED_FACES and have_numba()):
+        found = _compiled_pairs(exact, tri, axis, grid)
+    else:
+        found = [pairs[_cross(exact, tri, axis, pairs)] for pairs in grid.pairs()]
+    out = tested[np.concatenate(found)] if found else np.zeros((0, 2), np.int64)
+    return out[np.lexsort((out[:, 1], out[:, 0]))]
+
+
+def _compiled_pairs(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, grid: CubeGrid) -> list:
+    """The crossing pairs: decided by the compiled pass where its float64
+    signs are certified, the others here, in integers."""
+    from .crossing_kernels import cube_pairs
+
+    small = exact.small if exact.small is not None else np.zeros((1, 3), np.int64)
+    found = np.zeros((1024, 2), np.int64)
+    undecided = np.zeros((1 << 16, 2), np.int64)
+    while True:
+        nf, nu = cube_pairs(exact.xyz, small, tri, axis, grid.box, grid.key, grid.start, grid.size, grid.cl,
+                            grid.lo, grid.hi, grid.dims, found, undecided)
+        if nf <= len(found) and nu <= len(undecided):
+            break
+        found = np.zeros((max(nf, len(found)), 2), np.int64)
+        undecided = np.zeros((max(nu, len(undecided)), 2), np.int64)
+    rest = undecided[:nu]
+    return [found[:nf], rest[_cross(exact, tri, axis, rest)]]
+
+
+def projection_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
+    """Per triangle, the axis along which it is seen with its largest
+    extent (a component of its normal that is exactly non-zero), or -1 where
+    its corners are collinear."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    signs = np.stack([exact.orient2d(a, b, c, np.full(len(tri), k)) for k in range(3)], axis=1)
+    x = exact.xyz
+    with np.errstate(over="ignore", invalid="ignore"):
+        normal = np.abs(np.cross(x[b] - x[a], x[c] - x[a]))
+    normal = np.where(signs != 0, np.nan_to_num(normal, nan=0.0, posinf=1.0) + 1e-300, -1.0)
+    axis = np.argmax(normal, axis=1)
+    axis[~np.any(signs != 0, axis=1)] = -1
+    return axis
+
+
+class CubeGrid:
+    """Closed boxes ``[lo, hi]`` hashed into a grid of cubes about the size
+    of a typical box: ``box`` (box numbers) sorted by ``key`` (their cubes),
+    the cubes' ``start`` and ``size`` in it, each box's lowest cube ``cl``.
+    A pair of overlapping boxes belongs to the one cube that holds the lower
+    corner of their common box, so no pair is seen twice."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray) -> None:
+        self.lo, self.hi = lo, hi
+        cl, ch = _grid_cells(lo, hi)
+        span = ch - cl + 1
+        count = np.prod(span, axis=1)
+        box = np.repeat(np.arange(len(lo)), count)
+        local = np.arange(len(box)) - np.repeat(np.cumsum(count) - count, count)
+        sx, sy = span[box, 0], span[box, 1]
+        cell = cl[box] + np.stack([local % sx, (local // sx) % sy, local // (sx * sy)], axis=1)
+        self.dims = ch.max(axis=0) + 1
+        key = self.cube_key(cell)
+        order = np.argsort(key, kind="stable")
+        self.box, self.key, self.cl = box[order], key[order], cl
+        self.start = np.flatnonzero(np.r_[True, self.key[1:] != self.key[:-1]])
+        self.size = np.diff(np.r_[self.start, len(self.key)])
+
+    def cube_key(self, cell: np.ndarray) -> np.ndarray:
+        """One integer per cube (x fastest)."""
+        return (cell[:, 2] * self.dims[1] + cell[:, 1]) * self.dims[0] + cell[:, 0]
+
+    def pairs(self) -> Iterator[np.ndarray]:
+        """Pairs ``(i, j)``, ``i < j``, of the boxes that overlap, in chunks."""
+        after = np.repeat(self.start + self.size, self.size) - np.arange(len(self.key)) - 1
+        lo, hi = self.lo, self.hi
+        for first, second in _index_pairs(after):
+            i, j = self.box[first], self.box[second]
+            mine = self.cube_key(np.maximum(self.cl[i], self.cl[j])) == self.key[first]
+            meet = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+            keep = mine & meet
+            yield np.stack([np.minimum(i, j)[keep], np.maximum(i, j)[keep]], axis=1)
+
+
+def _grid_cells(lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest and highest grid cube of each box, for a cube size that
+    puts each box in a few cubes on average (doubled until it does)."""
+    origin = lo.min(axis=0)
+    extent = float(np.max(hi.max(axis=0) - origin))
+    if not extent > 0:
+        zero = np.zeros(lo.shape, np.int64)
+        return zero, zero
+    size = max(float(np.median(np.max(hi - lo, axis=1))), extent / 2**20)
+    while True:
+        cl = np.floor((lo - origin) / size).astype(np.int64)
+        ch = np.floor((hi - origin) / size).astype(np.int64)
+        if np.prod(ch - cl + 1, axis=1).sum() <= 8 * len(lo) + 1024 or size >= extent:
+            return cl, ch
+        size *= 2
+
+
+def _index_pairs(after: np.ndarray) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """``(first, second)`` index arrays: each entry ``k`` with each of the
+    ``after[k]`` entries that follow it, at most :data:`CHUNK_PAIRS` a chunk."""
+    ends = np.cumsum(after)
+    lo = 0
+    while lo < len(after):
+        hi = int(np.searchsorted(ends, ends[lo - 1] + CHUNK_PAIRS if lo else CHUNK_PAIRS, side="right"))
+        hi = max(hi, lo + 1)
+        n = after[lo:hi]
+        first = np.repeat(np.arange(lo, hi), n)
+        offset = np.arange(len(first)) - np.repeat(np.cumsum(n) - n, n)
+        yield first, first + 1 + offset
+        lo = hi
+
+
+def _cross(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Which face pairs cross, by the number of corners they share."""
+    A, B = tri[pairs[:, 0]], tri[pairs[:, 1]]
+    same = A[:, :, None] == B[:, None, :]
+    shared = same.sum(axis=(1, 2))
+    out = np.zeros(len(pairs), dtype=bool)
+    for n, rule in ((2, _edge_rule), (1, _corner_rule), (0, _apart_rule)):
+        rows = np.flatnonzero(shared == n)
+        if len(rows):
+            out[rows] = rule(exact, A[rows], B[rows], same[rows], axis[pairs[rows, 0]], axis[pairs[rows, 1]])
+    return out
+
+
+def _edge_rule(exact, A, B, same, axis_a, axis_b) -> np.ndarray:
+    """Faces on a common edge cross when coplanar on one side of it."""
+    ia = np.argmin(same.any(axis=2), axis=1)  # A's corner off the common edge
+    ib = np.argmin(same.any(axis=1), axis=1)
+    rows = np.arange(len(A))
+    a, b = A[rows, ia], B[rows, ib]
+    u, v = A[rows, (ia + 1) % 3], A[rows, (ia + 2) % 3]
+    out = exact.orient3d(u, v, a, b) == 0
+    k = np.flatnonzero(out)
+    side = exact.orient2d(u[k], v[k], a[k], axis_a[k]) * exact.orient2d(u[k], v[k], b[k], axis_a[k])
+    out[k] = side > 0
+    return out
+
+
+def _corner_rule(exact, A, B, same, axis_a, axis_b) -> np.ndarray:
+    """Faces on a common corner cross when the edge of either opposite that
+    corner meets the other face."""
+    ia = np.argmax(same.any(axis=2), axis=1)
+    ib = np.argmax(same.any(axis=1), axis=1)
+    rows = np.arange(len(A))
+    out = segment_meets_triangle(exact, A[rows, (ia + 1) % 3], A[rows, (ia + 2) % 3], B, axis_b)
+    rest = np.flatnonzero(~out)
+    out[rest] = segment_meets_triangle(exact, B[rest, (ib[rest] + 1) % 3], B[rest, (ib[rest] + 2) % 3],
+                                       A[rest], axis_a[rest])
+    return out
+
+
+def _apart_rule(exact, A, B, same, axis_a, axis_b) -> np.ndarray:
+    """Faces with no common corner cross when they meet: then an edge of one
+    meets the other (their common part is convex, with its ends on edges)."""
+    side_b = np.stack([exact.orient3d(A[:, 0], A[:, 1], A[:, 2], B[:, k]) for k in range(3)], axis=1)
+    side_a = np.stack([exact.orient3d(B[:, 0], B[:, 1], B[:, 2], A[:, k]) for k in range(3)], axis=1)
+    apart = (np.all(side_b > 0, axis=1) | np.all(side_b < 0, axis=1)
+             | np.all(side_a > 0, axis=1) | np.all(side_a < 0, axis=1))
+    out = np.zeros(len(A), dtype=bool)
+    for (S, T, sides, axis_t) in ((B, A, side_b, axis_a), (A, B, side_a, axis_b)):
+        for k in range(3):
+            rows = np.flatnonzero(~apart & ~out)
+            if not len(rows):
+                return out
+            p, q = (k, (k + 1) % 3)
+            out[rows] = segment_meets_triangle(exact, S[rows, p], S[rows, q], T[rows], axis_t[rows],
+                                               sides[rows, p], sides[rows, q])
+    return out
+
+
+def segment_meets_triangle(exact: ExactPoints, p: np.ndarray, q: np.ndarray, tri: np.ndarray, axis: np.ndarray,
+                           side_p: np.ndarray | None = None, side_q: np.ndarray | None = None) -> np.ndarray:
+    """Whether each closed segment ``p q`` meets its closed triangle ``tri``
+    (point indices; ``axis`` from :func:`projection_axis`; ``side_p``,
+    ``side_q``: the orientations of ``p`` and ``q`` against the triangle's
+    plane, where known)."""
+    t0, t1, t2 = tri[:, 0], tri[:, 1], tri[:, 2]
+    sp = exact.orient3d(t0, t1, t2, p) if side_p is None else side_p
+    sq = exact.orient3d(t0, t1, t2, q) if side_q is None else side_q
+    out = np.zeros(len(p), dtype=bool)
+    meets_plane = ~((sp == sq) & (sp != 0))
+    planar = meets_plane & (sp == 0) & (sq == 0)
+    k = np.flatnonzero(meets_plane & ~planar)  # one point on the plane: inside the triangle?
+    if len(k):
+        w = np.stack([exact.orient3d(p[k], q[k], a[k], b[k]) for a, b in ((t0, t1), (t1, t2), (t2, t0))], axis=1)
+        out[k] = ~(np.any(w > 0, axis=1) & np.any(w < 0, axis=1))
+    k = np.flatnonzero(planar)
+    if len(k):
+        out[k] = _segment_meets_triangle_2d(exact, p[k], q[k], tri[k], axis[k])
+    return out
+
+
+def _segment_meets_triangle_2d(exact, p, q, tri, axis) -> np.ndarray:
+    """Segment and triangle in one plane, seen along ``axis``: an end inside
+    the triangle, or the segment meets an edge."""
+    out = _inside(exact, p, tri, axis) | _inside(exact, q, tri, axis)
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        k = np.flatnonzero(~out)
+        if not len(k):
+            break
+        out[k] = _segments_meet_2d(exact, p[k], q[k], tri[k, a], tri[k, b], axis[k])
+    return out
+
+
+def _inside(exact, x, tri, axis) -> np.ndarray:
+    """Whether point ``x`` lies in the closed triangle seen along ``axis``."""
+    s = np.stack([exact.orient2d(tri[:, a], tri[:, b], x, axis) for a, b in ((0, 1), (1, 2), (2, 0))], axis=1)
+    return ~(np.any(s > 0, axis=1) & np.any(s < 0, axis=1))
+
+
+def _segments_meet_2d(exact, p, q, r, s, axis) -> np.ndarray:
+    """Whether closed segments ``p q`` and ``r s`` meet, seen along ``axis``."""
+    d1, d2 = exact.orient2d(r, s, p, axis), exact.orient2d(r, s, q, axis)
+    d3, d4 = exact.orient2d(p, q, r, axis), exact.orient2d(p, q, s, axis)
+    out = (d1 * d2 < 0) & (d3 * d4 < 0)
+    x = exact.xyz
+    for d, x0, x1, y in ((d1, r, s, p), (d2, r, s, q), (d3, p, q, r), (d4, p, q, s)):
+        on = d == 0
+        lo, hi = np.minimum(x[x0], x[x1]), np.maximum(x[x0], x[x1])
+        out |= on & np.all((lo <= x[y]) & (x[y] <= hi), axis=1)
+    return out

@@ -1,0 +1,204 @@
+"""A genus verdict as data (:class:`GenusVerdict`), and its words.
+
+:func:`isoflow.mesh.genus.verify_genus` decides; this module holds what it
+decides (the kind of verdict, the facts it rests on, why the resolution
+stepping stopped, the notes) and the one wording of it that the command
+line and :meth:`GenusVerdict.to_dict` share. A limit that stopped the
+stepping is named by the :func:`~isoflow.mesh.genus.verify_genus` parameter
+that sets it (``max_resolution``, ``time_limit``), as data; its words write
+it as the command line's option.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from ..results import Result
+from ..scale.memory import gib
+
+#: what the verdict says, first
+VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
+#: why the resolution stepping stopped before the Betti numbers settled
+StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
+#: the facts said after the verdict
+NoteKind = Literal["dropped_faces", "welded", "open", "nonmanifold_edges", "nonmanifold_vertices", "nested",
+                   "overlap", "self_intersecting", "cavities", "coarse", "manifold3d_refused", "no_mesh_genus"]
+
+
+@dataclass(frozen=True)
+class Stop:
+    """Why :func:`~isoflow.mesh.genus.digital_steps` stopped stepping.
+
+    ``limit`` is the value of the limit (a resolution, seconds), ``option``
+    the parameter that sets it, ``resolution`` the next resolution (not
+    tried) and ``estimate`` what it would have taken (seconds for
+    ``time_limit``, bytes for ``memory``).
+    """
+
+    kind: StopKind
+    limit: float | None = None
+    resolution: int | None = None
+    estimate: float | None = None
+    option: str | None = None
+
+
+@dataclass(frozen=True)
+class Note:
+    """One fact said after the verdict: its kind and its figures."""
+
+    kind: NoteKind
+    facts: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class GenusVerdict(Result):
+    """What :func:`~isoflow.mesh.genus.verify_genus` found, as fields and as
+    a mapping of the keys ``isoflow genus --json`` prints (``v.agree``,
+    ``v["agree"]``); :meth:`to_dict` is that JSON object.
+
+    ``reference`` is the genus the digital genus is compared with, taken
+    from ``reference_source`` (``"mesh"``: the mesh's own genus; ``"solid"``:
+    the genus of the solid manifold3d builds, where components overlap,
+    touch or nest).
+    """
+
+    input: str
+    mesh: dict
+    manifold3d: dict
+    pymeshlab: dict
+    self_intersecting_faces: int | None
+    faces_crossing_other_components: int | None
+    solid_genus: int | None
+    digital: list
+    solid: dict
+    converged: bool
+    agree: bool
+    kind: VerdictKind
+    reference: int | None
+    reference_source: Literal["mesh", "solid"]
+    stop: Stop | None = None
+    notes: tuple[Note, ...] = ()
+
+    #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order
+    KEYS = ("input", "mesh", "manifold3d", "pymeshlab", "self_intersecting_faces",
+            "faces_crossing_other_components", "solid_genus", "digital", "solid", "converged", "agree", "verdict")
+
+    @property
+    def verdict(self) -> str:
+        """The verdict in words (:func:`verdict_text`)."""
+        return verdict_text(self)
+
+    def _keys(self) -> list[str]:
+        # the JSON's keys: some fields are the verdict's facts, not printed,
+        # and the verdict's words are a property
+        return list(self.KEYS)
+
+
+# --------------------------------------------------------------------------
+# words
+# --------------------------------------------------------------------------
+
+
+def option_flag(option: str) -> str:
+    """The command line's spelling of a parameter.
+
+    Examples
+    --------
+    >>> option_flag("time_limit")
+    '--time-limit'
+    """
+    return "--" + option.replace("_", "-")
+
+
+def stop_text(stop: Stop) -> str:
+    """Why the stepping stopped, as the verdict says it.
+
+    Examples
+    --------
+    >>> stop_text(Stop("max_resolution", limit=256, resolution=512, option="max_resolution"))
+    'the largest resolution allowed (256, --max-resolution)'
+    """
+    if stop.kind == "asked":
+        return "the resolutions asked"
+    flag = option_flag(stop.option) if stop.option else ""
+    if stop.kind == "max_resolution":
+        return f"the largest resolution allowed ({stop.limit}, {flag})"
+    if stop.kind == "time_limit":
+        return (f"the time limit ({stop.limit:g} s, {flag}): {stop.resolution} would take about "
+                f"{stop.estimate:.0f} s")
+    return f"the memory budget: {stop.resolution} would need about {gib(int(stop.estimate or 0))}"
+
+
+def verdict_text(v: GenusVerdict) -> str:
+    """The verdict sentence: what it says first, then the notes."""
+    notes = [note_text(n) for n in v.notes]
+    return head_text(v) + ("; " + "; ".join(notes) if notes else "")
+
+
+def head_text(v: GenusVerdict) -> str:
+    """What the verdict says first."""
+    digital, stop = v.digital, (f"; stopped by {stop_text(v.stop)}" if v.stop else "")
+    ref_name = f"{v.reference_source} genus"
+    if v.kind == "self_intersecting":
+        return (f"self-intersecting: {v.self_intersecting_faces} faces cross faces of their own component, "
+                "so the surface bounds no well-defined solid and no finer grid settles its genus")
+    if v.kind == "no_solid":
+        volume = v.solid.get("volume")
+        return (f"no solid: the mesh encloses no voxel at resolution {digital[-1]['resolution']}"
+                + (f" (its enclosed volume is {volume:.3g})" if volume is not None else "")
+                + ", so there is no solid genus to check")
+    if v.kind == "no_reference":
+        return f"no {ref_name} to compare" if digital else "no mesh genus to compare"
+    if v.kind == "not_converged":
+        trail = ", ".join(f"{d['resolution']}: {tuple(d['betti'])}" for d in digital[-3:])
+        why = ("the digital Betti numbers still change" if len(digital) > 1 else
+               "one resolution cannot show that the digital Betti numbers have settled")
+        return f"not converged at {digital[-1]['resolution']}: {why} ({trail})" + stop
+    if v.kind == "agree":
+        return f"agree: {'solid genus' if v.reference_source == 'solid' else 'genus'} {v.reference}"
+    return (f"disagree: {ref_name} {v.reference}, digital genus {digital[-1]['genus']} "
+            f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})" + stop)
+
+
+def note_text(note: Note) -> str:
+    """One note of the verdict in words."""
+    return _NOTE_WORDS[note.kind](**note.facts)
+
+
+def _open_words(boundary_edges: int, inconsistent_edges: int) -> str:
+    return (f"the mesh is open ({boundary_edges} boundary edges"
+            + (f", {inconsistent_edges} inconsistently oriented" if inconsistent_edges else "")
+            + "): it bounds no solid, so it has no genus as a closed surface; its solid is read by the "
+            "generalised winding number (|w| > 1/2)")
+
+
+def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None) -> str:
+    return (f"the mesh's {components} components overlap or touch ({crossing} faces cross other components, "
+            f"{shared} vertices shared): the solid they bound is their union, "
+            + (f"genus {solid_genus} (manifold3d)" if solid_genus is not None
+               else f"which manifold3d could not build ({error})"))
+
+
+_NOTE_WORDS = {
+    "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
+    "welded": lambda n: (f"{n} vertices that differ only by rounding noise were welded before counting "
+                         "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
+    "open": _open_words,
+    "nonmanifold_edges": lambda n: f"{n} non-manifold edges (more than two faces): not a 2-manifold, genus undefined",
+    "nonmanifold_vertices": lambda n: (f"{n} non-manifold vertices where separate sheets touch at a point; "
+                                       "genus counted per edge-connected component"),
+    "nested": lambda components, solid_genus: (
+        f"the mesh's {components} components nest with shells facing the same way (a winding "
+        "number of 2 or more inside): the solid they bound by the nonzero rule swallows the inner ones, "
+        f"genus {solid_genus} (manifold3d)"),
+    "overlap": _overlap_words,
+    "self_intersecting": lambda n: f"{n} faces cross faces of their own component",
+    "cavities": lambda n, resolution: f"the solid has {n} cavities (nested shells) at resolution {resolution}",
+    "coarse": lambda resolution, genus, pitch: (
+        f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
+        f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
+    "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
+    "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
+}

@@ -1,0 +1,122 @@
+"""The public API as a user and a type checker see it: ``isoflow.__all__``,
+the lazy loader, the stub ``__init__.pyi`` and ``py.typed``; mypy reads
+concrete types off a user's script."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import inspect
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import isoflow
+
+PACKAGE = Path(isoflow.__file__).parent
+
+
+def stub_names() -> dict[str, str]:
+    """name -> module, as the stub declares them (``from .m import x as x``)."""
+    tree = ast.parse((PACKAGE / "__init__.pyi").read_text())
+    out = {}
+    for node in tree.body:
+        if isinstance(node, ast.ImportFrom):
+            for alias in node.names:
+                assert alias.asname == alias.name, f"the stub re-exports {alias.name} as itself"
+                out[alias.name] = "." * node.level + (node.module or alias.name)
+    return out
+
+
+def test_all_is_what_the_stub_declares_and_every_name_loads():
+    names = stub_names()
+    assert sorted(isoflow.__all__) == sorted(names) == isoflow.__all__
+    for name in isoflow.__all__:
+        value = getattr(isoflow, name)
+        home = importlib.import_module(names[name].replace(".", "isoflow.", 1) if names[name] != "." else "isoflow")
+        if inspect.ismodule(value):
+            assert value is importlib.import_module(f"isoflow.{name}")
+        else:
+            assert getattr(home, name) is value, name
+
+
+def test_nothing_but_the_api_is_public():
+    # no stray names (an imported helper such as import_module) in the namespace
+    # (a subpackage that has been imported is an attribute of its parent:
+    # Python's import system puts it there)
+    public = {n for n in dir(isoflow) if not n.startswith("_") and not inspect.ismodule(getattr(isoflow, n))}
+    assert public == {n for n in isoflow.__all__ if not inspect.ismodule(getattr(isoflow, n))}
+    with pytest.raises(AttributeError, match="no attribute 'import_module'"):
+        isoflow.import_module  # noqa: B018
+
+
+def test_the_package_says_it_is_typed():
+    assert (PACKAGE / "py.typed").is_file() and (PACKAGE / "__init__.pyi").is_file()
+    import tomllib
+
+    data = tomllib.loads((PACKAGE.parents[1] / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    assert {"py.typed", "*.pyi"} <= set(data["isoflow"])
+
+
+USER_SCRIPT = '''
+import numpy as np
+import isoflow
+
+vol = np.zeros((4, 4, 4), dtype=bool)
+obj = isoflow.DigitalObject(vol)
+reveal_type(isoflow.analyze(vol))
+reveal_type(isoflow.analyze(vol).betti)
+reveal_type(isoflow.analyze_chunked(vol))
+reveal_type(isoflow.analyze_zarr("v.zarr"))
+reveal_type(isoflow.closed_surfaces(vol, 6))
+reveal_type(isoflow.configurations(vol))
+reveal_type(isoflow.configuration_histogram(vol))
+reveal_type(isoflow.euler_characteristic(vol, 6))
+reveal_type(isoflow.betti_numbers(vol, 6))
+reveal_type(isoflow.euler_lut(3, 6))
+reveal_type(isoflow.a_lut(6))
+reveal_type(isoflow.class_histogram(isoflow.configuration_histogram(vol)))
+reveal_type(isoflow.class_lut())
+reveal_type(isoflow.code_lut())
+reveal_type(isoflow.f_lut())
+reveal_type(isoflow.gamma_lut())
+reveal_type(isoflow.normal_lut())
+reveal_type(isoflow.planar_index(np.ones((3, 3), bool)))
+reveal_type(isoflow.CLASS_LABELS)
+reveal_type(isoflow.boundary_mesh(vol, 6))
+reveal_type(isoflow.boundary_mesh(vol, 6).euler_characteristic)
+reveal_type(isoflow.flow_step(obj, 6))
+reveal_type(isoflow.run_flow(obj, steps=1))
+reveal_type(isoflow.voxelize_mesh(np.zeros((3, 3)), np.zeros((1, 3), int), resolution=4))
+reveal_type(isoflow.voxelize_file("m.stl", resolution=4))
+reveal_type(isoflow.verify_genus("m.stl"))
+reveal_type(isoflow.read_volume("v.npy"))
+reveal_type(isoflow.read_object("v.npy"))
+reveal_type(isoflow.read_points("p.txt"))
+reveal_type(isoflow.write_volume(obj, "v.npz"))
+reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has no py.typed: Manifold is Any)
+reveal_type(isoflow.data.bob())
+'''
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
+    script = tmp_path / "user.py"
+    script.write_text(USER_SCRIPT)
+    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
+    p = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
+                        "--cache-dir", str(tmp_path / "cache"), str(script)],
+                       capture_output=True, text=True, cwd=tmp_path, env=env)
+    revealed = re.findall(r"user\.py:(\d+): note: Revealed type is \"(.*)\"", p.stdout)
+    calls = [line for line in USER_SCRIPT.splitlines() if line.startswith("reveal_type")]
+    assert len(revealed) == len(calls), p.stdout + p.stderr
+    vague = [calls[i] + " -> " + t for i, (_, t) in enumerate(revealed)
+             if t == "Any" or t.startswith("builtins.dict[Any") or t == "builtins.dict[builtins.str, Any]"]
+    assert not vague, "\n".join(vague)
+    # the results are isoflow's own types, not dicts
+    assert "isoflow.digital.report.Report" in revealed[0][1]
+    assert "isoflow.mesh.verdict.GenusVerdict" in revealed[calls.index('reveal_type(isoflow.verify_genus("m.stl"))')][1]
