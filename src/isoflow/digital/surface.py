@@ -225,40 +225,14 @@ class QuadMesh:
     def polygons(self) -> np.ndarray:
         """Faces with their midpoints (DESIGN section 6): (F, 4) when there are
         none, else (F, 8) cyclic rows of corner, midpoint or -1, corner, ...
-
-        A row with a midpoint starts at its first midpoint. Readers
-        (trimesh, MeshLab) triangulate a polygon by a fan from its first
-        vertex; from a corner next to a midpoint that fan would draw the
-        lattice edge the midpoint splits (a non-manifold edge) and a
-        zero-area triangle along it. From the midpoint every fan triangle
-        has area and every fan diagonal lies inside the face.
-        """
-        if not self.midpoints:
-            return self.faces
-        seq = np.full((len(self.faces), 8), -1, dtype=np.int64)
-        seq[:, 0::2] = self.faces
-        seq[:, 1::2] = self.edge_midpoint
-        split = (self.edge_midpoint >= 0).any(axis=1)
-        first = np.where(split, np.argmax(self.edge_midpoint >= 0, axis=1) * 2 + 1, 0)
-        rows = np.arange(len(seq))[:, None]
-        return seq[rows, (first[:, None] + np.arange(8)) % 8]
+        (see :func:`polygon_rows`)."""
+        return polygon_rows(self.faces, self.edge_midpoint)
 
     def triangles(self) -> np.ndarray:
         """Triangles with the faces' orientation and no degenerate ones: two
         per plain quad, a fan from the first midpoint (see :meth:`polygons`)
         for a face with midpoints."""
-        plain = (self.edge_midpoint < 0).all(axis=1)
-        q = self.faces[plain]
-        tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
-        if not plain.all():
-            seq = self.polygons()[~plain]
-            count = (seq >= 0).sum(axis=1)
-            for size in np.unique(count):
-                grp = seq[count == size]
-                poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
-                for t in range(1, size - 1):
-                    tris.append(poly[:, [0, t, t + 1]])
-        return np.concatenate(tris)
+        return triangle_rows(self.faces, self.edge_midpoint)[0]
 
     def components(self) -> list[dict]:
         """Closed surface components, largest first, each with its Euler
@@ -282,6 +256,85 @@ class QuadMesh:
             }
             for c in order
         ]
+
+
+def polygon_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> np.ndarray:
+    """Quads with the midpoints of their doubled edges as polygons.
+
+    Parameters
+    ----------
+    faces : numpy.ndarray
+        (F, 4) corner indices, counter-clockwise seen from outside.
+    edge_midpoint : numpy.ndarray
+        (F, 4): the vertex on edge t -> t + 1, or -1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``faces`` itself when no edge has a midpoint, else (F, 8) cyclic
+        rows of corner, midpoint or -1, corner, ...; a row with a midpoint
+        starts at its first midpoint. Readers (trimesh, MeshLab) triangulate
+        a polygon by a fan from its first vertex; from a corner next to a
+        midpoint that fan would draw the lattice edge the midpoint splits (a
+        non-manifold edge) and a zero-area triangle along it. From the
+        midpoint every fan triangle has area and every fan diagonal lies
+        inside the face.
+
+    Examples
+    --------
+    >>> polygon_rows(np.array([[0, 1, 2, 3]]), np.array([[-1, 4, -1, -1]])).tolist()
+    [[4, 2, -1, 3, -1, 0, -1, 1]]
+    """
+    split = (edge_midpoint >= 0).any(axis=1)
+    if not split.any():
+        return faces
+    seq = np.full((len(faces), 8), -1, dtype=np.int64)
+    seq[:, 0::2] = faces
+    seq[:, 1::2] = edge_midpoint
+    rows = np.flatnonzero(split)
+    first = np.argmax(edge_midpoint[rows] >= 0, axis=1) * 2 + 1
+    seq[rows] = seq[rows[:, None], (first[:, None] + np.arange(8)) % 8]
+    return seq
+
+
+def triangle_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of quads with midpoints, and the face of each triangle.
+
+    Parameters
+    ----------
+    faces, edge_midpoint : numpy.ndarray
+        As in :func:`polygon_rows`.
+
+    Returns
+    -------
+    triangles : numpy.ndarray
+        (T, 3) with the faces' orientation and no degenerate ones: two per
+        plain quad (in face order), then a fan from the first midpoint of
+        each face with midpoints, grouped by polygon size.
+    face : numpy.ndarray
+        (T,) the face each triangle is part of.
+
+    Examples
+    --------
+    >>> tris, face = triangle_rows(np.array([[0, 1, 2, 3]]), np.array([[-1, -1, -1, -1]]))
+    >>> tris.tolist(), face.tolist()
+    ([[0, 1, 2], [0, 2, 3]], [0, 0])
+    """
+    plain = (edge_midpoint < 0).all(axis=1)
+    q = faces[plain]
+    tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
+    owner = [np.repeat(np.flatnonzero(plain), 2)]
+    if not plain.all():
+        split = np.flatnonzero(~plain)
+        seq = polygon_rows(faces[split], edge_midpoint[split])
+        count = (seq >= 0).sum(axis=1)
+        for size in np.unique(count):
+            grp = seq[count == size]
+            poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
+            for t in range(1, size - 1):
+                tris.append(poly[:, [0, t, t + 1]])
+                owner.append(split[count == size])
+    return np.concatenate(tris), np.concatenate(owner)
 
 
 def _vertex_components(polygons: np.ndarray, nv: int) -> tuple[int, np.ndarray]:
