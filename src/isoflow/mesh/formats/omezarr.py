@@ -166,6 +166,61 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     return report
 
 
+def store_volume(path, label=None) -> tuple:
+    """A zarr store's 3D volume without reading it: ``(array, pitch,
+    origin)`` with the array in isoflow's (x, y, z) order (the zarr array
+    itself where it is stored so, else a dask array over it), selecting
+    ``label`` when given, placed as :func:`read` places it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+    label : number, optional
+        The value of the object's voxels in a label image.
+
+    Returns
+    -------
+    tuple
+        ``(array, pitch, origin)``; ``pitch`` and ``origin`` None for a
+        plain array without them.
+
+    Raises
+    ------
+    IsoflowError
+        A store that is not a 3D volume, a bad label or placement.
+    """
+    import_library("zarr", "OME-Zarr")
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, dataset = open_zarr_node(file, level)
+    pitch = origin = None
+    if multiscale is None:
+        order, other = list(range(array.ndim)), []
+        attrs = dict(getattr(array, "attrs", {}) or {})
+        if "pitch" in attrs and "origin" in attrs:
+            pitch, origin = np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+    else:
+        names = axis_names(multiscale, array.ndim, where)
+        order, other = spatial_axes(names, array.shape, where)
+        scale, shift = placement_of(multiscale, dataset, array.ndim, where)
+        pitch, origin = scale[order], shift[order] - scale[order] / 2
+    if len(order) != 3:
+        raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
+    if label is not None:
+        check_label(label, array.dtype, where)
+    if label is None and not other and order == [0, 1, 2]:
+        return array, pitch, origin
+    from ...scale.chunks import import_dask
+
+    _, da = import_dask()
+    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+    kept = [i for i in range(array.ndim) if i not in other]
+    lazy = raw.transpose([kept.index(i) for i in order])
+    return (lazy if label is None else lazy == label), pitch, origin
+
+
 class _Guarded:
     """A zarr array whose reads raise one IsoflowError line naming the
     store (a damaged chunk), for ``dask.array.from_array``."""
