@@ -87,15 +87,16 @@ def check_ply(path, expected: dict, frame) -> dict:
     if (nv, nf) != (expected["vertices"], expected["faces"]):
         problems.append(f"{nv} vertices and {nf} faces (isoflow: {expected['vertices']} and {expected['faces']})")
         return _verdict(path, problems, {})
-    fingerprint, units, bad = 0, 0.0, 0
+    fingerprint, units = 0, 0.0
     centre, unit = _centre(frame, expected), volume_unit(frame)
     for start in range(0, nf, CHUNK_FACES):
         count = min(CHUNK_FACES, nf - start)
         rec = np.fromfile(path, fdt, count, offset=head + nv * vdt.itemsize + start * fdt.itemsize)
         idx = rec["i"].astype(np.int64)
-        bad += int(np.count_nonzero(rec["n"] != k)) + int(np.count_nonzero((idx < 0) | (idx >= nv)))
+        bad = int(np.count_nonzero(rec["n"] != k)) + int(np.count_nonzero((idx < 0) | (idx >= nv)))
         if bad:
-            break
+            problems.append(f"{bad} faces with another corner count than {k} or an index out of range")
+            return _verdict(path, problems, {})
         fingerprint = (fingerprint + edge_fingerprint(idx)) % 2**64
         verts = np.memmap(path, vdt, "r", offset=head, shape=(nv,))
         xyz = np.stack([verts[c][idx].astype(np.float64) for c in ("x", "y", "z")], axis=-1)
@@ -105,8 +106,6 @@ def check_ply(path, expected: dict, frame) -> dict:
                     .astype(np.int64).sum()) for s in range(0, nv, CHUNK_FACES))
     euler = nv - nf * k // 2 + nf
     figures = {"fingerprint": fingerprint, "euler_number": euler, "volume_units": units, "a_sum": a_sum}
-    if bad:
-        problems.append(f"{bad} faces with another corner count than {k} or an index out of range")
     problems += _compare(figures, expected, frame, gauss_bonnet=True)
     return _verdict(path, problems, figures)
 
