@@ -235,3 +235,28 @@ def test_work_that_does_not_fit_is_refused_up_front(tmp_path, rng, monkeypatch):
     with pytest.raises(IsoflowError, match="smaller chunks"):
         write_surface_blocks(v, tmp_path / "s.ply", 6, block_shape=CHUNKS, threads=1)
     assert not list(tmp_path.iterdir())
+
+
+def test_ome_zarr_in_zyx_order_with_its_placement(tmp_path, rng, capsys):
+    # isoflow's OME-Zarr stores (z, y, x) with a scale and a translation:
+    # the streamed file's records (world positions) equal those of the
+    # in-memory file of the same object
+    from isoflow.mesh.volumes import write_volume
+
+    v = seam_volume(rng)
+    obj = DigitalObject(v, pitch=(0.5, 0.25, 2.0), origin=(10.0, 0.0, -1.0))
+    path = write_volume(obj, tmp_path / "img.zarr")
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply")]) == 0
+    assert "written block by block" in capsys.readouterr().out
+    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(v, 6), obj)
+    assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
+
+
+def test_label_image_store(tmp_path, rng):
+    labels = rng.integers(0, 3, (9, 11, 10)).astype(np.uint8) * 3  # 0, 3, 6
+    path = tmp_path / "labels.zarr"
+    z = zarr.open_array(str(path), mode="w", shape=labels.shape, chunks=(4, 5, 3), dtype=np.uint8)
+    z[:] = labels
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--label", "3", "--connectivity", "26"]) == 0
+    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(labels == 3, 26), DigitalObject(labels == 3))
+    assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
