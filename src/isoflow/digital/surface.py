@@ -175,8 +175,8 @@ class QuadMesh:
     """
 
     vertices: np.ndarray  # (V, 3) float64, array-corner units
-    faces: np.ndarray  # (F, 4) int64, counter-clockwise seen from outside
-    edge_midpoint: np.ndarray  # (F, 4) int64: vertex inserted on edge t -> t+1, or -1
+    faces: np.ndarray  # (F, 4) counter-clockwise seen from outside; int32 (int64 from 2^31 vertices on)
+    edge_midpoint: np.ndarray  # (F, 4) as faces: vertex inserted on edge t -> t+1, or -1
     face_normals: np.ndarray  # (F, 3) int8, unit outward normals
     config: np.ndarray  # (V,) uint8 configuration byte (0 on midpoints)
     sheet: np.ndarray  # (V,) int8: which sheet of its lattice vertex (-1 on midpoints)

@@ -47,6 +47,8 @@ from ..digital.lattice import DigitalObject
 from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import binary, index_dtype
+from ..scale.chunkcache import ChunkReader
+from ..scale.chunks import is_zarr_array
 from ..scale.compiled import using
 from .export import float32_holds, mesh_vertex_table, ply_header
 
@@ -336,10 +338,10 @@ def block_grid(array, block_shape=None) -> BlockGrid:
     """The blocks of a zarr array (its shards or chunks, grouped when tiny:
     :func:`isoflow.scale.chunks.zarr_blocks`), of a dask array (its chunks)
     or of any other array (``block_shape``, else one block)."""
-    from ..scale.chunks import block_bounds, is_zarr_array, zarr_blocks
+    from ..scale.chunks import block_bounds, zarr_blocks
 
     shape = tuple(int(s) for s in array.shape)
-    if is_zarr_array(array):
+    if is_zarr_array(array) or isinstance(array, ChunkReader):
         chunks = zarr_blocks(array, block_shape)
     elif block_shape is None and hasattr(array, "chunks") and hasattr(array, "compute"):
         chunks = array.chunks
@@ -463,11 +465,18 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)
     frame = frame or DigitalObject(np.zeros((1, 1, 1), bool))
+    if is_zarr_array(array):
+        array = ChunkReader(array)
     grid = block_grid(array, block_shape)
     with using(threads):
         workers = thread_count()
     itemsize = np.dtype(array.dtype).itemsize
-    _check_memory(where, workers, _largest_read(grid) * (2 * itemsize + 2), "counting")
+    cache = 0
+    if isinstance(array, ChunkReader):
+        # a layer's blocks read the last chunk layer of the one below and the
+        # first of the one above: each chunk decoded once
+        array.max_bytes = cache = _cache_bytes(grid, array.chunks, np.dtype(array.array.dtype).itemsize)
+    _check_memory(where, workers, _largest_read(grid) * (2 * itemsize + 2), "counting", cache)
     source = Source(array)
 
     def count(index):
@@ -481,7 +490,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     position = _checked_position(out, suffix, layout, grid, frame)
     per_task = max(_largest_read(grid) * (2 * itemsize + 2) + layout.items[i] * BYTES_PER_ITEM
                    + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
-    _check_memory(where, workers, per_task, "writing")
+    _check_memory(where, workers, per_task, "writing", cache)
     header = _header(suffix, layout, position, comments, conn, where)
     size = _file_size(suffix, layout, position, len(header))
     _check_disk(out, size)
@@ -514,15 +523,23 @@ def _largest_read(grid: BlockGrid) -> int:
     return int(np.prod([max(b - a for a, b in bounds) + 3 for bounds in grid.bounds]))
 
 
-def _check_memory(where: str, workers: int, per_task: int, what: str) -> None:
+def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0) -> None:
     """Refuse, before the pass, blocks that would not fit ``workers`` at a
-    time, saying how many would."""
+    time (beside the chunk cache), saying how many would."""
     from ..scale.memory import check_fits, default_budget
 
-    fit = default_budget() // max(per_task, 1)
+    fit = (default_budget() - cache) // max(per_task, 1)
     hint = (f"run {fit} at a time (--threads {fit})" if fit >= 1 else
             "write the store with smaller chunks (or pass smaller blocks)")
-    check_fits(workers * per_task, f"{where}: {what} the surface's blocks ({workers} at a time)", hint=hint)
+    check_fits(workers * per_task + cache, f"{where}: {what} the surface's blocks ({workers} at a time)", hint=hint)
+
+
+def _cache_bytes(grid: BlockGrid, chunks, itemsize: int) -> int:
+    """Decoded chunks of a layer of blocks along the first axis with the
+    chunk layers either side (what its blocks read), and of the next layer
+    of blocks, which starts while the last blocks of this one run."""
+    thick = 2 * max(b - a for a, b in grid.bounds[0]) + 2 * chunks[0]
+    return int(thick * grid.shape[1] * grid.shape[2] * itemsize)
 
 
 def _checked_position(out: Path, suffix: str, layout: Layout, grid: BlockGrid, frame: DigitalObject) -> type:

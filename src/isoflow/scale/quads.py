@@ -288,8 +288,8 @@ def _write_vertex(at, c, dm, ns, x, y, z, vertices, config, sheet):
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheets, dspoke, lower_owner, cd,
-                corner, faces, midpoint, normals):
+def _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheets, lower_owner, cd, corner, faces,
+                midpoint, normals):
     """Write the faces whose lowest corner is one of plane p's own
     vertices, from face number f on; returns the next number.
     ``lower_owner``: the voxel a face's pair of an edge contact is told by
@@ -318,18 +318,19 @@ def _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheet
                 for a in range(3):
                     below = (c >> (7 - (1 << a))) & 1
                     if below != top:
-                        f = _face(p, j, k, a, below == 1, f, ly, lz, idmap, cfgmap, dmmap, nsheet, sheets, dspoke,
+                        f = _face(p, j, k, a, below == 1, f, ly, lz, idmap, cfgmap, dmmap, nsheet, sheets,
                                   lower_owner, cd, corner, faces, midpoint, normals)
     return f
 
 
 @njit(cache=True, nogil=True, _nrt=False, inline="always")
-def _face(p, j, k, a, plus, f, ly, lz, idmap, cfgmap, dmmap, nsheet, sheets, dspoke, lower_owner, cd, corner,
-          faces, midpoint, normals):
+def _face(p, j, k, a, plus, f, ly, lz, idmap, cfgmap, dmmap, nsheet, sheets, lower_owner, cd, corner, faces,
+          midpoint, normals):
     """Face f: normal axis a (+e_a when ``plus``), lowest corner (p, j, k).
     ``corner[t]``: its corners' first number, configuration, doubled
     edges, number, midpoint of edge t -> t + 1."""
     ja, ka = (a + 1) % 3, (a + 2) % 3
+    doubled = 0
     for t in range(4):
         dj, dk = cd[t, 0], cd[t, 1]
         x = p + (1 - dj) * (ja == 0) + (1 - dk) * (ka == 0)
@@ -342,21 +343,19 @@ def _face(p, j, k, a, plus, f, ly, lz, idmap, cfgmap, dmmap, nsheet, sheets, dsp
         corner[t, 2] = dmmap[s, yy, zz]
         corner[t, 3] = corner[t, 0] + sheets[cc, 4 * a + dj + 2 * dk]
         corner[t, 4] = -1
-    for t in range(4):
-        u = (t + 1) % 4
-        dj0, dk0, dj1, dk1 = cd[t, 0], cd[t, 1], cd[u, 0], cd[u, 1]
-        e, m, dm_ = (ja, ka, dk0) if dj0 != dj1 else (ka, ja, dj0)
-        side = 1 if dj0 + dk0 > dj1 + dk1 else 0
-        if dspoke[corner[t, 1], e, side] and dspoke[corner[u, 1], e, 1 - side]:
-            low = t if side == 1 else u
-            # the pair's voxel along the lower axis across the edge: below
-            # (0) or above (1) it; the two pairs' voxels are diagonal
-            if min(a, m) == a:
-                bit = 0 if plus == lower_owner else 1
-            else:
-                bit = dm_
-            corner[t, 4] = (corner[low, 0] + nsheet[corner[low, 1]]
-                            + 2 * _bits3(corner[low, 2] & ((1 << e) - 1)) + bit)
+        doubled |= corner[t, 2]
+    if doubled:  # an edge of the face may be doubled: its lower end says so
+        for t in range(4):
+            u = (t + 1) % 4
+            dj0, dk0, dj1, dk1 = cd[t, 0], cd[t, 1], cd[u, 0], cd[u, 1]
+            e, m, dm_ = (ja, ka, dk0) if dj0 != dj1 else (ka, ja, dj0)
+            low = t if dj0 + dk0 > dj1 + dk1 else u  # the coordinate grows from t when d goes 1 -> 0
+            if (corner[low, 2] >> e) & 1:
+                # the pair's voxel along the lower axis across the edge:
+                # below (0) or above (1) it; the two pairs' are diagonal
+                bit = (0 if plus == lower_owner else 1) if a < m else dm_
+                corner[t, 4] = (corner[low, 0] + nsheet[corner[low, 1]]
+                                + 2 * _bits3(corner[low, 2] & ((1 << e) - 1)) + bit)
     if plus:
         for t in range(4):
             faces[f, t] = corner[t, 3]
@@ -389,8 +388,8 @@ def _fill_planes(bits, nx, ny, nz, box, p0, p1, counters, vbase, fbase, nsheet, 
         if p + 1 <= box[0, 1]:
             pinched += _build_plane(bits, nx, ny, nz, box, p + 1, counters, idmap, cfgmap, dmmap, nsheet, dspoke,
                                     dflag, pinch, p + 1 < p1, vbase, origin, vertices, config, sheet)
-        f = _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheets, dspoke, lower_owner, cd,
-                        corner, faces, midpoint, normals)
+        f = _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheets, lower_owner, cd, corner,
+                        faces, midpoint, normals)
     return pinched
 
 

@@ -167,10 +167,10 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
 
 
 def store_volume(path, label=None) -> tuple:
-    """A zarr store's 3D volume without reading it: ``(array, pitch,
-    origin)`` with the array in isoflow's (x, y, z) order (the zarr array
-    itself where it is stored so, else a dask array over it), selecting
-    ``label`` when given, placed as :func:`read` places it.
+    """A zarr store's 3D volume without reading it: ``(reader, pitch,
+    origin)``, the reader giving blocks in isoflow's (x, y, z) order
+    (:class:`isoflow.scale.chunkcache.ChunkReader`), of ``label``'s voxels
+    when given, placed as :func:`read` places them.
 
     Parameters
     ----------
@@ -182,7 +182,7 @@ def store_volume(path, label=None) -> tuple:
     Returns
     -------
     tuple
-        ``(array, pitch, origin)``; ``pitch`` and ``origin`` None for a
+        ``(reader, pitch, origin)``; ``pitch`` and ``origin`` None for a
         plain array without them.
 
     Raises
@@ -190,6 +190,8 @@ def store_volume(path, label=None) -> tuple:
     IsoflowError
         A store that is not a 3D volume, a bad label or placement.
     """
+    from ...scale.chunkcache import ChunkReader
+
     import_library("zarr", "OME-Zarr")
     file, level = split_dataset(path)
     where = str(path)
@@ -209,16 +211,7 @@ def store_volume(path, label=None) -> tuple:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
     if label is not None:
         check_label(label, array.dtype, where)
-    if label is None and not other and order == [0, 1, 2]:
-        return array, pitch, origin
-    from ...scale.chunks import import_dask
-
-    _, da = import_dask()
-    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
-    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
-    kept = [i for i in range(array.ndim) if i not in other]
-    lazy = raw.transpose([kept.index(i) for i in order])
-    return (lazy if label is None else lazy == label), pitch, origin
+    return ChunkReader(_Guarded(array, where), order, other, label), pitch, origin
 
 
 class _Guarded:
@@ -228,6 +221,7 @@ class _Guarded:
     def __init__(self, array, where: str):
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
+        self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
 
     def __getitem__(self, key):
         try:
