@@ -240,7 +240,7 @@ def main(argv=None) -> int:
         print(json.dumps(child(*args.child)))
         return 0
     meta = {"python": platform.python_version(), "machine": platform.machine(), "cpus": os.cpu_count(),
-            "date": time.strftime("%Y-%m-%d %H:%M"), "argv": sys.argv[1:]}
+            "date": time.strftime("%Y-%m-%d %H:%M"), "argv": [a for a in sys.argv[1:] if not a.startswith("/")]}
     if args.small:
         result = {"meta": meta, "small": small([96, 128, 160, 192], args.repeat)}
     else:

@@ -108,7 +108,7 @@ def command(path: Path, threads: int | None) -> dict:
         if p.returncode or not lines:
             return {"error": ((p.stderr or p.stdout).strip().splitlines() or ["?"])[-1]}
         res = json.loads(lines[-1])
-        res.update(file_bytes=out.stat().st_size, summary=[ln for ln in p.stdout.splitlines() if ln.startswith("/")])
+        res.update(file_bytes=out.stat().st_size, summary=[ln.replace(str(out), out.name) for ln in p.stdout.splitlines() if ln.startswith(str(out))])
         return res
 
 
@@ -162,7 +162,7 @@ def main(argv=None) -> int:
                      f"{m.get('peak_bytes', 0) / 2**20:.0f} | {r.get('store_over_memory_512_scaled', float('nan')):.2f} |")
     print("\n".join(lines))
     meta = {"python": platform.python_version(), "cpus": os.cpu_count(), "date": time.strftime("%Y-%m-%d %H:%M"),
-            "argv": sys.argv[1:], "loadavg_1min": os.getloadavg()[0]}
+            "argv": [a for a in sys.argv[1:] if not a.startswith("/")], "loadavg_1min": os.getloadavg()[0]}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"meta": meta, "rows": rows, "table": "\n".join(lines)}, indent=1))
