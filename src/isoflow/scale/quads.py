@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import index_dtype
-from .bitrows import popcount, trailing_zeros
+from .bitrows import config_at, popcount, trailing_zeros
 from .jit import njit
 
 #: the corners of a face with normal +e_a, counter-clockwise seen from
@@ -57,25 +57,13 @@ CLASSES = 27
 
 
 @njit(cache=True, nogil=True)
-def _config_at(bits, nx, ny, nz, i, j, k):
-    """Configuration of lattice vertex (i, j, k) read from the bit rows
-    (voxels outside the array are background)."""
-    c = 0
-    for o in range(8):
-        x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
-        if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
-            c |= np.int64((bits[x * ny + y, z >> 6] >> np.uint64(z & 63)) & np.uint64(1)) << o
-    return c
-
-
-@njit(cache=True, nogil=True)
 def _doubled(bits, nx, ny, nz, i, j, k, c, dspoke):
     """Bit a set: the lattice edge from (i, j, k) toward +e_a is doubled
     (a doubled spoke at both of its ends)."""
     m = 0
     for a in range(3):
         if dspoke[c, a, 1]:
-            cn = _config_at(bits, nx, ny, nz, i + (a == 0), j + (a == 1), k + (a == 2))
+            cn = config_at(bits, nx, ny, nz, i + (a == 0), j + (a == 1), k + (a == 2))
             if dspoke[cn, a, 0]:
                 m |= 1 << a
     return m
@@ -97,6 +85,23 @@ def _row(x, y, nx, ny):
     if 0 <= x < nx and 0 <= y < ny:
         return x * ny + y
     return nx * ny
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _vertex_rows(p, j, nx, ny):
+    """The four voxel rows around vertex row (p, j), row dx + 2 dy being
+    (p - 1 + dx, j - 1 + dy), and whether all four lie outside the array."""
+    r0, r1 = _row(p - 1, j - 1, nx, ny), _row(p, j - 1, nx, ny)
+    r2, r3 = _row(p - 1, j, nx, ny), _row(p, j, nx, ny)
+    return r0, r1, r2, r3, r0 == r1 == r2 == r3
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _carry_into(bits, w, r0, r1, r2, r3):
+    """The top bits of the four rows' words before word w."""
+    if w == 0:
+        return np.uint64(0)
+    return _surface_word(bits, w - 1, r0, r1, r2, r3, np.uint64(0))[9]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -171,80 +176,27 @@ def _count_refs(box, i, j, k, dm):
     return n
 
 
-@njit(cache=True, nogil=True)
-def _count_planes(bits, nx, ny, nz, box, p0, p1, nsheet, dspoke, dflag, items, faces, refs):
-    """Pass 1 over vertex planes p0 <= p < p1 (see :func:`count_planes`)."""
-    for p in range(p0, p1):
-        cx = _cls(p, box[0, 2], box[0, 3])
-        for j in range(box[1, 0], box[1, 1] + 1):
-            cxy = cx + 3 * _cls(j, box[1, 2], box[1, 3])
-            own_xy = cxy % 3 != 2 and cxy // 3 != 2
-            r0, r1 = _row(p - 1, j - 1, nx, ny), _row(p, j - 1, nx, ny)
-            r2, r3 = _row(p - 1, j, nx, ny), _row(p, j, nx, ny)
-            if r0 == r1 == r2 == r3:  # all four rows outside the array
-                continue
-            w0, w1 = box[2, 0] >> 6, box[2, 1] >> 6
-            carry = np.uint64(0)
-            if w0 > 0:
-                carry = _surface_word(bits, w0 - 1, r0, r1, r2, r3, carry)[9]
-            for w in range(w0, w1 + 1):
-                x0, x1, x2, x3, q0, q1, q2, q3, surf, carry = _surface_word(bits, w, r0, r1, r2, r3, carry)
-                surf &= _word_range(box[2, 0], box[2, 1], w)
-                while surf:
-                    b = trailing_zeros(surf)
-                    surf &= surf - np.uint64(1)
-                    k = w * 64 + np.int64(b)
-                    c = _config_bits(b, x0, x1, x2, x3, q0, q1, q2, q3)
-                    ck = _cls(k, box[2, 2], box[2, 3])
-                    dm = _doubled(bits, nx, ny, nz, p, j, k, c, dspoke) if dflag[c] else 0
-                    items[p - p0, cxy + 9 * ck] += nsheet[c] + 2 * _bits3(dm)
-                    if dm:
-                        refs[p - p0] += _count_refs(box, p, j, k, dm)
-                    if own_xy and ck != 2:
-                        top = (c >> 7) & 1
-                        faces[p - p0] += (top != ((c >> 6) & 1)) + (top != ((c >> 5) & 1)) + (top != ((c >> 3) & 1))
-
-
-def count_planes(bits: np.ndarray, shape: tuple[int, int, int], box: np.ndarray, p0: int, p1: int,
-                 tables: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pass 1 over the box's vertex planes ``p0 <= p < p1``.
-
-    Returns each plane's items per class (``(p1 - p0, 27)``), the faces it
-    owns, and the references of those faces to midpoints (a face with m
-    midpoints is ``2 + m`` triangles).
-    """
-    nsheet, _, dspoke, dflag, _ = tables
-    n = max(p1 - p0, 0)
-    items = np.zeros((n, CLASSES), np.int64)
-    faces = np.zeros(n, np.int64)
-    refs = np.zeros(n, np.int64)
-    nx, ny, nz = shape
-    _count_planes(bits, nx, ny, nz, box, p0, p1, nsheet, dspoke, dflag, items, faces, refs)
-    return items, faces, refs
-
-
 @njit(cache=True, nogil=True, _nrt=False)
-def _build_plane(bits, nx, ny, nz, box, p, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag, pinch, write,
-                 vbase, origin, vertices, config, sheet):
-    """Number plane p's items (``counters``: the next number per class),
-    keeping each surface vertex's first number, configuration and doubled
-    edges in the plane's maps; with ``write``, write the box's own vertices.
-    Returns the pinched vertices written."""
+def _plane(bits, nx, ny, nz, box, p, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag, pinch, keep, write,
+           vbase, origin, vertices, config, sheet, tally):
+    """Number plane p's items in lattice order (``counters``: the next
+    number of each class, advanced); with ``keep``, keep each surface
+    vertex's first number, configuration and doubled edges in the plane's
+    maps; with ``write``, write the box's own vertices. Adds the faces the
+    box owns here and their references to midpoints to ``tally``. Returns
+    the pinched vertices written."""
     pinched = 0
     s = p & 1
     cx = _cls(p, box[0, 2], box[0, 3])
     ly, lz = box[1, 0], box[2, 0]
     for j in range(box[1, 0], box[1, 1] + 1):
         cxy = cx + 3 * _cls(j, box[1, 2], box[1, 3])
-        own_xy = write and cxy % 3 != 2 and cxy // 3 != 2
-        r0, r1 = _row(p - 1, j - 1, nx, ny), _row(p, j - 1, nx, ny)
-        r2, r3 = _row(p - 1, j, nx, ny), _row(p, j, nx, ny)
-        if r0 == r1 == r2 == r3:
+        own_xy = cxy % 3 != 2 and cxy // 3 != 2
+        r0, r1, r2, r3, outside = _vertex_rows(p, j, nx, ny)
+        if outside:
             continue
         w0, w1 = box[2, 0] >> 6, box[2, 1] >> 6
-        carry = np.uint64(0)
-        if w0 > 0:
-            carry = _surface_word(bits, w0 - 1, r0, r1, r2, r3, carry)[9]
+        carry = _carry_into(bits, w0, r0, r1, r2, r3)
         for w in range(w0, w1 + 1):
             x0, x1, x2, x3, q0, q1, q2, q3, surf, carry = _surface_word(bits, w, r0, r1, r2, r3, carry)
             surf &= _word_range(box[2, 0], box[2, 1], w)
@@ -258,14 +210,49 @@ def _build_plane(bits, nx, ny, nz, box, p, counters, idmap, cfgmap, dmmap, nshee
                 dm = _doubled(bits, nx, ny, nz, p, j, k, c, dspoke) if dflag[c] else 0
                 first = counters[cl]
                 counters[cl] = first + nsheet[c] + 2 * _bits3(dm)
-                idmap[s, j - ly, k - lz] = first
-                cfgmap[s, j - ly, k - lz] = c
-                dmmap[s, j - ly, k - lz] = dm
+                if keep:
+                    idmap[s, j - ly, k - lz] = first
+                    cfgmap[s, j - ly, k - lz] = c
+                    dmmap[s, j - ly, k - lz] = dm
+                if dm:
+                    tally[1] += _count_refs(box, p, j, k, dm)
                 if own_xy and ck != 2:
-                    _write_vertex(first - vbase, c, dm, nsheet[c], origin[0] + p, origin[1] + j, origin[2] + k,
-                                  vertices, config, sheet)
-                    pinched += pinch[c]
+                    top = (c >> 7) & 1
+                    tally[0] += (top != ((c >> 6) & 1)) + (top != ((c >> 5) & 1)) + (top != ((c >> 3) & 1))
+                    if write:
+                        _write_vertex(first - vbase, c, dm, nsheet[c], origin[0] + p, origin[1] + j, origin[2] + k,
+                                      vertices, config, sheet)
+                        pinched += pinch[c]
     return pinched
+
+
+@njit(cache=True, nogil=True)
+def _count_planes(bits, nx, ny, nz, box, p0, p1, nsheet, dspoke, dflag, pinch, items, tally):
+    """Pass 1 over vertex planes p0 <= p < p1 (see :func:`count_planes`)."""
+    maps = np.empty((2, 1, 1), np.int64)
+    small = np.empty((2, 1, 1), np.uint8)
+    vertices, config, sheet = np.empty((0, 3)), np.empty(0, np.uint8), np.empty(0, np.int8)
+    origin = np.zeros(3, np.int64)
+    for p in range(p0, p1):
+        _plane(bits, nx, ny, nz, box, p, items[p - p0], maps, small, small, nsheet, dspoke, dflag, pinch, False,
+               False, 0, origin, vertices, config, sheet, tally[p - p0])
+
+
+def count_planes(bits: np.ndarray, shape: tuple[int, int, int], box: np.ndarray, p0: int, p1: int,
+                 tables: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pass 1 over the box's vertex planes ``p0 <= p < p1``.
+
+    Returns each plane's items per class (``(p1 - p0, 27)``), the faces it
+    owns, and the references of those faces to midpoints (a face with m
+    midpoints is ``2 + m`` triangles).
+    """
+    nsheet, _, dspoke, dflag, pinch = tables
+    n = max(p1 - p0, 0)
+    items = np.zeros((n, CLASSES), np.int64)
+    tally = np.zeros((n, 2), np.int64)
+    nx, ny, nz = shape
+    _count_planes(bits, nx, ny, nz, box, p0, p1, nsheet, dspoke, dflag, pinch, items, tally)
+    return items, tally[:, 0], tally[:, 1]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -297,15 +284,12 @@ def _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheet
     face with normal +e_a; ``corner``: scratch (4, 5)."""
     ly, lz = box[1, 0], box[2, 0]
     for j in range(box[1, 0], box[1, 3]):
-        r0, r1 = _row(p - 1, j - 1, nx, ny), _row(p, j - 1, nx, ny)
-        r2, r3 = _row(p - 1, j, nx, ny), _row(p, j, nx, ny)
-        if r0 == r1 == r2 == r3:
+        r0, r1, r2, r3, outside = _vertex_rows(p, j, nx, ny)
+        if outside:
             continue
         last = box[2, 3] - 1
         w0, w1 = box[2, 0] >> 6, last >> 6
-        carry = np.uint64(0)
-        if w0 > 0:
-            carry = _surface_word(bits, w0 - 1, r0, r1, r2, r3, carry)[9]
+        carry = _carry_into(bits, w0, r0, r1, r2, r3)
         for w in range(w0, w1 + 1):
             x0, x1, x2, x3, q0, q1, q2, q3, surf, carry = _surface_word(bits, w, r0, r1, r2, r3, carry)
             own = ((x2 ^ x3) | (x1 ^ x3) | (x3 ^ q3)) & _word_range(box[2, 0], last, w)
@@ -380,14 +364,15 @@ def _fill_planes(bits, nx, ny, nz, box, p0, p1, counters, vbase, fbase, nsheet, 
     cfgmap = np.empty((2, nj, nk), np.uint8)
     dmmap = np.empty((2, nj, nk), np.uint8)
     corner = np.empty((4, 5), np.int64)
+    tally = np.zeros(2, np.int64)
     cd = CORNER_D
-    pinched = _build_plane(bits, nx, ny, nz, box, p0, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag, pinch,
-                           True, vbase, origin, vertices, config, sheet)
+    pinched = _plane(bits, nx, ny, nz, box, p0, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag, pinch, True,
+                     True, vbase, origin, vertices, config, sheet, tally)
     f = fbase
     for p in range(p0, p1):
         if p + 1 <= box[0, 1]:
-            pinched += _build_plane(bits, nx, ny, nz, box, p + 1, counters, idmap, cfgmap, dmmap, nsheet, dspoke,
-                                    dflag, pinch, p + 1 < p1, vbase, origin, vertices, config, sheet)
+            pinched += _plane(bits, nx, ny, nz, box, p + 1, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag,
+                              pinch, True, p + 1 < p1, vbase, origin, vertices, config, sheet, tally)
         f = _emit_faces(bits, nx, ny, nz, box, p, f, idmap, cfgmap, dmmap, nsheet, sheets, lower_owner, cd, corner,
                         faces, midpoint, normals)
     return pinched
