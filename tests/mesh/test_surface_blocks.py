@@ -183,16 +183,24 @@ def test_command_writes_and_checks(tmp_path, rng, capsys):
     assert faces_as_records(out) == faces_as_records(tmp_path / "m.ply")
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["-o", "{tmp}/s.obj"], "binary PLY or STL only (.ply, .stl), not .obj"),
-    (["-o", "{tmp}/s.ply", "--png", "{tmp}/s.png"], "--png needs the whole surface in memory"),
-    (["-o", "{tmp}/s.ply", "--ascii"], "--ascii needs the whole surface in memory"),
+@pytest.mark.parametrize("argv, asked", [
+    (["-o", "{tmp}/s.obj"], ".obj"),
+    (["-o", "{tmp}/s.ply", "--png", "{tmp}/s.png"], "--png"),
+    (["-o", "{tmp}/s.ply", "--ascii"], "--ascii"),
 ])
-def test_command_refuses_what_does_not_stream(tmp_path, capsys, argv, message):
+def test_what_does_not_stream_is_meshed_in_memory_or_refused(tmp_path, capsys, monkeypatch, argv, asked):
+    from isoflow.scale import memory
+
     path = store(tmp_path, np.ones((3, 3, 3), bool))
-    assert main(["surface", str(path), *[a.format(tmp=tmp_path) for a in argv]]) == 2
+    argv = ["surface", str(path), *[a.format(tmp=tmp_path) for a in argv]]
+    assert main(argv) == 0  # a store that fits: read whole, as any volume
+    assert "written block by block" not in capsys.readouterr().out
+    for p in tmp_path.glob("s.*"):
+        p.unlink()
+    monkeypatch.setattr(memory, "default_budget", lambda: 50)  # a store larger than memory
+    assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and message in err[0]
+    assert len(err) == 1 and f"{asked} needs the whole surface in memory" in err[0] and "(.ply, .stl)" in err[0]
     assert not list(tmp_path.glob("s.*"))
 
 
@@ -260,3 +268,10 @@ def test_label_image_store(tmp_path, rng):
     assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--label", "3", "--connectivity", "26"]) == 0
     want = export.write_surface(tmp_path / "m.ply", boundary_mesh(labels == 3, 26), DigitalObject(labels == 3))
     assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
+
+
+def test_other_suffixes_are_refused_naming_those_that_stream(tmp_path):
+    for name in ("s.obj", "s.glb", "s"):
+        with pytest.raises(IsoflowError, match=r"binary PLY or STL only \(\.ply, \.stl\)"):
+            write_surface_blocks(np.ones((2, 2, 2), bool), tmp_path / name)
+    assert not list(tmp_path.iterdir())

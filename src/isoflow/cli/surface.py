@@ -6,6 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import IsoflowError
 from .inputs import add_connectivity, add_input_arguments, load_input, thread_count
 
@@ -32,7 +34,9 @@ def cmd_surface(args: argparse.Namespace) -> int:
     from ..mesh.outputs import check_output_path, check_picture_path
 
     if is_store(args.input):
-        return cmd_surface_store(args)
+        if streams(args):
+            return cmd_surface_store(args)
+        refuse_store_beyond_memory(args)
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
     out = check_output_path(args.output, args.force, suffixes=export.SURFACE_SUFFIXES, what="surface")
@@ -123,8 +127,6 @@ def is_store(name: str) -> bool:
 def cmd_surface_store(args: argparse.Namespace) -> int:
     """``surface STORE.zarr -o OUT.(ply|stl)``: the mesh written block by
     block, then read back in chunks."""
-    import numpy as np
-
     from ..digital.lattice import DigitalObject
     from ..digital.topology import default_connectivity
     from ..mesh.formats.omezarr import store_volume
@@ -160,18 +162,32 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     return 0
 
 
-def refuse_in_memory_options(args: argparse.Namespace) -> None:
-    """Options that need the whole mesh in memory, refused for a store."""
+def streams(args: argparse.Namespace) -> bool:
+    """The output is one that is written block by block: binary PLY or STL
+    without a picture."""
     from ..mesh.surface_blocks import STREAM_SUFFIXES
 
-    suffix = Path(args.output).suffix.lower()
-    if suffix not in STREAM_SUFFIXES:
-        raise IsoflowError(f"{args.output}: the surface of a .zarr store is written block by block as binary "
-                           f"PLY or STL only ({', '.join(STREAM_SUFFIXES)}), not {suffix or 'this'}")
-    for flag, given in (("--ascii", args.ascii), ("--png", args.png)):
-        if given:
-            raise IsoflowError(f"{args.input}: {flag} needs the whole surface in memory; a .zarr store's is "
-                               "written block by block")
+    return Path(args.output).suffix.lower() in STREAM_SUFFIXES and not args.ascii and not args.png
+
+
+def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
+    """A store whose volume would not fit in memory with its mesh, asked
+    for what needs the whole mesh in memory: one line naming what streams."""
+    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.surface_blocks import STREAM_SUFFIXES
+    from ..scale.memory import default_budget, gib
+
+    array = store_volume(args.input, args.label)[0]
+    need = 2 * int(np.prod(array.shape, dtype=np.int64))  # the volume and its configurations, before the mesh
+    if need > default_budget():
+        asked = "--ascii" if args.ascii else "--png" if args.png else Path(args.output).suffix.lower() or args.output
+        raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {gib(default_budget())} "
+                           f"here); a store's surface is written block by block as binary PLY or STL "
+                           f"({', '.join(STREAM_SUFFIXES)})")
+
+
+def refuse_in_memory_options(args: argparse.Namespace) -> None:
+    """Options of meshes, refused for a store."""
     if args.pitch is not None or args.resolution is not None or args.strict:
         raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict apply to meshes, not to .zarr input")
 
