@@ -50,9 +50,25 @@ def _mix(x: np.ndarray, salt: int) -> np.ndarray:
 
 
 def edge_fingerprint(rows: np.ndarray) -> int:
-    """``sum h1(a) h2(b) - h1(b) h2(a)`` over the directed edges of the
-    polygons ``rows`` (corner keys, cyclic), modulo 2^64: zero when every
-    directed edge has its reverse."""
+    """``sum h1(a) h2(b) - h1(b) h2(a)`` over the directed edges of
+    polygons, modulo 2^64: zero when every directed edge has its reverse.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        (F, k) integer keys of each polygon's corners, in cyclic order.
+
+    Returns
+    -------
+    int
+        The sum; add those of several chunks modulo 2^64.
+
+    Examples
+    --------
+    >>> tetra = np.array([[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]])
+    >>> edge_fingerprint(tetra), edge_fingerprint(tetra[:3]) != 0
+    (0, True)
+    """
     a, b = rows, np.roll(rows, -1, axis=1)
     with np.errstate(over="ignore"):
         terms = _mix(a, 1) * _mix(b, 2) - _mix(b, 1) * _mix(a, 2)
@@ -60,8 +76,23 @@ def edge_fingerprint(rows: np.ndarray) -> int:
 
 
 def read_ply_header(path) -> tuple[int, np.dtype, int, int]:
-    """``(header bytes, vertex record type, vertices, faces)`` of a binary
-    PLY of vertex columns and a face list."""
+    """The layout of a binary PLY of vertex columns and a face list.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+
+    Returns
+    -------
+    tuple
+        ``(header bytes, vertex record type, vertices, faces)``.
+
+    Raises
+    ------
+    ValueError
+        Not a binary little-endian PLY.
+    """
     with open(path, "rb") as fh:
         head = fh.read(1 << 16)
     end = head.find(b"end_header\n")
@@ -78,8 +109,7 @@ def read_ply_header(path) -> tuple[int, np.dtype, int, int]:
 
 def check_ply(path, expected: dict, frame) -> dict:
     """Stream a binary PLY of :mod:`isoflow.mesh.surface_blocks` and
-    compare it with ``expected`` (``vertices``, ``faces``, ``kind``,
-    ``euler_characteristic``, ``pinched``, ``voxels``)."""
+    compare it with isoflow's counts (see :func:`check_streamed`)."""
     head, vdt, nv, nf = read_ply_header(path)
     k = 4 if expected["kind"] == "quads" else 3
     fdt = np.dtype([("n", "u1"), ("i", "<i4", (k,))])
@@ -112,8 +142,7 @@ def check_ply(path, expected: dict, frame) -> dict:
 
 def check_stl(path, expected: dict, frame) -> dict:
     """Stream a binary STL of :mod:`isoflow.mesh.surface_blocks` and
-    compare it with ``expected`` (``faces``, ``euler_characteristic``,
-    ``voxels``)."""
+    compare it with isoflow's counts (see :func:`check_streamed`)."""
     from .surface_blocks import STL_DTYPE, STL_HEADER
 
     nf = int(np.fromfile(path, "<u4", 1, offset=80)[0])
@@ -142,8 +171,39 @@ def check_stl(path, expected: dict, frame) -> dict:
 
 
 def check_streamed(path, expected: dict, frame) -> dict:
-    """:func:`check_ply` or :func:`check_stl` by the file's suffix; a file
-    that cannot be read is a disagreement."""
+    """Read a surface file back in chunks and compare it with isoflow's
+    counts (see the module docs for what is checked).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A binary PLY or STL written by
+        :func:`isoflow.mesh.surface_blocks.write_surface_blocks`.
+    expected : dict
+        That function's result (``vertices``, ``faces``, ``kind``,
+        ``euler_characteristic``, ``pinched``, ``voxels``), and ``centre``:
+        a point near the surface in array-corner units (the volume's
+        centre), about which the volume is summed.
+    frame : DigitalObject
+        The voxel size and origin of the positions.
+
+    Returns
+    -------
+    dict
+        ``agree`` (bool), ``problem`` (one line, or None), ``figures`` (what
+        the file reads as), ``mode``: ``"streamed"``. A file that cannot be
+        read is a disagreement.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from isoflow import DigitalObject
+    >>> from isoflow.mesh.surface_blocks import write_surface_blocks
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "cube.stl"
+    >>> written = write_surface_blocks(np.ones((2, 2, 2), bool), out, scheduler="sync")
+    >>> check_streamed(out, dict(written, centre=(1, 1, 1)), DigitalObject(np.ones((2, 2, 2), bool)))["agree"]
+    True
+    """
     try:
         return (check_stl if Path(path).suffix.lower() == ".stl" else check_ply)(path, expected, frame)
     except (OSError, ValueError, KeyError) as exc:

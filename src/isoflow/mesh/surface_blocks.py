@@ -35,9 +35,10 @@ counts (a few numbers per block).
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -70,7 +71,8 @@ BYTES_PER_ITEM, BYTES_PER_FACE = 160, 200
 
 @dataclass(frozen=True)
 class BlockGrid:
-    """Blocks of a 3D volume: per axis the ``[start, stop)`` of each."""
+    """Blocks of a 3D volume of ``shape``: per axis the ``[start, stop)``
+    of each (``bounds``)."""
 
     shape: tuple[int, int, int]
     bounds: tuple[tuple[tuple[int, int], ...], ...]
@@ -104,7 +106,7 @@ class BlockGrid:
                      for (a, b) in (self.bounds[axis][i] for axis, i in enumerate(index)))
 
 
-def read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
+def _read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
     """A block of voxels as a host bool array (a dask array is computed
     here, in the task, on its synchronous scheduler)."""
     part = array[slices]
@@ -120,13 +122,45 @@ def read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
 
 
 def count_block(array, grid: BlockGrid, index, connectivity: int, where: str) -> dict:
-    """Pass 1 on one block: its items per part (8), faces, triangles (two
-    per face and one per midpoint a face names) and own voxels."""
+    """Pass 1 on one block (a dask task).
+
+    Parameters
+    ----------
+    array : array-like
+        The volume (x, y, z), sliced for the block and its halo.
+    grid : BlockGrid
+        The blocks.
+    index : tuple of int
+        The block.
+    connectivity : {6, 26}
+        The object's connectivity.
+    where : str
+        The input's name in messages.
+
+    Returns
+    -------
+    dict
+        ``parts``: the block's items (mesh vertices) in each of its eight
+        parts, part ``px + 2 py + 4 pz`` (0: on its lower seam along that
+        axis, 1: inside); ``faces``: the faces it owns; ``triangles``: two
+        per face and one per midpoint a face names; ``voxels``: its own.
+
+    Raises
+    ------
+    IsoflowError
+        A block that cannot be read or is not binary.
+
+    Examples
+    --------
+    >>> grid = BlockGrid((2, 2, 2), (((0, 1), (1, 2)), ((0, 2),), ((0, 2),)))
+    >>> count_block(np.ones((2, 2, 2), bool), grid, (1, 0, 0), 6, "cube")["parts"].tolist()
+    [1, 1, 2, 2, 2, 2, 3, 4]
+    """
     from ..scale.bitrows import pack
     from ..scale.quads import count_planes
 
     slices, box, origin = grid.box(index)
-    vol = read_box(array, slices, where, [s.start for s in slices])
+    vol = _read_box(array, slices, where, [s.start for s in slices])
     with using(1):
         bits = pack(vol)[0]
         # every plane of the box: the faces below the upper seam name the
@@ -183,15 +217,48 @@ class BlockPlan:
 
 
 def block_plan(layout: Layout, index) -> BlockPlan:
-    """The part of ``layout`` that block ``index`` writes by."""
+    """The part of ``layout`` that block ``index`` writes by.
+
+    Parameters
+    ----------
+    layout : Layout
+        The file's layout (:func:`plan`).
+    index : tuple of int
+        The block.
+
+    Returns
+    -------
+    BlockPlan
+    """
     return BlockPlan(tuple(index), layout.counters(index), int(layout.part_start[index][0]), layout.items[index],
                      layout.quads[index], layout.face_start[index], layout.kind, layout.vertices)
 
 
 def plan(grid: BlockGrid, counts: dict, triangles: bool) -> Layout:
-    """The layout of the file from every block's counts (``counts``: index
-    -> :func:`count_block`'s result), blocks in C order. ``triangles``:
-    write triangles (STL, or a PLY whose faces are not all quads)."""
+    """The layout of the file from every block's counts, blocks in C order.
+
+    Parameters
+    ----------
+    grid : BlockGrid
+        The blocks.
+    counts : dict
+        Block index -> :func:`count_block`'s result.
+    triangles : bool
+        The faces are written as triangles (STL, or a PLY whose faces are
+        not all quads).
+
+    Returns
+    -------
+    Layout
+
+    Examples
+    --------
+    >>> grid = BlockGrid((2, 2, 2), (((0, 1), (1, 2)), ((0, 2),), ((0, 2),)))
+    >>> counts = {i: count_block(np.ones((2, 2, 2), bool), grid, i, 6, "cube") for i in grid.indices()}
+    >>> layout = plan(grid, counts, False)
+    >>> layout.vertices, layout.faces, layout.part_start[(1, 0, 0)].tolist()
+    (26, 24, [9, 10, 11, 13, 15, 17, 19, 22])
+    """
     part_start, items, quads, face_start = {}, {}, {}, {}
     nitems = nfaces = 0
     for index in grid.indices():
@@ -206,13 +273,28 @@ def plan(grid: BlockGrid, counts: dict, triangles: bool) -> Layout:
 
 
 def mesh_block(array, grid: BlockGrid, block: BlockPlan, connectivity: int, where: str) -> QuadMesh:
-    """Pass 2 on one block: its own vertices (vertex ``v`` of the file at
-    row ``v - block.first``) and its faces, numbered as in the whole file."""
+    """Pass 2 on one block, in memory: its own vertices and the faces it
+    owns, numbered as in the whole file.
+
+    Parameters
+    ----------
+    array, grid, connectivity, where
+        As in :func:`count_block`.
+    block : BlockPlan
+        Where the block's items and faces go (:func:`block_plan`).
+
+    Returns
+    -------
+    QuadMesh
+        Vertex ``v`` of the file at row ``v - block.first``; the faces name
+        the file's vertices (the block's own and its upper neighbours'
+        seams'). ``pinched``: the block's own.
+    """
     from ..scale.bitrows import pack
     from ..scale.quads import fill_planes
 
     slices, box, origin = grid.box(block.index)
-    vol = read_box(array, slices, where, [s.start for s in slices])
+    vol = _read_box(array, slices, where, [s.start for s in slices])
     idx = index_dtype(block.vertices)
     n, f = block.items, block.quads
     out = (np.empty((n, 3)), np.empty(n, np.uint8), np.empty(n, np.int8), np.empty((f, 4), idx),
@@ -236,9 +318,10 @@ class Target:
     position: type
     vertex_offset: int  # bytes before the first vertex record (PLY)
     face_offset: int  # bytes before the first face record
+    header: bytes = b""
 
 
-def vertex_dtype(position) -> np.dtype:
+def _vertex_dtype(position) -> np.dtype:
     """A PLY vertex record of :func:`isoflow.mesh.export.mesh_vertex_table`'s
     columns, positions of type ``position``."""
     empty = QuadMesh(np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros((0, 4), np.int32),
@@ -247,11 +330,12 @@ def vertex_dtype(position) -> np.dtype:
     return np.dtype([(k, v.dtype.newbyteorder("<")) for k, v in table.items()])
 
 
-def face_dtype(kind: Literal["quads", "triangles"]) -> np.dtype:
+def _face_dtype(kind: Literal["quads", "triangles"]) -> np.dtype:
     """A PLY face record: the corner count (uchar), then int indices."""
     return np.dtype([("n", "u1"), ("i", "<i4", (4 if kind == "quads" else 3,))])
 
 
+#: a binary STL triangle record
 STL_DTYPE = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
 
@@ -263,18 +347,30 @@ def _pwrite(fd: int, data: np.ndarray, offset: int) -> None:
 
 
 def write_block(array, grid: BlockGrid, block: BlockPlan, target: Target, connectivity: int, where: str) -> dict:
-    """Pass 2 on one block, written into the target file: its vertex
-    records at their numbers, its face records from its first face on.
-    Returns its pinched vertices."""
+    """Pass 2 on one block, written into the target file (a dask task).
+
+    Parameters
+    ----------
+    array, grid, block, connectivity, where
+        As in :func:`mesh_block`.
+    target : Target
+        The file: its vertex records are written at their numbers, its face
+        records from the block's first face on.
+
+    Returns
+    -------
+    dict
+        ``pinched``: the block's pinched vertices.
+    """
     mesh = mesh_block(array, grid, block, connectivity, where)
     if target.suffix == ".stl":
-        records = [(STL_HEADER + block.face_start * STL_DTYPE.itemsize, stl_records(mesh, block.first, target.frame))]
+        records = [(STL_HEADER + block.face_start * STL_DTYPE.itemsize, _stl_records(mesh, block.first, target.frame))]
     else:
         vertices = mesh_vertex_table(mesh, target.frame, target.position)
-        vrec = np.empty(len(mesh.vertices), vertex_dtype(target.position))
+        vrec = np.empty(len(mesh.vertices), _vertex_dtype(target.position))
         for name in vrec.dtype.names:
             vrec[name] = vertices[name]
-        fdt = face_dtype(block.kind)
+        fdt = _face_dtype(block.kind)
         faces = mesh.faces if block.kind == "quads" else triangle_rows(mesh.faces, mesh.edge_midpoint)[0]
         frec = np.empty(len(faces), fdt)
         frec["n"], frec["i"] = fdt["i"].shape[0], faces
@@ -300,7 +396,7 @@ def _corner_offsets() -> np.ndarray:
     return out
 
 
-def stl_records(mesh: QuadMesh, first: int, frame: DigitalObject) -> np.ndarray:
+def _stl_records(mesh: QuadMesh, first: int, frame: DigitalObject) -> np.ndarray:
     """The STL triangles of a block's faces, as :func:`triangle_rows` cuts
     them. A face's positions come from its lowest corner, which is the
     block's own vertex (its first corner, or its last where the normal is
@@ -323,7 +419,7 @@ def stl_records(mesh: QuadMesh, first: int, frame: DigitalObject) -> np.ndarray:
     return rec
 
 
-class Source:
+class _Source:
     """The volume handed to the block tasks: a holder, so that dask passes
     a dask array to them as it is instead of computing it first."""
 
@@ -335,9 +431,26 @@ class Source:
 
 
 def block_grid(array, block_shape=None) -> BlockGrid:
-    """The blocks of a zarr array (its shards or chunks, grouped when tiny:
-    :func:`isoflow.scale.chunks.zarr_blocks`), of a dask array (its chunks)
-    or of any other array (``block_shape``, else one block)."""
+    """The blocks of a volume.
+
+    Parameters
+    ----------
+    array : zarr.Array, ChunkReader, dask.array.Array or array-like
+        A zarr array is cut along its shards or chunks, grouped when tiny
+        (:func:`isoflow.scale.chunks.zarr_blocks`); a dask array along its
+        chunks; any other array into one block.
+    block_shape : tuple of int, optional
+        Blocks of this shape instead.
+
+    Returns
+    -------
+    BlockGrid
+
+    Examples
+    --------
+    >>> block_grid(np.zeros((5, 4, 3)), (2, 4, 3)).bounds[0]
+    ((0, 2), (2, 4), (4, 5))
+    """
     from ..scale.chunks import block_bounds, zarr_blocks
 
     shape = tuple(int(s) for s in array.shape)
@@ -351,7 +464,7 @@ def block_grid(array, block_shape=None) -> BlockGrid:
     return BlockGrid(shape, tuple(tuple(b) for b in block_bounds(chunks)))
 
 
-def position_type(shape, frame: DigitalObject) -> type:
+def _position_type(shape, frame: DigitalObject) -> type:
     """float32 where it holds every lattice point and edge midpoint of the
     volume to :data:`isoflow.mesh.export.POSITION_TOLERANCE` voxels (as
     :func:`isoflow.mesh.export.mesh_vertex_table` asks of a mesh's own
@@ -453,63 +566,90 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     """
     from ..digital.topology import resolve_connectivity
     from ..scale.compiled import thread_count
-    from .outputs import atomic_path, check_output_path
 
     where = where or str(getattr(array, "store_path", None) or "volume")
-    suffix = Path(path).suffix.lower()
-    if suffix not in STREAM_SUFFIXES:
-        raise IsoflowError(f"{path}: a surface larger than memory is written block by block as binary "
-                           f"{' or '.join(s[1:].upper() for s in STREAM_SUFFIXES)} only (.ply, .stl), not {suffix or 'this'}")
-    out = check_output_path(path, force, suffixes=STREAM_SUFFIXES, what="surface")
+    out = _checked_output(path, force)
     if len(array.shape) != 3:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)
     frame = frame or DigitalObject(np.zeros((1, 1, 1), bool))
-    if is_zarr_array(array):
-        array = ChunkReader(array)
-    grid = block_grid(array, block_shape)
+    array, grid, cache = _reader(array, block_shape)
     with using(threads):
         workers = thread_count()
-    itemsize = np.dtype(array.dtype).itemsize
-    cache = 0
-    if isinstance(array, ChunkReader):
-        # a layer's blocks read the last chunk layer of the one below and the
-        # first of the one above: each chunk decoded once
-        array.max_bytes = cache = _cache_bytes(grid, array.chunks, np.dtype(array.array.dtype).itemsize)
-    _check_memory(where, workers, _largest_read(grid) * (2 * itemsize + 2), "counting", cache)
-    source = Source(array)
-
-    def count(index):
-        return _delayed(count_block)(source, grid, index, conn, where)
-
-    counts = _by_layers(grid, count, scheduler, workers, progress, 0)
-    triangles = triangulate or suffix == ".stl" or any(c["triangles"] != 2 * c["faces"] for c in counts.values())
+    read = _largest_read(grid) * (2 * np.dtype(array.dtype).itemsize + 2)
+    _check_memory(where, workers, read, "counting", cache)
+    source = _Source(array)
+    counts = _by_layers(grid, lambda i: _delayed(count_block)(source, grid, i, conn, where), scheduler, workers,
+                        progress, 0)
+    triangles = triangulate or out.suffix.lower() == ".stl" or any(
+        c["triangles"] != 2 * c["faces"] for c in counts.values())
     layout = plan(grid, counts, triangles)
     if layout.voxels == 0:
         raise IsoflowError(f"{where}: the object is empty, there is no surface to write")
-    position = _checked_position(out, suffix, layout, grid, frame)
-    per_task = max(_largest_read(grid) * (2 * itemsize + 2) + layout.items[i] * BYTES_PER_ITEM
-                   + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
+    per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
     _check_memory(where, workers, per_task, "writing", cache)
-    header = _header(suffix, layout, position, comments, conn, where)
-    size = _file_size(suffix, layout, position, len(header))
-    _check_disk(out, size)
-    with atomic_path(out) as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(header)
-            fh.truncate(size)
-        target = Target(str(tmp), suffix, frame, position, len(header),
-                        len(header) + (layout.vertices * vertex_dtype(position).itemsize if suffix == ".ply" else 0))
-
-        def write(index):
-            return _delayed(write_block)(source, grid, block_plan(layout, index), target, conn, where)
-
-        written = _by_layers(grid, write, scheduler, workers, progress, grid.numblocks[0])
+    target, size = _prepared(out, layout, frame, comments, conn, where)
+    with _filling(out, target, size) as target:
+        written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
+                                                                   where), scheduler, workers, progress,
+                             grid.numblocks[0])
     quads = sum(layout.quads.values())
     midpoints = sum(c["triangles"] - 2 * c["faces"] for c in counts.values()) // 2
     return {"path": out, "vertices": layout.vertices, "faces": layout.faces, "kind": layout.kind, "quads": quads,
             "midpoints": midpoints, "pinched": sum(w["pinched"] for w in written.values()), "voxels": layout.voxels,
             "euler_characteristic": layout.vertices - quads - midpoints, "bytes": size}
+
+
+def _checked_output(path, force: bool) -> Path:
+    """The output, refused in one line naming the suffixes that stream."""
+    from .outputs import check_output_path
+
+    suffix = Path(path).suffix.lower()
+    if suffix not in STREAM_SUFFIXES:
+        raise IsoflowError(f"{path}: a surface larger than memory is written block by block as binary PLY or STL "
+                           f"only ({', '.join(STREAM_SUFFIXES)}), not {suffix or 'this'}")
+    return check_output_path(path, force, suffixes=STREAM_SUFFIXES, what="surface")
+
+
+def _reader(array, block_shape) -> tuple:
+    """The array the blocks read (a zarr array through a chunk cache), its
+    blocks and the cache's bytes."""
+    if is_zarr_array(array):
+        array = ChunkReader(array)
+    grid = block_grid(array, block_shape)
+    cache = 0
+    if isinstance(array, ChunkReader):
+        # a layer's blocks read the last chunk layer of the one below and the
+        # first of the one above: each chunk decoded once
+        array.max_bytes = cache = _cache_bytes(grid, array.chunks, np.dtype(array.array.dtype).itemsize)
+    return array, grid, cache
+
+
+def _prepared(out: Path, layout: Layout, frame: DigitalObject, comments, conn: int, where: str) -> tuple:
+    """The file's target (a temporary path to come) and size, refused up
+    front where the format or the disk cannot hold it."""
+    suffix = out.suffix.lower()
+    position = _checked_position(out, suffix, layout, layout.grid, frame)
+    header = _header(suffix, layout, position, comments, conn, where)
+    size = _file_size(suffix, layout, position, len(header))
+    _check_disk(out, size)
+    faces_at = len(header) + (layout.vertices * _vertex_dtype(position).itemsize if suffix == ".ply" else 0)
+    return Target("", suffix, frame, position, len(header), faces_at, header), size
+
+
+@contextlib.contextmanager
+def _filling(out: Path, target: Target, size: int):
+    """A temporary file beside ``out`` of the final size with its header,
+    for the blocks to write into; renamed over ``out`` when they are done
+    (:func:`isoflow.mesh.outputs.atomic_path`: an error or an interruption
+    removes it and leaves ``out`` as it was)."""
+    from .outputs import atomic_path
+
+    with atomic_path(out) as tmp:
+        with open(tmp, "wb") as fh:
+            fh.write(target.header)
+            fh.truncate(size)
+        yield replace(target, path=str(tmp))
 
 
 def _delayed(fn):
@@ -544,7 +684,7 @@ def _cache_bytes(grid: BlockGrid, chunks, itemsize: int) -> int:
 
 def _checked_position(out: Path, suffix: str, layout: Layout, grid: BlockGrid, frame: DigitalObject) -> type:
     """The position type of the file, refusing what the format cannot hold."""
-    position = position_type(grid.shape, frame)
+    position = _position_type(grid.shape, frame)
     if suffix == ".stl":
         if position is not np.float32:
             raise IsoflowError(f"{out}: binary STL holds float32 positions, which would move this surface's "
@@ -562,7 +702,7 @@ def _header(suffix: str, layout: Layout, position, comments: tuple[str, ...], co
     if suffix == ".stl":
         text = f"isoflow surface of {Path(where).name}, {conn}-connectivity".encode("ascii", "replace")[:80]
         return text.ljust(80, b" ") + np.uint32(layout.faces).tobytes()
-    vdt = vertex_dtype(position)
+    vdt = _vertex_dtype(position)
     return ply_header({k: vdt[k] for k in vdt.names}, layout.vertices, layout.faces,
                       (*comments, f"faces: {layout.kind}"))
 
@@ -570,7 +710,7 @@ def _header(suffix: str, layout: Layout, position, comments: tuple[str, ...], co
 def _file_size(suffix: str, layout: Layout, position, header: int) -> int:
     if suffix == ".stl":
         return header + layout.faces * STL_DTYPE.itemsize
-    return header + layout.vertices * vertex_dtype(position).itemsize + layout.faces * face_dtype(layout.kind).itemsize
+    return header + layout.vertices * _vertex_dtype(position).itemsize + layout.faces * _face_dtype(layout.kind).itemsize
 
 
 def _check_disk(out: Path, size: int) -> None:

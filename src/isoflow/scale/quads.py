@@ -2,7 +2,7 @@
 vertex's configuration and sheet, written straight into the mesh's arrays.
 
 The mesh is the one :func:`isoflow.digital.surface.boundary_mesh` defines
-(its tables come in as ``tables``, see :func:`mesh_tables`); this module
+(its tables come in as ``tables``: :func:`isoflow.digital.surface.row_tables`); this module
 only knows lattice points, words and counts. A lattice vertex is on the
 surface where its eight voxels are not all equal; on four bit rows (the
 voxel rows around a row of vertices, :mod:`isoflow.scale.bitrows`) a few
@@ -18,7 +18,8 @@ at most three faces (one per normal axis, between octant 7 and octant
 Two passes, each over slabs of vertex planes on the threads:
 
 1. :func:`count_planes`: the items of every plane (split into the 27
-   classes of a box, below), the faces and the triangles each plane owns;
+   classes of a box, below), the faces each plane owns and their
+   references to midpoints (the triangles they make);
 2. :func:`fill_planes`: with each slab's first item and face known from the
    counts, a slab numbers its planes' items in lattice order, keeping the
    numbers, configurations and doubled edges of two planes at a time
@@ -242,9 +243,38 @@ def count_planes(bits: np.ndarray, shape: tuple[int, int, int], box: np.ndarray,
                  tables: tuple) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pass 1 over the box's vertex planes ``p0 <= p < p1``.
 
-    Returns each plane's items per class (``(p1 - p0, 27)``), the faces it
-    owns, and the references of those faces to midpoints (a face with m
-    midpoints is ``2 + m`` triangles).
+    Parameters
+    ----------
+    bits : numpy.ndarray
+        The volume's bit rows (:func:`isoflow.scale.bitrows.pack`).
+    shape : tuple of int
+        The volume's shape.
+    box : numpy.ndarray
+        (3, 4) int64: per axis ``lo, hi, t0, t1`` (see the module docs;
+        :func:`whole_box` for a whole volume).
+    p0, p1 : int
+        The vertex planes (first axis) to count.
+    tables : tuple of numpy.ndarray
+        :func:`isoflow.digital.surface.row_tables`.
+
+    Returns
+    -------
+    items : numpy.ndarray
+        (p1 - p0, 27) int64: each plane's items (mesh vertices) per class.
+    faces : numpy.ndarray
+        (p1 - p0,) the faces the box owns in each plane.
+    refs : numpy.ndarray
+        (p1 - p0,) the references of those faces to midpoints: a face with
+        m midpoints is ``2 + m`` triangles.
+
+    Examples
+    --------
+    >>> from isoflow.scale.bitrows import pack
+    >>> from isoflow.digital.surface import row_tables
+    >>> cube = np.ones((1, 1, 1), bool)
+    >>> items, faces, refs = count_planes(pack(cube)[0], (1, 1, 1), whole_box((1, 1, 1)), 0, 2, row_tables(6))
+    >>> items[:, 13].tolist(), faces.tolist(), refs.tolist()  # the +x face's lowest corner is on plane 1
+    ([4, 4], [5, 1], [0, 0])
     """
     nsheet, _, dspoke, dflag, pinch = tables
     n = max(p1 - p0, 0)
@@ -382,12 +412,49 @@ def fill_planes(bits: np.ndarray, shape: tuple[int, int, int], box: np.ndarray, 
                 counters: np.ndarray, vbase: int, fbase: int, tables: tuple, connectivity: int, origin,
                 out: tuple) -> int:
     """Pass 2 over the box's own vertex planes ``p0 <= p < p1``: number
-    their items from ``counters`` (the first number per class at plane p0;
-    advanced in place) and write the own vertices at ``number - vbase`` and
-    the own faces from ``fbase`` on into ``out``: ``(vertices, config,
-    sheet, faces, edge_midpoint, face_normals)``. ``origin``: the lattice
-    coordinates of the bit rows' point (0, 0, 0). Returns the pinched
-    vertices written (those in ``tables``' pinch table)."""
+    their items and write the box's own vertices and faces.
+
+    Parameters
+    ----------
+    bits, shape, box, tables
+        As in :func:`count_planes`.
+    p0, p1 : int
+        The vertex planes to write (own planes of the box).
+    counters : numpy.ndarray
+        (27,) int64: the number of the first item of each class at plane
+        ``p0`` (advanced in place).
+    vbase : int
+        Item ``n`` is written at row ``n - vbase`` of the vertex arrays.
+    fbase : int
+        The row of the first face written.
+    connectivity : {6, 26}
+        Which voxel of an edge contact a pair of faces belongs to (for the
+        midpoints of doubled edges).
+    origin : sequence of int
+        The lattice coordinates of the bit rows' point (0, 0, 0).
+    out : tuple of numpy.ndarray
+        ``(vertices, config, sheet, faces, edge_midpoint, face_normals)``
+        as :class:`isoflow.digital.surface.QuadMesh` holds them.
+
+    Returns
+    -------
+    int
+        The pinched vertices written (sheet 0 of a configuration in the
+        tables' pinch table).
+
+    Examples
+    --------
+    >>> from isoflow.scale.bitrows import pack
+    >>> from isoflow.digital.surface import row_tables
+    >>> out = (np.empty((8, 3)), np.empty(8, np.uint8), np.empty(8, np.int8), np.empty((6, 4), np.int32),
+    ...        np.empty((6, 4), np.int32), np.empty((6, 3), np.int8))
+    >>> counters = np.zeros(27, np.int64)
+    >>> fill_planes(pack(np.ones((1, 1, 1), bool))[0], (1, 1, 1), whole_box((1, 1, 1)), 0, 2, counters, 0, 0,
+    ...             row_tables(6), 6, (0, 0, 0), out)
+    0
+    >>> out[3][0].tolist(), out[5][0].tolist()  # the -x face, its corners seen from outside
+    ([1, 3, 2, 0], [-1, 0, 0])
+    """
     nsheet, sheets, dspoke, dflag, pinch = tables
     nx, ny, nz = shape
     return int(_fill_planes(bits, nx, ny, nz, box, p0, p1, counters, vbase, fbase, nsheet, sheets, dspoke, dflag,
@@ -396,18 +463,54 @@ def fill_planes(bits: np.ndarray, shape: tuple[int, int, int], box: np.ndarray, 
 
 def whole_box(shape: tuple[int, int, int]) -> np.ndarray:
     """The box of a whole volume: every lattice point numbered and own, in
-    class 1."""
+    class 1.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The volume's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3, 4) int64, per axis ``lo, hi, t0, t1`` (see the module docs).
+
+    Examples
+    --------
+    >>> whole_box((2, 3, 4)).tolist()
+    [[0, 2, -1, 3], [0, 3, -1, 4], [0, 4, -1, 5]]
+    """
     return np.array([[0, n, -1, n + 1] for n in shape], np.int64)
 
 
 def mesh_rows(volume: np.ndarray, tables: tuple, connectivity: int) -> tuple:
     """The boundary mesh of a 3D volume from its bit rows, on the threads.
 
-    Returns ``(vertices, config, sheet, faces, edge_midpoint, face_normals,
-    pinched)`` as :class:`isoflow.digital.surface.QuadMesh` holds them
-    (vertices float64 in array-corner units, faces and midpoints in
-    :func:`index_dtype`), vertices numbered in lattice order with each
-    lattice vertex's midpoints after its sheets.
+    Parameters
+    ----------
+    volume : numpy.ndarray
+        3D, nonzero for the object (any memory order).
+    tables : tuple of numpy.ndarray
+        :func:`isoflow.digital.surface.row_tables` of ``connectivity``.
+    connectivity : {6, 26}
+        The object's connectivity.
+
+    Returns
+    -------
+    tuple
+        ``(vertices, config, sheet, faces, edge_midpoint, face_normals,
+        pinched)`` as :class:`isoflow.digital.surface.QuadMesh` holds them
+        (vertices float64 in array-corner units, faces and midpoints in
+        :func:`isoflow.scale.arrays.index_dtype`), vertices numbered in
+        lattice order with each lattice vertex's midpoints after its sheets.
+
+    Examples
+    --------
+    >>> from isoflow.digital.surface import row_tables
+    >>> vertices, config, sheet, faces, midpoint, normals, pinched = mesh_rows(np.ones((1, 1, 2), bool),
+    ...                                                                        row_tables(6), 6)
+    >>> len(vertices), len(faces), pinched
+    (12, 10, 0)
     """
     from .bitrows import pack
     from .compiled import run, slabs, thread_count
