@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, thread_count
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -21,7 +21,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--ascii", action="store_true", help="ASCII PLY instead of binary")
     p.add_argument("--triangulate", action="store_true", help="triangles in every format (two per plain quad)")
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
-    p.add_argument("--no-check", action="store_true", help="do not read the written file back with trimesh")
+    p.add_argument("--no-check", action="store_true",
+                   help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="blocks of a .zarr store meshed at a time (default: $ISOFLOW_THREADS, else every CPU)")
@@ -135,7 +136,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..mesh.surface_blocks import write_surface_blocks
     from .progress import progress_bar
 
-    refuse_in_memory_options(args)
+    refuse_mesh_options(args, ".zarr")
     array, pitch, origin = store_volume(args.input, args.label)
     frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch,
                           origin=(0.0, 0.0, 0.0) if origin is None else origin)
@@ -184,12 +185,6 @@ def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
         raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {gib(default_budget())} "
                            f"here); a store's surface is written block by block as binary PLY or STL "
                            f"({', '.join(STREAM_SUFFIXES)})")
-
-
-def refuse_in_memory_options(args: argparse.Namespace) -> None:
-    """Options of meshes, refused for a store."""
-    if args.pitch is not None or args.resolution is not None or args.strict:
-        raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict apply to meshes, not to .zarr input")
 
 
 def surface_comments(name: str, conn: int) -> tuple[str, ...]:

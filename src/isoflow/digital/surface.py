@@ -34,9 +34,9 @@ from typing import Literal
 
 import numpy as np
 
+from ..scale.arrays import index_dtype
 from .configurations import configurations, octant_bit
 from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
-from ..scale.arrays import index_dtype
 from .topology import check_connectivity
 
 # --------------------------------------------------------------------------
