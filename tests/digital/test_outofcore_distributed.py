@@ -67,3 +67,39 @@ def test_a_bad_block_is_one_line_from_a_worker(client):
         analyze_chunked(da.from_array(v, chunks=(7, 5, 9)), 6, scheduler=client.get)
     message = str(err.value)
     assert "\n" not in message and "not a binary volume" in message and "(14, 0, 0)" in message
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_surface_blocks_on_process_workers(client, tmp_path, conn):
+    # the surface of a zarr store written block by block on two worker
+    # processes into one file: the in-memory mesh's records and faces
+    import trimesh
+
+    from isoflow import boundary_mesh
+    from isoflow.mesh.export import write_surface
+    from isoflow.mesh.streamed_readback import check_streamed
+    from isoflow.mesh.surface_blocks import write_surface_blocks
+
+    rng = np.random.default_rng(20131122)
+    v = rng.random((23, 19, 26)) < 0.45  # many edge and vertex contacts
+    v[:12] |= torus(8, 3, size=26, axis=0)[:12, 3:22, :]  # a tunnel across blocks
+    z = zarr.open_array(str(tmp_path / "v.zarr"), mode="w", shape=v.shape, chunks=(7, 5, 9), dtype=bool)
+    z[:] = v
+    got = write_surface_blocks(zarr.open_array(str(tmp_path / "v.zarr"), mode="r"), tmp_path / "s.ply", conn,
+                               scheduler=client.get)
+    mesh = boundary_mesh(v, conn)
+    want = write_surface(tmp_path / "m.ply", mesh, DigitalObject(v))
+    assert got["pinched"] == mesh.pinched and got["euler_characteristic"] == mesh.euler_characteristic
+    assert check_streamed(got["path"], dict(got, centre=np.array(v.shape) / 2), DigitalObject(v))["agree"]
+
+    def records(path):
+        tm = trimesh.load(path, process=False)
+        data = tm.metadata["_ply_raw"]["vertex"]["data"]
+        rows = np.stack([data[n].astype(np.float64).ravel() for n in data.dtype.names], axis=1)
+        faces = np.sort(rows[tm.faces].reshape(len(tm.faces), -1), axis=1)  # a face by its corners' records
+        return np.unique(rows, axis=0, return_counts=True), np.unique(faces, axis=0, return_counts=True)
+
+    (rows_got, n_got), (faces_got, m_got) = records(got["path"])
+    (rows_want, n_want), (faces_want, m_want) = records(want["path"])
+    assert np.array_equal(rows_got, rows_want) and np.array_equal(n_got, n_want)
+    assert np.array_equal(faces_got, faces_want) and np.array_equal(m_got, m_want)

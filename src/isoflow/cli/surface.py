@@ -6,8 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -19,8 +21,11 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--ascii", action="store_true", help="ASCII PLY instead of binary")
     p.add_argument("--triangulate", action="store_true", help="triangles in every format (two per plain quad)")
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
-    p.add_argument("--no-check", action="store_true", help="do not read the written file back with trimesh")
+    p.add_argument("--no-check", action="store_true",
+                   help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
+    p.add_argument("--threads", type=thread_count, metavar="N",
+                   help="blocks of a .zarr store meshed at a time (default: $ISOFLOW_THREADS, else every CPU)")
     p.set_defaults(func=cmd_surface)
 
 
@@ -29,6 +34,10 @@ def cmd_surface(args: argparse.Namespace) -> int:
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path
 
+    if is_store(args.input):
+        if streams(args):
+            return cmd_surface_store(args)
+        refuse_store_beyond_memory(args)
     # both outputs checked before loading and before anything is written:
     # a bad --png must not leave the mesh behind
     out = check_output_path(args.output, args.force, suffixes=export.SURFACE_SUFFIXES, what="surface")
@@ -43,11 +52,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
-    comments = (
-        f"isoflow surface of {Path(args.input).name}, {conn}-connectivity",
-        "per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
-        "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)",
-    )
+    comments = surface_comments(args.input, conn)
     written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                    force=args.force, comments=comments)
     comps = mesh.components()
@@ -123,3 +128,82 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
         print(f"{out}: trimesh reads it back watertight, V-E+F = {t['euler_number']}, genus {t['genus']}, "
               f"volume {t['volume']:.6g}: as isoflow counts")
     return 0
+
+
+def is_store(name: str) -> bool:
+    """A 3D zarr store: its surface is written block by block."""
+    from ..mesh.formats.omezarr import stored_ndim
+    from ..mesh.formats.registry import split_dataset
+
+    return split_dataset(name)[0].suffix.lower() == ".zarr" and stored_ndim(name) == 3
+
+
+def cmd_surface_store(args: argparse.Namespace) -> int:
+    """``surface STORE.zarr -o OUT.(ply|stl)``: the mesh written block by
+    block, then read back in chunks."""
+    from ..digital.lattice import DigitalObject
+    from ..digital.connectivity import default_connectivity
+    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.readback import volume_unit
+    from ..mesh.streamed_readback import check_streamed
+    from ..mesh.surface_blocks import write_surface_blocks
+    from .progress import progress_bar
+
+    refuse_mesh_options(args, ".zarr")
+    array, pitch, origin = store_volume(args.input, args.label)
+    frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch,
+                          origin=(0.0, 0.0, 0.0) if origin is None else origin)
+    conn = args.connectivity or default_connectivity(3)
+    with progress_bar(args, "blocks") as show:
+        written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
+                                       force=args.force, where=args.input, triangulate=args.triangulate,
+                                       comments=surface_comments(args.input, conn))
+    out = written["path"]
+    print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
+          f"V-E+F = {written['euler_characteristic']}"
+          + (f", {written['pinched']} pinched vertices" if written["pinched"] else "")
+          + " (written block by block; isoflow info counts its closed surfaces)")
+    if args.no_check:
+        return 0
+    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2), frame)
+    if not check["agree"]:
+        print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
+        return 1
+    print(f"{out}: read back in chunks (every face): closed and consistently wound, volume "
+          f"{check['figures']['volume_units'] * volume_unit(frame) ** 3:.6g}"
+          + ("" if out.suffix.lower() == ".stl" else f", V-E+F = {check['figures']['euler_number']}, "
+             "sum of a = 8 chi") + ": as isoflow counts")
+    return 0
+
+
+def streams(args: argparse.Namespace) -> bool:
+    """The output is one that is written block by block: binary PLY or STL
+    without a picture."""
+    from ..mesh.surface_blocks import STREAM_SUFFIXES
+
+    return Path(args.output).suffix.lower() in STREAM_SUFFIXES and not args.ascii and not args.png
+
+
+def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
+    """A store whose volume would not fit in memory with its mesh, asked
+    for what needs the whole mesh in memory: one line naming what streams."""
+    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.surface_blocks import STREAM_SUFFIXES
+    from ..scale.memory import default_budget, gib
+
+    array = store_volume(args.input, args.label)[0]
+    need = 2 * int(np.prod(array.shape, dtype=np.int64))  # the volume and its configurations, before the mesh
+    if need > default_budget():
+        asked = "--ascii" if args.ascii else "--png" if args.png else Path(args.output).suffix.lower() or args.output
+        raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {gib(default_budget())} "
+                           f"here); a store's surface is written block by block as binary PLY or STL "
+                           f"({', '.join(STREAM_SUFFIXES)})")
+
+
+def surface_comments(name: str, conn: int) -> tuple[str, ...]:
+    """The PLY header comments of ``surface``."""
+    return (
+        f"isoflow surface of {Path(name).name}, {conn}-connectivity",
+        "per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
+        "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)",
+    )

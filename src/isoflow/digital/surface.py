@@ -30,9 +30,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Literal
 
 import numpy as np
 
+from ..scale.arrays import index_dtype
+from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
 from .connectivity import check_connectivity
@@ -173,8 +176,8 @@ class QuadMesh:
     """
 
     vertices: np.ndarray  # (V, 3) float64, array-corner units
-    faces: np.ndarray  # (F, 4) int64, counter-clockwise seen from outside
-    edge_midpoint: np.ndarray  # (F, 4) int64: vertex inserted on edge t -> t+1, or -1
+    faces: np.ndarray  # (F, 4) counter-clockwise seen from outside; int32 (int64 from 2^31 vertices on)
+    edge_midpoint: np.ndarray  # (F, 4) as faces: vertex inserted on edge t -> t+1, or -1
     face_normals: np.ndarray  # (F, 3) int8, unit outward normals
     config: np.ndarray  # (V,) uint8 configuration byte (0 on midpoints)
     sheet: np.ndarray  # (V,) int8: which sheet of its lattice vertex (-1 on midpoints)
@@ -223,40 +226,14 @@ class QuadMesh:
     def polygons(self) -> np.ndarray:
         """Faces with their midpoints (docs/formats.md, "Surface files"): (F, 4) when there are
         none, else (F, 8) cyclic rows of corner, midpoint or -1, corner, ...
-
-        A row with a midpoint starts at its first midpoint. Readers
-        (trimesh, MeshLab) triangulate a polygon by a fan from its first
-        vertex; from a corner next to a midpoint that fan would draw the
-        lattice edge the midpoint splits (a non-manifold edge) and a
-        zero-area triangle along it. From the midpoint every fan triangle
-        has area and every fan diagonal lies inside the face.
-        """
-        if not self.midpoints:
-            return self.faces
-        seq = np.full((len(self.faces), 8), -1, dtype=np.int64)
-        seq[:, 0::2] = self.faces
-        seq[:, 1::2] = self.edge_midpoint
-        split = (self.edge_midpoint >= 0).any(axis=1)
-        first = np.where(split, np.argmax(self.edge_midpoint >= 0, axis=1) * 2 + 1, 0)
-        rows = np.arange(len(seq))[:, None]
-        return seq[rows, (first[:, None] + np.arange(8)) % 8]
+        (see :func:`polygon_rows`)."""
+        return polygon_rows(self.faces, self.edge_midpoint)
 
     def triangles(self) -> np.ndarray:
         """Triangles with the faces' orientation and no degenerate ones: two
         per plain quad, a fan from the first midpoint (see :meth:`polygons`)
         for a face with midpoints."""
-        plain = (self.edge_midpoint < 0).all(axis=1)
-        q = self.faces[plain]
-        tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
-        if not plain.all():
-            seq = self.polygons()[~plain]
-            count = (seq >= 0).sum(axis=1)
-            for size in np.unique(count):
-                grp = seq[count == size]
-                poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
-                for t in range(1, size - 1):
-                    tris.append(poly[:, [0, t, t + 1]])
-        return np.concatenate(tris)
+        return triangle_rows(self.faces, self.edge_midpoint)[0]
 
     def components(self) -> list[dict]:
         """Closed surface components, largest first, each with its Euler
@@ -280,6 +257,85 @@ class QuadMesh:
             }
             for c in order
         ]
+
+
+def polygon_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> np.ndarray:
+    """Quads with the midpoints of their doubled edges as polygons.
+
+    Parameters
+    ----------
+    faces : numpy.ndarray
+        (F, 4) corner indices, counter-clockwise seen from outside.
+    edge_midpoint : numpy.ndarray
+        (F, 4): the vertex on edge t -> t + 1, or -1.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``faces`` itself when no edge has a midpoint, else (F, 8) cyclic
+        rows of corner, midpoint or -1, corner, ...; a row with a midpoint
+        starts at its first midpoint. Readers (trimesh, MeshLab) triangulate
+        a polygon by a fan from its first vertex; from a corner next to a
+        midpoint that fan would draw the lattice edge the midpoint splits (a
+        non-manifold edge) and a zero-area triangle along it. From the
+        midpoint every fan triangle has area and every fan diagonal lies
+        inside the face.
+
+    Examples
+    --------
+    >>> polygon_rows(np.array([[0, 1, 2, 3]]), np.array([[-1, 4, -1, -1]])).tolist()
+    [[4, 2, -1, 3, -1, 0, -1, 1]]
+    """
+    split = (edge_midpoint >= 0).any(axis=1)
+    if not split.any():
+        return faces
+    seq = np.full((len(faces), 8), -1, dtype=np.int64)
+    seq[:, 0::2] = faces
+    seq[:, 1::2] = edge_midpoint
+    rows = np.flatnonzero(split)
+    first = np.argmax(edge_midpoint[rows] >= 0, axis=1) * 2 + 1
+    seq[rows] = seq[rows[:, None], (first[:, None] + np.arange(8)) % 8]
+    return seq
+
+
+def triangle_rows(faces: np.ndarray, edge_midpoint: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Triangles of quads with midpoints, and the face of each triangle.
+
+    Parameters
+    ----------
+    faces, edge_midpoint : numpy.ndarray
+        As in :func:`polygon_rows`.
+
+    Returns
+    -------
+    triangles : numpy.ndarray
+        (T, 3) with the faces' orientation and no degenerate ones: two per
+        plain quad (in face order), then a fan from the first midpoint of
+        each face with midpoints, grouped by polygon size.
+    face : numpy.ndarray
+        (T,) the face each triangle is part of.
+
+    Examples
+    --------
+    >>> tris, face = triangle_rows(np.array([[0, 1, 2, 3]]), np.array([[-1, -1, -1, -1]]))
+    >>> tris.tolist(), face.tolist()
+    ([[0, 1, 2], [0, 2, 3]], [0, 0])
+    """
+    plain = (edge_midpoint < 0).all(axis=1)
+    q = faces[plain]
+    tris = [np.stack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]], axis=1).reshape(-1, 3)]
+    owner = [np.repeat(np.flatnonzero(plain), 2)]
+    if not plain.all():
+        split = np.flatnonzero(~plain)
+        seq = polygon_rows(faces[split], edge_midpoint[split])
+        count = (seq >= 0).sum(axis=1)
+        for size in np.unique(count):
+            grp = seq[count == size]
+            poly = grp[grp >= 0].reshape(len(grp), size)  # drop the -1 slots, keeping order
+            for t in range(1, size - 1):
+                tris.append(poly[:, [0, t, t + 1]])
+                owner.append(split[count == size])
+    return np.concatenate(tris), np.concatenate(owner)
 
 
 def _vertex_components(polygons: np.ndarray, nv: int) -> tuple[int, np.ndarray]:
@@ -332,119 +388,228 @@ def mesh_memory(hist: np.ndarray) -> int:
 
 def _empty_mesh(connectivity: int) -> QuadMesh:
     return QuadMesh(
-        np.zeros((0, 3)), np.zeros((0, 4), np.int64), np.zeros((0, 4), np.int64),
+        np.zeros((0, 3)), np.zeros((0, 4), index_dtype(0)), np.zeros((0, 4), index_dtype(0)),
         np.zeros((0, 3), np.int8), np.zeros(0, np.uint8), np.zeros(0, np.int8),
         connectivity, 0,
     )
 
 
-def boundary_mesh(volume: np.ndarray, connectivity: int = 6) -> QuadMesh:
+def mesh_method(volume: np.ndarray, method: Method = "auto") -> Literal["numpy", "compiled"]:
+    """The way :func:`boundary_mesh` builds the mesh of ``volume``: from the
+    bit rows (numba, :mod:`isoflow.scale.quads`) or with NumPy over the
+    whole volume.
+
+    Parameters
+    ----------
+    volume : numpy.ndarray
+        The 3D volume to mesh.
+    method : {"auto", "numpy", "compiled"}
+        ``"auto"``: the bit rows where numba is installed and the volume has
+        at least :func:`~isoflow.scale.compiled.least_voxels` voxels (with
+        the surfaces: below that the NumPy mesh is done before numba has
+        started; ``benchmarks/bench_mesh.py --small``), else NumPy.
+
+    Returns
+    -------
+    {"numpy", "compiled"}
+
+    Raises
+    ------
+    IsoflowError
+        For another method, or ``"compiled"`` without numba.
+
+    Examples
+    --------
+    >>> mesh_method(np.zeros((4, 4, 4), bool)), mesh_method(np.zeros((4, 4, 4), bool), "compiled")
+    ('numpy', 'compiled')
+    """
+    return "compiled" if use_compiled(volume, surfaces=True, method=method) else "numpy"
+
+
+@lru_cache(maxsize=None)
+def row_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
+    """The tables of :mod:`isoflow.scale.quads` for one connectivity.
+
+    Parameters
+    ----------
+    connectivity : {6, 26}
+        The object's connectivity (it decides the pairing at edge contacts
+        and which vertex contacts are pinched).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(nsheet, sheets, doubled_spoke, doubled_up, pinch)`` over the 256
+        configurations: the number of sheets (int64), :func:`sheet_lut`
+        (int64), :func:`doubled_spoke_lut`, whether a spoke toward +e_a is
+        doubled (bool), :func:`pinch_lut` (int64).
+
+    Examples
+    --------
+    >>> nsheet, sheets, dspoke, up, pinch = row_tables(6)
+    >>> int(nsheet[0]), int(nsheet[1]), int(nsheet[0b10000001])
+    (0, 1, 2)
+    """
+    sheets = sheet_lut(connectivity)
+    dspoke = doubled_spoke_lut(connectivity)
+    tables = ((sheets.max(axis=1) + 1).astype(np.int64), sheets.astype(np.int64), dspoke,
+              dspoke[:, :, 1].any(axis=1), pinch_lut(connectivity).astype(np.int64))
+    for t in tables:
+        t.setflags(write=False)
+    return tables
+
+
+def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "auto") -> QuadMesh:
     """The closed quad mesh of a 3D object's boundary (docs/mathematics.md).
 
-    ``volume`` is a 3D boolean array; vertices come out in array-corner units
-    (voxel ``v`` spans ``[v, v+1]``), ordered by lattice position and sheet.
-    Cost: one configuration pass, three face passes, table look-ups; no sort
-    over the faces.
+    Parameters
+    ----------
+    volume : numpy.ndarray
+        A 3D array, nonzero for the object (any memory order).
+    connectivity : {6, 26}
+        The object's connectivity: faces meeting at an edge contact are
+        paired inside each object voxel under 6, across the edge under 26.
+    method : {"auto", "numpy", "compiled"}
+        How the mesh is built (see :func:`mesh_method`); every method gives
+        the same mesh up to the order of its vertices and faces.
+
+    Returns
+    -------
+    QuadMesh
+        Vertices in array-corner units (voxel ``v`` spans ``[v, v + 1]``),
+        ordered by lattice position and sheet (with ``"numpy"`` the
+        midpoints of doubled edges come last, else after their edge's lower
+        end).
+
+    Raises
+    ------
+    ValueError
+        If the volume is not 3D, or for a bad connectivity or method.
+
+    Notes
+    -----
+    The mesh is a closed, oriented 2-manifold whose Euler characteristic
+    is ``V - E + F = 2 chi + 2 pinched`` (section 4's chi, Theorems 10-11).
+
+    Examples
+    --------
+    >>> mesh = boundary_mesh(np.ones((1, 1, 1), bool))
+    >>> len(mesh.vertices), len(mesh.faces), mesh.euler_characteristic
+    (8, 6, 2)
     """
-    vol = np.asarray(volume, dtype=bool)
+    vol = np.asarray(volume)
     if vol.ndim != 3:
         raise ValueError("boundary_mesh needs a 3D volume")
     check_connectivity(3, connectivity)
+    if mesh_method(vol, method) == "compiled":
+        return _mesh_from_rows(vol, connectivity)
+    return _mesh_numpy(vol.astype(bool, copy=False), connectivity)
+
+
+def _mesh_from_rows(vol: np.ndarray, connectivity: int) -> QuadMesh:
+    """The mesh from the bit rows, slab by slab on the threads
+    (:func:`isoflow.scale.quads.mesh_rows`)."""
+    from ..scale.quads import mesh_rows
+
+    vertices, config, sheet, faces, midpoint, normals, pinched = mesh_rows(vol, row_tables(connectivity),
+                                                                          connectivity)
+    return QuadMesh(vertices, faces, midpoint, normals, config, sheet, connectivity, pinched)
+
+
+def _mesh_numpy(vol: np.ndarray, connectivity: int) -> QuadMesh:
+    """The mesh with NumPy over the whole volume: one configuration pass,
+    a cumulative sum numbering the lattice vertices' sheets, three face
+    passes, table look-ups."""
     cfg = configurations(vol)
+    sheets = sheet_lut(connectivity)
+    nsheet = (sheets.max(axis=1) + 1).astype(np.int32)[cfg.ravel()]
+    # lattice vertex v with s sheets owns ids first[v] .. first[v] + s - 1
+    first = np.cumsum(nsheet, dtype=np.int64 if vol.size > 2**28 else np.int32) - nsheet
+    if not len(first) or int(first[-1] + nsheet[-1]) == 0:
+        return _empty_mesh(connectivity)
+    padded = np.pad(vol, 1)
+    blocks = [_axis_faces(padded, cfg, first, i, sign, connectivity) for i in range(3) for sign in (1, -1)]
+    blocks = [b for b in blocks if b is not None]
+    faces = np.concatenate([b[0] for b in blocks])
+    doubled = np.concatenate([b[1] for b in blocks])
+    vertices, vconfig, sheet = _lattice_vertices(cfg, nsheet, first)
+    pinched = int(np.count_nonzero(pinch_lut(connectivity)[vconfig] & (sheet == 0)))
+    midpoint = np.full(faces.shape, -1, dtype=np.int64)
+    if doubled.any():
+        owners = np.concatenate([np.broadcast_to(b[3][:, None], b[0].shape) for b in blocks])
+        vertices, vconfig, sheet = _add_midpoints(faces, doubled, owners, midpoint, vertices, vconfig, sheet)
+    idx = index_dtype(len(vertices))
+    return QuadMesh(vertices=vertices, faces=faces.astype(idx), edge_midpoint=midpoint.astype(idx),
+                    face_normals=np.concatenate([b[2] for b in blocks]), config=vconfig, sheet=sheet,
+                    connectivity=connectivity, pinched=pinched)
+
+
+def _axis_faces(padded: np.ndarray, cfg: np.ndarray, first: np.ndarray, i: int, sign: int, connectivity: int):
+    """The faces with normal ``sign * e_i``: their corner ids (outward
+    order), which of their edges are doubled, their normals and the padded
+    index of the voxel that owns them for edge pairing; None where there
+    are none."""
+    j, k = (i + 1) % 3, (i + 2) % 3
+    lo = padded[tuple(slice(None, -1) if a == i else slice(1, -1) for a in range(3))]
+    hi = padded[tuple(slice(1, None) if a == i else slice(1, -1) for a in range(3))]
+    flat = np.flatnonzero(lo > hi if sign > 0 else hi > lo)  # faster than np.nonzero on 3D masks
+    if len(flat) == 0:
+        return None
+    base = list(np.unravel_index(flat, lo.shape))
     cfg_flat = cfg.ravel()
-    vshape = cfg.shape
     sheets = sheet_lut(connectivity)
     doubled_spoke = doubled_spoke_lut(connectivity)
+    # Along i the index is the plane's lattice coordinate (the padded index
+    # of the voxel below it); along j, k the face spans [q, q+1] with q the
+    # unpadded voxel index.
+    ids, cfgs = [], []
+    for dj, dk in _CORNER_D:
+        c = [None, None, None]
+        c[i], c[j], c[k] = base[i], base[j] + (1 - dj), base[k] + (1 - dk)
+        lin = np.ravel_multi_index(c, cfg.shape)
+        cf = cfg_flat[lin]
+        ids.append(first[lin] + sheets[cf, 4 * i + dj + 2 * dk])
+        cfgs.append(cf)
+    # Edge t -> t+1 runs along j or k; it is doubled when the spoke is
+    # doubled at both ends (leaving corner t on side 1 when d goes 1 -> 0,
+    # i.e. the coordinate grows).
+    dbl = []
+    for t in range(4):
+        (dj0, dk0), (dj1, dk1) = _CORNER_D[t], _CORNER_D[(t + 1) % 4]
+        axis = j if dj0 != dj1 else k
+        side = 1 if (dj0 + dk0) > (dj1 + dk1) else 0
+        dbl.append(doubled_spoke[cfgs[t], axis, side] & doubled_spoke[cfgs[(t + 1) % 4], axis, 1 - side])
+    block, dblock = np.stack(ids, axis=1), np.stack(dbl, axis=1)
+    if sign < 0:
+        block, dblock = block[:, ::-1], dblock[:, [2, 1, 0, 3]]
+    normals = np.zeros((len(block), 3), np.int8)
+    normals[:, i] = sign
+    # the voxel that owns the face for edge pairing: the object voxel under
+    # 6-connectivity, the background voxel under 26 (padded linear index)
+    own = [base[0] + 1, base[1] + 1, base[2] + 1]
+    own[i] = base[i] + (1 if (sign > 0) == (connectivity == 26) else 0)
+    return block.astype(np.int64), dblock, normals, np.ravel_multi_index(own, padded.shape)
 
-    # Dense vertex numbering: lattice vertex v with s sheets owns ids
-    # first[v] .. first[v] + s - 1, in lattice order.
-    nsheet = (sheets.max(axis=1) + 1).astype(np.int32)[cfg_flat]
-    first = np.cumsum(nsheet, dtype=np.int64 if vol.size > 2**28 else np.int32) - nsheet
-    n_lattice = int(first[-1] + nsheet[-1]) if len(first) else 0
-    if n_lattice == 0:
-        return _empty_mesh(connectivity)
 
-    padded = np.pad(vol, 1)
-    pshape = padded.shape
-    faces, normals, owners, doubled = [], [], [], []
-    for i in range(3):
-        j, k = (i + 1) % 3, (i + 2) % 3
-        lo = padded[tuple(slice(None, -1) if a == i else slice(1, -1) for a in range(3))]
-        hi = padded[tuple(slice(1, None) if a == i else slice(1, -1) for a in range(3))]
-        for sign, mask in ((1, lo > hi), (-1, hi > lo)):
-            flat = np.flatnonzero(mask)  # faster than np.nonzero on 3D masks
-            if len(flat) == 0:
-                continue
-            base = list(np.unravel_index(flat, mask.shape))
-            # Along i the index is the plane's lattice coordinate (the padded
-            # index of the voxel below it); along j, k the face spans
-            # [q, q+1] with q the unpadded voxel index.
-            ids, cfgs = [], []
-            for dj, dk in _CORNER_D:
-                c = [None, None, None]
-                c[i] = base[i]
-                c[j] = base[j] + (1 - dj)
-                c[k] = base[k] + (1 - dk)
-                lin = np.ravel_multi_index(c, vshape)
-                cf = cfg_flat[lin]
-                ids.append(first[lin] + sheets[cf, 4 * i + dj + 2 * dk])
-                cfgs.append(cf)
-            # Edge t -> t+1 runs along j or k; it is doubled when the spoke
-            # is doubled at both ends (leaving corner t on side 1 when d goes
-            # 1 -> 0, i.e. the coordinate grows).
-            dbl = []
-            for t in range(4):
-                (dj0, dk0), (dj1, dk1) = _CORNER_D[t], _CORNER_D[(t + 1) % 4]
-                axis = j if dj0 != dj1 else k
-                side = 1 if (dj0 + dk0) > (dj1 + dk1) else 0
-                dbl.append(doubled_spoke[cfgs[t], axis, side] & doubled_spoke[cfgs[(t + 1) % 4], axis, 1 - side])
-            block = np.stack(ids, axis=1)
-            dblock = np.stack(dbl, axis=1)
-            if sign < 0:
-                block = block[:, ::-1]
-                dblock = dblock[:, [2, 1, 0, 3]]
-            faces.append(block)
-            doubled.append(dblock)
-            n = np.zeros((len(block), 3), np.int8)
-            n[:, i] = sign
-            normals.append(n)
-            # The voxel that owns the face for edge pairing: the object voxel
-            # under 6-connectivity, the background voxel under 26 (padded
-            # linear index).
-            own = [base[0] + 1, base[1] + 1, base[2] + 1]
-            own[i] = base[i] + (1 if (sign > 0) == (connectivity == 26) else 0)
-            owners.append(np.ravel_multi_index(own, pshape))
-    faces = np.concatenate(faces)
-    doubled = np.concatenate(doubled)
-
+def _lattice_vertices(cfg: np.ndarray, nsheet: np.ndarray, first: np.ndarray):
+    """Positions, configurations and sheet numbers of the lattice vertices'
+    sheets, in lattice order."""
     on = np.flatnonzero(nsheet)
     counts = nsheet[on]
     lin = np.repeat(on, counts)
     sheet = (np.arange(len(lin)) - np.repeat(first[on], counts)).astype(np.int8)
-    vertices = np.stack(np.unravel_index(lin, vshape), axis=1).astype(np.float64)
-    vconfig = cfg_flat[lin]
-    pinched = int(np.count_nonzero(pinch_lut(connectivity)[vconfig] & (sheet == 0)))
+    vertices = np.stack(np.unravel_index(lin, cfg.shape), axis=1).astype(np.float64)
+    return vertices, cfg.ravel()[lin], sheet
 
-    midpoint = np.full(faces.shape, -1, dtype=np.int64)
-    if doubled.any():
-        # One midpoint per (edge, owning voxel): the two faces of one pair
-        # share their owner, the two pairs have different owners.
-        a, b = faces[doubled], np.roll(faces, -1, axis=1)[doubled]
-        owner = np.broadcast_to(np.concatenate(owners)[:, None], faces.shape)[doubled]
-        key = np.stack([np.minimum(a, b), np.maximum(a, b), owner], axis=1)
-        pairs, pair_id = np.unique(key, axis=0, return_inverse=True)
-        midpoint[doubled] = len(vertices) + pair_id.ravel()
-        mid_xyz = (vertices[pairs[:, 0]] + vertices[pairs[:, 1]]) / 2
-        vertices = np.concatenate([vertices, mid_xyz])
-        vconfig = np.concatenate([vconfig, np.zeros(len(pairs), np.uint8)])
-        sheet = np.concatenate([sheet, np.full(len(pairs), -1, np.int8)])
-    return QuadMesh(
-        vertices=vertices,
-        faces=faces,
-        edge_midpoint=midpoint,
-        face_normals=np.concatenate(normals),
-        config=vconfig,
-        sheet=sheet,
-        connectivity=connectivity,
-        pinched=pinched,
-    )
+
+def _add_midpoints(faces, doubled, owners, midpoint, vertices, vconfig, sheet):
+    """One midpoint per (doubled edge, owning voxel): the two faces of one
+    pair share their owner, the two pairs have different owners. Fills
+    ``midpoint`` and returns the vertex arrays with the midpoints after."""
+    a, b = faces[doubled], np.roll(faces, -1, axis=1)[doubled]
+    key = np.stack([np.minimum(a, b), np.maximum(a, b), owners[doubled]], axis=1)
+    pairs, pair_id = np.unique(key, axis=0, return_inverse=True)
+    midpoint[doubled] = len(vertices) + pair_id.ravel()
+    mid_xyz = (vertices[pairs[:, 0]] + vertices[pairs[:, 1]]) / 2
+    return (np.concatenate([vertices, mid_xyz]), np.concatenate([vconfig, np.zeros(len(pairs), np.uint8)]),
+            np.concatenate([sheet, np.full(len(pairs), -1, np.int8)]))

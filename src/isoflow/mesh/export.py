@@ -146,11 +146,13 @@ def stl_refusal(path, effect: dict, spacing) -> str:
             f"are {effect['step']:.3g} apart); write .ply, .obj or .glb, which keep them")
 
 
-def mesh_vertex_table(mesh, obj: DigitalObject) -> dict[str, np.ndarray]:
+def mesh_vertex_table(mesh, obj: DigitalObject, position=None) -> dict[str, np.ndarray]:
     """Per-vertex columns written to PLY: position (world; float32 where it
-    holds them, see the module docs), curvature data."""
+    holds them, see the module docs, or the type ``position``), curvature
+    data."""
     xyz = obj.world(mesh.vertices)
-    position = np.float32 if float32_holds(xyz, obj.spacing) else np.float64
+    if position is None:
+        position = np.float32 if float32_holds(xyz, obj.spacing) else np.float64
     cls = mesh.vertex_class
     rgb = gamma_colours(mesh.gamma, cls)
     return {
@@ -208,16 +210,9 @@ def write_ply(
     groups = list(_size_groups(faces))
     if not ascii and len(groups) > 1:
         raise ValueError(f"{path}: a binary PLY needs faces of one size, got sizes {[k for k, _ in groups]}")
-    header = ["ply", f"format {'ascii' if ascii else 'binary_little_endian'} 1.0"]
-    header += [f"comment {c}" for c in comments]
-    header.append(f"element vertex {n}")
-    for k in names:
-        header.append(f"property {_PLY_TYPES[columns[k].dtype.str[1:]]} {k}")
-    header.append(f"element face {sum(len(g) for _, g in groups)}")
-    header.append("property list uchar int vertex_indices")
-    header.append("end_header")
+    header = ply_header({k: columns[k].dtype for k in names}, n, sum(len(g) for _, g in groups), comments, ascii)
     with atomic_write(path, sync=sync) as fh:
-        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        fh.write(header)
         if ascii:
             fmt = " ".join(f"%.{_digits(columns[k])}g" if columns[k].dtype.kind == "f" else "%d" for k in names)
             if n:
@@ -236,6 +231,17 @@ def write_ply(
                 rec["i"] = rows
                 fh.write(rec.tobytes())
     return path
+
+
+def ply_header(dtypes: dict, vertices: int, faces: int, comments: tuple[str, ...] = (), ascii: bool = False) -> bytes:
+    """The header of a PLY with per-vertex scalar columns of the given
+    types and a face list (uchar count, int indices)."""
+    header = ["ply", f"format {'ascii' if ascii else 'binary_little_endian'} 1.0"]
+    header += [f"comment {c}" for c in comments]
+    header.append(f"element vertex {vertices}")
+    header += [f"property {_PLY_TYPES[np.dtype(t).str[1:]]} {k}" for k, t in dtypes.items()]
+    header += [f"element face {faces}", "property list uchar int vertex_indices", "end_header"]
+    return ("\n".join(header) + "\n").encode("ascii")
 
 
 def _digits(values: np.ndarray, step: float | None = None) -> int:

@@ -177,3 +177,15 @@ def to_gpu(volume: np.ndarray):
             f"of GPU memory and {gib(free)} is free; drop --gpu"
         )
     return cupy.asarray(volume)
+
+
+def index_dtype(count: int) -> type:
+    """The index type of a mesh with ``count`` vertices: int32 below 2^31
+    (half the memory of int64, which large meshes need), else int64.
+
+    Examples
+    --------
+    >>> index_dtype(8).__name__, index_dtype(2**31).__name__
+    ('int32', 'int64')
+    """
+    return np.int32 if count < 2**31 else np.int64

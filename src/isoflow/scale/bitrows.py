@@ -50,6 +50,18 @@ def trailing_zeros(typingctx, x):
 
 
 @njit(cache=True, nogil=True)
+def config_at(bits, nx, ny, nz, i, j, k):
+    """Configuration of lattice vertex (i, j, k) read from the bit rows of
+    an (nx, ny, nz) volume (voxels outside the array are background)."""
+    c = 0
+    for o in range(8):
+        x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
+        if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
+            c |= np.int64((bits[x * ny + y, z >> 6] >> np.uint64(z & 63)) & np.uint64(1)) << o
+    return c
+
+
+@njit(cache=True, nogil=True)
 def _pack_rows(v, bits, nruns, ngaps, i0, i1):
     """Bits of rows (i, j), i0 <= i < i1, and their runs of set bits and of
     clear bits (the gaps between runs, and before the first and after the

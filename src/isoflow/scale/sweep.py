@@ -53,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 from .jit import njit
 
+from .bitrows import config_at as _config
 from .bitrows import popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
 from .kernels import union
@@ -65,18 +66,6 @@ ALL, NO_SURFACES, PINCHES = 0, 1, 2
 #: things written by one thread each (spare nodes, histograms) lie this
 #: many int64 apart, so that threads never write to the same cache line
 _SPREAD = 16
-
-
-@njit(cache=True, nogil=True)
-def _config(bits, nx, ny, nz, i, j, k):
-    """Configuration of vertex (i, j, k) read from the bit rows (zeros
-    outside the array)."""
-    c = 0
-    for o in range(8):
-        x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
-        if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz:
-            c |= np.int64((bits[x * ny + y, z >> 6] >> np.uint64(z & 63)) & np.uint64(1)) << o
-    return c
 
 
 @njit(cache=True, nogil=True)

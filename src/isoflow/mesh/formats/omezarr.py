@@ -167,6 +167,54 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     return report
 
 
+def store_volume(path, label=None) -> tuple:
+    """A zarr store's 3D volume without reading it: ``(reader, pitch,
+    origin)``, the reader giving blocks in isoflow's (x, y, z) order
+    (:class:`isoflow.scale.chunkcache.ChunkReader`), of ``label``'s voxels
+    when given, placed as :func:`read` places them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+    label : number, optional
+        The value of the object's voxels in a label image.
+
+    Returns
+    -------
+    tuple
+        ``(reader, pitch, origin)``; ``pitch`` and ``origin`` None for a
+        plain array without them.
+
+    Raises
+    ------
+    IsoflowError
+        A store that is not a 3D volume, a bad label or placement.
+    """
+    from ...scale.chunkcache import ChunkReader
+
+    import_library("zarr", "OME-Zarr")
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, dataset = open_zarr_node(file, level)
+    pitch = origin = None
+    if multiscale is None:
+        order, other = list(range(array.ndim)), []
+        attrs = dict(getattr(array, "attrs", {}) or {})
+        if "pitch" in attrs and "origin" in attrs:
+            pitch, origin = np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+    else:
+        names = axis_names(multiscale, array.ndim, where)
+        order, other = spatial_axes(names, array.shape, where)
+        scale, shift = placement_of(multiscale, dataset, array.ndim, where)
+        pitch, origin = scale[order], shift[order] - scale[order] / 2
+    if len(order) != 3:
+        raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
+    if label is not None:
+        check_label(label, array.dtype, where)
+    return ChunkReader(_Guarded(array, where), order, other, label), pitch, origin
+
+
 class _Guarded:
     """A zarr array whose reads raise one IsoflowError line naming the
     store (a damaged chunk), for ``dask.array.from_array``."""
@@ -174,6 +222,7 @@ class _Guarded:
     def __init__(self, array, where: str):
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
+        self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
 
     def __getitem__(self, key):
         try:

@@ -1,0 +1,277 @@
+"""The boundary mesh written block by block (``surface STORE.zarr``) is the
+in-memory mesh: the same vertices with the same attributes and the same
+faces, up to order, on odd chunkings with objects, tunnels, cavities, edge
+and vertex contacts across block faces, edges and corners, at 6 and 26;
+the files read back by trimesh and pymeshlab as the in-memory files do."""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from conftest import ball, torus
+from isoflow import DigitalObject, boundary_mesh
+from isoflow.cli import main
+from isoflow.digital.surface import QuadMesh
+from isoflow.errors import IsoflowError
+from isoflow.mesh import export, surface_blocks
+from isoflow.mesh.streamed_readback import check_streamed, read_ply_header
+from isoflow.mesh.surface_blocks import BlockGrid, block_plan, count_block, mesh_block, plan, write_surface_blocks
+from isoflow.scale.chunks import block_bounds
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "digital"))
+from test_surface_rows import canonical, contact_volume  # noqa: E402
+
+zarr = pytest.importorskip("zarr")
+
+CHUNKS = (5, 7, 6)
+
+
+def seam_volume(rng) -> np.ndarray:
+    """Random voxels and shapes cut by the blocks of CHUNKS, with vertex
+    and edge contacts (of the object and of the background) planted on
+    block corners, edges and faces."""
+    v = rng.random((17, 20, 19)) < 0.15
+    v[:, 2:19, 1:18] |= torus(6, 2, size=17, axis=1)  # a tunnel across blocks
+    hollow = ball(6, 17) & ~ball(3, 17)  # a cavity spanning blocks
+    v[:, 3:20, 2:19] |= hollow
+    corners = [(5, 7, 6), (10, 14, 12), (5, 14, 6)]
+    for x, y, z in corners:
+        v[x - 1:x + 1, y - 1:y + 1, z - 1:z + 1] = False
+        v[x - 1, y - 1, z - 1] = v[x, y, z] = True  # vertex contact on a block corner
+    for x, y in ((5, 7), (10, 14)):
+        v[x - 1:x + 1, y - 1:y + 1, 2:4] = False
+        v[x - 1, y - 1, 2:4] = v[x, y, 2:4] = True  # edge contact along a block edge
+    cube = np.ones((2, 2, 2), bool)
+    cube[0, 1, 0] = cube[1, 0, 1] = False  # a background vertex contact on a block face
+    v[4:6, 9:11, 11:13] = cube
+    return v
+
+
+def grid_of(shape, chunks) -> BlockGrid:
+    sizes = tuple(tuple([c] * (s // c) + ([s % c] if s % c else [])) for c, s in zip(chunks, shape))
+    return BlockGrid(tuple(shape), tuple(tuple(b) for b in block_bounds(sizes)))
+
+
+def blocks_mesh(v, conn, chunks) -> QuadMesh:
+    """The blocks' meshes side by side: vertex rows are the file's numbers."""
+    grid = grid_of(v.shape, chunks)
+    counts = {i: count_block(v, grid, i, conn, "v") for i in grid.indices()}
+    layout = plan(grid, counts, False)
+    meshes = [mesh_block(v, grid, block_plan(layout, i), conn, "v") for i in grid.indices()]
+    cat = lambda name: np.concatenate([getattr(m, name) for m in meshes])  # noqa: E731
+    return QuadMesh(cat("vertices"), cat("faces"), cat("edge_midpoint"), cat("face_normals"), cat("config"),
+                    cat("sheet"), conn, sum(m.pinched for m in meshes))
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_blocks_number_their_seams_alike(rng, conn):
+    # every block's vertices and faces together are the in-memory mesh,
+    # numbered without gaps: the seams' vertices are the same numbers
+    cases = [(seam_volume(rng), CHUNKS)]
+    cases += [(contact_volume(rng, int(rng.integers(3, 12))), tuple(rng.integers(1, 7, 3))) for _ in range(8)]
+    seen_pinch = seen_midpoint = 0
+    for v, chunks in cases:
+        got, want = blocks_mesh(v, conn, chunks), boundary_mesh(v, conn, method="numpy")
+        assert got.pinched == want.pinched
+        assert canonical(got) == canonical(want)
+        seen_pinch += got.pinched > 0
+        seen_midpoint += got.midpoints > 0
+    assert seen_pinch and seen_midpoint
+
+
+def store(tmp_path, v, chunks=CHUNKS) -> Path:
+    path = tmp_path / "v.zarr"
+    z = zarr.open_array(str(path), mode="w", shape=v.shape, chunks=chunks, dtype=bool)
+    z[:] = v
+    return path
+
+
+def faces_as_records(path) -> tuple[list, list]:
+    """A PLY's vertex records (every column) and its faces as the tuples of
+    their corners' records, starting at the least, as multisets."""
+    tm = trimesh.load(path, process=False)
+    data = tm.metadata["_ply_raw"]["vertex"]["data"]
+    rec = [tuple(float(data[name][i].item()) for name in data.dtype.names) for i in range(len(data))]
+    faces = []
+    for f in tm.faces.tolist():
+        seq = [rec[i] for i in f]
+        start = min(range(len(seq)), key=lambda t: seq[t])
+        faces.append(tuple(seq[start:] + seq[:start]))
+    return sorted(rec), sorted(faces)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_written_files_equal_the_in_memory_files(tmp_path, rng, conn):
+    import pymeshlab
+
+    v = seam_volume(rng)
+    obj = DigitalObject(v, pitch=0.5, origin=(10.0, 0.0, -1.0))
+    frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=0.5, origin=(10.0, 0.0, -1.0))
+    array = zarr.open_array(str(store(tmp_path, v)), mode="r")
+    mesh = boundary_mesh(v, conn)
+    assert mesh.pinched and (conn == 6 or mesh.midpoints)
+    for suffix in (".ply", ".stl"):
+        got = write_surface_blocks(array, tmp_path / f"blocks{suffix}", conn, frame=frame)
+        want = export.write_surface(tmp_path / f"memory{suffix}", mesh, obj)
+        assert got["faces"] == want["face_count"] and got["kind"] == want["faces"].replace("polygons", "quads")
+        assert got["vertices"] == len(mesh.vertices) and got["pinched"] == mesh.pinched
+        assert got["euler_characteristic"] == mesh.euler_characteristic
+        check = check_streamed(got["path"], dict(got, centre=np.array(v.shape) / 2), frame)
+        assert check["agree"], check["problem"]
+        if suffix == ".ply":
+            assert faces_as_records(got["path"]) == faces_as_records(want["path"])
+            ms = pymeshlab.MeshSet()
+            ms.load_new_mesh(str(got["path"]))
+            topo = ms.get_topological_measures()
+            assert topo["is_mesh_two_manifold"] and topo["boundary_edges"] == 0
+            assert topo["genus"] == sum(c["genus"] for c in mesh.components())
+        else:
+            a, b = (trimesh.load(p, process=False) for p in (got["path"], want["path"]))
+            key = lambda m: sorted(map(tuple, np.round(m.vertices[m.faces], 6).reshape(len(m.faces), -1).tolist()))  # noqa: E731
+            assert key(a) == key(b)
+
+
+def test_dask_array_and_block_shapes(tmp_path, rng):
+    da = pytest.importorskip("dask.array")
+    v = seam_volume(rng)
+    want = boundary_mesh(v, 26)
+    for array, shape in ((da.from_array(v, chunks=(4, 9, 5)), None), (v, (3, 20, 7)), (v, None)):
+        got = write_surface_blocks(array, tmp_path / "d.ply", 26, block_shape=shape, force=True,
+                                   scheduler="threads", threads=2)
+        assert (got["vertices"], got["euler_characteristic"], got["pinched"]) == (
+            len(want.vertices), want.euler_characteristic, want.pinched)
+        check = check_streamed(got["path"], dict(got, centre=np.array(v.shape) / 2), DigitalObject(v))
+        assert check["agree"], check["problem"]
+
+
+def test_the_check_sees_a_broken_file(tmp_path, rng):
+    v = seam_volume(rng)
+    got = write_surface_blocks(v, tmp_path / "b.ply", 6, block_shape=CHUNKS)
+    expected = dict(got, centre=np.array(v.shape) / 2)
+    head, vdt, nv, nf = read_ply_header(got["path"])
+    data = bytearray(got["path"].read_bytes())
+    k = 4 if got["kind"] == "quads" else 3
+    at = head + nv * vdt.itemsize + 1  # the first face's indices, reversed
+    data[at:at + 4 * k] = np.frombuffer(bytes(data[at:at + 4 * k]), "<i4")[::-1].tobytes()
+    flipped = tmp_path / "flipped.ply"
+    flipped.write_bytes(bytes(data))
+    assert "not consistently wound" in check_streamed(flipped, expected, DigitalObject(v))["problem"]
+    cut = tmp_path / "cut.ply"
+    cut.write_bytes(bytes(data[:-(1 + 4 * k)]))
+    assert not check_streamed(cut, expected, DigitalObject(v))["agree"]
+    data[at:at + 4] = np.int32(nv).tobytes()  # an index past the last vertex
+    flipped.write_bytes(bytes(data))
+    assert "index out of range" in check_streamed(flipped, expected, DigitalObject(v))["problem"]
+
+
+def test_command_writes_and_checks(tmp_path, rng, capsys):
+    v = seam_volume(rng)
+    path = store(tmp_path, v)
+    out = tmp_path / "s.ply"
+    assert main(["surface", str(path), "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    mesh = boundary_mesh(v, 6)
+    assert f"{len(mesh.vertices)} vertices" in printed and f"V-E+F = {mesh.euler_characteristic}" in printed
+    assert "read back in chunks" in printed and "as isoflow counts" in printed
+    tm = trimesh.load(out, process=False)
+    assert tm.is_watertight and tm.volume == pytest.approx(v.sum())
+    np.save(tmp_path / "v.npy", v)  # the in-memory command's file holds the same records
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "m.ply")]) == 0
+    assert faces_as_records(out) == faces_as_records(tmp_path / "m.ply")
+
+
+@pytest.mark.parametrize("argv, asked", [
+    (["-o", "{tmp}/s.obj"], ".obj"),
+    (["-o", "{tmp}/s.ply", "--png", "{tmp}/s.png"], "--png"),
+    (["-o", "{tmp}/s.ply", "--ascii"], "--ascii"),
+])
+def test_what_does_not_stream_is_meshed_in_memory_or_refused(tmp_path, capsys, monkeypatch, argv, asked):
+    from isoflow.scale import memory
+
+    path = store(tmp_path, np.ones((3, 3, 3), bool))
+    argv = ["surface", str(path), *[a.format(tmp=tmp_path) for a in argv]]
+    assert main(argv) == 0  # a store that fits: read whole, as any volume
+    assert "written block by block" not in capsys.readouterr().out
+    for p in tmp_path.glob("s.*"):
+        p.unlink()
+    monkeypatch.setattr(memory, "default_budget", lambda: 50)  # a store larger than memory
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{asked} needs the whole surface in memory" in err[0] and "(.ply, .stl)" in err[0]
+    assert not list(tmp_path.glob("s.*"))
+
+
+def test_empty_store_and_existing_output(tmp_path, capsys):
+    path = store(tmp_path, np.zeros((4, 5, 6), bool))
+    assert main(["surface", str(path), "-o", str(tmp_path / "e.ply")]) == 2
+    assert "the object is empty" in capsys.readouterr().err
+    full = store(tmp_path, np.ones((4, 5, 6), bool))
+    (tmp_path / "x.ply").write_text("old")
+    assert main(["surface", str(full), "-o", str(tmp_path / "x.ply")]) == 2
+    assert "exists" in capsys.readouterr().err and (tmp_path / "x.ply").read_text() == "old"
+
+
+def test_interrupted_run_leaves_the_previous_output(tmp_path, rng, monkeypatch):
+    v = seam_volume(rng)
+    out = tmp_path / "s.ply"
+    out.write_text("previous")
+    real, calls = surface_blocks.write_block, []
+
+    def interrupted(*args):
+        calls.append(1)
+        if len(calls) == 5:
+            raise KeyboardInterrupt
+        return real(*args)
+
+    monkeypatch.setattr(surface_blocks, "write_block", interrupted)
+    with pytest.raises(KeyboardInterrupt, match="unchanged"):
+        write_surface_blocks(v, out, 6, block_shape=CHUNKS, force=True, scheduler="sync")
+    assert out.read_text() == "previous" and sorted(p.name for p in tmp_path.iterdir()) == ["s.ply"]
+
+
+def test_work_that_does_not_fit_is_refused_up_front(tmp_path, rng, monkeypatch):
+    from isoflow.scale import memory
+
+    v = seam_volume(rng)
+    monkeypatch.setattr(memory, "default_budget", lambda: 150_000)
+    with pytest.raises(IsoflowError, match=r"\(4 at a time\).*; run [123] at a time \(--threads [123]\)"):
+        write_surface_blocks(v, tmp_path / "s.ply", 6, block_shape=CHUNKS, threads=4)
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    with pytest.raises(IsoflowError, match="smaller chunks"):
+        write_surface_blocks(v, tmp_path / "s.ply", 6, block_shape=CHUNKS, threads=1)
+    assert not list(tmp_path.iterdir())
+
+
+def test_ome_zarr_in_zyx_order_with_its_placement(tmp_path, rng, capsys):
+    # isoflow's OME-Zarr stores (z, y, x) with a scale and a translation:
+    # the streamed file's records (world positions) equal those of the
+    # in-memory file of the same object
+    from isoflow.mesh.volumes import write_volume
+
+    v = seam_volume(rng)
+    obj = DigitalObject(v, pitch=(0.5, 0.25, 2.0), origin=(10.0, 0.0, -1.0))
+    path = write_volume(obj, tmp_path / "img.zarr")
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply")]) == 0
+    assert "written block by block" in capsys.readouterr().out
+    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(v, 6), obj)
+    assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
+
+
+def test_label_image_store(tmp_path, rng):
+    labels = rng.integers(0, 3, (9, 11, 10)).astype(np.uint8) * 3  # 0, 3, 6
+    path = tmp_path / "labels.zarr"
+    z = zarr.open_array(str(path), mode="w", shape=labels.shape, chunks=(4, 5, 3), dtype=np.uint8)
+    z[:] = labels
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--label", "3", "--connectivity", "26"]) == 0
+    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(labels == 3, 26), DigitalObject(labels == 3))
+    assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
+
+
+def test_other_suffixes_are_refused_naming_those_that_stream(tmp_path):
+    for name in ("s.obj", "s.glb", "s"):
+        with pytest.raises(IsoflowError, match=r"binary PLY or STL only \(\.ply, \.stl\)"):
+            write_surface_blocks(np.ones((2, 2, 2), bool), tmp_path / name)
+    assert not list(tmp_path.iterdir())
