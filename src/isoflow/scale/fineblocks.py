@@ -1,0 +1,415 @@
+"""The moves of one flow step carried out cell by cell on the grid refined
+twice, each change only where the cell is a simple point (numba): the
+compiled form of :func:`isoflow.flow.guard.realise_moves`.
+
+The refined grid is never built: new voxel (lattice vertex) ``w`` is a
+block of ``2^n`` fine cells whose cell ``e`` lies in octant ``e`` of
+``w``, so the old object's fine grid *is* its configuration array, one
+byte per vertex, bit ``e`` for cell ``e`` (:func:`blocks`). The ``3^n``
+fine cells around cell ``e`` of block ``w`` lie in the ``2^n`` blocks
+``w + delta`` with ``delta_d`` in ``{-1, 0}`` where ``e_d = 0`` and ``{0,
+1}`` where ``e_d = 1``; their packed neighbourhood (the code of
+:func:`isoflow.digital.simple.neighbourhood_codes`: offset ``o`` at bit
+``sum_d (o_d + 1) 3^d``) is the OR of one table look-up per block byte.
+
+Whether a code is simple is Bertrand's test (both topological numbers 1,
+see :mod:`isoflow.digital.simple`) on the 27-bit board, counted by
+dilations of bit masks and remembered in a small hash table per process
+(:func:`memo`): real surfaces repeat a few hundred codes, and a table that
+stays in the cache answers them sooner than any table over all 2^26 codes.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from .bitrows import trailing_zeros
+from .compiled import run, slabs, thread_count
+from .jit import njit
+
+_U1, _U63 = np.uint64(1), np.uint64(63)
+
+
+@lru_cache(maxsize=None)
+def board(ndim: int) -> dict:
+    """The ``3^n`` bitboard's masks: per axis the shift and the cells that
+    may move up (``lo``) or down (``hi``) along it; the face neighbours, the
+    18- (3D) or 8-neighbourhood (2D), the whole board less its centre
+    (``face``, ``near``, ``all``)."""
+    coords = np.array([[(i // 3**d) % 3 for d in range(ndim)] for i in range(3**ndim)])
+    l1 = np.abs(coords - 1).sum(1)
+
+    def mask(sel):
+        return int(sum(1 << int(i) for i in np.flatnonzero(sel)))
+
+    return {
+        "steps": np.array([3**d for d in range(ndim)], np.uint32),
+        "lo": np.array([mask(coords[:, d] < 2) for d in range(ndim)], np.uint32),
+        "hi": np.array([mask(coords[:, d] > 0) for d in range(ndim)], np.uint32),
+        "face": mask(l1 == 1),
+        "near": mask((l1 >= 1) & (l1 <= 2)),
+        "all": mask(l1 >= 1),
+    }
+
+
+@njit(cache=True, nogil=True)
+def _dilate(s, steps, lo, hi, full):
+    out = s
+    for d in range(len(steps)):
+        src = out if full else s
+        out = out | ((src & lo[d]) << steps[d]) | ((src & hi[d]) >> steps[d])
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _one_component(present, seeds, steps, lo, hi, full):
+    """Whether exactly one component of ``present`` meets ``seeds``."""
+    left = present
+    count = 0
+    while left & seeds:
+        cand = left & seeds
+        comp = cand & (~cand + np.uint32(1))
+        while True:
+            grown = _dilate(comp, steps, lo, hi, full) & left
+            if grown == comp:
+                break
+            comp = grown
+        count += 1
+        if count > 1:
+            return False
+        left &= ~comp
+    return count == 1
+
+
+@njit(cache=True, nogil=True)
+def _simple(code, face, steps, lo, hi, masks):
+    """Both topological numbers of the packed neighbourhood are 1
+    (:func:`isoflow.digital.simple.topological_numbers`): ``face`` for the
+    face connectivity (6, 4) of the object; ``masks``: face, near, all."""
+    f, near, whole = masks[0], masks[1], masks[2]
+    ob = code & whole
+    bg = ~code & whole
+    if face:
+        return _one_component(ob & near, f, steps, lo, hi, False) and _one_component(bg, whole, steps, lo, hi, True)
+    return _one_component(ob, whole, steps, lo, hi, True) and _one_component(bg & near, f, steps, lo, hi, False)
+
+
+#: a remembered code's slot in the table of :func:`memo`: the code, this
+#: bit (taken), and whether it is simple
+_TAKEN, _SIMPLE = np.uint32(1 << 31), np.uint32(1 << 30)
+_GOLDEN, _LOW32 = np.uint64(0x9E3779B1), np.uint64(0xFFFFFFFF)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _slot(code, shift):
+    """Fibonacci hashing of a code into a table of ``2^(32 - shift)`` slots."""
+    return np.int64(((np.uint64(code) * _GOLDEN) & _LOW32) >> np.uint64(shift))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _look_up(known, code, shift, last):
+    """``(found, slot)``: 1 or 0 where the table of :func:`memo` knows
+    whether the code is simple, -1 where not, with the free slot for it."""
+    slot, mark = _slot(code, shift), code | _TAKEN
+    while True:
+        got = known[slot]
+        if got == 0:
+            return -1, slot
+        if (got & ~_SIMPLE) == mark:
+            return (1 if got & _SIMPLE else 0), slot
+        slot = (slot + 1) & last
+
+
+@njit(cache=True, nogil=True)
+def _decide(known, fill, slot, code, face, steps, lo, hi, masks):
+    """Test a code the table does not know (1: simple, 0: not) and put it
+    in its free slot, while the table is at most three quarters full
+    (``fill[0]``: slots taken)."""
+    yes = _simple(code, face, steps, lo, hi, masks)
+    if 4 * fill[0] < 3 * len(known):
+        known[slot] = code | _TAKEN | (_SIMPLE if yes else np.uint32(0))
+        fill[0] += 1
+    return 1 if yes else 0
+
+
+@njit(cache=True, nogil=True)
+def _rehash(old, new, bits):
+    size = len(new)
+    for got in old:
+        if got:
+            slot = _slot(got & ~(_TAKEN | _SIMPLE), 32 - bits)
+            while new[slot]:
+                slot = (slot + 1) & (size - 1)
+            new[slot] = got
+
+
+_MEMOS: dict = {}
+
+
+def memo(ndim: int, face: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The codes found simple or not in this process, per dimension and
+    kind of connectivity: ``(table, fill)``, the table twice as large once
+    it is half full (at most 2^22 slots, 16 MiB)."""
+    key = (ndim, face)
+    table, fill = _MEMOS.get(key, (None, None))
+    if table is None:
+        table, fill = np.zeros(1 << 12, np.uint32), np.array([0, 12], np.int64)
+    elif 2 * fill[0] > len(table) and fill[1] < 22:
+        fill[1] += 1
+        grown = np.zeros(1 << int(fill[1]), np.uint32)
+        _rehash(table, grown, fill[1])
+        table = grown
+    _MEMOS[key] = (table, fill)
+    return table, fill
+
+
+@njit(cache=True, nogil=True)
+def _simple_codes(codes, face, steps, lo, hi, masks, known, fill, out):
+    shift, last = 32 - fill[1], len(known) - 1
+    for i in range(len(codes)):
+        code = codes[i]
+        found, slot = _look_up(known, code, shift, last)
+        if found < 0:
+            found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
+        out[i] = found == 1
+
+
+def _board_tuples(ndim: int):
+    """The board's masks as tuples (passed by value: a kernel's inner loop
+    then holds no array reference to count): ``steps, lo, hi, masks``."""
+    b = board(ndim)
+    steps, lo, hi = (tuple(np.uint32(x) for x in b[k]) for k in ("steps", "lo", "hi"))
+    return steps, lo, hi, tuple(np.uint32(b[k]) for k in ("face", "near", "all"))
+
+
+def simple(codes: np.ndarray, ndim: int, face: bool) -> np.ndarray:
+    """Whether each packed neighbourhood (the codes of
+    :func:`isoflow.digital.simple.neighbourhood_codes`) is that of a simple
+    point, for the face connectivity of the object (``face``: 6 or 4) or
+    the full one; the compiled test that :func:`realise` makes."""
+    codes = np.ascontiguousarray(codes, np.uint32)
+    out = np.empty(len(codes), np.bool_)
+    _simple_codes(codes, face, *_board_tuples(ndim), *memo(ndim, face), out)
+    return out
+
+
+@lru_cache(maxsize=None)
+def code_tables(ndim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per octant ``e`` (cell of a block) and block ``b`` of its
+    neighbourhood (``delta_d = b_d - 1 + e_d``): the code bits that each
+    value of block ``b``'s byte sets (``tables[e, b, byte]``, centre left
+    out), and the offsets ``delta`` (``deltas[e, b]``, per axis)."""
+    cells = 1 << ndim
+    tables = np.zeros((cells, cells, 1 << cells), np.uint32)
+    deltas = np.zeros((cells, cells, ndim), np.int64)
+    for e in range(cells):
+        ev = [(e >> d) & 1 for d in range(ndim)]
+        for b in range(cells):
+            deltas[e, b] = [((b >> d) & 1) - 1 + ev[d] for d in range(ndim)]
+        for idx in range(3**ndim):
+            o = [(idx // 3**d) % 3 - 1 for d in range(ndim)]
+            if not any(o):
+                continue
+            pos = [ev[d] + o[d] for d in range(ndim)]  # -1 .. 2
+            delta = [p // 2 for p in pos]
+            b = sum((dl + 1 - ev[d]) << d for d, dl in enumerate(delta))
+            cell = sum((p % 2) << d for d, p in enumerate(pos))
+            for byte in range(1 << cells):
+                if byte >> cell & 1:
+                    tables[e, b, byte] |= 1 << idx
+    return tables, deltas
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fill_runs(state, at, word, value):
+    """``state[at + k] = value`` for every set bit ``k`` of ``word``, a run
+    of bits at a time."""
+    while word:
+        k = np.int64(trailing_zeros(word))
+        rest = ~(word >> np.uint64(k))
+        n = 64 - k if rest == 0 else np.int64(trailing_zeros(rest))
+        state[at + k: at + k + n] = value
+        word &= ~((~np.uint64(0) >> np.uint64(64 - n)) << np.uint64(k))
+
+
+@njit(cache=True, nogil=True)
+def _grow(a, n):
+    out = np.empty(max(2 * len(a), n + 1024), a.dtype)
+    out[: len(a)] = a
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal):
+    """Configuration bytes of vertex rows ``i0 <= i < i1`` of a 3D volume
+    into the padded ``state`` (flat, ``strides``), and the boundary
+    vertices (neither empty nor full) with their goal, the keep bit.
+    Returns ``(pending, goal, count)``, grown as needed."""
+    nwords = keep.shape[1]
+    count = 0
+    for i in range(i0, i1):
+        for j in range(ny + 1):
+            r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
+            r1 = i * ny + j - 1 if i < nx and j >= 1 else -1
+            r2 = (i - 1) * ny + j if i >= 1 and j < ny else -1
+            r3 = i * ny + j if i < nx and j < ny else -1
+            base = (i + 1) * strides[0] + (j + 1) * strides[1] + 1
+            v = i * (ny + 1) + j
+            p0 = p1 = p2 = p3 = np.uint64(0)
+            for w in range(nwords):
+                u0 = bits[r0, w] if r0 >= 0 and w < bits.shape[1] else np.uint64(0)
+                u1 = bits[r1, w] if r1 >= 0 and w < bits.shape[1] else np.uint64(0)
+                u2 = bits[r2, w] if r2 >= 0 and w < bits.shape[1] else np.uint64(0)
+                u3 = bits[r3, w] if r3 >= 0 and w < bits.shape[1] else np.uint64(0)
+                s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+                s2, s3 = (u2 << _U1) | (p2 >> _U63), (u3 << _U1) | (p3 >> _U63)
+                p0, p1, p2, p3 = u0, u1, u2, u3
+                inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
+                boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
+                at = base + 64 * w
+                _fill_runs(state, at, inside, 255)
+                m = boundary
+                while m:
+                    k = trailing_zeros(m)
+                    m &= m - _U1
+                    c = 0
+                    for o, plane in enumerate((s0, s1, s2, s3, u0, u1, u2, u3)):
+                        c |= np.int64((plane >> k) & _U1) << o
+                    state[at + k] = c
+                    if count == len(pending):
+                        pending, goal = _grow(pending, count), _grow(goal, count)
+                    pending[count] = at + k
+                    goal[count] = np.uint8((keep[v, w] >> k) & _U1)
+                    count += 1
+    return pending, goal, count
+
+
+@njit(cache=True, nogil=True)
+def _blocks_rows2(bits, nx, keep, state, strides, pending, goal):
+    """:func:`_blocks_layers` of a 2D volume (rows along axis 0)."""
+    nwords = keep.shape[1]
+    count = 0
+    for i in range(nx + 1):
+        r0 = i - 1 if i >= 1 else -1
+        r1 = i if i < nx else -1
+        base = (i + 1) * strides[0] + 1
+        p0 = p1 = np.uint64(0)
+        for w in range(nwords):
+            u0 = bits[r0, w] if r0 >= 0 and w < bits.shape[1] else np.uint64(0)
+            u1 = bits[r1, w] if r1 >= 0 and w < bits.shape[1] else np.uint64(0)
+            s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+            p0, p1 = u0, u1
+            inside = s0 & s1 & u0 & u1
+            boundary = (s0 | s1 | u0 | u1) & ~inside
+            at = base + 64 * w
+            _fill_runs(state, at, inside, 15)
+            m = boundary
+            while m:
+                k = trailing_zeros(m)
+                m &= m - _U1
+                c = 0
+                for o, plane in enumerate((s0, s1, u0, u1)):
+                    c |= np.int64((plane >> k) & _U1) << o
+                state[at + k] = c
+                if count == len(pending):
+                    pending, goal = _grow(pending, count), _grow(goal, count)
+                pending[count] = at + k
+                goal[count] = np.uint8((keep[i, w] >> k) & _U1)
+                count += 1
+    return pending, goal, count
+
+
+def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
+    """The old object on the grid refined twice: its configuration bytes,
+    one per lattice vertex, in an array padded by one vertex each side
+    (``state``, flat), and its boundary vertices (``pending``: flat indices
+    into ``state``) with their moves (``goal``: 1 outward, 0 inward) read
+    from ``keep``, the step's bit rows (:func:`isoflow.scale.flowbits.moves3`
+    or ``moves2``). ``bits``: the volume's rows (a 2D volume as one layer).
+
+    Returns ``(state, padded shape, pending, goal)``."""
+    nd = len(shape)
+    padded = tuple(s + 3 for s in shape)
+    state = np.zeros(int(np.prod(padded)), np.uint8)
+    strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
+    if nd == 2:
+        pending, goal, count = _blocks_rows2(bits, shape[0], keep, state, strides,
+                                             np.empty(4096, np.int64), np.empty(4096, np.uint8))
+        return state, padded, pending[:count], goal[:count]
+    nx, ny, nz = shape
+    parts = slabs(nx + 1, thread_count((nx + 1) * (ny + 1) * (nz + 1)))
+    found = run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b,
+                  np.empty(4096, np.int64), np.empty(4096, np.uint8)) for a, b in parts])
+    pending = np.concatenate([p[:c] for p, _, c in found])
+    goal = np.concatenate([g[:c] for _, g, c in found])
+    return state, padded, pending, goal
+
+
+@njit(cache=True, nogil=True)
+def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known, fill, face, flip, max_sweeps, flips):
+    """The sweeps of :func:`realise` (in place on ``state``, ``pending``
+    and ``goal``). Returns ``(stuck, flipped)``: the first ``stuck`` of
+    ``pending`` are left half-way, the first ``flipped`` of ``flips`` had
+    their move reversed."""
+    n = len(pending)
+    cells = tables.shape[0]
+    full = (1 << cells) - 1
+    reversed_ = -1
+    shift, last = 32 - fill[1], len(known) - 1
+    for _ in range(max_sweeps):
+        changed = False
+        for e in range(cells):
+            for idx in range(n):
+                p = pending[idx]
+                s = np.int64(state[p])
+                if ((s >> e) & 1) == goal[idx]:
+                    continue
+                code = np.uint32(0)
+                for b in range(cells):
+                    code |= tables[e, b, state[p + offsets[e, b]]]
+                found, slot = _look_up(known, code, shift, last)
+                if found < 0:
+                    found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
+                if found:
+                    state[p] = s ^ (1 << e)
+                    changed = True
+        m = 0
+        for idx in range(n):
+            p = pending[idx]
+            if np.int64(state[p]) != (full if goal[idx] else 0):
+                pending[m] = p
+                goal[m] = goal[idx]
+                m += 1
+        n = m
+        if not changed:
+            if not flip or reversed_ >= 0 or n == 0:
+                break
+            for idx in range(n):
+                goal[idx] ^= 1
+                flips[idx] = pending[idx]
+            reversed_ = n
+    return n, max(reversed_, 0)
+
+
+def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goal: np.ndarray, face: bool,
+            flip: bool = True, max_sweeps: int = 256) -> tuple[np.ndarray, np.ndarray]:
+    """Carry out the moves ``goal`` of the blocks ``pending`` (from
+    :func:`blocks`) one fine cell at a time, a cell only when it is simple
+    for the object's connectivity (``face``: 6 or 4), as
+    :func:`isoflow.flow.guard.realise_moves` does: octant after octant,
+    sweeps until nothing changes, then (``flip``) every block still pending
+    has its move reversed once.
+
+    Returns ``(stuck, reversed)``: the flat indices (into ``state``) of the
+    blocks left half-way and of those whose move was reversed."""
+    nd = len(padded)
+    tables, deltas = code_tables(nd)
+    strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
+    offsets = deltas @ strides
+    steps, lo, hi, masks = _board_tuples(nd)
+    flips = np.empty(len(pending), np.int64)
+    stuck, flipped = _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks,
+                              *memo(nd, face), face, flip, max_sweeps, flips)
+    return pending[:stuck].copy(), flips[:flipped].copy()

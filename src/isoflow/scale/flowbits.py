@@ -1,0 +1,416 @@
+"""One step of the digital curvature flow on bit rows (numba).
+
+The volume is held as rows of 64-voxel words along its last axis
+(:mod:`isoflow.scale.bitrows`); the step writes the next object, on the
+vertex grid (one more voxel per axis), in the same form. What a vertex does
+is given by a table over its configurations (:data:`KEEP`, :data:`NEGATIVE`
+and the segment roles below, made by :mod:`isoflow.flow.bitflow` from the
+paper's tables); this module knows rows and runs, not curvature.
+
+A vertex row ``(i, j)`` has the four voxel rows around it, ``(i - 1 + dx, j
+- 1 + dy)``; read as a word ``U`` (voxel ``k`` at bit ``k``) and shifted by
+one (``S``: voxel ``k - 1`` at bit ``k``) they are the eight octant planes
+of the 64 vertices of a word: octant ``dx + 2 dy + 4 dz`` is ``S`` for
+``dz = 0``, ``U`` for ``dz = 1``. So every interior vertex of a word is
+found by one AND of the planes, and only boundary vertices are decoded one
+by one (count trailing zeros), their configuration gathered from the
+planes and looked up.
+
+Segments (runs of one configuration along an axis, Definitions 12-13, 16)
+are only asked for configurations that are the same on both sides of the
+vertex along the segment's axis (a convex edge along its edge, a flat
+vertex along its face): the run of such a vertex is the run of equal
+*cross-sections* (the 2^(n-1) voxels at one position along the axis), and
+its ends are the vertices where the cross-section changes.
+
+* Along the packed axis the cross-section changes where any of the rows
+  does (an *event*: ``S ^ U``); a segment is the stretch between two
+  events, its ends those events.
+* Across rows the change is a word comparison of the rows at ``t`` and at
+  ``t - 1``; whether the segment through each vertex has a negative end
+  before it (after it) is carried along the axis by one forward (backward)
+  scan of words, 64 lines at a time.
+
+Vertex rows are cut into slabs along the first axis, one per thread, as in
+:mod:`isoflow.scale.sweep`; the scan across the first axis runs afterwards,
+in slabs along the second.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .bitrows import popcount, trailing_zeros
+from .compiled import run, slabs, thread_count
+from .jit import njit
+
+#: bits of the table over configurations (:func:`isoflow.flow.bitflow.step_table`)
+KEEP, NEGATIVE = 1, 2
+#: 3D: the segment a vertex waits for, by its role (edge along x, y, z;
+#: flat with normal x, y, z); 2D: a flat vertex's segment along axis 0 or 1
+EDGE_X, EDGE_Y, EDGE_Z, FLAT_X, FLAT_Y, FLAT_Z = 4, 8, 16, 32, 64, 128
+FLAT_0, FLAT_1 = 4, 8
+
+_U1, _U63 = np.uint64(1), np.uint64(63)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _load(bits, row, w):
+    """Word ``w`` of a row, zero for row -1 (outside the array) and past the row."""
+    if row < 0 or w >= bits.shape[1]:
+        return np.uint64(0)
+    return bits[row, w]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _bit(word, k):
+    return (word >> np.uint64(k)) & _U1
+
+
+@njit(cache=True, nogil=True)
+def _fill(words, row, a, b):
+    """Set bits ``a .. b`` (inclusive) of row ``row``."""
+    wa, wb = a >> 6, b >> 6
+    for w in range(wa, wb + 1):
+        lo = a - 64 * w if w == wa else 0
+        hi = b - 64 * w if w == wb else 63
+        span = ~np.uint64(0) >> np.uint64(63 - (hi - lo))
+        words[row, w] |= span << np.uint64(lo)
+
+
+@njit(cache=True, nogil=True)
+def _packed_segments(keep, neg, row, events, edge, flat, nwords):
+    """Along the packed axis: the stretches between events whose vertices
+    wait for it (``edge``: kept when both ends are negative, ``flat``: when
+    one is) are kept or left to the other axes."""
+    prev, prev_neg = -1, np.uint64(0)
+    for w in range(nwords):
+        m = events[w]
+        while m:
+            k = trailing_zeros(m)
+            m &= m - _U1
+            e = 64 * w + np.int64(k)
+            here = _bit(neg[row, w], k)
+            s = prev + 1
+            if prev >= 0 and e > s:
+                sw, sk = s >> 6, s & 63
+                if _bit(edge[sw], sk) & prev_neg & here:
+                    _fill(keep, row, s, e - 1)
+                elif _bit(flat[sw], sk) & (prev_neg | here):
+                    _fill(keep, row, s, e - 1)
+            prev, prev_neg = e, here
+
+
+@njit(cache=True, nogil=True)
+def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, bits, a0, b0, rstride, ends, change, run_):
+    """Across rows: keep the vertices of rows ``v0 + t vstride`` (t = 0 ..
+    n) that wait for a segment along this axis, ``pany`` (one negative
+    end) and ``pboth`` (two), rows ``p0 + t pstride`` of those tables.
+
+    The cross-section at ``t`` is voxel rows ``a0 + t rstride`` and ``b0 +
+    t rstride`` (-1: outside the array), both at voxels ``k - 1`` and
+    ``k``; it changes at vertex ``t`` where they differ from those at ``t -
+    1``. A segment's end before a vertex is the last change at or before
+    it, after it the first change after it. ``ends``, ``change``: (n + 1,
+    words) work arrays; ``run_``: one row of work."""
+    nwords = keep.shape[1]
+    run_[:] = 0
+    for t in range(n + 1):
+        prev = np.uint64(0)
+        v = v0 + t * vstride
+        for w in range(nwords):
+            d = np.uint64(0)
+            for r0 in (a0, b0):
+                if r0 >= 0:
+                    now = _load(bits, r0 + t * rstride, w) if t < n else np.uint64(0)
+                    before = _load(bits, r0 + (t - 1) * rstride, w) if t > 0 else np.uint64(0)
+                    d |= now ^ before
+            dd = d | (d << _U1) | (prev >> _U63)
+            prev = d
+            change[t, w] = dd
+            run_[w] = (dd & neg[v, w]) | (~dd & run_[w])
+            ends[t, w] = run_[w]
+    run_[:] = 0
+    for t in range(n, -1, -1):
+        v = v0 + t * vstride
+        p = p0 + t * pstride
+        for w in range(nwords):
+            a, b = pany[p, w], pboth[p, w]
+            if a | b:
+                before, after = ends[t, w], run_[w]
+                keep[v, w] |= (a & (before | after)) | (b & before & after)
+            dd = change[t, w]
+            run_[w] = (dd & neg[v, w]) | (~dd & run_[w])
+
+
+@njit(cache=True, nogil=True)
+def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, i1):
+    """The moves of vertex rows ``(i, j)``, ``i0 <= i < i1``: ``keep`` gets
+    the vertices kept by their configuration alone and by their segments
+    along the packed axis and along the second axis; ``pany_x``,
+    ``pboth_x`` (and ``waits_x[j]``) the vertices still waiting for their
+    segments along the first axis, which :func:`_scan` settles afterwards."""
+    nwords = keep.shape[1]
+    pany_y = np.zeros((ny + 1, nwords), np.uint64)
+    pboth_y = np.zeros((ny + 1, nwords), np.uint64)
+    ends = np.empty((ny + 1, nwords), np.uint64)
+    change = np.empty((ny + 1, nwords), np.uint64)
+    work = np.empty(nwords, np.uint64)
+    events = np.empty(nwords, np.uint64)
+    edge_z = np.empty(nwords, np.uint64)
+    flat_z = np.empty(nwords, np.uint64)
+    for i in range(i0, i1):
+        waits_y = False
+        for j in range(ny + 1):
+            v = i * (ny + 1) + j
+            r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
+            r1 = i * ny + j - 1 if i < nx and j >= 1 else -1
+            r2 = (i - 1) * ny + j if i >= 1 and j < ny else -1
+            r3 = i * ny + j if i < nx and j < ny else -1
+            p0 = p1 = p2 = p3 = np.uint64(0)
+            waits_z = np.uint64(0)
+            for w in range(nwords):
+                u0, u1, u2, u3 = _load(bits, r0, w), _load(bits, r1, w), _load(bits, r2, w), _load(bits, r3, w)
+                s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+                s2, s3 = (u2 << _U1) | (p2 >> _U63), (u3 << _U1) | (p3 >> _U63)
+                p0, p1, p2, p3 = u0, u1, u2, u3
+                inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
+                boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
+                kp, ng = inside, np.uint64(0)
+                ax = bx = ay = by = ez = fz = np.uint64(0)
+                m = boundary
+                while m:
+                    k = trailing_zeros(m)
+                    m &= m - _U1
+                    c = (_bit(s0, k) | (_bit(s1, k) << np.uint64(1)) | (_bit(s2, k) << np.uint64(2))
+                         | (_bit(s3, k) << np.uint64(3)) | (_bit(u0, k) << np.uint64(4))
+                         | (_bit(u1, k) << np.uint64(5)) | (_bit(u2, k) << np.uint64(6))
+                         | (_bit(u3, k) << np.uint64(7)))
+                    f = table[c]
+                    one = _U1 << k
+                    if f & KEEP:
+                        kp |= one
+                    if f & NEGATIVE:
+                        ng |= one
+                    if f & (FLAT_Y | FLAT_Z):
+                        ax |= one
+                    if f & EDGE_X:
+                        bx |= one
+                    if f & (FLAT_X | FLAT_Z):
+                        ay |= one
+                    if f & EDGE_Y:
+                        by |= one
+                    if f & EDGE_Z:
+                        ez |= one
+                    if f & (FLAT_X | FLAT_Y):
+                        fz |= one
+                keep[v, w] = kp
+                neg[v, w] = ng
+                pany_x[v, w] = ax
+                pboth_x[v, w] = bx
+                pany_y[j, w] = ay
+                pboth_y[j, w] = by
+                events[w] = (s0 ^ u0) | (s1 ^ u1) | (s2 ^ u2) | (s3 ^ u3)
+                edge_z[w] = ez
+                flat_z[w] = fz
+                waits_z |= ez | fz
+                if ax | bx:
+                    waits_x[j] = True
+                if ay | by:
+                    waits_y = True
+            if waits_z:
+                _packed_segments(keep, neg, v, events, edge_z, flat_z, nwords)
+        if waits_y:
+            _scan(keep, neg, pany_y, pboth_y, 0, 1, i * (ny + 1), 1, ny, bits,
+                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work)
+
+
+@njit(cache=True, nogil=True)
+def _scan_columns(bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, j0, j1):
+    """The segments along the first axis of the vertex columns ``j0 <= j < j1``."""
+    nwords = keep.shape[1]
+    ends = np.empty((nx + 1, nwords), np.uint64)
+    change = np.empty((nx + 1, nwords), np.uint64)
+    work = np.empty(nwords, np.uint64)
+    for j in range(j0, j1):
+        if waits_x[j]:
+            _scan(keep, neg, pany_x, pboth_x, j, ny + 1, j, ny + 1, nx, bits,
+                  j - 1 if j >= 1 else -1, j if j < ny else -1, ny, ends, change, work)
+
+
+def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> np.ndarray:
+    """The vertices of a 3D volume's lattice that the step keeps, as bit rows.
+
+    ``bits``: the volume (``shape``) as :func:`isoflow.scale.bitrows.pack`
+    gives it; ``table``: per configuration, :data:`KEEP`, :data:`NEGATIVE`
+    and the segment a vertex waits for (``EDGE_*``, ``FLAT_*``). Returns
+    the bit rows of the vertex grid (``shape`` plus one per axis), row
+    ``(i, j)`` at ``i (ny + 1) + j``, ``(nz + 1) // 64 + 1`` words a row and
+    one more row, clear."""
+    nx, ny, nz = shape
+    nwords = (nz + 1) // 64 + 1
+    rows = (nx + 1) * (ny + 1)
+    keep = np.zeros((rows + 1, nwords), np.uint64)
+    neg = np.empty((rows, nwords), np.uint64)
+    pany_x = np.empty((rows, nwords), np.uint64)
+    pboth_x = np.empty((rows, nwords), np.uint64)
+    table = np.ascontiguousarray(table, np.int64)
+    threads = thread_count((nx + 1) * (ny + 1) * (nz + 1))
+    parts = slabs(nx + 1, threads)
+    waits = np.zeros((len(parts), ny + 1), np.bool_)
+    run([(_moves_layers, bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits[t], a, b)
+         for t, (a, b) in enumerate(parts)])
+    waits_x = waits.any(axis=0)
+    run([(_scan_columns, bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, a, b)
+         for a, b in slabs(ny + 1, threads)])
+    return keep
+
+
+@njit(cache=True, nogil=True)
+def _moves_rows2(bits, nx, table, keep, neg, pany, waits):
+    """The planar step's moves of every vertex row (2D, rows along axis 0):
+    settled by the configuration and the segments along the packed axis;
+    ``pany`` the flat vertices waiting for a segment along axis 0."""
+    nwords = keep.shape[1]
+    events = np.empty(nwords, np.uint64)
+    edge = np.zeros(nwords, np.uint64)
+    flat = np.empty(nwords, np.uint64)
+    for i in range(nx + 1):
+        r0 = i - 1 if i >= 1 else -1
+        r1 = i if i < nx else -1
+        p0 = p1 = np.uint64(0)
+        waits_1 = np.uint64(0)
+        for w in range(nwords):
+            u0, u1 = _load(bits, r0, w), _load(bits, r1, w)
+            s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+            p0, p1 = u0, u1
+            inside = s0 & s1 & u0 & u1
+            boundary = (s0 | s1 | u0 | u1) & ~inside
+            kp, ng, a0, f1 = inside, np.uint64(0), np.uint64(0), np.uint64(0)
+            m = boundary
+            while m:
+                k = trailing_zeros(m)
+                m &= m - _U1
+                c = _bit(s0, k) | (_bit(s1, k) << np.uint64(1)) | (_bit(u0, k) << np.uint64(2)) | (_bit(u1, k) << np.uint64(3))
+                f = table[c]
+                one = _U1 << k
+                if f & KEEP:
+                    kp |= one
+                if f & NEGATIVE:
+                    ng |= one
+                if f & FLAT_0:
+                    a0 |= one
+                if f & FLAT_1:
+                    f1 |= one
+            keep[i, w] = kp
+            neg[i, w] = ng
+            pany[i, w] = a0
+            events[w] = (s0 ^ u0) | (s1 ^ u1)
+            flat[w] = f1
+            waits_1 |= f1
+            if a0:
+                waits[0] = True
+        if waits_1:
+            _packed_segments(keep, neg, i, events, edge, flat, nwords)
+
+
+def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.ndarray:
+    """:func:`moves3` for a 2D volume (rows along axis 0, ``FLAT_0`` and
+    ``FLAT_1`` in the table): the vertex grid's bit rows, one per vertex
+    row and one more, clear."""
+    nx, ny = shape
+    nwords = (ny + 1) // 64 + 1
+    keep = np.zeros((nx + 2, nwords), np.uint64)
+    neg = np.empty((nx + 1, nwords), np.uint64)
+    pany = np.empty((nx + 1, nwords), np.uint64)
+    table = np.ascontiguousarray(table, np.int64)
+    waits = np.zeros(1, np.bool_)
+    _moves_rows2(bits, nx, table, keep, neg, pany, waits)
+    if waits[0]:
+        _scan(keep, neg, pany, np.zeros_like(pany), 0, 1, 0, 1, nx, bits, 0, -1, 1,
+              np.empty((nx + 1, nwords), np.uint64), np.empty((nx + 1, nwords), np.uint64),
+              np.empty(nwords, np.uint64))
+    return keep
+
+
+@njit(cache=True, nogil=True)
+def _bounds(words, nx, ny):
+    """Smallest and one past the largest row index along the first two
+    axes holding a set bit, and every row or-ed together."""
+    lo_i, hi_i, lo_j, hi_j = nx, 0, ny, 0
+    union = np.zeros(words.shape[1], np.uint64)
+    for i in range(nx):
+        for j in range(ny):
+            r = i * ny + j
+            seen = np.uint64(0)
+            for w in range(words.shape[1]):
+                seen |= words[r, w]
+                union[w] |= words[r, w]
+            if seen:
+                lo_i, hi_i = min(lo_i, i), max(hi_i, i + 1)
+                lo_j, hi_j = min(lo_j, j), max(hi_j, j + 1)
+    return lo_i, hi_i, lo_j, hi_j, union
+
+
+@njit(cache=True, nogil=True)
+def _crop_rows(words, ny, lo_i, lo_j, lo_k, sy, out, nruns, ngaps, sz, r0, r1):
+    """Rows ``r0 <= r < r1`` of the cropped volume: row ``(x, y)`` is row
+    ``(lo_i + x, lo_j + y)`` of ``words`` from bit ``lo_k`` on; with the
+    number of runs and gaps of each, as :func:`isoflow.scale.bitrows.pack`
+    counts them."""
+    q, s = lo_k >> 6, np.uint64(lo_k & 63)
+    back = np.uint64(64) - s
+    have = words.shape[1]
+    for r in range(r0, r1):
+        src = (lo_i + r // sy) * ny + lo_j + r % sy
+        carry = np.uint64(0)
+        runs = 0
+        for w in range(out.shape[1]):
+            word = words[src, w + q] if w + q < have else np.uint64(0)
+            if s:
+                word >>= s
+                if w + q + 1 < have:
+                    word |= words[src, w + q + 1] << back
+            out[r, w] = word
+            runs += popcount(word & ~((word << _U1) | carry))
+            carry = word >> _U63
+        nruns[r + 1] = runs
+        first = out[r, 0] & _U1
+        last = (out[r, (sz - 1) >> 6] >> np.uint64((sz - 1) & 63)) & _U1
+        ngaps[r + 1] = runs + 1 - np.int64(first) - np.int64(last)
+
+
+def crop(words: np.ndarray, shape: tuple[int, int, int]):
+    """The smallest box holding the set bits of a 3D volume of ``shape``
+    given as bit rows (:func:`moves3`, or :func:`moves2` read as one layer).
+
+    Returns ``(bits, shape, lo, run_offsets, gap_offsets)``: the box as
+    :func:`isoflow.scale.bitrows.pack` would pack it (the runs and gaps of
+    its rows counted), its shape and its lowest corner in ``shape``'s
+    indices; an empty volume gives shape ``(0, 0, 0)``."""
+    nx, ny, nz = shape
+    lo_i, hi_i, lo_j, hi_j, union = _bounds(words, nx, ny)
+    if hi_i == 0:
+        empty = np.zeros((1, 1), np.uint64)
+        return empty, (0, 0, 0), (0, 0, 0), np.zeros(2, np.int64), np.zeros(2, np.int64)
+    set_words = np.flatnonzero(union)
+    first, last = int(set_words[0]), int(set_words[-1])
+    lo_k = 64 * first + (int(union[first]) & -int(union[first])).bit_length() - 1
+    hi_k = 64 * last + int(union[last]).bit_length()
+    sx, sy, sz = hi_i - lo_i, hi_j - lo_j, hi_k - lo_k
+    out = np.empty((sx * sy + 1, sz // 64 + 1), np.uint64)
+    out[-1] = 0
+    nruns = np.zeros(sx * sy + 2, np.int64)
+    ngaps = np.zeros(sx * sy + 2, np.int64)
+    parts = slabs(sx * sy, thread_count(sx * sy * sz))
+    run([(_crop_rows, words, ny, lo_i, lo_j, lo_k, sy, out, nruns, ngaps, sz, a, b) for a, b in parts])
+    return out, (sx, sy, sz), (lo_i, lo_j, lo_k), np.cumsum(nruns), np.cumsum(ngaps)
+
+
+def unpack(bits: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """The boolean volume of bit rows (the last axis packed, little-endian words)."""
+    rows = int(np.prod(shape[:-1]))
+    if rows == 0 or shape[-1] == 0:
+        return np.zeros(shape, bool)
+    as_bytes = np.ascontiguousarray(bits[:rows], dtype="<u8").view(np.uint8)
+    return np.unpackbits(as_bytes, axis=1, count=shape[-1], bitorder="little").view(bool).reshape(shape)
