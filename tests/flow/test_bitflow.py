@@ -18,8 +18,9 @@ from isoflow.digital.topology import betti_numbers, is_face_connectivity
 from isoflow.flow.bitflow import PackedObject, packed_record, packed_step, vertex_rows, vertex_shape
 from isoflow.flow.bitguard import packed_guarded_step, packed_key
 from isoflow.flow.guard import guarded_step, realise_moves, shape_key
-from isoflow.flow.motion import flow_connectivity, flow_moves, flow_step
-from isoflow.flow.run import _record
+from isoflow.flow.motion import flow_moves, flow_step
+from isoflow.flow.run import run_flow
+from isoflow.flow.engines import step_record
 from isoflow.scale import fineblocks, flowbits
 from shapes import contacts, figure_eight, hollow_ball, linked_rings, planar_disc_ring, solid_torus, union_of_boxes
 
@@ -93,7 +94,7 @@ def test_states_and_records_equal_the_numpy_flow(name, volume):
         state = PackedObject.of(obj)
         for step in range(60):
             assert same_object(state.to_object(), obj), (name, conn, step)
-            assert packed_record(state, step, conn) == _record(obj, step, conn), (name, conn, step)
+            assert packed_record(state, step, conn) == step_record(obj, step, conn), (name, conn, step)
             if not obj.voxels:
                 break
             obj, state = flow_step(obj, conn), packed_step(state, conn)
@@ -106,7 +107,7 @@ def test_runs_of_random_volumes_equal_the_numpy_flow(ndim):
             obj = DigitalObject(v).cropped()
             state = PackedObject.of(obj)
             for step in range(40):
-                assert packed_record(state, step, conn) == _record(obj, step, conn)
+                assert packed_record(state, step, conn) == step_record(obj, step, conn)
                 assert same_object(state.to_object(), obj)
                 if not obj.voxels:
                     break
@@ -182,3 +183,58 @@ def test_simple_test_on_bitboards_equals_digital_simple(ndim, face):
     expected = simple_codes(codes, ndim, conn)
     assert 0 < expected.sum() < len(codes)
     assert np.array_equal(fineblocks.simple(codes, ndim, face), expected)
+
+
+def run_both(volume, **kw):
+    compiled = run_flow(DigitalObject(volume), method="compiled", **kw)
+    oracle = run_flow(DigitalObject(volume), method="numpy", **kw)
+    return compiled, oracle
+
+
+@pytest.mark.parametrize("ndim", [3, 2])
+@pytest.mark.parametrize("guard", [False, True])
+def test_whole_runs_equal_the_numpy_runs(ndim, guard):
+    """run_flow on bit rows and on arrays: the same records, states, stop,
+    limit, topology changes (with their place) and guard tallies."""
+    changes = 0
+    sources = list(random_volumes(ndim, 10, seed=40 + ndim)) + [v for _, v in named_shapes() if v.ndim == ndim]
+    for v in sources:
+        for conn in connectivities(ndim):
+            compiled, oracle = run_both(v, connectivity=conn, guard=guard)
+            assert compiled.to_dict() == oracle.to_dict()
+            assert len(compiled.states) == len(oracle.states)
+            assert all(same_object(a, b) for a, b in zip(compiled.states, oracle.states))
+            changes += len(oracle.topology_changes)
+    assert guard or changes > 0
+
+
+def test_until_topology_change_cap_and_progress_equal_the_numpy_runs():
+    v = np.zeros((9, 9, 70), bool)
+    v[1:5, 1:5, :] = v[6:8, 6:8, 3:66] = True  # two bars: the thinner vanishes first
+    seen = {"numpy": [], "compiled": []}
+    for method in seen:
+        r = run_flow(DigitalObject(v), until_topology_change=True, keep_states=False, method=method,
+                     progress=lambda step, obj, m=method: seen[m].append((step, obj.voxels, obj.offset)))
+        assert r.stop_reason == "topology-change"
+        seen[method].append(r.to_dict())
+    assert seen["numpy"] == seen["compiled"]
+    for steps in (0, 1, 3):
+        compiled, oracle = run_both(v, steps=steps)
+        assert compiled.to_dict() == oracle.to_dict() and compiled.stop_reason == "steps"
+
+
+def test_flow_result_reads_as_a_mapping():
+    r = run_flow(np.ones((3, 4, 5), bool), keep_states=False)
+    assert r["steps"] is r.steps and r["stop_reason"] == r.stop_reason == "vanished"
+    assert dict(r) == r.to_dict() and list(r) == list(r.to_dict())
+    with pytest.raises(KeyError):
+        r["states"]
+    with pytest.raises(AttributeError):
+        r.stop_reason = "steps"
+
+
+def test_method_is_checked():
+    from isoflow.errors import IsoflowError
+
+    with pytest.raises(IsoflowError, match="method must be"):
+        run_flow(np.ones((2, 2, 2), bool), method="gpu")
