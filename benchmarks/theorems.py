@@ -175,7 +175,7 @@ def mesh_objects(directories, resolutions=(32, 64)):
             for res in resolutions:
                 try:
                     v, f = vx.load_mesh(p)
-                    vol = vx.voxelize(v, f, resolution=res, allow_open=True)[0]
+                    vol = vx.voxelize(v, f, resolution=res)[0]
                 except Exception as exc:  # a mesh the voxeliser refuses: say so, go on
                     print(f"{p.name} at {res}: skipped ({exc.__class__.__name__}: {exc})", file=sys.stderr)
                     continue

@@ -207,7 +207,7 @@ def test_info_threads_option_and_environment(tmp_path):
 def test_open_meshes_by_default_strict_refuses_on_every_mesh_command(tmp_path, capsys):
     # plane_holes.obj is open (manifest: 27 boundary loops, 341 boundary
     # edges): read by default with one note line on stderr; --strict refuses
-    # it on every command; --allow-open is accepted and changes nothing
+    # it on every command
     mesh = ROOT / "meshes" / "plane_holes.obj"
     r = info_json(capsys, mesh, "--resolution", "12")
     err = capsys.readouterr().err
@@ -215,7 +215,6 @@ def test_open_meshes_by_default_strict_refuses_on_every_mesh_command(tmp_path, c
     assert main(["info", str(mesh), "--resolution", "12"]) == 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "note" in err[0] and "341 boundary edges" in err[0] and "|w| > 1/2" in err[0]
-    assert info_json(capsys, mesh, "--resolution", "12", "--allow-open")["voxels"] == r["voxels"]
     out = tmp_path / "o"
     out.mkdir()
     for cmd in (["info", str(mesh), "--resolution", "12"],
@@ -227,13 +226,16 @@ def test_open_meshes_by_default_strict_refuses_on_every_mesh_command(tmp_path, c
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "not watertight: 341 boundary edges" in err[0], (cmd, err)
     assert not any(out.iterdir())
-    assert main(["voxelize", str(mesh), "--resolution", "12", "--allow-open", "-o", str(tmp_path / "p.npz")]) == 0
+    assert main(["voxelize", str(mesh), "--resolution", "12", "-o", str(tmp_path / "p.npz")]) == 0
     capsys.readouterr()
     assert info_json(capsys, tmp_path / "p.npz")["voxels"] == r["voxels"]
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
-    for flag in ("--allow-open", "--strict"):
-        assert main(["info", str(tmp_path / "v.npy"), flag]) == 2
-        assert "apply to meshes" in capsys.readouterr().err
+    assert main(["info", str(tmp_path / "v.npy"), "--strict"]) == 2
+    assert "apply to meshes" in capsys.readouterr().err
+    # the option that changed nothing is gone: argparse refuses it
+    with pytest.raises(SystemExit) as exit:
+        main(["info", str(tmp_path / "v.npy"), "--allow-open"])
+    assert exit.value.code == 2
 
 
 def test_memory_budget_is_most_of_what_the_kernel_says_is_available():

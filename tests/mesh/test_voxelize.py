@@ -647,7 +647,7 @@ def test_edge_contact_cubes_use_exact_scanline():
     with pytest.raises(IsoflowError, match="1 non-manifold"):
         voxelize(u, f, pitch=0.25, strict=True)
     report = {}
-    vol, _, _ = voxelize(u, f, pitch=0.25, allow_open=True, report=report)
+    vol, _, _ = voxelize(u, f, pitch=0.25, report=report)
     assert report["chain_edges"] == 0 and "1 non-manifold edge;" in report["note"]
     assert "edges balance" in report["note"]
     assert vol.shape == (8, 8, 4) and vol.sum() == 2 * 4 * 4 * 4

@@ -218,7 +218,7 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
 
 
 def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = False,
-             allow_open: bool | None = None, grid=None, max_bytes: int | None = None,
+             grid=None, max_bytes: int | None = None,
              progress: Callable[[int, int], object] | None = None, report: dict | None = None):
     """Voxelise the solid bounded by a triangle mesh.
 
@@ -240,8 +240,6 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         whose voxels lie inside two or more layers or have winding numbers
         of both signs (overlapping or self-intersecting shells, as far as
         the voxel centres see them).
-    allow_open
-        Accepted and ignored (open meshes are read by default now).
     grid
         Optional ``(origin, shape)``: sample on this grid (with ``pitch``)
         instead of the one centred on the bounding box, e.g. to put voxel
@@ -300,7 +298,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     return vol, origin, pitch
 
 
-def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, strict=False, allow_open=None,
+def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, strict=False,
                   progress=None, report=None) -> DigitalObject:
     """The solid bounded by a triangle mesh as a digital object.
 
@@ -316,7 +314,7 @@ def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, strict=False,
     return DigitalObject(vol, pitch=pitch, origin=origin)
 
 
-def voxelize_file(path, *, pitch=None, resolution=None, strict=False, allow_open=None, progress=None,
+def voxelize_file(path, *, pitch=None, resolution=None, strict=False, progress=None,
                   report=None) -> DigitalObject:
     """Read a mesh file (any format trimesh reads) and voxelise its solid."""
     v, f = load_mesh(path)

@@ -1,0 +1,143 @@
+"""``isoflow flow``: the digital curvature flow (section 5), with its files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..errors import IsoflowError
+from .inputs import add_connectivity, add_input_arguments, load_input
+from .progress import progress_bar
+
+
+def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
+    p = add_command(sub, "flow", "run the digital curvature flow (section 5) with topology control")
+    add_input_arguments(p)
+    add_connectivity(p)
+    p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
+    p.add_argument("--guard", action="store_true", help="topology control (Theorem 21): every step by simple deformations, thinning where a step cannot be; ends at a thin fixed point")
+    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv, flow.png and shapes.png into DIR")
+    p.add_argument("--volumes", metavar="SUFFIX",
+                   help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
+    p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
+    p.set_defaults(func=cmd_flow)
+
+
+def cmd_flow(args: argparse.Namespace) -> int:
+    if args.out:  # before any work (the FlowWriter checks it again when it makes the directory)
+        from ..flow.files import check_output_dir
+
+        check_output_dir(args.out, args.force)
+    obj = load_input(args)
+    check_flow_input(args, obj)
+    writer = flow_writer(args, obj)
+    result = run_with_files(args, obj, writer)
+    if args.json:
+        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+    else:
+        print(format_flow(result, str(args.input)))
+        if args.out:
+            print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
+                  + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
+    return 0 if writer is None else say_read_back(args, writer)
+
+
+def check_flow_input(args: argparse.Namespace, obj) -> None:
+    """The object and the options make a flow, or one line says why not."""
+    if obj.ndim not in (2, 3):
+        raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
+                           f"this one is {obj.ndim}D")
+    if obj.voxels == 0:
+        raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
+    if args.steps is not None and args.steps < 0:
+        raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
+    if args.volumes is not None and not args.out:
+        raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
+
+
+def flow_writer(args: argparse.Namespace, obj):
+    """The writer of ``--out``, or None. Files are written while the flow
+    runs, so no state is kept in memory (every state of a box of side s
+    would cost about s^4/4 bytes)."""
+    from ..flow.files import FlowWriter
+    from ..flow.motion import flow_connectivity
+    from ..flow.run import default_max_steps
+
+    if args.volumes is not None:  # ("" too: refused, not ignored)
+        from ..mesh.volumes import check_volume_suffix
+
+        args.volumes = check_volume_suffix(args.volumes)  # before the output directory is made
+    if not args.out:
+        return None
+    last = args.steps if args.steps is not None else default_max_steps(obj)
+    conn = flow_connectivity(obj.ndim, args.connectivity)
+    writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
+    if args.volumes is not None:
+        writer.write_volumes(args.volumes)
+    return writer
+
+
+def run_with_files(args: argparse.Namespace, obj, writer):
+    """The flow, each state handed to the writer as it comes."""
+    from ..flow.run import run_flow
+
+    with progress_bar(args, "flow", unit=" steps") as show:
+
+        def progress(step, state):
+            if writer is not None:
+                writer.add(step, state)
+            if show is not None:  # a counter unless --steps says how many
+                show(step, args.steps)
+
+        try:
+            if writer is not None:
+                writer.add(0, obj.cropped())
+            result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                              progress=progress, keep_states=False)
+            if writer is not None:
+                writer.finish(result)
+        except BaseException:
+            if writer is not None:  # the previous run's files stay as they were
+                writer.abort()
+            raise
+    return result
+
+
+def say_read_back(args: argparse.Namespace, writer) -> int:
+    """How many step files trimesh read back as isoflow counts them; 1 when
+    any did not agree."""
+    read = [c for c in writer.checks.values() if not c.get("skipped")]
+    skipped = [c["skipped"] for c in writer.checks.values() if c.get("skipped")]
+    if read and not args.json:
+        print(f"{args.out}: {len(read) - len(writer.problems)} of {len(read)} step surfaces "
+              "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)")
+    if skipped and not args.quiet:
+        print(f"isoflow flow: note: {len(skipped)} step files not read back ({skipped[0]})", file=sys.stderr)
+    for line in writer.problems:
+        print(f"isoflow flow: error: {line}", file=sys.stderr)
+    return 1 if writer.problems else 0
+
+
+def format_flow(result, name: str) -> str:
+    """The flow's records as a table, its stop and its limit point."""
+    lines = [
+        f"{name}: digital curvature flow, {result.connectivity}-connectivity"
+        + (", guard" if result.guard else ""),
+        f"  {'step':>5} {'voxels':>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}",
+    ]
+    for s in result.steps:
+        lines.append(
+            f"  {s['step']:>5} {s['voxels']:>10} {s['parity']:>6}  {str(tuple(s['betti'])):<12} "
+            f"{s['euler_characteristic']:>4} {s['energy']:>8}"
+        )
+    lim = result.limit
+    lines.append(f"  stopped: {result.stop_reason}")
+    if lim["center"] is not None:
+        centre = ", ".join(f"{c:g}" for c in lim["center"])
+        lines.append(f"  limit: ({centre}), last non-empty state {lim['last_shape']} at step {lim['last_step']}")
+    for c in result.topology_changes:
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, in {c['where']}")
+    return "\n".join(lines)

@@ -1,0 +1,88 @@
+"""``isoflow genus``: a mesh's genus, from the mesh, its peers and its voxels."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..errors import IsoflowError
+from .inputs import add_mesh_rule
+from .progress import progress_bar
+
+
+def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
+    p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
+    p.add_argument("mesh", help="a mesh file: any format trimesh reads")
+    p.add_argument("--resolution", type=int, nargs="+",
+                   help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
+                        "digital Betti numbers of the last two agree")
+    p.add_argument("--max-resolution", type=int, help="stop doubling beyond this (default 1024)")
+    p.add_argument("--time-limit", type=float, metavar="SECONDS",
+                   help="stop doubling when the next resolution would end past this (default 60)")
+    p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
+    add_mesh_rule(p)
+    p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=cmd_genus)
+
+
+def check_limits(args: argparse.Namespace) -> None:
+    """Resolutions and the time limit are positive, or one line says which."""
+    for name in ("resolution", "max_resolution"):
+        values = getattr(args, name)
+        for r in values if isinstance(values, list) else [values]:
+            if r is not None and r < 1:
+                raise IsoflowError(f"--{name.replace('_', '-')} must be a positive integer, got {r}")
+    if args.time_limit is not None and not args.time_limit > 0:
+        raise IsoflowError(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
+
+
+def cmd_genus(args: argparse.Namespace) -> int:
+    from ..mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
+
+    check_limits(args)
+    conn = args.connectivity or 6
+    res = args.resolution or list(DEFAULT_RESOLUTIONS)
+    kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
+    with progress_bar(args, "genus") as show:
+
+        def stepped(entry: dict) -> None:  # the automatic stepping, one line per resolution on a terminal
+            if show is not None:
+                print(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
+                      f"({entry['seconds']:.1f} s)", file=sys.stderr)
+
+        report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped,
+                              strict=args.strict, **kw)
+    if args.json:
+        print(json.dumps(report))
+    else:
+        print(format_genus(report, args.mesh))
+    return 0
+
+
+def format_genus(report, name: str) -> str:
+    """The verdict as a terminal reads it: one line per witness."""
+    m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
+    per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
+    solid = report["solid"]
+    crossings = ("?" if report["self_intersecting_faces"] is None else
+                 f"{report['self_intersecting_faces']} faces cross their own component, "
+                 f"{report['faces_crossing_other_components']} cross another component")
+    lines = [
+        f"{name}: {m['vertices']} vertices, {m['faces']} faces",
+        f"  mesh        watertight {m['watertight']}, {m['components']} components, V-E+F {m['euler_number']}, "
+        f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
+        f"  crossings   {crossings} (pymeshlab)",
+        "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
+                           f"genus {m3['genus']} over {m3['components']} components (genus() of the whole mesh: {m3['genus_whole_mesh']})"),
+        "  solid       " + (f"genus {solid['genus']}, {solid['surfaces']} boundary surfaces, volume {solid['volume']:.6g} "
+                            "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
+        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
+    ]
+    for d in report["digital"]:
+        b = d["betti"]
+        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn solid: {b[0]} components, {b[1]} tunnels, "
+                     f"{b[2]} cavities -> genus {d['genus']}")
+    lines.append(f"  verdict     {report['verdict']}")
+    return "\n".join(lines)

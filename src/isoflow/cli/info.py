@@ -1,0 +1,144 @@
+"""``isoflow info``: the topology and curvature-index histogram of an object."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import threading
+
+from ..errors import IsoflowError
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
+from .progress import progress_bar
+
+
+def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
+    p = add_command(sub, "info", "topology and curvature-index histogram of an object")
+    add_input_arguments(p)
+    add_connectivity(p)
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
+    p.add_argument("--threads", type=thread_count, metavar="N",
+                   help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
+    p.add_argument(
+        "--gpu",
+        action="store_true",
+        help="compute chi, Betti numbers and n on a CUDA GPU with CuPy (pip install 'isoflow[gpu]')",
+    )
+    p.set_defaults(func=cmd_info)
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    from ..mesh.formats.omezarr import stored_ndim
+    from ..mesh.formats.registry import split_dataset
+
+    if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
+        report = info_of_store(args)
+    else:
+        report = info_in_memory(args)
+    report["input"] = str(args.input)
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    print(format_info(report))
+    return 0
+
+
+def info_of_store(args: argparse.Namespace) -> dict:
+    """Out of core: block by block, never the whole volume in memory (4D
+    arrays are read whole, as from the other formats)."""
+    from ..mesh.formats.omezarr import analyze_store
+
+    refuse_mesh_options(args, ".zarr")
+    if args.gpu:
+        raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
+    with progress_bar(args, "blocks") as show:
+        return analyze_store(args.input, args.connectivity, label=args.label, progress=show,
+                             surfaces=not args.no_surfaces, threads=args.threads)
+
+
+def info_in_memory(args: argparse.Namespace) -> dict:
+    from ..digital.analysis import analyze
+
+    warming = warm_up_while_reading(args)
+    obj = load_input(args)
+    if warming is not None:
+        warming.join()
+    if args.gpu:
+        from ..scale.arrays import to_gpu
+
+        report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
+        report["parity"] = obj.parity  # a bare array has no lattice place
+        return report
+    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
+
+
+def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
+    """A thread that loads the compiled passes (numba and its cached code,
+    once per process) while the input is read, which releases the GIL; only
+    for volumes large enough to use them (a small one answers in the NumPy
+    passes, without numba's start)."""
+    from ..mesh.formats.npy import voxel_count
+    from ..mesh.formats.registry import split_dataset
+    from ..mesh.load import is_mesh_path
+    from ..scale.compiled import have_numba, least_voxels
+
+    path = split_dataset(args.input)[0]
+    least = least_voxels(surfaces=not args.no_surfaces)
+    try:
+        # the voxels from a .npy's header; elsewhere a bit per voxel at the
+        # least (binvox; compressed files: no matter)
+        voxels = voxel_count(path) if path.suffix.lower() == ".npy" else None
+        big = path.stat().st_size >= least // 8 if voxels is None else voxels >= least
+    except OSError:
+        return None
+    if args.gpu or not big or is_mesh_path(path) or not have_numba():
+        return None
+    from ..digital.closed_surfaces import warm_up
+
+    def quietly() -> None:
+        with contextlib.suppress(Exception):  # the command itself says what fails
+            warm_up(surfaces=not args.no_surfaces)
+
+    thread = threading.Thread(target=quietly, daemon=True)
+    thread.start()
+    return thread
+
+
+def format_info(r) -> str:
+    """The report as a terminal reads it."""
+    lines = [
+        f"{r['input']}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
+        f"{r['voxels']} voxels, {r['connectivity']}-connectivity",
+        f"  Euler characteristic   {r['euler_characteristic']}",
+    ]
+    names = {2: ["components", "holes"], 3: ["components", "tunnels", "cavities"],
+             4: ["components", "b1", "b2", "enclosed background"]}[r["dimension"]]
+    lines.append(
+        "  Betti numbers          "
+        + ", ".join(f"{'?' if b is None else b} {name}" for b, name in zip(r["betti"], names))
+    )
+    lines.append("  vertex classes (eq. 4.9):")
+    for label, count in r["classes"].items():
+        lines.append(f"    {label:<10} {count:>12}")
+    lines.append(f"    {'not well-composed':<10} {r['non_well_composed']:>5}")
+    scale = 1 << r["dimension"]
+    lines.append(f"  a^T n                  {r['a_dot_n']}  (= {scale} chi)")
+    lines.append(f"  energy E = k^T n       {r['energy']}")
+    lines += format_surfaces(r)
+    return "\n".join(lines)
+
+
+def format_surfaces(r) -> list[str]:
+    lines = []
+    if r.get("surfaces"):
+        lines.append(f"  closed surfaces        {len(r['surfaces'])}")
+        for i, s in enumerate(r["surfaces"][:10]):
+            lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
+        if len(r["surfaces"]) > 10:
+            lines.append(f"    ... {len(r['surfaces']) - 10} more")
+    if r.get("surfaces", []) is None:  # 4D: the boundary is a 3-manifold, not a surface
+        lines.append(f"  closed surfaces        not computed in {r['dimension']}D")
+    if r.get("pinched_vertices"):
+        lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
+    return lines

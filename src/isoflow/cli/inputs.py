@@ -1,0 +1,115 @@
+"""What every command reads: the input argument, its options, and the one
+loader that turns a volume, a point list or a mesh into a digital object."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import IsoflowError
+from .progress import progress_bar
+
+
+def add_input_arguments(p: argparse.ArgumentParser) -> None:
+    """The input of ``info``, ``surface`` and ``flow``, and how it is read."""
+    p.add_argument("input", help="volume (.npy/.npz, .tif, .nii(.gz), .nrrd, FILE.h5:/dataset, .binvox, .vox, "
+                                 ".zarr), point list (.txt: x y z per line) or mesh (any format trimesh reads)")
+    p.add_argument("--label", type=label_value, metavar="N",
+                   help="a label image: the voxels of value N are the object (MagicaVoxel: colour index N)")
+    p.add_argument(
+        "--points-are",
+        choices=("corners", "voxels"),
+        default="corners",
+        help="a point list gives cube corners (the paper's point model, default) or voxel indices",
+    )
+    grid = p.add_mutually_exclusive_group()
+    grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
+    grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
+    add_mesh_rule(p)
+
+
+def add_mesh_rule(p: argparse.ArgumentParser) -> None:
+    """How a mesh is read into voxels."""
+    p.add_argument("--strict", action="store_true",
+                   help="refuse a mesh that is not watertight, or whose voxels lie in overlapping layers "
+                        "(by default it is read by the generalised winding number)")
+
+
+def add_connectivity(p: argparse.ArgumentParser) -> None:
+    """``--connectivity`` of the object, in any dimension."""
+    p.add_argument(
+        "--connectivity",
+        type=int,
+        choices=(4, 6, 8, 26, 80),
+        default=None,
+        help="object connectivity: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default: 6 / 4 / 8, the paper's)",
+    )
+
+
+def label_value(text: str) -> int | float:
+    """``--label N``: a number, kept an int when it is one."""
+    try:
+        return int(text)  # exactly, however large (checked against the array's type)
+    except ValueError:
+        pass
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    return int(value) if value.is_integer() else value
+
+
+def thread_count(text: str) -> int:
+    """argparse type of ``--threads``: a positive integer."""
+    from ..scale.compiled import check_threads
+
+    try:
+        return check_threads(text, "N")
+    except IsoflowError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+def say_note(args: argparse.Namespace, path: object, report: dict) -> None:
+    """What is unusual about a mesh, and the rule used: one line on stderr
+    (dropped by --quiet)."""
+    if report.get("note") and not args.quiet:
+        print(f"isoflow {args.command}: note: {path}: {report['note']}", file=sys.stderr)
+
+
+def voxelize_input(path: str | Path, args: argparse.Namespace):
+    """A mesh file voxelised by the one mesh reader of every command."""
+    from ..mesh.voxelize import voxelize_file
+
+    report: dict = {}
+    with progress_bar(args, "voxelize") as show:
+        obj = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
+                            progress=show, report=report)
+    say_note(args, path, report)
+    return obj
+
+
+def mesh_options_given(args: argparse.Namespace) -> bool:
+    """Whether an option that only a mesh input takes was given."""
+    return args.pitch is not None or args.resolution is not None or args.strict
+
+
+def refuse_mesh_options(args: argparse.Namespace, what: str) -> None:
+    """One line when a mesh-only option is given for a volume or points."""
+    if mesh_options_given(args):
+        raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict apply to meshes, not to {what} input")
+
+
+def load_input(args: argparse.Namespace):
+    """The digital object named on the command line (volume, points or mesh)."""
+    from ..mesh.load import is_mesh_path
+    from ..mesh.volumes import read_object
+
+    path = Path(args.input)
+    if is_mesh_path(path):
+        if getattr(args, "label", None) is not None:
+            raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
+        return voxelize_input(path, args)
+    refuse_mesh_options(args, path.suffix or "this")
+    # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
+    return read_object(args.input, points_are=args.points_are, label=args.label)

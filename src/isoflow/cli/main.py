@@ -1,0 +1,220 @@
+"""The command line's entry point: the parser, signals, warnings and the
+exit statuses every command shares.
+
+Every command reads its input through :func:`isoflow.cli.inputs.load_input`,
+hands arrays to the core, and prints either a readable table or one JSON
+object. Bad input becomes one line on stderr and exit status 2; heavy
+libraries (trimesh, matplotlib) are imported only by the commands that need
+them, so that ``isoflow info`` starts fast; so are tqdm (the progress bars,
+only on a terminal) and shtab (only by ``isoflow completion``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+from collections.abc import Iterator
+
+from ..errors import IsoflowError
+from . import completion, flow, genus, info, surface, voxelize
+
+#: the commands in the order ``isoflow`` lists them
+COMMANDS = (info, surface, voxelize, genus, flow, completion)
+
+
+def installed_version() -> str:
+    """The installed package's version (its metadata, as pip sees it)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("isoflow")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "(not installed: no package metadata; pip install -e .)"
+
+
+class VersionAction(argparse.Action):
+    """``--version``: the metadata is read only when asked, not at every start."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, default=argparse.SUPPRESS, help=None):
+        super().__init__(option_strings, dest=dest, default=default, nargs=0, help=help)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"isoflow {installed_version()}")
+        parser.exit()
+
+
+def command_list(parser: argparse.ArgumentParser) -> str:
+    """What ``isoflow`` alone prints: usage and one line per command."""
+    commands = parser.commands  # type: ignore[attr-defined]
+    width = max(map(len, commands))
+    lines = [parser.format_usage().rstrip(), "", parser.description or "", "", "commands:"]
+    lines += [f"  {name:<{width}}  {p.description}" for name, p in commands.items()]
+    lines += ["", "'isoflow COMMAND -h' lists a command's options; 'isoflow --version' prints the version."]
+    return "\n".join(lines)
+
+
+def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
+    """A sub-command whose one-line summary is both its entry in the command
+    list and the description of its own -h."""
+    return sub.add_parser(name, help=summary, description=summary)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``isoflow`` parser with every command's options (the docs' command
+    line page is generated from it)."""
+    parser = argparse.ArgumentParser(
+        prog="isoflow",
+        description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
+    )
+    parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
+    parser.commands = sub.choices  # type: ignore[attr-defined]  # name -> sub-command parser, in order
+    for command in COMMANDS:
+        command.add_parser(sub, add_command)
+    for p in sub.choices.values():
+        p.add_argument("-q", "--quiet", action="store_true",
+                       help="no progress bars or warnings on stderr (errors are still printed)")
+    return parser
+
+
+@contextlib.contextmanager
+def quiet_stderr(quiet: bool) -> Iterator[None]:
+    """--quiet: informational stderr (library warnings, log records below
+    ERROR) is dropped while the command runs; errors still reach stderr as
+    one line. Restored afterwards, for callers of :func:`main` in-process."""
+    if not quiet:
+        yield
+        return
+    import logging
+    import warnings
+
+    before = logging.root.manager.disable
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        logging.disable(logging.WARNING)
+        try:
+            yield
+        finally:
+            logging.disable(before)
+
+
+@contextlib.contextmanager
+def termination_as_interrupt(received: list) -> Iterator[None]:
+    """Treat SIGTERM (``kill``, a batch system's time limit, a closing
+    terminal's SIGHUP) as Ctrl-C while a command runs: the same clean-up
+    runs (temporary files and the flow's staging directory are removed, an
+    existing output stays as it was) and the signal's number is appended
+    to ``received``. Python's default for SIGTERM is to die at once, which
+    leaves the temporary files behind. Only the main thread may set
+    handlers; elsewhere (a command run from a library thread) nothing
+    changes."""
+    import signal
+    import threading
+
+    wanted = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(signum, frame):
+        # kept as well as raised: a library may swallow the KeyboardInterrupt
+        # (trimesh's import guards), and no output is then renamed into place
+        # (isoflow.mesh.outputs.SIGNALS) and the command still ends as
+        # interrupted
+        received.append(signum)
+        raise KeyboardInterrupt
+
+    before = {sig: signal.signal(sig, interrupt) for sig in wanted}
+    try:
+        yield
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+
+
+@contextlib.contextmanager
+def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
+    """Each :class:`~isoflow.errors.IsoflowWarning` as one ``warning:`` line
+    on stderr, without the source line Python adds; others as Python shows
+    them."""
+    import warnings
+
+    from ..errors import IsoflowWarning
+
+    with warnings.catch_warnings():
+        shown = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, IsoflowWarning):
+                print(f"isoflow {args.command}: warning: {message}", file=sys.stderr)
+            else:
+                shown(message, category, filename, lineno, file, line)
+
+        if not args.quiet:
+            warnings.simplefilter("always", IsoflowWarning)
+            warnings.showwarning = show
+        yield
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one ``isoflow`` command line; returns its exit status (0 done,
+    1 a written file did not read back as counted, 2 bad input, 128 + the
+    signal's number when interrupted)."""
+    import signal
+
+    from ..mesh.outputs import SIGNALS
+    from ..scale import compiled
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:  # `isoflow` alone: what it can do, not an error
+        print(command_list(parser))
+        return 0
+    args.parser = parser
+    terminated = SIGNALS  # the signals received (what the writers look at before renaming)
+    terminated.clear()
+
+    def compiling(message):  # numba's first run after installing: a note, not silence
+        print(f"isoflow {args.command}: note: {message}", file=sys.stderr, flush=True)
+
+    before = compiled.on_first_compile
+    compiled.on_first_compile = None if args.quiet else compiling
+    try:
+        with quiet_stderr(args.quiet), warnings_as_lines(args), termination_as_interrupt(terminated):
+            status = args.func(args)
+            if terminated:  # a signal a library swallowed: the command still ends as interrupted
+                raise KeyboardInterrupt
+            return status
+    except IsoflowError as exc:
+        print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except MemoryError:
+        name = getattr(args, "input", None) or getattr(args, "mesh", "")
+        print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
+        sig = terminated[0] if terminated else signal.SIGINT
+        how = "interrupted" if sig == signal.SIGINT else "terminated"
+        print(f"isoflow: {how}" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
+        # the shell's convention: 128 + the signal's number
+        return 128 + int(sig)
+    except BrokenPipeError:  # `isoflow info ... | head`: not an error
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    finally:
+        compiled.on_first_compile = before
+        terminated.clear()  # said: later writes in this process (a library's caller) are not held back
+
+
+def console() -> None:
+    """The ``isoflow`` command: :func:`main`, then exit without the
+    interpreter's last garbage collection, which walks every object (numba's
+    many, once it is loaded) only to find nothing to collect."""
+    import gc
+
+    code = main()
+    gc.freeze()
+    sys.exit(code)
