@@ -95,8 +95,11 @@ def run_with_files(args: argparse.Namespace, obj, writer):
         try:
             if writer is not None:
                 writer.add(0, obj.cropped())
+            # (no callback when nothing uses the states: a compiled run then
+            # never unpacks them)
             result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
-                              progress=progress, keep_states=False)
+                              progress=progress if writer is not None or show is not None else None,
+                              keep_states=False)
             if writer is not None:
                 writer.finish(result)
         except BaseException:
