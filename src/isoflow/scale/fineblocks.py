@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .bitrows import trailing_zeros
+from .bitrows import popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 
@@ -235,20 +235,15 @@ def _fill_runs(state, at, word, value):
 
 
 @njit(cache=True, nogil=True)
-def _grow(a, n):
-    out = np.empty(max(2 * len(a), n + 1024), a.dtype)
-    out[: len(a)] = a
-    return out
-
-
-@njit(cache=True, nogil=True)
-def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal):
+def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal, start, write):
     """Configuration bytes of vertex rows ``i0 <= i < i1`` of a 3D volume
     into the padded ``state`` (flat, ``strides``), and the boundary
-    vertices (neither empty nor full) with their goal, the keep bit.
-    Returns ``(pending, goal, count)``, grown as needed."""
+    vertices (neither empty nor full) from ``pending[start]`` on, with
+    their goal, the keep bit. Without ``write`` only counts the boundary
+    vertices (the arrays are sized by that count: growing them in the loop
+    would count references to them on every word). Returns the count."""
     nwords = keep.shape[1]
-    count = 0
+    count = start
     for i in range(i0, i1):
         for j in range(ny + 1):
             r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
@@ -268,29 +263,31 @@ def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal):
                 p0, p1, p2, p3 = u0, u1, u2, u3
                 inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
                 boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
+                if not write:
+                    count += popcount(boundary)
+                    continue
                 at = base + 64 * w
                 _fill_runs(state, at, inside, 255)
                 m = boundary
                 while m:
                     k = trailing_zeros(m)
                     m &= m - _U1
-                    c = 0
-                    for o, plane in enumerate((s0, s1, s2, s3, u0, u1, u2, u3)):
-                        c |= np.int64((plane >> k) & _U1) << o
-                    state[at + k] = c
-                    if count == len(pending):
-                        pending, goal = _grow(pending, count), _grow(goal, count)
+                    c = (((s0 >> k) & _U1) | (((s1 >> k) & _U1) << np.uint64(1)) | (((s2 >> k) & _U1) << np.uint64(2))
+                         | (((s3 >> k) & _U1) << np.uint64(3)) | (((u0 >> k) & _U1) << np.uint64(4))
+                         | (((u1 >> k) & _U1) << np.uint64(5)) | (((u2 >> k) & _U1) << np.uint64(6))
+                         | (((u3 >> k) & _U1) << np.uint64(7)))
+                    state[at + k] = np.uint8(c)
                     pending[count] = at + k
                     goal[count] = np.uint8((keep[v, w] >> k) & _U1)
                     count += 1
-    return pending, goal, count
+    return count
 
 
 @njit(cache=True, nogil=True)
-def _blocks_rows2(bits, nx, keep, state, strides, pending, goal):
+def _blocks_rows2(bits, nx, keep, state, strides, pending, goal, start, write):
     """:func:`_blocks_layers` of a 2D volume (rows along axis 0)."""
     nwords = keep.shape[1]
-    count = 0
+    count = start
     for i in range(nx + 1):
         r0 = i - 1 if i >= 1 else -1
         r1 = i if i < nx else -1
@@ -303,22 +300,22 @@ def _blocks_rows2(bits, nx, keep, state, strides, pending, goal):
             p0, p1 = u0, u1
             inside = s0 & s1 & u0 & u1
             boundary = (s0 | s1 | u0 | u1) & ~inside
+            if not write:
+                count += popcount(boundary)
+                continue
             at = base + 64 * w
             _fill_runs(state, at, inside, 15)
             m = boundary
             while m:
                 k = trailing_zeros(m)
                 m &= m - _U1
-                c = 0
-                for o, plane in enumerate((s0, s1, u0, u1)):
-                    c |= np.int64((plane >> k) & _U1) << o
-                state[at + k] = c
-                if count == len(pending):
-                    pending, goal = _grow(pending, count), _grow(goal, count)
+                c = (((s0 >> k) & _U1) | (((s1 >> k) & _U1) << np.uint64(1)) | (((u0 >> k) & _U1) << np.uint64(2))
+                     | (((u1 >> k) & _U1) << np.uint64(3)))
+                state[at + k] = np.uint8(c)
                 pending[count] = at + k
                 goal[count] = np.uint8((keep[i, w] >> k) & _U1)
                 count += 1
-    return pending, goal, count
+    return count
 
 
 def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
@@ -334,16 +331,19 @@ def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
     padded = tuple(s + 3 for s in shape)
     state = np.zeros(int(np.prod(padded)), np.uint8)
     strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
+    none = np.zeros(0, np.int64), np.zeros(0, np.uint8)
     if nd == 2:
-        pending, goal, count = _blocks_rows2(bits, shape[0], keep, state, strides,
-                                             np.empty(4096, np.int64), np.empty(4096, np.uint8))
-        return state, padded, pending[:count], goal[:count]
+        count = _blocks_rows2(bits, shape[0], keep, state, strides, *none, 0, False)
+        pending, goal = np.empty(count, np.int64), np.empty(count, np.uint8)
+        _blocks_rows2(bits, shape[0], keep, state, strides, pending, goal, 0, True)
+        return state, padded, pending, goal
     nx, ny, nz = shape
     parts = slabs(nx + 1, thread_count((nx + 1) * (ny + 1) * (nz + 1)))
-    found = run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b,
-                  np.empty(4096, np.int64), np.empty(4096, np.uint8)) for a, b in parts])
-    pending = np.concatenate([p[:c] for p, _, c in found])
-    goal = np.concatenate([g[:c] for _, g, c in found])
+    counts = run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, *none, 0, False) for a, b in parts])
+    starts = np.concatenate([[0], np.cumsum(counts)])
+    pending, goal = np.empty(int(starts[-1]), np.int64), np.empty(int(starts[-1]), np.uint8)
+    run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, pending, goal, int(start), True)
+         for (a, b), start in zip(parts, starts)])
     return state, padded, pending, goal
 
 
@@ -358,14 +358,17 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
     full = (1 << cells) - 1
     reversed_ = -1
     shift, last = 32 - fill[1], len(known) - 1
+    need = np.empty(n, np.uint8)  # per block, the cells not yet at its goal
+    for idx in range(n):
+        need[idx] = state[pending[idx]] ^ (full if goal[idx] else 0)
     for _ in range(max_sweeps):
         changed = False
         for e in range(cells):
+            bit = np.uint8(1 << e)
             for idx in range(n):
-                p = pending[idx]
-                s = np.int64(state[p])
-                if ((s >> e) & 1) == goal[idx]:
+                if not need[idx] & bit:
                     continue
+                p = pending[idx]
                 code = np.uint32(0)
                 for b in range(cells):
                     code |= tables[e, b, state[p + offsets[e, b]]]
@@ -373,14 +376,13 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
                 if found < 0:
                     found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
                 if found:
-                    state[p] = s ^ (1 << e)
+                    state[p] ^= bit
+                    need[idx] ^= bit
                     changed = True
         m = 0
         for idx in range(n):
-            p = pending[idx]
-            if np.int64(state[p]) != (full if goal[idx] else 0):
-                pending[m] = p
-                goal[m] = goal[idx]
+            if need[idx]:
+                pending[m], goal[m], need[m] = pending[idx], goal[idx], need[idx]
                 m += 1
         n = m
         if not changed:
@@ -388,6 +390,7 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
                 break
             for idx in range(n):
                 goal[idx] ^= 1
+                need[idx] ^= full
                 flips[idx] = pending[idx]
             reversed_ = n
     return n, max(reversed_, 0)

@@ -78,7 +78,7 @@ def _fill(words, row, a, b):
         words[row, w] |= span << np.uint64(lo)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _packed_segments(keep, neg, row, events, edge, flat, nwords):
     """Along the packed axis: the stretches between events whose vertices
     wait for it (``edge``: kept when both ends are negative, ``flat``: when
