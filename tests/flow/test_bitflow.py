@@ -238,3 +238,28 @@ def test_method_is_checked():
 
     with pytest.raises(IsoflowError, match="method must be"):
         run_flow(np.ones((2, 2, 2), bool), method="gpu")
+
+
+@pytest.mark.parametrize("connectivity", [6, 26])
+def test_realised_moves_on_threads_equal_the_numpy_sweeps(connectivity):
+    """A step with enough boundary blocks to split each batch among two
+    threads (fineblocks.THREADED_BLOCKS) gives what the NumPy sweeps give."""
+    from isoflow.scale.compiled import using
+
+    v = np.random.default_rng(connectivity).random((34, 40, 70)) < 0.6
+    obj = DigitalObject(v).cropped()
+    cfg, keep = flow_moves(obj, connectivity)
+    target, stuck = realise_moves(cfg, keep, connectivity)
+    assert stuck.any() and (target != keep).any()
+    state = PackedObject.of(obj)
+    cells, padded, pending, goal = fineblocks.blocks(state.bits, state.shape, vertex_rows(state, connectivity))
+    assert len(pending) >= fineblocks.THREADED_BLOCKS
+    with using(2):
+        stuck2, flipped = fineblocks.realise(cells, padded, pending, goal, is_face_connectivity(connectivity))
+    inner = (slice(1, -1),) * 3
+    mask = np.zeros(padded, bool)
+    mask.ravel()[stuck2] = True
+    assert np.array_equal(mask[inner], stuck)
+    mask[:] = False
+    mask.ravel()[flipped] = True
+    assert np.array_equal(mask[inner], target != keep)

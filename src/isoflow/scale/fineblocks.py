@@ -148,11 +148,12 @@ def _rehash(old, new, bits):
 _MEMOS: dict = {}
 
 
-def memo(ndim: int, face: bool) -> tuple[np.ndarray, np.ndarray]:
-    """The codes found simple or not in this process, per dimension and
-    kind of connectivity: ``(table, fill)``, the table twice as large once
-    it is half full (at most 2^22 slots, 16 MiB)."""
-    key = (ndim, face)
+def memo(ndim: int, face: bool, thread: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The codes found simple or not in this process, per dimension, kind
+    of connectivity and thread (so that threads never write one table):
+    ``(table, fill)``, the table twice as large once it is half full (at
+    most 2^22 slots, 16 MiB)."""
+    key = (ndim, face, thread)
     table, fill = _MEMOS.get(key, (None, None))
     if table is None:
         table, fill = np.zeros(1 << 12, np.uint32), np.array([0, 12], np.int64)
@@ -348,51 +349,111 @@ def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
 
 
 @njit(cache=True, nogil=True)
+def _batch(state, pending, need, e, i0, i1, tables, offsets, steps, lo, hi, masks, known, fill, face):
+    """Cell ``e`` of the blocks ``pending[i0:i1]`` that still need it
+    (``need``), each changed where it is simple. The cells of one octant
+    are two fine cells apart, outside each other's neighbourhoods, so any
+    order (and any split among threads) gives the same. Returns whether
+    any cell changed."""
+    shift, last = 32 - fill[1], len(known) - 1
+    bit = np.uint8(1 << e)
+    changed = False
+    for idx in range(i0, i1):
+        if not need[idx] & bit:
+            continue
+        p = pending[idx]
+        code = np.uint32(0)
+        for b in range(tables.shape[0]):
+            code |= tables[e, b, state[p + offsets[e, b]]]
+        found, slot = _look_up(known, code, shift, last)
+        if found < 0:
+            found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
+        if found:
+            state[p] ^= bit
+            need[idx] ^= bit
+            changed = True
+    return changed
+
+
+@njit(cache=True, nogil=True)
+def _needs(state, pending, goal, full):
+    """Per block, the cells not yet at its goal."""
+    need = np.empty(len(pending), np.uint8)
+    for idx in range(len(pending)):
+        need[idx] = state[pending[idx]] ^ (full if goal[idx] else 0)
+    return need
+
+
+@njit(cache=True, nogil=True)
+def _settle(pending, goal, need, n, changed, flip, reversed_, flips, full):
+    """The end of a sweep: the blocks at their goal leave ``pending``;
+    when no cell changed, every block left has its move reversed, once
+    (``flip``). Returns ``(blocks left, reversed so far or -1, done)``."""
+    m = 0
+    for idx in range(n):
+        if need[idx]:
+            pending[m], goal[m], need[m] = pending[idx], goal[idx], need[idx]
+            m += 1
+    if changed:
+        return m, reversed_, False
+    if not flip or reversed_ >= 0 or m == 0:
+        return m, reversed_, True
+    for idx in range(m):
+        goal[idx] ^= 1
+        need[idx] ^= full
+        flips[idx] = pending[idx]
+    return m, m, False
+
+
+@njit(cache=True, nogil=True)
 def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known, fill, face, flip, max_sweeps, flips):
-    """The sweeps of :func:`realise` (in place on ``state``, ``pending``
-    and ``goal``). Returns ``(stuck, flipped)``: the first ``stuck`` of
-    ``pending`` are left half-way, the first ``flipped`` of ``flips`` had
-    their move reversed."""
+    """The sweeps of :func:`realise` on one thread (in place on ``state``,
+    ``pending`` and ``goal``). Returns ``(stuck, flipped)``: the first
+    ``stuck`` of ``pending`` are left half-way, the first ``flipped`` of
+    ``flips`` had their move reversed."""
     n = len(pending)
     cells = tables.shape[0]
     full = (1 << cells) - 1
+    need = _needs(state, pending, goal, full)
     reversed_ = -1
-    shift, last = 32 - fill[1], len(known) - 1
-    need = np.empty(n, np.uint8)  # per block, the cells not yet at its goal
-    for idx in range(n):
-        need[idx] = state[pending[idx]] ^ (full if goal[idx] else 0)
     for _ in range(max_sweeps):
         changed = False
         for e in range(cells):
-            bit = np.uint8(1 << e)
-            for idx in range(n):
-                if not need[idx] & bit:
-                    continue
-                p = pending[idx]
-                code = np.uint32(0)
-                for b in range(cells):
-                    code |= tables[e, b, state[p + offsets[e, b]]]
-                found, slot = _look_up(known, code, shift, last)
-                if found < 0:
-                    found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
-                if found:
-                    state[p] ^= bit
-                    need[idx] ^= bit
-                    changed = True
-        m = 0
-        for idx in range(n):
-            if need[idx]:
-                pending[m], goal[m], need[m] = pending[idx], goal[idx], need[idx]
-                m += 1
-        n = m
-        if not changed:
-            if not flip or reversed_ >= 0 or n == 0:
+            changed |= _batch(state, pending, need, e, 0, n, tables, offsets, steps, lo, hi, masks, known, fill, face)
+        n, reversed_, done = _settle(pending, goal, need, n, changed, flip, reversed_, flips, full)
+        if done:
+            break
+    return n, max(reversed_, 0)
+
+
+#: from this many boundary blocks a step's cells are changed on threads,
+#: each batch (one octant) split among them: below it, handing a batch to
+#: a thread costs more than it saves
+THREADED_BLOCKS = 50_000
+
+
+def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps, flips, threads):
+    """:func:`_realise` with every batch split among ``threads`` threads
+    (each with its own table of codes, :func:`memo`)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    n = len(pending)
+    cells = tables.shape[0]
+    full = (1 << cells) - 1
+    need = _needs(state, pending, goal, full)
+    memos = [memo(nd, face, t) for t in range(threads)]
+    reversed_ = -1
+    with ThreadPoolExecutor(threads, thread_name_prefix="isoflow-realise") as pool:
+        for _ in range(max_sweeps):
+            parts = slabs(n, threads)
+            changed = False
+            for e in range(cells):
+                futures = [pool.submit(_batch, state, pending, need, e, a, b, tables, offsets, *board_, *memos[t], face)
+                           for t, (a, b) in enumerate(parts)]
+                changed |= any([f.result() for f in futures])
+            n, reversed_, done = _settle(pending, goal, need, n, changed, flip, reversed_, flips, full)
+            if done:
                 break
-            for idx in range(n):
-                goal[idx] ^= 1
-                need[idx] ^= full
-                flips[idx] = pending[idx]
-            reversed_ = n
     return n, max(reversed_, 0)
 
 
@@ -403,7 +464,8 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     for the object's connectivity (``face``: 6 or 4), as
     :func:`isoflow.flow.guard.realise_moves` does: octant after octant,
     sweeps until nothing changes, then (``flip``) every block still pending
-    has its move reversed once.
+    has its move reversed once. Large steps (:data:`THREADED_BLOCKS`) split
+    each octant's batch among the threads.
 
     Returns ``(stuck, reversed)``: the flat indices (into ``state``) of the
     blocks left half-way and of those whose move was reversed."""
@@ -411,8 +473,13 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     tables, deltas = code_tables(nd)
     strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
     offsets = deltas @ strides
-    steps, lo, hi, masks = _board_tuples(nd)
+    board_ = _board_tuples(nd)
     flips = np.empty(len(pending), np.int64)
-    stuck, flipped = _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks,
-                              *memo(nd, face), face, flip, max_sweeps, flips)
+    threads = thread_count(len(pending) * (1_000_000 // THREADED_BLOCKS))
+    if threads > 1 and len(pending) >= THREADED_BLOCKS:
+        stuck, flipped = _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps,
+                                           flips, threads)
+    else:
+        stuck, flipped = _realise(state, pending, goal, tables, offsets, *board_, *memo(nd, face), face, flip,
+                                  max_sweeps, flips)
     return pending[:stuck].copy(), flips[:flipped].copy()
