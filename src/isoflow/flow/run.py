@@ -38,7 +38,7 @@ from ..errors import IsoflowError
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
 
-__all__ = ["FlowResult", "GuardKind", "StopReason", "default_max_steps", "run_flow"]
+__all__ = ["FlowResult", "GuardKind", "StopReason", "default_max_steps", "max_steps_for", "run_engine", "run_flow"]
 
 #: why a run ended: the object became empty (``vanished``); the number of
 #: steps asked was done (``steps``); ``until_topology_change`` stopped before
@@ -123,7 +123,12 @@ def default_max_steps(obj: DigitalObject) -> int:
     """Safety cap when no step count is given: a box of side s vanishes in
     s steps; four times the largest side plus 16 leaves room for the bar
     rule's growth."""
-    return 4 * max(obj.volume.shape, default=0) + 16
+    return max_steps_for(obj.volume.shape)
+
+
+def max_steps_for(shape: tuple[int, ...]) -> int:
+    """:func:`default_max_steps` of an array of ``shape``."""
+    return 4 * max(shape, default=0) + 16
 
 
 @dataclass
@@ -303,14 +308,44 @@ def run_flow(
     cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
-    capped: StopReason = "steps" if steps is not None else "max-steps"
+    return run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
+                      guard=guard, until_topology_change=until_topology_change,
+                      allowance=default_max_steps(obj), progress=progress, keep_states=keep_states)
+
+
+def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
+               until_topology_change: bool = False, allowance: int = 0,
+               progress: Callable[[int, Any], None] | None = None, keep_states: bool = False) -> FlowResult:
+    """The run of :func:`run_flow` from a first state that ``engine`` holds
+    (one of :mod:`isoflow.flow.engines`, or the stores of
+    :mod:`isoflow.flow.chunked`): records, stops and the result.
+
+    Parameters
+    ----------
+    engine : ArrayFlow
+        Steps and records the states.
+    state
+        The first state, as ``engine.start`` gives it.
+    cap : int or None
+        The most steps; ``capped`` is the stop reason when it is reached.
+    capped : StopReason
+        ``steps`` or ``max-steps``.
+    guard, until_topology_change, progress, keep_states
+        As in :func:`run_flow`.
+    allowance : int
+        Guarded runs: flow steps that may leave the object as large.
+
+    Returns
+    -------
+    FlowResult
+    """
+    conn = engine.conn
     trace = _Trace(engine, keep_states, progress)
-    state = engine.start(obj)
     trace.add(state, engine.record(state, 0))
     changes: list[dict] = []
     tally = _Guarded()
     if guard:
-        stop = _guarded(engine, state, trace, cap, capped, default_max_steps(obj), tally)
+        stop = _guarded(engine, state, trace, cap, capped, allowance, tally)
     else:
         stop, changes = _plain(engine, state, trace, cap, capped, until_topology_change)
     return FlowResult(

@@ -102,20 +102,26 @@ def _packed_segments(keep, neg, row, events, edge, flat, nwords):
 
 
 @njit(cache=True, nogil=True)
-def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, bits, a0, b0, rstride, ends, change, run_):
-    """Across rows: keep the vertices of rows ``v0 + t vstride`` (t = 0 ..
-    n) that wait for a segment along this axis, ``pany`` (one negative
-    end) and ``pboth`` (two), rows ``p0 + t pstride`` of those tables.
+def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, t0, t1, bits, a0, b0, rstride, ends, change,
+          before, after, changed):
+    """Across rows: keep the vertices of rows ``v0 + t vstride`` (``t0 <= t
+    < t1``, of ``0 .. n``) that wait for a segment along this axis,
+    ``pany`` (one negative end) and ``pboth`` (two), rows ``p0 + t
+    pstride`` of those tables.
 
     The cross-section at ``t`` is voxel rows ``a0 + t rstride`` and ``b0 +
-    t rstride`` (-1: outside the array), both at voxels ``k - 1`` and
-    ``k``; it changes at vertex ``t`` where they differ from those at ``t -
-    1``. A segment's end before a vertex is the last change at or before
-    it, after it the first change after it. ``ends``, ``change``: (n + 1,
-    words) work arrays; ``run_``: one row of work."""
+    t rstride`` (-1: none; ``t = n``: outside the array), both at voxels
+    ``k - 1`` and ``k``; it changes at vertex ``t`` where they differ from
+    those at ``t - 1``. A segment's end before a vertex is the last change
+    at or before it, after it the first change after it: whether that end
+    is negative is carried forward (``before``: in, for the rows before
+    ``t0``; out, after ``t1 - 1``) and backward (``after``: in, for row ``t1
+    - 1`` from the rows past it; out, for row ``t0 - 1``); ``changed`` gets
+    every change seen. A whole axis is ``t0 = 0``, ``t1 = n + 1`` with
+    nothing before or after; a slab of it hands these on to the next.
+    ``ends``, ``change``: (n + 1, words) work arrays."""
     nwords = keep.shape[1]
-    run_[:] = 0
-    for t in range(n + 1):
+    for t in range(t0, t1):
         prev = np.uint64(0)
         v = v0 + t * vstride
         for w in range(nwords):
@@ -123,24 +129,24 @@ def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, bits, a0, b0, rst
             for r0 in (a0, b0):
                 if r0 >= 0:
                     now = _load(bits, r0 + t * rstride, w) if t < n else np.uint64(0)
-                    before = _load(bits, r0 + (t - 1) * rstride, w) if t > 0 else np.uint64(0)
-                    d |= now ^ before
+                    old = _load(bits, r0 + (t - 1) * rstride, w) if t > 0 else np.uint64(0)
+                    d |= now ^ old
             dd = d | (d << _U1) | (prev >> _U63)
             prev = d
             change[t, w] = dd
-            run_[w] = (dd & neg[v, w]) | (~dd & run_[w])
-            ends[t, w] = run_[w]
-    run_[:] = 0
-    for t in range(n, -1, -1):
+            changed[w] |= dd
+            before[w] = (dd & neg[v, w]) | (~dd & before[w])
+            ends[t, w] = before[w]
+    for t in range(t1 - 1, t0 - 1, -1):
         v = v0 + t * vstride
         p = p0 + t * pstride
         for w in range(nwords):
             a, b = pany[p, w], pboth[p, w]
             if a | b:
-                before, after = ends[t, w], run_[w]
-                keep[v, w] |= (a & (before | after)) | (b & before & after)
+                ahead, behind = ends[t, w], after[w]
+                keep[v, w] |= (a & (ahead | behind)) | (b & ahead & behind)
             dd = change[t, w]
-            run_[w] = (dd & neg[v, w]) | (~dd & run_[w])
+            after[w] = (dd & neg[v, w]) | (~dd & after[w])
 
 
 @njit(cache=True, nogil=True)
@@ -156,6 +162,8 @@ def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, 
     ends = np.empty((ny + 1, nwords), np.uint64)
     change = np.empty((ny + 1, nwords), np.uint64)
     work = np.empty(nwords, np.uint64)
+    rest = np.empty(nwords, np.uint64)
+    seen = np.zeros(nwords, np.uint64)
     events = np.empty(nwords, np.uint64)
     edge_z = np.empty(nwords, np.uint64)
     flat_z = np.empty(nwords, np.uint64)
@@ -221,21 +229,27 @@ def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, 
             if waits_z:
                 _packed_segments(keep, neg, v, events, edge_z, flat_z, nwords)
         if waits_y:
-            _scan(keep, neg, pany_y, pboth_y, 0, 1, i * (ny + 1), 1, ny, bits,
-                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work)
+            work[:] = 0
+            rest[:] = 0
+            _scan(keep, neg, pany_y, pboth_y, 0, 1, i * (ny + 1), 1, ny, 0, ny + 1, bits,
+                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work, rest, seen)
 
 
 @njit(cache=True, nogil=True)
-def _scan_columns(bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, j0, j1):
-    """The segments along the first axis of the vertex columns ``j0 <= j < j1``."""
+def _scan_columns(bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, j0, j1, t0, t1, before, after, changed):
+    """The segments along the first axis of the vertex columns ``j0 <= j <
+    j1``, over vertex layers ``t0 <= t < t1`` (see :func:`_scan`; per
+    column ``before``, ``after``, ``changed``). Columns with nothing
+    waiting are skipped, unless a slab's ends are asked (not the whole
+    axis)."""
     nwords = keep.shape[1]
     ends = np.empty((nx + 1, nwords), np.uint64)
     change = np.empty((nx + 1, nwords), np.uint64)
-    work = np.empty(nwords, np.uint64)
+    whole = t0 == 0 and t1 == nx + 1
     for j in range(j0, j1):
-        if waits_x[j]:
-            _scan(keep, neg, pany_x, pboth_x, j, ny + 1, j, ny + 1, nx, bits,
-                  j - 1 if j >= 1 else -1, j if j < ny else -1, ny, ends, change, work)
+        if waits_x[j] or not whole:
+            _scan(keep, neg, pany_x, pboth_x, j, ny + 1, j, ny + 1, nx, t0, t1, bits,
+                  j - 1 if j >= 1 else -1, j if j < ny else -1, ny, ends, change, before[j], after[j], changed[j])
 
 
 def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> np.ndarray:
@@ -247,23 +261,46 @@ def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> 
     the bit rows of the vertex grid (``shape`` plus one per axis), row
     ``(i, j)`` at ``i (ny + 1) + j``, ``(nz + 1) // 64 + 1`` words a row and
     one more row, clear."""
+    return moves3_layers(bits, shape, table, 0, shape[0] + 1)[0]
+
+
+def moves3_layers(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray, first: int, last: int,
+                  before: np.ndarray | None = None, after: np.ndarray | None = None):
+    """:func:`moves3` for the vertex layers ``first <= i < last`` only: the
+    volume's voxel layers ``first - 1 .. last - 1`` are all it reads, so a
+    slab of a larger volume with one voxel layer below it (zeros outside
+    the volume) gives its own vertex layers ``1 .. L - 1``. Segments along
+    the first axis that go on past the slab take ``before``/``after``: per
+    vertex line ``(j, k)`` (bit rows, ``(ny + 1, words)``), whether the
+    segment's end before the slab (after it) is negative, as the slabs
+    below (above) hand it on.
+
+    Returns ``(keep, before, after, changed)``: the vertex grid's bit rows
+    (only the layers asked are set), what this slab hands on upward and
+    downward (what a segment leaving the slab upward has behind it, and
+    one leaving it downward ahead of it), and the lines along which the
+    cross-section changes inside the slab (where it does not, the slab
+    hands on what it was given)."""
     nx, ny, nz = shape
     nwords = (nz + 1) // 64 + 1
     rows = (nx + 1) * (ny + 1)
     keep = np.zeros((rows + 1, nwords), np.uint64)
-    neg = np.empty((rows, nwords), np.uint64)
-    pany_x = np.empty((rows, nwords), np.uint64)
-    pboth_x = np.empty((rows, nwords), np.uint64)
+    neg = np.zeros((rows, nwords), np.uint64)
+    pany_x = np.zeros((rows, nwords), np.uint64)
+    pboth_x = np.zeros((rows, nwords), np.uint64)
     table = np.ascontiguousarray(table, np.int64)
-    threads = thread_count((nx + 1) * (ny + 1) * (nz + 1))
-    parts = slabs(nx + 1, threads)
+    threads = thread_count((last - first) * (ny + 1) * (nz + 1))
+    parts = [(first + a, first + b) for a, b in slabs(last - first, threads)]
     waits = np.zeros((len(parts), ny + 1), np.bool_)
     run([(_moves_layers, bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits[t], a, b)
          for t, (a, b) in enumerate(parts)])
     waits_x = waits.any(axis=0)
-    run([(_scan_columns, bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, a, b)
+    before = np.zeros((ny + 1, nwords), np.uint64) if before is None else before.copy()
+    after = np.zeros((ny + 1, nwords), np.uint64) if after is None else after.copy()
+    changed = np.zeros((ny + 1, nwords), np.uint64)
+    run([(_scan_columns, bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, a, b, first, last, before, after, changed)
          for a, b in slabs(ny + 1, threads)])
-    return keep
+    return keep, before, after, changed
 
 
 @njit(cache=True, nogil=True)
@@ -327,9 +364,9 @@ def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.nd
     waits = np.zeros(1, np.bool_)
     _moves_rows2(bits, nx, table, keep, neg, pany, waits)
     if waits[0]:
-        _scan(keep, neg, pany, np.zeros_like(pany), 0, 1, 0, 1, nx, bits, 0, -1, 1,
-              np.empty((nx + 1, nwords), np.uint64), np.empty((nx + 1, nwords), np.uint64),
-              np.empty(nwords, np.uint64))
+        work = np.zeros((3, nwords), np.uint64)
+        _scan(keep, neg, pany, np.zeros_like(pany), 0, 1, 0, 1, nx, 0, nx + 1, bits, 0, -1, 1,
+              np.empty((nx + 1, nwords), np.uint64), np.empty((nx + 1, nwords), np.uint64), work[0], work[1], work[2])
     return keep
 
 
