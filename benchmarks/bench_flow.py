@@ -30,6 +30,11 @@ sigma 2, > 0.5, seed 0), a solid torus (R = 0.3 n, r = 0.15 n) in 128^3.
    baseline tree's plain run (minutes).
 4. ``torus``: the torus flowed to its end plain and guarded at 6 and 26 in
    process, by each method.
+5. ``zarr`` (only when asked, ``--only zarr``): a ``--zarr-size``^3 ball
+   written as a zarr store slab by slab, then ``isoflow flow BALL.zarr
+   --out DIR --volumes .zarr --steps --zarr-steps`` as a whole command (the
+   flow block by block): its wall and CPU seconds and the peak resident
+   memory of the process (``ru_maxrss``).
 
 Every run checks that the methods agree on the records they produce. Only
 relative paths and figures are written.
@@ -224,6 +229,48 @@ def to_the_limit(size: int, repeat: int, baseline: Path | None) -> dict:
     return out
 
 
+def zarr_ball(n: int) -> Path:
+    """A ball filling 90% of an n^3 store, written slab by slab (no n^3
+    array in memory)."""
+    import zarr
+
+    path = CACHE / f"flow_ball{n}.zarr"
+    if (path / "0").exists():
+        return path
+    CACHE.mkdir(exist_ok=True)
+    root = zarr.open_group(str(path), mode="w", zarr_format=2)
+    z = root.create_array("0", shape=(n, n, n), chunks=(32, 256, 256), dtype=np.uint8, fill_value=0)
+    yz = np.indices((n, n), dtype=np.float32) - (n - 1) / 2
+    for a in range(0, n, 32):
+        x = np.arange(a, min(a + 32, n), dtype=np.float32)[:, None, None] - (n - 1) / 2
+        z[a:a + 32] = (x**2 + (yz**2).sum(0)) <= (0.45 * n) ** 2
+    return path
+
+
+def zarr_flow(n: int, steps: int) -> dict:
+    import shutil
+    import tempfile
+
+    path = zarr_ball(n)
+    out = Path(tempfile.mkdtemp()) / "run"
+    argv = [sys.executable, "-m", "isoflow.cli", "flow", str(path), "--out", str(out), "--volumes", ".zarr",
+            "--steps", str(steps), "--json", "-q"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    done = subprocess.run(argv, env=env, check=True, capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    shutil.rmtree(out.parent, ignore_errors=True)
+    rec = json.loads(done.stdout)
+    out = {"size": n, "steps": steps, "wall_s": round(wall, 1),
+           "cpu_s": round((r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime), 1),
+           "peak_rss_gib": round(r1.ru_maxrss / 2**20, 3), "voxels": [s["voxels"] for s in rec["steps"]]}
+    print(f"ball {n}^3 from zarr, {steps} steps block by block: {wall:.0f} s, peak memory "
+          f"{out['peak_rss_gib']} GiB (the largest child process so far)")
+    return out
+
+
 def torus_runs(n: int, repeat: int) -> dict:
     obj = DigitalObject(np.load(cached("torus", n)))
     out = {"voxels": obj.voxels}
@@ -251,7 +298,9 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--baseline", type=Path, help="another isoflow source tree whose commands are timed beside")
     ap.add_argument("--baseline-limit", action="store_true", help="also run the baseline's flow to the limit")
-    ap.add_argument("--only", nargs="+", choices=["step", "commands", "limit", "torus"])
+    ap.add_argument("--only", nargs="+", choices=["step", "commands", "limit", "torus", "zarr"])
+    ap.add_argument("--zarr-size", type=int, default=1024, help="side of the ball flowed from zarr (--only zarr)")
+    ap.add_argument("--zarr-steps", type=int, default=20)
     ap.add_argument("--json", help="also write the figures to this file")
     args = ap.parse_args(argv)
     report = {"machine": platform.platform(), "python": platform.python_version(), "numpy": np.__version__,
@@ -266,6 +315,8 @@ def main(argv=None):
                                               args.baseline if args.baseline_limit else None)
     if "torus" in parts:
         report[f"torus{args.torus}"] = torus_runs(args.torus, args.repeat)
+    if "zarr" in parts:
+        report[f"zarr_ball{args.zarr_size}"] = zarr_flow(args.zarr_size, args.zarr_steps)
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(report, indent=1) + "\n")

@@ -164,22 +164,59 @@ def packed_step(state: PackedObject, connectivity: int) -> PackedObject:
 
 
 def vertex_rows(state: PackedObject, connectivity: int) -> np.ndarray:
-    """The lattice vertices of a non-empty state that one step keeps, as the
-    bit rows of the vertex grid (:func:`isoflow.scale.flowbits.moves3`;
-    a 2D grid as one layer)."""
+    """The lattice vertices of a non-empty state that one step keeps.
+
+    Parameters
+    ----------
+    state : PackedObject
+        A non-empty state.
+    connectivity : int
+        The object's connectivity (4 or 8; 6 or 26).
+
+    Returns
+    -------
+    numpy.ndarray
+        The bit rows of the vertex grid
+        (:func:`isoflow.scale.flowbits.moves3`; a 2D grid as one layer).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rows = vertex_rows(PackedObject.of(np.ones((3, 3, 3), bool)), 6)
+    >>> int(np.bitwise_count(rows).sum())  # the box's inner vertices: a 2^3 box
+    8
+    """
     table = step_table(state.ndim, connectivity)
     moves = flowbits.moves3 if state.ndim == 3 else flowbits.moves2
     return moves(state.bits, state.shape, table)
 
 
 def vertex_shape(state: PackedObject) -> tuple[int, int, int]:
-    """The 3D shape the vertex grid's rows are packed as."""
+    """The 3D shape the vertex grid's rows are packed as (a 2D grid as one
+    layer).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> vertex_shape(PackedObject.of(np.ones((2, 3), bool)))
+    (1, 3, 4)
+    """
     return _layers(tuple(s + 1 for s in state.shape))
 
 
 def from_vertex_rows(state: PackedObject, rows: np.ndarray) -> PackedObject:
-    """The object on the other lattice whose voxels are the vertices set in
-    ``rows`` (the vertex grid of ``state``), cropped."""
+    """The object on the other lattice (eq. 5.1) whose voxels are the
+    vertices set in ``rows`` (the vertex grid of ``state``, as
+    :func:`vertex_rows` gives it), cropped.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> box = PackedObject.of(np.ones((3, 3, 3), bool))
+    >>> new = from_vertex_rows(box, vertex_rows(box, 6))
+    >>> new.shape, new.place.offset, new.parity
+    ((2, 2, 2), (0, 0, 0), 1)
+    """
     nd = state.ndim
     bits, shape, lo, runs, gaps = flowbits.crop(rows, vertex_shape(state))
     place = state.place.on_dual_lattice(state.place.volume)
@@ -195,9 +232,17 @@ _SLAB = np.array([sum(1 << (2 * b + 1) for b in range(4) if c >> b & 1) for c in
 
 
 def packed_record(state: PackedObject, step: int, connectivity: int) -> dict:
-    """A state's figures, as :func:`isoflow.flow.run` records them: step,
-    voxels, parity, Betti numbers, chi, energy (eq. 5.22) and bbox, from
-    one sweep of its rows."""
+    """A state's figures, as :func:`isoflow.flow.engines.step_record` gives
+    them for the unpacked state: step, voxels, parity, Betti numbers, chi,
+    energy (eq. 5.22) and bbox, from one sweep of its rows.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> r = packed_record(PackedObject.of(np.ones((2, 2, 2), bool)), 0, 6)
+    >>> r["voxels"], r["betti"], r["euler_characteristic"], r["bbox"]
+    (8, [1, 0, 0], 1, [[0.0, 0.0, 0.0], [2.0, 2.0, 2.0]])
+    """
     nd = state.ndim
     if not state.voxels:
         hist, betti = None, [0] * nd

@@ -24,7 +24,16 @@ from .guard import is_progress, resolve_stuck, thinning_step
 
 def packed_key(state: PackedObject) -> bytes:
     """A digest of the state's shape up to translation and lattice (as
-    :func:`isoflow.flow.guard.shape_key`, over the packed rows)."""
+    :func:`isoflow.flow.guard.shape_key`, over the packed rows).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import DigitalObject
+    >>> a, b = np.ones((2, 2, 2), bool), DigitalObject(np.ones((2, 2, 2), bool), offset=(5, 0, 0))
+    >>> packed_key(PackedObject.of(a)) == packed_key(PackedObject.of(b))
+    True
+    """
     h = hashlib.sha1(repr(state.shape).encode())
     h.update(state.bits.tobytes())
     return h.digest()
@@ -46,8 +55,23 @@ def _toggle(rows: np.ndarray, indices: np.ndarray, padded: tuple[int, ...]) -> N
 
 
 def packed_lattice_step(state: PackedObject, conn: int, betti: list[int]):
-    """:func:`isoflow.flow.guard.lattice_step` of a packed state:
-    ``(new state, kind, moves reversed)`` or None."""
+    """:func:`isoflow.flow.guard.lattice_step` of a packed state: the flow
+    step by simple deformations (Theorem 21), else its stuck blocks
+    resolved.
+
+    Returns
+    -------
+    tuple or None
+        ``(new state, kind, moves reversed)``, kind ``flow`` or
+        ``partial``; None where no resolution keeps ``betti``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> new, kind, reversed_moves = packed_lattice_step(PackedObject.of(np.ones((3, 3, 3), bool)), 6, [1, 0, 0])
+    >>> new.shape, kind, reversed_moves
+    ((2, 2, 2), 'flow', 0)
+    """
     keep = vertex_rows(state, conn)
     cells, padded, pending, goal = fineblocks.blocks(state.bits, state.shape, keep)
     stuck, flipped = fineblocks.realise(cells, padded, pending, goal, is_face_connectivity(conn))
@@ -68,9 +92,21 @@ def packed_lattice_step(state: PackedObject, conn: int, betti: list[int]):
 
 def packed_guarded_step(state: PackedObject, conn: int, betti: list[int], *, seen: set | None = None,
                         may_grow: bool = True) -> tuple[PackedObject, str, int]:
-    """:func:`isoflow.flow.guard.guarded_step` of a packed state:
-    ``(next state, kind, moves reversed)``, kind ``flow``, ``partial``,
-    ``thinning`` or ``fixed-point`` (the state itself)."""
+    """:func:`isoflow.flow.guard.guarded_step` of a packed state.
+
+    Returns
+    -------
+    tuple
+        ``(next state, kind, moves reversed)``, kind ``flow``, ``partial``,
+        ``thinning`` or ``fixed-point`` (the state itself).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> one = PackedObject.of(np.ones((1, 1, 1), bool))
+    >>> packed_guarded_step(one, 6, [1, 0, 0])[1]  # a single voxel is a fixed point
+    'fixed-point'
+    """
     got = packed_lattice_step(state, conn, betti)
     if got is not None:
         new, kind, n_reversed = got

@@ -76,7 +76,7 @@ class StoredObject:
         return import_zarr().open_group(self.path, mode="r")["0"]
 
 
-def layers(path: str, a: int, b: int, shape: tuple[int, int, int]) -> np.ndarray:
+def _layers(path: str, a: int, b: int, shape: tuple[int, int, int]) -> np.ndarray:
     """Voxel layers ``a <= x < b`` of the store's volume (``shape``), as
     bools; layers outside the volume are empty."""
     out = np.zeros((b - a, *shape[1:]), bool)
@@ -93,19 +93,19 @@ def _slab_moves(path: str, shape, i0: int, i1: int, table, before=None, after=No
     from ..scale import bitrows, flowbits
     from ..scale.compiled import using
 
-    vol = layers(path, i0 - 1, i1, shape)
+    vol = _layers(path, i0 - 1, i1, shape)
     with using(1):
         bits = bitrows.pack(vol)[0]
         return flowbits.moves3_layers(bits, vol.shape, table, 1, vol.shape[0], before, after)
 
 
-def slab_ends(path: str, shape, i0: int, i1: int, table):
+def _slab_ends(path: str, shape, i0: int, i1: int, table):
     """Pass 1: what the slab hands on with nothing given (``before``,
     ``after``) and where its cross-section changes."""
     return _slab_moves(path, shape, i0, i1, table)[1:]
 
 
-def slab_keep(path: str, shape, i0: int, i1: int, table, before, after, scratch: str):
+def _slab_keep(path: str, shape, i0: int, i1: int, table, before, after, scratch: str):
     """Pass 3: the slab's vertex layers, written to ``scratch`` (the vertex
     grid); returns their bounding box in the grid (``lo``, ``hi``) or None."""
     from ..scale import flowbits
@@ -121,7 +121,7 @@ def slab_keep(path: str, shape, i0: int, i1: int, table, before, after, scratch:
                                                                  int(nz[2][-1] + 1)]
 
 
-def hand_on(ends: list) -> tuple[list, list]:
+def _hand_on(ends: list) -> tuple[list, list]:
     """Pass 2: what each slab is handed from below and from above, given
     each slab's ``(before, after, changed)`` with nothing handed to it."""
     zero = np.zeros_like(ends[0][0])
@@ -133,7 +133,7 @@ def hand_on(ends: list) -> tuple[list, list]:
     return below, above[::-1]
 
 
-def create_store(path: Path, shape, chunks, place: DigitalObject) -> None:
+def _create_store(path: Path, shape, chunks, place: DigitalObject) -> None:
     """An empty OME-Zarr image (NGFF 0.4, one level ``0`` of uint8, axes
     stored x, y, z) placed as ``place``, for slabs to write into."""
     from ..mesh.formats.omezarr import multiscales
@@ -144,10 +144,21 @@ def create_store(path: Path, shape, chunks, place: DigitalObject) -> None:
     root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz")
 
 
-def slab_thickness(shape, slab: int | None, workers: int) -> int:
+def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int) -> int:
     """Vertex layers per slab: ``slab``, or as many as fit
-    :data:`SLAB_VOXELS`; refused up front when the workers' slabs would not
-    fit in memory."""
+    :data:`SLAB_VOXELS`.
+
+    Raises
+    ------
+    IsoflowError
+        The workers' slabs would not fit in memory (up front), or ``slab``
+        is not positive.
+
+    Examples
+    --------
+    >>> slab_thickness((100, 1023, 1023), None, 2)
+    32
+    """
     _, ny, nz = shape
     layer = (ny + 1) * (nz + 1)
     thick = max(1, SLAB_VOXELS // layer) if slab is None else int(slab)
@@ -206,7 +217,7 @@ class ChunkedFlow(ArrayFlow):
         shape = tuple(int(s) for s in box.shape)
         path = self._name()
         chunks = (slab_thickness(shape, self.slab, self.workers), min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
-        create_store(path, shape, chunks, place)
+        _create_store(path, shape, chunks, place)
         target = import_zarr().open_group(str(path), mode="r+")["0"]
         voxels = box.astype(np.uint8).rechunk(chunks)
         count = voxels.sum(dtype=np.int64)
@@ -237,14 +248,14 @@ class ChunkedFlow(ArrayFlow):
         shape = state.shape
         thick = slab_thickness(shape, self.slab, self.workers)
         parts = [(a, min(a + thick, shape[0] + 1)) for a in range(0, shape[0] + 1, thick)]
-        ends = self._compute(*(delayed(slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
-        below, above = hand_on(list(ends))
+        ends = self._compute(*(delayed(_slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
+        below, above = _hand_on(list(ends))
         scratch = self.directory / ".flow-scratch.zarr"
         grid = tuple(s + 1 for s in shape)
-        create_store(scratch, grid, (thick, min(CHUNK_YZ, grid[1]), min(CHUNK_YZ, grid[2])), state.place)
+        _create_store(scratch, grid, (thick, min(CHUNK_YZ, grid[1]), min(CHUNK_YZ, grid[2])), state.place)
         try:
             boxes = [b for b in self._compute(*(
-                delayed(slab_keep, pure=False)(state.path, shape, a, b, table, below[s], above[s], str(scratch))
+                delayed(_slab_keep, pure=False)(state.path, shape, a, b, table, below[s], above[s], str(scratch))
                 for s, (a, b) in enumerate(parts))) if b is not None]
             place = state.place.on_dual_lattice(state.place.volume)
             if not boxes:
@@ -284,7 +295,23 @@ def _binary_block(block: np.ndarray, where: str = "volume", block_info=None) -> 
 def source_volume(path):
     """The volume of a zarr store (``IMAGE.zarr:LEVEL`` too) as a dask array
     in x, y, z order, and its placement (a :class:`DigitalObject` with an
-    empty volume): what :func:`isoflow.read_volume` reads, lazily."""
+    empty volume): what :func:`isoflow.read_volume` reads, lazily.
+
+    Raises
+    ------
+    IsoflowError
+        Not a zarr store, or not a 3D volume.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from isoflow.mesh.volumes import write_volume
+    >>> path = tempfile.mkdtemp() + "/v.zarr"
+    >>> _ = write_volume(DigitalObject(np.ones((2, 3, 4), bool), pitch=0.5), path)
+    >>> volume, place = source_volume(path)
+    >>> volume.shape, place.spacing.tolist()
+    ((2, 3, 4), [0.5, 0.5, 0.5])
+    """
     from ..mesh.formats.omezarr import axis_names, placement_of
     from ..mesh.formats.registry import spatial_axes, split_dataset
     from ..scale.chunks import open_zarr_node
@@ -314,9 +341,15 @@ def source_volume(path):
     return lazy, DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin)
 
 
-def guard_refusal(where: str, shape) -> str:
+def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
     """Why the guarded flow of a store is not done block by block, and what
-    it would need in memory (one line)."""
+    it would need in memory (one line).
+
+    Examples
+    --------
+    >>> guard_refusal("big.zarr", (1024, 1024, 1024)).split(";")[0]
+    'big.zarr: --guard is not done block by block (a guarded step realises its moves cell by cell in one order over the whole surface)'
+    """
     need = 6 * int(np.prod(shape))  # the volume, its configuration bytes and the rows of a step
     return (f"{where}: --guard is not done block by block (a guarded step realises its moves cell by cell in one "
             f"order over the whole surface); in memory this {'x'.join(map(str, shape))} volume needs about "
@@ -364,6 +397,16 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     -----
     Eqs. 5.15-5.18; the segments along the first axis are joined across
     the slabs (module docstring).
+
+    Examples
+    --------
+    >>> import tempfile, zarr, numpy as np
+    >>> from pathlib import Path
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> zarr.open_array(str(folder / "in.zarr"), mode="w", shape=(3, 3, 3), chunks=(2, 2, 2), dtype="u1")[...] = 1
+    >>> r = flow_chunked(folder / "in.zarr", folder, slab=1)
+    >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
+    ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
     """
     from .motion import flow_connectivity
     from .run import max_steps_for, run_engine

@@ -31,7 +31,15 @@ COMPILED_VOXELS = 1 << 18
 
 def step_record(obj: DigitalObject, step: int, conn: int) -> dict:
     """A state's figures: step, voxels, parity, Betti numbers, chi, energy
-    (eq. 5.22) and the world bounding box (:func:`isoflow.digital.analysis.analyze`)."""
+    (eq. 5.22) and the world bounding box (:func:`isoflow.digital.analysis.analyze`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> r = step_record(DigitalObject(np.ones((2, 2, 2), bool)), 0, 6)
+    >>> r["voxels"], r["betti"], r["energy"]
+    (8, [1, 0, 0], 8)
+    """
     r = analyze(obj, conn, surfaces=False)
     box = obj.bbox()
     return {
@@ -46,7 +54,15 @@ def step_record(obj: DigitalObject, step: int, conn: int) -> dict:
 
 
 def is_box(volume: np.ndarray) -> bool:
-    """True when the non-empty volume, cropped, is a full box (a cuboid)."""
+    """True when the non-empty volume, cropped, is a full box (a cuboid).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.zeros((4, 4, 4), bool); v[1:3, 1:3, 1:4] = True
+    >>> is_box(v), is_box(np.eye(3, dtype=bool))
+    (True, False)
+    """
     if not volume.any():
         return False
     nz = np.argwhere(volume)
@@ -142,10 +158,30 @@ def flow_engine(method: Method, obj: DigitalObject, conn: int) -> ArrayFlow:
     :data:`COMPILED_VOXELS` voxels in its array or numba is started in
     this process already.
 
+    Parameters
+    ----------
+    method : {"auto", "numpy", "compiled"}
+        How to hold and step the states.
+    obj : DigitalObject
+        The run's input (its array's size decides ``auto``).
+    conn : int
+        The object's connectivity.
+
+    Returns
+    -------
+    ArrayFlow
+        :class:`ArrayFlow` or :class:`BitFlow`.
+
     Raises
     ------
     IsoflowError
         ``method`` is none of the three, or ``compiled`` without numba.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> type(flow_engine("numpy", DigitalObject(np.ones((2, 2, 2), bool)), 6)).__name__
+    'ArrayFlow'
     """
     if method not in ("auto", "numpy", "compiled"):
         raise IsoflowError(f"method must be 'auto', 'numpy' or 'compiled', got {method!r}")

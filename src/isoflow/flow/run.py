@@ -127,7 +127,13 @@ def default_max_steps(obj: DigitalObject) -> int:
 
 
 def max_steps_for(shape: tuple[int, ...]) -> int:
-    """:func:`default_max_steps` of an array of ``shape``."""
+    """:func:`default_max_steps` of an array of ``shape``.
+
+    Examples
+    --------
+    >>> max_steps_for((10, 20, 5))
+    96
+    """
     return 4 * max(shape, default=0) + 16
 
 
@@ -338,6 +344,15 @@ def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason,
     Returns
     -------
     FlowResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.flow.engines import ArrayFlow
+    >>> engine = ArrayFlow(6)
+    >>> r = run_engine(engine, engine.start(DigitalObject(np.ones((2, 2, 2), bool))), cap=5, capped="max-steps")
+    >>> r.stop_reason, [s["voxels"] for s in r.steps]
+    ('vanished', [8, 1, 0])
     """
     conn = engine.conn
     trace = _Trace(engine, keep_states, progress)

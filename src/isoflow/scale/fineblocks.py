@@ -15,7 +15,7 @@ fine cells around cell ``e`` of block ``w`` lie in the ``2^n`` blocks
 Whether a code is simple is Bertrand's test (both topological numbers 1,
 see :mod:`isoflow.digital.simple`) on the 27-bit board, counted by
 dilations of bit masks and remembered in a small hash table per process
-(:func:`memo`): real surfaces repeat a few hundred codes, and a table that
+(:func:`_memo`): real surfaces repeat a few hundred codes, and a table that
 stays in the cache answers them sooner than any table over all 2^26 codes.
 """
 
@@ -33,7 +33,7 @@ _U1, _U63 = np.uint64(1), np.uint64(63)
 
 
 @lru_cache(maxsize=None)
-def board(ndim: int) -> dict:
+def _board(ndim: int) -> dict:
     """The ``3^n`` bitboard's masks: per axis the shift and the cells that
     may move up (``lo``) or down (``hi``) along it; the face neighbours, the
     18- (3D) or 8-neighbourhood (2D), the whole board less its centre
@@ -96,7 +96,7 @@ def _simple(code, face, steps, lo, hi, masks):
     return _one_component(ob, whole, steps, lo, hi, True) and _one_component(bg & near, f, steps, lo, hi, False)
 
 
-#: a remembered code's slot in the table of :func:`memo`: the code, this
+#: a remembered code's slot in the table of :func:`_memo`: the code, this
 #: bit (taken), and whether it is simple
 _TAKEN, _SIMPLE = np.uint32(1 << 31), np.uint32(1 << 30)
 _GOLDEN, _LOW32 = np.uint64(0x9E3779B1), np.uint64(0xFFFFFFFF)
@@ -110,7 +110,7 @@ def _slot(code, shift):
 
 @njit(cache=True, nogil=True, inline="always")
 def _look_up(known, code, shift, last):
-    """``(found, slot)``: 1 or 0 where the table of :func:`memo` knows
+    """``(found, slot)``: 1 or 0 where the table of :func:`_memo` knows
     whether the code is simple, -1 where not, with the free slot for it."""
     slot, mark = _slot(code, shift), code | _TAKEN
     while True:
@@ -148,7 +148,7 @@ def _rehash(old, new, bits):
 _MEMOS: dict = {}
 
 
-def memo(ndim: int, face: bool, thread: int = 0) -> tuple[np.ndarray, np.ndarray]:
+def _memo(ndim: int, face: bool, thread: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """The codes found simple or not in this process, per dimension, kind
     of connectivity and thread (so that threads never write one table):
     ``(table, fill)``, the table twice as large once it is half full (at
@@ -180,24 +180,48 @@ def _simple_codes(codes, face, steps, lo, hi, masks, known, fill, out):
 def _board_tuples(ndim: int):
     """The board's masks as tuples (passed by value: a kernel's inner loop
     then holds no array reference to count): ``steps, lo, hi, masks``."""
-    b = board(ndim)
+    b = _board(ndim)
     steps, lo, hi = (tuple(np.uint32(x) for x in b[k]) for k in ("steps", "lo", "hi"))
     return steps, lo, hi, tuple(np.uint32(b[k]) for k in ("face", "near", "all"))
 
 
 def simple(codes: np.ndarray, ndim: int, face: bool) -> np.ndarray:
-    """Whether each packed neighbourhood (the codes of
-    :func:`isoflow.digital.simple.neighbourhood_codes`) is that of a simple
-    point, for the face connectivity of the object (``face``: 6 or 4) or
-    the full one; the compiled test that :func:`realise` makes."""
+    """Whether each packed neighbourhood is that of a simple point: the
+    compiled test that :func:`realise` makes.
+
+    Parameters
+    ----------
+    codes : numpy.ndarray
+        Packed ``3^n`` neighbourhoods, as
+        :func:`isoflow.digital.simple.neighbourhood_codes` gives them.
+    ndim : int
+        2 or 3.
+    face : bool
+        The object's connectivity is the face one (4, 6), else the full one.
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, one per code.
+
+    Notes
+    -----
+    Bertrand's topological numbers are both 1 (``T = 1``, ``T-bar = 1``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> simple(np.array([0b000001000, 0b101000101]), 2, True).tolist()  # one neighbour; four corners only
+    [True, False]
+    """
     codes = np.ascontiguousarray(codes, np.uint32)
     out = np.empty(len(codes), np.bool_)
-    _simple_codes(codes, face, *_board_tuples(ndim), *memo(ndim, face), out)
+    _simple_codes(codes, face, *_board_tuples(ndim), *_memo(ndim, face), out)
     return out
 
 
 @lru_cache(maxsize=None)
-def code_tables(ndim: int) -> tuple[np.ndarray, np.ndarray]:
+def _code_tables(ndim: int) -> tuple[np.ndarray, np.ndarray]:
     """Per octant ``e`` (cell of a block) and block ``b`` of its
     neighbourhood (``delta_d = b_d - 1 + e_d``): the code bits that each
     value of block ``b``'s byte sets (``tables[e, b, byte]``, centre left
@@ -320,14 +344,35 @@ def _blocks_rows2(bits, nx, keep, state, strides, pending, goal, start, write):
 
 
 def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
-    """The old object on the grid refined twice: its configuration bytes,
-    one per lattice vertex, in an array padded by one vertex each side
-    (``state``, flat), and its boundary vertices (``pending``: flat indices
-    into ``state``) with their moves (``goal``: 1 outward, 0 inward) read
-    from ``keep``, the step's bit rows (:func:`isoflow.scale.flowbits.moves3`
-    or ``moves2``). ``bits``: the volume's rows (a 2D volume as one layer).
+    """The old object on the grid refined twice, and the moves to realise.
 
-    Returns ``(state, padded shape, pending, goal)``."""
+    Parameters
+    ----------
+    bits : numpy.ndarray
+        The volume's bit rows (a 2D volume as one layer).
+    shape : tuple of int
+        The volume's shape (2D or 3D).
+    keep : numpy.ndarray
+        The step's bit rows (:func:`isoflow.scale.flowbits.moves3` or
+        ``moves2``).
+
+    Returns
+    -------
+    tuple
+        ``(state, padded shape, pending, goal)``: the configuration bytes,
+        one per lattice vertex, in an array padded by one vertex each side
+        (flat); the boundary vertices (flat indices into ``state``) and
+        their moves (1 outward, 0 inward).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> bits = bitrows.pack(np.ones((1, 1, 1), bool))[0]
+    >>> state, padded, pending, goal = blocks(bits, (1, 1, 1), np.zeros((5, 1), np.uint64))
+    >>> padded, len(pending), sorted(int(state[p]) for p in pending)[:2]
+    ((4, 4, 4), 8, [1, 2])
+    """
     nd = len(shape)
     padded = tuple(s + 3 for s in shape)
     state = np.zeros(int(np.prod(padded)), np.uint8)
@@ -434,14 +479,14 @@ THREADED_BLOCKS = 50_000
 
 def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps, flips, threads):
     """:func:`_realise` with every batch split among ``threads`` threads
-    (each with its own table of codes, :func:`memo`)."""
+    (each with its own table of codes, :func:`_memo`)."""
     from concurrent.futures import ThreadPoolExecutor
 
     n = len(pending)
     cells = tables.shape[0]
     full = (1 << cells) - 1
     need = _needs(state, pending, goal, full)
-    memos = [memo(nd, face, t) for t in range(threads)]
+    memos = [_memo(nd, face, t) for t in range(threads)]
     reversed_ = -1
     with ThreadPoolExecutor(threads, thread_name_prefix="isoflow-realise") as pool:
         for _ in range(max_sweeps):
@@ -467,10 +512,41 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     has its move reversed once. Large steps (:data:`THREADED_BLOCKS`) split
     each octant's batch among the threads.
 
-    Returns ``(stuck, reversed)``: the flat indices (into ``state``) of the
-    blocks left half-way and of those whose move was reversed."""
+    Parameters
+    ----------
+    state, padded, pending, goal
+        As :func:`blocks` gives them; ``state``, ``pending`` and ``goal``
+        are changed in place.
+    face : bool
+        The object's connectivity is the face one (6, 4).
+    flip : bool
+        Reverse the moves of the blocks left stuck, once.
+    max_sweeps : int
+        Sweeps at most.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(stuck, reversed)``: the flat indices (into ``state``) of the
+        blocks left half-way and of those whose move was reversed.
+
+    Notes
+    -----
+    The flow step by simple deformations (Theorem 21; see
+    :mod:`isoflow.flow.guard`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> bits = bitrows.pack(np.ones((2, 2, 2), bool))[0]
+    >>> keep = np.zeros((10, 1), np.uint64); keep[4] = 2  # the centre vertex (1, 1, 1)
+    >>> cells = blocks(bits, (2, 2, 2), keep)
+    >>> [len(x) for x in realise(*cells, face=True)]  # no block stuck, no move reversed
+    [0, 0]
+    """
     nd = len(padded)
-    tables, deltas = code_tables(nd)
+    tables, deltas = _code_tables(nd)
     strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
     offsets = deltas @ strides
     board_ = _board_tuples(nd)
@@ -480,6 +556,6 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
         stuck, flipped = _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps,
                                            flips, threads)
     else:
-        stuck, flipped = _realise(state, pending, goal, tables, offsets, *board_, *memo(nd, face), face, flip,
+        stuck, flipped = _realise(state, pending, goal, tables, offsets, *board_, *_memo(nd, face), face, flip,
                                   max_sweeps, flips)
     return pending[:stuck].copy(), flips[:flipped].copy()

@@ -255,12 +255,37 @@ def _scan_columns(bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, j0, j1, t0,
 def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> np.ndarray:
     """The vertices of a 3D volume's lattice that the step keeps, as bit rows.
 
-    ``bits``: the volume (``shape``) as :func:`isoflow.scale.bitrows.pack`
-    gives it; ``table``: per configuration, :data:`KEEP`, :data:`NEGATIVE`
-    and the segment a vertex waits for (``EDGE_*``, ``FLAT_*``). Returns
-    the bit rows of the vertex grid (``shape`` plus one per axis), row
-    ``(i, j)`` at ``i (ny + 1) + j``, ``(nz + 1) // 64 + 1`` words a row and
-    one more row, clear."""
+    Parameters
+    ----------
+    bits : numpy.ndarray
+        The volume as :func:`isoflow.scale.bitrows.pack` gives it.
+    shape : tuple of int
+        The volume's shape.
+    table : numpy.ndarray
+        Per configuration (256): :data:`KEEP`, :data:`NEGATIVE` and the
+        segment a vertex waits for (``EDGE_*``, ``FLAT_*``).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint64 bit rows of the vertex grid (``shape`` plus one per axis),
+        row ``(i, j)`` at ``i (ny + 1) + j``, ``(nz + 1) // 64 + 1`` words a
+        row and one more row, clear.
+
+    Notes
+    -----
+    The moves of eqs. 5.15-5.18 as the table gives them; the module
+    docstring says how segments are found.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> table = np.zeros(256, np.int64); table[255] = KEEP  # interior vertices only
+    >>> rows = moves3(bitrows.pack(np.ones((3, 3, 3), bool))[0], (3, 3, 3), table)
+    >>> int(np.bitwise_count(rows).sum())  # the 2^3 inner vertices
+    8
+    """
     return moves3_layers(bits, shape, table, 0, shape[0] + 1)[0]
 
 
@@ -352,9 +377,32 @@ def _moves_rows2(bits, nx, table, keep, neg, pany, waits):
 
 
 def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.ndarray:
-    """:func:`moves3` for a 2D volume (rows along axis 0, ``FLAT_0`` and
-    ``FLAT_1`` in the table): the vertex grid's bit rows, one per vertex
-    row and one more, clear."""
+    """:func:`moves3` for a 2D volume (eq. 5.8).
+
+    Parameters
+    ----------
+    bits : numpy.ndarray
+        The image's rows along axis 0, packed as one layer of a 3D volume.
+    shape : tuple of int
+        The image's shape.
+    table : numpy.ndarray
+        Per configuration (16): :data:`KEEP`, :data:`NEGATIVE`, ``FLAT_0``
+        and ``FLAT_1``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vertex grid's bit rows, one per vertex row and one more, clear.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> table = np.zeros(16, np.int64); table[15] = KEEP
+    >>> rows = moves2(bitrows.pack(np.ones((1, 3, 4), bool))[0], (3, 4), table)
+    >>> int(np.bitwise_count(rows).sum())
+    6
+    """
     nx, ny = shape
     nwords = (ny + 1) // 64 + 1
     keep = np.zeros((nx + 2, nwords), np.uint64)
@@ -418,13 +466,32 @@ def _crop_rows(words, ny, lo_i, lo_j, lo_k, sy, out, nruns, ngaps, sz, r0, r1):
 
 
 def crop(words: np.ndarray, shape: tuple[int, int, int]):
-    """The smallest box holding the set bits of a 3D volume of ``shape``
-    given as bit rows (:func:`moves3`, or :func:`moves2` read as one layer).
+    """The smallest box holding the set bits of a volume given as bit rows.
 
-    Returns ``(bits, shape, lo, run_offsets, gap_offsets)``: the box as
-    :func:`isoflow.scale.bitrows.pack` would pack it (the runs and gaps of
-    its rows counted), its shape and its lowest corner in ``shape``'s
-    indices; an empty volume gives shape ``(0, 0, 0)``."""
+    Parameters
+    ----------
+    words : numpy.ndarray
+        Bit rows of a 3D volume (:func:`moves3`, or :func:`moves2` read as
+        one layer), one clear row past the last.
+    shape : tuple of int
+        That volume's shape.
+
+    Returns
+    -------
+    tuple
+        ``(bits, shape, lo, run_offsets, gap_offsets)``: the box as
+        :func:`isoflow.scale.bitrows.pack` would pack it (the runs and gaps
+        of its rows counted), its shape and its lowest corner in the input's
+        indices; an empty volume gives shape ``(0, 0, 0)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> v = np.zeros((4, 4, 70), bool); v[1:3, 2, 65:67] = True
+    >>> crop(bitrows.pack(v)[0], v.shape)[1:3]
+    ((2, 1, 2), (1, 2, 65))
+    """
     nx, ny, nz = shape
     lo_i, hi_i, lo_j, hi_j, union = _bounds(words, nx, ny)
     if hi_i == 0:
@@ -445,7 +512,29 @@ def crop(words: np.ndarray, shape: tuple[int, int, int]):
 
 
 def unpack(bits: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
-    """The boolean volume of bit rows (the last axis packed, little-endian words)."""
+    """The boolean volume of bit rows.
+
+    Parameters
+    ----------
+    bits : numpy.ndarray
+        uint64 rows, the last axis packed (voxel ``k`` at bit ``k % 64`` of
+        word ``k // 64``), at least ``prod(shape[:-1])`` of them.
+    shape : tuple of int
+        The volume's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        A bool array of ``shape``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.scale import bitrows
+    >>> v = np.random.default_rng(0).random((3, 2, 70)) < 0.5
+    >>> bool(np.array_equal(unpack(bitrows.pack(v)[0], v.shape), v))
+    True
+    """
     rows = int(np.prod(shape[:-1]))
     if rows == 0 or shape[-1] == 0:
         return np.zeros(shape, bool)
