@@ -25,11 +25,11 @@ from functools import lru_cache
 
 import numpy as np
 
-from .bitrows import popcount, trailing_zeros
+from .bitrows import around, configuration, planar_configuration, popcount, shifted, trailing_zeros, word
 from .compiled import run, slabs, thread_count
 from .jit import njit
 
-_U1, _U63 = np.uint64(1), np.uint64(63)
+_U1 = np.uint64(1)
 
 
 @lru_cache(maxsize=None)
@@ -271,20 +271,13 @@ def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal, st
     count = start
     for i in range(i0, i1):
         for j in range(ny + 1):
-            r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
-            r1 = i * ny + j - 1 if i < nx and j >= 1 else -1
-            r2 = (i - 1) * ny + j if i >= 1 and j < ny else -1
-            r3 = i * ny + j if i < nx and j < ny else -1
+            r0, r1, r2, r3 = around(i, j, nx, ny)
             base = (i + 1) * strides[0] + (j + 1) * strides[1] + 1
             v = i * (ny + 1) + j
             p0 = p1 = p2 = p3 = np.uint64(0)
             for w in range(nwords):
-                u0 = bits[r0, w] if r0 >= 0 and w < bits.shape[1] else np.uint64(0)
-                u1 = bits[r1, w] if r1 >= 0 and w < bits.shape[1] else np.uint64(0)
-                u2 = bits[r2, w] if r2 >= 0 and w < bits.shape[1] else np.uint64(0)
-                u3 = bits[r3, w] if r3 >= 0 and w < bits.shape[1] else np.uint64(0)
-                s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
-                s2, s3 = (u2 << _U1) | (p2 >> _U63), (u3 << _U1) | (p3 >> _U63)
+                u0, u1, u2, u3 = word(bits, r0, w), word(bits, r1, w), word(bits, r2, w), word(bits, r3, w)
+                s0, s1, s2, s3 = shifted(u0, p0), shifted(u1, p1), shifted(u2, p2), shifted(u3, p3)
                 p0, p1, p2, p3 = u0, u1, u2, u3
                 inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
                 boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
@@ -297,11 +290,7 @@ def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal, st
                 while m:
                     k = trailing_zeros(m)
                     m &= m - _U1
-                    c = (((s0 >> k) & _U1) | (((s1 >> k) & _U1) << np.uint64(1)) | (((s2 >> k) & _U1) << np.uint64(2))
-                         | (((s3 >> k) & _U1) << np.uint64(3)) | (((u0 >> k) & _U1) << np.uint64(4))
-                         | (((u1 >> k) & _U1) << np.uint64(5)) | (((u2 >> k) & _U1) << np.uint64(6))
-                         | (((u3 >> k) & _U1) << np.uint64(7)))
-                    state[at + k] = np.uint8(c)
+                    state[at + k] = np.uint8(configuration(s0, s1, s2, s3, u0, u1, u2, u3, k))
                     pending[count] = at + k
                     goal[count] = np.uint8((keep[v, w] >> k) & _U1)
                     count += 1
@@ -319,9 +308,8 @@ def _blocks_rows2(bits, nx, keep, state, strides, pending, goal, start, write):
         base = (i + 1) * strides[0] + 1
         p0 = p1 = np.uint64(0)
         for w in range(nwords):
-            u0 = bits[r0, w] if r0 >= 0 and w < bits.shape[1] else np.uint64(0)
-            u1 = bits[r1, w] if r1 >= 0 and w < bits.shape[1] else np.uint64(0)
-            s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+            u0, u1 = word(bits, r0, w), word(bits, r1, w)
+            s0, s1 = shifted(u0, p0), shifted(u1, p1)
             p0, p1 = u0, u1
             inside = s0 & s1 & u0 & u1
             boundary = (s0 | s1 | u0 | u1) & ~inside
@@ -334,9 +322,7 @@ def _blocks_rows2(bits, nx, keep, state, strides, pending, goal, start, write):
             while m:
                 k = trailing_zeros(m)
                 m &= m - _U1
-                c = (((s0 >> k) & _U1) | (((s1 >> k) & _U1) << np.uint64(1)) | (((u0 >> k) & _U1) << np.uint64(2))
-                     | (((u1 >> k) & _U1) << np.uint64(3)))
-                state[at + k] = np.uint8(c)
+                state[at + k] = np.uint8(planar_configuration(s0, s1, u0, u1, k))
                 pending[count] = at + k
                 goal[count] = np.uint8((keep[i, w] >> k) & _U1)
                 count += 1

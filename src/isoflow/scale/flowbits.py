@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bitrows import popcount, trailing_zeros
+from .bitrows import around, configuration, planar_configuration, popcount, shifted, trailing_zeros, word
 from .compiled import run, slabs, thread_count
 from .jit import njit
 
@@ -55,16 +55,8 @@ _U1, _U63 = np.uint64(1), np.uint64(63)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _load(bits, row, w):
-    """Word ``w`` of a row, zero for row -1 (outside the array) and past the row."""
-    if row < 0 or w >= bits.shape[1]:
-        return np.uint64(0)
-    return bits[row, w]
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _bit(word, k):
-    return (word >> np.uint64(k)) & _U1
+def _bit(value, k):
+    return (value >> np.uint64(k)) & _U1
 
 
 @njit(cache=True, nogil=True)
@@ -128,8 +120,8 @@ def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, t0, t1, bits, a0,
             d = np.uint64(0)
             for r0 in (a0, b0):
                 if r0 >= 0:
-                    now = _load(bits, r0 + t * rstride, w) if t < n else np.uint64(0)
-                    old = _load(bits, r0 + (t - 1) * rstride, w) if t > 0 else np.uint64(0)
+                    now = word(bits, r0 + t * rstride, w) if t < n else np.uint64(0)
+                    old = word(bits, r0 + (t - 1) * rstride, w) if t > 0 else np.uint64(0)
                     d |= now ^ old
             dd = d | (d << _U1) | (prev >> _U63)
             prev = d
@@ -171,16 +163,12 @@ def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, 
         waits_y = False
         for j in range(ny + 1):
             v = i * (ny + 1) + j
-            r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
-            r1 = i * ny + j - 1 if i < nx and j >= 1 else -1
-            r2 = (i - 1) * ny + j if i >= 1 and j < ny else -1
-            r3 = i * ny + j if i < nx and j < ny else -1
+            r0, r1, r2, r3 = around(i, j, nx, ny)
             p0 = p1 = p2 = p3 = np.uint64(0)
             waits_z = np.uint64(0)
             for w in range(nwords):
-                u0, u1, u2, u3 = _load(bits, r0, w), _load(bits, r1, w), _load(bits, r2, w), _load(bits, r3, w)
-                s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
-                s2, s3 = (u2 << _U1) | (p2 >> _U63), (u3 << _U1) | (p3 >> _U63)
+                u0, u1, u2, u3 = word(bits, r0, w), word(bits, r1, w), word(bits, r2, w), word(bits, r3, w)
+                s0, s1, s2, s3 = shifted(u0, p0), shifted(u1, p1), shifted(u2, p2), shifted(u3, p3)
                 p0, p1, p2, p3 = u0, u1, u2, u3
                 inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
                 boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
@@ -190,11 +178,7 @@ def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, 
                 while m:
                     k = trailing_zeros(m)
                     m &= m - _U1
-                    c = (_bit(s0, k) | (_bit(s1, k) << np.uint64(1)) | (_bit(s2, k) << np.uint64(2))
-                         | (_bit(s3, k) << np.uint64(3)) | (_bit(u0, k) << np.uint64(4))
-                         | (_bit(u1, k) << np.uint64(5)) | (_bit(u2, k) << np.uint64(6))
-                         | (_bit(u3, k) << np.uint64(7)))
-                    f = table[c]
+                    f = table[configuration(s0, s1, s2, s3, u0, u1, u2, u3, k)]
                     one = _U1 << k
                     if f & KEEP:
                         kp |= one
@@ -343,8 +327,8 @@ def _moves_rows2(bits, nx, table, keep, neg, pany, waits):
         p0 = p1 = np.uint64(0)
         waits_1 = np.uint64(0)
         for w in range(nwords):
-            u0, u1 = _load(bits, r0, w), _load(bits, r1, w)
-            s0, s1 = (u0 << _U1) | (p0 >> _U63), (u1 << _U1) | (p1 >> _U63)
+            u0, u1 = word(bits, r0, w), word(bits, r1, w)
+            s0, s1 = shifted(u0, p0), shifted(u1, p1)
             p0, p1 = u0, u1
             inside = s0 & s1 & u0 & u1
             boundary = (s0 | s1 | u0 | u1) & ~inside
@@ -353,8 +337,7 @@ def _moves_rows2(bits, nx, table, keep, neg, pany, waits):
             while m:
                 k = trailing_zeros(m)
                 m &= m - _U1
-                c = _bit(s0, k) | (_bit(s1, k) << np.uint64(1)) | (_bit(u0, k) << np.uint64(2)) | (_bit(u1, k) << np.uint64(3))
-                f = table[c]
+                f = table[planar_configuration(s0, s1, u0, u1, k)]
                 one = _U1 << k
                 if f & KEEP:
                     kp |= one
