@@ -56,7 +56,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 CACHE = Path(__file__).resolve().parent / ".cache"
+
+from timing import timed_command  # noqa: E402
 
 from isoflow import DigitalObject  # noqa: E402
 from isoflow.flow.engines import flow_engine  # noqa: E402
@@ -149,16 +152,9 @@ def step_in_process(size: int, repeat: int) -> dict:
 
 
 def command(args: list[str], src: Path | None = None) -> tuple[float, float]:
-    """Wall and CPU seconds (the child's, all threads) of one command."""
-    env = dict(os.environ)
-    if src is not None:
-        env["PYTHONPATH"] = str(src)
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = time.perf_counter()
-    subprocess.run(args, env=env, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime)
+    """Wall and CPU seconds (the child's, all threads) of one command,
+    with the isoflow of the source tree ``src`` when given."""
+    return timed_command(args, None if src is None else str(src))
 
 
 def flow_command(path: Path, *extra: str) -> list[str]:

@@ -7,7 +7,6 @@ rings, rows across word boundaries (63, 64, 65, 127-129 voxels along the
 packed axis), shapes filling their array (touching every border), in 3D
 and 2D, at both connectivities."""
 
-from dataclasses import replace
 
 import numpy as np
 import pytest

@@ -45,15 +45,19 @@ def step_table(ndim: int, connectivity: int) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        int64, one entry per configuration (16 or 256), read-only.
+        int64, one entry per 3D configuration (256), read-only. A 2D image
+        is stepped as the layer ``x = 0`` of a volume: its configurations
+        are those of the vertex layer ``x = 1``, octants ``dx = 0`` only
+        (pixel bit ``b`` is octant ``2 b``), the others are 0.
 
     Notes
     -----
     3D: a convex edge along axis ``a`` waits for its segment along ``a``
-    (kept when both ends are negative), a flat vertex with normal ``a`` for
-    its two in-face segments (kept when any end is negative): the table of
-    :func:`isoflow.flow.motion.motion_luts`, eqs. 5.15-5.18. 2D: a flat
-    vertex waits for its segment along the axis of its two pixels (eq. 5.8).
+    (kept when both ends are negative: ``BOTH``), a flat vertex with normal
+    ``a`` for its two in-face segments (kept when any end is negative:
+    ``ANY``): the table of :func:`isoflow.flow.motion.motion_luts`, eqs.
+    5.15-5.18. 2D: a flat vertex waits for its segment along the axis of
+    its two pixels (eq. 5.8), axes 0 and 1 being y and z.
 
     Examples
     --------
@@ -61,18 +65,30 @@ def step_table(ndim: int, connectivity: int) -> np.ndarray:
     >>> bool(step_table(3, 6)[255] & KEEP), bool(step_table(3, 6)[1] & KEEP)
     (True, False)
     """
+    any_, both = (flowbits.ANY_X, flowbits.ANY_Y, flowbits.ANY_Z), (flowbits.BOTH_X, flowbits.BOTH_Y, flowbits.BOTH_Z)
     if ndim == 3:
         keep, negative, role = motion_luts(connectivity)
-        roles = [flowbits.EDGE_X, flowbits.EDGE_Y, flowbits.EDGE_Z, flowbits.FLAT_X, flowbits.FLAT_Y, flowbits.FLAT_Z]
+        # edges along x, y, z; flats with normal x, y, z: the other two axes
+        roles = [*both, any_[1] | any_[2], any_[0] | any_[2], any_[0] | any_[1]]
     else:
         keep, negative, role = planar_motion_luts(connectivity)
-        roles = [flowbits.FLAT_0, flowbits.FLAT_1]
-    table = np.where(keep, flowbits.KEEP, 0) | np.where(negative, flowbits.NEGATIVE, 0)
+        roles = [any_[1], any_[2]]  # a flat pixel's segment along axis 0 (y), axis 1 (z)
+    flags = np.where(keep, flowbits.KEEP, 0) | np.where(negative, flowbits.NEGATIVE, 0)
     for r, flag in enumerate(roles, start=1):
-        table[role == r] |= flag
-    table = table.astype(np.int64)
+        flags[role == r] |= flag
+    table = np.zeros(256, np.int64)
+    table[_as_layer(ndim)] = flags
     table.setflags(write=False)
     return table
+
+
+def _as_layer(ndim: int) -> np.ndarray:
+    """Each configuration's index in :func:`step_table`: itself in 3D; in
+    2D the configuration of the vertex layer ``x = 1`` with the same pixels
+    (pixel bit ``b`` is octant ``2 b``)."""
+    if ndim == 3:
+        return np.arange(256)
+    return np.array([sum(1 << (2 * b) for b in range(4) if c >> b & 1) for c in range(16)])
 
 
 def _layers(shape: tuple[int, ...]) -> tuple[int, int, int]:

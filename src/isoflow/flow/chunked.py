@@ -96,7 +96,7 @@ def _slab_moves(path: str, shape, i0: int, i1: int, table, before=None, after=No
     vol = _layers(path, i0 - 1, i1, shape)
     with using(1):
         bits = bitrows.pack(vol)[0]
-        return flowbits.moves3_layers(bits, vol.shape, table, 1, vol.shape[0], before, after)
+        return flowbits.moves3_layers(bits, vol.shape, table, 1, vol.shape[0], before, after, hand_on=True)
 
 
 def _slab_ends(path: str, shape, i0: int, i1: int, table):

@@ -162,11 +162,3 @@ def configuration(s0, s1, s2, s3, u0, u1, u2, u3, k):
             | (((s3 >> kk) & one) << np.uint64(3)) | (((u0 >> kk) & one) << np.uint64(4))
             | (((u1 >> kk) & one) << np.uint64(5)) | (((u2 >> kk) & one) << np.uint64(6))
             | (((u3 >> kk) & one) << np.uint64(7)))
-
-
-@njit(cache=True, nogil=True, inline="always")
-def planar_configuration(s0, s1, u0, u1, k):
-    """:func:`configuration` of a 2D vertex (pixel ``d0 + 2 d1``)."""
-    one, kk = np.uint64(1), np.uint64(k)
-    return (((s0 >> kk) & one) | (((s1 >> kk) & one) << np.uint64(1)) | (((u0 >> kk) & one) << np.uint64(2))
-            | (((u1 >> kk) & one) << np.uint64(3)))

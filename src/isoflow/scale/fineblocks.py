@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .bitrows import around, configuration, planar_configuration, popcount, shifted, trailing_zeros, word
+from .bitrows import around, configuration, octant_planes, popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 
@@ -260,72 +260,47 @@ def _fill_runs(state, at, word, value):
 
 
 @njit(cache=True, nogil=True)
-def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal, start, write):
+def _blocks_layers(bits, nx, ny, keep, state, strides, i0, i1, pending, goal, start, write, planar):
     """Configuration bytes of vertex rows ``i0 <= i < i1`` of a 3D volume
     into the padded ``state`` (flat, ``strides``), and the boundary
     vertices (neither empty nor full) from ``pending[start]`` on, with
     their goal, the keep bit. Without ``write`` only counts the boundary
     vertices (the arrays are sized by that count: growing them in the loop
-    would count references to them on every word). Returns the count."""
+    would count references to them on every word). Returns the count.
+    ``planar``: a 2D image as the layer ``x = 0`` (vertex layer 1 asked;
+    its vertices' octants ``dx = 0`` are the pixels; ``keep`` has that
+    layer's rows only, ``strides`` the image's padded vertex grid's after a
+    0)."""
     nwords = keep.shape[1]
     count = start
+    full = 15 if planar else 255
     for i in range(i0, i1):
         for j in range(ny + 1):
-            r0, r1, r2, r3 = around(i, j, nx, ny)
+            rows = around(i, j, nx, ny)
             base = (i + 1) * strides[0] + (j + 1) * strides[1] + 1
-            v = i * (ny + 1) + j
-            p0 = p1 = p2 = p3 = np.uint64(0)
+            v = (i - i0 if planar else i) * (ny + 1) + j
+            previous = (np.uint64(0), np.uint64(0), np.uint64(0), np.uint64(0))
             for w in range(nwords):
-                u0, u1, u2, u3 = word(bits, r0, w), word(bits, r1, w), word(bits, r2, w), word(bits, r3, w)
-                s0, s1, s2, s3 = shifted(u0, p0), shifted(u1, p1), shifted(u2, p2), shifted(u3, p3)
-                p0, p1, p2, p3 = u0, u1, u2, u3
-                inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
+                s0, s1, s2, s3, u0, u1, u2, u3 = octant_planes(bits, rows, w, previous)
+                previous = (u0, u1, u2, u3)
+                inside = s0 & s2 & u0 & u2 if planar else s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
                 boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
                 if not write:
                     count += popcount(boundary)
                     continue
                 at = base + 64 * w
-                _fill_runs(state, at, inside, 255)
+                _fill_runs(state, at, inside, full)
                 m = boundary
                 while m:
                     k = trailing_zeros(m)
                     m &= m - _U1
-                    state[at + k] = np.uint8(configuration(s0, s1, s2, s3, u0, u1, u2, u3, k))
+                    c = configuration(s0, s1, s2, s3, u0, u1, u2, u3, k)
+                    if planar:  # octants 0, 2, 4, 6 are pixels 0, 1, 2, 3
+                        c = (c & 1) | ((c >> 1) & 2) | ((c >> 2) & 4) | ((c >> 3) & 8)
+                    state[at + k] = np.uint8(c)
                     pending[count] = at + k
                     goal[count] = np.uint8((keep[v, w] >> k) & _U1)
                     count += 1
-    return count
-
-
-@njit(cache=True, nogil=True)
-def _blocks_rows2(bits, nx, keep, state, strides, pending, goal, start, write):
-    """:func:`_blocks_layers` of a 2D volume (rows along axis 0)."""
-    nwords = keep.shape[1]
-    count = start
-    for i in range(nx + 1):
-        r0 = i - 1 if i >= 1 else -1
-        r1 = i if i < nx else -1
-        base = (i + 1) * strides[0] + 1
-        p0 = p1 = np.uint64(0)
-        for w in range(nwords):
-            u0, u1 = word(bits, r0, w), word(bits, r1, w)
-            s0, s1 = shifted(u0, p0), shifted(u1, p1)
-            p0, p1 = u0, u1
-            inside = s0 & s1 & u0 & u1
-            boundary = (s0 | s1 | u0 | u1) & ~inside
-            if not write:
-                count += popcount(boundary)
-                continue
-            at = base + 64 * w
-            _fill_runs(state, at, inside, 15)
-            m = boundary
-            while m:
-                k = trailing_zeros(m)
-                m &= m - _U1
-                state[at + k] = np.uint8(planar_configuration(s0, s1, u0, u1, k))
-                pending[count] = at + k
-                goal[count] = np.uint8((keep[i, w] >> k) & _U1)
-                count += 1
     return count
 
 
@@ -364,17 +339,17 @@ def blocks(bits: np.ndarray, shape: tuple[int, ...], keep: np.ndarray):
     state = np.zeros(int(np.prod(padded)), np.uint8)
     strides = np.array([int(np.prod(padded[d + 1:])) for d in range(nd)], np.int64)
     none = np.zeros(0, np.int64), np.zeros(0, np.uint8)
-    if nd == 2:
-        count = _blocks_rows2(bits, shape[0], keep, state, strides, *none, 0, False)
-        pending, goal = np.empty(count, np.int64), np.empty(count, np.uint8)
-        _blocks_rows2(bits, shape[0], keep, state, strides, pending, goal, 0, True)
-        return state, padded, pending, goal
-    nx, ny, nz = shape
-    parts = slabs(nx + 1, thread_count((nx + 1) * (ny + 1) * (nz + 1)))
-    counts = run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, *none, 0, False) for a, b in parts])
+    if nd == 2:  # the image as the layer x = 0 of a volume, its vertex layer 1
+        layers, strides, parts = (1, *shape), np.array([0, strides[0]]), [(1, 2)]
+    else:
+        layers = shape
+        parts = slabs(shape[0] + 1, thread_count(int(np.prod([s + 1 for s in shape]))))
+    nx, ny, _ = layers
+    counts = run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, *none, 0, False, nd == 2)
+                  for a, b in parts])
     starts = np.concatenate([[0], np.cumsum(counts)])
     pending, goal = np.empty(int(starts[-1]), np.int64), np.empty(int(starts[-1]), np.uint8)
-    run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, pending, goal, int(start), True)
+    run([(_blocks_layers, bits, nx, ny, keep, state, strides, a, b, pending, goal, int(start), True, nd == 2)
          for (a, b), start in zip(parts, starts)])
     return state, padded, pending, goal
 

@@ -40,16 +40,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bitrows import around, configuration, planar_configuration, popcount, shifted, trailing_zeros, word
+from .bitrows import around, configuration, octant_planes, popcount, trailing_zeros, word
 from .compiled import run, slabs, thread_count
 from .jit import njit
 
 #: bits of the table over configurations (:func:`isoflow.flow.bitflow.step_table`)
 KEEP, NEGATIVE = 1, 2
-#: 3D: the segment a vertex waits for, by its role (edge along x, y, z;
-#: flat with normal x, y, z); 2D: a flat vertex's segment along axis 0 or 1
-EDGE_X, EDGE_Y, EDGE_Z, FLAT_X, FLAT_Y, FLAT_Z = 4, 8, 16, 32, 64, 128
-FLAT_0, FLAT_1 = 4, 8
+#: the segments a vertex waits for, per axis: kept when one end (``ANY_*``:
+#: a flat vertex's in-face axes) or both ends (``BOTH_*``: a convex edge's
+#: axis) are negative; a 2D image is the layer ``x = 0`` of a 3D volume, its
+#: axes 0 and 1 the axes y and z
+ANY_X, BOTH_X, ANY_Y, BOTH_Y, ANY_Z, BOTH_Z = 4, 8, 16, 32, 64, 128
 
 _U1, _U63 = np.uint64(1), np.uint64(63)
 
@@ -142,96 +143,93 @@ def _scan(keep, neg, pany, pboth, p0, pstride, v0, vstride, n, t0, t1, bits, a0,
 
 
 @njit(cache=True, nogil=True)
-def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, i1):
+def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, i1, planar):
     """The moves of vertex rows ``(i, j)``, ``i0 <= i < i1``: ``keep`` gets
     the vertices kept by their configuration alone and by their segments
     along the packed axis and along the second axis; ``pany_x``,
     ``pboth_x`` (and ``waits_x[j]``) the vertices still waiting for their
-    segments along the first axis, which :func:`_scan` settles afterwards."""
+    segments along the first axis, which :func:`_scan` settles afterwards.
+    ``planar``: the volume is a 2D image as the layer ``x = 0`` (one voxel
+    layer, vertex layer 1 asked), whose vertices have only the octants
+    ``dx = 0``."""
     nwords = keep.shape[1]
     pany_y = np.zeros((ny + 1, nwords), np.uint64)
     pboth_y = np.zeros((ny + 1, nwords), np.uint64)
     ends = np.empty((ny + 1, nwords), np.uint64)
     change = np.empty((ny + 1, nwords), np.uint64)
-    work = np.empty(nwords, np.uint64)
-    rest = np.empty(nwords, np.uint64)
-    seen = np.zeros(nwords, np.uint64)
+    work = np.empty((3, nwords), np.uint64)
     events = np.empty(nwords, np.uint64)
-    edge_z = np.empty(nwords, np.uint64)
-    flat_z = np.empty(nwords, np.uint64)
+    both_z = np.empty(nwords, np.uint64)
+    any_z = np.empty(nwords, np.uint64)
     for i in range(i0, i1):
         waits_y = False
         for j in range(ny + 1):
             v = i * (ny + 1) + j
-            r0, r1, r2, r3 = around(i, j, nx, ny)
-            p0 = p1 = p2 = p3 = np.uint64(0)
+            rows = around(i, j, nx, ny)
+            previous = (np.uint64(0), np.uint64(0), np.uint64(0), np.uint64(0))
             waits_z = np.uint64(0)
             for w in range(nwords):
-                u0, u1, u2, u3 = word(bits, r0, w), word(bits, r1, w), word(bits, r2, w), word(bits, r3, w)
-                s0, s1, s2, s3 = shifted(u0, p0), shifted(u1, p1), shifted(u2, p2), shifted(u3, p3)
-                p0, p1, p2, p3 = u0, u1, u2, u3
-                inside = s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
+                s0, s1, s2, s3, u0, u1, u2, u3 = octant_planes(bits, rows, w, previous)
+                previous = (u0, u1, u2, u3)
+                inside = s0 & s2 & u0 & u2 if planar else s0 & s1 & s2 & s3 & u0 & u1 & u2 & u3
                 boundary = (s0 | s1 | s2 | s3 | u0 | u1 | u2 | u3) & ~inside
-                kp, ng = inside, np.uint64(0)
-                ax = bx = ay = by = ez = fz = np.uint64(0)
-                m = boundary
-                while m:
-                    k = trailing_zeros(m)
-                    m &= m - _U1
-                    f = table[configuration(s0, s1, s2, s3, u0, u1, u2, u3, k)]
-                    one = _U1 << k
-                    if f & KEEP:
-                        kp |= one
-                    if f & NEGATIVE:
-                        ng |= one
-                    if f & (FLAT_Y | FLAT_Z):
-                        ax |= one
-                    if f & EDGE_X:
-                        bx |= one
-                    if f & (FLAT_X | FLAT_Z):
-                        ay |= one
-                    if f & EDGE_Y:
-                        by |= one
-                    if f & EDGE_Z:
-                        ez |= one
-                    if f & (FLAT_X | FLAT_Y):
-                        fz |= one
-                keep[v, w] = kp
+                kp, ng, ax, bx, ay, by, az, bz = _decode(boundary, s0, s1, s2, s3, u0, u1, u2, u3, table)
+                keep[v, w] = inside | kp
                 neg[v, w] = ng
                 pany_x[v, w] = ax
                 pboth_x[v, w] = bx
                 pany_y[j, w] = ay
                 pboth_y[j, w] = by
                 events[w] = (s0 ^ u0) | (s1 ^ u1) | (s2 ^ u2) | (s3 ^ u3)
-                edge_z[w] = ez
-                flat_z[w] = fz
-                waits_z |= ez | fz
+                both_z[w] = bz
+                any_z[w] = az
+                waits_z |= az | bz
                 if ax | bx:
                     waits_x[j] = True
                 if ay | by:
                     waits_y = True
             if waits_z:
-                _packed_segments(keep, neg, v, events, edge_z, flat_z, nwords)
+                _packed_segments(keep, neg, v, events, both_z, any_z, nwords)
         if waits_y:
             work[:] = 0
-            rest[:] = 0
             _scan(keep, neg, pany_y, pboth_y, 0, 1, i * (ny + 1), 1, ny, 0, ny + 1, bits,
-                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work, rest, seen)
+                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work[0], work[1],
+                  work[2])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _decode(boundary, s0, s1, s2, s3, u0, u1, u2, u3, table):
+    """The boundary vertices of a word, one by one: per flag of the table
+    (:data:`KEEP`, :data:`NEGATIVE`, ``ANY_X`` .. ``BOTH_Z``), the word of
+    those whose configuration has it."""
+    f0 = f1 = f2 = f3 = f4 = f5 = f6 = f7 = np.uint64(0)
+    m = boundary
+    while m:
+        k = trailing_zeros(m)
+        m &= m - _U1
+        f = np.uint64(table[configuration(s0, s1, s2, s3, u0, u1, u2, u3, k)])
+        f0 |= (f & _U1) << k
+        f1 |= ((f >> np.uint64(1)) & _U1) << k
+        f2 |= ((f >> np.uint64(2)) & _U1) << k
+        f3 |= ((f >> np.uint64(3)) & _U1) << k
+        f4 |= ((f >> np.uint64(4)) & _U1) << k
+        f5 |= ((f >> np.uint64(5)) & _U1) << k
+        f6 |= ((f >> np.uint64(6)) & _U1) << k
+        f7 |= ((f >> np.uint64(7)) & _U1) << k
+    return f0, f1, f2, f3, f4, f5, f6, f7
 
 
 @njit(cache=True, nogil=True)
 def _scan_columns(bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, j0, j1, t0, t1, before, after, changed):
     """The segments along the first axis of the vertex columns ``j0 <= j <
-    j1``, over vertex layers ``t0 <= t < t1`` (see :func:`_scan`; per
-    column ``before``, ``after``, ``changed``). Columns with nothing
-    waiting are skipped, unless a slab's ends are asked (not the whole
-    axis)."""
+    j1`` where something waits (``waits_x``), over vertex layers ``t0 <= t
+    < t1`` (see :func:`_scan`; per column ``before``, ``after``,
+    ``changed``)."""
     nwords = keep.shape[1]
     ends = np.empty((nx + 1, nwords), np.uint64)
     change = np.empty((nx + 1, nwords), np.uint64)
-    whole = t0 == 0 and t1 == nx + 1
     for j in range(j0, j1):
-        if waits_x[j] or not whole:
+        if waits_x[j]:
             _scan(keep, neg, pany_x, pboth_x, j, ny + 1, j, ny + 1, nx, t0, t1, bits,
                   j - 1 if j >= 1 else -1, j if j < ny else -1, ny, ends, change, before[j], after[j], changed[j])
 
@@ -247,7 +245,7 @@ def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> 
         The volume's shape.
     table : numpy.ndarray
         Per configuration (256): :data:`KEEP`, :data:`NEGATIVE` and the
-        segment a vertex waits for (``EDGE_*``, ``FLAT_*``).
+        segments a vertex waits for (``ANY_*``, ``BOTH_*``).
 
     Returns
     -------
@@ -265,7 +263,7 @@ def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> 
     --------
     >>> import numpy as np
     >>> from isoflow.scale import bitrows
-    >>> table = np.zeros(256, np.int64); table[255] = KEEP  # interior vertices only
+    >>> table = np.zeros(256, np.int64)  # keeps only the interior vertices
     >>> rows = moves3(bitrows.pack(np.ones((3, 3, 3), bool))[0], (3, 3, 3), table)
     >>> int(np.bitwise_count(rows).sum())  # the 2^3 inner vertices
     8
@@ -274,7 +272,8 @@ def moves3(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray) -> 
 
 
 def moves3_layers(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarray, first: int, last: int,
-                  before: np.ndarray | None = None, after: np.ndarray | None = None):
+                  before: np.ndarray | None = None, after: np.ndarray | None = None, *, hand_on: bool = False,
+                  planar: bool = False):
     """:func:`moves3` for the vertex layers ``first <= i < last`` only: the
     volume's voxel layers ``first - 1 .. last - 1`` are all it reads, so a
     slab of a larger volume with one voxel layer below it (zeros outside
@@ -283,6 +282,10 @@ def moves3_layers(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarr
     vertex line ``(j, k)`` (bit rows, ``(ny + 1, words)``), whether the
     segment's end before the slab (after it) is negative, as the slabs
     below (above) hand it on.
+
+    ``hand_on``: scan every line along the first axis, for what the slab
+    hands on, not only those where a vertex waits; ``planar``: the volume
+    is a 2D image as the layer ``x = 0`` (:func:`moves2`).
 
     Returns ``(keep, before, after, changed)``: the vertex grid's bit rows
     (only the layers asked are set), what this slab hands on upward and
@@ -301,62 +304,15 @@ def moves3_layers(bits: np.ndarray, shape: tuple[int, int, int], table: np.ndarr
     threads = thread_count((last - first) * (ny + 1) * (nz + 1))
     parts = [(first + a, first + b) for a, b in slabs(last - first, threads)]
     waits = np.zeros((len(parts), ny + 1), np.bool_)
-    run([(_moves_layers, bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits[t], a, b)
+    run([(_moves_layers, bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits[t], a, b, planar)
          for t, (a, b) in enumerate(parts)])
-    waits_x = waits.any(axis=0)
+    waits_x = waits.any(axis=0) | hand_on
     before = np.zeros((ny + 1, nwords), np.uint64) if before is None else before.copy()
     after = np.zeros((ny + 1, nwords), np.uint64) if after is None else after.copy()
     changed = np.zeros((ny + 1, nwords), np.uint64)
     run([(_scan_columns, bits, nx, ny, keep, neg, pany_x, pboth_x, waits_x, a, b, first, last, before, after, changed)
          for a, b in slabs(ny + 1, threads)])
     return keep, before, after, changed
-
-
-@njit(cache=True, nogil=True)
-def _moves_rows2(bits, nx, table, keep, neg, pany, waits):
-    """The planar step's moves of every vertex row (2D, rows along axis 0):
-    settled by the configuration and the segments along the packed axis;
-    ``pany`` the flat vertices waiting for a segment along axis 0."""
-    nwords = keep.shape[1]
-    events = np.empty(nwords, np.uint64)
-    edge = np.zeros(nwords, np.uint64)
-    flat = np.empty(nwords, np.uint64)
-    for i in range(nx + 1):
-        r0 = i - 1 if i >= 1 else -1
-        r1 = i if i < nx else -1
-        p0 = p1 = np.uint64(0)
-        waits_1 = np.uint64(0)
-        for w in range(nwords):
-            u0, u1 = word(bits, r0, w), word(bits, r1, w)
-            s0, s1 = shifted(u0, p0), shifted(u1, p1)
-            p0, p1 = u0, u1
-            inside = s0 & s1 & u0 & u1
-            boundary = (s0 | s1 | u0 | u1) & ~inside
-            kp, ng, a0, f1 = inside, np.uint64(0), np.uint64(0), np.uint64(0)
-            m = boundary
-            while m:
-                k = trailing_zeros(m)
-                m &= m - _U1
-                f = table[planar_configuration(s0, s1, u0, u1, k)]
-                one = _U1 << k
-                if f & KEEP:
-                    kp |= one
-                if f & NEGATIVE:
-                    ng |= one
-                if f & FLAT_0:
-                    a0 |= one
-                if f & FLAT_1:
-                    f1 |= one
-            keep[i, w] = kp
-            neg[i, w] = ng
-            pany[i, w] = a0
-            events[w] = (s0 ^ u0) | (s1 ^ u1)
-            flat[w] = f1
-            waits_1 |= f1
-            if a0:
-                waits[0] = True
-        if waits_1:
-            _packed_segments(keep, neg, i, events, edge, flat, nwords)
 
 
 def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.ndarray:
@@ -369,8 +325,11 @@ def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.nd
     shape : tuple of int
         The image's shape.
     table : numpy.ndarray
-        Per configuration (16): :data:`KEEP`, :data:`NEGATIVE`, ``FLAT_0``
-        and ``FLAT_1``.
+        Per 3D configuration (256) of the layer ``x = 1`` of vertices of the
+        image as the layer ``x = 0`` of voxels (octants ``dx = 0`` only:
+        pixel ``(d0, d1)`` is octant ``2 d0 + 4 d1``): :data:`KEEP`,
+        :data:`NEGATIVE`, ``ANY_Y`` (a segment along axis 0), ``ANY_Z``
+        (along axis 1).
 
     Returns
     -------
@@ -381,24 +340,14 @@ def moves2(bits: np.ndarray, shape: tuple[int, int], table: np.ndarray) -> np.nd
     --------
     >>> import numpy as np
     >>> from isoflow.scale import bitrows
-    >>> table = np.zeros(16, np.int64); table[15] = KEEP
+    >>> table = np.zeros(256, np.int64); table[1 | 4 | 16 | 64] = KEEP  # all four pixels
     >>> rows = moves2(bitrows.pack(np.ones((1, 3, 4), bool))[0], (3, 4), table)
     >>> int(np.bitwise_count(rows).sum())
     6
     """
     nx, ny = shape
-    nwords = (ny + 1) // 64 + 1
-    keep = np.zeros((nx + 2, nwords), np.uint64)
-    neg = np.empty((nx + 1, nwords), np.uint64)
-    pany = np.empty((nx + 1, nwords), np.uint64)
-    table = np.ascontiguousarray(table, np.int64)
-    waits = np.zeros(1, np.bool_)
-    _moves_rows2(bits, nx, table, keep, neg, pany, waits)
-    if waits[0]:
-        work = np.zeros((3, nwords), np.uint64)
-        _scan(keep, neg, pany, np.zeros_like(pany), 0, 1, 0, 1, nx, 0, nx + 1, bits, 0, -1, 1,
-              np.empty((nx + 1, nwords), np.uint64), np.empty((nx + 1, nwords), np.uint64), work[0], work[1], work[2])
-    return keep
+    keep = moves3_layers(bits, (1, nx, ny), table, 1, 2, planar=True)[0]
+    return keep[nx + 1:]  # the vertex layer x = 1, whose octants dx = 0 are the image, and the clear row
 
 
 @njit(cache=True, nogil=True)
