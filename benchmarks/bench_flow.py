@@ -1,41 +1,53 @@
-"""Speed of the digital curvature flow.
+"""Speed of the digital curvature flow, against one morphological erosion.
 
-    python benchmarks/bench_flow.py            # 128^3 ball to the end, one 256^3 step, guarded 128^3 torus
+    python benchmarks/bench_flow.py                 # everything, 256^3 ball
     python benchmarks/bench_flow.py --json benchmarks/results/bench_flow.json
+    python benchmarks/bench_flow.py --baseline OTHER/src   # also time another checkout's commands
 
-Times (wall clock, best of ``--repeat`` for the single steps):
+The peer is ``scipy.ndimage.binary_erosion`` of the same volume (a user's
+idea of "one step of a morphological filter"). Inputs are made once and
+cached in ``benchmarks/.cache/``: a digital ball filling 90% of a
+``size^3`` array, a smoothed random porous field (uniform noise, gaussian
+sigma 2, > 0.5, seed 0), a solid torus (R = 0.3 n, r = 0.15 n) in 128^3.
 
-* a digital ball in a 128^3 array flowed until it vanishes, the bare steps
-  (``flow_step``) and the full ``run_flow`` (which also takes the Betti
-  numbers, Euler characteristic and energy of every state);
-* one step of a 256^3 ball and of a 256^3 porous object (smoothed noise:
-  a surface in every direction, the worst case for the segment search);
-* a solid torus in a 128^3 array (R = 0.3 n, r = 0.15 n) run to the end
-  plain (``run_flow``: until it vanishes) and guarded (``run_flow(...,
-  guard=True)``: to its fixed point, a closed curve), at 6 and 26, timed in
-  pairs (plain, guarded, plain, guarded: ``--repeat`` pairs, medians), with
-  the time per step of each and their ratio; and the first (largest) step
-  alone: ``flow_step`` against ``guarded_step``. Both runs record the Betti
-  numbers and energy of every state, so the per-step ratio is what a user
-  of ``isoflow flow --guard`` waits for.
+1. ``step_in_process``: one flow step with its record (voxels, parity,
+   Betti numbers, chi, energy, bbox) of the ball and of the porous field,
+   as ``run_flow`` takes it, by each method (``compiled``: bit rows,
+   ``numpy``: the arrays of the reference implementation), against one
+   erosion, timed alternately (erosion, compiled, numpy, ...), best of
+   ``--repeat``; wall and CPU seconds (the CPU seconds of all threads).
+2. ``commands``: whole commands in fresh processes, best of ``--repeat``,
+   alternately: ``isoflow flow BALL.npy --steps 5 --json`` and ``--steps
+   25``, whose difference over 20 is one step with its record; the same
+   for ``python -c`` scripts that load the ball and run 1 and 21 erosions;
+   the ratio of the two per-operation times. With ``--baseline SRC``, the
+   flow commands of the isoflow source tree ``SRC`` (today's main, say)
+   beside.
+3. ``to_the_limit``: whole commands ``isoflow flow BALL.npy --json`` and
+   ``--guard``, to the limit point (the plain flow until the ball vanishes,
+   the guarded one to its fixed point), alternately, best of ``--repeat``;
+   the guarded time over the plain one. ``--baseline-limit`` also times the
+   baseline tree's plain run (minutes).
+4. ``torus``: the torus flowed to its end plain and guarded at 6 and 26 in
+   process, by each method.
+5. ``zarr`` (only when asked, ``--only zarr``): a ``--zarr-size``^3 ball
+   written as a zarr store slab by slab, then ``isoflow flow BALL.zarr
+   --out DIR --volumes .zarr --steps --zarr-steps`` as a whole command (the
+   flow block by block): its wall and CPU seconds and the peak resident
+   memory of the process (``ru_maxrss``).
 
-Why a step costs what it costs: one pass builds the configuration bytes
-(three shifted ORs), one table look-up gives the unconditional moves, one
-finds the convex-edge and flat vertices (the only ones whose move depends on
-their segments); then, per axis, a contiguous copy of the lines along it, one
-comparison with the shifted array marks the run starts, one ``flatnonzero``
-lists them, one
-cumulative sum numbers the runs, so that every edge/flat vertex reads its
-run's first vertex and the next run's start -- a constant number of
-whole-array passes (about a dozen over ``(n+1)^3`` elements) plus work
-proportional to the surface.
+Every run checks that the methods agree on the records they produce. Only
+relative paths and figures are written.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import resource
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -44,76 +56,19 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+CACHE = Path(__file__).resolve().parent / ".cache"
+
+from timing import timed_command  # noqa: E402
 
 from isoflow import DigitalObject  # noqa: E402
-from isoflow.flow.motion import flow_step  # noqa: E402
+from isoflow.flow.engines import flow_engine  # noqa: E402
 from isoflow.flow.run import run_flow  # noqa: E402
-from isoflow.flow.guard import guarded_step  # noqa: E402
 
 
 def ball(n: int) -> np.ndarray:
     x = np.indices((n,) * 3, dtype=np.float32) - (n - 1) / 2
     return (x**2).sum(0) <= (0.45 * n) ** 2
-
-
-def torus(n: int) -> np.ndarray:
-    x = np.indices((n,) * 3, dtype=np.float32) - (n - 1) / 2
-    rho = np.sqrt(x[0] ** 2 + x[1] ** 2)
-    return (rho - 0.3 * n) ** 2 + x[2] ** 2 <= (0.15 * n) ** 2
-
-
-def paired(a, b, repeat):
-    """Time ``a`` and ``b`` alternately (a b a b ...): medians and last results."""
-    ta, tb = [], []
-    for _ in range(repeat):
-        for fn, times in ((a, ta), (b, tb)):
-            t = time.perf_counter()
-            out = fn()
-            times.append(time.perf_counter() - t)
-            if fn is a:
-                ra = out
-            else:
-                rb = out
-    return float(np.median(ta)), float(np.median(tb)), ra, rb
-
-
-def guarded_torus(n: int, repeat: int) -> dict:
-    """Plain and guarded runs of the n^3 torus, timed in pairs (module docstring)."""
-    obj = DigitalObject(torus(n))
-    out = {"voxels": obj.voxels}
-    for conn in (6, 26):
-        tp, tg, plain, guarded = paired(
-            lambda: run_flow(obj, connectivity=conn, keep_states=False),
-            lambda: run_flow(obj, connectivity=conn, guard=True, keep_states=False),
-            repeat,
-        )
-        sp, sg = len(plain.steps) - 1, len(guarded.steps) - 1
-        t1p, t1g, _, first = paired(lambda: flow_step(obj, conn), lambda: guarded_step(obj, conn, [1, 1, 0]), repeat)
-        out[str(conn)] = {
-            "plain_steps": sp,
-            "plain_total_s": round(tp, 3),
-            "plain_per_step_s": round(tp / sp, 4),
-            "guarded_steps": sg,
-            "guarded_kinds": guarded.guard_steps,
-            "guarded_stop": guarded.stop_reason,
-            "guarded_end_voxels": guarded.steps[-1]["voxels"],
-            "guarded_total_s": round(tg, 3),
-            "guarded_per_step_s": round(tg / sg, 4),
-            "per_step_ratio": round((tg / sg) / (tp / sp), 2),
-            "first_step_plain_s": round(t1p, 3),
-            "first_step_guarded_s": round(t1g, 3),
-            "first_step_ratio": round(t1g / t1p, 2),
-            "first_step_kind": first.kind,
-        }
-        o = out[str(conn)]
-        print(
-            f"torus in {n}^3 ({obj.voxels} voxels), {conn}-connectivity: plain {sp} steps {tp:.2f} s "
-            f"({1000 * tp / sp:.0f} ms/step), guarded {sg} steps {tg:.2f} s ({1000 * tg / sg:.0f} ms/step, "
-            f"{o['guarded_kinds']}, {o['guarded_stop']} at {o['guarded_end_voxels']} voxels): "
-            f"{o['per_step_ratio']}x per step; first step {1000 * t1p:.0f} ms plain, {1000 * t1g:.0f} ms guarded "
-            f"({o['first_step_ratio']}x)"
-        )
-    return out
 
 
 def porous(n: int, seed: int = 0) -> np.ndarray:
@@ -123,61 +78,244 @@ def porous(n: int, seed: int = 0) -> np.ndarray:
     return gaussian_filter(field, 2.0) > 0.5
 
 
-def best(fn, repeat):
-    times = []
+def torus(n: int) -> np.ndarray:
+    x = np.indices((n,) * 3, dtype=np.float32) - (n - 1) / 2
+    rho = np.sqrt(x[0] ** 2 + x[1] ** 2)
+    return (rho - 0.3 * n) ** 2 + x[2] ** 2 <= (0.15 * n) ** 2
+
+
+def cached(name: str, n: int) -> Path:
+    path = CACHE / f"flow_{name}{n}.npy"
+    if not path.exists():
+        CACHE.mkdir(exist_ok=True)
+        np.save(path, {"ball": ball, "porous": porous, "torus": torus}[name](n))
+    return path
+
+
+def clocks():
+    return time.perf_counter(), time.process_time()
+
+
+def since(start) -> tuple[float, float]:
+    wall, cpu = clocks()
+    return wall - start[0], cpu - start[1]
+
+
+def step_with_record(method: str, obj: DigitalObject, conn: int = 6):
+    """One step and its record, as a run takes them (the state packed
+    first, outside the clock, as a run holds it between steps)."""
+    engine = flow_engine(method, obj, conn)
+    state = engine.start(obj)
+
+    def go():
+        new = engine.step(state)
+        return engine.record(new, 1)
+
+    return go
+
+
+def alternate(fns: dict, repeat: int) -> tuple[dict, dict]:
+    """Time each function in turn, ``repeat`` rounds; the best wall and CPU
+    seconds of each, and each one's last result."""
+    best = {k: (np.inf, np.inf) for k in fns}
+    out = {}
     for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return min(times), out
+        for k, fn in fns.items():
+            start = clocks()
+            out[k] = fn()
+            wall, cpu = since(start)
+            best[k] = (min(best[k][0], wall), min(best[k][1], cpu))
+    return {k: {"wall_s": round(w, 4), "cpu_s": round(c, 4)} for k, (w, c) in best.items()}, out
+
+
+def step_in_process(size: int, repeat: int) -> dict:
+    from scipy.ndimage import binary_erosion
+
+    report = {}
+    for name in ("ball", "porous"):
+        vol = np.load(cached(name, size))
+        obj = DigitalObject(vol)
+        fns = {"erosion": lambda: binary_erosion(vol), "compiled": step_with_record("compiled", obj),
+               "numpy": step_with_record("numpy", obj)}
+        fns["compiled"]()  # numba's start, outside the clock
+        times, out = alternate(fns, repeat)
+        assert out["compiled"] == out["numpy"], "the methods' records differ"
+        for k in ("compiled", "numpy"):
+            times[k]["over_erosion_wall"] = round(times[k]["wall_s"] / times["erosion"]["wall_s"], 3)
+            times[k]["over_erosion_cpu"] = round(times[k]["cpu_s"] / times["erosion"]["cpu_s"], 3)
+        report[f"{name}{size}"] = {"voxels": obj.voxels, **times}
+        print(f"{name} {size}^3, one step with its record: compiled {1000 * times['compiled']['wall_s']:.1f} ms "
+              f"({times['compiled']['over_erosion_wall']}x an erosion; CPU {times['compiled']['over_erosion_cpu']}x), "
+              f"numpy {1000 * times['numpy']['wall_s']:.0f} ms ({times['numpy']['over_erosion_wall']}x), "
+              f"erosion {1000 * times['erosion']['wall_s']:.0f} ms")
+    return report
+
+
+def command(args: list[str], src: Path | None = None) -> tuple[float, float]:
+    """Wall and CPU seconds (the child's, all threads) of one command,
+    with the isoflow of the source tree ``src`` when given."""
+    return timed_command(args, None if src is None else str(src))
+
+
+def flow_command(path: Path, *extra: str) -> list[str]:
+    return [sys.executable, "-m", "isoflow.cli", "flow", str(path), "--json", *extra]
+
+
+def erosion_command(path: Path, count: int) -> list[str]:
+    script = ("import sys, numpy, scipy.ndimage as n; v = numpy.load(sys.argv[1]); "
+              f"[n.binary_erosion(v) for _ in range({count})]")
+    return [sys.executable, "-c", script, str(path)]
+
+
+def best_commands(cmds: dict, repeat: int) -> dict:
+    best = {k: (np.inf, np.inf) for k in cmds}
+    for _ in range(repeat):
+        for k, (argv, src) in cmds.items():
+            wall, cpu = command(argv, src)
+            best[k] = (min(best[k][0], wall), min(best[k][1], cpu))
+    return {k: {"wall_s": round(w, 3), "cpu_s": round(c, 3)} for k, (w, c) in best.items()}
+
+
+def per_operation(times: dict, few: str, many: str, count: int) -> dict:
+    return {c: round((times[many][c] - times[few][c]) / count, 4) for c in ("wall_s", "cpu_s")}
+
+
+def commands(size: int, repeat: int, baseline: Path | None) -> dict:
+    path = cached("ball", size)
+    here = ROOT / "src"
+    cmds = {"flow_5": (flow_command(path, "--steps", "5"), here), "flow_25": (flow_command(path, "--steps", "25"), here),
+            "erode_1": (erosion_command(path, 1), None), "erode_21": (erosion_command(path, 21), None)}
+    if baseline is not None:
+        cmds["baseline_flow_5"] = (flow_command(path, "--steps", "5"), baseline)
+        cmds["baseline_flow_25"] = (flow_command(path, "--steps", "25"), baseline)
+    command(cmds["flow_5"][0], here)  # numba's cache, outside the clock
+    times = best_commands(cmds, repeat)
+    step = per_operation(times, "flow_5", "flow_25", 20)
+    erosion = per_operation(times, "erode_1", "erode_21", 20)
+    out = {"commands": times, "step": step, "erosion": erosion,
+           "step_over_erosion_wall": round(step["wall_s"] / erosion["wall_s"], 3),
+           "step_over_erosion_cpu": round(step["cpu_s"] / erosion["cpu_s"], 3)}
+    line = (f"whole commands, ball {size}^3: a step with its record {1000 * step['wall_s']:.1f} ms, an erosion "
+            f"{1000 * erosion['wall_s']:.1f} ms: {out['step_over_erosion_wall']}x (CPU {out['step_over_erosion_cpu']}x)")
+    if baseline is not None:
+        old = per_operation(times, "baseline_flow_5", "baseline_flow_25", 20)
+        out["baseline_step"] = old
+        out["baseline_step_over_erosion_wall"] = round(old["wall_s"] / erosion["wall_s"], 3)
+        line += f"; baseline's step {1000 * old['wall_s']:.0f} ms ({out['baseline_step_over_erosion_wall']}x)"
+    print(line)
+    return out
+
+
+def to_the_limit(size: int, repeat: int, baseline: Path | None) -> dict:
+    path = cached("ball", size)
+    here = ROOT / "src"
+    cmds = {"plain": (flow_command(path), here), "guarded": (flow_command(path, "--guard"), here)}
+    if baseline is not None:
+        cmds["baseline_plain"] = (flow_command(path), baseline)
+    times = best_commands(cmds, repeat)
+    out = {"commands": times, "guarded_over_plain_wall": round(times["guarded"]["wall_s"] / times["plain"]["wall_s"], 3),
+           "guarded_over_plain_cpu": round(times["guarded"]["cpu_s"] / times["plain"]["cpu_s"], 3)}
+    r = run_flow(np.load(path), keep_states=False)
+    out["steps"] = len(r.steps) - 1
+    out["limit"] = r.limit
+    print(f"ball {size}^3 to its limit ({out['steps']} steps) as a whole command: plain {times['plain']['wall_s']:.2f} s, "
+          f"guarded {times['guarded']['wall_s']:.2f} s ({out['guarded_over_plain_wall']}x; CPU "
+          f"{out['guarded_over_plain_cpu']}x)" + (f", baseline plain {times['baseline_plain']['wall_s']:.1f} s"
+                                                  if baseline is not None else ""))
+    return out
+
+
+def zarr_ball(n: int) -> Path:
+    """A ball filling 90% of an n^3 store, written slab by slab (no n^3
+    array in memory)."""
+    import zarr
+
+    path = CACHE / f"flow_ball{n}.zarr"
+    if (path / "0").exists():
+        return path
+    CACHE.mkdir(exist_ok=True)
+    root = zarr.open_group(str(path), mode="w", zarr_format=2)
+    z = root.create_array("0", shape=(n, n, n), chunks=(32, 256, 256), dtype=np.uint8, fill_value=0)
+    yz = np.indices((n, n), dtype=np.float32) - (n - 1) / 2
+    for a in range(0, n, 32):
+        x = np.arange(a, min(a + 32, n), dtype=np.float32)[:, None, None] - (n - 1) / 2
+        z[a:a + 32] = (x**2 + (yz**2).sum(0)) <= (0.45 * n) ** 2
+    return path
+
+
+def zarr_flow(n: int, steps: int) -> dict:
+    import shutil
+    import tempfile
+
+    path = zarr_ball(n)
+    out = Path(tempfile.mkdtemp()) / "run"
+    argv = [sys.executable, "-m", "isoflow.cli", "flow", str(path), "--out", str(out), "--volumes", ".zarr",
+            "--steps", str(steps), "--json", "-q"]
+    env = dict(os.environ, PYTHONPATH=str(ROOT / "src"))
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    done = subprocess.run(argv, env=env, check=True, capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    shutil.rmtree(out.parent, ignore_errors=True)
+    rec = json.loads(done.stdout)
+    out = {"size": n, "steps": steps, "wall_s": round(wall, 1),
+           "cpu_s": round((r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime), 1),
+           "peak_rss_gib": round(r1.ru_maxrss / 2**20, 3), "voxels": [s["voxels"] for s in rec["steps"]]}
+    print(f"ball {n}^3 from zarr, {steps} steps block by block: {wall:.0f} s, peak memory "
+          f"{out['peak_rss_gib']} GiB (the largest child process so far)")
+    return out
+
+
+def torus_runs(n: int, repeat: int) -> dict:
+    obj = DigitalObject(np.load(cached("torus", n)))
+    out = {"voxels": obj.voxels}
+    for conn in (6, 26):
+        fns = {f"{m}_{g}": (lambda m=m, g=g: run_flow(obj, connectivity=conn, guard=g == "guarded", keep_states=False,
+                                                        method=m))
+               for m in ("compiled", "numpy") for g in ("plain", "guarded")}
+        times, got = alternate(fns, repeat)
+        for g in ("plain", "guarded"):
+            assert got[f"compiled_{g}"].to_dict() == got[f"numpy_{g}"].to_dict(), "the methods' runs differ"
+        guarded = got["compiled_guarded"]
+        out[str(conn)] = {**times, "plain_steps": len(got["compiled_plain"].steps) - 1,
+                          "guarded_steps": len(guarded.steps) - 1, "guarded_kinds": guarded.guard_steps,
+                          "guarded_stop": guarded.stop_reason}
+        print(f"torus {n}^3 at {conn}: plain {times['compiled_plain']['wall_s']:.2f} s (numpy "
+              f"{times['numpy_plain']['wall_s']:.2f} s), guarded {times['compiled_guarded']['wall_s']:.2f} s (numpy "
+              f"{times['numpy_guarded']['wall_s']:.2f} s), {guarded.guard_steps}")
+    return out
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--small", type=int, default=128)
-    ap.add_argument("--large", type=int, default=256)
+    ap.add_argument("--size", type=int, default=256, help="side of the ball and porous field (default 256)")
+    ap.add_argument("--torus", type=int, default=128, help="side of the torus (default 128)")
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--baseline", type=Path, help="another isoflow source tree whose commands are timed beside")
+    ap.add_argument("--baseline-limit", action="store_true", help="also run the baseline's flow to the limit")
+    ap.add_argument("--only", nargs="+", choices=["step", "commands", "limit", "torus", "zarr"])
+    ap.add_argument("--zarr-size", type=int, default=1024, help="side of the ball flowed from zarr (--only zarr)")
+    ap.add_argument("--zarr-steps", type=int, default=20)
     ap.add_argument("--json", help="also write the figures to this file")
     args = ap.parse_args(argv)
-    report = {"machine": platform.platform(), "python": platform.python_version(), "numpy": np.__version__}
-
-    obj = DigitalObject(ball(args.small))
-    flow_step(DigitalObject(ball(8)))  # build the lookup tables once
-    t = time.perf_counter()
-    cur, steps = obj, 0
-    while cur.voxels:
-        cur = flow_step(cur)
-        steps += 1
-    bare = time.perf_counter() - t
-    t = time.perf_counter()
-    result = run_flow(obj, keep_states=False)
-    full = time.perf_counter() - t
-    report[f"ball{args.small}_to_the_end"] = {
-        "voxels": obj.voxels,
-        "steps": steps,
-        "flow_step_total_s": round(bare, 3),
-        "flow_step_per_step_s": round(bare / steps, 4),
-        "run_flow_total_s": round(full, 3),
-        "run_flow_per_step_s": round(full / steps, 4),
-        "limit": result.limit,
-    }
-    print(
-        f"ball in {args.small}^3 ({obj.voxels} voxels): vanishes after {steps} steps; "
-        f"flow_step {bare:.2f} s ({1000 * bare / steps:.1f} ms/step); "
-        f"run_flow with Betti numbers and energy {full:.2f} s ({1000 * full / steps:.1f} ms/step); "
-        f"limit {result.limit['center']} ({result.limit['last_shape']})"
-    )
-
-    for name, make in (("ball", ball), ("porous", porous)):
-        big = DigitalObject(make(args.large))
-        secs, new = best(lambda: flow_step(big), args.repeat)
-        report[f"{name}{args.large}_one_step_s"] = round(secs, 3)
-        print(f"one step of a {args.large}^3 {name} ({big.voxels} voxels -> {new.voxels}): {secs:.2f} s")
-
-    report[f"torus{args.small}_plain_vs_guarded"] = guarded_torus(args.small, args.repeat)
+    report = {"machine": platform.platform(), "python": platform.python_version(), "numpy": np.__version__,
+              "cpus": len(os.sched_getaffinity(0)), "baseline": args.baseline is not None}
+    parts = args.only or ["step", "commands", "limit", "torus"]
+    if "step" in parts:
+        report["step_in_process"] = step_in_process(args.size, args.repeat)
+    if "commands" in parts:
+        report["commands"] = commands(args.size, args.repeat, args.baseline)
+    if "limit" in parts:
+        report["to_the_limit"] = to_the_limit(args.size, args.repeat,
+                                              args.baseline if args.baseline_limit else None)
+    if "torus" in parts:
+        report[f"torus{args.torus}"] = torus_runs(args.torus, args.repeat)
+    if "zarr" in parts:
+        report[f"zarr_ball{args.zarr_size}"] = zarr_flow(args.zarr_size, args.zarr_steps)
     if args.json:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(report, indent=1))
+        Path(args.json).write_text(json.dumps(report, indent=1) + "\n")
 
 
 if __name__ == "__main__":

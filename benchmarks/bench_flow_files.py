@@ -19,10 +19,8 @@ import argparse
 import contextlib
 import io
 import os
-import resource
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,6 +29,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from timing import timed_command  # noqa: E402
 
 
 def objects(tmp: Path) -> list[tuple[str, Path, list[str]]]:
@@ -46,17 +47,11 @@ def objects(tmp: Path) -> list[tuple[str, Path, list[str]]]:
 
 def command(src: Path, inp: Path, out: Path | None, extra: list[str]) -> tuple[float, float]:
     """Wall and CPU seconds of one ``isoflow flow`` from the source tree ``src``."""
-    env = dict(os.environ, PYTHONPATH=str(src))
     args = [sys.executable, "-m", "isoflow.cli", "flow", str(inp), *extra]
     if out is not None:
         shutil.rmtree(out, ignore_errors=True)
         args += ["--out", str(out)]
-    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    t = time.perf_counter()
-    subprocess.run(args, env=env, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t
-    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return wall, (r1.ru_utime + r1.ru_stime) - (r0.ru_utime + r0.ru_stime)
+    return timed_command(args, str(src))
 
 
 def in_process(inp: Path, out: Path, extra: list[str]) -> dict:

@@ -156,15 +156,16 @@ def state_digest(obj) -> str:
     return h.hexdigest()[:16]
 
 
-def plain_runs():
-    """The plain runs of :func:`plain_reference_objects` at both connectivities."""
+def plain_runs(method: str = "numpy"):
+    """The plain runs of :func:`plain_reference_objects` at both
+    connectivities, stepped by ``method`` (``numpy``: the reference)."""
     from isoflow import DigitalObject
     from isoflow.flow.run import run_flow
 
     runs = {}
     for name, v in plain_reference_objects():
         for conn in (6, 26):
-            r = run_flow(DigitalObject(v), connectivity=conn)
+            r = run_flow(DigitalObject(v), connectivity=conn, method=method)
             runs[f"{name}@{conn}"] = {
                 "states": [state_digest(s) for s in r.states],
                 "stop_reason": r.stop_reason,

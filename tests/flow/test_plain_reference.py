@@ -7,7 +7,8 @@ connectivity, a digest of every state (shape, offset, parity, voxels), the
 stop reason, the limit and the topology changes with their place. The objects
 are seeded (tori, annulus prisms, linked rings, a figure eight, a hollow
 ball, edge and vertex contacts, random unions of boxes and noise, in 3D and
-2D).
+2D). Both ways of stepping (``method="numpy"`` and ``"compiled"``, on bit
+rows) must give them.
 """
 
 import json
@@ -20,9 +21,10 @@ from shapes import plain_runs
 REFERENCE = json.loads(Path(__file__).with_name("plain_reference.json").read_text())
 
 
-@pytest.fixture(scope="module")
-def now():
-    return plain_runs()
+@pytest.fixture(scope="module", params=["numpy", "compiled"])
+def now(request):
+    """The runs of today's NumPy flow and of the flow on bit rows."""
+    return plain_runs(request.param)
 
 
 def test_same_objects(now):

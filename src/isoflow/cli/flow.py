@@ -31,6 +31,8 @@ def cmd_flow(args: argparse.Namespace) -> int:
         from ..flow.files import check_output_dir
 
         check_output_dir(args.out, args.force)
+    if block_wise(args):
+        return flow_store(args)
     obj = load_input(args)
     check_flow_input(args, obj)
     writer = flow_writer(args, obj)
@@ -45,12 +47,59 @@ def cmd_flow(args: argparse.Namespace) -> int:
     return 0 if writer is None else say_read_back(args, writer)
 
 
+def block_wise(args: argparse.Namespace) -> bool:
+    """A .zarr input whose states go to .zarr stores (``--volumes .zarr``)
+    is flowed block by block, never read into memory."""
+    from ..mesh.formats.registry import split_dataset
+
+    return (split_dataset(args.input)[0].suffix.lower() == ".zarr" and args.volumes is not None
+            and args.volumes.lower() == ".zarr")
+
+
+def flow_store(args: argparse.Namespace) -> int:
+    """The plain flow of a zarr store block by block
+    (:func:`isoflow.flow.chunked.flow_chunked`), its states written into
+    ``--out`` as step_NNN.zarr with flow.csv and flow.png; the previous
+    run's files stay until this one is complete."""
+    from ..flow.chunked import flow_chunked, guard_refusal, source_volume
+    from ..flow.files import FlowWriter
+    from ..flow.motion import flow_connectivity
+    from ..flow.run import max_steps_for
+
+    volume, _ = source_volume(args.input)
+    if getattr(args, "label", None) is not None:
+        raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
+                           "store of their own, or flow it without --volumes .zarr")
+    if args.guard:
+        raise IsoflowError(guard_refusal(str(args.input), volume.shape))
+    check_flow_input(args, None)
+    conn = flow_connectivity(3, args.connectivity)
+    last = args.steps if args.steps is not None else max_steps_for(volume.shape)
+    writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
+    with progress_bar(args, "flow", unit=" steps") as show:
+        try:
+            result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
+                                  progress=None if show is None else (lambda step, state: show(step, args.steps)))
+            writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
+            writer.finish(result)
+        except BaseException:
+            writer.abort()  # the previous run's files stay as they were
+            raise
+    if args.json:
+        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+    else:
+        print(format_flow(result, str(args.input)))
+        print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
+    return 0
+
+
 def check_flow_input(args: argparse.Namespace, obj) -> None:
-    """The object and the options make a flow, or one line says why not."""
-    if obj.ndim not in (2, 3):
+    """The object (None: read block by block) and the options make a flow,
+    or one line says why not."""
+    if obj is not None and obj.ndim not in (2, 3):
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
                            f"this one is {obj.ndim}D")
-    if obj.voxels == 0:
+    if obj is not None and obj.voxels == 0:
         raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
@@ -95,8 +144,11 @@ def run_with_files(args: argparse.Namespace, obj, writer):
         try:
             if writer is not None:
                 writer.add(0, obj.cropped())
+            # (no callback when nothing uses the states: a compiled run then
+            # never unpacks them)
             result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
-                              progress=progress, keep_states=False)
+                              progress=progress if writer is not None or show is not None else None,
+                              keep_states=False)
             if writer is not None:
                 writer.finish(result)
         except BaseException:

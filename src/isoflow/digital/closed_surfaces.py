@@ -374,11 +374,21 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
     and faces of its whole boundary; the surfaces follow from the tree of
     components (:func:`surface_tree`). The pinches found by the sweep join
     the components into the connectivity's own for the Betti numbers."""
-    from ..scale import bitrows, kernels, sweep
+    from ..scale import bitrows
 
     bits, off, goff = bitrows.pack(vol)
+    return census_of_rows(bits, vol.shape, off, goff, conn, surfaces)
+
+
+def census_of_rows(bits: np.ndarray, shape: tuple[int, int, int], off: np.ndarray, goff: np.ndarray, conn: int,
+                   surfaces: bool = True) -> dict:
+    """:func:`compiled_census` of a volume held as bit rows: ``bits``,
+    ``off`` and ``goff`` as :func:`isoflow.scale.bitrows.pack` gives them
+    for a non-empty volume of ``shape``."""
+    from ..scale import kernels, sweep
+
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    found = sweep.sweep(bits, vol.shape, off, goff, kernels.ADJACENCY[obj_adj] + kernels.ADJACENCY[bg_adj],
+    found = sweep.sweep(bits, shape, off, goff, kernels.ADJACENCY[obj_adj] + kernels.ADJACENCY[bg_adj],
                         sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces)
     starts = (bits[:-1, 0] & 1).astype(np.int64)  # 1: the row starts with a run
     del bits

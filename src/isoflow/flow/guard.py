@@ -38,6 +38,7 @@ import hashlib
 import itertools
 import math
 from dataclasses import dataclass, replace
+from typing import Callable
 
 import numpy as np
 
@@ -169,6 +170,15 @@ def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):
     done, stuck = realise_moves(cfg, keep, conn)
     if not stuck.any():
         return obj.on_dual_lattice(done).cropped(), "flow", int((done != keep).sum())
+    return resolve_stuck(obj, keep, done, stuck, conn, betti)
+
+
+def resolve_stuck(obj: DigitalObject, keep: np.ndarray, done: np.ndarray, stuck: np.ndarray, conn: int,
+                  betti: list[int]):
+    """Step 2 of the module docstring: the stuck blocks all given their
+    plain move (``keep``), all moved outward, or all inward, the first that
+    keeps the Betti numbers, with the others' realised moves (``done``):
+    ``(new object, "partial", moves reversed)``, or None."""
     for vol in (np.where(stuck, keep, done), done | stuck, done & ~stuck):
         if vol.any() and betti_numbers(vol, conn) == betti:
             return obj.on_dual_lattice(vol).cropped(), "partial", int((vol != keep).sum())
@@ -242,6 +252,20 @@ def shape_key(obj: DigitalObject) -> bytes:
     return h.digest()
 
 
+def is_progress(voxels: int, before: int, key: Callable[[], bytes], key_before: Callable[[], bytes],
+                seen: set | None, may_grow: bool) -> bool:
+    """Whether a flow step is progress (module docstring): it removes
+    voxels (``voxels < before``), or (``may_grow``) it reaches a shape
+    (``key()``, its :func:`shape_key`) that is neither the current one
+    (``key_before()``) nor in ``seen``."""
+    if voxels < before:
+        return True
+    if not may_grow:
+        return False
+    k = key()
+    return k != key_before() and (seen is None or k not in seen)
+
+
 @dataclass(frozen=True)
 class GuardedStep:
     """What :func:`guarded_step` did: ``new`` is the next state (the same
@@ -276,9 +300,7 @@ def guarded_step(
     got = lattice_step(obj, conn, betti)
     if got is not None:
         new, kind, n_reversed = got
-        if new.voxels < obj.voxels or (
-            may_grow and shape_key(new) != shape_key(obj) and (seen is None or shape_key(new) not in seen)
-        ):
+        if is_progress(new.voxels, obj.voxels, lambda: shape_key(new), lambda: shape_key(obj), seen, may_grow):
             return GuardedStep(new, kind, n_reversed)
     thinned = thinning_step(obj.volume, conn)
     if thinned is not None:

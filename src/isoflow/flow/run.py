@@ -19,74 +19,76 @@ and records per step the voxels, parity, Betti numbers, chi, energy
   ends ``converged`` at a fixed point, a state with no simple voxel left
   that no flow step makes smaller or new (docs/flow.md). Each guarded
   step's record says which kind of step it was (``move``).
+
+The states are held and stepped by one of :mod:`isoflow.flow.engines`
+(NumPy arrays or bit rows, the same states); this module only decides when
+to stop and what to report.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable
+from dataclasses import dataclass, field
+from typing import Any, Callable, Literal
 
 import numpy as np
 
-from ..digital.analysis import analyze
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
-from . import guard as control
-from .motion import flow_connectivity, flow_moves
+from ..results import Result
+from .engines import ArrayFlow, Method, flow_engine
+from .motion import flow_connectivity
+
+__all__ = ["FlowResult", "GuardKind", "StopReason", "default_max_steps", "max_steps_for", "run_engine", "run_flow"]
+
+#: why a run ended: the object became empty (``vanished``); the number of
+#: steps asked was done (``steps``); ``until_topology_change`` stopped before
+#: a step that changes the Betti numbers (``topology-change``); a guarded run
+#: reached a fixed point (``converged``); a plain run's shape repeats with
+#: period 2 (``cycle``); a plain run reached its safety cap (``max-steps``)
+StopReason = Literal["vanished", "steps", "topology-change", "converged", "cycle", "max-steps"]
+#: a guarded step: the whole flow step, the flow step with its stuck blocks
+#: resolved, or a thinning step on the same lattice (isoflow.flow.guard)
+GuardKind = Literal["flow", "partial", "thinning"]
 
 
-def _bbox_list(obj: DigitalObject):
-    box = obj.bbox()
-    return None if box is None else [box[0].tolist(), box[1].tolist()]
+@dataclass(frozen=True, eq=False)
+class FlowResult(Result):
+    """What :func:`run_flow` returns; it also reads as the mapping that
+    ``isoflow flow --json`` prints (``r["steps"]`` is ``r.steps``; the
+    states are an attribute only).
 
-
-def _record(obj: DigitalObject, step: int, conn: int) -> dict:
-    """Per-step figures: voxels, parity, Betti numbers, chi, energy, bbox."""
-    r = analyze(obj, conn, surfaces=False)
-    betti, chi, energy = r["betti"], r["euler_characteristic"], r["energy"]
-    return {
-        "step": step,
-        "voxels": obj.voxels,
-        "parity": obj.parity,
-        "betti": list(map(int, betti)),
-        "euler_characteristic": int(chi),
-        "energy": int(energy),
-        "bbox": _bbox_list(obj),
-    }
-
-
-def is_box(volume: np.ndarray) -> bool:
-    """True when the non-empty volume, cropped, is a full box (a cuboid)."""
-    if not volume.any():
-        return False
-    nz = np.argwhere(volume)
-    lo, hi = nz.min(0), nz.max(0) + 1
-    return bool(volume[tuple(slice(a, b) for a, b in zip(lo, hi))].all())
-
-
-@dataclass
-class FlowResult:
-    """What :func:`run_flow` returns.
-
-    ``steps``: one dict per state, step 0 the input (see :func:`_record`).
-    ``states``: the objects themselves (when kept). ``stop_reason``:
-    ``vanished`` (the object became empty), ``steps`` (the number of steps
-    asked was done), ``topology-change`` (``until_topology_change``: stopped
-    before the step that would change the Betti numbers), ``converged``
-    (guarded: a fixed point, see :mod:`isoflow.flow.guard`), ``cycle``
-    (plain: the shape repeats with period 2) or ``max-steps`` (safety cap of
-    plain runs). ``limit``: ``center`` (world coordinates of
-    the centre of the last non-empty state's bbox) and ``last_shape``
-    (``cuboid`` when that state is a full box, ``other`` otherwise,
-    ``not-reached`` when the run stopped before vanishing or converging).
-    ``topology_changes``: one dict per change of the Betti numbers (step,
-    before, after, where = world bbox, applied). ``guard_steps`` (guarded
-    runs): how many steps were ``flow``, ``partial`` and ``thinning``.
+    Attributes
+    ----------
+    steps : list of dict
+        One record per state, step 0 the input: step, voxels, parity,
+        betti, euler_characteristic, energy, bbox (world [min, max]), and
+        in guarded runs the kind of step (``move``).
+    states : list of DigitalObject
+        The states themselves, when kept.
+    stop_reason : StopReason
+        Why the run ended (:data:`StopReason`).
+    limit : dict
+        ``center`` (world centre of the last non-empty state's bbox),
+        ``last_shape`` (``cuboid`` when that state is a full box,
+        ``other``, or ``not-reached`` when the run stopped before vanishing
+        or converging) and ``last_step``.
+    topology_changes : list of dict
+        One per change of the Betti numbers in a plain run: step, before,
+        after, where (world bbox), applied.
+    connectivity : int
+        The object's connectivity (4 or 8 in 2D).
+    guard : bool
+        Whether topology control ran.
+    reversed_moves : int
+        Guarded runs: vertices whose move was reversed, over all steps.
+    guard_steps : dict or None
+        Guarded runs: how many steps were ``flow``, ``partial`` and
+        ``thinning``.
     """
 
     steps: list[dict]
     states: list[DigitalObject]
-    stop_reason: str
+    stop_reason: StopReason
     limit: dict
     topology_changes: list[dict]
     connectivity: int
@@ -94,40 +96,140 @@ class FlowResult:
     reversed_moves: int = 0
     guard_steps: dict | None = None
 
-    def to_dict(self) -> dict:
-        return {
-            "connectivity": self.connectivity,
-            "guard": self.guard,
-            "stop_reason": self.stop_reason,
-            "steps": self.steps,
-            "limit": self.limit,
-            "topology_changes": self.topology_changes,
-            "reversed_moves": self.reversed_moves,
-            **({"guard_steps": self.guard_steps} if self.guard else {}),
-        }
-
-
-def _limit(steps: list[dict], last_volume: np.ndarray | None, reached: bool) -> dict:
-    last = next((s for s in reversed(steps) if s["voxels"] > 0), None)
-    if last is None or not reached:
-        return {"center": None, "last_shape": "not-reached", "last_step": None if last is None else last["step"]}
-    lo, hi = np.array(last["bbox"][0]), np.array(last["bbox"][1])
-    return {
-        "center": ((lo + hi) / 2).tolist(),
-        "last_shape": "cuboid" if is_box(last_volume) else "other",
-        "last_step": last["step"],
-    }
+    def _keys(self) -> list[str]:
+        # what ``isoflow flow --json`` prints (without ``input``), in its
+        # order: the states are an attribute only, the guard's counts only
+        # for guarded runs
+        keys = ["connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
+        return keys + ["guard_steps"] if self.guard else keys
 
 
 def default_max_steps(obj: DigitalObject) -> int:
     """Safety cap when no step count is given: a box of side s vanishes in
     s steps; four times the largest side plus 16 leaves room for the bar
     rule's growth."""
-    return 4 * max(obj.volume.shape, default=0) + 16
+    return max_steps_for(obj.volume.shape)
+
+
+def max_steps_for(shape: tuple[int, ...]) -> int:
+    """:func:`default_max_steps` of an array of ``shape``.
+
+    Examples
+    --------
+    >>> max_steps_for((10, 20, 5))
+    96
+    """
+    return 4 * max(shape, default=0) + 16
+
+
+@dataclass
+class _Trace:
+    """What a run keeps as it goes: the records, the states (when kept), the
+    last non-empty state; it tells ``progress`` of every new state."""
+
+    engine: ArrayFlow
+    keep_states: bool
+    progress: Callable[[int, DigitalObject], None] | None
+    records: list[dict] = field(default_factory=list)
+    states: list[DigitalObject] = field(default_factory=list)
+    last: Any = None
+
+    def add(self, state, record: dict) -> None:
+        self.records.append(record)
+        if state.voxels:
+            self.last = state
+        tell = self.progress is not None and record["step"] > 0
+        if self.keep_states or tell:
+            obj = self.engine.to_object(state)
+            if self.keep_states:
+                self.states.append(obj)
+            if tell:
+                self.progress(record["step"], obj)
+
+
+@dataclass
+class _Guarded:
+    """A guarded run's tallies: steps of each kind, moves reversed."""
+
+    kinds: dict = field(default_factory=lambda: {"flow": 0, "partial": 0, "thinning": 0})
+    reversed_moves: int = 0
+
+
+def _check_count(name: str, value) -> None:
+    if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
+        raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
+
+
+def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason,
+           until_topology_change: bool) -> tuple[StopReason, list[dict]]:
+    """Plain steps until the object vanishes, the cap, a cycle of period 2,
+    or (``until_topology_change``) a change of the Betti numbers."""
+    changes: list[dict] = []
+    two_back = None
+    step = 0
+    while True:
+        if state.voxels == 0:
+            return "vanished", changes
+        if cap is not None and step >= cap:
+            return capped, changes
+        new = engine.step(state)
+        record = engine.record(new, step + 1)
+        before = trace.records[-1]["betti"]
+        if record["betti"] != before and new.voxels:
+            changes.append({"step": step + 1, "before": before, "after": record["betti"],
+                            "where": engine.change_region(state), "applied": not until_topology_change})
+            if until_topology_change:
+                return "topology-change", changes
+        step += 1
+        trace.add(new, record)
+        if two_back is not None and new.voxels and engine.same(two_back, new):
+            return "cycle", changes
+        two_back, state = state, new
+
+
+def _guarded(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason, allowance: int,
+             tally: _Guarded) -> StopReason:
+    """Guarded steps until the object vanishes, the cap, or a fixed point;
+    ``allowance``: flow steps that may leave the object as large."""
+    seen = {engine.key(state)}
+    step = 0
+    while True:
+        if state.voxels == 0:
+            return "vanished"
+        if cap is not None and step >= cap:
+            return capped
+        before = trace.records[-1]["betti"]
+        new, kind, n_reversed = engine.guarded(state, before, seen, allowance > 0)
+        if kind == "fixed-point":
+            return "converged"
+        tally.reversed_moves += n_reversed
+        tally.kinds[kind] += 1
+        if new.voxels >= state.voxels:
+            allowance -= 1
+        seen.add(engine.key(new))
+        record = engine.record(new, step + 1)
+        record["move"] = kind
+        if record["betti"] != before:  # simple deformations cannot do this
+            raise RuntimeError(f"guarded {kind} step {step + 1} changed the Betti numbers {before} -> {record['betti']}")
+        step += 1
+        trace.add(new, record)
+        state = new
+
+
+def _limit(trace: _Trace, reached: bool) -> dict:
+    last = next((s for s in reversed(trace.records) if s["voxels"] > 0), None)
+    if last is None or not reached:
+        return {"center": None, "last_shape": "not-reached", "last_step": None if last is None else last["step"]}
+    lo, hi = np.array(last["bbox"][0]), np.array(last["bbox"][1])
+    return {
+        "center": ((lo + hi) / 2).tolist(),
+        "last_shape": "cuboid" if trace.engine.is_cuboid(trace.last) else "other",
+        "last_step": last["step"],
+    }
 
 
 def run_flow(
-    obj: DigitalObject,
+    obj: DigitalObject | np.ndarray,
     steps: int | None = None,
     guard: bool = False,
     connectivity: int | None = 6,
@@ -136,100 +238,124 @@ def run_flow(
     *,
     max_steps: int | None = None,
     keep_states: bool = True,
+    method: Method = "auto",
 ) -> FlowResult:
     """Run the digital curvature flow (Definition 18).
 
-    Until the object vanishes (``steps=None``), or for ``steps`` steps, or,
-    with ``until_topology_change``, until the next step would change the Betti
-    numbers. ``guard`` applies topology control (module docstring).
-    ``progress(step, obj)`` is called after every step.
+    Parameters
+    ----------
+    obj : DigitalObject or numpy.ndarray
+        A 2D or 3D object (a bare binary array sits at the origin).
+    steps : int, optional
+        Run this many steps at most; by default until the object vanishes
+        (plain runs stop at :func:`default_max_steps`, guarded runs at
+        their fixed point).
+    guard : bool
+        Topology control (module docstring): no step changes the Betti
+        numbers.
+    connectivity : int, optional
+        6 or 26 (4 or 8 in 2D; 6 and 26 are read as those there).
+    until_topology_change : bool
+        Plain runs: stop before the first step that changes the Betti
+        numbers.
+    progress : callable, optional
+        ``progress(step, state)`` after every step.
+    max_steps : int, optional
+        The cap of a run without ``steps``.
+    keep_states : bool
+        Keep every state in the result (``states``).
+    method : {"auto", "numpy", "compiled"}
+        How the states are held and stepped (:func:`isoflow.flow.engines.flow_engine`);
+        every method gives the same result.
+
+    Returns
+    -------
+    FlowResult
+        The records of every state, why the run stopped, its limit and the
+        topology changes.
+
+    Raises
+    ------
+    IsoflowError
+        A bad connectivity, dimension, step count or method.
+
+    Notes
+    -----
+    One step is eqs. 5.15-5.18 (3D) or eq. 5.8 (2D); the energy is
+    ``E = k^T n`` (eq. 5.22); the guard is built on Theorem 21.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> r = run_flow(np.ones((3, 3, 3), bool), keep_states=False)
+    >>> r.stop_reason, [s["voxels"] for s in r["steps"]]
+    ('vanished', [27, 8, 1, 0])
     """
     obj = DigitalObject.of(obj)
     conn = flow_connectivity(obj.ndim, connectivity)
-    for name, value in (("steps", steps), ("max_steps", max_steps)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
-            raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
+    _check_count("steps", steps)
+    _check_count("max_steps", max_steps)
+    engine = flow_engine(method, obj, conn)
     cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
-    # guarded: flow steps that do not shrink the object, and the shapes seen
-    allowance, seen = default_max_steps(obj), set()
-    current = obj.cropped()
-    records = [_record(current, 0, conn)]
-    states = [current] if keep_states else []
+    return run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
+                      guard=guard, until_topology_change=until_topology_change,
+                      allowance=default_max_steps(obj), progress=progress, keep_states=keep_states)
+
+
+def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
+               until_topology_change: bool = False, allowance: int = 0,
+               progress: Callable[[int, Any], None] | None = None, keep_states: bool = False) -> FlowResult:
+    """The run of :func:`run_flow` from a first state that ``engine`` holds
+    (one of :mod:`isoflow.flow.engines`, or the stores of
+    :mod:`isoflow.flow.chunked`): records, stops and the result.
+
+    Parameters
+    ----------
+    engine : ArrayFlow
+        Steps and records the states.
+    state
+        The first state, as ``engine.start`` gives it.
+    cap : int or None
+        The most steps; ``capped`` is the stop reason when it is reached.
+    capped : StopReason
+        ``steps`` or ``max-steps``.
+    guard, until_topology_change, progress, keep_states
+        As in :func:`run_flow`.
+    allowance : int
+        Guarded runs: flow steps that may leave the object as large.
+
+    Returns
+    -------
+    FlowResult
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow.flow.engines import ArrayFlow
+    >>> engine = ArrayFlow(6)
+    >>> r = run_engine(engine, engine.start(DigitalObject(np.ones((2, 2, 2), bool))), cap=5, capped="max-steps")
+    >>> r.stop_reason, [s["voxels"] for s in r.steps]
+    ('vanished', [8, 1, 0])
+    """
+    conn = engine.conn
+    trace = _Trace(engine, keep_states, progress)
+    trace.add(state, engine.record(state, 0))
     changes: list[dict] = []
-    reversed_moves = 0
-    kinds = {"flow": 0, "partial": 0, "thinning": 0}
+    tally = _Guarded()
     if guard:
-        seen.add(control.shape_key(current))
-    history = [current.volume]
-    last_nonempty = current.volume if current.voxels else None
-    stop = None
-    step = 0
-    while stop is None:
-        if current.voxels == 0:
-            stop = "vanished"
-            break
-        if cap is not None and step >= cap:
-            stop = "steps" if steps is not None else "max-steps"
-            break
-        before = records[-1]["betti"]
-        if guard:
-            got = control.guarded_step(current, conn, before, seen=seen, may_grow=allowance > 0)
-            if got.kind == "fixed-point":
-                stop = "converged"
-                break
-            new = got.new
-            reversed_moves += got.reversed_moves
-            kinds[got.kind] += 1
-            if new.voxels >= current.voxels:
-                allowance -= 1
-            seen.add(control.shape_key(new))
-        else:
-            cfg, keep = flow_moves(current, conn)
-            new = current.on_dual_lattice(keep).cropped()
-        rec = _record(new, step + 1, conn)
-        if guard:
-            rec["move"] = got.kind
-            if rec["betti"] != before:  # simple deformations cannot do this
-                raise RuntimeError(f"guarded {got.kind} step {step + 1} changed the Betti numbers {before} -> {rec['betti']}")
-        elif rec["betti"] != before and new.voxels:
-            change = {
-                "step": step + 1,
-                "before": before,
-                "after": rec["betti"],
-                "where": control.change_region(current, cfg, keep, conn),
-                "applied": not until_topology_change,
-            }
-            changes.append(change)
-            if until_topology_change:
-                stop = "topology-change"
-                break
-        step += 1
-        current = new
-        records.append(rec)
-        if keep_states:
-            states.append(new)
-        if new.voxels:
-            last_nonempty = new.volume
-        if progress is not None:
-            progress(step, new)
-        if not guard and len(history) >= 2 and _same(history[-2], new.volume) and new.voxels:
-            stop = "cycle"
-        history = (history + [new.volume])[-2:]
-    reached = stop in ("vanished", "converged")
+        stop = _guarded(engine, state, trace, cap, capped, allowance, tally)
+    else:
+        stop, changes = _plain(engine, state, trace, cap, capped, until_topology_change)
     return FlowResult(
-        steps=records,
-        states=states,
+        steps=trace.records,
+        states=trace.states,
         stop_reason=stop,
-        limit=_limit(records, last_nonempty, reached),
+        limit=_limit(trace, stop in ("vanished", "converged")),
         topology_changes=changes,
         connectivity=conn,
         guard=guard,
-        reversed_moves=reversed_moves,
-        guard_steps=kinds if guard else None,
+        reversed_moves=tally.reversed_moves,
+        guard_steps=tally.kinds if guard else None,
     )
-
-
-def _same(a: np.ndarray, b: np.ndarray) -> bool:
-    return a.shape == b.shape and np.array_equal(a, b)

@@ -122,3 +122,55 @@ def pack(volume: np.ndarray):
     ngaps = np.zeros(nx * ny + 2, np.int64)
     run([(_pack_rows, v, bits, nruns, ngaps, a, b) for a, b in slabs(nx, thread_count(v.size))])
     return bits, np.cumsum(nruns), np.cumsum(ngaps)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def word(bits, row, w):
+    """Word ``w`` of a row, zero for row -1 (outside the array) and past
+    the row's words."""
+    if row < 0 or w >= bits.shape[1]:
+        return np.uint64(0)
+    return bits[row, w]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def around(i, j, nx, ny):
+    """The rows of the four voxel rows around vertex row ``(i, j)`` of an
+    ``nx x ny`` grid of rows: row ``q = dx + 2 dy`` is voxel row ``(i - 1 +
+    dx, j - 1 + dy)``, -1 where that is outside the array."""
+    r0 = (i - 1) * ny + j - 1 if i >= 1 and j >= 1 else -1
+    r1 = i * ny + j - 1 if i < nx and j >= 1 else -1
+    r2 = (i - 1) * ny + j if i >= 1 and j < ny else -1
+    r3 = i * ny + j if i < nx and j < ny else -1
+    return r0, r1, r2, r3
+
+
+@njit(cache=True, nogil=True, inline="always")
+def shifted(u, previous):
+    """The word whose bit ``k`` is voxel ``k - 1`` of the row: ``u`` moved
+    up by one, with the top bit of the row's previous word."""
+    return (u << np.uint64(1)) | (previous >> np.uint64(63))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def octant_planes(bits, rows, w, previous):
+    """The eight octant planes of word ``w`` of a vertex row: ``(s0, s1,
+    s2, s3, u0, u1, u2, u3)``, ``u_q`` word ``w`` of voxel row ``rows[q]``
+    (see :func:`around`) and ``s_q`` the same shifted by one
+    (:func:`shifted`; ``previous``: the rows' words ``w - 1``). Unused
+    rows are -1 (a 2D vertex row has two)."""
+    u0, u1, u2, u3 = word(bits, rows[0], w), word(bits, rows[1], w), word(bits, rows[2], w), word(bits, rows[3], w)
+    return (shifted(u0, previous[0]), shifted(u1, previous[1]), shifted(u2, previous[2]), shifted(u3, previous[3]),
+            u0, u1, u2, u3)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def configuration(s0, s1, s2, s3, u0, u1, u2, u3, k):
+    """The configuration of vertex ``k`` of a word, from its octant planes
+    (octant ``q`` is ``s_q``, voxel ``k - 1``; octant ``q + 4`` is ``u_q``,
+    voxel ``k``)."""
+    one, kk = np.uint64(1), np.uint64(k)
+    return (((s0 >> kk) & one) | (((s1 >> kk) & one) << np.uint64(1)) | (((s2 >> kk) & one) << np.uint64(2))
+            | (((s3 >> kk) & one) << np.uint64(3)) | (((u0 >> kk) & one) << np.uint64(4))
+            | (((u1 >> kk) & one) << np.uint64(5)) | (((u2 >> kk) & one) << np.uint64(6))
+            | (((u3 >> kk) & one) << np.uint64(7)))

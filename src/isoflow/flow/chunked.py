@@ -1,0 +1,419 @@
+"""The digital curvature flow beyond memory: every state a zarr store, every
+step slabs of layers as dask tasks (the plain flow; eqs. 5.15-5.18).
+
+A step's move at a vertex needs its configuration (two voxel layers) and
+the ends of its segments, which may run far along any axis. A slab of
+vertex layers ``i0 <= i < i1`` reads voxel layers ``i0 - 1 .. i1 - 1``
+(:func:`isoflow.scale.flowbits.moves3_layers`) and holds every segment
+along the second and third axes whole, as it spans them; a segment along
+the first axis may leave it. Whether such a segment's end beyond the slab
+is negative is what the slabs hand on, per vertex line ``(j, k)``:
+
+1. every slab, given nothing, says what it hands on upward and downward
+   and along which lines its cross-section changes (where it does not, it
+   hands on what it is given): bit arrays of one face each;
+2. a scan over the slabs composes them, so that each slab gets what the
+   slabs below and above hand it;
+3. every slab computes its moves with that, and writes its vertex layers
+   to a scratch store; the bounding box of all of them is copied to the
+   step's store (an OME-Zarr image, axes stored x, y, z).
+
+The result equals the in-memory flow's states. The records come from the
+block-wise report (:func:`isoflow.digital.outofcore.analyze_chunked`).
+Topology changes are found (the Betti numbers of consecutive states) but
+not located: the place is where the guard's sweeps over the whole surface
+get stuck, and those sweeps go in one order over all of it, so ``where``
+is None. For the same reason the guarded flow is not done block by block
+(:func:`guard_refusal`).
+
+Memory is a few slabs per worker (two bytes per voxel of a slab, and its
+bit rows) and faces; the slabs are as thick as fits :data:`SLAB_VOXELS`.
+The tasks take paths, so they run on a ``dask.distributed`` cluster
+(``scheduler=client.get``) where the stores are on a shared file system.
+"""
+
+from __future__ import annotations
+
+import shutil
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..digital.lattice import DigitalObject
+from ..errors import IsoflowError
+from ..scale.chunks import import_dask, import_zarr
+from ..scale.memory import check_fits, default_budget, gib
+from .engines import ArrayFlow
+
+#: voxels of one slab (a slab reads them as bytes and writes as many)
+SLAB_VOXELS = 1 << 25
+#: chunk sides of the step stores along the second and third axes
+CHUNK_YZ = 256
+
+
+@dataclass(frozen=True)
+class StoredObject:
+    """A state of the flow held in a zarr store: ``path`` (None when
+    empty), its ``shape`` (x, y, z), ``place`` (offset, parity, pitch,
+    origin; its own volume empty) and ``voxels``."""
+
+    path: str | None
+    shape: tuple[int, int, int]
+    place: DigitalObject
+    voxels: int
+
+    @property
+    def parity(self) -> int:
+        return self.place.parity
+
+    @property
+    def ndim(self) -> int:
+        return 3
+
+    def array(self):
+        """The state's zarr array (x, y, z; uint8 0/1)."""
+        return import_zarr().open_group(self.path, mode="r")["0"]
+
+
+def _layers(path: str, a: int, b: int, shape: tuple[int, int, int]) -> np.ndarray:
+    """Voxel layers ``a <= x < b`` of the store's volume (``shape``), as
+    bools; layers outside the volume are empty."""
+    out = np.zeros((b - a, *shape[1:]), bool)
+    lo, hi = max(a, 0), min(b, shape[0])
+    if hi > lo:
+        out[lo - a:hi - a] = import_zarr().open_group(path, mode="r")["0"][lo:hi] != 0
+    return out
+
+
+def _slab_moves(path: str, shape, i0: int, i1: int, table, before=None, after=None):
+    """The moves of vertex layers ``i0 <= i < i1`` of the state in ``path``:
+    :func:`isoflow.scale.flowbits.moves3_layers` of voxel layers ``i0 - 1
+    .. i1 - 1`` (one thread: the slabs are the parallel work)."""
+    from ..scale import bitrows, flowbits
+    from ..scale.compiled import using
+
+    vol = _layers(path, i0 - 1, i1, shape)
+    with using(1):
+        bits = bitrows.pack(vol)[0]
+        return flowbits.moves3_layers(bits, vol.shape, table, 1, vol.shape[0], before, after, hand_on=True)
+
+
+def _slab_ends(path: str, shape, i0: int, i1: int, table):
+    """Pass 1: what the slab hands on with nothing given (``before``,
+    ``after``) and where its cross-section changes."""
+    return _slab_moves(path, shape, i0, i1, table)[1:]
+
+
+def _slab_keep(path: str, shape, i0: int, i1: int, table, before, after, scratch: str):
+    """Pass 3: the slab's vertex layers, written to ``scratch`` (the vertex
+    grid); returns their bounding box in the grid (``lo``, ``hi``) or None."""
+    from ..scale import flowbits
+
+    keep = _slab_moves(path, shape, i0, i1, table, before, after)[0]
+    grid = (i1 - i0 + 2, shape[1] + 1, shape[2] + 1)
+    vol = flowbits.unpack(keep, grid)[1:-1]
+    import_zarr().open_group(scratch, mode="r+")["0"][i0:i1] = vol.view(np.uint8)
+    if not vol.any():
+        return None
+    nz = [np.flatnonzero(vol.any(axis=tuple(a for a in range(3) if a != axis))) for axis in range(3)]
+    return [int(i0 + nz[0][0]), int(nz[1][0]), int(nz[2][0])], [int(i0 + nz[0][-1] + 1), int(nz[1][-1] + 1),
+                                                                 int(nz[2][-1] + 1)]
+
+
+def _hand_on(ends: list) -> tuple[list, list]:
+    """Pass 2: what each slab is handed from below and from above, given
+    each slab's ``(before, after, changed)`` with nothing handed to it."""
+    zero = np.zeros_like(ends[0][0])
+    below, above = [zero], [zero]
+    for before, _, changed in ends[:-1]:
+        below.append((changed & before) | (~changed & below[-1]))
+    for _, after, changed in ends[:0:-1]:
+        above.append((changed & after) | (~changed & above[-1]))
+    return below, above[::-1]
+
+
+def _create_store(path: Path, shape, chunks, place: DigitalObject) -> None:
+    """An empty OME-Zarr image (NGFF 0.4, one level ``0`` of uint8, axes
+    stored x, y, z) placed as ``place``, for slabs to write into."""
+    from ..mesh.formats.omezarr import multiscales
+
+    root = import_zarr().open_group(str(path), mode="w", zarr_format=2)
+    root.create_array("0", shape=tuple(shape), chunks=tuple(chunks), dtype=np.uint8, fill_value=0)
+    corner = place.world(np.zeros(3))
+    root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz")
+
+
+def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int) -> int:
+    """Vertex layers per slab: ``slab``, or as many as fit
+    :data:`SLAB_VOXELS`.
+
+    Raises
+    ------
+    IsoflowError
+        The workers' slabs would not fit in memory (up front), or ``slab``
+        is not positive.
+
+    Examples
+    --------
+    >>> slab_thickness((100, 1023, 1023), None, 2)
+    32
+    """
+    _, ny, nz = shape
+    layer = (ny + 1) * (nz + 1)
+    thick = max(1, SLAB_VOXELS // layer) if slab is None else int(slab)
+    if thick < 1:
+        raise IsoflowError(f"slab must be a positive number of layers, got {slab}")
+    # a slab's bytes read and written, its bit rows (five arrays) and faces
+    check_fits(workers * (2 * (thick + 2) * layer + 6 * (thick + 2) * layer // 8),
+               f"the flow's slabs of {thick} layers of {ny + 1} x {nz + 1} vertices on {workers} workers",
+               hint="give thinner slabs (slab=)")
+    return thick
+
+
+class ChunkedFlow(ArrayFlow):
+    """States as zarr stores in ``directory`` (``step_NNN.zarr``, the step
+    zero padded to ``width``), stepped by slabs of layers as dask tasks on
+    ``scheduler``; the plain flow only."""
+
+    def __init__(self, conn: int, directory, *, width: int = 3, slab: int | None = None, scheduler=None,
+                 workers: int = 2):
+        super().__init__(conn)
+        self.directory, self.width, self.slab = Path(directory), width, slab
+        self.scheduler, self.workers = scheduler, workers
+        self.written: list[str] = []
+        self.source_shape: tuple[int, ...] = ()
+        self._step = 0
+
+    def _compute(self, *tasks):
+        dask, _ = import_dask()
+        kwargs = {"num_workers": self.workers} if self.scheduler in (None, "threads") else {}
+        return dask.compute(*tasks, scheduler=self.scheduler or "threads", **kwargs)
+
+    def _name(self) -> Path:
+        name = f"step_{self._step:0{self.width}d}.zarr"
+        self.written.append(name)
+        return self.directory / name
+
+    def start(self, source) -> StoredObject:
+        """The input (a zarr store's volume, see :func:`source_volume`),
+        cropped, as step 0's store."""
+        volume, place = source_volume(source)
+        self.source_shape = tuple(int(s) for s in volume.shape)
+        _, da = import_dask()
+        checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source))
+        extents = self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
+                                  for axis in range(3)))
+        if not len(extents[0]):
+            raise IsoflowError(f"{source}: the object is empty, there is nothing to flow")
+        lo = [int(e[0]) for e in extents]
+        hi = [int(e[-1]) + 1 for e in extents]
+        place = replace(place, offset=tuple(lo))
+        return self._store(checked[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]], place)
+
+    def _store(self, box, place: DigitalObject) -> StoredObject:
+        """A dask array written as the next step's store."""
+        _, da = import_dask()
+        shape = tuple(int(s) for s in box.shape)
+        path = self._name()
+        chunks = (slab_thickness(shape, self.slab, self.workers), min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
+        _create_store(path, shape, chunks, place)
+        target = import_zarr().open_group(str(path), mode="r+")["0"]
+        voxels = box.astype(np.uint8).rechunk(chunks)
+        count = voxels.sum(dtype=np.int64)
+        _, total = self._compute(da.store(voxels, target, lock=False, compute=False), count)
+        self._step += 1
+        return StoredObject(str(path), shape, place, int(total))
+
+    def record(self, state: StoredObject, step: int) -> dict:
+        from ..digital.outofcore import analyze_chunked
+
+        out = {"step": step, "voxels": state.voxels, "parity": state.parity, "betti": [0, 0, 0],
+               "euler_characteristic": 0, "energy": 0, "bbox": None}
+        if state.voxels:
+            r = analyze_chunked(state.array(), self.conn, surfaces=False, scheduler=self.scheduler,
+                                threads=self.workers)
+            box = [state.place.world(np.zeros(3)).tolist(), state.place.world(np.array(state.shape, float)).tolist()]
+            out.update(betti=list(map(int, r["betti"])), euler_characteristic=int(r["euler_characteristic"]),
+                       energy=int(r["energy"]), bbox=box)
+        return out
+
+    def step(self, state: StoredObject) -> StoredObject:
+        from dask import delayed
+
+        from .bitflow import step_table
+
+        _, da = import_dask()
+        table = step_table(3, self.conn)
+        shape = state.shape
+        thick = slab_thickness(shape, self.slab, self.workers)
+        parts = [(a, min(a + thick, shape[0] + 1)) for a in range(0, shape[0] + 1, thick)]
+        ends = self._compute(*(delayed(_slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
+        below, above = _hand_on(list(ends))
+        scratch = self.directory / ".flow-scratch.zarr"
+        grid = tuple(s + 1 for s in shape)
+        _create_store(scratch, grid, (thick, min(CHUNK_YZ, grid[1]), min(CHUNK_YZ, grid[2])), state.place)
+        try:
+            boxes = [b for b in self._compute(*(
+                delayed(_slab_keep, pure=False)(state.path, shape, a, b, table, below[s], above[s], str(scratch))
+                for s, (a, b) in enumerate(parts))) if b is not None]
+            place = state.place.on_dual_lattice(state.place.volume)
+            if not boxes:
+                self._step += 1
+                return StoredObject(None, (0, 0, 0), place, 0)
+            lo = np.min([b[0] for b in boxes], axis=0)
+            hi = np.max([b[1] for b in boxes], axis=0)
+            place = replace(place, offset=tuple(int(o + a) for o, a in zip(place.offset, lo)))
+            grid_array = da.from_zarr(import_zarr().open_group(str(scratch), mode="r")["0"])
+            return self._store(grid_array[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]], place)
+        finally:
+            shutil.rmtree(scratch, ignore_errors=True)
+
+    def change_region(self, state: StoredObject):
+        return None  # not located out of core (module docstring)
+
+    def same(self, a: StoredObject, b: StoredObject) -> bool:
+        if a.shape != b.shape or a.voxels != b.voxels or not a.voxels:
+            return False
+        _, da = import_dask()
+        return bool(self._compute((da.from_zarr(a.array()) == da.from_zarr(b.array())).all())[0])
+
+    def to_object(self, state: StoredObject) -> StoredObject:
+        return state  # never read into memory
+
+    def is_cuboid(self, state: StoredObject) -> bool:
+        return state.voxels == int(np.prod(state.shape))
+
+
+def _binary_block(block: np.ndarray, where: str = "volume", block_info=None) -> np.ndarray:
+    from ..scale.arrays import binary
+
+    near = None if block_info is None else tuple(lo for lo, _ in block_info[0]["array-location"])
+    return binary(block, where, near=near)
+
+
+def source_volume(path):
+    """The volume of a zarr store (``IMAGE.zarr:LEVEL`` too) as a dask array
+    in x, y, z order, and its placement (a :class:`DigitalObject` with an
+    empty volume): what :func:`isoflow.read_volume` reads, lazily.
+
+    Raises
+    ------
+    IsoflowError
+        Not a zarr store, or not a 3D volume.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np
+    >>> from isoflow.mesh.volumes import write_volume
+    >>> path = tempfile.mkdtemp() + "/v.zarr"
+    >>> _ = write_volume(DigitalObject(np.ones((2, 3, 4), bool), pitch=0.5), path)
+    >>> volume, place = source_volume(path)
+    >>> volume.shape, place.spacing.tolist()
+    ((2, 3, 4), [0.5, 0.5, 0.5])
+    """
+    from ..mesh.formats.omezarr import axis_names, placement_of
+    from ..mesh.formats.registry import spatial_axes, split_dataset
+    from ..scale.chunks import open_zarr_node
+
+    _, da = import_dask()
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, dataset = open_zarr_node(file, level)
+    lazy = da.from_zarr(array)
+    pitch, origin = 1.0, None
+    if multiscale is None:
+        attrs = dict(getattr(array, "attrs", {}) or {})
+        if "pitch" in attrs and "origin" in attrs:
+            pitch, origin = np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+    else:
+        names = axis_names(multiscale, array.ndim, where)
+        scale, shift = placement_of(multiscale, dataset, array.ndim, where)
+        xyz, other = spatial_axes(names, array.shape, where)
+        lazy = lazy[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+        kept = [i for i in range(array.ndim) if i not in other]
+        lazy = lazy.transpose([kept.index(i) for i in xyz])
+        pitch = scale[xyz]
+        origin = shift[xyz] - pitch / 2
+    if lazy.ndim != 3:
+        raise IsoflowError(f"{where}: the flow runs block by block on 3D volumes; this one is {lazy.ndim}D "
+                           "(a 2D image is read into memory without --volumes .zarr)")
+    return lazy, DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin)
+
+
+def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
+    """Why the guarded flow of a store is not done block by block, and what
+    it would need in memory (one line).
+
+    Examples
+    --------
+    >>> guard_refusal("big.zarr", (1024, 1024, 1024)).split(";")[0]
+    'big.zarr: --guard is not done block by block (a guarded step realises its moves cell by cell in one order over the whole surface)'
+    """
+    need = 6 * int(np.prod(shape))  # the volume, its configuration bytes and the rows of a step
+    return (f"{where}: --guard is not done block by block (a guarded step realises its moves cell by cell in one "
+            f"order over the whole surface); in memory this {'x'.join(map(str, shape))} volume needs about "
+            f"{gib(need)} of the {gib(default_budget())} available: flow it without --volumes .zarr, or without "
+            "--guard")
+
+
+def flow_chunked(source, directory, steps: int | None = None, connectivity: int = 6, *, max_steps: int | None = None,
+                 until_topology_change: bool = False, slab: int | None = None, scheduler=None, workers: int = 2,
+                 width: int = 3, progress=None):
+    """The plain flow of a zarr store's volume, block by block.
+
+    Parameters
+    ----------
+    source : str or path
+        A zarr store (``IMAGE.zarr`` or ``IMAGE.zarr:LEVEL``), 3D.
+    directory : str or path
+        An existing directory; every state is written into it as
+        ``step_NNN.zarr`` (an OME-Zarr image, axes stored x, y, z, placed in
+        the world), ``NNN`` zero padded to ``width``.
+    steps, connectivity, max_steps, until_topology_change, progress
+        As in :func:`isoflow.flow.run.run_flow` (``progress(step, state)``
+        gets the stored state).
+    slab : int, optional
+        Vertex layers per task (default: :data:`SLAB_VOXELS` voxels).
+    scheduler
+        A dask scheduler (default: ``workers`` threads), ``client.get`` of a
+        ``dask.distributed`` client too.
+    workers : int
+        Tasks in flight on the local schedulers (memory is sized for them).
+
+    Returns
+    -------
+    FlowResult
+        As :func:`isoflow.flow.run.run_flow` returns it, without states and
+        with ``where`` None in the topology changes.
+
+    Raises
+    ------
+    IsoflowError
+        A store that is not a 3D binary volume, an empty one, slabs that do
+        not fit in memory.
+
+    Notes
+    -----
+    Eqs. 5.15-5.18; the segments along the first axis are joined across
+    the slabs (module docstring).
+
+    Examples
+    --------
+    >>> import tempfile, zarr, numpy as np
+    >>> from pathlib import Path
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> zarr.open_array(str(folder / "in.zarr"), mode="w", shape=(3, 3, 3), chunks=(2, 2, 2), dtype="u1")[...] = 1
+    >>> r = flow_chunked(folder / "in.zarr", folder, slab=1)
+    >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
+    ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
+    """
+    from .motion import flow_connectivity
+    from .run import max_steps_for, run_engine
+
+    conn = flow_connectivity(3, connectivity)
+    engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
+    state = engine.start(source)
+    cap = steps if steps is not None else max_steps_for(engine.source_shape) if max_steps is None else max_steps
+    return run_engine(engine, state, cap=cap, capped="steps" if steps is not None else "max-steps",
+                      until_topology_change=until_topology_change, progress=progress)

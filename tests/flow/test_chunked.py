@@ -1,0 +1,166 @@
+"""The plain flow of a zarr store, block by block (isoflow.flow.chunked),
+against the in-memory flow of the same volume: the same records, stop,
+limit and topology changes (not located out of core: ``where`` is None),
+and every state's store equal to the in-memory state, read back by zarr
+and by isoflow.read_volume with its place in the world. On odd chunkings
+of the input and odd slab thicknesses, at 6 and 26, with segments that
+cross many slabs, edge and vertex contacts, shapes touching the border;
+on a two-process dask LocalCluster; as the command `isoflow flow
+IN.zarr --out DIR --volumes .zarr`, whose refusals are one line and whose
+interruption leaves the previous run as it was."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+zarr = pytest.importorskip("zarr")
+pytest.importorskip("dask")
+
+from isoflow import DigitalObject  # noqa: E402
+from isoflow.cli import main  # noqa: E402
+from isoflow.errors import IsoflowError  # noqa: E402
+from isoflow.flow.chunked import flow_chunked, slab_thickness  # noqa: E402
+from isoflow.flow.files import STAGE  # noqa: E402
+from isoflow.flow.run import run_flow  # noqa: E402
+from isoflow.mesh.outputs import TEMP_MARK  # noqa: E402
+from isoflow.mesh.volumes import read_object, write_volume  # noqa: E402
+
+
+def crossing_volume(seed: int = 0) -> np.ndarray:
+    """A ball, a bar along the first axis through every slab (long
+    segments), noise (edge and vertex contacts), voxels on the border."""
+    rng = np.random.default_rng(seed)
+    x = np.indices((23, 19, 70)) - np.array([11, 9, 40])[:, None, None, None]
+    v = (x**2).sum(0) <= 8**2
+    v[:, 1:4, 2:5] = True  # touches both ends of the first axis
+    v[3:9, 12:18, 60:70] |= rng.random((6, 6, 10)) < 0.6
+    return v
+
+
+def plain_store(path, v, chunks):
+    zarr.open_array(str(path), mode="w", shape=v.shape, chunks=chunks, dtype=np.uint8)[...] = v
+
+
+def in_memory(path, conn, **kw):
+    r = run_flow(read_object(path), connectivity=conn, method="numpy", **kw)
+    expected = r.to_dict()
+    for change in expected["topology_changes"]:
+        change["where"] = None
+    return r, expected
+
+
+def check_states(run, out, width=3):
+    for step, state in enumerate(run.states):
+        store = out / f"step_{step:0{width}d}.zarr"
+        if not state.voxels:
+            assert not store.exists()
+            continue
+        stored = zarr.open_group(str(store), mode="r")["0"][...]
+        assert stored.shape == state.volume.shape and np.array_equal(stored != 0, state.volume)
+        back = read_object(store)
+        assert np.array_equal(back.volume, state.volume)
+        assert np.allclose(back.world(np.zeros(3)), state.world(np.zeros(3)))
+        assert np.allclose(back.spacing, state.spacing)
+
+
+@pytest.mark.parametrize("conn,chunks,slab,steps", [(6, (5, 7, 11), 1, 8), (26, (5, 7, 11), 3, None),
+                                                    (6, (23, 19, 70), 8, None), (26, (4, 19, 9), 5, None)])
+def test_equals_the_in_memory_flow_on_odd_chunkings(tmp_path, conn, chunks, slab, steps):
+    v = crossing_volume()
+    plain_store(tmp_path / "in.zarr", v, chunks)
+    mem, expected = in_memory(tmp_path / "in.zarr", conn, steps=steps)
+    out = tmp_path / "run"
+    out.mkdir()
+    got = flow_chunked(tmp_path / "in.zarr", out, connectivity=conn, slab=slab, steps=steps)
+    assert got.to_dict() == expected
+    assert expected["topology_changes"]  # the bar and the ball part
+    check_states(mem, out)
+
+
+def test_placed_ome_zarr_input_and_its_stops(tmp_path):
+    v = crossing_volume(1)
+    obj = DigitalObject(v, pitch=(0.5, 0.5, 2.0), origin=(10.0, -3.0, 7.5))
+    write_volume(obj, tmp_path / "in.zarr")
+    for kw in ({"steps": 4}, {"until_topology_change": True}, {"max_steps": 2}):
+        mem, expected = in_memory(tmp_path / "in.zarr", 6, **kw)
+        out = tmp_path / f"run{len(list(tmp_path.iterdir()))}"
+        out.mkdir()
+        got = flow_chunked(tmp_path / "in.zarr", out, slab=6, **kw)
+        assert got.to_dict() == expected
+        check_states(mem, out)
+
+
+def test_on_a_two_process_local_cluster(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    v = crossing_volume(2)
+    plain_store(tmp_path / "in.zarr", v, (6, 10, 16))
+    mem, expected = in_memory(tmp_path / "in.zarr", 26, steps=6)
+    out = tmp_path / "run"
+    out.mkdir()
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        got = flow_chunked(tmp_path / "in.zarr", out, connectivity=26, slab=4, steps=6, scheduler=client.get)
+    assert got.to_dict() == expected
+    check_states(mem, out)
+
+
+def test_slabs_that_do_not_fit_are_refused_up_front():
+    with pytest.raises(IsoflowError, match="slabs of 1 layers of 1000001 x 1000001 vertices .* give thinner slabs"):
+        slab_thickness((10, 10**6, 10**6), None, 2)
+
+
+def test_command_writes_the_states_as_stores(tmp_path, capsys):
+    v = crossing_volume(3)
+    write_volume(DigitalObject(v, pitch=0.25), tmp_path / "in.zarr")
+    assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "6", "--json"]) == 0
+    expected = json.loads(capsys.readouterr().out)
+    for change in expected["topology_changes"]:
+        change["where"] = None
+    out = tmp_path / "run"
+    assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "6", "--out", str(out), "--volumes", ".zarr",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == expected
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["flow.csv", "flow.png"] + [f"step_{s:03d}.zarr" for s in range(7)]
+    rows = (out / "flow.csv").read_text().splitlines()
+    assert len(rows) == len(expected["steps"]) + 1
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--guard"], "--guard is not done block by block"),
+    (["--label", "1"], "--label is not read block by block"),
+])
+def test_command_refusals_are_one_line(tmp_path, capsys, extra, message):
+    plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
+    assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr", *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_an_interrupted_command_leaves_the_previous_run(tmp_path):
+    plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "flow.csv").write_text("the previous run\n")
+    proc = subprocess.Popen([sys.executable, "-m", "isoflow.cli", "flow", str(tmp_path / "in.zarr"), "--out", str(out),
+                             "--volumes", ".zarr", "--force"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True)
+    end = time.monotonic() + 120
+    while not any(s.glob("step_002.zarr") for s in out.glob(f".{STAGE}{TEMP_MARK}*")):
+        assert proc.poll() is None and time.monotonic() < end, proc.stderr.read()
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "Traceback" not in err
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv"]
+    assert (out / "flow.csv").read_text() == "the previous run\n"
