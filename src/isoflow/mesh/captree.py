@@ -352,6 +352,16 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
     grad[0], grad[1], grad[2] = 0.0, 0.0, 0.0
     if lo.shape[0] == 0 or hi[0] == 0:
         return 0.0, 0.0, 0.0, 0.0, CLEAR, 0, 0
+    if h == 0 and theta == 0:  # the exact sum at a point: every triangle, in order
+        for t in range(T.shape[0]):
+            ax, ay, az = T[t, 0, 0] - px, T[t, 0, 1] - py, T[t, 0, 2] - pz
+            bx, by, bz = T[t, 1, 0] - px, T[t, 1, 1] - py, T[t, 1, 2] - pz
+            cx, cy, cz = T[t, 2, 0] - px, T[t, 2, 1] - py, T[t, 2, 2] - pz
+            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+            if abs(det) <= reach * nlen[t] and dist_triangle(T, t, px, py, pz) <= reach:
+                return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
+            zx, zy, turns = _solid_angle_step(ax, ay, az, bx, by, bz, cx, cy, cz, zx, zy, turns)
+        return (math.atan2(zy, zx) + 2.0 * math.pi * turns) / (2.0 * math.pi), 0.0, 0.0, 0.0, CLEAR, 0, 0
     stack[0] = 0
     top = 1
     while top:

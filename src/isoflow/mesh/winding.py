@@ -87,7 +87,7 @@ SMALL = 64
 #: far nodes are expanded when their radius is at most this share of their distance
 THETA = 0.3
 #: pieces of top blocks per slab (the unit of progress and of the threads' work)
-PIECES = 64
+PIECES = 512
 _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 0.7537])
 
 FORCE_IN, FORCE_OUT = 127, -128
@@ -319,7 +319,8 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                               T, nlen, near, nn, cross, nc, origin, pitch, tol, flags)
                 if left == 0 or th == 0 or rest > err:  # a tighter tree cannot help
                     break
-                th = th / 3.0 if th == theta else 0.0
+                # a remainder far beyond the margin: straight to the exact sum
+                th = th / 3.0 if th == theta and err < 0.25 else 0.0
                 flags[3] += 1
             if left == 0:
                 pass
@@ -460,6 +461,10 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     ties = np.argwhere(rule == TIE_PENDING)
     if len(ties):
         P = origin + pitch * (ties + corner + 0.5 + TIE_STEP)
-        w = gwn(P, Tm)
+        w = np.empty(len(P))
+        step = max(1, (1 << 22) // max(1, len(Tm)))  # pieces of about 4M solid angles
+        Tm = np.ascontiguousarray(Tm, dtype=np.float64)
+        run_pieces(lambda n: _gwn_points(P[n * step:(n + 1) * step], Tm, w[n * step:(n + 1) * step]),
+                   -(-len(P) // step), threads=threads)
         rule[tuple(ties.T)] = np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)
     return rule, (i0, j0, k0)
