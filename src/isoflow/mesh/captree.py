@@ -523,3 +523,29 @@ def near_sum(T, nlen, near, nnear, cross, ncross, qx, qy, qz, px, py, pz, tol):
             return 0.0, True
         zx, zy, turns = _solid_angle_step(ax, ay, az, bx, by, bz, cx, cy, cz, zx, zy, turns)
     return jumps + (math.atan2(zy, zx) + 2.0 * math.pi * turns) / (2.0 * math.pi), False
+
+
+@njit(cache=True, nogil=True)
+def near_range(T, near, nnear, px, py, pz, h):
+    """The near triangles' winding number at p and a bound on its variation
+    over the ball of radius h around p (``h / 4pi sum_edges len / (d -
+    h)^2``, their gradient being the Biot-Savart field of their edges), or
+    ``ok = False`` where one of them meets the ball (the sum jumps there).
+    Lets a block near a cap's edge be decided as a whole when it is far
+    from the 1/2 level set."""
+    zx, zy, turns = 1.0, 0.0, 0
+    var = 0.0
+    for q in range(nnear):
+        t = near[q]
+        if dist_triangle(T, t, px, py, pz) <= h:
+            return 0.0, 0.0, False
+        for k in range(3):
+            k1 = (k + 1) % 3
+            d = dist_segment(T[t, k, 0], T[t, k, 1], T[t, k, 2], T[t, k1, 0], T[t, k1, 1], T[t, k1, 2], px, py, pz) - h
+            ex, ey, ez = T[t, k1, 0] - T[t, k, 0], T[t, k1, 1] - T[t, k, 1], T[t, k1, 2] - T[t, k, 2]
+            var += math.sqrt(ex * ex + ey * ey + ez * ez) / (d * d)
+        zx, zy, turns = _solid_angle_step(T[t, 0, 0] - px, T[t, 0, 1] - py, T[t, 0, 2] - pz, T[t, 1, 0] - px,
+                                          T[t, 1, 1] - py, T[t, 1, 2] - pz, T[t, 2, 0] - px, T[t, 2, 1] - py,
+                                          T[t, 2, 2] - pz, zx, zy, turns)
+    w = (math.atan2(zy, zx) + 2.0 * math.pi * turns) / (2.0 * math.pi)
+    return w, var * h / (4.0 * math.pi), True

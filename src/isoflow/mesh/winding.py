@@ -68,7 +68,7 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.cancel import STOP, run_pieces
 from ..scale.jit import njit
-from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_sum
+from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range, near_sum
 
 #: centres closer than this (in pitches) to the cap are summed over M itself
 TIE_PITCHES = 1e-6
@@ -84,6 +84,8 @@ REACH = 2.0
 #: a block of at most this many centres that leaves at most a quarter of
 #: them undecided has those evaluated one by one instead of being split
 SMALL = 64
+#: a block of more than SMALL centres with more near and crossing triangles is split, not painted
+NEAR_PAINT = 4
 #: far nodes are expanded when their radius is at most this share of their distance
 THETA = 0.3
 #: pieces of top blocks per slab (the unit of progress and of the threads' work)
@@ -381,7 +383,21 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nle
         if n <= 8:  # (the caller takes them one by one)
             rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = UNDECIDED
         return n
-    constant = nn + nc == 0 and math.floor(w - bound - slope + 0.5) == math.floor(w + bound + slope + 0.5)
+    wq, spread = w, bound + slope
+    if nc == 0 and nn:  # the near triangles too, if they keep off the block: the whole block at once
+        wn, var, apart = near_range(T, near, nn, qx, qy, qz, 0.5 * pitch * math.sqrt(
+            (i1 - i0 - 1) ** 2 + (j1 - j0 - 1) ** 2 + (k1 - k0 - 1) ** 2))
+        wq, spread = (w + wn, spread + var) if apart else (w, math.inf)
+    constant = nc == 0 and spread < 0.5 and math.floor(wq - spread + 0.5) == math.floor(wq + spread + 0.5)
+    if not constant and nn + nc > NEAR_PAINT and n > SMALL:  # cheaper split: the children have fewer
+        return n
+    if constant:  # one R for the block
+        r = math.floor(wq + 0.5)
+        if r > MAX_R or r < -MAX_R:
+            flags[0] = 1
+        else:
+            rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = r
+        return 0
     left = 0
     for i in range(i0, i1):
         px = origin[0] + pitch * (i + 0.5)
@@ -389,9 +405,7 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nle
             py = origin[1] + pitch * (j + 0.5)
             for k in range(k0, k1):
                 pz = origin[2] + pitch * (k + 0.5)
-                x = w
-                if not constant:
-                    x += grad[0] * (px - qx) + grad[1] * (py - qy) + grad[2] * (pz - qz)
+                x = w + grad[0] * (px - qx) + grad[1] * (py - qy) + grad[2] * (pz - qz)
                 if nn + nc:
                     flags[6] += nn
                     flags[7] += nc
