@@ -286,6 +286,19 @@ def edge_terms(ax, ay, az, bx, by, bz, h):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def add_edge(acc, X, e, first, px, py, pz, h):
+    """Add the terms of edge ``X[e, first] -> X[e, 1 - first]`` at p
+    (:func:`edge_terms`) to ``acc = [gx, gy, gz, hess]``."""
+    a, b = first, 1 - first
+    gx, gy, gz, hs = edge_terms(X[e, a, 0] - px, X[e, a, 1] - py, X[e, a, 2] - pz,
+                                X[e, b, 0] - px, X[e, b, 1] - py, X[e, b, 2] - pz, h)
+    acc[0] += gx
+    acc[1] += gy
+    acc[2] += gz
+    acc[3] += hs
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _solid_angle_step(ax, ay, az, bx, by, bz, cx, cy, cz, zx, zy, turns):
     """Multiply the running product ``zx + i zy`` (``turns`` whole turns)
     by triangle (a, b, c)'s factor ``den + i det`` (van Oosterom & Strackee
@@ -334,7 +347,8 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
     into the argument) the Biot-Savart field at p of the far part's boundary
     edges that are summed exactly, ``var`` the bound on the variation over
     the ball of the far nodes, ``hess`` the bound on the derivative of
-    ``grad``'s field over the ball, and status :data:`CLEAR`, or
+    ``grad``'s field over the ball (``grad`` has four entries: the fourth
+    is scratch), and status :data:`CLEAR`, or
     :data:`HIT` where more triangles are near or crossing than the scratch
     holds, or where p lies within ``tol`` of a crossing triangle's plane,
     or (``h = 0``: the ball is the point) where any triangle is within
@@ -345,11 +359,9 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
     far = 0.0
     err = 0.0
     var = 0.0
-    hess = 0.0
-    gx, gy, gz = 0.0, 0.0, 0.0
     nnear = 0
     ncross = 0
-    grad[0], grad[1], grad[2] = 0.0, 0.0, 0.0
+    grad[:] = 0.0
     if lo.shape[0] == 0 or hi[0] == 0:
         return 0.0, 0.0, 0.0, 0.0, CLEAR, 0, 0
     if h == 0 and theta == 0:  # the exact sum at a point: every triangle, in order
@@ -409,24 +421,16 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
             zx, zy, turns = _solid_angle_step(ax, ay, az, bx, by, bz, cx, cy, cz, zx, zy, turns)
             if h > 0:
                 for e in range(owner[t], owner[t + 1]):
-                    # the cap's boundary runs against the chain: E[e, 1] -> E[e, 0]
-                    ex, ey, ez, hs = edge_terms(E[e, 1, 0] - px, E[e, 1, 1] - py, E[e, 1, 2] - pz,
-                                                E[e, 0, 0] - px, E[e, 0, 1] - py, E[e, 0, 2] - pz, h)
-                    gx += ex
-                    gy += ey
-                    gz += ez
-                    hess += hs
+                    add_edge(grad, E, e, 1, px, py, pz, h)  # the cap's boundary runs against the chain
     if h > 0 and nnear:
-        ex, ey, ez, hs = _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges)
-        gx += ex
-        gy += ey
-        gz += ez
-        hess += hs
+        _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, grad)
+    hess = grad[3]
     if not hess < math.inf:  # NaN: an edge of the far part within h (rounding); let the caller split
         return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
     inv4pi = 1.0 / (4.0 * math.pi)
     w = (2.0 * (math.atan2(zy, zx) + 2.0 * math.pi * turns) + far) * inv4pi
-    grad[0], grad[1], grad[2] = gx * GRAD_SIGN * inv4pi, gy * GRAD_SIGN * inv4pi, gz * GRAD_SIGN * inv4pi
+    for d in range(3):
+        grad[d] *= GRAD_SIGN * inv4pi
     return w, err * inv4pi, var * h * inv4pi, hess * inv4pi, CLEAR, nnear, ncross
 
 
@@ -446,7 +450,7 @@ def _near_kind(T, t, px, py, pz, d, h, reach, on_plane):
 
 
 @njit(cache=True, nogil=True)
-def _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges):
+def _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, acc):
     """The far part's boundary edges that come from the near triangles:
     the chain edges they hold (reversed, as in the cap's boundary) minus
     their own boundaries, opposite copies cancelled (equal coordinates:
@@ -456,7 +460,8 @@ def _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges):
     for q in range(nnear):
         t = near[q]
         if n + owner[t + 1] - owner[t] + 3 > edges.shape[0]:
-            return 0.0, 0.0, 0.0, math.nan  # more than the scratch holds: the caller splits
+            acc[3] = math.nan  # more than the scratch holds: the caller splits
+            return
         for e in range(owner[t], owner[t + 1]):
             for d in range(3):
                 edges[n, 0, d] = E[e, 1, d]
@@ -477,16 +482,9 @@ def _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges):
                 alive[a] = False
                 alive[b] = False
                 break
-    gx, gy, gz, hess = 0.0, 0.0, 0.0, 0.0
     for a in range(n):
         if alive[a]:
-            ex, ey, ez, hs = edge_terms(edges[a, 0, 0] - px, edges[a, 0, 1] - py, edges[a, 0, 2] - pz,
-                                         edges[a, 1, 0] - px, edges[a, 1, 1] - py, edges[a, 1, 2] - pz, h)
-            gx += ex
-            gy += ey
-            gz += ez
-            hess += hs
-    return gx, gy, gz, hess
+            add_edge(acc, edges, a, 0, px, py, pz, h)
 
 
 @njit(cache=True, nogil=True, inline="always")

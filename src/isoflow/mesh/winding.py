@@ -288,7 +288,7 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     near = np.empty(MAX_NEAR, dtype=np.int64)
     cross = np.empty(MAX_NEAR, dtype=np.int64)
     edges = np.empty((6 * MAX_NEAR, 2, 3))
-    grad = np.empty(3)
+    grad = np.empty(4)  # the gradient, and scratch for the derivative bound
     for q in range(tops.shape[0]):
         if stop[0]:
             return
