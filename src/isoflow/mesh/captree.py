@@ -83,7 +83,10 @@ class CapTree:
         T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
         E = np.ascontiguousarray(E, dtype=np.float64).reshape(-1, 2, 3)
         k = len(T)
-        order, lo, hi, child = _build(T.mean(axis=1), LEAF_SIZE)
+        if k:
+            order, lo, hi, child = _build(T.mean(axis=1), LEAF_SIZE)
+        else:  # a closed mesh: no compiled code to load
+            order, lo, hi, child = (np.zeros(0, dtype=np.int64) for _ in range(4))
         rank = np.empty(k, dtype=np.int64)
         rank[order] = np.arange(k)
         self.T = np.ascontiguousarray(T[order])
