@@ -82,7 +82,7 @@ def voxelize_input(path: str | Path, args: argparse.Namespace):
     from ..mesh.voxelize import voxelize_file
 
     report: dict = {}
-    with progress_bar(args, "voxelize") as show:
+    with progress_bar(args, "voxelize", estimate=True) as show:
         obj = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
                             progress=show, report=report)
     say_note(args, path, report)

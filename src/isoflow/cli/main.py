@@ -148,6 +148,8 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
     import signal
     import threading
 
+    from ..scale.cancel import request_stop
+
     wanted = [signal.SIGINT, signal.SIGTERM] + ([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -157,8 +159,9 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
         # kept as well as raised: a library may swallow the KeyboardInterrupt
         # (trimesh's import guards), and no output is then renamed into place
         # (isoflow.mesh.outputs.SIGNALS) and the command still ends as
-        # interrupted
+        # interrupted; compiled work on other threads stops at its next poll
         received.append(signum)
+        request_stop()
         raise KeyboardInterrupt
 
     before = {sig: signal.signal(sig, interrupt) for sig in wanted}
@@ -201,6 +204,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from ..mesh.outputs import SIGNALS
     from ..scale import compiled
+    from ..scale.cancel import clear_stop
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -210,6 +214,7 @@ def main(argv: list[str] | None = None) -> int:
     args.parser = parser
     terminated = SIGNALS  # the signals received (what the writers look at before renaming)
     terminated.clear()
+    clear_stop()
 
     def compiling(message):  # numba's first run after installing: a note, not silence
         print(f"isoflow {args.command}: note: {message}", file=sys.stderr, flush=True)
@@ -244,6 +249,7 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         compiled.on_first_compile = before
         terminated.clear()  # said: later writes in this process (a library's caller) are not held back
+        clear_stop()
 
 
 def console() -> None:

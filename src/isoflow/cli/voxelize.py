@@ -44,7 +44,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
 
     report: dict = {}
     out = Path(args.output)
-    with progress_bar(args, "voxelize") as show:
+    with progress_bar(args, "voxelize", estimate=True) as show:
         z = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
                              force=args.force, progress=show, report=report)
     say_note(args, args.mesh, report)

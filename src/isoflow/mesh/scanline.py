@@ -54,6 +54,8 @@ operation for operation: its volumes are reproduced bit for bit.
 from __future__ import annotations
 
 import numpy as np
+
+from ..scale.cancel import STOP, Stopped, run_pieces
 from ..scale.jit import njit
 
 
@@ -121,8 +123,10 @@ class ScanGrid:
         tri = np.nonzero((hi > lo) & (self.j1 > self.j0))[0]
         counts = np.zeros(len(tri) + 1, dtype=np.int64)
         args = (tri, lo, hi, self.j0, self.j1, self.xc, self.yc, self.e_lox, self.e_loy,
-                self.e_hiy, self.e_dx, self.e_dy, self.e_dir)
+                self.e_hiy, self.e_dx, self.e_dy, self.e_dir, STOP)
         _count_hits(*args, counts)
+        if STOP[0]:  # the counts are unfinished: no list to build from them
+            raise Stopped
         offsets = np.cumsum(counts)
         offsets[1:] = offsets[:-1].copy()
         offsets[0] = 0
@@ -132,6 +136,8 @@ class ScanGrid:
         val = np.empty(total, dtype=np.int8)
         _write_hits(*args, offsets, self.zc, self.A, self.n, self.zmin, self.zmax, xa, ny,
                     col, kz, val)
+        if STOP[0]:
+            raise Stopped
         ncol = (xb - xa) * ny
         start = np.zeros(ncol + 1, dtype=np.int64)
         skz = np.empty(total, dtype=np.int32)
@@ -160,8 +166,10 @@ def _winding_2d(t, px, py, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir):
 
 
 @njit(cache=True, nogil=True)
-def _count_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, counts):
+def _count_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, stop, counts):
     for q in range(len(tri)):
+        if stop[0]:
+            return
         t = tri[q]
         c = 0
         for i in range(lo[t], hi[t]):
@@ -173,9 +181,11 @@ def _count_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _write_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, offsets,
+def _write_hits(tri, lo, hi, j0, j1, xc, yc, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, stop, offsets,
                 zc, A, n, zmin, zmax, xa, ny, col, kz, val):
     for q in range(len(tri)):
+        if stop[0]:
+            return
         t = tri[q]
         o = offsets[q]
         for i in range(lo[t], hi[t]):
@@ -223,7 +233,7 @@ def _group_by_column(col, kz, val, start, skz, sval):
 
 
 @njit(cache=True, nogil=True)
-def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
+def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats, stop):
     """Fill local rows r0 <= i < r1 of ``vol`` (slab-local first index).
 
     Each column is swept upward with the running winding number W (the sum
@@ -241,6 +251,8 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
     pos_n = 0
     neg_n = 0
     for i in range(r0, r1):
+        if stop[0]:
+            break
         for j in range(ny):
             c = i * ny + j
             a, b = start[c], start[c + 1]
@@ -317,27 +329,12 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
         start, kz, val = grid.crossings(a, b)
         st = np.zeros(3, dtype=np.int64)
         shift = np.array([a - xa, a - xa, 0, 0, 0, 0], dtype=np.int64)  # to this half's rows
-        _sweep(out[a - xa:b - xa], start, kz, val, 0, b - a, rarr, rbox - shift, st)
-        return st
+        _sweep(out[a - xa:b - xa], start, kz, val, 0, b - a, rarr, rbox - shift, st, STOP)
+        parts[(a, b)] = st
 
-    if len(halves) == 1:
-        stats += run(xa, xb)
-    else:
-        for st in two_threads().map(lambda ab: run(*ab), halves):
-            stats += st
+    parts: dict = {}
+    run_pieces(lambda n: run(*halves[n]), len(halves), threads=threads)
+    for st in parts.values():
+        stats += st
     return out
-
-
-_POOL = []
-
-
-def two_threads():
-    """One pool of two threads for the compiled passes (which release the
-    GIL), kept for the process: starting threads per slab cost more than a
-    slab's work on a busy machine."""
-    if not _POOL:
-        from concurrent.futures import ThreadPoolExecutor
-
-        _POOL.append(ThreadPoolExecutor(max_workers=2, thread_name_prefix="isoflow-voxelize"))
-    return _POOL[0]
 

@@ -47,6 +47,8 @@ DEFAULT_RESOLUTION = 64
 #: the in-memory voxeliser fills the volume in slabs of about this many
 #: voxels (progress is reported per slab; each slab runs on two threads)
 SLAB_VOXELS = 1 << 24
+#: units of progress per slab
+PROGRESS_UNITS = 1000
 #: bytes of temporaries per (triangle, column) pair that may cross
 PAIR_BYTES = 18
 #: what to do when a volume does not fit in memory
@@ -90,14 +92,13 @@ class Solid:
         self.faces = faces
 
     def prepare(self, frame, origin_s, pitch_s, shape) -> "VoxelPlan":
-        from .winding import cap_triangles
+        from .winding import close_mesh
 
         shift, e, _, _ = frame
         with np.errstate(over="ignore", invalid="ignore"):
             vs = np.ldexp(self.v - shift, -e)  # unused far-off vertices may overflow: never read
         Tm = vs[self.faces]
-        Tc, E = cap_triangles(vs, *self.chain)
-        return VoxelPlan(Tm, Tc, E, origin_s, pitch_s, shape)
+        return VoxelPlan(Tm, close_mesh(vs, self.faces, *self.chain), origin_s, pitch_s, shape)
 
     def check_layers(self, stats) -> None:
         """With ``strict``, refuse a mesh whose voxels lie inside two or more
@@ -157,25 +158,29 @@ class VoxelPlan:
     mesh and its cap, and the cap's own triangles for the rule.  Small
     (O(triangles)) and picklable, so dask can ship it to workers."""
 
-    def __init__(self, Tm, Tc, E, origin_s, pitch_s, shape):
+    def __init__(self, Tm, cap, origin_s, pitch_s, shape):
+        from .captree import CapTree
         from .scanline import ScanGrid
 
         self.shape = tuple(int(n) for n in shape)
         self.origin = np.asarray(origin_s, dtype=np.float64)
         self.pitch = float(pitch_s)
         self.Tm = Tm
-        self.Tc = Tc
-        self.E = E
-        T = np.concatenate([Tm, Tc]) if len(Tc) else Tm
-        self.grid = ScanGrid(T, self.origin, self.pitch, self.shape)
+        self.E = cap.E
+        self.tree = CapTree(cap.T, cap.E, cap.owner)
+        # the closed mesh M + C, less the faces that the cap holds reversed (they cancel)
+        self.grid = ScanGrid(np.concatenate([Tm[~cap.reversed_faces], cap.cones()]), self.origin, self.pitch,
+                             self.shape)
 
-    def fill(self, xa: int, xb: int, out=None, stats=None, threads: int = 1) -> np.ndarray:
-        """The volume of slab ``[xa, xb)`` (first axis)."""
+    def fill(self, xa: int, xb: int, out=None, stats=None, threads: int = 1, progress=None) -> np.ndarray:
+        """The volume of slab ``[xa, xb)`` (first axis); ``progress(done,
+        total)`` as the cap's rule advances."""
         from .scanline import fill_slab
         from .winding import winding_rule
 
         _, ny, nz = self.shape
-        rule = winding_rule(self.Tc, self.E, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads)
+        rule = winding_rule(self.tree, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads,
+                            progress=progress)
         return fill_slab(self.grid, xa, xb, rule=rule, out=out, stats=stats, threads=threads)
 
     def slab_bytes(self, rows: int) -> int:
@@ -250,7 +255,8 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         :func:`isoflow.scale.memory.default_budget` (90 % of the available
         memory).  The message suggests a zarr store.
     progress
-        Optional ``callable(done, total)``, called once per slab.
+        Optional ``callable(done, total)``, called as the work advances
+        (``PROGRESS_UNITS`` per slab).
     report
         Optional dict that receives ``defects`` (the edge census of the faces
         as given), ``flipped_faces``, ``chain_edges`` (edges the cap closes; 0 when the exact
@@ -286,16 +292,23 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
     vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
     stats = np.zeros(3, dtype=np.int64)
-    for n, (a, b) in enumerate(slabs, 1):
-        plan.fill(a, b, out=vol[a:b], stats=stats, threads=2)
+    for n, (a, b) in enumerate(slabs):
+        step = None if progress is None else _share(progress, n, len(slabs))
+        plan.fill(a, b, out=vol[a:b], stats=stats, threads=2, progress=step)
         if progress is not None:
-            progress(n, len(slabs))
+            progress((n + 1) * PROGRESS_UNITS, len(slabs) * PROGRESS_UNITS)
     solid.check_layers(stats)
     if report is not None:
         report.update(defects=solid.defects, flipped_faces=solid.flipped,
                       chain_edges=len(plan.E), overlap_voxels=int(stats[0]),
                       note=solid.note(stats))
     return vol, origin, pitch
+
+
+def _share(progress, n: int, slabs: int):
+    """Slab n's progress as a share of the whole."""
+    return lambda done, total: progress(n * PROGRESS_UNITS + done * (PROGRESS_UNITS - 1) // total,
+                                        slabs * PROGRESS_UNITS)
 
 
 def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, strict=False,

@@ -1,5 +1,6 @@
 """The generalised winding number (Jacobson et al. 2013) of voxel centres,
-exactly and at about the cost of the closed scanline.
+exactly, with a tree over the cap so that soups and meshes with many
+boundaries cost about what closed meshes cost.
 
 The generalised winding number of a triangle mesh M at a point p is
 ``w(p) = sum over triangles of Omega_t(p) / 4 pi`` (signed solid angles); a
@@ -9,286 +10,233 @@ mesh w is the integer winding number and the rule is the nonzero rule.
 How it is computed (no approximation that can flip a voxel):
 
 1. **Cap.** The boundary of M as an integer 1-chain (every edge with its net
-   multiplicity, uses one way minus uses the other way) is a cycle.  The cone
-   C from an apex over each of its connected pieces (one triangle
-   ``(apex, b, a)`` per chain edge ``a -> b``) has boundary ``-boundary(M)``,
-   so ``M + C`` is closed: its winding number W is an integer that the exact
-   scanline (:mod:`isoflow.mesh.scanline`) computes at every centre, and
-   ``w_M = W - w_C``.
+   multiplicity, uses one way minus uses the other way) is a cycle.  A cap C
+   with boundary ``-boundary(M)`` makes ``M + C`` closed: its winding number
+   W is an integer that the exact scanline (:mod:`isoflow.mesh.scanline`)
+   computes at every centre, and ``w_M = W - w_C``.  The faces of M fall
+   into *groups* (face components joined by shared boundary pieces); each
+   group is capped by the cheaper of two caps, by area: cones over its
+   boundary pieces (from each piece's centroid, lifted by 1 % of its size
+   along its vector area and 0.1 % along a fixed generic direction, so
+   that a planar hole in a plane of voxel centres does not put a layer of
+   centres on the cap), or the group itself reversed.  A scanned surface
+   with a few holes gets cones; a triangle soup, or a mesh whose boundary
+   runs everywhere (a tetrahedral mesh's faces written as quads), gets
+   itself: its faces then cancel out of the scanline, which reads zero
+   there, and the cap carries all of w.
 2. **Rounding to an integer.** ``|W - w_C| > 1/2`` iff ``W != round(w_C)``
    (W is an integer; equality only at |w| = 1/2 exactly).  So only
-   ``R = round(w_C)`` is needed, and R is 0 wherever ``|w_C| < 1/2``.
-3. **Blocks with a bound.** ``w_C`` is harmonic off C, and its gradient is
-   the Biot-Savart integral over the boundary chain, so on a ball of radius h
-   around q that does not meet C, ``|w_C(p) - w_C(q)| <= h / 4 pi * sum_e
-   len_e / (d_e - h)^2`` (d_e: distance from q to chain edge e).  Blocks of
-   voxels are evaluated at their centre with this bound; a block whose
-   interval ``w_C(q) +- bound`` holds no half-integer gets one R; the others
-   (and blocks that meet C) are split in eight, down to single voxels,
-   which get ``w_C`` exactly (the sum of the triangles' ``atan2`` terms is
-   taken as the argument of a product of complex numbers, counting whole
-   turns: one ``atan2`` per point).  A centre within ``1e-6`` pitch of the cap
-   (where the scanline's tie rule and the sign of a solid angle could
-   disagree), and one whose ``w_C`` is within ``1e-9`` of a half-integer
-   (where rounding it decides nothing: on a planar part of M that lies in
-   a plane of centres, ``w_C`` is exactly 1/2 inside the boundary, and
-   ``|w_M| -> 1/2`` from both sides), gets ``w_M`` summed over M's own
-   triangles instead, at the point the scanline's tie rule stands for
-   (the centre moved by ``(eta, eps, -delta)``, ``0 < eps << eta << delta``,
-   here 1e-9, 1e-7 and 1e-5 pitch): on a planar sheet ``|w_M|`` is then
-   just under 1/2, so its centres are out, whichever way it faces.
+   ``R = round(w_C)`` is needed.
+3. **Blocks with a bound.** Blocks of voxels are evaluated at their centre
+   by :func:`isoflow.mesh.captree.evaluate`: the cap's triangles in a tree
+   of balls, near ones summed exactly, far ones by Barill et al.'s
+   expansion with a proven remainder, plus a bound on the variation over
+   the block (the Biot-Savart field of the chain).  A cap triangle that
+   cuts the block along its plane without an edge in it adds its integer
+   crossing per voxel (the side of its plane).  A block whose interval
+   ``w_C(q) +- (remainder + variation)`` holds no half-integer gets one R
+   (plus the crossings); a block that is undecided because of the
+   remainder is evaluated again with a tighter tree (``theta / 3``, then
+   exactly); other blocks, and blocks that a cap edge meets, are split in
+   eight, down to single voxels, whose ``w_C`` is exact at the last try.
+   A centre within ``1e-6`` pitch of the cap (where the scanline's tie
+   rule and the sign of a solid angle could disagree), and one whose
+   ``w_C`` is within ``1e-9`` of a half-integer (where rounding it
+   decides nothing: on a planar part of M that lies in a plane of
+   centres, ``w_C`` is exactly 1/2 inside the boundary), gets ``w_M``
+   summed over M's own triangles instead, at the point the scanline's tie
+   rule stands for (the centre moved by ``(eta, eps, -delta)``, ``0 < eps
+   << eta << delta``, here 1e-9, 1e-7 and 1e-5 pitch): on a planar sheet
+   ``|w_M|`` is then just under 1/2, so its centres are out, whichever way
+   it faces.
 
-Caps are cones over each boundary piece from its centroid, lifted by 1 % of
-its size along its vector area and by 0.1 % along a fixed generic direction,
-so that a planar hole lying in a plane of voxel centres does not put a whole
-layer of centres on the cap; the boundary of a lone triangle (a soup) is
-capped by the triangle itself, reversed.
-
-Cost: the scanline's, plus (blocks evaluated) x (cap triangles + chain
-edges).  Near a hole, w passes 1/2 on a soap-film-like sheet across it, and
-there every voxel needs its exact value: a hole n voxels wide costs about
-n^2 such voxels.
+Cost: the scanline's, plus the blocks evaluated, each at about the
+logarithm of the cap's size.  Near a hole w passes 1/2 on a
+soap-film-like sheet across it, and there every voxel needs its own
+value: a hole n voxels wide costs about n^2 such voxels.  The work runs
+in pieces of blocks on two threads, polling :mod:`isoflow.scale.cancel`,
+so that an interrupt ends it at once.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
-from ..scale.jit import njit
 
 from ..errors import IsoflowError
+from ..scale.cancel import STOP, run_pieces
+from ..scale.jit import njit
+from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range, near_sum
 
 #: centres closer than this (in pitches) to the cap are summed over M itself
 TIE_PITCHES = 1e-6
 #: ... and those whose w_C is this close to a half-integer
 TIE_WINDING = 1e-9
 #: where they are summed: the centre moved as the scanline's tie rule moves
-#: it, (x + eta, y + eps, z - delta) with 0 < eps << eta << delta (pitches)
+#: it, (x + eta, y + eps, -delta) with 0 < eps << eta << delta (pitches)
 TIE_STEP = np.array([1e-7, 1e-9, -1e-5])
 #: blocks at the coarsest level are about this many per axis
 TOP_BLOCKS = 16
+#: triangles with an edge within this many block radii (beyond the block) are summed at each centre
+REACH = 2.0
+#: a block of at most this many centres that leaves at most a quarter of
+#: them undecided has those evaluated one by one instead of being split
+SMALL = 64
+#: a block of more than SMALL centres with more near and crossing triangles is split, not painted
+NEAR_PAINT = 4
+#: far nodes are expanded when their radius is at most this share of their distance
+THETA = 0.3
+#: pieces of top blocks per slab (the unit of progress and of the threads' work)
+PIECES = 512
 _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 0.7537])
+
+FORCE_IN, FORCE_OUT = 127, -128
+#: a centre the kernel leaves to be summed over M (then FORCE_IN or FORCE_OUT)
+TIE_PENDING = -127
+#: a centre that the model of its block did not decide (evaluated on its own next)
+UNDECIDED = -126
+#: the largest |R| the int8 rule holds beside these codes
+MAX_R = 125
 
 
 # ---------------------------------------------------------------------------
 # caps
 # ---------------------------------------------------------------------------
 
-def cap_triangles(v: np.ndarray, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The cap over the boundary chain ``a[e] -> b[e]`` (edges repeated by
-    multiplicity): corners (K, 3, 3) of its triangles, one cone per
-    connected piece, and the chain's edges (E, 2, 3) (the cap's boundary,
-    for the bound on its variation).
+@dataclass
+class Cap:
+    """A cap that closes a mesh (module docstring, step 1).
 
-    A piece that is the boundary of one lone triangle (a soup) is capped by
-    that triangle reversed (the cone from one of its corners, less its two
-    flat triangles): one cap triangle instead of three."""
+    ``T`` (K, 3, 3) its triangles, ``E`` (E, 2, 3) the chain (the mesh's
+    boundary, repeated by multiplicity), ``owner`` (E,) the cap triangle
+    that has each chain edge as an edge of its own, and ``reversed_faces``
+    the mesh's faces that the cap holds reversed (they cancel out of the
+    closed mesh, so the scanline skips them).
+    """
+
+    T: np.ndarray
+    E: np.ndarray
+    owner: np.ndarray
+    reversed_faces: np.ndarray
+
+    def cones(self) -> np.ndarray:
+        """The cap's triangles that are not reversed faces (those come first)."""
+        return self.T[int(self.reversed_faces.sum()):]
+
+
+def close_mesh(v: np.ndarray, faces: np.ndarray, a: np.ndarray, b: np.ndarray) -> Cap:
+    """The cap over the boundary chain ``a[e] -> b[e]`` of ``faces``.
+
+    Parameters
+    ----------
+    v : (N, 3) float array
+        Vertex positions.
+    faces : (M, 3) int array
+        The mesh's faces (oriented as they will be read).
+    a, b : (E,) int arrays
+        The chain: directed edges repeated by their net multiplicity
+        (:func:`isoflow.mesh.load.boundary_chain`).
+
+    Returns
+    -------
+    Cap
+        Cones over the boundary pieces of each group of faces, or the group
+        reversed, whichever has the smaller area.
+
+    Examples
+    --------
+    >>> v = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    >>> cap = close_mesh(v, np.array([[0, 1, 2]]), np.array([0, 1, 2]), np.array([1, 2, 0]))
+    >>> cap.T.shape, cap.reversed_faces.tolist()
+    ((1, 3, 3), [True])
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    m = len(faces)
     if len(a) == 0:
-        return np.zeros((0, 3, 3)), np.zeros((0, 2, 3))
+        return Cap(np.zeros((0, 3, 3)), np.zeros((0, 2, 3)), np.zeros(0, np.int64), np.zeros(m, bool))
+    piece, face_of_edge, face_group, ngroups = _groups(faces, len(v), a, b)
+    apex, cone_area = _cones(v, a, b, piece)
+    fa = 0.5 * np.linalg.norm(np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]]), axis=1)
+    fgroup = face_group[face_of_edge]  # the group of each chain edge
+    cone_by_group = np.bincount(fgroup, weights=cone_area, minlength=ngroups)
+    inside = face_group >= 0
+    area_by_group = np.bincount(face_group[inside], weights=fa[inside], minlength=ngroups)
+    own = area_by_group <= cone_by_group  # cap the group by itself, reversed
+    rev = inside & own[np.maximum(face_group, 0)]
+    cone_edges = ~own[fgroup]
+    Tr = v[faces[rev][:, ::-1]]
+    Tk = np.stack([apex[piece[cone_edges]], v[b[cone_edges]], v[a[cone_edges]]], axis=1)
+    T = np.concatenate([Tr, Tk])
+    owner = np.empty(len(a), dtype=np.int64)
+    rank = np.cumsum(rev) - 1  # index of a reversed face among the cap's triangles
+    owner[~cone_edges] = rank[face_of_edge[~cone_edges]]
+    owner[cone_edges] = len(Tr) + np.arange(int(cone_edges.sum()))
+    E = np.stack([v[a], v[b]], axis=1)
+    return Cap(T, E, owner, rev)
+
+
+def _groups(faces, n, a, b):
+    """Pieces of the chain (connected edges), a face holding each chain
+    edge, and each face's group (-1 for a closed face component): the face
+    components joined by the pieces they share; and the number of labels."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
+    m = len(faces)
+    e0 = faces.reshape(-1)
+    e1 = faces[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(e0, e1) * np.int64(n) + np.maximum(e0, e1)
+    order = np.argsort(key, kind="stable")
+    sk = key[order]
+    ck = np.minimum(a, b) * np.int64(n) + np.maximum(a, b)
+    face_of_edge = order[np.searchsorted(sk, ck)] // 3
+    # face components through shared edges
+    same = sk[1:] == sk[:-1]
+    fo = order // 3
+    g = coo_matrix((np.ones(int(same.sum())), (fo[:-1][same], fo[1:][same])), shape=(m, m))
+    nc, comp = connected_components(g, directed=False)
+    # chain pieces
     used, inv = np.unique(np.concatenate([a, b]), return_inverse=True)
-    ia, ib = inv[: len(a)], inv[len(a):]
-    n = len(used)
-    g = coo_matrix((np.ones(len(a)), (ia, ib)), shape=(n, n))
-    ncomp, lab = connected_components(g, directed=False)
-    pts = v[used]
-    cnt = np.bincount(lab, minlength=ncomp).astype(np.float64)
-    centroid = np.stack([np.bincount(lab, weights=pts[:, d], minlength=ncomp) for d in range(3)], 1) / cnt[:, None]
-    lo = np.full((ncomp, 3), np.inf)
-    hi = np.full((ncomp, 3), -np.inf)
-    np.minimum.at(lo, lab, pts)
-    np.maximum.at(hi, lab, pts)
+    k = len(used)
+    g = coo_matrix((np.ones(len(a)), (inv[: len(a)], inv[len(a):])), shape=(k, k))
+    _, lab = connected_components(g, directed=False)
+    piece = lab[inv[: len(a)]]
+    # groups: components and pieces, joined where a piece bounds a component
+    npc = int(piece.max()) + 1
+    g = coo_matrix((np.ones(len(a)), (comp[face_of_edge], nc + piece)), shape=(nc + npc, nc + npc))
+    ngroups, glab = connected_components(g, directed=False)
+    bounded = np.zeros(nc, dtype=bool)
+    bounded[comp[face_of_edge]] = True
+    return piece, face_of_edge, np.where(bounded[comp], glab[:nc][comp], -1), ngroups
+
+
+def _cones(v, a, b, piece):
+    """The apex of each piece's cone and the area of each chain edge's cone
+    triangle."""
+    npc = int(piece.max()) + 1
+    pts_a = v[a]
+    cnt = np.bincount(piece, minlength=npc).astype(np.float64)
+    centroid = np.stack([np.bincount(piece, weights=pts_a[:, d], minlength=npc) for d in range(3)], 1) / cnt[:, None]
+    lo = np.full((npc, 3), np.inf)
+    hi = np.full((npc, 3), -np.inf)
+    np.minimum.at(lo, piece, pts_a)
+    np.maximum.at(hi, piece, pts_a)
     size = np.linalg.norm(hi - lo, axis=1)
-    ce = lab[ia]
-    area = 0.5 * np.cross(pts[ia] - centroid[ce], pts[ib] - centroid[ce])
-    normal = np.stack([np.bincount(ce, weights=area[:, d], minlength=ncomp) for d in range(3)], 1)
+    area = 0.5 * np.cross(v[a] - centroid[piece], v[b] - centroid[piece])
+    normal = np.stack([np.bincount(piece, weights=area[:, d], minlength=npc) for d in range(3)], 1)
     nlen = np.linalg.norm(normal, axis=1)
     flat = nlen <= 1e-12 * size**2
     unit = np.where(flat[:, None], _GENERIC, normal / np.where(flat, 1.0, nlen)[:, None])
     apex = centroid + size[:, None] * (0.01 * unit + 0.001 * _GENERIC)
-    # a lone triangle's boundary (three edges, three vertices): apex on a corner
-    ecount = np.bincount(ce, minlength=ncomp)
-    lone = (ecount == 3) & (cnt == 3)
-    first = np.full(ncomp, -1, dtype=np.int64)
-    first[ce[::-1]] = ia[::-1]  # some vertex of each piece
-    apex[lone] = pts[first[lone]]
-    T = np.empty((len(a), 3, 3))
-    T[:, 0] = apex[ce]
-    T[:, 1] = v[b]
-    T[:, 2] = v[a]
-    flat = lone[ce] & ((ia == first[ce]) | (ib == first[ce]))  # cap triangles with two equal corners
-    E = np.stack([v[a], v[b]], axis=1)
-    return T[~flat], E
+    tri = 0.5 * np.linalg.norm(np.cross(v[b] - apex[piece], v[a] - apex[piece]), axis=1)
+    return apex, tri
 
 
 # ---------------------------------------------------------------------------
-# compiled geometry
+# the exact sum (ties, references)
 # ---------------------------------------------------------------------------
-
-@njit(cache=True, nogil=True, inline="always")
-def _solid_angle(T, t, px, py, pz):
-    """Signed solid angle of triangle t at p (van Oosterom & Strackee 1983)."""
-    ax, ay, az = T[t, 0, 0] - px, T[t, 0, 1] - py, T[t, 0, 2] - pz
-    bx, by, bz = T[t, 1, 0] - px, T[t, 1, 1] - py, T[t, 1, 2] - pz
-    cx, cy, cz = T[t, 2, 0] - px, T[t, 2, 1] - py, T[t, 2, 2] - pz
-    la = math.sqrt(ax * ax + ay * ay + az * az)
-    lb = math.sqrt(bx * bx + by * by + bz * bz)
-    lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-    det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-    den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-           + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-    return 2.0 * math.atan2(det, den)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _dot(ax, ay, az, bx, by, bz):
-    return ax * bx + ay * by + az * bz
-
-
-@njit(cache=True, nogil=True)
-def _dist2_triangle(T, t, px, py, pz):
-    """Squared distance from p to triangle t (Ericson, Real-Time Collision
-    Detection, 5.1.5)."""
-    ax, ay, az = T[t, 0, 0], T[t, 0, 1], T[t, 0, 2]
-    abx, aby, abz = T[t, 1, 0] - ax, T[t, 1, 1] - ay, T[t, 1, 2] - az
-    acx, acy, acz = T[t, 2, 0] - ax, T[t, 2, 1] - ay, T[t, 2, 2] - az
-    apx, apy, apz = px - ax, py - ay, pz - az
-    d1 = _dot(abx, aby, abz, apx, apy, apz)
-    d2 = _dot(acx, acy, acz, apx, apy, apz)
-    if d1 <= 0 and d2 <= 0:
-        qx, qy, qz = ax, ay, az
-    else:
-        bpx, bpy, bpz = px - T[t, 1, 0], py - T[t, 1, 1], pz - T[t, 1, 2]
-        d3 = _dot(abx, aby, abz, bpx, bpy, bpz)
-        d4 = _dot(acx, acy, acz, bpx, bpy, bpz)
-        cpx, cpy, cpz = px - T[t, 2, 0], py - T[t, 2, 1], pz - T[t, 2, 2]
-        d5 = _dot(abx, aby, abz, cpx, cpy, cpz)
-        d6 = _dot(acx, acy, acz, cpx, cpy, cpz)
-        vc = d1 * d4 - d3 * d2
-        vb = d5 * d2 - d1 * d6
-        va = d3 * d6 - d5 * d4
-        if d3 >= 0 and d4 <= d3:
-            qx, qy, qz = T[t, 1, 0], T[t, 1, 1], T[t, 1, 2]
-        elif d6 >= 0 and d5 <= d6:
-            qx, qy, qz = T[t, 2, 0], T[t, 2, 1], T[t, 2, 2]
-        elif vc <= 0 and d1 >= 0 and d3 <= 0:
-            s = d1 / (d1 - d3)
-            qx, qy, qz = ax + s * abx, ay + s * aby, az + s * abz
-        elif vb <= 0 and d2 >= 0 and d6 <= 0:
-            s = d2 / (d2 - d6)
-            qx, qy, qz = ax + s * acx, ay + s * acy, az + s * acz
-        elif va <= 0 and (d4 - d3) >= 0 and (d5 - d6) >= 0:
-            s = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-            qx = T[t, 1, 0] + s * (T[t, 2, 0] - T[t, 1, 0])
-            qy = T[t, 1, 1] + s * (T[t, 2, 1] - T[t, 1, 1])
-            qz = T[t, 1, 2] + s * (T[t, 2, 2] - T[t, 1, 2])
-        else:
-            den = va + vb + vc
-            if den == 0:  # degenerate triangle: all three regions failed
-                qx, qy, qz = ax, ay, az
-            else:
-                s, u = vb / den, vc / den
-                qx, qy, qz = ax + abx * s + acx * u, ay + aby * s + acy * u, az + abz * s + acz * u
-    dx, dy, dz = px - qx, py - qy, pz - qz
-    return dx * dx + dy * dy + dz * dz
-
-
-@njit(cache=True, nogil=True)
-def _dist_segment(E, e, px, py, pz):
-    """Distance from p to the segment E[e, 0] - E[e, 1]."""
-    bx, by, bz = E[e, 0, 0], E[e, 0, 1], E[e, 0, 2]
-    ex, ey, ez = E[e, 1, 0] - bx, E[e, 1, 1] - by, E[e, 1, 2] - bz
-    wx, wy, wz = px - bx, py - by, pz - bz
-    ee = ex * ex + ey * ey + ez * ez
-    s = 0.0 if ee == 0 else min(max((wx * ex + wy * ey + wz * ez) / ee, 0.0), 1.0)
-    dx, dy, dz = wx - s * ex, wy - s * ey, wz - s * ez
-    return math.sqrt(dx * dx + dy * dy + dz * dz)
-
-
-@njit(cache=True, nogil=True)
-def _eval_blocks(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals):
-    """Evaluate round(w_C) on blocks ``[i0, i1) x [j0, j1) x [k0, k1)``.
-
-    status 0: ``rvals`` holds R for the whole block; 1: split it; 2: a single
-    centre within ``tol`` of the cap, or whose w_C is a half-integer within
-    :data:`TIE_WINDING` (sum over the mesh instead).  One pass
-    over the cap's triangles: the solid angle, the distance to the
-    triangle's plane (``|det| / |n|``, a lower bound of the distance to the
-    triangle, which is computed only when the plane is near), and a lower
-    bound of the distance to its chain edge for the bound on the variation.
-    """
-    inv4pi = 1.0 / (4.0 * math.pi)
-    for q in range(blocks.shape[0]):
-        i0, i1, j0, j1, k0, k1 = blocks[q, 0], blocks[q, 1], blocks[q, 2], blocks[q, 3], blocks[q, 4], blocks[q, 5]
-        px = origin[0] + pitch * (0.5 * (i0 + i1))
-        py = origin[1] + pitch * (0.5 * (j0 + j1))
-        pz = origin[2] + pitch * (0.5 * (k0 + k1))
-        di, dj, dk = i1 - i0 - 1, j1 - j0 - 1, k1 - k0 - 1
-        h = 0.5 * pitch * math.sqrt(di * di + dj * dj + dk * dk)
-        reach = h if h > 0 else tol
-        zx, zy, turns = 1.0, 0.0, 0
-        var = 0.0
-        hit = False
-        for t in range(Tc.shape[0]):
-            ax, ay, az = Tc[t, 0, 0] - px, Tc[t, 0, 1] - py, Tc[t, 0, 2] - pz
-            bx, by, bz = Tc[t, 1, 0] - px, Tc[t, 1, 1] - py, Tc[t, 1, 2] - pz
-            cx, cy, cz = Tc[t, 2, 0] - px, Tc[t, 2, 1] - py, Tc[t, 2, 2] - pz
-            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-            if abs(det) <= reach * nlen[t]:  # the plane is near: is the triangle?
-                if _dist2_triangle(Tc, t, px, py, pz) <= reach * reach:
-                    hit = True
-                    break
-            la = math.sqrt(ax * ax + ay * ay + az * az)
-            lb = math.sqrt(bx * bx + by * by + bz * bz)
-            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-                   + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-            # sum of atan2(det, den) as the argument of a product of complex
-            # numbers, counting the turns: one atan2 per block, not per triangle
-            nx = zx * den - zy * det
-            ny = zx * det + zy * den
-            if _upper(zx, zy) and _upper(den, det) and not _upper(nx, ny):
-                turns += 1
-            elif zy < 0 and det < 0 and _upper(nx, ny):
-                turns -= 1
-            m = max(abs(nx), abs(ny))
-            if m > 0:  # 0 only for a centre on a corner: within tol, not used
-                zx, zy = nx / m, ny / m
-        w = 2.0 * (math.atan2(zy, zx) + 2.0 * math.pi * turns)  # the sum of 2 atan2(det, den)
-        if h > 0 and not hit:
-            for e in range(E.shape[0]):
-                ax, ay, az = E[e, 0, 0] - px, E[e, 0, 1] - py, E[e, 0, 2] - pz
-                bx, by, bz = E[e, 1, 0] - px, E[e, 1, 1] - py, E[e, 1, 2] - pz
-                # distance to the edge >= (|a| + |b| - |b - a|) / 2
-                la = math.sqrt(ax * ax + ay * ay + az * az)
-                lb = math.sqrt(bx * bx + by * by + bz * bz)
-                d = 0.5 * (la + lb - elen[e]) - h
-                if d <= 0:
-                    d = _dist_segment(E, e, px, py, pz) - h
-                var += elen[e] / (d * d)
-        if hit:
-            status[q] = 2 if h == 0 else 1
-            continue
-        w *= inv4pi
-        var *= h * inv4pi
-        lo = math.floor(w - var + 0.5)
-        if h == 0 and abs(w - math.floor(w) - 0.5) <= TIE_WINDING:
-            status[q] = 2  # a half-integer: its rounding would be the noise's
-        elif lo == math.floor(w + var + 0.5):
-            status[q] = 0
-            rvals[q] = int(lo)
-        else:  # a single centre never splits (a NaN would loop forever)
-            status[q] = 1 if h > 0 else 2
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _upper(x, y):
-    """The argument of x + iy lies in (0, pi]."""
-    return y > 0 or (y == 0 and x < 0)
-
 
 @njit(cache=True, nogil=True)
 def _gwn_points(P, T, out):
@@ -297,7 +245,16 @@ def _gwn_points(P, T, out):
     for p in range(P.shape[0]):
         w = 0.0
         for t in range(T.shape[0]):
-            w += _solid_angle(T, t, P[p, 0], P[p, 1], P[p, 2])
+            ax, ay, az = T[t, 0, 0] - P[p, 0], T[t, 0, 1] - P[p, 1], T[t, 0, 2] - P[p, 2]
+            bx, by, bz = T[t, 1, 0] - P[p, 0], T[t, 1, 1] - P[p, 1], T[t, 1, 2] - P[p, 2]
+            cx, cy, cz = T[t, 2, 0] - P[p, 0], T[t, 2, 1] - P[p, 1], T[t, 2, 2] - P[p, 2]
+            la = math.sqrt(ax * ax + ay * ay + az * az)
+            lb = math.sqrt(bx * bx + by * by + bz * bz)
+            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+            den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
+                   + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
+            w += 2.0 * math.atan2(det, den)  # van Oosterom & Strackee 1983
         out[p] = w * inv4pi
 
 
@@ -315,42 +272,164 @@ def gwn(points, triangles) -> np.ndarray:
 # the rule R = round(w_C) on a box of the grid
 # ---------------------------------------------------------------------------
 
-FORCE_IN, FORCE_OUT = 127, -128
+@njit(cache=True, nogil=True)
+def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, nlen, E, elen, owner, lo, hi, child,
+                   centre, rho, A, Mo, S, L, flags, stop):
+    """R on every centre of the blocks ``tops`` (rows ``i0, i1, j0, j1, k0,
+    k1`` in grid coordinates), written into ``rule`` whose voxel (0, 0, 0)
+    is grid voxel ``box``; centres left for M's own sum get
+    :data:`TIE_PENDING`.  ``flags[0]`` is set where |R| would exceed
+    :data:`MAX_R`; ``flags[1:]`` count blocks evaluated, single centres
+    evaluated, retries with a tighter tree, hits, splits, near triangles
+    and crossing triangles summed at centres.  Returns early
+    (work undone) once ``stop[0]`` is set."""
+    blocks = np.empty((512, 6), dtype=np.int64)
+    stack = np.empty(64, dtype=np.int64)
+    near = np.empty(MAX_NEAR, dtype=np.int64)
+    cross = np.empty(MAX_NEAR, dtype=np.int64)
+    edges = np.empty((6 * MAX_NEAR, 2, 3))
+    grad = np.empty(4)  # the gradient, and scratch for the derivative bound
+    for q in range(tops.shape[0]):
+        if stop[0]:
+            return
+        blocks[0] = tops[q]
+        nb = 1
+        while nb:
+            nb -= 1
+            i0, i1, j0, j1, k0, k1 = (blocks[nb, 0], blocks[nb, 1], blocks[nb, 2], blocks[nb, 3],
+                                      blocks[nb, 4], blocks[nb, 5])
+            px = origin[0] + pitch * (0.5 * (i0 + i1))
+            py = origin[1] + pitch * (0.5 * (j0 + j1))
+            pz = origin[2] + pitch * (0.5 * (k0 + k1))
+            di, dj, dk = i1 - i0 - 1, j1 - j0 - 1, k1 - k0 - 1
+            h = 0.5 * pitch * math.sqrt(di * di + dj * dj + dk * dk)
+            # near triangles: within the ball and a margin, so that the far part's edges keep away
+            reach = h + max(reach_factor * h, 2 * pitch) if h > 0 else tol
+            th = theta
+            left = -1  # centres of the block still undecided (-1: the block is a hit)
+            flags[1] += 1
+            flags[2] += h == 0
+            while True:
+                w, err, var, hess, status, nn, nc = evaluate(px, py, pz, h, reach, th, tol, T, nlen, E, elen, owner,
+                                                             lo, hi, child, centre, rho, A, Mo, S, L, stack, near,
+                                                             cross, edges, grad)
+                if status == HIT:
+                    flags[4] += 1
+                    break
+                rest = var + 0.5 * h * h * hess
+                left = _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, err + rest + TIE_WINDING, px, py, pz,
+                              T, nlen, near, nn, cross, nc, origin, pitch, tol, flags)
+                if left == 0 or th == 0 or rest > err:  # a tighter tree cannot help
+                    break
+                # a remainder far beyond the margin: straight to the exact sum
+                th = th / 3.0 if th == theta and err < 0.25 else 0.0
+                flags[3] += 1
+            if left == 0:
+                pass
+            elif h == 0:
+                rule[i0 - box[0], j0 - box[1], k0 - box[2]] = TIE_PENDING
+            elif left > 0 and (left * 4 <= (i1 - i0) * (j1 - j0) * (k1 - k0) <= SMALL or left <= 8):
+                for i in range(i0, i1):  # the undecided centres on their own
+                    for j in range(j0, j1):
+                        for k in range(k0, k1):
+                            if rule[i - box[0], j - box[1], k - box[2]] == UNDECIDED:
+                                blocks[nb, 0], blocks[nb, 1], blocks[nb, 2] = i, i + 1, j
+                                blocks[nb, 3], blocks[nb, 4], blocks[nb, 5] = j + 1, k, k + 1
+                                nb += 1
+            else:
+                flags[5] += 1
+                nb = _push_children(blocks, nb, i0, i1, j0, j1, k0, k1)
+            if stop[0]:
+                return
 
 
-def _split(blocks: np.ndarray) -> np.ndarray:
-    """Each block cut in two at the middle of every axis longer than one."""
-    out = [blocks]
-    for a in range(3):
-        lo, hi = out[-1][:, 2 * a], out[-1][:, 2 * a + 1]
-        mid = (lo + hi) // 2
-        cut = hi - lo > 1
-        left = out[-1].copy()
-        left[cut, 2 * a + 1] = mid[cut]
-        right = out[-1][cut].copy()
-        right[:, 2 * a] = mid[cut]
-        out.append(np.concatenate([left, right]))
-    return out[-1]
+@njit(cache=True, nogil=True)
+def _push_children(blocks, nb, i0, i1, j0, j1, k0, k1):
+    """The block cut at the middle of every axis longer than one."""
+    mi, mj, mk = (i0 + i1) // 2, (j0 + j1) // 2, (k0 + k1) // 2
+    for a in range(2):
+        ia, ib = (i0, mi) if a == 0 else (mi, i1)
+        if ia == ib:
+            continue
+        for b in range(2):
+            ja, jb = (j0, mj) if b == 0 else (mj, j1)
+            if ja == jb:
+                continue
+            for c in range(2):
+                ka, kb = (k0, mk) if c == 0 else (mk, k1)
+                if ka == kb:
+                    continue
+                blocks[nb, 0], blocks[nb, 1], blocks[nb, 2] = ia, ib, ja
+                blocks[nb, 3], blocks[nb, 4], blocks[nb, 5] = jb, ka, kb
+                nb += 1
+    return nb
 
 
-def winding_rule(Tc, E, Tm, origin, pitch, box, threads: int = 1):
-    """``R = round(w_C)`` for every centre of ``box = (i0, i1, j0, j1, k0, k1)``
-    where it is not 0, as ``(array, (i0, j0, k0))`` (int8, with the codes
-    FORCE_IN / FORCE_OUT where the centre is so close to the cap that the
-    mesh's own winding number decided), or None where R is 0 everywhere.
+@njit(cache=True, nogil=True)
+def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross, nc, origin,
+           pitch, tol, flags):
+    """R on the block's centres p from the model at its centre q:
+    ``round(w + grad . (p - q) + w_near(p) +- bound)`` (w_near summed over
+    the near triangles at p).  Centres where the interval holds a
+    half-integer get :data:`UNDECIDED`, those on a near triangle
+    :data:`TIE_PENDING`; returns how many are undecided.  A block of more
+    than :data:`SMALL` centres stops at its first undecided one (it is
+    split, and its children paint it again) and returns all of them."""
+    n = (i1 - i0) * (j1 - j0) * (k1 - k0)
+    slope = math.sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * 0.5 * pitch * math.sqrt(
+        (i1 - i0 - 1) ** 2 + (j1 - j0 - 1) ** 2 + (k1 - k0 - 1) ** 2)
+    ok = 2 * bound < 1 and abs(w) + slope < 1e6  # false for NaN or inf too
+    if not ok:  # no centre can be decided
+        if n <= 8:  # (the caller takes them one by one)
+            rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = UNDECIDED
+        return n
+    wq, spread = w, bound + slope
+    if nc == 0 and nn:  # the near triangles too, if they keep off the block: the whole block at once
+        wn, var, apart = near_range(T, near, nn, qx, qy, qz, 0.5 * pitch * math.sqrt(
+            (i1 - i0 - 1) ** 2 + (j1 - j0 - 1) ** 2 + (k1 - k0 - 1) ** 2))
+        wq, spread = (w + wn, spread + var) if apart else (w, math.inf)
+    constant = nc == 0 and spread < 0.5 and math.floor(wq - spread + 0.5) == math.floor(wq + spread + 0.5)
+    if not constant and nn + nc > NEAR_PAINT and n > SMALL:  # cheaper split: the children have fewer
+        return n
+    if constant:  # one R for the block
+        r = math.floor(wq + 0.5)
+        if r > MAX_R or r < -MAX_R:
+            flags[0] = 1
+        else:
+            rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = r
+        return 0
+    left = 0
+    for i in range(i0, i1):
+        px = origin[0] + pitch * (i + 0.5)
+        for j in range(j0, j1):
+            py = origin[1] + pitch * (j + 0.5)
+            for k in range(k0, k1):
+                pz = origin[2] + pitch * (k + 0.5)
+                x = w + grad[0] * (px - qx) + grad[1] * (py - qy) + grad[2] * (pz - qz)
+                if nn + nc:
+                    flags[6] += nn
+                    flags[7] += nc
+                    wn, tie = near_sum(T, nlen, near, nn, cross, nc, qx, qy, qz, px, py, pz, tol)
+                    if tie:
+                        rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
+                        continue
+                    x += wn
+                val = math.floor(x - bound + 0.5)
+                if val != math.floor(x + bound + 0.5):
+                    if n > SMALL:  # the block will be split: its children paint it again
+                        return n
+                    rule[i - box[0], j - box[1], k - box[2]] = UNDECIDED
+                    left += 1
+                elif val > MAX_R or val < -MAX_R:
+                    flags[0] = 1
+                else:
+                    rule[i - box[0], j - box[1], k - box[2]] = val
+    return left
 
-    ``Tc`` are the cap's triangles, ``E`` its boundary edges (E, 2, 3), ``Tm``
-    the mesh's triangles (for the ties), all in the frame of ``origin`` and
-    ``pitch``.
-    """
-    if len(E) == 0:
-        return None
-    Tc = np.ascontiguousarray(Tc, dtype=np.float64)
-    E = np.ascontiguousarray(E, dtype=np.float64)
-    origin = np.asarray(origin, dtype=np.float64)
-    elen = np.linalg.norm(E[:, 1] - E[:, 0], axis=1)
-    nlen = np.linalg.norm(np.cross(Tc[:, 1] - Tc[:, 0], Tc[:, 2] - Tc[:, 0]), axis=1)
-    tol = TIE_PITCHES * pitch
+
+def top_blocks(box) -> np.ndarray:
+    """The coarsest blocks over ``box = (i0, i1, j0, j1, k0, k1)``: about
+    :data:`TOP_BLOCKS` per axis, a power of two voxels wide."""
     i0, i1, j0, j1, k0, k1 = (int(x) for x in box)
     ext = max(i1 - i0, j1 - j0, k1 - k0)
     s = 1 << max(0, math.ceil(math.log2(max(1, ext / TOP_BLOCKS))))
@@ -358,56 +437,48 @@ def winding_rule(Tc, E, Tm, origin, pitch, box, threads: int = 1):
     gi, gj, gk = np.meshgrid(np.arange(len(edges[0]) - 1), np.arange(len(edges[1]) - 1),
                              np.arange(len(edges[2]) - 1), indexing="ij")
     gi, gj, gk = gi.ravel(), gj.ravel(), gk.ravel()
-    blocks = np.stack([edges[0][gi], edges[0][gi + 1], edges[1][gj], edges[1][gj + 1],
-                       edges[2][gk], edges[2][gk + 1]], axis=1).astype(np.int64)
-    done_b, done_r, ties = [], [], []
-    while len(blocks):
-        status = np.empty(len(blocks), dtype=np.int8)
-        rvals = np.zeros(len(blocks), dtype=np.int64)
-        _run_split(_eval_blocks, blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals, threads)
-        keep = (status == 0) & (rvals != 0)
-        done_b.append(blocks[keep])
-        done_r.append(rvals[keep])
-        ties.append(blocks[status == 2])
-        blocks = _split(blocks[status == 1])
-    done_b = np.concatenate(done_b)
-    done_r = np.concatenate(done_r)
-    ties = np.concatenate(ties)
-    if len(ties):
-        P = origin + pitch * (ties[:, [0, 2, 4]] + 0.5 + TIE_STEP)
-        w = gwn(P, Tm)
-        done_b = np.concatenate([done_b, ties])
-        done_r = np.concatenate([done_r, np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)])
-    if len(done_b) == 0:
+    return np.stack([edges[0][gi], edges[0][gi + 1], edges[1][gj], edges[1][gj + 1],
+                     edges[2][gk], edges[2][gk + 1]], axis=1).astype(np.int64)
+
+
+def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progress=None, counts=None):
+    """``R = round(w_C)`` for every centre of ``box = (i0, i1, j0, j1, k0, k1)``
+    as ``(array, (i0, j0, k0))`` (int8, with the codes FORCE_IN / FORCE_OUT
+    where the centre is so close to the cap, or its w_C to a half-integer,
+    that the mesh's own winding number decided), or None where the cap is
+    empty.
+
+    ``tree`` holds the cap's triangles and chain, ``Tm`` the mesh's
+    triangles (for the ties), all in the frame of ``origin`` and ``pitch``.
+    ``progress(done, total)`` is called after each piece of blocks;
+    ``counts`` (int64 (7,)), if given, is incremented with the work done
+    (see :func:`_decide_blocks`).
+    """
+    if len(tree.T) == 0:
         return None
-    normal = (done_r != FORCE_IN) & (done_r != FORCE_OUT)
-    if normal.any() and np.abs(done_r[normal]).max() > 126:
-        raise IsoflowError("voxelize: the cap's winding number exceeds 126 (more than 126 "
+    origin = np.asarray(origin, dtype=np.float64)
+    i0, i1, j0, j1, k0, k1 = (int(x) for x in box)
+    rule = np.zeros((i1 - i0, j1 - j0, k1 - k0), dtype=np.int8)
+    tops = top_blocks(box)
+    # pieces in a scattered order: progress (and the time left) grows evenly
+    tops = tops[np.random.default_rng(0).permutation(len(tops))]
+    pieces = np.array_split(tops, min(PIECES, len(tops)))
+    flags = np.zeros(8, dtype=np.int64)
+    corner = np.array([i0, j0, k0], dtype=np.int64)
+    args = (rule, corner, origin, float(pitch), THETA, REACH, TIE_PITCHES * pitch) + tree.arrays() + (flags, STOP)
+    run_pieces(lambda n: _decide_blocks(pieces[n], *args), len(pieces), threads=threads, progress=progress)
+    if counts is not None:
+        counts += flags[1:]
+    if flags[0]:
+        raise IsoflowError(f"voxelize: the cap's winding number exceeds {MAX_R} (more than {MAX_R} "
                            "overlapping layers of boundary): not supported")
-    lo = done_b[:, [0, 2, 4]].min(axis=0)
-    hi = done_b[:, [1, 3, 5]].max(axis=0)
-    rule = np.zeros(tuple(hi - lo), dtype=np.int8)
-    b = done_b - np.repeat(lo, 2)
-    _paint(rule, b, done_r.astype(np.int8))
-    return rule, tuple(int(x) for x in lo)
-
-
-@njit(cache=True, nogil=True)
-def _paint(rule, blocks, vals):
-    for q in range(blocks.shape[0]):
-        rule[blocks[q, 0]:blocks[q, 1], blocks[q, 2]:blocks[q, 3], blocks[q, 4]:blocks[q, 5]] = vals[q]
-
-
-def _run_split(kernel, blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals, threads):
-    """The kernel over the blocks, in two halves on two threads if asked."""
-    n = len(blocks)
-    if threads <= 1 or n < 64:
-        kernel(blocks, origin, pitch, Tc, nlen, E, elen, tol, status, rvals)
-        return
-    from .scanline import two_threads
-
-    h = n // 2
-    futs = [two_threads().submit(kernel, blocks[a:b], origin, pitch, Tc, nlen, E, elen, tol, status[a:b], rvals[a:b])
-            for a, b in ((0, h), (h, n))]
-    for fu in futs:
-        fu.result()
+    ties = np.argwhere(rule == TIE_PENDING)
+    if len(ties):
+        P = origin + pitch * (ties + corner + 0.5 + TIE_STEP)
+        w = np.empty(len(P))
+        step = max(1, (1 << 22) // max(1, len(Tm)))  # pieces of about 4M solid angles
+        Tm = np.ascontiguousarray(Tm, dtype=np.float64)
+        run_pieces(lambda n: _gwn_points(P[n * step:(n + 1) * step], Tm, w[n * step:(n + 1) * step]),
+                   -(-len(P) // step), threads=threads)
+        rule[tuple(ties.T)] = np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)
+    return rule, (i0, j0, k0)
