@@ -24,6 +24,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
 from ..scale.memory import default_budget, gib
 from .load import load_mesh, mesh_defects
+from .fills import Fill
 from .voxelize import voxelize
 
 # --------------------------------------------------------------------------
@@ -375,7 +376,7 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False) -> tuple[list, str | None]:
+                  strict: bool = False, fill: Fill = "winding") -> tuple[list, str | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``: two coarse grids can both close the
@@ -388,7 +389,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     ``progress(done, total)`` follows the voxelisations as one count that
     only grows: each resolution tried weighs ``resolution**3`` (what its grid
     costs), and ``total`` grows by that weight when the stepping adds a
-    resolution. ``on_resolution(entry)`` is called after each.
+    resolution. ``on_resolution(entry)`` is called after each. ``fill``
+    is the voxels compared (:mod:`isoflow.mesh.fills`).
     """
     import time
 
@@ -422,8 +424,9 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
         def rung(done, total, finished=finished, weight=weight, ahead=ahead):
             progress(finished + round(weight * (done / total if total else 1.0)), ahead)
 
-        vol, _, pitch = voxelize(vertices, faces, resolution=res, strict=strict,
-                                 progress=None if progress is None else rung)
+        vol = voxelize(vertices, faces, resolution=res, strict=strict, fill=fill,
+                       progress=None if progress is None else rung, details=True)
+        vol, pitch = vol.volume, vol.pitch
         finished += weight
         betti = betti_numbers(vol, connectivity)
         entry = {"resolution": int(res), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
@@ -441,7 +444,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, progress=None, *,
                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
-                 on_resolution=None, strict: bool = False) -> dict:
+                 on_resolution=None, strict: bool = False, fill: Fill = "winding") -> dict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
     intersections, the genus of the solid it bounds, and the digital
     topology of that solid voxelised at growing resolutions, with a verdict.
@@ -457,6 +460,8 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
     An open or inconsistently oriented mesh has no genus of its own; its
     solid is read by the generalised winding number (|w| > 1/2) and its
     digital topology reported; ``strict`` refuses it (IsoflowError).
+    ``fill`` chooses the voxels compared (:mod:`isoflow.mesh.fills`; the
+    report's ``fill``).
     """
     path = Path(path)
     resolutions = list(resolutions)
@@ -474,6 +479,7 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         "self_intersecting_faces": crossings.get("self_intersecting_faces"),
         "faces_crossing_other_components": crossings.get("faces_crossing_other_components"),
         "solid_genus": None,
+        "fill": fill,
         "digital": [],
     }
     notes = []
@@ -513,7 +519,7 @@ def verify_genus(path, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, p
         out["digital"], stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not crossing_self, max_resolution=max_resolution,
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
-            strict=strict)
+            strict=strict, fill=fill)
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
     digital = out["digital"]

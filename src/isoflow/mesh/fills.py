@@ -1,0 +1,181 @@
+"""Which voxels a mesh fills, and what a voxelisation tells its caller.
+
+Three fills (``fill=`` of :func:`~isoflow.mesh.voxelize.voxelize`,
+``--fill`` of every command that voxelises):
+
+``winding``
+    The solid the mesh bounds: a voxel is in iff the generalised winding
+    number of its centre exceeds 1/2 in absolute value (the nonzero rule on
+    closed meshes).  A surface that bounds nothing (a zero-thickness panel,
+    a sheet) gives no voxel.
+``shell``
+    The surface itself: every voxel whose closed cube the surface meets
+    (:mod:`isoflow.mesh.shell`).
+``flood``
+    The shell and everything it encloses: the shell plus every voxel that
+    no 6-path of voxels outside the shell joins to the outside of the grid
+    (as binvox's and trimesh's fills; scipy's ``binary_fill_holes``).
+
+The details of a voxelisation are a :class:`Voxelization`; where the
+winding rule leaves a mesh with area a tiny or empty solid,
+:func:`thin_solid` says so and why.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
+from typing import Any, Literal
+
+import numpy as np
+
+#: the rule that decides which voxels a mesh fills
+Fill = Literal["winding", "shell", "flood"]
+FILLS: tuple[str, ...] = ("winding", "shell", "flood")
+
+#: The winding rule's solid counts as thin when it has fewer voxels than
+#: this share of the surface's shell (measured on public meshes, see
+#: docs/voxelisation.md: closed models give 0.8 or more at 64 voxels
+#: across, the cases that need another fill 0.2 or less).
+THIN_SHARE = 0.5
+#: the shell is counted only where the solid has fewer voxels than this
+#: many times the area in voxel faces (a shell has 1.5 to 3 of them).
+THIN_TRIGGER = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class Voxelization(Mapping):
+    """What a voxelisation gave, and what it found in the mesh.
+
+    Reads as a mapping too (``v["note"]``, ``dict(v)``), as the results of
+    isoflow's other functions do.
+
+    Attributes
+    ----------
+    volume : bool ndarray (nx, ny, nz) or None
+        The voxels (None where they were written to a store).
+    origin : float64 ndarray (3,)
+        Lower corner of voxel (0, 0, 0).
+    pitch : float
+    fill : {"winding", "shell", "flood"}
+    voxels : int
+        Voxels in.
+    defects : dict
+        The edge census of the faces as given
+        (:func:`~isoflow.mesh.load.mesh_defects`).
+    flipped_faces : int
+        Faces turned over to orient the mesh consistently.
+    double_sided_faces : int
+        Pairs of coincident faces of opposite orientation, each read as one.
+    chain_edges : int
+        Boundary edges the winding number's cap closes (0: the exact
+        scanline alone decided).
+    overlap_voxels : int
+        Voxels inside two or more layers (overlapping shells).
+    shell_voxels : int or None
+        Voxels of the surface's shell, where they were counted (to tell a
+        thin or empty solid).
+    note : str or None
+        One line for the user on what is unusual, or None.
+    """
+
+    volume: np.ndarray | None = field(repr=False)
+    origin: np.ndarray
+    pitch: float
+    fill: Fill
+    voxels: int
+    defects: dict
+    flipped_faces: int = 0
+    double_sided_faces: int = 0
+    chain_edges: int = 0
+    overlap_voxels: int = 0
+    shell_voxels: int | None = None
+    note: str | None = None
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self._names():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._names())
+
+    def __len__(self) -> int:
+        return len(self._names())
+
+    @classmethod
+    def _names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    def to_dict(self) -> dict:
+        """Every field but the volume, as JSON takes it (origin a list)."""
+        out = {k: getattr(self, k) for k in self._names() if k != "volume"}
+        out["origin"] = np.asarray(self.origin, dtype=np.float64).tolist()
+        return out
+
+
+def check_fill(fill: object) -> Fill:
+    """``fill`` if it names a fill, else an IsoflowError naming the three."""
+    from ..errors import IsoflowError
+
+    if fill not in FILLS:
+        raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {fill!r}")
+    return fill  # type: ignore[return-value]
+
+
+def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> float:
+    """The share of the triangles' area (corners ``T`` (M, 3, 3) in the
+    grid's frame) that bounds no voxel of ``volume``: faces whose centroid
+    has no voxel in on either side (three quarters of a voxel along the
+    normal), as zero-thickness parts, double-sided faces and parts thinner
+    than a voxel leave them.
+
+    Examples
+    --------
+    A square panel in an empty grid bounds nothing:
+
+    >>> T = np.array([[[0, 0, 1.5], [2, 0, 1.5], [0, 2, 1.5]]], dtype=float)
+    >>> unbounded_area(T, np.zeros((2, 2, 3), dtype=bool), np.zeros(3), 1.0)
+    1.0
+    """
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    area = np.linalg.norm(n, axis=1)
+    keep = area > 0
+    if not keep.any():
+        return 0.0
+    n, area = n[keep] / area[keep, None], area[keep]
+    c = T[keep].mean(axis=1)
+    bounded = np.zeros(len(c), dtype=bool)
+    shape = np.array(volume.shape)
+    for step in (0.75, -0.75):
+        idx = np.floor((c + step * pitch * n - origin) / pitch).astype(np.int64)
+        inside = np.all((idx >= 0) & (idx < shape), axis=1)
+        bounded[inside] |= volume[tuple(idx[inside].T)]
+    return float(area[~bounded].sum() / area.sum())
+
+
+def thin_solid(voxels: int, shell_voxels: int, share: float, double_sided: int) -> str | None:
+    """One line where the winding rule's solid (``voxels``) is thin or empty
+    against the surface's shell (``shell_voxels``), with the reasons found
+    (``share``: of the area bounding nothing, :func:`unbounded_area`;
+    ``double_sided``: faces read as one) and the fills that give the model;
+    None where it is not thin.
+
+    Examples
+    --------
+    >>> thin_solid(0, 120, 1.0, 0)[:40]
+    'the winding rule leaves no voxel in (the'
+    """
+    if voxels >= THIN_SHARE * shell_voxels or shell_voxels == 0:
+        return None
+    what = "no voxel" if voxels == 0 else f"{voxels} voxels"
+    why = []
+    if double_sided:
+        why.append(f"{double_sided} double-sided faces read as one")
+    if share > 0:
+        why.append(f"{100 * share:.0f} % of the area bounds no voxel on either side "
+                   "(zero-thickness parts, or parts thinner than a voxel)")
+    reason = "; ".join(why) if why else "the surface bounds little volume at this resolution"
+    return (f"the winding rule leaves {what} in (the surface's shell has {shell_voxels}): {reason}; "
+            "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
+            "(fill='flood' / 'shell')")
