@@ -309,16 +309,31 @@ def _plane_separated(T, t, s, plane, c0, c1):
 @njit(cache=True, nogil=True, inline="always")
 def _planes_below(PL, a, n, x, strict):
     """How many of the planes ``PL[a, :n + 1]`` are below x (at most x if
-    not ``strict``): a binary search, inlined (a call passing the array
-    would cost more than the search)."""
-    lo, hi = 0, n + 1
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if PL[a, mid] < x or (not strict and PL[a, mid] == x):
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
+    not ``strict``): guessed from the even spacing, then settled by
+    comparing with the planes themselves (so exact however they round)."""
+    if not x > PL[a, 0]:
+        return 0 if (strict or not x == PL[a, 0]) else 1
+    if not x < PL[a, n]:
+        return n + 1 if (not strict or x > PL[a, n]) else n
+    c = min(max(int((x - PL[a, 0]) / (PL[a, n] - PL[a, 0]) * n), 0), n)
+    while c > 0 and not (PL[a, c - 1] < x or (not strict and PL[a, c - 1] == x)):
+        c -= 1
+    while c <= n and (PL[a, c] < x or (not strict and PL[a, c] == x)):
+        c += 1
+    return c
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _below_near(PL, a, n, x, m, strict):
+    """How many planes of axis a are below x - m and below x + m (at most,
+    if not ``strict``): one search, then the planes within m of x."""
+    c = _planes_below(PL, a, n, x, strict)
+    lo, hi = c, c
+    while lo > 0 and (PL[a, lo - 1] > x - m or (strict and PL[a, lo - 1] == x - m)):
+        lo -= 1
+    while hi <= n and (PL[a, hi] < x + m or (not strict and PL[a, hi] == x + m)):
+        hi += 1
+    return lo, hi
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -361,48 +376,53 @@ def _set_up(T, t, scale, s, n, coef, bnd, plane):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _column_span(T, t, w, S, coef, bnd, n, u0, u1, v0, v1):
-    """Heights (axis w) of triangle t over the column [u0, u1] x [v0, v1]
-    (axes u = w+1, v = w+2), in floating point: the least and greatest over
-    the corners of their common polygon, which are the triangle's corners in
-    the column, the crossings of its edges with the column's sides, and the
-    column's corners inside its projection (heights on its plane).  Points
-    that rounding puts just outside are taken too: each lies on the triangle
-    within rounding of the polygon, so the span moves by no more than that."""
+def _plane_span(T, t, w, n, u0, u1, v0, v1):
+    """Least and greatest height (axis w) of triangle t's plane over the
+    column [u0, u1] x [v0, v1], in floating point: at two of its corners."""
     u, v = (w + 1) % 3, (w + 2) % 3
-    zl, zh = np.inf, -np.inf
-    for k in range(3):
-        au, av, az = T[t, k, u], T[t, k, v], T[t, k, w]
-        if u0 <= au <= u1 and v0 <= av <= v1:
-            zl, zh = min(zl, az), max(zh, az)
-        k2 = (k + 1) % 3
-        bu, bv, bz = T[t, k2, u], T[t, k2, v], T[t, k2, w]
-        for side_u in range(2):  # the sides u = const (0) and v = const (1)
-            pa, pb, qa, qb = (au, bu, av, bv) if side_u == 0 else (av, bv, au, bu)
-            q0, q1 = (v0, v1) if side_u == 0 else (u0, u1)
-            for c in ((u0, u1) if side_u == 0 else (v0, v1)):
-                if (pa - c) * (pb - c) <= 0 and pa != pb:
-                    f = (c - pa) / (pb - pa)
-                    q = qa + f * (qb - qa)
-                    if q0 <= q <= q1:
-                        z = az + f * (bz - az)
-                        zl, zh = min(zl, z), max(zh, z)
-    for cu in (u0, u1):
-        for cv in (v0, v1):
-            inside = S != 0
-            for k in range(3):
-                val = coef[w, k, 0] * cu + coef[w, k, 1] * cv + coef[w, k, 2]
-                inside = inside and S * val >= -bnd[w, k]
-            if inside:
-                z = T[t, 0, w] - (n[u] * (cu - T[t, 0, u]) + n[v] * (cv - T[t, 0, v])) / n[w]
-                zl, zh = min(zl, z), max(zh, z)
+    su, sv = -n[u] / n[w], -n[v] / n[w]  # the plane's slopes
+    h = T[t, 0, w] + su * (u0 - T[t, 0, u]) + sv * (v0 - T[t, 0, v])
+    du, dv = su * (u1 - u0), sv * (v1 - v0)
+    return h + min(du, 0.0) + min(dv, 0.0), h + max(du, 0.0) + max(dv, 0.0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _chord_span(T, t, w, n, lo, hi, side_lo, side_hi, on_v, c, zl, zh):
+    """``(zl, zh)`` widened by the heights of triangle t's plane at the ends
+    of the chord [lo, hi] (the triangle along a side of a column) clipped to
+    the side [side_lo, side_hi]; the side is the line v = c (``on_v``) or
+    u = c."""
+    a, b = max(lo, side_lo), min(hi, side_hi)
+    if a <= b:
+        u, v = (w + 1) % 3, (w + 2) % 3
+        for x in (a, b):
+            pu, pv = (x, c) if on_v else (c, x)
+            z = T[t, 0, w] - (n[u] * (pu - T[t, 0, u]) + n[v] * (pv - T[t, 0, v])) / n[w]
+            zl, zh = min(zl, z), max(zh, z)
     return zl, zh
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _line_extent(T, t, u, v, c):
+    """Where the line v = c meets triangle t projected on the axes (u, v):
+    its least and greatest u, in floating point ((inf, -inf) if it misses)."""
+    lo, hi = np.inf, -np.inf
+    for k in range(3):
+        au, av = T[t, k, u], T[t, k, v]
+        if av == c:
+            lo, hi = min(lo, au), max(hi, au)
+        k2 = (k + 1) % 3
+        bu, bv = T[t, k2, u], T[t, k2, v]
+        if (av < c < bv) or (bv < c < av):
+            x = au + (c - av) / (bv - av) * (bu - au)
+            lo, hi = min(lo, x), max(hi, x)
+    return lo, hi
+
+
 @njit(cache=True, nogil=True)
-def _shell(T, t0, t1, PL, nv, xa, xb, scale, out):
+def _shell(T, tri, PL, nv, xa, xb, scale, out):
     """Mark in ``out`` (rows [xa, xb) of the grid) the voxels that
-    triangles [t0, t1) meet; ``PL[a, :nv[a] + 1]`` are the planes between
+    triangles ``tri`` meet; ``PL[a, :nv[a] + 1]`` are the planes between
     voxels along axis a, ``scale`` bounds the coordinates' magnitude."""
     s = np.empty(3, dtype=np.int64)
     lo = np.empty(3, dtype=np.int64)
@@ -414,7 +434,8 @@ def _shell(T, t0, t1, PL, nv, xa, xb, scale, out):
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
     plane = np.empty(5)
-    for t in range(t0, t1):
+    for q in range(len(tri)):
+        t = tri[q]
         empty = False
         for a in range(3):
             mn = min(T[t, 0, a], T[t, 1, a], T[t, 2, a])
@@ -432,35 +453,75 @@ def _shell(T, t0, t1, PL, nv, xa, xb, scale, out):
         cond = norms / abs(n[w]) if n[w] != 0 else np.inf
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
+        reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
         wmin = min(T[t, 0, w], T[t, 1, w], T[t, 2, w])
         wmax = max(T[t, 0, w], T[t, 1, w], T[t, 2, w])
-        for iu in range(lo[u], hi[u]):
-            c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
-            idx[u] = iu
-            for iv in range(lo[v], hi[v]):
-                c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
-                idx[v] = iv
-                if _projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v]):
+        for iv in range(lo[v], hi[v]):
+            c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
+            idx[v] = iv
+            # The columns of this row that meet the projection are those
+            # whose u-range meets its extent in the strip (a convex set's
+            # shadow is an interval), and those strictly inside both of the
+            # strip's lines' chords lie inside it whole; both extents are
+            # rounded by less than reach, and only the columns within reach
+            # of an end are tested.
+            a0, b0 = _line_extent(T, t, u, v, c0[v])
+            a1, b1 = _line_extent(T, t, u, v, c1[v])
+            ul, uh = min(a0, a1), max(b0, b1)
+            for k in range(3):  # the corners in the strip
+                if c0[v] <= T[t, k, v] <= c1[v]:
+                    ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
+            if ul <= uh:
+                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u])
+                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u])
+            else:  # rounding found nothing: every column of the box, tested
+                iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
+            in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True)
+            in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False) - 1
+            c1l, d1l, chord_at = np.inf, -np.inf, -1
+            for iu in range(iu0, iu1):
+                c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
+                idx[u] = iu
+                if not met0 <= iu < met1 and _projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u],
+                                                                     c0[v], c1[v]):
                     continue
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
-                    zl, zh = _column_span(T, t, w, s[w], coef, bnd, n, c0[u], c1[u], c0[v], c1[v])
+                    # the chords on the column's two u sides (the lower one
+                    # is the last column's upper one, if that was found)
+                    c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
+                    c1l, d1l = _line_extent(T, t, v, u, c1[u])
+                    chord_at = iu + 1
+                    if in0 <= iu < in1:  # inside the projection: the plane over the column
+                        zl, zh = _plane_span(T, t, w, n, c0[u], c1[u], c0[v], c1[v])
+                    else:  # the heights at the corners of the polygon column and triangle share
+                        zl, zh = np.inf, -np.inf
+                        for k in range(3):
+                            if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
+                                zl, zh = min(zl, T[t, k, w]), max(zh, T[t, k, w])
+                        zl, zh = _chord_span(T, t, w, n, a0, b0, c0[u], c1[u], True, c0[v], zl, zh)
+                        zl, zh = _chord_span(T, t, w, n, a1, b1, c0[u], c1[u], True, c1[v], zl, zh)
+                        zl, zh = _chord_span(T, t, w, n, c0l, d0l, c0[v], c1[v], False, c0[u], zl, zh)
+                        zl, zh = _chord_span(T, t, w, n, c1l, d1l, c0[v], c1[v], False, c1[u], zl, zh)
                     if zl <= zh:
                         # in: every voxel whose extent meets [Zl, Zh], the
                         # true span (the polygon is connected, so it takes
                         # every height between); decided where the rounded
                         # span leaves no doubt, tested where a plane between
                         # voxels is within margin of one of its ends
-                        k0, k1 = _range(PL, w, nv[w], max(zl - margin, wmin), min(zh + margin, wmax), lo[w], hi[w])
-                        sure0, sure1 = _range(PL, w, nv[w], zl + margin, zh - margin, lo[w], hi[w])
+                        below_lo, sure0 = _below_near(PL, w, nv[w], zl, margin, True)
+                        sure1, above_hi = _below_near(PL, w, nv[w], zh, margin, False)
+                        k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
+                        sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
                 for k in range(k0, k1):
                     idx[w] = k
                     if sure0 <= k < sure1:
                         out[idx[0] - xa, idx[1], idx[2]] = True
                         continue
                     c0[w], c1[w] = PL[w, k], PL[w, k + 1]
-                    if (_projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
+                    if (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
+                            or _projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
                             or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
                             or _plane_separated(T, t, s, plane, c0, c1)):
                         continue
@@ -513,18 +574,20 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
     if len(T) == 0 or xb <= xa:
         return out
+    x = T[:, :, 0]
+    # the triangles that reach the slab (each slab would otherwise look at all)
+    tri = np.nonzero((x.max(axis=1) >= planes[0][xa]) & (x.min(axis=1) <= planes[0][xb]))[0]
     PL = np.full((3, nv.max() + 1), np.nan)
     for a in range(3):
         PL[a, :nv[a] + 1] = planes[a]
     scale = float(max(np.abs(T).max(), *(np.abs(p[[0, -1]]).max() for p in planes)))
-    m = len(T)
+    m = len(tri)
     if threads <= 1 or m < 2:
-        _shell(T, 0, m, PL, nv, xa, xb, scale, out)
+        _shell(T, tri, PL, nv, xa, xb, scale, out)
         return out
     from .scanline import two_threads
 
-    h = m // 2
-    futures = [two_threads().submit(_shell, T, a, b, PL, nv, xa, xb, scale, out) for a, b in ((0, h), (h, m))]
+    futures = [two_threads().submit(_shell, T, part, PL, nv, xa, xb, scale, out) for part in (tri[: m // 2], tri[m // 2:])]
     for fu in futures:
         fu.result()
     return out
