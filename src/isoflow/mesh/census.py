@@ -278,15 +278,15 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     n_vertices = len(vertices)
     mate = opposite_pairs(f, n_vertices)
     paired = mate >= 0
-    if paired.any():
-        p = np.asarray(vertices, dtype=np.float64)[f[paired]]
-        flat = ~np.any(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-        paired[np.nonzero(paired)[0][flat]] = False
-        mate[~paired] = -1
+    if not paired.any():
+        return f, 0
+    p = np.asarray(vertices, dtype=np.float64)[f]
+    flat = ~np.any(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    paired &= ~flat
     if not paired.any():
         return f, 0
     first = paired & (np.arange(len(f)) < mate)
-    wall = _walls(f[first], f[~paired], n_vertices)
+    wall = _walls(f[first], f[~paired & ~flat], n_vertices)
     drop = paired.copy()
     kept = np.nonzero(first)[0][~wall]
     drop[kept] = False

@@ -34,10 +34,15 @@ Fill = Literal["winding", "shell", "flood"]
 FILLS: tuple[str, ...] = ("winding", "shell", "flood")
 
 #: The winding rule's solid counts as thin when it has fewer voxels than
-#: this share of the surface's shell (measured on public meshes, see
-#: docs/voxelisation.md: closed models give 0.8 or more at 64 voxels
-#: across, the cases that need another fill 0.2 or less).
+#: this share of the surface's shell (measured on 33 public and generated
+#: meshes at 64, 128 and 256 across, benchmarks/bench_fills.py
+#: --thresholds: the least share of a model that bounds a solid is 0.77,
+#: platonic_shelf.obj at 64; a zero-thickness panel gives 0).
 THIN_SHARE = 0.5
+#: ... or when at least this share of the area bounds no voxel on either
+#: side (the same sweep: at most 0.10 on the public meshes, plane_holes.obj
+#: at 64; a panel gives 1).
+UNBOUNDED_SHARE = 0.25
 #: the shell is counted only where the solid has fewer voxels than this
 #: many times the area in voxel faces (a shell has 1.5 to 3 of them).
 THIN_TRIGGER = 2.0
@@ -125,10 +130,10 @@ def check_fill(fill: object) -> Fill:
 
 def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> float:
     """The share of the triangles' area (corners ``T`` (M, 3, 3) in the
-    grid's frame) that bounds no voxel of ``volume``: faces whose centroid
-    has no voxel in on either side (three quarters of a voxel along the
-    normal), as zero-thickness parts, double-sided faces and parts thinner
-    than a voxel leave them.
+    grid's frame) that bounds no voxel of ``volume``: faces with no voxel in
+    at their centroid or on either side of it (three quarters of a voxel
+    along the normal), as zero-thickness parts, double-sided faces and parts
+    thinner than a voxel leave them.
 
     Examples
     --------
@@ -147,28 +152,31 @@ def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> f
     c = T[keep].mean(axis=1)
     bounded = np.zeros(len(c), dtype=bool)
     shape = np.array(volume.shape)
-    for step in (0.75, -0.75):
+    for step in (0.0, 0.75, -0.75):
         idx = np.floor((c + step * pitch * n - origin) / pitch).astype(np.int64)
         inside = np.all((idx >= 0) & (idx < shape), axis=1)
         bounded[inside] |= volume[tuple(idx[inside].T)]
     return float(area[~bounded].sum() / area.sum())
 
 
-def thin_solid(voxels: int, shell_voxels: int, share: float, double_sided: int) -> str | None:
+def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided: int) -> str | None:
     """One line where the winding rule's solid (``voxels``) is thin or empty
-    against the surface's shell (``shell_voxels``), with the reasons found
-    (``share``: of the area bounding nothing, :func:`unbounded_area`;
-    ``double_sided``: faces read as one) and the fills that give the model;
-    None where it is not thin.
+    against the surface's shell (``shell_voxels``, None where not counted:
+    then it is not thin), or leaves much of the area bounding nothing
+    (``share``, :func:`unbounded_area`), with the reasons found
+    (``double_sided``: faces read as one) and the fills that give the model;
+    None otherwise.
 
     Examples
     --------
     >>> thin_solid(0, 120, 1.0, 0)[:40]
     'the winding rule leaves no voxel in (the'
     """
-    if voxels >= THIN_SHARE * shell_voxels or shell_voxels == 0:
+    thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
+    if not thin and share < UNBOUNDED_SHARE:
         return None
     what = "no voxel" if voxels == 0 else f"{voxels} voxels"
+    against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
     why = []
     if double_sided:
         why.append(f"{double_sided} double-sided faces read as one")
@@ -176,6 +184,6 @@ def thin_solid(voxels: int, shell_voxels: int, share: float, double_sided: int) 
         why.append(f"{100 * share:.0f} % of the area bounds no voxel on either side "
                    "(zero-thickness parts, or parts thinner than a voxel)")
     reason = "; ".join(why) if why else "the surface bounds little volume at this resolution"
-    return (f"the winding rule leaves {what} in (the surface's shell has {shell_voxels}): {reason}; "
+    return (f"the winding rule leaves {what} in{against}: {reason}; "
             "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
             "(fill='flood' / 'shell')")

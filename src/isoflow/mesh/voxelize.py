@@ -255,14 +255,14 @@ class VoxelPlan:
         return total
 
     def thin_note(self, volume: np.ndarray, voxels: int, double_sided: int) -> tuple[int | None, str | None]:
-        """The shell's voxels and :func:`~isoflow.mesh.fills.thin_solid`'s
-        line where the winding rule's solid is small against the area (the
-        shell is counted only then)."""
+        """The shell's voxels (counted only where the winding rule's solid
+        is small against the area, else None) and
+        :func:`~isoflow.mesh.fills.thin_solid`'s line."""
         Tm = self.Tm
         area = 0.5 * float(np.linalg.norm(np.cross(Tm[:, 1] - Tm[:, 0], Tm[:, 2] - Tm[:, 0]), axis=1).sum())
-        if not area > 0 or voxels >= THIN_TRIGGER * area / self.pitch**2:
+        if not area > 0:
             return None, None
-        shell = self.shell_count()
+        shell = self.shell_count() if voxels < THIN_TRIGGER * area / self.pitch**2 else None
         share = unbounded_area(Tm, volume, self.origin, self.pitch) if volume is not None else 0.0
         return shell, thin_solid(voxels, shell, share, double_sided)
 
