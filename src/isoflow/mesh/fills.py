@@ -34,14 +34,14 @@ Fill = Literal["winding", "shell", "flood"]
 FILLS: tuple[str, ...] = ("winding", "shell", "flood")
 
 #: The winding rule's solid counts as thin when it has fewer voxels than
-#: this share of the surface's shell (measured on 33 public and generated
+#: this share of the surface's shell (measured on 30 public and generated
 #: meshes at 64, 128 and 256 across, benchmarks/bench_fills.py
 #: --thresholds: the least share of a model that bounds a solid is 0.77,
 #: platonic_shelf.obj at 64; a zero-thickness panel gives 0).
 THIN_SHARE = 0.5
 #: ... or when at least this share of the area bounds no voxel on either
-#: side (the same sweep: at most 0.10 on the public meshes, plane_holes.obj
-#: at 64; a panel gives 1).
+#: side (the same sweep: at most 0.07 on the public meshes, plane_holes.obj
+#: at 64; a panel gives 1, the double-sided chair 0.46 at 128).
 UNBOUNDED_SHARE = 0.25
 #: the shell is counted only where the solid has fewer voxels than this
 #: many times the area in voxel faces (a shell has 1.5 to 3 of them).

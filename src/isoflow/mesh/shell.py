@@ -550,7 +550,7 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     out : bool ndarray (xb - xa, ny, nz), optional
         Filled in place (voxels are only set, never cleared).
     threads : int
-        1 or 2 (the triangles split in two halves at once; compiled code
+        1 or 2 (the rows split in two halves filled at once; compiled code
         runs without the GIL).
 
     Returns
@@ -574,20 +574,23 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
     if len(T) == 0 or xb <= xa:
         return out
-    x = T[:, :, 0]
-    # the triangles that reach the slab (each slab would otherwise look at all)
-    tri = np.nonzero((x.max(axis=1) >= planes[0][xa]) & (x.min(axis=1) <= planes[0][xb]))[0]
+    xmin, xmax = T[:, :, 0].min(axis=1), T[:, :, 0].max(axis=1)
     PL = np.full((3, nv.max() + 1), np.nan)
     for a in range(3):
         PL[a, :nv[a] + 1] = planes[a]
     scale = float(max(np.abs(T).max(), *(np.abs(p[[0, -1]]).max() for p in planes)))
-    m = len(tri)
-    if threads <= 1 or m < 2:
-        _shell(T, tri, PL, nv, xa, xb, scale, out)
+    mid = (xa + xb) // 2
+    parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
+    calls = []
+    for a, b in parts:  # each part its own rows: the threads never write the same memory
+        tri = np.nonzero((xmax >= planes[0][a]) & (xmin <= planes[0][b]))[0]  # the triangles that reach it
+        calls.append((T, tri, PL, nv, a, b, scale, out[a - xa:b - xa]))
+    if len(calls) == 1:
+        _shell(*calls[0])
         return out
     from .scanline import two_threads
 
-    futures = [two_threads().submit(_shell, T, part, PL, nv, xa, xb, scale, out) for part in (tri[: m // 2], tri[m // 2:])]
+    futures = [two_threads().submit(_shell, *c) for c in calls]
     for fu in futures:
         fu.result()
     return out

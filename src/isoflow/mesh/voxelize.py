@@ -238,7 +238,12 @@ class VoxelPlan:
         _, ny, nz = self.shape
         return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rows * ny * nz
 
-    def slabs(self, voxels: int = SLAB_VOXELS) -> list[tuple[int, int]]:
+    def slabs(self, voxels: int | None = None) -> list[tuple[int, int]]:
+        """Ranges of rows of about ``voxels`` voxels (default
+        :data:`SLAB_VOXELS`; eight times that for a shell, which needs no
+        temporaries and whose every slab looks at each triangle)."""
+        if voxels is None:
+            voxels = SLAB_VOXELS if self.fill_rule == "winding" else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
