@@ -1,4 +1,4 @@
-"""The picture of docs/voxelisation.md: one model in the three fills.
+"""The picture of docs/fills.md: one model in the three fills.
 
 The model is a signpost: a closed box (the post) and a zero-thickness
 panel (the sign) fixed to it, voxelised at 20 across with ``fill="winding"``,
