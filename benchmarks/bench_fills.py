@@ -8,7 +8,7 @@ Usage::
 
 Rows (benchmarks/results/fills.json and fills.md):
 
-* ``chair``: meshes/chair_double_sided.obj (thin boxes and zero-thickness
+* ``chair``: tests/mesh/data/chair_double_sided.obj (thin boxes and zero-thickness
   panels, every face written twice) at 128 across: whether the default
   (winding) run says the note, and ``--fill flood``'s voxel count against
   trimesh's ``voxelized(pitch).fill()`` at the same pitch (the chair puts
@@ -48,6 +48,7 @@ from isoflow.mesh.load import load_mesh  # noqa: E402
 from isoflow.mesh.voxelize import Solid, voxelize  # noqa: E402
 
 MESHES = ROOT / "meshes"
+DATA = ROOT / "tests" / "mesh" / "data"  # the generated meshes (make_thin_models.py)
 
 
 def pairs(a, b, repeat: int):
@@ -75,10 +76,10 @@ def closed_samples():
 def chair_row() -> dict:
     import trimesh
 
-    v, f = load_mesh(MESHES / "chair_double_sided.obj")
+    v, f = load_mesh(DATA / "chair_double_sided.obj")
     default = voxelize(v, f, resolution=128, details=True)
     flood = voxelize(v, f, resolution=128, fill="flood", details=True)
-    tm = trimesh.load(MESHES / "chair_double_sided.obj", force="mesh").voxelized(flood.pitch)
+    tm = trimesh.load(DATA / "chair_double_sided.obj", force="mesh").voxelized(flood.pitch)
     surface, filled = int(tm.matrix.sum()), int(tm.fill().matrix.sum())
     row = {"mesh": "chair_double_sided.obj", "resolution": 128, "winding_voxels": default.voxels,
            "note": default.note, "thin_note": bool(default.note and "winding rule leaves" in default.note),
@@ -160,7 +161,7 @@ def thresholds() -> int:
     from isoflow.mesh.voxelize import plan_voxels
 
     warnings.simplefilter("ignore")
-    files = [p for p in sorted(MESHES.iterdir()) if p.suffix.lower() in (".obj", ".ply", ".off", ".stl")]
+    files = [p for d in (MESHES, DATA) for p in sorted(d.iterdir()) if p.suffix.lower() in (".obj", ".ply", ".off", ".stl")]
     pm = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes"
     files += [pm / n for n in ("airplane.obj", "bone.ply", "bunny.obj", "bunny10k_textured.obj", "cow.obj", "cube.obj")]
     cases = [(p.name, *load_mesh(p)) for p in files if p.exists()]

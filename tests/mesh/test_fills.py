@@ -32,6 +32,7 @@ trimesh = pytest.importorskip("trimesh")
 
 ROOT = Path(__file__).resolve().parents[2]
 MESHES = ROOT / "meshes"
+DATA = Path(__file__).with_name("data")  # the generated meshes (make_thin_models.py)
 DIGESTS = json.loads((Path(__file__).with_name("data") / "closed_digests.json").read_text())
 CLOSED = sorted({e["mesh"] for e in DIGESTS["volumes"]})
 
@@ -151,10 +152,11 @@ def test_shell_covers_the_surface_and_separates(rng):
 # flood
 # ---------------------------------------------------------------------------
 
-@pytest.mark.parametrize("name", ["torus.obj", "rabbit.obj", "plane_holes.obj", "chair_double_sided.obj",
-                                  "soup.obj", "platonic_shelf.obj"])
-def test_flood_is_the_shell_with_its_holes_filled(name):
-    v, f = load_mesh(MESHES / name)
+@pytest.mark.parametrize("path", [MESHES / "torus.obj", MESHES / "rabbit.obj", MESHES / "plane_holes.obj",
+                                  DATA / "chair_double_sided.obj", DATA / "soup.obj", MESHES / "platonic_shelf.obj"],
+                         ids=lambda p: p.name)
+def test_flood_is_the_shell_with_its_holes_filled(path):
+    v, f = load_mesh(path)
     shell = voxelize(v, f, resolution=40, fill="shell")[0]
     flood = voxelize(v, f, resolution=40, fill="flood")[0]
     assert np.array_equal(flood, ndimage.binary_fill_holes(shell))
@@ -266,7 +268,7 @@ def test_strict_refuses_double_sided_faces():
 # ---------------------------------------------------------------------------
 
 def test_zero_thickness_panel_says_why_and_which_fill():
-    v, f = load_mesh(MESHES / "panel.obj")
+    v, f = load_mesh(DATA / "panel.obj")
     r = voxelize(v, f, resolution=32, details=True)
     assert r.voxels == 0 and r.shell_voxels == voxelize(v, f, resolution=32, fill="shell", details=True).voxels
     assert "leaves no voxel" in r.note and "100 % of the area" in r.note and "--fill flood" in r.note
@@ -295,12 +297,12 @@ def test_closed_samples_get_no_thin_note():
 
 
 def test_chair_default_notes_and_flood_matches_trimesh():
-    v, f = load_mesh(MESHES / "chair_double_sided.obj")
+    v, f = load_mesh(DATA / "chair_double_sided.obj")
     r = voxelize(v, f, resolution=128, details=True)
     assert r.double_sided_faces == 64 and "64 double-sided faces" in r.note
     assert "bounds no voxel on either side" in r.note and "--fill flood" in r.note
     flood = voxelize(v, f, resolution=128, fill="flood", details=True)
-    ref = int(trimesh.load(MESHES / "chair_double_sided.obj", force="mesh").voxelized(flood.pitch).fill().matrix.sum())
+    ref = int(trimesh.load(DATA / "chair_double_sided.obj", force="mesh").voxelized(flood.pitch).fill().matrix.sum())
     assert abs(flood.voxels / ref - 1) < 0.05
     assert UNBOUNDED_SHARE < 1
 
@@ -365,7 +367,7 @@ def test_every_command_takes_fill(tmp_path, capsys, fill):
 
 
 def test_cli_says_the_thin_note_and_strict_refuses(capsys):
-    panel = str(MESHES / "panel.obj")
+    panel = str(DATA / "panel.obj")
     assert main(["info", panel, "--resolution", "16"]) == 0
     err = capsys.readouterr().err
     assert "note:" in err and "leaves no voxel" in err and "--fill flood" in err

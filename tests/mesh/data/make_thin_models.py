@@ -1,4 +1,6 @@
-"""Write the generated sample meshes of meshes/ that the fills need:
+"""Write the generated meshes that the fills' tests and benchmark read
+(beside this script, in tests/mesh/data/; isoflow's own, under its
+licence):
 
 * ``chair_double_sided.obj``: a chair as furniture exports write it: thin
   boxes (a seat cushion 0.6 thick, four legs 0.6 wide, at 128 voxels
@@ -22,9 +24,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-
-ROOT = Path(__file__).resolve().parents[3]
-
 
 def box(lo, hi):
     """Corners and outward triangles of the box [lo, hi]."""
@@ -72,7 +71,7 @@ def write_obj(path: Path, v, f, comment: str) -> None:
 
 
 def main() -> None:
-    out = ROOT / "meshes"
+    out = Path(__file__).resolve().parent
     write_obj(out / "chair_double_sided.obj", *join(chair(), True),
               "a chair of boxes and zero-thickness panels, every face written twice (isoflow, "
               "tests/mesh/data/make_thin_models.py)")
