@@ -321,6 +321,15 @@ def test_voxelization_reads_as_a_mapping():
     assert obj.voxels == r.voxels and np.array_equal(obj.volume, r.volume)
 
 
+@pytest.mark.parametrize("name,res", [("plane_holes.obj", 24), ("target.obj", 20), ("rabbit.obj", 30),
+                                      ("cube_no_bottom.obj", 9)])
+def test_voxels_counted_by_the_sweep(name, res):
+    """The sweep counts what it sets (runs, voxels the rule decides, voxels
+    forced in at ties) instead of a pass over the volume."""
+    r = voxelize(*load_mesh(MESHES / name), resolution=res, details=True)
+    assert r.voxels == int(np.count_nonzero(r.volume)) > 0
+
+
 def test_the_note_is_a_warning_without_details():
     v, f = load_mesh(MESHES / "cube_no_bottom.obj")
     with pytest.warns(MeshNote, match="8 boundary edges"):

@@ -268,7 +268,8 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
     ``W != R`` where R is 0, or ``rule[...]`` inside the box
     ``rbox = (i0, i1, j0, j1, k0, k1)`` (slab-local).  Codes 127 / -128 in
     ``rule`` force a voxel in / out.  ``stats`` counts voxels with
-    ``|W - R| >= 2`` and with ``W - R`` positive and negative.  ``vol`` must
+    ``|W - R| >= 2``, with ``W - R`` positive and negative, and those forced
+    in (so the last three add up to the voxels in).  ``vol`` must
     be all False: only voxels inside are written (pages of a fresh
     ``np.zeros`` array that stay outside are never touched).
     """
@@ -277,6 +278,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
     over = 0
     pos_n = 0
     neg_n = 0
+    forced = 0
     for i in range(r0, r1):
         for j in range(ny):
             c = i * ny + j
@@ -294,6 +296,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
                                 r = rule[i - bi0, j - bj0, k - bk0]
                             if r == 127:
                                 vol[i, j, k] = True
+                                forced += 1
                             elif r != -128:
                                 d = s - r
                                 if d != 0:
@@ -319,6 +322,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats):
     stats[0] += over
     stats[1] += pos_n
     stats[2] += neg_n
+    stats[3] += forced
 
 
 # ---------------------------------------------------------------------------
@@ -331,7 +335,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     ``rule`` is None (R = 0: the nonzero rule of a closed chain) or
     ``(array, (i0, j0, k0))``: R on a box of the grid, in grid coordinates
     (see :func:`_sweep` for the codes).  ``out`` is an optional boolean
-    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (3,)) is
+    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (4,)) is
     incremented with the counts of :func:`_sweep`.  With ``threads=2`` the
     slab is split in two halves filled at once (compiled code runs without
     the GIL).
@@ -340,7 +344,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     if out is None:
         out = np.zeros((xb - xa, ny, nz), dtype=bool)
     if stats is None:
-        stats = np.zeros(3, dtype=np.int64)
+        stats = np.zeros(4, dtype=np.int64)
     if rule is None:
         rarr, rbox = np.zeros((1, 1, 1), dtype=np.int8), np.zeros(6, dtype=np.int64)
     else:
@@ -352,7 +356,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
 
     def run(a, b):
         start, kz, val = grid.crossings(a, b)
-        st = np.zeros(3, dtype=np.int64)
+        st = np.zeros(4, dtype=np.int64)
         shift = np.array([a - xa, a - xa, 0, 0, 0, 0], dtype=np.int64)  # to this half's rows
         _sweep(out[a - xa:b - xa], start, kz, val, 0, b - a, rarr, rbox - shift, st)
         return st

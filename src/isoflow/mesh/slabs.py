@@ -81,7 +81,7 @@ def _slab_task(plan, store: str, xa: int, xb: int):
     """Fill rows [xa, xb) and write them to the store's level; the slab's
     counts."""
     zarr = import_zarr()
-    stats = np.zeros(3, dtype=np.int64)
+    stats = np.zeros(4, dtype=np.int64)
     vol = plan.fill(xa, xb, stats=stats, threads=1)
     z = zarr.open_group(store, mode="r+")["0"]
     z[xa:xb] = vol.view(np.uint8)

@@ -406,7 +406,7 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "wind
     temp = plan.slab_bytes(max(b - a for a, b in slabs))
     check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
     vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
-    stats = np.zeros(3, dtype=np.int64)
+    stats = np.zeros(4, dtype=np.int64)  # see scanline._sweep: the last three add up to the voxels in
     for n, (a, b) in enumerate(slabs, 1):
         plan.fill(a, b, out=vol[a:b], stats=stats, threads=2)
         if progress is not None:
@@ -416,7 +416,8 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "wind
 
         vol = fill_enclosed(vol, inplace=True)
     solid.check_layers(stats)
-    result = voxelization(solid, plan, vol, int(np.count_nonzero(vol)), origin, pitch, stats)
+    voxels = int(stats[1:].sum()) if fill == "winding" else int(np.count_nonzero(vol))
+    result = voxelization(solid, plan, vol, voxels, origin, pitch, stats)
     if details:
         return result
     say_note(result.note)
