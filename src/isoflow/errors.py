@@ -14,3 +14,12 @@ class IsoflowWarning(UserWarning):
     """Something a user should know that is not an error: a file format that
     cannot keep the voxel size, an affine's rotation left out. The command
     line prints it as one ``warning:`` line."""
+
+
+class MeshNote(IsoflowWarning):
+    """What is unusual about a mesh that was voxelised, and the rule that
+    read it (double-sided faces, boundary edges, an empty solid and the
+    fill that gives the model): the ``note`` of
+    :class:`~isoflow.mesh.voxelize.Voxelization`, issued as a warning
+    when the caller did not ask for the details. The command line prints it
+    as one ``note:`` line."""

@@ -567,8 +567,8 @@ def test_open_mesh_refused_only_when_strict():
     with pytest.raises(IsoflowError) as e:
         voxelize(v, f, resolution=16, strict=True)
     assert "341 boundary edges" in _oneline(e)
-    report = {}
-    vol, _, _ = voxelize(v, f, resolution=16, report=report)
+    report = voxelize(v, f, resolution=16, details=True)
+    vol, _, _ = report.volume, report.origin, report.pitch
     assert vol.any() and report["defects"]["boundary_edges"] == 341 and report["chain_edges"] == 341
     assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
@@ -586,8 +586,8 @@ def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
     both = trimesh.util.concatenate([a, b])
     v, f = np.asarray(both.vertices), np.asarray(both.faces)
     assert mesh_defects(v, f)["watertight"]
-    report = {}
-    vol, origin, pitch = voxelize(v, f, resolution=24, report=report)
+    report = voxelize(v, f, resolution=24, details=True)
+    vol, origin, pitch = report.volume, report.origin, report.pitch
     c = origin + (np.argwhere(np.ones(vol.shape, bool)) + 0.5) * pitch
     twice = int((a.contains(c) & b.contains(c)).sum())
     assert report["overlap_voxels"] == twice > 0
@@ -622,8 +622,8 @@ def test_inconsistent_and_nonmanifold_counts():
     with pytest.raises(IsoflowError, match="3 inconsistently oriented edges"):
         voxelize(v, flipped, resolution=8, strict=True)
     # by default the flipped face is turned back (trimesh.repair.fix_winding)
-    report = {}
-    vol, _, _ = voxelize(v, flipped, resolution=8, report=report)
+    report = voxelize(v, flipped, resolution=8, details=True)
+    vol, _, _ = report.volume, report.origin, report.pitch
     assert vol.all() and report["flipped_faces"] == 1 and report["chain_edges"] == 0
     assert "1 flipped face " in report["note"] and "fix_winding" in report["note"]
     # one triangle; three triangles on one edge
@@ -646,8 +646,8 @@ def test_edge_contact_cubes_use_exact_scanline():
     assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 0 and not d["watertight"]
     with pytest.raises(IsoflowError, match="1 non-manifold"):
         voxelize(u, f, pitch=0.25, strict=True)
-    report = {}
-    vol, _, _ = voxelize(u, f, pitch=0.25, report=report)
+    report = voxelize(u, f, pitch=0.25, details=True)
+    vol, _, _ = report.volume, report.origin, report.pitch
     assert report["chain_edges"] == 0 and "1 non-manifold edge;" in report["note"]
     assert "edges balance" in report["note"]
     assert vol.shape == (8, 8, 4) and vol.sum() == 2 * 4 * 4 * 4

@@ -158,9 +158,9 @@ def test_block_model_bounds_the_cap_everywhere_on_the_block(rng):
 @pytest.mark.parametrize("n,res", [(1, 29), (7, 40), (30, 33), (100, 48)])
 def test_random_soups_are_exact_everywhere(rng, n, res):
     v, f = soup(rng, n)
-    report = {}
-    vol, origin, pitch = voxelize(v, f, resolution=res, report=report)
-    assert report["chain_edges"] == 3 * n
+    out = voxelize(v, f, resolution=res, details=True)
+    vol, origin, pitch = out.volume, out.origin, out.pitch
+    assert out.chain_edges == 3 * n
     assert vol.any() == (n > 1)  # a lone triangle has |w| < 1/2 everywhere
     margin, _ = assert_exact(v, f, vol, origin, pitch)
     if n >= 30:  # the comparison reaches the 1/2 level set

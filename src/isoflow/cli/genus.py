@@ -7,7 +7,7 @@ import json
 import sys
 
 from ..errors import IsoflowError
-from .inputs import add_mesh_rule
+from .inputs import add_mesh_rule, mesh_fill
 from .progress import progress_bar
 
 
@@ -53,12 +53,16 @@ def cmd_genus(args: argparse.Namespace) -> int:
                       f"({entry['seconds']:.1f} s)", file=sys.stderr)
 
         report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped,
-                              strict=args.strict, **kw)
+                              strict=args.strict, fill=mesh_fill(args), **kw)
     if args.json:
         print(json.dumps(report.to_dict()))
     else:
         print(format_genus(report, args.mesh))
     return 0
+
+
+#: what the digital lines call the voxels of each fill
+FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
 def format_genus(report, name: str) -> str:
@@ -80,9 +84,10 @@ def format_genus(report, name: str) -> str:
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
     ]
+    what = FILL_WORDS[report.get("fill", "winding")]
     for d in report["digital"]:
         b = d["betti"]
-        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn solid: {b[0]} components, {b[1]} tunnels, "
+        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn {what}: {b[0]} components, {b[1]} tunnels, "
                      f"{b[2]} cavities -> genus {d['genus']}")
     lines.append(f"  verdict     {report['verdict']}")
     return "\n".join(lines)

@@ -31,9 +31,21 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
 
 def add_mesh_rule(p: argparse.ArgumentParser) -> None:
     """How a mesh is read into voxels."""
+    from ..mesh.fills import FILLS
+
+    p.add_argument("--fill", choices=FILLS, default=None,
+                   help="which voxels a mesh fills: winding (default: the solid it bounds, |w| > 1/2), shell "
+                        "(every voxel whose closed cube the surface meets) or flood (the shell and what it "
+                        "encloses)")
     p.add_argument("--strict", action="store_true",
-                   help="refuse a mesh that is not watertight, or whose voxels lie in overlapping layers "
-                        "(by default it is read by the generalised winding number)")
+                   help="refuse a mesh that is not watertight or has double-sided faces, whose voxels lie in "
+                        "overlapping layers, or whose winding solid is thin or empty against its shell (by "
+                        "default it is read by the generalised winding number)")
+
+
+def mesh_fill(args: argparse.Namespace) -> str:
+    """The ``--fill`` given, or the default (the winding rule)."""
+    return args.fill or "winding"
 
 
 def add_connectivity(p: argparse.ArgumentParser) -> None:
@@ -70,34 +82,33 @@ def thread_count(text: str) -> int:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def say_note(args: argparse.Namespace, path: object, report: dict) -> None:
+def say_note(args: argparse.Namespace, path: object, note: str | None) -> None:
     """What is unusual about a mesh, and the rule used: one line on stderr
     (dropped by --quiet)."""
-    if report.get("note") and not args.quiet:
-        print(f"isoflow {args.command}: note: {path}: {report['note']}", file=sys.stderr)
+    if note and not args.quiet:
+        print(f"isoflow {args.command}: note: {path}: {note}", file=sys.stderr)
 
 
 def voxelize_input(path: str | Path, args: argparse.Namespace):
     """A mesh file voxelised by the one mesh reader of every command."""
     from ..mesh.voxelize import voxelize_file
 
-    report: dict = {}
     with progress_bar(args, "voxelize", estimate=True) as show:
-        obj = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
-                            progress=show, report=report)
-    say_note(args, path, report)
+        obj, details = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
+                                     strict=args.strict, progress=show, details=True)
+    say_note(args, path, details.note)
     return obj
 
 
 def mesh_options_given(args: argparse.Namespace) -> bool:
     """Whether an option that only a mesh input takes was given."""
-    return args.pitch is not None or args.resolution is not None or args.strict
+    return args.pitch is not None or args.resolution is not None or args.strict or args.fill is not None
 
 
 def refuse_mesh_options(args: argparse.Namespace, what: str) -> None:
     """One line when a mesh-only option is given for a volume or points."""
     if mesh_options_given(args):
-        raise IsoflowError(f"{args.input}: --pitch/--resolution/--strict apply to meshes, not to {what} input")
+        raise IsoflowError(f"{args.input}: --pitch/--resolution/--fill/--strict apply to meshes, not to {what} input")
 
 
 def load_input(args: argparse.Namespace):

@@ -175,17 +175,19 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
 @contextlib.contextmanager
 def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
     """Each :class:`~isoflow.errors.IsoflowWarning` as one ``warning:`` line
-    on stderr, without the source line Python adds; others as Python shows
-    them."""
+    on stderr (a :class:`~isoflow.errors.MeshNote` as a ``note:`` line),
+    without the source line Python adds; others as Python shows them."""
     import warnings
 
-    from ..errors import IsoflowWarning
+    from ..errors import IsoflowWarning, MeshNote
 
     with warnings.catch_warnings():
         shown = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if issubclass(category, IsoflowWarning):
+            if issubclass(category, MeshNote):
+                print(f"isoflow {args.command}: note: {message}", file=sys.stderr)
+            elif issubclass(category, IsoflowWarning):
                 print(f"isoflow {args.command}: warning: {message}", file=sys.stderr)
             else:
                 shown(message, category, filename, lineno, file, line)

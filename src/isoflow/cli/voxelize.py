@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .inputs import add_mesh_rule, say_note, voxelize_input
+from .inputs import add_mesh_rule, mesh_fill, say_note, voxelize_input
 from .progress import progress_bar
 
 
@@ -42,12 +42,12 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
     """Beyond memory: slab by slab into a chunked zarr array, as dask tasks."""
     from ..mesh.slabs import voxelize_to_zarr
 
-    report: dict = {}
     out = Path(args.output)
     with progress_bar(args, "voxelize", estimate=True) as show:
-        z = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution, strict=args.strict,
-                             force=args.force, progress=show, report=report)
-    say_note(args, args.mesh, report)
+        z, details = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution,
+                                      fill=mesh_fill(args), strict=args.strict, force=args.force, progress=show,
+                                      details=True)
+    say_note(args, args.mesh, details.note)
     shape = "x".join(map(str, z["shape"]))
     print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
           f"pitch {z['pitch']:.6g}, origin {np.round(z['origin'], 6).tolist()}")

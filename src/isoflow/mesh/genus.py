@@ -26,6 +26,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
 from ..scale.memory import default_budget
 from .crossings import crossing_pairs
+from .fills import Fill
 from .load import load_mesh, mesh_defects
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import voxelize
@@ -360,7 +361,7 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False) -> tuple[list, Stop | None]:
+                  strict: bool = False, fill: Fill = "winding") -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``: two coarse grids can both close the
@@ -373,7 +374,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     ``progress(done, total)`` follows the voxelisations as one count that
     only grows: each resolution tried weighs ``resolution**3`` (what its grid
     costs), and ``total`` grows by that weight when the stepping adds a
-    resolution. ``on_resolution(entry)`` is called after each.
+    resolution. ``on_resolution(entry)`` is called after each. ``fill``
+    is the voxels compared (:mod:`isoflow.mesh.fills`).
     """
     import time
 
@@ -395,7 +397,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
         def rung(done, total, finished=finished, weight=weight, ahead=ahead):
             progress(finished + round(weight * (done / total if total else 1.0)), ahead)
 
-        entry = digital_entry(vertices, faces, res, connectivity, strict=strict,
+        entry = digital_entry(vertices, faces, res, connectivity, strict=strict, fill=fill,
                               progress=None if progress is None else rung)
         finished += weight
         out.append(entry)
@@ -429,13 +431,15 @@ def next_resolution(done: list, target: int | None, *, step: bool, max_resolutio
 
 
 def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict: bool = False,
-                  progress=None) -> dict:
+                  fill: Fill = "winding", progress=None) -> dict:
     """The solid voxelised at ``resolution`` and its Betti numbers: one
     entry of :func:`digital_steps`."""
     import time
 
     t = time.monotonic()
-    vol, _, pitch = voxelize(vertices, faces, resolution=resolution, strict=strict, progress=progress)
+    solid = voxelize(vertices, faces, resolution=resolution, strict=strict, fill=fill, progress=progress,
+                     details=True)
+    vol, pitch = solid.volume, solid.pitch
     betti = betti_numbers(vol, connectivity)
     return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
             "connectivity": connectivity, "betti": betti, "genus": betti[1],
@@ -450,7 +454,8 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
                  connectivity: int = 6, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
-                 on_resolution: Callable[[dict], object] | None = None, strict: bool = False) -> GenusVerdict:
+                 on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
+                 fill: Fill = "winding") -> GenusVerdict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
     intersections, the genus of the solid it bounds, and the digital
     topology of that solid voxelised at growing resolutions, with a verdict.
@@ -484,6 +489,8 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
         Called with each resolution's entry as it is done.
     strict : bool
         Refuse a mesh that is not watertight.
+    fill : {"winding", "shell", "flood"}
+        The voxels compared (:mod:`isoflow.mesh.fills`; the verdict's ``fill``).
 
     Returns
     -------
@@ -510,7 +517,7 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
         digital, stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
-            strict=strict)
+            strict=strict, fill=fill)
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
@@ -519,7 +526,7 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
         input=str(path), mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
-        solid_genus=w["solid_genus"], digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
+        solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop,
         notes=tuple(load_notes(stats) + shape_notes(w, kind) + digital_notes(w, digital, reference, stable)))

@@ -54,7 +54,9 @@ def check_format_libraries(path: Path) -> None:
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
     """Lower corner, upper corner and extent of the vertices the faces use;
     IsoflowError if the extent overflows to infinity."""
-    used = v[np.unique(f)]
+    mark = np.zeros(len(v), dtype=bool)
+    mark[f.reshape(-1)] = True  # a mask, not np.unique: linear, no sort
+    used = v if mark.all() else v[mark]
     lo, hi = used.min(axis=0), used.max(axis=0)
     with np.errstate(over="ignore"):
         ext = hi - lo
@@ -268,30 +270,6 @@ def _check_obj_indices(path: Path, faces: np.ndarray) -> None:
 # combinatorial defects
 # ---------------------------------------------------------------------------
 
-def _edge_census(faces: np.ndarray, n_vertices: int):
-    """Undirected edges and how they are used.
-
-    Returns ``(inv, counts, fwd, bwd, lo, hi)`` where ``inv`` maps each of
-    the 3M directed half-edges (row-major over faces; -1 for a degenerate
-    a->a edge) to its undirected edge ``lo -> hi`` (lo < hi), ``counts`` is
-    the number of uses per undirected edge and ``fwd`` / ``bwd`` how many
-    uses go low->high / high->low index.
-    """
-    a = faces.reshape(-1)
-    b = faces[:, [1, 2, 0]].reshape(-1)
-    lo = np.minimum(a, b)
-    hi = np.maximum(a, b)
-    key = lo * np.int64(max(n_vertices, 1)) + hi
-    ok = a != b
-    inv = np.full(len(a), -1, dtype=np.int64)
-    uniq, inv_ok, counts = np.unique(key[ok], return_inverse=True, return_counts=True)
-    inv[ok] = inv_ok.reshape(-1)
-    fwd = np.bincount(inv_ok.reshape(-1), weights=(a < b)[ok], minlength=len(uniq)).astype(np.int64)
-    bwd = counts - fwd
-    n = np.int64(max(n_vertices, 1))
-    return inv, counts, fwd, bwd, uniq // n, uniq % n
-
-
 def mesh_defects(vertices, faces) -> dict:
     """Count the combinatorial defects that make a mesh unfit to bound a solid.
 
@@ -313,32 +291,24 @@ def mesh_defects(vertices, faces) -> dict:
     cubes sharing an edge) still bounds a solid; the scanline of
     :func:`voxelize` is exact on it without a cap.
     """
+    from .census import census
+
     v, f = check_mesh(vertices, faces, where="mesh_defects")
-    inv, counts, fwd, bwd, _, _ = _edge_census(f, len(v))
+    return defect_counts(*census(f, len(v))[2:])
+
+
+def defect_counts(fwd: np.ndarray, bwd: np.ndarray, components: int) -> dict:
+    """:func:`mesh_defects` from an edge census (the uses of each edge each
+    way, :func:`isoflow.mesh.census.census`) and the number of components."""
+    counts = fwd + bwd
     boundary = int((counts == 1).sum())
     nonmanifold = int((counts > 2).sum())
     inconsistent = int(((counts >= 2) & (fwd != bwd)).sum())
-
-    # face components: chain consecutive faces that share an undirected edge
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    m = len(f)
-    ok = inv >= 0
-    he_face = (np.arange(3 * m) // 3)[ok]
-    he_edge = inv[ok]
-    order = np.lexsort((he_face, he_edge))
-    e_sorted = he_edge[order]
-    f_sorted = he_face[order]
-    link = e_sorted[1:] == e_sorted[:-1]
-    r, c = f_sorted[:-1][link], f_sorted[1:][link]
-    g = coo_matrix((np.ones(len(r)), (r, c)), shape=(m, m))
-    ncomp, _ = connected_components(g, directed=False)
     return {
         "boundary_edges": boundary,
         "nonmanifold_edges": nonmanifold,
         "inconsistent_edges": inconsistent,
-        "components": int(ncomp),
+        "components": components,
         "edges": int(len(counts)),
         "watertight": boundary == 0 and nonmanifold == 0 and inconsistent == 0,
     }
@@ -392,9 +362,17 @@ def boundary_chain(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.n
     minus uses b -> a).  Empty iff every edge's uses balance (the mesh bounds
     a solid).  The chain is a cycle: every vertex has as many chain edges in
     as out."""
-    _, _, fwd, bwd, lo, hi = _edge_census(np.asarray(faces, dtype=np.int64), n_vertices)
+    from .census import census
+
+    return chain_of(*census(np.asarray(faces, dtype=np.int64), n_vertices)[:4])
+
+
+def chain_of(lo: np.ndarray, hi: np.ndarray, fwd: np.ndarray, bwd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`boundary_chain` from an edge census (edges ``lo -> hi`` and
+    their uses each way), by ``(lo, hi)``."""
     net = fwd - bwd
     sel = np.nonzero(net)[0]
+    sel = sel[np.lexsort((hi[sel], lo[sel]))]  # by (lo, hi): the cap's triangles in a fixed order
     k = net[sel]
     src = np.where(k > 0, lo[sel], hi[sel])
     dst = np.where(k > 0, hi[sel], lo[sel])

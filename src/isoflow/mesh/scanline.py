@@ -74,34 +74,16 @@ class ScanGrid:
         self.xc = origin[0] + (np.arange(nx) + 0.5) * pitch
         self.yc = origin[1] + (np.arange(ny) + 0.5) * pitch
         self.zc = origin[2] + (np.arange(nz) + 0.5) * pitch
-        x, y = T[:, :, 0], T[:, :, 1]
-        # Rows: exactly the y_j with ymin <= y_j < ymax (only those can
-        # straddle an edge under the half-open rule).  Columns: the triangle's
-        # x-range plus one spare column on each side; farther columns are
-        # robustly outside (left of the triangle both straddled edges are
-        # crossed and cancel, right of it neither is).
-        self.j0 = np.searchsorted(self.yc, y.min(axis=1), side="left")
-        self.j1 = np.searchsorted(self.yc, y.max(axis=1), side="left")
-        self.i0 = np.maximum(np.searchsorted(self.xc, x.min(axis=1), side="left") - 1, 0)
-        self.i1 = np.minimum(np.searchsorted(self.xc, x.max(axis=1), side="right") + 1, nx)
-        # edge k runs from corner k to corner k+1, stored low-to-high in y so
-        # that two triangles sharing an edge evaluate it bit for bit alike
-        P = T[:, :, :2]
-        Pn = P[:, [1, 2, 0], :]
-        up = P[:, :, 1] < Pn[:, :, 1]
-        lo = np.where(up[:, :, None], P, Pn)
-        hi = np.where(up[:, :, None], Pn, P)
-        self.e_lox = np.ascontiguousarray(lo[:, :, 0])
-        self.e_loy = np.ascontiguousarray(lo[:, :, 1])
-        self.e_hiy = np.ascontiguousarray(hi[:, :, 1])
-        self.e_dx = np.ascontiguousarray(hi[:, :, 0] - lo[:, :, 0])
-        self.e_dy = np.ascontiguousarray(hi[:, :, 1] - lo[:, :, 1])
-        self.e_dir = np.where(up, 1, -1).astype(np.int8)
-        # plane of each triangle: z = A.z - (n.x (x - A.x) + n.y (y - A.y)) / n.z
+        m = len(T)
+        T = np.ascontiguousarray(T, dtype=np.float64)
+        self.j0, self.j1, self.i0, self.i1 = (np.empty(m, dtype=np.int64) for _ in range(4))
+        self.e_lox, self.e_loy, self.e_hiy, self.e_dx, self.e_dy = (np.empty((m, 3)) for _ in range(5))
+        self.e_dir = np.empty((m, 3), dtype=np.int8)
         self.A = np.ascontiguousarray(T[:, 0, :])
-        self.n = np.ascontiguousarray(np.cross(T[:, 1, :] - self.A, T[:, 2, :] - self.A))
-        self.zmin = T[:, :, 2].min(axis=1)
-        self.zmax = T[:, :, 2].max(axis=1)
+        self.n = np.empty((m, 3))
+        self.zmin, self.zmax = np.empty(m), np.empty(m)
+        _set_up(T, self.xc, self.yc, self.j0, self.j1, self.i0, self.i1, self.e_lox, self.e_loy, self.e_hiy,
+                self.e_dx, self.e_dy, self.e_dir, self.n, self.zmin, self.zmax)
 
     def pairs(self, xa: int = 0, xb: int | None = None) -> int:
         """Number of (triangle, column) pairs tested for the slab [xa, xb)."""
@@ -149,6 +131,61 @@ class ScanGrid:
 # ---------------------------------------------------------------------------
 # compiled passes
 # ---------------------------------------------------------------------------
+
+@njit(cache=True, nogil=True)
+def first_at_least(a, x, strict):
+    """``np.searchsorted(a, x, side="right" if strict else "left")``."""
+    lo, hi = 0, len(a)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < x or (strict and a[mid] == x):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def _set_up(T, xc, yc, j0, j1, i0, i1, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, n, zmin, zmax):
+    """The per-triangle data of :class:`ScanGrid`, one triangle at a time.
+
+    Rows: exactly the y_j with ymin <= y_j < ymax (only those can straddle
+    an edge under the half-open rule).  Columns: the triangle's x-range plus
+    one spare column on each side; farther columns are robustly outside
+    (left of the triangle both straddled edges are crossed and cancel, right
+    of it neither is).  Edge k runs from corner k to corner k+1, stored
+    low-to-high in y so that two triangles sharing an edge evaluate it bit
+    for bit alike.  The plane of each triangle is
+    ``z = A.z - (n.x (x - A.x) + n.y (y - A.y)) / n.z`` with ``n`` the cross
+    product of its edges from corner 0, in NumPy's order of operations."""
+    nx = len(xc)
+    for t in range(T.shape[0]):
+        xmin = min(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
+        xmax = max(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
+        ymin = min(T[t, 0, 1], T[t, 1, 1], T[t, 2, 1])
+        ymax = max(T[t, 0, 1], T[t, 1, 1], T[t, 2, 1])
+        j0[t] = first_at_least(yc, ymin, False)
+        j1[t] = first_at_least(yc, ymax, False)
+        i0[t] = max(first_at_least(xc, xmin, False) - 1, 0)
+        i1[t] = min(first_at_least(xc, xmax, True) + 1, nx)
+        for k in range(3):
+            kn = (k + 1) % 3
+            up = T[t, k, 1] < T[t, kn, 1]
+            a, b = (k, kn) if up else (kn, k)
+            e_lox[t, k] = T[t, a, 0]
+            e_loy[t, k] = T[t, a, 1]
+            e_hiy[t, k] = T[t, b, 1]
+            e_dx[t, k] = T[t, b, 0] - T[t, a, 0]
+            e_dy[t, k] = T[t, b, 1] - T[t, a, 1]
+            e_dir[t, k] = 1 if up else -1
+        a0, a1, a2 = T[t, 1, 0] - T[t, 0, 0], T[t, 1, 1] - T[t, 0, 1], T[t, 1, 2] - T[t, 0, 2]
+        b0, b1, b2 = T[t, 2, 0] - T[t, 0, 0], T[t, 2, 1] - T[t, 0, 1], T[t, 2, 2] - T[t, 0, 2]
+        n[t, 0] = a1 * b2 - a2 * b1
+        n[t, 1] = a2 * b0 - a0 * b2
+        n[t, 2] = a0 * b1 - a1 * b0
+        zmin[t] = min(T[t, 0, 2], T[t, 1, 2], T[t, 2, 2])
+        zmax[t] = max(T[t, 0, 2], T[t, 1, 2], T[t, 2, 2])
+
 
 @njit(cache=True, nogil=True)
 def _winding_2d(t, px, py, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir):
@@ -241,7 +278,8 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats, stop):
     ``W != R`` where R is 0, or ``rule[...]`` inside the box
     ``rbox = (i0, i1, j0, j1, k0, k1)`` (slab-local).  Codes 127 / -128 in
     ``rule`` force a voxel in / out.  ``stats`` counts voxels with
-    ``|W - R| >= 2`` and with ``W - R`` positive and negative.  ``vol`` must
+    ``|W - R| >= 2``, with ``W - R`` positive and negative, and those forced
+    in (so the last three add up to the voxels in).  ``vol`` must
     be all False: only voxels inside are written (pages of a fresh
     ``np.zeros`` array that stay outside are never touched).
     """
@@ -250,6 +288,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats, stop):
     over = 0
     pos_n = 0
     neg_n = 0
+    forced = 0
     for i in range(r0, r1):
         if stop[0]:
             break
@@ -269,6 +308,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats, stop):
                                 r = rule[i - bi0, j - bj0, k - bk0]
                             if r == 127:
                                 vol[i, j, k] = True
+                                forced += 1
                             elif r != -128:
                                 d = s - r
                                 if d != 0:
@@ -294,6 +334,7 @@ def _sweep(vol, start, kz, val, r0, r1, rule, rbox, stats, stop):
     stats[0] += over
     stats[1] += pos_n
     stats[2] += neg_n
+    stats[3] += forced
 
 
 # ---------------------------------------------------------------------------
@@ -306,7 +347,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     ``rule`` is None (R = 0: the nonzero rule of a closed chain) or
     ``(array, (i0, j0, k0))``: R on a box of the grid, in grid coordinates
     (see :func:`_sweep` for the codes).  ``out`` is an optional boolean
-    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (3,)) is
+    array of shape (xb - xa, ny, nz), all False, to fill.  ``stats`` (int64 (4,)) is
     incremented with the counts of :func:`_sweep`.  With ``threads=2`` the
     slab is split in two halves filled at once (compiled code runs without
     the GIL).
@@ -315,7 +356,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
     if out is None:
         out = np.zeros((xb - xa, ny, nz), dtype=bool)
     if stats is None:
-        stats = np.zeros(3, dtype=np.int64)
+        stats = np.zeros(4, dtype=np.int64)
     if rule is None:
         rarr, rbox = np.zeros((1, 1, 1), dtype=np.int8), np.zeros(6, dtype=np.int64)
     else:
@@ -327,7 +368,7 @@ def fill_slab(grid: ScanGrid, xa: int, xb: int, rule=None, out=None, stats=None,
 
     def run(a, b):
         start, kz, val = grid.crossings(a, b)
-        st = np.zeros(3, dtype=np.int64)
+        st = np.zeros(4, dtype=np.int64)
         shift = np.array([a - xa, a - xa, 0, 0, 0, 0], dtype=np.int64)  # to this half's rows
         _sweep(out[a - xa:b - xa], start, kz, val, 0, b - a, rarr, rbox - shift, st, STOP)
         parts[(a, b)] = st

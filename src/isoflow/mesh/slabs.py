@@ -33,6 +33,7 @@ from ..scale.memory import check_fits, gib
 from .formats.omezarr import multiscales
 from .grid import fmt_count
 from .load import load_mesh
+from .fills import Fill
 from .outputs import atomic_path, check_writable_dir
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -80,30 +81,37 @@ def _slab_task(plan, store: str, xa: int, xb: int):
     """Fill rows [xa, xb) and write them to the store's level; the slab's
     counts."""
     zarr = import_zarr()
-    stats = np.zeros(3, dtype=np.int64)
+    stats = np.zeros(4, dtype=np.int64)
     vol = plan.fill(xa, xb, stats=stats, threads=1)
     z = zarr.open_group(store, mode="r+")["0"]
     z[xa:xb] = vol.view(np.uint8)
     return int(np.count_nonzero(vol)), stats
 
 
-def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool = False, force: bool = False,
-                     chunks=None, scheduler=None, max_bytes: int | None = None, progress=None,
-                     report: dict | None = None) -> dict:
+def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                     force: bool = False, chunks=None, scheduler=None, max_bytes: int | None = None, progress=None,
+                     details: bool = False):
     """Voxelise a mesh into a chunked zarr array at ``path`` without holding
     the volume.
 
     ``source`` is a mesh file or ``(vertices, faces)``; the grid, the rule
-    and ``strict`` are those of :func:`~isoflow.mesh.voxelize.voxelize`.
+    (``fill``) and ``strict`` are those of
+    :func:`~isoflow.mesh.voxelize.voxelize`.  The winding rule and the
+    shell are filled slab by slab; a flood fill needs the whole grid's
+    shell at once, so it is refused where that does not fit in memory.
     The store is an OME-Zarr image (see the module docs; read it back with
     :func:`isoflow.read_volume`), its level ``0`` chunked as ``chunks``,
     by default slabs of at most 128 MiB by 256 x 256; ``scheduler`` is any
     dask scheduler (default: two threads).  ``progress(done, total)`` is called per slab (local
     schedulers).  Returns ``shape``, ``chunks``, ``voxels``, ``pitch``,
-    ``origin``.
+    ``origin``; with ``details``, also the
+    :class:`~isoflow.mesh.fills.Voxelization` (its volume None), whose note
+    is otherwise issued as a :class:`~isoflow.errors.MeshNote` warning.
     """
-    from .voxelize import Solid, plan_voxels
+    from .fills import check_fill
+    from .voxelize import Solid, plan_voxels, say_note, voxelization
 
+    fill = check_fill(fill)
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, Path)) else "mesh"
     v, f = load_mesh(source) if isinstance(source, (str, Path)) else source  # names the file itself
@@ -116,7 +124,10 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
         what = f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels"
         hint = f"give smaller chunks (a slab of one row holds {gib(shape[1] * shape[2])})"
         check_fits(WORKERS * chunks[0] * shape[1] * shape[2], what, hint=hint, budget=max_bytes)  # before any work
-        solid = Solid(v, f, strict=strict)
+        if fill == "flood":  # its enclosed voxels need the whole grid's shell at once
+            check_fits(shape[0] * shape[1] * shape[2], f"{what}: fill=flood holds the whole grid",
+                       hint="--fill shell and --fill winding go slab by slab", budget=max_bytes)
+        solid = Solid(v, f, strict=strict, fill=fill)
         _, _, origin_s, pitch_s = frame
         plan = solid.prepare(frame, origin_s, pitch_s, shape)
         slab = chunks[0] * shape[1] * shape[2] + plan.slab_bytes(chunks[0])
@@ -136,7 +147,7 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
         root.create_array("0", shape=shape, chunks=chunks, dtype=np.uint8, fill_value=0)
         root.attrs.update({"multiscales": multiscales(path.name, [float(pitch)] * 3, origin, stored="xyz"),
                            "source": where,
-                           "rule": "generalised winding number |w| > 1/2 (nonzero on closed meshes)"})
+                           "rule": RULES[fill]})
         plan_d = delayed(plan, pure=True)
         tasks = [delayed(_slab_task, pure=False)(plan_d, str(tmp), a, b, dask_key_name=("voxelize-slab", n))
                  for n, (a, b) in enumerate(slabs)]
@@ -153,13 +164,33 @@ def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, strict: bool 
             results = dask.compute(*tasks, scheduler=sched, **kwargs)
         voxels = sum(r[0] for r in results)
         stats = np.sum([r[1] for r in results], axis=0)
-        try:
+        if fill == "flood":
+            voxels = flood_store(root["0"], slabs)
+        try:  # refused: nothing replaces the previous store
             solid.check_layers(stats)
-        except IsoflowError as exc:  # refused: nothing replaces the previous store
+            result = voxelization(solid, plan, None, voxels, origin, pitch, stats)
+        except IsoflowError as exc:
             raise IsoflowError(f"{where}: {exc}") from None
-    if report is not None:
-        report.update(defects=solid.defects, flipped_faces=solid.flipped, chain_edges=len(plan.E),
-                      overlap_voxels=int(stats[0]), note=solid.note(stats))
-    return {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
-            "origin": np.asarray(origin, dtype=np.float64)}
+    store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
+             "origin": np.asarray(origin, dtype=np.float64)}
+    if details:
+        return store, result
+    say_note(result.note)
+    return store
 
+
+#: what the store's "rule" attribute says of each fill
+RULES = {"winding": "generalised winding number |w| > 1/2 (nonzero on closed meshes)",
+         "shell": "shell: every voxel whose closed cube the surface meets",
+         "flood": "flood: the shell and every voxel it encloses (6-connected outside)"}
+
+
+def flood_store(array, slabs) -> int:
+    """Add to the shell written in ``array`` the voxels it encloses (read
+    whole, filled in memory, written back slab by slab); the voxels in."""
+    from ..scale.kernels import fill_enclosed
+
+    vol = fill_enclosed(np.asarray(array[:], dtype=bool), inplace=True)
+    for a, b in slabs:
+        array[a:b] = vol[a:b].view(np.uint8)
+    return int(np.count_nonzero(vol))

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from ..results import Result
+from .fills import Fill
 from ..scale.memory import gib
 
 #: what the verdict says, first
@@ -71,6 +72,7 @@ class GenusVerdict(Result):
     self_intersecting_faces: int | None
     faces_crossing_other_components: int | None
     solid_genus: int | None
+    fill: Fill
     digital: list
     solid: dict
     converged: bool
@@ -83,7 +85,7 @@ class GenusVerdict(Result):
 
     #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order
     KEYS = ("input", "mesh", "manifold3d", "pymeshlab", "self_intersecting_faces",
-            "faces_crossing_other_components", "solid_genus", "digital", "solid", "converged", "agree", "verdict")
+            "faces_crossing_other_components", "solid_genus", "fill", "digital", "solid", "converged", "agree", "verdict")
 
     @property
     def verdict(self) -> str:

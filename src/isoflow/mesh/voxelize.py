@@ -33,14 +33,16 @@ shell nested inside another with the opposite orientation is a cavity.
 
 from __future__ import annotations
 
-from typing import Callable
+import warnings
+from typing import Callable, Literal, overload
 
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, MeshNote
+from .fills import THIN_TRIGGER, Fill, Voxelization, check_fill, thin_solid, unbounded_area
 from .grid import check_grid_memory, voxel_grid
-from .load import boundary_chain, check_mesh, load_mesh, merge_coincident, mesh_defects, orient_faces
+from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_defects, orient_faces  # noqa: F401
 
 #: default resolution when a mesh is given to a command without --pitch/--resolution
 DEFAULT_RESOLUTION = 64
@@ -57,39 +59,71 @@ ZARR_HINT = "write it slab by slab to a zarr store instead (isoflow voxelize MES
 
 class Solid:
     """A triangle mesh made ready to voxelise: its edge census, its
-    orientation repaired where needed, and the cap that closes it.
+    double-sided faces read as one, its orientation repaired where needed,
+    and the cap that closes it.
 
     ``defects`` are the counts of :func:`mesh_defects` on the faces as given;
     after exact duplicates of vertex positions are merged (a triangle soup)
-    ``census`` recounts them.  ``flipped`` faces were turned over by
-    :func:`orient_faces`; ``chain_edges`` is the length of the boundary
-    chain that the cap closes (0: the exact scanline alone decides).
+    and double-sided faces are read as one (``double_sided`` pairs, see
+    :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
+    them.  ``flipped`` faces were turned over by :func:`orient_faces`;
+    ``chain_edges`` is the length of the boundary chain that the cap closes
+    (0: the exact scanline alone decides).
     """
 
-    def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False):
+    def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False, fill: Fill = "winding"):
+        from .census import census, one_face_per_pair  # compiled: loaded when a mesh is voxelised
+
         self.strict = strict
-        self.defects = mesh_defects(v, f)
-        if strict and not self.defects["watertight"]:
-            d = self.defects
-            raise IsoflowError(
-                "voxelize: mesh is not watertight: "
-                f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
-                f"{d['inconsistent_edges']} inconsistently oriented edges (without --strict / strict=True "
-                "it is read by the generalised winding number)")
+        self.fill = fill
+        edges = census(f, len(v))
+        self.defects = defect_counts(*edges[2:])
         faces = f
         self.census = self.defects
+        self.joined = 0  # edges joined by merging vertices at equal positions
+        self.double_sided = self.flipped = self.chain_edges = 0
+        self.v = v
+        self.faces = faces
+        self.chain = (np.zeros(0, dtype=np.int64),) * 2
+        if fill != "winding":  # a shell takes the faces as they are, in any orientation
+            self.refuse_defects()
+            return
         if self.defects["boundary_edges"] or self.defects["inconsistent_edges"]:
             faces = merge_coincident(v, f)
-            self.census = mesh_defects(v, faces)
-        self.flipped = 0
+            edges = census(faces, len(v))
+            self.census = defect_counts(*edges[2:])
+            self.joined = max(0, self.defects["boundary_edges"] - self.census["boundary_edges"])
+        # a pair shares its three edges, each then used at least twice: on
+        # a manifold mesh the pair is a component of its own
+        if self.census["nonmanifold_edges"] or self.census["components"] > 1:
+            faces, self.double_sided = one_face_per_pair(v, faces)
+            if self.double_sided:
+                edges = census(faces, len(v))
+                self.census = defect_counts(*edges[2:])
+        self.refuse_defects()
         if self.census["inconsistent_edges"]:
             faces, self.flipped = orient_faces(v, faces)
-        a, b = boundary_chain(faces, len(v))
+            edges = census(faces, len(v))
+        a, b = chain_of(*edges[:4])
         self.chain = (a, b)
         self.chain_edges = int(len(a))
         # geometry: the corners of the faces as oriented now
         self.v = v
         self.faces = faces
+
+    def refuse_defects(self) -> None:
+        """With ``strict``, refuse a mesh that is not watertight or has
+        double-sided faces, naming the counts."""
+        d = self.defects
+        if not self.strict or (d["watertight"] and not self.double_sided):
+            return
+        what = [f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
+                f"{d['inconsistent_edges']} inconsistently oriented edges"]
+        if self.double_sided:
+            what.append(_count(self.double_sided, "double-sided face") + " (coincident faces of opposite "
+                        "orientation)")
+        raise IsoflowError("voxelize: mesh is not watertight: " + "; ".join(what)
+                           + " (without --strict / strict=True it is read by the generalised winding number)")
 
     def prepare(self, frame, origin_s, pitch_s, shape) -> "VoxelPlan":
         from .winding import close_mesh
@@ -98,7 +132,7 @@ class Solid:
         with np.errstate(over="ignore", invalid="ignore"):
             vs = np.ldexp(self.v - shift, -e)  # unused far-off vertices may overflow: never read
         Tm = vs[self.faces]
-        return VoxelPlan(Tm, close_mesh(vs, self.faces, *self.chain), origin_s, pitch_s, shape)
+        return VoxelPlan(Tm, close_mesh(vs, self.faces, *self.chain), origin_s, pitch_s, shape, self.fill)
 
     def check_layers(self, stats) -> None:
         """With ``strict``, refuse a mesh whose voxels lie inside two or more
@@ -119,12 +153,17 @@ class Solid:
 
     def note(self, stats=None) -> str | None:
         """One line on what is unusual about the mesh and the rule that read
-        it; None for a closed, consistently oriented mesh without overlaps."""
+        it; None for a closed, consistently oriented mesh without overlaps,
+        and for a shell (which any surface has)."""
+        if self.fill != "winding":
+            return None
         c = self.census
         what = []
-        if c is not self.defects and self.defects["boundary_edges"] > c["boundary_edges"]:
-            what.append(_count(self.defects["boundary_edges"] - c["boundary_edges"], "edge")
-                        + " joined by merging vertices at equal positions (a triangle soup)")
+        if self.joined:
+            what.append(_count(self.joined, "edge") + " joined by merging vertices at equal positions (a triangle soup)")
+        if self.double_sided:
+            what.append(_count(self.double_sided, "double-sided face") + " (coincident faces of opposite "
+                        "orientation, each read as one face)")
         if c["boundary_edges"]:
             what.append(_count(c["boundary_edges"], "boundary edge"))
         if c["nonmanifold_edges"]:
@@ -155,29 +194,42 @@ def _count(n: int, noun: str) -> str:
 
 class VoxelPlan:
     """Everything needed to fill any slab of the grid: the scanline over the
-    mesh and its cap, and the cap's own triangles for the rule.  Small
-    (O(triangles)) and picklable, so dask can ship it to workers."""
+    mesh and its cap, and the cap's own triangles for the rule (``fill``
+    "winding"), or the mesh's triangles for its shell ("shell", and
+    "flood" before the enclosed voxels are added).  Small (O(triangles))
+    and picklable, so dask can ship it to workers."""
 
-    def __init__(self, Tm, cap, origin_s, pitch_s, shape):
-        from .captree import CapTree
+    def __init__(self, Tm, cap, origin_s, pitch_s, shape, fill: Fill = "winding"):
         from .scanline import ScanGrid
+        from .shell import grid_planes
 
         self.shape = tuple(int(n) for n in shape)
         self.origin = np.asarray(origin_s, dtype=np.float64)
         self.pitch = float(pitch_s)
+        self.fill_rule = fill
         self.Tm = Tm
         self.E = cap.E
-        self.tree = CapTree(cap.T, cap.E, cap.owner)
-        # the closed mesh M + C, less the faces that the cap holds reversed (they cancel)
-        self.grid = ScanGrid(np.concatenate([Tm[~cap.reversed_faces], cap.cones()]), self.origin, self.pitch,
-                             self.shape)
+        if fill == "winding":
+            from .captree import CapTree
+
+            self.tree = CapTree(cap.T, cap.E, cap.owner)
+            # the closed mesh M + C, less the faces that the cap holds reversed (they cancel)
+            self.grid = ScanGrid(np.concatenate([Tm[~cap.reversed_faces], cap.cones()]), self.origin, self.pitch,
+                                 self.shape)
+        else:
+            self.planes = grid_planes(self.origin, self.pitch, self.shape)
 
     def fill(self, xa: int, xb: int, out=None, stats=None, threads: int = 1, progress=None) -> np.ndarray:
-        """The volume of slab ``[xa, xb)`` (first axis); ``progress(done,
-        total)`` as the cap's rule advances."""
+        """The volume of slab ``[xa, xb)`` (first axis): by the winding rule
+        (``progress(done, total)`` as the cap's rule advances), or the shell
+        (for "flood" too: its enclosed voxels need the whole grid,
+        :func:`fill_enclosed`)."""
         from .scanline import fill_slab
+        from .shell import fill_shell
         from .winding import winding_rule
 
+        if self.fill_rule != "winding":
+            return fill_shell(self.Tm, self.planes, xa, xb, out=out, threads=threads)
         _, ny, nz = self.shape
         rule = winding_rule(self.tree, self.Tm, self.origin, self.pitch, (xa, xb, 0, ny, 0, nz), threads=threads,
                             progress=progress)
@@ -186,14 +238,44 @@ class VoxelPlan:
     def slab_bytes(self, rows: int) -> int:
         """Temporaries of a slab of ``rows`` rows beyond its volume, at most:
         the crossings (bounded by the whole grid's pairs), its columns, and
-        the rule's box (one byte per voxel of the slab)."""
+        the rule's box (one byte per voxel of the slab); none for the shell."""
+        if self.fill_rule != "winding":
+            return 0
         _, ny, nz = self.shape
         return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rows * ny * nz
 
-    def slabs(self, voxels: int = SLAB_VOXELS) -> list[tuple[int, int]]:
+    def slabs(self, voxels: int | None = None) -> list[tuple[int, int]]:
+        """Ranges of rows of about ``voxels`` voxels (default
+        :data:`SLAB_VOXELS`; eight times that for a shell, which needs no
+        temporaries and whose every slab looks at each triangle)."""
+        if voxels is None:
+            voxels = SLAB_VOXELS if self.fill_rule == "winding" else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
+
+    def shell_count(self) -> int:
+        """Voxels of the mesh's shell on this grid, counted slab by slab (a
+        slab's volume at a time)."""
+        from .shell import fill_shell, grid_planes
+
+        planes = grid_planes(self.origin, self.pitch, self.shape)
+        total = 0
+        for a, b in self.slabs():
+            total += int(np.count_nonzero(fill_shell(self.Tm, planes, a, b, threads=2)))
+        return total
+
+    def thin_note(self, volume: np.ndarray, voxels: int, double_sided: int) -> tuple[int | None, str | None]:
+        """The shell's voxels (counted only where the winding rule's solid
+        is small against the area, else None) and
+        :func:`~isoflow.mesh.fills.thin_solid`'s line."""
+        Tm = self.Tm
+        area = 0.5 * float(np.linalg.norm(np.cross(Tm[:, 1] - Tm[:, 0], Tm[:, 2] - Tm[:, 0]), axis=1).sum())
+        if not area > 0:
+            return None, None
+        shell = self.shell_count() if voxels < THIN_TRIGGER * area / self.pitch**2 else None
+        share = unbounded_area(Tm, volume, self.origin, self.pitch) if volume is not None else 0.0
+        return shell, thin_solid(voxels, shell, share, double_sided)
 
 
 def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
@@ -222,10 +304,22 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
     return v, f, shape, what, (shift, e, origin_s, pitch_s), origin, pitch
 
 
-def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = False,
-             grid=None, max_bytes: int | None = None,
-             progress: Callable[[int, int], object] | None = None, report: dict | None = None):
-    """Voxelise the solid bounded by a triangle mesh.
+@overload
+def voxelize(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+             grid=None, max_bytes: int | None = None, progress: Callable[[int, int], object] | None = None,
+             details: Literal[False] = False) -> tuple[np.ndarray, np.ndarray, float]: ...
+
+
+@overload
+def voxelize(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+             grid=None, max_bytes: int | None = None, progress: Callable[[int, int], object] | None = None,
+             details: Literal[True]) -> Voxelization: ...
+
+
+def voxelize(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+             grid=None, max_bytes: int | None = None, progress: Callable[[int, int], object] | None = None,
+             details: bool = False):
+    """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
 
     Parameters
     ----------
@@ -239,12 +333,21 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
         ``MAX_RESOLUTION``; the longest side of the bounding box gets exactly
         R voxels.  The grid is centred on the bounding box (see
         :mod:`isoflow.mesh.grid`).
+    fill : {"winding", "shell", "flood"}
+        ``winding`` (default): voxel in iff the generalised winding number
+        of its centre exceeds 1/2 in absolute value (the solid the mesh
+        bounds).  ``shell``: every voxel whose closed cube the surface
+        meets (:mod:`isoflow.mesh.shell`).  ``flood``: the shell and every
+        voxel it encloses (no 6-path outside the shell to the outside of
+        the grid).  See :mod:`isoflow.mesh.fills`.
     strict
-        Refuse a mesh that is not watertight (see :func:`mesh_defects`)
-        instead of reading it by the generalised winding number, and one
-        whose voxels lie inside two or more layers or have winding numbers
-        of both signs (overlapping or self-intersecting shells, as far as
-        the voxel centres see them).
+        Refuse a mesh that is not watertight (see :func:`mesh_defects`) or
+        has double-sided faces, instead of reading it by the generalised
+        winding number; with ``fill="winding"`` also one whose voxels lie
+        inside two or more layers or have winding numbers of both signs
+        (overlapping or self-intersecting shells, as far as the voxel
+        centres see them), and one whose solid is thin or empty against its
+        shell (:func:`~isoflow.mesh.fills.thin_solid`).
     grid
         Optional ``(origin, shape)``: sample on this grid (with ``pitch``)
         instead of the one centred on the bounding box, e.g. to put voxel
@@ -257,51 +360,75 @@ def voxelize(vertices, faces, *, pitch=None, resolution=None, strict: bool = Fal
     progress
         Optional ``callable(done, total)``, called as the work advances
         (``PROGRESS_UNITS`` per slab).
-    report
-        Optional dict that receives ``defects`` (the edge census of the faces
-        as given), ``flipped_faces``, ``chain_edges`` (edges the cap closes; 0 when the exact
-        scanline alone decides), ``overlap_voxels`` (voxels inside two or
-        more layers) and ``note`` (one line for the user, or None).
+    details
+        Return a :class:`~isoflow.mesh.fills.Voxelization` (the volume and
+        what was found in the mesh) instead of ``(volume, origin, pitch)``;
+        without it, the note, if any, is issued as a
+        :class:`~isoflow.errors.MeshNote` warning.
 
     Returns
     -------
     volume : bool ndarray (nx, ny, nz)
-        ``volume[i, j, k]`` is true iff the centre
+        With ``fill="winding"``, ``volume[i, j, k]`` is true iff the centre
         ``origin + pitch * (i + .5, j + .5, k + .5)`` has ``|w| > 1/2``.
         Borders are neither trimmed nor padded.
     origin : float64 (3,)
         Lower corner of voxel (0, 0, 0).
     pitch : float
+        (Or, with ``details=True``, one :class:`Voxelization` holding them.)
 
-    Exactness: on a closed, consistently oriented mesh the volume is the
-    exact nonzero winding number with the tie rule of
-    :mod:`isoflow.mesh.scanline` (a centre on a horizontal-ish face counts as
-    below it: a box [z0, z1] holds the centres with z0 < z <= z1).  On any other mesh it is
-    the generalised winding number rule, exact except where |w| is within
-    rounding of 1/2 (:mod:`isoflow.mesh.winding`).
+    Raises
+    ------
+    IsoflowError
+        Bad arrays, a grid that does not fit in memory, and what ``strict``
+        refuses.
+
+    Notes
+    -----
+    Exactness: on a closed, consistently oriented mesh the winding volume
+    is the exact nonzero winding number with the tie rule of
+    :mod:`isoflow.mesh.scanline` (a centre on a horizontal-ish face counts
+    as below it: a box [z0, z1] holds the centres with z0 < z <= z1).  On
+    any other mesh it is the generalised winding number rule, exact except
+    where |w| is within rounding of 1/2 (:mod:`isoflow.mesh.winding`).  The
+    shell is exact (closed cubes: touching counts).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box((2, 2, 2))
+    >>> vol, origin, pitch = voxelize(box.vertices, box.faces, resolution=4)
+    >>> int(vol.sum()), int(voxelize(box.vertices, box.faces, resolution=4, fill="shell")[0].sum())
+    (64, 56)
     """
+    fill = check_fill(fill)
     v, f, shape, what, frame, origin, pitch = plan_voxels(
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     # the volume itself, before anything O(grid): one byte per voxel
     check_grid_memory(shape, what, 1, 0, max_bytes, hint=ZARR_HINT)
-    solid = Solid(v, f, strict=strict)
+    solid = Solid(v, f, strict=strict, fill=fill)
     _, _, origin_s, pitch_s = frame
     plan = solid.prepare(frame, origin_s, pitch_s, shape)
     slabs = plan.slabs()
     temp = plan.slab_bytes(max(b - a for a, b in slabs))
     check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
     vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
-    stats = np.zeros(3, dtype=np.int64)
+    stats = np.zeros(4, dtype=np.int64)  # see scanline._sweep: the last three add up to the voxels in
     for n, (a, b) in enumerate(slabs):
         step = None if progress is None else _share(progress, n, len(slabs))
         plan.fill(a, b, out=vol[a:b], stats=stats, threads=2, progress=step)
         if progress is not None:
             progress((n + 1) * PROGRESS_UNITS, len(slabs) * PROGRESS_UNITS)
+    if fill == "flood":
+        from ..scale.kernels import fill_enclosed
+
+        vol = fill_enclosed(vol, inplace=True)
     solid.check_layers(stats)
-    if report is not None:
-        report.update(defects=solid.defects, flipped_faces=solid.flipped,
-                      chain_edges=len(plan.E), overlap_voxels=int(stats[0]),
-                      note=solid.note(stats))
+    voxels = int(stats[1:].sum()) if fill == "winding" else int(np.count_nonzero(vol))
+    result = voxelization(solid, plan, vol, voxels, origin, pitch, stats)
+    if details:
+        return result
+    say_note(result.note)
     return vol, origin, pitch
 
 
@@ -311,28 +438,124 @@ def _share(progress, n: int, slabs: int):
                                         slabs * PROGRESS_UNITS)
 
 
-def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, strict=False,
-                  progress=None, report=None) -> DigitalObject:
-    """The solid bounded by a triangle mesh as a digital object.
+def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats) -> Voxelization:
+    """The :class:`Voxelization` of a filled grid (``vol`` None for a
+    store: then no share of unbounded area is measured), with its note; with
+    ``strict``, a thin or empty winding solid is refused here."""
+    notes = [solid.note(stats)]
+    shell = None
+    if solid.fill == "winding":
+        shell, thin = plan.thin_note(vol, voxels, solid.double_sided)
+        if thin and solid.strict:
+            raise IsoflowError(f"voxelize: {thin}; without --strict / strict=True the winding rule's answer is kept")
+        notes.append(thin)
+    note = "; ".join(n for n in notes if n) or None
+    return Voxelization(volume=vol, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch),
+                        fill=solid.fill, voxels=int(voxels), defects=solid.defects, flipped_faces=solid.flipped,
+                        double_sided_faces=solid.double_sided, chain_edges=len(plan.E),
+                        overlap_voxels=int(stats[0]), shell_voxels=shell, note=note)
 
-    Voxel in iff the generalised winding number of its centre exceeds 1/2 in
-    absolute value (on closed meshes: nonzero winding number). The object
-    carries the grid's pitch and origin, so its surfaces and flows export in
-    the mesh's coordinates.
+
+def say_note(note: str | None, stacklevel: int = 3) -> None:
+    """Issue a voxelisation's note as a :class:`~isoflow.errors.MeshNote`
+    warning (for callers that did not ask for the details)."""
+    if note:
+        warnings.warn(note, MeshNote, stacklevel=stacklevel)
+
+
+@overload
+def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: Literal[False] = False) -> DigitalObject: ...
+
+
+@overload
+def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
+
+
+def voxelize_mesh(vertices, faces, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: bool = False):
+    """A triangle mesh as a digital object: its solid, shell or flood fill.
+
+    Parameters
+    ----------
+    vertices, faces
+        As :func:`voxelize`.
+    pitch, resolution
+        At most one; neither: ``resolution=DEFAULT_RESOLUTION``.
+    fill, strict, progress
+        As :func:`voxelize`.
+    details
+        Also return the :class:`~isoflow.mesh.fills.Voxelization`; without
+        it, its note, if any, is issued as a
+        :class:`~isoflow.errors.MeshNote` warning.
+
+    Returns
+    -------
+    DigitalObject or (DigitalObject, Voxelization)
+        The object carries the grid's pitch and origin, so its surfaces and
+        flows export in the mesh's coordinates.
+
+    Raises
+    ------
+    IsoflowError
+        As :func:`voxelize`.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box((2, 2, 2))
+    >>> obj, v = voxelize_mesh(box.vertices, box.faces, resolution=4, fill="flood", details=True)
+    >>> obj.voxels, v["fill"], v.note is None
+    (64, 'flood', True)
     """
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
-    vol, origin, pitch = voxelize(vertices, faces, pitch=pitch, resolution=resolution, strict=strict,
-                                  progress=progress, report=report)
-    return DigitalObject(vol, pitch=pitch, origin=origin)
+    result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
+                      progress=progress, details=True)
+    obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
+    if details:
+        return obj, result
+    say_note(result.note)
+    return obj
 
 
-def voxelize_file(path, *, pitch=None, resolution=None, strict=False, progress=None,
-                  report=None) -> DigitalObject:
-    """Read a mesh file (any format trimesh reads) and voxelise its solid."""
+@overload
+def voxelize_file(path, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: Literal[False] = False) -> DigitalObject: ...
+
+
+@overload
+def voxelize_file(path, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
+
+
+def voxelize_file(path, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
+                  progress=None, details: bool = False):
+    """Read a mesh file (any format trimesh reads) and voxelise it.
+
+    Parameters
+    ----------
+    path : str or Path
+    pitch, resolution, fill, strict, progress, details
+        As :func:`voxelize_mesh`.
+
+    Returns
+    -------
+    DigitalObject or (DigitalObject, Voxelization)
+
+    Raises
+    ------
+    IsoflowError
+        As :func:`load_mesh` and :func:`voxelize`, naming the file.
+    """
     v, f = load_mesh(path)
     try:
-        return voxelize_mesh(v, f, pitch=pitch, resolution=resolution, strict=strict, progress=progress,
-                             report=report)
+        obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
+                                    progress=progress, details=True)
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
+    if details:
+        return obj, result
+    say_note(result.note)
+    return obj

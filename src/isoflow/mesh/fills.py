@@ -1,0 +1,179 @@
+"""Which voxels a mesh fills, and what a voxelisation tells its caller.
+
+Three fills (``fill=`` of :func:`~isoflow.mesh.voxelize.voxelize`,
+``--fill`` of every command that voxelises):
+
+``winding``
+    The solid the mesh bounds: a voxel is in iff the generalised winding
+    number of its centre exceeds 1/2 in absolute value (the nonzero rule on
+    closed meshes).  A surface that bounds nothing (a zero-thickness panel,
+    a sheet) gives no voxel.
+``shell``
+    The surface itself: every voxel whose closed cube the surface meets
+    (:mod:`isoflow.mesh.shell`).
+``flood``
+    The shell and everything it encloses: the shell plus every voxel that
+    no 6-path of voxels outside the shell joins to the outside of the grid
+    (as binvox's and trimesh's fills; scipy's ``binary_fill_holes``).
+
+The details of a voxelisation are a :class:`Voxelization`; where the
+winding rule leaves a mesh with area a tiny or empty solid,
+:func:`thin_solid` says so and why.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ..results import Result
+
+#: the rule that decides which voxels a mesh fills
+Fill = Literal["winding", "shell", "flood"]
+FILLS: tuple[str, ...] = ("winding", "shell", "flood")
+
+#: The winding rule's solid counts as thin when it has fewer voxels than
+#: this share of the surface's shell (measured on 30 public and generated
+#: meshes at 64, 128 and 256 across, benchmarks/bench_fills.py
+#: --thresholds: the least share of a model that bounds a solid is 0.77,
+#: platonic_shelf.obj at 64; a zero-thickness panel gives 0).
+THIN_SHARE = 0.5
+#: ... or when at least this share of the area bounds no voxel on either
+#: side (the same sweep: at most 0.07 on the public meshes, plane_holes.obj
+#: at 64; a panel gives 1, the double-sided chair 0.46 at 128).
+UNBOUNDED_SHARE = 0.25
+#: faces sampled to estimate the share of the area that bounds nothing
+SAMPLED_FACES = 8192
+#: the shell is counted only where the solid has fewer voxels than this
+#: many times the area in voxel faces (a shell has 1.5 to 3 of them).
+THIN_TRIGGER = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class Voxelization(Result):
+    """What a voxelisation gave, and what it found in the mesh.
+
+    Reads as a mapping too (``v["note"]``, ``dict(v)``), as the results of
+    isoflow's other functions do.
+
+    Attributes
+    ----------
+    volume : bool ndarray (nx, ny, nz) or None
+        The voxels (None where they were written to a store).
+    origin : float64 ndarray (3,)
+        Lower corner of voxel (0, 0, 0).
+    pitch : float
+    fill : {"winding", "shell", "flood"}
+    voxels : int
+        Voxels in.
+    defects : dict
+        The edge census of the faces as given
+        (:func:`~isoflow.mesh.load.mesh_defects`).
+    flipped_faces : int
+        Faces turned over to orient the mesh consistently.
+    double_sided_faces : int
+        Pairs of coincident faces of opposite orientation, each read as one.
+    chain_edges : int
+        Boundary edges the winding number's cap closes (0: the exact
+        scanline alone decided).
+    overlap_voxels : int
+        Voxels inside two or more layers (overlapping shells).
+    shell_voxels : int or None
+        Voxels of the surface's shell, where they were counted (to tell a
+        thin or empty solid).
+    note : str or None
+        One line for the user on what is unusual, or None.
+    """
+
+    volume: np.ndarray | None = field(repr=False)
+    origin: np.ndarray
+    pitch: float
+    fill: Fill
+    voxels: int
+    defects: dict
+    flipped_faces: int = 0
+    double_sided_faces: int = 0
+    chain_edges: int = 0
+    overlap_voxels: int = 0
+    shell_voxels: int | None = None
+    note: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field but the volume, as JSON takes it (origin a list)."""
+        out = super().to_dict()
+        del out["volume"]
+        return out
+
+
+def check_fill(fill: object) -> Fill:
+    """``fill`` if it names a fill, else an IsoflowError naming the three."""
+    from ..errors import IsoflowError
+
+    if fill not in FILLS:
+        raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {fill!r}")
+    return fill  # type: ignore[return-value]
+
+
+def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> float:
+    """The share of the triangles' area (corners ``T`` (M, 3, 3) in the
+    grid's frame) that bounds no voxel of ``volume``: faces with no voxel in
+    at their centroid or on either side of it (three quarters of a voxel
+    along the normal), as zero-thickness parts, double-sided faces and parts
+    thinner than a voxel leave them; estimated on every k-th face, at most
+    about :data:`SAMPLED_FACES` of them.
+
+    Examples
+    --------
+    A square panel in an empty grid bounds nothing:
+
+    >>> T = np.array([[[0, 0, 1.5], [2, 0, 1.5], [0, 2, 1.5]]], dtype=float)
+    >>> unbounded_area(T, np.zeros((2, 2, 3), dtype=bool), np.zeros(3), 1.0)
+    1.0
+    """
+    T = T[:: max(1, len(T) // SAMPLED_FACES)]  # an estimate: every k-th face
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    area = np.linalg.norm(n, axis=1)
+    keep = area > 0
+    if not keep.any():
+        return 0.0
+    n, area = n[keep] / area[keep, None], area[keep]
+    c = T[keep].mean(axis=1)
+    bounded = np.zeros(len(c), dtype=bool)
+    shape = np.array(volume.shape)
+    for step in (0.0, 0.75, -0.75):
+        idx = np.floor((c + step * pitch * n - origin) / pitch).astype(np.int64)
+        inside = np.all((idx >= 0) & (idx < shape), axis=1)
+        bounded[inside] |= volume[tuple(idx[inside].T)]
+    return float(area[~bounded].sum() / area.sum())
+
+
+def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided: int) -> str | None:
+    """One line where the winding rule's solid (``voxels``) is thin or empty
+    against the surface's shell (``shell_voxels``, None where not counted:
+    then it is not thin), or leaves much of the area bounding nothing
+    (``share``, :func:`unbounded_area`), with the reasons found
+    (``double_sided``: faces read as one) and the fills that give the model;
+    None otherwise.
+
+    Examples
+    --------
+    >>> thin_solid(0, 120, 1.0, 0)[:40]
+    'the winding rule leaves no voxel in (the'
+    """
+    thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
+    if not thin and share < UNBOUNDED_SHARE:
+        return None
+    what = "no voxel" if voxels == 0 else f"{voxels} voxels"
+    against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
+    why = []
+    if double_sided:
+        why.append(f"{double_sided} double-sided faces read as one")
+    if share > 0:
+        why.append(f"{100 * share:.0f} % of the area bounds no voxel on either side "
+                   "(zero-thickness parts, or parts thinner than a voxel)")
+    reason = "; ".join(why) if why else "the surface bounds little volume at this resolution"
+    return (f"the winding rule leaves {what} in{against}: {reason}; "
+            "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
+            "(fill='flood' / 'shell')")

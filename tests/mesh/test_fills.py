@@ -1,0 +1,392 @@
+"""The three fills, double-sided faces and the note on thin solids.
+
+References from outside the code under test: an exact triangle-box overlap
+(Akenine-Moeller's separating axes in rational arithmetic, below) for the
+shell; scipy's ``binary_fill_holes`` of the shell for the flood; numpy's
+``np.unique`` for the edge census; the single-sided mesh's own voxels
+(and the closed-mesh digests) for double-sided copies; trimesh's
+``voxelized(pitch).fill()`` for the chair.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import warnings
+from fractions import Fraction as F
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from isoflow.cli import main
+from isoflow.errors import IsoflowError, MeshNote
+from isoflow.mesh.census import census, one_face_per_pair, opposite_pairs
+from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization
+from isoflow.mesh.load import load_mesh
+from isoflow.mesh.shell import fill_shell, grid_planes
+from isoflow.mesh.voxelize import voxelize, voxelize_file, voxelize_mesh
+
+trimesh = pytest.importorskip("trimesh")
+
+ROOT = Path(__file__).resolve().parents[2]
+MESHES = ROOT / "meshes"
+DATA = Path(__file__).with_name("data")  # the generated meshes (make_thin_models.py)
+DIGESTS = json.loads((Path(__file__).with_name("data") / "closed_digests.json").read_text())
+CLOSED = sorted({e["mesh"] for e in DIGESTS["volumes"]})
+
+
+# ---------------------------------------------------------------------------
+# an exact reference: Akenine-Moeller's 13 separating axes, in fractions
+# ---------------------------------------------------------------------------
+
+def _overlap(tri, lo, hi) -> bool:
+    e = [[tri[(k + 1) % 3][a] - tri[k][a] for a in range(3)] for k in range(3)]
+
+    def cross(p, q):
+        return [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]]
+
+    axes = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    c = [(lo[a] + hi[a]) / 2 for a in range(3)]
+    h = [(hi[a] - lo[a]) / 2 for a in range(3)]
+    for L in axes + [cross(e[0], e[1])] + [cross(ek, ax) for ek in e for ax in axes]:
+        if not any(L):
+            continue
+        t = [sum(L[a] * p[a] for a in range(3)) for p in tri]
+        r = sum(abs(L[a]) * h[a] for a in range(3))
+        m = sum(L[a] * c[a] for a in range(3))
+        if max(t) < m - r or m + r < min(t):
+            return False
+    return True
+
+
+def shell_reference(T, planes) -> np.ndarray:
+    """Every voxel whose closed cube meets a closed triangle, exactly."""
+    P = [[F(float(x)) for x in p] for p in planes]
+    out = np.zeros(tuple(len(p) - 1 for p in planes), dtype=bool)
+    for tri in np.asarray(T, dtype=float):
+        tr = [[F(float(x)) for x in p] for p in tri]
+        rng = []
+        for a in range(3):
+            lo, hi = min(p[a] for p in tr), max(p[a] for p in tr)
+            rng.append([i for i in range(len(P[a]) - 1) if P[a][i] <= hi and P[a][i + 1] >= lo])
+        for i in rng[0]:
+            for j in rng[1]:
+                for k in rng[2]:
+                    if not out[i, j, k] and _overlap(tr, (P[0][i], P[1][j], P[2][k]),
+                                                     (P[0][i + 1], P[1][j + 1], P[2][k + 1])):
+                        out[i, j, k] = True
+    return out
+
+
+PLANES = grid_planes(np.array([-0.1, 0.0, 0.05]), 0.25, (6, 5, 6))
+
+
+def _on_grid(rng, n):
+    """Corners on the planes between voxels and halfway between them."""
+    T = np.empty((n, 3, 3))
+    for a, top in enumerate((12, 10, 12)):
+        T[..., a] = PLANES[a][0] + 0.125 * rng.integers(0, top, (n, 3))
+    return T
+
+
+@pytest.mark.parametrize("kind", ["random", "on the grid", "slivers", "faces in grid planes", "needles"])
+def test_shell_equals_exact_triangle_box_overlap(kind, rng):
+    for trial in range(12):
+        if kind == "random":
+            T = rng.uniform(-0.3, 1.7, (5, 3, 3))
+        elif kind == "on the grid":
+            T = _on_grid(rng, 5)
+        elif kind == "slivers":  # a corner within 1e-9 of the opposite edge
+            a, b = rng.uniform(0, 1.4, (2, 5, 3))
+            T = np.stack([a, b, a + (b - a) * rng.uniform(0, 1, (5, 1)) + rng.normal(0, 1e-9, (5, 3))], 1)
+        elif kind == "faces in grid planes":
+            T = rng.uniform(-0.1, 1.4, (5, 3, 3))
+            axis = rng.integers(0, 3, 5)
+            for q in range(5):
+                T[q, :, axis[q]] = PLANES[axis[q]][rng.integers(0, 6)]
+        else:  # degenerate: a segment, a point
+            T = np.repeat(rng.uniform(0, 1.4, (5, 1, 3)), 3, axis=1)
+            T[:3, 1] = rng.uniform(0, 1.4, (3, 3))
+        got = fill_shell(T, PLANES, 0, 6)
+        assert np.array_equal(got, shell_reference(T, PLANES)), (kind, trial)
+
+
+def test_shell_in_slabs_and_threads_is_the_whole(rng):
+    T = rng.uniform(-0.2, 1.6, (40, 3, 3))
+    whole = fill_shell(T, PLANES, 0, 6)
+    assert whole.any() and np.array_equal(fill_shell(T, PLANES, 0, 6, threads=2), whole)
+    parts = np.concatenate([fill_shell(T, PLANES, a, b) for a, b in ((0, 1), (1, 4), (4, 6))])
+    assert np.array_equal(parts, whole)
+
+
+@pytest.mark.parametrize("name,res", [("cube_no_bottom.obj", 6), ("hourglass_ico.obj", 7), ("featuretype.STL", 5),
+                                      ("torus.obj", 8)])
+def test_shell_of_real_meshes_exact(name, res):
+    """Real meshes through the whole voxeliser (its grid, its frame), the
+    cube's axis-aligned faces exactly on planes between voxels."""
+    v, f = load_mesh(MESHES / name)
+    r = voxelize(v, f, resolution=res, fill="shell", details=True)
+    planes = grid_planes(r.origin, r.pitch, r.volume.shape)
+    assert r.voxels and np.array_equal(r.volume, shell_reference(v[f], planes))
+
+
+def test_shell_covers_the_surface_and_separates(rng):
+    """The shell holds the voxel of every point of the surface, and (26-
+    separating) no 26-path of other voxels crosses a closed surface: the
+    inside and outside are not 26-adjacent."""
+    m = trimesh.creation.icosphere(3)
+    r = voxelize(m.vertices, m.faces, resolution=20, fill="shell", details=True)
+    pts, _ = trimesh.sample.sample_surface(m, 3000, seed=1)
+    idx = np.floor((pts - r.origin) / r.pitch).astype(int)
+    assert r.volume[tuple(idx.T)].all()
+    inside = voxelize(m.vertices, m.faces, resolution=20)[0] & ~r.volume
+    outside = ~(r.volume | ndimage.binary_fill_holes(r.volume))
+    assert inside.any() and outside.any()
+    grown = ndimage.binary_dilation(inside, structure=np.ones((3, 3, 3)))
+    assert not (grown & outside).any()
+
+
+# ---------------------------------------------------------------------------
+# flood
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("path", [MESHES / "torus.obj", MESHES / "rabbit.obj", MESHES / "plane_holes.obj",
+                                  DATA / "chair_double_sided.obj", DATA / "soup.obj", MESHES / "platonic_shelf.obj"],
+                         ids=lambda p: p.name)
+def test_flood_is_the_shell_with_its_holes_filled(path):
+    v, f = load_mesh(path)
+    shell = voxelize(v, f, resolution=40, fill="shell")[0]
+    flood = voxelize(v, f, resolution=40, fill="flood")[0]
+    assert np.array_equal(flood, ndimage.binary_fill_holes(shell))
+
+
+def test_flood_of_a_closed_mesh_holds_its_solid():
+    v, f = load_mesh(MESHES / "bob_small.ply")
+    solid = voxelize(v, f, resolution=48)[0]
+    flood = voxelize(v, f, resolution=48, fill="flood")[0]
+    shell = voxelize(v, f, resolution=48, fill="shell")[0]
+    assert np.array_equal(flood, solid | shell) and (flood & ~shell).any()
+
+
+# ---------------------------------------------------------------------------
+# the census and double-sided faces
+# ---------------------------------------------------------------------------
+
+def test_census_counts_as_np_unique(rng):
+    for trial in range(20):
+        f = rng.integers(0, 12, (rng.integers(1, 60), 3))
+        lo, hi, fwd, bwd, comps = census(f, 12)
+        a, b = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
+        ok = a != b
+        key = np.minimum(a, b)[ok] * 12 + np.maximum(a, b)[ok]
+        u, inv = np.unique(key, return_inverse=True)
+        order = np.argsort(lo * 12 + hi)
+        assert np.array_equal((lo * 12 + hi)[order], u)
+        assert np.array_equal(fwd[order], np.bincount(inv, weights=(a < b)[ok], minlength=len(u)))
+        assert np.array_equal((fwd + bwd)[order], np.bincount(inv, minlength=len(u)))
+        mesh = trimesh.Trimesh(np.zeros((12, 3)), f, process=False, validate=False)
+        from scipy.sparse.csgraph import connected_components
+        from scipy.sparse import coo_matrix
+
+        he = np.arange(3 * len(f))[ok] // 3
+        pairs = [(he[i], he[j]) for i in range(len(key)) for j in range(i) if key[i] == key[j]]
+        g = coo_matrix((np.ones(len(pairs)), tuple(np.array(pairs).T.reshape(2, -1))), shape=(len(f),) * 2)
+        assert comps == connected_components(g, directed=False)[0], mesh
+
+
+def test_opposite_pairs():
+    f = np.array([[0, 1, 2], [2, 1, 0], [1, 2, 0], [0, 2, 1], [0, 2, 1], [3, 4, 5]])
+    mate = opposite_pairs(f, 6)
+    assert mate.tolist() == [1, 0, 3, 2, -1, -1]
+
+
+def _double(f, reversed_first=False):
+    both = [f[:, ::-1], f] if reversed_first else [f, f[:, ::-1]]
+    return np.stack(both, axis=1).reshape(-1, 3)
+
+
+@pytest.mark.parametrize("entry", [e for e in DIGESTS["volumes"] if e["resolution"] == 64],
+                         ids=lambda e: e["mesh"])
+def test_double_sided_closed_meshes_give_the_single_sided_voxels(entry):
+    """Every face also written reversed (after it, or before it): the same
+    voxels, bit for bit, as the digests of the single-sided mesh."""
+    v, f = load_mesh(MESHES / entry["mesh"])
+    for first in (False, True):
+        r = voxelize(v, _double(f, first), resolution=64, details=True)
+        import hashlib
+
+        assert hashlib.sha256(np.packbits(r.volume).tobytes()).hexdigest() == entry["sha256"], first
+        p = v[f]
+        drawn = int(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).any(axis=1).sum())  # zero-area pairs stay
+        assert r.double_sided_faces == drawn and "double-sided" in r.note
+
+
+@pytest.mark.parametrize("name", CLOSED)
+def test_double_sided_closed_meshes_at_256(name):
+    v, f = load_mesh(MESHES / name)
+    single = voxelize(v, f, resolution=256)[0]
+    assert np.array_equal(voxelize(v, _double(f, True), resolution=256, details=True).volume, single)
+
+
+def test_double_sided_soup_copies_the_solid():
+    """A box written as a soup (own vertices per face), every face twice."""
+    box = trimesh.creation.box((1, 2, 3))
+    T = box.vertices[box.faces]
+    both = np.concatenate([T, T[:, ::-1]])
+    v, f = both.reshape(-1, 3), np.arange(3 * len(both)).reshape(-1, 3)
+    r = voxelize(v, f, resolution=12, details=True)
+    assert np.array_equal(r.volume, voxelize(box.vertices, box.faces, resolution=12)[0])
+    assert r.double_sided_faces == 12
+
+
+def test_walls_between_solids_cancel():
+    """Boxes stacked face to face with their shared faces coincident (a
+    voxel-art export) give their union, not membranes read as faces."""
+    cubes = [trimesh.creation.box(bounds=[[i, j, 0], [i + 1, j + 1, 1]]) for i in range(3) for j in range(2)]
+    v = np.concatenate([c.vertices for c in cubes])
+    f = np.concatenate([c.faces + 8 * n for n, c in enumerate(cubes)])
+    from isoflow.mesh.load import merge_coincident
+
+    f = merge_coincident(v, f)
+    _, pairs = one_face_per_pair(v, f)
+    assert pairs == 0
+    r = voxelize(v, f, pitch=0.25, details=True)
+    union = trimesh.creation.box(bounds=[[0, 0, 0], [3, 2, 1]])
+    assert np.array_equal(r.volume, voxelize(union.vertices, union.faces, pitch=0.25)[0])
+
+
+def test_strict_refuses_double_sided_faces():
+    box = trimesh.creation.box((1, 1, 1))
+    with pytest.raises(IsoflowError, match="12 double-sided faces"):
+        voxelize(box.vertices, _double(box.faces), resolution=8, strict=True)
+
+
+# ---------------------------------------------------------------------------
+# never an empty answer in silence
+# ---------------------------------------------------------------------------
+
+def test_zero_thickness_panel_says_why_and_which_fill():
+    v, f = load_mesh(DATA / "panel.obj")
+    r = voxelize(v, f, resolution=32, details=True)
+    assert r.voxels == 0 and r.shell_voxels == voxelize(v, f, resolution=32, fill="shell", details=True).voxels
+    assert "leaves no voxel" in r.note and "100 % of the area" in r.note and "--fill flood" in r.note
+    with pytest.raises(IsoflowError, match="4 boundary edges"):
+        voxelize(v, f, resolution=32, strict=True)
+
+
+def test_closed_plate_thinner_than_a_voxel():
+    """Closed and watertight, but between two layers of centres: the rule
+    keeps no voxel, says so, and --strict refuses it for that."""
+    plate = trimesh.creation.box(bounds=[[0, 0, 0.1], [6, 6, 0.3]])
+    grid = ([-0.5, -0.5, -1.0], (7, 7, 3))
+    r = voxelize(plate.vertices, plate.faces, pitch=1.0, grid=grid, details=True)
+    assert r.voxels == 0 and r.shell_voxels == 49 and "leaves no voxel" in r.note and "thinner than a voxel" in r.note
+    with pytest.raises(IsoflowError, match="leaves no voxel"):
+        voxelize(plate.vertices, plate.faces, pitch=1.0, grid=grid, strict=True)
+
+
+def test_closed_samples_get_no_thin_note():
+    for name in CLOSED:
+        v, f = load_mesh(MESHES / name)
+        r = voxelize(v, f, resolution=64, details=True)
+        assert r.note is None or "winding rule leaves" not in r.note, name
+        if r.shell_voxels is not None:
+            assert r.voxels >= THIN_SHARE * r.shell_voxels
+
+
+def test_chair_default_notes_and_flood_matches_trimesh():
+    v, f = load_mesh(DATA / "chair_double_sided.obj")
+    r = voxelize(v, f, resolution=128, details=True)
+    assert r.double_sided_faces == 64 and "64 double-sided faces" in r.note
+    assert "bounds no voxel on either side" in r.note and "--fill flood" in r.note
+    flood = voxelize(v, f, resolution=128, fill="flood", details=True)
+    ref = int(trimesh.load(DATA / "chair_double_sided.obj", force="mesh").voxelized(flood.pitch).fill().matrix.sum())
+    assert abs(flood.voxels / ref - 1) < 0.05
+    assert UNBOUNDED_SHARE < 1
+
+
+# ---------------------------------------------------------------------------
+# the API: Voxelization, MeshNote, fill=
+# ---------------------------------------------------------------------------
+
+def test_voxelization_reads_as_a_mapping():
+    v, f = load_mesh(MESHES / "cube_no_bottom.obj")
+    obj, r = voxelize_mesh(v, f, resolution=8, details=True)
+    assert isinstance(r, Voxelization) and r["note"] == r.note and "8 boundary edges" in r.note
+    assert set(r) >= {"volume", "origin", "pitch", "fill", "voxels", "defects", "note"}
+    d = r.to_dict()
+    assert "volume" not in d and json.loads(json.dumps(d))["chain_edges"] == 8
+    assert obj.voxels == r.voxels and np.array_equal(obj.volume, r.volume)
+
+
+@pytest.mark.parametrize("name,res", [("plane_holes.obj", 24), ("target.obj", 20), ("rabbit.obj", 30),
+                                      ("cube_no_bottom.obj", 9)])
+def test_voxels_counted_by_the_sweep(name, res):
+    """The sweep counts what it sets (runs, voxels the rule decides, voxels
+    forced in at ties) instead of a pass over the volume."""
+    r = voxelize(*load_mesh(MESHES / name), resolution=res, details=True)
+    assert r.voxels == int(np.count_nonzero(r.volume)) > 0
+
+
+def test_the_note_is_a_warning_without_details():
+    v, f = load_mesh(MESHES / "cube_no_bottom.obj")
+    with pytest.warns(MeshNote, match="8 boundary edges"):
+        voxelize_mesh(v, f, resolution=8)
+    with pytest.warns(MeshNote, match="8 boundary edges"):
+        voxelize_file(MESHES / "cube_no_bottom.obj", resolution=8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        voxelize_mesh(v, f, resolution=8, details=True)
+        voxelize(*load_mesh(MESHES / "torus.obj"), resolution=8)  # closed: no note
+
+
+def test_bad_fill_is_one_clear_error():
+    with pytest.raises(IsoflowError, match="fill must be one of winding, shell, flood"):
+        voxelize(np.eye(3), np.array([[0, 1, 2]]), resolution=4, fill="solid")
+
+
+# ---------------------------------------------------------------------------
+# the command line
+# ---------------------------------------------------------------------------
+
+@pytest.mark.parametrize("fill", ["shell", "flood"])
+def test_every_command_takes_fill(tmp_path, capsys, fill):
+    mesh = str(MESHES / "torus.obj")
+    want = voxelize(*load_mesh(MESHES / "torus.obj"), resolution=24, fill=fill)[0]
+    assert main(["voxelize", mesh, "--resolution", "24", "--fill", fill, "-o", str(tmp_path / "a.npy")]) == 0
+    assert np.array_equal(np.load(tmp_path / "a.npy").astype(bool), want)
+    assert main(["voxelize", mesh, "--resolution", "24", "--fill", fill, "-o", str(tmp_path / "a.zarr")]) == 0
+    from isoflow.mesh.volumes import read_volume
+
+    assert np.array_equal(read_volume(str(tmp_path / "a.zarr")).volume.astype(bool), want)
+    capsys.readouterr()
+    assert main(["info", mesh, "--resolution", "24", "--fill", fill, "--json", "--no-surfaces"]) == 0
+    assert json.loads(capsys.readouterr().out)["voxels"] == int(want.sum())
+    assert main(["surface", mesh, "--resolution", "24", "--fill", fill, "-o", str(tmp_path / "s.ply")]) == 0
+    assert main(["flow", mesh, "--resolution", "24", "--fill", fill, "--steps", "1",
+                 "--out", str(tmp_path / "flow")]) == 0
+    capsys.readouterr()
+    assert main(["genus", mesh, "--resolution", "24", "--no-step", "--fill", fill, "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["fill"] == fill and report["digital"][0]["voxels"] == int(want.sum())
+    assert main(["genus", mesh, "--resolution", "24", "--no-step", "--fill", fill]) == 0
+    assert f"--fill {fill}" in capsys.readouterr().out
+
+
+def test_cli_says_the_thin_note_and_strict_refuses(capsys):
+    panel = str(DATA / "panel.obj")
+    assert main(["info", panel, "--resolution", "16"]) == 0
+    err = capsys.readouterr().err
+    assert "note:" in err and "leaves no voxel" in err and "--fill flood" in err
+    assert main(["info", panel, "--resolution", "16", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["info", panel, "--resolution", "16", "--strict"]) == 2
+    assert "error:" in capsys.readouterr().err
+
+
+def test_fill_is_refused_for_volumes(tmp_path, capsys):
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), dtype=bool))
+    assert main(["info", str(tmp_path / "v.npy"), "--fill", "shell"]) == 2
+    assert "--fill" in capsys.readouterr().err
