@@ -285,17 +285,9 @@ def _label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: in
     }
 
 
-def _csr(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Rows grouped by ``source`` (0..n-1): the start of each group (n + 1)
-    and the columns in that order."""
-    order = np.argsort(source, kind="stable")
-    start = np.concatenate([[0], np.cumsum(np.bincount(source, minlength=n))]).astype(np.int64)
-    return (start,) + tuple(np.ascontiguousarray(c[order]) for c in columns)
-
-
 def _graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces."""
-    from ..scale.piece_graph import label_topology
+    from ..scale.piece_graph import grouped, label_topology
     from ..scale.pieces import NONE
 
     n = len(piece_label)
@@ -303,13 +295,13 @@ def _graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pas
     a, b = (keys >> np.uint64(32)).astype(np.int64), (keys & np.uint64(0xFFFFFFFF)).astype(np.int64)
     touch = passed["kind"] < NONE
     kind = passed["kind"][touch].astype(np.int64)
-    adj = _csr(np.concatenate([a[touch], b[touch]]), n, np.concatenate([b[touch], a[touch]]), np.concatenate([kind, kind]))
+    adj = grouped(np.concatenate([a[touch], b[touch]]), n, np.concatenate([b[touch], a[touch]]), np.concatenate([kind, kind]))
     # the sheets by object piece: the smaller piece's of each pair, then the larger's
     ab, ba = sums[:, 0] > 0, sums[:, 2] > 0
-    sheets = _csr(np.concatenate([a[ab], b[ba]]), n, np.concatenate([b[ab], a[ba]]),
+    sheets = grouped(np.concatenate([a[ab], b[ba]]), n, np.concatenate([b[ab], a[ba]]),
                   np.concatenate([sums[ab, 0], sums[ba, 2]]), np.concatenate([sums[ab, 1], sums[ba, 3]]))
     nlabels = int(piece_label.max(initial=-1)) + 1
-    lab_start, lab_pieces = _csr(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
+    lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
                            pieces["hi"], *adj, *sheets, *JOINS[conn])

@@ -37,7 +37,7 @@ def _open(piece, plo, phi, blo, bhi):
     return False
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _root(parent, x):
     while parent[x] != x:
         parent[x] = parent[parent[x]]
@@ -45,7 +45,7 @@ def _root(parent, x):
     return x
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, kind):
     """Components of the label's pieces ``own`` over edges of at most
     ``kind``: ``parent`` (local roots, one per piece of ``own``; ``local``
@@ -69,7 +69,7 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     return count
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, kind, mark, stamp,
                      comp, queue):
     """Components of the rest of the image over edges of at most ``kind``
@@ -113,9 +113,121 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
     return enclosed
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _sort_by(order, n, first, second):
+    """Sort ``order[:n]`` by ``first`` then ``second`` (insertion sort: a
+    label has few entries), stable."""
+    for t in range(1, n):
+        e = order[t]
+        u = t
+        while u > 0 and (first[order[u - 1]] > first[e] or (
+                first[order[u - 1]] == first[e] and second[order[u - 1]] > second[e])):
+            order[u] = order[u - 1]
+            u -= 1
+        order[u] = e
+
+
 @njit(cache=True, nogil=True)
+def _sift(order, start, end, key):
+    root = start
+    while 2 * root + 1 < end:
+        child = 2 * root + 1
+        if child + 1 < end and key[order[child]] < key[order[child + 1]]:
+            child += 1
+        if key[order[root]] >= key[order[child]]:
+            return
+        order[root], order[child] = order[child], order[root]
+        root = child
+
+
+@njit(cache=True, nogil=True)
+def _heap_sort(order, n, key):
+    """Sort ``order[:n]`` by ``key`` in place (a label with many entries)."""
+    for start in range(n // 2 - 1, -1, -1):
+        _sift(order, start, n, key)
+    for end in range(n - 1, 0, -1):
+        order[0], order[end] = order[end], order[0]
+        _sift(order, 0, end, key)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow, schi,
+              sfaces, nsurf):
+    """The label's surfaces from its sheets summed per (own component,
+    rest component), appended at ``nsurf`` in the report's order (most
+    faces first, then chi). Returns the new ``nsurf``."""
+    n = 0
+    for t in range(len(own)):
+        p = own[t]
+        for e in range(sh_start[p], sh_start[p + 1]):
+            key[n] = parent[t] * (m + 1) + comp[sh_to[e]]
+            verts[n] = sh_n[e]
+            quarters[n] = sh_q[e]
+            order[n] = n
+            n += 1
+    if n > 32:
+        _heap_sort(order, n, key)
+    else:
+        _sort_by(order, n, key, key)
+    first = nsurf
+    for t in range(n):
+        e = order[t]
+        if t == 0 or key[e] != key[order[t - 1]]:
+            srow[nsurf] = r
+            schi[nsurf] = 0
+            sfaces[nsurf] = 0
+            nsurf += 1
+        schi[nsurf - 1] += verts[e]
+        sfaces[nsurf - 1] += quarters[e]
+    for s in range(first, nsurf):
+        sfaces[s] //= 4
+        schi[s] -= sfaces[s]
+        key[s - first] = -sfaces[s]
+        verts[s - first] = schi[s]
+        order[s - first] = s - first
+    _sort_by(order, nsurf - first, key, verts)
+    for t in range(nsurf - first):
+        sfaces[first + t] = -key[order[t]]
+        schi[first + t] = verts[order[t]]
+    return nsurf
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
+                sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
+                parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
+    """The loop of :func:`label_topology` over its rows, on scratch arrays
+    (compiled without reference counting: nothing is allocated here).
+    Returns the number of surfaces."""
+    nsurf = 0
+    for r in range(len(rows)):
+        label = rows[r]
+        own = lab_pieces[lab_start[label]:lab_start[label + 1]]
+        if len(own) == 0:
+            continue
+        for d in range(3):
+            blo[d] = plo[own[0], d]
+            bhi[d] = phi[own[0], d]
+        for p in own:
+            for d in range(3):
+                blo[d] = min(blo[d], plo[p, d])
+                bhi[d] = max(bhi[d], phi[p, d])
+        b0[r] = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
+        _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
+        m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
+                             r + 1, stamp, comp, queue)
+        if cc_kind == bg_kind:
+            b2[r] = m
+        else:
+            b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
+                                     cc_kind, r + 1, stamp2, comp2, queue)
+        nsurf = _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow,
+                          schi, sfaces, nsurf)
+    return nsurf
+
+
 def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
-                   sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind):
+                   sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
     """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
     (enclosed components of the rest under ``cc_kind``), and the closed
     surfaces of its boundary mesh: the pairs (component of the label under
@@ -129,80 +241,39 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     each label's in the report's order (most faces first, then chi).
     """
     npieces = len(piece_label)
-    local = np.zeros(npieces, np.int64)
-    stamp = np.zeros(npieces, np.int64)
-    comp = np.zeros(npieces, np.int64)
-    stamp2 = np.zeros(npieces, np.int64)
-    comp2 = np.zeros(npieces, np.int64)
-    queue = np.zeros(npieces, np.int64)
-    b0 = np.zeros(len(rows), np.int64)
-    b2 = np.zeros(len(rows), np.int64)
-    total = 0
-    for r in range(len(rows)):
-        for p in lab_pieces[lab_start[rows[r]]:lab_start[rows[r] + 1]]:
-            total += sh_start[p + 1] - sh_start[p]
-    srow = np.zeros(total, np.int64)
-    schi = np.zeros(total, np.int64)
-    sfaces = np.zeros(total, np.int64)
-    nsurf = 0
-    parent = np.zeros(npieces, np.int64)
-    parent0 = np.zeros(npieces, np.int64)
-    for r in range(len(rows)):
-        label = rows[r]
-        own = lab_pieces[lab_start[label]:lab_start[label + 1]]
-        if len(own) == 0:
-            continue
-        blo = plo[own[0]].copy()
-        bhi = phi[own[0]].copy()
-        for p in own:
-            for d in range(3):
-                blo[d] = min(blo[d], plo[p, d])
-                bhi[d] = max(bhi[d], phi[p, d])
-        b0[r] = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
-        _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
-        mark = r + 1
-        m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
-                             mark, stamp, comp, queue)
-        if cc_kind == bg_kind:
-            b2[r] = m
-        else:
-            b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
-                                     cc_kind, mark, stamp2, comp2, queue)
-        # the surfaces: sheets summed per (own component, rest component)
-        n = 0
-        for t in range(len(own)):
-            n += sh_start[own[t] + 1] - sh_start[own[t]]
-        key = np.empty(n, np.int64)
-        verts = np.empty(n, np.int64)
-        quarters = np.empty(n, np.int64)
-        n = 0
-        for t in range(len(own)):
-            p = own[t]
-            for e in range(sh_start[p], sh_start[p + 1]):
-                key[n] = parent[t] * (m + 1) + comp[sh_to[e]]
-                verts[n] = sh_n[e]
-                quarters[n] = sh_q[e]
-                n += 1
-        order = np.argsort(key)
-        first = nsurf
-        for t in range(n):
-            e = order[t]
-            if t == 0 or key[e] != key[order[t - 1]]:
-                srow[nsurf] = r
-                schi[nsurf] = 0
-                sfaces[nsurf] = 0
-                nsurf += 1
-            schi[nsurf - 1] += verts[e]
-            sfaces[nsurf - 1] += quarters[e]
-        for s in range(first, nsurf):
-            sfaces[s] //= 4
-            schi[s] -= sfaces[s]
-        # the report's order: most faces first, ties by chi
-        part = np.arange(first, nsurf)
-        by_chi = part[np.argsort(schi[first:nsurf], kind="mergesort")]
-        ordered = by_chi[np.argsort(-sfaces[by_chi], kind="mergesort")]
-        chi_sorted = schi[ordered].copy()
-        faces_sorted = sfaces[ordered].copy()
-        schi[first:nsurf] = chi_sorted
-        sfaces[first:nsurf] = faces_sorted
-    return b0, b2, srow[:nsurf], schi[:nsurf], sfaces[:nsurf]
+    per_label = np.add.reduceat(np.diff(sh_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
+    per_label = np.where(np.diff(lab_start) > 0, per_label, 0)
+    total = int(per_label[rows].sum()) if len(rows) else 0
+    most = int(per_label.max(initial=0))
+    scratch = [np.zeros(npieces, np.int64) for _ in range(8)]
+    small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
+    b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
+    surf = [np.zeros(total, np.int64) for _ in range(3)]
+    nsurf = _label_loop(np.asarray(rows, np.int64), lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to,
+                        adj_kind, sh_start, sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, *scratch, *small,
+                        b0, b2, *surf)
+    return (b0, b2) + tuple(s[:nsurf] for s in surf)
+
+
+@njit(cache=True, nogil=True)
+def _counting_order(source, n):
+    """Where each row goes when rows are grouped by ``source`` (0..n-1),
+    keeping their order within a group, and the groups' starts."""
+    start = np.zeros(n + 1, np.int64)
+    for s in source:
+        start[s + 1] += 1
+    for g in range(n):
+        start[g + 1] += start[g]
+    fill = start[:-1].copy()
+    order = np.empty(len(source), np.int64)
+    for r in range(len(source)):
+        order[fill[source[r]]] = r
+        fill[source[r]] += 1
+    return start, order
+
+
+def grouped(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Rows grouped by ``source`` (0..n-1, a counting sort): the start of
+    each group (n + 1) and the columns in that order."""
+    start, order = _counting_order(np.asarray(source, np.int64), n)
+    return (start,) + tuple(np.ascontiguousarray(np.take(c, order)) for c in columns)

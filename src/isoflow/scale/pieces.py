@@ -43,8 +43,8 @@ FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 
 #: bytes per piece of the statistics (value, count, three sums, two corners)
 PIECE_BYTES = 8 + 8 + 24 + 24
-#: bytes per slot of the pair table (key, kind, sheets, quarters)
-PAIR_BYTES = 8 + 1 + 8 + 8
+#: bytes per slot of the pair table (key, kind, sheets and quarters each way)
+PAIR_BYTES = 8 + 1 + 16
 
 
 def unsigned(volume: np.ndarray) -> np.ndarray:
@@ -211,7 +211,7 @@ def _grown(keys, kind, acc):
     cap = 2 * len(keys)
     nkeys = np.full(cap, EMPTY, np.uint64)
     nkind = np.full(cap, NONE, np.uint8)
-    nacc = np.zeros((cap, 4), np.int64)
+    nacc = np.zeros((cap, 2), np.int64)
     for s in range(len(keys)):
         k = keys[s]
         if k != EMPTY:
@@ -226,8 +226,9 @@ def _grown(keys, kind, acc):
 def _add(keys, kind, acc, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
     """Add to the pair of pieces p != q: the closer ``how`` they touch, the
     sheets (and their quarters of faces) whose object voxel is in p and
-    background voxel in q, and those the other way. Returns 1 for a new
-    pair."""
+    background voxel in q, and those the other way, each direction in one
+    int64 (sheets in the low half, quarters in the high). Returns 1 for a
+    new pair."""
     if p > q:
         p, q = q, p
         sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
@@ -239,10 +240,8 @@ def _add(keys, kind, acc, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters
         new = 1
     if kind[s] > how:
         kind[s] = how
-    acc[s, 0] += sheets_pq
-    acc[s, 1] += quarters_pq
-    acc[s, 2] += sheets_qp
-    acc[s, 3] += quarters_qp
+    acc[s, 0] += sheets_pq | (quarters_pq << 32)
+    acc[s, 1] += sheets_qp | (quarters_qp << 32)
     return new
 
 
@@ -322,10 +321,11 @@ def _label(flat, ny, nz, a, nx, i, j, k, piece, c, value, want, base, features, 
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, keys, kind, acc, pid, pmask):
-    """A block of three pieces or more (rare): the pairs of pieces, then
-    every label of the block. Returns the number of new pairs."""
-    new = 0
+             quarter, spokes, doubled, contact, keys, kind, acc, pid, pmask, pval, local):
+    """A block of three pieces or more: every label of the block (its
+    pieces' octants together), its sheets summed per pair of the block's
+    pieces in ``local`` (m x m x 2), then one entry per pair. Returns the
+    number of new pairs."""
     m = 0
     for o in range(8):
         p = id8[o]
@@ -335,28 +335,45 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, tabl
         if u == m:
             pid[m] = p
             pmask[m] = 0
+            pval[m] = val8[o]
             m += 1
         pmask[u] |= 1 << o
     for u in range(m):
+        for w in range(m):
+            local[u, w, 0] = 0
+            local[u, w, 1] = 0
+    for u in range(m):
+        piece = pid[u]
+        if piece == 0 or not want[piece - base]:
+            continue
+        c = pmask[u]
+        merged = False
+        for w in range(m):
+            if w != u and pid[w] != 0 and pval[w] == pval[u]:
+                if w < u:  # the label was done at its first piece
+                    merged = True
+                    break
+                c |= pmask[w]
+        if merged:
+            continue
+        _label(flat, ny, nz, a, nx, i, j, k, piece, c, pval[u], want, base, features, table, doubled, spokes)
+        for s_ in range(nsheet[c]):
+            p, q = id8[sheet_obj[c, s_]], id8[sheet_bg[c, s_]]
+            u1 = 0
+            while pid[u1] != p:
+                u1 += 1
+            w1 = 0
+            while pid[w1] != q:
+                w1 += 1
+            local[u1, w1, 0] += 1
+            local[u1, w1, 1] += quarter[c, s_]
+    new = 0
+    for u in range(m):
         for w in range(u + 1, m):
             how = contact[pmask[u], pmask[w]]
-            if how < NONE:
-                new += _add(keys, kind, acc, pid[u], pid[w], how, 0, 0, 0, 0)
-    for u in range(m):  # a label's pieces' octants together
-        piece = pid[u]
-        if piece == 0 or pmask[u] == 0:
-            continue
-        value = val8[_lowest(pmask[u])]
-        c = pmask[u]
-        for w in range(u + 1, m):
-            if pid[w] != 0 and pmask[w] != 0 and val8[_lowest(pmask[w])] == value:
-                c |= pmask[w]
-                pmask[w] = 0
-        if not want[piece - base]:
-            continue
-        _label(flat, ny, nz, a, nx, i, j, k, piece, c, value, want, base, features, table, doubled, spokes)
-        for s_ in range(nsheet[c]):
-            new += _add(keys, kind, acc, id8[sheet_obj[c, s_]], id8[sheet_bg[c, s_]], NONE, 1, quarter[c, s_], 0, 0)
+            if how < NONE or local[u, w, 0] != 0 or local[w, u, 0] != 0:
+                new += _add(keys, kind, acc, pid[u], pid[w], how, local[u, w, 0], local[u, w, 1], local[w, u, 0],
+                            local[w, u, 1])
     return new
 
 
@@ -391,7 +408,8 @@ def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, want, base, features, 
 
 @njit(cache=True, nogil=True, _nrt=False)
 def _vertex_layers(flat, ids, ny, nz, a, nx, i0, i1, j0, k0, want, base, features, table, nsheet, qsum, sheet_obj,
-                   sheet_bg, quarter, spokes, doubled, contact, keys, kind, acc, used, val8, id8, rows, pid, pmask):
+                   sheet_bg, quarter, spokes, doubled, contact, keys, kind, acc, used, val8, id8, rows, pid, pmask,
+                   pval, local):
     """The vertex pass over layers i0 <= i < i1, from vertex (i0, j0, k0)
     on (see the module docs). ``flat``/``ids``: the slab's values and
     pieces (from voxel layer a of a volume of nx layers); ``want[piece]``:
@@ -440,7 +458,7 @@ def _vertex_layers(flat, ids, ny, nz, a, nx, i0, i1, j0, k0, want, base, feature
                 else:
                     used += _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, table, nsheet,
                                      sheet_obj, sheet_bg, quarter, spokes, doubled, contact, keys, kind, acc, pid,
-                                     pmask)
+                                     pmask, pval, local)
     return used, i1, 0, 0
 
 
@@ -476,9 +494,9 @@ def vertex_pass(values: np.ndarray, pieces: np.ndarray, want: np.ndarray, table:
 
     def call(t):
         keys, kind, acc = np.full(1 << 12, EMPTY, np.uint64), np.full(1 << 12, NONE, np.uint8), np.zeros(
-            (1 << 12, 4), np.int64)
+            (1 << 12, 2), np.int64)
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(4, np.int64), np.zeros(8, np.int64),
-                   np.zeros(8, np.int64))
+                   np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
         used, i, j, k = 0, lo + parts[t][0], 0, 0
         while i < lo + parts[t][1]:
             used, i, j, k = _vertex_layers(*args, i, lo + parts[t][1], j, k, want.astype(np.bool_), base, features[t],
@@ -487,7 +505,8 @@ def vertex_pass(values: np.ndarray, pieces: np.ndarray, want: np.ndarray, table:
                 check_fits(PAIR_BYTES * 2 * len(keys) * len(parts), f"the pairs of {npieces:,} pieces")
                 keys, kind, acc = _grown(keys, kind, acc)
         full = keys != EMPTY
-        return keys[full], kind[full], acc[full]
+        low, high = acc[full] & 0xFFFFFFFF, acc[full] >> 32
+        return keys[full], kind[full], np.stack([low[:, 0], high[:, 0], low[:, 1], high[:, 1]], axis=1)
 
     found = run([(call, t) for t in range(len(parts))])
     keys, kind, sums = (np.concatenate(cols) for cols in zip(*found))
