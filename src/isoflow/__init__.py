@@ -27,6 +27,7 @@ _WHERE = {
     "normal_lut": ".digital.indices",
     "planar_index": ".digital.indices",
     "DigitalObject": ".digital.lattice",
+    "label_table": ".digital.label_table",
     "analyze_chunked": ".digital.outofcore",
     "analyze_zarr": ".digital.outofcore",
     "QuadMesh": ".digital.surface",
