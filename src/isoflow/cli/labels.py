@@ -63,18 +63,27 @@ def refuse_single_label(args: argparse.Namespace) -> None:
 
 def read_table(args: argparse.Namespace, surfaces: bool = True):
     """The label image named on the command line and its table, with only
-    the labels that occur (a note names those asked for that do not)."""
+    the labels that occur (a note names those asked for that do not):
+    ``(about, connectivity, table, image)``, ``about`` its shape, type,
+    voxel size and origin, ``image`` None for a zarr store (read block by
+    block)."""
     from ..digital.label_table import label_table
     from ..digital.topology import default_connectivity
     from ..mesh.volumes import read_label_image
 
     refuse_single_label(args)
-    image = read_label_image(args.input)
     asked = label_choice(args.labels)
     conn = args.connectivity or default_connectivity(3)
-    wanted = None if asked is None else _within_type(asked, image.array.dtype)
-    table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                        surfaces=surfaces, threads=getattr(args, "threads", None))
+    image = None
+    if is_store(args.input):
+        about, table = table_of_store(args, conn, asked, surfaces)
+    else:
+        image = read_label_image(args.input)
+        about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
+                 "origin": image.origin}
+        wanted = None if asked is None else _within_type(asked, image.array.dtype)
+        table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                            surfaces=surfaces, threads=getattr(args, "threads", None))
     present = table["voxels"] > 0
     if not present.all():
         absent = table["label"][~present]
@@ -86,7 +95,40 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
         raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
-    return image, conn, table
+    return about, conn, table, image
+
+
+def is_store(path) -> bool:
+    """Whether the input is a zarr store (``IMAGE.zarr:LEVEL`` too), read
+    block by block."""
+    from ..mesh.formats.registry import split_dataset
+
+    return split_dataset(path)[0].suffix.lower() == ".zarr"
+
+
+def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
+    """The table of a zarr store, one layer of blocks at a time (never the
+    whole image in memory), with a progress bar; the image as read (its
+    shape, type and placement, no array)."""
+    from ..digital.label_blocks import label_table_blocks
+    from ..digital.lattice import DigitalObject
+    from ..mesh.formats.omezarr import LabelSlabs
+    from ..scale.compiled import using
+    from .progress import progress_bar
+
+    if getattr(args, "command", "") == "surface":
+        raise IsoflowError(f"{args.input}: surface --labels reads the image whole; convert the store to .npy or "
+                           ".nii.gz first (info --labels reads it block by block)")
+    slabs = LabelSlabs(args.input)
+    try:
+        place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{args.input}: {exc}") from None
+    wanted = None if asked is None else _within_type(asked, slabs.dtype)
+    with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
+        table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
+                                   labels=wanted, surfaces=surfaces, progress=show)
+    return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
 
 
 def _within_type(asked: list[int], dtype) -> list[int]:
@@ -107,13 +149,13 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
 
     if args.csv:
         check_output_path(args.csv, args.force)
-    image, conn, table = read_table(args, surfaces=not args.no_surfaces)
+    about, conn, table, _ = read_table(args, surfaces=not args.no_surfaces)
     if args.csv:
         write_csv(args.csv, table, args.force)
     if args.json:
-        print(json.dumps(table_json(args.input, image, conn, table)))
+        print(json.dumps(table_json(args.input, about, conn, table)))
         return 0
-    print(format_table(args.input, image, conn, table))
+    print(format_table(args.input, about, conn, table))
     if args.csv:
         print(f"{args.csv}: {len(table['label'])} rows, {len(table)} columns")
     return 0
@@ -128,12 +170,12 @@ def json_value(value):
     return value.item() if isinstance(value, np.generic) else value
 
 
-def table_json(name, image, conn: int, table: dict) -> dict:
+def table_json(name, about: dict, conn: int, table: dict) -> dict:
     """What ``--json`` prints: the image and one object per label."""
     keys = list(table)
     rows = [{k: json_value(table[k][r]) for k in keys} for r in range(len(table["label"]))]
-    return {"input": str(name), "shape": [int(s) for s in image.array.shape], "dtype": str(image.array.dtype),
-            "pitch": image.spacing.tolist(), "origin": image.origin.tolist(), "connectivity": conn,
+    return {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
+            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn,
             "labels": rows}
 
 
@@ -166,11 +208,11 @@ def _cell(value, width: int) -> str:
     return f"{value:>{width}}"
 
 
-def format_table(name, image, conn: int, table: dict) -> str:
+def format_table(name, about: dict, conn: int, table: dict) -> str:
     """The compact table: the first rows, then a summary of all."""
     n = len(table["label"])
-    pitch = "x".join(f"{p:g}" for p in image.spacing)
-    lines = [f"{name}: {n} labels, shape {'x'.join(map(str, image.array.shape))}, voxel {pitch}, "
+    pitch = "x".join(f"{p:g}" for p in about["spacing"])
+    lines = [f"{name}: {n} labels, shape {'x'.join(map(str, about['shape']))}, voxel {pitch}, "
              f"{conn}-connectivity"]
     surfaces = "genera" in table
     head = "".join(f"{h:>{w}}" for h, _, w in TERMINAL_COLUMNS)
@@ -248,7 +290,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     if args.png or args.ascii or args.triangulate:
         raise IsoflowError(f"{args.input}: --png, --ascii and --triangulate write one surface, not --labels")
     target = surface_outputs(args)
-    image, conn, table = read_table(args)
+    _, conn, table, image = read_table(args)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]

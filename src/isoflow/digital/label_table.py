@@ -165,17 +165,17 @@ def label_table(
     """
     from ..scale.compiled import using
 
-    vol = _checked_image(image)
+    vol = checked_image(image)
     conn = check_connectivity(3, connectivity)
     # the pitch and origin checked as every object's are
     place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
-    wanted = None if labels is None else _wanted(labels, vol.dtype)
+    wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
     return columns(found, place.spacing, place.origin, surfaces)
 
 
-def _checked_image(image) -> np.ndarray:
+def checked_image(image) -> np.ndarray:
     vol = np.asarray(image)
     if vol.ndim != 3:
         raise IsoflowError(f"a label table needs a 3D label image, got a {vol.ndim}D array")
@@ -196,7 +196,7 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     return have_numba() and (numba_started() or vol.size >= least_voxels() // 8)
 
 
-def _wanted(labels, dtype) -> np.ndarray:
+def wanted_labels(labels, dtype) -> np.ndarray:
     """The labels asked for, as values of the image's type: each one a
     whole number the type holds, none twice."""
     asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
@@ -221,31 +221,66 @@ def _wanted(labels, dtype) -> np.ndarray:
 JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 
 
+#: bytes per voxel of the compiled path beyond the image: the piece of
+#: every voxel (uint32); the pieces' and pairs' tables are checked as they
+#: are made
+PIECE_BYTES_PER_VOXEL = 4
+
+
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs)."""
+    from ..scale.memory import check_fits
     from ..scale.pieces import label_pieces, vertex_pass
 
+    copy = 0 if vol.flags.c_contiguous else vol.nbytes
+    check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
+               f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     pieces = label_pieces(vol)
-    values, piece_label, rows = _label_rows(pieces["values"], vol.dtype, wanted)
-    want = np.zeros(len(values) + 1, bool)
-    want[rows[rows >= 0] + 1] = True
-    want = want[piece_label + 1]
+    want = wanted_pieces(pieces["values"], vol.dtype, wanted)
+    passed = vertex_pass(vol, pieces.pop("ids"), want, feature_table(conn), pass_tables(conn, surfaces))
+    return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
+
+
+def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
+    """Labels of an image of ``dtype`` as the pieces hold them: their
+    bits, unsigned, as uint64."""
+    width = np.dtype(np.uint8 if dtype == np.bool_ else dtype).itemsize
+    return np.asarray(labels, dtype=np.uint8 if dtype == np.bool_ else dtype).view(f"u{width}").astype(np.uint64)
+
+
+def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
+    """Per piece (values as :func:`~isoflow.scale.pieces.label_pieces`
+    gives them, 0 the outside), whether its label has a row."""
+    want = values != 0 if wanted is None else np.isin(values, label_bits(wanted, dtype))
+    want[0] = False
+    return want
+
+
+def pass_tables(conn: int, surfaces: bool) -> tuple:
+    """The sheet tables of the vertex pass; without the surfaces no sheets
+    and no doubled spokes (only the histogram and the graph)."""
     tables = sweep_tables(conn)
-    if not surfaces:  # no sheets, no doubled spokes: only the histogram and the graph
-        tables = (np.zeros_like(tables[0]),) + tables[1:4] + (np.zeros_like(tables[4]), tables[5])
-    passed = vertex_pass(vol, pieces.pop("ids"), want, feature_table(conn), tables)
-    topology = _graph_topology(pieces, piece_label, rows, passed, conn)
-    by_label = _label_sums(pieces, piece_label, passed, len(values))
-    found = {key: _at_rows(column, rows) for key, column in by_label.items()}
+    if surfaces:
+        return tables
+    return (np.zeros_like(tables[0]),) + tables[1:4] + (np.zeros_like(tables[4]), tables[5])
+
+
+def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndarray | None) -> dict:
+    """The rows' sums from the pieces (values, counts, sums, boxes) and
+    what the vertex pass found (features, doubled edges, pairs)."""
+    values, piece_label, rows = label_rows(pieces["values"], dtype, wanted)
+    topology = graph_topology(pieces, piece_label, rows, passed, conn)
+    by_label = label_sums(pieces, piece_label, passed, len(values))
+    found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)
-    dtype = np.dtype(np.uint8 if vol.dtype == np.bool_ else vol.dtype)
+    dtype = np.dtype(np.uint8 if dtype == np.bool_ else dtype)
     found["label"] = np.zeros(len(rows), dtype) if wanted is None else wanted.astype(dtype)
     found["label"][rows >= 0] = values[rows[rows >= 0]].astype(f"u{dtype.itemsize}").view(dtype)
     return found
 
 
-def _label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The distinct values of the pieces (their bits, uint64), each piece's
     index among them (-1 for the outside, piece 0) and the index of every
     row of the table (-1 for a label asked for that is absent)."""
@@ -253,21 +288,20 @@ def _label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np
     piece_label = np.concatenate([[-1], inverse]).astype(np.int64)
     if wanted is None:
         return values, piece_label, np.flatnonzero(values != 0)
-    width = np.dtype(np.uint8 if dtype == np.bool_ else dtype).itemsize
-    bits = wanted.view(np.dtype(f"u{width}")).astype(np.uint64)
+    bits = label_bits(wanted, dtype)
     at = np.minimum(np.searchsorted(values, bits), max(len(values) - 1, 0))
     found = (len(values) > 0) & (values[at] == bits) if len(values) else np.zeros(len(bits), bool)
     return values, piece_label, np.where(found, at, -1)
 
 
-def _at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:
+def at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """A per-label column at the table's rows, zero where a row's label is absent."""
     out = column[np.maximum(rows, 0)] if len(column) else np.zeros((len(rows),) + column.shape[1:], column.dtype)
     out[rows < 0] = 0
     return out
 
 
-def _label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int) -> dict:
+def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int) -> dict:
     """Per label (all of them): voxels, coordinate sums, box, features and
     doubled edges, added up over its pieces."""
     of = piece_label[1:]
@@ -275,8 +309,8 @@ def _label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: in
     hi = np.full((nlabels, 3), -1, np.int64)
     np.minimum.at(lo, of, pieces["lo"][1:])
     np.maximum.at(hi, of, pieces["hi"][1:])
-    features = np.zeros((nlabels, passed["features"].shape[1]), np.int64)
-    np.add.at(features, of, passed["features"][1:])
+    features = np.stack([np.bincount(of, column, nlabels) for column in passed["features"][1:].T], axis=1)
+    features = features.astype(np.int64).reshape(nlabels, passed["features"].shape[1])
     return {
         "voxels": np.bincount(of, pieces["counts"][1:], nlabels).astype(np.int64),
         "sums": np.stack([np.bincount(of, pieces["sums"][1:, d], nlabels) for d in range(3)], axis=1),
@@ -285,7 +319,7 @@ def _label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: in
     }
 
 
-def _graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
+def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces."""
     from ..scale.piece_graph import grouped, label_topology
     from ..scale.pieces import NONE

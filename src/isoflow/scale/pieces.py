@@ -448,7 +448,7 @@ def _vertex_layers(flat, ids, ny, nz, a, nx, i0, i1, j0, k0, want, base, feature
                     prev_same = same
                     continue
                 prev_same = same
-                if 2 * (used + 64) > len(keys):  # the most one vertex adds, with room
+                if 10 * (used + 64) > 7 * len(keys):  # the most one vertex adds; a table at most 70 % full
                     return used, i, j, k
                 m0 = _mask_of(id8, id8[0])
                 o1 = _lowest(255 ^ m0)
@@ -518,10 +518,11 @@ def vertex_pass(values: np.ndarray, pieces: np.ndarray, want: np.ndarray, table:
 
 def merge_pairs(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray) -> tuple[np.ndarray, ...]:
     """Entries of several pair tables, one entry per key: the closest
-    kind, the sums added."""
-    uniq, inverse = np.unique(keys, return_inverse=True)
-    closest = np.full(len(uniq), NONE, np.uint8)
-    np.minimum.at(closest, inverse, kind)
-    total = np.zeros((len(uniq), sums.shape[1]), np.int64)
-    np.add.at(total, inverse, sums)
-    return uniq, closest, total
+    kind, the sums added (sorted by key, reduced per run of equal keys)."""
+    if not len(keys):
+        return keys, kind, sums
+    order = np.argsort(keys, kind="stable")
+    keys = keys[order]
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+    return (keys[starts], np.minimum.reduceat(kind[order], starts),
+            np.add.reduceat(sums[order], starts, axis=0))
