@@ -50,7 +50,7 @@ CACHE = ROOT / "benchmarks" / ".cache"
 def grid_for(count: int) -> tuple[int, int, int]:
     """Three factors of ``count``, as near a cube as they come."""
     best = (count, 1, 1)
-    for a in range(1, int(round(count ** (1 / 3))) + 2):
+    for a in range(1, round(count ** (1 / 3)) + 2):
         if count % a:
             continue
         for b in range(a, int(np.sqrt(count // a)) + 2):
@@ -174,9 +174,10 @@ def in_child(name: str, path: Path, repeat: int) -> dict:
 def commands(path: Path, pairs: int) -> dict:
     """Whole commands, alternated: medians of wall seconds and their ratio."""
     ours = [sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--json"]
-    theirs = [sys.executable, "-c", "import sys, numpy as np; from skimage.measure import regionprops_table; "
+    script = ("import sys, numpy as np; from skimage.measure import regionprops_table; "
               "t = regionprops_table(np.load(sys.argv[1]), properties=('label', 'area', 'euler_number')); "
-              "print(len(t['label']))", str(path)]
+              "print(len(t['label']))")
+    theirs = [sys.executable, "-c", script, str(path)]
     times: dict[str, list[float]] = {"isoflow": [], "skimage": []}
     for _ in range(pairs):
         for key, cmd in (("isoflow", ours), ("skimage", theirs)):

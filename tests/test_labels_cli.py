@@ -108,7 +108,7 @@ def test_surface_labels_glb_one_closed_manifold_per_label(tmp_path, capsys, segm
     scene = trimesh.load(out, force="scene", process=False)
     assert sorted(scene.graph.nodes_geometry) == sorted(f"label_{v}" for v in table["label"])
     for r, label in enumerate(table["label"]):
-        transform, geometry = scene.graph[f"label_{label}"]
+        _, geometry = scene.graph[f"label_{label}"]
         mesh = scene.geometry[geometry]
         assert mesh.is_watertight and mesh.is_winding_consistent
         # the mesh is split at the pinches and around doubled edges, where

@@ -7,12 +7,12 @@ import json
 
 import numpy as np
 import pytest
+from test_label_table import nested
 
 from isoflow import label_table
 from isoflow.cli import main
 from isoflow.digital.label_blocks import label_table_blocks
 from isoflow.scale.compiled import have_numba
-from test_label_table import nested
 
 pytestmark = pytest.mark.skipif(not have_numba(), reason="numba not installed")
 

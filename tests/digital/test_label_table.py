@@ -7,8 +7,8 @@ centroids."""
 
 import numpy as np
 import pytest
+from conftest import ball
 
-from conftest import ball, torus
 from isoflow import analyze, label_table
 from isoflow.errors import IsoflowError
 from isoflow.scale.compiled import have_numba

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import re
 import sys
 
@@ -161,45 +160,41 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     return 0
 
 
-def json_value(value):
-    """A table cell as JSON holds it (NaN as null, tuples as lists)."""
-    if isinstance(value, tuple):
-        return [int(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return None if math.isnan(value) else float(value)
-    return value.item() if isinstance(value, np.generic) else value
+def plain_columns(table: dict, nan=None, tuples=list) -> dict[str, list]:
+    """The table's columns as Python lists (NaN as ``nan``, each tuple of
+    genera through ``tuples``), column by column rather than cell by cell."""
+    out = {}
+    for key, column in table.items():
+        if column.dtype == object:
+            out[key] = [tuples(v) for v in column]
+        elif column.dtype.kind == "f" and np.isnan(column).any():
+            out[key] = [nan if missing else v for v, missing in zip(column.tolist(), np.isnan(column).tolist())]
+        else:
+            out[key] = column.tolist()
+    return out
 
 
 def table_json(name, about: dict, conn: int, table: dict) -> dict:
     """What ``--json`` prints: the image and one object per label."""
-    keys = list(table)
-    rows = [{k: json_value(table[k][r]) for k in keys} for r in range(len(table["label"]))]
+    cols = plain_columns(table)
+    rows = [dict(zip(cols, values)) for values in zip(*cols.values())]
     return {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn,
             "labels": rows}
 
 
-def csv_value(value) -> str:
-    """A table cell as CSV text (genera as ``0;1``, NaN empty)."""
-    if isinstance(value, tuple):
-        return ";".join(str(v) for v in value)
-    if isinstance(value, (float, np.floating)):
-        return "" if math.isnan(value) else repr(float(value))
-    return str(value)
-
-
 def write_csv(path, table: dict, force: bool) -> None:
-    """The full table as CSV, written whole or not at all."""
+    """The full table as CSV (genera as ``0;1``, NaN empty), written whole
+    or not at all."""
     import csv
 
     from ..mesh.outputs import atomic_write
 
+    cols = plain_columns(table, nan="", tuples=lambda g: ";".join(map(str, g)))
     with atomic_write(path, "w", newline="", encoding="utf-8") as fh:
         writer = csv.writer(fh)
-        writer.writerow(list(table))
-        columns = list(table.values())
-        for r in range(len(table["label"])):
-            writer.writerow([csv_value(c[r]) for c in columns])
+        writer.writerow(list(cols))
+        writer.writerows(zip(*cols.values()))
 
 
 def _cell(value, width: int) -> str:
@@ -212,8 +207,8 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     """The compact table: the first rows, then a summary of all."""
     n = len(table["label"])
     pitch = "x".join(f"{p:g}" for p in about["spacing"])
-    lines = [f"{name}: {n} labels, shape {'x'.join(map(str, about['shape']))}, voxel {pitch}, "
-             f"{conn}-connectivity"]
+    shape = "x".join(map(str, about["shape"]))
+    lines = [f"{name}: {n} labels, shape {shape}, voxel {pitch}, {conn}-connectivity"]
     surfaces = "genera" in table
     head = "".join(f"{h:>{w}}" for h, _, w in TERMINAL_COLUMNS)
     lines.append(head + ("  surfaces (genera)" if surfaces else ""))

@@ -33,7 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -57,7 +57,7 @@ SURFACE_COLUMNS = ("surfaces", "genera", "surface_euler", "pinched_vertices", "d
 _EULER, _CLASSES, _NWC, _A_WC, _ENERGY, _PINCH, _FACES = 0, slice(1, 10), 10, 11, 12, 13, slice(14, 17)
 
 
-@lru_cache(maxsize=None)
+@cache
 def feature_table(connectivity: int = 6) -> np.ndarray:
     """(256, 17) int64: what one vertex of each configuration adds to its
     label's row: the Euler share ``8 x`` (eq. 4.10), one in its class's

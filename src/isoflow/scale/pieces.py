@@ -238,8 +238,7 @@ def _add(keys, kind, acc, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters
     if keys[s] == EMPTY:
         keys[s] = key
         new = 1
-    if kind[s] > how:
-        kind[s] = how
+    kind[s] = min(kind[s], how)
     acc[s, 0] += sheets_pq | (quarters_pq << 32)
     acc[s, 1] += sheets_qp | (quarters_qp << 32)
     return new
