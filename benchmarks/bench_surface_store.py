@@ -9,7 +9,7 @@ Inputs, made once in ``--dir`` (default benchmarks/.cache/):
 * ``ball-N.zarr``: a ball of radius 0.45 N (benchmarks/run.py's), zarr v3,
   bool, chunks 128^3, blosc-zstd with bit shuffle, written chunk by chunk;
   ``ball-N.npy`` beside it for the in-memory command;
-* ``mesh-N.zarr``: a 94k-triangle mesh (Spot, /work/shared/meshes or
+* ``mesh-N.zarr``: a 94k-triangle mesh (Spot, :func:`isoflow.data.spot`, or
   ``--mesh-file``, subdivided twice) voxelised at N voxels along its
   longest side by ``isoflow voxelize`` (an OME-Zarr store, slab chunks);
   ``mesh-N.npy`` read from it for the in-memory command (N <= 512).
@@ -67,7 +67,9 @@ def mesh_file(arg: str | None, tmp: Path) -> Path:
     """Spot subdivided twice (5856 -> 93,696 triangles), as PLY."""
     import trimesh
 
-    src = Path(arg) if arg else Path("/work/shared/meshes/spot.ply")
+    from isoflow import data
+
+    src = Path(arg) if arg else data.spot()
     out = tmp / "spot94k.ply"
     if not out.exists():
         m = trimesh.load(src, force="mesh")

@@ -156,3 +156,20 @@ def test_four_d(example_run):
         assert (m["betti"][0], m["betti"][3], m["euler_characteristic"]) == (1, 0, 1 - g)
         assert (s["betti"][0], s["betti"][3], s["euler_characteristic"]) == (1, 1, 0)
         assert m["a_dot_n"] == 16 * m["euler_characteristic"]
+
+
+def test_label_table(example_run):
+    out, printed = example_run("label_table")
+    with open(out / "labels.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    image = np.load(out / "labels.npy")
+    assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
+    for row in rows:
+        mask = image == int(row["label"])
+        # scikit-image's Euler number of each label (6-connected), its voxels in units of 0.5
+        assert int(row["euler_characteristic"]) == euler_number(mask, 1)
+        assert float(row["volume"]) == mask.sum() * 0.125
+    # the hollowed grain has its cavity, the drilled one its tunnel
+    assert (int(rows[0]["b2"]), int(rows[1]["b1"])) == (1, 1)
+    assert rows[0]["genera"] == "0;0" and f"{len(rows)} labels" in printed
+    assert (out / "labels.png").stat().st_size > 0

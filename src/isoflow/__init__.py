@@ -20,6 +20,7 @@ _WHERE = {
     "ClosedSurface": ".digital.report",
     "analyze_chunked": ".digital.outofcore",
     "analyze_zarr": ".digital.outofcore",
+    "label_table": ".digital.label_table",
     "configurations": ".digital.configurations",
     "configuration_histogram": ".digital.configurations",
     "euler_characteristic": ".digital.topology",

@@ -20,6 +20,7 @@ from .digital.indices import (
     normal_lut as normal_lut,
     planar_index as planar_index,
 )
+from .digital.label_table import label_table as label_table
 from .digital.lattice import DigitalObject as DigitalObject
 from .digital.outofcore import analyze_chunked as analyze_chunked, analyze_zarr as analyze_zarr
 from .digital.report import ClosedSurface as ClosedSurface, Report as Report

@@ -11,6 +11,7 @@ import threading
 from ..digital.report import Report
 from ..errors import IsoflowError
 from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
+from .labels import add_labels_option
 from .progress import progress_bar
 
 
@@ -19,6 +20,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_labels_option(p)
+    p.add_argument("--csv", metavar="FILE", help="with --labels: write the full table as CSV")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --csv file")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
@@ -34,6 +38,12 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
+    if args.labels is not None:
+        from .labels import cmd_info_labels
+
+        return cmd_info_labels(args)
+    if args.csv:
+        raise IsoflowError(f"{args.input}: --csv writes the table of --labels; without it, --json prints the report")
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
         report = info_of_store(args)
     else:

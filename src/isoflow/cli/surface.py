@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import IsoflowError
 from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
+from .labels import add_labels_option
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -17,7 +18,10 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("-o", "--output", required=True,
-                   help="OUT.ply, OUT.obj, OUT.stl (binary, triangles) or OUT.glb (triangles, vertex colours)")
+                   help="OUT.ply, OUT.obj, OUT.stl (binary, triangles) or OUT.glb (triangles, vertex colours); "
+                        "with --labels OUT.glb (a node per label) or DIR/ (a file per label, see --suffix)")
+    add_labels_option(p)
+    p.add_argument("--suffix", help="with --labels -o DIR/: the files' format, .ply, .obj, .stl or .glb")
     p.add_argument("--ascii", action="store_true", help="ASCII PLY instead of binary")
     p.add_argument("--triangulate", action="store_true", help="triangles in every format (two per plain quad)")
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
@@ -34,6 +38,12 @@ def cmd_surface(args: argparse.Namespace) -> int:
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path
 
+    if args.labels is not None:
+        from .labels import cmd_surface_labels
+
+        return cmd_surface_labels(args)
+    if args.suffix:
+        raise IsoflowError(f"{args.output}: --suffix names the files of --labels -o DIR/")
     if is_store(args.input):
         if streams(args):
             return cmd_surface_store(args)

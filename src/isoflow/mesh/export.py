@@ -316,24 +316,42 @@ def write_glb(
     transform)``, positions in the file's float32 with the 4x4 transform
     that puts them in place as the node's matrix (where float32 cannot
     hold the world positions; see the module docs)."""
+    return write_glb_scene(path, [(None, columns, triangles, frame)], force=force, comment=comment, sync=sync)
+
+
+def write_glb_scene(path: str | os.PathLike, parts: list, *, force: bool = False, comment: str = "",
+                    sync: bool = True) -> Path:
+    """Write several meshes into one binary glTF, each its own node:
+    ``parts`` holds ``(name, columns, triangles, frame)`` as
+    :func:`write_glb` takes them (a name of None: trimesh's)."""
     import trimesh
 
     path = check_output_path(path, force)
-    xyz = np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(np.float64)
-    transform = None
-    if frame is not None:
-        xyz, transform = np.asarray(frame[0], np.float64), frame[1]
-    rgb = np.column_stack([columns["red"], columns["green"], columns["blue"], np.full(len(xyz), 255, np.uint8)])
-    extra = {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
-    mesh = trimesh.Trimesh(xyz, triangles, vertex_colors=rgb, vertex_attributes=extra, process=False)
-    if comment:
-        mesh.metadata["isoflow"] = comment
     scene = trimesh.Scene()
-    scene.add_geometry(mesh, transform=transform)
+    for name, columns, triangles, frame in parts:
+        xyz = np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(np.float64)
+        transform = None
+        if frame is not None:
+            xyz, transform = np.asarray(frame[0], np.float64), frame[1]
+        rgb = np.column_stack([columns["red"], columns["green"], columns["blue"],
+                               np.full(len(xyz), 255, np.uint8)])
+        extra = {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
+        mesh = trimesh.Trimesh(xyz, triangles, vertex_colors=rgb, vertex_attributes=extra, process=False)
+        if comment:
+            mesh.metadata["isoflow"] = comment
+        scene.add_geometry(mesh, transform=transform, geom_name=name, node_name=name)
     data = trimesh.exchange.gltf.export_glb(scene, include_normals=False)
     with atomic_write(path, sync=sync) as fh:
         fh.write(data)
     return path
+
+
+def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
+    """One boundary mesh as a part of :func:`write_glb_scene`: triangles
+    in world coordinates, with the curvature columns (in voxel units under
+    the node's transform where float32 cannot hold the world positions)."""
+    table = mesh_vertex_table(mesh, obj)
+    return name, table, mesh.triangles(), None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
 
 
 def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool = False) -> tuple[str, np.ndarray]:

@@ -95,6 +95,12 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
             tm = trimesh.load(path, force="mesh", process=False)
         if weld:
             tm = weld_equal_positions(tm)
+    return mesh_figures(tm, unit, area=weld)
+
+
+def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
+    """The figures of :func:`trimesh_figures` of a trimesh mesh (``area``:
+    with its surface area, as an STL's read-back needs)."""
     closed = bool(len(tm.faces) and tm.is_watertight and tm.is_winding_consistent)
     if closed:
         # trimesh's watertight test found every edge in exactly two faces:
@@ -110,11 +116,11 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
         local = (v - (v.mean(axis=0) if len(v) else 0.0)) / unit
         units = signed_volume(local, tm.faces)
         volume = units * np.float64(unit) ** 3
-        area = float(np.linalg.norm(np.cross(local[tm.faces[:, 1]] - local[tm.faces[:, 0]],
-                                             local[tm.faces[:, 2]] - local[tm.faces[:, 0]]), axis=1).sum() / 2
-                     ) if weld else None
+        area_units = float(np.linalg.norm(np.cross(local[tm.faces[:, 1]] - local[tm.faces[:, 0]],
+                                                   local[tm.faces[:, 2]] - local[tm.faces[:, 0]]), axis=1).sum() / 2
+                           ) if area else None
     return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": volume, "volume_units": units,
-            "area_units": area}
+            "area_units": area_units}
 
 
 def weld_equal_positions(tm):
@@ -179,3 +185,33 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
         problems.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
     problem = f"{path}: trimesh reads " + ", ".join(problems) if problems else None
     return {"isoflow": ours, "trimesh": theirs, "agree": not problems, "problem": problem}
+
+
+def check_scene_file(path, parts: list) -> list[str]:
+    """Read a glTF scene written by :func:`isoflow.mesh.export.write_glb_scene`
+    back with trimesh and compare every node (its transform applied) with
+    isoflow's counts: ``parts`` holds ``(name, mesh, obj, components)``.
+    Returns the problems, one line each (none: every node agrees)."""
+    import trimesh
+
+    path = Path(path)
+    try:
+        scene = trimesh.load(path, force="scene", process=False)
+    except Exception as exc:
+        return [f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"]
+    problems = []
+    for name, mesh, obj, components in parts:
+        if name not in scene.graph.nodes_geometry:
+            problems.append(f"{path}: no node {name}")
+            continue
+        transform, geometry = scene.graph[name]
+        tm = scene.geometry[geometry].copy()
+        tm.apply_transform(transform)
+        ours, theirs = isoflow_figures(mesh, obj, components), mesh_figures(tm, volume_unit(obj))
+        wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
+                 if theirs[k] != ours[k]]
+        if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=0):
+            wrong.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
+        if wrong:
+            problems.append(f"{path}: node {name}: trimesh reads " + ", ".join(wrong))
+    return problems

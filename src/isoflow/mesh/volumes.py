@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -114,7 +115,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         except IsoflowError as exc:
             if "threshold it first" not in str(exc):
                 raise
-            raise IsoflowError(f"{exc}, or select one label with --label N (label=N)") from None
+            raise IsoflowError(f"{exc}, or select one label with --label N (label=N), {EVERY_LABEL}") from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -123,6 +124,49 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise IsoflowError(f"{where}: {exc}") from None
+
+
+#: what the refusal of a label image where a mask is expected adds
+EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table)"
+
+
+@dataclass(frozen=True)
+class LabelImage:
+    """A label image as read: integers in (x, y, z) order, the voxel size
+    per axis and the world position of voxel (0, 0, 0)'s lowest corner."""
+
+    array: np.ndarray
+    spacing: np.ndarray
+    origin: np.ndarray
+
+
+def read_label_image(path: str | os.PathLike) -> LabelImage:
+    """A 3D label image from any format :func:`read_volume` reads, as
+    integers (a float array whose values are all whole numbers, as NIfTI
+    scaling may give, becomes int64), with its voxel size and origin."""
+    file, dataset = split_dataset(path)
+    fmt = format_for(file)
+    if fmt is None:
+        raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
+    _check_readable(file, directory_ok=fmt.module == "omezarr")
+    raw = fmt.load().read(file, dataset)
+    arr = np.asarray(raw.array)
+    if arr.ndim != 3:
+        raise IsoflowError(f"{path}: a label table needs a 3D volume, this array is {arr.ndim}D with shape {arr.shape}")
+    if arr.dtype.kind == "f":
+        whole = np.isfinite(arr).all() and (arr == np.round(arr)).all() and np.abs(arr).max(initial=0) < 2**63
+        if not whole:
+            raise IsoflowError(f"{path}: holds {arr.dtype} values that are not whole numbers, not labels")
+        arr = arr.astype(np.int64)
+    elif arr.dtype.kind not in "biu":
+        raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
+    try:
+        obj = DigitalObject(np.zeros((1, 1, 1), bool), **{k: v for k, v in (
+            ("pitch", raw.pitch), ("origin", raw.origin), ("offset", raw.offset), ("parity", raw.parity))
+            if v is not None})
+    except IsoflowError as exc:
+        raise IsoflowError(f"{path}: {exc}") from None
+    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, 3)))[0])
 
 
 def select_label(array, label, where: str) -> np.ndarray:

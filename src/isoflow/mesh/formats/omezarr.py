@@ -292,3 +292,47 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
             {"type": "translation", "translation": centre[order].tolist()},
         ]}],
     }]
+
+
+class LabelSlabs:
+    """A zarr store's 3D label image read in slabs along x, whatever the
+    stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
+    order, ``slabs[a:b]`` the x layers a .. b - 1 as a NumPy array (a
+    damaged chunk is one line), ``layers`` the stored chunks along x,
+    ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest corner)."""
+
+    def __init__(self, path):
+        from ...scale.chunks import zarr_blocks
+
+        import_library("zarr", "OME-Zarr")
+        file, level = split_dataset(path)
+        self.where = str(path)
+        array, multiscale, dataset = open_zarr_node(file, level)
+        if multiscale is None:
+            names = "xyz"[:array.ndim] if array.ndim == 3 else None
+            attrs = dict(getattr(array, "attrs", {}) or {})
+            pitch, origin = attrs.get("pitch", 1.0), attrs.get("origin")
+        else:
+            names = axis_names(multiscale, array.ndim, self.where)
+            scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
+        if names is None:
+            raise IsoflowError(f"{self.where}: a label table needs a 3D volume, this array is {array.ndim}D")
+        self.xyz, self.other = spatial_axes(names, array.shape, self.where)
+        if len(self.xyz) != 3:
+            raise IsoflowError(f"{self.where}: a label table needs a 3D volume, this image has axes {names}")
+        if multiscale is not None:
+            pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
+        self.array, self.guarded = array, _Guarded(array, self.where)
+        self.shape = tuple(int(array.shape[i]) for i in self.xyz)
+        self.dtype = array.dtype
+        self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
+        self.pitch, self.origin = pitch, origin
+
+    def __getitem__(self, x):
+        index = [0] * len(self.array.shape)
+        for axis in self.xyz:
+            index[axis] = slice(None)
+        index[self.xyz[0]] = x
+        data = np.asarray(self.guarded[tuple(index)])
+        kept = [a for a in range(len(self.array.shape)) if a not in self.other]
+        return np.transpose(data, [kept.index(a) for a in self.xyz])

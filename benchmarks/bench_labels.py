@@ -1,0 +1,251 @@
+"""The label table against the tools a user would otherwise pick (issue 25).
+
+    python benchmarks/bench_labels.py                                  # 256^3: 1,000 and 100,000 labels
+    python benchmarks/bench_labels.py --size 512 --labels 1000 --commands 3
+    python benchmarks/bench_labels.py --size 128 --labels 100 --repeat 1 --json ''   # a quick look
+
+Input (generated, cached in benchmarks/.cache/): a grain map, Voronoi cells
+of jittered seeds on a grid (one per cell, ``--labels`` of them: the grid
+is the factorisation of the count nearest a cube), with pores cut in (balls
+of label 0, about 1.5 % of the volume); ``uint32``.
+
+In process, each in a fresh child process (imports and numba's cached code
+loaded on a tiny image first; the input loaded; the peak RSS reset through
+``/proc/self/clear_refs``), best of ``--repeat``:
+
+* ``isoflow.label_table(image, 6)``: every label's row with its surfaces;
+* ``isoflow.analyze(image > 0, 6)``: one binary report of the same volume
+  (the grains' union), and ``analyze(image == L, 6)`` for one label: what
+  a loop over the labels pays per label;
+* ``skimage.measure.regionprops_table(image, properties=("label", "area",
+  "euler_number"))``: voxel counts and the Euler characteristic (26).
+
+Extra peak memory is the child's peak RSS during the tool less its RSS
+with the input loaded, per voxel. Whole commands (``--commands N``,
+alternated): ``isoflow info FILE.npy --labels --json`` against ``python -c``
+running the same ``regionprops_table`` on ``np.load(FILE)``; medians.
+
+Results go to ``benchmarks/results/labels.json`` (``--json``) and a
+Markdown table on stdout; paths in them are relative to the repository.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+CACHE = ROOT / "benchmarks" / ".cache"
+
+
+def grid_for(count: int) -> tuple[int, int, int]:
+    """Three factors of ``count``, as near a cube as they come."""
+    best = (count, 1, 1)
+    for a in range(1, round(count ** (1 / 3)) + 2):
+        if count % a:
+            continue
+        for b in range(a, int(np.sqrt(count // a)) + 2):
+            if (count // a) % b == 0:
+                c = count // a // b
+                if max(a, b, c) < max(best):
+                    best = tuple(sorted((a, b, c)))
+    return best
+
+
+def grains(size: int, count: int, seed: int = 0) -> np.ndarray:
+    """The grain map (see the module docs)."""
+    from numba import njit
+
+    @njit(cache=False)
+    def voronoi(out, seeds, cells, cell):
+        nx, ny, nz = out.shape
+        for x in range(nx):
+            i = min(int(x / cell[0]), cells[0] - 1)
+            for y in range(ny):
+                j = min(int(y / cell[1]), cells[1] - 1)
+                for z in range(nz):
+                    k = min(int(z / cell[2]), cells[2] - 1)
+                    best, label = 1e30, 0
+                    for a in range(max(i - 1, 0), min(i + 2, cells[0])):
+                        for b in range(max(j - 1, 0), min(j + 2, cells[1])):
+                            for c in range(max(k - 1, 0), min(k + 2, cells[2])):
+                                s = (a * cells[1] + b) * cells[2] + c
+                                d = ((x + .5 - seeds[s, 0]) ** 2 + (y + .5 - seeds[s, 1]) ** 2
+                                     + (z + .5 - seeds[s, 2]) ** 2)
+                                if d < best:
+                                    best, label = d, s + 1
+                    out[x, y, z] = label
+
+    rng = np.random.default_rng(seed)
+    cells = np.array(grid_for(count))
+    cell = size / cells
+    index = np.indices(cells).reshape(3, -1).T
+    seeds = (index + rng.uniform(0.1, 0.9, index.shape)) * cell
+    out = np.empty((size,) * 3, np.uint32)
+    voronoi(out, seeds, cells, cell)
+    radius = 0.3 * float(cell.min())  # pores about a third of a grain across
+    pores = int(0.015 * size**3 / (4 / 3 * np.pi * radius**3)) + 1
+    for c in rng.uniform(0, size, (pores, 3)):
+        r = radius * rng.uniform(0.6, 1.4)
+        lo = np.maximum(np.floor(c - r).astype(int), 0)
+        hi = np.minimum(np.ceil(c + r).astype(int) + 1, size)
+        g = np.ogrid[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]]
+        inside = sum((g[a] + 0.5 - c[a]) ** 2 for a in range(3)) <= r * r
+        out[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]][inside] = 0
+    return out
+
+
+def cached(size: int, count: int) -> Path:
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path = CACHE / f"grains-{size}-{count}.npy"
+    if not path.exists():
+        np.save(path, grains(size, count))
+    return path
+
+
+TOOLS = {
+    "isoflow.label_table": "label_table(image, 6)",
+    "isoflow.analyze.union": "analyze(image > 0, 6)",
+    "isoflow.analyze.one": "analyze(image == label, 6)",
+    "skimage.regionprops_table": "regionprops_table(image, properties=('label', 'area', 'euler_number'))",
+}
+
+
+def _tool(name: str):
+    if name.startswith("isoflow"):
+        import isoflow
+
+        if name == "isoflow.label_table":
+            return lambda image: isoflow.label_table(image, 6)
+        if name == "isoflow.analyze.union":
+            return lambda image: isoflow.analyze(image > 0, 6)
+        return lambda image: isoflow.analyze(image == image[tuple(s // 2 for s in image.shape)], 6)
+    from skimage.measure import regionprops_table
+
+    return lambda image: regionprops_table(image, properties=("label", "area", "euler_number"))
+
+
+def child(name: str, path: Path, repeat: int) -> dict:
+    """One tool in this (child) process: best seconds, extra peak bytes."""
+    run = _tool(name)
+    warm = np.ascontiguousarray(np.load(path)[:24, :24, :24])
+    if name == "isoflow.label_table":  # the compiled pass, as the input will take it
+        import isoflow
+
+        isoflow.label_table(warm, 6, method="compiled")
+    run(warm)  # imports, numba's cached code
+    image = np.load(path)
+    with open("/proc/self/clear_refs", "w") as fh:
+        fh.write("5")  # the peak RSS back to the current RSS
+    base = _rss()
+    best = float("inf")
+    for _ in range(repeat):
+        start = time.perf_counter()
+        result = run(image)
+        best = min(best, time.perf_counter() - start)
+    extra = max(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 - base)
+    rows = len(result["label"]) if isinstance(result, dict) and "label" in result else None
+    return {"seconds": best, "extra_peak_bytes": extra, "bytes_per_voxel": extra / image.size, "rows": rows}
+
+
+def _rss() -> int:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def in_child(name: str, path: Path, repeat: int) -> dict:
+    out = subprocess.run([sys.executable, __file__, "--child", name, str(path), "--repeat", str(repeat)],
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def commands(path: Path, pairs: int) -> dict:
+    """Whole commands, alternated: medians of wall seconds and their ratio."""
+    ours = [sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--json"]
+    script = ("import sys, numpy as np; from skimage.measure import regionprops_table; "
+              "t = regionprops_table(np.load(sys.argv[1]), properties=('label', 'area', 'euler_number')); "
+              "print(len(t['label']))")
+    theirs = [sys.executable, "-c", script, str(path)]
+    times: dict[str, list[float]] = {"isoflow": [], "skimage": []}
+    for _ in range(pairs):
+        for key, cmd in (("isoflow", ours), ("skimage", theirs)):
+            start = time.perf_counter()
+            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, cwd=ROOT)
+            times[key].append(time.perf_counter() - start)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    return {"isoflow_seconds": med["isoflow"], "skimage_seconds": med["skimage"],
+            "ratio": med["skimage"] / med["isoflow"], "pairs": pairs}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", type=int, default=256)
+    ap.add_argument("--labels", type=int, nargs="+", default=[1000, 100_000])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--commands", type=int, default=1, help="pairs of whole commands per input (0: none)")
+    ap.add_argument("--tools", nargs="+", default=list(TOOLS))
+    ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "labels.json"))
+    ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
+    args = ap.parse_args(argv)
+    if args.child:
+        print(json.dumps(child(args.child[0], Path(args.child[1]), args.repeat)))
+        return 0
+    results = []
+    for count in args.labels:
+        path = cached(args.size, count)
+        for name in args.tools:
+            rec = {"size": args.size, "labels": count, "tool": name, "call": TOOLS[name],
+                   **in_child(name, path, args.repeat)}
+            results.append(rec)
+            print(f"{args.size}^3 {count} labels {name}: {rec['seconds']:.3f} s, "
+                  f"{rec['bytes_per_voxel']:.2f} B/voxel", file=sys.stderr)
+        if args.commands:
+            results.append({"size": args.size, "labels": count, "tool": "commands",
+                            "input": str(path.relative_to(ROOT)), **commands(path, args.commands)})
+    print(markdown(args, results))
+    if args.json:
+        meta = {"command": "python benchmarks/bench_labels.py " + " ".join(argv or sys.argv[1:]),
+                "machine": f"{platform.processor() or platform.machine()}, {_cpus()} CPUs", "python":
+                platform.python_version(), "load_average": list(np.round(__import__("os").getloadavg(), 2))}
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps({"meta": meta, "results": results}, indent=1) + "\n")
+    return 0
+
+
+def _cpus() -> int:
+    from isoflow.scale.compiled import available_cpus
+
+    return available_cpus()
+
+
+def markdown(args, results: list[dict]) -> str:
+    lines = ["| size | labels | tool | seconds | extra peak B/voxel | vs label_table |", "|---|---:|---|---:|---:|---:|"]
+    for count in args.labels:
+        rows = [r for r in results if r["labels"] == count and r["tool"] != "commands"]
+        ours = next((r["seconds"] for r in rows if r["tool"] == "isoflow.label_table"), None)
+        for r in rows:
+            ratio = f"{r['seconds'] / ours:.2f}x" if ours else "-"
+            lines.append(f"| {r['size']}^3 | {count:,} | {r['call']} | {r['seconds']:.3f} | "
+                         f"{r['bytes_per_voxel']:.2f} | {ratio} |")
+        for r in results:
+            if r["labels"] == count and r["tool"] == "commands":
+                lines.append(f"| {r['size']}^3 | {count:,} | whole commands: isoflow info --labels --json "
+                             f"{r['isoflow_seconds']:.2f} s, regionprops_table {r['skimage_seconds']:.2f} s | - | - | "
+                             f"{r['ratio']:.2f}x |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,336 @@
+"""``--labels``: every label of a label image at once, for ``info`` (one row
+per label: a compact table, ``--json``, ``--csv FILE``) and ``surface`` (one
+closed surface per label)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+
+import numpy as np
+
+from ..errors import IsoflowError
+
+#: rows the terminal shows before the summary
+SHOWN_ROWS = 20
+#: the columns of the terminal table: (heading, column, width)
+TERMINAL_COLUMNS = (("label", "label", 8), ("voxels", "voxels", 10), ("volume", "volume", 11),
+                    ("area", "surface_area", 11), ("chi", "euler_characteristic", 6), ("b0", "b0", 4),
+                    ("b1", "b1", 5), ("b2", "b2", 4))
+
+_RANGE = re.compile(r"\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*)?")
+
+
+def add_labels_option(p: argparse.ArgumentParser) -> None:
+    """``--labels [SPEC]``: every nonzero label, or a choice of them."""
+    p.add_argument("--labels", nargs="?", const="all", metavar="SPEC",
+                   help="a label image: one row (info) or one surface (surface) per label; every nonzero label, "
+                        "or those of SPEC, e.g. 3,7,10-20")
+
+
+def label_choice(text: str) -> list[int] | None:
+    """The labels of ``--labels SPEC`` in order, each once (None: every
+    nonzero label). ``A-B`` (or ``A..B``) is the range of A to B."""
+    if text == "all":
+        return None
+    chosen: dict[int, None] = {}
+    for part in text.split(","):
+        match = _RANGE.fullmatch(part)
+        if not match:
+            raise IsoflowError(f"--labels {text}: {part.strip()!r} is not a label or a range A-B of labels")
+        first, last = int(match[1]), int(match[2] if match[2] is not None else match[1])
+        if last < first:
+            raise IsoflowError(f"--labels {text}: the range {part.strip()} runs backwards")
+        if last - first > 10_000_000:
+            raise IsoflowError(f"--labels {text}: the range {part.strip()} has more than 10 million labels")
+        chosen.update(dict.fromkeys(range(first, last + 1)))
+    return list(chosen)
+
+
+def refuse_single_label(args: argparse.Namespace) -> None:
+    """One line when --labels comes with options it cannot take."""
+    if getattr(args, "label", None) is not None:
+        raise IsoflowError(f"{args.input}: --label selects one object, --labels every label: give one of them")
+    if getattr(args, "gpu", False):
+        raise IsoflowError(f"{args.input}: --labels runs on the host, not with --gpu")
+    from .inputs import refuse_mesh_options
+
+    refuse_mesh_options(args, "a label image")
+
+
+def read_table(args: argparse.Namespace, surfaces: bool = True):
+    """The label image named on the command line and its table, with only
+    the labels that occur (a note names those asked for that do not):
+    ``(about, connectivity, table, image)``, ``about`` its shape, type,
+    voxel size and origin, ``image`` None for a zarr store (read block by
+    block)."""
+    from ..digital.label_table import label_table
+    from ..digital.connectivity import default_connectivity
+    from ..mesh.volumes import read_label_image
+
+    refuse_single_label(args)
+    asked = label_choice(args.labels)
+    conn = args.connectivity or default_connectivity(3)
+    image = None
+    if is_store(args.input):
+        about, table = table_of_store(args, conn, asked, surfaces)
+    else:
+        image = read_label_image(args.input)
+        about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
+                 "origin": image.origin}
+        wanted = None if asked is None else _within_type(asked, image.array.dtype)
+        table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                            surfaces=surfaces, threads=getattr(args, "threads", None))
+    present = table["voxels"] > 0
+    if not present.all():
+        absent = table["label"][~present]
+        if not present.any():
+            raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
+        if not args.quiet:
+            print(f"isoflow {args.command}: note: {args.input}: {len(absent)} of the labels asked for do not occur "
+                  f"({_some(absent)})", file=sys.stderr)
+        table = {k: v[present] for k, v in table.items()}
+    if not len(table["label"]):
+        raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+    return about, conn, table, image
+
+
+def is_store(path) -> bool:
+    """Whether the input is a zarr store (``IMAGE.zarr:LEVEL`` too), read
+    block by block."""
+    from ..mesh.formats.registry import split_dataset
+
+    return split_dataset(path)[0].suffix.lower() == ".zarr"
+
+
+def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
+    """The table of a zarr store, one layer of blocks at a time (never the
+    whole image in memory), with a progress bar; the image as read (its
+    shape, type and placement, no array)."""
+    from ..digital.label_blocks import label_table_blocks
+    from ..digital.lattice import DigitalObject
+    from ..mesh.formats.omezarr import LabelSlabs
+    from ..scale.compiled import using
+    from .progress import progress_bar
+
+    if getattr(args, "command", "") == "surface":
+        raise IsoflowError(f"{args.input}: surface --labels reads the image whole; convert the store to .npy or "
+                           ".nii.gz first (info --labels reads it block by block)")
+    slabs = LabelSlabs(args.input)
+    try:
+        place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{args.input}: {exc}") from None
+    wanted = None if asked is None else _within_type(asked, slabs.dtype)
+    with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
+        table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
+                                   labels=wanted, surfaces=surfaces, progress=show)
+    return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
+
+
+def _within_type(asked: list[int], dtype) -> list[int]:
+    """The labels asked for that the image's type can hold (the others
+    cannot occur)."""
+    info = np.iinfo(np.uint8 if dtype == np.bool_ else dtype)
+    return [v for v in asked if info.min <= v <= info.max] or asked[:1]
+
+
+def _some(values, most: int = 8) -> str:
+    shown = ", ".join(str(v) for v in np.asarray(values)[:most].tolist())
+    return shown + (f", ... ({len(values) - most} more)" if len(values) > most else "")
+
+
+def cmd_info_labels(args: argparse.Namespace) -> int:
+    """``isoflow info LABELS --labels``."""
+    from ..mesh.outputs import check_output_path
+
+    if args.csv:
+        check_output_path(args.csv, args.force)
+    about, conn, table, _ = read_table(args, surfaces=not args.no_surfaces)
+    if args.csv:
+        write_csv(args.csv, table, args.force)
+    if args.json:
+        print(json.dumps(table_json(args.input, about, conn, table)))
+        return 0
+    print(format_table(args.input, about, conn, table))
+    if args.csv:
+        print(f"{args.csv}: {len(table['label'])} rows, {len(table)} columns")
+    return 0
+
+
+def plain_columns(table: dict, nan=None, tuples=list) -> dict[str, list]:
+    """The table's columns as Python lists (NaN as ``nan``, each tuple of
+    genera through ``tuples``), column by column rather than cell by cell."""
+    out = {}
+    for key, column in table.items():
+        if column.dtype == object:
+            out[key] = [tuples(v) for v in column]
+        elif column.dtype.kind == "f" and np.isnan(column).any():
+            out[key] = [nan if missing else v for v, missing in zip(column.tolist(), np.isnan(column).tolist())]
+        else:
+            out[key] = column.tolist()
+    return out
+
+
+def table_json(name, about: dict, conn: int, table: dict) -> dict:
+    """What ``--json`` prints: the image and one object per label."""
+    cols = plain_columns(table)
+    rows = [dict(zip(cols, values)) for values in zip(*cols.values())]
+    return {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
+            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn,
+            "labels": rows}
+
+
+def write_csv(path, table: dict, force: bool) -> None:
+    """The full table as CSV (genera as ``0;1``, NaN empty), written whole
+    or not at all."""
+    import csv
+
+    from ..mesh.outputs import atomic_write
+
+    cols = plain_columns(table, nan="", tuples=lambda g: ";".join(map(str, g)))
+    with atomic_write(path, "w", newline="", encoding="utf-8") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(list(cols))
+        writer.writerows(zip(*cols.values()))
+
+
+def _cell(value, width: int) -> str:
+    if isinstance(value, (float, np.floating)):
+        return f"{value:>{width}.6g}"
+    return f"{value:>{width}}"
+
+
+def format_table(name, about: dict, conn: int, table: dict) -> str:
+    """The compact table: the first rows, then a summary of all."""
+    n = len(table["label"])
+    pitch = "x".join(f"{p:g}" for p in about["spacing"])
+    shape = "x".join(map(str, about["shape"]))
+    lines = [f"{name}: {n} labels, shape {shape}, voxel {pitch}, {conn}-connectivity"]
+    surfaces = "genera" in table
+    head = "".join(f"{h:>{w}}" for h, _, w in TERMINAL_COLUMNS)
+    lines.append(head + ("  surfaces (genera)" if surfaces else ""))
+    for r in range(min(n, SHOWN_ROWS)):
+        row = "".join(_cell(table[c][r], w) for _, c, w in TERMINAL_COLUMNS)
+        if surfaces:
+            genera = ",".join(map(str, table["genera"][r][:6])) + (",..." if len(table["genera"][r]) > 6 else "")
+            row += f"  {table['surfaces'][r]} ({genera})"
+        lines.append(row)
+    if n > SHOWN_ROWS:
+        lines.append(f"  ... {n - SHOWN_ROWS} more labels (--json, or --csv FILE, for the full table)")
+    lines.append(summary(table))
+    return "\n".join(lines)
+
+
+def summary(table: dict) -> str:
+    """One line over every label."""
+    n = len(table["label"])
+    parts = [f"{n} labels", f"{int(table['voxels'].sum())} voxels"]
+    for column, what in (("b0", "in several components"), ("b1", "with tunnels"), ("b2", "with cavities")):
+        count = int(np.count_nonzero(table[column] > (1 if column == "b0" else 0)))
+        parts.append(f"{count} {what}")
+    if "pinched_vertices" in table:
+        parts.append(f"{int(np.count_nonzero(table['pinched_vertices']))} with pinched vertices")
+    return "  all: " + ", ".join(parts)
+
+
+def surface_outputs(args: argparse.Namespace):
+    """Where ``surface --labels`` writes: ``("glb", path)`` for one glTF
+    with a node per label, or ``("dir", directory, suffix)`` for a file per
+    label (``-o DIR/`` with ``--suffix``), checked before any work."""
+    from pathlib import Path
+
+    from ..mesh.export import SURFACE_SUFFIXES
+    from ..mesh.outputs import check_output_path, check_writable_dir
+
+    out = str(args.output)
+    if out.endswith(("/", "\\")) or Path(out).is_dir():
+        suffix = (args.suffix or "").lower()
+        suffix = suffix if suffix.startswith(".") or not suffix else "." + suffix
+        if suffix not in SURFACE_SUFFIXES:
+            raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}")
+        directory = Path(out)
+        if not directory.is_dir():
+            check_writable_dir(directory.parent, f"the directory {directory.name}")
+        return "dir", directory, suffix
+    if args.suffix:
+        raise IsoflowError(f"{out}: --suffix names the files of -o DIR/; one file holds every label as .glb")
+    path = check_output_path(out, args.force, suffixes=SURFACE_SUFFIXES, what="surface")
+    if path.suffix.lower() != ".glb":
+        raise IsoflowError(f"{path}: one file holds a surface per label only as .glb (a node per label); "
+                           "write -o DIR/ --suffix .ply for a file per label")
+    return "glb", path
+
+
+def label_mesh(image, label, table_row: dict, conn: int):
+    """The boundary mesh of one label and its place: the label's box cut
+    out (everything else is its complement), the mesh in the box's
+    array-corner units and the object that puts them in world units."""
+    from ..digital.lattice import DigitalObject
+    from ..digital.surface import boundary_mesh
+
+    lo = np.round((table_row["lo"] - image.origin) / image.spacing).astype(np.int64)
+    hi = np.round((table_row["hi"] - image.origin) / image.spacing).astype(np.int64)
+    box = image.array[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]] == label
+    obj = DigitalObject(box, offset=tuple(int(v) for v in lo), pitch=image.spacing, origin=image.origin)
+    return boundary_mesh(box, conn), obj
+
+
+def cmd_surface_labels(args: argparse.Namespace) -> int:
+    """``isoflow surface LABELS --labels -o OUT.glb`` (or ``-o DIR/ --suffix``)."""
+    from ..mesh.outputs import check_output_path
+
+    if args.png or args.ascii or args.triangulate:
+        raise IsoflowError(f"{args.input}: --png, --ascii and --triangulate write one surface, not --labels")
+    target = surface_outputs(args)
+    _, conn, table, image = read_table(args)
+    names = [f"label_{v}" for v in table["label"].tolist()]
+    if target[0] == "dir":
+        files = [target[1] / f"{name}{target[2]}" for name in names]
+        for f in files:
+            if (f.exists() or f.is_symlink()) and not args.force:
+                check_output_path(f, args.force)
+    boxes = {"lo": np.stack([table[f"bbox-{d}"] for d in range(3)], axis=1),
+             "hi": np.stack([table[f"bbox-{d + 3}"] for d in range(3)], axis=1)}
+    meshes = []
+    for r, label in enumerate(table["label"]):
+        mesh, obj = label_mesh(image, label, {k: v[r] for k, v in boxes.items()}, conn)
+        if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
+            raise AssertionError(f"label {label}: the mesh has V-E+F {mesh.euler_characteristic}, "
+                                 f"the table {table['surface_euler'][r]}")
+        meshes.append((names[r], mesh, obj, mesh.components()))
+    problems = write_label_surfaces(args, target, meshes)
+    faces = sum(len(m.faces) for _, m, _, _ in meshes)
+    where = target[1] if target[0] == "glb" else f"{target[1]}/ ({len(meshes)} {target[2]} files)"
+    print(f"{where}: {len(meshes)} labels, {faces} faces, one closed surface mesh per label"
+          + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
+    for line in problems:
+        print(f"isoflow surface: error: {line}", file=sys.stderr)
+    return 1 if problems else 0
+
+
+def write_label_surfaces(args: argparse.Namespace, target, meshes: list) -> list[str]:
+    """Write every label's surface (a glTF node each, or a file each) and
+    read them back (unless --no-check). Returns the problems found."""
+    from ..mesh import export
+    from ..mesh.readback import check_scene_file, check_surface_file
+
+    if target[0] == "glb":
+        parts = [export.glb_part(name, mesh, obj) for name, mesh, obj, _ in meshes]
+        export.write_glb_scene(target[1], parts, force=args.force, comment=f"isoflow surface --labels of "
+                               f"{args.input}, {args.connectivity or 6}-connectivity")
+        return [] if args.no_check else check_scene_file(target[1], meshes)
+    target[1].mkdir(exist_ok=True)
+    problems = []
+    for name, mesh, obj, comps in meshes:
+        path = target[1] / f"{name}{target[2]}"
+        export.write_surface(path, mesh, obj, force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        if args.no_check:
+            continue
+        welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+        check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
+        if check.get("agree") is False:
+            problems.append(check["problem"])
+    return problems

@@ -1,0 +1,196 @@
+"""The label table of a label image that does not fit in memory, read one
+layer of blocks at a time (a zarr store: ``isoflow info LABELS.zarr
+--labels``).
+
+The passes of :mod:`isoflow.digital.label_table` run on each layer of
+blocks along axis 0 with one voxel layer of each neighbour: the pieces of
+the slab (their voxels, sums and boxes counted on the slab's own layers
+only), then the vertex pass over the slab's own vertex layers (which read
+the voxel layer before the slab, and the one after it for the doubled
+edges). A piece cut by a seam gets a number in each slab; the two voxel
+layers both slabs read name the same voxels under both numbers, and a
+connected-components pass over those pairs makes them one before the graph
+of pieces is walked. Memory: two slabs' voxels and pieces, and tables per
+piece and per pair of pieces.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..scale.memory import check_fits
+from .label_table import (
+    PIECE_BYTES_PER_VOXEL,
+    checked_image,
+    columns,
+    feature_table,
+    pass_tables,
+    rows_of_pieces,
+    wanted_labels,
+    wanted_pieces,
+)
+from .lattice import DigitalObject
+from .connectivity import check_connectivity
+
+
+def label_table_blocks(
+    array,
+    connectivity: int = 6,
+    *,
+    layers: Sequence[int] | None = None,
+    pitch=None,
+    origin=None,
+    labels=None,
+    surfaces: bool = True,
+    progress: Callable[[int, int], None] | None = None,
+) -> dict[str, np.ndarray]:
+    """:func:`isoflow.label_table` of a 3D label array read in slabs along
+    axis 0 (a zarr array, or anything ``array[a:b]`` reads as NumPy).
+
+    Parameters
+    ----------
+    array : array-like
+        3D integer label image with ``shape`` and ``dtype``; read as
+        ``array[a:b]`` (voxel layers a .. b - 1), never whole.
+    connectivity : {6, 26}
+        As :func:`isoflow.label_table`.
+    layers : sequence of int, optional
+        Voxel layers per slab (the array's chunks along axis 0; default:
+        one slab).
+    pitch, origin, labels, surfaces
+        As :func:`isoflow.label_table`.
+    progress : callable, optional
+        ``progress(done, total)`` after each slab.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The table of :func:`isoflow.label_table`, equal to it.
+
+    Raises
+    ------
+    IsoflowError
+        As :func:`isoflow.label_table`; a slab that would not fit in memory.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> image = np.zeros((6, 5, 5), np.uint8)
+    >>> image[1:5, 1:4, 1:4] = 2
+    >>> image[2:4, 2, 2] = 0                    # a cavity cut by the seam at layer 3
+    >>> t = label_table_blocks(image, layers=[3, 3])
+    >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist()
+    ([2], [34], [1])
+    """
+    checked_image(np.empty((1,) * len(array.shape), array.dtype))  # 3D, integers
+    conn = check_connectivity(3, connectivity)
+    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    wanted = None if labels is None else wanted_labels(labels, array.dtype)
+    nx = int(array.shape[0])
+    sizes = [nx] if layers is None else [int(n) for n in layers]
+    if sum(sizes) != nx or min(sizes) < 1:
+        raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
+    stream = _Stream(array, conn, wanted, surfaces)
+    stops = np.cumsum(sizes)
+    for t, (x0, x1) in enumerate(zip(stops - sizes, stops)):
+        stream.slab(int(x0), int(x1))
+        if progress is not None:
+            progress(t + 1, len(sizes))
+    found = rows_of_pieces(*stream.joined(), array.dtype, conn, wanted)
+    return columns(found, place.spacing, place.origin, surfaces)
+
+
+class _Stream:
+    """What the slabs found so far: per piece (numbered across slabs) its
+    statistics, features and doubled edges, the pairs of pieces, and the
+    pairs of numbers that name one piece in two slabs."""
+
+    def __init__(self, array, conn: int, wanted, surfaces: bool):
+        self.array, self.conn, self.wanted, self.surfaces = array, conn, wanted, surfaces
+        self.nx = int(array.shape[0])
+        self.total = 0  # pieces numbered so far (0: the outside)
+        self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
+                                                       "doubled", "keys", "kind", "sums_pairs", "same")}
+        self.tail = None  # the previous slab's last two voxel layers, numbered across slabs
+
+    def slab(self, x0: int, x1: int) -> None:
+        """The pieces and the vertex pass of voxel layers x0 .. x1 - 1."""
+        from ..scale.pieces import label_pieces, vertex_pass
+
+        a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
+        shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
+        check_fits((PIECE_BYTES_PER_VOXEL + np.dtype(self.array.dtype).itemsize) * int(np.prod(shape)),
+                   f"a slab of {'x'.join(map(str, shape))} voxels of the label image",
+                   hint="write the store with smaller chunks along its first axis")
+        vol = np.ascontiguousarray(np.asarray(self.array[a:b]))
+        pieces = label_pieces(vol, first=x0 - a, last=x1 - a, x0=a)
+        ids = pieces.pop("ids")
+        want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
+        passed = vertex_pass(vol, ids, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
+                             layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total)
+        numbered = ids.astype(np.int64) + self.total
+        if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
+            pairs = np.stack([self.tail.reshape(-1), numbered[:2].reshape(-1)], axis=1)
+            self.parts["same"].append(np.unique(pairs, axis=0))
+        self.tail = numbered[x1 - 1 - a:x1 + 1 - a].copy() if x1 < self.nx else None
+        for key in ("values", "counts", "sums", "lo", "hi"):
+            self.parts[key].append(pieces[key][1:])
+        self.parts["features"].append(passed["features"][1:])
+        self.parts["doubled"].append(passed["doubled"][1:])
+        self.parts["keys"].append(passed["keys"])
+        self.parts["kind"].append(passed["kind"])
+        self.parts["sums_pairs"].append(passed["sums"])
+        self.total += pieces["n"]
+
+    def joined(self) -> tuple[dict, dict]:
+        """The pieces and the vertex pass's findings of the whole image:
+        pieces named in two slabs made one (numbered 1.. in order of their
+        first number), their sums added, their boxes joined."""
+        from ..scale.pieces import merge_pairs
+
+        one = _same_pieces(self.total, self.parts["same"])
+        n = int(one.max(initial=0))
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.parts.items() if k != "same"}
+        at = one[1:]
+        pieces = {"values": np.zeros(n + 1, np.uint64), "counts": np.zeros(n + 1, np.int64),
+                  "sums": np.zeros((n + 1, 3), np.int64), "lo": np.full((n + 1, 3), np.iinfo(np.int64).max),
+                  "hi": np.full((n + 1, 3), -1, np.int64)}
+        pieces["values"][at] = cat["values"]
+        np.add.at(pieces["counts"], at, cat["counts"])
+        np.add.at(pieces["sums"], at, cat["sums"])
+        np.minimum.at(pieces["lo"], at, cat["lo"])
+        np.maximum.at(pieces["hi"], at, cat["hi"])
+        features = np.zeros((n + 1, cat["features"].shape[1]), np.int64)
+        np.add.at(features, at, cat["features"])
+        doubled = np.bincount(at, cat["doubled"], n + 1).astype(np.int64)
+        keys = cat["keys"].astype(np.uint64)
+        p = one[(keys >> np.uint64(32)).astype(np.int64)]
+        q = one[(keys & np.uint64(0xFFFFFFFF)).astype(np.int64)]
+        sums = cat["sums_pairs"].reshape(-1, 4)
+        keep = p != q  # pairs within one piece (named in two slabs) touch nothing else
+        flip = p > q
+        sums = np.where(flip[:, None], sums[:, [2, 3, 0, 1]], sums)
+        lo, hi = np.minimum(p, q), np.maximum(p, q)
+        keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
+        keys, kind, sums = merge_pairs(keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep])
+        return pieces, {"features": features, "doubled": doubled, "keys": keys, "kind": kind, "sums": sums}
+
+
+def _same_pieces(total: int, same: list) -> np.ndarray:
+    """Per piece number (0 .. total), the number of the piece it is once
+    the numbers that name one piece in two slabs are made one: 0 for the
+    outside, then 1.. in order of each piece's first number."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pairs = np.concatenate(same) if same else np.zeros((0, 2), np.int64)
+    graph = coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(total + 1, total + 1))
+    _, comp = connected_components(graph, directed=False)
+    first = np.full(comp.max(initial=0) + 1, total + 1)
+    np.minimum.at(first, comp, np.arange(total + 1))
+    order = np.argsort(first)  # components by their first number: the outside's (0) first
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[comp]

@@ -1,0 +1,436 @@
+"""The topology and curvature indices of every label of a label image, as
+one table (``isoflow info LABELS --labels``).
+
+A label's object is the voxels of that label; everything else (the value
+0 and every other label) is its complement. Every row is what
+:func:`isoflow.digital.analysis.analyze` reports for ``image == label``,
+found for all labels at once:
+
+* every lattice vertex sees at most eight labels, and the configuration of
+  each (section 4) comes from the same 2x2x2 block, so one pass over the
+  vertices gives every label's class histogram ``n`` (eq. 4.9), its
+  ``a^T n = 8 chi`` (Theorems 10-11, eq. 4.12-4.13), its energy
+  ``E = k^T n`` (eq. 5.22) and its boundary faces per axis
+  (:mod:`isoflow.scale.pieces`);
+* the voxels of every value are cut into face-connected *pieces* in one
+  labelling; a label's components under 6, 18 or 26, and the components of
+  its complement, are unions of pieces joined where they touch by a face,
+  an edge or a vertex, which the same pass records; so b0, the cavities b2
+  (enclosed components of the complement under the complementary
+  connectivity) and ``b1 = b0 + b2 - chi`` come from a graph of pieces,
+  label by label, without another pass over the voxels
+  (:mod:`isoflow.scale.piece_graph`);
+* the closed surfaces of a label's boundary mesh (DESIGN section 3) are the
+  pairs (component of the label, component of its complement) under the
+  mesh's adjacencies that its boundary faces separate
+  (:mod:`isoflow.digital.closed_surfaces`), each with ``chi = V - F``
+  counted from the sheets through the lattice vertices; the pass adds the
+  sheets up per pair of pieces.
+
+The columns follow scikit-image's ``regionprops_table``: a dict of NumPy
+arrays of one length, which ``pandas.DataFrame`` takes as it is.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from typing import Literal
+
+import numpy as np
+
+from ..errors import IsoflowError
+from .closed_surfaces import sweep_tables
+from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
+from .lattice import DigitalObject
+from .surface import face_slots, pinch_lut, slot_octants
+from .connectivity import check_connectivity
+
+#: the columns of :func:`label_table`, in order ("bbox" and "centroid"
+#: stand for their numbered columns, "n" for n-0 .. n-8)
+COLUMNS = ("label", "voxels", "volume", "surface_area", "bbox", "centroid", "euler_characteristic", "b0", "b1",
+           "b2", "n", "non_well_composed", "energy", "surfaces", "genera", "surface_euler", "pinched_vertices",
+           "doubled_edges")
+#: the columns that need the surfaces (left out with ``surfaces=False``)
+SURFACE_COLUMNS = ("surfaces", "genera", "surface_euler", "pinched_vertices", "doubled_edges")
+
+#: the feature table's columns (see :func:`feature_table`)
+_EULER, _CLASSES, _NWC, _A_WC, _ENERGY, _PINCH, _FACES = 0, slice(1, 10), 10, 11, 12, 13, slice(14, 17)
+
+
+@cache
+def feature_table(connectivity: int = 6) -> np.ndarray:
+    """(256, 17) int64: what one vertex of each configuration adds to its
+    label's row: the Euler share ``8 x`` (eq. 4.10), one in its class's
+    column of ``n`` (nine, eq. 4.9), one if it is not well-composed, ``a``
+    and ``k = a^2`` where it is well-composed (eq. 4.12, 5.22), one at a
+    pinch (:func:`~isoflow.digital.surface.pinch_lut`), and its boundary
+    face slots per normal axis (four per face)."""
+    check_connectivity(3, connectivity)
+    cls = class_lut()
+    a = a_lut(connectivity).astype(np.int64)
+    on = cls >= 0
+    out = np.zeros((256, 17), np.int64)
+    out[:, _EULER] = euler_lut(3, connectivity)
+    out[np.flatnonzero(on), 1 + cls[on]] = 1
+    out[:, _NWC] = cls == NOT_WELL_COMPOSED
+    out[:, _A_WC] = np.where(on, a, 0)
+    out[:, _ENERGY] = np.where(on, a * a, 0)
+    out[:, _PINCH] = pinch_lut(connectivity)
+    codes = np.arange(256)
+    for slot in range(12):
+        lo, hi = slot_octants(slot)
+        out[:, 14 + slot // 4] += ((codes >> lo) & 1) != ((codes >> hi) & 1)
+    assert (out[:, _FACES].sum(axis=1) == face_slots()).all()
+    return out
+
+
+def label_table(
+    image,
+    connectivity: int = 6,
+    *,
+    pitch=None,
+    origin=None,
+    labels=None,
+    surfaces: bool = True,
+    method: Literal["auto", "numpy", "compiled"] = "auto",
+    threads: int | None = None,
+) -> dict[str, np.ndarray]:
+    """The shape report of every label of a 3D label image, as columns.
+
+    Parameters
+    ----------
+    image : array_like
+        3D integer (or bool) label image, any integer type up to 64 bits.
+    connectivity : {6, 26}
+        Every label's connectivity; its complement takes the other one.
+    pitch : float or sequence of 3 floats, optional
+        Voxel size (per axis); volumes, areas, boxes and centroids are in
+        its units (default 1).
+    origin : sequence of 3 floats, optional
+        World position of voxel (0, 0, 0)'s lowest corner (default 0).
+    labels : sequence of int, optional
+        The labels to report, in this order (default: every nonzero label
+        present, in increasing order). A label absent from the image gets
+        a row of zeros (NaN box and centroid), as ``analyze`` of an empty
+        mask.
+    surfaces : bool
+        Count the closed surfaces of every label's boundary mesh (the
+        columns of :data:`SURFACE_COLUMNS`).
+    method : {"auto", "numpy", "compiled"}
+        "compiled": one pass for all labels (numba); "numpy": ``analyze``
+        on each label's box plus one voxel; "auto": the compiled pass
+        where numba is installed, unless the image is small and has few
+        labels.
+    threads : int, optional
+        Threads for the compiled passes (default: ``ISOFLOW_THREADS``,
+        else every CPU).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        One row per label: ``label``, ``voxels``, ``volume``,
+        ``surface_area`` (boundary faces times their area), ``bbox-0`` ..
+        ``bbox-5`` (lowest and highest corner of the label's voxels, world
+        units), ``centroid-0`` .. ``centroid-2`` (world units: the voxel
+        ``v`` spans ``[v, v + 1]``, so with unit pitch this is
+        scikit-image's centroid plus 0.5), ``euler_characteristic``,
+        ``b0``, ``b1``, ``b2``, ``n-0`` .. ``n-8`` (the classes of
+        :data:`~isoflow.digital.indices.CLASS_LABELS`), ``non_well_composed``,
+        ``energy``, and with ``surfaces``: ``surfaces`` (their number),
+        ``genera`` (a tuple per label, most faces first, as ``analyze``
+        lists them), ``surface_euler`` (V - E + F of the label's whole mesh,
+        ``2 chi + 2 pinched``), ``pinched_vertices``, ``doubled_edges``.
+
+    Raises
+    ------
+    IsoflowError
+        A volume that is not 3D or not integer, a bad connectivity, pitch
+        or method, or work that would not fit in memory.
+
+    Notes
+    -----
+    Each row equals ``analyze(image == label, connectivity)``: ``chi`` from
+    ``a^T n = 8 chi`` (Theorems 10-11), ``b1 = b0 + b2 - chi``, ``energy =
+    k^T n`` (eq. 5.22), the surfaces' genus ``1 - chi/2``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> image = np.zeros((6, 6, 6), np.uint16)
+    >>> image[1:5, 1:5, 1:5] = 7          # a hollow cube
+    >>> image[2:4, 2:4, 2:4] = 3          # with a cube of another label inside
+    >>> t = label_table(image)
+    >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist(), t["genera"].tolist()
+    ([3, 7], [8, 56], [0, 1], [(0,), (0, 0)])
+    """
+    from ..scale.compiled import using
+
+    vol = checked_image(image)
+    conn = check_connectivity(3, connectivity)
+    # the pitch and origin checked as every object's are
+    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    wanted = None if labels is None else wanted_labels(labels, vol.dtype)
+    with using(threads):
+        found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
+    return columns(found, place.spacing, place.origin, surfaces)
+
+
+def checked_image(image) -> np.ndarray:
+    vol = np.asarray(image)
+    if vol.ndim != 3:
+        raise IsoflowError(f"a label table needs a 3D label image, got a {vol.ndim}D array")
+    if vol.dtype != np.bool_ and vol.dtype.kind not in "iu":
+        raise IsoflowError(f"a label image holds integers, not {vol.dtype}")
+    return vol
+
+
+#: the one pass over the label image pays numba's start from this many
+#: voxels on; below it, :func:`analyze` on each label's box answers sooner
+LABEL_PASS_VOXELS = 250_000
+
+
+def _use_compiled(vol: np.ndarray, method: str) -> bool:
+    from ..scale.compiled import METHODS, have_numba
+
+    if method not in METHODS:
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if method == "compiled" and not have_numba():
+        raise IsoflowError("method='compiled' needs numba: pip install numba")
+    return method == "compiled" or (method == "auto" and have_numba() and vol.size >= LABEL_PASS_VOXELS)
+
+
+def wanted_labels(labels, dtype) -> np.ndarray:
+    """The labels asked for, as values of the image's type: each one a
+    whole number the type holds, none twice."""
+    asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
+    info = np.iinfo(np.uint8 if dtype == np.bool_ else dtype)
+    for value in asked:
+        whole = isinstance(value, (int, np.integer)) or (
+            isinstance(value, (float, np.floating)) and float(value).is_integer())
+        if not whole or not info.min <= int(value) <= info.max:
+            raise IsoflowError(f"label {value!r} is not a value a {np.dtype(dtype)} label image holds "
+                               f"({info.min} to {info.max})")
+    values = [int(v) for v in asked]
+    if len(set(values)) != len(values):
+        twice = sorted({v for v in values if values.count(v) > 1})
+        raise IsoflowError(f"labels asked twice: {', '.join(map(str, twice))}")
+    return np.array(values, dtype=dtype)
+
+
+#: how closely two pieces must touch to be joined (1 face, 2 edge, 3
+#: vertex), per connectivity: for the label's mesh solid, its b0, the mesh
+#: solid's complement and the complement under the other connectivity (b2)
+#: (the mesh's adjacencies: closed_surfaces.MESH_ADJACENCY)
+JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
+
+
+#: bytes per voxel of the compiled path beyond the image: the piece of
+#: every voxel (uint32); the pieces' and pairs' tables are checked as they
+#: are made
+PIECE_BYTES_PER_VOXEL = 4
+
+
+def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
+    """The rows by the compiled passes: the pieces, one vertex pass, the
+    graph of pieces label by label (see the module docs)."""
+    from ..scale.memory import check_fits
+    from ..scale.pieces import label_pieces, vertex_pass
+
+    copy = 0 if vol.flags.c_contiguous else vol.nbytes
+    check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
+               f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
+    pieces = label_pieces(vol)
+    want = wanted_pieces(pieces["values"], vol.dtype, wanted)
+    passed = vertex_pass(vol, pieces.pop("ids"), want, feature_table(conn), pass_tables(conn, surfaces))
+    return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
+
+
+def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
+    """Labels of an image of ``dtype`` as the pieces hold them: their
+    bits, unsigned, as uint64."""
+    width = np.dtype(np.uint8 if dtype == np.bool_ else dtype).itemsize
+    return np.asarray(labels, dtype=np.uint8 if dtype == np.bool_ else dtype).view(f"u{width}").astype(np.uint64)
+
+
+def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
+    """Per piece (values as :func:`~isoflow.scale.pieces.label_pieces`
+    gives them, 0 the outside), whether its label has a row."""
+    want = values != 0 if wanted is None else np.isin(values, label_bits(wanted, dtype))
+    want[0] = False
+    return want
+
+
+def pass_tables(conn: int, surfaces: bool) -> tuple:
+    """The sheet tables of the vertex pass; without the surfaces no sheets
+    and no doubled spokes (only the histogram and the graph)."""
+    tables = sweep_tables(conn)
+    if surfaces:
+        return tables
+    return (np.zeros_like(tables[0]),) + tables[1:4] + (np.zeros_like(tables[4]), tables[5])
+
+
+def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndarray | None) -> dict:
+    """The rows' sums from the pieces (values, counts, sums, boxes) and
+    what the vertex pass found (features, doubled edges, pairs)."""
+    values, piece_label, rows = label_rows(pieces["values"], dtype, wanted)
+    topology = graph_topology(pieces, piece_label, rows, passed, conn)
+    by_label = label_sums(pieces, piece_label, passed, len(values))
+    found = {key: at_rows(column, rows) for key, column in by_label.items()}
+    found.update(topology)
+    dtype = np.dtype(np.uint8 if dtype == np.bool_ else dtype)
+    found["label"] = np.zeros(len(rows), dtype) if wanted is None else wanted.astype(dtype)
+    found["label"][rows >= 0] = values[rows[rows >= 0]].astype(f"u{dtype.itemsize}").view(dtype)
+    return found
+
+
+def label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct values of the pieces (their bits, uint64), each piece's
+    index among them (-1 for the outside, piece 0) and the index of every
+    row of the table (-1 for a label asked for that is absent)."""
+    values, inverse = np.unique(piece_values[1:], return_inverse=True)
+    piece_label = np.concatenate([[-1], inverse]).astype(np.int64)
+    if wanted is None:
+        return values, piece_label, np.flatnonzero(values != 0)
+    bits = label_bits(wanted, dtype)
+    at = np.minimum(np.searchsorted(values, bits), max(len(values) - 1, 0))
+    found = (len(values) > 0) & (values[at] == bits) if len(values) else np.zeros(len(bits), bool)
+    return values, piece_label, np.where(found, at, -1)
+
+
+def at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """A per-label column at the table's rows, zero where a row's label is absent."""
+    out = column[np.maximum(rows, 0)] if len(column) else np.zeros((len(rows),) + column.shape[1:], column.dtype)
+    out[rows < 0] = 0
+    return out
+
+
+def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int) -> dict:
+    """Per label (all of them): voxels, coordinate sums, box, features and
+    doubled edges, added up over its pieces."""
+    of = piece_label[1:]
+    lo = np.full((nlabels, 3), np.iinfo(np.int64).max, np.int64)
+    hi = np.full((nlabels, 3), -1, np.int64)
+    np.minimum.at(lo, of, pieces["lo"][1:])
+    np.maximum.at(hi, of, pieces["hi"][1:])
+    features = np.stack([np.bincount(of, column, nlabels) for column in passed["features"][1:].T], axis=1)
+    features = features.astype(np.int64).reshape(nlabels, passed["features"].shape[1])
+    return {
+        "voxels": np.bincount(of, pieces["counts"][1:], nlabels).astype(np.int64),
+        "sums": np.stack([np.bincount(of, pieces["sums"][1:, d], nlabels) for d in range(3)], axis=1),
+        "lo": lo, "hi": hi, "features": features,
+        "doubled": np.bincount(of, passed["doubled"][1:], nlabels).astype(np.int64),
+    }
+
+
+def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
+    """b0, b2 and the surfaces of every row from the graph of pieces."""
+    from ..scale.piece_graph import grouped, label_topology
+    from ..scale.pieces import NONE
+
+    n = len(piece_label)
+    keys, sums = passed["keys"], passed["sums"]
+    a, b = (keys >> np.uint64(32)).astype(np.int64), (keys & np.uint64(0xFFFFFFFF)).astype(np.int64)
+    touch = passed["kind"] < NONE
+    kind = passed["kind"][touch].astype(np.int64)
+    adj = grouped(np.concatenate([a[touch], b[touch]]), n, np.concatenate([b[touch], a[touch]]), np.concatenate([kind, kind]))
+    # the sheets by object piece: the smaller piece's of each pair, then the larger's
+    ab, ba = sums[:, 0] > 0, sums[:, 2] > 0
+    sheets = grouped(np.concatenate([a[ab], b[ba]]), n, np.concatenate([b[ab], a[ba]]),
+                  np.concatenate([sums[ab, 0], sums[ba, 2]]), np.concatenate([sums[ab, 1], sums[ba, 3]]))
+    nlabels = int(piece_label.max(initial=-1)) + 1
+    lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
+    present = np.flatnonzero(rows >= 0)
+    found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
+                           pieces["hi"], *adj, *sheets, *JOINS[conn])
+    b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
+    b0[present], b2[present] = found[0], found[1]
+    return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],
+            "surface_faces": found[4]}
+
+
+def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
+    """The rows by NumPy: ``analyze`` of each label's box plus one voxel
+    (outside the box everything is the label's complement, so the report
+    is the whole image's), the voxels of every label from one sort."""
+    from .analysis import analyze
+
+    flat = vol.reshape(-1)
+    order = np.argsort(flat, kind="stable")
+    values, starts = np.unique(flat[order], return_index=True)
+    labels = values[values != 0] if wanted is None else wanted.astype(values.dtype)
+    ends = np.append(starts[1:], flat.size)
+    found = {"label": labels, "voxels": np.zeros(len(labels), np.int64), "sums": np.zeros((len(labels), 3)),
+             "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
+             "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
+             "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
+    surfs = []
+    for row, label in enumerate(labels):
+        at = np.searchsorted(values, label)
+        if at == len(values) or values[at] != label:
+            continue
+        where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
+        lo, hi = where.min(axis=0), where.max(axis=0)
+        box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
+        report = analyze(box, conn, surfaces=surfaces)
+        found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
+        found["lo"][row], found["hi"][row] = lo, hi
+        found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]
+        found["features"][row] = _report_features(report, box)
+        found["doubled"][row] = report.get("doubled_edges", 0)
+        surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
+    surfs = np.array(surfs, np.int64).reshape(-1, 3)
+    found.update(surface_rows=surfs[:, 0], surface_chi=surfs[:, 1], surface_faces=surfs[:, 2])
+    return found
+
+
+def _report_features(report: dict, box: np.ndarray) -> np.ndarray:
+    """The feature sums of :func:`feature_table` from a report and the
+    (padded) box: the faces per axis counted on the box."""
+    out = np.zeros(17, np.int64)
+    out[_EULER] = 8 * report["euler_characteristic"]
+    out[_CLASSES] = report["n"]
+    out[_NWC] = report["non_well_composed"]
+    out[_A_WC] = report["a_dot_n_well_composed"]
+    out[_ENERGY] = report["energy"]
+    out[_PINCH] = report.get("pinched_vertices", 0)
+    out[_FACES] = [4 * np.count_nonzero(np.diff(box, axis=d)) for d in range(3)]
+    return out
+
+
+def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool) -> dict[str, np.ndarray]:
+    """The table's columns (see :func:`label_table`) from the rows' sums."""
+    voxels = found["voxels"]
+    features = found["features"]
+    out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
+                                  "volume": voxels * float(np.prod(spacing))}
+    faces = features[:, _FACES] // 4
+    out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
+                                            spacing[0] * spacing[1]])
+    present = voxels > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for d in range(3):
+            out[f"bbox-{d}"] = np.where(present, origin[d] + spacing[d] * found["lo"][:, d], np.nan)
+        for d in range(3):
+            out[f"bbox-{d + 3}"] = np.where(present, origin[d] + spacing[d] * (found["hi"][:, d] + 1), np.nan)
+        for d in range(3):
+            mean = found["sums"][:, d] / voxels
+            out[f"centroid-{d}"] = np.where(present, origin[d] + spacing[d] * (mean + 0.5), np.nan)
+    chi = features[:, _EULER] // 8
+    out["euler_characteristic"] = chi
+    out["b0"], out["b1"], out["b2"] = found["b0"], found["b0"] + found["b2"] - chi, found["b2"]
+    for i in range(9):
+        out[f"n-{i}"] = features[:, 1 + i]
+    out["non_well_composed"] = features[:, _NWC]
+    out["energy"] = features[:, _ENERGY]
+    if surfaces:
+        rows, chis = found["surface_rows"], found["surface_chi"]
+        out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
+        genera = np.empty(len(voxels), object)
+        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1))
+        for r in range(len(voxels)):
+            genera[r] = tuple(int(1 - c // 2) for c in chis[cuts[r]:cuts[r + 1]])
+        out["genera"] = genera
+        out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
+        out["pinched_vertices"] = features[:, _PINCH]
+        out["doubled_edges"] = found["doubled"]
+    return out

@@ -1,0 +1,279 @@
+"""Per label, the components of the graph of pieces (numba): the label's
+own, and those of everything else, without a pass over the voxels.
+
+The nodes are the pieces of :mod:`isoflow.scale.pieces` (node 0 the
+region outside the array), each with its label and bounding box; an edge
+joins two pieces that touch, with how closely (1 face, 2 edge, 3 vertex).
+Under an adjacency that joins up to ``kind``, the components of a label
+are those of its pieces over the edges of at most that kind, and the
+components of the rest of the image (every other label and the outside)
+are those of the graph with the label's pieces taken out.
+
+Those are found from the label's neighbours outward, one label at a time,
+and the walk stops early: a piece of the rest that reaches the label's
+bounding box (or lies beyond it) is joined to the outside by a straight
+line of voxels that leaves the box, so its component is the outside's.
+Only the components enclosed by the label are walked whole, and they lie
+inside its box; a label's cost is its neighbours and what it encloses,
+whatever the number of labels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .jit import njit
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _open(piece, plo, phi, blo, bhi):
+    """Whether a piece of the rest reaches the label's box [blo, bhi]
+    (inclusive voxel ranges), or is the outside."""
+    if piece == 0:
+        return True
+    for d in range(3):
+        if plo[piece, d] <= blo[d] or phi[piece, d] >= bhi[d]:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _root(parent, x):
+    while parent[x] != x:
+        parent[x] = parent[parent[x]]
+        x = parent[x]
+    return x
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, kind):
+    """Components of the label's pieces ``own`` over edges of at most
+    ``kind``: ``parent`` (local roots, one per piece of ``own``; ``local``
+    gives a piece's place in ``own``). Returns their number."""
+    m = len(own)
+    for t in range(m):
+        parent[t] = t
+        local[own[t]] = t
+    count = m
+    for t in range(m):
+        p = own[t]
+        for e in range(adj_start[p], adj_start[p + 1]):
+            q = adj_to[e]
+            if adj_kind[e] <= kind and piece_label[q] == label:
+                ra, rb = _root(parent, t), _root(parent, local[q])
+                if ra != rb:
+                    parent[max(ra, rb)] = min(ra, rb)
+                    count -= 1
+    for t in range(m):
+        parent[t] = _root(parent, t)
+    return count
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, kind, mark, stamp,
+                     comp, queue):
+    """Components of the rest of the image over edges of at most ``kind``
+    that touch the label's pieces ``own`` by a face: ``comp[piece]`` (where
+    ``stamp[piece] == mark``) is 0 for the outside's component and 1..m for
+    the enclosed ones. Returns m."""
+    enclosed = 0
+    for p in own:
+        for e in range(adj_start[p], adj_start[p + 1]):
+            seed = adj_to[e]
+            if adj_kind[e] != 1 or piece_label[seed] == label or stamp[seed] == mark:
+                continue
+            stamp[seed] = mark
+            comp[seed] = -1
+            queue[0] = seed
+            head, tail = 0, 1
+            outside = _open(seed, plo, phi, blo, bhi)
+            while head < tail and not outside:
+                x = queue[head]
+                head += 1
+                for f in range(adj_start[x], adj_start[x + 1]):
+                    y = adj_to[f]
+                    if adj_kind[f] > kind or piece_label[y] == label:
+                        continue
+                    if stamp[y] == mark:
+                        if comp[y] == 0:  # a piece of the outside's component, walked before
+                            outside = True
+                            break
+                        continue
+                    stamp[y] = mark
+                    comp[y] = -1
+                    queue[tail] = y
+                    tail += 1
+                    if _open(y, plo, phi, blo, bhi):
+                        outside = True
+                        break
+            if not outside:
+                enclosed += 1
+            for t in range(tail):
+                comp[queue[t]] = 0 if outside else enclosed
+    return enclosed
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sort_by(order, n, first, second):
+    """Sort ``order[:n]`` by ``first`` then ``second`` (insertion sort: a
+    label has few entries), stable."""
+    for t in range(1, n):
+        e = order[t]
+        u = t
+        while u > 0 and (first[order[u - 1]] > first[e] or (
+                first[order[u - 1]] == first[e] and second[order[u - 1]] > second[e])):
+            order[u] = order[u - 1]
+            u -= 1
+        order[u] = e
+
+
+@njit(cache=True, nogil=True)
+def _sift(order, start, end, key):
+    root = start
+    while 2 * root + 1 < end:
+        child = 2 * root + 1
+        if child + 1 < end and key[order[child]] < key[order[child + 1]]:
+            child += 1
+        if key[order[root]] >= key[order[child]]:
+            return
+        order[root], order[child] = order[child], order[root]
+        root = child
+
+
+@njit(cache=True, nogil=True)
+def _heap_sort(order, n, key):
+    """Sort ``order[:n]`` by ``key`` in place (a label with many entries)."""
+    for start in range(n // 2 - 1, -1, -1):
+        _sift(order, start, n, key)
+    for end in range(n - 1, 0, -1):
+        order[0], order[end] = order[end], order[0]
+        _sift(order, 0, end, key)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow, schi,
+              sfaces, nsurf):
+    """The label's surfaces from its sheets summed per (own component,
+    rest component), appended at ``nsurf`` in the report's order (most
+    faces first, then chi). Returns the new ``nsurf``."""
+    n = 0
+    for t in range(len(own)):
+        p = own[t]
+        for e in range(sh_start[p], sh_start[p + 1]):
+            key[n] = parent[t] * (m + 1) + comp[sh_to[e]]
+            verts[n] = sh_n[e]
+            quarters[n] = sh_q[e]
+            order[n] = n
+            n += 1
+    if n > 32:
+        _heap_sort(order, n, key)
+    else:
+        _sort_by(order, n, key, key)
+    first = nsurf
+    for t in range(n):
+        e = order[t]
+        if t == 0 or key[e] != key[order[t - 1]]:
+            srow[nsurf] = r
+            schi[nsurf] = 0
+            sfaces[nsurf] = 0
+            nsurf += 1
+        schi[nsurf - 1] += verts[e]
+        sfaces[nsurf - 1] += quarters[e]
+    for s in range(first, nsurf):
+        sfaces[s] //= 4
+        schi[s] -= sfaces[s]
+        key[s - first] = -sfaces[s]
+        verts[s - first] = schi[s]
+        order[s - first] = s - first
+    _sort_by(order, nsurf - first, key, verts)
+    for t in range(nsurf - first):
+        sfaces[first + t] = -key[order[t]]
+        schi[first + t] = verts[order[t]]
+    return nsurf
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
+                sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
+                parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
+    """The loop of :func:`label_topology` over its rows, on scratch arrays
+    (compiled without reference counting: nothing is allocated here).
+    Returns the number of surfaces."""
+    nsurf = 0
+    for r in range(len(rows)):
+        label = rows[r]
+        own = lab_pieces[lab_start[label]:lab_start[label + 1]]
+        if len(own) == 0:
+            continue
+        for d in range(3):
+            blo[d] = plo[own[0], d]
+            bhi[d] = phi[own[0], d]
+        for p in own:
+            for d in range(3):
+                blo[d] = min(blo[d], plo[p, d])
+                bhi[d] = max(bhi[d], phi[p, d])
+        b0[r] = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
+        _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
+        m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
+                             r + 1, stamp, comp, queue)
+        if cc_kind == bg_kind:
+            b2[r] = m
+        else:
+            b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
+                                     cc_kind, r + 1, stamp2, comp2, queue)
+        nsurf = _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow,
+                          schi, sfaces, nsurf)
+    return nsurf
+
+
+def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
+                   sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
+    """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
+    (enclosed components of the rest under ``cc_kind``), and the closed
+    surfaces of its boundary mesh: the pairs (component of the label under
+    ``obj_kind``, component of the rest under ``bg_kind``) that its sheets
+    join, each with its mesh vertices (sheets) and faces.
+
+    ``lab_start``/``lab_pieces``: each label's pieces; ``adj_*``: the
+    edges, both ways; ``sh_*``: per object piece, the background pieces of
+    its sheets with their sheet and quarter counts. Returns ``b0``, ``b2``
+    and the surfaces as ``row`` (index into ``rows``), ``chi``, ``faces``,
+    each label's in the report's order (most faces first, then chi).
+    """
+    npieces = len(piece_label)
+    per_label = np.add.reduceat(np.diff(sh_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
+    per_label = np.where(np.diff(lab_start) > 0, per_label, 0)
+    total = int(per_label[rows].sum()) if len(rows) else 0
+    most = int(per_label.max(initial=0))
+    scratch = [np.zeros(npieces, np.int64) for _ in range(8)]
+    small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
+    b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
+    surf = [np.zeros(total, np.int64) for _ in range(3)]
+    nsurf = _label_loop(np.asarray(rows, np.int64), lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to,
+                        adj_kind, sh_start, sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, *scratch, *small,
+                        b0, b2, *surf)
+    return (b0, b2) + tuple(s[:nsurf] for s in surf)
+
+
+@njit(cache=True, nogil=True)
+def _counting_order(source, n):
+    """Where each row goes when rows are grouped by ``source`` (0..n-1),
+    keeping their order within a group, and the groups' starts."""
+    start = np.zeros(n + 1, np.int64)
+    for s in source:
+        start[s + 1] += 1
+    for g in range(n):
+        start[g + 1] += start[g]
+    fill = start[:-1].copy()
+    order = np.empty(len(source), np.int64)
+    for r in range(len(source)):
+        order[fill[source[r]]] = r
+        fill[source[r]] += 1
+    return start, order
+
+
+def grouped(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Rows grouped by ``source`` (0..n-1, a counting sort): the start of
+    each group (n + 1) and the columns in that order."""
+    start, order = _counting_order(np.asarray(source, np.int64), n)
+    return (start,) + tuple(np.ascontiguousarray(np.take(c, order)) for c in columns)

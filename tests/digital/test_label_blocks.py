@@ -1,0 +1,72 @@
+"""The label table block by block (issue 25): equal to the whole image's
+on random and nested label images cut into slabs of odd sizes, at 6 and 26,
+and from zarr stores (plain, and OME-Zarr stored z, y, x) on the command
+line."""
+
+import json
+
+import numpy as np
+import pytest
+from test_label_table import nested
+
+from isoflow import label_table
+from isoflow.cli import main
+from isoflow.digital.label_blocks import label_table_blocks
+from isoflow.scale.compiled import have_numba
+
+pytestmark = pytest.mark.skipif(not have_numba(), reason="numba not installed")
+
+
+def same_tables(a, b):
+    assert list(a) == list(b)
+    for key in a:
+        if a[key].dtype == object:
+            assert list(a[key]) == list(b[key]), key
+        else:
+            assert np.array_equal(a[key], b[key], equal_nan=True), key
+
+
+def cuts(rng, n):
+    """Random slab sizes adding up to n (ones included)."""
+    out = []
+    while n:
+        out.append(int(rng.integers(1, n + 1)) if rng.random() < 0.6 else 1)
+        n -= out[-1]
+    return out
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_slabs_of_any_size_give_the_whole_images_table(rng, conn):
+    for trial in range(40):
+        shape = tuple(rng.integers(2, 11, 3))
+        k = int(rng.integers(2, 6))
+        p = rng.dirichlet(np.ones(k) * (0.3 if trial % 2 else 3.0))
+        image = rng.choice(k, size=shape, p=p).astype(np.int16)
+        same_tables(label_table_blocks(image, conn, layers=cuts(rng, shape[0])), label_table(image, conn))
+    image = nested(rng)
+    for layers in ([1] * 30, [7, 1, 13, 9], [29, 1]):
+        same_tables(label_table_blocks(image, conn, layers=layers, pitch=(1, 2, 3), labels=[4, 1, 99]),
+                    label_table(image, conn, pitch=(1, 2, 3), labels=[4, 1, 99]))
+
+
+def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng):
+    zarr = pytest.importorskip("zarr")
+    from isoflow.mesh.formats.omezarr import multiscales
+
+    image = nested(rng).astype(np.uint32)
+    np.save(tmp_path / "n.npy", image)
+    plain = zarr.create_array(str(tmp_path / "plain.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
+    plain[...] = image
+    group = zarr.open_group(str(tmp_path / "ome.zarr"), mode="w")
+    group.attrs["multiscales"] = multiscales("n", [1.0, 1.0, 1.0], [0.0, 0.0, 0.0], stored="zyx")
+    stored = image.transpose(2, 1, 0)
+    level = group.create_array("0", shape=stored.shape, chunks=(5, 9, 11), dtype=stored.dtype)
+    level[...] = stored
+
+    def rows(path):
+        assert main(["info", str(path), "--labels", "--json", "--connectivity", "26"]) == 0
+        return json.loads(capsys.readouterr().out)["labels"]
+
+    want = rows(tmp_path / "n.npy")
+    assert rows(tmp_path / "plain.zarr") == want
+    assert rows(tmp_path / "ome.zarr") == want

@@ -1,0 +1,195 @@
+"""The label table (issue 25): every row equals ``analyze(image == label)``
+on random label images whose labels touch by faces, edges and vertices,
+nest inside each other and wrap around each other, at 6 and 26, on the
+NumPy and compiled paths and on several threads; and scikit-image's
+regionprops gives the same voxel counts, Euler numbers, boxes and
+centroids."""
+
+import numpy as np
+import pytest
+from conftest import ball
+
+from isoflow import analyze, label_table
+from isoflow.errors import IsoflowError
+from isoflow.scale.compiled import have_numba
+
+needs_numba = pytest.mark.skipif(not have_numba(), reason="numba not installed")
+METHODS = ["numpy", pytest.param("compiled", marks=needs_numba)]
+
+
+def row_report(table, r):
+    """The row's part of analyze's report, in analyze's form."""
+    return {
+        "voxels": int(table["voxels"][r]),
+        "euler_characteristic": int(table["euler_characteristic"][r]),
+        "betti": [int(table["b0"][r]), int(table["b1"][r]), int(table["b2"][r])],
+        "n": [int(table[f"n-{i}"][r]) for i in range(9)],
+        "non_well_composed": int(table["non_well_composed"][r]),
+        "energy": int(table["energy"][r]),
+        "genera": list(table["genera"][r]),
+        "surface_euler": int(table["surface_euler"][r]),
+        "pinched_vertices": int(table["pinched_vertices"][r]),
+        "doubled_edges": int(table["doubled_edges"][r]),
+    }
+
+
+def analyze_report(mask, conn):
+    r = analyze(mask, conn)
+    return {
+        "voxels": r["voxels"], "euler_characteristic": r["euler_characteristic"], "betti": r["betti"],
+        "n": r["n"], "non_well_composed": r["non_well_composed"], "energy": r["energy"],
+        "genera": [s["genus"] for s in r["surfaces"]],
+        "surface_euler": sum(s["euler_characteristic"] for s in r["surfaces"]),
+        "pinched_vertices": r["pinched_vertices"], "doubled_edges": r["doubled_edges"],
+    }
+
+
+def assert_rows_equal_analyze(image, conn, **kw):
+    table = label_table(image, conn, **kw)
+    assert len(set(table.keys()) - {"genera"}) == len(table) - 1
+    for r, label in enumerate(table["label"]):
+        assert row_report(table, r) == analyze_report(image == label, conn), (label, conn, kw)
+    return table
+
+
+def nested(rng, shape=(30, 18, 17)):
+    """Labels that nest and wrap: a hollow ball (1) around a hollow ball
+    (2) around a ball (3), a torus (4) around a rod (5), in a noise of
+    labels 6-8 and 0 with face, edge and vertex contacts."""
+    image = rng.choice([0, 0, 6, 7, 8], size=shape).astype(np.int32)
+    x = np.indices(shape).astype(float)
+    r = np.sqrt(((x - np.array([8, 8.5, 8]).reshape(3, 1, 1, 1)) ** 2).sum(0))
+    image[r <= 7.2] = 1
+    image[r <= 5.2] = 2
+    image[r <= 3.6] = 0
+    image[r <= 2.2] = 3
+    # a torus around axis 0 at x = 22, a rod of label 5 through it along axis 0
+    rho = np.hypot(x[1] - 8.5, x[2] - 8)
+    image[(rho - 5) ** 2 + (x[0] - 22) ** 2 <= 1.6**2] = 4
+    image[17:29, 8:10, 7:9] = 5
+    return image
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("conn", [6, 26])
+def test_random_label_images_equal_analyze_per_label(rng, conn, method):
+    seen = np.zeros(4, int)
+    for trial in range(60):
+        shape = tuple(rng.integers(2, 10, 3))
+        k = rng.integers(2, 6)
+        # one label dense half of the time, so that it encloses others
+        p = rng.dirichlet(np.ones(k) * (0.3 if trial % 2 else 3.0))
+        image = rng.choice(k, size=shape, p=p).astype(rng.choice([np.uint8, np.int16, np.uint64]))
+        table = assert_rows_equal_analyze(image, conn, method=method, threads=1 + trial % 3)
+        seen += [(table["b0"] > 1).any(), (table["b1"] > 0).any(), (table["b2"] > 0).any(),
+                 (table["pinched_vertices"] > 0).any()]
+    # several components, tunnels, cavities and pinches all occurred
+    assert (seen > 2).all(), seen
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("conn", [6, 26])
+def test_nested_and_wrapped_labels_equal_analyze(rng, conn, method):
+    image = nested(rng)
+    table = assert_rows_equal_analyze(image, conn, method=method, threads=2)
+    by_label = dict(zip(table["label"].tolist(), range(len(table["label"]))))
+    # the hollow balls enclose (b2), the torus has its tunnel, the rod goes through it
+    assert table["b2"][by_label[1]] >= 1 and table["b2"][by_label[2]] >= 1
+    assert table["b1"][by_label[4]] >= 1
+
+
+@needs_numba
+def test_many_pieces_grow_the_pair_table_and_threads_agree(rng):
+    """A noise of 6 labels on 36^3 has tens of thousands of pieces: the pair
+    table grows many times; 1 and 3 threads give the same table."""
+    image = rng.integers(0, 6, (36, 30, 33)).astype(np.uint16)
+    one = label_table(image, 26, method="compiled", threads=1)
+    three = label_table(image, 26, method="compiled", threads=3)
+    for key in one:
+        assert np.array_equal(one[key], three[key]), key
+    numpy = label_table(image, 26, method="numpy")
+    for key in one:
+        assert np.array_equal(one[key], numpy[key], equal_nan=key.startswith(("bbox", "centroid"))) or \
+            np.allclose(one[key], numpy[key]), key
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_regionprops_gives_the_same_counts_boxes_centroids_and_euler_numbers(rng, method):
+    from skimage.measure import regionprops
+
+    image = nested(rng)
+    table = label_table(image, 26, method=method)  # scikit-image's 3D Euler number is 26-connected
+    props = {p.label: p for p in regionprops(image)}
+    assert sorted(props) == table["label"].tolist()
+    for r, label in enumerate(table["label"]):
+        p = props[label]
+        assert table["voxels"][r] == p.area
+        assert table["euler_characteristic"][r] == p.euler_number
+        assert [table[f"bbox-{d}"][r] for d in range(6)] == list(p.bbox)
+        # a voxel v spans [v, v + 1]: its centre is scikit-image's v + 0.5
+        assert np.allclose([table[f"centroid-{d}"][r] - 0.5 for d in range(3)], p.centroid)
+
+
+def test_world_units_follow_the_pitch_per_axis_and_the_origin():
+    image = np.zeros((6, 7, 8), np.uint8)
+    image[1:4, 2:4, 3:7] = 9  # 3 x 2 x 4 voxels
+    t = label_table(image, pitch=(0.5, 2.0, 3.0), origin=(10, 20, 30))
+    assert t["volume"][0] == pytest.approx(24 * 0.5 * 2 * 3)
+    # faces: 2 x (2*4) across axis 0 of area 6, 2 x (3*4) across axis 1 of area 1.5, 2 x (3*2) across 2 of area 1
+    assert t["surface_area"][0] == pytest.approx(16 * 6 + 24 * 1.5 + 12 * 1.0)
+    assert [t[f"bbox-{d}"][0] for d in range(6)] == [10.5, 24, 39, 12, 28, 51]
+    assert [t[f"centroid-{d}"][0] for d in range(3)] == pytest.approx([11.25, 26, 45])
+
+
+def test_labels_asked_for_in_order_with_absent_ones_as_empty_masks(rng):
+    image = nested(rng).astype(np.int64) * 1000 - 3000  # negative labels, wide values
+    table = label_table(image, labels=[-2000, 12345, -3000])
+    assert table["label"].tolist() == [-2000, 12345, -3000]
+    assert table["voxels"][1] == 0 and np.isnan(table["bbox-0"][1]) and table["genera"][1] == ()
+    empty = analyze_report(np.zeros((3, 3, 3), bool), 6)
+    assert row_report(table, 1) == empty
+    for r in (0, 2):
+        assert row_report(table, r) == analyze_report(image == table["label"][r], 6)
+
+
+def test_without_surfaces_the_surface_columns_are_left_out(rng):
+    image = nested(rng)
+    full, short = label_table(image), label_table(image, surfaces=False)
+    assert set(full) - set(short) == {"surfaces", "genera", "surface_euler", "pinched_vertices", "doubled_edges"}
+    for key in short:
+        assert np.array_equal(short[key], full[key], equal_nan=True), key
+
+
+def test_pandas_takes_the_columns_as_they_are(rng):
+    pd = pytest.importorskip("pandas")
+    table = label_table(nested(rng))
+    frame = pd.DataFrame(table)
+    assert len(frame) == len(table["label"]) and list(frame.columns) == list(table)
+
+
+def test_bool_image_is_label_1():
+    image = ball(4.0, 12) & ~ball(2.0, 12)
+    table = label_table(image)
+    assert table["label"].tolist() == [1]
+    assert row_report(table, 0) == analyze_report(image, 6)
+
+
+@pytest.mark.parametrize("bad, words", [
+    (np.zeros((4, 4), np.uint8), "3D"),
+    (np.zeros((4, 4, 4), np.float32), "integers"),
+])
+def test_bad_images_are_one_line(bad, words):
+    with pytest.raises(IsoflowError, match=words):
+        label_table(bad)
+
+
+def test_bad_choices_are_one_line():
+    image = np.zeros((3, 3, 3), np.uint8)
+    with pytest.raises(IsoflowError, match="asked twice: 2"):
+        label_table(image, labels=[2, 1, 2])
+    with pytest.raises(IsoflowError, match="not a value a uint8"):
+        label_table(image, labels=[300])
+    with pytest.raises(IsoflowError, match="method"):
+        label_table(image, method="fast")
+    with pytest.raises(IsoflowError, match="connectivity 18"):
+        label_table(image, 18)

@@ -1,0 +1,55 @@
+"""The pieces of a label image (every value's 6-connected components, the
+value 0 too) are cc3d's components of each value, numbered in C order of
+their first voxel, with their counts, boxes and coordinate sums."""
+
+import numpy as np
+import pytest
+
+from isoflow.scale.compiled import have_numba
+
+pytestmark = pytest.mark.skipif(not have_numba(), reason="numba not installed")
+
+
+def test_pieces_are_each_values_face_components(rng):
+    import cc3d
+
+    from isoflow.scale.pieces import label_pieces
+
+    for _ in range(40):
+        shape = tuple(rng.integers(2, 12, 3))
+        image = rng.integers(0, rng.integers(2, 5), shape).astype(np.int16) - 1  # -1 too
+        found = label_pieces(image)
+        ids = found["ids"]
+        # C order of first voxels: the first voxel of piece p comes before that of p + 1
+        first = np.unique(ids.ravel(), return_index=True)[1]
+        assert (np.diff(first) > 0).all() and found["n"] == len(first)
+        for value in np.unique(image):
+            theirs = cc3d.connected_components((image == value).astype(np.uint8), connectivity=6)
+            ours = np.where(image == value, ids, 0)
+            # the same partition: a one-to-one map between the two numberings
+            pairs = np.unique(np.stack([ours[image == value], theirs[image == value]]), axis=1)
+            assert len(np.unique(pairs[0])) == len(np.unique(pairs[1])) == pairs.shape[1]
+        for p in range(1, found["n"] + 1):
+            where = np.argwhere(ids == p)
+            assert found["counts"][p] == len(where)
+            assert (found["lo"][p] == where.min(axis=0)).all() and (found["hi"][p] == where.max(axis=0)).all()
+            assert (found["sums"][p] == where.sum(axis=0)).all()
+            assert found["values"][p] == np.uint16(image[tuple(where[0])])
+
+
+def test_contact_table_counts_each_pair_of_voxels_once():
+    """Every pair of voxels of a 3x3x3 neighbourhood is in exactly one block
+    of BLOCK_PAIRS, with the adjacency its offset says."""
+    from isoflow.scale.pieces import BLOCK_PAIRS
+
+    seen = {}
+    for w in np.ndindex(3, 3, 3):  # vertices of a 2x2x2 cube of voxels, and around it
+        for o1, o2, how in BLOCK_PAIRS:
+            a = tuple(np.array(w) - 1 + [(o1 >> d) & 1 for d in range(3)])
+            b = tuple(np.array(w) - 1 + [(o2 >> d) & 1 for d in range(3)])
+            if all(0 <= c < 2 for c in a + b):
+                key = tuple(sorted((a, b)))
+                assert key not in seen
+                seen[key] = how
+    assert len(seen) == 28  # every pair of the 8 voxels
+    assert all(how == int(np.abs(np.subtract(*k)).sum()) for k, how in seen.items())

@@ -1,0 +1,167 @@
+"""``info --labels`` and ``surface --labels`` as run (issue 25): the table
+of every label of a file, the NIfTI segmentation's units, the CSV and JSON,
+one closed surface per label read back by trimesh and pymeshlab."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import trimesh
+from test_input_errors import fails  # one line on stderr, exit 2
+
+from isoflow import analyze, label_table
+from isoflow.cli import main
+
+
+def run(capsys, *args):
+    assert main([*map(str, args)]) == 0, capsys.readouterr().err
+    return capsys.readouterr().out
+
+
+@pytest.fixture
+def segmentation(rng):
+    """Grains of labels 1-5 with touching faces, edges and vertices, a
+    hollow label 9 around label 4's core, 0 between."""
+    image = rng.choice([0, 1, 2, 3, 5], size=(16, 14, 12), p=[0.2, 0.2, 0.2, 0.2, 0.2]).astype(np.uint16)
+    image[3:11, 3:11, 3:10] = 9
+    image[5:9, 5:9, 5:8] = 4
+    return image
+
+
+def test_info_labels_json_rows_equal_analyze_per_label(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    for conn in (6, 26):
+        report = json.loads(run(capsys, "info", tmp_path / "seg.npy", "--labels", "--json", "--connectivity", conn))
+        rows = report["labels"]
+        assert [r["label"] for r in rows] == [1, 2, 3, 4, 5, 9]
+        for row in rows:
+            want = analyze(segmentation == row["label"], conn)
+            assert (row["voxels"], row["euler_characteristic"]) == (want["voxels"], want["euler_characteristic"])
+            assert [row["b0"], row["b1"], row["b2"]] == want["betti"]
+            assert row["genera"] == [s["genus"] for s in want["surfaces"]]
+            assert [row[f"n-{i}"] for i in range(9)] == want["n"]
+        assert report["labels"][-1]["b2"] == 1  # 9 holds 4
+
+
+def test_info_labels_choice_keeps_its_order_and_notes_absent_labels(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    assert main(["info", str(tmp_path / "seg.npy"), "--labels", "9,2-3,40", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert [r["label"] for r in json.loads(out)["labels"]] == [9, 2, 3]
+    assert "note" in err and "(40)" in err
+
+
+def test_info_labels_terminal_table_shows_the_first_rows_and_a_summary(tmp_path, capsys, rng):
+    image = np.repeat(np.arange(1, 31, dtype=np.uint8), 2)[:, None, None] * np.ones((1, 3, 3), np.uint8)
+    np.save(tmp_path / "slabs.npy", image)
+    out = run(capsys, "info", tmp_path / "slabs.npy", "--labels")
+    lines = out.splitlines()
+    assert "30 labels" in lines[0]
+    assert "... 10 more labels" in out
+    assert lines[-1].startswith("  all: 30 labels, 540 voxels")
+    assert len(lines) == 1 + 1 + 20 + 1 + 1
+
+
+def test_info_labels_csv_is_the_full_table_and_needs_force(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    out_csv = tmp_path / "t.csv"
+    run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", out_csv)
+    with open(out_csv, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    table = label_table(segmentation)
+    assert [int(r["label"]) for r in rows] == table["label"].tolist()
+    assert list(rows[0]) == list(table)
+    assert [r["genera"] for r in rows] == [";".join(map(str, g)) for g in table["genera"]]
+    assert [float(r["surface_area"]) for r in rows] == table["surface_area"].tolist()
+    fails(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", out_csv, words=("t.csv", "exists", "--force"))
+    run(capsys, "info", tmp_path / "seg.npy", "--labels", "3", "--csv", out_csv, "--force")
+    assert len(out_csv.read_text().splitlines()) == 2
+
+
+def test_info_labels_on_an_anisotropic_nifti_is_in_the_files_units(tmp_path, capsys, segmentation):
+    nib = pytest.importorskip("nibabel")
+    zooms = (0.5, 0.75, 2.0)
+    affine = np.diag([*zooms, 1.0])
+    affine[:3, 3] = (10, -20, 30)  # voxel 0's centre
+    nib.save(nib.Nifti1Image(segmentation.astype(np.int16), affine), tmp_path / "seg.nii.gz")
+    rows = json.loads(run(capsys, "info", tmp_path / "seg.nii.gz", "--labels", "--json"))["labels"]
+    read = nib.load(tmp_path / "seg.nii.gz")
+    zx, zy, zz = (float(z) for z in read.header.get_zooms())
+    assert (zx, zy, zz) == zooms
+    unit = label_table(segmentation)  # the same image in voxel units
+    for r, row in enumerate(rows):
+        mask = segmentation == row["label"]
+        assert row["volume"] == pytest.approx(mask.sum() * zx * zy * zz)
+        faces = [np.count_nonzero(np.diff(np.pad(mask, 1), axis=d)) for d in range(3)]
+        assert row["surface_area"] == pytest.approx(faces[0] * zy * zz + faces[1] * zx * zz + faces[2] * zx * zy)
+        assert row["bbox-0"] == pytest.approx(10 - zx / 2 + zx * unit["bbox-0"][r])
+        assert row["centroid-2"] == pytest.approx(30 - zz / 2 + zz * unit["centroid-2"][r])
+
+
+def test_surface_labels_glb_one_closed_manifold_per_label(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    out = tmp_path / "s.glb"
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", out, "--connectivity", "26")
+    assert "6 labels" in said and "read back" in said
+    table = label_table(segmentation, 26)
+    scene = trimesh.load(out, force="scene", process=False)
+    assert sorted(scene.graph.nodes_geometry) == sorted(f"label_{v}" for v in table["label"])
+    for r, label in enumerate(table["label"]):
+        _, geometry = scene.graph[f"label_{label}"]
+        mesh = scene.geometry[geometry]
+        assert mesh.is_watertight and mesh.is_winding_consistent
+        # the mesh is split at the pinches and around doubled edges, where
+        # its triangles keep their own copies; V - E + F is the table's
+        assert mesh.euler_number == table["surface_euler"][r]
+        assert abs(mesh.volume) == pytest.approx(table["volume"][r])
+
+
+def test_surface_labels_glb_opens_in_pymeshlab(tmp_path, capsys, segmentation):
+    pymeshlab = pytest.importorskip("pymeshlab")
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.glb")
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/each/", "--suffix", ".ply")
+    table = label_table(segmentation)
+    for r, label in enumerate(table["label"]):
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(tmp_path / "each" / f"label_{label}.ply"))
+        m = ms.current_mesh()
+        measures = ms.get_topological_measures()
+        assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
+        assert m.vertex_number() - measures["edges_number"] + m.face_number() == table["surface_euler"][r]
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(tmp_path / "s.glb"))  # every node, in one mesh
+    measures = ms.get_topological_measures()
+    assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
+
+
+def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["label_4.obj", "label_9.obj"]
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "4", "-o", f"{tmp_path}/out/", "--suffix", "obj",
+          words=("label_4.obj", "exists"))
+
+
+@pytest.mark.parametrize("extra, words", [
+    (("--labels", "3-x"), ("--labels 3-x", "'3-x'")),
+    (("--labels", "5-2"), ("backwards",)),
+    (("--labels", "--label", "3"), ("--label", "--labels")),
+    (("--labels", "77"), ("none of the labels", "77")),
+    (("--csv", "t.csv"), ("--csv", "--labels")),
+])
+def test_bad_label_options_are_one_line(tmp_path, capsys, segmentation, extra, words):
+    np.save(tmp_path / "seg.npy", segmentation)
+    fails(capsys, "info", tmp_path / "seg.npy", *extra, words=words)
+
+
+def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply", words=(".glb", "DIR/"))
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", words=("--suffix",))
+
+
+def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    fails(capsys, "info", tmp_path / "seg.npy", words=("threshold it first", "--label N", "--labels"))
