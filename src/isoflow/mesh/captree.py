@@ -409,7 +409,7 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
                     if d <= reach:
                         if h == 0:
                             return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
-                        kind = _near_kind(T, t, px, py, pz, d, h, reach, abs(det) <= tol * nlen[t])
+                        kind = near_kind(T, t, px, py, pz, d, h, reach, abs(det) <= tol * nlen[t])
                         if kind == NEAR:
                             if nnear == near.shape[0]:
                                 return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
@@ -426,7 +426,7 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
                 for e in range(owner[t], owner[t + 1]):
                     add_edge(grad, E, e, 1, px, py, pz, h)  # the cap's boundary runs against the chain
     if h > 0 and nnear:
-        _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, grad)
+        cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, grad)
     hess = grad[3]
     if not hess < math.inf:  # NaN: an edge of the far part within h (rounding); let the caller split
         return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
@@ -438,7 +438,7 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
 
 
 @njit(cache=True, nogil=True)
-def _near_kind(T, t, px, py, pz, d, h, reach, on_plane):
+def near_kind(T, t, px, py, pz, d, h, reach, on_plane):
     """A triangle within ``reach`` of p (at distance d): :data:`NEAR` if an
     edge is within reach (or p is on its plane), :data:`CROSSING` if it
     meets the ball of radius h, else :data:`FAR`."""
@@ -453,7 +453,7 @@ def _near_kind(T, t, px, py, pz, d, h, reach, on_plane):
 
 
 @njit(cache=True, nogil=True)
-def _cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, acc):
+def cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, acc):
     """The far part's boundary edges that come from the near triangles:
     the chain edges they hold (reversed, as in the cap's boundary) minus
     their own boundaries, opposite copies cancelled (equal coordinates:

@@ -68,19 +68,21 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.cancel import STOP, run_pieces
 from ..scale.jit import njit
+from .block_lanes import (FORCE_IN, FORCE_OUT, MAX_R, PAINT_LANES, TIE_PENDING, TIE_WINDING, UNDECIDED,
+                          exact_centres, paint_lanes)
+from .cap_lanes import FLAT_MAX, evaluate_lanes, lanes_arrays
 from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range, near_sum
 
-#: centres closer than this (in pitches) to the cap are summed over M itself
+#: centres closer than this (in pitches) to the cap, and those whose w_C
+#: is within TIE_WINDING of a half-integer, are summed over M itself
 TIE_PITCHES = 1e-6
-#: ... and those whose w_C is this close to a half-integer
-TIE_WINDING = 1e-9
 #: where they are summed: the centre moved as the scanline's tie rule moves
 #: it, (x + eta, y + eps, -delta) with 0 < eps << eta << delta (pitches)
 TIE_STEP = np.array([1e-7, 1e-9, -1e-5])
 #: blocks at the coarsest level are about this many per axis
 TOP_BLOCKS = 16
 #: triangles with an edge within this many block radii (beyond the block) are summed at each centre
-REACH = 2.0
+REACH = 8.0
 #: a block of at most this many centres that leaves at most a quarter of
 #: them undecided has those evaluated one by one instead of being split
 SMALL = 64
@@ -90,15 +92,11 @@ NEAR_PAINT = 4
 THETA = 0.3
 #: pieces of top blocks per slab (the unit of progress and of the threads' work)
 PIECES = 512
+#: an undecided block with at most this many (centre, cap triangle) pairs
+#: is summed exactly at every centre, in SIMD lanes, instead of being split
+EXACT_PAIRS = 1 << 16
 _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 0.7537])
-
-FORCE_IN, FORCE_OUT = 127, -128
-#: a centre the kernel leaves to be summed over M (then FORCE_IN or FORCE_OUT)
-TIE_PENDING = -127
-#: a centre that the model of its block did not decide (evaluated on its own next)
-UNDECIDED = -126
-#: the largest |R| the int8 rule holds beside these codes
-MAX_R = 125
+__all__ = ["FORCE_IN", "FORCE_OUT", "TIE_PENDING", "TIE_WINDING", "UNDECIDED"]  # the rule's codes, for callers
 
 
 # ---------------------------------------------------------------------------
@@ -274,14 +272,17 @@ def gwn(points, triangles) -> np.ndarray:
 
 @njit(cache=True, nogil=True)
 def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, nlen, E, elen, owner, lo, hi, child,
-                   centre, rho, A, Mo, S, L, flags, stop):
+                   centre, rho, A, Mo, S, L, C, D, eo, flags, stop):
     """R on every centre of the blocks ``tops`` (rows ``i0, i1, j0, j1, k0,
     k1`` in grid coordinates), written into ``rule`` whose voxel (0, 0, 0)
     is grid voxel ``box``; centres left for M's own sum get
-    :data:`TIE_PENDING`.  ``flags[0]`` is set where |R| would exceed
+    :data:`TIE_PENDING`; blocks are modelled in lanes over all the cap's
+    triangles (``C, D, eo``, :func:`isoflow.mesh.cap_lanes.lanes_arrays`)
+    where ``C`` holds any, through the tree otherwise.  ``flags[0]`` is set where |R| would exceed
     :data:`MAX_R`; ``flags[1:]`` count blocks evaluated, single centres
     evaluated, retries with a tighter tree, hits, splits, near triangles
-    and crossing triangles summed at centres.  Returns early
+    and crossing triangles summed at centres, and centres summed exactly
+    over the whole cap.  Returns early
     (work undone) once ``stop[0]`` is set."""
     blocks = np.empty((512, 6), dtype=np.int64)
     stack = np.empty(64, dtype=np.int64)
@@ -289,6 +290,11 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     cross = np.empty(MAX_NEAR, dtype=np.int64)
     edges = np.empty((6 * MAX_NEAR, 2, 3))
     grad = np.empty(4)  # the gradient, and scratch for the derivative bound
+    m = PAINT_LANES  # centres in lanes at once
+    X, Y, Z, wl, gap, J = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
+    Tn, ln = np.empty((MAX_NEAR, 3, 3)), np.empty(MAX_NEAR)
+    flat = C.shape[1] > 0
+    ang, dets, keep = np.empty(C.shape[1]), np.empty(C.shape[1]), np.empty(C.shape[1], dtype=np.bool_)
     for q in range(tops.shape[0]):
         if stop[0]:
             return
@@ -310,25 +316,37 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
             flags[1] += 1
             flags[2] += h == 0
             while True:
-                w, err, var, hess, status, nn, nc = evaluate(px, py, pz, h, reach, th, tol, T, nlen, E, elen, owner,
-                                                             lo, hi, child, centre, rho, A, Mo, S, L, stack, near,
-                                                             cross, edges, grad)
+                if flat:
+                    w, err, var, hess, status, nn, nc = evaluate_lanes(px, py, pz, h, reach, tol, T, nlen, E, owner,
+                                                                       C, D, eo, near, cross, edges, grad, ang, dets,
+                                                                       keep)
+                else:
+                    w, err, var, hess, status, nn, nc = evaluate(px, py, pz, h, reach, th, tol, T, nlen, E, elen,
+                                                                 owner, lo, hi, child, centre, rho, A, Mo, S, L,
+                                                                 stack, near, cross, edges, grad)
                 if status == HIT:
                     flags[4] += 1
                     break
                 rest = var + 0.5 * h * h * hess
                 left = _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, err + rest + TIE_WINDING, px, py, pz,
-                              T, nlen, near, nn, cross, nc, origin, pitch, tol, flags)
+                              T, nlen, near, nn, cross, nc, origin, pitch, tol, flags, X, Y, Z, wl, gap, J, Tn, ln)
                 if left == 0 or th == 0 or rest > err:  # a tighter tree cannot help
                     break
                 # a remainder far beyond the margin: straight to the exact sum
                 th = th / 3.0 if th == theta and err < 0.25 else 0.0
                 flags[3] += 1
+            n = (i1 - i0) * (j1 - j0) * (k1 - k0)
             if left == 0:
                 pass
+            elif n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS:
+                every = left < 0 or left == n  # (a block the model could not paint holds no codes)
+                done = exact_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, tol, T, nlen, X, Y, Z,
+                                     wl, gap)
+                flags[0] |= done < 0
+                flags[8] += done
             elif h == 0:
                 rule[i0 - box[0], j0 - box[1], k0 - box[2]] = TIE_PENDING
-            elif left > 0 and (left * 4 <= (i1 - i0) * (j1 - j0) * (k1 - k0) <= SMALL or left <= 8):
+            elif left > 0 and (left * 4 <= n <= SMALL or left <= 8):
                 for i in range(i0, i1):  # the undecided centres on their own
                     for j in range(j0, j1):
                         for k in range(k0, k1):
@@ -367,7 +385,7 @@ def _push_children(blocks, nb, i0, i1, j0, j1, k0, k1):
 
 @njit(cache=True, nogil=True)
 def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross, nc, origin,
-           pitch, tol, flags):
+           pitch, tol, flags, X, Y, Z, wl, gap, J, Tn, ln):
     """R on the block's centres p from the model at its centre q:
     ``round(w + grad . (p - q) + w_near(p) +- bound)`` (w_near summed over
     the near triangles at p).  Centres where the interval holds a
@@ -389,7 +407,7 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nle
             (i1 - i0 - 1) ** 2 + (j1 - j0 - 1) ** 2 + (k1 - k0 - 1) ** 2))
         wq, spread = (w + wn, spread + var) if apart else (w, math.inf)
     constant = nc == 0 and spread < 0.5 and math.floor(wq - spread + 0.5) == math.floor(wq + spread + 0.5)
-    if not constant and nn + nc > NEAR_PAINT and n > SMALL:  # cheaper split: the children have fewer
+    if not constant and nn + nc > NEAR_PAINT and n > max(SMALL, PAINT_LANES):  # cheaper split: the children have fewer
         return n
     if constant:  # one R for the block
         r = math.floor(wq + 0.5)
@@ -398,6 +416,13 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nle
         else:
             rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = r
         return 0
+    if n <= PAINT_LANES:  # the near triangles summed at every centre at once
+        flags[6] += n * nn
+        flags[7] += n * nc
+        left = paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross,
+                           nc, origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln)
+        flags[0] |= left < 0
+        return max(left, 0)
     left = 0
     for i in range(i0, i1):
         px = origin[0] + pitch * (i + 0.5)
@@ -451,7 +476,7 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     ``tree`` holds the cap's triangles and chain, ``Tm`` the mesh's
     triangles (for the ties), all in the frame of ``origin`` and ``pitch``.
     ``progress(done, total)`` is called after each piece of blocks;
-    ``counts`` (int64 (7,)), if given, is incremented with the work done
+    ``counts`` (int64 (8,)), if given, is incremented with the work done
     (see :func:`_decide_blocks`).
     """
     if len(tree.T) == 0:
@@ -463,9 +488,11 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     # pieces in a scattered order: progress (and the time left) grows evenly
     tops = tops[np.random.default_rng(0).permutation(len(tops))]
     pieces = np.array_split(tops, min(PIECES, len(tops)))
-    flags = np.zeros(8, dtype=np.int64)
+    flags = np.zeros(9, dtype=np.int64)
     corner = np.array([i0, j0, k0], dtype=np.int64)
-    args = (rule, corner, origin, float(pitch), THETA, REACH, TIE_PITCHES * pitch) + tree.arrays() + (flags, STOP)
+    flat = lanes_arrays(tree) if len(tree.T) <= FLAT_MAX else (np.zeros((9, 0)), np.zeros((6, 0)),
+                                                                 np.zeros(0, dtype=np.int64))
+    args = (rule, corner, origin, float(pitch), THETA, REACH, TIE_PITCHES * pitch) + tree.arrays() + flat + (flags, STOP)
     run_pieces(lambda n: _decide_blocks(pieces[n], *args), len(pieces), threads=threads, progress=progress)
     if counts is not None:
         counts += flags[1:]

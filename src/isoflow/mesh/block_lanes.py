@@ -1,0 +1,182 @@
+"""A block of voxel centres decided with its centres in SIMD lanes: the
+block's first-order model plus its near triangles summed at every centre
+at once, and the centres that the model leaves undecided summed exactly
+over the whole cap.
+
+These are the steps of :mod:`isoflow.mesh.winding`'s rule ``R =
+round(w_C)`` that cost per centre: the model of a block (its far part's
+value, gradient and bound, :func:`isoflow.mesh.captree.evaluate`) costs
+one walk of the cap's tree, but its near triangles and the exact sum
+cost a solid angle per centre and triangle.  Here each of those loops
+runs over the centres of the block for one triangle at a time
+(:func:`isoflow.mesh.solid_angles.winding_lanes`), so the arithmetic is
+that of the scalar code, lane by lane: the same values up to rounding,
+and rounding is what :data:`TIE_WINDING` absorbs.
+
+The rule's codes live here (the lanes write them).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..scale.jit import njit
+from .captree import dist_triangle
+from .solid_angles import winding_lanes
+
+#: centres whose w_C is this close to a half-integer are decided by the tie rule
+TIE_WINDING = 1e-9
+#: codes of a centre that the mesh's own sum decided
+FORCE_IN, FORCE_OUT = 127, -128
+#: a centre the kernel leaves to be summed over M (then FORCE_IN or FORCE_OUT)
+TIE_PENDING = -127
+#: a centre that the model of its block did not decide (evaluated on its own next)
+UNDECIDED = -126
+#: the largest |R| the int8 rule holds beside these codes
+MAX_R = 125
+#: blocks of at most this many centres are painted in lanes
+PAINT_LANES = 64
+
+
+@njit(cache=True, nogil=True)
+def centres(i0, i1, j0, j1, k0, k1, origin, pitch, X, Y, Z):
+    """The block's centres into ``X, Y, Z`` (i, then j, then k); their number."""
+    n = 0
+    for i in range(i0, i1):
+        for j in range(j0, j1):
+            for k in range(k0, k1):
+                X[n] = origin[0] + pitch * (i + 0.5)
+                Y[n] = origin[1] + pitch * (j + 0.5)
+                Z[n] = origin[2] + pitch * (k + 0.5)
+                n += 1
+    return n
+
+
+@njit(cache=True, nogil=True)
+def on_triangles(T, nlen, which, m, px, py, pz, tol):
+    """Whether p lies within ``tol`` of one of the triangles ``T[which[:m]]``
+    (all of ``T`` where ``which`` is None)."""
+    for q in range(m if which is not None else T.shape[0]):
+        t = which[q] if which is not None else q
+        ax, ay, az = T[t, 0, 0] - px, T[t, 0, 1] - py, T[t, 0, 2] - pz
+        bx, by, bz = T[t, 1, 0] - px, T[t, 1, 1] - py, T[t, 1, 2] - pz
+        cx, cy, cz = T[t, 2, 0] - px, T[t, 2, 1] - py, T[t, 2, 2] - pz
+        det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        if abs(det) <= tol * nlen[t] and dist_triangle(T, t, px, py, pz) <= tol:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def exact_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, tol, T, nlen, X, Y, Z, w, gap):
+    """R at the block's centres (all of them with ``every``, else those
+    marked :data:`UNDECIDED`) from the exact sum over the cap's triangles
+    ``T``: :data:`TIE_PENDING` where a centre lies within ``tol`` of the
+    cap or its ``w_C`` within :data:`TIE_WINDING` of a half-integer.
+    Returns the number summed, or -1 where |R| would exceed :data:`MAX_R`."""
+    n = 0
+    for i in range(i0, i1):
+        for j in range(j0, j1):
+            for k in range(k0, k1):
+                if every or rule[i - box[0], j - box[1], k - box[2]] == UNDECIDED:
+                    X[n] = origin[0] + pitch * (i + 0.5)
+                    Y[n] = origin[1] + pitch * (j + 0.5)
+                    Z[n] = origin[2] + pitch * (k + 0.5)
+                    n += 1
+    winding_lanes(T, nlen, X, Y, Z, n, tol, w, gap)
+    m = 0
+    big = False
+    for i in range(i0, i1):
+        for j in range(j0, j1):
+            for k in range(k0, k1):
+                if not (every or rule[i - box[0], j - box[1], k - box[2]] == UNDECIDED):
+                    continue
+                x = w[m]
+                val = math.floor(x - TIE_WINDING + 0.5)
+                if (gap[m] <= 0 and on_triangles(T, nlen, None, 0, X[m], Y[m], Z[m], tol)) or val != math.floor(
+                        x + TIE_WINDING + 0.5):
+                    rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
+                elif val > MAX_R or val < -MAX_R:
+                    big = True
+                else:
+                    rule[i - box[0], j - box[1], k - box[2]] = val
+                m += 1
+    return -1 if big else n
+
+
+@njit(cache=True, nogil=True)
+def near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, w, gap, J, Tn, ln):
+    """At each centre ``i < n``: ``w[i]`` the near triangles' winding
+    number plus the jumps of the crossing ones between q and the centre
+    (``w_t = -s / 2 +`` a continuous part, s the side of t's plane), and
+    ``gap[i] <= 0`` where a near triangle's or a crossing one's plane
+    passes within ``tol`` of it (``J`` is scratch)."""
+    for q in range(nn):
+        Tn[q] = T[near[q]]
+        ln[q] = nlen[near[q]]
+    winding_lanes(Tn[:nn], ln, X, Y, Z, n, tol, w, gap)
+    for i in range(n):
+        J[i] = 0.0
+    for c in range(nc):
+        t = cross[c]
+        ax, ay, az = T[t, 0, 0], T[t, 0, 1], T[t, 0, 2]
+        ux, uy, uz = T[t, 1, 0] - ax, T[t, 1, 1] - ay, T[t, 1, 2] - az
+        vx, vy, vz = T[t, 2, 0] - ax, T[t, 2, 1] - ay, T[t, 2, 2] - az
+        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        here = 1.0 if (qx - ax) * nx + (qy - ay) * ny + (qz - az) * nz > 0 else 0.0
+        margin = tol * nlen[t]
+        for i in range(n):
+            sp = (X[i] - ax) * nx + (Y[i] - ay) * ny + (Z[i] - az) * nz
+            J[i] += here - (1.0 if sp > 0 else 0.0)
+            gap[i] = min(gap[i], abs(sp) - margin)
+    for i in range(n):
+        w[i] += J[i]
+
+
+@njit(cache=True, nogil=True)
+def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross, nc,
+                origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln):
+    """R on the block's centres p from its model at q,
+    ``round(w + grad . (p - q) + w_near(p) +- bound)``, with the near
+    triangles summed in lanes (:func:`near_lanes`): :data:`UNDECIDED`
+    where the interval holds a half-integer, :data:`TIE_PENDING` on a near
+    or crossing triangle.  Returns how many are undecided, or -1 where
+    |R| would exceed :data:`MAX_R`."""
+    n = centres(i0, i1, j0, j1, k0, k1, origin, pitch, X, Y, Z)
+    near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, wl, gap, J, Tn, ln)
+    left = 0
+    big = False
+    m = 0
+    for i in range(i0, i1):
+        for j in range(j0, j1):
+            for k in range(k0, k1):
+                x = w + grad[0] * (X[m] - qx) + grad[1] * (Y[m] - qy) + grad[2] * (Z[m] - qz) + wl[m]
+                val = math.floor(x - bound + 0.5)
+                if gap[m] <= 0 and (on_triangles(T, nlen, near, nn, X[m], Y[m], Z[m], tol)
+                                    or _on_crossing(T, nlen, cross, nc, X[m], Y[m], Z[m], tol)):
+                    rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
+                elif val != math.floor(x + bound + 0.5):
+                    rule[i - box[0], j - box[1], k - box[2]] = UNDECIDED
+                    left += 1
+                elif val > MAX_R or val < -MAX_R:
+                    big = True
+                else:
+                    rule[i - box[0], j - box[1], k - box[2]] = val
+                m += 1
+    return -1 if big else left
+
+
+@njit(cache=True, nogil=True)
+def _on_crossing(T, nlen, cross, nc, px, py, pz, tol):
+    """Whether p lies within ``tol`` of a crossing triangle's plane (there,
+    within the ball, the triangle itself)."""
+    for c in range(nc):
+        t = cross[c]
+        ux, uy, uz = T[t, 1, 0] - T[t, 0, 0], T[t, 1, 1] - T[t, 0, 1], T[t, 1, 2] - T[t, 0, 2]
+        vx, vy, vz = T[t, 2, 0] - T[t, 0, 0], T[t, 2, 1] - T[t, 0, 1], T[t, 2, 2] - T[t, 0, 2]
+        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        if abs((px - T[t, 0, 0]) * nx + (py - T[t, 0, 1]) * ny + (pz - T[t, 0, 2]) * nz) <= tol * nlen[t]:
+            return True
+    return False
