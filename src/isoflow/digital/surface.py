@@ -173,6 +173,16 @@ class QuadMesh:
     vertex at the edge's midpoint, listed in ``edge_midpoint``; those faces are
     pentagons (or more) with collinear corners. They are rare on voxelised
     shapes and frequent in random noise.
+
+    Examples
+    --------
+    A single voxel: 8 vertices, 6 quads, a sphere (V - E + F = 2), each
+    corner a convex corner (a = 1, eq. 4.10):
+
+    >>> import numpy as np
+    >>> m = boundary_mesh(np.ones((1, 1, 1), bool))
+    >>> len(m.vertices), len(m.faces), m.euler_characteristic, m.a.tolist()
+    (8, 6, 2, [1, 1, 1, 1, 1, 1, 1, 1])
     """
 
     vertices: np.ndarray  # (V, 3) float64, array-corner units

@@ -196,6 +196,11 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     or whose numbers are not all integers in range, is read again line by
     line, for the one-line error that names the line.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A text file of points.
+
     Returns
     -------
     numpy.ndarray
@@ -310,6 +315,24 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     (Definitions 1-2): the object is every cube whose 2^n corners are all
     listed; ``'voxels'`` takes each point as a voxel index.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A volume of any format of :func:`read_volume`, or a point list.
+    points_are : {"corners", "voxels"}
+        How a point list is read.
+    label : int or float, optional
+        The value whose voxels are the object, in a label image.
+
+    Returns
+    -------
+    DigitalObject
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the file and the problem.
+
     Examples
     --------
     Example 19 of the paper: 20 points, 4 cubes (a corner cube and its three
@@ -374,6 +397,26 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     keep the world position of every voxel (see the table of docs/formats.md).
     The file is written beside the target and renamed when complete, so an
     interrupted write leaves any previous file as it was.
+
+    Parameters
+    ----------
+    obj : DigitalObject
+        The object (a bare binary array is taken at the origin).
+    path : str or os.PathLike
+        The file; its suffix names the format (``FILE.h5:/dataset`` too).
+    force : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    IsoflowError
+        An existing file without ``force``, a suffix isoflow does not write,
+        a library missing, an unwritable place.
 
     Examples
     --------
