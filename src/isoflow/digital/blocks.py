@@ -1,0 +1,327 @@
+"""One block of a volume larger than memory, summed up for the report block
+by block (:mod:`isoflow.digital.outofcore`).
+
+A 3D block goes through the vertex sweep of the in-memory report
+(:func:`isoflow.scale.sweep.sweep` on its bit rows): its runs and gaps are
+labelled under the boundary mesh's adjacencies
+(:data:`~isoflow.digital.closed_surfaces.MESH_ADJACENCY`), and the
+histogram, the components' sums (4 chi and the faces of their boundary)
+and the doubled edges are counted at the vertices the block owns. The
+block ``[a, b)`` owns along each axis the vertices ``a + 1 .. b`` (and
+``0`` when it is the first block), those whose lower voxel is its own;
+it counts those whose upper voxel is its own too, ``a + 1 .. b - 1`` (and
+``b`` when it is the last, where voxel ``b`` is outside the volume). The
+seam between it and the next block counts the vertices ``b``
+(:mod:`isoflow.digital.seams`). The background that touches the volume's
+border is joined to the outside; elsewhere the block's faces are no
+border, and its components end there.
+
+What a block hands on is small:
+
+* the *numbers* of its components on its faces inside the volume (object
+  and background in one numbering from 2; 1 is the outside), which become
+  node keys ``block << 32 | number`` (:data:`OUTSIDE` for 1);
+* its *pieces*, the components on those faces: their sums at its own
+  vertices and cells, together with those of the components they enclose
+  that touch no face (whose surfaces are complete: their parent in the tree
+  of surfaces, :func:`~isoflow.digital.closed_surfaces.component_parents`,
+  is in the block), the place of each piece's first voxel and the key of
+  the voxel before it: the component's parent where this is its first
+  piece (in block order, then C order in the block; a first voxel at the
+  block's low z face that is no border has its voxel before in the block
+  below, and is *pending* until the seam between them looks it up);
+* the surfaces of its components that touch no face, its histogram and
+  voxels, and for the Betti numbers how many of its components touch no
+  face once the pinches join them (the connectivity's own components) and
+  the pinches between pieces;
+* its doubled edges, and the *loose ends* of the doubled spokes whose
+  other end it does not count (as keys of the edge: lower vertex, axis).
+
+A 2D block is labelled whole with the connectivity and its complement
+(cc3d); it hands on its numbers on the faces, histogram and counts.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..scale.arrays import binary
+from ..scale.compiled import using
+from ..scale.labels import label
+from .closed_surfaces import MESH_ADJACENCY, component_parents, subtree_sums, surface_counts, sweep_tables
+from .configurations import configuration_histogram, configurations
+from .topology import COMPLEMENT
+
+#: a block's numbers live in the low 32 bits of a node key, the block in the high bits
+SHIFT = 32
+#: the node key of the region outside the array and the background joined to it
+OUTSIDE = np.int64(1) << 62
+#: a piece's parent is in the block below (see the module docs)
+PENDING = -2
+#: below this many voxels a block's histogram is one configuration array
+_DIRECT_HISTOGRAM = 1 << 18
+
+
+def node_keys(numbers: np.ndarray, block: int) -> np.ndarray:
+    """Node keys of a block's numbers: 0 stays 0 (no component), 1 is
+    :data:`OUTSIDE`."""
+    n = numbers.astype(np.int64)
+    return np.where(n > 1, n | (np.int64(block) << SHIFT), np.where(n == 1, OUTSIDE, 0))
+
+
+def edge_keys(ends: np.ndarray, origin, shape) -> np.ndarray:
+    """The lattice edges of doubled spokes ``ends`` (rows: vertex (i, j, k)
+    of a box at ``origin`` of the volume ``shape``, spoke bit ``2 axis +
+    side``) as keys: the volume's vertex index of the edge's lower end, times
+    3, plus the axis. Both ends of an edge give its key."""
+    ends = np.asarray(ends, np.int64).reshape(-1, 4)
+    axis, side = ends[:, 3] >> 1, ends[:, 3] & 1
+    lower = ends[:, :3] + np.asarray(origin, np.int64)
+    lower[np.arange(len(ends)), axis] -= 1 - side
+    return np.ravel_multi_index(tuple(lower.T), tuple(n + 1 for n in shape)) * 3 + axis
+
+
+def vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
+    """Configuration counts of a box of vertices around ``vox``.
+
+    ``configurations(vox)`` covers the vertices ``0 .. E`` along each axis
+    (``E = vox.shape[axis]``, zeros outside ``vox``); this counts those with
+    index ``0`` only where ``keep_low[axis]`` and index ``E`` only where
+    ``keep_high[axis]``. The whole box is counted by
+    :func:`configuration_histogram` and the dropped vertex layers, a thin
+    shell, are subtracted; layer ``k`` along an axis needs only the voxel
+    layers ``k-1`` and ``k``, and a layer leaves out the vertices already
+    dropped along the axes before it, so that none is subtracted twice.
+    """
+    ndim = vox.ndim
+    size = 1 << (1 << ndim)
+    if vox.size < _DIRECT_HISTOGRAM:
+        keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
+        return np.bincount(configurations(vox)[keep].ravel(), minlength=size).astype(np.int64)
+    hist = configuration_histogram(vox).astype(np.int64)
+    kept = []  # per axis, the kept index range of the axes already done
+    for axis in range(ndim):
+        end = vox.shape[axis]
+        for k, keep in ((0, keep_low[axis]), (end, keep_high[axis])):
+            if keep:
+                continue
+            voxels = slice(0, 1) if k == 0 else slice(end - 1, end)
+            slab = vox[tuple(voxels if m == axis else slice(None) for m in range(ndim))]
+            pick = [slice(None)] * ndim
+            pick[axis] = 0 if k == 0 else -1
+            for m, rng in enumerate(kept):
+                pick[m] = rng
+            hist -= np.bincount(configurations(slab)[tuple(pick)].ravel(), minlength=size)
+        kept.append(slice(0 if keep_low[axis] else 1, None if keep_high[axis] else -1))
+    return hist
+
+
+def summarize_block(block, index, numblocks, origin, shape, conn: int, where: str, surfaces: bool) -> dict:
+    """What one block (``index`` in the grid ``numblocks``, its first voxel
+    at ``origin`` of the volume ``shape``) hands on (see the module docs);
+    ``where`` names the input in a message about a value that is not 0 or
+    1. On one thread: the blocks run in parallel."""
+    with using(1):
+        core = binary(block, where, near=origin)
+        if core.ndim == 3:
+            return _swept_block(core, index, numblocks, origin, shape, conn, surfaces)
+        return _labelled_block(core, index, numblocks, conn)
+
+
+def _ends(index, numblocks) -> tuple[list[bool], list[bool]]:
+    """Per axis, whether the block is the first and the last one."""
+    return [i == 0 for i in index], [i == n - 1 for i, n in zip(index, numblocks)]
+
+
+def _inner_faces(index, numblocks):
+    """(axis, side) of the block's faces inside the volume."""
+    first, last = _ends(index, numblocks)
+    return [(axis, side) for axis in range(len(index)) for side in (0, 1) if not (last if side else first)[axis]]
+
+
+def _numbering(components: dict, sizes: tuple[int, int], outside: np.ndarray) -> tuple[dict, tuple, tuple]:
+    """Number the components seen on the faces: object ones from 2 on, then
+    background ones, the ``outside`` background components 1.
+
+    ``components``: per (kind, axis, side) the component (0 ..) of every
+    face voxel of that kind, -1 elsewhere; ``sizes``: how many of each kind.
+    Returns the faces' numbers (0 for the other kind), and per kind the
+    number of every component (0: not seen) and whether it was seen."""
+    seen = (np.zeros(sizes[0], bool), np.zeros(sizes[1], bool))
+    for (kind, _, _), comp in components.items():
+        seen[kind == "bg"][comp[comp >= 0]] = True
+    seen[1][outside] = True
+    numbers = (np.zeros(sizes[0], np.int64), np.zeros(sizes[1], np.int64))
+    inner = seen[1].copy()
+    inner[outside] = False
+    numbers[0][seen[0]] = 2 + np.arange(np.count_nonzero(seen[0]))
+    numbers[1][inner] = 2 + np.count_nonzero(seen[0]) + np.arange(np.count_nonzero(inner))
+    numbers[1][outside] = 1
+    dtype = np.uint16 if 2 + np.count_nonzero(seen[0]) + np.count_nonzero(inner) < 1 << 16 else np.uint32
+    faces = {key: np.maximum(_gather(numbers[key[0] == "bg"], comp, comp >= 0), 0).astype(dtype)
+             for key, comp in components.items()}
+    return faces, numbers, seen
+
+
+def _labelled_block(core, index, numblocks, conn) -> dict:
+    """A 2D block: labels of the object (connectivity) and the background
+    (its complement); background labels on the volume's border are the
+    outside."""
+    first, last = _ends(index, numblocks)
+    hist = vertex_histogram(core, first, last)
+    labels, sizes = {}, []
+    for kind, mask, adj in (("fg", core, conn), ("bg", ~core, COMPLEMENT[conn])):
+        labels[kind], n = label(mask, adj, smallest=True)
+        sizes.append(n)
+    border = [np.take(labels["bg"], 0 if side == 0 else -1, axis=axis) for axis in range(2) for side in (0, 1)
+              if (last if side else first)[axis]]
+    outside = np.unique(np.concatenate([b.ravel() for b in border] or [np.zeros(0, int)]))
+    outside = outside[outside > 0].astype(np.int64) - 1
+    components = {(kind, axis, side): np.ascontiguousarray(np.take(labels[kind], -side, axis=axis)).astype(np.int64) - 1
+                  for kind in ("fg", "bg") for axis, side in _inner_faces(index, numblocks)}
+    faces, _, _ = _numbering(components, tuple(sizes), outside)
+    return {"hist": hist, "voxels": int(np.count_nonzero(core)), "faces": faces,
+            "nodes": {"fg": sizes[0], "bg": sizes[1] - len(outside)}, "pinches": []}
+
+
+def _face_components(core, off, goff, parents, axis: int, side: int) -> dict:
+    """The object and background component of every voxel of a face layer
+    (-1 for the other kind), from the runs and gaps of its rows."""
+    nx, ny, nz = core.shape
+    if axis == 2:  # the first or last voxel of every row
+        rows = np.arange(nx * ny)
+        layer = core[:, :, -side].reshape(-1)
+        runs, gaps = off[rows + side] - side, goff[rows + side] - side
+    else:
+        at = (core.shape[axis] - 1) * side
+        layer = np.take(core, at, axis=axis)
+        rows = at * ny + np.arange(ny) if axis == 0 else np.arange(nx) * ny + at
+        before = np.zeros_like(layer)
+        before[:, 1:] = layer[:, :-1]
+        gap_starts = ~layer & before
+        gap_starts[:, 0] = ~layer[:, 0]
+        runs = off[rows][:, None] + np.cumsum(layer & ~before, axis=1) - 1
+        gaps = goff[rows][:, None] + np.cumsum(gap_starts, axis=1) - 1
+    shape = layer.shape if axis != 2 else (nx, ny)
+    return {"fg": _gather(parents[0], runs, layer).reshape(shape), "bg": _gather(parents[1], gaps, ~layer).reshape(shape)}
+
+
+def _gather(values: np.ndarray, index: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """``values[index]`` where ``where``, -1 elsewhere (int64)."""
+    out = np.full(index.shape, -1, np.int64)
+    out[where] = values[index[where]]
+    return out
+
+
+def _swept(core, first, last, conn: int, surfaces: bool):
+    """The sweep of a block at the vertices it counts, its background on the
+    volume's border joined to the outside; with its bit rows' offsets and
+    which rows start with a run."""
+    from ..scale import bitrows, kernels, sweep
+
+    bits, off, goff = bitrows.pack(core)
+    obj_adj, bg_adj = MESH_ADJACENCY[conn]
+    counted = np.array([[0 if f else 1 for f in first], [n + 1 if e else n for n, e in zip(core.shape, last)]])
+    found = sweep.sweep(bits, core.shape, off, goff, kernels.ADJACENCY[obj_adj] + kernels.ADJACENCY[bg_adj],
+                        sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces, counted=counted,
+                        border=[flag for f, e in zip(first, last) for flag in (f, e)])
+    found["voxels"] = int(np.bitwise_count(bits).sum())
+    return found, off, goff, (bits[:-1, 0] & 1).astype(np.int64)
+
+
+def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: bool) -> dict:
+    """A 3D block through the sweep (see the module docs)."""
+    first, last = _ends(index, numblocks)
+    found, off, goff, starts = _swept(core, first, last, conn, surfaces)
+    parents = found["parents"]
+    sizes = tuple(len(r) for r in found["roots"])
+    outside = int(parents[1][-1])
+    components = {(kind, axis, side): comp for axis, side in _inner_faces(index, numblocks)
+                  for kind, comp in _face_components(core, off, goff, parents, axis, side).items()}
+    faces, numbers, seen = _numbering(components, sizes, np.array([outside]))
+    block = int(np.ravel_multi_index(index, numblocks))
+    keys = np.concatenate([node_keys(numbers[0], block), node_keys(numbers[1], block)])
+    keys[(np.concatenate(seen) == 0)] = -1
+    out = {"hist": found["hist"], "voxels": found["voxels"], "faces": faces}
+    out.update(_betti_nodes(found, keys, seen, sizes, outside, conn))
+    if surfaces:
+        out.update(_pieces(found, keys, seen, off, goff, starts, block, first[2], core.shape[1]))
+        out["doubled"] = found["doubled"]
+        out["loose"] = [edge_keys(found["loose"], origin, shape)]
+    return out
+
+
+def _betti_nodes(found: dict, keys: np.ndarray, seen, sizes, outside: int, conn: int) -> dict:
+    """For the Betti numbers: per kind the block's nodes (its components
+    that touch no face, once the pinches join them, and its pieces; not the
+    outside) and the pinches between pieces (pairs of keys to join), on the
+    side the pinches join (the object under 26, the background under 6)."""
+    from ..scale.kernels import join_pairs
+
+    nodes = {}
+    for kind, n, s in (("fg", sizes[0], seen[0]), ("bg", sizes[1], seen[1])):
+        nodes[kind] = int(np.count_nonzero(~s)) + int(np.count_nonzero(s)) - (kind == "bg")
+    kind = 0 if conn == 26 else 1
+    pairs = found["parents"][kind][found["pairs"]]
+    if not len(pairs):
+        return {"nodes": nodes, "pinches": []}
+    cluster = np.arange(sizes[kind], dtype=np.int32)
+    join_pairs(cluster, pairs)
+    mine = keys[:sizes[0]] if kind == 0 else keys[sizes[0]:]
+    has_piece = np.zeros(sizes[kind], bool)
+    has_piece[cluster[seen[kind]]] = True
+    roots = cluster == np.arange(sizes[kind])
+    name = "fg" if kind == 0 else "bg"
+    nodes[name] = int(np.count_nonzero(roots & ~has_piece)) + int(np.count_nonzero(seen[kind])) - kind
+    pieces = np.flatnonzero(seen[kind])
+    pieces = pieces[np.argsort(cluster[pieces], kind="stable")]
+    same = cluster[pieces[1:]] == cluster[pieces[:-1]]
+    return {"nodes": nodes, "pinches": [np.stack([mine[pieces[:-1][same]], mine[pieces[1:][same]]])]}
+
+
+def _pieces(found, keys, seen, off, goff, starts, block: int, bottom: bool, ny: int) -> dict:
+    """The pieces (keys, side, sums, order, parent), the pending parents and
+    the surfaces of the block's components that touch no face."""
+    roots, parents = found["roots"], found["parents"]
+    up, outside = component_parents(roots, parents, off, goff, starts)
+    n = len(up)
+    piece = np.concatenate(seen)
+    piece[outside] = True
+    # the pieces and the outside are the roots of the block's forest
+    cut = np.append(np.where(piece, n, up), n)
+    signed = np.concatenate([found["sums"][0], -found["sums"][1], np.zeros((1, 2), np.int64)])
+    total = subtree_sums(cut, n, signed)[:n]
+    nobj = len(roots[0])
+    inner = ~piece
+    private = total[inner] * np.where(np.flatnonzero(inner) < nobj, 1, -1)[:, None]
+    vertices, faces = surface_counts(private)
+    # the voxel before each component's first one, where that is in the block
+    parent = keys[up]
+    parent[up == outside] = OUTSIDE
+    row_start = _row_start(roots, off, goff, starts)
+    parent[row_start] = OUTSIDE if bottom else PENDING
+    mine = piece.copy()
+    mine[outside] = False
+    first = np.concatenate(roots)
+    pending = mine & row_start & (not bottom)
+    rows = np.concatenate([np.searchsorted(off, roots[0], side="right"),
+                           np.searchsorted(goff, roots[1], side="right")]) - 1
+    return {
+        "pieces": [{"key": keys[mine], "obj": np.flatnonzero(mine) < nobj, "sums": total[mine],
+                    "order": (np.int64(block) << SHIFT) | first[mine], "parent": parent[mine]}],
+        "pending": [(rows[pending], keys[pending])],
+        "surfaces": [np.stack([vertices, faces], axis=1)],
+        "parents": [],
+    }
+
+
+def _row_start(roots, off, goff, starts) -> np.ndarray:
+    """Whether each component's first voxel starts its row (its first run,
+    in a row that starts with a run; its first gap, in one that starts with
+    a gap)."""
+    nrows = len(starts)
+    row = np.searchsorted(off, roots[0], side="right") - 1
+    obj = (roots[0] == off[row]) & (starts[np.minimum(row, nrows - 1)] == 1)
+    row = np.minimum(np.searchsorted(goff, roots[1], side="right") - 1, nrows - 1)
+    bg = (roots[1] == goff[row]) & (starts[row] == 0)
+    return np.concatenate([obj, bg])
