@@ -48,6 +48,7 @@ of a component on a face), never the volume or a label volume.
 from __future__ import annotations
 
 import itertools
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -121,14 +122,15 @@ def _components(nodes: int, edges: list[np.ndarray]) -> int:
 
 def _labels(pairs: np.ndarray, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct node keys of ``pairs`` (2, E) and ``keys``, sorted, and
-    the component of each under the edges ``pairs``."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    the component of each (0 ..) under the edges ``pairs``: the union-find
+    of the sweep's pinches (numba's, loaded for the blocks already)."""
+    from ..scale.kernels import join_pairs
 
     nodes, inverse = np.unique(np.concatenate([pairs.ravel(), keys]), return_inverse=True)
     e = pairs.shape[1]
-    graph = coo_matrix((np.ones(e, dtype=np.int8), (inverse[:e], inverse[e:2 * e])), shape=(len(nodes),) * 2)
-    return nodes, connected_components(graph, directed=False)[1]
+    roots = np.arange(len(nodes), dtype=np.int64 if len(nodes) >= 1 << 31 else np.int32)
+    join_pairs(roots, np.stack([inverse[:e], inverse[e:2 * e]], axis=1))
+    return nodes, np.unique(roots, return_inverse=True)[1]
 
 
 def _betti(ndim: int, conn: int, chi: int, merged) -> list[int]:
@@ -224,9 +226,8 @@ def _finish(ndim: int, conn: int, shape, surfaces: bool, merged) -> dict:
 def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
     """The shape of a dask or zarr array fit for the report, and the name
     of the input in messages; one-line errors for anything else."""
-    _, da = import_dask()
     is_zarr = is_zarr_array(array)
-    if not is_zarr and not isinstance(array, da.Array):
+    if not is_zarr and not isinstance(array, import_dask()[1].Array):
         raise IsoflowError(
             f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; "
             "use isoflow.analyze for in-memory arrays"
@@ -262,7 +263,7 @@ def _grid(array, block_shape, where: str) -> Grid:
 
 def _block_tasks(grid: Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
     """The summary tasks of the blocks of layer ``i`` along the first axis."""
-    dask, _ = import_dask()
+    dask, _ = import_dask(array=False)
     blocks = None if grid.is_zarr else grid.array.to_delayed()
     tasks = {}
     for tail in itertools.product(*(range(n) for n in grid.numblocks[1:])):
@@ -290,7 +291,7 @@ def _layers(grid: Grid, conn: int, where: str, surfaces: bool, shape, compute, p
     whatever order dask would pick for one big graph (it tends to read
     most blocks before merging any). Within a layer the blocks and merges
     run in parallel."""
-    dask, _ = import_dask()
+    dask, _ = import_dask(array=False)
     merged = []
     (current,) = compute(_block_tasks(grid, 0, conn, where, surfaces, shape))
     for i in range(grid.numblocks[0]):
@@ -304,6 +305,20 @@ def _layers(grid: Grid, conn: int, where: str, surfaces: bool, shape, compute, p
         if progress is not None:
             progress(i + 1, grid.numblocks[0])
     return merged
+
+
+def _scheduler(dask, scheduler):
+    """The scheduler's function where it is named (or dask's configured one,
+    by default threads), found without importing dask.distributed as dask
+    does for a name, to look for a client: that import takes longer than
+    the report of a small volume, and with distributed not imported no
+    client exists."""
+    if "distributed" in sys.modules or not (scheduler is None or isinstance(scheduler, str)):
+        return scheduler
+    from dask.base import named_schedulers
+
+    name = scheduler or dask.config.get("scheduler", None) or "threads"
+    return named_schedulers.get(name.lower(), scheduler) if isinstance(name, str) else name
 
 
 # --------------------------------------------------------------------------
@@ -346,7 +361,7 @@ def analyze_chunked(
     blocks along the first axis (``total`` layers), the unit of work between
     two computes.
     """
-    dask, _ = import_dask()
+    dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
     if 0 in shape:
@@ -354,6 +369,8 @@ def analyze_chunked(
     grid = _grid(array, block_shape, where)
     with using(threads):
         workers = thread_count()
+
+    scheduler = _scheduler(dask, scheduler)
 
     def compute(*tasks):
         return dask.compute(*tasks, scheduler=scheduler, num_workers=workers)
