@@ -147,20 +147,20 @@ def _numbering(components: dict, sizes: tuple[int, int], outside: np.ndarray) ->
     face voxel of that kind, -1 elsewhere; ``sizes``: how many of each kind.
     Returns the faces' numbers (0 for the other kind), and per kind the
     number of every component (0: not seen) and whether it was seen."""
-    seen = (np.zeros(sizes[0], bool), np.zeros(sizes[1], bool))
+    marks = (np.zeros(sizes[0] + 1, bool), np.zeros(sizes[1] + 1, bool))  # (index 0: none)
     for (kind, _, _), comp in components.items():
-        seen[kind == "bg"][comp[comp >= 0]] = True
+        marks[kind == "bg"][comp.ravel() + 1] = True
+    seen = (marks[0][1:], marks[1][1:])
     seen[1][outside] = True
-    numbers = (np.zeros(sizes[0], np.int64), np.zeros(sizes[1], np.int64))
     inner = seen[1].copy()
     inner[outside] = False
-    numbers[0][seen[0]] = 2 + np.arange(np.count_nonzero(seen[0]))
-    numbers[1][inner] = 2 + np.count_nonzero(seen[0]) + np.arange(np.count_nonzero(inner))
-    numbers[1][outside] = 1
+    numbers = (np.zeros(sizes[0] + 1, np.int64), np.zeros(sizes[1] + 1, np.int64))
+    numbers[0][1:][seen[0]] = 2 + np.arange(np.count_nonzero(seen[0]))
+    numbers[1][1:][inner] = 2 + np.count_nonzero(seen[0]) + np.arange(np.count_nonzero(inner))
+    numbers[1][1:][outside] = 1
     dtype = np.uint16 if 2 + np.count_nonzero(seen[0]) + np.count_nonzero(inner) < 1 << 16 else np.uint32
-    faces = {key: np.maximum(_gather(numbers[key[0] == "bg"], comp, comp >= 0), 0).astype(dtype)
-             for key, comp in components.items()}
-    return faces, numbers, seen
+    faces = {key: numbers[key[0] == "bg"].astype(dtype)[comp + 1] for key, comp in components.items()}
+    return faces, (numbers[0][1:], numbers[1][1:]), seen
 
 
 def _labelled_block(core, index, numblocks, conn) -> dict:
@@ -184,35 +184,6 @@ def _labelled_block(core, index, numblocks, conn) -> dict:
             "nodes": {"fg": sizes[0], "bg": sizes[1] - len(outside)}, "pinches": []}
 
 
-def _face_components(core, off, goff, parents, axis: int, side: int) -> dict:
-    """The object and background component of every voxel of a face layer
-    (-1 for the other kind), from the runs and gaps of its rows."""
-    nx, ny, nz = core.shape
-    if axis == 2:  # the first or last voxel of every row
-        rows = np.arange(nx * ny)
-        layer = core[:, :, -side].reshape(-1)
-        runs, gaps = off[rows + side] - side, goff[rows + side] - side
-    else:
-        at = (core.shape[axis] - 1) * side
-        layer = np.take(core, at, axis=axis)
-        rows = at * ny + np.arange(ny) if axis == 0 else np.arange(nx) * ny + at
-        before = np.zeros_like(layer)
-        before[:, 1:] = layer[:, :-1]
-        gap_starts = ~layer & before
-        gap_starts[:, 0] = ~layer[:, 0]
-        runs = off[rows][:, None] + np.cumsum(layer & ~before, axis=1) - 1
-        gaps = goff[rows][:, None] + np.cumsum(gap_starts, axis=1) - 1
-    shape = layer.shape if axis != 2 else (nx, ny)
-    return {"fg": _gather(parents[0], runs, layer).reshape(shape), "bg": _gather(parents[1], gaps, ~layer).reshape(shape)}
-
-
-def _gather(values: np.ndarray, index: np.ndarray, where: np.ndarray) -> np.ndarray:
-    """``values[index]`` where ``where``, -1 elsewhere (int64)."""
-    out = np.full(index.shape, -1, np.int64)
-    out[where] = values[index[where]]
-    return out
-
-
 def _swept(core, first, last, conn: int, surfaces: bool):
     """The sweep of a block at the vertices it counts, its background on the
     volume's border joined to the outside; with its bit rows' offsets and
@@ -226,18 +197,23 @@ def _swept(core, first, last, conn: int, surfaces: bool):
                         sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces, counted=counted,
                         border=[flag for f, e in zip(first, last) for flag in (f, e)])
     found["voxels"] = int(np.bitwise_count(bits).sum())
+    found["bits"] = bits
     return found, off, goff, (bits[:-1, 0] & 1).astype(np.int64)
 
 
 def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: bool) -> dict:
     """A 3D block through the sweep (see the module docs)."""
+    from ..scale.sweep import face_components
+
     first, last = _ends(index, numblocks)
     found, off, goff, starts = _swept(core, first, last, conn, surfaces)
     parents = found["parents"]
     sizes = tuple(len(r) for r in found["roots"])
     outside = int(parents[1][-1])
-    components = {(kind, axis, side): comp for axis, side in _inner_faces(index, numblocks)
-                  for kind, comp in _face_components(core, off, goff, parents, axis, side).items()}
+    components = {}
+    for axis, side in _inner_faces(index, numblocks):
+        components["fg", axis, side], components["bg", axis, side] = face_components(
+            found["bits"], off, goff, parents, core.shape, axis, side)
     faces, numbers, seen = _numbering(components, sizes, np.array([outside]))
     block = int(np.ravel_multi_index(index, numblocks))
     keys = np.concatenate([node_keys(numbers[0], block), node_keys(numbers[1], block)])

@@ -79,12 +79,27 @@ class Grid(NamedTuple):
         return tuple(self.bounds[axis][i] for axis, i in enumerate(index))
 
 
+class Job:
+    """What a block's tasks are told: the block (``index`` in the grid
+    ``numblocks``, its [start, stop) per axis ``box``), the volume's
+    ``shape``, the connectivity, the name of the input, whether the surfaces
+    are counted. One argument of a class of its own, which dask passes on
+    as it is: it walks through every tuple, named tuple and dataclass among
+    a task's arguments, twenty per block."""
+
+    __slots__ = ("index", "box", "numblocks", "shape", "conn", "where", "surfaces")
+
+    def __init__(self, index, box, numblocks, shape, conn: int, where: str, surfaces: bool):
+        self.index, self.box, self.numblocks, self.shape = index, box, numblocks, shape
+        self.conn, self.where, self.surfaces = conn, where, surfaces
+
+
 # --------------------------------------------------------------------------
 # the tasks (module-level functions so that process workers can run them)
 # --------------------------------------------------------------------------
 
 
-def _read_zarr_block(z, index, box, numblocks, shape, conn, where, surfaces) -> dict:
+def _read_zarr_block(z, job: Job) -> dict:
     """Read one block of a zarr array and summarise it.
 
     Reading inside the task (rather than through dask-array chunks) means a
@@ -92,18 +107,24 @@ def _read_zarr_block(z, index, box, numblocks, shape, conn, where, surfaces) -> 
     the scheduler picks; blocks follow the chunk grid, so each chunk is
     decoded once.
     """
-    region = tuple(slice(a, b) for a, b in box)
-    origin = tuple(a for a, _ in box)
+    region = tuple(slice(a, b) for a, b in job.box)
     try:
         data = np.asarray(z[region])
     except Exception as exc:  # a damaged or missing chunk
-        raise IsoflowError(f"{where}: cannot read the block at voxel {origin} ({exc})") from None
-    return summarize_block(data, index, numblocks, origin, shape, conn, where, surfaces)
+        raise IsoflowError(f"{job.where}: cannot read the block at voxel {tuple(a for a, _ in job.box)} ({exc})") from None
+    return _dask_block(data, job)
 
 
-def _dask_block(chunk, index, origin, numblocks, shape, conn, where, surfaces) -> dict:
+def _dask_block(chunk, job: Job) -> dict:
     """Summarise one chunk of a dask array (no halo needed, see blocks)."""
-    return summarize_block(chunk, index, numblocks, origin, shape, conn, where, surfaces)
+    return summarize_block(chunk, job.index, job.numblocks, tuple(a for a, _ in job.box), job.shape, job.conn,
+                           job.where, job.surfaces)
+
+
+def _merge(job: Job, *summaries) -> dict:
+    """:func:`isoflow.digital.seams.merge_block` of a block and its upper
+    neighbours' summaries."""
+    return merge_block(job.index, job.numblocks, job.box, job.shape, job.conn, job.surfaces, *summaries)
 
 
 # --------------------------------------------------------------------------
@@ -264,17 +285,18 @@ def _grid(array, block_shape, where: str) -> Grid:
 def _block_tasks(grid: Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
     """The summary tasks of the blocks of layer ``i`` along the first axis."""
     dask, _ = import_dask(array=False)
+    # the zarr array as one node of the graph: as an argument of every task
+    # dask would walk through its fields (dataclasses) for each of them
+    array = dask.delayed(grid.array, pure=False, traverse=False) if grid.is_zarr else None
     blocks = None if grid.is_zarr else grid.array.to_delayed()
     tasks = {}
     for tail in itertools.product(*(range(n) for n in grid.numblocks[1:])):
         index = (i, *tail)
-        box = grid.box(index)
+        job = Job(index, grid.box(index), grid.numblocks, tuple(shape), conn, where, surfaces)
         if grid.is_zarr:
-            tasks[index] = dask.delayed(_read_zarr_block, pure=False)(grid.array, index, box, grid.numblocks, shape,
-                                                                       conn, where, surfaces)
+            tasks[index] = dask.delayed(_read_zarr_block, pure=False)(array, job)
         else:
-            tasks[index] = dask.delayed(_dask_block, pure=False)(blocks[index], index, tuple(a for a, _ in box),
-                                                                  grid.numblocks, shape, conn, where, surfaces)
+            tasks[index] = dask.delayed(_dask_block, pure=False)(blocks[index], job)
     return tasks
 
 
@@ -293,15 +315,20 @@ def _layers(grid: Grid, conn: int, where: str, surfaces: bool, shape, compute, p
     run in parallel."""
     dask, _ = import_dask(array=False)
     merged = []
-    (current,) = compute(_block_tasks(grid, 0, conn, where, surfaces, shape))
+    first = _block_tasks(grid, 0, conn, where, surfaces, shape)
+    current = dict(zip(first, compute(*first.values())))
     for i in range(grid.numblocks[0]):
         upper = _block_tasks(grid, i + 1, conn, where, surfaces, shape) if i + 1 < grid.numblocks[0] else {}
-        both = {**current, **upper}
-        tasks = [dask.delayed(merge_block, pure=False)(index, grid.numblocks, grid.box(index), shape, conn, surfaces,
-                                                       *(both[u] for u in _uppers(index, grid.numblocks)))
+        # the summaries computed already as leaves of the graph (dask would
+        # walk through every dict and array of them as arguments)
+        both = {**{index: dask.delayed(s, pure=False, traverse=False) for index, s in current.items()}, **upper}
+        tasks = [dask.delayed(_merge, pure=False)(Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
+                                                      where, surfaces),
+                                                  *(both[u] for u in _uppers(index, grid.numblocks)))
                  for index in current]
-        done, current = compute(tasks, upper)
-        merged.extend(done)
+        done = compute(*tasks, *upper.values())
+        merged.extend(done[:len(tasks)])
+        current = dict(zip(upper, done[len(tasks):]))
         if progress is not None:
             progress(i + 1, grid.numblocks[0])
     return merged
@@ -373,7 +400,7 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
 
     def compute(*tasks):
-        return dask.compute(*tasks, scheduler=scheduler, num_workers=workers)
+        return dask.compute(*tasks, scheduler=scheduler, num_workers=workers, traverse=False)
 
     try:
         merged = _layers(grid, conn, where, surfaces, shape, compute, progress)

@@ -414,15 +414,16 @@ def _clear_ends_not_counted(rules, bits, r0, r1, r2, r3, nz):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _word_events(rows, nodes, tables, rules, slab, h, i, j, w, t, x0, x1, x2, x3, counted, outside, old, last,
-                 npairs, nloose):
+def _word_events(rows, nodes, tables, rules, slab, h, i, j, w, t, x, counted, outside, state):
     """The events of one word of a vertex row (``t``: the voxels where one
     of the four rows changes; ``x``: the rows' bits), in order: the
     histogram, the sheets of the counted ones (the common ones here, the
-    others in :func:`_rare_event`), their pinches. ``old``: the four rows'
-    voxels before the first, ``last``: the event before it. Returns
-    ``old`` and ``last`` after the word, the doubled edges counted, the
-    pinch pairs and loose ends so far."""
+    others in :func:`_rare_event`), their pinches. ``state``: the four
+    rows' voxels before the first event, the event before it, the pinch
+    pairs and loose ends so far. Returns the state after the word and the
+    doubled edges counted."""
+    x0, x1, x2, x3 = x
+    old, last, npairs, nloose = state
     one = np.uint64(1)
     nz, mode, pinch = rows.nz, rules.mode, tables.pinch
     lo, hi = rules.counted[0, 2], rules.counted[1, 2]
@@ -471,7 +472,40 @@ def _word_events(rows, nodes, tables, rules, slab, h, i, j, w, t, x0, x1, x2, x3
                     nodes.acc_obj[np.uint64(base[q] + np.int64(popcount(runs[q] & m)))] += value
         old = new
         last = k
-    return old, last, doubled, npairs, nloose
+    return (old, last, npairs, nloose), doubled
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_and_add(nodes, rules, x, p, s, t, b, g, ins, valid, first):
+    """One word of a block's four rows (their bits ``x``, those of the
+    voxels before ``p``, where their runs and gaps start ``s``, ``t``, their
+    runs and gaps numbered before the word ``b``, ``g``, all ones where
+    inside the array ``ins``; ``valid``: the voxels inside the array,
+    ``first``: bit 0 in the first word): the joins of the runs and of the
+    gaps that touch, and the pieces of row 3 added to their nodes."""
+    x0, x1, x2, x3 = x
+    p0, p1, p2, p3 = p
+    in0, in1, in2, in3 = ins
+    a = rules.adjacency
+    if rules.mode != AGAIN:
+        _join_rows(nodes.pobj, a[0], a[1], x0, x1, x2, x3, p0, p1, p2, p3, s[0], s[1], s[2], s[3], b[0], b[1], b[2],
+                   b[3])
+        _join_rows(nodes.pbg, a[2], a[3], ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2,
+                   ~x3 & valid & in3, ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2,
+                   ~p3 & ~first & in3, t[0], t[1], t[2], t[3], g[0], g[1], g[2], g[3])
+    if rules.mode == ALL and in3:
+        _pieces(nodes.acc_obj, x0, x1, x2, x3, p0, p1, p2, p3, s[3], b[3], rules.formula_obj)
+        _pieces(nodes.acc_bg, ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2, ~x3 & valid,
+                ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2, ~p3 & ~first, t[3], g[3],
+                not rules.formula_obj)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _note_rows(slab, b, s, g, t):
+    """Keep a word's numbering of the four rows' runs and gaps for its
+    events (see :func:`_node`)."""
+    for q in range(4):
+        slab.scratch[0, q], slab.uscratch[0, q], slab.scratch[1, q], slab.uscratch[1, q] = b[q], s[q], g[q], t[q]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -490,12 +524,10 @@ def _sweep_row(rows, nodes, tables, rules, slab, i, j, counted, outside, npairs,
         if mode != AGAIN:
             h[0] += nz + 1 - _clear_ends_not_counted(rules, bits, r0, r1, r2, r3, nz)
         return 0, npairs, nloose
-    objslack, objdiag, bgslack, bgdiag = rules.adjacency[0], rules.adjacency[1], rules.adjacency[2], \
-        rules.adjacency[3]
     zero, one, top = np.uint64(0), np.uint64(1), np.uint64(63)
     doubled = 0
-    last = -1  # the last event
-    old = 0  # the four rows' voxels before it
+    # the four rows' voxels before the last event, the last event
+    state = (0, -1, npairs, nloose)
     x0 = x1 = x2 = x3 = zero  # the rows' bits in the word
     s0 = s1 = s2 = s3 = zero  # where their runs start
     t0 = t1 = t2 = t3 = zero  # where their gaps start
@@ -526,31 +558,19 @@ def _sweep_row(rows, nodes, tables, rules, slab, i, j, counted, outside, npairs,
         t1 = ~x1 & (p1 | first) & valid & in1
         t2 = ~x2 & (p2 | first) & valid & in2
         t3 = ~x3 & (p3 | first) & valid & in3
-        if mode != AGAIN:
-            _join_rows(nodes.pobj, objslack, objdiag, x0, x1, x2, x3, p0, p1, p2, p3, s0, s1, s2, s3,
-                       b0, b1, b2, b3)
-            _join_rows(nodes.pbg, bgslack, bgdiag, ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2,
-                       ~x3 & valid & in3, ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2,
-                       ~p3 & ~first & in3, t0, t1, t2, t3, g0, g1, g2, g3)
-        if mode == ALL and in3:
-            _pieces(nodes.acc_obj, x0, x1, x2, x3, p0, p1, p2, p3, s3, b3, rules.formula_obj)
-            _pieces(nodes.acc_bg, ~x0 & valid & in0, ~x1 & valid & in1, ~x2 & valid & in2, ~x3 & valid,
-                    ~p0 & ~first & in0, ~p1 & ~first & in1, ~p2 & ~first & in2, ~p3 & ~first, t3, g3,
-                    not rules.formula_obj)
+        _join_and_add(nodes, rules, (x0, x1, x2, x3), (p0, p1, p2, p3), (s0, s1, s2, s3), (t0, t1, t2, t3),
+                      (b0, b1, b2, b3), (g0, g1, g2, g3), (in0, in1, in2, in3), valid, first)
         t = (x0 ^ p0) | (x1 ^ p1) | (x2 ^ p2) | (x3 ^ p3)
         if t == 0:
             continue
-        slab.scratch[0, 0], slab.scratch[0, 1], slab.scratch[0, 2], slab.scratch[0, 3] = b0, b1, b2, b3
-        slab.uscratch[0, 0], slab.uscratch[0, 1], slab.uscratch[0, 2], slab.uscratch[0, 3] = s0, s1, s2, s3
-        slab.scratch[1, 0], slab.scratch[1, 1], slab.scratch[1, 2], slab.scratch[1, 3] = g0, g1, g2, g3
-        slab.uscratch[1, 0], slab.uscratch[1, 1], slab.uscratch[1, 2], slab.uscratch[1, 3] = t0, t1, t2, t3
-        old, last, d, npairs, nloose = _word_events(rows, nodes, tables, rules, slab, h, i, j, w, t, x0, x1, x2,
-                                                    x3, counted, outside, old, last, npairs, nloose)
+        _note_rows(slab, (b0, b1, b2, b3), (s0, s1, s2, s3), (g0, g1, g2, g3), (t0, t1, t2, t3))
+        state, d = _word_events(rows, nodes, tables, rules, slab, h, i, j, w, t, (x0, x1, x2, x3), counted, outside,
+                                state)
         doubled += d
     if mode != AGAIN:
         # past the last event the four rows are clear
-        h[0] += nz - last - _clear_ends_not_counted(rules, bits, r0, r1, r2, r3, nz)
-    return doubled, npairs, nloose
+        h[0] += nz - state[1] - _clear_ends_not_counted(rules, bits, r0, r1, r2, r3, nz)
+    return doubled, state[2], state[3]
 
 
 @njit(cache=True, nogil=True, _nrt=False)
@@ -676,6 +696,84 @@ def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
         sums[np.uint64(cur), 1] += high
 
 
+@njit(cache=True, nogil=True)
+def _row_ends(bits, off, goff, pobj, pbg, nz, side, fg, bg):
+    """Components of every row's first voxel (``side`` 0) or last (1):
+    its first or last run or gap."""
+    k = (nz - 1) * side
+    for r in range(len(fg)):
+        if (bits[r, k >> 6] >> np.uint64(k & 63)) & np.uint64(1):
+            fg[r], bg[r] = pobj[off[r + side] - side], -1
+        else:
+            fg[r], bg[r] = -1, pbg[goff[r + side] - side]
+
+
+@njit(cache=True, nogil=True)
+def _face_rows(bits, off, goff, pobj, pbg, rows, nz, fg, bg):
+    """Components of the voxels of the bit ``rows``: ``fg`` the object's
+    (-1 for a background voxel), ``bg`` the background's."""
+    one = np.uint64(1)
+    for q in range(len(rows)):
+        r = rows[q]
+        run, gap = off[r] - 1, goff[r] - 1
+        before = 0
+        for k in range(nz):
+            bit = np.int64((bits[r, k >> 6] >> np.uint64(k & 63)) & one)
+            if bit and not before:
+                run += 1
+            elif not bit and (before or k == 0):
+                gap += 1
+            before = bit
+            fg[q, k] = pobj[run] if bit else -1
+            bg[q, k] = -1 if bit else pbg[gap]
+
+
+def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents, shape, axis: int,
+                    side: int) -> tuple[np.ndarray, np.ndarray]:
+    """The component of every voxel of a face layer of a volume swept whole.
+
+    Parameters
+    ----------
+    bits, off, goff : numpy.ndarray
+        :func:`isoflow.scale.bitrows.pack` of the volume.
+    parents : tuple of numpy.ndarray
+        The runs' and the gaps' components, :func:`sweep`'s ``parents``.
+    shape : tuple of int
+        The volume's shape ``(nx, ny, nz)``.
+    axis, side : int
+        The face: its axis and 0 for its first voxel layer, 1 for its last.
+
+    Returns
+    -------
+    fg, bg : numpy.ndarray
+        int64 arrays of the layer's shape (the other two axes): the object
+        component of each voxel (-1 for background voxels), the background
+        component (-1 for object voxels).
+
+    Examples
+    --------
+    >>> from isoflow.scale import bitrows, kernels
+    >>> from isoflow.digital.closed_surfaces import sweep_tables
+    >>> v = np.zeros((2, 2, 3), bool); v[0, 0, 1] = v[1, 1, 1] = True
+    >>> bits, off, goff = bitrows.pack(v)
+    >>> found = sweep(bits, v.shape, off, goff, kernels.ADJACENCY[6] + kernels.ADJACENCY[18],
+    ...               sweep_tables(6), pinch_objects=False)
+    >>> fg, bg = face_components(bits, off, goff, found["parents"], v.shape, 2, 0)
+    >>> fg.tolist(), bg.tolist()
+    ([[-1, -1], [-1, -1]], [[0, 0], [0, 0]])
+    """
+    nx, ny, nz = shape
+    if axis == 2:
+        fg, bg = np.empty(nx * ny, np.int64), np.empty(nx * ny, np.int64)
+        _row_ends(bits, off, goff, parents[0], parents[1], nz, side, fg, bg)
+        return fg.reshape(nx, ny), bg.reshape(nx, ny)
+    at = ((nx if axis == 0 else ny) - 1) * side
+    rows = at * ny + np.arange(ny, dtype=np.int64) if axis == 0 else np.arange(nx, dtype=np.int64) * ny + at
+    fg, bg = np.empty((len(rows), nz), np.int64), np.empty((len(rows), nz), np.int64)
+    _face_rows(bits, off, goff, parents[0], parents[1], rows, nz, fg, bg)
+    return fg, bg
+
+
 def _components(parent, acc, parts):
     """Number the sets of a union-find in place (node ranges ``parts`` on
     the threads): afterwards ``parent[x]`` is the number of x's set, sets
@@ -744,6 +842,35 @@ def _whole_lattice(shape) -> np.ndarray:
     return np.array([[0, 0, 0], [n + 1 for n in shape]], np.int64)
 
 
+def _rules(adjacency, shape, counted, border, surfaces: bool, pinch_objects: bool) -> Rules:
+    """The :data:`Rules` of a sweep (see :func:`sweep`)."""
+    counted = _whole_lattice(shape) if counted is None else np.asarray(counted, np.int64)
+    assert counted[0, 2] in (0, 1) and counted[1, 2] in (shape[2], shape[2] + 1), "along z all but the ends count"
+    border = np.asarray([True] * 6 if border is None else border, np.bool_)
+    # the object's components under 6-adjacency (else the background's) get
+    # their Euler characteristic from a formula over runs
+    formula_obj = tuple(adjacency[:2]) == (0, -1)
+    return Rules(np.asarray(adjacency, np.int64), counted, border, ALL if surfaces else NO_SURFACES, pinch_objects,
+                 formula_obj)
+
+
+def _sweep_slabs(rows: BitRows, nodes: Nodes, tables: Tables, rules: Rules, layers: list, threads: int) -> list:
+    """The first ``threads`` slabs at once, then the seams; the slabs'
+    outside representatives joined to the outside. A slab with more pinch
+    pairs or loose ends than its buffers hold is swept again for them alone,
+    with room for all. Returns each slab's doubled edges, pinch pairs and
+    loose ends."""
+    found = run([(_sweep_layers, rows, nodes, tables, rules, s) for s in layers[:threads]])
+    found += [_sweep_layers(rows, nodes, tables, rules, s) for s in layers[threads:]]
+    _join_reps(nodes.pbg, np.array([s.rep[0] for s in layers]), len(nodes.pbg) - 1)
+    for t, (_, npairs, nloose) in enumerate(found):
+        if max(npairs, nloose) > len(layers[t].pairs):
+            size = max(npairs, nloose)
+            layers[t] = layers[t]._replace(pairs=np.empty((size, 2), np.int64), loose=np.empty((size, 4), np.int64))
+            _sweep_layers(rows, nodes, tables, rules._replace(mode=AGAIN), layers[t])
+    return found
+
+
 def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfaces: bool = True, *,
           counted: np.ndarray | None = None, border=None, pair_capacity: int | None = None) -> dict:
     """One pass over the lattice vertices, slabs of layers on the threads.
@@ -782,23 +909,12 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
     check_fits(12 * (runs + gaps), f"labelling the {runs + gaps:,} runs and gaps of a {nx}x{ny}x{nz} volume",
                hint="store it as .zarr and run isoflow info on that (block by block)")
     nodes = _new_nodes(runs, gaps, _SPREAD * (len(parts) + 1))
-    formula_obj = tuple(adjacency[:2]) == (0, -1)
-    counted = _whole_lattice(shape) if counted is None else np.asarray(counted, np.int64)
-    assert counted[0, 2] in (0, 1) and counted[1, 2] in (nz, nz + 1), "the sweep counts all vertices along z but the ends"
-    rules = Rules(np.asarray(adjacency, np.int64), counted, np.asarray([True] * 6 if border is None else border, np.bool_),
-                  ALL if surfaces else NO_SURFACES, pinch_objects, formula_obj)
+    rules = _rules(adjacency, shape, counted, border, surfaces, pinch_objects)
     if pair_capacity is None:
         pair_capacity = max(4096, (runs + gaps) // (256 * len(parts)))
     layers = _new_slabs(parts, ny, pair_capacity)
-    rows, table = BitRows(bits, off, goff, nx, ny, nz), sheet_tables(tables, formula_obj)
-    found = run([(_sweep_layers, rows, nodes, table, rules, s) for s in layers[:len(parts)]])
-    found += [_sweep_layers(rows, nodes, table, rules, s) for s in layers[len(parts):]]
-    _join_reps(nodes.pbg, np.array([s.rep[0] for s in layers]), gaps)
-    for t, (_, npairs, nloose) in enumerate(found):
-        if max(npairs, nloose) > pair_capacity:  # more than room: find them again
-            size = max(npairs, nloose)
-            layers[t] = layers[t]._replace(pairs=np.empty((size, 2), np.int64), loose=np.empty((size, 4), np.int64))
-            _sweep_layers(rows, nodes, table, rules._replace(mode=AGAIN), layers[t])
+    rows = BitRows(bits, off, goff, nx, ny, nz)
+    found = _sweep_slabs(rows, nodes, sheet_tables(tables, rules.formula_obj), rules, layers, len(parts))
     # the sets numbered on the threads, node ranges of about equal size
     obj_roots, obj_sums = _components(nodes.pobj, nodes.acc_obj, slabs(runs, threads))
     bg_roots, bg_sums = _components(nodes.pbg, nodes.acc_bg, slabs(gaps + 1, threads))
