@@ -133,6 +133,7 @@ def write_volume(path: Path, n: int, feature: int, level: float, seed: int) -> d
 
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         voxels = sum(pool.map(one, regions))
+    z.attrs.update(written_with(n, feature, level, seed))
     size = sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
     return {
         "write_s": round(time.perf_counter() - t0, 2),
@@ -235,13 +236,31 @@ def child(kind: str, *args) -> dict:
     return out
 
 
+def written_with(n: int, feature: int, level: float, seed: int) -> dict:
+    return {"porous": {"size": n, "feature": feature, "level": level, "seed": seed}}
+
+
+def reusable(path: Path, n: int, args) -> bool:
+    """A store of an earlier run with ``--keep``, written with the same
+    parameters."""
+    import zarr
+
+    try:
+        return dict(zarr.open_array(str(path), mode="r").attrs) == written_with(n, args.feature, args.level, args.seed)
+    except Exception:  # no store, or not one of these
+        return False
+
+
 def measure_size(n: int, args, workdir: Path) -> dict:
     zpath, npath = workdir / f"porous-{n}.zarr", workdir / f"porous-{n}.npy"
-    print(f"{n}^3: writing {zpath} ...", flush=True)
     row = {"size": n, "chunks": [CHUNK] * 3, "connectivity": args.connectivity}
-    row.update(write_volume(zpath, n, args.feature, args.level, args.seed))
-    print(f"  written in {row['write_s']} s, {row['zarr_bytes'] / 2**20:.0f} MiB on disk", flush=True)
-    if n <= args.npy_max:
+    if args.reuse and reusable(zpath, n, args):
+        print(f"{n}^3: {zpath} as written before", flush=True)
+    else:
+        print(f"{n}^3: writing {zpath} ...", flush=True)
+        row.update(write_volume(zpath, n, args.feature, args.level, args.seed))
+        print(f"  written in {row['write_s']} s, {row['zarr_bytes'] / 2**20:.0f} MiB on disk", flush=True)
+    if n <= args.npy_max and not (args.reuse and npath.exists()):
         write_npy(npath, n, args.feature, args.level, args.seed)
     runs = {"zarr": [], "npy": []}
     for _ in range(args.pairs):  # alternated: A B A B
@@ -298,6 +317,8 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=2013)
     ap.add_argument("--dir", type=Path, help="where to write the volumes (default: a temporary folder)")
     ap.add_argument("--keep", action="store_true", help="keep the volumes")
+    ap.add_argument("--reuse", action="store_true",
+                    help="use the volumes an earlier run left in --dir with --keep (same size and parameters)")
     ap.add_argument("--npy-max", type=int, default=512, help="compare with the .npy command up to this size")
     ap.add_argument("--pairs", type=int, default=3, help="runs of each command, alternated; the best is kept")
     ap.add_argument("--repeat", type=int, default=5, help="in-memory analyses of 512^3 for the yardstick")

@@ -108,6 +108,45 @@ def test_diagonal_contacts_across_block_corners():
     check(hollow_ball(9, 6, size=24), 26)
 
 
+@pytest.mark.parametrize("conn", [6, 26])
+def test_pinches_tunnels_and_cavities_at_block_edges_and_corners(rng, conn):
+    """Vertex contacts (pinches under 6 between background voxels, under
+    26 between object voxels) and edge contacts right at block edges and
+    corners, a torus whose hole is a block corner, a cavity whose wall is
+    cut by three block faces; every field equal to the in-memory report."""
+    v = np.zeros((21, 24, 27), dtype=bool)
+    c = (7, 5, 9)  # a block corner: voxels 6|7, 4|5, 8|9
+    v[6, 4, 8] = v[7, 5, 9] = True  # vertex contact across the corner
+    v[6, 5, 8] = v[7, 4, 9] = True  # and the other diagonal: two contacts at one vertex
+    v[6, 19, 8] = v[7, 20, 9] = True  # a pinch of the object under 26 at the corner (7, 20, 9)
+    v[13, 9, 3] = v[14, 10, 3] = True  # edge contact across the block edge x = 14, y = 10
+    v[13:15, 9:11, 17:19] = True  # a pinch of the background under 6 at the corner (14, 10, 18):
+    v[13, 9, 17] = v[14, 10, 18] = False  # two opposite background voxels among six object ones
+    v[:, 14:16, 17:19] = True  # a bar along x through three blocks
+    v[2:5, 14, 17] = False  # (pierced: a vertex contact of its background)
+    t = torus(5, 1.5, size=13, axis=2)
+    v[c[0] - 6:c[0] + 7, c[1] - 6 + 10:c[1] + 7 + 10, 18:27] |= t[:, :, 2:11]
+    shell = hollow_ball(5, 3, size=12)
+    v[9:21, 8:20, 0:12] |= shell  # a cavity cut by the faces at x = 14, y = 10 and 15, z = 9
+    r = check(v, conn)
+    assert r["pinched_vertices"] >= 1 and r["betti"][1] >= 1 and r["betti"][2] >= 1
+    for chunks in ((7, 5, 9), (1, 24, 27), (21, 1, 4), (3, 3, 3)):
+        check(v, conn, chunks)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_doubled_edges_across_every_face(rng, conn):
+    """Chunks one voxel thick: every vertex is a seam's, every edge along
+    that axis has its ends in two seams (loose ends that meet); random
+    volumes with edge and vertex contacts."""
+    for axis in range(3):
+        v = rng.random((9, 10, 11)) < 0.5
+        chunks = [5, 4, 6]
+        chunks[axis] = 1
+        r = check(v, conn, tuple(chunks))
+        assert r["doubled_edges"] > 0
+
+
 @pytest.mark.parametrize("conn", [4, 8])
 def test_2d(rng, conn):
     for density in (0.3, 0.5, 0.7):
@@ -331,6 +370,26 @@ def test_cli_info_on_zarr(tmp_path, capsys):
     want = json.loads(capsys.readouterr().out)
     assert got.pop("input").endswith("t.zarr") and want.pop("input").endswith("t.npy")
     assert got == want and got["betti"] == [2, 1, 0]
+    # random volumes with edge and vertex contacts, at both connectivities:
+    # the command's JSON equals that of the .npy, doubled edges included
+    rng = np.random.default_rng(27)
+    v = rng.random((19, 23, 17)) < 0.5
+    write_zarr(tmp_path / "r.zarr", v, CHUNKS3)
+    np.save(tmp_path / "r.npy", v)
+    for conn in ("6", "26"):
+        reports = []
+        for name in ("r.zarr", "r.npy"):
+            assert main(["info", str(tmp_path / name), "--json", "--connectivity", conn]) == 0
+            reports.append(json.loads(capsys.readouterr().out))
+            reports[-1].pop("input")
+        assert reports[0] == reports[1] and reports[0]["doubled_edges"] > 0 and reports[0]["pinched_vertices"] > 0
+    # and as the command, in a process of its own
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "r.zarr"), "--json",
+                        "--connectivity", "26"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    command = json.loads(p.stdout)
+    command.pop("input")
+    assert command == reports[0]
     assert sorted(s["genus"] for s in got["surfaces"]) == [0, 1]  # the ball, the torus
     assert main(["info", str(path), "--connectivity", "26"]) == 0
     out = capsys.readouterr().out

@@ -63,17 +63,58 @@ _DIRECT_HISTOGRAM = 1 << 18
 
 
 def node_keys(numbers: np.ndarray, block: int) -> np.ndarray:
-    """Node keys of a block's numbers: 0 stays 0 (no component), 1 is
-    :data:`OUTSIDE`."""
+    """Node keys of a block's component numbers.
+
+    Parameters
+    ----------
+    numbers : numpy.ndarray
+        A block's numbers (see the module docs): 0 for no component, 1 for
+        the outside, 2 and up for the components on its faces.
+    block : int
+        The block's index in the grid, in C order.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 keys ``block << 32 | number``; 0 stays 0, 1 becomes
+        :data:`OUTSIDE`.
+
+    Examples
+    --------
+    >>> node_keys(np.array([0, 1, 2, 5], np.uint16), 3).tolist() == [0, int(OUTSIDE), 3 << 32 | 2, 3 << 32 | 5]
+    True
+    """
     n = numbers.astype(np.int64)
     return np.where(n > 1, n | (np.int64(block) << SHIFT), np.where(n == 1, OUTSIDE, 0))
 
 
 def edge_keys(ends: np.ndarray, origin, shape) -> np.ndarray:
-    """The lattice edges of doubled spokes ``ends`` (rows: vertex (i, j, k)
-    of a box at ``origin`` of the volume ``shape``, spoke bit ``2 axis +
-    side``) as keys: the volume's vertex index of the edge's lower end, times
-    3, plus the axis. Both ends of an edge give its key."""
+    """Keys of the lattice edges along which doubled spokes point.
+
+    Parameters
+    ----------
+    ends : numpy.ndarray
+        Rows ``(i, j, k, bit)``: a vertex of a box and a spoke of it, bit
+        ``2 axis + side`` (side 1 toward +axis), as the sweep and the seams
+        give their loose ends.
+    origin : sequence of int
+        The box's first voxel in the volume.
+    shape : sequence of int
+        The volume's shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 keys: the volume's vertex index (C order over ``shape + 1``)
+        of the edge's lower end, times 3, plus the axis. The two ends of an
+        edge give the same key.
+
+    Examples
+    --------
+    >>> ends = np.array([[1, 2, 3, 5], [1, 2, 4, 4]])  # +z from (1,2,3), -z from (1,2,4)
+    >>> edge_keys(ends, (0, 0, 0), (4, 4, 4)).tolist()
+    [116, 116]
+    """
     ends = np.asarray(ends, np.int64).reshape(-1, 4)
     axis, side = ends[:, 3] >> 1, ends[:, 3] & 1
     lower = ends[:, :3] + np.asarray(origin, np.int64)
@@ -84,14 +125,34 @@ def edge_keys(ends: np.ndarray, origin, shape) -> np.ndarray:
 def vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
     """Configuration counts of a box of vertices around ``vox``.
 
-    ``configurations(vox)`` covers the vertices ``0 .. E`` along each axis
-    (``E = vox.shape[axis]``, zeros outside ``vox``); this counts those with
-    index ``0`` only where ``keep_low[axis]`` and index ``E`` only where
-    ``keep_high[axis]``. The whole box is counted by
-    :func:`configuration_histogram` and the dropped vertex layers, a thin
-    shell, are subtracted; layer ``k`` along an axis needs only the voxel
-    layers ``k-1`` and ``k``, and a layer leaves out the vertices already
-    dropped along the axes before it, so that none is subtracted twice.
+    Parameters
+    ----------
+    vox : numpy.ndarray
+        A 2D or 3D box of voxels (bool).
+    keep_low, keep_high : sequence of bool
+        Per axis, whether the vertices of index ``0`` and ``E =
+        vox.shape[axis]`` are counted.
+
+    Returns
+    -------
+    numpy.ndarray
+        The 16 (2D) or 256 (3D) configuration counts (int64, section 4) of
+        the vertices ``0 .. E`` along each axis (zeros outside ``vox``), less
+        the layers left out.
+
+    Notes
+    -----
+    The whole box is counted by :func:`configuration_histogram` and the
+    dropped vertex layers, a thin shell, are subtracted; layer ``k`` along
+    an axis needs only the voxel layers ``k-1`` and ``k``, and a layer
+    leaves out the vertices already dropped along the axes before it, so
+    that none is subtracted twice.
+
+    Examples
+    --------
+    >>> v = np.ones((2, 2), bool)
+    >>> int(vertex_histogram(v, [True, True], [True, True]).sum()), int(vertex_histogram(v, [False, True], [True, False]).sum())
+    (9, 4)
     """
     ndim = vox.ndim
     size = 1 << (1 << ndim)
@@ -117,10 +178,50 @@ def vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
 
 
 def summarize_block(block, index, numblocks, origin, shape, conn: int, where: str, surfaces: bool) -> dict:
-    """What one block (``index`` in the grid ``numblocks``, its first voxel
-    at ``origin`` of the volume ``shape``) hands on (see the module docs);
-    ``where`` names the input in a message about a value that is not 0 or
-    1. On one thread: the blocks run in parallel."""
+    """What one block of a volume hands on to the report block by block.
+
+    Parameters
+    ----------
+    block : array_like
+        The block's voxels (bool, or numbers 0 and 1), 2D or 3D.
+    index, numblocks : tuple of int
+        The block's place in the grid of blocks, and the grid's size.
+    origin : tuple of int
+        The block's first voxel in the volume.
+    shape : tuple of int
+        The volume's shape.
+    conn : int
+        The connectivity (6 or 26; 4 or 8 in 2D).
+    where : str
+        The input's name, for messages.
+    surfaces : bool
+        Whether the closed surfaces and the doubled edges are counted (3D).
+
+    Returns
+    -------
+    dict
+        ``hist`` (the configurations of the vertices it counts), ``voxels``,
+        ``faces`` (the numbers on its faces inside the volume), ``nodes``
+        and ``pinches`` (for the Betti numbers); with ``surfaces`` in 3D also
+        ``pieces``, ``pending``, ``surfaces``, ``doubled``, ``loose`` and
+        ``parents`` (see the module docs).
+
+    Raises
+    ------
+    IsoflowError
+        A value other than 0 and 1, named with ``where`` and the voxel.
+
+    Notes
+    -----
+    It runs on one thread: the blocks run in parallel.
+
+    Examples
+    --------
+    >>> v = np.zeros((4, 4, 4), bool); v[1:3, 1:3, 2:] = True
+    >>> s = summarize_block(v, (0, 0, 0), (1, 1, 2), (0, 0, 0), (4, 4, 8), 6, "v", True)
+    >>> int(s["voxels"]), sorted(s["faces"]), len(s["pieces"][0]["key"])
+    (8, [('bg', 2, 1), ('fg', 2, 1)], 1)
+    """
     with using(1):
         core = binary(block, where, near=origin)
         if core.ndim == 3:
@@ -186,8 +287,8 @@ def _labelled_block(core, index, numblocks, conn) -> dict:
 
 def _swept(core, first, last, conn: int, surfaces: bool):
     """The sweep of a block at the vertices it counts, its background on the
-    volume's border joined to the outside; with its bit rows' offsets and
-    which rows start with a run."""
+    volume's border joined to the outside; with its bit rows and their
+    offsets."""
     from ..scale import bitrows, kernels, sweep
 
     bits, off, goff = bitrows.pack(core)
@@ -197,8 +298,7 @@ def _swept(core, first, last, conn: int, surfaces: bool):
                         sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces, counted=counted,
                         border=[flag for f, e in zip(first, last) for flag in (f, e)])
     found["voxels"] = int(np.bitwise_count(bits).sum())
-    found["bits"] = bits
-    return found, off, goff, (bits[:-1, 0] & 1).astype(np.int64)
+    return found, bits, off, goff
 
 
 def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: bool) -> dict:
@@ -206,14 +306,14 @@ def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: boo
     from ..scale.sweep import face_components
 
     first, last = _ends(index, numblocks)
-    found, off, goff, starts = _swept(core, first, last, conn, surfaces)
+    found, bits, off, goff = _swept(core, first, last, conn, surfaces)
     parents = found["parents"]
     sizes = tuple(len(r) for r in found["roots"])
     outside = int(parents[1][-1])
     components = {}
     for axis, side in _inner_faces(index, numblocks):
         components["fg", axis, side], components["bg", axis, side] = face_components(
-            found["bits"], off, goff, parents, core.shape, axis, side)
+            bits, off, goff, parents, core.shape, axis, side)
     faces, numbers, seen = _numbering(components, sizes, np.array([outside]))
     block = int(np.ravel_multi_index(index, numblocks))
     keys = np.concatenate([node_keys(numbers[0], block), node_keys(numbers[1], block)])
@@ -221,7 +321,8 @@ def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: boo
     out = {"hist": found["hist"], "voxels": found["voxels"], "faces": faces}
     out.update(_betti_nodes(found, keys, seen, sizes, outside, conn))
     if surfaces:
-        out.update(_pieces(found, keys, seen, off, goff, starts, block, first[2], core.shape[1]))
+        starts = (bits[:-1, 0] & 1).astype(np.int64)  # the rows that start with a run
+        out.update(_pieces(found, keys, seen, off, goff, starts, block, first[2]))
         out["doubled"] = found["doubled"]
         out["loose"] = [edge_keys(found["loose"], origin, shape)]
     return out
@@ -234,9 +335,7 @@ def _betti_nodes(found: dict, keys: np.ndarray, seen, sizes, outside: int, conn:
     side the pinches join (the object under 26, the background under 6)."""
     from ..scale.kernels import join_pairs
 
-    nodes = {}
-    for kind, n, s in (("fg", sizes[0], seen[0]), ("bg", sizes[1], seen[1])):
-        nodes[kind] = int(np.count_nonzero(~s)) + int(np.count_nonzero(s)) - (kind == "bg")
+    nodes = {"fg": sizes[0], "bg": sizes[1] - 1}  # (the outside is one node of the whole volume)
     kind = 0 if conn == 26 else 1
     pairs = found["parents"][kind][found["pairs"]]
     if not len(pairs):
@@ -255,7 +354,7 @@ def _betti_nodes(found: dict, keys: np.ndarray, seen, sizes, outside: int, conn:
     return {"nodes": nodes, "pinches": [np.stack([mine[pieces[:-1][same]], mine[pieces[1:][same]]])]}
 
 
-def _pieces(found, keys, seen, off, goff, starts, block: int, bottom: bool, ny: int) -> dict:
+def _pieces(found, keys, seen, off, goff, starts, block: int, bottom: bool) -> dict:
     """The pieces (keys, side, sums, order, parent), the pending parents and
     the surfaces of the block's components that touch no face."""
     roots, parents = found["roots"], found["parents"]
@@ -271,17 +370,15 @@ def _pieces(found, keys, seen, off, goff, starts, block: int, bottom: bool, ny: 
     inner = ~piece
     private = total[inner] * np.where(np.flatnonzero(inner) < nobj, 1, -1)[:, None]
     vertices, faces = surface_counts(private)
-    # the voxel before each component's first one, where that is in the block
+    # the key of the voxel before each component's first one: in the block,
+    # the outside, or for a first voxel on the low z face, the block below's
     parent = keys[up]
-    parent[up == outside] = OUTSIDE
-    row_start = _row_start(roots, off, goff, starts)
+    rows, row_start = _first_rows(roots, off, goff, starts)
     parent[row_start] = OUTSIDE if bottom else PENDING
     mine = piece.copy()
     mine[outside] = False
     first = np.concatenate(roots)
     pending = mine & row_start & (not bottom)
-    rows = np.concatenate([np.searchsorted(off, roots[0], side="right"),
-                           np.searchsorted(goff, roots[1], side="right")]) - 1
     return {
         "pieces": [{"key": keys[mine], "obj": np.flatnonzero(mine) < nobj, "sums": total[mine],
                     "order": (np.int64(block) << SHIFT) | first[mine], "parent": parent[mine]}],
@@ -291,13 +388,12 @@ def _pieces(found, keys, seen, off, goff, starts, block: int, bottom: bool, ny: 
     }
 
 
-def _row_start(roots, off, goff, starts) -> np.ndarray:
-    """Whether each component's first voxel starts its row (its first run,
-    in a row that starts with a run; its first gap, in one that starts with
-    a gap)."""
+def _first_rows(roots, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
+    """Each component's first row (object components first), and whether
+    its first voxel starts the row (its first run, in a row that starts
+    with a run; its first gap, in one that starts with a gap)."""
     nrows = len(starts)
-    row = np.searchsorted(off, roots[0], side="right") - 1
-    obj = (roots[0] == off[row]) & (starts[np.minimum(row, nrows - 1)] == 1)
-    row = np.minimum(np.searchsorted(goff, roots[1], side="right") - 1, nrows - 1)
-    bg = (roots[1] == goff[row]) & (starts[row] == 0)
-    return np.concatenate([obj, bg])
+    obj = np.minimum(np.searchsorted(off, roots[0], side="right") - 1, nrows - 1)
+    bg = np.minimum(np.searchsorted(goff, roots[1], side="right") - 1, nrows - 1)
+    at_start = np.concatenate([(roots[0] == off[obj]) & (starts[obj] == 1), (roots[1] == goff[bg]) & (starts[bg] == 0)])
+    return np.concatenate([obj, bg]), at_start

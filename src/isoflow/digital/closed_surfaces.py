@@ -387,22 +387,50 @@ def paid_numpy(seconds: float) -> None:
 def component_parents(roots, parents, off, goff, starts) -> tuple[np.ndarray, int]:
     """Every component's parent in the tree of the surfaces, and the root.
 
-    The components of the object and of the background (the sets of runs
-    and gaps of :func:`isoflow.scale.sweep.sweep`: ``roots``, each one's
-    smallest node, ``parents``, the set of every node) form a tree whose
+    Parameters
+    ----------
+    roots : tuple of numpy.ndarray
+        The object's and the background's components: each one's smallest
+        node (run, gap), :func:`isoflow.scale.sweep.sweep`'s ``roots``.
+    parents : tuple of numpy.ndarray
+        The component of every run and of every gap (the outside the last
+        gap node), the sweep's ``parents``.
+    off, goff : numpy.ndarray
+        Where each row's runs and gaps start in their numbering
+        (:func:`isoflow.scale.bitrows.pack`).
+    starts : numpy.ndarray
+        1 for the rows that start with a run.
+
+    Returns
+    -------
+    up : numpy.ndarray
+        The parent of every component, the object's first, then the
+        background's; the root its own.
+    root : int
+        The index of the outside's component.
+
+    Notes
+    -----
+    The components of the object and of the background form a tree whose
     edges are the surfaces, rooted at the outside's component. A
     component's parent is the one holding the voxel just before its first
     voxel in C order: that voxel lies outside the component and everything
     it encloses (else one of those would come first), and is
-    face-adjacent to it. ``off``, ``goff``: where each row's runs and gaps
-    start in their numbering (the outside is the last gap node);
-    ``starts``: 1 for the rows that start with a run.
+    face-adjacent to it. A component whose first voxel starts a row has no
+    voxel before it in the row: an object one gets the root, a background
+    one (which the sweep joins to the outside in a whole volume) the root
+    or another component.
 
-    Returns ``up``, the parent of every component (the object's first,
-    then the background's; the root its own), and the root's index. A
-    component whose first voxel starts a row has no voxel before it in the
-    row: an object one gets the root, a background one (which the sweep
-    joins to the outside in a whole volume) the root or another component.
+    Examples
+    --------
+    >>> from isoflow.scale import bitrows, kernels, sweep
+    >>> v = np.ones((3, 3, 3), bool); v[1, 1, 1] = False  # a cavity
+    >>> bits, off, goff = bitrows.pack(v)
+    >>> found = sweep.sweep(bits, v.shape, off, goff, kernels.ADJACENCY[6] + kernels.ADJACENCY[18],
+    ...                     sweep_tables(6), pinch_objects=False)
+    >>> up, root = component_parents(found["roots"], found["parents"], off, goff, (bits[:-1, 0] & 1).astype(int))
+    >>> up.tolist(), root  # the object (0) in the outside (2), the cavity (1) in the object
+    ([2, 0, 2], 2)
     """
     (obj_roots, bg_roots), (pobj, pbg) = roots, parents
     nobj = len(obj_roots)
@@ -450,8 +478,24 @@ def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, n
 
 
 def surface_counts(total: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mesh vertices and faces of surfaces from their sums (rows: ``4
-    chi``, faces): ``chi = V - F``."""
+    """Mesh vertices and faces of closed surfaces from their sums.
+
+    Parameters
+    ----------
+    total : numpy.ndarray
+        Rows ``(4 chi, F)``, one per surface.
+
+    Returns
+    -------
+    vertices, faces : numpy.ndarray
+        ``V = chi + F`` (every edge in two faces: ``chi = V - E + F = V -
+        F``) and ``F``.
+
+    Examples
+    --------
+    >>> [x.tolist() for x in surface_counts(np.array([[8, 6], [0, 16]]))]  # a cube, a torus
+    [[8, 16], [6, 16]]
+    """
     chi4, faces = total[:, 0], total[:, 1]
     assert (chi4 % 4 == 0).all(), "a surface's Euler characteristic is an integer"
     return chi4 // 4 + faces, faces

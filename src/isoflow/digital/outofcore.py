@@ -65,7 +65,7 @@ from .surface import boundary_faces, pinch_lut
 from .topology import euler_from_histogram, resolve_connectivity
 
 
-class Grid(NamedTuple):
+class _Grid(NamedTuple):
     """An array in blocks: the array (zarr or dask), whether it is zarr,
     per axis each block's [start, stop), and the number of blocks along
     each axis."""
@@ -79,7 +79,7 @@ class Grid(NamedTuple):
         return tuple(self.bounds[axis][i] for axis, i in enumerate(index))
 
 
-class Job:
+class _Job:
     """What a block's tasks are told: the block (``index`` in the grid
     ``numblocks``, its [start, stop) per axis ``box``), the volume's
     ``shape``, the connectivity, the name of the input, whether the surfaces
@@ -99,7 +99,7 @@ class Job:
 # --------------------------------------------------------------------------
 
 
-def _read_zarr_block(z, job: Job) -> dict:
+def _read_zarr_block(z, job: _Job) -> dict:
     """Read one block of a zarr array and summarise it.
 
     Reading inside the task (rather than through dask-array chunks) means a
@@ -115,13 +115,13 @@ def _read_zarr_block(z, job: Job) -> dict:
     return _dask_block(data, job)
 
 
-def _dask_block(chunk, job: Job) -> dict:
+def _dask_block(chunk, job: _Job) -> dict:
     """Summarise one chunk of a dask array (no halo needed, see blocks)."""
     return summarize_block(chunk, job.index, job.numblocks, tuple(a for a, _ in job.box), job.shape, job.conn,
                            job.where, job.surfaces)
 
 
-def _merge(job: Job, *summaries) -> dict:
+def _merge(job: _Job, *summaries) -> dict:
     """:func:`isoflow.digital.seams.merge_block` of a block and its upper
     neighbours' summaries."""
     return merge_block(job.index, job.numblocks, job.box, job.shape, job.conn, job.surfaces, *summaries)
@@ -266,7 +266,7 @@ def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
     return shape, where
 
 
-def _grid(array, block_shape, where: str) -> Grid:
+def _grid(array, block_shape, where: str) -> _Grid:
     """The blocks: a zarr array's chunks (or shards, small ones grouped), a
     dask array's chunks, or ``block_shape``."""
     if is_zarr_array(array):
@@ -279,10 +279,10 @@ def _grid(array, block_shape, where: str) -> Grid:
         chunks = array.chunks
     if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << SHIFT:
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
-    return Grid(array, is_zarr_array(array), block_bounds(chunks), tuple(len(c) for c in chunks))
+    return _Grid(array, is_zarr_array(array), block_bounds(chunks), tuple(len(c) for c in chunks))
 
 
-def _block_tasks(grid: Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
+def _block_tasks(grid: _Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
     """The summary tasks of the blocks of layer ``i`` along the first axis."""
     dask, _ = import_dask(array=False)
     # the zarr array as one node of the graph: as an argument of every task
@@ -292,7 +292,7 @@ def _block_tasks(grid: Grid, i: int, conn: int, where: str, surfaces: bool, shap
     tasks = {}
     for tail in itertools.product(*(range(n) for n in grid.numblocks[1:])):
         index = (i, *tail)
-        job = Job(index, grid.box(index), grid.numblocks, tuple(shape), conn, where, surfaces)
+        job = _Job(index, grid.box(index), grid.numblocks, tuple(shape), conn, where, surfaces)
         if grid.is_zarr:
             tasks[index] = dask.delayed(_read_zarr_block, pure=False)(array, job)
         else:
@@ -307,7 +307,7 @@ def _uppers(index, numblocks) -> list[tuple[int, ...]]:
             if all(i + di < n for i, di, n in zip(index, d, numblocks))]
 
 
-def _layers(grid: Grid, conn: int, where: str, surfaces: bool, shape, compute, progress) -> list[dict]:
+def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, progress) -> list[dict]:
     """Layer by layer along axis 0: merging layer i needs the summaries of
     layers i and i+1 only, so at most two layers of faces are held,
     whatever order dask would pick for one big graph (it tends to read
@@ -322,7 +322,7 @@ def _layers(grid: Grid, conn: int, where: str, surfaces: bool, shape, compute, p
         # the summaries computed already as leaves of the graph (dask would
         # walk through every dict and array of them as arguments)
         both = {**{index: dask.delayed(s, pure=False, traverse=False) for index, s in current.items()}, **upper}
-        tasks = [dask.delayed(_merge, pure=False)(Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
+        tasks = [dask.delayed(_merge, pure=False)(_Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
                                                       where, surfaces),
                                                   *(both[u] for u in _uppers(index, grid.numblocks)))
                  for index in current]

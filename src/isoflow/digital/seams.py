@@ -102,14 +102,45 @@ def _blocks_around(index, numblocks) -> tuple[dict, dict]:
 
 
 def merge_block(index, numblocks, box, shape, conn: int, surfaces: bool, *summaries) -> dict:
-    """What crosses the upper faces of one block, plus its own small numbers.
+    """What crosses the upper faces of one block, with its own small numbers.
 
-    ``summaries`` are those of :func:`isoflow.digital.blocks.summarize_block`
-    for the block and its existing upper neighbours ``index + d``, ``d`` in
-    ``{0,1}^n`` (C order of ``d``); ``box``: the block's [start, stop) along
-    each axis of the volume ``shape``. The block's own numbers are passed on, without its
-    faces, so that the final step never needs the (larger) summaries, which
-    the scheduler can then drop.
+    Parameters
+    ----------
+    index, numblocks : tuple of int
+        The block's place in the grid of blocks, and the grid's size.
+    box : tuple of (int, int)
+        The block's [start, stop) along each axis of the volume.
+    shape : tuple of int
+        The volume's shape.
+    conn : int
+        The connectivity (6 or 26; 4 or 8 in 2D).
+    surfaces : bool
+        Whether the closed surfaces and the doubled edges are counted (3D).
+    *summaries : dict
+        Those of :func:`isoflow.digital.blocks.summarize_block` for the
+        block and its existing upper neighbours ``index + d``, ``d`` in
+        ``{0,1}^n`` (C order of ``d``).
+
+    Returns
+    -------
+    dict
+        The block's summary without its faces (the larger part, which the
+        scheduler can then drop), its histogram with the seams' vertices
+        added, ``joins`` (per kind, pairs of node keys that touch across a
+        face), the seams' pinches, and with ``surfaces`` in 3D their
+        ``gains`` (node keys, 4 chi, faces), loose ends and the parents of
+        the pending pieces of the block above along z.
+
+    Examples
+    --------
+    >>> from isoflow.digital.blocks import summarize_block
+    >>> from isoflow.digital.configurations import configuration_histogram
+    >>> v = np.zeros((4, 3, 3), bool); v[1:3, 1, 1] = True  # across the face x = 2
+    >>> low, high = (summarize_block(v[a:a + 2], (i, 0, 0), (2, 1, 1), (a, 0, 0), v.shape, 6, "v", True)
+    ...              for i, a in ((0, 0), (1, 2)))
+    >>> m = merge_block((0, 0, 0), (2, 1, 1), ((0, 2), (0, 3), (0, 3)), v.shape, 6, True, low, high)
+    >>> bool((m["hist"] + high["hist"] == configuration_histogram(v)).all()), m["joins"]["fg"][0].shape
+    (True, (2, 1))
     """
     ndim = len(index)
     offsets, ids = _blocks_around(index, numblocks)
