@@ -44,9 +44,10 @@ above and adds up, per component, the mesh vertices and faces of its whole
 boundary (every sheet counts for its object and its background component);
 a surface's counts are then those of the component below it in the tree
 less those of the surfaces below that one. About 1.5 bytes per voxel on a
-porous field, no label volume, no table of pairs. Small volumes (scipy
-labels and the configuration array) and the blocks of the out-of-core pass
-count per label pair. All equal
+porous field, no label volume, no table of pairs; the blocks of the
+out-of-core pass go through the same sweep and join the trees
+(:mod:`isoflow.digital.outofcore`). Small volumes (cc3d labels and the
+configuration array) count per label pair. All equal
 ``boundary_mesh(volume, connectivity).components()`` exactly
 (the tests check it on thousands of random volumes).
 """

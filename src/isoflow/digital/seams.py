@@ -22,6 +22,7 @@ parents: the key of the voxel just below each piece's first voxel.
 from __future__ import annotations
 
 import itertools
+from functools import lru_cache
 
 import numpy as np
 
@@ -204,14 +205,13 @@ def _add_planar_seam(out: dict, seam: dict, index, numblocks, axis: int, conn: i
 def _add_seam(out: dict, seam: dict, index, numblocks, box, shape, axis: int, conn: int, surfaces: bool) -> None:
     """A 3D seam's census, added to the block's numbers."""
     from ..scale.seams import seam_census
-    from ..scale.sweep import sheet_tables
 
     fg, bg = (_cut(seam[kind], index, numblocks, axis) for kind in ("fg", "bg"))
     lo, hi = _kept(index, numblocks, axis, fg.shape)
     # the block's own voxels along each axis: the seam less its voxel beyond
     own = [n - int(m > axis and index[m] + 1 < numblocks[m]) for m, n in enumerate(fg.shape)]
-    found = seam_census(fg != 0, fg, bg, lo, hi, axis, own, int(OUTSIDE), sheet_tables(sweep_tables(conn), conn == 6),
-                        conn == 6, tuple(_REACH[a] for a in MESH_ADJACENCY[conn]))
+    found = seam_census(fg != 0, fg, bg, lo, hi, axis, own, int(OUTSIDE), _tables(conn), conn == 6,
+                        tuple(_REACH[a] for a in MESH_ADJACENCY[conn]))
     out["hist"] += found["hist"]
     edges = found["edges"]
     obj = edges[:, 2] == 1
@@ -223,6 +223,15 @@ def _add_seam(out: dict, seam: dict, index, numblocks, box, shape, axis: int, co
         start = [b - 1 if m == axis else a for m, (a, b) in enumerate(box)]
         out["loose"].append(edge_keys(found["loose"], start, shape))
         out["gains"].append(np.stack([found["keys"], found["chi4"], found["faces"]]))
+
+
+@lru_cache(maxsize=None)
+def _tables(conn: int):
+    """The sweep's tables for the seams (the object's Euler characteristic
+    from its cells under 6, the background's under 26)."""
+    from ..scale.sweep import sheet_tables
+
+    return sheet_tables(sweep_tables(conn), conn == 6)
 
 
 def _pending_parents(own: dict, above: dict, block_id: int) -> np.ndarray:

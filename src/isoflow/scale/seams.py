@@ -234,20 +234,55 @@ def _orders(axis: int) -> tuple[np.ndarray, np.ndarray]:
 
 def seam_census(vox: np.ndarray, fg: np.ndarray, bg: np.ndarray, lo, hi, axis: int, own, outside: int, tables,
                 formula_obj: bool, reach: tuple[int, int]) -> dict:
-    """The census of a seam (see the module docs): ``vox`` its voxels (two
-    layers along ``axis``), ``fg``/``bg`` their node keys (int64),
-    ``lo``/``hi`` the box of vertices it counts (vertex w between voxels w -
-    1 and w; along ``axis`` the one vertex 1), ``own`` the extent of the
-    block's own voxels along each axis, ``outside`` the key of voxels
-    beyond the seam, ``tables`` those of
-    :func:`isoflow.scale.sweep.sheet_tables`, ``reach`` the object's and
-    background's adjacencies (1, 2, 3: 6, 18, 26).
+    """The census of a seam (see the module docs).
 
-    Returns ``hist``; ``keys``, ``chi4`` and ``faces``: per key, signed (+
-    for the object, - for the background) what its surfaces gain, 4 chi and
-    faces; the pinch ``pairs`` (keys); the ``loose`` ends (w, spoke bit);
-    the ``edges`` (keys to join, and 1 for the object's, 0 for the
-    background's)."""
+    Parameters
+    ----------
+    vox : numpy.ndarray
+        The seam's voxels (bool, 3D), two layers along ``axis``.
+    fg, bg : numpy.ndarray
+        Their node keys (int64): of the object voxels, of the background
+        voxels (anything elsewhere).
+    lo, hi : sequence of int
+        The box of vertices the seam counts (vertex ``w`` between voxels
+        ``w - 1`` and ``w``; along ``axis`` the one vertex 1).
+    axis : int
+        The axis across the face.
+    own : sequence of int
+        The extent of the block's own voxels along each axis (the seam may
+        reach one voxel further).
+    outside : int
+        The key of the voxels beyond the seam (the volume's outside).
+    tables : Tables
+        Those of :func:`isoflow.scale.sweep.sheet_tables`.
+    formula_obj : bool
+        Whether the object's Euler characteristic comes from its cells.
+    reach : tuple of int
+        The object's and the background's adjacencies: how many coordinates
+        two neighbours may differ in (1, 2, 3 for 6, 18, 26).
+
+    Returns
+    -------
+    dict
+        ``hist``; ``keys``, ``chi4`` and ``faces``: per key, signed (+ for
+        the object, - for the background), what its surfaces gain, 4 chi and
+        faces; the pinch ``pairs`` (keys); the ``loose`` ends (vertex, spoke
+        bit); the ``edges`` (keys to join, and 1 for the object's, 0 for the
+        background's).
+
+    Examples
+    --------
+    >>> from isoflow.digital.closed_surfaces import sweep_tables
+    >>> from isoflow.scale.sweep import sheet_tables
+    >>> vox = np.zeros((2, 3, 3), bool); vox[:, 1, 1] = True  # a bar across the face
+    >>> keys = np.array([10, 20]).repeat(9).reshape(2, 3, 3)
+    >>> found = seam_census(vox, keys, keys + 1, (1, 0, 0), (2, 4, 4), 0, (1, 3, 3), -1,
+    ...                     sheet_tables(sweep_tables(6), True), True, (1, 2))
+    >>> int(found["hist"].sum()), sorted(set(map(tuple, found["edges"].tolist())))
+    (16, [(10, 20, 1), (11, 21, 0)])
+    >>> dict(zip(found["keys"].tolist(), zip(found["chi4"].tolist(), found["faces"].tolist())))[10]  # the edge, the face twice
+    (-8, -2)
+    """
     others = [m for m in range(3) if m != axis]
     vox, fg, bg = (np.ascontiguousarray(np.moveaxis(a, axis, 0)) for a in (vox.view(np.uint8), fg, bg))
     order, octant = _orders(axis)

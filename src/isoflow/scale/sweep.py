@@ -40,12 +40,23 @@ afterwards. Array indices in the loops are cast to unsigned integers
 Work per event is a few word operations and two additions, so that a
 512^3 porous field (36 million events) takes about 0.5 s on one thread.
 
-Only the helpers that run on every word (the joins of a block's rows and
-the surface pieces) are inlined by numba (``inline="always"``); the others
-are ordinary calls, which LLVM inlines where it pays. Inlining the twelve
-copies of :func:`_join_mask` at numba's level made the sweep's first
-compile (once per install) take 37 s instead of about 8 s, for no measured
-gain.
+A block of a larger volume (:mod:`isoflow.digital.blocks`) is swept with a
+box of *counted* vertices: the histogram, the sheets, the pinches and the
+doubled edges count there only (the runs' pieces, cells of the block, count
+whole), and a doubled spoke of a counted vertex toward a lattice vertex
+that is not counted is a *loose end*, handed on to whoever counts that
+vertex. Only the block's faces that are the volume's own border join their
+gaps to the outside.
+
+The arrays and flags travel as five named tuples: the volume's bit rows
+(:data:`BitRows`), the per-configuration :data:`Tables`, the union-find and
+sums (:data:`Nodes`), what every slab does alike (:data:`Rules`) and one
+slab's part (:data:`Slab`). The helpers that run on every word or row (the
+joins of a block's rows, the surface pieces, the events of a word) are
+inlined by numba (``inline="always"``); the others are ordinary calls,
+which LLVM inlines where it pays. Inlining the twelve copies of
+:func:`_join_mask` at numba's level made the sweep's first compile (once
+per install) several times longer, for no measured gain.
 """
 
 from __future__ import annotations
@@ -792,12 +803,34 @@ def _components(parent, acc, parts):
 
 
 def sheet_tables(tables, formula_obj: bool) -> Tables:
-    """The per-configuration :data:`Tables` of the sweep from those of
-    :func:`isoflow.digital.closed_surfaces.sweep_tables`. The object's
-    components under 6-adjacency (else the background's) get their Euler
-    characteristic from a formula over runs (see :func:`_pieces`), the
-    other side's from the sheets: per sheet its octant on that side, and
-    what it adds, 4 - q for q quarters of faces."""
+    """The per-configuration :data:`Tables` of the sweep and of the seams.
+
+    Parameters
+    ----------
+    tables : tuple of numpy.ndarray
+        Those of :func:`isoflow.digital.closed_surfaces.sweep_tables`.
+    formula_obj : bool
+        Whether the object's Euler characteristic comes from the formula
+        over runs (its components under 6-adjacency); else the background's
+        does, and the object's from the sheets.
+
+    Returns
+    -------
+    Tables
+        ``nsheet``; per sheet its ``octant`` on the side that counts sheets
+        and what it adds (``values``), ``4 - q`` for ``q`` quarters of faces
+        (four times its share of ``chi = V - F``); the doubled ``spokes``;
+        the ``pinch`` octants; ``info``, a common event's one sheet in one
+        number (its octant, and 128 + what it adds from bit 8), -1 for the
+        configurations that take the slower path.
+
+    Examples
+    --------
+    >>> from isoflow.digital.closed_surfaces import sweep_tables
+    >>> t = sheet_tables(sweep_tables(6), True)
+    >>> int(t.nsheet[1]), int(t.values[1, 0])  # one voxel: one sheet, three quarter faces at its corner
+    (1, 1)
+    """
     nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch = tables
     octant = np.where(nsheet[:, None] > np.arange(4), sheet_bg if formula_obj else sheet_obj, 0).astype(np.int64)
     nsheet = nsheet.astype(np.int64)
@@ -875,31 +908,62 @@ def sweep(bits, shape, off, goff, adjacency, tables, pinch_objects: bool, surfac
           counted: np.ndarray | None = None, border=None, pair_capacity: int | None = None) -> dict:
     """One pass over the lattice vertices, slabs of layers on the threads.
 
-    ``bits``, ``off``, ``goff``: :func:`isoflow.scale.bitrows.pack` of the
-    volume (``shape``); ``adjacency``: the object's and the background's
-    (slack between neighbouring rows, slack between diagonal rows or -1
-    each, see :data:`isoflow.scale.kernels.ADJACENCY`); ``tables``: those of
-    :func:`isoflow.digital.closed_surfaces.sweep_tables`; ``pinch_objects``:
-    the pinches join object voxels (else background ones); ``surfaces``:
-    add up the surfaces' sums (and count the doubled edges). A block of a
-    larger volume is swept with ``counted``, the box of vertices whose
-    histogram, sheets, pinches and doubled edges count ((2, 3): the first
-    and one past the last along each axis, the first 0 or 1, the last n or
-    n + 1 along the last axis; default: every vertex), and ``border``, which
-    of its six faces (low x, high x, low y, ...) are the volume's own, whose
-    gaps join the outside (default: all). ``pair_capacity``: pinch pairs and
-    loose ends a slab holds before it is swept again for them alone.
+    Parameters
+    ----------
+    bits, off, goff : numpy.ndarray
+        :func:`isoflow.scale.bitrows.pack` of the volume.
+    shape : tuple of int
+        The volume's shape ``(nx, ny, nz)``.
+    adjacency : tuple of int
+        The object's and the background's slacks (between neighbouring rows,
+        between diagonal rows or -1 each, see
+        :data:`isoflow.scale.kernels.ADJACENCY`).
+    tables : tuple of numpy.ndarray
+        Those of :func:`isoflow.digital.closed_surfaces.sweep_tables`.
+    pinch_objects : bool
+        Whether the pinches join object voxels (else background ones).
+    surfaces : bool
+        Add up the surfaces' sums and count the doubled edges.
+    counted : numpy.ndarray, optional
+        For a block of a larger volume, the box of vertices whose histogram,
+        sheets, pinches and doubled edges count ((2, 3): the first and one
+        past the last along each axis; along the last axis the first 0 or 1
+        and the last n or n + 1). Default: every vertex.
+    border : sequence of bool, optional
+        Which of the six faces (low x, high x, low y, high y, low z, high z)
+        are the volume's own, whose gaps join the outside. Default: all.
+    pair_capacity : int, optional
+        Pinch pairs and loose ends a slab holds before it is swept again for
+        them alone.
 
+    Returns
+    -------
+    dict
+        ``hist``, ``doubled``, the pinch ``pairs`` (nodes), the ``loose``
+        ends of doubled edges (rows (i, j, k, spoke bit): a doubled spoke of
+        a counted vertex toward a lattice vertex that is not counted), and
+        for the runs and the gaps: ``parents``, every node's component
+        (numbered in order of their smallest node), ``roots``, each
+        component's smallest node, and ``sums``, per component ``4 chi`` and
+        ``F`` of its boundary at the counted vertices (zero without
+        ``surfaces``).
+
+    Notes
+    -----
     The nodes are the runs, numbered row by row (as ``off`` says), and the
     gaps (``goff``), with one more gap node, the last, for the region
-    outside the array. Returns ``hist``, ``doubled``, the pinch ``pairs``
-    (nodes), the ``loose`` ends of doubled edges (rows (i, j, k, spoke
-    bit): a doubled spoke of a counted vertex toward a lattice vertex that
-    is not counted), and for the runs and the gaps: ``parents``, every
-    node's component (numbered in order of their smallest node),
-    ``roots``, each component's smallest node, and ``sums``, per component
-    ``4 chi`` and ``F`` of its boundary at the counted vertices (zero
-    without ``surfaces``).
+    outside the array.
+
+    Examples
+    --------
+    >>> from isoflow.scale import bitrows, kernels
+    >>> from isoflow.digital.closed_surfaces import sweep_tables
+    >>> v = np.ones((3, 3, 3), bool); v[1, 1, 1] = False  # a cavity
+    >>> bits, off, goff = bitrows.pack(v)
+    >>> found = sweep(bits, v.shape, off, goff, kernels.ADJACENCY[6] + kernels.ADJACENCY[18], sweep_tables(6),
+    ...               pinch_objects=False)
+    >>> int(found["hist"].sum()), [len(r) for r in found["roots"]]  # 4^3 vertices; one object, cavity, outside
+    (64, [1, 2])
     """
     nx, ny, nz = shape
     runs, gaps = int(off[-1]), int(goff[-1])
