@@ -18,8 +18,8 @@ what crosses its faces and a few numbers per component on them:
 * **Components** (b0 and the enclosed background components). A block's
   components on its faces are nodes (``block << 32 | number``); the seams
   give the pairs of nodes that touch across a face, and the union-find
-  over those edges (a sparse graph, scipy's ``connected_components``)
-  gives ``b0 = nodes - merges``. The background on the volume's border is
+  over those edges (that of the sweep's pinches) gives ``b0 = nodes -
+  merges``. The background on the volume's border is
   the outside, one node; the enclosed components are the others.
 * **The closed surfaces.** The components of the boundary mesh's solid and
   of its complement form a tree whose edges are the surfaces
@@ -54,9 +54,9 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.compiled import thread_count, using
-from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from ..scale.arrays import binary
+from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
+from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
 from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
@@ -367,26 +367,61 @@ def analyze_chunked(
     """The report of :func:`isoflow.digital.analysis.analyze`, computed block
     by block.
 
-    ``array`` is a 2D or 3D ``dask.array.Array`` or zarr array of bools or
-    0/1 numbers; the result equals
-    ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``
-    key for key. A dask array is processed along its own chunks; a zarr
-    array along its chunks (or shards; tiny chunks are grouped), or along
-    ``block_shape`` when given (a dask array is rechunked to it). Memory is a
-    few blocks per worker plus the faces of two layers of blocks; the voxels
-    are read once. An array with no voxels raises IsoflowError (``analyze``
-    has no report for it either).
+    Parameters
+    ----------
+    array : dask.array.Array or zarr.Array
+        A 2D or 3D array of bools or 0/1 numbers. A dask array is processed
+        along its own chunks; a zarr array along its chunks (or shards;
+        tiny chunks are grouped).
+    connectivity : int, optional
+        6 or 26 (4 or 8 in 2D); default 6 (4).
+    block_shape : tuple of int, optional
+        The blocks instead (a dask array is rechunked to it).
+    scheduler : optional
+        Passed to ``dask.compute``: default dask's configured one, threads;
+        ``"processes"`` runs blocks in worker processes (only from code
+        under ``if __name__ == "__main__":``); a ``dask.distributed``
+        client's ``get`` runs them on its workers.
+    where : str, optional
+        The input's name in error messages.
+    progress : callable, optional
+        ``progress(done, total)``, called after each layer of blocks along
+        the first axis (``total`` layers), the unit of work between two
+        computes.
+    surfaces : bool
+        Count the closed surfaces, pinched vertices and doubled edges (3D).
+    threads : int, optional
+        Workers of the threaded scheduler (default
+        :func:`isoflow.scale.compiled.thread_count`); each block's passes
+        run on one thread and release the GIL.
 
-    ``scheduler`` is passed to ``dask.compute`` (default: dask's configured
-    one, threads, on ``threads`` workers, default
-    :func:`isoflow.scale.compiled.thread_count`); each block's passes run on
-    one thread and release the GIL. ``"processes"`` runs blocks in worker
-    processes at the cost of starting them and pickling the faces (only from
-    code under ``if __name__ == "__main__":``). A ``dask.distributed``
-    client's ``get`` works as a scheduler too. ``where`` names the input in
-    error messages. ``progress(done, total)`` is called after each layer of
-    blocks along the first axis (``total`` layers), the unit of work between
-    two computes.
+    Returns
+    -------
+    dict
+        ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``,
+        key for key.
+
+    Raises
+    ------
+    IsoflowError
+        Anything but a 2D or 3D dask or zarr array of 0 and 1 (named with
+        ``where`` and the block's first voxel), an array with no voxels
+        (``analyze`` has no report for it either), blocks of 2^32 voxels.
+
+    Notes
+    -----
+    Memory is a few blocks per worker plus the faces of two layers of
+    blocks; the voxels are read once (see the module docs and
+    ``docs/outofcore.md``).
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> from isoflow import analyze
+    >>> v = np.zeros((12, 10, 11), bool); v[2:10, 2:8, 2:9] = True; v[5:7, 4:6, :] = False  # a tunnel
+    >>> r = analyze_chunked(da.from_array(v, chunks=(5, 4, 6)), 6)
+    >>> r["betti"], r == analyze(v, 6)
+    ([1, 1, 0], True)
     """
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
@@ -415,9 +450,40 @@ def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, sch
                  surfaces: bool = True, threads: int | None = None, progress=None) -> dict:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A zarr array, or a group with an array named ``volume`` or only one
+        array.
+    connectivity, block_shape, scheduler, surfaces, threads, progress
+        As in :func:`analyze_chunked`.
+
+    Returns
+    -------
+    dict
+        The report, as :func:`isoflow.digital.analysis.analyze` gives it.
+
+    Raises
+    ------
+    IsoflowError
+        A path that is no zarr store, a group without one volume, or the
+        errors of :func:`analyze_chunked`, with the path.
+
+    Notes
+    -----
     Before the full pass, the dtype and the first block's values are
     checked, so that a non-binary volume fails at once with the path in the
     message (every block is checked again as it is read).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> v = np.zeros((8, 8, 8), bool); v[1:7, 1:7, 1:7] = True; v[3:5, 3:5, 3:5] = False  # a cavity
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     z = zarr.create_array(store=d + "/v.zarr", shape=v.shape, chunks=(3, 5, 4), dtype=bool)
+    ...     z[...] = v
+    ...     analyze_zarr(d + "/v.zarr")["betti"]
+    [1, 0, 1]
     """
     z = open_zarr(path)
     where = str(path)
