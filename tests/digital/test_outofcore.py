@@ -207,7 +207,7 @@ def test_blocks_hand_on_faces_and_own_each_vertex_once(rng):
     v = rng.random((40, 30, 20)) < 0.5
     s = summarize_block(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), (120, 90, 60), 6, "test", True)
     assert sorted({a.shape for a in s["faces"].values()}) == [(30, 20), (40, 20), (40, 30)]
-    assert len(s["faces"]) == 2 * 6  # object and background numbers on 6 faces
+    assert len(s["faces"]) == 2 * 6  # the numbers and the object's voxels on 6 faces
     assert s["hist"].sum() == 39 * 29 * 19  # vertices a+1 .. b-1; those at b are the seams'
     assert len(s["pieces"][0]["key"]) < v.size // 20
     for conn in (6, 26):
@@ -280,6 +280,37 @@ def seam_oracle(vox, fg, bg, keep, axis, own, conn, outside):
     return hist, {k: g for k, g in gains.items() if g != (0, 0)}, pairs, loose, joins
 
 
+def layer_pairs(vox, keys, axis):
+    """Pairs of keys of face neighbours of one kind inside each layer of a
+    seam."""
+    pairs = set()
+    for m in range(3):
+        if m == axis:
+            continue
+        a, b = [slice(None)] * 3, [slice(None)] * 3
+        a[m], b[m] = slice(0, -1), slice(1, None)
+        same = vox[tuple(a)] == vox[tuple(b)]
+        pairs |= {(int(x), int(y), 0) for x, y in zip(keys[tuple(a)][same], keys[tuple(b)][same])}
+    return pairs
+
+
+def same_partition(left, right):
+    """Whether two sets of (key, key, kind) pairs join the keys alike."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    nodes = sorted({k for p in left | right for k in p[:2]})
+    at = {k: i for i, k in enumerate(nodes)}
+
+    def labels(pairs):
+        rows = np.array([[at[a], at[b]] for a, b, _ in pairs]).reshape(-1, 2)
+        graph = coo_matrix((np.ones(len(rows)), (rows[:, 0], rows[:, 1])), shape=(len(nodes),) * 2)
+        return connected_components(graph, directed=False)[1]
+
+    x, y = labels(left), labels(right)
+    return len(set(zip(x, y))) == len(set(x)) == len(set(y))
+
+
 @pytest.mark.parametrize("conn", [6, 26])
 def test_seam_census_against_numpy(rng, conn):
     """The compiled census of a seam (seen across each axis, with its
@@ -295,22 +326,30 @@ def test_seam_census_against_numpy(rng, conn):
             shape = [9, 11, 13]
             shape[axis] = 2
             vox = rng.random(shape) < density
-            # keys: a few per layer, some shared, beyond 32 bits
-            keys = rng.integers(2, 6, shape).astype(np.int64) + (np.indices(shape)[axis] << 40)
+            # keys beyond 32 bits, a few voxels of a layer each (in rows
+            # along the last axis)
+            keys = np.arange(vox.size).reshape(shape) // 3 + (np.indices(shape)[axis] << 40)
             fg, bg = np.where(vox, keys, 0), np.where(vox, 0, keys + (1 << 20))
             lo, hi = [1, 0, 1], [9, 12, 13]
             lo[axis], hi[axis] = 1, 2
             own = [n - 1 for n in shape]
             keep = tuple(slice(a, b) for a, b in zip(lo, hi))
-            got = seam_census(vox, fg, bg, lo, hi, axis, own, outside, sheet_tables(sweep_tables(conn), conn == 6),
-                              conn == 6, tuple({6: 1, 18: 2}[a] for a in MESH_ADJACENCY[conn]))
+            got = seam_census(vox, np.where(vox, fg, bg), lo, hi, axis, own, outside,
+                              sheet_tables(sweep_tables(conn), conn == 6), conn == 6,
+                              tuple({6: 1, 18: 2}[a] for a in MESH_ADJACENCY[conn]))
             hist, gains, pairs, loose, joins = seam_oracle(vox, fg, bg, keep, axis, own, conn, outside)
             assert (got["hist"] == hist).all()
             mine = {int(k): (int(c), int(f)) for k, c, f in zip(got["keys"], got["chi4"], got["faces"])}
             assert {k: g for k, g in mine.items() if g != (0, 0)} == gains and len(gains) > 5
             assert sorted(map(sorted, got["pairs"].tolist())) == pairs
             assert {tuple(map(int, e)) for e in got["loose"]} == loose
-            assert {tuple(map(int, e)) for e in got["edges"]} == joins and len(joins) > 5
+            # every pair found touches; with the pairs of face neighbours of
+            # one kind inside each layer (which the blocks' labels or other
+            # seams join), they join the keys as all the touching pairs do
+            edges = {tuple(map(int, e)) for e in got["edges"]}
+            assert edges <= joins and len(joins) > 5
+            inside = layer_pairs(vox, np.where(vox, fg, bg), axis)
+            assert same_partition(edges | inside, joins | inside)
 
 
 # --------------------------------------------------------------------------

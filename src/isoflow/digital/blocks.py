@@ -20,7 +20,8 @@ What a block hands on is small:
 
 * the *numbers* of its components on its faces inside the volume (object
   and background in one numbering from 2; 1 is the outside), which become
-  node keys ``block << 32 | number`` (:data:`OUTSIDE` for 1);
+  node keys ``block << 32 | number`` (:data:`OUTSIDE` for 1), and which
+  face voxels are the object's;
 * its *pieces*, the components on those faces: their sums at its own
   vertices and cells, together with those of the components they enclose
   that touch no face (whose surfaces are complete: their parent in the tree
@@ -84,8 +85,9 @@ def node_keys(numbers: np.ndarray, block: int) -> np.ndarray:
     >>> node_keys(np.array([0, 1, 2, 5], np.uint16), 3).tolist() == [0, int(OUTSIDE), 3 << 32 | 2, 3 << 32 | 5]
     True
     """
-    n = numbers.astype(np.int64)
-    return np.where(n > 1, n | (np.int64(block) << SHIFT), np.where(n == 1, OUTSIDE, 0))
+    table = np.arange(int(numbers.max(initial=1)) + 1, dtype=np.int64) | (np.int64(block) << SHIFT)
+    table[:2] = 0, OUTSIDE
+    return table[numbers]
 
 
 def edge_keys(ends: np.ndarray, origin, shape) -> np.ndarray:
@@ -201,7 +203,8 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
     -------
     dict
         ``hist`` (the configurations of the vertices it counts), ``voxels``,
-        ``faces`` (the numbers on its faces inside the volume), ``nodes``
+        ``faces`` (per face inside the volume its ``n``umbers and its
+        ``vox``els), ``nodes``
         and ``pinches`` (for the Betti numbers); with ``surfaces`` in 3D also
         ``pieces``, ``pending``, ``surfaces``, ``doubled``, ``loose`` and
         ``parents`` (see the module docs).
@@ -220,7 +223,7 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
     >>> v = np.zeros((4, 4, 4), bool); v[1:3, 1:3, 2:] = True
     >>> s = summarize_block(v, (0, 0, 0), (1, 1, 2), (0, 0, 0), (4, 4, 8), 6, "v", True)
     >>> int(s["voxels"]), sorted(s["faces"]), len(s["pieces"][0]["key"])
-    (8, [('bg', 2, 1), ('fg', 2, 1)], 1)
+    (8, [('n', 2, 1), ('vox', 2, 1)], 1)
     """
     with using(1):
         core = binary(block, where, near=origin)
@@ -244,24 +247,25 @@ def _numbering(components: dict, sizes: tuple[int, int], outside: np.ndarray) ->
     """Number the components seen on the faces: object ones from 2 on, then
     background ones, the ``outside`` background components 1.
 
-    ``components``: per (kind, axis, side) the component (0 ..) of every
-    face voxel of that kind, -1 elsewhere; ``sizes``: how many of each kind.
-    Returns the faces' numbers (0 for the other kind), and per kind the
-    number of every component (0: not seen) and whether it was seen."""
-    marks = (np.zeros(sizes[0] + 1, bool), np.zeros(sizes[1] + 1, bool))  # (index 0: none)
-    for (kind, _, _), comp in components.items():
-        marks[kind == "bg"][comp.ravel() + 1] = True
-    seen = (marks[0][1:], marks[1][1:])
-    seen[1][outside] = True
-    inner = seen[1].copy()
-    inner[outside] = False
-    numbers = (np.zeros(sizes[0] + 1, np.int64), np.zeros(sizes[1] + 1, np.int64))
-    numbers[0][1:][seen[0]] = 2 + np.arange(np.count_nonzero(seen[0]))
-    numbers[1][1:][inner] = 2 + np.count_nonzero(seen[0]) + np.arange(np.count_nonzero(inner))
-    numbers[1][1:][outside] = 1
-    dtype = np.uint16 if 2 + np.count_nonzero(seen[0]) + np.count_nonzero(inner) < 1 << 16 else np.uint32
-    faces = {key: numbers[key[0] == "bg"].astype(dtype)[comp + 1] for key, comp in components.items()}
-    return faces, (numbers[0][1:], numbers[1][1:]), seen
+    ``components``: per (axis, side) the component of every face voxel
+    (object components ``0 .. sizes[0] - 1``, then background ones). Returns
+    the faces (per (axis, side) the ``n``umbers and which voxels are the
+    object's, ``vox``), and per kind the number of every component (0: not
+    seen) and whether it was seen."""
+    seen = np.zeros(sizes[0] + sizes[1], bool)
+    for comp in components.values():
+        seen[comp.ravel()] = True
+    seen[sizes[0] + outside] = True
+    inner = seen.copy()
+    inner[sizes[0] + outside] = False
+    numbers = np.zeros(len(seen), np.int64)
+    numbers[inner] = 2 + np.arange(np.count_nonzero(inner))
+    numbers[sizes[0] + outside] = 1
+    small = numbers.astype(np.uint16 if 2 + np.count_nonzero(inner) < 1 << 16 else np.uint32)
+    faces = {}
+    for (axis, side), comp in components.items():
+        faces["n", axis, side], faces["vox", axis, side] = small[comp], comp < sizes[0]
+    return faces, (numbers[:sizes[0]], numbers[sizes[0]:]), (seen[:sizes[0]], seen[sizes[0]:])
 
 
 def _labelled_block(core, index, numblocks, conn) -> dict:
@@ -278,8 +282,10 @@ def _labelled_block(core, index, numblocks, conn) -> dict:
               if (last if side else first)[axis]]
     outside = np.unique(np.concatenate([b.ravel() for b in border] or [np.zeros(0, int)]))
     outside = outside[outside > 0].astype(np.int64) - 1
-    components = {(kind, axis, side): np.ascontiguousarray(np.take(labels[kind], -side, axis=axis)).astype(np.int64) - 1
-                  for kind in ("fg", "bg") for axis, side in _inner_faces(index, numblocks)}
+    components = {}
+    for axis, side in _inner_faces(index, numblocks):
+        fg, bg = (np.take(labels[kind], -side, axis=axis).astype(np.int64) for kind in ("fg", "bg"))
+        components[axis, side] = np.where(fg > 0, fg - 1, sizes[0] + bg - 1)
     faces, _, _ = _numbering(components, tuple(sizes), outside)
     return {"hist": hist, "voxels": int(np.count_nonzero(core)), "faces": faces,
             "nodes": {"fg": sizes[0], "bg": sizes[1] - len(outside)}, "pinches": []}
@@ -310,10 +316,8 @@ def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: boo
     parents = found["parents"]
     sizes = tuple(len(r) for r in found["roots"])
     outside = int(parents[1][-1])
-    components = {}
-    for axis, side in _inner_faces(index, numblocks):
-        components["fg", axis, side], components["bg", axis, side] = face_components(
-            bits, off, goff, parents, core.shape, axis, side)
+    components = {(axis, side): face_components(bits, off, goff, parents, sizes, core.shape, axis, side)
+                  for axis, side in _inner_faces(index, numblocks)}
     faces, numbers, seen = _numbering(components, sizes, np.array([outside]))
     block = int(np.ravel_multi_index(index, numblocks))
     keys = np.concatenate([node_keys(numbers[0], block), node_keys(numbers[1], block)])

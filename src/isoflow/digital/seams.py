@@ -36,9 +36,9 @@ from .topology import COMPLEMENT
 _REACH = {6: 1, 18: 2, 26: 3}
 
 
-def _seam(by_offset, block_id, kind: str, axis: int, ndim: int) -> np.ndarray:
-    """The two-voxel-thick seam of ``kind`` numbers across the upper face of
-    a block along ``axis``, as node keys.
+def _seam(by_offset, block_id, axis: int, ndim: int) -> tuple[np.ndarray, np.ndarray]:
+    """The two-voxel-thick seam across the upper face of a block along
+    ``axis``: its voxels and their node keys.
 
     Layer 0 is the upper face of the block (and of its upper neighbours
     along the other axes, one voxel of them), layer 1 the lower face of the
@@ -46,12 +46,11 @@ def _seam(by_offset, block_id, kind: str, axis: int, ndim: int) -> np.ndarray:
     plus one voxel where an upper neighbour exists.
     """
     others = [m for m in range(ndim) if m != axis]
-    own = by_offset[(0,) * ndim]["faces"][kind, axis, 1]
-    length = list(own.shape)
+    length = list(by_offset[(0,) * ndim]["faces"]["n", axis, 1].shape)
     shape = [2] * ndim
     for j, m in enumerate(others):
         shape[m] = length[j] + int(tuple(int(q == m) for q in range(ndim)) in by_offset)
-    seam = np.zeros(shape, dtype=np.int64)
+    vox, keys = np.zeros(shape, dtype=bool), np.zeros(shape, dtype=np.int64)
     for s in (0, 1):  # lower blocks' upper faces, upper blocks' lower faces
         for d_other in itertools.product((0, 1), repeat=ndim - 1):
             d = [0] * ndim
@@ -61,13 +60,14 @@ def _seam(by_offset, block_id, kind: str, axis: int, ndim: int) -> np.ndarray:
             d = tuple(d)
             if d not in by_offset:
                 continue
-            face = by_offset[d]["faces"][kind, axis, 1 - s]
-            face = face[tuple(slice(0, 1) if dj else slice(None) for dj in d_other)]
+            part = tuple(slice(0, 1) if dj else slice(None) for dj in d_other)
             dst = [s] * ndim
             for j, m in enumerate(others):
                 dst[m] = slice(length[j], length[j] + 1) if d_other[j] else slice(0, length[j])
-            seam[tuple(dst)] = node_keys(face, block_id[d])
-    return seam
+            faces = by_offset[d]["faces"]
+            vox[tuple(dst)] = faces["vox", axis, 1 - s][part]
+            keys[tuple(dst)] = node_keys(faces["n", axis, 1 - s][part], block_id[d])
+    return vox, keys
 
 
 def _labelled_joins(seam: np.ndarray, connectivity: int) -> np.ndarray:
@@ -156,7 +156,7 @@ def merge_block(index, numblocks, box, shape, conn: int, surfaces: bool, *summar
         for axis in range(ndim):
             if index[axis] + 1 == numblocks[axis]:
                 continue  # no upper neighbour: an array border
-            seam = {kind: _seam(by_offset, ids, kind, axis, ndim) for kind in ("fg", "bg")}
+            seam = _seam(by_offset, ids, axis, ndim)
             if ndim == 2:
                 _add_planar_seam(out, seam, index, numblocks, axis, conn)
             else:
@@ -191,26 +191,28 @@ def _cut(seam: np.ndarray, index, numblocks, axis: int) -> np.ndarray:
                       for m in range(seam.ndim))]
 
 
-def _add_planar_seam(out: dict, seam: dict, index, numblocks, axis: int, conn: int) -> None:
-    fg, bg = (_cut(seam[kind], index, numblocks, axis) for kind in ("fg", "bg"))
-    lo, hi = _kept(index, numblocks, axis, fg.shape)
+def _add_planar_seam(out: dict, seam: tuple, index, numblocks, axis: int, conn: int) -> None:
+    """A 2D seam's vertices and joins, added to the block's numbers."""
+    vox, keys = seam
+    cut = _cut(vox, index, numblocks, axis)
+    lo, hi = _kept(index, numblocks, axis, cut.shape)
     keep_low = [a == 0 for a in lo]
-    keep_high = [b == n + 1 for b, n in zip(hi, fg.shape)]
+    keep_high = [b == n + 1 for b, n in zip(hi, cut.shape)]
     keep_low[axis] = keep_high[axis] = False
-    out["hist"] += vertex_histogram(fg != 0, keep_low, keep_high)
-    out["joins"]["fg"].append(_labelled_joins(seam["fg"], conn))
-    out["joins"]["bg"].append(_labelled_joins(seam["bg"], COMPLEMENT[conn]))
+    out["hist"] += vertex_histogram(cut, keep_low, keep_high)
+    out["joins"]["fg"].append(_labelled_joins(np.where(vox, keys, 0), conn))
+    out["joins"]["bg"].append(_labelled_joins(np.where(vox, 0, keys), COMPLEMENT[conn]))
 
 
-def _add_seam(out: dict, seam: dict, index, numblocks, box, shape, axis: int, conn: int, surfaces: bool) -> None:
+def _add_seam(out: dict, seam: tuple, index, numblocks, box, shape, axis: int, conn: int, surfaces: bool) -> None:
     """A 3D seam's census, added to the block's numbers."""
     from ..scale.seams import seam_census
 
-    fg, bg = (_cut(seam[kind], index, numblocks, axis) for kind in ("fg", "bg"))
-    lo, hi = _kept(index, numblocks, axis, fg.shape)
+    vox, keys = (_cut(a, index, numblocks, axis) for a in seam)
+    lo, hi = _kept(index, numblocks, axis, vox.shape)
     # the block's own voxels along each axis: the seam less its voxel beyond
-    own = [n - int(m > axis and index[m] + 1 < numblocks[m]) for m, n in enumerate(fg.shape)]
-    found = seam_census(fg != 0, fg, bg, lo, hi, axis, own, int(OUTSIDE), _tables(conn), conn == 6,
+    own = [n - int(m > axis and index[m] + 1 < numblocks[m]) for m, n in enumerate(vox.shape)]
+    found = seam_census(vox, keys, lo, hi, axis, own, int(OUTSIDE), _tables(conn), conn == 6,
                         tuple(_REACH[a] for a in MESH_ADJACENCY[conn]))
     out["hist"] += found["hist"]
     edges = found["edges"]
@@ -239,6 +241,4 @@ def _pending_parents(own: dict, above: dict, block_id: int) -> np.ndarray:
     parents, the voxels just below their first voxels, on this block's
     upper z face (2, n)."""
     rows, keys = above["pending"][0]
-    fg, bg = own["faces"]["fg", 2, 1].ravel()[rows], own["faces"]["bg", 2, 1].ravel()[rows]
-    parent = np.where(fg > 0, node_keys(fg, block_id), node_keys(bg, block_id))
-    return np.stack([keys, parent])
+    return np.stack([keys, node_keys(own["faces"]["n", 2, 1].ravel()[rows], block_id)])

@@ -708,21 +708,22 @@ def _give_numbers(parent, acc, lo, hi, starts, bases, roots, sums):
 
 
 @njit(cache=True, nogil=True)
-def _row_ends(bits, off, goff, pobj, pbg, nz, side, fg, bg):
-    """Components of every row's first voxel (``side`` 0) or last (1):
-    its first or last run or gap."""
+def _row_ends(bits, off, goff, pobj, pbg, nobj, nz, side, out):
+    """Components of every row's first voxel (``side`` 0) or last (1): its
+    first or last run or gap (background components after the object's
+    ``nobj``)."""
     k = (nz - 1) * side
-    for r in range(len(fg)):
+    for r in range(len(out)):
         if (bits[r, k >> 6] >> np.uint64(k & 63)) & np.uint64(1):
-            fg[r], bg[r] = pobj[off[r + side] - side], -1
+            out[r] = pobj[off[r + side] - side]
         else:
-            fg[r], bg[r] = -1, pbg[goff[r + side] - side]
+            out[r] = nobj + pbg[goff[r + side] - side]
 
 
 @njit(cache=True, nogil=True)
-def _face_rows(bits, off, goff, pobj, pbg, rows, nz, fg, bg):
-    """Components of the voxels of the bit ``rows``: ``fg`` the object's
-    (-1 for a background voxel), ``bg`` the background's."""
+def _face_rows(bits, off, goff, pobj, pbg, nobj, rows, nz, out):
+    """Components of the voxels of the bit ``rows`` (background components
+    after the object's ``nobj``)."""
     one = np.uint64(1)
     for q in range(len(rows)):
         r = rows[q]
@@ -735,12 +736,11 @@ def _face_rows(bits, off, goff, pobj, pbg, rows, nz, fg, bg):
             elif not bit and (before or k == 0):
                 gap += 1
             before = bit
-            fg[q, k] = pobj[run] if bit else -1
-            bg[q, k] = -1 if bit else pbg[gap]
+            out[q, k] = pobj[run] if bit else nobj + pbg[gap]
 
 
-def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents, shape, axis: int,
-                    side: int) -> tuple[np.ndarray, np.ndarray]:
+def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents, counts, shape, axis: int,
+                    side: int) -> np.ndarray:
     """The component of every voxel of a face layer of a volume swept whole.
 
     Parameters
@@ -749,6 +749,8 @@ def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents
         :func:`isoflow.scale.bitrows.pack` of the volume.
     parents : tuple of numpy.ndarray
         The runs' and the gaps' components, :func:`sweep`'s ``parents``.
+    counts : tuple of int
+        How many components of the object and of the background there are.
     shape : tuple of int
         The volume's shape ``(nx, ny, nz)``.
     axis, side : int
@@ -756,10 +758,10 @@ def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents
 
     Returns
     -------
-    fg, bg : numpy.ndarray
-        int64 arrays of the layer's shape (the other two axes): the object
-        component of each voxel (-1 for background voxels), the background
-        component (-1 for object voxels).
+    numpy.ndarray
+        int64, the layer's shape (the other two axes): the object
+        component of each object voxel, ``counts[0]`` plus the background
+        component of each background voxel.
 
     Examples
     --------
@@ -769,20 +771,22 @@ def face_components(bits: np.ndarray, off: np.ndarray, goff: np.ndarray, parents
     >>> bits, off, goff = bitrows.pack(v)
     >>> found = sweep(bits, v.shape, off, goff, kernels.ADJACENCY[6] + kernels.ADJACENCY[18],
     ...               sweep_tables(6), pinch_objects=False)
-    >>> fg, bg = face_components(bits, off, goff, found["parents"], v.shape, 2, 0)
-    >>> fg.tolist(), bg.tolist()
-    ([[-1, -1], [-1, -1]], [[0, 0], [0, 0]])
+    >>> counts = [len(r) for r in found["roots"]]
+    >>> counts, face_components(bits, off, goff, found["parents"], counts, v.shape, 2, 1).tolist()
+    ([2, 1], [[2, 2], [2, 2]])
+    >>> face_components(bits, off, goff, found["parents"], counts, v.shape, 0, 0).tolist()
+    [[2, 0, 2], [2, 2, 2]]
     """
     nx, ny, nz = shape
     if axis == 2:
-        fg, bg = np.empty(nx * ny, np.int64), np.empty(nx * ny, np.int64)
-        _row_ends(bits, off, goff, parents[0], parents[1], nz, side, fg, bg)
-        return fg.reshape(nx, ny), bg.reshape(nx, ny)
+        out = np.empty(nx * ny, np.int64)
+        _row_ends(bits, off, goff, parents[0], parents[1], counts[0], nz, side, out)
+        return out.reshape(nx, ny)
     at = ((nx if axis == 0 else ny) - 1) * side
     rows = at * ny + np.arange(ny, dtype=np.int64) if axis == 0 else np.arange(nx, dtype=np.int64) * ny + at
-    fg, bg = np.empty((len(rows), nz), np.int64), np.empty((len(rows), nz), np.int64)
-    _face_rows(bits, off, goff, parents[0], parents[1], rows, nz, fg, bg)
-    return fg, bg
+    out = np.empty((len(rows), nz), np.int64)
+    _face_rows(bits, off, goff, parents[0], parents[1], counts[0], rows, nz, out)
+    return out
 
 
 def _components(parent, acc, parts):
