@@ -32,8 +32,9 @@ from .blocks import OUTSIDE, edge_keys, node_keys, vertex_histogram
 from .closed_surfaces import MESH_ADJACENCY, sweep_tables
 from .topology import COMPLEMENT
 
-#: how many coordinates two neighbours may differ in, per adjacency
-_REACH = {6: 1, 18: 2, 26: 3}
+#: how many coordinates two neighbours may differ in, per adjacency of the
+#: boundary mesh
+_REACH = {6: 1, 18: 2}
 
 
 def _seam(by_offset, block_id, axis: int, ndim: int) -> tuple[np.ndarray, np.ndarray]:

@@ -876,6 +876,7 @@ def _new_slabs(parts, ny: int, capacity: int) -> list[Slab]:
 
 
 def _whole_lattice(shape) -> np.ndarray:
+    """The counted box of every vertex of a volume (see :func:`sweep`)."""
     return np.array([[0, 0, 0], [n + 1 for n in shape]], np.int64)
 
 
