@@ -27,11 +27,11 @@ import math
 
 import matplotlib.pyplot as plt
 import numpy as np
+from _common import outputs, parse_args, run
 from dask.distributed import Client, LocalCluster
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 CHUNKS = (19, 29, 13)  # odd sizes: objects, tunnels and cavities cross block faces, edges and corners
 

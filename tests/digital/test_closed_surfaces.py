@@ -6,8 +6,8 @@ any number of threads."""
 
 import numpy as np
 import pytest
-
 from conftest import ball, torus
+
 from isoflow import analyze, boundary_mesh, euler_characteristic
 from isoflow.digital.closed_surfaces import closed_surfaces, sweep_tables
 from isoflow.digital.topology import betti_numbers
@@ -191,7 +191,7 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
             assert peak <= estimate, (name, conn, peak / v.size, estimate / v.size)
             assert counted(got) == mesh_answer(v, conn)
             with monkeypatch.context() as m, pytest.raises(IsoflowError, match="x".join(map(str, v.shape))):
-                m.setattr(memory, "default_budget", lambda: estimate - 1)
+                m.setattr(memory, "default_budget", lambda estimate=estimate: estimate - 1)
                 cs.small_census(v, conn)
 
 
@@ -254,8 +254,8 @@ def test_sweep_counts_a_box_of_vertices(rng, conn):
     # histogram (the configurations, zeros outside), their doubled edges
     # with both ends counted, and the loose ends of those with one end
     # counted (the doubled spokes of the mesh's tables at those vertices)
-    from isoflow.digital.configurations import configurations
     from isoflow.digital.closed_surfaces import MESH_ADJACENCY
+    from isoflow.digital.configurations import configurations
     from isoflow.scale import bitrows, kernels, sweep
 
     spokes = sweep_tables(conn)[4]

@@ -13,17 +13,17 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import ball, torus
 from scipy.ndimage import gaussian_filter
 
-from conftest import ball, torus
 from isoflow import DigitalObject, IsoflowError, analyze
 from isoflow.cli import main
 
 da = pytest.importorskip("dask.array")
 zarr = pytest.importorskip("zarr")
 from isoflow.digital import outofcore  # noqa: E402
-from isoflow.scale import chunks as chunks_mod  # noqa: E402
 from isoflow.digital.outofcore import analyze_chunked, analyze_zarr  # noqa: E402
+from isoflow.scale import chunks as chunks_mod  # noqa: E402
 
 CHUNKS3 = (7, 5, 9)
 CHUNKS2 = (7, 5)

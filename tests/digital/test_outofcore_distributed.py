@@ -9,8 +9,8 @@ contacts cross block faces, edges and corners."""
 
 import numpy as np
 import pytest
-
 from conftest import ball, torus
+
 from isoflow import DigitalObject, IsoflowError, analyze, analyze_chunked
 
 distributed = pytest.importorskip("distributed")

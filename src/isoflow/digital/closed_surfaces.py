@@ -54,25 +54,25 @@ configuration array) count per label pair. All equal
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary, count_codes
-from ..scale.compiled import Method, have_numba, use_compiled
+from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
+from .connectivity import check_connectivity
 from .report import SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
-from .connectivity import check_connectivity
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
 MESH_ADJACENCY = {6: (6, 18), 26: (18, 6)}
 
 
-@lru_cache(maxsize=None)
+@cache
 def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     """Per-configuration tables of the sheets, for the passes here.
 
@@ -105,10 +105,9 @@ def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
         for side in (0, 1):
             spokes |= doubled[:, axis, side].astype(np.uint8) << (2 * axis + side)
     pinch = np.full((256, 2), -1, np.int8)
-    for c in np.flatnonzero(pinch_lut(connectivity)):
-        pair = c if connectivity == 26 else 255 ^ c
-        octs = [o for o in range(8) if (pair >> o) & 1]
-        pinch[c] = octs
+    for config in np.flatnonzero(pinch_lut(connectivity)):
+        pair = int(config) if connectivity == 26 else 255 ^ int(config)
+        pinch[config] = [o for o in range(8) if (pair >> o) & 1]
     # The sweep counts a run of equal "layer" configurations (the same four
     # voxels on both sides of the vertex) in one step: it relies on their
     # sheets having four faces each and no doubled spoke.
@@ -284,11 +283,11 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     found = _pair_sums(obj, bg, np.concatenate(quarter).astype(np.int64))
     pinched = pinch[c_on, 0] >= 0
     side_obj = conn == 26  # the pinch joins two object octants under 26
-    ends = []
+    either = []
     for e in (0, 1):
         oct_ = pinch[c_on[pinched], e]
-        ends.append(obj_flat[base[pinched] + step[oct_]] if side_obj else bg_flat[bg_base[pinched] + bg_step[oct_]])
-    ends = np.stack(ends, axis=1).astype(np.int64).reshape(-1, 2)
+        either.append(obj_flat[base[pinched] + step[oct_]] if side_obj else bg_flat[bg_base[pinched] + bg_step[oct_]])
+    ends = np.stack(either, axis=1).astype(np.int64).reshape(-1, 2)
     found["pairs"] = ends[ends[:, 0] != ends[:, 1]]  # only those that join two pieces
     return found
 

@@ -62,10 +62,10 @@ from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
 from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
-from .seams import merge_block
-from .surface import boundary_faces, pinch_lut
 from .connectivity import resolve_connectivity
 from .report import Report
+from .seams import merge_block
+from .surface import boundary_faces, pinch_lut
 from .topology import euler_from_histogram
 
 
@@ -74,7 +74,7 @@ class _Grid(NamedTuple):
     per axis each block's [start, stop), and the number of blocks along
     each axis."""
 
-    array: object
+    array: Any
     is_zarr: bool
     bounds: list
     numblocks: tuple
@@ -292,7 +292,7 @@ def _block_tasks(grid: _Grid, i: int, conn: int, where: str, surfaces: bool, sha
     # the zarr array as one node of the graph: as an argument of every task
     # dask would walk through its fields (dataclasses) for each of them
     array = dask.delayed(grid.array, pure=False, traverse=False) if grid.is_zarr else None
-    blocks = None if grid.is_zarr else grid.array.to_delayed()
+    blocks: Any = None if grid.is_zarr else grid.array.to_delayed()
     tasks = {}
     for tail in itertools.product(*(range(n) for n in grid.numblocks[1:])):
         index = (i, *tail)
@@ -491,7 +491,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     ...     analyze_zarr(d + "/v.zarr")["betti"]
     [1, 0, 1]
     """
-    z = open_zarr(path)
+    z: Any = open_zarr(path)
     where = str(path)
     if z.ndim not in (2, 3):
         raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {z.ndim}D with shape {tuple(z.shape)}")

@@ -22,7 +22,7 @@ parents: the key of the voxel just below each piece's first voxel.
 from __future__ import annotations
 
 import itertools
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -228,7 +228,7 @@ def _add_seam(out: dict, seam: tuple, index, numblocks, box, shape, axis: int, c
         out["gains"].append(np.stack([found["keys"], found["chi4"], found["faces"]]))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _tables(conn: int):
     """The sweep's tables for the seams (the object's Euler characteristic
     from its cells under 6, the background's under 26)."""

@@ -60,12 +60,13 @@ bounding box.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.configurations import configurations
+from ..digital.connectivity import check_connectivity, is_face_connectivity
 from ..digital.indices import (
     CONVEX,
     FLAT,
@@ -76,7 +77,6 @@ from ..digital.indices import (
     f_lut,
 )
 from ..digital.lattice import DigitalObject
-from ..digital.connectivity import check_connectivity, is_face_connectivity
 from ..errors import IsoflowError
 from .planar import planar_moves
 from .segments import segment_moves
@@ -109,7 +109,7 @@ def flow_connectivity(ndim: int, connectivity: int | None) -> int:
 # --------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def motion_luts(connectivity: int = 6):
     """Tables over the 256 configurations that drive one 3D step.
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+from typing import Any
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -119,7 +120,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
-    meta = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
+    meta: dict[str, Any] = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
@@ -275,7 +276,7 @@ def _read_points_by_line(path: Path) -> np.ndarray:
             if point:
                 width = len(point)
                 coords.extend(point)
-    if not coords:
+    if not coords or width is None:
         raise IsoflowError(f"{path}: no points")
     return np.frombuffer(coords, dtype=np.int64).reshape(-1, width).copy()
 
@@ -431,7 +432,9 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     """
     obj = DigitalObject.of(obj)
     file, dataset = check_volume_output(path, force)
-    module = format_for(file, writing=True).load()
+    fmt = format_for(file, writing=True)
+    assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
+    module = fmt.load()
     if hasattr(module, "check"):  # refusals and warnings name the output, before it is written
         module.check(file, obj, dataset)
     # whole or not at all: written beside the target, renamed when complete

@@ -92,7 +92,7 @@ def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
 
 
 
-def open_zarr(path, level: str | None = None) -> "object":
+def open_zarr(path, level: str | None = None) -> object:
     """The volume array of a zarr store: the array at ``path``; in an
     OME-Zarr image (a group with NGFF ``multiscales``) its first resolution
     level, or ``level`` (a dataset path such as ``'1'``, or an index); in any

@@ -30,7 +30,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
-from functools import lru_cache
+from functools import cache
 from typing import Literal
 
 from ..errors import IsoflowError
@@ -90,7 +90,7 @@ def note_compile() -> None:
         logging.getLogger("isoflow").info(COMPILE_NOTE)
 
 
-@lru_cache(maxsize=None)
+@cache
 def have_numba() -> bool:
     """numba is installed (found without importing it: that is the slow part)."""
     from importlib.util import find_spec

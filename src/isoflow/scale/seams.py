@@ -27,7 +27,7 @@ seam counted again.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -210,7 +210,7 @@ def _across(vox, keys, own, formula_obj, steps_obj, steps_bg, table, edges):
     return n, 2 * used > len(table[0])
 
 
-@lru_cache(maxsize=None)
+@cache
 def _steps(reach: int) -> np.ndarray:
     """The steps (a, b) along the seam's face from a voxel of layer 0 to its
     neighbours in layer 1 under an adjacency (``reach``: how many
@@ -220,7 +220,7 @@ def _steps(reach: int) -> np.ndarray:
     return np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1) if 1 + abs(a) + abs(b) <= reach], np.int64)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _orders(axis: int) -> tuple[np.ndarray, np.ndarray]:
     """For a seam turned so that ``axis`` comes first: the volume's
     configuration code of each of the seam's, and the seam's octant of each

@@ -64,11 +64,11 @@ from __future__ import annotations
 from collections import namedtuple
 
 import numpy as np
-from .jit import njit
 
 from .bitrows import config_at as _config
 from .bitrows import popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
+from .jit import njit
 from .kernels import union
 from .memory import check_fits
 
