@@ -18,7 +18,15 @@ from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.memory import check_fits
 from ..scale.arrays import binary
-from .formats.registry import RawVolume, check_label, format_for, no_such_label, split_dataset, volume_suffixes
+from .formats.registry import (
+    LabelVolume,
+    RawVolume,
+    check_label,
+    format_for,
+    no_such_label,
+    split_dataset,
+    volume_suffixes,
+)
 from .outputs import atomic_path, check_output_path
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
@@ -386,7 +394,11 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     >>> back.voxels, float(back.pitch), back.origin.tolist()
     (24, 0.5, [1.0, 2.0, 3.0])
     """
-    obj = DigitalObject.of(obj)
+    return write_placed(DigitalObject.of(obj), path, force)
+
+
+def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False) -> Path:
+    """:func:`write_volume` of a digital object or a placed label image."""
     file, dataset = check_volume_output(path, force)
     module = format_for(file, writing=True).load()
     if hasattr(module, "check"):  # refusals and warnings name the output, before it is written
@@ -395,3 +407,43 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
         module.write(tmp, obj, dataset, name=file.name)
     return file
+
+
+def check_label_output(path: str | os.PathLike, count: int, force: bool = False) -> tuple[Path, str | None]:
+    """:func:`check_volume_output` for a label image of labels 1 .. ``count``:
+    also refused, before any work, where the format keeps fewer labels
+    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
+    file, dataset = check_volume_output(path, force)
+    fmt = format_for(file, writing=True)
+    if fmt.max_label is not None and count > fmt.max_label:
+        keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
+        raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
+                           ".nii.gz, .nrrd, .h5 or .npz")
+    return file, dataset
+
+
+def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | np.ndarray = 1.0, origin=None,
+                 force: bool = False) -> Path:
+    """Save a label image (unsigned integers in (x, y, z) order) in the
+    format its suffix names, with its voxel size and ``origin`` (the lower
+    corner of voxel (0, 0, 0)) where the format has room for them, in its
+    own integer type. Refuses an existing file unless ``force``, and a
+    format that keeps fewer labels (:func:`check_label_output`). Returns the
+    file's path; :func:`read_label_image` reads it back.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> labels = np.zeros((3, 2, 2), np.uint8)
+    >>> labels[0], labels[2] = 1, 2
+    >>> path = write_labels(labels, pathlib.Path(tempfile.mkdtemp()) / "labels.npz", pitch=0.5, origin=(1, 2, 3))
+    >>> back = read_label_image(path)
+    >>> np.array_equal(back.array, labels), back.spacing.tolist(), back.origin.tolist()
+    (True, [0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
+    """
+    arr = np.asarray(labels)
+    if arr.ndim != 3 or arr.dtype.kind != "u":
+        raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
+    check_label_output(path, int(arr.max(initial=0)), force)
+    origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
+    return write_placed(LabelVolume(arr, pitch, origin), path, force)
