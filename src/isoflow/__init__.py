@@ -45,6 +45,7 @@ _WHERE = {
     "voxelize_mesh": ".mesh.voxelize",
     "voxelize_file": ".mesh.voxelize",
     "voxelize_to_zarr": ".mesh.slabs",
+    "voxelize_meshes": ".mesh.label_voxels",
     "verify_genus": ".mesh.genus",
     "GenusVerdict": ".mesh.verdict",
     "read_volume": ".mesh.volumes",

@@ -31,6 +31,7 @@ from .flow.motion import flow_step as flow_step
 from .flow.run import FlowResult as FlowResult, run_flow as run_flow
 from .mesh.bridges import from_manifold as from_manifold, to_manifold as to_manifold
 from .mesh.genus import verify_genus as verify_genus
+from .mesh.label_voxels import voxelize_meshes as voxelize_meshes
 from .mesh.slabs import voxelize_to_zarr as voxelize_to_zarr
 from .mesh.verdict import GenusVerdict as GenusVerdict
 from .mesh.volumes import (
