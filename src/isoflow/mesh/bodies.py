@@ -54,8 +54,9 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     """The bodies of ``meshes`` in order: each a file path, a
     ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
     (a ``trimesh.Trimesh``); with ``split``, each one's bodies (see the
-    module docstring). A :class:`Body` is taken as it is. IsoflowError for
-    an empty list or a bad mesh."""
+    module docstring). Files are welded as :func:`load_mesh` welds them;
+    arrays and a :class:`Body` are taken as they are. IsoflowError for an
+    empty list or a bad mesh."""
     if isinstance(meshes, (str, os.PathLike)) or (isinstance(meshes, tuple) and len(meshes) == 2
                                                    and not isinstance(meshes[0], (str, os.PathLike))):
         meshes = [meshes]  # one mesh given alone
@@ -66,9 +67,8 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
         elif isinstance(mesh, (str, os.PathLike)):
             bodies += file_bodies(mesh, split)
         else:
-            where = f"mesh {n}"
-            v, f = (mesh.vertices, mesh.faces) if hasattr(mesh, "faces") else _pair(mesh, where)
-            v, f = weld(*check_mesh(v, f, where), where=where)
+            where = f"mesh {n}"  # arrays are taken as they are, not welded (as voxelize_mesh takes them)
+            v, f = check_mesh(*((mesh.vertices, mesh.faces) if hasattr(mesh, "faces") else _pair(mesh, where)), where)
             bodies += connected_bodies(v, f, where) if split else [Body(where, v, f)]
     if not bodies:
         raise IsoflowError("voxelize: no meshes given")
