@@ -2,11 +2,13 @@
 user would otherwise pick.
 
     python benchmarks/bench_label_voxels.py                          # 8 and 64 balls at 256
+    python benchmarks/bench_label_voxels.py --meshes 64 --radius 0.15 --json benchmarks/results/label_voxels_small.json
     python benchmarks/bench_label_voxels.py --meshes 8 --resolution 128 --repeat 1 --commands 1 --json ''
 
 Input (generated, cached in benchmarks/.cache/label_voxels/): ``--meshes N``
 icospheres (20,480 faces each) on a cubic lattice of N = k^3 sites, each of
-radius 0.6 lattice steps, so that neighbours overlap; one binary STL each.
+radius ``--radius`` lattice steps (0.6: neighbours overlap; 0.15: small
+parts apart in a large grid); one binary STL each.
 
 In process (the meshes read once before timing; best of ``--repeat``,
 the tools alternated):
@@ -51,20 +53,20 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from timing import timed_command  # noqa: E402
 
 
-def scene(count: int) -> list[Path]:
-    """``count`` (a cube) overlapping balls, one STL each, cached."""
+def scene(count: int, radius: float = 0.6) -> list[Path]:
+    """``count`` (a cube) balls of ``radius`` lattice steps, one STL each, cached."""
     import trimesh
 
     k = round(count ** (1 / 3))
     if k**3 != count:
         raise SystemExit(f"--meshes must be a cube (8, 27, 64, ...), got {count}")
-    folder = CACHE / f"balls{count}"
+    folder = CACHE / f"balls{count}_r{radius:g}"
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for n, (x, y, z) in enumerate(np.ndindex(k, k, k)):
         path = folder / f"ball{n:03d}.stl"
         if not path.exists():
-            ball = trimesh.creation.icosphere(5, 0.6)
+            ball = trimesh.creation.icosphere(5, radius)
             ball.apply_translation((x, y + 0.1 * x, z + 0.05 * y))
             ball.export(path)
         paths.append(path)
@@ -133,12 +135,12 @@ def best(fn, repeat):
     return min(times), out
 
 
-def measure(count: int, resolution: int, repeat: int, commands: int) -> list[dict]:
+def measure(count: int, resolution: int, repeat: int, commands: int, radius: float) -> list[dict]:
     import pyvista as pv
 
     from isoflow.mesh.load import load_mesh
 
-    paths = scene(count)
+    paths = scene(count, radius)
     meshes = [load_mesh(p) for p in paths]
     polys = [pv.read(str(p)) for p in paths]
     isoflow_blocks(meshes[:2], 16)  # numba's cached code loaded
@@ -154,14 +156,15 @@ def measure(count: int, resolution: int, repeat: int, commands: int) -> list[dic
     ours = outs["voxelize_meshes"]
     rows = []
     for name in tools:
-        rows.append({"meshes": count, "resolution": resolution, "tool": name, "seconds": min(seconds[name]),
+        rows.append({"meshes": count, "radius": radius, "resolution": resolution, "tool": name,
+                     "seconds": min(seconds[name]),
                      "voxels_differing": int((outs[name] != ours).sum()), "voxels": int((ours > 0).sum())})
     if commands:
-        rows += whole_commands(paths, resolution, commands, count)
+        rows += whole_commands(paths, resolution, commands, count, radius)
     return rows
 
 
-def whole_commands(paths, resolution, commands, count) -> list[dict]:
+def whole_commands(paths, resolution, commands, count, radius) -> list[dict]:
     with tempfile.TemporaryDirectory() as tmp:
         iso = [sys.executable, "-m", "isoflow", "voxelize", *map(str, paths), "--resolution", str(resolution),
                "-o", f"{tmp}/iso.npz", "--force", "-q"]
@@ -170,7 +173,8 @@ def whole_commands(paths, resolution, commands, count) -> list[dict]:
         for _ in range(commands):
             walls["isoflow voxelize (command)"].append(timed_command(iso, str(ROOT / "src"))[0])
             walls["pyvista script (command)"].append(timed_command(pv)[0])
-    return [{"meshes": count, "resolution": resolution, "tool": name, "seconds": statistics.median(w)}
+    return [{"meshes": count, "radius": radius, "resolution": resolution, "tool": name,
+             "seconds": statistics.median(w)}
             for name, w in walls.items()]
 
 
@@ -178,20 +182,22 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--meshes", type=int, nargs="+", default=[8, 64])
     ap.add_argument("--resolution", type=int, default=256)
+    ap.add_argument("--radius", type=float, default=0.6, help="of the balls, in lattice steps (0.6: neighbours "
+                    "overlap; 0.15: small parts apart in a large grid)")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--commands", type=int, default=3)
     ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "label_voxels.json"))
     args = ap.parse_args(argv)
     rows = []
     for count in args.meshes:
-        rows += measure(count, args.resolution, args.repeat, args.commands)
-    print("| meshes | resolution | tool | seconds | vs voxelize_meshes | voxels differing |")
-    print("|---:|---:|---|---:|---:|---:|")
+        rows += measure(count, args.resolution, args.repeat, args.commands, args.radius)
+    print("| meshes | radius | resolution | tool | seconds | vs voxelize_meshes | voxels differing |")
+    print("|---:|---:|---:|---|---:|---:|---:|")
     for row in rows:
         base = next(r["seconds"] for r in rows if r["meshes"] == row["meshes"] and (
             r["tool"] == ("voxelize_meshes" if "command" not in row["tool"] else "isoflow voxelize (command)")))
         differ = f"{row['voxels_differing']:,} of {row['voxels']:,}" if "voxels" in row else ""
-        print(f"| {row['meshes']} | {row['resolution']} | {row['tool']} | {row['seconds']:.3f} | "
+        print(f"| {row['meshes']} | {row['radius']:g} | {row['resolution']} | {row['tool']} | {row['seconds']:.3f} | "
               f"{row['seconds'] / base:.2f}x | {differ} |")
     if args.json:
         Path(args.json).write_text(json.dumps({

@@ -36,8 +36,8 @@ SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".
 
 @dataclass(frozen=True)
 class Body:
-    """One mesh of a label image: its name (file, file:node, file:k) and
-    its welded triangles."""
+    """One mesh of a label image: its name (file, file:node, file:k, or
+    mesh k for arrays) and its triangles (welded when read from a file)."""
 
     name: str
     vertices: np.ndarray
@@ -57,9 +57,8 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     module docstring). Files are welded as :func:`load_mesh` welds them;
     arrays and a :class:`Body` are taken as they are. IsoflowError for an
     empty list or a bad mesh."""
-    if isinstance(meshes, (str, os.PathLike)) or (isinstance(meshes, tuple) and len(meshes) == 2
-                                                   and not isinstance(meshes[0], (str, os.PathLike))):
-        meshes = [meshes]  # one mesh given alone
+    if isinstance(meshes, (str, os.PathLike)) or hasattr(meshes, "faces"):
+        meshes = [meshes]  # one file or one mesh given alone
     bodies: list[Body] = []
     for n, mesh in enumerate(meshes, 1):
         if isinstance(mesh, Body):  # read already
@@ -109,7 +108,9 @@ def node_bodies(path: Path) -> list[Body]:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
         where = f"{path}:{node}"
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
-        bodies.append(Body(where, *weld(*check_mesh(v, mesh.faces, where), where=where)))
+        v, f = weld(*check_mesh(v, mesh.faces, where), where=where)
+        if len(f):  # (every face degenerate: nothing to fill)
+            bodies.append(Body(where, v, f))
     if not bodies:
         raise IsoflowError(f"{path}: no node of the scene holds a triangle mesh")
     return bodies
