@@ -52,6 +52,7 @@ _WHERE = {
     "read_object": ".mesh.volumes",
     "read_points": ".mesh.volumes",
     "write_volume": ".mesh.volumes",
+    "write_labels": ".mesh.volumes",
     "to_manifold": ".mesh.bridges",
     "from_manifold": ".mesh.bridges",
     "IsoflowError": ".errors",

@@ -38,6 +38,7 @@ from .mesh.volumes import (
     read_object as read_object,
     read_points as read_points,
     read_volume as read_volume,
+    write_labels as write_labels,
     write_volume as write_volume,
 )
 from .mesh.voxelize import voxelize_file as voxelize_file, voxelize_mesh as voxelize_mesh
