@@ -93,11 +93,14 @@ reveal_type(isoflow.flow_step(obj, 6))
 reveal_type(isoflow.run_flow(obj, steps=1))
 reveal_type(isoflow.voxelize_mesh(np.zeros((3, 3)), np.zeros((1, 3), int), resolution=4))
 reveal_type(isoflow.voxelize_file("m.stl", resolution=4))
+reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))
+reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4).overlaps)
 reveal_type(isoflow.verify_genus("m.stl"))
 reveal_type(isoflow.read_volume("v.npy"))
 reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
 reveal_type(isoflow.write_volume(obj, "v.npz"))
+reveal_type(isoflow.write_labels(np.zeros((2, 2, 2), np.uint8), "l.npz", pitch=0.5))
 reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has no py.typed: Manifold is Any)
 reveal_type(isoflow.data.bob())
 '''
@@ -120,6 +123,8 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
     # the results are isoflow's own types, not dicts
     assert "isoflow.digital.report.Report" in revealed[0][1]
     assert "isoflow.mesh.verdict.GenusVerdict" in revealed[calls.index('reveal_type(isoflow.verify_genus("m.stl"))')][1]
+    labels = calls.index('reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))')
+    assert "isoflow.mesh.label_voxels.LabelVoxelization" in revealed[labels][1]
 
 
 def public_functions() -> list[tuple[str, object]]:
