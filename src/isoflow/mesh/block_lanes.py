@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from ..scale.jit import njit
 from .captree import dist_triangle
 from .solid_angles import winding_lanes

@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from ..scale.jit import njit
-from .captree import CLEAR, GRAD_SIGN, HIT, NEAR, CROSSING, CapTree, cut_edges, dist_triangle, near_kind
+from .captree import CLEAR, CROSSING, GRAD_SIGN, HIT, NEAR, CapTree, cut_edges, dist_triangle, near_kind
 from .solid_angles import atan2_lanes
 
 #: caps of at most this many triangles are evaluated in lanes, larger ones through the tree

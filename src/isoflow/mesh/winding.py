@@ -68,8 +68,7 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.cancel import STOP, run_pieces
 from ..scale.jit import njit
-from .block_lanes import (FORCE_IN, FORCE_OUT, MAX_R, PAINT_LANES, TIE_PENDING, TIE_WINDING, UNDECIDED,
-                          exact_centres, paint_lanes)
+from .block_lanes import FORCE_IN, FORCE_OUT, MAX_R, PAINT_LANES, TIE_PENDING, TIE_WINDING, UNDECIDED, exact_centres, paint_lanes
 from .cap_lanes import FLAT_MAX, evaluate_lanes, lanes_arrays
 from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range, near_sum
 
