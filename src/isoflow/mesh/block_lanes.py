@@ -39,17 +39,16 @@ PAINT_LANES = 64
 
 
 @njit(cache=True, nogil=True)
-def centres(i0, i1, j0, j1, k0, k1, origin, pitch, X, Y, Z):
-    """The block's centres into ``X, Y, Z`` (i, then j, then k); their number."""
-    n = 0
-    for i in range(i0, i1):
-        for j in range(j0, j1):
-            for k in range(k0, k1):
-                X[n] = origin[0] + pitch * (i + 0.5)
-                Y[n] = origin[1] + pitch * (j + 0.5)
-                Z[n] = origin[2] + pitch * (k + 0.5)
-                n += 1
-    return n
+def centres(i0, i1, j0, j1, k0, k1, start, m, origin, pitch, X, Y, Z):
+    """Centres ``start .. start + m - 1`` of the block (i, then j, then k)
+    into ``X, Y, Z``."""
+    nj, nk = j1 - j0, k1 - k0
+    for c in range(m):
+        i, r = divmod(start + c, nj * nk)
+        j, k = divmod(r, nk)
+        X[c] = origin[0] + pitch * (i0 + i + 0.5)
+        Y[c] = origin[1] + pitch * (j0 + j + 0.5)
+        Z[c] = origin[2] + pitch * (k0 + k + 0.5)
 
 
 @njit(cache=True, nogil=True)
@@ -134,35 +133,48 @@ def near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, w, gap
 
 
 @njit(cache=True, nogil=True)
-def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross, nc,
-                origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln):
+def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, qz, T, nlen, near, nn, cross, nc,
+                origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln, split):
     """R on the block's centres p from its model at q,
-    ``round(w + grad . (p - q) + w_near(p) +- bound)``, with the near
-    triangles summed in lanes (:func:`near_lanes`): :data:`UNDECIDED`
-    where the interval holds a half-integer, :data:`TIE_PENDING` on a near
-    or crossing triangle.  Returns how many are undecided, or -1 where
-    |R| would exceed :data:`MAX_R`."""
-    n = centres(i0, i1, j0, j1, k0, k1, origin, pitch, X, Y, Z)
-    near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, wl, gap, J, Tn, ln)
+    ``round(w + grad . (p - q) + w_near(p) +- (base + curv |p - q|^2))``
+    (the model's remainder at p), with the near
+    triangles summed in lanes (:func:`near_lanes`) over runs of
+    :data:`PAINT_LANES` centres: :data:`UNDECIDED` where the interval holds
+    a half-integer, :data:`TIE_PENDING` on a near or crossing triangle.
+    Returns how many are undecided, or -1 where |R| would exceed
+    :data:`MAX_R`; with ``split``, the block's size at its first undecided
+    centre (the block is split, and its children paint it again)."""
+    n = (i1 - i0) * (j1 - j0) * (k1 - k0)
+    nj, nk = j1 - j0, k1 - k0
+    for q in range(nn):
+        Tn[q] = T[near[q]]
+        ln[q] = nlen[near[q]]
     left = 0
     big = False
-    m = 0
-    for i in range(i0, i1):
-        for j in range(j0, j1):
-            for k in range(k0, k1):
-                x = w + grad[0] * (X[m] - qx) + grad[1] * (Y[m] - qy) + grad[2] * (Z[m] - qz) + wl[m]
-                val = math.floor(x - bound + 0.5)
-                if gap[m] <= 0 and (on_triangles(T, nlen, near, nn, X[m], Y[m], Z[m], tol)
-                                    or _on_crossing(T, nlen, cross, nc, X[m], Y[m], Z[m], tol)):
-                    rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
-                elif val != math.floor(x + bound + 0.5):
-                    rule[i - box[0], j - box[1], k - box[2]] = UNDECIDED
-                    left += 1
-                elif val > MAX_R or val < -MAX_R:
-                    big = True
-                else:
-                    rule[i - box[0], j - box[1], k - box[2]] = val
-                m += 1
+    for start in range(0, n, PAINT_LANES):
+        m = min(PAINT_LANES, n - start)
+        centres(i0, i1, j0, j1, k0, k1, start, m, origin, pitch, X, Y, Z)
+        near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, m, tol, wl, gap, J, Tn, ln)
+        for c in range(m):
+            i, r = divmod(start + c, nj * nk)
+            j, k = divmod(r, nk)
+            i, j, k = i + i0 - box[0], j + j0 - box[1], k + k0 - box[2]
+            dx, dy, dz = X[c] - qx, Y[c] - qy, Z[c] - qz
+            x = w + grad[0] * dx + grad[1] * dy + grad[2] * dz + wl[c]
+            bound = base + curv * (dx * dx + dy * dy + dz * dz)
+            val = math.floor(x - bound + 0.5)
+            if gap[c] <= 0 and (on_triangles(T, nlen, near, nn, X[c], Y[c], Z[c], tol)
+                                or _on_crossing(T, nlen, cross, nc, X[c], Y[c], Z[c], tol)):
+                rule[i, j, k] = TIE_PENDING
+            elif val != math.floor(x + bound + 0.5):
+                if split:
+                    return n
+                rule[i, j, k] = UNDECIDED
+                left += 1
+            elif val > MAX_R or val < -MAX_R:
+                big = True
+            else:
+                rule[i, j, k] = val
     return -1 if big else left
 
 

@@ -9,8 +9,8 @@ edge) at a time.  Here the same quantities are computed triangle by
 triangle and edge by edge in lanes, with the same classification:
 
 * triangles whose plane passes within ``reach`` of the block's centre q
-  are measured one by one (:func:`~isoflow.mesh.captree.dist_triangle`,
-  :func:`~isoflow.mesh.captree.near_kind`): *near* ones are left for the
+  are measured in lanes (as :func:`~isoflow.mesh.captree.dist_triangle`
+  and :func:`~isoflow.mesh.captree.near_kind` do): *near* ones are left for the
   caller to sum at each centre, *crossing* ones are listed;
 * the far part's winding number at q is the sum of the other triangles'
   solid angles, and its gradient the Biot-Savart field of their chain
@@ -32,7 +32,7 @@ import math
 import numpy as np
 
 from ..scale.jit import njit
-from .captree import CLEAR, CROSSING, GRAD_SIGN, HIT, NEAR, CapTree, cut_edges, dist_triangle, near_kind
+from .captree import CLEAR, CROSSING, FAR, GRAD_SIGN, HIT, NEAR, CapTree, cut_edges
 from .solid_angles import atan2_lanes
 
 #: caps of at most this many triangles are evaluated in lanes, larger ones through the tree
@@ -66,6 +66,42 @@ def _angles(C, nlen, px, py, pz, ang, det):
                + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
         ang[t] = atan2_lanes(d, den)
         det[t] = d
+
+
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _segment(ax, ay, az, bx, by, bz):
+    """Distance from the origin to the segment a-b
+    (:func:`~isoflow.mesh.captree.dist_segment` with selects for branches)."""
+    ex, ey, ez = bx - ax, by - ay, bz - az
+    wx, wy, wz = -ax, -ay, -az
+    ee = ex * ex + ey * ey + ez * ez
+    s = min(max((wx * ex + wy * ey + wz * ez) / (ee if ee != 0 else 1.0), 0.0), 1.0)
+    s = s if ee != 0 else 0.0
+    dx, dy, dz = wx - s * ex, wy - s * ey, wz - s * ez
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _distances(C, px, py, pz, dtri, dedge):
+    """Each triangle's distance from p (``dtri``,
+    :func:`~isoflow.mesh.captree.dist_triangle`) and its edges' least
+    distance (``dedge``), in lanes."""
+    for t in range(C.shape[1]):
+        ax, ay, az = C[0, t] - px, C[1, t] - py, C[2, t] - pz
+        bx, by, bz = C[3, t] - px, C[4, t] - py, C[5, t] - pz
+        cx, cy, cz = C[6, t] - px, C[7, t] - py, C[8, t] - pz
+        d = min(_segment(ax, ay, az, bx, by, bz), _segment(bx, by, bz, cx, cy, cz), _segment(cx, cy, cz, ax, ay, az))
+        ux, uy, uz = bx - ax, by - ay, bz - az
+        vx, vy, vz = cx - ax, cy - ay, cz - az
+        nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+        nn = nx * nx + ny * ny + nz * nz
+        wx, wy, wz = -ax, -ay, -az
+        s0 = ((uy * wz - uz * wy) * nx + (uz * wx - ux * wz) * ny + (ux * wy - uy * wx) * nz)
+        s1 = ((wy * vz - wz * vy) * nx + (wz * vx - wx * vz) * ny + (wx * vy - wy * vx) * nz)
+        inside = nn > 0 and s0 >= 0 and s1 >= 0 and s0 + s1 <= nn
+        plane = abs(wx * nx + wy * ny + wz * nz) / math.sqrt(nn if nn > 0 else 1.0)
+        dedge[t] = d
+        dtri[t] = plane if inside else d
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath={"reassoc"})
@@ -112,26 +148,26 @@ def _edge_sums(D, eo, keep, px, py, pz, h):
 
 @njit(cache=True, nogil=True)
 def evaluate_lanes(px, py, pz, h, reach, tol, T, nlen, E, owner, C, D, eo, near, cross, edges, grad, ang, det,
-                   keep):
+                   keep, dtri, dedge):
     """:func:`isoflow.mesh.captree.evaluate` with every node opened (no
     expansion), in lanes: ``(w, err, var, hess, status, nnear, ncross)``
     with ``err = var = 0``, ``grad`` written into the argument (four
-    entries, the fourth scratch).  ``ang``, ``det`` and ``keep`` are
-    scratch of one entry per triangle."""
+    entries, the fourth scratch).  ``ang``, ``det``, ``keep``, ``dtri`` and
+    ``dedge`` are scratch of one entry per triangle."""
     K = C.shape[1]
     _angles(C, nlen, px, py, pz, ang, det)
+    _distances(C, px, py, pz, dtri, dedge)
     nnear = 0
     ncross = 0
     for t in range(K):
         keep[t] = True
-        if abs(det[t]) > reach * nlen[t]:
-            continue
-        d = dist_triangle(T, t, px, py, pz)
+        d = dtri[t]
         if d > reach:
             continue
         if h == 0:
             return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0
-        kind = near_kind(T, t, px, py, pz, d, h, reach, abs(det[t]) <= tol * nlen[t])
+        # as isoflow.mesh.captree.near_kind
+        kind = NEAR if abs(det[t]) <= tol * nlen[t] or dedge[t] <= reach else (CROSSING if d <= h else FAR)
         if kind == NEAR:
             if nnear == near.shape[0]:
                 return 0.0, 0.0, 0.0, 0.0, HIT, 0, 0

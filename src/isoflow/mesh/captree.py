@@ -438,6 +438,25 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
 
 
 @njit(cache=True, nogil=True)
+def _holds_own_boundary(T, E, owner, t):
+    """Whether the chain edges that cap triangle t holds are its own three
+    edges, each reversed (a face of a soup, held by its cap reversed): then
+    they cancel its boundary in :func:`cut_edges`."""
+    if owner[t + 1] - owner[t] != 3:
+        return False
+    for k in range(3):
+        k1 = (k + 1) % 3
+        found = False
+        for e in range(owner[t], owner[t + 1]):
+            if (E[e, 0, 0] == T[t, k1, 0] and E[e, 0, 1] == T[t, k1, 1] and E[e, 0, 2] == T[t, k1, 2]
+                    and E[e, 1, 0] == T[t, k, 0] and E[e, 1, 1] == T[t, k, 1] and E[e, 1, 2] == T[t, k, 2]):
+                found = True
+        if not found:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
 def near_kind(T, t, px, py, pz, d, h, reach, on_plane):
     """A triangle within ``reach`` of p (at distance d): :data:`NEAR` if an
     edge is within reach (or p is on its plane), :data:`CROSSING` if it
@@ -462,6 +481,8 @@ def cut_edges(px, py, pz, h, T, E, owner, near, nnear, edges, acc):
     n = 0
     for q in range(nnear):
         t = near[q]
+        if _holds_own_boundary(T, E, owner, t):  # its six edges cancel among themselves
+            continue
         if n + owner[t + 1] - owner[t] + 3 > edges.shape[0]:
             acc[3] = math.nan  # more than the scratch holds: the caller splits
             return

@@ -70,7 +70,7 @@ from ..scale.cancel import STOP, run_pieces
 from ..scale.jit import njit
 from .block_lanes import FORCE_IN, FORCE_OUT, MAX_R, PAINT_LANES, TIE_PENDING, TIE_WINDING, UNDECIDED, exact_centres, paint_lanes
 from .cap_lanes import FLAT_MAX, evaluate_lanes, lanes_arrays
-from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range, near_sum
+from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range
 
 #: centres closer than this (in pitches) to the cap, and those whose w_C
 #: is within TIE_WINDING of a half-integer, are summed over M itself
@@ -81,7 +81,7 @@ TIE_STEP = np.array([1e-7, 1e-9, -1e-5])
 #: blocks at the coarsest level are about this many per axis
 TOP_BLOCKS = 16
 #: triangles with an edge within this many block radii (beyond the block) are summed at each centre
-REACH = 8.0
+REACH = 4.0
 #: a block of at most this many centres that leaves at most a quarter of
 #: them undecided has those evaluated one by one instead of being split
 SMALL = 64
@@ -294,6 +294,7 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     Tn, ln = np.empty((MAX_NEAR, 3, 3)), np.empty(MAX_NEAR)
     flat = C.shape[1] > 0
     ang, dets, keep = np.empty(C.shape[1]), np.empty(C.shape[1]), np.empty(C.shape[1], dtype=np.bool_)
+    dtri, dedge = np.empty(C.shape[1]), np.empty(C.shape[1])
     for q in range(tops.shape[0]):
         if stop[0]:
             return
@@ -318,7 +319,7 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                 if flat:
                     w, err, var, hess, status, nn, nc = evaluate_lanes(px, py, pz, h, reach, tol, T, nlen, E, owner,
                                                                        C, D, eo, near, cross, edges, grad, ang, dets,
-                                                                       keep)
+                                                                       keep, dtri, dedge)
                 else:
                     w, err, var, hess, status, nn, nc = evaluate(px, py, pz, h, reach, th, tol, T, nlen, E, elen,
                                                                  owner, lo, hi, child, centre, rho, A, Mo, S, L,
@@ -327,8 +328,10 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                     flags[4] += 1
                     break
                 rest = var + 0.5 * h * h * hess
-                left = _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, err + rest + TIE_WINDING, px, py, pz,
-                              T, nlen, near, nn, cross, nc, origin, pitch, tol, flags, X, Y, Z, wl, gap, J, Tn, ln)
+                base = err + var + TIE_WINDING
+                left = _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base + 0.5 * h * h * hess, base, 0.5 * hess,
+                              px, py, pz, T, nlen, near, nn, cross, nc, origin, pitch, tol, flags, X, Y, Z, wl, gap, J,
+                              Tn, ln)
                 if left == 0 or th == 0 or rest > err:  # a tighter tree cannot help
                     break
                 # a remainder far beyond the margin: straight to the exact sum
@@ -383,11 +386,13 @@ def _push_children(blocks, nb, i0, i1, j0, j1, k0, k1):
 
 
 @njit(cache=True, nogil=True)
-def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross, nc, origin,
-           pitch, tol, flags, X, Y, Z, wl, gap, J, Tn, ln):
+def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, base, curv, qx, qy, qz, T, nlen, near, nn, cross, nc,
+           origin, pitch, tol, flags, X, Y, Z, wl, gap, J, Tn, ln):
     """R on the block's centres p from the model at its centre q:
     ``round(w + grad . (p - q) + w_near(p) +- bound)`` (w_near summed over
-    the near triangles at p).  Centres where the interval holds a
+    the near triangles at p), ``bound`` the model's error on the block and
+    ``base + curv |p - q|^2`` at p (the first-order remainder grows as
+    the square of the distance from q).  Centres where the interval holds a
     half-integer get :data:`UNDECIDED`, those on a near triangle
     :data:`TIE_PENDING`; returns how many are undecided.  A block of more
     than :data:`SMALL` centres stops at its first undecided one (it is
@@ -415,40 +420,13 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nle
         else:
             rule[i0 - box[0]:i1 - box[0], j0 - box[1]:j1 - box[1], k0 - box[2]:k1 - box[2]] = r
         return 0
-    if n <= PAINT_LANES:  # the near triangles summed at every centre at once
-        flags[6] += n * nn
-        flags[7] += n * nc
-        left = paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, qx, qy, qz, T, nlen, near, nn, cross,
-                           nc, origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln)
-        flags[0] |= left < 0
-        return max(left, 0)
-    left = 0
-    for i in range(i0, i1):
-        px = origin[0] + pitch * (i + 0.5)
-        for j in range(j0, j1):
-            py = origin[1] + pitch * (j + 0.5)
-            for k in range(k0, k1):
-                pz = origin[2] + pitch * (k + 0.5)
-                x = w + grad[0] * (px - qx) + grad[1] * (py - qy) + grad[2] * (pz - qz)
-                if nn + nc:
-                    flags[6] += nn
-                    flags[7] += nc
-                    wn, tie = near_sum(T, nlen, near, nn, cross, nc, qx, qy, qz, px, py, pz, tol)
-                    if tie:
-                        rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
-                        continue
-                    x += wn
-                val = math.floor(x - bound + 0.5)
-                if val != math.floor(x + bound + 0.5):
-                    if n > SMALL:  # the block will be split: its children paint it again
-                        return n
-                    rule[i - box[0], j - box[1], k - box[2]] = UNDECIDED
-                    left += 1
-                elif val > MAX_R or val < -MAX_R:
-                    flags[0] = 1
-                else:
-                    rule[i - box[0], j - box[1], k - box[2]] = val
-    return left
+    # the near triangles summed at every centre, in lanes
+    flags[6] += n * nn
+    flags[7] += n * nc
+    left = paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, qz, T, nlen, near, nn, cross,
+                       nc, origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln, n > SMALL)
+    flags[0] |= left < 0
+    return max(left, 0)
 
 
 def top_blocks(box) -> np.ndarray:
