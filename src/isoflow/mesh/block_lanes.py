@@ -66,41 +66,50 @@ def on_triangles(T, nlen, which, m, px, py, pz, tol):
     return False
 
 
+#: centres queued for the exact sum before it runs (over all of them at once)
+QUEUE = 512
+
+
 @njit(cache=True, nogil=True)
-def exact_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, tol, T, nlen, X, Y, Z, w, gap):
-    """R at the block's centres (all of them with ``every``, else those
-    marked :data:`UNDECIDED`) from the exact sum over the cap's triangles
-    ``T``: :data:`TIE_PENDING` where a centre lies within ``tol`` of the
-    cap or its ``w_C`` within :data:`TIE_WINDING` of a half-integer.
-    Returns the number summed, or -1 where |R| would exceed :data:`MAX_R`."""
-    n = 0
+def queue_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, Q, at, nq):
+    """Queue the block's centres (all of them with ``every``, else those
+    marked :data:`UNDECIDED`) for :func:`exact_queue`: their positions
+    into ``Q`` and their indices in ``rule`` into ``at``, after the ``nq``
+    queued already.  Returns the new length (the caller leaves room for
+    the block)."""
     for i in range(i0, i1):
         for j in range(j0, j1):
             for k in range(k0, k1):
                 if every or rule[i - box[0], j - box[1], k - box[2]] == UNDECIDED:
-                    X[n] = origin[0] + pitch * (i + 0.5)
-                    Y[n] = origin[1] + pitch * (j + 0.5)
-                    Z[n] = origin[2] + pitch * (k + 0.5)
-                    n += 1
-    winding_lanes(T, nlen, X, Y, Z, n, tol, w, gap)
-    m = 0
+                    Q[0, nq] = origin[0] + pitch * (i + 0.5)
+                    Q[1, nq] = origin[1] + pitch * (j + 0.5)
+                    Q[2, nq] = origin[2] + pitch * (k + 0.5)
+                    at[nq, 0], at[nq, 1], at[nq, 2] = i - box[0], j - box[1], k - box[2]
+                    nq += 1
+    return nq
+
+
+@njit(cache=True, nogil=True)
+def exact_queue(rule, Q, at, nq, tol, T, nlen, w, gap):
+    """R at the ``nq`` queued centres from the exact sum over the cap's
+    triangles ``T`` (in lanes, all the queue at once):
+    :data:`TIE_PENDING` where a centre lies within ``tol`` of the cap or
+    its ``w_C`` within :data:`TIE_WINDING` of a half-integer.  Returns
+    -1 where |R| would exceed :data:`MAX_R`, else ``nq``."""
+    winding_lanes(T, nlen, Q[0], Q[1], Q[2], nq, tol, w, gap)
     big = False
-    for i in range(i0, i1):
-        for j in range(j0, j1):
-            for k in range(k0, k1):
-                if not (every or rule[i - box[0], j - box[1], k - box[2]] == UNDECIDED):
-                    continue
-                x = w[m]
-                val = math.floor(x - TIE_WINDING + 0.5)
-                if (gap[m] <= 0 and on_triangles(T, nlen, None, 0, X[m], Y[m], Z[m], tol)) or val != math.floor(
-                        x + TIE_WINDING + 0.5):
-                    rule[i - box[0], j - box[1], k - box[2]] = TIE_PENDING
-                elif val > MAX_R or val < -MAX_R:
-                    big = True
-                else:
-                    rule[i - box[0], j - box[1], k - box[2]] = val
-                m += 1
-    return -1 if big else n
+    for m in range(nq):
+        x = w[m]
+        val = math.floor(x - TIE_WINDING + 0.5)
+        i, j, k = at[m, 0], at[m, 1], at[m, 2]
+        if (gap[m] <= 0 and on_triangles(T, nlen, None, 0, Q[0, m], Q[1, m], Q[2, m], tol)) or val != math.floor(
+                x + TIE_WINDING + 0.5):
+            rule[i, j, k] = TIE_PENDING
+        elif val > MAX_R or val < -MAX_R:
+            big = True
+        else:
+            rule[i, j, k] = val
+    return -1 if big else nq
 
 
 @njit(cache=True, nogil=True)

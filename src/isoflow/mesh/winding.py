@@ -68,7 +68,19 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.cancel import STOP, run_pieces
 from ..scale.jit import njit
-from .block_lanes import FORCE_IN, FORCE_OUT, MAX_R, PAINT_LANES, TIE_PENDING, TIE_WINDING, UNDECIDED, exact_centres, paint_lanes
+from .block_lanes import (
+    FORCE_IN,
+    FORCE_OUT,
+    MAX_R,
+    PAINT_LANES,
+    QUEUE,
+    TIE_PENDING,
+    TIE_WINDING,
+    UNDECIDED,
+    exact_queue,
+    paint_lanes,
+    queue_centres,
+)
 from .cap_lanes import FLAT_MAX, evaluate_lanes, lanes_arrays
 from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range
 
@@ -292,6 +304,8 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     m = PAINT_LANES  # centres in lanes at once
     X, Y, Z, wl, gap, J = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     Tn, ln = np.empty((MAX_NEAR, 3, 3)), np.empty(MAX_NEAR)
+    Q, at, nq = np.empty((3, QUEUE)), np.empty((QUEUE, 3), dtype=np.int64), 0  # centres for the exact sum
+    wq, gq = np.empty(QUEUE), np.empty(QUEUE)
     flat = C.shape[1] > 0
     ang, dets, keep = np.empty(C.shape[1]), np.empty(C.shape[1]), np.empty(C.shape[1], dtype=np.bool_)
     dtri, dedge = np.empty(C.shape[1]), np.empty(C.shape[1])
@@ -342,10 +356,11 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                 pass
             elif n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS:
                 every = left < 0 or left == n  # (a block the model could not paint holds no codes)
-                done = exact_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, tol, T, nlen, X, Y, Z,
-                                     wl, gap)
-                flags[0] |= done < 0
-                flags[8] += done
+                if nq + n > QUEUE:
+                    flags[0] |= exact_queue(rule, Q, at, nq, tol, T, nlen, wq, gq) < 0
+                    flags[8] += nq
+                    nq = 0
+                nq = queue_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, Q, at, nq)
             elif h == 0:
                 rule[i0 - box[0], j0 - box[1], k0 - box[2]] = TIE_PENDING
             elif left > 0 and (left * 4 <= n <= SMALL or left <= 8):
@@ -361,6 +376,9 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                 nb = _push_children(blocks, nb, i0, i1, j0, j1, k0, k1)
             if stop[0]:
                 return
+    if nq:
+        flags[0] |= exact_queue(rule, Q, at, nq, tol, T, nlen, wq, gq) < 0
+        flags[8] += nq
 
 
 @njit(cache=True, nogil=True)
