@@ -103,6 +103,9 @@ NEAR_PAINT = 4
 THETA = 0.3
 #: pieces of top blocks per slab (the unit of progress and of the threads' work)
 PIECES = 512
+#: blocks of at most this many centres are painted to the end (their few
+#: undecided centres then summed exactly); larger ones stop at the first
+PAINT_ALL = 512
 #: an undecided block with at most this many (centre, cap triangle) pairs
 #: is summed exactly at every centre, in SIMD lanes, instead of being split
 EXACT_PAIRS = 1 << 16
@@ -354,9 +357,10 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
             n = (i1 - i0) * (j1 - j0) * (k1 - k0)
             if left == 0:
                 pass
-            elif n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS:
+            elif (n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS
+                  or 0 < left <= n // 8 and left * T.shape[0] <= EXACT_PAIRS):
                 every = left < 0 or left == n  # (a block the model could not paint holds no codes)
-                if nq + n > QUEUE:
+                if nq + (n if every else left) > QUEUE:
                     flags[0] |= exact_queue(rule, Q, at, nq, tol, T, nlen, wq, gq) < 0
                     flags[8] += nq
                     nq = 0
@@ -442,7 +446,7 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, base, curv, qx, qy
     flags[6] += n * nn
     flags[7] += n * nc
     left = paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, qz, T, nlen, near, nn, cross,
-                       nc, origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln, n > SMALL)
+                       nc, origin, pitch, tol, X, Y, Z, wl, gap, J, Tn, ln, n > PAINT_ALL)
     flags[0] |= left < 0
     return max(left, 0)
 
