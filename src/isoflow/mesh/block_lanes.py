@@ -39,16 +39,18 @@ PAINT_LANES = 64
 
 
 @njit(cache=True, nogil=True)
-def centres(i0, i1, j0, j1, k0, k1, start, m, origin, pitch, X, Y, Z):
-    """Centres ``start .. start + m - 1`` of the block (i, then j, then k)
-    into ``X, Y, Z``."""
-    nj, nk = j1 - j0, k1 - k0
+def centres(i, j, k, j0, j1, k0, k1, m, origin, pitch, X, Y, Z):
+    """``m`` centres of the block ``j0 <= j < j1, k0 <= k < k1`` into
+    ``X, Y, Z``, from centre (i, j, k) on (k fastest, then j, then i)."""
     for c in range(m):
-        i, r = divmod(start + c, nj * nk)
-        j, k = divmod(r, nk)
-        X[c] = origin[0] + pitch * (i0 + i + 0.5)
-        Y[c] = origin[1] + pitch * (j0 + j + 0.5)
-        Z[c] = origin[2] + pitch * (k0 + k + 0.5)
+        X[c] = origin[0] + pitch * (i + 0.5)
+        Y[c] = origin[1] + pitch * (j + 0.5)
+        Z[c] = origin[2] + pitch * (k + 0.5)
+        k += 1
+        if k == k1:
+            k, j = k0, j + 1
+            if j == j1:
+                j, i = j0, i + 1
 
 
 @njit(cache=True, nogil=True)
@@ -154,20 +156,23 @@ def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, 
     :data:`MAX_R`; with ``split``, the block's size at its first undecided
     centre (the block is split, and its children paint it again)."""
     n = (i1 - i0) * (j1 - j0) * (k1 - k0)
-    nj, nk = j1 - j0, k1 - k0
     for q in range(nn):
         Tn[q] = T[near[q]]
         ln[q] = nlen[near[q]]
     left = 0
     big = False
+    ci, cj, ck = i0, j0, k0  # the next run's first centre
     for start in range(0, n, PAINT_LANES):
         m = min(PAINT_LANES, n - start)
-        centres(i0, i1, j0, j1, k0, k1, start, m, origin, pitch, X, Y, Z)
+        centres(ci, cj, ck, j0, j1, k0, k1, m, origin, pitch, X, Y, Z)
         near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, m, tol, wl, gap, J, Tn, ln)
         for c in range(m):
-            i, r = divmod(start + c, nj * nk)
-            j, k = divmod(r, nk)
-            i, j, k = i + i0 - box[0], j + j0 - box[1], k + k0 - box[2]
+            i, j, k = ci - box[0], cj - box[1], ck - box[2]
+            ck += 1
+            if ck == k1:
+                ck, cj = k0, cj + 1
+                if cj == j1:
+                    cj, ci = j0, ci + 1
             dx, dy, dz = X[c] - qx, Y[c] - qy, Z[c] - qz
             x = w + grad[0] * dx + grad[1] * dy + grad[2] * dz + wl[c]
             bound = base + curv * (dx * dx + dy * dy + dz * dz)
