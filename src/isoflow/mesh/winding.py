@@ -83,6 +83,7 @@ from .block_lanes import (
 )
 from .cap_lanes import FLAT_MAX, evaluate_lanes, lanes_arrays
 from .captree import HIT, MAX_NEAR, CapTree, evaluate, near_range
+from .solid_angles import winding_lanes
 
 #: centres closer than this (in pitches) to the cap, and those whose w_C
 #: is within TIE_WINDING of a half-integer, are summed over M itself
@@ -244,40 +245,6 @@ def _cones(v, a, b, piece):
     apex = centroid + size[:, None] * (0.01 * unit + 0.001 * _GENERIC)
     tri = 0.5 * np.linalg.norm(np.cross(v[b] - apex[piece], v[a] - apex[piece]), axis=1)
     return apex, tri
-
-
-# ---------------------------------------------------------------------------
-# the exact sum (ties, references)
-# ---------------------------------------------------------------------------
-
-@njit(cache=True, nogil=True)
-def _gwn_points(P, T, out):
-    """Generalised winding number of points P over triangles T (brute force)."""
-    inv4pi = 1.0 / (4.0 * math.pi)
-    for p in range(P.shape[0]):
-        w = 0.0
-        for t in range(T.shape[0]):
-            ax, ay, az = T[t, 0, 0] - P[p, 0], T[t, 0, 1] - P[p, 1], T[t, 0, 2] - P[p, 2]
-            bx, by, bz = T[t, 1, 0] - P[p, 0], T[t, 1, 1] - P[p, 1], T[t, 1, 2] - P[p, 2]
-            cx, cy, cz = T[t, 2, 0] - P[p, 0], T[t, 2, 1] - P[p, 1], T[t, 2, 2] - P[p, 2]
-            la = math.sqrt(ax * ax + ay * ay + az * az)
-            lb = math.sqrt(bx * bx + by * by + bz * bz)
-            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-            den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-                   + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-            w += 2.0 * math.atan2(det, den)  # van Oosterom & Strackee 1983
-        out[p] = w * inv4pi
-
-
-def gwn(points, triangles) -> np.ndarray:
-    """Generalised winding number of ``points`` (n, 3) over ``triangles``
-    (m, 3, 3), summed triangle by triangle (O(n m))."""
-    P = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    T = np.ascontiguousarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
-    out = np.empty(len(P))
-    _gwn_points(P, T, out)
-    return out
 
 
 # ---------------------------------------------------------------------------
@@ -501,10 +468,16 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     ties = np.argwhere(rule == TIE_PENDING)
     if len(ties):
         P = origin + pitch * (ties + corner + 0.5 + TIE_STEP)
-        w = np.empty(len(P))
+        w, gap = np.empty(len(P)), np.empty(len(P))
+        X, Y, Z = (np.ascontiguousarray(P[:, d]) for d in range(3))
         step = max(1, (1 << 22) // max(1, len(Tm)))  # pieces of about 4M solid angles
         Tm = np.ascontiguousarray(Tm, dtype=np.float64)
-        run_pieces(lambda n: _gwn_points(P[n * step:(n + 1) * step], Tm, w[n * step:(n + 1) * step]),
-                   -(-len(P) // step), threads=threads)
+        nlen = np.ones(len(Tm))  # (gap, the distance to the planes, is not read)
+
+        def piece(n):
+            s = slice(n * step, min(len(P), (n + 1) * step))
+            winding_lanes(Tm, nlen, X[s], Y[s], Z[s], s.stop - s.start, 0.0, w[s], gap[s])
+
+        run_pieces(piece, -(-len(P) // step), threads=threads)
         rule[tuple(ties.T)] = np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)
     return rule, (i0, j0, k0)
