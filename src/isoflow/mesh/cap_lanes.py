@@ -33,7 +33,7 @@ import numpy as np
 
 from ..scale.jit import njit
 from .captree import CLEAR, CROSSING, FAR, GRAD_SIGN, HIT, NEAR, CapTree, cut_edges
-from .solid_angles import atan2_lanes
+from .solid_angles import half_angle
 
 #: caps of at most this many triangles are evaluated in lanes, larger ones through the tree
 FLAT_MAX = 2048
@@ -58,14 +58,7 @@ def _angles(C, nlen, px, py, pz, ang, det):
         ax, ay, az = C[0, t] - px, C[1, t] - py, C[2, t] - pz
         bx, by, bz = C[3, t] - px, C[4, t] - py, C[5, t] - pz
         cx, cy, cz = C[6, t] - px, C[7, t] - py, C[8, t] - pz
-        la = math.sqrt(ax * ax + ay * ay + az * az)
-        lb = math.sqrt(bx * bx + by * by + bz * bz)
-        lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-        d = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-        den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-               + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-        ang[t] = atan2_lanes(d, den)
-        det[t] = d
+        ang[t], det[t] = half_angle(ax, ay, az, bx, by, bz, cx, cy, cz)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", inline="always")

@@ -66,6 +66,19 @@ def atan2_lanes(y: float, x: float) -> float:
     return -a if y < 0 else a
 
 
+@njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def half_angle(ax, ay, az, bx, by, bz, cx, cy, cz):
+    """Half the solid angle of the triangle whose corners less p are
+    ``a, b, c``, ``atan2(det, den)``, and ``det`` (module docstring)."""
+    la = math.sqrt(ax * ax + ay * ay + az * az)
+    lb = math.sqrt(bx * bx + by * by + bz * bz)
+    lc = math.sqrt(cx * cx + cy * cy + cz * cz)
+    det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+    den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
+           + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
+    return atan2_lanes(det, den), det
+
+
 @njit(cache=True, nogil=True, error_model="numpy")
 def winding_lanes(T, nlen, X, Y, Z, n, tol, w, gap):
     """``w[i]``: the winding number at ``(X[i], Y[i], Z[i])``, ``i < n``,
@@ -86,13 +99,8 @@ def winding_lanes(T, nlen, X, Y, Z, n, tol, w, gap):
             ax, ay, az = ax0 - X[i], ay0 - Y[i], az0 - Z[i]
             bx, by, bz = bx0 - X[i], by0 - Y[i], bz0 - Z[i]
             cx, cy, cz = cx0 - X[i], cy0 - Y[i], cz0 - Z[i]
-            la = math.sqrt(ax * ax + ay * ay + az * az)
-            lb = math.sqrt(bx * bx + by * by + bz * bz)
-            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            det = ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
-            den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-                   + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-            w[i] += atan2_lanes(det, den)
+            half, det = half_angle(ax, ay, az, bx, by, bz, cx, cy, cz)
+            w[i] += half
             gap[i] = min(gap[i], abs(det) - margin)
     inv = 1.0 / (2.0 * _PI)
     for i in range(n):
