@@ -107,10 +107,8 @@ def exact_queue(rule, Q, at, nq, tol, T, nlen, w, gap):
         if (gap[m] <= 0 and on_triangles(T, nlen, None, 0, Q[0, m], Q[1, m], Q[2, m], tol)) or val != math.floor(
                 x + TIE_WINDING + 0.5):
             rule[i, j, k] = TIE_PENDING
-        elif val > MAX_R or val < -MAX_R:
-            big = True
         else:
-            rule[i, j, k] = val
+            big |= not _put(rule, i, j, k, val)
     return -1 if big else nq
 
 
@@ -185,11 +183,18 @@ def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, 
                     return n
                 rule[i, j, k] = UNDECIDED
                 left += 1
-            elif val > MAX_R or val < -MAX_R:
-                big = True
             else:
-                rule[i, j, k] = val
+                big |= not _put(rule, i, j, k, val)
     return -1 if big else left
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _put(rule, i, j, k, val):
+    """R = val at (i, j, k); False (nothing written) where |R| exceeds :data:`MAX_R`."""
+    if val > MAX_R or val < -MAX_R:
+        return False
+    rule[i, j, k] = val
+    return True
 
 
 @njit(cache=True, nogil=True)
