@@ -28,7 +28,11 @@ How it is computed (no approximation that can flip a voxel):
    (W is an integer; equality only at |w| = 1/2 exactly).  So only
    ``R = round(w_C)`` is needed.
 3. **Blocks with a bound.** Blocks of voxels are evaluated at their centre
-   by :func:`isoflow.mesh.captree.evaluate`: the cap's triangles in a tree
+   by :func:`isoflow.mesh.captree.evaluate` (a cap of at most
+   :data:`~isoflow.mesh.cap_lanes.FLAT_MAX` triangles, a soup, by
+   :func:`isoflow.mesh.cap_lanes.evaluate_lanes`, all its triangles at
+   once; the sums at each centre run in SIMD lanes,
+   :mod:`isoflow.mesh.block_lanes`): the cap's triangles in a tree
    of balls, near ones summed exactly, far ones by Barill et al.'s
    expansion with a proven remainder, plus a bound on the variation over
    the block (the Biot-Savart field of the chain).  A cap triangle that
