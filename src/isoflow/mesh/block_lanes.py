@@ -34,7 +34,7 @@ TIE_PENDING = -127
 UNDECIDED = -126
 #: the largest |R| the int8 rule holds beside these codes
 MAX_R = 125
-#: blocks of at most this many centres are painted in lanes
+#: centres painted at once, in one run of lanes
 PAINT_LANES = 64
 
 

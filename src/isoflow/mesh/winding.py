@@ -115,7 +115,6 @@ PAINT_ALL = 512
 #: is summed exactly at every centre, in SIMD lanes, instead of being split
 EXACT_PAIRS = 1 << 16
 _GENERIC = np.array([0.5773, 0.3141, 0.7537]) / np.linalg.norm([0.5773, 0.3141, 0.7537])
-__all__ = ["FORCE_IN", "FORCE_OUT", "TIE_PENDING", "TIE_WINDING", "UNDECIDED"]  # the rule's codes, for callers
 
 
 # ---------------------------------------------------------------------------
@@ -388,7 +387,7 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, base, curv, qx, qy
     the square of the distance from q).  Centres where the interval holds a
     half-integer get :data:`UNDECIDED`, those on a near triangle
     :data:`TIE_PENDING`; returns how many are undecided.  A block of more
-    than :data:`SMALL` centres stops at its first undecided one (it is
+    than :data:`PAINT_ALL` centres stops at its first undecided one (it is
     split, and its children paint it again) and returns all of them."""
     n = (i1 - i0) * (j1 - j0) * (k1 - k0)
     slope = math.sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]) * 0.5 * pitch * math.sqrt(
