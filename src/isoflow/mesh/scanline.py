@@ -59,7 +59,6 @@ from ..scale.cancel import STOP, Stopped, run_pieces
 from ..scale.jit import njit
 
 
-
 class ScanGrid:
     """The per-triangle data of the scanline, computed once (O(triangles)).
 
