@@ -333,3 +333,53 @@ def test_a_pipe_hears_once_how_long_the_voxelisation_will_take(tmp_path, capsys,
     assert main(["voxelize", str(mesh), "--resolution", "48", "-o", str(tmp_path / "c.npz"), "-q"]) == 0
     assert capsys.readouterr().err == ""
     assert bar.duration(45.2) == "45 s" and bar.duration(200) == "3 min 20 s" and bar.duration(7500) == "2 h 5 min"
+
+
+def test_block_models_bound_the_cap_at_each_point_s_distance(rng):
+    """The remainder taken at a point's own distance r from the block's
+    centre, ``err + var + hess r^2 / 2`` (how the blocks are painted),
+    bounds libigl's exact winding number of the cap at points near the
+    centre and at the ball's edge, for the tree's model and for the model
+    over all of a small cap's triangles at once (cap_lanes), which agree
+    with each other where the tree sums every node exactly."""
+    from isoflow.mesh.cap_lanes import evaluate_lanes, lanes_arrays
+    from isoflow.mesh.load import boundary_chain
+
+    checked = 0
+    for _ in range(8):
+        v, f = soup(rng, int(rng.integers(3, 40)))
+        cap = close_mesh(v, f, *boundary_chain(f, len(v)))
+        tree = CapTree(cap.T, cap.E, cap.owner)
+        C, D, eo = lanes_arrays(tree)
+        K = C.shape[1]
+        cv, cf = cap.T.reshape(-1, 3), np.arange(3 * len(cap.T)).reshape(-1, 3)
+        stack, near, cross = np.empty(64, np.int64), np.empty(MAX_NEAR, np.int64), np.empty(MAX_NEAR, np.int64)
+        near2, cross2 = np.empty(MAX_NEAR, np.int64), np.empty(MAX_NEAR, np.int64)
+        edges, grad, grad2 = np.empty((6 * MAX_NEAR, 2, 3)), np.empty(4), np.empty(4)
+        scratch = (np.empty(K), np.empty(K), np.empty(K, dtype=np.bool_), np.empty(K), np.empty(K))
+        for _ in range(25):
+            q = rng.random(3)
+            h = rng.choice([0.01, 0.03, 0.08])
+            reach = h + 4 * h
+            model = evaluate(*q, h, reach, 0.0, 1e-12, *tree.arrays(), stack, near, cross, edges, grad)
+            lanes = evaluate_lanes(*q, h, reach, 1e-12, tree.T, tree.nlen, tree.E, tree.owner, C, D, eo, near2,
+                                   cross2, edges, grad2, *scratch)
+            if model[4] or lanes[4]:
+                continue
+            w, err, var, hess, _, nn, nc = model
+            assert (lanes[5], lanes[6]) == (nn, nc)
+            assert sorted(near2[:nn]) == sorted(near[:nn]) and sorted(cross2[:nc]) == sorted(cross[:nc])
+            assert abs(lanes[0] - w) < 1e-12 and np.allclose(grad2[:3], grad[:3], rtol=1e-9, atol=1e-12)
+            assert lanes[3] <= hess * (1 + 1e-9) + 1e-12 and lanes[1] == lanes[2] == 0
+            d = rng.normal(size=(40, 3))
+            r = h * np.concatenate([rng.random(20) * 0.3, 1 - rng.random(20) * 1e-3])  # near q, at the edge
+            pts = q + d / np.linalg.norm(d, axis=1)[:, None] * r[:, None]
+            exact = igl.winding_number(cv, cf, pts)
+            for p, x in zip(pts, exact):
+                wn, tie = near_sum(tree.T, tree.nlen, near, nn, cross, nc, *q, *p, 1e-12)
+                assert not tie
+                rr = float((p - q) @ (p - q))
+                for ww, g, hh in ((w, grad, hess), (lanes[0], grad2, lanes[3])):
+                    assert abs(x - (ww + g[:3] @ (p - q) + wn)) <= err + var + 0.5 * rr * hh + 1e-9
+            checked += 1
+    assert checked > 50
