@@ -234,14 +234,14 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs)."""
     from ..scale.memory import check_fits
-    from ..scale.pieces import label_pieces, vertex_pass
+    from ..scale.pieces import piece_runs, vertex_pass
 
     copy = 0 if vol.flags.c_contiguous else vol.nbytes
     check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
-    pieces = label_pieces(vol)
+    pieces = piece_runs(vol)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
-    passed = vertex_pass(vol, pieces.pop("ids"), want, feature_table(conn), pass_tables(conn, surfaces))
+    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces))
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
 
 
@@ -253,7 +253,7 @@ def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
 
 
 def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
-    """Per piece (values as :func:`~isoflow.scale.pieces.label_pieces`
+    """Per piece (values as :func:`~isoflow.scale.pieces.piece_runs`
     gives them, 0 the outside), whether its label has a row."""
     want = values != 0 if wanted is None else np.isin(values, label_bits(wanted, dtype))
     want[0] = False
