@@ -135,7 +135,7 @@ def step_in_process(size: int, repeat: int) -> dict:
     for name in ("ball", "porous"):
         vol = np.load(cached(name, size))
         obj = DigitalObject(vol)
-        fns = {"erosion": lambda: binary_erosion(vol), "compiled": step_with_record("compiled", obj),
+        fns = {"erosion": lambda vol=vol: binary_erosion(vol), "compiled": step_with_record("compiled", obj),
                "numpy": step_with_record("numpy", obj)}
         fns["compiled"]()  # numba's start, outside the clock
         times, out = alternate(fns, repeat)
@@ -271,7 +271,8 @@ def torus_runs(n: int, repeat: int) -> dict:
     obj = DigitalObject(np.load(cached("torus", n)))
     out = {"voxels": obj.voxels}
     for conn in (6, 26):
-        fns = {f"{m}_{g}": (lambda m=m, g=g: run_flow(obj, connectivity=conn, guard=g == "guarded", keep_states=False,
+        fns = {f"{m}_{g}": (lambda m=m, g=g, conn=conn: run_flow(obj, connectivity=conn, guard=g == "guarded",
+                                                                  keep_states=False,
                                                         method=m))
                for m in ("compiled", "numpy") for g in ("plain", "guarded")}
         times, got = alternate(fns, repeat)

@@ -94,9 +94,9 @@ def main(argv=None) -> int:
             dvol = upload(vol)
             sync()
             upload_s = time.perf_counter() - t
-            gpu_s, gpu = best(lambda: analyze(dvol, 6, surfaces=False), args.repeat, sync)
-            host_s, host = best(lambda: analyze(vol, 6, surfaces=False), args.repeat, lambda: None)
-            sk_s, chi = best(lambda: euler_number(vol, connectivity=1), 1, lambda: None)
+            gpu_s, gpu = best(lambda dvol=dvol: analyze(dvol, 6, surfaces=False), args.repeat, sync)
+            host_s, host = best(lambda vol=vol: analyze(vol, 6, surfaces=False), args.repeat, lambda: None)
+            sk_s, chi = best(lambda vol=vol: euler_number(vol, connectivity=1), 1, lambda: None)
             same = gpu == host and gpu["euler_characteristic"] == chi
             ok &= same
             del dvol

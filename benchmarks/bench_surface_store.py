@@ -110,7 +110,8 @@ def command(path: Path, threads: int | None) -> dict:
         if p.returncode or not lines:
             return {"error": ((p.stderr or p.stdout).strip().splitlines() or ["?"])[-1]}
         res = json.loads(lines[-1])
-        res.update(file_bytes=out.stat().st_size, summary=[ln.replace(str(out), out.name) for ln in p.stdout.splitlines() if ln.startswith(str(out))])
+        summary = [ln.replace(str(out), out.name) for ln in p.stdout.splitlines() if ln.startswith(str(out))]
+        res.update(file_bytes=out.stat().st_size, summary=summary)
         return res
 
 

@@ -687,7 +687,7 @@ def check(results, sizes, names) -> list[str]:
     fails = []
     for size in sizes:
         for name in names:
-            def res(tool, step):
+            def res(tool, step, name=name, size=size):
                 r = results.get((name, size, tool), {})
                 for st in r.get("steps", []):
                     if st["step"] == step and "result" in st:
@@ -879,8 +879,8 @@ def main(argv=None) -> int:
         print(f"note: {m} not importable ({e}); its rows are skipped", flush=True)
 
     # warm the numba cache once, so that no child has to compile
-    subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, %r); import run; run.w_isoflow(run._tiny())"
-                    % str(HERE)], check=False)
+    subprocess.run([sys.executable, "-c", f"import sys; sys.path.insert(0, {str(HERE)!r}); import run; "
+                    "run.w_isoflow(run._tiny())"], check=False)
 
     print(f"{'task':<8}{'tool':<48}{'input':<7}{'size':>6}{'seconds':>10}{'runs':>5}{'B/vox':>9}{'ratio':>8}  note")
     results: dict = {}

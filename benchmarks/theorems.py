@@ -295,7 +295,7 @@ def main(argv=None):
     for conn in args.connectivity:  # counterexamples of an earlier run that no longer fail
         for old in (out / "counterexamples").glob(f"*_{conn}.npy"):
             old.unlink()
-    for (claim, conn), (n, name, v) in smallest.items():
+    for (claim, conn), (_, _, v) in smallest.items():
         slug = _slug(claim)
         np.save(out / "counterexamples" / f"{slug}_{conn}.npy", v)
 
@@ -352,7 +352,7 @@ def main(argv=None):
                 )
         lines.append("")
     lines += ["## Smallest counterexamples", "", "| claim | connectivity | input | voxels | file |", "|---|---|---|---|---|"]
-    for (claim, conn), (n, name, v) in sorted(smallest.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+    for (claim, conn), (n, name, _) in sorted(smallest.items(), key=lambda kv: (kv[0][1], kv[0][0])):
         slug = _slug(claim)
         lines.append(f"| {claim} | {conn} | {name} | {n} | `counterexamples/{slug}_{conn}.npy` |")
     lines.append("")

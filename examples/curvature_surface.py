@@ -25,11 +25,11 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import trimesh
+from _common import outputs, parse_args, run
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 
 def arguments(parser):

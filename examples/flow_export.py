@@ -28,10 +28,10 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import trimesh
+from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 
 def arguments(parser):

@@ -25,10 +25,10 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 
 def arguments(parser):

@@ -22,10 +22,10 @@ import csv
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 SUFFIXES = {".stl", ".obj", ".ply", ".off", ".glb"}
 

@@ -21,10 +21,10 @@ import csv
 
 import matplotlib.pyplot as plt
 import numpy as np
+from _common import outputs, parse_args, run
 from scipy.spatial import cKDTree
 
 import isoflow
-from _common import outputs, parse_args, run
 
 
 def arguments(parser):

@@ -22,10 +22,10 @@ import json
 from pathlib import Path
 
 import matplotlib.pyplot as plt
+from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
-from _common import outputs, parse_args, run
 
 
 def arguments(parser):

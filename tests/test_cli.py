@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from conftest import torus
 from skimage.measure import euler_number
 
-from conftest import torus
 from isoflow.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -175,6 +175,7 @@ def test_info_threads_option_and_environment(tmp_path):
     import os
 
     from conftest import ball, compiled_side
+
     from isoflow import boundary_mesh
     from isoflow.scale.compiled import least_voxels
 
@@ -282,6 +283,7 @@ def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
     # only for --no-surfaces. Every report equals the in-process one and
     # scikit-image's chi
     from conftest import compiled_side
+
     from isoflow.digital.analysis import analyze
     from isoflow.scale.compiled import have_numba, least_voxels
 
@@ -315,6 +317,7 @@ def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
     import os
 
     from conftest import compiled_side
+
     from isoflow.scale.compiled import COMPILE_NOTE, have_numba, least_voxels
 
     if not have_numba():

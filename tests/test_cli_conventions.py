@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import torus
 
 import isoflow
-from conftest import torus
 from isoflow.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,8 +10,9 @@ from __future__ import annotations
 import argparse
 from html.parser import HTMLParser
 
-import isoflow
 from docs_site import example_names, script_output_pictures
+
+import isoflow
 from isoflow.cli.main import build_parser
 
 

@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
+from docs_site import EXAMPLES, example_names
 from skimage.measure import euler_number
 
-from docs_site import EXAMPLES, example_names
 from isoflow import data
 
 

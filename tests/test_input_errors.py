@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import trimesh
 
+from isoflow.cli import main
+from isoflow.digital.lattice import DigitalObject
+from isoflow.errors import IsoflowError
 from isoflow.mesh.outputs import check_picture_path
 from isoflow.mesh.volumes import read_points, read_volume
-from isoflow.cli import main
-from isoflow.errors import IsoflowError
-from isoflow.digital.lattice import DigitalObject
 
 
 def fails(capsys, *args, words=()):

@@ -97,6 +97,7 @@ def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):
     exec(compile(code, "README.md", "exec"), namespace)
     report = namespace["report"]
     assert [report["betti"], report["euler_characteristic"]] == [[1, 1, 0], 0]  # as its comment says
+    assert list(namespace["table"]["label"]) == [3] and list(namespace["table"]["b1"]) == [1]
     assert (tmp_path / "bob.nii.gz").is_file()
 
 

@@ -31,12 +31,14 @@ from .flow.motion import flow_step as flow_step
 from .flow.run import FlowResult as FlowResult, run_flow as run_flow
 from .mesh.bridges import from_manifold as from_manifold, to_manifold as to_manifold
 from .mesh.genus import verify_genus as verify_genus
+from .mesh.label_voxels import voxelize_meshes as voxelize_meshes
 from .mesh.slabs import voxelize_to_zarr as voxelize_to_zarr
 from .mesh.verdict import GenusVerdict as GenusVerdict
 from .mesh.volumes import (
     read_object as read_object,
     read_points as read_points,
     read_volume as read_volume,
+    write_labels as write_labels,
     write_volume as write_volume,
 )
 from .mesh.voxelize import voxelize_file as voxelize_file, voxelize_mesh as voxelize_mesh

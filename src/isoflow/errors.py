@@ -7,7 +7,19 @@ value) so that nobody has to read a traceback from inside numpy.
 
 
 class IsoflowError(ValueError):
-    """Bad input: a missing or unreadable file, an empty or open mesh, ..."""
+    """Bad input: a missing or unreadable file, an empty or open mesh, ...
+
+    Its message is one line that names the file, the field or the value.
+
+    Examples
+    --------
+    >>> import isoflow
+    >>> try:
+    ...     isoflow.read_volume("no-such-volume.npy")
+    ... except IsoflowError as exc:
+    ...     print(exc)
+    no-such-volume.npy: no such file
+    """
 
 
 class IsoflowWarning(UserWarning):

@@ -6,8 +6,8 @@ any number of threads."""
 
 import numpy as np
 import pytest
-
 from conftest import ball, torus
+
 from isoflow import analyze, boundary_mesh, euler_characteristic
 from isoflow.digital.closed_surfaces import closed_surfaces, sweep_tables
 from isoflow.digital.topology import betti_numbers
@@ -191,7 +191,7 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
             assert peak <= estimate, (name, conn, peak / v.size, estimate / v.size)
             assert counted(got) == mesh_answer(v, conn)
             with monkeypatch.context() as m, pytest.raises(IsoflowError, match="x".join(map(str, v.shape))):
-                m.setattr(memory, "default_budget", lambda: estimate - 1)
+                m.setattr(memory, "default_budget", lambda estimate=estimate: estimate - 1)
                 cs.small_census(v, conn)
 
 
@@ -245,3 +245,48 @@ def test_bool_bytes_other_than_one_and_read_only_arrays(rng, conn, method):
             assert analyze(x, conn, method=method) == want
             assert betti_numbers(x, conn, method=method) == want["betti"]
         assert (odd.view(np.uint8) > 1).any() or not v.any()  # the input is left as it was
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+@pytest.mark.parametrize("conn", [6, 26])
+def test_sweep_counts_a_box_of_vertices(rng, conn):
+    # a block of a larger volume is swept at the vertices it counts: their
+    # histogram (the configurations, zeros outside), their doubled edges
+    # with both ends counted, and the loose ends of those with one end
+    # counted (the doubled spokes of the mesh's tables at those vertices)
+    from isoflow.digital.closed_surfaces import MESH_ADJACENCY
+    from isoflow.digital.configurations import configurations
+    from isoflow.scale import bitrows, kernels, sweep
+
+    spokes = sweep_tables(conn)[4]
+    seen_loose = 0
+    for _ in range(12):
+        v = rng.random(tuple(rng.integers(3, 9, 2)) + (int(rng.choice([5, 64, 70])),)) < rng.uniform(0.3, 0.7)
+        lo = [int(rng.integers(0, 3)), int(rng.integers(0, 3)), int(rng.integers(0, 2))]
+        hi = [int(rng.integers(n - 1, n + 2)) for n in v.shape[:2]] + [v.shape[2] + int(rng.integers(0, 2))]
+        bits, off, goff = bitrows.pack(v)
+        adj = kernels.ADJACENCY[MESH_ADJACENCY[conn][0]] + kernels.ADJACENCY[MESH_ADJACENCY[conn][1]]
+        with compiled.using(int(rng.integers(1, 4))):
+            found = sweep.sweep(bits, v.shape, off, goff, adj, sweep_tables(conn), pinch_objects=conn == 26,
+                                counted=np.array([lo, hi]))
+        cfg = configurations(v)
+        box = tuple(slice(a, b) for a, b in zip(lo, hi))
+        assert (found["hist"] == np.bincount(cfg[box].ravel(), minlength=256)).all()
+        inside = np.zeros(cfg.shape, bool)
+        inside[box] = True
+        doubled, loose = 0, set()
+        for w in zip(*np.nonzero(inside)):
+            for d in range(6):
+                axis, step = d >> 1, 2 * (d & 1) - 1
+                u = list(w)
+                u[axis] += step
+                if not (spokes[cfg[w]] >> d) & 1 or not 0 <= u[axis] < cfg.shape[axis]:
+                    continue
+                if inside[tuple(u)]:
+                    doubled += step > 0 and (spokes[cfg[tuple(u)]] >> (d ^ 1)) & 1
+                else:
+                    loose.add((*map(int, w), d))
+        assert found["doubled"] == doubled
+        assert {tuple(map(int, e)) for e in found["loose"]} == loose
+        seen_loose += len(loose)
+    assert seen_loose > 20

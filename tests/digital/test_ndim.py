@@ -214,7 +214,7 @@ def test_chi_multiplicative_on_products():
         a2, b2 = random_image(rng, 2, 1, 5), random_image(rng, 2, 1, 5)
         a1, b3 = random_image(rng, 1, 1, 5), random_image(rng, 3, 1, 4)
         for adj in ADJ:
-            chi = lambda x: euler(x, adj)  # noqa: E731
+            chi = lambda x, adj=adj: euler(x, adj)
             assert chi(hom.product_image(a2, b2)) == chi(a2) * chi(b2)
             assert chi(hom.product_image(a1, b3)) == chi(a1) * chi(b3)
 

@@ -4,16 +4,15 @@ every dimension against scikit-image, and 4D volumes through `isoflow info`."""
 import json
 
 import numpy as np
-from scipy.ndimage import generate_binary_structure, label
-
 from conftest import random_volume
+from scipy.ndimage import generate_binary_structure, label
 from skimage.measure import euler_number
 
+from isoflow.cli import main
 from isoflow.digital import homology as hom
 from isoflow.digital import indices as I
 from isoflow.digital import ndim as nd
 from isoflow.digital import symmetry as S
-from isoflow.cli import main
 from isoflow.digital.topology import betti_numbers, euler_characteristic
 
 

@@ -1,38 +1,36 @@
 """Out-of-core analysis: block-wise results equal the in-memory report exactly.
 
 Every comparison is the whole ``analyze(...)`` dict (histogram classes, chi,
-Betti numbers, energy, the closed surfaces and their genus ...; all but
-``doubled_edges``, which out of core is None), on volumes split into
-odd-sized chunks so that objects, tunnels, cavities and surfaces cross
-block faces, edges and corners.
+Betti numbers, energy, the closed surfaces and their genus, the pinched
+vertices and doubled edges), on volumes split into odd-sized chunks so
+that objects, tunnels, cavities, pinches and surfaces cross block faces,
+edges and corners.
 """
 
-import dataclasses
 import json
 import subprocess
 import sys
 
 import numpy as np
 import pytest
+from conftest import ball, torus
 from scipy.ndimage import gaussian_filter
 
-from conftest import ball, torus
 from isoflow import DigitalObject, IsoflowError, analyze
 from isoflow.cli import main
 
 da = pytest.importorskip("dask.array")
 zarr = pytest.importorskip("zarr")
 from isoflow.digital import outofcore  # noqa: E402
-from isoflow.scale import chunks as chunks_mod  # noqa: E402
 from isoflow.digital.outofcore import analyze_chunked, analyze_zarr  # noqa: E402
+from isoflow.scale import chunks as chunks_mod  # noqa: E402
 
 CHUNKS3 = (7, 5, 9)
 CHUNKS2 = (7, 5)
 
 
 def reference(v, conn, surfaces=True):
-    r = analyze(DigitalObject(v), conn, surfaces=surfaces)
-    return dataclasses.replace(r, doubled_edges=None)  # out of core: not counted
+    return analyze(DigitalObject(v), conn, surfaces=surfaces)
 
 
 def check(v, conn, chunks=None):
@@ -110,6 +108,45 @@ def test_diagonal_contacts_across_block_corners():
     check(hollow_ball(9, 6, size=24), 26)
 
 
+@pytest.mark.parametrize("conn", [6, 26])
+def test_pinches_tunnels_and_cavities_at_block_edges_and_corners(rng, conn):
+    """Vertex contacts (pinches under 6 between background voxels, under
+    26 between object voxels) and edge contacts right at block edges and
+    corners, a torus whose hole is a block corner, a cavity whose wall is
+    cut by three block faces; every field equal to the in-memory report."""
+    v = np.zeros((21, 24, 27), dtype=bool)
+    c = (7, 5, 9)  # a block corner: voxels 6|7, 4|5, 8|9
+    v[6, 4, 8] = v[7, 5, 9] = True  # vertex contact across the corner
+    v[6, 5, 8] = v[7, 4, 9] = True  # and the other diagonal: two contacts at one vertex
+    v[6, 19, 8] = v[7, 20, 9] = True  # a pinch of the object under 26 at the corner (7, 20, 9)
+    v[13, 9, 3] = v[14, 10, 3] = True  # edge contact across the block edge x = 14, y = 10
+    v[13:15, 9:11, 17:19] = True  # a pinch of the background under 6 at the corner (14, 10, 18):
+    v[13, 9, 17] = v[14, 10, 18] = False  # two opposite background voxels among six object ones
+    v[:, 14:16, 17:19] = True  # a bar along x through three blocks
+    v[2:5, 14, 17] = False  # (pierced: a vertex contact of its background)
+    t = torus(5, 1.5, size=13, axis=2)
+    v[c[0] - 6:c[0] + 7, c[1] - 6 + 10:c[1] + 7 + 10, 18:27] |= t[:, :, 2:11]
+    shell = hollow_ball(5, 3, size=12)
+    v[9:21, 8:20, 0:12] |= shell  # a cavity cut by the faces at x = 14, y = 10 and 15, z = 9
+    r = check(v, conn)
+    assert r["pinched_vertices"] >= 1 and r["betti"][1] >= 1 and r["betti"][2] >= 1
+    for chunks in ((7, 5, 9), (1, 24, 27), (21, 1, 4), (3, 3, 3)):
+        check(v, conn, chunks)
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_doubled_edges_across_every_face(rng, conn):
+    """Chunks one voxel thick: every vertex is a seam's, every edge along
+    that axis has its ends in two seams (loose ends that meet); random
+    volumes with edge and vertex contacts."""
+    for axis in range(3):
+        v = rng.random((9, 10, 11)) < 0.5
+        chunks = [5, 4, 6]
+        chunks[axis] = 1
+        r = check(v, conn, tuple(chunks))
+        assert r["doubled_edges"] > 0
+
+
 @pytest.mark.parametrize("conn", [4, 8])
 def test_2d(rng, conn):
     for density in (0.3, 0.5, 0.7):
@@ -130,43 +167,6 @@ def test_irregular_and_thin_chunks(rng):
     for conn in (4, 8):
         check(img, conn, (1, 25))
         check(img, conn, ((5, 1, 24), (2, 23)))
-
-
-@pytest.mark.parametrize("conn", [6, 26])
-def test_large_blocks_count_their_sheets_compiled(rng, conn):
-    # blocks and face tiles of 2^12 voxels and more count their vertices'
-    # sheets with the compiled pass (tiles number their node keys first),
-    # smaller ones with numpy: the two meet in the same report, equal to the
-    # in-memory one
-    from isoflow.digital import closed_surfaces as cs
-    from isoflow.scale import compiled
-
-    if not compiled.have_numba():
-        pytest.skip("numba not installed")
-    v = smooth(rng, (90, 70, 66), sigma=1.2)
-    v[rng.random(v.shape) < 0.02] ^= True  # edge and vertex contacts
-    assert cs._compiled_box(v[:64, :64, :64]) and not cs._compiled_box(v[:2, :2, :2])
-    check(v, conn, (64, 64, 64))
-    # and the compiled box pass itself equals the numpy one on a block
-    fg = outofcore._label(v, cs.MESH_ADJACENCY[conn][0])[0]
-    bg = outofcore._label(~v, cs.MESH_ADJACENCY[conn][1])[0]
-    keep = (slice(0, -1), slice(1, None), slice(1, -1))
-    marker = int(np.iinfo(bg.dtype).max)
-    fast = cs.box_sheets(v, fg, bg, keep, conn, marker, compiled=True)
-    slow = cs.box_sheets(v, fg, bg, keep, conn, marker)
-
-    def rows(r):
-        return sorted(zip(*(r[k].tolist() for k in ("obj", "bg", "vertices", "quarters"))))
-
-    assert rows(fast) == rows(slow) and len(rows(fast)) > 10
-    assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
-    # labels beyond 32 bits (node keys), and an outside key beyond them
-    big = np.int64(1) << 40
-    fg, bg = fg.astype(np.int64) + big, bg.astype(np.int64) + big
-    fast = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62, compiled=True)
-    slow = cs.box_sheets(v, fg, bg, keep, conn, np.int64(1) << 62)
-    assert rows(fast) == rows(slow)
-    assert sorted(map(sorted, fast["pairs"].tolist())) == sorted(map(sorted, slow["pairs"].tolist()))
 
 
 def test_trivial_volumes():
@@ -197,28 +197,159 @@ def test_block_counts_agree_with_dask_image(rng):
 
 
 def test_blocks_hand_on_faces_and_own_each_vertex_once(rng):
-    """What a block hands on is faces and counts, never voxel-sized (the
-    reason memory stays bounded), and the vertices split exactly between
-    the block pass and the merge across upper faces."""
+    """What a block hands on is faces and a few numbers per piece, never
+    voxel-sized (the reason memory stays bounded), and the vertices split
+    exactly between the blocks and the seams across their upper faces."""
+    from isoflow.digital.blocks import summarize_block
     from isoflow.digital.configurations import configuration_histogram
+    from isoflow.digital.seams import merge_block
 
     v = rng.random((40, 30, 20)) < 0.5
-    s = outofcore._summarize(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), 6, "test")
+    s = summarize_block(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), (120, 90, 60), 6, "test", True)
     assert sorted({a.shape for a in s["faces"].values()}) == [(30, 20), (40, 20), (40, 30)]
-    assert len(s["faces"]) == 3 * 6  # voxels, object and background labels on 6 faces
-    assert s["hist"].sum() == 39 * 29 * 19  # vertices a+1 .. b-1; those at b are merged
-    parts = [(v[:17], (0, 0, 0)), (v[17:], (1, 0, 0))]
-    for surfaces in (False, True):
-        sums = [outofcore._summarize(b, i, (2, 1, 1), (0, 0, 0), 6, "test", surfaces) for b, i in parts]
-        total = outofcore._merge((0, 0, 0), (2, 1, 1), 6, surfaces, *sums)["hist"]
-        total += outofcore._merge((1, 0, 0), (2, 1, 1), 6, surfaces, sums[1])["hist"]
-        assert (total == configuration_histogram(v)).all()
-    # with surfaces a block also hands on one entry per pair of labels its
-    # vertices' sheets separate (a few per surface piece), and its pinches
-    s = outofcore._summarize(v, (1, 1, 1), (3, 3, 3), (0, 0, 0), 6, "test", True)
-    (obj, bg, vertices, quarters), = s["sheets"]
-    assert len(obj) == len(bg) == len(vertices) < v.size // 20
-    assert vertices.sum() >= s["hist"][1:255].sum()  # a sheet or more per boundary vertex
+    assert len(s["faces"]) == 2 * 6  # the numbers and the object's voxels on 6 faces
+    assert s["hist"].sum() == 39 * 29 * 19  # vertices a+1 .. b-1; those at b are the seams'
+    assert len(s["pieces"][0]["key"]) < v.size // 20
+    for conn in (6, 26):
+        for surfaces in (False, True):
+            parts = [(v[:17], (0, 0, 0), ((0, 17), (0, 30), (0, 20))), (v[17:], (1, 0, 0), ((17, 40), (0, 30), (0, 20)))]
+            sums = [summarize_block(b, i, (2, 1, 1), (box[0][0], 0, 0), v.shape, conn, "test", surfaces)
+                    for b, i, box in parts]
+            total = merge_block((0, 0, 0), (2, 1, 1), parts[0][2], v.shape, conn, surfaces, *sums)["hist"]
+            total += merge_block((1, 0, 0), (2, 1, 1), parts[1][2], v.shape, conn, surfaces, sums[1])["hist"]
+            assert (total == configuration_histogram(v)).all()
+
+
+def seam_oracle(vox, fg, bg, keep, axis, own, conn, outside):
+    """What a seam's census must give, by NumPy: the histogram and loose
+    ends of its counted vertices, per key the sheets (box_sheets, the small
+    in-memory path), pinches and the cells across the face, and the pairs
+    of keys that touch across it."""
+    from isoflow.digital.closed_surfaces import MESH_ADJACENCY, box_sheets, sweep_tables
+    from isoflow.digital.configurations import configurations
+
+    formula = conn == 6  # the object's Euler characteristic comes from the runs under 6
+    cfg = configurations(vox)
+    found = box_sheets(vox, fg, bg, keep, conn, outside, cfg=cfg)
+    gains = {}
+
+    def add(key, chi4, faces):
+        old = gains.get(int(key), (0, 0))
+        gains[int(key)] = (old[0] + chi4, old[1] + faces)
+
+    for o, b, vert, q in zip(found["obj"], found["bg"], found["vertices"], found["quarters"]):
+        add(b if formula else o, (-1 if formula else 1) * (4 * int(vert) - int(q)), 0)
+    padded = np.pad(vox, 1)
+    keys = np.pad(np.where(vox, fg, bg), 1, constant_values=outside)
+    nsheet, _, _, _, spokes, pinch = sweep_tables(conn)
+    loose = set()
+    for w in zip(*np.nonzero(np.ones(cfg[keep].shape, bool))):
+        w = tuple(int(x) + k.start for x, k in zip(w, keep))
+        c = int(cfg[w])
+        loose |= {(*w, d) for d in range(6) if (spokes[c] >> d) & 1}
+        if pinch[c, 0] >= 0:
+            o = next(o for o in range(8) if bool((c >> o) & 1) == formula)
+            add(keys[w[0] + (o & 1), w[1] + ((o >> 1) & 1), w[2] + (o >> 2)], 8 * (1 if formula else -1), 0)
+    step = np.eye(3, dtype=int)[axis]
+    for u in zip(*np.nonzero(np.ones(own, bool))):
+        if u[axis] != 0 or vox[u] != vox[tuple(np.add(u, step))]:
+            continue
+        sign = 1 if vox[u] else -1
+        chi = 0
+        if bool(vox[u]) == formula:
+            boxes = [step + np.eye(3, dtype=int)[m] for m in range(3) if m != axis] + [np.ones(3, int)]
+            inside = [all(padded[tuple(np.add(u, d) + 1)] == formula for d in np.ndindex(*(b + 1))) for b in boxes]
+            chi = 8 * (-1 + inside[0] + inside[1] - inside[2])
+        add(keys[tuple(np.add(u, 1))], sign * chi, -2 * sign)
+    joins = set()
+    reach = {6: 1, 18: 2, 26: 3}
+    for u in zip(*np.nonzero(np.ones(vox.shape, bool))):
+        if u[axis] != 0:
+            continue
+        adj = MESH_ADJACENCY[conn][0 if vox[u] else 1]
+        for d in np.ndindex(3, 3, 3):
+            d = np.array(d) - 1
+            d[axis] = 1
+            v = tuple(np.add(u, d))
+            if np.abs(d).sum() <= reach[adj] and all(0 <= x < n for x, n in zip(v, vox.shape)) and vox[v] == vox[u]:
+                a, b = (fg[u], fg[v]) if vox[u] else (bg[u], bg[v])
+                if a != b:
+                    joins.add((int(a), int(b), int(vox[u])))
+    hist = np.bincount(cfg[keep].ravel(), minlength=256)
+    pairs = sorted(map(sorted, found["pairs"].tolist()))
+    return hist, {k: g for k, g in gains.items() if g != (0, 0)}, pairs, loose, joins
+
+
+def layer_pairs(vox, keys, axis):
+    """Pairs of keys of face neighbours of one kind inside each layer of a
+    seam."""
+    pairs = set()
+    for m in range(3):
+        if m == axis:
+            continue
+        a, b = [slice(None)] * 3, [slice(None)] * 3
+        a[m], b[m] = slice(0, -1), slice(1, None)
+        same = vox[tuple(a)] == vox[tuple(b)]
+        pairs |= {(int(x), int(y), 0) for x, y in zip(keys[tuple(a)][same], keys[tuple(b)][same])}
+    return pairs
+
+
+def same_partition(left, right):
+    """Whether two sets of (key, key, kind) pairs join the keys alike."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    nodes = sorted({k for p in left | right for k in p[:2]})
+    at = {k: i for i, k in enumerate(nodes)}
+
+    def labels(pairs):
+        rows = np.array([[at[a], at[b]] for a, b, _ in pairs]).reshape(-1, 2)
+        graph = coo_matrix((np.ones(len(rows)), (rows[:, 0], rows[:, 1])), shape=(len(nodes),) * 2)
+        return connected_components(graph, directed=False)[1]
+
+    x, y = labels(left), labels(right)
+    return len(set(zip(x, y))) == len(set(x)) == len(set(y))
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_seam_census_against_numpy(rng, conn):
+    """The compiled census of a seam (seen across each axis, with its
+    vertices and cells cut as the merge cuts them) equals the NumPy oracle
+    above on random seams with edge and vertex contacts."""
+    from isoflow.digital.closed_surfaces import MESH_ADJACENCY, sweep_tables
+    from isoflow.scale.seams import seam_census
+    from isoflow.scale.sweep import sheet_tables
+
+    outside = 1 << 62
+    for axis in range(3):
+        for density in (0.3, 0.5, 0.7):
+            shape = [9, 11, 13]
+            shape[axis] = 2
+            vox = rng.random(shape) < density
+            # keys beyond 32 bits, a few voxels of a layer each (in rows
+            # along the last axis)
+            keys = np.arange(vox.size).reshape(shape) // 3 + (np.indices(shape)[axis] << 40)
+            fg, bg = np.where(vox, keys, 0), np.where(vox, 0, keys + (1 << 20))
+            lo, hi = [1, 0, 1], [9, 12, 13]
+            lo[axis], hi[axis] = 1, 2
+            own = [n - 1 for n in shape]
+            keep = tuple(slice(a, b) for a, b in zip(lo, hi))
+            got = seam_census(vox, np.where(vox, fg, bg), lo, hi, axis, own, outside,
+                              sheet_tables(sweep_tables(conn), conn == 6), conn == 6,
+                              tuple({6: 1, 18: 2}[a] for a in MESH_ADJACENCY[conn]))
+            hist, gains, pairs, loose, joins = seam_oracle(vox, fg, bg, keep, axis, own, conn, outside)
+            assert (got["hist"] == hist).all()
+            mine = {int(k): (int(c), int(f)) for k, c, f in zip(got["keys"], got["chi4"], got["faces"])}
+            assert {k: g for k, g in mine.items() if g != (0, 0)} == gains and len(gains) > 5
+            assert sorted(map(sorted, got["pairs"].tolist())) == pairs
+            assert {tuple(map(int, e)) for e in got["loose"]} == loose
+            # every pair found touches; with the pairs of face neighbours of
+            # one kind inside each layer (which the blocks' labels or other
+            # seams join), they join the keys as all the touching pairs do
+            edges = {tuple(map(int, e)) for e in got["edges"]}
+            assert edges <= joins and len(joins) > 5
+            inside = layer_pairs(vox, np.where(vox, fg, bg), axis)
+            assert same_partition(edges | inside, joins | inside)
 
 
 # --------------------------------------------------------------------------
@@ -276,9 +407,28 @@ def test_cli_info_on_zarr(tmp_path, capsys):
     got = json.loads(capsys.readouterr().out)
     assert main(["info", str(tmp_path / "t.npy"), "--json"]) == 0
     want = json.loads(capsys.readouterr().out)
-    assert "doubled_edges" not in got and want.pop("doubled_edges") == 0  # not counted out of core
     assert got.pop("input").endswith("t.zarr") and want.pop("input").endswith("t.npy")
     assert got == want and got["betti"] == [2, 1, 0]
+    # random volumes with edge and vertex contacts, at both connectivities:
+    # the command's JSON equals that of the .npy, doubled edges included
+    rng = np.random.default_rng(27)
+    v = rng.random((19, 23, 17)) < 0.5
+    write_zarr(tmp_path / "r.zarr", v, CHUNKS3)
+    np.save(tmp_path / "r.npy", v)
+    for conn in ("6", "26"):
+        reports = []
+        for name in ("r.zarr", "r.npy"):
+            assert main(["info", str(tmp_path / name), "--json", "--connectivity", conn]) == 0
+            reports.append(json.loads(capsys.readouterr().out))
+            reports[-1].pop("input")
+        assert reports[0] == reports[1] and reports[0]["doubled_edges"] > 0 and reports[0]["pinched_vertices"] > 0
+    # and as the command, in a process of its own
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "r.zarr"), "--json",
+                        "--connectivity", "26"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    command = json.loads(p.stdout)
+    command.pop("input")
+    assert command == reports[0]
     assert sorted(s["genus"] for s in got["surfaces"]) == [0, 1]  # the ball, the torus
     assert main(["info", str(path), "--connectivity", "26"]) == 0
     out = capsys.readouterr().out

@@ -7,11 +7,10 @@ One cluster for the module (starting one costs a few seconds); volumes
 small, chunkings odd, so that objects, tunnels, cavities and edge/vertex
 contacts cross block faces, edges and corners."""
 
-import dataclasses
 import numpy as np
 import pytest
-
 from conftest import ball, torus
+
 from isoflow import DigitalObject, IsoflowError, analyze, analyze_chunked
 
 distributed = pytest.importorskip("distributed")
@@ -41,9 +40,8 @@ def test_dask_array_on_process_workers(client, conn):
     got = analyze_chunked(da.from_array(v, chunks=(7, 5, 9)), conn, scheduler=client.get,
                           progress=lambda done, total: layers.append((done, total)))
     want = analyze(DigitalObject(v), conn)
-    # out of core an edge across a block face has its ends in two tasks: no doubled-edge count
-    assert got.doubled_edges is None and want.doubled_edges is not None
-    assert got == dataclasses.replace(want, doubled_edges=None)  # the closed surfaces and their genus included
+    assert got == want  # the closed surfaces, their genus, the doubled edges included
+    assert want["doubled_edges"] > 0 and want["pinched_vertices"] > 0
     assert layers == [(i, 4) for i in range(1, 5)]  # one report per layer of blocks along axis 0
 
 
@@ -55,8 +53,7 @@ def test_zarr_store_on_process_workers(client, tmp_path, conn):
     z[:] = v
     got = analyze_chunked(zarr.open_array(str(tmp_path / "v.zarr"), mode="r"), conn, scheduler=client.get)
     want = analyze(DigitalObject(v), conn)
-    assert got.doubled_edges is None and want.doubled_edges is not None
-    assert got == dataclasses.replace(want, doubled_edges=None)
+    assert got == want
     assert got["betti"] == [2, 1, 1]
 
 

@@ -4,8 +4,8 @@ checked by trimesh, pymeshlab and manifold3d."""
 import numpy as np
 import pytest
 import trimesh
-
 from conftest import ball, random_volume, torus
+
 from isoflow import DigitalObject, boundary_mesh, euler_characteristic
 from isoflow.mesh.export import mesh_vertex_table, write_obj, write_ply
 

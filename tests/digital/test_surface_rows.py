@@ -6,14 +6,13 @@ normals, up to the order of vertices and faces."""
 import numpy as np
 import pytest
 import trimesh
-
 from conftest import ball, random_volume, torus
+
 from isoflow import DigitalObject, boundary_mesh, euler_characteristic
 from isoflow.digital.surface import mesh_method
-from isoflow.scale.compiled import least_voxels
 from isoflow.mesh import export
 from isoflow.mesh.readback import check_surface_file
-from isoflow.scale.compiled import using
+from isoflow.scale.compiled import least_voxels, using
 
 ATTRIBUTES = ("config", "sheet", "vertex_class", "gamma", "a", "f", "code", "normal")
 

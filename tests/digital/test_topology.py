@@ -3,9 +3,9 @@ shapes whose topology is known by construction."""
 
 import numpy as np
 import pytest
+from conftest import ball, random_volume, torus
 from skimage.measure import euler_number
 
-from conftest import ball, random_volume, torus
 from isoflow import DigitalObject, analyze, betti_numbers, euler_characteristic
 from isoflow.digital.configurations import configuration_histogram, configurations
 from isoflow.errors import IsoflowError

@@ -10,19 +10,19 @@ and 2D, at both connectivities."""
 
 import numpy as np
 import pytest
+from shapes import contacts, figure_eight, hollow_ball, linked_rings, planar_disc_ring, solid_torus, union_of_boxes
 
 from isoflow import DigitalObject
-from isoflow.digital.simple import simple_codes
 from isoflow.digital.connectivity import is_face_connectivity
+from isoflow.digital.simple import simple_codes
 from isoflow.digital.topology import betti_numbers
 from isoflow.flow.bitflow import PackedObject, packed_record, packed_step, vertex_rows, vertex_shape
 from isoflow.flow.bitguard import packed_guarded_step, packed_key
+from isoflow.flow.engines import step_record
 from isoflow.flow.guard import guarded_step, realise_moves, shape_key
 from isoflow.flow.motion import flow_moves, flow_step
 from isoflow.flow.run import run_flow
-from isoflow.flow.engines import step_record
 from isoflow.scale import fineblocks, flowbits
-from shapes import contacts, figure_eight, hollow_ball, linked_rings, planar_disc_ring, solid_torus, union_of_boxes
 
 WIDTHS = (1, 2, 63, 64, 65, 127, 128, 129)
 

@@ -13,19 +13,19 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-
 from conftest import ball
+
 from isoflow import DigitalObject, read_object
 from isoflow.cli import main
 from isoflow.digital.configurations import configurations
-from isoflow.errors import IsoflowError
-from isoflow.flow.motion import flow_moves, flow_step
-from isoflow.flow.run import run_flow
-from isoflow.digital.simple import simple_points
-from isoflow.flow.guard import guarded_step
 from isoflow.digital.indices import CONVEX, FLAT, NONE, class_lut, code_lut, f_lut, planar_class_lut
-from isoflow.flow.planar import planar_flow_step
+from isoflow.digital.simple import simple_points
 from isoflow.digital.topology import betti_numbers
+from isoflow.errors import IsoflowError
+from isoflow.flow.guard import guarded_step
+from isoflow.flow.motion import flow_moves, flow_step
+from isoflow.flow.planar import planar_flow_step
+from isoflow.flow.run import run_flow
 
 ROOT = Path(__file__).resolve().parents[2]
 

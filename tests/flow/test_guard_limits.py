@@ -17,13 +17,6 @@ import json
 import numpy as np
 import pytest
 from scipy import ndimage
-from skimage.measure import euler_number
-
-from isoflow import DigitalObject
-from isoflow.cli import main
-from isoflow.digital.simple import simple_points
-from isoflow.flow.guard import convexity, guarded_step, thinning_step
-from isoflow.flow.run import run_flow
 from shapes import (
     annulus_prism,
     contacts,
@@ -36,6 +29,13 @@ from shapes import (
     solid_torus,
     union_of_boxes,
 )
+from skimage.measure import euler_number
+
+from isoflow import DigitalObject
+from isoflow.cli import main
+from isoflow.digital.simple import simple_points
+from isoflow.flow.guard import convexity, guarded_step, thinning_step
+from isoflow.flow.run import run_flow
 
 
 def adjacency(ndim, conn):

@@ -15,7 +15,6 @@ import json
 from pathlib import Path
 
 import pytest
-
 from shapes import plain_runs
 
 REFERENCE = json.loads(Path(__file__).with_name("plain_reference.json").read_text())

@@ -13,9 +13,9 @@ import trimesh
 
 from isoflow import DigitalObject, betti_numbers, boundary_mesh
 from isoflow.cli import main
+from isoflow.errors import IsoflowError
 from isoflow.mesh.bridges import cube_union, from_manifold, to_manifold
 from isoflow.mesh.genus import mesh_topology, verify_genus
-from isoflow.errors import IsoflowError
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.voxelize import voxelize, voxelize_file
 

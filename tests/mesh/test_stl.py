@@ -131,10 +131,11 @@ def test_every_sample_mesh_whose_ply_is_written_gets_its_stl(tmp_path, scale, of
         mesh.vertices = np.asarray(mesh.vertices) * scale + offset
         src = tmp_path / f"{path.stem}.ply"
         mesh.export(src)
+        status = {}
         for suffix in (".ply", ".stl"):
             rc, _, err = run("surface", src, "--resolution", 32, "-o", tmp_path / f"out_{path.stem}{suffix}")
             written[suffix] += rc == 0
-            if suffix == ".stl" and rc_ply == 0:
+            status[suffix] = rc
+            if suffix == ".stl" and status[".ply"] == 0:
                 assert rc == 0, (path.name, err)
-            rc_ply = rc
     assert written[".stl"] == written[".ply"] == 15

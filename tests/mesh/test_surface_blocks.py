@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-
 from conftest import ball, torus
+
 from isoflow import DigitalObject, boundary_mesh
 from isoflow.cli import main
 from isoflow.digital.surface import QuadMesh

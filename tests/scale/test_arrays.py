@@ -15,15 +15,15 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import ball, random_volume, torus
 from skimage.measure import euler_number
 
-from conftest import ball, random_volume, torus
 from isoflow import DigitalObject, analyze, betti_numbers, euler_characteristic
-from isoflow.scale import arrays
-from isoflow.digital.analysis import voxels_from_histogram
 from isoflow.cli import main
+from isoflow.digital.analysis import voxels_from_histogram
 from isoflow.digital.configurations import configuration_histogram, configurations
 from isoflow.errors import IsoflowError
+from isoflow.scale import arrays
 
 xps = pytest.importorskip("array_api_strict")
 DEVICE = xps.Device("device1")

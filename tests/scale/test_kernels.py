@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
+from conftest import random_volume
 from scipy.ndimage import generate_binary_structure, label
 from skimage.measure import euler_number
 
-from conftest import random_volume
 from isoflow import DigitalObject, analyze
-from isoflow.scale import compiled, kernels
 from isoflow.digital.configurations import configurations
+from isoflow.scale import compiled, kernels
 
 pytestmark = pytest.mark.skipif(not kernels.HAVE_NUMBA, reason="numba not installed")
 
@@ -96,8 +96,8 @@ def test_mesh_components_equal_scipy_graph_components(rng):
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
-    from isoflow.scale.kernels import label_polygons
     from isoflow.digital.surface import boundary_mesh
+    from isoflow.scale.kernels import label_polygons
 
     for conn in (6, 26):
         mesh = boundary_mesh(rng.random((14, 12, 13)) < 0.5, conn)

@@ -16,7 +16,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     add_input_arguments(p)
     add_connectivity(p)
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
-    p.add_argument("--guard", action="store_true", help="topology control (Theorem 21): every step by simple deformations, thinning where a step cannot be; ends at a thin fixed point")
+    p.add_argument("--guard", action="store_true",
+                   help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
+                        "cannot be; ends at a thin fixed point")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")

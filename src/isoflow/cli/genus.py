@@ -79,7 +79,8 @@ def format_genus(report, name: str) -> str:
         f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
         f"  crossings   {crossings} (exact test)",
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
-                           f"genus {m3['genus']} over {m3['components']} components (genus() of the whole mesh: {m3['genus_whole_mesh']})"),
+                           f"genus {m3['genus']} over {m3['components']} components "
+                           f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {solid['surfaces']} boundary surfaces, volume {solid['volume']:.6g} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),

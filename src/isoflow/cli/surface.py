@@ -151,8 +151,8 @@ def is_store(name: str) -> bool:
 def cmd_surface_store(args: argparse.Namespace) -> int:
     """``surface STORE.zarr -o OUT.(ply|stl)``: the mesh written block by
     block, then read back in chunks."""
-    from ..digital.lattice import DigitalObject
     from ..digital.connectivity import default_connectivity
+    from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import store_volume
     from ..mesh.readback import volume_unit
     from ..mesh.streamed_readback import check_streamed

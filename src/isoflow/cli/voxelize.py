@@ -12,8 +12,11 @@ from .progress import progress_bar
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
-    p = add_command(sub, "voxelize", "voxelise a mesh's solid into a volume file (with pitch and origin)")
-    p.add_argument("mesh", help="a mesh file: any format trimesh reads (STL, OBJ, PLY, OFF, GLB, 3MF, DAE, ZIP, ...)")
+    p = add_command(sub, "voxelize", "voxelise a mesh's solid into a volume file (with pitch and origin), "
+                                     "or several meshes into one label image")
+    p.add_argument("mesh", nargs="+",
+                   help="a mesh file: any format trimesh reads (STL, OBJ, PLY, OFF, GLB, 3MF, DAE, ZIP, ...); "
+                        "several: one label image on one grid over them all, label i for the i-th mesh")
     grid = p.add_mutually_exclusive_group(required=True)
     grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
     grid.add_argument("--resolution", type=int, help="voxels along the longest side")
@@ -21,13 +24,29 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox), or "
                         "OUT.zarr: written slab by slab as dask tasks, never held in memory")
     add_mesh_rule(p)
+    add_label_options(p)
     p.add_argument("--force", action="store_true", help="overwrite an existing output")
     p.set_defaults(func=cmd_voxelize)
+
+
+def add_label_options(p: argparse.ArgumentParser) -> None:
+    """How several meshes become one label image."""
+    from ..mesh.label_voxels import OVERLAPS
+
+    p.add_argument("--split", action="store_true",
+                   help="a label per body: per node of a scene (glTF/GLB, 3MF, DAE, ...), per connected body of "
+                        "any other mesh (an STL's solids; a cavity stays with its body)")
+    p.add_argument("--overlap", choices=OVERLAPS, default="later",
+                   help="a voxel inside several meshes: later (default: the later mesh's label wins) or error "
+                        "(refuse, naming the pairs and counts)")
 
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
     from ..mesh.volumes import check_volume_output, write_volume
 
+    if len(args.mesh) > 1 or args.split:
+        return voxelize_labels(args)
+    args.mesh = args.mesh[0]
     if Path(args.output).suffix.lower() == ".zarr":
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
@@ -52,3 +71,42 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
     print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
           f"pitch {z['pitch']:.6g}, origin {np.round(z['origin'], 6).tolist()}")
     return 0
+
+
+def voxelize_labels(args: argparse.Namespace) -> int:
+    """Several meshes (or one split into bodies) into one label image."""
+    from ..mesh.bodies import mesh_bodies
+    from ..mesh.label_voxels import voxelize_meshes
+    from ..mesh.volumes import check_label_output, check_volume_output, write_labels
+
+    check_volume_output(args.output, args.force)  # suffix, library and path before the meshes are read
+    bodies = mesh_bodies(args.mesh, args.split)
+    check_label_output(args.output, len(bodies), args.force)  # and the format's labels, before the voxels
+    with progress_bar(args, "voxelize", estimate=True) as show:
+        r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
+                            overlap=args.overlap, strict=args.strict, progress=show)
+    for body, note in zip(bodies, r.notes):
+        say_note(args, body.name, note)
+    out = write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force)
+    say_note(args, out, r.note)
+    print(label_summary(out, r))
+    return 0
+
+
+#: the labels listed by name after a label image is written; the rest are counted
+LISTED_LABELS = 20
+
+
+def label_summary(out: Path, r) -> str:
+    """The written label image in words: grid, type, pitch, origin, and a
+    row per label (label, voxels, mesh)."""
+    shape = "x".join(map(str, r.labels.shape))
+    lines = [f"{out}: {len(r.names)} labels in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
+             f"origin {np.round(r.origin, 6).tolist()}"]
+    width = max(6, len(f"{max(r.voxels, default=0):,}"))
+    lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")
+    for i, (name, n) in enumerate(zip(r.names[:LISTED_LABELS], r.voxels), 1):
+        lines.append(f"{i:>6}  {n:>{width},}  {name}")
+    if len(r.names) > LISTED_LABELS:
+        lines.append(f"{'':>6}  ... and {len(r.names) - LISTED_LABELS} more labels")
+    return "\n".join(lines)

@@ -177,6 +177,12 @@ def spot() -> Path:
     -------
     pathlib.Path
         ``spot.ply``.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> data.spot().name, data.info("spot.ply")["genus"]
+    ('spot.ply', 0)
     """
     return path("spot.ply")
 
@@ -188,6 +194,12 @@ def torus() -> Path:
     -------
     pathlib.Path
         ``torus.obj``.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> data.torus().name, data.info("torus.obj")["genus"]
+    ('torus.obj', 1)
     """
     return path("torus.obj")
 
@@ -199,6 +211,12 @@ def eight() -> Path:
     -------
     pathlib.Path
         ``eight.off``.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> data.eight().name, data.info("eight.off")["genus"]
+    ('eight.off', 2)
     """
     return path("eight.off")
 

@@ -10,6 +10,9 @@ of every boundary face give the closed surfaces and their genus
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -17,6 +20,7 @@ from ..scale import arrays
 from ..scale.compiled import Method, using
 from .closed_surfaces import closed_surfaces, compiled_census, small_census, use_census
 from .configurations import configuration_histogram
+from .connectivity import resolve_connectivity
 from .indices import (
     CLASS_LABELS,
     NOT_WELL_COMPOSED,
@@ -29,7 +33,6 @@ from .indices import (
 )
 from .lattice import DigitalObject
 from .report import Report
-from .connectivity import resolve_connectivity
 from .topology import betti_numbers, euler_from_histogram
 
 
@@ -106,7 +109,7 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
         # compiled pass reads any nonzero byte as set
         vol, parity = arrays.as_volume(obj, canonical=False)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
-    census = _census(vol, conn, surfaces, method)
+    census: Mapping[str, Any] | None = _census(vol, conn, surfaces, method)
     if census is not None:
         hist = census["hist"]
         chi = euler_from_histogram(hist, 3, conn)

@@ -44,34 +44,35 @@ above and adds up, per component, the mesh vertices and faces of its whole
 boundary (every sheet counts for its object and its background component);
 a surface's counts are then those of the component below it in the tree
 less those of the surfaces below that one. About 1.5 bytes per voxel on a
-porous field, no label volume, no table of pairs. Small volumes (scipy
-labels and the configuration array) and the blocks of the out-of-core pass
-count per label pair. All equal
+porous field, no label volume, no table of pairs; the blocks of the
+out-of-core pass go through the same sweep and join the trees
+(:mod:`isoflow.digital.outofcore`). Small volumes (cc3d labels and the
+configuration array) count per label pair. All equal
 ``boundary_mesh(volume, connectivity).components()`` exactly
 (the tests check it on thousands of random volumes).
 """
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary, count_codes
-from ..scale.compiled import Method, have_numba, use_compiled
+from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
+from .connectivity import check_connectivity
 from .report import SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
-from .connectivity import check_connectivity
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
 MESH_ADJACENCY = {6: (6, 18), 26: (18, 6)}
 
 
-@lru_cache(maxsize=None)
+@cache
 def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     """Per-configuration tables of the sheets, for the passes here.
 
@@ -104,10 +105,9 @@ def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
         for side in (0, 1):
             spokes |= doubled[:, axis, side].astype(np.uint8) << (2 * axis + side)
     pinch = np.full((256, 2), -1, np.int8)
-    for c in np.flatnonzero(pinch_lut(connectivity)):
-        pair = c if connectivity == 26 else 255 ^ c
-        octs = [o for o in range(8) if (pair >> o) & 1]
-        pinch[c] = octs
+    for config in np.flatnonzero(pinch_lut(connectivity)):
+        pair = int(config) if connectivity == 26 else 255 ^ int(config)
+        pinch[config] = [o for o in range(8) if (pair >> o) & 1]
     # The sweep counts a run of equal "layer" configurations (the same four
     # voxels on both sides of the vertex) in one step: it relies on their
     # sheets having four faces each and no doubled spoke.
@@ -236,47 +236,8 @@ def small_census(vol: np.ndarray, conn: int) -> dict:
     }
 
 
-def _compiled_box(vox) -> bool:
-    """The compiled box pass is worth loading numba for from boxes of 2^12
-    voxels (the face tiles of 256^3 blocks have 2^17)."""
-    return vox.ndim == 3 and 1 << 12 <= vox.size < 1 << 31 and have_numba()
-
-
-def _fits_32_bits(labels: np.ndarray, outside) -> bool:
-    """Labels that the compiled pass can pack two by two into 64 bits."""
-    return labels.dtype in (np.uint16, np.uint32, np.int32) and 0 <= int(outside) < 1 << 32
-
-
-def _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside) -> dict:
-    """:func:`box_sheets` by the compiled pass. Labels that do not fit in
-    32 bits (node keys, in the face tiles out of core) are numbered first
-    and the numbers mapped back."""
-    from ..scale.boxes import box_sweep
-
-    values = {}
-    if not _fits_32_bits(obj_labels, 0):
-        values["obj"], obj_labels = np.unique(obj_labels, return_inverse=True)
-        obj_labels = obj_labels.reshape(vox.shape).astype(np.uint32)
-    if not _fits_32_bits(bg_labels, outside):
-        values["bg"], bg_labels = np.unique(np.append(bg_labels.ravel(), outside), return_inverse=True)
-        outside = int(bg_labels[-1])
-        bg_labels = bg_labels[:-1].reshape(vox.shape).astype(np.uint32)
-    bounds = [k.indices(n + 1)[:2] for k, n in zip(keep, vox.shape)]
-    found = box_sweep(vox, obj_labels, bg_labels, [a for a, _ in bounds], [b for _, b in bounds],
-                      int(outside), sweep_tables(conn))
-    if "obj" in values:
-        found["obj"] = values["obj"][found["obj"]]
-    if "bg" in values:
-        found["bg"] = values["bg"][found["bg"]]
-    if values:  # pinch pairs: object labels under 26, background ones under 6
-        kind = "obj" if conn == 26 else "bg"
-        if kind in values:
-            found["pairs"] = values[kind][found["pairs"]]
-    return found
-
-
 def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside,
-               compiled: bool = False, cfg: np.ndarray | None = None) -> dict:
+               cfg: np.ndarray | None = None) -> dict:
     """Sheets of some vertices of a box of voxels, summed per label pair.
 
     ``vox``: the box (bool); ``obj_labels``/``bg_labels``: integer labels of
@@ -288,13 +249,10 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     (``obj``, ``bg`` label arrays), their mesh ``vertices`` and ``quarters``
     of faces, and the pinch ``pairs`` (labels of the two octants to join for
     the connectivity's components: object labels under 26, background under
-    6). Used whole by the small path (:func:`small_census`: no numba below
-    :func:`~isoflow.scale.compiled.least_voxels`) and block by block out of
-    core, where ``compiled`` lets boxes from 2^12 voxels on take the
-    compiled pass. ``cfg``: ``configurations(vox)``, where the caller has it.
+    6). Used by the small path (:func:`small_census`: no numba below
+    :func:`~isoflow.scale.compiled.least_voxels`). ``cfg``:
+    ``configurations(vox)``, where the caller has it.
     """
-    if compiled and _compiled_box(vox):
-        return _compiled_box_sheets(vox, obj_labels, bg_labels, keep, conn, outside)
     nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
     cfg = (configurations(vox) if cfg is None else cfg)[keep]
     origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])
@@ -325,11 +283,11 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     found = _pair_sums(obj, bg, np.concatenate(quarter).astype(np.int64))
     pinched = pinch[c_on, 0] >= 0
     side_obj = conn == 26  # the pinch joins two object octants under 26
-    ends = []
+    either = []
     for e in (0, 1):
         oct_ = pinch[c_on[pinched], e]
-        ends.append(obj_flat[base[pinched] + step[oct_]] if side_obj else bg_flat[bg_base[pinched] + bg_step[oct_]])
-    ends = np.stack(ends, axis=1).astype(np.int64).reshape(-1, 2)
+        either.append(obj_flat[base[pinched] + step[oct_]] if side_obj else bg_flat[bg_base[pinched] + bg_step[oct_]])
+    ends = np.stack(either, axis=1).astype(np.int64).reshape(-1, 2)
     found["pairs"] = ends[ends[:, 0] != ends[:, 1]]  # only those that join two pieces
     return found
 
@@ -433,28 +391,53 @@ def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto") 
     return use_compiled(vol, surfaces, method)
 
 
-def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
-    """The surfaces' mesh vertices and faces from sums over the whole
-    boundary of every component.
+def component_parents(roots, parents, off, goff, starts) -> tuple[np.ndarray, int]:
+    """Every component's parent in the tree of the surfaces, and the root.
 
-    The components of the object and of the background (the sets of runs
-    and gaps of :func:`isoflow.scale.sweep.sweep`: ``roots``, each one's
-    smallest node, ``parents``, the set of every node, ``sums``, per set
-    ``4 chi`` and ``F`` of its boundary) form a tree whose edges are the
-    surfaces, rooted at the outside's component. A component's parent is
-    the one holding the voxel just before its first voxel in C order: that
-    voxel lies outside the component and everything it encloses (else one of
-    those would come first), and is face-adjacent to it. A component's
-    boundary is its parent surface and its children's, so from the leaves
-    up, a surface's sums are its child's less those of the child's own
-    children: the signed sum (object +, background -) over the child's
-    subtree. The root's sums are not needed (nor counted right: the sweep's
-    formulas see only the array).
+    Parameters
+    ----------
+    roots : tuple of numpy.ndarray
+        The object's and the background's components: each one's smallest
+        node (run, gap), :func:`isoflow.scale.sweep.sweep`'s ``roots``.
+    parents : tuple of numpy.ndarray
+        The component of every run and of every gap (the outside the last
+        gap node), the sweep's ``parents``.
+    off, goff : numpy.ndarray
+        Where each row's runs and gaps start in their numbering
+        (:func:`isoflow.scale.bitrows.pack`).
+    starts : numpy.ndarray
+        1 for the rows that start with a run.
 
-    ``off``, ``goff``: where each row's runs and gaps start in their
-    numbering (the outside is the last gap node); ``starts``: 1 for the rows
-    that start with a run. Returns per surface (as many as non-root
-    components) its mesh vertices and faces.
+    Returns
+    -------
+    up : numpy.ndarray
+        The parent of every component, the object's first, then the
+        background's; the root its own.
+    root : int
+        The index of the outside's component.
+
+    Notes
+    -----
+    The components of the object and of the background form a tree whose
+    edges are the surfaces, rooted at the outside's component. A
+    component's parent is the one holding the voxel just before its first
+    voxel in C order: that voxel lies outside the component and everything
+    it encloses (else one of those would come first), and is
+    face-adjacent to it. A component whose first voxel starts a row has no
+    voxel before it in the row: an object one gets the root, a background
+    one (which the sweep joins to the outside in a whole volume) the root
+    or another component.
+
+    Examples
+    --------
+    >>> from isoflow.scale import bitrows, kernels, sweep
+    >>> v = np.ones((3, 3, 3), bool); v[1, 1, 1] = False  # a cavity
+    >>> bits, off, goff = bitrows.pack(v)
+    >>> found = sweep.sweep(bits, v.shape, off, goff, kernels.ADJACENCY[6] + kernels.ADJACENCY[18],
+    ...                     sweep_tables(6), pinch_objects=False)
+    >>> up, root = component_parents(found["roots"], found["parents"], off, goff, (bits[:-1, 0] & 1).astype(int))
+    >>> up.tolist(), root  # the object (0) in the outside (2), the cavity (1) in the object
+    ([2, 0, 2], 2)
     """
     (obj_roots, bg_roots), (pobj, pbg) = roots, parents
     nobj = len(obj_roots)
@@ -470,17 +453,57 @@ def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, n
     # starts with a gap)
     row = np.minimum(np.searchsorted(goff, bg_roots, side="right"), len(starts)) - 1  # the outside: any
     run = off[row] + (bg_roots - goff[row]) - (1 - starts[row])
-    inner = np.arange(len(bg_roots)) != outside - nobj
+    inner = (np.arange(len(bg_roots)) != outside - nobj) & (run >= 0) & (run < len(pobj))
     up_bg = np.full(len(bg_roots), outside)
     up_bg[inner] = pobj[run[inner]]
     up = np.concatenate([up_obj, up_bg])
     up[outside] = outside
+    return up, outside
+
+
+def surface_tree(roots, parents, sums, off, goff, starts) -> tuple[np.ndarray, np.ndarray]:
+    """The surfaces' mesh vertices and faces from sums over the whole
+    boundary of every component.
+
+    A component's boundary is its parent surface and its children's
+    (:func:`component_parents`), so from the leaves up, a surface's sums
+    (``sums``: per component ``4 chi`` and ``F`` of its boundary) are its
+    child's less those of the child's own children: the signed sum (object
+    +, background -) over the child's subtree. The root's sums are not
+    needed (nor counted right: the sweep's formulas see only the array).
+    Returns per surface (as many as non-root components) its mesh vertices
+    and faces.
+    """
+    up, outside = component_parents(roots, parents, off, goff, starts)
+    nobj = len(roots[0])
     signed = np.concatenate([sums[0], -sums[1]])
     signed[outside] = 0
     total = subtree_sums(up, outside, signed)
     total[nobj:] *= -1
     edges = np.arange(len(up)) != outside
-    chi4, faces = total[edges, 0], total[edges, 1]
+    return surface_counts(total[edges])
+
+
+def surface_counts(total: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mesh vertices and faces of closed surfaces from their sums.
+
+    Parameters
+    ----------
+    total : numpy.ndarray
+        Rows ``(4 chi, F)``, one per surface.
+
+    Returns
+    -------
+    vertices, faces : numpy.ndarray
+        ``V = chi + F`` (every edge in two faces: ``chi = V - E + F = V -
+        F``) and ``F``.
+
+    Examples
+    --------
+    >>> [x.tolist() for x in surface_counts(np.array([[8, 6], [0, 16]]))]  # a cube, a torus
+    [[8, 16], [6, 16]]
+    """
+    chi4, faces = total[:, 0], total[:, 1]
     assert (chi4 % 4 == 0).all(), "a surface's Euler characteristic is an integer"
     return chi4 // 4 + faces, faces
 

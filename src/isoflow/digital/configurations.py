@@ -27,7 +27,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -68,7 +68,7 @@ def read_only(a: np.ndarray) -> np.ndarray:
     return a
 
 
-@lru_cache(maxsize=None)
+@cache
 def octants(n: int) -> np.ndarray:
     """Offsets ``d`` of the ``2^n`` cells of the window, row ``b`` = bit ``b``.
 
@@ -96,7 +96,7 @@ def half_mask(n: int, axis: int, side: int) -> int:
     return int(sum(1 << b for b in range(1 << n) if d[b, axis] == side))
 
 
-@lru_cache(maxsize=None)
+@cache
 def window_faces(n: int) -> tuple[tuple[int, int], ...]:
     """The ``3^n`` faces of the lattice incident to a vertex, as (mask, k).
 

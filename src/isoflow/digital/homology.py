@@ -13,7 +13,6 @@ import itertools
 import math
 
 import numpy as np
-
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError

@@ -13,12 +13,12 @@ classes *is* the paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
-from .connectivity import check_connectivity, is_face_connectivity
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
+from .connectivity import check_connectivity, is_face_connectivity
 
 #: class value of a configuration that is not well-composed
 NOT_WELL_COMPOSED = -1
@@ -53,7 +53,7 @@ def _bits(config: int, nbits: int) -> list[int]:
     return [(config >> b) & 1 for b in range(nbits)]
 
 
-@lru_cache(maxsize=None)
+@cache
 def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
     """The bits of the window cells on one side of ``axis`` (a 2x2 layer in 3D)."""
     return tuple(int(b) for b in np.flatnonzero(octants(ndim)[:, axis] == side))
@@ -64,7 +64,7 @@ def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
 # --------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
     """``2^n`` times every configuration's share of chi: the vector ``a``.
 
@@ -123,7 +123,7 @@ def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
 # --------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def well_composed(ndim: int = 3) -> np.ndarray:
     """Which configurations are well-composed boundary configurations.
 
@@ -174,7 +174,7 @@ def _hub(bits: list[int]) -> bool:
     return False
 
 
-@lru_cache(maxsize=None)
+@cache
 def _tables_3d():
     wc = well_composed(3)
     n_cfg = 256
@@ -315,7 +315,7 @@ def normal_lut() -> np.ndarray:
     return _tables_3d()[3]
 
 
-@lru_cache(maxsize=None)
+@cache
 def f_lut() -> np.ndarray:
     """The vertex index ``f`` of eq. 4.8 of every configuration.
 
@@ -428,7 +428,7 @@ def class_histogram(config_hist: np.ndarray) -> np.ndarray:
 PLANAR_LABELS = ("convex", "flat", "concave")
 
 
-@lru_cache(maxsize=None)
+@cache
 def planar_class_lut() -> np.ndarray:
     """0 convex (1 pixel of 4), 1 flat (2 adjacent), 2 concave (3 of 4),
     :data:`NOT_WELL_COMPOSED` (2 diagonal), :data:`OFF_SURFACE` (0 or 4)."""

@@ -33,10 +33,13 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Sequence
+
 from functools import cache
 from typing import Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from .closed_surfaces import sweep_tables
@@ -85,12 +88,12 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
 
 
 def label_table(
-    image,
+    image: ArrayLike,
     connectivity: int = 6,
     *,
-    pitch=None,
-    origin=None,
-    labels=None,
+    pitch: float | Sequence[float] | None = None,
+    origin: Sequence[float] | None = None,
+    labels: Iterable[int] | None = None,
     surfaces: bool = True,
     method: Literal["auto", "numpy", "compiled"] = "auto",
     threads: int | None = None,

@@ -73,7 +73,7 @@ class DigitalObject:
     offset: tuple[int, ...] = None  # type: ignore[assignment]
     parity: int = 0
     pitch: float | np.ndarray = 1.0
-    origin: np.ndarray = field(default=None)  # type: ignore[assignment]
+    origin: np.ndarray = field(default=None)  # type: ignore[arg-type]
 
     def __post_init__(self):
         vol = binary(self.volume, "DigitalObject volume")
@@ -94,13 +94,13 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
-    def of(cls, x) -> "DigitalObject":
+    def of(cls, x) -> DigitalObject:
         """``x`` itself if it is a DigitalObject, else the object of the
         binary array ``x`` at the origin: the API takes either."""
         return x if isinstance(x, cls) else cls(x)
 
     @classmethod
-    def from_voxels(cls, indices, **kw) -> "DigitalObject":
+    def from_voxels(cls, indices, **kw) -> DigitalObject:
         """Object made of the voxels with the given integer indices (N, n)."""
         idx = _integer_points(indices, "voxel index")
         lo = idx.min(axis=0)
@@ -110,7 +110,7 @@ class DigitalObject:
         return cls(vol, offset=tuple(lo), **kw)
 
     @classmethod
-    def from_points(cls, points, **kw) -> "DigitalObject":
+    def from_points(cls, points, **kw) -> DigitalObject:
         """The paper's point model (Definitions 1-2).
 
         A set of lattice points defines the object made of every unit cube
@@ -159,7 +159,7 @@ class DigitalObject:
         lo, hi = _nonzero_bounds(self.volume)
         return self.world(lo), self.world(hi)
 
-    def cropped(self) -> "DigitalObject":
+    def cropped(self) -> DigitalObject:
         """The same object in the smallest array that holds it."""
         if not self.volume.any():
             return replace(self, volume=np.zeros((0,) * self.ndim, bool))
@@ -171,7 +171,7 @@ class DigitalObject:
             offset=tuple(int(o + a) for o, a in zip(self.offset, lo)),
         )
 
-    def on_dual_lattice(self, vertex_volume: np.ndarray) -> "DigitalObject":
+    def on_dual_lattice(self, vertex_volume: np.ndarray) -> DigitalObject:
         """A volume indexed by this object's lattice vertices, as an object on
         the other lattice (eq. 5.1): its voxel ``w`` is the cube centred at
         vertex ``w``. ``vertex_volume`` has this volume's shape plus one per
@@ -227,7 +227,7 @@ def _check_grid(lo, hi, count: int, what: str, bytes_per_voxel: int) -> None:
 
     from ..scale.memory import check_fits
 
-    extents = [int(h) - int(l) + 1 for l, h in zip(lo, hi)]
+    extents = [int(b) - int(a) + 1 for a, b in zip(lo, hi)]
     check_fits(
         math.prod(extents) * bytes_per_voxel,
         f"a {'x'.join(map(str, extents))} grid for {count} {what} from {tuple(map(int, lo))} to {tuple(map(int, hi))}",

@@ -27,13 +27,21 @@ for the derivations and the findings.
 from __future__ import annotations
 
 import itertools
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from .configurations import check_dimension, configuration_histogram, configurations, full_window, octants, read_only, window_faces
+from .configurations import (
+    check_dimension,
+    configuration_histogram,
+    configurations,
+    full_window,
+    octants,
+    read_only,
+    window_faces,
+)
 from .connectivity import resolve_connectivity
 from .indices import CODE_CHARS, CONCAVE, CONVEX, FLAT, NONE, UNDEFINED, euler_lut, well_composed
 from .symmetry import configuration_orbits
@@ -108,7 +116,7 @@ def surface_energy(volume: ArrayLike, connectivity: int | None = None) -> int:
     return int(hist @ (a * a))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _sub_blocks(n: int) -> tuple[tuple[int, tuple[int, ...]], ...]:
     """Every sub-block of the window of dimension >= 2: (mask, antagonist pairs).
 
@@ -138,7 +146,7 @@ def _sub_blocks(n: int) -> tuple[tuple[int, tuple[int, ...]], ...]:
     return tuple(blocks)
 
 
-@lru_cache(maxsize=None)
+@cache
 def digitally_well_composed(n: int) -> np.ndarray:
     """Mask of boundary configurations without a critical sub-block.
 
@@ -173,7 +181,7 @@ def gf2_rank(columns: list[int]) -> int:
     return rank
 
 
-@lru_cache(maxsize=None)
+@cache
 def _face_signs(n: int) -> tuple[tuple[int, ...], ...]:
     """Sign vectors ``e`` of :func:`window_faces`, in the same order."""
     return tuple(itertools.product((-1, 0, 1), repeat=n))
@@ -230,7 +238,7 @@ def link_betti_numbers(config: int, n: int) -> dict:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def manifold_configurations(n: int) -> np.ndarray:
     """Mask of configurations where the boundary is locally an (n-1)-manifold.
 
@@ -367,7 +375,7 @@ def _merge(a: np.ndarray, b: np.ndarray, rule: str) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def _section_code_table(m: int, rule: str) -> np.ndarray:
     """Scalar code of every m-window seen as the section of an (m+1)-window.
 
@@ -385,7 +393,7 @@ def _section_code_table(m: int, rule: str) -> np.ndarray:
     return read_only(out)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _code_table(n: int, rule: str) -> np.ndarray:
     """Per-axis codes of every configuration of the n-window, (2^(2^n), n) int8."""
     c = np.arange(1 << (1 << n), dtype=np.int64)

@@ -1,240 +1,109 @@
 """The shape report of volumes larger than memory: dask arrays and zarr stores.
 
 :func:`analyze_chunked` returns exactly the dict of
-``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces=False)``
-while holding only a few blocks at a time. Everything in the report comes
-from three numbers per block, so the volume is read once, block by block:
+``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``
+while holding only a few blocks at a time. The volume is read once, block
+by block; each block is summed up on its own, in 3D by the vertex sweep of
+the in-memory report (:mod:`isoflow.digital.blocks`), and hands on only
+what crosses its faces and a few numbers per component on them:
 
 * **The configuration histogram.** Vertex ``w`` sees the voxels ``w-1`` and
-  ``w`` along every axis. The block ``[a, b)`` owns the vertices ``a+1 ..
-  b`` (and ``0`` if it is the first block): those below ``b`` need only its
-  own voxels and are counted when the block is read; those at ``b`` need
-  the first voxel layer of the next block, which the merge step below has
-  anyway (unless the block is the last one, where the voxel ``b`` is outside
-  and background). Each vertex is counted exactly once, no block is read
-  twice or with a halo, and the 256 (16 in 2D) bins of all blocks add up to
-  the whole volume's histogram, from which chi, ``n``, ``a^T n`` and the
-  energy follow (:func:`isoflow.digital.analysis.report_from_histogram`).
-* **Components of the object (b0).** Each block is labelled on its own; a
-  label is a node ``(block, local label)``. Two nodes are the same component
-  when voxels of theirs touch across a block face, so every block also keeps
-  the labels on its internal faces (a few MB, not the label volume). For the
-  plane between a block and its upper neighbour along an axis, the two facing
-  label layers are laid side by side in a two-voxel-thick tile that reaches
-  one voxel into the next blocks along the other axes (so that diagonal
-  contacts across block edges and corners are seen with 26/8-connectivity);
-  labelling that tile with the same connectivity joins exactly the nodes
-  that touch. The union-find over those edges (a sparse graph, scipy's
-  ``connected_components``) gives ``b0 = nodes - merges``.
-* **Enclosed background components** (cavities in 3D, holes in 2D). The same
-  on the complement with the complementary connectivity; a node is on the
-  outside when one of its voxels lies on the array's border faces (the
-  region outside the array is background and joins them all), and the
-  enclosed components are those with no such node.
+  ``w``. The block ``[a, b)`` counts the vertices ``a+1 .. b-1`` (and ``0``,
+  ``b`` where it is the first, the last block); the seam between it and the
+  next block counts the vertices ``b`` (:mod:`isoflow.digital.seams`). Each
+  vertex is counted exactly once, no block is read twice or with a halo,
+  and the 256 (16 in 2D) bins add up to the whole volume's histogram, from
+  which chi, ``n``, ``a^T n`` and the energy follow
+  (:func:`isoflow.digital.analysis.report_from_histogram`).
+* **Components** (b0 and the enclosed background components). A block's
+  components on its faces are nodes (``block << 32 | number``); the seams
+  give the pairs of nodes that touch across a face, and the union-find
+  over those edges (that of the sweep's pinches) gives ``b0 = nodes -
+  merges``. The background on the volume's border is
+  the outside, one node; the enclosed components are the others.
+* **The closed surfaces.** The components of the boundary mesh's solid and
+  of its complement form a tree whose edges are the surfaces
+  (:func:`isoflow.digital.closed_surfaces.component_parents`). A block
+  counts the surfaces of its components that touch no face and hands on
+  the sums of those on its faces; the seams add what lies across the faces,
+  and the tree over the joined components gives the others.
+* **Doubled edges.** An edge is counted where both its ends are; a doubled
+  spoke whose other end another block or seam counts is a loose end, and
+  the edges whose two loose ends meet are doubled too.
 
 Why not ``dask_image.ndmeasure.label``: it offsets every block's labels by
 the counts of all earlier blocks and relabels the blocks after the global
 merge, so every label block stays in memory until the merge is done: the
 whole int32 label volume (32 GiB at 2048^3) for the border slices and the
-component count. Counting needs only the face labels, which is what this
-module keeps; the tests check the two against each other.
+component count. Counting needs only the faces, which is what this module
+keeps; the tests check the two against each other.
 
 Zarr input is read block by block inside each block's task, a block being
-a chunk (or shard); a dask array is processed along its chunks. Each block
-task returns its faces (labels and voxels) and 256 counts, and the blocks go
-layer by layer along the first axis, so peak memory is a few blocks per
-worker plus the faces of two layers of blocks (plus the cross-block edges,
-a few per component crossing a face), never the volume or a label volume.
+a chunk (or shard); a dask array is processed along its chunks. The blocks
+go layer by layer along the first axis, so peak memory is a few blocks per
+worker plus the faces of two layers of blocks (and a few numbers per piece
+of a component on a face), never the volume or a label volume.
 """
 
 from __future__ import annotations
 
 import itertools
+import os
+import sys
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary
-from ..scale.compiled import thread_count, using
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
-from ..scale.labels import label
+from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
+from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
+from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
+from .connectivity import resolve_connectivity
 from .report import Report
-from .closed_surfaces import MESH_ADJACENCY, box_sheets, surfaces_from_counts
-from .configurations import configuration_histogram, configurations
-from .surface import pinch_lut
-from .connectivity import complement, resolve_connectivity
+from .seams import merge_block
+from .surface import boundary_faces, pinch_lut
 from .topology import euler_from_histogram
 
-#: local labels live in the low 32 bits of a node key, the block in the high bits
-_SHIFT = 32
-#: below this many voxels a block's histogram is one configuration array
-_DIRECT_HISTOGRAM = 1 << 18
-#: the node of the region outside the array (background), when surfaces are
-#: counted: no block has this number
-OUTSIDE = np.int64(1) << 62
+
+class _Grid(NamedTuple):
+    """An array in blocks: the array (zarr or dask), whether it is zarr,
+    per axis each block's [start, stop), and the number of blocks along
+    each axis."""
+
+    array: Any
+    is_zarr: bool
+    bounds: list
+    numblocks: tuple
+
+    def box(self, index) -> tuple:
+        return tuple(self.bounds[axis][i] for axis, i in enumerate(index))
 
 
-def adjacencies(ndim: int, conn: int, surfaces: bool) -> dict:
-    """The adjacencies the blocks are labelled with: the connectivity and its
-    complement, or, when the surfaces are counted (3D), those of the
-    boundary mesh's solid (:data:`~isoflow.digital.closed_surfaces.MESH_ADJACENCY`);
-    the pinches then join the labels into the connectivity's components."""
-    if surfaces and ndim == 3:
-        fg, bg = MESH_ADJACENCY[conn]
-        return {"fg": fg, "bg": bg}
-    return {"fg": conn, "bg": complement(ndim, conn)}
+class _Job:
+    """What a block's tasks are told: the block (``index`` in the grid
+    ``numblocks``, its [start, stop) per axis ``box``), the volume's
+    ``shape``, the connectivity, the name of the input, whether the surfaces
+    are counted. One argument of a class of its own, which dask passes on
+    as it is: it walks through every tuple, named tuple and dataclass among
+    a task's arguments, twenty per block."""
+
+    __slots__ = ("index", "box", "numblocks", "shape", "conn", "where", "surfaces")
+
+    def __init__(self, index, box, numblocks, shape, conn: int, where: str, surfaces: bool):
+        self.index, self.box, self.numblocks, self.shape = index, box, numblocks, shape
+        self.conn, self.where, self.surfaces = conn, where, surfaces
 
 
 # --------------------------------------------------------------------------
-# per-block work (module-level functions so that process workers can run them)
+# the tasks (module-level functions so that process workers can run them)
 # --------------------------------------------------------------------------
 
 
-def _label(mask: np.ndarray, connectivity: int) -> tuple[np.ndarray, int]:
-    """Connected-component labels of a 2D/3D boolean block, in the smallest
-    type that holds them (a block keeps the labels of its faces until the
-    merge)."""
-    return label(mask, connectivity, smallest=True)
-
-
-def _vertex_histogram(vox: np.ndarray, keep_low, keep_high) -> np.ndarray:
-    """Configuration counts of a box of vertices around ``vox``.
-
-    ``configurations(vox)`` covers the vertices ``0 .. E`` along each axis
-    (``E = vox.shape[axis]``, zeros outside ``vox``); this counts those with
-    index ``0`` only where ``keep_low[axis]`` and index ``E`` only where
-    ``keep_high[axis]``. The whole box is counted by
-    :func:`configuration_histogram` (the project's fastest path: a compiled
-    streaming kernel on large blocks) and the dropped vertex layers, a thin
-    shell, are subtracted; layer ``k`` along an axis needs only the voxel
-    layers ``k-1`` and ``k``, and a layer leaves out the vertices already
-    dropped along the axes before it, so that none is subtracted twice.
-    """
-    ndim = vox.ndim
-    size = 1 << (1 << ndim)
-    if vox.size < _DIRECT_HISTOGRAM:
-        # small (tiles, small blocks): one configuration array is cheapest
-        keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
-        return np.bincount(configurations(vox)[keep].ravel(), minlength=size).astype(np.int64)
-    hist = configuration_histogram(vox).astype(np.int64)
-    kept = []  # per axis, the kept index range of the axes already done
-    for axis in range(ndim):
-        end = vox.shape[axis]
-        for k, keep in ((0, keep_low[axis]), (end, keep_high[axis])):
-            if keep:
-                continue
-            voxels = slice(0, 1) if k == 0 else slice(end - 1, end)
-            slab = vox[tuple(voxels if m == axis else slice(None) for m in range(ndim))]
-            pick = [slice(None)] * ndim
-            pick[axis] = 0 if k == 0 else -1
-            for m, rng in enumerate(kept):
-                pick[m] = rng
-            hist -= np.bincount(configurations(slab)[tuple(pick)].ravel(), minlength=size)
-        kept.append(slice(0 if keep_low[axis] else 1, None if keep_high[axis] else -1))
-    return hist
-
-
-def _face(labels: np.ndarray, axis: int, end: int) -> np.ndarray:
-    return np.ascontiguousarray(np.take(labels, end, axis=axis))
-
-
-def _summarize(block, index, numblocks, origin, conn, where, surfaces=False) -> dict:
-    """Everything the report needs from one block, and nothing voxel-sized.
-
-    Vertex ``w`` needs the voxels ``w-1`` and ``w``; the block ``[a, b)``
-    owns the vertices ``a+1 .. b`` along each axis (and ``0`` when it is the
-    first block). Those below ``b`` need only the block's voxels and are
-    counted here; those at ``b`` (unless the block is the last one along
-    that axis, where the voxel ``b`` is outside and background) need the
-    next block's first voxel layer and are counted in :func:`_merge`.
-
-    Returns that histogram and the voxel count, the number of object and
-    background labels, the labels and voxels on the block's internal faces
-    (for the merge with its neighbours) and the background labels on the
-    array's border faces. With ``surfaces`` (3D), also the sheets of the
-    block's own vertices per pair of node keys and the pinches
-    (:func:`isoflow.digital.closed_surfaces.box_sheets`).
-    """
-    with using(1):  # the blocks run in parallel; one thread each
-        return _summarize_block(block, index, numblocks, origin, conn, where, surfaces)
-
-
-def _summarize_block(block, index, numblocks, origin, conn, where, surfaces) -> dict:
-    ndim = len(index)
-    surfaces = surfaces and ndim == 3
-    core = binary(block, where, near=origin)
-    first = tuple(i == 0 for i in index)
-    last = tuple(i == n - 1 for i, n in zip(index, numblocks))
-    hist = _vertex_histogram(core, first, last)
-    voxels = int(np.count_nonzero(core))
-    adj = adjacencies(ndim, conn, surfaces)
-    faces: dict = {}
-    counts = {}
-    kept = {}
-    border = np.zeros(0, dtype=np.int64)
-    for kind, mask in (("vox", core), ("fg", core), ("bg", ~core)):
-        if kind == "vox":
-            labels = mask
-        else:
-            labels, counts[kind] = _label(mask, adj[kind])
-        mine, outside = {}, []
-        for axis in range(ndim):
-            for side, end in ((0, 0), (1, -1)):
-                if not (last[axis] if side else first[axis]):
-                    mine[kind, axis, side] = _face(labels, axis, end)
-                elif kind == "bg":
-                    outside.append(_face(labels, axis, end))
-        if kind == "vox":
-            faces.update(mine)
-            continue
-        # Only labels seen on a face can take part in a merge or touch the
-        # border: number those 1 .. m (the count n stays the block's), so that
-        # the faces held for the merge are as small as they can be.
-        seen = np.unique(np.concatenate([f.ravel() for f in (*mine.values(), *outside)] or [np.zeros(0, int)]))
-        seen = seen[seen > 0]
-        dtype = np.uint16 if len(seen) < (1 << 16) else np.uint32
-        for key, f in mine.items():
-            faces[key] = np.where(f > 0, np.searchsorted(seen, f) + 1, 0).astype(dtype)
-        if kind == "bg" and outside:
-            on_border = np.unique(np.concatenate([f.ravel() for f in outside]))
-            border = np.searchsorted(seen, on_border[on_border > 0]).astype(np.int64) + 1
-        if surfaces:
-            kept[kind] = (labels, seen)
-        del labels, mask
-    out = {"hist": hist, "voxels": voxels, "counts": counts, "faces": faces, "border": border}
-    if surfaces:
-        block_id = int(np.ravel_multi_index(index, numblocks))
-        (fg, fg_seen), (bg, bg_seen) = kept["fg"], kept["bg"]
-        marker = np.iinfo(bg.dtype).max  # no label: the outside, in the block's numbering
-        keep = tuple(slice(0 if f else 1, None if lst else -1) for f, lst in zip(first, last))
-        found = box_sheets(core, fg, bg, keep, conn, marker, compiled=True)
-        del kept, fg, bg
-        out["sheets"] = [(_node_keys(found["obj"], fg_seen, block_id),
-                          _node_keys(found["bg"], bg_seen, block_id, marker),
-                          found["vertices"], found["quarters"])]
-        pinch_seen, pinch_marker = (fg_seen, None) if conn == 26 else (bg_seen, marker)
-        out["pinches"] = [_node_keys(found["pairs"].ravel(), pinch_seen, block_id, pinch_marker).reshape(2, -1, order="F")]
-    return out
-
-
-def _node_keys(local: np.ndarray, seen: np.ndarray, block: int, outside=None) -> np.ndarray:
-    """Global node keys of a block's own labels: a label seen on a face is
-    ``block << 32 | its number among those + 1``, as in the face arrays (and
-    so in the merge's edges); any other label is private to the block and
-    gets ``-(block << 32 | label) - 1``; ``outside`` becomes :data:`OUTSIDE`."""
-    local = np.asarray(local, dtype=np.int64)
-    pos = np.searchsorted(seen, local)
-    hit = pos < len(seen)
-    hit[hit] = seen[pos[hit]] == local[hit]
-    base = np.int64(block) << _SHIFT
-    keys = np.where(hit, (pos + 1) | base, -(local | base) - 1)
-    if outside is not None:
-        keys[local == outside] = OUTSIDE
-    return keys
-
-
-def _read_zarr_block(z, index, box, numblocks, conn, where, surfaces=False) -> dict:
+def _read_zarr_block(z, job: _Job) -> dict:
     """Read one block of a zarr array and summarise it.
 
     Reading inside the task (rather than through dask-array chunks) means a
@@ -242,287 +111,148 @@ def _read_zarr_block(z, index, box, numblocks, conn, where, surfaces=False) -> d
     the scheduler picks; blocks follow the chunk grid, so each chunk is
     decoded once.
     """
-    region = tuple(slice(a, b) for a, b in box)
-    origin = tuple(a for a, _ in box)
+    region = tuple(slice(a, b) for a, b in job.box)
     try:
         data = np.asarray(z[region])
     except Exception as exc:  # a damaged or missing chunk
-        raise IsoflowError(f"{where}: cannot read the block at voxel {origin} ({exc})") from None
-    return _summarize(data, index, numblocks, origin, conn, where, surfaces)
+        raise IsoflowError(f"{job.where}: cannot read the block at voxel {tuple(a for a, _ in job.box)} ({exc})") from None
+    return _dask_block(data, job)
 
 
-def _dask_block(chunk, index, origin, numblocks, conn, where, surfaces=False) -> dict:
-    """Summarise one chunk of a dask array (no halo needed, see _summarize)."""
-    return _summarize(chunk, index, numblocks, origin, conn, where, surfaces)
+def _dask_block(chunk, job: _Job) -> dict:
+    """Summarise one chunk of a dask array (no halo needed, see blocks)."""
+    return summarize_block(chunk, job.index, job.numblocks, tuple(a for a, _ in job.box), job.shape, job.conn,
+                           job.where, job.surfaces)
 
 
-def _keys(labels: np.ndarray, block: int) -> np.ndarray:
-    """Global node keys of local labels (0 stays 0: no node)."""
-    lab = labels.astype(np.int64)
-    return np.where(lab > 0, lab | (np.int64(block) << _SHIFT), 0)
+def _merge(job: _Job, *summaries) -> dict:
+    """:func:`isoflow.digital.seams.merge_block` of a block and its upper
+    neighbours' summaries."""
+    return merge_block(job.index, job.numblocks, job.box, job.shape, job.conn, job.surfaces, *summaries)
 
 
-def _tile_edges(tile: np.ndarray, connectivity: int) -> np.ndarray:
-    """Pairs of node keys that touch inside a face tile, shape (2, E).
-
-    Labelling the tile joins voxels that touch with the connectivity; all
-    keys inside one tile component are the same component of the volume, so
-    chaining them (sorted by tile component) gives enough edges.
-    """
-    mask = tile > 0
-    if not mask.any():
-        return np.zeros((2, 0), dtype=np.int64)
-    comp, _ = _label(mask, connectivity)
-    c = comp[mask].astype(np.int64)
-    k = tile[mask]
-    order = np.lexsort((k, c))
-    c, k = c[order], k[order]
-    new = np.ones(len(c), dtype=bool)
-    new[1:] = (c[1:] != c[:-1]) | (k[1:] != k[:-1])
-    c, k = c[new], k[new]
-    same = c[1:] == c[:-1]
-    return np.stack((k[:-1][same], k[1:][same]))
+# --------------------------------------------------------------------------
+# the final step
+# --------------------------------------------------------------------------
 
 
-def _tile(by_offset, block_id, kind: str, axis: int, ndim: int) -> np.ndarray:
-    """The two-voxel-thick tile across the upper face of a block along ``axis``.
-
-    Layer 0 is the upper face of the block (and of its upper neighbours
-    along the other axes, one voxel of them), layer 1 the lower face of the
-    blocks above. Along every other axis the tile is the block's extent plus
-    one voxel where an upper neighbour exists. Labels become node keys;
-    voxels stay bool.
-    """
-    others = [m for m in range(ndim) if m != axis]
-    own = by_offset[(0,) * ndim]["faces"][kind, axis, 1]
-    length = list(own.shape)
-    shape = [2] * ndim
-    for j, m in enumerate(others):
-        shape[m] = length[j] + int(tuple(int(q == m) for q in range(ndim)) in by_offset)
-    tile = np.zeros(shape, dtype=bool if kind == "vox" else np.int64)
-    for s in (0, 1):  # lower blocks' upper faces, upper blocks' lower faces
-        for d_other in itertools.product((0, 1), repeat=ndim - 1):
-            d = [0] * ndim
-            d[axis] = s
-            for j, m in enumerate(others):
-                d[m] = d_other[j]
-            d = tuple(d)
-            if d not in by_offset:
-                continue
-            face = by_offset[d]["faces"][kind, axis, 1 - s]
-            face = face[tuple(slice(0, 1) if dj else slice(None) for dj in d_other)]
-            dst = [s] * ndim
-            for j, m in enumerate(others):
-                dst[m] = slice(length[j], length[j] + 1) if d_other[j] else slice(0, length[j])
-            tile[tuple(dst)] = face if kind == "vox" else _keys(face, block_id[d])
-    return tile
-
-
-def _merge(index, numblocks, conn, surfaces, *summaries) -> dict:
-    """What crosses the upper faces of one block, plus its small numbers.
-
-    ``summaries`` are those of the block and of its existing upper
-    neighbours ``index + d``, ``d`` in ``{0,1}^n`` (C order of ``d``). For
-    each axis with an upper neighbour, the tile across that face (see
-    :func:`_tile`) gives the edges between object labels, between background
-    labels, and the configurations of the block's vertices on that face
-    (those :func:`_summarize` left out), with their sheets when ``surfaces``
-    (the tile's labels are node keys already). The block's own numbers are
-    passed on so that the final step never needs the (larger) summaries,
-    which the scheduler can then drop.
-    """
-    ndim = len(index)
-    surfaces = surfaces and ndim == 3
-    offsets = [
-        d for d in itertools.product((0, 1), repeat=ndim)
-        if all(i + di < n for i, di, n in zip(index, d, numblocks))
-    ]
-    by_offset = dict(zip(offsets, summaries))
-    block_id = {d: int(np.ravel_multi_index(tuple(i + di for i, di in zip(index, d)), numblocks)) for d in offsets}
-    own = by_offset[(0,) * ndim]
-    first = [i == 0 for i in index]
-    last = [i == n - 1 for i, n in zip(index, numblocks)]
-    hist = own["hist"].copy()
-    adj = adjacencies(ndim, conn, surfaces)
-    out = {
-        "voxels": own["voxels"],
-        "counts": own["counts"],
-        "border": own["border"] | (np.int64(block_id[(0,) * ndim]) << _SHIFT),
-        "fg": [],
-        "bg": [],
-        "sheets": list(own.get("sheets", [])),
-        "pinches": list(own.get("pinches", [])),
-    }
-    for axis in range(ndim):
-        if last[axis]:
-            continue  # no upper neighbour: an array border
-        tiles = {kind: _tile(by_offset, block_id, kind, axis, ndim) for kind in ("fg", "bg", "vox")}
-        for kind in ("fg", "bg"):
-            out[kind].append(_tile_edges(tiles[kind], adj[kind]))
-        # Vertices at the upper face along this axis (index 1 of the tile's
-        # vertex layers). Along an earlier axis the face vertices were
-        # counted by that axis's tile: drop the tile's extra voxel there, so
-        # that index E is left out; along a later axis keep it, it is the
-        # voxel the vertex at the block's end needs.
-        cut = tuple(slice(0, None if m >= axis or last[m] else -1) for m in range(ndim))
-        vox = tiles["vox"][cut]
-        keep_low = [False if m == axis else first[m] for m in range(ndim)]
-        keep_high = [False if m == axis else last[m] for m in range(ndim)]
-        hist += _vertex_histogram(vox, keep_low, keep_high)
-        if surfaces:
-            keep = tuple(slice(0 if lo else 1, None if hi else -1) for lo, hi in zip(keep_low, keep_high))
-            found = box_sheets(vox, tiles["fg"][cut], tiles["bg"][cut], keep, conn, OUTSIDE, compiled=True)
-            out["sheets"].append((found["obj"], found["bg"], found["vertices"], found["quarters"]))
-            out["pinches"].append(found["pairs"].T)
-    out["hist"] = hist
-    return out
-
-
-def _component_ids(edges: list[np.ndarray], keys: np.ndarray) -> np.ndarray:
-    """The component of every node key in ``keys`` under the cross-block
-    ``edges`` (2, E); a key in no edge is a component by itself."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
+def _components(nodes: int, edges: list[np.ndarray]) -> int:
+    """Components of a graph with ``nodes`` nodes given by its cross-block
+    edges (2, E). Only nodes that appear in an edge need the union-find;
+    every other node is a component by itself."""
     pairs = np.concatenate(edges, axis=1) if edges else np.zeros((2, 0), np.int64)
+    keys, comp = _labels(pairs, np.zeros(0, np.int64))
+    return int(nodes - len(keys) + (comp.max(initial=-1) + 1))
+
+
+def _labels(pairs: np.ndarray, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct node keys of ``pairs`` (2, E) and ``keys``, sorted, and
+    the component of each (0 ..) under the edges ``pairs``: the union-find
+    of the sweep's pinches (numba's, loaded for the blocks already)."""
+    from ..scale.kernels import join_pairs
+
     nodes, inverse = np.unique(np.concatenate([pairs.ravel(), keys]), return_inverse=True)
     e = pairs.shape[1]
-    graph = coo_matrix((np.ones(e, dtype=np.int8), (inverse[:e], inverse[e:2 * e])), shape=(len(nodes),) * 2)
-    return connected_components(graph, directed=False)[1][inverse[2 * e:]]
+    roots = np.arange(len(nodes), dtype=np.int64 if len(nodes) >= 1 << 31 else np.int32)
+    join_pairs(roots, np.stack([inverse[:e], inverse[e:2 * e]], axis=1))
+    return nodes, np.unique(roots, return_inverse=True)[1]
 
 
-def _closed_surfaces(merged, conn: int) -> list[dict]:
-    """The surfaces: every sheet's pair of node keys becomes the pair of
-    their components (under the mesh's adjacencies: the edges found in the
-    tiles, and the border background joined with the outside), summed."""
-    sheets = [t for m in merged for t in m["sheets"]]
-    if not sheets:
-        return []
-    obj, bg, vertices, quarters = (np.concatenate(col) for col in zip(*sheets))
-    border = np.concatenate([m["border"] for m in merged])
-    outside = np.stack([border, np.full(len(border), OUTSIDE)])
-    obj = _component_ids([e for m in merged for e in m["fg"]], obj)
-    bg = _component_ids([e for m in merged for e in m["bg"]] + [outside], bg)
-    pair, inverse = np.unique(obj.astype(np.int64) * (int(bg.max(initial=0)) + 1) + bg, return_inverse=True)
-    return surfaces_from_counts(np.bincount(inverse, weights=vertices, minlength=len(pair)).astype(np.int64),
-                                np.bincount(inverse, weights=quarters, minlength=len(pair)).astype(np.int64))
-
-
-def _components(nodes: int, edges: list[np.ndarray], border: np.ndarray | None = None) -> int:
-    """Components of a graph with ``nodes`` nodes given by its cross-block edges.
-
-    Only nodes that appear in an edge need the union-find; every other node
-    is a component by itself. With ``border``, return the number of
-    components containing no border node (the enclosed ones).
-    """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    pairs = np.concatenate(edges, axis=1) if edges else np.zeros((2, 0), np.int64)
-    keys, inverse = np.unique(pairs.ravel(), return_inverse=True)
-    m = len(keys)
-    if m:
-        e = pairs.shape[1]
-        graph = coo_matrix((np.ones(e, dtype=np.int8), (inverse[:e], inverse[e:])), shape=(m, m))
-        k, comp = connected_components(graph, directed=False)
-    else:
-        k, comp = 0, np.zeros(0, dtype=np.int64)
-    total = nodes - m + k
-    if border is None:
-        return int(total)
-    border = np.unique(border[border > 0])
-    pos = np.searchsorted(keys, border)
-    merged = pos < m
-    merged[merged] = keys[pos[merged]] == border[merged]
-    touching = len(np.unique(comp[pos[merged]])) + int(np.count_nonzero(~merged))
-    return int(total - touching)
-
-
-def _finish(ndim, conn, shape, surfaces, *merged) -> dict:
-    """Add up the blocks and build the report."""
-    surfaces = surfaces and ndim == 3
-    hist = np.sum([m["hist"] for m in merged], axis=0)
-    voxels = sum(m["voxels"] for m in merged)
-    fg_edges = [e for m in merged for e in m["fg"]]
-    bg_edges = [e for m in merged for e in m["bg"]]
-    if surfaces:
-        found = _closed_surfaces(merged, conn)
-        # the pinches join what the mesh's adjacencies split: object pieces
-        # under 26, background pieces under 6
-        pinches = [p for m in merged for p in m["pinches"]]
-        (fg_edges if conn == 26 else bg_edges).extend(pinches)
-    b0 = _components(sum(m["counts"]["fg"] for m in merged), fg_edges)
-    enclosed = _components(
-        sum(m["counts"]["bg"] for m in merged),
-        bg_edges,
-        np.concatenate([m["border"] for m in merged]),
-    )
-    chi = euler_from_histogram(hist, ndim, conn)
+def _betti(ndim: int, conn: int, chi: int, merged) -> list[int]:
+    """b0 and the enclosed background components from the blocks' nodes and
+    the edges between them: the seams' joins, and the pinches, which join
+    what the mesh's adjacencies split (object pieces under 26, background
+    pieces under 6); the outside is one more background node."""
+    joins = {kind: [e for m in merged for e in m["joins"][kind]] for kind in ("fg", "bg")}
+    joins["fg" if conn == 26 else "bg"] += [p for m in merged for p in m["pinches"]]
+    b0 = _components(sum(m["nodes"]["fg"] for m in merged), joins["fg"])
+    enclosed = _components(sum(m["nodes"]["bg"] for m in merged) + 1, joins["bg"]) - 1
     if ndim == 2:
         # as in topology.betti_numbers: b1 counts the holes, chi = b0 - b1
         assert b0 - enclosed == chi, "2D: chi must equal components minus holes"
-        betti = [b0, enclosed]
-    else:
-        betti = [b0, b0 + enclosed - chi, enclosed]
+        return [b0, enclosed]
+    return [b0, b0 + enclosed - chi, enclosed]
+
+
+def _pieces(merged) -> dict:
+    """The pieces of every block, with the pending parents filled in."""
+    pieces = {name: np.concatenate([p[name] for m in merged for p in m["pieces"]])
+              for name in ("key", "obj", "sums", "order", "parent")}
+    resolved = np.concatenate([p for m in merged for p in m["parents"]] or [np.zeros((2, 0), np.int64)], axis=1)
+    order = np.argsort(pieces["key"])
+    at = order[np.searchsorted(pieces["key"], resolved[0], sorter=order)]
+    pieces["parent"][at] = resolved[1]
+    return pieces
+
+
+def _joined_surfaces(merged) -> tuple[np.ndarray, np.ndarray]:
+    """Mesh vertices and faces of the surfaces between components that
+    touch a block face: the tree of the joined components (each one's
+    parent is that of its first piece), its sums the pieces' and the seams'
+    gains, and the surfaces the signed sums over the subtrees (as in
+    :func:`isoflow.digital.closed_surfaces.surface_tree`)."""
+    pieces = _pieces(merged)
+    joins = [e for m in merged for kind in ("fg", "bg") for e in m["joins"][kind]]
+    nodes, comp = _labels(np.concatenate(joins or [np.zeros((2, 0), np.int64)], axis=1),
+                          np.append(pieces["key"], OUTSIDE))
+    count, root = int(comp.max()) + 1, comp[np.searchsorted(nodes, OUTSIDE)]
+    mine = comp[np.searchsorted(nodes, pieces["key"])]
+    total = np.zeros((count, 2), np.int64)
+    np.add.at(total, mine, pieces["sums"])
+    gains = np.concatenate([g for m in merged for g in m["gains"]] or [np.zeros((3, 0), np.int64)], axis=1)
+    np.add.at(total, comp[np.searchsorted(nodes, gains[0])], gains[1:].T)
+    first = np.lexsort((pieces["order"], mine))
+    first = first[np.diff(mine[first], prepend=-1) != 0]
+    parent = pieces["parent"][first]
+    assert (parent != PENDING).all() and (parent >= 0).all(), "every component's first piece knows its parent"
+    up = np.arange(count)
+    up[mine[first]] = comp[np.searchsorted(nodes, parent)]
+    up[root], total[root] = root, 0
+    total = subtree_sums(up, root, total)
+    obj = np.zeros(count, bool)
+    obj[mine] = pieces["obj"]
+    total[~obj] *= -1
+    return surface_counts(total[np.arange(count) != root])
+
+
+def _surfaces(conn: int, chi: int, hist: np.ndarray, merged) -> dict:
+    """The report's surfaces, pinched vertices and doubled edges."""
+    joined = _joined_surfaces(merged)
+    inner = np.concatenate([s for m in merged for s in m["surfaces"]] or [np.zeros((0, 2), np.int64)])
+    vertices, faces = np.concatenate([joined[0], inner[:, 0]]), np.concatenate([joined[1], inner[:, 1]])
+    assert faces.sum() == boundary_faces(hist), "the surfaces' faces do not add up"
+    found = surfaces_from_counts(vertices, 4 * faces)
+    pinched = int(hist[pinch_lut(conn)].sum())
+    assert sum(s["euler_characteristic"] for s in found) == 2 * chi + 2 * pinched
+    # a doubled edge whose ends two tasks count: its key twice among the loose ends
+    _, seen = np.unique(np.concatenate([e for m in merged for e in m["loose"]]), return_counts=True)
+    assert (seen <= 2).all(), "an edge has two ends"
+    doubled = sum(m["doubled"] for m in merged) + int(np.count_nonzero(seen == 2))
+    return {"surfaces": found, "pinched_vertices": pinched, "doubled_edges": doubled}
+
+
+def _finish(ndim: int, conn: int, shape, surfaces: bool, merged) -> dict:
+    """Add up the blocks and build the report."""
+    hist = np.sum([m["hist"] for m in merged], axis=0)
+    chi = euler_from_histogram(hist, ndim, conn)
+    betti = _betti(ndim, conn, chi, merged)
+    voxels = sum(m["voxels"] for m in merged)
     report = report_from_histogram(hist, ndim, conn, voxels=voxels, shape=shape, betti=betti, parity=0)
-    if surfaces:
-        pinched = int(hist[pinch_lut(conn)].sum())
-        assert sum(s["euler_characteristic"] for s in found) == 2 * chi + 2 * pinched
-        # doubled edges need the configurations at both ends of an edge,
-        # which for an edge across a block face no single task has
-        report.update(surfaces=found, pinched_vertices=pinched, doubled_edges=None)
+    if surfaces and ndim == 3:
+        report.update(_surfaces(conn, chi, hist, merged))
     return report
 
 
 # --------------------------------------------------------------------------
-# public API
+# the graph
 # --------------------------------------------------------------------------
 
 
-def analyze_chunked(
-    array,
-    connectivity: int | None = None,
-    *,
-    block_shape=None,
-    scheduler=None,
-    where: str | None = None,
-    progress=None,
-    surfaces: bool = True,
-    threads: int | None = None,
-) -> Report:
-    """The report of :func:`isoflow.digital.analysis.analyze`, computed block
-    by block.
-
-    ``array`` is a 2D or 3D ``dask.array.Array`` or zarr array of bools or
-    0/1 numbers; the result equals
-    ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``
-    key for key, except that ``doubled_edges`` is None (an edge across a
-    block face has its two ends in different tasks). With ``surfaces`` (3D)
-    the blocks are labelled under the boundary mesh's adjacencies and every
-    vertex's sheets are counted per pair of labels where the vertex is
-    counted in the histogram (:func:`isoflow.digital.closed_surfaces.box_sheets`);
-    the pairs become the surfaces once the labels are joined across blocks. A dask array is processed along its own chunks; a zarr array
-    along its chunks (or shards; tiny chunks are grouped), or along
-    ``block_shape`` when given (a dask array is rechunked to it). Memory is a
-    few blocks per worker plus the faces of two layers of blocks; the voxels
-    are read once. An array with no voxels raises IsoflowError (``analyze``
-    has no report for it either).
-
-    ``scheduler`` is passed to ``dask.compute`` (default: dask's configured
-    one, threads). The labelling holds the GIL, so threads overlap mostly
-    the reading and the histogram; ``"processes"`` runs blocks truly in
-    parallel at the cost of starting workers and pickling the face labels
-    (worth it only for large volumes on idle cores, and only from code
-    under ``if __name__ == "__main__":``), on ``threads`` workers (default:
-    :func:`isoflow.scale.compiled.thread_count`); each block's own passes
-    then run on one thread. A ``dask.distributed`` client's ``get`` works as
-    a scheduler too. ``where`` names the input in error messages.
-    ``progress(done, total)`` is called after each layer of blocks along the
-    first axis (``total`` layers), the unit of work between two computes.
-    """
-    dask, da = import_dask()
+def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
+    """The shape of a dask or zarr array fit for the report, and the name
+    of the input in messages; one-line errors for anything else."""
     is_zarr = is_zarr_array(array)
-    if not is_zarr and not isinstance(array, da.Array):
+    if not is_zarr and not isinstance(array, import_dask()[1].Array):
         raise IsoflowError(
             f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; "
             "use isoflow.analyze for in-memory arrays"
@@ -532,17 +262,18 @@ def analyze_chunked(
     if any(np.isnan(s) for s in array.shape):
         raise IsoflowError(f"{where}: array shape {array.shape} is not known (call compute_chunk_sizes first)")
     shape = tuple(int(s) for s in array.shape)
-    ndim = len(shape)
-    if ndim not in (2, 3):
-        raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {ndim}D with shape {shape}")
+    if len(shape) not in (2, 3):
+        raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {len(shape)}D with shape {shape}")
     dtype = np.dtype(array.dtype)
     if dtype.kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
-    conn = resolve_connectivity(ndim, connectivity)
-    if 0 in shape:
-        raise IsoflowError(f"{where}: the array has no voxels (shape {shape})")
+    return shape, where
 
-    if is_zarr:
+
+def _grid(array, block_shape, where: str) -> _Grid:
+    """The blocks: a zarr array's chunks (or shards, small ones grouped), a
+    dask array's chunks, or ``block_shape``."""
+    if is_zarr_array(array):
         chunks = zarr_blocks(array, block_shape)
     else:
         if block_shape is not None:
@@ -550,69 +281,217 @@ def analyze_chunked(
         if any(np.isnan(c) for sizes in array.chunks for c in sizes):
             raise IsoflowError(f"{where}: chunk sizes are not known (call compute_chunk_sizes first)")
         chunks = array.chunks
-    bounds = block_bounds(chunks)
-    numblocks = tuple(len(c) for c in chunks)
-    if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << _SHIFT:
+    if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << SHIFT:
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
+    return _Grid(array, is_zarr_array(array), block_bounds(chunks), tuple(len(c) for c in chunks))
 
-    delayed = dask.delayed
-    blocks = None if is_zarr else array.to_delayed()
+
+def _block_tasks(grid: _Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
+    """The summary tasks of the blocks of layer ``i`` along the first axis."""
+    dask, _ = import_dask(array=False)
+    # the zarr array as one node of the graph: as an argument of every task
+    # dask would walk through its fields (dataclasses) for each of them
+    array = dask.delayed(grid.array, pure=False, traverse=False) if grid.is_zarr else None
+    blocks: Any = None if grid.is_zarr else grid.array.to_delayed()
+    tasks = {}
+    for tail in itertools.product(*(range(n) for n in grid.numblocks[1:])):
+        index = (i, *tail)
+        job = _Job(index, grid.box(index), grid.numblocks, tuple(shape), conn, where, surfaces)
+        if grid.is_zarr:
+            tasks[index] = dask.delayed(_read_zarr_block, pure=False)(array, job)
+        else:
+            tasks[index] = dask.delayed(_dask_block, pure=False)(blocks[index], job)
+    return tasks
+
+
+def _uppers(index, numblocks) -> list[tuple[int, ...]]:
+    """The block and its existing upper neighbours, ``index + d`` for ``d``
+    in ``{0,1}^n`` (C order)."""
+    return [tuple(i + di for i, di in zip(index, d)) for d in itertools.product((0, 1), repeat=len(index))
+            if all(i + di < n for i, di, n in zip(index, d, numblocks))]
+
+
+def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, progress) -> list[dict]:
+    """Layer by layer along axis 0: merging layer i needs the summaries of
+    layers i and i+1 only, so at most two layers of faces are held,
+    whatever order dask would pick for one big graph (it tends to read
+    most blocks before merging any). Within a layer the blocks and merges
+    run in parallel."""
+    dask, _ = import_dask(array=False)
+    merged = []
+    first = _block_tasks(grid, 0, conn, where, surfaces, shape)
+    current = dict(zip(first, compute(*first.values())))
+    for i in range(grid.numblocks[0]):
+        upper = _block_tasks(grid, i + 1, conn, where, surfaces, shape) if i + 1 < grid.numblocks[0] else {}
+        # the summaries computed already as leaves of the graph (dask would
+        # walk through every dict and array of them as arguments)
+        both = {**{index: dask.delayed(s, pure=False, traverse=False) for index, s in current.items()}, **upper}
+        tasks = [dask.delayed(_merge, pure=False)(_Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
+                                                      where, surfaces),
+                                                  *(both[u] for u in _uppers(index, grid.numblocks)))
+                 for index in current]
+        done = compute(*tasks, *upper.values())
+        merged.extend(done[:len(tasks)])
+        current = dict(zip(upper, done[len(tasks):]))
+        if progress is not None:
+            progress(i + 1, grid.numblocks[0])
+    return merged
+
+
+def _scheduler(dask, scheduler):
+    """The scheduler's function where it is named (or dask's configured one,
+    by default threads), found without importing dask.distributed as dask
+    does for a name, to look for a client: that import takes longer than
+    the report of a small volume, and with distributed not imported no
+    client exists."""
+    if "distributed" in sys.modules or not (scheduler is None or isinstance(scheduler, str)):
+        return scheduler
+    from dask.base import named_schedulers
+
+    name = scheduler or dask.config.get("scheduler", None) or "threads"
+    return named_schedulers.get(name.lower(), scheduler) if isinstance(name, str) else name
+
+
+# --------------------------------------------------------------------------
+# public API
+# --------------------------------------------------------------------------
+
+
+def analyze_chunked(
+    array: Any,
+    connectivity: int | None = None,
+    *,
+    block_shape: tuple[int, ...] | None = None,
+    scheduler: Callable | None = None,
+    where: str | None = None,
+    progress: Callable[[int, int], object] | None = None,
+    surfaces: bool = True,
+    threads: int | None = None,
+) -> Report:
+    """The report of :func:`isoflow.digital.analysis.analyze`, computed block
+    by block.
+
+    Parameters
+    ----------
+    array : dask.array.Array or zarr.Array
+        A 2D or 3D array of bools or 0/1 numbers. A dask array is processed
+        along its own chunks; a zarr array along its chunks (or shards;
+        tiny chunks are grouped).
+    connectivity : int, optional
+        6 or 26 (4 or 8 in 2D); default 6 (4).
+    block_shape : tuple of int, optional
+        The blocks instead (a dask array is rechunked to it).
+    scheduler : optional
+        Passed to ``dask.compute``: default dask's configured one, threads;
+        ``"processes"`` runs blocks in worker processes (only from code
+        under ``if __name__ == "__main__":``); a ``dask.distributed``
+        client's ``get`` runs them on its workers.
+    where : str, optional
+        The input's name in error messages.
+    progress : callable, optional
+        ``progress(done, total)``, called after each layer of blocks along
+        the first axis (``total`` layers), the unit of work between two
+        computes.
+    surfaces : bool
+        Count the closed surfaces, pinched vertices and doubled edges (3D).
+    threads : int, optional
+        Workers of the threaded scheduler (default
+        :func:`isoflow.scale.compiled.thread_count`); each block's passes
+        run on one thread and release the GIL.
+
+    Returns
+    -------
+    dict
+        ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``,
+        key for key.
+
+    Raises
+    ------
+    IsoflowError
+        Anything but a 2D or 3D dask or zarr array of 0 and 1 (named with
+        ``where`` and the block's first voxel), an array with no voxels
+        (``analyze`` has no report for it either), blocks of 2^32 voxels.
+
+    Notes
+    -----
+    Memory is a few blocks per worker plus the faces of two layers of
+    blocks; the voxels are read once (see the module docs and
+    ``docs/outofcore.md``).
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> from isoflow import analyze
+    >>> v = np.zeros((12, 10, 11), bool); v[2:10, 2:8, 2:9] = True; v[5:7, 4:6, :] = False  # a tunnel
+    >>> r = analyze_chunked(da.from_array(v, chunks=(5, 4, 6)), 6)
+    >>> r["betti"], r == analyze(v, 6)
+    ([1, 1, 0], True)
+    """
+    dask, _ = import_dask(array=False)
+    shape, where = _checked(array, where)
+    conn = resolve_connectivity(len(shape), connectivity)
+    if 0 in shape:
+        raise IsoflowError(f"{where}: the array has no voxels (shape {shape})")
+    grid = _grid(array, block_shape, where)
     with using(threads):
         workers = thread_count()
 
-    def block_task(index):
-        if is_zarr:
-            box = tuple(bounds[axis][i] for axis, i in enumerate(index))
-            return delayed(_read_zarr_block, pure=False)(array, index, box, numblocks, conn, where, surfaces)
-        origin = tuple(bounds[axis][i][0] for axis, i in enumerate(index))
-        return delayed(_dask_block, pure=False)(blocks[index], index, origin, numblocks, conn, where, surfaces)
+    scheduler = _scheduler(dask, scheduler)
 
-    def layer(i):
-        rest = [range(n) for n in numblocks[1:]]
-        return {(i, *tail): block_task((i, *tail)) for tail in itertools.product(*rest)}
+    def compute(*tasks):
+        return dask.compute(*tasks, scheduler=scheduler, num_workers=workers, traverse=False)
 
-    def uppers(index):
-        return [
-            tuple(i + di for i, di in zip(index, d))
-            for d in itertools.product((0, 1), repeat=ndim)
-            if all(i + di < n for i, di, n in zip(index, d, numblocks))
-        ]
-
-    # Layer by layer along axis 0: merging layer i needs the summaries of
-    # layers i and i+1 only, so at most two layers of faces are held,
-    # whatever order dask would pick for one big graph (it tends to read
-    # most blocks before merging any). Within a layer the blocks and merges
-    # run in parallel.
-    merged = []
     try:
-        (current,) = dask.compute(layer(0), scheduler=scheduler, num_workers=workers)
-        for i in range(numblocks[0]):
-            upper = layer(i + 1) if i + 1 < numblocks[0] else {}
-            both = {**current, **upper}
-            tasks = [
-                delayed(_merge, pure=False)(index, numblocks, conn, surfaces, *(both[u] for u in uppers(index)))
-                for index in current
-            ]
-            done, current = dask.compute(tasks, upper, scheduler=scheduler, num_workers=workers)
-            merged.extend(done)
-            if progress is not None:
-                progress(i + 1, numblocks[0])
+        merged = _layers(grid, conn, where, surfaces, shape, compute, progress)
     except IsoflowError as exc:
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message
         raise IsoflowError(str(exc.args[0]) if exc.args else str(exc)) from None
-    return Report.from_dict(_finish(ndim, conn, list(shape), surfaces, *merged))
+    return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged))
 
 
-def analyze_zarr(path, connectivity: int | None = None, *, block_shape=None, scheduler=None,
-                 surfaces: bool = True, threads: int | None = None, progress=None) -> Report:
+def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
+                 block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
+                 surfaces: bool = True, threads: int | None = None,
+                 progress: Callable[[int, int], object] | None = None) -> Report:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A zarr array, or a group with an array named ``volume`` or only one
+        array.
+    connectivity, block_shape, scheduler, surfaces, threads, progress
+        As in :func:`analyze_chunked`.
+
+    Returns
+    -------
+    dict
+        The report, as :func:`isoflow.digital.analysis.analyze` gives it.
+
+    Raises
+    ------
+    IsoflowError
+        A path that is no zarr store, a group without one volume, or the
+        errors of :func:`analyze_chunked`, with the path.
+
+    Notes
+    -----
     Before the full pass, the dtype and the first block's values are
     checked, so that a non-binary volume fails at once with the path in the
     message (every block is checked again as it is read).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> v = np.zeros((8, 8, 8), bool); v[1:7, 1:7, 1:7] = True; v[3:5, 3:5, 3:5] = False  # a cavity
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     z = zarr.create_array(store=d + "/v.zarr", shape=v.shape, chunks=(3, 5, 4), dtype=bool)
+    ...     z[...] = v
+    ...     analyze_zarr(d + "/v.zarr")["betti"]
+    [1, 0, 1]
     """
-    z = open_zarr(path)
+    z: Any = open_zarr(path)
     where = str(path)
     if z.ndim not in (2, 3):
         raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {z.ndim}D with shape {tuple(z.shape)}")

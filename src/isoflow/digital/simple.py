@@ -23,14 +23,14 @@ the same coordinates modulo 2) can be tested and changed at once
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
 from .connectivity import is_face_connectivity
 
 
-@lru_cache(maxsize=None)
+@cache
 def _neighbourhood(ndim: int):
     """Offsets and bit masks of the ``3^n`` bitboard.
 

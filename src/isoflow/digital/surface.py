@@ -29,16 +29,16 @@ loop over voxels or vertices.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
-from typing import Literal
+from functools import cache
+from typing import Any, Literal
 
 import numpy as np
 
 from ..scale.arrays import index_dtype
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
-from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
 from .connectivity import check_connectivity
+from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
 
 # --------------------------------------------------------------------------
 # The 12 face slots of a vertex window and how they join into sheets
@@ -75,7 +75,7 @@ def _spoke_slots(axis: int, side: int) -> list[int]:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def sheet_lut(connectivity: int = 6) -> np.ndarray:
     """Sheet number (0..3) of every boundary face slot, -1 for no face.
 
@@ -93,7 +93,7 @@ def sheet_lut(connectivity: int = 6) -> np.ndarray:
         boundary = [s for s in range(12) if bit[slot_oct[s][0]] != bit[slot_oct[s][1]]]
         parent = {s: s for s in boundary}
 
-        def find(s):
+        def find(s, parent=parent):
             while parent[s] != s:
                 s = parent[s]
             return s
@@ -120,7 +120,7 @@ def sheet_lut(connectivity: int = 6) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def pinch_lut(connectivity: int = 6) -> np.ndarray:
     """True at vertex contacts that the split mesh separates although the
     connectivity joins them: an opposite object pair under 26, an opposite
@@ -135,7 +135,7 @@ def pinch_lut(connectivity: int = 6) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def doubled_spoke_lut(connectivity: int = 6) -> np.ndarray:
     """(256, 3, 2): the spoke (axis, side) carries four boundary faces whose
     two pairs belong to one sheet at this vertex.
@@ -173,6 +173,16 @@ class QuadMesh:
     vertex at the edge's midpoint, listed in ``edge_midpoint``; those faces are
     pentagons (or more) with collinear corners. They are rare on voxelised
     shapes and frequent in random noise.
+
+    Examples
+    --------
+    A single voxel: 8 vertices, 6 quads, a sphere (V - E + F = 2), each
+    corner a convex corner (a = 1, eq. 4.10):
+
+    >>> import numpy as np
+    >>> m = boundary_mesh(np.ones((1, 1, 1), bool))
+    >>> len(m.vertices), len(m.faces), m.euler_characteristic, m.a.tolist()
+    (8, 6, 2, [1, 1, 1, 1, 1, 1, 1, 1])
     """
 
     vertices: np.ndarray  # (V, 3) float64, array-corner units
@@ -367,7 +377,7 @@ MESH_BYTES_PER_VERTEX = 16
 MESH_BYTES_PER_FACE = 300
 
 
-@lru_cache(maxsize=None)
+@cache
 def face_slots() -> np.ndarray:
     """Boundary face slots (0..12) of each of the 256 configurations."""
     pairs = [slot_octants(s) for s in range(12)]
@@ -426,7 +436,7 @@ def mesh_method(volume: np.ndarray, method: Method = "auto") -> Literal["numpy",
     return "compiled" if use_compiled(volume, surfaces=True, method=method) else "numpy"
 
 
-@lru_cache(maxsize=None)
+@cache
 def row_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     """The tables of :mod:`isoflow.scale.quads` for one connectivity.
 
@@ -453,7 +463,7 @@ def row_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     sheets = sheet_lut(connectivity)
     dspoke = doubled_spoke_lut(connectivity)
     tables = ((sheets.max(axis=1) + 1).astype(np.int64), sheets.astype(np.int64), dspoke,
-              dspoke[:, :, 1].any(axis=1), pinch_lut(connectivity).astype(np.int64))
+              np.asarray(dspoke[:, :, 1].any(axis=1)), pinch_lut(connectivity).astype(np.int64))
     for t in tables:
         t.setflags(write=False)
     return tables
@@ -564,7 +574,7 @@ def _axis_faces(padded: np.ndarray, cfg: np.ndarray, first: np.ndarray, i: int, 
     # unpadded voxel index.
     ids, cfgs = [], []
     for dj, dk in _CORNER_D:
-        c = [None, None, None]
+        c: list[Any] = [0, 0, 0]
         c[i], c[j], c[k] = base[i], base[j] + (1 - dj), base[k] + (1 - dk)
         lin = np.ravel_multi_index(c, cfg.shape)
         cf = cfg_flat[lin]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -42,7 +42,7 @@ class CubeGroup:
         return len(self.axis_permutations)
 
 
-@lru_cache(maxsize=None)
+@cache
 def hyperoctahedral_group(n: int) -> CubeGroup:
     """The symmetries of the n-cube on octant bits and on configurations.
 
@@ -102,7 +102,7 @@ def apply_symmetry(volume, g: int) -> np.ndarray:
     return np.transpose(y, tuple(int(i) for i in group.axis_permutations[g]))
 
 
-@lru_cache(maxsize=None)
+@cache
 def configuration_orbits(n: int) -> np.ndarray:
     """Canonical representative (least image under the group) of every configuration."""
     n = check_dimension(n)

@@ -10,10 +10,11 @@ number follows from chi.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -21,6 +22,7 @@ from ..scale.memory import check_fits
 from .configurations import DIMENSIONS, configuration_histogram
 from .connectivity import complement, resolve_connectivity
 from .indices import euler_lut
+
 
 def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
     """chi from the configuration histogram: ``sum_c hist[c] lut[c] / 2^n``."""
@@ -71,7 +73,7 @@ def euler_characteristic(volume: ArrayLike, connectivity: int | None = None) -> 
     return euler_from_histogram(configuration_histogram(v), v.ndim, conn)
 
 
-def _labeller(xp, v, method: Method = "auto"):
+def _labeller(xp, v, method: Method = "auto") -> tuple[Any, Any, Any]:
     """``(xp, volume, label)`` for a checked volume (:func:`arrays.as_volume`):
     the volume where its library can label it (host NumPy, a CuPy GPU),
     otherwise copied to the host once."""
@@ -135,7 +137,7 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
         faces = []
         for axis in range(v.ndim):
             for end in (0, -1):
-                index = [slice(None)] * v.ndim
+                index: list[Any] = [slice(None)] * v.ndim
                 index[axis] = end
                 faces.append(xp.reshape(labels[tuple(index)], (-1,)))
         # unique_values/concatenate/count_nonzero: in both NumPy and CuPy
@@ -144,7 +146,7 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
 
 
 def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
-                  method: Method = "auto") -> list[int]:
+                  method: Method = "auto") -> list[int | None]:
     """The Betti numbers of a 2D, 3D or 4D binary volume.
 
     b0 counts the components under ``connectivity``, the last Betti number

@@ -17,7 +17,7 @@ lower vertex layer.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -29,7 +29,7 @@ from .motion import motion_luts
 from .planar import planar_motion_luts
 
 
-@lru_cache(maxsize=None)
+@cache
 def step_table(ndim: int, connectivity: int) -> np.ndarray:
     """Per configuration, what the bit passes need to know (the flags of
     :mod:`isoflow.scale.flowbits`): kept whatever its segments, a negative
@@ -113,7 +113,7 @@ class PackedObject:
     voxels: int
 
     @classmethod
-    def of(cls, obj: DigitalObject) -> "PackedObject":
+    def of(cls, obj: DigitalObject) -> PackedObject:
         """The cropped object ``obj`` as bit rows."""
         obj = DigitalObject.of(obj).cropped()
         vol = obj.volume
@@ -141,7 +141,7 @@ class PackedObject:
         nd = self.ndim
         return [self.place.world(np.zeros(nd)).tolist(), self.place.world(np.array(self.shape, float)).tolist()]
 
-    def same_shape(self, other: "PackedObject") -> bool:
+    def same_shape(self, other: PackedObject) -> bool:
         """The same voxels in the same cropped array (placement aside)."""
         return self.shape == other.shape and np.array_equal(self.bits, other.bits)
 

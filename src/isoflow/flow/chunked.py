@@ -347,8 +347,9 @@ def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
 
     Examples
     --------
-    >>> guard_refusal("big.zarr", (1024, 1024, 1024)).split(";")[0]
-    'big.zarr: --guard is not done block by block (a guarded step realises its moves cell by cell in one order over the whole surface)'
+    >>> print(guard_refusal("big.zarr", (1024, 1024, 1024)).split(";")[0])  # doctest: +NORMALIZE_WHITESPACE
+    big.zarr: --guard is not done block by block (a guarded step realises its moves cell by cell in one
+    order over the whole surface)
     """
     need = 6 * int(np.prod(shape))  # the volume, its configuration bytes and the rows of a step
     return (f"{where}: --guard is not done block by block (a guarded step realises its moves cell by cell in one "

@@ -8,8 +8,6 @@ chooses one for a run (``method``).
 
 from __future__ import annotations
 
-from typing import Literal
-
 import numpy as np
 
 from ..digital.analysis import analyze

@@ -60,11 +60,13 @@ bounding box.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..digital.configurations import configurations
+from ..digital.connectivity import check_connectivity, is_face_connectivity
 from ..digital.indices import (
     CONVEX,
     FLAT,
@@ -75,7 +77,6 @@ from ..digital.indices import (
     f_lut,
 )
 from ..digital.lattice import DigitalObject
-from ..digital.connectivity import check_connectivity, is_face_connectivity
 from ..errors import IsoflowError
 from .planar import planar_moves
 from .segments import segment_moves
@@ -108,7 +109,7 @@ def flow_connectivity(ndim: int, connectivity: int | None) -> int:
 # --------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def motion_luts(connectivity: int = 6):
     """Tables over the 256 configurations that drive one 3D step.
 
@@ -158,13 +159,38 @@ def flow_moves(obj: DigitalObject, connectivity: int | None = 6) -> tuple[np.nda
     return cfg, keep
 
 
-def flow_step(obj: DigitalObject, connectivity: int | None = 6) -> DigitalObject:
+def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> DigitalObject:
     """One step of the digital curvature flow (Definition 18, eq. 5.15).
 
-    3D objects follow the table of the module docstring; 2D objects the
-    planar flow of eq. 5.8 (:mod:`isoflow.flow.planar`). The
-    result sits on the other lattice and is cropped to its bounding box.
-    ``obj`` may also be a bare binary array.
+    Every lattice vertex becomes a voxel of the new object on the dual
+    lattice (eq. 5.1) iff it is interior or a boundary vertex that moves
+    outward: 3D objects by the table of the module docstring (eqs.
+    5.15-5.18), 2D objects by the planar flow of eq. 5.8
+    (:mod:`isoflow.flow.planar`).
+
+    Parameters
+    ----------
+    obj : DigitalObject or array_like of bool
+        A 2D or 3D object (a bare array sits at the origin of the lattice).
+    connectivity : int, optional
+        The object's: 6 or 26 in 3D, 4 or 8 in 2D.
+
+    Returns
+    -------
+    DigitalObject
+        On the other lattice (``parity`` flipped), cropped to its bounding box.
+
+    Examples
+    --------
+    The paper's Example 19: four cubes (a corner cube and its three face
+    neighbours) become the cube centred at (1, 1, 1), then its point.
+
+    >>> import numpy as np
+    >>> v = np.zeros((2, 2, 2), bool)
+    >>> v[0, 0, 0] = v[1, 0, 0] = v[0, 1, 0] = v[0, 0, 1] = True
+    >>> step = flow_step(v)
+    >>> step.voxels, step.parity, step.offset
+    (1, 1, (0, 0, 0))
     """
     obj = DigitalObject.of(obj)
     cfg, keep = flow_moves(obj, connectivity)

@@ -25,7 +25,7 @@ column per step and vanishes at its centre.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -40,7 +40,7 @@ __all__ = ["planar_flow_step", "planar_moves", "planar_motion_luts"]
 _CONVEX, _FLAT, _CONCAVE = 0, 1, 2
 
 
-@lru_cache(maxsize=None)
+@cache
 def planar_motion_luts(connectivity: int = 4):
     """Tables over the 16 planar configurations: ``(keep, negative, role)``.
 

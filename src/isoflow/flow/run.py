@@ -27,8 +27,9 @@ to stop and what to report.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -143,7 +144,7 @@ class _Trace:
             obj = self.engine.to_object(state)
             if self.keep_states:
                 self.states.append(obj)
-            if tell:
+            if tell and self.progress is not None:
                 self.progress(record["step"], obj)
 
 
@@ -296,7 +297,7 @@ def run_flow(
     _check_count("steps", steps)
     _check_count("max_steps", max_steps)
     engine = flow_engine(method, obj, conn)
-    cap = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
+    cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
     return run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",

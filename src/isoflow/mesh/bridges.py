@@ -58,14 +58,14 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     mesh = manifold.to_mesh()
     verts = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
     tris = np.asarray(mesh.tri_verts, dtype=np.int64)
-    origin = np.asarray(origin, dtype=np.float64)
+    corner = np.asarray(origin, dtype=np.float64)
     if len(tris) == 0:
-        return DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin)
-    lo = np.floor((verts.min(axis=0) - origin) / pitch).astype(np.int64)
-    hi = np.ceil((verts.max(axis=0) - origin) / pitch).astype(np.int64)
+        return DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=corner)
+    lo = np.floor((verts.min(axis=0) - corner) / pitch).astype(np.int64)
+    hi = np.ceil((verts.max(axis=0) - corner) / pitch).astype(np.int64)
     shape = np.maximum(hi - lo, 1)
-    vol, _, _ = voxelize(verts, tris, pitch=pitch, grid=(origin + pitch * lo, shape))
-    return DigitalObject(vol, offset=tuple(lo), pitch=pitch, origin=origin).cropped()
+    vol, _, _ = voxelize(verts, tris, pitch=pitch, grid=(corner + pitch * lo, shape))
+    return DigitalObject(vol, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
 
 
 def cube_union(voxels):

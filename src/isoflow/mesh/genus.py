@@ -19,6 +19,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -99,10 +100,12 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
     chi = V - E + F
     closed = ~bad_edge & ~pinched_in_comp
-    genus_c = [int((2 - c) // 2) if ok and c % 2 == 0 else None for c, ok in zip(chi.tolist(), closed)]
+    genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
+                                 for c, ok in zip(chi.tolist(), closed)]
     used = np.unique(f)
     euler = int(len(used) - len(edge_start) + nf)
-    total = sum(genus_c) if genus_c and all(g is not None for g in genus_c) and defects["inconsistent_edges"] == 0 else None
+    known = [g for g in genus_c if g is not None]
+    total = sum(known) if genus_c and len(known) == len(genus_c) and defects["inconsistent_edges"] == 0 else None
     report = {
         "watertight": bool(defects["watertight"]),
         "components": int(ncomp),
@@ -154,7 +157,7 @@ def pymeshlab_report(vertices, faces) -> dict:
         t = ms.get_topological_measures()
     except Exception as exc:
         return {"error": f"{type(exc).__name__}: {exc}"}
-    out = {k: (int(t[k]) if not isinstance(t[k], bool) else bool(t[k])) for k in (
+    out: dict[str, Any] = {k: (int(t[k]) if not isinstance(t[k], bool) else bool(t[k])) for k in (
         "genus", "connected_components_number", "boundary_edges", "non_two_manifold_edges",
         "non_two_manifold_vertices", "is_mesh_two_manifold") if k in t}
     if out.get("genus", 0) < 0:
@@ -269,7 +272,7 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
             i = group[i]
         return i
 
-    inside = {}  # i -> components j whose solid holds solid i
+    inside: dict[int, list[int]] = {}  # i -> components j whose solid holds solid i
     for i in range(n):
         for j in range(i + 1, n):
             if not meet[i, j]:
@@ -313,8 +316,8 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
     regions = []
     boundary = True
     for k in keys:
-        around = wind(parent[k]) if parent[k] is not None else 0
-        boundary &= (wind(k) != 0) != (around != 0)
+        outer = wind(parent[k]) if parent[k] is not None else 0
+        boundary &= (wind(k) != 0) != (outer != 0)
         if wind(k) != 0:
             region = body[k]
             if children.get(k):
@@ -383,6 +386,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     out: list = []
     finished = 0  # weight of the resolutions done
     start = time.monotonic()
+    res: int | None
     while todo or out:
         if todo:
             res = todo.pop(0)
@@ -440,6 +444,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
     solid = voxelize(vertices, faces, resolution=resolution, strict=strict, fill=fill, progress=progress,
                      details=True)
     vol, pitch = solid.volume, solid.pitch
+    assert vol is not None, "an in-memory voxelisation has its volume"
     betti = betti_numbers(vol, connectivity)
     return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
             "connectivity": connectivity, "betti": betti, "genus": betti[1],

@@ -8,6 +8,7 @@ inconsistently oriented edges from the vertex indices alone.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import warnings
@@ -114,8 +115,8 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
 # loading
 # ---------------------------------------------------------------------------
 
-def _weld(v: np.ndarray, f: np.ndarray, rtol: float, where: str = "mesh",
-          stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "mesh",
+         stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
 
     Rounding coordinates to a grid (trimesh's approach) misses pairs that
@@ -204,47 +205,67 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         rtol = math.nan
     if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
         raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
-    if not p.exists():
-        raise IsoflowError(f"{p}: file not found")
-    if not p.is_file():
-        raise IsoflowError(f"{p}: not a regular file")
-    check_format_libraries(p)
-    import trimesh  # lazy: keeps `import isoflow` cheap
-
     ext = p.suffix.lower().lstrip(".")
-    kwargs: dict = {"process": False}
-    if ext == "obj":
-        kwargs.update(merge_tex=True, merge_norm=True)
-    try:
-        if ext == "off":  # trimesh's reader fails on polygons of 5+ corners (see isoflow.mesh.off)
-            from .off import read_off
+    if ext == "off":  # trimesh's reader fails on polygons of 5+ corners (see isoflow.mesh.off)
+        from .off import read_off
 
+        check_mesh_file(p)
+        with reading_mesh(p):
             vertices, faces = read_off(p)
-        else:
-            with warnings.catch_warnings():
-                # NumPy's overflow warnings on inf or huge coordinates: the
-                # one error line of check_mesh says what is wrong
-                warnings.simplefilter("ignore", RuntimeWarning)
-                mesh = trimesh.load(str(p), force="mesh", **kwargs)
-            vertices = np.asarray(mesh.vertices, dtype=np.float64)
-            faces = np.asarray(mesh.faces)
-            if ext == "obj" and faces.ndim == 2 and len(faces):
-                _check_obj_indices(p, faces)
-    except IsoflowError:
-        raise
-    except Exception as exc:  # trimesh raises anything from KeyError to struct.error
-        msg = " ".join(str(exc).split())[:200] or "no detail"
-        raise IsoflowError(
-            f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+    else:
+        mesh = trimesh_load(p, "mesh")
+        vertices = np.asarray(mesh.vertices, dtype=np.float64)
+        faces = np.asarray(mesh.faces)
+        if ext == "obj" and faces.ndim == 2 and len(faces):
+            _check_obj_indices(p, faces)
     if faces.size == 0 or faces.ndim != 2:
         # trimesh returns an empty mesh rather than failing on many garbage files
         raise IsoflowError(
             f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
-    vertices, faces = _weld(vertices, faces, rtol, where=str(p), stats=stats)
+    vertices, faces = weld(vertices, faces, rtol, where=str(p), stats=stats)
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def check_mesh_file(p: Path) -> None:
+    """A mesh file that exists, is a regular file, and whose format's
+    library is installed, or one line saying which is not."""
+    if not p.exists():
+        raise IsoflowError(f"{p}: file not found")
+    if not p.is_file():
+        raise IsoflowError(f"{p}: not a regular file")
+    check_format_libraries(p)
+
+
+@contextlib.contextmanager
+def reading_mesh(p: Path):
+    """Whatever a mesh reader raises on a bad file as one line naming it."""
+    try:
+        yield
+    except IsoflowError:
+        raise
+    except Exception as exc:  # trimesh raises anything from KeyError to struct.error
+        msg = " ".join(str(exc).split())[:200] or "no detail"
+        raise IsoflowError(f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+
+
+def trimesh_load(p: Path, force: str):
+    """``trimesh.load`` of a checked file, unprocessed (the weld is
+    isoflow's), ``force`` "mesh" (a scene's meshes as one, transforms
+    applied) or "scene"; OBJ with texture and normal seams merged."""
+    check_mesh_file(p)
+    import trimesh  # lazy: keeps `import isoflow` cheap
+
+    kwargs: dict = {"process": False}
+    if p.suffix.lower() == ".obj":
+        kwargs.update(merge_tex=True, merge_norm=True)
+    with reading_mesh(p), warnings.catch_warnings():
+        # NumPy's overflow warnings on inf or huge coordinates: the one
+        # error line of check_mesh says what is wrong
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return trimesh.load(str(p), force=force, **kwargs)
 
 
 def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:

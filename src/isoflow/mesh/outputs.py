@@ -87,7 +87,7 @@ def _temp_parts(path: Path) -> tuple[str, str]:
 def _owner() -> str:
     """This process in a temporary name: its host (8 hex digits of a hash
     of the host name) and its pid."""
-    import hashlib  # (socket alone costs 10 ms at the start of every command)
+    import hashlib  # (imported here: every command would pay socket's import at its start)
     import socket
 
     host = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]

@@ -66,14 +66,18 @@ class ScanGrid:
     ``T`` is the (M, 3, 3) array of triangle corners in the scaled frame,
     ``origin``, ``pitch`` and ``shape`` the grid in that frame.  Everything a
     slab needs is here; a ScanGrid is small enough to ship to dask workers.
+    ``start`` makes it the block of a larger grid whose voxel ``start`` is
+    this one's voxel 0: its centres are that grid's, bit for bit
+    (``origin + (start + i + 0.5) * pitch``, not rounded twice).
     """
 
-    def __init__(self, T: np.ndarray, origin, pitch: float, shape):
+    def __init__(self, T: np.ndarray, origin, pitch: float, shape, start=(0, 0, 0)):
         nx, ny, nz = (int(n) for n in shape)
         self.shape = (nx, ny, nz)
-        self.xc = origin[0] + (np.arange(nx) + 0.5) * pitch
-        self.yc = origin[1] + (np.arange(ny) + 0.5) * pitch
-        self.zc = origin[2] + (np.arange(nz) + 0.5) * pitch
+        sx, sy, sz = (int(s) for s in start)
+        self.xc = origin[0] + (np.arange(sx, sx + nx) + 0.5) * pitch
+        self.yc = origin[1] + (np.arange(sy, sy + ny) + 0.5) * pitch
+        self.zc = origin[2] + (np.arange(sz, sz + nz) + 0.5) * pitch
         m = len(T)
         T = np.ascontiguousarray(T, dtype=np.float64)
         self.j0, self.j1, self.i0, self.i1 = (np.empty(m, dtype=np.int64) for _ in range(4))

@@ -528,10 +528,12 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
                     out[idx[0] - xa, idx[1], idx[2]] = True
 
 
-def grid_planes(origin, pitch: float, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def grid_planes(origin, pitch: float, shape, start=(0, 0, 0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The planes between voxels along each axis, ``origin + pitch * i`` for
-    i = 0 .. n (the cubes' faces, as floating-point numbers)."""
-    return tuple(np.asarray(origin[a] + pitch * np.arange(shape[a] + 1), dtype=np.float64) for a in range(3))
+    i = start .. start + n (the cubes' faces, as floating-point numbers; a
+    block of a larger grid gets that grid's planes)."""
+    return tuple(np.asarray(origin[a] + pitch * np.arange(start[a], start[a] + shape[a] + 1), dtype=np.float64)
+                 for a in range(3))
 
 
 def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int = 1) -> np.ndarray:

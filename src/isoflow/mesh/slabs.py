@@ -22,10 +22,13 @@ cluster (``scheduler=client``) when the store is on a shared file system.
 
 from __future__ import annotations
 
+import os
 from contextlib import nullcontext
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.chunks import import_dask, import_zarr
@@ -33,7 +36,7 @@ from ..scale.memory import check_fits, gib
 from .formats.omezarr import multiscales
 from .grid import fmt_count
 from .load import load_mesh
-from .fills import Fill
+from .fills import Fill, Voxelization
 from .outputs import atomic_path, check_writable_dir
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -88,25 +91,57 @@ def _slab_task(plan, store: str, xa: int, xb: int):
     return int(np.count_nonzero(vol)), stats
 
 
-def voxelize_to_zarr(source, path, *, pitch=None, resolution=None, fill: Fill = "winding", strict: bool = False,
-                     force: bool = False, chunks=None, scheduler=None, max_bytes: int | None = None, progress=None,
-                     details: bool = False):
+def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], path: str | os.PathLike, *,
+                     pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
+                     strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
+                     scheduler: Callable | None = None, max_bytes: int | None = None,
+                     progress: Callable[[int, int], object] | None = None,
+                     details: bool = False) -> dict[str, Any] | tuple[dict[str, Any], Voxelization]:
     """Voxelise a mesh into a chunked zarr array at ``path`` without holding
     the volume.
 
-    ``source`` is a mesh file or ``(vertices, faces)``; the grid, the rule
-    (``fill``) and ``strict`` are those of
-    :func:`~isoflow.mesh.voxelize.voxelize`.  The winding rule and the
-    shell are filled slab by slab; a flood fill needs the whole grid's
-    shell at once, so it is refused where that does not fit in memory.
-    The store is an OME-Zarr image (see the module docs; read it back with
-    :func:`isoflow.read_volume`), its level ``0`` chunked as ``chunks``,
-    by default slabs of at most 128 MiB by 256 x 256; ``scheduler`` is any
-    dask scheduler (default: two threads).  ``progress(done, total)`` is called per slab (local
-    schedulers).  Returns ``shape``, ``chunks``, ``voxels``, ``pitch``,
-    ``origin``; with ``details``, also the
-    :class:`~isoflow.mesh.fills.Voxelization` (its volume None), whose note
-    is otherwise issued as a :class:`~isoflow.errors.MeshNote` warning.
+    The winding rule and the shell are filled slab by slab, as dask tasks;
+    a flood fill needs the whole grid's shell at once, so it is refused
+    where that does not fit in memory. The store is an OME-Zarr image (see
+    the module docs; read it back with :func:`isoflow.read_volume`, or
+    ``isoflow info STORE.zarr`` block by block).
+
+    Parameters
+    ----------
+    source : str, os.PathLike or (vertices, faces)
+        A mesh file, or the mesh's arrays.
+    path : str or os.PathLike
+        The store to write (a directory ``NAME.zarr``).
+    pitch, resolution, fill, strict
+        As :func:`~isoflow.mesh.voxelize.voxelize`.
+    force : bool
+        Replace an existing store.
+    chunks : tuple of int, optional
+        Level ``0``'s chunks; default slabs of at most 128 MiB by 256 x 256.
+    scheduler : callable, optional
+        Any dask scheduler (default: two threads).
+    max_bytes : int, optional
+        The memory budget the slabs must fit in.
+    progress : callable, optional
+        ``progress(done, total)``, called per slab (local schedulers).
+    details : bool
+        Also return the :class:`~isoflow.mesh.fills.Voxelization` (its
+        volume None); without it, its note is issued as a
+        :class:`~isoflow.errors.MeshNote` warning.
+
+    Returns
+    -------
+    dict or (dict, Voxelization)
+        ``shape``, ``chunks``, ``voxels``, ``pitch``, ``origin``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from isoflow import data, read_volume
+    >>> store = pathlib.Path(tempfile.mkdtemp()) / "torus.zarr"
+    >>> z = voxelize_to_zarr(data.torus(), store, resolution=24)
+    >>> z["voxels"] == read_volume(store).voxels
+    True
     """
     from .fills import check_fill
     from .voxelize import Solid, plan_voxels, say_note, voxelization

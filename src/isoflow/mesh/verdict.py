@@ -11,13 +11,13 @@ it as the command line's option.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from ..results import Result
-from .fills import Fill
 from ..scale.memory import gib
+from .fills import Fill
 
 #: what the verdict says, first
 VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
@@ -183,7 +183,7 @@ def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int
                else f"which manifold3d could not build ({error})"))
 
 
-_NOTE_WORDS = {
+_NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{n} vertices that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),

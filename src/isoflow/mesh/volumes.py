@@ -11,14 +11,24 @@ import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
-from ..scale.memory import check_fits
 from ..scale.arrays import binary
-from .formats.registry import RawVolume, check_label, format_for, no_such_label, split_dataset, volume_suffixes
+from ..scale.memory import check_fits
+from .formats.registry import (
+    LabelVolume,
+    RawVolume,
+    check_label,
+    format_for,
+    no_such_label,
+    split_dataset,
+    volume_suffixes,
+)
 from .outputs import atomic_path, check_output_path
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
@@ -119,7 +129,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
-    meta = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
+    meta: dict[str, Any] = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
@@ -196,6 +206,11 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     or whose numbers are not all integers in range, is read again line by
     line, for the one-line error that names the line.
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A text file of points.
+
     Returns
     -------
     numpy.ndarray
@@ -270,7 +285,7 @@ def _read_points_by_line(path: Path) -> np.ndarray:
             if point:
                 width = len(point)
                 coords.extend(point)
-    if not coords:
+    if not coords or width is None:
         raise IsoflowError(f"{path}: no points")
     return np.frombuffer(coords, dtype=np.int64).reshape(-1, width).copy()
 
@@ -309,6 +324,24 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     ``points_are='corners'`` reads a point list with the paper's point model
     (Definitions 1-2): the object is every cube whose 2^n corners are all
     listed; ``'voxels'`` takes each point as a voxel index.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A volume of any format of :func:`read_volume`, or a point list.
+    points_are : {"corners", "voxels"}
+        How a point list is read.
+    label : int or float, optional
+        The value whose voxels are the object, in a label image.
+
+    Returns
+    -------
+    DigitalObject
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the file and the problem.
 
     Examples
     --------
@@ -375,6 +408,26 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     The file is written beside the target and renamed when complete, so an
     interrupted write leaves any previous file as it was.
 
+    Parameters
+    ----------
+    obj : DigitalObject
+        The object (a bare binary array is taken at the origin).
+    path : str or os.PathLike
+        The file; its suffix names the format (``FILE.h5:/dataset`` too).
+    force : bool
+        Replace an existing file.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    IsoflowError
+        An existing file without ``force``, a suffix isoflow does not write,
+        a library missing, an unwritable place.
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -386,12 +439,79 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     >>> back.voxels, float(back.pitch), back.origin.tolist()
     (24, 0.5, [1.0, 2.0, 3.0])
     """
-    obj = DigitalObject.of(obj)
+    return write_placed(DigitalObject.of(obj), path, force)
+
+
+def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False) -> Path:
+    """:func:`write_volume` of a digital object or a placed label image."""
     file, dataset = check_volume_output(path, force)
-    module = format_for(file, writing=True).load()
+    fmt = format_for(file, writing=True)
+    assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
+    module = fmt.load()
     if hasattr(module, "check"):  # refusals and warnings name the output, before it is written
         module.check(file, obj, dataset)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
         module.write(tmp, obj, dataset, name=file.name)
     return file
+
+
+def check_label_output(path: str | os.PathLike, count: int, force: bool = False) -> tuple[Path, str | None]:
+    """:func:`check_volume_output` for a label image of labels 1 .. ``count``:
+    also refused, before any work, where the format keeps fewer labels
+    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
+    file, dataset = check_volume_output(path, force)
+    fmt = format_for(file, writing=True)
+    if fmt.max_label is not None and count > fmt.max_label:
+        keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
+        raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
+                           ".nii.gz, .nrrd, .h5 or .npz")
+    return file, dataset
+
+
+def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | np.ndarray = 1.0,
+                 origin: ArrayLike | None = None, force: bool = False) -> Path:
+    """Save a label image in the format its suffix names, in its own integer type.
+
+    Parameters
+    ----------
+    labels : ndarray
+        Unsigned integers in (x, y, z) order; 0 is the background.
+    path : str or PathLike
+        The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
+        OME-Zarr, ``.npz``, ...).
+    pitch : float or ndarray
+        The voxel size, one value or one per axis, kept where the format
+        has room for it.
+    origin : array_like, optional
+        The lower corner of voxel (0, 0, 0) in world units (zero if None).
+    force : bool
+        Overwrite an existing file.
+
+    Returns
+    -------
+    Path
+        The file written; :func:`read_label_image` reads it back.
+
+    Raises
+    ------
+    IsoflowError
+        For an existing file without ``force``, and for a format that keeps
+        fewer labels than the image has (:func:`check_label_output`).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> labels = np.zeros((3, 2, 2), np.uint8)
+    >>> labels[0], labels[2] = 1, 2
+    >>> path = write_labels(labels, pathlib.Path(tempfile.mkdtemp()) / "labels.npz", pitch=0.5, origin=(1, 2, 3))
+    >>> back = read_label_image(path)
+    >>> np.array_equal(back.array, labels), back.spacing.tolist(), back.origin.tolist()
+    (True, [0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
+    """
+    arr = np.asarray(labels)
+    if arr.ndim != 3 or arr.dtype.kind != "u":
+        raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
+    check_label_output(path, int(arr.max(initial=0)), force)
+    origin = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64).reshape(3)
+    return write_placed(LabelVolume(arr, pitch, origin), path, force)

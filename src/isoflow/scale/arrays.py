@@ -58,8 +58,8 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     ``near``: the index of the block's first voxel, for errors found block by
     block (out-of-core input). ``canonical=False`` returns a bool array as it
     is, for a pass that reads every nonzero byte as set
-    (:func:`isoflow.scale.bitrows.pack`): the check costs 9 ms on a 512^3
-    volume, 3% of ``analyze`` there."""
+    (:func:`isoflow.scale.bitrows.pack`), which spares it the pass over the
+    volume that the check costs."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     arr = np.asarray(array)
@@ -68,7 +68,7 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     if arr.dtype == np.bool_:
         # A bool array made by .view(bool) can hold bytes other than 0/1,
         # which numpy compares and cc3d labels as distinct values: make them
-        # canonical (the max is one fast pass, 10 ms at 512^3).
+        # canonical (the max is one pass, and most arrays need no copy).
         if arr.size and arr.view(np.uint8).max() > 1:
             arr = arr.view(np.uint8) != 0
         return arr

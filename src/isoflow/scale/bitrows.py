@@ -20,9 +20,8 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic
 
-from .jit import njit
-
 from .compiled import run, slabs, thread_count
+from .jit import njit
 
 
 @intrinsic

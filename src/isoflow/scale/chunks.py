@@ -21,10 +21,16 @@ MIN_BLOCK = 1 << 21
 MAX_BLOCKS = 512
 
 
-def import_dask():
-    """dask is optional for isoflow; say how to get it when it is missing."""
+def import_dask(array: bool = True):
+    """``(dask, dask.array)``: dask is optional for isoflow; say how to get
+    it when it is missing. Without ``array``, ``(dask, None)``: importing
+    dask.array takes several times as long as dask, which zarr input does
+    not need."""
     try:
         import dask
+
+        if not array:
+            return dask, None
         import dask.array as da
     except ImportError as exc:
         raise IsoflowError(
@@ -86,7 +92,7 @@ def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
 
 
 
-def open_zarr(path, level: str | None = None) -> "object":
+def open_zarr(path, level: str | None = None) -> object:
     """The volume array of a zarr store: the array at ``path``; in an
     OME-Zarr image (a group with NGFF ``multiscales``) its first resolution
     level, or ``level`` (a dataset path such as ``'1'``, or an index); in any

@@ -3,8 +3,8 @@
 The passes of :mod:`isoflow.scale.kernels` and :mod:`isoflow.scale.sweep`
 are compiled with numba. They are used for host volumes from
 :data:`MIN_VOXELS` on; below that, numpy and cc3d answer sooner than numba
-can start (importing numba and loading its cached machine code costs about
-0.5 s once per process), so one small volume never imports numba at all.
+can start (importing numba and loading its cached machine code is paid
+once per process), so one small volume never imports numba at all.
 The choice is a function of the input alone (:func:`use_compiled`); a
 caller that knows better (a loop over many small volumes, which pays
 numba's start once) says so with ``method="compiled"``, as scikit-image's
@@ -22,8 +22,7 @@ on (``os.sched_getaffinity``, which honours ``taskset`` and container CPU
 sets; ``os.cpu_count()`` where that is missing). Unless asked, a pass over
 a small volume takes fewer threads: one per :data:`VOXELS_PER_THREAD`, as
 starting and joining a thread costs about what sweeping a few hundred
-thousand voxels does (a loop over 64^3 volumes ran 40% of its time in
-starting threads).
+thousand voxels does.
 """
 
 from __future__ import annotations
@@ -31,7 +30,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
-from functools import lru_cache
+from functools import cache
 from typing import Literal
 
 from ..errors import IsoflowError
@@ -43,10 +42,9 @@ MIN_VOXELS = 2_000_000
 #: with the surfaces, host volumes take the compiled census (histogram,
 #: Betti numbers and surfaces in one sweep) from this many times
 #: MIN_VOXELS on (4 million, 159^3): below it the NumPy census is the
-#: faster command. As whole commands on smoothed porous fields (the most
-#: boundary per voxel of the benchmark's inputs) it took 0.71x the compiled
-#: command's time at 128^3, 0.90x at 160^3 and 1.28x at 192^3 (medians of
-#: 5 pairs); on a ball it is faster still (0.52x at 128^3)
+#: faster command, numba's start being the larger part of the compiled
+#: one's time (the crossover is measured by benchmarks/run.py on porous
+#: fields, the most boundary per voxel of its inputs)
 CENSUS_FACTOR = 2
 
 
@@ -66,7 +64,7 @@ _asked: contextvars.ContextVar[int | None] = contextvars.ContextVar("isoflow_thr
 #: what a process says, once, when numba starts compiling one of isoflow's
 #: passes instead of loading it from its cache: the first run after
 #: installing (or on a new CPU, or after an upgrade) waits seconds per pass,
-#: about 12 s for ``isoflow info`` here, with nothing else to show
+#: with nothing else to show
 COMPILE_NOTE = ("numba is compiling isoflow's passes for this CPU, once after installing (up to 15 s; "
                 "later runs load them from its cache)")
 
@@ -92,7 +90,7 @@ def note_compile() -> None:
         logging.getLogger("isoflow").info(COMPILE_NOTE)
 
 
-@lru_cache(maxsize=None)
+@cache
 def have_numba() -> bool:
     """numba is installed (found without importing it: that is the slow part)."""
     from importlib.util import find_spec

@@ -21,7 +21,7 @@ stays in the cache answers them sooner than any table over all 2^26 codes.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from .jit import njit
 _U1 = np.uint64(1)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _board(ndim: int) -> dict:
     """The ``3^n`` bitboard's masks: per axis the shift and the cells that
     may move up (``lo``) or down (``hi``) along it; the face neighbours, the
@@ -220,7 +220,7 @@ def simple(codes: np.ndarray, ndim: int, face: bool) -> np.ndarray:
     return out
 
 
-@lru_cache(maxsize=None)
+@cache
 def _code_tables(ndim: int) -> tuple[np.ndarray, np.ndarray]:
     """Per octant ``e`` (cell of a block) and block ``b`` of its
     neighbourhood (``delta_d = b_d - 1 + e_d``): the code bits that each

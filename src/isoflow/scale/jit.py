@@ -4,8 +4,8 @@ cost taken off.
 numba's first call of any function, even one loaded from its disk cache,
 imports every implementation module it has. One of them
 (``numba.np.arraymath``) imports ``scipy.linalg`` at import time only to
-check that BLAS exists. That import costs about 0.13-0.24 s, a tenth of
-``isoflow info`` on a 512^3 volume. isoflow's kernels use no BLAS, and
+check that BLAS exists, an import that is a noticeable share of a short
+command (``benchmarks/run.py`` times whole commands). isoflow's kernels use no BLAS, and
 scipy, a dependency, provides it. So that module is imported here with the
 check answered "yes" without the import, and the real check is put back at
 once. numba's linear algebra, where anyone uses it, still imports scipy and

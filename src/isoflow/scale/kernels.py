@@ -134,8 +134,7 @@ if HAVE_NUMBA:
         """The root of node a in a union-find's parent array (path halving).
 
         Indices are cast to unsigned: numba then skips the test for a
-        negative index (counted from the end) on every step of the chain,
-        which made the sweep's unions about 10% slower."""
+        negative index (counted from the end) on every step of the chain."""
         a = np.uint64(a)
         while np.uint64(parent[a]) != a:
             parent[a] = parent[np.uint64(parent[a])]

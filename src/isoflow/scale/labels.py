@@ -3,11 +3,10 @@ volume whole (small volumes, out-of-core blocks); large volumes take the
 run-based union-find of :mod:`isoflow.scale.kernels` instead.
 
 2D and 3D arrays are labelled by cc3d (connected-components-3d), other
-dimensions by ``scipy.ndimage.label``. cc3d imports in about 10 ms, where
-``import scipy.ndimage`` takes 0.3-0.4 s (scipy 1.17 parses the docstrings of
-its functions when the package loads): that import was half of what
-``isoflow info`` waits for on a small volume. cc3d also labels several times
-faster. Both number the components 1..n and give the same partition (the
+dimensions by ``scipy.ndimage.label``. cc3d imports at once, where
+``import scipy.ndimage`` parses the docstrings of its functions when the
+package loads, a large share of what ``isoflow info`` waits for on a small
+volume; cc3d also labels faster. Both number the components 1..n and give the same partition (the
 tests compare them).
 
 Two cc3d 4.1 bugs shape this: on *bool* input with 8-connectivity it may give

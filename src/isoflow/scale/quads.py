@@ -45,7 +45,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import index_dtype
-from .bitrows import config_at, popcount, trailing_zeros
+from .bitrows import config_at, trailing_zeros
 from .jit import njit
 
 #: the corners of a face with normal +e_a, counter-clockwise seen from
@@ -295,7 +295,7 @@ def _write_vertex(at, c, dm, ns, x, y, z, vertices, config, sheet):
     at += ns
     for a in range(3):
         if (dm >> a) & 1:
-            for t in range(2):
+            for _ in range(2):
                 vertices[at, 0] = x + 0.5 * (a == 0)
                 vertices[at, 1] = y + 0.5 * (a == 1)
                 vertices[at, 2] = z + 0.5 * (a == 2)

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+
 def box(lo, hi):
     """Corners and outward triangles of the box [lo, hi]."""
     import trimesh

@@ -22,7 +22,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, import_library, reading
+from .registry import RawVolume, check_shape, import_library, reading, stored_values
 
 DEFAULT_DATASET = "volume"
 
@@ -68,7 +68,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     h5py = import_library("h5py", "HDF5")
     name = (dataset or DEFAULT_DATASET).strip("/") or DEFAULT_DATASET
     with h5py.File(path, "w") as f:
-        ds = f.create_dataset(name, data=obj.volume.astype(np.uint8), compression="gzip",
+        ds = f.create_dataset(name, data=stored_values(obj.volume), compression="gzip",
                               chunks=True if obj.volume.size else None)
         ds.attrs["pitch"] = np.asarray(obj.pitch, np.float64)
         ds.attrs["origin"] = obj.origin

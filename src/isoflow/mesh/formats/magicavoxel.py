@@ -9,7 +9,8 @@ voxel size or origin (1 and 0 on reading; a warning when writing an object
 that has others) and models of at most 256 voxels a side.
 
 Written as version 150 with one model, every voxel colour index 1 (the
-default palette's white), which MagicaVoxel and the other .vox readers open.
+default palette's white), which MagicaVoxel and the other .vox readers open;
+a label image's voxels get their label (1-255) as colour index.
 """
 
 from __future__ import annotations
@@ -94,8 +95,9 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
-    xyz = np.argwhere(obj.volume).astype(np.uint8)
-    xyzi = np.column_stack([xyz, np.ones(len(xyz), np.uint8)]) if len(xyz) else np.zeros((0, 4), np.uint8)
+    xyz = np.argwhere(obj.volume)
+    colour = np.ones(len(xyz), np.uint8) if obj.volume.dtype == np.bool_ else obj.volume[tuple(xyz.T)]
+    xyzi = np.column_stack([xyz, colour]).astype(np.uint8) if len(xyz) else np.zeros((0, 4), np.uint8)
     size = struct.pack("<3i", *obj.volume.shape)
     voxels = struct.pack("<i", len(xyzi)) + xyzi.tobytes()
     children = _chunk(b"SIZE", size) + _chunk(b"XYZI", voxels)

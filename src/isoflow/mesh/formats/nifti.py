@@ -9,7 +9,7 @@ flips and permutations are exact, a rotation or shear is kept as its axis-
 aligned part with a warning). A fourth axis of length 1 is dropped; a 4D
 image is read as 4D (``info`` only) with voxel size 1 along the fourth axis.
 
-Written as NIfTI-1 (uint8 0/1) with a diagonal affine (the voxel sizes)
+Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
 NIfTI stores the affine in float32: pitch and origin are kept to float32
 precision.
@@ -24,7 +24,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, placement, quiet_logs, reading
+from .registry import RawVolume, check_shape, import_library, placement, quiet_logs, reading, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -57,7 +57,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     n = len(spacing)
     affine[:n, :n] = steps
     affine[:n, 3] = centre0
-    img = nib.Nifti1Image(obj.volume.astype(np.uint8), affine)
+    img = nib.Nifti1Image(stored_values(obj.volume), affine)
     img.set_sform(affine, code=1)
     img.set_qform(affine, code=1)
     img.header.set_xyzt_units("unknown")

@@ -27,7 +27,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, note, placement, reading
+from .registry import RawVolume, check_shape, import_library, note, placement, reading, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -97,4 +97,4 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         "kinds": ["domain"] * obj.ndim,
         "encoding": "gzip",
     }
-    nrrd.write(str(path), obj.volume.astype(np.uint8), header, index_order="F")
+    nrrd.write(str(path), stored_values(obj.volume), header, index_order="F")

@@ -43,6 +43,7 @@ from .registry import (
     reading,
     spatial_axes,
     split_dataset,
+    stored_values,
     to_xyz,
 )
 
@@ -261,7 +262,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     zarr = import_library("zarr", "OME-Zarr")
     spacing, corner = placement(obj)
-    data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (x, y, z) -> (z, y, x)
+    data = stored_values(np.ascontiguousarray(obj.volume.T))  # (x, y, z) -> (z, y, x)
     if path.is_dir() and not path.is_symlink():  # checked by check_output: an old store, --force given
         shutil.rmtree(path)
     elif path.exists() or path.is_symlink():

@@ -50,6 +50,8 @@ class VolumeFormat:
     imports: str | None = None
     #: suffixes read but not written (a detached header needs a second file)
     read_only: tuple[str, ...] = ()
+    #: the largest label a label image written in it keeps (None: any unsigned integer)
+    max_label: int | None = None
 
     def load(self):
         """The format's module (its library is imported only when used)."""
@@ -64,12 +66,12 @@ class VolumeFormat:
 
 FORMATS = (
     VolumeFormat("NumPy", (".npy", ".npz"), "npy", None),
-    VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile"),
+    VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1),  # ImageJ: 8 or 16 bits
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", imports="nrrd", read_only=(".nhdr",)),
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
-    VolumeFormat("binvox", (".binvox",), "binvox", None),
-    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None),
+    VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),  # a bit per voxel
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255),  # colour indices
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True),
 )
 
@@ -160,6 +162,35 @@ class RawVolume:
     offset: tuple[int, ...] | None = None
     parity: int = 0
     paint: bool = False
+
+
+@dataclass(frozen=True)
+class LabelVolume:
+    """A label image placed in the world, as the writers take it in place
+    of a :class:`DigitalObject`: unsigned integers in (x, y, z) order, voxel
+    ``v`` at ``origin + spacing * v`` (no lattice offset, parity 0)."""
+
+    volume: np.ndarray
+    pitch: float | np.ndarray
+    origin: np.ndarray
+    offset: tuple[int, ...] = (0, 0, 0)
+    parity: int = 0
+
+    @property
+    def ndim(self) -> int:
+        return self.volume.ndim
+
+    @property
+    def spacing(self) -> np.ndarray:
+        return np.broadcast_to(np.asarray(self.pitch, np.float64), (self.ndim,)).copy()
+
+    def world(self, array_points) -> np.ndarray:
+        return self.origin + self.spacing * np.asarray(array_points, np.float64)
+
+
+def stored_values(volume: np.ndarray) -> np.ndarray:
+    """What a format stores: a mask as 0/1 bytes, labels as they are."""
+    return volume.astype(np.uint8) if volume.dtype == np.bool_ else volume
 
 
 def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:

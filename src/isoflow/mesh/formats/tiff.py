@@ -33,6 +33,7 @@ from .registry import (
     placement,
     quiet_logs,
     reading,
+    stored_values,
     to_xyz,
 )
 
@@ -92,7 +93,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
     spacing = placement(obj)[0]
-    data = np.ascontiguousarray(obj.volume.T).astype(np.uint8)  # (z,) y, x
+    data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
     metadata = {"axes": "ZYX"[3 - obj.ndim:]}
     if obj.ndim == 3:
         metadata["spacing"] = float(spacing[2])

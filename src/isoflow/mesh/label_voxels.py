@@ -1,0 +1,309 @@
+"""Several meshes into one label image: label i for the i-th mesh.
+
+The grid is the one :mod:`isoflow.mesh.grid` lays over a single mesh, laid
+over the union of the meshes' bounding boxes (so one mesh gives the grid it
+gives alone). Each mesh is voxelised alone by
+:func:`~isoflow.mesh.voxelize.voxelize`, with the same ``fill``, on the block
+of that grid its bounding box covers (one voxel of margin: every voxel its
+surface touches), whose voxel centres and planes are the grid's bit for bit,
+and written into the label array as label i (1-based; 0 is background).
+
+Overlaps
+--------
+Where meshes overlap, ``overlap="later"`` (default) gives the voxel the
+label of the later mesh: the order of the meshes is their priority, as
+painting them one over the other would. ``overlap="error"`` refuses, naming
+the pairs. Either way the result counts the voxels inside two or more
+meshes (each once) and, per pair of labels ``(i, j)``, ``i < j``, the
+voxels of mesh j that held label i when mesh j was placed: the voxels label
+i lost to label j. Where no voxel lies in three or more meshes, that is
+the voxels the two meshes share.
+
+Memory
+------
+The label array (the smallest unsigned type that holds the labels), a bit
+per voxel for the overlaps and one mesh's block at a time (one byte per
+voxel) must fit in the budget; the largest block is known from the bounding
+boxes, so what would not fit is refused before any mesh is voxelised.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from ..errors import IsoflowError
+from ..results import Result
+from ..scale.memory import default_budget
+from .bodies import Body, mesh_bodies
+from .fills import Fill, check_fill
+from .grid import check_grid_memory, voxel_grid
+from .load import mesh_bbox
+from .voxelize import PROGRESS_UNITS, voxelize
+
+#: how the voxels inside two or more meshes are labelled
+Overlap = Literal["later", "error"]
+OVERLAPS: tuple[str, ...] = ("later", "error")
+#: what to do when the label array does not fit
+COARSER = "choose a coarser --resolution or --pitch (resolution= / pitch=)"
+#: pairs named in a note or an error; the rest are counted
+NAMED_PAIRS = 8
+
+
+@dataclass(frozen=True, eq=False)
+class LabelVoxelization(Result):
+    """Several meshes voxelised into one label image.
+
+    Reads as a mapping too (``r["names"]``); :meth:`to_dict` is every field
+    but the array.
+
+    Attributes
+    ----------
+    labels : unsigned integer ndarray (nx, ny, nz)
+        Label i (1-based) where mesh i fills the voxel, 0 elsewhere; the
+        smallest unsigned type that holds the labels.
+    origin : float64 ndarray (3,)
+        Lower corner of voxel (0, 0, 0).
+    pitch : float
+    names : tuple of str
+        Label i's mesh is ``names[i - 1]``: its file, ``FILE:NODE`` for a
+        scene's node, ``FILE:K`` for a connected body, ``mesh K`` for arrays.
+    voxels : tuple of int
+        Label i's voxels, ``voxels[i - 1]``, after overlaps are resolved.
+    fill : {"winding", "shell", "flood"}
+    overlap : {"later", "error"}
+    overlap_voxels : int
+        Voxels inside two or more meshes, each counted once.
+    overlaps : tuple of (int, int, int)
+        ``(i, j, n)``, ``i < j``: n voxels of label i were taken by the later
+        label j (see the module docstring), by ``(i, j)``.
+    notes : tuple of (str or None)
+        Each mesh's own note (:class:`~isoflow.mesh.fills.Voxelization`).
+    note : str or None
+        One line on the overlaps and on labels left without a voxel.
+    """
+
+    labels: np.ndarray = field(repr=False)
+    origin: np.ndarray
+    pitch: float
+    names: tuple[str, ...]
+    voxels: tuple[int, ...]
+    fill: Fill
+    overlap: Overlap
+    overlap_voxels: int
+    overlaps: tuple[tuple[int, int, int], ...]
+    notes: tuple[str | None, ...]
+    note: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field but the label array, as JSON takes it."""
+        out = super().to_dict()
+        del out["labels"]
+        return out
+
+
+def check_overlap(overlap: object) -> Overlap:
+    """``overlap`` if it names a rule, else an IsoflowError naming them."""
+    if overlap not in OVERLAPS:
+        raise IsoflowError(f"voxelize: overlap must be one of {', '.join(OVERLAPS)}, got {overlap!r}")
+    return overlap  # type: ignore[return-value]
+
+
+def label_dtype(count: int) -> np.dtype:
+    """The smallest unsigned integer type that holds labels 0 .. count.
+
+    Examples
+    --------
+    >>> [str(label_dtype(n)) for n in (1, 255, 256, 70000)]
+    ['uint8', 'uint8', 'uint16', 'uint32']
+    """
+    return np.dtype(np.min_scalar_type(max(1, int(count))))
+
+
+def union_grid(bodies: list[Body], pitch, resolution):
+    """``(pitch, origin, shape, what)`` of the grid :func:`voxel_grid` lays
+    over the union of the bodies' bounding boxes (their corners stand for
+    them: the grid depends on the box alone)."""
+    corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
+    used = np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)  # faces that use every corner
+    pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
+    return pitch, origin, shape, what
+
+
+def body_window(body: Body, origin: np.ndarray, pitch: float, shape) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """``(start, stop)``: the block of the grid holding every voxel whose
+    closed cube meets the body's bounding box, one voxel of margin against
+    rounding (for ``flood``, a border free of the shell)."""
+    lo, hi, _ = mesh_bbox(body.vertices, body.faces, body.name)
+    with np.errstate(over="ignore", invalid="ignore"):
+        a = np.floor((lo - origin) / pitch) - 1
+        b = np.floor((hi - origin) / pitch) + 2
+    n = np.asarray(shape, dtype=np.float64)
+    a = np.clip(np.nan_to_num(a, nan=0.0), 0, n - 1)
+    b = np.clip(np.nan_to_num(b, nan=n), a + 1, n)
+    return tuple(int(x) for x in a), tuple(int(x) for x in b)
+
+
+def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label: int, taken: np.ndarray,
+          rows: int = 64) -> int:
+    """Write ``label`` where the block ``vol`` (at ``start``) is in, the
+    later mesh winning; count into ``taken[i]`` the voxels taken from each
+    earlier label i and mark them in ``shared`` (a bit per voxel, packed
+    along the last axis). Returns the block's voxels. Row by row, so that
+    the temporaries stay a few rows of the block."""
+    sx, sy, sz = start
+    nx, ny, nz = vol.shape
+    block = labels[sx:sx + nx, sy:sy + ny, sz:sz + nz]
+    filled = 0
+    for a in range(0, nx, rows):
+        m, lab = vol[a:a + rows], block[a:a + rows]
+        filled += int(np.count_nonzero(m))
+        hit = m & (lab != 0)
+        if hit.any():
+            taken += np.bincount(lab[hit], minlength=len(taken))[:len(taken)]
+            i, j, k = np.nonzero(hit)
+            k = k + sz
+            np.bitwise_or.at(shared, (i + sx + a, j + sy, k >> 3), (128 >> (k & 7)).astype(np.uint8))
+        lab[m] = label
+    return filled
+
+
+def count_bits(packed: np.ndarray) -> int:
+    """The set bits of a packed bit array (without unpacking it)."""
+    table = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
+    return int(np.bincount(packed.reshape(-1), minlength=256) @ table)
+
+
+def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
+                    fill: Fill = "winding",
+                    overlap: Overlap = "later", split: bool = False, strict: bool = False,
+                    max_bytes: int | None = None,
+                    progress: Callable[[int, int], object] | None = None) -> LabelVoxelization:
+    """Several meshes voxelised into one label image on one grid.
+
+    Parameters
+    ----------
+    meshes : sequence
+        Mesh files (any format trimesh reads), ``(vertices, faces)`` pairs
+        or ``trimesh.Trimesh`` objects; mesh i gets label i (1-based).
+    pitch, resolution
+        At most one, for the grid over all of them (the rule of
+        :mod:`isoflow.mesh.grid` on the union of their bounding boxes);
+        neither: ``resolution=64``.
+    fill : {"winding", "shell", "flood"}
+        Every mesh's fill (:mod:`isoflow.mesh.fills`).
+    overlap : {"later", "error"}
+        A voxel inside several meshes gets the later one's label, or the
+        overlap is refused (IsoflowError naming the pairs and counts).
+    split
+        One label per body instead of per file: a scene's nodes, a mesh's
+        connected bodies (:mod:`isoflow.mesh.bodies`).
+    strict
+        As :func:`~isoflow.mesh.voxelize.voxelize`, for every mesh.
+    max_bytes
+        Memory budget (default: :func:`isoflow.scale.memory.default_budget`):
+        the label array, a bit per voxel and the largest mesh's block are
+        refused up front when they exceed it.
+    progress
+        Optional ``callable(done, total)`` as the meshes are voxelised.
+
+    Returns
+    -------
+    LabelVoxelization
+        The label array with its origin and pitch, the labels' names and
+        voxels, the overlaps, each mesh's note and one note of its own.
+
+    Raises
+    ------
+    IsoflowError
+        A bad mesh or option (naming the mesh), a grid beyond the budget,
+        overlaps with ``overlap="error"``.
+
+    Notes
+    -----
+    Each label's voxels, where no later mesh overlaps them, are exactly
+    what :func:`~isoflow.mesh.voxelize.voxelize` gives for that mesh alone
+    with ``pitch=r.pitch, grid=(r.origin, r.labels.shape)``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> a = trimesh.creation.box((2, 2, 2))
+    >>> b = trimesh.creation.box((2, 2, 2)); _ = b.apply_translation((1, 0, 0))
+    >>> r = voxelize_meshes([a, b], pitch=0.5)
+    >>> r.labels.shape, r.labels.dtype.name, r.voxels, r.overlaps
+    ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
+    """
+    fill, overlap = check_fill(fill), check_overlap(overlap)
+    if pitch is None and resolution is None:
+        resolution = 64
+    bodies = mesh_bodies(meshes, split)
+    pitch, origin, shape, what = union_grid(bodies, pitch, resolution)
+    dtype = label_dtype(len(bodies))
+    windows = [body_window(b, origin, pitch, shape) for b in bodies]
+    largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
+    budget = default_budget() if max_bytes is None else int(max_bytes)
+    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hint=COARSER)
+    fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
+    labels = np.zeros(shape, dtype)
+    shared = np.zeros((shape[0], shape[1], -(-shape[2] // 8)), np.uint8)
+    voxels = np.zeros(len(bodies) + 1, dtype=np.int64)
+    pairs: dict[tuple[int, int], int] = {}
+    notes = []
+    for n, (body, window) in enumerate(zip(bodies, windows), 1):
+        step = None if progress is None else _share(progress, n - 1, len(bodies))
+        try:
+            r = voxelize(body.vertices, body.faces, pitch=pitch, grid=(origin, shape), window=window, fill=fill,
+                         strict=strict, max_bytes=budget - fixed, progress=step, details=True)
+        except IsoflowError as exc:
+            raise IsoflowError(f"{body.name}: {exc}") from None
+        taken = np.zeros(n, dtype=np.int64)
+        voxels[n] = place(labels, shared, r.volume, window[0], n, taken)
+        voxels[:n] -= taken
+        pairs.update({(i, n): int(c) for i, c in enumerate(taken) if c})
+        notes.append(r.note)
+    names = tuple(b.name for b in bodies)
+    result = LabelVoxelization(
+        labels=labels, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch), names=names,
+        voxels=tuple(int(c) for c in voxels[1:]), fill=fill, overlap=overlap, overlap_voxels=count_bits(shared),
+        overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes))
+    if overlap == "error" and result.overlaps:
+        raise IsoflowError(f"voxelize: the meshes overlap: {overlap_text(result)}; overlap='later' (--overlap "
+                           "later) gives a shared voxel the later mesh's label")
+    return _with_note(result)
+
+
+def _share(progress, n: int, count: int):
+    """Mesh n's progress (from 0) as a share of the whole."""
+    return lambda done, total: progress(n * PROGRESS_UNITS + done * PROGRESS_UNITS // max(1, total),
+                                        count * PROGRESS_UNITS)
+
+
+def overlap_text(r: LabelVoxelization) -> str:
+    """The overlaps in words: how many voxels, the first pairs and counts."""
+    said = [f"{i} and {j}: {c}" for i, j, c in r.overlaps[:NAMED_PAIRS]]
+    more = len(r.overlaps) - NAMED_PAIRS
+    if more > 0:
+        said.append(f"and {more} more pairs")
+    voxels = "voxel lies" if r.overlap_voxels == 1 else "voxels lie"
+    return f"{r.overlap_voxels} {voxels} inside two or more meshes (labels {', '.join(said)})"
+
+
+def _with_note(r: LabelVoxelization) -> LabelVoxelization:
+    """The result with its one line on overlaps and empty labels."""
+    import dataclasses
+
+    parts = []
+    if r.overlaps:
+        parts.append(overlap_text(r) + "; the later mesh's label wins (--overlap error / overlap='error' "
+                                       "refuses)")
+    empty = [i for i, c in enumerate(r.voxels, 1) if c == 0]
+    if empty:
+        which = ", ".join(f"{i} ({r.names[i - 1]})" for i in empty[:NAMED_PAIRS])
+        parts.append(f"label{'s' if len(empty) > 1 else ''} {which} got no voxel (smaller than a voxel, no "
+                     "solid, or covered by later meshes)")
+    return dataclasses.replace(r, note="; ".join(parts) or None)

@@ -1,0 +1,191 @@
+"""``isoflow voxelize A B C -o LABELS`` as run (issue 25 item 6): the label
+image written in every format and read back by isoflow and by the format's
+own library (labels, pitch, origin), the overlap note and ``--overlap
+error``, ``--split`` of a multi-body STL and of a glTF scene, and ``info
+--labels`` on the result against each mesh's own voxelisation."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from test_input_errors import fails  # one line on stderr, exit 2
+
+from isoflow import analyze
+from isoflow.cli import main
+from isoflow.mesh.load import load_mesh
+from isoflow.mesh.volumes import read_label_image, read_volume
+from isoflow.mesh.voxelize import voxelize
+
+ROOT = Path(__file__).resolve().parents[1]
+TORUS = ROOT / "meshes" / "torus.obj"
+
+
+def ball(tmp_path, name, radius, centre):
+    s = trimesh.creation.icosphere(3, radius)
+    s.apply_translation(centre)
+    s.export(tmp_path / name)
+    return tmp_path / name
+
+
+def alone(path, pitch, origin, shape):
+    return voxelize(*load_mesh(path), pitch=pitch, grid=(origin, shape), details=True).volume
+
+
+@pytest.fixture
+def overlapping(tmp_path):
+    return ball(tmp_path, "a.stl", 1.0, (0, 0, 0)), ball(tmp_path, "b.obj", 0.8, (1.1, 0.3, -0.2))
+
+
+def test_two_overlapping_meshes_into_nifti_read_back_by_nibabel(tmp_path, capsys, overlapping):
+    import nibabel as nib
+
+    a, b = overlapping
+    out = tmp_path / "labels.nii.gz"
+    assert main(["voxelize", str(a), str(b), "--resolution", "40", "-o", str(out)]) == 0
+    printed, err = capsys.readouterr()
+    img = nib.load(out)
+    labels = np.asarray(img.dataobj)
+    assert img.get_data_dtype() == np.uint8 and set(np.unique(labels)) == {0, 1, 2}
+    pitch = np.asarray(img.header.get_zooms()[:3], float)
+    origin = img.affine[:3, 3] - pitch / 2  # the affine places voxel 0's centre
+    A, B = (alone(p, float(pitch[0]), origin, labels.shape) for p in (a, b))
+    assert np.array_equal(labels == 2, B) and np.array_equal(labels == 1, A & ~B)  # the later mesh wins
+    shared = int((A & B).sum())
+    assert f"note: {out}: {shared} voxels lie inside two or more meshes (labels 1 and 2: {shared})" in err
+    assert f"{out}: 2 labels in a {'x'.join(map(str, labels.shape))} grid (uint8)" in printed
+    assert f"{int((A & ~B).sum()):,}  {a}" in printed and f"{int(B.sum()):,}  {b}" in printed
+    back = read_label_image(out)  # isoflow's reader: the same array, pitch and origin
+    assert np.array_equal(back.array, labels) and np.allclose(back.spacing, pitch) and np.allclose(back.origin, origin)
+    assert np.array_equal(read_volume(out, label=2).volume, B)
+
+
+def test_overlap_error_refuses_in_one_line_and_writes_nothing(tmp_path, capsys, overlapping):
+    a, b = overlapping
+    out = tmp_path / "labels.nii.gz"
+    line = fails(capsys, "voxelize", a, b, "--resolution", "40", "--overlap", "error", "-o", out,
+                 words=("the meshes overlap", "voxels lie inside two or more meshes (labels 1 and 2: "))
+    assert not out.exists() and "--overlap later" in line
+    assert main(["voxelize", str(a), str(b), "--resolution", "40", "-o", str(out)]) == 0
+    capsys.readouterr()
+    fails(capsys, "voxelize", a, b, "--resolution", "40", "-o", out, words=("exists",))  # no --force
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".nrrd", ".h5", ".tif", ".zarr", ".vox"])
+def test_every_format_keeps_the_labels_and_its_library_reads_them(tmp_path, capsys, overlapping, suffix):
+    a, b = overlapping
+    out = tmp_path / f"labels{suffix}"
+    assert main(["voxelize", str(a), str(b), "--resolution", "24", "-o", str(out)]) == 0
+    capsys.readouterr()
+    back = read_label_image(out)
+    assert back.array.dtype == np.uint8 and set(np.unique(back.array)) == {0, 1, 2}
+    ref = tmp_path / "ref.npz"
+    assert main(["voxelize", str(a), str(b), "--resolution", "24", "-o", str(ref)]) == 0
+    capsys.readouterr()
+    ref = read_label_image(ref)
+    assert np.array_equal(back.array, ref.array)
+    if suffix == ".nrrd":
+        import nrrd
+
+        data, header = nrrd.read(str(out), index_order="F")
+        assert np.array_equal(data, ref.array) and np.allclose(np.diag(header["space directions"]), ref.spacing)
+    elif suffix == ".h5":
+        import h5py
+
+        with h5py.File(out) as f:
+            ds = f[next(iter(f))]
+            assert np.array_equal(ds[()], ref.array) and np.allclose(ds.attrs["origin"], ref.origin)
+    elif suffix == ".tif":
+        import tifffile
+
+        assert np.array_equal(tifffile.imread(out).T, ref.array)
+    elif suffix in (".npz", ".zarr"):
+        assert np.allclose(back.spacing, ref.spacing) and np.allclose(back.origin, ref.origin)
+
+
+def test_a_format_that_keeps_fewer_labels_is_refused_before_any_work(tmp_path, capsys, overlapping):
+    a, b = overlapping
+    fails(capsys, "voxelize", a, b, "--resolution", "24", "-o", tmp_path / "l.binvox",
+          words=("binvox keeps one label", "write .nii.gz"))
+    assert not (tmp_path / "l.binvox").exists()
+
+
+def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
+    parts = []
+    for k in range(5):
+        s = trimesh.creation.icosphere(2, 0.4)
+        s.apply_translation((k, 0.2 * k * k, 0))
+        parts.append(s)
+    path = tmp_path / "bodies.stl"
+    trimesh.util.concatenate(parts).export(path)
+    bodies = len(trimesh.load(path).split(only_watertight=False))
+    out = tmp_path / "bodies.npz"
+    assert main(["voxelize", str(path), "--split", "--resolution", "48", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    labels = read_label_image(out).array
+    assert bodies == 5 and set(np.unique(labels)) == set(range(bodies + 1))
+    assert f"{bodies} labels" in printed and f"{path}:{bodies}" in printed
+
+
+def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):
+    """A scene of named nodes: a torus (chi 0), a ball and a box; info
+    --labels on the label image gives each label the Euler characteristic
+    of the node's mesh voxelised alone on the same grid."""
+    torus = trimesh.load(TORUS, force="mesh")
+    torus.apply_scale(1 / torus.extents.max())
+    scene = trimesh.Scene()
+    scene.add_geometry(torus, node_name="ring", geom_name="torus")
+    scene.add_geometry(trimesh.creation.icosphere(3, 0.3), node_name="ball", geom_name="ball",
+                       transform=trimesh.transformations.translation_matrix([1.2, 0, 0]))
+    scene.add_geometry(trimesh.creation.box((0.4, 0.5, 0.6)), node_name="crate", geom_name="crate",
+                       transform=trimesh.transformations.translation_matrix([0, 1.1, 0]))
+    path = tmp_path / "scene.glb"
+    scene.export(path)
+    out = tmp_path / "scene.nii.gz"
+    assert main(["voxelize", str(path), "--split", "--resolution", "64", "-o", str(out)]) == 0
+    printed = capsys.readouterr().out
+    rows = [line.split() for line in printed.splitlines()[2:]]
+    assert [r[2] for r in rows] == [f"{path}:ball", f"{path}:crate", f"{path}:ring"]
+    image = read_label_image(out)
+    report = json.loads(_run(capsys, "info", out, "--labels", "--json"))
+    chis = {row["label"]: row["euler_characteristic"] for row in report["labels"]}
+    for label, node in enumerate(("ball", "crate", "ring"), 1):
+        transform, geometry = scene.graph[node]
+        mesh = scene.geometry[geometry].copy().apply_transform(transform)
+        own = voxelize(mesh.vertices, mesh.faces, pitch=float(image.spacing[0]), grid=(image.origin, image.array.shape),
+                       details=True).volume
+        assert np.array_equal(image.array == label, own), node
+        assert chis[label] == analyze(np.pad(own, 1))["euler_characteristic"], node
+    assert chis == {1: 1, 2: 1, 3: 0}  # solid balls and a solid torus
+
+
+def test_fill_applies_to_every_mesh(tmp_path, capsys):
+    panel = ROOT / "tests" / "mesh" / "data" / "panel.obj"
+    box = tmp_path / "box.stl"
+    trimesh.creation.box((1, 1, 1)).apply_translation((0, 0, 3)).export(box)
+    out = tmp_path / "l.npz"
+    assert main(["voxelize", str(panel), str(box), "--resolution", "32", "--fill", "shell", "-o", str(out)]) == 0
+    capsys.readouterr()
+    image = read_label_image(out)
+    for label, path in enumerate((panel, box), 1):
+        shell = voxelize(*load_mesh(path), pitch=float(image.spacing[0]), grid=(image.origin, image.array.shape),
+                         fill="shell", details=True).volume
+        assert shell.any() and np.array_equal(image.array == label, shell)
+
+
+def test_the_command_in_a_subprocess(tmp_path, overlapping):
+    a, b = overlapping
+    out = tmp_path / "l.nrrd"
+    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(a), str(b), "--pitch", "0.1", "-o", str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert "2 labels" in p.stdout and "inside two or more meshes" in p.stderr
+    assert read_label_image(out).spacing.tolist() == [0.1, 0.1, 0.1]
+
+
+def _run(capsys, *args):
+    assert main([*map(str, args)]) == 0, capsys.readouterr().err
+    return capsys.readouterr().out
