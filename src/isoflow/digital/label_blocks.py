@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..scale.memory import check_fits
+from .connectivity import check_connectivity
 from .label_table import (
     PIECE_BYTES_PER_VOXEL,
     checked_image,
@@ -32,7 +33,6 @@ from .label_table import (
     wanted_pieces,
 )
 from .lattice import DigitalObject
-from .connectivity import check_connectivity
 
 
 def label_table_blocks(

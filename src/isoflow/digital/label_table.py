@@ -34,7 +34,6 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-
 from functools import cache
 from typing import Literal
 
@@ -43,10 +42,10 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from .closed_surfaces import sweep_tables
+from .connectivity import check_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .surface import face_slots, pinch_lut, slot_octants
-from .connectivity import check_connectivity
 
 #: the columns of :func:`label_table`, in order ("bbox" and "centroid"
 #: stand for their numbered columns, "n" for n-0 .. n-8)
