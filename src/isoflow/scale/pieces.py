@@ -320,10 +320,21 @@ def label_pieces(volume: np.ndarray, first: int = 0, last: int | None = None, x0
 
 @njit(cache=True, nogil=True, inline="always")
 def _slot(pairs, key):
-    """The slot of ``key`` in the table, or the empty slot where it goes."""
+    """The slot of ``key`` in the table, or the empty slot where it goes:
+    first the ``2^SPREAD`` slots from the smaller piece's home (so that the
+    pairs of nearby pieces lie together), then, for a piece that touches
+    more pieces than that (the outside, a background around every cell),
+    from a slot of the whole key's hash, so that its pairs do not pile up
+    over its neighbours' homes."""
     mask = np.uint64(len(pairs) - 1)
-    q = key & np.uint64(0xFFFFFFFF)
-    s = (((key >> np.uint64(32)) << np.uint64(SPREAD)) + ((q * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(60))) & mask
+    h = key * np.uint64(0x9E3779B97F4A7C15)
+    s = (((key >> np.uint64(32)) << np.uint64(SPREAD)) + ((h & np.uint64(0xFFFFFFFF)) >> np.uint64(32 - SPREAD))) & mask
+    for _ in range(1 << SPREAD):
+        k = pairs[s, 0]
+        if k == key or k == EMPTY:
+            return s
+        s = (s + np.uint64(1)) & mask
+    s = (h >> np.uint64(32)) & mask
     while True:
         k = pairs[s, 0]
         if k == key or k == EMPTY:
