@@ -428,9 +428,10 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
         rows, chis = found["surface_rows"], found["surface_chi"]
         out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
         genera = np.empty(len(voxels), object)
-        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1))
-        for r in range(len(voxels)):
-            genera[r] = tuple(int(1 - c // 2) for c in chis[cuts[r]:cuts[r + 1]])
+        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1)).tolist()
+        every = (1 - np.asarray(chis, np.int64) // 2).tolist()  # Python ints, sliced per row
+        for r, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+            genera[r] = tuple(every[a:b])
         out["genera"] = genera
         out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
         out["pinched_vertices"] = features[:, _PINCH]

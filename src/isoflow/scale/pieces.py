@@ -694,7 +694,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     wanted = want.astype(np.bool_)
 
     def call(t):
-        pairs = new_pairs(1 << max(12, int(npieces << SPREAD).bit_length()))
+        pairs = new_pairs(1 << max(12, int(4 * npieces // len(parts)).bit_length()))
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
             np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
         used, i, j = 0, lo + parts[t][0], 0
