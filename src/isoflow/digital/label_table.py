@@ -326,19 +326,13 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
 
 def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces."""
-    from ..scale.piece_graph import grouped, label_topology
+    from ..scale.piece_graph import grouped, label_topology, pair_graph
     from ..scale.pieces import NONE
 
     n = len(piece_label)
-    keys, sums = passed["keys"], passed["sums"]
-    a, b = (keys >> np.uint64(32)).astype(np.int64), (keys & np.uint64(0xFFFFFFFF)).astype(np.int64)
-    touch = passed["kind"] < NONE
-    kind = passed["kind"][touch].astype(np.int64)
-    adj = grouped(np.concatenate([a[touch], b[touch]]), n, np.concatenate([b[touch], a[touch]]), np.concatenate([kind, kind]))
-    # the sheets by object piece: the smaller piece's of each pair, then the larger's
-    ab, ba = sums[:, 0] > 0, sums[:, 2] > 0
-    sheets = grouped(np.concatenate([a[ab], b[ba]]), n, np.concatenate([b[ab], a[ba]]),
-                  np.concatenate([sums[ab, 0], sums[ba, 2]]), np.concatenate([sums[ab, 1], sums[ba, 3]]))
+    adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
+    for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
+        passed[key] = passed[key][:0]
     nlabels = int(piece_label.max(initial=-1)) + 1
     lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)

@@ -50,6 +50,8 @@ FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 PIECE_BYTES = 8 + 8 + 24 + 24
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
 PAIR_BYTES = 32
+#: bytes per pair of :func:`vertex_pass`' entries (key, kind, four sums)
+PAIR_ENTRY_BYTES = 8 + 1 + 32
 #: the pairs of one piece start at slot ``piece << SPREAD`` (a piece of a
 #: grain map touches a few dozen others), so that the pairs a vertex row
 #: meets lie together
@@ -673,6 +675,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     high 32 bits), ``kind`` (how they touch) and ``sums`` (4 columns: the
     sheets whose object voxel is in the smaller piece and background voxel
     in the larger, their quarters of faces, then the same the other way).
+    A pair met by two threads has an entry from each (:func:`merge_pairs`
+    makes them one).
     """
     flat = unsigned(values)
     nxs, ny, nz = flat.shape
@@ -686,8 +690,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     count = np.uint32 if (nx + 1) * (ny + 1) * (nz + 1) < 2**32 else np.int64
     check_fits(len(parts) * npieces * (len(rows) * np.dtype(count).itemsize + 8),
                f"the vertex pass over {npieces:,} pieces")
-    features = [np.zeros((npieces, len(rows)), count) for _ in parts]
-    doubled = [np.zeros(npieces, np.int64) for _ in parts]
+    features = [np.zeros((npieces, len(rows)), count) for _ in parts or [0]]
+    doubled = [np.zeros(npieces, np.int64) for _ in parts or [0]]
     args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
     tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
@@ -705,31 +709,55 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
             if i < lo + parts[t][1]:
                 check_fits(PAIR_BYTES * 2 * len(pairs) * len(parts), f"the pairs of {npieces:,} pieces")
                 pairs = _move(pairs, new_pairs(2 * len(pairs)))
-        full = pairs[pairs[:, 0] != EMPTY]
-        del pairs
-        low, high = (full[:, 2:] & np.uint64(0xFFFFFFFF)).astype(np.int64), (full[:, 2:] >> np.uint64(32)).astype(np.int64)
-        return full[:, 0].copy(), full[:, 1].astype(np.uint8), np.stack([low[:, 0], high[:, 0], low[:, 1], high[:, 1]], axis=1)
+        return pairs, used
 
-    found_pairs = run([(call, t) for t in range(len(parts))])
-    if not found_pairs:
-        return {"features": np.zeros((npieces, table.shape[1]), np.int64), "doubled": np.zeros(npieces, np.int64),
-                "keys": np.zeros(0, np.uint64), "kind": np.zeros(0, np.uint8), "sums": np.zeros((0, 4), np.int64)}
-    keys, kind, sums = (np.concatenate(cols) for cols in zip(*found_pairs))
-    del found_pairs
-    if len(parts) > 1:
-        keys, kind, sums = merge_pairs(keys, kind, sums)
+    filled = run([(call, t) for t in range(len(parts))])
+    total = sum(used for _, used in filled)
+    check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
+    keys, kind, sums = np.empty(total, np.uint64), np.empty(total, np.uint8), np.empty((total, 4), np.int64)
+    at = 0
+    while filled:  # each table let go as soon as its entries are out
+        pairs, used = filled.pop(0)
+        _entries(pairs, keys[at:at + used], kind[at:at + used], sums[at:at + used])
+        at += used
+        del pairs
+    # a pair met by two threads (pieces at the seam between their layers)
+    # has an entry from each: the graph of pieces takes them as they are
     return {"features": features_of(features, rows), "doubled": sum(doubled[1:], doubled[0]),
             "keys": keys, "kind": kind, "sums": sums}
 
 
-def features_of(counts: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
+@njit(cache=True, nogil=True)
+def _entries(pairs, keys, kind, sums):
+    """The pair table's entries in slot order: keys, kinds and the sheets
+    and quarters each way (four columns)."""
+    n = 0
+    low = np.uint64(0xFFFFFFFF)
+    for s in range(len(pairs)):
+        if pairs[s, 0] != EMPTY:
+            keys[n] = pairs[s, 0]
+            kind[n] = pairs[s, 1]
+            sums[n, 0] = pairs[s, 2] & low
+            sums[n, 1] = pairs[s, 2] >> np.uint64(32)
+            sums[n, 2] = pairs[s, 3] & low
+            sums[n, 3] = pairs[s, 3] >> np.uint64(32)
+            n += 1
+
+
+def features_of(counts: list[np.ndarray], rows: np.ndarray, chunk: int = 1 << 15) -> np.ndarray:
     """Per piece, the features of its vertices: the threads' counts of each
-    group of configurations added up, times the group's row of features
-    (exact in float64: counts below 2^33, entries below 64)."""
-    total = counts[0].astype(np.int64)
+    group of configurations added up (in the first thread's counts: their
+    sum is at most the vertices, which its type holds), times the group's
+    row of features (exact in float64: counts below 2^33, entries below
+    64), a chunk of pieces at a time."""
+    total = counts[0]
     for more in counts[1:]:
         total += more
-    return np.rint(total.astype(np.float64) @ rows.astype(np.float64)).astype(np.int64)
+    out = np.empty((len(total), rows.shape[1]), np.int64)
+    weights = rows.astype(np.float64)
+    for a in range(0, len(total), chunk):
+        out[a:a + chunk] = np.rint(total[a:a + chunk].astype(np.float64) @ weights)
+    return out
 
 
 def merge_pairs(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray) -> tuple[np.ndarray, ...]:
