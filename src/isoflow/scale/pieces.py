@@ -586,15 +586,17 @@ def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, n
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, features, table, nsheet, qsum,
+def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
                  sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, used, val8, id8, cur, end,
                  nxt, rowv, pid, pmask, pval, local):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
     a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
-    and their pieces (:func:`piece_runs`); ``want[piece]``: its label is in
-    the table; ``base``: added to the slab's piece numbers (0 stays the
-    outside); ``used``: entries of the table; the rest is scratch.
+    and their pieces (:func:`piece_runs`); ``base``: added to the slab's
+    piece numbers (0 stays the outside); ``want[piece - fbase]``: its label
+    is in the table, ``features`` and ``doubled`` at ``piece - fbase`` too
+    (a thread's window of the pieces); ``used``: entries of the table; the
+    rest is scratch.
 
     A vertex row (i, j) walks its four voxel rows' runs together: where
     one of them begins a run, the vertex there has a block of two columns
@@ -631,7 +633,7 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
             z = 0
             while True:
                 # vertex z: column z - 1 (octants 0-3) and column z, which differ
-                used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, base, features, table, nsheet, qsum,
+                used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
                                sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask,
                                pval, local)
                 for q in range(4):
@@ -640,14 +642,14 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
                 t = min(min(nxt[0], nxt[1]), min(nxt[2], nxt[3]))
                 # vertices z + 1 .. t - 1: column z twice
                 if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, base, features,
+                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
                                    table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
                                    last, pid, pmask, pval, local)
                 if t == nz:  # vertex nz: the last column and the outside
                     for q in range(4):
                         id8[q + 4] = 0
                         val8[q + 4] = 0
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, base, features, table, nsheet,
+                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
                                    qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid,
                                    pmask, pval, local)
                     break
@@ -688,10 +690,13 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     rows, group = np.unique(np.asarray(table, np.int64), axis=0, return_inverse=True)
     # a group's count per piece is at most the vertices of the volume
     count = np.uint32 if (nx + 1) * (ny + 1) * (nz + 1) < 2**32 else np.int64
-    check_fits(len(parts) * npieces * (len(rows) * np.dtype(count).itemsize + 8),
+    # the pieces a thread meets: those of its voxel layers (numbered in C
+    # order, mostly a narrow range), so its counts cover that range only
+    windows = [piece_window(found, ny, x0, nxs, lo + p0 - 1, lo + p1 - 1) for p0, p1 in parts] or [(0, npieces)]
+    check_fits(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8),
                f"the vertex pass over {npieces:,} pieces")
-    features = [np.zeros((npieces, len(rows)), count) for _ in parts or [0]]
-    doubled = [np.zeros(npieces, np.int64) for _ in parts or [0]]
+    features = [np.zeros((b - a, len(rows)), count) for a, b in windows]
+    doubled = [np.zeros(b - a, np.int64) for a, b in windows]
     args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
     tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
@@ -704,8 +709,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
         used, i, j = 0, lo + parts[t][0], 0
         while i < lo + parts[t][1]:
             last = np.full(2, EMPTY, np.uint64)
-            used, i, j = _vertex_rows(*args, i, lo + parts[t][1], j, wanted, base, features[t], *tables, doubled[t],
-                                      contact, pairs, last, used, *scratch)
+            used, i, j = _vertex_rows(*args, i, lo + parts[t][1], j, wanted[windows[t][0]:], base,
+                                      base + windows[t][0], features[t], *tables, doubled[t], contact, pairs, last,
+                                      used, *scratch)
             if i < lo + parts[t][1]:
                 check_fits(PAIR_BYTES * 2 * len(pairs) * len(parts), f"the pairs of {npieces:,} pieces")
                 pairs = _move(pairs, new_pairs(2 * len(pairs)))
@@ -723,8 +729,20 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
         del pairs
     # a pair met by two threads (pieces at the seam between their layers)
     # has an entry from each: the graph of pieces takes them as they are
-    return {"features": features_of(features, rows), "doubled": sum(doubled[1:], doubled[0]),
+    return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
             "keys": keys, "kind": kind, "sums": sums}
+
+
+def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int) -> tuple[int, int]:
+    """The range [a, b) of the slab's piece numbers that its voxel layers
+    first .. last (global, inclusive, clipped to the slab of nxs layers
+    from x0) hold."""
+    r0 = max(first - x0, 0) * ny
+    r1 = min(last - x0 + 1, nxs) * ny
+    runs = found["runs"][found["offsets"][r0]:found["offsets"][max(r1, r0)]]
+    if not len(runs):
+        return 0, 0
+    return int(runs.min()), int(runs.max()) + 1
 
 
 @njit(cache=True, nogil=True)
@@ -744,19 +762,26 @@ def _entries(pairs, keys, kind, sums):
             n += 1
 
 
-def features_of(counts: list[np.ndarray], rows: np.ndarray, chunk: int = 1 << 15) -> np.ndarray:
-    """Per piece, the features of its vertices: the threads' counts of each
-    group of configurations added up (in the first thread's counts: their
-    sum is at most the vertices, which its type holds), times the group's
-    row of features (exact in float64: counts below 2^33, entries below
-    64), a chunk of pieces at a time."""
-    total = counts[0]
-    for more in counts[1:]:
-        total += more
-    out = np.empty((len(total), rows.shape[1]), np.int64)
+def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray,
+                chunk: int = 1 << 15) -> np.ndarray:
+    """Per piece, the features of its vertices: each thread's counts of
+    each group of configurations (over its window of pieces) times the
+    group's row of features (exact in float64: counts below 2^33, entries
+    below 64), added up, a chunk of pieces at a time."""
+    out = np.zeros((npieces, rows.shape[1]), np.int64)
     weights = rows.astype(np.float64)
-    for a in range(0, len(total), chunk):
-        out[a:a + chunk] = np.rint(total[a:a + chunk].astype(np.float64) @ weights)
+    for (lo, _), part in zip(windows, counts):
+        for a in range(0, len(part), chunk):
+            out[lo + a:lo + a + len(part[a:a + chunk])] += np.rint(part[a:a + chunk].astype(np.float64) @ weights
+                                                                   ).astype(np.int64)
+    return out
+
+
+def doubled_of(doubled: list[np.ndarray], windows: list, npieces: int) -> np.ndarray:
+    """Per piece, the threads' doubled edges added up."""
+    out = np.zeros(npieces, np.int64)
+    for (lo, hi), part in zip(windows, doubled):
+        out[lo:hi] += part
     return out
 
 
