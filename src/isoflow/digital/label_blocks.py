@@ -169,10 +169,10 @@ class _Stream:
         keys = cat["keys"].astype(np.uint64)
         p = one[(keys >> np.uint64(32)).astype(np.int64)]
         q = one[(keys & np.uint64(0xFFFFFFFF)).astype(np.int64)]
-        sums = cat["sums_pairs"].reshape(-1, 4)
+        sums = cat["sums_pairs"].astype(np.uint64).reshape(-1, 2)
         keep = p != q  # pairs within one piece (named in two slabs) touch nothing else
         flip = p > q
-        sums = np.where(flip[:, None], sums[:, [2, 3, 0, 1]], sums)
+        sums = np.where(flip[:, None], sums[:, ::-1], sums)
         lo, hi = np.minimum(p, q), np.maximum(p, q)
         keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
         keys, kind, sums = merge_pairs(keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep])

@@ -295,11 +295,11 @@ def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, sh_sta
                 adj_to[adj_fill[p]] = q
                 adj_kind[adj_fill[p]] = kind[r]
                 adj_fill[p] += 1
-        for p, q, c in ((a, b, 0), (b, a, 2)):
-            if sums[r, c] > 0:
+        for p, q, c in ((a, b, 0), (b, a, 1)):
+            if sums[r, c] & np.uint64(0xFFFFFFFF):
                 sh_to[sh_fill[p]] = q
-                sh_n[sh_fill[p]] = sums[r, c]
-                sh_q[sh_fill[p]] = sums[r, c + 1]
+                sh_n[sh_fill[p]] = sums[r, c] & np.uint64(0xFFFFFFFF)
+                sh_q[sh_fill[p]] = sums[r, c] >> np.uint64(32)
                 sh_fill[p] += 1
 
 
@@ -314,10 +314,10 @@ def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
             adj_start[a + 1] += 1
             adj_start[b + 1] += 1
             touching += 2
-        if sums[r, 0] > 0:
+        if sums[r, 0] & np.uint64(0xFFFFFFFF):
             sh_start[a + 1] += 1
             sheets += 1
-        if sums[r, 2] > 0:
+        if sums[r, 1] & np.uint64(0xFFFFFFFF):
             sh_start[b + 1] += 1
             sheets += 1
     return touching, sheets
@@ -326,7 +326,7 @@ def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
 def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int, none: int) -> tuple[tuple, tuple]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
     piece in the high 32 bits; ``kind`` below ``none`` where they touch;
-    ``sums``: sheets and quarters each way), grouped by piece in one
+    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece in one
     counting pass: the edges both ways (``adj_start``, ``adj_to``,
     ``adj_kind``) and, per object piece, its sheets' background pieces with
     their sheet and quarter counts (``sh_start``, ``sh_to``, ``sh_n``,

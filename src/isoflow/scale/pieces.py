@@ -50,8 +50,8 @@ FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 PIECE_BYTES = 8 + 8 + 24 + 24
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
 PAIR_BYTES = 32
-#: bytes per pair of :func:`vertex_pass`' entries (key, kind, four sums)
-PAIR_ENTRY_BYTES = 8 + 1 + 32
+#: bytes per pair of :func:`vertex_pass`' entries (key, kind, two packed sums)
+PAIR_ENTRY_BYTES = 8 + 1 + 16
 #: the pairs of one piece start at slot ``piece << SPREAD`` (a piece of a
 #: grain map touches a few dozen others), so that the pairs a vertex row
 #: meets lie together
@@ -674,9 +674,11 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     the pair table. Returns per piece ``features`` (n + 1, F) and
     ``doubled`` (lattice edges doubled at both ends, at their lower end),
     and the pair table's entries: ``keys`` (uint64: the smaller piece in the
-    high 32 bits), ``kind`` (how they touch) and ``sums`` (4 columns: the
-    sheets whose object voxel is in the smaller piece and background voxel
-    in the larger, their quarters of faces, then the same the other way).
+    high 32 bits), ``kind`` (how they touch) and ``sums`` (uint64, 2
+    columns: the sheets whose object voxel is in the smaller piece and
+    background voxel in the larger, plus their quarters of faces times
+    2^32; then the same the other way; each count below 2^32, so that
+    sums of entries add them both).
     A pair met by two threads has an entry from each (:func:`merge_pairs`
     makes them one).
     """
@@ -720,7 +722,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     filled = run([(call, t) for t in range(len(parts))])
     total = sum(used for _, used in filled)
     check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
-    keys, kind, sums = np.empty(total, np.uint64), np.empty(total, np.uint8), np.empty((total, 4), np.int64)
+    keys, kind, sums = np.empty(total, np.uint64), np.empty(total, np.uint8), np.empty((total, 2), np.uint64)
     at = 0
     while filled:  # each table let go as soon as its entries are out
         pairs, used = filled.pop(0)
@@ -748,17 +750,14 @@ def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int)
 @njit(cache=True, nogil=True)
 def _entries(pairs, keys, kind, sums):
     """The pair table's entries in slot order: keys, kinds and the sheets
-    and quarters each way (four columns)."""
+    and quarters each way (packed)."""
     n = 0
-    low = np.uint64(0xFFFFFFFF)
     for s in range(len(pairs)):
         if pairs[s, 0] != EMPTY:
             keys[n] = pairs[s, 0]
             kind[n] = pairs[s, 1]
-            sums[n, 0] = pairs[s, 2] & low
-            sums[n, 1] = pairs[s, 2] >> np.uint64(32)
-            sums[n, 2] = pairs[s, 3] & low
-            sums[n, 3] = pairs[s, 3] >> np.uint64(32)
+            sums[n, 0] = pairs[s, 2]
+            sums[n, 1] = pairs[s, 3]
             n += 1
 
 
