@@ -43,3 +43,25 @@ def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) 
 
 def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GiB"
+
+
+def mapped(shape, dtype, fill=None):
+    """An array in pages of its own (an anonymous memory map), zeros or
+    ``fill``: given back to the system the moment it is let go. The C
+    allocator keeps arrays of up to 32 MiB in heaps that it seldom gives
+    back once one of that size was freed, so a pass that makes and frees
+    many of them holds far more memory than it uses; the large passes over
+    label images take their tables this way."""
+    import mmap
+
+    import numpy as np
+
+    dtype = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    if count * dtype.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
+        out = np.zeros(shape, dtype)
+    else:
+        out = np.frombuffer(mmap.mmap(-1, count * dtype.itemsize), dtype, count).reshape(shape)
+    if fill is not None:
+        out[...] = fill
+    return out

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import njit
+from .memory import mapped
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -334,7 +335,7 @@ def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int, non
     them so)."""
     adj_start, sh_start = np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64)
     touching, sheets = _pair_degrees(keys, kind, sums, none, adj_start, sh_start)
-    adj = (adj_start, np.empty(touching, np.uint32), np.empty(touching, np.uint8))
-    sh = (sh_start, np.empty(sheets, np.uint32), np.empty(sheets, np.uint32), np.empty(sheets, np.uint32))
+    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8))
+    sh = (sh_start, mapped(sheets, np.uint32), mapped(sheets, np.uint32), mapped(sheets, np.uint32))
     _fill_pair_graph(keys, kind, sums, none, *adj, *sh)
     return adj, sh

@@ -38,7 +38,7 @@ import numpy as np
 
 from .compiled import run, slabs, thread_count
 from .jit import njit
-from .memory import check_fits
+from .memory import check_fits, mapped
 
 #: the key of an empty slot of the pair table
 EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -244,13 +244,16 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
     found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
     total = sum(len(s) for s, _ in found)
-    starts = np.concatenate([s for s, _ in found]) if found else np.zeros(0, np.int32)
-    parent = np.concatenate([p for _, p in found]) if found else np.zeros(0, np.uint32)
+    starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
+    np.concatenate([s for s, _ in found] or [starts[:0]], out=starts)
+    np.concatenate([p for _, p in found] or [parent[:0]], out=parent)
+    sizes = [len(s) for s, _ in found]
+    del found
     at = 0
-    for (lo, hi), (s, _) in zip(parts, found):
+    for (lo, hi), size in zip(parts, sizes):
         offsets[lo * ny:hi * ny] += at
-        parent[at:at + len(s)] += np.uint32(at)
-        at += len(s)
+        parent[at:at + size] += np.uint32(at)
+        at += size
     offsets[-1] = total
     for lo, _ in parts[1:]:
         _join_seam(flat, ny, nz, lo, offsets, starts, parent)
@@ -272,7 +275,7 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     """The runs of one slab of layers, joined within it (slab-local
     indices), in buffers that grow as they fill."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
-    starts, parent = np.empty(size, np.int32), np.empty(size, np.uint32)
+    starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
     used, x, y = 0, x_lo, 0
     while True:
         used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used)
@@ -280,7 +283,14 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
         check_fits(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image")
-        starts, parent = np.resize(starts, size), np.resize(parent, size)
+        starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
+
+
+def _grown_to(buffer: np.ndarray, size: int, used: int) -> np.ndarray:
+    """A buffer of ``size`` holding the first ``used`` entries of ``buffer``."""
+    out = mapped(size, buffer.dtype)
+    out[:used] = buffer[:used]
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -348,7 +358,7 @@ def new_pairs(cap: int) -> np.ndarray:
     """An empty pair table of ``cap`` slots (a power of two): per slot its
     key, kind, and sheets and quarters each way (one cache line holds two
     slots, so that a lookup reads one)."""
-    pairs = np.zeros((cap, 4), np.uint64)
+    pairs = mapped((cap, 4), np.uint64)
     pairs[:, 0] = EMPTY
     pairs[:, 1] = NONE
     return pairs
@@ -697,8 +707,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     windows = [piece_window(found, ny, x0, nxs, lo + p0 - 1, lo + p1 - 1) for p0, p1 in parts] or [(0, npieces)]
     check_fits(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8),
                f"the vertex pass over {npieces:,} pieces")
-    features = [np.zeros((b - a, len(rows)), count) for a, b in windows]
-    doubled = [np.zeros(b - a, np.int64) for a, b in windows]
+    features = [mapped((b - a, len(rows)), count) for a, b in windows]
+    doubled = [mapped(b - a, np.int64) for a, b in windows]
     args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
     tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
@@ -722,7 +732,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     filled = run([(call, t) for t in range(len(parts))])
     total = sum(used for _, used in filled)
     check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
-    keys, kind, sums = np.empty(total, np.uint64), np.empty(total, np.uint8), np.empty((total, 2), np.uint64)
+    keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
     at = 0
     while filled:  # each table let go as soon as its entries are out
         pairs, used = filled.pop(0)
@@ -767,7 +777,7 @@ def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.
     each group of configurations (over its window of pieces) times the
     group's row of features (exact in float64: counts below 2^33, entries
     below 64), added up, a chunk of pieces at a time."""
-    out = np.zeros((npieces, rows.shape[1]), np.int64)
+    out = mapped((npieces, rows.shape[1]), np.int64)
     weights = rows.astype(np.float64)
     for (lo, _), part in zip(windows, counts):
         for a in range(0, len(part), chunk):
