@@ -33,7 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from functools import cache
 from typing import Literal
 
@@ -170,7 +170,8 @@ def label_table(
     vol = checked_image(image)
     conn = check_connectivity(3, connectivity)
     # the pitch and origin checked as every object's are
-    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
+                          origin=None if origin is None else np.asarray(origin, float))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
@@ -226,9 +227,9 @@ def wanted_labels(labels, dtype) -> np.ndarray:
 JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 
 
-#: bytes per voxel of the compiled path beyond the image: the piece of
-#: every voxel (uint32); the pieces' and pairs' tables are checked as they
-#: are made
+#: bytes per voxel the compiled path takes beyond the image at the least
+#: (the runs of a label image with few per row, the per-thread tables);
+#: the runs, pieces and pairs beyond that are checked as they are made
 PIECE_BYTES_PER_VOXEL = 4
 
 
@@ -359,7 +360,7 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
-    surfs = []
+    surfs: list[tuple[int, int, int]] = []
     for row, label in enumerate(labels):
         at = np.searchsorted(values, label)
         if at == len(values) or values[at] != label:
@@ -374,12 +375,12 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
         found["features"][row] = _report_features(report, box)
         found["doubled"][row] = report.get("doubled_edges", 0)
         surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
-    surfs = np.array(surfs, np.int64).reshape(-1, 3)
-    found.update(surface_rows=surfs[:, 0], surface_chi=surfs[:, 1], surface_faces=surfs[:, 2])
+    table = np.array(surfs, np.int64).reshape(-1, 3)
+    found.update(surface_rows=table[:, 0], surface_chi=table[:, 1], surface_faces=table[:, 2])
     return found
 
 
-def _report_features(report: dict, box: np.ndarray) -> np.ndarray:
+def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
     """The feature sums of :func:`feature_table` from a report and the
     (padded) box: the faces per axis counted on the box."""
     out = np.zeros(17, np.int64)

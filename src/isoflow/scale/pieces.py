@@ -715,7 +715,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     wanted = want.astype(np.bool_)
 
     def call(t):
-        pairs = new_pairs(1 << max(12, int(4 * npieces // len(parts)).bit_length()))
+        pairs = new_pairs(1 << max(12, int(4 * (windows[t][1] - windows[t][0])).bit_length()))  # 4 a piece
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
             np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
         used, i, j = 0, lo + parts[t][0], 0
@@ -729,20 +729,26 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
                 pairs = _move(pairs, new_pairs(2 * len(pairs)))
         return pairs, used
 
-    filled = run([(call, t) for t in range(len(parts))])
+    keys, kind, sums = read_out(run([(call, t) for t in range(len(parts))]), npieces)
+    return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
+            "keys": keys, "kind": kind, "sums": sums}
+
+
+def read_out(filled: list, npieces: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries of the threads' pair tables ``(table, entries)`` in one
+    set of arrays, each table let go as soon as its entries are out. A pair
+    met by two threads (pieces at the seam between their layers) has an
+    entry from each: the graph of pieces takes them as they are."""
     total = sum(used for _, used in filled)
     check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
     keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
     at = 0
-    while filled:  # each table let go as soon as its entries are out
+    while filled:
         pairs, used = filled.pop(0)
         _entries(pairs, keys[at:at + used], kind[at:at + used], sums[at:at + used])
         at += used
         del pairs
-    # a pair met by two threads (pieces at the seam between their layers)
-    # has an entry from each: the graph of pieces takes them as they are
-    return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
-            "keys": keys, "kind": kind, "sums": sums}
+    return keys, kind, sums
 
 
 def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int) -> tuple[int, int]:
