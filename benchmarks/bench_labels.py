@@ -9,10 +9,11 @@ of jittered seeds on a grid (one per cell, ``--labels`` of them: the grid
 is the factorisation of the count nearest a cube), with pores cut in (balls
 of label 0, about 1.5 % of the volume); ``uint32``.
 
-In process, each call in a fresh child process (imports and numba's cached
-code loaded on a 160^3 corner first; the input loaded; the peak RSS reset
-through ``/proc/self/clear_refs``), the tools alternated, best of
-``--repeat`` (the peak memory: the largest):
+In process, in fresh child processes, the tools alternated, best of
+``--repeat`` children; each child loads imports and numba's cached code on
+a 160^3 corner, loads the input, resets its peak RSS (through
+``/proc/self/clear_refs``), calls the tool once untimed and once timed
+(the peak memory: the largest over both and over the children):
 
 * ``isoflow.label_table(image, 6)``: every label's row with its surfaces;
 * ``isoflow.analyze(image > 0, 6)``: one binary report of the same volume
@@ -139,20 +140,19 @@ def _tool(name: str):
 
 
 def child(name: str, path: Path, repeat: int) -> dict:
-    """One tool in this (child) process: best seconds, extra peak bytes."""
+    """One tool in this (child) process: best seconds of ``repeat`` calls
+    after a first, untimed one on the whole input (every compiled path it
+    takes loaded), and the extra peak bytes of all of them."""
     run = _tool(name)
-    # imports and numba's cached code, on a corner large enough to take the
-    # compiled paths the input takes, 4 million voxels (its memory is given back before the
-    # peak is reset, or not much of it is kept: an eighth of the input)
-    warm = np.ascontiguousarray(np.load(path, mmap_mode="r")[:160, :160, :160])
-    run(warm)
-    del warm
+    # imports and numba's cached code, most of it, on a corner (so that the
+    # first call's peak is the tool's, not the loading's)
+    run(np.ascontiguousarray(np.load(path, mmap_mode="r")[:160, :160, :160]))
     image = np.load(path)
     with open("/proc/self/clear_refs", "w") as fh:
         fh.write("5")  # the peak RSS back to the current RSS
     base = _rss()
+    result = run(image)
     best = float("inf")
-    result = None
     for _ in range(repeat):
         result = None  # the last call's result is not part of the next one's peak
         start = time.perf_counter()
