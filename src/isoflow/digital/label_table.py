@@ -171,7 +171,7 @@ def label_table(
     conn = check_connectivity(3, connectivity)
     # the pitch and origin checked as every object's are
     place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
-                          origin=None if origin is None else np.asarray(origin, float))
+                          origin=np.zeros(3) if origin is None else np.asarray(origin, float))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
@@ -337,8 +337,9 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     nlabels = int(piece_label.max(initial=-1)) + 1
     lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)
+    obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
-                           pieces["hi"], *adj, *sheets, *JOINS[conn])
+                           pieces["hi"], *adj, *sheets, obj_kind, b0_kind, bg_kind, cc_kind)
     b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],

@@ -324,7 +324,9 @@ def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
     return touching, sheets
 
 
-def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int, none: int) -> tuple[tuple, tuple]:
+def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
+               none: int) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray],
+                                  tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
     piece in the high 32 bits; ``kind`` below ``none`` where they touch;
     ``sums``: sheets plus quarters times 2^32, each way), grouped by piece in one
