@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
+from numpy.typing import DTypeLike
+
 from ..errors import IsoflowError
 
 
@@ -45,7 +48,7 @@ def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GiB"
 
 
-def mapped(shape, dtype, fill=None):
+def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) -> np.ndarray:
     """An array in pages of its own (an anonymous memory map), zeros or
     ``fill``: given back to the system the moment it is let go. The C
     allocator keeps arrays of up to 32 MiB in heaps that it seldom gives
@@ -54,14 +57,12 @@ def mapped(shape, dtype, fill=None):
     label images take their tables this way."""
     import mmap
 
-    import numpy as np
-
-    dtype = np.dtype(dtype)
+    kind = np.dtype(dtype)
     count = int(np.prod(shape, dtype=np.int64))
-    if count * dtype.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
-        out = np.zeros(shape, dtype)
+    if count * kind.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
+        out = np.zeros(shape, kind)
     else:
-        out = np.frombuffer(mmap.mmap(-1, count * dtype.itemsize), dtype, count).reshape(shape)
+        out = np.frombuffer(mmap.mmap(-1, count * kind.itemsize), kind, count).reshape(shape)
     if fill is not None:
         out[...] = fill
     return out
