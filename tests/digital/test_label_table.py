@@ -113,6 +113,30 @@ def test_many_pieces_grow_the_pair_table_and_threads_agree(rng):
             np.allclose(one[key], numpy[key]), key
 
 
+def cells(rng, shape=(26, 22, 24), count=400):
+    """A cell segmentation's form: hundreds of tiny labels (one to a few
+    voxels, some touching each other by faces, edges or vertices, some on
+    the border) in one background label 1 that touches every one of them,
+    with holes of 0 in it."""
+    image = np.ones(shape, np.uint32)
+    image[rng.random(shape) < 0.05] = 0
+    for label, corner in enumerate(rng.integers(0, np.array(shape) - 1, (count, 3)), start=2):
+        size = rng.integers(1, 3, 3)
+        image[tuple(slice(c, c + s) for c, s in zip(corner, size))] = label
+    return image
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("conn", [6, 26])
+def test_many_tiny_labels_in_one_background_equal_analyze(rng, conn, method):
+    """The background's piece and the outside touch hundreds of pieces each
+    (more than a piece's home in the pair table holds)."""
+    image = cells(rng)
+    table = assert_rows_equal_analyze(image, conn, method=method, threads=2)
+    # the background has a cavity or a tunnel round most cells
+    assert len(table["label"]) > 300 and table["b1"][0] + table["b2"][0] > 100
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_regionprops_gives_the_same_counts_boxes_centroids_and_euler_numbers(rng, method):
     from skimage.measure import regionprops

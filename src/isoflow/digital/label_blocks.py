@@ -21,6 +21,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..scale.memory import check_fits
+from .connectivity import check_connectivity
 from .label_table import (
     PIECE_BYTES_PER_VOXEL,
     checked_image,
@@ -32,7 +33,6 @@ from .label_table import (
     wanted_pieces,
 )
 from .lattice import DigitalObject
-from .connectivity import check_connectivity
 
 
 def label_table_blocks(
@@ -117,7 +117,7 @@ class _Stream:
 
     def slab(self, x0: int, x1: int) -> None:
         """The pieces and the vertex pass of voxel layers x0 .. x1 - 1."""
-        from ..scale.pieces import label_pieces, vertex_pass
+        from ..scale.pieces import piece_ids, piece_runs, vertex_pass
 
         a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
         shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
@@ -125,16 +125,17 @@ class _Stream:
                    f"a slab of {'x'.join(map(str, shape))} voxels of the label image",
                    hint="write the store with smaller chunks along its first axis")
         vol = np.ascontiguousarray(np.asarray(self.array[a:b]))
-        pieces = label_pieces(vol, first=x0 - a, last=x1 - a, x0=a)
-        ids = pieces.pop("ids")
+        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
-        passed = vertex_pass(vol, ids, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
+        passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
                              layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total)
-        numbered = ids.astype(np.int64) + self.total
         if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
-            pairs = np.stack([self.tail.reshape(-1), numbered[:2].reshape(-1)], axis=1)
+            head = piece_ids(pieces, vol.shape, (0, 2)).astype(np.int64) + self.total
+            pairs = np.stack([self.tail.reshape(-1), head.reshape(-1)], axis=1)
             self.parts["same"].append(np.unique(pairs, axis=0))
-        self.tail = numbered[x1 - 1 - a:x1 + 1 - a].copy() if x1 < self.nx else None
+        self.tail = None
+        if x1 < self.nx:
+            self.tail = piece_ids(pieces, vol.shape, (x1 - 1 - a, x1 + 1 - a)).astype(np.int64) + self.total
         for key in ("values", "counts", "sums", "lo", "hi"):
             self.parts[key].append(pieces[key][1:])
         self.parts["features"].append(passed["features"][1:])
@@ -168,10 +169,10 @@ class _Stream:
         keys = cat["keys"].astype(np.uint64)
         p = one[(keys >> np.uint64(32)).astype(np.int64)]
         q = one[(keys & np.uint64(0xFFFFFFFF)).astype(np.int64)]
-        sums = cat["sums_pairs"].reshape(-1, 4)
+        sums = cat["sums_pairs"].astype(np.uint64).reshape(-1, 2)
         keep = p != q  # pairs within one piece (named in two slabs) touch nothing else
         flip = p > q
-        sums = np.where(flip[:, None], sums[:, [2, 3, 0, 1]], sums)
+        sums = np.where(flip[:, None], sums[:, ::-1], sums)
         lo, hi = np.minimum(p, q), np.maximum(p, q)
         keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
         keys, kind, sums = merge_pairs(keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep])

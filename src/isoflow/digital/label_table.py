@@ -33,8 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
-
+from collections.abc import Iterable, Mapping, Sequence
 from functools import cache
 from typing import Literal
 
@@ -43,10 +42,10 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from .closed_surfaces import sweep_tables
+from .connectivity import check_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .surface import face_slots, pinch_lut, slot_octants
-from .connectivity import check_connectivity
 
 #: the columns of :func:`label_table`, in order ("bbox" and "centroid"
 #: stand for their numbered columns, "n" for n-0 .. n-8)
@@ -171,7 +170,8 @@ def label_table(
     vol = checked_image(image)
     conn = check_connectivity(3, connectivity)
     # the pitch and origin checked as every object's are
-    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
+                          origin=np.zeros(3) if origin is None else np.asarray(origin, float))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
@@ -227,9 +227,9 @@ def wanted_labels(labels, dtype) -> np.ndarray:
 JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 
 
-#: bytes per voxel of the compiled path beyond the image: the piece of
-#: every voxel (uint32); the pieces' and pairs' tables are checked as they
-#: are made
+#: bytes per voxel the compiled path takes beyond the image at the least
+#: (the runs of a label image with few per row, the per-thread tables);
+#: the runs, pieces and pairs beyond that are checked as they are made
 PIECE_BYTES_PER_VOXEL = 4
 
 
@@ -237,14 +237,14 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     """The rows by the compiled passes: the pieces, one vertex pass, the
     graph of pieces label by label (see the module docs)."""
     from ..scale.memory import check_fits
-    from ..scale.pieces import label_pieces, vertex_pass
+    from ..scale.pieces import piece_runs, vertex_pass
 
     copy = 0 if vol.flags.c_contiguous else vol.nbytes
     check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
-    pieces = label_pieces(vol)
+    pieces = piece_runs(vol)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
-    passed = vertex_pass(vol, pieces.pop("ids"), want, feature_table(conn), pass_tables(conn, surfaces))
+    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces))
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
 
 
@@ -256,7 +256,7 @@ def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
 
 
 def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
-    """Per piece (values as :func:`~isoflow.scale.pieces.label_pieces`
+    """Per piece (values as :func:`~isoflow.scale.pieces.piece_runs`
     gives them, 0 the outside), whether its label has a row."""
     want = values != 0 if wanted is None else np.isin(values, label_bits(wanted, dtype))
     want[0] = False
@@ -327,24 +327,19 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
 
 def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces."""
-    from ..scale.piece_graph import grouped, label_topology
+    from ..scale.piece_graph import grouped, label_topology, pair_graph
     from ..scale.pieces import NONE
 
     n = len(piece_label)
-    keys, sums = passed["keys"], passed["sums"]
-    a, b = (keys >> np.uint64(32)).astype(np.int64), (keys & np.uint64(0xFFFFFFFF)).astype(np.int64)
-    touch = passed["kind"] < NONE
-    kind = passed["kind"][touch].astype(np.int64)
-    adj = grouped(np.concatenate([a[touch], b[touch]]), n, np.concatenate([b[touch], a[touch]]), np.concatenate([kind, kind]))
-    # the sheets by object piece: the smaller piece's of each pair, then the larger's
-    ab, ba = sums[:, 0] > 0, sums[:, 2] > 0
-    sheets = grouped(np.concatenate([a[ab], b[ba]]), n, np.concatenate([b[ab], a[ba]]),
-                  np.concatenate([sums[ab, 0], sums[ba, 2]]), np.concatenate([sums[ab, 1], sums[ba, 3]]))
+    adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
+    for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
+        passed[key] = passed[key][:0]
     nlabels = int(piece_label.max(initial=-1)) + 1
     lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)
+    obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
-                           pieces["hi"], *adj, *sheets, *JOINS[conn])
+                           pieces["hi"], *adj, *sheets, obj_kind, b0_kind, bg_kind, cc_kind)
     b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],
@@ -366,7 +361,7 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
              "lo": np.zeros((len(labels), 3), np.int64), "hi": np.full((len(labels), 3), -1, np.int64),
              "features": np.zeros((len(labels), 17), np.int64), "doubled": np.zeros(len(labels), np.int64),
              "b0": np.zeros(len(labels), np.int64), "b2": np.zeros(len(labels), np.int64)}
-    surfs = []
+    surfs: list[tuple[int, int, int]] = []
     for row, label in enumerate(labels):
         at = np.searchsorted(values, label)
         if at == len(values) or values[at] != label:
@@ -381,12 +376,12 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
         found["features"][row] = _report_features(report, box)
         found["doubled"][row] = report.get("doubled_edges", 0)
         surfs += [(row, s["euler_characteristic"], s["faces"]) for s in report.get("surfaces", ())]
-    surfs = np.array(surfs, np.int64).reshape(-1, 3)
-    found.update(surface_rows=surfs[:, 0], surface_chi=surfs[:, 1], surface_faces=surfs[:, 2])
+    table = np.array(surfs, np.int64).reshape(-1, 3)
+    found.update(surface_rows=table[:, 0], surface_chi=table[:, 1], surface_faces=table[:, 2])
     return found
 
 
-def _report_features(report: dict, box: np.ndarray) -> np.ndarray:
+def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
     """The feature sums of :func:`feature_table` from a report and the
     (padded) box: the faces per axis counted on the box."""
     out = np.zeros(17, np.int64)
@@ -429,9 +424,10 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
         rows, chis = found["surface_rows"], found["surface_chi"]
         out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
         genera = np.empty(len(voxels), object)
-        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1))
-        for r in range(len(voxels)):
-            genera[r] = tuple(int(1 - c // 2) for c in chis[cuts[r]:cuts[r + 1]])
+        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1)).tolist()
+        every = (1 - np.asarray(chis, np.int64) // 2).tolist()  # Python ints, sliced per row
+        for r, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+            genera[r] = tuple(every[a:b])
         out["genera"] = genera
         out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
         out["pinched_vertices"] = features[:, _PINCH]

@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import os
 
+import numpy as np
+from numpy.typing import DTypeLike
+
 from ..errors import IsoflowError
 
 
@@ -43,3 +46,23 @@ def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) 
 
 def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GiB"
+
+
+def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) -> np.ndarray:
+    """An array in pages of its own (an anonymous memory map), zeros or
+    ``fill``: given back to the system the moment it is let go. The C
+    allocator keeps arrays of up to 32 MiB in heaps that it seldom gives
+    back once one of that size was freed, so a pass that makes and frees
+    many of them holds far more memory than it uses; the large passes over
+    label images take their tables this way."""
+    import mmap
+
+    kind = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    if count * kind.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
+        out = np.zeros(shape, kind)
+    else:
+        out = np.frombuffer(mmap.mmap(-1, count * kind.itemsize), kind, count).reshape(shape)
+    if fill is not None:
+        out[...] = fill
+    return out

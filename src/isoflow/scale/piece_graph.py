@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import njit
+from .memory import mapped
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -277,3 +278,66 @@ def grouped(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarra
     each group (n + 1) and the columns in that order."""
     start, order = _counting_order(np.asarray(source, np.int64), n)
     return (start,) + tuple(np.ascontiguousarray(np.take(c, order)) for c in columns)
+
+
+@njit(cache=True, nogil=True)
+def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, sh_start, sh_to, sh_n, sh_q):
+    """Both groupings of :func:`pair_graph` (their starts hold each group's
+    size, shifted by one, on entry)."""
+    for g in range(len(adj_start) - 1):
+        adj_start[g + 1] += adj_start[g]
+        sh_start[g + 1] += sh_start[g]
+    adj_fill = adj_start[:-1].copy()
+    sh_fill = sh_start[:-1].copy()
+    for r in range(len(keys)):
+        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
+        if kind[r] < none:
+            for p, q in ((a, b), (b, a)):
+                adj_to[adj_fill[p]] = q
+                adj_kind[adj_fill[p]] = kind[r]
+                adj_fill[p] += 1
+        for p, q, c in ((a, b, 0), (b, a, 1)):
+            if sums[r, c] & np.uint64(0xFFFFFFFF):
+                sh_to[sh_fill[p]] = q
+                sh_n[sh_fill[p]] = sums[r, c] & np.uint64(0xFFFFFFFF)
+                sh_q[sh_fill[p]] = sums[r, c] >> np.uint64(32)
+                sh_fill[p] += 1
+
+
+@njit(cache=True, nogil=True)
+def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
+    """Each piece's edges and sheet entries, counted at its start + 1."""
+    touching = 0
+    sheets = 0
+    for r in range(len(keys)):
+        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
+        if kind[r] < none:
+            adj_start[a + 1] += 1
+            adj_start[b + 1] += 1
+            touching += 2
+        if sums[r, 0] & np.uint64(0xFFFFFFFF):
+            sh_start[a + 1] += 1
+            sheets += 1
+        if sums[r, 1] & np.uint64(0xFFFFFFFF):
+            sh_start[b + 1] += 1
+            sheets += 1
+    return touching, sheets
+
+
+def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
+               none: int) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray],
+                                  tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """The graph of pieces from the vertex pass' pairs (keys: the smaller
+    piece in the high 32 bits; ``kind`` below ``none`` where they touch;
+    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece in one
+    counting pass: the edges both ways (``adj_start``, ``adj_to``,
+    ``adj_kind``) and, per object piece, its sheets' background pieces with
+    their sheet and quarter counts (``sh_start``, ``sh_to``, ``sh_n``,
+    ``sh_q``). Piece numbers and counts are held in 32 bits (the pass packs
+    them so)."""
+    adj_start, sh_start = np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64)
+    touching, sheets = _pair_degrees(keys, kind, sums, none, adj_start, sh_start)
+    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8))
+    sh = (sh_start, mapped(sheets, np.uint32), mapped(sheets, np.uint32), mapped(sheets, np.uint32))
+    _fill_pair_graph(keys, kind, sums, none, *adj, *sh)
+    return adj, sh

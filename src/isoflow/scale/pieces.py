@@ -10,16 +10,21 @@ by a face are in one piece, so the 18- and 26-components of a label, and
 the components of everything but a label, are unions of pieces joined
 where they touch by an edge or a vertex, which the vertex pass records.
 
-:func:`label_pieces` is a union-find whose parent array is the output
-itself (a voxel's parent is the flat index of a voxel before it), so the
-labelling costs the 4-byte piece number per voxel and nothing more; a
-second pass in C order numbers the roots 1..n and gives each piece its
-value, voxel count, coordinate sums and bounding box.
+:func:`piece_runs` cuts every row of the last axis into *runs* (maximal
+stretches of one value) and joins, in a union-find over the runs (a run's
+parent is a run before it), each run with the runs of the two rows before
+it that it touches by a face and shares a value with; so the labelling
+costs 8 bytes per run, not per voxel, and a grain map has few runs per
+row. A second pass in C order numbers the roots 1..n and gives each piece
+its value, voxel count, coordinate sums and bounding box.
 
-:func:`vertex_pass` visits every lattice vertex; where its 2x2x2 block
-holds more than one piece, it adds, for every label in the block (octant
-bit ``o`` set where octant ``o`` holds the label), the configuration's row
-of a feature table to the piece of the label's first octant, and the
+:func:`vertex_pass` walks every vertex row along the runs of its four
+voxel rows: between two places where one of them begins a run, every
+vertex has the same block, which is counted once with the number of those
+vertices. Where a block holds more than one piece, it adds, for every
+label in the block (octant bit ``o`` set where octant ``o`` holds the
+label), one to the piece of the label's first octant in the column of the
+configuration's group (configurations with one row of features), and the
 configuration's sheets (:func:`isoflow.digital.closed_surfaces.sweep_tables`)
 to the pair (object piece, background piece) of each; and it records every
 pair of pieces the block holds with the closest way they touch (1 face,
@@ -33,7 +38,7 @@ import numpy as np
 
 from .compiled import run, slabs, thread_count
 from .jit import njit
-from .memory import check_fits
+from .memory import check_fits, mapped
 
 #: the key of an empty slot of the pair table
 EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -44,7 +49,13 @@ FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 #: bytes per piece of the statistics (value, count, three sums, two corners)
 PIECE_BYTES = 8 + 8 + 24 + 24
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
-PAIR_BYTES = 8 + 1 + 16
+PAIR_BYTES = 32
+#: bytes per pair of :func:`vertex_pass`' entries (key, kind, two packed sums)
+PAIR_ENTRY_BYTES = 8 + 1 + 16
+#: the pairs of one piece start at slot ``piece << SPREAD`` (a piece of a
+#: grain map touches a few dozen others), so that the pairs a vertex row
+#: meets lie together
+SPREAD = 4
 
 
 def unsigned(volume: np.ndarray) -> np.ndarray:
@@ -73,108 +84,180 @@ def _find(parent, x):
 @njit(cache=True, nogil=True, inline="always")
 def _union(parent, a, b):
     """Join the sets of a and b under the smaller root (so that every
-    parent precedes its child). Returns 1 when they were apart."""
+    parent precedes its child)."""
     ra, rb = _find(parent, a), _find(parent, b)
-    if ra == rb:
-        return 0
     if ra < rb:
         parent[rb] = ra
-    else:
+    elif rb < ra:
         parent[ra] = rb
-    return 1
 
 
 @njit(cache=True, nogil=True)
-def _join_voxels(flat, ids, nx, ny, nz):
-    """First pass: ``ids`` becomes a union-find over the voxels (a voxel's
-    parent precedes it). A voxel takes its row predecessor's parent when
-    they are equal, and is joined to its face neighbours in the rows
-    before it where a contact begins (where both predecessors touch too,
-    the two are joined already). Returns the number of sets."""
-    sy, sx = nz, ny * nz
+def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
+    """Join the runs [a0, a1) of the voxel row at flat index ``row_a`` with
+    the runs [b0, b1) of the row at ``row_b`` that they touch by a face and
+    share a value with. Both rows cut [0, nz) into runs, so walking them
+    together, always stepping past the run that ends first, meets every
+    overlapping pair once."""
+    ia, ib = a0, b0
+    va, vb = flat[row_a + starts[ia]], flat[row_b + starts[ib]]
+    while True:
+        if va == vb:
+            _union(parent, ia, ib)
+        ea = starts[ia + 1] if ia + 1 < a1 else nz
+        eb = starts[ib + 1] if ib + 1 < b1 else nz
+        if ea <= eb:
+            ia += 1
+            if ia == a1:
+                return
+            va = flat[row_a + starts[ia]]
+        if eb <= ea:
+            ib += 1
+            if ib == b1:
+                return
+            vb = flat[row_b + starts[ib]]
+
+
+@njit(cache=True, nogil=True)
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used):
+    """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
+    y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
+    each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
+    each run joined in ``parent`` with the runs of rows (x, y - 1) and
+    (x - 1, y) it touches by a face and shares a value with (x - 1 within
+    the slab only). Returns ``(used, x, y)``: where it stopped because the
+    buffers might not hold the next row (``x == x_hi`` when done)."""
+    for x in range(x_at, x_hi):
+        for y in range(y_at if x == x_at else 0, ny):
+            if used + nz > len(starts):
+                return used, x, y
+            r = x * ny + y
+            row = r * nz
+            first = used
+            offsets[r] = first
+            prev = flat[row]
+            starts[used] = 0
+            parent[used] = used
+            used += 1
+            for z in range(1, nz):
+                v = flat[row + z]
+                if v != prev:
+                    starts[used] = z
+                    parent[used] = used
+                    used += 1
+                    prev = v
+            if y > 0:
+                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
+            if x > x_lo:
+                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1],
+                           row - ny * nz)
+    return used, x_hi, 0
+
+
+@njit(cache=True, nogil=True)
+def _join_seam(flat, ny, nz, x, offsets, starts, parent):
+    """Join the runs of voxel layer x with those of layer x - 1 (two slabs'
+    runs, numbered globally)."""
+    for y in range(ny):
+        r = x * ny + y
+        _join_rows(flat, nz, starts, parent, offsets[r], offsets[r + 1], r * nz, offsets[r - ny],
+                   offsets[r - ny + 1], (r - ny) * nz)
+
+
+@njit(cache=True, nogil=True)
+def _count_roots(parent):
+    """The number of sets of a union-find (its roots)."""
     n = 0
-    for x in range(nx):
-        for y in range(ny):
-            row = (x * ny + y) * nz
-            for z in range(nz):
-                v = row + z
-                val = flat[v]
-                left = z > 0 and flat[v - 1] == val
-                if left:
-                    ids[v] = ids[v - 1]
-                else:
-                    ids[v] = v
-                    n += 1
-                if y > 0 and flat[v - sy] == val and not (left and flat[v - sy - 1] == val):
-                    n -= _union(ids, v, v - sy)
-                if x > 0 and flat[v - sx] == val and not (left and flat[v - sx - 1] == val):
-                    n -= _union(ids, v, v - sx)
+    for k in range(len(parent)):
+        n += parent[k] == k
     return n
 
 
 @njit(cache=True, nogil=True)
-def _number_pieces(flat, ids, nx, ny, nz, first, last, x0, values, counts, sums, lo, hi):
-    """Second pass, in C order: roots get the numbers 1..n, every other
-    voxel its parent's number (the parent precedes it, so it has its number
-    already). Each run of one piece along a row adds to the piece's count,
-    coordinate sums and bounding box, for the layers first <= x < last
-    only (at global x offset ``x0``)."""
+def _number_runs(flat, offsets, starts, parent, ny, nz, first, last, x0, values, counts, sums, lo, hi):
+    """In C order, roots get the piece numbers 1..n and every other run its
+    parent's number (the parent precedes it, so it has its number already):
+    ``parent`` becomes each run's piece. Each run adds to its piece's
+    count, coordinate sums and bounding box, for the voxel layers
+    first <= x < last only (at global x offset ``x0``)."""
     n = 0
-    for x in range(nx):
+    for r in range(len(offsets) - 1):
+        x, y = r // ny, r % ny
         counted = first <= x < last
         gx = x + x0
-        for y in range(ny):
-            row = (x * ny + y) * nz
-            cur = -1
-            start = 0
-            for z in range(nz + 1):
-                if z < nz:
-                    v = row + z
-                    p = ids[v]
-                    if p == v:
-                        n += 1
-                        ids[v] = n
-                        values[n] = flat[v]
-                        piece = n
-                    else:
-                        piece = np.int64(ids[p])
-                        ids[v] = piece
-                else:
-                    piece = -2
-                if piece != cur:
-                    if cur >= 0 and counted:
-                        length = z - start
-                        counts[cur] += length
-                        sums[cur, 0] += gx * length
-                        sums[cur, 1] += y * length
-                        sums[cur, 2] += (start + z - 1) * length // 2
-                        lo[cur, 0] = min(lo[cur, 0], gx)
-                        lo[cur, 1] = min(lo[cur, 1], y)
-                        lo[cur, 2] = min(lo[cur, 2], start)
-                        hi[cur, 0] = max(hi[cur, 0], gx)
-                        hi[cur, 1] = max(hi[cur, 1], y)
-                        hi[cur, 2] = max(hi[cur, 2], z - 1)
-                    cur = piece
-                    start = z
+        k1 = offsets[r + 1]
+        for k in range(offsets[r], k1):
+            p = parent[k]
+            if p == k:
+                n += 1
+                parent[k] = n
+                values[n] = flat[r * nz + starts[k]]
+                piece = n
+            else:
+                piece = parent[p]
+                parent[k] = piece
+            if counted:
+                s = starts[k]
+                e = starts[k + 1] if k + 1 < k1 else nz
+                length = e - s
+                counts[piece] += length
+                sums[piece, 0] += gx * length
+                sums[piece, 1] += y * length
+                sums[piece, 2] += (s + e - 1) * length // 2
+                lo[piece, 0] = min(lo[piece, 0], gx)
+                lo[piece, 1] = min(lo[piece, 1], y)
+                lo[piece, 2] = min(lo[piece, 2], s)
+                hi[piece, 0] = max(hi[piece, 0], gx)
+                hi[piece, 1] = max(hi[piece, 1], y)
+                hi[piece, 2] = max(hi[piece, 2], e - 1)
+    return n
 
 
-def label_pieces(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0) -> dict:
-    """The 6-connected pieces of every value of a 3D integer image.
+#: bytes per run while the pieces are found: the z of its first voxel
+#: (int32) and its parent, then its piece (uint32)
+RUN_BYTES = 4 + 4
 
-    Returns ``ids`` (uint32, the volume's shape: each voxel's piece, 1..n in
-    C order of their first voxel), ``n``, and per piece (arrays of n + 1,
-    index 0 for the outside): ``values`` (uint64: the value's bits),
-    ``counts``, ``sums`` (coordinate sums, (n + 1, 3)), ``lo``/``hi``
-    (bounding box corners, inclusive). The statistics count the layers
-    ``first <= x < last`` of axis 0 only (all by default), at global
-    coordinate ``x + x0`` (for slabs of a larger volume).
+
+def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0) -> dict:
+    """The 6-connected pieces of every value of a 3D integer image, as runs.
+
+    A run is a maximal stretch of one value along a row of the last axis;
+    runs are numbered in C order. Returns ``offsets`` (int64, rows + 1:
+    row ``x * ny + y`` holds the runs ``offsets[r]:offsets[r + 1]``),
+    ``starts`` (int32: z of each run's first voxel), ``runs`` (uint32: each
+    run's piece, 1..n in C order of their first voxel), ``n``, and per
+    piece (arrays of n + 1, index 0 for the outside): ``values`` (uint64:
+    the value's bits), ``counts``, ``sums`` (coordinate sums, (n + 1, 3)),
+    ``lo``/``hi`` (bounding box corners, inclusive). The statistics count
+    the layers ``first <= x < last`` of axis 0 only (all by default), at
+    global coordinate ``x + x0`` (for slabs of a larger volume).
+
+    The runs of each slab of layers are found and joined with the rows
+    before them on a thread of their own, the slabs' seams joined after.
     """
     flat_vol = unsigned(volume)
     nx, ny, nz = flat_vol.shape
     if flat_vol.size >= 0xFFFFFFFF:
         raise ValueError("label_pieces numbers at most 2^32 - 2 voxels at once (use slabs)")
-    ids = np.empty(flat_vol.size, np.uint32)
-    n = _join_voxels(flat_vol.reshape(-1), ids, nx, ny, nz)
+    flat = flat_vol.reshape(-1)
+    offsets = np.zeros(nx * ny + 1, np.int64)
+    parts = slabs(nx, thread_count(flat.size)) if flat.size else []
+    found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
+    total = sum(len(s) for s, _ in found)
+    starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
+    np.concatenate([s for s, _ in found] or [starts[:0]], out=starts)
+    np.concatenate([p for _, p in found] or [parent[:0]], out=parent)
+    sizes = [len(s) for s, _ in found]
+    del found
+    at = 0
+    for (lo, hi), size in zip(parts, sizes):
+        offsets[lo * ny:hi * ny] += at
+        parent[at:at + size] += np.uint32(at)
+        at += size
+    offsets[-1] = total
+    for lo, _ in parts[1:]:
+        _join_seam(flat, ny, nz, lo, offsets, starts, parent)
+    n = int(_count_roots(parent))
     check_fits(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image",
                hint="a label image of noise has a piece for about every other voxel")
     values = np.zeros(n + 1, np.uint64)
@@ -182,10 +265,64 @@ def label_pieces(volume: np.ndarray, first: int = 0, last: int | None = None, x0
     sums = np.zeros((n + 1, 3), np.int64)
     lo = np.full((n + 1, 3), np.iinfo(np.int64).max, np.int64)
     hi = np.full((n + 1, 3), -1, np.int64)
-    _number_pieces(flat_vol.reshape(-1), ids, nx, ny, nz, first, nx if last is None else last, x0,
-                   values, counts, sums, lo, hi)
-    return {"ids": ids.reshape(flat_vol.shape), "n": int(n), "values": values, "counts": counts,
+    _number_runs(flat, offsets, starts, parent, ny, nz, first, nx if last is None else last, x0, values, counts,
+                 sums, lo, hi)
+    return {"offsets": offsets, "starts": starts, "runs": parent, "n": n, "values": values, "counts": counts,
             "sums": sums, "lo": lo, "hi": hi}
+
+
+def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray):
+    """The runs of one slab of layers, joined within it (slab-local
+    indices), in buffers that grow as they fill."""
+    size = max(nz, (x_hi - x_lo) * ny * nz // 16)
+    starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
+    used, x, y = 0, x_lo, 0
+    while True:
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used)
+        if x == x_hi:
+            return starts[:used], parent[:used]
+        size = min(2 * size, (x_hi - x_lo) * ny * nz)
+        check_fits(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image")
+        starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
+
+
+def _grown_to(buffer: np.ndarray, size: int, used: int) -> np.ndarray:
+    """A buffer of ``size`` holding the first ``used`` entries of ``buffer``."""
+    out = mapped(size, buffer.dtype)
+    out[:used] = buffer[:used]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _paint(offsets, starts, runs, nz, r0, r1, ids):
+    """Each voxel of rows r0 <= r < r1 its run's piece (``ids`` starts at row r0)."""
+    for r in range(r0, r1):
+        k1 = offsets[r + 1]
+        for k in range(offsets[r], k1):
+            e = starts[k + 1] if k + 1 < k1 else nz
+            for z in range(starts[k], e):
+                ids[(r - r0) * nz + z] = runs[k]
+
+
+def piece_ids(found: dict, shape: tuple[int, int, int], layers: tuple[int, int] | None = None) -> np.ndarray:
+    """The piece of every voxel of voxel layers ``layers`` (default all)
+    of :func:`piece_runs`' image of ``shape``: uint32, (layers, ny, nz)."""
+    nx, ny, nz = shape
+    a, b = (0, nx) if layers is None else layers
+    ids = np.empty((b - a, ny, nz), np.uint32)
+    _paint(found["offsets"], found["starts"], found["runs"], nz, a * ny, b * ny, ids.reshape(-1))
+    return ids
+
+
+def label_pieces(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0) -> dict:
+    """The 6-connected pieces of every value of a 3D integer image, voxel
+    by voxel: :func:`piece_runs` with ``ids`` (uint32, the volume's shape:
+    each voxel's piece) in place of the runs."""
+    found = piece_runs(volume, first, last, x0)
+    found["ids"] = piece_ids(found, volume.shape)
+    for key in ("offsets", "starts", "runs"):
+        del found[key]
+    return found
 
 
 # --------------------------------------------------------------------------
@@ -194,53 +331,77 @@ def label_pieces(volume: np.ndarray, first: int = 0, last: int | None = None, x0
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _slot(keys, key):
-    """The slot of ``key`` in the table, or the empty slot where it goes."""
-    mask = np.uint64(len(keys) - 1)
-    s = ((key * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)) & mask
+def _slot(pairs, key):
+    """The slot of ``key`` in the table, or the empty slot where it goes:
+    first the ``2^SPREAD`` slots from the smaller piece's home (so that the
+    pairs of nearby pieces lie together), then, for a piece that touches
+    more pieces than that (the outside, a background around every cell),
+    from a slot of the whole key's hash, so that its pairs do not pile up
+    over its neighbours' homes."""
+    mask = np.uint64(len(pairs) - 1)
+    h = key * np.uint64(0x9E3779B97F4A7C15)
+    s = (((key >> np.uint64(32)) << np.uint64(SPREAD)) + ((h & np.uint64(0xFFFFFFFF)) >> np.uint64(32 - SPREAD))) & mask
+    for _ in range(1 << SPREAD):
+        k = pairs[s, 0]
+        if k == key or k == EMPTY:
+            return s
+        s = (s + np.uint64(1)) & mask
+    s = (h >> np.uint64(32)) & mask
     while True:
-        k = keys[s]
+        k = pairs[s, 0]
         if k == key or k == EMPTY:
             return s
         s = (s + np.uint64(1)) & mask
 
 
+def new_pairs(cap: int) -> np.ndarray:
+    """An empty pair table of ``cap`` slots (a power of two): per slot its
+    key, kind, and sheets and quarters each way (one cache line holds two
+    slots, so that a lookup reads one)."""
+    pairs = mapped((cap, 4), np.uint64)
+    pairs[:, 0] = EMPTY
+    pairs[:, 1] = NONE
+    return pairs
+
+
 @njit(cache=True, nogil=True)
-def _grown(keys, kind, acc):
-    """The table moved into one twice as large."""
-    cap = 2 * len(keys)
-    nkeys = np.full(cap, EMPTY, np.uint64)
-    nkind = np.full(cap, NONE, np.uint8)
-    nacc = np.zeros((cap, 2), np.int64)
-    for s in range(len(keys)):
-        k = keys[s]
+def _move(pairs, bigger):
+    """The entries of ``pairs`` moved into the empty table ``bigger``."""
+    for s in range(len(pairs)):
+        k = pairs[s, 0]
         if k != EMPTY:
-            t = _slot(nkeys, k)
-            nkeys[t] = k
-            nkind[t] = kind[s]
-            nacc[t] = acc[s]
-    return nkeys, nkind, nacc
+            t = _slot(bigger, k)
+            for c in range(4):
+                bigger[t, c] = pairs[s, c]
+    return bigger
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _add(keys, kind, acc, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
+def _add(pairs, last, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
     """Add to the pair of pieces p != q: the closer ``how`` they touch, the
     sheets (and their quarters of faces) whose object voxel is in p and
     background voxel in q, and those the other way, each direction in one
-    int64 (sheets in the low half, quarters in the high). Returns 1 for a
-    new pair."""
+    word (sheets in the low half, quarters in the high). ``last``: the key
+    and slot of the previous call (a boundary's blocks one after another
+    mostly add to one pair). Returns 1 for a new pair."""
     if p > q:
         p, q = q, p
         sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
     key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
-    s = _slot(keys, key)
+    if key == last[0]:
+        s = last[1]
+    else:
+        s = _slot(pairs, key)
+        last[0] = key
+        last[1] = s
     new = 0
-    if keys[s] == EMPTY:
-        keys[s] = key
+    if pairs[s, 0] == EMPTY:
+        pairs[s, 0] = key
         new = 1
-    kind[s] = min(kind[s], how)
-    acc[s, 0] += sheets_pq | (quarters_pq << 32)
-    acc[s, 1] += sheets_qp | (quarters_qp << 32)
+    if how < pairs[s, 1]:
+        pairs[s, 1] = how
+    pairs[s, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
+    pairs[s, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
     return new
 
 
@@ -308,23 +469,27 @@ def _mask_of(id8, piece):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _label(flat, ny, nz, a, nx, i, j, k, piece, c, value, want, base, features, table, doubled, spokes):
-    """A label of the block, at its first piece: the configuration's
-    features, and the doubled edges where a spoke is doubled."""
+def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, features, table, doubled, spokes):
+    """A label of the block, at its first piece: its count of the
+    configuration's group (``table[c]``: configurations of one row of
+    features) goes up by the ``w`` vertices (i, j, k .. k + w - 1) that
+    have this block; and the doubled edges where a spoke is doubled (which
+    depend on the next vertices' blocks, so are counted one vertex at a
+    time)."""
     if want[piece - base]:
-        for f in range(features.shape[1]):
-            features[piece - base, f] += table[c, f]
+        features[piece - base, table[c]] += w
         if spokes[c] != 0:
-            doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, k, value, spokes[c], spokes)
+            for kk in range(k, k + w):
+                doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, keys, kind, acc, pid, pmask, pval, local):
+def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
+             quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
-    pieces in ``local`` (m x m x 2), then one entry per pair. Returns the
-    number of new pairs."""
+    pieces in ``local`` (m x m x 2), then one entry per pair; ``w``
+    vertices have this block. Returns the number of new pairs."""
     m = 0
     for o in range(8):
         p = id8[o]
@@ -338,24 +503,24 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, tabl
             m += 1
         pmask[u] |= 1 << o
     for u in range(m):
-        for w in range(m):
-            local[u, w, 0] = 0
-            local[u, w, 1] = 0
+        for t in range(m):
+            local[u, t, 0] = 0
+            local[u, t, 1] = 0
     for u in range(m):
         piece = pid[u]
         if piece == 0 or not want[piece - base]:
             continue
         c = pmask[u]
         merged = False
-        for w in range(m):
-            if w != u and pid[w] != 0 and pval[w] == pval[u]:
-                if w < u:  # the label was done at its first piece
+        for t in range(m):
+            if t != u and pid[t] != 0 and pval[t] == pval[u]:
+                if t < u:  # the label was done at its first piece
                     merged = True
                     break
-                c |= pmask[w]
+                c |= pmask[t]
         if merged:
             continue
-        _label(flat, ny, nz, a, nx, i, j, k, piece, c, pval[u], want, base, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, pval[u], want, base, features, table, doubled, spokes)
         for s_ in range(nsheet[c]):
             p, q = id8[sheet_obj[c, s_]], id8[sheet_bg[c, s_]]
             u1 = 0
@@ -364,15 +529,15 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, tabl
             w1 = 0
             while pid[w1] != q:
                 w1 += 1
-            local[u1, w1, 0] += 1
-            local[u1, w1, 1] += quarter[c, s_]
+            local[u1, w1, 0] += w
+            local[u1, w1, 1] += w * quarter[c, s_]
     new = 0
     for u in range(m):
-        for w in range(u + 1, m):
-            how = contact[pmask[u], pmask[w]]
-            if how < NONE or local[u, w, 0] != 0 or local[w, u, 0] != 0:
-                new += _add(keys, kind, acc, pid[u], pid[w], how, local[u, w, 0], local[u, w, 1], local[w, u, 0],
-                            local[w, u, 1])
+        for t in range(u + 1, m):
+            how = contact[pmask[u], pmask[t]]
+            if how < NONE or local[u, t, 0] != 0 or local[t, u, 0] != 0:
+                new += _add(pairs, last, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
+                            local[t, u, 1])
     return new
 
 
@@ -386,97 +551,146 @@ def _lowest(mask):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, want, base, features, table, nsheet, qsum, spokes,
-         doubled, contact, keys, kind, acc):
+def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, spokes,
+         doubled, contact, pairs, last):
     """A block of two pieces (the common case): pieces A (octants ``m0``)
     and B (the others, the first of them ``o1``). Each piece is its
     label's whole configuration there, and all of its sheets separate it
-    from the other. Returns the number of new pairs."""
+    from the other; ``w`` vertices have this block. Returns the number of
+    new pairs."""
     m1 = 255 ^ m0
     pa, pb = id8[0], id8[o1]
     if pa != 0 and pb != 0 and val8[0] == val8[o1]:  # one label, two pieces touching by an edge or a vertex
-        return _add(keys, kind, acc, pa, pb, contact[m0, m1], 0, 0, 0, 0)
-    na = nsheet[m0] if pa != 0 and want[pa - base] else 0
-    nb = nsheet[m1] if pb != 0 and want[pb - base] else 0
+        return _add(pairs, last, pa, pb, contact[m0, m1], 0, 0, 0, 0)
+    na = w * nsheet[m0] if pa != 0 and want[pa - base] else 0
+    nb = w * nsheet[m1] if pb != 0 and want[pb - base] else 0
     if pa != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, pa, m0, val8[0], want, base, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, val8[0], want, base, features, table, doubled, spokes)
     if pb != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
-    return _add(keys, kind, acc, pa, pb, contact[m0, m1], na, qsum[m0] if na else 0, nb, qsum[m1] if nb else 0)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
+    return _add(pairs, last, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
+                w * qsum[m1] if nb else 0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _block(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, sheet_obj, sheet_bg,
+           quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
+    """A block of two pieces or more, which ``w`` vertices (i, j, k ..
+    k + w - 1) have. Returns the number of new pairs."""
+    m0 = _mask_of(id8, id8[0])
+    o1 = _lowest(255 ^ m0)
+    if (m0 | _mask_of(id8, id8[o1])) == 255:
+        return _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum,
+                    spokes, doubled, contact, pairs, last)
+    return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj,
+                    sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz):
+    """Row q of the vertex row at its run c: the run's piece and value as
+    the block's octant q + 4 (the voxel at dz = 1), and where it ends."""
+    id8[q + 4] = base + np.int64(runs[c])
+    val8[q + 4] = flat[rowv[q] + starts[c]]
+    nxt[q] = starts[c + 1] if c + 1 < end[q] else nz
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _vertex_layers(flat, ids, ny, nz, a, nx, i0, i1, j0, k0, want, base, features, table, nsheet, qsum, sheet_obj,
-                   sheet_bg, quarter, spokes, doubled, contact, keys, kind, acc, used, val8, id8, rows, pid, pmask,
-                   pval, local):
-    """The vertex pass over layers i0 <= i < i1, from vertex (i0, j0, k0)
-    on (see the module docs). ``flat``/``ids``: the slab's values and
-    pieces (from voxel layer a of a volume of nx layers); ``want[piece]``:
-    its label is in the table; ``base``: added to the slab's piece numbers
-    (0 stays the outside); ``used``: entries of the table; the rest is
-    scratch. A vertex row (i, j) reads its four voxel rows a column at a
-    time and skips the columns where all eight voxels are one piece.
+def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
+                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, used, val8, id8, cur, end,
+                 nxt, rowv, pid, pmask, pval, local):
+    """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
+    on (see the module docs). ``flat``: the slab's values (from voxel layer
+    a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
+    and their pieces (:func:`piece_runs`); ``base``: added to the slab's
+    piece numbers (0 stays the outside); ``want[piece - fbase]``: its label
+    is in the table, ``features`` and ``doubled`` at ``piece - fbase`` too
+    (a thread's window of the pieces); ``used``: entries of the table; the
+    rest is scratch.
+
+    A vertex row (i, j) walks its four voxel rows' runs together: where
+    one of them begins a run, the vertex there has a block of two columns
+    that differ; between two such places every vertex has the same block,
+    its two columns equal, so it is counted once with the number of those
+    vertices (and skipped where the column is one piece).
 
     Compiled without reference counting (nothing is allocated here), which
-    the helpers' many array arguments would otherwise pay at every vertex.
-    Returns ``(used, i, j, k)``: the vertex where it stopped because the
+    the helpers' many array arguments would otherwise pay at every block.
+    Returns ``(used, i, j)``: the vertex row where it stopped because the
     table might fill up (``i == i1`` when done)."""
     for i in range(i0, i1):
         for j in range(j0 if i == i0 else 0, ny + 1):
-            first = k0 if i == i0 and j == j0 else 0
+            blocks = 1
             for q in range(4):  # row q = dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy), -1 outside
                 x, y = i - 1 + (q & 1), j - 1 + (q >> 1)
-                rows[q] = ((x - a) * ny + y) * nz if 0 <= x < nx and 0 <= y < ny else -1
-            for q in range(4, 8):
+                if 0 <= x < nx and 0 <= y < ny:
+                    r = (x - a) * ny + y
+                    cur[q], end[q], rowv[q] = offsets[r], offsets[r + 1], r * nz
+                    blocks += 2 * (end[q] - cur[q])
+                else:
+                    cur[q], end[q], rowv[q] = 0, 0, -1
+            if 10 * (used + 28 * blocks) > 7 * len(pairs):  # a block adds at most 28 pairs; a table at most 70 % full
+                return used, i, j
+            for q in range(4):
                 id8[q] = 0
-            prev_same = True
-            for k in range(nz + 1):
-                # column k: the four voxels (dz = 1) of this vertex, which
-                # are the dz = 0 voxels of the next
+                val8[q] = 0
+                if rowv[q] >= 0:
+                    _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
+                else:
+                    id8[q + 4] = 0
+                    val8[q + 4] = 0
+                    nxt[q] = nz
+            z = 0
+            while True:
+                # vertex z: column z - 1 (octants 0-3) and column z, which differ
+                used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
+                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask,
+                               pval, local)
                 for q in range(4):
                     id8[q] = id8[q + 4]
                     val8[q] = val8[q + 4]
-                    if k < nz and rows[q] >= 0:
-                        v = rows[q] + k
-                        id8[q + 4] = base + np.int64(ids[v])
-                        val8[q + 4] = flat[v]
-                    else:
+                t = min(min(nxt[0], nxt[1]), min(nxt[2], nxt[3]))
+                # vertices z + 1 .. t - 1: column z twice
+                if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
+                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
+                                   table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
+                                   last, pid, pmask, pval, local)
+                if t == nz:  # vertex nz: the last column and the outside
+                    for q in range(4):
                         id8[q + 4] = 0
-                same = id8[4] == id8[5] and id8[4] == id8[6] and id8[4] == id8[7]
-                if (same and prev_same and id8[0] == id8[4]) or k < first:
-                    prev_same = same
-                    continue
-                prev_same = same
-                if 10 * (used + 64) > 7 * len(keys):  # the most one vertex adds; a table at most 70 % full
-                    return used, i, j, k
-                m0 = _mask_of(id8, id8[0])
-                o1 = _lowest(255 ^ m0)
-                if (m0 | _mask_of(id8, id8[o1])) == 255:
-                    used += _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, want, base, features, table,
-                                 nsheet, qsum, spokes, doubled, contact, keys, kind, acc)
-                else:
-                    used += _several(val8, id8, flat, ny, nz, a, nx, i, j, k, want, base, features, table, nsheet,
-                                     sheet_obj, sheet_bg, quarter, spokes, doubled, contact, keys, kind, acc, pid,
-                                     pmask, pval, local)
-    return used, i1, 0, 0
+                        val8[q + 4] = 0
+                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
+                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid,
+                                   pmask, pval, local)
+                    break
+                for q in range(4):
+                    if nxt[q] == t:
+                        cur[q] += 1
+                        _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
+                z = t
+    return used, i1, 0
 
 
-def vertex_pass(values: np.ndarray, pieces: np.ndarray, want: np.ndarray, table: np.ndarray, sheet_tables,
+def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
                 layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0) -> dict:
     """The vertex pass (see the module docs) over a slab of a label image.
 
     ``values``: the slab (voxel layers ``x0 ..`` of a volume of ``nx``
-    layers, default: the whole volume); ``pieces``: its :func:`label_pieces`
-    numbers; ``want``: per piece (n + 1), whether its label is counted;
-    ``table``: (256, F) features per configuration; ``sheet_tables``:
+    layers, default: the whole volume); ``found``: its :func:`piece_runs`;
+    ``want``: per piece (n + 1), whether its label is counted; ``table``:
+    (256, F) features per configuration; ``sheet_tables``:
     :func:`isoflow.digital.closed_surfaces.sweep_tables`; ``layers``: the
     vertex layers (global, default all); ``base``: added to piece numbers in
     the pair table. Returns per piece ``features`` (n + 1, F) and
     ``doubled`` (lattice edges doubled at both ends, at their lower end),
     and the pair table's entries: ``keys`` (uint64: the smaller piece in the
-    high 32 bits), ``kind`` (how they touch) and ``sums`` (4 columns: the
-    sheets whose object voxel is in the smaller piece and background voxel
-    in the larger, their quarters of faces, then the same the other way).
+    high 32 bits), ``kind`` (how they touch) and ``sums`` (uint64, 2
+    columns: the sheets whose object voxel is in the smaller piece and
+    background voxel in the larger, plus their quarters of faces times
+    2^32; then the same the other way; each count below 2^32, so that
+    sums of entries add them both).
+    A pair met by two threads has an entry from each (:func:`merge_pairs`
+    makes them one).
     """
     flat = unsigned(values)
     nxs, ny, nz = flat.shape
@@ -484,35 +698,106 @@ def vertex_pass(values: np.ndarray, pieces: np.ndarray, want: np.ndarray, table:
     lo, hi = (0, nx + 1) if layers is None else layers
     nsheet, sheet_obj, sheet_bg, quarter, spokes, _ = (np.asarray(t, np.int64) for t in sheet_tables)
     npieces = len(want)
-    parts = slabs(hi - lo, thread_count(nxs * ny * nz))
-    check_fits(len(parts) * npieces * 8 * (table.shape[1] + 1), f"the vertex pass over {npieces:,} pieces")
-    features = [np.zeros((npieces, table.shape[1]), np.int64) for _ in parts]
-    doubled = [np.zeros(npieces, np.int64) for _ in parts]
-    args = (flat.reshape(-1), pieces.reshape(-1), ny, nz, x0, nx)
-    tables = (np.asarray(table, np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
+    parts = slabs(hi - lo, thread_count(nxs * ny * nz)) if flat.size else []
+    rows, group = np.unique(np.asarray(table, np.int64), axis=0, return_inverse=True)
+    # a group's count per piece is at most the vertices of the volume
+    count = np.uint32 if (nx + 1) * (ny + 1) * (nz + 1) < 2**32 else np.int64
+    # the pieces a thread meets: those of its voxel layers (numbered in C
+    # order, mostly a narrow range), so its counts cover that range only
+    windows = [piece_window(found, ny, x0, nxs, lo + p0 - 1, lo + p1 - 1) for p0, p1 in parts] or [(0, npieces)]
+    check_fits(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8),
+               f"the vertex pass over {npieces:,} pieces")
+    features = [mapped((b - a, len(rows)), count) for a, b in windows]
+    doubled = [mapped(b - a, np.int64) for a, b in windows]
+    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
+    tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
+    contact = contact_table()
+    wanted = want.astype(np.bool_)
 
     def call(t):
-        keys, kind, acc = np.full(1 << 12, EMPTY, np.uint64), np.full(1 << 12, NONE, np.uint8), np.zeros(
-            (1 << 12, 2), np.int64)
-        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(4, np.int64), np.zeros(8, np.int64),
-                   np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
-        used, i, j, k = 0, lo + parts[t][0], 0, 0
+        pairs = new_pairs(1 << max(12, int(4 * (windows[t][1] - windows[t][0])).bit_length()))  # 4 a piece
+        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
+            np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
+        used, i, j = 0, lo + parts[t][0], 0
         while i < lo + parts[t][1]:
-            used, i, j, k = _vertex_layers(*args, i, lo + parts[t][1], j, k, want.astype(np.bool_), base, features[t],
-                                        *tables, doubled[t], contact_table(), keys, kind, acc, used, *scratch)
+            last = np.full(2, EMPTY, np.uint64)
+            used, i, j = _vertex_rows(*args, i, lo + parts[t][1], j, wanted[windows[t][0]:], base,
+                                      base + windows[t][0], features[t], *tables, doubled[t], contact, pairs, last,
+                                      used, *scratch)
             if i < lo + parts[t][1]:
-                check_fits(PAIR_BYTES * 2 * len(keys) * len(parts), f"the pairs of {npieces:,} pieces")
-                keys, kind, acc = _grown(keys, kind, acc)
-        full = keys != EMPTY
-        low, high = acc[full] & 0xFFFFFFFF, acc[full] >> 32
-        return keys[full], kind[full], np.stack([low[:, 0], high[:, 0], low[:, 1], high[:, 1]], axis=1)
+                check_fits(PAIR_BYTES * 2 * len(pairs) * len(parts), f"the pairs of {npieces:,} pieces")
+                pairs = _move(pairs, new_pairs(2 * len(pairs)))
+        return pairs, used
 
-    found = run([(call, t) for t in range(len(parts))])
-    keys, kind, sums = (np.concatenate(cols) for cols in zip(*found))
-    if len(parts) > 1:
-        keys, kind, sums = merge_pairs(keys, kind, sums)
-    return {"features": sum(features[1:], features[0]), "doubled": sum(doubled[1:], doubled[0]),
+    keys, kind, sums = read_out(run([(call, t) for t in range(len(parts))]), npieces)
+    return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
             "keys": keys, "kind": kind, "sums": sums}
+
+
+def read_out(filled: list, npieces: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The entries of the threads' pair tables ``(table, entries)`` in one
+    set of arrays, each table let go as soon as its entries are out. A pair
+    met by two threads (pieces at the seam between their layers) has an
+    entry from each: the graph of pieces takes them as they are."""
+    total = sum(used for _, used in filled)
+    check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
+    keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
+    at = 0
+    while filled:
+        pairs, used = filled.pop(0)
+        _entries(pairs, keys[at:at + used], kind[at:at + used], sums[at:at + used])
+        at += used
+        del pairs
+    return keys, kind, sums
+
+
+def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int) -> tuple[int, int]:
+    """The range [a, b) of the slab's piece numbers that its voxel layers
+    first .. last (global, inclusive, clipped to the slab of nxs layers
+    from x0) hold."""
+    r0 = max(first - x0, 0) * ny
+    r1 = min(last - x0 + 1, nxs) * ny
+    runs = found["runs"][found["offsets"][r0]:found["offsets"][max(r1, r0)]]
+    if not len(runs):
+        return 0, 0
+    return int(runs.min()), int(runs.max()) + 1
+
+
+@njit(cache=True, nogil=True)
+def _entries(pairs, keys, kind, sums):
+    """The pair table's entries in slot order: keys, kinds and the sheets
+    and quarters each way (packed)."""
+    n = 0
+    for s in range(len(pairs)):
+        if pairs[s, 0] != EMPTY:
+            keys[n] = pairs[s, 0]
+            kind[n] = pairs[s, 1]
+            sums[n, 0] = pairs[s, 2]
+            sums[n, 1] = pairs[s, 3]
+            n += 1
+
+
+def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray,
+                chunk: int = 1 << 15) -> np.ndarray:
+    """Per piece, the features of its vertices: each thread's counts of
+    each group of configurations (over its window of pieces) times the
+    group's row of features (exact in float64: counts below 2^33, entries
+    below 64), added up, a chunk of pieces at a time."""
+    out = mapped((npieces, rows.shape[1]), np.int64)
+    weights = rows.astype(np.float64)
+    for (lo, _), part in zip(windows, counts):
+        for a in range(0, len(part), chunk):
+            out[lo + a:lo + a + len(part[a:a + chunk])] += np.rint(part[a:a + chunk].astype(np.float64) @ weights
+                                                                   ).astype(np.int64)
+    return out
+
+
+def doubled_of(doubled: list[np.ndarray], windows: list, npieces: int) -> np.ndarray:
+    """Per piece, the threads' doubled edges added up."""
+    out = np.zeros(npieces, np.int64)
+    for (lo, hi), part in zip(windows, doubled):
+        out[lo:hi] += part
+    return out
 
 
 def merge_pairs(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray) -> tuple[np.ndarray, ...]:
