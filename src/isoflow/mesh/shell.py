@@ -164,10 +164,10 @@ def orient2d(au, av, bu, bv, cu, cv):
         return -_sgn(bv - av) * _sgn(cu - au)
     if av == bv:
         return _sgn(bu - au) * _sgn(cv - av)
-    l = (bu - au) * (cv - av)
-    r = (bv - av) * (cu - au)
-    det = l - r
-    bound = _CCW_BOUND * (abs(l) + abs(r))
+    lhs = (bu - au) * (cv - av)
+    rhs = (bv - av) * (cu - au)
+    det = lhs - rhs
+    bound = _CCW_BOUND * (abs(lhs) + abs(rhs))
     if det > bound:
         return 1
     if -det > bound:
@@ -307,6 +307,16 @@ def _plane_separated(T, t, s, plane, c0, c1):
 # ---------------------------------------------------------------------------
 
 @njit(cache=True, nogil=True, inline="always")
+def _mark(out, i, j, k):
+    """Set voxel (i, j, k): 1 if it was not set yet (the shell's voxels are
+    counted as they are found, not by reading the volume again)."""
+    if out[i, j, k]:
+        return 0
+    out[i, j, k] = True
+    return 1
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _planes_below(PL, a, n, x, strict):
     """How many of the planes ``PL[a, :n + 1]`` are below x (at most x if
     not ``strict``): guessed from the even spacing, then settled by
@@ -420,10 +430,12 @@ def _line_extent(T, t, u, v, c):
 
 
 @njit(cache=True, nogil=True)
-def _shell(T, tri, PL, nv, xa, xb, scale, out):
+def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     """Mark in ``out`` (rows [xa, xb) of the grid) the voxels that
     triangles ``tri`` meet; ``PL[a, :nv[a] + 1]`` are the planes between
-    voxels along axis a, ``scale`` bounds the coordinates' magnitude."""
+    voxels along axis a, ``scale`` bounds the coordinates' magnitude.
+    Returns how many voxels were not set yet; ends early when ``stop[0]``
+    is set."""
     s = np.empty(3, dtype=np.int64)
     lo = np.empty(3, dtype=np.int64)
     hi = np.empty(3, dtype=np.int64)
@@ -434,7 +446,10 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
     plane = np.empty(5)
+    added = 0
     for q in range(len(tri)):
+        if stop[0]:
+            break
         t = tri[q]
         empty = False
         for a in range(3):
@@ -454,8 +469,6 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
-        wmin = min(T[t, 0, w], T[t, 1, w], T[t, 2, w])
-        wmax = max(T[t, 0, w], T[t, 1, w], T[t, 2, w])
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
             idx[v] = iv
@@ -517,7 +530,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
                 for k in range(k0, k1):
                     idx[w] = k
                     if sure0 <= k < sure1:
-                        out[idx[0] - xa, idx[1], idx[2]] = True
+                        added += _mark(out, idx[0] - xa, idx[1], idx[2])
                         continue
                     c0[w], c1[w] = PL[w, k], PL[w, k + 1]
                     if (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
@@ -525,7 +538,8 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
                             or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
                             or _plane_separated(T, t, s, plane, c0, c1)):
                         continue
-                    out[idx[0] - xa, idx[1], idx[2]] = True
+                    added += _mark(out, idx[0] - xa, idx[1], idx[2])
+    return added
 
 
 def grid_planes(origin, pitch: float, shape, start=(0, 0, 0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -560,6 +574,12 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     bool ndarray (xb - xa, ny, nz)
         True where the voxel's closed cube meets a triangle.
 
+    Raises
+    ------
+    Stopped
+        When :data:`isoflow.scale.cancel.STOP` was set (a signal) before
+        the shell was complete.
+
     Examples
     --------
     A triangle in the plane z = 1 between two layers of a 2 x 2 x 2 grid
@@ -570,27 +590,68 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     >>> fill_shell(T, planes, 0, 2)[:, :, :].sum(axis=(0, 1)).tolist()
     [1, 1]
     """
-    nv = np.array([len(p) - 1 for p in planes], dtype=np.int64)
     if out is None:
-        out = np.zeros((xb - xa, nv[1], nv[2]), dtype=bool)
-    T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
-    if len(T) == 0 or xb <= xa:
-        return out
-    xmin, xmax = T[:, :, 0].min(axis=1), T[:, :, 0].max(axis=1)
-    PL = np.full((3, nv.max() + 1), np.nan)
-    for a in range(3):
-        PL[a, :nv[a] + 1] = planes[a]
-    scale = float(max(np.abs(T).max(), *(np.abs(p[[0, -1]]).max() for p in planes)))
-    mid = (xa + xb) // 2
-    parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
-    calls = []
-    for a, b in parts:  # each part its own rows: the threads never write the same memory
-        tri = np.nonzero((xmax >= planes[0][a]) & (xmin <= planes[0][b]))[0]  # the triangles that reach it
-        calls.append((T, tri, PL, nv, a, b, scale, out[a - xa:b - xa]))
-    if len(calls) == 1:
-        _shell(*calls[0])
-        return out
-    from ..scale.cancel import run_pieces
-
-    run_pieces(lambda i: _shell(*calls[i]), len(calls), threads=2)  # off the main thread: a signal ends it
+        out = np.zeros((xb - xa,) + tuple(len(p) - 1 for p in planes[1:]), dtype=bool)
+    ShellGrid(T, planes).fill(xa, xb, out, threads=threads)
     return out
+
+
+def _spatial_order(T: np.ndarray) -> np.ndarray:
+    """The triangles in Morton (Z-curve) order of their centres on a 2**7
+    grid: neighbours follow each other, so the voxels they share are still
+    in cache (a shell voxel is marked by two or three triangles)."""
+    c = T.mean(axis=1)
+    lo, span = c.min(axis=0), float(np.ptp(c, axis=0).max())
+    q = ((c - lo) * (127.0 / span if span > 0 else 0.0)).astype(np.int64)
+    code = np.zeros(len(T), dtype=np.int64)
+    for b in range(7):
+        for a in range(3):
+            code |= ((q[:, a] >> b) & 1) << (3 * b + a)
+    return np.argsort(code, kind="stable")
+
+
+class ShellGrid:
+    """The triangles and the planes of a shell, set up once (O(triangles))
+    for every slab that is filled from them; small and picklable, so dask
+    can ship it to workers.
+
+    ``T`` (M, 3, 3) are the triangles in the frame of ``planes``
+    (:func:`grid_planes`), any triangles (degenerate, overlapping, in any
+    orientation).
+    """
+
+    def __init__(self, T: np.ndarray, planes):
+        T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
+        self.T = np.ascontiguousarray(T[_spatial_order(T)]) if len(T) else T
+        self.nv = np.array([len(p) - 1 for p in planes], dtype=np.int64)
+        self.x0 = np.asarray(planes[0], dtype=np.float64)
+        self.xmin, self.xmax = self.T[:, :, 0].min(axis=1), self.T[:, :, 0].max(axis=1)
+        self.PL = np.full((3, self.nv.max() + 1), np.nan)
+        for a in range(3):
+            self.PL[a, :self.nv[a] + 1] = planes[a]
+        self.scale = float(max(np.abs(self.T).max(initial=0.0), *(np.abs(p[[0, -1]]).max() for p in planes)))
+
+    def fill(self, xa: int, xb: int, out: np.ndarray, threads: int = 1) -> int:
+        """Set in ``out`` (bool (xb - xa, ny, nz)) the voxels of rows
+        [xa, xb) that the triangles meet; returns how many were not set
+        before (the shell's voxels, where ``out`` was all False).  With
+        ``threads=2`` the rows are split in two halves filled at once; a
+        signal (:data:`~isoflow.scale.cancel.STOP`) ends the work and
+        raises :class:`~isoflow.scale.cancel.Stopped`."""
+        from ..scale.cancel import STOP, Stopped, run_pieces
+
+        if len(self.T) == 0 or xb <= xa:
+            return 0
+        mid = (xa + xb) // 2
+        parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
+        added = [0] * len(parts)
+
+        def run(i: int) -> None:  # each part its own rows: the threads never write the same memory
+            a, b = parts[i]
+            tri = np.nonzero((self.xmax >= self.x0[a]) & (self.xmin <= self.x0[b]))[0]  # the triangles that reach it
+            added[i] = _shell(self.T, tri, self.PL, self.nv, a, b, self.scale, out[a - xa:b - xa], STOP)
+
+        run_pieces(run, len(parts), threads=len(parts))  # off the main thread: a signal ends it
+        if STOP[0]:
+            raise Stopped
+        return sum(added)
