@@ -317,15 +317,16 @@ def _mark(out, i, j, k):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _planes_below(PL, a, n, x, strict):
+def _planes_below(PL, a, n, x, strict, per_unit):
     """How many of the planes ``PL[a, :n + 1]`` are below x (at most x if
-    not ``strict``): guessed from the even spacing, then settled by
-    comparing with the planes themselves (so exact however they round)."""
+    not ``strict``): guessed from the even spacing (``per_unit`` planes per
+    unit), then settled by comparing with the planes themselves (so exact
+    however they round)."""
     if not x > PL[a, 0]:
         return 0 if (strict or not x == PL[a, 0]) else 1
     if not x < PL[a, n]:
         return n + 1 if (not strict or x > PL[a, n]) else n
-    c = min(max(int((x - PL[a, 0]) / (PL[a, n] - PL[a, 0]) * n), 0), n)
+    c = min(max(int((x - PL[a, 0]) * per_unit), 0), n)
     while c > 0 and not (PL[a, c - 1] < x or (not strict and PL[a, c - 1] == x)):
         c -= 1
     while c <= n and (PL[a, c] < x or (not strict and PL[a, c] == x)):
@@ -334,10 +335,10 @@ def _planes_below(PL, a, n, x, strict):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _below_near(PL, a, n, x, m, strict):
+def _below_near(PL, a, n, x, m, strict, per_unit):
     """How many planes of axis a are below x - m and below x + m (at most,
     if not ``strict``): one search, then the planes within m of x."""
-    c = _planes_below(PL, a, n, x, strict)
+    c = _planes_below(PL, a, n, x, strict, per_unit)
     lo, hi = c, c
     while lo > 0 and (PL[a, lo - 1] > x - m or (strict and PL[a, lo - 1] == x - m)):
         lo -= 1
@@ -347,11 +348,23 @@ def _below_near(PL, a, n, x, m, strict):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _range(PL, a, n, lo, hi, k_min, k_max):
-    """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``) whose closed
-    extent meets [lo, hi], within [k_min, k_max)."""
-    k0 = max(_planes_below(PL, a, n, lo, True) - 1, k_min)
-    k1 = min(_planes_below(PL, a, n, hi, False), k_max)
+def _near_count(PL, a, n, x, m, strict, per_unit):
+    """:func:`_below_near`, found at once where no plane is within m of x
+    (the common case: the planes on either side of the guess from the even
+    spacing, ``per_unit`` planes per unit, are farther)."""
+    c = int((x - PL[a, 0]) * per_unit)
+    if 0 <= c < n and PL[a, c] < x - m and PL[a, c + 1] > x + m:
+        return c + 1, c + 1
+    return _below_near(PL, a, n, x, m, strict, per_unit)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _range(PL, a, n, lo, hi, k_min, k_max, per_unit):
+    """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``, ``per_unit``
+    planes per unit) whose closed extent meets [lo, hi], within
+    [k_min, k_max)."""
+    k0 = max(_planes_below(PL, a, n, lo, True, per_unit) - 1, k_min)
+    k1 = min(_planes_below(PL, a, n, hi, False, per_unit), k_max)
     return k0, k1
 
 
@@ -446,6 +459,9 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
     plane = np.empty(5)
+    g = np.empty(3)
+    for a in range(3):  # planes per unit along each axis: where a search starts
+        g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
     for q in range(len(tri)):
         if stop[0]:
@@ -455,7 +471,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         for a in range(3):
             mn = min(T[t, 0, a], T[t, 1, a], T[t, 2, a])
             mx = max(T[t, 0, a], T[t, 1, a], T[t, 2, a])
-            lo[a], hi[a] = _range(PL, a, nv[a], mn, mx, xa if a == 0 else 0, xb if a == 0 else nv[a])
+            lo[a], hi[a] = _range(PL, a, nv[a], mn, mx, xa if a == 0 else 0, xb if a == 0 else nv[a], g[a])
             empty = empty or lo[a] >= hi[a]
         if empty:
             continue
@@ -465,6 +481,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             if abs(n[a]) > abs(n[w]):
                 w = a
         u, v = (w + 1) % 3, (w + 2) % 3
+        gu, gw = g[u], g[w]
         cond = norms / abs(n[w]) if n[w] != 0 else np.inf
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
@@ -485,12 +502,12 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 if c0[v] <= T[t, k, v] <= c1[v]:
                     ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
             if ul <= uh:
-                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u])
-                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u])
+                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u], gu)
+                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u], gu)
             else:  # rounding found nothing: every column of the box, tested
                 iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
-            in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True)
-            in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False) - 1
+            in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True, gu)
+            in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False, gu) - 1
             c1l, d1l, chord_at = np.inf, -np.inf, -1
             for iu in range(iu0, iu1):
                 c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
@@ -523,8 +540,8 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                         # every height between); decided where the rounded
                         # span leaves no doubt, tested where a plane between
                         # voxels is within margin of one of its ends
-                        below_lo, sure0 = _below_near(PL, w, nv[w], zl, margin, True)
-                        sure1, above_hi = _below_near(PL, w, nv[w], zh, margin, False)
+                        below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
+                        sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
                 for k in range(k0, k1):
@@ -596,18 +613,45 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     return out
 
 
-def _spatial_order(T: np.ndarray) -> np.ndarray:
-    """The triangles in Morton (Z-curve) order of their centres on a 2**7
-    grid: neighbours follow each other, so the voxels they share are still
-    in cache (a shell voxel is marked by two or three triangles)."""
-    c = T.mean(axis=1)
-    lo, span = c.min(axis=0), float(np.ptp(c, axis=0).max())
-    q = ((c - lo) * (127.0 / span if span > 0 else 0.0)).astype(np.int64)
-    code = np.zeros(len(T), dtype=np.int64)
-    for b in range(7):
+@njit(cache=True, nogil=True)
+def _spatial_order(T, bits):
+    """The triangles in Morton (Z-curve) order of their centres on a grid of
+    ``2**bits`` cells a side (a counting sort): neighbours follow each
+    other, so the voxels they share are still in cache when the next one
+    marks them (a shell voxel is marked by two or three triangles).
+    Returns the order, each triangle's least and greatest first coordinate,
+    and the largest magnitude of a coordinate."""
+    m = len(T)
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    xmin, xmax = np.empty(m), np.empty(m)
+    scale = 0.0
+    for t in range(m):
+        xmin[t] = min(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
+        xmax[t] = max(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
         for a in range(3):
-            code |= ((q[:, a] >> b) & 1) << (3 * b + a)
-    return np.argsort(code, kind="stable")
+            c = (T[t, 0, a] + T[t, 1, a] + T[t, 2, a]) / 3.0
+            lo[a], hi[a] = min(lo[a], c), max(hi[a], c)
+            for k in range(3):
+                scale = max(scale, abs(T[t, k, a]))
+    span = max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
+    f = ((1 << bits) - 1) / span if span > 0 else 0.0
+    code = np.zeros(m, dtype=np.int64)
+    for t in range(m):
+        for a in range(3):
+            q = int(((T[t, 0, a] + T[t, 1, a] + T[t, 2, a]) / 3.0 - lo[a]) * f)
+            for b in range(bits):
+                code[t] |= ((q >> b) & 1) << (3 * b + a)
+    start = np.zeros((1 << (3 * bits)) + 1, dtype=np.int64)
+    for t in range(m):
+        start[code[t] + 1] += 1
+    for c in range(1 << (3 * bits)):
+        start[c + 1] += start[c]
+    order = np.empty(m, dtype=np.int64)
+    for t in range(m):
+        order[start[code[t]]] = t
+        start[code[t]] += 1
+    return order, xmin[order], xmax[order], scale
 
 
 class ShellGrid:
@@ -622,14 +666,14 @@ class ShellGrid:
 
     def __init__(self, T: np.ndarray, planes):
         T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
-        self.T = np.ascontiguousarray(T[_spatial_order(T)]) if len(T) else T
+        order, self.xmin, self.xmax, scale = _spatial_order(T, 5)
+        self.T = T[order]
         self.nv = np.array([len(p) - 1 for p in planes], dtype=np.int64)
         self.x0 = np.asarray(planes[0], dtype=np.float64)
-        self.xmin, self.xmax = self.T[:, :, 0].min(axis=1), self.T[:, :, 0].max(axis=1)
         self.PL = np.full((3, self.nv.max() + 1), np.nan)
         for a in range(3):
             self.PL[a, :self.nv[a] + 1] = planes[a]
-        self.scale = float(max(np.abs(self.T).max(initial=0.0), *(np.abs(p[[0, -1]]).max() for p in planes)))
+        self.scale = float(max(scale, *(np.abs(p[[0, -1]]).max() for p in planes)))
 
     def fill(self, xa: int, xb: int, out: np.ndarray, threads: int = 1) -> int:
         """Set in ``out`` (bool (xb - xa, ny, nz)) the voxels of rows
