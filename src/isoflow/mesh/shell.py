@@ -518,14 +518,14 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
-                    # the chords on the column's two u sides (the lower one
-                    # is the last column's upper one, if that was found)
-                    c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
-                    c1l, d1l = _line_extent(T, t, v, u, c1[u])
-                    chord_at = iu + 1
                     if in0 <= iu < in1:  # inside the projection: the plane over the column
                         zl, zh = _plane_span(T, t, w, n, c0[u], c1[u], c0[v], c1[v])
                     else:  # the heights at the corners of the polygon column and triangle share
+                        # the chords on the column's two u sides (the lower
+                        # one is the last column's upper one, if found)
+                        c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
+                        c1l, d1l = _line_extent(T, t, v, u, c1[u])
+                        chord_at = iu + 1
                         zl, zh = np.inf, -np.inf
                         for k in range(3):
                             if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
