@@ -261,18 +261,21 @@ class VoxelPlan:
     def slab_bytes(self, rows: int) -> int:
         """Temporaries of a slab of ``rows`` rows beyond its volume, at most:
         the crossings (bounded by the whole grid's pairs), its columns, and
-        the rule's box (one byte per voxel of the slab); none for the shell."""
+        the rule's box (one byte per voxel of the slab, where there is a
+        cap); none for the shell."""
         if self.fill_rule != "winding":
             return 0
         _, ny, nz = self.shape
-        return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rows * ny * nz
+        rule = rows * ny * nz if len(self.tree.T) else 0
+        return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rule
 
     def slabs(self, voxels: int | None = None) -> list[tuple[int, int]]:
         """Ranges of rows of about ``voxels`` voxels (default
-        :data:`SLAB_VOXELS`; eight times that for a shell, which needs no
-        temporaries and whose every slab looks at each triangle)."""
+        :data:`SLAB_VOXELS`; eight times that for a shell, and for a mesh
+        without a cap, which need no temporaries of a slab's size and whose
+        every slab looks at each triangle)."""
         if voxels is None:
-            voxels = SLAB_VOXELS if self.fill_rule == "winding" else 8 * SLAB_VOXELS
+            voxels = SLAB_VOXELS if self.fill_rule == "winding" and len(self.tree.T) else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
@@ -290,8 +293,10 @@ class VoxelPlan:
         """The shell's voxels (counted only where the winding rule's solid
         is small against the area, else None) and
         :func:`~isoflow.mesh.fills.thin_solid`'s line."""
+        from .shell import surface_area
+
         Tm = self.Tm
-        area = 0.5 * float(np.linalg.norm(np.cross(Tm[:, 1] - Tm[:, 0], Tm[:, 2] - Tm[:, 0]), axis=1).sum())
+        area = surface_area(Tm)
         if not area > 0:
             return None, None
         shell = self.shell_count() if voxels < THIN_TRIGGER * area / self.pitch**2 else None
