@@ -302,6 +302,45 @@ def _plane_separated(T, t, s, plane, c0, c1):
     return val > plane[4] or (val >= -plane[4] and side(T, t, lx, ly, lz) > 0)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _cut(S, bound, far, near, au, av, bu, bv, fu, fv, nu, nv):
+    """Whether the line through a projected edge a -> b separates the
+    projection (orientation sign S) from a rectangle whose corners farthest
+    along and against the edge's normal are (fu, fv) and (nu, nv), where
+    the edge's affine function is ``far`` and ``near`` in floating point
+    (error below ``bound``; exact where that cannot decide).  Scalars only:
+    numba counts the references of an inlined helper's array arguments on
+    every use once it calls out, which made the same test take ten times
+    as long."""
+    if S >= 0:
+        sg = 1 if far > bound else (-1 if far < -bound else orient2d(au, av, bu, bv, fu, fv))
+        if sg < 0:
+            return True  # every corner strictly outside this edge
+    if S <= 0:
+        sg = 1 if near > bound else (-1 if near < -bound else orient2d(au, av, bu, bv, nu, nv))
+        if sg > 0:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
+    """:func:`_projection_separated` on the plane w for the column
+    [c0[u], c1[u]] x [c0[v], c1[v]], its array reads here and its signs in
+    :func:`_cut`."""
+    for k in range(3):
+        A, B = coef[w, k, 0], coef[w, k, 1]
+        if A == 0.0 and B == 0.0:  # the edge projects to a point
+            continue
+        k2 = (k + 1) % 3
+        fu, fv = (c1[u] if A > 0 else c0[u]), (c1[v] if B > 0 else c0[v])
+        nu, nv = (c0[u] if A > 0 else c1[u]), (c0[v] if B > 0 else c1[v])
+        if _cut(S, bnd[w, k], A * fu + B * fv + coef[w, k, 2], A * nu + B * nv + coef[w, k, 2],
+                T[t, k, u], T[t, k, v], T[t, k2, u], T[t, k2, v], fu, fv, nu, nv):
+            return True
+    return False
+
+
 # ---------------------------------------------------------------------------
 # the shell
 # ---------------------------------------------------------------------------
@@ -512,8 +551,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             for iu in range(iu0, iu1):
                 c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
                 idx[u] = iu
-                if not met0 <= iu < met1 and _projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u],
-                                                                     c0[v], c1[v]):
+                if not met0 <= iu < met1 and _column_cut(T, t, u, v, w, s[w], coef, bnd, c0, c1):
                     continue
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
