@@ -525,6 +525,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
+        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]])  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
             idx[v] = iv
@@ -534,7 +535,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             # strip's lines' chords lie inside it whole; both extents are
             # rounded by less than reach, and only the columns within reach
             # of an end are tested.
-            a0, b0 = _line_extent(T, t, u, v, c0[v])
+            a0, b0 = a1, b1  # the last row's upper line
             a1, b1 = _line_extent(T, t, u, v, c1[v])
             ul, uh = min(a0, a1), max(b0, b1)
             for k in range(3):  # the corners in the strip
