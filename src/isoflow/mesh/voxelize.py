@@ -346,7 +346,7 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
     if not ok or len(lo) != 3 or len(hi) != 3 or not all(0 <= a < b <= n for a, b, n in zip(lo, hi, shape)):
         raise IsoflowError(f"voxelize: window must be (start, stop), three indices each with "
                            f"0 <= start < stop <= {tuple(shape)}, got {window!r}")
-    return lo, tuple(b - a for a, b in zip(lo, hi))  # type: ignore[return-value]
+    return lo, tuple(b - a for a, b in zip(lo, hi))
 
 
 @overload
@@ -573,6 +573,7 @@ def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None 
         resolution = DEFAULT_RESOLUTION
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                       progress=progress, details=True)
+    assert result.volume is not None  # an in-memory voxelisation always holds its volume
     obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
     if details:
         return obj, result
