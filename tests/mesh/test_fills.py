@@ -175,7 +175,7 @@ def test_flood_of_a_closed_mesh_holds_its_solid():
 # ---------------------------------------------------------------------------
 
 def test_census_counts_as_np_unique(rng):
-    for trial in range(20):
+    for _ in range(20):
         f = rng.integers(0, 12, (rng.integers(1, 60), 3))
         lo, hi, fwd, bwd, comps = census(f, 12)
         a, b = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
@@ -187,8 +187,8 @@ def test_census_counts_as_np_unique(rng):
         assert np.array_equal(fwd[order], np.bincount(inv, weights=(a < b)[ok], minlength=len(u)))
         assert np.array_equal((fwd + bwd)[order], np.bincount(inv, minlength=len(u)))
         mesh = trimesh.Trimesh(np.zeros((12, 3)), f, process=False, validate=False)
-        from scipy.sparse.csgraph import connected_components
         from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
 
         he = np.arange(3 * len(f))[ok] // 3
         pairs = [(he[i], he[j]) for i in range(len(key)) for j in range(i) if key[i] == key[j]]
@@ -215,7 +215,6 @@ def test_double_sided_closed_meshes_give_the_single_sided_voxels(entry):
     v, f = load_mesh(MESHES / entry["mesh"])
     for first in (False, True):
         r = voxelize(v, _double(f, first), resolution=64, details=True)
-        import hashlib
 
         assert hashlib.sha256(np.packbits(r.volume).tobytes()).hexdigest() == entry["sha256"], first
         p = v[f]

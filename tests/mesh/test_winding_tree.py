@@ -102,8 +102,9 @@ def test_edge_integrals_match_quadrature(rng):
     for a, b in cases:
         e = b - a
         length = np.linalg.norm(e)
-        integral = quad(lambda t: length / np.linalg.norm(a + t * e) ** 3, 0, 1, epsabs=0, epsrel=1e-12)[0]
-        field = [quad(lambda t, k=k: np.cross(e, a + t * e)[k] / np.linalg.norm(a + t * e) ** 3, 0, 1,
+        integral = quad(lambda t, a=a, e=e, length=length: length / np.linalg.norm(a + t * e) ** 3, 0, 1,
+                        epsabs=0, epsrel=1e-12)[0]
+        field = [quad(lambda t, a=a, e=e, k=k: np.cross(e, a + t * e)[k] / np.linalg.norm(a + t * e) ** 3, 0, 1,
                       epsabs=0, epsrel=1e-12)[0] for k in range(3)]
         gx, gy, gz, bound = edge_terms(*a, *b, 0.0)
         assert bound == pytest.approx(2 * integral, rel=1e-9)

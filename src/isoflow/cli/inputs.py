@@ -34,9 +34,9 @@ def add_mesh_rule(p: argparse.ArgumentParser) -> None:
     from ..mesh.fills import FILLS
 
     p.add_argument("--fill", choices=FILLS, default=None,
-                   help="which voxels a mesh fills: winding (default: the solid it bounds, by the generalised winding number), shell "
-                        "(every voxel whose closed cube the surface meets) or flood (the shell and what it "
-                        "encloses)")
+                   help="which voxels a mesh fills: winding (default: the solid it bounds, by the generalised "
+                        "winding number), shell (every voxel whose closed cube the surface meets) or flood (the "
+                        "shell and what it encloses)")
     p.add_argument("--strict", action="store_true",
                    help="refuse a mesh that is not watertight or has double-sided faces, whose voxels lie in "
                         "overlapping layers, or whose winding solid is thin or empty against its shell (by "

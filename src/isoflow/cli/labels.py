@@ -66,8 +66,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     ``(about, connectivity, table, image)``, ``about`` its shape, type,
     voxel size and origin, ``image`` None for a zarr store (read block by
     block)."""
-    from ..digital.label_table import label_table
     from ..digital.connectivity import default_connectivity
+    from ..digital.label_table import label_table
     from ..mesh.volumes import read_label_image
 
     refuse_single_label(args)

@@ -58,7 +58,7 @@ def _edges(faces, n_vertices):
                 start[min(a, b) + 1] += 1
     for i in range(n):
         start[i + 1] += start[i]
-    end = start[:-1].copy()  # each bucket's distinct edges so far: [start[l], end[l])
+    end = start[:-1].copy()  # each bucket's distinct edges so far: [start[v], end[v])
     hi = np.empty(start[n], dtype=np.int64)
     fwd = np.zeros(start[n], dtype=np.int64)
     bwd = np.zeros(start[n], dtype=np.int64)
@@ -69,14 +69,14 @@ def _edges(faces, n_vertices):
             a, b = faces[t, k], faces[t, (k + 1) % 3]
             if a == b:
                 continue
-            l, h = (a, b) if a < b else (b, a)
-            e = start[l]
-            while e < end[l] and hi[e] != h:
+            low, h = (a, b) if a < b else (b, a)
+            e = start[low]
+            while e < end[low] and hi[e] != h:
                 e += 1
-            if e == end[l]:
+            if e == end[low]:
                 hi[e] = h
                 first[e] = t
-                end[l] += 1
+                end[low] += 1
             else:
                 ra, rb = _find(parent, t), _find(parent, first[e])
                 if ra != rb:
@@ -86,21 +86,21 @@ def _edges(faces, n_vertices):
             else:
                 bwd[e] += 1
     ne = 0
-    for l in range(n):
-        ne += end[l] - start[l]
+    for v in range(n):
+        ne += end[v] - start[v]
     lo_out = np.empty(ne, dtype=np.int64)
     hi_out = np.empty(ne, dtype=np.int64)
     fwd_out = np.empty(ne, dtype=np.int64)
     bwd_out = np.empty(ne, dtype=np.int64)
     q = 0
-    for l in range(n):
-        for e in range(start[l], end[l]):
-            lo_out[q], hi_out[q], fwd_out[q], bwd_out[q] = l, hi[e], fwd[e], bwd[e]
+    for v in range(n):
+        for e in range(start[v], end[v]):
+            lo_out[q], hi_out[q], fwd_out[q], bwd_out[q] = v, hi[e], fwd[e], bwd[e]
             q += 1
     first_out = np.empty(ne, dtype=np.int64)
     q = 0
-    for l in range(n):
-        for e in range(start[l], end[l]):
+    for v in range(n):
+        for e in range(start[v], end[v]):
             first_out[q] = first[e]
             q += 1
     for t in range(m):

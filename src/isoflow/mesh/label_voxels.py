@@ -144,7 +144,7 @@ def body_window(body: Body, origin: np.ndarray, pitch: float, shape) -> tuple[tu
         b = np.floor((hi - origin) / pitch) + 2
     n = np.asarray(shape, dtype=np.float64)
     a = np.clip(np.nan_to_num(a, nan=0.0), 0, n - 1)
-    b = np.clip(np.nan_to_num(b, nan=n), a + 1, n)
+    b = np.clip(np.where(np.isnan(b), n, b), a + 1, n)
     return tuple(int(x) for x in a), tuple(int(x) for x in b)
 
 
@@ -261,6 +261,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
                          strict=strict, max_bytes=budget - fixed, progress=step, details=True)
         except IsoflowError as exc:
             raise IsoflowError(f"{body.name}: {exc}") from None
+        assert r.volume is not None  # voxelize keeps the voxels in memory unless given a store
         taken = np.zeros(n, dtype=np.int64)
         voxels[n] = place(labels, shared, r.volume, window[0], n, taken)
         voxels[:n] -= taken

@@ -23,9 +23,10 @@ cluster (``scheduler=client``) when the store is on a shared file system.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from contextlib import nullcontext
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -33,10 +34,10 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError
 from ..scale.chunks import import_dask, import_zarr
 from ..scale.memory import check_fits, gib
+from .fills import Fill, Voxelization
 from .formats.omezarr import multiscales
 from .grid import fmt_count
 from .load import load_mesh
-from .fills import Fill, Voxelization
 from .outputs import atomic_path, check_writable_dir
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -148,8 +149,8 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
 
     fill = check_fill(fill)
     path = check_store_path(path, force)
-    where = str(source) if isinstance(source, (str, Path)) else "mesh"
-    v, f = load_mesh(source) if isinstance(source, (str, Path)) else source  # names the file itself
+    where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"
+    v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else source  # names the file itself
     try:
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
         chunks, slabs = slab_layout(shape, chunks)

@@ -462,7 +462,7 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
-    if fmt.max_label is not None and count > fmt.max_label:
+    if fmt is not None and fmt.max_label is not None and count > fmt.max_label:
         keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
         raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
                            ".nii.gz, .nrrd, .h5 or .npz")

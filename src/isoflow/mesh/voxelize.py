@@ -573,7 +573,7 @@ def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None 
         resolution = DEFAULT_RESOLUTION
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                       progress=progress, details=True)
-    assert result.volume is not None  # an in-memory voxelisation always holds its volume
+    assert result.volume is not None  # voxelize keeps the voxels in memory unless given a store
     obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
     if details:
         return obj, result
