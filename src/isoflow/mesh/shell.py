@@ -309,9 +309,8 @@ def _cut(S, bound, far, near, au, av, bu, bv, fu, fv, nu, nv):
     along and against the edge's normal are (fu, fv) and (nu, nv), where
     the edge's affine function is ``far`` and ``near`` in floating point
     (error below ``bound``; exact where that cannot decide).  Scalars only:
-    numba counts the references of an inlined helper's array arguments on
-    every use once it calls out, which made the same test take ten times
-    as long."""
+    where an inlined helper that takes arrays calls out, numba keeps its
+    arrays' reference counting in the caller's loop."""
     if S >= 0:
         sg = 1 if far > bound else (-1 if far < -bound else orient2d(au, av, bu, bv, fu, fv))
         if sg < 0:
@@ -680,7 +679,8 @@ def _spatial_order(T, bits):
     """The triangles in Morton (Z-curve) order of their centres on a grid of
     ``2**bits`` cells a side (a counting sort): neighbours follow each
     other, so the voxels they share are still in cache when the next one
-    marks them (a shell voxel is marked by two or three triangles).
+    marks them (a voxel near an edge is reached from each triangle around
+    it).
     Returns the order, each triangle's least and greatest first coordinate,
     and the largest magnitude of a coordinate."""
     m = len(T)
