@@ -5,6 +5,7 @@ Usage::
 
     PYTHONPATH=src python benchmarks/bench_fills.py [--repeat 3] [--res 256 512 1024]
     PYTHONPATH=src python benchmarks/bench_fills.py --thresholds
+    PYTHONPATH=src python benchmarks/bench_fills.py --sphere [--repeat 5]  # the speed rows only
 
 Rows (benchmarks/results/fills.json and fills.md):
 
@@ -117,16 +118,31 @@ def sphere_rows(resolutions, repeat: int) -> list:
     voxelize(v, f, resolution=16, fill="shell")
     rows = []
     for res in resolutions:
-        t_iso, t_pv = pairs(lambda: voxelize(v, f, resolution=res),
-                            lambda: poly.voxelize_binary_mask(spacing=2.0 / res), repeat)
-        t_wind, t_shell = pairs(lambda: voxelize(v, f, resolution=res),
-                                lambda: voxelize(v, f, resolution=res, fill="shell"), repeat)
+        t_iso, t_pv = pairs(lambda res=res: voxelize(v, f, resolution=res),
+                            lambda res=res: poly.voxelize_binary_mask(spacing=2.0 / res), repeat)
+        t_wind, t_shell = pairs(lambda res=res: voxelize(v, f, resolution=res),
+                                lambda res=res: voxelize(v, f, resolution=res, fill="shell"), repeat)
         rows.append({"mesh": "icosphere(6)", "faces": int(len(f)), "resolution": res, "winding_s": t_iso,
                      "pyvista_s": t_pv, "pyvista_over_winding": t_pv / t_iso, "winding_again_s": t_wind,
                      "shell_s": t_shell, "winding_over_shell": t_wind / t_shell})
         print(f"sphere {len(f)} faces at {res}: winding {t_iso:.3f} s, pyvista {t_pv:.3f} s ({t_pv / t_iso:.2f}x); "
               f"shell {t_shell:.3f} s vs winding {t_wind:.3f} s ({t_wind / t_shell:.2f}x)", flush=True)
     return rows
+
+
+def markdown_sphere(sphere: list) -> list:
+    """The closed sphere's rows of the targets' table."""
+    lines = []
+    for r in sphere:
+        need = 1.0 if r["resolution"] <= 256 else 2.0
+        lines.append(f"| 81,920-triangle sphere at {r['resolution']}: winding vs pyvista (need {need:g}x) | "
+                     f"{r['winding_s']:.3f} s vs {r['pyvista_s']:.3f} s: {r['pyvista_over_winding']:.2f}x | "
+                     f"{'yes' if r['pyvista_over_winding'] >= need else 'no'} |")
+    for r in sphere:
+        lines.append(f"| sphere at {r['resolution']}: `--fill shell` vs the closed scanline | "
+                     f"{r['shell_s']:.3f} s vs {r['winding_again_s']:.3f} s: {r['winding_over_shell']:.2f}x | "
+                     f"{'yes' if r['winding_over_shell'] >= 1 else 'no'} |")
+    return lines
 
 
 def markdown(chair: dict, double: list, sphere: list, repeat: int) -> str:
@@ -139,15 +155,7 @@ def markdown(chair: dict, double: list, sphere: list, repeat: int) -> str:
     same = sum(r["identical"] for r in double)
     lines.append(f"| double-sided closed samples, same voxels at 64 and 256 | {same} of {len(double)} | "
                  f"{'yes' if same == len(double) else 'no'} |")
-    for r in sphere:
-        need = 1.0 if r["resolution"] <= 256 else 2.0
-        lines.append(f"| 81,920-triangle sphere at {r['resolution']}: winding vs pyvista (need {need:g}x) | "
-                     f"{r['winding_s']:.3f} s vs {r['pyvista_s']:.3f} s: {r['pyvista_over_winding']:.2f}x | "
-                     f"{'yes' if r['pyvista_over_winding'] >= need else 'no'} |")
-    for r in sphere:
-        lines.append(f"| sphere at {r['resolution']}: `--fill shell` vs the closed scanline | "
-                     f"{r['shell_s']:.3f} s vs {r['winding_again_s']:.3f} s: {r['winding_over_shell']:.2f}x | "
-                     f"{'yes' if r['winding_over_shell'] >= 1 else 'no'} |")
+    lines += markdown_sphere(sphere)
     lines += ["", f"Medians of {repeat} A B pairs in one process, {os.cpu_count()} CPUs; "
               "`PYTHONPATH=src python benchmarks/bench_fills.py`."]
     return "\n".join(lines)
@@ -168,7 +176,8 @@ def thresholds() -> int:
     for name, m in [("trimesh box", trimesh.creation.box((1, 2, 3))), ("trimesh icosphere", trimesh.creation.icosphere(3)),
                     ("trimesh cylinder", trimesh.creation.cylinder(0.5, 3)),
                     ("trimesh annulus", trimesh.creation.annulus(0.8, 1.0, 0.05)),
-                    ("trimesh torus", trimesh.creation.torus(1, 0.2)), ("trimesh thin box", trimesh.creation.box((10, 10, 0.05)))]:
+                    ("trimesh torus", trimesh.creation.torus(1, 0.2)),
+                    ("trimesh thin box", trimesh.creation.box((10, 10, 0.05)))]:
         cases.append((name, np.asarray(m.vertices), np.asarray(m.faces)))
     rows = []
     for name, v, f in cases:
@@ -190,15 +199,34 @@ def thresholds() -> int:
     return 0
 
 
+def sphere_only(resolutions, repeat: int) -> int:
+    """The closed sphere's rows alone (benchmarks/results/fills_sphere.json, .md)."""
+    sphere = sphere_rows(resolutions, repeat)
+    res_dir = ROOT / "benchmarks" / "results"
+    res_dir.mkdir(parents=True, exist_ok=True)
+    (res_dir / "fills_sphere.json").write_text(json.dumps(
+        {"benchmark": "issue 24: closed-mesh and shell speed", "timing": f"median of {repeat} A B pairs",
+         "cpus": os.cpu_count(), "python": platform.python_version(), "sphere": sphere}, indent=1))
+    md = "\n".join(markdown_sphere(sphere) + ["", f"Medians of {repeat} A B pairs in one process, {os.cpu_count()} "
+                                              "CPUs; `PYTHONPATH=src python benchmarks/bench_fills.py --sphere`."])
+    (res_dir / "fills_sphere.md").write_text(md + "\n")
+    print("\n" + md)
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--res", type=int, nargs="+", default=[256, 512, 1024])
     ap.add_argument("--thresholds", action="store_true", help="the sweep behind the note's thresholds")
+    ap.add_argument("--sphere", action="store_true",
+                    help="only the closed sphere's rows (speed), written to fills_sphere.json and .md")
     args = ap.parse_args(argv)
     if args.thresholds:
         return thresholds()
     warnings.simplefilter("ignore")
+    if args.sphere:
+        return sphere_only(args.res, args.repeat)
     chair = chair_row()
     double = double_sided_rows()
     sphere = sphere_rows(args.res, args.repeat)

@@ -25,7 +25,7 @@ from isoflow.errors import IsoflowError, MeshNote
 from isoflow.mesh.census import census, one_face_per_pair, opposite_pairs
 from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization
 from isoflow.mesh.load import load_mesh
-from isoflow.mesh.shell import fill_shell, grid_planes
+from isoflow.mesh.shell import ShellGrid, fill_shell, grid_planes, surface_area
 from isoflow.mesh.voxelize import voxelize, voxelize_file, voxelize_mesh
 
 trimesh = pytest.importorskip("trimesh")
@@ -130,6 +130,27 @@ def test_shell_of_real_meshes_exact(name, res):
     r = voxelize(v, f, resolution=res, fill="shell", details=True)
     planes = grid_planes(r.origin, r.pitch, r.volume.shape)
     assert r.voxels and np.array_equal(r.volume, shell_reference(v[f], planes))
+    assert r.voxels == int(np.count_nonzero(r.volume))  # counted as marked, not read back
+
+
+def test_shell_counts_new_voxels_in_any_order(rng):
+    """ShellGrid.fill returns the voxels it set that were not set before
+    (on one thread and two), and the triangles' order (it sorts them along
+    a Z-curve) changes nothing."""
+    T = rng.uniform(-0.2, 1.6, (60, 3, 3))
+    whole = fill_shell(T, PLANES, 0, 6)
+    for threads in (1, 2):
+        out = np.zeros_like(whole)
+        out[2, 1:3] = True  # some voxels set before
+        n = ShellGrid(T[rng.permutation(len(T))], PLANES).fill(0, 6, out, threads=threads)
+        assert np.array_equal(out, whole | (np.arange(6)[:, None, None] == 2) & (np.arange(5)[None, :, None] >= 1)
+                              & (np.arange(5)[None, :, None] < 3))
+        assert n == int(np.count_nonzero(whole)) - int(np.count_nonzero(whole[2, 1:3]))
+
+
+def test_surface_area_against_trimesh():
+    m = trimesh.creation.icosphere(2)
+    assert surface_area(m.vertices[m.faces]) == pytest.approx(m.area, rel=1e-12)
 
 
 def test_shell_covers_the_surface_and_separates(rng):

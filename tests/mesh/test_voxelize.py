@@ -829,3 +829,23 @@ def test_big_grid_keeps_covering_the_bounding_box():
     with pytest.raises(IsoflowError) as e:
         voxelize(v, f, pitch=1.0, max_bytes=1000)
     assert "1000000001x1x1 grid" in _oneline(e)
+
+
+def test_scanline_rows_and_columns_are_searchsorted():
+    """The scanline's per-triangle rows and columns, found from the even
+    spacing of the centres, are numpy's ``searchsorted`` of the triangle's
+    extent among the centres (on centres exactly, at and past both ends)."""
+    from isoflow.mesh.scanline import ScanGrid
+
+    rng = np.random.default_rng(3)
+    for n, origin, pitch in ((1, -0.3, 0.7), (2, 0.0, 1.0), (37, -1.25, 0.0625), (300, 0.1, 1 / 3)):
+        shape = (n, n + 1, 4)
+        probe = ScanGrid(np.zeros((0, 3, 3)), np.full(3, origin), pitch, shape)
+        xs = np.concatenate([probe.xc, probe.yc, rng.uniform(origin - pitch, origin + (n + 2) * pitch, 200)])
+        T = rng.choice(xs, (300, 3, 3))
+        g = ScanGrid(T, np.full(3, origin), pitch, shape)
+        lo, hi = T.min(axis=1), T.max(axis=1)
+        assert np.array_equal(g.j0, np.searchsorted(g.yc, lo[:, 1], "left"))
+        assert np.array_equal(g.j1, np.searchsorted(g.yc, hi[:, 1], "left"))
+        assert np.array_equal(g.i0, np.maximum(np.searchsorted(g.xc, lo[:, 0], "left") - 1, 0))
+        assert np.array_equal(g.i1, np.minimum(np.searchsorted(g.xc, hi[:, 0], "right") + 1, n))

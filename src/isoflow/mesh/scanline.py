@@ -148,6 +148,24 @@ def first_at_least(a, x, strict):
     return lo
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _first_at_least_even(a, x, strict, per_unit):
+    """:func:`first_at_least` of evenly spaced ``a`` (``per_unit`` entries
+    per unit): guessed from the spacing, then settled by comparing with
+    ``a`` itself (so exact however its entries round)."""
+    n = len(a)
+    if not x > a[0]:
+        return 1 if strict and x == a[0] else 0
+    if not x < a[n - 1]:
+        return n if strict or x > a[n - 1] else n - 1
+    c = min(max(int((x - a[0]) * per_unit) + 1, 1), n - 1)
+    while c > 0 and not (a[c - 1] < x or (strict and a[c - 1] == x)):
+        c -= 1
+    while c < n and (a[c] < x or (strict and a[c] == x)):
+        c += 1
+    return c
+
+
 @njit(cache=True, nogil=True)
 def _set_up(T, xc, yc, j0, j1, i0, i1, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, n, zmin, zmax):
     """The per-triangle data of :class:`ScanGrid`, one triangle at a time.
@@ -162,15 +180,17 @@ def _set_up(T, xc, yc, j0, j1, i0, i1, e_lox, e_loy, e_hiy, e_dx, e_dy, e_dir, n
     ``z = A.z - (n.x (x - A.x) + n.y (y - A.y)) / n.z`` with ``n`` the cross
     product of its edges from corner 0, in NumPy's order of operations."""
     nx = len(xc)
+    gx = (nx - 1) / (xc[nx - 1] - xc[0]) if nx > 1 else 0.0  # centres per unit: where a search starts
+    gy = (len(yc) - 1) / (yc[len(yc) - 1] - yc[0]) if len(yc) > 1 else 0.0
     for t in range(T.shape[0]):
         xmin = min(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
         xmax = max(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
         ymin = min(T[t, 0, 1], T[t, 1, 1], T[t, 2, 1])
         ymax = max(T[t, 0, 1], T[t, 1, 1], T[t, 2, 1])
-        j0[t] = first_at_least(yc, ymin, False)
-        j1[t] = first_at_least(yc, ymax, False)
-        i0[t] = max(first_at_least(xc, xmin, False) - 1, 0)
-        i1[t] = min(first_at_least(xc, xmax, True) + 1, nx)
+        j0[t] = _first_at_least_even(yc, ymin, False, gy)
+        j1[t] = _first_at_least_even(yc, ymax, False, gy)
+        i0[t] = max(_first_at_least_even(xc, xmin, False, gx) - 1, 0)
+        i1[t] = min(_first_at_least_even(xc, xmax, True, gx) + 1, nx)
         for k in range(3):
             kn = (k + 1) % 3
             up = T[t, k, 1] < T[t, kn, 1]

@@ -164,10 +164,10 @@ def orient2d(au, av, bu, bv, cu, cv):
         return -_sgn(bv - av) * _sgn(cu - au)
     if av == bv:
         return _sgn(bu - au) * _sgn(cv - av)
-    l = (bu - au) * (cv - av)
-    r = (bv - av) * (cu - au)
-    det = l - r
-    bound = _CCW_BOUND * (abs(l) + abs(r))
+    lhs = (bu - au) * (cv - av)
+    rhs = (bv - av) * (cu - au)
+    det = lhs - rhs
+    bound = _CCW_BOUND * (abs(lhs) + abs(rhs))
     if det > bound:
         return 1
     if -det > bound:
@@ -302,20 +302,69 @@ def _plane_separated(T, t, s, plane, c0, c1):
     return val > plane[4] or (val >= -plane[4] and side(T, t, lx, ly, lz) > 0)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _cut(S, bound, far, near, au, av, bu, bv, fu, fv, nu, nv):
+    """Whether the line through a projected edge a -> b separates the
+    projection (orientation sign S) from a rectangle whose corners farthest
+    along and against the edge's normal are (fu, fv) and (nu, nv), where
+    the edge's affine function is ``far`` and ``near`` in floating point
+    (error below ``bound``; exact where that cannot decide).  Scalars only:
+    where an inlined helper that takes arrays calls out, numba keeps its
+    arrays' reference counting in the caller's loop."""
+    if S >= 0:
+        sg = 1 if far > bound else (-1 if far < -bound else orient2d(au, av, bu, bv, fu, fv))
+        if sg < 0:
+            return True  # every corner strictly outside this edge
+    if S <= 0:
+        sg = 1 if near > bound else (-1 if near < -bound else orient2d(au, av, bu, bv, nu, nv))
+        if sg > 0:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
+    """:func:`_projection_separated` on the plane w for the column
+    [c0[u], c1[u]] x [c0[v], c1[v]], its array reads here and its signs in
+    :func:`_cut`."""
+    for k in range(3):
+        A, B = coef[w, k, 0], coef[w, k, 1]
+        if A == 0.0 and B == 0.0:  # the edge projects to a point
+            continue
+        k2 = (k + 1) % 3
+        fu, fv = (c1[u] if A > 0 else c0[u]), (c1[v] if B > 0 else c0[v])
+        nu, nv = (c0[u] if A > 0 else c1[u]), (c0[v] if B > 0 else c1[v])
+        if _cut(S, bnd[w, k], A * fu + B * fv + coef[w, k, 2], A * nu + B * nv + coef[w, k, 2],
+                T[t, k, u], T[t, k, v], T[t, k2, u], T[t, k2, v], fu, fv, nu, nv):
+            return True
+    return False
+
+
 # ---------------------------------------------------------------------------
 # the shell
 # ---------------------------------------------------------------------------
 
 @njit(cache=True, nogil=True, inline="always")
-def _planes_below(PL, a, n, x, strict):
+def _mark(out, i, j, k):
+    """Set voxel (i, j, k): 1 if it was not set yet (the shell's voxels are
+    counted as they are found, not by reading the volume again)."""
+    if out[i, j, k]:
+        return 0
+    out[i, j, k] = True
+    return 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _planes_below(PL, a, n, x, strict, per_unit):
     """How many of the planes ``PL[a, :n + 1]`` are below x (at most x if
-    not ``strict``): guessed from the even spacing, then settled by
-    comparing with the planes themselves (so exact however they round)."""
+    not ``strict``): guessed from the even spacing (``per_unit`` planes per
+    unit), then settled by comparing with the planes themselves (so exact
+    however they round)."""
     if not x > PL[a, 0]:
         return 0 if (strict or not x == PL[a, 0]) else 1
     if not x < PL[a, n]:
         return n + 1 if (not strict or x > PL[a, n]) else n
-    c = min(max(int((x - PL[a, 0]) / (PL[a, n] - PL[a, 0]) * n), 0), n)
+    c = min(max(int((x - PL[a, 0]) * per_unit), 0), n)
     while c > 0 and not (PL[a, c - 1] < x or (not strict and PL[a, c - 1] == x)):
         c -= 1
     while c <= n and (PL[a, c] < x or (not strict and PL[a, c] == x)):
@@ -324,10 +373,10 @@ def _planes_below(PL, a, n, x, strict):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _below_near(PL, a, n, x, m, strict):
+def _below_near(PL, a, n, x, m, strict, per_unit):
     """How many planes of axis a are below x - m and below x + m (at most,
     if not ``strict``): one search, then the planes within m of x."""
-    c = _planes_below(PL, a, n, x, strict)
+    c = _planes_below(PL, a, n, x, strict, per_unit)
     lo, hi = c, c
     while lo > 0 and (PL[a, lo - 1] > x - m or (strict and PL[a, lo - 1] == x - m)):
         lo -= 1
@@ -337,11 +386,23 @@ def _below_near(PL, a, n, x, m, strict):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _range(PL, a, n, lo, hi, k_min, k_max):
-    """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``) whose closed
-    extent meets [lo, hi], within [k_min, k_max)."""
-    k0 = max(_planes_below(PL, a, n, lo, True) - 1, k_min)
-    k1 = min(_planes_below(PL, a, n, hi, False), k_max)
+def _near_count(PL, a, n, x, m, strict, per_unit):
+    """:func:`_below_near`, found at once where no plane is within m of x
+    (the common case: the planes on either side of the guess from the even
+    spacing, ``per_unit`` planes per unit, are farther)."""
+    c = int((x - PL[a, 0]) * per_unit)
+    if 0 <= c < n and PL[a, c] < x - m and PL[a, c + 1] > x + m:
+        return c + 1, c + 1
+    return _below_near(PL, a, n, x, m, strict, per_unit)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _range(PL, a, n, lo, hi, k_min, k_max, per_unit):
+    """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``, ``per_unit``
+    planes per unit) whose closed extent meets [lo, hi], within
+    [k_min, k_max)."""
+    k0 = max(_planes_below(PL, a, n, lo, True, per_unit) - 1, k_min)
+    k1 = min(_planes_below(PL, a, n, hi, False, per_unit), k_max)
     return k0, k1
 
 
@@ -420,10 +481,12 @@ def _line_extent(T, t, u, v, c):
 
 
 @njit(cache=True, nogil=True)
-def _shell(T, tri, PL, nv, xa, xb, scale, out):
+def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     """Mark in ``out`` (rows [xa, xb) of the grid) the voxels that
     triangles ``tri`` meet; ``PL[a, :nv[a] + 1]`` are the planes between
-    voxels along axis a, ``scale`` bounds the coordinates' magnitude."""
+    voxels along axis a, ``scale`` bounds the coordinates' magnitude.
+    Returns how many voxels were not set yet; ends early when ``stop[0]``
+    is set."""
     s = np.empty(3, dtype=np.int64)
     lo = np.empty(3, dtype=np.int64)
     hi = np.empty(3, dtype=np.int64)
@@ -434,13 +497,19 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
     plane = np.empty(5)
+    g = np.empty(3)
+    for a in range(3):  # planes per unit along each axis: where a search starts
+        g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
+    added = 0
     for q in range(len(tri)):
+        if stop[0]:
+            break
         t = tri[q]
         empty = False
         for a in range(3):
             mn = min(T[t, 0, a], T[t, 1, a], T[t, 2, a])
             mx = max(T[t, 0, a], T[t, 1, a], T[t, 2, a])
-            lo[a], hi[a] = _range(PL, a, nv[a], mn, mx, xa if a == 0 else 0, xb if a == 0 else nv[a])
+            lo[a], hi[a] = _range(PL, a, nv[a], mn, mx, xa if a == 0 else 0, xb if a == 0 else nv[a], g[a])
             empty = empty or lo[a] >= hi[a]
         if empty:
             continue
@@ -450,12 +519,12 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
             if abs(n[a]) > abs(n[w]):
                 w = a
         u, v = (w + 1) % 3, (w + 2) % 3
+        gu, gw = g[u], g[w]
         cond = norms / abs(n[w]) if n[w] != 0 else np.inf
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
-        wmin = min(T[t, 0, w], T[t, 1, w], T[t, 2, w])
-        wmax = max(T[t, 0, w], T[t, 1, w], T[t, 2, w])
+        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]])  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
             idx[v] = iv
@@ -465,37 +534,36 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
             # strip's lines' chords lie inside it whole; both extents are
             # rounded by less than reach, and only the columns within reach
             # of an end are tested.
-            a0, b0 = _line_extent(T, t, u, v, c0[v])
+            a0, b0 = a1, b1  # the last row's upper line
             a1, b1 = _line_extent(T, t, u, v, c1[v])
             ul, uh = min(a0, a1), max(b0, b1)
             for k in range(3):  # the corners in the strip
                 if c0[v] <= T[t, k, v] <= c1[v]:
                     ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
             if ul <= uh:
-                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u])
-                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u])
+                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u], gu)
+                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u], gu)
             else:  # rounding found nothing: every column of the box, tested
                 iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
-            in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True)
-            in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False) - 1
+            in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True, gu)
+            in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False, gu) - 1
             c1l, d1l, chord_at = np.inf, -np.inf, -1
             for iu in range(iu0, iu1):
                 c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
                 idx[u] = iu
-                if not met0 <= iu < met1 and _projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u],
-                                                                     c0[v], c1[v]):
+                if not met0 <= iu < met1 and _column_cut(T, t, u, v, w, s[w], coef, bnd, c0, c1):
                     continue
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
-                    # the chords on the column's two u sides (the lower one
-                    # is the last column's upper one, if that was found)
-                    c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
-                    c1l, d1l = _line_extent(T, t, v, u, c1[u])
-                    chord_at = iu + 1
                     if in0 <= iu < in1:  # inside the projection: the plane over the column
                         zl, zh = _plane_span(T, t, w, n, c0[u], c1[u], c0[v], c1[v])
                     else:  # the heights at the corners of the polygon column and triangle share
+                        # the chords on the column's two u sides (the lower
+                        # one is the last column's upper one, if found)
+                        c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
+                        c1l, d1l = _line_extent(T, t, v, u, c1[u])
+                        chord_at = iu + 1
                         zl, zh = np.inf, -np.inf
                         for k in range(3):
                             if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
@@ -510,14 +578,14 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
                         # every height between); decided where the rounded
                         # span leaves no doubt, tested where a plane between
                         # voxels is within margin of one of its ends
-                        below_lo, sure0 = _below_near(PL, w, nv[w], zl, margin, True)
-                        sure1, above_hi = _below_near(PL, w, nv[w], zh, margin, False)
+                        below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
+                        sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
                 for k in range(k0, k1):
                     idx[w] = k
                     if sure0 <= k < sure1:
-                        out[idx[0] - xa, idx[1], idx[2]] = True
+                        added += _mark(out, idx[0] - xa, idx[1], idx[2])
                         continue
                     c0[w], c1[w] = PL[w, k], PL[w, k + 1]
                     if (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
@@ -525,7 +593,31 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out):
                             or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
                             or _plane_separated(T, t, s, plane, c0, c1)):
                         continue
-                    out[idx[0] - xa, idx[1], idx[2]] = True
+                    added += _mark(out, idx[0] - xa, idx[1], idx[2])
+    return added
+
+
+@njit(cache=True, nogil=True)
+def _area(T):
+    total = 0.0
+    for t in range(len(T)):
+        ux, uy, uz = T[t, 1, 0] - T[t, 0, 0], T[t, 1, 1] - T[t, 0, 1], T[t, 1, 2] - T[t, 0, 2]
+        vx, vy, vz = T[t, 2, 0] - T[t, 0, 0], T[t, 2, 1] - T[t, 0, 1], T[t, 2, 2] - T[t, 0, 2]
+        total += math.sqrt((uy * vz - uz * vy) ** 2 + (uz * vx - ux * vz) ** 2 + (ux * vy - uy * vx) ** 2)
+    return 0.5 * total
+
+
+def surface_area(T: np.ndarray) -> float:
+    """The total area of the triangles ``T`` (M, 3, 3), in one compiled
+    pass (it decides, for every winding voxelisation, whether the thin
+    note's shell is counted).
+
+    Examples
+    --------
+    >>> surface_area(np.array([[[0, 0, 0], [2, 0, 0], [0, 1, 0]]], dtype=float))
+    1.0
+    """
+    return float(_area(np.ascontiguousarray(T, dtype=np.float64)))
 
 
 def grid_planes(origin, pitch: float, shape, start=(0, 0, 0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -560,6 +652,12 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     bool ndarray (xb - xa, ny, nz)
         True where the voxel's closed cube meets a triangle.
 
+    Raises
+    ------
+    Stopped
+        When :data:`isoflow.scale.cancel.STOP` was set (a signal) before
+        the shell was complete.
+
     Examples
     --------
     A triangle in the plane z = 1 between two layers of a 2 x 2 x 2 grid
@@ -570,27 +668,96 @@ def fill_shell(T: np.ndarray, planes, xa: int, xb: int, out=None, threads: int =
     >>> fill_shell(T, planes, 0, 2)[:, :, :].sum(axis=(0, 1)).tolist()
     [1, 1]
     """
-    nv = np.array([len(p) - 1 for p in planes], dtype=np.int64)
     if out is None:
-        out = np.zeros((xb - xa, nv[1], nv[2]), dtype=bool)
-    T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
-    if len(T) == 0 or xb <= xa:
-        return out
-    xmin, xmax = T[:, :, 0].min(axis=1), T[:, :, 0].max(axis=1)
-    PL = np.full((3, nv.max() + 1), np.nan)
-    for a in range(3):
-        PL[a, :nv[a] + 1] = planes[a]
-    scale = float(max(np.abs(T).max(), *(np.abs(p[[0, -1]]).max() for p in planes)))
-    mid = (xa + xb) // 2
-    parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
-    calls = []
-    for a, b in parts:  # each part its own rows: the threads never write the same memory
-        tri = np.nonzero((xmax >= planes[0][a]) & (xmin <= planes[0][b]))[0]  # the triangles that reach it
-        calls.append((T, tri, PL, nv, a, b, scale, out[a - xa:b - xa]))
-    if len(calls) == 1:
-        _shell(*calls[0])
-        return out
-    from ..scale.cancel import run_pieces
-
-    run_pieces(lambda i: _shell(*calls[i]), len(calls), threads=2)  # off the main thread: a signal ends it
+        out = np.zeros((xb - xa,) + tuple(len(p) - 1 for p in planes[1:]), dtype=bool)
+    ShellGrid(T, planes).fill(xa, xb, out, threads=threads)
     return out
+
+
+@njit(cache=True, nogil=True)
+def _spatial_order(T, bits):
+    """The triangles in Morton (Z-curve) order of their centres on a grid of
+    ``2**bits`` cells a side (a counting sort): neighbours follow each
+    other, so the voxels they share are still in cache when the next one
+    marks them (a voxel near an edge is reached from each triangle around
+    it).
+    Returns the order, each triangle's least and greatest first coordinate,
+    and the largest magnitude of a coordinate."""
+    m = len(T)
+    lo = np.full(3, np.inf)
+    hi = np.full(3, -np.inf)
+    xmin, xmax = np.empty(m), np.empty(m)
+    scale = 0.0
+    for t in range(m):
+        xmin[t] = min(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
+        xmax[t] = max(T[t, 0, 0], T[t, 1, 0], T[t, 2, 0])
+        for a in range(3):
+            c = (T[t, 0, a] + T[t, 1, a] + T[t, 2, a]) / 3.0
+            lo[a], hi[a] = min(lo[a], c), max(hi[a], c)
+            for k in range(3):
+                scale = max(scale, abs(T[t, k, a]))
+    span = max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
+    f = ((1 << bits) - 1) / span if span > 0 else 0.0
+    code = np.zeros(m, dtype=np.int64)
+    for t in range(m):
+        for a in range(3):
+            q = int(((T[t, 0, a] + T[t, 1, a] + T[t, 2, a]) / 3.0 - lo[a]) * f)
+            for b in range(bits):
+                code[t] |= ((q >> b) & 1) << (3 * b + a)
+    start = np.zeros((1 << (3 * bits)) + 1, dtype=np.int64)
+    for t in range(m):
+        start[code[t] + 1] += 1
+    for c in range(1 << (3 * bits)):
+        start[c + 1] += start[c]
+    order = np.empty(m, dtype=np.int64)
+    for t in range(m):
+        order[start[code[t]]] = t
+        start[code[t]] += 1
+    return order, xmin[order], xmax[order], scale
+
+
+class ShellGrid:
+    """The triangles and the planes of a shell, set up once (O(triangles))
+    for every slab that is filled from them; small and picklable, so dask
+    can ship it to workers.
+
+    ``T`` (M, 3, 3) are the triangles in the frame of ``planes``
+    (:func:`grid_planes`), any triangles (degenerate, overlapping, in any
+    orientation).
+    """
+
+    def __init__(self, T: np.ndarray, planes):
+        T = np.ascontiguousarray(T, dtype=np.float64).reshape(-1, 3, 3)
+        order, self.xmin, self.xmax, scale = _spatial_order(T, 5)
+        self.T = T[order]
+        self.nv = np.array([len(p) - 1 for p in planes], dtype=np.int64)
+        self.x0 = np.asarray(planes[0], dtype=np.float64)
+        self.PL = np.full((3, self.nv.max() + 1), np.nan)
+        for a in range(3):
+            self.PL[a, :self.nv[a] + 1] = planes[a]
+        self.scale = float(max(scale, *(np.abs(p[[0, -1]]).max() for p in planes)))
+
+    def fill(self, xa: int, xb: int, out: np.ndarray, threads: int = 1) -> int:
+        """Set in ``out`` (bool (xb - xa, ny, nz)) the voxels of rows
+        [xa, xb) that the triangles meet; returns how many were not set
+        before (the shell's voxels, where ``out`` was all False).  With
+        ``threads=2`` the rows are split in two halves filled at once; a
+        signal (:data:`~isoflow.scale.cancel.STOP`) ends the work and
+        raises :class:`~isoflow.scale.cancel.Stopped`."""
+        from ..scale.cancel import STOP, Stopped, run_pieces
+
+        if len(self.T) == 0 or xb <= xa:
+            return 0
+        mid = (xa + xb) // 2
+        parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
+        added = [0] * len(parts)
+
+        def run(i: int) -> None:  # each part its own rows: the threads never write the same memory
+            a, b = parts[i]
+            tri = np.nonzero((self.xmax >= self.x0[a]) & (self.xmin <= self.x0[b]))[0]  # the triangles that reach it
+            added[i] = _shell(self.T, tri, self.PL, self.nv, a, b, self.scale, out[a - xa:b - xa], STOP)
+
+        run_pieces(run, len(parts), threads=len(parts))  # off the main thread: a signal ends it
+        if STOP[0]:
+            raise Stopped
+        return sum(added)

@@ -33,9 +33,10 @@ shell nested inside another with the opposite orientation is a cavity.
 
 from __future__ import annotations
 
-import warnings
 import os
-from typing import Callable, Literal, overload
+import warnings
+from collections.abc import Callable
+from typing import Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -130,7 +131,7 @@ class Solid:
         raise IsoflowError("voxelize: mesh is not watertight: " + "; ".join(what)
                            + " (without --strict / strict=True it is read by the generalised winding number)")
 
-    def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> "VoxelPlan":
+    def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
         """The :class:`VoxelPlan` of the grid ``origin_s``, ``pitch_s`` (in
         the scaled ``frame``), or of its block of ``shape`` at ``start``."""
         from .winding import close_mesh
@@ -229,19 +230,26 @@ class VoxelPlan:
             self.grid = ScanGrid(np.concatenate([Tm[~cap.reversed_faces], cap.cones()]), self.origin, self.pitch,
                                  self.shape, self.start)
         else:
-            self.planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
+            from .shell import ShellGrid
+
+            self.shell = ShellGrid(Tm, grid_planes(self.origin, self.pitch, self.shape, self.start))
 
     def fill(self, xa: int, xb: int, out=None, stats=None, threads: int = 1, progress=None) -> np.ndarray:
         """The volume of slab ``[xa, xb)`` (first axis): by the winding rule
         (``progress(done, total)`` as the cap's rule advances), or the shell
         (for "flood" too: its enclosed voxels need the whole grid,
-        :func:`fill_enclosed`)."""
+        :func:`fill_enclosed`), whose voxels ``stats[3]`` counts (in by a
+        rule other than the winding number's)."""
         from .scanline import fill_slab
-        from .shell import fill_shell
         from .winding import winding_rule
 
         if self.fill_rule != "winding":
-            return fill_shell(self.Tm, self.planes, xa, xb, out=out, threads=threads)
+            if out is None:
+                out = np.zeros((xb - xa,) + self.shape[1:], dtype=bool)
+            added = self.shell.fill(xa, xb, out, threads=threads)
+            if stats is not None:
+                stats[3] += added
+            return out
         _, ny, nz = self.shape
         sx, sy, sz = self.start
         rule = winding_rule(self.tree, self.Tm, self.origin, self.pitch, (sx + xa, sx + xb, sy, sy + ny, sz, sz + nz),
@@ -253,18 +261,21 @@ class VoxelPlan:
     def slab_bytes(self, rows: int) -> int:
         """Temporaries of a slab of ``rows`` rows beyond its volume, at most:
         the crossings (bounded by the whole grid's pairs), its columns, and
-        the rule's box (one byte per voxel of the slab); none for the shell."""
+        the rule's box (one byte per voxel of the slab, where there is a
+        cap); none for the shell."""
         if self.fill_rule != "winding":
             return 0
         _, ny, nz = self.shape
-        return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rows * ny * nz
+        rule = rows * ny * nz if len(self.tree.T) else 0
+        return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rule
 
     def slabs(self, voxels: int | None = None) -> list[tuple[int, int]]:
         """Ranges of rows of about ``voxels`` voxels (default
-        :data:`SLAB_VOXELS`; eight times that for a shell, which needs no
-        temporaries and whose every slab looks at each triangle)."""
+        :data:`SLAB_VOXELS`; eight times that for a shell, and for a mesh
+        without a cap, which need no temporaries of a slab's size and whose
+        every slab looks at each triangle)."""
         if voxels is None:
-            voxels = SLAB_VOXELS if self.fill_rule == "winding" else 8 * SLAB_VOXELS
+            voxels = SLAB_VOXELS if self.fill_rule == "winding" and len(self.tree.T) else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
@@ -272,20 +283,20 @@ class VoxelPlan:
     def shell_count(self) -> int:
         """Voxels of the mesh's shell on this grid, counted slab by slab (a
         slab's volume at a time)."""
-        from .shell import fill_shell, grid_planes
+        from .shell import ShellGrid, grid_planes
 
-        planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
-        total = 0
-        for a, b in self.slabs():
-            total += int(np.count_nonzero(fill_shell(self.Tm, planes, a, b, threads=2)))
-        return total
+        shell = ShellGrid(self.Tm, grid_planes(self.origin, self.pitch, self.shape, self.start))
+        _, ny, nz = self.shape
+        return sum(shell.fill(a, b, np.zeros((b - a, ny, nz), dtype=bool), threads=2) for a, b in self.slabs())
 
     def thin_note(self, volume: np.ndarray, voxels: int, double_sided: int) -> tuple[int | None, str | None]:
         """The shell's voxels (counted only where the winding rule's solid
         is small against the area, else None) and
         :func:`~isoflow.mesh.fills.thin_solid`'s line."""
+        from .shell import surface_area
+
         Tm = self.Tm
-        area = 0.5 * float(np.linalg.norm(np.cross(Tm[:, 1] - Tm[:, 0], Tm[:, 2] - Tm[:, 0]), axis=1).sum())
+        area = surface_area(Tm)
         if not area > 0:
             return None, None
         shell = self.shell_count() if voxels < THIN_TRIGGER * area / self.pitch**2 else None
@@ -469,7 +480,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
 
         vol = fill_enclosed(vol, inplace=True)
     solid.check_layers(stats)
-    voxels = int(stats[1:].sum()) if fill == "winding" else int(np.count_nonzero(vol))
+    voxels = int(np.count_nonzero(vol)) if fill == "flood" else int(stats[1:].sum())
     result = voxelization(solid, plan, vol, voxels, origin, pitch, stats)
     if details:
         return result
