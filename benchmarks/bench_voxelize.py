@@ -119,8 +119,8 @@ def real(args) -> int:
         idx = np.argwhere(np.ones(vol.shape, dtype=bool))
         q = origin + (idx + 0.5) * pitch
         del idx
-        t_iso, t_igl, (vol, _, _), w = _pairs(lambda: voxelize(v, f, resolution=res),
-                                              lambda: igl.fast_winding_number(v, f, q), args.repeat)
+        t_iso, t_igl, (vol, _, _), w = _pairs(lambda v=v, f=f, res=res: voxelize(v, f, resolution=res),
+                                              lambda v=v, f=f, q=q: igl.fast_winding_number(v, f, q), args.repeat)
         agree = float(np.mean(vol.reshape(-1) == (np.abs(w) > 0.5)))
         cmd = [exe, "voxelize", str(path), "--resolution", str(res), "-o", str(tmp / "o.npz"), "--force"]
         t_cmd = []
@@ -146,8 +146,8 @@ def real(args) -> int:
         pitch = 2.0 / res
         voxelize(sphere.vertices, sphere.faces, resolution=16)
         t_iso, t_pv, (vol, _, _), img = _pairs(
-            lambda: voxelize(sphere.vertices, sphere.faces, resolution=res),
-            lambda: poly.voxelize_binary_mask(spacing=pitch), args.repeat)
+            lambda res=res: voxelize(sphere.vertices, sphere.faces, resolution=res),
+            lambda pitch=pitch: poly.voxelize_binary_mask(spacing=pitch), args.repeat)
         n_pv = int(np.count_nonzero(img.point_data["mask"]))
         rows.append({"mesh": "icosphere(4)", "faces": int(len(sphere.faces)), "resolution": res,
                      "isoflow_s": t_iso, "pyvista_s": t_pv, "ratio": t_pv / t_iso,

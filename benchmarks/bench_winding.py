@@ -44,7 +44,7 @@ sys.path.insert(0, str(ROOT / "src"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from generated import random_soup, tet_quads, write_obj  # noqa: E402
-from isoflow.mesh.load import load_mesh  # noqa: E402
+
 from isoflow.mesh.voxelize import voxelize  # noqa: E402
 
 
@@ -135,8 +135,8 @@ def closed_case(args, tmp: Path) -> list[dict]:
     voxelize(v, f, resolution=16)
     rows = []
     for res in (256, 512):
-        t_iso, _ = best(lambda: voxelize(v, f, resolution=res), args.repeat)
-        t_pv, _ = best(lambda: poly.voxelize_binary_mask(spacing=2.0 / res), args.repeat)
+        t_iso, _ = best(lambda res=res: voxelize(v, f, resolution=res), args.repeat)
+        t_pv, _ = best(lambda res=res: poly.voxelize_binary_mask(spacing=2.0 / res), args.repeat)
         row = {"case": f"icosphere 81,920 faces @{res} in process", "isoflow_s": t_iso, "pyvista_s": t_pv,
                "ratio_pyvista_over_isoflow": t_pv / t_iso}
         print(row, flush=True)
