@@ -172,10 +172,6 @@ def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label:
     return filled
 
 
-def count_bits(packed: np.ndarray) -> int:
-    """The set bits of a packed bit array (without unpacking it)."""
-    table = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
-    return int(np.bincount(packed.reshape(-1), minlength=256) @ table)
 
 
 def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
@@ -270,7 +266,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     names = tuple(b.name for b in bodies)
     result = LabelVoxelization(
         labels=labels, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch), names=names,
-        voxels=tuple(int(c) for c in voxels[1:]), fill=fill, overlap=overlap, overlap_voxels=count_bits(shared),
+        voxels=tuple(int(c) for c in voxels[1:]), fill=fill, overlap=overlap,
+        overlap_voxels=int(np.bitwise_count(shared).sum(dtype=np.int64)),
         overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes))
     if overlap == "error" and result.overlaps:
         raise IsoflowError(f"voxelize: the meshes overlap: {overlap_text(result)}; overlap='later' (--overlap "
