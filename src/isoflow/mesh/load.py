@@ -212,6 +212,8 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         check_mesh_file(p)
         with reading_mesh(p):
             vertices, faces = read_off(p)
+    elif (simple := _read_simple(p)) is not None:
+        vertices, faces = simple
     else:
         mesh = trimesh_load(p, "mesh")
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
@@ -227,6 +229,14 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def _read_simple(p: Path):
+    """A plain STL or OBJ read with NumPy alone (no trimesh import), or None."""
+    from .readers import read_simple
+
+    check_mesh_file(p)
+    return read_simple(p)
 
 
 def check_mesh_file(p: Path) -> None:
