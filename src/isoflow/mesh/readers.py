@@ -91,7 +91,7 @@ def read_obj(data: bytes) -> Mesh | None:
     second; other polygons as fans); vertices no face uses are dropped.
     Negative indices are read only where every ``v`` line comes before every
     ``f`` line (there trimesh's count from the end and OBJ's count back from
-    the face agree); an index 0 or out of range is left to trimesh's path
+    the face agree), and with ``/`` only where every index is negative; an index 0 or out of range is left to trimesh's path
     (which names the line)."""
     if b"\\" in data or data.startswith(b"\xef\xbb\xbf"):
         return None  # line continuations and byte-order marks: trimesh's rules
@@ -175,8 +175,9 @@ def _obj_faces(f_lines: list[bytes], nv: int, *, negatives_ok: bool) -> np.ndarr
     flat = nums[::per]
     if (flat == 0).any() or (flat > nv).any() or (flat < -nv).any():
         return None
-    if (flat < 0).any() and (not negatives_ok or form != 0):
-        return None  # trimesh sorts texture-split corners by raw index, negatives first
+    negative = flat < 0
+    if negative.any() and (not negatives_ok or (form != 0 and not negative.all())):
+        return None  # trimesh sorts texture-split corners by raw index: negatives before the others
     return _triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes)
 
 
