@@ -108,6 +108,8 @@ OBJ_CASES = {
     "a word ending in /": (QUAD + "f 1/ 2/ 3/\n", False),
     "a word 1///2": (QUAD + "vn 0 0 1\nf 1///1 2///1 3///1\n", False),
     "forms mixed in a line": (QUAD + "vt 0 0\nvn 0 0 1\nf 1//1 2/1/1 3//1\n", False),
+    "vt not numbers": (QUAD + "vt 0 x\nf 1/1 2/1 3/1\n", False),
+    "vt of two sizes": (QUAD + "vt 0 0\nvt 1 1 1\nf 1/1 2/1 3/2\n", False),
     "two-corner face": (QUAD + "f 1 2 3\nf 1 2\n", False),
     "empty": ("", False),
     "vertices only": (QUAD, False),
@@ -142,8 +144,13 @@ def test_stl_loads_as_through_trimesh(kind, tmp_path, monkeypatch):
     p.write_bytes(data if isinstance(data, bytes) else data.encode())
     _same(p, monkeypatch, fast=True)
     if kind == "ascii":
-        p.write_bytes(p.read_bytes().replace(b"\n", b"\r\n"))
+        text = p.read_bytes()
+        p.write_bytes(text.replace(b"\n", b"\r\n"))
         _same(p, monkeypatch, fast=True)
+        p.write_bytes(b"solid Solid1 of SolidPart\n" + text.split(b"\n", 1)[1].replace(b"endsolid", b"endsolid Solid1"))
+        _same(p, monkeypatch, fast=True)
+        p.write_bytes(text + text)  # two solids: a scene in trimesh
+        _same(p, monkeypatch, fast=False)
 
 
 def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):

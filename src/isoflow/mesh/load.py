@@ -179,7 +179,9 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     """Read a triangle mesh and weld vertices that coincide.
 
     Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted (OFF
-    by :mod:`isoflow.mesh.off`, which takes polygons of any size); the
+    by :mod:`isoflow.mesh.off`, which takes polygons of any size; plain STL
+    and OBJ files by :mod:`isoflow.mesh.readers`, to the same arrays as
+    trimesh's, without importing it); the
     file is loaded with ``force="mesh"`` so multi-solid STLs and glTF scenes
     become one mesh (scene transforms applied).  OBJ files are loaded with
     ``merge_tex=True, merge_norm=True`` (trimesh otherwise splits vertices at

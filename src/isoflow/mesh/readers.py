@@ -62,7 +62,7 @@ def read_stl(data: bytes) -> Mesh | None:
 
 def _read_stl_ascii(data: bytes) -> Mesh | None:
     low = data.lower()
-    if not low.lstrip().startswith(b"solid") or low.count(b"solid") != 2 or low.count(b"endsolid") != 1:
+    if not low.lstrip().startswith(b"solid") or low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid"):
         return None  # several solids (or none): trimesh's scene of them
     lines = [ln.split() for ln in low.splitlines()]
     corners = [w[1:] for w in lines if w[:1] == [b"vertex"]]
@@ -70,11 +70,8 @@ def _read_stl_ascii(data: bytes) -> Mesh | None:
         return None
     if any(len(c) != 3 for c in corners):
         return None
-    try:
-        v = np.array([float(x) for c in corners for x in c], dtype=np.float64).reshape(-1, 3)
-    except ValueError:
-        return None
-    return _soup(v)
+    v = _numbers(b" ".join(b" ".join(c) for c in corners), np.float64, 3 * len(corners))
+    return None if v is None else _soup(v.reshape(-1, 3))
 
 
 def _soup(v: np.ndarray) -> Mesh:
@@ -91,8 +88,9 @@ def read_obj(data: bytes) -> Mesh | None:
     second; other polygons as fans); vertices no face uses are dropped.
     Negative indices are read only where every ``v`` line comes before every
     ``f`` line (there trimesh's count from the end and OBJ's count back from
-    the face agree), and with ``/`` only where every index is negative; an index 0 or out of range is left to trimesh's path
-    (which names the line)."""
+    the face agree), and with ``/`` only where every index is negative; an
+    index 0 or out of range is left to trimesh's path (which names the
+    line)."""
     if b"\\" in data or data.startswith(b"\xef\xbb\xbf"):
         return None  # line continuations and byte-order marks: trimesh's rules
     data = data.replace(b"\r\n", b"\n")
@@ -124,6 +122,7 @@ def _only_ignored(lines: list[bytes]) -> bool:
     before the first face (trimesh makes a mesh of each material, and of
     the faces before the first, and concatenates them in its own order)."""
     materials: set[bytes] = set()
+    attributes: dict[bytes, list[list[bytes]]] = {b"vt": [], b"vn": []}
     first_material = first_face = len(lines)
     for i, line in enumerate(lines):
         if line == b"f":
@@ -138,11 +137,23 @@ def _only_ignored(lines: list[bytes]) -> bool:
         if key == b"usemtl" and len(words) == 2:
             materials.add(words[1])
             first_material = min(first_material, i)
-        elif key in (b"vt", b"vn") and b"#" in line:
-            return False
+        elif key in attributes:
+            attributes[key].append(words[1:])
         elif key not in _OBJ_IGNORED and not key.startswith(b"#"):
             return False
-    return not materials or (len(materials) == 1 and first_material < first_face)
+    if materials and (len(materials) > 1 or first_material > first_face):
+        return False
+    return all(_table(rows) for rows in attributes.values())
+
+
+def _table(rows: list[list[bytes]]) -> bool:
+    """Whether ``vt`` or ``vn`` lines hold numbers, as many on each line
+    (where they do not, trimesh's reader may fail, or clip them)."""
+    if not rows:
+        return True
+    n = len(rows[0])
+    return all(len(r) == n for r in rows) and _numbers(b" ".join(w for r in rows for w in r), np.float64,
+                                                       n * len(rows)) is not None
 
 
 def _numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
