@@ -19,13 +19,14 @@ from isoflow.mesh import readers
 from isoflow.mesh.load import load_mesh
 
 ROOT = Path(__file__).resolve().parents[2]
-SHARED = Path("/work/shared/meshes")
+#: A folder of more mesh files to compare (a sweep of public meshes), if set.
+EXTRA = os.environ.get("ISOFLOW_EXTRA_MESHES")
 SUFFIXES = (".obj", ".stl", ".ply", ".off")
 
 
 def _files():
-    dirs = [ROOT / "meshes", ROOT / "tests" / "mesh" / "data"] + ([SHARED] if SHARED.is_dir() else [])
-    return sorted(p for d in dirs for p in d.iterdir() if p.suffix.lower() in SUFFIXES)
+    dirs = [ROOT / "meshes", ROOT / "tests" / "mesh" / "data"] + ([Path(EXTRA)] if EXTRA else [])
+    return sorted(p for d in dirs for p in d.rglob("*") if p.suffix.lower() in SUFFIXES)
 
 
 def _through_trimesh(p: Path, monkeypatch):
