@@ -1,7 +1,8 @@
 """Benchmark: meshes that are not closed (issue 24, items 4 and 5).
 
     PYTHONPATH=src python benchmarks/bench_winding.py [--out benchmarks/results/winding.json]
-        [--repeat 3] [--baseline OTHER_SRC] [--skip-igl] [--tets-res 32] [--only soup bunny tets closed signal]
+        [--repeat 3] [--baseline OTHER_SRC] [--skip-igl] [--tets-res 32]
+        [--only soup bunny startup tets closed signal]
 
 Cases, each timed in the same run (best of ``--repeat``; A B A B where two
 things are compared):
@@ -13,6 +14,8 @@ things are compared):
   the voxels that differ from libigl's ``|w| > 1/2`` are counted.
 * ``bunny``: the Stanford bunny scan that pymeshlab ships (holes in its
   base) at 256 across, as a whole command.
+* ``startup``: the soup and the bunny at 8 across as whole commands: what
+  every command pays to start and to read its file.
 * ``tets``: the tetrahedral quad mesh (96,000 faces, libigl's ``cube_40k``
   in kind) at ``--tets-res`` across, in process.
 * ``closed``: an 81,920-triangle icosphere at 256 and 512 across, in
@@ -116,6 +119,21 @@ def bunny_case(args, tmp: Path) -> list[dict]:
                      ["voxelize", str(path), "--resolution", "256", "-o", str(tmp / "b.npz")])]
 
 
+def startup_case(args, tmp: Path) -> list[dict]:
+    """The soup and the bunny at 8 across: the command's start-up and the
+    file's loading, the voxels next to nothing."""
+    import pymeshlab
+
+    rows = [commands(args, "soup100 @8 command (start-up, loading)",
+                     ["voxelize", str(write_obj(tmp / "soup100.obj", *random_soup())), "--resolution", "8",
+                      "-o", str(tmp / "s8.npz")])]
+    path = Path(pymeshlab.__file__).parent / "tests" / "sample_meshes" / "bunny10k_textured.obj"
+    if path.is_file():
+        rows.append(commands(args, "bunny10k scan @8 command (start-up, loading)",
+                             ["voxelize", str(path), "--resolution", "8", "-o", str(tmp / "b8.npz")]))
+    return rows
+
+
 def tets_case(args, tmp: Path) -> list[dict]:
     v, f = tet_quads()
     voxelize(v[:9], np.array([[0, 1, 2], [3, 4, 5]]), resolution=8)
@@ -171,9 +189,10 @@ def main() -> int:
     ap.add_argument("--baseline", help="another checkout's src directory, timed A B A B")
     ap.add_argument("--skip-igl", action="store_true")
     ap.add_argument("--tets-res", type=int, default=32)
-    ap.add_argument("--only", nargs="*", default=["soup", "bunny", "tets", "closed", "signal"])
+    ap.add_argument("--only", nargs="*", default=["soup", "bunny", "startup", "tets", "closed", "signal"])
     args = ap.parse_args()
-    cases = {"soup": soup_case, "bunny": bunny_case, "tets": tets_case, "closed": closed_case, "signal": signal_case}
+    cases = {"soup": soup_case, "bunny": bunny_case, "startup": startup_case, "tets": tets_case,
+             "closed": closed_case, "signal": signal_case}
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for name in args.only:

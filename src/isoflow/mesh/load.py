@@ -179,7 +179,9 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     """Read a triangle mesh and weld vertices that coincide.
 
     Any format trimesh reads (STL, OBJ, PLY, OFF, GLB, ...) is accepted (OFF
-    by :mod:`isoflow.mesh.off`, which takes polygons of any size); the
+    by :mod:`isoflow.mesh.off`, which takes polygons of any size; plain STL
+    and OBJ files by :mod:`isoflow.mesh.readers`, to the same arrays as
+    trimesh's, without importing it); the
     file is loaded with ``force="mesh"`` so multi-solid STLs and glTF scenes
     become one mesh (scene transforms applied).  OBJ files are loaded with
     ``merge_tex=True, merge_norm=True`` (trimesh otherwise splits vertices at
@@ -212,6 +214,8 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         check_mesh_file(p)
         with reading_mesh(p):
             vertices, faces = read_off(p)
+    elif (simple := _read_simple(p)) is not None:
+        vertices, faces = simple
     else:
         mesh = trimesh_load(p, "mesh")
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
@@ -227,6 +231,14 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def _read_simple(p: Path):
+    """A plain STL or OBJ read with NumPy alone (no trimesh import), or None."""
+    from .readers import read_simple
+
+    check_mesh_file(p)
+    return read_simple(p)
 
 
 def check_mesh_file(p: Path) -> None:

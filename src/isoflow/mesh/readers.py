@@ -1,0 +1,249 @@
+"""Plain NumPy readers for the simplest mesh files: binary and ASCII STL,
+and OBJ files of vertices and faces.
+
+Each reader returns exactly the vertices and faces that ``trimesh.load``
+(``process=False``, ``force="mesh"``) gives for the file, or ``None`` for
+anything it does not recognise as simple, and the caller then asks trimesh.
+Saying ``None`` is always safe; guessing never is, so every reader refuses
+at the first line it has not seen before.  Used by
+:func:`isoflow.mesh.load.load_mesh` so that a command on a plain file does
+not import trimesh (and the scipy modules it pulls in).
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+Mesh = tuple[np.ndarray, np.ndarray]
+
+_STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
+_OBJ_IGNORED = frozenset((b"#", b"vt", b"vn", b"o", b"g", b"s", b"mtllib"))
+
+
+def read_simple(path: Path) -> Mesh | None:
+    """Vertices (float64 (N, 3)) and faces (int64 (M, 3)) of a plain STL or
+    OBJ file read as trimesh reads it, or ``None`` where trimesh should read it.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "t.obj"
+    >>> _ = p.write_text("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nv 0 0 1\\nf 1 2 3 4\\n")
+    >>> v, f = read_simple(p)
+    >>> f.tolist()
+    [[0, 1, 2], [2, 3, 0]]
+    """
+    suffix = path.suffix.lower()
+    if suffix not in (".stl", ".obj"):
+        return None
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None  # trimesh's path says what is wrong with the file
+    return read_stl(data) if suffix == ".stl" else read_obj(data)
+
+
+def read_stl(data: bytes) -> Mesh | None:
+    """A binary STL (80-byte header, count, 50-byte records; read as binary
+    whenever the size says so, as trimesh does) or an ASCII STL of one solid:
+    three corners per facet, none shared."""
+    if len(data) >= 84:
+        n = int(np.frombuffer(data, "<u4", 1, 80)[0])
+        if len(data) == 84 + 50 * n:
+            if n == 0:
+                return None
+            rec = np.frombuffer(data, _STL_RECORD, n, 84)
+            return _soup(rec["corners"].reshape(-1, 3).astype(np.float64))
+    return _read_stl_ascii(data)
+
+
+def _read_stl_ascii(data: bytes) -> Mesh | None:
+    low = data.lower()
+    if not low.lstrip().startswith(b"solid") or low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid"):
+        return None  # several solids (or none): trimesh's scene of them
+    lines = [ln.split() for ln in low.splitlines()]
+    corners = [w[1:] for w in lines if w[:1] == [b"vertex"]]
+    if not corners or len(corners) != low.count(b"vertex") or len(corners) % 3:
+        return None
+    if any(len(c) != 3 for c in corners):
+        return None
+    v = _numbers(b" ".join(b" ".join(c) for c in corners), np.float64, 3 * len(corners))
+    return None if v is None else _soup(v.reshape(-1, 3))
+
+
+def _soup(v: np.ndarray) -> Mesh:
+    """Every three consecutive corners a triangle of their own."""
+    return v, np.arange(len(v), dtype=np.int64).reshape(-1, 3)
+
+
+def read_obj(data: bytes) -> Mesh | None:
+    """An OBJ file of ``v`` and ``f`` lines (``vt``, ``vn``, ``#``, ``o``,
+    ``g``, ``s``, ``mtllib`` and one material's ``usemtl`` lines ignored).
+
+    Faces use the position indices only; a polygon is split as trimesh
+    splits it (quads of a file of quads as two blocks, first triangles then
+    second; other polygons as fans); vertices no face uses are dropped.
+    Negative indices are read only where every ``v`` line comes before every
+    ``f`` line (there trimesh's count from the end and OBJ's count back from
+    the face agree), and with ``/`` only where every index is negative; an
+    index 0 or out of range is left to trimesh's path (which names the
+    line)."""
+    if b"\\" in data or data.startswith(b"\xef\xbb\xbf"):
+        return None  # line continuations and byte-order marks: trimesh's rules
+    data = data.replace(b"\r\n", b"\n")
+    if b"\r" in data:
+        return None  # lines ended by CR alone: not lines to trimesh
+    lines = data.split(b"\n")
+    heads = [ln[:2] for ln in lines]
+    v_at = [i for i, h in enumerate(heads) if h == b"v "]
+    f_at = [i for i, h in enumerate(heads) if h == b"f "]
+    rest = [lines[i] if h != b"f " else b"f" for i, h in enumerate(heads) if h != b"v "]
+    if not v_at or not f_at or not _only_ignored(rest):
+        return None
+    v = _numbers(b" ".join(lines[i][2:] for i in v_at), np.float64, 3 * len(v_at))
+    if v is None or any(len(lines[i].split()) != 4 for i in v_at):
+        return None  # four or six numbers a line: trimesh's w or colours
+    faces = _obj_faces([lines[i][2:] for i in f_at], len(v_at), negatives_ok=v_at[-1] < f_at[0])
+    if faces is None:
+        return None
+    v = v.reshape(-1, 3)
+    used = np.zeros(len(v), dtype=bool)
+    used[faces] = True
+    inverse = np.cumsum(used) - 1  # the used vertices, in file order
+    return v[used], inverse[faces]
+
+
+def _only_ignored(lines: list[bytes]) -> bool:
+    """Whether the lines other than ``v`` (each face line given as ``f``)
+    are blank or ones the reader ignores, with at most one material, named
+    before the first face (trimesh makes a mesh of each material, and of
+    the faces before the first, and concatenates them in its own order)."""
+    materials: set[bytes] = set()
+    attributes: dict[bytes, list[list[bytes]]] = {b"vt": [], b"vn": []}
+    first_material = first_face = len(lines)
+    for i, line in enumerate(lines):
+        if line == b"f":
+            first_face = min(first_face, i)
+            continue
+        words = line.split()
+        if not words:
+            continue
+        if line[:1].isspace():
+            return False
+        key = words[0]
+        if key == b"usemtl" and len(words) == 2:
+            materials.add(words[1])
+            first_material = min(first_material, i)
+        elif key in attributes:
+            attributes[key].append(words[1:])
+        elif key not in _OBJ_IGNORED and not key.startswith(b"#"):
+            return False
+    if materials and (len(materials) > 1 or first_material > first_face):
+        return False
+    return all(_table(rows) for rows in attributes.values())
+
+
+def _table(rows: list[list[bytes]]) -> bool:
+    """Whether ``vt`` or ``vn`` lines hold numbers, as many on each line
+    (where they do not, trimesh's reader may fail, or clip them)."""
+    if not rows:
+        return True
+    n = len(rows[0])
+    return all(len(r) == n for r in rows) and _numbers(b" ".join(w for r in rows for w in r), np.float64,
+                                                       n * len(rows)) is not None
+
+
+def _numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
+    """``count`` numbers parsed as trimesh parses them (``np.fromstring``),
+    or None where the text holds anything else."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)  # text it cannot read to its end
+            a = np.fromstring(text.decode("ascii"), dtype=dtype, sep=" ")
+    except (UnicodeDecodeError, ValueError):
+        return None
+    return a if len(a) == count else None
+
+
+def _obj_faces(f_lines: list[bytes], nv: int, *, negatives_ok: bool) -> np.ndarray | None:
+    """Triangles (position indices from 0) of the face lines (their text
+    after ``f``), or ``None``."""
+    first = f_lines[0].split()[0]
+    form = 2 if b"//" in first else 3 if first.count(b"/") == 2 else first.count(b"/")
+    if form > 3:
+        return None
+    text = b"\n".join(f_lines)
+    sizes = _face_sizes(np.frombuffer(text, np.uint8), form, len(f_lines))
+    if sizes is None or sizes.min() < 3:
+        return None
+    per = (1, 2, 2, 3)[form]  # numbers per corner: i; i/j; i//k; i/j/k
+    nums = _numbers(text.replace(b"/", b" "), np.int64, per * int(sizes.sum()))
+    if nums is None:
+        return None
+    flat = nums[::per]
+    if (flat == 0).any() or (flat > nv).any() or (flat < -nv).any():
+        return None
+    negative = flat < 0
+    if negative.any() and (not negatives_ok or (form != 0 and not negative.all())):
+        return None  # trimesh sorts texture-split corners by raw index: negatives before the others
+    return _triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes)
+
+
+def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:
+    """The number of corners on each line of face words (bytes ``a``), or
+    ``None`` unless every word has the first word's form: ``i`` (form 0),
+    ``i/j`` (1), ``i//k`` (2) or ``i/j/k`` (3), each number ``-?[0-9]+``."""
+    digit = (a >= 48) & (a <= 57)
+    minus, slash, newline = a == 45, a == 47, a == 10
+    ws = (a == 32) | (a == 9) | newline
+    if not (digit | minus | slash | ws).all():
+        return None
+    prev = np.concatenate(([32], a[:-1]))
+    nxt = np.concatenate((a[1:], [32]))
+    prev_ws = np.concatenate(([True], ws[:-1]))
+    next_ws = np.concatenate((ws[1:], [True]))
+    nxt_digit = (nxt >= 48) & (nxt <= 57)
+    prev_digit = (prev >= 48) & (prev <= 57)
+    double = form == 2
+    bad = minus & ~((prev_ws | (prev == 47)) & nxt_digit)
+    bad |= slash & ~((prev_digit | (double & (prev == 47))) & (nxt_digit | (nxt == 45) | (double & (nxt == 47))))
+    bad |= ~ws & next_ws & ~digit  # a word ends in a digit
+    start = ~ws & prev_ws
+    word = np.cumsum(start) - 1
+    n_words = int(word[-1]) + 1 if len(a) else 0
+    per_word = np.bincount(word[slash], minlength=n_words)
+    if bad.any() or (per_word != (0, 1, 2, 2)[form]).any():
+        return None
+    if double and int((slash & (nxt == 47)).sum()) != n_words:
+        return None
+    return np.bincount(np.cumsum(newline)[start], minlength=n_lines)
+
+
+def _triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """Polygons (corners ``flat``, ``sizes[i]`` corners each) as trimesh
+    splits them: a file of quads only as all first halves, then all second
+    halves; otherwise each polygon in turn as a fan from its first corner
+    (a quad among others as (0, 1, 2), (2, 3, 0))."""
+    k = int(sizes[0])
+    if (sizes == 3).all():
+        return flat.reshape(-1, 3)
+    if (sizes == 4).all():
+        q = flat.reshape(-1, 4)
+        return np.vstack((q[:, [0, 1, 2]], q[:, [2, 3, 0]]))
+    if (sizes == k).all():
+        p = flat.reshape(-1, k)
+        j = np.arange(1, k - 1)
+        return np.stack((np.repeat(p[:, :1], k - 2, axis=1), p[:, j], p[:, j + 1]), axis=2).reshape(-1, 3)
+    out = []
+    start = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    for s, n in zip(start.tolist(), sizes.tolist()):
+        c = flat[s:s + n]
+        if n == 4:
+            out.append(c[[0, 1, 2, 2, 3, 0]])
+        else:
+            j = np.arange(1, n - 1)
+            out.append(np.stack((np.full(n - 2, c[0]), c[j], c[j + 1]), axis=1).reshape(-1))
+    return np.concatenate(out).reshape(-1, 3)

@@ -1,0 +1,178 @@
+"""The NumPy readers of plain STL and OBJ files against trimesh's path:
+every file the fast path accepts loads to the same arrays as through
+trimesh (after the weld), and a command on a plain file never imports
+trimesh."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from isoflow.errors import IsoflowError
+from isoflow.mesh import readers
+from isoflow.mesh.load import load_mesh
+
+ROOT = Path(__file__).resolve().parents[2]
+#: A folder of more mesh files to compare (a sweep of public meshes), if set.
+EXTRA = os.environ.get("ISOFLOW_EXTRA_MESHES")
+SUFFIXES = (".obj", ".stl", ".ply", ".off")
+
+
+def _files():
+    dirs = [ROOT / "meshes", ROOT / "tests" / "mesh" / "data"] + ([Path(EXTRA)] if EXTRA else [])
+    return sorted(p for d in dirs for p in d.rglob("*") if p.suffix.lower() in SUFFIXES)
+
+
+def _through_trimesh(p: Path, monkeypatch):
+    with monkeypatch.context() as m:
+        m.setattr(readers, "read_simple", lambda path: None)
+        return _load(p)
+
+
+def _load(p: Path):
+    stats: dict = {}
+    try:
+        v, f = load_mesh(p, stats=stats)
+    except IsoflowError as exc:
+        return str(exc)
+    return v, f, stats
+
+
+def _same(p: Path, monkeypatch, *, fast: bool | None = None):
+    """Both paths give the same arrays, stats or error line; ``fast`` says
+    whether the NumPy reader must accept the file."""
+    if fast is not None:
+        assert (readers.read_simple(p) is not None) == fast, p
+    a, b = _load(p), _through_trimesh(p, monkeypatch)
+    if isinstance(b, str):
+        assert a == b
+        return
+    assert not isinstance(a, str), a
+    assert a[0].dtype == b[0].dtype and a[1].dtype == b[1].dtype
+    np.testing.assert_array_equal(a[0], b[0])
+    np.testing.assert_array_equal(a[1], b[1])
+    assert a[2] == b[2]
+
+
+@pytest.mark.parametrize("path", _files(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_mesh_files_load_as_through_trimesh(path, monkeypatch):
+    _same(path, monkeypatch)
+
+
+def test_the_sample_obj_and_stl_files_take_the_fast_path():
+    taken = [p.name for p in _files() if readers.read_simple(p) is not None]
+    assert {"soup.obj", "rabbit.obj", "torus.obj", "panel.obj", "featuretype.STL"} <= set(taken)
+
+
+QUAD = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+BOX = "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
+OBJ_CASES = {
+    "triangles": (QUAD + "f 1 2 3\nf 1 3 4\nf 1 2 5\n", True),
+    "quads": (QUAD + BOX, True),
+    "pentagons": (QUAD + "v 2 2 2\nf 1 2 3 4 5\nf 5 6 7 8 9\nf 2 3 4 5 6\n", True),
+    "mixed polygons": (QUAD + "v 2 2 2\nf 1 2 3 4 5 9\nf 1 2 6\nf 3 4 8 7\nf 1 5 8 4 2\n", True),
+    "negative indices": (QUAD + "f -8 -7 -6 -5\nf -4 -3 -2 -1\nf 1 2 -3\n", True),
+    "vt": (QUAD + "vt 0 0\nvt 1 0\nvt 1 1\n" + BOX.replace(" 1", " 1/1").replace(" 2", " 2/2")
+           .replace(" 3", " 3/3").replace(" 4", " 4/1").replace(" 5", " 5/2").replace(" 6", " 6/3")
+           .replace(" 7", " 7/1").replace(" 8", " 8/2"), True),
+    "vt per corner": (QUAD + "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                      "f 1/1 2/2 3/3\nf 1/4 3/2 4/3\nf 3/1 2/4 5/2 6/3\n", True),
+    "vn": (QUAD + "vn 0 0 1\nvn 0 1 0\n" + "".join(
+        f"f {a}//1 {b}//2 {c}//1\n" for a, b, c in [(1, 2, 3), (1, 3, 4), (5, 6, 7), (8, 2, 4)]), True),
+    "vt and vn": (QUAD + "vt 0 0\nvn 0 0 1\n" + "".join(
+        f"f {a}/1/1 {b}/1/1 {c}/1/1\n" for a, b, c in [(1, 2, 3), (4, 3, 2), (8, 7, 6)]), True),
+    "comments and groups": ("# a comment\nmtllib x.mtl\no box\n" + QUAD + "g side\ns 1\nusemtl red\n"
+                            + BOX + "# end\n", True),
+    "CRLF": ((QUAD + BOX).replace("\n", "\r\n"), True),
+    "unused vertices": ("v 0 0 1e-13\n" + QUAD + "v 9 9 9\nf 2 3 4\nf 2 4 5\nf 3 4 6\n", True),
+    "weld in tolerance": (QUAD + "v 1e-12 0 0\nf 9 2 3\nf 1 3 4\nf 1 2 5\n", True),
+    "interleaved negatives": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\nf -4 -3 -1\n", False),
+    "index 0": (QUAD + "f 0 1 2\nf 1 2 3\n", False),
+    "index out of range": (QUAD + "f 1 2 9\n", False),
+    "two materials": (QUAD + "usemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n", False),
+    "faces before the material": (QUAD + "f 1 2 3\nusemtl a\nf 1 3 4\n", False),
+    "vertex colours": (QUAD.replace("\n", " 1 0 0\n") + "f 1 2 3\n", False),
+    "lines": (QUAD + "f 1 2 3\nl 1 2\n", False),
+    "trailing comment": (QUAD + "f 1 2 3 # one\n", False),
+    "mixed face words": (QUAD + "vt 0 0\nf 1/1 2/1 3/1\nf 1 3 4\n", False),
+    "tabs and spaces": (QUAD.replace("v ", "v  ").replace(" 0\n", "\t0 \n") + "f 1\t2  3 \nf  1 3 4\n", True),
+    "negative with //": (QUAD + "vn 0 0 1\nf -1//1 -2//1 -3//1\nf -8//1 -7//1 -6//1\n", True),
+    "negative with vt": (QUAD + "vt 0 0\nvt 1 1\nf -1/-1 -2/-1 -3/-2\nf -8/-2 -7/-1 -6/-1\nf -1/-1 -2/-2 -3/-2\n", True),
+    "signs mixed with vt": (QUAD + "vt 0 0\nvt 1 1\nf -1/1 2/1 -3/2\nf 1/2 7/1 -6/1\n", False),
+    "a word 1-2": (QUAD + "f 1 2 3\nf 1-2 3 4\n", False),
+    "a word ending in /": (QUAD + "f 1/ 2/ 3/\n", False),
+    "a word 1///2": (QUAD + "vn 0 0 1\nf 1///1 2///1 3///1\n", False),
+    "forms mixed in a line": (QUAD + "vt 0 0\nvn 0 0 1\nf 1//1 2/1/1 3//1\n", False),
+    "vt not numbers": (QUAD + "vt 0 x\nf 1/1 2/1 3/1\n", False),
+    "vt of two sizes": (QUAD + "vt 0 0\nvt 1 1 1\nf 1/1 2/1 3/2\n", False),
+    "two-corner face": (QUAD + "f 1 2 3\nf 1 2\n", False),
+    "empty": ("", False),
+    "vertices only": (QUAD, False),
+}
+
+
+@pytest.mark.parametrize("name", OBJ_CASES)
+def test_generated_obj_loads_as_through_trimesh(name, tmp_path, monkeypatch):
+    text, fast = OBJ_CASES[name]
+    p = tmp_path / "m.obj"
+    p.write_bytes(text.encode())
+    _same(p, monkeypatch, fast=fast)
+
+
+def test_an_obj_face_with_index_0_is_refused_with_its_line(tmp_path):
+    p = tmp_path / "zero.obj"
+    p.write_text(QUAD + "f 1 2 3\nf 0 1 2\n")
+    with pytest.raises(IsoflowError, match=r"zero.obj:10: face 'f 0 1 2' uses vertex index 0"):
+        load_mesh(p)
+
+
+def _box_mesh():
+    return trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+
+
+@pytest.mark.parametrize("kind", ["binary", "ascii"])
+def test_stl_loads_as_through_trimesh(kind, tmp_path, monkeypatch):
+    rng = np.random.default_rng(7)
+    mesh = trimesh.util.concatenate([_box_mesh(), trimesh.Trimesh(rng.random((6, 3)) * 1e3 - 400, [[0, 1, 2], [3, 4, 5]])])
+    p = tmp_path / "m.stl"
+    data = mesh.export(file_type="stl" if kind == "binary" else "stl_ascii")
+    p.write_bytes(data if isinstance(data, bytes) else data.encode())
+    _same(p, monkeypatch, fast=True)
+    if kind == "ascii":
+        text = p.read_bytes()
+        p.write_bytes(text.replace(b"\n", b"\r\n"))
+        _same(p, monkeypatch, fast=True)
+        p.write_bytes(b"solid Solid1 of SolidPart\n" + text.split(b"\n", 1)[1].replace(b"endsolid", b"endsolid Solid1"))
+        _same(p, monkeypatch, fast=True)
+        p.write_bytes(text + text)  # two solids: a scene in trimesh
+        _same(p, monkeypatch, fast=False)
+
+
+def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):
+    body = _box_mesh().export(file_type="stl")
+    p = tmp_path / "m.stl"
+    p.write_bytes(b"solid looks like text".ljust(80) + body[80:])
+    _same(p, monkeypatch, fast=True)
+    for data in (body[:-7], body[:80] + b"\0\0\0\0", b"", b"solid a\nendsolid a\nsolid b\nendsolid b\n"):
+        p.write_bytes(data)
+        _same(p, monkeypatch, fast=False)
+        with pytest.raises(IsoflowError, match=str(p)):
+            load_mesh(p)
+
+
+def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
+    out = tmp_path / "x.npy"
+    code = ("import sys; from isoflow.cli import main\n"
+            "try:\n    main(sys.argv[1:])\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'trimesh'))")
+    r = subprocess.run([sys.executable, "-c", code, "voxelize", str(ROOT / "tests/mesh/data/soup.obj"),
+                        "--resolution", "16", "-o", str(out), "--quiet"],
+                       capture_output=True, text=True, env=dict(os.environ), check=True)
+    assert out.exists()
+    assert r.stdout.strip().splitlines()[-1] == "[]"
