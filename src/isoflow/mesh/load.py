@@ -183,9 +183,10 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     and OBJ files by :mod:`isoflow.mesh.readers`, to the same arrays as
     trimesh's, without importing it); the
     file is loaded with ``force="mesh"`` so multi-solid STLs and glTF scenes
-    become one mesh (scene transforms applied).  OBJ files are loaded with
-    ``merge_tex=True, merge_norm=True`` (trimesh otherwise splits vertices at
-    UV / normal seams), then every file goes through a positional weld with
+    become one mesh (scene transforms applied).  trimesh splits an OBJ's
+    vertices at UV / normal seams (``merge_tex``/``merge_norm`` are asked
+    for, but an unprocessed load keeps the split), so every file goes
+    through a positional weld with
     tolerance ``merge_rtol`` times the bounding-box diagonal: ASCII STLs such as
     ``featuretype.STL`` store shared corners that differ by 1e-16 and are only
     closed after that weld.  Faces collapsed by the weld (zero area) are
@@ -266,7 +267,8 @@ def reading_mesh(p: Path):
 def trimesh_load(p: Path, force: str):
     """``trimesh.load`` of a checked file, unprocessed (the weld is
     isoflow's), ``force`` "mesh" (a scene's meshes as one, transforms
-    applied) or "scene"; OBJ with texture and normal seams merged."""
+    applied) or "scene"; an OBJ's texture and normal seams are asked to be
+    merged (the weld merges what trimesh leaves split)."""
     check_mesh_file(p)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
