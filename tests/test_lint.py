@@ -29,6 +29,6 @@ def test_ruff_finds_nothing():
 
 @pytest.mark.skipif(importlib.util.find_spec("mypy") is None, reason="mypy is in the test extra")
 def test_mypy_finds_nothing_in_the_public_modules():
-    r = run("mypy", "--no-incremental")
+    r = run("mypy")
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
     assert "Success" in r.stdout
