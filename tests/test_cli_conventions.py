@@ -8,6 +8,7 @@ import importlib.metadata
 import io
 import os
 import shutil
+import signal
 import struct
 import subprocess
 import sys
@@ -224,6 +225,42 @@ def test_a_signal_a_library_swallows_still_stops_the_output(tmp_path, capsys, mo
     assert not outputs.SIGNALS  # and the next command starts afresh
     monkeypatch.undo()
     assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 0
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_inside_a_weakref_callback_ends_the_command_without_a_traceback(tmp_path, capsys, monkeypatch):
+    """A SIGTERM whose KeyboardInterrupt is raised where Python cannot
+    raise it (here a weakref callback, as during garbage collection) is
+    dropped by Python with an "Exception ignored" traceback on stderr; the
+    command still ends as terminated, in its one line."""
+    import weakref
+
+    from isoflow.mesh import export
+
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply")]) == 0
+    before = (tmp_path / "s.ply").read_bytes()
+    table = export.mesh_vertex_table
+
+    class Dropped:
+        pass
+
+    def collected(*args):
+        thing = Dropped()
+        ref = weakref.ref(thing, lambda _: os.kill(os.getpid(), signal.SIGTERM))
+        del thing  # the callback runs now, and the handler inside it
+        assert ref() is None
+        return table(*args)
+
+    monkeypatch.setattr(export, "mesh_vertex_table", collected)
+    monkeypatch.setattr(sys, "unraisablehook", sys.__unraisablehook__)  # Python's, not pytest's
+    capsys.readouterr()
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "Exception ignored" not in err, err
+    assert err.strip().splitlines() == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; "
+                                        "the previous s.ply is unchanged"], err
+    assert (tmp_path / "s.ply").read_bytes() == before
 
 
 def test_quiet_drops_every_note(tmp_path, capsys):

@@ -164,10 +164,20 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
         request_stop()
         raise KeyboardInterrupt
 
+    def unraisable(report):
+        # the KeyboardInterrupt raised where Python cannot raise it (a weakref
+        # callback, a finaliser during garbage collection) is reported with a
+        # traceback and dropped; the signal is kept above, so the command
+        # still ends as interrupted, and the report would only alarm
+        if not (received and isinstance(report.exc_value, KeyboardInterrupt)):
+            hook(report)
+
     before = {sig: signal.signal(sig, interrupt) for sig in wanted}
+    hook, sys.unraisablehook = sys.unraisablehook, unraisable
     try:
         yield
     finally:
+        sys.unraisablehook = hook
         for sig, handler in before.items():
             signal.signal(sig, handler)
 
