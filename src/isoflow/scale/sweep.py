@@ -65,8 +65,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from .bitrows import config_at as _config
-from .bitrows import popcount, trailing_zeros
+from .bitrows import config_at, popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 from .kernels import union
@@ -240,7 +239,7 @@ def _doubled_spokes(rows, tables, rules, slab, i, j, k, c, nloose):
             continue  # past the lattice: no edge
         if lo[axis] <= at < hi[axis]:
             if d == 1 or d == 3 or d == 4:
-                doubled += (spokes[_config(rows.bits, rows.nx, rows.ny, rows.nz, x, y, z)] >> (d ^ 1)) & 1
+                doubled += (spokes[config_at(rows.bits, rows.nx, rows.ny, rows.nz, x, y, z)] >> (d ^ 1)) & 1
             continue
         if nloose < len(slab.loose):
             slab.loose[nloose, 0], slab.loose[nloose, 1], slab.loose[nloose, 2], slab.loose[nloose, 3] = i, j, k, d
