@@ -167,10 +167,13 @@ def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):
 
 
 def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
+    """Nor the scipy modules of a weld or a graph's components (sparse,
+    csgraph, spatial): each of those imports is a share of a short command."""
     out = tmp_path / "x.npy"
     code = ("import sys; from isoflow.cli import main\n"
             "try:\n    main(sys.argv[1:])\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'trimesh'))")
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'trimesh'"
+            " or m.split('.')[:2] in (['scipy', 'sparse'], ['scipy', 'spatial'])))")
     r = subprocess.run([sys.executable, "-c", code, "voxelize", str(ROOT / "tests/mesh/data/soup.obj"),
                         "--resolution", "16", "-o", str(out), "--quiet"],
                        capture_output=True, text=True, env=dict(os.environ), check=True)

@@ -183,12 +183,10 @@ def _same_pieces(total: int, same: list) -> np.ndarray:
     """Per piece number (0 .. total), the number of the piece it is once
     the numbers that name one piece in two slabs are made one: 0 for the
     outside, then 1.. in order of each piece's first number."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from ..scale.graphs import components
 
     pairs = np.concatenate(same) if same else np.zeros((0, 2), np.int64)
-    graph = coo_matrix((np.ones(len(pairs), np.int8), (pairs[:, 0], pairs[:, 1])), shape=(total + 1, total + 1))
-    _, comp = connected_components(graph, directed=False)
+    _, comp = components(total + 1, pairs[:, 0], pairs[:, 1])
     first = np.full(comp.max(initial=0) + 1, total + 1)
     np.minimum.at(first, comp, np.arange(total + 1))
     order = np.argsort(first)  # components by their first number: the outside's (0) first

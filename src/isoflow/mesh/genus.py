@@ -47,8 +47,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     closed surfaces touching at a point, like ``hourglass_ico.obj``).
     With ``return_components``, also each face's component number.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from ..scale.graphs import components
 
     v = np.asarray(vertices)
     f = np.asarray(faces, dtype=np.int64)
@@ -66,8 +65,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     # faces sharing an edge are in one component (all of them at a
     # non-manifold edge): join each half-edge's face to its edge's first face
     first_face = face_of[order][np.repeat(edge_start, edge_count)]
-    graph = coo_matrix((np.ones(len(order)), (face_of[order], first_face)), shape=(nf, nf))
-    ncomp, comp = connected_components(graph, directed=False)
+    ncomp, comp = components(nf, face_of[order], first_face)
 
     # per component: V (vertices used), E (edges), F, and whether closed
     comp_of_edge = comp[face_of[order][edge_start]]
@@ -86,8 +84,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     same_dir = a[h1] == a[h2]
     src = np.concatenate([corner_a[h1], corner_b[h1]])
     dst = np.concatenate([np.where(same_dir, corner_a[h2], corner_b[h2]), np.where(same_dir, corner_b[h2], corner_a[h2])])
-    cgraph = coo_matrix((np.ones(len(src)), (src, dst)), shape=(3 * nf, 3 * nf))
-    _, fan = connected_components(cgraph, directed=False)
+    _, fan = components(3 * nf, src, dst)
     vf = np.unique(np.stack([f.ravel(), fan], axis=1), axis=0)
     fans_per_vertex = np.bincount(vf[:, 0], minlength=len(v))
     vcomp = np.unique(np.stack([f.ravel(), np.repeat(comp, 3)], axis=1), axis=0)

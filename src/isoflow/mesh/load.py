@@ -129,9 +129,8 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     ``dropped_faces``: faces left with two equal corners (by the weld, or
     as read).
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
+    from ..scale.graphs import components  # numba: imported where a mesh is welded
+    from .close_pairs import close_pairs
 
     lo, _, ext = mesh_bbox(v, f, where)  # refuses an extent that overflows
     uniq, inverse = np.unique(v, axis=0, return_inverse=True)
@@ -149,12 +148,10 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
             w = np.ldexp(uniq - lo, -e)
         tol = rtol * float(np.linalg.norm(np.ldexp(ext, -e)))
         near = np.nonzero(np.all(np.abs(w) <= 2.0**40, axis=1))[0]
-        pairs = cKDTree(w[near]).query_pairs(tol, output_type="ndarray")
+        pairs = close_pairs(w[near], tol, cell=2.0**-20)  # cells far finer than any mesh's spacing
         if len(pairs):
             pairs = near[pairs]
-            n = len(uniq)
-            g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-            _, lab = connected_components(g, directed=False)
+            _, lab = components(len(uniq), pairs[:, 0], pairs[:, 1])
             if stats is not None:
                 used = np.unique(inverse[f])
                 stats["welded"] = int(len(used) - len(np.unique(lab[used])))
@@ -369,8 +366,8 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     a component whose flipped faces outweigh the others is turned back.
     """
     import trimesh
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+
+    from ..scale.graphs import components
 
     mesh = trimesh.Trimesh(vertices, faces, process=False, validate=False)
     if mesh.is_winding_consistent:
@@ -379,9 +376,7 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     fixed = np.asarray(mesh.faces, dtype=np.int64)
     flipped = np.any(fixed != faces, axis=1)
     adj = np.asarray(mesh.face_adjacency, dtype=np.int64).reshape(-1, 2)
-    m = len(faces)
-    g = coo_matrix((np.ones(len(adj)), (adj[:, 0], adj[:, 1])), shape=(m, m))
-    ncomp, comp = connected_components(g, directed=False)
+    ncomp, comp = components(len(faces), adj[:, 0], adj[:, 1])
     area = np.asarray(mesh.area_faces, dtype=np.float64)
     turned = np.bincount(comp, weights=area * flipped, minlength=ncomp)
     total = np.bincount(comp, weights=area, minlength=ncomp)

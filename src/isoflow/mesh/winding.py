@@ -197,8 +197,7 @@ def _groups(faces, n, a, b):
     """Pieces of the chain (connected edges), a face holding each chain
     edge, and each face's group (-1 for a closed face component): the face
     components joined by the pieces they share; and the number of labels."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from ..scale.graphs import components
 
     m = len(faces)
     e0 = faces.reshape(-1)
@@ -211,18 +210,15 @@ def _groups(faces, n, a, b):
     # face components through shared edges
     same = sk[1:] == sk[:-1]
     fo = order // 3
-    g = coo_matrix((np.ones(int(same.sum())), (fo[:-1][same], fo[1:][same])), shape=(m, m))
-    nc, comp = connected_components(g, directed=False)
+    nc, comp = components(m, fo[:-1][same], fo[1:][same])
     # chain pieces
     used, inv = np.unique(np.concatenate([a, b]), return_inverse=True)
     k = len(used)
-    g = coo_matrix((np.ones(len(a)), (inv[: len(a)], inv[len(a):])), shape=(k, k))
-    _, lab = connected_components(g, directed=False)
+    _, lab = components(k, inv[: len(a)], inv[len(a):])
     piece = lab[inv[: len(a)]]
     # groups: components and pieces, joined where a piece bounds a component
     npc = int(piece.max()) + 1
-    g = coo_matrix((np.ones(len(a)), (comp[face_of_edge], nc + piece)), shape=(nc + npc, nc + npc))
-    ngroups, glab = connected_components(g, directed=False)
+    ngroups, glab = components(nc + npc, comp[face_of_edge], nc + piece)
     bounded = np.zeros(nc, dtype=bool)
     bounded[comp[face_of_edge]] = True
     return piece, face_of_edge, np.where(bounded[comp], glab[:nc][comp], -1), ngroups

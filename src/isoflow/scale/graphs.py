@@ -1,0 +1,75 @@
+"""Connected components of a graph given as an edge list, compiled.
+
+The welds, caps, face components and seams of the mesh layer each need the
+components of a graph of up to a few million nodes. scipy's
+``connected_components`` of a sparse matrix gives them, but importing
+``scipy.sparse`` and ``csgraph`` is a large share of a short command's
+start-up; a union-find over the edge list (linear in the edges, with path
+halving) gives the same numbering without it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .jit import njit
+
+
+@njit(cache=True, nogil=True)
+def _roots(n, a, b):
+    """Each node's root after joining every edge ``a[i] - b[i]``: the
+    smallest node of its component (the larger root is hung below the
+    smaller one)."""
+    parent = np.arange(n)
+    for i in range(a.shape[0]):
+        x = a[i]
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        y = b[i]
+        while parent[y] != y:
+            parent[y] = parent[parent[y]]
+            y = parent[y]
+        if x < y:
+            parent[y] = x
+        elif y < x:
+            parent[x] = y
+    for v in range(n):  # roots are smaller than their nodes: one pass in order
+        parent[v] = parent[parent[v]]
+    return parent
+
+
+def components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
+    """The connected components of the undirected graph on nodes ``0 .. n-1``
+    with edges ``a[i] - b[i]``.
+
+    Parameters
+    ----------
+    n : int
+        Number of nodes.
+    a, b : numpy.ndarray
+        Integer arrays of equal length: the edges' ends (loops and repeated
+        edges allowed).
+
+    Returns
+    -------
+    count : int
+        Number of components.
+    labels : numpy.ndarray
+        ``int64`` per node: its component, numbered ``0 .. count-1`` in the
+        order of each component's smallest node (scipy's
+        ``connected_components`` numbers them so too).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> count, labels = components(5, np.array([3, 1]), np.array([4, 0]))
+    >>> count, labels.tolist()
+    (3, [0, 0, 1, 2, 2])
+    """
+    if n == 0:
+        return 0, np.zeros(0, np.int64)
+    roots = _roots(n, np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64))
+    is_root = roots == np.arange(n)
+    rank = np.cumsum(is_root) - 1  # roots are their components' smallest nodes: rank in node order
+    return int(is_root.sum()), rank[roots]
