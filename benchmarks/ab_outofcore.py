@@ -2,7 +2,7 @@
 source trees (e.g. main's and a branch's), for a machine shared with other
 jobs, where only runs side by side compare.
 
-    python benchmarks/ab_outofcore.py /tmp/ooc/porous-1024.zarr --a /work/main/src --b src --pairs 6
+    python benchmarks/ab_outofcore.py DIR/porous-1024.zarr --a MAIN/src --b src --pairs 6
 
 Each command runs in a fresh process with ``PYTHONPATH`` set to one tree,
 A and B alternated (A B, B A, A B, ...); the best wall time and the least
