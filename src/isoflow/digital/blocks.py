@@ -226,7 +226,9 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
     (8, [('n', 2, 1), ('vox', 2, 1)], 1)
     """
     with using(1):
-        core = binary(block, where, near=origin)
+        # the sweep packs every nonzero byte as set, as in memory: a 3D bool
+        # block needs no pass that makes its bytes 0 and 1 (cc3d, in 2D, does)
+        core = binary(block, where, near=origin, canonical=np.ndim(block) != 3)
         if core.ndim == 3:
             return _swept_block(core, index, numblocks, origin, shape, conn, surfaces)
         return _labelled_block(core, index, numblocks, conn)

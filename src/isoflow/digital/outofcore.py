@@ -338,6 +338,17 @@ def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, 
     return merged
 
 
+def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:
+    """The workers of a local scheduler: one per thread, two for the
+    threaded scheduler where the blocks are read from zarr. A zarr block's
+    task waits while zarr's own threads read and decompress its chunk; a
+    second task per thread sweeps another block meanwhile, so the cores
+    are not left idle. Worker processes are not doubled: each holds a
+    Python of its own."""
+    processes = scheduler in ("processes", "multiprocessing") or getattr(scheduler, "__module__", "") == "dask.multiprocessing"
+    return threads * (2 if is_zarr and not processes else 1)
+
+
 def _scheduler(dask, scheduler):
     """The scheduler's function where it is named (or dask's configured one,
     by default threads), found without importing dask.distributed as dask
@@ -395,9 +406,10 @@ def analyze_chunked(
     surfaces : bool
         Count the closed surfaces, pinched vertices and doubled edges (3D).
     threads : int, optional
-        Workers of the threaded scheduler (default
+        Threads of the local scheduler (default
         :func:`isoflow.scale.compiled.thread_count`); each block's passes
-        run on one thread and release the GIL.
+        run on one thread and release the GIL. Blocks read from zarr run
+        two tasks per thread, one of them mostly waiting for its chunk.
 
     Returns
     -------
@@ -433,10 +445,9 @@ def analyze_chunked(
     if 0 in shape:
         raise IsoflowError(f"{where}: the array has no voxels (shape {shape})")
     grid = _grid(array, block_shape, where)
-    with using(threads):
-        workers = thread_count()
-
     scheduler = _scheduler(dask, scheduler)
+    with using(threads):
+        workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
 
     def compute(*tasks):
         return dask.compute(*tasks, scheduler=scheduler, num_workers=workers, traverse=False)

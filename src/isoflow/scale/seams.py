@@ -34,6 +34,7 @@ import numpy as np
 from .jit import njit
 
 _EMPTY = -1
+_BEYOND = 2  # a padded seam's voxels beyond the seam: of neither kind
 _GOLDEN = -7046029254386353131  # 0x9E3779B97F4A7C15 as int64: Fibonacci hashing
 
 
@@ -70,41 +71,35 @@ def _flush(table, key, dv, dq, used):
 
 @njit(cache=True, nogil=True, inline="always")
 def _nibble(vox, j, k):
-    """Voxels (t, j - 1 + p, k) of the seam as bits t + 2 p (clear outside)."""
-    _, n1, n2 = vox.shape
-    c = 0
-    if 0 <= k < n2:
-        if j >= 1:
-            c |= vox[0, j - 1, k] | (vox[1, j - 1, k] << 1)
-        if j < n1:
-            c |= (vox[0, j, k] << 2) | (vox[1, j, k] << 3)
-    return c
+    """Voxels (t, j - 1 + p, k) of the padded seam as bits t + 2 p (clear
+    beyond the seam)."""
+    return (vox[0, j - 1, k] & 1) | ((vox[1, j - 1, k] & 1) << 1) | ((vox[0, j, k] & 1) << 2) | ((vox[1, j, k] & 1) << 3)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _octant_key(vox, keys, j, k, o, outside):
-    """The key of octant ``o`` (t + 2 p + 4 q) of vertex (1, j, k) and its
-    sign in the sums (+1 for the object, -1 for the background);
-    ``outside`` beyond the seam."""
+def _octant_key(vox, keys, j, k, o):
+    """The key of octant ``o`` (t + 2 p + 4 q) of vertex (1, j, k) of the
+    padded seam and its sign in the sums (+1 for the object, -1 for the
+    background and beyond the seam)."""
     t, y, z = o & 1, j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
-    if 0 <= y < vox.shape[1] and 0 <= z < vox.shape[2]:
-        return keys[t, y, z], 2 * np.int64(vox[t, y, z]) - 1
-    return np.int64(outside), -1
+    return keys[t, y, z], 2 * np.int64(vox[t, y, z] & 1) - 1
 
 
 @njit(cache=True, nogil=True)
-def _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, table, hist, pairs, loose):
+def _vertices(vox, keys, lo, hi, tables, formula_obj, order, octant, table, hist, pairs, loose):
     """The vertices (1, j, k), lo <= (j, k) < hi, of a seam whose axis is
-    first: histogram, sheets and pinches into the hash ``table`` (keys, 4
-    chi, faces), pinch ``pairs``, loose ends (j, k, spoke bit). ``order``
+    first (``vox`` and ``keys`` padded, :func:`_padded`, so that the
+    vertex sees the padded voxels (j .. j + 1, k .. k + 1)): histogram,
+    sheets and pinches into the hash ``table`` (keys, 4 chi, faces), pinch
+    ``pairs``, loose ends (j, k, spoke bit). ``order``
     turns the seam's configuration code into the volume's, ``octant`` the
     volume's octants into the seam's. Returns the pinch pairs and loose
     ends found (also past the buffers) and whether the table filled up."""
     used = npairs = nloose = 0
     run, dv = _EMPTY, 0  # the key being added to, and what it gained so far
-    for j in range(lo[0], hi[0]):
-        before = _nibble(vox, j, lo[1] - 1)
-        for k in range(lo[1], hi[1]):
+    for j in range(lo[0] + 1, hi[0] + 1):
+        before = _nibble(vox, j, lo[1])
+        for k in range(lo[1] + 1, hi[1] + 1):
             now = _nibble(vox, j, k)
             c = order[before | (now << 4)]
             before = now
@@ -112,7 +107,7 @@ def _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, ta
             if c == 0 or c == 255:
                 continue
             for s in range(tables.nsheet[c]):
-                key, sign = _octant_key(vox, keys, j, k, octant[tables.octant[c, s]], outside)
+                key, sign = _octant_key(vox, keys, j, k, octant[tables.octant[c, s]])
                 if key != run:
                     used = _flush(table, run, dv, 0, used)
                     run, dv = key, 0
@@ -121,10 +116,10 @@ def _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, ta
                 o = 0  # the six other octants: one component of the formula side
                 while ((c >> o) & 1) != formula_obj:
                     o += 1
-                key, sign = _octant_key(vox, keys, j, k, octant[o], outside)
+                key, sign = _octant_key(vox, keys, j, k, octant[o])
                 used = _flush(table, key, 8 * sign, 0, used)
-                a = _octant_key(vox, keys, j, k, octant[tables.pinch[c, 0]], outside)[0]
-                b = _octant_key(vox, keys, j, k, octant[tables.pinch[c, 1]], outside)[0]
+                a = _octant_key(vox, keys, j, k, octant[tables.pinch[c, 0]])[0]
+                b = _octant_key(vox, keys, j, k, octant[tables.pinch[c, 1]])[0]
                 if a != b:
                     if npairs < len(pairs):
                         pairs[npairs, 0], pairs[npairs, 1] = a, b
@@ -132,7 +127,7 @@ def _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, ta
             for d in range(6):
                 if (tables.spokes[c] >> d) & 1:
                     if nloose < len(loose):
-                        loose[nloose, 0], loose[nloose, 1], loose[nloose, 2] = j, k, d
+                        loose[nloose, 0], loose[nloose, 1], loose[nloose, 2] = j - 1, k - 1, d
                     nloose += 1
             if 2 * used > len(table[0]):
                 return npairs, nloose, True
@@ -142,9 +137,9 @@ def _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, ta
 
 @njit(cache=True, nogil=True, inline="always")
 def _formula(vox, formula_obj, j, k):
-    """Whether voxels (0, j, k) and (1, j, k) are both of the formula side
-    (False outside the seam)."""
-    return j < vox.shape[1] and k < vox.shape[2] and vox[0, j, k] == formula_obj and vox[1, j, k] == formula_obj
+    """1 where voxels (0, j, k) and (1, j, k) of the padded seam are both
+    of the formula side, else 0 (also beyond the seam)."""
+    return np.int64(vox[0, j, k] == formula_obj) & np.int64(vox[1, j, k] == formula_obj)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -152,19 +147,21 @@ def _cell_gain(vox, formula_obj, j, k):
     """What the cells across the face with their first voxel (0, j, k)
     take from its component's sums (4 chi, faces; the voxel pairs with
     (1, j, k), of one kind): a face counted twice, and on the formula side
-    an edge, with the squares and the cube that follow it along j and k."""
+    an edge, with the squares and the cube that follow it along j and k.
+    Without branches: the voxels' kinds follow no pattern a branch
+    predictor could learn."""
     sign = 2 * np.int64(vox[0, j, k]) - 1
-    if vox[0, j, k] != formula_obj:
-        return 0, -2 * sign
     along_j, along_k = _formula(vox, formula_obj, j + 1, k), _formula(vox, formula_obj, j, k + 1)
-    cube = along_j and along_k and _formula(vox, formula_obj, j + 1, k + 1)
-    return 8 * sign * (-1 + along_j + along_k - cube), -2 * sign
+    cube = along_j & along_k & _formula(vox, formula_obj, j + 1, k + 1)
+    edge = np.int64(vox[0, j, k] == formula_obj)
+    return 8 * sign * edge * (-1 + along_j + along_k - cube), -2 * sign
 
 
 @njit(cache=True, nogil=True)
 def _across(vox, keys, own, formula_obj, steps_obj, steps_bg, table, edges):
-    """One pass over the voxels (0, j, k) of a seam whose axis is first:
-    the cells across the face whose first voxel is the block's own
+    """One pass over the voxels (0, j, k) of a seam whose axis is first
+    (``vox`` and ``keys`` padded, :func:`_padded`, so no neighbour is out
+    of bounds; below the seam's own coordinates): the cells across the face whose first voxel is the block's own
     (``own``: its extent along j and k; the seam reaches one voxel further
     where the next block along that axis takes part) into the hash
     ``table``, and the pairs of neighbouring voxels of one kind across the
@@ -180,10 +177,11 @@ def _across(vox, keys, own, formula_obj, steps_obj, steps_bg, table, edges):
     run, dv, dq = _EMPTY, 0, 0
     last = np.full((9, 2), _EMPTY, np.int64)
     _, n1, n2 = vox.shape
-    for j in range(n1):
-        for k in range(n2):
+    for j in range(1, n1 - 1):
+        for k in range(1, n2 - 1):
             kind, a = vox[0, j, k], keys[0, j, k]
-            if j < own[0] and k < own[1] and kind == vox[1, j, k]:
+            straight = vox[1, j, k] == kind
+            if straight and j <= own[0] and k <= own[1]:
                 if a != run:
                     used = _flush(table, run, dv, dq, used)
                     run, dv, dq = a, 0, 0
@@ -192,13 +190,18 @@ def _across(vox, keys, own, formula_obj, steps_obj, steps_bg, table, edges):
                 if 2 * used > len(table[0]):
                     return n, True
             steps = steps_obj if kind else steps_bg
-            straight = vox[1, j, k] == kind
+            if straight:  # the step (0, 0), the middle one; the diagonals join through it
+                d, b = len(steps) // 2, keys[1, j, k]
+                if a != b and not (a == last[d, 0] and b == last[d, 1]):
+                    last[d, 0], last[d, 1] = a, b
+                    if n < len(edges):
+                        edges[n, 0], edges[n, 1], edges[n, 2] = a, b, kind
+                    n += 1
+                continue
             for d in range(len(steps)):
                 y, z = j + steps[d, 0], k + steps[d, 1]
-                if not (0 <= y < n1 and 0 <= z < n2) or vox[1, y, z] != kind:
-                    continue
-                if (y != j or z != k) and (straight or vox[0, y, z] == kind):
-                    continue  # joined through a voxel face-adjacent to both
+                if vox[1, y, z] != kind or vox[0, y, z] == kind:
+                    continue  # no pair, or joined through a voxel face-adjacent to both
                 b = keys[1, y, z]
                 if a == b or (a == last[d, 0] and b == last[d, 1]):
                     continue
@@ -217,6 +220,7 @@ def _steps(reach: int) -> np.ndarray:
     coordinates two neighbours may differ in: 1 or 2 for 6 or 18, the
     boundary mesh's adjacencies)."""
     assert reach <= 2, "a diagonal is joined through a face-adjacent voxel: not so under 26"
+    # the step (0, 0) is the middle one (_across looks it up there)
     return np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1) if 1 + abs(a) + abs(b) <= reach], np.int64)
 
 
@@ -234,6 +238,18 @@ def _orders(axis: int) -> tuple[np.ndarray, np.ndarray]:
     for c in range(256):
         order[sum(1 << int(octant[o]) for o in range(8) if (c >> o) & 1)] = c
     return order, octant
+
+
+def _padded(vox: np.ndarray, keys: np.ndarray, outside: int) -> tuple[np.ndarray, np.ndarray]:
+    """The seam (axis first) with one more voxel on either side along j and
+    k, of neither kind (:data:`_BEYOND`, clear in the vertices'
+    configurations) and of the ``outside`` key: the volume beyond the seam
+    as the vertices on its rim see it, with no bounds to check."""
+    _, n1, n2 = vox.shape
+    padded = np.full((2, n1 + 2, n2 + 2), _BEYOND, np.uint8), np.full((2, n1 + 2, n2 + 2), outside, np.int64)
+    for whole, part in zip(padded, (vox, keys)):
+        whole[:, 1:-1, 1:-1] = part
+    return padded
 
 
 def seam_census(vox: np.ndarray, keys: np.ndarray, lo, hi, axis: int, own, outside: int, tables, formula_obj: bool,
@@ -289,20 +305,20 @@ def seam_census(vox: np.ndarray, keys: np.ndarray, lo, hi, axis: int, own, outsi
     (-8, -2)
     """
     others = [m for m in range(3) if m != axis]
-    vox = np.ascontiguousarray(np.moveaxis(vox.view(np.uint8), axis, 0))
-    keys = np.ascontiguousarray(np.moveaxis(keys, axis, 0))
+    vox, keys = np.moveaxis(vox.view(np.uint8), axis, 0), np.moveaxis(keys, axis, 0)
     order, octant = _orders(axis)
     lo, hi, own = (np.array([x[m] for m in others], np.int64) for x in (lo, hi, own))
     steps = _steps(reach[0]), _steps(reach[1])
+    padded = _padded(vox, keys, outside)
     capacity, room, joins = 1 << 10, 1 << 8, max(64, vox.size // 4)
     while True:
         table = (np.full(capacity, _EMPTY, np.int64), np.zeros(capacity, np.int64), np.zeros(capacity, np.int64))
         hist = np.zeros(256, np.int64)
         pairs, loose = np.empty((room, 2), np.int64), np.empty((room, 3), np.int64)
         edges = np.empty((joins, 3), np.int64)
-        npairs, nloose, full = _vertices(vox, keys, lo, hi, outside, tables, formula_obj, order, octant, table, hist,
-                                         pairs, loose)
-        nedges, full_too = (0, True) if full else _across(vox, keys, own, formula_obj, *steps, table, edges)
+        npairs, nloose, full = _vertices(*padded, lo, hi, tables, formula_obj, order, octant, table, hist, pairs,
+                                         loose)
+        nedges, full_too = (0, True) if full else _across(*padded, own, formula_obj, *steps, table, edges)
         if full or full_too:
             capacity *= 4
         elif max(npairs, nloose) > room or nedges > joins:
