@@ -356,6 +356,17 @@ def _slot(pairs, key):
         s = (s + np.uint64(1)) & mask
 
 
+@njit(cache=True, nogil=True)
+def _emptied(pairs):
+    """The pair table with every slot emptied."""
+    for s in range(len(pairs)):
+        pairs[s, 0] = EMPTY
+        pairs[s, 1] = NONE
+        pairs[s, 2] = 0
+        pairs[s, 3] = 0
+    return pairs
+
+
 def new_pairs(cap: int) -> np.ndarray:
     """An empty pair table of ``cap`` slots (a power of two): per slot its
     key, kind, and sheets and quarters each way (one cache line holds two
@@ -422,32 +433,67 @@ def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
     return len(old), n
 
 
+#: slots of a thread's cache of the pairs met last (a power of two): the
+#: blocks of a vertex row meet mostly the pairs of the rows before, so
+#: their sums gather in a table that the processor's nearest cache holds,
+#: and only a pair pushed out of it is looked up in the pair table
+NEAR_SLOTS = 1 << 10
+
+
 @njit(cache=True, nogil=True, inline="always")
-def _add(pairs, last, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
-    """Add to the pair of pieces p != q: the closer ``how`` they touch, the
-    sheets (and their quarters of faces) whose object voxel is in p and
-    background voxel in q, and those the other way, each direction in one
-    word (sheets in the low half, quarters in the high). ``last``: the key
-    and slot of the previous call (a boundary's blocks one after another
-    mostly add to one pair). Returns 1 for a new pair."""
-    if p > q:
-        p, q = q, p
-        sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
-    key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
-    if key == last[0]:
-        s = last[1]
-    else:
-        s = _slot(pairs, key)
-        last[0] = key
-        last[1] = s
+def _spill(pairs, near, c):
+    """Slot c of the near cache added into the pair table (and emptied).
+    Returns 1 for a new pair."""
+    key = near[c, 0]
+    s = _slot(pairs, key)
     new = 0
     if pairs[s, 0] == EMPTY:
         pairs[s, 0] = key
         new = 1
-    if how < pairs[s, 1]:
-        pairs[s, 1] = how
-    pairs[s, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
-    pairs[s, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
+    if near[c, 1] < pairs[s, 1]:
+        pairs[s, 1] = near[c, 1]
+    pairs[s, 2] += near[c, 2]
+    pairs[s, 3] += near[c, 3]
+    near[c, 0] = EMPTY
+    return new
+
+
+@njit(cache=True, nogil=True)
+def _spill_all(pairs, near):
+    """The whole near cache added into the pair table. Returns the new pairs."""
+    new = 0
+    for c in range(len(near)):
+        if near[c, 0] != EMPTY:
+            new += _spill(pairs, near, c)
+    return new
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _add(pairs, near, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
+    """Add to the pair of pieces p != q: the closer ``how`` they touch, the
+    sheets (and their quarters of faces) whose object voxel is in p and
+    background voxel in q, and those the other way, each direction in one
+    word (sheets in the low half, quarters in the high). The sums gather
+    in the near cache (``near``: a small pair table, one slot per hash),
+    whose slot's pair, if another, goes to the pair table first. Returns
+    the new pairs of the pair table (0 or 1)."""
+    if p > q:
+        p, q = q, p
+        sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
+    key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
+    c = ((key * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)) & np.uint64(len(near) - 1)
+    new = 0
+    if near[c, 0] != key:
+        if near[c, 0] != EMPTY:
+            new = _spill(pairs, near, c)
+        near[c, 0] = key
+        near[c, 1] = NONE
+        near[c, 2] = 0
+        near[c, 3] = 0
+    if how < near[c, 1]:
+        near[c, 1] = how
+    near[c, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
+    near[c, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
     return new
 
 
@@ -531,7 +577,7 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, feature
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
+             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
     pieces in ``local`` (m x m x 2), then one entry per pair; ``w``
@@ -582,7 +628,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
         for t in range(u + 1, m):
             how = contact[pmask[u], pmask[t]]
             if how < NONE or local[u, t, 0] != 0 or local[t, u, 0] != 0:
-                new += _add(pairs, last, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
+                new += _add(pairs, near, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
                             local[t, u, 1])
     return new
 
@@ -598,7 +644,7 @@ def _lowest(mask):
 
 @njit(cache=True, nogil=True, inline="always")
 def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, spokes,
-         doubled, contact, pairs, last):
+         doubled, contact, pairs, near):
     """A block of two pieces (the common case): pieces A (octants ``m0``)
     and B (the others, the first of them ``o1``). Each piece is its
     label's whole configuration there, and all of its sheets separate it
@@ -607,29 +653,29 @@ def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, feature
     m1 = 255 ^ m0
     pa, pb = id8[0], id8[o1]
     if pa != 0 and pb != 0 and val8[0] == val8[o1]:  # one label, two pieces touching by an edge or a vertex
-        return _add(pairs, last, pa, pb, contact[m0, m1], 0, 0, 0, 0)
+        return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
     na = w * nsheet[m0] if pa != 0 and want[pa - base] else 0
     nb = w * nsheet[m1] if pb != 0 and want[pb - base] else 0
     if pa != 0:
         _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, val8[0], want, base, features, table, doubled, spokes)
     if pb != 0:
         _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
-    return _add(pairs, last, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
+    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
                 w * qsum[m1] if nb else 0)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _block(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, sheet_obj, sheet_bg,
-           quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
+           quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
     """A block of two pieces or more, which ``w`` vertices (i, j, k ..
     k + w - 1) have. Returns the number of new pairs."""
     m0 = _mask_of(id8, id8[0])
     o1 = _lowest(255 ^ m0)
     if (m0 | _mask_of(id8, id8[o1])) == 255:
         return _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum,
-                    spokes, doubled, contact, pairs, last)
+                    spokes, doubled, contact, pairs, near)
     return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj,
-                    sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local)
+                    sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -643,7 +689,7 @@ def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, n
 
 @njit(cache=True, nogil=True, _nrt=False)
 def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
-                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, used, val8, id8, cur, end,
+                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, used, val8, id8, cur, end,
                  nxt, rowv, pid, pmask, pval, local):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
@@ -675,7 +721,8 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
                     blocks += 2 * (end[q] - cur[q])
                 else:
                     cur[q], end[q], rowv[q] = 0, 0, -1
-            if 10 * (used + 28 * blocks) > 7 * len(pairs):  # a block adds at most 28 pairs; a table at most 70 % full
+            # a block adds at most 28 pairs, the near cache holds some; a table at most 70 % full
+            if 10 * (used + len(near) + 28 * blocks) > 7 * len(pairs):
                 return used, i, j
             for q in range(4):
                 id8[q] = 0
@@ -690,7 +737,7 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
             while True:
                 # vertex z: column z - 1 (octants 0-3) and column z, which differ
                 used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
-                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask,
+                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask,
                                pval, local)
                 for q in range(4):
                     id8[q] = id8[q + 4]
@@ -700,13 +747,13 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
                 if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
                     used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
                                    table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
-                                   last, pid, pmask, pval, local)
+                                   near, pid, pmask, pval, local)
                 if t == nz:  # vertex nz: the last column and the outside
                     for q in range(4):
                         id8[q + 4] = 0
                         val8[q + 4] = 0
                     used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
-                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid,
+                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
                                    pmask, pval, local)
                     break
                 for q in range(4):
@@ -774,7 +821,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
         while i < end:
             at = (i, j)
             used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
-                                      features[t], *tables, doubled[t], contact, sink.pairs, np.full(2, EMPTY),
+                                      features[t], *tables, doubled[t], contact, sink.pairs, sink.near,
                                       used, *scratch)
             if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
                 used = sink.drain(used, i - 1, grow=(i, j) == at)
@@ -808,6 +855,8 @@ class PairSink:
     def __init__(self, top: np.ndarray, base: int, threads: int):
         self.top, self.base, self.threads = top, base, threads
         self.pairs = new_pairs(FIRST_SLOTS)
+        self.near = new_pairs(NEAR_SLOTS)
+        self.spare: np.ndarray | None = None
         self.blocks: list[list] = []  # [keys, kind, sums, entries]
 
     def drain(self, used: int, below: int | None, grow: bool = False) -> int:
@@ -817,19 +866,27 @@ class PairSink:
         ``grow``. Returns the pairs in the new table."""
         last = below is None  # all out: the new table stays empty
         below = np.iinfo(np.int64).max if below is None else below
+        # the vertex rows stop while the table holds the near cache's pairs too
+        used += _spill_all(self.pairs, self.near)
         keep = int(_count_open(self.pairs, self.top, self.base, below))
         size = 2 * len(self.pairs) if grow else len(self.pairs)
         while 10 * keep > 3 * size:
             size *= 2
         check_fits(PAIR_BYTES * size * self.threads, f"a pair table of {size:,} slots per thread")
-        new, s = new_pairs(1 if last else size), 0
+        if last:
+            new = new_pairs(1)
+        elif self.spare is not None and len(self.spare) == size:
+            new = _emptied(self.spare)
+        else:
+            new = new_pairs(size)
+        s = 0
         while s < len(self.pairs):
             if not self.blocks or self.blocks[-1][3] == len(self.blocks[-1][0]):
                 self.blocks.append([mapped(ENTRY_BLOCK, np.uint64), mapped(ENTRY_BLOCK, np.uint8),
                                     mapped((ENTRY_BLOCK, 2), np.uint64), 0])
             block = self.blocks[-1]
             s, block[3] = _drain(self.pairs, new, self.top, self.base, below, *block, s)
-        self.pairs = new
+        self.pairs, self.spare = new, self.pairs  # the old table is the next one (no fresh pages to fault in)
         return keep
 
 
