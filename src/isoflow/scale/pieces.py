@@ -121,30 +121,22 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
 
 
 @njit(cache=True, nogil=True)
-def _count_runs(flat, ny, nz, x_lo, x_hi, counts):
-    """The runs of each voxel row (x, y), x_lo <= x < x_hi, at
-    ``counts[x * ny + y]``."""
-    for r in range(x_lo * ny, x_hi * ny):
-        row = r * nz
-        n = 1
-        for z in range(1, nz):
-            n += flat[row + z] != flat[row + z - 1]
-        counts[r] = n
-
-
-@njit(cache=True, nogil=True)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, offsets, starts, parent):
-    """The runs of the voxel rows (x, y), x_lo <= x < x_hi, written from
-    ``offsets[x * ny + y]`` on: ``starts`` (z of each run's first voxel),
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used):
+    """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
+    y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
+    each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
     each run joined in ``parent`` with the runs of rows (x, y - 1) and
     (x - 1, y) it touches by a face and shares a value with (x - 1 within
-    the slab only)."""
-    for x in range(x_lo, x_hi):
-        for y in range(ny):
+    the slab only). Returns ``(used, x, y)``: where it stopped because the
+    buffers might not hold the next row (``x == x_hi`` when done)."""
+    for x in range(x_at, x_hi):
+        for y in range(y_at if x == x_at else 0, ny):
+            if used + nz > len(starts):
+                return used, x, y
             r = x * ny + y
             row = r * nz
-            first = offsets[r]
-            used = first
+            first = used
+            offsets[r] = first
             prev = flat[row]
             starts[used] = 0
             parent[used] = used
@@ -161,6 +153,7 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, offsets, starts, parent):
             if x > x_lo:
                 _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1],
                            row - ny * nz)
+    return used, x_hi, 0
 
 
 @njit(cache=True, nogil=True)
@@ -249,14 +242,21 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     if flat_vol.size >= 0xFFFFFFFF:
         raise ValueError("label_pieces numbers at most 2^32 - 2 voxels at once (use slabs)")
     flat = flat_vol.reshape(-1)
+    offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
-    counts = np.zeros(nx * ny + 1, np.int64)
-    run([(_count_runs, flat, ny, nz, lo, hi, counts[1:]) for lo, hi in parts])
-    offsets = np.cumsum(counts, out=counts)  # row r's runs: offsets[r]:offsets[r + 1]
-    total = int(offsets[-1])
-    check_fits(RUN_BYTES * total, f"the {total:,} runs of a label image")
+    found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
+    total = sum(len(s) for s, _ in found)
     starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
-    run([(_slab_runs, flat, ny, nz, lo, hi, offsets, starts, parent) for lo, hi in parts])
+    np.concatenate([s for s, _ in found] or [starts[:0]], out=starts)
+    np.concatenate([p for _, p in found] or [parent[:0]], out=parent)
+    sizes = [len(s) for s, _ in found]
+    del found
+    at = 0
+    for (lo, hi), size in zip(parts, sizes):
+        offsets[lo * ny:hi * ny] += at
+        parent[at:at + size] += np.uint32(at)
+        at += size
+    offsets[-1] = total
     for lo, _ in parts[1:]:
         _join_seam(flat, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
@@ -271,6 +271,28 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
                  sums, lo, hi)
     return {"offsets": offsets, "starts": starts, "runs": parent, "n": n, "values": values, "counts": counts,
             "sums": sums, "lo": lo, "hi": hi}
+
+
+def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray):
+    """The runs of one slab of layers, joined within it (slab-local
+    indices), in buffers that grow as they fill."""
+    size = max(nz, (x_hi - x_lo) * ny * nz // 16)
+    starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
+    used, x, y = 0, x_lo, 0
+    while True:
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used)
+        if x == x_hi:
+            return starts[:used], parent[:used]
+        size = min(2 * size, (x_hi - x_lo) * ny * nz)
+        check_fits(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image")
+        starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
+
+
+def _grown_to(buffer: np.ndarray, size: int, used: int) -> np.ndarray:
+    """A buffer of ``size`` holding the first ``used`` entries of ``buffer``."""
+    out = mapped(size, buffer.dtype)
+    out[:used] = buffer[:used]
+    return out
 
 
 @njit(cache=True, nogil=True)
