@@ -70,3 +70,26 @@ def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng):
     want = rows(tmp_path / "n.npy")
     assert rows(tmp_path / "plain.zarr") == want
     assert rows(tmp_path / "ome.zarr") == want
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_a_pair_table_of_16_slots_drains_and_grows_to_the_same_table(rng, conn, monkeypatch):
+    """The vertex pass writes out the pairs behind the sweep whenever its
+    table fills, and grows it where a vertex row does not fit: from a table
+    of 16 slots and a near cache of 4 (whose pairs are pushed out into the
+    table all the time), on one thread and two, whole and in slabs (pieces
+    numbered from a base), every row is still analyze's."""
+    from isoflow.scale import pieces
+
+    image = np.where(rng.random((20, 18, 17)) < 0.5, nested(rng, (20, 18, 17)),
+                     rng.integers(0, 9, (20, 18, 17))).astype(np.int32)
+    numpy = label_table(image, conn, method="numpy")
+    drains, drain = [], pieces.PairSink.drain
+    monkeypatch.setattr(pieces, "FIRST_SLOTS", 16)
+    monkeypatch.setattr(pieces, "NEAR_SLOTS", 4)
+    monkeypatch.setattr(pieces.PairSink, "drain", lambda self, *a, **k: drains.append(k) or drain(self, *a, **k))
+    for threads in (1, 2):
+        same_tables(label_table(image, conn, method="compiled", threads=threads), numpy)
+    same_tables(label_table_blocks(image, conn, layers=cuts(rng, 20)), numpy)
+    # the table filled again and again, and some vertex row did not fit in it
+    assert len(drains) > 20 and any(k.get("grow") for k in drains)

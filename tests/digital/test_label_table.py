@@ -101,7 +101,7 @@ def test_nested_and_wrapped_labels_equal_analyze(rng, conn, method):
 @needs_numba
 def test_many_pieces_grow_the_pair_table_and_threads_agree(rng):
     """A noise of 6 labels on 36^3 has tens of thousands of pieces: the pair
-    table grows many times; 1 and 3 threads give the same table."""
+    table fills many times; 1 and 3 threads give the same table."""
     image = rng.integers(0, 6, (36, 30, 33)).astype(np.uint16)
     one = label_table(image, 26, method="compiled", threads=1)
     three = label_table(image, 26, method="compiled", threads=3)

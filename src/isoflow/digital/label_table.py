@@ -244,7 +244,7 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
     pieces = piece_runs(vol)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
-    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces))
+    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False)
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
 
 
@@ -333,7 +333,7 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     n = len(piece_label)
     adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
     for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
-        passed[key] = passed[key][:0]
+        passed[key] = passed[key][:0].copy()  # (a view would keep them)
     nlabels = int(piece_label.max(initial=-1)) + 1
     lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)

@@ -29,7 +29,9 @@ configuration's sheets (:func:`isoflow.digital.closed_surfaces.sweep_tables`)
 to the pair (object piece, background piece) of each; and it records every
 pair of pieces the block holds with the closest way they touch (1 face,
 2 edge, 3 vertex). Pairs live in an open-addressing hash table keyed by
-the two piece numbers, which grows as it fills.
+the two piece numbers; when it fills, the pairs behind the sweep (one of
+whose pieces ends before the layers still to come) leave it as entries,
+so that it holds the pairs of the pieces being crossed (:class:`PairSink`).
 """
 
 from __future__ import annotations
@@ -354,6 +356,17 @@ def _slot(pairs, key):
         s = (s + np.uint64(1)) & mask
 
 
+@njit(cache=True, nogil=True)
+def _emptied(pairs):
+    """The pair table with every slot emptied."""
+    for s in range(len(pairs)):
+        pairs[s, 0] = EMPTY
+        pairs[s, 1] = NONE
+        pairs[s, 2] = 0
+        pairs[s, 3] = 0
+    return pairs
+
+
 def new_pairs(cap: int) -> np.ndarray:
     """An empty pair table of ``cap`` slots (a power of two): per slot its
     key, kind, and sheets and quarters each way (one cache line holds two
@@ -365,43 +378,122 @@ def new_pairs(cap: int) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
-def _move(pairs, bigger):
-    """The entries of ``pairs`` moved into the empty table ``bigger``."""
-    for s in range(len(pairs)):
-        k = pairs[s, 0]
-        if k != EMPTY:
-            t = _slot(bigger, k)
-            for c in range(4):
-                bigger[t, c] = pairs[s, c]
-    return bigger
+def _tops(offsets, runs, ny, x0, top):
+    """Per piece of a slab, the last voxel layer (global, from ``x0``)
+    that holds it: rows come in C order, so the last row of a piece wins."""
+    for r in range(len(offsets) - 1):
+        x = r // ny + x0
+        for k in range(offsets[r], offsets[r + 1]):
+            top[runs[k]] = x
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _add(pairs, last, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
-    """Add to the pair of pieces p != q: the closer ``how`` they touch, the
-    sheets (and their quarters of faces) whose object voxel is in p and
-    background voxel in q, and those the other way, each direction in one
-    word (sheets in the low half, quarters in the high). ``last``: the key
-    and slot of the previous call (a boundary's blocks one after another
-    mostly add to one pair). Returns 1 for a new pair."""
-    if p > q:
-        p, q = q, p
-        sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
-    key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
-    if key == last[0]:
-        s = last[1]
-    else:
-        s = _slot(pairs, key)
-        last[0] = key
-        last[1] = s
+def _done(key, top, base, below):
+    """Whether the pair ``key`` lies behind the sweep: one of its pieces
+    (slab numbers from ``base``; 0, the outside, never) ends before voxel
+    layer ``below``, so no block from there on holds both."""
+    p = np.int64(key >> np.uint64(32))
+    q = np.int64(key & np.uint64(0xFFFFFFFF))
+    return (p != 0 and top[p - base] < below) or (q != 0 and top[q - base] < below)
+
+
+@njit(cache=True, nogil=True)
+def _count_open(pairs, top, base, below):
+    """The entries of the table whose pieces may still meet."""
+    n = 0
+    for s in range(len(pairs)):
+        k = pairs[s, 0]
+        n += k != EMPTY and not _done(k, top, base, below)
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
+    """From slot ``s0`` of ``old`` on: the pairs behind the sweep (voxel
+    layer ``below``) written out as entries at ``n`` of ``keys``/``kind``/
+    ``sums``, the others moved into the empty table ``new``. Returns
+    ``(s, n)``: the slot where it stopped because the entries were full
+    (``len(old)`` when done) and the entries written."""
+    for s in range(s0, len(old)):
+        k = old[s, 0]
+        if k == EMPTY:
+            continue
+        if _done(k, top, base, below):
+            if n == len(keys):
+                return s, n
+            keys[n] = k
+            kind[n] = old[s, 1]
+            sums[n, 0] = old[s, 2]
+            sums[n, 1] = old[s, 3]
+            n += 1
+        else:
+            t = _slot(new, k)
+            for c in range(4):
+                new[t, c] = old[s, c]
+    return len(old), n
+
+
+#: slots of a thread's cache of the pairs met last (a power of two): the
+#: blocks of a vertex row meet mostly the pairs of the rows before, so
+#: their sums gather in a table that the processor's nearest cache holds,
+#: and only a pair pushed out of it is looked up in the pair table
+NEAR_SLOTS = 1 << 10
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _spill(pairs, near, c):
+    """Slot c of the near cache added into the pair table (and emptied).
+    Returns 1 for a new pair."""
+    key = near[c, 0]
+    s = _slot(pairs, key)
     new = 0
     if pairs[s, 0] == EMPTY:
         pairs[s, 0] = key
         new = 1
-    if how < pairs[s, 1]:
-        pairs[s, 1] = how
-    pairs[s, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
-    pairs[s, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
+    if near[c, 1] < pairs[s, 1]:
+        pairs[s, 1] = near[c, 1]
+    pairs[s, 2] += near[c, 2]
+    pairs[s, 3] += near[c, 3]
+    near[c, 0] = EMPTY
+    return new
+
+
+@njit(cache=True, nogil=True)
+def _spill_all(pairs, near):
+    """The whole near cache added into the pair table. Returns the new pairs."""
+    new = 0
+    for c in range(len(near)):
+        if near[c, 0] != EMPTY:
+            new += _spill(pairs, near, c)
+    return new
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _add(pairs, near, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
+    """Add to the pair of pieces p != q: the closer ``how`` they touch, the
+    sheets (and their quarters of faces) whose object voxel is in p and
+    background voxel in q, and those the other way, each direction in one
+    word (sheets in the low half, quarters in the high). The sums gather
+    in the near cache (``near``: a small pair table, one slot per hash),
+    whose slot's pair, if another, goes to the pair table first. Returns
+    the new pairs of the pair table (0 or 1)."""
+    if p > q:
+        p, q = q, p
+        sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
+    key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
+    c = ((key * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)) & np.uint64(len(near) - 1)
+    new = 0
+    if near[c, 0] != key:
+        if near[c, 0] != EMPTY:
+            new = _spill(pairs, near, c)
+        near[c, 0] = key
+        near[c, 1] = NONE
+        near[c, 2] = 0
+        near[c, 3] = 0
+    if how < near[c, 1]:
+        near[c, 1] = how
+    near[c, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
+    near[c, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
     return new
 
 
@@ -485,7 +577,7 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, feature
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
+             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
     pieces in ``local`` (m x m x 2), then one entry per pair; ``w``
@@ -536,7 +628,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
         for t in range(u + 1, m):
             how = contact[pmask[u], pmask[t]]
             if how < NONE or local[u, t, 0] != 0 or local[t, u, 0] != 0:
-                new += _add(pairs, last, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
+                new += _add(pairs, near, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
                             local[t, u, 1])
     return new
 
@@ -552,7 +644,7 @@ def _lowest(mask):
 
 @njit(cache=True, nogil=True, inline="always")
 def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, spokes,
-         doubled, contact, pairs, last):
+         doubled, contact, pairs, near):
     """A block of two pieces (the common case): pieces A (octants ``m0``)
     and B (the others, the first of them ``o1``). Each piece is its
     label's whole configuration there, and all of its sheets separate it
@@ -561,29 +653,29 @@ def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, feature
     m1 = 255 ^ m0
     pa, pb = id8[0], id8[o1]
     if pa != 0 and pb != 0 and val8[0] == val8[o1]:  # one label, two pieces touching by an edge or a vertex
-        return _add(pairs, last, pa, pb, contact[m0, m1], 0, 0, 0, 0)
+        return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
     na = w * nsheet[m0] if pa != 0 and want[pa - base] else 0
     nb = w * nsheet[m1] if pb != 0 and want[pb - base] else 0
     if pa != 0:
         _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, val8[0], want, base, features, table, doubled, spokes)
     if pb != 0:
         _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
-    return _add(pairs, last, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
+    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
                 w * qsum[m1] if nb else 0)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _block(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, sheet_obj, sheet_bg,
-           quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local):
+           quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
     """A block of two pieces or more, which ``w`` vertices (i, j, k ..
     k + w - 1) have. Returns the number of new pairs."""
     m0 = _mask_of(id8, id8[0])
     o1 = _lowest(255 ^ m0)
     if (m0 | _mask_of(id8, id8[o1])) == 255:
         return _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum,
-                    spokes, doubled, contact, pairs, last)
+                    spokes, doubled, contact, pairs, near)
     return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj,
-                    sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask, pval, local)
+                    sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -597,7 +689,7 @@ def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, n
 
 @njit(cache=True, nogil=True, _nrt=False)
 def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
-                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, used, val8, id8, cur, end,
+                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, used, val8, id8, cur, end,
                  nxt, rowv, pid, pmask, pval, local):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
@@ -629,7 +721,8 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
                     blocks += 2 * (end[q] - cur[q])
                 else:
                     cur[q], end[q], rowv[q] = 0, 0, -1
-            if 10 * (used + 28 * blocks) > 7 * len(pairs):  # a block adds at most 28 pairs; a table at most 70 % full
+            # a block adds at most 28 pairs, the near cache holds some; a table at most 70 % full
+            if 10 * (used + len(near) + 28 * blocks) > 7 * len(pairs):
                 return used, i, j
             for q in range(4):
                 id8[q] = 0
@@ -644,7 +737,7 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
             while True:
                 # vertex z: column z - 1 (octants 0-3) and column z, which differ
                 used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
-                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid, pmask,
+                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask,
                                pval, local)
                 for q in range(4):
                     id8[q] = id8[q + 4]
@@ -654,13 +747,13 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
                 if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
                     used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
                                    table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
-                                   last, pid, pmask, pval, local)
+                                   near, pid, pmask, pval, local)
                 if t == nz:  # vertex nz: the last column and the outside
                     for q in range(4):
                         id8[q + 4] = 0
                         val8[q + 4] = 0
                     used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
-                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, last, pid,
+                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
                                    pmask, pval, local)
                     break
                 for q in range(4):
@@ -672,7 +765,8 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
-                layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0) -> dict:
+                layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0,
+                keep_runs: bool = True) -> dict:
     """The vertex pass (see the module docs) over a slab of a label image.
 
     ``values``: the slab (voxel layers ``x0 ..`` of a volume of ``nx``
@@ -690,7 +784,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     2^32; then the same the other way; each count below 2^32, so that
     sums of entries add them both).
     A pair met by two threads has an entry from each (:func:`merge_pairs`
-    makes them one).
+    makes them one). Without ``keep_runs`` the runs of ``found``
+    (``starts`` and ``runs``) are let go once the sweep is done, before
+    the pairs are read out.
     """
     flat = unsigned(values)
     nxs, ny, nz = flat.shape
@@ -714,40 +810,102 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     contact = contact_table()
     wanted = want.astype(np.bool_)
 
-    def call(t):
-        pairs = new_pairs(1 << max(12, int(4 * (windows[t][1] - windows[t][0])).bit_length()))  # 4 a piece
+    top = np.zeros(npieces, np.int64)
+    _tops(found["offsets"], found["runs"], ny, x0, top)
+
+    def call(t, args):
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
             np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
-        used, i, j = 0, lo + parts[t][0], 0
-        while i < lo + parts[t][1]:
-            last = np.full(2, EMPTY, np.uint64)
-            used, i, j = _vertex_rows(*args, i, lo + parts[t][1], j, wanted[windows[t][0]:], base,
-                                      base + windows[t][0], features[t], *tables, doubled[t], contact, pairs, last,
+        sink = PairSink(top, base, len(parts))
+        used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
+        while i < end:
+            at = (i, j)
+            used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
+                                      features[t], *tables, doubled[t], contact, sink.pairs, sink.near,
                                       used, *scratch)
-            if i < lo + parts[t][1]:
-                check_fits(PAIR_BYTES * 2 * len(pairs) * len(parts), f"the pairs of {npieces:,} pieces")
-                pairs = _move(pairs, new_pairs(2 * len(pairs)))
-        return pairs, used
+            if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
+                used = sink.drain(used, i - 1, grow=(i, j) == at)
+        sink.drain(used, None)
+        return sink.blocks
 
-    keys, kind, sums = read_out(run([(call, t) for t in range(len(parts))]), npieces)
+    filled = run([(call, t, args) for t in range(len(parts))])
+    del args  # the runs: let go here where the caller lets them go
+    if not keep_runs:
+        for key in ("starts", "runs"):
+            found[key] = found[key][:0].copy()  # a view would keep the buffer
+    keys, kind, sums = read_out(filled, npieces)
     return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
             "keys": keys, "kind": kind, "sums": sums}
 
 
+#: the pair table's first size (slots), and entries per block of the pairs
+#: written out
+FIRST_SLOTS, ENTRY_BLOCK = 1 << 15, 1 << 16
+
+
+class PairSink:
+    """A thread's pair table and the pairs it has written out.
+
+    The sweep meets the pieces in C order, and a pair of pieces none of
+    whose blocks lie ahead of it (one of the two ends behind the sweep) is
+    complete: it leaves the table as an entry of a block of entries. So the
+    table holds the pairs of the pieces the sweep is crossing, not of the
+    whole image: it stays small, and its lookups hit the cache."""
+
+    def __init__(self, top: np.ndarray, base: int, threads: int):
+        self.top, self.base, self.threads = top, base, threads
+        self.pairs = new_pairs(FIRST_SLOTS)
+        self.near = new_pairs(NEAR_SLOTS)
+        self.spare: np.ndarray | None = None
+        self.blocks: list[list] = []  # [keys, kind, sums, entries]
+
+    def drain(self, used: int, below: int | None, grow: bool = False) -> int:
+        """The pairs of the table that lie behind voxel layer ``below``
+        (all of them where None) written out, the others moved into a new
+        table, larger where they would fill more than 30 % of it or where
+        ``grow``. Returns the pairs in the new table."""
+        last = below is None  # all out: the new table stays empty
+        below = np.iinfo(np.int64).max if below is None else below
+        # the vertex rows stop while the table holds the near cache's pairs too
+        used += _spill_all(self.pairs, self.near)
+        keep = int(_count_open(self.pairs, self.top, self.base, below))
+        size = 2 * len(self.pairs) if grow else len(self.pairs)
+        while 10 * keep > 3 * size:
+            size *= 2
+        check_fits(PAIR_BYTES * size * self.threads, f"a pair table of {size:,} slots per thread")
+        if last:
+            new = new_pairs(1)
+        elif self.spare is not None and len(self.spare) == size:
+            new = _emptied(self.spare)
+        else:
+            new = new_pairs(size)
+        s = 0
+        while s < len(self.pairs):
+            if not self.blocks or self.blocks[-1][3] == len(self.blocks[-1][0]):
+                self.blocks.append([mapped(ENTRY_BLOCK, np.uint64), mapped(ENTRY_BLOCK, np.uint8),
+                                    mapped((ENTRY_BLOCK, 2), np.uint64), 0])
+            block = self.blocks[-1]
+            s, block[3] = _drain(self.pairs, new, self.top, self.base, below, *block, s)
+        self.pairs, self.spare = new, self.pairs  # the old table is the next one (no fresh pages to fault in)
+        return keep
+
+
 def read_out(filled: list, npieces: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The entries of the threads' pair tables ``(table, entries)`` in one
-    set of arrays, each table let go as soon as its entries are out. A pair
-    met by two threads (pieces at the seam between their layers) has an
-    entry from each: the graph of pieces takes them as they are."""
-    total = sum(used for _, used in filled)
+    """The threads' blocks of pair entries ``[keys, kind, sums, entries]``
+    in one set of arrays, each block let go as soon as it is copied. A
+    pair met by two threads (pieces at the seam between their layers) has
+    an entry from each: the graph of pieces takes them as they are."""
+    blocks = [block for thread in filled for block in thread]
+    filled.clear()
+    total = sum(block[3] for block in blocks)
     check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
     keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
     at = 0
-    while filled:
-        pairs, used = filled.pop(0)
-        _entries(pairs, keys[at:at + used], kind[at:at + used], sums[at:at + used])
-        at += used
-        del pairs
+    while blocks:
+        k, c, v, n = blocks.pop(0)
+        keys[at:at + n], kind[at:at + n], sums[at:at + n] = k[:n], c[:n], v[:n]
+        at += n
+        del k, c, v
     return keys, kind, sums
 
 
@@ -763,33 +921,29 @@ def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int)
     return int(runs.min()), int(runs.max()) + 1
 
 
-@njit(cache=True, nogil=True)
-def _entries(pairs, keys, kind, sums):
-    """The pair table's entries in slot order: keys, kinds and the sheets
-    and quarters each way (packed)."""
-    n = 0
-    for s in range(len(pairs)):
-        if pairs[s, 0] != EMPTY:
-            keys[n] = pairs[s, 0]
-            kind[n] = pairs[s, 1]
-            sums[n, 0] = pairs[s, 2]
-            sums[n, 1] = pairs[s, 3]
-            n += 1
-
-
-def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray,
-                chunk: int = 1 << 15) -> np.ndarray:
+def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray) -> np.ndarray:
     """Per piece, the features of its vertices: each thread's counts of
     each group of configurations (over its window of pieces) times the
-    group's row of features (exact in float64: counts below 2^33, entries
-    below 64), added up, a chunk of pieces at a time."""
+    group's row of features, added up; each thread's counts let go as soon
+    as they are added."""
     out = mapped((npieces, rows.shape[1]), np.int64)
-    weights = rows.astype(np.float64)
-    for (lo, _), part in zip(windows, counts):
-        for a in range(0, len(part), chunk):
-            out[lo + a:lo + a + len(part[a:a + chunk])] += np.rint(part[a:a + chunk].astype(np.float64) @ weights
-                                                                   ).astype(np.int64)
+    weights = np.ascontiguousarray(rows, np.int64)
+    while counts:
+        lo, _ = windows[len(windows) - len(counts)]
+        _add_features(counts.pop(0), weights, out[lo:])
     return out
+
+
+@njit(cache=True, nogil=True)
+def _add_features(counts, weights, out):
+    """``out[p] += counts[p] @ weights``, over the nonzero counts only (a
+    piece meets few groups of configurations)."""
+    for p in range(len(counts)):
+        for g in range(counts.shape[1]):
+            c = np.int64(counts[p, g])
+            if c != 0:
+                for f in range(weights.shape[1]):
+                    out[p, f] += c * weights[g, f]
 
 
 def doubled_of(doubled: list[np.ndarray], windows: list, npieces: int) -> np.ndarray:
