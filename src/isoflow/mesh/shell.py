@@ -348,10 +348,9 @@ def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
 def _mark(out, i, j, k):
     """Set voxel (i, j, k): 1 if it was not set yet (the shell's voxels are
     counted as they are found, not by reading the volume again)."""
-    if out[i, j, k]:
-        return 0
+    was = out[i, j, k]
     out[i, j, k] = True
-    return 1
+    return 1 - np.int64(was)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -437,29 +436,25 @@ def _set_up(T, t, scale, s, n, coef, bnd, plane):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _plane_span(T, t, w, n, u0, u1, v0, v1):
-    """Least and greatest height (axis w) of triangle t's plane over the
-    column [u0, u1] x [v0, v1], in floating point: at two of its corners."""
-    u, v = (w + 1) % 3, (w + 2) % 3
-    su, sv = -n[u] / n[w], -n[v] / n[w]  # the plane's slopes
-    h = T[t, 0, w] + su * (u0 - T[t, 0, u]) + sv * (v0 - T[t, 0, v])
+def _plane_span(h0, ou, ov, su, sv, u0, u1, v0, v1):
+    """Least and greatest height of the plane ``h0 + su (u - ou) + sv (v -
+    ov)`` over the column [u0, u1] x [v0, v1], in floating point: at two of
+    its corners."""
+    h = h0 + su * (u0 - ou) + sv * (v0 - ov)
     du, dv = su * (u1 - u0), sv * (v1 - v0)
     return h + min(du, 0.0) + min(dv, 0.0), h + max(du, 0.0) + max(dv, 0.0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _chord_span(T, t, w, n, lo, hi, side_lo, side_hi, on_v, c, zl, zh):
-    """``(zl, zh)`` widened by the heights of triangle t's plane at the ends
+def _side_span(lo, hi, side_lo, side_hi, base, slope, o, zl, zh):
+    """``(zl, zh)`` widened by the heights of a triangle's plane at the ends
     of the chord [lo, hi] (the triangle along a side of a column) clipped to
-    the side [side_lo, side_hi]; the side is the line v = c (``on_v``) or
-    u = c."""
+    the side [side_lo, side_hi]; along the side, the plane's height at x is
+    ``base + slope * (x - o)``."""
     a, b = max(lo, side_lo), min(hi, side_hi)
     if a <= b:
-        u, v = (w + 1) % 3, (w + 2) % 3
-        for x in (a, b):
-            pu, pv = (x, c) if on_v else (c, x)
-            z = T[t, 0, w] - (n[u] * (pu - T[t, 0, u]) + n[v] * (pv - T[t, 0, v])) / n[w]
-            zl, zh = min(zl, z), max(zh, z)
+        za, zb = base + slope * (a - o), base + slope * (b - o)
+        zl, zh = min(zl, za, zb), max(zh, za, zb)
     return zl, zh
 
 
@@ -498,6 +493,11 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     bnd = np.empty((3, 3))
     plane = np.empty(5)
     g = np.empty(3)
+    # the chords of the lines u = PL[u, i] (their least and greatest v) and
+    # the plane's height where each line meets v = T[t, 0, v]: one triangle's
+    cl = np.empty(PL.shape[1])
+    ch = np.empty(PL.shape[1])
+    cb = np.empty(PL.shape[1])
     for a in range(3):  # planes per unit along each axis: where a search starts
         g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
@@ -524,6 +524,13 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
+        h0, ou, ov = T[t, 0, w], T[t, 0, u], T[t, 0, v]
+        su = sv = 0.0
+        if not sliver:  # the plane's slopes, and the u lines' chords (shared by the rows)
+            su, sv = -n[u] / n[w], -n[v] / n[w]
+            for i in range(lo[u], hi[u] + 1):
+                cl[i], ch[i] = _line_extent(T, t, v, u, PL[u, i])
+                cb[i] = h0 + su * (PL[u, i] - ou)
         a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]])  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
@@ -547,7 +554,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
             in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True, gu)
             in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False, gu) - 1
-            c1l, d1l, chord_at = np.inf, -np.inf, -1
+            b0v, b1v = h0 + sv * (c0[v] - ov), h0 + sv * (c1[v] - ov)  # the heights along v = c0[v], c1[v]
             for iu in range(iu0, iu1):
                 c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
                 idx[u] = iu
@@ -557,21 +564,16 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
                     if in0 <= iu < in1:  # inside the projection: the plane over the column
-                        zl, zh = _plane_span(T, t, w, n, c0[u], c1[u], c0[v], c1[v])
+                        zl, zh = _plane_span(h0, ou, ov, su, sv, c0[u], c1[u], c0[v], c1[v])
                     else:  # the heights at the corners of the polygon column and triangle share
-                        # the chords on the column's two u sides (the lower
-                        # one is the last column's upper one, if found)
-                        c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
-                        c1l, d1l = _line_extent(T, t, v, u, c1[u])
-                        chord_at = iu + 1
                         zl, zh = np.inf, -np.inf
                         for k in range(3):
                             if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
                                 zl, zh = min(zl, T[t, k, w]), max(zh, T[t, k, w])
-                        zl, zh = _chord_span(T, t, w, n, a0, b0, c0[u], c1[u], True, c0[v], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, a1, b1, c0[u], c1[u], True, c1[v], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, c0l, d0l, c0[v], c1[v], False, c0[u], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, c1l, d1l, c0[v], c1[v], False, c1[u], zl, zh)
+                        zl, zh = _side_span(a0, b0, c0[u], c1[u], b0v, su, ou, zl, zh)
+                        zl, zh = _side_span(a1, b1, c0[u], c1[u], b1v, su, ou, zl, zh)
+                        zl, zh = _side_span(cl[iu], ch[iu], c0[v], c1[v], cb[iu], sv, ov, zl, zh)
+                        zl, zh = _side_span(cl[iu + 1], ch[iu + 1], c0[v], c1[v], cb[iu + 1], sv, ov, zl, zh)
                     if zl <= zh:
                         # in: every voxel whose extent meets [Zl, Zh], the
                         # true span (the polygon is connected, so it takes
