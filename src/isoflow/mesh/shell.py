@@ -459,18 +459,28 @@ def _side_span(lo, hi, side_lo, side_hi, base, slope, o, zl, zh):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _line_extent(T, t, u, v, c):
+def _inverse_slopes(T, t, u, v, out):
+    """``out[k]``: how far u moves along edge k of triangle t (corner k to
+    corner k + 1) per unit of v (0 where the edge keeps v)."""
+    for k in range(3):
+        k2 = (k + 1) % 3
+        dv = T[t, k2, v] - T[t, k, v]
+        out[k] = (T[t, k2, u] - T[t, k, u]) / dv if dv != 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _line_extent(T, t, u, v, c, slopes):
     """Where the line v = c meets triangle t projected on the axes (u, v):
-    its least and greatest u, in floating point ((inf, -inf) if it misses)."""
+    its least and greatest u, in floating point ((inf, -inf) if it misses);
+    ``slopes`` are the edges' :func:`_inverse_slopes`."""
     lo, hi = np.inf, -np.inf
     for k in range(3):
         au, av = T[t, k, u], T[t, k, v]
         if av == c:
             lo, hi = min(lo, au), max(hi, au)
-        k2 = (k + 1) % 3
-        bu, bv = T[t, k2, u], T[t, k2, v]
+        bv = T[t, (k + 1) % 3, v]
         if (av < c < bv) or (bv < c < av):
-            x = au + (c - av) / (bv - av) * (bu - au)
+            x = au + (c - av) * slopes[k]
             lo, hi = min(lo, x), max(hi, x)
     return lo, hi
 
@@ -498,6 +508,8 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     cl = np.empty(PL.shape[1])
     ch = np.empty(PL.shape[1])
     cb = np.empty(PL.shape[1])
+    du_dv = np.empty(3)  # the edges' inverse slopes, both ways
+    dv_du = np.empty(3)
     for a in range(3):  # planes per unit along each axis: where a search starts
         g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
@@ -526,12 +538,14 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
         h0, ou, ov = T[t, 0, w], T[t, 0, u], T[t, 0, v]
         su = sv = 0.0
+        _inverse_slopes(T, t, u, v, du_dv)
         if not sliver:  # the plane's slopes, and the u lines' chords (shared by the rows)
             su, sv = -n[u] / n[w], -n[v] / n[w]
+            _inverse_slopes(T, t, v, u, dv_du)
             for i in range(lo[u], hi[u] + 1):
-                cl[i], ch[i] = _line_extent(T, t, v, u, PL[u, i])
+                cl[i], ch[i] = _line_extent(T, t, v, u, PL[u, i], dv_du)
                 cb[i] = h0 + su * (PL[u, i] - ou)
-        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]])  # the chord on the first row's lower line
+        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]], du_dv)  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
             idx[v] = iv
@@ -542,14 +556,16 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             # rounded by less than reach, and only the columns within reach
             # of an end are tested.
             a0, b0 = a1, b1  # the last row's upper line
-            a1, b1 = _line_extent(T, t, u, v, c1[v])
+            a1, b1 = _line_extent(T, t, u, v, c1[v], du_dv)
             ul, uh = min(a0, a1), max(b0, b1)
             for k in range(3):  # the corners in the strip
                 if c0[v] <= T[t, k, v] <= c1[v]:
                     ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
-            if ul <= uh:
-                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u], gu)
-                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u], gu)
+            if ul <= uh:  # the planes below ul -+ reach, and at most uh -+ reach
+                below0, below1 = _near_count(PL, u, nv[u], ul, reach, True, gu)
+                above0, above1 = _near_count(PL, u, nv[u], uh, reach, False, gu)
+                iu0, met0 = max(below0 - 1, lo[u]), max(below1 - 1, lo[u])
+                met1, iu1 = min(above0, hi[u]), min(above1, hi[u])
             else:  # rounding found nothing: every column of the box, tested
                 iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
             in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True, gu)
