@@ -340,17 +340,39 @@ def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
     return False
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _separated(T, t, u, v, w, s, coef, bnd, plane, c0, c1):
+    """Whether one of the thirteen axes separates triangle t from the box
+    [c0, c1]: the box's own axes are the column and its voxel's extent."""
+    return (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
+            or _projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
+            or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
+            or _plane_separated(T, t, s, plane, c0, c1))
+
+
 # ---------------------------------------------------------------------------
 # the shell
 # ---------------------------------------------------------------------------
 
-@njit(cache=True, nogil=True, inline="always")
-def _mark(out, i, j, k):
-    """Set voxel (i, j, k): 1 if it was not set yet (the shell's voxels are
-    counted as they are found, not by reading the volume again)."""
-    was = out[i, j, k]
-    out[i, j, k] = True
-    return 1 - np.int64(was)
+#: runs of voxels a triangle's columns hold, set together: the marking's
+#: misses in the volume then overlap, away from the columns' arithmetic
+_RUNS = 256
+
+
+@njit(cache=True, nogil=True)
+def _mark_runs(flat, run_at, run_len, m, step):
+    """Set the voxels of runs ``0 .. m - 1`` of ``flat`` (run r: run_len[r]
+    voxels from run_at[r], ``step`` apart); returns how many were not set
+    yet (the shell's voxels are counted as they are found, not by reading
+    the volume again)."""
+    added = 0
+    for r in range(m):
+        at = run_at[r]
+        for _ in range(run_len[r]):
+            added += 1 - np.int64(flat[at])
+            flat[at] = True
+            at += step
+    return added
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -510,6 +532,11 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     cb = np.empty(PL.shape[1])
     du_dv = np.empty(3)  # the edges' inverse slopes, both ways
     dv_du = np.empty(3)
+    flat = out.reshape(-1)
+    stride = np.array([out.shape[1] * out.shape[2], out.shape[2], 1])
+    run_at = np.empty(_RUNS, dtype=np.int64)
+    run_len = np.empty(_RUNS, dtype=np.int64)
+    m = 0
     for a in range(3):  # planes per unit along each axis: where a search starts
         g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
@@ -532,6 +559,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 w = a
         u, v = (w + 1) % 3, (w + 2) % 3
         gu, gw = g[u], g[w]
+        step = stride[w]
         cond = norms / abs(n[w]) if n[w] != 0 else np.inf
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
@@ -600,18 +628,24 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                         sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
-                for k in range(k0, k1):
-                    idx[w] = k
-                    if sure0 <= k < sure1:
-                        added += _mark(out, idx[0] - xa, idx[1], idx[2])
-                        continue
-                    c0[w], c1[w] = PL[w, k], PL[w, k + 1]
-                    if (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
-                            or _projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
-                            or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
-                            or _plane_separated(T, t, s, plane, c0, c1)):
-                        continue
-                    added += _mark(out, idx[0] - xa, idx[1], idx[2])
+                idx[w] = 0
+                base = (idx[0] - xa) * stride[0] + idx[1] * stride[1] + idx[2] * stride[2]
+                k = k0
+                while k < k1:  # runs [k - n_run, k)
+                    if k == sure0 and sure0 < sure1:  # the voxels in without a test: one run
+                        k, n_run = sure1, sure1 - sure0
+                    else:  # a voxel near an end of the span, tested
+                        c0[w], c1[w] = PL[w, k], PL[w, k + 1]
+                        k, n_run = k + 1, 1
+                        if _separated(T, t, u, v, w, s, coef, bnd, plane, c0, c1):
+                            continue
+                    if m == _RUNS:
+                        added += _mark_runs(flat, run_at, run_len, m, step)
+                        m = 0
+                    run_at[m], run_len[m] = base + (k - n_run) * step, n_run
+                    m += 1
+        added += _mark_runs(flat, run_at, run_len, m, step)
+        m = 0
     return added
 
 
