@@ -519,7 +519,8 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     hi = np.empty(3, dtype=np.int64)
     c0 = np.empty(3)
     c1 = np.empty(3)
-    idx = np.empty(3, dtype=np.int64)
+    corner_u = np.empty(3)
+    corner_w = np.empty(3)
     n = np.empty(3)
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
@@ -576,7 +577,13 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]], du_dv)  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
-            idx[v] = iv
+            row = iv * stride[v] - xa * stride[0]  # where the row's voxels 0 along u and w lie in flat
+            # the corners in the strip, their u and w
+            nc = 0
+            for k in range(3):
+                if c0[v] <= T[t, k, v] <= c1[v]:
+                    corner_u[nc], corner_w[nc] = T[t, k, u], T[t, k, w]
+                    nc += 1
             # The columns of this row that meet the projection are those
             # whose u-range meets its extent in the strip (a convex set's
             # shadow is an interval), and those strictly inside both of the
@@ -586,9 +593,8 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             a0, b0 = a1, b1  # the last row's upper line
             a1, b1 = _line_extent(T, t, u, v, c1[v], du_dv)
             ul, uh = min(a0, a1), max(b0, b1)
-            for k in range(3):  # the corners in the strip
-                if c0[v] <= T[t, k, v] <= c1[v]:
-                    ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
+            for k in range(nc):
+                ul, uh = min(ul, corner_u[k]), max(uh, corner_u[k])
             if ul <= uh:  # the planes below ul -+ reach, and at most uh -+ reach
                 below0, below1 = _near_count(PL, u, nv[u], ul, reach, True, gu)
                 above0, above1 = _near_count(PL, u, nv[u], uh, reach, False, gu)
@@ -600,22 +606,22 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False, gu) - 1
             b0v, b1v = h0 + sv * (c0[v] - ov), h0 + sv * (c1[v] - ov)  # the heights along v = c0[v], c1[v]
             for iu in range(iu0, iu1):
-                c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
-                idx[u] = iu
+                u0, u1 = PL[u, iu], PL[u, iu + 1]
+                c0[u], c1[u] = u0, u1
                 if not met0 <= iu < met1 and _column_cut(T, t, u, v, w, s[w], coef, bnd, c0, c1):
                     continue
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
                     if in0 <= iu < in1:  # inside the projection: the plane over the column
-                        zl, zh = _plane_span(h0, ou, ov, su, sv, c0[u], c1[u], c0[v], c1[v])
+                        zl, zh = _plane_span(h0, ou, ov, su, sv, u0, u1, c0[v], c1[v])
                     else:  # the heights at the corners of the polygon column and triangle share
                         zl, zh = np.inf, -np.inf
-                        for k in range(3):
-                            if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
-                                zl, zh = min(zl, T[t, k, w]), max(zh, T[t, k, w])
-                        zl, zh = _side_span(a0, b0, c0[u], c1[u], b0v, su, ou, zl, zh)
-                        zl, zh = _side_span(a1, b1, c0[u], c1[u], b1v, su, ou, zl, zh)
+                        for k in range(nc):
+                            if u0 <= corner_u[k] <= u1:
+                                zl, zh = min(zl, corner_w[k]), max(zh, corner_w[k])
+                        zl, zh = _side_span(a0, b0, u0, u1, b0v, su, ou, zl, zh)
+                        zl, zh = _side_span(a1, b1, u0, u1, b1v, su, ou, zl, zh)
                         zl, zh = _side_span(cl[iu], ch[iu], c0[v], c1[v], cb[iu], sv, ov, zl, zh)
                         zl, zh = _side_span(cl[iu + 1], ch[iu + 1], c0[v], c1[v], cb[iu + 1], sv, ov, zl, zh)
                     if zl <= zh:
@@ -628,8 +634,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                         sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
-                idx[w] = 0
-                base = (idx[0] - xa) * stride[0] + idx[1] * stride[1] + idx[2] * stride[2]
+                base = row + iu * stride[u]
                 k = k0
                 while k < k1:  # runs [k - n_run, k)
                     if k == sure0 and sure0 < sure1:  # the voxels in without a test: one run
