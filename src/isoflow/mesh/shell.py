@@ -418,6 +418,30 @@ def _near_count(PL, a, n, x, m, strict, per_unit):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _place(x, x0, per_unit, n, guard):
+    """How many of n + 1 evenly spaced planes (the first at x0,
+    ``per_unit`` a unit) are below x - m and below x + m, both, where
+    ``guard`` (:func:`_guard`) tells that no plane is within m of x; -1
+    where that is not sure (then :func:`_near_count` compares)."""
+    f = (x - x0) * per_unit
+    c = int(f)
+    if 0 <= c < n and guard < f - c < 1.0 - guard:  # f - c is exact (Sterbenz)
+        return c + 1
+    return -1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _guard(m, scale, per_unit, n):
+    """How far from a whole number x's place among n + 1 planes must be
+    (in units of their spacing) for no plane to lie within m of x.  The
+    planes ``origin + pitch * i`` are each rounded by at most 4 eps scale,
+    ``per_unit`` (n over the planes' span) is 1 / pitch within 3 eps plus
+    8 eps scale per unit, and x's place is rounded twice: together less
+    than (m + 18 eps scale) per_unit + 3 eps n, doubled and more here."""
+    return (m + 64.0 * _EPS * (scale + 1.0)) * per_unit + 64.0 * _EPS * n
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _range(PL, a, n, lo, hi, k_min, k_max, per_unit):
     """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``, ``per_unit``
     planes per unit) whose closed extent meets [lo, hi], within
@@ -566,6 +590,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
         h0, ou, ov = T[t, 0, w], T[t, 0, u], T[t, 0, v]
+        pw0, guard = PL[w, 0], _guard(margin, scale, gw, nv[w])
         su = sv = 0.0
         _inverse_slopes(T, t, u, v, du_dv)
         if not sliver:  # the plane's slopes, and the u lines' chords (shared by the rows)
@@ -630,8 +655,12 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                         # every height between); decided where the rounded
                         # span leaves no doubt, tested where a plane between
                         # voxels is within margin of one of its ends
-                        below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
-                        sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
+                        below_lo = sure0 = _place(zl, pw0, gw, nv[w], guard)
+                        if below_lo < 0:
+                            below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
+                        sure1 = above_hi = _place(zh, pw0, gw, nv[w], guard)
+                        if sure1 < 0:
+                            sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
                 base = row + iu * stride[u]
