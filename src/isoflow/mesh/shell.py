@@ -49,6 +49,7 @@ import math
 import numpy as np
 
 from ..scale.jit import njit
+from ..scale.prefetch import prefetch_write
 
 _EPS = 2.0**-53
 #: Shewchuk's static bounds: |det| beyond them decides the sign
@@ -677,6 +678,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                         added += _mark_runs(flat, run_at, run_len, m, step)
                         m = 0
                     run_at[m], run_len[m] = base + (k - n_run) * step, n_run
+                    prefetch_write(flat, base + (k - n_run) * step)  # set with the triangle's other runs
                     m += 1
         added += _mark_runs(flat, run_at, run_len, m, step)
         m = 0
@@ -834,6 +836,11 @@ class ShellGrid:
 
         if len(self.T) == 0 or xb <= xa:
             return 0
+        if not out.flags.c_contiguous:  # the pass sets voxels by their place in the C-ordered volume
+            work = np.ascontiguousarray(out)
+            added = self.fill(xa, xb, work, threads=threads)
+            out[...] = work
+            return added
         mid = (xa + xb) // 2
         parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
         added = [0] * len(parts)
