@@ -40,6 +40,14 @@ the few voxels near its plane are tested (the plane rises by at most two
 voxels across a column), or, for a sliver whose plane is ill-defined in
 floating point, the voxels of its whole range in that column.  Work is
 proportional to the area in voxels plus the triangles, not to the grid.
+What a triangle shares between its columns is computed once: the chords of
+its projection on the lines between columns (a row's lower line is the
+last row's upper one), the plane's slopes, the corners in a row's strip.
+A span's end is placed among the planes from its position alone where a
+guard (the rounding of the planes and of the position, bounded) leaves no
+plane within the margin.  The voxels a triangle's columns hold are gathered
+as runs, their first cache lines fetched, and set together: the volume's
+misses then overlap instead of waiting behind each column's arithmetic.
 """
 
 from __future__ import annotations
