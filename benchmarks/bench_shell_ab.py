@@ -9,8 +9,10 @@ Each round runs one process per source tree, this one (``src``) and
 ``--other``'s, in turn (interleaved, so that a busy machine weighs on both
 alike); each process times ``voxelize(..., fill="shell")`` and
 ``voxelize(...)`` (the winding rule's closed scanline) at 256, 512 and 1024
-across ``--repeat`` times each, wall and processor seconds.  Reported: the
-best of all rounds per tree, size and fill (benchmarks/results/shell_ab.json).
+across ``--repeat`` times each, wall and processor seconds, and a digest
+of the voxels (the two trees must agree, bit for bit, or nothing is
+reported).  Reported: the best of all rounds per tree, size and fill
+(benchmarks/results/shell_ab.json).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from pathlib import Path
 RESOLUTIONS = (256, 512, 1024)
 
 CHILD = """
-import json, sys, time
+import hashlib, json, sys, time
 import numpy as np, trimesh
 from isoflow.mesh.voxelize import voxelize
 s = trimesh.creation.icosphere(subdivisions=6)
@@ -40,8 +42,8 @@ for res in %(res)r:
             w, c = time.perf_counter(), time.process_time()
             vol = voxelize(v, f, resolution=res, fill=fill)[0]
             wall, cpu = min(wall, time.perf_counter() - w), min(cpu, time.process_time() - c)
-            del vol
-        out[f"{fill} {res}"] = [wall, cpu]
+        out[f"{fill} {res}"] = [wall, cpu, hashlib.sha1(np.packbits(vol).tobytes()).hexdigest()]
+        del vol
 print(json.dumps(out))
 """
 
@@ -61,11 +63,17 @@ def main() -> int:
     args = ap.parse_args()
     here = str(Path(__file__).resolve().parents[1] / "src")
     best: dict[str, dict[str, list[float]]] = {"this": {}, "other": {}}
+    digests: dict[str, set[str]] = {}
     for _ in range(args.rounds):
         for name, src in (("other", args.other), ("this", here)):
-            for key, (wall, cpu) in run_tree(src, args.repeat).items():
+            for key, (wall, cpu, digest) in run_tree(src, args.repeat).items():
                 old = best[name].get(key, [float("inf"), float("inf")])
                 best[name][key] = [min(old[0], wall), min(old[1], cpu)]
+                digests.setdefault(key, set()).add(digest)
+    differ = sorted(key for key, d in digests.items() if len(d) > 1)
+    if differ:  # the trees must give the same voxels before their times mean anything
+        print(f"the two trees' voxels differ: {', '.join(differ)}", file=sys.stderr)
+        return 1
     rows = []
     for res in RESOLUTIONS:
         row = {"resolution": res}
