@@ -119,6 +119,9 @@ def test_shell_in_slabs_and_threads_is_the_whole(rng):
     assert whole.any() and np.array_equal(fill_shell(T, PLANES, 0, 6, threads=2), whole)
     parts = np.concatenate([fill_shell(T, PLANES, a, b) for a, b in ((0, 1), (1, 4), (4, 6))])
     assert np.array_equal(parts, whole)
+    for out in (np.zeros(whole.shape, dtype=bool, order="F"), np.zeros((6, 5, 12), dtype=bool)[:, :, ::2]):
+        assert np.array_equal(fill_shell(T, PLANES, 0, 6, out=out), whole)  # filled in place, any layout
+        assert np.array_equal(out, whole)
 
 
 @pytest.mark.parametrize("name,res", [("cube_no_bottom.obj", 6), ("hourglass_ico.obj", 7), ("featuretype.STL", 5),

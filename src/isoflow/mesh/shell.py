@@ -40,6 +40,14 @@ the few voxels near its plane are tested (the plane rises by at most two
 voxels across a column), or, for a sliver whose plane is ill-defined in
 floating point, the voxels of its whole range in that column.  Work is
 proportional to the area in voxels plus the triangles, not to the grid.
+What a triangle shares between its columns is computed once: the chords of
+its projection on the lines between columns (a row's lower line is the
+last row's upper one), the plane's slopes, the corners in a row's strip.
+A span's end is placed among the planes from its position alone where a
+guard (the rounding of the planes and of the position, bounded) leaves no
+plane within the margin.  The voxels a triangle's columns hold are gathered
+as runs, their first cache lines fetched, and set together: the volume's
+misses then overlap instead of waiting behind each column's arithmetic.
 """
 
 from __future__ import annotations
@@ -49,6 +57,7 @@ import math
 import numpy as np
 
 from ..scale.jit import njit
+from ..scale.prefetch import prefetch_write
 
 _EPS = 2.0**-53
 #: Shewchuk's static bounds: |det| beyond them decides the sign
@@ -340,18 +349,39 @@ def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
     return False
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _separated(T, t, u, v, w, s, coef, bnd, plane, c0, c1):
+    """Whether one of the thirteen axes separates triangle t from the box
+    [c0, c1]: the box's own axes are the column and its voxel's extent."""
+    return (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
+            or _projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
+            or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
+            or _plane_separated(T, t, s, plane, c0, c1))
+
+
 # ---------------------------------------------------------------------------
 # the shell
 # ---------------------------------------------------------------------------
 
-@njit(cache=True, nogil=True, inline="always")
-def _mark(out, i, j, k):
-    """Set voxel (i, j, k): 1 if it was not set yet (the shell's voxels are
-    counted as they are found, not by reading the volume again)."""
-    if out[i, j, k]:
-        return 0
-    out[i, j, k] = True
-    return 1
+#: runs of voxels a triangle's columns hold, set together: the marking's
+#: misses in the volume then overlap, away from the columns' arithmetic
+_RUNS = 256
+
+
+@njit(cache=True, nogil=True)
+def _mark_runs(flat, run_at, run_len, m, step):
+    """Set the voxels of runs ``0 .. m - 1`` of ``flat`` (run r: run_len[r]
+    voxels from run_at[r], ``step`` apart); returns how many were not set
+    yet (the shell's voxels are counted as they are found, not by reading
+    the volume again)."""
+    added = 0
+    for r in range(m):
+        at = run_at[r]
+        for _ in range(run_len[r]):
+            added += 1 - np.int64(flat[at])
+            flat[at] = True
+            at += step
+    return added
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -397,6 +427,30 @@ def _near_count(PL, a, n, x, m, strict, per_unit):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _place(x, x0, per_unit, n, guard):
+    """How many of n + 1 evenly spaced planes (the first at x0,
+    ``per_unit`` a unit) are below x - m and below x + m, both, where
+    ``guard`` (:func:`_guard`) tells that no plane is within m of x; -1
+    where that is not sure (then :func:`_near_count` compares)."""
+    f = (x - x0) * per_unit
+    c = int(f)
+    if 0 <= c < n and guard < f - c < 1.0 - guard:  # f - c is exact (Sterbenz)
+        return c + 1
+    return -1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _guard(m, scale, per_unit, n):
+    """How far from a whole number x's place among n + 1 planes must be
+    (in units of their spacing) for no plane to lie within m of x.  The
+    planes ``origin + pitch * i`` are each rounded by at most 4 eps scale,
+    ``per_unit`` (n over the planes' span) is 1 / pitch within 3 eps plus
+    8 eps scale per unit, and x's place is rounded twice: together less
+    than (m + 18 eps scale) per_unit + 3 eps n, doubled and more here."""
+    return (m + 64.0 * _EPS * (scale + 1.0)) * per_unit + 64.0 * _EPS * n
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _range(PL, a, n, lo, hi, k_min, k_max, per_unit):
     """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``, ``per_unit``
     planes per unit) whose closed extent meets [lo, hi], within
@@ -437,45 +491,51 @@ def _set_up(T, t, scale, s, n, coef, bnd, plane):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _plane_span(T, t, w, n, u0, u1, v0, v1):
-    """Least and greatest height (axis w) of triangle t's plane over the
-    column [u0, u1] x [v0, v1], in floating point: at two of its corners."""
-    u, v = (w + 1) % 3, (w + 2) % 3
-    su, sv = -n[u] / n[w], -n[v] / n[w]  # the plane's slopes
-    h = T[t, 0, w] + su * (u0 - T[t, 0, u]) + sv * (v0 - T[t, 0, v])
+def _plane_span(h0, ou, ov, su, sv, u0, u1, v0, v1):
+    """Least and greatest height of the plane ``h0 + su (u - ou) + sv (v -
+    ov)`` over the column [u0, u1] x [v0, v1], in floating point: at two of
+    its corners."""
+    h = h0 + su * (u0 - ou) + sv * (v0 - ov)
     du, dv = su * (u1 - u0), sv * (v1 - v0)
     return h + min(du, 0.0) + min(dv, 0.0), h + max(du, 0.0) + max(dv, 0.0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _chord_span(T, t, w, n, lo, hi, side_lo, side_hi, on_v, c, zl, zh):
-    """``(zl, zh)`` widened by the heights of triangle t's plane at the ends
+def _side_span(lo, hi, side_lo, side_hi, base, slope, o, zl, zh):
+    """``(zl, zh)`` widened by the heights of a triangle's plane at the ends
     of the chord [lo, hi] (the triangle along a side of a column) clipped to
-    the side [side_lo, side_hi]; the side is the line v = c (``on_v``) or
-    u = c."""
+    the side [side_lo, side_hi]; along the side, the plane's height at x is
+    ``base + slope * (x - o)``."""
     a, b = max(lo, side_lo), min(hi, side_hi)
     if a <= b:
-        u, v = (w + 1) % 3, (w + 2) % 3
-        for x in (a, b):
-            pu, pv = (x, c) if on_v else (c, x)
-            z = T[t, 0, w] - (n[u] * (pu - T[t, 0, u]) + n[v] * (pv - T[t, 0, v])) / n[w]
-            zl, zh = min(zl, z), max(zh, z)
+        za, zb = base + slope * (a - o), base + slope * (b - o)
+        zl, zh = min(zl, za, zb), max(zh, za, zb)
     return zl, zh
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _line_extent(T, t, u, v, c):
+def _inverse_slopes(T, t, u, v, out):
+    """``out[k]``: how far u moves along edge k of triangle t (corner k to
+    corner k + 1) per unit of v (0 where the edge keeps v)."""
+    for k in range(3):
+        k2 = (k + 1) % 3
+        dv = T[t, k2, v] - T[t, k, v]
+        out[k] = (T[t, k2, u] - T[t, k, u]) / dv if dv != 0.0 else 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _line_extent(T, t, u, v, c, slopes):
     """Where the line v = c meets triangle t projected on the axes (u, v):
-    its least and greatest u, in floating point ((inf, -inf) if it misses)."""
+    its least and greatest u, in floating point ((inf, -inf) if it misses);
+    ``slopes`` are the edges' :func:`_inverse_slopes`."""
     lo, hi = np.inf, -np.inf
     for k in range(3):
         au, av = T[t, k, u], T[t, k, v]
         if av == c:
             lo, hi = min(lo, au), max(hi, au)
-        k2 = (k + 1) % 3
-        bu, bv = T[t, k2, u], T[t, k2, v]
+        bv = T[t, (k + 1) % 3, v]
         if (av < c < bv) or (bv < c < av):
-            x = au + (c - av) / (bv - av) * (bu - au)
+            x = au + (c - av) * slopes[k]
             lo, hi = min(lo, x), max(hi, x)
     return lo, hi
 
@@ -492,12 +552,25 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     hi = np.empty(3, dtype=np.int64)
     c0 = np.empty(3)
     c1 = np.empty(3)
-    idx = np.empty(3, dtype=np.int64)
+    corner_u = np.empty(3)
+    corner_w = np.empty(3)
     n = np.empty(3)
     coef = np.empty((3, 3, 3))
     bnd = np.empty((3, 3))
     plane = np.empty(5)
     g = np.empty(3)
+    # the chords of the lines u = PL[u, i] (their least and greatest v) and
+    # the plane's height where each line meets v = T[t, 0, v]: one triangle's
+    cl = np.empty(PL.shape[1])
+    ch = np.empty(PL.shape[1])
+    cb = np.empty(PL.shape[1])
+    du_dv = np.empty(3)  # the edges' inverse slopes, both ways
+    dv_du = np.empty(3)
+    flat = out.reshape(-1)
+    stride = np.array([out.shape[1] * out.shape[2], out.shape[2], 1])
+    run_at = np.empty(_RUNS, dtype=np.int64)
+    run_len = np.empty(_RUNS, dtype=np.int64)
+    m = 0
     for a in range(3):  # planes per unit along each axis: where a search starts
         g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
@@ -520,14 +593,31 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                 w = a
         u, v = (w + 1) % 3, (w + 2) % 3
         gu, gw = g[u], g[w]
+        step = stride[w]
         cond = norms / abs(n[w]) if n[w] != 0 else np.inf
         sliver = not cond < _SLIVER
         margin = _SPAN_ERROR * _EPS * cond * (scale + 1.0)
         reach = _SPAN_ERROR * _EPS * (scale + 1.0)  # the rounding of a projection's extent
-        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]])  # the chord on the first row's lower line
+        h0, ou, ov = T[t, 0, w], T[t, 0, u], T[t, 0, v]
+        pw0, guard = PL[w, 0], _guard(margin, scale, gw, nv[w])
+        su = sv = 0.0
+        _inverse_slopes(T, t, u, v, du_dv)
+        if not sliver:  # the plane's slopes, and the u lines' chords (shared by the rows)
+            su, sv = -n[u] / n[w], -n[v] / n[w]
+            _inverse_slopes(T, t, v, u, dv_du)
+            for i in range(lo[u], hi[u] + 1):
+                cl[i], ch[i] = _line_extent(T, t, v, u, PL[u, i], dv_du)
+                cb[i] = h0 + su * (PL[u, i] - ou)
+        a1, b1 = _line_extent(T, t, u, v, PL[v, lo[v]], du_dv)  # the chord on the first row's lower line
         for iv in range(lo[v], hi[v]):
             c0[v], c1[v] = PL[v, iv], PL[v, iv + 1]
-            idx[v] = iv
+            row = iv * stride[v] - xa * stride[0]  # where the row's voxels 0 along u and w lie in flat
+            # the corners in the strip, their u and w
+            nc = 0
+            for k in range(3):
+                if c0[v] <= T[t, k, v] <= c1[v]:
+                    corner_u[nc], corner_w[nc] = T[t, k, u], T[t, k, w]
+                    nc += 1
             # The columns of this row that meet the projection are those
             # whose u-range meets its extent in the strip (a convex set's
             # shadow is an interval), and those strictly inside both of the
@@ -535,65 +625,71 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
             # rounded by less than reach, and only the columns within reach
             # of an end are tested.
             a0, b0 = a1, b1  # the last row's upper line
-            a1, b1 = _line_extent(T, t, u, v, c1[v])
+            a1, b1 = _line_extent(T, t, u, v, c1[v], du_dv)
             ul, uh = min(a0, a1), max(b0, b1)
-            for k in range(3):  # the corners in the strip
-                if c0[v] <= T[t, k, v] <= c1[v]:
-                    ul, uh = min(ul, T[t, k, u]), max(uh, T[t, k, u])
-            if ul <= uh:
-                iu0, iu1 = _range(PL, u, nv[u], ul - reach, uh + reach, lo[u], hi[u], gu)
-                met0, met1 = _range(PL, u, nv[u], ul + reach, uh - reach, lo[u], hi[u], gu)
+            for k in range(nc):
+                ul, uh = min(ul, corner_u[k]), max(uh, corner_u[k])
+            if ul <= uh:  # the planes below ul -+ reach, and at most uh -+ reach
+                below0, below1 = _near_count(PL, u, nv[u], ul, reach, True, gu)
+                above0, above1 = _near_count(PL, u, nv[u], uh, reach, False, gu)
+                iu0, met0 = max(below0 - 1, lo[u]), max(below1 - 1, lo[u])
+                met1, iu1 = min(above0, hi[u]), min(above1, hi[u])
             else:  # rounding found nothing: every column of the box, tested
                 iu0, iu1, met0, met1 = lo[u], hi[u], hi[u], lo[u]
             in0 = _planes_below(PL, u, nv[u], max(a0, a1) + reach, True, gu)
             in1 = _planes_below(PL, u, nv[u], min(b0, b1) - reach, False, gu) - 1
-            c1l, d1l, chord_at = np.inf, -np.inf, -1
+            b0v, b1v = h0 + sv * (c0[v] - ov), h0 + sv * (c1[v] - ov)  # the heights along v = c0[v], c1[v]
             for iu in range(iu0, iu1):
-                c0[u], c1[u] = PL[u, iu], PL[u, iu + 1]
-                idx[u] = iu
+                u0, u1 = PL[u, iu], PL[u, iu + 1]
+                c0[u], c1[u] = u0, u1
                 if not met0 <= iu < met1 and _column_cut(T, t, u, v, w, s[w], coef, bnd, c0, c1):
                     continue
                 k0, k1 = lo[w], hi[w]
                 sure0, sure1 = k1, k0  # the voxels [sure0, sure1) are in without a test
                 if not sliver:  # the span of heights over this column, rounded by less than margin
                     if in0 <= iu < in1:  # inside the projection: the plane over the column
-                        zl, zh = _plane_span(T, t, w, n, c0[u], c1[u], c0[v], c1[v])
+                        zl, zh = _plane_span(h0, ou, ov, su, sv, u0, u1, c0[v], c1[v])
                     else:  # the heights at the corners of the polygon column and triangle share
-                        # the chords on the column's two u sides (the lower
-                        # one is the last column's upper one, if found)
-                        c0l, d0l = (c1l, d1l) if chord_at == iu else _line_extent(T, t, v, u, c0[u])
-                        c1l, d1l = _line_extent(T, t, v, u, c1[u])
-                        chord_at = iu + 1
                         zl, zh = np.inf, -np.inf
-                        for k in range(3):
-                            if c0[u] <= T[t, k, u] <= c1[u] and c0[v] <= T[t, k, v] <= c1[v]:
-                                zl, zh = min(zl, T[t, k, w]), max(zh, T[t, k, w])
-                        zl, zh = _chord_span(T, t, w, n, a0, b0, c0[u], c1[u], True, c0[v], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, a1, b1, c0[u], c1[u], True, c1[v], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, c0l, d0l, c0[v], c1[v], False, c0[u], zl, zh)
-                        zl, zh = _chord_span(T, t, w, n, c1l, d1l, c0[v], c1[v], False, c1[u], zl, zh)
+                        for k in range(nc):
+                            if u0 <= corner_u[k] <= u1:
+                                zl, zh = min(zl, corner_w[k]), max(zh, corner_w[k])
+                        zl, zh = _side_span(a0, b0, u0, u1, b0v, su, ou, zl, zh)
+                        zl, zh = _side_span(a1, b1, u0, u1, b1v, su, ou, zl, zh)
+                        zl, zh = _side_span(cl[iu], ch[iu], c0[v], c1[v], cb[iu], sv, ov, zl, zh)
+                        zl, zh = _side_span(cl[iu + 1], ch[iu + 1], c0[v], c1[v], cb[iu + 1], sv, ov, zl, zh)
                     if zl <= zh:
                         # in: every voxel whose extent meets [Zl, Zh], the
                         # true span (the polygon is connected, so it takes
                         # every height between); decided where the rounded
                         # span leaves no doubt, tested where a plane between
                         # voxels is within margin of one of its ends
-                        below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
-                        sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
+                        below_lo = sure0 = _place(zl, pw0, gw, nv[w], guard)
+                        if below_lo < 0:
+                            below_lo, sure0 = _near_count(PL, w, nv[w], zl, margin, True, gw)
+                        sure1 = above_hi = _place(zh, pw0, gw, nv[w], guard)
+                        if sure1 < 0:
+                            sure1, above_hi = _near_count(PL, w, nv[w], zh, margin, False, gw)
                         k0, k1 = max(below_lo - 1, lo[w]), min(above_hi, hi[w])
                         sure0, sure1 = max(sure0 - 1, lo[w]), min(sure1, hi[w])
-                for k in range(k0, k1):
-                    idx[w] = k
-                    if sure0 <= k < sure1:
-                        added += _mark(out, idx[0] - xa, idx[1], idx[2])
-                        continue
-                    c0[w], c1[w] = PL[w, k], PL[w, k + 1]
-                    if (_projection_separated(T, t, w, s[w], coef, bnd, c0[u], c1[u], c0[v], c1[v])
-                            or _projection_separated(T, t, u, s[u], coef, bnd, c0[v], c1[v], c0[w], c1[w])
-                            or _projection_separated(T, t, v, s[v], coef, bnd, c0[w], c1[w], c0[u], c1[u])
-                            or _plane_separated(T, t, s, plane, c0, c1)):
-                        continue
-                    added += _mark(out, idx[0] - xa, idx[1], idx[2])
+                base = row + iu * stride[u]
+                k = k0
+                while k < k1:  # runs [k - n_run, k)
+                    if k == sure0 and sure0 < sure1:  # the voxels in without a test: one run
+                        k, n_run = sure1, sure1 - sure0
+                    else:  # a voxel near an end of the span, tested
+                        c0[w], c1[w] = PL[w, k], PL[w, k + 1]
+                        k, n_run = k + 1, 1
+                        if _separated(T, t, u, v, w, s, coef, bnd, plane, c0, c1):
+                            continue
+                    if m == _RUNS:
+                        added += _mark_runs(flat, run_at, run_len, m, step)
+                        m = 0
+                    run_at[m], run_len[m] = base + (k - n_run) * step, n_run
+                    prefetch_write(flat, base + (k - n_run) * step)  # set with the triangle's other runs
+                    m += 1
+        added += _mark_runs(flat, run_at, run_len, m, step)
+        m = 0
     return added
 
 
@@ -748,6 +844,11 @@ class ShellGrid:
 
         if len(self.T) == 0 or xb <= xa:
             return 0
+        if not out.flags.c_contiguous:  # the pass sets voxels by their place in the C-ordered volume
+            work = np.ascontiguousarray(out)
+            added = self.fill(xa, xb, work, threads=threads)
+            out[...] = work
+            return added
         mid = (xa + xb) // 2
         parts = [(xa, xb)] if threads <= 1 or xb - xa < 2 else [(xa, mid), (mid, xb)]
         added = [0] * len(parts)
