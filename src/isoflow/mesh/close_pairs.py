@@ -53,10 +53,14 @@ def close_pairs(points: np.ndarray, r: float, cell: float = 0.0) -> np.ndarray:
     p = np.ascontiguousarray(points, dtype=np.float64)
     if len(p) < 2:
         return np.zeros((0, 2), np.int64)
-    side = max(r, cell, float(np.abs(p).max()) * 2.0**-60)
+    largest = float(np.abs(p).max())
+    side = max(r, cell, largest * 2.0**-60)
     number = np.floor(p / side).astype(np.int64)
     table, chain = _cells(number)
-    return _pairs(p, number, side, table, chain, r)
+    # a point's distance to its cell's faces is rounded: a slack of a few
+    # units in the last place of the coordinates only adds cells to look in
+    reach = r + (largest + side) * 2.0**-48
+    return _pairs(p, number, side, table, chain, r, reach)
 
 
 @njit(cache=True, nogil=True)
@@ -94,18 +98,18 @@ def _cells(cell):
 
 
 @njit(cache=True, nogil=True)
-def _pairs(p, cell, side, table, chain, r):
+def _pairs(p, cell, side, table, chain, r, reach):
     """The pairs, each found from the point of the lower cell."""
     out = np.empty((16, 2), np.int64)
     k = 0
     r2 = r * r
     for i in range(p.shape[0]):
-        # the neighbouring cells this point is within r of, per axis
-        low1 = p[i, 1] - cell[i, 1] * side <= r
-        low2 = p[i, 2] - cell[i, 2] * side <= r
-        high0 = (cell[i, 0] + 1) * side - p[i, 0] <= r
-        high1 = (cell[i, 1] + 1) * side - p[i, 1] <= r
-        high2 = (cell[i, 2] + 1) * side - p[i, 2] <= r
+        # the neighbouring cells this point is within reach of, per axis
+        low1 = p[i, 1] - cell[i, 1] * side <= reach
+        low2 = p[i, 2] - cell[i, 2] * side <= reach
+        high0 = (cell[i, 0] + 1) * side - p[i, 0] <= reach
+        high1 = (cell[i, 1] + 1) * side - p[i, 1] <= reach
+        high2 = (cell[i, 2] + 1) * side - p[i, 2] <= reach
         for d0 in range(0, 2):
             if d0 == 1 and not high0:
                 continue
