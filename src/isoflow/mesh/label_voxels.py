@@ -172,8 +172,6 @@ def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label:
     return filled
 
 
-
-
 def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
                     fill: Fill = "winding",
                     overlap: Overlap = "later", split: bool = False, strict: bool = False,

@@ -4,39 +4,15 @@ The welds, caps, face components and seams of the mesh layer each need the
 components of a graph of up to a few million nodes. scipy's
 ``connected_components`` of a sparse matrix gives them, but importing
 ``scipy.sparse`` and ``csgraph`` is a large share of a short command's
-start-up; a union-find over the edge list (linear in the edges, with path
-halving) gives the same numbering without it.
+start-up; the sweep's union-find (:func:`isoflow.scale.kernels.join_pairs`)
+over the edge list gives the same numbering without it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .jit import njit
-
-
-@njit(cache=True, nogil=True)
-def _roots(n, a, b):
-    """Each node's root after joining every edge ``a[i] - b[i]``: the
-    smallest node of its component (the larger root is hung below the
-    smaller one)."""
-    parent = np.arange(n)
-    for i in range(a.shape[0]):
-        x = a[i]
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        y = b[i]
-        while parent[y] != y:
-            parent[y] = parent[parent[y]]
-            y = parent[y]
-        if x < y:
-            parent[y] = x
-        elif y < x:
-            parent[x] = y
-    for v in range(n):  # roots are smaller than their nodes: one pass in order
-        parent[v] = parent[parent[v]]
-    return parent
+from .kernels import join_pairs
 
 
 def components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
@@ -69,7 +45,10 @@ def components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
     """
     if n == 0:
         return 0, np.zeros(0, np.int64)
-    roots = _roots(n, np.ascontiguousarray(a, dtype=np.int64), np.ascontiguousarray(b, dtype=np.int64))
+    roots = np.arange(n, dtype=np.int64)
+    # joined under the smaller root and flattened: each node's root is its
+    # component's smallest node
+    join_pairs(roots, np.stack([np.asarray(a, np.int64), np.asarray(b, np.int64)], axis=1))
     is_root = roots == np.arange(n)
     rank = np.cumsum(is_root) - 1  # roots are their components' smallest nodes: rank in node order
     return int(is_root.sum()), rank[roots]
