@@ -245,17 +245,21 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
     found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
-    total = sum(len(s) for s, _ in found)
+    at = np.cumsum([0] + [len(s) for s, _ in found]).tolist()
+    total = at[-1]
     starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
-    np.concatenate([s for s, _ in found] or [starts[:0]], out=starts)
-    np.concatenate([p for _, p in found] or [parent[:0]], out=parent)
-    sizes = [len(s) for s, _ in found]
+
+    def place(t: int, slab_starts: np.ndarray, slab_parent: np.ndarray) -> None:
+        """Slab t's runs at their place in the whole, numbered globally."""
+        lo, hi = parts[t]
+        starts[at[t]:at[t + 1]] = slab_starts
+        np.add(slab_parent, np.uint32(at[t]), out=parent[at[t]:at[t + 1]])
+        offsets[lo * ny:hi * ny] += at[t]
+
+    calls = [(place, t, *found[t]) for t in range(len(parts))]
     del found
-    at = 0
-    for (lo, hi), size in zip(parts, sizes):
-        offsets[lo * ny:hi * ny] += at
-        parent[at:at + size] += np.uint32(at)
-        at += size
+    run(calls)
+    del calls
     offsets[-1] = total
     for lo, _ in parts[1:]:
         _join_seam(flat, ny, nz, lo, offsets, starts, parent)
@@ -552,15 +556,6 @@ def _doubled(flat, ny, nz, a, nx, i, j, k, value, sp, spokes):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _mask_of(id8, piece):
-    """The octants of a block that hold ``piece`` (no branches)."""
-    m = 0
-    for o in range(8):
-        m |= np.int64(id8[o] == piece) << o
-    return m
-
-
-@njit(cache=True, nogil=True, inline="always")
 def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, features, table, doubled, spokes):
     """A label of the block, at its first piece: its count of the
     configuration's group (``table[c]``: configurations of one row of
@@ -577,11 +572,12 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, feature
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
+             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
-    pieces in ``local`` (m x m x 2), then one entry per pair; ``w``
-    vertices have this block. Returns the number of new pairs."""
+    pieces in ``local`` (m x m x 2; ``slot[o]``: the index among them of
+    octant o's piece), then one entry per pair; ``w`` vertices have this
+    block. Returns the number of new pairs."""
     m = 0
     for o in range(8):
         p = id8[o]
@@ -594,6 +590,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
             pval[m] = val8[o]
             m += 1
         pmask[u] |= 1 << o
+        slot[o] = u
     for u in range(m):
         for t in range(m):
             local[u, t, 0] = 0
@@ -614,13 +611,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
             continue
         _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, pval[u], want, base, features, table, doubled, spokes)
         for s_ in range(nsheet[c]):
-            p, q = id8[sheet_obj[c, s_]], id8[sheet_bg[c, s_]]
-            u1 = 0
-            while pid[u1] != p:
-                u1 += 1
-            w1 = 0
-            while pid[w1] != q:
-                w1 += 1
+            u1, w1 = slot[sheet_obj[c, s_]], slot[sheet_bg[c, s_]]
             local[u1, w1, 0] += w
             local[u1, w1, 1] += w * quarter[c, s_]
     new = 0
@@ -634,77 +625,116 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _lowest(mask):
-    """The lowest set bit's index of a nonzero mask."""
-    o = 0
-    while not (mask >> o) & 1:
-        o += 1
-    return o
+def _mask8(p, a0, a1, a2, a3, b0, b1, b2, b3):
+    """The octants of a block (ids a0..a3 at dz = 0, b0..b3 at dz = 1) that
+    hold piece p (no branches)."""
+    return (np.int64(a0 == p) | (np.int64(a1 == p) << 1) | (np.int64(a2 == p) << 2) | (np.int64(a3 == p) << 3)
+            | (np.int64(b0 == p) << 4) | (np.int64(b1 == p) << 5) | (np.int64(b2 == p) << 6)
+            | (np.int64(b3 == p) << 7))
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, spokes,
-         doubled, contact, pairs, near):
-    """A block of two pieces (the common case): pieces A (octants ``m0``)
-    and B (the others, the first of them ``o1``). Each piece is its
-    label's whole configuration there, and all of its sheets separate it
-    from the other; ``w`` vertices have this block. Returns the number of
-    new pairs."""
-    m1 = 255 ^ m0
-    pa, pb = id8[0], id8[o1]
-    if pa != 0 and pb != 0 and val8[0] == val8[o1]:  # one label, two pieces touching by an edge or a vertex
+def _other(p, a1, a2, a3, b0, b1, b2, b3):
+    """The piece of the first octant (1 .. 7) that does not hold p."""
+    q = b3
+    q = b2 if b2 != p else q
+    q = b1 if b1 != p else q
+    q = b0 if b0 != p else q
+    q = a3 if a3 != p else q
+    q = a2 if a2 != p else q
+    return a1 if a1 != p else q
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _value(pvalues, vbase, piece):
+    """The value of a piece (0 for the outside)."""
+    return pvalues[piece - vbase] if piece != 0 else np.uint64(0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _count(flat, ny, nz, a, nx, i, j, k, w, piece, c, pvalues, vbase, fbase, features, table, doubled, spokes):
+    """A wanted label of the block, at its only piece there: its count of the
+    configuration's group goes up by the ``w`` vertices that have this block,
+    and its doubled edges (:func:`_label`)."""
+    features[piece - fbase, table[c]] += w
+    if spokes[c] != 0:
+        value = pvalues[piece - vbase]
+        for kk in range(k, k + w):
+            doubled[piece - fbase] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features,
+           table, sheets, doubled, contact, pairs, near, scratch):
+    """A block of two pieces or more (octant ``q`` of the column at dz = 0
+    holds piece ``a<q>``, of the column at dz = 1 ``b<q>``), which ``w``
+    vertices (i, j, k .. k + w - 1) have. Two pieces, the common case, are
+    read from the ids as they are: each piece is its label's whole
+    configuration there, and all of its sheets separate it from the other.
+    ``sheets``: the sheet tables (``nsheet, qsum, sheet_obj, sheet_bg,
+    quarter, spokes``); ``scratch``: ``val8, id8, pid, pmask, pval, slot,
+    local`` (a block of three pieces or more). Returns the number of new
+    pairs."""
+    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    val8, id8, pid, pmask, pval, slot, local = scratch
+    pa = a0
+    m0 = _mask8(pa, a0, a1, a2, a3, b0, b1, b2, b3)
+    pb = _other(pa, a1, a2, a3, b0, b1, b2, b3)
+    m1 = _mask8(pb, a0, a1, a2, a3, b0, b1, b2, b3)
+    if (m0 | m1) != 255:
+        id8[0], id8[1], id8[2], id8[3], id8[4], id8[5], id8[6], id8[7] = a0, a1, a2, a3, b0, b1, b2, b3
+        for o in range(8):
+            val8[o] = _value(pvalues, vbase, id8[o])
+        return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features, table, nsheet, sheet_obj,
+                        sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local)
+    if pa != 0 and pb != 0 and pvalues[pa - vbase] == pvalues[pb - vbase]:
+        # one label, two pieces touching by an edge or a vertex
         return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
-    na = w * nsheet[m0] if pa != 0 and want[pa - base] else 0
-    nb = w * nsheet[m1] if pb != 0 and want[pb - base] else 0
-    if pa != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, val8[0], want, base, features, table, doubled, spokes)
-    if pb != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
-    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
-                w * qsum[m1] if nb else 0)
+    na, nb = 0, 0
+    if pa != 0 and want[pa - fbase]:
+        na = w * nsheet[m0]
+        _count(flat, ny, nz, a, nx, i, j, k, w, pa, m0, pvalues, vbase, fbase, features, table, doubled, spokes)
+    if pb != 0 and want[pb - fbase]:
+        nb = w * nsheet[m1]
+        _count(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues, vbase, fbase, features, table, doubled, spokes)
+    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb, w * qsum[m1] if nb else 0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _block(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, sheet_obj, sheet_bg,
-           quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
-    """A block of two pieces or more, which ``w`` vertices (i, j, k ..
-    k + w - 1) have. Returns the number of new pairs."""
-    m0 = _mask_of(id8, id8[0])
-    o1 = _lowest(255 ^ m0)
-    if (m0 | _mask_of(id8, id8[o1])) == 255:
-        return _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum,
-                    spokes, doubled, contact, pairs, near)
-    return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj,
-                    sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz):
-    """Row q of the vertex row at its run c: the run's piece and value as
-    the block's octant q + 4 (the voxel at dz = 1), and where it ends."""
-    id8[q + 4] = base + np.int64(runs[c])
-    val8[q + 4] = flat[rowv[q] + starts[c]]
-    nxt[q] = starts[c + 1] if c + 1 < end[q] else nz
+def _row_at(offsets, starts, runs, base, nz, inside, r):
+    """A voxel row's first run ``c``, its end ``e``, the run's piece and
+    where the next run starts (a row outside the volume: one run of the
+    outside, piece 0)."""
+    if not inside:
+        return 0, 0, np.int64(0), nz
+    c, e = offsets[r], offsets[r + 1]
+    return c, e, base + np.int64(runs[c]), starts[c + 1] if c + 1 < e else nz
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
-                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, used, val8, id8, cur, end,
-                 nxt, rowv, pid, pmask, pval, local):
+def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table,
+                 sheets, doubled, contact, pairs, near, used, scratch):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
     a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
-    and their pieces (:func:`piece_runs`); ``base``: added to the slab's
-    piece numbers (0 stays the outside); ``want[piece - fbase]``: its label
-    is in the table, ``features`` and ``doubled`` at ``piece - fbase`` too
-    (a thread's window of the pieces); ``used``: entries of the table; the
-    rest is scratch.
+    and their pieces (:func:`piece_runs`), ``pvalues`` the pieces' values;
+    ``base``: added to the slab's piece numbers (0 stays the outside);
+    ``want[piece - fbase]``: its label is in the table, ``features`` and
+    ``doubled`` at ``piece - fbase`` too (a thread's window of the pieces);
+    ``sheets``: the sheet tables (:func:`_block`); ``used``: entries of
+    the table; ``scratch``: :func:`_block`'s.
 
-    A vertex row (i, j) walks its four voxel rows' runs together: where
-    one of them begins a run, the vertex there has a block of two columns
-    that differ; between two such places every vertex has the same block,
-    its two columns equal, so it is counted once with the number of those
-    vertices (and skipped where the column is one piece).
+    A vertex row (i, j) walks its four voxel rows' runs together (row q =
+    dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy)), the pieces of the
+    column before in ``a<q>`` and of the column at ``z`` in ``b<q>``
+    (scalars, which stay in registers): where one of the rows begins a
+    run, the vertex there has a block of two columns that differ; between
+    two such places every vertex has the same block, its two columns
+    equal, so it is counted once with the number of those vertices (and
+    skipped where the column is one piece). One call site of
+    :func:`_block` (each is compiled inline) takes the three kinds of
+    block in turn: the vertex at a run's start, the stretch after it, and
+    the last vertex (the last column and the outside).
 
     Compiled without reference counting (nothing is allocated here), which
     the helpers' many array arguments would otherwise pay at every block.
@@ -712,55 +742,50 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
     table might fill up (``i == i1`` when done)."""
     for i in range(i0, i1):
         for j in range(j0 if i == i0 else 0, ny + 1):
-            blocks = 1
-            for q in range(4):  # row q = dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy), -1 outside
-                x, y = i - 1 + (q & 1), j - 1 + (q >> 1)
-                if 0 <= x < nx and 0 <= y < ny:
-                    r = (x - a) * ny + y
-                    cur[q], end[q], rowv[q] = offsets[r], offsets[r + 1], r * nz
-                    blocks += 2 * (end[q] - cur[q])
-                else:
-                    cur[q], end[q], rowv[q] = 0, 0, -1
+            c0, e0, b0, n0 = _row_at(offsets, starts, runs, base, nz, i >= 1 and j >= 1, (i - 1 - a) * ny + j - 1)
+            c1, e1, b1, n1 = _row_at(offsets, starts, runs, base, nz, i < nx and j >= 1, (i - a) * ny + j - 1)
+            c2, e2, b2, n2 = _row_at(offsets, starts, runs, base, nz, i >= 1 and j < ny, (i - 1 - a) * ny + j)
+            c3, e3, b3, n3 = _row_at(offsets, starts, runs, base, nz, i < nx and j < ny, (i - a) * ny + j)
+            blocks = 1 + 2 * ((e0 - c0) + (e1 - c1) + (e2 - c2) + (e3 - c3))
             # a block adds at most 28 pairs, the near cache holds some; a table at most 70 % full
             if 10 * (used + len(near) + 28 * blocks) > 7 * len(pairs):
                 return used, i, j
-            for q in range(4):
-                id8[q] = 0
-                val8[q] = 0
-                if rowv[q] >= 0:
-                    _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
-                else:
-                    id8[q + 4] = 0
-                    val8[q + 4] = 0
-                    nxt[q] = nz
-            z = 0
+            # the block to count: columns l (dz = 0) and r (dz = 1), from vertex k, w vertices
+            l0, l1, l2, l3, r0, r1, r2, r3 = 0, 0, 0, 0, b0, b1, b2, b3
+            z, k, w, t = 0, 0, 1, 0
+            event, last = True, False
             while True:
-                # vertex z: column z - 1 (octants 0-3) and column z, which differ
-                used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
-                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask,
-                               pval, local)
-                for q in range(4):
-                    id8[q] = id8[q + 4]
-                    val8[q] = val8[q + 4]
-                t = min(min(nxt[0], nxt[1]), min(nxt[2], nxt[3]))
-                # vertices z + 1 .. t - 1: column z twice
-                if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
-                                   table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
-                                   near, pid, pmask, pval, local)
-                if t == nz:  # vertex nz: the last column and the outside
-                    for q in range(4):
-                        id8[q + 4] = 0
-                        val8[q + 4] = 0
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
-                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
-                                   pmask, pval, local)
+                used += _block(l0, l1, l2, l3, r0, r1, r2, r3, pvalues, base, flat, ny, nz, a, nx, i, j, k, w, want,
+                               fbase, features, table, sheets, doubled, contact, pairs, near, scratch)
+                if last:
                     break
-                for q in range(4):
-                    if nxt[q] == t:
-                        cur[q] += 1
-                        _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
+                l0, l1, l2, l3 = b0, b1, b2, b3
+                if event:  # vertices z + 1 .. t - 1: column z twice, unless it is one piece
+                    t = min(min(n0, n1), min(n2, n3))
+                    if t - z > 1 and not (b0 == b1 and b0 == b2 and b0 == b3):
+                        r0, r1, r2, r3, k, w, event = b0, b1, b2, b3, z + 1, t - z - 1, False
+                        continue
+                if t == nz:  # vertex nz: the last column and the outside
+                    r0, r1, r2, r3, k, w, last = 0, 0, 0, 0, nz, 1, True
+                    continue
+                if n0 == t:
+                    c0 += 1
+                    b0 = base + np.int64(runs[c0])
+                    n0 = starts[c0 + 1] if c0 + 1 < e0 else nz
+                if n1 == t:
+                    c1 += 1
+                    b1 = base + np.int64(runs[c1])
+                    n1 = starts[c1 + 1] if c1 + 1 < e1 else nz
+                if n2 == t:
+                    c2 += 1
+                    b2 = base + np.int64(runs[c2])
+                    n2 = starts[c2 + 1] if c2 + 1 < e2 else nz
+                if n3 == t:
+                    c3 += 1
+                    b3 = base + np.int64(runs[c3])
+                    n3 = starts[c3 + 1] if c3 + 1 < e3 else nz
                 z = t
+                r0, r1, r2, r3, k, w, event = b0, b1, b2, b3, z, 1, True
     return used, i1, 0
 
 
@@ -805,8 +830,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
                f"the vertex pass over {npieces:,} pieces")
     features = [mapped((b - a, len(rows)), count) for a, b in windows]
     doubled = [mapped(b - a, np.int64) for a, b in windows]
-    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
-    tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
+    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], found["values"], ny, nz, x0, nx)
+    table_of = group.reshape(-1).astype(np.int64)
+    sheets = (nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
     wanted = want.astype(np.bool_)
 
@@ -814,15 +840,15 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     _tops(found["offsets"], found["runs"], ny, x0, top)
 
     def call(t, args):
-        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
-            np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
+        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.int64),
+                   np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64))
         sink = PairSink(top, base, len(parts))
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
         while i < end:
             at = (i, j)
             used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
-                                      features[t], *tables, doubled[t], contact, sink.pairs, sink.near,
-                                      used, *scratch)
+                                      features[t], table_of, sheets, doubled[t], contact, sink.pairs,
+                                      sink.near, used, scratch)
             if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
                 used = sink.drain(used, i - 1, grow=(i, j) == at)
         sink.drain(used, None)
