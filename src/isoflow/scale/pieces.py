@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .bitrows import trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 from .memory import check_fits, mapped
@@ -121,39 +122,80 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
 
 
 @njit(cache=True, nogil=True)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used):
+def _mark_changes(flat, g0, n, marks):
+    """``marks[z]`` (z < n): whether voxel g0 + z of the flattened image
+    differs from the one before it (``marks[0]`` is left as it is). The
+    loop indexes views from 0, so that it compiles to vector compares."""
+    after, before, out = flat[g0 + 1:g0 + n], flat[g0:g0 + n - 1], marks[1:n]
+    for z in range(n - 1):
+        out[z] = after[z] != before[z]
+
+
+#: voxels whose changes :func:`_slab_runs` marks at once (a few rows)
+MARK_VOXELS = 1 << 13
+
+
+@njit(cache=True, nogil=True)
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, marks, words):
     """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
     y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
     each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
     each run joined in ``parent`` with the runs of rows (x, y - 1) and
     (x - 1, y) it touches by a face and shares a value with (x - 1 within
     the slab only). Returns ``(used, x, y)``: where it stopped because the
-    buffers might not hold the next row (``x == x_hi`` when done)."""
-    for x in range(x_at, x_hi):
-        for y in range(y_at if x == x_at else 0, ny):
-            if used + nz > len(starts):
-                return used, x, y
-            r = x * ny + y
-            row = r * nz
-            first = used
-            offsets[r] = first
-            prev = flat[row]
-            starts[used] = 0
-            parent[used] = used
-            used += 1
-            for z in range(1, nz):
-                v = flat[row + z]
-                if v != prev:
-                    starts[used] = z
-                    parent[used] = used
-                    used += 1
-                    prev = v
-            if y > 0:
-                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
-            if x > x_lo:
-                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1],
-                           row - ny * nz)
+    buffers might not hold the next rows (``x == x_hi`` when done).
+
+    The rows are read a batch at a time: first a byte per voxel that says
+    whether it begins a run (every row's first voxel does), in one vector
+    pass over the batch; then the set bytes, eight at a time as the words
+    ``words`` (the same buffer as ``marks``), each found by its trailing
+    zeros: a row of long runs costs its runs, not its voxels."""
+    batch = max(1, (len(marks) - 8) // nz)
+    r = x_at * ny + y_at
+    r_end = x_hi * ny
+    while r < r_end:
+        b = min(batch, r_end - r)
+        if used + b * nz > len(starts):
+            return used, r // ny, r % ny
+        _mark_changes(flat, r * nz, b * nz, marks)
+        for t in range(b):
+            marks[t * nz] = 1
+        for t in range(b * nz, b * nz + 8):
+            marks[t] = 0
+        # the set bytes in order; each row's first is its start
+        row_end = 0
+        rr = r - 1
+        first = used
+        for k in range((b * nz + 7) // 8):
+            w = words[k]
+            while w != 0:
+                g = k * 8 + (np.int64(trailing_zeros(w)) >> 3)
+                w &= w - np.uint64(1)
+                if g == row_end:  # the next row begins: the last one is complete
+                    if rr >= r:
+                        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+                    rr += 1
+                    row_end += nz
+                    first = used
+                    offsets[rr] = first
+                starts[used] = g - (row_end - nz)
+                parent[used] = used
+                used += 1
+        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+        r += b
     return used, x_hi, 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent):
+    """Join the runs [first, used) of row r = x * ny + y with the runs of
+    rows (x, y - 1) and (x - 1, y) (within the slab)."""
+    x, y = r // ny, r % ny
+    row = r * nz
+    if y > 0:
+        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
+    if x > x_lo:
+        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz)
 
 
 @njit(cache=True, nogil=True)
@@ -282,9 +324,11 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     indices), in buffers that grow as they fill."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
     starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
+    words = np.zeros((max(MARK_VOXELS, nz) + 16) // 8, np.uint64)
+    marks = words.view(np.uint8)
     used, x, y = 0, x_lo, 0
     while True:
-        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used)
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, marks, words)
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
