@@ -36,6 +36,8 @@ so that it holds the pairs of the pieces being crossed (:class:`PairSink`).
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from .bitrows import trailing_zeros
@@ -50,7 +52,9 @@ EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
 FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 
 #: bytes per piece of the statistics (value, count, three sums, two corners)
-PIECE_BYTES = 8 + 8 + 24 + 24
+PIECE_BYTES = 8 + 8 + 24 + 24 + 24
+#: bytes per piece of a thread's share of the statistics (all but the value)
+STAT_BYTES = PIECE_BYTES - 8
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
 PAIR_BYTES = 32
 #: bytes per pair of :func:`vertex_pass`' entries (key, kind, two packed sums)
@@ -218,43 +222,86 @@ def _count_roots(parent):
 
 
 @njit(cache=True, nogil=True)
-def _number_runs(flat, offsets, starts, parent, ny, nz, first, last, x0, values, counts, sums, lo, hi):
+def _number_runs(flat, offsets, starts, parent, nz, values):
     """In C order, roots get the piece numbers 1..n and every other run its
     parent's number (the parent precedes it, so it has its number already):
-    ``parent`` becomes each run's piece. Each run adds to its piece's
-    count, coordinate sums and bounding box, for the voxel layers
-    first <= x < last only (at global x offset ``x0``)."""
+    ``parent`` becomes each run's piece, ``values`` each piece's value."""
     n = 0
     for r in range(len(offsets) - 1):
-        x, y = r // ny, r % ny
-        counted = first <= x < last
-        gx = x + x0
-        k1 = offsets[r + 1]
-        for k in range(offsets[r], k1):
+        for k in range(offsets[r], offsets[r + 1]):
             p = parent[k]
             if p == k:
                 n += 1
                 parent[k] = n
                 values[n] = flat[r * nz + starts[k]]
-                piece = n
             else:
-                piece = parent[p]
-                parent[k] = piece
-            if counted:
-                s = starts[k]
-                e = starts[k + 1] if k + 1 < k1 else nz
-                length = e - s
-                counts[piece] += length
-                sums[piece, 0] += gx * length
-                sums[piece, 1] += y * length
-                sums[piece, 2] += (s + e - 1) * length // 2
-                lo[piece, 0] = min(lo[piece, 0], gx)
-                lo[piece, 1] = min(lo[piece, 1], y)
-                lo[piece, 2] = min(lo[piece, 2], s)
-                hi[piece, 0] = max(hi[piece, 0], gx)
-                hi[piece, 1] = max(hi[piece, 1], y)
-                hi[piece, 2] = max(hi[piece, 2], e - 1)
+                parent[k] = parent[p]
     return n
+
+
+@njit(cache=True, nogil=True)
+def _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, p0, counts, sums, lo, hi):
+    """Each run of rows r0 <= r < r1 adds to its piece's count, coordinate
+    sums and bounding box (at index ``piece - p0``; global x offset
+    ``x0``)."""
+    for r in range(r0, r1):
+        gx, y = r // ny + x0, r % ny
+        k1 = offsets[r + 1]
+        for k in range(offsets[r], k1):
+            piece = np.int64(runs[k]) - p0
+            s = starts[k]
+            e = starts[k + 1] if k + 1 < k1 else nz
+            length = e - s
+            counts[piece] += length
+            sums[piece, 0] += gx * length
+            sums[piece, 1] += y * length
+            sums[piece, 2] += (s + e - 1) * length // 2
+            lo[piece, 0] = min(lo[piece, 0], gx)
+            lo[piece, 1] = min(lo[piece, 1], y)
+            lo[piece, 2] = min(lo[piece, 2], s)
+            hi[piece, 0] = max(hi[piece, 0], gx)
+            hi[piece, 1] = max(hi[piece, 1], y)
+            hi[piece, 2] = max(hi[piece, 2], e - 1)
+
+
+def _empty_stats(size: int) -> tuple[np.ndarray, ...]:
+    """Counts, coordinate sums and box corners of ``size`` pieces, empty."""
+    return (np.zeros(size, np.int64), np.zeros((size, 3), np.int64),
+            np.full((size, 3), np.iinfo(np.int64).max, np.int64), np.full((size, 3), -1, np.int64))
+
+
+def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape: tuple[int, int, int], n: int,
+                layers: tuple[int, int], x0: int, parts: list) -> tuple[np.ndarray, ...]:
+    """Per piece (n + 1): voxel count, coordinate sums and bounding box of
+    its runs in the voxel layers ``layers`` (at global x offset ``x0``),
+    each slab of ``parts`` on a thread of its own: a slab adds into arrays
+    over the range of pieces its runs hold (pieces are numbered in C order,
+    so mostly a narrow one), added into the whole after."""
+    _, ny, nz = shape
+    rows = [(max(a, layers[0]) * ny, min(b, layers[1]) * ny) for a, b in parts]
+    rows = [(r0, r1) for r0, r1 in rows if r0 < r1]
+    counts, sums, lo, hi = _empty_stats(n + 1)
+    if len(rows) <= 1:
+        for r0, r1 in rows:
+            _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, 0, counts, sums, lo, hi)
+        return counts, sums, lo, hi
+    windows = []
+    for r0, r1 in rows:
+        held = runs[offsets[r0]:offsets[r1]]
+        windows.append((int(held.min()), int(held.max()) + 1) if len(held) else (0, 0))
+    check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread")
+
+    def slab(r0: int, r1: int, p0: int, p1: int) -> tuple[np.ndarray, ...]:
+        part = _empty_stats(p1 - p0)
+        _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, p0, *part)
+        return part
+
+    for (p0, p1), (c, s, a, b) in zip(windows, run([(slab, *r, *w) for r, w in zip(rows, windows)])):
+        counts[p0:p1] += c
+        sums[p0:p1] += s
+        np.minimum(lo[p0:p1], a, out=lo[p0:p1])
+        np.maximum(hi[p0:p1], b, out=hi[p0:p1])
+    return counts, sums, lo, hi
 
 
 #: bytes per run while the pieces are found: the z of its first voxel
@@ -309,12 +356,9 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     check_fits(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image",
                hint="a label image of noise has a piece for about every other voxel")
     values = np.zeros(n + 1, np.uint64)
-    counts = np.zeros(n + 1, np.int64)
-    sums = np.zeros((n + 1, 3), np.int64)
-    lo = np.full((n + 1, 3), np.iinfo(np.int64).max, np.int64)
-    hi = np.full((n + 1, 3), -1, np.int64)
-    _number_runs(flat, offsets, starts, parent, ny, nz, first, nx if last is None else last, x0, values, counts,
-                 sums, lo, hi)
+    _number_runs(flat, offsets, starts, parent, nz, values)
+    counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
+                                       x0, parts)
     return {"offsets": offsets, "starts": starts, "runs": parent, "n": n, "values": values, "counts": counts,
             "sums": sums, "lo": lo, "hi": hi}
 
@@ -559,6 +603,7 @@ BLOCK_PAIRS = np.array(
      (0, 7, VERTEX), (1, 6, VERTEX), (2, 5, VERTEX), (3, 4, VERTEX)], np.int64)
 
 
+@cache
 def contact_table() -> np.ndarray:
     """(256, 256) uint8: how two pieces holding the octants of masks ``a``
     and ``b`` of a block touch there, counting only the pairs of
