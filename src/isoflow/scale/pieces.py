@@ -754,28 +754,29 @@ def _count(flat, ny, nz, a, nx, i, j, k, w, piece, c, pvalues, vbase, fbase, fea
 
 @njit(cache=True, nogil=True, inline="always")
 def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features,
-           table, sheets, doubled, contact, pairs, near, scratch):
+           table, sheets, doubled, contact, pairs, near, deferred, count):
     """A block of two pieces or more (octant ``q`` of the column at dz = 0
     holds piece ``a<q>``, of the column at dz = 1 ``b<q>``), which ``w``
     vertices (i, j, k .. k + w - 1) have. Two pieces, the common case, are
     read from the ids as they are: each piece is its label's whole
     configuration there, and all of its sheets separate it from the other.
-    ``sheets``: the sheet tables (``nsheet, qsum, sheet_obj, sheet_bg,
-    quarter, spokes``); ``scratch``: ``val8, id8, pid, pmask, pval, slot,
-    local`` (a block of three pieces or more). Returns the number of new
-    pairs."""
+    A block of three pieces or more is put off (its ids, k and w appended
+    to ``deferred``, ``count[0]`` of them) for :func:`_deferred`, so that
+    the vertex rows' loop holds the common case only. ``sheets``: the sheet
+    tables (``nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes``).
+    Returns the number of new pairs."""
     nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
-    val8, id8, pid, pmask, pval, slot, local = scratch
     pa = a0
     m0 = _mask8(pa, a0, a1, a2, a3, b0, b1, b2, b3)
     pb = _other(pa, a1, a2, a3, b0, b1, b2, b3)
     m1 = _mask8(pb, a0, a1, a2, a3, b0, b1, b2, b3)
     if (m0 | m1) != 255:
-        id8[0], id8[1], id8[2], id8[3], id8[4], id8[5], id8[6], id8[7] = a0, a1, a2, a3, b0, b1, b2, b3
-        for o in range(8):
-            val8[o] = _value(pvalues, vbase, id8[o])
-        return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features, table, nsheet, sheet_obj,
-                        sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local)
+        d = count[0]
+        deferred[d, 0], deferred[d, 1], deferred[d, 2], deferred[d, 3] = a0, a1, a2, a3
+        deferred[d, 4], deferred[d, 5], deferred[d, 6], deferred[d, 7] = b0, b1, b2, b3
+        deferred[d, 8], deferred[d, 9] = k, w
+        count[0] = d + 1
+        return 0
     if pa != 0 and pb != 0 and pvalues[pa - vbase] == pvalues[pb - vbase]:
         # one label, two pieces touching by an edge or a vertex
         return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
@@ -802,7 +803,7 @@ def _row_at(offsets, starts, runs, base, nz, inside, r):
 
 @njit(cache=True, nogil=True, _nrt=False)
 def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table,
-                 sheets, doubled, contact, pairs, near, used, scratch):
+                 sheets, doubled, contact, pairs, near, used, deferred, count, scratch):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
     a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
@@ -811,7 +812,9 @@ def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0
     ``want[piece - fbase]``: its label is in the table, ``features`` and
     ``doubled`` at ``piece - fbase`` too (a thread's window of the pieces);
     ``sheets``: the sheet tables (:func:`_block`); ``used``: entries of
-    the table; ``scratch``: :func:`_block`'s.
+    the table; ``deferred``, ``count``: the blocks put off (at most two per
+    run of a vertex row's voxel rows, and one); ``scratch``:
+    :func:`_deferred`'s.
 
     A vertex row (i, j) walks its four voxel rows' runs together (row q =
     dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy)), the pieces of the
@@ -845,7 +848,7 @@ def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0
             event, last = True, False
             while True:
                 used += _block(l0, l1, l2, l3, r0, r1, r2, r3, pvalues, base, flat, ny, nz, a, nx, i, j, k, w, want,
-                               fbase, features, table, sheets, doubled, contact, pairs, near, scratch)
+                               fbase, features, table, sheets, doubled, contact, pairs, near, deferred, count)
                 if last:
                     break
                 l0, l1, l2, l3 = b0, b1, b2, b3
@@ -875,7 +878,30 @@ def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0
                     n3 = starts[c3 + 1] if c3 + 1 < e3 else nz
                 z = t
                 r0, r1, r2, r3, k, w, event = b0, b1, b2, b3, z, 1, True
+            if count[0]:
+                used += _deferred(deferred, count, pvalues, base, flat, ny, nz, a, nx, i, j, want, fbase, features,
+                                  table, sheets, doubled, contact, pairs, near, scratch)
     return used, i1, 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, fbase, features, table, sheets,
+              doubled, contact, pairs, near, scratch):
+    """The blocks of three pieces or more that :func:`_block` put off in
+    vertex row (i, j), each by :func:`_several`; ``scratch``: ``val8, id8,
+    pid, pmask, pval, slot, local``. Returns the number of new pairs."""
+    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    val8, id8, pid, pmask, pval, slot, local = scratch
+    new = 0
+    for d in range(count[0]):
+        for o in range(8):
+            id8[o] = deferred[d, o]
+            val8[o] = _value(pvalues, vbase, id8[o])
+        new += _several(val8, id8, flat, ny, nz, a, nx, i, j, deferred[d, 8], deferred[d, 9], want, fbase, features,
+                        table, nsheet, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
+                        pmask, pval, slot, local)
+    count[0] = 0
+    return new
 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
@@ -931,13 +957,14 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     def call(t, args):
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.int64),
                    np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64))
+        put_off = (np.zeros((8 * nz + 2, 10), np.int64), np.zeros(1, np.int64))
         sink = PairSink(top, base, len(parts))
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
         while i < end:
             at = (i, j)
             used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
                                       features[t], table_of, sheets, doubled[t], contact, sink.pairs,
-                                      sink.near, used, scratch)
+                                      sink.near, used, *put_off, scratch)
             if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
                 used = sink.drain(used, i - 1, grow=(i, j) == at)
         sink.drain(used, None)
