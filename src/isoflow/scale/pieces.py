@@ -126,13 +126,27 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
 
 
 @njit(cache=True, nogil=True)
-def _mark_changes(flat, g0, n, marks):
-    """``marks[z]`` (z < n): whether voxel g0 + z of the flattened image
-    differs from the one before it (``marks[0]`` is left as it is). The
-    loop indexes views from 0, so that it compiles to vector compares."""
-    after, before, out = flat[g0 + 1:g0 + n], flat[g0:g0 + n - 1], marks[1:n]
-    for z in range(n - 1):
-        out[z] = after[z] != before[z]
+def _change_bits(flat, g0, n, words):
+    """Bit p of ``words`` (p < n): whether voxel g0 + p of the flattened
+    image differs from the one before it (bit 0: no); the bits from n on
+    clear. The full words compare views indexed from 0, so that they
+    compile to vector compares."""
+    full = n // 64
+    w = np.uint64(0)
+    for p in range(1, min(n, 64)):
+        w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p)
+    words[0] = w
+    for k in range(1, full):
+        after, before = flat[g0 + 64 * k:g0 + 64 * k + 64], flat[g0 + 64 * k - 1:g0 + 64 * k + 63]
+        w = np.uint64(0)
+        for t in range(64):
+            w |= np.uint64(after[t] != before[t]) << np.uint64(t)
+        words[k] = w
+    if full >= 1 and n % 64:
+        w = np.uint64(0)
+        for p in range(64 * full, n):
+            w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p - 64 * full)
+        words[full] = w
 
 
 #: voxels whose changes :func:`_slab_runs` marks at once (a few rows)
@@ -140,7 +154,7 @@ MARK_VOXELS = 1 << 13
 
 
 @njit(cache=True, nogil=True)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, marks, words):
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words):
     """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
     y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
     each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
@@ -149,31 +163,29 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
     the slab only). Returns ``(used, x, y)``: where it stopped because the
     buffers might not hold the next rows (``x == x_hi`` when done).
 
-    The rows are read a batch at a time: first a byte per voxel that says
+    The rows are read a batch at a time: first a bit per voxel that says
     whether it begins a run (every row's first voxel does), in one vector
-    pass over the batch; then the set bytes, eight at a time as the words
-    ``words`` (the same buffer as ``marks``), each found by its trailing
-    zeros: a row of long runs costs its runs, not its voxels."""
-    batch = max(1, (len(marks) - 8) // nz)
+    pass over the batch (:func:`_change_bits`); then the set bits, each
+    found by its word's trailing zeros: a row of long runs costs its runs
+    and a word per 64 voxels, not a step per voxel."""
+    batch = max(1, (64 * len(words) - 64) // nz)
     r = x_at * ny + y_at
     r_end = x_hi * ny
     while r < r_end:
         b = min(batch, r_end - r)
         if used + b * nz > len(starts):
             return used, r // ny, r % ny
-        _mark_changes(flat, r * nz, b * nz, marks)
+        _change_bits(flat, r * nz, b * nz, words)
         for t in range(b):
-            marks[t * nz] = 1
-        for t in range(b * nz, b * nz + 8):
-            marks[t] = 0
-        # the set bytes in order; each row's first is its start
+            words[(t * nz) >> 6] |= np.uint64(1) << np.uint64((t * nz) & 63)
+        # the set bits in order; each row's first is its start
         row_end = 0
         rr = r - 1
         first = used
-        for k in range((b * nz + 7) // 8):
+        for k in range((b * nz + 63) // 64):
             w = words[k]
             while w != 0:
-                g = k * 8 + (np.int64(trailing_zeros(w)) >> 3)
+                g = k * 64 + np.int64(trailing_zeros(w))
                 w &= w - np.uint64(1)
                 if g == row_end:  # the next row begins: the last one is complete
                     if rr >= r:
@@ -368,11 +380,10 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     indices), in buffers that grow as they fill."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
     starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
-    words = np.zeros((max(MARK_VOXELS, nz) + 16) // 8, np.uint64)
-    marks = words.view(np.uint8)
+    words = np.zeros(max(MARK_VOXELS, nz) // 64 + 2, np.uint64)
     used, x, y = 0, x_lo, 0
     while True:
-        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, marks, words)
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words)
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
