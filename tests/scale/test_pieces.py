@@ -37,6 +37,38 @@ def test_pieces_are_each_values_face_components(rng):
             assert found["values"][p] == np.uint16(image[tuple(where[0])])
 
 
+@pytest.mark.parametrize("nz", [1, 63, 64, 65, 200, 9000])
+def test_pieces_of_long_rows_on_several_threads(rng, nz):
+    """Rows around a word of 64 voxels and longer than a batch of rows, cut
+    into runs of every length (single voxels too), in slabs on one to three
+    threads: cc3d's components of each value, the same on every count of
+    threads."""
+    import cc3d
+
+    from isoflow.scale.compiled import using
+    from isoflow.scale.pieces import label_pieces
+
+    shape = (7, 5, nz) if nz > 1 else (40, 9, 1)
+    # runs of random lengths along z, shared by neighbouring rows often
+    cuts = rng.random(shape) < rng.choice([0.02, 0.3, 0.9], size=shape[:2] + (1,))
+    image = (np.cumsum(cuts, axis=2) % 3).astype(np.uint32)
+    image[rng.random(shape) < 0.01] = 7
+    found = [label_pieces(image)]
+    for threads in (2, 3):
+        with using(threads):
+            found.append(label_pieces(image))
+    for f in found:
+        assert (f["ids"] == found[0]["ids"]).all() and f["n"] == found[0]["n"]
+        assert (f["counts"] == found[0]["counts"]).all() and (f["sums"] == found[0]["sums"]).all()
+        assert (f["lo"] == found[0]["lo"]).all() and (f["hi"] == found[0]["hi"]).all()
+    ids = found[0]["ids"]
+    for value in np.unique(image):
+        theirs = cc3d.connected_components((image == value).astype(np.uint8), connectivity=6)
+        pairs = np.unique(np.stack([ids[image == value], theirs[image == value]]), axis=1)
+        assert len(np.unique(pairs[0])) == len(np.unique(pairs[1])) == pairs.shape[1]
+    assert found[0]["counts"][1:].sum() == image.size
+
+
 def test_contact_table_counts_each_pair_of_voxels_once():
     """Every pair of voxels of a 3x3x3 neighbourhood is in exactly one block
     of BLOCK_PAIRS, with the adjacency its offset says."""

@@ -48,6 +48,13 @@ def gib(n: int) -> str:
     return f"{n / 2**30:.1f} GiB"
 
 
+#: a map of this many bytes or more asks for the processor's large pages
+#: (2 MiB, where the system lends them on request), as NumPy does for its
+#: own large arrays: the system then zeroes and maps a table a large page
+#: at a time instead of in thousands of small faults
+HUGE_PAGES_FROM = 4 << 20
+
+
 def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) -> np.ndarray:
     """An array in pages of its own (an anonymous memory map), zeros or
     ``fill``: given back to the system the moment it is let go. The C
@@ -62,7 +69,10 @@ def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) 
     if count * kind.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
         out = np.zeros(shape, kind)
     else:
-        out = np.frombuffer(mmap.mmap(-1, count * kind.itemsize), kind, count).reshape(shape)
+        pages = mmap.mmap(-1, count * kind.itemsize, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+        if count * kind.itemsize >= HUGE_PAGES_FROM and hasattr(mmap, "MADV_HUGEPAGE"):
+            pages.madvise(mmap.MADV_HUGEPAGE)
+        out = np.frombuffer(pages, kind, count).reshape(shape)
     if fill is not None:
         out[...] = fill
     return out

@@ -36,8 +36,11 @@ so that it holds the pairs of the pieces being crossed (:class:`PairSink`).
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
+from .bitrows import trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 from .memory import check_fits, mapped
@@ -49,7 +52,9 @@ EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
 FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 
 #: bytes per piece of the statistics (value, count, three sums, two corners)
-PIECE_BYTES = 8 + 8 + 24 + 24
+PIECE_BYTES = 8 + 8 + 24 + 24 + 24
+#: bytes per piece of a thread's share of the statistics (all but the value)
+STAT_BYTES = PIECE_BYTES - 8
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
 PAIR_BYTES = 32
 #: bytes per pair of :func:`vertex_pass`' entries (key, kind, two packed sums)
@@ -121,39 +126,92 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
 
 
 @njit(cache=True, nogil=True)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used):
+def _change_bits(flat, g0, n, words):
+    """Bit p of ``words`` (p < n): whether voxel g0 + p of the flattened
+    image differs from the one before it (bit 0: no); the bits from n on
+    clear. The full words compare views indexed from 0, so that they
+    compile to vector compares."""
+    full = n // 64
+    w = np.uint64(0)
+    for p in range(1, min(n, 64)):
+        w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p)
+    words[0] = w
+    for k in range(1, full):
+        after, before = flat[g0 + 64 * k:g0 + 64 * k + 64], flat[g0 + 64 * k - 1:g0 + 64 * k + 63]
+        w = np.uint64(0)
+        for t in range(64):
+            w |= np.uint64(after[t] != before[t]) << np.uint64(t)
+        words[k] = w
+    if full >= 1 and n % 64:
+        w = np.uint64(0)
+        for p in range(64 * full, n):
+            w |= np.uint64(flat[g0 + p] != flat[g0 + p - 1]) << np.uint64(p - 64 * full)
+        words[full] = w
+
+
+#: voxels whose changes :func:`_slab_runs` marks at once (a few rows)
+MARK_VOXELS = 1 << 13
+
+
+@njit(cache=True, nogil=True)
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words):
     """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
     y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
     each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
     each run joined in ``parent`` with the runs of rows (x, y - 1) and
     (x - 1, y) it touches by a face and shares a value with (x - 1 within
     the slab only). Returns ``(used, x, y)``: where it stopped because the
-    buffers might not hold the next row (``x == x_hi`` when done)."""
-    for x in range(x_at, x_hi):
-        for y in range(y_at if x == x_at else 0, ny):
-            if used + nz > len(starts):
-                return used, x, y
-            r = x * ny + y
-            row = r * nz
-            first = used
-            offsets[r] = first
-            prev = flat[row]
-            starts[used] = 0
-            parent[used] = used
-            used += 1
-            for z in range(1, nz):
-                v = flat[row + z]
-                if v != prev:
-                    starts[used] = z
-                    parent[used] = used
-                    used += 1
-                    prev = v
-            if y > 0:
-                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
-            if x > x_lo:
-                _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1],
-                           row - ny * nz)
+    buffers might not hold the next rows (``x == x_hi`` when done).
+
+    The rows are read a batch at a time: first a bit per voxel that says
+    whether it begins a run (every row's first voxel does), in one vector
+    pass over the batch (:func:`_change_bits`); then the set bits, each
+    found by its word's trailing zeros: a row of long runs costs its runs
+    and a word per 64 voxels, not a step per voxel."""
+    batch = max(1, (64 * len(words) - 64) // nz)
+    r = x_at * ny + y_at
+    r_end = x_hi * ny
+    while r < r_end:
+        b = min(batch, r_end - r)
+        if used + b * nz > len(starts):
+            return used, r // ny, r % ny
+        _change_bits(flat, r * nz, b * nz, words)
+        for t in range(b):
+            words[(t * nz) >> 6] |= np.uint64(1) << np.uint64((t * nz) & 63)
+        # the set bits in order; each row's first is its start
+        row_end = 0
+        rr = r - 1
+        first = used
+        for k in range((b * nz + 63) // 64):
+            w = words[k]
+            while w != 0:
+                g = k * 64 + np.int64(trailing_zeros(w))
+                w &= w - np.uint64(1)
+                if g == row_end:  # the next row begins: the last one is complete
+                    if rr >= r:
+                        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+                    rr += 1
+                    row_end += nz
+                    first = used
+                    offsets[rr] = first
+                starts[used] = g - (row_end - nz)
+                parent[used] = used
+                used += 1
+        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+        r += b
     return used, x_hi, 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent):
+    """Join the runs [first, used) of row r = x * ny + y with the runs of
+    rows (x, y - 1) and (x - 1, y) (within the slab)."""
+    x, y = r // ny, r % ny
+    row = r * nz
+    if y > 0:
+        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
+    if x > x_lo:
+        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz)
 
 
 @njit(cache=True, nogil=True)
@@ -176,43 +234,86 @@ def _count_roots(parent):
 
 
 @njit(cache=True, nogil=True)
-def _number_runs(flat, offsets, starts, parent, ny, nz, first, last, x0, values, counts, sums, lo, hi):
+def _number_runs(flat, offsets, starts, parent, nz, values):
     """In C order, roots get the piece numbers 1..n and every other run its
     parent's number (the parent precedes it, so it has its number already):
-    ``parent`` becomes each run's piece. Each run adds to its piece's
-    count, coordinate sums and bounding box, for the voxel layers
-    first <= x < last only (at global x offset ``x0``)."""
+    ``parent`` becomes each run's piece, ``values`` each piece's value."""
     n = 0
     for r in range(len(offsets) - 1):
-        x, y = r // ny, r % ny
-        counted = first <= x < last
-        gx = x + x0
-        k1 = offsets[r + 1]
-        for k in range(offsets[r], k1):
+        for k in range(offsets[r], offsets[r + 1]):
             p = parent[k]
             if p == k:
                 n += 1
                 parent[k] = n
                 values[n] = flat[r * nz + starts[k]]
-                piece = n
             else:
-                piece = parent[p]
-                parent[k] = piece
-            if counted:
-                s = starts[k]
-                e = starts[k + 1] if k + 1 < k1 else nz
-                length = e - s
-                counts[piece] += length
-                sums[piece, 0] += gx * length
-                sums[piece, 1] += y * length
-                sums[piece, 2] += (s + e - 1) * length // 2
-                lo[piece, 0] = min(lo[piece, 0], gx)
-                lo[piece, 1] = min(lo[piece, 1], y)
-                lo[piece, 2] = min(lo[piece, 2], s)
-                hi[piece, 0] = max(hi[piece, 0], gx)
-                hi[piece, 1] = max(hi[piece, 1], y)
-                hi[piece, 2] = max(hi[piece, 2], e - 1)
+                parent[k] = parent[p]
     return n
+
+
+@njit(cache=True, nogil=True)
+def _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, p0, counts, sums, lo, hi):
+    """Each run of rows r0 <= r < r1 adds to its piece's count, coordinate
+    sums and bounding box (at index ``piece - p0``; global x offset
+    ``x0``)."""
+    for r in range(r0, r1):
+        gx, y = r // ny + x0, r % ny
+        k1 = offsets[r + 1]
+        for k in range(offsets[r], k1):
+            piece = np.int64(runs[k]) - p0
+            s = starts[k]
+            e = starts[k + 1] if k + 1 < k1 else nz
+            length = e - s
+            counts[piece] += length
+            sums[piece, 0] += gx * length
+            sums[piece, 1] += y * length
+            sums[piece, 2] += (s + e - 1) * length // 2
+            lo[piece, 0] = min(lo[piece, 0], gx)
+            lo[piece, 1] = min(lo[piece, 1], y)
+            lo[piece, 2] = min(lo[piece, 2], s)
+            hi[piece, 0] = max(hi[piece, 0], gx)
+            hi[piece, 1] = max(hi[piece, 1], y)
+            hi[piece, 2] = max(hi[piece, 2], e - 1)
+
+
+def _empty_stats(size: int) -> tuple[np.ndarray, ...]:
+    """Counts, coordinate sums and box corners of ``size`` pieces, empty."""
+    return (np.zeros(size, np.int64), np.zeros((size, 3), np.int64),
+            np.full((size, 3), np.iinfo(np.int64).max, np.int64), np.full((size, 3), -1, np.int64))
+
+
+def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape: tuple[int, int, int], n: int,
+                layers: tuple[int, int], x0: int, parts: list) -> tuple[np.ndarray, ...]:
+    """Per piece (n + 1): voxel count, coordinate sums and bounding box of
+    its runs in the voxel layers ``layers`` (at global x offset ``x0``),
+    each slab of ``parts`` on a thread of its own: a slab adds into arrays
+    over the range of pieces its runs hold (pieces are numbered in C order,
+    so mostly a narrow one), added into the whole after."""
+    _, ny, nz = shape
+    rows = [(max(a, layers[0]) * ny, min(b, layers[1]) * ny) for a, b in parts]
+    rows = [(r0, r1) for r0, r1 in rows if r0 < r1]
+    counts, sums, lo, hi = _empty_stats(n + 1)
+    if len(rows) <= 1:
+        for r0, r1 in rows:
+            _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, 0, counts, sums, lo, hi)
+        return counts, sums, lo, hi
+    windows = []
+    for r0, r1 in rows:
+        held = runs[offsets[r0]:offsets[r1]]
+        windows.append((int(held.min()), int(held.max()) + 1) if len(held) else (0, 0))
+    check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread")
+
+    def slab(r0: int, r1: int, p0: int, p1: int) -> tuple[np.ndarray, ...]:
+        part = _empty_stats(p1 - p0)
+        _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, p0, *part)
+        return part
+
+    for (p0, p1), (c, s, a, b) in zip(windows, run([(slab, *r, *w) for r, w in zip(rows, windows)])):
+        counts[p0:p1] += c
+        sums[p0:p1] += s
+        np.minimum(lo[p0:p1], a, out=lo[p0:p1])
+        np.maximum(hi[p0:p1], b, out=hi[p0:p1])
+    return counts, sums, lo, hi
 
 
 #: bytes per run while the pieces are found: the z of its first voxel
@@ -245,17 +346,21 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
     found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
-    total = sum(len(s) for s, _ in found)
+    at = np.cumsum([0] + [len(s) for s, _ in found]).tolist()
+    total = at[-1]
     starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
-    np.concatenate([s for s, _ in found] or [starts[:0]], out=starts)
-    np.concatenate([p for _, p in found] or [parent[:0]], out=parent)
-    sizes = [len(s) for s, _ in found]
+
+    def place(t: int, slab_starts: np.ndarray, slab_parent: np.ndarray) -> None:
+        """Slab t's runs at their place in the whole, numbered globally."""
+        lo, hi = parts[t]
+        starts[at[t]:at[t + 1]] = slab_starts
+        np.add(slab_parent, np.uint32(at[t]), out=parent[at[t]:at[t + 1]])
+        offsets[lo * ny:hi * ny] += at[t]
+
+    calls = [(place, t, *found[t]) for t in range(len(parts))]
     del found
-    at = 0
-    for (lo, hi), size in zip(parts, sizes):
-        offsets[lo * ny:hi * ny] += at
-        parent[at:at + size] += np.uint32(at)
-        at += size
+    run(calls)
+    del calls
     offsets[-1] = total
     for lo, _ in parts[1:]:
         _join_seam(flat, ny, nz, lo, offsets, starts, parent)
@@ -263,12 +368,9 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     check_fits(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image",
                hint="a label image of noise has a piece for about every other voxel")
     values = np.zeros(n + 1, np.uint64)
-    counts = np.zeros(n + 1, np.int64)
-    sums = np.zeros((n + 1, 3), np.int64)
-    lo = np.full((n + 1, 3), np.iinfo(np.int64).max, np.int64)
-    hi = np.full((n + 1, 3), -1, np.int64)
-    _number_runs(flat, offsets, starts, parent, ny, nz, first, nx if last is None else last, x0, values, counts,
-                 sums, lo, hi)
+    _number_runs(flat, offsets, starts, parent, nz, values)
+    counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
+                                       x0, parts)
     return {"offsets": offsets, "starts": starts, "runs": parent, "n": n, "values": values, "counts": counts,
             "sums": sums, "lo": lo, "hi": hi}
 
@@ -278,9 +380,10 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     indices), in buffers that grow as they fill."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
     starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
+    words = np.zeros(max(MARK_VOXELS, nz) // 64 + 2, np.uint64)
     used, x, y = 0, x_lo, 0
     while True:
-        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used)
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words)
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
@@ -511,6 +614,7 @@ BLOCK_PAIRS = np.array(
      (0, 7, VERTEX), (1, 6, VERTEX), (2, 5, VERTEX), (3, 4, VERTEX)], np.int64)
 
 
+@cache
 def contact_table() -> np.ndarray:
     """(256, 256) uint8: how two pieces holding the octants of masks ``a``
     and ``b`` of a block touch there, counting only the pairs of
@@ -552,15 +656,6 @@ def _doubled(flat, ny, nz, a, nx, i, j, k, value, sp, spokes):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _mask_of(id8, piece):
-    """The octants of a block that hold ``piece`` (no branches)."""
-    m = 0
-    for o in range(8):
-        m |= np.int64(id8[o] == piece) << o
-    return m
-
-
-@njit(cache=True, nogil=True, inline="always")
 def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, features, table, doubled, spokes):
     """A label of the block, at its first piece: its count of the
     configuration's group (``table[c]``: configurations of one row of
@@ -577,11 +672,12 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, feature
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
+             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
-    pieces in ``local`` (m x m x 2), then one entry per pair; ``w``
-    vertices have this block. Returns the number of new pairs."""
+    pieces in ``local`` (m x m x 2; ``slot[o]``: the index among them of
+    octant o's piece), then one entry per pair; ``w`` vertices have this
+    block. Returns the number of new pairs."""
     m = 0
     for o in range(8):
         p = id8[o]
@@ -594,6 +690,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
             pval[m] = val8[o]
             m += 1
         pmask[u] |= 1 << o
+        slot[o] = u
     for u in range(m):
         for t in range(m):
             local[u, t, 0] = 0
@@ -614,13 +711,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
             continue
         _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, pval[u], want, base, features, table, doubled, spokes)
         for s_ in range(nsheet[c]):
-            p, q = id8[sheet_obj[c, s_]], id8[sheet_bg[c, s_]]
-            u1 = 0
-            while pid[u1] != p:
-                u1 += 1
-            w1 = 0
-            while pid[w1] != q:
-                w1 += 1
+            u1, w1 = slot[sheet_obj[c, s_]], slot[sheet_bg[c, s_]]
             local[u1, w1, 0] += w
             local[u1, w1, 1] += w * quarter[c, s_]
     new = 0
@@ -634,77 +725,119 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _lowest(mask):
-    """The lowest set bit's index of a nonzero mask."""
-    o = 0
-    while not (mask >> o) & 1:
-        o += 1
-    return o
+def _mask8(p, a0, a1, a2, a3, b0, b1, b2, b3):
+    """The octants of a block (ids a0..a3 at dz = 0, b0..b3 at dz = 1) that
+    hold piece p (no branches)."""
+    return (np.int64(a0 == p) | (np.int64(a1 == p) << 1) | (np.int64(a2 == p) << 2) | (np.int64(a3 == p) << 3)
+            | (np.int64(b0 == p) << 4) | (np.int64(b1 == p) << 5) | (np.int64(b2 == p) << 6)
+            | (np.int64(b3 == p) << 7))
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, spokes,
-         doubled, contact, pairs, near):
-    """A block of two pieces (the common case): pieces A (octants ``m0``)
-    and B (the others, the first of them ``o1``). Each piece is its
-    label's whole configuration there, and all of its sheets separate it
-    from the other; ``w`` vertices have this block. Returns the number of
-    new pairs."""
-    m1 = 255 ^ m0
-    pa, pb = id8[0], id8[o1]
-    if pa != 0 and pb != 0 and val8[0] == val8[o1]:  # one label, two pieces touching by an edge or a vertex
+def _other(p, a1, a2, a3, b0, b1, b2, b3):
+    """The piece of the first octant (1 .. 7) that does not hold p."""
+    q = b3
+    q = b2 if b2 != p else q
+    q = b1 if b1 != p else q
+    q = b0 if b0 != p else q
+    q = a3 if a3 != p else q
+    q = a2 if a2 != p else q
+    return a1 if a1 != p else q
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _value(pvalues, vbase, piece):
+    """The value of a piece (0 for the outside)."""
+    return pvalues[piece - vbase] if piece != 0 else np.uint64(0)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _count(flat, ny, nz, a, nx, i, j, k, w, piece, c, pvalues, vbase, fbase, features, table, doubled, spokes):
+    """A wanted label of the block, at its only piece there: its count of the
+    configuration's group goes up by the ``w`` vertices that have this block,
+    and its doubled edges (:func:`_label`)."""
+    features[piece - fbase, table[c]] += w
+    if spokes[c] != 0:
+        value = pvalues[piece - vbase]
+        for kk in range(k, k + w):
+            doubled[piece - fbase] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features,
+           table, sheets, doubled, contact, pairs, near, deferred, count):
+    """A block of two pieces or more (octant ``q`` of the column at dz = 0
+    holds piece ``a<q>``, of the column at dz = 1 ``b<q>``), which ``w``
+    vertices (i, j, k .. k + w - 1) have. Two pieces, the common case, are
+    read from the ids as they are: each piece is its label's whole
+    configuration there, and all of its sheets separate it from the other.
+    A block of three pieces or more is put off (its ids, k and w appended
+    to ``deferred``, ``count[0]`` of them) for :func:`_deferred`, so that
+    the vertex rows' loop holds the common case only. ``sheets``: the sheet
+    tables (``nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes``).
+    Returns the number of new pairs."""
+    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    pa = a0
+    m0 = _mask8(pa, a0, a1, a2, a3, b0, b1, b2, b3)
+    pb = _other(pa, a1, a2, a3, b0, b1, b2, b3)
+    m1 = _mask8(pb, a0, a1, a2, a3, b0, b1, b2, b3)
+    if (m0 | m1) != 255:
+        d = count[0]
+        deferred[d, 0], deferred[d, 1], deferred[d, 2], deferred[d, 3] = a0, a1, a2, a3
+        deferred[d, 4], deferred[d, 5], deferred[d, 6], deferred[d, 7] = b0, b1, b2, b3
+        deferred[d, 8], deferred[d, 9] = k, w
+        count[0] = d + 1
+        return 0
+    if pa != 0 and pb != 0 and pvalues[pa - vbase] == pvalues[pb - vbase]:
+        # one label, two pieces touching by an edge or a vertex
         return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
-    na = w * nsheet[m0] if pa != 0 and want[pa - base] else 0
-    nb = w * nsheet[m1] if pb != 0 and want[pb - base] else 0
-    if pa != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, val8[0], want, base, features, table, doubled, spokes)
-    if pb != 0:
-        _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, val8[o1], want, base, features, table, doubled, spokes)
-    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb,
-                w * qsum[m1] if nb else 0)
+    na, nb = 0, 0
+    if pa != 0 and want[pa - fbase]:
+        na = w * nsheet[m0]
+        _count(flat, ny, nz, a, nx, i, j, k, w, pa, m0, pvalues, vbase, fbase, features, table, doubled, spokes)
+    if pb != 0 and want[pb - fbase]:
+        nb = w * nsheet[m1]
+        _count(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues, vbase, fbase, features, table, doubled, spokes)
+    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb, w * qsum[m1] if nb else 0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _block(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum, sheet_obj, sheet_bg,
-           quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local):
-    """A block of two pieces or more, which ``w`` vertices (i, j, k ..
-    k + w - 1) have. Returns the number of new pairs."""
-    m0 = _mask_of(id8, id8[0])
-    o1 = _lowest(255 ^ m0)
-    if (m0 | _mask_of(id8, id8[o1])) == 255:
-        return _two(val8, id8, m0, o1, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, qsum,
-                    spokes, doubled, contact, pairs, near)
-    return _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj,
-                    sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, local)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _enter(q, c, offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz):
-    """Row q of the vertex row at its run c: the run's piece and value as
-    the block's octant q + 4 (the voxel at dz = 1), and where it ends."""
-    id8[q + 4] = base + np.int64(runs[c])
-    val8[q + 4] = flat[rowv[q] + starts[c]]
-    nxt[q] = starts[c + 1] if c + 1 < end[q] else nz
+def _row_at(offsets, starts, runs, base, nz, inside, r):
+    """A voxel row's first run ``c``, its end ``e``, the run's piece and
+    where the next run starts (a row outside the volume: one run of the
+    outside, piece 0)."""
+    if not inside:
+        return 0, 0, np.int64(0), nz
+    c, e = offsets[r], offsets[r + 1]
+    return c, e, base + np.int64(runs[c]), starts[c + 1] if c + 1 < e else nz
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table, nsheet, qsum,
-                 sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, used, val8, id8, cur, end,
-                 nxt, rowv, pid, pmask, pval, local):
+def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table,
+                 sheets, doubled, contact, pairs, near, used, deferred, count, scratch):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
     on (see the module docs). ``flat``: the slab's values (from voxel layer
     a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
-    and their pieces (:func:`piece_runs`); ``base``: added to the slab's
-    piece numbers (0 stays the outside); ``want[piece - fbase]``: its label
-    is in the table, ``features`` and ``doubled`` at ``piece - fbase`` too
-    (a thread's window of the pieces); ``used``: entries of the table; the
-    rest is scratch.
+    and their pieces (:func:`piece_runs`), ``pvalues`` the pieces' values;
+    ``base``: added to the slab's piece numbers (0 stays the outside);
+    ``want[piece - fbase]``: its label is in the table, ``features`` and
+    ``doubled`` at ``piece - fbase`` too (a thread's window of the pieces);
+    ``sheets``: the sheet tables (:func:`_block`); ``used``: entries of
+    the table; ``deferred``, ``count``: the blocks put off (at most two per
+    run of a vertex row's voxel rows, and one); ``scratch``:
+    :func:`_deferred`'s.
 
-    A vertex row (i, j) walks its four voxel rows' runs together: where
-    one of them begins a run, the vertex there has a block of two columns
-    that differ; between two such places every vertex has the same block,
-    its two columns equal, so it is counted once with the number of those
-    vertices (and skipped where the column is one piece).
+    A vertex row (i, j) walks its four voxel rows' runs together (row q =
+    dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy)), the pieces of the
+    column before in ``a<q>`` and of the column at ``z`` in ``b<q>``
+    (scalars, which stay in registers): where one of the rows begins a
+    run, the vertex there has a block of two columns that differ; between
+    two such places every vertex has the same block, its two columns
+    equal, so it is counted once with the number of those vertices (and
+    skipped where the column is one piece). One call site of
+    :func:`_block` (each is compiled inline) takes the three kinds of
+    block in turn: the vertex at a run's start, the stretch after it, and
+    the last vertex (the last column and the outside).
 
     Compiled without reference counting (nothing is allocated here), which
     the helpers' many array arguments would otherwise pay at every block.
@@ -712,56 +845,74 @@ def _vertex_rows(flat, offsets, starts, runs, ny, nz, a, nx, i0, i1, j0, want, b
     table might fill up (``i == i1`` when done)."""
     for i in range(i0, i1):
         for j in range(j0 if i == i0 else 0, ny + 1):
-            blocks = 1
-            for q in range(4):  # row q = dx + 2 dy: voxel row (i - 1 + dx, j - 1 + dy), -1 outside
-                x, y = i - 1 + (q & 1), j - 1 + (q >> 1)
-                if 0 <= x < nx and 0 <= y < ny:
-                    r = (x - a) * ny + y
-                    cur[q], end[q], rowv[q] = offsets[r], offsets[r + 1], r * nz
-                    blocks += 2 * (end[q] - cur[q])
-                else:
-                    cur[q], end[q], rowv[q] = 0, 0, -1
+            c0, e0, b0, n0 = _row_at(offsets, starts, runs, base, nz, i >= 1 and j >= 1, (i - 1 - a) * ny + j - 1)
+            c1, e1, b1, n1 = _row_at(offsets, starts, runs, base, nz, i < nx and j >= 1, (i - a) * ny + j - 1)
+            c2, e2, b2, n2 = _row_at(offsets, starts, runs, base, nz, i >= 1 and j < ny, (i - 1 - a) * ny + j)
+            c3, e3, b3, n3 = _row_at(offsets, starts, runs, base, nz, i < nx and j < ny, (i - a) * ny + j)
+            blocks = 1 + 2 * ((e0 - c0) + (e1 - c1) + (e2 - c2) + (e3 - c3))
             # a block adds at most 28 pairs, the near cache holds some; a table at most 70 % full
             if 10 * (used + len(near) + 28 * blocks) > 7 * len(pairs):
                 return used, i, j
-            for q in range(4):
-                id8[q] = 0
-                val8[q] = 0
-                if rowv[q] >= 0:
-                    _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
-                else:
-                    id8[q + 4] = 0
-                    val8[q + 4] = 0
-                    nxt[q] = nz
-            z = 0
+            # the block to count: columns l (dz = 0) and r (dz = 1), from vertex k, w vertices
+            l0, l1, l2, l3, r0, r1, r2, r3 = 0, 0, 0, 0, b0, b1, b2, b3
+            z, k, w, t = 0, 0, 1, 0
+            event, last = True, False
             while True:
-                # vertex z: column z - 1 (octants 0-3) and column z, which differ
-                used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z, 1, want, fbase, features, table, nsheet, qsum,
-                               sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid, pmask,
-                               pval, local)
-                for q in range(4):
-                    id8[q] = id8[q + 4]
-                    val8[q] = val8[q + 4]
-                t = min(min(nxt[0], nxt[1]), min(nxt[2], nxt[3]))
-                # vertices z + 1 .. t - 1: column z twice
-                if t - z > 1 and not (id8[0] == id8[1] and id8[0] == id8[2] and id8[0] == id8[3]):
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, z + 1, t - z - 1, want, fbase, features,
-                                   table, nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs,
-                                   near, pid, pmask, pval, local)
-                if t == nz:  # vertex nz: the last column and the outside
-                    for q in range(4):
-                        id8[q + 4] = 0
-                        val8[q + 4] = 0
-                    used += _block(val8, id8, flat, ny, nz, a, nx, i, j, nz, 1, want, fbase, features, table, nsheet,
-                                   qsum, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
-                                   pmask, pval, local)
+                used += _block(l0, l1, l2, l3, r0, r1, r2, r3, pvalues, base, flat, ny, nz, a, nx, i, j, k, w, want,
+                               fbase, features, table, sheets, doubled, contact, pairs, near, deferred, count)
+                if last:
                     break
-                for q in range(4):
-                    if nxt[q] == t:
-                        cur[q] += 1
-                        _enter(q, cur[q], offsets, starts, runs, flat, rowv, end, nxt, id8, val8, base, nz)
+                l0, l1, l2, l3 = b0, b1, b2, b3
+                if event:  # vertices z + 1 .. t - 1: column z twice, unless it is one piece
+                    t = min(min(n0, n1), min(n2, n3))
+                    if t - z > 1 and not (b0 == b1 and b0 == b2 and b0 == b3):
+                        r0, r1, r2, r3, k, w, event = b0, b1, b2, b3, z + 1, t - z - 1, False
+                        continue
+                if t == nz:  # vertex nz: the last column and the outside
+                    r0, r1, r2, r3, k, w, last = 0, 0, 0, 0, nz, 1, True
+                    continue
+                if n0 == t:
+                    c0 += 1
+                    b0 = base + np.int64(runs[c0])
+                    n0 = starts[c0 + 1] if c0 + 1 < e0 else nz
+                if n1 == t:
+                    c1 += 1
+                    b1 = base + np.int64(runs[c1])
+                    n1 = starts[c1 + 1] if c1 + 1 < e1 else nz
+                if n2 == t:
+                    c2 += 1
+                    b2 = base + np.int64(runs[c2])
+                    n2 = starts[c2 + 1] if c2 + 1 < e2 else nz
+                if n3 == t:
+                    c3 += 1
+                    b3 = base + np.int64(runs[c3])
+                    n3 = starts[c3 + 1] if c3 + 1 < e3 else nz
                 z = t
+                r0, r1, r2, r3, k, w, event = b0, b1, b2, b3, z, 1, True
+            if count[0]:
+                used += _deferred(deferred, count, pvalues, base, flat, ny, nz, a, nx, i, j, want, fbase, features,
+                                  table, sheets, doubled, contact, pairs, near, scratch)
     return used, i1, 0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, fbase, features, table, sheets,
+              doubled, contact, pairs, near, scratch):
+    """The blocks of three pieces or more that :func:`_block` put off in
+    vertex row (i, j), each by :func:`_several`; ``scratch``: ``val8, id8,
+    pid, pmask, pval, slot, local``. Returns the number of new pairs."""
+    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    val8, id8, pid, pmask, pval, slot, local = scratch
+    new = 0
+    for d in range(count[0]):
+        for o in range(8):
+            id8[o] = deferred[d, o]
+            val8[o] = _value(pvalues, vbase, id8[o])
+        new += _several(val8, id8, flat, ny, nz, a, nx, i, j, deferred[d, 8], deferred[d, 9], want, fbase, features,
+                        table, nsheet, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
+                        pmask, pval, slot, local)
+    count[0] = 0
+    return new
 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
@@ -805,8 +956,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
                f"the vertex pass over {npieces:,} pieces")
     features = [mapped((b - a, len(rows)), count) for a, b in windows]
     doubled = [mapped(b - a, np.int64) for a, b in windows]
-    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], ny, nz, x0, nx)
-    tables = (group.reshape(-1).astype(np.int64), nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
+    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], found["values"], ny, nz, x0, nx)
+    table_of = group.reshape(-1).astype(np.int64)
+    sheets = (nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
     wanted = want.astype(np.bool_)
 
@@ -814,15 +966,16 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     _tops(found["offsets"], found["runs"], ny, x0, top)
 
     def call(t, args):
-        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64)) + tuple(np.zeros(4, np.int64) for _ in range(4)) + (
-            np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.uint64), np.zeros((8, 8, 2), np.int64))
+        scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.int64),
+                   np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64))
+        put_off = (np.zeros((8 * nz + 2, 10), np.int64), np.zeros(1, np.int64))
         sink = PairSink(top, base, len(parts))
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
         while i < end:
             at = (i, j)
             used, i, j = _vertex_rows(*args, i, end, j, wanted[windows[t][0]:], base, base + windows[t][0],
-                                      features[t], *tables, doubled[t], contact, sink.pairs, sink.near,
-                                      used, *scratch)
+                                      features[t], table_of, sheets, doubled[t], contact, sink.pairs,
+                                      sink.near, used, *put_off, scratch)
             if i < end:  # the table is full: the pairs behind the sweep out, a larger table if none were
                 used = sink.drain(used, i - 1, grow=(i, j) == at)
         sink.drain(used, None)
