@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scale.jit import njit
+from ..scale.kernels import find, union
 
 #: Fibonacci hashing of a face's vertex set: the key times 2**64 / golden
 #: ratio, top bits
@@ -28,14 +29,6 @@ def _slot_bits(n: int) -> int:
     while (1 << bits) < 2 * n:
         bits += 1
     return bits
-
-
-@njit(cache=True, nogil=True)
-def _find(parent, i):
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
 
 
 @njit(cache=True, nogil=True)
@@ -78,9 +71,7 @@ def _edges(faces, n_vertices):
                 first[e] = t
                 end[low] += 1
             else:
-                ra, rb = _find(parent, t), _find(parent, first[e])
-                if ra != rb:
-                    parent[max(ra, rb)] = min(ra, rb)
+                union(parent, t, first[e])
             if a < b:
                 fwd[e] += 1
             else:
@@ -104,7 +95,7 @@ def _edges(faces, n_vertices):
             first_out[q] = first[e]
             q += 1
     for t in range(m):
-        parent[t] = _find(parent, t)
+        parent[t] = find(parent, t)
     return lo_out, hi_out, fwd_out, bwd_out, first_out, parent
 
 

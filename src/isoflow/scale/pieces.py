@@ -43,6 +43,7 @@ import numpy as np
 from .bitrows import trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
+from .kernels import union
 from .memory import check_fits, mapped
 
 #: the key of an empty slot of the pair table
@@ -76,29 +77,6 @@ def unsigned(volume: np.ndarray) -> np.ndarray:
     return v.view(np.dtype(f"u{v.dtype.itemsize}"))
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _find(parent, x):
-    """The root of x, halving the path on the way."""
-    while True:
-        p = parent[x]
-        if p == x:
-            return x
-        g = parent[p]
-        parent[x] = g
-        x = g
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _union(parent, a, b):
-    """Join the sets of a and b under the smaller root (so that every
-    parent precedes its child)."""
-    ra, rb = _find(parent, a), _find(parent, b)
-    if ra < rb:
-        parent[rb] = ra
-    elif rb < ra:
-        parent[ra] = rb
-
-
 @njit(cache=True, nogil=True)
 def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
     """Join the runs [a0, a1) of the voxel row at flat index ``row_a`` with
@@ -110,7 +88,7 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
     va, vb = flat[row_a + starts[ia]], flat[row_b + starts[ib]]
     while True:
         if va == vb:
-            _union(parent, ia, ib)
+            union(parent, ia, ib)
         ea = starts[ia + 1] if ia + 1 < a1 else nz
         eb = starts[ib + 1] if ib + 1 < b1 else nz
         if ea <= eb:
