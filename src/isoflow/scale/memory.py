@@ -56,8 +56,9 @@ HUGE_PAGES_FROM = 4 << 20
 
 
 def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) -> np.ndarray:
-    """An array in pages of its own (an anonymous memory map), zeros or
-    ``fill``: given back to the system the moment it is let go. The C
+    """An array in pages of its own (a private anonymous memory map, in
+    large pages from :data:`HUGE_PAGES_FROM` bytes on), zeros or ``fill``:
+    given back to the system the moment it is let go. The C
     allocator keeps arrays of up to 32 MiB in heaps that it seldom gives
     back once one of that size was freed, so a pass that makes and frees
     many of them holds far more memory than it uses; the large passes over

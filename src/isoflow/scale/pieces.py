@@ -15,8 +15,10 @@ stretches of one value) and joins, in a union-find over the runs (a run's
 parent is a run before it), each run with the runs of the two rows before
 it that it touches by a face and shares a value with; so the labelling
 costs 8 bytes per run, not per voxel, and a grain map has few runs per
-row. A second pass in C order numbers the roots 1..n and gives each piece
-its value, voxel count, coordinate sums and bounding box.
+row. The run starts are found as a bit per voxel (vector compares, 64
+voxels a word). A second pass in C order numbers the roots 1..n and gives
+each piece its value; then every slab of layers adds its runs to the voxel
+count, coordinate sums and bounding box of their pieces, on its thread.
 
 :func:`vertex_pass` walks every vertex row along the runs of its four
 voxel rows: between two places where one of them begins a run, every
