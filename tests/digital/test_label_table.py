@@ -89,6 +89,18 @@ def test_random_label_images_equal_analyze_per_label(rng, conn, method):
 
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("conn", [6, 26])
+def test_label_zero_asked_for_equals_analyze(rng, conn, method):
+    """Asked for, the value 0 is a label like any other: its row is
+    ``analyze(image == 0)``; the region outside the array is not part of it
+    (a block with the outside, 0-voxels and other labels in it)."""
+    for trial in range(12):
+        image = rng.choice(4, size=tuple(rng.integers(2, 9, 3)), p=[0.4, 0.2, 0.2, 0.2]).astype(np.uint8)
+        table = assert_rows_equal_analyze(image, conn, method=method, labels=[0, 2], threads=1 + trial % 2)
+        assert table["label"].tolist() == [0, 2] and table["voxels"][0] == np.count_nonzero(image == 0)
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("conn", [6, 26])
 def test_nested_and_wrapped_labels_equal_analyze(rng, conn, method):
     image = nested(rng)
     table = assert_rows_equal_analyze(image, conn, method=method, threads=2)

@@ -652,44 +652,50 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, feature
 
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
-             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local):
+             quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local, same):
     """A block of three pieces or more: every label of the block (its
     pieces' octants together), its sheets summed per pair of the block's
     pieces in ``local`` (m x m x 2; ``slot[o]``: the index among them of
     octant o's piece), then one entry per pair; ``w`` vertices have this
-    block. Returns the number of new pairs."""
+    block. The pieces and labels come from masks of equal octants
+    (``same[o]``: the octants that hold octant o's piece), compared all at
+    once rather than searched for. Returns the number of new pairs."""
+    for o in range(8):
+        x = id8[o]
+        e = 0
+        for q in range(8):
+            e |= np.int64(id8[q] == x) << q
+        same[o] = e
     m = 0
     for o in range(8):
-        p = id8[o]
-        u = 0
-        while u < m and pid[u] != p:
-            u += 1
-        if u == m:
-            pid[m] = p
-            pmask[m] = 0
+        e = same[o]
+        if e & ((1 << o) - 1) == 0:  # the first octant of its piece
+            pid[m] = id8[o]
+            pmask[m] = e
             pval[m] = val8[o]
+            slot[o] = m
             m += 1
-        pmask[u] |= 1 << o
-        slot[o] = u
+        else:
+            slot[o] = slot[trailing_zeros(e)]
     for u in range(m):
         for t in range(m):
             local[u, t, 0] = 0
             local[u, t, 1] = 0
+    outside = same[0] if id8[0] == 0 else 0
+    for o in range(1, 8):
+        outside = same[o] if id8[o] == 0 else outside
     for u in range(m):
         piece = pid[u]
         if piece == 0 or not want[piece - base]:
             continue
-        c = pmask[u]
-        merged = False
-        for t in range(m):
-            if t != u and pid[t] != 0 and pval[t] == pval[u]:
-                if t < u:  # the label was done at its first piece
-                    merged = True
-                    break
-                c |= pmask[t]
-        if merged:
+        v = pval[u]
+        c = 0
+        for q in range(8):
+            c |= np.int64(val8[q] == v) << q
+        c &= ~outside  # the label's octants (the outside holds no label)
+        if slot[trailing_zeros(c)] != u:  # the label was done at its first piece
             continue
-        _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, pval[u], want, base, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, v, want, base, features, table, doubled, spokes)
         for s_ in range(nsheet[c]):
             u1, w1 = slot[sheet_obj[c, s_]], slot[sheet_bg[c, s_]]
             local[u1, w1, 0] += w
@@ -880,9 +886,9 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
               doubled, contact, pairs, near, scratch):
     """The blocks of three pieces or more that :func:`_block` put off in
     vertex row (i, j), each by :func:`_several`; ``scratch``: ``val8, id8,
-    pid, pmask, pval, slot, local``. Returns the number of new pairs."""
+    pid, pmask, pval, slot, local, same``. Returns the number of new pairs."""
     nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
-    val8, id8, pid, pmask, pval, slot, local = scratch
+    val8, id8, pid, pmask, pval, slot, local, same = scratch
     new = 0
     for d in range(count[0]):
         for o in range(8):
@@ -890,7 +896,7 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
             val8[o] = _value(pvalues, vbase, id8[o])
         new += _several(val8, id8, flat, ny, nz, a, nx, i, j, deferred[d, 8], deferred[d, 9], want, fbase, features,
                         table, nsheet, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near, pid,
-                        pmask, pval, slot, local)
+                        pmask, pval, slot, local, same)
     count[0] = 0
     return new
 
@@ -947,7 +953,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
 
     def call(t, args):
         scratch = (np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros(8, np.int64), np.zeros(8, np.int64),
-                   np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64))
+                   np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64),
+                   np.zeros(8, np.int64))
         put_off = (np.zeros((8 * nz + 2, 10), np.int64), np.zeros(1, np.int64))
         sink = PairSink(top, base, len(parts))
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
