@@ -857,6 +857,8 @@ def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0
                 if t == nz:  # vertex nz: the last column and the outside
                     r0, r1, r2, r3, k, w, last = 0, 0, 0, 0, nz, 1, True
                     continue
+                # each row that begins a run at t steps to it; written out row by
+                # row, as the rows' state is scalars (kept in registers), not arrays
                 if n0 == t:
                     c0 += 1
                     b0 = base + np.int64(runs[c0])
