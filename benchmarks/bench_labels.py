@@ -22,6 +22,10 @@ a 160^3 corner, loads the input, resets its peak RSS (through
 * ``skimage.measure.regionprops_table(image, properties=("label", "area",
   "euler_number"))``: voxel counts and the Euler characteristic (26).
 
+With ``--stages N``, one more child times the label table's stages warm,
+best of N each: the pieces, the vertex pass and the rest (the graph of
+pieces, the surfaces, the columns).
+
 Extra peak memory is the child's peak RSS during the tool less its RSS
 with the input loaded, per voxel. Whole commands (``--commands N``,
 alternated): ``isoflow info FILE.npy --labels --json`` against ``python -c``
@@ -163,6 +167,30 @@ def child(name: str, path: Path, repeat: int) -> dict:
     return {"seconds": best, "extra_peak_bytes": extra, "bytes_per_voxel": extra / image.size, "rows": rows}
 
 
+def stages(path: Path, repeat: int) -> dict:
+    """The label table's stages in this (child) process, warm, best of
+    ``repeat`` each: the pieces (``piece_runs``), the vertex pass and the
+    rest (the graph of pieces, the surfaces, the columns)."""
+    import isoflow.digital.label_table as lt
+    from isoflow.scale.pieces import piece_runs, vertex_pass
+
+    image = np.load(path)
+    lt.label_table(image)
+    best = {"pieces": float("inf"), "vertex_pass": float("inf"), "rest": float("inf")}
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        pieces = piece_runs(image)
+        t1 = time.perf_counter()
+        want = lt.wanted_pieces(pieces["values"], image.dtype, None)
+        passed = vertex_pass(image, pieces, want, lt.feature_table(6), lt.pass_tables(6, True), keep_runs=False)
+        t2 = time.perf_counter()
+        lt.columns(lt.rows_of_pieces(pieces, passed, image.dtype, 6, None), np.ones(3), np.zeros(3), True)
+        t3 = time.perf_counter()
+        for key, dt in (("pieces", t1 - t0), ("vertex_pass", t2 - t1), ("rest", t3 - t2)):
+            best[key] = min(best[key], dt)
+    return best
+
+
 def _rss() -> int:
     with open("/proc/self/status") as fh:
         for line in fh:
@@ -203,10 +231,13 @@ def main(argv=None) -> int:
     ap.add_argument("--commands", type=int, default=1, help="pairs of whole commands per input (0: none)")
     ap.add_argument("--tools", nargs="+", default=list(TOOLS))
     ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "labels.json"))
+    ap.add_argument("--stages", type=int, default=0,
+                    help="also time the label table's stages in one warm child, best of N (0: not)")
     ap.add_argument("--child", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.child[0], Path(args.child[1]), args.repeat)))
+        work = stages if args.child[0] == "stages" else lambda path, repeat: child(args.child[0], path, repeat)
+        print(json.dumps(work(Path(args.child[1]), args.repeat)))
         return 0
     results = []
     for count in args.labels:
@@ -226,6 +257,9 @@ def main(argv=None) -> int:
             results.append(rec)
             print(f"{args.size}^3 {count} labels {name}: {rec['seconds']:.3f} s, "
                   f"{rec['bytes_per_voxel']:.2f} B/voxel", file=sys.stderr)
+        if args.stages:
+            results.append({"size": args.size, "labels": count, "tool": "stages",
+                            **in_child("stages", path, args.stages)})
         if args.commands:
             results.append({"size": args.size, "labels": count, "tool": "commands",
                             "input": str(path.relative_to(ROOT)), **commands(path, args.commands)})
@@ -284,7 +318,7 @@ def _cpus() -> int:
 def markdown(args, results: list[dict]) -> str:
     lines = ["| size | labels | tool | seconds | extra peak B/voxel | vs label_table |", "|---|---:|---|---:|---:|---:|"]
     for count in args.labels:
-        rows = [r for r in results if r["labels"] == count and r["tool"] != "commands"]
+        rows = [r for r in results if r["labels"] == count and r["tool"] not in ("commands", "stages")]
         ours = next((r["seconds"] for r in rows if r["tool"] == "isoflow.label_table"), None)
         for r in rows:
             ratio = f"{r['seconds'] / ours:.2f}x" if ours else "-"
@@ -295,6 +329,9 @@ def markdown(args, results: list[dict]) -> str:
                 lines.append(f"| {r['size']}^3 | {count:,} | whole commands: isoflow info --labels --json "
                              f"{r['isoflow_seconds']:.2f} s, regionprops_table {r['skimage_seconds']:.2f} s | - | - | "
                              f"{r['ratio']:.2f}x |")
+            if r["labels"] == count and r["tool"] == "stages":
+                lines.append(f"| {r['size']}^3 | {count:,} | stages, warm: pieces {r['pieces']:.3f} s, vertex pass "
+                             f"{r['vertex_pass']:.3f} s, the rest {r['rest']:.3f} s | - | - | - |")
     return "\n".join(lines)
 
 
