@@ -313,8 +313,12 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
     of = piece_label[1:]
     lo = np.full((nlabels, 3), np.iinfo(np.int64).max, np.int64)
     hi = np.full((nlabels, 3), -1, np.int64)
-    np.minimum.at(lo, of, pieces["lo"][1:])
-    np.maximum.at(hi, of, pieces["hi"][1:])
+    if len(of):  # each label's box from its pieces' boxes, the pieces grouped by label
+        order = np.argsort(of, kind="stable")
+        grouped = of[order]
+        starts = np.flatnonzero(np.concatenate([[True], grouped[1:] != grouped[:-1]]))
+        lo[grouped[starts]] = np.minimum.reduceat(pieces["lo"][1:][order], starts, axis=0)
+        hi[grouped[starts]] = np.maximum.reduceat(pieces["hi"][1:][order], starts, axis=0)
     features = np.stack([np.bincount(of, column, nlabels) for column in passed["features"][1:].T], axis=1)
     features = features.astype(np.int64).reshape(nlabels, passed["features"].shape[1])
     return {
@@ -423,12 +427,11 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     if surfaces:
         rows, chis = found["surface_rows"], found["surface_chi"]
         out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
-        genera = np.empty(len(voxels), object)
         cuts = np.searchsorted(rows, np.arange(len(voxels) + 1)).tolist()
         every = (1 - np.asarray(chis, np.int64) // 2).tolist()  # Python ints, sliced per row
-        for r, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
-            genera[r] = tuple(every[a:b])
-        out["genera"] = genera
+        # a tuple per row as one object each (assigned as a list, NumPy would read the tuples as rows)
+        out["genera"] = np.fromiter((tuple(every[a:b]) for a, b in zip(cuts[:-1], cuts[1:])), dtype=object,
+                                    count=len(voxels))
         out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
         out["pinched_vertices"] = features[:, _PINCH]
         out["doubled_edges"] = found["doubled"]
