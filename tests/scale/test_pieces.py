@@ -66,7 +66,16 @@ def test_pieces_of_long_rows_on_several_threads(rng, nz):
         theirs = cc3d.connected_components((image == value).astype(np.uint8), connectivity=6)
         pairs = np.unique(np.stack([ids[image == value], theirs[image == value]]), axis=1)
         assert len(np.unique(pairs[0])) == len(np.unique(pairs[1])) == pairs.shape[1]
-    assert found[0]["counts"][1:].sum() == image.size
+    # the statistics are each piece's, from its voxels
+    n = found[0]["n"] + 1
+    assert (found[0]["counts"] == np.bincount(ids.ravel(), minlength=n)).all()
+    coords = np.indices(shape).reshape(3, -1)
+    for d in range(3):
+        assert (found[0]["sums"][:, d] == np.bincount(ids.ravel(), coords[d], minlength=n)).all()
+        lo, hi = np.full(n, np.iinfo(np.int64).max), np.full(n, -1)
+        np.minimum.at(lo, ids.ravel(), coords[d])
+        np.maximum.at(hi, ids.ravel(), coords[d])
+        assert (found[0]["lo"][1:, d] == lo[1:]).all() and (found[0]["hi"][1:, d] == hi[1:]).all()
 
 
 def test_contact_table_counts_each_pair_of_voxels_once():
