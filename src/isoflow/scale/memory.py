@@ -70,7 +70,10 @@ def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) 
     if count * kind.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
         out = np.zeros(shape, kind)
     else:
-        pages = mmap.mmap(-1, count * kind.itemsize, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+        if hasattr(mmap, "MAP_PRIVATE"):  # POSIX: a private map (a shared one faults slower)
+            pages = mmap.mmap(-1, count * kind.itemsize, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+        else:  # Windows: its anonymous maps take no flags
+            pages = mmap.mmap(-1, count * kind.itemsize)
         if count * kind.itemsize >= HUGE_PAGES_FROM and hasattr(mmap, "MADV_HUGEPAGE"):
             pages.madvise(mmap.MADV_HUGEPAGE)
         out = np.frombuffer(pages, kind, count).reshape(shape)
