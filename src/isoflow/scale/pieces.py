@@ -277,10 +277,7 @@ def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape
         for r0, r1 in rows:
             _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, 0, counts, sums, lo, hi)
         return counts, sums, lo, hi
-    windows = []
-    for r0, r1 in rows:
-        held = runs[offsets[r0]:offsets[r1]]
-        windows.append((int(held.min()), int(held.max()) + 1) if len(held) else (0, 0))
+    windows = [pieces_held(offsets, runs, r0, r1) for r0, r1 in rows]
     check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread")
 
     def slab(r0: int, r1: int, p0: int, p1: int) -> tuple[np.ndarray, ...]:
@@ -636,18 +633,17 @@ def _doubled(flat, ny, nz, a, nx, i, j, k, value, sp, spokes):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, want, base, features, table, doubled, spokes):
-    """A label of the block, at its first piece: its count of the
+def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, base, features, table, doubled, spokes):
+    """A wanted label of the block, at its first piece: its count of the
     configuration's group (``table[c]``: configurations of one row of
     features) goes up by the ``w`` vertices (i, j, k .. k + w - 1) that
     have this block; and the doubled edges where a spoke is doubled (which
     depend on the next vertices' blocks, so are counted one vertex at a
     time)."""
-    if want[piece - base]:
-        features[piece - base, table[c]] += w
-        if spokes[c] != 0:
-            for kk in range(k, k + w):
-                doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
+    features[piece - base, table[c]] += w
+    if spokes[c] != 0:
+        for kk in range(k, k + w):
+            doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -693,9 +689,9 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
         for q in range(8):
             c |= np.int64(val8[q] == v) << q
         c &= ~outside  # the label's octants (the outside holds no label)
-        if slot[trailing_zeros(c)] != u:  # the label was done at its first piece
+        if slot[trailing_zeros(c)] != u:  # the label is counted at its first piece
             continue
-        _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, v, want, base, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, v, base, features, table, doubled, spokes)
         for s_ in range(nsheet[c]):
             u1, w1 = slot[sheet_obj[c, s_]], slot[sheet_bg[c, s_]]
             local[u1, w1, 0] += w
@@ -738,18 +734,6 @@ def _value(pvalues, vbase, piece):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _count(flat, ny, nz, a, nx, i, j, k, w, piece, c, pvalues, vbase, fbase, features, table, doubled, spokes):
-    """A wanted label of the block, at its only piece there: its count of the
-    configuration's group goes up by the ``w`` vertices that have this block,
-    and its doubled edges (:func:`_label`)."""
-    features[piece - fbase, table[c]] += w
-    if spokes[c] != 0:
-        value = pvalues[piece - vbase]
-        for kk in range(k, k + w):
-            doubled[piece - fbase] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
-
-
-@njit(cache=True, nogil=True, inline="always")
 def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features,
            table, sheets, doubled, contact, pairs, near, deferred, count):
     """A block of two pieces or more (octant ``q`` of the column at dz = 0
@@ -780,10 +764,10 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     na, nb = 0, 0
     if pa != 0 and want[pa - fbase]:
         na = w * nsheet[m0]
-        _count(flat, ny, nz, a, nx, i, j, k, w, pa, m0, pvalues, vbase, fbase, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, pvalues[pa - vbase], fbase, features, table, doubled, spokes)
     if pb != 0 and want[pb - fbase]:
         nb = w * nsheet[m1]
-        _count(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues, vbase, fbase, features, table, doubled, spokes)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues[pb - vbase], fbase, features, table, doubled, spokes)
     return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb, w * qsum[m1] if nb else 0)
 
 
@@ -1057,10 +1041,16 @@ def piece_window(found: dict, ny: int, x0: int, nxs: int, first: int, last: int)
     from x0) hold."""
     r0 = max(first - x0, 0) * ny
     r1 = min(last - x0 + 1, nxs) * ny
-    runs = found["runs"][found["offsets"][r0]:found["offsets"][max(r1, r0)]]
-    if not len(runs):
+    return pieces_held(found["offsets"], found["runs"], r0, max(r1, r0))
+
+
+def pieces_held(offsets: np.ndarray, runs: np.ndarray, r0: int, r1: int) -> tuple[int, int]:
+    """The range [a, b) of piece numbers that the runs of rows r0 .. r1 - 1
+    hold ((0, 0) where they hold none)."""
+    held = runs[offsets[r0]:offsets[r1]]
+    if not len(held):
         return 0, 0
-    return int(runs.min()), int(runs.max()) + 1
+    return int(held.min()), int(held.max()) + 1
 
 
 def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray) -> np.ndarray:
