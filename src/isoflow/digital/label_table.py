@@ -275,9 +275,13 @@ def pass_tables(conn: int, surfaces: bool) -> tuple:
 def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndarray | None) -> dict:
     """The rows' sums from the pieces (values, counts, sums, boxes) and
     what the vertex pass found (features, doubled edges, pairs)."""
+    from ..scale.piece_graph import grouped
+
     values, piece_label, rows = label_rows(pieces["values"], dtype, wanted)
-    topology = graph_topology(pieces, piece_label, rows, passed, conn)
-    by_label = label_sums(pieces, piece_label, passed, len(values))
+    # every label's pieces, for its sums and for the graph (each label has one piece at least)
+    by = grouped(piece_label[1:], len(values), np.arange(1, len(piece_label), dtype=np.int64))
+    topology = graph_topology(pieces, piece_label, rows, passed, conn, *by)
+    by_label = label_sums(pieces, piece_label, passed, *by)
     found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)
     dtype = np.dtype(np.uint8 if dtype == np.bool_ else dtype)
@@ -307,18 +311,18 @@ def at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int) -> dict:
+def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, lab_start: np.ndarray,
+               lab_pieces: np.ndarray) -> dict:
     """Per label (all of them): voxels, coordinate sums, box, features and
-    doubled edges, added up over its pieces."""
+    doubled edges, added up over its pieces (``lab_pieces[lab_start[l]:
+    lab_start[l + 1]]``, one at least)."""
     of = piece_label[1:]
+    nlabels = len(lab_start) - 1
     lo = np.full((nlabels, 3), np.iinfo(np.int64).max, np.int64)
     hi = np.full((nlabels, 3), -1, np.int64)
-    if len(of):  # each label's box from its pieces' boxes, the pieces grouped by label
-        order = np.argsort(of, kind="stable")
-        grouped = of[order]
-        starts = np.flatnonzero(np.concatenate([[True], grouped[1:] != grouped[:-1]]))
-        lo[grouped[starts]] = np.minimum.reduceat(pieces["lo"][1:][order], starts, axis=0)
-        hi[grouped[starts]] = np.maximum.reduceat(pieces["hi"][1:][order], starts, axis=0)
+    if nlabels:  # each label's box from its pieces' boxes
+        lo = np.minimum.reduceat(pieces["lo"][lab_pieces], lab_start[:-1], axis=0)
+        hi = np.maximum.reduceat(pieces["hi"][lab_pieces], lab_start[:-1], axis=0)
     features = np.stack([np.bincount(of, column, nlabels) for column in passed["features"][1:].T], axis=1)
     features = features.astype(np.int64).reshape(nlabels, passed["features"].shape[1])
     return {
@@ -329,17 +333,17 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
     }
 
 
-def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int) -> dict:
-    """b0, b2 and the surfaces of every row from the graph of pieces."""
-    from ..scale.piece_graph import grouped, label_topology, pair_graph
+def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int,
+                   lab_start: np.ndarray, lab_pieces: np.ndarray) -> dict:
+    """b0, b2 and the surfaces of every row from the graph of pieces (each
+    label's pieces: ``lab_pieces[lab_start[l]:lab_start[l + 1]]``)."""
+    from ..scale.piece_graph import label_topology, pair_graph
     from ..scale.pieces import NONE
 
     n = len(piece_label)
     adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
     for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
         passed[key] = passed[key][:0].copy()  # (a view would keep them)
-    nlabels = int(piece_label.max(initial=-1)) + 1
-    lab_start, lab_pieces = grouped(piece_label[1:], nlabels, np.arange(1, n, dtype=np.int64))
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
