@@ -165,3 +165,33 @@ def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation)
 def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     fails(capsys, "info", tmp_path / "seg.npy", words=("threshold it first", "--label N", "--labels"))
+
+
+@pytest.mark.parametrize("rows", [0, 1, 5, 23])
+def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows):
+    """The rows of --json and --csv, written a block of columns at a time,
+    equal the standard library's writers on the same cells (NaN and
+    infinities as null / empty, genera as lists / ``0;1``), across blocks
+    of rows."""
+    import io
+
+    from isoflow.cli import table_text
+
+    monkeypatch.setattr(table_text, "BLOCK_ROWS", 4)
+    floats = rng.uniform(-1e3, 1e3, rows) * 10.0 ** rng.integers(-9, 18, rows)
+    floats[::3] = np.round(floats[::3])
+    floats[1::5] = np.nan
+    floats[2::7] = -np.inf
+    genera = np.empty(rows, object)
+    genera[:] = [tuple(rng.integers(0, 4, rng.integers(0, 4)).tolist()) for _ in range(rows)]
+    table = {"label": np.arange(rows, dtype=np.uint64) + np.uint64(2**63), "voxels": rng.integers(-9, 10**12, rows),
+             "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera}
+    cells = [[None if isinstance(v, float) and not np.isfinite(v) else v for v in table[k].tolist()]
+             for k in ("label", "voxels", "x", "ok")] + [[list(g) for g in genera]]
+    want = json.dumps([dict(zip(table, row)) for row in zip(*cells)])
+    assert "".join(table_text.json_rows(table)) == want
+    fh = io.StringIO()
+    writer = csv.writer(fh)
+    writer.writerow(list(table))
+    writer.writerows(zip(*cells[:4], [";".join(map(str, g)) for g in genera]))
+    assert "".join(table_text.csv_rows(table)) == fh.getvalue()

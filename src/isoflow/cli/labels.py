@@ -8,10 +8,12 @@ import argparse
 import json
 import re
 import sys
+from collections.abc import Iterator
 
 import numpy as np
 
 from ..errors import IsoflowError
+from .table_text import csv_rows, json_rows
 
 #: rows the terminal shows before the summary
 SHOWN_ROWS = 20
@@ -152,7 +154,8 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     if args.csv:
         write_csv(args.csv, table, args.force)
     if args.json:
-        print(json.dumps(table_json(args.input, about, conn, table)))
+        sys.stdout.writelines(json_text(args.input, about, conn, table))
+        sys.stdout.write("\n")
         return 0
     print(format_table(args.input, about, conn, table))
     if args.csv:
@@ -160,41 +163,23 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     return 0
 
 
-def plain_columns(table: dict, nan=None, tuples=list) -> dict[str, list]:
-    """The table's columns as Python lists (NaN as ``nan``, each tuple of
-    genera through ``tuples``), column by column rather than cell by cell."""
-    out = {}
-    for key, column in table.items():
-        if column.dtype == object:
-            out[key] = [tuples(v) for v in column]
-        elif column.dtype.kind == "f" and np.isnan(column).any():
-            out[key] = [nan if missing else v for v, missing in zip(column.tolist(), np.isnan(column).tolist())]
-        else:
-            out[key] = column.tolist()
-    return out
-
-
-def table_json(name, about: dict, conn: int, table: dict) -> dict:
-    """What ``--json`` prints: the image and one object per label."""
-    cols = plain_columns(table)
-    rows = [dict(zip(cols, values)) for values in zip(*cols.values())]
-    return {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
-            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn,
-            "labels": rows}
+def json_text(name, about: dict, conn: int, table: dict) -> Iterator[str]:
+    """What ``--json`` prints, in pieces: one object, the image and then
+    ``labels``, one object per label (NaN as null)."""
+    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
+            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn}
+    yield json.dumps(head)[:-1] + ', "labels": '
+    yield from json_rows(table)
+    yield "}"
 
 
 def write_csv(path, table: dict, force: bool) -> None:
     """The full table as CSV (genera as ``0;1``, NaN empty), written whole
     or not at all."""
-    import csv
-
     from ..mesh.outputs import atomic_write
 
-    cols = plain_columns(table, nan="", tuples=lambda g: ";".join(map(str, g)))
     with atomic_write(path, "w", newline="", encoding="utf-8") as fh:
-        writer = csv.writer(fh)
-        writer.writerow(list(cols))
-        writer.writerows(zip(*cols.values()))
+        fh.writelines(csv_rows(table))
 
 
 def _cell(value, width: int) -> str:
