@@ -316,6 +316,8 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, lab_start: n
     """Per label (all of them): voxels, coordinate sums, box, features and
     doubled edges, added up over its pieces (``lab_pieces[lab_start[l]:
     lab_start[l + 1]]``, one at least)."""
+    from ..scale.piece_graph import add_by_label
+
     of = piece_label[1:]
     nlabels = len(lab_start) - 1
     lo = np.full((nlabels, 3), np.iinfo(np.int64).max, np.int64)
@@ -323,14 +325,12 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, lab_start: n
     if nlabels:  # each label's box from its pieces' boxes
         lo = np.minimum.reduceat(pieces["lo"][lab_pieces], lab_start[:-1], axis=0)
         hi = np.maximum.reduceat(pieces["hi"][lab_pieces], lab_start[:-1], axis=0)
-    features = np.stack([np.bincount(of, column, nlabels) for column in passed["features"][1:].T], axis=1)
-    features = features.astype(np.int64).reshape(nlabels, passed["features"].shape[1])
-    return {
-        "voxels": np.bincount(of, pieces["counts"][1:], nlabels).astype(np.int64),
-        "sums": np.stack([np.bincount(of, pieces["sums"][1:, d], nlabels) for d in range(3)], axis=1),
-        "lo": lo, "hi": hi, "features": features,
-        "doubled": np.bincount(of, passed["doubled"][1:], nlabels).astype(np.int64),
-    }
+    totals = {key: np.zeros((nlabels,) + column.shape[1:], np.int64)
+              for key, column in (("voxels", pieces["counts"]), ("sums", pieces["sums"]),
+                                  ("features", passed["features"]), ("doubled", passed["doubled"]))}
+    add_by_label(of, pieces["counts"][1:], pieces["sums"][1:], passed["features"][1:], passed["doubled"][1:],
+                 *totals.values())
+    return {**totals, "lo": lo, "hi": hi}
 
 
 def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, passed: dict, conn: int,
@@ -403,6 +403,26 @@ def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
     return out
 
 
+def genera_column(rows: np.ndarray, genera: np.ndarray, n: int) -> np.ndarray:
+    """Per row of ``n``, the tuple of the genera of its surfaces
+    (``rows``: each surface's row, in order). Rows of one surface, the
+    common case, share one tuple per genus, put in place all at once."""
+    out = np.empty(n, object)
+    out.fill(())
+    cuts = np.searchsorted(rows, np.arange(n + 1))
+    count = np.diff(cuts)
+    one = np.flatnonzero(count == 1)
+    kinds, which = np.unique(genera[cuts[one]], return_inverse=True)
+    shared = np.empty(len(kinds), object)
+    for k, genus in enumerate(kinds.tolist()):
+        shared[k] = (genus,)
+    out[one] = shared[which.reshape(-1)]
+    every = genera.tolist()
+    for r in np.flatnonzero(count > 1).tolist():
+        out[r] = tuple(every[cuts[r]:cuts[r + 1]])
+    return out
+
+
 def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool) -> dict[str, np.ndarray]:
     """The table's columns (see :func:`label_table`) from the rows' sums."""
     voxels = found["voxels"]
@@ -431,11 +451,7 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     if surfaces:
         rows, chis = found["surface_rows"], found["surface_chi"]
         out["surfaces"] = np.bincount(rows, minlength=len(voxels)).astype(np.int64)
-        cuts = np.searchsorted(rows, np.arange(len(voxels) + 1)).tolist()
-        every = (1 - np.asarray(chis, np.int64) // 2).tolist()  # Python ints, sliced per row
-        # a tuple per row as one object each (assigned as a list, NumPy would read the tuples as rows)
-        out["genera"] = np.fromiter((tuple(every[a:b]) for a, b in zip(cuts[:-1], cuts[1:])), dtype=object,
-                                    count=len(voxels))
+        out["genera"] = genera_column(rows, 1 - np.asarray(chis, np.int64) // 2, len(voxels))
         out["surface_euler"] = np.bincount(rows, chis, len(voxels)).astype(np.int64)
         out["pinched_vertices"] = features[:, _PINCH]
         out["doubled_edges"] = found["doubled"]

@@ -227,6 +227,11 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
     return nsurf
 
 
+#: bytes per piece of a thread's scratch in :func:`label_topology` (a
+#: piece's place among its label's, two stamps, two components, the queue)
+TOPOLOGY_BYTES = 6 * 4
+
+
 def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
                    sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
     """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
@@ -240,20 +245,70 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     its sheets with their sheet and quarter counts. Returns ``b0``, ``b2``
     and the surfaces as ``row`` (index into ``rows``), ``chi``, ``faces``,
     each label's in the report's order (most faces first, then chi).
+
+    The labels are independent: the rows are cut into runs of about equal
+    work (pieces and sheet entries), each walked on a thread of its own
+    with scratch of its own (:data:`TOPOLOGY_BYTES` per piece).
     """
+    from .compiled import run, thread_count
+    from .memory import check_fits
+
+    rows = np.asarray(rows, np.int64)
     npieces = len(piece_label)
+    sizes = np.diff(lab_start)
     per_label = np.add.reduceat(np.diff(sh_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
-    per_label = np.where(np.diff(lab_start) > 0, per_label, 0)
-    total = int(per_label[rows].sum()) if len(rows) else 0
-    most = int(per_label.max(initial=0))
-    scratch = [np.zeros(npieces, np.int64) for _ in range(8)]
-    small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
-    b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
-    surf = [np.zeros(total, np.int64) for _ in range(3)]
-    nsurf = _label_loop(np.asarray(rows, np.int64), lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to,
-                        adj_kind, sh_start, sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, *scratch, *small,
-                        b0, b2, *surf)
-    return (b0, b2) + tuple(s[:nsurf] for s in surf)
+    per_label = np.where(sizes > 0, per_label, 0)
+    work = np.cumsum(per_label[rows] + sizes[rows]) if len(rows) else np.zeros(0, np.int64)
+    # a thread per run of rows where the walks outweigh its scratch's pages
+    threads = max(1, min(thread_count(), int(work[-1] // max(npieces, 1)) if len(work) else 1, len(rows)))
+    check_fits(TOPOLOGY_BYTES * npieces * threads, f"the graph walks of {len(rows):,} labels")
+    cuts = [0] + [int(np.searchsorted(work, work[-1] * t / threads)) for t in range(1, threads)] + [len(rows)]
+    other = cc_kind != bg_kind
+
+    def walk(a: int, b: int) -> tuple[np.ndarray, ...]:
+        """Rows a .. b - 1 on scratch of their own."""
+        part = rows[a:b]
+        total = int(per_label[part].sum()) if len(part) else 0
+        most = int(per_label[part].max(initial=0))
+        own = int(sizes[part].max(initial=0))
+        local, queue = np.zeros(npieces, np.int32), np.zeros(npieces, np.uint32)
+        parent, parent0 = np.zeros(own, np.int32), np.zeros(own, np.int32)  # per piece of one label
+        stamps = [np.zeros(npieces if k < 2 or other else 1, np.int32) for k in range(4)]  # stamp, comp, stamp2, comp2
+        small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
+        b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
+        surf = [np.zeros(total, np.int64) for _ in range(3)]
+        nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start,
+                            sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
+                            parent0, *small, b0, b2, *surf)
+        surf[0][:nsurf] += a  # rows of the whole
+        return (b0, b2) + tuple(s[:nsurf] for s in surf)
+
+    found = run([(walk, a, b) for a, b in zip(cuts[:-1], cuts[1:])])
+    return tuple(np.concatenate([f[k] for f in found]) for k in range(5))
+
+
+@njit(cache=True, nogil=True)
+def add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_features, out_doubled):
+    """Per label, the sums of its pieces' voxel counts, coordinate sums,
+    features and doubled edges (``of[p]``: piece p's label), in one pass
+    over the pieces.
+
+    Examples
+    --------
+    >>> t = [np.zeros(2, np.int64), np.zeros((2, 3), np.int64), np.zeros((2, 1), np.int64), np.zeros(2, np.int64)]
+    >>> add_by_label(np.array([1, 0, 1]), np.array([2, 3, 4]), np.ones((3, 3), np.int64),
+    ...              np.ones((3, 1), np.int64), np.zeros(3, np.int64), *t)
+    >>> t[0].tolist(), t[2].ravel().tolist()
+    ([3, 6], [1, 2])
+    """
+    for p in range(len(of)):
+        label = of[p]
+        out_counts[label] += counts[p]
+        out_doubled[label] += doubled[p]
+        for d in range(3):
+            out_sums[label, d] += sums[p, d]
+        for f in range(features.shape[1]):
+            out_features[label, f] += features[p, f]
 
 
 @njit(cache=True, nogil=True)
