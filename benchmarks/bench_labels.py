@@ -22,6 +22,11 @@ a 160^3 corner, loads the input, resets its peak RSS (through
 * ``skimage.measure.regionprops_table(image, properties=("label", "area",
   "euler_number"))``: voxel counts and the Euler characteristic (26).
 
+With more than one ``--labels`` count, the census of each input (its
+runs, and its lattice vertices whose block holds two values or more, three
+or more) says how much more boundary the larger count has, which any pass
+that follows the boundary pays for.
+
 With ``--stages N``, one more child times the label table's stages warm,
 best of N each: the pieces, the vertex pass and the rest (the graph of
 pieces, the surfaces, the columns).
@@ -191,6 +196,28 @@ def stages(path: Path, repeat: int) -> dict:
     return best
 
 
+def census(path: Path) -> dict:
+    """How much boundary the input has, which a pass that follows the
+    boundary pays for: its runs (maximal stretches of one value along the
+    last axis), and its lattice vertices whose 2x2x2 block holds two
+    values or more, three or more (the outside a value of its own)."""
+    image = np.load(path, mmap_mode="r")
+    nx, ny, nz = image.shape
+    runs, by_values = 0, np.zeros(9, np.int64)
+    for x0 in range(0, nx + 1, 16):  # vertex layers x0 .. x1 - 1, from voxel layers x0 - 1 .. x1 - 1
+        x1 = min(x0 + 16, nx + 1)
+        lo, hi = max(x0 - 1, 0), min(x1, nx)
+        block = np.full((x1 - x0 + 1, ny + 2, nz + 2), -1, np.int64)
+        block[lo - x0 + 1:hi - x0 + 1, 1:-1, 1:-1] = image[lo:hi]
+        octants = [block[dx:dx + x1 - x0, dy:dy + ny + 1, dz:dz + nz + 1]
+                   for dx in (0, 1) for dy in (0, 1) for dz in (0, 1)]
+        ordered = np.sort(np.stack(octants, axis=-1), axis=-1)
+        by_values += np.bincount(1 + np.count_nonzero(np.diff(ordered, axis=-1), axis=-1).ravel(), minlength=9)
+        layers = np.asarray(image[x0:min(x1, nx)])
+        runs += layers.shape[0] * ny + int(np.count_nonzero(layers[:, :, 1:] != layers[:, :, :-1]))
+    return {"runs": runs, "boundary_vertices": int(by_values[2:].sum()), "vertices_of_3_or_more": int(by_values[3:].sum())}
+
+
 def _rss() -> int:
     with open("/proc/self/status") as fh:
         for line in fh:
@@ -257,6 +284,8 @@ def main(argv=None) -> int:
             results.append(rec)
             print(f"{args.size}^3 {count} labels {name}: {rec['seconds']:.3f} s, "
                   f"{rec['bytes_per_voxel']:.2f} B/voxel", file=sys.stderr)
+        if len(args.labels) > 1:
+            results.append({"size": args.size, "labels": count, "tool": "census", **census(path)})
         if args.stages:
             results.append({"size": args.size, "labels": count, "tool": "stages",
                             **in_child("stages", path, args.stages)})
@@ -306,6 +335,14 @@ def targets(results: list[dict]) -> dict:
         ratio = seconds("isoflow.label_table", counts[-1]) / seconds("isoflow.label_table", counts[0])
         ratios[f"label_table {counts[-1]}/{counts[0]}"] = ratio
         lines.append(f"label_table at {counts[-1]:,} labels {ratio:.2f}x its time at {counts[0]:,} (target <= 2)")
+        grown = [r for r in results if r["tool"] == "census" and r["labels"] in (counts[0], counts[-1])]
+        if len(grown) == 2:
+            few, many = sorted(grown, key=lambda r: r["labels"])
+            for key in ("runs", "boundary_vertices", "vertices_of_3_or_more"):
+                ratios[f"{key} {counts[-1]}/{counts[0]}"] = many[key] / few[key]
+            lines.append("the input grows from {:,} to {:,} labels: runs {:.2f}x, boundary vertices {:.2f}x, vertices "
+                         "of three values or more {:.2f}x".format(counts[0], counts[-1], *(
+                             many[k] / few[k] for k in ("runs", "boundary_vertices", "vertices_of_3_or_more"))))
     return {"ratios": ratios, "lines": lines}
 
 
@@ -318,7 +355,7 @@ def _cpus() -> int:
 def markdown(args, results: list[dict]) -> str:
     lines = ["| size | labels | tool | seconds | extra peak B/voxel | vs label_table |", "|---|---:|---|---:|---:|---:|"]
     for count in args.labels:
-        rows = [r for r in results if r["labels"] == count and r["tool"] not in ("commands", "stages")]
+        rows = [r for r in results if r["labels"] == count and r["tool"] not in ("commands", "stages", "census")]
         ours = next((r["seconds"] for r in rows if r["tool"] == "isoflow.label_table"), None)
         for r in rows:
             ratio = f"{r['seconds'] / ours:.2f}x" if ours else "-"
