@@ -131,9 +131,12 @@ def test_surface_labels_glb_opens_in_pymeshlab(tmp_path, capsys, segmentation):
         assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
         assert m.vertex_number() - measures["edges_number"] + m.face_number() == table["surface_euler"][r]
     ms = pymeshlab.MeshSet()
-    ms.load_new_mesh(str(tmp_path / "s.glb"))  # every node, in one mesh
-    measures = ms.get_topological_measures()
-    assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
+    ms.load_new_mesh(str(tmp_path / "s.glb"))  # a layer per node
+    assert ms.mesh_number() == len(table["label"])
+    for layer in range(ms.mesh_number()):
+        ms.set_current_mesh(layer)
+        measures = ms.get_topological_measures()
+        assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
 
 
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):

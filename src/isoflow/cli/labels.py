@@ -179,7 +179,8 @@ def write_csv(path, table: dict, force: bool) -> None:
     from ..mesh.outputs import atomic_write
 
     with atomic_write(path, "w", newline="", encoding="utf-8") as fh:
-        fh.writelines(csv_rows(table))
+        for text in csv_rows(table):
+            fh.write(text)
 
 
 def _cell(value, width: int) -> str:

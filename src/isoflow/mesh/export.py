@@ -309,7 +309,7 @@ def write_glb(
     sync: bool = True,
     frame=None,
 ) -> Path:
-    """Write a binary glTF (trimesh's exporter): triangles on shared
+    """Write a binary glTF (:mod:`isoflow.mesh.gltf`): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
     (``COLOR_0``) and the other columns but the position as custom vertex
     attributes (``_config``, ``_class``, ...). ``frame``: ``(positions,
@@ -323,26 +323,26 @@ def write_glb_scene(path: str | os.PathLike, parts: list, *, force: bool = False
                     sync: bool = True) -> Path:
     """Write several meshes into one binary glTF, each its own node:
     ``parts`` holds ``(name, columns, triangles, frame)`` as
-    :func:`write_glb` takes them (a name of None: trimesh's)."""
-    import trimesh
+    :func:`write_glb` takes them (a name of None: ``geometry_<i>``), in
+    the layout of :mod:`isoflow.mesh.gltf`."""
+    from .gltf import glb_chunks
 
     path = check_output_path(path, force)
-    scene = trimesh.Scene()
-    for name, columns, triangles, frame in parts:
-        xyz = np.column_stack([columns["x"], columns["y"], columns["z"]]).astype(np.float64)
-        transform = None
-        if frame is not None:
-            xyz, transform = np.asarray(frame[0], np.float64), frame[1]
+    meshes = []
+    for t, (name, columns, triangles, frame) in enumerate(parts):
+        xyz = np.column_stack([columns["x"], columns["y"], columns["z"]])
         rgb = np.column_stack([columns["red"], columns["green"], columns["blue"],
                                np.full(len(xyz), 255, np.uint8)])
-        extra = {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
-        mesh = trimesh.Trimesh(xyz, triangles, vertex_colors=rgb, vertex_attributes=extra, process=False)
-        if comment:
-            mesh.metadata["isoflow"] = comment
-        scene.add_geometry(mesh, transform=transform, geom_name=name, node_name=name)
-    data = trimesh.exchange.gltf.export_glb(scene, include_normals=False)
+        meshes.append({"name": f"geometry_{t}" if name is None else name,
+                       "positions": xyz if frame is None else frame[0], "triangles": triangles, "colors": rgb,
+                       "attributes": {f"_{k}": v for k, v in columns.items()
+                                      if k not in ("x", "y", "z", "red", "green", "blue")},
+                       "matrix": None if frame is None else frame[1]})
+    chunks = glb_chunks(meshes, comment)
+    del meshes
     with atomic_write(path, sync=sync) as fh:
-        fh.write(data)
+        for chunk in chunks:
+            fh.write(chunk)
     return path
 
 
