@@ -250,22 +250,12 @@ def surface_outputs(args: argparse.Namespace):
     return "glb", path
 
 
-def label_mesh(image, label, table_row: dict, conn: int):
-    """The boundary mesh of one label and its place: the label's box cut
-    out (everything else is its complement), the mesh in the box's
-    array-corner units and the object that puts them in world units."""
-    from ..digital.lattice import DigitalObject
-    from ..digital.surface import boundary_mesh
-
-    lo = np.round((table_row["lo"] - image.origin) / image.spacing).astype(np.int64)
-    hi = np.round((table_row["hi"] - image.origin) / image.spacing).astype(np.int64)
-    box = image.array[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]] == label
-    obj = DigitalObject(box, offset=tuple(int(v) for v in lo), pitch=image.spacing, origin=image.origin)
-    return boundary_mesh(box, conn), obj
-
-
 def cmd_surface_labels(args: argparse.Namespace) -> int:
-    """``isoflow surface LABELS --labels -o OUT.glb`` (or ``-o DIR/ --suffix``)."""
+    """``isoflow surface LABELS --labels -o OUT.glb`` (or ``-o DIR/ --suffix``):
+    every label's mesh in its box, boxes meshed many at a time
+    (:func:`isoflow.digital.label_meshes.label_meshes`)."""
+    from ..digital.label_meshes import label_meshes
+    from ..digital.lattice import DigitalObject
     from ..mesh.outputs import check_output_path
 
     if args.png or args.ascii or args.triangulate:
@@ -280,9 +270,12 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                 check_output_path(f, args.force)
     boxes = {"lo": np.stack([table[f"bbox-{d}"] for d in range(3)], axis=1),
              "hi": np.stack([table[f"bbox-{d + 3}"] for d in range(3)], axis=1)}
+    lo = np.round((boxes["lo"] - image.origin) / image.spacing).astype(np.int64)
+    hi = np.round((boxes["hi"] - image.origin) / image.spacing).astype(np.int64)
     meshes = []
-    for r, label in enumerate(table["label"]):
-        mesh, obj = label_mesh(image, label, {k: v[r] for k, v in boxes.items()}, conn)
+    for r, (mesh, box) in enumerate(label_meshes(image.array, table["label"], lo, hi, conn)):
+        label = table["label"][r]
+        obj = DigitalObject(box, offset=tuple(int(v) for v in lo[r]), pitch=image.spacing, origin=image.origin)
         if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
             raise AssertionError(f"label {label}: the mesh has V-E+F {mesh.euler_characteristic}, "
                                  f"the table {table['surface_euler'][r]}")

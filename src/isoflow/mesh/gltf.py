@@ -39,8 +39,8 @@ def padded_rows(data: np.ndarray) -> np.ndarray:
     --------
     >>> padded_rows(np.array([3, -1], np.int8)).tolist()
     [[3, 0, 0, 0], [-1, 0, 0, 0]]
-    >>> padded_rows(np.array([0.5])).dtype
-    dtype('float32')
+    >>> padded_rows(np.array([0.5])).dtype.str
+    '<f4'
     """
     data = np.asarray(data)
     if data.dtype.itemsize == 8:
@@ -48,9 +48,9 @@ def padded_rows(data: np.ndarray) -> np.ndarray:
                            else np.uint32)
     data = data.reshape(len(data), -1)
     width = data.shape[1] * data.dtype.itemsize
-    if width % 4:
-        data = np.pad(data, ((0, 0), (0, (4 - width % 4) // data.dtype.itemsize)))
-    return np.ascontiguousarray(data, data.dtype.newbyteorder("<"))
+    out = np.zeros((len(data), data.shape[1] + (-width % 4) // data.dtype.itemsize), data.dtype.newbyteorder("<"))
+    out[:, :data.shape[1]] = data
+    return out
 
 
 def glb_chunks(meshes: list[dict], comment: str = "") -> list[bytes]:

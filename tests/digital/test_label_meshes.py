@@ -1,0 +1,66 @@
+"""Many labels' boundary meshes per call (isoflow.digital.label_meshes):
+each label's part equals boundary_mesh of that label's box alone (the same
+vertices with their configurations and sheets, the same faces with their
+normals and edge midpoints, the same pinched count), on random label
+images with face, edge and vertex contacts, nested labels, at 6 and 26,
+meshed by NumPy and compiled, in batches of one box, a few, and all."""
+
+import numpy as np
+import pytest
+
+from isoflow.digital import label_meshes as lm
+from isoflow.digital.surface import boundary_mesh
+
+
+def canonical(mesh):
+    """The mesh as sets keyed by positions (order-free): each vertex's
+    position, sheet and configuration; each face as its corners' and its
+    edge midpoints' keys from its lowest corner on, with its normal."""
+    key = [tuple(np.round(v, 6)) + (int(s),) for v, s in zip(mesh.vertices.tolist(), mesh.sheet.tolist())]
+    vertices = sorted(zip(key, mesh.config.tolist()))
+    faces = []
+    for f, mid, n in zip(mesh.faces.tolist(), mesh.edge_midpoint.tolist(), mesh.face_normals.tolist()):
+        corners = [key[i] for i in f]
+        mids = [key[i] if i >= 0 else None for i in mid]
+        r = corners.index(min(corners))
+        faces.append((tuple(corners[r:] + corners[:r]), tuple(mids[r:] + mids[:r]), tuple(n)))
+    return vertices, sorted(faces), mesh.pinched
+
+
+def boxes(image):
+    labels = np.unique(image)
+    labels = labels[labels != 0]
+    where = [np.argwhere(image == v) for v in labels]
+    return labels, np.array([w.min(axis=0) for w in where]), np.array([w.max(axis=0) + 1 for w in where])
+
+
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
+@pytest.mark.parametrize("conn", [6, 26])
+def test_each_labels_part_is_its_boxs_mesh(rng, monkeypatch, method, conn):
+    for trial, batch in enumerate([1, 300, 1 << 22]):
+        monkeypatch.setattr(lm, "BATCH_VOXELS", batch)
+        image = rng.choice([0, 1, 2, 3, 5], size=(11, 9, 10), p=[0.3, 0.2, 0.2, 0.2, 0.1]).astype(np.uint16)
+        image[2:8, 2:7, 3:9] = 7  # a label holding another
+        image[4:6, 4:5, 5:7] = 8
+        labels, lo, hi = boxes(image)
+        found = lm.label_meshes(image, labels, lo, hi, conn, method=method)
+        assert len(found) == len(labels)
+        midpoints = 0
+        for label, a, b, (mesh, mask) in zip(labels, lo, hi, found):
+            alone = image[a[0]:b[0], a[1]:b[1], a[2]:b[2]] == label
+            np.testing.assert_array_equal(mask, alone)
+            want = boundary_mesh(alone, conn, method="numpy")
+            assert canonical(mesh) == canonical(want), (trial, label)
+            assert mesh.euler_characteristic == want.euler_characteristic
+            midpoints += want.midpoints
+    assert midpoints > 0 or conn == 6  # the random images have doubled edges at 26
+
+
+def test_a_box_larger_than_a_batch_is_meshed_alone(monkeypatch):
+    monkeypatch.setattr(lm, "BATCH_VOXELS", 10)
+    image = np.zeros((6, 5, 4), np.uint8)
+    image[0:6, 0:5, 0:4] = 1
+    image[2:4, 2:3, 1:3] = 2
+    labels, lo, hi = boxes(image)
+    (big, _), (small, _) = lm.label_meshes(image, labels, lo, hi)
+    assert (big.euler_characteristic, small.euler_characteristic) == (4, 2)  # 1 is hollow: two spheres
