@@ -107,21 +107,23 @@ def _batch_meshes(image, labels, lo, extent, batch: list[int], shape: tuple[int,
     face_slot = slot[mesh.faces[:, 0]]
     forder = np.argsort(face_slot, kind="stable")
     ffirst = np.searchsorted(face_slot[forder], np.arange(len(batch) + 1))
+    # every part's arrays at once, in its box's units and numbering; the
+    # parts are then slices
     vertices, config, sheet = mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder]
-    faces = new_index[mesh.faces[forder]]
+    vertices[:, 0] -= starts[slot[vorder]]
+    idx = index_dtype(int(np.diff(vfirst).max(initial=0)))
+    local = new_index - vfirst[slot]  # each vertex's number within its part
+    faces = local[mesh.faces[forder]].astype(idx)
     midpoint = mesh.edge_midpoint[forder]
-    midpoint = np.where(midpoint >= 0, new_index[np.maximum(midpoint, 0)], -1)
+    midpoint = np.where(midpoint >= 0, local[np.maximum(midpoint, 0)], -1).astype(idx)
     normals = mesh.face_normals[forder]
-    pinched = pinch_lut(connectivity)[config].astype(bool) & (sheet == 0)
+    lone = (pinch_lut(connectivity)[config].astype(bool) & (sheet == 0)).astype(np.int64)
+    pinched = np.add.reduceat(lone, vfirst[:-1]) if len(lone) else np.zeros(len(batch), np.int64)
     out = []
     for s in range(len(batch)):
         v0, v1, f0, f1 = vfirst[s], vfirst[s + 1], ffirst[s], ffirst[s + 1]
-        idx = index_dtype(int(v1 - v0))
-        part_mid = midpoint[f0:f1]
-        part = QuadMesh(vertices=vertices[v0:v1] - np.array([starts[s], 0, 0], np.float64),
-                        faces=(faces[f0:f1] - v0).astype(idx),
-                        edge_midpoint=np.where(part_mid >= 0, part_mid - v0, -1).astype(idx),
+        part = QuadMesh(vertices=vertices[v0:v1], faces=faces[f0:f1], edge_midpoint=midpoint[f0:f1],
                         face_normals=normals[f0:f1], config=config[v0:v1], sheet=sheet[v0:v1],
-                        connectivity=connectivity, pinched=int(np.count_nonzero(pinched[v0:v1])))
+                        connectivity=connectivity, pinched=int(pinched[s]))
         out.append((part, masks[s]))
     return out

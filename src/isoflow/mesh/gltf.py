@@ -91,26 +91,27 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list[bytes]:
                       "target": ELEMENT_ARRAY_BUFFER if key == "indices" else ARRAY_BUFFER})
         chunks.append(raw + b"\0" * (-len(raw) % 4))
         offset += len(chunks[-1])
-    starts = {key: (3 * np.concatenate([[0], np.cumsum(sizes)])[:-1] if key == "indices" else first)
-              for key in columns}
-    bounds = {key: (np.minimum.reduceat(data, first, axis=0).tolist(), np.maximum.reduceat(data, first, axis=0).tolist())
-              for key, data in columns.items() if key != "indices" and len(data)}
+    # per kind of array, every mesh's accessor (its part of the view)
+    face_first = 3 * np.concatenate([[0], np.cumsum(sizes)])[:-1]
+    kinds = []
+    for v, (key, data) in enumerate(columns.items()):
+        row = data.shape[1] if data.ndim == 2 else 1
+        first_row, count = (face_first, 3 * sizes) if key == "indices" else (first, counts)
+        head = {"bufferView": v, "componentType": COMPONENT[data.dtype.newbyteorder("=")],
+                "type": "SCALAR" if key == "indices" else VECTOR[row], **({"normalized": True} if key == "COLOR_0"
+                                                                           else {})}
+        bounds = ((np.minimum.reduceat(data, first, axis=0).tolist(), np.maximum.reduceat(data, first, axis=0).tolist())
+                  if key != "indices" and len(data) else ([None] * len(meshes),) * 2)
+        kinds.append((key, head, (first_row * row * data.dtype.itemsize).tolist(), count.tolist(), *bounds))
     accessors, gltf_meshes, nodes = [], [], []
     for t, mesh in enumerate(meshes):
         attributes = {}
-        for v, (key, data) in enumerate(columns.items()):
-            row = data.shape[1] if data.ndim == 2 else 1
-            accessor = {"bufferView": v, "byteOffset": int(starts[key][t]) * row * data.dtype.itemsize,
-                        "componentType": COMPONENT[data.dtype.newbyteorder("=")],
-                        "count": int(3 * sizes[t] if key == "indices" else counts[t]),
-                        "type": "SCALAR" if key == "indices" else VECTOR[row]}
-            if key == "COLOR_0":
-                accessor["normalized"] = True
+        for key, head, offsets, count, low, high in kinds:
+            accessor = {**head, "byteOffset": offsets[t], "count": count[t]}
             if key != "indices":
-                accessor["min"], accessor["max"] = bounds[key][0][t], bounds[key][1][t]
+                accessor["min"], accessor["max"] = low[t], high[t]
+                attributes[key] = len(accessors)
             accessors.append(accessor)
-            if key != "indices":
-                attributes[key] = len(accessors) - 1
         primitive = {"attributes": attributes, "indices": len(accessors) - len(columns), "mode": 4}
         gltf_meshes.append({"name": mesh["name"], "primitives": [primitive],
                             **({"extras": {"isoflow": comment}} if comment else {})})
