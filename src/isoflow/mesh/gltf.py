@@ -53,10 +53,10 @@ def padded_rows(data: np.ndarray) -> np.ndarray:
     return out
 
 
-def glb_chunks(meshes: list[dict], comment: str = "") -> list[bytes]:
+def glb_chunks(meshes: list[dict], comment: str = "") -> list:
     """The GLB file of ``meshes`` as the pieces to write one after the
-    other (the header, the JSON chunk, the binary chunk's header and its
-    arrays): ``meshes`` holds each ``{"name", "positions" (n, 3),
+    other (bytes, and the arrays' own memory as memoryviews: the header, the
+    JSON chunk, the binary chunk's header and its arrays): ``meshes`` holds each ``{"name", "positions" (n, 3),
     "triangles" (m, 3), "colors" (n, 4) uint8, "attributes": {name: (n,)
     or (n, k)}, "matrix": 4x4 or None}``, every mesh with the same
     attribute names and at least one triangle; a node each, in order.
@@ -86,18 +86,19 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list[bytes]:
         columns[name] = padded_rows(np.concatenate([np.asarray(m["attributes"][name]) for m in meshes]))
     views, chunks, offset = [], [], 0
     for key, data in columns.items():
-        raw = np.ascontiguousarray(data).tobytes()
+        # the array's own bytes, little-endian, not a copy where they are so
+        raw = memoryview(np.ascontiguousarray(data, data.dtype.newbyteorder("<")).reshape(-1)).cast("B")
         views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(raw),
                       "target": ELEMENT_ARRAY_BUFFER if key == "indices" else ARRAY_BUFFER})
-        chunks.append(raw + b"\0" * (-len(raw) % 4))
-        offset += len(chunks[-1])
+        chunks += [raw, b"\0" * (-len(raw) % 4)]
+        offset += len(raw) + -len(raw) % 4
     # per kind of array, every mesh's accessor (its part of the view)
     face_first = 3 * np.concatenate([[0], np.cumsum(sizes)])[:-1]
     kinds = []
     for v, (key, data) in enumerate(columns.items()):
         row = data.shape[1] if data.ndim == 2 else 1
         first_row, count = (face_first, 3 * sizes) if key == "indices" else (first, counts)
-        head = {"bufferView": v, "componentType": COMPONENT[data.dtype.newbyteorder("=")],
+        head = {"bufferView": v, "componentType": COMPONENT[np.dtype(data.dtype.name)],
                 "type": "SCALAR" if key == "indices" else VECTOR[row], **({"normalized": True} if key == "COLOR_0"
                                                                            else {})}
         bounds = ((np.minimum.reduceat(data, first, axis=0).tolist(), np.maximum.reduceat(data, first, axis=0).tolist())
