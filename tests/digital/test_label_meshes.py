@@ -64,3 +64,38 @@ def test_a_box_larger_than_a_batch_is_meshed_alone(monkeypatch):
     labels, lo, hi = boxes(image)
     (big, _), (small, _) = lm.label_meshes(image, labels, lo, hi)
     assert (big.euler_characteristic, small.euler_characteristic) == (4, 2)  # 1 is hollow: two spheres
+
+
+@pytest.mark.parametrize("origin", [(1.0, -2.0, 0.5), (4e6 + 0.1, 0.0, -3e5)])
+def test_batch_glb_parts_are_each_parts_own(rng, monkeypatch, origin):
+    """The glTF parts computed once over a batch equal glb_part of each
+    label's mesh and box (columns, triangles, and the node transform where
+    float32 cannot hold the world positions: far from the origin)."""
+    from isoflow.digital.lattice import DigitalObject
+    from isoflow.mesh import export
+
+    monkeypatch.setattr(lm, "BATCH_VOXELS", 2000)
+    image = rng.choice([0, 1, 2, 3], size=(12, 8, 9), p=[0.4, 0.2, 0.2, 0.2]).astype(np.uint8)
+    labels, lo, hi = boxes(image)
+    pitch = (0.5, 1.25, 3.0)
+    names = [f"label_{v}" for v in labels]
+    frames = 0
+    for conn in (6, 26):
+        for batch in lm.label_batches(image, labels, lo, hi, conn):
+            for s, (name, columns, triangles, frame) in enumerate(export.batch_glb_parts(batch, names, lo, pitch,
+                                                                                           origin)):
+                t = batch.rows[s]
+                obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[t]), pitch=pitch, origin=origin)
+                want = export.glb_part(names[t], batch.part(s), obj)
+                assert name == want[0]
+                assert columns.keys() == want[1].keys()
+                for key in columns:
+                    np.testing.assert_array_equal(columns[key], want[1][key], err_msg=key)
+                    assert columns[key].dtype == want[1][key].dtype
+                np.testing.assert_array_equal(triangles, want[2])
+                assert (frame is None) == (want[3] is None)
+                if frame is not None:
+                    frames += 1
+                    np.testing.assert_array_equal(frame[0], want[3][0])
+                    np.testing.assert_array_equal(frame[1], want[3][1])
+    assert frames > 0 or origin[0] < 1e6

@@ -253,9 +253,11 @@ def surface_outputs(args: argparse.Namespace):
 def cmd_surface_labels(args: argparse.Namespace) -> int:
     """``isoflow surface LABELS --labels -o OUT.glb`` (or ``-o DIR/ --suffix``):
     every label's mesh in its box, boxes meshed many at a time
-    (:func:`isoflow.digital.label_meshes.label_meshes`)."""
-    from ..digital.label_meshes import label_meshes
+    (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
+    columns computed per batch."""
+    from ..digital.label_meshes import label_batches
     from ..digital.lattice import DigitalObject
+    from ..mesh.export import batch_glb_parts
     from ..mesh.outputs import check_output_path
 
     if args.png or args.ascii or args.triangulate:
@@ -272,15 +274,21 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
              "hi": np.stack([table[f"bbox-{d + 3}"] for d in range(3)], axis=1)}
     lo = np.round((boxes["lo"] - image.origin) / image.spacing).astype(np.int64)
     hi = np.round((boxes["hi"] - image.origin) / image.spacing).astype(np.int64)
-    meshes = []
-    for r, (mesh, box) in enumerate(label_meshes(image.array, table["label"], lo, hi, conn)):
-        label = table["label"][r]
-        obj = DigitalObject(box, offset=tuple(int(v) for v in lo[r]), pitch=image.spacing, origin=image.origin)
-        if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
-            raise AssertionError(f"label {label}: the mesh has V-E+F {mesh.euler_characteristic}, "
-                                 f"the table {table['surface_euler'][r]}")
-        meshes.append((names[r], mesh, obj, None if args.no_check else mesh.components()))
-    problems = write_label_surfaces(args, target, meshes)
+    meshes: list = [None] * len(names)
+    glb_parts: list = [None] * len(names)
+    for batch in label_batches(image.array, table["label"], lo, hi, conn):
+        if target[0] == "glb":
+            for s, part in enumerate(batch_glb_parts(batch, names, lo, image.spacing, image.origin)):
+                glb_parts[batch.rows[s]] = part
+        for s, r in enumerate(batch.rows):
+            mesh = batch.part(s)
+            if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
+                raise AssertionError(f"label {table['label'][r]}: the mesh has V-E+F {mesh.euler_characteristic}, "
+                                     f"the table {table['surface_euler'][r]}")
+            obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
+                                origin=image.origin)
+            meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
+    problems = write_label_surfaces(args, target, meshes, glb_parts)
     faces = sum(len(m.faces) for _, m, _, _ in meshes)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({len(meshes)} {target[2]} files)"
     print(f"{where}: {len(meshes)} labels, {faces} faces, one closed surface mesh per label"
@@ -290,15 +298,15 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     return 1 if problems else 0
 
 
-def write_label_surfaces(args: argparse.Namespace, target, meshes: list) -> list[str]:
-    """Write every label's surface (a glTF node each, or a file each) and
-    read them back (unless --no-check). Returns the problems found."""
+def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list) -> list[str]:
+    """Write every label's surface (a glTF node each, from ``glb_parts``,
+    or a file each) and read them back (unless --no-check). Returns the
+    problems found."""
     from ..mesh import export
     from ..mesh.readback import check_scene_file, check_surface_file
 
     if target[0] == "glb":
-        parts = [export.glb_part(name, mesh, obj) for name, mesh, obj, _ in meshes]
-        export.write_glb_scene(target[1], parts, force=args.force, comment=f"isoflow surface --labels of "
+        export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
         return [] if args.no_check else check_scene_file(target[1], meshes)
     target[1].mkdir(exist_ok=True)

@@ -13,6 +13,9 @@ padding stays small; a box larger than a batch is meshed alone.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..scale.arrays import index_dtype
@@ -21,6 +24,43 @@ from .surface import QuadMesh, boundary_mesh, pinch_lut
 
 #: voxels of one batch of boxes (its mask, and the mesh's passes over it)
 BATCH_VOXELS = 1 << 22
+
+
+@dataclass
+class Batch:
+    """The meshes of some labels' boxes, meshed at once: per-vertex and
+    per-face arrays of all the parts, part after part (part ``s`` holds
+    vertices ``vfirst[s]:vfirst[s + 1]`` and faces ``ffirst[s]:ffirst[s +
+    1]``), vertices in their own box's array-corner units, faces and
+    midpoints numbered within their part."""
+
+    rows: list[int]  # the labels' indices, part by part
+    masks: list[np.ndarray]  # each box's mask (a view into the batch's volume)
+    vertices: np.ndarray
+    config: np.ndarray
+    sheet: np.ndarray
+    faces: np.ndarray
+    edge_midpoint: np.ndarray
+    face_normals: np.ndarray
+    vfirst: np.ndarray
+    ffirst: np.ndarray
+    pinched: np.ndarray  # per part
+    connectivity: int
+
+    def part(self, s: int) -> QuadMesh:
+        """Part s as a mesh of its own (views of the batch's arrays)."""
+        v0, v1, f0, f1 = self.vfirst[s], self.vfirst[s + 1], self.ffirst[s], self.ffirst[s + 1]
+        return QuadMesh(vertices=self.vertices[v0:v1], faces=self.faces[f0:f1],
+                        edge_midpoint=self.edge_midpoint[f0:f1], face_normals=self.face_normals[f0:f1],
+                        config=self.config[v0:v1], sheet=self.sheet[v0:v1], connectivity=self.connectivity,
+                        pinched=int(self.pinched[s]))
+
+    def joined(self) -> QuadMesh:
+        """Every part in one mesh object for its per-vertex columns (its
+        faces keep their parts' numbering: not a mesh to walk)."""
+        return QuadMesh(vertices=self.vertices, faces=self.faces, edge_midpoint=self.edge_midpoint,
+                        face_normals=self.face_normals, config=self.config, sheet=self.sheet,
+                        connectivity=self.connectivity, pinched=int(self.pinched.sum()))
 
 
 def label_meshes(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.ndarray, connectivity: int = 6,
@@ -58,14 +98,32 @@ def label_meshes(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.n
     >>> [(len(m.faces), m.euler_characteristic, int(box.sum())) for m, box in found]
     [(6, 2, 1), (24, 2, 8)]
     """
+    out: list = [None] * len(labels)
+    for batch in label_batches(image, labels, lo, hi, connectivity, method):
+        for s, t in enumerate(batch.rows):
+            out[t] = (batch.part(s), batch.masks[s])
+    return out
+
+
+def label_batches(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.ndarray, connectivity: int = 6,
+                  method: Method = "auto") -> Iterator[Batch]:
+    """The batches of :func:`label_meshes` (same arguments), one at a time.
+
+    Examples
+    --------
+    >>> image = np.zeros((4, 3, 3), np.uint8)
+    >>> image[0, 0, 0], image[2:4, 1:3, 1:3] = 1, 2
+    >>> [(b.rows, b.vfirst.tolist()) for b in label_batches(image, np.array([1, 2]),
+    ...  np.array([[0, 0, 0], [2, 1, 1]]), np.array([[1, 1, 1], [4, 3, 3]]))]
+    [([1, 0], [0, 26, 34])]
+    """
     lo, hi = np.asarray(lo, np.int64).reshape(-1, 3), np.asarray(hi, np.int64).reshape(-1, 3)
     extent = hi - lo
-    out: list[tuple[QuadMesh, np.ndarray] | None] = [None] * len(labels)
     order = np.argsort(-(extent[:, 1] * extent[:, 2]), kind="stable")
     at = 0
     while at < len(order):
         # the boxes of a batch: while their layers, one empty between, fit
-        batch = [int(order[at])]
+        rows = [int(order[at])]
         ny, nz, nx = int(extent[order[at], 1]), int(extent[order[at], 2]), int(extent[order[at], 0]) + 1
         at += 1
         while at < len(order):
@@ -73,23 +131,20 @@ def label_meshes(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.n
             wide, deep = max(ny, int(extent[t, 1])), max(nz, int(extent[t, 2]))
             if (nx + int(extent[t, 0]) + 1) * wide * deep > BATCH_VOXELS:
                 break
-            batch.append(t)
+            rows.append(t)
             ny, nz, nx = wide, deep, nx + int(extent[t, 0]) + 1
             at += 1
-        shape = (nx, ny, nz)
-        for t, found in zip(batch, _batch_meshes(image, labels, lo, extent, batch, shape, connectivity, method)):
-            out[t] = found
-    return out  # type: ignore[return-value]
+        yield _batch(image, labels, lo, extent, rows, (nx, ny, nz), connectivity, method)
 
 
-def _batch_meshes(image, labels, lo, extent, batch: list[int], shape: tuple[int, int, int], connectivity: int,
-                  method: Method) -> list[tuple[QuadMesh, np.ndarray]]:
-    """The boxes of ``batch`` laid along axis 0 in a volume of ``shape``
+def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, int], connectivity: int,
+           method: Method) -> Batch:
+    """The boxes of ``rows`` laid along axis 0 in a volume of ``shape``
     (each box, then an empty layer), meshed once and cut apart."""
     vol = np.zeros(shape, bool)
-    starts = np.zeros(len(batch) + 1, np.int64)
+    starts = np.zeros(len(rows) + 1, np.int64)
     masks = []
-    for s, t in enumerate(batch):
+    for s, t in enumerate(rows):
         a, e = lo[t], extent[t]
         x = int(starts[s])
         vol[x:x + e[0], :e[1], :e[2]] = image[a[0]:a[0] + e[0], a[1]:a[1] + e[1], a[2]:a[2] + e[2]] == labels[t]
@@ -98,32 +153,25 @@ def _batch_meshes(image, labels, lo, extent, batch: list[int], shape: tuple[int,
     mesh = boundary_mesh(vol, connectivity, method)
     # a vertex's box: that of its lattice layer (a box's last layer is its
     # own, the empty layer after it has no vertex; a midpoint lies within)
-    slot_of_layer = np.repeat(np.arange(len(batch)), np.diff(starts))
+    slot_of_layer = np.repeat(np.arange(len(rows)), np.diff(starts))
     slot = slot_of_layer[np.floor(mesh.vertices[:, 0]).astype(np.int64)]
     vorder = np.argsort(slot, kind="stable")
     new_index = np.empty(len(vorder), np.int64)
     new_index[vorder] = np.arange(len(vorder))
-    vfirst = np.searchsorted(slot[vorder], np.arange(len(batch) + 1))
+    vfirst = np.searchsorted(slot[vorder], np.arange(len(rows) + 1))
     face_slot = slot[mesh.faces[:, 0]]
     forder = np.argsort(face_slot, kind="stable")
-    ffirst = np.searchsorted(face_slot[forder], np.arange(len(batch) + 1))
-    # every part's arrays at once, in its box's units and numbering; the
-    # parts are then slices
+    ffirst = np.searchsorted(face_slot[forder], np.arange(len(rows) + 1))
+    # every part's arrays at once, in its box's units and numbering
     vertices, config, sheet = mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder]
     vertices[:, 0] -= starts[slot[vorder]]
     idx = index_dtype(int(np.diff(vfirst).max(initial=0)))
     local = new_index - vfirst[slot]  # each vertex's number within its part
-    faces = local[mesh.faces[forder]].astype(idx)
     midpoint = mesh.edge_midpoint[forder]
-    midpoint = np.where(midpoint >= 0, local[np.maximum(midpoint, 0)], -1).astype(idx)
-    normals = mesh.face_normals[forder]
     lone = (pinch_lut(connectivity)[config].astype(bool) & (sheet == 0)).astype(np.int64)
-    pinched = np.add.reduceat(lone, vfirst[:-1]) if len(lone) else np.zeros(len(batch), np.int64)
-    out = []
-    for s in range(len(batch)):
-        v0, v1, f0, f1 = vfirst[s], vfirst[s + 1], ffirst[s], ffirst[s + 1]
-        part = QuadMesh(vertices=vertices[v0:v1], faces=faces[f0:f1], edge_midpoint=midpoint[f0:f1],
-                        face_normals=normals[f0:f1], config=config[v0:v1], sheet=sheet[v0:v1],
-                        connectivity=connectivity, pinched=int(pinched[s]))
-        out.append((part, masks[s]))
-    return out
+    return Batch(rows=rows, masks=masks, vertices=vertices, config=config, sheet=sheet,
+                 faces=local[mesh.faces[forder]].astype(idx),
+                 edge_midpoint=np.where(midpoint >= 0, local[np.maximum(midpoint, 0)], -1).astype(idx),
+                 face_normals=mesh.face_normals[forder], vfirst=vfirst, ffirst=ffirst,
+                 pinched=np.add.reduceat(lone, vfirst[:-1]) if len(lone) else np.zeros(len(rows), np.int64),
+                 connectivity=connectivity)

@@ -153,6 +153,12 @@ def mesh_vertex_table(mesh, obj: DigitalObject, position=None) -> dict[str, np.n
     xyz = obj.world(mesh.vertices)
     if position is None:
         position = np.float32 if float32_holds(xyz, obj.spacing) else np.float64
+    return vertex_columns(mesh, xyz, position)
+
+
+def vertex_columns(mesh, xyz: np.ndarray, position) -> dict[str, np.ndarray]:
+    """The columns of :func:`mesh_vertex_table` from the vertices' world
+    positions ``xyz``, stored as ``position``."""
     cls = mesh.vertex_class
     rgb = gamma_colours(mesh.gamma, cls)
     return {
@@ -352,6 +358,43 @@ def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
     the node's transform where float32 cannot hold the world positions)."""
     table = mesh_vertex_table(mesh, obj)
     return name, table, mesh.triangles(), None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
+
+
+def batch_glb_parts(batch, names: list[str], offsets: np.ndarray, spacing, origin) -> list[tuple]:
+    """The parts of :func:`write_glb_scene` of every box of a batch of
+    :func:`isoflow.digital.label_meshes.label_batches` (``names`` and
+    ``offsets``, the boxes' first voxels, per label index): what
+    :func:`glb_part` gives for each part and its box, the columns and the
+    triangles computed once over the batch and sliced."""
+    from ..digital.surface import triangle_rows
+
+    mesh = batch.joined()
+    parts = len(batch.rows)
+    spacing, origin = np.asarray(spacing, np.float64), np.asarray(origin, np.float64)
+    corner = np.asarray(offsets, np.float64)[batch.rows]
+    of_vertex = np.repeat(np.arange(parts), np.diff(batch.vfirst))
+    xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
+    with np.errstate(over="ignore", invalid="ignore"):
+        held = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz) <= POSITION_TOLERANCE * spacing
+    holds = np.logical_and.reduceat(held.all(axis=1), batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
+    table = vertex_columns(mesh, xyz, np.float32)
+    wide = vertex_columns(mesh, xyz, np.float64) if not holds.all() else table
+    triangles, face = triangle_rows(mesh.faces, mesh.edge_midpoint)
+    of_face = np.repeat(np.arange(parts), np.diff(batch.ffirst))[face]
+    order = np.argsort(of_face, kind="stable")  # a part's triangles in the order of its own triangle_rows
+    triangles, tfirst = triangles[order], np.searchsorted(of_face[order], np.arange(parts + 1))
+    out = []
+    for s, t in enumerate(batch.rows):
+        v0, v1 = batch.vfirst[s], batch.vfirst[s + 1]
+        columns = {key: column[v0:v1] for key, column in (table if holds[s] else wide).items()}
+        frame = None
+        if not holds[s]:  # positions in voxel units under the node's transform (grid_frame)
+            transform = np.eye(4)
+            transform[:3, :3] = np.diag(spacing)
+            transform[:3, 3] = origin + spacing * corner[s]
+            frame = (np.asarray(mesh.vertices[v0:v1], np.float64), transform)
+        out.append((names[t], columns, triangles[tfirst[s]:tfirst[s + 1]], frame))
+    return out
 
 
 def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool = False) -> tuple[str, np.ndarray]:
