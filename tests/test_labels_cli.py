@@ -139,6 +139,14 @@ def test_surface_labels_glb_opens_in_pymeshlab(tmp_path, capsys, segmentation):
         assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
 
 
+def test_surface_labels_without_the_check_writes_the_same_file(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "a.glb", "--no-check")
+    assert "6 labels" in said and "read back" not in said
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "b.glb")
+    assert (tmp_path / "a.glb").read_bytes() == (tmp_path / "b.glb").read_bytes()
+
+
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")

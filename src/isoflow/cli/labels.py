@@ -285,8 +285,10 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
                 raise AssertionError(f"label {table['label'][r]}: the mesh has V-E+F {mesh.euler_characteristic}, "
                                      f"the table {table['surface_euler'][r]}")
-            obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
-                                origin=image.origin)
+            obj = None  # (only the files of a directory and the read-back need each label's object)
+            if target[0] == "dir" or not args.no_check:
+                obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
+                                    origin=image.origin)
             meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
     problems = write_label_surfaces(args, target, meshes, glb_parts)
     faces = sum(len(m.faces) for _, m, _, _ in meshes)

@@ -104,18 +104,22 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list:
         bounds = ((np.minimum.reduceat(data, first, axis=0).tolist(), np.maximum.reduceat(data, first, axis=0).tolist())
                   if key != "indices" and len(data) else ([None] * len(meshes),) * 2)
         kinds.append((key, head, (first_row * row * data.dtype.itemsize).tolist(), count.tolist(), *bounds))
-    accessors, gltf_meshes, nodes = [], [], []
+    # the accessors kind by kind: mesh t's of kind k is accessor k * n + t
+    # (the indices are the first kind)
+    n = len(meshes)
+    accessors: list[dict] = []
+    for key, head, offsets, count, low, high in kinds:
+        if key == "indices":
+            accessors += [{**head, "byteOffset": o, "count": c} for o, c in zip(offsets, count)]
+        else:
+            accessors += [{**head, "byteOffset": o, "count": c, "min": a, "max": b}
+                          for o, c, a, b in zip(offsets, count, low, high)]
+    extras = {"extras": {"isoflow": comment}} if comment else {}
+    gltf_meshes = [{"name": mesh["name"], "primitives": [{
+        "attributes": {key: k * n + t for k, (key, *_) in enumerate(kinds) if key != "indices"},
+        "indices": t, "mode": 4}], **extras} for t, mesh in enumerate(meshes)]
+    nodes = []
     for t, mesh in enumerate(meshes):
-        attributes = {}
-        for key, head, offsets, count, low, high in kinds:
-            accessor = {**head, "byteOffset": offsets[t], "count": count[t]}
-            if key != "indices":
-                accessor["min"], accessor["max"] = low[t], high[t]
-                attributes[key] = len(accessors)
-            accessors.append(accessor)
-        primitive = {"attributes": attributes, "indices": len(accessors) - len(columns), "mode": 4}
-        gltf_meshes.append({"name": mesh["name"], "primitives": [primitive],
-                            **({"extras": {"isoflow": comment}} if comment else {})})
         node = {"name": mesh["name"], "mesh": t}
         if mesh.get("matrix") is not None:
             node["matrix"] = np.asarray(mesh["matrix"], np.float64).T.reshape(-1).tolist()  # column-major
