@@ -310,6 +310,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     if target[0] == "glb":
         export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
+        glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         return [] if args.no_check else check_scene_file(target[1], meshes)
     target[1].mkdir(exist_ok=True)
     problems = []
