@@ -40,12 +40,16 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
 from .outputs import atomic_write, check_output_path
+
+if TYPE_CHECKING:
+    from ..digital.label_meshes import Batch
 
 #: a position is held exactly enough when it is off by at most this many voxels
 POSITION_TOLERANCE = 1e-6
@@ -360,7 +364,7 @@ def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
     return name, table, mesh.triangles(), None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
 
 
-def batch_glb_parts(batch, names: list[str], offsets: np.ndarray, spacing, origin) -> list[tuple]:
+def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin) -> list[tuple]:
     """The parts of :func:`write_glb_scene` of every box of a batch of
     :func:`isoflow.digital.label_meshes.label_batches` (``names`` and
     ``offsets``, the boxes' first voxels, per label index): what

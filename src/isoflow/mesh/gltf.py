@@ -87,7 +87,7 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list:
     views, chunks, offset = [], [], 0
     for key, data in columns.items():
         # the array's own bytes, little-endian, not a copy where they are so
-        raw = memoryview(np.ascontiguousarray(data, data.dtype.newbyteorder("<")).reshape(-1)).cast("B")
+        raw = np.ascontiguousarray(data, data.dtype.newbyteorder("<")).reshape(-1).data.cast("B")
         views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(raw),
                       "target": ELEMENT_ARRAY_BUFFER if key == "indices" else ARRAY_BUFFER})
         chunks += [raw, b"\0" * (-len(raw) % 4)]
