@@ -147,6 +147,29 @@ def test_surface_labels_without_the_check_writes_the_same_file(tmp_path, capsys,
     assert (tmp_path / "a.glb").read_bytes() == (tmp_path / "b.glb").read_bytes()
 
 
+@pytest.mark.parametrize("out, extra, phases", [("s.glb", (), 2), ("s.glb", ("--no-check",), 1),
+                                                ("each/", ("--suffix", ".ply", "--no-check"), 2)])
+def test_surface_labels_reports_one_growing_count(tmp_path, capsys, monkeypatch, segmentation, out, extra, phases):
+    """Long work shows progress: every label meshed, then every label read
+    back (or written, a file each), as one count that only grows."""
+    import contextlib
+
+    from isoflow.cli import progress
+
+    seen = []
+
+    @contextlib.contextmanager
+    def bar(args, label, unit="it", estimate=False):
+        yield lambda done, total: seen.append((done, total))
+
+    monkeypatch.setattr(progress, "progress_bar", bar)
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/{out}", *extra)
+    done = [d for d, _ in seen]
+    assert done == sorted(done) and seen[-1] == (6 * phases, 6 * phases)
+    assert {t for _, t in seen} == {6 * phases}
+
+
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")

@@ -256,9 +256,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
     columns computed per batch."""
     from ..digital.label_meshes import label_batches
-    from ..digital.lattice import DigitalObject
-    from ..mesh.export import batch_glb_parts
     from ..mesh.outputs import check_output_path
+    from .progress import progress_bar
 
     if args.png or args.ascii or args.triangulate:
         raise IsoflowError(f"{args.input}: --png, --ascii and --triangulate write one surface, not --labels")
@@ -276,21 +275,17 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     hi = np.round((boxes["hi"] - image.origin) / image.spacing).astype(np.int64)
     meshes: list = [None] * len(names)
     glb_parts: list = [None] * len(names)
-    for batch in label_batches(image.array, table["label"], lo, hi, conn):
-        if target[0] == "glb":
-            for s, part in enumerate(batch_glb_parts(batch, names, lo, image.spacing, image.origin)):
-                glb_parts[batch.rows[s]] = part
-        for s, r in enumerate(batch.rows):
-            mesh = batch.part(s)
-            if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
-                raise AssertionError(f"label {table['label'][r]}: the mesh has V-E+F {mesh.euler_characteristic}, "
-                                     f"the table {table['surface_euler'][r]}")
-            obj = None  # (only the files of a directory and the read-back need each label's object)
-            if target[0] == "dir" or not args.no_check:
-                obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
-                                    origin=image.origin)
-            meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
-    problems = write_label_surfaces(args, target, meshes, glb_parts)
+    with progress_bar(args, "label surfaces", estimate=True) as show:
+        # one count: each label meshed, then each written (a file each) or read back
+        total = len(names) * (2 if target[0] == "dir" or not args.no_check else 1)
+        report = None if show is None else (lambda done, _: show(len(names) + done, total))
+        meshed = 0
+        for batch in label_batches(image.array, table["label"], lo, hi, conn):
+            meshed += len(batch.rows)
+            _take_batch(args, target, batch, table, names, lo, image, meshes, glb_parts)
+            if show is not None:
+                show(meshed, total)
+        problems = write_label_surfaces(args, target, meshes, glb_parts, report)
     faces = sum(len(m.faces) for _, m, _, _ in meshes)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({len(meshes)} {target[2]} files)"
     print(f"{where}: {len(meshes)} labels, {faces} faces, one closed surface mesh per label"
@@ -300,10 +295,35 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     return 1 if problems else 0
 
 
-def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list) -> list[str]:
+def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: list[str], lo: np.ndarray, image,
+                meshes: list, glb_parts: list) -> None:
+    """A batch of labels' meshes (:func:`isoflow.digital.label_meshes.label_batches`)
+    into ``meshes`` (and ``glb_parts`` for one glTF file) at the labels'
+    rows, each mesh checked against the table's V - E + F."""
+    from ..digital.lattice import DigitalObject
+    from ..mesh.export import batch_glb_parts
+
+    if target[0] == "glb":
+        for s, part in enumerate(batch_glb_parts(batch, names, lo, image.spacing, image.origin)):
+            glb_parts[batch.rows[s]] = part
+    for s, r in enumerate(batch.rows):
+        mesh = batch.part(s)
+        if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
+            raise AssertionError(f"label {table['label'][r]}: the mesh has V-E+F {mesh.euler_characteristic}, "
+                                 f"the table {table['surface_euler'][r]}")
+        obj = None  # (only the files of a directory and the read-back need each label's object)
+        if target[0] == "dir" or not args.no_check:
+            obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
+                                origin=image.origin)
+        meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
+
+
+def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
+                         progress=None) -> list[str]:
     """Write every label's surface (a glTF node each, from ``glb_parts``,
-    or a file each) and read them back (unless --no-check). Returns the
-    problems found."""
+    or a file each) and read them back (unless --no-check), telling
+    ``progress(done, total)`` of the labels written (a file each) or read
+    back. Returns the problems found."""
     from ..mesh import export
     from ..mesh.readback import check_scene_file, check_surface_file
 
@@ -311,16 +331,17 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
-        return [] if args.no_check else check_scene_file(target[1], meshes)
+        return [] if args.no_check else check_scene_file(target[1], meshes, progress)
     target[1].mkdir(exist_ok=True)
     problems = []
-    for name, mesh, obj, comps in meshes:
+    for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
         export.write_surface(path, mesh, obj, force=args.force, comments=(f"isoflow surface --labels: {name}",))
-        if args.no_check:
-            continue
-        welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
-        check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
-        if check.get("agree") is False:
-            problems.append(check["problem"])
+        if not args.no_check:
+            welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+            check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
+            if check.get("agree") is False:
+                problems.append(check["problem"])
+        if progress is not None:
+            progress(done, len(meshes))
     return problems

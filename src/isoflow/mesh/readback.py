@@ -187,11 +187,12 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     return {"isoflow": ours, "trimesh": theirs, "agree": not problems, "problem": problem}
 
 
-def check_scene_file(path, parts: list) -> list[str]:
+def check_scene_file(path, parts: list, progress=None) -> list[str]:
     """Read a glTF scene written by :func:`isoflow.mesh.export.write_glb_scene`
     back with trimesh and compare every node (its transform applied) with
-    isoflow's counts: ``parts`` holds ``(name, mesh, obj, components)``.
-    Returns the problems, one line each (none: every node agrees)."""
+    isoflow's counts: ``parts`` holds ``(name, mesh, obj, components)``;
+    ``progress(done, total)`` hears of the nodes measured. Returns the
+    problems, one line each (none: every node agrees)."""
     import trimesh
 
     path = Path(path)
@@ -209,7 +210,7 @@ def check_scene_file(path, parts: list) -> list[str]:
         placed.append((np.asarray(tm.vertices, np.float64) @ transform[:3, :3].T + transform[:3, 3],
                        np.asarray(tm.faces), volume_unit(obj)))
         found.append((name, mesh, obj, components))
-    for (name, mesh, obj, components), theirs in zip(found, scene_figures(placed)):
+    for (name, mesh, obj, components), theirs in zip(found, scene_figures(placed, progress)):
         ours = isoflow_figures(mesh, obj, components)
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]
@@ -225,16 +226,18 @@ def check_scene_file(path, parts: list) -> list[str]:
 UNION_TRIANGLES = 1 << 17
 
 
-def scene_figures(placed: list) -> list[dict]:
+def scene_figures(placed: list, progress=None) -> list[dict]:
     """:func:`mesh_figures` of every node of a scene (``placed``: its
     vertices in place, its faces and its volume unit), a run of nodes of
     about :data:`UNION_TRIANGLES` triangles at a time (see
-    :func:`union_figures`)."""
+    :func:`union_figures`); ``progress(done, total)`` after each run."""
     sizes = np.cumsum([len(f) for _, f, _ in placed])
     out: list[dict] = []
     while len(out) < len(placed):
         end = max(len(out) + 1, int(np.searchsorted(sizes, (sizes[len(out) - 1] if out else 0) + UNION_TRIANGLES)))
         out += union_figures(placed[len(out):end])
+        if progress is not None:
+            progress(len(out), len(placed))
     return out
 
 
