@@ -229,3 +229,23 @@ def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, row
     writer.writerow(list(table))
     writer.writerows(zip(*cells[:4], [";".join(map(str, g)) for g in genera]))
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
+
+
+def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys, monkeypatch, rng):
+    """Up front where the image's own first buffers would not fit (1 byte a
+    voxel); later, still in one line and before it is made, where only the
+    many pieces of an image of noise would not. A grain map of few labels
+    is not refused for what many labels need (a budget of 2.4 bytes a
+    voxel: 4 up front refused it)."""
+    from isoflow.scale import memory
+
+    grains = np.repeat(np.arange(1, 5, dtype=np.uint8), 64)[:, None, None] * np.ones((1, 256, 256), np.uint8)
+    np.save(tmp_path / "grains.npy", grains)
+    monkeypatch.setattr(memory, "default_budget", lambda: 12_000_000)  # below 1 byte a voxel (16.8 MB)
+    fails(capsys, "info", tmp_path / "grains.npy", "--labels", words=("256x256x256", "label table", "budget"))
+    monkeypatch.setattr(memory, "default_budget", lambda: 40_000_000)
+    assert [r["voxels"] for r in json.loads(run(capsys, "info", tmp_path / "grains.npy", "--labels", "--json"))
+            ["labels"]] == [64 * 256 * 256] * 4
+    noise = rng.integers(1, 200, (256, 256, 256)).astype(np.uint8)
+    np.save(tmp_path / "noise.npy", noise)
+    fails(capsys, "info", tmp_path / "noise.npy", "--labels", words=("label image", "needs about", "budget"))

@@ -227,10 +227,14 @@ def wanted_labels(labels, dtype) -> np.ndarray:
 JOINS = {6: (1, 1, 2, 3), 26: (2, 3, 1, 1)}
 
 
-#: bytes per voxel the compiled path takes beyond the image at the least
-#: (the runs of a label image with few per row, the per-thread tables);
-#: the runs, pieces and pairs beyond that are checked as they are made
-PIECE_BYTES_PER_VOXEL = 4
+#: bytes per voxel the compiled path takes beyond the image at the least:
+#: the first buffers of the runs (8 bytes a run, a run per 16 voxels: 0.5)
+#: and the per-thread tables of a grain map (its peak: 0.5 byte a voxel at
+#: 512^3 with 1,000 labels, 1.0 at 256^3); the runs, pieces, pairs and the
+#: graph beyond that are checked as they are made (many small labels take
+#: far more: 7 bytes a voxel at 256^3 with 100,000 labels), so that a large
+#: image of few labels is not refused for what only many labels need
+PIECE_BYTES_PER_VOXEL = 1
 
 
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
