@@ -199,13 +199,13 @@ def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
     for what needs the whole mesh in memory: one line naming what streams."""
     from ..mesh.formats.omezarr import store_volume
     from ..mesh.surface_blocks import STREAM_SUFFIXES
-    from ..scale.memory import default_budget, gib
+    from ..scale.memory import default_budget, sized
 
     array = store_volume(args.input, args.label)[0]
     need = 2 * int(np.prod(array.shape, dtype=np.int64))  # the volume and its configurations, before the mesh
     if need > default_budget():
         asked = "--ascii" if args.ascii else "--png" if args.png else Path(args.output).suffix.lower() or args.output
-        raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {gib(default_budget())} "
+        raise IsoflowError(f"{args.input}: {asked} needs the whole surface in memory (more than {sized(default_budget())} "
                            f"here); a store's surface is written block by block as binary PLY or STL "
                            f"({', '.join(STREAM_SUFFIXES)})")
 

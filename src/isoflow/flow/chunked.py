@@ -43,7 +43,7 @@ import numpy as np
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
 from ..scale.chunks import import_dask, import_zarr
-from ..scale.memory import check_fits, default_budget, gib
+from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
 #: voxels of one slab (a slab reads them as bytes and writes as many)
@@ -354,7 +354,7 @@ def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
     need = 6 * int(np.prod(shape))  # the volume, its configuration bytes and the rows of a step
     return (f"{where}: --guard is not done block by block (a guarded step realises its moves cell by cell in one "
             f"order over the whole surface); in memory this {'x'.join(map(str, shape))} volume needs about "
-            f"{gib(need)} of the {gib(default_budget())} available: flow it without --volumes .zarr, or without "
+            f"{sized(need)} of the {sized(default_budget())} available: flow it without --volumes .zarr, or without "
             "--guard")
 
 

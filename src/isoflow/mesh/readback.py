@@ -159,12 +159,12 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     (:func:`isoflow.mesh.export.float32_effect`), which changes the volume
     by at most ``moved`` times the area: the volume is compared within that.
     """
-    from ..scale.memory import default_budget, gib
+    from ..scale.memory import default_budget, sized
 
     path = Path(path)
     need, budget = readback_memory(mesh), default_budget()
     if need > budget:
-        why = f"trimesh would need about {gib(need)}, more than the budget of {gib(budget)}"
+        why = f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}"
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
     ours = isoflow_figures(mesh, obj, components)
     try:

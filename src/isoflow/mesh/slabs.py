@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.chunks import import_dask, import_zarr
-from ..scale.memory import check_fits, gib
+from ..scale.memory import check_fits, sized
 from .fills import Fill, Voxelization
 from .formats.omezarr import multiscales
 from .grid import fmt_count
@@ -158,7 +158,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
             raise IsoflowError(f"voxelize: {what} needs a {'x'.join(fmt_count(n, False) for n in shape)} grid: "
                                "too many columns even for a zarr store")
         what = f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels"
-        hint = f"give smaller chunks (a slab of one row holds {gib(shape[1] * shape[2])})"
+        hint = f"give smaller chunks (a slab of one row holds {sized(shape[1] * shape[2])})"
         check_fits(WORKERS * chunks[0] * shape[1] * shape[2], what, hint=hint, budget=max_bytes)  # before any work
         if fill == "flood":  # its enclosed voxels need the whole grid's shell at once
             check_fits(shape[0] * shape[1] * shape[2], f"{what}: fill=flood holds the whole grid",

@@ -717,8 +717,8 @@ def _check_disk(out: Path, size: int) -> None:
     """Refuse a file larger than the free space beside the output."""
     import shutil
 
-    from ..scale.memory import gib
+    from ..scale.memory import sized
 
     free = shutil.disk_usage(out.parent).free
     if size > free:
-        raise IsoflowError(f"{out}: the surface file needs {gib(size)} on disk, {gib(free)} is free there")
+        raise IsoflowError(f"{out}: the surface file needs {sized(size)} on disk, {sized(free)} is free there")

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from ..results import Result
-from ..scale.memory import gib
+from ..scale.memory import sized
 from .fills import Fill
 
 #: what the verdict says, first
@@ -130,7 +130,7 @@ def stop_text(stop: Stop) -> str:
     if stop.kind == "time_limit":
         return (f"the time limit ({stop.limit:g} s, {flag}): {stop.resolution} would take about "
                 f"{stop.estimate:.0f} s")
-    return f"the memory budget: {stop.resolution} would need about {gib(int(stop.estimate or 0))}"
+    return f"the memory budget: {stop.resolution} would need about {sized(int(stop.estimate or 0))}"
 
 
 def verdict_text(v: GenusVerdict) -> str:

@@ -24,7 +24,7 @@ import os
 import numpy as np
 
 from ..errors import IsoflowError
-from .memory import gib
+from .memory import sized
 
 
 def namespace(x):
@@ -173,8 +173,8 @@ def to_gpu(volume: np.ndarray):
     need = int(np.prod(volume.shape, dtype=np.int64)) * GPU_BYTES_PER_VOXEL
     if need > free:
         raise IsoflowError(
-            f"a {'x'.join(map(str, volume.shape))} volume needs about {gib(need)} "
-            f"of GPU memory and {gib(free)} is free; drop --gpu"
+            f"a {'x'.join(map(str, volume.shape))} volume needs about {sized(need)} "
+            f"of GPU memory and {sized(free)} is free; drop --gpu"
         )
     return cupy.asarray(volume)
 

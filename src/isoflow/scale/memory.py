@@ -39,13 +39,25 @@ def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) 
     budget = default_budget() if budget is None else int(budget)
     if need > budget:
         raise IsoflowError(
-            f"{what} needs about {gib(need)} of memory, more than the budget of {gib(budget)} "
+            f"{what} needs about {sized(need)} of memory, more than the budget of {sized(budget)} "
             "(the memory available now)" + (f"; {hint}" if hint else "")
         )
 
 
-def gib(n: int) -> str:
-    return f"{n / 2**30:.1f} GiB"
+def sized(n: int) -> str:
+    """A number of bytes as a person reads it: in GiB from 1 GiB on, in MiB
+    or KiB below (a budget of "0.0 GiB" says nothing).
+
+    Examples
+    --------
+    >>> sized(3 << 30), sized(12_000_000), sized(200_000), sized(100)
+    ('3.0 GiB', '11.4 MiB', '195 KiB', '100 bytes')
+    """
+    if n >= 1 << 30:
+        return f"{n / 2**30:.1f} GiB"
+    if n >= 1 << 20:
+        return f"{n / 2**20:.1f} MiB"
+    return f"{n / 2**10:.0f} KiB" if n >= 1 << 10 else f"{n} bytes"
 
 
 #: a map of this many bytes or more asks for the processor's large pages
