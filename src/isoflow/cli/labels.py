@@ -269,10 +269,9 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
         for f in files:
             if (f.exists() or f.is_symlink()) and not args.force:
                 check_output_path(f, args.force)
-    boxes = {"lo": np.stack([table[f"bbox-{d}"] for d in range(3)], axis=1),
-             "hi": np.stack([table[f"bbox-{d + 3}"] for d in range(3)], axis=1)}
-    lo = np.round((boxes["lo"] - image.origin) / image.spacing).astype(np.int64)
-    hi = np.round((boxes["hi"] - image.origin) / image.spacing).astype(np.int64)
+    # each label's box in voxels, from the table's world corners
+    lo, hi = (np.round((np.stack([table[f"bbox-{d}"] for d in axes], axis=1) - image.origin) / image.spacing)
+              .astype(np.int64) for axes in ((0, 1, 2), (3, 4, 5)))
     meshes: list = [None] * len(names)
     glb_parts: list = [None] * len(names)
     with progress_bar(args, "label surfaces", estimate=True) as show:

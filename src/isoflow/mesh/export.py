@@ -83,12 +83,16 @@ def _gamma_palette() -> np.ndarray:
 def float32_holds(xyz: np.ndarray, spacing) -> bool:
     """Whether float32 holds the positions ``xyz`` to
     :data:`POSITION_TOLERANCE` voxels (of size ``spacing`` per axis)."""
+    return bool(float32_held(xyz, spacing).all())
+
+
+def float32_held(xyz: np.ndarray, spacing) -> np.ndarray:
+    """Per coordinate of ``xyz``, whether float32 holds it to
+    :data:`POSITION_TOLERANCE` voxels (of size ``spacing`` per axis)."""
     xyz = np.asarray(xyz, np.float64)
-    if not len(xyz):
-        return True
     with np.errstate(over="ignore", invalid="ignore"):
         error = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz)
-    return bool(np.all(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64)))
+    return np.asarray(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64))
 
 
 def float32_effect(xyz: np.ndarray, spacing) -> dict:
@@ -360,8 +364,16 @@ def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
     """One boundary mesh as a part of :func:`write_glb_scene`: triangles
     in world coordinates, with the curvature columns (in voxel units under
     the node's transform where float32 cannot hold the world positions)."""
+    table, frame = glb_columns(mesh, obj)
+    return name, table, mesh.triangles(), frame
+
+
+def glb_columns(mesh, obj: DigitalObject) -> tuple[dict[str, np.ndarray], tuple | None]:
+    """A mesh's vertex columns for a glTF and its frame: None where float32
+    holds the world positions, else :func:`grid_frame` (positions in voxel
+    units under the node's transform)."""
     table = mesh_vertex_table(mesh, obj)
-    return name, table, mesh.triangles(), None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
+    return table, None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
 
 
 def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin) -> list[tuple]:
@@ -378,11 +390,9 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     corner = np.asarray(offsets, np.float64)[batch.rows]
     of_vertex = np.repeat(np.arange(parts), np.diff(batch.vfirst))
     xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
-    with np.errstate(over="ignore", invalid="ignore"):
-        held = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz) <= POSITION_TOLERANCE * spacing
-    holds = np.logical_and.reduceat(held.all(axis=1), batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
+    held = float32_held(xyz, spacing).all(axis=1)
+    holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
     table = vertex_columns(mesh, xyz, np.float32)
-    wide = vertex_columns(mesh, xyz, np.float64) if not holds.all() else table
     triangles, face = triangle_rows(mesh.faces, mesh.edge_midpoint)
     of_face = np.repeat(np.arange(parts), np.diff(batch.ffirst))[face]
     order = np.argsort(of_face, kind="stable")  # a part's triangles in the order of its own triangle_rows
@@ -390,13 +400,11 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     out = []
     for s, t in enumerate(batch.rows):
         v0, v1 = batch.vfirst[s], batch.vfirst[s + 1]
-        columns = {key: column[v0:v1] for key, column in (table if holds[s] else wide).items()}
+        columns = {key: column[v0:v1] for key, column in table.items()}
         frame = None
         if not holds[s]:  # positions in voxel units under the node's transform (grid_frame)
-            transform = np.eye(4)
-            transform[:3, :3] = np.diag(spacing)
-            transform[:3, 3] = origin + spacing * corner[s]
-            frame = (np.asarray(mesh.vertices[v0:v1], np.float64), transform)
+            columns.update(x=xyz[v0:v1, 0], y=xyz[v0:v1, 1], z=xyz[v0:v1, 2])  # (float64, as glb_part's)
+            frame = (np.asarray(mesh.vertices[v0:v1], np.float64), grid_transform(spacing, origin + spacing * corner[s]))
         out.append((names[t], columns, triangles[tfirst[s]:tfirst[s + 1]], frame))
     return out
 
@@ -445,9 +453,8 @@ def write_surface(
         return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
                 "moved_voxels": effect["moved_voxels"]}
     else:
-        table = mesh_vertex_table(mesh, obj)
-        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync,
-                  frame=None if table["x"].dtype == np.float32 else grid_frame(mesh, obj))
+        table, frame = glb_columns(mesh, obj)
+        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
     return {"path": path, "faces": kind, "face_count": len(faces)}
 
 
@@ -455,11 +462,17 @@ def grid_frame(mesh, obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
     """The mesh's vertices in array-corner units (multiples of 1/2: exact
     in float32) and the 4x4 affine map that :meth:`DigitalObject.world`
     applies to them (a diagonal of voxel sizes, a translation)."""
-    corner = obj.world(np.zeros((1, 3)))[0]
+    return np.asarray(mesh.vertices, np.float64), grid_transform(obj.spacing, obj.world(np.zeros((1, 3)))[0])
+
+
+def grid_transform(spacing, corner) -> np.ndarray:
+    """The 4x4 affine map from array-corner units to the world: a diagonal
+    of voxel sizes ``spacing``, a translation to the array corner's world
+    position ``corner``."""
     transform = np.eye(4)
-    transform[:3, :3] = np.diag(obj.spacing)
+    transform[:3, :3] = np.diag(spacing)
     transform[:3, 3] = corner
-    return np.asarray(mesh.vertices, np.float64), transform
+    return transform
 
 
 def shared_positions(mesh) -> int:

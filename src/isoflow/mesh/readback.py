@@ -252,12 +252,12 @@ def union_figures(placed: list) -> list[dict]:
 
     counts = np.array([len(v) for v, _, _ in placed], np.int64)
     sizes = np.array([len(f) for _, f, _ in placed], np.int64)
-    if not len(placed) or not sizes.all():
-        return [mesh_figures(trimesh.Trimesh(v, f, process=False), unit) for v, f, unit in placed]
     first = np.concatenate([[0], np.cumsum(counts)])
-    union = trimesh.Trimesh(np.concatenate([v for v, _, _ in placed]),
-                            np.concatenate([f + at for (_, f, _), at in zip(placed, first)]), process=False)
-    if not (union.is_watertight and union.is_winding_consistent):
+    union = None
+    if len(placed) and sizes.all():
+        union = trimesh.Trimesh(np.concatenate([v for v, _, _ in placed]),
+                                np.concatenate([f + at for (_, f, _), at in zip(placed, first)]), process=False)
+    if union is None or not (union.is_watertight and union.is_winding_consistent):
         return [mesh_figures(trimesh.Trimesh(v, f, process=False), unit) for v, f, unit in placed]
     n = len(placed)
     of_vertex, of_face = np.repeat(np.arange(n), counts), np.repeat(np.arange(n), sizes)
