@@ -334,9 +334,32 @@ def test_a_pipe_hears_once_how_long_the_voxelisation_will_take(tmp_path, capsys,
     err = capsys.readouterr().err
     notes = [line for line in err.splitlines() if "will take about" in line]
     assert len(notes) == 1 and notes[0].startswith("isoflow voxelize: note: voxelize will take about"), err
+    assert notes[0].endswith("; --fill flood (the shell and what it encloses) or --fill shell sum no solid angles "
+                             "and take far less"), err
     assert main(["voxelize", str(mesh), "--resolution", "48", "-o", str(tmp_path / "c.npz"), "-q"]) == 0
     assert capsys.readouterr().err == ""
     assert bar.duration(45.2) == "45 s" and bar.duration(200) == "3 min 20 s" and bar.duration(7500) == "2 h 5 min"
+
+
+def test_the_time_note_takes_the_pace_after_the_first_share(capsys, monkeypatch):
+    """The reading and numba's compiling (40 s here) come before the first
+    share is done and do not recur: the estimate is what has run plus the
+    pace since the first share (1 s a share) times the shares left, not
+    the time so far over the share done (which said 23 min 20 s for a
+    job of 2 min 19 s)."""
+    import argparse
+    import time
+
+    from isoflow.cli import progress as bar
+
+    clock = [0.0]
+    monkeypatch.setattr(time, "monotonic", lambda: clock[0])
+    show = bar.time_note(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
+    for t, done in ((30.0, 0), (40.0, 1), (41.0, 2), (42.0, 3), (50.0, 11)):
+        clock[0] = t
+        show(done, 100)
+    assert capsys.readouterr().err == (
+        "isoflow voxelize: note: voxelize will take about 2 min 19 s in all (3 % done in 42 s)\n")
 
 
 def test_block_models_bound_the_cap_at_each_point_s_distance(rng):

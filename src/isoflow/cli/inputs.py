@@ -48,6 +48,15 @@ def mesh_fill(args: argparse.Namespace) -> str:
     return args.fill or "winding"
 
 
+def fill_hint(args: argparse.Namespace) -> str | None:
+    """What to say when the winding rule will take long (a mesh whose
+    boundary runs everywhere, summed solid angle by solid angle): the
+    fills that sum none."""
+    if mesh_fill(args) != "winding":
+        return None
+    return "--fill flood (the shell and what it encloses) or --fill shell sum no solid angles and take far less"
+
+
 def add_connectivity(p: argparse.ArgumentParser) -> None:
     """``--connectivity`` of the object, in any dimension."""
     p.add_argument(
@@ -93,7 +102,7 @@ def voxelize_input(path: str | Path, args: argparse.Namespace):
     """A mesh file voxelised by the one mesh reader of every command."""
     from ..mesh.voxelize import voxelize_file
 
-    with progress_bar(args, "voxelize", estimate=True) as show:
+    with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         obj, details = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                                      strict=args.strict, progress=show, details=True)
     say_note(args, path, details.note)

@@ -16,7 +16,7 @@ Progress = Callable[[int, "int | None"], None]
 
 @contextlib.contextmanager
 def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
-                 estimate: bool = False) -> Iterator[Progress | None]:
+                 estimate: bool = False, hint: str | None = None) -> Iterator[Progress | None]:
     """A tqdm bar on stderr fed by a core ``progress(done, total)`` callback.
 
     Yields the callback, or None (no bar, and tqdm not imported) when
@@ -26,10 +26,11 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     terminal keeps only the results. A ``total`` of None gives a counter
     (the flow, whose length is not known in advance). With ``estimate``
     (work whose shares are alike, as the voxeliser's pieces), a pipe gets
-    :func:`time_note` instead of nothing.
+    :func:`time_note` instead of nothing, with ``hint`` (what would take
+    less) after its estimate.
     """
     if args.quiet or not sys.stderr.isatty():
-        yield time_note(args, label) if estimate and not args.quiet else None
+        yield time_note(args, label, hint) if estimate and not args.quiet else None
         return
     from tqdm import tqdm
 
@@ -56,27 +57,42 @@ NOTE_AFTER = 2.0
 NOTE_LONG = 30.0
 
 
-def time_note(args: argparse.Namespace, label: str) -> Progress:
+def time_note(args: argparse.Namespace, label: str, hint: str | None = None) -> Progress:
     """A ``progress(done, total)`` callback for a pipe or a log: once the
-    work has run :data:`NOTE_AFTER` seconds, if what is done so far says
-    that the whole will take :data:`NOTE_LONG` seconds or more, one note
-    line with the estimate (and nothing more, so logs stay short)."""
+    work has run :data:`NOTE_AFTER` seconds past its first finished share,
+    if the pace since then says that the whole will take :data:`NOTE_LONG`
+    seconds or more, one note line with the estimate (and nothing more, so
+    logs stay short), ending with ``hint`` where given.
+
+    The pace is taken from the first report with work done on, not from
+    the start: before it lie the reading of the mesh and numba's loading or
+    compiling of the passes, which cost the same however large the work,
+    and divided by a first share of a few hundred they made a job of
+    minutes read as one of hours.
+    """
     import time
 
     start = time.monotonic()
+    first: list[tuple[float, int]] = []
     said: list[bool] = []
 
     def show(done: int, total: int | None) -> None:
         if said or not total or done <= 0:
             return
-        elapsed = time.monotonic() - start
-        if elapsed < NOTE_AFTER:
+        now = time.monotonic()
+        if not first:
+            first.append((now, done))
+            return
+        t0, d0 = first[0]
+        if done <= d0 or now - t0 < NOTE_AFTER:
             return
         said.append(True)
-        whole = elapsed * total / done
+        elapsed = now - start
+        whole = elapsed + (now - t0) / (done - d0) * (total - done)
         if whole >= NOTE_LONG:
             print(f"isoflow {args.command}: note: {label} will take about {duration(whole)} in all "
-                  f"({100 * done / total:.0f} % done in {duration(elapsed)})", file=sys.stderr, flush=True)
+                  f"({100 * done / total:.0f} % done in {duration(elapsed)})" + (f"; {hint}" if hint else ""),
+                  file=sys.stderr, flush=True)
 
     return show
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .inputs import add_mesh_rule, mesh_fill, say_note, voxelize_input
+from .inputs import add_mesh_rule, fill_hint, mesh_fill, say_note, voxelize_input
 from .progress import progress_bar
 
 
@@ -62,7 +62,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
     from ..mesh.slabs import voxelize_to_zarr
 
     out = Path(args.output)
-    with progress_bar(args, "voxelize", estimate=True) as show:
+    with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         z, details = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution,
                                       fill=mesh_fill(args), strict=args.strict, force=args.force, progress=show,
                                       details=True)
@@ -82,7 +82,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     check_volume_output(args.output, args.force)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
     check_label_output(args.output, len(bodies), args.force)  # and the format's labels, before the voxels
-    with progress_bar(args, "voxelize", estimate=True) as show:
+    with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                             overlap=args.overlap, strict=args.strict, progress=show)
     for body, note in zip(bodies, r.notes):

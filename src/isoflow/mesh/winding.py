@@ -70,7 +70,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.cancel import STOP, run_pieces
+from ..scale.cancel import STOP, Stopped, run_pieces
 from ..scale.jit import njit
 from .block_lanes import (
     FORCE_IN,
@@ -417,6 +417,21 @@ def _paint(rule, box, i0, i1, j0, j1, k0, k1, w, grad, bound, base, curv, qx, qy
     return max(left, 0)
 
 
+def _decided_ties(Tm: np.ndarray, nlen: np.ndarray, P: np.ndarray) -> np.ndarray:
+    """FORCE_IN or FORCE_OUT for the centres whose tie points are ``P``
+    ((m, 3)) by the mesh's own winding number there, summed in pieces of
+    about 4M solid angles (so that a stop is heard between them)."""
+    X, Y, Z = (np.ascontiguousarray(P[:, d]) for d in range(3))
+    w, gap = np.empty(len(P)), np.empty(len(P))
+    step = max(1, (1 << 22) // max(1, len(Tm)))
+    for a in range(0, len(P), step):
+        if STOP[0]:
+            raise Stopped
+        b = min(len(P), a + step)
+        winding_lanes(Tm, nlen, X[a:b], Y[a:b], Z[a:b], b - a, 0.0, w[a:b], gap[a:b])
+    return np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT).astype(np.int8)
+
+
 def top_blocks(box) -> np.ndarray:
     """The coarsest blocks over ``box = (i0, i1, j0, j1, k0, k1)``: about
     :data:`TOP_BLOCKS` per axis, a power of two voxels wide."""
@@ -458,25 +473,23 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     flat = lanes_arrays(tree) if len(tree.T) <= FLAT_MAX else (np.zeros((9, 0)), np.zeros((6, 0)),
                                                                  np.zeros(0, dtype=np.int64))
     args = (rule, corner, origin, float(pitch), THETA, REACH, TIE_PITCHES * pitch) + tree.arrays() + flat + (flags, STOP)
-    run_pieces(lambda n: _decide_blocks(pieces[n], *args), len(pieces), threads=threads, progress=progress)
+    Tm = np.ascontiguousarray(Tm, dtype=np.float64)
+    nlen = np.ones(len(Tm))  # (gap, the distance to the planes, is not read)
+
+    def piece(n: int) -> None:
+        # a piece's ties are its own work: on a mesh whose faces hold many
+        # centres they cost as much as its blocks, and progress counts them
+        _decide_blocks(pieces[n], *args)
+        for top in pieces[n]:
+            part = rule[top[0] - i0:top[1] - i0, top[2] - j0:top[3] - j0, top[4] - k0:top[5] - k0]
+            ties = np.argwhere(part == TIE_PENDING)
+            if len(ties):
+                part[tuple(ties.T)] = _decided_ties(Tm, nlen, origin + pitch * (ties + top[0::2] + 0.5 + TIE_STEP))
+
+    run_pieces(piece, len(pieces), threads=threads, progress=progress)
     if counts is not None:
         counts += flags[1:]
     if flags[0]:
         raise IsoflowError(f"voxelize: the cap's winding number exceeds {MAX_R} (more than {MAX_R} "
                            "overlapping layers of boundary): not supported")
-    ties = np.argwhere(rule == TIE_PENDING)
-    if len(ties):
-        P = origin + pitch * (ties + corner + 0.5 + TIE_STEP)
-        w, gap = np.empty(len(P)), np.empty(len(P))
-        X, Y, Z = (np.ascontiguousarray(P[:, d]) for d in range(3))
-        step = max(1, (1 << 22) // max(1, len(Tm)))  # pieces of about 4M solid angles
-        Tm = np.ascontiguousarray(Tm, dtype=np.float64)
-        nlen = np.ones(len(Tm))  # (gap, the distance to the planes, is not read)
-
-        def piece(n):
-            s = slice(n * step, min(len(P), (n + 1) * step))
-            winding_lanes(Tm, nlen, X[s], Y[s], Z[s], s.stop - s.start, 0.0, w[s], gap[s])
-
-        run_pieces(piece, -(-len(P) // step), threads=threads)
-        rule[tuple(ties.T)] = np.where(np.abs(w) > 0.5, FORCE_IN, FORCE_OUT)
     return rule, (i0, j0, k0)
