@@ -7,6 +7,20 @@ import pytest
 # the documentation built once per session, and the examples' runs in its gallery
 pytest_plugins = ["docs_site"]
 
+#: test files that share a session's work, run on one worker of pytest-xdist
+#: (the documentation's site, whose gallery runs the examples, built once)
+SHARED_WORKER = {"test_docs.py": "site", "test_examples.py": "site"}
+
+
+@pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
+def pytest_collection_modifyitems(config, items):
+    """Each test file on one worker of pytest-xdist (``--dist loadgroup``
+    in pyproject.toml): a file's tests use the same compiled passes, which
+    a cold cache then compiles once rather than on both workers at once;
+    the files of :data:`SHARED_WORKER` share one."""
+    for item in items:
+        item.add_marker(pytest.mark.xdist_group(SHARED_WORKER.get(item.path.name, item.nodeid.split("::")[0])))
+
 
 def ball(radius: float, size: int | None = None, centre=None) -> np.ndarray:
     size = size or int(2 * radius + 4)

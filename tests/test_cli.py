@@ -309,32 +309,6 @@ def test_info_on_a_small_npy_answers_without_numba(tmp_path, conn):
         assert ("surfaces" in report) == (not flags)
 
 
-def test_first_run_after_installing_says_that_numba_compiles(tmp_path):
-    # numba compiles the passes only where its cache has none: an empty
-    # cache directory stands for a fresh install. The first run says so
-    # once on stderr (it waits seconds otherwise in silence), the next one
-    # loads the cache and says nothing; both report the same
-    import os
-
-    from conftest import compiled_side
-
-    from isoflow.scale.compiled import COMPILE_NOTE, have_numba, least_voxels
-
-    if not have_numba():
-        pytest.skip("numba not installed")
-    vol = np.random.default_rng(3).random((compiled_side(),) * 3) < 0.3  # edge and vertex contacts
-    assert vol.size >= least_voxels(surfaces=True)
-    np.save(tmp_path / "v.npy", vol)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
-    runs = [subprocess.run([sys.executable, "-m", "isoflow.cli", "info", str(tmp_path / "v.npy"), "--json"],
-                           capture_output=True, text=True, env=env) for _ in range(2)]
-    assert [p.returncode for p in runs] == [0, 0], runs[0].stderr
-    assert runs[0].stderr.splitlines() == [f"isoflow info: note: {COMPILE_NOTE}"]
-    assert runs[1].stderr == ""
-    first, second = (json.loads(p.stdout) for p in runs)
-    assert first == second and first["euler_characteristic"] == euler_number(vol, connectivity=1)
-
-
 def test_the_compile_note_is_said_once_and_logged_without_a_listener(monkeypatch, caplog):
     import logging
 

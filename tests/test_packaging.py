@@ -73,13 +73,15 @@ def test_python_m_isoflow_is_the_command():
 
 
 def test_wheel_installs_and_runs_the_readme_command(tmp_path):
-    """python -m build, a fresh venv, the wheel's isoflow, README line 1."""
+    """python -m build, a fresh venv, the wheel's isoflow, README line 1
+    (its first command twice: numba's compile note on the first run only)."""
     pytest.importorskip("build", reason="the wheel check needs `build` (pip install -e '.[test]')")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     proc = subprocess.run([sys.executable, str(ROOT / ".ci" / "check-wheel"), str(tmp_path)],
                           capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     assert "runs the README's first command" in proc.stdout
+    assert "the first run said once that numba compiles, the second loaded its cache" in proc.stdout
 
 
 def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):

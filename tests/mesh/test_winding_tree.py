@@ -319,6 +319,40 @@ def test_a_signal_ends_a_long_voxelisation_at_once(tmp_path):
     assert not [p for p in tmp_path.iterdir() if TEMP_MARK in p.name]
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_taken_as_a_compiled_pass_returns_still_ends_as_terminated(tmp_path, capsys, monkeypatch):
+    """A signal whose KeyboardInterrupt is raised while numba boxes a
+    compiled pass's result (in a finaliser that runs then) comes out as
+    ``SystemError: ... returned a result with an exception set``: the
+    command still ends as terminated, with 128 + the signal and one line,
+    and writes nothing (seen with SIGHUP on a busy machine, as the cap's
+    tree was built)."""
+    import os
+
+    from isoflow.mesh import captree
+
+    build = captree._build
+
+    def signalled(g, leaf):
+        out = build(g, leaf)
+        try:
+            os.kill(os.getpid(), signal.SIGHUP)
+            time.sleep(1)  # the handler runs here
+        except KeyboardInterrupt as exc:
+            raise SystemError("CPUDispatcher(<function _build>) returned a result with an exception set") from exc
+        return out
+
+    monkeypatch.setattr(captree, "_build", signalled)
+    v, f = soup(np.random.default_rng(5), 20)
+    mesh = tmp_path / "soup.obj"
+    mesh.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist())
+                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f.tolist()))
+    out = tmp_path / "out.npz"
+    assert main(["voxelize", str(mesh), "--resolution", "16", "-o", str(out)]) == 128 + signal.SIGHUP
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "isoflow: terminated"
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if TEMP_MARK in p.name]
+
+
 def test_a_pipe_hears_once_how_long_the_voxelisation_will_take(tmp_path, capsys, monkeypatch):
     from isoflow.cli import progress as bar
 

@@ -208,12 +208,23 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
         yield
 
 
+def interrupted(signals: list, what: str) -> int:
+    """The last line of a signalled command (``isoflow: interrupted`` for
+    SIGINT, ``isoflow: terminated`` for the others, with ``what`` where a
+    write names its file) and its exit status: 128 + the signal's number,
+    the shell's convention."""
+    import signal
+
+    sig = signals[0] if signals else signal.SIGINT
+    how = "interrupted" if sig == signal.SIGINT else "terminated"
+    print(f"isoflow: {how}" + (f": {what}" if what else ""), file=sys.stderr)
+    return 128 + int(sig)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``isoflow`` command line; returns its exit status (0 done,
     1 a written file did not read back as counted, 2 bad input, 128 + the
     signal's number when interrupted)."""
-    import signal
-
     from ..mesh.outputs import SIGNALS
     from ..scale import compiled
     from ..scale.cancel import clear_stop
@@ -248,16 +259,20 @@ def main(argv: list[str] | None = None) -> int:
         print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
-        sig = terminated[0] if terminated else signal.SIGINT
-        how = "interrupted" if sig == signal.SIGINT else "terminated"
-        print(f"isoflow: {how}" + (f": {exc}" if str(exc) else ""), file=sys.stderr)
-        # the shell's convention: 128 + the signal's number
-        return 128 + int(sig)
+        return interrupted(terminated, str(exc))
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
         import os
 
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except Exception:
+        if not terminated:
+            raise
+        # the signal's KeyboardInterrupt raised where it could not travel: in
+        # Python code that ran while numba boxed a compiled pass's result (a
+        # finaliser), which then fails with "SystemError: ... returned a
+        # result with an exception set"; the command was still signalled
+        return interrupted(terminated, "")
     finally:
         compiled.on_first_compile = before
         terminated.clear()  # said: later writes in this process (a library's caller) are not held back
