@@ -12,12 +12,20 @@ pytest_plugins = ["docs_site"]
 SHARED_WORKER = {"test_docs.py": "site", "test_examples.py": "site"}
 
 
+#: the test files that take minutes in one process (the wheel built and
+#: installed, the site built with its gallery), begun first: collected last,
+#: they ran alone on one worker at the end while the other idled
+LONG_FIRST = ("test_packaging.py", "test_docs.py", "test_examples.py")
+
+
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
 def pytest_collection_modifyitems(config, items):
     """Each test file on one worker of pytest-xdist (``--dist loadgroup``
     in pyproject.toml): a file's tests use the same compiled passes, which
     a cold cache then compiles once rather than on both workers at once;
-    the files of :data:`SHARED_WORKER` share one."""
+    the files of :data:`SHARED_WORKER` share one, and those of
+    :data:`LONG_FIRST` come first."""
+    items.sort(key=lambda item: item.path.name not in LONG_FIRST)  # stable: the rest keep their order
     for item in items:
         item.add_marker(pytest.mark.xdist_group(SHARED_WORKER.get(item.path.name, item.nodeid.split("::")[0])))
 
