@@ -268,10 +268,10 @@ def main(argv: list[str] | None = None) -> int:
     except Exception:
         if not terminated:
             raise
-        # the signal's KeyboardInterrupt raised where it could not travel: in
-        # Python code that ran while numba boxed a compiled pass's result (a
-        # finaliser), which then fails with "SystemError: ... returned a
-        # result with an exception set"; the command was still signalled
+        # a signal's KeyboardInterrupt raised where it cannot travel (in a
+        # finaliser that runs while numba boxes a compiled pass's result)
+        # surfaces as another exception, a SystemError: after a signal, the
+        # command ends as signalled whatever the exception
         return interrupted(terminated, "")
     finally:
         compiled.on_first_compile = before
