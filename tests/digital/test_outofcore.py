@@ -501,3 +501,33 @@ def test_missing_dask_says_what_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "zarr", None)
     with pytest.raises(IsoflowError, match=r"isoflow\[dask\]"):
         outofcore.open_zarr(".")
+
+
+def test_a_failed_block_leaves_no_block_running_behind_the_error():
+    """The error comes back when the blocks already begun have ended: work
+    left running on dask's threads would go on reading the store and would
+    restore the warnings state it found (numba's compiler enters
+    ``warnings.catch_warnings`` on its thread) in the middle of what the
+    caller does next."""
+    import threading
+    import time
+
+    running = []
+    lock = threading.Lock()
+
+    def block(x, block_info=None):
+        with lock:
+            running.append(1)
+        try:
+            if block_info[0]["chunk-location"] == (0, 0, 0):
+                raise IsoflowError("v.zarr: cannot read block (0, 0, 0)")
+            time.sleep(0.3)
+            return x
+        finally:
+            with lock:
+                running.pop()
+
+    v = da.from_array(np.ones((8, 8, 8), bool), chunks=4).map_blocks(block, dtype=bool)
+    with pytest.raises(IsoflowError, match="cannot read block"):
+        analyze_chunked(v, 6, block_shape=(4, 4, 4), threads=2)
+    assert running == []

@@ -58,6 +58,7 @@ import numpy as np
 from ..errors import IsoflowError
 from ..scale.arrays import binary
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
+from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
@@ -450,7 +451,7 @@ def analyze_chunked(
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
 
     def compute(*tasks):
-        return dask.compute(*tasks, scheduler=scheduler, num_workers=workers, traverse=False)
+        return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)
 
     try:
         merged = _layers(grid, conn, where, surfaces, shape, compute, progress)

@@ -42,7 +42,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
-from ..scale.chunks import import_dask, import_zarr
+from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
@@ -186,9 +186,8 @@ class ChunkedFlow(ArrayFlow):
         self._step = 0
 
     def _compute(self, *tasks):
-        dask, _ = import_dask()
-        kwargs = {"num_workers": self.workers} if self.scheduler in (None, "threads") else {}
-        return dask.compute(*tasks, scheduler=self.scheduler or "threads", **kwargs)
+        workers = self.workers if self.scheduler in (None, "threads") else None
+        return compute(*tasks, scheduler=self.scheduler or "threads", workers=workers)
 
     def _name(self) -> Path:
         name = f"step_{self._step:0{self.width}d}.zarr"

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.chunks import import_dask, import_zarr
+from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, sized
 from .fills import Fill, Voxelization
 from .formats.omezarr import multiscales
@@ -194,10 +194,8 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
                 done[0] += 1
                 progress(done[0], len(slabs))
 
-        sched = scheduler if scheduler is not None else "threads"
-        kwargs = {"num_workers": WORKERS} if sched == "threads" else {}
         with Callback(posttask=posttask) if progress is not None else nullcontext():
-            results = dask.compute(*tasks, scheduler=sched, **kwargs)
+            results = compute(*tasks, scheduler=scheduler or "threads", workers=WORKERS)
         voxels = sum(r[0] for r in results)
         stats = np.sum([r[1] for r in results], axis=0)
         if fill == "flood":

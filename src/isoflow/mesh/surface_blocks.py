@@ -482,14 +482,13 @@ def _by_layers(grid: BlockGrid, task, scheduler, workers: int, progress, before:
     layer of blocks along the first axis at a time; ``progress(done,
     total)`` after each layer, the layers of both passes counted
     (``before``: those done before this pass)."""
-    from ..scale.chunks import import_dask
+    from ..scale.chunks import compute
 
-    dask, _ = import_dask()
     out = {}
     layers = grid.numblocks[0]
     for i in range(layers):
         indices = [ix for ix in grid.indices() if ix[0] == i]
-        (done,) = dask.compute([task(ix) for ix in indices], scheduler=scheduler, num_workers=workers)
+        (done,) = compute([task(ix) for ix in indices], scheduler=scheduler, workers=workers)
         out.update(zip(indices, done))
         if progress is not None:
             progress(before + i + 1, 2 * layers)

@@ -2,12 +2,14 @@
 
 What the out-of-core passes share and that knows nothing of digital
 topology: the optional imports with the message that names the extra, a
-zarr store's volume array, and the block grid over an array (zarr chunks or
-shards grouped into blocks big enough to be worth a task).
+dask compute that leaves no task running behind it, a zarr store's volume
+array, and the block grid over an array (zarr chunks or shards grouped into
+blocks big enough to be worth a task).
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -37,6 +39,59 @@ def import_dask(array: bool = True):
             f"out-of-core analysis needs dask: install isoflow[dask] (pip install 'isoflow[dask]'; {exc})"
         ) from None
     return dask, da
+
+
+def compute(*tasks, scheduler=None, workers: int | None = None, **kwargs) -> tuple:
+    """``dask.compute(*tasks)`` that leaves nothing running behind it.
+
+    On dask's threaded scheduler (``scheduler`` None, ``"threads"`` or its
+    function) the tasks run on a pool of ``workers`` threads of this call,
+    shut down before it returns or raises: dask answers a failed task at
+    once while the tasks already begun go on, in its pools kept for the
+    process, reading the store and counting after the caller has the error
+    (a Python caller goes on with other work beside them; a command's
+    interrupt stops them through :data:`isoflow.scale.cancel.STOP`). Other
+    schedulers (``"sync"``, a process pool, a distributed client's ``get``)
+    are called as they are, ``workers`` as their ``num_workers``.
+
+    Examples
+    --------
+    >>> from dask import delayed
+    >>> compute(delayed(sum)([1, 2]), delayed(max)(3, 4), workers=2)
+    (3, 4)
+    """
+    import_dask(array=False)  # where dask is missing: the message that names the extra
+    import dask.system
+    import dask.threaded
+
+    if not _threaded(scheduler):
+        extra = {} if workers is None else {"num_workers": workers}
+        return dask.compute(*tasks, scheduler=scheduler, **extra, **kwargs)
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(workers or dask.system.CPU_COUNT, thread_name_prefix="isoflow-block")
+    try:
+        return dask.compute(*tasks, scheduler=dask.threaded.get, pool=pool, **kwargs)
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _threaded(scheduler) -> bool:
+    """Whether ``scheduler`` is dask's threaded one: named so, or None where
+    neither dask's configuration nor a distributed client (looked for only
+    where dask.distributed is imported already) names another."""
+    import dask.config
+    import dask.threaded
+
+    if scheduler is None:
+        scheduler = dask.config.get("scheduler", None)
+    if scheduler is None and "distributed" in sys.modules:
+        try:
+            sys.modules["distributed"].default_client()
+            return False
+        except ValueError:  # no client
+            pass
+    return scheduler is None or scheduler is dask.threaded.get or scheduler in ("threads", "threading")
 
 
 def import_zarr():
