@@ -7,9 +7,14 @@ import pytest
 # the documentation built once per session, and the examples' runs in its gallery
 pytest_plugins = ["docs_site"]
 
-#: test files that share a session's work, run on one worker of pytest-xdist
-#: (the documentation's site, whose gallery runs the examples, built once)
-SHARED_WORKER = {"test_docs.py": "site", "test_examples.py": "site"}
+#: test files that share a session's work, run on one worker of pytest-xdist:
+#: the documentation's site, whose gallery runs the examples, built once; the
+#: compiled passes that a cold cache would otherwise compile on both workers
+#: at once (the winding rule's, the label table's)
+SHARED_WORKER = {"test_docs.py": "site", "test_examples.py": "site",
+                 "test_winding.py": "winding", "test_voxelize.py": "winding", "test_fills.py": "winding",
+                 "test_winding_tree.py": "winding", "test_readers.py": "winding",
+                 "test_label_table.py": "labels", "test_labels_cli.py": "labels"}
 
 
 #: the test files that take minutes in one process (the wheel built and

@@ -111,6 +111,20 @@ def test_nested_and_wrapped_labels_equal_analyze(rng, conn, method):
 
 
 @needs_numba
+def test_the_vertex_pass_is_compiled_once_for_every_integer_width(rng):
+    """Label images come as uint8, int16, uint32, int64, in either byte
+    order: the vertex pass reads the values as bytes, so that one compiled
+    pass serves every width (a compile of its own per width was a first
+    wait per width for the user)."""
+    from isoflow.scale import pieces
+
+    image = rng.choice(5, size=(7, 6, 8), p=[0.4, 0.15, 0.15, 0.15, 0.15])
+    for dtype in (np.uint8, np.dtype(">i2"), np.uint32, np.int64):
+        assert_rows_equal_analyze(image.astype(dtype), 26, method="compiled")
+    assert len(pieces._vertex_rows.signatures) == 1, pieces._vertex_rows.signatures
+
+
+@needs_numba
 def test_many_pieces_grow_the_pair_table_and_threads_agree(rng):
     """A noise of 6 labels on 36^3 has tens of thousands of pieces: the pair
     table fills many times; 1 and 3 threads give the same table."""

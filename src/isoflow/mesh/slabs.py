@@ -170,7 +170,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
         check_fits(WORKERS * slab + 2 * plan.Tm.nbytes, what, hint=hint, budget=max_bytes)
     except IsoflowError as exc:
         raise IsoflowError(f"{where}: {exc}") from None
-    dask, _ = import_dask()
+    import_dask()  # where dask is missing: the message that names the extra
     zarr = import_zarr()
     from dask import delayed
     from dask.callbacks import Callback

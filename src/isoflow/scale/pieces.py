@@ -605,16 +605,36 @@ def contact_table() -> np.ndarray:
     return out
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _value_at(flat, v):
+    """Voxel v's value from ``flat``, the slab's values as their
+    little-endian bytes (one row per voxel)."""
+    out = np.uint64(0)
+    for b in range(flat.shape[1]):
+        out |= np.uint64(flat[v, b]) << np.uint64(8 * b)
+    return out
+
+
 @njit(cache=True, nogil=True)
 def _config_at(flat, ny, nz, a, nx, i, j, k, value):
     """Configuration of ``value`` at vertex (i, j, k) (global i; the slab
-    starts at voxel layer a; voxels outside the volume hold no value)."""
+    starts at voxel layer a; voxels outside the volume hold no value;
+    ``flat``: as for :func:`_value_at`)."""
     c = 0
     for o in range(8):
         x, y, z = i - 1 + (o & 1), j - 1 + ((o >> 1) & 1), k - 1 + (o >> 2)
-        if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz and flat[((x - a) * ny + y) * nz + z] == value:
+        if 0 <= x < nx and 0 <= y < ny and 0 <= z < nz and _value_at(flat, ((x - a) * ny + y) * nz + z) == value:
             c |= 1 << o
     return c
+
+
+def value_bytes(flat: np.ndarray) -> np.ndarray:
+    """A label image's values as :func:`_value_at` reads them: a (voxels,
+    width) uint8 view of its little-endian integers (a copy only on a
+    big-endian machine), so that the vertex pass is compiled once for
+    every integer width rather than once per width."""
+    little = flat.astype(flat.dtype.newbyteorder("<"), copy=False)
+    return np.ascontiguousarray(little).reshape(-1).view(np.uint8).reshape(-1, flat.dtype.itemsize)
 
 
 @njit(cache=True, nogil=True)
@@ -786,9 +806,10 @@ def _row_at(offsets, starts, runs, base, nz, inside, r):
 def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0, want, base, fbase, features, table,
                  sheets, doubled, contact, pairs, near, used, deferred, count, scratch):
     """The vertex pass over layers i0 <= i < i1, from vertex row (i0, j0)
-    on (see the module docs). ``flat``: the slab's values (from voxel layer
-    a of a volume of nx layers); ``offsets``/``starts``/``runs``: its runs
-    and their pieces (:func:`piece_runs`), ``pvalues`` the pieces' values;
+    on (see the module docs). ``flat``: the slab's values as bytes
+    (:func:`value_bytes`; from voxel layer a of a volume of nx layers);
+    ``offsets``/``starts``/``runs``: its runs and their pieces
+    (:func:`piece_runs`), ``pvalues`` the pieces' values (uint64);
     ``base``: added to the slab's piece numbers (0 stays the outside);
     ``want[piece - fbase]``: its label is in the table, ``features`` and
     ``doubled`` at ``piece - fbase`` too (a thread's window of the pieces);
@@ -928,7 +949,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
                f"the vertex pass over {npieces:,} pieces")
     features = [mapped((b - a, len(rows)), count) for a, b in windows]
     doubled = [mapped(b - a, np.int64) for a, b in windows]
-    args = (flat.reshape(-1), found["offsets"], found["starts"], found["runs"], found["values"], ny, nz, x0, nx)
+    # the values as bytes and the pieces' values as uint64: one compiled pass for every width
+    args = (value_bytes(flat), found["offsets"], found["starts"], found["runs"],
+            found["values"].astype(np.uint64), ny, nz, x0, nx)
     table_of = group.reshape(-1).astype(np.int64)
     sheets = (nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
