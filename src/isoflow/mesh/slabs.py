@@ -195,7 +195,8 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
                 progress(done[0], len(slabs))
 
         with Callback(posttask=posttask) if progress is not None else nullcontext():
-            results = compute(*tasks, scheduler=scheduler or "threads", workers=WORKERS)
+            workers = WORKERS if scheduler in (None, "threads") else None  # others: their own count
+            results = compute(*tasks, scheduler=scheduler or "threads", workers=workers)
         voxels = sum(r[0] for r in results)
         stats = np.sum([r[1] for r in results], axis=0)
         if fill == "flood":

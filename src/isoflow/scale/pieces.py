@@ -951,7 +951,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     doubled = [mapped(b - a, np.int64) for a, b in windows]
     # the values as bytes and the pieces' values as uint64: one compiled pass for every width
     args = (value_bytes(flat), found["offsets"], found["starts"], found["runs"],
-            found["values"].astype(np.uint64), ny, nz, x0, nx)
+            found["values"].astype(np.uint64, copy=False), ny, nz, x0, nx)
     table_of = group.reshape(-1).astype(np.int64)
     sheets = (nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
