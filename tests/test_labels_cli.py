@@ -201,14 +201,28 @@ def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentat
     fails(capsys, "info", tmp_path / "seg.npy", words=("threshold it first", "--label N", "--labels"))
 
 
-@pytest.mark.parametrize("rows", [0, 1, 5, 23])
-def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows):
-    """The rows of --json and --csv, written a block of columns at a time,
-    equal the standard library's writers on the same cells (NaN and
-    infinities as null / empty, genera as lists / ``0;1``), across blocks
-    of rows."""
+def assert_text_as_json_and_csv_write(table: dict) -> None:
+    """json_rows and csv_rows of ``table`` equal the standard library's
+    writers on the same cells (NaN and infinities as null / empty, an
+    object column's tuples as lists / ``0;1``)."""
     import io
 
+    from isoflow.cli import table_text
+
+    cells = [[list(v) if isinstance(v, tuple) else None if isinstance(v, float) and not np.isfinite(v) else v
+              for v in column.tolist()] for column in table.values()]
+    want = json.dumps([dict(zip(table, row)) for row in zip(*cells)])
+    assert "".join(table_text.json_rows(table)) == want
+    fh = io.StringIO()
+    writer = csv.writer(fh)
+    writer.writerow(list(table))
+    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column] for column in cells]))
+    assert "".join(table_text.csv_rows(table)) == fh.getvalue()
+
+
+@pytest.mark.parametrize("rows", [0, 1, 5, 23])
+def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows):
+    """Random cells, across blocks of rows."""
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 4)
@@ -218,17 +232,35 @@ def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, row
     floats[2::7] = -np.inf
     genera = np.empty(rows, object)
     genera[:] = [tuple(rng.integers(0, 4, rng.integers(0, 4)).tolist()) for _ in range(rows)]
-    table = {"label": np.arange(rows, dtype=np.uint64) + np.uint64(2**63), "voxels": rng.integers(-9, 10**12, rows),
-             "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera}
-    cells = [[None if isinstance(v, float) and not np.isfinite(v) else v for v in table[k].tolist()]
-             for k in ("label", "voxels", "x", "ok")] + [[list(g) for g in genera]]
-    want = json.dumps([dict(zip(table, row)) for row in zip(*cells)])
-    assert "".join(table_text.json_rows(table)) == want
-    fh = io.StringIO()
-    writer = csv.writer(fh)
-    writer.writerow(list(table))
-    writer.writerows(zip(*cells[:4], [";".join(map(str, g)) for g in genera]))
-    assert "".join(table_text.csv_rows(table)) == fh.getvalue()
+    assert_text_as_json_and_csv_write(
+        {"label": np.arange(rows, dtype=np.uint64) + np.uint64(2**63), "voxels": rng.integers(-9, 10**12, rows),
+         "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera})
+
+
+def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch):
+    """The integers at the ends of every width (the most negative int64
+    has no positive twin), and the floats where ``repr`` changes how it
+    writes a whole number (an exponent from 1e16 on), a signed zero, the
+    smallest subnormal: the compiled digits and the floats' whole-number
+    path write what json and csv write."""
+    from isoflow.cli import table_text
+
+    monkeypatch.setattr(table_text, "BLOCK_ROWS", 5)
+    floats = np.array([-0.0, 0.0, 9999999999999998.0, 1e16, -1e16, 2.0**53, 123456789012345.0, -7.0, 0.1,
+                       5e-324, 1e300, -np.inf, np.nan, 1.5, 1e22, 100.0])
+    rows = len(floats)
+    with np.errstate(over="ignore"):  # 1e300 and 1e22 as float32: inf
+        table = {"float": floats, "float32": floats.astype(np.float32)}
+    for kind in ("int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64"):
+        info = np.iinfo(kind)
+        table[kind] = np.resize(np.array([info.min, info.max, 0, 1, 9, 10, 99, 100, info.max // 10],
+                                         kind), rows)
+    table["int64"][:4] = [-(2**63), -(2**63) + 1, -10, -9]
+    genera = np.empty(rows, object)
+    genera[:] = [(), (0,), (0,), (1, 12)] * (rows // 4)
+    table["genera"] = genera
+    table["ok"] = np.arange(rows) % 3 == 0
+    assert_text_as_json_and_csv_write(table)
 
 
 def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys, monkeypatch, rng):

@@ -3,13 +3,17 @@
 JSON objects (``--json``) and CSV rows (``--csv``), a block of rows at a
 time.
 
-The text of a whole column comes from C loops: ``repr`` of its values as
-a list, split at the separators, is each value's text exactly as
-:mod:`json` and :mod:`csv` write it (both use ``repr`` for numbers); then
-a row's cells are interleaved with the column names by slice assignment
-and joined once. So a table of a million rows is not a million dicts for
-the JSON encoder, and the text is written a block of rows at a time
-rather than held whole.
+Every column's cells become ASCII text right-aligned in the rows of a byte
+matrix, with each cell's length (:mod:`isoflow.scale.text_rows`):
+integers, and floats holding whole numbers below 1e16 (which ``repr``
+writes as ``123.0``), as compiled digits; other floats through ``repr``
+(the shortest text that reads back as the float: what :mod:`json` and
+:mod:`csv` write); tuples of an object column through ``str``, once per
+distinct tuple. A block's rows are then joined from the columns' cells and
+the separators and names between them in one compiled pass. So a table of
+a million rows is neither a million dicts for the JSON encoder nor a
+Python string per integer cell, and the text is written a block of rows at
+a time rather than held whole.
 """
 
 from __future__ import annotations
@@ -19,8 +23,14 @@ from collections.abc import Iterator
 
 import numpy as np
 
-#: rows turned into text at once (their cells are Python strings meanwhile)
+from ..scale.text_rows import decimal_cells, decimal_width, join_rows
+
+#: rows turned into text at once
 BLOCK_ROWS = 1 << 14
+
+#: floats of a whole value below this are written by ``repr`` as digits and
+#: ``.0``; from it on, with an exponent (``1e+16``)
+_WHOLE_BELOW = 1e16
 
 
 def cell_texts(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, str]) -> list[str]:
@@ -37,9 +47,13 @@ def cell_texts(column: np.ndarray, missing: str, joined: str, booleans: tuple[st
     ['0;2', '']
     """
     if column.dtype == object:
+        values = column.tolist()
+        # the texts of the distinct tuples (a table's genera repeat a few)
         if joined == ";":
-            return [";".join(map(str, v)) for v in column]
-        return ["[" + joined.join(map(str, v)) + "]" for v in column]
+            text = {v: ";".join(map(str, v)) for v in set(values)}
+        else:
+            text = {v: "[" + joined.join(map(str, v)) + "]" for v in set(values)}
+        return [text[v] for v in values]
     if column.dtype.kind == "b":
         return [booleans[v] for v in column.tolist()]
     if not len(column):
@@ -51,16 +65,100 @@ def cell_texts(column: np.ndarray, missing: str, joined: str, booleans: tuple[st
     return texts
 
 
-def _rows(table: dict, lo: int, hi: int, before: list[str], missing: str, joined: str,
+def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """ASCII texts right-aligned in the rows of a (n, longest) uint8
+    matrix, and their lengths."""
+    n = len(texts)
+    lengths = np.fromiter(map(len, texts), np.int64, n)
+    width = int(lengths.max()) if n else 0
+    chars = np.zeros((n, width), np.uint8)
+    text = np.frombuffer("".join(texts).encode("ascii"), np.uint8)
+    row = np.repeat(np.arange(n), lengths)
+    # a character's place: its row's padding, then its place in its text
+    chars[row, np.arange(len(text)) - np.repeat(np.cumsum(lengths) - width, lengths)] = text
+    return chars, lengths
+
+
+def _integer_cells(magnitude: np.ndarray, negative: np.ndarray, suffix: bytes = b"") -> tuple[np.ndarray, np.ndarray]:
+    """Integers (their magnitudes as uint64 and signs) as decimal text
+    with ``suffix`` after the digits, as :func:`_text_cells` gives texts."""
+    width = decimal_width(magnitude) + bool(negative.any()) + len(suffix)
+    chars = np.empty((len(magnitude), width), np.uint8)
+    lengths = np.empty(len(magnitude), np.int64)
+    decimal_cells(magnitude, negative, np.frombuffer(suffix, np.uint8), chars, lengths)
+    return chars, lengths
+
+
+def _int_cells(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An integer column (any width, signed or not) as decimal text."""
+    if column.dtype.kind == "u":
+        return _integer_cells(column.astype(np.uint64), np.zeros(len(column), np.bool_))
+    wide = column.astype(np.int64)
+    negative = wide < 0
+    # two's complement: -v as uint64 is |v|, for the most negative int64 too
+    # (whose negation wraps to itself, 2**63 as uint64)
+    magnitude = np.where(negative, (-wide).astype(np.uint64), wide.astype(np.uint64))
+    return _integer_cells(magnitude, negative)
+
+
+def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarray]:
+    """A float column as ``repr`` writes it (NaN and infinities as
+    ``missing``): whole values below 1e16 as digits and ``.0``, -0.0 with
+    its sign, the others through ``repr``."""
+    values = column.astype(np.float64)
+    finite = np.isfinite(values)
+    size = np.abs(np.where(finite, values, 0.0))
+    whole = finite & (size < _WHOLE_BELOW) & (size == np.floor(size))
+    other = finite & ~whole
+    parts = [(whole, _integer_cells(size[whole].astype(np.uint64), np.signbit(values[whole]), b".0"))]
+    if other.any():
+        parts.append((other, _text_cells(cell_texts(values[other], missing, "", ("", "")))))
+    if not finite.all():
+        absent = ~finite
+        parts.append((absent, _text_cells([missing] * int(absent.sum()))))
+    width = max(chars.shape[1] for _, (chars, _) in parts)
+    chars = np.zeros((len(values), width), np.uint8)
+    lengths = np.zeros(len(values), np.int64)
+    for where, (some, their) in parts:
+        chars[where, width - some.shape[1]:] = some
+        lengths[where] = their
+    return chars, lengths
+
+
+def cell_bytes(column: np.ndarray, missing: str, joined: str,
+               booleans: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
+    """Every value of a column as :func:`cell_texts` writes it, in ASCII
+    right-aligned in the rows of a (n, longest) uint8 matrix, and each
+    value's length.
+
+    Examples
+    --------
+    >>> chars, lengths = cell_bytes(np.array([-12, 3]), "", "", ("", ""))
+    >>> [bytes(row[len(row) - n:]).decode() for row, n in zip(chars, lengths)]
+    ['-12', '3']
+    >>> chars, lengths = cell_bytes(np.array([8.0, 0.1, np.inf]), "null", "", ("", ""))
+    >>> [bytes(row[len(row) - n:]).decode() for row, n in zip(chars, lengths)]
+    ['8.0', '0.1', 'null']
+    """
+    if column.dtype.kind in "iu":
+        return _int_cells(column)
+    if column.dtype.kind == "f":
+        return _float_cells(column, missing)
+    return _text_cells(cell_texts(column, missing, joined, booleans))
+
+
+def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
           booleans: tuple[str, str]) -> str:
     """Rows lo .. hi - 1 as one text, each cell after its column's
     ``before[c]`` (the first column's holds the end of the row before)."""
-    width = 2 * len(before)
-    parts: list[str] = [""] * (width * (hi - lo))
-    for c, column in enumerate(table.values()):
-        parts[2 * c::width] = [before[c]] * (hi - lo)
-        parts[2 * c + 1::width] = cell_texts(column[lo:hi], missing, joined, booleans)
-    return "".join(parts)
+    cells = [cell_bytes(column[lo:hi], missing, joined, booleans) for column in table.values()]
+    chars = np.concatenate([c for c, _ in cells], axis=1)
+    lengths = np.stack([n for _, n in cells], axis=1)
+    seps = np.frombuffer(b"".join(before), np.uint8)
+    out = np.empty(int(lengths.sum()) + (hi - lo) * len(seps), np.uint8)
+    size = join_rows(chars, lengths, np.cumsum([c.shape[1] for c, _ in cells]), seps,
+                     np.cumsum([len(b) for b in before]), out)
+    return out[:size].tobytes().decode("ascii")
 
 
 def json_rows(table: dict) -> Iterator[str]:
@@ -75,7 +173,7 @@ def json_rows(table: dict) -> Iterator[str]:
     '[{"label": 1, "volume": 8.0}, {"label": 2, "volume": null}]'
     """
     keys = [json.dumps(str(k)) for k in table]
-    before = ["}, {" + keys[0] + ": "] + [", " + k + ": " for k in keys[1:]]
+    before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
     n = len(next(iter(table.values()))) if table else 0
     yield "["
     for lo in range(0, n, BLOCK_ROWS):
@@ -96,7 +194,7 @@ def csv_rows(table: dict) -> Iterator[str]:
     'label,genera\\r\\n1,0\\r\\n2,1;2\\r\\n'
     """
     yield ",".join(map(str, table))
-    before = ["\r\n"] + [","] * (len(table) - 1)
+    before = [b"\r\n"] + [b","] * (len(table) - 1)
     n = len(next(iter(table.values()))) if table else 0
     for lo in range(0, n, BLOCK_ROWS):
         yield _rows(table, lo, min(lo + BLOCK_ROWS, n), before, "", ";", ("False", "True"))

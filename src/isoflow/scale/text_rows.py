@@ -1,0 +1,96 @@
+"""Text of a table (numba): integers' decimal digits and a block of rows
+joined from its cells, as ASCII bytes.
+
+A table of a million rows as JSON or CSV is tens of millions of short
+texts. Python makes each a string object (``repr`` of an int, then the
+joins); here an integer column becomes its digits written into the rows
+of a byte matrix, right-aligned, with each cell's length, and a block of
+rows is copied out of the columns' matrices with the separators between
+the cells, once. The cells that only Python writes as its readers expect
+(floats that are not whole numbers: the shortest text that reads back as
+the same float) come in as bytes the same way.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .jit import njit
+
+
+def decimal_width(magnitude: np.ndarray) -> int:
+    """Digits of the largest of ``magnitude`` (uint64), at least 1.
+
+    Examples
+    --------
+    >>> decimal_width(np.array([0, 999, 1000], np.uint64))
+    4
+    """
+    return len(str(int(magnitude.max()))) if len(magnitude) else 1
+
+
+@njit(cache=True, nogil=True)
+def decimal_cells(magnitude, negative, suffix, chars, lengths):
+    """Integer ``r`` (``magnitude[r]``, uint64, and ``negative[r]``) as
+    its decimal digits, ``-`` before them where negative and ``suffix``
+    (uint8) after them, right-aligned in row ``r`` of ``chars`` (uint8,
+    wide enough: :func:`decimal_width` plus sign plus suffix); its length
+    in ``lengths[r]``.
+
+    Examples
+    --------
+    >>> chars, lengths = np.zeros((2, 5), np.uint8), np.zeros(2, np.int64)
+    >>> decimal_cells(np.array([7, 120], np.uint64), np.array([True, False]),
+    ...               np.frombuffer(b".0", np.uint8), chars, lengths)
+    >>> [bytes(row[5 - n:]).decode() for row, n in zip(chars, lengths)]
+    ['-7.0', '120.0']
+    """
+    width = chars.shape[1]
+    ten = np.uint64(10)
+    for r in range(len(magnitude)):
+        at = width - len(suffix)
+        for q in range(len(suffix)):
+            chars[r, at + q] = suffix[q]
+        v = magnitude[r]
+        while True:  # uint64 with uint64 only: with an int numba would divide floats
+            at -= 1
+            chars[r, at] = np.uint64(48) + v % ten
+            v //= ten
+            if v == 0:
+                break
+        if negative[r]:
+            at -= 1
+            chars[r, at] = 45  # "-"
+        lengths[r] = width - at
+
+
+@njit(cache=True, nogil=True)
+def join_rows(cells, lengths, ends, seps, sep_ends, out):
+    """Rows of text: row ``r`` is, for every column ``c``, its separator
+    ``seps[sep_ends[c - 1]:sep_ends[c]]`` then its cell, the last
+    ``lengths[r, c]`` bytes of ``cells[r, :ends[c]]`` (the columns'
+    right-aligned cells side by side). Written into ``out`` (uint8, at
+    least the text's length); returns the length.
+
+    Examples
+    --------
+    >>> cells = np.frombuffer(b" 1 x" b"23yy", np.uint8).reshape(2, 4)
+    >>> lengths = np.array([[1, 1], [2, 2]])
+    >>> seps = np.frombuffer(b";a=,b=", np.uint8)
+    >>> out = np.zeros(32, np.uint8)
+    >>> n = join_rows(cells, lengths, np.array([2, 4]), seps, np.array([3, 6]), out)
+    >>> bytes(out[:n]).decode()
+    ';a=1,b=x;a=23,b=yy'
+    """
+    at = 0
+    for r in range(cells.shape[0]):
+        s = 0
+        for c in range(len(ends)):
+            for q in range(s, sep_ends[c]):
+                out[at] = seps[q]
+                at += 1
+            s = sep_ends[c]
+            for q in range(ends[c] - lengths[r, c], ends[c]):
+                out[at] = cells[r, q]
+                at += 1
+    return at
