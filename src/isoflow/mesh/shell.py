@@ -48,6 +48,12 @@ guard (the rounding of the planes and of the position, bounded) leaves no
 plane within the margin.  The voxels a triangle's columns hold are gathered
 as runs, their first cache lines fetched, and set together: the volume's
 misses then overlap instead of waiting behind each column's arithmetic.
+
+The helpers are numba functions of their own, not inlined into the loop by
+numba (``inline="always"``): numba types every inlined copy again, which
+made the shell's first compile, a user's first wait, about half as long
+again, and the fill measured the same speed without it
+(``benchmarks/bench_shell_ab.py``).
 """
 
 from __future__ import annotations
@@ -78,7 +84,7 @@ _SPAN_ERROR = 2.0**10
 # exact arithmetic: floating-point expansions (Shewchuk 1997)
 # ---------------------------------------------------------------------------
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _two_sum(a, b):
     x = a + b
     bv = x - a
@@ -86,14 +92,14 @@ def _two_sum(a, b):
     return x, (a - av) + (b - bv)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _split(a):
     c = _SPLITTER * a
     hi = c - (c - a)
     return hi, a - hi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _two_product(a, b):
     x = a * b
     ahi, alo = _split(a)
@@ -184,7 +190,7 @@ def orient2d(au, av, bu, bv, cu, cv):
     return _orient2d_exact(au, av, bu, bv, cu, cv)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _sgn(x):
     return 1 if x > 0 else (-1 if x < 0 else 0)
 
@@ -256,7 +262,7 @@ def side(T, t, dx, dy, dz):
 # the separating axes
 # ---------------------------------------------------------------------------
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _edge_sign(T, t, p, k, coef, bnd, cu, cv):
     """Sign of ``orient2d`` of edge k of triangle t, projected on the plane
     p (the coordinate plane (p+1, p+2)), at (cu, cv): the edge's affine
@@ -271,7 +277,7 @@ def _edge_sign(T, t, p, k, coef, bnd, cu, cv):
     return orient2d(T[t, k, u], T[t, k, v], T[t, k2, u], T[t, k2, v], cu, cv)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _projection_separated(T, t, p, S, coef, bnd, u0, u1, v0, v1):
     """Whether a line through an edge of triangle t, projected on the plane
     p, separates it from the rectangle [u0, u1] x [v0, v1].  ``S`` is the
@@ -290,7 +296,7 @@ def _projection_separated(T, t, p, S, coef, bnd, u0, u1, v0, v1):
     return False
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _plane_separated(T, t, s, plane, c0, c1):
     """Whether triangle t's plane has the box [c0, c1] strictly on one side
     (``s``: the exact signs of its normal's components, all 0 for a
@@ -311,15 +317,15 @@ def _plane_separated(T, t, s, plane, c0, c1):
     return val > plane[4] or (val >= -plane[4] and side(T, t, lx, ly, lz) > 0)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _cut(S, bound, far, near, au, av, bu, bv, fu, fv, nu, nv):
     """Whether the line through a projected edge a -> b separates the
     projection (orientation sign S) from a rectangle whose corners farthest
     along and against the edge's normal are (fu, fv) and (nu, nv), where
     the edge's affine function is ``far`` and ``near`` in floating point
     (error below ``bound``; exact where that cannot decide).  Scalars only:
-    where an inlined helper that takes arrays calls out, numba keeps its
-    arrays' reference counting in the caller's loop."""
+    where a helper that takes arrays calls out, numba keeps its arrays'
+    reference counting in the caller's loop."""
     if S >= 0:
         sg = 1 if far > bound else (-1 if far < -bound else orient2d(au, av, bu, bv, fu, fv))
         if sg < 0:
@@ -349,7 +355,7 @@ def _column_cut(T, t, u, v, w, S, coef, bnd, c0, c1):
     return False
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _separated(T, t, u, v, w, s, coef, bnd, plane, c0, c1):
     """Whether one of the thirteen axes separates triangle t from the box
     [c0, c1]: the box's own axes are the column and its voxel's extent."""
@@ -384,7 +390,7 @@ def _mark_runs(flat, run_at, run_len, m, step):
     return added
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _planes_below(PL, a, n, x, strict, per_unit):
     """How many of the planes ``PL[a, :n + 1]`` are below x (at most x if
     not ``strict``): guessed from the even spacing (``per_unit`` planes per
@@ -402,7 +408,7 @@ def _planes_below(PL, a, n, x, strict, per_unit):
     return c
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _below_near(PL, a, n, x, m, strict, per_unit):
     """How many planes of axis a are below x - m and below x + m (at most,
     if not ``strict``): one search, then the planes within m of x."""
@@ -415,7 +421,7 @@ def _below_near(PL, a, n, x, m, strict, per_unit):
     return lo, hi
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _near_count(PL, a, n, x, m, strict, per_unit):
     """:func:`_below_near`, found at once where no plane is within m of x
     (the common case: the planes on either side of the guess from the even
@@ -426,7 +432,7 @@ def _near_count(PL, a, n, x, m, strict, per_unit):
     return _below_near(PL, a, n, x, m, strict, per_unit)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _place(x, x0, per_unit, n, guard):
     """How many of n + 1 evenly spaced planes (the first at x0,
     ``per_unit`` a unit) are below x - m and below x + m, both, where
@@ -439,7 +445,7 @@ def _place(x, x0, per_unit, n, guard):
     return -1
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _guard(m, scale, per_unit, n):
     """How far from a whole number x's place among n + 1 planes must be
     (in units of their spacing) for no plane to lie within m of x.  The
@@ -450,7 +456,7 @@ def _guard(m, scale, per_unit, n):
     return (m + 64.0 * _EPS * (scale + 1.0)) * per_unit + 64.0 * _EPS * n
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _range(PL, a, n, lo, hi, k_min, k_max, per_unit):
     """Voxels [k0, k1) of axis a (n voxels, planes ``PL[a]``, ``per_unit``
     planes per unit) whose closed extent meets [lo, hi], within
@@ -490,7 +496,7 @@ def _set_up(T, t, scale, s, n, coef, bnd, plane):
     return norms
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _plane_span(h0, ou, ov, su, sv, u0, u1, v0, v1):
     """Least and greatest height of the plane ``h0 + su (u - ou) + sv (v -
     ov)`` over the column [u0, u1] x [v0, v1], in floating point: at two of
@@ -500,7 +506,7 @@ def _plane_span(h0, ou, ov, su, sv, u0, u1, v0, v1):
     return h + min(du, 0.0) + min(dv, 0.0), h + max(du, 0.0) + max(dv, 0.0)
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _side_span(lo, hi, side_lo, side_hi, base, slope, o, zl, zh):
     """``(zl, zh)`` widened by the heights of a triangle's plane at the ends
     of the chord [lo, hi] (the triangle along a side of a column) clipped to
@@ -513,7 +519,7 @@ def _side_span(lo, hi, side_lo, side_hi, base, slope, o, zl, zh):
     return zl, zh
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _inverse_slopes(T, t, u, v, out):
     """``out[k]``: how far u moves along edge k of triangle t (corner k to
     corner k + 1) per unit of v (0 where the edge keeps v)."""
@@ -523,7 +529,7 @@ def _inverse_slopes(T, t, u, v, out):
         out[k] = (T[t, k2, u] - T[t, k, u]) / dv if dv != 0.0 else 0.0
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True)
 def _line_extent(T, t, u, v, c, slopes):
     """Where the line v = c meets triangle t projected on the axes (u, v):
     its least and greatest u, in floating point ((inf, -inf) if it misses);

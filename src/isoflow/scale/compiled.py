@@ -65,8 +65,8 @@ _asked: contextvars.ContextVar[int | None] = contextvars.ContextVar("isoflow_thr
 #: passes instead of loading it from its cache: the first run after
 #: installing (or on a new CPU, or after an upgrade) waits seconds per pass,
 #: with nothing else to show
-COMPILE_NOTE = ("numba is compiling isoflow's passes for this CPU, once after installing (up to 15 s; "
-                "later runs load them from its cache)")
+COMPILE_NOTE = ("numba is compiling isoflow's passes for this CPU, once after installing (seconds to about "
+                "two minutes the first time each kind of work runs; later runs load them from its cache)")
 
 #: called with :data:`COMPILE_NOTE` in its place when set (the command line
 #: prints it on stderr); else the note is logged to the ``isoflow`` logger
