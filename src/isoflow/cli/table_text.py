@@ -23,8 +23,6 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ..scale.text_rows import decimal_cells, decimal_width, join_rows
-
 #: rows turned into text at once
 BLOCK_ROWS = 1 << 14
 
@@ -82,6 +80,8 @@ def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
 def _integer_cells(magnitude: np.ndarray, negative: np.ndarray, suffix: bytes = b"") -> tuple[np.ndarray, np.ndarray]:
     """Integers (their magnitudes as uint64 and signs) as decimal text
     with ``suffix`` after the digits, as :func:`_text_cells` gives texts."""
+    from ..scale.text_rows import decimal_cells, decimal_width  # numba: not for a command without a table
+
     width = decimal_width(magnitude) + bool(negative.any()) + len(suffix)
     chars = np.empty((len(magnitude), width), np.uint8)
     lengths = np.empty(len(magnitude), np.int64)
@@ -151,6 +151,8 @@ def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, join
           booleans: tuple[str, str]) -> str:
     """Rows lo .. hi - 1 as one text, each cell after its column's
     ``before[c]`` (the first column's holds the end of the row before)."""
+    from ..scale.text_rows import join_rows
+
     cells = [cell_bytes(column[lo:hi], missing, joined, booleans) for column in table.values()]
     chars = np.concatenate([c for c, _ in cells], axis=1)
     lengths = np.stack([n for _, n in cells], axis=1)
