@@ -113,6 +113,16 @@ def exact_queue(rule, Q, at, nq, tol, T, nlen, w, gap):
 
 
 @njit(cache=True, nogil=True)
+def _copy_triangle(T, t, Tn, q):
+    """``Tn[q] = T[t]`` element by element: an array assigned to an array
+    makes numba compile its shape-mismatch message (string formatting),
+    seconds of a first run's compile."""
+    for a in range(3):
+        for b in range(3):
+            Tn[q, a, b] = T[t, a, b]
+
+
+@njit(cache=True, nogil=True)
 def near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, w, gap, J, Tn, ln):
     """At each centre ``i < n``: ``w[i]`` the near triangles' winding
     number plus the jumps of the crossing ones between q and the centre
@@ -120,7 +130,7 @@ def near_lanes(T, nlen, near, nn, cross, nc, qx, qy, qz, X, Y, Z, n, tol, w, gap
     ``gap[i] <= 0`` where a near triangle's or a crossing one's plane
     passes within ``tol`` of it (``J`` is scratch)."""
     for q in range(nn):
-        Tn[q] = T[near[q]]
+        _copy_triangle(T, near[q], Tn, q)
         ln[q] = nlen[near[q]]
     winding_lanes(Tn[:nn], ln, X, Y, Z, n, tol, w, gap)
     for i in range(n):
@@ -155,7 +165,7 @@ def paint_lanes(rule, box, i0, i1, j0, j1, k0, k1, w, grad, base, curv, qx, qy, 
     centre (the block is split, and its children paint it again)."""
     n = (i1 - i0) * (j1 - j0) * (k1 - k0)
     for q in range(nn):
-        Tn[q] = T[near[q]]
+        _copy_triangle(T, near[q], Tn, q)
         ln[q] = nlen[near[q]]
     left = 0
     big = False

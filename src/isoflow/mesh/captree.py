@@ -146,7 +146,8 @@ def _build(g, leaf):
         for i in range(a, b):
             keys[i - a] = g[order[i], ax]
         sub = order[a:b][np.argsort(keys, kind="mergesort")]
-        order[a:b] = sub
+        for i in range(a, b):  # (element by element: a slice assigned an array compiles numba's message)
+            order[i] = sub[i - a]
         m = (a + b) // 2
         child[nd] = n
         lo[n], hi[n], lo[n + 1], hi[n + 1] = a, m, m, b

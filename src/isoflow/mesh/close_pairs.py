@@ -91,7 +91,10 @@ def _cells(cell):
     chain = np.full(n, -1, np.int64)
     for i in range(n):
         s = _slot(table, cell[i, 0], cell[i, 1], cell[i, 2])
-        table[s, :3] = cell[i]
+        # element by element: an array assigned to a slice makes numba
+        # compile its shape-mismatch message (string formatting), seconds
+        # of a first run's compile
+        table[s, 0], table[s, 1], table[s, 2] = cell[i, 0], cell[i, 1], cell[i, 2]
         chain[i] = table[s, 3]
         table[s, 3] = i
     return table, chain
@@ -129,7 +132,8 @@ def _pairs(p, cell, side, table, chain, r, reach):
                             if q <= r2:
                                 if k == out.shape[0]:
                                     grown = np.empty((2 * k, 2), np.int64)
-                                    grown[:k] = out
+                                    for m in range(k):  # (element by element: see _cells)
+                                        grown[m, 0], grown[m, 1] = out[m, 0], out[m, 1]
                                     out = grown
                                 out[k, 0] = min(i, j)
                                 out[k, 1] = max(i, j)

@@ -281,7 +281,8 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     for q in range(tops.shape[0]):
         if stop[0]:
             return
-        blocks[0] = tops[q]
+        for c in range(6):  # (element by element: an array assigned to a row compiles numba's message)
+            blocks[0, c] = tops[q, c]
         nb = 1
         while nb:
             nb -= 1
