@@ -31,17 +31,16 @@ BLOCK_ROWS = 1 << 14
 _WHOLE_BELOW = 1e16
 
 
-def cell_texts(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, str]) -> list[str]:
-    """Every value of a column as text: numbers as ``repr`` writes them,
-    NaN and infinities as ``missing``, a tuple of integers (an object
-    column) as its values joined by ``joined`` (``"[" ... "]"`` around
-    them in JSON), booleans as ``booleans`` (false, true).
+def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> list[str]:
+    """The cells that are not numbers as text: a tuple of integers (an
+    object column) as its values joined by ``joined`` (``"[" ... "]"``
+    around them in JSON), booleans as ``booleans`` (false, true).
 
     Examples
     --------
-    >>> cell_texts(np.array([1.5, np.nan]), "null", ", ", ("false", "true"))
-    ['1.5', 'null']
-    >>> cell_texts(np.array([(0, 2), ()], dtype=object), "", ";", ("False", "True"))
+    >>> cell_texts(np.array([True, False]), ", ", ("false", "true"))
+    ['true', 'false']
+    >>> cell_texts(np.array([(0, 2), ()], dtype=object), ";", ("False", "True"))
     ['0;2', '']
     """
     if column.dtype == object:
@@ -52,15 +51,7 @@ def cell_texts(column: np.ndarray, missing: str, joined: str, booleans: tuple[st
         else:
             text = {v: "[" + joined.join(map(str, v)) + "]" for v in set(values)}
         return [text[v] for v in values]
-    if column.dtype.kind == "b":
-        return [booleans[v] for v in column.tolist()]
-    if not len(column):
-        return []
-    texts = repr(column.tolist())[1:-1].split(", ")
-    if column.dtype.kind == "f":
-        for k in np.flatnonzero(~np.isfinite(column)).tolist():
-            texts[k] = missing
-    return texts
+    return [booleans[v] for v in column.tolist()]
 
 
 def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -112,7 +103,8 @@ def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarr
     other = finite & ~whole
     parts = [(whole, _integer_cells(size[whole].astype(np.uint64), np.signbit(values[whole]), b".0"))]
     if other.any():
-        parts.append((other, _text_cells(cell_texts(values[other], missing, "", ("", "")))))
+        # the shortest text that reads back as the float, as json and csv write it
+        parts.append((other, _text_cells(repr(values[other].tolist())[1:-1].split(", "))))
     if not finite.all():
         absent = ~finite
         parts.append((absent, _text_cells([missing] * int(absent.sum()))))
@@ -127,9 +119,10 @@ def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarr
 
 def cell_bytes(column: np.ndarray, missing: str, joined: str,
                booleans: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
-    """Every value of a column as :func:`cell_texts` writes it, in ASCII
-    right-aligned in the rows of a (n, longest) uint8 matrix, and each
-    value's length.
+    """Every value of a column as :mod:`json` (``missing`` for NaN and
+    infinities, ``joined`` between a tuple's values, ``booleans``) or
+    :mod:`csv` write it, in ASCII right-aligned in the rows of a (n,
+    longest) uint8 matrix, and each value's length.
 
     Examples
     --------
@@ -144,7 +137,7 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
         return _int_cells(column)
     if column.dtype.kind == "f":
         return _float_cells(column, missing)
-    return _text_cells(cell_texts(column, missing, joined, booleans))
+    return _text_cells(cell_texts(column, joined, booleans))
 
 
 def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
