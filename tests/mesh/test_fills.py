@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import hashlib
 import json
+import subprocess
+import sys
 import warnings
 from fractions import Fraction as F
 from pathlib import Path
@@ -26,6 +28,7 @@ from isoflow.mesh.census import census, one_face_per_pair, opposite_pairs
 from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.shell import ShellGrid, fill_shell, grid_planes, surface_area
+from isoflow.mesh.shell_bound import shell_voxels_at_most
 from isoflow.mesh.voxelize import voxelize, voxelize_file, voxelize_mesh
 
 trimesh = pytest.importorskip("trimesh")
@@ -111,6 +114,57 @@ def test_shell_equals_exact_triangle_box_overlap(kind, rng):
             T[:3, 1] = rng.uniform(0, 1.4, (3, 3))
         got = fill_shell(T, PLANES, 0, 6)
         assert np.array_equal(got, shell_reference(T, PLANES)), (kind, trial)
+
+
+@pytest.mark.parametrize("kind", ["random", "on the grid", "slivers", "faces in grid planes", "large"])
+def test_shell_bound_is_at_least_the_exact_shell(kind, rng):
+    """The boxes' count (which spares the shell's pass for the thin note)
+    is never below the exact shell's, ties on the planes included."""
+    for trial in range(12):
+        if kind == "random":
+            T = rng.uniform(-0.3, 1.7, (5, 3, 3))
+        elif kind == "on the grid":
+            T = _on_grid(rng, 5)
+        elif kind == "slivers":
+            a, b = rng.uniform(0, 1.4, (2, 5, 3))
+            T = np.stack([a, b, a + (b - a) * rng.uniform(0, 1, (5, 1)) + rng.normal(0, 1e-9, (5, 3))], 1)
+        elif kind == "faces in grid planes":
+            T = _on_grid(rng, 5)
+            axis = rng.integers(0, 3, 5)
+            for q in range(5):
+                T[q, :, axis[q]] = PLANES[axis[q]][rng.integers(0, 6)]
+        else:  # spanning the grid: cut into many pieces
+            T = rng.uniform(-0.5, 2.0, (2, 3, 3))
+        exact = int(shell_reference(T, PLANES).sum())
+        bound = shell_voxels_at_most(T, PLANES, need=10**6)
+        assert bound is not None and bound >= exact, (kind, trial)
+        assert shell_voxels_at_most(T, PLANES, need=bound) == bound
+        assert shell_voxels_at_most(T, PLANES, need=exact - 1) is None
+
+
+@pytest.mark.parametrize("name", ["torus.obj", "featuretype.STL", "hourglass_ico.obj", "plane_holes.obj",
+                                  "plate_holes.STL", "platonic_shelf.obj", "not_convex.obj"])
+def test_thin_note_as_with_the_exact_shell(name):
+    """Where the bound spares the shell's count, the note is what the exact
+    count gives (none); where it does not, the count is the shell's."""
+    v, f = load_mesh(MESHES / name)
+    for res in (8, 16, 24, 48):
+        r = voxelize(v, f, resolution=res, details=True)
+        shell = voxelize(v, f, resolution=res, fill="shell", details=True).voxels
+        if r.shell_voxels is None:
+            assert r.voxels >= THIN_SHARE * shell and (r.note is None or "winding rule leaves" not in r.note)
+        else:
+            assert r.shell_voxels == shell
+
+
+def test_a_small_solid_needs_no_shell_pass():
+    """The torus at 24 across is small against its area (the thin note's
+    trigger), yet the bound shows it is no thin solid: the shell's compiled
+    pass is never called (its first compile is a wait of its own)."""
+    code = ("import isoflow, isoflow.mesh.shell as s; _, r = isoflow.voxelize_file(isoflow.data.torus(), resolution=24, "
+            "details=True); print(r.voxels, r.shell_voxels, len(s._shell.signatures))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["1124", "None", "0"]
 
 
 def test_shell_in_slabs_and_threads_is_the_whole(rng):

@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote
-from .fills import THIN_TRIGGER, Fill, Voxelization, check_fill, thin_solid, unbounded_area
+from .fills import THIN_SHARE, THIN_TRIGGER, UNBOUNDED_SHARE, Fill, Voxelization, check_fill, thin_solid, unbounded_area
 from .grid import check_grid_memory, voxel_grid
 from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_defects, orient_faces  # noqa: F401
 
@@ -291,17 +291,25 @@ class VoxelPlan:
 
     def thin_note(self, volume: np.ndarray, voxels: int, double_sided: int) -> tuple[int | None, str | None]:
         """The shell's voxels (counted only where the winding rule's solid
-        is small against the area, else None) and
-        :func:`~isoflow.mesh.fills.thin_solid`'s line."""
-        from .shell import surface_area
+        is small against the area and a bound on the shell does not already
+        show it is at least :data:`~isoflow.mesh.fills.THIN_SHARE` of it,
+        else None) and :func:`~isoflow.mesh.fills.thin_solid`'s line."""
+        from .shell import grid_planes, surface_area
+        from .shell_bound import shell_voxels_at_most
 
         Tm = self.Tm
         area = surface_area(Tm)
         if not area > 0:
             return None, None
-        shell = self.shell_count() if voxels < THIN_TRIGGER * area / self.pitch**2 else None
         corner = self.origin + self.pitch * np.asarray(self.start)
         share = unbounded_area(Tm, volume, corner, self.pitch) if volume is not None else 0.0
+        shell = None
+        if voxels < THIN_TRIGGER * area / self.pitch**2:
+            # a note for the share names the shell's count; otherwise the
+            # count matters only where the solid may be under its share of it
+            planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
+            if share >= UNBOUNDED_SHARE or shell_voxels_at_most(Tm, planes, int(voxels / THIN_SHARE)) is None:
+                shell = self.shell_count()
         return shell, thin_solid(voxels, shell, share, double_sided)
 
 
