@@ -67,14 +67,26 @@ def plot_figures(result):
 
 
 def plot_shapes(result, count=4):
-    """The object at ``count`` steps from the first to the last non-empty one."""
+    """The object at ``count`` steps from the first to the last non-empty
+    one: each step's boundary surface, shaded by its faces' normals (one
+    collection of polygons: matplotlib's ``voxels`` draws a cube per voxel,
+    minutes for a modest object)."""
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
     steps = [i for i, s in enumerate(result.states) if s.voxels]
     shown = steps[:: max(1, len(steps) // count)][:count]
+    light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
     fig = plt.figure(figsize=(3 * len(shown), 3.2))
     for i, step in enumerate(shown):
         state = result.states[step]
+        mesh = isoflow.boundary_mesh(state.volume, 6)
+        shade = 0.45 + 0.55 * np.clip(mesh.face_normals.astype(float) @ light, 0, 1)
+        orange = np.array(plt.matplotlib.colors.to_rgb("tab:orange"))
         ax = fig.add_subplot(1, len(shown), i + 1, projection="3d")
-        ax.voxels(state.volume, facecolors="tab:orange", edgecolors="k", linewidth=0.1)
+        ax.add_collection3d(Poly3DCollection(mesh.vertices[mesh.faces], facecolors=orange * shade[:, None],
+                                             edgecolors="k", linewidths=0.1))
+        for setter, n in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), state.volume.shape):
+            setter(0, n)
         ax.set_title(f"step {step}: {state.voxels} voxels", fontsize=9)
         ax.set_box_aspect(state.volume.shape)
         ax.set_axis_off()
