@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..scale.jit import njit
 from .captree import dist_triangle
 from .solid_angles import winding_lanes
@@ -55,10 +57,9 @@ def centres(i, j, k, j0, j1, k0, k1, m, origin, pitch, X, Y, Z):
 
 @njit(cache=True, nogil=True)
 def on_triangles(T, nlen, which, m, px, py, pz, tol):
-    """Whether p lies within ``tol`` of one of the triangles ``T[which[:m]]``
-    (all of ``T`` where ``which`` is None)."""
-    for q in range(m if which is not None else T.shape[0]):
-        t = which[q] if which is not None else q
+    """Whether p lies within ``tol`` of one of the triangles ``T[which[:m]]``."""
+    for q in range(m):
+        t = which[q]
         ax, ay, az = T[t, 0, 0] - px, T[t, 0, 1] - py, T[t, 0, 2] - pz
         bx, by, bz = T[t, 1, 0] - px, T[t, 1, 1] - py, T[t, 1, 2] - pz
         cx, cy, cz = T[t, 2, 0] - px, T[t, 2, 1] - py, T[t, 2, 2] - pz
@@ -99,12 +100,13 @@ def exact_queue(rule, Q, at, nq, tol, T, nlen, w, gap):
     its ``w_C`` within :data:`TIE_WINDING` of a half-integer.  Returns
     -1 where |R| would exceed :data:`MAX_R`, else ``nq``."""
     winding_lanes(T, nlen, Q[0], Q[1], Q[2], nq, tol, w, gap)
+    every = np.arange(T.shape[0])
     big = False
     for m in range(nq):
         x = w[m]
         val = math.floor(x - TIE_WINDING + 0.5)
         i, j, k = at[m, 0], at[m, 1], at[m, 2]
-        if (gap[m] <= 0 and on_triangles(T, nlen, None, 0, Q[0, m], Q[1, m], Q[2, m], tol)) or val != math.floor(
+        if (gap[m] <= 0 and on_triangles(T, nlen, every, T.shape[0], Q[0, m], Q[1, m], Q[2, m], tol)) or val != math.floor(
                 x + TIE_WINDING + 0.5):
             rule[i, j, k] = TIE_PENDING
         else:

@@ -150,8 +150,8 @@ def evaluate_lanes(px, py, pz, h, reach, tol, T, nlen, E, owner, C, D, eo, near,
     K = C.shape[1]
     _angles(C, nlen, px, py, pz, ang, det)
     _distances(C, px, py, pz, dtri, dedge)
-    nnear = 0
-    ncross = 0
+    nnear = np.int64(0)  # not the literal 0: numba would compile cut_edges once more for it
+    ncross = np.int64(0)
     for t in range(K):
         keep[t] = True
         d = dtri[t]

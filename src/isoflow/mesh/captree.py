@@ -363,8 +363,8 @@ def evaluate(px, py, pz, h, reach, theta, tol, T, nlen, E, elen, owner, lo, hi, 
     far = 0.0
     err = 0.0
     var = 0.0
-    nnear = 0
-    ncross = 0
+    nnear = np.int64(0)  # not the literal 0: numba would compile cut_edges once more for it
+    ncross = np.int64(0)
     grad[:] = 0.0
     if lo.shape[0] == 0 or hi[0] == 0:
         return 0.0, 0.0, 0.0, 0.0, CLEAR, 0, 0

@@ -273,7 +273,8 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
     m = PAINT_LANES  # centres in lanes at once
     X, Y, Z, wl, gap, J = np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m), np.empty(m)
     Tn, ln = np.empty((MAX_NEAR, 3, 3)), np.empty(MAX_NEAR)
-    Q, at, nq = np.empty((3, QUEUE)), np.empty((QUEUE, 3), dtype=np.int64), 0  # centres for the exact sum
+    Q, at = np.empty((3, QUEUE)), np.empty((QUEUE, 3), dtype=np.int64)  # centres for the exact sum
+    nq = np.int64(0)  # not the literal 0: numba would compile the callees once more for it
     wq, gq = np.empty(QUEUE), np.empty(QUEUE)
     flat = C.shape[1] > 0
     ang, dets, keep = np.empty(C.shape[1]), np.empty(C.shape[1]), np.empty(C.shape[1], dtype=np.bool_)
@@ -330,7 +331,7 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                 if nq + (n if every else left) > QUEUE:
                     flags[0] |= exact_queue(rule, Q, at, nq, tol, T, nlen, wq, gq) < 0
                     flags[8] += nq
-                    nq = 0
+                    nq = np.int64(0)
                 nq = queue_centres(rule, box, i0, i1, j0, j1, k0, k1, every, origin, pitch, Q, at, nq)
             elif h == 0:
                 rule[i0 - box[0], j0 - box[1], k0 - box[2]] = TIE_PENDING
