@@ -165,7 +165,7 @@ def _orient2d_exact(au, av, bu, bv, cu, cv):
     _diff(bv, av, d[2])
     _diff(cu, au, d[3])
     e = np.empty(64)
-    n = 1
+    n = np.int64(1)  # not the literal 1: numba would compile the helpers once more for it
     e[0] = 0.0
     n = _add_product(e, n, d[0], d[1], 1.0)
     n = _add_product(e, n, d[2], d[3], -1.0)
@@ -219,7 +219,7 @@ def _side_exact(T, t, dx, dy, dz):
     _diff(dz, T[t, 0, 2], d[8])
     e = np.empty(800)
     e[0] = 0.0
-    n = 1
+    n = np.int64(1)
     # u . (v x w) with u = b - a, v = c - a, w = d - a
     for (i, j, k, sg) in ((0, 4, 8, 1.0), (0, 5, 7, -1.0), (1, 5, 6, 1.0), (1, 3, 8, -1.0),
                           (2, 3, 7, 1.0), (2, 4, 6, -1.0)):
@@ -576,7 +576,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
     stride = np.array([out.shape[1] * out.shape[2], out.shape[2], 1])
     run_at = np.empty(_RUNS, dtype=np.int64)
     run_len = np.empty(_RUNS, dtype=np.int64)
-    m = 0
+    m = np.int64(0)  # not the literal 0 (nor w below): numba would compile the callees once more for it
     for a in range(3):  # planes per unit along each axis: where a search starts
         g[a] = nv[a] / (PL[a, nv[a]] - PL[a, 0])
     added = 0
@@ -593,7 +593,7 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
         if empty:
             continue
         norms = _set_up(T, t, scale, s, n, coef, bnd, plane)
-        w = 0
+        w = np.int64(0)
         for a in range(1, 3):
             if abs(n[a]) > abs(n[w]):
                 w = a
@@ -690,12 +690,12 @@ def _shell(T, tri, PL, nv, xa, xb, scale, out, stop):
                             continue
                     if m == _RUNS:
                         added += _mark_runs(flat, run_at, run_len, m, step)
-                        m = 0
+                        m = np.int64(0)
                     run_at[m], run_len[m] = base + (k - n_run) * step, n_run
                     prefetch_write(flat, base + (k - n_run) * step)  # set with the triangle's other runs
                     m += 1
         added += _mark_runs(flat, run_at, run_len, m, step)
-        m = 0
+        m = np.int64(0)
     return added
 
 

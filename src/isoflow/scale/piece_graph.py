@@ -148,7 +148,7 @@ def _heap_sort(order, n, key):
         _sift(order, start, n, key)
     for end in range(n - 1, 0, -1):
         order[0], order[end] = order[end], order[0]
-        _sift(order, 0, end, key)
+        _sift(order, np.int64(0), end, key)  # not the literal 0: numba would compile _sift once more for it
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -157,7 +157,7 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
     """The label's surfaces from its sheets summed per (own component,
     rest component), appended at ``nsurf`` in the report's order (most
     faces first, then chi). Returns the new ``nsurf``."""
-    n = 0
+    n = np.int64(0)  # not the literal 0: numba would compile _heap_sort once more for it
     for t in range(len(own)):
         p = own[t]
         for e in range(sh_start[p], sh_start[p + 1]):
