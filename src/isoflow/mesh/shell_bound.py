@@ -113,7 +113,7 @@ def _box_voxels(T: np.ndarray, planes, pitch: np.ndarray) -> int:
         hi[:, a] = np.searchsorted(planes[a][:-1], T[:, :, a].max(axis=1) + grow[a], side="right")
     np.clip(lo, 0, shape, out=lo)
     np.clip(hi, 0, shape, out=hi)
-    # the voxels as flat indices, marked in a grid of bits where it is small
+    # the voxels as flat indices, marked in a boolean grid where it is small
     # (else counted once each by sorting)
     first = (lo[:, 0] * shape[1] + lo[:, 1]) * shape[2] + lo[:, 2]
     seen = np.zeros(int(np.prod(shape)), dtype=bool) if np.prod(shape) <= MARKED_VOXELS else None
