@@ -170,7 +170,7 @@ def _memo(ndim: int, face: bool, thread: int = 0) -> tuple[np.ndarray, np.ndarra
 def _simple_codes(codes, face, steps, lo, hi, masks, known, fill, out):
     shift, last = 32 - fill[1], len(known) - 1
     for i in range(len(codes)):
-        code = codes[i]
+        code = np.uint64(codes[i])  # as _batch's: one compile of _decide for both
         found, slot = _look_up(known, code, shift, last)
         if found < 0:
             found = _decide(known, fill, slot, code, face, steps, lo, hi, masks)
@@ -368,7 +368,7 @@ def _batch(state, pending, need, e, i0, i1, tables, offsets, steps, lo, hi, mask
         if not need[idx] & bit:
             continue
         p = pending[idx]
-        code = np.uint32(0)
+        code = np.uint64(0)  # the type numba gives ``|=`` here: _decide is compiled for it alone
         for b in range(tables.shape[0]):
             code |= tables[e, b, state[p + offsets[e, b]]]
         found, slot = _look_up(known, code, shift, last)
@@ -421,9 +421,9 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
     cells = tables.shape[0]
     full = (1 << cells) - 1
     need = _needs(state, pending, goal, full)
-    reversed_ = -1
+    reversed_ = np.int64(-1)  # not literals: numba would compile _settle once more for them
     for _ in range(max_sweeps):
-        changed = False
+        changed = np.bool_(False)
         for e in range(cells):
             changed |= _batch(state, pending, need, e, 0, n, tables, offsets, steps, lo, hi, masks, known, fill, face)
         n, reversed_, done = _settle(pending, goal, need, n, changed, flip, reversed_, flips, full)
