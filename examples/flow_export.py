@@ -76,12 +76,12 @@ def plot_shapes(result, count=4):
     steps = [i for i, s in enumerate(result.states) if s.voxels]
     shown = steps[:: max(1, len(steps) // count)][:count]
     light = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+    orange = np.array(plt.matplotlib.colors.to_rgb("tab:orange"))
     fig = plt.figure(figsize=(3 * len(shown), 3.2))
     for i, step in enumerate(shown):
         state = result.states[step]
         mesh = isoflow.boundary_mesh(state.volume, 6)
         shade = 0.45 + 0.55 * np.clip(mesh.face_normals.astype(float) @ light, 0, 1)
-        orange = np.array(plt.matplotlib.colors.to_rgb("tab:orange"))
         ax = fig.add_subplot(1, len(shown), i + 1, projection="3d")
         ax.add_collection3d(Poly3DCollection(mesh.vertices[mesh.faces], facecolors=orange * shade[:, None],
                                              edgecolors="k", linewidths=0.1))
