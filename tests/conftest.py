@@ -17,10 +17,17 @@ SHARED_WORKER = {"test_docs.py": "site", "test_examples.py": "site",
                  "test_label_table.py": "labels", "test_labels_cli.py": "labels"}
 
 
-#: the test files that take minutes in one process (the wheel built and
-#: installed, the site built with its gallery), begun first: collected last,
-#: they ran alone on one worker at the end while the other idled
-LONG_FIRST = ("test_packaging.py", "test_docs.py", "test_examples.py")
+#: the test files (or groups of :data:`SHARED_WORKER`) that take longest on a
+#: cold cache, begun first and in this order (seconds, cold, 2026-12-03: the
+#: winding rule's group 177, the flow's plain reference 76, mostly its
+#: compile, the wheel built and installed 71, the label table's group 71, out
+#: of core 60, the flow on bit rows 54, the site with its gallery 47, the
+#: chunked flow 43); each worker takes the next file when it is done, so no
+#: long one is left to run alone at the end while the other idles.
+#: pyproject.toml passes ``--no-loadscope-reorder``: pytest-xdist would
+#: otherwise order the files by their number of tests
+LONGEST_FIRST = ("winding", "test_plain_reference.py", "test_packaging.py", "labels", "test_outofcore.py",
+                 "test_bitflow.py", "site", "test_chunked.py")
 
 
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
@@ -29,8 +36,12 @@ def pytest_collection_modifyitems(config, items):
     in pyproject.toml): a file's tests use the same compiled passes, which
     a cold cache then compiles once rather than on both workers at once;
     the files of :data:`SHARED_WORKER` share one, and those of
-    :data:`LONG_FIRST` come first."""
-    items.sort(key=lambda item: item.path.name not in LONG_FIRST)  # stable: the rest keep their order
+    :data:`LONGEST_FIRST` come first, in its order."""
+    def rank(item) -> int:
+        scope = SHARED_WORKER.get(item.path.name, item.path.name)
+        return LONGEST_FIRST.index(scope) if scope in LONGEST_FIRST else len(LONGEST_FIRST)
+
+    items.sort(key=rank)  # stable: the rest keep their order
     for item in items:
         item.add_marker(pytest.mark.xdist_group(SHARED_WORKER.get(item.path.name, item.nodeid.split("::")[0])))
 
