@@ -526,7 +526,7 @@ def _sweep_row(rows, nodes, tables, rules, slab, i, j, counted, outside, npairs,
     zero, one, top = np.uint64(0), np.uint64(1), np.uint64(63)
     doubled = 0
     # the four rows' voxels before the last event, the last event
-    state = (0, -1, npairs, nloose)
+    state = (np.int64(0), np.int64(-1), npairs, nloose)
     x0 = x1 = x2 = x3 = zero  # the rows' bits in the word
     s0 = s1 = s2 = s3 = zero  # where their runs start
     t0 = t1 = t2 = t3 = zero  # where their gaps start
@@ -591,7 +591,8 @@ def _sweep_layers(rows, nodes, tables, rules, slab):
     # only adds up (the outside's component has no parent surface)
     outside = len(nodes.pbg) + slab.spare
     counted = rules.counted
-    doubled = npairs = nloose = 0
+    doubled = 0
+    npairs = nloose = np.int64(0)  # not the literal 0: numba would compile the rare events' helpers once more
     for i in range(slab.lo, slab.hi):
         for j in range(ny + 1):
             if not again and i < rows.nx and j < ny:
@@ -825,6 +826,7 @@ def sheet_tables(tables, formula_obj: bool) -> Tables:
     """
     nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch = tables
     octant = np.where(nsheet[:, None] > np.arange(4), sheet_bg if formula_obj else sheet_obj, 0).astype(np.int64)
+    pinch = pinch.astype(np.int64)  # as octant: _node is compiled for one type of octant
     nsheet = nsheet.astype(np.int64)
     values = np.where(np.arange(4) < nsheet[:, None], 4 - quarters.astype(np.int64), 0)
     # the events that take the slower path: several sheets, a pinch, a
