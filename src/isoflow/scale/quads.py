@@ -396,8 +396,9 @@ def _fill_planes(bits, nx, ny, nz, box, p0, p1, counters, vbase, fbase, nsheet, 
     corner = np.empty((4, 5), np.int64)
     tally = np.zeros(2, np.int64)
     cd = CORNER_D
+    # write as a runtime flag, as in the loop below: numba compiles _plane once for both calls
     pinched = _plane(bits, nx, ny, nz, box, p0, counters, idmap, cfgmap, dmmap, nsheet, dspoke, dflag, pinch, True,
-                     True, vbase, origin, vertices, config, sheet, tally)
+                     np.bool_(True), vbase, origin, vertices, config, sheet, tally)
     f = fbase
     for p in range(p0, p1):
         if p + 1 <= box[0, 1]:
