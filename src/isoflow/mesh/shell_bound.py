@@ -67,9 +67,10 @@ def shell_voxels_at_most(T: np.ndarray, planes, need: int) -> int | None:
     pitch = (np.array([p[-1] for p in planes]) - lo_plane) / np.array([len(p) - 1 for p in planes])
     limit = min(MAX_PIECES, len(T) + PIECES_PER_VOXEL * need)
     for extent in EXTENTS:
-        T = _pieces(T, extent * pitch, limit)
-        if T is None:
+        pieces = _pieces(T, extent * pitch, limit)
+        if pieces is None:
             return None
+        T = pieces  # a finer cut starts from these
         count = _box_voxels(T, planes, pitch)
         if count <= need:
             return count
