@@ -241,8 +241,8 @@ def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch):
     """The integers at the ends of every width (the most negative int64
     has no positive twin), and the floats where ``repr`` changes how it
     writes a whole number (an exponent from 1e16 on), a signed zero, the
-    smallest subnormal: the compiled digits and the floats' whole-number
-    path write what json and csv write."""
+    smallest subnormal (left to ``repr``): the compiled digits write what
+    json and csv write."""
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 5)

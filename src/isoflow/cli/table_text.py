@@ -5,10 +5,10 @@ time.
 
 Every column's cells become ASCII text right-aligned in the rows of a byte
 matrix, with each cell's length (:mod:`isoflow.scale.text_rows`):
-integers, and floats holding whole numbers below 1e16 (which ``repr``
-writes as ``123.0``), as compiled digits; other floats through ``repr``
-(the shortest text that reads back as the float: what :mod:`json` and
-:mod:`csv` write); tuples of an object column through ``str``, once per
+integers as compiled digits; floats as compiled digits too, the text
+``repr`` writes (the shortest that reads back as the float: what
+:mod:`json` and :mod:`csv` write), by :mod:`isoflow.scale.float_text`;
+tuples of an object column through ``str``, once per
 distinct tuple. A block's rows are then joined from the columns' cells and
 the separators and names between them in one compiled pass. So a table of
 a million rows is neither a million dicts for the JSON encoder nor a
@@ -25,11 +25,6 @@ import numpy as np
 
 #: rows turned into text at once
 BLOCK_ROWS = 1 << 14
-
-#: floats of a whole value below this are written by ``repr`` as digits and
-#: ``.0``; from it on, with an exponent (``1e+16``)
-_WHOLE_BELOW = 1e16
-
 
 def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> list[str]:
     """The cells that are not numbers as text: a tuple of integers (an
@@ -68,15 +63,15 @@ def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
     return chars, lengths
 
 
-def _integer_cells(magnitude: np.ndarray, negative: np.ndarray, suffix: bytes = b"") -> tuple[np.ndarray, np.ndarray]:
-    """Integers (their magnitudes as uint64 and signs) as decimal text
-    with ``suffix`` after the digits, as :func:`_text_cells` gives texts."""
+def _integer_cells(magnitude: np.ndarray, negative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Integers (their magnitudes as uint64 and signs) as decimal text, as
+    :func:`_text_cells` gives texts."""
     from ..scale.text_rows import decimal_cells, decimal_width  # numba: not for a command without a table
 
-    width = decimal_width(magnitude) + bool(negative.any()) + len(suffix)
+    width = decimal_width(magnitude) + bool(negative.any())
     chars = np.empty((len(magnitude), width), np.uint8)
     lengths = np.empty(len(magnitude), np.int64)
-    decimal_cells(magnitude, negative, np.frombuffer(suffix, np.uint8), chars, lengths)
+    decimal_cells(magnitude, negative, chars, lengths)
     return chars, lengths
 
 
@@ -94,27 +89,21 @@ def _int_cells(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarray]:
     """A float column as ``repr`` writes it (NaN and infinities as
-    ``missing``): whole values below 1e16 as digits and ``.0``, -0.0 with
-    its sign, the others through ``repr``."""
-    values = column.astype(np.float64)
-    finite = np.isfinite(values)
-    size = np.abs(np.where(finite, values, 0.0))
-    whole = finite & (size < _WHOLE_BELOW) & (size == np.floor(size))
-    other = finite & ~whole
-    parts = [(whole, _integer_cells(size[whole].astype(np.uint64), np.signbit(values[whole]), b".0"))]
-    if other.any():
-        # the shortest text that reads back as the float, as json and csv write it
-        parts.append((other, _text_cells(repr(values[other].tolist())[1:-1].split(", "))))
-    if not finite.all():
-        absent = ~finite
-        parts.append((absent, _text_cells([missing] * int(absent.sum()))))
-    width = max(chars.shape[1] for _, (chars, _) in parts)
-    chars = np.zeros((len(values), width), np.uint8)
+    ``missing``): compiled, but for the subnormal floats, which go
+    through ``repr``."""
+    from ..scale.float_text import FLOAT_WIDTH, power_table, shortest_cells
+
+    values = np.ascontiguousarray(column, dtype=np.float64)
+    chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
     lengths = np.zeros(len(values), np.int64)
-    for where, (some, their) in parts:
-        chars[where, width - some.shape[1]:] = some
-        lengths[where] = their
-    return chars, lengths
+    shortest_cells(values, power_table(), chars, lengths)
+    left = np.flatnonzero(lengths == 0)  # NaN, infinities, subnormal floats
+    if len(left):
+        texts = [repr(v) if np.isfinite(v) else missing for v in values[left].tolist()]
+        some, their = _text_cells(texts)
+        chars[left, FLOAT_WIDTH - some.shape[1]:] = some
+        lengths[left] = their
+    return chars[:, FLOAT_WIDTH - int(lengths.max(initial=0)):], lengths
 
 
 def cell_bytes(column: np.ndarray, missing: str, joined: str,

@@ -6,9 +6,8 @@ texts. Python makes each a string object (``repr`` of an int, then the
 joins); here an integer column becomes its digits written into the rows
 of a byte matrix, right-aligned, with each cell's length, and a block of
 rows is copied out of the columns' matrices with the separators between
-the cells, once. The cells that only Python writes as its readers expect
-(floats that are not whole numbers: the shortest text that reads back as
-the same float) come in as bytes the same way.
+the cells, once. Floats come as
+bytes the same way, from :mod:`isoflow.scale.float_text`.
 """
 
 from __future__ import annotations
@@ -30,27 +29,23 @@ def decimal_width(magnitude: np.ndarray) -> int:
 
 
 @njit(cache=True, nogil=True)
-def decimal_cells(magnitude, negative, suffix, chars, lengths):
+def decimal_cells(magnitude, negative, chars, lengths):
     """Integer ``r`` (``magnitude[r]``, uint64, and ``negative[r]``) as
-    its decimal digits, ``-`` before them where negative and ``suffix``
-    (uint8) after them, right-aligned in row ``r`` of ``chars`` (uint8,
-    wide enough: :func:`decimal_width` plus sign plus suffix); its length
-    in ``lengths[r]``.
+    its decimal digits, ``-`` before them where negative, right-aligned in
+    row ``r`` of ``chars`` (uint8, wide enough: :func:`decimal_width` plus
+    the sign); its length in ``lengths[r]``.
 
     Examples
     --------
-    >>> chars, lengths = np.zeros((2, 5), np.uint8), np.zeros(2, np.int64)
-    >>> decimal_cells(np.array([7, 120], np.uint64), np.array([True, False]),
-    ...               np.frombuffer(b".0", np.uint8), chars, lengths)
-    >>> [bytes(row[5 - n:]).decode() for row, n in zip(chars, lengths)]
-    ['-7.0', '120.0']
+    >>> chars, lengths = np.zeros((2, 3), np.uint8), np.zeros(2, np.int64)
+    >>> decimal_cells(np.array([7, 120], np.uint64), np.array([True, False]), chars, lengths)
+    >>> [bytes(row[3 - n:]).decode() for row, n in zip(chars, lengths)]
+    ['-7', '120']
     """
     width = chars.shape[1]
     ten = np.uint64(10)
     for r in range(len(magnitude)):
-        at = width - len(suffix)
-        for q in range(len(suffix)):
-            chars[r, at + q] = suffix[q]
+        at = width
         v = magnitude[r]
         while True:  # uint64 with uint64 only: with an int numba would divide floats
             at -= 1
