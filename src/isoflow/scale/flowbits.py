@@ -192,8 +192,9 @@ def _moves_layers(bits, nx, ny, table, keep, neg, pany_x, pboth_x, waits_x, i0, 
                 _packed_segments(keep, neg, v, events, both_z, any_z, nwords)
         if waits_y:
             work[:] = 0
-            _scan(keep, neg, pany_y, pboth_y, 0, 1, i * (ny + 1), 1, ny, 0, ny + 1, bits,
-                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, 1, ends, change, work[0], work[1],
+            one = np.int64(1)  # the strides as variables, as the columns' call passes them: one compile
+            _scan(keep, neg, pany_y, pboth_y, np.int64(0), one, i * (ny + 1), one, ny, np.int64(0), ny + 1, bits,
+                  (i - 1) * ny if i >= 1 else -1, i * ny if i < nx else -1, one, ends, change, work[0], work[1],
                   work[2])
 
 

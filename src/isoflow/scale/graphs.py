@@ -45,7 +45,8 @@ def components(n: int, a: np.ndarray, b: np.ndarray) -> tuple[int, np.ndarray]:
     """
     if n == 0:
         return 0, np.zeros(0, np.int64)
-    roots = np.arange(n, dtype=np.int64)
+    # int32 below 2^31 nodes, as every other caller's parent array: one compile of the union-find
+    roots = np.arange(n, dtype=np.int32 if n < 1 << 31 else np.int64)
     # joined under the smaller root and flattened: each node's root is its
     # component's smallest node
     join_pairs(roots, np.stack([np.asarray(a, np.int64), np.asarray(b, np.int64)], axis=1))

@@ -304,7 +304,8 @@ def label_polygons(polygons: np.ndarray, nv: int) -> tuple[np.ndarray, int]:
     """``(labels, count)``: connected components of a mesh's ``nv`` vertices
     joined by its polygons (same partition as scipy's ``connected_components``
     on the face graph; 4 bytes per vertex instead of a sparse matrix)."""
-    return _label_polygons(np.ascontiguousarray(polygons), nv)
+    # int32 below 2^31 vertices whichever type the mesh holds: one compile
+    return _label_polygons(np.ascontiguousarray(polygons, dtype=np.int32 if nv < 1 << 31 else np.int64), nv)
 
 
 def volume_view(volume: np.ndarray) -> np.ndarray:

@@ -64,8 +64,8 @@ def _add(keys, vs, qs, key, dv, dq):
 def _flush(table, key, dv, dq, used):
     """Add a run's sums to the table (nothing for no key); returns the
     entries used."""
-    if key != _EMPTY:
-        used += _add(table[0], table[1], table[2], key, dv, dq)
+    if key != _EMPTY:  # as int64 at every call site (some pass constants): _add compiles once
+        used += _add(table[0], table[1], table[2], np.int64(key), np.int64(dv), np.int64(dq))
     return used
 
 
