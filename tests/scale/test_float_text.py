@@ -16,7 +16,7 @@ def texts(values: np.ndarray) -> list[str | None]:
     """What the compiled writer gives per value (None: left to the caller)."""
     chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
     lengths = np.full(len(values), -1, np.int64)
-    shortest_cells(np.ascontiguousarray(values, np.float64), power_table(), chars, lengths)
+    shortest_cells(np.ascontiguousarray(values, np.float64).view(np.uint64), power_table(), chars, lengths)
     return [bytes(row[FLOAT_WIDTH - n:]).decode() if n else None for row, n in zip(chars, lengths)]
 
 

@@ -96,7 +96,7 @@ def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarr
     values = np.ascontiguousarray(column, dtype=np.float64)
     chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
     lengths = np.zeros(len(values), np.int64)
-    shortest_cells(values, power_table(), chars, lengths)
+    shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
     left = np.flatnonzero(lengths == 0)  # NaN, infinities, subnormal floats
     if len(left):
         texts = [repr(v) if np.isfinite(v) else missing for v in values[left].tolist()]

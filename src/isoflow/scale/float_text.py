@@ -133,31 +133,37 @@ def _digits(c, q, powers):
     return (s if below else t), k
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _put(chars, r, at, byte):
+    """Byte ``byte`` before place ``at`` of row ``r``; returns the new place."""
+    chars[r, at - 1] = byte
+    return at - 1
+
+
 @njit(cache=True, nogil=True)
-def shortest_cells(values, powers, chars, lengths):
-    """Float ``values[r]`` as ``repr`` writes it, right-aligned in row
-    ``r`` of ``chars`` (uint8, :data:`FLOAT_WIDTH` wide), its length in
-    ``lengths[r]``; NaN, infinities and subnormal floats (length 0) are
-    left to the caller. ``powers``: :func:`power_table`.
+def shortest_cells(bits, powers, chars, lengths):
+    """The float of bits ``bits[r]`` (a float64 array viewed as uint64) as
+    ``repr`` writes it, right-aligned in row ``r`` of ``chars`` (uint8,
+    :data:`FLOAT_WIDTH` wide), its length in ``lengths[r]``; NaN,
+    infinities and subnormal floats (length 0) are left to the caller.
+    ``powers``: :func:`power_table`. Written from the right, last digit
+    first.
 
     Examples
     --------
     >>> values = np.array([0.1, -2.5e-07, 1e16, 123.0, -0.0, 5e-324])
     >>> chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
     >>> lengths = np.zeros(len(values), np.int64)
-    >>> shortest_cells(values, power_table(), chars, lengths)
+    >>> shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
     >>> [bytes(row[FLOAT_WIDTH - n:]).decode() for row, n in zip(chars, lengths)]
     ['0.1', '-2.5e-07', '1e+16', '123.0', '-0.0', '']
     """
-    digits = np.zeros(20, np.uint8)
-    row = np.zeros(FLOAT_WIDTH, np.uint8)  # the text, left-aligned, then copied to the right
     ten = np.uint64(10)
-    every = values.view(np.uint64)
-    for r in range(len(values)):
-        bits = every[r]
-        negative = (bits >> np.uint64(63)) != np.uint64(0)
-        frac = bits & np.uint64((1 << 52) - 1)
-        bq = np.int64((bits >> np.uint64(52)) & np.uint64(0x7FF))
+    zero = np.uint64(48)  # "0"
+    for r in range(len(bits)):
+        b = bits[r]
+        frac = b & np.uint64((1 << 52) - 1)
+        bq = np.int64((b >> np.uint64(52)) & np.uint64(0x7FF))
         if bq == 0x7FF or (bq == 0 and frac != np.uint64(0)):
             lengths[r] = 0  # NaN, infinity, subnormal: the caller's
             continue
@@ -170,68 +176,55 @@ def shortest_cells(values, powers, chars, lengths):
                 f, e = c >> np.uint64(-q), 0  # a whole number below 2^53: its own digits
             else:
                 f, e = _digits(c, q, powers)
-        n = 0  # the digits, last first, without trailing zeros
-        if f == np.uint64(0):
-            digits[0] = 48
-            n = 1
-        else:
+        n = 1  # the digits without trailing zeros: f 10^e, n of them
+        if f != np.uint64(0):
             while f % ten == np.uint64(0):
                 f //= ten
                 e += 1
-            while f != np.uint64(0):
-                digits[n] = np.uint8(np.uint64(48) + f % ten)
-                f //= ten
+            rest = f // ten
+            while rest != np.uint64(0):
+                rest //= ten
                 n += 1
         point = n + e  # the decimal point after this many digits
-        at = 0
-        if negative:
-            row[at] = 45
-            at += 1
-        if -4 < point <= 16:
-            if point <= 0:
-                row[at] = 48
-                row[at + 1] = 46
-                at += 2
-                for _ in range(-point):
-                    row[at] = 48
-                    at += 1
-                for d in range(n - 1, -1, -1):
-                    row[at] = digits[d]
-                    at += 1
-            else:
-                for d in range(n - 1, -1, -1):
-                    if n - 1 - d == point:
-                        row[at] = 46
-                        at += 1
-                    row[at] = digits[d]
-                    at += 1
-                if point >= n:
-                    for _ in range(point - n):
-                        row[at] = 48
-                        at += 1
-                    row[at] = 46
-                    row[at + 1] = 48
-                    at += 2
-        else:
-            row[at] = digits[n - 1]
-            at += 1
-            if n > 1:
-                row[at] = 46
-                at += 1
-                for d in range(n - 2, -1, -1):
-                    row[at] = digits[d]
-                    at += 1
-            x = point - 1
-            row[at] = 101  # "e"
-            row[at + 1] = 45 if x < 0 else 43
-            at += 2
-            x = abs(x)
+        at = FLOAT_WIDTH
+        if not -4 < point <= 16:  # d.ddde+XX
+            x = abs(point - 1)
+            at = _put(chars, r, at, 48 + x % 10)
+            at = _put(chars, r, at, 48 + (x // 10) % 10)
             if x >= 100:
-                row[at] = 48 + x // 100
-                at += 1
-            row[at] = 48 + (x // 10) % 10
-            row[at + 1] = 48 + x % 10
-            at += 2
-        for q2 in range(at):
-            chars[r, FLOAT_WIDTH - at + q2] = row[q2]
-        lengths[r] = at
+                at = _put(chars, r, at, 48 + x // 100)
+            at = _put(chars, r, at, 45 if point - 1 < 0 else 43)
+            at = _put(chars, r, at, 101)  # "e"
+            for _ in range(n - 1):
+                at = _put(chars, r, at, zero + f % ten)
+                f //= ten
+            if n > 1:
+                at = _put(chars, r, at, 46)  # "."
+            at = _put(chars, r, at, zero + f)
+        elif point <= 0:  # 0.000ddd
+            for _ in range(n):
+                at = _put(chars, r, at, zero + f % ten)
+                f //= ten
+            for _ in range(-point):
+                at = _put(chars, r, at, 48)
+            at = _put(chars, r, at, 46)
+            at = _put(chars, r, at, 48)
+        elif point < n:  # ddd.ddd
+            for _ in range(n - point):
+                at = _put(chars, r, at, zero + f % ten)
+                f //= ten
+            at = _put(chars, r, at, 46)
+            for _ in range(point):
+                at = _put(chars, r, at, zero + f % ten)
+                f //= ten
+        else:  # ddd000.0
+            at = _put(chars, r, at, 48)
+            at = _put(chars, r, at, 46)
+            for _ in range(point - n):
+                at = _put(chars, r, at, 48)
+            for _ in range(n):
+                at = _put(chars, r, at, zero + f % ten)
+                f //= ten
+        if b >> np.uint64(63):
+            at = _put(chars, r, at, 45)  # "-"
+        lengths[r] = FLOAT_WIDTH - at
