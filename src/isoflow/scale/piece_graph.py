@@ -46,11 +46,15 @@ def _root(parent, x):
     return x
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, _nrt=False)
 def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, kind):
     """Components of the label's pieces ``own`` over edges of at most
     ``kind``: ``parent`` (local roots, one per piece of ``own``; ``local``
-    gives a piece's place in ``own``). Returns their number."""
+    gives a piece's place in ``own``). Returns their number.
+
+    Called twice per label by :func:`_label_loop`, so compiled once on its
+    own rather than inline at both calls (a shorter first compile, the
+    same speed); without reference counting, as its caller."""
     m = len(own)
     for t in range(m):
         parent[t] = t
@@ -70,13 +74,14 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     return count
 
 
-@njit(cache=True, nogil=True, inline="always")
+@njit(cache=True, nogil=True, _nrt=False)
 def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, kind, mark, stamp,
                      comp, queue):
     """Components of the rest of the image over edges of at most ``kind``
     that touch the label's pieces ``own`` by a face: ``comp[piece]`` (where
     ``stamp[piece] == mark``) is 0 for the outside's component and 1..m for
-    the enclosed ones. Returns m."""
+    the enclosed ones. Returns m. Compiled on its own, as
+    :func:`_own_components`."""
     enclosed = 0
     for p in own:
         for e in range(adj_start[p], adj_start[p + 1]):
