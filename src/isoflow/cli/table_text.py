@@ -8,12 +8,12 @@ matrix, with each cell's length (:mod:`isoflow.scale.text_rows`):
 integers as compiled digits; floats as compiled digits too, the text
 ``repr`` writes (the shortest that reads back as the float: what
 :mod:`json` and :mod:`csv` write), by :mod:`isoflow.scale.float_text`;
-tuples of an object column through ``str``, once per
-distinct tuple. A block's rows are then joined from the columns' cells and
-the separators and names between them in one compiled pass. So a table of
-a million rows is neither a million dicts for the JSON encoder nor a
-Python string per integer cell, and the text is written a block of rows at
-a time rather than held whole.
+tuples of an object column through ``str``, once per distinct tuple. A
+block's rows are then joined from the columns' cells and the separators
+and names between them in one compiled pass. So a table of a million rows
+is neither a million dicts for the JSON encoder nor a Python string per
+number, and the text is written a block of rows at a time rather than
+held whole.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ import numpy as np
 
 #: rows turned into text at once
 BLOCK_ROWS = 1 << 14
+
 
 def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> list[str]:
     """The cells that are not numbers as text: a tuple of integers (an

@@ -111,12 +111,12 @@ def _digits(c, q, powers):
         cbl = cb - np.uint64(1)
         k = (q * 661_971_961_083 - 274_743_187_321) >> 41  # floor(log10(3/4 2^q))
     h = np.uint64(q + ((-k * 913_124_641_741) >> 38) + 2)
-    g1, g0 = powers[k + 325, 0], powers[k + 325, 1]
+    g1, g0 = powers[k - _K_MIN, 0], powers[k - _K_MIN, 1]
     vb = _rop(g1, g0, cb << h)
     vbl = _rop(g1, g0, cbl << h)
     vbr = _rop(g1, g0, cbr << h)
     s = vb >> np.uint64(2)
-    if s >= np.uint64(100):
+    if s >= np.uint64(100):  # always here (s has 16 or 17 digits); Java's two-digit rule for subnormals
         sp10 = np.uint64(10) * _mulhi(s, np.uint64(1844674407370955168))  # 10 floor(s / 10)
         tp10 = sp10 + np.uint64(10)
         upin = vbl + out <= sp10 << np.uint64(2)

@@ -6,8 +6,8 @@ texts. Python makes each a string object (``repr`` of an int, then the
 joins); here an integer column becomes its digits written into the rows
 of a byte matrix, right-aligned, with each cell's length, and a block of
 rows is copied out of the columns' matrices with the separators between
-the cells, once. Floats come as
-bytes the same way, from :mod:`isoflow.scale.float_text`.
+the cells, once. Floats come as bytes the same way, from
+:mod:`isoflow.scale.float_text`.
 """
 
 from __future__ import annotations
