@@ -896,8 +896,8 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
     pid, pmask, pval, slot, local, same``. Returns the number of new pairs.
 
     Called once per vertex row, so compiled on its own rather than inline
-    (as :func:`_vertex_rows`, without reference counting): the vertex
-    rows' first compile is shorter by about a quarter, at the same speed."""
+    (as :func:`_vertex_rows`, without reference counting): a shorter first
+    compile of the vertex rows, at the same speed."""
     nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
     val8, id8, pid, pmask, pval, slot, local, same = scratch
     new = 0
