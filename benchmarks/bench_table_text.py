@@ -10,9 +10,10 @@ Timed, warm, alternated, best of ``--repeat``, each checked equal first:
 * ``--json``'s text (``isoflow.cli.table_text.json_rows``) against
   ``json.dumps`` of a list of one dict per row (what a script writes);
 * ``--csv``'s text (``csv_rows``) against ``csv.writer`` over the rows;
-* the float columns alone (the centroids: 3 per row): the compiled
-  shortest round-trip text (``isoflow.scale.float_text``) against
-  ``repr`` of each float, the text both writers above hold.
+* the float columns alone (the centroids: 3 per row): their cells
+  (``cell_bytes``: the compiled shortest round-trip text,
+  ``isoflow.scale.float_text``) against ``repr`` of each float, the text
+  both writers above hold.
 
 The whole command (``isoflow info FILE --labels --json``) is timed by
 ``benchmarks/bench_labels.py --commands N``.
@@ -54,26 +55,16 @@ def std_csv(table: dict) -> str:
     fh = io.StringIO()
     writer = csv.writer(fh)
     writer.writerow(list(table))
-    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else "" if v is None else v
-                            for v in column] for column in cells]))
+    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column]
+                            for column in cells]))
     return fh.getvalue()
-
-
-def compiled_floats(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The floats' texts as the writers hold them: a byte matrix and lengths."""
-    from isoflow.scale.float_text import FLOAT_WIDTH, power_table, shortest_cells
-
-    chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
-    lengths = np.zeros(len(values), np.int64)
-    shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
-    return chars, lengths
 
 
 def main(argv=None) -> int:
     from bench_labels import cached
 
     from isoflow import label_table
-    from isoflow.cli.table_text import csv_rows, json_rows
+    from isoflow.cli.table_text import cell_bytes, csv_rows, json_rows
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=int, default=256)
@@ -85,13 +76,14 @@ def main(argv=None) -> int:
     path = cached(args.size, args.labels)
     table = label_table(np.load(path))
     floats = np.ascontiguousarray(np.concatenate([table[f"centroid-{d}"] for d in range(3)]))
-    chars, lengths = compiled_floats(floats)
+    chars, lengths = cell_bytes(floats, "null", "", ("", ""))  # a float column's cells, as the writers take them
     texts = [bytes(row[len(row) - n:]).decode() for row, n in zip(chars, lengths)]
     assert texts == [repr(v) for v in floats.tolist()], "the float text differs from repr"
     pairs = {
         "json": (lambda: "".join(json_rows(table)), lambda: std_json(table), "json.dumps(list of dicts)"),
         "csv": (lambda: "".join(csv_rows(table)), lambda: std_csv(table), "csv.writer"),
-        "floats": (lambda: compiled_floats(floats), lambda: [repr(v) for v in floats.tolist()], "repr per float"),
+        "floats": (lambda: cell_bytes(floats, "null", "", ("", "")), lambda: [repr(v) for v in floats.tolist()],
+                   "repr per float"),
     }
     assert pairs["json"][0]() == pairs["json"][1](), "json text differs"
     assert pairs["csv"][0]() == pairs["csv"][1](), "csv text differs"
