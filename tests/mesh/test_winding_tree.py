@@ -11,6 +11,7 @@ the signal's number) on a real process.
 from __future__ import annotations
 
 import math
+import shutil
 import signal
 import subprocess
 import sys
@@ -280,6 +281,42 @@ def test_pieces_stop_when_asked_and_leave_nothing_running():
     assert not STOP[0] and len(done) < 1000 and sorted(done) == sorted(running)
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_second_interrupt_while_the_workers_stop_still_waits_for_them():
+    """``timeout`` sends its signal to the command and again to its process
+    group, and people press Ctrl-C twice: the second KeyboardInterrupt
+    comes while :func:`run_pieces` waits for its workers to stop. It must
+    go on waiting: a worker left running would go on once the command
+    clears the flag (seen: ``timeout 20 isoflow voxelize`` of the
+    tetrahedral quads said ``terminated`` and ran on until killed)."""
+    import threading
+
+    begun, ended = [], []
+    main_thread = threading.main_thread().ident
+
+    def work(i):
+        begun.append(i)
+        if i == 0:
+            signal.pthread_kill(main_thread, signal.SIGINT)  # the first signal
+        while not STOP[0]:
+            time.sleep(0.001)
+        if i == 0:
+            signal.pthread_kill(main_thread, signal.SIGINT)  # the second, while the main thread waits for the workers
+        time.sleep(0.3)  # a block of work that ends at its next poll
+        ended.append(i)
+
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_pieces(work, 100, threads=2)
+        assert begun and sorted(ended) == sorted(begun)  # nothing left running
+        assert not STOP[0]  # and the next work may run
+    finally:
+        signal.signal(signal.SIGINT, before)
+        time.sleep(0.5)  # what a failing run left running ends before the next test
+        clear_stop()
+
+
 def test_pieces_report_progress_to_the_end():
     seen = []
     run_pieces(lambda i: time.sleep(0.002), 200, threads=2, progress=lambda d, n: seen.append((d, n)))
@@ -290,24 +327,33 @@ def test_pieces_report_progress_to_the_end():
 def test_a_signal_ends_a_long_voxelisation_at_once(tmp_path):
     """``isoflow voxelize`` on a mesh whose boundary runs everywhere, at a
     size that takes minutes, signalled mid-work (SIGTERM, SIGINT and SIGHUP,
-    one command each, side by side): each exits within 2 s with the
-    README's status (128 + the signal), says so in one line, and leaves
-    neither the output nor a temporary file."""
+    one command each, side by side; SIGTERM from ``timeout``, which sends
+    it twice, to the command and to its process group): each exits within
+    2 s with the README's status (128 + the signal), says so in one line,
+    and leaves neither the output nor a temporary file."""
     v, f = tet_quads(12)
     mesh = tmp_path / "tets.obj"
     mesh.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in v.tolist())
                     + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f.tolist()))
     voxelize(v[:9], np.array([[0, 1, 2], [3, 4, 5]]), resolution=8)  # compiled passes in numba's cache
+    wait = 8  # reading, orienting, the cap, and into the voxels
+    timeout = shutil.which("timeout")
     runs = {}
     for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGHUP):
         out = tmp_path / f"out{int(sig)}.npz"
-        runs[sig] = out, subprocess.Popen([sys.executable, "-m", "isoflow", "voxelize", str(mesh), "--resolution", "160",
-                                           "-o", str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    time.sleep(8)  # reading, orienting, the cap, and into the voxels
+        command = [sys.executable, "-m", "isoflow", "voxelize", str(mesh), "--resolution", "160", "-o", str(out)]
+        if sig == signal.SIGTERM and timeout:
+            command = [timeout, "--preserve-status", str(wait)] + command
+        runs[sig] = out, subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    started = time.monotonic()
+    time.sleep(wait)
     for sig, (out, proc) in runs.items():
-        assert proc.poll() is None, proc.stderr.read()
-        sent = time.monotonic()
-        proc.send_signal(sig)
+        if sig == signal.SIGTERM and timeout:
+            sent = started + wait
+        else:
+            assert proc.poll() is None, proc.stderr.read()
+            sent = time.monotonic()
+            proc.send_signal(sig)
         _, err = proc.communicate(timeout=60)
         took = time.monotonic() - sent
         assert proc.returncode == 128 + sig, err

@@ -111,8 +111,10 @@ def run_pieces(work: Callable[[int], object], n: int, threads: int = 2,
             with lock:
                 done[0] += 1
 
-    futures = [pool().submit(worker) for _ in range(max(1, min(2, threads, n)))]
-    try:
+    futures: list = []
+    try:  # an interrupt between two submissions still waits for the first
+        for _ in range(max(1, min(2, threads, n))):
+            futures.append(pool().submit(worker))
         while True:
             finished, running = wait(futures, timeout=POLL, return_when=FIRST_EXCEPTION)
             for f in finished:
@@ -124,9 +126,38 @@ def run_pieces(work: Callable[[int], object], n: int, threads: int = 2,
     except BaseException:
         ours = not STOP[0]  # a signal handler may have set it already, for other work too
         STOP[0] = 1
-        wait(futures)
+        _wait_out(futures)
         if ours:
             STOP[0] = 0
         raise
     if STOP[0]:
         raise Stopped
+
+
+def _wait_out(futures: list) -> None:
+    """Wait until every one of ``futures`` is done, whatever interrupts the
+    wait meanwhile.
+
+    A second interrupt comes often: ``timeout`` sends its signal to the
+    command and then to the command's process group, and people press
+    Ctrl-C twice. Let through, it would end the wait with workers still
+    running; the command then clears :data:`STOP` and, at exit, waits for
+    those workers, which go on through all their pieces (minutes to hours
+    after saying ``terminated``). The workers poll :data:`STOP`, so the wait
+    is one block of work.
+
+    Examples
+    --------
+    >>> from concurrent.futures import ThreadPoolExecutor
+    >>> with ThreadPoolExecutor(1) as threads:
+    ...     futures = [threads.submit(sum, [1, 2])]
+    ...     _wait_out(futures)
+    >>> futures[0].result()
+    3
+    """
+    while True:
+        try:
+            wait(futures)
+            return
+        except KeyboardInterrupt:
+            continue
