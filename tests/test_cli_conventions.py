@@ -228,6 +228,40 @@ def test_a_signal_a_library_swallows_still_stops_the_output(tmp_path, capsys, mo
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_repeated_signal_does_not_cut_short_the_clean_up(tmp_path, capsys, monkeypatch):
+    """``timeout`` sends SIGTERM to the command and again to its process
+    group, and people press Ctrl-C twice: a second signal arriving as the
+    first one's clean-up begins must not interrupt it (raised again, it
+    left the temporary file beside the output and the line without its
+    file)."""
+    from isoflow.mesh import outputs
+
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply")]) == 0
+    before = (tmp_path / "s.ply").read_bytes()
+    sync, remove = outputs.sync_file, outputs._remove
+
+    def signalled(path):  # the first signal, as the written file is flushed
+        os.kill(os.getpid(), signal.SIGTERM)
+        sync(path)
+
+    def removing(tmp):  # the second, as the temporary file is removed
+        os.kill(os.getpid(), signal.SIGTERM)
+        remove(tmp)
+
+    monkeypatch.setattr(outputs, "sync_file", signalled)
+    monkeypatch.setattr(outputs, "_remove", removing)
+    capsys.readouterr()
+    np.save(tmp_path / "v.npy", np.ones((4, 4, 4), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; the previous s.ply "
+                   "is unchanged"], err
+    assert (tmp_path / "s.ply").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.ply", "v.npy"]  # no temporary file left
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def test_a_signal_inside_a_weakref_callback_ends_the_command_without_a_traceback(tmp_path, capsys, monkeypatch):
     """A SIGTERM whose KeyboardInterrupt is raised where Python cannot
     raise it (here a weakref callback, as during garbage collection) is

@@ -21,6 +21,9 @@ from . import completion, flow, genus, info, surface, voxelize
 
 #: the commands in the order ``isoflow`` lists them
 COMMANDS = (info, surface, voxelize, genus, flow, completion)
+#: a signal this soon (seconds) after the last one raised as KeyboardInterrupt
+#: is taken as the same request: recorded, not raised again
+REPEAT_SECONDS = 1.0
 
 
 def installed_version() -> str:
@@ -142,11 +145,15 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
     runs (temporary files and the flow's staging directory are removed, an
     existing output stays as it was) and the signal's number is appended
     to ``received``. Python's default for SIGTERM is to die at once, which
-    leaves the temporary files behind. Only the main thread may set
+    leaves the temporary files behind. A signal within
+    :data:`REPEAT_SECONDS` of the last one raised is recorded but not
+    raised: it would interrupt the clean-up. Only the main thread may set
     handlers; elsewhere (a command run from a library thread) nothing
     changes."""
+    import math
     import signal
     import threading
+    import time
 
     from ..scale.cancel import request_stop
 
@@ -155,6 +162,8 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
         yield
         return
 
+    raised = [-math.inf]  # when a signal was last raised as KeyboardInterrupt
+
     def interrupt(signum, frame):
         # kept as well as raised: a library may swallow the KeyboardInterrupt
         # (trimesh's import guards), and no output is then renamed into place
@@ -162,7 +171,14 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
         # interrupted; compiled work on other threads stops at its next poll
         received.append(signum)
         request_stop()
-        raise KeyboardInterrupt
+        # one within a second of the last one raised is the same request
+        # (`timeout` signals the command and then its process group; people
+        # press Ctrl-C twice): raised again, it would cut short the clean-up
+        # that the first began (a temporary file left behind)
+        now = time.monotonic()
+        if now - raised[0] >= REPEAT_SECONDS:
+            raised[0] = now
+            raise KeyboardInterrupt
 
     def unraisable(report):
         # the KeyboardInterrupt raised where Python cannot raise it (a weakref
