@@ -197,6 +197,20 @@ def test_zsh_and_tcsh_scripts(capsys):
     assert bad.value.code == 2 and "invalid choice" in capsys.readouterr().err
 
 
+def assert_terminated_while_writing(tmp_path, capsys, before: bytes) -> None:
+    """``surface`` of a larger ``v.npy`` over ``s.ply`` (holding ``before``),
+    signalled as the caller arranged: exit 143, one line naming the file,
+    the previous ``s.ply`` kept and no temporary file left."""
+    capsys.readouterr()
+    np.save(tmp_path / "v.npy", np.ones((4, 4, 4), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; the previous s.ply "
+                   "is unchanged"], err
+    assert (tmp_path / "s.ply").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.ply", "v.npy"]  # no temporary file left
+
+
 def test_a_signal_a_library_swallows_still_stops_the_output(tmp_path, capsys, monkeypatch):
     """The handlers raise KeyboardInterrupt, which trimesh's import guards
     (except BaseException) can swallow: the command then finished, exited 0
@@ -214,14 +228,7 @@ def test_a_signal_a_library_swallows_still_stops_the_output(tmp_path, capsys, mo
         return table(*args)
 
     monkeypatch.setattr(export, "mesh_vertex_table", swallowed)
-    capsys.readouterr()
-    np.save(tmp_path / "v.npy", np.ones((4, 4, 4), bool))
-    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
-    err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; the previous s.ply "
-                   "is unchanged"], err
-    assert (tmp_path / "s.ply").read_bytes() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.ply", "v.npy"]  # no temporary file left
+    assert_terminated_while_writing(tmp_path, capsys, before)
     assert not outputs.SIGNALS  # and the next command starts afresh
     monkeypatch.undo()
     assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 0
@@ -251,14 +258,7 @@ def test_a_repeated_signal_does_not_cut_short_the_clean_up(tmp_path, capsys, mon
 
     monkeypatch.setattr(outputs, "sync_file", signalled)
     monkeypatch.setattr(outputs, "_remove", removing)
-    capsys.readouterr()
-    np.save(tmp_path / "v.npy", np.ones((4, 4, 4), bool))
-    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 143
-    err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"isoflow: terminated: {tmp_path / 's.ply'}: interrupted while writing; the previous s.ply "
-                   "is unchanged"], err
-    assert (tmp_path / "s.ply").read_bytes() == before
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["s.ply", "v.npy"]  # no temporary file left
+    assert_terminated_while_writing(tmp_path, capsys, before)
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")

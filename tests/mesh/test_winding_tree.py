@@ -435,11 +435,36 @@ def test_the_time_note_takes_the_pace_after_the_first_share(capsys, monkeypatch)
     clock = [0.0]
     monkeypatch.setattr(time, "monotonic", lambda: clock[0])
     show = bar.time_note(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
-    for t, done in ((30.0, 0), (40.0, 1), (41.0, 2), (42.0, 3), (50.0, 11)):
+    for t, done in ((30.0, 0), (40.0, 1), (41.0, 2), (42.0, 3), (50.0, 11), (60.0, 21)):
         clock[0] = t
         show(done, 100)
     assert capsys.readouterr().err == (
-        "isoflow voxelize: note: voxelize will take about 2 min 19 s in all (3 % done in 42 s)\n")
+        "isoflow voxelize: note: voxelize will take about 2 min 19 s in all (11 % done in 50 s)\n")
+
+
+def test_the_time_note_takes_the_pace_over_a_whole_piece(capsys, monkeypatch):
+    """The two threads begin their pieces together and end them in bursts
+    (the tetrahedral quads at 256 across: 70 s a piece, two ending at 76
+    and 77 s, the next two at 146 and 151 s; a share of 1,000 reported
+    every 0.1 s): the pace taken over the first burst alone said 18
+    minutes for a job of about five hours, and taken just before the
+    second burst it says ten. Taken as a share ends, over at least as long
+    as the first share took, it says about five hours."""
+    import argparse
+    import time
+
+    from isoflow.cli import progress as bar
+
+    clock = [0.0]
+    monkeypatch.setattr(time, "monotonic", lambda: clock[0])
+    show = bar.time_note(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
+    reports = [(6.0, 0), (40.0, 0), (76.2, 1), (77.0, 3), (78.3, 3), (100.0, 3), (146.4, 3), (146.5, 5), (151.3, 7)]
+    for t, done in reports:
+        clock[0] = t
+        show(done, 1000)
+    said = capsys.readouterr().err
+    assert said == "isoflow voxelize: note: voxelize will take about 4 h 53 min in all (0 % done in 2 min 26 s)\n", said
+    assert 4 * 3600 < 146.5 + (146.5 - 76.2) / 4 * 995 < 5 * 3600  # the estimate, by hand
 
 
 def test_block_models_bound_the_cap_at_each_point_s_distance(rng):

@@ -68,23 +68,35 @@ def time_note(args: argparse.Namespace, label: str, hint: str | None = None) -> 
     the start: before it lie the reading of the mesh and numba's loading or
     compiling of the passes, which cost the same however large the work,
     and divided by a first share of a few hundred they made a job of
-    minutes read as one of hours.
+    minutes read as one of hours. It is taken over at least as long as the
+    first share took since the first report (of any share, none done
+    included), and read as a share ends: the threads begin their pieces
+    together and end them in bursts, so two pieces ending a second apart
+    after 70 s each made a job of five hours read as one of 18 minutes,
+    and read just before the next burst, as one of ten hours.
     """
     import time
 
     start = time.monotonic()
+    begun: list[float] = []
     first: list[tuple[float, int]] = []
+    seen = [0]
     said: list[bool] = []
 
     def show(done: int, total: int | None) -> None:
-        if said or not total or done <= 0:
+        if said or not total:
             return
         now = time.monotonic()
+        if not begun:
+            begun.append(now)
+        ended, seen[0] = done > seen[0], done  # a share ended just now
+        if done <= 0:
+            return
         if not first:
             first.append((now, done))
             return
         t0, d0 = first[0]
-        if done <= d0 or now - t0 < NOTE_AFTER:
+        if not ended or done <= d0 or now - t0 < max(NOTE_AFTER, t0 - begun[0]):
             return
         said.append(True)
         elapsed = now - start
