@@ -162,7 +162,7 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
         yield
         return
 
-    raised = [-math.inf]  # when a signal was last raised as KeyboardInterrupt
+    raised = [-math.inf]  # time.monotonic() of the last signal raised as KeyboardInterrupt
 
     def interrupt(signum, frame):
         # kept as well as raised: a library may swallow the KeyboardInterrupt
