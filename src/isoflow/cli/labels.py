@@ -21,6 +21,10 @@ SHOWN_ROWS = 20
 TERMINAL_COLUMNS = (("label", "label", 8), ("voxels", "voxels", 10), ("volume", "volume", 11),
                     ("area", "surface_area", 11), ("chi", "euler_characteristic", 6), ("b0", "b0", 4),
                     ("b1", "b1", 5), ("b2", "b2", 4))
+#: those of a 2D table (:mod:`isoflow.digital.planar_labels`)
+PLANAR_TERMINAL_COLUMNS = (("label", "label", 8), ("pixels", "voxels", 10), ("area", "area", 11),
+                           ("perimeter", "perimeter", 11), ("chi", "euler_characteristic", 6), ("b0", "b0", 4),
+                           ("b1", "b1", 5))
 
 _RANGE = re.compile(r"\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*)?")
 
@@ -68,18 +72,26 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     ``(about, connectivity, table, image)``, ``about`` its shape, type,
     voxel size and origin, ``image`` None for a zarr store (read block by
     block)."""
-    from ..digital.connectivity import default_connectivity
+    from ..digital.connectivity import default_connectivity, resolve_connectivity
     from ..digital.label_table import label_table
     from ..mesh.volumes import read_label_image
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
-    conn = args.connectivity or default_connectivity(3)
     image = None
     if is_store(args.input):
+        conn = args.connectivity or default_connectivity(3)
         about, table = table_of_store(args, conn, asked, surfaces)
     else:
         image = read_label_image(args.input)
+        ndim = image.array.ndim
+        if ndim == 2 and getattr(args, "command", "") == "surface":
+            raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
+                               f"{args.input} --labels gives its table)")
+        try:
+            conn = resolve_connectivity(ndim, args.connectivity)
+        except IsoflowError as exc:
+            raise IsoflowError(f"{args.input}: {exc}") from None
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin}
         wanted = None if asked is None else _within_type(asked, image.array.dtype)
@@ -194,12 +206,15 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     n = len(table["label"])
     pitch = "x".join(f"{p:g}" for p in about["spacing"])
     shape = "x".join(map(str, about["shape"]))
-    lines = [f"{name}: {n} labels, shape {shape}, voxel {pitch}, {conn}-connectivity"]
+    planar = len(about["shape"]) == 2
+    lines = [f"{name}: {_count(n, 'label')}, shape {shape}, {'pixel' if planar else 'voxel'} {pitch}, "
+             f"{conn}-connectivity"]
     surfaces = "genera" in table
-    head = "".join(f"{h:>{w}}" for h, _, w in TERMINAL_COLUMNS)
+    shown = PLANAR_TERMINAL_COLUMNS if planar else TERMINAL_COLUMNS
+    head = "".join(f"{h:>{w}}" for h, _, w in shown)
     lines.append(head + ("  surfaces (genera)" if surfaces else ""))
     for r in range(min(n, SHOWN_ROWS)):
-        row = "".join(_cell(table[c][r], w) for _, c, w in TERMINAL_COLUMNS)
+        row = "".join(_cell(table[c][r], w) for _, c, w in shown)
         if surfaces:
             genera = ",".join(map(str, table["genera"][r][:6])) + (",..." if len(table["genera"][r]) > 6 else "")
             row += f"  {table['surfaces'][r]} ({genera})"
@@ -210,11 +225,20 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     return "\n".join(lines)
 
 
+def _count(n: int, what: str) -> str:
+    """``1 label``, ``2 labels``."""
+    return f"{n} {what}{'' if n == 1 else 's'}"
+
+
 def summary(table: dict) -> str:
     """One line over every label."""
     n = len(table["label"])
-    parts = [f"{n} labels", f"{int(table['voxels'].sum())} voxels"]
-    for column, what in (("b0", "in several components"), ("b1", "with tunnels"), ("b2", "with cavities")):
+    planar = "perimeter" in table
+    parts = [_count(n, "label"), _count(int(table["voxels"].sum()), "pixel" if planar else "voxel")]
+    for column, what in (("b0", "in several components"), ("b1", "with holes" if planar else "with tunnels"),
+                         ("b2", "with cavities")):
+        if column not in table:
+            continue
         count = int(np.count_nonzero(table[column] > (1 if column == "b0" else 0)))
         parts.append(f"{count} {what}")
     if "pinched_vertices" in table:

@@ -42,7 +42,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from .closed_surfaces import sweep_tables
-from .connectivity import check_connectivity
+from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .surface import face_slots, pinch_lut, slot_octants
@@ -88,7 +88,7 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
 
 def label_table(
     image: ArrayLike,
-    connectivity: int = 6,
+    connectivity: int | None = None,
     *,
     pitch: float | Sequence[float] | None = None,
     origin: Sequence[float] | None = None,
@@ -97,18 +97,20 @@ def label_table(
     method: Literal["auto", "numpy", "compiled"] = "auto",
     threads: int | None = None,
 ) -> dict[str, np.ndarray]:
-    """The shape report of every label of a 3D label image, as columns.
+    """The shape report of every label of a 3D or 2D label image, as columns.
 
     Parameters
     ----------
     image : array_like
-        3D integer (or bool) label image, any integer type up to 64 bits.
-    connectivity : {6, 26}
-        Every label's connectivity; its complement takes the other one.
-    pitch : float or sequence of 3 floats, optional
+        3D or 2D integer (or bool) label image, any integer type up to 64
+        bits.
+    connectivity : {6, 26} in 3D, {4, 8} in 2D, optional
+        Every label's connectivity (default the paper's: 6, in 2D 4); its
+        complement takes the other one.
+    pitch : float or sequence of floats, optional
         Voxel size (per axis); volumes, areas, boxes and centroids are in
         its units (default 1).
-    origin : sequence of 3 floats, optional
+    origin : sequence of floats, optional
         World position of voxel (0, 0, 0)'s lowest corner (default 0).
     labels : sequence of int, optional
         The labels to report, in this order (default: every nonzero label
@@ -117,12 +119,13 @@ def label_table(
         mask.
     surfaces : bool
         Count the closed surfaces of every label's boundary mesh (the
-        columns of :data:`SURFACE_COLUMNS`).
+        columns of :data:`SURFACE_COLUMNS`; 3D only).
     method : {"auto", "numpy", "compiled"}
         "compiled": one pass for all labels (numba); "numpy": ``analyze``
         on each label's box plus one voxel; "auto": the compiled pass
         where numba is installed, unless the image is small and has few
-        labels.
+        labels. A 2D image takes one NumPy pass for all labels
+        (:mod:`isoflow.digital.planar_labels`) whatever the method.
     threads : int, optional
         Threads for the compiled passes (default: ``ISOFLOW_THREADS``,
         else every CPU).
@@ -142,12 +145,19 @@ def label_table(
         ``genera`` (a tuple per label, most faces first, as ``analyze``
         lists them), ``surface_euler`` (V - E + F of the label's whole mesh,
         ``2 chi + 2 pinched``), ``pinched_vertices``, ``doubled_edges``.
+        A 2D table has the same columns one dimension down (the paper's
+        section 4 in the plane): ``label``, ``voxels`` (pixels), ``area``,
+        ``perimeter`` (boundary pixel edges times their length),
+        ``bbox-0`` .. ``bbox-3``, ``centroid-0`` .. ``centroid-1``,
+        ``euler_characteristic``, ``b0``, ``b1`` (holes), ``n-0`` ..
+        ``n-2`` (convex, flat, concave, eq. 4.9), ``non_well_composed``,
+        ``energy``.
 
     Raises
     ------
     IsoflowError
-        A volume that is not 3D or not integer, a bad connectivity, pitch
-        or method, or work that would not fit in memory.
+        An image that is not 2D or 3D or not integer, a bad connectivity,
+        pitch or method, or work that would not fit in memory.
 
     Notes
     -----
@@ -164,15 +174,33 @@ def label_table(
     >>> t = label_table(image)
     >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist(), t["genera"].tolist()
     ([3, 7], [8, 56], [0, 1], [(0,), (0, 0)])
+
+    A 2D segmentation: a ring of four cells around a fifth
+
+    >>> cells = np.zeros((5, 5), np.int32)
+    >>> cells[0, :], cells[4, :], cells[1:4, 0], cells[1:4, 4] = 1, 2, 3, 4
+    >>> cells[2, 2] = 5
+    >>> t = label_table(cells, pitch=0.5)
+    >>> t["b0"].tolist(), t["b1"].tolist(), t["area"].tolist()
+    ([1, 1, 1, 1, 1], [0, 0, 0, 0, 0], [1.25, 1.25, 0.75, 0.75, 0.25])
+    >>> label_table(cells > 0)["b1"].tolist()  # one label: the ring holds a hole
+    [1]
     """
     from ..scale.compiled import using
 
     vol = checked_image(image)
-    conn = check_connectivity(3, connectivity)
+    conn = resolve_connectivity(vol.ndim, connectivity)
     # the pitch and origin checked as every object's are
-    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
-                          origin=np.zeros(3) if origin is None else np.asarray(origin, float))
+    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
+                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin, float))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
+    if vol.ndim == 2:
+        from .planar_labels import planar_table
+
+        _use_compiled(vol, method)  # the method checked as in 3D
+        plain = vol.view(np.uint8) if vol.dtype == np.bool_ else vol
+        return planar_table(plain, conn, place.spacing, place.origin,
+                            None if wanted is None else wanted.astype(plain.dtype))
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
     return columns(found, place.spacing, place.origin, surfaces)
@@ -180,8 +208,8 @@ def label_table(
 
 def checked_image(image) -> np.ndarray:
     vol = np.asarray(image)
-    if vol.ndim != 3:
-        raise IsoflowError(f"a label table needs a 3D label image, got a {vol.ndim}D array")
+    if vol.ndim not in (2, 3):
+        raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
     if vol.dtype != np.bool_ and vol.dtype.kind not in "iu":
         raise IsoflowError(f"a label image holds integers, not {vol.dtype}")
     return vol

@@ -151,8 +151,8 @@ class LabelImage:
 
 
 def read_label_image(path: str | os.PathLike) -> LabelImage:
-    """A 3D label image from any format :func:`read_volume` reads, as
-    integers (a float array whose values are all whole numbers, as NIfTI
+    """A 3D or 2D label image from any format :func:`read_volume` reads,
+    as integers (a float array whose values are all whole numbers, as NIfTI
     scaling may give, becomes int64), with its voxel size and origin."""
     file, dataset = split_dataset(path)
     fmt = format_for(file)
@@ -161,8 +161,9 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     raw = fmt.load().read(file, dataset)
     arr = np.asarray(raw.array)
-    if arr.ndim != 3:
-        raise IsoflowError(f"{path}: a label table needs a 3D volume, this array is {arr.ndim}D with shape {arr.shape}")
+    if arr.ndim not in (2, 3):
+        raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
+                           f"{arr.shape}")
     if arr.dtype.kind == "f":
         whole = np.isfinite(arr).all() and (arr == np.round(arr)).all() and np.abs(arr).max(initial=0) < 2**63
         if not whole:
@@ -171,12 +172,12 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
     try:
-        obj = DigitalObject(np.zeros((1, 1, 1), bool), **{k: v for k, v in (
+        obj = DigitalObject(np.zeros((1,) * arr.ndim, bool), **{k: v for k, v in (
             ("pitch", raw.pitch), ("origin", raw.origin), ("offset", raw.offset), ("parity", raw.parity))
             if v is not None})
     except IsoflowError as exc:
         raise IsoflowError(f"{path}: {exc}") from None
-    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, 3)))[0])
+    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0])
 
 
 def select_label(array, label, where: str) -> np.ndarray:

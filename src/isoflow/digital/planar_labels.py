@@ -1,0 +1,205 @@
+"""The label table of a 2D label image: a cell segmentation, a grain map of
+a micrograph, one slice of a volume (``isoflow info LABELS --labels`` on a
+2D image).
+
+A label's object is the pixels of that label; everything else is its
+complement, and every row equals what
+:func:`isoflow.digital.analysis.analyze` reports for ``image == label`` in
+2D, found for all labels at once:
+
+* every lattice vertex sees at most four labels, and the configuration of
+  each (section 4: the 16 of a 2x2 block) comes from the same block, so one
+  pass over the vertices gives every label's configuration histogram; its
+  ``a^T n = 4 chi`` (eq. 4.12), its planar classes ``n`` (eq. 4.9) and its
+  energy follow from that histogram as for one object
+  (:func:`~isoflow.digital.analysis.report_from_histogram`);
+* the components of every label come from one labelling of the whole image
+  (cc3d's, which joins pixels of equal value), so ``b0`` needs no pass per
+  label, and ``b1 = b0 - chi`` (the holes: in the plane there is no
+  cavity);
+* the perimeter is the pixel edges between the label and anything else,
+  each times its length.
+"""
+
+from __future__ import annotations
+
+from typing import Literal, cast
+
+import numpy as np
+
+from .indices import NOT_WELL_COMPOSED, PLANAR_LABELS, euler_lut, planar_class_lut
+
+#: the columns of a 2D table, in order ("bbox", "centroid" and "n" stand for
+#: their numbered columns); ``area`` and ``perimeter`` are a 3D table's
+#: ``volume`` and ``surface_area`` one dimension down
+PLANAR_COLUMNS = ("label", "voxels", "area", "perimeter", "bbox", "centroid", "euler_characteristic", "b0", "b1",
+                  "n", "non_well_composed", "energy")
+
+#: vertex rows whose configurations are read at a time (memory: a few
+#: arrays of this many rows' vertices)
+ROWS_AT_ONCE = 1 << 20
+
+
+def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.ndarray,
+                 wanted: np.ndarray | None) -> dict[str, np.ndarray]:
+    """The table of a 2D label image (the columns of :data:`PLANAR_COLUMNS`).
+
+    Parameters
+    ----------
+    image : (ny, nx) integer or bool array
+        The label image.
+    conn : {4, 8}
+        Every label's connectivity; its complement takes the other one.
+    spacing, origin : (2,) float arrays
+        Pixel size per axis, and the world position of pixel (0, 0)'s
+        lowest corner.
+    wanted : array of the image's type, optional
+        The labels to report, in this order (None: every nonzero label
+        present, in increasing order); an absent one gets a row of zeros
+        (NaN box and centroid).
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        One row per label, as :func:`isoflow.label_table` describes.
+
+    Examples
+    --------
+    >>> image = np.array([[1, 1, 1, 0],
+    ...                   [1, 0, 1, 2],
+    ...                   [1, 1, 1, 0]], np.uint8)
+    >>> t = planar_table(image, 4, np.ones(2), np.zeros(2), None)
+    >>> t["label"].tolist(), t["voxels"].tolist(), t["b1"].tolist(), t["perimeter"].tolist()
+    ([1, 2], [8, 1], [1, 0], [16.0, 4.0])
+    """
+    values, dense = dense_labels(image)
+    k = len(values) + 1  # dense index 0: the outside of the image
+    hist = label_histograms(dense, k)
+    counts, sums, lo, hi = _places(dense, k)
+    b0 = _components(dense, conn, k)
+    edges = _boundary_edges(dense, k)
+    if wanted is None:
+        rows = np.flatnonzero((values != 0) & (counts[1:] > 0)) + 1
+        labels = values[rows - 1]
+    else:
+        at = np.minimum(np.searchsorted(values, wanted), len(values) - 1)
+        rows = np.where(values[at] == wanted, at + 1, 0)  # row 0: an absent label's zeros
+        labels = np.asarray(wanted, dtype=values.dtype)
+    chi = hist @ euler_lut(2, conn).astype(np.int64) // 4
+    cls = planar_class_lut()
+    out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
+                                  "area": counts[rows] * float(spacing[0] * spacing[1]),
+                                  "perimeter": edges[rows] @ np.array([spacing[1], spacing[0]])}
+    present = counts[rows] > 0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        for d in range(2):
+            out[f"bbox-{d}"] = np.where(present, origin[d] + spacing[d] * lo[rows, d], np.nan)
+        for d in range(2):
+            out[f"bbox-{d + 2}"] = np.where(present, origin[d] + spacing[d] * (hi[rows, d] + 1), np.nan)
+        for d in range(2):
+            out[f"centroid-{d}"] = np.where(present, origin[d] + spacing[d] * (sums[rows, d] / counts[rows] + 0.5),
+                                            np.nan)
+    out["euler_characteristic"] = chi[rows]
+    out["b0"] = b0[rows]
+    out["b1"] = b0[rows] - chi[rows]
+    n = np.stack([hist[:, cls == c].sum(axis=1) for c in range(len(PLANAR_LABELS))], axis=1)
+    for c in range(len(PLANAR_LABELS)):
+        out[f"n-{c}"] = n[rows, c]
+    out["non_well_composed"] = hist[rows][:, cls == NOT_WELL_COMPOSED].sum(axis=1)
+    out["energy"] = n[rows, 0] + n[rows, 2]  # k = a^2 is 1 at convex and concave vertices, 0 at flat ones
+    return out
+
+
+def dense_labels(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The image's values as dense indices from 1: ``(values, dense)``,
+    ``dense`` (uint32, the image's shape) holding ``i + 1`` where the image
+    holds ``values[i]``. Values within a span of a sixteenth of the pixels
+    (cell numbers 1 .. N, the common case) are offsets from the smallest,
+    some of them absent (no sort); others are sorted out by ``np.unique``."""
+    if not image.size:
+        return np.zeros(0, image.dtype), np.zeros(image.shape, np.uint32)
+    low, high = image.min(), image.max()
+    if int(high) - int(low) < max(1 << 10, image.size // 16):
+        values = np.arange(int(low), int(high) + 1).astype(image.dtype)
+        wide = image if image.dtype.kind == "u" else image.astype(np.int64)  # (int8 -128 .. 127 would wrap)
+        return values, (wide - low).astype(np.uint32) + np.uint32(1)
+    values, dense = np.unique(image, return_inverse=True)
+    return values, (dense.reshape(image.shape) + 1).astype(np.uint32 if len(values) < 2**32 - 1 else np.uint64)
+
+
+def label_histograms(dense: np.ndarray, k: int) -> np.ndarray:
+    """(k, 16) int64: per label (dense index 1 .. k - 1 of ``dense``, 0
+    the outside), how many lattice vertices have each configuration of it
+    (bit ``d0 + 2 d1`` for the pixel ``w - 1 + d`` of vertex ``w``, as
+    :func:`~isoflow.digital.configurations.configurations` numbers them).
+    A label is counted at the first of a block's pixels that holds it, so
+    each vertex adds one configuration per label it sees."""
+    padded = np.pad(dense, 1)
+    ny, nx = dense.shape
+    hist = np.zeros(k * 16, np.int64)
+    step = max(1, ROWS_AT_ONCE // (nx + 1))
+    for y0 in range(0, ny + 1, step):
+        y1 = min(ny + 1, y0 + step)
+        q = [padded[y0 + (b & 1):y1 + (b & 1), (b >> 1):nx + 1 + (b >> 1)].reshape(-1) for b in range(4)]
+        uniform = (q[0] == q[1]) & (q[0] == q[2]) & (q[0] == q[3])
+        hist[15::16] += np.bincount(q[0][uniform], minlength=k)[:k]  # every pixel of the block one label's
+        q = [c[~uniform] for c in q]
+        for p in range(4):
+            label = q[p].astype(np.int64)
+            first = label != 0
+            for r in range(p):
+                first &= q[r] != q[p]
+            mask = sum((q[r] == q[p]).astype(np.int64) << r for r in range(4))
+            hist += np.bincount((label * 16 + mask)[first], minlength=k * 16)
+    hist[:16] = 0  # the outside is no label
+    return hist.reshape(k, 16)
+
+
+def _places(dense: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per dense label: pixel count, coordinate sums (k, 2) and the lowest
+    and highest pixel of its box (k, 2 each; 0 and -1 where absent)."""
+    flat = dense.reshape(-1)
+    counts = np.bincount(flat, minlength=k).astype(np.int64)
+    ny, nx = dense.shape
+    sums = np.stack([np.bincount(flat, weights=np.repeat(np.arange(ny, dtype=np.float64), nx), minlength=k),
+                     np.bincount(flat, weights=np.tile(np.arange(nx, dtype=np.float64), ny), minlength=k)], axis=1)
+    # the boxes from the runs of the rows (a run: a stretch of one label
+    # along axis 1), far fewer than the pixels
+    begins = np.ones((ny, nx), bool)
+    np.not_equal(dense[:, 1:], dense[:, :-1], out=begins[:, 1:])
+    y, x0 = np.nonzero(begins)
+    run_label = dense[y, x0]
+    x1 = np.append(x0[1:] - 1, nx - 1)  # a run ends before the next begins, or at its row's end
+    x1[np.flatnonzero(np.diff(y))] = nx - 1
+    lo, hi = np.full((k, 2), np.iinfo(np.int64).max, np.int64), np.full((k, 2), -1, np.int64)
+    np.minimum.at(lo, (run_label, 0), y)
+    np.maximum.at(hi, (run_label, 0), y)
+    np.minimum.at(lo, (run_label, 1), x0)
+    np.maximum.at(hi, (run_label, 1), x1)
+    lo[counts == 0] = 0
+    return counts, sums, lo, hi
+
+
+def _components(dense: np.ndarray, conn: int, k: int) -> np.ndarray:
+    """Per dense label, its components under ``conn`` (4 or 8): one
+    labelling of the whole image, which joins neighbours of equal value."""
+    import cc3d
+
+    parts, count = cc3d.connected_components(dense, connectivity=cast(Literal[4, 8], conn), return_N=True)
+    label_of = np.zeros(count + 1, np.int64)
+    label_of[parts.reshape(-1)] = dense.reshape(-1)
+    return np.bincount(label_of[1:], minlength=k)[:k]
+
+
+def _boundary_edges(dense: np.ndarray, k: int) -> np.ndarray:
+    """(k, 2): per dense label, the pixel edges it shares with another
+    value or the outside, between neighbours along axis 0 and along axis 1."""
+    padded = np.pad(dense, 1)
+    out = np.zeros((k, 2), np.int64)
+    for axis in range(2):
+        a = padded[:-1, :] if axis == 0 else padded[:, :-1]
+        b = padded[1:, :] if axis == 0 else padded[:, 1:]
+        differ = a != b
+        out[:, axis] = np.bincount(a[differ], minlength=k)[:k] + np.bincount(b[differ], minlength=k)[:k]
+    out[0] = 0
+    return out

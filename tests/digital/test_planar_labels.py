@@ -1,0 +1,172 @@
+"""The label table of 2D label images: every row equals ``analyze(image ==
+label)`` in 2D on random label images whose labels touch by edges and
+corners and nest inside each other, at 4 and 8; scikit-image's
+regionprops gives the same pixel counts, Euler numbers, boxes and
+centroids; the perimeter is the label's boundary pixel edges; and the
+command line prints, writes and refuses 2D tables as it does 3D ones."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from isoflow import analyze, label_table
+from isoflow.digital import planar_labels
+from isoflow.errors import IsoflowError
+
+
+def analyze_row(mask, conn):
+    r = analyze(mask, conn)
+    return [r["voxels"], r["euler_characteristic"], r["betti"][0], r["betti"][1], *r["n"], r["non_well_composed"],
+            r["energy"]]
+
+
+def table_row(table, r):
+    keys = ["voxels", "euler_characteristic", "b0", "b1", "n-0", "n-1", "n-2", "non_well_composed", "energy"]
+    return [int(table[k][r]) for k in keys]
+
+
+def edges_of(mask, pitch=(1.0, 1.0)):
+    """The mask's boundary pixel edges times their length, counted on the mask alone."""
+    m = np.pad(mask, 1).astype(np.int8)
+    return (np.count_nonzero(np.diff(m, axis=0)) * pitch[1] + np.count_nonzero(np.diff(m, axis=1)) * pitch[0])
+
+
+def nested(rng, shape=(23, 29)):
+    """Rings of labels around rings around a disc, a ring cut open, in a
+    noise of labels and 0 that touch them by edges and corners."""
+    image = rng.choice([0, 0, 6, 7, 8], size=shape).astype(np.int64)
+    y, x = np.indices(shape) - np.array([11, 13])[:, None, None]
+    r = np.hypot(y, x)
+    image[(r >= 8) & (r < 10)] = 1
+    image[(r >= 5) & (r < 7)] = 2
+    image[r < 3] = 3
+    image[(r >= 3.5) & (r < 4.5) & (x != 0)] = 4  # a ring cut open: no hole
+    image[:, -3:] = rng.choice([-5, 2**40 + 3, 9], size=(shape[0], 3))
+    return image
+
+
+@pytest.mark.parametrize("conn", [4, 8])
+def test_random_label_images_equal_analyze_per_label(conn):
+    rng = np.random.default_rng(20131122)
+    for trial in range(120):
+        shape = tuple(int(s) for s in rng.integers(1, 14, 2))
+        image = rng.integers(0, int(rng.integers(2, 7)), shape)
+        if trial % 3 == 0:  # sparse: labels meeting at single corners
+            image = np.where(rng.random(shape) < 0.35, image, 0)
+        image = image.astype(rng.choice([np.uint8, np.int16, np.uint32, np.int64]))
+        table = label_table(image, conn)
+        assert table["label"].tolist() == sorted(set(image[image != 0].tolist()))
+        for r, label in enumerate(table["label"]):
+            assert table_row(table, r) == analyze_row(image == label, conn), (trial, label)
+            assert table["perimeter"][r] == edges_of(image == label)
+            ys, xs = np.nonzero(image == label)
+            assert [table[f"bbox-{d}"][r] for d in range(4)] == [ys.min(), xs.min(), ys.max() + 1, xs.max() + 1]
+            assert [table[f"centroid-{d}"][r] for d in range(2)] == [ys.mean() + 0.5, xs.mean() + 0.5]
+
+
+@pytest.mark.parametrize("conn", [4, 8])
+def test_nested_rings_and_negative_and_wide_labels(conn):
+    image = nested(np.random.default_rng(1))
+    table = label_table(image, conn)
+    for r, label in enumerate(table["label"]):
+        assert table_row(table, r) == analyze_row(image == label, conn), label
+    at = {int(v): r for r, v in enumerate(table["label"])}
+    assert table["b1"][at[1]] >= 1 and table["b1"][at[2]] >= 1  # the rings hold holes
+    assert table["b0"][at[3]] == 1 and table["b1"][at[3]] == 0
+    assert -5 in at and 2**40 + 3 in at
+    extremes = np.array([[-128, 127, 0], [127, -128, -128]], np.int8)  # the type's whole span
+    t = label_table(extremes, conn)
+    assert t["label"].tolist() == [-128, 127] and t["voxels"].tolist() == [3, 2]
+    assert t["b0"].tolist() == ([2, 2] if conn == 4 else [1, 1])
+
+
+def test_bool_image_is_one_label_and_the_table_by_chunks_is_the_same(monkeypatch):
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 40, (61, 47))
+    whole = label_table(image, 8)
+    monkeypatch.setattr(planar_labels, "ROWS_AT_ONCE", 50)  # one vertex row at a time
+    chunked = label_table(image, 8)
+    for key in whole:
+        np.testing.assert_array_equal(whole[key], chunked[key], err_msg=key)
+    mask = image > 20
+    t = label_table(mask)
+    assert t["label"].tolist() == [1] and table_row(t, 0) == analyze_row(mask, 4)
+
+
+def test_regionprops_gives_the_same_areas_euler_numbers_boxes_and_centroids():
+    from skimage.measure import regionprops_table
+
+    rng = np.random.default_rng(7)
+    image = rng.integers(0, 9, (40, 33)).astype(np.int32)
+    image[5:30, 4:28] = 0
+    image[8:26, 8:24] = 3  # a label with holes of other labels inside
+    image[12:14, 12:20] = 5
+    image[16, 10] = 0
+    ours = label_table(image, 8)
+    theirs = regionprops_table(image, properties=("label", "area", "euler_number", "bbox", "centroid"))
+    np.testing.assert_array_equal(ours["label"], theirs["label"])
+    np.testing.assert_array_equal(ours["voxels"], theirs["area"])
+    np.testing.assert_array_equal(ours["euler_characteristic"], theirs["euler_number"])
+    for d in range(4):
+        np.testing.assert_array_equal(ours[f"bbox-{d}"], theirs[f"bbox-{d}"])
+    for d in range(2):  # pixel v spans [v, v + 1]: scikit-image's centroid plus 0.5
+        np.testing.assert_allclose(ours[f"centroid-{d}"], theirs[f"centroid-{d}"] + 0.5, rtol=0, atol=1e-12)
+
+
+def test_pitch_origin_and_labels_asked_for():
+    image = np.zeros((6, 9), np.uint16)
+    image[1:4, 2:7] = 4
+    image[2, 4] = 0
+    t = label_table(image, pitch=(0.5, 2.0), origin=(10.0, -1.0), labels=[4, 9])
+    assert t["label"].tolist() == [4, 9]
+    assert t["area"].tolist() == [14 * 1.0, 0.0]
+    assert t["perimeter"][0] == edges_of(image == 4, (0.5, 2.0)) == 2 * 3 * 0.5 + 2 * 5 * 2.0 + 2 * 0.5 + 2 * 2.0
+    assert [t[f"bbox-{d}"][0] for d in range(4)] == [10.5, 3.0, 12.0, 13.0]
+    assert np.isnan(t["bbox-0"][1]) and np.isnan(t["centroid-1"][1])
+    assert t["b1"].tolist() == [1, 0] and t["voxels"].tolist() == [14, 0]
+    with pytest.raises(IsoflowError, match="connectivity 6 is not valid in 2D"):
+        label_table(image, 6)
+    with pytest.raises(IsoflowError, match="3D or 2D label image, got a 1D"):
+        label_table(image[0])
+
+
+def run(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def test_info_labels_on_a_2d_image_from_the_shell(tmp_path):
+    image = nested(np.random.default_rng(5))[:, :-3].astype(np.int32)
+    np.save(tmp_path / "cells.npy", image)
+    proc = run("info", "cells.npy", "--labels", "--json", "--connectivity", "8", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["shape"] == [23, 26] and out["connectivity"] == 8 and len(out["pitch"]) == 2
+    table = label_table(image, 8)
+    assert [row["label"] for row in out["labels"]] == table["label"].tolist()
+    for row, r in zip(out["labels"], range(len(table["label"]))):
+        assert [row[k] for k in ("voxels", "euler_characteristic", "b0", "b1", "n-0", "n-1", "n-2",
+                                 "non_well_composed", "energy")] == table_row(table, r)
+        assert row["perimeter"] == edges_of(image == row["label"])
+    text = run("info", "cells.npy", "--labels", cwd=tmp_path)
+    assert text.returncode == 0 and "pixel 1x1, 4-connectivity" in text.stdout
+    assert "perimeter" in text.stdout and "with holes" in text.stdout and "b2" not in text.stdout
+    for args, message in ((("info", "cells.npy", "--labels", "--connectivity", "26"),
+                           "cells.npy: connectivity 26 is not valid in 2D (use 4 or 8)"),
+                          (("surface", "cells.npy", "--labels", "-o", "out.glb"),
+                           "cells.npy: surface needs a 3D label image, this one is 2D")):
+        proc = run(*args, cwd=tmp_path)
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+        assert message in proc.stderr
+    assert not (tmp_path / "out.glb").exists()
+
+
+def test_a_2d_zarr_store_names_what_reads_it(tmp_path):
+    zarr = pytest.importorskip("zarr")
+    store = zarr.open_array(tmp_path / "cells.zarr", mode="w", shape=(12, 9), chunks=(5, 5), dtype="u2")
+    store[:] = 3
+    proc = run("info", "cells.zarr", "--labels", cwd=tmp_path)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "is 2D; save it as .npy or .tif for its 2D table" in proc.stderr
