@@ -220,12 +220,19 @@ def assert_text_as_json_and_csv_write(table: dict) -> None:
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
 
 
+#: table_text.PLAIN_ROWS for each way of writing a table: every table in
+#: Python's text, every table in compiled digits
+WRITERS = {"plain": 10**9, "compiled": -1}
+
+
+@pytest.mark.parametrize("writer", WRITERS)
 @pytest.mark.parametrize("rows", [0, 1, 5, 23])
-def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows):
+def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows, writer):
     """Random cells, across blocks of rows."""
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 4)
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer])
     floats = rng.uniform(-1e3, 1e3, rows) * 10.0 ** rng.integers(-9, 18, rows)
     floats[::3] = np.round(floats[::3])
     floats[1::5] = np.nan
@@ -237,7 +244,8 @@ def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, row
          "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera})
 
 
-def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch):
+@pytest.mark.parametrize("writer", WRITERS)
+def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch, writer):
     """The integers at the ends of every width (the most negative int64
     has no positive twin), and the floats where ``repr`` changes how it
     writes a whole number (an exponent from 1e16 on), a signed zero, the
@@ -246,6 +254,7 @@ def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch):
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 5)
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer])
     floats = np.array([-0.0, 0.0, 9999999999999998.0, 1e16, -1e16, 2.0**53, 123456789012345.0, -7.0, 0.1,
                        5e-324, 1e300, -np.inf, np.nan, 1.5, 1e22, 100.0])
     rows = len(floats)

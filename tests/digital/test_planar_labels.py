@@ -81,16 +81,22 @@ def test_nested_rings_and_negative_and_wide_labels(conn):
     t = label_table(extremes, conn)
     assert t["label"].tolist() == [-128, 127] and t["voxels"].tolist() == [3, 2]
     assert t["b0"].tolist() == ([2, 2] if conn == 4 else [1, 1])
+    top = np.array([[2**64 - 1, 0], [2**64 - 3, 2**64 - 1]], np.uint64)  # beyond int64
+    assert label_table(top, conn)["label"].tolist() == [2**64 - 3, 2**64 - 1]
 
 
-def test_bool_image_is_one_label_and_the_table_by_chunks_is_the_same(monkeypatch):
+def test_bool_image_is_one_label_and_the_table_by_chunks_or_without_histograms_is_the_same(monkeypatch):
     rng = np.random.default_rng(3)
     image = rng.integers(0, 40, (61, 47))
     whole = label_table(image, 8)
     monkeypatch.setattr(planar_labels, "ROWS_AT_ONCE", 50)  # one vertex row at a time
     chunked = label_table(image, 8)
-    for key in whole:
-        np.testing.assert_array_equal(whole[key], chunked[key], err_msg=key)
+    for histogram in (0, 1):  # features summed directly, or a histogram per label
+        monkeypatch.setattr(planar_labels, "HISTOGRAM_LABELS", histogram)
+        table = label_table(image, 8)
+        for key in whole:
+            np.testing.assert_array_equal(whole[key], chunked[key], err_msg=key)
+            np.testing.assert_array_equal(whole[key], table[key], err_msg=key)
     mask = image > 20
     t = label_table(mask)
     assert t["label"].tolist() == [1] and table_row(t, 0) == analyze_row(mask, 4)
@@ -133,15 +139,19 @@ def test_pitch_origin_and_labels_asked_for():
         label_table(image[0])
 
 
-def run(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+def run(*args, cwd, flags=()):
+    return subprocess.run([sys.executable, *flags, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd)
 
 
 def test_info_labels_on_a_2d_image_from_the_shell(tmp_path):
     image = nested(np.random.default_rng(5))[:, :-3].astype(np.int32)
     np.save(tmp_path / "cells.npy", image)
-    proc = run("info", "cells.npy", "--labels", "--json", "--connectivity", "8", cwd=tmp_path)
+    proc = run("info", "cells.npy", "--labels", "--json", "--connectivity", "8", cwd=tmp_path, flags=("-X", "importtime"))
     assert proc.returncode == 0, proc.stderr
+    # NumPy and cc3d, and a table this small written in Python: numba's half-second start is not paid
+    imported = {line.split("|")[-1].strip() for line in proc.stderr.splitlines() if line.startswith("import time:")}
+    assert "cc3d" in imported and "numba" not in imported
     out = json.loads(proc.stdout)
     assert out["shape"] == [23, 26] and out["connectivity"] == 8 and len(out["pitch"]) == 2
     table = label_table(image, 8)
@@ -170,3 +180,20 @@ def test_a_2d_zarr_store_names_what_reads_it(tmp_path):
     proc = run("info", "cells.zarr", "--labels", cwd=tmp_path)
     assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
     assert "is 2D; save it as .npy or .tif for its 2D table" in proc.stderr
+
+
+def test_a_2d_table_beyond_the_budget_is_refused_before_the_work(tmp_path, monkeypatch):
+    """Up front for the pixels, then for the labels once their number is
+    known: a map of few cells is not refused for what a label per pixel
+    needs."""
+    from isoflow.scale import memory
+
+    cells = np.repeat(np.arange(1, 5, dtype=np.uint16), 256)[:, None] * np.ones((1, 1024), np.uint16)  # 1M pixels
+    noise = np.random.default_rng(0).permutation(cells.size).reshape(cells.shape).astype(np.uint32)
+    monkeypatch.setattr(memory, "default_budget", lambda: 20 * cells.size)  # below the pixels' share
+    with pytest.raises(IsoflowError, match="label table of a 1024x1024 label image needs about"):
+        label_table(cells)
+    monkeypatch.setattr(memory, "default_budget", lambda: 50 * cells.size)
+    assert label_table(cells)["voxels"].tolist() == [256 * 1024] * 4
+    with pytest.raises(IsoflowError, match="1024x1024 label image of 1,048,576 values needs about"):
+        label_table(noise)

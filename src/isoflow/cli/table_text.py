@@ -19,12 +19,17 @@ held whole.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 
 import numpy as np
 
 #: rows turned into text at once
 BLOCK_ROWS = 1 << 14
+#: a table of at most this many rows is written by Python's own text of
+#: each cell (the same text): numba's start, about half a second, would
+#: cost a small table (a 2D segmentation, a few organs) more than it saves
+PLAIN_ROWS = 2048
 
 
 def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> list[str]:
@@ -130,6 +135,23 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
     return _text_cells(cell_texts(column, joined, booleans))
 
 
+def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
+                booleans: tuple[str, str]) -> str:
+    """:func:`_rows` in Python: each cell's text from ``str`` (integers)
+    and ``repr`` (floats: the text :mod:`json` and :mod:`csv` write)."""
+    columns = []
+    for column in table.values():
+        part = column[lo:hi]
+        if part.dtype.kind in "iu":
+            columns.append(list(map(str, part.tolist())))
+        elif part.dtype.kind == "f":
+            columns.append([repr(v) if math.isfinite(v) else missing for v in part.astype(np.float64).tolist()])
+        else:
+            columns.append(cell_texts(part, joined, booleans))
+    seps = [b.decode("ascii") for b in before]
+    return "".join("".join(sep + cell for sep, cell in zip(seps, row)) for row in zip(*columns))
+
+
 def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
           booleans: tuple[str, str]) -> str:
     """Rows lo .. hi - 1 as one text, each cell after its column's
@@ -160,9 +182,10 @@ def json_rows(table: dict) -> Iterator[str]:
     keys = [json.dumps(str(k)) for k in table]
     before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
     n = len(next(iter(table.values()))) if table else 0
+    rows = _plain_rows if n <= PLAIN_ROWS else _rows
     yield "["
     for lo in range(0, n, BLOCK_ROWS):
-        text = _rows(table, lo, min(lo + BLOCK_ROWS, n), before, "null", ", ", ("false", "true"))
+        text = rows(table, lo, min(lo + BLOCK_ROWS, n), before, "null", ", ", ("false", "true"))
         yield text[3:] if lo == 0 else text  # the first row has no "}, " before it
     yield "}]" if n else "]"
 
@@ -181,6 +204,7 @@ def csv_rows(table: dict) -> Iterator[str]:
     yield ",".join(map(str, table))
     before = [b"\r\n"] + [b","] * (len(table) - 1)
     n = len(next(iter(table.values()))) if table else 0
+    rows = _plain_rows if n <= PLAIN_ROWS else _rows
     for lo in range(0, n, BLOCK_ROWS):
-        yield _rows(table, lo, min(lo + BLOCK_ROWS, n), before, "", ";", ("False", "True"))
+        yield rows(table, lo, min(lo + BLOCK_ROWS, n), before, "", ";", ("False", "True"))
     yield "\r\n"

@@ -27,6 +27,7 @@ from typing import Literal, cast
 
 import numpy as np
 
+from ..scale.memory import check_fits
 from .indices import NOT_WELL_COMPOSED, PLANAR_LABELS, euler_lut, planar_class_lut
 
 #: the columns of a 2D table, in order ("bbox", "centroid" and "n" stand for
@@ -35,9 +36,20 @@ from .indices import NOT_WELL_COMPOSED, PLANAR_LABELS, euler_lut, planar_class_l
 PLANAR_COLUMNS = ("label", "voxels", "area", "perimeter", "bbox", "centroid", "euler_characteristic", "b0", "b1",
                   "n", "non_well_composed", "energy")
 
-#: vertex rows whose configurations are read at a time (memory: a few
-#: arrays of this many rows' vertices)
+#: vertices whose configurations are read at a time (memory: a few arrays
+#: of this many)
 ROWS_AT_ONCE = 1 << 20
+#: bytes beyond the image at the peak, checked before the work: per pixel
+#: (the dense labels, the padded copies, the labelling, the runs), per
+#: vertex of a chunk (its blocks' labels and configurations) and per label
+#: (its sums and the table's columns); measured (tracemalloc): 10 bytes a
+#: pixel on a 4096^2 cell map, 37 on a 1024^2 one (one chunk), 300 a pixel
+#: where every pixel is a label
+PIXEL_BYTES, CHUNK_BYTES, LABEL_BYTES = 8, 40, 320
+#: labels are counted in a configuration histogram (16 counts a label)
+#: where there are at most this share of a label per pixel, else their
+#: features are summed directly (:func:`label_features`)
+HISTOGRAM_LABELS = 1 / 16
 
 
 def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.ndarray,
@@ -72,9 +84,13 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     >>> t["label"].tolist(), t["voxels"].tolist(), t["b1"].tolist(), t["perimeter"].tolist()
     ([1, 2], [8, 1], [1, 0], [16.0, 4.0])
     """
+    shape = "x".join(map(str, image.shape))
+    need = PIXEL_BYTES * image.size + CHUNK_BYTES * min(image.size, ROWS_AT_ONCE)
+    check_fits(need, f"the label table of a {shape} label image")
     values, dense = dense_labels(image)
     k = len(values) + 1  # dense index 0: the outside of the image
-    hist = label_histograms(dense, k)
+    check_fits(need + LABEL_BYTES * k, f"the label table of a {shape} label image of {k - 1:,} values")
+    features = label_features(dense, k, conn)
     counts, sums, lo, hi = _places(dense, k)
     b0 = _components(dense, conn, k)
     edges = _boundary_edges(dense, k)
@@ -85,8 +101,7 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
         at = np.minimum(np.searchsorted(values, wanted), len(values) - 1)
         rows = np.where(values[at] == wanted, at + 1, 0)  # row 0: an absent label's zeros
         labels = np.asarray(wanted, dtype=values.dtype)
-    chi = hist @ euler_lut(2, conn).astype(np.int64) // 4
-    cls = planar_class_lut()
+    chi = features[:, 0] // 4
     out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
                                   "area": counts[rows] * float(spacing[0] * spacing[1]),
                                   "perimeter": edges[rows] @ np.array([spacing[1], spacing[0]])}
@@ -102,11 +117,10 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     out["euler_characteristic"] = chi[rows]
     out["b0"] = b0[rows]
     out["b1"] = b0[rows] - chi[rows]
-    n = np.stack([hist[:, cls == c].sum(axis=1) for c in range(len(PLANAR_LABELS))], axis=1)
     for c in range(len(PLANAR_LABELS)):
-        out[f"n-{c}"] = n[rows, c]
-    out["non_well_composed"] = hist[rows][:, cls == NOT_WELL_COMPOSED].sum(axis=1)
-    out["energy"] = n[rows, 0] + n[rows, 2]  # k = a^2 is 1 at convex and concave vertices, 0 at flat ones
+        out[f"n-{c}"] = features[rows, 1 + c]
+    out["non_well_composed"] = features[rows, 4]
+    out["energy"] = features[rows, 1] + features[rows, 3]  # k = a^2: 1 at convex and concave vertices, 0 at flat
     return out
 
 
@@ -120,62 +134,94 @@ def dense_labels(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return np.zeros(0, image.dtype), np.zeros(image.shape, np.uint32)
     low, high = image.min(), image.max()
     if int(high) - int(low) < max(1 << 10, image.size // 16):
-        values = np.arange(int(low), int(high) + 1).astype(image.dtype)
-        wide = image if image.dtype.kind == "u" else image.astype(np.int64)  # (int8 -128 .. 127 would wrap)
-        return values, (wide - low).astype(np.uint32) + np.uint32(1)
-    values, dense = np.unique(image, return_inverse=True)
-    return values, (dense.reshape(image.shape) + 1).astype(np.uint32 if len(values) < 2**32 - 1 else np.uint64)
+        values = np.arange(int(high) - int(low) + 1).astype(image.dtype) + low  # (modulo the type: exact)
+        dense = np.empty(image.shape, np.uint32)
+        if image.dtype == np.uint64:  # (its values need not fit an int64)
+            np.add(image - low, np.uint64(1), out=dense, casting="unsafe")
+        else:  # in int64 a buffer at a time, so that int8 -128 .. 127 does not wrap
+            np.subtract(image, int(low) - 1, out=dense, dtype=np.int64, casting="unsafe")
+        return values, dense
+    values, inverse = np.unique(image, return_inverse=True)
+    return values, (inverse.reshape(image.shape) + 1).astype(np.uint32 if len(values) < 2**32 - 1 else np.uint64)
 
 
-def label_histograms(dense: np.ndarray, k: int) -> np.ndarray:
-    """(k, 16) int64: per label (dense index 1 .. k - 1 of ``dense``, 0
-    the outside), how many lattice vertices have each configuration of it
-    (bit ``d0 + 2 d1`` for the pixel ``w - 1 + d`` of vertex ``w``, as
-    :func:`~isoflow.digital.configurations.configurations` numbers them).
-    A label is counted at the first of a block's pixels that holds it, so
-    each vertex adds one configuration per label it sees."""
+#: the columns of :func:`label_features`: the Euler share (``a^T n = 4
+#: chi``, eq. 4.12), the three planar classes (eq. 4.9) and the
+#: configurations that are not well-composed
+FEATURES = ("euler", "convex", "flat", "concave", "non_well_composed")
+
+
+def feature_rows(conn: int) -> np.ndarray:
+    """(16, 5) int64: what a vertex of each configuration adds to its
+    label's :data:`FEATURES`."""
+    cls = planar_class_lut()
+    return np.stack([euler_lut(2, conn), cls == 0, cls == 1, cls == 2, cls == NOT_WELL_COMPOSED],
+                    axis=1).astype(np.int64)
+
+
+def label_features(dense: np.ndarray, k: int, conn: int) -> np.ndarray:
+    """(k, 5) int64: per label (dense index 1 .. k - 1 of ``dense``, 0
+    the outside), its :data:`FEATURES` summed over the lattice vertices:
+    each vertex adds, for every label it sees, the row of that label's
+    configuration there (bit ``d0 + 2 d1`` for the pixel ``w - 1 + d`` of
+    vertex ``w``, as :func:`~isoflow.digital.configurations.configurations`
+    numbers them), counted at the first of the block's pixels that holds
+    the label. A configuration histogram per label would take 16 counts a
+    label, too many where nearly every pixel is a label of its own."""
+    rows = feature_rows(conn)
     padded = np.pad(dense, 1)
     ny, nx = dense.shape
-    hist = np.zeros(k * 16, np.int64)
+    counts = np.zeros((k, 16), np.int64) if k <= HISTOGRAM_LABELS * dense.size else None
+    out = np.zeros((k, len(FEATURES)), np.int64)
     step = max(1, ROWS_AT_ONCE // (nx + 1))
     for y0 in range(0, ny + 1, step):
         y1 = min(ny + 1, y0 + step)
         q = [padded[y0 + (b & 1):y1 + (b & 1), (b >> 1):nx + 1 + (b >> 1)].reshape(-1) for b in range(4)]
         uniform = (q[0] == q[1]) & (q[0] == q[2]) & (q[0] == q[3])
-        hist[15::16] += np.bincount(q[0][uniform], minlength=k)[:k]  # every pixel of the block one label's
+        inside = np.bincount(q[0][uniform], minlength=k)[:k]  # every pixel of the block one label's
+        out += inside[:, None] * rows[15]
         q = [c[~uniform] for c in q]
+        labels, masks = [], []
         for p in range(4):
-            label = q[p].astype(np.int64)
-            first = label != 0
+            first = q[p] != 0
             for r in range(p):
                 first &= q[r] != q[p]
-            mask = sum((q[r] == q[p]).astype(np.int64) << r for r in range(4))
-            hist += np.bincount((label * 16 + mask)[first], minlength=k * 16)
-    hist[:16] = 0  # the outside is no label
-    return hist.reshape(k, 16)
+            masks.append(sum((q[r] == q[p]).astype(np.int64) << r for r in range(4))[first])
+            labels.append(q[p][first].astype(np.int64))
+        label, mask = np.concatenate(labels), np.concatenate(masks)
+        if counts is not None:  # few labels: a histogram, weighed once at the end
+            counts += np.bincount(label * 16 + mask, minlength=16 * k).reshape(k, 16)
+        else:
+            for f in range(len(FEATURES)):
+                out[:, f] += np.bincount(label, weights=rows[mask, f], minlength=k).astype(np.int64)
+    if counts is not None:
+        out += counts @ rows
+    out[0] = 0  # the outside is no label
+    return out
 
 
 def _places(dense: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per dense label: pixel count, coordinate sums (k, 2) and the lowest
     and highest pixel of its box (k, 2 each; 0 and -1 where absent)."""
-    flat = dense.reshape(-1)
-    counts = np.bincount(flat, minlength=k).astype(np.int64)
+    # from the runs of the rows (a run: a stretch of one label along axis
+    # 1), far fewer than the pixels; sums of whole numbers below 2^53 in
+    # float64 are exact
     ny, nx = dense.shape
-    sums = np.stack([np.bincount(flat, weights=np.repeat(np.arange(ny, dtype=np.float64), nx), minlength=k),
-                     np.bincount(flat, weights=np.tile(np.arange(nx, dtype=np.float64), ny), minlength=k)], axis=1)
-    # the boxes from the runs of the rows (a run: a stretch of one label
-    # along axis 1), far fewer than the pixels
     begins = np.ones((ny, nx), bool)
     np.not_equal(dense[:, 1:], dense[:, :-1], out=begins[:, 1:])
     y, x0 = np.nonzero(begins)
     run_label = dense[y, x0]
     x1 = np.append(x0[1:] - 1, nx - 1)  # a run ends before the next begins, or at its row's end
     x1[np.flatnonzero(np.diff(y))] = nx - 1
+    length = x1 - x0 + 1
+    counts = np.bincount(run_label, weights=length, minlength=k).astype(np.int64)
+    sums = np.stack([np.bincount(run_label, weights=y * length, minlength=k),
+                     np.bincount(run_label, weights=(x0 + x1) * length // 2, minlength=k)], axis=1)
     lo, hi = np.full((k, 2), np.iinfo(np.int64).max, np.int64), np.full((k, 2), -1, np.int64)
-    np.minimum.at(lo, (run_label, 0), y)
-    np.maximum.at(hi, (run_label, 0), y)
-    np.minimum.at(lo, (run_label, 1), x0)
-    np.maximum.at(hi, (run_label, 1), x1)
+    np.minimum.at(lo[:, 0], run_label, y)
+    np.maximum.at(hi[:, 0], run_label, y)
+    np.minimum.at(lo[:, 1], run_label, x0)
+    np.maximum.at(hi[:, 1], run_label, x1)
     lo[counts == 0] = 0
     return counts, sums, lo, hi
 
