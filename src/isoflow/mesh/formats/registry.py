@@ -73,6 +73,8 @@ FORMATS = (
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),  # a bit per voxel
     VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255),  # colour indices
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True),
+    # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
+    VolumeFormat("PNG", (".png",), "png", None, imports="PIL", read_only=(".png",)),
 )
 
 

@@ -1,0 +1,51 @@
+"""PNG: 2D masks and label images (Pillow), read only.
+
+PNG is what many 2D segmentations are saved as: Cellpose's ``_cp_masks.png``
+(16-bit cell numbers), palette PNGs whose indices are the classes (PASCAL
+VOC), 8-bit masks. Axes: row ``j``, column ``i`` is pixel ``(i, j)``
+(isoflow's (x, y), as a TIFF page). Modes: bilevel (``1``) as bool; 8-,
+16- and 32-bit grey (``L``, ``I;16``, ``I``) as their integers; palette
+(``P``) as the indices, not the colours; grey stored as colour (``RGB``,
+``RGBA``, ``LA`` whose colour channels are equal, the alpha ignored) as
+that grey. Colours that differ are refused: a colour-coded image is a
+picture of labels, whose numbering its file does not say. An animated PNG
+(several frames) is refused. The pixel size is 1: PNG's ``pHYs`` is a
+print resolution (pixels per metre), not a microscope's calibration.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import IsoflowError
+from .registry import RawVolume, check_shape, import_library, reading
+
+#: Pillow's modes read as they are (their integer type)
+GREY = {"1": np.bool_, "L": np.uint8, "P": np.uint8, "I;16": np.uint16, "I;16B": np.uint16, "I;16L": np.uint16,
+        "I": np.int32}
+#: modes of grey stored as colour: the channels that must be equal
+COLOUR = {"RGB": 3, "RGBA": 3, "LA": 1}
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    pil = import_library("PIL.Image", "PNG", "pillow")
+    where = str(path)
+    with reading(path, "PNG"), pil.open(path) as image:
+        if getattr(image, "n_frames", 1) > 1:
+            raise IsoflowError(f"{where}: an animated PNG of {image.n_frames} frames; isoflow reads one image")
+        mode = image.mode
+        if mode not in GREY and mode not in COLOUR:
+            raise IsoflowError(f"{where}: a PNG of mode {mode}, which isoflow does not read as labels")
+        check_shape((image.height, image.width), GREY.get(mode, np.uint8), where)
+        data = np.asarray(image)
+    if mode in COLOUR:
+        channels = data[..., :COLOUR[mode]]
+        grey = channels[..., 0]
+        if not (channels == grey[..., None]).all():
+            raise IsoflowError(f"{where}: holds colours, not labels or a mask (its {mode} channels differ); save "
+                               "it as a grey (8- or 16-bit) or palette PNG")
+        data = grey
+    data = np.asarray(data, dtype=GREY.get(mode, np.uint8))
+    return RawVolume(np.ascontiguousarray(data.T), np.ones(2))

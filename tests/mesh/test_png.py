@@ -1,0 +1,87 @@
+"""PNG input (2D masks and label images, as Cellpose and PASCAL VOC save
+them): every mode read as the pixels' labels, row j and column i as pixel
+(i, j); colours, animations and damaged files refused in one line."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from isoflow import analyze, label_table
+
+Image = pytest.importorskip("PIL.Image")
+
+
+def run(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True, cwd=cwd)
+
+
+def one_line_exit_2(proc, words):
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert words in proc.stderr, proc.stderr
+
+
+@pytest.fixture
+def cells():
+    """Cells numbered past 255 (16 bits), touching by edges and corners, with holes."""
+    rng = np.random.default_rng(11)
+    image = rng.integers(0, 4, (21, 34)).astype(np.uint16) * 300
+    image[5:15, 5:25] = 7
+    image[8:11, 9:12] = 0
+    return image
+
+
+def test_a_16_bit_label_png_is_its_cells(tmp_path, cells):
+    Image.fromarray(cells).save(tmp_path / "cp_masks.png")
+    proc = run("info", "cp_masks.png", "--labels", "--json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = json.loads(proc.stdout)
+    assert out["shape"] == [34, 21] and out["dtype"] == "uint16"  # (x, y): columns, then rows
+    table = label_table(cells.T)
+    assert [row["label"] for row in out["labels"]] == table["label"].tolist() == [7, 300, 600, 900]
+    for r, row in enumerate(out["labels"]):
+        assert [row[k] for k in ("voxels", "euler_characteristic", "b0", "b1")] == [
+            int(table[k][r]) for k in ("voxels", "euler_characteristic", "b0", "b1")]
+    assert out["labels"][0]["b1"] == 1  # label 7's hole
+
+
+def test_palette_indices_grey_as_colour_and_masks(tmp_path, cells):
+    small = (cells // 300).astype(np.uint8)  # indices 0 .. 3
+    palette = Image.fromarray(small, mode="P")
+    palette.putpalette([0, 0, 0, 200, 10, 10, 10, 200, 10, 10, 10, 200] + [0] * 744)  # colours unlike the indices
+    palette.save(tmp_path / "voc.png")
+    Image.fromarray(np.stack([small] * 3 + [np.full_like(small, 255)], axis=-1), mode="RGBA").save(tmp_path / "g.png")
+    mask = cells == 7
+    Image.fromarray(mask).save(tmp_path / "bilevel.png")
+    Image.fromarray(mask.astype(np.uint8)).save(tmp_path / "mask.png")
+    want = label_table(small.T)
+    for name in ("voc.png", "g.png"):
+        proc = run("info", name, "--labels", "--json", cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        rows = json.loads(proc.stdout)["labels"]
+        assert [r["label"] for r in rows] == want["label"].tolist() == [1, 2, 3], name
+        assert [r["voxels"] for r in rows] == want["voxels"].tolist(), name
+    report = analyze(mask.T)
+    for name in ("bilevel.png", "mask.png"):
+        proc = run("info", name, "--json", cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr
+        got = json.loads(proc.stdout)
+        assert [got["voxels"], got["betti"], got["n"]] == [report["voxels"], report["betti"], report["n"]], name
+
+
+def test_colours_animations_damaged_files_and_writing_are_refused(tmp_path, cells):
+    small = (cells // 300).astype(np.uint8)
+    Image.fromarray(np.stack([small, 2 * small, small], axis=-1)).save(tmp_path / "colour.png")
+    frames = [Image.fromarray(small), Image.fromarray(small[::-1].copy())]
+    frames[0].save(tmp_path / "anim.png", save_all=True, append_images=frames[1:])
+    (tmp_path / "bad.png").write_bytes(b"\x89PNG\r\n\x1a\nnot a png")
+    one_line_exit_2(run("info", "colour.png", "--labels", cwd=tmp_path), "colour.png: holds colours, not labels")
+    one_line_exit_2(run("info", "anim.png", cwd=tmp_path), "anim.png: an animated PNG of 2 frames")
+    one_line_exit_2(run("info", "bad.png", cwd=tmp_path), "bad.png: not a readable PNG file")
+    from isoflow import data
+
+    one_line_exit_2(run("voxelize", data.bob(), "--resolution", "8", "-o", "m.png", cwd=tmp_path),
+                    "m.png: volumes are written as")  # read only: PNG keeps no pixel size
+    assert not (tmp_path / "m.png").exists()
