@@ -158,6 +158,27 @@ def test_four_d(example_run):
         assert m["a_dot_n"] == 16 * m["euler_characteristic"]
 
 
+def test_cell_table(example_run):
+    from scipy import ndimage
+
+    out, printed = example_run("cell_table")
+    with open(out / "cells.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    image = np.load(out / "cells.npy")
+    assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
+    for row in rows:
+        mask = image == int(row["label"])
+        # scikit-image's Euler number (4-connected); the holes: the 8-components of the
+        # complement that keep off the image's edge, by scipy; pixels of 0.25 units
+        assert int(row["euler_characteristic"]) == euler_number(mask, 1)
+        parts, count = ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))
+        assert int(row["b1"]) == count - 1
+        assert float(row["area"]) == mask.sum() * 0.0625
+    holes = sum(int(r["b1"]) for r in rows)
+    assert rows[0]["b1"] == "2" and f"{holes} holes in all" in printed and holes > 10
+    assert (out / "cells.png").stat().st_size > 0
+
+
 def test_label_table(example_run):
     out, printed = example_run("label_table")
     with open(out / "labels.csv", newline="") as fh:

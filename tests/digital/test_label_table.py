@@ -225,7 +225,7 @@ def test_bool_image_is_label_1():
 
 
 @pytest.mark.parametrize("bad, words", [
-    (np.zeros((4, 4), np.uint8), "3D"),
+    (np.zeros((2, 2, 2, 2), np.uint8), "3D or 2D label image, got a 4D"),  # (2D: tests/digital/test_planar_labels.py)
     (np.zeros((4, 4, 4), np.float32), "integers"),
 ])
 def test_bad_images_are_one_line(bad, words):
