@@ -465,3 +465,31 @@ def test_the_extras_the_messages_name_bring_those_libraries():
     for extra in (EXTRA, "dask"):
         zarr_req = next(r for r in extras[extra] if r.startswith("zarr"))
         assert zarr_req == "zarr>=3", (extra, zarr_req)
+
+
+def test_a_mask_written_0_255_is_that_mask_in_every_format(tmp_path, capsys, labels):
+    """Image tools write masks as 0 and 255 (or 0 and -1, 0 and 255.0): a
+    volume whose only nonzero value is one v is the mask of v (what --label v
+    gives); two nonzero values are still refused."""
+    from PIL import Image
+
+    mask = labels == 3
+    want = info(capsys, _saved(tmp_path / "mask.npy", mask))
+    files = [_saved(tmp_path / "m255.npy", mask.astype(np.uint8) * 255),
+             _saved(tmp_path / "m_1.npy", -mask.astype(np.int8)),
+             _saved(tmp_path / "m255f.npy", mask * np.float32(255))]
+    tifffile.imwrite(tmp_path / "m255.tif", np.ascontiguousarray((mask * 255).astype(np.uint8).T))  # (z, y, x)
+    nib.save(nib.Nifti1Image((mask * 255).astype(np.int16), np.eye(4)), tmp_path / "m255.nii.gz")
+    files += [tmp_path / "m255.tif", tmp_path / "m255.nii.gz"]
+    for path in files:
+        got = info(capsys, path)
+        assert [got[k] for k in ("voxels", "betti", "n")] == [want[k] for k in ("voxels", "betti", "n")], path
+    flat = mask[:, :, 5]
+    Image.fromarray((flat.T * 255).astype(np.uint8)).save(tmp_path / "m255.png")  # rows are y
+    assert info(capsys, tmp_path / "m255.png")["betti"] == isoflow.analyze(flat)["betti"]
+    fails(capsys, "info", _saved(tmp_path / "two.npy", labels), words=("not a binary volume", "--label N"))
+
+
+def _saved(path, array):
+    np.save(path, array)
+    return path

@@ -58,8 +58,9 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
 
     ``path`` may name a dataset inside the file: ``FILE.h5:/group/volume``,
     ``IMAGE.zarr:1`` (an OME-Zarr resolution level). The volume must hold
-    0/1 values; a label image is refused unless ``label`` selects one value
-    (its voxels become the object). MagicaVoxel colours are not labels: any
+    0/1 values, or 0 and one other value (a mask written 0/255); a label
+    image is refused unless ``label`` selects one value (its voxels become
+    the object). MagicaVoxel colours are not labels: any
     coloured voxel is in the object unless ``label`` picks one colour index.
 
     An ``.npz`` written by :func:`write_volume` carries ``volume`` plus its
@@ -120,6 +121,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     else:
         if arr.dtype == np.uint8 and arr.size and arr.max() <= 1:
             arr = arr.view(np.bool_)  # a 0/1 mask, as every format is written: no comparisons, no copy
+        else:
+            arr = one_value_mask(arr)
         try:
             vol = binary(arr, where)
         except IsoflowError as exc:
@@ -134,6 +137,29 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise IsoflowError(f"{where}: {exc}") from None
+
+
+def one_value_mask(arr: np.ndarray) -> np.ndarray:
+    """The mask of an array whose only nonzero value is one ``v`` other than
+    1 (a mask written 0/255, as image tools write masks, or a label image
+    of one label: ``--label v`` could mean nothing else), else the array as
+    it is (for :func:`~isoflow.scale.arrays.binary` to check).
+
+    Examples
+    --------
+    >>> one_value_mask(np.array([[0, 255], [255, 0]], np.uint8)).tolist()
+    [[False, True], [True, False]]
+    >>> one_value_mask(np.array([0, 3, 5])).tolist()  # two labels: not a mask
+    [0, 3, 5]
+    """
+    if arr.dtype.kind not in "iuf" or not arr.size:
+        return arr
+    low, high = arr.min(), arr.max()
+    value = high if high != 0 else low
+    if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
+        return arr
+    mask = arr == value
+    return mask if np.count_nonzero(mask) + np.count_nonzero(arr == 0) == arr.size else arr
 
 
 #: what the refusal of a label image where a mask is expected adds
