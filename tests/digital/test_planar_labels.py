@@ -173,13 +173,25 @@ def test_info_labels_on_a_2d_image_from_the_shell(tmp_path):
     assert not (tmp_path / "out.glb").exists()
 
 
-def test_a_2d_zarr_store_names_what_reads_it(tmp_path):
+def test_a_2d_zarr_store_is_read_whole(tmp_path):
+    """Block by block is for 3D stores; a 2D one is read as a file is."""
     zarr = pytest.importorskip("zarr")
-    store = zarr.open_array(tmp_path / "cells.zarr", mode="w", shape=(12, 9), chunks=(5, 5), dtype="u2")
-    store[:] = 3
-    proc = run("info", "cells.zarr", "--labels", cwd=tmp_path)
-    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
-    assert "is 2D; save it as .npy or .tif for its 2D table" in proc.stderr
+    from isoflow.digital.label_blocks import label_table_blocks
+    from isoflow.mesh.formats.omezarr import LabelSlabs
+
+    image = nested(np.random.default_rng(8))[:, :-3].astype(np.uint16)
+    store = zarr.open_array(tmp_path / "cells.zarr", mode="w", shape=image.shape, chunks=(5, 7), dtype="u2")
+    store[:] = image
+    proc = run("info", "cells.zarr", "--labels", "--json", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    rows = json.loads(proc.stdout)["labels"]
+    table = label_table(image)
+    assert [r["label"] for r in rows] == table["label"].tolist()
+    assert [r["b1"] for r in rows] == table["b1"].tolist() and [r["perimeter"] for r in rows] == table["perimeter"].tolist()
+    one_line = run("surface", "cells.zarr", "--labels", "-o", "s.glb", cwd=tmp_path)
+    assert one_line.returncode == 2 and "surface needs a 3D label image, this one is 2D" in one_line.stderr
+    with pytest.raises(IsoflowError, match="this array is 2D; a 2D table reads the image whole"):
+        label_table_blocks(LabelSlabs(str(tmp_path / "cells.zarr")), 6)
 
 
 def test_a_2d_table_beyond_the_budget_is_refused_before_the_work(tmp_path, monkeypatch):

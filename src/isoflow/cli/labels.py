@@ -74,12 +74,13 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     block)."""
     from ..digital.connectivity import default_connectivity, resolve_connectivity
     from ..digital.label_table import label_table
+    from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_label_image
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
     image = None
-    if is_store(args.input):
+    if is_store(args.input) and stored_ndim(args.input) != 2:  # (a 2D store is read whole, as a file)
         conn = args.connectivity or default_connectivity(3)
         about, table = table_of_store(args, conn, asked, surfaces)
     else:

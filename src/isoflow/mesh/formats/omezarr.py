@@ -318,13 +318,13 @@ class LabelSlabs:
             scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
         if names is None:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
-                               f"volume, this array is {array.ndim}D" + ("; save it as .npy or .tif for its 2D "
-                                                                        "table" if array.ndim == 2 else ""))
+                               f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
+                                                                        "(label_table)" if array.ndim == 2 else ""))
         self.xyz, self.other = spatial_axes(names, array.shape, self.where)
         if len(self.xyz) != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
-                               f"volume, this image has axes {names}" + ("; save it as .npy or .tif for its 2D "
-                                                                        "table" if len(self.xyz) == 2 else ""))
+                               f"volume, this image has axes {names}" + ("; a 2D table reads the image whole "
+                                                                        "(label_table)" if len(self.xyz) == 2 else ""))
         if multiscale is not None:
             pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
         self.array, self.guarded = array, _Guarded(array, self.where)
