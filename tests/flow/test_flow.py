@@ -390,6 +390,16 @@ def test_cli_flow_out_files(tmp_path, capsys):
     assert main(["flow", str(tmp_path / "d.npy"), "--out", str(out)]) == 2
     assert "not empty" in capsys.readouterr().err
     assert main(["flow", str(tmp_path / "d.npy"), "--out", str(out), "--force"]) == 0
+    assert "step_*.ply" in capsys.readouterr().out
+
+
+def test_cli_flow_out_of_a_2d_object_names_the_files_it_writes(tmp_path, capsys):
+    disc = np.hypot(*np.indices((21, 21)) - 10.0) <= 7
+    np.save(tmp_path / "disc.npy", disc)
+    assert main(["flow", str(tmp_path / "disc.npy"), "--out", str(tmp_path / "run")]) == 0
+    said = capsys.readouterr().out.strip().splitlines()[-1]
+    assert said == f"{tmp_path / 'run'}: flow.csv, flow.png (figures)"
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["flow.csv", "flow.png"]
 
 
 def test_cli_flow_bad_input(tmp_path, capsys):

@@ -44,7 +44,9 @@ def cmd_flow(args: argparse.Namespace) -> int:
     else:
         print(format_flow(result, str(args.input)))
         if args.out:
-            print(f"{args.out}: surfaces (step_*.ply), flow.csv, flow.png (figures), shapes.png (3D: the object at a few steps)"
+            written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + ["flow.csv", "flow.png (figures)"] + (
+                ["shapes.png (the object at a few steps)"] if obj.ndim == 3 else [])
+            print(f"{args.out}: {', '.join(written)}"
                   + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
     return 0 if writer is None else say_read_back(args, writer)
 
