@@ -49,7 +49,11 @@ def test_info_labels_choice_keeps_its_order_and_notes_absent_labels(tmp_path, ca
     assert main(["info", str(tmp_path / "seg.npy"), "--labels", "9,2-3,40", "--json"]) == 0
     out, err = capsys.readouterr()
     assert [r["label"] for r in json.loads(out)["labels"]] == [9, 2, 3]
-    assert "note" in err and "(40)" in err
+    assert "1 of the labels asked for does not occur (40)" in err
+    assert main(["info", str(tmp_path / "seg.npy"), "--labels", "9,40-41", "--json"]) == 0
+    assert "2 of the labels asked for do not occur (40, 41)" in capsys.readouterr().err
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "3", "-o", tmp_path / "one.glb")
+    assert said.startswith(f"{tmp_path / 'one.glb'}: 1 label, ")
 
 
 def test_info_labels_terminal_table_shows_the_first_rows_and_a_summary(tmp_path, capsys, rng):

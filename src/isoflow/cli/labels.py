@@ -104,8 +104,9 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         if not present.any():
             raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
         if not args.quiet:
-            print(f"isoflow {args.command}: note: {args.input}: {len(absent)} of the labels asked for do not occur "
-                  f"({_some(absent)})", file=sys.stderr)
+            verb = "does" if len(absent) == 1 else "do"
+            print(f"isoflow {args.command}: note: {args.input}: {len(absent)} of the labels asked for {verb} not "
+                  f"occur ({_some(absent)})", file=sys.stderr)
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
         raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
@@ -312,7 +313,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
         problems = write_label_surfaces(args, target, meshes, glb_parts, report)
     faces = sum(len(m.faces) for _, m, _, _ in meshes)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({len(meshes)} {target[2]} files)"
-    print(f"{where}: {len(meshes)} labels, {faces} faces, one closed surface mesh per label"
+    print(f"{where}: {_count(len(meshes), 'label')}, {faces} faces, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
