@@ -224,9 +224,9 @@ def assert_text_as_json_and_csv_write(table: dict) -> None:
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
 
 
-#: table_text.PLAIN_ROWS for each way of writing a table: every table in
-#: Python's text, every table in compiled digits
-WRITERS = {"plain": 10**9, "compiled": -1}
+#: table_text.PLAIN_ROWS and PLAIN_ROWS_COLD for each way of writing a
+#: table: every table in Python's text, every table in compiled digits
+WRITERS = {"plain": (10**9, 10**9), "compiled": (-1, -1)}
 
 
 @pytest.mark.parametrize("writer", WRITERS)
@@ -236,7 +236,8 @@ def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, row
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 4)
-    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer])
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer][0])
+    monkeypatch.setattr(table_text, "PLAIN_ROWS_COLD", WRITERS[writer][1])
     floats = rng.uniform(-1e3, 1e3, rows) * 10.0 ** rng.integers(-9, 18, rows)
     floats[::3] = np.round(floats[::3])
     floats[1::5] = np.nan
@@ -258,7 +259,8 @@ def test_table_text_of_the_values_at_the_edges_of_each_type(monkeypatch, writer)
     from isoflow.cli import table_text
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 5)
-    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer])
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer][0])
+    monkeypatch.setattr(table_text, "PLAIN_ROWS_COLD", WRITERS[writer][1])
     floats = np.array([-0.0, 0.0, 9999999999999998.0, 1e16, -1e16, 2.0**53, 123456789012345.0, -7.0, 0.1,
                        5e-324, 1e300, -np.inf, np.nan, 1.5, 1e22, 100.0])
     rows = len(floats)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections.abc import Iterator
 
 import numpy as np
@@ -28,8 +29,11 @@ import numpy as np
 BLOCK_ROWS = 1 << 14
 #: a table of at most this many rows is written by Python's own text of
 #: each cell (the same text): numba's start, about half a second, would
-#: cost a small table (a 2D segmentation, a few organs) more than it saves
-PLAIN_ROWS = 2048
+#: cost a small table (a few organs) more than it saves; where numba is
+#: not loaded at all yet (a 2D table is NumPy's), up to PLAIN_ROWS_COLD
+#: rows (Python's text: about 11 us a row of a table's 18 columns, the
+#: compiled one 1.5 us after a start of 0.5-0.9 s)
+PLAIN_ROWS, PLAIN_ROWS_COLD = 2048, 50_000
 
 
 def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> list[str]:
@@ -135,6 +139,11 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
     return _text_cells(cell_texts(column, joined, booleans))
 
 
+def plain(n: int) -> bool:
+    """Whether a table of ``n`` rows is written by :func:`_plain_rows`."""
+    return n <= PLAIN_ROWS or (n <= PLAIN_ROWS_COLD and "numba" not in sys.modules)
+
+
 def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
                 booleans: tuple[str, str]) -> str:
     """:func:`_rows` in Python: each cell's text from ``str`` (integers)
@@ -182,7 +191,7 @@ def json_rows(table: dict) -> Iterator[str]:
     keys = [json.dumps(str(k)) for k in table]
     before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
     n = len(next(iter(table.values()))) if table else 0
-    rows = _plain_rows if n <= PLAIN_ROWS else _rows
+    rows = _plain_rows if plain(n) else _rows
     yield "["
     for lo in range(0, n, BLOCK_ROWS):
         text = rows(table, lo, min(lo + BLOCK_ROWS, n), before, "null", ", ", ("false", "true"))
@@ -204,7 +213,7 @@ def csv_rows(table: dict) -> Iterator[str]:
     yield ",".join(map(str, table))
     before = [b"\r\n"] + [b","] * (len(table) - 1)
     n = len(next(iter(table.values()))) if table else 0
-    rows = _plain_rows if n <= PLAIN_ROWS else _rows
+    rows = _plain_rows if plain(n) else _rows
     for lo in range(0, n, BLOCK_ROWS):
         yield rows(table, lo, min(lo + BLOCK_ROWS, n), before, "", ";", ("False", "True"))
     yield "\r\n"
