@@ -89,7 +89,7 @@ def test_bool_image_is_one_label_and_the_table_by_chunks_or_without_histograms_i
     rng = np.random.default_rng(3)
     image = rng.integers(0, 40, (61, 47))
     whole = label_table(image, 8)
-    monkeypatch.setattr(planar_labels, "ROWS_AT_ONCE", 50)  # one vertex row at a time
+    monkeypatch.setattr(planar_labels, "VERTICES_AT_ONCE", 50)  # one vertex row at a time
     chunked = label_table(image, 8)
     for histogram in (0, 1):  # features summed directly, or a histogram per label
         monkeypatch.setattr(planar_labels, "HISTOGRAM_LABELS", histogram)
@@ -133,6 +133,8 @@ def test_pitch_origin_and_labels_asked_for():
     assert [t[f"bbox-{d}"][0] for d in range(4)] == [10.5, 3.0, 12.0, 13.0]
     assert np.isnan(t["bbox-0"][1]) and np.isnan(t["centroid-1"][1])
     assert t["b1"].tolist() == [1, 0] and t["voxels"].tolist() == [14, 0]
+    empty = label_table(np.zeros((0, 5), np.int32), labels=[3])  # no pixel: every label asked for absent
+    assert empty["label"].tolist() == [3] and empty["voxels"].tolist() == [0] and np.isnan(empty["bbox-0"][0])
     with pytest.raises(IsoflowError, match="connectivity 6 is not valid in 2D"):
         label_table(image, 6)
     with pytest.raises(IsoflowError, match="3D or 2D label image, got a 1D"):

@@ -9,10 +9,10 @@ complement, and every row equals what
 
 * every lattice vertex sees at most four labels, and the configuration of
   each (section 4: the 16 of a 2x2 block) comes from the same block, so one
-  pass over the vertices gives every label's configuration histogram; its
-  ``a^T n = 4 chi`` (eq. 4.12), its planar classes ``n`` (eq. 4.9) and its
-  energy follow from that histogram as for one object
-  (:func:`~isoflow.digital.analysis.report_from_histogram`);
+  pass over the vertices gives every label's ``a^T n = 4 chi`` (eq. 4.12),
+  its planar classes ``n`` (eq. 4.9) and its energy, what
+  :func:`~isoflow.digital.analysis.report_from_histogram` reads from one
+  object's configuration histogram;
 * the components of every label come from one labelling of the whole image
   (cc3d's, which joins pixels of equal value), so ``b0`` needs no pass per
   label, and ``b1 = b0 - chi`` (the holes: in the plane there is no
@@ -38,7 +38,7 @@ PLANAR_COLUMNS = ("label", "voxels", "area", "perimeter", "bbox", "centroid", "e
 
 #: vertices whose configurations are read at a time (memory: a few arrays
 #: of this many)
-ROWS_AT_ONCE = 1 << 20
+VERTICES_AT_ONCE = 1 << 20
 #: bytes beyond the image at the peak, checked before the work: per pixel
 #: (the dense labels, the padded copies, the labelling, the runs), per
 #: vertex of a chunk (its blocks' labels and configurations) and per label
@@ -85,7 +85,7 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     ([1, 2], [8, 1], [1, 0], [16.0, 4.0])
     """
     shape = "x".join(map(str, image.shape))
-    need = PIXEL_BYTES * image.size + CHUNK_BYTES * min(image.size, ROWS_AT_ONCE)
+    need = PIXEL_BYTES * image.size + CHUNK_BYTES * min(image.size, VERTICES_AT_ONCE)
     check_fits(need, f"the label table of a {shape} label image")
     values, dense = dense_labels(image)
     k = len(values) + 1  # dense index 0: the outside of the image
@@ -97,6 +97,8 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     if wanted is None:
         rows = np.flatnonzero((values != 0) & (counts[1:] > 0)) + 1
         labels = values[rows - 1]
+    elif not len(values):  # an image of no pixels: every label absent
+        rows, labels = np.zeros(len(wanted), np.int64), np.asarray(wanted, dtype=values.dtype)
     else:
         at = np.minimum(np.searchsorted(values, wanted), len(values) - 1)
         rows = np.where(values[at] == wanted, at + 1, 0)  # row 0: an absent label's zeros
@@ -142,7 +144,8 @@ def dense_labels(image: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.subtract(image, int(low) - 1, out=dense, dtype=np.int64, casting="unsafe")
         return values, dense
     values, inverse = np.unique(image, return_inverse=True)
-    return values, (inverse.reshape(image.shape) + 1).astype(np.uint32 if len(values) < 2**32 - 1 else np.uint64)
+    # (2^32 values or more would need far more than the memory check lets through)
+    return values, (inverse.reshape(image.shape) + 1).astype(np.uint32)
 
 
 #: the columns of :func:`label_features`: the Euler share (``a^T n = 4
@@ -155,8 +158,10 @@ def feature_rows(conn: int) -> np.ndarray:
     """(16, 5) int64: what a vertex of each configuration adds to its
     label's :data:`FEATURES`."""
     cls = planar_class_lut()
-    return np.stack([euler_lut(2, conn), cls == 0, cls == 1, cls == 2, cls == NOT_WELL_COMPOSED],
+    rows = np.stack([euler_lut(2, conn), cls == 0, cls == 1, cls == 2, cls == NOT_WELL_COMPOSED],
                     axis=1).astype(np.int64)
+    assert not rows[15].any()  # a block of one label adds nothing to it: the passes skip those
+    return rows
 
 
 def label_features(dense: np.ndarray, k: int, conn: int) -> np.ndarray:
@@ -173,14 +178,12 @@ def label_features(dense: np.ndarray, k: int, conn: int) -> np.ndarray:
     ny, nx = dense.shape
     counts = np.zeros((k, 16), np.int64) if k <= HISTOGRAM_LABELS * dense.size else None
     out = np.zeros((k, len(FEATURES)), np.int64)
-    step = max(1, ROWS_AT_ONCE // (nx + 1))
+    step = max(1, VERTICES_AT_ONCE // (nx + 1))
     for y0 in range(0, ny + 1, step):
         y1 = min(ny + 1, y0 + step)
         q = [padded[y0 + (b & 1):y1 + (b & 1), (b >> 1):nx + 1 + (b >> 1)].reshape(-1) for b in range(4)]
-        uniform = (q[0] == q[1]) & (q[0] == q[2]) & (q[0] == q[3])
-        inside = np.bincount(q[0][uniform], minlength=k)[:k]  # every pixel of the block one label's
-        out += inside[:, None] * rows[15]
-        q = [c[~uniform] for c in q]
+        mixed = (q[0] != q[1]) | (q[0] != q[2]) | (q[0] != q[3])  # (a block of one label adds nothing)
+        q = [c[mixed] for c in q]
         labels, masks = [], []
         for p in range(4):
             first = q[p] != 0
