@@ -118,12 +118,17 @@ def grains(size: int, count: int, seed: int = 0) -> np.ndarray:
     return out
 
 
-def cached(size: int, count: int) -> Path:
+def cached_array(name: str, make) -> Path:
+    """``benchmarks/.cache/NAME.npy``, made by ``make()`` the first time."""
     CACHE.mkdir(parents=True, exist_ok=True)
-    path = CACHE / f"grains-{size}-{count}.npy"
+    path = CACHE / f"{name}.npy"
     if not path.exists():
-        np.save(path, grains(size, count))
+        np.save(path, make())
     return path
+
+
+def cached(size: int, count: int) -> Path:
+    return cached_array(f"grains-{size}-{count}", lambda: grains(size, count))
 
 
 TOOLS = {
@@ -232,9 +237,10 @@ def in_child(name: str, path: Path, repeat: int) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def commands(path: Path, pairs: int) -> dict:
-    """Whole commands, alternated: medians of wall seconds and their ratio."""
-    ours = [sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--json"]
+def commands(path: Path, pairs: int, options: tuple[str, ...] = ()) -> dict:
+    """Whole commands, alternated: medians of wall seconds and their ratio
+    (``options``: more of ``isoflow info``'s)."""
+    ours = [sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--json", *options]
     script = ("import sys, numpy as np; from skimage.measure import regionprops_table; "
               "t = regionprops_table(np.load(sys.argv[1]), properties=('label', 'area', 'euler_number')); "
               "print(len(t['label']))")

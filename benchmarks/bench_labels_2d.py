@@ -28,16 +28,14 @@ import argparse
 import json
 import os
 import platform
-import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from bench_labels import cached_array, commands  # the same whole commands, with --connectivity 8
 
 ROOT = Path(__file__).resolve().parent.parent
-CACHE = ROOT / "benchmarks" / ".cache"
 
 
 def cells(size: int, count: int, seed: int = 0) -> np.ndarray:
@@ -55,11 +53,7 @@ def cells(size: int, count: int, seed: int = 0) -> np.ndarray:
 
 
 def cached(size: int, count: int) -> Path:
-    CACHE.mkdir(parents=True, exist_ok=True)
-    path = CACHE / f"cells-{size}-{count}.npy"
-    if not path.exists():
-        np.save(path, cells(size, count))
-    return path
+    return cached_array(f"cells-{size}-{count}", lambda: cells(size, count))
 
 
 def in_process(image: np.ndarray, repeat: int) -> dict:
@@ -83,24 +77,6 @@ def in_process(image: np.ndarray, repeat: int) -> dict:
             "ratio": best["skimage"] / best["isoflow"], "rows": len(first["isoflow"]["label"])}
 
 
-def commands(path: Path, pairs: int) -> dict:
-    """Whole commands, alternated: medians of wall seconds and their ratio."""
-    ours = [sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--connectivity", "8", "--json"]
-    script = ("import sys, numpy as np; from skimage.measure import regionprops_table; "
-              "t = regionprops_table(np.load(sys.argv[1]), properties=('label', 'area', 'euler_number')); "
-              "print(len(t['label']))")
-    theirs = [sys.executable, "-c", script, str(path)]
-    times: dict[str, list[float]] = {"isoflow": [], "skimage": []}
-    for _ in range(pairs):
-        for key, cmd in (("isoflow", ours), ("skimage", theirs)):
-            start = time.perf_counter()
-            subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, cwd=ROOT)
-            times[key].append(time.perf_counter() - start)
-    med = {k: statistics.median(v) for k, v in times.items()}
-    return {"isoflow_seconds": med["isoflow"], "skimage_seconds": med["skimage"],
-            "ratio": med["skimage"] / med["isoflow"], "pairs": pairs}
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[1024, 4096])
@@ -120,7 +96,7 @@ def main(argv=None) -> int:
         results.append(rec)
         if args.commands:
             results.append({"size": size, "cells": count, "how": "whole commands", "input":
-                            str(path.relative_to(ROOT)), **commands(path, args.commands)})
+                            str(path.relative_to(ROOT)), **commands(path, args.commands, ("--connectivity", "8"))})
         for r in results[-2 if args.commands else -1:]:
             lines.append(f"| {size}^2 | {count:,} | {r['how']} | {r['isoflow_seconds']:.3f} | "
                          f"{r['skimage_seconds']:.3f} | {r['ratio']:.2f}x |")

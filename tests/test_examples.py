@@ -158,39 +158,41 @@ def test_four_d(example_run):
         assert m["a_dot_n"] == 16 * m["euler_characteristic"]
 
 
+def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
+    """A table example's CSV rows, each with its label's mask in the image
+    it wrote: one row per nonzero label, in order, each with scikit-image's
+    Euler number (at 2n-connectivity)."""
+    with open(out / f"{stem}.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    image = np.load(out / f"{stem}.npy")
+    assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
+    masks = [image == int(row["label"]) for row in rows]
+    assert [int(r["euler_characteristic"]) for r in rows] == [euler_number(m, 1) for m in masks]
+    return list(zip(rows, masks))
+
+
 def test_cell_table(example_run):
     from scipy import ndimage
 
     out, printed = example_run("cell_table")
-    with open(out / "cells.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    image = np.load(out / "cells.npy")
-    assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
-    for row in rows:
-        mask = image == int(row["label"])
-        # scikit-image's Euler number (4-connected); the holes: the 8-components of the
-        # complement that keep off the image's edge, by scipy; pixels of 0.25 units
-        assert int(row["euler_characteristic"]) == euler_number(mask, 1)
+    rows = table_example_rows(out, "cells")
+    for row, mask in rows:
+        # the holes: the 8-components of the complement that keep off the
+        # image's edge, by scipy; pixels of 0.25 units
         parts, count = ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))
         assert int(row["b1"]) == count - 1
         assert float(row["area"]) == mask.sum() * 0.0625
-    holes = sum(int(r["b1"]) for r in rows)
-    assert rows[0]["b1"] == "2" and f"{holes} holes in all" in printed and holes > 10
+    holes = sum(int(r["b1"]) for r, _ in rows)
+    assert rows[0][0]["b1"] == "2" and f"{holes} holes in all" in printed and holes > 10
     assert (out / "cells.png").stat().st_size > 0
 
 
 def test_label_table(example_run):
     out, printed = example_run("label_table")
-    with open(out / "labels.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    image = np.load(out / "labels.npy")
-    assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
-    for row in rows:
-        mask = image == int(row["label"])
-        # scikit-image's Euler number of each label (6-connected), its voxels in units of 0.5
-        assert int(row["euler_characteristic"]) == euler_number(mask, 1)
-        assert float(row["volume"]) == mask.sum() * 0.125
+    rows = table_example_rows(out, "labels")
+    for row, mask in rows:
+        assert float(row["volume"]) == mask.sum() * 0.125  # voxels of 0.5 units
     # the hollowed grain has its cavity, the drilled one its tunnel
-    assert (int(rows[0]["b2"]), int(rows[1]["b1"])) == (1, 1)
-    assert rows[0]["genera"] == "0;0" and f"{len(rows)} labels" in printed
+    assert (int(rows[0][0]["b2"]), int(rows[1][0]["b1"])) == (1, 1)
+    assert rows[0][0]["genera"] == "0;0" and f"{len(rows)} labels" in printed
     assert (out / "labels.png").stat().st_size > 0
