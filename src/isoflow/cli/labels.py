@@ -32,8 +32,8 @@ _RANGE = re.compile(r"\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*)?")
 def add_labels_option(p: argparse.ArgumentParser) -> None:
     """``--labels [SPEC]``: every nonzero label, or a choice of them."""
     p.add_argument("--labels", nargs="?", const="all", metavar="SPEC",
-                   help="a label image: one row (info) or one surface (surface) per label; every nonzero label, "
-                        "or those of SPEC, e.g. 3,7,10-20")
+                   help="a label image: one row (info; 3D or 2D) or one surface (surface; 3D) per label; every "
+                        "nonzero label, or those of SPEC, e.g. 3,7,10-20")
 
 
 def label_choice(text: str) -> list[int] | None:
