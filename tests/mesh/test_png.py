@@ -69,6 +69,9 @@ def test_palette_indices_grey_as_colour_and_masks(tmp_path, cells):
         assert proc.returncode == 0, proc.stderr
         got = json.loads(proc.stdout)
         assert [got["voxels"], got["betti"], got["n"]] == [report["voxels"], report["betti"], report["n"]], name
+    text = run("info", "mask.png", cwd=tmp_path).stdout.splitlines()
+    assert text[0] == f"mask.png: 2D, shape 34x21, {report['voxels']} pixels, 4-connectivity"
+    assert text[2] == f"  Betti numbers          {report['betti'][0]} components, {report['betti'][1]} holes"
 
 
 def test_colours_animations_damaged_files_and_writing_are_refused(tmp_path, cells):

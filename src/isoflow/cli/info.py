@@ -119,7 +119,7 @@ def format_info(r: Report, name: str) -> str:
     """The report as a terminal reads it."""
     lines = [
         f"{name}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
-        f"{r['voxels']} voxels, {r['connectivity']}-connectivity",
+        f"{r['voxels']} {'pixels' if r['dimension'] == 2 else 'voxels'}, {r['connectivity']}-connectivity",
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
     names = {2: ["components", "holes"], 3: ["components", "tunnels", "cavities"],
