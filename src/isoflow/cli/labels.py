@@ -72,27 +72,26 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     ``(about, connectivity, table, image)``, ``about`` its shape, type,
     voxel size and origin, ``image`` None for a zarr store (read block by
     block)."""
-    from ..digital.connectivity import default_connectivity, resolve_connectivity
+    from ..digital.connectivity import resolve_connectivity
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_label_image
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
-    image = None
-    if is_store(args.input) and stored_ndim(args.input) != 2:  # (a 2D store is read whole, as a file)
-        conn = args.connectivity or default_connectivity(3)
+    # a 3D store is read block by block; a 2D one whole, as a file is
+    image = None if is_store(args.input) and stored_ndim(args.input) != 2 else read_label_image(args.input)
+    ndim = 3 if image is None else image.array.ndim
+    if ndim == 2 and getattr(args, "command", "") == "surface":
+        raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
+                           f"{args.input} --labels gives its table)")
+    try:
+        conn = resolve_connectivity(ndim, args.connectivity)
+    except IsoflowError as exc:
+        raise IsoflowError(f"{args.input}: {exc}") from None
+    if image is None:
         about, table = table_of_store(args, conn, asked, surfaces)
     else:
-        image = read_label_image(args.input)
-        ndim = image.array.ndim
-        if ndim == 2 and getattr(args, "command", "") == "surface":
-            raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
-                               f"{args.input} --labels gives its table)")
-        try:
-            conn = resolve_connectivity(ndim, args.connectivity)
-        except IsoflowError as exc:
-            raise IsoflowError(f"{args.input}: {exc}") from None
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin}
         wanted = None if asked is None else _within_type(asked, image.array.dtype)

@@ -28,11 +28,10 @@ import numpy as np
 #: rows turned into text at once
 BLOCK_ROWS = 1 << 14
 #: a table of at most this many rows is written by Python's own text of
-#: each cell (the same text): numba's start, about half a second, would
-#: cost a small table (a few organs) more than it saves; where numba is
-#: not loaded at all yet (a 2D table is NumPy's), up to PLAIN_ROWS_COLD
-#: rows (Python's text: about 11 us a row of a table's 18 columns, the
-#: compiled one 1.5 us after a start of 0.5-0.9 s)
+#: each cell (the same text): numba's start would cost a small table (a
+#: few organs) more than the compiled digits save; where numba is not
+#: loaded at all yet (a 2D table is NumPy's), its start is all the more to
+#: pay, so up to PLAIN_ROWS_COLD rows (where the two cost about the same)
 PLAIN_ROWS, PLAIN_ROWS_COLD = 2048, 50_000
 
 

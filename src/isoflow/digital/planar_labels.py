@@ -90,10 +90,11 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
     values, dense = dense_labels(image)
     k = len(values) + 1  # dense index 0: the outside of the image
     check_fits(need + LABEL_BYTES * k, f"the label table of a {shape} label image of {k - 1:,} values")
-    features = label_features(dense, k, conn)
+    padded = np.pad(dense, 1)  # the outside of the image as dense index 0 around it
+    features = label_features(padded, k, conn)
     counts, sums, lo, hi = _places(dense, k)
     b0 = _components(dense, conn, k)
-    edges = _boundary_edges(dense, k)
+    edges = _boundary_edges(padded, k)
     if wanted is None:
         rows = np.flatnonzero((values != 0) & (counts[1:] > 0)) + 1
         labels = values[rows - 1]
@@ -164,9 +165,10 @@ def feature_rows(conn: int) -> np.ndarray:
     return rows
 
 
-def label_features(dense: np.ndarray, k: int, conn: int) -> np.ndarray:
-    """(k, 5) int64: per label (dense index 1 .. k - 1 of ``dense``, 0
-    the outside), its :data:`FEATURES` summed over the lattice vertices:
+def label_features(padded: np.ndarray, k: int, conn: int) -> np.ndarray:
+    """(k, 5) int64: per label (dense index 1 .. k - 1 of ``padded``, the
+    dense labels with a ring of 0, the outside, around them), its
+    :data:`FEATURES` summed over the lattice vertices:
     each vertex adds, for every label it sees, the row of that label's
     configuration there (bit ``d0 + 2 d1`` for the pixel ``w - 1 + d`` of
     vertex ``w``, as :func:`~isoflow.digital.configurations.configurations`
@@ -174,9 +176,8 @@ def label_features(dense: np.ndarray, k: int, conn: int) -> np.ndarray:
     the label. A configuration histogram per label would take 16 counts a
     label, too many where nearly every pixel is a label of its own."""
     rows = feature_rows(conn)
-    padded = np.pad(dense, 1)
-    ny, nx = dense.shape
-    counts = np.zeros((k, 16), np.int64) if k <= HISTOGRAM_LABELS * dense.size else None
+    ny, nx = padded.shape[0] - 2, padded.shape[1] - 2
+    counts = np.zeros((k, 16), np.int64) if k <= HISTOGRAM_LABELS * ny * nx else None
     out = np.zeros((k, len(FEATURES)), np.int64)
     step = max(1, VERTICES_AT_ONCE // (nx + 1))
     for y0 in range(0, ny + 1, step):
@@ -240,10 +241,10 @@ def _components(dense: np.ndarray, conn: int, k: int) -> np.ndarray:
     return np.bincount(label_of[1:], minlength=k)[:k]
 
 
-def _boundary_edges(dense: np.ndarray, k: int) -> np.ndarray:
-    """(k, 2): per dense label, the pixel edges it shares with another
-    value or the outside, between neighbours along axis 0 and along axis 1."""
-    padded = np.pad(dense, 1)
+def _boundary_edges(padded: np.ndarray, k: int) -> np.ndarray:
+    """(k, 2): per dense label (``padded``: as :func:`label_features`
+    takes it), the pixel edges it shares with another value or the outside,
+    between neighbours along axis 0 and along axis 1."""
     out = np.zeros((k, 2), np.int64)
     for axis in range(2):
         a = padded[:-1, :] if axis == 0 else padded[:, :-1]

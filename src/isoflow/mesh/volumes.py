@@ -119,10 +119,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     elif raw.paint:
         vol = arr != 0
     else:
-        if arr.dtype == np.uint8 and arr.size and arr.max() <= 1:
-            arr = arr.view(np.bool_)  # a 0/1 mask, as every format is written: no comparisons, no copy
-        else:
-            arr = one_value_mask(arr)
+        arr = one_value_mask(arr)
         try:
             vol = binary(arr, where)
         except IsoflowError as exc:
@@ -142,8 +139,9 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
 def one_value_mask(arr: np.ndarray) -> np.ndarray:
     """The mask of an array whose only nonzero value is one ``v`` other than
     1 (a mask written 0/255, as image tools write masks, or a label image
-    of one label: ``--label v`` could mean nothing else), else the array as
-    it is (for :func:`~isoflow.scale.arrays.binary` to check).
+    of one label: ``--label v`` could mean nothing else); a uint8 0/1 array
+    (as every format is written) as its bool view, without a copy; else
+    the array as it is (for :func:`~isoflow.scale.arrays.binary` to check).
 
     Examples
     --------
@@ -154,7 +152,10 @@ def one_value_mask(arr: np.ndarray) -> np.ndarray:
     """
     if arr.dtype.kind not in "iuf" or not arr.size:
         return arr
-    low, high = arr.min(), arr.max()
+    high = arr.max()
+    if arr.dtype == np.uint8 and high <= 1:
+        return arr.view(np.bool_)
+    low = arr.min()
     value = high if high != 0 else low
     if value == 1 or value == 0 or not np.isfinite(value) or (low != 0 and high != 0 and low != high):
         return arr
