@@ -121,6 +121,26 @@ def test_surface_labels_glb_one_closed_manifold_per_label(tmp_path, capsys, segm
         assert abs(mesh.volume) == pytest.approx(table["volume"][r])
 
 
+def test_surface_labels_of_a_zarr_store_in_its_units(tmp_path, capsys, segmentation):
+    """A store's surfaces are meshed from the image read whole (info reads
+    it block by block): each node closed, with the volume and V - E + F of
+    the store's own table, in the OME-Zarr scale's units."""
+    pytest.importorskip("zarr")
+    from test_formats_cli import ome_group
+
+    ome_group(tmp_path / "seg.zarr", [{"type": "scale", "scale": [2.0, 0.5, 1.0]}], data=segmentation)
+    rows = json.loads(run(capsys, "info", tmp_path / "seg.zarr", "--labels", "--json"))["labels"]
+    said = run(capsys, "surface", tmp_path / "seg.zarr", "--labels", "-o", tmp_path / "s.glb")
+    assert "6 labels" in said and "read back" in said
+    scene = trimesh.load(tmp_path / "s.glb", force="scene", process=False)
+    for row in rows:
+        mask = segmentation == row["label"]
+        assert row["volume"] == pytest.approx(mask.sum() * 2.0 * 0.5 * 1.0)
+        mesh = scene.geometry[scene.graph[f"label_{row['label']}"][1]]
+        assert mesh.is_watertight and mesh.euler_number == row["surface_euler"]
+        assert abs(mesh.volume) == pytest.approx(row["volume"])
+
+
 def test_surface_labels_glb_opens_in_pymeshlab(tmp_path, capsys, segmentation):
     pymeshlab = pytest.importorskip("pymeshlab")
     np.save(tmp_path / "seg.npy", segmentation)

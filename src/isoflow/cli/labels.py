@@ -79,8 +79,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
-    # a 3D store is read block by block; a 2D one whole, as a file is
-    image = None if is_store(args.input) and stored_ndim(args.input) != 2 else read_label_image(args.input)
+    # info reads a 3D store block by block; a 2D one, and every store whose
+    # surfaces are written, whole (as a file is, refused up front where it
+    # would not fit)
+    blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
+    image = None if blocks else read_label_image(args.input)
     ndim = 3 if image is None else image.array.ndim
     if ndim == 2 and getattr(args, "command", "") == "surface":
         raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
@@ -130,9 +133,6 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     from ..scale.compiled import using
     from .progress import progress_bar
 
-    if getattr(args, "command", "") == "surface":
-        raise IsoflowError(f"{args.input}: surface --labels reads the image whole; convert the store to .npy or "
-                           ".nii.gz first (info --labels reads it block by block)")
     slabs = LabelSlabs(args.input)
     try:
         place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
