@@ -4,6 +4,7 @@ one closed surface per label read back by trimesh and pymeshlab."""
 
 import csv
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -54,6 +55,35 @@ def test_info_labels_choice_keeps_its_order_and_notes_absent_labels(tmp_path, ca
     assert "2 of the labels asked for do not occur (40, 41)" in capsys.readouterr().err
     said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "3", "-o", tmp_path / "one.glb")
     assert said.startswith(f"{tmp_path / 'one.glb'}: 1 label, ")
+    # a label the type cannot hold is noted as absent too (uint16: 0 to 65535)
+    assert main(["info", str(tmp_path / "seg.npy"), "--labels", "9,70000", "--json"]) == 0
+    assert "1 of the labels asked for does not occur (70000)" in capsys.readouterr().err
+
+
+def test_a_float_label_file_names_the_voxel_that_is_no_label(tmp_path, capsys, segmentation):
+    scaled = segmentation.astype(np.float16)  # NIfTI's scaling gives floats; float16 warned of an overflow
+    np.save(tmp_path / "f.npy", scaled)
+    np.save(tmp_path / "i.npy", segmentation)
+    assert run(capsys, "info", tmp_path / "f.npy", "--labels", "--json") == run(
+        capsys, "info", tmp_path / "i.npy", "--labels", "--json").replace("i.npy", "f.npy").replace("uint16", "int64")
+    scaled[4, 5, 6] = np.nan
+    np.save(tmp_path / "f.npy", scaled)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fails(capsys, "info", tmp_path / "f.npy", "--labels", words=("f.npy", "voxel (4, 5, 6) holds nan", "not a label"))
+
+
+def test_a_bool_image_is_label_1_and_holds_no_label_2(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "mask.npy", segmentation == 9)
+    np.save(tmp_path / "cut.npy", segmentation[8] == 9)  # 2D
+    for name in ("mask.npy", "cut.npy"):
+        fails(capsys, "info", tmp_path / name, "--labels", "2", words=(name, "none of the labels asked for occur (2)"))
+        assert main(["info", str(tmp_path / name), "--labels", "2,1", "--json"]) == 0
+        out, err = capsys.readouterr()
+        assert [r["label"] for r in json.loads(out)["labels"]] == [1]
+        assert "1 of the labels asked for does not occur (2)" in err
+    run(capsys, "surface", tmp_path / "mask.npy", "--labels", "-o", f"{tmp_path}/out/", "--suffix", "ply")
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["label_1.ply"]
 
 
 def test_info_labels_terminal_table_shows_the_first_rows_and_a_summary(tmp_path, capsys, rng):
@@ -207,6 +237,7 @@ def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentati
     (("--labels", "5-2"), ("backwards",)),
     (("--labels", "--label", "3"), ("--label", "--labels")),
     (("--labels", "77"), ("none of the labels", "77")),
+    (("--labels=-3",), ("seg.npy", "none of the labels asked for occur (-3)", "uint16 (0 to 65535)")),
     (("--csv", "t.csv"), ("--csv", "--labels")),
 ])
 def test_bad_label_options_are_one_line(tmp_path, capsys, segmentation, extra, words):

@@ -93,3 +93,48 @@ def test_a_pair_table_of_16_slots_drains_and_grows_to_the_same_table(rng, conn, 
     same_tables(label_table_blocks(image, conn, layers=cuts(rng, 20)), numpy)
     # the table filled again and again, and some vertex row did not fit in it
     assert len(drains) > 20 and any(k.get("grow") for k in drains)
+
+
+def test_signed_bool_and_float_images_give_the_whole_images_table_in_slabs(rng):
+    """Slabs of a signed image list negative labels first, as the whole
+    image and analyze do (the pieces hold the bits, unsigned); a bool
+    image is label 1 (label 2 absent); a float image of whole numbers is
+    int64, and a NaN is named with its voxel in the whole image."""
+    from isoflow.errors import IsoflowError
+
+    image = nested(rng)
+    signed = (image.astype(np.int64) - 4).astype(np.int8)
+    signed[signed == 4] = -128
+    numpy = label_table(signed, method="numpy")
+    assert numpy["label"].tolist() == sorted(set(np.unique(signed).tolist()) - {0})
+    same_tables(label_table_blocks(signed, layers=cuts(rng, 30)), numpy)
+    same_tables(label_table_blocks(image > 4, layers=cuts(rng, 30), labels=[2, 1]),
+                label_table(image > 4, method="numpy", labels=[2, 1]))
+    same_tables(label_table_blocks(image.astype(np.float32), layers=cuts(rng, 30)),
+                label_table(image.astype(np.int64), method="numpy"))
+    broken = image.astype(np.float32)
+    broken[23, 4, 5] = np.nan
+    with pytest.raises(IsoflowError, match=r"voxel \(23, 4, 5\) holds nan"):
+        label_table_blocks(broken, layers=[10, 10, 10])
+
+
+def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp_path, capsys, rng):
+    zarr = pytest.importorskip("zarr")
+    image = (nested(rng) - 4).astype(np.float32)  # NIfTI-style whole floats, negative ones too
+    np.save(tmp_path / "n.npy", image.astype(np.int64))
+    store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
+    store[...] = image
+
+    def rows(path, *more):
+        assert main(["info", str(path), "--labels", "--json", *more]) == 0
+        out = capsys.readouterr()
+        return json.loads(out.out)["labels"], out.err
+
+    assert rows(tmp_path / "f.zarr")[0] == rows(tmp_path / "n.npy")[0]
+    asked, note = rows(tmp_path / "f.zarr", "--labels=-3,99")
+    assert asked == rows(tmp_path / "n.npy", "--labels=-3")[0]
+    assert "1 of the labels asked for does not occur (99)" in note
+    store[3, 2, 1] = 0.5
+    assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
+    err = capsys.readouterr().err
+    assert "f.zarr: voxel (3, 2, 1) holds 0.5: not a whole number" in err and len(err.splitlines()) == 1

@@ -217,16 +217,71 @@ def test_pandas_takes_the_columns_as_they_are(rng):
     assert len(frame) == len(table["label"]) and list(frame.columns) == list(table)
 
 
-def test_bool_image_is_label_1():
+@pytest.mark.parametrize("method", METHODS)
+def test_bool_image_is_label_1(method):
     image = ball(4.0, 12) & ~ball(2.0, 12)
-    table = label_table(image)
-    assert table["label"].tolist() == [1]
+    table = label_table(image, method=method)
+    assert table["label"].tolist() == [1] and table["label"].dtype == np.uint8
     assert row_report(table, 0) == analyze_report(image, 6)
+    # label 2 is not True: a bool image holds none of it, so its row is empty
+    for image_nd in (image, image[6]):
+        asked = label_table(image_nd, labels=[2, np.True_], method=method)
+        assert asked["label"].tolist() == [2, 1]
+        assert asked["voxels"].tolist() == [0, np.count_nonzero(image_nd)]
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_signed_labels_come_in_increasing_order(rng, method):
+    for dtype in (np.int8, np.int64):
+        info = np.iinfo(dtype)
+        values = np.array([0, info.min, -5, -1, 3, info.max], dtype)
+        image = values[rng.integers(0, len(values), (60, 50, 45))]  # above the compiled pass's size
+        table = label_table(image, method=method)
+        assert table["label"].tolist() == sorted(set(values.tolist()) - {0})
+        for r in range(len(table["label"])):
+            assert table["voxels"][r] == np.count_nonzero(image == table["label"][r])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_a_float_image_of_whole_numbers_is_read_as_int64(rng, method):
+    image = nested(rng)
+    want = label_table(image.astype(np.int64), method=method)
+    for dtype in (np.float16, np.float32, np.float64):
+        got = label_table(image.astype(dtype), method=method)
+        assert got["label"].dtype == np.int64
+        for key in want:
+            same = (list(want[key]) == list(got[key]) if want[key].dtype == object
+                    else np.array_equal(want[key], got[key], equal_nan=True))
+            assert same, key
+    planar = label_table(image[10].astype(np.float32))
+    assert planar["label"].tolist() == np.unique(image[10])[1:].tolist()
+    lowest = np.zeros((3, 3, 3))
+    lowest[1, 1, 1] = -(2.0**63)  # int64's least value, exact in float64
+    assert label_table(lowest)["label"].tolist() == [np.iinfo(np.int64).min]
+
+
+@pytest.mark.parametrize("value, dtype, words", [
+    (np.nan, np.float32, r"voxel \(1, 2, 0\) holds nan: not a label"),
+    (-np.inf, np.float16, r"voxel \(1, 2, 0\) holds -inf: not a label"),
+    (2.5, np.float64, r"voxel \(1, 2, 0\) holds 2.5: not a whole number"),
+    (2.0**70, np.float32, r"holds 1.1805916207174113e\+21: beyond the int64 labels"),
+    (2.0**63, np.float64, "beyond the int64 labels"),
+])
+def test_a_float_value_that_is_no_label_is_named_with_its_voxel(value, dtype, words):
+    import warnings
+
+    image = np.zeros((3, 4, 5), dtype)
+    with np.errstate(over="ignore"):
+        image[1, 2, 0] = value
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # float16 compared with 2**63 warned of an overflow
+        with pytest.raises(IsoflowError, match=words):
+            label_table(image)
 
 
 @pytest.mark.parametrize("bad, words", [
     (np.zeros((2, 2, 2, 2), np.uint8), "3D or 2D label image, got a 4D"),  # (2D: tests/digital/test_planar_labels.py)
-    (np.zeros((4, 4, 4), np.float32), "integers"),
+    (np.zeros((4, 4, 4), np.complex64), "integers, not complex64"),
 ])
 def test_bad_images_are_one_line(bad, words):
     with pytest.raises(IsoflowError, match=words):
@@ -237,7 +292,7 @@ def test_bad_choices_are_one_line():
     image = np.zeros((3, 3, 3), np.uint8)
     with pytest.raises(IsoflowError, match="asked twice: 2"):
         label_table(image, labels=[2, 1, 2])
-    with pytest.raises(IsoflowError, match="not a value a uint8"):
+    with pytest.raises(IsoflowError, match=r"not a value the labels of this image hold: they are uint8 \(0 to 255\)"):
         label_table(image, labels=[300])
     with pytest.raises(IsoflowError, match="method"):
         label_table(image, method="fast")

@@ -97,12 +97,13 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin}
-        wanted = None if asked is None else _within_type(asked, image.array.dtype)
+        wanted = None if asked is None else _within_type(args.input, asked, image.array.dtype)
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
     present = table["voxels"] > 0
-    if not present.all():
-        absent = table["label"][~present]
+    beyond = [] if asked is None else _beyond_type(asked, about["dtype"])
+    if not present.all() or beyond:
+        absent = table["label"][~present].tolist() + beyond
         if not present.any():
             raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
         if not args.quiet:
@@ -138,18 +139,36 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
         place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
     except IsoflowError as exc:
         raise IsoflowError(f"{args.input}: {exc}") from None
-    wanted = None if asked is None else _within_type(asked, slabs.dtype)
+    wanted = None if asked is None else _within_type(args.input, asked, slabs.dtype)
     with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
-        table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
-                                   labels=wanted, surfaces=surfaces, progress=show)
+        try:
+            table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
+                                       labels=wanted, surfaces=surfaces, progress=show)
+        except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
+            raise IsoflowError(f"{args.input}: {exc}") from None
     return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
 
 
-def _within_type(asked: list[int], dtype) -> list[int]:
+def _within_type(name, asked: list[int], dtype) -> list[int]:
     """The labels asked for that the image's type can hold (the others
-    cannot occur)."""
-    info = np.iinfo(np.uint8 if dtype == np.bool_ else dtype)
-    return [v for v in asked if info.min <= v <= info.max] or asked[:1]
+    cannot occur); an error when it holds none of them."""
+    from ..digital.label_table import label_dtype
+
+    kind = label_dtype(dtype)
+    info = np.iinfo(kind)
+    within = [v for v in asked if info.min <= v <= info.max]
+    if not within:
+        raise IsoflowError(f"{name}: none of the labels asked for occur ({_some(asked)}): its labels are "
+                           f"{kind} ({info.min} to {info.max})")
+    return within
+
+
+def _beyond_type(asked: list[int], dtype) -> list[int]:
+    """The labels asked for that the image's type cannot hold."""
+    from ..digital.label_table import label_dtype
+
+    info = np.iinfo(label_dtype(dtype))
+    return [v for v in asked if not info.min <= v <= info.max]
 
 
 def _some(values, most: int = 8) -> str:

@@ -24,9 +24,11 @@ from ..scale.memory import check_fits
 from .connectivity import check_connectivity
 from .label_table import (
     PIECE_BYTES_PER_VOXEL,
+    as_labels,
     checked_image,
     columns,
     feature_table,
+    label_dtype,
     pass_tables,
     rows_of_pieces,
     wanted_labels,
@@ -84,10 +86,11 @@ def label_table_blocks(
     >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist()
     ([2], [34], [1])
     """
-    checked_image(np.empty((1,) * len(array.shape), array.dtype))  # 3D, integers
+    checked_image(np.zeros((1,) * len(array.shape), array.dtype))  # 3D, of labels
+    kind = label_dtype(array.dtype)
     conn = check_connectivity(3, connectivity)
     place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
-    wanted = None if labels is None else wanted_labels(labels, array.dtype)
+    wanted = None if labels is None else wanted_labels(labels, kind)
     nx = int(array.shape[0])
     sizes = [nx] if layers is None else [int(n) for n in layers]
     if sum(sizes) != nx or min(sizes) < 1:
@@ -98,7 +101,7 @@ def label_table_blocks(
         stream.slab(int(x0), int(x1))
         if progress is not None:
             progress(t + 1, len(sizes))
-    found = rows_of_pieces(*stream.joined(), array.dtype, conn, wanted)
+    found = rows_of_pieces(*stream.joined(), kind, conn, wanted)
     return columns(found, place.spacing, place.origin, surfaces)
 
 
@@ -121,10 +124,12 @@ class _Stream:
 
         a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
         shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
-        check_fits((PIECE_BYTES_PER_VOXEL + np.dtype(self.array.dtype).itemsize) * int(np.prod(shape)),
+        stored = np.dtype(self.array.dtype)
+        converted = label_dtype(stored).itemsize if stored.kind == "f" else 0  # a float slab's int64 copy
+        check_fits((PIECE_BYTES_PER_VOXEL + stored.itemsize + converted) * int(np.prod(shape)),
                    f"a slab of {'x'.join(map(str, shape))} voxels of the label image",
                    hint="write the store with smaller chunks along its first axis")
-        vol = np.ascontiguousarray(np.asarray(self.array[a:b]))
+        vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a))
         pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),

@@ -102,8 +102,9 @@ def label_table(
     Parameters
     ----------
     image : array_like
-        3D or 2D integer (or bool) label image, any integer type up to 64
-        bits.
+        3D or 2D label image: any integer type up to 64 bits, bool (labels
+        0 and 1, as uint8), or float whose values are all whole numbers
+        (as NIfTI's scaling gives; read as int64).
     connectivity : {6, 26} in 3D, {4, 8} in 2D, optional
         Every label's connectivity (default the paper's: 6, in 2D 4); its
         complement takes the other one.
@@ -156,7 +157,9 @@ def label_table(
     Raises
     ------
     IsoflowError
-        An image that is not 2D or 3D or not integer, a bad connectivity,
+        An image that is not 2D or 3D, a value that is no label (NaN, not
+        whole, beyond int64), a label asked for that the image's type cannot
+        hold, a bad connectivity,
         pitch or method, or work that would not fit in memory.
 
     Notes
@@ -198,21 +201,57 @@ def label_table(
         from .planar_labels import planar_table
 
         _use_compiled(vol, method)  # the method checked as in 3D
-        plain = vol.view(np.uint8) if vol.dtype == np.bool_ else vol
-        return planar_table(plain, conn, place.spacing, place.origin,
-                            None if wanted is None else wanted.astype(plain.dtype))
+        return planar_table(vol, conn, place.spacing, place.origin, wanted)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
     return columns(found, place.spacing, place.origin, surfaces)
 
 
 def checked_image(image) -> np.ndarray:
+    """The label image as an array of :func:`label_dtype` (see
+    :func:`as_labels`): 3D or 2D."""
     vol = np.asarray(image)
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
-    if vol.dtype != np.bool_ and vol.dtype.kind not in "iu":
-        raise IsoflowError(f"a label image holds integers, not {vol.dtype}")
-    return vol
+    return as_labels(vol)
+
+
+def label_dtype(dtype) -> np.dtype:
+    """The type of an image's labels: its own for integers, uint8 for a
+    bool image (labels 0 and 1), int64 for a float image of whole numbers
+    (as NIfTI's scaling gives)."""
+    dtype = np.dtype(dtype)
+    if dtype == np.bool_:
+        return np.dtype(np.uint8)
+    if dtype.kind in "iu":
+        return dtype
+    if dtype.kind == "f":
+        return np.dtype(np.int64)
+    raise IsoflowError(f"a label image holds integers, not {dtype}")
+
+
+def as_labels(array, first_layer: int = 0) -> np.ndarray:
+    """An image's labels as :func:`label_dtype` (a bool image viewed as
+    uint8, a float one converted); an error naming the first value that is
+    no label (NaN, infinite, beyond int64, not whole) and its voxel
+    (``first_layer``: the index of the array's layer 0 along axis 0)."""
+    vol = np.asarray(array)
+    kind = label_dtype(vol.dtype)
+    if vol.dtype == np.bool_:
+        return vol.view(np.uint8)
+    if vol.dtype.kind != "f":
+        return vol
+    flat = vol.reshape(-1)
+    wide = flat.astype(np.float64)  # float16 holds no 2**63 to compare with
+    for bad, why in ((~np.isfinite(flat), f"not a label (a {vol.dtype} label image holds whole numbers)"),
+                     ((wide >= 2.0**63) | (wide < -(2.0**63)), f"beyond the int64 labels a {vol.dtype} image is read as"),
+                     (flat != np.round(flat), "not a whole number, so not a label")):
+        if bad.any():
+            at = int(np.argmax(bad))
+            voxel = np.unravel_index(at, vol.shape)
+            where = ", ".join(str(int(i) + (first_layer if d == 0 else 0)) for d, i in enumerate(voxel))
+            raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
+    return flat.astype(kind).reshape(vol.shape)
 
 
 #: the one pass over the label image pays numba's start from this many
@@ -234,13 +273,13 @@ def wanted_labels(labels, dtype) -> np.ndarray:
     """The labels asked for, as values of the image's type: each one a
     whole number the type holds, none twice."""
     asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
-    info = np.iinfo(np.uint8 if dtype == np.bool_ else dtype)
+    info = np.iinfo(label_dtype(dtype))
     for value in asked:
-        whole = isinstance(value, (int, np.integer)) or (
+        whole = isinstance(value, (int, np.integer, np.bool_)) or (
             isinstance(value, (float, np.floating)) and float(value).is_integer())
         if not whole or not info.min <= int(value) <= info.max:
-            raise IsoflowError(f"label {value!r} is not a value a {np.dtype(dtype)} label image holds "
-                               f"({info.min} to {info.max})")
+            raise IsoflowError(f"label {value!r} is not a value the labels of this image hold: they are "
+                               f"{np.dtype(dtype)} ({info.min} to {info.max})")
     values = [int(v) for v in asked]
     if len(set(values)) != len(values):
         twice = sorted({v for v in values if values.count(v) > 1})
@@ -283,8 +322,8 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
 def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
     """Labels of an image of ``dtype`` as the pieces hold them: their
     bits, unsigned, as uint64."""
-    width = np.dtype(np.uint8 if dtype == np.bool_ else dtype).itemsize
-    return np.asarray(labels, dtype=np.uint8 if dtype == np.bool_ else dtype).view(f"u{width}").astype(np.uint64)
+    width = np.dtype(dtype).itemsize
+    return np.asarray(labels, dtype=dtype).view(f"u{width}").astype(np.uint64)
 
 
 def wanted_pieces(values: np.ndarray, dtype, wanted: np.ndarray | None) -> np.ndarray:
@@ -316,7 +355,7 @@ def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndar
     by_label = label_sums(pieces, piece_label, passed, *by)
     found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)
-    dtype = np.dtype(np.uint8 if dtype == np.bool_ else dtype)
+    dtype = np.dtype(dtype)
     found["label"] = np.zeros(len(rows), dtype) if wanted is None else wanted.astype(dtype)
     found["label"][rows >= 0] = values[rows[rows >= 0]].astype(f"u{dtype.itemsize}").view(dtype)
     return found
@@ -329,7 +368,12 @@ def label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.
     values, inverse = np.unique(piece_values[1:], return_inverse=True)
     piece_label = np.concatenate([[-1], inverse]).astype(np.int64)
     if wanted is None:
-        return values, piece_label, np.flatnonzero(values != 0)
+        rows = np.flatnonzero(values != 0)
+        kind = np.dtype(dtype)
+        if kind.kind == "i":  # the bits sort negative labels after the positive ones: rows go by value
+            signed = values[rows].astype(f"u{kind.itemsize}").view(kind)
+            rows = rows[np.argsort(signed, kind="stable")]
+        return values, piece_label, rows
     bits = label_bits(wanted, dtype)
     at = np.minimum(np.searchsorted(values, bits), max(len(values) - 1, 0))
     found = (len(values) > 0) & (values[at] == bits) if len(values) else np.zeros(len(bits), bool)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..digital.label_table import as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
 from ..scale.arrays import binary
@@ -192,10 +193,10 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
         raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
                            f"{arr.shape}")
     if arr.dtype.kind == "f":
-        whole = np.isfinite(arr).all() and (arr == np.round(arr)).all() and np.abs(arr).max(initial=0) < 2**63
-        if not whole:
-            raise IsoflowError(f"{path}: holds {arr.dtype} values that are not whole numbers, not labels")
-        arr = arr.astype(np.int64)
+        try:
+            arr = as_labels(arr)
+        except IsoflowError as exc:
+            raise IsoflowError(f"{path}: {exc}") from None
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
     try:
