@@ -156,9 +156,35 @@ def test_sample_meshes_match_exact_references():
         got = mine(v, f)
         for i, j in got - want:
             assert len(set(f[i]) & set(f[j])) == 2 and edge_pair_crosses(v, f[i], f[j]), (path.name, i, j)
-        assert want <= got, path.name
-        counts[path.name] = len(got)
-    assert counts["rabbit.obj"] == 195 and counts["torus.obj"] == 0 and counts["not_convex.obj"] == 156
+        for i, j in want - got:  # CGAL's touching pairs at T-junctions that zero-area faces close
+            assert along_sliver_edge(v, f, f[i], f[j]) or along_sliver_edge(v, f, f[j], f[i]), (path.name, i, j)
+        counts[path.name] = len(got), len(want - got)
+    assert counts["rabbit.obj"] == (195, 0) and counts["torus.obj"] == (0, 0) and counts["not_convex.obj"] == (156, 0)
+    assert counts["wallhole.obj"] == (34, 16)
+
+
+def along_sliver_edge(v, f, F, G) -> bool:
+    """Rational reference for the sliver rule: an edge of G lies within an
+    edge of F, both edges of faces whose corners are collinear, and G's
+    third corner is off F's plane or on the other side of that edge."""
+    def collinear(t):
+        a, b, c = (q(v[i]) for i in t)
+        return cross(sub(b, a), sub(c, a)) == [0, 0, 0]
+
+    sliver_edges = {frozenset((t[e], t[(e + 1) % 3])) for t in f if collinear(t) for e in range(3)}
+    for e in range(3):
+        p, r, c = F[e], F[(e + 1) % 3], F[(e + 2) % 3]
+        for g in range(3):
+            a, b, k = G[g], G[(g + 1) % 3], G[(g + 2) % 3]
+            if {a, b} == {p, r} or {frozenset((p, r)), frozenset((a, b))} - sliver_edges:
+                continue
+            P, R, C, K = q(v[p]), q(v[r]), q(v[c]), q(v[k])
+            within = all(cross(sub(R, P), sub(q(v[m]), P)) == [0, 0, 0]
+                         and 0 <= dot(sub(q(v[m]), P), sub(R, P)) <= dot(sub(R, P), sub(R, P)) for m in (a, b))
+            normal = cross(sub(R, P), sub(C, P))
+            if within and (dot(normal, sub(K, P)) != 0 or dot(cross(sub(R, P), sub(K, P)), normal) < 0):
+                return True
+    return False
 
 
 def torus_pair(gap: float, offset=(0.0, 0.0, 0.0)):
@@ -210,7 +236,8 @@ def test_self_intersections_split_by_component():
     _, comp = mesh_topology(v, f, return_components=True)
     r = self_intersections(v, f, comp)
     faces = np.unique(np.array(sorted(cgal_pairs(v, f))))
-    assert r == {"self_intersecting_faces": 0, "faces_crossing_other_components": len(faces)}
+    assert r == {"self_intersecting_faces": 0, "faces_crossing_other_components": len(faces), "zero_area_faces": 0,
+                 "pairs_along_slivers": 0}
 
 
 def test_a_voxel_surface_has_no_crossing(rng):
@@ -235,3 +262,71 @@ def test_orientation_signs_are_exact():
     a, b, c, d = (q(x) for x in ([big, 0, 0], [0, big, 0], [0, 0, big], [big / 3, big / 3, big / 3 + 2]))
     det = dot(sub(a, d), cross(sub(b, d), sub(c, d)))
     assert s[0] == (det > 0) - (det < 0) != 0
+
+
+def t_junction_box(splits=(0.5,)):
+    """A closed box (trimesh's) whose face on one side of an edge is split
+    at points of that edge, its neighbour across the edge left whole, and
+    zero-area faces (slivers) closing the T-junction as CAD exports do: a
+    closed manifold of genus 0. Returns vertices, faces, the whole face's
+    index and the split faces' indices."""
+    box = trimesh.creation.box()
+    v, f = box.vertices.copy(), box.faces.tolist()
+    split, whole = (int(x) for x in box.face_adjacency[0])
+    a, b, k = f[split]
+    while {a, b} != set(box.face_adjacency_edges[0].tolist()):
+        a, b, k = b, k, a
+    ends = [a] + [len(v) + i for i in range(len(splits))] + [b]
+    v = np.vstack([v, [v[a] + t * (v[b] - v[a]) for t in splits]])  # on the edge exactly: halves and quarters
+    f[split:split + 1] = [[p, q, k] for p, q in zip(ends[:-1], ends[1:])]
+    # sliver i: from the point before split point i to b, then to it: every edge has two faces, one each way
+    f += [[ends[i], b, ends[i + 1]] for i in range(len(splits))]
+    whole += len(splits) if whole > split else 0
+    return v, np.array(f), whole, list(range(split, split + len(splits) + 1))
+
+
+@pytest.mark.parametrize("splits", [(0.5,), (0.25, 0.5), (0.25, 0.5, 0.75)])
+def test_zero_area_faces_closing_a_t_junction_are_no_crossing(splits):
+    """CGAL sees the whole face meet the split ones at the split points
+    (one common corner or none, touching); the slivers make the edge one,
+    so isoflow reports no crossing, and the mesh is the closed genus-0
+    surface manifold3d sees."""
+    import manifold3d as m3
+
+    v, f, whole, parts = t_junction_box(splits)
+    _, comp = mesh_topology(v, f, return_components=True)
+    report = mesh_topology(v, f)
+    assert report["watertight"] and report["genus"] == 0
+    mf = m3.Manifold(m3.Mesh(vert_properties=v.astype(np.float32), tri_verts=f.astype(np.uint32)))
+    assert mf.status() == m3.Error.NoError and mf.genus() == 0
+    cgal = cgal_pairs(v, f)
+    assert cgal and all(whole in p and (set(p) - {whole}) <= set(parts) for p in cgal)
+    assert mine(v, f) == set()
+    r = self_intersections(v, f, comp)
+    assert r["self_intersecting_faces"] == 0 and r["zero_area_faces"] == len(splits)
+    assert r["pairs_along_slivers"] == len(cgal)
+
+
+def test_a_split_face_folded_onto_the_whole_one_still_crosses():
+    """A split face turned into the whole face's plane, on its side of the
+    edge, overlaps it: the slivers explain the common edge, not the
+    overlap."""
+    v, f, whole, parts = t_junction_box((0.5,))
+    k = f[parts[0], 2]  # the split faces' corner off the edge
+    v = v.copy()
+    v[k] = v[f[whole]].mean(axis=0)  # the whole face's centre: in its plane exactly (a box face)
+    assert (min(whole, parts[0]), max(whole, parts[0])) in mine(v, f)
+
+
+def test_genus_of_a_t_junction_box_agrees_and_names_the_sliver(tmp_path, capsys):
+    import json
+
+    from isoflow.cli import main
+
+    v, f, _, _ = t_junction_box((0.5,))
+    trimesh.Trimesh(v, f, process=False).export(tmp_path / "t.obj")
+    assert main(["genus", str(tmp_path / "t.obj"), "--resolution", "16", "32", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["self_intersecting_faces"] == 0 and report["agree"] and report["solid_genus"] == 0
+    assert "1 zero-area face (corners in a line)" in report["verdict"]
+    assert "2 face pairs meet along it where it closes a split edge" in report["verdict"]

@@ -12,7 +12,12 @@ rules, whose CGAL predicates are exact):
   side of that edge (they overlap); otherwise they meet only along it;
 * faces with the same three corners (a duplicate, or the two sides of a
   double-sided face) are not tested, nor faces whose corners are collinear
-  (no area, nothing to cross).
+  (no area, nothing to cross);
+* where zero-area faces close a T-junction (an edge split by a vertex on
+  one side, whole on the other, a sliver ``p, q, m`` with ``m`` on ``p-q``
+  between them, as CAD exports write), an edge of one face lying on an
+  edge of the other, both edges of such slivers, is a common edge: the
+  faces cross only when coplanar on one side of it.
 
 Corners are common when they are at the same position. Every decision is
 the sign of an exact determinant of the float64 coordinates as stored
@@ -24,6 +29,7 @@ a crossing.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -70,6 +76,25 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
     >>> crossing_pairs(v, np.array([[0, 1, 2], [3, 4, 5], [6, 7, 8]])).tolist()
     [[0, 1]]
     """
+    return find_crossings(vertices, faces, method).pairs
+
+
+@dataclass(frozen=True)
+class Crossings:
+    """What :func:`find_crossings` found: the crossing ``pairs`` (as
+    :func:`crossing_pairs`), the faces of ``zero_area`` (collinear
+    corners, not tested) and the pairs that meet ``along_slivers`` (at a
+    T-junction zero-area faces close: no crossing)."""
+
+    pairs: np.ndarray
+    zero_area: int
+    along_slivers: int
+
+
+def find_crossings(vertices: np.ndarray, faces: np.ndarray,
+                   method: Literal["auto", "numpy", "compiled"] = "auto") -> Crossings:
+    """:func:`crossing_pairs`, with the zero-area faces it left out and the
+    pairs they explain (see the module's rules)."""
     v = np.asarray(vertices, np.float64)
     f = np.asarray(faces, np.int64)
     points, position = np.unique(v, axis=0, return_inverse=True)
@@ -77,8 +102,9 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
     tri = position.reshape(-1)[f]
     axis = projection_axis(exact, tri) if len(f) else np.zeros(0, np.int64)
     tested = np.flatnonzero(axis >= 0)  # collinear corners: nothing to cross
+    zero_area = len(f) - len(tested)
     if len(tested) < 2:
-        return np.zeros((0, 2), np.int64)
+        return Crossings(np.zeros((0, 2), np.int64), zero_area, 0)
     tri, axis = tri[tested], axis[tested]
     corners = exact.xyz[tri]
     grid = CubeGrid(corners.min(axis=1), corners.max(axis=1))
@@ -87,7 +113,58 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
     else:
         found = [pairs[_cross(exact, tri, axis, pairs)] for pairs in grid.pairs()]
     out = tested[np.concatenate(found)] if found else np.zeros((0, 2), np.int64)
-    return out[np.lexsort((out[:, 1], out[:, 0]))]
+    along = np.zeros(len(out), bool)
+    if len(out) and zero_area:
+        whole = position.reshape(-1)[f]
+        flat = np.ones(len(f), bool)
+        flat[tested] = False
+        along = sliver_joined(exact, whole, whole[flat], out)
+        out = out[~along]
+    return Crossings(out[np.lexsort((out[:, 1], out[:, 0]))], zero_area, int(np.count_nonzero(along)))
+
+
+def sliver_joined(exact: ExactPoints, tri: np.ndarray, slivers: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Per pair of faces found to meet, whether zero-area faces explain
+    it: an edge of one lies on an edge of the other (collinear, within
+    it), both edges of ``slivers`` (faces of collinear corners), and the
+    faces meet only along it (the shorter edge's face has its third corner
+    off the other's plane, or on the other side of the line). ``tri``:
+    corners as position numbers."""
+    n = np.int64(len(exact.xyz))
+
+    def edge_keys(t: np.ndarray) -> np.ndarray:  # (K, 3) edge keys, edge e from corner e to e + 1
+        a, b = t, np.roll(t, -1, axis=1)
+        return np.minimum(a, b).astype(np.int64) * n + np.maximum(a, b)
+
+    on_sliver = np.isin(edge_keys(tri[pairs.reshape(-1)]), np.unique(edge_keys(slivers))).reshape(-1, 2, 3)
+    out = np.zeros(len(pairs), bool)
+    for r in np.flatnonzero(on_sliver[:, 0].any(axis=1) & on_sliver[:, 1].any(axis=1)).tolist():
+        for long, short in ((0, 1), (1, 0)):
+            F, G = tri[pairs[r, long]], tri[pairs[r, short]]
+            for e in np.flatnonzero(on_sliver[r, long]).tolist():
+                for g in np.flatnonzero(on_sliver[r, short]).tolist():
+                    out[r] |= _meets_only_along(exact, F, e, G, g)
+    return out
+
+
+def _meets_only_along(exact: ExactPoints, F: np.ndarray, e: int, G: np.ndarray, g: int) -> bool:
+    """Whether G's edge g lies on F's edge e (not the same edge) and the
+    two faces meet only along it."""
+    p, q, c = F[e], F[(e + 1) % 3], F[(e + 2) % 3]
+    a, b, k = G[g], G[(g + 1) % 3], G[(g + 2) % 3]
+    if {int(a), int(b)} == {int(p), int(q)}:
+        return False
+    x = exact.xyz
+    lo, hi = np.minimum(x[p], x[q]), np.maximum(x[p], x[q])
+    for m in (a, b):
+        line = exact.orient2d(np.array([p] * 3), np.array([q] * 3), np.array([m] * 3), np.arange(3))
+        if line.any() or (x[m] < lo).any() or (x[m] > hi).any():
+            return False
+    if exact.orient3d(np.array([p]), np.array([q]), np.array([c]), np.array([k]))[0] != 0:
+        return True
+    axis = projection_axis(exact, F[None])[0]
+    view = exact.orient2d(np.array([p, p]), np.array([q, q]), np.array([c, k]), np.array([axis, axis]))
+    return bool(view[0] * view[1] < 0)
 
 
 def _compiled_pairs(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, grid: CubeGrid) -> list:

@@ -26,7 +26,7 @@ import numpy as np
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
 from ..scale.memory import default_budget
-from .crossings import crossing_pairs
+from .crossings import find_crossings
 from .fills import Fill
 from .load import load_mesh, mesh_defects
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
@@ -71,8 +71,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     comp_of_edge = comp[face_of[order][edge_start]]
     E = np.bincount(comp_of_edge, minlength=ncomp)
     F = np.bincount(comp, minlength=ncomp)
-    vc = np.unique(np.stack([np.repeat(comp, 3), f.ravel()], axis=1), axis=0)
-    V = np.bincount(vc[:, 0], minlength=ncomp)
+    V = _distinct_per(np.repeat(comp, 3), ncomp, f.ravel(), len(v))
     bad_edge = np.bincount(comp_of_edge, weights=(edge_count != 2), minlength=ncomp) > 0
 
     # fans: corners around a vertex joined across the manifold edges
@@ -85,10 +84,8 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     src = np.concatenate([corner_a[h1], corner_b[h1]])
     dst = np.concatenate([np.where(same_dir, corner_a[h2], corner_b[h2]), np.where(same_dir, corner_b[h2], corner_a[h2])])
     _, fan = components(3 * nf, src, dst)
-    vf = np.unique(np.stack([f.ravel(), fan], axis=1), axis=0)
-    fans_per_vertex = np.bincount(vf[:, 0], minlength=len(v))
-    vcomp = np.unique(np.stack([f.ravel(), np.repeat(comp, 3)], axis=1), axis=0)
-    comps_per_vertex = np.bincount(vcomp[:, 0], minlength=len(v))
+    fans_per_vertex = _distinct_per(f.ravel(), len(v), fan, 3 * nf)
+    comps_per_vertex = _distinct_per(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
     pinched_in_comp = np.zeros(ncomp, dtype=bool)
     inner_pinch = np.flatnonzero(fans_per_vertex > np.maximum(comps_per_vertex, 1))
     if len(inner_pinch):
@@ -99,8 +96,8 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     closed = ~bad_edge & ~pinched_in_comp
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
-    used = np.unique(f)
-    euler = int(len(used) - len(edge_start) + nf)
+    used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))
+    euler = int(used - len(edge_start) + nf)
     known = [g for g in genus_c if g is not None]
     total = sum(known) if genus_c and len(known) == len(genus_c) and defects["inconsistent_edges"] == 0 else None
     report = {
@@ -113,12 +110,22 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
         "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex > 1)),
-        "vertices": len(used),
+        "vertices": int(used),
         "faces": int(nf),
         # vertices on faces of more than one component: components touching
         "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
     }
     return (report, comp) if return_components else report
+
+
+def _distinct_per(first: np.ndarray, n_first: int, second: np.ndarray, n_second: int) -> np.ndarray:
+    """Per value ``0 .. n_first - 1`` of ``first``, how many distinct
+    values of ``second`` (``0 .. n_second - 1``) occur beside it. Each pair
+    is one int64 key: ``np.unique(axis=0)`` sorts the rows as opaque bytes,
+    in one uninterruptible call that takes seconds on a million faces."""
+    key = np.sort(first.astype(np.int64) * max(n_second, 1) + second)  # (np.unique hashes, several times slower)
+    distinct = key[np.r_[True, key[1:] != key[:-1]]] if len(key) else key
+    return np.bincount(distinct // max(n_second, 1), minlength=n_first)
 
 
 def manifold3d_report(vertices, faces) -> dict:
@@ -168,7 +175,8 @@ def self_intersections(vertices, faces, component) -> dict:
     their own component (``self_intersecting_faces``: the component is no
     embedded surface) and those crossing only other components
     (``faces_crossing_other_components``: components overlap or touch)."""
-    pairs = crossing_pairs(vertices, faces)
+    found = find_crossings(vertices, faces)
+    pairs = found.pairs
     component = np.asarray(component)
     nf = len(np.asarray(faces))
     hit = np.zeros(nf, dtype=bool)
@@ -179,6 +187,8 @@ def self_intersections(vertices, faces, component) -> dict:
     return {
         "self_intersecting_faces": int(np.count_nonzero(own)),
         "faces_crossing_other_components": int(np.count_nonzero(hit & ~own)),
+        "zero_area_faces": found.zero_area,
+        "pairs_along_slivers": found.along_slivers,
     }
 
 
@@ -600,6 +610,8 @@ def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
             "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error")}))
     if w["crossing_self"] and kind != "self_intersecting":
         notes.append(Note("self_intersecting", {"n": w["self_intersecting_faces"]}))
+    if w["zero_area_faces"]:
+        notes.append(Note("zero_area_faces", {"n": w["zero_area_faces"], "along": w["pairs_along_slivers"]}))
     return notes
 
 

@@ -25,7 +25,8 @@ VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting",
 StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "open", "nonmanifold_edges", "nonmanifold_vertices", "nested",
-                   "overlap", "self_intersecting", "cavities", "coarse", "manifold3d_refused", "no_mesh_genus"]
+                   "overlap", "self_intersecting", "zero_area_faces", "cavities", "coarse", "manifold3d_refused",
+                   "no_mesh_genus"]
 
 
 @dataclass(frozen=True)
@@ -197,6 +198,11 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"genus {solid_genus} (manifold3d)"),
     "overlap": _overlap_words,
     "self_intersecting": lambda n: f"{n} faces cross faces of their own component",
+    "zero_area_faces": lambda n, along: (
+        f"{n} zero-area face{'s' if n > 1 else ''} (corners in a line) left out of the crossing test"
+        + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "
+           f"{'them' if n > 1 else 'it'} where {'they close' if n > 1 else 'it closes'} a split edge (a T-junction): "
+           "no crossing" if along else "")),
     "cavities": lambda n, resolution: f"the solid has {n} cavities (nested shells) at resolution {resolution}",
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
