@@ -82,6 +82,24 @@ def test_surface_writes_ply_and_obj(tmp_path, capsys):
         assert m.volume == pytest.approx(v.sum())
 
 
+def test_surface_says_how_trimesh_reads_split_contacts_back(tmp_path, capsys):
+    """Two cubes touching along an edge: the mesh keeps two copies of the
+    edge's vertices, so trimesh reads the file back watertight only with
+    process=False; the line says so, with the number of positions its
+    default merge joins (the vertices it drops)."""
+    vol = np.zeros((6, 6, 4), bool)
+    vol[1:3, 1:3, 1:3] = vol[3:5, 3:5, 1:3] = True  # an edge contact: 3 lattice points, 2 edge midpoints
+    np.save(tmp_path / "e.npy", vol)
+    assert main(["surface", str(tmp_path / "e.npy"), "-o", str(tmp_path / "e.ply"), "--connectivity", "26"]) == 0
+    said = capsys.readouterr().out.splitlines()[-1]
+    kept, merged = trimesh.load(tmp_path / "e.ply", process=False), trimesh.load(tmp_path / "e.ply")
+    assert kept.is_watertight and not merged.is_watertight
+    assert f"with process=False (its default merge joins the split copies at {len(kept.vertices) - len(merged.vertices)} " in said
+    np.save(tmp_path / "one.npy", vol[:3])  # one cube: nothing to merge, nothing to say
+    assert main(["surface", str(tmp_path / "one.npy"), "-o", str(tmp_path / "one.ply")]) == 0
+    assert "reads it back watertight, V-E+F = 2" in capsys.readouterr().out
+
+
 def test_surface_png(tmp_path):
     np.save(tmp_path / "t.npy", torus(5, 2))
     assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.ply"),

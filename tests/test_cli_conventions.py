@@ -331,3 +331,31 @@ def test_outputs_and_labels_checked_before_any_work(tmp_path, capsys, monkeypatc
     assert main(["voxelize", str(TORUS), "--resolution", "8", "-o", str(tmp_path / "t.zarr")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "cannot write the zarr store t.zarr here" in err[0], err
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.parametrize("labels", [False, True])
+def test_a_signal_during_the_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch, labels):
+    """Ctrl-C while trimesh reads the written surface back: exit 130, one
+    line saying the file is there and only its check was cut short (it
+    said only "interrupted"), and the file is the whole surface."""
+    import trimesh
+
+    from isoflow.mesh import readback
+
+    np.save(tmp_path / "v.npy", np.pad(np.ones((3, 3, 3), np.uint8), 1) * 4)
+    figures = readback.trimesh_figures
+
+    def interrupted(*args, **kw):
+        os.kill(os.getpid(), signal.SIGINT)
+        return figures(*args, **kw)
+
+    monkeypatch.setattr(readback, "trimesh_figures", interrupted)
+    out = tmp_path / ("d" if labels else "s.ply")
+    args = ["--labels", "-o", f"{out}/", "--suffix", ".ply"] if labels else ["-o", str(out)]
+    assert main(["surface", str(tmp_path / "v.npy"), *args]) == 130
+    written = out / "label_4.ply" if labels else out
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"isoflow: interrupted: {written} is written, not read back (--no-check skips the read-back)"]
+    mesh = trimesh.load(written, process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(27)

@@ -369,12 +369,14 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     back. Returns the problems found."""
     from ..mesh import export
     from ..mesh.readback import check_scene_file, check_surface_file
+    from .progress import reading_back
 
     if target[0] == "glb":
         export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
-        return [] if args.no_check else check_scene_file(target[1], meshes, progress)
+        with reading_back(target[1]):
+            return [] if args.no_check else check_scene_file(target[1], meshes, progress)
     target[1].mkdir(exist_ok=True)
     problems = []
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
@@ -382,7 +384,8 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         export.write_surface(path, mesh, obj, force=args.force, comments=(f"isoflow surface --labels: {name}",))
         if not args.no_check:
             welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
-            check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
+            with reading_back(path):
+                check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
             if check.get("agree") is False:
                 problems.append(check["problem"])
         if progress is not None:

@@ -57,6 +57,18 @@ NOTE_AFTER = 2.0
 NOTE_LONG = 30.0
 
 
+@contextlib.contextmanager
+def reading_back(path) -> Iterator[None]:
+    """The read-back check of a file already written: interrupted, the
+    command's last line says the file is there and only its check was cut
+    short (``isoflow: interrupted: PATH is written, not read back``), not
+    a bare "interrupted" that leaves the user guessing."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(f"{path} is written, not read back (--no-check skips the read-back)") from None
+
+
 def time_note(args: argparse.Namespace, label: str, hint: str | None = None) -> Progress:
     """A ``progress(done, total)`` callback for a pipe or a log: once the
     work has run :data:`NOTE_AFTER` seconds past its first finished share,

@@ -114,15 +114,18 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     it does not agree with isoflow's counts."""
     from ..mesh import export
     from ..mesh.readback import check_surface_file
+    from .progress import reading_back
 
-    welded = export.shared_positions(mesh) if out.suffix.lower() == ".stl" else 0
+    shared = export.shared_positions(mesh)
+    welded = shared if out.suffix.lower() == ".stl" else 0
     if welded and not args.quiet:
         print(f"isoflow surface: note: {out}: STL keeps no shared vertices, so readers weld the split copies at "
               f"{welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart",
               file=sys.stderr)
     if args.no_check:
         return 0
-    check = check_surface_file(out, mesh, obj, topology=not welded, components=comps)
+    with reading_back(out):
+        check = check_surface_file(out, mesh, obj, topology=not welded, components=comps)
     if check.get("skipped"):
         if not args.quiet:
             print(f"isoflow surface: note: {out}: not read back ({check['skipped']})", file=sys.stderr)
@@ -135,7 +138,11 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
         print(f"{out}: trimesh reads back volume {t['volume']:.6g} after its weld, as isoflow counts "
               "(the welded contacts leave no manifold to compare)")
     else:
-        print(f"{out}: trimesh reads it back watertight, V-E+F = {t['euler_number']}, genus {t['genus']}, "
+        # trimesh.load merges equal positions by default, which joins the
+        # split copies into non-manifold points: say how it was read
+        how = (f" with process=False (its default merge joins the split copies at {shared} edge/vertex contacts "
+               "into non-manifold points)" if shared else "")
+        print(f"{out}: trimesh reads it back watertight{how}, V-E+F = {t['euler_number']}, genus {t['genus']}, "
               f"volume {t['volume']:.6g}: as isoflow counts")
     return 0
 
