@@ -347,3 +347,37 @@ def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys
     noise = rng.integers(1, 200, (256, 256, 256)).astype(np.uint8)
     np.save(tmp_path / "noise.npy", noise)
     fails(capsys, "info", tmp_path / "noise.npy", "--labels", words=("label image", "needs about", "budget"))
+
+
+def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    printed = run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-")
+    run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", tmp_path / "t.csv")
+    assert printed.encode() == (tmp_path / "t.csv").read_bytes() and not (tmp_path / "-").exists()
+    assert [int(r["label"]) for r in csv.DictReader(printed.splitlines())] == [1, 2, 3, 4, 5, 9]
+    fails(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-", "--json", words=("--csv -", "--json"))
+
+
+def test_the_terminal_table_keeps_its_columns_with_64_bit_labels(tmp_path, capsys):
+    image = np.zeros((5, 5, 5), np.uint64)
+    image[1, 1, 1], image[3, 3, 3] = 7, np.iinfo(np.uint64).max
+    np.save(tmp_path / "u.npy", image)
+    lines = run(capsys, "info", tmp_path / "u.npy", "--labels").splitlines()
+    head = lines[1].index("  surfaces")
+    assert [line.index("  1 (0)") for line in lines[2:4]] == [head, head]
+    assert lines[3].split()[0] == str(np.iinfo(np.uint64).max)
+
+
+def test_surface_labels_files_take_ascii_and_triangulate(tmp_path, capsys, segmentation):
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/d/", "--suffix", "ply",
+        "--ascii", "--triangulate")
+    for label in (4, 9):
+        text = (tmp_path / "d" / f"label_{label}.ply").read_bytes()
+        assert text.startswith(b"ply\nformat ascii 1.0\n") and b"comment faces: triangles" in text
+        mesh = trimesh.load(tmp_path / "d" / f"label_{label}.ply", process=False)
+        assert mesh.is_watertight and mesh.volume == pytest.approx(np.count_nonzero(segmentation == label))
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.glb", "--triangulate",
+          words=("s.glb", "--triangulate", "-o DIR/"))
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/e/", "--suffix", "stl", "--ascii",
+          words=("--ascii", ".ply", ".stl"))

@@ -21,7 +21,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     add_connectivity(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_labels_option(p)
-    p.add_argument("--csv", metavar="FILE", help="with --labels: write the full table as CSV")
+    p.add_argument("--csv", metavar="FILE", help="with --labels: write the full table as CSV (- prints it on stdout)")
     p.add_argument("--force", action="store_true", help="overwrite an existing --csv file")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
     p.add_argument("--threads", type=thread_count, metavar="N",

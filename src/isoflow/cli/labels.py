@@ -180,9 +180,15 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     """``isoflow info LABELS --labels``."""
     from ..mesh.outputs import check_output_path
 
-    if args.csv:
+    to_stdout = args.csv == "-"
+    if to_stdout and args.json:
+        raise IsoflowError(f"{args.input}: --csv - and --json both print on stdout: give one of them")
+    if args.csv and not to_stdout:
         check_output_path(args.csv, args.force)
     about, conn, table, _ = read_table(args, surfaces=not args.no_surfaces)
+    if to_stdout:  # the table alone on stdout, for a pipe
+        sys.stdout.writelines(csv_rows(table))
+        return 0
     if args.csv:
         write_csv(args.csv, table, args.force)
     if args.json:
@@ -231,9 +237,13 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
              f"{conn}-connectivity"]
     surfaces = "genera" in table
     shown = PLANAR_TERMINAL_COLUMNS if planar else TERMINAL_COLUMNS
+    # every column as wide as its widest shown value (64-bit labels, a
+    # billion voxels), so that the columns stay aligned
+    rows = range(min(n, SHOWN_ROWS))
+    shown = tuple((h, c, max([w] + [len(_cell(table[c][r], 0)) + 1 for r in rows])) for h, c, w in shown)
     head = "".join(f"{h:>{w}}" for h, _, w in shown)
     lines.append(head + ("  surfaces (genera)" if surfaces else ""))
-    for r in range(min(n, SHOWN_ROWS)):
+    for r in rows:
         row = "".join(_cell(table[c][r], w) for _, c, w in shown)
         if surfaces:
             genera = ",".join(map(str, table["genera"][r][:6])) + (",..." if len(table["genera"][r]) > 6 else "")
@@ -303,9 +313,14 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     from ..mesh.outputs import check_output_path
     from .progress import progress_bar
 
-    if args.png or args.ascii or args.triangulate:
-        raise IsoflowError(f"{args.input}: --png, --ascii and --triangulate write one surface, not --labels")
+    if args.png:
+        raise IsoflowError(f"{args.input}: --png draws one surface, not --labels")
     target = surface_outputs(args)
+    if target[0] == "glb" and (args.ascii or args.triangulate):
+        raise IsoflowError(f"{target[1]}: --ascii and --triangulate shape the files of -o DIR/; a .glb holds "
+                           "triangles in binary")
+    if args.ascii and target[2] != ".ply":
+        raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     _, conn, table, image = read_table(args)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
@@ -381,7 +396,8 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     problems = []
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
-        export.write_surface(path, mesh, obj, force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate, force=args.force,
+                             comments=(f"isoflow surface --labels: {name}",))
         if not args.no_check:
             welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
             with reading_back(path):
