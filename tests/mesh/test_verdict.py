@@ -66,3 +66,28 @@ def test_no_option_name_in_the_deciding_code():
     import re
 
     assert re.findall(r"--[a-z]", source) == []
+
+
+def test_the_solid_line_counts_bodies_and_cavities(tmp_path, capsys):
+    """Two boxes apart, one of them hollow (a box inside it, facing in):
+    the solid is 2 bodies with 1 cavity, its 3 shells what trimesh splits
+    the mesh into; the line used to say "3 boundary surfaces" only."""
+    import trimesh
+
+    from isoflow.mesh.genus import solid_report
+
+    outer = trimesh.creation.box(extents=(4, 4, 4))
+    hole = trimesh.creation.box(extents=(2, 2, 2))
+    hole.invert()
+    apart = trimesh.creation.box(extents=(1, 1, 1))
+    apart.apply_translation((6, 0, 0))
+    mesh = trimesh.util.concatenate([outer, hole, apart])
+    parts = mesh.split(only_watertight=False)
+    want_bodies = sum(1 for p in parts if p.volume > 0)
+    assert (len(parts), want_bodies) == (3, 2)
+    report = solid_report(mesh.vertices, mesh.faces)
+    assert (report["bodies"], report["cavities"], report["surfaces"]) == (want_bodies, 1, 3)
+    assert report["volume"] == pytest.approx(mesh.volume)
+    mesh.export(tmp_path / "m.obj")
+    assert main(["genus", str(tmp_path / "m.obj"), "--resolution", "16", "--no-step"]) == 0
+    assert "solid       genus 0, 2 bodies, 1 cavity, volume 57 " in capsys.readouterr().out

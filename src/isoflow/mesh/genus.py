@@ -223,7 +223,9 @@ def solid_report(vertices, faces) -> dict:
     subtracted (``approximate``: True).
 
     ``genus`` is the number of handles of the solid's boundary (its b1, what
-    the digital genus measures); ``boundary`` says whether the mesh is the
+    the digital genus measures); ``surfaces`` its closed boundary surfaces,
+    ``bodies`` and ``cavities`` those that bound a body from outside and a
+    cavity (its b0 and b2); ``boundary`` says whether the mesh is the
     solid's boundary (every surface between a region of winding 0 and one
     of winding not 0), so that the mesh's own genus is the one to compare.
     ``{"error": ...}`` where manifold3d refuses the mesh.
@@ -247,8 +249,11 @@ def solid_report(vertices, faces) -> dict:
         return {"error": f"{type(exc).__name__}: {detail}"}
     with np.errstate(over="ignore", under="ignore"):
         volume = float(np.ldexp(solid.volume(), 3 * e))
-    return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "volume": volume,
-            "boundary": boundary, "approximate": approximate}
+    # decompose() splits the solid into its shells: a body's outer one
+    # (positive volume) and its cavities' (negative)
+    bodies = sum(1 for p in pieces if p.volume() > 0)
+    return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "bodies": bodies,
+            "cavities": len(pieces) - bodies, "volume": volume, "boundary": boundary, "approximate": approximate}
 
 
 #: relative volume below which two solids are taken not to overlap (float32 booleans)
