@@ -359,3 +359,24 @@ def test_a_signal_during_the_read_back_says_the_file_is_written(tmp_path, capsys
         f"isoflow: interrupted: {written} is written, not read back (--no-check skips the read-back)"]
     mesh = trimesh.load(written, process=False)
     assert mesh.is_watertight and mesh.volume == pytest.approx(27)
+
+
+def test_an_output_that_is_the_input_is_refused_even_with_force(tmp_path, capsys):
+    """`surface m.obj -o m.obj --force` replaced the user's mesh with the
+    voxel surface; every output (-o, --csv, --png) that names the input,
+    by another path or a hard link, is refused and the file kept."""
+    from test_input_errors import fails
+
+    mesh = Path(__file__).resolve().parents[1] / "meshes" / "torus.obj"
+    (tmp_path / "m.obj").write_bytes(mesh.read_bytes())
+    os.link(tmp_path / "m.obj", tmp_path / "link.obj")
+    labels = np.zeros((4, 4, 4), np.uint8)
+    labels[1:3, 1:3, 1:3] = 2
+    np.save(tmp_path / "l.npy", labels)
+    for argv in (["surface", tmp_path / "m.obj", "-o", tmp_path / "m.obj"],
+                 ["surface", tmp_path / "m.obj", "-o", tmp_path / "link.obj"],
+                 ["surface", tmp_path / "l.npy", "--label", "2", "-o", tmp_path / "s.ply", "--png", tmp_path / "l.npy"],
+                 ["info", tmp_path / "l.npy", "--labels", "--csv", f"{tmp_path}/../{tmp_path.name}/l.npy"]):
+        fails(capsys, *argv, "--force", words=("is the input", "--force replaces an output, never the input"))
+    assert (tmp_path / "m.obj").read_bytes() == mesh.read_bytes()
+    assert np.array_equal(np.load(tmp_path / "l.npy"), labels)

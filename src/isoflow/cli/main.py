@@ -224,6 +224,30 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
         yield
 
 
+def refuse_output_over_input(args: argparse.Namespace) -> None:
+    """An output that is the command's own input (the same file, and the
+    same dataset of an HDF5 or zarr file) is refused, --force or not: the
+    file being read would be replaced by what was made from it."""
+    import os
+
+    from ..mesh.formats.registry import split_dataset
+
+    meshes = getattr(args, "mesh", None)
+    inputs = [getattr(args, "input", None)] + (meshes if isinstance(meshes, list) else [meshes])
+    for out in (getattr(args, key, None) for key in ("output", "csv", "png")):
+        if not out or out == "-":
+            continue
+        out_file, out_set = split_dataset(out)
+        for name in filter(None, inputs):
+            in_file, in_set = split_dataset(name)
+            if out_set != in_set:
+                continue
+            both = out_file.exists() and in_file.exists()
+            if os.path.samefile(out_file, in_file) if both else out_file.resolve() == in_file.resolve():
+                raise IsoflowError(f"{out}: is the input {name}; write the output to another file (--force "
+                                   "replaces an output, never the input)")
+
+
 def interrupted(signals: list, what: str) -> int:
     """The last line of a signalled command (``isoflow: interrupted`` for
     SIGINT, ``isoflow: terminated`` for the others, with ``what`` where a
@@ -263,6 +287,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with quiet_stderr(args.quiet), warnings_as_lines(args), log_records_as_notes(args), \
                 termination_as_interrupt(terminated):
+            refuse_output_over_input(args)
             status = args.func(args)
             if terminated:  # a signal a library swallowed: the command still ends as interrupted
                 raise KeyboardInterrupt
