@@ -2,6 +2,8 @@
 traceback, no silently wrong value, nothing written."""
 
 import os
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -233,3 +235,129 @@ def test_a_dangling_symlink_output_needs_force(tmp_path, capsys):
     assert (tmp_path / "s.ply").is_symlink()
     assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "--force"]) == 0
     assert (tmp_path / "s.ply").is_file() and not (tmp_path / "s.ply").is_symlink()
+
+
+# ------------------------------------------------ a mesh's grid beyond memory
+
+TORUS = Path(__file__).resolve().parents[1] / "meshes" / "torus.obj"
+#: a budget (1.9 MiB) that refuses the sample torus at a few hundred voxels across
+SMALL = 2_000_000
+
+
+def small_budget(monkeypatch):
+    from isoflow.scale import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: SMALL)
+
+
+def command_words(line: str) -> str:
+    """A refusal on the command line names its options, never a Python
+    parameter or an option that the command does not have."""
+    for python in ("max_bytes", "resolution=", "pitch=", "chunks", "voxelize_to_zarr"):
+        assert python not in line, (python, line)
+    return line
+
+
+def said_fit(line: str) -> int | float:
+    """The finest grid a refusal says fits in the small budget."""
+    found = re.search(r"at most --resolution (\d+) fits in 1\.9 MiB", line)
+    if found:
+        return int(found.group(1))
+    found = re.search(r"--pitch (\S+) or coarser fits in 1\.9 MiB", line)
+    assert found, line
+    return float(found.group(1))
+
+
+@pytest.mark.parametrize("out", ["v.npy", "v.zarr"])
+def test_a_mesh_grid_beyond_the_budget_names_the_largest_resolution_that_fits(tmp_path, capsys, monkeypatch, out):
+    """The refusal said no resolution that fits, named ``max_bytes`` (and,
+    for a store, "smaller chunks", no option of the command). The one it
+    names now fits: it is voxelised under the same budget, one more is not."""
+    if out.endswith(".zarr"):
+        pytest.importorskip("zarr")
+    small_budget(monkeypatch)
+    line = fails(capsys, "voxelize", TORUS, "--resolution", 400, "-o", tmp_path / out,
+                 words=("torus.obj", "--resolution 400 needs", "budget of 1.9 MiB"))
+    assert "zarr" not in command_words(line)  # no store holds it in that budget either
+    fit = said_fit(line)
+    assert main(["voxelize", str(TORUS), "--resolution", str(fit), "-o", str(tmp_path / out)]) == 0
+    capsys.readouterr()
+    line = fails(capsys, "voxelize", TORUS, "--resolution", fit + 1, "-o", tmp_path / ("w" + out[1:]))
+    assert said_fit(line) == fit
+
+
+def test_a_pitch_beyond_the_budget_names_the_smallest_pitch_that_fits(tmp_path, capsys, monkeypatch):
+    small_budget(monkeypatch)
+    line = fails(capsys, "voxelize", TORUS, "--pitch", "0.001", "-o", tmp_path / "v.npy",
+                 words=("torus.obj", "--pitch 0.001 needs", "or coarser fits"))
+    pitch = said_fit(command_words(line))
+    assert main(["voxelize", str(TORUS), "--pitch", repr(pitch), "-o", str(tmp_path / "v.npy")]) == 0
+    capsys.readouterr()
+    assert said_fit(fails(capsys, "voxelize", TORUS, "--pitch", repr(pitch * 0.9), "-o", tmp_path / "w.npy")) == pitch
+
+
+@pytest.mark.parametrize("out", ["v.npy", "v.zarr"])
+def test_a_grid_that_no_file_holds_is_not_sent_to_a_store(tmp_path, capsys, out):
+    """--pitch 1e-300: a grid of 3e900 voxels. The in-memory refusal sent
+    it to a zarr store, and a store's slabs were listed (for ever) before
+    its columns were refused."""
+    if out.endswith(".zarr"):
+        pytest.importorskip("zarr")
+    line = fails(capsys, "voxelize", TORUS, "--pitch", "1e-300", "-o", tmp_path / out,
+                 words=("--pitch 1e-300 needs", "3.125e+900 voxels", "or coarser fits"))
+    assert "-o OUT.zarr" not in command_words(line)
+    assert ("more columns than a zarr store's slabs can index" in line) == out.endswith(".zarr")
+
+
+def test_voxelize_suggests_a_store_where_one_holds_the_grid(tmp_path, capsys, monkeypatch):
+    from isoflow.scale import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: 512 << 20)  # a store at 2048 holds about 360 MiB
+    line = fails(capsys, "voxelize", TORUS, "--resolution", 2048, "-o", tmp_path / "v.npy",
+                 words=("--resolution 2048 needs", "fits in 512.0 MiB", "or write it slab by slab: -o OUT.zarr"))
+    command_words(line)
+
+
+def test_genus_beyond_the_budget_names_the_largest_resolution_that_fits(capsys, monkeypatch):
+    """genus suggested a store (`voxelize -o OUT.zarr`), of no use for the
+    Betti numbers; the resolution it names fits the voxels and their
+    labelling, as the stepping counts them."""
+    small_budget(monkeypatch)
+    line = fails(capsys, "genus", TORUS, "--resolution", 400, words=("torus.obj", "--resolution 400 needs", "Betti"))
+    assert "zarr" not in command_words(line) and "voxelize" not in line
+    fit = said_fit(line)
+    assert main(["genus", str(TORUS), "--resolution", str(fit), "--no-step"]) == 0
+    capsys.readouterr()
+    assert said_fit(fails(capsys, "genus", TORUS, "--resolution", fit + 1)) == fit
+
+
+def test_surface_of_a_mesh_beyond_the_budget_names_the_largest_resolution_that_fits(tmp_path, capsys, monkeypatch):
+    small_budget(monkeypatch)
+    line = fails(capsys, "surface", TORUS, "--resolution", 400, "-o", tmp_path / "s.ply",
+                 words=("torus.obj", "--resolution 400 needs"))
+    assert "zarr" not in command_words(line)
+    # its voxels fit (the surface's own memory is checked when it is known)
+    assert main(["voxelize", str(TORUS), "--resolution", str(said_fit(line)), "-o", str(tmp_path / "v.npy")]) == 0
+
+
+# --------------------------------------- option values, as they are read
+
+@pytest.mark.parametrize("argv, words", [
+    (["voxelize", "missing.obj", "-o", "v.npy", "--resolution", "0"], ("--resolution", "from 1", "got 0")),
+    (["voxelize", "missing.obj", "-o", "v.npy", "--resolution", "-3"], ("--resolution", "got -3")),
+    (["voxelize", "missing.obj", "-o", "v.npy", "--resolution", "2.5"], ("--resolution", "'2.5'")),
+    (["genus", "missing.obj", "--resolution", "64", "0"], ("--resolution", "got 0")),
+    (["genus", "missing.obj", "--max-resolution", "0"], ("--max-resolution", "got 0")),
+    (["surface", "missing.obj", "-o", "s.ply", "--resolution", "0"], ("--resolution", "got 0")),
+    (["info", "missing.obj", "--pitch", "-1"], ("--pitch", "got -1")),
+])
+def test_a_resolution_below_one_is_refused_before_the_mesh_is_read(capsys, argv, words):
+    """Refused only after the mesh was loaded (minutes for a large one):
+    here the mesh does not even exist, and the option is what is said (as
+    the arguments are read: nothing is written)."""
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert done.value.code == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert "missing.obj" not in lines[0] and all(w in lines[0] for w in words), lines[0]

@@ -1,9 +1,12 @@
 """The one exception type isoflow raises for bad input.
 
-The CLI turns it into a one-line message and exit code 2; the Python API lets
-it propagate. Its message always names the thing that is wrong (file, field,
-value) so that nobody has to read a traceback from inside numpy.
+The CLI turns it into a one-line message (in its ``command_line`` words where
+an error has them) and exit code 2; the Python API lets it propagate. Its
+message always names the thing that is wrong (file, field, value) so that
+nobody has to read a traceback from inside numpy.
 """
+
+from __future__ import annotations
 
 
 class IsoflowError(ValueError):
@@ -20,6 +23,36 @@ class IsoflowError(ValueError):
     ...     print(exc)
     no-such-volume.npy: no such file
     """
+
+    #: the message in the command line's words where they differ from the
+    #: Python API's (its options, ``--resolution``, where the message names
+    #: a function's parameter, ``resolution=``); None where they are the same
+    command_line: str | None = None
+
+    def at(self, where: object) -> IsoflowError:
+        """This error with ``where`` (a file, a mesh) put before its
+        message, in both wordings.
+
+        Parameters
+        ----------
+        where : object
+            What the error is about, as its message names it.
+
+        Returns
+        -------
+        IsoflowError
+            A new error (a subclass keeps its kind: see
+            :meth:`isoflow.mesh.grid.GridTooLarge.at`).
+
+        Examples
+        --------
+        >>> str(IsoflowError("no such file").at("a.npy"))
+        'a.npy: no such file'
+        """
+        out = IsoflowError(f"{where}: {self}")
+        if self.command_line is not None:
+            out.command_line = f"{where}: {self.command_line}"
+        return out
 
 
 class IsoflowWarning(UserWarning):

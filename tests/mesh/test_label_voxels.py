@@ -168,8 +168,11 @@ def test_too_big_is_refused_before_any_mesh_is_voxelised(monkeypatch):
     a, b = sphere(1.0, (0, 0, 0)), sphere(1.0, (5, 0, 0))
     voxels = 200 * 58 * 58
     # the label array and a bit per voxel fit, not with one sphere's block (about 61^3 bytes) as well
-    with pytest.raises(IsoflowError, match="needs a 200x58x58 grid .*coarser --resolution"):
+    with pytest.raises(IsoflowError, match="needs a 200x58x58 grid .*coarser resolution= or pitch=") as e:
         voxelize_meshes([a, b], resolution=200, max_bytes=int(voxels * 1.125) + 50**3)
+    # the command line names its options, not the parameters
+    said = e.value.command_line
+    assert "--resolution 200 needs" in said and "coarser --resolution or --pitch" in said and "max_bytes" not in said
 
 
 def test_bad_input_is_one_line_naming_it(tmp_path):

@@ -91,3 +91,16 @@ def test_the_solid_line_counts_bodies_and_cavities(tmp_path, capsys):
     mesh.export(tmp_path / "m.obj")
     assert main(["genus", str(tmp_path / "m.obj"), "--resolution", "16", "--no-step"]) == 0
     assert "solid       genus 0, 2 bodies, 1 cavity, volume 57 " in capsys.readouterr().out
+
+
+def test_resolutions_asked_past_max_resolution_are_tried_and_not_blamed_on_it():
+    """--max-resolution caps the doubling only (docs/genus.md): 48 asked
+    with the cap at 16 is tried, and the verdict said it was stopped by
+    "the largest resolution allowed (16, --max-resolution)"."""
+    v = verify_genus(MESHES / "torus.obj", (48,), max_resolution=16)
+    assert [d["resolution"] for d in v.digital] == [48]
+    assert v.stop == Stop("asked", limit=16, resolution=48, option="max_resolution")
+    assert "largest resolution allowed" not in v.verdict
+    assert "stopped by the resolutions asked (48 is past --max-resolution 16, which caps only the doubling)" in v.verdict
+    printed = json_of(MESHES / "torus.obj", "--resolution", 48, "--max-resolution", 16)
+    assert printed["verdict"] == v.verdict  # at the cap itself, the cap stops it: test_the_stop_and_the_facts_are_data

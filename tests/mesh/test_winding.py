@@ -21,7 +21,7 @@ import pytest
 
 import isoflow
 from isoflow.cli import main
-from isoflow.errors import IsoflowError
+from isoflow.mesh.grid import GridTooLarge
 from isoflow.mesh.load import MESH_SUFFIXES, load_mesh, mesh_defects
 from isoflow.mesh.voxelize import voxelize
 
@@ -367,10 +367,21 @@ def test_cli_voxelize_to_zarr_then_info(tmp_path, capsys):
     assert "not a zarr store" in capsys.readouterr().err and (tmp_path / "d.zarr" / "keep.txt").exists()
 
 
-def test_too_big_for_memory_suggests_zarr():
+def test_too_big_for_memory_names_the_finest_grid_and_a_store_where_one_holds_it():
+    """The refusal names the largest resolution that fits (it does, one
+    more does not) in Python's words, and a zarr store only where one
+    holds the grid (it named the command line's ``-o OUT.zarr`` always)."""
     v, f = load_mesh(MESHES / "target.obj")
-    with pytest.raises(IsoflowError, match=r"135,168 voxels.*more than max_bytes=100,000.*-o OUT\.zarr"):
+    with pytest.raises(GridTooLarge, match=r"135,168 voxels.*more than max_bytes=100,000; at most resolution=\d+ fits$") as e:
         voxelize(v, f, resolution=64, max_bytes=100_000)
+    fit = e.value.fit
+    assert voxelize(v, f, resolution=fit, max_bytes=100_000)[0].size <= 100_000
+    with pytest.raises(GridTooLarge) as more:
+        voxelize(v, f, resolution=fit + 1, max_bytes=100_000)
+    assert more.value.fit == fit and "--resolution" in more.value.command_line
+    with pytest.raises(GridTooLarge, match=r"or write it slab by slab to a zarr store \(isoflow\.voxelize_to_zarr\)") as e:
+        voxelize(v, f, resolution=2048, max_bytes=2 << 30)
+    assert e.value.store and "-o OUT.zarr" not in str(e.value)
 
 
 # ---------------------------------------------------------------------------

@@ -7,17 +7,18 @@ import json
 import sys
 
 from ..errors import IsoflowError
-from .inputs import add_mesh_rule, mesh_fill
+from .inputs import add_mesh_rule, mesh_fill, resolution_value
 from .progress import progress_bar
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
     p.add_argument("mesh", help="a mesh file: any format trimesh reads")
-    p.add_argument("--resolution", type=int, nargs="+",
+    p.add_argument("--resolution", type=resolution_value, nargs="+",
                    help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
                         "digital Betti numbers of the last two agree")
-    p.add_argument("--max-resolution", type=int, help="stop doubling beyond this (default 1024)")
+    p.add_argument("--max-resolution", type=resolution_value,
+                   help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
                    help="stop doubling when the next resolution would end past this (default 60)")
     p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
@@ -28,12 +29,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def check_limits(args: argparse.Namespace) -> None:
-    """Resolutions and the time limit are positive, or one line says which."""
-    for name in ("resolution", "max_resolution"):
-        values = getattr(args, name)
-        for r in values if isinstance(values, list) else [values]:
-            if r is not None and r < 1:
-                raise IsoflowError(f"--{name.replace('_', '-')} must be a positive integer, got {r}")
+    """The time limit is positive, or one line says so (the resolutions are
+    checked as the command line is read: :func:`resolution_value`)."""
     if args.time_limit is not None and not args.time_limit > 0:
         raise IsoflowError(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
 

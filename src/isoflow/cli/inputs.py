@@ -24,8 +24,8 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
         help="a point list gives cube corners (the paper's point model, default) or voxel indices",
     )
     grid = p.add_mutually_exclusive_group()
-    grid.add_argument("--pitch", type=float, help="voxel size when the input is a mesh")
-    grid.add_argument("--resolution", type=int, help="voxels along the mesh's longest side (default 64)")
+    grid.add_argument("--pitch", type=pitch_value, help="voxel size when the input is a mesh")
+    grid.add_argument("--resolution", type=resolution_value, help="voxels along the mesh's longest side (default 64)")
     add_mesh_rule(p)
 
 
@@ -79,6 +79,48 @@ def label_value(text: str) -> int | float:
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     return int(value) if value.is_integer() else value
+
+
+def resolution_value(text: str) -> int:
+    """argparse type of ``--resolution`` (and ``--max-resolution``): voxels
+    along the mesh's longest side, a whole number from 1 to
+    :data:`~isoflow.mesh.grid.MAX_RESOLUTION`, refused as the command line
+    is read, before a mesh (however large) is loaded.
+
+    Examples
+    --------
+    >>> resolution_value("64")
+    64
+    """
+    from ..mesh.grid import MAX_RESOLUTION
+
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number of voxels: {text!r}") from None
+    if not 1 <= value <= MAX_RESOLUTION:
+        raise argparse.ArgumentTypeError(f"must be a whole number of voxels from 1 to {MAX_RESOLUTION}, got {value}")
+    return value
+
+
+def pitch_value(text: str) -> float:
+    """argparse type of ``--pitch``: a voxel size, positive and finite,
+    refused as the command line is read (before the mesh is loaded).
+
+    Examples
+    --------
+    >>> pitch_value("0.5")
+    0.5
+    """
+    import math
+
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a positive voxel size, got {text}")
+    return value
 
 
 def thread_count(text: str) -> int:

@@ -57,6 +57,19 @@ def command_list(parser: argparse.ArgumentParser) -> str:
     return "\n".join(lines)
 
 
+class CommandParser(argparse.ArgumentParser):
+    """A command's parser. A bad value of an option (argparse's
+    ``argument --resolution: ...``: a type, a choice, options that exclude
+    each other) is one line on stderr and exit status 2, as every other bad
+    input; a command line of the wrong shape (an argument missing or not
+    known) also shows the usage."""
+
+    def error(self, message: str):
+        if message.startswith("argument "):  # names the option and what is wrong with its value
+            self.exit(2, f"{self.prog}: error: {message}\n")
+        super().error(message)
+
+
 def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
     """A sub-command whose one-line summary is both its entry in the command
     list and the description of its own -h."""
@@ -71,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
     )
     parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", parser_class=CommandParser)
     parser.commands = sub.choices  # type: ignore[attr-defined]  # name -> sub-command parser, in order
     for command in COMMANDS:
         command.add_parser(sub, add_command)
@@ -292,8 +305,8 @@ def main(argv: list[str] | None = None) -> int:
             if terminated:  # a signal a library swallowed: the command still ends as interrupted
                 raise KeyboardInterrupt
             return status
-    except IsoflowError as exc:
-        print(f"isoflow {args.command}: error: {exc}", file=sys.stderr)
+    except IsoflowError as exc:  # in the command line's words (its options) where they differ from Python's
+        print(f"isoflow {args.command}: error: {exc.command_line or exc}", file=sys.stderr)
         return 2
     except MemoryError:
         name = getattr(args, "input", None) or getattr(args, "mesh", "")

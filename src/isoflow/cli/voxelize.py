@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .inputs import add_mesh_rule, fill_hint, mesh_fill, say_note, voxelize_input
+from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar
 
 
@@ -18,8 +18,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="a mesh file: any format trimesh reads (STL, OBJ, PLY, OFF, GLB, 3MF, DAE, ZIP, ...); "
                         "several: one label image on one grid over them all, label i for the i-th mesh")
     grid = p.add_mutually_exclusive_group(required=True)
-    grid.add_argument("--pitch", type=float, help="voxel size in mesh units")
-    grid.add_argument("--resolution", type=int, help="voxels along the longest side")
+    grid.add_argument("--pitch", type=pitch_value, help="voxel size in mesh units")
+    grid.add_argument("--resolution", type=resolution_value, help="voxels along the longest side")
     p.add_argument("-o", "--output", required=True,
                    help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox), or "
                         "OUT.zarr: written slab by slab as dask tasks, never held in memory")
@@ -42,6 +42,7 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
 
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
+    from ..mesh.grid import GridTooLarge
     from ..mesh.volumes import check_volume_output, write_volume
 
     if len(args.mesh) > 1 or args.split:
@@ -50,7 +51,12 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     if Path(args.output).suffix.lower() == ".zarr":
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
-    obj = voxelize_input(args.mesh, args)
+    try:
+        obj = voxelize_input(args.mesh, args)
+    except GridTooLarge as exc:
+        if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
+            raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
+        raise
     out = write_volume(obj, args.output, force=args.force)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")

@@ -25,12 +25,13 @@ import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError
-from ..scale.memory import default_budget
+from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
+from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words
 from .load import load_mesh, mesh_defects
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
-from .voxelize import voxelize
+from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
 # --------------------------------------------------------------------------
 # the mesh's own topology
@@ -400,6 +401,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     start = time.monotonic()
     res: int | None
     while todo or out:
+        stepped = not todo  # a resolution the stepping chose, not one asked
         if todo:
             res = todo.pop(0)
         else:
@@ -413,8 +415,13 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
         def rung(done, total, finished=finished, weight=weight, ahead=ahead):
             progress(finished + round(weight * (done / total if total else 1.0)), ahead)
 
-        entry = digital_entry(vertices, faces, res, connectivity, strict=strict, fill=fill,
-                              progress=None if progress is None else rung)
+        try:
+            entry = digital_entry(vertices, faces, res, connectivity, strict=strict, fill=fill,
+                                  progress=None if progress is None else rung, finest=not stepped)
+        except GridTooLarge as exc:
+            if stepped:  # the estimate let it through, the exact count did not: the memory stops the stepping
+                return out, Stop("memory", resolution=res, estimate=grid_need(exc.shape, DIGITAL_BYTES_PER_VOXEL))
+            raise
         finished += weight
         out.append(entry)
         if on_resolution is not None:
@@ -426,7 +433,9 @@ def next_resolution(done: list, target: int | None, *, step: bool, max_resolutio
                     elapsed: float) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
     why not: the Betti numbers settled on ``target`` (no :class:`Stop`), or
-    a limit (the time that ``elapsed`` seconds leave, the memory budget)."""
+    a limit (the time that ``elapsed`` seconds leave, the memory budget).
+    ``max_resolution`` caps the doubling only: where the resolutions asked
+    already pass it, they are what ended the stepping (a Stop "asked")."""
     stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
     if stable and (target is None or done[-1]["genus"] == target):
         return None, None
@@ -436,25 +445,49 @@ def next_resolution(done: list, target: int | None, *, step: bool, max_resolutio
     res = 2 * last["resolution"]
     grow = (res / last["resolution"]) ** 3
     if res > max_resolution:
+        if last["resolution"] > max_resolution:
+            # asked beyond the cap, which caps only the doubling: the
+            # resolutions asked end the stepping, not the cap
+            return None, Stop("asked", limit=max_resolution, resolution=last["resolution"], option="max_resolution")
         return None, Stop("max_resolution", limit=max_resolution, resolution=res, option="max_resolution")
     if elapsed + last["seconds"] * grow > time_limit:
         return None, Stop("time_limit", limit=time_limit, resolution=res, estimate=last["seconds"] * grow,
                           option="time_limit")
     need = int(np.prod(last["shape"]) * grow * DIGITAL_BYTES_PER_VOXEL)
-    if need > default_budget():
+    if need > memory.default_budget():
         return None, Stop("memory", resolution=res, estimate=need)
     return res, None
 
 
 def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict: bool = False,
-                  fill: Fill = "winding", progress=None) -> dict:
+                  fill: Fill = "winding", progress=None, finest: bool = True) -> dict:
     """The solid voxelised at ``resolution`` and its Betti numbers: one
-    entry of :func:`digital_steps`."""
+    entry of :func:`digital_steps`. A grid whose voxels and labelling do not
+    fit in the memory budget is refused (:class:`~isoflow.mesh.grid.GridTooLarge`),
+    naming the finest one that does where ``finest``."""
     import time
 
     t = time.monotonic()
-    solid = voxelize(vertices, faces, resolution=resolution, strict=strict, fill=fill, progress=progress,
-                     details=True)
+    budget = memory.default_budget()
+    vertices, faces, shape, what, _, _, _ = plan_voxels(vertices, faces, resolution=resolution)
+    try:
+        # the volume and its labelling, as the stepping counts them (the
+        # voxeliser checks its own share, the volume and its slabs)
+        if not grid_fits(shape, DIGITAL_BYTES_PER_VOXEL, 0, budget):
+            need = grid_need(shape, DIGITAL_BYTES_PER_VOXEL)
+            raise GridTooLarge(what, f"{grid_words(shape, need)} for its Betti numbers", budget, shape=shape)
+        solid = voxelize(vertices, faces, resolution=resolution, strict=strict, fill=fill, progress=progress,
+                         details=True)
+    except GridTooLarge as exc:
+        if not finest:
+            raise
+        # the finest grid whose Betti numbers fit by both counts; the Betti
+        # numbers need the volume in memory: a zarr store is no way out
+        made = Solid(vertices, faces, strict=strict, fill=fill)
+        fit = finest_fit(vertices, faces, what, shape, lambda s, fr: grid_fits(s, DIGITAL_BYTES_PER_VOXEL, 0, budget)
+                         and in_memory(made, fr, s, budget)[0])
+        # verify_genus takes no max_bytes: its budget is the memory available
+        raise exc.but(fit=fit, sought=True, hints=("", ""), store=False, place="", parameter=None) from None
     vol, pitch = solid.volume, solid.pitch
     assert vol is not None, "an in-memory voxelisation has its volume"
     betti = betti_numbers(vol, connectivity)
@@ -536,7 +569,7 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill)
     except IsoflowError as exc:
-        raise IsoflowError(f"{path}: {exc}") from None
+        raise exc.at(path) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
     kind = verdict_kind(w, digital, reference, stable)
     return GenusVerdict(

@@ -44,11 +44,13 @@ refused.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.memory import default_budget
+from ..scale import memory
+from ..scale.memory import sized
 from .load import mesh_bbox
 
 #: Largest ``resolution=`` accepted (voxels along the longest side).
@@ -160,24 +162,238 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     return float(pitch), origin.astype(np.float64), tuple(shape), what, (shift, e, origin_s, pitch_s)
 
 
-def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes, hint: str = ""):
-    """Refuse a grid whose volume (``bytes_per_voxel`` per voxel) and ``extra``
-    bytes of temporaries exceed ``max_bytes`` (default: the memory budget),
-    naming its size; ``hint`` says what to do instead."""
-    if max_bytes is None:
-        max_bytes = default_budget()
-    nvox = shape[0] * shape[1] * shape[2]  # Python ints: no overflow
-    if nvox < 2**53:
-        need = int(nvox * bytes_per_voxel) + extra
-    else:
-        from fractions import Fraction
+def grid_need(shape, bytes_per_voxel: float, extra: int = 0) -> int:
+    """Bytes of a grid of ``shape`` at ``bytes_per_voxel`` and ``extra``
+    bytes of temporaries, exactly (Python ints: no overflow however large).
 
-        need = int(nvox * Fraction(bytes_per_voxel)) + extra
-    if need > max_bytes or nvox >= 2**62:
-        limit = (f"more than max_bytes={fmt_count(max_bytes)}" if need > max_bytes
-                 else "more than one array can index")
-        dims = "x".join(fmt_count(n, sep=False) for n in shape)
-        raise IsoflowError(
-            f"voxelize: {what} needs a {dims} grid "
-            f"({fmt_count(nvox)} voxels, about {fmt_count(need)} bytes), {limit}"
-            + (f": {hint}" if hint else ""))
+    Examples
+    --------
+    >>> grid_need((10, 10, 10), 1.125, 7)
+    1132
+    """
+    nvox = math.prod(int(n) for n in shape)
+    if nvox < 2**53:
+        return int(nvox * bytes_per_voxel) + int(extra)
+    from fractions import Fraction
+
+    return int(nvox * Fraction(bytes_per_voxel)) + int(extra)
+
+
+def grid_fits(shape, bytes_per_voxel: float, extra: int, budget: int) -> bool:
+    """Whether a grid of ``shape`` fits in ``budget`` bytes (see
+    :func:`grid_need`) and in one array (fewer than 2**62 voxels)."""
+    return math.prod(int(n) for n in shape) < 2**62 and grid_need(shape, bytes_per_voxel, extra) <= budget
+
+
+def grid_words(shape, need: int | None = None) -> str:
+    """A grid as its refusal names it: its sides, its voxels and the bytes
+    it needs.
+
+    Examples
+    --------
+    >>> grid_words((2000, 300, 2000), 1_200_000_000)
+    'a 2000x300x2000 grid (1,200,000,000 voxels, about 1,200,000,000 bytes)'
+    """
+    dims = "x".join(fmt_count(n, sep=False) for n in shape)
+    nvox = math.prod(int(n) for n in shape)
+    return f"a {dims} grid ({fmt_count(nvox)} voxels" + (f", about {fmt_count(need)} bytes)" if need is not None else ")")
+
+
+def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes,
+                      hints: tuple[str, str] = ("", "")) -> None:
+    """Refuse (:class:`GridTooLarge`) a grid whose volume (``bytes_per_voxel``
+    per voxel) and ``extra`` bytes of temporaries exceed ``max_bytes``
+    (default: the memory budget), naming its size; ``hints`` say what to do
+    instead, in the Python API's words and the command line's."""
+    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    if not grid_fits(shape, bytes_per_voxel, extra, budget):
+        need = grid_need(shape, bytes_per_voxel, extra)
+        raise GridTooLarge(what, grid_words(shape, need), budget, shape=tuple(shape),
+                           beyond="" if need > budget else "more than one array can index", hints=hints)
+
+
+def _bytes(n: int) -> str:
+    """A number of bytes as a person reads it, however large."""
+    return sized(n) if n < 2**70 else f"{fmt_count(n)} bytes"
+
+
+def option_words(what: str) -> str:
+    """A grid parameter as the command line writes it.
+
+    Examples
+    --------
+    >>> option_words("resolution=1290"), option_words("pitch=1e-300")
+    ('--resolution 1290', '--pitch 1e-300')
+    """
+    name, _, value = what.partition("=")
+    return f"--{name.replace('_', '-')} {value}"
+
+
+class GridTooLarge(IsoflowError):
+    """A voxel grid refused before anything grid-sized is allocated: it
+    would not fit in the memory budget, in one array or in a zarr store.
+
+    Its message names the grid asked for, what it needs, the limit and the
+    finest grid that fits; :attr:`command_line` says the same with the
+    command line's options (``--resolution 1290``) where the message names
+    the Python parameters (``resolution=1290``, ``max_bytes``).
+
+    Parameters
+    ----------
+    what : str
+        The grid asked for, as :func:`voxel_grid` names it:
+        ``"resolution=R"`` or ``"pitch=P"``.
+    needs : str
+        What it needs, in words (:func:`grid_words`).
+    budget : int
+        The bytes it had.
+    shape : tuple of int, optional
+        Its shape.
+    beyond : str
+        The limit in words where it is not the budget (one array, a store's
+        columns).
+    fit : int, float or None
+        The finest grid that passes the same checks under the same budget
+        (:func:`finest_fit`): the largest resolution, or the smallest pitch
+        of three significant digits; None where none does.
+    sought : bool
+        Whether ``fit`` was looked for (not where the grid was given
+        whole, ``grid=`` or ``window=``).
+    hints : (str, str)
+        What else to do, in the Python API's words and the command line's.
+    store : bool
+        Whether a zarr store, written slab by slab, would hold the grid
+        asked within the same budget.
+    place : str
+        What the message starts with (the file, the step).
+    parameter : str or None
+        The Python parameter that set ``budget`` (``max_bytes``); None
+        where the caller has none (the memory available, as on the
+        command line).
+    """
+
+    def __init__(self, what: str, needs: str, budget: int, *, shape: tuple | None = None, beyond: str = "",
+                 fit: int | float | None = None, sought: bool = False, hints: tuple[str, str] = ("", ""),
+                 store: bool = False, place: str = "voxelize: ", parameter: str | None = "max_bytes"):
+        self.facts = {"what": what, "needs": needs, "budget": budget, "shape": shape, "beyond": beyond, "fit": fit,
+                      "sought": sought, "hints": tuple(hints), "store": store, "place": place, "parameter": parameter}
+        self.what, self.shape, self.budget, self.fit, self.store = what, shape, budget, fit, store
+        super().__init__(self.words(command_line=False))
+
+    def __reduce__(self):  # pickled (a dask worker's error) by its facts, not its message
+        return (_grid_too_large, (self.facts,))
+
+    @property  # type: ignore[override]
+    def command_line(self) -> str:
+        """The message with the command line's options."""
+        return self.words(command_line=True)
+
+    def words(self, command_line: bool) -> str:
+        """The message in the Python API's words, or the command line's."""
+        facts = self.facts
+        said = option_words if command_line else (lambda text: text)
+        budget = facts["budget"]
+        if facts["beyond"]:
+            limit = facts["beyond"]
+        elif command_line or not facts["parameter"]:  # no option sets it: it is what the system has free
+            limit = f"more than the memory budget of {_bytes(budget)} (the memory available now)"
+        else:
+            limit = f"more than {facts['parameter']}={fmt_count(budget)}"
+        text = f"{facts['place']}{said(facts['what'])} needs {facts['needs']}, {limit}"
+        room = f" in {_bytes(budget)}" if command_line else ""
+        fit = facts["fit"]
+        if fit is not None and facts["what"].startswith("pitch="):
+            text += f"; {said(f'pitch={fit!r}')} or coarser fits{room}"
+        elif fit is not None:
+            text += f"; at most {said(f'resolution={fit}')} fits{room}"
+        elif facts["sought"]:
+            text += f"; not even {said('resolution=1')} fits{room}"
+        hint = facts["hints"][1 if command_line else 0]
+        return text + (f"; {hint}" if hint else "")
+
+    def at(self, where: object) -> GridTooLarge:
+        """This refusal with ``where`` (a file, a mesh) put before it."""
+        return self.but(place=f"{where}: {self.facts['place']}")
+
+    def but(self, **facts) -> GridTooLarge:
+        """This refusal with some of its facts changed (``hints=``,
+        ``store=``: what the caller knows to do instead)."""
+        return GridTooLarge(**{**self.facts, **facts})
+
+
+def _grid_too_large(facts: dict) -> GridTooLarge:
+    return GridTooLarge(**facts)
+
+
+def box_corners(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two corners of the mesh's bounding box as a mesh whose one face
+    uses both: :func:`voxel_grid` lays on it the grid it lays on the mesh
+    (it depends on the box alone), at no cost per triangle."""
+    lo, hi, _ = mesh_bbox(v, f, "voxelize")
+    return np.array([lo, hi]), np.array([[0, 1, 1]])
+
+
+def coarser_pitch(pitch: float) -> float:
+    """``pitch`` rounded up to three significant digits: a pitch a person
+    types, no finer than ``pitch``.
+
+    Examples
+    --------
+    >>> coarser_pitch(0.0038757), coarser_pitch(2.5)
+    (0.00388, 2.5)
+    """
+    from decimal import ROUND_CEILING, Decimal
+
+    d = Decimal(pitch)
+    return float(d.quantize(Decimal(1).scaleb(d.adjusted() - 2), rounding=ROUND_CEILING))
+
+
+def finest_fit(v: np.ndarray, f: np.ndarray, what: str, shape, fits: Callable[[tuple, tuple], bool]) -> int | float | None:
+    """The finest grid of the mesh ``(v, f)`` that passes the checks that
+    refused the grid ``what`` of ``shape``.
+
+    Parameters
+    ----------
+    v, f
+        The mesh (only its bounding box lays the grids).
+    what : str
+        The grid refused, as :func:`voxel_grid` names it: ``"resolution=R"``
+        or ``"pitch=P"``.
+    shape
+        Its shape.
+    fits : callable
+        ``fits(shape, frame)``: whether the grid of ``shape`` in the scaled
+        ``frame`` of :func:`voxel_grid` passes the checks (taken as
+        monotone: a coarser grid of the same mesh needs no more).
+
+    Returns
+    -------
+    int, float or None
+        For a resolution: the largest one below ``max(shape)`` that fits;
+        for a pitch: the smallest pitch of three significant digits that
+        fits (about the longest side over that resolution); None where not
+        even one voxel along the longest side fits.
+    """
+    corners, used = box_corners(v, f)
+
+    def fitting(pitch, resolution) -> bool:
+        _, _, grid, _, frame = voxel_grid(corners, used, pitch, resolution)
+        return fits(grid, frame)
+
+    # bisection: lo fits (0: nothing does), hi does not (the grid refused,
+    # or one beyond any resolution)
+    lo, hi = 0, min(max(int(n) for n in shape), MAX_RESOLUTION + 1)
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        lo, hi = (mid, hi) if fitting(None, mid) else (lo, mid)
+    if lo == 0 or not what.startswith("pitch="):
+        return lo or None
+    # a pitch that a person types: rounded up, it lays a grid no larger on
+    # any axis; checked all the same (the slab temporaries are the plan's)
+    longest = float((corners[1] - corners[0]).max())
+    while lo > 0:
+        pitch = coarser_pitch(longest / lo)
+        if fitting(pitch, None):
+            return pitch
+        lo -= max(1, lo // 100)
+    return None

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..errors import IsoflowError
 from ..results import Result
-from ..scale.memory import default_budget
+from ..scale import memory
 from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill
 from .grid import check_grid_memory, voxel_grid
@@ -48,8 +48,8 @@ from .voxelize import PROGRESS_UNITS, voxelize
 #: how the voxels inside two or more meshes are labelled
 Overlap = Literal["later", "error"]
 OVERLAPS: tuple[str, ...] = ("later", "error")
-#: what to do when the label array does not fit
-COARSER = "choose a coarser --resolution or --pitch (resolution= / pitch=)"
+#: what to do when the label array does not fit, in the Python API's words and the command line's
+COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolution or --pitch")
 #: pairs named in a note or an error; the rest are counted
 NAMED_PAIRS = 8
 
@@ -240,8 +240,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
-    budget = default_budget() if max_bytes is None else int(max_bytes)
-    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hint=COARSER)
+    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hints=COARSER)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
     shared = np.zeros((shape[0], shape[1], -(-shape[2] // 8)), np.uint8)
@@ -254,7 +254,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
             r = voxelize(body.vertices, body.faces, pitch=pitch, grid=(origin, shape), window=window, fill=fill,
                          strict=strict, max_bytes=budget - fixed, progress=step, details=True)
         except IsoflowError as exc:
-            raise IsoflowError(f"{body.name}: {exc}") from None
+            raise exc.at(body.name) from None  # a refused grid keeps its command-line words
         assert r.volume is not None  # voxelize keeps the voxels in memory unless given a store
         taken = np.zeros(n, dtype=np.int64)
         voxels[n] = place(labels, shared, r.volume, window[0], n, taken)

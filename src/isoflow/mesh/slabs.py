@@ -22,6 +22,7 @@ cluster (``scheduler=client``) when the store is on a shared file system.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable
 from contextlib import nullcontext
@@ -32,11 +33,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
+from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
-from ..scale.memory import check_fits, sized
 from .fills import Fill, Voxelization
 from .formats.omezarr import multiscales
-from .grid import fmt_count
+from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh
 from .outputs import atomic_path, check_writable_dir
 
@@ -67,9 +68,10 @@ def check_store_path(path, force: bool) -> Path:
     return path
 
 
-def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[int, int]]]:
-    """Zarr chunks and slabs: a slab is one chunk thick along the first axis,
-    at most SLAB_BYTES voxels (a power of two rows, at most 64)."""
+def slab_chunks(shape, chunks=None) -> tuple[int, int, int]:
+    """Zarr chunks of a store of ``shape``: ``chunks`` checked, or by
+    default a slab (one chunk thick along the first axis) of at most
+    SLAB_BYTES voxels (a power of two rows, at most 64)."""
     nx, ny, nz = shape
     if chunks is None:
         rows = max(1, min(64, SLAB_BYTES // max(1, ny * nz)))
@@ -78,7 +80,34 @@ def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[in
     chunks = tuple(int(c) for c in chunks)
     if len(chunks) != 3 or min(chunks) < 1:
         raise IsoflowError(f"chunks must be three positive integers, got {chunks}")
-    return chunks, [(a, min(a + chunks[0], nx)) for a in range(0, nx, chunks[0])]
+    return chunks  # type: ignore[return-value]
+
+
+def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[int, int]]]:
+    """Zarr chunks (:func:`slab_chunks`) and slabs: a slab is one chunk
+    thick along the first axis."""
+    chunks = slab_chunks(shape, chunks)
+    return chunks, [(a, min(a + chunks[0], shape[0])) for a in range(0, shape[0], chunks[0])]
+
+
+#: the scanline indexes a slab's columns (and a layer's) in fewer than this
+MAX_COLUMNS = 2**40
+
+
+def store_need(shape, chunks=None, fill: Fill = "winding", temp: int = 0, fixed: int = 0) -> int | None:
+    """Bytes that writing a store of ``shape`` holds at once: :data:`WORKERS`
+    slabs of ``chunks`` (default :func:`slab_chunks`) with ``temp`` bytes
+    of temporaries each, ``fixed`` bytes and the voxel centres of the
+    plan, or for ``fill="flood"`` the whole grid where that is more; None
+    where the grid has too many columns for any store."""
+    nx, ny, nz = (int(n) for n in shape)
+    if max(nx * ny, ny * nz) >= MAX_COLUMNS:
+        return None
+    rows = slab_chunks(shape, chunks)[0]
+    # the centres: a grid of few columns and very many rows is refused
+    # before its plan allocates them
+    need = WORKERS * (rows * ny * nz + temp) + fixed + 8 * (nx + ny + nz)
+    return max(need, nx * ny * nz) if fill == "flood" else need
 
 
 def _slab_task(plan, store: str, xa: int, xb: int):
@@ -153,23 +182,25 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else source  # names the file itself
     try:
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
+        budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+        solid = None
+
+        def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
+            nonlocal solid
+            if solid is None:
+                solid = Solid(v, f, strict=strict, fill=fill)
+            return solid
+
+        # the columns and the slabs' volumes before any work (the slabs'
+        # list is not made for a grid of more rows than memory holds)
+        if (need := store_need(shape, chunks, fill)) is None or need > budget:
+            raise store_refusal(v, f, what, shape, chunks, fill, budget, made, need)
+        fits, plan, need = in_store(made(), frame, shape, chunks, fill, budget)
+        if not fits:
+            raise store_refusal(v, f, what, shape, chunks, fill, budget, made, need, temporaries=True)
         chunks, slabs = slab_layout(shape, chunks)
-        if max(shape[0] * shape[1], shape[1] * shape[2]) >= 2**40:
-            raise IsoflowError(f"voxelize: {what} needs a {'x'.join(fmt_count(n, False) for n in shape)} grid: "
-                               "too many columns even for a zarr store")
-        what = f"voxelize: {what}: {WORKERS} slabs of {chunks[0]} x {shape[1]} x {shape[2]} voxels"
-        hint = f"give smaller chunks (a slab of one row holds {sized(shape[1] * shape[2])})"
-        check_fits(WORKERS * chunks[0] * shape[1] * shape[2], what, hint=hint, budget=max_bytes)  # before any work
-        if fill == "flood":  # its enclosed voxels need the whole grid's shell at once
-            check_fits(shape[0] * shape[1] * shape[2], f"{what}: fill=flood holds the whole grid",
-                       hint="--fill shell and --fill winding go slab by slab", budget=max_bytes)
-        solid = Solid(v, f, strict=strict, fill=fill)
-        _, _, origin_s, pitch_s = frame
-        plan = solid.prepare(frame, origin_s, pitch_s, shape)
-        slab = chunks[0] * shape[1] * shape[2] + plan.slab_bytes(chunks[0])
-        check_fits(WORKERS * slab + 2 * plan.Tm.nbytes, what, hint=hint, budget=max_bytes)
     except IsoflowError as exc:
-        raise IsoflowError(f"{where}: {exc}") from None
+        raise exc.at(where) from None  # a refused grid keeps its kind and its command-line words
     import_dask()  # where dask is missing: the message that names the extra
     zarr = import_zarr()
     from dask import delayed
@@ -212,6 +243,43 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
         return store, result
     say_note(result.note)
     return store
+
+
+def in_store(solid, frame, shape, chunks, fill: Fill, budget: int):
+    """Whether writing the grid of ``shape`` (in the scaled ``frame`` of
+    :func:`~isoflow.mesh.grid.voxel_grid`) to a store fits in ``budget``
+    bytes: :func:`store_need` with the slabs' temporaries and two copies of
+    the triangles. Returns ``(fits, plan, bytes)``; where the slabs'
+    volumes alone do not fit, no plan is made and the bytes are theirs
+    (None: too many columns)."""
+    need = store_need(shape, chunks, fill)
+    if need is None or need > budget:
+        return False, None, need
+    rows = slab_chunks(shape, chunks)[0]
+    plan = solid.prepare(frame, frame[2], frame[3], shape)
+    need = store_need(shape, chunks, fill, temp=plan.slab_bytes(rows), fixed=2 * plan.Tm.nbytes)
+    return need is not None and need <= budget, plan, need
+
+
+def store_refusal(v, f, what: str, shape, chunks, fill: Fill, budget: int, made, need: int | None,
+                  temporaries: bool = False) -> GridTooLarge:
+    """The refusal of a store of ``shape`` (``need`` bytes, None: too many
+    columns), naming the finest grid of the mesh that a store holds."""
+    fit = finest_fit(v, f, what, shape, lambda s, fr: in_store(made(), fr, s, chunks, fill, budget)[0])
+    rows, ny, nz = slab_chunks(shape, chunks)[0], shape[1], shape[2]
+    hints = ("", "")
+    if need is None:
+        needs, beyond = grid_words(shape), "more columns than a zarr store's slabs can index (2**40)"
+    elif fill == "flood" and math.prod(shape) > budget:  # its enclosed voxels need the whole grid's shell at once
+        needs, beyond = f"{grid_words(shape, math.prod(shape))} in memory at once to flood it", ""
+        hints = ('fill="shell" and fill="winding" go slab by slab', "--fill shell and --fill winding go slab by slab")
+    else:
+        needs = (f"{WORKERS} slabs of {rows} x {ny} x {nz} voxels in memory at once (about {fmt_count(need)} bytes"
+                 + (" with their temporaries)" if temporaries else ")"))
+        beyond = ""
+        if rows > 1:  # thinner slabs: an option of the Python API only
+            hints = ("smaller chunks= along the first axis make thinner slabs", "")
+    return GridTooLarge(what, needs, budget, shape=tuple(shape), beyond=beyond, fit=fit, sought=True, hints=hints)
 
 
 #: what the store's "rule" attribute says of each fill

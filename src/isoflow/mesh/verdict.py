@@ -36,7 +36,9 @@ class Stop:
     ``limit`` is the value of the limit (a resolution, seconds), ``option``
     the parameter that sets it, ``resolution`` the next resolution (not
     tried) and ``estimate`` what it would have taken (seconds for
-    ``time_limit``, bytes for ``memory``).
+    ``time_limit``, bytes for ``memory``). An ``asked`` stop has a
+    ``limit`` where the resolutions asked pass ``max_resolution`` (which
+    caps only the doubling; ``resolution`` is then the last one asked).
     """
 
     kind: StopKind
@@ -122,10 +124,14 @@ def stop_text(stop: Stop) -> str:
     --------
     >>> stop_text(Stop("max_resolution", limit=256, resolution=512, option="max_resolution"))
     'the largest resolution allowed (256, --max-resolution)'
+    >>> stop_text(Stop("asked", limit=64, resolution=256, option="max_resolution"))
+    'the resolutions asked (256 is past --max-resolution 64, which caps only the doubling)'
     """
-    if stop.kind == "asked":
-        return "the resolutions asked"
     flag = option_flag(stop.option) if stop.option else ""
+    if stop.kind == "asked":
+        if stop.limit is not None:  # asked beyond the cap: the cap did not stop anything asked
+            return f"the resolutions asked ({stop.resolution} is past {flag} {stop.limit}, which caps only the doubling)"
+        return "the resolutions asked"
     if stop.kind == "max_resolution":
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":

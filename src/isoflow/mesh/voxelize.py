@@ -43,8 +43,9 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote
+from ..scale import memory
 from .fills import THIN_SHARE, THIN_TRIGGER, UNBOUNDED_SHARE, Fill, Voxelization, check_fill, thin_solid, unbounded_area
-from .grid import check_grid_memory, voxel_grid
+from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_defects, orient_faces  # noqa: F401
 
 #: a progress callback: ``progress(done, total)``
@@ -60,7 +61,7 @@ PROGRESS_UNITS = 1000
 #: bytes of temporaries per (triangle, column) pair that may cross
 PAIR_BYTES = 18
 #: what to do when a volume does not fit in memory
-ZARR_HINT = "write it slab by slab to a zarr store instead (isoflow voxelize MESH ... -o OUT.zarr)"
+ZARR_HINT = "or write it slab by slab to a zarr store (isoflow.voxelize_to_zarr)"
 
 
 class Solid:
@@ -415,10 +416,13 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         corner).  Several meshes on one grid each fill the block their
         bounding box covers (:func:`isoflow.mesh.label_voxels.voxelize_meshes`).
     max_bytes
-        Refuse (IsoflowError) before allocating if the volume and the
-        temporaries of a slab would need more.  Default:
-        :func:`isoflow.scale.memory.default_budget` (90 % of the available
-        memory).  The message suggests a zarr store.
+        Refuse (:class:`~isoflow.mesh.grid.GridTooLarge`, an IsoflowError)
+        before allocating if the volume and the temporaries of a slab would
+        need more.  Default: :func:`isoflow.scale.memory.default_budget`
+        (90 % of the available memory).  The message names the finest grid
+        that fits (the largest ``resolution=``, or the smallest ``pitch=``
+        of three significant digits) and, where one would hold the grid,
+        a zarr store (:func:`~isoflow.mesh.slabs.voxelize_to_zarr`).
     progress
         Optional ``callable(done, total)``, called as the work advances
         (``PROGRESS_UNITS`` per slab).
@@ -468,14 +472,34 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
+    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    solid = None
+
+    def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
+        nonlocal solid
+        if solid is None:
+            solid = Solid(v, f, strict=strict, fill=fill)
+        return solid
+
+    def refuse(extra: int):
+        # a grid laid by pitch= or resolution= alone: the message names the
+        # finest one that fits (grid= and window= leave no other to name)
+        whole = grid is None and window is None
+        store = whole and store_holds(made(), frame, shape, budget)
+        fit = finest_fit(v, f, what, shape, lambda s, fr: in_memory(made(), fr, s, budget)[0]) if whole else None
+        need = grid_need(shape, 1, extra)
+        return GridTooLarge(what, grid_words(shape, need), budget, shape=shape, fit=fit, sought=whole, store=store,
+                            beyond="" if need > budget else "more than one array can index",
+                            hints=(ZARR_HINT if store else "", ""))
+
     # the volume itself, before anything O(grid): one byte per voxel
-    check_grid_memory(shape, what, 1, 0, max_bytes, hint=ZARR_HINT)
-    solid = Solid(v, f, strict=strict, fill=fill)
-    _, _, origin_s, pitch_s = frame
-    plan = solid.prepare(frame, origin_s, pitch_s, shape, start)
+    if not grid_fits(shape, 1, 0, budget):
+        raise refuse(0)
+    fits, plan, temp = in_memory(made(), frame, shape, budget, start)
+    if not fits:
+        raise refuse(temp)
+    assert plan is not None
     slabs = plan.slabs()
-    temp = plan.slab_bytes(max(b - a for a, b in slabs))
-    check_grid_memory(shape, what, 1, temp, max_bytes, hint=ZARR_HINT)
     vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
     stats = np.zeros(4, dtype=np.int64)  # see scanline._sweep: the last three add up to the voxels in
     for n, (a, b) in enumerate(slabs):
@@ -494,6 +518,28 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         return result
     say_note(result.note)
     return vol, origin, pitch
+
+
+def in_memory(solid: Solid, frame, shape, budget: int, start=(0, 0, 0)) -> tuple[bool, VoxelPlan | None, int]:
+    """Whether voxelising the grid of ``shape`` (in the scaled ``frame`` of
+    :func:`~isoflow.mesh.grid.voxel_grid`, or its block at ``start``) fits
+    in ``budget`` bytes: its volume, a byte per voxel, and the temporaries
+    of its largest slab. Returns ``(fits, plan, temporaries)``; no plan
+    where the volume alone does not fit (nothing O(grid) is made then)."""
+    if not grid_fits(shape, 1, 0, budget):
+        return False, None, 0
+    plan = solid.prepare(frame, frame[2], frame[3], shape, start)
+    temp = plan.slab_bytes(max(b - a for a, b in plan.slabs()))
+    return grid_fits(shape, 1, temp, budget), plan, temp
+
+
+def store_holds(solid: Solid, frame, shape, budget: int) -> bool:
+    """Whether :func:`~isoflow.mesh.slabs.voxelize_to_zarr` could write
+    the grid of ``shape`` (in the scaled ``frame``) to a zarr store within
+    ``budget`` bytes, with its default chunks."""
+    from .slabs import in_store
+
+    return in_store(solid, frame, shape, None, solid.fill, budget)[0]
 
 
 def _share(progress, n: int, slabs: int):
@@ -637,7 +683,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
         obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
                                     progress=progress, details=True)
     except IsoflowError as exc:
-        raise IsoflowError(f"{path}: {exc}") from None
+        raise exc.at(path) from None  # a refused grid keeps its kind and its command-line words
     if details:
         return obj, result
     say_note(result.note)
