@@ -361,3 +361,41 @@ def test_a_resolution_below_one_is_refused_before_the_mesh_is_read(capsys, argv,
     lines = err.strip().splitlines()
     assert done.value.code == 2 and len(lines) == 1 and "Traceback" not in err, err
     assert "missing.obj" not in lines[0] and all(w in lines[0] for w in words), lines[0]
+
+
+def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_path, capsys):
+    """One refusal, two readers: the shell's gets --force, --strict and
+    --overlap, Python's force=, strict= and overlap= (both were printed
+    side by side, "--force (force=True)", which reads wrong in each)."""
+    import trimesh
+
+    from isoflow import voxelize_meshes
+    from isoflow.mesh.export import write_surface
+    from isoflow.mesh.voxelize import voxelize_file
+
+    vol = np.zeros((4, 4, 4), bool)
+    vol[1:3, 1:3, 1:3] = True
+    np.save(tmp_path / "v.npy", vol)
+    (tmp_path / "s.ply").write_text("taken")
+    fails(capsys, "surface", tmp_path / "v.npy", "-o", tmp_path / "s.ply", words=("exists; pass --force to overwrite",))
+    from isoflow import boundary_mesh
+
+    with pytest.raises(IsoflowError, match=r"exists; pass force=True to overwrite$"):
+        write_surface(tmp_path / "s.ply", boundary_mesh(vol), None)
+    open_box = trimesh.creation.box()
+    open_box.faces = open_box.faces[1:]
+    open_box.export(tmp_path / "open.obj")
+    fails(capsys, "voxelize", tmp_path / "open.obj", "-o", tmp_path / "o.npy", "--resolution", "8", "--strict",
+          words=("not watertight", "(without --strict it is read"))
+    with pytest.raises(IsoflowError, match=r"\(without strict=True it is read") as raised:
+        voxelize_file(tmp_path / "open.obj", resolution=8, strict=True)
+    assert "--strict" not in str(raised.value)
+    a, b = trimesh.creation.box(), trimesh.creation.box()
+    b.apply_translation((0.5, 0, 0))
+    a.export(tmp_path / "a.obj")
+    b.export(tmp_path / "b.obj")
+    fails(capsys, "voxelize", tmp_path / "a.obj", tmp_path / "b.obj", "-o", tmp_path / "l.npy", "--resolution", "8",
+          "--overlap", "error", words=("the meshes overlap", "--overlap later gives"))
+    with pytest.raises(IsoflowError, match=r"overlap='later' gives") as raised:
+        voxelize_meshes([str(tmp_path / "a.obj"), str(tmp_path / "b.obj")], resolution=8, overlap="error")
+    assert "--overlap" not in str(raised.value)

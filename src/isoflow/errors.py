@@ -29,6 +29,22 @@ class IsoflowError(ValueError):
     #: a function's parameter, ``resolution=``); None where they are the same
     command_line: str | None = None
 
+    @classmethod
+    def worded(cls, python: str, command_line: str) -> IsoflowError:
+        """An error whose message names the Python API's parameters
+        (``force=True``) and whose :attr:`command_line` the command's options
+        (``--force``).
+
+        Examples
+        --------
+        >>> e = IsoflowError.worded("a.ply: exists; pass force=True to overwrite", "a.ply: exists; pass --force to overwrite")
+        >>> str(e), e.command_line
+        ('a.ply: exists; pass force=True to overwrite', 'a.ply: exists; pass --force to overwrite')
+        """
+        out = cls(python)
+        out.command_line = command_line
+        return out
+
     def at(self, where: object) -> IsoflowError:
         """This error with ``where`` (a file, a mesh) put before its
         message, in both wordings.

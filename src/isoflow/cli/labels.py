@@ -91,7 +91,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     try:
         conn = resolve_connectivity(ndim, args.connectivity)
     except IsoflowError as exc:
-        raise IsoflowError(f"{args.input}: {exc}") from None
+        raise exc.at(args.input) from None
     if image is None:
         about, table = table_of_store(args, conn, asked, surfaces)
     else:
@@ -138,14 +138,14 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     try:
         place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
     except IsoflowError as exc:
-        raise IsoflowError(f"{args.input}: {exc}") from None
+        raise exc.at(args.input) from None
     wanted = None if asked is None else _within_type(args.input, asked, slabs.dtype)
     with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
         try:
             table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
                                        labels=wanted, surfaces=surfaces, progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
-            raise IsoflowError(f"{args.input}: {exc}") from None
+            raise exc.at(args.input) from None
     return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
 
 

@@ -268,8 +268,9 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         overlap_voxels=int(np.bitwise_count(shared).sum(dtype=np.int64)),
         overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes))
     if overlap == "error" and result.overlaps:
-        raise IsoflowError(f"voxelize: the meshes overlap: {overlap_text(result)}; overlap='later' (--overlap "
-                           "later) gives a shared voxel the later mesh's label")
+        said = f"the meshes overlap: {overlap_text(result)}; "
+        raise IsoflowError.worded(f"voxelize: {said}overlap='later' gives a shared voxel the later mesh's label",
+                                  f"{said}--overlap later gives a shared voxel the later mesh's label")
     return _with_note(result)
 
 

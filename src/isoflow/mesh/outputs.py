@@ -42,7 +42,8 @@ def check_output_path(
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
-        raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+        raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
+                                      f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
 

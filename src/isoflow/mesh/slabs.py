@@ -58,7 +58,8 @@ def check_store_path(path, force: bool) -> Path:
         raise IsoflowError(f"{path}: a zarr store must end in .zarr")
     if path.exists():
         if not force:
-            raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+            raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
+                                      f"{path}: exists; pass --force to overwrite")
         marks = ("zarr.json", ".zarray", ".zgroup")
         if not path.is_dir() or not (any((path / m).exists() for m in marks) or not any(path.iterdir())):
             raise IsoflowError(f"{path}: exists and is not a zarr store; not replacing it")
@@ -236,7 +237,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
             solid.check_layers(stats)
             result = voxelization(solid, plan, None, voxels, origin, pitch, stats)
         except IsoflowError as exc:
-            raise IsoflowError(f"{where}: {exc}") from None
+            raise exc.at(where) from None
     store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
              "origin": np.asarray(origin, dtype=np.float64)}
     if details:

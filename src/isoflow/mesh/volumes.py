@@ -134,7 +134,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
-        raise IsoflowError(f"{where}: {exc}") from None
+        raise exc.at(where) from None
 
 
 def one_value_mask(arr: np.ndarray) -> np.ndarray:
@@ -196,7 +196,7 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
         try:
             arr = as_labels(arr)
         except IsoflowError as exc:
-            raise IsoflowError(f"{path}: {exc}") from None
+            raise exc.at(path) from None
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
     try:
@@ -204,7 +204,7 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
             ("pitch", raw.pitch), ("origin", raw.origin), ("offset", raw.offset), ("parity", raw.parity))
             if v is not None})
     except IsoflowError as exc:
-        raise IsoflowError(f"{path}: {exc}") from None
+        raise exc.at(path) from None
     return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0])
 
 
@@ -394,7 +394,7 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
             return DigitalObject.from_voxels(pts)
         return DigitalObject.from_points(pts)
     except IsoflowError as exc:  # e.g. the grid beyond the memory budget: say which file
-        raise IsoflowError(f"{path}: {exc}") from None
+        raise exc.at(path) from None
 
 
 

@@ -129,8 +129,9 @@ class Solid:
         if self.double_sided:
             what.append(_count(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
-        raise IsoflowError("voxelize: mesh is not watertight: " + "; ".join(what)
-                           + " (without --strict / strict=True it is read by the generalised winding number)")
+        said = "voxelize: mesh is not watertight: " + "; ".join(what)
+        raise IsoflowError.worded(said + " (without strict=True it is read by the generalised winding number)",
+                                  said + " (without --strict it is read by the generalised winding number)")
 
     def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
         """The :class:`VoxelPlan` of the grid ``origin_s``, ``pitch_s`` (in
@@ -157,8 +158,9 @@ class Solid:
         if stats[1] and stats[2]:
             what.append("both positive and negative winding numbers")
         if what:
-            raise IsoflowError("voxelize: mesh overlaps or intersects itself: " + " and ".join(what)
-                               + " (without --strict / strict=True the union is taken)")
+            said = "voxelize: mesh overlaps or intersects itself: " + " and ".join(what)
+            raise IsoflowError.worded(said + " (without strict=True the union is taken)",
+                                      said + " (without --strict the union is taken)")
 
     def note(self, stats=None) -> str | None:
         """One line on what is unusual about the mesh and the rule that read
@@ -557,7 +559,8 @@ def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch:
     if solid.fill == "winding":
         shell, thin = plan.thin_note(vol, voxels, solid.double_sided)
         if thin and solid.strict:
-            raise IsoflowError(f"voxelize: {thin}; without --strict / strict=True the winding rule's answer is kept")
+            raise IsoflowError.worded(f"voxelize: {thin}; without strict=True the winding rule's answer is kept",
+                                      f"voxelize: {thin}; without --strict the winding rule's answer is kept")
         notes.append(thin)
     note = "; ".join(n for n in notes if n) or None
     return Voxelization(volume=vol, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch),

@@ -245,7 +245,8 @@ def check_output(path, force: bool = False) -> Path:
     check_writable_dir(path.parent, f"the zarr store {path.name}")
     if path.exists() or path.is_symlink():
         if not force:
-            raise IsoflowError(f"{path}: exists; pass --force (force=True) to overwrite")
+            raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
+                                      f"{path}: exists; pass --force to overwrite")
         is_store = any((path / m).exists() for m in (".zgroup", ".zarray", "zarr.json"))
         if path.is_dir() and not path.is_symlink() and not is_store:
             raise IsoflowError(f"{path}: a directory that is not a zarr store; not replaced")
