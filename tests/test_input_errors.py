@@ -399,3 +399,33 @@ def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_
     with pytest.raises(IsoflowError, match=r"overlap='later' gives") as raised:
         voxelize_meshes([str(tmp_path / "a.obj"), str(tmp_path / "b.obj")], resolution=8, overlap="error")
     assert "--overlap" not in str(raised.value)
+
+
+# ------------------------------------------------------ mesh face indices
+
+TET = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n"
+
+
+@pytest.mark.parametrize(
+    "face, words",
+    [("f 1 2 5", ("index 5", "past the file's 4 vertices")),  # was IndexError: index 4 is out of bounds
+     ("f -1 -2 -5", ("index -5", "before the first vertex (4 vertices")),  # was IndexError: index -5 ...
+     ("f 0 2 3", ("index 0", "OBJ numbers vertices from 1"))],  # was read as 'f 1 2 3', without a word
+)
+@pytest.mark.parametrize("command", [("genus",), ("voxelize", "--resolution", "16", "-o", "out.npy"),
+                                     ("surface", "--resolution", "16", "-o", "out.stl")])
+def test_an_obj_face_index_that_names_no_vertex_is_one_line_naming_it(tmp_path, capsys, face, words, command):
+    path = tmp_path / "bad.obj"
+    path.write_text(TET + "f 1 3 2\nf 1 2 4\n# the bad face\n" + face + "\nf 2 3 4\n")  # the bad face: line 8
+    name, *rest = command
+    rest = [str(tmp_path / w) if w.startswith("out.") else w for w in rest]
+    fails(capsys, name, path, *rest, words=(f"bad.obj:8: face '{face}' uses vertex", *words))
+    assert not any(tmp_path.glob("out.*"))
+
+
+def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys):
+    path = tmp_path / "bad.off"
+    path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n# a comment\n\n3 0 3 4\n3 1 2 3\n")
+    fails(capsys, "genus", path, words=("bad.off:11: OFF face 2 '3 0 3 4' uses vertex 4", "not one of the 4 vertices"))
+    path.write_text("OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 -1 2\n")  # was read as vertex 3 (the last)
+    fails(capsys, "genus", path, words=("bad.off:7: OFF face 0 '3 0 -1 2' uses vertex -1", "numbered from 0 to 3"))

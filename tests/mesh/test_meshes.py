@@ -283,8 +283,11 @@ def test_cli_genus_options(capsys):
     assert main(["genus", str(MESHES / "eight.off"), "--resolution", "24", "--no-step"]) == 0
     out = capsys.readouterr().out
     assert "verdict     not converged at 24" in out and "crossings   0 faces" in out and "solid       genus 2" in out
-    assert main(["genus", str(MESHES / "eight.off"), "--max-resolution", "0"]) == 2
-    assert "--max-resolution must be a positive integer" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as bad:  # refused as the arguments are read
+        main(["genus", str(MESHES / "eight.off"), "--max-resolution", "0"])
+    assert bad.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "isoflow genus: error: argument --max-resolution: must be a whole number of voxels from 1 to 2147483647, got 0"]
 
 
 def test_cli_voxelize_and_surface_in_world_coordinates(tmp_path, capsys):
@@ -320,7 +323,8 @@ def _bad(tmp_path):
         (["genus", tmp_path / "empty.obj"], "empty.obj"),
         (["info", tmp_path / "nan.obj"], "NaN"),
         (["voxelize", MESHES / "torus.obj", "--resolution", "100000", "-o", tmp_path / "o.npz"], "100000"),
-        (["voxelize", MESHES / "torus.obj", "--resolution", "100000", "-o", tmp_path / "o.npz"], "-o OUT.zarr"),
+        (["voxelize", MESHES / "torus.obj", "--resolution", "100000", "-o", tmp_path / "o.npz"], "at most --resolution"),
+        (["voxelize", MESHES / "torus.obj", "--resolution", "10000", "-o", tmp_path / "o.npz"], "-o OUT.zarr"),
         (["info", MESHES / "plane_holes.obj", "--strict"], "not watertight"),
     ]
 

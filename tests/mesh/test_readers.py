@@ -93,8 +93,6 @@ OBJ_CASES = {
     "unused vertices": ("v 0 0 1e-13\n" + QUAD + "v 9 9 9\nf 2 3 4\nf 2 4 5\nf 3 4 6\n", True),
     "weld in tolerance": (QUAD + "v 1e-12 0 0\nf 9 2 3\nf 1 3 4\nf 1 2 5\n", True),
     "interleaved negatives": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\nf -4 -3 -1\n", False),
-    "index 0": (QUAD + "f 0 1 2\nf 1 2 3\n", False),
-    "index out of range": (QUAD + "f 1 2 9\n", False),
     "two materials": (QUAD + "usemtl a\nf 1 2 3\nusemtl b\nf 1 3 4\n", False),
     "faces before the material": (QUAD + "f 1 2 3\nusemtl a\nf 1 3 4\n", False),
     "vertex colours": (QUAD.replace("\n", " 1 0 0\n") + "f 1 2 3\n", False),
@@ -130,6 +128,61 @@ def test_an_obj_face_with_index_0_is_refused_with_its_line(tmp_path):
     p.write_text(QUAD + "f 1 2 3\nf 0 1 2\n")
     with pytest.raises(IsoflowError, match=r"zero.obj:10: face 'f 0 1 2' uses vertex index 0"):
         load_mesh(p)
+
+
+#: OBJ files with a face index that names no vertex: the file, its bad face line
+#: (found by its text, not by the reader), the index as written and what the
+#: message says of it. trimesh fails with an IndexError on the first two kinds
+#: and reads index 0 as vertex 1; the fast reader and trimesh's path (a file
+#: of two materials is trimesh's) must both name the line.
+BAD_INDEX = {
+    "past the end": (QUAD + "f 1 2 3\n# a comment\n\nf 1 2 9\nf 1 2 3\n", "f 1 2 9", "9",
+                     "past the file's 8 vertices"),
+    "past the end, CRLF": ((QUAD + "f 1 2 3\nf 1 9 3\n").replace("\n", "\r\n"), "f 1 9 3", "9",
+                           "past the file's 8 vertices"),
+    "past the end, vt": (QUAD + "vt 0 0\nf 1/1 2/1 3/1\nf 1/1 2/1 12/1\n", "f 1/1 2/1 12/1", "12",
+                         "past the file's 8 vertices"),
+    "past the end, two materials": (QUAD + "usemtl a\nf 1 2 3\nusemtl b\nf 4 5 9\n", "f 4 5 9", "9",
+                                    "past the file's 8 vertices"),
+    "before the first": (QUAD + "f -1 -2 -3\nf -1 -2 -9\n", "f -1 -2 -9", "-9",
+                         "before the first vertex (8 vertices come before the face; -1 is the last of them)"),
+    "before the first, interleaved": ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nv 0 0 1\nf -5 -3 -1\n",
+                                      "f -5 -3 -1", "-5", "before the first vertex (4 vertices come before"),
+    "index 0": (QUAD + "f 1 2 3\nf 0 2 3\n", "f 0 2 3", "0", "but OBJ numbers vertices from 1 (-1 for the last)"),
+    "index -0": (QUAD + "f 1 2 3\nf 2 -0 3\n", "f 2 -0 3", "-0", "but OBJ numbers vertices from 1"),
+    "index 0, two materials": (QUAD + "usemtl a\nf 1 2 3\nusemtl b\nf 0 2 3\n", "f 0 2 3", "0",
+                               "but OBJ numbers vertices from 1"),
+}
+
+
+@pytest.mark.parametrize("name", BAD_INDEX)
+def test_an_obj_face_index_that_names_no_vertex_is_refused_with_its_line(name, tmp_path, monkeypatch):
+    text, bad, index, words = BAD_INDEX[name]
+    p = tmp_path / "m.obj"
+    p.write_bytes(text.encode())
+    line = text.splitlines().index(bad) + 1
+    expected = f"{p}:{line}: face {bad!r} uses vertex index {index}, {words}"
+    fast, through_trimesh = _load(p), _through_trimesh(p, monkeypatch)
+    assert isinstance(fast, str) and fast.startswith(expected), (fast, expected)
+    assert through_trimesh == fast
+
+
+def test_a_bad_obj_index_is_found_without_a_line_scan_of_good_files(monkeypatch):
+    """The line-by-line search runs only once an index is known bad (or a
+    trimesh-read file may hold a 0): never on a good file."""
+    monkeypatch.setattr(readers, "obj_index_error", lambda *a: pytest.fail("searched a good file"))
+    for p in _files():
+        if p.suffix == ".obj":
+            _load(p)
+
+
+def test_may_name_vertex_0_sees_a_zero_word_on_face_lines_only():
+    seen = [b"f 0 1 2", b"v 0 0 0\nf 1 -0 2\n", b"v 1 0 0\nf 1 2 0", b"v 0 0 0\nf 1 2 0/1 4\n",
+            b"v 0 0 0\r\nf 1 0 3\r\n", b"v 0 0 0\nf\t1\t0\t3\n"]
+    not_seen = [b"v 0 0 0\nf 1 2 3\n", b"v 0 0 0\nf 1 2 1/0 4\n", b"v 0 0 0\nf 1 2 10\n", b"0", b"-0",
+                b"vt 0 0\n", b"", b"\n", b"v 0.0 0 0\nf 1 2 3\n"]
+    assert all(readers.may_name_vertex_0(d) for d in seen)
+    assert not any(readers.may_name_vertex_0(d) for d in not_seen)
 
 
 def _box_mesh():

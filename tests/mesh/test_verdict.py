@@ -104,3 +104,91 @@ def test_resolutions_asked_past_max_resolution_are_tried_and_not_blamed_on_it():
     assert "stopped by the resolutions asked (48 is past --max-resolution 16, which caps only the doubling)" in v.verdict
     printed = json_of(MESHES / "torus.obj", "--resolution", 48, "--max-resolution", 16)
     assert printed["verdict"] == v.verdict  # at the cap itself, the cap stops it: test_the_stop_and_the_facts_are_data
+
+
+# ------------------------------------------------ faces on the same corners
+
+def _box_obj(tmp_path, name, extra):
+    """trimesh's box with ``extra`` faces appended, written as OBJ
+    unprocessed (trimesh would otherwise merge nothing and keep them)."""
+    import numpy as np
+    import trimesh
+
+    box = trimesh.creation.box()
+    faces = np.vstack([box.faces, extra(box.faces)])
+    path = tmp_path / name
+    trimesh.Trimesh(box.vertices, faces, process=False).export(path)
+    return path, box, trimesh.Trimesh(box.vertices, faces, process=False)
+
+
+def _corners(box, i):
+    return tuple(tuple(float(x) for x in box.vertices[k]) for k in box.faces[i])
+
+
+def test_a_face_listed_twice_is_named_and_dropped_not_called_open(tmp_path):
+    """Was: "the mesh is open (0 boundary edges, 3 inconsistently oriented)",
+    no genus, no word of the repeated face."""
+    path, box, mesh = _box_obj(tmp_path, "dup.obj", lambda f: f[:1])
+    assert int((~mesh.unique_faces()).sum()) == 1  # trimesh's count of repeated faces
+    v = verify_genus(path, (16, 32), step=False)
+    assert v.kind == "agree" and v.reference == 0 and v.mesh["faces"] == len(box.faces)
+    assert v.notes[0] == Note("repeated_faces", {"n": 1, "copies": 1, "corners": _corners(box, 0)})
+    assert not {"open", "inconsistent", "nonmanifold_edges"} & {n.kind for n in v.notes}
+    where = ", ".join("(" + ", ".join(f"{x:.6g}" for x in c) + ")" for c in _corners(box, 0))
+    assert v.verdict == ("agree: genus 0; 1 face listed twice (the same three corners, the same way round; "
+                         f"at {where}): the copy dropped")
+    printed = json_of(path, "--resolution", 16, 32, "--no-step")
+    assert printed["verdict"] == v.verdict and printed["mesh"]["watertight"] is True
+
+
+def test_faces_listed_more_than_once_are_counted(tmp_path):
+    """Every face twice and the second (rotated) a third time: 12 faces
+    repeated, 13 copies (trimesh's count)."""
+    import numpy as np
+
+    path, box, mesh = _box_obj(tmp_path, "dups.obj", lambda f: np.vstack([f, np.roll(f[1:2], 1, axis=1)]))
+    assert int((~mesh.unique_faces()).sum()) == 13
+    v = verify_genus(path, (16, 32), step=False)
+    assert v.kind == "agree" and v.reference == 0
+    assert v.notes[0].kind == "repeated_faces" and v.notes[0].facts["n"] == 12 and v.notes[0].facts["copies"] == 13
+    assert "12 faces listed more than once (13 copies; the same three corners, the same way round; the first at " \
+        in v.verdict and v.verdict.endswith("the copies dropped")
+
+
+def test_a_double_sided_face_is_named_and_the_mesh_not_called_open(tmp_path):
+    """Face 0 again the other way round: kept (which side is meant is not
+    known), named, and what leaving out the later face gives; the mesh
+    has no boundary edge (trimesh: none used once), so it is not "open"."""
+    path, box, mesh = _box_obj(tmp_path, "ds.obj", lambda f: f[:1, ::-1])
+    import trimesh
+
+    assert len(trimesh.grouping.group_rows(mesh.edges_sorted, require_count=1)) == 0
+    v = verify_genus(path, (16, 32), step=False)
+    assert v.kind == "no_reference"
+    kinds = [n.kind for n in v.notes]
+    assert "open" not in kinds and "repeated_faces" not in kinds
+    assert v.notes[kinds.index("double_sided")].facts == {"n": 1, "corners": _corners(box, 0), "genus": 0}
+    assert v.notes[kinds.index("inconsistent")].facts == {"edges": 3}
+    assert "1 double-sided face (the same three corners listed once each way round; at " in v.verdict
+    assert "without the later face of the pair the mesh is closed, genus 0" in v.verdict
+    assert "the mesh has no boundary edge, but 3 edges inconsistently oriented" in v.verdict
+    assert "the mesh is open" not in v.verdict
+
+
+def test_open_and_turned_meshes_keep_their_words(tmp_path):
+    """A face missing: open, with its 3 boundary edges; a face turned over
+    in a closed box: no boundary edge, 3 edges inconsistent, no double-sided face."""
+    path, _, _ = _box_obj(tmp_path, "open.obj", lambda f: f[:0])
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(ln for ln in lines if ln != next(x for x in lines if x.startswith("f "))) + "\n")
+    v = verify_genus(path, (16, 32), step=False)
+    assert Note("open", {"boundary_edges": 3, "inconsistent_edges": 0}) in v.notes
+    assert "the mesh is open (3 boundary edges)" in v.verdict
+    path, _, _ = _box_obj(tmp_path, "turned.obj", lambda f: f[:0])
+    text = path.read_text()
+    first = next(x for x in text.splitlines() if x.startswith("f "))
+    a, b, c = first.split()[1:]
+    path.write_text(text.replace(first, f"f {a} {c} {b}", 1))
+    v = verify_genus(path, (16, 32), step=False)
+    kinds = [n.kind for n in v.notes]
+    assert Note("inconsistent", {"edges": 3}) in v.notes and "open" not in kinds and "double_sided" not in kinds

@@ -29,7 +29,7 @@ from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words
-from .load import load_mesh, mesh_defects
+from .load import load_mesh, mesh_defects, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -518,6 +518,9 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
     and never for a self-intersecting mesh: its surface bounds no
     well-defined solid, and no grid settles that.
 
+    A face listed again the same way round (the same three corners) is
+    dropped before anything is counted, as a degenerate face is: it draws
+    no more surface, only non-manifold edges (a note names it).
     An open or inconsistently oriented mesh has no genus of its own; its
     solid is read by the generalised winding number (``|w| > 1/2``) and its
     digital topology reported; ``strict`` refuses it (IsoflowError).
@@ -561,6 +564,7 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
         raise IsoflowError("verify_genus needs at least one resolution")
     stats: dict = {}
     v, f = load_mesh(path, stats=stats)
+    f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["mesh"]["genus"]
     try:  # with strict, a mesh that is not watertight is refused here
@@ -582,13 +586,56 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
         notes=tuple(load_notes(stats) + shape_notes(w, kind) + digital_notes(w, digital, reference, stable)))
 
 
+def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
+    """The faces less the repeats of earlier ones (the same three corners
+    the same way round, :func:`~isoflow.mesh.load.repeated_faces`); where
+    there are some, ``stats["repeated_faces"]`` holds the facts of their
+    note: ``n`` faces listed more than once, ``copies`` dropped and the
+    ``corners`` of the first such face."""
+    first = repeated_faces(f)
+    repeat = first != np.arange(len(f))
+    if not repeat.any():
+        return f
+    listed = np.unique(first[repeat])
+    stats["repeated_faces"] = {"n": len(listed), "copies": int(np.count_nonzero(repeat)),
+                               "corners": _corners_of(v, f[listed[0]])}
+    return f[~repeat]
+
+
+def _corners_of(v: np.ndarray, face: np.ndarray) -> tuple:
+    """A face's corners as tuples of floats (a note's facts, where to look)."""
+    return tuple(tuple(float(x) for x in v[i]) for i in face)
+
+
+def _double_sided(v: np.ndarray, f: np.ndarray) -> dict | None:
+    """Pairs of faces on the same three corners, once each way round (the
+    two sides of a sheet, or a wall between two solids), or None: ``n``
+    pairs, the ``corners`` of the first, and the ``genus`` of the mesh with
+    the later face of each pair left out (None where that mesh has none),
+    what removing the reversed copies would give.  A pair of zero-area
+    faces (corners in a line) draws nothing: left to the zero-area note."""
+    from .census import opposite_pairs  # compiled: loaded with the census
+
+    mate = opposite_pairs(f, len(v))
+    later = (mate >= 0) & (mate < np.arange(len(f)))
+    if later.any():
+        p = v[f[later]]
+        later[later] = np.any(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    if not later.any():
+        return None
+    first = int(mate[np.argmax(later)])
+    return {"n": int(np.count_nonzero(later)), "corners": _corners_of(v, f[first]),
+            "genus": mesh_topology(v, f[~later])["genus"]}
+
+
 def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     """What the mesh, the exact crossing test, manifold3d and pymeshlab say
     of a loaded mesh, and the flags the verdict reads: ``crossing_self``
     (faces cross faces of their own component), ``balanced`` (closed and
     consistently oriented), ``nested`` (shells nest facing the same way, so
-    the mesh is not the solid's boundary) and ``overlap`` (the solid's genus
-    is the reference: components overlap, touch or nest)."""
+    the mesh is not the solid's boundary), ``overlap`` (the solid's genus
+    is the reference: components overlap, touch or nest) and
+    ``double_sided`` (faces listed once each way round, or None)."""
     mesh, comp = mesh_topology(v, f, return_components=True)
     out = {"mesh": mesh, "manifold3d": manifold3d_report(v, f), "pymeshlab": pymeshlab_report(v, f)}
     out.update(self_intersections(v, f, comp))
@@ -598,7 +645,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
     nested = solid.get("boundary") is False and not touching
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
-               nested=nested, overlap=touching or nested)
+               nested=nested, overlap=touching or nested,
+               double_sided=_double_sided(v, f))
     return out
 
 
@@ -619,23 +667,31 @@ def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) ->
 
 
 def load_notes(stats: dict) -> list[Note]:
-    """What the weld did: faces dropped, positions merged."""
+    """What the loading did: faces dropped, positions merged, repeated
+    faces dropped."""
     notes = []
     if stats.get("dropped_faces"):
         notes.append(Note("dropped_faces", {"n": stats["dropped_faces"]}))
     if stats.get("welded"):
         notes.append(Note("welded", {"n": stats["welded"]}))
+    if stats.get("repeated_faces"):
+        notes.append(Note("repeated_faces", stats["repeated_faces"]))
     return notes
 
 
 def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
-    """What the mesh is: open, non-manifold, nested or overlapping, and,
+    """What the mesh is: double-sided, open or inconsistently oriented,
+    non-manifold, nested or overlapping, and,
     where the verdict does not start with it, self-intersecting."""
     mesh = w["mesh"]
     notes = []
-    if not w["balanced"]:
+    if w["double_sided"]:
+        notes.append(Note("double_sided", w["double_sided"]))
+    if mesh["boundary_edges"]:
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
                                    "inconsistent_edges": mesh["inconsistent_edges"]}))
+    elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"]}))
     if mesh["nonmanifold_edges"]:
         notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:

@@ -215,11 +215,16 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     elif (simple := _read_simple(p)) is not None:
         vertices, faces = simple
     else:
-        mesh = trimesh_load(p, "mesh")
+        try:
+            mesh = trimesh_load(p, "mesh")
+        except IsoflowError:
+            if ext == "obj":  # trimesh's IndexError on an index past the vertices: name the line
+                _check_obj_indices(p, failed=True)
+            raise
         vertices = np.asarray(mesh.vertices, dtype=np.float64)
         faces = np.asarray(mesh.faces)
-        if ext == "obj" and faces.ndim == 2 and len(faces):
-            _check_obj_indices(p, faces)
+        if ext == "obj":
+            _check_obj_indices(p)
     if faces.size == 0 or faces.ndim != 2:
         # trimesh returns an empty mesh rather than failing on many garbage files
         raise IsoflowError(
@@ -284,18 +289,19 @@ def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:
     return (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
 
 
-def _check_obj_indices(path: Path, faces: np.ndarray) -> None:
-    """OBJ numbers vertices from 1; trimesh reads a face with an index 0 as
-    a degenerate face (a corner repeated), without a word. Only where a face
-    repeats a corner (cheap to see) is the file searched for a 0 index."""
-    if not _repeats_a_corner(faces).any():
-        return
-    with open(path, "rb") as fh:
-        for lineno, line in enumerate(fh, 1):
-            words = line.split(b"#", 1)[0].split()
-            if words[:1] == [b"f"] and any(w.split(b"/", 1)[0] == b"0" for w in words[1:]):
-                raise IsoflowError(f"{path}:{lineno}: face {line.strip().decode(errors='replace')!r} uses vertex "
-                                   "index 0; OBJ numbers vertices from 1 (-1 for the last)")
+def _check_obj_indices(path: Path, failed: bool = False) -> None:
+    """One line naming the OBJ face whose index names no vertex, where
+    trimesh ``failed`` to read the file (an index past the vertices, either
+    way) or read it with a face that may use index 0 (trimesh reads it as
+    the first vertex without a word; :func:`isoflow.mesh.readers.may_name_vertex_0`
+    is the cheap look before the line-by-line search)."""
+    from .readers import may_name_vertex_0, obj_index_error
+
+    data = path.read_bytes()
+    if failed or may_name_vertex_0(data):
+        message = obj_index_error(path, data)
+        if message is not None:
+            raise IsoflowError(message)
 
 
 # ---------------------------------------------------------------------------
@@ -327,6 +333,48 @@ def mesh_defects(vertices, faces) -> dict:
 
     v, f = check_mesh(vertices, faces, where="mesh_defects")
     return defect_counts(*census(f, len(v))[2:])
+
+
+def repeated_faces(faces) -> np.ndarray:
+    """For each face, the first face with the same three vertices the same
+    way round: itself, or an earlier face it repeats.
+
+    ``(1, 2, 3)``, ``(2, 3, 1)`` and ``(3, 1, 2)`` are one face listed
+    three times; ``(1, 3, 2)`` is its other side (a double-sided face, see
+    :func:`isoflow.mesh.census.opposite_pairs`), not a repeat.  A repeat
+    adds nothing to the surface, yet it makes its three edges non-manifold
+    and inconsistently oriented (each used twice one way).
+
+    Parameters
+    ----------
+    faces : int ndarray (M, 3)
+
+    Returns
+    -------
+    int64 ndarray (M,)
+        ``first[i] == i`` for the first listing of each face; the repeats
+        are ``first != np.arange(M)``.
+
+    Examples
+    --------
+    >>> repeated_faces(np.array([[0, 1, 2], [1, 2, 3], [2, 0, 1], [0, 2, 1]])).tolist()
+    [0, 1, 0, 3]
+    """
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if len(f) == 0:
+        return np.zeros(0, dtype=np.int64)
+    a, b, c = f.T
+    # each face turned to start at its smallest vertex: one spelling per side
+    at_a, at_b = (a <= b) & (a <= c), (b < a) & (b <= c)
+    turned = (np.minimum(np.minimum(a, b), c), np.where(at_a, b, np.where(at_b, c, a)),
+              np.where(at_a, c, np.where(at_b, a, b)))
+    n = int(f.max()) + 1
+    if n <= 2_000_000:  # n**3 < 2**63: one int64 key, sorted several times faster than rows
+        key = (turned[0] * n + turned[1]) * n + turned[2]
+        _, first, inverse = np.unique(key, return_index=True, return_inverse=True)
+    else:
+        _, first, inverse = np.unique(np.stack(turned, axis=1), axis=0, return_index=True, return_inverse=True)
+    return first[inverse.reshape(-1)]  # (np.unique's return_index: each value's first occurrence)
 
 
 def defect_counts(fwd: np.ndarray, bwd: np.ndarray, components: int) -> dict:

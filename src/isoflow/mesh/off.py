@@ -34,8 +34,9 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
         text = path.read_bytes().decode("utf-8", errors="replace")
     except OSError as exc:
         raise IsoflowError(f"{path}: cannot read ({exc})") from None
-    lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
-    lines = [ln for ln in lines if ln]
+    numbered = [(i, ln.split("#", 1)[0].split()) for i, ln in enumerate(text.splitlines(), 1)]
+    numbered = [(i, words) for i, words in numbered if words]  # the line numbers name a bad face
+    lines = [words for _, words in numbered]
     if not lines:
         raise IsoflowError(f"{path}: empty OFF file")
     head = lines[0]
@@ -68,12 +69,13 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
             corners, k = [], -1
         if k < 3 or len(corners) != k:
             raise IsoflowError(f"{path}: OFF face {i} is {' '.join(ln)!r}, not a corner count and that many indices")
+        if not all(0 <= c < nv for c in corners):  # (else a Python IndexError, or -1 read as the last)
+            bad = next(c for c in corners if not 0 <= c < nv)
+            lineno = numbered[len(lines) - len(body) + nv + i][0]
+            raise IsoflowError(f"{path}:{lineno}: OFF face {i} {' '.join(ln)!r} uses vertex {bad}, "
+                               f"not one of the {nv} vertices (numbered from 0 to {nv - 1})")
         triangles.extend((corners[0], corners[j], corners[j + 1]) for j in range(1, k - 1))
-    faces = np.array(triangles, dtype=np.int64).reshape(-1, 3)
-    if len(faces) and (faces.min() < 0 or faces.max() >= nv):
-        raise IsoflowError(f"{path}: an OFF face uses vertex {int(faces.max() if faces.max() >= nv else faces.min())}, "
-                           f"beyond the {nv} vertices")
-    return vertices, faces
+    return vertices, np.array(triangles, dtype=np.int64).reshape(-1, 3)
 
 
 def _numbers(fields) -> bool:

@@ -24,9 +24,9 @@ VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting",
 #: why the resolution stepping stopped before the Betti numbers settled
 StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 #: the facts said after the verdict
-NoteKind = Literal["dropped_faces", "welded", "open", "nonmanifold_edges", "nonmanifold_vertices", "nested",
-                   "overlap", "self_intersecting", "zero_area_faces", "cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus"]
+NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
+                   "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
+                   "zero_area_faces", "cavities", "coarse", "manifold3d_refused", "no_mesh_genus"]
 
 
 @dataclass(frozen=True)
@@ -183,6 +183,31 @@ def _open_words(boundary_edges: int, inconsistent_edges: int) -> str:
             "generalised winding number (|w| > 1/2)")
 
 
+def _inconsistent_words(edges: int) -> str:
+    return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
+            "(used more often one way than the other): it bounds no solid as given, so it has no genus as a "
+            "closed surface; its solid is read by the generalised winding number (|w| > 1/2)")
+
+
+def _point(p) -> str:
+    return "(" + ", ".join(f"{x:.6g}" for x in p) + ")"
+
+
+def _repeated_words(n: int, copies: int, corners) -> str:
+    listed = "twice (" if copies == n else f"more than once ({copies} copies; "
+    return (f"{n} face{'s' if n > 1 else ''} listed {listed}the same three corners, the same way round; "
+            f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))}): "
+            f"{'the copies' if copies > 1 else 'the copy'} dropped")
+
+
+def _double_sided_words(n: int, corners, genus: int | None) -> str:
+    s = "s" if n > 1 else ""
+    return (f"{n} double-sided face{s} (the same three corners listed once each way round; "
+            f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))})"
+            + (f"; without the later face of {'each' if n > 1 else 'the'} pair the mesh is closed, genus {genus}"
+               if genus is not None else ""))
+
+
 def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None) -> str:
     return (f"the mesh's {components} components overlap or touch ({crossing} faces cross other components, "
             f"{shared} vertices shared): the solid they bound is their union, "
@@ -194,7 +219,10 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{n} vertices that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
+    "repeated_faces": _repeated_words,
+    "double_sided": _double_sided_words,
     "open": _open_words,
+    "inconsistent": _inconsistent_words,
     "nonmanifold_edges": lambda n: f"{n} non-manifold edges (more than two faces): not a 2-manifold, genus undefined",
     "nonmanifold_vertices": lambda n: (f"{n} non-manifold vertices where separate sheets touch at a point; "
                                        "genus counted per edge-connected component"),
