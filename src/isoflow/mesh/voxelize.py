@@ -475,7 +475,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
     budget = memory.default_budget() if max_bytes is None else int(max_bytes)
-    solid = None
+    solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
         nonlocal solid
@@ -513,9 +513,9 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         from ..scale.kernels import fill_enclosed
 
         vol = fill_enclosed(vol, inplace=True)
-    solid.check_layers(stats)
+    made().check_layers(stats)
     voxels = int(np.count_nonzero(vol)) if fill == "flood" else int(stats[1:].sum())
-    result = voxelization(solid, plan, vol, voxels, origin, pitch, stats)
+    result = voxelization(made(), plan, vol, voxels, origin, pitch, stats)
     if details:
         return result
     say_note(result.note)
@@ -539,7 +539,7 @@ def store_holds(solid: Solid, frame, shape, budget: int) -> bool:
     """Whether :func:`~isoflow.mesh.slabs.voxelize_to_zarr` could write
     the grid of ``shape`` (in the scaled ``frame``) to a zarr store within
     ``budget`` bytes, with its default chunks."""
-    from .slabs import in_store
+    from .store_plan import in_store
 
     return in_store(solid, frame, shape, None, solid.fill, budget)[0]
 
