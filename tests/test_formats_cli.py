@@ -493,3 +493,36 @@ def test_a_mask_written_0_255_is_that_mask_in_every_format(tmp_path, capsys, lab
 def _saved(path, array):
     np.save(path, array)
     return path
+
+
+def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, capsys, labels):
+    """``-o FILE.h5:/name`` adds a dataset to an existing file, as h5py's
+    own ``File(path, "a")`` would: the other datasets, their attributes and
+    the file's groups stay as they were (read back by h5py, not by isoflow);
+    the same dataset again is refused without --force and replaced with it."""
+    h5py = pytest.importorskip("h5py")
+    target = tmp_path / "scan.h5"
+    raw = np.arange(24, dtype=np.float32).reshape(2, 3, 4)
+    with h5py.File(target, "w") as f:  # a file another tool wrote
+        f.create_dataset("raw/image", data=raw).attrs["element_size_um"] = (0.5, 0.5, 2.0)
+    trimesh.creation.box((2.0, 3.0, 4.0)).export(tmp_path / "box.stl")
+    box = tmp_path / "box.stl"
+    run(capsys, "voxelize", box, "--pitch", "1", "-o", f"{target}:/seg/box")
+    with h5py.File(target, "r") as f:
+        assert np.array_equal(f["raw/image"][()], raw)
+        assert tuple(f["raw/image"].attrs["element_size_um"]) == (0.5, 0.5, 2.0)
+        assert int(f["seg/box"][()].sum()) == 2 * 3 * 4  # the box's unit voxels
+    fails(capsys, "voxelize", box, "--pitch", "0.5", "-o", f"{target}:/seg/box", words=("holds /seg/box already", "--force"))
+    fails(capsys, "voxelize", box, "--pitch", "0.5", "-o", f"{target}:/seg", "--force", words=("/seg is a group",))
+    fails(capsys, "voxelize", box, "--pitch", "0.5", "-o", f"{target}:/raw/image/x", words=("/raw/image is a dataset",))
+    run(capsys, "voxelize", box, "--pitch", "0.5", "-o", f"{target}:/seg/box", "--force")
+    with h5py.File(target, "r") as f:
+        assert sorted(k for k in ("raw/image", "seg/box") if k in f) == ["raw/image", "seg/box"]
+        assert np.array_equal(f["raw/image"][()], raw)
+        assert int(f["seg/box"][()].sum()) == 4 * 6 * 8
+    assert isoflow.read_volume(f"{target}:/seg/box").voxels == 4 * 6 * 8
+    # the file named without a dataset is the file: --force replaces all of it
+    fails(capsys, "voxelize", box, "--pitch", "1", "-o", target, words=("exists", "--force"))
+    run(capsys, "voxelize", box, "--pitch", "1", "-o", target, "--force")
+    with h5py.File(target, "r") as f:
+        assert "raw" not in f and "seg" not in f and int(f["volume"][()].sum()) == 24

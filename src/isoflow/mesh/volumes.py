@@ -410,7 +410,11 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
         raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5 and zarr")
     fmt.require()  # a missing library fails before anything is written
     # a zarr store is a directory: its module checks (and with force clears) it
-    getattr(fmt.load(), "check_output", check_output_path)(file, force)
+    module = fmt.load()
+    if hasattr(module, "check_output"):
+        module.check_output(file, force, dataset)
+    else:
+        check_output_path(file, force)
     return file, dataset
 
 
@@ -427,10 +431,11 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
 
 
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
-    """Save an object in the format its suffix names (``FILE.h5:/dataset``
-    for a dataset inside a new HDF5 file), with its voxel size and origin
-    where the format has room for them; a warning says what a format cannot
-    keep. Refuses an existing file unless ``force``. Returns the file's path.
+    """Save an object in the format its suffix names (``FILE.h5:/dataset``:
+    a dataset of an HDF5 file, new or existing, whose other datasets are
+    kept), with its voxel size and origin where the format has room for
+    them; a warning says what a format cannot keep. Refuses an existing file
+    (or dataset) unless ``force``. Returns the file's path.
 
     ``.npz`` keeps everything (offset and parity too); the other formats
     keep the world position of every voxel (see the table of docs/formats.md).
@@ -444,7 +449,7 @@ def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = Fals
     path : str or os.PathLike
         The file; its suffix names the format (``FILE.h5:/dataset`` too).
     force : bool
-        Replace an existing file.
+        Replace an existing file (``FILE.h5:/dataset``: only that dataset).
 
     Returns
     -------
@@ -481,7 +486,10 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
         module.check(file, obj, dataset)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
-        module.write(tmp, obj, dataset, name=file.name)
+        if fmt.datasets and dataset is not None:  # FILE.h5:/name: the file's other datasets are kept
+            module.write(tmp, obj, dataset, name=file.name, into=file)
+        else:
+            module.write(tmp, obj, dataset, name=file.name)
     return file
 
 

@@ -10,12 +10,16 @@ back, so a round trip is exact. Files from other tools: their
 ``element_size_um`` attribute (ilastik and Fiji's HDF5 plug-in, one size per
 dataset axis) is read as the voxel size when ``pitch`` is absent.
 
-Written as uint8 0/1, gzip-compressed and chunked, into a new file
-(``--force`` replaces the whole file, not one dataset of it).
+Written as uint8 0/1, gzip-compressed and chunked. ``FILE.h5`` names the
+file: a new one (``--force`` replaces it). ``FILE.h5:/group/name`` names one
+dataset: written into an existing HDF5 file beside its other datasets, which
+are kept (``--force`` only where that dataset is there already; HDF5 does not
+give back a replaced dataset's space, ``h5repack`` does).
 """
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -64,10 +68,64 @@ def _listed(names: list[str]) -> str:
     return (shown + f", ... ({len(names)} in all)" if len(names) > 10 else shown) or "none"
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def _name(dataset: str | None) -> str:
+    return (dataset or DEFAULT_DATASET).strip("/") or DEFAULT_DATASET
+
+
+def _kept(path: Path, dataset: str | None) -> bool:
+    """Whether writing ``path:dataset`` keeps the file's other datasets: a
+    dataset is named and the file is there as HDF5 (anything else at the
+    path is a file that ``--force`` replaces)."""
+    if dataset is None or not path.is_file():
+        return False
     h5py = import_library("h5py", "HDF5")
-    name = (dataset or DEFAULT_DATASET).strip("/") or DEFAULT_DATASET
-    with h5py.File(path, "w") as f:
+    try:
+        return bool(h5py.is_hdf5(path))
+    except OSError:  # unreadable: the write itself says why
+        return False
+
+
+def check_output(path: str | Path, force: bool = False, dataset: str | None = None) -> Path:
+    """The output ``FILE.h5`` (a new file, or ``force``) or ``FILE.h5:/name``
+    (a dataset added to an existing HDF5 file, or replaced with ``force``),
+    checked before any work."""
+    from ..outputs import check_output_path, check_writable_dir
+
+    path = Path(path)
+    if not _kept(path, dataset):
+        return check_output_path(path, force)
+    h5py = import_library("h5py", "HDF5")
+    name = _name(dataset)
+    with reading(path, "HDF5"), h5py.File(path, "r") as f:
+        node = f.get(name)
+        if node is not None and not isinstance(node, h5py.Dataset):
+            raise IsoflowError(f"{path}: /{name} is a group of the file, not a dataset; not replaced")
+        if node is not None and not force:
+            raise IsoflowError.worded(
+                f"{path}: holds /{name} already; pass force=True to replace it (the file's other datasets are kept)",
+                f"{path}: holds /{name} already; pass --force to replace it (the file's other datasets are kept)")
+        parts = name.split("/")
+        for i in range(1, len(parts)):  # every group on the way must be a group, not a dataset
+            above = "/".join(parts[:i])
+            if isinstance(f.get(above), h5py.Dataset):
+                raise IsoflowError(f"{path}: /{above} is a dataset, so /{name} cannot be made inside it")
+    check_writable_dir(path.parent, f"the HDF5 file {path.name}")
+    return path
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          into: Path | None = None) -> None:
+    """Write ``obj`` as the dataset; ``into``: the existing file whose other
+    datasets the written file keeps (``path`` is then a copy of it)."""
+    h5py = import_library("h5py", "HDF5")
+    keep = into is not None and _kept(into, dataset)
+    if keep:
+        assert into is not None
+        shutil.copyfile(into, path)
+    name = _name(dataset)
+    with h5py.File(path, "r+" if keep else "w") as f:
+        if name in f:
+            del f[name]
         ds = f.create_dataset(name, data=stored_values(obj.volume), compression="gzip",
                               chunks=True if obj.volume.size else None)
         ds.attrs["pitch"] = np.asarray(obj.pitch, np.float64)

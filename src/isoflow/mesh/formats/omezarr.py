@@ -233,7 +233,7 @@ class _Guarded:
                                f"({exc.__class__.__name__}: {exc})") from None
 
 
-def check_output(path, force: bool = False) -> Path:
+def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
     """An output zarr store (a directory), checked before any work: refused
     when it exists, unless ``force`` and it is a zarr store (which
     :func:`write` replaces)."""
