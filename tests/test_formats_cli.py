@@ -507,7 +507,7 @@ def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, 
         f.create_dataset("raw/image", data=raw).attrs["element_size_um"] = (0.5, 0.5, 2.0)
     trimesh.creation.box((2.0, 3.0, 4.0)).export(tmp_path / "box.stl")
     box = tmp_path / "box.stl"
-    run(capsys, "voxelize", box, "--pitch", "1", "-o", f"{target}:/seg/box")
+    assert run(capsys, "voxelize", box, "--pitch", "1", "-o", f"{target}:/seg/box").startswith(f"{target}:/seg/box: 24 voxels")
     with h5py.File(target, "r") as f:
         assert np.array_equal(f["raw/image"][()], raw)
         assert tuple(f["raw/image"].attrs["element_size_um"]) == (0.5, 0.5, 2.0)

@@ -57,7 +57,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
         raise
-    out = write_volume(obj, args.output, force=args.force)
+    out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
     return 0
@@ -93,7 +93,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
                             overlap=args.overlap, strict=args.strict, progress=show)
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
-    out = write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force)
+    out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force), args.output)
     say_note(args, out, r.note)
     print(label_summary(out, r))
     return 0
@@ -103,7 +103,16 @@ def voxelize_labels(args: argparse.Namespace) -> int:
 LISTED_LABELS = 20
 
 
-def label_summary(out: Path, r) -> str:
+def written(file: Path, output: str) -> str:
+    """The file written, with the dataset inside it where one was named
+    (``scan.h5:/seg/box``: a file may hold several)."""
+    from ..mesh.formats.registry import split_dataset
+
+    dataset = split_dataset(output)[1]
+    return str(file) if dataset is None else f"{file}:{dataset}"
+
+
+def label_summary(out: str | Path, r) -> str:
     """The written label image in words: grid, type, pitch, origin, and a
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
