@@ -380,3 +380,22 @@ def test_an_output_that_is_the_input_is_refused_even_with_force(tmp_path, capsys
         fails(capsys, *argv, "--force", words=("is the input", "--force replaces an output, never the input"))
     assert (tmp_path / "m.obj").read_bytes() == mesh.read_bytes()
     assert np.array_equal(np.load(tmp_path / "l.npy"), labels)
+
+
+@pytest.mark.parametrize("argv, meant", [
+    (["flow", "t.npy", "-o", "f.ply"], "-o: did you mean --out?"),  # flow writes into a directory
+    (["info", "t.npy", "--lables"], "--lables: did you mean --labels?"),
+    (["info", "t.npy", "extra"], None),
+])
+def test_an_unknown_argument_shows_its_commands_usage(capsys, argv, meant):
+    """argparse's top-level parser reported a command's unknown argument
+    with isoflow's usage ("usage: isoflow [-h] [--version] COMMAND"), so
+    the user saw no option of the command they typed."""
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    assert done.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"usage: isoflow {argv[0]} ") and "--connectivity" in err, err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(f"isoflow {argv[0]}: error: unrecognized arguments: {' '.join(argv[2:])}"), last
+    assert (meant in last) if meant else "did you mean" not in last, last

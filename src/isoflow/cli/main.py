@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import difflib
 import sys
 from collections.abc import Iterator
 
@@ -68,6 +69,22 @@ class CommandParser(argparse.ArgumentParser):
         if message.startswith("argument "):  # names the option and what is wrong with its value
             self.exit(2, f"{self.prog}: error: {message}\n")
         super().error(message)
+
+
+def unrecognized(parser: argparse.ArgumentParser, extra: list[str]) -> str:
+    """argparse's "unrecognized arguments", with the command's option that
+    an unknown one most likely meant (``-o`` of ``flow``: ``--out``)."""
+    options = [o for action in parser._actions for o in action.option_strings]
+    meant = []
+    for word in extra:
+        if not word.startswith("-") or word in options:
+            continue
+        name = word.split("=")[0]
+        close = [o for o in options if o.startswith("--") and o[2:].startswith(name.lstrip("-"))] if len(
+            name.lstrip("-")) == 1 else difflib.get_close_matches(name, options, n=1, cutoff=0.7)
+        if close:
+            meant.append(f"{name}: did you mean {' or '.join(close[:2])}?")
+    return f"unrecognized arguments: {' '.join(extra)}" + (f" ({'; '.join(meant)})" if meant else "")
 
 
 def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
@@ -283,7 +300,10 @@ def main(argv: list[str] | None = None) -> int:
     from ..scale.cancel import clear_stop
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # the command's usage, not isoflow's, and the option meant where one is close
+        command = parser.commands.get(args.command) if args.command else None  # type: ignore[attr-defined]
+        (command or parser).error(unrecognized(command or parser, extra))
     if args.command is None:  # `isoflow` alone: what it can do, not an error
         print(command_list(parser))
         return 0
