@@ -429,3 +429,53 @@ def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys)
     fails(capsys, "genus", path, words=("bad.off:11: OFF face 2 '3 0 3 4' uses vertex 4", "not one of the 4 vertices"))
     path.write_text("OFF\n4 1 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 -1 2\n")  # was read as vertex 3 (the last)
     fails(capsys, "genus", path, words=("bad.off:7: OFF face 0 '3 0 -1 2' uses vertex -1", "numbered from 0 to 3"))
+
+
+# ------------------------------------------- mesh content in another format
+
+PLY_TET = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+           "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+OFF_TET = "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n"
+OBJ_TET = TET + "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+def tet_stl(binary: bool) -> bytes:
+    mesh = trimesh.Trimesh(np.eye(4, 3, -1), [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], process=False)
+    out = mesh.export(file_type="stl" if binary else "stl_ascii")
+    return out if isinstance(out, bytes) else out.encode()
+
+
+@pytest.mark.parametrize(
+    "content, name, words",  # each was "no triangles read (empty mesh, or not a valid X file)" unless noted
+    [(OBJ_TET, "model.stl", ("an OBJ file (lines 'v x y z' and 'f ...'), not STL", "rename it model.obj")),
+     (PLY_TET, "model.obj", ("a PLY file", "not OBJ", "rename it model.ply")),
+     (PLY_TET, "model.stl", ("a PLY file", "not STL", "rename it model.ply")),
+     (OFF_TET, "model.obj", ("an OFF file", "not OBJ", "rename it model.off")),
+     (OBJ_TET, "model.ply", ("an OBJ file", "not PLY", "rename it model.obj")),  # was trimesh's 'Not a ply file!'
+     (OBJ_TET, "model.off", ("an OBJ file", "not OFF", "rename it model.obj")),  # was 'not an OFF file'
+     (tet_stl(binary=False), "model.obj", ("an ASCII STL file", "not OBJ", "rename it model.stl")),
+     (tet_stl(binary=True), "model.obj", ("a binary STL file", "not OBJ", "rename it model.stl")),
+     (tet_stl(binary=True), "model.glb", ("a binary STL file", "not GLB", "rename it model.stl"))],
+)
+@pytest.mark.parametrize("command", [("genus",), ("info", "--resolution", "32")])
+def test_mesh_content_in_another_format_than_its_suffix_names_it(tmp_path, capsys, content, name, words, command):
+    path = tmp_path / name
+    path.write_bytes(content if isinstance(content, bytes) else content.encode())
+    line = fails(capsys, command[0], path, *command[1:], words=(f"{path}: no triangles read: its content is", *words))
+    assert "cannot read" not in line and "not a valid" not in line
+    renamed = path.rename(tmp_path / words[-1].split()[-1])  # the fix it names reads the file
+    assert main(["genus", str(renamed)]) == 0
+
+
+@pytest.mark.parametrize("content", [bytes(range(256)) * 20, b"", b"hello\nworld\n", b"solid x\nendsolid x\n"])
+def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, content):
+    path = tmp_path / "junk.stl"
+    path.write_bytes(content)
+    fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid STL file)",))
+
+
+def test_a_file_in_its_suffix_format_without_triangles_keeps_the_plain_line(tmp_path, capsys):
+    path = tmp_path / "points.ply"
+    path.write_text(PLY_TET.replace("element face 4", "element face 0").rsplit("\n", 5)[0] + "\n")  # points only
+    fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid PLY file)",))

@@ -195,8 +195,10 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     dropped), so callers can say what the weld did.
 
     Raises :class:`IsoflowError` for a missing file, a file trimesh cannot
-    read, a mesh without faces, NaN/inf coordinates, coordinates whose extent
-    overflows, out-of-range faces and a ``merge_rtol`` outside [0, 1).
+    read, a mesh without faces (naming the format a file holds where its
+    suffix names another: :func:`misnamed_mesh`), NaN/inf coordinates,
+    coordinates whose extent overflows, out-of-range faces and a
+    ``merge_rtol`` outside [0, 1).
     """
     p = Path(os.fspath(path))
     try:
@@ -206,33 +208,38 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
         raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
     ext = p.suffix.lower().lstrip(".")
-    if ext == "off":  # trimesh's reader fails on polygons of 5+ corners (see isoflow.mesh.off)
-        from .off import read_off
-
-        check_mesh_file(p)
-        with reading_mesh(p):
-            vertices, faces = read_off(p)
-    elif (simple := _read_simple(p)) is not None:
-        vertices, faces = simple
-    else:
-        try:
-            mesh = trimesh_load(p, "mesh")
-        except IsoflowError:
-            if ext == "obj":  # trimesh's IndexError on an index past the vertices: name the line
-                _check_obj_indices(p, failed=True)
-            raise
-        vertices = np.asarray(mesh.vertices, dtype=np.float64)
-        faces = np.asarray(mesh.faces)
-        if ext == "obj":
-            _check_obj_indices(p)
-    if faces.size == 0 or faces.ndim != 2:
-        # trimesh returns an empty mesh rather than failing on many garbage files
-        raise IsoflowError(
-            f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
+    with reading_mesh(p):  # a failed or empty read: one line, naming the format of a misnamed file
+        vertices, faces = _read(p, ext)
+        if faces.size == 0 or faces.ndim != 2:
+            # trimesh returns an empty mesh rather than failing on many garbage files
+            raise IsoflowError(
+                f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
     vertices, faces = weld(vertices, faces, rtol, where=str(p), stats=stats)
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
+    return vertices, faces
+
+
+def _read(p: Path, ext: str):
+    """The vertices and faces of a mesh file as its reader gives them."""
+    if ext == "off":  # trimesh's reader fails on polygons of 5+ corners (see isoflow.mesh.off)
+        from .off import read_off
+
+        check_mesh_file(p)
+        return read_off(p)
+    if (simple := _read_simple(p)) is not None:
+        return simple
+    try:
+        mesh = trimesh_load(p, "mesh")
+    except IsoflowError:
+        if ext == "obj":  # trimesh's IndexError on an index past the vertices: name the line
+            _check_obj_indices(p, failed=True)
+        raise
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    faces = np.asarray(mesh.faces)
+    if ext == "obj":
+        _check_obj_indices(p)
     return vertices, faces
 
 
@@ -256,14 +263,61 @@ def check_mesh_file(p: Path) -> None:
 
 @contextlib.contextmanager
 def reading_mesh(p: Path):
-    """Whatever a mesh reader raises on a bad file as one line naming it."""
+    """Whatever a mesh reader raises on a bad file as one line naming it.
+
+    Where the file's first bytes say it holds another format than its
+    suffix names (an OBJ file saved as ``.stl``: read as an STL, it gives
+    no triangles), the line says which and the name to give it instead
+    (:func:`misnamed_mesh`); otherwise it is the reader's own.  The
+    content is looked at only once a read has failed.
+    """
     try:
         yield
     except IsoflowError:
-        raise
+        hint = misnamed_mesh(p)
+        if hint is None:
+            raise
+        raise IsoflowError(hint) from None
     except Exception as exc:  # trimesh raises anything from KeyError to struct.error
         msg = " ".join(str(exc).split())[:200] or "no detail"
-        raise IsoflowError(f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+        hint = misnamed_mesh(p)
+        raise IsoflowError(hint or f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+
+
+def misnamed_mesh(p: Path) -> str | None:
+    """The line for a mesh file that gave no triangles when its first
+    bytes say it holds another format than its suffix names
+    (:func:`isoflow.mesh.sniff.sniff_mesh_format`), or ``None``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "model.stl"
+    >>> _ = p.write_text("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
+    >>> print(misnamed_mesh(p).replace(str(p.parent), "DIR"))
+    DIR/model.stl: no triangles read: its content is an OBJ file (lines 'v x y z' and 'f ...'), not STL; rename it model.obj
+    """
+    from .sniff import FORMATS, SNIFF_BYTES, sniff_mesh_format
+
+    try:
+        if not p.is_file():  # (a FIFO would block the read)
+            return None
+        with open(p, "rb") as fh:
+            size = os.fstat(fh.fileno()).st_size
+            head = fh.read(SNIFF_BYTES)
+    except OSError:
+        return None
+    kind = sniff_mesh_format(head, size)
+    if not kind:
+        return None
+    what, suffix = FORMATS[kind]
+    name = p.name
+    written = next((s for s in MESH_SUFFIXES if name.lower().endswith(s)), p.suffix.lower())
+    if suffix == {".stl_ascii": ".stl"}.get(written, written):
+        return None  # the format the suffix says: the reader's own line says what is wrong
+    stem = name[:len(name) - len(written)]
+    said = f", not {written.lstrip('.').upper()}" if written else ""
+    return f"{p}: no triangles read: its content is {what}{said}; rename it {stem}{suffix}"
 
 
 def trimesh_load(p: Path, force: str):
