@@ -1,6 +1,7 @@
 """Bad input found by fuzzing: one line naming the file/field, exit 2, no
 traceback, no silently wrong value, nothing written."""
 
+import json
 import os
 import re
 from pathlib import Path
@@ -13,7 +14,7 @@ from isoflow.cli import main
 from isoflow.digital.lattice import DigitalObject
 from isoflow.errors import IsoflowError
 from isoflow.mesh.outputs import check_picture_path
-from isoflow.mesh.volumes import read_points, read_volume
+from isoflow.mesh.volumes import read_object, read_points, read_volume, write_volume
 
 
 def fails(capsys, *args, words=()):
@@ -177,6 +178,64 @@ def test_point_grid_beyond_the_memory_budget(tmp_path, capsys, monkeypatch, poin
     fails(capsys, "info", path, "--points-are", points_are, words=("spread.txt", "201x201x201", "budget"))
     with pytest.raises(IsoflowError, match="budget"):
         DigitalObject.from_points([[0, 0, 0], [200, 200, 200]])
+
+
+
+# ------------------------------------------------- --points-are: point lists only
+
+@pytest.mark.parametrize("value", ["voxels", "corners"])
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_points_are_is_refused_for_a_mesh(tmp_path, capsys, command, value):
+    # was silently ignored: the mesh was voxelised as without it
+    out = ["-o", tmp_path / "s.ply"] if command == "surface" else []
+    line = fails(capsys, command, box_stl(tmp_path), "--points-are", value, *out,
+                 words=("box.stl", "--points-are", "point lists", "not to mesh input"))
+    assert line.startswith(f"isoflow {command}: error: {tmp_path / 'box.stl'}:"), line
+    assert not (tmp_path / "s.ply").exists()
+
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_points_are_is_refused_for_a_volume(tmp_path, capsys, command):
+    np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
+    out = ["-o", tmp_path / "s.ply"] if command == "surface" else []
+    fails(capsys, command, tmp_path / "ok.npy", "--points-are", "voxels", *out,
+          words=("ok.npy", "--points-are", "point lists", "not to volume input"))
+    fails(capsys, "info", tmp_path / "ok.npy", "--labels", "all", "--points-are", "corners",
+          words=("ok.npy", "--points-are", "not to a label image input"))
+    with pytest.raises(IsoflowError, match=r"ok\.npy: points_are='voxels' applies to point lists"):
+        read_object(tmp_path / "ok.npy", points_are="voxels")
+    # the Python default (and saying it) still reads a volume
+    assert read_object(tmp_path / "ok.npy").voxels == read_object(tmp_path / "ok.npy", points_are="corners").voxels == 8
+
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_points_are_is_refused_for_a_store_read_block_by_block(tmp_path, capsys, command):
+    pytest.importorskip("zarr")
+    store = tmp_path / "v.zarr"
+    write_volume(DigitalObject(np.ones((3, 3, 3), bool)), store)
+    out = {"info": [], "surface": ["-o", tmp_path / "s.ply"], "flow": ["--out", tmp_path / "f", "--volumes", ".zarr"]}
+    fails(capsys, command, store, "--points-are", "voxels", *out[command],
+          words=("v.zarr", "--points-are", "not to volume input"))
+    fails(capsys, command, store, "--pitch", "2", *out[command], words=("v.zarr", "--pitch", "not to .zarr input"))
+
+
+def test_points_are_voxels_reads_a_point_list_otherwise(tmp_path, capsys):
+    # a 2x2x2 block of corners plus one loose point: the cube they close,
+    # against one voxel a point
+    pts = {(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)} | {(5, 5, 5)}
+    path = tmp_path / "pts.txt"
+    path.write_text("".join(f"{x} {y} {z}\n" for x, y, z in sorted(pts)))
+    closed = sum(all((x + dx, y + dy, z + dz) in pts for dx in (0, 1) for dy in (0, 1) for dz in (0, 1))
+                 for x, y, z in pts)
+    reports = {}
+    for given in ([], ["--points-are", "corners"], ["--points-are", "voxels"]):
+        assert main(["info", str(path), "--json", "--no-surfaces", *given]) == 0, given
+        reports[tuple(given)] = json.loads(capsys.readouterr().out)
+    default, corners, voxels = reports.values()
+    assert default == corners and corners["voxels"] == closed
+    assert voxels["voxels"] == len(pts) != closed
+    assert voxels["betti"][0] == 2 and corners["betti"][0] == 1  # the loose point is an object only as a voxel
+    assert read_object(path).voxels == closed and read_object(path, points_are="voxels").voxels == len(pts)
 
 
 # ------------------------------------------------------------ output paths

@@ -7,7 +7,7 @@ import json
 import sys
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option
 from .progress import progress_bar
 
 
@@ -70,6 +70,8 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.motion import flow_connectivity
     from ..flow.run import max_steps_for
 
+    refuse_mesh_options(args, ".zarr")
+    refuse_points_option(args, "volume")
     volume, _ = source_volume(args.input)
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "

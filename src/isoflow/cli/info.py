@@ -10,7 +10,7 @@ import threading
 
 from ..digital.report import Report
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option, thread_count
 from .labels import add_labels_option
 from .progress import progress_bar
 
@@ -61,6 +61,7 @@ def info_of_store(args: argparse.Namespace) -> Report:
     from ..mesh.formats.omezarr import analyze_store
 
     refuse_mesh_options(args, ".zarr")
+    refuse_points_option(args, "volume")
     if args.gpu:
         raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
     with progress_bar(args, "blocks") as show:

@@ -20,8 +20,9 @@ def add_input_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--points-are",
         choices=("corners", "voxels"),
-        default="corners",
-        help="a point list gives cube corners (the paper's point model, default) or voxel indices",
+        default=None,
+        help="a point list gives cube corners (the paper's point model, default) or voxel indices; "
+             "refused for a volume or a mesh",
     )
     grid = p.add_mutually_exclusive_group()
     grid.add_argument("--pitch", type=pitch_value, help="voxel size when the input is a mesh")
@@ -162,16 +163,27 @@ def refuse_mesh_options(args: argparse.Namespace, what: str) -> None:
         raise IsoflowError(f"{args.input}: --pitch/--resolution/--fill/--strict apply to meshes, not to {what} input")
 
 
+def refuse_points_option(args: argparse.Namespace, what: str) -> None:
+    """One line when ``--points-are`` is given for a volume or a mesh: it
+    says how a point list is read, and nothing else reads it."""
+    if getattr(args, "points_are", None) is not None:
+        raise IsoflowError(f"{args.input}: --points-are applies to point lists (x y z per line, .txt), "
+                           f"not to {what} input")
+
+
 def load_input(args: argparse.Namespace):
     """The digital object named on the command line (volume, points or mesh)."""
     from ..mesh.load import is_mesh_path
-    from ..mesh.volumes import read_object
+    from ..mesh.volumes import is_volume, read_object
 
     path = Path(args.input)
     if is_mesh_path(path):
         if getattr(args, "label", None) is not None:
             raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
+        refuse_points_option(args, "mesh")
         return voxelize_input(path, args)
     refuse_mesh_options(args, path.suffix or "this")
+    if is_volume(args.input):  # anything else is read as a point list
+        refuse_points_option(args, "volume")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
-    return read_object(args.input, points_are=args.points_are, label=args.label)
+    return read_object(args.input, points_are=args.points_are or "corners", label=args.label)

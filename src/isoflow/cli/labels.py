@@ -61,9 +61,10 @@ def refuse_single_label(args: argparse.Namespace) -> None:
         raise IsoflowError(f"{args.input}: --label selects one object, --labels every label: give one of them")
     if getattr(args, "gpu", False):
         raise IsoflowError(f"{args.input}: --labels runs on the host, not with --gpu")
-    from .inputs import refuse_mesh_options
+    from .inputs import refuse_mesh_options, refuse_points_option
 
     refuse_mesh_options(args, "a label image")
+    refuse_points_option(args, "a label image")
 
 
 def read_table(args: argparse.Namespace, surfaces: bool = True):

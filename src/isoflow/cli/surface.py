@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, thread_count
+from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option, thread_count
 from .labels import add_labels_option
 
 
@@ -167,6 +167,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from .progress import progress_bar
 
     refuse_mesh_options(args, ".zarr")
+    refuse_points_option(args, "volume")
     array, pitch, origin = store_volume(args.input, args.label)
     frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch,
                           origin=(0.0, 0.0, 0.0) if origin is None else origin)

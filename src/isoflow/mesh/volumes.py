@@ -359,7 +359,8 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     path : str or os.PathLike
         A volume of any format of :func:`read_volume`, or a point list.
     points_are : {"corners", "voxels"}
-        How a point list is read.
+        How a point list is read; ``"voxels"`` is refused for a volume
+        (nothing of a volume is read as points).
     label : int or float, optional
         The value whose voxels are the object, in a label image.
 
@@ -384,6 +385,9 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     if points_are not in ("corners", "voxels"):
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {points_are!r}")
     if is_volume(path):
+        if points_are != "corners":  # the default, kept for any path; "voxels" would be ignored
+            raise IsoflowError(f"{path}: points_are={points_are!r} applies to point lists (x y z per line, .txt), "
+                               "not to volume input")
         return read_volume(path, label=label)
     path = Path(path)
     if label is not None:
