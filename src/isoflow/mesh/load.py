@@ -278,6 +278,8 @@ def reading_mesh(p: Path):
         if hint is None:
             raise
         raise IsoflowError(hint) from None
+    except MemoryError:  # the command's own "out of memory" line, not "cannot read as a mesh"
+        raise
     except Exception as exc:  # trimesh raises anything from KeyError to struct.error
         msg = " ".join(str(exc).split())[:200] or "no detail"
         hint = misnamed_mesh(p)
