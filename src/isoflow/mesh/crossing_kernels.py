@@ -228,45 +228,21 @@ def cube_pairs(x, n, tri, axis, box, key, start, size, cl, lo, hi, dims, found, 
     cube of the lower corner of their common box where the boxes overlap,
     and decided: crossing pairs into ``found``, undecided ones into
     ``undecided`` (rows of face indices). Returns the two counts; a count
-    beyond an array's length means it was too short (call again).
-
-    A cube's boxes are copied side by side before its pairs are looked at:
-    each box is then read once per cube, not once per pair, from arrays
-    indexed by box numbers scattered over the mesh."""
+    beyond an array's length means it was too short (call again)."""
     nf = 0
     nu = 0
-    cap = 0
-    mb = np.empty(0, np.int64)
-    mcl = np.empty((0, 3), np.int64)
-    mlo = np.empty((0, 3), np.float64)
-    mhi = np.empty((0, 3), np.float64)
     for g in range(len(start)):
-        s0, m = start[g], size[g]
-        if m < 2:
-            continue
-        if m > cap:
-            cap = max(m, 2 * cap)
-            mb = np.empty(cap, np.int64)
-            mcl = np.empty((cap, 3), np.int64)
-            mlo = np.empty((cap, 3), np.float64)
-            mhi = np.empty((cap, 3), np.float64)
-        for k in range(m):
-            i = box[s0 + k]
-            mb[k] = i
-            for c in range(3):
-                mcl[k, c] = cl[i, c]
-                mlo[k, c] = lo[i, c]
-                mhi[k, c] = hi[i, c]
-        here = key[s0]
-        for p in range(m):
-            for q in range(p + 1, m):
-                r0, r1, r2 = max(mcl[p, 0], mcl[q, 0]), max(mcl[p, 1], mcl[q, 1]), max(mcl[p, 2], mcl[q, 2])
-                if (r2 * dims[1] + r1) * dims[0] + r0 != here:
+        s0 = start[g]
+        for e1 in range(s0, s0 + size[g]):
+            i = box[e1]
+            for e2 in range(e1 + 1, s0 + size[g]):
+                j = box[e2]
+                r0, r1, r2 = max(cl[i, 0], cl[j, 0]), max(cl[i, 1], cl[j, 1]), max(cl[i, 2], cl[j, 2])
+                if (r2 * dims[1] + r1) * dims[0] + r0 != key[e1]:
                     continue
-                if (mlo[p, 0] > mhi[q, 0] or mlo[q, 0] > mhi[p, 0] or mlo[p, 1] > mhi[q, 1] or mlo[q, 1] > mhi[p, 1]
-                        or mlo[p, 2] > mhi[q, 2] or mlo[q, 2] > mhi[p, 2]):
+                if (lo[i, 0] > hi[j, 0] or lo[j, 0] > hi[i, 0] or lo[i, 1] > hi[j, 1] or lo[j, 1] > hi[i, 1]
+                        or lo[i, 2] > hi[j, 2] or lo[j, 2] > hi[i, 2]):
                     continue
-                i, j = mb[p], mb[q]
                 r = _pair(x, n, tri, axis, i, j)
                 if r == 1:
                     if nf < len(found):
