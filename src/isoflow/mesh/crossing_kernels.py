@@ -5,7 +5,9 @@
 Every sign is -1, 0 or 1 where the float64 evaluation is certified (the
 bound, or a zero row or column), and :data:`UNDECIDED` otherwise; a pair
 whose answer rests on an undecided sign is handed back undecided, and the
-NumPy pass decides it in integers. So the compiled pass changes the time,
+NumPy pass decides it in integers. Points that are small integers in one
+unit (``n``, :attr:`isoflow.mesh.predicates.ExactPoints.small`) are
+decided in int64 alone, exactly. So the compiled pass changes the time,
 never the answer (the tests hold the two equal).
 """
 
@@ -39,21 +41,22 @@ def _o2_int(n, a, b, c, k):
 
 @njit(cache=True, nogil=True)
 def _o3(x, n, a, b, c, d):
-    """Sign of orient3d: certified float64, else exact int64 where the
-    points are small integers (``n`` has more than one row), else UNDECIDED."""
-    r = _o3_float(x, a, b, c, d)
-    if r == UNDECIDED and n.shape[0] > 1:
+    """Sign of orient3d: exact in int64 where the points are small integers
+    (``n`` holds them; None where they are not), else certified float64,
+    else UNDECIDED. A None ``n`` is a type of its own: numba compiles the
+    kernels for it without the integer path, which, compiled in beside the
+    float one, slows every call about three times."""
+    if n is not None:
         return _o3_int(n, a, b, c, d)
-    return r
+    return _o3_float(x, a, b, c, d)
 
 
 @njit(cache=True, nogil=True)
 def _o2(x, n, a, b, c, k):
     """Sign of orient2d seen along axis ``k``, as :func:`_o3`."""
-    r = _o2_float(x, a, b, c, k)
-    if r == UNDECIDED and n.shape[0] > 1:
+    if n is not None:
         return _o2_int(n, a, b, c, k)
-    return r
+    return _o2_float(x, a, b, c, k)
 
 
 @njit(cache=True, nogil=True)
@@ -250,3 +253,110 @@ def cube_pairs(x, n, tri, axis, box, key, start, size, cl, lo, hi, dims, found, 
                         undecided[nu, 0], undecided[nu, 1] = min(i, j), max(i, j)
                     nu += 1
     return nf, nu
+
+
+@njit(cache=True, nogil=True)
+def face_axes(x, n, tri, axis, undecided):
+    """:func:`isoflow.mesh.crossings.projection_axis` per triangle, into
+    ``axis``, where its three orient2d signs are certified
+    (:func:`_o2`); ``undecided[t]`` set where one is not (the NumPy pass
+    decides those). The normal's components are taken with NumPy's
+    ``np.cross`` operations in its order, so the axis is the one it picks."""
+    for t in range(len(tri)):
+        a, b, c = tri[t, 0], tri[t, 1], tri[t, 2]
+        s0, s1, s2 = _o2(x, n, a, b, c, 0), _o2(x, n, a, b, c, 1), _o2(x, n, a, b, c, 2)
+        if s0 == UNDECIDED or s1 == UNDECIDED or s2 == UNDECIDED:
+            undecided[t] = True
+            continue
+        if s0 == 0 and s1 == 0 and s2 == 0:
+            axis[t] = -1
+            continue
+        u0, u1, u2 = x[b, 0] - x[a, 0], x[b, 1] - x[a, 1], x[b, 2] - x[a, 2]
+        w0, w1, w2 = x[c, 0] - x[a, 0], x[c, 1] - x[a, 1], x[c, 2] - x[a, 2]
+        best = 0
+        top = -2.0
+        for k in range(3):
+            if k == 0:
+                m, s = abs(u1 * w2 - u2 * w1), s0
+            elif k == 1:
+                m, s = abs(u2 * w0 - u0 * w2), s1
+            else:
+                m, s = abs(u0 * w1 - u1 * w0), s2
+            if s == 0:
+                m = -1.0
+            else:
+                if np.isnan(m):
+                    m = 0.0
+                elif np.isinf(m):
+                    m = 1.0
+                m = m + 1e-300
+            if m > top:  # the first of equal ones, as argmax
+                best, top = k, m
+        axis[t] = best
+
+
+@njit(cache=True, nogil=True)
+def cube_entries(cl, ch, dims, box, key):
+    """Each box's cubes (from its lowest ``cl`` to its highest ``ch``, x
+    fastest) into ``box`` (the box's number) and ``key`` (the cube's, as
+    :meth:`isoflow.mesh.crossings.CubeGrid.cube_key`), box after box."""
+    e = 0
+    for i in range(len(cl)):
+        for z in range(cl[i, 2], ch[i, 2] + 1):
+            for y in range(cl[i, 1], ch[i, 1] + 1):
+                row = (z * dims[1] + y) * dims[0]
+                for xx in range(cl[i, 0], ch[i, 0] + 1):
+                    box[e] = i
+                    key[e] = row + xx
+                    e += 1
+
+
+@njit(cache=True, nogil=True)
+def sort_by_key(key, box, bits):
+    """``key`` and ``box`` reordered by ``key`` (non-negative, below
+    ``2**bits``), stably: a radix sort of 16-bit digits. Returns the two
+    sorted arrays (new ones, or the arguments)."""
+    n = len(key)
+    k2 = np.empty_like(key)
+    b2 = np.empty_like(box)
+    count = np.empty(1 << 16, np.int64)
+    shift = 0
+    while shift < bits:
+        count[:] = 0
+        for e in range(n):
+            count[(key[e] >> shift) & 0xFFFF] += 1
+        total = 0
+        for d in range(1 << 16):
+            c = count[d]
+            count[d] = total
+            total += c
+        for e in range(n):
+            d = (key[e] >> shift) & 0xFFFF
+            k2[count[d]] = key[e]
+            b2[count[d]] = box[e]
+            count[d] += 1
+        key, k2 = k2, key
+        box, b2 = b2, box
+        shift += 16
+    return key, box
+
+
+@njit(cache=True, nogil=True)
+def runs(key):
+    """Where each run of equal values of the sorted ``key`` starts, and its
+    length."""
+    n = len(key)
+    m = 0
+    for e in range(n):
+        if e == 0 or key[e] != key[e - 1]:
+            m += 1
+    start = np.empty(m, np.int64)
+    size = np.empty(m, np.int64)
+    g = -1
+    for e in range(n):
+        if e == 0 or key[e] != key[e - 1]:
+            g += 1
+            start[g] = e
+            size[g] = 0
+        size[g] += 1
+    return start, size

@@ -35,6 +35,7 @@ from typing import Literal
 import numpy as np
 
 from ..scale.compiled import have_numba
+from .load import distinct_rows
 from .predicates import ExactPoints
 
 #: from this many faces on, ``method="auto"`` takes the compiled pass
@@ -97,18 +98,19 @@ def find_crossings(vertices: np.ndarray, faces: np.ndarray,
     pairs they explain (see the module's rules)."""
     v = np.asarray(vertices, np.float64)
     f = np.asarray(faces, np.int64)
-    points, position = np.unique(v, axis=0, return_inverse=True)
+    points, position = distinct_rows(v)
     exact = ExactPoints(points)
     tri = position.reshape(-1)[f]
-    axis = projection_axis(exact, tri) if len(f) else np.zeros(0, np.int64)
+    compiled = method == "compiled" or (method == "auto" and len(f) >= COMPILED_FACES and have_numba())
+    axis = (_compiled_axis if compiled else projection_axis)(exact, tri) if len(f) else np.zeros(0, np.int64)
     tested = np.flatnonzero(axis >= 0)  # collinear corners: nothing to cross
     zero_area = len(f) - len(tested)
     if len(tested) < 2:
         return Crossings(np.zeros((0, 2), np.int64), zero_area, 0)
     tri, axis = tri[tested], axis[tested]
     corners = exact.xyz[tri]
-    grid = CubeGrid(corners.min(axis=1), corners.max(axis=1))
-    if method == "compiled" or (method == "auto" and len(f) >= COMPILED_FACES and have_numba()):
+    grid = CubeGrid(corners.min(axis=1), corners.max(axis=1), compiled=compiled)
+    if compiled:
         found = _compiled_pairs(exact, tri, axis, grid)
     else:
         found = [pairs[_cross(exact, tri, axis, pairs)] for pairs in grid.pairs()]
@@ -172,7 +174,7 @@ def _compiled_pairs(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, grid:
     signs are certified, the others here, in integers."""
     from .crossing_kernels import cube_pairs
 
-    small = exact.small if exact.small is not None else np.zeros((1, 3), np.int64)
+    small = exact.small  # (None: no integer path compiled in)
     found = np.zeros((1024, 2), np.int64)
     undecided = np.zeros((1 << 16, 2), np.int64)
     while True:
@@ -184,6 +186,20 @@ def _compiled_pairs(exact: ExactPoints, tri: np.ndarray, axis: np.ndarray, grid:
         undecided = np.zeros((max(nu, len(undecided)), 2), np.int64)
     rest = undecided[:nu]
     return [found[:nf], rest[_cross(exact, tri, axis, rest)]]
+
+
+def _compiled_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
+    """:func:`projection_axis`, compiled where the float64 signs are
+    certified, the rest by it."""
+    from .crossing_kernels import face_axes
+
+    axis = np.zeros(len(tri), np.int64)
+    undecided = np.zeros(len(tri), bool)
+    face_axes(exact.xyz, exact.small, tri, axis, undecided)
+    rest = np.flatnonzero(undecided)
+    if len(rest):
+        axis[rest] = projection_axis(exact, tri[rest])
+    return axis
 
 
 def projection_axis(exact: ExactPoints, tri: np.ndarray) -> np.ndarray:
@@ -208,9 +224,12 @@ class CubeGrid:
     A pair of overlapping boxes belongs to the one cube that holds the lower
     corner of their common box, so no pair is seen twice."""
 
-    def __init__(self, lo: np.ndarray, hi: np.ndarray) -> None:
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, compiled: bool = False) -> None:
         self.lo, self.hi = lo, hi
         cl, ch = _grid_cells(lo, hi)
+        if compiled:
+            self._compiled(cl, ch)
+            return
         span = ch - cl + 1
         count = np.prod(span, axis=1)
         box = np.repeat(np.arange(len(lo)), count)
@@ -223,6 +242,20 @@ class CubeGrid:
         self.box, self.key, self.cl = box[order], key[order], cl
         self.start = np.flatnonzero(np.r_[True, self.key[1:] != self.key[:-1]])
         self.size = np.diff(np.r_[self.start, len(self.key)])
+
+    def _compiled(self, cl: np.ndarray, ch: np.ndarray) -> None:
+        """The same arrays from the compiled kernels: the cubes listed box
+        by box and sorted by a radix sort (stable, as the NumPy pass)."""
+        from .crossing_kernels import cube_entries, runs, sort_by_key
+
+        self.cl = cl
+        self.dims = ch.max(axis=0) + 1
+        total = int(np.prod(ch - cl + 1, axis=1).sum())
+        box = np.empty(total, np.int64)
+        key = np.empty(total, np.int64)
+        cube_entries(cl, ch, self.dims, box, key)
+        self.key, self.box = sort_by_key(key, box, int(np.prod(self.dims) - 1).bit_length())
+        self.start, self.size = runs(self.key)
 
     def cube_key(self, cell: np.ndarray) -> np.ndarray:
         """One integer per cube (x fastest)."""

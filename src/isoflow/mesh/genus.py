@@ -121,24 +121,51 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
 def _distinct_per(first: np.ndarray, n_first: int, second: np.ndarray, n_second: int) -> np.ndarray:
     """Per value ``0 .. n_first - 1`` of ``first``, how many distinct
-    values of ``second`` (``0 .. n_second - 1``) occur beside it. Each pair
-    is one int64 key: ``np.unique(axis=0)`` sorts the rows as opaque bytes,
-    in one uninterruptible call that takes seconds on a million faces."""
-    key = np.sort(first.astype(np.int64) * max(n_second, 1) + second)  # (np.unique hashes, several times slower)
-    distinct = key[np.r_[True, key[1:] != key[:-1]]] if len(key) else key
-    return np.bincount(distinct // max(n_second, 1), minlength=n_first)
+    values of ``second`` (``0 .. n_second - 1``) occur beside it
+    (:func:`~isoflow.mesh.census.distinct_counts`: compiled, no sort)."""
+    from .census import distinct_counts  # compiled: loaded with the census
+
+    return distinct_counts(first, n_first, second, n_second)
 
 
-def manifold3d_report(vertices, faces) -> dict:
+def whole_manifold(vertices, faces) -> tuple[Any, int]:
+    """The mesh as one manifold3d ``Manifold`` (its vertices
+    :func:`normalized`, in float32), or the exception its binding raised
+    for malformed input, and the exponent ``e`` of the scaling: what
+    :func:`manifold3d_report` and :func:`solid_report` both start from, so
+    that :func:`witnesses` builds it once (a second on a million faces).
+
+    Parameters
+    ----------
+    vertices : ndarray, shape (N, 3)
+    faces : int ndarray, shape (M, 3)
+
+    Returns
+    -------
+    tuple
+        ``(manifold or exception, e)``.
+    """
     import manifold3d as m3
 
     v, e = normalized(vertices)  # manifold3d takes float32
     try:
-        mf = m3.Manifold(
+        return m3.Manifold(
             m3.Mesh(vert_properties=np.asarray(v, np.float32), tri_verts=np.asarray(faces, np.uint32))
-        )
+        ), e
     except Exception as exc:  # the binding raises for malformed input
-        return {"error": f"{type(exc).__name__}: {exc}"}
+        return exc, e
+
+
+def manifold3d_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
+    """manifold3d's genus of the mesh (the sum over its parts), of the whole
+    mesh, its number of parts and volume, or ``{"error": ...}`` where it
+    refuses the mesh; ``whole``: :func:`whole_manifold` of the mesh, where
+    already built."""
+    import manifold3d as m3
+
+    mf, e = whole_manifold(vertices, faces) if whole is None else whole
+    if isinstance(mf, Exception):
+        return {"error": f"{type(mf).__name__}: {mf}"}
     status = mf.status()
     if status != m3.Error.NoError:
         return {"error": status.name}
@@ -208,7 +235,7 @@ def normalized(vertices) -> tuple[np.ndarray, int]:
     return np.ldexp(v - (lo + hi) / 2, -e), e
 
 
-def solid_report(vertices, faces) -> dict:
+def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     """The solid the mesh bounds by the nonzero winding rule (the rule the
     voxeliser reads), built with manifold3d's booleans.
 
@@ -229,18 +256,18 @@ def solid_report(vertices, faces) -> dict:
     cavity (its b0 and b2); ``boundary`` says whether the mesh is the
     solid's boundary (every surface between a region of winding 0 and one
     of winding not 0), so that the mesh's own genus is the one to compare.
-    ``{"error": ...}`` where manifold3d refuses the mesh.
+    ``{"error": ...}`` where manifold3d refuses the mesh. ``whole``:
+    :func:`whole_manifold` of the mesh, where already built.
     """
     import manifold3d as m3
 
-    v, e = normalized(vertices)
+    made, e = whole_manifold(vertices, faces) if whole is None else whole
     try:
-        whole = m3.Manifold(
-            m3.Mesh(vert_properties=np.asarray(v, np.float32), tri_verts=np.asarray(faces, np.uint32))
-        )
-        if whole.status() != m3.Error.NoError:
-            return {"error": whole.status().name}
-        parts = whole.decompose()
+        if isinstance(made, Exception):
+            raise made
+        if made.status() != m3.Error.NoError:
+            return {"error": made.status().name}
+        parts = made.decompose()
         signs = [1 if p.volume() >= 0 else -1 for p in parts]
         solids = [p if s > 0 else _inside_out(m3, p) for p, s in zip(parts, signs)]
         solid, boundary, approximate = _nonzero_solid(m3, solids, signs)
@@ -637,11 +664,12 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     is the reference: components overlap, touch or nest) and
     ``double_sided`` (faces listed once each way round, or None)."""
     mesh, comp = mesh_topology(v, f, return_components=True)
-    out = {"mesh": mesh, "manifold3d": manifold3d_report(v, f), "pymeshlab": pymeshlab_report(v, f)}
+    whole = whole_manifold(v, f)
+    out = {"mesh": mesh, "manifold3d": manifold3d_report(v, f, whole), "pymeshlab": pymeshlab_report(v, f)}
     out.update(self_intersections(v, f, comp))
     crossing_self = bool(out["self_intersecting_faces"])
     balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
-    solid = solid_report(v, f) if balanced and not crossing_self else {"error": "not computed"}
+    solid = solid_report(v, f, whole) if balanced and not crossing_self else {"error": "not computed"}
     touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
     nested = solid.get("boundary") is False and not touching
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,

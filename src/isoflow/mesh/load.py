@@ -133,8 +133,7 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     from .close_pairs import close_pairs
 
     lo, _, ext = mesh_bbox(v, f, where)  # refuses an extent that overflows
-    uniq, inverse = np.unique(v, axis=0, return_inverse=True)
-    inverse = inverse.reshape(-1)
+    uniq, inverse = distinct_rows(v)
     longest = float(ext.max())
     if rtol > 0 and longest > 0 and len(uniq) > 1:
         # Distances are taken relative to the bounding box's lower corner and
@@ -162,14 +161,55 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     if stats is not None:
         stats.setdefault("welded", 0)
         stats["dropped_faces"] = int(len(keep) - np.count_nonzero(keep))
-    # compact + order by first use in the original vertex array
-    groups = np.unique(f)
+    # compact + order by first use in the original vertex array; the
+    # positions the faces use, marked (np.unique hashes 3M indices: slower)
+    mark = np.zeros(inverse.max() + 1, dtype=bool)
+    mark[f] = True
+    groups = np.flatnonzero(mark)
     first = np.full(inverse.max() + 1, len(v), dtype=np.int64)
     np.minimum.at(first, inverse, np.arange(len(v)))
     order = np.argsort(first[groups], kind="stable")
     remap = np.empty(inverse.max() + 1, dtype=np.int64)
     remap[groups[order]] = np.arange(len(groups))
     return v[first[groups[order]]].copy(), remap[f]
+
+
+def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``points`` (equal values: ``-0.0`` is ``0.0``),
+    in increasing order, and each row's number among them: what
+    ``np.unique(points, axis=0, return_inverse=True)`` gives.
+
+    ``np.unique`` sorts the rows as records, one comparison of a field
+    after another; three stable sorts of plain columns (``np.lexsort``) are
+    several times faster on a million rows.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, K)
+        Rows to compare (floats: NaN is unequal to anything).
+
+    Returns
+    -------
+    distinct : ndarray, shape (D, K)
+        The distinct rows, sorted by the first column, then the second, ...
+    inverse : int64 ndarray, shape (N,)
+        ``distinct[inverse]`` equals ``points``.
+
+    Examples
+    --------
+    >>> d, i = distinct_rows(np.array([[1.0, 2.0], [0.0, 5.0], [1.0, 2.0]]))
+    >>> d.tolist(), i.tolist()
+    ([[0.0, 5.0], [1.0, 2.0]], [1, 0, 1])
+    """
+    p = np.asarray(points)
+    inverse = np.zeros(len(p), np.int64)
+    if not len(p):
+        return p.copy(), inverse
+    order = np.lexsort(p.T[::-1])
+    rows = p[order]
+    new = np.r_[True, np.any(rows[1:] != rows[:-1], axis=1)]
+    inverse[order] = np.cumsum(new) - 1
+    return rows[new], inverse
 
 
 def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:

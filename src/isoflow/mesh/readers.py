@@ -25,6 +25,10 @@ Mesh = tuple[np.ndarray, np.ndarray]
 
 _STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("corners", "<f4", (3, 3)), ("attribute", "<u2")])
 _OBJ_IGNORED = frozenset((b"#", b"vt", b"vn", b"o", b"g", b"s", b"mtllib"))
+#: the bytes ``bytes.split()`` splits at
+_SPACE = np.isin(np.arange(256), list(b" \t\n\r\x0b\x0c"))
+#: the bytes of a face line's words and the spaces between them
+_FACE_BYTES = np.isin(np.arange(256), list(b"0123456789-/ \t\n"))
 
 
 def read_simple(path: Path) -> Mesh | None:
@@ -111,17 +115,32 @@ def read_obj(data: bytes) -> Mesh | None:
     data = data.replace(b"\r\n", b"\n")
     if b"\r" in data:
         return None  # lines ended by CR alone: not lines to trimesh
-    lines = data.split(b"\n")
-    heads = [ln[:2] for ln in lines]
-    v_at = [i for i, h in enumerate(heads) if h == b"v "]
-    f_at = [i for i, h in enumerate(heads) if h == b"f "]
-    rest = [lines[i] if h != b"f " else b"f" for i, h in enumerate(heads) if h != b"v "]
-    if not v_at or not f_at or not _only_ignored(rest):
+    # the lines told apart by their first two bytes, on the file's bytes
+    # as one array (no Python object per line)
+    a = np.frombuffer(data, np.uint8)
+    ends = np.flatnonzero(a == 10)
+    starts = np.concatenate(([0], ends + 1))
+    ends = np.append(ends, len(a))
+    is_v, is_f = _heads(a, starts, ends, b"v "), _heads(a, starts, ends, b"f ")
+    v_at, f_at = np.flatnonzero(is_v), np.flatnonzero(is_f)
+    if not len(v_at) or not len(f_at):
         return None
-    v = _numbers(b" ".join(lines[i][2:] for i in v_at), np.float64, 3 * len(v_at))
-    if v is None or any(len(lines[i].split()) != 4 for i in v_at):
+    # the other lines, in order, and the first face line as "f" (the only
+    # face line :func:`_only_ignored` needs: where faces begin)
+    others = np.flatnonzero(~is_v & (~is_f | (np.arange(len(starts)) == f_at[0])))
+    rest = [b"f" if is_f[i] else data[starts[i]:ends[i]] for i in others.tolist()]
+    if not _only_ignored(rest):
+        return None
+    v_text = _tails(a, starts, ends, is_v)
+    if not (_words_per_line(v_text) == 3).all():
         return None  # four or six numbers a line: trimesh's w or colours
-    faces = _obj_faces([lines[i][2:] for i in f_at], len(v_at), negatives_ok=v_at[-1] < f_at[0])
+    v_text[v_text == 10] = 32  # the lines' numbers as one line
+    v = _numbers(v_text.tobytes(), np.float64, 3 * len(v_at))
+    if v is None:
+        return None
+    first_line = data[starts[f_at[0]] + 2:ends[f_at[0]]]
+    faces = _obj_faces(first_line, _tails(a, starts, ends, is_f), len(f_at), len(v_at),
+                       negatives_ok=v_at[-1] < f_at[0])
     if faces is None:
         return None
     v = v.reshape(-1, 3)
@@ -129,6 +148,41 @@ def read_obj(data: bytes) -> Mesh | None:
     used[faces] = True
     inverse = np.cumsum(used) - 1  # the used vertices, in file order
     return v[used], inverse[faces]
+
+
+def _heads(a: np.ndarray, starts: np.ndarray, ends: np.ndarray, head: bytes) -> np.ndarray:
+    """Which lines (from ``starts`` to ``ends`` in the bytes ``a``) begin
+    with the two bytes ``head``."""
+    long = ends - starts >= 2
+    if not long.any():
+        return long
+    first = a[np.where(long, starts, 0)]
+    second = a[np.where(long, starts + 1, 0)]
+    return long & (first == head[0]) & (second == head[1])
+
+
+def _tails(a: np.ndarray, starts: np.ndarray, ends: np.ndarray, which: np.ndarray) -> np.ndarray:
+    """The text after the first two bytes of the lines ``which`` (from
+    ``starts`` to ``ends`` in the bytes ``a``, each but the last followed
+    by a newline): ``b"\\n".join(tails)``, as a new array."""
+    newline = np.ones(len(starts), np.int64)
+    newline[-1] = 0
+    # each line as three runs of bytes: its head, its tail and its newline,
+    # the last two kept where the line is one of ``which``
+    keep = np.repeat(np.stack([np.zeros(len(starts), bool), which, which], axis=1).ravel(),
+                     np.stack([np.where(which, 2, ends - starts + newline), np.where(which, ends - starts - 2, 0),
+                               np.where(which, newline, 0)], axis=1).ravel())
+    text = a[keep]
+    return text[:-1] if len(text) and text[-1] == 10 else text
+
+
+def _words_per_line(text: np.ndarray) -> np.ndarray:
+    """The number of words ``bytes.split`` finds on each line of ``text``
+    (bytes, lines ended by newlines; no carriage returns)."""
+    space = _SPACE[text]
+    start = np.flatnonzero(~space & np.r_[True, space[:-1]])
+    newline = np.flatnonzero(text == 10)
+    return np.diff(np.r_[0, np.searchsorted(start, newline), len(start)])
 
 
 def _only_ignored(lines: list[bytes]) -> bool:
@@ -183,19 +237,20 @@ def _numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
     return a if len(a) == count else None
 
 
-def _obj_faces(f_lines: list[bytes], nv: int, *, negatives_ok: bool) -> np.ndarray | None:
-    """Triangles (position indices from 0) of the face lines (their text
-    after ``f``), or ``None``."""
-    first = f_lines[0].split()[0]
+def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, nv: int, *, negatives_ok: bool) -> np.ndarray | None:
+    """Triangles (position indices from 0) of the face lines, ``text``
+    their text after ``f`` joined by newlines (bytes, a new array: changed
+    here), ``first_line`` the first one's; or ``None``."""
+    first = first_line.split()[0]
     form = 2 if b"//" in first else 3 if first.count(b"/") == 2 else first.count(b"/")
     if form > 3:
         return None
-    text = b"\n".join(f_lines)
-    sizes = _face_sizes(np.frombuffer(text, np.uint8), form, len(f_lines))
+    sizes = _face_sizes(text, form, n_lines)
     if sizes is None or sizes.min() < 3:
         return None
     per = (1, 2, 2, 3)[form]  # numbers per corner: i; i/j; i//k; i/j/k
-    nums = _numbers(text.replace(b"/", b" "), np.int64, per * int(sizes.sum()))
+    text[text == 47] = 32
+    nums = _numbers(text.tobytes(), np.int64, per * int(sizes.sum()))
     if nums is None:
         return None
     flat = nums[::per]
@@ -289,31 +344,31 @@ def may_name_vertex_0(data: bytes) -> bool:
 def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:
     """The number of corners on each line of face words (bytes ``a``), or
     ``None`` unless every word has the first word's form: ``i`` (form 0),
-    ``i/j`` (1), ``i//k`` (2) or ``i/j/k`` (3), each number ``-?[0-9]+``."""
-    digit = (a >= 48) & (a <= 57)
-    minus, slash, newline = a == 45, a == 47, a == 10
-    ws = (a == 32) | (a == 9) | newline
-    if not (digit | minus | slash | ws).all():
+    ``i/j`` (1), ``i//k`` (2) or ``i/j/k`` (3), each number ``-?[0-9]+``.
+
+    Only the signs and slashes are looked at one by one (their neighbours
+    say whether they sit in a number's place); a word whose signs and
+    slashes all do ends in a digit."""
+    if not _FACE_BYTES[a].all():
         return None
-    prev = np.concatenate(([32], a[:-1]))
-    nxt = np.concatenate((a[1:], [32]))
-    prev_ws = np.concatenate(([True], ws[:-1]))
-    next_ws = np.concatenate((ws[1:], [True]))
-    nxt_digit = (nxt >= 48) & (nxt <= 57)
-    prev_digit = (prev >= 48) & (prev <= 57)
+    padded = np.concatenate(([32], a, [32]))  # a space before and after
+    space = padded <= 32  # (tab, newline and space: the only bytes below 33 left)
+    start = np.flatnonzero(~space[1:-1] & space[:-2])
     double = form == 2
-    bad = minus & ~((prev_ws | (prev == 47)) & nxt_digit)
-    bad |= slash & ~((prev_digit | (double & (prev == 47))) & (nxt_digit | (nxt == 45) | (double & (nxt == 47))))
-    bad |= ~ws & next_ws & ~digit  # a word ends in a digit
-    start = ~ws & prev_ws
-    word = np.cumsum(start) - 1
-    n_words = int(word[-1]) + 1 if len(a) else 0
-    per_word = np.bincount(word[slash], minlength=n_words)
-    if bad.any() or (per_word != (0, 1, 2, 2)[form]).any():
+    minus, slash = np.flatnonzero(a == 45), np.flatnonzero(a == 47)
+    for at, before, after in ((minus, b" \t\n/", b"0123456789"),
+                              (slash, b"0123456789" + b"/" * double, b"0123456789-" + b"/" * double)):
+        if len(at) and not (np.isin(padded[at], list(before)).all() and np.isin(padded[at + 2], list(after)).all()):
+            return None
+    # slashes sit inside words (a digit or slash either side): those between
+    # one word's start and the next are that word's
+    per_word = np.diff(np.r_[np.searchsorted(slash, start), len(slash)])
+    if (per_word != (0, 1, 2, 2)[form]).any():
         return None
-    if double and int((slash & (nxt == 47)).sum()) != n_words:
+    if double and np.count_nonzero(padded[slash + 2] == 47) != len(start):
         return None
-    return np.bincount(np.cumsum(newline)[start], minlength=n_lines)
+    newline = np.flatnonzero(a == 10)
+    return np.bincount(np.searchsorted(newline, start), minlength=n_lines)
 
 
 def _triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
