@@ -304,25 +304,14 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> np.ndarray:
 
 
 @njit(cache=True, nogil=True)
-def _distinct_counts(first, n_first, second, n_second):
-    # the items grouped by ``first`` (a counting sort), then each group's
-    # values of ``second`` marked with the group's number as they are seen
-    begin = np.zeros(n_first + 1, np.int64)
-    for k in range(len(first)):
-        begin[first[k] + 1] += 1
-    for g in range(n_first):
-        begin[g + 1] += begin[g]
-    at = begin[:-1].copy()
-    grouped = np.empty(len(first), np.int64)
-    for k in range(len(first)):
-        grouped[at[first[k]]] = second[k]
-        at[first[k]] += 1
-    seen = np.full(n_second, -1, np.int64)
-    out = np.zeros(n_first, np.int64)
-    for g in range(n_first):
-        for e in range(begin[g], begin[g + 1]):
-            if seen[grouped[e]] != g:
-                seen[grouped[e]] = g
+def _distinct_in_groups(start, values, n_values):
+    # each group's values marked with the group's number as they are seen
+    seen = np.full(n_values, -1, np.int64)
+    out = np.zeros(len(start) - 1, np.int64)
+    for g in range(len(start) - 1):
+        for e in range(start[g], start[g + 1]):
+            if seen[values[e]] != g:
+                seen[values[e]] = g
                 out[g] += 1
     return out
 
@@ -348,7 +337,8 @@ def distinct_counts(first: np.ndarray, n_first: int, second: np.ndarray, n_secon
     >>> distinct_counts(np.array([0, 0, 2, 0]), 3, np.array([5, 5, 1, 4]), 6).tolist()
     [2, 0, 1]
     """
-    first = np.ascontiguousarray(first, np.int64)
-    second = np.ascontiguousarray(second, np.int64)
-    return _distinct_counts(first, int(n_first), second, max(int(n_second), 1))
+    from ..scale.piece_graph import grouped  # the counting sort
+
+    start, values = grouped(first, int(n_first), np.asarray(second, np.int64))
+    return _distinct_in_groups(start, values, max(int(n_second), 1))
 

@@ -49,6 +49,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     With ``return_components``, also each face's component number.
     """
     from ..scale.graphs import components
+    from .census import distinct_counts  # compiled: loaded with the census, when a mesh is counted
 
     v = np.asarray(vertices)
     f = np.asarray(faces, dtype=np.int64)
@@ -72,7 +73,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     comp_of_edge = comp[face_of[order][edge_start]]
     E = np.bincount(comp_of_edge, minlength=ncomp)
     F = np.bincount(comp, minlength=ncomp)
-    V = _distinct_per(np.repeat(comp, 3), ncomp, f.ravel(), len(v))
+    V = distinct_counts(np.repeat(comp, 3), ncomp, f.ravel(), len(v))
     bad_edge = np.bincount(comp_of_edge, weights=(edge_count != 2), minlength=ncomp) > 0
 
     # fans: corners around a vertex joined across the manifold edges
@@ -85,8 +86,8 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     src = np.concatenate([corner_a[h1], corner_b[h1]])
     dst = np.concatenate([np.where(same_dir, corner_a[h2], corner_b[h2]), np.where(same_dir, corner_b[h2], corner_a[h2])])
     _, fan = components(3 * nf, src, dst)
-    fans_per_vertex = _distinct_per(f.ravel(), len(v), fan, 3 * nf)
-    comps_per_vertex = _distinct_per(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
+    fans_per_vertex = distinct_counts(f.ravel(), len(v), fan, 3 * nf)
+    comps_per_vertex = distinct_counts(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
     pinched_in_comp = np.zeros(ncomp, dtype=bool)
     inner_pinch = np.flatnonzero(fans_per_vertex > np.maximum(comps_per_vertex, 1))
     if len(inner_pinch):
@@ -117,15 +118,6 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
     }
     return (report, comp) if return_components else report
-
-
-def _distinct_per(first: np.ndarray, n_first: int, second: np.ndarray, n_second: int) -> np.ndarray:
-    """Per value ``0 .. n_first - 1`` of ``first``, how many distinct
-    values of ``second`` (``0 .. n_second - 1``) occur beside it
-    (:func:`~isoflow.mesh.census.distinct_counts`: compiled, no sort)."""
-    from .census import distinct_counts  # compiled: loaded with the census
-
-    return distinct_counts(first, n_first, second, n_second)
 
 
 def whole_manifold(vertices, faces) -> tuple[Any, int]:

@@ -163,10 +163,11 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
         stats["dropped_faces"] = int(len(keep) - np.count_nonzero(keep))
     # compact + order by first use in the original vertex array; the
     # positions the faces use, marked (np.unique hashes 3M indices: slower)
-    mark = np.zeros(inverse.max() + 1, dtype=bool)
+    positions = inverse.max() + 1
+    mark = np.zeros(positions, dtype=bool)
     mark[f] = True
     groups = np.flatnonzero(mark)
-    first = np.full(inverse.max() + 1, len(v), dtype=np.int64)
+    first = np.full(positions, len(v), dtype=np.int64)
     np.minimum.at(first, inverse, np.arange(len(v)))
     order = np.argsort(first[groups], kind="stable")
     remap = np.empty(inverse.max() + 1, dtype=np.int64)
