@@ -411,3 +411,22 @@ def test_the_verdict_does_not_depend_on_units_or_placement(tmp_path, scale, shif
         write_off_exact(tmp_path / name, m.vertices * scale + shift, m.faces)
         r = verify_genus(tmp_path / name, (32, 64), step=False)
         assert r["self_intersecting_faces"] == 0 and r["verdict"].startswith(want), (name, r["verdict"])
+
+
+def test_distinct_rows_and_counts_equal_numpys_unique(rng):
+    """The weld's and the crossing test's distinct rows are what
+    ``np.unique(axis=0, return_inverse=True)`` gives (rows repeated, -0.0
+    beside 0.0); the per-value distinct counts of ``mesh_topology`` what
+    ``np.unique`` of the pairs counts."""
+    from isoflow.mesh.census import distinct_counts
+    from isoflow.mesh.load import distinct_rows
+
+    for _ in range(20):
+        rows = rng.integers(-2, 3, size=(int(rng.integers(1, 200)), 3)).astype(np.float64)
+        rows[rng.random(rows.shape) < 0.1] = -0.0
+        got, inverse = distinct_rows(rows)
+        want, want_inverse = np.unique(rows, axis=0, return_inverse=True)
+        assert np.array_equal(got, want) and np.array_equal(inverse, want_inverse.reshape(-1))
+        first, second = rng.integers(0, 7, 300), rng.integers(0, 11, 300)
+        pairs = np.unique(np.stack([first, second], axis=1), axis=0)
+        assert np.array_equal(distinct_counts(first, 9, second, 11), np.bincount(pairs[:, 0], minlength=9))
