@@ -16,9 +16,7 @@ this is its number of tunnels b1.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -29,7 +27,7 @@ from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words
-from .load import load_mesh, mesh_defects, repeated_faces
+from .load import MeshInput, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -520,7 +518,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 # --------------------------------------------------------------------------
 
 
-def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
+def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
                  connectivity: int = 6, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
@@ -546,8 +544,10 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
 
     Parameters
     ----------
-    path : str or os.PathLike
-        A mesh file of any format trimesh reads.
+    mesh : str, os.PathLike, (vertices, faces) or object with ``vertices`` and ``faces``
+        A mesh file of any format trimesh reads, or a mesh in memory (a
+        ``trimesh.Trimesh``; positions welded as a file's are:
+        :func:`~isoflow.mesh.load.mesh_input`).
     resolutions : sequence of int
         Voxels along the longest side, tried first.
     connectivity : {6, 26}
@@ -576,13 +576,15 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
     >>> v = verify_genus(data.torus(), resolutions=[24, 48], step=False)
     >>> v.kind, v.reference, [d["genus"] for d in v.digital]
     ('agree', 1, [1, 1])
+    >>> import trimesh
+    >>> verify_genus(trimesh.creation.torus(1.0, 0.3), resolutions=[32, 64], step=False).kind
+    'agree'
     """
-    path = Path(path)
     resolutions = list(resolutions)
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
     stats: dict = {}
-    v, f = load_mesh(path, stats=stats)
+    name, v, f = mesh_input(mesh, stats=stats)
     f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["mesh"]["genus"]
@@ -592,11 +594,11 @@ def verify_genus(path: str | os.PathLike, resolutions: Sequence[int] = DEFAULT_R
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill)
     except IsoflowError as exc:
-        raise exc.at(path) from None  # a refused grid keeps its command-line words
+        raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
     kind = verdict_kind(w, digital, reference, stable)
     return GenusVerdict(
-        input=str(path), mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
+        input=name, mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",

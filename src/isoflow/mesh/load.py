@@ -13,6 +13,7 @@ import math
 import os
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -260,6 +261,66 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+#: a mesh given to a function that reads one: a file, a ``(vertices, faces)``
+#: pair, or an object with ``vertices`` and ``faces`` (``trimesh.Trimesh``)
+MeshInput = str | os.PathLike | tuple | Any
+
+
+def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
+               stats: dict | None = None) -> tuple[str, np.ndarray, np.ndarray]:
+    """A mesh file read by :func:`load_mesh`, or a mesh in memory checked
+    and welded the same way, with the name its messages give it.
+
+    A mesh built in memory (trimesh splits vertices at UV seams as a file's
+    reader does) gets the same weld as a file, so that its topology is the
+    surface's, not the vertex list's.
+
+    Parameters
+    ----------
+    mesh : str, os.PathLike, (vertices, faces) or object with ``vertices`` and ``faces``
+        The mesh: a file of any format :func:`load_mesh` reads, or (N, 3)
+        positions and (M, 3) vertex indices.
+    merge_rtol : float
+        Weld tolerance, times the bounding-box diagonal (:func:`load_mesh`).
+    stats : dict, optional
+        Receives what the weld did (:func:`weld`).
+
+    Returns
+    -------
+    name : str
+        The file's name, or ``"mesh"`` for a mesh in memory.
+    vertices : numpy.ndarray
+        float64 (N, 3).
+    faces : numpy.ndarray
+        int64 (M, 3).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> name, v, f = mesh_input(trimesh.creation.box())
+    >>> name, v.shape, f.shape
+    ('mesh', (8, 3), (12, 3))
+    >>> mesh_input((v, f[:, :2]))
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: mesh: faces must have shape (M, 3) (triangles), got (12, 2)
+    """
+    if isinstance(mesh, (str, os.PathLike)):
+        return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
+    if isinstance(mesh, tuple) and len(mesh) == 2:
+        vertices, faces = mesh
+    elif hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        vertices, faces = mesh.vertices, mesh.faces
+    else:
+        raise IsoflowError(f"mesh: expected a file name, a (vertices, faces) pair or an object with vertices and "
+                           f"faces, got {type(mesh).__name__}")
+    v, f = check_mesh(vertices, faces, where="mesh")
+    v, f = weld(v, f, float(merge_rtol), where="mesh", stats=stats)
+    if len(f) == 0:
+        raise IsoflowError("mesh: empty mesh (every face is degenerate)")
+    return "mesh", v, f
 
 
 def _read(p: Path, ext: str):
