@@ -473,3 +473,64 @@ def test_fill_is_refused_for_volumes(tmp_path, capsys):
     np.save(tmp_path / "v.npy", np.ones((3, 3, 3), dtype=bool))
     assert main(["info", str(tmp_path / "v.npy"), "--fill", "shell"]) == 2
     assert "--fill" in capsys.readouterr().err
+
+
+HINT = "; --fill flood (the shell and what it encloses) or --fill shell sum no solid angles and take far less"
+
+
+@pytest.fixture
+def piped_notes(monkeypatch, capsys):
+    """Every voxelisation piped (capsys: stderr is no terminal) says its
+    time note, over slabs of a few rows (so that a small grid reports as
+    a long one does, share by share); the function runs a command line
+    and returns its note lines."""
+    from isoflow.cli import progress as bar
+    from isoflow.mesh import store_plan
+    from isoflow.mesh import voxelize as vox
+
+    monkeypatch.setattr(bar, "NOTE_AFTER", 0.0)
+    monkeypatch.setattr(bar, "NOTE_LONG", 0.0)
+    monkeypatch.setattr(vox, "SLAB_VOXELS", 64)
+    monkeypatch.setattr(store_plan, "SLAB_BYTES", 1)
+
+    def notes(*argv: str) -> list[str]:
+        capsys.readouterr()
+        assert main(list(argv)) == 0
+        return [line for line in capsys.readouterr().err.splitlines() if "will take about" in line]
+
+    return notes
+
+
+@pytest.mark.parametrize("out", ["v.npz", "v.zarr", "info"])
+def test_the_time_note_offers_the_fills_only_where_the_rule_sums_solid_angles(tmp_path, piped_notes, out):
+    """A closed mesh is read by the scanline alone, no cap and no solid
+    angle summed: the shell and the flood fill take as long, and the note
+    says none of them (it did, the hint being chosen from --fill before
+    the mesh was read). An open mesh's cap sums solid angles: the note
+    names the fills that do not, in memory, into a store and as any
+    command's input."""
+    closed, open_ = str(MESHES / "torus.obj"), str(MESHES / "cube_no_bottom.obj")
+    for mesh, hinted in ((closed, False), (open_, True)):
+        if out == "info":
+            argv = ["info", mesh, "--resolution", "24", "--json", "--no-surfaces"]
+        else:
+            argv = ["voxelize", mesh, "--resolution", "24", "-o", str(tmp_path / out), "--force"]
+        notes = piped_notes(*argv)
+        assert len(notes) == 1 and notes[0].startswith("isoflow "), notes
+        assert notes[0].endswith(HINT) == hinted, notes
+        assert "solid angles" in notes[0] or not hinted
+    assert not any("solid angles" in n for n in piped_notes(*argv, "--fill", "shell"))
+
+
+def test_a_label_image_s_time_note_offers_the_fills_where_a_mesh_sums_solid_angles(tmp_path, piped_notes):
+    """Several meshes into one label image: two closed meshes get no hint;
+    an open one (a cap whose solid angles are summed) gets it. The core
+    tells each mesh's rule as it begins that mesh, so the open one comes
+    first here: a note said while only closed meshes have run knows of no
+    cap yet (nor does its estimate, taken from their pace)."""
+    closed, open_ = str(MESHES / "torus.obj"), str(MESHES / "cube_no_bottom.obj")
+    out = str(tmp_path / "labels.nii.gz")
+    notes = piped_notes("voxelize", closed, str(MESHES / "rabbit.obj"), "--resolution", "24", "-o", out)
+    assert len(notes) == 1 and "solid angles" not in notes[0], notes
+    notes = piped_notes("voxelize", open_, closed, "--resolution", "24", "-o", out, "--force")
+    assert len(notes) == 1 and notes[0].endswith(HINT), notes

@@ -434,7 +434,7 @@ def test_the_time_note_takes_the_pace_after_the_first_share(capsys, monkeypatch)
 
     clock = [0.0]
     monkeypatch.setattr(time, "monotonic", lambda: clock[0])
-    show = bar.time_note(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
+    show = bar.TimeNote(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
     for t, done in ((30.0, 0), (40.0, 1), (41.0, 2), (42.0, 3), (50.0, 11), (60.0, 21)):
         clock[0] = t
         show(done, 100)
@@ -457,7 +457,7 @@ def test_the_time_note_takes_the_pace_over_a_whole_piece(capsys, monkeypatch):
 
     clock = [0.0]
     monkeypatch.setattr(time, "monotonic", lambda: clock[0])
-    show = bar.time_note(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
+    show = bar.TimeNote(argparse.Namespace(command="voxelize", quiet=False), "voxelize")
     reports = [(6.0, 0), (40.0, 0), (76.2, 1), (77.0, 3), (78.3, 3), (100.0, 3), (146.4, 3), (146.5, 5), (151.3, 7)]
     for t, done in reports:
         clock[0] = t

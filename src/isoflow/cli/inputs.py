@@ -52,7 +52,10 @@ def mesh_fill(args: argparse.Namespace) -> str:
 def fill_hint(args: argparse.Namespace) -> str | None:
     """What to say when the winding rule will take long (a mesh whose
     boundary runs everywhere, summed solid angle by solid angle): the
-    fills that sum none."""
+    fills that sum none. Chosen before the mesh is read, so the time note
+    (:class:`~isoflow.cli.progress.TimeNote`) says it only where the core
+    tells that the rule does sum solid angles: on a closed mesh (the
+    scanline alone) these fills take as long."""
     if mesh_fill(args) != "winding":
         return None
     return "--fill flood (the shell and what it encloses) or --fill shell sum no solid angles and take far less"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import sys
+import time
 from collections.abc import Callable, Iterator
 
 #: the bar once the total is known: the share done and the time left (the
@@ -26,11 +27,11 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     terminal keeps only the results. A ``total`` of None gives a counter
     (the flow, whose length is not known in advance). With ``estimate``
     (work whose shares are alike, as the voxeliser's pieces), a pipe gets
-    :func:`time_note` instead of nothing, with ``hint`` (what would take
-    less) after its estimate.
+    a :class:`TimeNote` instead of nothing, with ``hint`` (what would take
+    less) after its estimate where the core says its rule sums solid angles.
     """
     if args.quiet or not sys.stderr.isatty():
-        yield time_note(args, label, hint) if estimate and not args.quiet else None
+        yield TimeNote(args, label, hint) if estimate and not args.quiet else None
         return
     from tqdm import tqdm
 
@@ -69,12 +70,13 @@ def reading_back(path) -> Iterator[None]:
         raise KeyboardInterrupt(f"{path} is written, not read back (--no-check skips the read-back)") from None
 
 
-def time_note(args: argparse.Namespace, label: str, hint: str | None = None) -> Progress:
+class TimeNote:
     """A ``progress(done, total)`` callback for a pipe or a log: once the
     work has run :data:`NOTE_AFTER` seconds past its first finished share,
     if the pace since then says that the whole will take :data:`NOTE_LONG`
     seconds or more, one note line with the estimate (and nothing more, so
-    logs stay short), ending with ``hint`` where given.
+    logs stay short), ending with ``hint`` where given and the core has
+    told (:meth:`rule`) that its winding rule sums solid angles.
 
     The pace is taken from the first report with work done on, not from
     the start: before it lie the reading of the mesh and numba's loading or
@@ -86,39 +88,58 @@ def time_note(args: argparse.Namespace, label: str, hint: str | None = None) -> 
     together and end them in bursts, so two pieces ending a second apart
     after 70 s each made a job of five hours read as one of 18 minutes,
     and read just before the next burst, as one of ten hours.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> note = TimeNote(argparse.Namespace(command="voxelize"), "voxelize", hint="--fill shell is quicker")
+    >>> note.rule(False); note.solid_angles
+    False
+    >>> note.rule(True); note.rule(False); note.solid_angles
+    True
     """
-    import time
 
-    start = time.monotonic()
-    begun: list[float] = []
-    first: list[tuple[float, int]] = []
-    seen = [0]
-    said: list[bool] = []
+    def __init__(self, args: argparse.Namespace, label: str, hint: str | None = None):
+        self.command, self.label, self.hint = args.command, label, hint
+        #: whether any mesh's winding rule sums solid angles, as the core
+        #: tells it: only then do the fills of ``hint`` take less
+        self.solid_angles = False
+        self.start = time.monotonic()
+        self.begun: float | None = None
+        self.first: tuple[float, int] | None = None
+        self.seen = 0
+        self.said = False
 
-    def show(done: int, total: int | None) -> None:
-        if said or not total:
+    def rule(self, solid_angles: bool) -> None:
+        """What the core tells of a mesh before filling it
+        (:class:`~isoflow.mesh.voxelize.RuleProgress`): whether its
+        winding rule sums solid angles. Of several meshes, one that does
+        is enough for the hint."""
+        self.solid_angles = self.solid_angles or solid_angles
+
+    def __call__(self, done: int, total: int | None) -> None:
+        if self.said or not total:
             return
         now = time.monotonic()
-        if not begun:
-            begun.append(now)
-        ended, seen[0] = done > seen[0], done  # a share ended just now
+        if self.begun is None:
+            self.begun = now
+        ended, self.seen = done > self.seen, done  # a share ended just now
         if done <= 0:
             return
-        if not first:
-            first.append((now, done))
+        if self.first is None:
+            self.first = (now, done)
             return
-        t0, d0 = first[0]
-        if not ended or done <= d0 or now - t0 < max(NOTE_AFTER, t0 - begun[0]):
+        t0, d0 = self.first
+        if not ended or done <= d0 or now - t0 < max(NOTE_AFTER, t0 - self.begun):
             return
-        said.append(True)
-        elapsed = now - start
+        self.said = True
+        elapsed = now - self.start
         whole = elapsed + (now - t0) / (done - d0) * (total - done)
         if whole >= NOTE_LONG:
-            print(f"isoflow {args.command}: note: {label} will take about {duration(whole)} in all "
+            hint = self.hint if self.solid_angles else None
+            print(f"isoflow {self.command}: note: {self.label} will take about {duration(whole)} in all "
                   f"({100 * done / total:.0f} % done in {duration(elapsed)})" + (f"; {hint}" if hint else ""),
                   file=sys.stderr, flush=True)
-
-    return show
 
 
 def duration(seconds: float) -> str:

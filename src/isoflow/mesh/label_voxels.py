@@ -43,7 +43,7 @@ from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill
 from .grid import check_grid_memory, voxel_grid
 from .load import mesh_bbox
-from .voxelize import PROGRESS_UNITS, voxelize
+from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
 
 #: how the voxels inside two or more meshes are labelled
 Overlap = Literal["later", "error"]
@@ -203,7 +203,10 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         the label array, a bit per voxel and the largest mesh's block are
         refused up front when they exceed it.
     progress
-        Optional ``callable(done, total)`` as the meshes are voxelised.
+        Optional ``callable(done, total)`` as the meshes are voxelised; one
+        with a ``rule`` method too
+        (:class:`~isoflow.mesh.voxelize.RuleProgress`) is told, before each
+        mesh is filled, whether the winding rule sums its solid angles.
 
     Returns
     -------
@@ -249,7 +252,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     pairs: dict[tuple[int, int], int] = {}
     notes = []
     for n, (body, window) in enumerate(zip(bodies, windows), 1):
-        step = None if progress is None else _share(progress, n - 1, len(bodies))
+        step = None if progress is None else _Share(progress, n - 1, len(bodies))
         try:
             r = voxelize(body.vertices, body.faces, pitch=pitch, grid=(origin, shape), window=window, fill=fill,
                          strict=strict, max_bytes=budget - fixed, progress=step, details=True)
@@ -274,10 +277,19 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     return _with_note(result)
 
 
-def _share(progress, n: int, count: int):
-    """Mesh n's progress (from 0) as a share of the whole."""
-    return lambda done, total: progress(n * PROGRESS_UNITS + done * PROGRESS_UNITS // max(1, total),
-                                        count * PROGRESS_UNITS)
+class _Share:
+    """Mesh n's progress (from 0) as a share of the whole, and what
+    :func:`voxelize` tells of its rule, passed on
+    (:class:`~isoflow.mesh.voxelize.RuleProgress`)."""
+
+    def __init__(self, progress: Callable[[int, int], object], n: int, count: int):
+        self.progress, self.n, self.count = progress, n, count
+
+    def __call__(self, done: int, total: int) -> None:
+        self.progress(self.n * PROGRESS_UNITS + done * PROGRESS_UNITS // max(1, total), self.count * PROGRESS_UNITS)
+
+    def rule(self, solid_angles: bool) -> None:
+        tell_rule(self.progress, solid_angles)
 
 
 def overlap_text(r: LabelVoxelization) -> str:

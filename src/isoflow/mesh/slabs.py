@@ -106,7 +106,10 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
     max_bytes : int, optional
         The memory budget the slabs must fit in.
     progress : callable, optional
-        ``progress(done, total)``, called per slab (local schedulers).
+        ``progress(done, total)``, called per slab (local schedulers); one
+        with a ``rule`` method too
+        (:class:`~isoflow.mesh.voxelize.RuleProgress`) is told, before the
+        slabs, whether the winding rule sums solid angles.
     details : bool
         Also return the :class:`~isoflow.mesh.fills.Voxelization` (its
         volume None); without it, its note is issued as a
@@ -127,7 +130,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
     True
     """
     from .fills import check_fill
-    from .voxelize import Solid, plan_voxels, say_note, voxelization
+    from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
     fill = check_fill(fill)
     path = check_store_path(path, force)
@@ -155,6 +158,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
     except IsoflowError as exc:
         raise exc.at(where) from None  # a refused grid keeps its kind and its command-line words
     import_dask()  # where dask is missing: the message that names the extra
+    tell_rule(progress, plan.solid_angles)
     zarr = import_zarr()
     from dask import delayed
     from dask.callbacks import Callback

@@ -36,7 +36,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Callable
-from typing import Literal, overload
+from typing import Literal, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -50,6 +50,68 @@ from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincide
 
 #: a progress callback: ``progress(done, total)``
 Progress = Callable[[int, int], object]
+
+
+@runtime_checkable
+class RuleProgress(Protocol):
+    """A ``progress(done, total)`` callback that is also told, per mesh,
+    whether the winding rule sums solid angles.
+
+    The voxelisers (:func:`voxelize`, :func:`voxelize_mesh`,
+    :func:`voxelize_file`, :func:`~isoflow.mesh.slabs.voxelize_to_zarr`,
+    :func:`~isoflow.mesh.label_voxels.voxelize_meshes`) call ``rule`` once
+    per mesh, after it is read and closed and before its voxels are
+    filled, where the callback has that method; a plain function is only
+    called with ``(done, total)``. ``solid_angles`` is True where the
+    winding rule sums the solid angles of the cap that closes the mesh's
+    boundary chain, the work that the shell and the flood fill do without;
+    False for a closed mesh (the exact scanline alone) and for those fills.
+    A caller can then say how the work could be cut only where it can.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> class Told:
+    ...     def __init__(self):
+    ...         self.said = []
+    ...     def __call__(self, done, total):
+    ...         pass
+    ...     def rule(self, solid_angles):
+    ...         self.said.append(solid_angles)
+    >>> box, told = trimesh.creation.box((2, 2, 2)), Told()
+    >>> isinstance(told, RuleProgress)
+    True
+    >>> _ = voxelize(box.vertices, box.faces, resolution=4, progress=told, details=True)
+    >>> _ = voxelize(box.vertices, box.faces[2:], resolution=4, progress=told, details=True)  # a side open
+    >>> told.said
+    [False, True]
+    """
+
+    def __call__(self, done: int, total: int) -> object: ...
+
+    def rule(self, solid_angles: bool) -> object: ...
+
+
+def tell_rule(progress: object, solid_angles: bool) -> None:
+    """Tell ``progress`` whether the winding rule sums solid angles, where
+    it listens (a :class:`RuleProgress`); nothing for a plain callback or
+    None.
+
+    Examples
+    --------
+    >>> told = []
+    >>> class Listening:
+    ...     def __call__(self, done, total):
+    ...         pass
+    ...     def rule(self, solid_angles):
+    ...         told.append(solid_angles)
+    >>> tell_rule(Listening(), True); tell_rule(print, True); tell_rule(None, True)
+    >>> told
+    [True]
+    """
+    if isinstance(progress, RuleProgress):
+        progress.rule(solid_angles)
+
 
 #: default resolution when a mesh is given to a command without --pitch/--resolution
 DEFAULT_RESOLUTION = 64
@@ -237,6 +299,13 @@ class VoxelPlan:
 
             self.shell = ShellGrid(Tm, grid_planes(self.origin, self.pitch, self.shape, self.start))
 
+    @property
+    def solid_angles(self) -> bool:
+        """Whether the winding rule sums the solid angles of a cap (the
+        mesh has a boundary chain); False for a closed mesh, which the
+        scanline alone decides, and for the shell."""
+        return self.fill_rule == "winding" and len(self.tree.T) > 0
+
     def fill(self, xa: int, xb: int, out=None, stats=None, threads: int = 1, progress=None) -> np.ndarray:
         """The volume of slab ``[xa, xb)`` (first axis): by the winding rule
         (``progress(done, total)`` as the cap's rule advances), or the shell
@@ -269,7 +338,7 @@ class VoxelPlan:
         if self.fill_rule != "winding":
             return 0
         _, ny, nz = self.shape
-        rule = rows * ny * nz if len(self.tree.T) else 0
+        rule = rows * ny * nz if self.solid_angles else 0
         return self.grid.pairs() * PAIR_BYTES + 16 * rows * ny + rule
 
     def slabs(self, voxels: int | None = None) -> list[tuple[int, int]]:
@@ -278,7 +347,7 @@ class VoxelPlan:
         without a cap, which need no temporaries of a slab's size and whose
         every slab looks at each triangle)."""
         if voxels is None:
-            voxels = SLAB_VOXELS if self.fill_rule == "winding" and len(self.tree.T) else 8 * SLAB_VOXELS
+            voxels = SLAB_VOXELS if self.solid_angles else 8 * SLAB_VOXELS
         nx, ny, nz = self.shape
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
@@ -427,7 +496,9 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         a zarr store (:func:`~isoflow.mesh.slabs.voxelize_to_zarr`).
     progress
         Optional ``callable(done, total)``, called as the work advances
-        (``PROGRESS_UNITS`` per slab).
+        (``PROGRESS_UNITS`` per slab); one with a ``rule`` method too
+        (:class:`RuleProgress`) is told, before the work, whether the
+        winding rule sums solid angles.
     details
         Return a :class:`~isoflow.mesh.fills.Voxelization` (the volume and
         what was found in the mesh) instead of ``(volume, origin, pitch)``;
@@ -501,6 +572,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     if not fits:
         raise refuse(temp)
     assert plan is not None
+    tell_rule(progress, plan.solid_angles)
     slabs = plan.slabs()
     vol = np.zeros(shape, dtype=bool)  # the sweep writes only the voxels inside
     stats = np.zeros(4, dtype=np.int64)  # see scanline._sweep: the last three add up to the voxels in
