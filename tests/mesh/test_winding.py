@@ -328,6 +328,23 @@ def test_zarr_store_equals_the_in_memory_volume(tmp_path, name, res, chunks):
     assert calls and calls[-1][0] == calls[-1][1] == -(-ref.shape[0] // z.chunks[0])
 
 
+def test_zarr_store_of_a_trimesh_object_equals_its_arrays(tmp_path):
+    """A mesh in memory is a (vertices, faces) pair or a trimesh.Trimesh,
+    as every voxeliser takes it; anything else is one line."""
+    import trimesh
+
+    from isoflow.mesh.slabs import voxelize_to_zarr
+
+    mesh = trimesh.load(MESHES / "target.obj", process=False)
+    ref, _, _ = voxelize(mesh.vertices, mesh.faces, resolution=23)
+    out = voxelize_to_zarr(mesh, tmp_path / "t.zarr", resolution=23, chunks=(5, 7, 9))
+    assert out["voxels"] == int(ref.sum())
+    assert zarr.open_group(str(tmp_path / "t.zarr"), mode="r").attrs["source"] == "mesh"
+    assert np.array_equal(zarr.open_group(str(tmp_path / "t.zarr"), mode="r")["0"][:], ref)
+    with pytest.raises(isoflow.IsoflowError, match=r"^mesh: a mesh is a file, a \(vertices, faces\) pair"):
+        voxelize_to_zarr(3, tmp_path / "n.zarr", resolution=8)
+
+
 def test_zarr_store_on_a_distributed_cluster(tmp_path):
     """The slab tasks run in worker processes of a dask.distributed cluster
     (the plan is pickled to them) and write the same store."""

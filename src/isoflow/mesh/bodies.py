@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .load import check_mesh, load_mesh, mesh_bbox, trimesh_load, weld
+from .load import check_mesh, load_mesh, mesh_arrays, mesh_bbox, trimesh_load, weld
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -67,20 +67,11 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
             bodies += file_bodies(mesh, split)
         else:
             where = f"mesh {n}"  # arrays are taken as they are, not welded (as voxelize_mesh takes them)
-            v, f = check_mesh(*((mesh.vertices, mesh.faces) if hasattr(mesh, "faces") else _pair(mesh, where)), where)
+            v, f = check_mesh(*mesh_arrays(mesh, where), where)
             bodies += connected_bodies(v, f, where) if split else [Body(where, v, f)]
     if not bodies:
         raise IsoflowError("voxelize: no meshes given")
     return bodies
-
-
-def _pair(mesh, where: str):
-    try:
-        v, f = mesh
-    except (TypeError, ValueError):
-        raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, "
-                           f"got {type(mesh).__name__}") from None
-    return v, f
 
 
 def file_bodies(path, split: bool) -> list[Body]:

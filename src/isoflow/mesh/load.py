@@ -309,18 +309,34 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     """
     if isinstance(mesh, (str, os.PathLike)):
         return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
-    if isinstance(mesh, tuple) and len(mesh) == 2:
-        vertices, faces = mesh
-    elif hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
-        vertices, faces = mesh.vertices, mesh.faces
-    else:
-        raise IsoflowError(f"mesh: expected a file name, a (vertices, faces) pair or an object with vertices and "
-                           f"faces, got {type(mesh).__name__}")
+    vertices, faces = mesh_arrays(mesh, "mesh")
     v, f = check_mesh(vertices, faces, where="mesh")
     v, f = weld(v, f, float(merge_rtol), where="mesh", stats=stats)
     if len(f) == 0:
         raise IsoflowError("mesh: empty mesh (every face is degenerate)")
     return "mesh", v, f
+
+
+def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
+    """The vertices and faces of a mesh in memory, as given (unchecked): a
+    ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
+    (a ``trimesh.Trimesh``); IsoflowError naming ``where`` otherwise.
+
+    Examples
+    --------
+    >>> mesh_arrays(([[0, 0, 0]], [[0, 0, 0]]), "mesh 1")
+    ([[0, 0, 0]], [[0, 0, 0]])
+    >>> mesh_arrays(3, "mesh 2")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, got int
+    """
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return mesh.vertices, mesh.faces
+    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        return mesh[0], mesh[1]
+    raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, "
+                       f"got {type(mesh).__name__}")
 
 
 def _read(p: Path, ext: str):

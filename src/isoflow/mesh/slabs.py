@@ -38,7 +38,7 @@ from ..scale.chunks import compute, import_dask, import_zarr
 from .fills import Fill, Voxelization
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
-from .load import load_mesh
+from .load import load_mesh, mesh_arrays
 from .outputs import atomic_path, check_writable_dir
 from .store_plan import WORKERS, in_store, slab_chunks, slab_layout, store_need
 
@@ -74,7 +74,7 @@ def _slab_task(plan, store: str, xa: int, xb: int):
     return int(np.count_nonzero(vol)), stats
 
 
-def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], path: str | os.PathLike, *,
+def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
                      pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
                      strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
                      scheduler: Callable | None = None, max_bytes: int | None = None,
@@ -91,8 +91,9 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
 
     Parameters
     ----------
-    source : str, os.PathLike or (vertices, faces)
-        A mesh file, or the mesh's arrays.
+    source : str, os.PathLike, (vertices, faces) or object with ``vertices`` and ``faces``
+        A mesh file, or the mesh's arrays (a ``trimesh.Trimesh``), taken as
+        :func:`~isoflow.mesh.voxelize.voxelize` takes them.
     path : str or os.PathLike
         The store to write (a directory ``NAME.zarr``).
     pitch, resolution, fill, strict
@@ -135,7 +136,8 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike], pa
     fill = check_fill(fill)
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"
-    v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else source  # names the file itself
+    # a file names itself in its errors
+    v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
         budget = memory.default_budget() if max_bytes is None else int(max_bytes)
