@@ -1,4 +1,4 @@
-"""The NumPy readers of plain STL and OBJ files against trimesh's path:
+"""The NumPy readers of plain STL, OBJ and PLY files against trimesh's path:
 every file the fast path accepts loads to the same arrays as through
 trimesh (after the weld), and a command on a plain file never imports
 trimesh."""
@@ -15,7 +15,7 @@ import pytest
 import trimesh
 
 from isoflow.errors import IsoflowError
-from isoflow.mesh import readers
+from isoflow.mesh import ply, readers
 from isoflow.mesh.load import load_mesh
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -32,7 +32,13 @@ def _files():
 def _through_trimesh(p: Path, monkeypatch):
     with monkeypatch.context() as m:
         m.setattr(readers, "read_simple", lambda path: None)
+        m.setattr(ply, "read_ply", lambda data: None)
         return _load(p)
+
+
+def _fast(p: Path):
+    """What the NumPy reader of the file's kind gives (None: trimesh's turn)."""
+    return ply.read_ply(p.read_bytes()) if p.suffix.lower() == ".ply" else readers.read_simple(p)
 
 
 def _load(p: Path):
@@ -48,7 +54,7 @@ def _same(p: Path, monkeypatch, *, fast: bool | None = None):
     """Both paths give the same arrays, stats or error line; ``fast`` says
     whether the NumPy reader must accept the file."""
     if fast is not None:
-        assert (readers.read_simple(p) is not None) == fast, p
+        assert (_fast(p) is not None) == fast, p
     a, b = _load(p), _through_trimesh(p, monkeypatch)
     if isinstance(b, str):
         assert a == b
@@ -65,9 +71,10 @@ def test_mesh_files_load_as_through_trimesh(path, monkeypatch):
     _same(path, monkeypatch)
 
 
-def test_the_sample_obj_and_stl_files_take_the_fast_path():
-    taken = [p.name for p in _files() if readers.read_simple(p) is not None]
-    assert {"soup.obj", "rabbit.obj", "torus.obj", "panel.obj", "featuretype.STL"} <= set(taken)
+def test_the_sample_obj_stl_and_ply_files_take_the_fast_path():
+    taken = [p.name for p in _files() if _fast(p) is not None]
+    assert {"soup.obj", "rabbit.obj", "torus.obj", "panel.obj", "featuretype.STL", "bob_small.ply",
+            "spot.ply"} <= set(taken)
 
 
 QUAD = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
@@ -231,4 +238,114 @@ def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
                         "--resolution", "16", "-o", str(out), "--quiet"],
                        capture_output=True, text=True, env=dict(os.environ), check=True)
     assert out.exists()
+    assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
+# PLY: a header, then the vertex and face elements as text or binary records
+
+PLY_TYPES = {"float": "f4", "double": "f8", "uchar": "u1", "ushort": "u2", "int": "i4", "uint": "u4"}
+
+
+def _ply(v, faces, form="ascii", vtype="float", count="uchar", index="int", extra=(), face_extra="",
+         texture=False, more="", newline="\n") -> bytes:
+    """A PLY file of vertices (with ``extra`` properties of value 7) and
+    polygons; ``face_extra`` and ``more`` add a face property and an
+    element, ``texture`` texture coordinates."""
+    names = ["x", "y", "z", *extra] + (["s", "t"] if texture else [])
+    cols = np.column_stack([np.asarray(v, float)] + [np.full(len(v), 7.0)] * (len(names) - 3))
+    head = ["ply", f"format {form} 1.0", "comment generated", f"element vertex {len(v)}"]
+    head += [f"property {vtype} {n}" for n in names]
+    head += [f"element face {len(faces)}", f"property list {count} {index} vertex_indices"]
+    head += [f"property uchar {face_extra}"] if face_extra else []
+    head += [more] if more else []
+    head += ["end_header"]
+    data = (newline.join(head) + newline).encode()
+    if form == "ascii":
+        rows = [" ".join(repr(float(x)) for x in row) for row in cols]
+        rows += [" ".join(map(str, [len(f), *f] + ([1] if face_extra else []))) for f in faces]
+        return data + (newline.join(rows) + newline).encode()
+    e = "<" if form == "binary_little_endian" else ">"
+    data += np.asarray(cols, e + PLY_TYPES[vtype]).tobytes()
+    for f in faces:
+        data += np.asarray([len(f)], e + PLY_TYPES[count]).tobytes() + np.asarray(f, e + PLY_TYPES[index]).tobytes()
+        data += b"\1" if face_extra else b""
+    return data
+
+
+def _polygons(rng, nv: int, sizes) -> list:
+    return [rng.choice(nv, int(s), replace=False).tolist() for s in sizes]
+
+
+@pytest.mark.parametrize("form", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_generated_ply_loads_as_trimesh_reads_it(form, tmp_path, monkeypatch):
+    """Random files of every kind trimesh reads: the same arrays (each
+    coordinate rounded to its declared type, the polygons split in
+    trimesh's order), checked on the reader's output itself and after
+    load_mesh's weld."""
+    rng = np.random.default_rng(11)
+    p = tmp_path / "m.ply"
+    for trial in range(24):
+        nv = int(rng.integers(6, 30))
+        v = rng.normal(size=(nv, 3)) * 10.0 ** int(rng.integers(-3, 4))
+        sizes = [np.full(9, 3), np.full(9, 4), np.full(7, 5), rng.integers(3, 7, 12)][trial % 4]
+        if form != "ascii" and trial % 4 == 3:
+            continue  # polygons of several sizes: trimesh cannot read them binary (below)
+        kw = dict(vtype=("float", "double")[trial % 2], count=("uchar", "int", "ushort")[trial % 3],
+                  index=("int", "uint")[trial // 3 % 2], extra=("quality",) * (trial % 3 == 1),
+                  newline="\r\n" if trial % 5 == 4 and form == "ascii" else "\n")
+        p.write_bytes(_ply(v, _polygons(rng, nv, sizes), form, **kw))
+        ours = ply.read_ply(p.read_bytes())
+        theirs = trimesh.load(p, process=False, force="mesh")
+        assert ours is not None, (trial, kw)
+        assert ours[0].dtype == np.float64 and ours[1].dtype == np.int64
+        np.testing.assert_array_equal(ours[0], theirs.vertices)
+        np.testing.assert_array_equal(ours[1], theirs.faces)
+        _same(p, monkeypatch, fast=True)
+
+
+def test_binary_ply_of_polygons_of_several_sizes_reads_as_its_ascii_twin(tmp_path):
+    """trimesh reads a binary file's faces as all the size of the first
+    ("PLY is unexpected length"): isoflow reads it, to what trimesh gives
+    for the same file in ASCII."""
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=(20, 3))
+    faces = _polygons(rng, 20, rng.integers(3, 8, 15))
+    (tmp_path / "a.ply").write_bytes(_ply(v, faces, "ascii", "double"))
+    (tmp_path / "b.ply").write_bytes(_ply(v, faces, "binary_big_endian", "double", "ushort", "uint"))
+    with pytest.raises(Exception, match="unexpected length"):
+        trimesh.load(tmp_path / "b.ply", process=False, force="mesh")
+    twin = trimesh.load(tmp_path / "a.ply", process=False, force="mesh")
+    v2, f2 = ply.read_ply((tmp_path / "b.ply").read_bytes())
+    np.testing.assert_array_equal(v2, twin.vertices)
+    np.testing.assert_array_equal(f2, twin.faces)
+
+
+@pytest.mark.parametrize("case", ["texture", "face property", "edge element", "two-corner face", "index past the end",
+                                  "truncated", "no faces"])
+def test_ply_the_reader_leaves_to_trimesh(case, tmp_path, monkeypatch):
+    """What trimesh reads differently (texture seams split vertices) or
+    refuses: the reader says None, and the file loads, or fails, as
+    through trimesh."""
+    rng = np.random.default_rng(2)
+    v = rng.normal(size=(8, 3))
+    faces = _polygons(rng, 8, [3, 3, 3])
+    kw: dict = {"texture": dict(texture=True), "face property": dict(face_extra="flags"),
+                "edge element": dict(more="element edge 0\nproperty int vertex1\nproperty int vertex2")}.get(case, {})
+    if case == "two-corner face":
+        faces[1] = faces[1][:2]
+    if case == "index past the end":
+        faces[2][1] = 8
+    data = _ply(v, faces if case != "no faces" else [], "binary_little_endian", **kw)
+    p = tmp_path / "m.ply"
+    p.write_bytes(data[:-5] if case == "truncated" else data)
+    assert ply.read_ply(p.read_bytes()) is None
+    _same(p, monkeypatch)
+
+
+def test_a_command_on_a_plain_ply_does_not_import_trimesh(tmp_path):
+    code = ("import sys; from isoflow.cli import main\n"
+            "assert main(sys.argv[1:]) == 0\n"
+            "print(sorted(m for m in sys.modules if m.split('.')[0] == 'trimesh'))")
+    r = subprocess.run([sys.executable, "-c", code, "info", str(ROOT / "meshes/bob_small.ply"), "--resolution", "16",
+                        "--quiet"], capture_output=True, text=True, env=dict(os.environ), check=True)
     assert r.stdout.strip().splitlines()[-1] == "[]"

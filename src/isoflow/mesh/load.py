@@ -362,11 +362,19 @@ def _read(p: Path, ext: str):
 
 
 def _read_simple(p: Path):
-    """A plain STL or OBJ read with NumPy alone (no trimesh import), or None."""
+    """A plain STL, OBJ or PLY read with NumPy alone (no trimesh import), or None."""
     from .readers import read_simple
 
     check_mesh_file(p)
-    return read_simple(p)
+    if p.suffix.lower() != ".ply":
+        return read_simple(p)
+    from .ply import read_ply
+
+    try:
+        data = p.read_bytes()
+    except OSError:
+        return None  # trimesh's path says what is wrong with the file
+    return read_ply(data)
 
 
 def check_mesh_file(p: Path) -> None:

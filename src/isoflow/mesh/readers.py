@@ -1,5 +1,6 @@
 """Plain NumPy readers for the simplest mesh files: binary and ASCII STL,
-and OBJ files of vertices and faces.
+and OBJ files of vertices and faces (PLY: :mod:`isoflow.mesh.ply`, on
+this module's helpers).
 
 Each reader returns exactly the vertices and faces that ``trimesh.load``
 (``process=False``, ``force="mesh"``) gives for the file, or ``None`` for
@@ -88,7 +89,7 @@ def _read_stl_ascii(data: bytes) -> Mesh | None:
         return None
     if any(len(c) != 3 for c in corners):
         return None
-    v = _numbers(b" ".join(b" ".join(c) for c in corners), np.float64, 3 * len(corners))
+    v = numbers(b" ".join(b" ".join(c) for c in corners), np.float64, 3 * len(corners))
     return None if v is None else _soup(v.reshape(-1, 3))
 
 
@@ -132,10 +133,10 @@ def read_obj(data: bytes) -> Mesh | None:
     if not _only_ignored(rest):
         return None
     v_text = _tails(a, starts, ends, is_v)
-    if not (_words_per_line(v_text) == 3).all():
+    if not (words_per_line(v_text) == 3).all():
         return None  # four or six numbers a line: trimesh's w or colours
     v_text[v_text == 10] = 32  # the lines' numbers as one line
-    v = _numbers(v_text.tobytes(), np.float64, 3 * len(v_at))
+    v = numbers(v_text.tobytes(), np.float64, 3 * len(v_at))
     if v is None:
         return None
     first_line = data[starts[f_at[0]] + 2:ends[f_at[0]]]
@@ -176,9 +177,15 @@ def _tails(a: np.ndarray, starts: np.ndarray, ends: np.ndarray, which: np.ndarra
     return text[:-1] if len(text) and text[-1] == 10 else text
 
 
-def _words_per_line(text: np.ndarray) -> np.ndarray:
+def words_per_line(text: np.ndarray) -> np.ndarray:
     """The number of words ``bytes.split`` finds on each line of ``text``
-    (bytes, lines ended by newlines; no carriage returns)."""
+    (bytes, lines ended by newlines; no carriage returns).
+
+    Examples
+    --------
+    >>> words_per_line(np.frombuffer(b"3 0 1 2\\n\\n 4  0 1 2 3", np.uint8)).tolist()
+    [4, 0, 5]
+    """
     space = _SPACE[text]
     start = np.flatnonzero(~space & np.r_[True, space[:-1]])
     newline = np.flatnonzero(text == 10)
@@ -221,13 +228,19 @@ def _table(rows: list[list[bytes]]) -> bool:
     if not rows:
         return True
     n = len(rows[0])
-    return all(len(r) == n for r in rows) and _numbers(b" ".join(w for r in rows for w in r), np.float64,
+    return all(len(r) == n for r in rows) and numbers(b" ".join(w for r in rows for w in r), np.float64,
                                                        n * len(rows)) is not None
 
 
-def _numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
+def numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
     """``count`` numbers parsed as trimesh parses them (``np.fromstring``),
-    or None where the text holds anything else."""
+    or None where the text holds anything else.
+
+    Examples
+    --------
+    >>> numbers(b"1 2.5e0\\n-3", np.float64, 3).tolist(), numbers(b"1 x", np.float64, 2)
+    ([1.0, 2.5, -3.0], None)
+    """
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)  # text it cannot read to its end
@@ -250,7 +263,7 @@ def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, nv: int, *, ne
         return None
     per = (1, 2, 2, 3)[form]  # numbers per corner: i; i/j; i//k; i/j/k
     text[text == 47] = 32
-    nums = _numbers(text.tobytes(), np.int64, per * int(sizes.sum()))
+    nums = numbers(text.tobytes(), np.int64, per * int(sizes.sum()))
     if nums is None:
         return None
     flat = nums[::per]
@@ -259,7 +272,7 @@ def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, nv: int, *, ne
     negative = flat < 0
     if negative.any() and (not negatives_ok or (form != 0 and not negative.all())):
         return None  # trimesh sorts texture-split corners by raw index: negatives before the others
-    return _triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes)
+    return triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes)
 
 
 class BadFaceIndex(ValueError):
@@ -371,11 +384,19 @@ def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:
     return np.bincount(np.searchsorted(newline, start), minlength=n_lines)
 
 
-def _triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+def triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
     """Polygons (corners ``flat``, ``sizes[i]`` corners each) as trimesh
     splits them: a file of quads only as all first halves, then all second
     halves; otherwise each polygon in turn as a fan from its first corner
-    (a quad among others as (0, 1, 2), (2, 3, 0))."""
+    (a quad among others as (0, 1, 2), (2, 3, 0)).
+
+    Examples
+    --------
+    >>> triangulate(np.arange(8), np.array([4, 4])).tolist()
+    [[0, 1, 2], [4, 5, 6], [2, 3, 0], [6, 7, 4]]
+    >>> triangulate(np.arange(7), np.array([3, 4])).tolist()
+    [[0, 1, 2], [3, 4, 5], [5, 6, 3]]
+    """
     k = int(sizes[0])
     if (sizes == 3).all():
         return flat.reshape(-1, 3)
