@@ -849,3 +849,23 @@ def test_scanline_rows_and_columns_are_searchsorted():
         assert np.array_equal(g.j1, np.searchsorted(g.yc, hi[:, 1], "left"))
         assert np.array_equal(g.i0, np.maximum(np.searchsorted(g.xc, lo[:, 0], "left") - 1, 0))
         assert np.array_equal(g.i1, np.minimum(np.searchsorted(g.xc, hi[:, 0], "right") + 1, n))
+
+
+def test_voxelize_mesh_takes_a_mesh_alone_as_every_voxeliser_does():
+    """A trimesh.Trimesh or a (vertices, faces) pair in place of the two
+    arrays: the same object; a lone array or a file name is one line."""
+    import trimesh
+
+    from isoflow import voxelize_mesh
+
+    mesh = trimesh.creation.torus(1.0, 0.4)
+    ref = voxelize_mesh(mesh.vertices, mesh.faces, resolution=24)
+    for given in (mesh, (mesh.vertices, mesh.faces)):
+        obj = voxelize_mesh(given, resolution=24)
+        assert np.array_equal(obj.volume, ref.volume) and obj.pitch == ref.pitch
+        assert np.array_equal(obj.origin, ref.origin)
+    # the solid's volume, as trimesh measures the mesh (2 pi^2 R r^2)
+    assert ref.voxels * ref.pitch**3 == pytest.approx(mesh.volume, rel=0.03)
+    for bad in (mesh.vertices, "torus.stl"):
+        with pytest.raises(IsoflowError, match="^voxelize: faces are missing"):
+            voxelize_mesh(bad, resolution=8)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import os
 import warnings
 from collections.abc import Callable
-from typing import Literal, Protocol, overload, runtime_checkable
+from typing import Any, Literal, Protocol, overload, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -46,7 +46,7 @@ from ..errors import IsoflowError, MeshNote
 from ..scale import memory
 from .fills import THIN_SHARE, THIN_TRIGGER, UNBOUNDED_SHARE, Fill, Voxelization, check_fill, thin_solid, unbounded_area
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
-from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_defects, orient_faces  # noqa: F401
+from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_arrays, mesh_defects, orient_faces  # noqa: F401
 
 #: a progress callback: ``progress(done, total)``
 Progress = Callable[[int, int], object]
@@ -649,18 +649,18 @@ def say_note(note: str | None, stacklevel: int = 3) -> None:
 
 
 @overload
-def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None,
+def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
                   resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
-def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None,
+def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
                   resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
-def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None,
+def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
                   resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:
@@ -669,7 +669,9 @@ def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None 
     Parameters
     ----------
     vertices, faces
-        As :func:`voxelize`.
+        As :func:`voxelize`; or a mesh alone (a ``trimesh.Trimesh``, any
+        object with ``vertices`` and ``faces``, or a ``(vertices, faces)``
+        pair) in place of ``vertices``, taken as its arrays are.
     pitch, resolution
         At most one; neither: ``resolution=DEFAULT_RESOLUTION``.
     fill, strict, progress
@@ -697,7 +699,14 @@ def voxelize_mesh(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None 
     >>> obj, v = voxelize_mesh(box.vertices, box.faces, resolution=4, fill="flood", details=True)
     >>> obj.voxels, v["fill"], v.note is None
     (64, 'flood', True)
+    >>> voxelize_mesh(box, resolution=4).voxels
+    64
     """
+    if faces is None:
+        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces")):
+            raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
+                               "and faces (a trimesh.Trimesh) alone; a file: voxelize_file(path)")
+        vertices, faces = mesh_arrays(vertices, "voxelize")
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
