@@ -197,5 +197,8 @@ def format_flow(result, name: str) -> str:
         centre = ", ".join(f"{c:g}" for c in lim["center"])
         lines.append(f"  limit: ({centre}), last non-empty state {lim['last_shape']} at step {lim['last_step']}")
     for c in result.topology_changes:
-        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, in {c['where']}")
+        # a store flowed block by block finds changes but does not locate
+        # them (where is None): say so, not "in None"
+        place = "not located (block by block)" if c["where"] is None else f"in {c['where']}"
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
     return "\n".join(lines)
