@@ -60,6 +60,16 @@ def _step_file_pattern() -> re.Pattern:
     return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
 
 
+def replaced_by_run(directory, path) -> bool:
+    """Whether a run into ``directory`` (with ``force``) replaces or removes
+    the file ``path``: a step file of any suffix, flow.csv or a picture
+    there. The command refuses such a file as its input."""
+    out, path = Path(directory), Path(path)
+    if not (out.is_dir() and path.exists()) or not os.path.samefile(out, path.parent):
+        return False
+    return path.name in RUN_FILES or _step_file_pattern().fullmatch(path.name) is not None
+
+
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
     """The per-step figures as CSV columns and rows (bbox as min/max per
     axis); with ``checks`` (step -> :func:`check_surface_file` result, 3D),
