@@ -268,6 +268,18 @@ def test_bad_picture_path_is_refused_before_anything_is_written(tmp_path, capsys
 
 # ------------------------------------------------------- non-regular input
 
+@pytest.mark.parametrize("command,names_labels", [("info", True), ("surface", True), ("flow", False)])
+def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, capsys, command, names_labels):
+    # flow takes --label N, not --labels: its refusal named an option that
+    # the command then refuses as unrecognized
+    labels = np.zeros((5, 5, 5), np.uint8)
+    labels[1:3, 1:3, 1:3], labels[3, 3, 3] = 2, 7
+    np.save(tmp_path / "l.npy", labels)
+    extra = ["-o", tmp_path / "s.ply"] if command == "surface" else []
+    line = fails(capsys, command, tmp_path / "l.npy", *extra, words=("l.npy", "not a binary volume", "--label N"))
+    assert ("--labels" in line) == names_labels
+
+
 def test_device_input_is_refused(capsys):
     # /dev/null stands in for /dev/zero (which would never end) and FIFOs
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))

@@ -186,4 +186,13 @@ def load_input(args: argparse.Namespace):
     if is_volume(args.input):  # anything else is read as a point list
         refuse_points_option(args, "volume")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
-    return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    try:
+        return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    except IsoflowError as exc:
+        from ..mesh.volumes import EVERY_LABEL
+
+        # a label image's refusal names --labels, which flow does not take
+        # (it flows one object): leave it out there
+        if args.command == "flow" and EVERY_LABEL in str(exc):
+            raise IsoflowError(str(exc).replace(f", {EVERY_LABEL}", "")) from None
+        raise
