@@ -280,6 +280,25 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     assert ("--labels" in line) == names_labels
 
 
+@pytest.mark.parametrize("points,cell", [("0 0 0\n-5 3 2\n", "cube has all 8"), ("0 0\n1 0\n", "square has all 4")])
+def test_a_point_list_that_gives_no_voxel_says_why(tmp_path, capsys, points, cell):
+    # points with no cube of the paper's point model among them: the object
+    # is empty although the input is not; it said only "the object is empty"
+    (tmp_path / "p.txt").write_text(points)
+    why = (f"the object is empty: no unit {cell} of its corners among the points (the paper's point model, "
+           "Definitions 1-2); --points-are voxels reads each point as a voxel")
+    fails(capsys, "flow", tmp_path / "p.txt", words=("p.txt", why))
+    if cell.startswith("cube"):
+        fails(capsys, "surface", tmp_path / "p.txt", "-o", tmp_path / "p.ply", words=("p.txt", why))
+        assert not (tmp_path / "p.ply").exists()
+    assert main(["info", str(tmp_path / "p.txt"), "--json"]) == 0  # an empty report, with the reason as a note
+    out, err = capsys.readouterr()
+    assert json.loads(out)["voxels"] == 0
+    assert err.strip().splitlines() == [f"isoflow info: note: {tmp_path / 'p.txt'}: {why.partition(': ')[2]}"]
+    assert main(["flow", str(tmp_path / "p.txt"), "--points-are", "voxels", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == 2
+
+
 def test_device_input_is_refused(capsys):
     # /dev/null stands in for /dev/zero (which would never end) and FIFOs
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))

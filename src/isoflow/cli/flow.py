@@ -7,7 +7,14 @@ import json
 import sys
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option
+from .inputs import (
+    add_connectivity,
+    add_input_arguments,
+    load_input,
+    refuse_mesh_options,
+    refuse_points_option,
+    why_empty,
+)
 from .progress import progress_bar
 
 
@@ -106,7 +113,8 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
                            f"this one is {obj.ndim}D")
     if obj is not None and obj.voxels == 0:
-        raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
+        why = why_empty(args, obj)  # a point list with points: say why none is in
+        raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:

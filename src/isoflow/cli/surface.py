@@ -9,7 +9,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option, thread_count
+from .inputs import (
+    add_connectivity,
+    add_input_arguments,
+    load_input,
+    refuse_mesh_options,
+    refuse_points_option,
+    thread_count,
+    why_empty,
+)
 from .labels import add_labels_option
 
 
@@ -59,7 +67,9 @@ def cmd_surface(args: argparse.Namespace) -> int:
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
     if obj.voxels == 0:
-        raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
+        why = why_empty(args, obj)  # a point list with points: say why none is in
+        raise IsoflowError(f"{args.input}: the object is empty"
+                           + (f": {why}" if why else ", there is no surface to write"))
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
