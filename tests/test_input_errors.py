@@ -299,6 +299,20 @@ def test_a_point_list_that_gives_no_voxel_says_why(tmp_path, capsys, points, cel
     assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == 2
 
 
+@pytest.mark.parametrize("name", ["v.npy", "v.nii.gz", "v.binvox", "v.h5:/seg", "v.zarr"])
+@pytest.mark.parametrize("command", ["voxelize", "genus"])
+def test_a_volume_given_where_a_mesh_is_read_says_so(tmp_path, capsys, name, command):
+    # trimesh said "file_type 'npy' not supported", failed inside its binvox
+    # reader (TypeError), and FILE.h5:/dataset was "file not found"
+    v = np.zeros((4, 4, 4), bool)
+    v[1:3, 1:3, 1:3] = True
+    write_volume(DigitalObject(v), tmp_path / name)
+    extra = ["--pitch", "1", "-o", tmp_path / "out.npy"] if command == "voxelize" else []
+    fails(capsys, command, tmp_path / name, *extra,
+          words=(f"{tmp_path / name}: a volume file, not a triangle mesh; voxelize and genus read meshes",))
+    assert not (tmp_path / "out.npy").exists()
+
+
 def test_device_input_is_refused(capsys):
     # /dev/null stands in for /dev/zero (which would never end) and FIFOs
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))
