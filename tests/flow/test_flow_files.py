@@ -149,3 +149,22 @@ def test_flow_out_force_never_replaces_its_own_input(tmp_path, name, extra):
     rc, stdout, err = run("flow", out / "v.npy", "--out", out, "--force", "--no-check")
     assert rc == 0, err
     assert (out / "v.npy").exists() and (out / "step_000.ply").exists()
+
+
+def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path):
+    # a step volume binvox cannot hold, into a new directory and an empty
+    # one: there is no previous run to keep (it said "the previous run's
+    # files in the directory are unchanged"); over an earlier run it is kept
+    np.save(tmp_path / "img.npy", np.ones((4, 5), bool))
+    (tmp_path / "empty").mkdir()
+    for out in (tmp_path / "new", tmp_path / "empty"):
+        rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", out, "--volumes", ".binvox")
+        assert rc == 2
+        assert err.strip().splitlines() == [
+            f"isoflow flow: error: {out / 'step_000.binvox'}: binvox holds 3D voxels, this object is 2D; nothing was written"]
+    assert not (tmp_path / "new").exists() and not any((tmp_path / "empty").iterdir())
+    assert run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty")[0] == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()}
+    rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".binvox", "--force")
+    assert rc == 2 and err.strip().endswith("; the previous run's files in the directory are unchanged")
+    assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before

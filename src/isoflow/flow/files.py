@@ -175,6 +175,7 @@ class FlowWriter:
     def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999, check: bool = True):
         out = check_output_dir(directory, force)
         self.created = not out.exists()
+        self.had_files = not self.created and any(out.iterdir())  # (a killed run's staging is gone: check_output_dir)
         try:
             out.mkdir(exist_ok=True)
             self.stage = temp_sibling(out / STAGE, directory=True)
@@ -312,7 +313,10 @@ class FlowWriter:
             msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
             if not msg.strip():  # an interrupt between two writes: name the run's directory
                 msg = f"{self.out}: stopped while writing the flow's files"
-            msg = msg.rstrip("; ") + "; the previous run's files in the directory are unchanged"
+            # a directory without files before this run holds no previous run
+            # to keep: there, nothing of the run is left (abort)
+            msg = msg.rstrip("; ") + ("; the previous run's files in the directory are unchanged" if self.had_files
+                                      else "; nothing was written")
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
 
     def _commit(self) -> list:
