@@ -147,6 +147,22 @@ def test_label_image_without_label_says_threshold_or_label(tmp_path, capsys, lab
     fails(capsys, "info", tmp_path / "l.nii.gz", "--label", "4", words=("no voxel has label 4", "0, 3, 5"))
 
 
+def test_a_label_image_refusal_counts_voxels_in_memory_and_per_block_in_a_store(tmp_path, capsys, labels):
+    # it said "N values other than 0 and 1", read as N distinct values; of
+    # a store checked block by block N is the block's count, not the store's
+    np.save(tmp_path / "l.npy", labels)
+    many = int(np.count_nonzero(labels > 1))
+    fails(capsys, "info", tmp_path / "l.npy", words=(f"({many} voxels hold values other than 0 and 1, e.g. ",))
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(5, 5, 5), zarr_format=2)
+    line = fails(capsys, "info", tmp_path / "l.zarr", words=("l.zarr: not a binary volume",))
+    found = re.search(r"\((\d+) voxels in the block at voxel \((\d+), (\d+), (\d+)\) hold values other than 0 and 1", line)
+    assert found, line
+    count, *corner = map(int, found.groups())
+    block = labels[tuple(slice(c, c + 5) for c in corner)]
+    assert count == np.count_nonzero(block > 1) < many
+
+
 def corrupt_files(tmp_path):
     (tmp_path / "junk.tif").write_bytes(b"II*\x00" + b"\xff" * 40)
     (tmp_path / "junk.nii.gz").write_bytes(b"\x1f\x8b\x08\x00garbage")

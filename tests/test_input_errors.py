@@ -268,6 +268,51 @@ def test_bad_picture_path_is_refused_before_anything_is_written(tmp_path, capsys
 
 # ------------------------------------------------------- non-regular input
 
+@pytest.mark.parametrize("command,names_labels", [("info", True), ("surface", True), ("flow", False)])
+def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, capsys, command, names_labels):
+    # flow takes --label N, not --labels: its refusal named an option that
+    # the command then refuses as unrecognized
+    labels = np.zeros((5, 5, 5), np.uint8)
+    labels[1:3, 1:3, 1:3], labels[3, 3, 3] = 2, 7
+    np.save(tmp_path / "l.npy", labels)
+    extra = ["-o", tmp_path / "s.ply"] if command == "surface" else []
+    line = fails(capsys, command, tmp_path / "l.npy", *extra, words=("l.npy", "not a binary volume", "--label N"))
+    assert ("--labels" in line) == names_labels
+
+
+@pytest.mark.parametrize("points,cell", [("0 0 0\n-5 3 2\n", "cube has all 8"), ("0 0\n1 0\n", "square has all 4")])
+def test_a_point_list_that_gives_no_voxel_says_why(tmp_path, capsys, points, cell):
+    # points with no cube of the paper's point model among them: the object
+    # is empty although the input is not; it said only "the object is empty"
+    (tmp_path / "p.txt").write_text(points)
+    why = (f"the object is empty: no unit {cell} of its corners among the points (the paper's point model, "
+           "Definitions 1-2); --points-are voxels reads each point as a voxel")
+    fails(capsys, "flow", tmp_path / "p.txt", words=("p.txt", why))
+    if cell.startswith("cube"):
+        fails(capsys, "surface", tmp_path / "p.txt", "-o", tmp_path / "p.ply", words=("p.txt", why))
+        assert not (tmp_path / "p.ply").exists()
+    assert main(["info", str(tmp_path / "p.txt"), "--json"]) == 0  # an empty report, with the reason as a note
+    out, err = capsys.readouterr()
+    assert json.loads(out)["voxels"] == 0
+    assert err.strip().splitlines() == [f"isoflow info: note: {tmp_path / 'p.txt'}: {why.partition(': ')[2]}"]
+    assert main(["flow", str(tmp_path / "p.txt"), "--points-are", "voxels", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == 2
+
+
+@pytest.mark.parametrize("name", ["v.npy", "v.nii.gz", "v.binvox", "v.h5:/seg", "v.zarr"])
+@pytest.mark.parametrize("command", ["voxelize", "genus"])
+def test_a_volume_given_where_a_mesh_is_read_says_so(tmp_path, capsys, name, command):
+    # trimesh said "file_type 'npy' not supported", failed inside its binvox
+    # reader (TypeError), and FILE.h5:/dataset was "file not found"
+    v = np.zeros((4, 4, 4), bool)
+    v[1:3, 1:3, 1:3] = True
+    write_volume(DigitalObject(v), tmp_path / name)
+    extra = ["--pitch", "1", "-o", tmp_path / "out.npy"] if command == "voxelize" else []
+    fails(capsys, command, tmp_path / name, *extra,
+          words=(f"{tmp_path / name}: a volume file, not a triangle mesh; voxelize and genus read meshes",))
+    assert not (tmp_path / "out.npy").exists()
+
+
 def test_device_input_is_refused(capsys):
     # /dev/null stands in for /dev/zero (which would never end) and FIFOs
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))

@@ -164,3 +164,15 @@ def test_an_interrupted_command_leaves_the_previous_run(tmp_path):
     assert "Traceback" not in err
     assert sorted(p.name for p in out.iterdir()) == ["flow.csv"]
     assert (out / "flow.csv").read_text() == "the previous run\n"
+
+
+def test_command_text_says_changes_are_not_located(tmp_path, capsys):
+    """The table of a store flowed block by block names its topology
+    changes without a place; it printed "in None"."""
+    v = crossing_volume(3)
+    write_volume(DigitalObject(v), tmp_path / "in.zarr")
+    assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "6", "--out", str(tmp_path / "run"),
+                 "--volumes", ".zarr", "-q"]) == 0
+    changes = [line for line in capsys.readouterr().out.splitlines() if "topology change" in line]
+    assert changes and all(line.endswith("not located (block by block)") for line in changes)
+    assert not any("None" in line for line in changes)

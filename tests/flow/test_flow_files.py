@@ -125,3 +125,46 @@ def test_an_interrupt_while_writing_names_the_directory(tmp_path, capsys, monkey
     assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while writing the flow's files; the previous "
                    "run's files in the directory are unchanged"], err
     assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir()} == before
+
+
+@pytest.mark.parametrize("name,extra", [
+    ("step_007.npy", []),  # an earlier run's step file: removed once the run is in place
+    ("step_000.npy", ["--volumes", ".npy"]),  # replaced by the new step 0 (cropped, its place lost)
+])
+def test_flow_out_force_never_replaces_its_own_input(tmp_path, name, extra):
+    v = np.zeros((6, 7, 8), bool)
+    v[1:5, 2:6, 2:7] = True
+    out = tmp_path / "run"
+    out.mkdir()
+    np.save(out / name, v)
+    before = (out / name).read_bytes()
+    rc, stdout, err = run("flow", out / name, "--out", out, "--force", *extra)
+    assert rc == 2 and stdout == ""
+    assert err.strip().splitlines() == [
+        f"isoflow flow: error: {out / name}: is the input, and flow --out {out} replaces the step files, flow.csv "
+        "and pictures there; give --out another directory (--force replaces an output, never the input)"]
+    assert sorted(p.name for p in out.iterdir()) == [name] and (out / name).read_bytes() == before
+    # another file in the directory is no step file: the run goes ahead beside it
+    np.save(out / "v.npy", v)
+    rc, stdout, err = run("flow", out / "v.npy", "--out", out, "--force", "--no-check")
+    assert rc == 0, err
+    assert (out / "v.npy").exists() and (out / "step_000.ply").exists()
+
+
+def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path):
+    # a step volume binvox cannot hold, into a new directory and an empty
+    # one: there is no previous run to keep (it said "the previous run's
+    # files in the directory are unchanged"); over an earlier run it is kept
+    np.save(tmp_path / "img.npy", np.ones((4, 5), bool))
+    (tmp_path / "empty").mkdir()
+    for out in (tmp_path / "new", tmp_path / "empty"):
+        rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", out, "--volumes", ".binvox")
+        assert rc == 2
+        assert err.strip().splitlines() == [
+            f"isoflow flow: error: {out / 'step_000.binvox'}: binvox holds 3D voxels, this object is 2D; nothing was written"]
+    assert not (tmp_path / "new").exists() and not any((tmp_path / "empty").iterdir())
+    assert run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty")[0] == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()}
+    rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".binvox", "--force")
+    assert rc == 2 and err.strip().endswith("; the previous run's files in the directory are unchanged")
+    assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before

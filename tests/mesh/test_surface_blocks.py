@@ -270,6 +270,20 @@ def test_label_image_store(tmp_path, rng):
     assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
 
 
+def test_a_label_no_voxel_has_is_named_with_the_values_present(tmp_path, capsys):
+    # as in memory and as `info STORE.zarr --label N`; it said "the object
+    # is empty, there is no surface to write"
+    labels = np.zeros((6, 7, 8), np.uint16)
+    labels[1:3, 1:4, 2:5], labels[4, 5, 6] = 2, 7
+    path = tmp_path / "labels.zarr"
+    z = zarr.open_array(str(path), mode="w", shape=labels.shape, chunks=(4, 5, 3), dtype=np.uint16)
+    z[:] = labels
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--label", "3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow surface: error: {path}: no voxel has label 3 (values present: 0, 2, 7)"]
+    assert not list(tmp_path.glob("s.*"))
+
+
 def test_other_suffixes_are_refused_naming_those_that_stream(tmp_path):
     for name in ("s.obj", "s.glb", "s"):
         with pytest.raises(IsoflowError, match=r"binary PLY or STL only \(\.ply, \.stl\)"):

@@ -7,7 +7,14 @@ import json
 import sys
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option
+from .inputs import (
+    add_connectivity,
+    add_input_arguments,
+    load_input,
+    refuse_mesh_options,
+    refuse_points_option,
+    why_empty,
+)
 from .progress import progress_bar
 
 
@@ -106,7 +113,8 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
                            f"this one is {obj.ndim}D")
     if obj is not None and obj.voxels == 0:
-        raise IsoflowError(f"{args.input}: the object is empty, there is nothing to flow")
+        why = why_empty(args, obj)  # a point list with points: say why none is in
+        raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:
@@ -197,5 +205,8 @@ def format_flow(result, name: str) -> str:
         centre = ", ".join(f"{c:g}" for c in lim["center"])
         lines.append(f"  limit: ({centre}), last non-empty state {lim['last_shape']} at step {lim['last_step']}")
     for c in result.topology_changes:
-        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, in {c['where']}")
+        # a store flowed block by block finds changes but does not locate
+        # them (where is None): say so, not "in None"
+        place = "not located (block by block)" if c["where"] is None else f"in {c['where']}"
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
     return "\n".join(lines)

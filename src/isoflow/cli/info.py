@@ -10,7 +10,16 @@ import threading
 
 from ..digital.report import Report
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option, thread_count
+from .inputs import (
+    add_connectivity,
+    add_input_arguments,
+    load_input,
+    refuse_mesh_options,
+    refuse_points_option,
+    say_note,
+    thread_count,
+    why_empty,
+)
 from .labels import add_labels_option
 from .progress import progress_bar
 
@@ -76,6 +85,9 @@ def info_in_memory(args: argparse.Namespace) -> Report:
     obj = load_input(args)
     if warming is not None:
         warming.join()
+    # an empty report is an answer, but of a point list with points it needs
+    # the reason
+    say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
     if args.gpu:
         from ..scale.arrays import to_gpu
 

@@ -174,6 +174,22 @@ def refuse_points_option(args: argparse.Namespace, what: str) -> None:
                            f"not to {what} input")
 
 
+def why_empty(args: argparse.Namespace, obj) -> str | None:
+    """Why the object read is empty, where the input was not: a point list
+    read with the paper's point model, in which no cube has all its corners
+    listed (a list of voxel indices read as corners, most often). None
+    otherwise (an empty volume is empty as given; a mesh says why in its
+    note)."""
+    from ..mesh.load import is_mesh_path
+    from ..mesh.volumes import is_volume
+
+    if obj.voxels or is_volume(args.input) or is_mesh_path(Path(args.input)) or args.points_are == "voxels":
+        return None
+    cell = "square" if obj.ndim == 2 else "cube"
+    return (f"no unit {cell} has all {2 ** obj.ndim} of its corners among the points (the paper's point model, "
+            "Definitions 1-2); --points-are voxels reads each point as a voxel")
+
+
 def load_input(args: argparse.Namespace):
     """The digital object named on the command line (volume, points or mesh)."""
     from ..mesh.load import is_mesh_path
@@ -189,4 +205,13 @@ def load_input(args: argparse.Namespace):
     if is_volume(args.input):  # anything else is read as a point list
         refuse_points_option(args, "volume")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
-    return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    try:
+        return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    except IsoflowError as exc:
+        from ..mesh.volumes import EVERY_LABEL
+
+        # a label image's refusal names --labels, which flow does not take
+        # (it flows one object): leave it out there
+        if args.command == "flow" and EVERY_LABEL in str(exc):
+            raise IsoflowError(str(exc).replace(f", {EVERY_LABEL}", "")) from None
+        raise

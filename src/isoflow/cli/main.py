@@ -276,6 +276,16 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
             if os.path.samefile(out_file, in_file) if both else out_file.resolve() == in_file.resolve():
                 raise IsoflowError(f"{out}: is the input {name}; write the output to another file (--force "
                                    "replaces an output, never the input)")
+    directory = getattr(args, "out", None) if args.command == "flow" else None
+    if directory and args.input:
+        # `flow DIR/step_003.npy --out DIR --force` would remove (or, with
+        # --volumes, replace) its own input once the run is in place
+        from ..flow.files import replaced_by_run
+
+        if replaced_by_run(directory, split_dataset(args.input)[0]):
+            raise IsoflowError(f"{args.input}: is the input, and flow --out {directory} replaces the step files, "
+                               "flow.csv and pictures there; give --out another directory (--force replaces an "
+                               "output, never the input)")
 
 
 def interrupted(signals: list, what: str) -> int:

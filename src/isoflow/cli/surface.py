@@ -9,7 +9,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .inputs import add_connectivity, add_input_arguments, load_input, refuse_mesh_options, refuse_points_option, thread_count
+from .inputs import (
+    add_connectivity,
+    add_input_arguments,
+    load_input,
+    refuse_mesh_options,
+    refuse_points_option,
+    thread_count,
+    why_empty,
+)
 from .labels import add_labels_option
 
 
@@ -59,7 +67,9 @@ def cmd_surface(args: argparse.Namespace) -> int:
     if obj.ndim != 3:
         raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
     if obj.voxels == 0:
-        raise IsoflowError(f"{args.input}: the object is empty, there is no surface to write")
+        why = why_empty(args, obj)  # a point list with points: say why none is in
+        raise IsoflowError(f"{args.input}: the object is empty"
+                           + (f": {why}" if why else ", there is no surface to write"))
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
@@ -160,10 +170,10 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.formats.omezarr import label_absent, store_volume
     from ..mesh.readback import volume_unit
     from ..mesh.streamed_readback import check_streamed
-    from ..mesh.surface_blocks import write_surface_blocks
+    from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from .progress import progress_bar
 
     refuse_mesh_options(args, ".zarr")
@@ -173,9 +183,16 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
                           origin=(0.0, 0.0, 0.0) if origin is None else origin)
     conn = args.connectivity or default_connectivity(3)
     with progress_bar(args, "blocks") as show:
-        written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
-                                       force=args.force, where=args.input, triangulate=args.triangulate,
-                                       comments=surface_comments(args.input, conn))
+        try:
+            written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
+                                           force=args.force, where=args.input, triangulate=args.triangulate,
+                                           comments=surface_comments(args.input, conn))
+        except EmptySurface:
+            if args.label is None:
+                raise
+            # the label's voxels are none: say that no voxel has it and what
+            # the store holds (as in memory), not "the object is empty"
+            raise label_absent(args.input, args.label) from None
     out = written["path"]
     print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
           f"V-E+F = {written['euler_characteristic']}"

@@ -60,6 +60,16 @@ def _step_file_pattern() -> re.Pattern:
     return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
 
 
+def replaced_by_run(directory, path) -> bool:
+    """Whether a run into ``directory`` (with ``force``) replaces or removes
+    the file ``path``: a step file of any suffix, flow.csv or a picture
+    there. The command refuses such a file as its input."""
+    out, path = Path(directory), Path(path)
+    if not (out.is_dir() and path.exists()) or not os.path.samefile(out, path.parent):
+        return False
+    return path.name in RUN_FILES or _step_file_pattern().fullmatch(path.name) is not None
+
+
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
     """The per-step figures as CSV columns and rows (bbox as min/max per
     axis); with ``checks`` (step -> :func:`check_surface_file` result, 3D),
@@ -165,6 +175,7 @@ class FlowWriter:
     def __init__(self, directory, connectivity: int, force: bool = False, last_step: int = 999, check: bool = True):
         out = check_output_dir(directory, force)
         self.created = not out.exists()
+        self.had_files = not self.created and any(out.iterdir())  # (a killed run's staging is gone: check_output_dir)
         try:
             out.mkdir(exist_ok=True)
             self.stage = temp_sibling(out / STAGE, directory=True)
@@ -302,7 +313,10 @@ class FlowWriter:
             msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
             if not msg.strip():  # an interrupt between two writes: name the run's directory
                 msg = f"{self.out}: stopped while writing the flow's files"
-            msg = msg.rstrip("; ") + "; the previous run's files in the directory are unchanged"
+            # a directory without files before this run holds no previous run
+            # to keep: there, nothing of the run is left (abort)
+            msg = msg.rstrip("; ") + ("; the previous run's files in the directory are unchanged" if self.had_files
+                                      else "; nothing was written")
             raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
 
     def _commit(self) -> list:

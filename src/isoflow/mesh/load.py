@@ -249,6 +249,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         rtol = math.nan
     if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
         raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
+    refuse_volume(path)
     ext = p.suffix.lower().lstrip(".")
     with reading_mesh(p):  # a failed or empty read: one line, naming the format of a misnamed file
         vertices, faces = _read(p, ext)
@@ -337,6 +338,17 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
         return mesh[0], mesh[1]
     raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, "
                        f"got {type(mesh).__name__}")
+
+
+def refuse_volume(path) -> None:
+    """One line for a volume file given where a mesh is read: trimesh would
+    say ``file_type 'npy' not supported`` (or fail inside its binvox
+    reader), and ``FILE.h5:/dataset`` would be "file not found"."""
+    from .formats.registry import format_for, split_dataset
+
+    if not is_mesh_path(path) and format_for(split_dataset(path)[0]) is not None:
+        raise IsoflowError(f"{path}: a volume file, not a triangle mesh; voxelize and genus read meshes "
+                           "(isoflow info, surface and flow read volumes)")
 
 
 def _read(p: Path, ext: str):

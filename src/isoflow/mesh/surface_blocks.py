@@ -69,6 +69,12 @@ STL_RECORD, STL_HEADER = 50, 84
 BYTES_PER_ITEM, BYTES_PER_FACE = 160, 200
 
 
+class EmptySurface(IsoflowError):
+    """The volume holds no voxel of the object: there is no surface to
+    write. A kind of its own, so that a caller that selected a label can
+    say that no voxel has it (:func:`isoflow.mesh.formats.omezarr.label_absent`)."""
+
+
 @dataclass(frozen=True)
 class BlockGrid:
     """Blocks of a 3D volume of ``shape``: per axis the ``[start, stop)``
@@ -584,7 +590,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
         c["triangles"] != 2 * c["faces"] for c in counts.values())
     layout = plan(grid, counts, triangles)
     if layout.voxels == 0:
-        raise IsoflowError(f"{where}: the object is empty, there is no surface to write")
+        raise EmptySurface(f"{where}: the object is empty, there is no surface to write")
     per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
     _check_memory(where, workers, per_task, "writing", cache)
     target, size = _prepared(out, layout, frame, comments, conn, where)

@@ -77,9 +77,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
     if bad.any():
         value = arr[bad].flat[0]
-        place = f" near voxel {tuple(int(o) for o in near)}" if near is not None else ""
+        # the count is of voxels (not of distinct values), and of this block
+        # only where the volume is checked block by block
+        place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
         raise IsoflowError(
-            f"{where}: not a binary volume ({int(bad.sum())} values other than 0 and 1{place}, "
+            f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
             f"e.g. {value}); threshold it first, e.g. volume > 0"
         )
     return arr.astype(bool)

@@ -162,10 +162,28 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
         report = analyze_chunked(lazy, connectivity, where=where, progress=progress, surfaces=surfaces,
                                  threads=threads)
         if label is not None and report["voxels"] == 0:
-            raise no_such_label(label, np.unique(da.unique(raw).compute()), where)
+            raise label_absent(path, label)
     if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report = dataclasses.replace(report, shape=[int(array.shape[i]) for i in order])
     return report
+
+
+def label_absent(path, label) -> IsoflowError:
+    """The error for a ``label`` that no voxel of the store ``path`` has,
+    listing the values present (read in a pass over the store, once the
+    label's object came out empty), as :func:`isoflow.read_volume` refuses
+    it in memory."""
+    from ...scale.chunks import import_dask
+
+    _, da = import_dask()
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, _ = open_zarr_node(file, level)
+    other = [] if multiscale is None else spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)[1]
+    # chunks read through a guard, so that a damaged one is one line
+    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+    return no_such_label(label, np.unique(da.unique(raw).compute()), where)
 
 
 def store_volume(path, label=None) -> tuple:
