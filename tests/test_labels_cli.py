@@ -82,8 +82,9 @@ def test_a_bool_image_is_label_1_and_holds_no_label_2(tmp_path, capsys, segmenta
         out, err = capsys.readouterr()
         assert [r["label"] for r in json.loads(out)["labels"]] == [1]
         assert "1 of the labels asked for does not occur (2)" in err
-    run(capsys, "surface", tmp_path / "mask.npy", "--labels", "-o", f"{tmp_path}/out/", "--suffix", "ply")
+    out = run(capsys, "surface", tmp_path / "mask.npy", "--labels", "-o", f"{tmp_path}/out/", "--suffix", "ply")
     assert [p.name for p in (tmp_path / "out").iterdir()] == ["label_1.ply"]
+    assert out.startswith(f"{tmp_path}/out/ (1 .ply file): 1 label, ")
 
 
 def test_info_labels_terminal_table_shows_the_first_rows_and_a_summary(tmp_path, capsys, rng):

@@ -346,7 +346,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                 show(meshed, total)
         problems = write_label_surfaces(args, target, meshes, glb_parts, report)
     faces = sum(len(m.faces) for _, m, _, _ in meshes)
-    where = target[1] if target[0] == "glb" else f"{target[1]}/ ({len(meshes)} {target[2]} files)"
+    where = target[1] if target[0] == "glb" else f"{target[1]}/ ({_count(len(meshes), target[2] + ' file')})"
     print(f"{where}: {_count(len(meshes), 'label')}, {faces} faces, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
     for line in problems:
