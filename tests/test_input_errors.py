@@ -278,6 +278,13 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     extra = ["-o", tmp_path / "s.ply"] if command == "surface" else []
     line = fails(capsys, command, tmp_path / "l.npy", *extra, words=("l.npy", "not a binary volume", "--label N"))
     assert ("--labels" in line) == names_labels
+    # a store, checked block by block, says the same (it named no option at all)
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(3, 3, 3), zarr_format=2)
+    extra = ["--out", tmp_path / "run", "--volumes", ".zarr"] if command == "flow" else extra
+    line = fails(capsys, command, tmp_path / "l.zarr", *extra,
+                 words=("l.zarr", "not a binary volume", "in the block at voxel", "--label N"))
+    assert ("--labels" in line) == names_labels
 
 
 @pytest.mark.parametrize("points,cell", [("0 0 0\n-5 3 2\n", "cube has all 8"), ("0 0\n1 0\n", "square has all 4")])

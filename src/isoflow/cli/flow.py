@@ -10,6 +10,7 @@ from ..errors import IsoflowError
 from .inputs import (
     add_connectivity,
     add_input_arguments,
+    label_options,
     load_input,
     refuse_mesh_options,
     refuse_points_option,
@@ -89,7 +90,7 @@ def flow_store(args: argparse.Namespace) -> int:
     conn = flow_connectivity(3, args.connectivity)
     last = args.steps if args.steps is not None else max_steps_for(volume.shape)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
-    with progress_bar(args, "flow", unit=" steps") as show:
+    with progress_bar(args, "flow", unit=" steps") as show, label_options(args):
         try:
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   progress=None if show is None else (lambda step, state: show(step, args.steps)))

@@ -13,6 +13,7 @@ from ..errors import IsoflowError
 from .inputs import (
     add_connectivity,
     add_input_arguments,
+    label_options,
     load_input,
     refuse_mesh_options,
     refuse_points_option,
@@ -73,7 +74,7 @@ def info_of_store(args: argparse.Namespace) -> Report:
     refuse_points_option(args, "volume")
     if args.gpu:
         raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
-    with progress_bar(args, "blocks") as show:
+    with progress_bar(args, "blocks") as show, label_options(args):
         return analyze_store(args.input, args.connectivity, label=args.label, progress=show,
                              surfaces=not args.no_surfaces, threads=args.threads)
 

@@ -4,7 +4,9 @@ loader that turns a volume, a point list or a mesh into a digital object."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 from ..errors import IsoflowError
@@ -205,13 +207,20 @@ def load_input(args: argparse.Namespace):
     if is_volume(args.input):  # anything else is read as a point list
         refuse_points_option(args, "volume")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
-    try:
+    with label_options(args):
         return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
-    except IsoflowError as exc:
-        from ..mesh.volumes import EVERY_LABEL
 
-        # a label image's refusal names --labels, which flow does not take
-        # (it flows one object): leave it out there
-        if args.command == "flow" and EVERY_LABEL in str(exc):
-            raise IsoflowError(str(exc).replace(f", {EVERY_LABEL}", "")) from None
-        raise
+
+@contextlib.contextmanager
+def label_options(args: argparse.Namespace) -> Iterator[None]:
+    """A label image where a mask is expected, in memory or found block by
+    block in a store: its refusal names the options of this command that
+    select labels (``--label N``; ``--labels`` where the command takes it:
+    not flow, which flows one object)."""
+    from ..mesh.volumes import with_label_options
+    from ..scale.arrays import NotBinary
+
+    try:
+        yield
+    except NotBinary as exc:
+        raise with_label_options(exc, every=args.command != "flow") from None

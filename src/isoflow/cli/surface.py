@@ -12,6 +12,7 @@ from ..errors import IsoflowError
 from .inputs import (
     add_connectivity,
     add_input_arguments,
+    label_options,
     load_input,
     refuse_mesh_options,
     refuse_points_option,
@@ -182,7 +183,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch,
                           origin=(0.0, 0.0, 0.0) if origin is None else origin)
     conn = args.connectivity or default_connectivity(3)
-    with progress_bar(args, "blocks") as show:
+    with progress_bar(args, "blocks") as show, label_options(args):
         try:
             written = write_surface_blocks(array, args.output, conn, frame=frame, threads=args.threads, progress=show,
                                            force=args.force, where=args.input, triangulate=args.triangulate,

@@ -56,7 +56,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary
+from ..scale.arrays import NotBinary, binary
 from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
@@ -457,8 +457,10 @@ def analyze_chunked(
         merged = _layers(grid, conn, where, surfaces, shape, compute, progress)
     except IsoflowError as exc:
         # a process worker's error comes back with its traceback in str();
-        # keep the one-line message
-        raise IsoflowError(str(exc.args[0]) if exc.args else str(exc)) from None
+        # keep the one-line message (and a label image's kind: the command
+        # names the options that select labels)
+        message = str(exc.args[0]) if exc.args else str(exc)
+        raise (NotBinary if isinstance(exc, NotBinary) else IsoflowError)(message) from None
     return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged))
 
 

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError
-from ..scale.arrays import binary
+from ..scale.arrays import NotBinary, binary
 from ..scale.memory import check_fits
 from .formats.registry import (
     LabelVolume,
@@ -123,10 +123,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         arr = one_value_mask(arr)
         try:
             vol = binary(arr, where)
-        except IsoflowError as exc:
-            if "threshold it first" not in str(exc):
-                raise
-            raise IsoflowError(f"{exc}, or select one label with --label N (label=N), {EVERY_LABEL}") from None
+        except NotBinary as exc:
+            raise with_label_options(exc) from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -166,6 +164,20 @@ def one_value_mask(arr: np.ndarray) -> np.ndarray:
 
 #: what the refusal of a label image where a mask is expected adds
 EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table)"
+
+
+def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
+    """The refusal of a label image where a mask is expected, with the
+    options that select its labels: one (``--label N``) and, where the
+    command takes it (``every``), all (``--labels``).
+
+    Examples
+    --------
+    >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), every=False))
+    'v.npy: not a binary volume, or select one label with --label N (label=N)'
+    """
+    options = ", or select one label with --label N (label=N)" + (f", {EVERY_LABEL}" if every else "")
+    return NotBinary(exc.bare + options, bare=exc.bare)
 
 
 @dataclass(frozen=True)

@@ -80,11 +80,22 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # the count is of voxels (not of distinct values), and of this block
         # only where the volume is checked block by block
         place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        raise IsoflowError(
+        raise NotBinary(
             f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
             f"e.g. {value}); threshold it first, e.g. volume > 0"
         )
     return arr.astype(bool)
+
+
+class NotBinary(IsoflowError):
+    """A volume of values other than 0 and 1 where a mask is expected (a
+    label image, most often): a kind of its own, so that a command can add
+    the options that select its labels, in memory or block by block, to
+    ``bare`` (the message without them)."""
+
+    def __init__(self, message: str, bare: str | None = None):
+        super().__init__(message)
+        self.bare = message if bare is None else bare
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):
