@@ -349,3 +349,14 @@ def test_a_command_on_a_plain_ply_does_not_import_trimesh(tmp_path):
     r = subprocess.run([sys.executable, "-c", code, "info", str(ROOT / "meshes/bob_small.ply"), "--resolution", "16",
                         "--quiet"], capture_output=True, text=True, env=dict(os.environ), check=True)
     assert r.stdout.strip().splitlines()[-1] == "[]"
+
+
+@pytest.mark.parametrize("rtol", [1, 2.5, -1e-9, "x", None, float("nan")])
+def test_a_weld_tolerance_outside_0_1_is_refused_for_a_file_and_a_mesh_in_memory(rtol):
+    """1 or more would weld every vertex into one, whatever the mesh."""
+    from isoflow.mesh.load import mesh_input
+
+    box = trimesh.creation.box()
+    for given in (ROOT / "meshes" / "torus.obj", box, (box.vertices, box.faces)):
+        with pytest.raises(IsoflowError, match=r"merge_rtol must be a number in \[0, 1\)"):
+            mesh_input(given, merge_rtol=rtol)

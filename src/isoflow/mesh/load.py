@@ -243,12 +243,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     ``merge_rtol`` outside [0, 1).
     """
     p = Path(os.fspath(path))
-    try:
-        rtol = float(merge_rtol)
-    except (TypeError, ValueError):
-        rtol = math.nan
-    if not 0 <= rtol < 1:  # rtol >= 1 would weld every vertex of the mesh into one
-        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
+    rtol = weld_tolerance(merge_rtol)
     refuse_volume(path)
     ext = p.suffix.lower().lstrip(".")
     with reading_mesh(p):  # a failed or empty read: one line, naming the format of a misnamed file
@@ -262,6 +257,18 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def weld_tolerance(merge_rtol) -> float:
+    """``merge_rtol`` as a float in [0, 1), or IsoflowError: 1 or more would
+    weld every vertex of the mesh into one."""
+    try:
+        rtol = float(merge_rtol)
+    except (TypeError, ValueError):
+        rtol = math.nan
+    if not 0 <= rtol < 1:
+        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
+    return rtol
 
 
 #: a mesh given to a function that reads one: a file, a ``(vertices, faces)``
@@ -312,7 +319,7 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
         return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
     vertices, faces = mesh_arrays(mesh, "mesh")
     v, f = check_mesh(vertices, faces, where="mesh")
-    v, f = weld(v, f, float(merge_rtol), where="mesh", stats=stats)
+    v, f = weld(v, f, weld_tolerance(merge_rtol), where="mesh", stats=stats)
     if len(f) == 0:
         raise IsoflowError("mesh: empty mesh (every face is degenerate)")
     return "mesh", v, f
