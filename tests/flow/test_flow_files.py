@@ -11,6 +11,7 @@ import pytest
 import trimesh
 from skimage.measure import euler_number
 
+import isoflow
 from isoflow import boundary_mesh
 from isoflow.cli import main
 
@@ -151,20 +152,45 @@ def test_flow_out_force_never_replaces_its_own_input(tmp_path, name, extra):
     assert (out / "v.npy").exists() and (out / "step_000.ply").exists()
 
 
-def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path):
-    # a step volume binvox cannot hold, into a new directory and an empty
-    # one: there is no previous run to keep (it said "the previous run's
-    # files in the directory are unchanged"); over an earlier run it is kept
+def test_step_volumes_a_format_cannot_hold_are_refused_before_the_flow(tmp_path):
+    # binvox holds 3D voxels of one size: a 2D image or a pitch per axis
+    # was refused when step 0 was written, after the input was read and
+    # the flow begun; now before the output directory is made
+    np.save(tmp_path / "img.npy", np.ones((4, 5), bool))
+    isoflow.write_volume(isoflow.DigitalObject(np.ones((3, 3, 3), bool), pitch=(1.0, 1.0, 2.0)), tmp_path / "a.npz")
+    for name, why in (("img.npy", "binvox holds 3D voxels, this object is 2D"),
+                      ("a.npz", "binvox holds one voxel size and this object's pitch is [1.0, 1.0, 2.0]")):
+        rc, stdout, err = run("flow", tmp_path / name, "--out", tmp_path / "new", "--volumes", ".binvox")
+        assert rc == 2 and stdout == ""
+        assert err.strip().splitlines() == [f"isoflow flow: error: {tmp_path / 'new' / 'step_000.binvox'}: {why}"
+                                            + ("; write .nii.gz, .nrrd or .h5 to keep it" if name == "a.npz" else "")]
+        assert not (tmp_path / "new").exists()
+
+
+def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path, monkeypatch):
+    # a step volume that fails to be written (here: the disk), into a new
+    # directory and an empty one: there is no previous run to keep (it said
+    # "the previous run's files in the directory are unchanged"); over an
+    # earlier run it is kept
+    import isoflow.mesh.volumes as volumes
+
+    def full(obj, path, force=False):
+        raise isoflow.IsoflowError(f"{path}: no space left on the device")
+
     np.save(tmp_path / "img.npy", np.ones((4, 5), bool))
     (tmp_path / "empty").mkdir()
-    for out in (tmp_path / "new", tmp_path / "empty"):
-        rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", out, "--volumes", ".binvox")
-        assert rc == 2
-        assert err.strip().splitlines() == [
-            f"isoflow flow: error: {out / 'step_000.binvox'}: binvox holds 3D voxels, this object is 2D; nothing was written"]
+    with monkeypatch.context() as m:
+        m.setattr(volumes, "write_volume", full)
+        for out in (tmp_path / "new", tmp_path / "empty"):
+            rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", out, "--volumes", ".npz")
+            assert rc == 2
+            assert err.strip().splitlines() == [
+                f"isoflow flow: error: {out / 'step_000.npz'}: no space left on the device; nothing was written"]
     assert not (tmp_path / "new").exists() and not any((tmp_path / "empty").iterdir())
     assert run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty")[0] == 0
     before = {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()}
-    rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".binvox", "--force")
+    with monkeypatch.context() as m:
+        m.setattr(volumes, "write_volume", full)
+        rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".npz", "--force")
     assert rc == 2 and err.strip().endswith("; the previous run's files in the directory are unchanged")
     assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before

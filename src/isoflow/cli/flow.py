@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 from ..errors import IsoflowError
 from .inputs import (
@@ -126,17 +127,21 @@ def flow_writer(args: argparse.Namespace, obj):
     """The writer of ``--out``, or None. Files are written while the flow
     runs, so no state is kept in memory (every state of a box of side s
     would cost about s^4/4 bytes)."""
-    from ..flow.files import FlowWriter
+    from ..flow.files import FlowWriter, step_width
     from ..flow.motion import flow_connectivity
     from ..flow.run import default_max_steps
 
+    last = args.steps if args.steps is not None else default_max_steps(obj)
     if args.volumes is not None:  # ("" too: refused, not ignored)
-        from ..mesh.volumes import check_volume_suffix
+        from ..mesh.volumes import check_volume_holds, check_volume_suffix
 
-        args.volumes = check_volume_suffix(args.volumes)  # before the output directory is made
+        # before the output directory is made: the suffix, and what its
+        # format cannot hold of the states (their dimension and pitch are the object's)
+        args.volumes = check_volume_suffix(args.volumes)
+        if args.out:
+            check_volume_holds(Path(args.out) / f"step_{0:0{step_width(last)}d}{args.volumes}", obj)
     if not args.out:
         return None
-    last = args.steps if args.steps is not None else default_max_steps(obj)
     conn = flow_connectivity(obj.ndim, args.connectivity)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
     if args.volumes is not None:

@@ -60,6 +60,18 @@ def _step_file_pattern() -> re.Pattern:
     return re.compile(r"step_\d+(" + "|".join(re.escape(s) for s in suffixes) + r")", re.IGNORECASE)
 
 
+def step_width(last_step: int) -> int:
+    """Digits of the step numbers in file names (``step_007.ply``), enough
+    for the last step and at least three, so that names sort as steps do.
+
+    Examples
+    --------
+    >>> step_width(96), step_width(1500)
+    (3, 4)
+    """
+    return max(3, len(str(last_step)))
+
+
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
@@ -184,7 +196,7 @@ class FlowWriter:
         self.out, self.connectivity = out, connectivity
         self.volume_suffix = None  # set by write_volumes
         self._said: set[str] = set()  # warnings said already (see _named)
-        self.width = max(3, len(str(last_step)))
+        self.width = step_width(last_step)
         self.staged: list[str] = []  # names written into the staging directory
         self.checks: dict[int, dict] = {}
         self.problems: list[str] = []

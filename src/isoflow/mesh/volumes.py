@@ -446,6 +446,32 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
     return suffix
 
 
+def check_volume_holds(path: str | os.PathLike, obj: DigitalObject) -> None:
+    """Refuse now, in one line, what the format of ``path`` could not hold
+    of ``obj`` (a 2D object as binvox, a pitch per axis as MagicaVoxel),
+    for work that writes such files later (the flow's step volumes); what
+    a format would only drop is said when the file is written.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import DigitalObject
+    >>> check_volume_holds("run/step_000.binvox", DigitalObject(np.ones((3, 3), bool)))
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: run/step_000.binvox: binvox holds 3D voxels, this object is 2D
+    """
+    import warnings
+
+    file = Path(path)
+    fmt = format_for(file, writing=True)
+    module = None if fmt is None else fmt.load()
+    if module is not None and hasattr(module, "check"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            module.check(file, obj, None)
+
+
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``:
     a dataset of an HDF5 file, new or existing, whose other datasets are
