@@ -194,8 +194,10 @@ def label_table(
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     # the pitch and origin checked as every object's are
-    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
-                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin, float))
+    # (as given: a float conversion here would raise NumPy's ValueError on a
+    # string before the check could name the field)
+    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else pitch,
+                          origin=origin)
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table

@@ -1,0 +1,44 @@
+"""Bad arguments to the Python API: one IsoflowError naming the parameter
+and its value, never NumPy's own error nor a file written as given."""
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.errors import IsoflowError
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": -1}, ("'pitch'", "-1")),
+    ({"pitch": (1.0, 2.0)}, ("'pitch'", "3 numbers")),
+    ({"origin": (1, 2)}, ("'origin'", "[1, 2]")),
+    ({"origin": "abc"}, ("'origin'", "'abc'")),
+])
+def test_write_labels_checks_its_pitch_and_origin(tmp_path, kwargs, words):
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[1, 1, 1] = 2
+    path = tmp_path / "labels.nii.gz"
+    with pytest.raises(IsoflowError) as info:
+        isoflow.write_labels(labels, path, **kwargs)
+    for w in words:
+        assert w in str(info.value)
+    assert not path.exists()
+
+
+def test_write_labels_keeps_a_good_placement(tmp_path):
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[1, 1, 1] = 2
+    path = isoflow.write_labels(labels, tmp_path / "labels.nii.gz", pitch=(1, 2, 3), origin=[4, 5, 6])
+    back = isoflow.read_volume(path, label=2)
+    assert back.spacing.tolist() == [1.0, 2.0, 3.0] and back.origin.tolist() == [4.0, 5.0, 6.0]
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"origin": "abc"}, ("'origin'", "'abc'")),
+    ({"pitch": "x"}, ("'pitch'", "'x'")),
+])
+def test_label_table_names_a_pitch_or_origin_that_is_no_number(kwargs, words):
+    with pytest.raises(IsoflowError) as info:
+        isoflow.label_table(np.ones((2, 2, 2), np.uint8), **kwargs)
+    for w in words:
+        assert w in str(info.value)
