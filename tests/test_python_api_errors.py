@@ -42,3 +42,20 @@ def test_label_table_names_a_pitch_or_origin_that_is_no_number(kwargs, words):
         isoflow.label_table(np.ones((2, 2, 2), np.uint8), **kwargs)
     for w in words:
         assert w in str(info.value)
+
+
+@pytest.mark.parametrize("function", [
+    isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configuration_histogram,
+    isoflow.closed_surfaces, isoflow.boundary_mesh, isoflow.label_table,
+])
+def test_a_digital_object_where_an_array_is_taken_is_named(function):
+    # NumPy makes the object a 0D object array: it was refused as "0D" or
+    # "of type object" (boundary_mesh: a bare ValueError)
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)
+    with pytest.raises(IsoflowError, match=r"a DigitalObject, not an array; pass its \.volume"):
+        function(obj)
+
+
+def test_boundary_mesh_of_a_2d_array_is_an_isoflow_error():
+    with pytest.raises(IsoflowError, match="boundary_mesh needs a 3D volume, got a 2D array"):
+        isoflow.boundary_mesh(np.ones((2, 2), bool))

@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary, count_codes
+from ..scale.arrays import binary, count_codes, refuse_object
 from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
@@ -171,6 +171,7 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     """
     # canonical bools: a bool array made by .view(bool) may hold bytes other
     # than 0/1, which the configurations and cc3d would read as values
+    refuse_object(volume, "closed_surfaces")
     vol = binary(np.asarray(volume, dtype=bool))
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
