@@ -59,3 +59,17 @@ def test_a_digital_object_where_an_array_is_taken_is_named(function):
 def test_boundary_mesh_of_a_2d_array_is_an_isoflow_error():
     with pytest.raises(IsoflowError, match="boundary_mesh needs a 3D volume, got a 2D array"):
         isoflow.boundary_mesh(np.ones((2, 2), bool))
+
+
+@pytest.mark.parametrize(("volume", "chi"), [(np.ones((3, 3), bool), 5), (np.ones((3, 3, 3), bool), 5)])
+def test_betti_numbers_refuses_a_chi_that_is_not_the_volumes(volume, chi):
+    # 2D: an assert (skipped under -O); 3D: b1 = 1 + 0 - 5 = -4 returned
+    with pytest.raises(IsoflowError, match="chi=5 is not this volume's Euler characteristic"):
+        isoflow.betti_numbers(volume, chi=chi)
+
+
+def test_betti_numbers_takes_the_right_chi():
+    ring = np.ones((3, 3, 1), bool)
+    ring[1, 1, 0] = False
+    assert isoflow.betti_numbers(ring, 6, chi=0) == [1, 1, 0]
+    assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
