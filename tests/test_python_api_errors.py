@@ -73,3 +73,18 @@ def test_betti_numbers_takes_the_right_chi():
     ring[1, 1, 0] = False
     assert isoflow.betti_numbers(ring, 6, chi=0) == [1, 1, 0]
     assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
+
+
+@pytest.mark.parametrize(("args", "kwargs", "words"), [
+    ((16,), {}, "resolutions must be a sequence of integers, got 16; one resolution is [16]"),
+    (([16],), {"time_limit": -1}, "time_limit must be a positive number of seconds, got -1"),
+    (([16],), {"time_limit": float("nan")}, "time_limit must be a positive number of seconds, got nan"),
+    (([16],), {"max_resolution": 0}, "max_resolution must be an integer >= 1, got 0"),
+    (([16],), {"max_resolution": 2.5}, "max_resolution must be an integer >= 1, got 2.5"),
+])
+def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs, words):
+    # a lone int was list()'s TypeError; the others ran and stopped at once
+    trimesh = pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as info:
+        isoflow.verify_genus(trimesh.creation.box(), *args, **kwargs)
+    assert str(info.value) == words
