@@ -88,3 +88,14 @@ def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs
     with pytest.raises(IsoflowError) as info:
         isoflow.verify_genus(trimesh.creation.box(), *args, **kwargs)
     assert str(info.value) == words
+
+
+@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
+def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
+    # a dask array was rechunked as given: ZeroDivisionError, dask's
+    # ValueError, or 2.5 read as 2 (a zarr array was checked already)
+    da = pytest.importorskip("dask.array")
+    array = da.from_array(np.ones((5, 5, 5), bool), chunks=2)
+    with pytest.raises(IsoflowError, match=r"block_shape .* does not fit a 3D array"):
+        isoflow.analyze_chunked(array, 6, block_shape=block_shape)
+    assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
