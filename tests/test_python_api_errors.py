@@ -99,3 +99,13 @@ def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(bloc
     with pytest.raises(IsoflowError, match=r"block_shape .* does not fit a 3D array"):
         isoflow.analyze_chunked(array, 6, block_shape=block_shape)
     assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
+
+
+@pytest.mark.parametrize("connectivity", [26.0, np.int64(26), np.float32(26)])
+def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivity):
+    # 26.0 passed the check and was reported as given ("connectivity": 26.0)
+    volume = np.ones((2, 2, 2), bool)
+    values = [isoflow.analyze(volume, connectivity).to_dict()["connectivity"],
+              isoflow.run_flow(volume, connectivity=connectivity, steps=1).to_dict()["connectivity"],
+              isoflow.boundary_mesh(volume, connectivity).connectivity]
+    assert all(type(v) is int and v == 26 for v in values), values

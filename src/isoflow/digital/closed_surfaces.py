@@ -175,7 +175,7 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     vol = binary(np.asarray(volume, dtype=bool))
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
-    check_connectivity(3, connectivity)
+    connectivity = check_connectivity(3, connectivity)  # as an int
     census = compiled_census(vol, connectivity) if use_census(vol, method=method) else small_census(vol, connectivity)
     return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                          doubled_edges=census["doubled_edges"], hist=census["hist"],

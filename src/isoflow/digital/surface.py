@@ -513,7 +513,7 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     vol = np.asarray(volume)
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
-    check_connectivity(3, connectivity)
+    connectivity = check_connectivity(3, connectivity)  # as an int
     if mesh_method(vol, method) == "compiled":
         return _mesh_from_rows(vol, connectivity)
     return _mesh_numpy(vol.astype(bool, copy=False), connectivity)
