@@ -109,3 +109,11 @@ def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivi
               isoflow.run_flow(volume, connectivity=connectivity, steps=1).to_dict()["connectivity"],
               isoflow.boundary_mesh(volume, connectivity).connectivity]
     assert all(type(v) is int and v == 26 for v in values), values
+
+
+@pytest.mark.parametrize("slab", [0, -2, 1.5])
+def test_configuration_histogram_names_a_bad_slab(slab):
+    # 0 was range()'s "arg 3 must not be zero"; -2 and 1.5 ran or failed as NumPy's
+    with pytest.raises(IsoflowError, match=f"slab must be an integer >= 1, got {slab}"):
+        isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=slab, method="numpy")
+    assert isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=1, method="numpy")[255] == 8
