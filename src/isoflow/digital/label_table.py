@@ -195,10 +195,10 @@ def label_table(
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     # the pitch and origin checked as every object's are
-    # (as given: a float conversion here would raise NumPy's ValueError on a
-    # string before the check could name the field)
-    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else pitch,
-                          origin=origin)
+    # (without a dtype: a float conversion here would raise NumPy's
+    # ValueError on a string before the check could name the field)
+    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch),
+                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table
