@@ -1,6 +1,8 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -117,3 +119,24 @@ def test_configuration_histogram_names_a_bad_slab(slab):
     with pytest.raises(IsoflowError, match=f"slab must be an integer >= 1, got {slab}"):
         isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=slab, method="numpy")
     assert isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=1, method="numpy")[255] == 8
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 0}, "'pitch' must be positive"),
+    ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),
+    ({"origin": (1, 2)}, "'origin' must be 3 numbers, one per axis, got [1, 2]"),
+])
+def test_from_manifold_checks_its_grid_first(kwargs, words):
+    # a zero pitch warned of NumPy's division by zero before voxelize
+    # refused it; a short origin was NumPy's broadcast error
+    m3 = pytest.importorskip("manifold3d")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(IsoflowError) as info:
+            isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), **kwargs)
+    assert words in str(info.value)
+
+
+def test_from_manifold_names_what_is_not_a_manifold():
+    with pytest.raises(IsoflowError, match="from_manifold takes a manifold3d.Manifold, got ndarray"):
+        isoflow.from_manifold(np.ones((2, 2, 2), bool))
