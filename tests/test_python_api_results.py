@@ -25,3 +25,16 @@ def test_a_report_comes_back_from_its_json():
     for conn in (6, 26):
         report = isoflow.analyze(ring, conn)
         assert isoflow.Report.from_dict(json.loads(json.dumps(report.to_dict()))) == report
+
+
+def test_a_4d_nifti_warns_of_the_fourth_axis_placement_it_cannot_keep(tmp_path):
+    # the fourth axis's pitch and origin were dropped without a word, read
+    # back as 1 and 0 (TIFF's dropped origin is warned of)
+    import pytest
+
+    pytest.importorskip("nibabel")
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2, 2), bool), pitch=(1, 1, 1, 0.5), origin=(1, 2, 3, 4))
+    with pytest.warns(isoflow.IsoflowWarning, match="fourth axis's voxel size 0.5 and origin 4 are not written"):
+        isoflow.write_volume(obj, tmp_path / "a.nii.gz")
+    back = isoflow.read_volume(tmp_path / "a.nii.gz")
+    assert back.spacing.tolist() == [1, 1, 1, 1] and back.origin.tolist() == [1, 2, 3, 0]
