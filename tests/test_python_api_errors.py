@@ -140,3 +140,14 @@ def test_from_manifold_checks_its_grid_first(kwargs, words):
 def test_from_manifold_names_what_is_not_a_manifold():
     with pytest.raises(IsoflowError, match="from_manifold takes a manifold3d.Manifold, got ndarray"):
         isoflow.from_manifold(np.ones((2, 2, 2), bool))
+
+
+@pytest.mark.parametrize("value", [2, np.nan])
+def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(value):
+    # the volume was converted to bool first: 2 and NaN read as True
+    volume = np.zeros((3, 3, 3))
+    volume[1, 1, 1] = value
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        isoflow.closed_surfaces(volume)
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        isoflow.analyze(volume)

@@ -142,7 +142,7 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
 
     Parameters
     ----------
-    volume : array_like of bool, 3D
+    volume : array_like of bool or 0/1, 3D
     connectivity : {6, 26}
         The object's.
     method : {"auto", "numpy", "compiled"}
@@ -169,10 +169,12 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     >>> [s["genus"] for s in c.surfaces], c.doubled_edges
     ([0], 1)
     """
-    # canonical bools: a bool array made by .view(bool) may hold bytes other
-    # than 0/1, which the configurations and cc3d would read as values
+    # canonical bools (binary makes them: a bool array made by .view(bool)
+    # may hold bytes other than 0/1, which the configurations and cc3d would
+    # read as values); other values refused as analyze refuses them (a
+    # conversion to bool first read 2 or NaN as True)
     refuse_object(volume, "closed_surfaces")
-    vol = binary(np.asarray(volume, dtype=bool))
+    vol = binary(volume)
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
     connectivity = check_connectivity(3, connectivity)  # as an int
