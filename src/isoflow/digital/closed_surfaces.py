@@ -60,7 +60,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary, count_codes
+from ..scale.arrays import binary, count_codes, refuse_object
 from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
@@ -142,7 +142,7 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
 
     Parameters
     ----------
-    volume : array_like of bool, 3D
+    volume : array_like of bool or 0/1, 3D
     connectivity : {6, 26}
         The object's.
     method : {"auto", "numpy", "compiled"}
@@ -169,12 +169,15 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     >>> [s["genus"] for s in c.surfaces], c.doubled_edges
     ([0], 1)
     """
-    # canonical bools: a bool array made by .view(bool) may hold bytes other
-    # than 0/1, which the configurations and cc3d would read as values
-    vol = binary(np.asarray(volume, dtype=bool))
+    # canonical bools (binary makes them: a bool array made by .view(bool)
+    # may hold bytes other than 0/1, which the configurations and cc3d would
+    # read as values); other values refused as analyze refuses them (a
+    # conversion to bool first read 2 or NaN as True)
+    refuse_object(volume, "closed_surfaces")
+    vol = binary(volume)
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
-    check_connectivity(3, connectivity)
+    connectivity = check_connectivity(3, connectivity)  # as an int
     census = compiled_census(vol, connectivity) if use_census(vol, method=method) else small_census(vol, connectivity)
     return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                          doubled_edges=census["doubled_edges"], hist=census["hist"],

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
+from ..scale.arrays import refuse_object
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
@@ -194,8 +195,10 @@ def label_table(
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     # the pitch and origin checked as every object's are
-    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch, float),
-                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin, float))
+    # (without a dtype: a float conversion here would raise NumPy's
+    # ValueError on a string before the check could name the field)
+    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch),
+                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table
@@ -210,6 +213,7 @@ def label_table(
 def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
+    refuse_object(image, "label_table")
     vol = np.asarray(image)
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")

@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, binary
-from ..scale.chunks import block_bounds, import_dask, is_zarr_array, open_zarr, zarr_blocks
+from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
@@ -278,7 +278,7 @@ def _grid(array, block_shape, where: str) -> _Grid:
         chunks = zarr_blocks(array, block_shape)
     else:
         if block_shape is not None:
-            array = array.rechunk(tuple(int(b) for b in block_shape))
+            array = array.rechunk(checked_block_shape(block_shape, array.shape))
         if any(np.isnan(c) for sizes in array.chunks for c in sizes):
             raise IsoflowError(f"{where}: chunk sizes are not known (call compute_chunk_sizes first)")
         chunks = array.chunks

@@ -34,7 +34,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..scale.arrays import index_dtype
+from ..errors import IsoflowError
+from ..scale.arrays import index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity
@@ -493,8 +494,9 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
 
     Raises
     ------
-    ValueError
-        If the volume is not 3D, or for a bad connectivity or method.
+    IsoflowError
+        (a ValueError) If the volume is not a 3D array, or for a bad
+        connectivity or method.
 
     Notes
     -----
@@ -507,10 +509,11 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     >>> len(mesh.vertices), len(mesh.faces), mesh.euler_characteristic
     (8, 6, 2)
     """
+    refuse_object(volume, "boundary_mesh")
     vol = np.asarray(volume)
-    if vol.ndim != 3:
-        raise ValueError("boundary_mesh needs a 3D volume")
-    check_connectivity(3, connectivity)
+    if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
+        raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
+    connectivity = check_connectivity(3, connectivity)  # as an int
     if mesh_method(vol, method) == "compiled":
         return _mesh_from_rows(vol, connectivity)
     return _mesh_numpy(vol.astype(bool, copy=False), connectivity)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import IsoflowError
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -162,7 +163,8 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default:
         the paper's 6, 4, 8).
     chi : int, optional
-        The Euler characteristic when it is known already.
+        The Euler characteristic when it is known already (one that cannot
+        be the volume's is refused).
     method : {"auto", "numpy", "compiled"}
         The labellings (cc3d, scipy, CuPy), the compiled run-based
         union-find, or by the volume's size.
@@ -201,8 +203,13 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn))
     if v.ndim == 4:
         return [b0, None, None, enclosed]
+    # a ``chi`` given that is not the volume's: in 2D chi = b0 - b1 exactly,
+    # in 3D it would give a negative b1 (an assert was skipped under -O and
+    # a negative Betti number returned as an answer)
+    if (v.ndim == 2 and b0 - enclosed != chi) or (v.ndim == 3 and b0 + enclosed - chi < 0):
+        raise IsoflowError(f"chi={chi} is not this volume's Euler characteristic ({b0} components and "
+                           f"{enclosed} {'holes' if v.ndim == 2 else 'cavities'}); leave chi out to compute it")
     if v.ndim == 2:
-        assert b0 - enclosed == chi, "2D: chi must equal components minus holes"
         return [b0, enclosed]
     return [b0, b0 + enclosed - chi, enclosed]
 

@@ -27,7 +27,7 @@ to stop and what to report.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -103,6 +103,24 @@ class FlowResult(Result):
         # for guarded runs
         keys = ["connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
         return keys + ["guard_steps"] if self.guard else keys
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> FlowResult:
+        """The result of :meth:`to_dict`'s JSON (``isoflow flow --json``):
+        the states are not in it, so none are kept, as with
+        ``keep_states=False`` (``states`` given is taken).
+
+        Examples
+        --------
+        >>> import json, numpy as np
+        >>> r = run_flow(np.ones((3, 3, 3), bool))
+        >>> back = FlowResult.from_dict(json.loads(json.dumps(r.to_dict())))
+        >>> back.to_dict() == r.to_dict(), back.states
+        (True, [])
+        """
+        # without this, the JSON's own mapping was refused: states is a
+        # field without a default (TypeError: missing 'states')
+        return super().from_dict({"states": [], **values})
 
 
 def default_max_steps(obj: DigitalObject) -> int:

@@ -45,6 +45,12 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     DigitalObject
         Cropped to the solid, its ``offset`` the lattice index of its first voxel.
 
+    Raises
+    ------
+    IsoflowError
+        For something other than a Manifold, a pitch that is not one
+        positive number, or an origin that is not three numbers.
+
     Examples
     --------
     A 2x3x4 box less a unit cube at a corner:
@@ -55,10 +61,19 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     >>> obj.voxels, obj.volume.shape
     (23, (2, 3, 4))
     """
+    # checked first: an array was an AttributeError, a zero pitch NumPy's
+    # divide-by-zero warnings before voxelize refused it, a short origin
+    # NumPy's broadcast error
+    if not callable(getattr(manifold, "to_mesh", None)):
+        raise IsoflowError(f"from_manifold takes a manifold3d.Manifold, got {type(manifold).__name__}"
+                           "; a mesh: voxelize_mesh, an array: DigitalObject")
+    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=np.asarray(pitch), origin=np.asarray(origin))
+    if np.ndim(place.pitch):
+        raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {np.asarray(pitch).tolist()!r}")
+    pitch, corner = float(place.pitch), place.origin
     mesh = manifold.to_mesh()
     verts = np.asarray(mesh.vert_properties, dtype=np.float64)[:, :3]
     tris = np.asarray(mesh.tri_verts, dtype=np.int64)
-    corner = np.asarray(origin, dtype=np.float64)
     if len(tris) == 0:
         return DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=corner)
     lo = np.floor((verts.min(axis=0) - corner) / pitch).astype(np.int64)

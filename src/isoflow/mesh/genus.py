@@ -16,7 +16,7 @@ this is its number of tunnels b1.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 import numpy as np
@@ -570,6 +570,13 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         The witnesses, the verdict's kind and the facts it rests on;
         ``to_dict()`` is the JSON the ``genus`` command prints.
 
+    Raises
+    ------
+    IsoflowError
+        A mesh that cannot be read (or, with ``strict``, is not watertight);
+        resolutions that are not a non-empty sequence; a ``max_resolution``
+        below 1 or a ``time_limit`` that is not a positive number of seconds.
+
     Examples
     --------
     >>> from isoflow import data
@@ -580,9 +587,21 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     >>> verify_genus(trimesh.creation.torus(1.0, 0.3), resolutions=[32, 64], step=False).kind
     'agree'
     """
+    # the arguments checked as the command line's are (a negative time
+    # limit, a cap below one or a lone int ran, or failed in list(), with
+    # no word naming them)
+    if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
+        hint = f"; one resolution is [{resolutions!r}]" if isinstance(resolutions, (int, np.integer)) else ""
+        raise IsoflowError(f"resolutions must be a sequence of integers, got {resolutions!r}{hint}")
     resolutions = list(resolutions)
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
+    if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
+            or max_resolution < 1:
+        raise IsoflowError(f"max_resolution must be an integer >= 1, got {max_resolution!r}")
+    if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
+            or not time_limit > 0:
+        raise IsoflowError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
     f = _drop_repeated_faces(v, f, stats)

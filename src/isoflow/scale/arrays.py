@@ -50,6 +50,15 @@ def is_host(xp) -> bool:
     return xp is np
 
 
+def refuse_object(array, where: str) -> None:
+    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` where an array
+    is taken: NumPy makes it a 0D object array, which was refused as "0D" or
+    "of type object", not named (known by its fields: this layer cannot
+    import the class)."""
+    if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
+        raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume")
+
+
 def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
     """A host boolean volume from a 0/1 array, or a clear error saying why not.
 
@@ -62,6 +71,7 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     volume that the check costs."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
+    refuse_object(array, where)
     arr = np.asarray(array)
     if arr.dtype == np.bool_ and not canonical:
         return arr

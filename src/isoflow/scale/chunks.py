@@ -120,6 +120,27 @@ def block_bounds(chunks) -> list[list[tuple[int, int]]]:
     return out
 
 
+def checked_block_shape(block_shape, shape) -> tuple[int, ...]:
+    """``block_shape`` as integers >= 1, one per axis of ``shape``, or one
+    line naming it (a dask array's rechunk divided by a zero, or raised
+    dask's own error on a length that does not fit).
+
+    Examples
+    --------
+    >>> checked_block_shape((2, 3.0), (5, 5))
+    (2, 3)
+    """
+    try:
+        block = tuple(int(b) for b in block_shape)
+        whole = all(b == float(c) for b, c in zip(block, block_shape))
+    except (TypeError, ValueError, OverflowError):
+        block, whole = (), False
+    if not whole or len(block) != len(shape) or any(b < 1 for b in block):
+        raise IsoflowError(f"block_shape {block_shape!r} does not fit a {len(shape)}D array "
+                           f"(one integer >= 1 per axis)")
+    return block
+
+
 def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
     """Regular chunks of a zarr array: its shards (or chunks), grown by whole
     chunks to at least MIN_BLOCK voxels when they would make too many blocks."""
@@ -138,9 +159,7 @@ def zarr_blocks(z, block_shape) -> tuple[tuple[int, ...], ...]:
             i = min(grow, key=lambda j: block[j])
             block[i] = min(2 * block[i], shape[i])
     else:
-        if len(block_shape) != len(shape) or any(int(b) < 1 for b in block_shape):
-            raise IsoflowError(f"block_shape {tuple(block_shape)} does not fit a {len(shape)}D array")
-        block = [min(int(b), s) for b, s in zip(block_shape, shape)]
+        block = [min(b, s) for b, s in zip(checked_block_shape(block_shape, shape), shape)]
     return tuple(
         tuple([b] * (s // b) + ([s % b] if s % b else [])) for b, s in zip(block, shape)
     )

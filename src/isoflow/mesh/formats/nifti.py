@@ -7,7 +7,8 @@ isoflow turns the array so that axis 0 runs along world x, 1 along y, 2
 along z, each with a positive step (:mod:`isoflow.mesh.formats.affine`:
 flips and permutations are exact, a rotation or shear is kept as its axis-
 aligned part with a warning). A fourth axis of length 1 is dropped; a 4D
-image is read as 4D (``info`` only) with voxel size 1 along the fourth axis.
+image is read as 4D (``info`` only) with voxel size 1 along the fourth axis;
+a 4D object written with another voxel size or origin along it is warned of.
 
 Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
@@ -24,7 +25,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, placement, quiet_logs, reading, stored_values
+from .registry import RawVolume, check_shape, import_library, note, placement, quiet_logs, reading, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -47,6 +48,18 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if data.ndim == 4:
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
     return RawVolume(vol, pitch, origin)
+
+
+def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+    """Warn of a fourth axis's placement, which the affine has no room for
+    (read back as voxel size 1 from 0): it was dropped without a word, as
+    TIFF's origin is not."""
+    if obj.ndim != 4:
+        return
+    spacing, corner = placement(obj)
+    if spacing[3] != 1 or corner[3] != 0:
+        note(f"{path}: NIfTI places the first three axes only; the fourth axis's voxel size "
+             f"{float(spacing[3]):.9g} and origin {float(corner[3]):.9g} are not written (read back as 1 and 0)")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:

@@ -1,0 +1,153 @@
+"""Bad arguments to the Python API: one IsoflowError naming the parameter
+and its value, never NumPy's own error nor a file written as given."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.errors import IsoflowError
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": -1}, ("'pitch'", "-1")),
+    ({"pitch": (1.0, 2.0)}, ("'pitch'", "3 numbers")),
+    ({"origin": (1, 2)}, ("'origin'", "[1, 2]")),
+    ({"origin": "abc"}, ("'origin'", "'abc'")),
+])
+def test_write_labels_checks_its_pitch_and_origin(tmp_path, kwargs, words):
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[1, 1, 1] = 2
+    path = tmp_path / "labels.nii.gz"
+    with pytest.raises(IsoflowError) as info:
+        isoflow.write_labels(labels, path, **kwargs)
+    for w in words:
+        assert w in str(info.value)
+    assert not path.exists()
+
+
+def test_write_labels_keeps_a_good_placement(tmp_path):
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[1, 1, 1] = 2
+    path = isoflow.write_labels(labels, tmp_path / "labels.nii.gz", pitch=(1, 2, 3), origin=[4, 5, 6])
+    back = isoflow.read_volume(path, label=2)
+    assert back.spacing.tolist() == [1.0, 2.0, 3.0] and back.origin.tolist() == [4.0, 5.0, 6.0]
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"origin": "abc"}, ("'origin'", "'abc'")),
+    ({"pitch": "x"}, ("'pitch'", "'x'")),
+])
+def test_label_table_names_a_pitch_or_origin_that_is_no_number(kwargs, words):
+    with pytest.raises(IsoflowError) as info:
+        isoflow.label_table(np.ones((2, 2, 2), np.uint8), **kwargs)
+    for w in words:
+        assert w in str(info.value)
+
+
+@pytest.mark.parametrize("function", [
+    isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configuration_histogram,
+    isoflow.closed_surfaces, isoflow.boundary_mesh, isoflow.label_table,
+])
+def test_a_digital_object_where_an_array_is_taken_is_named(function):
+    # NumPy makes the object a 0D object array: it was refused as "0D" or
+    # "of type object" (boundary_mesh: a bare ValueError)
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)
+    with pytest.raises(IsoflowError, match=r"a DigitalObject, not an array; pass its \.volume"):
+        function(obj)
+
+
+def test_boundary_mesh_of_a_2d_array_is_an_isoflow_error():
+    with pytest.raises(IsoflowError, match="boundary_mesh needs a 3D volume, got a 2D array"):
+        isoflow.boundary_mesh(np.ones((2, 2), bool))
+
+
+@pytest.mark.parametrize(("volume", "chi"), [(np.ones((3, 3), bool), 5), (np.ones((3, 3, 3), bool), 5)])
+def test_betti_numbers_refuses_a_chi_that_is_not_the_volumes(volume, chi):
+    # 2D: an assert (skipped under -O); 3D: b1 = 1 + 0 - 5 = -4 returned
+    with pytest.raises(IsoflowError, match="chi=5 is not this volume's Euler characteristic"):
+        isoflow.betti_numbers(volume, chi=chi)
+
+
+def test_betti_numbers_takes_the_right_chi():
+    ring = np.ones((3, 3, 1), bool)
+    ring[1, 1, 0] = False
+    assert isoflow.betti_numbers(ring, 6, chi=0) == [1, 1, 0]
+    assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
+
+
+@pytest.mark.parametrize(("args", "kwargs", "words"), [
+    ((16,), {}, "resolutions must be a sequence of integers, got 16; one resolution is [16]"),
+    (([16],), {"time_limit": -1}, "time_limit must be a positive number of seconds, got -1"),
+    (([16],), {"time_limit": float("nan")}, "time_limit must be a positive number of seconds, got nan"),
+    (([16],), {"max_resolution": 0}, "max_resolution must be an integer >= 1, got 0"),
+    (([16],), {"max_resolution": 2.5}, "max_resolution must be an integer >= 1, got 2.5"),
+])
+def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs, words):
+    # a lone int was list()'s TypeError; the others ran and stopped at once
+    trimesh = pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as info:
+        isoflow.verify_genus(trimesh.creation.box(), *args, **kwargs)
+    assert str(info.value) == words
+
+
+@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
+def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
+    # a dask array was rechunked as given: ZeroDivisionError, dask's
+    # ValueError, or 2.5 read as 2 (a zarr array was checked already)
+    da = pytest.importorskip("dask.array")
+    array = da.from_array(np.ones((5, 5, 5), bool), chunks=2)
+    with pytest.raises(IsoflowError, match=r"block_shape .* does not fit a 3D array"):
+        isoflow.analyze_chunked(array, 6, block_shape=block_shape)
+    assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
+
+
+@pytest.mark.parametrize("connectivity", [26.0, np.int64(26), np.float32(26)])
+def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivity):
+    # 26.0 passed the check and was reported as given ("connectivity": 26.0)
+    volume = np.ones((2, 2, 2), bool)
+    values = [isoflow.analyze(volume, connectivity).to_dict()["connectivity"],
+              isoflow.run_flow(volume, connectivity=connectivity, steps=1).to_dict()["connectivity"],
+              isoflow.boundary_mesh(volume, connectivity).connectivity]
+    assert all(type(v) is int and v == 26 for v in values), values
+
+
+@pytest.mark.parametrize("slab", [0, -2, 1.5])
+def test_configuration_histogram_names_a_bad_slab(slab):
+    # 0 was range()'s "arg 3 must not be zero"; -2 and 1.5 ran or failed as NumPy's
+    with pytest.raises(IsoflowError, match=f"slab must be an integer >= 1, got {slab}"):
+        isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=slab, method="numpy")
+    assert isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=1, method="numpy")[255] == 8
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 0}, "'pitch' must be positive"),
+    ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),
+    ({"origin": (1, 2)}, "'origin' must be 3 numbers, one per axis, got [1, 2]"),
+])
+def test_from_manifold_checks_its_grid_first(kwargs, words):
+    # a zero pitch warned of NumPy's division by zero before voxelize
+    # refused it; a short origin was NumPy's broadcast error
+    m3 = pytest.importorskip("manifold3d")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(IsoflowError) as info:
+            isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), **kwargs)
+    assert words in str(info.value)
+
+
+def test_from_manifold_names_what_is_not_a_manifold():
+    with pytest.raises(IsoflowError, match="from_manifold takes a manifold3d.Manifold, got ndarray"):
+        isoflow.from_manifold(np.ones((2, 2, 2), bool))
+
+
+@pytest.mark.parametrize("value", [2, np.nan])
+def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(value):
+    # the volume was converted to bool first: 2 and NaN read as True
+    volume = np.zeros((3, 3, 3))
+    volume[1, 1, 1] = value
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        isoflow.closed_surfaces(volume)
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        isoflow.analyze(volume)
