@@ -194,3 +194,33 @@ def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path, monkeypat
         rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", tmp_path / "empty", "--volumes", ".npz", "--force")
     assert rc == 2 and err.strip().endswith("; the previous run's files in the directory are unchanged")
     assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before
+
+
+@pytest.mark.parametrize("store", [False, True])
+def test_an_interrupt_as_the_run_begins_leaves_no_staging_directory(tmp_path, monkeypatch, store):
+    """Between the staging directory's making and the flow's first step (the
+    progress bar's start, an import), an interrupt left the directory behind
+    (and, over an earlier run, a hidden directory beside its files): it is
+    removed wherever the interrupt comes, and an earlier run stays."""
+    import isoflow.cli.flow as cli_flow
+
+    v = np.zeros((6, 6, 6), bool)
+    v[1:5, 1:5, 1:5] = True
+    name = "in.zarr" if store else "in.npy"
+    isoflow.write_volume(isoflow.DigitalObject(v), tmp_path / name)
+    extra = ["--volumes", ".zarr"] if store else []
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "flow.csv").write_text("the previous run\n")
+
+    @contextlib.contextmanager
+    def interrupted_bar(*args, **kwargs):
+        raise KeyboardInterrupt
+        yield
+
+    monkeypatch.setattr(cli_flow, "progress_bar", interrupted_bar)
+    for out in (tmp_path / "new", tmp_path / "run"):
+        rc, _, err = run("flow", tmp_path / name, "--out", out, "--force", *extra)
+        assert rc == 130 and err.strip().splitlines()[-1].startswith("isoflow: interrupted"), err
+    assert not (tmp_path / "new").exists()
+    assert [p.name for p in (tmp_path / "run").iterdir()] == ["flow.csv"]
+    assert (tmp_path / "run" / "flow.csv").read_text() == "the previous run\n"

@@ -91,15 +91,15 @@ def flow_store(args: argparse.Namespace) -> int:
     conn = flow_connectivity(3, args.connectivity)
     last = args.steps if args.steps is not None else max_steps_for(volume.shape)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
-    with progress_bar(args, "flow", unit=" steps") as show, label_options(args):
-        try:
+    try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
+        with progress_bar(args, "flow", unit=" steps") as show, label_options(args):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   progress=None if show is None else (lambda step, state: show(step, args.steps)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
-        except BaseException:
-            writer.abort()  # the previous run's files stay as they were
-            raise
+    except BaseException:
+        writer.abort()  # the previous run's files stay as they were
+        raise
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
     else:
@@ -153,15 +153,15 @@ def run_with_files(args: argparse.Namespace, obj, writer):
     """The flow, each state handed to the writer as it comes."""
     from ..flow.run import run_flow
 
-    with progress_bar(args, "flow", unit=" steps") as show:
+    try:  # the writer's staging directory is made: an interrupt anywhere (an import, a bar) removes it
+        with progress_bar(args, "flow", unit=" steps") as show:
 
-        def progress(step, state):
-            if writer is not None:
-                writer.add(step, state)
-            if show is not None:  # a counter unless --steps says how many
-                show(step, args.steps)
+            def progress(step, state):
+                if writer is not None:
+                    writer.add(step, state)
+                if show is not None:  # a counter unless --steps says how many
+                    show(step, args.steps)
 
-        try:
             if writer is not None:
                 writer.add(0, obj.cropped())
             # (no callback when nothing uses the states: a compiled run then
@@ -171,10 +171,10 @@ def run_with_files(args: argparse.Namespace, obj, writer):
                               keep_states=False)
             if writer is not None:
                 writer.finish(result)
-        except BaseException:
-            if writer is not None:  # the previous run's files stay as they were
-                writer.abort()
-            raise
+    except BaseException:
+        if writer is not None:  # the previous run's files stay as they were
+            writer.abort()
+        raise
     return result
 
 

@@ -217,10 +217,11 @@ def label_options(args: argparse.Namespace) -> Iterator[None]:
     block in a store: its refusal names the options of this command that
     select labels (``--label N``; ``--labels`` where the command takes it:
     not flow, which flows one object)."""
-    from ..mesh.volumes import with_label_options
     from ..scale.arrays import NotBinary
 
     try:
         yield
     except NotBinary as exc:
+        from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
+
         raise with_label_options(exc, every=args.command != "flow") from None
