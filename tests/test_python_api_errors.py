@@ -151,3 +151,16 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.closed_surfaces(volume)
     with pytest.raises(IsoflowError, match="not a binary volume"):
         isoflow.analyze(volume)
+
+
+def test_class_histogram_names_a_histogram_that_is_not_3d():
+    # a 2D histogram (16 counts) or any other length was NumPy's IndexError
+    hist2d = isoflow.configuration_histogram(np.ones((3, 3), bool))
+    for bad, words in ((hist2d, r"got \(16,\)"), (np.zeros(300), r"got \(300,\)"),
+                       (np.array(["x"] * 256), "got an array of type <U1")):
+        with pytest.raises(IsoflowError, match="class_histogram takes the 256 counts of a 3D configuration histogram, "
+                                               + words):
+            isoflow.class_histogram(bad)
+    # the box of the paper's example: 8 convex corners (class (+,+,+), index 7), as analyze counts them
+    box = np.ones((3, 3, 3), bool)
+    assert isoflow.class_histogram(isoflow.configuration_histogram(box)).tolist() == isoflow.analyze(box).n

@@ -17,6 +17,7 @@ from functools import cache
 
 import numpy as np
 
+from ..errors import IsoflowError
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import check_connectivity, is_face_connectivity
 
@@ -415,9 +416,14 @@ def class_histogram(config_hist: np.ndarray) -> np.ndarray:
     >>> dict(zip(CLASS_LABELS, n.tolist()))["(+,+,+)"], int(n[6]), int(n[4])
     (8, 24, 24)
     """
+    hist = np.asarray(config_hist)
+    if hist.shape != (256,) or hist.dtype.kind not in "iuf":
+        # (a 2D histogram has 16 counts, a 4D one 65536: a bare IndexError or a wrong n otherwise)
+        raise IsoflowError(f"class_histogram takes the 256 counts of a 3D configuration histogram, got "
+                           f"{'an array of type ' + str(hist.dtype) if hist.dtype.kind not in 'iuf' else hist.shape}")
     cls = class_lut()
     on = cls >= 0
-    return np.bincount(cls[on], weights=config_hist[on], minlength=9).astype(np.int64)
+    return np.bincount(cls[on], weights=hist[on], minlength=9).astype(np.int64)
 
 
 # --------------------------------------------------------------------------
