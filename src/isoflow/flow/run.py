@@ -72,7 +72,8 @@ class FlowResult(Result):
         ``center`` (world centre of the last non-empty state's bbox),
         ``last_shape`` (``cuboid`` when that state is a full box,
         ``other``, or ``not-reached`` when the run stopped before vanishing
-        or converging) and ``last_step``.
+        or converging, or had no non-empty state at all: an empty input,
+        whose ``stop_reason`` is ``vanished``) and ``last_step``.
     topology_changes : list of dict
         One per change of the Betti numbers in a plain run: step, before,
         after, where (world bbox), applied.
