@@ -243,7 +243,7 @@ def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
 
 # PLY: a header, then the vertex and face elements as text or binary records
 
-PLY_TYPES = {"float": "f4", "double": "f8", "uchar": "u1", "ushort": "u2", "int": "i4", "uint": "u4"}
+PLY_TYPES = {"float": "f4", "double": "f8", "uchar": "u1", "ushort": "u2", "int": "i4", "uint": "u4", "uint64": "u8"}
 
 
 def _ply(v, faces, form="ascii", vtype="float", count="uchar", index="int", extra=(), face_extra="",
@@ -318,6 +318,11 @@ def test_binary_ply_of_polygons_of_several_sizes_reads_as_its_ascii_twin(tmp_pat
     v2, f2 = ply.read_ply((tmp_path / "b.ply").read_bytes())
     np.testing.assert_array_equal(v2, twin.vertices)
     np.testing.assert_array_equal(f2, twin.faces)
+    # a 64-bit count past any file (damaged): trimesh's turn, not an OverflowError
+    head = _ply(v[:3], [[0, 1, 2]], "binary_little_endian", count="uint64")
+    tail = np.array([2**64 - 1], "<u8").tobytes() + np.array([0, 1, 2], "<i4").tobytes()
+    damaged = head.replace(b"element face 1", b"element face 2") + tail
+    assert ply.read_ply(head) is not None and ply.read_ply(damaged) is None
 
 
 @pytest.mark.parametrize("case", ["texture", "face property", "edge element", "two-corner face", "index past the end",

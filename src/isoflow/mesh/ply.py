@@ -151,10 +151,10 @@ def _binary(body: bytes, order: str, vertex: list, nv: int, count: str, index: s
     for f in range(nf):  # faces of several sizes: each count says where the next face begins
         if at + c.itemsize > len(faces):
             return None
-        sizes[f] = int(np.frombuffer(faces, c, 1, at)[0])
-        if sizes[f] < 0:
+        n = int(np.frombuffer(faces, c, 1, at)[0])
+        if not 0 <= n <= len(faces):  # (a 64-bit count past int64 would not even fit the array)
             return None
-        starts[f] = at + c.itemsize
+        sizes[f], starts[f] = n, at + c.itemsize
         at = starts[f] + sizes[f] * i.itemsize
     if at > len(faces):
         return None
