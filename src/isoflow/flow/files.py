@@ -362,7 +362,10 @@ class FlowWriter:
     def abort(self) -> None:
         """Remove the staging directory (and the output directory when this
         writer made it and nothing else is in it): the previous run stays."""
+        from ..scale.chunks import settle_zarr_io
+
         self._stop_checks()
+        settle_zarr_io()  # a step store's write that the interrupt did not end would recreate the stage
         shutil.rmtree(self.stage, ignore_errors=True)
         if self.created:
             try:

@@ -279,6 +279,9 @@ def _replace(tmp: Path, path: Path, directory: bool) -> None:
 def _remove(tmp: Path) -> None:
     with contextlib.suppress(OSError):
         if tmp.is_dir() and not tmp.is_symlink():
+            from ..scale.chunks import settle_zarr_io  # a store's writes interrupted may still be under way
+
+            settle_zarr_io()
             shutil.rmtree(tmp)
         else:
             tmp.unlink()

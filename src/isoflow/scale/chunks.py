@@ -76,6 +76,37 @@ def compute(*tasks, scheduler=None, workers: int | None = None, **kwargs) -> tup
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+def settle_zarr_io(timeout: float = 5.0) -> None:
+    """Wait, at most ``timeout`` seconds, until zarr's I/O thread has no
+    work in flight. A zarr call runs on that thread while the caller waits;
+    an interrupt (Ctrl-C, a batch system's SIGTERM) ends the wait, not the
+    work, which may then write into a store being removed and leave it
+    behind. Called before a half-written store is removed; nothing where
+    zarr is not loaded or its thread not started.
+
+    Examples
+    --------
+    >>> settle_zarr_io()  # nothing in flight: returns at once
+    """
+    import asyncio
+
+    sync = sys.modules.get("zarr.core.sync")
+    loop = getattr(sync, "loop", [None])[0] if sync is not None else None
+    if loop is None or loop.is_closed() or not loop.is_running():
+        return
+
+    async def the_others() -> None:
+        me = asyncio.current_task()
+        pending = [t for t in asyncio.all_tasks() if t is not me]
+        if pending:
+            await asyncio.wait(pending, timeout=timeout)
+
+    try:
+        asyncio.run_coroutine_threadsafe(the_others(), loop).result(timeout + 1.0)
+    except Exception:  # (a loop closing meanwhile, a timeout: removing the store goes on as before)
+        pass
+
+
 def _threaded(scheduler) -> bool:
     """Whether ``scheduler`` is dask's threaded one: named so, or None where
     neither dask's configuration nor a distributed client (looked for only
