@@ -248,8 +248,8 @@ def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: 
     >>> int(h.sum()), int(h[255])  # 27 vertices, one of them inside
     (27, 1)
     """
-    # checked before any pass: 0 was range()'s ValueError, and the compiled
-    # kernel, which takes no slab, let any value through
+    # checked before any pass: the NumPy passes step through the volume by
+    # it, and the compiled kernel, which takes no slab, would not look at it
     if slab is not None and (isinstance(slab, (bool, np.bool_)) or not isinstance(slab, (int, np.integer)) or slab < 1):
         raise IsoflowError(f"slab must be an integer >= 1, got {slab!r}")
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)

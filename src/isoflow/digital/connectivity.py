@@ -27,8 +27,8 @@ def check_connectivity(ndim: int, connectivity: int) -> int:
     if connectivity not in VALID.get(ndim, ()):
         allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
         raise IsoflowError(f"connectivity {connectivity} is not valid in {ndim}D (use {allowed})")
-    # a Python int: 6.0 or numpy.int64(6) pass the test above, and were
-    # returned, and reported (``"connectivity": 6.0``), as given
+    # a Python int: 6.0 or numpy.int64(6) pass the test above, and the
+    # value returned is what reports and JSON show
     return int(connectivity)
 
 

@@ -204,8 +204,8 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     if v.ndim == 4:
         return [b0, None, None, enclosed]
     # a ``chi`` given that is not the volume's: in 2D chi = b0 - b1 exactly,
-    # in 3D it would give a negative b1 (an assert was skipped under -O and
-    # a negative Betti number returned as an answer)
+    # in 3D it would give a negative b1; a check, not an assert, as -O
+    # removes asserts
     if (v.ndim == 2 and b0 - enclosed != chi) or (v.ndim == 3 and b0 + enclosed - chi < 0):
         raise IsoflowError(f"chi={chi} is not this volume's Euler characteristic ({b0} components and "
                            f"{enclosed} {'holes' if v.ndim == 2 else 'cavities'}); leave chi out to compute it")

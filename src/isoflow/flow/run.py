@@ -119,8 +119,7 @@ class FlowResult(Result):
         >>> back.to_dict() == r.to_dict(), back.states
         (True, [])
         """
-        # without this, the JSON's own mapping was refused: states is a
-        # field without a default (TypeError: missing 'states')
+        # the JSON holds no states, and states is a field without a default
         return super().from_dict({"states": [], **values})
 
 

@@ -61,9 +61,8 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     >>> obj.voxels, obj.volume.shape
     (23, (2, 3, 4))
     """
-    # checked first: an array was an AttributeError, a zero pitch NumPy's
-    # divide-by-zero warnings before voxelize refused it, a short origin
-    # NumPy's broadcast error
+    # checked before any arithmetic, so that each bad argument is named:
+    # the mesh is taken from the manifold, and the pitch divides
     if not callable(getattr(manifold, "to_mesh", None)):
         raise IsoflowError(f"from_manifold takes a manifold3d.Manifold, got {type(manifold).__name__}"
                            "; a mesh: voxelize_mesh, an array: DigitalObject")

@@ -591,8 +591,8 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     arr = np.asarray(labels)
     if arr.ndim != 3 or arr.dtype.kind != "u":
         raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
-    # the pitch and origin checked as every object's are (a negative pitch
-    # was written as given, a short origin was NumPy's reshape error)
+    # the pitch and origin checked as every object's are, before the file
+    # is written: the format stores whatever it is given
     place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=pitch,
                           origin=np.zeros(3) if origin is None else np.asarray(origin))
     check_label_output(path, int(arr.max(initial=0)), force)

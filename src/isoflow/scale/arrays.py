@@ -52,9 +52,9 @@ def is_host(xp) -> bool:
 
 def refuse_object(array, where: str) -> None:
     """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` where an array
-    is taken: NumPy makes it a 0D object array, which was refused as "0D" or
-    "of type object", not named (known by its fields: this layer cannot
-    import the class)."""
+    is taken: NumPy would make it a 0D object array, refused for its shape or
+    type rather than named (known by its fields: this layer cannot import
+    the class)."""
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume")
 
