@@ -137,7 +137,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
 
     slabs = LabelSlabs(args.input)
     try:
-        place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=slabs.pitch, origin=slabs.origin)
+        place = DigitalObject.placement(3, pitch=slabs.pitch, origin=slabs.origin)
     except IsoflowError as exc:
         raise exc.at(args.input) from None
     wanted = None if asked is None else _within_type(args.input, asked, slabs.dtype)

@@ -180,8 +180,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
     array, pitch, origin = store_volume(args.input, args.label)
-    frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch,
-                          origin=(0.0, 0.0, 0.0) if origin is None else origin)
+    frame = DigitalObject.placement(3, pitch=pitch, origin=origin)
     conn = args.connectivity or default_connectivity(3)
     with progress_bar(args, "blocks") as show, label_options(args):
         try:

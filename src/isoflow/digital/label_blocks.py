@@ -89,7 +89,7 @@ def label_table_blocks(
     checked_image(np.zeros((1,) * len(array.shape), array.dtype))  # 3D, of labels
     kind = label_dtype(array.dtype)
     conn = check_connectivity(3, connectivity)
-    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    place = DigitalObject.placement(3, pitch=pitch, origin=origin)
     wanted = None if labels is None else wanted_labels(labels, kind)
     nx = int(array.shape[0])
     sizes = [nx] if layers is None else [int(n) for n in layers]

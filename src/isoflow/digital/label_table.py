@@ -197,8 +197,8 @@ def label_table(
     # the pitch and origin checked as every object's are
     # (without a dtype: a float conversion here would raise NumPy's
     # ValueError on a string before the check could name the field)
-    place = DigitalObject(np.zeros((1,) * vol.ndim, bool), pitch=1.0 if pitch is None else np.asarray(pitch),
-                          origin=np.zeros(vol.ndim) if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(vol.ndim, pitch=None if pitch is None else np.asarray(pitch),
+                                    origin=None if origin is None else np.asarray(origin))
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table

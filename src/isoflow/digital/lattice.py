@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary
@@ -127,6 +128,23 @@ class DigitalObject:
         for corner in np.ndindex(*(2,) * n):
             vol &= grid[tuple(slice(c, c + s) for c, s in zip(corner, shape))]
         return cls(vol, offset=tuple(lo), **kw)
+
+    @classmethod
+    def placement(cls, ndim: int, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
+                  offset: ArrayLike | None = None, parity: int | None = None) -> DigitalObject:
+        """An empty object of one voxel that holds a place only: ``pitch``,
+        ``origin``, ``offset`` and ``parity`` (None: the defaults) checked
+        as every object's are, so that a table or a file written without a
+        DigitalObject names a bad field as the object would.
+
+        Examples
+        --------
+        >>> place = DigitalObject.placement(3, pitch=(0.5, 0.5, 2.0), origin=(1, 2, 3))
+        >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
+        ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
+        """
+        given = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
+        return cls(np.zeros((1,) * ndim, bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
     @property

@@ -332,7 +332,7 @@ def _vertex_dtype(position) -> np.dtype:
     columns, positions of type ``position``."""
     empty = QuadMesh(np.zeros((0, 3)), np.zeros((0, 4), np.int32), np.zeros((0, 4), np.int32),
                      np.zeros((0, 3), np.int8), np.zeros(0, np.uint8), np.zeros(0, np.int8), 6, 0)
-    table = mesh_vertex_table(empty, DigitalObject(np.zeros((1, 1, 1), bool)), position)
+    table = mesh_vertex_table(empty, DigitalObject.placement(3), position)
     return np.dtype([(k, v.dtype.newbyteorder("<")) for k, v in table.items()])
 
 
@@ -577,7 +577,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     if len(array.shape) != 3:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)
-    frame = frame or DigitalObject(np.zeros((1, 1, 1), bool))
+    frame = frame or DigitalObject.placement(3)
     array, grid, cache = _reader(array, block_shape)
     with using(threads):
         workers = thread_count()

@@ -212,9 +212,7 @@ def read_label_image(path: str | os.PathLike) -> LabelImage:
     elif arr.dtype.kind not in "biu":
         raise IsoflowError(f"{path}: holds {arr.dtype} values, not labels")
     try:
-        obj = DigitalObject(np.zeros((1,) * arr.ndim, bool), **{k: v for k, v in (
-            ("pitch", raw.pitch), ("origin", raw.origin), ("offset", raw.offset), ("parity", raw.parity))
-            if v is not None})
+        obj = DigitalObject.placement(arr.ndim, raw.pitch, raw.origin, raw.offset, raw.parity)
     except IsoflowError as exc:
         raise exc.at(path) from None
     return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0])
@@ -593,7 +591,6 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
         raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject(np.zeros((1, 1, 1), bool), pitch=pitch,
-                          origin=np.zeros(3) if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(3, pitch=pitch, origin=None if origin is None else np.asarray(origin))
     check_label_output(path, int(arr.max(initial=0)), force)
     return write_placed(LabelVolume(arr, place.pitch, place.origin), path, force)
