@@ -32,6 +32,8 @@ def json_ready(value: Any) -> Any:
     """
     if isinstance(value, Result):
         return value.to_dict()
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):  # a result's part (a verdict's stop)
+        return {f.name: json_ready(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, Mapping):
         return {str(k): json_ready(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):

@@ -86,9 +86,13 @@ class GenusVerdict(Result):
     stop: Stop | None = None
     notes: tuple[Note, ...] = ()
 
-    #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order
+    #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order:
+    #: the sentence, then the facts it is written from, so that a script
+    #: reads ``kind`` rather than parsing words, and :meth:`from_dict` takes
+    #: the JSON back
     KEYS = ("input", "mesh", "manifold3d", "pymeshlab", "self_intersecting_faces",
-            "faces_crossing_other_components", "solid_genus", "fill", "digital", "solid", "converged", "agree", "verdict")
+            "faces_crossing_other_components", "solid_genus", "fill", "digital", "solid", "converged", "agree", "verdict",
+            "kind", "reference", "reference_source", "stop", "notes")
 
     @property
     def verdict(self) -> str:
@@ -96,9 +100,31 @@ class GenusVerdict(Result):
         return verdict_text(self)
 
     def _keys(self) -> list[str]:
-        # the JSON's keys: some fields are the verdict's facts, not printed,
-        # and the verdict's words are a property
+        # the JSON's keys: the verdict's words are a property
         return list(self.KEYS)
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> GenusVerdict:
+        """The verdict of :meth:`to_dict`'s JSON (``isoflow genus --json``):
+        the sentence is dropped (it is written again from the facts), the
+        stop and the notes are rebuilt from their objects.
+
+        Examples
+        --------
+        >>> import json
+        >>> from isoflow.mesh.genus import verify_genus
+        >>> v = verify_genus("meshes/torus.obj", (16, 32))
+        >>> back = GenusVerdict.from_dict(json.loads(json.dumps(v.to_dict())))
+        >>> back.kind, back.verdict == v.verdict, back.to_dict() == v.to_dict()
+        ('agree', True, True)
+        """
+        given = {k: v for k, v in values.items() if k != "verdict"}
+        stop = given.get("stop")
+        if isinstance(stop, Mapping):
+            given["stop"] = Stop(**stop)
+        given["notes"] = tuple(n if isinstance(n, Note) else Note(n["kind"], n.get("facts", {}))
+                               for n in given.get("notes", ()))
+        return super().from_dict(given)
 
 
 # --------------------------------------------------------------------------
