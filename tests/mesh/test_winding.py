@@ -325,6 +325,7 @@ def test_zarr_store_equals_the_in_memory_volume(tmp_path, name, res, chunks):
     assert scale["scale"] == [pitch] * 3 and np.allclose(shift["translation"], origin + pitch / 2, rtol=0, atol=1e-12)
     back = isoflow.read_volume(tmp_path / "v.zarr")
     assert np.array_equal(back.volume, ref) and np.allclose(back.origin, origin, rtol=0, atol=1e-12)
+    assert json.loads(json.dumps(out)) == out and np.allclose(out["origin"], origin, rtol=0, atol=1e-12)
     assert calls and calls[-1][0] == calls[-1][1] == -(-ref.shape[0] // z.chunks[0])
 
 

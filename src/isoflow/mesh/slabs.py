@@ -127,8 +127,8 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
     >>> from isoflow import data, read_volume
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "torus.zarr"
     >>> z = voxelize_to_zarr(data.torus(), store, resolution=24)
-    >>> z["voxels"] == read_volume(store).voxels
-    True
+    >>> z["voxels"] == read_volume(store).voxels, z["origin"] == read_volume(store).origin.tolist()
+    (True, True)
     """
     from .fills import check_fill
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
@@ -197,7 +197,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
         except IsoflowError as exc:
             raise exc.at(where) from None
     store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
-             "origin": np.asarray(origin, dtype=np.float64)}
+             "origin": [float(x) for x in origin]}  # plain numbers, as shape's: the dict is JSON as it is
     if details:
         return store, result
     say_note(result.note)
