@@ -164,3 +164,17 @@ def test_class_histogram_names_a_histogram_that_is_not_3d():
     # the box of the paper's example: 8 convex corners (class (+,+,+), index 7), as analyze counts them
     box = np.ones((3, 3, 3), bool)
     assert isoflow.class_histogram(isoflow.configuration_histogram(box)).tolist() == isoflow.analyze(box).n
+
+
+@pytest.mark.parametrize("points,ndim", [("0 0 0\n-5 3 2\n", 3), ("0 0\n1 0\n", 2)])
+def test_read_object_says_why_a_point_list_gives_no_voxel(tmp_path, points, ndim):
+    # the paper's point model keeps a cube only where all 2^n corners are
+    # listed: none here, so the object is empty although the file is not,
+    # and Python said nothing (the command line gave the reason as a note)
+    (tmp_path / "p.txt").write_text(points)
+    with pytest.warns(isoflow.IsoflowWarning, match=r"p\.txt: no unit .* points_are='voxels' reads each point") as seen:
+        assert isoflow.read_object(tmp_path / "p.txt").voxels == 0
+    assert len(seen) == 1 and f"all {2 ** ndim} of its corners" in str(seen[0].message)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert isoflow.read_object(tmp_path / "p.txt", points_are="voxels").voxels == len(points.splitlines())

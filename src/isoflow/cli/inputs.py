@@ -5,11 +5,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import sys
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, IsoflowWarning
 from .progress import progress_bar
 
 
@@ -183,19 +185,17 @@ def why_empty(args: argparse.Namespace, obj) -> str | None:
     otherwise (an empty volume is empty as given; a mesh says why in its
     note)."""
     from ..mesh.load import is_mesh_path
-    from ..mesh.volumes import is_volume
+    from ..mesh.volumes import is_volume, no_cube_reason
 
     if obj.voxels or is_volume(args.input) or is_mesh_path(Path(args.input)) or args.points_are == "voxels":
         return None
-    cell = "square" if obj.ndim == 2 else "cube"
-    return (f"no unit {cell} has all {2 ** obj.ndim} of its corners among the points (the paper's point model, "
-            "Definitions 1-2); --points-are voxels reads each point as a voxel")
+    return no_cube_reason(obj.ndim, "--points-are voxels")
 
 
 def load_input(args: argparse.Namespace):
     """The digital object named on the command line (volume, points or mesh)."""
     from ..mesh.load import is_mesh_path
-    from ..mesh.volumes import is_volume, read_object
+    from ..mesh.volumes import NO_CUBE, is_volume, read_object
 
     path = Path(args.input)
     if is_mesh_path(path):
@@ -207,7 +207,9 @@ def load_input(args: argparse.Namespace):
     if is_volume(args.input):  # anything else is read as a point list
         refuse_points_option(args, "volume")
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
-    with label_options(args):
+    with label_options(args), warnings.catch_warnings():
+        # an empty point model: each command says why in its own words (why_empty)
+        warnings.filterwarnings("ignore", message=re.escape(f"{path}: {NO_CUBE}"), category=IsoflowWarning)
         return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.label_table import as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, IsoflowWarning
 from ..scale.arrays import NotBinary, binary
 from ..scale.memory import check_fits
 from .formats.registry import (
@@ -404,11 +405,32 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
         raise IsoflowError(f"{path}: a label selects voxels of a volume, not of a point list")
     pts = read_points(path)
     try:
-        if points_are == "voxels":
-            return DigitalObject.from_voxels(pts)
-        return DigitalObject.from_points(pts)
+        obj = DigitalObject.from_voxels(pts) if points_are == "voxels" else DigitalObject.from_points(pts)
     except IsoflowError as exc:  # e.g. the grid beyond the memory budget: say which file
         raise exc.at(path) from None
+    if not obj.voxels and points_are == "corners":  # points, and no cube: say why, as the command line does
+        warnings.warn(f"{path}: {no_cube_reason(obj.ndim, 'points_are=' + repr('voxels'))}", IsoflowWarning,
+                      stacklevel=2)
+    return obj
+
+
+#: how :func:`no_cube_reason` starts (the command line, which says it in its own words, filters the warning by it)
+NO_CUBE = "no unit "
+
+
+def no_cube_reason(ndim: int, option: str) -> str:
+    """Why a point list read with the paper's point model gave no voxel,
+    naming ``option``, the spelling (Python's or the command line's) of
+    the way that reads each point as a voxel.
+
+    Examples
+    --------
+    >>> no_cube_reason(2, "--points-are voxels")[:45]
+    'no unit square has all 4 of its corners among'
+    """
+    cell = "square" if ndim == 2 else "cube"
+    return (f"{NO_CUBE}{cell} has all {2 ** ndim} of its corners among the points (the paper's point model, "
+            f"Definitions 1-2); {option} reads each point as a voxel")
 
 
 
