@@ -590,3 +590,21 @@ def test_a_file_in_its_suffix_format_without_triangles_keeps_the_plain_line(tmp_
     path = tmp_path / "points.ply"
     path.write_text(PLY_TET.replace("element face 4", "element face 0").rsplit("\n", 5)[0] + "\n")  # points only
     fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid PLY file)",))
+
+
+@pytest.mark.parametrize("input_name", ["b.npy", "b.zarr"])
+def test_surface_names_a_bad_connectivity_before_an_existing_output(tmp_path, capsys, input_name):
+    # a surface is always of a 3D object, so 80 (a 4D connectivity) can never
+    # work: it was refused only after "exists; pass --force", and --force
+    # then led to the real problem
+    vol = np.zeros((5, 5, 5), bool)
+    vol[1:4, 1:4, 1:4] = True
+    if input_name.endswith(".zarr"):
+        zarr = pytest.importorskip("zarr")
+        zarr.create_array(str(tmp_path / input_name), data=vol.astype(np.uint8), chunks=(3, 3, 3), zarr_format=2)
+    else:
+        np.save(tmp_path / input_name, vol)
+    (tmp_path / "old.ply").write_text("kept")
+    fails(capsys, "surface", tmp_path / input_name, "--connectivity", 80, "-o", tmp_path / "old.ply",
+          words=("connectivity 80 is not valid in 3D (use 6 or 26)",))
+    assert (tmp_path / "old.ply").read_text() == "kept"

@@ -43,10 +43,12 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_surface(args: argparse.Namespace) -> int:
-    from ..digital.connectivity import default_connectivity
+    from ..digital.connectivity import check_connectivity, default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path
 
+    if args.connectivity is not None:  # every surface is of a 3D object: a bad value is named before any file
+        check_connectivity(3, args.connectivity)
     if args.labels is not None:
         from .labels import cmd_surface_labels
 
