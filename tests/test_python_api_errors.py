@@ -178,3 +178,14 @@ def test_read_object_says_why_a_point_list_gives_no_voxel(tmp_path, points, ndim
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert isoflow.read_object(tmp_path / "p.txt", points_are="voxels").voxels == len(points.splitlines())
+
+
+def test_boundary_mesh_of_an_object_says_how_to_place_the_mesh():
+    # the refusal said only "pass its .volume", and the mesh of the volume is
+    # in array-corner units: the way to the object's place is obj.world
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5, origin=(1.0, 2.0, 3.0))
+    with pytest.raises(IsoflowError, match=r"obj\.world\(mesh\.vertices\)") as refused:
+        isoflow.boundary_mesh(obj)
+    assert len(str(refused.value).splitlines()) == 1
+    placed = obj.world(isoflow.boundary_mesh(obj.volume).vertices)
+    assert placed.min(axis=0).tolist() == [1.0, 2.0, 3.0] and placed.max(axis=0).tolist() == [2.0, 3.0, 4.0]

@@ -509,7 +509,8 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     >>> len(mesh.vertices), len(mesh.faces), mesh.euler_characteristic
     (8, 6, 2)
     """
-    refuse_object(volume, "boundary_mesh")
+    refuse_object(volume, "boundary_mesh", then="the mesh is in array-corner units: obj.world(mesh.vertices) "
+                  "puts its vertices where the object is")
     vol = np.asarray(volume)
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")

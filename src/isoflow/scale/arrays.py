@@ -50,13 +50,14 @@ def is_host(xp) -> bool:
     return xp is np
 
 
-def refuse_object(array, where: str) -> None:
+def refuse_object(array, where: str, then: str = "") -> None:
     """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` where an array
     is taken: NumPy would make it a 0D object array, refused for its shape or
     type rather than named (known by its fields: this layer cannot import
-    the class)."""
+    the class). ``then``: what to do with the result to place it as the
+    object is placed."""
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
-        raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume")
+        raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
 
 
 def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
