@@ -13,7 +13,7 @@ import trimesh
 
 from isoflow import DigitalObject, betti_numbers, boundary_mesh
 from isoflow.cli import main
-from isoflow.errors import IsoflowError
+from isoflow.errors import IsoflowError, MeshNote
 from isoflow.mesh.bridges import cube_union, from_manifold, to_manifold
 from isoflow.mesh.genus import mesh_topology, verify_genus
 from isoflow.mesh.load import load_mesh
@@ -236,15 +236,22 @@ def test_object_from_manifold_booleans_matches_manifold3d():
     assert back.genus() == solid.genus()
 
 
+@pytest.mark.filterwarnings("error")  # the exact solid, with no note (a sparse one was called thin)
 def test_round_trip_object_manifold_object(rng):
-    for _ in range(20):
-        v = rng.random((5, 6, 4)) < 0.6
-        if not v.any():
-            continue
-        obj = DigitalObject(v, offset=(-2, 3, 1)).cropped()
-        for conn in (6, 26):
-            back = from_manifold(to_manifold(obj, conn))
-            assert back.offset == obj.offset and (back.volume == obj.volume).all()
+    for density in (0.6, 0.3):
+        for _ in range(10):
+            v = rng.random((5, 6, 4)) < density
+            if not v.any():
+                continue
+            obj = DigitalObject(v, offset=(-2, 3, 1)).cropped()
+            for conn in (6, 26):
+                back = from_manifold(to_manifold(obj, conn))
+                assert back.offset == obj.offset and (back.volume == obj.volume).all()
+
+
+def test_a_manifold_that_holds_no_voxel_says_why():
+    with pytest.warns(MeshNote, match="leaves no voxel in"):
+        assert from_manifold(m3.Manifold.sphere(0.01), pitch=1.0).voxels == 0
 
 
 def test_edge_and_corner_contacts_agree_under_matching_connectivity():

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
-from .voxelize import voxelize
+from .voxelize import say_note, voxelize
 
 if TYPE_CHECKING:
     from manifold3d import Manifold
@@ -78,8 +78,13 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     lo = np.floor((verts.min(axis=0) - corner) / pitch).astype(np.int64)
     hi = np.ceil((verts.max(axis=0) - corner) / pitch).astype(np.int64)
     shape = np.maximum(hi - lo, 1)
-    vol, _, _ = voxelize(verts, tris, pitch=pitch, grid=(corner + pitch * lo, shape))
-    return DigitalObject(vol, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
+    found = voxelize(verts, tris, pitch=pitch, grid=(corner + pitch * lo, shape), details=True)
+    # a manifold is closed and bounds what it draws (no double-sided or
+    # zero-thickness faces), so a solid thin beside its shell is the solid,
+    # exact for a union of voxels: the note speaks only for an empty one
+    if not found.volume.any():
+        say_note(found.note)
+    return DigitalObject(found.volume, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
 
 
 def cube_union(voxels):
