@@ -605,6 +605,9 @@ def test_surface_names_a_bad_connectivity_before_an_existing_output(tmp_path, ca
     else:
         np.save(tmp_path / input_name, vol)
     (tmp_path / "old.ply").write_text("kept")
-    fails(capsys, "surface", tmp_path / input_name, "--connectivity", 80, "-o", tmp_path / "old.ply",
-          words=("connectivity 80 is not valid in 3D (use 6 or 26)",))
+    with pytest.raises(SystemExit) as refused:  # argparse's refusal, with the choices
+        main(["surface", str(tmp_path / input_name), "--connectivity", "80", "-o", str(tmp_path / "old.ply")])
+    assert refused.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "isoflow surface: error: argument --connectivity: invalid choice: 80 (choose from 6, 26)"]
     assert (tmp_path / "old.ply").read_text() == "kept"

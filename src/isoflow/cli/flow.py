@@ -23,7 +23,7 @@ from .progress import progress_bar
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "flow", "run the digital curvature flow (section 5) with topology control")
     add_input_arguments(p)
-    add_connectivity(p)
+    add_connectivity(p, dims=(2, 3))
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "

@@ -25,7 +25,7 @@ from .labels import add_labels_option
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "surface", "write the boundary quad mesh (PLY/OBJ/STL/GLB) with curvature attributes")
     add_input_arguments(p)
-    add_connectivity(p)
+    add_connectivity(p, dims=(3,))
     p.add_argument("-o", "--output", required=True,
                    help="OUT.ply, OUT.obj, OUT.stl (binary, triangles) or OUT.glb (triangles, vertex colours); "
                         "with --labels OUT.glb (a node per label) or DIR/ (a file per label, see --suffix)")
@@ -43,12 +43,10 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_surface(args: argparse.Namespace) -> int:
-    from ..digital.connectivity import check_connectivity, default_connectivity
+    from ..digital.connectivity import default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path
 
-    if args.connectivity is not None:  # every surface is of a 3D object: a bad value is named before any file
-        check_connectivity(3, args.connectivity)
     if args.labels is not None:
         from .labels import cmd_surface_labels
 
