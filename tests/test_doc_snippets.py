@@ -1,18 +1,28 @@
-"""The Python snippets of README.md and docs/*.md call the public API as it
-is: every ``isoflow.NAME(...)`` (or a name imported from isoflow) exists and
-takes the keywords the snippet gives. The snippets need files they do not
-make, so they are read, not run."""
+"""The snippets of README.md and docs/*.md use isoflow as it is: every
+``isoflow.NAME(...)`` of a Python snippet (or a name imported from isoflow)
+exists and takes the keywords the snippet gives; every command line of a
+shell snippet is one the parser takes, and every option an inline command
+names is that command's; the keys the pages name for ``info --json`` and
+``flow --json`` are the keys printed, and every key printed is named. The
+snippets need files they do not make, so they are read, not run."""
 
 from __future__ import annotations
 
+import argparse
 import ast
+import contextlib
 import inspect
+import io
+import json
 import re
+import shlex
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import isoflow
+from isoflow.cli.main import build_parser, main
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -58,3 +68,119 @@ def test_snippets_call_the_api_as_it_is(page):
                 continue
             wrong += [f"line {line}: {name}() takes no {k}=" for k in keywords if k not in params]
     assert not wrong, wrong
+
+
+#: a command line of isoflow's in a snippet, up to a comment, pipe, redirection or the span's end
+COMMAND = re.compile(r"(?<![\w/.-])isoflow (info|surface|voxelize|genus|flow|completion)\b(?!:)[^#|&>`)\"\n]*")
+#: isoflow's commands, which a paragraph about a command's keys names too
+COMMANDS = {"info", "surface", "voxelize", "genus", "flow", "completion"}
+
+
+def shell_lines(page: Path) -> list[str]:
+    """The lines of the page's fenced shell snippets (```bash, ```sh, or a
+    plain fence), continuation lines joined."""
+    lines, fence = [], None
+    for line in page.read_text().splitlines():
+        if line.startswith("```"):
+            fence = line[3:].strip() if fence is None else None
+            continue
+        if fence in ("bash", "sh", "shell", "console", ""):
+            if lines and lines[-1].endswith("\\"):
+                lines[-1] = lines[-1][:-1] + line
+            else:
+                lines.append(line)
+    return lines
+
+
+def refusal(argv: list[str]) -> str | None:
+    """What the parser says of a command line, or None where it takes it."""
+    said = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(said), contextlib.redirect_stdout(io.StringIO()):
+            build_parser().parse_args(argv)
+    except SystemExit:
+        return said.getvalue().strip().splitlines()[-1]
+    return None
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_shell_snippets_are_command_lines_the_parser_takes(page):
+    wrong = []
+    for line in shell_lines(page):
+        for match in COMMAND.finditer(line):
+            text = match.group(0).strip()
+            if "[" in text or "..." in text:  # a synopsis, not a command line
+                continue
+            said = refusal(shlex.split(text)[1:])
+            if said:
+                wrong.append(f"{text}: {said}")
+    assert not wrong, wrong
+
+
+def options_of(command: str) -> set[str]:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    return {option for action in sub._actions for option in action.option_strings}
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_inline_commands_name_options_the_command_has(page):
+    text = re.sub(r"```.*?```", "", page.read_text(), flags=re.S)
+    wrong = []
+    for span in re.findall(r"`([^`]+)`", text):
+        for match in COMMAND.finditer(span):
+            options = options_of(match.group(1))
+            for option in re.findall(r"(?<![\w-])--[a-z][a-z0-9-]*", match.group(0)):
+                if option not in options:
+                    wrong.append(f"{match.group(0).strip()}: isoflow {match.group(1)} has no {option}")
+    assert not wrong, wrong
+
+
+def named_keys(page: str, opening: str) -> set[str]:
+    """The identifiers in backticks in the paragraph of ``page`` that begins
+    with ``opening``, less the names of commands."""
+    text = (ROOT / "docs" / page).read_text()
+    start = text.index(opening)
+    paragraph = text[start:text.index("\n\n", start)]
+    return set(re.findall(r"`([a-z][a-z0-9_]*)`", paragraph)) - COMMANDS
+
+
+def keys_in(value) -> set[str]:
+    """Every key of a JSON value, at any depth."""
+    if isinstance(value, dict):
+        return set(value).union(*(keys_in(v) for v in value.values()))
+    if isinstance(value, list):
+        return set().union(*(keys_in(v) for v in value))
+    return set()
+
+
+def printed(capsys, argv: list[str]) -> dict:
+    capsys.readouterr()
+    assert main(argv) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_the_keys_named_for_info_json_are_those_printed(tmp_path, capsys):
+    volume = np.zeros((7, 7, 7), bool)
+    volume[1:6, 1:6, 1:6] = True
+    volume[2:5, 2:5, 1:6] = False  # a tube: a tunnel, one closed surface
+    np.save(tmp_path / "tube.npy", volume)
+    report = printed(capsys, ["info", str(tmp_path / "tube.npy"), "--json"])
+    named = named_keys("cli.md", "`info --json` prints one object with")
+    assert set(report) <= named, set(report) - named
+    assert named <= keys_in(report), named - keys_in(report)
+    bare = printed(capsys, ["info", str(tmp_path / "tube.npy"), "--json", "--no-surfaces"])
+    assert set(report) - set(bare) == {"surfaces", "pinched_vertices", "doubled_edges"}
+
+
+def test_the_keys_named_for_flow_json_are_those_printed(tmp_path, capsys):
+    volume = np.zeros((8, 8, 8), bool)
+    volume[1:7, 1:7, 1:7] = True
+    volume[3:5, 3:5, 1:7] = False  # a ring: the guard keeps its tunnel
+    np.save(tmp_path / "ring.npy", volume)
+    named = named_keys("flow.md", "`--json` prints one object:")
+    plain = printed(capsys, ["flow", str(tmp_path / "ring.npy"), "--json"])
+    guarded = printed(capsys, ["flow", str(tmp_path / "ring.npy"), "--guard", "--json"])
+    top = set(plain) | set(guarded)
+    assert top <= named, top - named
+    assert named <= keys_in(plain) | keys_in(guarded), named - keys_in(plain) - keys_in(guarded)

@@ -35,6 +35,19 @@ def test_write_labels_keeps_a_good_placement(tmp_path):
     assert back.spacing.tolist() == [1.0, 2.0, 3.0] and back.origin.tolist() == [4.0, 5.0, 6.0]
 
 
+@pytest.mark.parametrize("dtype", [np.uint32, np.uint64])
+def test_write_labels_keeps_wide_labels_that_a_tiff_holds(tmp_path, dtype):
+    """ImageJ TIFF holds 8 or 16 bits: labels up to 65,535 in a wider array
+    are written, not refused by tifffile with a traceback."""
+    tifffile = pytest.importorskip("tifffile")
+    labels = np.zeros((4, 3, 2), dtype)
+    labels[0, 0, 0], labels[3, 2, 1] = 7, 65535
+    path = isoflow.write_labels(labels, tmp_path / "labels.tif", pitch=0.5)
+    stored = tifffile.imread(path)
+    assert stored.dtype == np.uint16 and stored.shape == (2, 3, 4)  # z, y, x
+    assert stored[0, 0, 0] == 7 and stored[1, 2, 3] == 65535 and np.count_nonzero(stored) == 2
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"origin": "abc"}, ("'origin'", "'abc'")),
     ({"pitch": "x"}, ("'pitch'", "'x'")),

@@ -614,5 +614,10 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(3, pitch=pitch, origin=None if origin is None else np.asarray(origin))
-    check_label_output(path, int(arr.max(initial=0)), force)
+    file = check_label_output(path, int(arr.max(initial=0)), force)[0]
+    fmt = format_for(file, writing=True)
+    if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
+        # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
+        # 16 bits, whatever the array's); they fit, as just checked
+        arr = arr.astype(np.min_scalar_type(fmt.max_label))
     return write_placed(LabelVolume(arr, place.pitch, place.origin), path, force)
