@@ -382,3 +382,30 @@ def test_surface_labels_files_take_ascii_and_triangulate(tmp_path, capsys, segme
           words=("s.glb", "--triangulate", "-o DIR/"))
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/e/", "--suffix", "stl", "--ascii",
           words=("--ascii", ".ply", ".stl"))
+
+
+def test_a_label_no_voxel_has_is_named_in_all_its_digits(tmp_path, capsys):
+    """--label N on a label image without N lists the values present as
+    they are: 2**40 and 2**40 + 1 are two labels (%g wrote both
+    1.09951e+12), a 64-bit label keeps its 20 digits; an image without
+    voxels has none to list."""
+    image = np.zeros((4, 4, 4), np.uint64)
+    image[1, 1, 1], image[2, 2, 2] = 2**40, 2**64 - 1
+    np.save(tmp_path / "big.npy", image)
+    present = ", ".join(map(str, np.unique(image).tolist()))
+    assert present == "0, 1099511627776, 18446744073709551615"
+    fails(capsys, "info", tmp_path / "big.npy", "--label", 2**40 + 1,
+          words=(f"no voxel has label {2**40 + 1} (values present: {present})",))
+    np.save(tmp_path / "none.npy", np.zeros((0, 3, 3), np.uint8))
+    fails(capsys, "info", tmp_path / "none.npy", "--label", 1, words=("no voxel has label 1: the array has no voxels",))
+    fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no voxels (shape 0x3x3)",))
+
+
+def test_surface_labels_into_a_file_named_as_a_directory_is_refused_up_front(tmp_path, capsys, segmentation):
+    """-o NAME/ where NAME is a file: one line before any work (was
+    FileExistsError from mkdir once every label was meshed)."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    (tmp_path / "taken").write_text("a file")
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/taken/", "--suffix", "ply",
+          words=("taken/", "exists and is not a directory"))
+    assert (tmp_path / "taken").read_text() == "a file"

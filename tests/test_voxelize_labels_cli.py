@@ -128,6 +128,12 @@ def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
     labels = read_label_image(out).array
     assert bodies == 5 and set(np.unique(labels)) == set(range(bodies + 1))
     assert f"{bodies} labels" in printed and f"{path}:{bodies}" in printed
+    # one body: one label, in the singular
+    one = tmp_path / "one.stl"
+    parts[0].export(one)
+    assert len(trimesh.load(one).split(only_watertight=False)) == 1
+    assert main(["voxelize", str(one), "--split", "--resolution", "8", "-o", str(tmp_path / "one.npz")]) == 0
+    assert capsys.readouterr().out.startswith(f"{tmp_path / 'one.npz'}: 1 label in a ")
 
 
 def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):

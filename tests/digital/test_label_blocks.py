@@ -138,3 +138,22 @@ def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp
     assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
     err = capsys.readouterr().err
     assert "f.zarr: voxel (3, 2, 1) holds 0.5: not a whole number" in err and len(err.splitlines()) == 1
+
+
+def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):
+    """A store of shape (0, y, x) holds no voxel: label_table_blocks gives
+    label_table's table of that empty image (a zero row per label asked
+    for), and info --labels says it has no voxels in one line (was
+    ValueError from min() of no layers)."""
+    zarr = pytest.importorskip("zarr")
+    empty = np.zeros((0, 4, 5), np.uint16)
+    for layers in (None, []):
+        same_tables(label_table_blocks(empty, layers=layers), label_table(empty))
+    asked = label_table_blocks(empty, labels=[3], pitch=(1, 2, 3))
+    same_tables(asked, label_table(empty, labels=[3], pitch=(1, 2, 3)))
+    assert asked["voxels"].tolist() == [0] and np.isnan(asked["bbox-0"]).all()
+    zarr.create_array(str(tmp_path / "e.zarr"), shape=(0, 4, 5), chunks=(2, 2, 2), dtype="uint16")
+    for spec in ("--labels", "--labels=3"):
+        assert main(["info", str(tmp_path / "e.zarr"), spec]) == 2
+        err = capsys.readouterr().err
+        assert err.splitlines() == [f"isoflow info: error: {tmp_path / 'e.zarr'}: the image has no voxels (shape 0x4x5)"]

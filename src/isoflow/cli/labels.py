@@ -101,6 +101,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if asked is None else _within_type(args.input, asked, image.array.dtype)
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
+    if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
+        raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
     present = table["voxels"] > 0
     beyond = [] if asked is None else _beyond_type(asked, about["dtype"])
     if not present.all() or beyond:
@@ -293,6 +295,8 @@ def surface_outputs(args: argparse.Namespace):
         if suffix not in SURFACE_SUFFIXES:
             raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}")
         directory = Path(out)
+        if not directory.is_dir() and (directory.exists() or directory.is_symlink()):  # mkdir would fail, after the work
+            raise IsoflowError(f"{out}: exists and is not a directory; give a new or existing directory for a file per label")
         if not directory.is_dir():
             check_writable_dir(directory.parent, f"the directory {directory.name}")
         return "dir", directory, suffix
