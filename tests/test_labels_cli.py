@@ -409,3 +409,24 @@ def test_surface_labels_into_a_file_named_as_a_directory_is_refused_up_front(tmp
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/taken/", "--suffix", "ply",
           words=("taken/", "exists and is not a directory"))
     assert (tmp_path / "taken").read_text() == "a file"
+
+
+def test_labels_before_the_input_names_what_it_took(tmp_path, capsys, segmentation):
+    """`info --labels seg.npy`: the optional SPEC takes the file name and
+    argparse then said the input was missing; one line names what
+    --labels took and where the input goes. A choice that reads as labels
+    (`--labels 3` with no input) keeps argparse's message."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    for command in (["info"], ["surface", "-o", str(tmp_path / "s.glb")]):
+        with pytest.raises(SystemExit) as exit_:
+            main([*command, "--labels", str(tmp_path / "seg.npy")])
+        assert exit_.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"--labels took '{tmp_path / 'seg.npy'}' as its labels" in err[0]
+        assert f"isoflow {command[0]} {tmp_path / 'seg.npy'} --labels" in err[0]
+    assert not (tmp_path / "s.glb").exists()
+    with pytest.raises(SystemExit):
+        main(["info", "--labels", "3"])
+    assert capsys.readouterr().err.strip().endswith("the following arguments are required: input")
+    assert [r["label"] for r in json.loads(run(capsys, "info", "--labels", "9,3", tmp_path / "seg.npy", "--json"))
+            ["labels"]] == [9, 3]

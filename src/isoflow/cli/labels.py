@@ -55,6 +55,13 @@ def label_choice(text: str) -> list[int] | None:
     return list(chosen)
 
 
+def reads_as_choice(text: str) -> bool:
+    """Whether ``text`` is written as ``--labels SPEC`` is (labels and
+    ranges, comma-separated); else it is most likely the input, taken by
+    the option's optional SPEC."""
+    return all(_RANGE.fullmatch(part) for part in text.split(","))
+
+
 def refuse_single_label(args: argparse.Namespace) -> None:
     """One line when --labels comes with options it cannot take."""
     if getattr(args, "label", None) is not None:
