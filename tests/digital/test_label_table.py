@@ -298,3 +298,8 @@ def test_bad_choices_are_one_line():
         label_table(image, method="fast")
     with pytest.raises(IsoflowError, match="connectivity 18"):
         label_table(image, 18)
+    # the text "6" is no connectivity; the message quotes it rather than
+    # refuse 6 while offering it ("connectivity 6 is not valid in 3D (use 6 or 26)")
+    for text, dims in (("6", 3), ("4", 2)):
+        with pytest.raises(IsoflowError, match=f"^connectivity '{text}' is not valid in {dims}D"):
+            label_table(image if dims == 3 else image[0], text)
