@@ -430,3 +430,24 @@ def test_labels_before_the_input_names_what_it_took(tmp_path, capsys, segmentati
     assert capsys.readouterr().err.strip().endswith("the following arguments are required: input")
     assert [r["label"] for r in json.loads(run(capsys, "info", "--labels", "9,3", tmp_path / "seg.npy", "--json"))
             ["labels"]] == [9, 3]
+
+
+def test_an_ome_tiff_label_image_is_in_its_physical_sizes(tmp_path, capsys, segmentation):
+    """An OME-TIFF's voxel size is its OME-XML PhysicalSizeX/Y/Z (it was
+    read as 1: volumes and areas in voxels); one that is no size is one line."""
+    tifffile = pytest.importorskip("tifffile")
+    sizes = {"PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 2.0}
+    tifffile.imwrite(tmp_path / "seg.ome.tif", segmentation.T, metadata={"axes": "ZYX", **sizes})
+    with tifffile.TiffFile(tmp_path / "seg.ome.tif") as tif:
+        assert tif.is_ome and all(f'{k}="{v}"' in tif.ome_metadata for k, v in sizes.items())
+    report = json.loads(run(capsys, "info", tmp_path / "seg.ome.tif", "--labels", "--json"))
+    assert report["pitch"] == [0.5, 0.25, 2.0]
+    for row in report["labels"]:
+        mask = segmentation == row["label"]
+        assert row["volume"] == pytest.approx(mask.sum() * 0.5 * 0.25 * 2.0)
+        faces = [np.count_nonzero(np.diff(np.pad(mask, 1), axis=d)) for d in range(3)]
+        assert row["surface_area"] == pytest.approx(faces[0] * 0.25 * 2.0 + faces[1] * 0.5 * 2.0 + faces[2] * 0.5 * 0.25)
+    tifffile.imwrite(tmp_path / "cut.ome.tif", segmentation[:, :, 4].T, metadata={"axes": "YX", **sizes})
+    assert json.loads(run(capsys, "info", tmp_path / "cut.ome.tif", "--labels", "--json"))["pitch"] == [0.5, 0.25]
+    tifffile.imwrite(tmp_path / "bad.ome.tif", segmentation.T, metadata={"axes": "ZYX", "PhysicalSizeZ": -1.0})
+    fails(capsys, "info", tmp_path / "bad.ome.tif", "--labels", words=("bad.ome.tif", "PhysicalSizeZ '-1.0'"))
