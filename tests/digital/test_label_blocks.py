@@ -157,3 +157,21 @@ def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):
         assert main(["info", str(tmp_path / "e.zarr"), spec]) == 2
         err = capsys.readouterr().err
         assert err.splitlines() == [f"isoflow info: error: {tmp_path / 'e.zarr'}: the image has no voxels (shape 0x4x5)"]
+
+
+def test_info_labels_json_of_a_float_store_is_the_float_files(tmp_path, capsys, rng):
+    """A float image is read as int64 labels in memory and from a store
+    alike: --json of the store is --json of the same floats in a .npy,
+    "dtype" included (the store said float32)."""
+    zarr = pytest.importorskip("zarr")
+    image = (nested(rng) - 4).astype(np.float32)
+    np.save(tmp_path / "f.npy", image)
+    store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
+    store[...] = image
+    said = []
+    for name in ("f.npy", "f.zarr"):
+        assert main(["info", str(tmp_path / name), "--labels", "--json"]) == 0
+        said.append(json.loads(capsys.readouterr().out))
+    assert said[0]["dtype"] == said[1]["dtype"] == "int64"
+    said[1]["input"] = said[0]["input"]
+    assert said[1] == said[0]

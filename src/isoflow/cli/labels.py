@@ -139,6 +139,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array)."""
     from ..digital.label_blocks import label_table_blocks
+    from ..digital.label_table import label_dtype
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import LabelSlabs
     from ..scale.compiled import using
@@ -156,7 +157,9 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
                                        labels=wanted, surfaces=surfaces, progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             raise exc.at(args.input) from None
-    return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
+    # a float store's labels are int64, as a float file's are read (read_label_image): the same --json
+    kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
+    return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
 
 
 def _within_type(name, asked: list[int], dtype) -> list[int]:
