@@ -175,3 +175,19 @@ def test_info_labels_json_of_a_float_store_is_the_float_files(tmp_path, capsys, 
     assert said[0]["dtype"] == said[1]["dtype"] == "int64"
     said[1]["input"] = said[0]["input"]
     assert said[1] == said[0]
+
+
+def test_a_damaged_chunk_is_one_line_naming_the_store_once(tmp_path, capsys):
+    """info --labels of a store with a damaged chunk: the store named once
+    (it was 'd.zarr: d.zarr: ...') and the voxels read as ranges, not
+    Python's slice objects."""
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((10, 8, 6), np.uint16)
+    image[2:7, 1:5, 1:4] = 3
+    zarr.create_array(str(tmp_path / "d.zarr"), data=image, chunks=(5, 4, 3), zarr_format=2)
+    (tmp_path / "d.zarr" / "1.0.0").write_bytes(b"garbage")
+    for extra in (["--labels"], ["--label", "3"]):
+        assert main(["info", str(tmp_path / "d.zarr"), *extra]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and err[0].count("d.zarr") == 1 and "cannot read a chunk in [" in err[0], err
+        assert "slice(" not in err[0]

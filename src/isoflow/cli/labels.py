@@ -156,7 +156,8 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
             table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
                                        labels=wanted, surfaces=surfaces, progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
-            raise exc.at(args.input) from None
+            named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
+            raise (exc if named else exc.at(args.input)) from None
     # a float store's labels are int64, as a float file's are read (read_label_image): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
