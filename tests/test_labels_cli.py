@@ -451,3 +451,21 @@ def test_an_ome_tiff_label_image_is_in_its_physical_sizes(tmp_path, capsys, segm
     assert json.loads(run(capsys, "info", tmp_path / "cut.ome.tif", "--labels", "--json"))["pitch"] == [0.5, 0.25]
     tifffile.imwrite(tmp_path / "bad.ome.tif", segmentation.T, metadata={"axes": "ZYX", "PhysicalSizeZ": -1.0})
     fails(capsys, "info", tmp_path / "bad.ome.tif", "--labels", words=("bad.ome.tif", "PhysicalSizeZ '-1.0'"))
+
+
+def test_surface_labels_as_stl_notes_the_contacts_a_weld_joins(tmp_path, capsys):
+    """STL keeps no shared vertices: a label whose voxels meet along an
+    edge has two sheets through it, which any reader's weld makes
+    non-manifold. surface --label says so of its one file; --labels -o
+    DIR/ --suffix stl said nothing, and now names the files."""
+    image = np.zeros((5, 5, 5), np.uint8)
+    image[1, 1, 1] = image[2, 2, 1] = 1  # an edge contact (6-connectivity: two components)
+    image[3:5, 3:5, 3:5] = 2  # a cube
+    np.save(tmp_path / "e.npy", image)
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl"]) == 0
+    err = capsys.readouterr().err
+    assert "STL keeps no shared vertices" in err and "of 1 file (label_1.stl)" in err
+    welded = {n: trimesh.load(tmp_path / "d" / f"label_{n}.stl") for n in (1, 2)}  # trimesh welds by position
+    assert not welded[1].is_watertight and welded[2].is_watertight
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "2", "-o", f"{tmp_path}/c/", "--suffix", "stl"]) == 0
+    assert "STL keeps" not in capsys.readouterr().err

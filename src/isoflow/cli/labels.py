@@ -410,16 +410,23 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             return [] if args.no_check else check_scene_file(target[1], meshes, progress)
     target[1].mkdir(exist_ok=True)
     problems = []
+    welds = {}  # label file -> the contacts STL cannot keep apart
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
         export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate, force=args.force,
                              comments=(f"isoflow surface --labels: {name}",))
+        welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+        if welded:
+            welds[path.name] = welded
         if not args.no_check:
-            welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
             with reading_back(path):
                 check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
             if check.get("agree") is False:
                 problems.append(check["problem"])
         if progress is not None:
             progress(done, len(meshes))
+    if welds and not args.quiet:  # as surface says of one STL file
+        print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
+              f"at {sum(welds.values())} edge/vertex contacts of {_count(len(welds), 'file')} ({_some(list(welds))}) "
+              "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
     return problems
