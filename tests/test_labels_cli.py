@@ -469,3 +469,24 @@ def test_surface_labels_as_stl_notes_the_contacts_a_weld_joins(tmp_path, capsys)
     assert not welded[1].is_watertight and welded[2].is_watertight
     assert main(["surface", str(tmp_path / "e.npy"), "--labels", "2", "-o", f"{tmp_path}/c/", "--suffix", "stl"]) == 0
     assert "STL keeps" not in capsys.readouterr().err
+
+
+def test_surface_labels_counts_the_faces_its_files_hold(tmp_path, capsys, segmentation):
+    """The summary's faces are those written, of the kind written, as
+    surface says of one file: a .glb holds triangles (it gave the quads'
+    count, half of them), a PLY at 26 triangles where a label has edge
+    midpoints and quads elsewhere."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.glb")
+    scene = trimesh.load(tmp_path / "s.glb", force="scene", process=False)
+    assert f"6 labels, {sum(len(g.faces) for g in scene.geometry.values())} faces (triangles), " in said
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", "--suffix", "ply",
+               "--connectivity", "26", "--ascii")
+    counts, kinds = [], set()
+    for path in (tmp_path / "d").iterdir():
+        header = path.read_bytes().split(b"end_header")[0].decode().splitlines()
+        counts += [int(line.split()[2]) for line in header if line.startswith("element face ")]
+        kinds |= {line.split(": ")[1] for line in header if line.startswith("comment faces: ")}
+    said_faces = said.split("6 labels, ")[1].split(", one closed")[0]
+    assert said_faces.startswith(f"{sum(counts)} faces (")
+    assert set(said_faces.split("(")[1].rstrip(")").split(", ")) == kinds

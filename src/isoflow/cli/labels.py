@@ -359,10 +359,9 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             _take_batch(args, target, batch, table, names, lo, image, meshes, glb_parts)
             if show is not None:
                 show(meshed, total)
-        problems = write_label_surfaces(args, target, meshes, glb_parts, report)
-    faces = sum(len(m.faces) for _, m, _, _ in meshes)
+        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({_count(len(meshes), target[2] + ' file')})"
-    print(f"{where}: {_count(len(meshes), 'label')}, {faces} faces, one closed surface mesh per label"
+    print(f"{where}: {_count(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
@@ -393,28 +392,33 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
-                         progress=None) -> list[str]:
+                         progress=None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, from ``glb_parts``,
     or a file each) and read them back (unless --no-check), telling
     ``progress(done, total)`` of the labels written (a file each) or read
-    back. Returns the problems found."""
+    back. Returns the problems found and the faces written in words
+    (``18944 faces (triangles)``: as the files hold them, as surface says of one)."""
     from ..mesh import export
     from ..mesh.readback import check_scene_file, check_surface_file
     from .progress import reading_back
 
     if target[0] == "glb":
+        faces = f"{sum(len(part[2]) for part in glb_parts)} faces (triangles)"
         export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
-            return [] if args.no_check else check_scene_file(target[1], meshes, progress)
+            return ([] if args.no_check else check_scene_file(target[1], meshes, progress)), faces
     target[1].mkdir(exist_ok=True)
     problems = []
+    count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
-        export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate, force=args.force,
-                             comments=(f"isoflow surface --labels: {name}",))
+        written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                       force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        count += written["face_count"]
+        kinds[written["faces"]] = None
         welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
         if welded:
             welds[path.name] = welded
@@ -429,4 +433,4 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
               f"at {sum(welds.values())} edge/vertex contacts of {_count(len(welds), 'file')} ({_some(list(welds))}) "
               "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
-    return problems
+    return problems, f"{count} faces ({', '.join(kinds)})"
