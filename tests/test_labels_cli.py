@@ -250,6 +250,10 @@ def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation)
     np.save(tmp_path / "seg.npy", segmentation)
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply", words=(".glb", "DIR/"))
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", words=("--suffix",))
+    # --suffix with a new directory's name without its slash: the line says the slash makes it
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "new", "--suffix", "ply",
+          words=("no such directory", f"-o {tmp_path / 'new'}/ makes it"))
+    assert not (tmp_path / "new").exists()
 
 
 def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentation):

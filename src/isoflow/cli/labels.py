@@ -312,6 +312,8 @@ def surface_outputs(args: argparse.Namespace):
             check_writable_dir(directory.parent, f"the directory {directory.name}")
         return "dir", directory, suffix
     if args.suffix:
+        if not Path(out).suffix:  # a directory meant, not there yet: only the slash says so
+            raise IsoflowError(f"{out}: no such directory; -o {out}/ makes it, for a file per label (--suffix)")
         raise IsoflowError(f"{out}: --suffix names the files of -o DIR/; one file holds every label as .glb")
     path = check_output_path(out, args.force, suffixes=SURFACE_SUFFIXES, what="surface")
     if path.suffix.lower() != ".glb":
