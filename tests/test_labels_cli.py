@@ -250,6 +250,10 @@ def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation)
     np.save(tmp_path / "seg.npy", segmentation)
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply", words=(".glb", "DIR/"))
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", words=("--suffix",))
+    # --suffix with a new directory's name without its slash: the line says the slash makes it
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "new", "--suffix", "ply",
+          words=("no such directory", f"-o {tmp_path / 'new'}/ makes it"))
+    assert not (tmp_path / "new").exists()
 
 
 def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentation):
@@ -382,3 +386,111 @@ def test_surface_labels_files_take_ascii_and_triangulate(tmp_path, capsys, segme
           words=("s.glb", "--triangulate", "-o DIR/"))
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/e/", "--suffix", "stl", "--ascii",
           words=("--ascii", ".ply", ".stl"))
+
+
+def test_a_label_no_voxel_has_is_named_in_all_its_digits(tmp_path, capsys):
+    """--label N on a label image without N lists the values present as
+    they are: 2**40 and 2**40 + 1 are two labels (%g wrote both
+    1.09951e+12), a 64-bit label keeps its 20 digits; an image without
+    voxels has none to list."""
+    image = np.zeros((4, 4, 4), np.uint64)
+    image[1, 1, 1], image[2, 2, 2] = 2**40, 2**64 - 1
+    np.save(tmp_path / "big.npy", image)
+    present = ", ".join(map(str, np.unique(image).tolist()))
+    assert present == "0, 1099511627776, 18446744073709551615"
+    fails(capsys, "info", tmp_path / "big.npy", "--label", 2**40 + 1,
+          words=(f"no voxel has label {2**40 + 1} (values present: {present})",))
+    np.save(tmp_path / "none.npy", np.zeros((0, 3, 3), np.uint8))
+    fails(capsys, "info", tmp_path / "none.npy", "--label", 1, words=("no voxel has label 1: the array has no voxels",))
+    fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no voxels (shape 0x3x3)",))
+
+
+def test_surface_labels_into_a_file_named_as_a_directory_is_refused_up_front(tmp_path, capsys, segmentation):
+    """-o NAME/ where NAME is a file: one line before any work (was
+    FileExistsError from mkdir once every label was meshed)."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    (tmp_path / "taken").write_text("a file")
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/taken/", "--suffix", "ply",
+          words=("taken/", "exists and is not a directory"))
+    assert (tmp_path / "taken").read_text() == "a file"
+
+
+def test_labels_before_the_input_names_what_it_took(tmp_path, capsys, segmentation):
+    """`info --labels seg.npy`: the optional SPEC takes the file name and
+    argparse then said the input was missing; one line names what
+    --labels took and where the input goes. A choice that reads as labels
+    (`--labels 3` with no input) keeps argparse's message."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    for command in (["info"], ["surface", "-o", str(tmp_path / "s.glb")]):
+        with pytest.raises(SystemExit) as exit_:
+            main([*command, "--labels", str(tmp_path / "seg.npy")])
+        assert exit_.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and f"--labels took '{tmp_path / 'seg.npy'}' as its labels" in err[0]
+        assert f"isoflow {command[0]} {tmp_path / 'seg.npy'} --labels" in err[0]
+    assert not (tmp_path / "s.glb").exists()
+    with pytest.raises(SystemExit):
+        main(["info", "--labels", "3"])
+    assert capsys.readouterr().err.strip().endswith("the following arguments are required: input")
+    assert [r["label"] for r in json.loads(run(capsys, "info", "--labels", "9,3", tmp_path / "seg.npy", "--json"))
+            ["labels"]] == [9, 3]
+
+
+def test_an_ome_tiff_label_image_is_in_its_physical_sizes(tmp_path, capsys, segmentation):
+    """An OME-TIFF's voxel size is its OME-XML PhysicalSizeX/Y/Z (it was
+    read as 1: volumes and areas in voxels); one that is no size is one line."""
+    tifffile = pytest.importorskip("tifffile")
+    sizes = {"PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 2.0}
+    tifffile.imwrite(tmp_path / "seg.ome.tif", segmentation.T, metadata={"axes": "ZYX", **sizes})
+    with tifffile.TiffFile(tmp_path / "seg.ome.tif") as tif:
+        assert tif.is_ome and all(f'{k}="{v}"' in tif.ome_metadata for k, v in sizes.items())
+    report = json.loads(run(capsys, "info", tmp_path / "seg.ome.tif", "--labels", "--json"))
+    assert report["pitch"] == [0.5, 0.25, 2.0]
+    for row in report["labels"]:
+        mask = segmentation == row["label"]
+        assert row["volume"] == pytest.approx(mask.sum() * 0.5 * 0.25 * 2.0)
+        faces = [np.count_nonzero(np.diff(np.pad(mask, 1), axis=d)) for d in range(3)]
+        assert row["surface_area"] == pytest.approx(faces[0] * 0.25 * 2.0 + faces[1] * 0.5 * 2.0 + faces[2] * 0.5 * 0.25)
+    tifffile.imwrite(tmp_path / "cut.ome.tif", segmentation[:, :, 4].T, metadata={"axes": "YX", **sizes})
+    assert json.loads(run(capsys, "info", tmp_path / "cut.ome.tif", "--labels", "--json"))["pitch"] == [0.5, 0.25]
+    tifffile.imwrite(tmp_path / "bad.ome.tif", segmentation.T, metadata={"axes": "ZYX", "PhysicalSizeZ": -1.0})
+    fails(capsys, "info", tmp_path / "bad.ome.tif", "--labels", words=("bad.ome.tif", "PhysicalSizeZ '-1.0'"))
+
+
+def test_surface_labels_as_stl_notes_the_contacts_a_weld_joins(tmp_path, capsys):
+    """STL keeps no shared vertices: a label whose voxels meet along an
+    edge has two sheets through it, which any reader's weld makes
+    non-manifold. surface --label says so of its one file; --labels -o
+    DIR/ --suffix stl said nothing, and now names the files."""
+    image = np.zeros((5, 5, 5), np.uint8)
+    image[1, 1, 1] = image[2, 2, 1] = 1  # an edge contact (6-connectivity: two components)
+    image[3:5, 3:5, 3:5] = 2  # a cube
+    np.save(tmp_path / "e.npy", image)
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl"]) == 0
+    err = capsys.readouterr().err
+    assert "STL keeps no shared vertices" in err and "of 1 file (label_1.stl)" in err
+    welded = {n: trimesh.load(tmp_path / "d" / f"label_{n}.stl") for n in (1, 2)}  # trimesh welds by position
+    assert not welded[1].is_watertight and welded[2].is_watertight
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "2", "-o", f"{tmp_path}/c/", "--suffix", "stl"]) == 0
+    assert "STL keeps" not in capsys.readouterr().err
+
+
+def test_surface_labels_counts_the_faces_its_files_hold(tmp_path, capsys, segmentation):
+    """The summary's faces are those written, of the kind written, as
+    surface says of one file: a .glb holds triangles (it gave the quads'
+    count, half of them), a PLY at 26 triangles where a label has edge
+    midpoints and quads elsewhere."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.glb")
+    scene = trimesh.load(tmp_path / "s.glb", force="scene", process=False)
+    assert f"6 labels, {sum(len(g.faces) for g in scene.geometry.values())} faces (triangles), " in said
+    said = run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", "--suffix", "ply",
+               "--connectivity", "26", "--ascii")
+    counts, kinds = [], set()
+    for path in (tmp_path / "d").iterdir():
+        header = path.read_bytes().split(b"end_header")[0].decode().splitlines()
+        counts += [int(line.split()[2]) for line in header if line.startswith("element face ")]
+        kinds |= {line.split(": ")[1] for line in header if line.startswith("comment faces: ")}
+    said_faces = said.split("6 labels, ")[1].split(", one closed")[0]
+    assert said_faces.startswith(f"{sum(counts)} faces (")
+    assert set(said_faces.split("(")[1].rstrip(")").split(", ")) == kinds

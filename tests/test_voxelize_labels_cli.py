@@ -106,6 +106,24 @@ def test_every_format_keeps_the_labels_and_its_library_reads_them(tmp_path, caps
         assert np.allclose(back.spacing, ref.spacing) and np.allclose(back.origin, ref.origin)
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint32, np.uint64])
+def test_write_labels_keeps_the_type_in_nifti_and_nibabel_reads_it(tmp_path, dtype):
+    """write_labels writes a label image "in its own integer type": 64-bit
+    labels too (nibabel refused uint64 data unless its type is named, a
+    ValueError out of write_labels)."""
+    nib = pytest.importorskip("nibabel")
+    from isoflow import write_labels
+
+    labels = np.zeros((4, 3, 2), dtype)
+    labels[1, 1, 1], labels[3, 2, 1] = 1, np.iinfo(dtype).max
+    path = write_labels(labels, tmp_path / "l.nii.gz", pitch=(0.5, 1.0, 2.0), origin=(1, 2, 3))
+    image = nib.load(path)
+    assert image.get_data_dtype() == dtype and np.array_equal(np.asarray(image.dataobj), labels)
+    assert [float(z) for z in image.header.get_zooms()] == [0.5, 1.0, 2.0]
+    back = read_label_image(path)
+    assert np.array_equal(back.array, labels) and back.origin.tolist() == [1.0, 2.0, 3.0]
+
+
 def test_a_format_that_keeps_fewer_labels_is_refused_before_any_work(tmp_path, capsys, overlapping):
     a, b = overlapping
     fails(capsys, "voxelize", a, b, "--resolution", "24", "-o", tmp_path / "l.binvox",
@@ -128,6 +146,12 @@ def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
     labels = read_label_image(out).array
     assert bodies == 5 and set(np.unique(labels)) == set(range(bodies + 1))
     assert f"{bodies} labels" in printed and f"{path}:{bodies}" in printed
+    # one body: one label, in the singular
+    one = tmp_path / "one.stl"
+    parts[0].export(one)
+    assert len(trimesh.load(one).split(only_watertight=False)) == 1
+    assert main(["voxelize", str(one), "--split", "--resolution", "8", "-o", str(tmp_path / "one.npz")]) == 0
+    assert capsys.readouterr().out.startswith(f"{tmp_path / 'one.npz'}: 1 label in a ")
 
 
 def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):

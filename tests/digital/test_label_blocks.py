@@ -138,3 +138,56 @@ def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp
     assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
     err = capsys.readouterr().err
     assert "f.zarr: voxel (3, 2, 1) holds 0.5: not a whole number" in err and len(err.splitlines()) == 1
+
+
+def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):
+    """A store of shape (0, y, x) holds no voxel: label_table_blocks gives
+    label_table's table of that empty image (a zero row per label asked
+    for), and info --labels says it has no voxels in one line (was
+    ValueError from min() of no layers)."""
+    zarr = pytest.importorskip("zarr")
+    empty = np.zeros((0, 4, 5), np.uint16)
+    for layers in (None, []):
+        same_tables(label_table_blocks(empty, layers=layers), label_table(empty))
+    asked = label_table_blocks(empty, labels=[3], pitch=(1, 2, 3))
+    same_tables(asked, label_table(empty, labels=[3], pitch=(1, 2, 3)))
+    assert asked["voxels"].tolist() == [0] and np.isnan(asked["bbox-0"]).all()
+    zarr.create_array(str(tmp_path / "e.zarr"), shape=(0, 4, 5), chunks=(2, 2, 2), dtype="uint16")
+    for spec in ("--labels", "--labels=3"):
+        assert main(["info", str(tmp_path / "e.zarr"), spec]) == 2
+        err = capsys.readouterr().err
+        assert err.splitlines() == [f"isoflow info: error: {tmp_path / 'e.zarr'}: the image has no voxels (shape 0x4x5)"]
+
+
+def test_info_labels_json_of_a_float_store_is_the_float_files(tmp_path, capsys, rng):
+    """A float image is read as int64 labels in memory and from a store
+    alike: --json of the store is --json of the same floats in a .npy,
+    "dtype" included (the store said float32)."""
+    zarr = pytest.importorskip("zarr")
+    image = (nested(rng) - 4).astype(np.float32)
+    np.save(tmp_path / "f.npy", image)
+    store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
+    store[...] = image
+    said = []
+    for name in ("f.npy", "f.zarr"):
+        assert main(["info", str(tmp_path / name), "--labels", "--json"]) == 0
+        said.append(json.loads(capsys.readouterr().out))
+    assert said[0]["dtype"] == said[1]["dtype"] == "int64"
+    said[1]["input"] = said[0]["input"]
+    assert said[1] == said[0]
+
+
+def test_a_damaged_chunk_is_one_line_naming_the_store_once(tmp_path, capsys):
+    """info --labels of a store with a damaged chunk: the store named once
+    (it was 'd.zarr: d.zarr: ...') and the voxels read as ranges, not
+    Python's slice objects."""
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((10, 8, 6), np.uint16)
+    image[2:7, 1:5, 1:4] = 3
+    zarr.create_array(str(tmp_path / "d.zarr"), data=image, chunks=(5, 4, 3), zarr_format=2)
+    (tmp_path / "d.zarr" / "1.0.0").write_bytes(b"garbage")
+    for extra in (["--labels"], ["--label", "3"]):
+        assert main(["info", str(tmp_path / "d.zarr"), *extra]) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and err[0].count("d.zarr") == 1 and "cannot read a chunk in [" in err[0], err
+        assert "slice(" not in err[0]

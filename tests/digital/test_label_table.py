@@ -202,6 +202,25 @@ def test_labels_asked_for_in_order_with_absent_ones_as_empty_masks(rng):
         assert row_report(table, r) == analyze_report(image == table["label"][r], 6)
 
 
+def test_labels_from_any_iterable_in_its_order(rng):
+    """labels= is typed Iterable[int]: a generator, dict keys or a range
+    give the rows a list gives, in their order (a generator was refused as
+    "label <generator ...> is not a value the labels of this image hold"),
+    in 3D, in 2D and block by block."""
+    from isoflow.digital.label_blocks import label_table_blocks
+
+    image = nested(rng)
+    asked = [int(v) for v in np.unique(image)[::-1] if v][:3] + [250]
+    counts = [int(np.count_nonzero(image == v)) for v in asked]
+    for kind in (lambda: (v for v in asked), lambda: dict.fromkeys(asked).keys(), lambda: iter(asked)):
+        assert label_table(image, labels=kind())["voxels"].tolist() == counts
+        assert label_table(image, labels=kind())["label"].tolist() == asked
+        assert label_table_blocks(image, labels=kind(), layers=[10, 20])["voxels"].tolist() == counts
+        assert label_table(image[5], labels=kind())["voxels"].tolist() == [int(np.count_nonzero(image[5] == v))
+                                                                           for v in asked]
+    assert label_table(image, labels=range(1, 4))["label"].tolist() == [1, 2, 3]
+
+
 def test_without_surfaces_the_surface_columns_are_left_out(rng):
     image = nested(rng)
     full, short = label_table(image), label_table(image, surfaces=False)
@@ -298,3 +317,8 @@ def test_bad_choices_are_one_line():
         label_table(image, method="fast")
     with pytest.raises(IsoflowError, match="connectivity 18"):
         label_table(image, 18)
+    # the text "6" is no connectivity; the message quotes it rather than
+    # refuse 6 while offering it ("connectivity 6 is not valid in 3D (use 6 or 26)")
+    for text, dims in (("6", 3), ("4", 2)):
+        with pytest.raises(IsoflowError, match=f"^connectivity '{text}' is not valid in {dims}D"):
+            label_table(image if dims == 3 else image[0], text)

@@ -55,6 +55,13 @@ def label_choice(text: str) -> list[int] | None:
     return list(chosen)
 
 
+def reads_as_choice(text: str) -> bool:
+    """Whether ``text`` is written as ``--labels SPEC`` is (labels and
+    ranges, comma-separated); else it is most likely the input, taken by
+    the option's optional SPEC."""
+    return all(_RANGE.fullmatch(part) for part in text.split(","))
+
+
 def refuse_single_label(args: argparse.Namespace) -> None:
     """One line when --labels comes with options it cannot take."""
     if getattr(args, "label", None) is not None:
@@ -101,6 +108,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if asked is None else _within_type(args.input, asked, image.array.dtype)
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
+    if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
+        raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
     present = table["voxels"] > 0
     beyond = [] if asked is None else _beyond_type(asked, about["dtype"])
     if not present.all() or beyond:
@@ -130,6 +139,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array)."""
     from ..digital.label_blocks import label_table_blocks
+    from ..digital.label_table import label_dtype
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import LabelSlabs
     from ..scale.compiled import using
@@ -146,8 +156,11 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
             table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
                                        labels=wanted, surfaces=surfaces, progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
-            raise exc.at(args.input) from None
-    return {"shape": slabs.shape, "dtype": slabs.dtype, "spacing": place.spacing, "origin": place.origin}, table
+            named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
+            raise (exc if named else exc.at(args.input)) from None
+    # a float store's labels are int64, as a float file's are read (read_label_image): the same --json
+    kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
+    return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
 
 
 def _within_type(name, asked: list[int], dtype) -> list[int]:
@@ -293,10 +306,14 @@ def surface_outputs(args: argparse.Namespace):
         if suffix not in SURFACE_SUFFIXES:
             raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}")
         directory = Path(out)
+        if not directory.is_dir() and (directory.exists() or directory.is_symlink()):  # mkdir would fail, after the work
+            raise IsoflowError(f"{out}: exists and is not a directory; give a new or existing directory for a file per label")
         if not directory.is_dir():
             check_writable_dir(directory.parent, f"the directory {directory.name}")
         return "dir", directory, suffix
     if args.suffix:
+        if not Path(out).suffix:  # a directory meant, not there yet: only the slash says so
+            raise IsoflowError(f"{out}: no such directory; -o {out}/ makes it, for a file per label (--suffix)")
         raise IsoflowError(f"{out}: --suffix names the files of -o DIR/; one file holds every label as .glb")
     path = check_output_path(out, args.force, suffixes=SURFACE_SUFFIXES, what="surface")
     if path.suffix.lower() != ".glb":
@@ -344,10 +361,9 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             _take_batch(args, target, batch, table, names, lo, image, meshes, glb_parts)
             if show is not None:
                 show(meshed, total)
-        problems = write_label_surfaces(args, target, meshes, glb_parts, report)
-    faces = sum(len(m.faces) for _, m, _, _ in meshes)
+        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({_count(len(meshes), target[2] + ' file')})"
-    print(f"{where}: {_count(len(meshes), 'label')}, {faces} faces, one closed surface mesh per label"
+    print(f"{where}: {_count(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
@@ -378,33 +394,45 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
-                         progress=None) -> list[str]:
+                         progress=None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, from ``glb_parts``,
     or a file each) and read them back (unless --no-check), telling
     ``progress(done, total)`` of the labels written (a file each) or read
-    back. Returns the problems found."""
+    back. Returns the problems found and the faces written in words
+    (``18944 faces (triangles)``: as the files hold them, as surface says of one)."""
     from ..mesh import export
     from ..mesh.readback import check_scene_file, check_surface_file
     from .progress import reading_back
 
     if target[0] == "glb":
+        faces = f"{sum(len(part[2]) for part in glb_parts)} faces (triangles)"
         export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
                                f"{args.input}, {args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
-            return [] if args.no_check else check_scene_file(target[1], meshes, progress)
+            return ([] if args.no_check else check_scene_file(target[1], meshes, progress)), faces
     target[1].mkdir(exist_ok=True)
     problems = []
+    count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
+    welds = {}  # label file -> the contacts STL cannot keep apart
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
-        export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate, force=args.force,
-                             comments=(f"isoflow surface --labels: {name}",))
+        written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                       force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        count += written["face_count"]
+        kinds[written["faces"]] = None
+        welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+        if welded:
+            welds[path.name] = welded
         if not args.no_check:
-            welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
             with reading_back(path):
                 check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
             if check.get("agree") is False:
                 problems.append(check["problem"])
         if progress is not None:
             progress(done, len(meshes))
-    return problems
+    if welds and not args.quiet:  # as surface says of one STL file
+        print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
+              f"at {sum(welds.values())} edge/vertex contacts of {_count(len(welds), 'file')} ({_some(list(welds))}) "
+              "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
+    return problems, f"{count} faces ({', '.join(kinds)})"

@@ -65,9 +65,21 @@ class CommandParser(argparse.ArgumentParser):
     input; a command line of the wrong shape (an argument missing or not
     known) also shows the usage."""
 
+    def parse_known_args(self, args=None, namespace=None):
+        # kept for error(): what the options took before an argument was found missing
+        self.namespace = argparse.Namespace() if namespace is None else namespace
+        return super().parse_known_args(args, self.namespace)
+
     def error(self, message: str):
         if message.startswith("argument "):  # names the option and what is wrong with its value
             self.exit(2, f"{self.prog}: error: {message}\n")
+        from .labels import reads_as_choice
+
+        taken = getattr(getattr(self, "namespace", None), "labels", None)
+        if taken not in (None, "all") and message.endswith("required: input") and not reads_as_choice(taken):
+            # `info --labels seg.nii.gz`: the optional SPEC took the input, which is then "missing"
+            self.exit(2, f"{self.prog}: error: no input: --labels took {taken!r} as its labels; give the input "
+                         f"before --labels ({self.prog} {taken} --labels) or a choice after it (--labels 3,7)\n")
         super().error(message)
 
 

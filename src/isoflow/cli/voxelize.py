@@ -116,7 +116,8 @@ def label_summary(out: str | Path, r) -> str:
     """The written label image in words: grid, type, pitch, origin, and a
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
-    lines = [f"{out}: {len(r.names)} labels in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
+    labels = f"{len(r.names)} label{'' if len(r.names) == 1 else 's'}"
+    lines = [f"{out}: {labels} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
              f"origin {np.round(r.origin, 6).tolist()}"]
     width = max(6, len(f"{max(r.voxels, default=0):,}"))
     lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")

@@ -26,7 +26,9 @@ def check_connectivity(ndim: int, connectivity: int) -> int:
     """
     if connectivity not in VALID.get(ndim, ()):
         allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
-        raise IsoflowError(f"connectivity {connectivity} is not valid in {ndim}D (use {allowed})")
+        # text quoted: "connectivity 6 is not valid in 3D (use 6 or 26)" of '6' contradicts itself
+        shown = repr(connectivity) if isinstance(connectivity, str) else connectivity
+        raise IsoflowError(f"connectivity {shown} is not valid in {ndim}D (use {allowed})")
     # a Python int: 6.0 or numpy.int64(6) pass the test above, and the
     # value returned is what reports and JSON show
     return int(connectivity)

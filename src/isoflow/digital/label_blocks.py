@@ -29,6 +29,7 @@ from .label_table import (
     columns,
     feature_table,
     label_dtype,
+    label_table,
     pass_tables,
     rows_of_pieces,
     wanted_labels,
@@ -93,6 +94,9 @@ def label_table_blocks(
     wanted = None if labels is None else wanted_labels(labels, kind)
     nx = int(array.shape[0])
     sizes = [nx] if layers is None else [int(n) for n in layers]
+    if nx == 0 and not any(sizes):  # no layer to read (a store of shape (0, ...)): the empty image's table
+        return label_table(np.zeros(array.shape, kind), conn, pitch=place.spacing, origin=place.origin,
+                           labels=labels, surfaces=surfaces)
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
     stream = _Stream(array, conn, wanted, surfaces)

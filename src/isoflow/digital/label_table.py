@@ -276,6 +276,9 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
 def wanted_labels(labels, dtype) -> np.ndarray:
     """The labels asked for, as values of the image's type: each one a
     whole number the type holds, none twice."""
+    if isinstance(labels, Iterable) and not isinstance(labels, (str, bytes, np.ndarray)):
+        # a generator, a set, dict keys: their labels in their order (NumPy holds such an object as one value)
+        labels = list(labels)
     asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
     info = np.iinfo(label_dtype(dtype))
     for value in asked:

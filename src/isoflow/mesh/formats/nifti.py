@@ -70,7 +70,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     n = len(spacing)
     affine[:n, :n] = steps
     affine[:n, 3] = centre0
-    img = nib.Nifti1Image(stored_values(obj.volume), affine)
+    values = stored_values(obj.volume)
+    # the type named: nibabel refuses int64 and uint64 data unless it is (64-bit labels)
+    img = nib.Nifti1Image(values, affine, dtype=values.dtype)
     img.set_sform(affine, code=1)
     img.set_qform(affine, code=1)
     img.header.set_xyzt_units("unknown")

@@ -247,8 +247,19 @@ class _Guarded:
         try:
             return np.asarray(self.array[key])
         except Exception as exc:  # zarr and its codecs raise many types
-            raise IsoflowError(f"{self.where}: cannot read the chunk at {key} "
+            raise IsoflowError(f"{self.where}: cannot read a chunk in {_index_text(key)} "
                                f"({exc.__class__.__name__}: {exc})") from None
+
+
+def _index_text(key) -> str:
+    """A read's index as the stored array's voxel ranges, ``[0:6, :, :]``
+    (not Python's ``(slice(0, 6, None), ...)``)."""
+    def one(k) -> str:
+        if not isinstance(k, slice):
+            return str(k)
+        return f"{'' if k.start is None else k.start}:{'' if k.stop is None else k.stop}"
+
+    return "[" + ", ".join(one(k) for k in (key if isinstance(key, tuple) else (key,))) + "]"
 
 
 def check_output(path, force: bool = False, dataset: str | None = None) -> Path:

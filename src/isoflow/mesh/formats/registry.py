@@ -241,9 +241,23 @@ def check_label(label, dtype, where: str) -> None:
 
 
 def no_such_label(label, values, where: str) -> IsoflowError:
-    """The error for a label no voxel has, listing the ``values`` present."""
-    shown = ", ".join(f"{v:g}" for v in values[:20]) + (", ..." if len(values) > 20 else "")
-    return IsoflowError(f"{where}: no voxel has label {label:g} (values present: {shown})")
+    """The error for a label no voxel has, listing the ``values`` present
+    (none in an array without voxels)."""
+    if not len(values):
+        return IsoflowError(f"{where}: no voxel has label {_number(label)}: the array has no voxels")
+    shown = ", ".join(_number(v) for v in values[:20]) + (", ..." if len(values) > 20 else "")
+    return IsoflowError(f"{where}: no voxel has label {_number(label)} (values present: {shown})")
+
+
+def _number(value) -> str:
+    """A label as written: a whole number in all its digits (``%g`` made
+    2**40 + 1 and 2**40 alike, and 64-bit labels one value), any other in ``%g``."""
+    value = value.item() if isinstance(value, np.generic) else value
+    if isinstance(value, bool):  # a mask's values: 0 and 1
+        value = int(value)
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**64:
+        value = int(value)
+    return str(value) if isinstance(value, int) and abs(value) < 2**64 else f"{value:g}"
 
 
 def note(message: str) -> None:

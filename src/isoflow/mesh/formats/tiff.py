@@ -11,7 +11,8 @@ volume is not said by the file.
 
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) where present, z from
-ImageJ's ``spacing``; 1 where absent. TIFF has no origin (0 on reading; a
+ImageJ's ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (its
+units as written); 1 where absent. TIFF has no origin (0 on reading; a
 warning when writing an object whose origin is not 0). Written as an ImageJ
 hyperstack of uint8 0/1 with those tags, so that Fiji opens it calibrated.
 Resolutions are rationals in TIFF: a pitch is kept to about 9 digits.
@@ -60,6 +61,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         res = [page.tags[t].value for t in (X_RESOLUTION, Y_RESOLUTION) if t in page.tags]
         resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
         spacing = (tif.imagej_metadata or {}).get("spacing")
+        sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
@@ -69,7 +71,33 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
     if vol.ndim == 3:
         pitch.append(_spacing(spacing, where))
+    pitch = [sizes.get(axis, p) for axis, p in zip("XYZ", pitch)]
     return RawVolume(vol, np.array(pitch))
+
+
+def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
+    """An OME-TIFF's voxel size per axis (``X``, ``Y``, ``Z``) from its
+    ``Pixels`` element's PhysicalSize attributes, where given: the file's
+    own calibration, which the resolution tags need not carry."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        pixels = ET.fromstring(xml or "").find(".//{*}Pixels")
+    except ET.ParseError:
+        return {}  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
+    sizes = {}
+    for axis in "XYZ":
+        value = None if pixels is None else pixels.get(f"PhysicalSize{axis}")
+        if value is None:
+            continue
+        try:
+            size = float(value)
+        except ValueError:
+            raise IsoflowError(f"{where}: OME-XML's PhysicalSize{axis} {value!r} is not a number") from None
+        if not (np.isfinite(size) and size > 0):
+            raise IsoflowError(f"{where}: OME-XML's PhysicalSize{axis} {value!r} is not a positive voxel size")
+        sizes[axis] = size
+    return sizes
 
 
 def _spacing(value, where: str) -> float:
