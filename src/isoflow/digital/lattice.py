@@ -19,6 +19,7 @@ Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -143,7 +144,7 @@ class DigitalObject:
         >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
         """
-        given = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
+        given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
         return cls(np.zeros((1,) * ndim, bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry

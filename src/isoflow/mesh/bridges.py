@@ -82,9 +82,11 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     # a manifold is closed and bounds what it draws (no double-sided or
     # zero-thickness faces), so a solid thin beside its shell is the solid,
     # exact for a union of voxels: the note speaks only for an empty one
-    if not found.volume.any():
+    vol = found.volume
+    assert vol is not None  # (voxelised in memory: the volume is held)
+    if not vol.any():
         say_note(found.note)
-    return DigitalObject(found.volume, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
+    return DigitalObject(vol, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
 
 
 def cube_union(voxels):
