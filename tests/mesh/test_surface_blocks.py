@@ -214,6 +214,15 @@ def test_empty_store_and_existing_output(tmp_path, capsys):
     assert "exists" in capsys.readouterr().err and (tmp_path / "x.ply").read_text() == "old"
 
 
+def test_store_without_voxels_is_refused_in_one_line(tmp_path, capsys):
+    # a zero-length axis: no blocks at all (was a ValueError from sizing the chunk cache)
+    path = store(tmp_path, np.zeros((0, 5, 6), bool))
+    assert main(["surface", str(path), "-o", str(tmp_path / "e.ply")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the object is empty (shape (0, 5, 6))" in err[0]
+    assert not list(tmp_path.glob("e.*"))
+
+
 def test_interrupted_run_leaves_the_previous_output(tmp_path, rng, monkeypatch):
     v = seam_volume(rng)
     out = tmp_path / "s.ply"

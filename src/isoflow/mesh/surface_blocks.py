@@ -577,6 +577,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     if len(array.shape) != 3:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this one has shape {tuple(array.shape)}")
     conn = resolve_connectivity(3, connectivity)
+    if 0 in array.shape:  # no blocks to lay out: the in-memory refusal, before the grid is sized
+        raise EmptySurface(f"{where}: the object is empty (shape {tuple(array.shape)}), there is no surface to write")
     frame = frame or DigitalObject.placement(3)
     array, grid, cache = _reader(array, block_shape)
     with using(threads):
