@@ -116,6 +116,15 @@ def test_voxelize_writes_every_format(tmp_path, capsys, suffix):
     fails(capsys, "voxelize", mesh, "--resolution", "24", "-o", tmp_path / f"v{suffix}", words=("exists", "--force"))
 
 
+def test_flow_step_tiffs_of_thin_states_read_back_3d(tmp_path, capsys):
+    # the 3x3x3 box flows to 8 voxels, then to one: that step's TIFF read back as a 2D image of one pixel
+    np.save(tmp_path / "box.npy", np.ones((3, 3, 3), bool))
+    run(capsys, "flow", tmp_path / "box.npy", "--out", tmp_path / "out", "--volumes", ".tif")
+    states = [isoflow.read_volume(p) for p in sorted((tmp_path / "out").glob("step_*.tif"))]
+    assert [s.volume.shape for s in states] == [(3, 3, 3), (2, 2, 2), (1, 1, 1)]
+    assert [isoflow.analyze(s.volume, 6)["euler_characteristic"] for s in states] == [1, 1, 1]
+
+
 def test_voxelize_refuses_an_unknown_suffix_before_working(tmp_path, capsys):
     fails(capsys, "voxelize", tmp_path / "missing.stl", "--resolution", "8", "-o", tmp_path / "v.xyz",
           words=("v.xyz", ".nii.gz", ".binvox"))

@@ -103,6 +103,22 @@ def test_tiff_round_trip(tmp_path, vol):
     np.testing.assert_allclose(back.pitch, PITCH)
 
 
+@pytest.mark.parametrize("shape", [(4, 5, 1), (1, 5, 4), (4, 1, 5), (1, 1, 5), (1, 1, 1), (5, 1), (1, 1)])
+def test_tiff_round_trip_one_voxel_thick(tmp_path, rng, shape):
+    # tifffile reads a last axis of length 1 as samples and drops axes of
+    # length 1: a volume one voxel thick came back 2D, or with its axes turned
+    tifffile = pytest.importorskip("tifffile")
+    v = rng.random(shape) < 0.5
+    v.flat[0] = True
+    path = tmp_path / "thin.tif"
+    isoflow.write_volume(v, path)
+    with tifffile.TiffFile(path) as tif:  # a page per z slice, x by y: what Fiji opens
+        z, y, x = (1, *shape[::-1]) if len(shape) == 2 else shape[::-1]
+        assert len(tif.pages) == z and tif.pages[0].shape == (y, x)
+    back = isoflow.read_volume(path)
+    assert back.volume.shape == shape and np.array_equal(back.volume, v)
+
+
 def test_nifti_round_trip(tmp_path, vol):
     nib = pytest.importorskip("nibabel")
     obj = placed(vol)

@@ -2,7 +2,9 @@
 
 Axes: a stack is read by tifffile as (pages, rows, columns) = (z, y, x) and
 turned into isoflow's (x, y, z): column ``i``, row ``j``, page ``k`` is voxel
-``(i, j, k)``; a single page is the 2D image (x, y). A stack without
+``(i, j, k)``; a single page is the 2D image (x, y), or, with ImageJ's z
+``spacing`` (which isoflow writes for every 3D volume), a stack of one
+slice. Axes of length 1 are kept (a volume one voxel wide). A stack without
 ImageJ's axis names (tifffile's 'Q' or 'I' axis) is taken as z; other axes
 (time, channels, RGB samples) must have length 1: a time series is not a
 z-stack, however alike their pages look. A file of several image series
@@ -54,7 +56,6 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                                f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
                                "save the stack on its own")
         series = tif.series[0]
-        axes = list(series.axes.upper())
         check_shape(series.shape, series.dtype, where)
         data = series.asarray()
         page = series.keyframe
@@ -62,6 +63,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
         spacing = (tif.imagej_metadata or {}).get("spacing")
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
+        axes, shape = _unsqueezed(series, spacing is not None)
+        data = data.reshape(shape)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
@@ -100,6 +103,17 @@ def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
     return sizes
 
 
+def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
+    """The series' axes and shape without its axes of length 1, but for
+    the rows and columns (tifffile drops those too: a volume one voxel wide
+    would lose an axis) and, in a ``stack`` (ImageJ's z ``spacing`` is
+    given, as isoflow writes every 3D volume), the slices: a stack of one
+    slice is a volume one voxel thick, not a 2D image."""
+    axes, shape = series.get_axes(False).upper(), series.get_shape(False)
+    keep = [i for i, (a, n) in enumerate(zip(axes, shape)) if n > 1 or a in "YX" or (a == "Z" and stack)]
+    return [axes[i] for i in keep], [shape[i] for i in keep]
+
+
 def _spacing(value, where: str) -> float:
     """The z voxel size from ImageJ's ``spacing`` (1 where absent)."""
     if value is None or value == "":
@@ -122,7 +136,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     tifffile = import_library("tifffile", "TIFF")
     spacing = placement(obj)[0]
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
-    metadata = {"axes": "ZYX"[3 - obj.ndim:]}
+    metadata = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
     if obj.ndim == 3:
         metadata["spacing"] = float(spacing[2])
-    tifffile.imwrite(path, data, imagej=True, resolution=(1 / spacing[0], 1 / spacing[1]), metadata=metadata)
+    z, y, x = data.shape if obj.ndim == 3 else (1, *data.shape)
+    tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=(1 / spacing[0], 1 / spacing[1]),
+                     metadata=metadata)
