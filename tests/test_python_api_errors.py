@@ -71,6 +71,17 @@ def test_a_digital_object_where_an_array_is_taken_is_named(function):
         function(obj)
 
 
+@pytest.mark.parametrize("function", [
+    isoflow.analyze, isoflow.run_flow, isoflow.closed_surfaces, isoflow.boundary_mesh, isoflow.label_table,
+])
+def test_a_path_where_an_array_is_taken_is_named(tmp_path, function):
+    # boundary_mesh and label_table said "got a 0D array" of a file name
+    np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
+    for path in (str(tmp_path / "v.npy"), tmp_path / "v.npy"):
+        with pytest.raises(IsoflowError, match=r"v\.npy: a path, not an array; read it with isoflow\.read_object"):
+            function(path)
+
+
 def test_boundary_mesh_of_a_2d_array_is_an_isoflow_error():
     with pytest.raises(IsoflowError, match="boundary_mesh needs a 3D volume, got a 2D array"):
         isoflow.boundary_mesh(np.ones((2, 2), bool))

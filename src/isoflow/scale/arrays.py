@@ -51,11 +51,13 @@ def is_host(xp) -> bool:
 
 
 def refuse_object(array, where: str, then: str = "") -> None:
-    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` where an array
-    is taken: NumPy would make it a 0D object array, refused for its shape or
-    type rather than named (known by its fields: this layer cannot import
-    the class). ``then``: what to do with the result to place it as the
-    object is placed."""
+    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` or a path
+    where an array is taken: NumPy would make either a 0D array, refused
+    for its shape or type rather than named (an object is known by its
+    fields: this layer cannot import the class). ``then``: what to do with
+    the result to place it as the object is placed."""
+    if isinstance(array, (str, os.PathLike)):
+        raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
 
@@ -70,8 +72,6 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     is, for a pass that reads every nonzero byte as set
     (:func:`isoflow.scale.bitrows.pack`), which spares it the pass over the
     volume that the check costs."""
-    if isinstance(array, (str, os.PathLike)):
-        raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
     refuse_object(array, where)
     arr = np.asarray(array)
     if arr.dtype == np.bool_ and not canonical:
