@@ -78,7 +78,8 @@ def test_a_path_where_an_array_is_taken_is_named(tmp_path, function):
     # boundary_mesh and label_table said "got a 0D array" of a file name
     np.save(tmp_path / "v.npy", np.ones((2, 2, 2), bool))
     for path in (str(tmp_path / "v.npy"), tmp_path / "v.npy"):
-        with pytest.raises(IsoflowError, match=r"v\.npy: a path, not an array; read it with isoflow\.read_object"):
+        reader = "read_labels" if function is isoflow.label_table else "read_object"  # a label image's reader
+        with pytest.raises(IsoflowError, match=rf"v\.npy: a path, not an array; read it with isoflow\.{reader}"):
             function(path)
 
 
@@ -213,3 +214,24 @@ def test_boundary_mesh_of_an_object_says_how_to_place_the_mesh():
     assert len(str(refused.value).splitlines()) == 1
     placed = obj.world(isoflow.boundary_mesh(obj.volume).vertices)
     assert placed.min(axis=0).tolist() == [1.0, 2.0, 3.0] and placed.max(axis=0).tolist() == [2.0, 3.0, 4.0]
+
+
+def test_read_labels_gives_label_table_the_files_units(tmp_path):
+    """A segmentation file read in Python keeps its anisotropic voxels: the
+    table of ``label_table(read_labels(path))`` is the command line's,
+    volumes in the file's units (nibabel's zooms, independently)."""
+    nib = pytest.importorskip("nibabel")
+    labels = np.zeros((6, 5, 4), np.uint16)
+    labels[1:3, 1:4, 1:3], labels[4, 0:5, 0:4] = 3, 9
+    affine = np.diag([0.5, 0.25, 2.0, 1.0])
+    nib.save(nib.Nifti1Image(labels, affine), tmp_path / "seg.nii.gz")
+    zooms = nib.load(tmp_path / "seg.nii.gz").header.get_zooms()
+    image = isoflow.read_labels(tmp_path / "seg.nii.gz")
+    assert isinstance(image, isoflow.LabelImage) and image.spacing.tolist() == list(zooms)
+    table = isoflow.label_table(image)
+    assert table["label"].tolist() == [3, 9]
+    assert table["volume"].tolist() == [12 * float(np.prod(zooms)), 20 * float(np.prod(zooms))]
+    # a pitch given replaces the file's
+    assert isoflow.label_table(image, pitch=1.0)["volume"].tolist() == [12.0, 20.0]
+    with pytest.raises(IsoflowError, match="seg.nii.gz: a path, not an array; read it with isoflow.read_labels"):
+        isoflow.label_table(str(tmp_path / "seg.nii.gz"))

@@ -17,7 +17,7 @@ from test_input_errors import fails  # one line on stderr, exit 2
 from isoflow import analyze
 from isoflow.cli import main
 from isoflow.mesh.load import load_mesh
-from isoflow.mesh.volumes import read_label_image, read_volume
+from isoflow.mesh.volumes import read_labels, read_volume
 from isoflow.mesh.voxelize import voxelize
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,7 +58,7 @@ def test_two_overlapping_meshes_into_nifti_read_back_by_nibabel(tmp_path, capsys
     assert f"note: {out}: {shared} voxels lie inside two or more meshes (labels 1 and 2: {shared})" in err
     assert f"{out}: 2 labels in a {'x'.join(map(str, labels.shape))} grid (uint8)" in printed
     assert f"{int((A & ~B).sum()):,}  {a}" in printed and f"{int(B.sum()):,}  {b}" in printed
-    back = read_label_image(out)  # isoflow's reader: the same array, pitch and origin
+    back = read_labels(out)  # isoflow's reader: the same array, pitch and origin
     assert np.array_equal(back.array, labels) and np.allclose(back.spacing, pitch) and np.allclose(back.origin, origin)
     assert np.array_equal(read_volume(out, label=2).volume, B)
 
@@ -80,12 +80,12 @@ def test_every_format_keeps_the_labels_and_its_library_reads_them(tmp_path, caps
     out = tmp_path / f"labels{suffix}"
     assert main(["voxelize", str(a), str(b), "--resolution", "24", "-o", str(out)]) == 0
     capsys.readouterr()
-    back = read_label_image(out)
+    back = read_labels(out)
     assert back.array.dtype == np.uint8 and set(np.unique(back.array)) == {0, 1, 2}
     ref = tmp_path / "ref.npz"
     assert main(["voxelize", str(a), str(b), "--resolution", "24", "-o", str(ref)]) == 0
     capsys.readouterr()
-    ref = read_label_image(ref)
+    ref = read_labels(ref)
     assert np.array_equal(back.array, ref.array)
     if suffix == ".nrrd":
         import nrrd
@@ -120,7 +120,7 @@ def test_write_labels_keeps_the_type_in_nifti_and_nibabel_reads_it(tmp_path, dty
     image = nib.load(path)
     assert image.get_data_dtype() == dtype and np.array_equal(np.asarray(image.dataobj), labels)
     assert [float(z) for z in image.header.get_zooms()] == [0.5, 1.0, 2.0]
-    back = read_label_image(path)
+    back = read_labels(path)
     assert np.array_equal(back.array, labels) and back.origin.tolist() == [1.0, 2.0, 3.0]
 
 
@@ -143,7 +143,7 @@ def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
     out = tmp_path / "bodies.npz"
     assert main(["voxelize", str(path), "--split", "--resolution", "48", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
-    labels = read_label_image(out).array
+    labels = read_labels(out).array
     assert bodies == 5 and set(np.unique(labels)) == set(range(bodies + 1))
     assert f"{bodies} labels" in printed and f"{path}:{bodies}" in printed
     # one body: one label, in the singular
@@ -173,7 +173,7 @@ def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):
     printed = capsys.readouterr().out
     rows = [line.split() for line in printed.splitlines()[2:]]
     assert [r[2] for r in rows] == [f"{path}:ball", f"{path}:crate", f"{path}:ring"]
-    image = read_label_image(out)
+    image = read_labels(out)
     report = json.loads(_run(capsys, "info", out, "--labels", "--json"))
     chis = {row["label"]: row["euler_characteristic"] for row in report["labels"]}
     for label, node in enumerate(("ball", "crate", "ring"), 1):
@@ -193,7 +193,7 @@ def test_fill_applies_to_every_mesh(tmp_path, capsys):
     out = tmp_path / "l.npz"
     assert main(["voxelize", str(panel), str(box), "--resolution", "32", "--fill", "shell", "-o", str(out)]) == 0
     capsys.readouterr()
-    image = read_label_image(out)
+    image = read_labels(out)
     for label, path in enumerate((panel, box), 1):
         shell = voxelize(*load_mesh(path), pitch=float(image.spacing[0]), grid=(image.origin, image.array.shape),
                          fill="shell", details=True).volume
@@ -207,7 +207,7 @@ def test_the_command_in_a_subprocess(tmp_path, overlapping):
                        capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     assert "2 labels" in p.stdout and "inside two or more meshes" in p.stderr
-    assert read_label_image(out).spacing.tolist() == [0.1, 0.1, 0.1]
+    assert read_labels(out).spacing.tolist() == [0.1, 0.1, 0.1]
 
 
 def _run(capsys, *args):

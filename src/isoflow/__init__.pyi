@@ -40,6 +40,7 @@ from .digital.indices import (
 from .digital.indices import (
     planar_index as planar_index,
 )
+from .digital.label_table import LabelImage as LabelImage
 from .digital.label_table import label_table as label_table
 from .digital.lattice import DigitalObject as DigitalObject
 from .digital.outofcore import analyze_chunked as analyze_chunked
@@ -61,6 +62,9 @@ from .mesh.genus import verify_genus as verify_genus
 from .mesh.label_voxels import voxelize_meshes as voxelize_meshes
 from .mesh.slabs import voxelize_to_zarr as voxelize_to_zarr
 from .mesh.verdict import GenusVerdict as GenusVerdict
+from .mesh.volumes import (
+    read_labels as read_labels,
+)
 from .mesh.volumes import (
     read_object as read_object,
 )

@@ -83,7 +83,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     from ..digital.connectivity import resolve_connectivity
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
-    from ..mesh.volumes import read_label_image
+    from ..mesh.volumes import read_labels
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
@@ -91,7 +91,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # surfaces are written, whole (as a file is, refused up front where it
     # would not fit)
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
-    image = None if blocks else read_label_image(args.input)
+    image = None if blocks else read_labels(args.input)
     ndim = 3 if image is None else image.array.ndim
     if ndim == 2 and getattr(args, "command", "") == "surface":
         raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
@@ -158,7 +158,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None
-    # a float store's labels are int64, as a float file's are read (read_label_image): the same --json
+    # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
 

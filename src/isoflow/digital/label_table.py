@@ -34,6 +34,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from functools import cache
 from typing import Literal
 
@@ -87,8 +88,28 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     return out
 
 
+@dataclass(frozen=True)
+class LabelImage:
+    """A label image with its place: integers in (x, y, z) order, the voxel
+    size per axis and the world position of voxel (0, 0, 0)'s lowest
+    corner, as :func:`~isoflow.mesh.volumes.read_labels` reads a file.
+    :func:`label_table` takes it in place of the array and its ``pitch``
+    and ``origin``.
+
+    Examples
+    --------
+    >>> image = LabelImage(np.array([[1, 1, 1], [0, 2, 2]]), np.array([0.5, 2.0]), np.zeros(2))
+    >>> label_table(image)["area"].tolist()  # pixels of 0.5 x 2
+    [3.0, 2.0]
+    """
+
+    array: np.ndarray
+    spacing: np.ndarray
+    origin: np.ndarray
+
+
 def label_table(
-    image: ArrayLike,
+    image: ArrayLike | LabelImage,
     connectivity: int | None = None,
     *,
     pitch: float | Sequence[float] | None = None,
@@ -102,10 +123,12 @@ def label_table(
 
     Parameters
     ----------
-    image : array_like
+    image : array_like or LabelImage
         3D or 2D label image: any integer type up to 64 bits, bool (labels
         0 and 1, as uint8), or float whose values are all whole numbers
-        (as NIfTI's scaling gives; read as int64).
+        (as NIfTI's scaling gives; read as int64). A :class:`LabelImage`
+        (:func:`isoflow.read_labels` of a file) brings its voxel size and
+        origin, which ``pitch`` and ``origin`` given replace.
     connectivity : {6, 26} in 3D, {4, 8} in 2D, optional
         Every label's connectivity (default the paper's: 6, in 2D 4); its
         complement takes the other one.
@@ -192,6 +215,10 @@ def label_table(
     """
     from ..scale.compiled import using
 
+    if isinstance(image, LabelImage):  # the file's place, unless given
+        pitch = image.spacing.tolist() if pitch is None else pitch
+        origin = image.origin.tolist() if origin is None else origin
+        image = image.array
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     # the pitch and origin checked as every object's are
@@ -213,7 +240,7 @@ def label_table(
 def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
-    refuse_object(image, "label_table")
+    refuse_object(image, "label_table", reader="isoflow.read_labels")
     vol = np.asarray(image)
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")

@@ -10,14 +10,13 @@ from __future__ import annotations
 import os
 import re
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..digital.label_table import as_labels
+from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError, IsoflowWarning
 from ..scale.arrays import NotBinary, binary
@@ -164,7 +163,7 @@ def one_value_mask(arr: np.ndarray) -> np.ndarray:
 
 
 #: what the refusal of a label image where a mask is expected adds
-EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table)"
+EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table(isoflow.read_labels(path)))"
 
 
 def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
@@ -181,20 +180,41 @@ def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
     return NotBinary(exc.bare + options, bare=exc.bare)
 
 
-@dataclass(frozen=True)
-class LabelImage:
-    """A label image as read: integers in (x, y, z) order, the voxel size
-    per axis and the world position of voxel (0, 0, 0)'s lowest corner."""
+def read_labels(path: str | os.PathLike) -> LabelImage:
+    """A 3D or 2D label image from a file, with its voxel size and origin.
 
-    array: np.ndarray
-    spacing: np.ndarray
-    origin: np.ndarray
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file of any format :func:`read_volume` reads (a segmentation in
+        NIfTI, NRRD, TIFF, HDF5, zarr, ...), optionally ``:dataset``.
 
+    Returns
+    -------
+    LabelImage
+        ``array``: the labels in isoflow's (x, y, z) order, as integers (a
+        float array whose values are all whole numbers, as NIfTI scaling
+        may give, becomes int64); ``spacing`` and ``origin`` as
+        :func:`read_volume` gives them. :func:`isoflow.label_table` takes
+        it as it is, in the file's units.
 
-def read_label_image(path: str | os.PathLike) -> LabelImage:
-    """A 3D or 2D label image from any format :func:`read_volume` reads,
-    as integers (a float array whose values are all whole numbers, as NIfTI
-    scaling may give, becomes int64), with its voxel size and origin."""
+    Raises
+    ------
+    IsoflowError
+        One line naming the file: not a volume, not 2D or 3D, values that
+        are no labels.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from isoflow import label_table
+    >>> labels = np.zeros((4, 4, 4), np.uint8)
+    >>> labels[0], labels[2:] = 1, 2
+    >>> path = write_labels(labels, pathlib.Path(tempfile.mkdtemp()) / "seg.nii.gz", pitch=(0.5, 0.5, 2.0))
+    >>> image = read_labels(path)
+    >>> image.spacing.tolist(), label_table(image)["volume"].tolist()
+    ([0.5, 0.5, 2.0], [8.0, 16.0])
+    """
     file, dataset = split_dataset(path)
     fmt = format_for(file)
     if fmt is None:
@@ -590,7 +610,7 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     Returns
     -------
     Path
-        The file written; :func:`read_label_image` reads it back.
+        The file written; :func:`read_labels` reads it back.
 
     Raises
     ------
@@ -604,7 +624,7 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> labels = np.zeros((3, 2, 2), np.uint8)
     >>> labels[0], labels[2] = 1, 2
     >>> path = write_labels(labels, pathlib.Path(tempfile.mkdtemp()) / "labels.npz", pitch=0.5, origin=(1, 2, 3))
-    >>> back = read_label_image(path)
+    >>> back = read_labels(path)
     >>> np.array_equal(back.array, labels), back.spacing.tolist(), back.origin.tolist()
     (True, [0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
     """

@@ -50,14 +50,15 @@ def is_host(xp) -> bool:
     return xp is np
 
 
-def refuse_object(array, where: str, then: str = "") -> None:
+def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read_object") -> None:
     """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` or a path
     where an array is taken: NumPy would make either a 0D array, refused
     for its shape or type rather than named (an object is known by its
     fields: this layer cannot import the class). ``then``: what to do with
-    the result to place it as the object is placed."""
+    the result to place it as the object is placed; ``reader``: the
+    function that reads such a file."""
     if isinstance(array, (str, os.PathLike)):
-        raise IsoflowError(f"{array}: a path, not an array; read it with isoflow.read_object")
+        raise IsoflowError(f"{array}: a path, not an array; read it with {reader}")
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
 
