@@ -10,9 +10,13 @@ meshes joined, as every command reads it). With ``split``:
   named ``FILE:NODE`` and taken in the natural order of the node names
   (``part2`` before ``part10``: trimesh does not keep the file's order);
 * any other mesh (STL with one or several solids, OBJ, PLY, OFF, or arrays)
-  gives one body per **connected body**: faces joined across shared edges
-  after the weld, as trimesh's ``split(only_watertight=False)`` finds them,
-  in the order of their first face, named ``FILE:1``, ``FILE:2``, ... A
+  gives one body per **connected body**: faces joined across every shared
+  edge after the weld, in the order of their first face, named ``FILE:1``,
+  ``FILE:2``, ... Bodies that touch along an edge or share a face are one
+  body: telling them apart needs the faces' order around each non-manifold
+  edge, which the weld's edge table does not hold (trimesh's split joins
+  only across edges of two faces, so it parts the first and cuts the second
+  into open pieces). A
   closed shell oriented inwards (negative volume: the wall of a cavity)
   stays with the body whose solid holds it, so a hollow part is one body
   with its cavity empty, not a solid and a second solid filling the cavity.
