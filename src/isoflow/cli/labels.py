@@ -100,20 +100,25 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         conn = resolve_connectivity(ndim, args.connectivity)
     except IsoflowError as exc:
         raise exc.at(args.input) from None
+    # a long choice (a range of millions) is a filter on the whole table:
+    # a row of zeros per label asked would cost more than the image
+    every = asked is not None and len(asked) > CHOICE_ROWS
     if image is None:
-        about, table = table_of_store(args, conn, asked, surfaces)
+        about, table = table_of_store(args, conn, None if every else asked, surfaces)
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin}
-        wanted = None if asked is None else _within_type(args.input, asked, image.array.dtype)
+        wanted = None if asked is None or every else _within_type(args.input, asked, image.array.dtype)
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
         raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
-    present = table["voxels"] > 0
     beyond = [] if asked is None else _beyond_type(asked, about["dtype"])
-    if not present.all() or beyond:
-        absent = table["label"][~present].tolist() + beyond
+    if every:
+        table, missing = chosen_rows(table, _within_type(args.input, asked, about["dtype"]))
+    present = table["voxels"] > 0
+    if every or not present.all() or beyond:
+        absent = (missing if every else table["label"][~present].tolist()) + beyond
         if not present.any():
             raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
         if not args.quiet:
@@ -163,6 +168,33 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
 
 
+#: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)
+CHOICE_ROWS = 1 << 16
+
+
+def chosen_rows(table: dict, chosen: list[int]) -> tuple[dict, list[int]]:
+    """The rows of ``table`` (every label present, in increasing order)
+    whose labels are ``chosen``, in the order chosen, and the labels
+    chosen that have no row (in that order too).
+
+    Examples
+    --------
+    >>> rows, missing = chosen_rows({"label": np.array([2, 5, 9]), "voxels": np.array([4, 1, 7])}, [9, 3, 2])
+    >>> rows["label"].tolist(), rows["voxels"].tolist(), missing
+    ([9, 2], [7, 4], [3])
+    """
+    labels = table["label"]
+    wanted = np.asarray(chosen, dtype=labels.dtype)  # each within the type (_within_type)
+    order = np.argsort(wanted, kind="stable")
+    at = np.minimum(np.searchsorted(wanted[order], labels), len(wanted) - 1)
+    hit = wanted[order][at] == labels
+    place = order[at[hit]]  # each row's place in the choice
+    rows = np.flatnonzero(hit)[np.argsort(place, kind="stable")]
+    found = np.zeros(len(wanted), bool)
+    found[place] = True
+    return {k: v[rows] for k, v in table.items()}, wanted[~found].tolist()
+
+
 def _within_type(name, asked: list[int], dtype) -> list[int]:
     """The labels asked for that the image's type can hold (the others
     cannot occur); an error when it holds none of them."""
@@ -170,7 +202,8 @@ def _within_type(name, asked: list[int], dtype) -> list[int]:
 
     kind = label_dtype(dtype)
     info = np.iinfo(kind)
-    within = [v for v in asked if info.min <= v <= info.max]
+    lo, hi = int(info.min), int(info.max)  # (looked up once: a choice may hold millions)
+    within = [v for v in asked if lo <= v <= hi]
     if not within:
         raise IsoflowError(f"{name}: none of the labels asked for occur ({_some(asked)}): its labels are "
                            f"{kind} ({info.min} to {info.max})")
@@ -182,7 +215,8 @@ def _beyond_type(asked: list[int], dtype) -> list[int]:
     from ..digital.label_table import label_dtype
 
     info = np.iinfo(label_dtype(dtype))
-    return [v for v in asked if not info.min <= v <= info.max]
+    lo, hi = int(info.min), int(info.max)
+    return [v for v in asked if not lo <= v <= hi]
 
 
 def _some(values, most: int = 8) -> str:
