@@ -9,6 +9,7 @@ inconsistently oriented edges from the vertex indices alone.
 from __future__ import annotations
 
 import contextlib
+import io
 import math
 import os
 import warnings
@@ -476,13 +477,37 @@ def trimesh_load(p: Path, force: str):
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}
+    source: Any = str(p)
     if p.suffix.lower() == ".obj":
         kwargs.update(merge_tex=True, merge_norm=True)
+        if (text := _obj_relative_resolved(p)) is not None:
+            # the file's own materials and textures still resolve beside it
+            source = io.BytesIO(text)
+            kwargs.update(file_type="obj", resolver=trimesh.resolvers.FilePathResolver(str(p)))
     with reading_mesh(p), warnings.catch_warnings():
         # NumPy's overflow warnings on inf or huge coordinates: the one
         # error line of check_mesh says what is wrong
         warnings.simplefilter("ignore", RuntimeWarning)
-        return trimesh.load(str(p), force=force, **kwargs)
+        return trimesh.load(source, force=force, **kwargs)
+
+
+def _obj_relative_resolved(p: Path) -> bytes | None:
+    """The OBJ file's text with its relative face indices written as the
+    vertices they name (:func:`isoflow.mesh.readers.relative_indices_resolved`),
+    or None where trimesh counts them right (or there are none).  A
+    relative index before the first vertex is refused naming its line."""
+    from .readers import may_name_vertex_0, obj_index_error, relative_indices_resolved
+
+    try:
+        data = p.read_bytes()
+    except OSError:
+        return None  # trimesh's path says what is wrong with the file
+    text = relative_indices_resolved(data)
+    if text is not None and may_name_vertex_0(text):  # written 0: no vertex (or a 0 in the file)
+        message = obj_index_error(p, data)
+        if message is not None:
+            raise IsoflowError(message)
+    return text
 
 
 def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:

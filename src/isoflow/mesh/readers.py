@@ -354,6 +354,63 @@ def may_name_vertex_0(data: bytes) -> bool:
     return bool(((a[start] == 102) & ((second == 32) | (second == 9))).any())
 
 
+def relative_indices_resolved(data: bytes) -> bytes | None:
+    """An OBJ file's text with each relative (negative) index of its ``f``
+    lines written as the index from 1 that it names, where a ``v``, ``vt``
+    or ``vn`` line follows a face with one; None where none does.
+
+    OBJ counts a relative index back from its face's line (-1: the last
+    vertex above it), trimesh from the end of the file.  The two agree
+    unless vertices follow the face, as in a file of several objects each
+    written with relative indices, where trimesh's count gives every
+    object the last one's vertices.  A position index before the first
+    vertex is written 0, which the readers refuse (:func:`obj_index_error`
+    names its line in the file as written).
+
+    Examples
+    --------
+    >>> relative_indices_resolved(b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf -3 -2 -1\\nv 0 0 1\\nf -4 -2 -1 # c -1\\n")
+    b'v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\nv 0 0 1\\nf 1 3 4 # c -1\\n'
+    >>> relative_indices_resolved(b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf -3 -2 -1\\n") is None
+    True
+    """
+    a = np.frombuffer(data, np.uint8)
+    # a sign after a space or tab, on a line that starts "f ": the first
+    # relative index; vectorised, as most files have none
+    sign = np.flatnonzero(a[1:] == 45) + 1
+    sign = sign[(a[sign - 1] == 32) | (a[sign - 1] == 9)]
+    newline = np.flatnonzero(a == 10)
+    start = np.concatenate(([0], newline + 1))[np.searchsorted(newline, sign)]
+    second = a[np.minimum(start + 1, len(a) - 1)]
+    sign = sign[(a[start] == 102) & ((second == 32) | (second == 9))]
+    if not len(sign) or data.find(b"\nv", int(sign[0])) < 0:
+        return None  # no vertex after a relative index: trimesh's count is OBJ's
+    seen = [0, 0, 0]  # v, vt and vn lines so far
+    slot = {b"v": 0, b"vt": 1, b"vn": 2}
+    lines = data.split(b"\n")
+    for i, line in enumerate(lines):
+        code, hash_, comment = line.partition(b"#")
+        words = code.split()
+        if words and words[0] in slot:
+            seen[slot[words[0]]] += 1
+        elif words[:1] == [b"f"] and b"-" in code:
+            lines[i] = b" ".join([b"f"] + [_absolute(w, seen) for w in words[1:]]) + (
+                b" " + hash_ + comment if hash_ else b"") + (b"\r" if line.endswith(b"\r") and not hash_ else b"")
+    return b"\n".join(lines)
+
+
+def _absolute(word: bytes, seen: list[int]) -> bytes:
+    """A face word ``i``, ``i/j``, ``i//k`` or ``i/j/k`` with its relative
+    indices counted back over the ``seen`` vertex, texture and normal lines
+    (a position before the first written 0, which names none)."""
+    parts = word.split(b"/")
+    for n, part in enumerate(parts[:3]):
+        if part.startswith(b"-") and part[1:].isdigit():
+            k = seen[n] + 1 + int(part)
+            parts[n] = str(k if k >= 1 or n else 0).encode()
+    return b"/".join(parts)
+
+
 def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:
     """The number of corners on each line of face words (bytes ``a``), or
     ``None`` unless every word has the first word's form: ``i`` (form 0),
