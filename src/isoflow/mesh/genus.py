@@ -623,7 +623,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop,
-        notes=tuple(load_notes(stats) + shape_notes(w, kind) + digital_notes(w, digital, reference, stable)))
+        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + digital_notes(w, digital, reference, stable)))
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
@@ -720,8 +720,9 @@ def load_notes(stats: dict) -> list[Note]:
     return notes
 
 
-def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
-    """What the mesh is: double-sided, open or inconsistently oriented,
+def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note]:
+    """What the mesh is: double-sided, open or inconsistently oriented
+    (with the ``fill`` whose voxels were compared instead),
     non-manifold, nested or overlapping, and,
     where the verdict does not start with it, self-intersecting."""
     mesh = w["mesh"]
@@ -730,9 +731,9 @@ def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
         notes.append(Note("double_sided", w["double_sided"]))
     if mesh["boundary_edges"]:
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
-                                   "inconsistent_edges": mesh["inconsistent_edges"]}))
+                                   "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill}))
     elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
-        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"]}))
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill}))
     if mesh["nonmanifold_edges"]:
         notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:

@@ -202,17 +202,22 @@ def note_text(note: Note) -> str:
     return _NOTE_WORDS[note.kind](**note.facts)
 
 
-def _open_words(boundary_edges: int, inconsistent_edges: int) -> str:
+#: what the digital genus was measured on, by the fill compared
+_READ_AS = {"winding": "its solid is read by the generalised winding number (|w| > 1/2)",
+            "shell": "its voxels are its shell (--fill shell: every voxel the surface meets)",
+            "flood": "its voxels are its flood fill (--fill flood: the shell and what it encloses)"}
+
+
+def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "winding") -> str:
     return (f"the mesh is open ({boundary_edges} boundary edges"
             + (f", {inconsistent_edges} inconsistently oriented" if inconsistent_edges else "")
-            + "): it bounds no solid, so it has no genus as a closed surface; its solid is read by the "
-            "generalised winding number (|w| > 1/2)")
+            + "): it bounds no solid, so it has no genus as a closed surface; " + _READ_AS[fill])
 
 
-def _inconsistent_words(edges: int) -> str:
+def _inconsistent_words(edges: int, fill: str = "winding") -> str:
     return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
             "(used more often one way than the other): it bounds no solid as given, so it has no genus as a "
-            "closed surface; its solid is read by the generalised winding number (|w| > 1/2)")
+            "closed surface; " + _READ_AS[fill])
 
 
 def _point(p) -> str:
