@@ -251,13 +251,24 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         vertices, faces = _read(p, ext)
         if faces.size == 0 or faces.ndim != 2:
             # trimesh returns an empty mesh rather than failing on many garbage files
-            raise IsoflowError(
-                f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
+            raise IsoflowError((_stl_size_line(p) if ext == "stl" else None)
+                               or f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
     vertices, faces = weld(vertices, faces, rtol, where=str(p), stats=stats)
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def _stl_size_line(p: Path) -> str | None:
+    """The line for a binary STL whose size does not match its facet count
+    (:func:`isoflow.mesh.readers.stl_size_error`), or None."""
+    from .readers import stl_size_error
+
+    try:
+        return stl_size_error(p, p.read_bytes())
+    except OSError:
+        return None
 
 
 def weld_tolerance(merge_rtol) -> float:

@@ -79,6 +79,41 @@ def read_stl(data: bytes) -> Mesh | None:
     return _read_stl_ascii(data)
 
 
+def stl_size_error(path, data: bytes) -> str | None:
+    """Why a file that is no ASCII STL gave no triangles as a binary one:
+    the line naming its size against the 84 bytes plus 50 per facet that
+    its header counts (a file truncated, padded after its facets, or whose
+    count a writer left wrong), or ``None`` where the size is right, the
+    file holds no whole facet of numbers or it reads as ASCII.
+
+    Examples
+    --------
+    >>> data = bytes(80) + (2).to_bytes(4, "little") + bytes(110)
+    >>> print(stl_size_error("t.stl", data))
+    t.stl: no triangles read: as a binary STL its header counts 2 facets (184 bytes), but the file has
+    194 bytes (2 facets and 10 bytes after the header): truncated, padded, or its facet count is wrong
+    """
+    head = data[:1024]
+    if len(data) < 84 or (data.lstrip()[:5].lower() == b"solid" and b"facet" in head.lower()):
+        return None
+    if not head.translate(None, bytes(range(32, 127)) + b"\t\n\r"):
+        return None  # text, not a header and facets: the reader's own line
+    n = int(np.frombuffer(data, "<u4", 1, 80)[0])
+    whole, rest = divmod(len(data) - 84, 50)
+    if len(data) == 84 + 50 * n or not whole:
+        return None
+    # facets that hold numbers, as a file of other bytes would not: a NaN,
+    # an infinity or 1e30 among them says the file is no STL at all
+    rec = np.frombuffer(data, _STL_RECORD, min(whole, 10_000), 84)
+    values = np.concatenate((rec["normal"].ravel(), rec["corners"].ravel()))
+    if not (np.abs(values) < 1e30).all():
+        return None
+    held = f"{whole} facet{'' if whole == 1 else 's'}" + (f" and {rest} bytes" if rest else "")
+    return (f"{path}: no triangles read: as a binary STL its header counts {n} facet{'' if n == 1 else 's'} "
+            f"({84 + 50 * n} bytes), but the file has {len(data)} bytes ({held} after the header): "
+            "truncated, padded, or its facet count is wrong")
+
+
 def _read_stl_ascii(data: bytes) -> Mesh | None:
     low = data.lower()
     if not low.lstrip().startswith(b"solid") or low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid"):
