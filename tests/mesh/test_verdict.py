@@ -209,6 +209,21 @@ def test_an_open_mesh_names_the_fill_its_voxels_were(fill, tmp_path):
     assert json_of(path, "--resolution", 16, 32, "--no-step", "--fill", fill)["verdict"] == v.verdict
 
 
+def test_one_of_a_kind_is_said_in_the_singular():
+    """hourglass_ico.obj: two icospheres touching at one vertex (trimesh:
+    two bodies, one vertex shared). Was "1 non-manifold vertices",
+    "1 vertices shared"."""
+    import trimesh
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / "hourglass_ico.obj"
+    mesh = trimesh.load(path, process=True)
+    assert mesh.body_count == 1 and len(mesh.split(only_watertight=False)) == 2
+    v = verify_genus(path, (16, 32), step=False)
+    assert "1 non-manifold vertex where separate sheets touch at a point" in v.verdict
+    assert "(0 faces cross other components, 1 vertex shared)" in v.verdict
+    assert "vertices" not in v.verdict
+
+
 def test_a_mesh_in_memory_gets_the_verdict_of_its_file(tmp_path):
     """verify_genus takes a trimesh object or a (vertices, faces) pair, welded
     as a file is: the same verdict as the file written from it, and
