@@ -224,6 +224,21 @@ def test_one_of_a_kind_is_said_in_the_singular():
     assert "vertices" not in v.verdict
 
 
+@pytest.mark.parametrize("name", ["torus.obj", "eight.off"])
+def test_the_shell_of_a_closed_mesh_gives_its_genus(name):
+    """A shell is the surface thickened: b1 = 2 g, one cavity. Was: b1 taken
+    for the genus, so the stepping chased the mesh's genus up to 1024
+    across and said "disagree", every grid "too coarse"."""
+    import trimesh
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / name
+    genus = (2 - trimesh.load(path, process=True).euler_number) // 2  # trimesh's count: torus 1, eight 2
+    v = verify_genus(path, (32, 64), fill="shell")
+    assert [d["resolution"] for d in v.digital] == [32, 64]
+    assert v.digital[-1]["betti"] == [1, 2 * genus, 1] and v.digital[-1]["genus"] == genus
+    assert v.kind == "agree" and v.reference == genus and v.verdict == f"agree: genus {genus}"
+
+
 def test_a_mesh_in_memory_gets_the_verdict_of_its_file(tmp_path):
     """verify_genus takes a trimesh object or a (vertices, faces) pair, welded
     as a file is: the same verdict as the file written from it, and
