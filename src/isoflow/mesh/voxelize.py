@@ -44,7 +44,17 @@ from numpy.typing import ArrayLike
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote
 from ..scale import memory
-from .fills import THIN_SHARE, THIN_TRIGGER, UNBOUNDED_SHARE, Fill, Voxelization, check_fill, thin_solid, unbounded_area
+from .fills import (
+    THIN_SHARE,
+    THIN_TRIGGER,
+    UNBOUNDED_SHARE,
+    Fill,
+    Voxelization,
+    check_fill,
+    flood_adds_nothing,
+    thin_solid,
+    unbounded_area,
+)
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_arrays, mesh_defects, orient_faces  # noqa: F401
 
@@ -587,7 +597,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vol = fill_enclosed(vol, inplace=True)
     made().check_layers(stats)
     voxels = int(np.count_nonzero(vol)) if fill == "flood" else int(stats[1:].sum())
-    result = voxelization(made(), plan, vol, voxels, origin, pitch, stats)
+    result = voxelization(made(), plan, vol, voxels, origin, pitch, stats, shell_before=int(stats[1:].sum()))
     if details:
         return result
     say_note(result.note)
@@ -622,12 +632,17 @@ def _share(progress, n: int, slabs: int):
                                         slabs * PROGRESS_UNITS)
 
 
-def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats) -> Voxelization:
+def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats,
+                 shell_before: int | None = None) -> Voxelization:
     """The :class:`Voxelization` of a filled grid (``vol`` None for a
     store: then no share of unbounded area is measured), with its note; with
-    ``strict``, a thin or empty winding solid is refused here."""
+    ``strict``, a thin or empty winding solid is refused here.
+    ``shell_before``: a flood fill's shell, before the voxels it encloses."""
     notes = [solid.note(stats)]
     shell = None
+    if solid.fill == "flood":  # a flood that leaked is the shell alone: said, not silent
+        notes.append(flood_adds_nothing(voxels, shell_before, solid.census["boundary_edges"],
+                                        int(np.prod(plan.shape))))
     if solid.fill == "winding":
         shell, thin = plan.thin_note(vol, voxels, solid.double_sided)
         if thin and solid.strict:
