@@ -337,10 +337,18 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     return "mesh", v, f
 
 
+def is_scene(mesh: object) -> bool:
+    """Whether ``mesh`` is a scene of meshes in memory (a ``trimesh.Scene``,
+    as ``trimesh.load`` gives for a glTF file): nodes and their geometry."""
+    return hasattr(mesh, "graph") and hasattr(mesh, "geometry") and hasattr(mesh, "to_mesh")
+
+
 def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     """The vertices and faces of a mesh in memory, as given (unchecked): a
     ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
-    (a ``trimesh.Trimesh``); IsoflowError naming ``where`` otherwise.
+    (a ``trimesh.Trimesh``), or a ``trimesh.Scene``'s meshes as one, node
+    transforms applied, as a scene file is read; IsoflowError naming
+    ``where`` otherwise.
 
     Examples
     --------
@@ -349,13 +357,15 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     >>> mesh_arrays(3, "mesh 2")
     Traceback (most recent call last):
     ...
-    isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, got int
+    isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, got int
     """
+    if is_scene(mesh):
+        mesh = mesh.to_mesh()  # type: ignore[attr-defined]
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
         return mesh.vertices, mesh.faces
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         return mesh[0], mesh[1]
-    raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, "
+    raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, "
                        f"got {type(mesh).__name__}")
 
 

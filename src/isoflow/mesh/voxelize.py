@@ -56,7 +56,17 @@ from .fills import (
     unbounded_area,
 )
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
-from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_arrays, mesh_defects, orient_faces  # noqa: F401
+from .load import (  # noqa: F401
+    chain_of,
+    check_mesh,
+    defect_counts,
+    is_scene,
+    load_mesh,
+    merge_coincident,
+    mesh_arrays,
+    mesh_defects,
+    orient_faces,
+)
 
 #: a progress callback: ``progress(done, total)``
 Progress = Callable[[int, int], object]
@@ -718,9 +728,9 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     64
     """
     if faces is None:
-        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces")):
+        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)):
             raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
-                               "and faces (a trimesh.Trimesh) alone; a file: voxelize_file(path)")
+                               "and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
         vertices, faces = mesh_arrays(vertices, "voxelize")
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
