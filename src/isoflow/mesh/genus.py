@@ -510,7 +510,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
     betti = betti_numbers(vol, connectivity)
     # a shell is the surface thickened: each handle of a closed surface
     # gives it two tunnels (a torus's shell: b1 = 2), a solid's one
-    genus = betti[1] // 2 if fill == "shell" else betti[1]
+    genus = betti[1] // 2 if fill == "shell" and betti[1] is not None else betti[1]
     return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
             "connectivity": connectivity, "betti": betti, "genus": genus,
             "seconds": round(time.monotonic() - t, 3)}
