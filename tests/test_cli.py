@@ -45,6 +45,23 @@ def test_info_json_contract(tmp_path, capsys):
     assert r["surfaces"] == [{"euler_characteristic": 0, "genus": 1, "faces": r["surfaces"][0]["faces"]}]
 
 
+@pytest.mark.parametrize("fill, voxels", [("winding", 6 * 11 * 16), ("shell", 6 * 11 * 16 - 4 * 9 * 14)])
+def test_info_of_a_mesh_says_its_fill_and_grid(fill, voxels, tmp_path, capsys):
+    """A 1 x 2 x 3 box at 16 across: pitch 3/16, 6 x 11 x 16 voxels centred
+    on the box, all in its solid, only the outer layer in its shell. The
+    report did not say which fill or grid its counts were of."""
+    box = tmp_path / "box.stl"
+    trimesh.creation.box((1, 2, 3)).export(box)
+    r = info_json(capsys, box, "--resolution", 16, "--fill", fill)
+    assert r["voxels"] == voxels
+    assert r["voxelised"] == {"fill": fill, "pitch": 0.1875, "origin": [-0.5625, -1.03125, -1.5]}
+    assert main(["info", str(box), "--resolution", "16", "--fill", fill]) == 0
+    assert f"voxelised              --fill {fill}, pitch 0.1875, origin [-0.5625, -1.03125, -1.5]" \
+        in capsys.readouterr().out.splitlines()[1]
+    np.save(tmp_path / "v.npy", np.ones((2, 2, 2), np.uint8))
+    assert "voxelised" not in info_json(capsys, tmp_path / "v.npy")
+
+
 def test_info_26_connectivity_and_2d(tmp_path, capsys):
     rng = np.random.default_rng(3)
     v = rng.random((9, 9, 9)) < 0.4

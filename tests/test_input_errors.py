@@ -325,6 +325,20 @@ def test_device_input_is_refused(capsys):
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))
 
 
+@pytest.mark.parametrize("change, words", [
+    (lambda d: d + bytes(10), ("counts 12 facets (684 bytes)", "has 694 bytes (12 facets and 10 bytes after")),
+    (lambda d: d[:80] + bytes(4) + d[84:], ("counts 0 facets (84 bytes)", "has 684 bytes (12 facets after")),
+    (lambda d: d[:300], ("counts 12 facets (684 bytes)", "has 300 bytes (4 facets and 16 bytes after")),
+], ids=["padded", "count 0", "truncated"])
+def test_a_binary_stl_of_the_wrong_size_says_so(tmp_path, capsys, change, words):
+    """A box's 12 facets (50 bytes each after the 84-byte header) padded,
+    with a count of 0, or cut short: the line said only "not a valid STL
+    file", about a file whose facets are all there."""
+    path = box_stl(tmp_path)
+    path.write_bytes(change(path.read_bytes()))
+    fails(capsys, "info", path, words=("box.stl: no triangles read: as a binary STL its header", *words))
+
+
 def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
     path = tmp_path / "data.bin"
     path.write_bytes(b"0 0 0\n\0\0\0\0\n1 1 1\n" + bytes(range(256)) * 100)

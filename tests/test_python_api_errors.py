@@ -235,3 +235,24 @@ def test_read_labels_gives_label_table_the_files_units(tmp_path):
     assert isoflow.label_table(image, pitch=1.0)["volume"].tolist() == [12.0, 20.0]
     with pytest.raises(IsoflowError, match="seg.nii.gz: a path, not an array; read it with isoflow.read_labels"):
         isoflow.label_table(str(tmp_path / "seg.nii.gz"))
+
+def test_a_trimesh_scene_is_read_as_its_file_is(tmp_path):
+    """trimesh.load of a glTF file gives a Scene: voxelize_meshes raised a
+    TypeError ('Scene' object is not iterable), the others refused it. Two
+    unit cubes three apart, one of them the same geometry moved by its
+    node: 2 x 8**3 voxels at 32 across, as from the file."""
+    trimesh = pytest.importorskip("trimesh")
+    scene = trimesh.Scene()
+    cube = trimesh.creation.box((1, 1, 1))
+    scene.add_geometry(cube, node_name="a")
+    scene.add_geometry(cube, node_name="b", transform=trimesh.transformations.translation_matrix((3, 0, 0)))
+    path = tmp_path / "two.glb"
+    scene.export(path)
+    assert isoflow.voxelize_file(path, resolution=32).voxels == 2 * 8**3
+    assert isoflow.voxelize_mesh(scene, resolution=32).voxels == 2 * 8**3
+    assert isoflow.voxelize_meshes(scene, resolution=32).voxels == (2 * 8**3,)
+    labels = isoflow.voxelize_meshes(scene, resolution=32, split=True)
+    assert labels.names == ("mesh 1:a", "mesh 1:b") and labels.voxels == (8**3, 8**3)
+    assert isoflow.verify_genus(scene, (16, 32)).verdict == "agree: genus 0"
+    with pytest.raises(IsoflowError, match="mesh 1: no node of the scene holds a triangle mesh"):
+        isoflow.voxelize_meshes(trimesh.Scene(), resolution=8, split=True)

@@ -458,6 +458,24 @@ def test_every_command_takes_fill(tmp_path, capsys, fill):
     assert f"--fill {fill}" in capsys.readouterr().out
 
 
+def test_a_flood_that_leaks_says_so(tmp_path, capsys):
+    """cube_no_bottom.obj (8 boundary edges): the outside comes in through
+    the missing face, so the flood is the shell alone, as scipy's
+    binary_fill_holes of the shell gives; it was said nowhere. A closed
+    box's flood, which encloses its inside, says nothing."""
+    mesh = MESHES / "cube_no_bottom.obj"
+    shell = voxelize_file(mesh, resolution=16, fill="shell").volume.astype(bool)
+    obj, v = voxelize_file(mesh, resolution=16, fill="flood", details=True)
+    filled = ndimage.binary_fill_holes(np.pad(shell, 1))[1:-1, 1:-1, 1:-1]
+    assert obj.voxels == int(filled.sum()) == int(shell.sum()) == 1156
+    assert v.note.startswith("the flood fill encloses no voxel beyond the shell (1156 voxels)")
+    assert "(8 boundary edges)" in v.note and "--fill winding" in v.note
+    assert main(["voxelize", str(mesh), "--resolution", "16", "--fill", "flood", "-o", str(tmp_path / "f.zarr")]) == 0
+    assert "note:" in capsys.readouterr().err
+    box = trimesh.creation.box((1, 2, 3))
+    assert voxelize_mesh(box, resolution=16, fill="flood", details=True)[1].note is None
+
+
 def test_cli_says_the_thin_note_and_strict_refuses(capsys):
     panel = str(DATA / "panel.obj")
     assert main(["info", panel, "--resolution", "16"]) == 0

@@ -130,6 +130,45 @@ def test_generated_obj_loads_as_through_trimesh(name, tmp_path, monkeypatch):
     _same(p, monkeypatch, fast=fast)
 
 
+def _objects_with_relative_indices(faces_word) -> str:
+    """Two unit cubes, three apart along x, each an ``o`` of its own with
+    its vertices and then its quads by relative indices, as exporters that
+    write each object on its own do."""
+    text = "mtllib none.mtl\n"
+    for k, x in enumerate((0, 3)):
+        text += f"o cube{k}\nusemtl m{k}\n" + QUAD.replace("v 0 ", f"v {x} ").replace("v 1 ", f"v {x + 1} ")
+        text += "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+        for line in BOX.splitlines():
+            text += "f " + " ".join(faces_word(int(i) - 9, j - 4) for j, i in enumerate(line.split()[1:])) + "\n"
+    return text
+
+
+@pytest.mark.parametrize("form", ["i", "i/j"])
+def test_relative_obj_indices_count_back_from_their_face(form, tmp_path, monkeypatch):
+    """OBJ counts -1 as the last vertex above the face; trimesh counts from
+    the end of the file, which gave both objects the second cube's
+    vertices: one cube, its faces twice."""
+    word = (lambda i, j: f"{i}") if form == "i" else (lambda i, j: f"{i}/{j}")
+    p = tmp_path / "two.obj"
+    p.write_text(_objects_with_relative_indices(word))
+    v, f = load_mesh(p)
+    assert len(v) == 16 and len(f) == 24
+    mesh = trimesh.Trimesh(v, f, process=False)
+    assert mesh.is_watertight and mesh.body_count == 2
+    assert mesh.volume == pytest.approx(2.0)
+    np.testing.assert_array_equal(mesh.bounds, [[0, 0, 0], [4, 1, 1]])
+    _same(p, monkeypatch, fast=False)
+
+
+def test_relative_obj_indices_split_into_their_objects(tmp_path):
+    from isoflow.mesh.bodies import file_bodies
+
+    p = tmp_path / "two.obj"
+    p.write_text(_objects_with_relative_indices(lambda i, j: f"{i}"))
+    bodies = file_bodies(p, split=True)
+    assert sorted(b.vertices[:, 0].min() for b in bodies) == [0, 3]
+
+
 def test_an_obj_face_with_index_0_is_refused_with_its_line(tmp_path):
     p = tmp_path / "zero.obj"
     p.write_text(QUAD + "f 1 2 3\nf 0 1 2\n")

@@ -169,7 +169,7 @@ def test_a_double_sided_face_is_named_and_the_mesh_not_called_open(tmp_path):
     kinds = [n.kind for n in v.notes]
     assert "open" not in kinds and "repeated_faces" not in kinds
     assert v.notes[kinds.index("double_sided")].facts == {"n": 1, "corners": _corners(box, 0), "genus": 0}
-    assert v.notes[kinds.index("inconsistent")].facts == {"edges": 3}
+    assert v.notes[kinds.index("inconsistent")].facts == {"edges": 3, "fill": "winding"}
     assert "1 double-sided face (the same three corners listed once each way round; at " in v.verdict
     assert "without the later face of the pair the mesh is closed, genus 0" in v.verdict
     assert "the mesh has no boundary edge, but 3 edges inconsistently oriented" in v.verdict
@@ -183,7 +183,7 @@ def test_open_and_turned_meshes_keep_their_words(tmp_path):
     lines = path.read_text().splitlines()
     path.write_text("\n".join(ln for ln in lines if ln != next(x for x in lines if x.startswith("f "))) + "\n")
     v = verify_genus(path, (16, 32), step=False)
-    assert Note("open", {"boundary_edges": 3, "inconsistent_edges": 0}) in v.notes
+    assert Note("open", {"boundary_edges": 3, "inconsistent_edges": 0, "fill": "winding"}) in v.notes
     assert "the mesh is open (3 boundary edges)" in v.verdict
     path, _, _ = _box_obj(tmp_path, "turned.obj", lambda f: f[:0])
     text = path.read_text()
@@ -192,7 +192,51 @@ def test_open_and_turned_meshes_keep_their_words(tmp_path):
     path.write_text(text.replace(first, f"f {a} {c} {b}", 1))
     v = verify_genus(path, (16, 32), step=False)
     kinds = [n.kind for n in v.notes]
-    assert Note("inconsistent", {"edges": 3}) in v.notes and "open" not in kinds and "double_sided" not in kinds
+    assert Note("inconsistent", {"edges": 3, "fill": "winding"}) in v.notes
+    assert "open" not in kinds and "double_sided" not in kinds
+
+
+@pytest.mark.parametrize("fill", ["flood", "shell"])
+def test_an_open_mesh_names_the_fill_its_voxels_were(fill, tmp_path):
+    """Was: "its solid is read by the generalised winding number" whatever
+    --fill said; the digital lines measured the flood fill or the shell."""
+    path, _, _ = _box_obj(tmp_path, "open.obj", lambda f: f[:0])
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(ln for ln in lines if ln != next(x for x in lines if x.startswith("f "))) + "\n")
+    v = verify_genus(path, (16, 32), step=False, fill=fill)
+    assert Note("open", {"boundary_edges": 3, "inconsistent_edges": 0, "fill": fill}) in v.notes
+    assert "winding" not in v.verdict and f"(--fill {fill}:" in v.verdict
+    assert json_of(path, "--resolution", 16, 32, "--no-step", "--fill", fill)["verdict"] == v.verdict
+
+
+def test_one_of_a_kind_is_said_in_the_singular():
+    """hourglass_ico.obj: two icospheres touching at one vertex (trimesh:
+    two bodies, one vertex shared). Was "1 non-manifold vertices",
+    "1 vertices shared"."""
+    import trimesh
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / "hourglass_ico.obj"
+    mesh = trimesh.load(path, process=True)
+    assert mesh.body_count == 1 and len(mesh.split(only_watertight=False)) == 2
+    v = verify_genus(path, (16, 32), step=False)
+    assert "1 non-manifold vertex where separate sheets touch at a point" in v.verdict
+    assert "(0 faces cross other components, 1 vertex shared)" in v.verdict
+    assert "vertices" not in v.verdict
+
+
+@pytest.mark.parametrize("name", ["torus.obj", "eight.off"])
+def test_the_shell_of_a_closed_mesh_gives_its_genus(name):
+    """A shell is the surface thickened: b1 = 2 g, one cavity. Was: b1 taken
+    for the genus, so the stepping chased the mesh's genus up to 1024
+    across and said "disagree", every grid "too coarse"."""
+    import trimesh
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / name
+    genus = (2 - trimesh.load(path, process=True).euler_number) // 2  # trimesh's count: torus 1, eight 2
+    v = verify_genus(path, (32, 64), fill="shell")
+    assert [d["resolution"] for d in v.digital] == [32, 64]
+    assert v.digital[-1]["betti"] == [1, 2 * genus, 1] and v.digital[-1]["genus"] == genus
+    assert v.kind == "agree" and v.reference == genus and v.verdict == f"agree: genus {genus}"
 
 
 def test_a_mesh_in_memory_gets_the_verdict_of_its_file(tmp_path):

@@ -7,6 +7,7 @@ import contextlib
 import dataclasses
 import json
 import threading
+from pathlib import Path
 
 from ..digital.report import Report
 from ..errors import IsoflowError
@@ -15,6 +16,7 @@ from .inputs import (
     add_input_arguments,
     label_options,
     load_input,
+    mesh_fill,
     refuse_mesh_options,
     refuse_points_option,
     say_note,
@@ -54,14 +56,15 @@ def cmd_info(args: argparse.Namespace) -> int:
         return cmd_info_labels(args)
     if args.csv:
         raise IsoflowError(f"{args.input}: --csv writes the table of --labels; without it, --json prints the report")
+    grid = None
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
         report = info_of_store(args)
     else:
-        report = info_in_memory(args)
+        report, grid = info_in_memory(args)
     if args.json:
-        print(json.dumps({**report.to_dict(), "input": str(args.input)}))
+        print(json.dumps({**report.to_dict(), **({"voxelised": grid} if grid else {}), "input": str(args.input)}))
         return 0
-    print(format_info(report, str(args.input)))
+    print(format_info(report, str(args.input), grid))
     return 0
 
 
@@ -79,7 +82,9 @@ def info_of_store(args: argparse.Namespace) -> Report:
                              surfaces=not args.no_surfaces, threads=args.threads)
 
 
-def info_in_memory(args: argparse.Namespace) -> Report:
+def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None]:
+    """The report, and for a mesh the grid it was voxelised on
+    (:func:`mesh_grid`)."""
     from ..digital.analysis import analyze
 
     warming = warm_up_while_reading(args)
@@ -89,12 +94,24 @@ def info_in_memory(args: argparse.Namespace) -> Report:
     # an empty report is an answer, but of a point list with points it needs
     # the reason
     say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
+    grid = mesh_grid(args, obj)
     if args.gpu:
         from ..scale.arrays import to_gpu
 
         report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
-        return dataclasses.replace(report, parity=obj.parity)  # a bare array has no lattice place
-    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
+        return dataclasses.replace(report, parity=obj.parity), grid  # a bare array has no lattice place
+    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads), grid
+
+
+def mesh_grid(args: argparse.Namespace, obj) -> dict | None:
+    """For a mesh input, the fill and the grid its voxels are (the counts
+    differ by fill and pitch, and a report that did not say which could not
+    be told from another); None for a volume or a point list."""
+    from ..mesh.load import is_mesh_path
+
+    if not is_mesh_path(Path(args.input)):
+        return None
+    return {"fill": mesh_fill(args), "pitch": float(obj.pitch), "origin": [float(x) for x in obj.origin]}
 
 
 def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
@@ -129,11 +146,17 @@ def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
     return thread
 
 
-def format_info(r: Report, name: str) -> str:
-    """The report as a terminal reads it."""
+def format_info(r: Report, name: str, grid: dict | None = None) -> str:
+    """The report as a terminal reads it (``grid``: a mesh's, :func:`mesh_grid`)."""
     lines = [
         f"{name}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
         f"{r['voxels']} {'pixels' if r['dimension'] == 2 else 'voxels'}, {r['connectivity']}-connectivity",
+    ]
+    if grid:
+        # (as voxelize prints them)
+        lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}, "
+                     f"origin {[round(x, 6) for x in grid['origin']]}")
+    lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
     names = {2: ["components", "holes"], 3: ["components", "tunnels", "cavities"],

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .load import check_mesh, load_mesh, mesh_arrays, mesh_bbox, trimesh_load, weld
+from .load import check_mesh, is_scene, load_mesh, mesh_arrays, mesh_bbox, trimesh_load, weld
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -61,7 +61,7 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     module docstring). Files are welded as :func:`load_mesh` welds them;
     arrays and a :class:`Body` are taken as they are. IsoflowError for an
     empty list or a bad mesh."""
-    if isinstance(meshes, (str, os.PathLike)) or hasattr(meshes, "faces"):
+    if isinstance(meshes, (str, os.PathLike)) or hasattr(meshes, "faces") or is_scene(meshes):
         meshes = [meshes]  # one file or one mesh given alone
     bodies: list[Body] = []
     for n, mesh in enumerate(meshes, 1):
@@ -69,6 +69,8 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
             bodies.append(mesh)
         elif isinstance(mesh, (str, os.PathLike)):
             bodies += file_bodies(mesh, split)
+        elif split and is_scene(mesh):
+            bodies += scene_bodies(mesh, f"mesh {n}")
         else:
             where = f"mesh {n}"  # arrays are taken as they are, not welded (as voxelize_mesh takes them)
             v, f = check_mesh(*mesh_arrays(mesh, where), where)
@@ -90,24 +92,29 @@ def file_bodies(path, split: bool) -> list[Body]:
 
 
 def node_bodies(path: Path) -> list[Body]:
-    """One body per node of a scene that holds a triangle mesh, in world
-    coordinates, in the natural order of the node names."""
+    """One body per node of a scene file that holds a triangle mesh, in
+    world coordinates, in the natural order of the node names."""
+    return scene_bodies(trimesh_load(path, "scene"), str(path))
+
+
+def scene_bodies(scene, name: str) -> list[Body]:
+    """One body per node of a ``trimesh.Scene`` (named ``name:node``) that
+    holds a triangle mesh, as :func:`node_bodies` reads a file's."""
     import trimesh
 
-    scene = trimesh_load(path, "scene")
     bodies = []
     for node in sorted(scene.graph.nodes_geometry, key=natural_key):
         transform, geometry = scene.graph[node]
         mesh = scene.geometry.get(geometry)
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
-        where = f"{path}:{node}"
+        where = f"{name}:{node}"
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
         v, f = weld(*check_mesh(v, mesh.faces, where), where=where)
         if len(f):  # (every face degenerate: nothing to fill)
             bodies.append(Body(where, v, f))
     if not bodies:
-        raise IsoflowError(f"{path}: no node of the scene holds a triangle mesh")
+        raise IsoflowError(f"{name}: no node of the scene holds a triangle mesh")
     return bodies
 
 

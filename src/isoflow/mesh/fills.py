@@ -177,3 +177,26 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     return (f"the winding rule leaves {what} in{against}: {reason}; "
             "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
             "(fill='flood' / 'shell')")
+
+
+def flood_adds_nothing(voxels: int, shell_voxels: int | None, boundary_edges: int, grid_voxels: int) -> str | None:
+    """One line where the flood fill (``voxels``) is only the shell
+    (``shell_voxels``, its voxels before the flood): the outside reached
+    every other voxel of the grid (``grid_voxels``), through the gaps of an
+    open surface (its ``boundary_edges``) or past parts thinner than a
+    voxel; None where it enclosed some voxel, or there is no shell or no
+    other voxel.
+
+    Examples
+    --------
+    >>> flood_adds_nothing(1156, 1156, 8, 4096)[:63]
+    'the flood fill encloses no voxel beyond the shell (1156 voxels)'
+    >>> flood_adds_nothing(4096, 1156, 8, 4096) is None
+    True
+    """
+    if not voxels or voxels != shell_voxels or voxels == grid_voxels:
+        return None
+    how = (f"through the gaps of the open surface ({boundary_edges} boundary edges)" if boundary_edges
+           else "past it (parts thinner than a voxel enclose nothing)")
+    return (f"the flood fill encloses no voxel beyond the shell ({voxels} voxels): the outside reaches every "
+            f"other voxel {how}; --fill winding closes holes as a soap film would (fill='winding')")

@@ -508,8 +508,11 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
     vol, pitch = solid.volume, solid.pitch
     assert vol is not None, "an in-memory voxelisation has its volume"
     betti = betti_numbers(vol, connectivity)
+    # a shell is the surface thickened: each handle of a closed surface
+    # gives it two tunnels (a torus's shell: b1 = 2), a solid's one
+    genus = betti[1] // 2 if fill == "shell" and betti[1] is not None else betti[1]
     return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
-            "connectivity": connectivity, "betti": betti, "genus": betti[1],
+            "connectivity": connectivity, "betti": betti, "genus": genus,
             "seconds": round(time.monotonic() - t, 3)}
 
 
@@ -623,7 +626,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop,
-        notes=tuple(load_notes(stats) + shape_notes(w, kind) + digital_notes(w, digital, reference, stable)))
+        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill)
+                    + digital_notes(w, digital, reference, stable, fill)))
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
@@ -720,8 +724,9 @@ def load_notes(stats: dict) -> list[Note]:
     return notes
 
 
-def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
-    """What the mesh is: double-sided, open or inconsistently oriented,
+def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note]:
+    """What the mesh is: double-sided, open or inconsistently oriented
+    (with the ``fill`` whose voxels were compared instead),
     non-manifold, nested or overlapping, and,
     where the verdict does not start with it, self-intersecting."""
     mesh = w["mesh"]
@@ -730,9 +735,9 @@ def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
         notes.append(Note("double_sided", w["double_sided"]))
     if mesh["boundary_edges"]:
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
-                                   "inconsistent_edges": mesh["inconsistent_edges"]}))
+                                   "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill}))
     elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
-        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"]}))
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill}))
     if mesh["nonmanifold_edges"]:
         notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:
@@ -750,13 +755,13 @@ def shape_notes(w: dict, kind: VerdictKind) -> list[Note]:
     return notes
 
 
-def digital_notes(w: dict, digital: list, reference: int | None, stable: bool) -> list[Note]:
+def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding") -> list[Note]:
     """What the grids showed (cavities, resolutions too coarse) and what
     the peers could not say."""
     notes = []
     if digital:
         last = digital[-1]
-        if last["betti"][2]:
+        if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:
             notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})

@@ -9,6 +9,7 @@ inconsistently oriented edges from the vertex indices alone.
 from __future__ import annotations
 
 import contextlib
+import io
 import math
 import os
 import warnings
@@ -250,13 +251,24 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         vertices, faces = _read(p, ext)
         if faces.size == 0 or faces.ndim != 2:
             # trimesh returns an empty mesh rather than failing on many garbage files
-            raise IsoflowError(
-                f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
+            raise IsoflowError((_stl_size_line(p) if ext == "stl" else None)
+                               or f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
     vertices, faces = weld(vertices, faces, rtol, where=str(p), stats=stats)
     if len(faces) == 0:
         raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
     return vertices, faces
+
+
+def _stl_size_line(p: Path) -> str | None:
+    """The line for a binary STL whose size does not match its facet count
+    (:func:`isoflow.mesh.readers.stl_size_error`), or None."""
+    from .readers import stl_size_error
+
+    try:
+        return stl_size_error(p, p.read_bytes())
+    except OSError:
+        return None
 
 
 def weld_tolerance(merge_rtol) -> float:
@@ -325,10 +337,18 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     return "mesh", v, f
 
 
+def is_scene(mesh: object) -> bool:
+    """Whether ``mesh`` is a scene of meshes in memory (a ``trimesh.Scene``,
+    as ``trimesh.load`` gives for a glTF file): nodes and their geometry."""
+    return hasattr(mesh, "graph") and hasattr(mesh, "geometry") and hasattr(mesh, "to_mesh")
+
+
 def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     """The vertices and faces of a mesh in memory, as given (unchecked): a
     ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
-    (a ``trimesh.Trimesh``); IsoflowError naming ``where`` otherwise.
+    (a ``trimesh.Trimesh``), or a ``trimesh.Scene``'s meshes as one, node
+    transforms applied, as a scene file is read; IsoflowError naming
+    ``where`` otherwise.
 
     Examples
     --------
@@ -337,13 +357,15 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     >>> mesh_arrays(3, "mesh 2")
     Traceback (most recent call last):
     ...
-    isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, got int
+    isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, got int
     """
+    if is_scene(mesh):
+        mesh = mesh.to_mesh()  # type: ignore[attr-defined]
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
         return mesh.vertices, mesh.faces
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         return mesh[0], mesh[1]
-    raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair or a trimesh.Trimesh, "
+    raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, "
                        f"got {type(mesh).__name__}")
 
 
@@ -476,13 +498,37 @@ def trimesh_load(p: Path, force: str):
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}
+    source: Any = str(p)
     if p.suffix.lower() == ".obj":
         kwargs.update(merge_tex=True, merge_norm=True)
+        if (text := _obj_relative_resolved(p)) is not None:
+            # the file's own materials and textures still resolve beside it
+            source = io.BytesIO(text)
+            kwargs.update(file_type="obj", resolver=trimesh.resolvers.FilePathResolver(str(p)))
     with reading_mesh(p), warnings.catch_warnings():
         # NumPy's overflow warnings on inf or huge coordinates: the one
         # error line of check_mesh says what is wrong
         warnings.simplefilter("ignore", RuntimeWarning)
-        return trimesh.load(str(p), force=force, **kwargs)
+        return trimesh.load(source, force=force, **kwargs)
+
+
+def _obj_relative_resolved(p: Path) -> bytes | None:
+    """The OBJ file's text with its relative face indices written as the
+    vertices they name (:func:`isoflow.mesh.readers.relative_indices_resolved`),
+    or None where trimesh counts them right (or there are none).  A
+    relative index before the first vertex is refused naming its line."""
+    from .readers import may_name_vertex_0, obj_index_error, relative_indices_resolved
+
+    try:
+        data = p.read_bytes()
+    except OSError:
+        return None  # trimesh's path says what is wrong with the file
+    text = relative_indices_resolved(data)
+    if text is not None and may_name_vertex_0(text):  # written 0: no vertex (or a 0 in the file)
+        message = obj_index_error(p, data)
+        if message is not None:
+            raise IsoflowError(message)
+    return text
 
 
 def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:

@@ -79,6 +79,41 @@ def read_stl(data: bytes) -> Mesh | None:
     return _read_stl_ascii(data)
 
 
+def stl_size_error(path, data: bytes) -> str | None:
+    """Why a file that is no ASCII STL gave no triangles as a binary one:
+    the line naming its size against the 84 bytes plus 50 per facet that
+    its header counts (a file truncated, padded after its facets, or whose
+    count a writer left wrong), or ``None`` where the size is right, the
+    file holds no whole facet of numbers or it reads as ASCII.
+
+    Examples
+    --------
+    >>> data = bytes(80) + (2).to_bytes(4, "little") + bytes(110)
+    >>> print(stl_size_error("t.stl", data))
+    t.stl: no triangles read: as a binary STL its header counts 2 facets (184 bytes), but the file has
+    194 bytes (2 facets and 10 bytes after the header): truncated, padded, or its facet count is wrong
+    """
+    head = data[:1024]
+    if len(data) < 84 or (data.lstrip()[:5].lower() == b"solid" and b"facet" in head.lower()):
+        return None
+    if not head.translate(None, bytes(range(32, 127)) + b"\t\n\r"):
+        return None  # text, not a header and facets: the reader's own line
+    n = int(np.frombuffer(data, "<u4", 1, 80)[0])
+    whole, rest = divmod(len(data) - 84, 50)
+    if len(data) == 84 + 50 * n or not whole:
+        return None
+    # facets that hold numbers, as a file of other bytes would not: a NaN,
+    # an infinity or 1e30 among them says the file is no STL at all
+    rec = np.frombuffer(data, _STL_RECORD, min(whole, 10_000), 84)
+    values = np.concatenate((rec["normal"].ravel(), rec["corners"].ravel()))
+    if not (np.abs(values) < 1e30).all():
+        return None
+    held = f"{whole} facet{'' if whole == 1 else 's'}" + (f" and {rest} bytes" if rest else "")
+    return (f"{path}: no triangles read: as a binary STL its header counts {n} facet{'' if n == 1 else 's'} "
+            f"({84 + 50 * n} bytes), but the file has {len(data)} bytes ({held} after the header): "
+            "truncated, padded, or its facet count is wrong")
+
+
 def _read_stl_ascii(data: bytes) -> Mesh | None:
     low = data.lower()
     if not low.lstrip().startswith(b"solid") or low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid"):
@@ -352,6 +387,63 @@ def may_name_vertex_0(data: bytes) -> bool:
     start = np.concatenate(([0], newline + 1))[np.searchsorted(newline, z)]
     second = a[np.minimum(start + 1, len(a) - 1)]
     return bool(((a[start] == 102) & ((second == 32) | (second == 9))).any())
+
+
+def relative_indices_resolved(data: bytes) -> bytes | None:
+    """An OBJ file's text with each relative (negative) index of its ``f``
+    lines written as the index from 1 that it names, where a ``v``, ``vt``
+    or ``vn`` line follows a face with one; None where none does.
+
+    OBJ counts a relative index back from its face's line (-1: the last
+    vertex above it), trimesh from the end of the file.  The two agree
+    unless vertices follow the face, as in a file of several objects each
+    written with relative indices, where trimesh's count gives every
+    object the last one's vertices.  A position index before the first
+    vertex is written 0, which the readers refuse (:func:`obj_index_error`
+    names its line in the file as written).
+
+    Examples
+    --------
+    >>> relative_indices_resolved(b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf -3 -2 -1\\nv 0 0 1\\nf -4 -2 -1 # c -1\\n")
+    b'v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\nv 0 0 1\\nf 1 3 4 # c -1\\n'
+    >>> relative_indices_resolved(b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf -3 -2 -1\\n") is None
+    True
+    """
+    a = np.frombuffer(data, np.uint8)
+    # a sign after a space or tab, on a line that starts "f ": the first
+    # relative index; vectorised, as most files have none
+    sign = np.flatnonzero(a[1:] == 45) + 1
+    sign = sign[(a[sign - 1] == 32) | (a[sign - 1] == 9)]
+    newline = np.flatnonzero(a == 10)
+    start = np.concatenate(([0], newline + 1))[np.searchsorted(newline, sign)]
+    second = a[np.minimum(start + 1, len(a) - 1)]
+    sign = sign[(a[start] == 102) & ((second == 32) | (second == 9))]
+    if not len(sign) or data.find(b"\nv", int(sign[0])) < 0:
+        return None  # no vertex after a relative index: trimesh's count is OBJ's
+    seen = [0, 0, 0]  # v, vt and vn lines so far
+    slot = {b"v": 0, b"vt": 1, b"vn": 2}
+    lines = data.split(b"\n")
+    for i, line in enumerate(lines):
+        code, hash_, comment = line.partition(b"#")
+        words = code.split()
+        if words and words[0] in slot:
+            seen[slot[words[0]]] += 1
+        elif words[:1] == [b"f"] and b"-" in code:
+            lines[i] = b" ".join([b"f"] + [_absolute(w, seen) for w in words[1:]]) + (
+                b" " + hash_ + comment if hash_ else b"") + (b"\r" if line.endswith(b"\r") and not hash_ else b"")
+    return b"\n".join(lines)
+
+
+def _absolute(word: bytes, seen: list[int]) -> bytes:
+    """A face word ``i``, ``i/j``, ``i//k`` or ``i/j/k`` with its relative
+    indices counted back over the ``seen`` vertex, texture and normal lines
+    (a position before the first written 0, which names none)."""
+    parts = word.split(b"/")
+    for n, part in enumerate(parts[:3]):
+        if part.startswith(b"-") and part[1:].isdigit():
+            k = seen[n] + 1 + int(part)
+            parts[n] = str(k if k >= 1 or n else 0).encode()
+    return b"/".join(parts)
 
 
 def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:

@@ -187,13 +187,13 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
         with Callback(posttask=posttask) if progress is not None else nullcontext():
             workers = WORKERS if scheduler in (None, "threads") else None  # others: their own count
             results = compute(*tasks, scheduler=scheduler or "threads", workers=workers)
-        voxels = sum(r[0] for r in results)
+        voxels = shell = sum(r[0] for r in results)
         stats = np.sum([r[1] for r in results], axis=0)
         if fill == "flood":
             voxels = flood_store(root["0"], slabs)
         try:  # refused: nothing replaces the previous store
             made().check_layers(stats)
-            result = voxelization(made(), plan, None, voxels, origin, pitch, stats)
+            result = voxelization(made(), plan, None, voxels, origin, pitch, stats, shell_before=shell)
         except IsoflowError as exc:
             raise exc.at(where) from None
     store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),

@@ -44,9 +44,29 @@ from numpy.typing import ArrayLike
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote
 from ..scale import memory
-from .fills import THIN_SHARE, THIN_TRIGGER, UNBOUNDED_SHARE, Fill, Voxelization, check_fill, thin_solid, unbounded_area
+from .fills import (
+    THIN_SHARE,
+    THIN_TRIGGER,
+    UNBOUNDED_SHARE,
+    Fill,
+    Voxelization,
+    check_fill,
+    flood_adds_nothing,
+    thin_solid,
+    unbounded_area,
+)
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
-from .load import chain_of, check_mesh, defect_counts, load_mesh, merge_coincident, mesh_arrays, mesh_defects, orient_faces  # noqa: F401
+from .load import (  # noqa: F401
+    chain_of,
+    check_mesh,
+    defect_counts,
+    is_scene,
+    load_mesh,
+    merge_coincident,
+    mesh_arrays,
+    mesh_defects,
+    orient_faces,
+)
 
 #: a progress callback: ``progress(done, total)``
 Progress = Callable[[int, int], object]
@@ -587,7 +607,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vol = fill_enclosed(vol, inplace=True)
     made().check_layers(stats)
     voxels = int(np.count_nonzero(vol)) if fill == "flood" else int(stats[1:].sum())
-    result = voxelization(made(), plan, vol, voxels, origin, pitch, stats)
+    result = voxelization(made(), plan, vol, voxels, origin, pitch, stats, shell_before=int(stats[1:].sum()))
     if details:
         return result
     say_note(result.note)
@@ -622,12 +642,17 @@ def _share(progress, n: int, slabs: int):
                                         slabs * PROGRESS_UNITS)
 
 
-def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats) -> Voxelization:
+def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats,
+                 shell_before: int | None = None) -> Voxelization:
     """The :class:`Voxelization` of a filled grid (``vol`` None for a
     store: then no share of unbounded area is measured), with its note; with
-    ``strict``, a thin or empty winding solid is refused here."""
+    ``strict``, a thin or empty winding solid is refused here.
+    ``shell_before``: a flood fill's shell, before the voxels it encloses."""
     notes = [solid.note(stats)]
     shell = None
+    if solid.fill == "flood":  # a flood that leaked is the shell alone: said, not silent
+        notes.append(flood_adds_nothing(voxels, shell_before, solid.census["boundary_edges"],
+                                        int(np.prod(plan.shape))))
     if solid.fill == "winding":
         shell, thin = plan.thin_note(vol, voxels, solid.double_sided)
         if thin and solid.strict:
@@ -703,9 +728,9 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     64
     """
     if faces is None:
-        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces")):
+        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)):
             raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
-                               "and faces (a trimesh.Trimesh) alone; a file: voxelize_file(path)")
+                               "and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
         vertices, faces = mesh_arrays(vertices, "voxelize")
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
