@@ -5,6 +5,7 @@ one closed surface per label read back by trimesh and pymeshlab."""
 import csv
 import json
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -519,3 +520,11 @@ def test_a_choice_of_millions_of_labels_filters_the_table(tmp_path, capsys):
     assert rows == json.loads(run(capsys, "info", tmp_path / "two.npy", "--labels", "7,3", "--json"))["labels"]
     assert "2999998 of the labels asked for do not occur (1, 2, 4, 5, 6, 8, 9, 10, ..." in err
     assert peak < 800e6, peak
+
+
+def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):
+    # it said "not a volume file (volumes end in .npy, ...)", as for any file,
+    # and not how a label image of meshes is made
+    line = fails(capsys, "info", Path(__file__).resolve().parents[1] / "meshes" / "torus.obj", "--labels",
+                 words=("torus.obj: a mesh, not a label image", "voxelize A.stl B.obj"))
+    assert "volumes end in" not in line

@@ -161,11 +161,13 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     --------
     >>> thin_solid(0, 120, 1.0, 0)[:40]
     'the winding rule leaves no voxel in (the'
+    >>> thin_solid(1, 120, 1.0, 0)[:39]
+    'the winding rule leaves 1 voxel in (the'
     """
     thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
     if not thin and share < UNBOUNDED_SHARE:
         return None
-    what = "no voxel" if voxels == 0 else f"{voxels} voxels"
+    what = "no voxel" if voxels == 0 else f"{voxels} voxel{'' if voxels == 1 else 's'}"
     against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
     why = []
     if double_sided:

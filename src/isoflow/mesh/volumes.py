@@ -218,6 +218,11 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     file, dataset = split_dataset(path)
     fmt = format_for(file)
     if fmt is None:
+        from .load import is_mesh_path
+
+        if is_mesh_path(file):  # a mesh voxelises to one object; a label image of meshes is voxelize's
+            raise IsoflowError(f"{path}: a mesh, not a label image; voxelize A.stl B.obj --resolution R -o "
+                               "LABELS.nii.gz makes one of several meshes (isoflow.voxelize_meshes)")
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     raw = fmt.load().read(file, dataset)
