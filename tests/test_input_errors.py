@@ -625,3 +625,21 @@ def test_surface_names_a_bad_connectivity_before_an_existing_output(tmp_path, ca
     assert capsys.readouterr().err.strip().splitlines() == [
         "isoflow surface: error: argument --connectivity: invalid choice: 80 (choose from 6, 26)"]
     assert (tmp_path / "old.ply").read_text() == "kept"
+
+
+def test_a_face_far_from_the_rest_is_named_when_the_weld_leaves_no_face(tmp_path, capsys):
+    # the weld merges positions closer than 1e-10 of the box's diagonal: one
+    # face at 1e300 made that 1e290, every other face lost its corners, and
+    # the line said only "every face is degenerate"
+    box = trimesh.creation.box()
+    far = np.array([[1e300, 0, 0], [1e300, 1, 0], [1e300, 0, 1]])
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in np.vstack([box.vertices, far]).tolist()]
+    lines += [f"f {a} {b} {c}" for a, b, c in (box.faces + 1).tolist()] + ["f 9 10 11"]
+    (tmp_path / "stray.obj").write_text("\n".join(lines) + "\n")
+    fails(capsys, "info", tmp_path / "stray.obj", "--resolution", 8,
+          words=("stray.obj: empty mesh", "1e-10 of the bounding box's diagonal", "[1e+300, 1.0, 1.0]",
+                 "a face far from the others"))
+    # faces degenerate as written: the plain line
+    (tmp_path / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2 2\nf 1 1 2\n")
+    line = fails(capsys, "info", tmp_path / "flat.obj", "--resolution", 8)
+    assert "far from the others" not in line

@@ -254,10 +254,32 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
             raise IsoflowError((_stl_size_line(p) if ext == "stl" else None)
                                or f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
-    vertices, faces = weld(vertices, faces, rtol, where=str(p), stats=stats)
-    if len(faces) == 0:
-        raise IsoflowError(f"{p}: empty mesh (every face is degenerate)")
-    return vertices, faces
+    welded, kept = weld(vertices, faces, rtol, where=str(p), stats=stats)
+    if len(kept) == 0:
+        raise IsoflowError(why_no_face(vertices, faces, rtol, str(p)))
+    return welded, kept
+
+
+def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str) -> str:
+    """The line for a mesh the weld left without a face (``faces``: as
+    read): every face degenerate as read, or faces that had three corners
+    until the weld's tolerance (``rtol`` times the bounding box's diagonal)
+    merged them, because a face far from the rest stretches the box.
+
+    Examples
+    --------
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1e300, 0, 0], [1e300, 1, 0], [1e300, 0, 1]], float)
+    >>> why_no_face(v, np.array([[0, 1, 2], [3, 4, 5]]), 1e-10, "m.obj")[-103:]
+    'to [1e+300, 1.0, 1.0], and so no face kept three corners (a face far from the others stretches the box)'
+    """
+    if not np.count_nonzero(~_repeats_a_corner(faces)):
+        return f"{where}: empty mesh (every face is degenerate)"
+    used = vertices[np.unique(faces)]
+    lo, hi = ([float(f"{x:.3g}") for x in p] for p in (used.min(axis=0), used.max(axis=0)))
+    return (f"{where}: empty mesh: the weld makes one point of positions closer than {rtol:g} of the bounding "
+            f"box's diagonal, the box runs from {lo} to {hi}, and so no face kept three corners (a face far from "
+            "the others stretches the box)")
+
 
 
 def _stl_size_line(p: Path) -> str | None:
@@ -331,10 +353,11 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
         return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
     vertices, faces = mesh_arrays(mesh, "mesh")
     v, f = check_mesh(vertices, faces, where="mesh")
-    v, f = weld(v, f, weld_tolerance(merge_rtol), where="mesh", stats=stats)
-    if len(f) == 0:
-        raise IsoflowError("mesh: empty mesh (every face is degenerate)")
-    return "mesh", v, f
+    rtol = weld_tolerance(merge_rtol)
+    welded, kept = weld(v, f, rtol, where="mesh", stats=stats)
+    if len(kept) == 0:
+        raise IsoflowError(why_no_face(v, f, rtol, "mesh"))
+    return "mesh", welded, kept
 
 
 def is_scene(mesh: object) -> bool:
