@@ -192,6 +192,13 @@ def test_split_keeps_a_cavity_with_its_body_beside_a_box_on_its_edge():
     assert joined == 2  # outer and neighbour joined across the edge, the cavity's wall alone
     assert [len(b.faces) for b in bodies] == [24, 12]
     assert [b.volume for b in bodies] == pytest.approx([26.0, 27.0])
+    # an inward tetrahedron on the diagonal of the cube's top: joined to the cube around that edge
+    cube = trimesh.creation.box()
+    tv = np.array([[-0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [0.2, -0.2, 0.0], [-0.2, 0.2, 0.0]])
+    tet = trimesh.Trimesh(tv, [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]], process=False)  # inwards
+    assert tet.volume < 0 and [1, 7] in cube.edges.tolist()  # tv[0], tv[1]: the cube's vertices 1 and 7
+    bodies, _ = split(*welded(cube, tet))
+    assert len(bodies) == 1 and bodies[0].volume == pytest.approx(1 + tet.volume)
 
 
 def test_split_of_open_meshes_and_fins_is_as_before():
@@ -210,6 +217,11 @@ def test_split_of_open_meshes_and_fins_is_as_before():
         bodies, joined = split(*mesh)
         assert len(bodies) == joined == 1
         assert len(bodies[0].faces) == len(mesh[1])
+    # solids written double-sided (each box also inverted): a body each, not a box and its inverse
+    chair = load_mesh(DATA / "chair_double_sided.obj")
+    bodies, joined = split(*chair)
+    assert len(bodies) == joined == 7  # five boxes, two sheets
+    assert sorted(len(b.faces) for b in bodies) == [4, 4, 24, 24, 24, 24, 24]
 
 
 def test_a_scene_splits_by_node_in_world_coordinates(tmp_path):

@@ -9,25 +9,27 @@ meshes joined, as every command reads it). With ``split``:
   node's transform applied; a geometry placed by two nodes is two bodies),
   named ``FILE:NODE`` and taken in the natural order of the node names
   (``part2`` before ``part10``: trimesh does not keep the file's order);
-* any other mesh (STL with one or several solids, OBJ, PLY, OFF, or arrays)
-  gives one body per **connected body**, named ``FILE:1``, ``FILE:2``, ...
-  in the order of their first face. Faces are joined across the edges of
-  the mesh after the weld: across an edge of one or two faces always, and
-  across a non-manifold edge only where they bound one wedge of solid
-  around it (:func:`radial_pairs`: the faces in the order of their angle
-  around the edge, their orientation saying which side is solid). So
-  closed bodies that touch along an edge or share a face (written once per
-  body, coincident faces) are parted, each whole and closed, where
-  trimesh's split (which joins only across edges of two faces) cuts the
-  second into open pieces. Where the faces around a non-manifold edge do
-  not alternate in orientation (three fins, a double-sided sheet on a
-  solid, a degenerate face), they are all joined; and where a piece would
-  come out open (an edge of it not used as often each way), all that
-  shares edges with it stays one body: an open mesh or a soup is parted
-  only where no edge joins it, as before. A closed shell oriented inwards
-  (negative volume: the wall of a cavity) stays with the body whose solid
-  holds it, so a hollow part is one body with its cavity empty, not a
-  solid and a second solid filling the cavity.
+* any other mesh (STL with one or several solids, OBJ, PLY, OFF, or
+  arrays) gives one body per **connected body**, named ``FILE:1``,
+  ``FILE:2``, ... in the order of their first face. Faces are joined
+  across the edges of the mesh after the weld: across an edge of one or
+  two faces always, and across a non-manifold edge only where they bound
+  one wedge of solid around it (:func:`radial_pairs`: the faces in the
+  order of their angle around the edge, their orientation saying which
+  side is solid). So closed bodies that touch along an edge or share a
+  face (written once per body, coincident faces) are parted, each whole
+  and closed, where trimesh's split (which joins only across edges of two
+  faces) cuts the second into open pieces. Where the faces around a
+  non-manifold edge do not alternate in orientation (three fins, a
+  double-sided sheet on a solid, a degenerate face), they are all joined;
+  a solid written double-sided (each face also the other way round) stays
+  one body; and where a piece would come out open (an edge of it not used
+  as often each way), all that shares edges with it stays one body: an
+  open mesh or a soup is parted only where no edge joins it, as before. A
+  closed shell oriented inwards (negative volume: the wall of a cavity)
+  stays with the body whose solid holds it, so a hollow part is one body
+  with its cavity empty, not a solid and a second solid filling the
+  cavity.
 """
 
 from __future__ import annotations
@@ -161,11 +163,13 @@ RADIAL_TIE = 1e-8
 def body_roots(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Each face's body as its smallest face index: faces joined across an
     edge of one or two faces, and across a non-manifold edge only where
-    they bound one wedge of solid (:func:`radial_pairs`). A component of
-    the edge table (faces joined across every shared edge) whose pieces
-    are not all closed is kept whole: nothing that is not closed is parted
-    from what it touches."""
-    from .census import edge_table
+    they bound one wedge of solid (:func:`radial_pairs`). A piece whose
+    every face has a twin of opposite orientation (a double-sided solid)
+    is joined to its twins' pieces, and a component of the edge table
+    (faces joined across every shared edge) whose pieces are not all
+    closed is kept whole: nothing that is not closed is parted from what
+    it touches."""
+    from .census import edge_table, opposite_pairs
 
     _, _, fwd, bwd, _, root = edge_table(f, len(v))
     if not np.any(fwd + bwd > 2):  # every edge manifold (or open): the edge table's components
@@ -197,6 +201,14 @@ def body_roots(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     fine = components_roots(m, np.concatenate(pairs))
     if np.array_equal(fine, root):
         return fine
+    # a piece all of whose faces are written both ways (a double-sided solid) joins its twins' pieces
+    mate = opposite_pairs(f, len(v))
+    whole = np.ones(m, dtype=bool)
+    np.logical_and.at(whole, fine, mate >= 0)
+    twin = whole[fine]
+    if np.any(twin):
+        pairs.append(np.stack([np.flatnonzero(twin), mate[twin]], axis=1))
+        fine = components_roots(m, np.concatenate(pairs))
     closed = pieces_closed(fine, group, face, forward)
     for r in np.unique(root[~closed[fine]]):  # an open piece: its whole component stays one body
         fine[root == r] = r
