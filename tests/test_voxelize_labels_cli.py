@@ -154,6 +154,20 @@ def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
     assert capsys.readouterr().out.startswith(f"{tmp_path / 'one.npz'}: 1 label in a ")
 
 
+def test_split_parts_two_boxes_that_touch_along_an_edge(tmp_path, capsys):
+    """Two unit cubes sharing an edge (an STL of them, welded when read):
+    a label each, of one cube's voxels each."""
+    boxes = [trimesh.creation.box().apply_translation(t) for t in ((0, 0, 0), (1, 1, 0))]
+    path = tmp_path / "two_boxes.stl"
+    trimesh.util.concatenate(boxes).export(path)
+    out = tmp_path / "l.npz"
+    assert main(["voxelize", str(path), "--split", "--resolution", "16", "-o", str(out)]) == 0
+    assert "2 labels" in capsys.readouterr().out
+    labels = read_labels(out).array
+    counts = np.bincount(labels.ravel())
+    assert len(counts) == 3 and counts[1] == counts[2] == 8**3  # a cube of 8 voxels a side (pitch 1/8)
+
+
 def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):
     """A scene of named nodes: a torus (chi 0), a ball and a box; info
     --labels on the label image gives each label the Euler characteristic

@@ -12,7 +12,8 @@ import trimesh
 from isoflow import IsoflowError, voxelize_meshes
 from isoflow.mesh import label_voxels
 from isoflow.mesh.bodies import mesh_bodies
-from isoflow.mesh.load import load_mesh
+from isoflow.mesh.census import edge_table
+from isoflow.mesh.load import load_mesh, weld
 from isoflow.mesh.voxelize import voxelize
 
 MESHES = Path(__file__).resolve().parents[2] / "meshes"
@@ -124,6 +125,103 @@ def test_split_keeps_a_cavity_with_its_body():
     assert np.array_equal(r.labels == 1, alone(shell, r)) and np.array_equal(r.labels == 2, alone(box, r))
     centre = np.floor((np.zeros(3) - r.origin) / r.pitch).astype(int)
     assert r.labels[tuple(centre)] == 0  # the cavity is empty
+
+
+def welded(*meshes):
+    """Meshes concatenated and welded, as a file of them is read."""
+    m = trimesh.util.concatenate(meshes)
+    return weld(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces))
+
+
+def unit_box(x, y, z, mirrored=False):
+    box = trimesh.creation.box()
+    if mirrored:  # upside down: its bottom triangulated as an unmirrored box's top
+        box.apply_transform(np.diag([1.0, 1.0, -1.0, 1.0]))
+    return box.apply_translation((x, y, z))
+
+
+def split(v, f):
+    """The bodies of a welded mesh as closed-or-not trimesh meshes, and the
+    number of components joined across every shared edge (the rule before
+    bodies were told apart around non-manifold edges)."""
+    bodies = [trimesh.Trimesh(b.vertices, b.faces, process=False) for b in mesh_bodies([(v, f)], split=True)]
+    return bodies, len(np.unique(edge_table(f, len(v))[5]))
+
+
+def test_split_parts_boxes_that_touch_along_an_edge():
+    bodies, joined = split(*welded(unit_box(0, 0, 0), unit_box(1, 1, 0)))
+    assert joined == 1  # the weld shares their edge: 4 faces on it
+    assert len(bodies) == 2
+    for b in bodies:
+        assert len(b.faces) == 12 and b.is_watertight and b.volume == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("mirrored", [False, True], ids=["other-diagonal", "same-triangles"])
+def test_split_parts_stacked_boxes_that_write_their_shared_face_twice(mirrored):
+    """The square between the boxes is written by each (opposite
+    orientations): triangulated across the other diagonal, or as the same
+    two triangles (exactly coincident faces)."""
+    v, f = welded(unit_box(0, 0, 0), unit_box(0, 0, 1, mirrored))
+    bodies, joined = split(v, f)
+    assert joined == 1 and len(f) == 24
+    assert len(bodies) == 2
+    for b in bodies:
+        assert len(b.faces) == 12 and b.is_watertight and b.volume == pytest.approx(1.0)
+    assert sorted(round(float(b.centroid[2]), 9) for b in bodies) == [0.0, 1.0]
+    stack, _ = split(*welded(*(unit_box(0, 0, z, mirrored and z % 2) for z in range(3))))
+    assert len(stack) == 3 and all(b.is_watertight and b.volume == pytest.approx(1.0) for b in stack)
+
+
+def test_split_parts_a_checkerboard_of_cubes_touching_at_edges_and_corners():
+    cells = [(x, y, z) for x in range(3) for y in range(3) for z in range(3) if (x + y + z) % 2 == 0]
+    cubes = [unit_box(*c) for c in cells]
+    bodies, joined = split(*welded(*cubes))
+    assert len(cubes) == 14 and joined == 1
+    assert len(bodies) == 14
+    assert all(len(b.faces) == 12 and b.is_watertight and b.volume == pytest.approx(1.0) for b in bodies)
+    assert sorted(tuple(np.round(b.centroid, 9) + 0.0) for b in bodies) == cells  # one body per cube
+
+
+def test_split_keeps_a_cavity_with_its_body_beside_a_box_on_its_edge():
+    outer, inner = trimesh.creation.box((3, 3, 3)), trimesh.creation.box((1, 1, 1))
+    inner.invert()  # the cavity's wall, oriented inwards
+    hollow, _ = split(*welded(outer, inner))
+    assert len(hollow) == 1 and hollow[0].volume == pytest.approx(26.0)
+    neighbour = trimesh.creation.box((3, 3, 3)).apply_translation((3, 3, 0))  # shares an edge with outer
+    bodies, joined = split(*welded(outer, inner, neighbour))
+    assert joined == 2  # outer and neighbour joined across the edge, the cavity's wall alone
+    assert [len(b.faces) for b in bodies] == [24, 12]
+    assert [b.volume for b in bodies] == pytest.approx([26.0, 27.0])
+    # an inward tetrahedron on the diagonal of the cube's top: joined to the cube around that edge
+    cube = trimesh.creation.box()
+    tv = np.array([[-0.5, -0.5, 0.5], [0.5, 0.5, 0.5], [0.2, -0.2, 0.0], [-0.2, 0.2, 0.0]])
+    tet = trimesh.Trimesh(tv, [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]], process=False)  # inwards
+    assert tet.volume < 0 and [1, 7] in cube.edges.tolist()  # tv[0], tv[1]: the cube's vertices 1 and 7
+    bodies, _ = split(*welded(cube, tet))
+    assert len(bodies) == 1 and bodies[0].volume == pytest.approx(1 + tet.volume)
+
+
+def test_split_of_open_meshes_and_fins_is_as_before():
+    """Where the faces around an edge do not bound wedges of solid, or the
+    pieces would be open, faces are joined across every shared edge."""
+    box = trimesh.creation.box()
+    lidless = trimesh.Trimesh(box.vertices, np.delete(box.faces, [4, 6], axis=0), process=False)  # no top
+    v = np.array([[0, 0, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [-1, -1, 0]], dtype=float)
+    three_fins = (v, np.array([[0, 1, 2], [1, 0, 3], [0, 1, 6]]))
+    four_fins = (v, np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4], [1, 0, 5]]))  # an X of open sheets, alternating
+    fin = np.array([[0.5, 0.5, -0.5], [0.5, 0.5, 0.5], [1.5, 1.5, 0.0]])
+    finned = (np.vstack([box.vertices, fin]), np.vstack([box.faces, [[8, 9, 10], [9, 8, 10]]]))  # double-sided
+    doubled = (box.vertices, np.vstack([box.faces, box.faces[:1, ::-1]]))  # a face written both ways
+    beside = welded(unit_box(0, 0, 0), lidless.copy().apply_translation((1, 1, 0)))  # open box on a closed one's edge
+    for mesh in (welded(lidless), three_fins, four_fins, weld(*finned), doubled, beside):
+        bodies, joined = split(*mesh)
+        assert len(bodies) == joined == 1
+        assert len(bodies[0].faces) == len(mesh[1])
+    # solids written double-sided (each box also inverted): a body each, not a box and its inverse
+    chair = load_mesh(DATA / "chair_double_sided.obj")
+    bodies, joined = split(*chair)
+    assert len(bodies) == joined == 7  # five boxes, two sheets
+    assert sorted(len(b.faces) for b in bodies) == [4, 4, 24, 24, 24, 24, 24]
 
 
 def test_a_scene_splits_by_node_in_world_coordinates(tmp_path):

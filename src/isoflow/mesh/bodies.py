@@ -9,17 +9,27 @@ meshes joined, as every command reads it). With ``split``:
   node's transform applied; a geometry placed by two nodes is two bodies),
   named ``FILE:NODE`` and taken in the natural order of the node names
   (``part2`` before ``part10``: trimesh does not keep the file's order);
-* any other mesh (STL with one or several solids, OBJ, PLY, OFF, or arrays)
-  gives one body per **connected body**: faces joined across every shared
-  edge after the weld, in the order of their first face, named ``FILE:1``,
-  ``FILE:2``, ... Bodies that touch along an edge or share a face are one
-  body: telling them apart needs the faces' order around each non-manifold
-  edge, which the weld's edge table does not hold (trimesh's split joins
-  only across edges of two faces, so it parts the first and cuts the second
-  into open pieces). A
+* any other mesh (STL with one or several solids, OBJ, PLY, OFF, or
+  arrays) gives one body per **connected body**, named ``FILE:1``,
+  ``FILE:2``, ... in the order of their first face. Faces are joined
+  across the edges of the mesh after the weld: across an edge of one or
+  two faces always, and across a non-manifold edge only where they bound
+  one wedge of solid around it (:func:`radial_pairs`: the faces in the
+  order of their angle around the edge, their orientation saying which
+  side is solid). So closed bodies that touch along an edge or share a
+  face (written once per body, coincident faces) are parted, each whole
+  and closed, where trimesh's split (which joins only across edges of two
+  faces) cuts the second into open pieces. Where the faces around a
+  non-manifold edge do not alternate in orientation (three fins, a
+  double-sided sheet on a solid, a degenerate face), they are all joined;
+  a solid written double-sided (each face also the other way round) stays
+  one body; and where a piece would come out open (an edge of it not used
+  as often each way), all that shares edges with it stays one body: an
+  open mesh or a soup is parted only where no edge joins it, as before. A
   closed shell oriented inwards (negative volume: the wall of a cavity)
   stays with the body whose solid holds it, so a hollow part is one body
-  with its cavity empty, not a solid and a second solid filling the cavity.
+  with its cavity empty, not a solid and a second solid filling the
+  cavity.
 """
 
 from __future__ import annotations
@@ -125,12 +135,10 @@ def natural_key(name) -> list:
 
 
 def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
-    """The connected bodies of a welded mesh (faces joined across shared
-    edges), each cavity's inward shell kept with the body that holds it,
-    in the order of their first face."""
-    from .census import edge_table
-
-    root = edge_table(f, len(v))[5]  # each face's component: its smallest face
+    """The connected bodies of a welded mesh (faces joined as
+    :func:`body_roots` joins them), each cavity's inward shell kept with
+    the body that holds it, in the order of their first face."""
+    root = body_roots(v, f)  # each face's component: its smallest face
     _, comp = np.unique(root, return_inverse=True)  # numbered by first face
     parts = [np.nonzero(comp == c)[0] for c in range(int(comp.max()) + 1)]
     if len(parts) == 1:
@@ -145,6 +153,142 @@ def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
         used, faces = np.unique(faces, return_inverse=True)
         bodies.append(Body(f"{name}:{k}", v[used], faces.reshape(-1, 3)))
     return bodies
+
+
+#: faces around an edge whose angles differ by less than this (radians)
+#: are coincident: one half-plane, ordered by orientation
+RADIAL_TIE = 1e-8
+
+
+def body_roots(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Each face's body as its smallest face index: faces joined across an
+    edge of one or two faces, and across a non-manifold edge only where
+    they bound one wedge of solid (:func:`radial_pairs`). A piece whose
+    every face has a twin of opposite orientation (a double-sided solid)
+    is joined to its twins' pieces, and a component of the edge table
+    (faces joined across every shared edge) whose pieces are not all
+    closed is kept whole: nothing that is not closed is parted from what
+    it touches."""
+    from .census import edge_table, opposite_pairs
+
+    _, _, fwd, bwd, _, root = edge_table(f, len(v))
+    if not np.any(fwd + bwd > 2):  # every edge manifold (or open): the edge table's components
+        return root
+    f = np.asarray(f, dtype=np.int64).reshape(-1, 3)
+    m = len(f)
+    a, b, c = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1), f[:, [2, 0, 1]].reshape(-1)
+    face = np.repeat(np.arange(m), 3)
+    keep = a != b
+    a, b, c, face = a[keep], b[keep], c[keep], face[keep]
+    key = np.minimum(a, b) * np.int64(max(len(v), 1)) + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    a, b, c, face, key = a[order], b[order], c[order], face[order], key[order]
+    start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    size = np.diff(np.r_[start, len(key)])
+    group = np.repeat(np.arange(len(start)), size)
+    forward = a < b
+    ups = np.bincount(group, weights=forward, minlength=len(start)).astype(np.int64)
+    radial = (size > 2) & (2 * ups == size)
+    paired = np.zeros(len(start), dtype=bool)
+    pairs = [np.empty((0, 2), dtype=np.int64)]
+    if np.any(radial):
+        h = radial[group]
+        ok, pa = radial_pairs(v, a[h], b[h], c[h], forward[h], group[h], face[h])
+        paired[np.flatnonzero(radial)[ok]] = True
+        pairs.append(pa)
+    join = ~paired[group]  # every other edge joins all its faces (to its first)
+    pairs.append(np.stack([face[join], face[start[group[join]]]], axis=1))
+    fine = components_roots(m, np.concatenate(pairs))
+    if np.array_equal(fine, root):
+        return fine
+    # a piece all of whose faces are written both ways (a double-sided solid) joins its twins' pieces
+    mate = opposite_pairs(f, len(v))
+    whole = np.ones(m, dtype=bool)
+    np.logical_and.at(whole, fine, mate >= 0)
+    twin = whole[fine]
+    if np.any(twin):
+        pairs.append(np.stack([np.flatnonzero(twin), mate[twin]], axis=1))
+        fine = components_roots(m, np.concatenate(pairs))
+    closed = pieces_closed(fine, group, face, forward)
+    for r in np.unique(root[~closed[fine]]):  # an open piece: its whole component stays one body
+        fine[root == r] = r
+    return fine
+
+
+def radial_pairs(v: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, forward: np.ndarray,
+                 group: np.ndarray, face: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The faces a non-manifold edge joins: the half-edges ``a -> b`` (third
+    vertex ``c``) of some edges, grouped by edge (``group`` ascending), each
+    edge used equally often each way. Around each edge the faces are taken
+    in the order of their angle (the third vertex projected on the plane
+    normal to the edge); a face using the edge upwards (lo -> hi) has its
+    normal towards increasing angle, so its solid lies behind it, and one
+    using it downwards opens a wedge of solid that the next face closes. At
+    one angle (coincident faces) the faces that close come first: two
+    solids touch there, a solid of no thickness is none. Where the order
+    alternates down, up, down, up, ... each downward face is joined to the
+    next face round; any other order (a fin, a sheet on a solid, a
+    degenerate face) leaves the edge unpaired. Returns (which of the
+    groups, in order, were paired; (K, 2) face pairs)."""
+    v = np.asarray(v, dtype=np.float64)
+    lo, hi = np.where(forward, a, b), np.where(forward, b, a)
+    p = v[lo]
+    _, first, inverse = np.unique(group, return_index=True, return_inverse=True)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a zero-length edge or face: nan, unpaired
+        d = v[hi] - p
+        d /= np.linalg.norm(d, axis=1)[:, None]
+        w = v[c] - p
+        w -= np.einsum("ij,ij->i", w, d)[:, None] * d
+        length = np.linalg.norm(w, axis=1)
+        e1 = w[first][inverse] / length[first][inverse][:, None]  # the first face of each edge: angle 0
+        e2 = np.cross(d, e1)
+        angle = np.arctan2(np.einsum("ij,ij->i", w, e2), np.einsum("ij,ij->i", w, e1))
+        angle = np.where(angle < -RADIAL_TIE, angle + 2 * np.pi, angle)
+        bad = ~np.isfinite(angle) | ~(length > RADIAL_TIE * np.linalg.norm(v[hi] - p, axis=1))
+    n = len(first)
+    bad_group = np.zeros(n, dtype=bool)
+    bad_group[inverse[bad]] = True
+    angle[bad] = 0.0
+    o = np.lexsort((angle, inverse))
+    g, t = inverse[o], angle[o]
+    tie = np.r_[False, (g[1:] == g[:-1]) & (np.diff(t) < RADIAL_TIE)]
+    cluster = np.cumsum(~tie)
+    o = o[np.lexsort((~forward[o], cluster))]  # in a cluster: the faces that close a wedge first
+    g, up = inverse[o], forward[o]
+    bad_group[g[1:][(g[1:] == g[:-1]) & (up[1:] == up[:-1])]] = True  # not alternating
+    begin = np.r_[0, np.flatnonzero(g[1:] != g[:-1]) + 1]
+    after = np.arange(1, len(o) + 1)
+    after[np.r_[begin[1:], len(o)] - 1] = begin  # the next face round, cyclically
+    down = ~up & ~bad_group[g]
+    pairs = np.stack([face[o][down], face[o][after[down]]], axis=1)
+    return ~bad_group, pairs
+
+
+def components_roots(m: int, pairs: np.ndarray) -> np.ndarray:
+    """Each of ``m`` faces' component, joined by ``pairs`` (K, 2), as its
+    smallest face index."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
+    _, label = connected_components(graph, directed=False)
+    smallest = np.full(int(label.max()) + 1 if m else 0, m, dtype=np.int64)
+    np.minimum.at(smallest, label, np.arange(m))
+    return smallest[label]
+
+
+def pieces_closed(root: np.ndarray, edge: np.ndarray, face: np.ndarray, forward: np.ndarray) -> np.ndarray:
+    """Whether each piece (the faces of one ``root``; indexed by root) uses
+    each of its edges as often each way, from the half-edges: their edge,
+    face and way (``forward``)."""
+    piece = root[face]
+    o = np.lexsort((piece, edge))
+    piece, edge = piece[o], edge[o]
+    begin = np.flatnonzero(np.r_[True, (edge[1:] != edge[:-1]) | (piece[1:] != piece[:-1])])
+    net = np.add.reduceat(np.where(forward[o], 1, -1), begin)
+    closed = np.ones(len(root), dtype=bool)
+    closed[piece[begin[net != 0]]] = False
+    return closed
 
 
 def cavity_owners(v: np.ndarray, f: np.ndarray, parts: list[np.ndarray]) -> list[int]:
