@@ -267,14 +267,10 @@ def radial_pairs(v: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray, for
 def components_roots(m: int, pairs: np.ndarray) -> np.ndarray:
     """Each of ``m`` faces' component, joined by ``pairs`` (K, 2), as its
     smallest face index."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
+    from ..scale.graphs import components
 
-    graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(m, m))
-    _, label = connected_components(graph, directed=False)
-    smallest = np.full(int(label.max()) + 1 if m else 0, m, dtype=np.int64)
-    np.minimum.at(smallest, label, np.arange(m))
-    return smallest[label]
+    _, label = components(m, pairs[:, 0], pairs[:, 1])  # numbered in the order of their smallest face
+    return np.unique(label, return_index=True)[1][label]
 
 
 def pieces_closed(root: np.ndarray, edge: np.ndarray, face: np.ndarray, forward: np.ndarray) -> np.ndarray:
