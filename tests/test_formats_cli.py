@@ -551,3 +551,28 @@ def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, 
     run(capsys, "voxelize", box, "--pitch", "1", "-o", target, "--force")
     with h5py.File(target, "r") as f:
         assert "raw" not in f and "seg" not in f and int(f["volume"][()].sum()) == 24
+
+
+def test_an_array_of_an_npz_archive_is_named_after_a_colon(tmp_path, capsys):
+    # an archive of several arrays (a segmentation saved beside its image)
+    # was refused with "name the volume 'volume'", and could not be read
+    # without saving it again; ARCHIVE.npz:NAME reads one array, as
+    # FILE.h5:/dataset does
+    skimage_measure = pytest.importorskip("skimage.measure")
+    seg = np.zeros((7, 6, 5), np.uint16)
+    seg[1:3, 1:4, 1:3], seg[4:6, 0:5, 0:4] = 4, 9
+    seg[4, 2, 2] = 0  # a hole inside label 9's slab: b2 = 1
+    np.savez(tmp_path / "user.npz", seg=seg, image=np.random.default_rng(0).random(seg.shape))
+    rows = json.loads(run(capsys, "info", f"{tmp_path / 'user.npz'}:seg", "--labels", "--json"))["labels"]
+    props = skimage_measure.regionprops(seg)
+    assert [r["label"] for r in rows] == [p.label for p in props]
+    assert [r["voxels"] for r in rows] == [int(p.area) for p in props]
+    assert [r["euler_characteristic"] for r in rows] == [p.euler_number for p in props]
+    assert info(capsys, f"{tmp_path / 'user.npz'}:seg", "--label", 9)["voxels"] == int((seg == 9).sum())
+    fails(capsys, "info", tmp_path / "user.npz", "--labels", words=("user.npz: holds arrays seg, image", "user.npz:seg"))
+    fails(capsys, "info", f"{tmp_path / 'user.npz'}:nope", "--labels",
+          words=("user.npz: holds no array 'nope' (its arrays: seg, image)",))
+    # written whole: a name is refused before any work, the file left alone
+    fails(capsys, "voxelize", isoflow.data.path("torus.obj"), "--resolution", 8, "-o", f"{tmp_path / 'user.npz'}:new",
+          words=("an .npz is written whole",))
+    assert sorted(np.load(tmp_path / "user.npz").files) == ["image", "seg"]

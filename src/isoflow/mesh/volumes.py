@@ -103,10 +103,16 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
     if fmt is None:
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
-    if dataset is not None and not fmt.datasets:
-        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5 and zarr")
+    check_dataset_read(path, fmt, dataset)
     raw = fmt.load().read(file, dataset)
     return as_object(raw, str(path), label)
+
+
+def check_dataset_read(path, fmt, dataset: str | None) -> None:
+    """A dataset named in a path is one the format can read: a dataset of
+    HDF5 and zarr, an array of an .npz."""
+    if dataset is not None and not (fmt.datasets or fmt.read_datasets):
+        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5, zarr and .npz")
 
 
 def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
@@ -225,6 +231,7 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
                                "LABELS.nii.gz makes one of several meshes (isoflow.voxelize_meshes)")
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
+    check_dataset_read(path, fmt, dataset)
     raw = fmt.load().read(file, dataset)
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
@@ -468,7 +475,8 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     if fmt is None:
         raise IsoflowError(f"{path}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
     if dataset is not None and not fmt.datasets:
-        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5 and zarr")
+        whole = " (an .npz is written whole: volume, offset, parity, pitch and origin)" if fmt.read_datasets else ""
+        raise IsoflowError(f"{path}: a dataset inside the file is written only for HDF5 and zarr{whole}")
     fmt.require()  # a missing library fails before anything is written
     # a zarr store is a directory: its module checks (and with force clears) it
     module = fmt.load()

@@ -26,7 +26,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         if isinstance(loaded, np.lib.npyio.NpzFile):
             with loaded as z:
                 names = list(z.files)
-                if "volume" in names:
+                if dataset is not None and dataset not in names:
+                    raise IsoflowError(f"{path}: holds no array {dataset!r} (its arrays: {', '.join(names)})")
+                if dataset not in (None, "volume"):  # one array named: the array alone
+                    arr = z[dataset]
+                elif "volume" in names:
                     arr = z["volume"]
                     for key in ("offset", "parity", "pitch", "origin"):
                         if key in names:
@@ -34,8 +38,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                 elif len(names) == 1:
                     arr = z[names[0]]
                 else:
-                    raise IsoflowError(f"{path}: holds arrays {names}; name the volume 'volume'")
+                    raise IsoflowError(f"{path}: holds arrays {', '.join(names)}; name one as {path}:{names[0]}, "
+                                       "or save the volume as 'volume'")
         elif isinstance(loaded, np.ndarray):
+            if dataset is not None:
+                raise IsoflowError(f"{path}: a .npy holds one array; name none (:{dataset})")
             arr = loaded
         else:
             raise IsoflowError(f"{path}: not a numpy array or archive ({type(loaded).__name__})")

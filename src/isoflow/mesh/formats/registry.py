@@ -46,6 +46,8 @@ class VolumeFormat:
     library: str | None  # the pip package it needs beyond isoflow's own dependencies
     #: a path may name a dataset inside the file: FILE.h5:/group/volume
     datasets: bool = False
+    #: ... when reading only (an .npz's arrays: it is written whole)
+    read_datasets: bool = False
     #: the module the library installs, when it differs from the package name
     imports: str | None = None
     #: suffixes read but not written (a detached header needs a second file)
@@ -65,7 +67,7 @@ class VolumeFormat:
 
 
 FORMATS = (
-    VolumeFormat("NumPy", (".npy", ".npz"), "npy", None),
+    VolumeFormat("NumPy", (".npy", ".npz"), "npy", None, read_datasets=True),
     VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1),  # ImageJ: 8 or 16 bits
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", imports="nrrd", read_only=(".nhdr",)),
@@ -83,14 +85,15 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
-_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr)):(?P<dataset>.*)$", re.IGNORECASE)
+_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr|npz)):(?P<dataset>.*)$", re.IGNORECASE)
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
     """``FILE.h5:/group/volume`` -> (FILE.h5, '/group/volume'); ``IMG.zarr:1``
-    -> (IMG.zarr, '1'), a resolution level; any other path -> (path, None).
+    -> (IMG.zarr, '1'), a resolution level; ``ARCHIVE.npz:seg`` -> one of
+    its arrays (read only); any other path -> (path, None).
 
-    Only after an HDF5 or zarr suffix, so that ``C:\\data\\a.nii`` stays a path."""
+    Only after an HDF5, zarr or npz suffix, so that ``C:\\data\\a.nii`` stays a path."""
     text = str(path)
     m = _DATASET.match(text)
     if m is None:
