@@ -334,6 +334,61 @@ def test_outputs_and_labels_checked_before_any_work(tmp_path, capsys, monkeypatc
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_pending_as_the_handlers_are_put_back_leaves_none_in_place(tmp_path, capsys, monkeypatch):
+    """``signal.signal`` runs a pending signal's handler before it changes
+    one: a SIGTERM that came as the command ended raised KeyboardInterrupt
+    from the first handler put back and left the others raising it after
+    the command had returned (a later SIGTERM then ended Python with 130)."""
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
+    wanted = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    before = {sig: signal.getsignal(sig) for sig in wanted}
+    setting = signal.signal
+    pending = [signal.SIGTERM]
+
+    def put_back(sig, handler):
+        if handler is before[signal.SIGINT] and pending:  # the first put back, as Python would run the handler
+            os.kill(os.getpid(), pending.pop())
+        return setting(sig, handler)
+
+    monkeypatch.setattr(signal, "signal", put_back)
+    try:
+        assert main(["info", str(tmp_path / "v.npy")]) == 143
+        assert {sig: signal.getsignal(sig) for sig in wanted} == before
+    finally:
+        for sig, handler in before.items():
+            setting(sig, handler)
+    assert capsys.readouterr().err.strip().splitlines()[-1:] == ["isoflow: terminated"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_inside_code_run_from_a_string_exits_128_plus_its_number(tmp_path, sig):
+    """A signal whose KeyboardInterrupt leaves an ``exec`` of source text
+    (scipy's ``exec("from numpy import *")`` while dask.array is imported,
+    a namedtuple's ``eval``) is recorded by CPython as unhandled although
+    the command handles it; under ``python -m`` the command then ended by
+    SIGINT (130) about one SIGTERM in six under ``timeout``, not 143."""
+    np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
+    (tmp_path / "signal_in_exec.py").write_text(f"""\
+import importlib, runpy
+cli = importlib.import_module("isoflow.cli.main")
+refuse = cli.refuse_output_over_input
+
+def signalled(args):  # while the command runs, as a library's import evaluates a string
+    exec("import signal; signal.raise_signal({int(sig)})", {{}})
+    refuse(args)
+
+cli.refuse_output_over_input = signalled
+runpy.run_module("isoflow", run_name="__main__")
+""")
+    path = os.pathsep.join([str(tmp_path), str(Path(isoflow.__file__).parents[1]), os.environ.get("PYTHONPATH", "")])
+    done = subprocess.run([sys.executable, "-m", "signal_in_exec", "info", str(tmp_path / "v.npy")], cwd=tmp_path,
+                          capture_output=True, text=True, env={**os.environ, "PYTHONPATH": path}, timeout=120)
+    how = "interrupted" if sig == signal.SIGINT else "terminated"
+    assert (done.returncode, done.stderr.strip().splitlines()[-1:]) == (128 + sig, [f"isoflow: {how}"]), done.stderr
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 @pytest.mark.parametrize("labels", [False, True])
 def test_a_signal_during_the_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch, labels):
     """Ctrl-C while trimesh reads the written surface back: exit 130, one

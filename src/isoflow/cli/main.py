@@ -232,12 +232,37 @@ def termination_as_interrupt(received: list) -> Iterator[None]:
 
     before = {sig: signal.signal(sig, interrupt) for sig in wanted}
     hook, sys.unraisablehook = sys.unraisablehook, unraisable
+    ended = False
     try:
         yield
+        ended = True
     finally:
         sys.unraisablehook = hook
-        for sig, handler in before.items():
-            signal.signal(sig, handler)
+        restore_handlers(before, raise_late=ended)
+
+
+def restore_handlers(before: dict, raise_late: bool = True) -> None:
+    """Put back every signal handler of ``before`` (signal: handler).
+
+    ``signal.signal`` first runs the handler of a signal still pending (one
+    that came as the command ended), and :func:`termination_as_interrupt`'s
+    raises KeyboardInterrupt: raised from the first handler put back, it
+    left the others in place after the command had returned, and a later
+    SIGTERM then raised KeyboardInterrupt as Python exited (status 130, not
+    143). It is raised once all are back, where the command ended without
+    an exception (``raise_late``); the signal is recorded either way."""
+    import signal
+
+    late = None
+    for sig, handler in before.items():
+        while True:
+            try:
+                signal.signal(sig, handler)
+                break
+            except KeyboardInterrupt as exc:  # the pending signal's handler ran; it is not pending any more
+                late = exc
+    if late is not None and raise_late:
+        raise late
 
 
 @contextlib.contextmanager
@@ -310,7 +335,25 @@ def interrupted(signals: list, what: str) -> int:
     sig = signals[0] if signals else signal.SIGINT
     how = "interrupted" if sig == signal.SIGINT else "terminated"
     print(f"isoflow: {how}" + (f": {what}" if what else ""), file=sys.stderr)
+    forget_escaped_interrupt()
     return 128 + int(sig)
+
+
+def forget_escaped_interrupt() -> None:
+    """Clear CPython's record that a KeyboardInterrupt left code it ran
+    from source text, once the command has handled that interrupt.
+
+    CPython marks the interrupt as unhandled when it leaves an ``exec`` or
+    ``eval`` of a string, even though a caller catches it. A signal raised
+    while a library is imported lands there often: dask.array imports
+    scipy, whose ``exec("from numpy import *")`` runs numpy's imports, and
+    namedtuples and dataclasses are made by ``eval``/``exec`` of their
+    source. Under ``python -m`` the interpreter then ignores the exit status
+    the command chose (143 for SIGTERM) and ends by SIGINT instead (130).
+    The record is reset at the start of every evaluation of a string, so
+    evaluating an empty one clears it; an interrupt that does escape the
+    command later is recorded again."""
+    exec("", {})
 
 
 def main(argv: list[str] | None = None) -> int:
