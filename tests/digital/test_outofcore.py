@@ -454,8 +454,8 @@ def test_bad_arrays_raise_isoflow_error(rng):
         analyze_chunked(da.zeros((4, 4, 4, 4), chunks=2))
     with pytest.raises(IsoflowError, match="connectivity 8"):
         analyze_chunked(da.zeros((4, 4, 4), chunks=2, dtype=bool), 8)
-    with pytest.raises(IsoflowError, match="no voxels"):
-        analyze_chunked(da.zeros((0, 4, 5), chunks=2, dtype=bool))
+    # no voxels: the empty object's report, as in memory (it was refused)
+    assert analyze_chunked(da.zeros((0, 4, 5), chunks=2, dtype=bool)) == analyze(np.zeros((0, 4, 5), bool))
     with pytest.raises(IsoflowError, match="dask or zarr array"):
         analyze_chunked(np.zeros((4, 4, 4), bool))
     with pytest.raises(IsoflowError, match="not a binary volume"):
@@ -531,3 +531,15 @@ def test_a_failed_block_leaves_no_block_running_behind_the_error():
     with pytest.raises(IsoflowError, match="cannot read block"):
         analyze_chunked(v, 6, block_shape=(4, 4, 4), threads=2)
     assert running == []
+
+
+def test_info_of_a_store_without_voxels_is_the_files(tmp_path, capsys):
+    # `info ZERO.zarr` refused ("the array has no voxels") where `info
+    # zero.npy` of the same array answers with the empty report
+    np.save(tmp_path / "zero.npy", np.zeros((0, 4, 5), bool))
+    zarr.create_array(str(tmp_path / "zero.zarr"), shape=(0, 4, 5), chunks=(2, 2, 2), dtype="uint8", zarr_format=2)
+    reports = []
+    for name in ("zero.npy", "zero.zarr"):
+        assert main(["info", str(tmp_path / name), "--json"]) == 0
+        reports.append({k: v for k, v in json.loads(capsys.readouterr().out).items() if k != "input"})
+    assert reports[0] == reports[1] and reports[1]["voxels"] == 0 and reports[1]["betti"] == [0, 0, 0]

@@ -422,8 +422,9 @@ def analyze_chunked(
     ------
     IsoflowError
         Anything but a 2D or 3D dask or zarr array of 0 and 1 (named with
-        ``where`` and the block's first voxel), an array with no voxels
-        (``analyze`` has no report for it either), blocks of 2^32 voxels.
+        ``where`` and the block's first voxel), blocks of 2^32 voxels. An
+        array with no voxels (a zero-length axis) has the empty report, as
+        with ``analyze``.
 
     Notes
     -----
@@ -443,8 +444,10 @@ def analyze_chunked(
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
-    if 0 in shape:
-        raise IsoflowError(f"{where}: the array has no voxels (shape {shape})")
+    if 0 in shape:  # no block to read: the report of the empty array, as analyze gives it
+        from .analysis import analyze
+
+        return analyze(np.zeros(shape, bool), conn, surfaces=surfaces)
     grid = _grid(array, block_shape, where)
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
