@@ -224,3 +224,32 @@ def test_an_interrupt_as_the_run_begins_leaves_no_staging_directory(tmp_path, mo
     assert not (tmp_path / "new").exists()
     assert [p.name for p in (tmp_path / "run").iterdir()] == ["flow.csv"]
     assert (tmp_path / "run" / "flow.csv").read_text() == "the previous run\n"
+
+
+def test_a_state_grown_past_magicavoxel_names_the_step(tmp_path, monkeypatch):
+    # a flow's states can grow past their input by a few voxels: MagicaVoxel's
+    # limit then failed at a later step with a voxelize hint ("voxelise it
+    # coarser (--resolution 256)"); now the step and the formats that hold any size
+    from isoflow.mesh.formats import magicavoxel
+
+    np.save(tmp_path / "v.npy", np.random.default_rng(0).random((8, 8, 8)) < 0.5)  # 8 across, 10 at step 2 (26-connected)
+    out = tmp_path / "out"
+    args = ("flow", tmp_path / "v.npy", "--out", out, "--steps", "3", "--connectivity", "26", "--no-check")
+    assert run(*args)[0] == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    monkeypatch.setattr(magicavoxel, "MAX_SIDE", 9)
+    rc, stdout, err = run(*args, "--force", "--volumes", ".vox")
+    assert rc == 2 and "Traceback" not in err
+    errors = [line for line in err.strip().splitlines() if not line.startswith("isoflow flow: warning:")]
+    assert errors == [
+        f"isoflow flow: error: {out / 'step_002.vox'}: step 2's state is 9x10x9 voxels, past MagicaVoxel's "
+        "9 a side; write the steps in another --volumes format (.npz or .zarr holds any size); "
+        "the previous run's files in the directory are unchanged"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # too large at step 0: refused before the flow, naming step 0
+    monkeypatch.setattr(magicavoxel, "MAX_SIDE", 7)
+    rc, stdout, err = run(*args, "--force", "--volumes", ".vox")
+    assert rc == 2 and err.strip().splitlines() == [
+        f"isoflow flow: error: {out / 'step_000.vox'}: step 0's state is 8x8x8 voxels, past MagicaVoxel's "
+        "7 a side; write the steps in another --volumes format (.npz or .zarr holds any size)"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

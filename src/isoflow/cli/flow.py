@@ -127,7 +127,7 @@ def flow_writer(args: argparse.Namespace, obj):
     """The writer of ``--out``, or None. Files are written while the flow
     runs, so no state is kept in memory (every state of a box of side s
     would cost about s^4/4 bytes)."""
-    from ..flow.files import FlowWriter, step_width
+    from ..flow.files import FlowWriter, check_step_volume, step_width
     from ..flow.motion import flow_connectivity
     from ..flow.run import default_max_steps
 
@@ -139,7 +139,9 @@ def flow_writer(args: argparse.Namespace, obj):
         # format cannot hold of the states (their dimension and pitch are the object's)
         args.volumes = check_volume_suffix(args.volumes)
         if args.out:
-            check_volume_holds(Path(args.out) / f"step_{0:0{step_width(last)}d}{args.volumes}", obj)
+            first = Path(args.out) / f"step_{0:0{step_width(last)}d}{args.volumes}"
+            check_step_volume(first, 0, obj)
+            check_volume_holds(first, obj)
     if not args.out:
         return None
     conn = flow_connectivity(obj.ndim, args.connectivity)

@@ -72,6 +72,23 @@ def step_width(last_step: int) -> int:
     return max(3, len(str(last_step)))
 
 
+def check_step_volume(path, step: int, state: DigitalObject) -> None:
+    """Refuse, naming the step, a state that the format of ``path`` cannot
+    hold for its size: MagicaVoxel's models are at most
+    :data:`~isoflow.mesh.formats.magicavoxel.MAX_SIDE` voxels a side, and a
+    flow's states can grow past their input by a few voxels (the format's
+    own message, a coarser voxelisation, does not fit a flow)."""
+    from ..mesh.formats import magicavoxel
+
+    if not str(path).lower().endswith(".vox"):
+        return
+    shape = state.volume.shape
+    if max(shape, default=0) > magicavoxel.MAX_SIDE:
+        raise IsoflowError(f"{path}: step {step}'s state is {'x'.join(map(str, shape))} voxels, past MagicaVoxel's "
+                           f"{magicavoxel.MAX_SIDE} a side; write the steps in another --volumes format "
+                           "(.npz or .zarr holds any size)")
+
+
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
@@ -266,6 +283,7 @@ class FlowWriter:
 
         name = f"step_{step:0{self.width}d}{self.volume_suffix}"
         with self._named():
+            check_step_volume(self.stage / name, step, state)
             write_volume(state, self.stage / name, force=True)
         self.staged.append(name)
 
