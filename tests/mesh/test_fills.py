@@ -359,6 +359,50 @@ def test_zero_thickness_panel_says_why_and_which_fill():
         voxelize(v, f, resolution=32, strict=True)
 
 
+@pytest.mark.parametrize("panel", ["panel.obj", "squashed box"])
+def test_a_store_says_the_thin_note_of_memory(tmp_path, capsys, panel):
+    # into a store the grid is not held: the share of the area that bounds
+    # nothing was taken as 0, and the note said only "the surface bounds
+    # little volume"; each slab now looks up the sampled points it fills
+    pytest.importorskip("zarr")
+    if panel == "panel.obj":
+        mesh = DATA / "panel.obj"
+    else:  # a box scaled to zero thickness along z
+        box = trimesh.creation.box(extents=[2, 3, 1])
+        box.apply_scale([1, 1, 0])
+        mesh = tmp_path / "flat.obj"
+        box.export(mesh)
+    notes = {}
+    for out in ("v.npy", "v.zarr"):
+        assert main(["voxelize", str(mesh), "--resolution", "64", "-o", str(tmp_path / out)]) == 0
+        notes[out] = [line for line in capsys.readouterr().err.splitlines() if "winding rule leaves" in line]
+    assert len(notes["v.npy"]) == 1 and "100 % of the area bounds no voxel on either side" in notes["v.npy"][0]
+    assert notes["v.zarr"] == notes["v.npy"]
+
+
+def test_a_store_measures_the_unbounded_share_of_memory(tmp_path, monkeypatch):
+    """A closed box and a panel beside it: part of the area bounds the
+    box's voxels, the rest nothing; the slabs (several, of chunks that cut
+    the points' rows) find the share the whole grid does, to the last bit."""
+    pytest.importorskip("zarr")
+    import isoflow.mesh.voxelize as vx
+    from isoflow.mesh.slabs import voxelize_to_zarr
+
+    box = trimesh.creation.box(bounds=[[0, 0, 0], [2, 2, 2]])
+    panel = trimesh.creation.box(bounds=[[3, 0, 1], [6, 3, 2]])
+    panel.apply_scale([1, 1, 0])
+    panel.apply_translation([0, 0, 1])
+    mesh = trimesh.util.concatenate([box, panel])
+    shares = []
+    area, share = vx.unbounded_area, vx.unbounded_share
+    monkeypatch.setattr(vx, "unbounded_area", lambda *a: shares.append(area(*a)) or shares[-1])
+    monkeypatch.setattr(vx, "unbounded_share", lambda *a: shares.append(share(*a)) or shares[-1])
+    memory = voxelize(mesh.vertices, mesh.faces, resolution=40, details=True)
+    _, store = voxelize_to_zarr(mesh, tmp_path / "v.zarr", resolution=40, chunks=(3, 7, 5), details=True)
+    assert len(shares) == 2 and 0.25 < shares[0] < 1 and shares[1] == shares[0]
+    assert memory.note is not None and store.note == memory.note and store.voxels == memory.voxels
+
+
 def test_closed_plate_thinner_than_a_voxel():
     """Closed and watertight, but between two layers of centres: the rule
     keeps no voxel, says so, and --strict refuses it for that."""

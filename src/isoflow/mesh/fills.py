@@ -116,13 +116,50 @@ def check_fill(fill: object) -> Fill:
     return fill  # type: ignore[return-value]
 
 
+def sampled_points(T: np.ndarray, origin, pitch: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """The points :func:`unbounded_area` looks up, of the triangles' corners
+    ``T`` (M, 3, 3) in the grid's frame: ``(idx, area)`` with ``idx`` (3, K,
+    3) the voxels (they may lie outside the grid) of each sampled face's
+    centroid and of the points three quarters of a voxel either side of it
+    along the normal, and ``area`` (K,) the faces' areas; None where no
+    sampled face has area. Every k-th face, at most about
+    :data:`SAMPLED_FACES` of them."""
+    T = T[:: max(1, len(T) // SAMPLED_FACES)]  # an estimate: every k-th face
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    area = np.linalg.norm(n, axis=1)
+    keep = area > 0
+    if not keep.any():
+        return None
+    n, area = n[keep] / area[keep, None], area[keep]
+    c = T[keep].mean(axis=1)
+    idx = np.stack([np.floor((c + step * pitch * n - origin) / pitch).astype(np.int64) for step in (0.0, 0.75, -0.75)])
+    return idx, area
+
+
+def look_up(volume: np.ndarray, idx: np.ndarray, start=(0, 0, 0)) -> np.ndarray:
+    """Whether each voxel ``idx`` (..., 3) of the grid is in, of
+    ``volume`` the grid's part from voxel ``start`` on (False outside it)."""
+    local = idx.reshape(-1, 3) - np.asarray(start, dtype=np.int64)
+    inside = np.all((local >= 0) & (local < np.array(volume.shape)), axis=1)
+    found = np.zeros(len(local), dtype=bool)
+    found[inside] = volume[tuple(local[inside].T)]
+    return found.reshape(idx.shape[:-1])
+
+
+def unbounded_share(area: np.ndarray, found: np.ndarray) -> float:
+    """The share of ``area`` (K,) of the sampled faces none of whose three
+    points (``found`` (3, K), :func:`sampled_points`) is in."""
+    return float(area[~found.any(axis=0)].sum() / area.sum())
+
+
 def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> float:
     """The share of the triangles' area (corners ``T`` (M, 3, 3) in the
     grid's frame) that bounds no voxel of ``volume``: faces with no voxel in
     at their centroid or on either side of it (three quarters of a voxel
     along the normal), as zero-thickness parts, double-sided faces and parts
     thinner than a voxel leave them; estimated on every k-th face, at most
-    about :data:`SAMPLED_FACES` of them.
+    about :data:`SAMPLED_FACES` of them (:func:`sampled_points`; a grid
+    written slab by slab looks its points up slab by slab).
 
     Examples
     --------
@@ -132,21 +169,11 @@ def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> f
     >>> unbounded_area(T, np.zeros((2, 2, 3), dtype=bool), np.zeros(3), 1.0)
     1.0
     """
-    T = T[:: max(1, len(T) // SAMPLED_FACES)]  # an estimate: every k-th face
-    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
-    area = np.linalg.norm(n, axis=1)
-    keep = area > 0
-    if not keep.any():
+    points = sampled_points(T, origin, pitch)
+    if points is None:
         return 0.0
-    n, area = n[keep] / area[keep, None], area[keep]
-    c = T[keep].mean(axis=1)
-    bounded = np.zeros(len(c), dtype=bool)
-    shape = np.array(volume.shape)
-    for step in (0.0, 0.75, -0.75):
-        idx = np.floor((c + step * pitch * n - origin) / pitch).astype(np.int64)
-        inside = np.all((idx >= 0) & (idx < shape), axis=1)
-        bounded[inside] |= volume[tuple(idx[inside].T)]
-    return float(area[~bounded].sum() / area.sum())
+    idx, area = points
+    return unbounded_share(area, look_up(volume, idx))
 
 
 def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided: int) -> str | None:

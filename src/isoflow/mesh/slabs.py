@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
-from .fills import Fill, Voxelization
+from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
@@ -63,15 +63,33 @@ def check_store_path(path, force: bool) -> Path:
     return path
 
 
-def _slab_task(plan, store: str, xa: int, xb: int):
+def _slab_task(plan, store: str, xa: int, xb: int, points=None):
     """Fill rows [xa, xb) and write them to the store's level; the slab's
-    counts."""
+    counts, and whether each of ``points`` (K, 3), voxels of the slab
+    (:func:`~isoflow.mesh.fills.sampled_points`), is in."""
     zarr = import_zarr()
     stats = np.zeros(4, dtype=np.int64)
     vol = plan.fill(xa, xb, stats=stats, threads=1)
     z = zarr.open_group(store, mode="r+")["0"]
     z[xa:xb] = vol.view(np.uint8)
-    return int(np.count_nonzero(vol)), stats
+    found = look_up(vol, points, (xa, 0, 0)) if points is not None else None
+    return int(np.count_nonzero(vol)), stats, found
+
+
+def slab_points(plan, slabs):
+    """The winding rule's sampled points (:meth:`VoxelPlan.sampled_points`)
+    split by slab, so that each slab looks up its own as it is filled (the
+    grid is never held, nor read back): ``(points, area, parts)``, ``parts``
+    the indices into the flattened points of each slab's, or None where no
+    sampled face has area."""
+    sampled = plan.sampled_points()
+    if sampled is None:
+        return None
+    idx, area = sampled
+    flat = idx.reshape(-1, 3)
+    inside = np.all((flat >= 0) & (flat < np.array(plan.shape)), axis=1)
+    parts = [np.flatnonzero(inside & (flat[:, 0] >= a) & (flat[:, 0] < b)) for a, b in slabs]
+    return flat, area, parts
 
 
 def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
@@ -175,7 +193,12 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
                            "source": where,
                            "rule": RULES[fill]})
         plan_d = delayed(plan, pure=True)
-        tasks = [delayed(_slab_task, pure=False)(plan_d, str(tmp), a, b, dask_key_name=("voxelize-slab", n))
+        # the share of the area that bounds nothing (the thin-solid note),
+        # looked up by each slab in the voxels it fills
+        sampled = slab_points(plan, slabs) if fill == "winding" else None
+        tasks = [delayed(_slab_task, pure=False)(plan_d, str(tmp), a, b,
+                                                 sampled[0][sampled[2][n]] if sampled is not None else None,
+                                                 dask_key_name=("voxelize-slab", n))
                  for n, (a, b) in enumerate(slabs)]
         done = [0]
 
@@ -189,11 +212,18 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
             results = compute(*tasks, scheduler=scheduler or "threads", workers=workers)
         voxels = shell = sum(r[0] for r in results)
         stats = np.sum([r[1] for r in results], axis=0)
+        found = None
+        if sampled is not None:
+            flat, _, parts = sampled
+            each = np.zeros(len(flat), dtype=bool)
+            for part, r in zip(parts, results):
+                each[part] = r[2]
+            found = each.reshape(3, -1)
         if fill == "flood":
             voxels = flood_store(root["0"], slabs)
         try:  # refused: nothing replaces the previous store
             made().check_layers(stats)
-            result = voxelization(made(), plan, None, voxels, origin, pitch, stats, shell_before=shell)
+            result = voxelization(made(), plan, None, voxels, origin, pitch, stats, shell_before=shell, found=found)
         except IsoflowError as exc:
             raise exc.at(where) from None
     store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),

@@ -52,8 +52,10 @@ from .fills import (
     Voxelization,
     check_fill,
     flood_adds_nothing,
+    sampled_points,
     thin_solid,
     unbounded_area,
+    unbounded_share,
 )
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import (  # noqa: F401
@@ -381,11 +383,20 @@ class VoxelPlan:
         _, ny, nz = self.shape
         return sum(shell.fill(a, b, np.zeros((b - a, ny, nz), dtype=bool), threads=2) for a, b in self.slabs())
 
-    def thin_note(self, volume: np.ndarray, voxels: int, double_sided: int) -> tuple[int | None, str | None]:
+    def sampled_points(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """:func:`~isoflow.mesh.fills.sampled_points` on this grid: the
+        voxels (indices in the grid) the share of unbounded area looks up."""
+        corner = self.origin + self.pitch * np.asarray(self.start)
+        return sampled_points(self.Tm, corner, self.pitch)
+
+    def thin_note(self, volume: np.ndarray | None, voxels: int, double_sided: int,
+                  found: np.ndarray | None = None) -> tuple[int | None, str | None]:
         """The shell's voxels (counted only where the winding rule's solid
         is small against the area and a bound on the shell does not already
         show it is at least :data:`~isoflow.mesh.fills.THIN_SHARE` of it,
-        else None) and :func:`~isoflow.mesh.fills.thin_solid`'s line."""
+        else None) and :func:`~isoflow.mesh.fills.thin_solid`'s line.
+        ``found``: where the grid is not held (``volume`` None), whether each
+        of :meth:`sampled_points` is in, looked up as it was written."""
         from .shell import grid_planes, surface_area
         from .shell_bound import shell_voxels_at_most
 
@@ -393,8 +404,12 @@ class VoxelPlan:
         area = surface_area(Tm)
         if not area > 0:
             return None, None
-        corner = self.origin + self.pitch * np.asarray(self.start)
-        share = unbounded_area(Tm, volume, corner, self.pitch) if volume is not None else 0.0
+        if volume is not None:
+            corner = self.origin + self.pitch * np.asarray(self.start)
+            share = unbounded_area(Tm, volume, corner, self.pitch)
+        else:
+            points = self.sampled_points() if found is not None else None
+            share = unbounded_share(points[1], found) if points is not None and found is not None else 0.0
         shell = None
         if voxels < THIN_TRIGGER * area / self.pitch**2:
             # a note for the share names the shell's count; otherwise the
@@ -643,18 +658,20 @@ def _share(progress, n: int, slabs: int):
 
 
 def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch: float, stats,
-                 shell_before: int | None = None) -> Voxelization:
+                 shell_before: int | None = None, found: np.ndarray | None = None) -> Voxelization:
     """The :class:`Voxelization` of a filled grid (``vol`` None for a
-    store: then no share of unbounded area is measured), with its note; with
-    ``strict``, a thin or empty winding solid is refused here.
-    ``shell_before``: a flood fill's shell, before the voxels it encloses."""
+    store: then ``found``, whether each of the plan's sampled points is in,
+    as the slabs looked them up, gives the share of unbounded area), with
+    its note; with ``strict``, a thin or empty winding solid is refused
+    here. ``shell_before``: a flood fill's shell, before the voxels it
+    encloses."""
     notes = [solid.note(stats)]
     shell = None
     if solid.fill == "flood":  # a flood that leaked is the shell alone: said, not silent
         notes.append(flood_adds_nothing(voxels, shell_before, solid.census["boundary_edges"],
                                         int(np.prod(plan.shape))))
     if solid.fill == "winding":
-        shell, thin = plan.thin_note(vol, voxels, solid.double_sided)
+        shell, thin = plan.thin_note(vol, voxels, solid.double_sided, found)
         if thin and solid.strict:
             raise IsoflowError.worded(f"voxelize: {thin}; without strict=True the winding rule's answer is kept",
                                       f"voxelize: {thin}; without --strict the winding rule's answer is kept")
