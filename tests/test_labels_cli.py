@@ -262,6 +262,17 @@ def test_a_label_image_given_for_a_mask_names_labels(tmp_path, capsys, segmentat
     fails(capsys, "info", tmp_path / "seg.npy", words=("threshold it first", "--label N", "--labels"))
 
 
+def test_a_4d_label_image_given_for_a_mask_offers_label_n_not_labels(tmp_path, capsys):
+    # a label table is 2D or 3D: --labels would be refused in turn
+    image = np.zeros((3, 3, 3, 3), np.uint8)
+    image[0], image[2] = 1, 2
+    np.save(tmp_path / "seg4.npy", image)
+    said = fails(capsys, "info", tmp_path / "seg4.npy", words=("threshold it first", "--label N"))
+    assert "--labels" not in said
+    assert main(["info", str(tmp_path / "seg4.npy"), "--label", "2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["euler_characteristic"] == 1  # one 3x3x3x1 box
+
+
 def assert_text_as_json_and_csv_write(table: dict) -> None:
     """json_rows and csv_rows of ``table`` equal the standard library's
     writers on the same cells (NaN and infinities as null / empty, an

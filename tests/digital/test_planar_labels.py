@@ -196,6 +196,20 @@ def test_a_2d_zarr_store_is_read_whole(tmp_path):
         label_table_blocks(LabelSlabs(str(tmp_path / "cells.zarr")), 6)
 
 
+def test_a_4d_store_is_refused_as_a_4d_file_is(tmp_path):
+    """A label table is 2D or 3D, whether the image is read whole or by
+    blocks: a 4D store is not told it needs 3D (a 2D one is read)."""
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((3, 4, 5, 2), np.uint8)
+    image[1] = 2
+    np.save(tmp_path / "seg4.npy", image)
+    zarr.open_array(tmp_path / "seg4.zarr", mode="w", shape=image.shape, chunks=(2, 3, 2, 1), dtype="u1")[:] = image
+    for name in ("seg4.npy", "seg4.zarr"):
+        proc = run("info", name, "--labels", cwd=tmp_path)
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+        assert f"{name}: a label table needs a 3D or 2D image, this array is 4D with shape (3, 4, 5, 2)" in proc.stderr
+
+
 def test_a_2d_table_beyond_the_budget_is_refused_before_the_work(tmp_path, monkeypatch):
     """Up front for the pixels, then for the labels once their number is
     known: a map of few cells is not refused for what a label per pixel

@@ -88,3 +88,30 @@ def test_colours_animations_damaged_files_and_writing_are_refused(tmp_path, cell
     one_line_exit_2(run("voxelize", data.bob(), "--resolution", "8", "-o", "m.png", cwd=tmp_path),
                     "m.png: volumes are written as")  # read only: PNG keeps no pixel size
     assert not (tmp_path / "m.png").exists()
+
+
+def sixteen_bit_png(path, channels, colour_type):
+    """A PNG of 16 bits a channel, written by hand: Pillow writes none in colour."""
+    import struct
+    import zlib
+
+    height, width = channels.shape[:2]
+    rows = b"".join(b"\x00" + channels[j].astype(">u2").tobytes() for j in range(height))
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    header = struct.pack(">IIBBBBB", width, height, 16, colour_type, 0, 0, 0)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def test_16_bit_colour_is_refused_not_cut_to_8_bits(tmp_path, cells):
+    # Pillow keeps the high byte of each 16-bit colour channel: cells 300, 600
+    # and 900 would read as 1, 2 and 3 and cell 7 as background
+    sixteen_bit_png(tmp_path / "rgb.png", np.stack([cells] * 3, axis=-1), 2)
+    sixteen_bit_png(tmp_path / "la.png", np.stack([cells, np.full_like(cells, 65535)], axis=-1), 4)
+    for name in ("rgb.png", "la.png"):
+        one_line_exit_2(run("info", name, "--labels", cwd=tmp_path), f"{name}: a PNG of 16-bit colour")
+    sixteen_bit_png(tmp_path / "grey.png", cells, 0)  # 16-bit grey is read whole
+    proc = run("info", "grey.png", "--labels", "--json", cwd=tmp_path)
+    assert [row["label"] for row in json.loads(proc.stdout)["labels"]] == [7, 300, 600, 900], proc.stderr

@@ -130,7 +130,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         try:
             vol = binary(arr, where)
         except NotBinary as exc:
-            raise with_label_options(exc) from None
+            # a label table takes 2D and 3D images: --labels is no way out in 4D
+            raise with_label_options(exc, every=arr.ndim != 4) from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -175,15 +176,17 @@ EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table(is
 def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
     """The refusal of a label image where a mask is expected, with the
     options that select its labels: one (``--label N``) and, where the
-    command takes it (``every``), all (``--labels``).
+    command takes it (``every``) and the image has a table (``exc.every``:
+    2D and 3D), all (``--labels``).
 
     Examples
     --------
     >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), every=False))
     'v.npy: not a binary volume, or select one label with --label N (label=N)'
     """
+    every = every and exc.every
     options = ", or select one label with --label N (label=N)" + (f", {EVERY_LABEL}" if every else "")
-    return NotBinary(exc.bare + options, bare=exc.bare)
+    return NotBinary(exc.bare + options, bare=exc.bare, every=every)
 
 
 def read_labels(path: str | os.PathLike) -> LabelImage:

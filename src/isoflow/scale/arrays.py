@@ -103,11 +103,13 @@ class NotBinary(IsoflowError):
     """A volume of values other than 0 and 1 where a mask is expected (a
     label image, most often): a kind of its own, so that a command can add
     the options that select its labels, in memory or block by block, to
-    ``bare`` (the message without them)."""
+    ``bare`` (the message without them). ``every``: whether ``--labels``
+    can take the image (a label table is 2D or 3D), so may be offered."""
 
-    def __init__(self, message: str, bare: str | None = None):
+    def __init__(self, message: str, bare: str | None = None, every: bool = True):
         super().__init__(message)
         self.bare = message if bare is None else bare
+        self.every = every
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):

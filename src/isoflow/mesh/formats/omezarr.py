@@ -346,6 +346,10 @@ class LabelSlabs:
         else:
             names = axis_names(multiscale, array.ndim, self.where)
             scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
+        if names is None and array.ndim not in (2, 3):
+            # as a file's: no label table is 4D, whether read whole or by blocks
+            raise IsoflowError(f"{self.where}: a label table needs a 3D or 2D image, this array is {array.ndim}D "
+                               f"with shape {tuple(array.shape)}")
         if names is None:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "

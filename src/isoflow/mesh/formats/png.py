@@ -8,7 +8,9 @@ VOC), 8-bit masks. Axes: row ``j``, column ``i`` is pixel ``(i, j)``
 (``P``) as the indices, not the colours; grey stored as colour (``RGB``,
 ``RGBA``, ``LA`` whose colour channels are equal, the alpha ignored) as
 that grey. Colours that differ are refused: a colour-coded image is a
-picture of labels, whose numbering its file does not say. An animated PNG
+picture of labels, whose numbering its file does not say. So is colour or
+grey with alpha at 16 bits a channel, which Pillow reads as 8 (label 300
+would be 1, labels 1 to 255 would be 0). An animated PNG
 (several frames) is refused. The pixel size is 1: PNG's ``pHYs`` is a
 print resolution (pixels per metre), not a microscope's calibration.
 """
@@ -38,6 +40,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         mode = image.mode
         if mode not in GREY and mode not in COLOUR:
             raise IsoflowError(f"{where}: a PNG of mode {mode}, which isoflow does not read as labels")
+        if mode in COLOUR and wide_channels(image):
+            raise IsoflowError(f"{where}: a PNG of 16-bit colour or grey and alpha, whose channels Pillow reads as "
+                               "8 bits (the labels would be wrong); save it as a 16-bit grey PNG")
         check_shape((image.height, image.width), GREY.get(mode, np.uint8), where)
         data = np.asarray(image)
     if mode in COLOUR:
@@ -49,3 +54,20 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         data = grey
     data = np.asarray(data, dtype=GREY.get(mode, np.uint8))
     return RawVolume(np.ascontiguousarray(data.T), np.ones(2))
+
+
+def wide_channels(image) -> bool:
+    """Whether a PNG Pillow opened stores 16 bits a channel in a mode of 8
+    (``RGB``, ``RGBA``: Pillow keeps the high byte of each channel).
+
+    Examples
+    --------
+    >>> import io
+    >>> from PIL import Image
+    >>> buffer = io.BytesIO()
+    >>> Image.new("RGB", (2, 2)).save(buffer, format="PNG")
+    >>> wide_channels(Image.open(buffer))
+    False
+    """
+    # the decoder's raw mode, e.g. 'RGB;16B', says the depth the mode hides
+    return any(";16" in str(tile[3]) for tile in image.tile)
