@@ -49,3 +49,22 @@ def test_compiled_report_does_not_import_scipy_linalg_and_numba_blas_still_works
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["False", "True"]
+
+
+def test_numba_messages_leave_sys_stderr_alone(monkeypatch):
+    """numba marked up its messages (also those it makes and drops while it
+    types) between colorama's init() and deinit(), which swap sys.stderr for
+    a wrapper and put back the stream init() saw: a compile on one thread
+    while another had replaced sys.stderr (capsys, redirect_stderr) left the
+    stale stream in place, and an isoflow command's error line went there
+    (the suite's rare "no line on stderr" failures)."""
+    from numba.core import errors
+
+    import isoflow.scale.jit  # noqa: F401  (what every compiled pass imports)
+
+    swapped = []
+    monkeypatch.setattr(errors, "init", lambda *a, **k: swapped.append("init"), raising=False)
+    monkeypatch.setattr(errors, "deinit", lambda *a, **k: swapped.append("deinit"), raising=False)
+    scheme = errors.termcolor()
+    assert [scheme.errmsg("a"), scheme.highlight("b"), scheme.code("c"), scheme.reset("d")] == ["a", "b", "c", "d"]
+    assert swapped == []

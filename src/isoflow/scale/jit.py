@@ -71,5 +71,31 @@ def _note_compiles() -> None:
     event.register("numba:compile", FirstCompile())
 
 
+def _plain_error_messages() -> None:
+    """numba's messages as plain text, without colorama.
+
+    numba marks up the text of its errors (also those it makes and drops
+    while it types a function) inside colorama's ``init()`` ... ``deinit()``,
+    which replace ``sys.stderr`` with a wrapper and then put back the stream
+    ``init()`` found. Compiling on one thread (the info command warms numba
+    up while the main thread reads the input) while another replaces
+    ``sys.stderr`` (``contextlib.redirect_stderr``, pytest's capsys) leaves
+    ``sys.stderr`` set to a stale stream afterwards: what is printed next
+    goes there. Plain text needs no terminal state; the default scheme
+    (``no_color``) only made the text bold."""
+    try:
+        from numba.core import config, errors
+    except ImportError:  # pragma: no cover - another numba layout
+        return
+    if getattr(config, "COLOR_SCHEME", None) != "no_color" or not hasattr(errors, "termcolor"):
+        return  # colours a user asked for (NUMBA_COLOR_SCHEME), or another layout
+    # numba's modules keep the one instance termcolor() made (ir, typeinfer,
+    # typeof, ...): its markup is made plain rather than the instance replaced
+    scheme = errors.termcolor()
+    if hasattr(scheme, "_markup"):
+        scheme._markup = lambda msg, color=None, style=None: msg
+
+
 _import_arraymath_without_blas_probe()
 _note_compiles()
+_plain_error_messages()
