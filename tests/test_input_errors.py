@@ -643,3 +643,33 @@ def test_a_face_far_from_the_rest_is_named_when_the_weld_leaves_no_face(tmp_path
     (tmp_path / "flat.obj").write_text("v 0 0 0\nv 1 0 0\nf 1 2 2\nf 1 1 2\n")
     line = fails(capsys, "info", tmp_path / "flat.obj", "--resolution", 8)
     assert "far from the others" not in line
+
+
+def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatch):
+    """info loads numba on a second thread while it reads a large input; on
+    a refusal that thread was left running after the command, and numba's
+    compile (which records the warnings of every thread and says them again
+    when it ends) put an earlier command's warning into a later one's
+    stderr. The warm-up here takes its time as a first compile does."""
+    import threading
+    import time
+
+    from isoflow.digital import closed_surfaces
+    from isoflow.scale.compiled import have_numba, least_voxels
+
+    if not have_numba():
+        pytest.skip("numba not installed: no warm-up")
+    side = round(least_voxels(surfaces=True) ** (1 / 3)) + 1
+    labels = np.zeros((side,) * 3, np.uint8)
+    labels[0, 0, 0], labels[1, 1, 1] = 2, 3  # a label image where a mask is read: refused after the read
+    np.save(tmp_path / "big.npy", labels)
+    warming = threading.Event()
+
+    def slow_warm_up(surfaces=True):
+        warming.set()
+        time.sleep(0.5)
+
+    monkeypatch.setattr(closed_surfaces, "warm_up", slow_warm_up)
+    fails(capsys, "info", tmp_path / "big.npy", words=("big.npy", "not a binary volume"))
+    assert warming.is_set()  # (the warm-up ran: the input is large enough)
+    assert not [t.name for t in threading.enumerate() if t.name.endswith("(quietly)") and t.is_alive()]

@@ -88,9 +88,14 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None]:
     from ..digital.analysis import analyze
 
     warming = warm_up_while_reading(args)
-    obj = load_input(args)
-    if warming is not None:
-        warming.join()
+    try:
+        obj = load_input(args)
+    finally:
+        # joined on a refusal too: a thread left compiling would outlive the
+        # command, and numba's compile records the warnings of every thread
+        # and says them again when it ends, in whatever runs then
+        if warming is not None:
+            warming.join()
     # an empty report is an answer, but of a point list with points it needs
     # the reason
     say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
