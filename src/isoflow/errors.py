@@ -9,6 +9,18 @@ nobody has to read a traceback from inside numpy.
 from __future__ import annotations
 
 
+def counted(n: int, one: str, many: str | None = None) -> str:
+    """A count and its noun in a message, the noun singular for 1 (``many``:
+    a plural other than ``one`` + "s").
+
+    Examples
+    --------
+    >>> counted(1, "cavity", "cavities"), counted(3, "cavity", "cavities"), counted(0, "label")
+    ('1 cavity', '3 cavities', '0 labels')
+    """
+    return f"{n} {one if n == 1 else many or one + 's'}"
+
+
 class IsoflowError(ValueError):
     """Bad input: a missing or unreadable file, an empty or open mesh, ...
 

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 from .inputs import add_mesh_rule, mesh_fill, resolution_value
 from .progress import progress_bar
 
@@ -62,10 +62,6 @@ def cmd_genus(args: argparse.Namespace) -> int:
 FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
-def _count(n: int, one: str, many: str) -> str:
-    return f"{n} {one if n == 1 else many}"
-
-
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
@@ -82,8 +78,8 @@ def format_genus(report, name: str) -> str:
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
                            f"genus {m3['genus']} over {m3['components']} components "
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
-        "  solid       " + (f"genus {solid['genus']}, {_count(solid['bodies'], 'body', 'bodies')}, "
-                            f"{_count(solid['cavities'], 'cavity', 'cavities')}, volume {solid['volume']:.6g} "
+        "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
+                            f"{counted(solid['cavities'], 'cavity', 'cavities')}, volume {solid['volume']:.6g} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
     ]

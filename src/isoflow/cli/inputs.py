@@ -65,17 +65,16 @@ def fill_hint(args: argparse.Namespace) -> str | None:
     return "--fill flood (the shell and what it encloses) or --fill shell sum no solid angles and take far less"
 
 
-#: the connectivities of each dimension, and the default (the paper's) first
-CONNECTIVITIES = {2: (4, 8), 3: (6, 26), 4: (8, 80)}
-
-
 def add_connectivity(p: argparse.ArgumentParser, dims: tuple[int, ...] = (2, 3, 4)) -> None:
     """``--connectivity`` of the object, in the dimensions the command
     takes (its choices those of these dimensions only, so that a value
     none of its objects takes is refused before any file is read)."""
-    choices = sorted({c for d in dims for c in CONNECTIVITIES[d]})
-    said = ", ".join(f"{' or '.join(map(str, CONNECTIVITIES[d]))} in {d}D" for d in sorted(dims, key=lambda d: d != 3))
-    default = " / ".join(str(CONNECTIVITIES[d][0]) for d in sorted(dims, key=lambda d: d != 3))
+    from ..digital.connectivity import VALID, default_connectivity
+
+    choices = sorted({c for d in dims for c in VALID[d]})
+    order = sorted(dims, key=lambda d: d != 3)  # 3D first: most commands' objects
+    said = ", ".join(f"{' or '.join(map(str, VALID[d]))} in {d}D" for d in order)
+    default = " / ".join(str(default_connectivity(d)) for d in order)
     p.add_argument("--connectivity", type=int, choices=choices, default=None,
                    help=f"object connectivity: {said} (default: {default}, the paper's)")
 

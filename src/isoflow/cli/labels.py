@@ -12,7 +12,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 from .table_text import csv_rows, json_rows
 
 #: rows the terminal shows before the summary
@@ -281,7 +281,7 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     pitch = "x".join(f"{p:g}" for p in about["spacing"])
     shape = "x".join(map(str, about["shape"]))
     planar = len(about["shape"]) == 2
-    lines = [f"{name}: {_count(n, 'label')}, shape {shape}, {'pixel' if planar else 'voxel'} {pitch}, "
+    lines = [f"{name}: {counted(n, 'label')}, shape {shape}, {'pixel' if planar else 'voxel'} {pitch}, "
              f"{conn}-connectivity"]
     surfaces = "genera" in table
     shown = PLANAR_TERMINAL_COLUMNS if planar else TERMINAL_COLUMNS
@@ -303,16 +303,11 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     return "\n".join(lines)
 
 
-def _count(n: int, what: str) -> str:
-    """``1 label``, ``2 labels``."""
-    return f"{n} {what}{'' if n == 1 else 's'}"
-
-
 def summary(table: dict) -> str:
     """One line over every label."""
     n = len(table["label"])
     planar = "perimeter" in table
-    parts = [_count(n, "label"), _count(int(table["voxels"].sum()), "pixel" if planar else "voxel")]
+    parts = [counted(n, "label"), counted(int(table["voxels"].sum()), "pixel" if planar else "voxel")]
     for column, what in (("b0", "in several components"), ("b1", "with holes" if planar else "with tunnels"),
                          ("b2", "with cavities")):
         if column not in table:
@@ -396,8 +391,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             if show is not None:
                 show(meshed, total)
         problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report)
-    where = target[1] if target[0] == "glb" else f"{target[1]}/ ({_count(len(meshes), target[2] + ' file')})"
-    print(f"{where}: {_count(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
+    where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
+    print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
@@ -467,6 +462,6 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             progress(done, len(meshes))
     if welds and not args.quiet:  # as surface says of one STL file
         print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
-              f"at {sum(welds.values())} edge/vertex contacts of {_count(len(welds), 'file')} ({_some(list(welds))}) "
+              f"at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} ({_some(list(welds))}) "
               "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
     return problems, f"{count} faces ({', '.join(kinds)})"

@@ -66,7 +66,7 @@ class CommandParser(argparse.ArgumentParser):
     known) also shows the usage."""
 
     def parse_known_args(self, args=None, namespace=None):
-        # kept for error(): what the options took before an argument was found missing
+        # error() reads what the options took: --labels' optional SPEC may have taken the input
         self.namespace = argparse.Namespace() if namespace is None else namespace
         return super().parse_known_args(args, self.namespace)
 

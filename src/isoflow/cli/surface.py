@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -79,7 +79,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
     comps = mesh.components()
     print(
         f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
-        f"{len(comps)} closed surface{'' if len(comps) == 1 else 's'}, V-E+F = {mesh.euler_characteristic}"
+        f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
         + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
     )
     if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..errors import counted
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar
 
@@ -117,8 +118,7 @@ def label_summary(out: str | Path, r) -> str:
     """The written label image in words: grid, type, pitch, origin, and a
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
-    labels = f"{len(r.names)} label{'' if len(r.names) == 1 else 's'}"
-    lines = [f"{out}: {labels} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
+    lines = [f"{out}: {counted(len(r.names), 'label')} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
              f"origin {np.round(r.origin, 6).tolist()}"]
     width = max(6, len(f"{max(r.voxels, default=0):,}"))
     lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")

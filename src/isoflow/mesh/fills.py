@@ -28,6 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from ..errors import counted
 from ..results import Result
 
 #: the rule that decides which voxels a mesh fills
@@ -194,7 +195,7 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
     if not thin and share < UNBOUNDED_SHARE:
         return None
-    what = "no voxel" if voxels == 0 else f"{voxels} voxel{'' if voxels == 1 else 's'}"
+    what = "no voxel" if voxels == 0 else counted(voxels, "voxel")
     against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
     why = []
     if double_sided:

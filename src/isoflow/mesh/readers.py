@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 
 Mesh = tuple[np.ndarray, np.ndarray]
 
@@ -108,8 +108,8 @@ def stl_size_error(path, data: bytes) -> str | None:
     values = np.concatenate((rec["normal"].ravel(), rec["corners"].ravel()))
     if not (np.abs(values) < 1e30).all():
         return None
-    held = f"{whole} facet{'' if whole == 1 else 's'}" + (f" and {rest} bytes" if rest else "")
-    return (f"{path}: no triangles read: as a binary STL its header counts {n} facet{'' if n == 1 else 's'} "
+    held = counted(whole, "facet") + (f" and {rest} bytes" if rest else "")
+    return (f"{path}: no triangles read: as a binary STL its header counts {counted(n, 'facet')} "
             f"({84 + 50 * n} bytes), but the file has {len(data)} bytes ({held} after the header): "
             "truncated, padded, or its facet count is wrong")
 

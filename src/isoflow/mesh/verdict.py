@@ -15,6 +15,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from ..errors import counted
 from ..results import Result
 from ..scale.memory import sized
 from .fills import Fill
@@ -202,7 +203,7 @@ def note_text(note: Note) -> str:
     return _NOTE_WORDS[note.kind](**note.facts)
 
 
-#: what the digital genus was measured on, by the fill compared
+#: the voxels whose digital genus a fill compares, in the note's words
 _READ_AS = {"winding": "its solid is read by the generalised winding number (|w| > 1/2)",
             "shell": "its voxels are its shell (--fill shell: every voxel the surface meets)",
             "flood": "its voxels are its flood fill (--fill flood: the shell and what it encloses)"}
@@ -218,11 +219,6 @@ def _inconsistent_words(edges: int, fill: str = "winding") -> str:
     return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
             "(used more often one way than the other): it bounds no solid as given, so it has no genus as a "
             "closed surface; " + _READ_AS[fill])
-
-
-def _count(n: int, one: str, many: str | None = None) -> str:
-    """``n`` and the noun, singular for 1 ("1 cavity", "2 cavities")."""
-    return f"{n} {one if n == 1 else many or one + 's'}"
 
 
 def _point(p) -> str:
@@ -246,22 +242,22 @@ def _double_sided_words(n: int, corners, genus: int | None) -> str:
 
 def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None) -> str:
     return (f"the mesh's {components} components overlap or touch ({crossing} faces cross other components, "
-            f"{_count(shared, 'vertex', 'vertices')} shared): the solid they bound is their union, "
+            f"{counted(shared, 'vertex', 'vertices')} shared): the solid they bound is their union, "
             + (f"genus {solid_genus} (manifold3d)" if solid_genus is not None
                else f"which manifold3d could not build ({error})"))
 
 
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
-    "welded": lambda n: (f"{_count(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
+    "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
     "repeated_faces": _repeated_words,
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,
-    "nonmanifold_edges": lambda n: (f"{_count(n, 'non-manifold edge')} (more than two faces): not a 2-manifold, "
+    "nonmanifold_edges": lambda n: (f"{counted(n, 'non-manifold edge')} (more than two faces): not a 2-manifold, "
                                     "genus undefined"),
-    "nonmanifold_vertices": lambda n: (f"{_count(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
+    "nonmanifold_vertices": lambda n: (f"{counted(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
                                        "sheets touch at a point; "
                                        "genus counted per edge-connected component"),
     "nested": lambda components, solid_genus: (
@@ -275,7 +271,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "
            f"{'them' if n > 1 else 'it'} where {'they close' if n > 1 else 'it closes'} a split edge (a T-junction): "
            "no crossing" if along else "")),
-    "cavities": lambda n, resolution: (f"the solid has {_count(n, 'cavity', 'cavities')} (nested shells) "
+    "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote
+from ..errors import IsoflowError, MeshNote, counted
 from ..scale import memory
 from .fills import (
     THIN_SHARE,
@@ -211,7 +211,7 @@ class Solid:
         what = [f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
                 f"{d['inconsistent_edges']} inconsistently oriented edges"]
         if self.double_sided:
-            what.append(_count(self.double_sided, "double-sided face") + " (coincident faces of opposite "
+            what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
         said = "voxelize: mesh is not watertight: " + "; ".join(what)
         raise IsoflowError.worded(said + " (without strict=True it is read by the generalised winding number)",
@@ -238,7 +238,7 @@ class Solid:
             return
         what = []
         if stats[0]:
-            what.append(_count(int(stats[0]), "voxel") + " inside two or more layers")
+            what.append(counted(int(stats[0]), "voxel") + " inside two or more layers")
         if stats[1] and stats[2]:
             what.append("both positive and negative winding numbers")
         if what:
@@ -255,20 +255,20 @@ class Solid:
         c = self.census
         what = []
         if self.joined:
-            what.append(_count(self.joined, "edge") + " joined by merging vertices at equal positions (a triangle soup)")
+            what.append(counted(self.joined, "edge") + " joined by merging vertices at equal positions (a triangle soup)")
         if self.double_sided:
-            what.append(_count(self.double_sided, "double-sided face") + " (coincident faces of opposite "
+            what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation, each read as one face)")
         if c["boundary_edges"]:
-            what.append(_count(c["boundary_edges"], "boundary edge"))
+            what.append(counted(c["boundary_edges"], "boundary edge"))
         if c["nonmanifold_edges"]:
-            what.append(_count(c["nonmanifold_edges"], "non-manifold edge"))
+            what.append(counted(c["nonmanifold_edges"], "non-manifold edge"))
         if self.flipped:
-            what.append(_count(self.flipped, "flipped face") + " (turned over with trimesh.repair.fix_winding)")
+            what.append(counted(self.flipped, "flipped face") + " (turned over with trimesh.repair.fix_winding)")
         elif c["inconsistent_edges"] and not c["nonmanifold_edges"]:
-            what.append(_count(c["inconsistent_edges"], "inconsistently oriented edge"))
+            what.append(counted(c["inconsistent_edges"], "inconsistently oriented edge"))
         if stats is not None and stats[0]:
-            what.append(_count(int(stats[0]), "voxel") + " inside two or more layers (self-intersecting "
+            what.append(counted(int(stats[0]), "voxel") + " inside two or more layers (self-intersecting "
                         "or overlapping shells: counted once, the union)")
         if stats is not None and stats[1] and stats[2]:
             what.append("both positive and negative winding numbers (inverted or "
@@ -281,10 +281,6 @@ class Solid:
         else:
             rule = "its edges balance, so it bounds a solid: read by the exact nonzero winding number"
         return "mesh has " + ", ".join(what) + "; " + rule
-
-
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 class VoxelPlan:
@@ -374,7 +370,7 @@ class VoxelPlan:
         rows = max(1, voxels // max(1, ny * nz))
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
 
-    def shell_count(self) -> int:
+    def shellcounted(self) -> int:
         """Voxels of the mesh's shell on this grid, counted slab by slab (a
         slab's volume at a time)."""
         from .shell import ShellGrid, grid_planes
@@ -416,7 +412,7 @@ class VoxelPlan:
             # count matters only where the solid may be under its share of it
             planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
             if share >= UNBOUNDED_SHARE or shell_voxels_at_most(Tm, planes, int(voxels / THIN_SHARE)) is None:
-                shell = self.shell_count()
+                shell = self.shellcounted()
         return shell, thin_solid(voxels, shell, share, double_sided)
 
 
