@@ -10,9 +10,11 @@ after the coordinates and after a face's corners) and refuses the rest in
 one line: binary OFF, 4D or n-D OFF, counts that do not match the lines, a
 corner that is not a vertex.
 
-Polygons are cut into fans from their first corner, as trimesh does; a
-polygon that runs along one of its edges twice (``4 1 2 3 2``: a spike)
-gives two triangles that cancel in the winding number.
+Polygons are cut as :func:`isoflow.mesh.readers.triangulate` cuts them:
+into fans from their first corner, as trimesh does, except a concave
+polygon whose fan would leave it, which is cut by ears; a polygon that
+runs along one of its edges twice (``4 1 2 3 2``: a spike) gives two
+triangles that cancel in the winding number.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
+from .readers import triangulate
 
 #: the header keyword: ST (texture), C (colour), N (normal) prefixes
 _HEADER = re.compile(r"^(ST)?C?N?(4?)(n?)OFF$")
@@ -60,7 +63,7 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
     except ValueError:
         bad = next(i for i, ln in enumerate(body[:nv]) if len(ln) < 3 or not _numbers(ln[:3]))
         raise IsoflowError(f"{path}: OFF vertex {bad} is {' '.join(body[bad])!r}, not three numbers") from None
-    triangles = []
+    polygons = []
     for i, ln in enumerate(body[nv:nv + nf]):
         try:
             k = int(ln[0])
@@ -74,8 +77,12 @@ def read_off(path: Path) -> tuple[np.ndarray, np.ndarray]:
             lineno = numbered[len(lines) - len(body) + nv + i][0]
             raise IsoflowError(f"{path}:{lineno}: OFF face {i} {' '.join(ln)!r} uses vertex {bad}, "
                                f"not one of the {nv} vertices (numbered from 0 to {nv - 1})")
-        triangles.extend((corners[0], corners[j], corners[j + 1]) for j in range(1, k - 1))
-    return vertices, np.array(triangles, dtype=np.int64).reshape(-1, 3)
+        polygons.append(corners)
+    if not polygons:
+        return vertices, np.zeros((0, 3), dtype=np.int64)
+    sizes = np.array([len(c) for c in polygons], dtype=np.int64)
+    flat = np.fromiter((c for corners in polygons for c in corners), dtype=np.int64, count=int(sizes.sum()))
+    return vertices, triangulate(flat, sizes, vertices)
 
 
 def _numbers(fields) -> bool:

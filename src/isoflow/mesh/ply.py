@@ -13,8 +13,10 @@ a polygon split as trimesh splits it (faces of one size as
 :func:`~isoflow.mesh.readers.triangulate` does; faces of several sizes
 as ``trimesh.geometry.triangulate_quads`` orders them: the triangles, then
 the quads' first halves and second halves, then the other polygons as
-fans). A binary file whose faces have several sizes, which trimesh cannot
-read ("PLY is unexpected length"), is read the same way.
+fans), except that a concave polygon whose fan would leave it is cut by
+ears (see :func:`~isoflow.mesh.readers.triangulate`). A binary file whose
+faces have several sizes, which trimesh cannot read ("PLY is unexpected
+length"), is read the same way.
 """
 
 from __future__ import annotations
@@ -172,14 +174,14 @@ def _mesh(v: np.ndarray, corners: np.ndarray, sizes: np.ndarray, nv: int) -> Mes
         return None
     v = v.astype(np.float64)
     if (sizes == sizes[0]).all():
-        return v, triangulate(corners, sizes)
+        return v, triangulate(corners, sizes, v)
     # several sizes: the triangles, the quads (two blocks of halves), the other polygons as fans
     first = np.cumsum(sizes) - sizes
     parts = []
     for which in (sizes == 3, sizes == 4, sizes > 4):
         if which.any():
             parts.append(triangulate(corners[np.repeat(first[which], sizes[which]) + _within(sizes[which])],
-                                     sizes[which]))
+                                     sizes[which], v))
     return v, np.concatenate(parts).astype(np.int64)
 
 

@@ -4,7 +4,9 @@ this module's helpers).
 
 Each reader returns exactly the vertices and faces that ``trimesh.load``
 (``process=False``, ``force="mesh"``) gives for the file, or ``None`` for
-anything it does not recognise as simple, and the caller then asks trimesh.
+anything it does not recognise as simple, and the caller then asks trimesh;
+except a concave polygon whose fan from its first corner would leave it,
+which trimesh fans and :func:`triangulate` cuts by ears.
 Saying ``None`` is always safe; guessing never is, so every reader refuses
 at the first line it has not seen before.  An OBJ face index that names no
 vertex is refused outright (:func:`obj_index_error` names its line): no
@@ -30,6 +32,8 @@ _OBJ_IGNORED = frozenset((b"#", b"vt", b"vn", b"o", b"g", b"s", b"mtllib"))
 _SPACE = np.isin(np.arange(256), list(b" \t\n\r\x0b\x0c"))
 #: the bytes of a face line's words and the spaces between them
 _FACE_BYTES = np.isin(np.arange(256), list(b"0123456789-/ \t\n"))
+#: polygons whose fans :func:`_cut_by_ears` tests at a time
+_CHUNK = 1 << 16
 
 
 def read_simple(path: Path) -> Mesh | None:
@@ -139,7 +143,9 @@ def read_obj(data: bytes) -> Mesh | None:
 
     Faces use the position indices only; a polygon is split as trimesh
     splits it (quads of a file of quads as two blocks, first triangles then
-    second; other polygons as fans); vertices no face uses are dropped.
+    second; other polygons as fans) unless its fan would leave it (a
+    concave polygon: cut by ears, :func:`triangulate`); vertices no face
+    uses are dropped.
     Negative indices are read only where every ``v`` line comes before every
     ``f`` line (there trimesh's count from the end and OBJ's count back from
     the face agree), and with ``/`` only where every index is negative.
@@ -174,12 +180,12 @@ def read_obj(data: bytes) -> Mesh | None:
     v = numbers(v_text.tobytes(), np.float64, 3 * len(v_at))
     if v is None:
         return None
+    v = v.reshape(-1, 3)
     first_line = data[starts[f_at[0]] + 2:ends[f_at[0]]]
-    faces = _obj_faces(first_line, _tails(a, starts, ends, is_f), len(f_at), len(v_at),
+    faces = _obj_faces(first_line, _tails(a, starts, ends, is_f), len(f_at), v,
                        negatives_ok=v_at[-1] < f_at[0])
     if faces is None:
         return None
-    v = v.reshape(-1, 3)
     used = np.zeros(len(v), dtype=bool)
     used[faces] = True
     inverse = np.cumsum(used) - 1  # the used vertices, in file order
@@ -285,10 +291,12 @@ def numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
     return a if len(a) == count else None
 
 
-def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, nv: int, *, negatives_ok: bool) -> np.ndarray | None:
+def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, v: np.ndarray, *,
+               negatives_ok: bool) -> np.ndarray | None:
     """Triangles (position indices from 0) of the face lines, ``text``
     their text after ``f`` joined by newlines (bytes, a new array: changed
-    here), ``first_line`` the first one's; or ``None``."""
+    here), ``first_line`` the first one's, ``v`` the positions; or ``None``."""
+    nv = len(v)
     first = first_line.split()[0]
     form = 2 if b"//" in first else 3 if first.count(b"/") == 2 else first.count(b"/")
     if form > 3:
@@ -307,7 +315,7 @@ def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, nv: int, *, ne
     negative = flat < 0
     if negative.any() and (not negatives_ok or (form != 0 and not negative.all())):
         return None  # trimesh sorts texture-split corners by raw index: negatives before the others
-    return triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes)
+    return triangulate(np.where(flat > 0, flat - 1, flat + nv), sizes, v)
 
 
 class BadFaceIndex(ValueError):
@@ -476,11 +484,43 @@ def _face_sizes(a: np.ndarray, form: int, n_lines: int) -> np.ndarray | None:
     return np.bincount(np.searchsorted(newline, start), minlength=n_lines)
 
 
-def triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
-    """Polygons (corners ``flat``, ``sizes[i]`` corners each) as trimesh
-    splits them: a file of quads only as all first halves, then all second
-    halves; otherwise each polygon in turn as a fan from its first corner
-    (a quad among others as (0, 1, 2), (2, 3, 0)).
+def triangulate(flat: np.ndarray, sizes: np.ndarray, vertices: np.ndarray | None = None) -> np.ndarray:
+    """Triangles of polygons, each polygon's in its own orientation.
+
+    Every polygon is first cut as trimesh cuts it: a file of quads only as
+    all first halves, then all second halves; otherwise each polygon in
+    turn as a fan from its first corner (a quad among others as (0, 1, 2),
+    (2, 3, 0)). Given ``vertices``, a polygon whose fan leaves it (a
+    concave polygon, an L or a U, whose first corner does not see every
+    other corner) is cut by ear clipping in the plane of its Newell normal
+    instead (:func:`_ear_cuts`), its triangles in the rows its fan had.
+
+    Parameters
+    ----------
+    flat : numpy.ndarray
+        The polygons' corners (vertex indices), one polygon after another.
+    sizes : numpy.ndarray
+        The number of corners of each polygon, each at least 3.
+    vertices : numpy.ndarray, optional
+        float64 (N, 3) positions of the vertices ``flat`` names; without
+        them every polygon is fanned.
+
+    Returns
+    -------
+    numpy.ndarray
+        The triangles (M, 3), ``sizes - 2`` of them per polygon.
+
+    Notes
+    -----
+    A polygon keeps its fan wherever every fan triangle turns the way of
+    the polygon's Newell normal (convex polygons, and concave ones whose
+    first corner sees all the others): there the fan covers the polygon
+    once. So does a polygon of no area (a spike ``1 2 3 2``: two triangles
+    that cancel in the winding number). A polygon off its plane by more
+    than 1e-6 of its size and coordinates (non-planar, past rounding), or
+    whose ear cut has a triangle turned against the polygon (self-crossing,
+    a bow tie), keeps its fan as well, as trimesh cuts it: the fan's
+    winding number is the polygon's.
 
     Examples
     --------
@@ -488,7 +528,27 @@ def triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
     [[0, 1, 2], [4, 5, 6], [2, 3, 0], [6, 7, 4]]
     >>> triangulate(np.arange(7), np.array([3, 4])).tolist()
     [[0, 1, 2], [3, 4, 5], [5, 6, 3]]
+
+    An L from a corner that does not see the far end of the L: its fan's
+    second triangle (2, 0) (1, 1) (1, 2) would lie in the notch, turned
+    against the L, so the L is cut by ears.
+
+    >>> L = np.array([[2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 0, 0]], float)
+    >>> triangulate(np.arange(6), np.array([6]))[1].tolist()
+    [0, 2, 3]
+    >>> triangulate(np.arange(6), np.array([6]), L).tolist()
+    [[2, 3, 4], [2, 4, 5], [0, 1, 2], [5, 0, 2]]
     """
+    if (sizes == 3).all():
+        return flat.reshape(-1, 3)
+    at = _fan(np.arange(len(flat)), sizes)  # where in ``flat`` each corner of each triangle is
+    if vertices is not None:
+        _cut_by_ears(at, flat, sizes, vertices)
+    return flat[at]
+
+
+def _fan(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
+    """The polygons as trimesh cuts them (see :func:`triangulate`)."""
     k = int(sizes[0])
     if (sizes == 3).all():
         return flat.reshape(-1, 3)
@@ -509,3 +569,96 @@ def triangulate(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
             j = np.arange(1, n - 1)
             out.append(np.stack((np.full(n - 2, c[0]), c[j], c[j + 1]), axis=1).reshape(-1))
     return np.concatenate(out).reshape(-1, 3)
+
+
+def _cut_by_ears(at: np.ndarray, flat: np.ndarray, sizes: np.ndarray, vertices: np.ndarray) -> None:
+    """Replace, in ``at`` (the fan of :func:`_fan`, as places in ``flat``),
+    the triangles of each planar polygon its fan leaves by its ear cut.
+
+    The test is vectorised over the polygons of each size: the fan from the
+    first corner covers a polygon once where every fan triangle's normal
+    agrees with the polygon's Newell normal (the fan normals' sum), which
+    holds for every convex polygon, so that most files never reach the cut."""
+    start = np.cumsum(sizes) - sizes
+    bad = []
+    for k in np.unique(sizes[sizes > 3]).tolist():
+        which = np.flatnonzero(sizes == k)
+        corners = flat.reshape(-1, k) if len(which) == len(sizes) else flat[start[which, None] + np.arange(k)]
+        for lo in range(0, len(which), _CHUNK):  # in chunks: a few arrays of (chunk, k) floats at a time
+            bad.append(which[lo:lo + _CHUNK][_fan_turns_back(corners[lo:lo + _CHUNK], vertices)])
+    cut = np.sort(np.concatenate(bad)) if bad else np.zeros(0, np.int64)
+    if not len(cut):
+        return
+    # the rows of each polygon's triangles, polygon by polygon, in the fan's
+    # order (a file of quads puts a quad's two halves far apart)
+    owner = np.searchsorted(start, at[:, 0], side="right") - 1
+    rows = np.flatnonzero(np.isin(owner, cut))
+    rows = rows[np.argsort(owner[rows], kind="stable")]
+    first_row = np.cumsum(sizes[cut] - 2) - (sizes[cut] - 2)
+    for k in np.unique(sizes[cut]).tolist():
+        these = np.flatnonzero(sizes[cut] == k)
+        corners = flat[start[cut[these], None] + np.arange(k)]
+        ears, ok = _ear_cuts(vertices[corners])
+        mine = rows[first_row[these[ok], None] + np.arange(k - 2)]  # (polygon, its k - 2 rows)
+        at[mine] = start[cut[these[ok]], None, None] + ears[ok]
+
+
+def _fan_turns_back(corners: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Which polygons (rows of ``corners``, vertex indices) have a fan
+    triangle turned against the polygon's Newell normal, past rounding.
+
+    The Newell normal is the sum of the fan triangles' normals (taken from
+    the first corner); a straight corner's triangle has no area, and a
+    polygon of no area (a spike) no normal: neither counts as turned. The
+    cross products are written out per coordinate: ``np.cross`` on
+    (m, k, 3) arrays is the slowest step on a file of a million quads."""
+    x, y, z = (vertices[:, d][corners] for d in range(3))
+    x, y, z = x[:, 1:] - x[:, :1], y[:, 1:] - y[:, :1], z[:, 1:] - z[:, :1]
+    nx = y[:, :-1] * z[:, 1:] - z[:, :-1] * y[:, 1:]
+    ny = z[:, :-1] * x[:, 1:] - x[:, :-1] * z[:, 1:]
+    nz = x[:, :-1] * y[:, 1:] - y[:, :-1] * x[:, 1:]
+    sx, sy, sz = nx.sum(axis=1), ny.sum(axis=1), nz.sum(axis=1)
+    along = nx * sx[:, None] + ny * sy[:, None] + nz * sz[:, None]
+    return (along < -1e-12 * (sx * sx + sy * sy + sz * sz)[:, None]).any(axis=1)
+
+
+def _ear_cuts(corner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The ear cuts of polygons of one size: corner numbers (m, k - 2, 3),
+    each triangle turned as its polygon, and which of the ``m`` polygons
+    (``corner``: positions (m, k, 3)) have one: not a polygon off its plane
+    (by more than 1e-6 of its size and coordinates: rounding), of no area,
+    or one whose cut has a triangle turned against it (self-crossing).
+
+    Each polygon is laid flat in the plane of its Newell normal, in axes
+    that see it counter-clockwise, and cut by ``manifold3d.triangulate``
+    (imported here: only a file with such a polygon pays for it), one call
+    per polygon: a call takes polygons as the outlines and holes of one."""
+    m, k = corner.shape[:2]
+    q = corner - corner[:, :1]
+    newell = np.cross(q[:, 1:-1], q[:, 2:]).sum(axis=1)
+    length = np.linalg.norm(newell, axis=1)
+    size = np.abs(q).max(axis=(1, 2))
+    normal = newell / np.where(length > 0, length, 1.0)[:, None]
+    height = np.einsum("mkj,mj->mk", q, normal)
+    ok = (length > 0) & (np.ptp(height, axis=1) <= 1e-6 * (size + np.abs(corner).max(axis=(1, 2))))
+    # axes in the plane: u toward the corner farthest from the first, w = normal x u
+    u = q[np.arange(m), np.argmax(np.einsum("mkj,mkj->mk", q, q), axis=1)]
+    u -= np.einsum("mj,mj->m", u, normal)[:, None] * normal
+    u /= np.where(ok, np.linalg.norm(u, axis=1), 1.0)[:, None]
+    w = np.cross(normal, u)
+    scale = np.where(ok, size, 1.0)[:, None]
+    xy = np.stack((np.einsum("mkj,mj->mk", q, u) / scale, np.einsum("mkj,mj->mk", q, w) / scale), axis=2)
+    from manifold3d import triangulate as cut
+
+    ears = np.zeros((m, k - 2, 3), dtype=np.int64)
+    for i in np.flatnonzero(ok).tolist():
+        e = np.asarray(cut([xy[i]]), dtype=np.int64).reshape(-1, 3)
+        if len(e) == k - 2:
+            ears[i] = e
+        else:
+            ok[i] = False
+    a, b, c = (xy[np.arange(m)[:, None], ears[:, :, j]] for j in range(3))
+    turn = (b[..., 0] - a[..., 0]) * (c[..., 1] - a[..., 1]) - (b[..., 1] - a[..., 1]) * (c[..., 0] - a[..., 0])
+    # the polygon's doubled area in the flat axes is length / size**2
+    ok &= ~(turn < -1e-12 * (length / scale[:, 0] ** 2)[:, None]).any(axis=1)
+    return ears, ok
