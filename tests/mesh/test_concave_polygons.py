@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from isoflow.mesh import readers
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.readers import triangulate
 
@@ -62,11 +63,22 @@ def prism(name: str, first: int):
     return v, [bottom, top, *sides], triangles
 
 
+#: the formats written: ``materials.obj`` is an OBJ of two materials with
+#: texture coordinates, which isoflow leaves to trimesh to read
+FORMATS = [".obj", ".off", ".ply", "materials.obj"]
+
+
 def write(path: Path, v, faces) -> Path:
     """``faces`` (polygons or triangles) as an OBJ, ASCII OFF or ASCII PLY
-    file, by the file's suffix."""
+    file, by the file's suffix; an OBJ named ``*materials.obj`` with two
+    materials and texture coordinates."""
     rows = [" ".join(repr(float(c)) for c in p) for p in np.asarray(v).tolist()]
-    if path.suffix == ".obj":
+    if path.name.endswith("materials.obj"):
+        text = "mtllib none.mtl\n" + "".join(f"v {r}\n" for r in rows) + "vt 0 0\nvt 1 0\n"
+        for n, f in enumerate(faces):
+            text += "usemtl a\n" * (n == 0) + "usemtl b\n" * (n == 2)
+            text += "f " + " ".join(f"{i + 1}/{1 + n % 2}" for i in f) + "\n"
+    elif path.suffix == ".obj":
         text = "".join(f"v {r}\n" for r in rows) + "".join("f " + " ".join(str(i + 1) for i in f) + "\n" for f in faces)
     elif path.suffix == ".off":
         text = f"OFF\n{len(v)} {len(faces)} 0\n" + "".join(f"{r}\n" for r in rows)
@@ -99,14 +111,17 @@ def test_the_hand_cut_triangles_are_the_shapes():
 
 
 @pytest.mark.parametrize("name, first", CASES)
-@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+@pytest.mark.parametrize("suffix", FORMATS)
 def test_concave_caps_are_cut_inside_the_polygon_and_turned_as_it(name, first, suffix, tmp_path):
     """Each cap's triangles face the cap's way and add up to its shoelace
     area (a fan across the notch has triangles turned the other way, and
     more area); the prism's signed volume is area times height, and trimesh
     and pymeshlab measure the hand-cut prism the same."""
     v, polygons, triangles = prism(name, first)
-    got_v, got_f = load_mesh(write(tmp_path / f"p{suffix}", v, polygons))
+    path = write(tmp_path / f"p{suffix}", v, polygons)
+    if path.suffix == ".obj":  # (which reader reads it: isoflow's, or trimesh's)
+        assert (readers.read_simple(path) is None) == (suffix == "materials.obj")
+    got_v, got_f = load_mesh(path)
     n = len(SHAPES[name][0])
     assert len(got_f) == len(triangles) == 2 * (n - 2) + 2 * n
     area = _shoelace(SHAPES[name][0])
@@ -137,23 +152,24 @@ def _perimeter(name: str) -> float:
 
 @pytest.mark.parametrize("name, first", CASES)
 def test_concave_prism_shell_is_its_triangle_twins(name, first, tmp_path):
-    """``--fill shell`` of the polygon prism as OBJ, OFF and PLY: the voxels
+    """``--fill shell`` of the polygon prism as OBJ (read by isoflow and by
+    trimesh), OFF and PLY: the voxels
     of the same prism written as triangles (a fan across the notch adds
     voxels the prism does not have)."""
     v, polygons, triangles = prism(name, first)
     want = voxels(write(tmp_path / "t.obj", v, triangles), "shell")
-    for suffix in (".obj", ".off", ".ply"):
+    for suffix in FORMATS:
         assert np.array_equal(voxels(write(tmp_path / f"p{suffix}", v, polygons), "shell"), want), suffix
 
 
 def test_concave_prism_flood_is_its_triangle_twins(tmp_path):
     v, polygons, triangles = prism("U", 4)
     want = voxels(write(tmp_path / "t.obj", v, triangles), "flood")
-    for suffix in (".obj", ".off", ".ply"):
+    for suffix in FORMATS:
         assert np.array_equal(voxels(write(tmp_path / f"p{suffix}", v, polygons), "flood"), want), suffix
 
 
-@pytest.mark.parametrize("suffix", [".obj", ".off", ".ply"])
+@pytest.mark.parametrize("suffix", FORMATS)
 def test_concave_prism_genus_is_0_without_self_intersection(suffix, tmp_path):
     """``isoflow genus``: a fan across the notch overlaps the cap's other
     triangles, and the prism was called self-intersecting."""

@@ -524,7 +524,7 @@ def trimesh_load(p: Path, force: str):
     source: Any = str(p)
     if p.suffix.lower() == ".obj":
         kwargs.update(merge_tex=True, merge_norm=True)
-        if (text := _obj_relative_resolved(p)) is not None:
+        if (text := _obj_rewritten(p)) is not None:
             # the file's own materials and textures still resolve beside it
             source = io.BytesIO(text)
             kwargs.update(file_type="obj", resolver=trimesh.resolvers.FilePathResolver(str(p)))
@@ -535,12 +535,15 @@ def trimesh_load(p: Path, force: str):
         return trimesh.load(source, force=force, **kwargs)
 
 
-def _obj_relative_resolved(p: Path) -> bytes | None:
-    """The OBJ file's text with its relative face indices written as the
-    vertices they name (:func:`isoflow.mesh.readers.relative_indices_resolved`),
-    or None where trimesh counts them right (or there are none).  A
-    relative index before the first vertex is refused naming its line."""
-    from .readers import may_name_vertex_0, obj_index_error, relative_indices_resolved
+def _obj_rewritten(p: Path) -> bytes | None:
+    """The OBJ file's text as trimesh should read it, or None where it
+    reads the file as it is: its relative face indices written as the
+    vertices they name (:func:`isoflow.mesh.readers.relative_indices_resolved`;
+    a relative index before the first vertex is refused naming its line),
+    then its concave polygons written as the triangles isoflow's readers
+    cut them into (:func:`isoflow.mesh.readers.concave_faces_cut`: trimesh
+    would fan them across their notches)."""
+    from .readers import concave_faces_cut, may_name_vertex_0, obj_index_error, relative_indices_resolved
 
     try:
         data = p.read_bytes()
@@ -551,7 +554,8 @@ def _obj_relative_resolved(p: Path) -> bytes | None:
         message = obj_index_error(p, data)
         if message is not None:
             raise IsoflowError(message)
-    return text
+    cut = concave_faces_cut(data if text is None else text)
+    return text if cut is None else cut
 
 
 def _repeats_a_corner(faces: np.ndarray) -> np.ndarray:

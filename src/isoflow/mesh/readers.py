@@ -6,7 +6,8 @@ Each reader returns exactly the vertices and faces that ``trimesh.load``
 (``process=False``, ``force="mesh"``) gives for the file, or ``None`` for
 anything it does not recognise as simple, and the caller then asks trimesh;
 except a concave polygon whose fan from its first corner would leave it,
-which trimesh fans and :func:`triangulate` cuts by ears.
+which trimesh fans and :func:`triangulate` cuts by ears (an OBJ file that
+trimesh reads is given to it with those cuts: :func:`concave_faces_cut`).
 Saying ``None`` is always safe; guessing never is, so every reader refuses
 at the first line it has not seen before.  An OBJ face index that names no
 vertex is refused outright (:func:`obj_index_error` names its line): no
@@ -439,6 +440,67 @@ def relative_indices_resolved(data: bytes) -> bytes | None:
         elif words[:1] == [b"f"] and b"-" in code:
             lines[i] = b" ".join([b"f"] + [_absolute(w, seen) for w in words[1:]]) + (
                 b" " + hash_ + comment if hash_ else b"") + (b"\r" if line.endswith(b"\r") and not hash_ else b"")
+    return b"\n".join(lines)
+
+
+def concave_faces_cut(data: bytes) -> bytes | None:
+    """An OBJ file's text with each face line whose polygon :func:`triangulate`
+    cuts by ears (a concave polygon whose fan would cross its notch) written
+    as those triangles, one ``f`` line each of the corners' words as written
+    (texture and normal indices kept); None where no face line needs it.
+
+    For the files trimesh reads (several materials, vertex colours, ...):
+    trimesh fans every polygon. Relative indices are counted from the end of
+    the file, as trimesh counts them (:func:`relative_indices_resolved`
+    first, where the two counts differ); a file this cannot read (a face
+    index that names no vertex, line continuations) is left as it is, for
+    trimesh to read or name what is wrong.
+
+    Examples
+    --------
+    >>> L = b"v 2 0 0\\nv 2 1 0\\nv 1 1 0\\nv 1 2 0\\nv 0 2 0\\nv 0 0 0\\nusemtl a\\n"
+    >>> concave_faces_cut(L + b"f 1/1 2/1 3/1 4/1 5/1 6/1\\n").split(b"\\n")[7:]
+    [b'f 3/1 4/1 5/1', b'f 3/1 5/1 6/1', b'f 1/1 2/1 3/1', b'f 6/1 1/1 3/1', b'']
+    >>> concave_faces_cut(L + b"f 6 5 4 3 2 1\\n") is None  # from (0, 0) the fan stays in the L
+    True
+    """
+    a = np.frombuffer(data, np.uint8)
+    start = np.concatenate(([0], np.flatnonzero(a == 10) + 1))
+    # a face of four corners or more, found without a Python line loop: most files have none
+    head = np.r_[a, 0, 0][np.minimum(start[:, None] + [0, 1], len(a) + 1)]
+    if b"\\" in data or not ((head[:, 0] == 102) & _SPACE[head[:, 1]] & (words_per_line(a) > 4)).any():
+        return None
+    lines = data.split(b"\n")
+    positions, polygons = [], []
+    for i, line in enumerate(lines):
+        words = line.split(b"#", 1)[0].split()
+        if words[:1] == [b"v"]:
+            positions.append(words[1:4])
+        elif words[:1] == [b"f"] and len(words) > 4:
+            polygons.append((i, words[1:]))
+    try:
+        v = np.array(positions, dtype=np.float64).reshape(-1, 3)
+        flat = np.array([int(w.split(b"/", 1)[0]) for _, words in polygons for w in words], dtype=np.int64)
+    except ValueError:
+        return None
+    if not len(flat) or (flat == 0).any() or (np.abs(flat) > len(v)).any():
+        return None
+    flat = np.where(flat > 0, flat - 1, flat + len(v))
+    sizes = np.array([len(words) for _, words in polygons], dtype=np.int64)
+    # cut by places in ``flat``: which polygon, and which of its words, each corner is
+    at = triangulate(np.arange(len(flat)), sizes, v[flat])
+    first = np.cumsum(sizes) - sizes
+    owner = np.searchsorted(first, at[:, 0], side="right") - 1
+    changed = np.unique(owner[(at != triangulate(np.arange(len(flat)), sizes)).any(axis=1)])
+    if not len(changed):
+        return None
+    order = np.argsort(owner, kind="stable")  # each polygon's triangles together, in the fan's order
+    row = np.cumsum(sizes - 2) - (sizes - 2)
+    for p in changed.tolist():
+        i, words = polygons[p]
+        end = b"\r" if lines[i].endswith(b"\r") else b""
+        cut = at[order[row[p]:row[p] + sizes[p] - 2]] - first[p]
+        lines[i] = b"\n".join(b"f " + b" ".join(words[c] for c in t) + end for t in cut.tolist())
     return b"\n".join(lines)
 
 
