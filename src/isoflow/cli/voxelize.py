@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import counted
+from ..errors import IsoflowError, counted
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar
 
@@ -39,8 +39,10 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
                    help="a label per body: per node of a scene (glTF/GLB, 3MF, DAE, ...), per connected body of "
                         "any other mesh (an STL's solids; a cavity stays with its body)")
     p.add_argument("--overlap", choices=OVERLAPS, default="later",
-                   help="a voxel inside several meshes: later (default: the later mesh's label wins) or error "
-                        "(refuse, naming the pairs and counts)")
+                   help="a voxel inside several meshes (or bodies of --split): later (default: the later mesh's "
+                        "label wins) or error (refuse, naming the pairs and counts); one mesh without --split has "
+                        "nothing to overlap, and --overlap error is refused there (--strict refuses its own "
+                        "overlapping shells)")
 
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
@@ -50,6 +52,12 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     if len(args.mesh) > 1 or args.split:
         return voxelize_labels(args)
     args.mesh = args.mesh[0]
+    if args.overlap == "error":
+        # a check asked for and silently skipped would pass a mesh whose parts overlap; "later" stays
+        # accepted, as a script that always passes it for a varying number of meshes asks for nothing
+        raise IsoflowError(f"{args.mesh}: --overlap error compares several meshes or the bodies of --split, and one "
+                           "mesh has no other to overlap: add --split to label its bodies and refuse their overlaps, "
+                           "or --strict to refuse a mesh whose own shells overlap")
     if Path(args.output).suffix.lower() == ".zarr":
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
