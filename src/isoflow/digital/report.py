@@ -56,7 +56,9 @@ class Report(Result):
         The paper's ``a^T n`` over the nine classes alone (3D and 4D).
     surfaces : list of ClosedSurface or None
         Each closed surface of the boundary mesh, largest first (3D, when
-        asked; ``[]`` in 2D).
+        asked; ``[]`` for an empty object). None, and no key in the mapping
+        or the JSON, where surfaces do not apply: in 2D the boundary is
+        closed curves, in 4D a 3-manifold (``info`` says "not applicable").
     pinched_vertices : int or None
         Vertex contacts the mesh splits although the connectivity joins them.
     doubled_edges : int or None
@@ -71,6 +73,12 @@ class Report(Result):
     >>> r = analyze(np.ones((2, 2, 2), bool))
     >>> r.voxels, r["euler_characteristic"], r.to_dict()["betti"]
     (8, 1, [1, 0, 0])
+
+    Surfaces are a 3D notion: a 2D report has none, rather than an empty list:
+
+    >>> square = analyze(np.ones((2, 2), bool))
+    >>> square.surfaces is None, "surfaces" in square, "surfaces" in square.to_dict()
+    (True, False, False)
     """
 
     voxels: int
