@@ -77,7 +77,8 @@ def analyze(
         ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the
         configurations that are not well-composed included, and so equals
         ``2^n chi`` on every object; ``a_dot_n_well_composed`` is the paper's
-        ``a^T n`` over the nine classes alone.
+        ``a^T n`` over the nine classes alone (in 4D the 45 manifold
+        classes), and ``energy`` sums ``a^2`` over the same classes.
 
     Raises
     ------
