@@ -611,7 +611,10 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     Parameters
     ----------
     labels : ndarray
-        Unsigned integers in (x, y, z) order; 0 is the background.
+        Unsigned integers in (x, y, z) order, or (x, y) for a 2D image (a
+        cell segmentation, a section's grain map: the formats that hold 2D,
+        not binvox or MagicaVoxel); 0 is the background. Not 4D:
+        :func:`read_labels` would not read it back.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
@@ -631,8 +634,9 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     Raises
     ------
     IsoflowError
-        For an existing file without ``force``, and for a format that keeps
-        fewer labels than the image has (:func:`check_label_output`).
+        For an existing file without ``force``, an array that is not 2D or
+        3D unsigned integers, a format that keeps fewer labels than the
+        image has (:func:`check_label_output`) or no 2D image.
 
     Examples
     --------
@@ -643,17 +647,28 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> back = read_labels(path)
     >>> np.array_equal(back.array, labels), back.spacing.tolist(), back.origin.tolist()
     (True, [0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
+
+    A 2D label image, placed by two numbers:
+
+    >>> cells = np.array([[1, 1, 0], [0, 2, 2]], np.uint16)
+    >>> back = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.nii.gz", pitch=(0.5, 0.25)))
+    >>> np.array_equal(back.array, cells), back.spacing.tolist()
+    (True, [0.5, 0.25])
     """
     arr = np.asarray(labels)
-    if arr.ndim != 3 or arr.dtype.kind != "u":
-        raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
+    if arr.ndim == 4:
+        # read_labels and label_table take 2D and 3D only: a file this wrote should read back
+        raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
+                           "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
+    if arr.ndim not in (2, 3) or arr.dtype.kind != "u":
+        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject.placement(3, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
-    return write_placed(LabelVolume(arr, place.pitch, place.origin), path, force)
+    return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)
