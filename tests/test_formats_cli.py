@@ -438,7 +438,7 @@ def test_writing_names_the_output_not_its_temporary_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{tmp_path / 't.tif'}: TIFF keeps no origin" in err[0] and "isoflow-tmp" not in err[0]
     fails(capsys, "voxelize", mesh, "--resolution", "300", "-o", tmp_path / "big.vox",
-          words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256",))
+          words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256", "; voxelise it coarser (--resolution 256)"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.stl", "t.tif"]  # nothing else left
     pytest.importorskip("zarr")
     isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 3, 4), bool)), tmp_path / "img.zarr")
@@ -630,3 +630,28 @@ def test_an_array_of_an_npz_archive_is_named_after_a_colon(tmp_path, capsys):
     fails(capsys, "voxelize", isoflow.data.path("torus.obj"), "--resolution", 8, "-o", f"{tmp_path / 'user.npz'}:new",
           words=("an .npz is written whole",))
     assert sorted(np.load(tmp_path / "user.npz").files) == ["image", "seg"]
+
+
+def test_magicavoxel_states_its_limit_and_each_caller_its_remedy(tmp_path):
+    """MagicaVoxel's check said "voxelise it coarser (--resolution 256)" to
+    every writer, a Python caller of write_volume too (no option there),
+    and the flow tested the same limit again itself. The format states its
+    limit alone; voxelize adds a coarser grid, one mesh or several, in the
+    shell; the flow's steps name their own remedy (tests/flow)."""
+    from isoflow.mesh.formats.magicavoxel import ModelTooLarge
+
+    with pytest.raises(ModelTooLarge) as raised:
+        isoflow.write_volume(isoflow.DigitalObject(np.ones((257, 2, 2), bool)), tmp_path / "big.vox")
+    said = "MagicaVoxel models are at most 256 voxels a side, this object is 257x2x2"
+    assert str(raised.value) == f"{tmp_path / 'big.vox'}: {said}"
+    assert not (tmp_path / "big.vox").exists()
+    a, b = tmp_path / "a.stl", tmp_path / "b.stl"
+    trimesh.creation.box((1, 1, 1)).export(a)
+    trimesh.creation.box((1, 1, 1)).apply_translation((2, 0, 0)).export(b)
+    for meshes in ([a], [a, b]):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *map(str, meshes), "--resolution", "300",
+                            "-o", str(tmp_path / "big.vox")], capture_output=True, text=True)
+        assert p.returncode == 2 and not (tmp_path / "big.vox").exists()
+        assert p.stderr.strip().splitlines()[-1].endswith(
+            "MagicaVoxel models are at most 256 voxels a side, this object is "
+            + ("300x300x300" if len(meshes) == 1 else "300x100x100") + "; voxelise it coarser (--resolution 256)"), p.stderr

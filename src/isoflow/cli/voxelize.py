@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -67,7 +69,8 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
         raise
-    out = written(write_volume(obj, args.output, force=args.force), args.output)
+    with coarser_for_magicavoxel():
+        out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
     return 0
@@ -103,10 +106,36 @@ def voxelize_labels(args: argparse.Namespace) -> int:
                             overlap=args.overlap, strict=args.strict, progress=show)
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
-    out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force), args.output)
+    with coarser_for_magicavoxel():
+        out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force),
+                      args.output)
     say_note(args, out, r.note)
     print(label_summary(out, r))
     return 0
+
+
+@contextlib.contextmanager
+def coarser_for_magicavoxel() -> Iterator[None]:
+    """MagicaVoxel's refusal of a grid past its side, with voxelize's
+    remedy: a coarser grid (the format states its limit only, as a flow
+    that grew past it needs another remedy).
+
+    Examples
+    --------
+    >>> from isoflow.mesh.formats.magicavoxel import ModelTooLarge
+    >>> try:
+    ...     with coarser_for_magicavoxel():
+    ...         raise ModelTooLarge("big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2")
+    ... except IsoflowError as exc:
+    ...     print(exc)
+    big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2; voxelise it coarser (--resolution 256)
+    """
+    from ..mesh.formats.magicavoxel import MAX_SIDE, ModelTooLarge
+
+    try:
+        yield
+    except ModelTooLarge as exc:
+        raise IsoflowError(f"{exc}; voxelise it coarser (--resolution {MAX_SIDE})") from None
 
 
 #: the labels listed by name after a label image is written; the rest are counted
