@@ -98,14 +98,44 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
     >>> read_volume(folder / "labels.npy", label=7).voxels
     8
     """
+    return as_object(_read_raw(path), str(path), label)
+
+
+def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
+    """What the format of ``path`` (``FILE:dataset`` too) reads, once the
+    suffix, the file and the dataset named are checked: the one prologue of
+    :func:`read_volume` and :func:`read_labels`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A volume file, optionally ``:dataset``.
+    mesh : str, optional
+        What to say of a mesh file in place of "not a volume file" (a
+        reader whose remedy for a mesh differs).
+
+    Returns
+    -------
+    RawVolume
+        The array in isoflow's axis order and its placement, unchecked.
+
+    Raises
+    ------
+    IsoflowError
+        A suffix of no volume format, a missing or unreadable file, a
+        dataset named where the format has none, or the format's refusal.
+    """
     file, dataset = split_dataset(path)
     fmt = format_for(file)
     if fmt is None:
+        from .load import is_mesh_path
+
+        if mesh is not None and is_mesh_path(file):
+            raise IsoflowError(f"{path}: {mesh}")
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     check_dataset_read(path, fmt, dataset)
-    raw = fmt.load().read(file, dataset)
-    return as_object(raw, str(path), label)
+    return fmt.load().read(file, dataset)
 
 
 def check_dataset_read(path, fmt, dataset: str | None) -> None:
@@ -224,18 +254,9 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     >>> image.spacing.tolist(), label_table(image)["volume"].tolist()
     ([0.5, 0.5, 2.0], [8.0, 16.0])
     """
-    file, dataset = split_dataset(path)
-    fmt = format_for(file)
-    if fmt is None:
-        from .load import is_mesh_path
-
-        if is_mesh_path(file):  # a mesh voxelises to one object; a label image of meshes is voxelize's
-            raise IsoflowError(f"{path}: a mesh, not a label image; voxelize A.stl B.obj --resolution R -o "
-                               "LABELS.nii.gz makes one of several meshes (isoflow.voxelize_meshes)")
-        raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
-    _check_readable(file, directory_ok=fmt.module == "omezarr")
-    check_dataset_read(path, fmt, dataset)
-    raw = fmt.load().read(file, dataset)
+    # a mesh voxelises to one object; a label image of meshes is voxelize's
+    raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
+                               "makes one of several meshes (isoflow.voxelize_meshes)")
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
