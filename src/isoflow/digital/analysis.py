@@ -78,7 +78,8 @@ def analyze(
         configurations that are not well-composed included, and so equals
         ``2^n chi`` on every object; ``a_dot_n_well_composed`` is the paper's
         ``a^T n`` over the nine classes alone (in 4D the 45 manifold
-        classes), and ``energy`` sums ``a^2`` over the same classes.
+        classes), and ``energy`` sums ``a^2`` over the classes of ``n``
+        alone (the nine, the three planar ones, the 45 manifold ones).
 
     Raises
     ------
