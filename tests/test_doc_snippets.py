@@ -239,3 +239,6 @@ def test_the_4d_energies_of_ndim_md_are_the_code_s(tmp_path, capsys):
     block[1:3, 1:3, 1:3, 1:3] = True
     block[1, 1, 1, 1] = block[2, 2, 2, 2] = False
     assert (surface_energy(block, 8), isoflow.analyze(block, 8).energy) == (238, 42)
+    corner = isoflow.analyze(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8)  # the inequality is E's, not the report's
+    assert "not keep it (the two cells sharing a vertex under face adjacency are two\ncomponents, and `energy` 30 < 32)" in text
+    assert (corner.betti[0], corner.energy) == (2, 30) and surface_energy(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8) >= 32
