@@ -398,3 +398,29 @@ def test_method_refuses_what_it_cannot_do():
         analyze(np.ones((2, 2, 2), bool), method="fast")
     with pytest.raises(IsoflowError, match="method='compiled' takes 2D and 3D NumPy volumes"):
         analyze(np.ones((2, 2, 2, 2), bool), method="compiled")
+
+
+def test_surfaces_do_not_apply_in_2d_and_4d(tmp_path):
+    """A 2D report printed ``"surfaces": []`` and the library's Report held
+    ``[]``, which reads as "no closed surface found": a ring has one boundary
+    curve and no surface. Surfaces are 3D only: absent from the JSON and the
+    mapping in 2D (as in 4D), and the text says they do not apply; a 3D
+    empty object keeps its ``[]``."""
+    from isoflow import analyze
+
+    ring = np.ones((5, 5), bool)
+    ring[2, 2] = False
+    np.save(tmp_path / "ring.npy", ring)
+    p = run("info", str(tmp_path / "ring.npy"), "--json")
+    assert p.returncode == 0, p.stderr
+    r = json.loads(p.stdout)
+    assert r["betti"] == [1, 1] and "surfaces" not in r
+    p = run("info", str(tmp_path / "ring.npy"))
+    assert "closed surfaces        not applicable in 2D (the boundary is closed curves)" in p.stdout
+    report = analyze(ring)
+    assert report.surfaces is None and "surfaces" not in report and report.genus == []
+    np.save(tmp_path / "h.npy", np.ones((2, 2, 2, 2), bool))
+    p = run("info", str(tmp_path / "h.npy"))
+    assert "closed surfaces        not applicable in 4D (the boundary is a 3-manifold)" in p.stdout
+    assert "surfaces" not in json.loads(run("info", str(tmp_path / "h.npy"), "--json").stdout)
+    assert analyze(np.zeros((3, 3, 3), bool)).surfaces == []

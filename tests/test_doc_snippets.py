@@ -187,3 +187,58 @@ def test_the_keys_named_for_flow_json_are_those_printed(tmp_path, capsys):
     top = set(plain) | set(guarded)
     assert top <= named, top - named
     assert named <= keys_in(plain) | keys_in(guarded), named - keys_in(plain) - keys_in(guarded)
+
+
+def _cells(*cells: tuple[int, ...]) -> np.ndarray:
+    """A 4D image of the given cells (coordinates 0 or 1, in a 2x2x2x2 box)."""
+    image = np.zeros((2, 2, 2, 2), bool)
+    for cell in cells:
+        image[cell] = True
+    return image
+
+
+#: the objects of ndim.md's eq. 6.3 table, by the text of its object column
+ENERGY_OBJECTS = {
+    "boxes": [_cells((0, 0, 0, 0)), _cells((0, 0, 0, 0), (1, 0, 0, 0))],
+    "two cells sharing a 2-face / an edge / a vertex": [
+        _cells((0, 0, 0, 0), (1, 1, 0, 0)), _cells((0, 0, 0, 0), (1, 1, 1, 0)), _cells((0, 0, 0, 0), (1, 1, 1, 1))],
+    "an L: cells `(0,0,0,0), (1,0,0,0), (0,1,0,0)` (well-composed)": [
+        _cells((0, 0, 0, 0), (1, 0, 0, 0), (0, 1, 0, 0))],
+    "two cells sharing a 2-face (two components)": [_cells((0, 0, 0, 0), (1, 1, 0, 0))],
+}
+
+
+def test_the_4d_energies_of_ndim_md_are_the_code_s(tmp_path, capsys):
+    """ndim.md's table of eq. 6.3 gave ``E = 226`` for two cells sharing a
+    corner where ``isoflow info`` prints ``energy 30``: the table's ``E`` is
+    ``ndim.surface_energy`` (every vertex), the report's sums the 45
+    manifold classes. Each row's two figures are the code's, at each
+    adjacency it names; and the report's for two cells is the 32 corners
+    less two per shared vertex (each a single cell, ``a = 1``)."""
+    from isoflow.digital.ndim import surface_energy
+
+    text = (ROOT / "docs" / "ndim.md").read_text()
+    header = "| adjacency | cells | object | Betti | `E` | `2^n (1 + g)` | `info`'s `energy` |"
+    table = text[text.index(header):].split("\n\n")[0].splitlines()[2:]
+    assert len(table) == len(ENERGY_OBJECTS)
+    for row in table:
+        adjacency, _, name, _, energy, _, reported = (c.strip() for c in row.strip("|").split("|"))
+        images = ENERGY_OBJECTS[name]
+        said = [[int(x) for x in column.split(" / ")] * (len(images) if " / " not in column else 1)
+                for column in (energy, reported)]
+        for image, e, r in zip(images, *said):
+            for conn in {"both": (8, 80), "full": (80,), "face": (8,)}[adjacency]:
+                np.save(tmp_path / "c.npy", image)
+                report = printed(capsys, ["info", str(tmp_path / "c.npy"), "--json", "--connectivity", str(conn)])
+                assert (surface_energy(image, conn), report["energy"]) == (e, r), (name, conn)
+                if image.sum() == 2 and name != "boxes":
+                    shared = 2 ** (4 - int(np.abs(np.subtract(*np.argwhere(image))).sum()))
+                    assert r == 32 - 2 * shared, name
+    assert "its energy is `E = 238` (`info`'s\n`energy` leaves out the centre vertex, not a manifold point, `a = 14`: 42)" in text
+    block = np.zeros((4, 4, 4, 4), bool)
+    block[1:3, 1:3, 1:3, 1:3] = True
+    block[1, 1, 1, 1] = block[2, 2, 2, 2] = False
+    assert (surface_energy(block, 8), isoflow.analyze(block, 8).energy) == (238, 42)
+    corner = isoflow.analyze(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8)  # the inequality is E's, not the report's
+    assert "not keep it (the two cells sharing a vertex under face adjacency are two\ncomponents, and `energy` 30 < 32)" in text
+    assert (corner.betti[0], corner.energy) == (2, 30) and surface_energy(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8) >= 32

@@ -4,6 +4,7 @@ world coordinates, writing by suffix, and bad files give one line, exit 2."""
 
 import json
 import re
+import subprocess
 import sys
 
 import numpy as np
@@ -234,6 +235,59 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
     assert info(capsys, tmp_path / "pages.tif")["shape"] == [12, 16, 5]
 
 
+def moving_ball() -> np.ndarray:
+    """A ball moving one voxel per frame along x, as stored (t, z, y, x):
+    consecutive frames overlap, so the space-time object is one contractible
+    piece, chi 1, b0 1, b3 0."""
+    t, z, y, x = np.indices((3, 6, 7, 8))
+    return (((x - 2 - t) ** 2 + (y - 3) ** 2 + (z - 2.5) ** 2) <= 4).astype(np.uint8)
+
+
+def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
+    """ndim.md says info takes time series of 3D segmentations, but an
+    OME-TIFF, an ImageJ hyperstack and an OME-Zarr image with a time axis
+    were refused ("axis 't' has 3 entries"): each is now read as (x, y, z,
+    t), the same report as the .npy of that array, in a subprocess as the
+    user runs it; the surface command still refuses 4D, and a series of 2D
+    images is still refused, saying which series are read."""
+    zarr = pytest.importorskip("zarr")
+
+    data = moving_ball()
+    tifffile.imwrite(tmp_path / "ts.ome.tif", data, ome=True,
+                     metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0})
+    tifffile.imwrite(tmp_path / "ts_imagej.tif", data[:, :, None], imagej=True, metadata={"axes": "TZCYX", "spacing": 2.0})
+    g = zarr.open_group(tmp_path / "ts.ome.zarr", mode="w", zarr_format=2)
+    g.create_array("0", data=data, chunks=(1, 3, 7, 8))
+    axes = [{"name": "t", "type": "time"}] + [{"name": a, "type": "space"} for a in "zyx"]
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [
+        {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [5.0, 2.0, 0.5, 0.5]}]}]}]
+
+    def report(name):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        return {k: v for k, v in json.loads(p.stdout).items() if k != "input"}
+
+    np.save(tmp_path / "ts.npy", np.transpose(data, (3, 2, 1, 0)))
+    report_of_npy = report("ts.npy")
+    assert report_of_npy["dimension"] == 4 and report_of_npy["shape"] == [8, 7, 6, 3]
+    assert report_of_npy["euler_characteristic"] == 1 and report_of_npy["betti"] == [1, None, None, 0]
+    assert report_of_npy["voxels"] == int(data.sum())
+    for name in ("ts.ome.tif", "ts_imagej.tif", "ts.ome.zarr"):
+        assert report(name) == report_of_npy, name
+        back = isoflow.read_volume(tmp_path / name)
+        assert np.array_equal(back.volume, np.transpose(data, (3, 2, 1, 0)).astype(bool))
+        expected = [0.5, 0.5, 2.0, 1.0] if name != "ts_imagej.tif" else [1.0, 1.0, 2.0, 1.0]
+        assert back.spacing.tolist() == expected, name  # time: step 1, as a 4D NIfTI's
+    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(tmp_path / "ts.ome.tif"), "-o",
+                        str(tmp_path / "s.ply")], capture_output=True, text=True)
+    assert p.returncode == 2 and "surface needs a 3D object, this one is 4D" in p.stderr
+    tifffile.imwrite(tmp_path / "tyx.ome.tif", data[:, 2], ome=True, metadata={"axes": "TYX"})
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "tyx.ome.tif")],
+                       capture_output=True, text=True)
+    assert p.returncode == 2 and "save one time point (a time series is read as 4D only of 3D volumes)" in p.stderr
+
+
 def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
         tif.write(np.ones((3, 4, 5), np.uint8), photometric="minisblack")
@@ -384,7 +438,7 @@ def test_writing_names_the_output_not_its_temporary_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"{tmp_path / 't.tif'}: TIFF keeps no origin" in err[0] and "isoflow-tmp" not in err[0]
     fails(capsys, "voxelize", mesh, "--resolution", "300", "-o", tmp_path / "big.vox",
-          words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256",))
+          words=(f"{tmp_path / 'big.vox'}: MagicaVoxel models are at most 256", "; voxelise it coarser (--resolution 256)"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["t.stl", "t.tif"]  # nothing else left
     pytest.importorskip("zarr")
     isoflow.write_volume(isoflow.DigitalObject(np.ones((2, 3, 4), bool)), tmp_path / "img.zarr")
@@ -576,3 +630,28 @@ def test_an_array_of_an_npz_archive_is_named_after_a_colon(tmp_path, capsys):
     fails(capsys, "voxelize", isoflow.data.path("torus.obj"), "--resolution", 8, "-o", f"{tmp_path / 'user.npz'}:new",
           words=("an .npz is written whole",))
     assert sorted(np.load(tmp_path / "user.npz").files) == ["image", "seg"]
+
+
+def test_magicavoxel_states_its_limit_and_each_caller_its_remedy(tmp_path):
+    """MagicaVoxel's check said "voxelise it coarser (--resolution 256)" to
+    every writer, a Python caller of write_volume too (no option there),
+    and the flow tested the same limit again itself. The format states its
+    limit alone; voxelize adds a coarser grid, one mesh or several, in the
+    shell; the flow's steps name their own remedy (tests/flow)."""
+    from isoflow.mesh.formats.magicavoxel import ModelTooLarge
+
+    with pytest.raises(ModelTooLarge) as raised:
+        isoflow.write_volume(isoflow.DigitalObject(np.ones((257, 2, 2), bool)), tmp_path / "big.vox")
+    said = "MagicaVoxel models are at most 256 voxels a side, this object is 257x2x2"
+    assert str(raised.value) == f"{tmp_path / 'big.vox'}: {said}"
+    assert not (tmp_path / "big.vox").exists()
+    a, b = tmp_path / "a.stl", tmp_path / "b.stl"
+    trimesh.creation.box((1, 1, 1)).export(a)
+    trimesh.creation.box((1, 1, 1)).apply_translation((2, 0, 0)).export(b)
+    for meshes in ([a], [a, b]):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *map(str, meshes), "--resolution", "300",
+                            "-o", str(tmp_path / "big.vox")], capture_output=True, text=True)
+        assert p.returncode == 2 and not (tmp_path / "big.vox").exists()
+        assert p.stderr.strip().splitlines()[-1].endswith(
+            "MagicaVoxel models are at most 256 voxels a side, this object is "
+            + ("300x300x300" if len(meshes) == 1 else "300x100x100") + "; voxelise it coarser (--resolution 256)"), p.stderr

@@ -4,6 +4,8 @@ one closed surface per label read back by trimesh and pymeshlab."""
 
 import csv
 import json
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -539,3 +541,42 @@ def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):
     line = fails(capsys, "info", Path(__file__).resolve().parents[1] / "meshes" / "torus.obj", "--labels",
                  words=("torus.obj: a mesh, not a label image", "voxelize A.stl B.obj"))
     assert "volumes end in" not in line
+
+
+def test_write_labels_writes_a_2d_label_image_that_info_labels_reads(tmp_path):
+    """write_labels took 3D only ("a label image is a 3D array"), though
+    read_labels, label_table and ``info --labels`` take a 2D image (a cell
+    segmentation): a 2D image is written in every format that holds 2D and
+    read back with its pixel size and origin, and ``info --labels`` in the
+    shell gives the cells' areas and perimeters known by hand. 4D stays
+    refused (read_labels reads no 4D back), saying so."""
+    from isoflow import read_labels, write_labels
+    from isoflow.errors import IsoflowError
+
+    cells = np.zeros((6, 5), np.uint16)
+    cells[0:2, 0:3] = 1  # a 2x3 block
+    cells[3:6, 1:4] = 300  # a 3x3 ring
+    cells[4, 2] = 0
+    out = tmp_path / "cells.nii.gz"
+    code = ("import sys, numpy as np, isoflow; cells = np.load(sys.argv[1]); "
+            "isoflow.write_labels(cells, sys.argv[2], pitch=(0.5, 0.25), origin=(1, 2))")
+    np.save(tmp_path / "cells.npy", cells)
+    p = subprocess.run([sys.executable, "-c", code, str(tmp_path / "cells.npy"), str(out)], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(out), "--labels", "--json"],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    table = json.loads(p.stdout)
+    assert table["pitch"] == [0.5, 0.25] and table["origin"] == [1.0, 2.0]
+    block, ring = table["labels"]
+    assert (block["label"], block["voxels"], block["area"], block["perimeter"]) == (1, 6, 6 * 0.125, 2 * (2 * 0.5 + 3 * 0.25))
+    assert [block[f"bbox-{i}"] for i in range(4)] == [1.0, 2.0, 1.0 + 2 * 0.5, 2.0 + 3 * 0.25]
+    assert (ring["label"], ring["voxels"], ring["b0"], ring["b1"]) == (300, 8, 1, 1)
+    for suffix in (".npz", ".tif", ".nii", ".nrrd", ".h5", ".zarr"):
+        back = read_labels(write_labels(cells, tmp_path / f"c{suffix}", pitch=(0.5, 0.25)))
+        assert np.array_equal(back.array, cells) and back.spacing.tolist() == [0.5, 0.25], suffix
+    with pytest.raises(IsoflowError, match=r"holds 3D voxels, this object is 2D"):
+        write_labels((cells == 1).astype(np.uint8), tmp_path / "c.binvox")
+    with pytest.raises(IsoflowError, match=r"written in 2D or 3D, as read_labels reads it back; this one is 4D"):
+        write_labels(np.zeros((2, 2, 2, 2), np.uint8), tmp_path / "c4.npz")
+    assert not (tmp_path / "c4.npz").exists()

@@ -227,3 +227,30 @@ def test_the_command_in_a_subprocess(tmp_path, overlapping):
 def _run(capsys, *args):
     assert main([*map(str, args)]) == 0, capsys.readouterr().err
     return capsys.readouterr().out
+
+
+def test_overlap_error_on_one_mesh_is_refused_and_with_split_compares_its_bodies(tmp_path):
+    """``--overlap error`` on one mesh was silently ignored: a mesh of two
+    overlapping balls was written as their union, the check asked for never
+    made. It is refused (naming --split and --strict) before the mesh is
+    read; with --split it compares the mesh's bodies; --overlap later, the
+    default, stays accepted with one mesh."""
+    a, b = trimesh.creation.icosphere(3, 1.0), trimesh.creation.icosphere(3, 0.8)
+    b.apply_translation((1.1, 0.3, -0.2))
+    both = tmp_path / "two.obj"
+    trimesh.util.concatenate([a, b]).export(both)
+    out = tmp_path / "o.npz"
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(both), "--resolution", "20",
+                               "-o", str(out), *args], capture_output=True, text=True)
+
+    p = run("--overlap", "error")
+    assert p.returncode == 2 and not out.exists(), p.stderr
+    line = p.stderr.strip().splitlines()[-1]
+    assert "--overlap error compares several meshes" in line and "--split" in line and "--strict" in line
+    p = run("--overlap", "error", "--split")
+    assert p.returncode == 2 and not out.exists()
+    assert "the meshes overlap" in p.stderr and "(labels 1 and 2: " in p.stderr
+    p = run("--overlap", "later")
+    assert p.returncode == 0 and out.exists(), p.stderr

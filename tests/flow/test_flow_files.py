@@ -242,14 +242,14 @@ def test_a_state_grown_past_magicavoxel_names_the_step(tmp_path, monkeypatch):
     assert rc == 2 and "Traceback" not in err
     errors = [line for line in err.strip().splitlines() if not line.startswith("isoflow flow: warning:")]
     assert errors == [
-        f"isoflow flow: error: {out / 'step_002.vox'}: step 2's state is 9x10x9 voxels, past MagicaVoxel's "
-        "9 a side; write the steps in another --volumes format (.npz or .zarr holds any size); "
+        f"isoflow flow: error: {out / 'step_002.vox'}: MagicaVoxel models are at most 9 voxels a side, this object "
+        "is 9x10x9 (step 2's state); write the steps in another --volumes format (.npz or .zarr holds any size); "
         "the previous run's files in the directory are unchanged"]
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     # too large at step 0: refused before the flow, naming step 0
     monkeypatch.setattr(magicavoxel, "MAX_SIDE", 7)
     rc, stdout, err = run(*args, "--force", "--volumes", ".vox")
     assert rc == 2 and err.strip().splitlines() == [
-        f"isoflow flow: error: {out / 'step_000.vox'}: step 0's state is 8x8x8 voxels, past MagicaVoxel's "
-        "7 a side; write the steps in another --volumes format (.npz or .zarr holds any size)"]
+        f"isoflow flow: error: {out / 'step_000.vox'}: MagicaVoxel models are at most 7 voxels a side, this object "
+        "is 8x8x8 (step 0's state); write the steps in another --volumes format (.npz or .zarr holds any size)"]
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before

@@ -133,7 +133,7 @@ def flow_writer(args: argparse.Namespace, obj):
 
     last = args.steps if args.steps is not None else default_max_steps(obj)
     if args.volumes is not None:  # ("" too: refused, not ignored)
-        from ..mesh.volumes import check_volume_holds, check_volume_suffix
+        from ..mesh.volumes import check_volume_suffix
 
         # before the output directory is made: the suffix, and what its
         # format cannot hold of the states (their dimension and pitch are the object's)
@@ -141,7 +141,6 @@ def flow_writer(args: argparse.Namespace, obj):
         if args.out:
             first = Path(args.out) / f"step_{0:0{step_width(last)}d}{args.volumes}"
             check_step_volume(first, 0, obj)
-            check_volume_holds(first, obj)
     if not args.out:
         return None
     conn = flow_connectivity(obj.ndim, args.connectivity)

@@ -189,8 +189,9 @@ def format_surfaces(r: Report) -> list[str]:
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
         if len(r["surfaces"]) > 10:
             lines.append(f"    ... {len(r['surfaces']) - 10} more")
-    if r.dimension == 4:  # the boundary is a 3-manifold, not a surface
-        lines.append(f"  closed surfaces        not computed in {r['dimension']}D")
+    if r.dimension != 3:  # said outright: no line at all would read as "no surfaces found"
+        boundary = "closed curves" if r.dimension == 2 else "a 3-manifold"
+        lines.append(f"  closed surfaces        not applicable in {r['dimension']}D (the boundary is {boundary})")
     if r.get("pinched_vertices"):
         lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
     return lines

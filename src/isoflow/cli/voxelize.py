@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import counted
+from ..errors import IsoflowError, counted
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar
 
@@ -39,8 +41,10 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
                    help="a label per body: per node of a scene (glTF/GLB, 3MF, DAE, ...), per connected body of "
                         "any other mesh (an STL's solids; a cavity stays with its body)")
     p.add_argument("--overlap", choices=OVERLAPS, default="later",
-                   help="a voxel inside several meshes: later (default: the later mesh's label wins) or error "
-                        "(refuse, naming the pairs and counts)")
+                   help="a voxel inside several meshes (or bodies of --split): later (default: the later mesh's "
+                        "label wins) or error (refuse, naming the pairs and counts); one mesh without --split has "
+                        "nothing to overlap, and --overlap error is refused there (--strict refuses its own "
+                        "overlapping shells)")
 
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
@@ -50,6 +54,12 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     if len(args.mesh) > 1 or args.split:
         return voxelize_labels(args)
     args.mesh = args.mesh[0]
+    if args.overlap == "error":
+        # a check asked for and silently skipped would pass a mesh whose parts overlap; "later" stays
+        # accepted, as a script that always passes it for a varying number of meshes asks for nothing
+        raise IsoflowError(f"{args.mesh}: --overlap error compares several meshes or the bodies of --split, and one "
+                           "mesh has no other to overlap: add --split to label its bodies and refuse their overlaps, "
+                           "or --strict to refuse a mesh whose own shells overlap")
     if Path(args.output).suffix.lower() == ".zarr":
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
@@ -59,7 +69,8 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
         raise
-    out = written(write_volume(obj, args.output, force=args.force), args.output)
+    with coarser_for_magicavoxel():
+        out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
     return 0
@@ -95,10 +106,36 @@ def voxelize_labels(args: argparse.Namespace) -> int:
                             overlap=args.overlap, strict=args.strict, progress=show)
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
-    out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force), args.output)
+    with coarser_for_magicavoxel():
+        out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force),
+                      args.output)
     say_note(args, out, r.note)
     print(label_summary(out, r))
     return 0
+
+
+@contextlib.contextmanager
+def coarser_for_magicavoxel() -> Iterator[None]:
+    """MagicaVoxel's refusal of a grid past its side, with voxelize's
+    remedy: a coarser grid (the format states its limit only, as a flow
+    that grew past it needs another remedy).
+
+    Examples
+    --------
+    >>> from isoflow.mesh.formats.magicavoxel import ModelTooLarge
+    >>> try:
+    ...     with coarser_for_magicavoxel():
+    ...         raise ModelTooLarge("big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2")
+    ... except IsoflowError as exc:
+    ...     print(exc)
+    big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2; voxelise it coarser (--resolution 256)
+    """
+    from ..mesh.formats.magicavoxel import MAX_SIDE, ModelTooLarge
+
+    try:
+        yield
+    except ModelTooLarge as exc:
+        raise IsoflowError(f"{exc}; voxelise it coarser (--resolution {MAX_SIDE})") from None
 
 
 #: the labels listed by name after a label image is written; the rest are counted

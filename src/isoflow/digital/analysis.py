@@ -77,7 +77,9 @@ def analyze(
         ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the
         configurations that are not well-composed included, and so equals
         ``2^n chi`` on every object; ``a_dot_n_well_composed`` is the paper's
-        ``a^T n`` over the nine classes alone.
+        ``a^T n`` over the nine classes alone (in 4D the 45 manifold
+        classes), and ``energy`` sums ``a^2`` over the classes of ``n``
+        alone (the nine, the three planar ones, the 45 manifold ones).
 
     Raises
     ------
@@ -166,9 +168,10 @@ def report_from_histogram(
 
     Split out of :func:`analyze` so that the out-of-core pass
     (:mod:`isoflow.digital.outofcore`), which never holds the volume, builds the very
-    same dict from its block-wise histogram and component counts. In 2D the
-    (empty) ``surfaces`` list is part of the report; in 3D :func:`analyze`
-    appends the surfaces when asked.
+    same dict from its block-wise histogram and component counts. In 3D
+    :func:`analyze` appends the surfaces when asked; in 2D and 4D there are
+    none to count (the boundary is curves, a 3-manifold), so the report has
+    no ``surfaces`` key.
     """
     hist = np.asarray(hist)
     chi = euler_from_histogram(hist, ndim, conn)
@@ -206,7 +209,6 @@ def report_from_histogram(
             non_well_composed=int(hist[pcls == NOT_WELL_COMPOSED].sum()),
             a_dot_n=int(np.dot(hist, euler_lut(2, conn))),
             energy=int(n[0] + n[2]),
-            surfaces=[],
         )
     return out
 
@@ -235,5 +237,4 @@ def _report_4d(hist: np.ndarray, conn: int) -> dict:
         "a_dot_n": int(np.dot(hist, a)),
         "a_dot_n_well_composed": int(np.dot(hist[manifold & boundary], a[manifold & boundary])),
         "energy": int(np.dot(hist[manifold & boundary], a[manifold & boundary] ** 2)),
-        "surfaces": None,
     }

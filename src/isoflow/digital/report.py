@@ -45,18 +45,29 @@ class Report(Result):
         The class histogram of eq. 4.9: nine counts ``n_-4 .. n_4`` in 3D;
         convex, flat, concave in 2D; the 45 manifold classes in 4D.
     classes : dict
-        ``n`` by class label.
+        ``n`` by class label (in 4D by the class's least configuration, the
+        classes that occur).
     non_well_composed : int
-        Boundary vertices whose configuration is not well-composed.
+        Boundary vertices outside the classes of ``n`` (in 4D, outside the
+        45 manifold classes: also the face-connected configurations where
+        the boundary is not a 3-manifold).
     a_dot_n : int
         ``sum_v a(v)`` over every vertex, equal to ``2^n chi``.
     energy : int
-        ``E = k^T n`` (eq. 5.22).
+        ``E = k^T n`` (eq. 5.22), ``k = a^2``, over the classes of ``n``
+        alone: the ``non_well_composed`` vertices are left out, so in 4D
+        this is less than :func:`isoflow.digital.ndim.surface_energy`, the
+        sum over every vertex, wherever the boundary is not a manifold (two
+        cells sharing one corner: 30, the other corners, against 226 at
+        80-connectivity).
     a_dot_n_well_composed : int or None
-        The paper's ``a^T n`` over the nine classes alone (3D and 4D).
+        The paper's ``a^T n`` over the classes of ``n`` alone: the nine in
+        3D, the 45 manifold classes in 4D (None in 2D).
     surfaces : list of ClosedSurface or None
         Each closed surface of the boundary mesh, largest first (3D, when
-        asked; ``[]`` in 2D).
+        asked; ``[]`` for an empty object). None, and no key in the mapping
+        or the JSON, where surfaces do not apply: in 2D the boundary is
+        closed curves, in 4D a 3-manifold (``info`` says "not applicable").
     pinched_vertices : int or None
         Vertex contacts the mesh splits although the connectivity joins them.
     doubled_edges : int or None
@@ -71,6 +82,21 @@ class Report(Result):
     >>> r = analyze(np.ones((2, 2, 2), bool))
     >>> r.voxels, r["euler_characteristic"], r.to_dict()["betti"]
     (8, 1, [1, 0, 0])
+
+    Surfaces are a 3D notion: a 2D report has none, rather than an empty list:
+
+    >>> square = analyze(np.ones((2, 2), bool))
+    >>> square.surfaces is None, "surfaces" in square, "surfaces" in square.to_dict()
+    (True, False, False)
+
+    In 4D two cells sharing one corner: 30 corners of one cell, each
+    ``a = 1``, and the shared corner, not a manifold point, left out:
+
+    >>> cells = np.zeros((2, 2, 2, 2), bool)
+    >>> cells[0, 0, 0, 0] = cells[1, 1, 1, 1] = True
+    >>> r = analyze(cells, 80)
+    >>> len(r.n), r.non_well_composed, r.energy, r.a_dot_n_well_composed, r.a_dot_n
+    (45, 1, 30, 30, 16)
     """
 
     voxels: int

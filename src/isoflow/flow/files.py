@@ -73,20 +73,36 @@ def step_width(last_step: int) -> int:
 
 
 def check_step_volume(path, step: int, state: DigitalObject) -> None:
-    """Refuse, naming the step, a state that the format of ``path`` cannot
-    hold for its size: MagicaVoxel's models are at most
-    :data:`~isoflow.mesh.formats.magicavoxel.MAX_SIDE` voxels a side, and a
-    flow's states can grow past their input by a few voxels (the format's
-    own message, a coarser voxelisation, does not fit a flow)."""
-    from ..mesh.formats import magicavoxel
+    """Refuse what the format of ``path`` cannot hold of the state of
+    ``step`` (:func:`~isoflow.mesh.volumes.check_volume_holds`), and where
+    that is its size, name the step and the flow's remedy: a flow's states
+    can grow past their input by a few voxels, past MagicaVoxel's
+    :data:`~isoflow.mesh.formats.magicavoxel.MAX_SIDE` a side at a later
+    step, and no coarser grid helps a run under way.
 
-    if not str(path).lower().endswith(".vox"):
-        return
-    shape = state.volume.shape
-    if max(shape, default=0) > magicavoxel.MAX_SIDE:
-        raise IsoflowError(f"{path}: step {step}'s state is {'x'.join(map(str, shape))} voxels, past MagicaVoxel's "
-                           f"{magicavoxel.MAX_SIDE} a side; write the steps in another --volumes format "
-                           "(.npz or .zarr holds any size)")
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The step's volume file.
+    step : int
+        The step whose state it holds.
+    state : DigitalObject
+        That state.
+
+    Raises
+    ------
+    IsoflowError
+        One line, naming the file (and the step where the state is too
+        large).
+    """
+    from ..mesh.formats.magicavoxel import ModelTooLarge
+    from ..mesh.volumes import check_volume_holds
+
+    try:
+        check_volume_holds(path, state)
+    except ModelTooLarge as exc:
+        raise IsoflowError(f"{exc} (step {step}'s state); write the steps in another --volumes format "
+                           "(.npz or .zarr holds any size)") from None
 
 
 def replaced_by_run(directory, path) -> bool:

@@ -98,14 +98,44 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
     >>> read_volume(folder / "labels.npy", label=7).voxels
     8
     """
+    return as_object(_read_raw(path), str(path), label)
+
+
+def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
+    """What the format of ``path`` (``FILE:dataset`` too) reads, once the
+    suffix, the file and the dataset named are checked: the one prologue of
+    :func:`read_volume` and :func:`read_labels`.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A volume file, optionally ``:dataset``.
+    mesh : str, optional
+        What to say of a mesh file in place of "not a volume file" (a
+        reader whose remedy for a mesh differs).
+
+    Returns
+    -------
+    RawVolume
+        The array in isoflow's axis order and its placement, unchecked.
+
+    Raises
+    ------
+    IsoflowError
+        A suffix of no volume format, a missing or unreadable file, a
+        dataset named where the format has none, or the format's refusal.
+    """
     file, dataset = split_dataset(path)
     fmt = format_for(file)
     if fmt is None:
+        from .load import is_mesh_path
+
+        if mesh is not None and is_mesh_path(file):
+            raise IsoflowError(f"{path}: {mesh}")
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     check_dataset_read(path, fmt, dataset)
-    raw = fmt.load().read(file, dataset)
-    return as_object(raw, str(path), label)
+    return fmt.load().read(file, dataset)
 
 
 def check_dataset_read(path, fmt, dataset: str | None) -> None:
@@ -224,18 +254,9 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     >>> image.spacing.tolist(), label_table(image)["volume"].tolist()
     ([0.5, 0.5, 2.0], [8.0, 16.0])
     """
-    file, dataset = split_dataset(path)
-    fmt = format_for(file)
-    if fmt is None:
-        from .load import is_mesh_path
-
-        if is_mesh_path(file):  # a mesh voxelises to one object; a label image of meshes is voxelize's
-            raise IsoflowError(f"{path}: a mesh, not a label image; voxelize A.stl B.obj --resolution R -o "
-                               "LABELS.nii.gz makes one of several meshes (isoflow.voxelize_meshes)")
-        raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
-    _check_readable(file, directory_ok=fmt.module == "omezarr")
-    check_dataset_read(path, fmt, dataset)
-    raw = fmt.load().read(file, dataset)
+    # a mesh voxelises to one object; a label image of meshes is voxelize's
+    raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
+                               "makes one of several meshes (isoflow.voxelize_meshes)")
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
@@ -611,7 +632,10 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     Parameters
     ----------
     labels : ndarray
-        Unsigned integers in (x, y, z) order; 0 is the background.
+        Unsigned integers in (x, y, z) order, or (x, y) for a 2D image (a
+        cell segmentation, a section's grain map: the formats that hold 2D,
+        not binvox or MagicaVoxel); 0 is the background. Not 4D:
+        :func:`read_labels` would not read it back.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
@@ -631,8 +655,9 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     Raises
     ------
     IsoflowError
-        For an existing file without ``force``, and for a format that keeps
-        fewer labels than the image has (:func:`check_label_output`).
+        For an existing file without ``force``, an array that is not 2D or
+        3D unsigned integers, a format that keeps fewer labels than the
+        image has (:func:`check_label_output`) or no 2D image.
 
     Examples
     --------
@@ -643,17 +668,28 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> back = read_labels(path)
     >>> np.array_equal(back.array, labels), back.spacing.tolist(), back.origin.tolist()
     (True, [0.5, 0.5, 0.5], [1.0, 2.0, 3.0])
+
+    A 2D label image, placed by two numbers:
+
+    >>> cells = np.array([[1, 1, 0], [0, 2, 2]], np.uint16)
+    >>> back = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.nii.gz", pitch=(0.5, 0.25)))
+    >>> np.array_equal(back.array, cells), back.spacing.tolist()
+    (True, [0.5, 0.25])
     """
     arr = np.asarray(labels)
-    if arr.ndim != 3 or arr.dtype.kind != "u":
-        raise IsoflowError(f"{path}: a label image is a 3D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
+    if arr.ndim == 4:
+        # read_labels and label_table take 2D and 3D only: a file this wrote should read back
+        raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
+                           "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
+    if arr.ndim not in (2, 3) or arr.dtype.kind != "u":
+        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject.placement(3, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
-    return write_placed(LabelVolume(arr, place.pitch, place.origin), path, force)
+    return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)

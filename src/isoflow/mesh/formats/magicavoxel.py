@@ -30,6 +30,23 @@ VERSION = 150
 _LEAST = {b"SIZE": 12, b"XYZI": 4}
 
 
+class ModelTooLarge(IsoflowError):
+    """An object past MagicaVoxel's :data:`MAX_SIDE` voxels a side. Its
+    message states the format's limit only: what to do differs by caller
+    (``voxelize`` a coarser grid, ``flow`` its steps in another format), so
+    each caller that has a remedy adds it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> try:
+    ...     check(Path("big.vox"), DigitalObject(np.zeros((300, 2, 2), bool)))
+    ... except ModelTooLarge as exc:
+    ...     print(exc)
+    big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2
+    """
+
+
 def _chunks(data: bytes, start: int, end: int, where: str):
     """(id, content bytes, children start, children end) of the chunks in data[start:end]."""
     pos = start
@@ -86,8 +103,8 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: MagicaVoxel holds 3D models, this object is {obj.ndim}D")
     if max(obj.volume.shape, default=0) > MAX_SIDE:
-        raise IsoflowError(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
-                           f"{'x'.join(map(str, obj.volume.shape))}; voxelise it coarser (--resolution {MAX_SIDE})")
+        raise ModelTooLarge(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
+                            f"{'x'.join(map(str, obj.volume.shape))}")
     spacing, corner = placement(obj)
     if (spacing != 1).any() or corner.any():
         note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "

@@ -4,8 +4,10 @@ An OME-Zarr image is a zarr group whose ``multiscales`` metadata lists its
 resolution levels; ``IMAGE.zarr`` reads the first (full) level and
 ``IMAGE.zarr:1`` the level whose path is ``1`` (or the level of that index).
 Axes are matched by name: x, y, z go to isoflow's axes 0, 1, 2, whatever
-order the file stores them in (NGFF stores z, y, x); a time or channel axis
-must have length 1. The level's ``coordinateTransformations`` (scale, then
+order the file stores them in (NGFF stores z, y, x); a channel axis must
+have length 1, and a time axis too unless x, y and z are all there: a time
+series of 3D volumes is read as (x, y, z, t), voxel size 1 along t, the 4D
+volume ``info`` analyses (in memory, not block by block). The level's ``coordinateTransformations`` (scale, then
 translation, then those of the whole image) place voxel *centres*, as napari
 and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
 corner is the translation less half a voxel. A zarr store without
@@ -110,20 +112,23 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         return RawVolume(data)
     names = axis_names(multiscale, data.ndim, where)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
-    xyz, _ = spatial_axes(names, data.shape, where)
-    pitch = scale[xyz]
-    return RawVolume(to_xyz(data, names, where), pitch, shift[xyz] - pitch / 2)
+    xyz, _ = spatial_axes(names, data.shape, where, time=True)
+    pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
+    if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
+        pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
+    return RawVolume(to_xyz(data, names, where), pitch, origin)
 
 
 def stored_ndim(path) -> int:
     """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
-    its x, y and z axes in an OME-Zarr image, every axis of a plain array."""
+    its x, y and z axes in an OME-Zarr image (and a time axis of several
+    entries beside them: 4), every axis of a plain array."""
     import_library("zarr", "OME-Zarr")
     file, level = split_dataset(path)
     array, multiscale, _ = open_zarr_node(file, level)
     if multiscale is None:
         return array.ndim
-    return len(spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path))[0])
+    return len(spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path), time=True)[0])
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,

@@ -269,10 +269,41 @@ def note(message: str) -> None:
     warnings.warn(message, IsoflowWarning, stacklevel=3)
 
 
-def spatial_axes(names, shape, where: str) -> tuple[list[int], list[int]]:
+def spatial_axes(names, shape, where: str, time: bool = False) -> tuple[list[int], list[int]]:
     """Given the format's axis names (letters), the indices of x, y and z
     (those present, in that order) and of the other axes, which must have
-    length 1 (a time point or channel among several is refused)."""
+    length 1 (a time point or channel among several is refused).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The stored axes' names, one letter each (``"tczyx"``).
+    shape : sequence of int
+        The stored array's shape.
+    where : str
+        The file, as an error names it.
+    time : bool
+        Keep a time axis ``t`` of several entries beside x, y and z as a
+        fourth axis, after z: a time series of 3D volumes is the 4D volume
+        ``info`` analyses, as a 4D NIfTI is (a series of 2D images is still
+        refused: read as 3D, its time would pass for z).
+
+    Returns
+    -------
+    tuple of list of int
+        The indices of x, y, z (and t) in that order, and of the others.
+
+    Raises
+    ------
+    IsoflowError
+        Axes that name x, y or z twice, hold fewer than two of them, or a
+        channel or time axis of several entries that is not kept.
+
+    Examples
+    --------
+    >>> spatial_axes("tczyx", (3, 1, 4, 5, 6), "series.zarr", time=True)
+    ([4, 3, 2, 0], [1])
+    """
     names = [n.lower() for n in names]
     spatial = [n for n in names if n in ("x", "y", "z")]
     if len(set(spatial)) != len(spatial):
@@ -281,16 +312,27 @@ def spatial_axes(names, shape, where: str) -> tuple[list[int], list[int]]:
     if len(xyz) < 2:
         raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
     other = [i for i in range(len(names)) if i not in xyz]
+    series = [i for i in other if names[i] == "t" and shape[i] > 1]
+    if time and len(xyz) == 3 and len(series) == 1:
+        xyz, other = xyz + series, [i for i in other if i not in series]
     for i in other:
         if shape[i] != 1:
+            if names[i] != "t":
+                remedy = "save one channel"
+            elif len(xyz) == 3:  # a series of 3D volumes: refused only where the reader wants one volume
+                remedy = "save one time point (only isoflow info's report takes a time series of 3D volumes, as 4D)"
+            else:
+                remedy = "save one time point (a time series is read as 4D only of 3D volumes)"
             raise IsoflowError(
                 f"{where}: axis '{names[i]}' has {shape[i]} entries (axes {''.join(names)}, shape "
-                f"{tuple(shape)}); isoflow reads one volume: save one time point or channel"
+                f"{tuple(shape)}); isoflow reads one volume: {remedy}"
             )
     return xyz, other
 
 
 def to_xyz(array: np.ndarray, names, where: str) -> np.ndarray:
-    """``array`` with axes named ``names`` (e.g. 'tczyx') as isoflow's (x, y, z)."""
-    xyz, other = spatial_axes(names, array.shape, where)
+    """``array`` with axes named ``names`` (e.g. 'tczyx') as isoflow's (x, y,
+    z), or (x, y, z, t) for a time series of 3D volumes (see
+    :func:`spatial_axes`)."""
+    xyz, other = spatial_axes(names, array.shape, where, time=True)
     return np.transpose(array, xyz + other).reshape([array.shape[i] for i in xyz])

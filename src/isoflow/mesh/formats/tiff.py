@@ -5,9 +5,12 @@ turned into isoflow's (x, y, z): column ``i``, row ``j``, page ``k`` is voxel
 ``(i, j, k)``; a single page is the 2D image (x, y), or, with ImageJ's z
 ``spacing`` (which isoflow writes for every 3D volume), a stack of one
 slice. Axes of length 1 are kept (a volume one voxel wide). A stack without
-ImageJ's axis names (tifffile's 'Q' or 'I' axis) is taken as z; other axes
-(time, channels, RGB samples) must have length 1: a time series is not a
-z-stack, however alike their pages look. A file of several image series
+ImageJ's axis names (tifffile's 'Q' or 'I' axis) is taken as z; a time
+axis of several entries beside z (an OME-TIFF's or an ImageJ hyperstack's
+``T``) is read as a fourth axis, (x, y, z, t) with voxel size 1 along t, the
+4D volume ``info`` analyses; other axes (channels, RGB samples, the time of
+a series of 2D images) must have length 1: a time series is not a z-stack,
+however alike their pages look. A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
@@ -72,9 +75,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     names = ["x" if a == "X" else "y" if a == "Y" else "z" if a == "Z" else a for a in axes]
     vol = to_xyz(data, names, where)
     pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
-    if vol.ndim == 3:
+    if vol.ndim >= 3:
         pitch.append(_spacing(spacing, where))
-    pitch = [sizes.get(axis, p) for axis, p in zip("XYZ", pitch)]
+    if vol.ndim == 4:  # time keeps step 1, as a 4D NIfTI's does: a lattice axis, not seconds
+        pitch.append(1.0)
+    pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     return RawVolume(vol, np.array(pitch))
 
 
