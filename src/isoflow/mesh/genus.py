@@ -26,8 +26,8 @@ from ..errors import IsoflowError
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
-from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words
-from .load import MeshInput, mesh_defects, mesh_input, repeated_faces
+from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, near_origin
+from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -486,6 +486,11 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 
     t = time.monotonic()
     budget = memory.default_budget()
+    # the Betti numbers do not depend on where the voxels lie: a mesh far
+    # from the origin is moved near it (exactly), where a grid finer than
+    # the spacing of its coordinates can be laid
+    vertices, faces = check_mesh(vertices, faces, where="voxelize")
+    vertices = near_origin(vertices, faces)
     vertices, faces, shape, what, _, _, _ = plan_voxels(vertices, faces, resolution=resolution)
     try:
         # the volume and its labelling, as the stepping counts them (the
