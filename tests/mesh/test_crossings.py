@@ -236,8 +236,8 @@ def test_self_intersections_split_by_component():
     _, comp = mesh_topology(v, f, return_components=True)
     r = self_intersections(v, f, comp)
     faces = np.unique(np.array(sorted(cgal_pairs(v, f))))
-    assert r == {"self_intersecting_faces": 0, "faces_crossing_other_components": len(faces), "zero_area_faces": 0,
-                 "pairs_along_slivers": 0}
+    assert r == {"self_intersecting_faces": 0, "faces_touching_own_component": 0,
+                 "faces_crossing_other_components": len(faces), "zero_area_faces": 0, "pairs_along_slivers": 0}
 
 
 def test_a_voxel_surface_has_no_crossing(rng):

@@ -19,6 +19,11 @@ rules, whose CGAL predicates are exact):
   edge of the other, both edges of such slivers, is a common edge: the
   faces cross only when coplanar on one side of it.
 
+Of the crossing pairs, :func:`touching_pairs` tells those that only touch
+(neither surface passes through the other there: solids stacked face to
+face), which :func:`isoflow.mesh.genus.verify_genus` does not count as a
+self-intersection.
+
 Corners are common when they are at the same position. Every decision is
 the sign of an exact determinant of the float64 coordinates as stored
 (:mod:`isoflow.mesh.predicates`), so the answer depends on no unit,
@@ -29,7 +34,7 @@ a crossing.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
@@ -84,12 +89,15 @@ def crossing_pairs(vertices: np.ndarray, faces: np.ndarray,
 class Crossings:
     """What :func:`find_crossings` found: the crossing ``pairs`` (as
     :func:`crossing_pairs`), the faces of ``zero_area`` (collinear
-    corners, not tested) and the pairs that meet ``along_slivers`` (at a
-    T-junction zero-area faces close: no crossing)."""
+    corners, not tested), the pairs that meet ``along_slivers`` (at a
+    T-junction zero-area faces close: no crossing) and, per pair, whether
+    the two faces only ``touch`` (:func:`touching_pairs`: they meet, but
+    neither surface passes through the other there)."""
 
     pairs: np.ndarray
     zero_area: int
     along_slivers: int
+    touch: np.ndarray = field(default_factory=lambda: np.zeros(0, bool))
 
 
 def find_crossings(vertices: np.ndarray, faces: np.ndarray,
@@ -122,7 +130,117 @@ def find_crossings(vertices: np.ndarray, faces: np.ndarray,
         flat[tested] = False
         along = sliver_joined(exact, whole, whole[flat], out)
         out = out[~along]
-    return Crossings(out[np.lexsort((out[:, 1], out[:, 0]))], zero_area, int(np.count_nonzero(along)))
+    out = out[np.lexsort((out[:, 1], out[:, 0]))]
+    return Crossings(out, zero_area, int(np.count_nonzero(along)), touching_pairs(exact, position.reshape(-1)[f], out))
+
+
+def touching_pairs(exact: ExactPoints, tri: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Per pair of faces that meet (:func:`crossing_pairs`), whether they
+    only touch: neither surface passes through the other there, as where two
+    solids are stacked face to face or side by side.
+
+    The pairs that count as crossings above (touching counts, as libigl's
+    and CGAL's tests have it) are of four kinds, and three of them can
+    touch:
+
+    * coplanar faces whose insides do not overlap (they meet along their
+      edges: a face of one box and the coplanar side of the box stacked on
+      it, or a tessellation that is not edge to edge);
+    * coplanar faces that overlap facing opposite ways: two sheets back to
+      back, the two sides of a wall between solids drawn in different
+      triangles (the same triangles each way round are double-sided faces,
+      never tested); overlapping the same way they are two layers of one
+      side, a crossing;
+    * faces not in one plane where one lies on one side of the other's
+      plane (it meets that plane at an edge or a corner): a face that rests
+      on the other;
+    * faces that each pass through the other's plane, which cross.
+
+    A surface that passes through a face exactly along an edge or a corner
+    of its own rests on the face from both sides (its faces on either side
+    of that edge), so a face touched from both of its sides (the side a
+    face rests on; an opposite coplanar face counts as resting on the side
+    its normal points to, where the other solid lies) is crossed, and each
+    of its touching pairs counts as a crossing. This is a test per face, not
+    per point: a face that two other bodies touch from its two sides is
+    taken as crossed too, the safe answer.
+
+    Parameters
+    ----------
+    exact : ExactPoints
+        The distinct positions.
+    tri : ndarray (M, 3)
+        Each face's corners as position numbers.
+    pairs : ndarray (K, 2)
+        Pairs of faces that meet.
+
+    Returns
+    -------
+    ndarray (K,), bool
+
+    Examples
+    --------
+    A face of one box under a face of the box on it, facing the other way
+    and cut along the other diagonal; and a face standing on it:
+
+    >>> p = ExactPoints([[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0], [1, 1, 0], [1, 1, 1], [1, 1, -1]])
+    >>> touching_pairs(p, np.array([[0, 1, 2], [0, 3, 1], [4, 1, 5]]), np.array([[0, 1], [0, 2]])).tolist()
+    [True, True]
+
+    A face through it along its own edge (resting on both sides) crosses:
+
+    >>> touching_pairs(p, np.array([[0, 1, 2], [4, 1, 5], [1, 4, 6]]), np.array([[0, 1], [0, 2]])).tolist()
+    [False, False]
+    """
+    if not len(pairs):
+        return np.zeros(0, bool)
+    A, B = tri[pairs[:, 0]], tri[pairs[:, 1]]
+    # sides are signed towards each face's normal: orient3d is negative on the side the normal points to
+    side_b = -np.stack([exact.orient3d(A[:, 0], A[:, 1], A[:, 2], B[:, k]) for k in range(3)], axis=1)
+    side_a = -np.stack([exact.orient3d(B[:, 0], B[:, 1], B[:, 2], A[:, k]) for k in range(3)], axis=1)
+    coplanar = ~side_b.any(axis=1)
+    touch = np.zeros(len(pairs), bool)
+    # the side of each face that the other rests on (0: none said)
+    rests_a, rests_b = np.zeros(len(pairs), np.int64), np.zeros(len(pairs), np.int64)
+    k = np.flatnonzero(coplanar)
+    if len(k):
+        axis = projection_axis(exact, A[k])
+        apart = _insides_apart_2d(exact, A[k], B[k], axis)
+        turn = exact.orient2d(A[k, 0], A[k, 1], A[k, 2], axis) * exact.orient2d(B[k, 0], B[k, 1], B[k, 2], axis)
+        back_to_back = ~apart & (turn < 0)
+        touch[k] = apart | back_to_back
+        rests_a[k[back_to_back]] = rests_b[k[back_to_back]] = 1
+    k = np.flatnonzero(~coplanar)
+    if len(k):
+        b_one = np.all(side_b[k] >= 0, axis=1) | np.all(side_b[k] <= 0, axis=1)
+        a_one = np.all(side_a[k] >= 0, axis=1) | np.all(side_a[k] <= 0, axis=1)
+        touch[k] = b_one | a_one
+        rests_a[k] = np.where(b_one, np.sign(side_b[k].sum(axis=1)), 0)
+        rests_b[k] = np.where(a_one, np.sign(side_a[k].sum(axis=1)), 0)
+    # faces touched from both sides are crossed
+    face = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    rests = np.concatenate([rests_a, rests_b])
+    said = rests != 0
+    up = np.unique(face[said & (rests > 0)])
+    down = np.unique(face[said & (rests < 0)])
+    crossed = np.intersect1d(up, down)
+    return touch & ~np.isin(pairs, crossed).any(axis=1)
+
+
+def _insides_apart_2d(exact: ExactPoints, A: np.ndarray, B: np.ndarray, axis: np.ndarray) -> np.ndarray:
+    """Whether coplanar triangles ``A`` and ``B`` (corners as position
+    numbers), seen along ``axis``, have no inside point in common: a line
+    through an edge of one has the other on its far side, touching allowed
+    (two convex polygons whose insides are apart are parted by the line of
+    one of their edges)."""
+    apart = np.zeros(len(A), bool)
+    for S, T in ((A, B), (B, A)):
+        for e in range(3):
+            p, q, r = S[:, e], S[:, (e + 1) % 3], S[:, (e + 2) % 3]
+            own = exact.orient2d(p, q, r, axis)
+            far = np.stack([exact.orient2d(p, q, T[:, j], axis) * own <= 0 for j in range(3)], axis=1)
+            apart |= far.all(axis=1)
+    return apart
 
 
 def sliver_joined(exact: ExactPoints, tri: np.ndarray, slivers: np.ndarray, pairs: np.ndarray) -> np.ndarray:

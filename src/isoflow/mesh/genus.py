@@ -26,8 +26,8 @@ from ..errors import IsoflowError
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
-from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words
-from .load import MeshInput, mesh_defects, mesh_input, repeated_faces
+from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, near_origin
+from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -191,20 +191,27 @@ def self_intersections(vertices, faces, component) -> dict:
     """Faces that cross other faces (:func:`isoflow.mesh.crossings.crossing_pairs`:
     exact, on the coordinates as given, never a centred or scaled copy), split into those crossing a face of
     their own component (``self_intersecting_faces``: the component is no
-    embedded surface) and those crossing only other components
-    (``faces_crossing_other_components``: components overlap or touch)."""
+    embedded surface), those that only touch faces of their own component
+    (``faces_touching_own_component``: :attr:`~isoflow.mesh.crossings.Crossings.touch`,
+    solids stacked face to face on shared corners) and those crossing
+    other components (``faces_crossing_other_components``: components
+    overlap or touch)."""
     found = find_crossings(vertices, faces)
     pairs = found.pairs
     component = np.asarray(component)
     nf = len(np.asarray(faces))
-    hit = np.zeros(nf, dtype=bool)
-    own = np.zeros(nf, dtype=bool)
-    hit[pairs.ravel()] = True
-    same = pairs[component[pairs[:, 0]] == component[pairs[:, 1]]]
-    own[same.ravel()] = True
+    own, rest, other = (np.zeros(nf, dtype=bool) for _ in range(3))
+    same = component[pairs[:, 0]] == component[pairs[:, 1]]
+    # faces of one component that only touch (solids stacked face to face
+    # on shared corners) do not make it self-intersecting: the solid is
+    # their union, as where components touch
+    own[pairs[same & ~found.touch].ravel()] = True
+    rest[pairs[same & found.touch].ravel()] = True
+    other[pairs[~same].ravel()] = True
     return {
         "self_intersecting_faces": int(np.count_nonzero(own)),
-        "faces_crossing_other_components": int(np.count_nonzero(hit & ~own)),
+        "faces_touching_own_component": int(np.count_nonzero(rest & ~own)),
+        "faces_crossing_other_components": int(np.count_nonzero(other & ~own)),
         "zero_area_faces": found.zero_area,
         "pairs_along_slivers": found.along_slivers,
     }
@@ -486,6 +493,11 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 
     t = time.monotonic()
     budget = memory.default_budget()
+    # the Betti numbers do not depend on where the voxels lie: a mesh far
+    # from the origin is moved near it (exactly), where a grid finer than
+    # the spacing of its coordinates can be laid
+    vertices, faces = check_mesh(vertices, faces, where="voxelize")
+    vertices = near_origin(vertices, faces)
     vertices, faces, shape, what, _, _, _ = plan_voxels(vertices, faces, resolution=resolution)
     try:
         # the volume and its labelling, as the stepping counts them (the
@@ -678,7 +690,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     (faces cross faces of their own component), ``balanced`` (closed and
     consistently oriented), ``nested`` (shells nest facing the same way, so
     the mesh is not the solid's boundary), ``overlap`` (the solid's genus
-    is the reference: components overlap, touch or nest) and
+    is the reference: components overlap, touch or nest, or faces of one
+    component touch) and
     ``double_sided`` (faces listed once each way round, or None)."""
     mesh, comp = mesh_topology(v, f, return_components=True)
     whole = whole_manifold(v, f)
@@ -687,7 +700,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     crossing_self = bool(out["self_intersecting_faces"])
     balanced = mesh["boundary_edges"] == 0 and mesh["inconsistent_edges"] == 0
     solid = solid_report(v, f, whole) if balanced and not crossing_self else {"error": "not computed"}
-    touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"])
+    touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"]
+                    or out["faces_touching_own_component"])
     nested = solid.get("boundary") is False and not touching
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
                nested=nested, overlap=touching or nested,
@@ -747,7 +761,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
     elif w["overlap"]:
         notes.append(Note("overlap", {
             "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
-            "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error")}))
+            "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error"),
+            **({"touching": w["faces_touching_own_component"]} if w["faces_touching_own_component"] else {})}))
     if w["crossing_self"] and kind != "self_intersecting":
         notes.append(Note("self_intersecting", {"n": w["self_intersecting_faces"]}))
     if w["zero_area_faces"]:

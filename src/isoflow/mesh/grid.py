@@ -83,8 +83,10 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     where ``2**e`` is the power of two just above the longest side of the
     bounding box (so the mesh spans about one unit), ``origin_s`` and
     ``pitch_s`` being the grid in those units.  ``shift`` is zero except on an
-    axis where the mesh is flat and lies more than 2**60 sizes from zero (it
-    would overflow).  Multiplying by a power of two is exact, and rounded
+    axis where the mesh lies a size or more from zero (:func:`local_shift`):
+    there the vertices are taken relative to a multiple of ``2**e`` near them,
+    exactly, so that the voxel centres are placed with the precision they
+    have near the origin.  Multiplying by a power of two is exact, and rounded
     sums, products and quotients commute with it (barring overflow and
     underflow), so every comparison the scanline makes is bit-for-bit the one
     the unscaled arithmetic makes wherever that neither overflows nor
@@ -100,9 +102,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     if not longest > 0:
         raise IsoflowError("voxelize: mesh bounding box has zero size (all vertices coincide)")
     e = math.frexp(longest)[1]
-    far_flat = (ext == 0) & (lo != 0)
-    far_flat[far_flat] = np.frexp(lo[far_flat])[1] - e > 60
-    shift = np.where(far_flat, lo, 0.0)
+    shift = local_shift(lo, hi, e)
     lo_s, hi_s = np.ldexp(lo - shift, -e), np.ldexp(hi - shift, -e)
     ext_s = np.ldexp(ext, -e)
     if resolution is not None:
@@ -160,6 +160,142 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     with np.errstate(over="ignore", invalid="ignore"):
         origin = np.ldexp(origin_s, e) + shift
     return float(pitch), origin.astype(np.float64), tuple(shape), what, (shift, e, origin_s, pitch_s)
+
+
+def local_shift(lo: np.ndarray, hi: np.ndarray, e: int) -> np.ndarray:
+    """Per axis, a multiple of ``2**e`` that the vertices in ``[lo, hi]``
+    are taken relative to: zero where the box lies within ``2**e`` of zero,
+    else the multiple of ``2**e`` nearest zero beyond which the box lies.
+
+    ``2**e`` is at least the longest side of the box, so every vertex minus
+    the shift lies within ``2**(e+1)`` of zero and is a multiple of the
+    vertex's own spacing (the shift, a multiple of ``2**e``, is one of it
+    wherever that spacing is at most ``2**e``, and of ``2**e`` where it is
+    more): the difference is representable, and so computed exactly.  A mesh
+    translated by a multiple of ``2**e`` thus gives the same coordinates
+    relative to its shift, hence the same voxels bit for bit.
+
+    Parameters
+    ----------
+    lo, hi : ndarray (3,)
+        The bounding box.
+    e : int
+        The exponent of the power of two just above its longest side.
+
+    Returns
+    -------
+    ndarray (3,)
+        The shift, float64.
+
+    Examples
+    --------
+    >>> local_shift(np.array([1e15, -0.5, -1e6 - 3]), np.array([1e15 + 4, 3.0, -1e6]), 3).tolist()
+    [1000000000000000.0, 0.0, -1000000.0]
+    """
+    shift = np.zeros(3)
+    if e > 1023:  # 2**e beyond the float range: every coordinate lies within it of zero
+        return shift
+    unit = math.ldexp(1.0, e)
+    for a in range(3):
+        # fmod is exact, and so is the subtraction (its result, a multiple
+        # of 2**e no larger than |lo|, is representable)
+        if lo[a] >= unit:
+            shift[a] = lo[a] - math.fmod(lo[a], unit)
+        elif hi[a] <= -unit:
+            shift[a] = hi[a] - math.fmod(hi[a], unit)
+    return shift
+
+
+def near_origin(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The vertices the faces use moved by the :func:`local_shift` of their
+    bounding box (exactly: see there), the others as they are: the mesh
+    where a grid finer than the float64 spacing of its coordinates can be
+    laid, for what depends on the voxels alone and not on where they lie
+    (Betti numbers).
+
+    Parameters
+    ----------
+    v, f : ndarray
+        The checked mesh (:func:`~isoflow.mesh.load.check_mesh`).
+
+    Returns
+    -------
+    ndarray
+        A new vertex array, or ``v`` itself where no axis is shifted.
+
+    Examples
+    --------
+    >>> near_origin(np.array([[1e15, 0, 0], [1e15 + 4, 1, 1], [7.0, 7, 7]]), np.array([[0, 1, 1]])).tolist()
+    [[0.0, 0.0, 0.0], [4.0, 1.0, 1.0], [7.0, 7.0, 7.0]]
+    """
+    lo, hi, ext = mesh_bbox(v, f, "voxelize")
+    longest = float(ext.max())
+    if not longest > 0:
+        return v  # voxel_grid refuses it
+    shift = local_shift(lo, hi, math.frexp(longest)[1])
+    if not shift.any():
+        return v
+    used = np.unique(f)
+    out = v.copy()
+    out[used] -= shift
+    return out
+
+
+def check_placement(lo: np.ndarray, hi: np.ndarray, pitch: float, what: str) -> None:
+    """Refuse a grid whose voxels are finer than the float64 spacing of the
+    coordinates they lie among: there no voxel corner or centre can be said
+    in the mesh's coordinates (the origin written out would be off by more
+    than half a voxel), and the file's coordinates themselves are rounded
+    to more than a voxel.
+
+    Parameters
+    ----------
+    lo, hi : ndarray (3,)
+        The mesh's bounding box.
+    pitch : float
+        The voxel size.
+    what : str
+        The grid, as :func:`voxel_grid` names it (``"resolution=R"``).
+
+    Raises
+    ------
+    IsoflowError
+        Naming the pitch, the spacing, where the coordinates lie, the
+        finest grid that can be placed there and the way out of moving the
+        mesh nearer the origin.
+
+    Examples
+    --------
+    >>> check_placement(np.array([1e15] * 3), np.array([1e15 + 4] * 3), 0.125, "resolution=32")
+    >>> check_placement(np.array([1e16] * 3), np.array([1e16 + 4] * 3), 0.125, "resolution=32")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: voxelize: resolution=32 makes voxels of 0.125, finer than the float64
+    spacing 2.0 of the coordinates near 1e+16: the grid cannot be placed there; at most resolution=2 can be,
+    or move the mesh nearer the origin
+    """
+    longest = float((hi - lo).max())
+    if not longest / pitch < 2.0**52:
+        return  # finer than the spacing at the mesh's own size: refused as too large to hold
+    far = np.maximum(np.abs(lo), np.abs(hi))
+    flat = hi == lo  # one layer of voxels, centred on the plane: nothing to place finer
+    spacing = np.where(flat, 0.0, np.spacing(far))
+    if not pitch < float(spacing.max()):
+        return
+    a = int(np.argmax(spacing))
+    gap, near = float(spacing[a]), float(far[a])
+    finest = math.floor(longest / gap)
+
+    def words(said: Callable[[str], str]) -> str:
+        if not what.startswith("resolution="):
+            fit = f"{said(f'pitch={gap!r}')} or coarser can be"
+        else:
+            fit = f"at most {said(f'resolution={finest}')} can be" if finest >= 1 else "no resolution can be"
+        return (f"voxelize: {said(what)} makes voxels of {pitch:.6g}, finer than the float64 spacing {gap!r} of the "
+                f"coordinates near {near:.6g}: the grid cannot be placed there; {fit}, or move the mesh nearer "
+                "the origin")
+
+    raise IsoflowError.worded(words(lambda text: text), words(option_words))
 
 
 def grid_need(shape, bytes_per_voxel: float, extra: int = 0) -> int:

@@ -41,7 +41,7 @@ from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill
-from .grid import check_grid_memory, voxel_grid
+from .grid import check_grid_memory, check_placement, voxel_grid
 from .load import mesh_bbox
 from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
 
@@ -131,6 +131,7 @@ def union_grid(bodies: list[Body], pitch, resolution):
     corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
     used = np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)  # faces that use every corner
     pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
+    check_placement(corners.min(axis=0), corners.max(axis=0), pitch, what)
     return pitch, origin, shape, what
 
 

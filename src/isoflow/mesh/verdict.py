@@ -240,11 +240,19 @@ def _double_sided_words(n: int, corners, genus: int | None) -> str:
                if genus is not None else ""))
 
 
-def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None) -> str:
+def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None,
+                   touching: int = 0) -> str:
+    union = (f"genus {solid_genus} (manifold3d)" if solid_genus is not None
+             else f"which manifold3d could not build ({error})")
+    # touching faces of one component (solids stacked face to face on
+    # shared corners): they meet without crossing, which is no overlap
+    touch = (f"{counted(touching, 'face')} {'touch faces of their' if touching > 1 else 'touches faces of its'} own "
+             "component without crossing (solids face to face)") if touching else ""
+    if touching and not crossing and not shared:
+        return f"{touch}: the solid the mesh bounds is their union, {union}"
     return (f"the mesh's {components} components overlap or touch ({crossing} faces cross other components, "
-            f"{counted(shared, 'vertex', 'vertices')} shared): the solid they bound is their union, "
-            + (f"genus {solid_genus} (manifold3d)" if solid_genus is not None
-               else f"which manifold3d could not build ({error})"))
+            f"{counted(shared, 'vertex', 'vertices')} shared{'; ' + touch if touch else ''}): the solid they bound "
+            f"is their union, {union}")
 
 
 _NOTE_WORDS: dict[str, Callable[..., str]] = {

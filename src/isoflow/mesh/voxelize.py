@@ -57,7 +57,7 @@ from .fills import (
     unbounded_area,
     unbounded_share,
 )
-from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
+from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import (  # noqa: F401
     chain_of,
     check_mesh,
@@ -66,6 +66,7 @@ from .load import (  # noqa: F401
     load_mesh,
     merge_coincident,
     mesh_arrays,
+    mesh_bbox,
     mesh_defects,
     orient_faces,
 )
@@ -423,7 +424,9 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
     v, f = check_mesh(vertices, faces, where="voxelize")
     pitch, origin, shape, what, frame = voxel_grid(v, f, pitch, resolution)
     shift, e, origin_s, pitch_s = frame
-    if grid is not None:
+    if grid is None:
+        check_placement(*mesh_bbox(v, f, "voxelize")[:2], pitch, what)
+    else:
         if resolution is not None:
             raise IsoflowError("voxelize: grid= needs pitch=, not resolution=")
         try:

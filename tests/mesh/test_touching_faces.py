@@ -1,0 +1,109 @@
+"""Solids that touch face to face are no self-intersection; solids that
+pass through each other are, whether the mesh writes them as one edge-
+connected surface or as two.
+
+The references are independent of the crossing test: the union of two
+boxes stacked face to face is a box, or an L-shaped block (genus 0);
+pymeshlab's self-intersection selection (its own triangle test) finds no
+face crossing there and every face of two interpenetrating boxes that
+passes through the other.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+trimesh = pytest.importorskip("trimesh")
+
+
+def boxes_obj(path, *boxes) -> None:
+    """One OBJ of trimesh boxes (``bounds`` each), each its own closed
+    12-triangle surface; corners at one position are welded when read."""
+    trimesh.util.concatenate([trimesh.creation.box(bounds=b) for b in boxes]).export(path)
+
+
+def genus_json(path) -> dict:
+    """``isoflow genus FILE --json`` as a user runs it."""
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--resolution", "16", "32", "--json"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout)
+
+
+def pymeshlab_crossing_faces(path) -> int:
+    """Faces pymeshlab selects as self-intersecting."""
+    pymeshlab = pytest.importorskip("pymeshlab")
+    from isoflow.mesh.load import load_mesh
+
+    v, f = load_mesh(path)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(v, f))
+    ms.compute_selection_by_self_intersections_per_face()
+    return int(ms.current_mesh().selected_face_number())
+
+
+@pytest.mark.parametrize("top, faces", [(((0, 0, 1), (1, 1, 2)), 4), (((0, 0, 1), (2, 1, 2)), 11)])
+def test_boxes_stacked_face_to_face_touch(tmp_path, top, faces):
+    """A unit box under a box on its top face: the same square (trimesh cuts
+    the shared face along the other diagonal in each, so its triangles
+    overlap back to back) or a 2 x 1 block whose underside the box covers
+    half of (its sides stand on the box's top, coplanar sides meet along
+    an edge). The corners on the shared face are welded: one edge-connected
+    component, which was called self-intersecting (4 and 11 faces). The
+    solid is the union, genus 0."""
+    path = tmp_path / "stacked.obj"
+    boxes_obj(path, ((0, 0, 0), (1, 1, 1)), top)
+    assert pymeshlab_crossing_faces(path) == 0
+    r = genus_json(path)
+    assert (r["kind"], r["reference_source"], r["reference"], r["solid_genus"]) == ("agree", "solid", 0, 0)
+    assert r["self_intersecting_faces"] == 0 and r["mesh"]["components"] == 1
+    assert r["solid"]["volume"] == pytest.approx(np.prod(np.subtract(top[1], top[0])) + 1)
+    overlap = [n for n in r["notes"] if n["kind"] == "overlap"]
+    assert overlap and overlap[0]["facts"]["touching"] == faces
+    assert f"{faces} faces touch faces of their own component without crossing" in r["verdict"]
+
+
+def test_eight_pieces_face_to_face_are_their_union(tmp_path):
+    """meshes/not_convex.obj: eight closed pieces that touch face to face,
+    welded into one component (156 face pairs meet, none crossing: pymeshlab
+    flags no face), was called self-intersecting; manifold3d's union of the
+    pieces has genus 2."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / "not_convex.obj"
+    if not path.is_file():
+        pytest.skip("public test meshes not found")
+    assert pymeshlab_crossing_faces(path) == 0
+    r = genus_json(path)
+    assert (r["kind"], r["reference_source"], r["self_intersecting_faces"], r["manifold3d"]["components"]) \
+        == ("agree", "solid", 0, 8)
+    assert r["solid_genus"] == r["digital"][-1]["genus"] == 2
+
+
+def test_interpenetrating_boxes_still_cross(tmp_path):
+    """Two unit boxes, the second moved by (1/2, 1/2, 1/2): written as two
+    surfaces, the 12 faces pymeshlab selects cross the other component
+    (the solid is their union, genus 0); welded into one component along
+    a shared edge, a block through the box is self-intersecting."""
+    path = tmp_path / "through.obj"
+    boxes_obj(path, ((0, 0, 0), (1, 1, 1)), ((0.5, 0.5, 0.5), (1.5, 1.5, 1.5)))
+    r = genus_json(path)
+    assert r["faces_crossing_other_components"] == pymeshlab_crossing_faces(path) == 12
+    assert (r["kind"], r["reference_source"], r["self_intersecting_faces"]) == ("agree", "solid", 0)
+    # a box [0, 2]^3 and a slanted block on its top edge from (2, 2, 2) to
+    # (0, 2, 2) whose square section dips half into the box
+    c, u, v, w = np.array([2.0, 2, 2]), np.array([0, -0.5, -0.5]), np.array([0, 0.5, -0.5]), np.array([-2.0, 0, 0])
+    block = trimesh.Trimesh([c, c + u, c + u + v, c + v, c + w, c + u + w, c + u + v + w, c + v + w],
+                            [[0, 1, 2], [0, 2, 3], [4, 6, 5], [4, 7, 6], [0, 5, 1], [0, 4, 5],
+                             [2, 7, 3], [2, 6, 7], [1, 6, 2], [1, 5, 6], [3, 4, 0], [3, 7, 4]], process=False)
+    assert block.is_watertight and block.volume == pytest.approx(1.0)  # closed, facing out: a solid of 1
+    path = tmp_path / "welded.obj"
+    trimesh.util.concatenate([trimesh.creation.box(bounds=((0, 0, 0), (2, 2, 2))), block]).export(path)
+    r = genus_json(path)
+    assert r["mesh"]["components"] == 1
+    assert r["kind"] == "self_intersecting" and r["self_intersecting_faces"] > 0
