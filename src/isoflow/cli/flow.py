@@ -13,6 +13,7 @@ from .inputs import (
     add_input_arguments,
     label_options,
     load_input,
+    one_time_point,
     refuse_mesh_options,
     refuse_points_option,
     why_empty,
@@ -112,8 +113,9 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     """The object (None: read block by block) and the options make a flow,
     or one line says why not."""
     if obj is not None and obj.ndim not in (2, 3):
+        hint = one_time_point(args.input, obj.volume.shape, args.label) if obj.ndim == 4 else ""
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
-                           f"this one is {obj.ndim}D")
+                           f"this one is {obj.ndim}D{hint}")
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
