@@ -288,6 +288,33 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     assert p.returncode == 2 and "save one time point (a time series is read as 4D only of 3D volumes)" in p.stderr
 
 
+@pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["flow", "--steps", "1"]])
+def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(command, tmp_path):
+    """``surface`` and ``flow`` take one 3D volume; a time series (read as
+    4D) got "needs a 3D object" and no way on. The one line now names the
+    file and a command that saves its first time point as 3D, run here as
+    the user would from the shell: the saved volume is frame 0 as stored,
+    with the file's voxel size, and the command then takes it."""
+    data = moving_ball()
+    tifffile.imwrite(tmp_path / "ts.ome.tif", data, ome=True,
+                     metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0})
+    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "ts.ome.tif", *command[1:]],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "ts.ome.tif" in p.stderr, p.stderr
+    assert "4D, shape 8x7x6x3 (a time series of 3 volumes" in p.stderr
+    line = p.stderr.split("give that: ", 1)[1].strip()
+    assert line.startswith("python -c ")
+    shell = subprocess.run(sys.executable + line[len("python"):], shell=True, capture_output=True, text=True,
+                           cwd=tmp_path)
+    assert shell.returncode == 0, shell.stderr
+    frame = isoflow.read_volume(tmp_path / "t0.npz")
+    assert np.array_equal(frame.volume, data[0].transpose(2, 1, 0).astype(bool))  # stored (z, y, x): x first
+    assert frame.pitch.tolist() == [0.5, 0.5, 2.0]
+    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "t0.npz", *command[1:]],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 0, p.stderr
+
+
 def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
         tif.write(np.ones((3, 4, 5), np.uint8), photometric="minisblack")

@@ -253,3 +253,31 @@ def test_a_state_grown_past_magicavoxel_names_the_step(tmp_path, monkeypatch):
         f"isoflow flow: error: {out / 'step_000.vox'}: MagicaVoxel models are at most 7 voxels a side, this object "
         "is 8x8x8 (step 0's state); write the steps in another --volumes format (.npz or .zarr holds any size)"]
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+@pytest.mark.parametrize("extra, remedy", [
+    (["--volumes", ".ome.zarr"], "flow it block by block (--out DIR --volumes .zarr"),
+    ([], "flow it block by block (--out DIR --volumes .zarr"),
+    (["--volumes", ".npz", "--label", "1"], "write label 1's voxels as a store of their own"),
+    (["--guard"], "crop it: --guard is not done block by block"),
+])
+def test_a_store_too_large_to_flow_in_memory_names_the_block_wise_flow(tmp_path, extra, remedy):
+    """``--volumes .ome.zarr`` (OME-Zarr, as ``.zarr``) flows in memory and
+    writes each state from there: the state is in memory already. A store
+    that would not fit there was refused as any read is, "use a .zarr store
+    with 'isoflow info'": the line, up front, from the shell, now names the
+    flow that reads it block by block (``--volumes .zarr``), or why none
+    does. The store holds 2^60 uint8 voxels (only its metadata is written):
+    three bytes a voxel, 3 * 2^30 GiB."""
+    import subprocess
+    import sys
+
+    zarr = pytest.importorskip("zarr")
+    zarr.open_array(str(tmp_path / "huge.zarr"), mode="w", shape=(1 << 20,) * 3, chunks=(256,) * 3, dtype="u1",
+                    zarr_format=2, fill_value=0)
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", "huge.zarr", "--steps", "1", "--out", "run", *extra],
+                       capture_output=True, text=True, cwd=tmp_path, timeout=120)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
+    assert p.stderr.startswith("isoflow flow: error: huge.zarr: a 1048576x1048576x1048576 volume of uint8 needs about "
+                               f"{3 << 30:.1f} GiB of memory"), p.stderr
+    assert remedy in p.stderr and not (tmp_path / "run").exists()

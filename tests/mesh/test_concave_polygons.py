@@ -21,6 +21,7 @@ import trimesh
 
 from isoflow.mesh import readers
 from isoflow.mesh.load import load_mesh
+from isoflow.mesh.ply import read_ply
 from isoflow.mesh.readers import triangulate
 
 #: outlines counter-clockwise seen from +z, and a cut of each into triangles
@@ -243,3 +244,71 @@ def test_random_simple_polygons_of_mixed_sizes_are_each_covered_once():
     area = np.bincount(owner[t[:, 0]], facing, minlength=len(sizes))
     np.testing.assert_allclose(area, [_shoelace(o) for o in outlines], rtol=1e-9)
     assert (fan != t).any(axis=1).sum() > 100  # (most polygons were not fans)
+
+
+def six_cornered_prism():
+    """The L prism (corner 0 first, whose fan crosses the notch) with every
+    face a hexagon: each vertical edge has a vertex at mid-height, so each
+    side is a rectangle of six corners (trimesh reads a binary PLY only
+    when its faces are of one size, "PLY is unexpected length" otherwise)."""
+    v, polygons, _ = prism("L", 0)
+    n = len(SHAPES["L"][0])
+    v = np.vstack([v, v[:n] + [0, 0, HEIGHT / 2]])
+    sides = [[i, (i + 1) % n, 2 * n + (i + 1) % n, n + (i + 1) % n, n + i, 2 * n + i] for i in range(n)]
+    return v, polygons[:2] + sides
+
+
+def write_textured_ply(path: Path, v, faces, binary: bool, texture: str) -> Path:
+    """A PLY file (float32 coordinates) with texture coordinates per
+    ``"vertex"`` (properties ``s t``) or per ``"face"`` (a ``texcoord``
+    list beside the corners): isoflow's reader leaves both to trimesh."""
+    v = np.asarray(v, np.float32)
+    uv = v[:, :2] / 3
+    head = f"ply\nformat {'binary_little_endian' if binary else 'ascii'} 1.0\nelement vertex {len(v)}\n"
+    head += "property float x\nproperty float y\nproperty float z\n"
+    head += "property float s\nproperty float t\n" * (texture == "vertex")
+    head += f"element face {len(faces)}\nproperty list uchar int vertex_indices\n"
+    head += "property list uchar float texcoord\n" * (texture == "face") + "end_header\n"
+    rows = [np.concatenate([v[i], uv[i]]) if texture == "vertex" else v[i] for i in range(len(v))]
+    records = [(np.asarray(f), uv[f].reshape(-1)) for f in faces]
+    if binary:
+        body = b"".join(r.astype("<f4").tobytes() for r in rows)
+        for f, t in records:
+            body += np.uint8(len(f)).tobytes() + f.astype("<i4").tobytes()
+            body += (np.uint8(len(t)).tobytes() + t.astype("<f4").tobytes()) * (texture == "face")
+        path.write_bytes(head.encode() + body)
+    else:
+        text = "".join(" ".join(map(repr, r.tolist())) + "\n" for r in rows)
+        for f, t in records:
+            text += f"{len(f)} " + " ".join(map(str, f.tolist()))
+            text += (f" {len(t)} " + " ".join(map(repr, t.tolist()))) * (texture == "face") + "\n"
+        path.write_text(head + text)
+    return path
+
+
+@pytest.mark.parametrize("binary, texture", [(True, "vertex"), (True, "face"), (False, "vertex"), (False, "face")])
+def test_textured_ply_read_by_trimesh_is_cut_as_isoflow_cuts(binary, texture, tmp_path):
+    """A PLY with texture coordinates is read by trimesh, which fanned the
+    L caps across their notch: ``--fill shell`` then filled the notch and
+    ``genus`` called the prism self-intersecting. Its polygons are now cut
+    by ears, as isoflow's own reader cuts them: the voxels of the prism
+    written as triangles (by hand), genus 0 without self-intersection."""
+    v, polygons = six_cornered_prism()
+    path = write_textured_ply(tmp_path / "p.ply", v, polygons, binary, texture)
+    assert read_ply(path.read_bytes()) is None  # (trimesh reads it)
+    tv, _, triangles = prism("L", 0)
+    assert np.array_equal(voxels(path, "shell"), voxels(write(tmp_path / "t.obj", tv, triangles), "shell"))
+    r = run("genus", path, "--resolution", "8", "16", "--no-step", "--json", "-q")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["self_intersecting_faces"] == 0 and out["mesh"]["genus"] == 0 and out["kind"] != "self_intersecting"
+
+
+def test_textured_ply_of_several_face_sizes_is_cut_as_isoflow_cuts(tmp_path):
+    """An ASCII PLY with texture coordinates per vertex whose faces are of
+    several sizes (the L caps among quads): trimesh orders its triangles
+    otherwise (triangles, quad halves, polygons), and its caps are cut too."""
+    v, polygons, triangles = prism("L", 0)
+    path = write_textured_ply(tmp_path / "p.ply", v, polygons, False, "vertex")
+    assert np.array_equal(voxels(path, "shell"), voxels(write(tmp_path / "t.obj", v, triangles), "shell"))
+    assert np.array_equal(voxels(path, "flood"), voxels(tmp_path / "t.obj", "flood"))

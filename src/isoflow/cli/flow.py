@@ -13,6 +13,7 @@ from .inputs import (
     add_input_arguments,
     label_options,
     load_input,
+    one_time_point,
     refuse_mesh_options,
     refuse_points_option,
     why_empty,
@@ -44,6 +45,7 @@ def cmd_flow(args: argparse.Namespace) -> int:
         check_output_dir(args.out, args.force)
     if block_wise(args):
         return flow_store(args)
+    refuse_store_read_whole(args)
     obj = load_input(args)
     check_flow_input(args, obj)
     writer = flow_writer(args, obj)
@@ -67,6 +69,46 @@ def block_wise(args: argparse.Namespace) -> bool:
 
     return (split_dataset(args.input)[0].suffix.lower() == ".zarr" and args.volumes is not None
             and args.volumes.lower() == ".zarr")
+
+
+def refuse_store_read_whole(args: argparse.Namespace) -> None:
+    """A 3D .zarr store that this flow would read whole into memory
+    (``--volumes`` other than ``.zarr``, ``.ome.zarr`` too, or none) and
+    that would not fit there: refused before anything is written, as any
+    read is (:func:`~isoflow.mesh.formats.registry.check_shape`), the line
+    naming the flow that reads it block by block.
+
+    On this path every state is computed whole in memory, so writing it
+    (``--volumes .ome.zarr`` as any other format) through memory is right:
+    it costs the stored 0/1 copy, a byte a voxel, beside a flow that holds
+    the state already; the store that would not fit is the input, and it
+    is refused here, up front.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``input``, ``label``, ``guard``.
+
+    Raises
+    ------
+    IsoflowError
+        One line: the memory the read needs, the budget, what to do.
+    """
+    from ..mesh.formats.omezarr import store_volume
+    from ..mesh.formats.registry import check_shape, split_dataset
+    from .surface import is_store
+
+    if split_dataset(args.input)[0].suffix.lower() != ".zarr" or not is_store(args.input):
+        return
+    array = store_volume(args.input)[0]  # (the stored type: the read reads it whole, --label or not)
+    if args.guard:
+        hint = "crop it: --guard is not done block by block"
+    elif args.label is not None:
+        hint = (f"write label {args.label}'s voxels as a store of their own and flow that block by block "
+                "(--out DIR --volumes .zarr, which takes no --label), or crop it")
+    else:
+        hint = "flow it block by block (--out DIR --volumes .zarr: each state a step_NNN.zarr store), or crop it"
+    check_shape(array.shape, array.dtype, str(args.input), hint=hint)
 
 
 def flow_store(args: argparse.Namespace) -> int:
@@ -112,8 +154,9 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     """The object (None: read block by block) and the options make a flow,
     or one line says why not."""
     if obj is not None and obj.ndim not in (2, 3):
+        hint = one_time_point(args.input, obj.volume.shape, args.label) if obj.ndim == 4 else ""
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
-                           f"this one is {obj.ndim}D")
+                           f"this one is {obj.ndim}D{hint}")
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))

@@ -216,6 +216,45 @@ def load_input(args: argparse.Namespace):
         return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
 
 
+def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:
+    """What to do with a 4D volume (a time series, read as x, y, z, t)
+    given to a command that takes one 3D volume: save one time point as a
+    3D file, voxel size and origin kept, and give that.
+
+    There is no option that picks a time point: the one line of Python is
+    the way, and it names the file as given.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The input as given on the command line.
+    shape : tuple of int
+        The 4D volume's shape (x, y, z, t).
+    label : float, optional
+        The ``--label`` given: the line reads that label.
+
+    Returns
+    -------
+    str
+        The end of the refusal, after "this one is 4D".
+
+    Examples
+    --------
+    >>> print(one_time_point("cells.ome.tif", (8, 8, 8, 3)))
+    , shape 8x8x8x3 (a time series of 3 volumes, read as x, y, z, t); save one time point as 3D and give that: \
+python -c 'import isoflow; o = isoflow.read_volume("cells.ome.tif"); \
+isoflow.write_volume(isoflow.DigitalObject(o.volume[..., 0], pitch=o.pitch[:3], origin=o.origin[:3]), "t0.npz")'
+    """
+    import json
+    import shlex
+
+    label_arg = "" if label is None else f", label={label!r}"
+    code = (f"import isoflow; o = isoflow.read_volume({json.dumps(str(path))}{label_arg}); isoflow.write_volume("
+            'isoflow.DigitalObject(o.volume[..., 0], pitch=o.pitch[:3], origin=o.origin[:3]), "t0.npz")')
+    return (f", shape {'x'.join(map(str, shape))} (a time series of {shape[-1]} volumes, read as x, y, z, t); "
+            f"save one time point as 3D and give that: python -c {shlex.quote(code)}")
+
+
 @contextlib.contextmanager
 def label_options(args: argparse.Namespace) -> Iterator[None]:
     """A label image where a mask is expected, in memory or found block by

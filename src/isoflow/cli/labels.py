@@ -108,14 +108,14 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin}
-        wanted = None if asked is None or every else _within_type(args.input, asked, image.array.dtype)
+        wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
         raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
-    beyond = [] if asked is None else _beyond_type(asked, about["dtype"])
+    within, beyond = ([], []) if asked is None else _by_type(args.input, asked, about["dtype"])
     if every:
-        table, missing = chosen_rows(table, _within_type(args.input, asked, about["dtype"]))
+        table, missing = chosen_rows(table, within)
     present = table["voxels"] > 0
     if every or not present.all() or beyond:
         absent = (missing if every else table["label"][~present].tolist()) + beyond
@@ -155,7 +155,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
         place = DigitalObject.placement(3, pitch=slabs.pitch, origin=slabs.origin)
     except IsoflowError as exc:
         raise exc.at(args.input) from None
-    wanted = None if asked is None else _within_type(args.input, asked, slabs.dtype)
+    wanted = None if asked is None else _by_type(args.input, asked, slabs.dtype)[0]
     with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
         try:
             table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
@@ -184,7 +184,7 @@ def chosen_rows(table: dict, chosen: list[int]) -> tuple[dict, list[int]]:
     ([9, 2], [7, 4], [3])
     """
     labels = table["label"]
-    wanted = np.asarray(chosen, dtype=labels.dtype)  # each within the type (_within_type)
+    wanted = np.asarray(chosen, dtype=labels.dtype)  # each within the type (_by_type)
     order = np.argsort(wanted, kind="stable")
     at = np.minimum(np.searchsorted(wanted[order], labels), len(wanted) - 1)
     hit = wanted[order][at] == labels
@@ -195,28 +195,44 @@ def chosen_rows(table: dict, chosen: list[int]) -> tuple[dict, list[int]]:
     return {k: v[rows] for k, v in table.items()}, wanted[~found].tolist()
 
 
-def _within_type(name, asked: list[int], dtype) -> list[int]:
-    """The labels asked for that the image's type can hold (the others
-    cannot occur); an error when it holds none of them."""
+def _by_type(name, asked: list[int], dtype) -> tuple[list[int], list[int]]:
+    """The labels asked for that the image's type can hold, and those it
+    cannot (they cannot occur), each in the order asked; an error when it
+    holds none of them.
+
+    Parameters
+    ----------
+    name : str
+        The image, as the error names it.
+    asked : list of int
+        The labels asked for.
+    dtype : numpy.dtype
+        The image's type (a float image's labels are read as integers:
+        :func:`~isoflow.digital.label_table.label_dtype`).
+
+    Returns
+    -------
+    tuple of list of int
+        ``(within, beyond)``.
+
+    Examples
+    --------
+    >>> _by_type("cells.tif", [3, 300, -1, 255], np.uint8)
+    ([3, 255], [300, -1])
+    """
     from ..digital.label_table import label_dtype
 
     kind = label_dtype(dtype)
     info = np.iinfo(kind)
     lo, hi = int(info.min), int(info.max)  # (looked up once: a choice may hold millions)
-    within = [v for v in asked if lo <= v <= hi]
+    within: list[int] = []
+    beyond: list[int] = []
+    for v in asked:
+        (within if lo <= v <= hi else beyond).append(v)
     if not within:
         raise IsoflowError(f"{name}: none of the labels asked for occur ({_some(asked)}): its labels are "
                            f"{kind} ({info.min} to {info.max})")
-    return within
-
-
-def _beyond_type(asked: list[int], dtype) -> list[int]:
-    """The labels asked for that the image's type cannot hold."""
-    from ..digital.label_table import label_dtype
-
-    info = np.iinfo(label_dtype(dtype))
-    lo, hi = int(info.min), int(info.max)
-    return [v for v in asked if not lo <= v <= hi]
+    return within, beyond
 
 
 def _some(values, most: int = 8) -> str:

@@ -14,6 +14,7 @@ from .inputs import (
     add_input_arguments,
     label_options,
     load_input,
+    one_time_point,
     refuse_mesh_options,
     refuse_points_option,
     thread_count,
@@ -66,7 +67,8 @@ def cmd_surface(args: argparse.Namespace) -> int:
         check_picture_path(args.png, args.force)
     obj = load_input(args)
     if obj.ndim != 3:
-        raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D")
+        hint = one_time_point(args.input, obj.volume.shape, args.label) if obj.ndim == 4 else ""
+        raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is {obj.ndim}D{hint}")
     if obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty"

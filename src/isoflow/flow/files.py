@@ -295,6 +295,23 @@ class FlowWriter:
         self.volume_suffix = check_volume_suffix(suffix)
 
     def add_volume(self, step: int, state: DigitalObject) -> None:
+        """Write ``state`` as ``step_NNN{suffix}`` into the staging
+        directory (:meth:`write_volumes`), after the format's check of what
+        it can hold (:func:`check_step_volume`).
+
+        Written from memory, a ``.zarr`` or ``.ome.zarr`` store as any
+        other format: the in-memory flow holds the state whole already, and
+        the write adds its stored 0/1 copy (a byte a voxel); an input store
+        too large for that is refused before the flow (``isoflow flow``
+        names ``--volumes .zarr``, which flows it block by block).
+
+        Parameters
+        ----------
+        step : int
+            The step whose state it is.
+        state : DigitalObject
+            That state, non-empty.
+        """
         from ..mesh.volumes import write_volume
 
         name = f"step_{step:0{self.width}d}{self.volume_suffix}"

@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import counted
+from ..errors import IsoflowError, counted
 from ..results import Result
 
 #: the rule that decides which voxels a mesh fills
@@ -109,9 +109,23 @@ class Voxelization(Result):
 
 
 def check_fill(fill: object) -> Fill:
-    """``fill`` if it names a fill, else an IsoflowError naming the three."""
-    from ..errors import IsoflowError
+    """``fill`` if it names a fill, else an IsoflowError naming the three.
 
+    Parameters
+    ----------
+    fill : object
+        What was given as ``fill``.
+
+    Returns
+    -------
+    Fill
+        ``fill``, one of :data:`FILLS`.
+
+    Examples
+    --------
+    >>> check_fill("shell")
+    'shell'
+    """
     if fill not in FILLS:
         raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {fill!r}")
     return fill  # type: ignore[return-value]

@@ -516,7 +516,8 @@ def trimesh_load(p: Path, force: str):
     """``trimesh.load`` of a checked file, unprocessed (the weld is
     isoflow's), ``force`` "mesh" (a scene's meshes as one, transforms
     applied) or "scene"; an OBJ's texture and normal seams are asked to be
-    merged (the weld merges what trimesh leaves split)."""
+    merged (the weld merges what trimesh leaves split); a PLY's concave
+    polygons are cut by ears (:func:`_ply_polygons_cut`)."""
     check_mesh_file(p)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
@@ -532,7 +533,29 @@ def trimesh_load(p: Path, force: str):
         # NumPy's overflow warnings on inf or huge coordinates: the one
         # error line of check_mesh says what is wrong
         warnings.simplefilter("ignore", RuntimeWarning)
-        return trimesh.load(source, force=force, **kwargs)
+        loaded = trimesh.load(source, force=force, **kwargs)
+    if p.suffix.lower() == ".ply":
+        _ply_polygons_cut(loaded)
+    return loaded
+
+
+def _ply_polygons_cut(loaded: Any) -> None:
+    """Re-cut, in place, the concave polygons trimesh fanned in a PLY file
+    it read (a mesh, or a scene's meshes), as isoflow's own reader cuts
+    them (:func:`isoflow.mesh.ply.concave_polygons_cut`, from the face
+    lists trimesh keeps in ``metadata["_ply_raw"]``): a fan across an L's
+    notch fills the notch and crosses the polygon's other triangles."""
+    from .ply import concave_polygons_cut
+
+    meshes = list(loaded.geometry.values()) if is_scene(loaded) else [loaded]
+    for mesh in meshes:
+        raw = getattr(mesh, "metadata", {}).get("_ply_raw")
+        faces = getattr(mesh, "faces", None)
+        if not isinstance(raw, dict) or not isinstance(raw.get("face"), dict) or faces is None:
+            continue  # a point cloud, or a trimesh that keeps no face lists: its reading stands
+        cut = concave_polygons_cut(faces, mesh.vertices, raw["face"].get("data"))
+        if cut is not None:
+            mesh.faces = cut
 
 
 def _obj_rewritten(p: Path) -> bytes | None:

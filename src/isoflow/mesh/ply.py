@@ -16,7 +16,8 @@ the quads' first halves and second halves, then the other polygons as
 fans), except that a concave polygon whose fan would leave it is cut by
 ears (see :func:`~isoflow.mesh.readers.triangulate`). A binary file whose
 faces have several sizes, which trimesh cannot read ("PLY is unexpected
-length"), is read the same way.
+length"), is read the same way. A file trimesh reads has its concave
+polygons cut the same way after it (:func:`concave_polygons_cut`).
 """
 
 from __future__ import annotations
@@ -173,16 +174,107 @@ def _mesh(v: np.ndarray, corners: np.ndarray, sizes: np.ndarray, nv: int) -> Mes
     if (sizes < 3).any() or (corners < 0).any() or (corners >= nv).any():
         return None
     v = v.astype(np.float64)
+    return v, _split(corners, sizes, v)
+
+
+def _split(corners: np.ndarray, sizes: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
+    """The polygons' triangles (int64 (M, 3)) in the order trimesh gives
+    them: faces of one size as :func:`~isoflow.mesh.readers.triangulate`
+    does, faces of several sizes as ``trimesh.geometry.triangulate_quads``
+    orders them (the triangles, the quads as two blocks of halves, the
+    other polygons as fans); given the vertices ``v``, a concave polygon
+    whose fan would leave it is cut by ears."""
     if (sizes == sizes[0]).all():
-        return v, triangulate(corners, sizes, v)
-    # several sizes: the triangles, the quads (two blocks of halves), the other polygons as fans
+        return triangulate(corners, sizes, v).astype(np.int64)
     first = np.cumsum(sizes) - sizes
     parts = []
     for which in (sizes == 3, sizes == 4, sizes > 4):
         if which.any():
             parts.append(triangulate(corners[np.repeat(first[which], sizes[which]) + _within(sizes[which])],
                                      sizes[which], v))
-    return v, np.concatenate(parts).astype(np.int64)
+    return np.concatenate(parts).astype(np.int64)
+
+
+def concave_polygons_cut(faces: np.ndarray, vertices: np.ndarray, face_data: object) -> np.ndarray | None:
+    """The triangles of a PLY file that trimesh read, with each concave
+    polygon whose fan would leave it cut by ears, as :func:`read_ply` cuts
+    it; None where trimesh's triangles need no change.
+
+    trimesh fans every polygon of the files it reads (texture coordinates,
+    other elements, faces with more properties: where :func:`read_ply`
+    says None), and a fan across an L's notch fills the notch. The
+    polygons are the face lists trimesh keeps (``face_data``: its
+    ``metadata["_ply_raw"]["face"]["data"]``). Its vertices may not be the
+    file's (it splits them at texture seams), so each polygon's corners are
+    taken from trimesh's own triangles, whose order (:func:`_split`) says
+    which polygon corner each of their corners is; where that order is not
+    trimesh's (another trimesh), the triangles are left as read.
+
+    Parameters
+    ----------
+    faces : numpy.ndarray
+        trimesh's triangles (M, 3), indices into ``vertices``.
+    vertices : numpy.ndarray
+        trimesh's vertices (N, 3).
+    face_data : object
+        The face element's data as trimesh's PLY reader keeps it: a dict
+        of the corner lists (a 2D array, or an object array of lists) or
+        a structured array of fixed-size lists.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        int64 (M, 3): the triangles in trimesh's rows, concave polygons cut
+        by ears; None where none is.
+
+    Examples
+    --------
+    An L (fanned by trimesh from its corner (2, 0): its second triangle
+    lies in the notch) with vertices split at a seam: corner 5 is vertex 6.
+
+    >>> L = np.array([[2, 0, 0], [2, 1, 0], [1, 1, 0], [1, 2, 0], [0, 2, 0], [0, 0, 0], [0, 0, 0]], float)
+    >>> fan = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 6]])
+    >>> concave_polygons_cut(fan, L, {"vertex_indices": np.array([[0, 1, 2, 3, 4, 5]])}).tolist()
+    [[2, 3, 4], [2, 4, 6], [0, 1, 2], [6, 0, 2]]
+    """
+    lists = _face_lists(face_data)
+    faces = np.asarray(faces)
+    if lists is None or not len(faces):
+        return None
+    flat, sizes = lists
+    if (sizes < 3).any() or (sizes == 3).all():
+        return None
+    places = _split(np.arange(len(flat)), sizes)  # where in ``flat`` each corner of trimesh's triangles is
+    if places.shape != faces.shape:
+        return None
+    corner = np.zeros(len(flat), np.int64)
+    corner[places] = faces
+    if not (corner[places] == faces).all():
+        return None  # trimesh split the polygons otherwise: its reading stands
+    cut = _split(corner, sizes, np.asarray(vertices, np.float64))
+    return None if np.array_equal(cut, faces) else cut
+
+
+def _face_lists(face_data: object) -> tuple[np.ndarray, np.ndarray] | None:
+    """The corners (one polygon after another) and sizes of the face
+    lists trimesh's PLY reader keeps, or None for a form it has not."""
+    lists = None
+    if isinstance(face_data, dict):
+        lists = next((face_data[n] for n in ("vertex_indices", "vertex_index") if n in face_data), None)
+    elif isinstance(face_data, np.ndarray) and face_data.dtype.names:
+        name = next((n for n in ("vertex_indices", "vertex_index") if n in face_data.dtype.names), None)
+        if name is not None and face_data.dtype[name].names and "f1" in face_data.dtype[name].names:
+            lists = face_data[name]["f1"]  # binary lists of one size: (count, corners) records
+    if not isinstance(lists, np.ndarray) or not len(lists):
+        return None
+    if lists.dtype != object and lists.ndim == 2 and lists.dtype.kind in "iu":
+        return lists.reshape(-1).astype(np.int64), np.full(len(lists), lists.shape[1], np.int64)
+    if lists.dtype != object or lists.ndim != 1:
+        return None
+    rows = [np.asarray(r).reshape(-1) for r in lists]
+    if any(r.dtype.kind not in "iu" for r in rows):
+        return None
+    return np.concatenate(rows).astype(np.int64), np.array([len(r) for r in rows], np.int64)
 
 
 def _within(sizes: np.ndarray) -> np.ndarray:

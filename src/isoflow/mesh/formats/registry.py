@@ -205,9 +205,14 @@ def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
     return obj.spacing, obj.world(np.zeros(obj.ndim))
 
 
-def check_shape(shape, dtype, where: str) -> None:
+#: what a volume too large to read can do instead (:func:`check_shape`)
+READ_HINT = "crop it, or use a .zarr store with 'isoflow info' (read block by block)"
+
+
+def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     """Refuse, before reading, an array that will not fit in memory (the
-    file's array plus the boolean volume)."""
+    file's array plus the boolean volume), the line ending in ``hint``:
+    what to do instead."""
     import math
 
     from ...scale.memory import check_fits
@@ -216,7 +221,7 @@ def check_shape(shape, dtype, where: str) -> None:
     check_fits(
         voxels * (np.dtype(dtype).itemsize + 2),  # the file's array, the boolean volume, its C-ordered copy
         f"{where}: a {'x'.join(map(str, shape))} volume of {np.dtype(dtype)}",
-        hint="crop it, or use a .zarr store with 'isoflow info' (read block by block)",
+        hint=hint,
     )
 
 
