@@ -438,7 +438,7 @@ def _read_simple(p: Path):
         data = p.read_bytes()
     except OSError:
         return None  # trimesh's path says what is wrong with the file
-    return read_ply(data)
+    return read_ply(data, where=str(p))
 
 
 def check_mesh_file(p: Path) -> None:
