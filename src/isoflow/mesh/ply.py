@@ -320,9 +320,12 @@ def _ascii(text: bytes, elements: list[Element], where: str, header_lines: int) 
         error = exc
     if len(lines) == rows and (off := _line_off(tokens, words[lines], elements)) is not None:
         i, name, row, width = off  # a row per line: the first line that is not its row says more
-        raise IsoflowError(f"{where}: line {header_lines + int(lines[i]) + 1} holds {int(words[lines[i]])} numbers, "
-                           f"but row {row} of element '{name}' takes {width} (the header's properties or counts do "
-                           "not match the data)") from None
+        line = f"{where}: line {header_lines + int(lines[i]) + 1}"
+        if width < 0:
+            raise IsoflowError(f"{line}: row {row} of element '{name}' gives a list a count that is no whole number "
+                               "from 0 up, or past the line") from None
+        raise IsoflowError(f"{line} holds {int(words[lines[i]])} numbers, but row {row} of element '{name}' takes "
+                           f"{width} (the header's properties or counts do not match the data)") from None
     if error is not None:
         raise error
     return _assemble(got, elements, where)
