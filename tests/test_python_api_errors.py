@@ -1,6 +1,7 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import re
 import warnings
 
 import numpy as np
@@ -100,6 +101,17 @@ def test_betti_numbers_takes_the_right_chi():
     ring[1, 1, 0] = False
     assert isoflow.betti_numbers(ring, 6, chi=0) == [1, 1, 0]
     assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
+
+
+@pytest.mark.parametrize("chi", [0.5, 1.0, "1", True, np.float64(0)])
+def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
+    # a cube with a tunnel (chi 0): chi=0.5 gave b1 = 0.5, 1.0 gave [1, 0.0, 0], "1" NumPy's TypeError
+    tunnel = np.ones((3, 3, 3), bool)
+    tunnel[1, 1, :] = False
+    with pytest.raises(IsoflowError, match=re.escape(f"chi must be an integer, got {chi!r}")):
+        isoflow.betti_numbers(tunnel, chi=chi)
+    result = isoflow.betti_numbers(tunnel, chi=np.int64(0))
+    assert result == [1, 1, 0] and all(type(b) is int for b in result)
 
 
 @pytest.mark.parametrize(("args", "kwargs", "words"), [
