@@ -38,3 +38,30 @@ def test_a_4d_nifti_warns_of_the_fourth_axis_placement_it_cannot_keep(tmp_path):
         isoflow.write_volume(obj, tmp_path / "a.nii.gz")
     back = isoflow.read_volume(tmp_path / "a.nii.gz")
     assert back.spacing.tolist() == [1, 1, 1, 1] and back.origin.tolist() == [1, 2, 3, 0]
+
+
+def test_objects_meshes_and_results_compare_by_their_arrays():
+    # == raised NumPy's "truth value of an array ... is ambiguous": the
+    # generated __eq__ compared the array fields as a tuple
+    import pytest
+
+    cube = np.ones((3, 3, 3), bool)
+    obj = isoflow.DigitalObject(cube, pitch=0.5, origin=(1, 2, 3))
+    assert obj == isoflow.DigitalObject(cube.copy(), pitch=0.5, origin=(1.0, 2.0, 3.0))
+    assert obj != isoflow.DigitalObject(cube, pitch=0.5, origin=(1, 2, 4))
+    assert obj != isoflow.DigitalObject(cube[:2], pitch=0.5, origin=(1, 2, 3))
+    assert obj != isoflow.DigitalObject(cube, offset=(0, 0, 1), pitch=0.5, origin=(1, 2, 3))
+    assert obj != "cube" and obj in [None, isoflow.DigitalObject(cube, pitch=0.5, origin=(1, 2, 3))]
+    with pytest.raises(TypeError, match="unhashable type: 'DigitalObject'"):
+        hash(obj)
+    # the flow of a 3x3x3 box: 27, 8, 1 voxels, then nothing (docs/flow.md); two runs give equal states
+    states = isoflow.run_flow(cube).states
+    assert [s.voxels for s in states] == [27, 8, 1, 0] and states == isoflow.run_flow(cube).states
+    assert states[1] != states[2]
+    assert isoflow.boundary_mesh(cube) == isoflow.boundary_mesh(cube.copy())
+    assert isoflow.boundary_mesh(cube) != isoflow.boundary_mesh(cube[:2])
+    census = isoflow.closed_surfaces(cube)
+    assert census == isoflow.closed_surfaces(cube) and census != isoflow.closed_surfaces(cube[:2])
+    image = isoflow.LabelImage(cube.astype(np.uint8), np.ones(3), np.zeros(3))
+    assert image == isoflow.LabelImage(cube.astype(np.uint8), np.ones(3), np.zeros(3))
+    assert image != isoflow.LabelImage(cube.astype(np.uint8), np.full(3, 2.0), np.zeros(3))

@@ -42,6 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
+from ..results import same_fields
 from ..scale.arrays import refuse_object
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
@@ -88,7 +89,7 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LabelImage:
     """A label image with its place: integers in (x, y, z) order, the voxel
     size per axis and the world position of voxel (0, 0, 0)'s lowest
@@ -106,6 +107,11 @@ class LabelImage:
     array: np.ndarray
     spacing: np.ndarray
     origin: np.ndarray
+
+    # equal when the three arrays are, by their elements (the generated
+    # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
+    __eq__ = same_fields
+    __hash__ = None  # type: ignore[assignment]
 
 
 def label_table(

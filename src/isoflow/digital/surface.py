@@ -35,6 +35,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import IsoflowError
+from ..results import same_fields
 from ..scale.arrays import index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
@@ -160,7 +161,7 @@ def doubled_spoke_lut(connectivity: int = 6) -> np.ndarray:
 # --------------------------------------------------------------------------
 
 
-@dataclass
+@dataclass(eq=False)
 class QuadMesh:
     """A closed, outward-oriented quad mesh on lattice points.
 
@@ -194,6 +195,8 @@ class QuadMesh:
     sheet: np.ndarray  # (V,) int8: which sheet of its lattice vertex (-1 on midpoints)
     connectivity: int
     pinched: int  # vertex contacts split against the connectivity
+
+    __eq__ = same_fields  # the arrays by their elements: the generated __eq__ raised NumPy's ValueError
 
     @property
     def midpoints(self) -> int:
