@@ -103,6 +103,37 @@ def test_betti_numbers_takes_the_right_chi():
     assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
 
 
+RAGGED = [[[1, 0], [1]], [[1, 1], [0, 1]]]  # a 2x2x2 volume with one voxel left out of a row
+
+
+@pytest.mark.parametrize(("call", "where"), [
+    (lambda: isoflow.euler_characteristic(RAGGED), "volume"),
+    (lambda: isoflow.betti_numbers(RAGGED), "volume"),
+    (lambda: isoflow.analyze(RAGGED), "volume"),
+    (lambda: isoflow.closed_surfaces(RAGGED), "volume"),
+    (lambda: isoflow.boundary_mesh(RAGGED), "volume"),
+    (lambda: isoflow.configuration_histogram(RAGGED), "volume"),
+    (lambda: isoflow.flow_step(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.run_flow(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.to_manifold(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.label_table(RAGGED), "label_table image"),
+    (lambda: isoflow.class_histogram([list(range(255)), [1]]), "config_hist"),
+    (lambda: isoflow.planar_index([[1, 0], [1]]), "points"),
+    (lambda: isoflow.DigitalObject.from_points([[0, 0, 0], [1, 0]]), "lattice point coordinates"),
+    (lambda: isoflow.voxelize_mesh(np.eye(3), [[0, 1, 2], [0, 1]], resolution=4), "voxelize: faces"),
+])
+def test_nested_lists_of_uneven_lengths_are_refused_naming_the_argument(call, where):
+    # NumPy's own ValueError ("setting an array element with a sequence") came through, naming neither
+    with pytest.raises(IsoflowError, match=f"^{re.escape(where)}: nested sequences of uneven lengths are no array"):
+        call()
+
+
+def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_file(tmp_path):
+    with pytest.raises(IsoflowError, match=r"l\.npz: labels: nested sequences of uneven lengths are no array"):
+        isoflow.write_labels(RAGGED, tmp_path / "l.npz")
+    assert not (tmp_path / "l.npz").exists()
+
+
 @pytest.mark.parametrize("chi", [0.5, 1.0, "1", True, np.float64(0)])
 def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
     # a cube with a tunnel (chi 0): chi=0.5 gave b1 = 0.5, 1.0 gave [1, 0.0, 0], "1" NumPy's TypeError

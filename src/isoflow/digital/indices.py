@@ -18,6 +18,7 @@ from functools import cache
 import numpy as np
 
 from ..errors import IsoflowError
+from ..scale.arrays import as_array
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import check_connectivity, is_face_connectivity
 
@@ -416,7 +417,7 @@ def class_histogram(config_hist: np.ndarray) -> np.ndarray:
     >>> dict(zip(CLASS_LABELS, n.tolist()))["(+,+,+)"], int(n[6]), int(n[4])
     (8, 24, 24)
     """
-    hist = np.asarray(config_hist)
+    hist = as_array(config_hist, "config_hist")
     if hist.shape != (256,) or hist.dtype.kind not in "iuf":
         # (a 2D histogram has 16 counts, a 4D one 65536: a bare IndexError or a wrong n otherwise)
         raise IsoflowError(f"class_histogram takes the 256 counts of a 3D configuration histogram, got "
@@ -477,7 +478,7 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     >>> r.tolist(), int(r.sum()) // 4
     ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
     """
-    f = np.pad(np.asarray(points, dtype=bool), 1).astype(np.int8)
+    f = np.pad(as_array(points, "points").astype(bool), 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.
     ring = [

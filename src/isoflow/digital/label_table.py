@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..results import same_fields
-from ..scale.arrays import refuse_object
+from ..scale.arrays import as_array, refuse_object
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
@@ -247,7 +247,7 @@ def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
     refuse_object(image, "label_table", reader="isoflow.read_labels")
-    vol = np.asarray(image)
+    vol = as_array(image, "label_table image")
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
     return as_labels(vol)

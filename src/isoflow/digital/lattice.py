@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..results import same_fields
-from ..scale.arrays import binary
+from ..scale.arrays import as_array, binary
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,7 +232,7 @@ MAX_COORDINATE = 2**40
 
 
 def _integer_points(points, what: str) -> np.ndarray:
-    arr = np.asarray(points)
+    arr = as_array(points, f"{what} coordinates")
     if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
         raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
     if arr.dtype.kind not in "biuf":

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import IsoflowError
 from ..results import same_fields
-from ..scale.arrays import index_dtype, refuse_object
+from ..scale.arrays import as_array, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity
@@ -514,7 +514,7 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     """
     refuse_object(volume, "boundary_mesh", then="the mesh is in array-corner units: obj.world(mesh.vertices) "
                   "puts its vertices where the object is")
-    vol = np.asarray(volume)
+    vol = as_array(volume)
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
     connectivity = check_connectivity(3, connectivity)  # as an int

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import IsoflowError
+from ..scale.arrays import as_array
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
 #: vertex positions are welded by :func:`load_mesh`.
@@ -87,7 +88,7 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
         raise IsoflowError(f"{where}: vertices are not a numeric array ({exc})") from None
     if v.ndim != 2 or v.shape[1] != 3:
         raise IsoflowError(f"{where}: vertices must have shape (N, 3), got {v.shape}")
-    f = np.asarray(faces)
+    f = as_array(faces, f"{where}: faces")
     if f.ndim != 2 or f.shape[1] != 3:
         raise IsoflowError(f"{where}: faces must have shape (M, 3) (triangles), got {f.shape}")
     if f.shape[0] == 0:

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError, IsoflowWarning
-from ..scale.arrays import NotBinary, binary
+from ..scale.arrays import NotBinary, as_array, binary
 from ..scale.memory import check_fits
 from .formats.registry import (
     LabelVolume,
@@ -676,7 +676,7 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> np.array_equal(back.array, cells), back.spacing.tolist()
     (True, [0.5, 0.25])
     """
-    arr = np.asarray(labels)
+    arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
         raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
