@@ -133,6 +133,22 @@ def test_planar_index_eq_4_2_values():
     assert ell4[1, 1] == -1  # the re-entrant corner: r = -1/4, concave
 
 
+def test_planar_index_refuses_what_is_no_2d_set_of_points():
+    # a 3x3x3 cube gave a 3x3x5 array, a row of points NumPy's IndexError, and 0.5 or NaN counted as
+    # points (a 3x3 square of them: 4 convex corners, sum 4 chi = 4) where every other mask refuses them
+    from isoflow.errors import IsoflowError
+
+    with pytest.raises(IsoflowError, match="points: planar_index takes a 2D array, got a 3D array"):
+        I.planar_index(np.ones((3, 3, 3), bool))
+    with pytest.raises(IsoflowError, match="points: planar_index takes a 2D array, got a 1D array"):
+        I.planar_index(np.ones(3, bool))
+    for value in (0.5, np.nan):
+        with pytest.raises(IsoflowError, match=f"points: not a binary volume .* e.g. {value}"):
+            I.planar_index(np.full((3, 3), value))
+    square = I.planar_index(np.ones((3, 3), np.float32))  # 0/1 of any type is a set of points
+    assert square.shape == (3, 3) and int(square.sum()) == 4
+
+
 def test_planar_index_sums_to_four_chi(rng):
     for _ in range(200):
         pts = rng.random(rng.integers(1, 12, 2)) < rng.uniform(0.2, 0.9)

@@ -18,7 +18,7 @@ from functools import cache
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.arrays import as_array
+from ..scale.arrays import as_array, binary
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import check_connectivity, is_face_connectivity
 
@@ -453,7 +453,7 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     points : numpy.ndarray
-        A 2D binary array of lattice points.
+        A 2D binary array of lattice points (bool or 0/1).
 
     Returns
     -------
@@ -462,6 +462,11 @@ def planar_index(points: np.ndarray) -> np.ndarray:
         f_k+2`` over the 4-neighbours ``k`` in {1, 3, 5, 7} (the products are
         the unit squares at the point): +1, 0, -1 at convex, flat, concave
         boundary points, 0 inside and off the set.
+
+    Raises
+    ------
+    IsoflowError
+        When ``points`` is not 2D or holds values other than 0 and 1.
 
     Notes
     -----
@@ -478,7 +483,12 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     >>> r.tolist(), int(r.sum()) // 4
     ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
     """
-    f = np.pad(as_array(points, "points").astype(bool), 1).astype(np.int8)
+    # a 3D array gave an array of another shape, a 1D one NumPy's IndexError,
+    # and 0.5 or NaN counted as points: refused, as every mask of the API is
+    grid = binary(points, "points")
+    if grid.ndim != 2:
+        raise IsoflowError(f"points: planar_index takes a 2D array, got a {grid.ndim}D array")
+    f = np.pad(grid, 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.
     ring = [
