@@ -223,7 +223,9 @@ def _tables_3d():
         codes[c] = (CONVEX, CONCAVE, CONCAVE)
     for c in np.flatnonzero(cls == 0):
         codes[c] = (CONCAVE, CONCAVE, CONCAVE)
-    return gamma, cls, codes, normal2
+    # cached and handed out by the public gamma_lut, class_lut, code_lut and
+    # normal_lut: a caller's write into one changed every later analyze
+    return read_only(gamma), read_only(cls), read_only(codes), read_only(normal2)
 
 
 def gamma_lut() -> np.ndarray:
@@ -337,7 +339,7 @@ def f_lut() -> np.ndarray:
     """
     codes = code_lut()
     s = np.where(np.isin(codes, (CONVEX, CONCAVE)), codes, 0)
-    return s.sum(axis=1) * np.abs(s).sum(axis=1)
+    return read_only(s.sum(axis=1) * np.abs(s).sum(axis=1))  # cached: shared with every later caller
 
 
 def a_lut(connectivity: int = 6) -> np.ndarray:
