@@ -134,6 +134,48 @@ def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_file(tmp_path)
     assert not (tmp_path / "l.npz").exists()
 
 
+def _box():
+    import trimesh
+
+    return trimesh.creation.box()
+
+
+@pytest.mark.parametrize(("call", "name", "how"), [
+    (lambda p: isoflow.run_flow(np.ones((3, 3, 3), bool), progress=p), "progress", "progress(step, state)"),
+    (lambda p: isoflow.run_flow(np.ones((3, 3, 3), bool), guard=True, progress=p), "progress",
+     "progress(step, state)"),
+    (lambda p: isoflow.voxelize_mesh(_box(), resolution=4, progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.voxelize_meshes([_box()], resolution=4, progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.verify_genus(_box(), resolutions=(4,), progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.verify_genus(_box(), resolutions=(4,), on_resolution=p), "on_resolution",
+     "on_resolution(entry)"),
+])
+def test_a_callback_that_cannot_be_called_is_refused_naming_it(call, name, how):
+    # it failed at its first call, after a flow step or a slab, as "'int' object is not callable"
+    with pytest.raises(TypeError, match=re.escape(f"{name} must be a callable, {how}, or None; got 5")):
+        call(5)
+
+
+@pytest.mark.parametrize("call", [
+    lambda p, tmp: isoflow.analyze_chunked(_zarr_cube(tmp), progress=p),
+    lambda p, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, progress=p),
+])
+def test_a_progress_of_the_block_by_block_work_that_cannot_be_called_is_refused(call, tmp_path):
+    pytest.importorskip("zarr")
+    with pytest.raises(TypeError, match=re.escape("progress must be a callable, progress(done, total), or None; "
+                                                  "got 'log'")):
+        call("log", tmp_path)
+    assert not (tmp_path / "v.zarr").exists()
+
+
+def _zarr_cube(folder):
+    import zarr
+
+    store = zarr.open(str(folder / "cube.zarr"), mode="w", shape=(4, 4, 4), chunks=(2, 2, 2), dtype=np.uint8)
+    store[1:3, 1:3, 1:3] = 1
+    return store
+
+
 @pytest.mark.parametrize("chi", [0.5, 1.0, "1", True, np.float64(0)])
 def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
     # a cube with a tunnel (chi 0): chi=0.5 gave b1 = 0.5, 1.0 gave [1, 0.0, 0], "1" NumPy's TypeError
