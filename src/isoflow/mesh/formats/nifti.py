@@ -25,17 +25,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import (
-    RawVolume,
-    check_shape,
-    import_library,
-    note,
-    placement,
-    quiet_logs,
-    reading,
-    refuse_empty,
-    stored_values,
-)
+from .registry import RawVolume, check_shape, import_library, note, placement, quiet_logs, reading, refuse_empty, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
