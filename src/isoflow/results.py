@@ -102,9 +102,10 @@ def same_fields(a: Any, b: object) -> bool:
     >>> Box(np.zeros(3)) == Box(np.zeros(3)), Box(np.zeros(3)) == Box(np.ones(3))
     (True, False)
     """
+    names = [f.name for f in dataclasses.fields(a)]  # before the test below narrows ``a`` to ``b``'s type
     if type(a) is not type(b):
         return NotImplemented
-    return all(same_values(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+    return all(same_values(getattr(a, name), getattr(b, name)) for name in names)
 
 
 class Result(Mapping[str, Any]):
