@@ -98,20 +98,21 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
             pass
         else:
             raise IsoflowError(f"{where}: faces must be integer vertex indices, got dtype {f.dtype}")
-    f = f.astype(np.int64, copy=False)
     bad = ~np.isfinite(v)
     if bad.any():
         nv = int(bad.any(axis=1).sum())
         raise IsoflowError(
             f"{where}: {nv} of {len(v)} vertices have NaN or infinite coordinates "
             f"({int(bad.sum())} values)")
+    # checked in the faces' own type: int64 wraps a uint64 index from 2**63 on (and a float one
+    # beyond int64) to a negative number, which the message then named instead of the index given
     lo, hi = int(f.min()), int(f.max())
     if lo < 0 or hi >= len(v):
         nbad = int(((f < 0) | (f >= len(v))).sum())
         worst = lo if lo < 0 else hi
         raise IsoflowError(
             f"{where}: {nbad} face indices out of range [0, {len(v)}) (e.g. {worst})")
-    return v, f
+    return v, f.astype(np.int64, copy=False)
 
 
 # ---------------------------------------------------------------------------
