@@ -27,6 +27,17 @@ def test_a_report_comes_back_from_its_json():
         assert isoflow.Report.from_dict(json.loads(json.dumps(report.to_dict()))) == report
 
 
+def test_a_4d_report_comes_back_from_its_json():
+    # the classes of a 4D report are keyed by configuration, ints, which JSON writes as strings: read
+    # back, {"1": 16, ...} was not equal to {1: 16, ...}. A 2x2x2x2 block: 16 corners of 1 cell each
+    # (configuration 1), 32 edge vertices of 2 (3), 24 face vertices of 4 (15), 8 of 8 (255)
+    block = np.ones((2, 2, 2, 2), bool)
+    report = isoflow.analyze(block, 80)
+    back = isoflow.Report.from_dict(json.loads(json.dumps(report.to_dict())))
+    assert back == report and back.classes == {1: 16, 3: 32, 15: 24, 255: 8}
+    assert isoflow.Report.from_dict(report.to_dict()) == report  # int keys given stay as they are
+
+
 def test_a_4d_nifti_warns_of_the_fourth_axis_placement_it_cannot_keep(tmp_path):
     # the fourth axis's pitch and origin were dropped without a word, read
     # back as 1 and 0 (TIFF's dropped origin is warned of)
