@@ -52,6 +52,18 @@ def test_a_voxelization_comes_back_from_its_json():
     assert Voxelization.from_dict(dict(v)) == v and obj.voxels == 64
 
 
+def test_a_surface_census_comes_back_from_its_json():
+    # JSON makes the histogram and the Betti counts lists: read back, (1, 1) was not equal to [1, 1]
+    from isoflow.digital.report import SurfaceCensus
+
+    hollow = np.ones((3, 3, 3), bool)
+    hollow[1, 1, 1] = False
+    census = isoflow.closed_surfaces(hollow)
+    back = SurfaceCensus.from_dict(json.loads(json.dumps(census.to_dict())))
+    assert back == census and back.betti_counts == (1, 1) and [s["genus"] for s in back.surfaces] == [0, 0]
+    assert back.hist.sum() == 4**3  # the lattice vertices of a 3x3x3 array
+
+
 def test_a_4d_nifti_warns_of_the_fourth_axis_placement_it_cannot_keep(tmp_path):
     # the fourth axis's pitch and origin were dropped without a word, read
     # back as 1 and 0 (TIFF's dropped origin is warned of)
