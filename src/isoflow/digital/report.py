@@ -129,15 +129,6 @@ class Report(Result):
         keys back from JSON, whose keys are strings (the report read back
         was not equal to the one written).
 
-        Parameters
-        ----------
-        values : mapping
-            The fields, e.g. ``json.loads`` of ``to_dict()``.
-
-        Returns
-        -------
-        Report
-
         Examples
         --------
         >>> import json
@@ -185,15 +176,6 @@ class SurfaceCensus(Result):
         """The census of :meth:`to_dict`'s JSON, its histogram an array and
         its Betti counts a tuple again (JSON makes both lists, and the census
         read back was not equal to the one written).
-
-        Parameters
-        ----------
-        values : mapping
-            The fields, e.g. ``json.loads`` of ``to_dict()``.
-
-        Returns
-        -------
-        SurfaceCensus
 
         Examples
         --------

@@ -115,15 +115,6 @@ class Voxelization(Result):
         (``volume`` given is taken), and the origin is an array again. It
         was refused, the volume being a field without a default.
 
-        Parameters
-        ----------
-        values : mapping
-            The fields, e.g. ``json.loads`` of ``to_dict()``.
-
-        Returns
-        -------
-        Voxelization
-
         Examples
         --------
         >>> import json, trimesh
