@@ -242,3 +242,68 @@ def test_the_4d_energies_of_ndim_md_are_the_code_s(tmp_path, capsys):
     corner = isoflow.analyze(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8)  # the inequality is E's, not the report's
     assert "not keep it (the two cells sharing a vertex under face adjacency are two\ncomponents, and `energy` 30 < 32)" in text
     assert (corner.betti[0], corner.energy) == (2, 30) and surface_energy(_cells((0, 0, 0, 0), (1, 1, 1, 1)), 8) >= 32
+
+
+def test_the_cube_sides_named_for_the_compiled_thresholds_are_the_first_that_take_them():
+    """large-volumes.md and dependencies.md said 2 million voxels was 128^3
+    (126^3 = 2,000,376 already takes the compiled passes): every ``N
+    million voxels (S^3)`` and ``N million, S^3`` of the pages names the
+    smallest cube at the threshold, and the thresholds are the code's."""
+    from isoflow.scale.compiled import least_voxels
+
+    said = re.compile(r"(\d) million(?: voxels)?,? \((\d+)\^3\)|(\d) million, (\d+)\^3")
+    seen = set()
+    for page in PAGES:
+        for m in said.finditer(" ".join(page.read_text().split())):
+            millions, side = (int(g) for g in (m.group(1, 2) if m.group(1) else m.group(3, 4)))
+            assert millions * 1_000_000 in (least_voxels(), least_voxels(surfaces=True)), (page.name, m.group(0))
+            assert (side - 1) ** 3 < millions * 1_000_000 <= side ** 3, (page.name, m.group(0))
+            seen.add((page.name, millions))
+    assert {("large-volumes.md", 2), ("large-volumes.md", 4), ("dependencies.md", 2), ("surface.md", 4)} <= seen
+
+
+def test_the_flow_figures_of_flow_md_are_the_code_s():
+    """flow.md's small examples, each run as the page says: the 3x4x5 box,
+    the rectangle, the L of five squares, Example 19's limit, the two cubes
+    sharing an edge at 6 and 26, one thinning step of the box and the
+    solid torus of the pictures."""
+    import sys
+
+    from isoflow.flow.guard import thinning_step
+
+    text = " ".join((ROOT / "docs" / "flow.md").read_text().split())
+
+    def voxels(volume, connectivity=6):
+        return [s["voxels"] for s in isoflow.run_flow(volume, connectivity=connectivity).steps]
+
+    assert "the 3x4x5 box gives 60, 24, 6, 0 voxels" in text
+    assert voxels(np.ones((3, 4, 5), bool)) == [60, 24, 6, 0]
+    assert "A rectangle loses one row and one column per step" in text
+    assert voxels(np.ones((3, 6), bool), 4) == [18, 10, 4, 0]
+    assert "the L of five squares with arms of length 3 gives 5, 3, 1, 0 pixels" in text
+    ell = np.zeros((3, 3), bool)
+    ell[:, 0] = ell[2, :] = True
+    assert voxels(ell, 4) == [5, 3, 1, 0]
+    assert "the limit is the point `(1,1,1)`" in text and "the single cube `[0.5, 1.5]^3`" in text
+    run = isoflow.run_flow(isoflow.read_object(isoflow.data.example19()))
+    assert run.steps[1]["bbox"] == [[0.5] * 3, [1.5] * 3] and run.limit["center"] == [1.0, 1.0, 1.0]
+    assert ("Two 2x2x2 cubes sharing an edge become two separate points under 6 and stay one piece joined along "
+            "the shared edge under 26") in text
+    cubes = np.zeros((4, 4, 2), bool)
+    cubes[:2, :2] = cubes[2:, 2:] = True
+    two = isoflow.run_flow(cubes, steps=1, connectivity=6).steps[1]
+    one = isoflow.run_flow(cubes, steps=1, connectivity=26).steps[1]
+    assert (two["voxels"], two["betti"][0], one["betti"][0]) == (2, 2, 1)
+    assert "One thinning step of a 3x4x5 box removes its outer layer" in text
+    box = np.zeros((5, 6, 7), bool)
+    box[1:4, 1:5, 1:6] = True
+    inner = np.zeros_like(box)
+    inner[2:3, 2:4, 2:5] = True
+    assert np.array_equal(thinning_step(box, 6), inner)
+    assert "A solid torus (R = 7, r = 3, 1280 voxels)" in text
+    sys.path.insert(0, str(ROOT / "tests" / "flow"))
+    try:
+        import shapes
+    finally:
+        sys.path.remove(str(ROOT / "tests" / "flow"))
+    assert int(shapes.solid_torus(7, 3).sum()) == 1280

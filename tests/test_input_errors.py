@@ -673,3 +673,25 @@ def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatc
     fails(capsys, "info", tmp_path / "big.npy", words=("big.npy", "not a binary volume"))
     assert warming.is_set()  # (the warm-up ran: the input is large enough)
     assert not [t.name for t in threading.enumerate() if t.name.endswith("(quietly)") and t.is_alive()]
+
+
+# ------------------------------------------------- a missing input, worded once
+
+#: inputs of every kind (volumes, a point list, meshes, a zarr store, an HDF5
+#: dataset) and the file the line names
+MISSING_INPUTS = {"gone.npy": "gone.npy", "gone.tif": "gone.tif", "gone.txt": "gone.txt", "gone.stl": "gone.stl",
+                  "gone.ply": "gone.ply", "gone.off": "gone.off", "gone.zarr": "gone.zarr", "gone.h5:/v": "gone.h5"}
+
+
+@pytest.mark.parametrize("command", ["info", "voxelize", "surface", "genus", "flow"])
+def test_a_missing_input_is_worded_alike_by_every_command(command, tmp_path, capsys):
+    """Volumes said "no such file", meshes "file not found", zarr stores
+    "no such file or directory"; voxelize and genus said a missing volume
+    was "a volume file, not a triangle mesh". Every command, on an input
+    of every kind that is not there, now says the one wording."""
+    after = {"voxelize": ["--resolution", "8", "-o", tmp_path / "v.npy"], "surface": ["-o", tmp_path / "s.ply"],
+             "flow": ["--out", tmp_path / "flow"]}.get(command, [])
+    for given, named in MISSING_INPUTS.items():
+        line = fails(capsys, command, f"{tmp_path}/{given}", *after)
+        assert line == f"isoflow {command}: error: {tmp_path / named}: no such file or directory", given
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written

@@ -263,6 +263,33 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.analyze(volume)
 
 
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
+@pytest.mark.parametrize("value", [2, 255, 0.5, np.nan])
+def test_boundary_mesh_refuses_a_volume_that_is_not_binary_as_analyze_does(method, value):
+    # every nonzero value was read as True: a label image or a probability
+    # map gave a mesh of all its labels without a word
+    if method == "compiled":
+        pytest.importorskip("numba")
+    volume = np.zeros((3, 3, 3))
+    volume[1, 1, 1] = value
+    with pytest.raises(IsoflowError, match="not a binary volume"):
+        isoflow.boundary_mesh(volume, 6, method=method)
+    with pytest.raises(IsoflowError, match="is not a binary volume"):
+        isoflow.boundary_mesh(np.full((1, 1, 2), "a"), 6, method=method)
+
+
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
+def test_boundary_mesh_reads_a_0_1_volume_of_any_type_as_the_cube_it_is(method):
+    # one voxel is a cube: 8 corners, 6 square faces, V - E + F = 2
+    if method == "compiled":
+        pytest.importorskip("numba")
+    bytes_ = np.zeros((3, 3, 3), np.uint8)
+    bytes_[1, 1, 1] = 1
+    for volume in (bytes_, bytes_.astype(float), (bytes_ * 2).view(bool)):
+        mesh = isoflow.boundary_mesh(volume, 6, method=method)
+        assert (len(mesh.vertices), len(mesh.faces), mesh.euler_characteristic) == (8, 6, 2)
+
+
 def test_class_histogram_names_a_histogram_that_is_not_3d():
     # a 2D histogram (16 counts) or any other length was NumPy's IndexError
     hist2d = isoflow.configuration_histogram(np.ones((3, 3), bool))

@@ -8,6 +8,10 @@ nobody has to read a traceback from inside numpy.
 
 from __future__ import annotations
 
+#: what every reader says of an input that is not there (a volume, a mesh,
+#: a zarr store: a directory), after its path
+MISSING = "no such file or directory"
+
 
 def counted(n: int, one: str, many: str | None = None) -> str:
     """A count and its noun in a message, the noun singular for 1 (``many``:
@@ -64,7 +68,7 @@ class IsoflowError(ValueError):
     ...     isoflow.read_volume("no-such-volume.npy")
     ... except IsoflowError as exc:
     ...     print(exc)
-    no-such-volume.npy: no such file
+    no-such-volume.npy: no such file or directory
     """
 
     #: the message in the command line's words where they differ from the
@@ -105,8 +109,8 @@ class IsoflowError(ValueError):
 
         Examples
         --------
-        >>> str(IsoflowError("no such file").at("a.npy"))
-        'a.npy: no such file'
+        >>> str(IsoflowError(MISSING).at("a.npy"))
+        'a.npy: no such file or directory'
         """
         out = IsoflowError(f"{where}: {self}")
         if self.command_line is not None:

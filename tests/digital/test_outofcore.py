@@ -462,6 +462,28 @@ def test_bad_arrays_raise_isoflow_error(rng):
         analyze_chunked(da.from_array(np.array([["a", "b"], ["c", "d"]]), chunks=1))
 
 
+def test_a_store_given_to_analyze_chunked_is_pointed_to_analyze_zarr(tmp_path):
+    # the OME-Zarr group voxelize_to_zarr and write_volume write, or its
+    # path, was told "use isoflow.analyze for in-memory arrays", which
+    # reads neither; the advice given now works
+    from skimage.measure import euler_number
+
+    from isoflow import write_volume
+
+    v = torus(6, 2)
+    path = write_volume(DigitalObject(v), tmp_path / "torus.zarr")
+    for given in (str(path), path, zarr.open(str(path), mode="r")):
+        with pytest.raises(IsoflowError) as info:
+            analyze_chunked(given, 6)
+        assert "isoflow.analyze_zarr(path) reads a zarr store" in str(info.value)
+        assert "in-memory" not in str(info.value) and "\n" not in str(info.value)
+    assert "group['0']" in str(info.value)
+    report = analyze_zarr(path, 6)
+    assert report.betti == [1, 1, 0] and report.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+    with pytest.raises(IsoflowError, match="use isoflow.analyze for in-memory arrays"):
+        analyze_chunked(v)
+
+
 def test_bad_zarr_inputs_raise_with_the_path(tmp_path, rng):
     with pytest.raises(IsoflowError, match="missing.zarr: no such file"):
         analyze_zarr(tmp_path / "missing.zarr")

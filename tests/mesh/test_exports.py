@@ -258,3 +258,50 @@ def test_stl_that_cannot_hold_the_positions_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "float32" in err[0] and "would merge" in err[0] and ".ply" in err[0]
     assert not (tmp_path / "utm.stl").exists()
+
+
+def _titles(monkeypatch):
+    """The titles of every picture a command saves (then saved as usual)."""
+    from isoflow.flow import pictures
+    from isoflow.mesh import render
+
+    seen = []
+    real = render.save_figure
+
+    def save(fig, path):
+        seen.append(" ".join([fig._suptitle.get_text() if fig._suptitle else ""] + [a.get_title() for a in fig.axes]))
+        return real(fig, path)
+
+    monkeypatch.setattr(render, "save_figure", save)
+    monkeypatch.setattr(pictures, "save_figure", save)
+    return seen
+
+
+def test_pictures_name_the_green_they_draw(tmp_path, monkeypatch):
+    # not well-composed vertices are drawn green (and faces there greenish),
+    # but the key said only "blue concave, white flat, red convex": the
+    # thin rings of a guarded flow were half green with no word on it
+    seen = _titles(monkeypatch)
+    contact = np.zeros((4, 4, 4), bool)
+    contact[1, 1, 1] = contact[2, 2, 2] = True  # two voxels sharing one corner only: not well-composed there
+    box = np.zeros((4, 4, 4), bool)
+    box[1:3, 1:3, 1:3] = True
+    np.save(tmp_path / "contact.npy", contact)
+    np.save(tmp_path / "box.npy", box)
+    for name in ("contact", "box"):
+        assert main(["surface", str(tmp_path / f"{name}.npy"), "--connectivity", "26", "-o", str(tmp_path / f"{name}.ply"),
+                     "--png", str(tmp_path / f"{name}.png")]) == 0
+        assert main(["flow", str(tmp_path / f"{name}.npy"), "--connectivity", "26", "--steps", "1",
+                     "--out", str(tmp_path / f"run_{name}")]) == 0
+    surface_contact, flow_contact, surface_box, flow_box = [s for s in seen if "concave" in s]
+    for title in (surface_contact, flow_contact):
+        assert "blue concave, white flat, red convex, green not well-composed" in title
+    for title in (surface_box, flow_box):
+        assert "green" not in title and "blue concave, white flat, red convex" in title
+    from isoflow.mesh.export import gamma_colours
+
+    mesh = boundary_mesh(contact, 26)
+    corner = np.all(mesh.vertices == 2, axis=1)  # the shared corner, once per sheet
+    assert corner.sum() == 2 and (mesh.vertex_class[corner] == -1).all()
+    r, g, b = gamma_colours(mesh.gamma, mesh.vertex_class)[corner][0].astype(int)
+    assert g > r and g > b

@@ -346,6 +346,42 @@ def test_strict_refuses_double_sided_faces():
         voxelize(box.vertices, _double(box.faces), resolution=8, strict=True)
 
 
+@pytest.mark.parametrize(("mesh", "fill", "rule"), [
+    ("double-sided box", "winding", "read by the exact nonzero winding number"),
+    ("panel.obj", "winding", "read by the generalised winding number"),
+    ("panel.obj", "shell", "the shell fill takes its faces as they are"),
+    ("panel.obj", "flood", "the flood fill takes its faces as they are"),
+])
+def test_strict_names_the_rule_the_mesh_is_read_by_without_it(tmp_path, mesh, fill, rule):
+    # the refusal said "without --strict it is read by the generalised
+    # winding number" for every fill, also of a closed box drawn
+    # double-sided, which without --strict is read by the exact rule (its
+    # note says so) into the box's own voxels
+    if mesh == "double-sided box":
+        box = trimesh.creation.box((1, 1, 1))
+        path = tmp_path / "box2.obj"
+        trimesh.Trimesh(box.vertices, _double(box.faces), process=False).export(path)
+    else:
+        path = DATA / mesh
+
+    def command(*extra):
+        return subprocess.run([sys.executable, "-m", "isoflow", "voxelize", str(path), "--resolution", "8",
+                               "--fill", fill, "-o", str(tmp_path / f"{fill}.npz"), *extra],
+                              capture_output=True, text=True)
+
+    refused = command("--strict")
+    assert refused.returncode == 2 and not (tmp_path / f"{fill}.npz").exists()
+    line = refused.stderr.strip()
+    assert "\n" not in line and line.endswith(f"(without --strict {rule})" if fill != "winding" else f"{rule})")
+    done = command()
+    assert done.returncode == 0, done.stderr
+    if mesh == "double-sided box":
+        assert rule in done.stderr  # the note of the run without --strict
+        box = trimesh.creation.box((1, 1, 1))
+        assert np.array_equal(np.load(tmp_path / "winding.npz")["volume"],
+                              voxelize(box.vertices, box.faces, resolution=8)[0])
+
+
 # ---------------------------------------------------------------------------
 # never an empty answer in silence
 # ---------------------------------------------------------------------------

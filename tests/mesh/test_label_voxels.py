@@ -278,7 +278,7 @@ def test_bad_input_is_one_line_naming_it(tmp_path):
         voxelize_meshes([sphere(1, (0, 0, 0))], overlap="first")
     with pytest.raises(IsoflowError, match="no meshes given"):
         voxelize_meshes([])
-    with pytest.raises(IsoflowError, match="nothing.stl: file not found"):
+    with pytest.raises(IsoflowError, match="nothing.stl: no such file or directory"):
         voxelize_meshes([tmp_path / "nothing.stl"])
     with pytest.raises(IsoflowError, match="mesh 2: faces must have shape"):
         voxelize_meshes([sphere(1, (0, 0, 0)), (np.zeros((3, 3)), np.zeros((1, 2), int))])

@@ -325,7 +325,7 @@ def _bad(tmp_path):
     (tmp_path / "empty.obj").write_text("# nothing\n")
     (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv nan 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n")
     return [
-        (["voxelize", tmp_path / "missing.stl", "--resolution", "8", "-o", tmp_path / "o.npz"], "not found"),
+        (["voxelize", tmp_path / "missing.stl", "--resolution", "8", "-o", tmp_path / "o.npz"], "no such file or directory"),
         (["voxelize", tmp_path / "garbage.stl", "--resolution", "8", "-o", tmp_path / "o.npz"], "garbage.stl"),
         (["genus", tmp_path / "empty.obj"], "empty.obj"),
         (["info", tmp_path / "nan.obj"], "NaN"),

@@ -5,6 +5,7 @@ trimesh."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -32,7 +33,7 @@ def _files():
 def _through_trimesh(p: Path, monkeypatch):
     with monkeypatch.context() as m:
         m.setattr(readers, "read_simple", lambda path: None)
-        m.setattr(ply, "read_ply", lambda data: None)
+        m.setattr(ply, "read_ply", lambda data, where="": None)
         return _load(p)
 
 
@@ -357,19 +358,21 @@ def test_binary_ply_of_polygons_of_several_sizes_reads_as_its_ascii_twin(tmp_pat
     v2, f2 = ply.read_ply((tmp_path / "b.ply").read_bytes())
     np.testing.assert_array_equal(v2, twin.vertices)
     np.testing.assert_array_equal(f2, twin.faces)
-    # a 64-bit count past any file (damaged): trimesh's turn, not an OverflowError
+    # a 64-bit count past any file (damaged): one line, not an OverflowError
     head = _ply(v[:3], [[0, 1, 2]], "binary_little_endian", count="uint64")
     tail = np.array([2**64 - 1], "<u8").tobytes() + np.array([0, 1, 2], "<i4").tobytes()
     damaged = head.replace(b"element face 1", b"element face 2") + tail
-    assert ply.read_ply(head) is not None and ply.read_ply(damaged) is None
+    assert ply.read_ply(head) is not None
+    with pytest.raises(IsoflowError, match="^m.ply: the binary body ends inside row 1 of element 'face' "):
+        ply.read_ply(damaged, "m.ply")
 
 
-@pytest.mark.parametrize("case", ["texture", "face property", "edge element", "two-corner face", "index past the end",
-                                  "truncated", "no faces"])
-def test_ply_the_reader_leaves_to_trimesh(case, tmp_path, monkeypatch):
-    """What trimesh reads differently (texture seams split vertices) or
-    refuses: the reader says None, and the file loads, or fails, as
-    through trimesh."""
+@pytest.mark.parametrize("case", ["texture", "face property", "edge element", "two-corner face"])
+def test_ply_with_more_than_vertices_and_faces_loads_as_through_trimesh(case, tmp_path, monkeypatch):
+    """Texture coordinates (trimesh splits the vertices at their seams; the
+    weld joins them again), a face property, another element, a face of two
+    corners (trimesh drops it): isoflow's reader reads them, to trimesh's
+    arrays."""
     rng = np.random.default_rng(2)
     v = rng.normal(size=(8, 3))
     faces = _polygons(rng, 8, [3, 3, 3])
@@ -377,13 +380,15 @@ def test_ply_the_reader_leaves_to_trimesh(case, tmp_path, monkeypatch):
                 "edge element": dict(more="element edge 0\nproperty int vertex1\nproperty int vertex2")}.get(case, {})
     if case == "two-corner face":
         faces[1] = faces[1][:2]
-    if case == "index past the end":
-        faces[2][1] = 8
-    data = _ply(v, faces if case != "no faces" else [], "binary_little_endian", **kw)
     p = tmp_path / "m.ply"
-    p.write_bytes(data[:-5] if case == "truncated" else data)
-    assert ply.read_ply(p.read_bytes()) is None
-    _same(p, monkeypatch)
+    p.write_bytes(_ply(v, faces, "binary_little_endian" if case != "two-corner face" else "ascii", **kw))
+    _same(p, monkeypatch, fast=True)
+
+
+def test_ply_without_faces_is_left_to_trimesh(tmp_path, monkeypatch):
+    p = tmp_path / "m.ply"
+    p.write_bytes(_ply(np.eye(3), [], "binary_little_endian"))
+    _same(p, monkeypatch, fast=False)
 
 
 def test_a_command_on_a_plain_ply_does_not_import_trimesh(tmp_path):
@@ -404,3 +409,187 @@ def test_a_weld_tolerance_outside_0_1_is_refused_for_a_file_and_a_mesh_in_memory
     for given in (ROOT / "meshes" / "torus.obj", box, (box.vertices, box.faces)):
         with pytest.raises(IsoflowError, match=r"merge_rtol must be a number in \[0, 1\)"):
             mesh_input(given, merge_rtol=rtol)
+
+
+# PLY files of every kind of property and element (any header: _write_ply)
+
+PLY_FORMS = ["ascii", "binary_little_endian", "binary_big_endian"]
+PLY_FLOATS = {"float", "double", "float32", "float64"}
+
+
+def _write_ply(path: Path, form: str, elements: list) -> Path:
+    """A PLY file of ``elements``, each ``(name, properties, rows)``: a
+    property is ``(type, name)`` or ``(("list", count type, item type),
+    name)``, a row a value per property (a sequence for a list)."""
+    head = ["ply", f"format {form} 1.0", "comment written by test_readers"]
+    for name, props, rows in elements:
+        head.append(f"element {name} {len(rows)}")
+        head += [f"property {t} {n}" if isinstance(t, str) else f"property list {t[1]} {t[2]} {n}" for t, n in props]
+    data = ("\n".join(head + ["end_header"]) + "\n").encode()
+    e = ">" if form == "binary_big_endian" else "<"
+    for _, props, rows in elements:
+        for row in rows:
+            words, cells = [], b""
+            for (t, _), x in zip(props, row):
+                kind = t if isinstance(t, str) else t[2]
+                items = list(x) if not isinstance(t, str) else [x]
+                word = (lambda y: repr(float(y))) if kind in PLY_FLOATS else (lambda y: str(int(y)))
+                words += ([str(len(items))] if not isinstance(t, str) else []) + [word(y) for y in items]
+                if not isinstance(t, str):
+                    cells += np.asarray(len(items), e + ply.TYPES[t[1]]).tobytes()
+                cells += np.asarray(items, e + ply.TYPES[kind]).tobytes()
+            data += (" ".join(words) + "\n").encode() if form == "ascii" else cells
+    path.write_bytes(data)
+    return path
+
+
+#: an L-shaped prism: the L's corners at z = 0 and at z = 1
+L_CAP = [(0, 0), (2, 0), (2, 1), (1, 1), (1, 2), (0, 2)]
+L_PRISM = np.array([(x, y, z) for z in (0, 1) for x, y in L_CAP], float) * 1.5 + 0.25
+#: its polygons: the concave L caps (6 corners), five sides as quads, one as two triangles
+L_FACES = [[5, 4, 3, 2, 1, 0], [6, 7, 8, 9, 10, 11], [0, 1, 7], [0, 7, 6]] + [
+    [i, (i + 1) % 6, (i + 1) % 6 + 6, i + 6] for i in range(1, 6)]
+#: the same prism as triangles, cut by hand (the L as four triangles inside it)
+L_TRIANGLES = [[0, 2, 1], [0, 3, 2], [0, 5, 3], [3, 5, 4], [6, 7, 8], [6, 8, 9], [6, 9, 11], [9, 10, 11]] + [
+    t for i in range(6) for t in ([i, (i + 1) % 6, (i + 1) % 6 + 6], [i, (i + 1) % 6 + 6, i + 6])]
+PLY_VARIANTS = ["u v", "s t", "texcoord", "normals, colours, edges, materials"]
+
+
+def _prism_elements(variant: str | None, triangles: bool = False, trimesh_reads: bool = False) -> list:
+    """The L prism's elements with the properties and elements of
+    ``variant`` beside its positions and corner lists (None: none). Unless
+    ``trimesh_reads``, the materials' names are lists of two lengths and
+    the edges have a colour: trimesh cannot read either in a binary file
+    ("PLY is unexpected length", "edges are not (n, 2)")."""
+    faces = L_TRIANGLES if triangles else L_FACES
+    xyz_type, corner_type = {"u v": ("float", ("list", "uchar", "int")), "s t": ("double", ("list", "ushort", "uint32")),
+                             "texcoord": ("float32", ("list", "uint8", "int32")),
+                             "normals, colours, edges, materials": ("float", ("list", "int", "uint"))}.get(
+                                 variant or "", ("float", ("list", "uchar", "int")))
+    vprops: list = [(xyz_type, c) for c in "xyz"]
+    vrows = [list(p) for p in L_PRISM]
+    fprops: list = [(corner_type, "vertex_indices")]
+    frows: list = [[f] for f in faces]
+    before, after = [], []
+    if variant in ("u v", "s t"):
+        vprops += [("float" if variant == "u v" else "float32", c) for c in variant.split()]
+        vrows = [r + [0.25 * i, 1 - 0.125 * i] for i, r in enumerate(vrows)]
+    if variant == "texcoord":  # a texture coordinate per corner: every corner its own
+        fprops.append((("list", "uchar", "float"), "texcoord"))
+        frows = [r + [[0.01 * (7 * j + k) for k in range(2 * len(r[0]))]] for j, r in enumerate(frows)]
+    if variant == "normals, colours, edges, materials":
+        vprops += [("float", n) for n in ("nx", "ny", "nz")] + [("uchar", c) for c in ("red", "green", "blue", "alpha")]
+        vrows = [r + [0.0, 0.0, 1.0, 200, 100, 50, 255] for r in vrows]
+        fprops = [("uchar", "red"), ("int16", "flags")] + fprops + [("uchar", "green")]
+        frows = [[9, -3] + r + [7] for r in frows]
+        names = [b"steel", b"brass" if trimesh_reads else b"wood"]
+        before = [("material", [("uchar", "ambient_red"), ("float", "ambient_coeff"), (("list", "uchar", "char"), "name")],
+                   [[255, 0.5, names[0]], [0, 1.0, names[1]]])]
+        edges = [("int", "vertex1"), ("int", "vertex2")] + [("uchar", "red")] * (not trimesh_reads)
+        after = [("edge", edges, [[0, 1, 5], [1, 2, 5], [2, 8, 5]])]
+    return before + [("vertex", vprops, vrows), ("face", fprops, frows)] + after
+
+
+def _info(path: Path) -> dict:
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--resolution", "16", "--json"],
+                       capture_output=True, text=True, env=dict(os.environ), timeout=300)
+    assert r.returncode == 0, r.stderr
+    got = json.loads(r.stdout)
+    got.pop("input")
+    return got
+
+
+@pytest.mark.parametrize("form", PLY_FORMS)
+def test_ply_with_texture_normals_colours_and_more_elements_reads_as_the_plain_file(form, tmp_path):
+    """A PLY holding, beside its positions and corner lists, texture
+    coordinates (per vertex, ``u v`` or ``s t``, or per face), normals,
+    colours, face properties, an ``edge`` and a ``material`` element, with
+    faces of 3, 4 and 6 corners (the L caps, concave): ``isoflow info``
+    reads each as it reads the same prism written with nothing else, a
+    solid of one piece without tunnels. trimesh fails on several (a
+    binary file "of unexpected length", per-face texture lists of several
+    lengths a shape mismatch), and isoflow said "cannot read as a mesh"."""
+    plain = _info(_write_ply(tmp_path / "plain.ply", "ascii", _prism_elements(None)))
+    assert plain["betti"] == [1, 0, 0] and plain["surfaces"][0]["genus"] == 0
+    for variant in PLY_VARIANTS:
+        path = _write_ply(tmp_path / f"{variant.split(',')[0].replace(' ', '_')}.ply", form, _prism_elements(variant))
+        assert _info(path) == plain, variant
+
+
+@pytest.mark.parametrize("form", PLY_FORMS)
+@pytest.mark.parametrize("variant", PLY_VARIANTS)
+def test_ply_with_every_kind_of_property_loads_as_trimesh_reads_it(form, variant, tmp_path, monkeypatch):
+    """Where trimesh reads the file, the same arrays: its triangles'
+    corners (trimesh splits textured vertices at their seams), all its
+    vertices where it keeps the file's, and the same arrays after
+    load_mesh's weld; where it fails, the failures isoflow no longer
+    shares."""
+    for triangles in (True, False):
+        p = _write_ply(tmp_path / "m.ply", form, _prism_elements(variant, triangles, trimesh_reads=True))
+        ours = ply.read_ply(p.read_bytes())
+        assert ours is not None
+        try:
+            theirs = trimesh.load(p, process=False, force="mesh")
+        except Exception as exc:  # faces of several sizes, binary; per-face texture lists of several lengths
+            assert not triangles and (form != "ascii" or variant == "texcoord"), exc
+            assert "unexpected length" in str(exc) or "shape" in str(exc)
+            continue
+        assert not (not triangles and variant == "texcoord")
+        if triangles:  # (polygons: trimesh fans the concave L across its notch)
+            np.testing.assert_array_equal(ours[0][ours[1]], theirs.vertices[theirs.faces])
+            np.testing.assert_array_equal(ours[1], L_TRIANGLES)
+        if variant in ("normals, colours, edges, materials", ):
+            np.testing.assert_array_equal(ours[0], theirs.vertices)
+        _same(p, monkeypatch, fast=True)
+
+
+def _broken(case: str, path: Path) -> Path:
+    """The L prism's file (texture coordinates per face: lists of several
+    lengths) spoiled as ``case`` says."""
+    form = "ascii" if case.startswith("ASCII") else "binary_big_endian" if "big" in case else "binary_little_endian"
+    elements = _prism_elements("texcoord")
+    if "index" in case:
+        elements[1][2][2][0] = [0, 1, 99 if "past" in case else -1]
+    data = _write_ply(path, form, elements).read_bytes()
+    body = data.index(b"end_header\n") + 11
+    data = {"binary cut short": data[:-3], "binary big-endian cut in the vertices": data[:body + 100],
+            "ASCII cut short": data[:data.rindex(b"\n", 0, -1) + 1],
+            "ASCII vertex row too long": data[:body] + data[body:].replace(b"\n", b" 7.0\n", 1),
+            "ASCII one face more than the header's": data.replace(b"element face 9", b"element face 8"),
+            "ASCII word not a number": data[:body] + data[body:].replace(b" ", b" x", 1)}.get(case, data)
+    path.write_bytes(data)
+    return path
+
+
+#: PLY files that do not match their headers, and the line saying what is wrong
+PLY_BROKEN = {
+    "binary cut short": "the binary body ends inside row 8 of element 'face' (of 9): the file is cut short, or the "
+                        "header's counts do not match the data",
+    "binary big-endian cut in the vertices": "the binary body ends inside row 8 of element 'vertex' (of 12)",
+    "binary index past the vertices": "face 2 names vertex 99, but the file's vertices are numbered 0 to 11",
+    "binary big-endian negative index": "face 2 names vertex -1, but the file's vertices are numbered 0 to 11",
+    "ASCII index past the vertices": "face 2 names vertex 99, but the file's vertices are numbered 0 to 11",
+    "ASCII cut short": "the ASCII body ends inside row 8 of element 'face' (of 9)",
+    "ASCII vertex row too long": "line 12 holds 4 numbers, but row 0 of element 'vertex' takes 3 (the header's "
+                                 "properties or counts do not match the data)",
+    "ASCII one face more than the header's": "the header's rows take 154 numbers, but the body holds 168 (the "
+                                             "header's counts do not match the data)",
+    "ASCII word not a number": "line 12: a word that is not a number",
+}
+
+
+@pytest.mark.parametrize("case", PLY_BROKEN)
+def test_a_ply_that_does_not_match_its_header_is_refused_in_one_line(case, tmp_path):
+    p = _broken(case, tmp_path / "m.ply")
+    with pytest.raises(IsoflowError) as exc:
+        load_mesh(p)
+    assert str(exc.value).startswith(f"{p}: {PLY_BROKEN[case]}"), str(exc.value)
+
+
+@pytest.mark.parametrize("case", ["binary cut short", "binary index past the vertices"])
+def test_the_cli_refuses_a_broken_ply_in_one_line_with_exit_2(case, tmp_path):
+    p = _broken(case, tmp_path / "m.ply")
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(p), "--resolution", "16"],
+                       capture_output=True, text=True, env=dict(os.environ), timeout=300)
+    assert r.returncode == 2
+    assert r.stderr.strip() == f"isoflow info: error: {p}: {PLY_BROKEN[case]}"

@@ -482,7 +482,7 @@ def _oneline(exc):
 def test_error_missing_file(tmp_path):
     with pytest.raises(IsoflowError) as e:
         load_mesh(tmp_path / "nope.stl")
-    assert "nope.stl" in _oneline(e) and "not found" in _oneline(e)
+    assert "nope.stl" in _oneline(e) and "no such file or directory" in _oneline(e)
     assert issubclass(IsoflowError, ValueError)
 
 

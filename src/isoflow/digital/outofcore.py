@@ -254,10 +254,7 @@ def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
     of the input in messages; one-line errors for anything else."""
     is_zarr = is_zarr_array(array)
     if not is_zarr and not isinstance(array, import_dask()[1].Array):
-        raise IsoflowError(
-            f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; "
-            "use isoflow.analyze for in-memory arrays"
-        )
+        raise IsoflowError(f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; {_instead(array)}")
     if where is None:
         where = str(getattr(array, "store_path", None) or getattr(array, "path", "zarr array")) if is_zarr else "dask array"
     if any(np.isnan(s) for s in array.shape):
@@ -269,6 +266,34 @@ def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
     if dtype.kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
     return shape, where
+
+
+def _instead(array) -> str:
+    """What to call for an input that is not a chunked array: a store (its
+    path, or the group an OME-Zarr image is, as ``voxelize_to_zarr`` writes
+    it) was told to use the in-memory ``analyze``, which reads neither.
+
+    Parameters
+    ----------
+    array : object
+        What :func:`analyze_chunked` was given.
+
+    Returns
+    -------
+    str
+        The advice, for the end of the one-line error.
+
+    Examples
+    --------
+    >>> _instead("scan.zarr")
+    'isoflow.analyze_zarr(path) reads a zarr store (an OME-Zarr image: its first level)'
+    """
+    store = "isoflow.analyze_zarr(path) reads a zarr store (an OME-Zarr image: its first level)"
+    if isinstance(array, (str, os.PathLike)):
+        return store
+    if type(array).__module__.split(".")[0] == "zarr" and hasattr(array, "arrays"):
+        return f"{store}, or pass one of the group's arrays (group['0'])"
+    return "use isoflow.analyze for in-memory arrays"
 
 
 def _grid(array, block_shape, where: str) -> _Grid:

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import IsoflowError
 from ..results import same_fields
-from ..scale.arrays import as_array, index_dtype, refuse_object
+from ..scale.arrays import as_array, binary, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity
@@ -479,7 +479,8 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     Parameters
     ----------
     volume : numpy.ndarray
-        A 3D array, nonzero for the object (any memory order).
+        A 3D array of 0/1 values (bool or any numeric type), 1 for the
+        object (any memory order).
     connectivity : {6, 26}
         The object's connectivity: faces meeting at an edge contact are
         paired inside each object voxel under 6, across the edge under 26.
@@ -498,8 +499,8 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     Raises
     ------
     IsoflowError
-        (a ValueError) If the volume is not a 3D array, or for a bad
-        connectivity or method.
+        (a ValueError) If the volume is not a 3D array of 0/1 values, or
+        for a bad connectivity or method.
 
     Notes
     -----
@@ -518,9 +519,14 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
     connectivity = check_connectivity(3, connectivity)  # as an int
-    if mesh_method(vol, method) == "compiled":
+    how = mesh_method(vol, method)
+    # 2, 255 and NaN are refused as analyze refuses them, not meshed as
+    # object; the bit rows read any nonzero byte of a bool array as set, so
+    # only the NumPy faces need its bytes made 0/1
+    vol = binary(vol, canonical=how == "numpy")
+    if how == "compiled":
         return _mesh_from_rows(vol, connectivity)
-    return _mesh_numpy(vol.astype(bool, copy=False), connectivity)
+    return _mesh_numpy(vol, connectivity)
 
 
 def _mesh_from_rows(vol: np.ndarray, connectivity: int) -> QuadMesh:

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.surface import boundary_mesh
-from ..mesh.render import FACE_BUDGET, draw_surface, pyplot, save_figure
+from ..mesh.render import FACE_BUDGET, colour_key, draw_surface, pyplot, save_figure
 
 
 def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
@@ -25,13 +25,15 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
     cols = min(3, len(frames))
     rows = -(-len(frames) // cols)
     fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
+    classes = []  # the distinct vertex classes, for the key (not the meshes: they can be large)
     for k, (state, rec) in enumerate(frames):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
         mesh = boundary_mesh(state.volume, connectivity)
+        classes.append(np.unique(mesh.vertex_class))
         draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(frames), bounds=box)
         ax.set_axis_off()
         ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
-    fig.suptitle("digital curvature flow (blue concave, white flat, red convex)", fontsize=9)
+    fig.suptitle(f"digital curvature flow ({colour_key(classes)})", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
 

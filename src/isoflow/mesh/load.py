@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import MISSING, IsoflowError
 from ..scale.arrays import as_array
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -397,10 +397,15 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
 def refuse_volume(path) -> None:
     """One line for a volume file given where a mesh is read: trimesh would
     say ``file_type 'npy' not supported`` (or fail inside its binvox
-    reader), and ``FILE.h5:/dataset`` would be "file not found"."""
+    reader), and ``FILE.h5:/dataset`` would be "no such file or directory"
+    while the file is there. A volume file that is not there is said to be
+    missing, as every reader says it (a mesh's or a volume's)."""
     from .formats.registry import format_for, split_dataset
 
-    if not is_mesh_path(path) and format_for(split_dataset(path)[0]) is not None:
+    file = split_dataset(path)[0]
+    if not is_mesh_path(path) and format_for(file) is not None:
+        if not file.exists():
+            raise IsoflowError(f"{file}: {MISSING}")
         raise IsoflowError(f"{path}: a volume file, not a triangle mesh; voxelize and genus read meshes "
                            "(isoflow info, surface and flow read volumes)")
 
@@ -440,14 +445,14 @@ def _read_simple(p: Path):
         data = p.read_bytes()
     except OSError:
         return None  # trimesh's path says what is wrong with the file
-    return read_ply(data)
+    return read_ply(data, where=str(p))
 
 
 def check_mesh_file(p: Path) -> None:
     """A mesh file that exists, is a regular file, and whose format's
     library is installed, or one line saying which is not."""
     if not p.exists():
-        raise IsoflowError(f"{p}: file not found")
+        raise IsoflowError(f"{p}: {MISSING}")
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
     check_format_libraries(p)

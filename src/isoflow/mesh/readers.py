@@ -621,16 +621,16 @@ def _fan(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
         p = flat.reshape(-1, k)
         j = np.arange(1, k - 1)
         return np.stack((np.repeat(p[:, :1], k - 2, axis=1), p[:, j], p[:, j + 1]), axis=2).reshape(-1, 3)
-    out = []
-    start = np.concatenate(([0], np.cumsum(sizes)[:-1]))
-    for s, n in zip(start.tolist(), sizes.tolist()):
-        c = flat[s:s + n]
-        if n == 4:
-            out.append(c[[0, 1, 2, 2, 3, 0]])
-        else:
-            j = np.arange(1, n - 1)
-            out.append(np.stack((np.full(n - 2, c[0]), c[j], c[j + 1]), axis=1).reshape(-1))
-    return np.concatenate(out).reshape(-1, 3)
+    # polygons of several sizes, each in turn: triangle t of a polygon from
+    # corner s is (s, s + t + 1, s + t + 2), but a quad's second is (2, 3, 0)
+    start = np.cumsum(sizes) - sizes
+    owner = np.repeat(np.arange(len(sizes)), sizes - 2)
+    s = start[owner]
+    t = np.arange(len(owner)) - np.repeat(np.cumsum(sizes - 2) - (sizes - 2), sizes - 2)
+    at = np.stack((s, s + t + 1, s + t + 2), axis=1)
+    second = (sizes[owner] == 4) & (t == 1)
+    at[second] = s[second, None] + [2, 3, 0]
+    return flat[at]
 
 
 def _cut_by_ears(at: np.ndarray, flat: np.ndarray, sizes: np.ndarray, vertices: np.ndarray) -> None:

@@ -67,9 +67,46 @@ def draw_surface(ax, mesh, obj, elev: float, azim: float, budget: int, bounds=No
     ax.view_init(elev=elev, azim=azim)
 
 
+def colour_key(vertex_classes) -> str:
+    """The key to the colours :func:`gamma_colours` gives a picture's vertices.
+
+    Parameters
+    ----------
+    vertex_classes : iterable of numpy.ndarray
+        The ``vertex_class`` of each mesh the picture draws (or of its
+        distinct values).
+
+    Returns
+    -------
+    str
+        The gamma scale, then green and grey where some vertex is not
+        well-composed or is the midpoint of a doubled edge: a picture of a
+        thin ring was half green with no word on what green is.
+
+    Examples
+    --------
+    >>> from isoflow.digital.surface import boundary_mesh
+    >>> colour_key([boundary_mesh(np.ones((2, 2, 2), bool)).vertex_class])
+    'blue concave, white flat, red convex'
+    >>> contact = np.zeros((2, 2, 2), bool); contact[0, 0, 0] = contact[1, 1, 1] = True
+    >>> colour_key([boundary_mesh(contact, 26).vertex_class])
+    'blue concave, white flat, red convex, green not well-composed'
+    """
+    classes: set[int] = set()
+    for vertex_class in vertex_classes:
+        classes.update(np.unique(vertex_class).tolist())
+    key = "blue concave, white flat, red convex"
+    if -1 in classes:
+        key += ", green not well-composed"
+    if -2 in classes:
+        key += ", grey edge midpoints"
+    return key
+
+
 def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azim: float = -55) -> Path:
     """Write a PNG of the boundary mesh, faces coloured by the mean vertex
-    angle gamma of their corners (blue concave, white flat, red convex)."""
+    angle gamma of their corners (blue concave, white flat, red convex;
+    green, grey: :func:`colour_key`)."""
     plt = pyplot()
     fig = plt.figure(figsize=(7, 6), dpi=110)
     ax = fig.add_subplot(projection="3d")
@@ -77,6 +114,6 @@ def render_surface(mesh, obj, path: Path, title: str = "", elev: float = 25, azi
     ax.set_xlabel("x")
     ax.set_ylabel("y")
     ax.set_zlabel("z")
-    ax.set_title(f"{title}\nvertex angle: blue concave, white flat, red convex", fontsize=9)
+    ax.set_title(f"{title}\nvertex angle: {colour_key([mesh.vertex_class])}", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)

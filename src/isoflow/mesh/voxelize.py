@@ -192,20 +192,31 @@ class Solid:
             if self.double_sided:
                 edges = census(faces, len(v))
                 self.census = defect_counts(*edges[2:])
-        self.refuse_defects()
         if self.census["inconsistent_edges"]:
             faces, self.flipped = orient_faces(v, faces)
             edges = census(faces, len(v))
         a, b = chain_of(*edges[:4])
         self.chain = (a, b)
         self.chain_edges = int(len(a))
+        # refused once the chain is known, so that the refusal names the
+        # rule the mesh is read by without strict (before any voxel)
+        self.refuse_defects()
         # geometry: the corners of the faces as oriented now
         self.v = v
         self.faces = faces
 
     def refuse_defects(self) -> None:
         """With ``strict``, refuse a mesh that is not watertight or has
-        double-sided faces, naming the counts."""
+        double-sided faces, naming the counts.
+
+        Raises
+        ------
+        IsoflowError
+            One line: the counts, and the rule that reads the mesh without
+            ``strict`` (the shell as it is, the generalised winding number
+            across a boundary chain, or the exact nonzero rule where the
+            edges balance once double-sided faces are read as one).
+        """
         d = self.defects
         if not self.strict or (d["watertight"] and not self.double_sided):
             return
@@ -215,8 +226,13 @@ class Solid:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
         said = "voxelize: mesh is not watertight: " + "; ".join(what)
-        raise IsoflowError.worded(said + " (without strict=True it is read by the generalised winding number)",
-                                  said + " (without --strict it is read by the generalised winding number)")
+        if self.fill != "winding":
+            rule = f"the {self.fill} fill takes its faces as they are"
+        elif self.chain_edges:
+            rule = "it is read by the generalised winding number"
+        else:  # double-sided faces read as one, coincident corners joined: closed
+            rule = "its edges balance, so it bounds a solid: it is read by the exact nonzero winding number"
+        raise IsoflowError.worded(said + f" (without strict=True {rule})", said + f" (without --strict {rule})")
 
     def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
         """The :class:`VoxelPlan` of the grid ``origin_s``, ``pitch_s`` (in

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import MISSING, IsoflowError
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -211,7 +211,7 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
     zarr = import_zarr()
     path = Path(path)
     if not path.exists():
-        raise IsoflowError(f"{path}: no such file or directory")
+        raise IsoflowError(f"{path}: {MISSING}")
     try:
         node = zarr.open(str(path), mode="r")
     except Exception as exc:  # zarr raises several types for what is not a store

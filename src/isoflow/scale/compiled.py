@@ -35,7 +35,7 @@ from typing import Literal
 
 from ..errors import IsoflowError
 
-#: host volumes with at least this many voxels (128^3) use the compiled
+#: host volumes with at least this many voxels (126^3 and up) use the compiled
 #: passes (the histogram, the Betti numbers)
 MIN_VOXELS = 2_000_000
 
