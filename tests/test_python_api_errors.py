@@ -1,6 +1,7 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import re
 import warnings
 
 import numpy as np
@@ -100,6 +101,90 @@ def test_betti_numbers_takes_the_right_chi():
     ring[1, 1, 0] = False
     assert isoflow.betti_numbers(ring, 6, chi=0) == [1, 1, 0]
     assert isoflow.betti_numbers(ring[:, :, 0], 4, chi=0) == [1, 1]
+
+
+RAGGED = [[[1, 0], [1]], [[1, 1], [0, 1]]]  # a 2x2x2 volume with one voxel left out of a row
+
+
+@pytest.mark.parametrize(("call", "where"), [
+    (lambda: isoflow.euler_characteristic(RAGGED), "volume"),
+    (lambda: isoflow.betti_numbers(RAGGED), "volume"),
+    (lambda: isoflow.analyze(RAGGED), "volume"),
+    (lambda: isoflow.closed_surfaces(RAGGED), "volume"),
+    (lambda: isoflow.boundary_mesh(RAGGED), "volume"),
+    (lambda: isoflow.configuration_histogram(RAGGED), "volume"),
+    (lambda: isoflow.flow_step(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.run_flow(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.to_manifold(RAGGED), "DigitalObject volume"),
+    (lambda: isoflow.label_table(RAGGED), "label_table image"),
+    (lambda: isoflow.class_histogram([list(range(255)), [1]]), "config_hist"),
+    (lambda: isoflow.planar_index([[1, 0], [1]]), "points"),
+    (lambda: isoflow.DigitalObject.from_points([[0, 0, 0], [1, 0]]), "lattice point coordinates"),
+    (lambda: isoflow.voxelize_mesh(np.eye(3), [[0, 1, 2], [0, 1]], resolution=4), "voxelize: faces"),
+])
+def test_nested_lists_of_uneven_lengths_are_refused_naming_the_argument(call, where):
+    # NumPy's own ValueError ("setting an array element with a sequence") came through, naming neither
+    with pytest.raises(IsoflowError, match=f"^{re.escape(where)}: nested sequences of uneven lengths are no array"):
+        call()
+
+
+def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_file(tmp_path):
+    with pytest.raises(IsoflowError, match=r"l\.npz: labels: nested sequences of uneven lengths are no array"):
+        isoflow.write_labels(RAGGED, tmp_path / "l.npz")
+    assert not (tmp_path / "l.npz").exists()
+
+
+def _box():
+    import trimesh
+
+    return trimesh.creation.box()
+
+
+@pytest.mark.parametrize(("call", "name", "how"), [
+    (lambda p: isoflow.run_flow(np.ones((3, 3, 3), bool), progress=p), "progress", "progress(step, state)"),
+    (lambda p: isoflow.run_flow(np.ones((3, 3, 3), bool), guard=True, progress=p), "progress",
+     "progress(step, state)"),
+    (lambda p: isoflow.voxelize_mesh(_box(), resolution=4, progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.voxelize_meshes([_box()], resolution=4, progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.verify_genus(_box(), resolutions=(4,), progress=p), "progress", "progress(done, total)"),
+    (lambda p: isoflow.verify_genus(_box(), resolutions=(4,), on_resolution=p), "on_resolution",
+     "on_resolution(entry)"),
+])
+def test_a_callback_that_cannot_be_called_is_refused_naming_it(call, name, how):
+    # it failed at its first call, after a flow step or a slab, as "'int' object is not callable"
+    with pytest.raises(TypeError, match=re.escape(f"{name} must be a callable, {how}, or None; got 5")):
+        call(5)
+
+
+@pytest.mark.parametrize("call", [
+    lambda p, tmp: isoflow.analyze_chunked(_zarr_cube(tmp), progress=p),
+    lambda p, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, progress=p),
+])
+def test_a_progress_of_the_block_by_block_work_that_cannot_be_called_is_refused(call, tmp_path):
+    pytest.importorskip("zarr")
+    with pytest.raises(TypeError, match=re.escape("progress must be a callable, progress(done, total), or None; "
+                                                  "got 'log'")):
+        call("log", tmp_path)
+    assert not (tmp_path / "v.zarr").exists()
+
+
+def _zarr_cube(folder):
+    import zarr
+
+    store = zarr.open(str(folder / "cube.zarr"), mode="w", shape=(4, 4, 4), chunks=(2, 2, 2), dtype=np.uint8)
+    store[1:3, 1:3, 1:3] = 1
+    return store
+
+
+@pytest.mark.parametrize("chi", [0.5, 1.0, "1", True, np.float64(0)])
+def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
+    # a cube with a tunnel (chi 0): chi=0.5 gave b1 = 0.5, 1.0 gave [1, 0.0, 0], "1" NumPy's TypeError
+    tunnel = np.ones((3, 3, 3), bool)
+    tunnel[1, 1, :] = False
+    with pytest.raises(IsoflowError, match=re.escape(f"chi must be an integer, got {chi!r}")):
+        isoflow.betti_numbers(tunnel, chi=chi)
+    result = isoflow.betti_numbers(tunnel, chi=np.int64(0))
+    assert result == [1, 1, 0] and all(type(b) is int for b in result)
 
 
 @pytest.mark.parametrize(("args", "kwargs", "words"), [

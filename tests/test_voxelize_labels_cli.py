@@ -124,6 +124,34 @@ def test_write_labels_keeps_the_type_in_nifti_and_nibabel_reads_it(tmp_path, dty
     assert np.array_equal(back.array, labels) and back.origin.tolist() == [1.0, 2.0, 3.0]
 
 
+@pytest.mark.parametrize("dtype", [np.int16, np.int32, ">i4", np.int64])
+def test_a_signed_label_image_read_from_nifti_is_written_back(tmp_path, dtype):
+    # read_labels gives an int16 or int32 NIfTI's labels (and scipy.ndimage.label makes them) signed, which
+    # write_labels refused ("unsigned integers, got 3D int32"); written as the unsigned type of their width
+    nib = pytest.importorskip("nibabel")
+    from scipy import ndimage
+
+    from isoflow import label_table, write_labels
+    from isoflow.errors import IsoflowError
+
+    mask = np.zeros((6, 5, 4), bool)
+    mask[0:2, 0:2, 0:2] = mask[3:6, 2:5, 1:4] = True
+    cells = ndimage.label(mask)[0].astype(dtype)
+    native = np.dtype(dtype).newbyteorder("=")
+    nib.save(nib.Nifti1Image(cells.astype(native), np.diag([0.5, 1.0, 2.0, 1.0]), dtype=native), tmp_path / "seg.nii.gz")
+    image = read_labels(tmp_path / "seg.nii.gz")
+    assert image.array.dtype.kind == "i"
+    path = write_labels(image.array, tmp_path / "back.nii.gz", pitch=image.spacing, origin=image.origin)
+    written = nib.load(path)
+    assert written.get_data_dtype() == np.dtype(np.dtype(dtype).str.replace("i", "u")).newbyteorder("=")
+    back = read_labels(path)
+    assert np.array_equal(back.array, cells) and back.spacing.tolist() == [0.5, 1.0, 2.0]
+    assert label_table(back)["voxels"].tolist() == [8, 27]
+    with pytest.raises(IsoflowError, match="holds labels from 0 on, this one holds -1"):
+        write_labels(cells - 1, tmp_path / "negative.nii.gz")
+    assert not (tmp_path / "negative.nii.gz").exists()
+
+
 def test_a_format_that_keeps_fewer_labels_is_refused_before_any_work(tmp_path, capsys, overlapping):
     a, b = overlapping
     fails(capsys, "voxelize", a, b, "--resolution", "24", "-o", tmp_path / "l.binvox",

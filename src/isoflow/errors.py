@@ -25,6 +25,37 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+def check_callable(value: object, name: str, call: str) -> None:
+    """Refuse, before any work, a callback that cannot be called: it failed
+    at its first call, after a step or a slab, as ``TypeError: 'int' object
+    is not callable``, which names neither the argument nor its value.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed (None: no callback).
+    name : str
+        The argument's name.
+    call : str
+        How it is called, for the message.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is neither None nor callable.
+
+    Examples
+    --------
+    >>> check_callable(print, "progress", "progress(done, total)")
+    >>> check_callable(5, "progress", "progress(done, total)")
+    Traceback (most recent call last):
+    ...
+    TypeError: progress must be a callable, progress(done, total), or None; got 5
+    """
+    if value is not None and not callable(value):
+        raise TypeError(f"{name} must be a callable, {call}, or None; got {value!r}")
+
+
 class IsoflowError(ValueError):
     """Bad input: a missing or unreadable file, an empty or open mesh, ...
 

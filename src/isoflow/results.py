@@ -45,6 +45,69 @@ def json_ready(value: Any) -> Any:
     return value
 
 
+def same_values(a: Any, b: Any) -> bool:
+    """Whether two values are equal, NumPy arrays among them (and in the
+    lists, tuples and mappings that hold them) by shape and elements: ``==``
+    on an array gives an array, whose truth NumPy refuses (``ValueError``).
+
+    Parameters
+    ----------
+    a, b : Any
+        The values.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> same_values({"n": np.arange(3), "b": [1, 0]}, {"n": np.arange(3), "b": [1, 0]})
+    True
+    >>> same_values(np.zeros(2), np.zeros(3)), same_values((1, np.ones(2)), (1, np.zeros(2)))
+    (False, False)
+    """
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.shape(a) == np.shape(b) and bool(np.array_equal(a, b))
+    if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
+        return type(a) is type(b) and len(a) == len(b) and all(map(same_values, a, b))
+    if isinstance(a, Mapping) and isinstance(b, Mapping) and not (isinstance(a, Result) or isinstance(b, Result)):
+        return a.keys() == b.keys() and all(same_values(a[k], b[k]) for k in a)
+    return bool(a == b)
+
+
+def same_fields(a: Any, b: object) -> bool:
+    """The ``__eq__`` of a dataclass with array fields: the same type and
+    every field :func:`same_values` (the ``__eq__`` a dataclass generates
+    compares the fields as tuples, and so fails on the arrays).
+
+    Parameters
+    ----------
+    a : dataclass instance
+        The instance compared.
+    b : object
+        What it is compared with.
+
+    Returns
+    -------
+    bool
+        ``NotImplemented`` for another type, so that Python tries ``b``'s
+        own comparison, and then identity.
+
+    Examples
+    --------
+    >>> @dataclasses.dataclass(eq=False)
+    ... class Box:
+    ...     corner: np.ndarray
+    ...     __eq__ = same_fields
+    >>> Box(np.zeros(3)) == Box(np.zeros(3)), Box(np.zeros(3)) == Box(np.ones(3))
+    (True, False)
+    """
+    names = [f.name for f in dataclasses.fields(a)]  # before the test below narrows ``a`` to ``b``'s type
+    if type(a) is not type(b):
+        return NotImplemented
+    return all(same_values(getattr(a, name), getattr(b, name)) for name in names)
+
+
 class Result(Mapping[str, Any]):
     """Base of isoflow's result dataclasses: fields read as attributes and
     as keys, and :meth:`to_dict` is the command line's JSON.
@@ -70,6 +133,13 @@ class Result(Mapping[str, Any]):
 
     def __len__(self) -> int:
         return len(self._keys())
+
+    def __eq__(self, other: object) -> bool:
+        # a mapping's equality (the items), with the arrays among the values
+        # compared by their elements: Mapping's own raised NumPy's ValueError
+        if not isinstance(other, Mapping):
+            return NotImplemented
+        return len(self) == len(other) and all(k in other and same_values(self[k], other[k]) for k in self)
 
     def to_dict(self) -> dict[str, Any]:
         """The result as plain dicts, lists and numbers (what ``--json`` prints)."""

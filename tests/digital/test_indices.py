@@ -133,6 +133,35 @@ def test_planar_index_eq_4_2_values():
     assert ell4[1, 1] == -1  # the re-entrant corner: r = -1/4, concave
 
 
+@pytest.mark.parametrize("table", [I.gamma_lut, I.class_lut, I.code_lut, I.normal_lut, I.f_lut])
+def test_the_public_tables_cannot_be_written_into(table):
+    # they are cached: a caller's class_lut()[:] = 0 made every later analyze of a box with a cavity
+    # report n = (64, 0, ..., 0) instead of the paper's 8 convex and 8 concave corners, 24 + 24 edges
+    with pytest.raises(ValueError, match="read-only"):
+        table()[0] = 7
+    box = np.ones((3, 3, 3), bool)
+    box[1, 1, 1] = False
+    from isoflow import analyze
+
+    assert analyze(box).n == [0, 0, 0, 8, 24, 8, 24, 0, 0]
+
+
+def test_planar_index_refuses_what_is_no_2d_set_of_points():
+    # a 3x3x3 cube gave a 3x3x5 array, a row of points NumPy's IndexError, and 0.5 or NaN counted as
+    # points (a 3x3 square of them: 4 convex corners, sum 4 chi = 4) where every other mask refuses them
+    from isoflow.errors import IsoflowError
+
+    with pytest.raises(IsoflowError, match="points: planar_index takes a 2D array, got a 3D array"):
+        I.planar_index(np.ones((3, 3, 3), bool))
+    with pytest.raises(IsoflowError, match="points: planar_index takes a 2D array, got a 1D array"):
+        I.planar_index(np.ones(3, bool))
+    for value in (0.5, np.nan):
+        with pytest.raises(IsoflowError, match=f"points: not a binary volume .* e.g. {value}"):
+            I.planar_index(np.full((3, 3), value))
+    square = I.planar_index(np.ones((3, 3), np.float32))  # 0/1 of any type is a set of points
+    assert square.shape == (3, 3) and int(square.sum()) == 4
+
+
 def test_planar_index_sums_to_four_chi(rng):
     for _ in range(200):
         pts = rng.random(rng.integers(1, 12, 2)) < rng.uniform(0.2, 0.9)

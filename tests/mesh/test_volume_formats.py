@@ -197,6 +197,24 @@ def test_binvox_refuses_anisotropic_voxels(tmp_path, vol):
     assert not (tmp_path / "v.binvox").exists()
 
 
+def test_the_empty_last_state_of_a_flow_is_written_or_refused_in_one_line(tmp_path):
+    # a plain run ends on the empty object, shape (0, 0, 0): the formats that keep it read it back as such,
+    # TIFF (tifffile's own ValueError) and NIfTI (a file read back as shape (0,)) refuse it, binvox wrote scale 0
+    gone = isoflow.run_flow(np.ones((3, 3, 3), bool)).states[-1]
+    assert gone.volume.shape == (0, 0, 0)
+    for suffix in (".npz", ".npy", ".h5", ".nrrd", ".zarr", ".vox", ".binvox"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", IsoflowWarning)  # what .npy and .vox do not keep
+            back = isoflow.read_volume(isoflow.write_volume(gone, tmp_path / f"gone{suffix}"))
+        assert back.volume.shape == (0, 0, 0) and back.voxels == 0, suffix
+    for suffix, fmt in ((".tif", "TIFF"), (".nii.gz", "NIfTI")):
+        for shape in ((0, 0, 0), (0, 4, 5), (4, 0)):
+            with pytest.raises(IsoflowError, match=f"{fmt} holds no array with a side of length 0, this one is "
+                                                   f"{'x'.join(map(str, shape))}"):
+                isoflow.write_volume(np.zeros(shape, bool), tmp_path / f"gone{suffix}")
+            assert not list(tmp_path.glob(f"*gone*{suffix}*")), "nothing left behind"
+
+
 def test_vox_round_trip_read_by_py_vox_io(tmp_path, vol):
     pytest.importorskip("pyvox")
     from pyvox.parser import VoxParser

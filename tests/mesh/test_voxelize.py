@@ -532,6 +532,20 @@ def test_error_nan_and_out_of_range(tmp_path):
         voxelize(v[:, :2], f, resolution=4)
 
 
+def test_an_index_beyond_int64_is_named_as_given():
+    # a uint64 index 2**63 (and a float one 1e30) wrapped to -9223372036854775808 in int64, which the
+    # message named: "out of range [0, 4) (e.g. -9223372036854775808)"
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    f = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], np.uint64)
+    f[2, 2] = 2**63
+    with pytest.raises(IsoflowError, match=r"1 face indices out of range \[0, 4\) \(e\.g\. 9223372036854775808\)"):
+        voxelize(v, f, resolution=4)
+    with pytest.raises(IsoflowError, match=r"out of range \[0, 4\) \(e\.g\. 1000000000000000019884624838656\)"):
+        voxelize(v, np.where(f == 2**63, 1e30, f.astype(np.float64)), resolution=4)
+    vol = voxelize(v, np.where(f == 2**63, 3, f), resolution=4)[0]  # the tetrahedron, as uint64 faces
+    assert vol.shape == (4, 4, 4) and 0 < vol.sum() < 64
+
+
 def test_error_grid_parameters():
     v, f, _, _ = _ball()
     for kw in ({}, {"pitch": 0.1, "resolution": 8}, {"pitch": 0}, {"pitch": -1.0},

@@ -18,6 +18,7 @@ from functools import cache
 import numpy as np
 
 from ..errors import IsoflowError
+from ..scale.arrays import as_array, binary
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import check_connectivity, is_face_connectivity
 
@@ -222,7 +223,9 @@ def _tables_3d():
         codes[c] = (CONVEX, CONCAVE, CONCAVE)
     for c in np.flatnonzero(cls == 0):
         codes[c] = (CONCAVE, CONCAVE, CONCAVE)
-    return gamma, cls, codes, normal2
+    # cached and handed out by the public gamma_lut, class_lut, code_lut and
+    # normal_lut: a caller's write into one changed every later analyze
+    return read_only(gamma), read_only(cls), read_only(codes), read_only(normal2)
 
 
 def gamma_lut() -> np.ndarray:
@@ -336,7 +339,7 @@ def f_lut() -> np.ndarray:
     """
     codes = code_lut()
     s = np.where(np.isin(codes, (CONVEX, CONCAVE)), codes, 0)
-    return s.sum(axis=1) * np.abs(s).sum(axis=1)
+    return read_only(s.sum(axis=1) * np.abs(s).sum(axis=1))  # cached: shared with every later caller
 
 
 def a_lut(connectivity: int = 6) -> np.ndarray:
@@ -416,7 +419,7 @@ def class_histogram(config_hist: np.ndarray) -> np.ndarray:
     >>> dict(zip(CLASS_LABELS, n.tolist()))["(+,+,+)"], int(n[6]), int(n[4])
     (8, 24, 24)
     """
-    hist = np.asarray(config_hist)
+    hist = as_array(config_hist, "config_hist")
     if hist.shape != (256,) or hist.dtype.kind not in "iuf":
         # (a 2D histogram has 16 counts, a 4D one 65536: a bare IndexError or a wrong n otherwise)
         raise IsoflowError(f"class_histogram takes the 256 counts of a 3D configuration histogram, got "
@@ -452,7 +455,7 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     Parameters
     ----------
     points : numpy.ndarray
-        A 2D binary array of lattice points.
+        A 2D binary array of lattice points (bool or 0/1).
 
     Returns
     -------
@@ -461,6 +464,11 @@ def planar_index(points: np.ndarray) -> np.ndarray:
         f_k+2`` over the 4-neighbours ``k`` in {1, 3, 5, 7} (the products are
         the unit squares at the point): +1, 0, -1 at convex, flat, concave
         boundary points, 0 inside and off the set.
+
+    Raises
+    ------
+    IsoflowError
+        When ``points`` is not 2D or holds values other than 0 and 1.
 
     Notes
     -----
@@ -477,7 +485,12 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     >>> r.tolist(), int(r.sum()) // 4
     ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
     """
-    f = np.pad(np.asarray(points, dtype=bool), 1).astype(np.int8)
+    # a 3D array gave an array of another shape, a 1D one NumPy's IndexError,
+    # and 0.5 or NaN counted as points: refused, as every mask of the API is
+    grid = binary(points, "points")
+    if grid.ndim != 2:
+        raise IsoflowError(f"points: planar_index takes a 2D array, got a {grid.ndim}D array")
+    f = np.pad(grid, 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.
     ring = [

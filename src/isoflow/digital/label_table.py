@@ -42,7 +42,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import refuse_object
+from ..results import same_fields
+from ..scale.arrays import as_array, refuse_object
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
@@ -88,7 +89,7 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LabelImage:
     """A label image with its place: integers in (x, y, z) order, the voxel
     size per axis and the world position of voxel (0, 0, 0)'s lowest
@@ -106,6 +107,11 @@ class LabelImage:
     array: np.ndarray
     spacing: np.ndarray
     origin: np.ndarray
+
+    # equal when the three arrays are, by their elements (the generated
+    # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
+    __eq__ = same_fields
+    __hash__ = None  # type: ignore[assignment]
 
 
 def label_table(
@@ -241,7 +247,7 @@ def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
     refuse_object(image, "label_table", reader="isoflow.read_labels")
-    vol = np.asarray(image)
+    vol = as_array(image, "label_table image")
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
     return as_labels(vol)

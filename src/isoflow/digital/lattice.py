@@ -25,10 +25,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary
+from ..results import same_fields
+from ..scale.arrays import as_array, binary
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class DigitalObject:
     """A binary volume with its place on the lattice or its dual (eq. 5.1).
 
@@ -76,6 +77,12 @@ class DigitalObject:
     parity: int = 0
     pitch: float | np.ndarray = 1.0
     origin: np.ndarray = field(default=None)  # type: ignore[arg-type]
+
+    # equal when every field is, the volume by its elements: the generated
+    # __eq__ compared the arrays with ==, whose truth NumPy refuses; and
+    # unhashable, as the volume, a NumPy array, can change
+    __eq__ = same_fields
+    __hash__ = None  # type: ignore[assignment]
 
     def __post_init__(self):
         vol = binary(self.volume, "DigitalObject volume")
@@ -225,7 +232,7 @@ MAX_COORDINATE = 2**40
 
 
 def _integer_points(points, what: str) -> np.ndarray:
-    arr = np.asarray(points)
+    arr = as_array(points, f"{what} coordinates")
     if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
         raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
     if arr.dtype.kind not in "biuf":

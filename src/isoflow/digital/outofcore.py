@@ -55,7 +55,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable
 from ..scale.arrays import NotBinary, binary
 from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, open_zarr, zarr_blocks
 from ..scale.chunks import compute as compute_tasks
@@ -466,6 +466,7 @@ def analyze_chunked(
     >>> r["betti"], r == analyze(v, 6)
     ([1, 1, 0], True)
     """
+    check_callable(progress, "progress", "progress(done, total)")
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import dataclasses
-from typing import TypedDict
+from collections.abc import Mapping
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -121,6 +122,27 @@ class Report(Result):
         """The genus of each closed surface (3D, when the surfaces were asked)."""
         return [s["genus"] for s in self.surfaces or []]
 
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> Report:
+        """The report with the given fields, as :meth:`Result.from_dict`; a
+        4D report's ``classes``, keyed by configuration, get their integer
+        keys back from JSON, whose keys are strings (the report read back
+        was not equal to the one written).
+
+        Examples
+        --------
+        >>> import json
+        >>> from isoflow import analyze
+        >>> r = analyze(np.ones((2, 2, 2, 2), bool), 80)
+        >>> back = Report.from_dict(json.loads(json.dumps(r.to_dict())))
+        >>> back == r, sorted(back.classes)
+        (True, [1, 3, 15, 255])
+        """
+        values = dict(values)
+        if values.get("dimension") == 4 and isinstance(values.get("classes"), Mapping):
+            values["classes"] = {int(k): n for k, n in values["classes"].items()}
+        return super().from_dict(values)
+
 
 @dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
 class SurfaceCensus(Result):
@@ -148,3 +170,23 @@ class SurfaceCensus(Result):
     doubled_edges: int
     hist: np.ndarray
     betti_counts: tuple[int, int]
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> SurfaceCensus:
+        """The census of :meth:`to_dict`'s JSON, its histogram an array and
+        its Betti counts a tuple again (JSON makes both lists, and the census
+        read back was not equal to the one written).
+
+        Examples
+        --------
+        >>> import json
+        >>> from isoflow import closed_surfaces
+        >>> c = closed_surfaces(np.ones((2, 2, 2), bool))
+        >>> back = SurfaceCensus.from_dict(json.loads(json.dumps(c.to_dict())))
+        >>> back == c, back.betti_counts, back.hist.dtype
+        (True, (1, 0), dtype('int64'))
+        """
+        given = dict(values)
+        given["hist"] = np.asarray(given["hist"], dtype=np.int64)
+        given["betti_counts"] = tuple(given["betti_counts"])
+        return super().from_dict(given)

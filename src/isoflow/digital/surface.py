@@ -35,7 +35,8 @@ from typing import Any, Literal
 import numpy as np
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary, index_dtype, refuse_object
+from ..results import same_fields
+from ..scale.arrays import as_array, binary, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
 from .connectivity import check_connectivity
@@ -160,7 +161,7 @@ def doubled_spoke_lut(connectivity: int = 6) -> np.ndarray:
 # --------------------------------------------------------------------------
 
 
-@dataclass
+@dataclass(eq=False)
 class QuadMesh:
     """A closed, outward-oriented quad mesh on lattice points.
 
@@ -194,6 +195,8 @@ class QuadMesh:
     sheet: np.ndarray  # (V,) int8: which sheet of its lattice vertex (-1 on midpoints)
     connectivity: int
     pinched: int  # vertex contacts split against the connectivity
+
+    __eq__ = same_fields  # the arrays by their elements: the generated __eq__ raised NumPy's ValueError
 
     @property
     def midpoints(self) -> int:
@@ -512,7 +515,7 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     """
     refuse_object(volume, "boundary_mesh", then="the mesh is in array-corner units: obj.world(mesh.vertices) "
                   "puts its vertices where the object is")
-    vol = np.asarray(volume)
+    vol = as_array(volume)
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
     connectivity = check_connectivity(3, connectivity)  # as an int

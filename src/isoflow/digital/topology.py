@@ -164,7 +164,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         the paper's 6, 4, 8).
     chi : int, optional
         The Euler characteristic when it is known already (one that cannot
-        be the volume's is refused).
+        be the volume's is refused, and so is one that is not an integer).
     method : {"auto", "numpy", "compiled"}
         The labellings (cc3d, scipy, CuPy), the compiled run-based
         union-find, or by the volume's size.
@@ -175,6 +175,13 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         ``[b0, b1, b2]`` in 3D, ``[b0, b1]`` in 2D (``chi = b0 - b1`` is
         checked); in 4D ``[b0, None, None, b3]``: chi fixes ``b1 - b2`` but
         not each.
+
+    Raises
+    ------
+    IsoflowError
+        When the volume is not binary or not 2D to 4D, the connectivity is
+        not valid in its dimension, or ``chi`` is no integer or cannot be
+        the volume's.
 
     Examples
     --------
@@ -190,7 +197,12 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     """
     xp, v = arrays.as_volume(volume)
     conn = resolve_connectivity(v.ndim, connectivity)
-    if chi is None:
+    # b1 = b0 + b2 - chi: a chi of 0.5 gave b1 = 0.5, 1.0 a float, "1" NumPy's TypeError
+    if chi is not None:
+        if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
+            raise IsoflowError(f"chi must be an integer, got {chi!r}")
+        chi = int(chi)  # a NumPy integer gives a list of plain ints, as chi computed here does
+    else:
         chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)
     # the volume is checked once here; one host copy where the library cannot label
     xp, v, label = _labeller(xp, v, method)

@@ -173,12 +173,19 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> D
     obj : DigitalObject or array_like of bool
         A 2D or 3D object (a bare array sits at the origin of the lattice).
     connectivity : int, optional
-        The object's: 6 or 26 in 3D, 4 or 8 in 2D.
+        The object's: 6 or 26 in 3D, 4 or 8 in 2D, where 6 and 26 (the
+        default 6 among them) are read as 4 and 8; None is the default.
 
     Returns
     -------
     DigitalObject
         On the other lattice (``parity`` flipped), cropped to its bounding box.
+
+    Raises
+    ------
+    IsoflowError
+        When the object is not 2D or 3D, or the connectivity is none of
+        those.
 
     Examples
     --------
@@ -191,6 +198,14 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> D
     >>> step = flow_step(v)
     >>> step.voxels, step.parity, step.offset
     (1, 1, (0, 0, 0))
+
+    A 2D object takes the default too, as 4-connectivity: an L of five
+    pixels becomes an L of three on the dual lattice.
+
+    >>> ell = np.zeros((3, 3), bool)
+    >>> ell[0, :] = ell[:, 0] = True
+    >>> flow_step(ell).volume.astype(int).tolist() == flow_step(ell, 4).volume.astype(int).tolist() == [[1, 1], [1, 0]]
+    True
     """
     obj = DigitalObject.of(obj)
     cfg, keep = flow_moves(obj, connectivity)

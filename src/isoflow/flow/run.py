@@ -34,7 +34,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -312,6 +312,7 @@ def run_flow(
     """
     obj = DigitalObject.of(obj)
     conn = flow_connectivity(obj.ndim, connectivity)
+    check_callable(progress, "progress", "progress(step, state)")
     _check_count("steps", steps)
     _check_count("max_steps", max_steps)
     engine = flow_engine(method, obj, conn)

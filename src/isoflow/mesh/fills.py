@@ -23,6 +23,7 @@ winding rule leaves a mesh with area a tiny or empty solid,
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -106,6 +107,26 @@ class Voxelization(Result):
         out = super().to_dict()
         del out["volume"]
         return out
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> Voxelization:
+        """The voxelisation of :meth:`to_dict`'s JSON: the volume is not in
+        it, so there is none, as where the voxels went to a store
+        (``volume`` given is taken), and the origin is an array again. It
+        was refused, the volume being a field without a default.
+
+        Examples
+        --------
+        >>> import json, trimesh
+        >>> from isoflow import voxelize_mesh
+        >>> v = voxelize_mesh(trimesh.creation.box(), resolution=4, details=True)[1]
+        >>> back = Voxelization.from_dict(json.loads(json.dumps(v.to_dict())))
+        >>> back.to_dict() == v.to_dict(), back.volume, back.origin.tolist()
+        (True, None, [-0.5, -0.5, -0.5])
+        """
+        given = {"volume": None, **values}
+        given["origin"] = np.asarray(given["origin"], dtype=np.float64)
+        return super().from_dict(given)
 
 
 def check_fill(fill: object) -> Fill:

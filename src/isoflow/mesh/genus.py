@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill
@@ -605,6 +605,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     # the arguments checked as the command line's are (a negative time
     # limit, a cap below one or a lone int ran, or failed in list(), with
     # no word naming them)
+    check_callable(progress, "progress", "progress(done, total)")
+    check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{resolutions!r}]" if isinstance(resolutions, (int, np.integer)) else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {resolutions!r}{hint}")

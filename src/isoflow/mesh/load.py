@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MISSING, IsoflowError
+from ..scale.arrays import as_array
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
 #: vertex positions are welded by :func:`load_mesh`.
@@ -87,7 +88,7 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
         raise IsoflowError(f"{where}: vertices are not a numeric array ({exc})") from None
     if v.ndim != 2 or v.shape[1] != 3:
         raise IsoflowError(f"{where}: vertices must have shape (N, 3), got {v.shape}")
-    f = np.asarray(faces)
+    f = as_array(faces, f"{where}: faces")
     if f.ndim != 2 or f.shape[1] != 3:
         raise IsoflowError(f"{where}: faces must have shape (M, 3) (triangles), got {f.shape}")
     if f.shape[0] == 0:
@@ -97,20 +98,21 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
             pass
         else:
             raise IsoflowError(f"{where}: faces must be integer vertex indices, got dtype {f.dtype}")
-    f = f.astype(np.int64, copy=False)
     bad = ~np.isfinite(v)
     if bad.any():
         nv = int(bad.any(axis=1).sum())
         raise IsoflowError(
             f"{where}: {nv} of {len(v)} vertices have NaN or infinite coordinates "
             f"({int(bad.sum())} values)")
+    # checked in the faces' own type: int64 wraps a uint64 index from 2**63 on (and a float one
+    # beyond int64) to a negative number, which the message then named instead of the index given
     lo, hi = int(f.min()), int(f.max())
     if lo < 0 or hi >= len(v):
         nbad = int(((f < 0) | (f >= len(v))).sum())
         worst = lo if lo < 0 else hi
         raise IsoflowError(
             f"{where}: {nbad} face indices out of range [0, {len(v)}) (e.g. {worst})")
-    return v, f
+    return v, f.astype(np.int64, copy=False)
 
 
 # ---------------------------------------------------------------------------

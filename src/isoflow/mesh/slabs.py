@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
 from .fills import Fill, Voxelization, look_up
@@ -152,6 +152,7 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
     fill = check_fill(fill)
+    check_callable(progress, "progress", "progress(done, total)")
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"
     # a file names itself in its errors

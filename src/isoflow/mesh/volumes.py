@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import MISSING, IsoflowError, IsoflowWarning
-from ..scale.arrays import NotBinary, binary
+from ..scale.arrays import NotBinary, as_array, binary
 from ..scale.memory import check_fits
 from .formats.registry import (
     LabelVolume,
@@ -627,12 +627,13 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
 
 def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | np.ndarray = 1.0,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
-    """Save a label image in the format its suffix names, in its own integer type.
+    """Save a label image in the format its suffix names, in its own integer type
+    (a signed one as the unsigned type of its width).
 
     Parameters
     ----------
     labels : ndarray
-        Unsigned integers in (x, y, z) order, or (x, y) for a 2D image (a
+        Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
         not binvox or MagicaVoxel); 0 is the background. Not 4D:
         :func:`read_labels` would not read it back.
@@ -656,8 +657,8 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     ------
     IsoflowError
         For an existing file without ``force``, an array that is not 2D or
-        3D unsigned integers, a format that keeps fewer labels than the
-        image has (:func:`check_label_output`) or no 2D image.
+        3D integers, a negative label, a format that keeps fewer labels
+        than the image has (:func:`check_label_output`) or no 2D image.
 
     Examples
     --------
@@ -676,13 +677,21 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> np.array_equal(back.array, cells), back.spacing.tolist()
     (True, [0.5, 0.25])
     """
-    arr = np.asarray(labels)
+    arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
         raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
                            "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
-    if arr.ndim not in (2, 3) or arr.dtype.kind != "u":
-        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of unsigned integers, got {arr.ndim}D {arr.dtype}")
+    if arr.ndim not in (2, 3) or arr.dtype.kind not in "iu":
+        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers, got {arr.ndim}D {arr.dtype}")
+    if arr.dtype.kind == "i":
+        # signed labels, as read_labels reads an int16 or int32 NIfTI and scipy.ndimage.label and
+        # scikit-image's label make them, were refused: written as the unsigned type of their width,
+        # whose bits are the same for labels from 0 on (a view, no copy)
+        low = int(arr.min(initial=0))
+        if low < 0:
+            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {low}")
+        arr = arr.view(arr.dtype.str.replace("i", "u"))
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))

@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, counted
+from ..errors import IsoflowError, MeshNote, check_callable, counted
 from ..scale import memory
 from .fills import (
     THIN_SHARE,
@@ -591,6 +591,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     (64, 56)
     """
     fill = check_fill(fill)
+    check_callable(progress, "progress", "progress(done, total)")
     v, f, shape, what, frame, origin, pitch = plan_voxels(
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)

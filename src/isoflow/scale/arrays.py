@@ -63,6 +63,45 @@ def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
 
 
+def as_array(array, where: str = "volume") -> np.ndarray:
+    """``numpy.asarray(array)``, nested sequences of uneven lengths refused
+    in one line naming the argument: NumPy's own ``ValueError`` ("setting an
+    array element with a sequence") names neither it nor the function.
+
+    Parameters
+    ----------
+    array : array_like
+        What the caller passed.
+    where : str
+        The argument's name, which the message starts with.
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Raises
+    ------
+    IsoflowError
+        For nested sequences of uneven lengths.
+
+    Examples
+    --------
+    >>> as_array([[1, 0], [0, 1]]).shape
+    (2, 2)
+    >>> try:
+    ...     as_array([[1, 0], [1]], "volume")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(" (")[0])
+    volume: nested sequences of uneven lengths are no array
+    """
+    try:
+        return np.asarray(array)
+    except ValueError as error:
+        if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
+            raise
+        raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
 def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
     """A host boolean volume from a 0/1 array, or a clear error saying why not.
 
@@ -74,7 +113,7 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     (:func:`isoflow.scale.bitrows.pack`), which spares it the pass over the
     volume that the check costs."""
     refuse_object(array, where)
-    arr = np.asarray(array)
+    arr = as_array(array, where)
     if arr.dtype == np.bool_ and not canonical:
         return arr
     if arr.dtype == np.bool_:

@@ -87,11 +87,13 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     spacing, corner = placement(obj)
     side = max(obj.volume.shape)
+    # scale is the cube's side in world units; the reader divides it by the side, or by 1 for an empty cube (0
+    # voxels a side), whose scale must still be the voxel size: a scale of 0 is refused as damaged on reading
     cube = np.zeros((side,) * 3, np.uint8)
     cube[tuple(slice(0, s) for s in obj.volume.shape)] = obj.volume
     header = (f"#binvox 1\ndim {side} {side} {side}\n"
               f"translate {' '.join(repr(float(c)) for c in corner)}\n"
-              f"scale {float(spacing[0]) * side!r}\ndata\n")
+              f"scale {float(spacing[0]) * max(side, 1)!r}\ndata\n")
     with open(path, "wb") as fh:
         fh.write(header.encode("ascii"))
         fh.write(run_lengths(cube.transpose(0, 2, 1).ravel()).tobytes())

@@ -25,7 +25,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, note, placement, quiet_logs, reading, stored_values
+from .registry import RawVolume, check_shape, import_library, note, placement, quiet_logs, reading, refuse_empty, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -51,9 +51,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
-    """Warn of a fourth axis's placement, which the affine has no room for
-    (read back as voxel size 1 from 0): it was dropped without a word, as
-    TIFF's origin is not."""
+    """Refuse an array with a side of length 0; warn of a fourth axis's
+    placement, which the affine has no room for (read back as voxel size 1
+    from 0): it was dropped without a word, as TIFF's origin is not."""
+    # a NIfTI dimension of 0 is written, but nibabel reads the file back as shape (0,)
+    refuse_empty(path, obj.volume.shape, "NIfTI")
     if obj.ndim != 4:
         return
     spacing, corner = placement(obj)

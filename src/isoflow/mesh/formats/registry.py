@@ -205,6 +205,40 @@ def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
     return obj.spacing, obj.world(np.zeros(obj.ndim))
 
 
+def refuse_empty(path: Path, shape: tuple[int, ...], fmt: str) -> None:
+    """Refuse, before writing, an array with a side of length 0 (the last
+    state of a flow that vanished, a crop of nothing), which ``fmt`` has no
+    way to store: its writer failed inside its library, or wrote a file that
+    reads back as some other shape.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file to be written, named in the message.
+    shape : tuple of int
+        The array's shape.
+    fmt : str
+        The format's name, as the message gives it.
+
+    Raises
+    ------
+    IsoflowError
+        If a side of ``shape`` is 0, naming the formats that keep it.
+
+    Examples
+    --------
+    >>> refuse_empty(Path("x.tif"), (2, 3, 4), "TIFF")  # nothing to refuse
+    >>> try:
+    ...     refuse_empty(Path("x.tif"), (0, 3, 4), "TIFF")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(";")[0])
+    x.tif: TIFF holds no array with a side of length 0, this one is 0x3x4
+    """
+    if 0 in shape:
+        raise IsoflowError(f"{path}: {fmt} holds no array with a side of length 0, this one is "
+                           f"{'x'.join(map(str, shape))}; write .npz, .npy, .h5, .nrrd or .zarr")
+
+
 #: what a volume too large to read can do instead (:func:`check_shape`)
 READ_HINT = "crop it, or use a .zarr store with 'isoflow info' (read block by block)"
 

@@ -39,6 +39,7 @@ from .registry import (
     placement,
     quiet_logs,
     reading,
+    refuse_empty,
     stored_values,
     to_xyz,
 )
@@ -132,6 +133,7 @@ def _spacing(value, where: str) -> float:
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
+    refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
     origin = placement(obj)[1]
     if origin.any():
         note(f"{path}: TIFF keeps no origin; the origin {np.round(origin, 9).tolist()} is not written")
