@@ -32,7 +32,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     nib = import_library("nibabel", "NIfTI")
     where = str(path)
     with reading(path, "NIfTI"), quiet_logs("nibabel.global"):
-        img = nib.load(path)
+        img = _load(nib, path)
         if not isinstance(img, (nib.Nifti1Image, nib.Nifti2Image)):
             raise IsoflowError(f"{where}: not a NIfTI image ({type(img).__name__})")
         shape = img.shape
@@ -78,7 +78,33 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     img.set_sform(affine, code=1)
     img.set_qform(affine, code=1)
     img.header.set_xyzt_units("unknown")
-    nib.save(img, path)
+    # the file named exactly: nib.save takes "bob.Nii.gz" for "bob.nii.gz" and writes that other file,
+    # leaving the named one (a temporary file renamed over the output) empty
+    img.to_file_map(img.make_file_map({"image": str(path)}))
+
+
+def _load(nib, path: Path):
+    """The NIfTI image in the file ``path`` itself.
+
+    Parameters
+    ----------
+    nib : module
+        nibabel.
+    path : Path
+        The file.
+
+    Returns
+    -------
+    nibabel.spatialimages.SpatialImage
+        The image.
+    """
+    if nib.Nifti1Image.filespec_to_file_map(str(path))["image"].filename == str(path):
+        return nib.load(path)
+    # a suffix in mixed case ("bob.Nii.gz"): nib.load would open "bob.nii.gz", another file or none
+    try:
+        return nib.Nifti1Image.from_file_map(nib.Nifti1Image.make_file_map({"image": str(path)}))
+    except nib.spatialimages.HeaderDataError:  # not NIfTI-1: a NIfTI-2 header, or no NIfTI at all
+        return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
 
 
 def placement_3d(obj: DigitalObject):
