@@ -2,6 +2,8 @@
 subprocess): a suffix in any case, an existing output replaced with
 --force, outputs that collide; the file is read back by its own library."""
 
+import resource
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -18,6 +20,17 @@ def run(*args) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
 
 
+def run_on_a_small_disk(limit: int, *args) -> subprocess.CompletedProcess:
+    """The command line with files limited to ``limit`` bytes (RLIMIT_FSIZE, SIGXFSZ ignored): a write
+    past it fails midway with EFBIG, as on a full disk, without root to mount one."""
+    def small_disk() -> None:
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
+                          preexec_fn=small_disk)
+
+
 @pytest.mark.parametrize("suffix", [".Nii", ".Nii.gz"])
 def test_a_nifti_suffix_in_mixed_case_is_the_file_written(tmp_path, suffix):
     # nib.save wrote "torus.nii(.gz)" beside the named file and left the named one empty, over the old one
@@ -31,3 +44,19 @@ def test_a_nifti_suffix_in_mixed_case_is_the_file_written(tmp_path, suffix):
     assert int(np.asarray(img.dataobj).sum()) > 0
     back = run("info", out, "--json")  # and isoflow reads the file it wrote
     assert back.returncode == 0, back.stderr
+
+
+def test_an_hdf5_write_that_fails_midway_is_one_line_and_keeps_the_old_file(tmp_path):
+    # HDF5 wrote on the disk itself: a message of several lines, h5py's tracebacks, a crash (exit -11)
+    pytest.importorskip("h5py")
+    out = tmp_path / "torus.h5"
+    args = ("voxelize", TORUS, "--resolution", 48, "-o", out, "-q")
+    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    assert first.returncode == 0, first.stderr
+    assert out.stat().st_size > 3000
+    out.write_bytes(b"old")
+    p = run_on_a_small_disk(3000, *args, "--force")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and str(out) in p.stderr and "File too large" in p.stderr, p.stderr
+    assert out.read_bytes() == b"old"
+    assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]

@@ -159,6 +159,7 @@ def _running(pid: int) -> bool:
 def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
     """One line naming the file and the cause of a failed write."""
     cause = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
+    cause = " ".join(cause.split())  # one line: a library's message (HDF5's) may hold line breaks
     kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
     return IsoflowError(f"{path}: could not write ({cause}); {kept}")
 

@@ -123,7 +123,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         assert into is not None
         shutil.copyfile(into, path)
     name = _name(dataset)
-    with h5py.File(path, "r+" if keep else "w") as f:
+    # built in memory (the core driver, nothing written back) and written out by Python: HDF5's own write
+    # on a full disk gave an error of several lines and crashed the interpreter as its objects were freed
+    with h5py.File(path, "r+" if keep else "w", driver="core", backing_store=False) as f:
         if name in f:
             del f[name]
         ds = f.create_dataset(name, data=stored_values(obj.volume), compression="gzip",
@@ -132,3 +134,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         ds.attrs["origin"] = obj.origin
         ds.attrs["offset"] = np.array(obj.offset, np.int64)
         ds.attrs["parity"] = np.int64(obj.parity)
+        f.flush()
+        image = f.id.get_file_image()
+    with open(path, "wb") as fh:
+        fh.write(image)
