@@ -2,8 +2,10 @@
 subprocess): a suffix in any case, an existing output replaced with
 --force, outputs that collide; the file is read back by its own library."""
 
+import os
 import resource
 import signal
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -60,3 +62,22 @@ def test_an_hdf5_write_that_fails_midway_is_one_line_and_keeps_the_old_file(tmp_
     assert p.stderr.count("\n") == 1 and str(out) in p.stderr and "File too large" in p.stderr, p.stderr
     assert out.read_bytes() == b"old"
     assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]
+
+
+@pytest.mark.parametrize("command", [("voxelize", TORUS, "--resolution", 16), ("surface", TORUS, "--resolution", 16),
+                                     ("info", "LABELS", "--labels", "--csv")])
+def test_a_pipe_or_device_as_the_output_is_refused_and_kept(tmp_path, command):
+    # renamed over with --force: "-o /dev/null --force" as root put a regular file in place of /dev/null
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "labels.npy", labels)
+    suffix = {"voxelize": ".npz", "surface": ".ply", "info": ".csv"}[command[0]]
+    out = tmp_path / f"pipe{suffix}"
+    os.mkfifo(out)
+    args = [tmp_path / "labels.npy" if a == "LABELS" else a for a in command]
+    if command[0] != "info":
+        args.append("-o")
+    p = run(*args, out, "--force", "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and str(out) in p.stderr, p.stderr
+    assert stat.S_ISFIFO(os.lstat(out).st_mode)  # still the pipe

@@ -22,6 +22,7 @@ import glob
 import os
 import secrets
 import shutil
+import stat
 from pathlib import Path
 
 from ..errors import IsoflowError
@@ -41,11 +42,37 @@ def check_output_path(
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
+    refuse_special_file(path)
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
         raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
                                       f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def refuse_special_file(path: str | os.PathLike) -> None:
+    """Refuse an output that is a device, a pipe or a socket (or a link to
+    one: ``/dev/stdout``), before any work.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the path: a file is written beside its target and
+        renamed over it, so ``-o /dev/null --force`` run as root replaced
+        the system's ``/dev/null`` with a regular file.
+    """
+    try:
+        mode = os.stat(path).st_mode  # the link's target: /dev/stdout is a link to a pipe or terminal
+    except OSError:  # missing, or a dangling link: a new file is made
+        return
+    if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
+        raise IsoflowError(f"{path}: is a device, pipe or socket, not a file; an output is written beside it and "
+                           "renamed over it, which would replace it: give a file name")
 
 
 def check_writable_dir(directory: str | os.PathLike, purpose: str) -> Path:
