@@ -81,3 +81,25 @@ def test_a_pipe_or_device_as_the_output_is_refused_and_kept(tmp_path, command):
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and str(out) in p.stderr, p.stderr
     assert stat.S_ISFIFO(os.lstat(out).st_mode)  # still the pipe
+
+
+def files_under(directory: Path) -> dict[str, bytes]:
+    """Every file under ``directory`` with its bytes."""
+    return {str(f.relative_to(directory)): f.read_bytes() for f in sorted(directory.rglob("*")) if f.is_file()}
+
+
+@pytest.mark.parametrize("outputs", [("flow", "--out", "STORE", "--force"), ("flow", "--out", "STORE/run"),
+                                     ("surface", "-o", "STORE/surface.ply"),
+                                     ("surface", "--labels", "-o", "STORE/", "--suffix", ".ply")])
+def test_an_output_inside_the_input_zarr_store_is_refused(tmp_path, outputs):
+    # a zarr store is a directory: flow --out STORE --force wrote its step files and pictures into the input
+    pytest.importorskip("zarr")
+    store = tmp_path / "torus.zarr"
+    made = run("voxelize", TORUS, "--resolution", 16, "-o", store, "-q")
+    assert made.returncode == 0, made.stderr
+    before = files_under(store)
+    command, *rest = outputs
+    p = run(command, store, *[str(store) + a[5:] if a.startswith("STORE") else a for a in rest], "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and str(store) in p.stderr, p.stderr
+    assert files_under(store) == before

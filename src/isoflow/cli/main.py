@@ -301,12 +301,18 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
 
     meshes = getattr(args, "mesh", None)
     inputs = [getattr(args, "input", None)] + (meshes if isinstance(meshes, list) else [meshes])
-    for out in (getattr(args, key, None) for key in ("output", "csv", "png")):
+    # (flow's --out too: a directory, which may be the input zarr store itself)
+    for out in (getattr(args, key, None) for key in ("output", "csv", "png", "out")):
         if not out or out == "-":
             continue
         out_file, out_set = split_dataset(out)
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
+            if in_file.is_dir() and in_file.resolve() in out_file.resolve().parents:
+                # a zarr store is a directory: files written into it (flow --out STORE/run, surface --labels
+                # -o STORE/) change the input, --force or not
+                raise IsoflowError(f"{out}: lies inside the input {name}; write the output elsewhere (--force "
+                                   "replaces an output, never the input)")
             if out_set != in_set:
                 continue
             both = out_file.exists() and in_file.exists()
