@@ -103,3 +103,11 @@ def test_an_output_inside_the_input_zarr_store_is_refused(tmp_path, outputs):
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and str(store) in p.stderr, p.stderr
     assert files_under(store) == before
+
+
+def test_voxelize_into_an_existing_directory_says_it_is_a_directory(tmp_path):
+    # the refusal listed the volume suffixes only, as for a mistyped suffix
+    p = run("voxelize", TORUS, "--resolution", 16, "-o", tmp_path, "--force", "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and f"{tmp_path}: is a directory" in p.stderr, p.stderr
+    assert list(tmp_path.iterdir()) == []

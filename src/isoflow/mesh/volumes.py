@@ -496,6 +496,9 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     (or ``force``). Returns ``(file, dataset)``."""
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
+    if fmt is None and Path(file).is_dir():  # "-o out/": the list of suffixes alone did not say what was wrong
+        raise IsoflowError(f"{path}: is a directory; give a file name for the volume, ending in "
+                           f"{', '.join(volume_suffixes(writable=True))}")
     if fmt is None:
         raise IsoflowError(f"{path}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
     if dataset is not None and not fmt.datasets:
