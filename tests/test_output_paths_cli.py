@@ -111,3 +111,20 @@ def test_voxelize_into_an_existing_directory_says_it_is_a_directory(tmp_path):
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and f"{tmp_path}: is a directory" in p.stderr, p.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_file_per_label_failing_midway_says_which_files_were_written(tmp_path):
+    # the line said "nothing was written" of the file that failed, while the labels before it were in place
+    labels = np.zeros((30, 12, 12), np.uint8)
+    labels[1:3, 1:3, 1:3], labels[5:7, 5:7, 5:7] = 1, 2
+    labels[10:29, 1:11, 1:11] = 3  # the largest file, written last
+    np.save(tmp_path / "labels.npy", labels)
+    args = ("surface", tmp_path / "labels.npy", "--labels", "-o", f"{tmp_path / 'out'}/", "--suffix", ".ply", "-q")
+    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    assert first.returncode == 0, first.stderr
+    sizes = {f.name: f.stat().st_size for f in (tmp_path / "out").iterdir()}
+    assert max(sizes["label_1.ply"], sizes["label_2.ply"]) < 4000 < sizes["label_3.ply"]
+    p = run_on_a_small_disk(4000, *args, "--force")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and "label_3.ply" in p.stderr, p.stderr
+    assert "label_1.ply, label_2.ply) were written" in p.stderr, p.stderr

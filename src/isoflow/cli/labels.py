@@ -462,8 +462,17 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     welds = {}  # label file -> the contacts STL cannot keep apart
     for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
         path = target[1] / f"{name}{target[2]}"
-        written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                       force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        try:
+            written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                           force=args.force, comments=(f"isoflow surface --labels: {name}",))
+        except IsoflowError as exc:
+            if done == 1:
+                raise
+            # the line said "nothing was written" of this file alone, while the labels before it were in place
+            after = len(meshes) - done
+            raise IsoflowError(f"{exc}; the {counted(done - 1, 'label file')} before it "
+                               f"({_some([meshes[i][0] + target[2] for i in range(done - 1)])}) were written"
+                               + (f", the {counted(after, 'label file')} after it not" if after else "")) from None
         count += written["face_count"]
         kinds[written["faces"]] = None
         welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
