@@ -14,7 +14,10 @@ Written as uint8 0/1, gzip-compressed and chunked. ``FILE.h5`` names the
 file: a new one (``--force`` replaces it). ``FILE.h5:/group/name`` names one
 dataset: written into an existing HDF5 file beside its other datasets, which
 are kept (``--force`` only where that dataset is there already; HDF5 does not
-give back a replaced dataset's space, ``h5repack`` does).
+give back a replaced dataset's space, ``h5repack`` does). The file is built
+in memory (compressed) and written out whole, so a write that fails midway
+(a full disk) is one error line; a dataset added to an existing file holds
+that file in memory too.
 """
 
 from __future__ import annotations
