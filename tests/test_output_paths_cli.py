@@ -128,3 +128,24 @@ def test_a_file_per_label_failing_midway_says_which_files_were_written(tmp_path)
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and "label_3.ply" in p.stderr, p.stderr
     assert "label_1.ply, label_2.ply) were written" in p.stderr, p.stderr
+
+
+def test_a_long_output_name_that_fits_is_written(tmp_path):
+    # a 240-byte name fits (255), but its temporary name beside it did not: "File name too long", exit 2
+    out = tmp_path / ("a" * 236 + ".npz")
+    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
+    assert p.returncode == 0, p.stderr
+    with np.load(out) as back:
+        assert back["volume"].sum() > 0
+    assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]
+
+
+@pytest.mark.parametrize("command", [("voxelize", TORUS, "--resolution", 16, "-o"), ("flow", TORUS, "--resolution", 16,
+                                                                                     "--out")])
+def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, command):
+    # Path.exists raised the bare OSError: a traceback, exit 1
+    out = tmp_path / ("b" * 300 + ".npz")
+    p = run(*command, out, "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and "File name too long" in p.stderr, p.stderr
+    assert list(tmp_path.iterdir()) == []

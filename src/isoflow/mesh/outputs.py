@@ -38,6 +38,7 @@ def check_output_path(
     one of ``suffixes`` (any case; none: any name), is not a directory, does
     not exist unless ``force``, and its directory exists and is writable."""
     path = Path(path)
+    refuse_unusable_name(path)
     if suffixes and path.suffix.lower() not in suffixes:
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
     if path.is_dir():  # --force must not mean "replace a directory"
@@ -48,6 +49,28 @@ def check_output_path(
                                       f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def refuse_unusable_name(path: str | os.PathLike) -> None:
+    """Refuse, in one line, an output whose name the file system cannot
+    take (a name longer than its limit, 255 bytes on most).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output.
+
+    Raises
+    ------
+    IsoflowError
+        Naming the path and the cause: ``Path.exists`` raised the bare
+        ``OSError`` (a traceback on the command line) for such a name.
+    """
+    try:
+        os.stat(path)
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
 
 
 def refuse_special_file(path: str | os.PathLike) -> None:
@@ -104,11 +127,23 @@ def _read_only_fs(directory: Path) -> bool:
         return False
 
 
+#: the longest file name most file systems take, in bytes
+NAME_MAX = 255
+
+
 def _temp_parts(path: Path) -> tuple[str, str]:
     """(prefix, suffix) of the temporary names beside ``path``: all its
-    suffixes are kept (nibabel reads ".nii.gz", not only ".gz")."""
+    suffixes are kept (nibabel reads ".nii.gz", not only ".gz"), the
+    name shortened so that a temporary name fits where ``path`` does."""
     suffix = "".join(path.suffixes)
+    # the mark, the host, a 7-digit pid and the random part: a 240-byte output name got a temporary
+    # name the file system refused ("File name too long")
+    added = len(os.fsencode(f".{TEMP_MARK}{'0' * 8}-{'0' * 7}-{'0' * 8}"))
+    if added + len(os.fsencode(suffix)) > NAME_MAX:  # many dots: the format is named by the last suffix
+        suffix = path.suffix
     stem = path.name[: len(path.name) - len(suffix)] if suffix else path.name
+    while stem and added + len(os.fsencode(stem + suffix)) > NAME_MAX:
+        stem = stem[:-1]
     return f".{stem}{TEMP_MARK}", suffix
 
 
