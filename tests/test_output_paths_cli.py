@@ -149,3 +149,18 @@ def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, comma
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and "File name too long" in p.stderr, p.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("ascii_ply", [False, True])
+def test_a_ply_of_an_input_named_beyond_ascii_is_written(tmp_path, ascii_ply):
+    # the input's name goes into the PLY header's comment, which was encoded as ASCII: a traceback, exit 1
+    trimesh = pytest.importorskip("trimesh")
+    cube = np.zeros((5, 5, 5), bool)
+    cube[1:4, 1:4, 1:4] = True
+    np.save(tmp_path / "grün.npy", cube)
+    out = tmp_path / "grün.ply"
+    p = run("surface", tmp_path / "grün.npy", "-o", out, *(["--ascii"] if ascii_ply else []), "-q")
+    assert p.returncode == 0, p.stderr
+    mesh = trimesh.load(out, process=False)
+    assert len(mesh.faces) == 2 * 6 * 9 and mesh.is_watertight  # 54 quads, as triangles
+    assert b"comment isoflow surface of gr\\xfcn.npy" in out.read_bytes()[:300]

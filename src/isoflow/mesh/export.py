@@ -251,7 +251,9 @@ def ply_header(dtypes: dict, vertices: int, faces: int, comments: tuple[str, ...
     """The header of a PLY with per-vertex scalar columns of the given
     types and a face list (uchar count, int indices)."""
     header = ["ply", f"format {'ascii' if ascii else 'binary_little_endian'} 1.0"]
-    header += [f"comment {c}" for c in comments]
+    # a PLY header is ASCII, a line each: an input named "grün.npy" (or with a line break) in a comment
+    # raised UnicodeEncodeError, a traceback, so its other characters are written as escapes
+    header += ["comment " + " ".join(c.split()).encode("ascii", "backslashreplace").decode("ascii") for c in comments]
     header.append(f"element vertex {vertices}")
     header += [f"property {_PLY_TYPES[np.dtype(t).str[1:]]} {k}" for k, t in dtypes.items()]
     header += [f"element face {faces}", "property list uchar int vertex_indices", "end_header"]
