@@ -164,3 +164,11 @@ def test_a_ply_of_an_input_named_beyond_ascii_is_written(tmp_path, ascii_ply):
     mesh = trimesh.load(out, process=False)
     assert len(mesh.faces) == 2 * 6 * 9 and mesh.is_watertight  # 54 quads, as triangles
     assert b"comment isoflow surface of gr\\xfcn.npy" in out.read_bytes()[:300]
+
+
+def test_an_output_path_with_a_line_break_is_refused_in_one_line(tmp_path):
+    # the path was printed as it is: the error took two lines
+    out = tmp_path / "no\nsuch" / "x.npz"
+    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and "no\\nsuch: no such directory" in p.stderr, p.stderr

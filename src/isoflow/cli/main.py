@@ -399,7 +399,9 @@ def main(argv: list[str] | None = None) -> int:
                 raise KeyboardInterrupt
             return status
     except IsoflowError as exc:  # in the command line's words (its options) where they differ from Python's
-        print(f"isoflow {args.command}: error: {exc.command_line or exc}", file=sys.stderr)
+        # one line, as the exit status 2 promises: a path given with a line break in it is shown escaped
+        line = str(exc.command_line or exc).replace("\r", "\\r").replace("\n", "\\n")
+        print(f"isoflow {args.command}: error: {line}", file=sys.stderr)
         return 2
     except MemoryError:
         name = getattr(args, "input", None) or getattr(args, "mesh", "")
