@@ -298,7 +298,7 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
     import os
 
     from ..mesh.formats.registry import split_dataset
-    from ..mesh.outputs import refuse_unusable_name
+    from ..mesh.outputs import refuse_unusable_output
 
     meshes = getattr(args, "mesh", None)
     inputs = [getattr(args, "input", None)] + (meshes if isinstance(meshes, list) else [meshes])
@@ -307,7 +307,7 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
         if not out or out == "-":
             continue
         out_file, out_set = split_dataset(out)
-        refuse_unusable_name(out_file)  # before exists() below raises on it
+        refuse_unusable_output(out_file)  # before exists() below raises on it
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
             if in_file.is_dir() and in_file.resolve() in out_file.resolve().parents:

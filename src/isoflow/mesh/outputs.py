@@ -38,12 +38,11 @@ def check_output_path(
     one of ``suffixes`` (any case; none: any name), is not a directory, does
     not exist unless ``force``, and its directory exists and is writable."""
     path = Path(path)
-    refuse_unusable_name(path)
+    refuse_unusable_output(path)
     if suffixes and path.suffix.lower() not in suffixes:
         raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
-    refuse_special_file(path)
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
         raise IsoflowError.worded(f"{path}: exists; pass force=True to overwrite",
                                       f"{path}: exists; pass --force to overwrite")
@@ -51,9 +50,10 @@ def check_output_path(
     return path
 
 
-def refuse_unusable_name(path: str | os.PathLike) -> None:
-    """Refuse, in one line, an output whose name the file system cannot
-    take (a name longer than its limit, 255 bytes on most).
+def refuse_unusable_output(path: str | os.PathLike) -> None:
+    """Refuse, in one line and before any work, an output whose name the
+    file system cannot take (longer than its limit, 255 bytes on most) or
+    that is a device, a pipe or a socket (or a link to one: ``/dev/stdout``).
 
     Parameters
     ----------
@@ -64,35 +64,17 @@ def refuse_unusable_name(path: str | os.PathLike) -> None:
     ------
     IsoflowError
         Naming the path and the cause: ``Path.exists`` raised the bare
-        ``OSError`` (a traceback on the command line) for such a name.
-    """
-    try:
-        os.stat(path)
-    except OSError as exc:
-        if exc.errno == errno.ENAMETOOLONG:
-            raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
-
-
-def refuse_special_file(path: str | os.PathLike) -> None:
-    """Refuse an output that is a device, a pipe or a socket (or a link to
-    one: ``/dev/stdout``), before any work.
-
-    Parameters
-    ----------
-    path : str or os.PathLike
-        The output.
-
-    Raises
-    ------
-    IsoflowError
-        One line naming the path: a file is written beside its target and
-        renamed over it, so ``-o /dev/null --force`` run as root replaced
-        the system's ``/dev/null`` with a regular file.
+        ``OSError`` (a traceback on the command line) for a name too long;
+        a file is written beside its target and renamed over it, so
+        ``-o /dev/null --force`` run as root replaced the system's
+        ``/dev/null`` with a regular file.
     """
     try:
         mode = os.stat(path).st_mode  # the link's target: /dev/stdout is a link to a pipe or terminal
-    except OSError:  # missing, or a dangling link: a new file is made
-        return
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
+        return  # missing, or a dangling link: a new file is made
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
         raise IsoflowError(f"{path}: is a device, pipe or socket, not a file; an output is written beside it and "
                            "renamed over it, which would replace it: give a file name")

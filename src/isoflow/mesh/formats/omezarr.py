@@ -271,10 +271,10 @@ def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
     """An output zarr store (a directory), checked before any work: refused
     when it exists, unless ``force`` and it is a zarr store (which
     :func:`write` replaces)."""
-    from ..outputs import check_writable_dir, refuse_special_file
+    from ..outputs import check_writable_dir, refuse_unusable_output
 
     path = Path(path)
-    refuse_special_file(path)  # --force would unlink a device or pipe and put a store in its place
+    refuse_unusable_output(path)  # --force would unlink a device or pipe and put a store in its place
     if not path.parent.is_dir():
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
     check_writable_dir(path.parent, f"the zarr store {path.name}")
