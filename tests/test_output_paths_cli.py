@@ -172,3 +172,14 @@ def test_an_output_path_with_a_line_break_is_refused_in_one_line(tmp_path):
     p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and "no\\nsuch: no such directory" in p.stderr, p.stderr
+
+
+def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
+    # --force replaced the run's files and removed a directory of such a name with everything in it
+    run_dir = tmp_path / "run"
+    (run_dir / "step_001.ply").mkdir(parents=True)
+    (run_dir / "step_001.ply" / "notes.txt").write_text("mine")
+    p = run("flow", TORUS, "--resolution", 12, "--out", run_dir, "--force", "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and "step_001.ply" in p.stderr, p.stderr
+    assert (run_dir / "step_001.ply" / "notes.txt").read_text() == "mine"

@@ -105,6 +105,18 @@ def check_step_volume(path, step: int, state: DigitalObject) -> None:
                            "(.npz or .zarr holds any size)") from None
 
 
+def _run_names(out: Path) -> list[Path]:
+    """What a run into ``out`` replaces or removes there: the step files of
+    any suffix, flow.csv and the pictures."""
+    steps = _step_file_pattern()
+    return [p for p in out.glob("step_*") if steps.fullmatch(p.name)] + [out / n for n in RUN_FILES]
+
+
+def _is_zarr_store(path: Path) -> bool:
+    """Whether the directory ``path`` is a zarr store (version 2 or 3)."""
+    return any((path / mark).exists() for mark in (".zgroup", ".zarray", "zarr.json"))
+
+
 def replaced_by_run(directory, path) -> bool:
     """Whether a run into ``directory`` (with ``force``) replaces or removes
     the file ``path``: a step file of any suffix, flow.csv or a picture
@@ -160,6 +172,12 @@ def check_output_dir(directory, force: bool = False):
         remove_abandoned(out / STAGE)
     if out.is_dir() and any(out.iterdir()) and not force:
         raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
+    if out.is_dir():
+        for taken in _run_names(out):
+            # --force replaces a run's files; a directory of that name (and all in it) was removed with them
+            if taken.is_dir() and not (taken.suffix.lower() == ".zarr" and _is_zarr_store(taken)):
+                raise IsoflowError(f"{taken}: a directory that is not a step store of a run; flow --force "
+                                   "replaces a run's files, not it: move it, or give --out another directory")
     parent = out if out.is_dir() else next((p for p in out.parents if p.exists()), Path("."))
     check_writable_dir(parent, f"the flow's files ({out})")
     return out
@@ -394,9 +412,7 @@ class FlowWriter:
                     shutil.rmtree(self.out / name)
                 os.replace(self.stage / name, self.out / name)
             sync_directory(self.out)
-            steps = _step_file_pattern()
-            earlier = [p for p in self.out.glob("step_*") if steps.fullmatch(p.name)]
-            for old in [*earlier, *(self.out / n for n in RUN_FILES)]:
+            for old in _run_names(self.out):
                 if old.name not in new and old.exists():
                     shutil.rmtree(old) if old.is_dir() else old.unlink()
         except OSError as exc:
