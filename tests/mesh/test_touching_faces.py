@@ -193,3 +193,30 @@ def test_a_cube_walled_in_by_others_voxelises_as_the_model(tmp_path):
     assert r.returncode == 0, r.stderr
     got = np.load(out)["volume"]
     assert np.array_equal(got, np.kron(voxels, np.ones((10, 10, 10), bool)))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_voxel_models_written_cube_by_cube_voxelise_as_themselves(tmp_path, seed):
+    """Random 4^3 voxel models (faces, edges and corners in contact, walls
+    open and closed), each written cube by cube: at a quarter of a voxel
+    the voxels are the model's own, 4^3 per cube, exactly (no voxel centre
+    lies on a face)."""
+    import warnings
+
+    import isoflow
+
+    rng = np.random.default_rng(seed)
+    for trial in range(8):
+        voxels = rng.random((4, 4, 4)) < rng.uniform(0.3, 0.8)
+        if not voxels.any():
+            continue
+        path = tmp_path / f"model{trial}.obj"
+        cubes_obj(path, voxels)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the mesh's notes (non-manifold edges, double-sided faces)
+            obj = isoflow.voxelize_file(path, pitch=0.25)
+        lo = np.argwhere(voxels).min(axis=0)
+        hi = np.argwhere(voxels).max(axis=0) + 1
+        expected = np.kron(voxels[lo[0]:hi[0], lo[1]:hi[1], lo[2]:hi[2]], np.ones((4, 4, 4), bool))
+        assert np.array_equal(obj.volume, expected), (seed, trial)
+        assert np.allclose(obj.origin, lo)
