@@ -40,7 +40,7 @@ from ..errors import IsoflowError, check_callable
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
-from .fills import Fill, check_fill
+from .fills import Fill, check_fill, check_strict
 from .grid import check_grid_memory, check_placement, voxel_grid
 from .load import mesh_bbox
 from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
@@ -264,7 +264,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     >>> r.labels.shape, r.labels.dtype.name, r.voxels, r.overlaps
     ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
     """
-    fill, overlap = check_fill(fill), check_overlap(overlap)
+    fill, overlap, strict = check_fill(fill), check_overlap(overlap), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:
         resolution = 64
