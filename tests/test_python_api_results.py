@@ -119,3 +119,17 @@ def test_a_label_voxelization_comes_back_from_its_json():
     assert back.voxels == (32, 64) and back.overlaps == ((1, 2, 32),) and back.overlap_voxels == 32
     assert back.origin.tolist() == [-1.0, -1.0, -1.0] and back.names == ("mesh 1", "mesh 2")
     assert LabelVoxelization.from_dict(dict(r)) == r and r.labels.shape == (6, 4, 4)
+
+
+def test_an_object_that_vanishes_is_the_empty_object_every_crop_gives():
+    # flow_step of a vanishing object kept its dual lattice's offset, (-1, -1, -1), while an empty object crops
+    # to offset zeros: the two empty objects, of the same parity, compared unequal
+    import numpy as np
+
+    cube = np.zeros((3, 3, 3), bool)
+    cube[1, 1, 1] = True  # one voxel: its 8 vertices are convex corners, none is kept (eq. 5.15)
+    gone = isoflow.flow_step(isoflow.DigitalObject(cube, offset=(4, 5, 6)))
+    assert gone.voxels == 0 and gone.volume.shape == (0, 0, 0) and gone.parity == 1 and gone.offset == (0, 0, 0)
+    assert gone == isoflow.DigitalObject(np.zeros((2, 2, 2), bool), offset=(-7, 0, 3), parity=1).cropped()
+    pixel = np.ones((1, 1), bool)  # in 2D too (the planar flow)
+    assert isoflow.flow_step(pixel).offset == (0, 0) and isoflow.flow_step(pixel).voxels == 0
