@@ -133,3 +133,25 @@ def test_an_object_that_vanishes_is_the_empty_object_every_crop_gives():
     assert gone == isoflow.DigitalObject(np.zeros((2, 2, 2), bool), offset=(-7, 0, 3), parity=1).cropped()
     pixel = np.ones((1, 1), bool)  # in 2D too (the planar flow)
     assert isoflow.flow_step(pixel).offset == (0, 0) and isoflow.flow_step(pixel).voxels == 0
+
+
+def test_a_1d_array_is_counted_by_euler_characteristic_betti_numbers_and_analyze_alike():
+    # euler_characteristic took a 1D array (docs/ndim.md: 1D to 4D) while betti_numbers and analyze
+    # refused it ("a volume is 2D, 3D or 4D"); its runs, counted by scipy's labelling, are b0 and chi
+    import numpy as np
+    from scipy import ndimage
+
+    rng = np.random.default_rng(7)
+    for row in [rng.random(n) < p for n in (1, 2, 17, 200) for p in (0.2, 0.5, 0.9)] + [np.zeros(0, bool)]:
+        runs = ndimage.label(row)[1]
+        assert isoflow.euler_characteristic(row) == runs
+        assert isoflow.betti_numbers(row) == [runs] == isoflow.betti_numbers(row, chi=runs)
+        r = isoflow.analyze(row)
+        assert r.betti == [runs] and r.euler_characteristic == runs and r.dimension == 1
+        assert r.voxels == int(row.sum()) and r.a_dot_n == 2 * runs and r.classes["convex"] == 2 * runs
+    import pytest
+
+    with pytest.raises(isoflow.IsoflowError, match=r"^chi=2 is not this volume's Euler characteristic \(1 run\)"):
+        isoflow.betti_numbers(np.ones(3, bool), chi=2)
+    with pytest.raises(isoflow.IsoflowError, match=r"^connectivity 4 is not valid in 1D \(use 2\)"):
+        isoflow.analyze(np.ones(3, bool), 4)
