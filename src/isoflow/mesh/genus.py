@@ -16,6 +16,7 @@ this is its number of tunnels b1.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -25,7 +26,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable
 from ..scale import memory
 from .crossings import find_crossings
-from .fills import Fill
+from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
@@ -607,12 +608,17 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     # no word naming them)
     check_callable(progress, "progress", "progress(done, total)")
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
+    strict = check_strict(strict, "verify_genus")
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{resolutions!r}]" if isinstance(resolutions, (int, np.integer)) else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {resolutions!r}{hint}")
     resolutions = list(resolutions)
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
+    for r in resolutions:  # int() took "32" and 32.5 (as 32) in silence
+        if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer, float, np.floating)) \
+                or not (math.isfinite(r) and r == int(r) and r >= 1):
+            raise IsoflowError(f"resolutions must be integers >= 1, got {r!r} in {resolutions!r}")
     if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
             or max_resolution < 1:
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {max_resolution!r}")
