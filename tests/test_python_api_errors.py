@@ -202,6 +202,71 @@ def test_verify_genus_checks_its_arguments_as_the_command_line_does(args, kwargs
     assert str(info.value) == words
 
 
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, strict=s), "voxelize: strict"),
+    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, strict=s), "voxelize: strict"),
+    (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), strict=s), "verify_genus: strict"),
+])
+@pytest.mark.parametrize("strict", ["no", 1, None])
+def test_a_strict_that_is_no_bool_is_refused_naming_it(call, words, strict):
+    # strict="no" turned strict mode on (a non-empty string is true), 1 too
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=re.escape(f"{words} must be True or False, got {strict!r}")):
+        call(strict)
+
+
+@pytest.mark.parametrize("call", [
+    lambda s, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, strict=s),
+    lambda s, tmp: isoflow.voxelize_file(tmp / "box.stl", resolution=4, strict=s),
+])
+def test_a_strict_that_is_no_bool_is_refused_before_a_file_is_read_or_written(call, tmp_path):
+    pytest.importorskip("zarr")
+    _box().export(tmp_path / "box.stl")
+    with pytest.raises(IsoflowError, match=re.escape("voxelize: strict must be True or False, got 'no'")):
+        call("no", tmp_path)
+    assert not (tmp_path / "v.zarr").exists()
+
+
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": "0.5"}, "voxelize: pitch must be a positive number, got '0.5'"),
+    ({"pitch": True}, "voxelize: pitch must be a positive number, got True"),
+    ({"resolution": "4"}, "voxelize: resolution must be an integer >= 1, got '4'"),
+])
+@pytest.mark.parametrize("voxelize", [
+    lambda **k: isoflow.voxelize_mesh(_box(), **k),
+    lambda **k: isoflow.voxelize_meshes([_box()], **k),
+])
+def test_a_pitch_or_resolution_that_is_no_number_is_refused_naming_it(voxelize, kwargs, words):
+    # pitch="0.5" was read as the number it spells (and True as 1)
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as info:
+        voxelize(**kwargs)
+    assert str(info.value) == words
+    assert voxelize(pitch=0.5).voxels in (8, (8,))  # the unit box at pitch 0.5: 2 x 2 x 2 voxels
+
+
+@pytest.mark.parametrize("resolution", ["4", 4.5, True])
+def test_verify_genus_refuses_a_resolution_that_is_no_integer(resolution):
+    # int() took "4" and 4.5 (as 4) in silence
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=re.escape(f"resolutions must be integers >= 1, got {resolution!r} in")):
+        isoflow.verify_genus(_box(), resolutions=[8, resolution])
+
+
+@pytest.mark.parametrize("voxelize", [
+    lambda v, f: isoflow.voxelize_mesh(v, f, resolution=4),
+    lambda v, f: isoflow.voxelize_meshes([(v, f)], resolution=4),
+    lambda v, f: isoflow.verify_genus((v, f), resolutions=(4,)),
+])
+def test_complex_vertices_are_refused_naming_them(voxelize):
+    # the imaginary part was dropped with NumPy's ComplexWarning alone
+    box = _box()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(IsoflowError, match=r"vertices must be real coordinates, got complex numbers \(complex128\)"):
+            voxelize(box.vertices + 1j, box.faces)
+
+
 @pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
 def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
     # a dask array was rechunked as given: ZeroDivisionError, dask's

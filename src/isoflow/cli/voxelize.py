@@ -104,6 +104,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                             overlap=args.overlap, strict=args.strict, progress=show)
+    assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
     with coarser_for_magicavoxel():

@@ -33,7 +33,7 @@ from .indices import (
 )
 from .lattice import DigitalObject
 from .report import Report
-from .topology import betti_numbers, euler_from_histogram
+from .topology import DIMENSIONS, betti_numbers, euler_from_histogram
 
 
 def analyze(
@@ -43,7 +43,9 @@ def analyze(
     threads: int | None = None,
     method: Method = "auto",
 ) -> Report:
-    """Everything ``isoflow info`` reports about a 2D, 3D or 4D object.
+    """Everything ``isoflow info`` reports about a 2D, 3D or 4D object (a
+    bare 1D array too, as :func:`~isoflow.digital.topology.euler_characteristic`
+    and :func:`~isoflow.digital.topology.betti_numbers` take it).
 
     One pass of configurations gives the histogram from which chi (Theorems
     10-11), the class vector ``n`` (eq. 4.9), ``a^T n`` (eqs. 4.12-4.13) and
@@ -60,8 +62,8 @@ def analyze(
         computed on its device (only the surfaces, when asked, are counted
         from a host copy).
     connectivity : int, optional
-        The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default:
-        the paper's 6, 4, 8); the background takes the other.
+        The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D, 2 in 1D
+        (default: the paper's 6, 4, 8, 2); the background takes the other.
     surfaces : bool
         Count the closed surfaces and their genus (3D).
     threads : int, optional
@@ -84,7 +86,7 @@ def analyze(
     Raises
     ------
     IsoflowError
-        When the volume is not binary, not 2D to 4D, or would not fit in
+        When the volume is not binary, not 1D to 4D, or would not fit in
         memory.
 
     Examples
@@ -98,6 +100,12 @@ def analyze(
     >>> r = analyze(torus)
     >>> r.betti, r.euler_characteristic, r.a_dot_n, r.genus
     ([1, 1, 0], 0, 0, [1])
+
+    A row of two runs: their four ends are its convex vertices.
+
+    >>> r = analyze(np.array([0, 1, 1, 0, 1], bool))
+    >>> r.betti, r.euler_characteristic, r.classes, r.energy
+    ([2], 2, {'convex': 4, 'flat': 0, 'concave': 0}, 4)
     """
     with using(threads):
         return Report.from_dict(_analyze(obj, connectivity, surfaces, method))
@@ -109,7 +117,7 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
     else:
         # a bool array's bytes are made 0/1 only for the NumPy passes: the
         # compiled pass reads any nonzero byte as set
-        vol, parity = arrays.as_volume(obj, canonical=False)[1], 0
+        vol, parity = arrays.as_volume(obj, canonical=False, dims=DIMENSIONS)[1], 0
     conn = resolve_connectivity(vol.ndim, connectivity)
     census: Mapping[str, Any] | None = _census(vol, conn, surfaces, method)
     if census is not None:
@@ -199,6 +207,17 @@ def report_from_histogram(
             a_dot_n=int(np.dot(hist, a)),
             a_dot_n_well_composed=int(np.dot(hist[on], a[on])),
             energy=int(np.dot(hist[on], k[on])),
+        )
+    elif ndim == 1:
+        # a run's two ends (configurations 1 and 2) are the only boundary vertices, convex, of
+        # Euler share 1/2 (a = 1): the planar classes with neither flat nor concave vertices
+        ends = int(hist[1] + hist[2])
+        out.update(
+            n=[ends, 0, 0],
+            classes=dict(zip(PLANAR_LABELS, [ends, 0, 0])),
+            non_well_composed=0,
+            a_dot_n=int(np.dot(hist, euler_lut(1, conn))),
+            energy=ends,
         )
     else:
         pcls = planar_class_lut()

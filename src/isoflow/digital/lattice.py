@@ -186,9 +186,25 @@ class DigitalObject:
         return self.world(lo), self.world(hi)
 
     def cropped(self) -> DigitalObject:
-        """The same object in the smallest array that holds it."""
+        """The same object in the smallest array that holds it.
+
+        An empty object is held by an array of no voxels, which has no
+        place: its offset is zeros (parity, pitch and origin are kept), so
+        that every empty object crops to the same one.
+
+        Examples
+        --------
+        >>> v = np.zeros((4, 4), bool); v[1:3, 2] = True
+        >>> c = DigitalObject(v, offset=(5, 5)).cropped()
+        >>> c.volume.shape, c.offset
+        ((2, 1), (6, 7))
+        >>> DigitalObject(np.zeros((4, 4), bool), offset=(5, 5)).cropped().offset
+        (0, 0)
+        """
         if not self.volume.any():
-            return replace(self, volume=np.zeros((0,) * self.ndim, bool))
+            # the offset of where the object was (a vanished flow's dual lattice: -1 per axis)
+            # says nothing of an object of no voxels and made equal empty objects unequal
+            return replace(self, volume=np.zeros((0,) * self.ndim, bool), offset=(0,) * self.ndim)
         lo, hi = _nonzero_bounds(self.volume)
         sl = tuple(slice(a, b) for a, b in zip(lo, hi))
         return replace(

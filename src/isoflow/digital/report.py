@@ -30,7 +30,7 @@ class Report(Result):
     voxels : int
         Object voxels.
     dimension : int
-        2, 3 or 4.
+        2, 3 or 4 (1 for a bare 1D array).
     shape : list of int
         The array's shape.
     connectivity : int
@@ -41,10 +41,12 @@ class Report(Result):
         chi, by the digital Gauss-Bonnet sum (Theorems 10-11).
     betti : list of int or None
         ``[b0, b1, b2]`` in 3D (components, tunnels, cavities), ``[b0, b1]``
-        in 2D; in 4D the Betti numbers that components give (the others None).
+        in 2D, ``[b0]`` in 1D (the runs); in 4D the Betti numbers that
+        components give (the others None).
     n : list of int
         The class histogram of eq. 4.9: nine counts ``n_-4 .. n_4`` in 3D;
-        convex, flat, concave in 2D; the 45 manifold classes in 4D.
+        convex, flat, concave in 2D (in 1D the run ends, convex, and 0, 0);
+        the 45 manifold classes in 4D.
     classes : dict
         ``n`` by class label (in 4D by the class's least configuration, the
         classes that occur).
@@ -63,7 +65,7 @@ class Report(Result):
         80-connectivity).
     a_dot_n_well_composed : int or None
         The paper's ``a^T n`` over the classes of ``n`` alone: the nine in
-        3D, the 45 manifold classes in 4D (None in 2D).
+        3D, the 45 manifold classes in 4D (None in 1D and 2D).
     surfaces : list of ClosedSurface or None
         Each closed surface of the boundary mesh, largest first (3D, when
         asked; ``[]`` for an empty object). None, and no key in the mapping

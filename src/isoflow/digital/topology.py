@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -148,20 +148,21 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
 
 def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
                   method: Method = "auto") -> list[int | None]:
-    """The Betti numbers of a 2D, 3D or 4D binary volume.
+    """The Betti numbers of a 1D to 4D binary volume.
 
     b0 counts the components under ``connectivity``, the last Betti number
     the background components that do not reach the border (cavities in 3D,
     holes in 2D) under the complementary connectivity, and in 3D
-    ``b1 = b0 + b2 - chi`` the tunnels.
+    ``b1 = b0 + b2 - chi`` the tunnels. In 1D b0 is the number of runs,
+    which is chi (segments have no holes).
 
     Parameters
     ----------
     volume : array_like of bool or 0/1
         A NumPy array, or a CuPy array labelled on its GPU.
     connectivity : int, optional
-        The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D (default:
-        the paper's 6, 4, 8).
+        The object's: 6 or 26 in 3D, 4 or 8 in 2D, 8 or 80 in 4D, 2 in 1D
+        (default: the paper's 6, 4, 8, 2).
     chi : int, optional
         The Euler characteristic when it is known already (one that cannot
         be the volume's is refused, and so is one that is not an integer).
@@ -173,13 +174,13 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     -------
     list of int
         ``[b0, b1, b2]`` in 3D, ``[b0, b1]`` in 2D (``chi = b0 - b1`` is
-        checked); in 4D ``[b0, None, None, b3]``: chi fixes ``b1 - b2`` but
+        checked), ``[b0]`` in 1D (``chi = b0`` is checked); in 4D ``[b0, None, None, b3]``: chi fixes ``b1 - b2`` but
         not each.
 
     Raises
     ------
     IsoflowError
-        When the volume is not binary or not 2D to 4D, the connectivity is
+        When the volume is not binary or not 1D to 4D, the connectivity is
         not valid in its dimension, or ``chi`` is no integer or cannot be
         the volume's.
 
@@ -194,8 +195,14 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     >>> box[1, 1, 1] = False
     >>> betti_numbers(ring), betti_numbers(box)
     ([1, 1, 0], [1, 0, 1])
+
+    A row of three runs:
+
+    >>> betti_numbers(np.array([1, 1, 0, 1, 0, 0, 1], bool))
+    [3]
     """
-    xp, v = arrays.as_volume(volume)
+    # 1D as euler_characteristic takes it (docs/ndim.md: the same functions serve 1D to 4D)
+    xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
     # b1 = b0 + b2 - chi: a chi of 0.5 gave b1 = 0.5, 1.0 a float, "1" NumPy's TypeError
     if chi is not None:
@@ -204,6 +211,14 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         chi = int(chi)  # a NumPy integer gives a list of plain ints, as chi computed here does
     else:
         chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)
+    if v.ndim == 1:
+        # the runs are the vertices where a run starts (configuration 2: the cell after the vertex alone),
+        # counted here rather than taken from chi so that a chi given is checked
+        runs = int(configuration_histogram(v, method=method)[2])
+        if chi != runs:
+            raise IsoflowError(f"chi={chi} is not this volume's Euler characteristic ({counted(runs, 'run')}); "
+                               "leave chi out to compute it")
+        return [runs]
     # the volume is checked once here; one host copy where the library cannot label
     xp, v, label = _labeller(xp, v, method)
     if use_compiled(v, method=method):

@@ -237,8 +237,12 @@ def from_vertex_rows(state: PackedObject, rows: np.ndarray) -> PackedObject:
     bits, shape, lo, runs, gaps = flowbits.crop(rows, vertex_shape(state))
     place = state.place.on_dual_lattice(state.place.volume)
     lo = lo[3 - nd:]
-    shape = shape[3 - nd:] if shape[0] else (0,) * nd
-    place = replace(place, offset=tuple(o + int(a) for o, a in zip(place.offset, lo)))
+    if shape[0]:
+        shape = shape[3 - nd:]
+        place = replace(place, offset=tuple(o + int(a) for o, a in zip(place.offset, lo)))
+    else:  # the object vanished: offset zeros, as DigitalObject.cropped gives every empty object
+        shape = (0,) * nd
+        place = replace(place, offset=(0,) * nd)
     return PackedObject(bits, shape, runs, gaps, place, int(np.bitwise_count(bits).sum()))
 
 

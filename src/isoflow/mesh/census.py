@@ -287,7 +287,12 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
 def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> np.ndarray:
     """Which of the ``kept`` faces (one per pair) lie in a wall: a component
     of them with free edges (used once among them), every one of which an
-    unpaired face also uses."""
+    unpaired face also uses; or a closed component (no free edge) every
+    corner of which an unpaired face also uses: the walls all round a solid
+    enclosed by others (the middle cube of a cross of cubes written one by
+    one, whose corners the arms' faces reach, not the diagonals inside its
+    faces), where a closed model drawn double-sided meets no unpaired face,
+    or a few of its corners."""
     if len(single) == 0:
         return np.zeros(len(kept), dtype=bool)
     n = np.int64(max(n_vertices, 1))
@@ -300,7 +305,12 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> np.ndarray:
     has_free[comp] = True
     open_edge = np.zeros(len(kept), dtype=bool)
     open_edge[comp[~covered]] = True
-    return (has_free & ~open_edge)[root]
+    # a corner no unpaired face uses, per component of the kept faces
+    reached = np.zeros(int(n_vertices), dtype=bool)
+    reached[single.ravel()] = True
+    bare = np.zeros(len(kept), dtype=bool)
+    bare[np.repeat(root, 3)[~reached[kept.ravel()]]] = True
+    return ((has_free & ~open_edge) | (~has_free & ~bare))[root]
 
 
 @njit(cache=True, nogil=True)

@@ -152,6 +152,36 @@ def check_fill(fill: object) -> Fill:
     return fill  # type: ignore[return-value]
 
 
+def check_strict(strict: object, where: str = "voxelize") -> bool:
+    """``strict`` as a bool if it is one, else an IsoflowError naming it:
+    ``strict="no"`` turned strict mode on (any non-empty string is true).
+
+    Parameters
+    ----------
+    strict : object
+        What was given as ``strict``: True or False (NumPy's bools too).
+    where : str
+        The function, for the message.
+
+    Returns
+    -------
+    bool
+        ``strict``.
+
+    Examples
+    --------
+    >>> check_strict(False)
+    False
+    >>> check_strict("no")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: voxelize: strict must be True or False, got 'no'
+    """
+    if not isinstance(strict, (bool, np.bool_)):
+        raise IsoflowError(f"{where}: strict must be True or False, got {strict!r}")
+    return bool(strict)
+
+
 def sampled_points(T: np.ndarray, origin, pitch: float) -> tuple[np.ndarray, np.ndarray] | None:
     """The points :func:`unbounded_area` looks up, of the triangles' corners
     ``T`` (M, 3, 3) in the grid's frame: ``(idx, area)`` with ``idx`` (3, K,

@@ -16,6 +16,7 @@ this is its number of tunnels b1.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
@@ -25,7 +26,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable
 from ..scale import memory
 from .crossings import find_crossings
-from .fills import Fill
+from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
@@ -607,12 +608,17 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     # no word naming them)
     check_callable(progress, "progress", "progress(done, total)")
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
+    strict = check_strict(strict, "verify_genus")
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{resolutions!r}]" if isinstance(resolutions, (int, np.integer)) else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {resolutions!r}{hint}")
     resolutions = list(resolutions)
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
+    for r in resolutions:  # int() took "32" and 32.5 (as 32) in silence
+        if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer, float, np.floating)) \
+                or not (math.isfinite(r) and r == int(r) and r >= 1):
+            raise IsoflowError(f"resolutions must be integers >= 1, got {r!r} in {resolutions!r}")
     if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
             or max_resolution < 1:
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {max_resolution!r}")
@@ -623,7 +629,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     name, v, f = mesh_input(mesh, stats=stats)
     f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
-    reference = w["solid_genus"] if w["overlap"] else w["mesh"]["genus"]
+    reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
@@ -671,8 +677,16 @@ def _double_sided(v: np.ndarray, f: np.ndarray) -> dict | None:
     pairs, the ``corners`` of the first, and the ``genus`` of the mesh with
     the later face of each pair left out (None where that mesh has none),
     what removing the reversed copies would give.  A pair of zero-area
-    faces (corners in a line) draws nothing: left to the zero-area note."""
-    from .census import opposite_pairs  # compiled: loaded with the census
+    faces (corners in a line) draws nothing: left to the zero-area note.
+
+    Where pairs form walls between solids (boxes stacked face to face on
+    shared corners, a voxel model written cube by cube:
+    :func:`~isoflow.mesh.census.one_face_per_pair` drops such a wall whole),
+    also ``walls``, the pairs in walls, and ``union_genus``, the genus of
+    the mesh without its walls: the surface of the solids' union, which is
+    what the voxels are (both left out where that mesh is no closed
+    manifold: a face of a closed surface drawn twice is no wall)."""
+    from .census import one_face_per_pair, opposite_pairs  # compiled: loaded with the census
 
     mate = opposite_pairs(f, len(v))
     later = (mate >= 0) & (mate < np.arange(len(f)))
@@ -682,8 +696,14 @@ def _double_sided(v: np.ndarray, f: np.ndarray) -> dict | None:
     if not later.any():
         return None
     first = int(mate[np.argmax(later)])
-    return {"n": int(np.count_nonzero(later)), "corners": _corners_of(v, f[first]),
-            "genus": mesh_topology(v, f[~later])["genus"]}
+    out = {"n": int(np.count_nonzero(later)), "corners": _corners_of(v, f[first]),
+           "genus": mesh_topology(v, f[~later])["genus"]}
+    read, one = one_face_per_pair(v, f)
+    walls = (len(f) - len(read) - one) // 2  # a wall's pairs are dropped both faces; the others one face each
+    union_genus = mesh_topology(v, read)["genus"] if walls else None
+    if union_genus is not None:  # walls that part solids: without them the surface closes (not a face drawn twice)
+        out.update(walls=walls, union_genus=union_genus)
+    return out
 
 
 def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
@@ -694,7 +714,12 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     the mesh is not the solid's boundary), ``overlap`` (the solid's genus
     is the reference: components overlap, touch or nest, or faces of one
     component touch) and
-    ``double_sided`` (faces listed once each way round, or None)."""
+    ``double_sided`` (faces listed once each way round, or None), and
+    ``walled`` with ``walled_genus``: every such pair lies in a wall
+    between solids, and the genus of the mesh without the walls, the
+    reference where no solid genus is (the solids on either side of a wall
+    share its faces: their union is what the voxels are, and which side a
+    lone pair means is not known, so a mesh with other pairs has none)."""
     mesh, comp = mesh_topology(v, f, return_components=True)
     whole = whole_manifold(v, f)
     out = {"mesh": mesh, "manifold3d": manifold3d_report(v, f, whole), "pymeshlab": pymeshlab_report(v, f)}
@@ -708,6 +733,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
                nested=nested, overlap=touching or nested,
                double_sided=_double_sided(v, f))
+    sided = out["double_sided"] or {}
+    out.update(walled=sided.get("walls", 0) == sided.get("n", -1), walled_genus=sided.get("union_genus"))
     return out
 
 

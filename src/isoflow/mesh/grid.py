@@ -120,6 +120,10 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
         what = f"resolution={res}"
         cells = ext_s / pitch_s
     else:
+        # float() reads "0.5" and True as numbers: a pitch given as text or a bool is refused
+        # by name, as a resolution is, not taken for the number it spells
+        if isinstance(pitch, (str, bytes, bool, np.bool_)):
+            raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}")
         try:
             pitch = float(pitch)
         except (TypeError, ValueError, OverflowError):

@@ -30,7 +30,7 @@ boxes, so what would not fit is refused before any mesh is voxelised.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
@@ -40,7 +40,7 @@ from ..errors import IsoflowError, check_callable
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
-from .fills import Fill, check_fill
+from .fills import Fill, check_fill, check_strict
 from .grid import check_grid_memory, check_placement, voxel_grid
 from .load import mesh_bbox
 from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
@@ -63,9 +63,10 @@ class LabelVoxelization(Result):
 
     Attributes
     ----------
-    labels : unsigned integer ndarray (nx, ny, nz)
+    labels : unsigned integer ndarray (nx, ny, nz) or None
         Label i (1-based) where mesh i fills the voxel, 0 elsewhere; the
-        smallest unsigned type that holds the labels.
+        smallest unsigned type that holds the labels. None when read back
+        from :meth:`to_dict`'s JSON, which leaves the array out.
     origin : float64 ndarray (3,)
         Lower corner of voxel (0, 0, 0).
     pitch : float
@@ -87,7 +88,7 @@ class LabelVoxelization(Result):
         One line on the overlaps and on labels left without a voxel.
     """
 
-    labels: np.ndarray = field(repr=False)
+    labels: np.ndarray | None = field(repr=False)
     origin: np.ndarray
     pitch: float
     names: tuple[str, ...]
@@ -104,6 +105,33 @@ class LabelVoxelization(Result):
         out = super().to_dict()
         del out["labels"]
         return out
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> LabelVoxelization:
+        """The label voxelisation of :meth:`to_dict`'s JSON: the label array
+        is not in it, so there is none (``labels`` given is taken), the
+        origin is an array and the sequences tuples again. It was refused,
+        the array being a field without a default.
+
+        Examples
+        --------
+        >>> import json, trimesh
+        >>> r = voxelize_meshes([trimesh.creation.box()], resolution=4)
+        >>> back = LabelVoxelization.from_dict(json.loads(json.dumps(r.to_dict())))
+        >>> back.to_dict() == r.to_dict(), back.labels, back.origin.tolist(), back.voxels
+        (True, None, [-0.5, -0.5, -0.5], (64,))
+        """
+        given = {"labels": None, **values}
+        # JSON makes the origin and every tuple a list: back to the fields' types, so that the
+        # result equals the one written (a field left out is left to the dataclass to name)
+        if "origin" in given:
+            given["origin"] = np.asarray(given["origin"], dtype=np.float64)
+        for name in ("names", "voxels", "notes"):
+            if name in given:
+                given[name] = tuple(given[name])
+        if "overlaps" in given:
+            given["overlaps"] = tuple(tuple(o) for o in given["overlaps"])
+        return super().from_dict(given)
 
 
 def check_overlap(overlap: object) -> Overlap:
@@ -236,7 +264,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     >>> r.labels.shape, r.labels.dtype.name, r.voxels, r.overlaps
     ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
     """
-    fill, overlap = check_fill(fill), check_overlap(overlap)
+    fill, overlap, strict = check_fill(fill), check_overlap(overlap), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:
         resolution = 64

@@ -83,9 +83,14 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
     shapes, an empty mesh, non-integer faces, NaN or infinite coordinates,
     out-of-range indices."""
     try:
-        v = np.asarray(vertices, dtype=np.float64)
+        v = np.asarray(vertices)
+        complex_ = v.dtype.kind == "c"
+        if not complex_:
+            v = v.astype(np.float64, copy=False)
     except (TypeError, ValueError) as exc:
         raise IsoflowError(f"{where}: vertices are not a numeric array ({exc})") from None
+    if complex_:  # a cast to float64 drops the imaginary part with NumPy's ComplexWarning alone
+        raise IsoflowError(f"{where}: vertices must be real coordinates, got complex numbers ({v.dtype})")
     if v.ndim != 2 or v.shape[1] != 3:
         raise IsoflowError(f"{where}: vertices must have shape (N, 3), got {v.shape}")
     f = as_array(faces, f"{where}: faces")

@@ -148,10 +148,10 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
     >>> z["voxels"] == read_volume(store).voxels, z["origin"] == read_volume(store).origin.tolist()
     (True, True)
     """
-    from .fills import check_fill
+    from .fills import check_fill, check_strict
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
 
-    fill = check_fill(fill)
+    fill, strict = check_fill(fill), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"

@@ -232,12 +232,15 @@ def _repeated_words(n: int, copies: int, corners) -> str:
             f"{'the copies' if copies > 1 else 'the copy'} dropped")
 
 
-def _double_sided_words(n: int, corners, genus: int | None) -> str:
+def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, union_genus: int | None = None) -> str:
     s = "s" if n > 1 else ""
-    return (f"{n} double-sided face{s} (the same three corners listed once each way round; "
-            f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))})"
-            + (f"; without the later face of {'each' if n > 1 else 'the'} pair the mesh is closed, genus {genus}"
-               if genus is not None else ""))
+    said = (f"{n} double-sided face{s} (the same three corners listed once each way round; "
+            f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))})")
+    if walls:  # walls between solids: both faces of each pair dropped leave the union's surface
+        which = ("all" if walls == n else str(walls)) + f" in walls between solids{'' if walls == n else f' of the {n}'}"
+        return f"{said}, {which}: without the walls the mesh is closed, genus {union_genus}"
+    return said + (f"; without the later face of {'each' if n > 1 else 'the'} pair the mesh is closed, genus {genus}"
+                   if genus is not None else "")
 
 
 def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None,

@@ -51,6 +51,7 @@ from .fills import (
     Fill,
     Voxelization,
     check_fill,
+    check_strict,
     flood_adds_nothing,
     sampled_points,
     thin_solid,
@@ -590,7 +591,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     >>> int(vol.sum()), int(voxelize(box.vertices, box.faces, resolution=4, fill="shell")[0].sum())
     (64, 56)
     """
-    fill = check_fill(fill)
+    fill, strict = check_fill(fill), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")
     v, f, shape, what, frame, origin, pitch = plan_voxels(
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
@@ -820,6 +821,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     >>> max(obj.volume.shape), betti_numbers(obj.volume)
     (32, [1, 1, 0])
     """
+    check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
     v, f = load_mesh(path)
     try:
         obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
