@@ -183,3 +183,32 @@ def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and "step_001.ply" in p.stderr, p.stderr
     assert (run_dir / "step_001.ply" / "notes.txt").read_text() == "mine"
+
+
+@pytest.mark.parametrize("command", [("voxelize", TORUS, "--resolution", 16, "-o", "out.npz/"),
+                                     ("voxelize", TORUS, "--resolution", 16, "-o", "out.h5/"),
+                                     ("surface", "LABELS", "-o", "out.ply/"),
+                                     ("info", "LABELS", "--labels", "--csv", "out.csv/")])
+def test_a_file_output_given_as_a_directory_is_refused(tmp_path, command):
+    # Path() dropped the trailing slash: -o out.npz/ (a directory meant) wrote, or with --force replaced, a file out.npz
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "labels.npy", labels)
+    given = f"{tmp_path}/{command[-1]}"
+    old = tmp_path / command[-1].rstrip("/")
+    old.write_bytes(b"old")
+    args = [tmp_path / "labels.npy" if a == "LABELS" else a for a in command[:-1]]
+    p = run(*args, given, "--force", "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and f"{given}: a trailing slash names a directory" in p.stderr, p.stderr
+    assert old.read_bytes() == b"old"
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(["labels.npy", old.name])
+
+
+def test_a_zarr_store_given_as_a_directory_is_written(tmp_path):
+    # a store is a directory: -o out.zarr/ names it, unlike a file's name with a slash
+    pytest.importorskip("zarr")
+    p = run("voxelize", TORUS, "--resolution", 16, "-o", f"{tmp_path / 'out.zarr'}/", "-q")
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "out.zarr").is_dir()
+

@@ -37,6 +37,7 @@ def check_output_path(
     """The output file as a Path, checked before any work is done: it ends in
     one of ``suffixes`` (any case; none: any name), is not a directory, does
     not exist unless ``force``, and its directory exists and is writable."""
+    refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)
     refuse_unusable_output(path)
     if suffixes and path.suffix.lower() not in suffixes:
@@ -48,6 +49,28 @@ def check_output_path(
                                       f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def refuse_directory_spelling(path: str | os.PathLike, what: str = "output") -> None:
+    """Refuse a file output spelled as a directory, with a trailing slash.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output as the user gave it.
+    what : str
+        What the file holds, for the message ("surface", "volume").
+
+    Raises
+    ------
+    IsoflowError
+        Naming the path: ``Path`` drops the slash, so ``-o out.npz/``
+        quietly wrote a file ``out.npz`` where the user meant a directory.
+    """
+    text = str(path)
+    if text.endswith(("/", os.sep)) and text.rstrip("/" + os.sep):  # "/" alone is the root, refused as a directory
+        raise IsoflowError(f"{text}: a trailing slash names a directory, but the {what} is a file; "
+                           "give its file name without the slash")
 
 
 def refuse_unusable_output(path: str | os.PathLike) -> None:

@@ -30,7 +30,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
-from .outputs import atomic_path, check_output_path
+from .outputs import atomic_path, check_output_path, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -501,6 +501,8 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
                            f"{', '.join(volume_suffixes(writable=True))}")
     if fmt is None:
         raise IsoflowError(f"{path}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+    if dataset is None and not fmt.directory:  # split_dataset's Path dropped a trailing slash: check the path given
+        refuse_directory_spelling(path, "volume")
     if dataset is not None and not fmt.datasets:
         whole = " (an .npz is written whole: volume, offset, parity, pitch and origin)" if fmt.read_datasets else ""
         raise IsoflowError(f"{path}: a dataset inside the file is written only for HDF5 and zarr{whole}")

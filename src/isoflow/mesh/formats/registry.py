@@ -52,6 +52,8 @@ class VolumeFormat:
     imports: str | None = None
     #: suffixes read but not written (a detached header needs a second file)
     read_only: tuple[str, ...] = ()
+    #: written as a directory (a store), so ``-o NAME/`` names it
+    directory: bool = False
     #: the largest label a label image written in it keeps (None: any unsigned integer)
     max_label: int | None = None
 
@@ -74,7 +76,7 @@ FORMATS = (
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),  # a bit per voxel
     VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255),  # colour indices
-    VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True),
+    VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True),
     # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
     VolumeFormat("PNG", (".png",), "png", None, imports="PIL", read_only=(".png",)),
 )
