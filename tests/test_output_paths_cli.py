@@ -212,3 +212,51 @@ def test_a_zarr_store_given_as_a_directory_is_written(tmp_path):
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "out.zarr").is_dir()
 
+
+@pytest.mark.parametrize("suffix", [".npy", ".tif"])
+def test_a_short_write_says_why_not_only_numpys_byte_counts(tmp_path, suffix):
+    # numpy's tofile reports a short write as "23040 requested and 2872 written": the cause was not said
+    if suffix == ".tif":
+        pytest.importorskip("tifffile")
+    out = tmp_path / f"torus{suffix}"
+    args = ("voxelize", TORUS, "--resolution", 48, "-o", out, "-q")
+    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    assert first.returncode == 0, first.stderr
+    out.write_bytes(b"old")
+    p = run_on_a_small_disk(3000, *args, "--force")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and str(out) in p.stderr, p.stderr
+    assert "File too large: the file size limit (ulimit -f) is 3000 bytes" in p.stderr and "requested" not in p.stderr
+    assert out.read_bytes() == b"old"
+    assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]
+
+
+@pytest.fixture
+def full_disk(tmp_path):
+    """A directory on a tmpfs of 8 KiB, mounted for the test (root only)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    if os.geteuid() != 0:
+        pytest.skip("mounting a small tmpfs needs root")
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", str(disk)], capture_output=True)
+    if mounted.returncode != 0:
+        pytest.skip(f"no tmpfs could be mounted: {mounted.stderr!r}")
+    try:
+        yield disk
+    finally:
+        subprocess.run(["umount", str(disk)], check=True)
+
+
+@pytest.mark.parametrize("suffix", [".npy", ".tif"])
+def test_a_short_write_on_a_full_disk_says_no_space_left(full_disk, suffix):
+    # numpy's tofile reports a short write as "23040 requested and 8064 written": the full disk was not said
+    if suffix == ".tif":
+        pytest.importorskip("tifffile")
+    out = full_disk / f"torus{suffix}"
+    out.write_bytes(b"old")
+    p = run("voxelize", TORUS, "--resolution", 48, "-o", out, "--force", "-q")
+    assert p.returncode == 2, p.stderr
+    assert p.stderr.count("\n") == 1 and str(out) in p.stderr, p.stderr
+    assert "No space left on device: " in p.stderr and "requested" not in p.stderr, p.stderr
+    assert out.read_bytes() == b"old"
+    assert sorted(f.name for f in full_disk.iterdir()) == [out.name]

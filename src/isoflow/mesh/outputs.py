@@ -20,6 +20,7 @@ import contextlib
 import errno
 import glob
 import os
+import re
 import secrets
 import shutil
 import stat
@@ -226,9 +227,58 @@ def _running(pid: int) -> bool:
 def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
     """One line naming the file and the cause of a failed write."""
     cause = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
+    cause = short_write_cause(cause, path.parent) or cause
     cause = " ".join(cause.split())  # one line: a library's message (HDF5's) may hold line breaks
     kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
     return IsoflowError(f"{path}: could not write ({cause}); {kept}")
+
+
+#: numpy's words for a short write (``ndarray.tofile``, which ``np.save`` and tifffile use): the OS's cause is lost
+_SHORT_WRITE = re.compile(r"(\d+) requested and (\d+) written")
+
+
+def short_write_cause(cause: str, directory: Path) -> str | None:
+    """The cause of a short write in the OS's words, for a library that
+    reports only its byte counts.
+
+    Parameters
+    ----------
+    cause : str
+        The library's message: numpy's ``"887808 requested and 28544
+        written"``.
+    directory : Path
+        Where the file was written: its file system's free space tells a
+        full disk from a file size limit.
+
+    Returns
+    -------
+    str or None
+        ``"No space left on device (28544 bytes of 887808 written)"`` (or
+        ``File too large``, with the limit, under ``ulimit -f``); None for
+        any other message.
+    """
+    m = _SHORT_WRITE.fullmatch(cause)
+    if m is None:
+        return None
+    requested, done = int(m[1]), int(m[2])
+    counts = f"{done} bytes of {requested} written"
+    try:
+        import resource  # Unix only
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+        limited = limit != resource.RLIM_INFINITY
+    except ImportError:
+        limit, limited = -1, False
+    try:
+        fs = os.statvfs(directory)
+        # root may write into the blocks kept back for it; called before the partial file is removed
+        free = (fs.f_bfree if os.geteuid() == 0 else fs.f_bavail) * fs.f_frsize
+    except OSError:
+        free = None
+    if limited and (free is None or free >= requested - done):
+        return f"{os.strerror(errno.EFBIG)}: the file size limit (ulimit -f) is {limit} bytes; {counts}"
+    if free is None or free < requested - done:
+        return f"{os.strerror(errno.ENOSPC)}: {counts}"
+    return f"the write stopped short: {counts}"
 
 
 #: the signals a command has received (the command line's handlers append
@@ -274,9 +324,11 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
         if sync:
             sync_directory(path.parent)
     except BaseException as exc:
+        # worded before the partial file is removed: the disk's free space then says whether it was full
+        error = write_error(path, exc, existed) if isinstance(exc, OSError) else None
         _remove(tmp)
-        if isinstance(exc, OSError):
-            raise write_error(path, exc, existed) from None
+        if error is not None:
+            raise error from None
         if isinstance(exc, KeyboardInterrupt):  # say which file, keep the exit status of an interrupt
             kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
             raise KeyboardInterrupt(f"{path}: interrupted while writing; {kept}") from None
