@@ -4,6 +4,7 @@ subprocess): a suffix in any case, an existing output replaced with
 
 import os
 import resource
+import shutil
 import signal
 import stat
 import subprocess
@@ -236,8 +237,8 @@ def full_disk(tmp_path):
     """A directory on a tmpfs of 8 KiB, mounted for the test (root only)."""
     disk = tmp_path / "disk"
     disk.mkdir()
-    if os.geteuid() != 0:
-        pytest.skip("mounting a small tmpfs needs root")
+    if os.geteuid() != 0 or shutil.which("mount") is None or shutil.which("umount") is None:
+        pytest.skip("mounting a small tmpfs needs root and mount(8)")
     mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=8k", "tmpfs", str(disk)], capture_output=True)
     if mounted.returncode != 0:
         pytest.skip(f"no tmpfs could be mounted: {mounted.stderr!r}")
