@@ -296,6 +296,21 @@ def test_configuration_histogram_names_a_bad_slab(slab):
     assert isoflow.configuration_histogram(np.ones((3, 3, 3), bool), slab=1, method="numpy")[255] == 8
 
 
+@pytest.mark.parametrize(("pitch", "shown"), [
+    (True, "True"),
+    (np.False_, "False"),
+    ((1.0, True, 2.0), "[1.0, True, 2.0]"),
+    (np.array([True, True, True]), "[True, True, True]"),
+])
+def test_digital_object_refuses_a_bool_pitch(pitch, shown):
+    # pitch=True was read as a voxel size of 1.0 (and False as 0, "must be
+    # positive"); in a tuple of floats asarray made True 1.0 before any check
+    with pytest.raises(IsoflowError) as info:
+        isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch)
+    assert str(info.value) == f"'pitch' must be a number (one, or one per axis), not True or False, got {shown}"
+    assert isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=(1, 2.0, 1)).pitch.tolist() == [1.0, 2.0, 1.0]
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"pitch": 0}, "'pitch' must be positive"),
     ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),

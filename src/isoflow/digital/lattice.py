@@ -282,6 +282,14 @@ def _pitch(value, ndim: int):
     read-only array) when the voxels are anisotropic; a vector whose entries
     are all equal becomes one number, so that isotropic stays a scalar."""
     arr = np.asarray(value)
+    # _field takes bools (a parity of True is 1), but pitch=True is a slip,
+    # not a voxel size of 1; a bool among floats, (True, 2.0, 1.0), becomes
+    # 1.0 in asarray, so the elements are looked at as given
+    given = np.asarray(value, dtype=object) if arr.size <= 8 else arr
+    if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in given.flat):
+        items = [v.item() if isinstance(v, np.generic) else v for v in given.flat]
+        shown = f"an array of shape {arr.shape}" if given is arr else repr(items[0] if arr.ndim == 0 else items)
+        raise IsoflowError(f"'pitch' must be a number (one, or one per axis), not True or False, got {shown}")
     if arr.dtype.kind in "biuf" and arr.size == 1 and arr.ndim <= 1:
         pitch = _field(arr.reshape(()), "pitch", None)
     else:
