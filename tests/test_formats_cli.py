@@ -315,6 +315,35 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
     assert p.returncode == 0, p.stderr
 
 
+@pytest.mark.parametrize(("command", "needs"), [
+    (["surface", "-o", "s.ply"], "surface needs a 3D object"),
+    (["flow", "--steps", "1", "--out", "f", "--volumes", ".zarr"],
+     "the digital curvature flow is defined for 2D and 3D objects"),
+])
+def test_a_time_series_store_too_large_to_read_whole_says_how_to_take_one_time_point(
+        command, needs, tmp_path, capsys, monkeypatch):
+    """A 4D OME-Zarr store beyond memory got the memory refusal ("crop it,
+    or use a .zarr store with 'isoflow info'") from surface, and from flow
+    block by block the reader's "axis 't' has 3 entries": now the line a
+    4D volume in memory gets, its (x, y, z, t) shape and the command that
+    saves one time point, from the store's metadata alone."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.scale import memory
+
+    g = zarr.open_group(tmp_path / "ts.ome.zarr", mode="w", zarr_format=2)
+    g.create_array("0", data=moving_ball(), chunks=(1, 3, 7, 8))
+    axes = [{"name": "t", "type": "time"}] + [{"name": a, "type": "space"} for a in "zyx"]
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [
+        {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [5.0, 2.0, 0.5, 0.5]}]}]}]
+    monkeypatch.setattr(memory, "default_budget", lambda: 50)  # the store (3 KiB) would not fit
+    monkeypatch.chdir(tmp_path)
+    line = fails(capsys, command[0], "ts.ome.zarr", *command[1:])
+    assert line.startswith(f"isoflow {command[0]}: error: ts.ome.zarr: {needs}, this one is 4D, shape 8x7x6x3 "
+                           "(a time series of 3 volumes, read as x, y, z, t); save one time point as 3D and give "
+                           "that: python -c "), line
+    assert not list(tmp_path.glob("s.*")) and not (tmp_path / "f").exists()
+
+
 def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     with tifffile.TiffWriter(tmp_path / "two.tif") as tif:
         tif.write(np.ones((3, 4, 5), np.uint8), photometric="minisblack")

@@ -16,6 +16,7 @@ from .inputs import (
     one_time_point,
     refuse_mesh_options,
     refuse_points_option,
+    refuse_time_series_store,
     why_empty,
 )
 from .progress import progress_bar
@@ -43,6 +44,9 @@ def cmd_flow(args: argparse.Namespace) -> int:
         from ..flow.files import check_output_dir
 
         check_output_dir(args.out, args.force)
+    # a time series refused as in memory, on either path (block by block the
+    # reader's own line named no way to take one time point)
+    refuse_time_series_store(args, "the digital curvature flow is defined for 2D and 3D objects")
     if block_wise(args):
         return flow_store(args)
     refuse_store_read_whole(args)

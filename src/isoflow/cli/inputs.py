@@ -255,6 +255,40 @@ isoflow.write_volume(isoflow.DigitalObject(o.volume[..., 0], pitch=o.pitch[:3], 
             f"save one time point as 3D and give that: python -c {shlex.quote(code)}")
 
 
+def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
+    """A zarr store holding a time series (4D): refused from its metadata
+    with the line a 4D volume read into memory gets (its shape, and the
+    command that saves one time point), before any path is chosen.
+
+    Without it a store too large to read whole got the memory refusal
+    ("crop it"), and ``flow --volumes .zarr`` the reader's "axis 't' has N
+    entries": neither names the command that takes one time point.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``input``, and ``label`` where it has one.
+    needs : str
+        What the command needs, as its in-memory refusal says it
+        ("surface needs a 3D object").
+
+    Raises
+    ------
+    IsoflowError
+        ``{input}: {needs}, this one is 4D, shape ...; save one time point
+        ... python -c '...'``.
+    """
+    from ..mesh.formats.omezarr import stored_shape
+    from ..mesh.formats.registry import split_dataset
+
+    if split_dataset(args.input)[0].suffix.lower() != ".zarr":
+        return
+    shape = stored_shape(args.input)
+    if len(shape) == 4:
+        hint = one_time_point(args.input, shape, getattr(args, "label", None))
+        raise IsoflowError(f"{args.input}: {needs}, this one is 4D{hint}")
+
+
 @contextlib.contextmanager
 def label_options(args: argparse.Namespace) -> Iterator[None]:
     """A label image where a mask is expected, in memory or found block by

@@ -17,6 +17,7 @@ from .inputs import (
     one_time_point,
     refuse_mesh_options,
     refuse_points_option,
+    refuse_time_series_store,
     thread_count,
     why_empty,
 )
@@ -54,6 +55,8 @@ def cmd_surface(args: argparse.Namespace) -> int:
         return cmd_surface_labels(args)
     if args.suffix:
         raise IsoflowError(f"{args.output}: --suffix names the files of --labels -o DIR/")
+    # a time series refused as in memory, however large (is_store takes 3D stores only)
+    refuse_time_series_store(args, "surface needs a 3D object")
     if is_store(args.input):
         if streams(args):
             return cmd_surface_store(args)

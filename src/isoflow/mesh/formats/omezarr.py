@@ -27,6 +27,7 @@ the scale and translation that put every voxel where it was.
 from __future__ import annotations
 
 import dataclasses
+import os
 import shutil
 from pathlib import Path
 
@@ -123,12 +124,31 @@ def stored_ndim(path) -> int:
     """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
     its x, y and z axes in an OME-Zarr image (and a time axis of several
     entries beside them: 4), every axis of a plain array."""
+    return len(stored_shape(path))
+
+
+def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
+    """The shape of a zarr store's volume as :func:`read` gives it, from
+    the metadata alone (the volume is not read).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``.
+
+    Returns
+    -------
+    tuple of int
+        (x, y, z) in an OME-Zarr image, (x, y, z, t) for a time series of
+        3D volumes; every axis as stored in a plain array.
+    """
     import_library("zarr", "OME-Zarr")
     file, level = split_dataset(path)
     array, multiscale, _ = open_zarr_node(file, level)
     if multiscale is None:
-        return array.ndim
-    return len(spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path), time=True)[0])
+        return tuple(int(n) for n in array.shape)
+    xyz = spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path), time=True)[0]
+    return tuple(int(array.shape[i]) for i in xyz)
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
