@@ -141,6 +141,14 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     tuple of int
         (x, y, z) in an OME-Zarr image, (x, y, z, t) for a time series of
         3D volumes; every axis as stored in a plain array.
+
+    Examples
+    --------
+    >>> import tempfile, numpy as np, zarr
+    >>> path = Path(tempfile.mkdtemp()) / "plain.zarr"
+    >>> _ = zarr.open_array(str(path), mode="w", shape=(5, 4, 3, 2), dtype="u1")
+    >>> stored_shape(path)
+    (5, 4, 3, 2)
     """
     import_library("zarr", "OME-Zarr")
     file, level = split_dataset(path)
