@@ -468,7 +468,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         except IsoflowError as exc:
             if done == 1:
                 raise
-            # the line said "nothing was written" of this file alone, while the labels before it were in place
+            # the files of the labels before this one are in place: the line names them
             after = len(meshes) - done
             raise IsoflowError(f"{exc}; the {counted(done - 1, 'label file')} before it "
                                f"({_some([meshes[i][0] + target[2] for i in range(done - 1)])}) were written"

@@ -485,8 +485,8 @@ def planar_index(points: np.ndarray) -> np.ndarray:
     >>> r.tolist(), int(r.sum()) // 4
     ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
     """
-    # a 3D array gave an array of another shape, a 1D one NumPy's IndexError,
-    # and 0.5 or NaN counted as points: refused, as every mask of the API is
+    # a 2D mask of 0/1 only, as every mask of the API: another shape has no
+    # planar index, and 0.5 or NaN are no lattice points
     grid = binary(points, "points")
     if grid.ndim != 2:
         raise IsoflowError(f"points: planar_index takes a 2D array, got a {grid.ndim}D array")

@@ -202,8 +202,7 @@ class DigitalObject:
         (0, 0)
         """
         if not self.volume.any():
-            # the offset of where the object was (a vanished flow's dual lattice: -1 per axis)
-            # says nothing of an object of no voxels and made equal empty objects unequal
+            # an object of no voxels has no place: one offset for all, so that empty objects compare equal
             return replace(self, volume=np.zeros((0,) * self.ndim, bool), offset=(0,) * self.ndim)
         lo, hi = _nonzero_bounds(self.volume)
         sl = tuple(slice(a, b) for a, b in zip(lo, hi))

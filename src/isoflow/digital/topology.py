@@ -204,7 +204,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     # 1D as euler_characteristic takes it (docs/ndim.md: the same functions serve 1D to 4D)
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
-    # b1 = b0 + b2 - chi: a chi of 0.5 gave b1 = 0.5, 1.0 a float, "1" NumPy's TypeError
+    # b1 = b0 + b2 - chi is a count only for an integer chi
     if chi is not None:
         if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
             raise IsoflowError(f"chi must be an integer, got {chi!r}")

@@ -174,7 +174,7 @@ def check_output_dir(directory, force: bool = False):
         raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
     if out.is_dir():
         for taken in _run_names(out):
-            # --force replaces a run's files; a directory of that name (and all in it) was removed with them
+            # --force replaces a run's files, never a directory of the user's that bears one's name
             if taken.is_dir() and not (taken.suffix.lower() == ".zarr" and _is_zarr_store(taken)):
                 raise IsoflowError(f"{taken}: a directory that is not a step store of a run; flow --force "
                                    "replaces a run's files, not it: move it, or give --out another directory")

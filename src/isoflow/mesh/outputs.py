@@ -324,7 +324,7 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
         if sync:
             sync_directory(path.parent)
     except BaseException as exc:
-        # worded before the partial file is removed: the disk's free space then says whether it was full
+        # worded before the partial file is removed, as the disk's free space tells a full disk from a size limit
         error = write_error(path, exc, existed) if isinstance(exc, OSError) else None
         _remove(tmp)
         if error is not None:

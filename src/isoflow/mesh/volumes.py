@@ -496,7 +496,7 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     (or ``force``). Returns ``(file, dataset)``."""
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
-    if fmt is None and Path(file).is_dir():  # "-o out/": the list of suffixes alone did not say what was wrong
+    if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written
         raise IsoflowError(f"{path}: is a directory; give a file name for the volume, ending in "
                            f"{', '.join(volume_suffixes(writable=True))}")
     if fmt is None:
@@ -690,9 +690,9 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     if arr.ndim not in (2, 3) or arr.dtype.kind not in "iu":
         raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers, got {arr.ndim}D {arr.dtype}")
     if arr.dtype.kind == "i":
-        # signed labels, as read_labels reads an int16 or int32 NIfTI and scipy.ndimage.label and
-        # scikit-image's label make them, were refused: written as the unsigned type of their width,
-        # whose bits are the same for labels from 0 on (a view, no copy)
+        # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
+        # label's output): written as the unsigned type of their width, whose bits are the same for
+        # labels from 0 on (a view, no copy)
         low = int(arr.min(initial=0))
         if low < 0:
             raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {low}")

@@ -126,8 +126,8 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         assert into is not None
         shutil.copyfile(into, path)
     name = _name(dataset)
-    # built in memory (the core driver, nothing written back) and written out by Python: HDF5's own write
-    # on a full disk gave an error of several lines and crashed the interpreter as its objects were freed
+    # built in memory (the core driver, nothing written back) and written out by Python, so that a
+    # failing write (a full disk) is one OSError: HDF5's own write fails in several lines and can crash
     with h5py.File(path, "r+" if keep else "w", driver="core", backing_store=False) as f:
         if name in f:
             del f[name]
