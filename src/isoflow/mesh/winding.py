@@ -319,13 +319,18 @@ def _decide_blocks(tops, rule, box, origin, pitch, theta, reach_factor, tol, T, 
                               Tn, ln)
                 if left == 0 or th == 0 or rest > err:  # a tighter tree cannot help
                     break
+                if h == 0 and err >= 0.25:
+                    # a single centre whose remainder is hopeless (a cap of many layers that cancel,
+                    # which the bound cannot see): the exact sum in lanes below, over many queued
+                    # centres at once, costs less than the tree's walk over every triangle
+                    break
                 # a remainder far beyond the margin: straight to the exact sum
                 th = th / 3.0 if th == theta and err < 0.25 else 0.0
                 flags[3] += 1
             n = (i1 - i0) * (j1 - j0) * (k1 - k0)
             if left == 0:
                 pass
-            elif (n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS
+            elif (left > 0 and h == 0 or n <= PAINT_LANES and (n if left < 0 else left) * T.shape[0] <= EXACT_PAIRS
                   or 0 < left <= n // 8 and left * T.shape[0] <= EXACT_PAIRS):
                 every = left < 0 or left == n  # (a block the model could not paint holds no codes)
                 if nq + (n if every else left) > QUEUE:
@@ -469,7 +474,10 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
     tops = top_blocks(box)
     # pieces in a scattered order: progress (and the time left) grows evenly
     tops = tops[np.random.default_rng(0).permutation(len(tops))]
-    pieces = np.array_split(tops, min(PIECES, len(tops)))
+    # a piece holds at least a queue's worth of centres: the exact sums run in lanes over a piece's
+    # queued centres at once, and a short queue wastes the lanes
+    voxels = (i1 - i0) * (j1 - j0) * (k1 - k0)
+    pieces = np.array_split(tops, max(1, min(PIECES, len(tops), voxels // QUEUE)))
     flags = np.zeros(9, dtype=np.int64)
     corner = np.array([i0, j0, k0], dtype=np.int64)
     flat = lanes_arrays(tree) if len(tree.T) <= FLAT_MAX else (np.zeros((9, 0)), np.zeros((6, 0)),
@@ -482,11 +490,15 @@ def winding_rule(tree: CapTree, Tm, origin, pitch, box, threads: int = 1, progre
         # a piece's ties are its own work: on a mesh whose faces hold many
         # centres they cost as much as its blocks, and progress counts them
         _decide_blocks(pieces[n], *args)
+        # the piece's ties summed at once: the sum runs in lanes over the points, and a top
+        # block may hold a single tie
+        ties = []
         for top in pieces[n]:
             part = rule[top[0] - i0:top[1] - i0, top[2] - j0:top[3] - j0, top[4] - k0:top[5] - k0]
-            ties = np.argwhere(part == TIE_PENDING)
-            if len(ties):
-                part[tuple(ties.T)] = _decided_ties(Tm, nlen, origin + pitch * (ties + top[0::2] + 0.5 + TIE_STEP))
+            ties.append(np.argwhere(part == TIE_PENDING) + top[0::2])
+        at = np.concatenate(ties)
+        if len(at):
+            rule[tuple((at - corner).T)] = _decided_ties(Tm, nlen, origin + pitch * (at + 0.5 + TIE_STEP))
 
     run_pieces(piece, len(pieces), threads=threads, progress=progress)
     if counts is not None:
