@@ -227,7 +227,7 @@ def opposite_pairs(faces: np.ndarray, n_vertices: int) -> np.ndarray:
     return _opposite_pairs(f, int(n_vertices))
 
 
-def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, int]:
+def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Double-sided faces read as one face each: of each pair of coincident
     faces with opposite orientation (:func:`opposite_pairs`) the first in
     file order is kept and the other dropped, except in a wall between
@@ -249,6 +249,8 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     ----------
     vertices : float ndarray (N, 3)
     faces : int64 ndarray (M, 3)
+    mate : int64 ndarray (M,), optional
+        :func:`opposite_pairs` of these faces, where the caller has it.
 
     Returns
     -------
@@ -267,7 +269,8 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     """
     f = np.ascontiguousarray(faces, dtype=np.int64).reshape(-1, 3)
     n_vertices = len(vertices)
-    mate = opposite_pairs(f, n_vertices)
+    if mate is None:
+        mate = opposite_pairs(f, n_vertices)
     paired = mate >= 0
     if not paired.any():
         return f, 0

@@ -698,7 +698,7 @@ def _double_sided(v: np.ndarray, f: np.ndarray) -> dict | None:
     first = int(mate[np.argmax(later)])
     out = {"n": int(np.count_nonzero(later)), "corners": _corners_of(v, f[first]),
            "genus": mesh_topology(v, f[~later])["genus"]}
-    read, one = one_face_per_pair(v, f)
+    read, one = one_face_per_pair(v, f, mate)
     walls = (len(f) - len(read) - one) // 2  # a wall's pairs are dropped both faces; the others one face each
     union_genus = mesh_topology(v, read)["genus"] if walls else None
     if union_genus is not None:  # walls that part solids: without them the surface closes (not a face drawn twice)
