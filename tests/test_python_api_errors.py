@@ -134,6 +134,104 @@ def test_write_labels_of_nested_lists_of_uneven_lengths_names_the_file(tmp_path)
     assert not (tmp_path / "l.npz").exists()
 
 
+def _two_cubes():
+    """Two 3x3x3 cubes, one with a tunnel along z: b = [2, 1, 0], chi = 1."""
+    v = np.zeros((9, 5, 5), bool)
+    v[1:4, 1:4, 1:4] = v[5:8, 1:4, 1:4] = True
+    v[6, 2, 1:4] = False
+    return v
+
+
+def _masked(array, where):
+    """``array`` as a masked array whose elements ``where`` are masked."""
+    mask = np.zeros(np.shape(array), bool)
+    mask[where] = True
+    return np.ma.array(array, mask=mask)
+
+
+def _labels():
+    """Label 1: the two cubes; label 2: the last layer, which they leave empty."""
+    labels = np.where(_two_cubes(), 1, 0).astype(np.int32)
+    labels[8] = 2
+    return labels
+
+
+MASKED = _masked(_two_cubes(), (slice(2, 4), 2, 2))  # two masked voxels of the first cube
+MASKED_LABELS = _masked(_labels(), 8)  # label 2 wholly masked: 25 elements
+
+
+def _masked_mesh(part):
+    box = _box()
+    v, f = np.asarray(box.vertices), np.asarray(box.faces)
+    return (_masked(v, (0, 0)), f) if part == "vertices" else (v, _masked(f, (1, slice(None))))
+
+
+def _refused_as_masked(call, where, count):
+    # numpy.asarray reads the values stored under the mask: a masked voxel counted as in, a
+    # wholly masked label given a row
+    elements = "element" if count == 1 else "elements"
+    with pytest.raises(IsoflowError, match=rf"^{re.escape(where)}: a masked array with {count} masked {elements}; "
+                                           r"pass a\.filled\(0\) .* or a\.data "):
+        call()
+
+
+@pytest.mark.parametrize(("function", "where"), [
+    *[(f, "volume") for f in (isoflow.analyze, isoflow.euler_characteristic, isoflow.betti_numbers, isoflow.configurations,
+                              isoflow.configuration_histogram, isoflow.closed_surfaces, isoflow.boundary_mesh)],
+    *[(f, "DigitalObject volume") for f in (isoflow.DigitalObject, isoflow.flow_step, isoflow.run_flow, isoflow.to_manifold)],
+])
+def test_a_masked_volume_with_masked_voxels_is_refused_naming_the_count(function, where):
+    _refused_as_masked(lambda: function(MASKED), where, 2)
+
+
+@pytest.mark.parametrize(("call", "where", "count"), [
+    (lambda: isoflow.label_table(MASKED_LABELS), "label_table image", 25),
+    (lambda: isoflow.label_table(isoflow.LabelImage(MASKED_LABELS, np.ones(3), np.zeros(3))), "label_table image", 25),
+    (lambda: isoflow.planar_index(MASKED[:, :, 2]), "points", 2),
+    (lambda: isoflow.class_histogram(_masked(np.ones(256, np.int64), 3)), "config_hist", 1),
+    (lambda: isoflow.voxelize_mesh(*_masked_mesh("vertices"), resolution=4), "voxelize: vertices", 1),
+    (lambda: isoflow.voxelize_mesh(*_masked_mesh("faces"), resolution=4), "voxelize: faces", 3),
+    (lambda: isoflow.voxelize_meshes([_masked_mesh("vertices")], resolution=4), "mesh 1: vertices", 1),
+])
+def test_a_masked_array_with_masked_elements_is_refused_naming_the_count(call, where, count):
+    _refused_as_masked(call, where, count)
+
+
+def test_write_labels_of_a_masked_array_with_masked_elements_names_the_file(tmp_path):
+    with pytest.raises(IsoflowError, match=r"l\.npz: labels: a masked array with 25 masked elements"):
+        isoflow.write_labels(MASKED_LABELS, tmp_path / "l.npz")
+    assert not (tmp_path / "l.npz").exists()
+
+
+@pytest.mark.parametrize("mask", [np.ma.nomask, False], ids=["nomask", "all-False"])
+def test_a_masked_array_with_no_masked_element_is_read_as_its_data(mask, tmp_path):
+    from scipy import ndimage
+    from skimage.measure import euler_number
+
+    plain = _two_cubes()
+    unmasked = np.ma.array(plain, mask=mask)
+    report = isoflow.analyze(unmasked, 6)
+    assert report == isoflow.analyze(plain, 6)
+    # counted independently of isoflow: components, then chi of 6-connected voxels
+    assert report.betti[0] == ndimage.label(plain)[1] == 2
+    assert report.euler_characteristic == euler_number(plain, connectivity=1) == 1
+    assert report.betti == [2, 1, 0]
+    assert isoflow.DigitalObject(unmasked) == isoflow.DigitalObject(plain)
+    assert isoflow.betti_numbers(unmasked) == [2, 1, 0]
+    assert isoflow.boundary_mesh(unmasked) == isoflow.boundary_mesh(plain)
+    assert isoflow.run_flow(unmasked) == isoflow.run_flow(plain)
+    labels = _labels()
+    table, expected = isoflow.label_table(np.ma.array(labels, mask=mask)), isoflow.label_table(labels)
+    assert table.keys() == expected.keys() and table["label"].tolist() == [1, 2]
+    for key in table:
+        np.testing.assert_array_equal(table[key], expected[key])
+    written = isoflow.write_labels(np.ma.array(labels, mask=mask), tmp_path / "l.npy")
+    np.testing.assert_array_equal(np.load(written), labels)
+    # the mask alone decides: one masked element and the same call is refused
+    with pytest.raises(IsoflowError, match="a masked array with 1 masked element;"):
+        isoflow.analyze(_masked(plain, (2, 2, 2)), 6)
+
+
 def _box():
     import trimesh
 

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import MISSING, IsoflowError
-from ..scale.arrays import as_array
+from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
 #: vertex positions are welded by :func:`load_mesh`.
@@ -82,6 +82,7 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
     (copies or views), or IsoflowError naming ``where`` and what is wrong:
     shapes, an empty mesh, non-integer faces, NaN or infinite coordinates,
     out-of-range indices."""
+    refuse_masked(vertices, f"{where}: vertices")  # the faces are checked by as_array
     try:
         v = np.asarray(vertices)
         complex_ = v.dtype.kind == "c"

@@ -68,6 +68,10 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     in one line naming the argument: NumPy's own ``ValueError`` ("setting an
     array element with a sequence") names neither it nor the function.
 
+    A masked array with masked elements is refused too: ``numpy.asarray``
+    would read the values stored under the mask, which are missing data,
+    as if they were valid. One with no masked element is read as its data.
+
     Parameters
     ----------
     array : array_like
@@ -82,7 +86,8 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     Raises
     ------
     IsoflowError
-        For nested sequences of uneven lengths.
+        For nested sequences of uneven lengths, and for a masked array with
+        masked elements.
 
     Examples
     --------
@@ -93,13 +98,37 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     ... except IsoflowError as error:
     ...     print(str(error).split(" (")[0])
     volume: nested sequences of uneven lengths are no array
+    >>> try:
+    ...     as_array(np.ma.masked_equal([[1, 0], [0, 1]], 0), "volume")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(";")[0])
+    volume: a masked array with 2 masked elements
+    >>> type(as_array(np.ma.array([[1, 0], [0, 1]], mask=False))).__name__
+    'ndarray'
     """
+    refuse_masked(array, where)
     try:
         return np.asarray(array)
     except ValueError as error:
         if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
             raise
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
+def refuse_masked(array, where: str = "volume") -> None:
+    """Refuse a masked array with masked elements in one line: its masked
+    elements are missing data, and NumPy's conversions read whatever value
+    is stored under the mask. One with no masked element (``nomask`` or an
+    all-False mask) passes, as nothing is lost by reading its data."""
+    if not isinstance(array, np.ma.MaskedArray):
+        return
+    masked = int(np.ma.count_masked(array))
+    if masked:
+        elements = "element" if masked == 1 else "elements"
+        raise IsoflowError(
+            f"{where}: a masked array with {masked} masked {elements}; pass a.filled(0) to read the masked "
+            "elements as 0 (background), or a.data to use the values stored under the mask"
+        )
 
 
 def binary(array, where: str = "volume", near=None, canonical: bool = True) -> np.ndarray:
