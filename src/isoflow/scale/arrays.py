@@ -23,7 +23,7 @@ import os
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, counted
 from .memory import sized
 
 
@@ -115,18 +115,39 @@ def as_array(array, where: str = "volume") -> np.ndarray:
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
 
 
-def refuse_masked(array, where: str = "volume") -> None:
+def refuse_masked(array: object, where: str = "volume") -> None:
     """Refuse a masked array with masked elements in one line: its masked
     elements are missing data, and NumPy's conversions read whatever value
     is stored under the mask. One with no masked element (``nomask`` or an
-    all-False mask) passes, as nothing is lost by reading its data."""
+    all-False mask) passes, as nothing is lost by reading its data.
+
+    Parameters
+    ----------
+    array : object
+        Anything; only a :class:`numpy.ma.MaskedArray` is looked at.
+    where : str
+        The argument's name, for the message.
+
+    Raises
+    ------
+    IsoflowError
+        Naming ``where``, the count of masked elements and what to pass.
+
+    Examples
+    --------
+    >>> refuse_masked(np.ma.array([1, 0], mask=False))
+    >>> try:
+    ...     refuse_masked(np.ma.masked_equal([1, 0], 0), "labels")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(";")[0])
+    labels: a masked array with 1 masked element
+    """
     if not isinstance(array, np.ma.MaskedArray):
         return
     masked = int(np.ma.count_masked(array))
     if masked:
-        elements = "element" if masked == 1 else "elements"
         raise IsoflowError(
-            f"{where}: a masked array with {masked} masked {elements}; pass a.filled(0) to read the masked "
+            f"{where}: a masked array with {counted(masked, 'masked element')}; pass a.filled(0) to read the masked "
             "elements as 0 (background), or a.data to use the values stored under the mask"
         )
 
