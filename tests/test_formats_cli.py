@@ -243,6 +243,20 @@ def moving_ball() -> np.ndarray:
     return (((x - 2 - t) ** 2 + (y - 3) ** 2 + (z - 2.5) ** 2) <= 4).astype(np.uint8)
 
 
+def time_series_store(path, translation=None):
+    """An OME-Zarr time series of :func:`moving_ball` (NGFF 0.4, t z y x),
+    one chunk per time point and half z, voxel size 0.5, 0.5, 2 (x, y, z)
+    and time step 5; voxel centres moved by ``translation`` (t, z, y, x)."""
+    zarr = pytest.importorskip("zarr")
+    g = zarr.open_group(path, mode="w", zarr_format=2)
+    g.create_array("0", data=moving_ball(), chunks=(1, 3, 7, 8))
+    axes = [{"name": "t", "type": "time"}] + [{"name": a, "type": "space"} for a in "zyx"]
+    steps = [{"type": "scale", "scale": [5.0, 2.0, 0.5, 0.5]}]
+    steps += [] if translation is None else [{"type": "translation", "translation": translation}]
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [
+        {"path": "0", "coordinateTransformations": steps}]}]
+
+
 def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     """ndim.md says info takes time series of 3D segmentations, but an
     OME-TIFF, an ImageJ hyperstack and an OME-Zarr image with a time axis
@@ -250,17 +264,11 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     t), the same report as the .npy of that array, in a subprocess as the
     user runs it; the surface command still refuses 4D, and a series of 2D
     images is still refused, saying which series are read."""
-    zarr = pytest.importorskip("zarr")
-
     data = moving_ball()
     tifffile.imwrite(tmp_path / "ts.ome.tif", data, ome=True,
                      metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0})
     tifffile.imwrite(tmp_path / "ts_imagej.tif", data[:, :, None], imagej=True, metadata={"axes": "TZCYX", "spacing": 2.0})
-    g = zarr.open_group(tmp_path / "ts.ome.zarr", mode="w", zarr_format=2)
-    g.create_array("0", data=data, chunks=(1, 3, 7, 8))
-    axes = [{"name": "t", "type": "time"}] + [{"name": a, "type": "space"} for a in "zyx"]
-    g.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [
-        {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [5.0, 2.0, 0.5, 0.5]}]}]}]
+    time_series_store(tmp_path / "ts.ome.zarr")
 
     def report(name):
         p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
@@ -288,19 +296,37 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
     assert p.returncode == 2 and "save one time point (a time series is read as 4D only of 3D volumes)" in p.stderr
 
 
+@pytest.mark.parametrize("name", ["ts.ome.tif", "ts.ome.zarr"])
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["flow", "--steps", "1"]])
-def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(command, tmp_path):
+def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(command, name, tmp_path):
     """``surface`` and ``flow`` take one 3D volume; a time series (read as
     4D) got "needs a 3D object" and no way on. The one line now names the
     file and a command that saves its first time point as 3D, run here as
     the user would from the shell: the saved volume is frame 0 as stored,
-    with the file's voxel size, and the command then takes it."""
+    with the file's voxel size and origin, and the command then takes it.
+
+    The command read a store whole before taking frame 0, which a
+    time-lapse larger than memory cannot be: here the chunks of the other
+    time points are damaged, so that reading any of them fails, and the
+    command reads frame 0 alone."""
     data = moving_ball()
-    tifffile.imwrite(tmp_path / "ts.ome.tif", data, ome=True,
-                     metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0})
-    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "ts.ome.tif", *command[1:]],
+    if name == "ts.ome.tif":
+        tifffile.imwrite(tmp_path / name, data, ome=True,
+                         metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5, "PhysicalSizeZ": 2.0})
+        origin = [0.0, 0.0, 0.0]
+    else:
+        time_series_store(tmp_path / name, translation=[0.0, 1.0, 2.0, 3.0])
+        origin = [3.0 - 0.25, 2.0 - 0.25, 1.0 - 1.0]  # NGFF places voxel centres: less half a voxel
+        chunks = [c for c in (tmp_path / name / "0").iterdir() if not c.name.startswith(".")]
+        assert sorted(c.name for c in chunks) == [f"{t}.{z}.0.0" for t in range(3) for z in range(2)]
+        for chunk in chunks:
+            if not chunk.name.startswith("0."):
+                chunk.write_bytes(b"not a chunk")
+        with pytest.raises(isoflow.IsoflowError, match="not a readable zarr file"):
+            isoflow.read_volume(tmp_path / name)
+    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
                        capture_output=True, text=True, cwd=tmp_path)
-    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "ts.ome.tif" in p.stderr, p.stderr
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and name in p.stderr, p.stderr
     assert "4D, shape 8x7x6x3 (a time series of 3 volumes" in p.stderr
     line = p.stderr.split("give that: ", 1)[1].strip()
     assert line.startswith("python -c ")
@@ -309,10 +335,43 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
     assert shell.returncode == 0, shell.stderr
     frame = isoflow.read_volume(tmp_path / "t0.npz")
     assert np.array_equal(frame.volume, data[0].transpose(2, 1, 0).astype(bool))  # stored (z, y, x): x first
-    assert frame.pitch.tolist() == [0.5, 0.5, 2.0]
+    assert frame.pitch.tolist() == [0.5, 0.5, 2.0] and frame.origin.tolist() == origin
     p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "t0.npz", *command[1:]],
                        capture_output=True, text=True, cwd=tmp_path)
     assert p.returncode == 0, p.stderr
+
+
+@pytest.mark.parametrize("name", ["ts.ome.tif", "ts.ome.zarr", "ts.npy"])
+def test_read_volume_takes_one_time_point_and_refuses_a_time_that_is_not_one(name, tmp_path):
+    """``read_volume(path, time=t)`` (and ``read_labels``) is time point
+    ``t`` of a time series as 3D, with the voxel size of x, y, z; a time
+    before 0 or past the last, or any time of a 3D volume, is one line
+    naming the file, the value and the count."""
+    data = moving_ball()
+    path = tmp_path / name
+    if name == "ts.ome.tif":
+        tifffile.imwrite(path, data, ome=True, metadata={"axes": "TZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.5,
+                                                         "PhysicalSizeZ": 2.0})
+    elif name == "ts.ome.zarr":
+        time_series_store(path)
+    else:
+        np.save(path, data.transpose(3, 2, 1, 0))
+    pitch = [1.0, 1.0, 1.0] if name == "ts.npy" else [0.5, 0.5, 2.0]
+    for t in range(3):
+        frame = isoflow.read_volume(path, time=t)
+        assert np.array_equal(frame.volume, data[t].transpose(2, 1, 0).astype(bool))
+        assert frame.spacing.tolist() == pitch
+    labels = isoflow.read_labels(path, time=2)
+    assert np.array_equal(labels.array, data[2].transpose(2, 1, 0)) and labels.spacing.tolist() == pitch
+    for t in (-1, 3):
+        with pytest.raises(isoflow.IsoflowError) as error:
+            isoflow.read_volume(path, time=t)
+        assert str(error.value) == f"{path}: time={t} is no time point of this time series of 3 (0 to 2)"
+    isoflow.write_volume(isoflow.read_volume(path, time=0), tmp_path / "t0.npz")
+    with pytest.raises(isoflow.IsoflowError) as error:
+        isoflow.read_volume(tmp_path / "t0.npz", time=0)
+    assert str(error.value) == (f"{tmp_path / 't0.npz'}: time=0 picks a time point of a 4D volume (x, y, z, t), "
+                                "this one is 3D with shape 8x7x6: it has no time points")
 
 
 @pytest.mark.parametrize(("command", "needs"), [
@@ -327,14 +386,9 @@ def test_a_time_series_store_too_large_to_read_whole_says_how_to_take_one_time_p
     block by block the reader's "axis 't' has 3 entries": now the line a
     4D volume in memory gets, its (x, y, z, t) shape and the command that
     saves one time point, from the store's metadata alone."""
-    zarr = pytest.importorskip("zarr")
     from isoflow.scale import memory
 
-    g = zarr.open_group(tmp_path / "ts.ome.zarr", mode="w", zarr_format=2)
-    g.create_array("0", data=moving_ball(), chunks=(1, 3, 7, 8))
-    axes = [{"name": "t", "type": "time"}] + [{"name": a, "type": "space"} for a in "zyx"]
-    g.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [
-        {"path": "0", "coordinateTransformations": [{"type": "scale", "scale": [5.0, 2.0, 0.5, 0.5]}]}]}]
+    time_series_store(tmp_path / "ts.ome.zarr")
     monkeypatch.setattr(memory, "default_budget", lambda: 50)  # the store (3 KiB) would not fit
     monkeypatch.chdir(tmp_path)
     line = fails(capsys, command[0], "ts.ome.zarr", *command[1:])

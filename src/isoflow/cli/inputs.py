@@ -222,7 +222,9 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
     3D file, voxel size and origin kept, and give that.
 
     There is no option that picks a time point: the one line of Python is
-    the way, and it names the file as given.
+    the way, and it names the file as given. It reads that time point
+    alone (``read_volume(path, time=0)``): a ``.zarr`` store reads only
+    its chunks, so the line works on a time-lapse larger than memory.
 
     Parameters
     ----------
@@ -242,15 +244,13 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
     --------
     >>> print(one_time_point("cells.ome.tif", (8, 8, 8, 3)))
     , shape 8x8x8x3 (a time series of 3 volumes, read as x, y, z, t); save one time point as 3D and give that: \
-python -c 'import isoflow; o = isoflow.read_volume("cells.ome.tif"); \
-isoflow.write_volume(isoflow.DigitalObject(o.volume[..., 0], pitch=o.pitch[:3], origin=o.origin[:3]), "t0.npz")'
+python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.ome.tif", time=0), "t0.npz")'
     """
     import json
     import shlex
 
     label_arg = "" if label is None else f", label={label!r}"
-    code = (f"import isoflow; o = isoflow.read_volume({json.dumps(str(path))}{label_arg}); isoflow.write_volume("
-            'isoflow.DigitalObject(o.volume[..., 0], pitch=o.pitch[:3], origin=o.origin[:3]), "t0.npz")')
+    code = f'import isoflow; isoflow.write_volume(isoflow.read_volume({json.dumps(str(path))}{label_arg}, time=0), "t0.npz")'
     return (f", shape {'x'.join(map(str, shape))} (a time series of {shape[-1]} volumes, read as x, y, z, t); "
             f"save one time point as 3D and give that: python -c {shlex.quote(code)}")
 

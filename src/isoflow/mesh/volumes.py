@@ -7,6 +7,7 @@ and what is wrong; every writer refuses to replace an existing file unless
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 import warnings
@@ -25,6 +26,7 @@ from .formats.registry import (
     LabelVolume,
     RawVolume,
     check_label,
+    check_time,
     format_for,
     no_such_label,
     split_dataset,
@@ -53,7 +55,7 @@ def is_volume(path) -> bool:
     return format_for(split_dataset(path)[0]) is not None
 
 
-def read_volume(path: str | os.PathLike, label: int | float | None = None) -> DigitalObject:
+def read_volume(path: str | os.PathLike, label: int | float | None = None, *, time: int | None = None) -> DigitalObject:
     """A 2D, 3D (or 4D) volume from any format of :mod:`isoflow.mesh.formats`,
     with its voxel size and origin where the format has them.
 
@@ -74,6 +76,12 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
         A file of any suffix of docs/formats.md, optionally ``:dataset``.
     label : int or float, optional
         The value whose voxels are the object, in a label image.
+    time : int, optional
+        One time point (0 the first) of a time series, a 4D volume read as
+        (x, y, z, t): its 3D volume, with the voxel size and origin of x,
+        y and z. A ``.zarr`` store reads only that time point's chunks, so
+        a time-lapse larger than memory gives one; other formats read the
+        whole series, then take the time point.
 
     Returns
     -------
@@ -85,7 +93,8 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
     ------
     IsoflowError
         One line naming the file and the problem: missing, damaged, not
-        binary, no such dataset or label, a library missing.
+        binary, no such dataset or label, a library missing; a ``time``
+        given for a volume that is not 4D, or beyond its time points.
 
     Examples
     --------
@@ -97,11 +106,16 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None) -> Di
     >>> np.save(folder / "labels.npy", labels)
     >>> read_volume(folder / "labels.npy", label=7).voxels
     8
+    >>> series = np.stack([labels, np.where(labels, 0, 7)], axis=-1)  # (x, y, z, t): the cube, then the rest
+    >>> np.save(folder / "series.npy", series)
+    >>> frame = read_volume(folder / "series.npy", label=7, time=1)
+    >>> frame.volume.shape, frame.voxels
+    ((4, 4, 4), 56)
     """
-    return as_object(_read_raw(path), str(path), label)
+    return as_object(_read_raw(path, time=time), str(path), label)
 
 
-def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
+def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | None = None) -> RawVolume:
     """What the format of ``path`` (``FILE:dataset`` too) reads, once the
     suffix, the file and the dataset named are checked: the one prologue of
     :func:`read_volume` and :func:`read_labels`.
@@ -113,6 +127,9 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
     mesh : str, optional
         What to say of a mesh file in place of "not a volume file" (a
         reader whose remedy for a mesh differs).
+    time : int, optional
+        The time point of a 4D volume to give, as 3D (see
+        :func:`read_volume`).
 
     Returns
     -------
@@ -123,7 +140,8 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
     ------
     IsoflowError
         A suffix of no volume format, a missing or unreadable file, a
-        dataset named where the format has none, or the format's refusal.
+        dataset named where the format has none, a ``time`` that picks no
+        time point, or the format's refusal.
     """
     file, dataset = split_dataset(path)
     fmt = format_for(file)
@@ -135,7 +153,15 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None) -> RawVolume:
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     check_dataset_read(path, fmt, dataset)
-    return fmt.load().read(file, dataset)
+    if time is None:
+        return fmt.load().read(file, dataset)
+    if fmt.module == "omezarr":  # only that time point's chunks: a time-lapse store may not fit in memory
+        return fmt.load().read(file, dataset, time=time)
+    raw = fmt.load().read(file, dataset)
+    check_time(time, np.shape(raw.array), str(path))
+    space = {k: v if v is None or not np.ndim(v) else v[:3] for k, v in
+             {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset}.items()}
+    return dataclasses.replace(raw, array=raw.array[..., time], **space)
 
 
 def check_dataset_read(path, fmt, dataset: str | None) -> None:
@@ -219,7 +245,7 @@ def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
     return NotBinary(exc.bare + options, bare=exc.bare, every=every)
 
 
-def read_labels(path: str | os.PathLike) -> LabelImage:
+def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:
     """A 3D or 2D label image from a file, with its voxel size and origin.
 
     Parameters
@@ -227,6 +253,9 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     path : str or os.PathLike
         A file of any format :func:`read_volume` reads (a segmentation in
         NIfTI, NRRD, TIFF, HDF5, zarr, ...), optionally ``:dataset``.
+    time : int, optional
+        One time point of a time series of label images (4D, read as x, y,
+        z, t), as :func:`read_volume` takes it.
 
     Returns
     -------
@@ -240,8 +269,9 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     Raises
     ------
     IsoflowError
-        One line naming the file: not a volume, not 2D or 3D, values that
-        are no labels.
+        One line naming the file: not a volume, not 2D or 3D (a time
+        series without ``time``), values that are no labels, a ``time``
+        that picks no time point.
 
     Examples
     --------
@@ -256,7 +286,7 @@ def read_labels(path: str | os.PathLike) -> LabelImage:
     """
     # a mesh voxelises to one object; a label image of meshes is voxelize's
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
-                               "makes one of several meshes (isoflow.voxelize_meshes)")
+                               "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "

@@ -7,7 +7,8 @@ Axes are matched by name: x, y, z go to isoflow's axes 0, 1, 2, whatever
 order the file stores them in (NGFF stores z, y, x); a channel axis must
 have length 1, and a time axis too unless x, y and z are all there: a time
 series of 3D volumes is read as (x, y, z, t), voxel size 1 along t, the 4D
-volume ``info`` analyses (in memory, not block by block). The level's ``coordinateTransformations`` (scale, then
+volume ``info`` analyses (in memory, not block by block); ``time`` reads
+the chunks of one time point alone, as 3D. The level's ``coordinateTransformations`` (scale, then
 translation, then those of the whole image) place voxel *centres*, as napari
 and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
 corner is the translation less half a voxel. A zarr store without
@@ -40,6 +41,7 @@ from .registry import (
     RawVolume,
     check_label,
     check_shape,
+    check_time,
     import_library,
     no_such_label,
     placement,
@@ -92,26 +94,38 @@ def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tupl
     return scale, shift
 
 
-def read(path: Path, dataset: str | None = None) -> RawVolume:
+def read(path: Path, dataset: str | None = None, time: int | None = None) -> RawVolume:
+    """The level (or plain array) as a RawVolume; ``time`` picks one time
+    point of a 4D volume, and only that time point's chunks are read (a
+    time-lapse store is often larger than memory)."""
     import_library("zarr", "OME-Zarr")
     where = str(path) if dataset is None else f"{path}:{dataset}"
     array, multiscale, level = open_zarr_node(path, dataset)
-    check_shape(array.shape, array.dtype, where)
+    names = None if multiscale is None else axis_names(multiscale, array.ndim, where)
+    index: tuple = (Ellipsis,)
+    shape = tuple(array.shape)
+    if time is not None:
+        xyz = list(range(array.ndim)) if names is None else spatial_axes(names, array.shape, where, time=True)[0]
+        check_time(time, [array.shape[i] for i in xyz], where)
+        # the time axis kept, of length 1, so that the axes stay as stored
+        index = tuple(slice(int(time), int(time) + 1) if i == xyz[3] else slice(None) for i in range(array.ndim))
+        shape = tuple(1 if i == xyz[3] else n for i, n in enumerate(shape))
+    check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
-        data = np.asarray(array[...])
+        data = np.asarray(array[index])
     if multiscale is None:
+        data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
         # the grid in the attributes ``pitch`` and ``origin`` (x, y, z order)
         attrs = dict(getattr(array, "attrs", {}) or {})
         if "pitch" in attrs and "origin" in attrs:
             try:
-                return RawVolume(data, np.asarray(attrs["pitch"], np.float64),
-                                 np.asarray(attrs["origin"], np.float64))
+                pitch, origin = (np.asarray(attrs[k], np.float64) for k in ("pitch", "origin"))
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
+            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)))
         return RawVolume(data)
-    names = axis_names(multiscale, data.ndim, where)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2

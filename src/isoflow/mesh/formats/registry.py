@@ -261,6 +261,29 @@ def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     )
 
 
+def check_time(time, shape, where: str) -> None:
+    """Refuse a ``time`` that picks no time point of a volume of ``shape``
+    (isoflow's order: x, y, z, t for a time series): the volume is not 4D,
+    or ``time`` is not a whole number from 0 to the count less 1.
+
+    Examples
+    --------
+    >>> check_time(2, (8, 8, 8, 3), "cells.ome.zarr")  # nothing to refuse
+    >>> try:
+    ...     check_time(3, (8, 8, 8, 3), "cells.ome.zarr")
+    ... except IsoflowError as error:
+    ...     print(error)
+    cells.ome.zarr: time=3 is no time point of this time series of 3 (0 to 2)
+    """
+    if len(shape) != 4:
+        raise IsoflowError(f"{where}: time={time!r} picks a time point of a 4D volume (x, y, z, t), this one is "
+                           f"{len(shape)}D with shape {'x'.join(map(str, shape))}: it has no time points")
+    count = int(shape[3])
+    if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, np.integer)) or not 0 <= time < count:
+        raise IsoflowError(f"{where}: time={time!r} is no time point of this time series of {count} "
+                           f"(0 to {count - 1})")
+
+
 def check_label(label, dtype, where: str) -> None:
     """A label selects voxels of an array of numbers by one finite number."""
     if np.dtype(dtype).kind not in "biuf":
