@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from isoflow import analyze, label_table
+from isoflow import analyze, label_table, read_labels
 from isoflow.digital import planar_labels
 from isoflow.errors import IsoflowError
 
@@ -208,6 +208,40 @@ def test_a_4d_store_is_refused_as_a_4d_file_is(tmp_path):
         proc = run("info", name, "--labels", cwd=tmp_path)
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
         assert f"{name}: a label table needs a 3D or 2D image, this array is 4D with shape (3, 4, 5, 2)" in proc.stderr
+
+
+def test_a_4d_label_image_is_told_how_to_take_one_time_point(tmp_path):
+    """A time series of label images (a cell-tracking segmentation) was
+    refused without a way on: the refusal now ends with the command that
+    saves time point 0 as 3D, which, run as printed, gives that time
+    point's table (a .npy, a plain zarr array and an OME-Zarr image with a
+    t axis, stored t z y x)."""
+    zarr = pytest.importorskip("zarr")
+    image = np.zeros((5, 4, 3, 2), np.uint16)  # x, y, z, t: a cell that moves and a second one that appears
+    image[0:2, 0:2, 0:2, 0] = 7
+    image[2:4, 1:3, 1:3, 1] = 7
+    image[4, 3, 2, 1] = 9
+    np.save(tmp_path / "seg4.npy", image)
+    zarr.open_array(tmp_path / "seg4.zarr", mode="w", shape=image.shape, chunks=(2, 3, 2, 1), dtype="u2")[:] = image
+    g = zarr.open_group(tmp_path / "seg4.ome.zarr", mode="w", zarr_format=2)
+    g.create_array("0", data=image.transpose(3, 2, 1, 0), chunks=(1, 2, 2, 2))
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": "t", "type": "time"}]
+                               + [{"name": a, "type": "space"} for a in "zyx"],
+                               "datasets": [{"path": "0", "coordinateTransformations": [
+                                   {"type": "scale", "scale": [1.0, 2.0, 0.5, 0.5]}]}]}]
+    for name in ("seg4.npy", "seg4.zarr", "seg4.ome.zarr"):
+        proc = run("info", name, "--labels", cwd=tmp_path)
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+        assert "this array is 4D with shape (5, 4, 3, 2) (a time series, read as x, y, z, t)" in proc.stderr
+        (tmp_path / "t0.npz").unlink(missing_ok=True)
+        command = proc.stderr.split("give that: ", 1)[1].strip()
+        subprocess.run(command, shell=True, cwd=tmp_path, check=True)
+        frame = read_labels(tmp_path / "t0.npz")
+        assert np.array_equal(frame.array, image[..., 0])
+        assert frame.spacing.tolist() == ([0.5, 0.5, 2.0] if name == "seg4.ome.zarr" else [1.0, 1.0, 1.0])
+        table = run("info", "t0.npz", "--labels", "--json", cwd=tmp_path)
+        rows = json.loads(table.stdout)["labels"]
+        assert [(r["label"], r["voxels"]) for r in rows] == [(7, 8)]
 
 
 def test_a_2d_table_beyond_the_budget_is_refused_before_the_work(tmp_path, monkeypatch):

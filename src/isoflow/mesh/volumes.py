@@ -29,6 +29,7 @@ from .formats.registry import (
     check_time,
     format_for,
     no_such_label,
+    one_time_point_labels,
     split_dataset,
     volume_suffixes,
 )
@@ -290,7 +291,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
-                           f"{arr.shape}")
+                           f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
     if arr.dtype.kind == "f":
         try:
             arr = as_labels(arr)

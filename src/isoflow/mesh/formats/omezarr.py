@@ -44,6 +44,7 @@ from .registry import (
     check_time,
     import_library,
     no_such_label,
+    one_time_point_labels,
     placement,
     reading,
     spatial_axes,
@@ -397,12 +398,17 @@ class LabelSlabs:
         if names is None and array.ndim not in (2, 3):
             # as a file's: no label table is 4D, whether read whole or by blocks
             raise IsoflowError(f"{self.where}: a label table needs a 3D or 2D image, this array is {array.ndim}D "
-                               f"with shape {tuple(array.shape)}")
+                               f"with shape {tuple(array.shape)}"
+                               + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
         if names is None:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if array.ndim == 2 else ""))
-        self.xyz, self.other = spatial_axes(names, array.shape, self.where)
+        self.xyz, self.other = spatial_axes(names, array.shape, self.where, time=True)
+        if len(self.xyz) == 4:
+            shape = tuple(int(array.shape[i]) for i in self.xyz)
+            raise IsoflowError(f"{self.where}: a label table needs a 3D or 2D image, this array is 4D with shape "
+                               f"{shape}" + one_time_point_labels(self.where))
         if len(self.xyz) != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this image has axes {names}" + ("; a 2D table reads the image whole "

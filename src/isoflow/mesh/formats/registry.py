@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import importlib
 import logging
+import os
 import re
 import warnings
 from dataclasses import dataclass
@@ -282,6 +283,27 @@ def check_time(time, shape, where: str) -> None:
     if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, np.integer)) or not 0 <= time < count:
         raise IsoflowError(f"{where}: time={time!r} is no time point of this time series of {count} "
                            f"(0 to {count - 1})")
+
+
+def one_time_point_labels(path: str | os.PathLike) -> str:
+    """The end of the refusal of a 4D label image (a time series, read as
+    x, y, z, t): how to take one time point, in Python and as a 3D file
+    that every command reads.
+
+    Examples
+    --------
+    >>> print(one_time_point_labels("cells.zarr"))  # doctest: +NORMALIZE_WHITESPACE
+     (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save it as 3D and
+     give that: python -c 'import isoflow; i = isoflow.read_labels("cells.zarr", time=0);
+     isoflow.write_labels(i.array, "t0.npz", pitch=i.spacing, origin=i.origin)'
+    """
+    import json
+    import shlex
+
+    code = (f"import isoflow; i = isoflow.read_labels({json.dumps(str(path))}, time=0); "
+            'isoflow.write_labels(i.array, "t0.npz", pitch=i.spacing, origin=i.origin)')
+    return (f" (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save "
+            f"it as 3D and give that: python -c {shlex.quote(code)}")
 
 
 def check_label(label, dtype, where: str) -> None:
