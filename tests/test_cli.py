@@ -124,6 +124,47 @@ def test_surface_png(tmp_path):
     assert (tmp_path / "t.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def surface_with_picture(tmp_path, volume, *more) -> int:
+    """``surface -o out/t.ply --png out/t.png`` of ``volume``."""
+    np.save(tmp_path / "v.npy", volume)
+    (tmp_path / "out").mkdir(exist_ok=True)
+    return main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "out" / "t.ply"), "--png",
+                 str(tmp_path / "out" / "t.png"), *more])
+
+
+@pytest.mark.parametrize("how, status", [("disk full", 2), ("SIGTERM", 128 + 15)])
+def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkeypatch, how, status):
+    # the new mesh was in place beside the old picture when the picture's write failed
+    from test_labels_cli import fail_at, files_in
+
+    assert surface_with_picture(tmp_path, torus(5, 2)) == 0
+    before = files_in(tmp_path / "out")
+    capsys.readouterr()
+    fail_at(monkeypatch, "t.png", how)
+    code = surface_with_picture(tmp_path, torus(6, 2), "--force")
+    err = capsys.readouterr().err
+    assert code == status, err
+    assert err.count("\n") == 1 and err.rstrip().endswith("nothing was replaced"), err
+    assert files_in(tmp_path / "out") == before  # byte for byte, and no temporary left
+
+
+def test_surface_png_force_replaces_the_picture_also_where_the_mesh_reads_back_otherwise(tmp_path, capsys, monkeypatch):
+    # the new mesh was put in place and the picture not drawn: the old picture stayed beside it
+    from isoflow.mesh import readback
+
+    assert surface_with_picture(tmp_path, torus(5, 2)) == 0
+    old_png = (tmp_path / "out" / "t.png").read_bytes()
+    capsys.readouterr()
+    monkeypatch.setattr(readback, "check_surface_file", lambda path, *a, **k: {"agree": False, "problem": f"{path}: odd"})
+    assert surface_with_picture(tmp_path, torus(7, 2), "--force") == 1
+    assert capsys.readouterr().err.endswith("t.ply: odd\n")
+    mesh = trimesh.load(tmp_path / "out" / "t.ply", process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(int(torus(7, 2).sum()))
+    new_png = (tmp_path / "out" / "t.png").read_bytes()
+    assert new_png[:8] == b"\x89PNG\r\n\x1a\n" and new_png != old_png
+    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == ["t.ply", "t.png"]
+
+
 def _bad(tmp_path):
     np.save(tmp_path / "nonbinary.npy", np.arange(27).reshape(3, 3, 3))
     np.save(tmp_path / "line.npy", np.ones(5, bool))

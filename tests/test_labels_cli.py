@@ -580,3 +580,80 @@ def test_write_labels_writes_a_2d_label_image_that_info_labels_reads(tmp_path):
     with pytest.raises(IsoflowError, match=r"written in 2D or 3D, as read_labels reads it back; this one is 4D"):
         write_labels(np.zeros((2, 2, 2, 2), np.uint8), tmp_path / "c4.npz")
     assert not (tmp_path / "c4.npz").exists()
+
+
+def boxes(sizes: list[int]) -> np.ndarray:
+    """A label image of cubes, label i+1 of edge ``sizes[i]``, apart."""
+    image = np.zeros((4 + 6 * len(sizes), 8, 8), np.uint8)
+    for i, size in enumerate(sizes):
+        image[2 + 6 * i: 2 + 6 * i + size, 2:2 + size, 2:2 + size] = i + 1
+    return image
+
+
+def files_in(directory: Path) -> dict[str, bytes]:
+    """Every file in ``directory`` (temporaries too) with its bytes."""
+    return {f.name: f.read_bytes() for f in sorted(directory.iterdir())}
+
+
+def fail_at(monkeypatch, name: str, how: str) -> None:
+    """The write of the file ``name`` fails at its flush to the disk: a full disk, or SIGTERM arriving."""
+    import errno
+    import os
+    import signal
+
+    from isoflow.mesh import outputs
+
+    real = outputs.sync_file
+
+    def sync_file(path):
+        tmp = Path(path)  # the file's temporary: .STEM.isoflow-tmp-...SUFFIX
+        if tmp.name.startswith(f".{Path(name).stem}{outputs.TEMP_MARK}") and tmp.suffix == Path(name).suffix:
+            if how == "disk full":
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+            os.kill(os.getpid(), signal.SIGTERM)
+        return real(path)
+
+    monkeypatch.setattr(outputs, "sync_file", sync_file)
+
+
+@pytest.mark.parametrize("how, status", [("disk full", 2), ("SIGTERM", 128 + 15)])
+def test_surface_labels_failing_at_a_later_label_keeps_the_whole_earlier_set(tmp_path, capsys, monkeypatch, how, status):
+    # the first labels' files were replaced and the later ones kept: a mixed set that looked complete
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4, 3]))
+    out = tmp_path / "out"
+    run(capsys, "surface", tmp_path / "old.npy", "--labels", "-o", f"{out}/", "--suffix", "ply")
+    before = files_in(out)
+    assert sorted(before) == ["label_1.ply", "label_2.ply", "label_3.ply"]
+    fail_at(monkeypatch, "label_3.ply", how)
+    code = main(["surface", str(tmp_path / "new.npy"), "--labels", "-o", f"{out}/", "--suffix", "ply", "--force"])
+    err = capsys.readouterr().err
+    assert code == status, err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.rstrip().endswith("nothing was replaced"), err
+    assert files_in(out) == before  # byte for byte, and no temporary left
+
+
+def test_surface_labels_force_replaces_the_whole_set(tmp_path, capsys):
+    # label_4.ply of an earlier image with four labels stayed beside the three files of the new one
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4, 2]))
+    out = tmp_path / "out"
+    run(capsys, "surface", tmp_path / "old.npy", "--labels", "-o", f"{out}/", "--suffix", "ply")
+    assert sorted(files_in(out)) == ["label_1.ply", "label_2.ply", "label_3.ply", "label_4.ply"]
+    (out / "notes.txt").write_text("mine")
+    run(capsys, "surface", tmp_path / "new.npy", "--labels", "-o", f"{out}/", "--suffix", "ply", "--force")
+    assert sorted(files_in(out)) == ["label_1.ply", "label_2.ply", "label_3.ply", "notes.txt"]
+    for label, size in ((1, 3), (2, 4), (3, 2)):
+        mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+        assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+
+
+def test_surface_labels_without_force_says_an_earlier_run_s_files_are_kept(tmp_path, capsys):
+    np.save(tmp_path / "four.npy", boxes([2, 2, 2, 2]))
+    out = tmp_path / "out"
+    run(capsys, "surface", tmp_path / "four.npy", "--labels", "4", "-o", f"{out}/", "--suffix", "ply")
+    assert main(["surface", str(tmp_path / "four.npy"), "--labels", "1-3", "-o", f"{out}/", "--suffix", "ply"]) == 0
+    err = capsys.readouterr().err
+    assert "1 label file of an earlier run kept (label_4.ply); --force makes the directory hold" in err, err
+    assert sorted(files_in(out)) == ["label_1.ply", "label_2.ply", "label_3.ply", "label_4.ply"]

@@ -114,8 +114,8 @@ def test_voxelize_into_an_existing_directory_says_it_is_a_directory(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_a_file_per_label_failing_midway_says_which_files_were_written(tmp_path):
-    # the line said "nothing was written" of the file that failed, while the labels before it were in place
+def test_a_file_per_label_failing_midway_on_a_full_disk_keeps_the_earlier_set(tmp_path):
+    # the files of the labels before the one that failed were replaced, those after it kept: a mixed set
     labels = np.zeros((30, 12, 12), np.uint8)
     labels[1:3, 1:3, 1:3], labels[5:7, 5:7, 5:7] = 1, 2
     labels[10:29, 1:11, 1:11] = 3  # the largest file, written last
@@ -123,12 +123,15 @@ def test_a_file_per_label_failing_midway_says_which_files_were_written(tmp_path)
     args = ("surface", tmp_path / "labels.npy", "--labels", "-o", f"{tmp_path / 'out'}/", "--suffix", ".ply", "-q")
     first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
     assert first.returncode == 0, first.stderr
-    sizes = {f.name: f.stat().st_size for f in (tmp_path / "out").iterdir()}
-    assert max(sizes["label_1.ply"], sizes["label_2.ply"]) < 4000 < sizes["label_3.ply"]
+    before = files_under(tmp_path / "out")
+    assert max(len(before["label_1.ply"]), len(before["label_2.ply"])) < 4000 < len(before["label_3.ply"])
+    labels[1:4, 1:4, 1:4], labels[5:8, 5:8, 5:8] = 1, 2  # new files for the first two labels, which fit
+    np.save(tmp_path / "labels.npy", labels)
     p = run_on_a_small_disk(4000, *args, "--force")
     assert p.returncode == 2, p.stderr
     assert p.stderr.count("\n") == 1 and "label_3.ply" in p.stderr, p.stderr
-    assert "label_1.ply, label_2.ply) were written" in p.stderr, p.stderr
+    assert p.stderr.rstrip().endswith("File too large); nothing was replaced"), p.stderr
+    assert files_under(tmp_path / "out") == before
 
 
 def test_a_long_output_name_that_fits_is_written(tmp_path):

@@ -5,10 +5,13 @@ closed surface per label)."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import re
 import sys
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 
@@ -339,8 +342,6 @@ def surface_outputs(args: argparse.Namespace):
     """Where ``surface --labels`` writes: ``("glb", path)`` for one glTF
     with a node per label, or ``("dir", directory, suffix)`` for a file per
     label (``-o DIR/`` with ``--suffix``), checked before any work."""
-    from pathlib import Path
-
     from ..mesh.export import SURFACE_SUFFIXES
     from ..mesh.outputs import check_output_path, check_writable_dir
 
@@ -438,6 +439,42 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
 
 
+def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:
+    """The label files (``label_N`` with ``suffix``) in ``directory`` that
+    are not among ``names``: an earlier run's, of labels this run has not.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        The directory of ``-o DIR/``.
+    suffix : str
+        The files' suffix (``.ply``), as this run writes them.
+    names : list of str
+        This run's files without their suffix (``label_3``).
+
+    Returns
+    -------
+    list of Path
+        Those files, by name; a directory of such a name is left out.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> for f in ("label_1.ply", "label_9.ply", "label_9.obj", "notes.ply"):
+    ...     _ = (d / f).write_bytes(b"")
+    >>> [f.name for f in earlier_label_files(d, ".ply", ["label_1"])]
+    ['label_9.ply']
+    """
+    wanted = set(names)
+    found = []
+    for f in Path(directory).glob(f"label_*{suffix}"):
+        stem = f.name[: -len(suffix)]
+        if re.fullmatch(r"label_-?\d+", stem) and stem not in wanted and not f.is_dir():
+            found.append(f)
+    return sorted(found)
+
+
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
                          progress=None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, from ``glb_parts``,
@@ -456,35 +493,42 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if args.no_check else check_scene_file(target[1], meshes, progress)), faces
+    from ..mesh.outputs import output_set
+
+    made = not target[1].is_dir()
     target[1].mkdir(exist_ok=True)
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
-    for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
-        path = target[1] / f"{name}{target[2]}"
-        try:
-            written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                           force=args.force, comments=(f"isoflow surface --labels: {name}",))
-        except IsoflowError as exc:
-            if done == 1:
-                raise
-            # the files of the labels before this one are in place: the line names them
-            after = len(meshes) - done
-            raise IsoflowError(f"{exc}; the {counted(done - 1, 'label file')} before it "
-                               f"({_some([meshes[i][0] + target[2] for i in range(done - 1)])}) were written"
-                               + (f", the {counted(after, 'label file')} after it not" if after else "")) from None
-        count += written["face_count"]
-        kinds[written["faces"]] = None
-        welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
-        if welded:
-            welds[path.name] = welded
-        if not args.no_check:
-            with reading_back(path):
-                check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
-            if check.get("agree") is False:
-                problems.append(check["problem"])
-        if progress is not None:
-            progress(done, len(meshes))
+    earlier = earlier_label_files(target[1], target[2], [name for name, *_ in meshes])
+    if earlier and not args.force and not args.quiet:
+        print(f"isoflow surface: note: {target[1]}/: {counted(len(earlier), 'label file')} of an earlier run kept "
+              f"({_some([f.name for f in earlier])}); --force makes the directory hold this run's alone",
+              file=sys.stderr)
+    try:
+        # replaced together: a failure at any label leaves the directory's earlier set as it was
+        with output_set(f"{target[1]}/", retire=earlier if args.force else ()):
+            for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
+                path = target[1] / f"{name}{target[2]}"
+                written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                               force=args.force, comments=(f"isoflow surface --labels: {name}",))
+                count += written["face_count"]
+                kinds[written["faces"]] = None
+                welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+                if welded:
+                    welds[path.name] = welded
+                if not args.no_check:
+                    with reading_back(path):
+                        check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
+                    if check.get("agree") is False:
+                        problems.append(check["problem"])
+                if progress is not None:
+                    progress(done, len(meshes))
+    except BaseException:
+        if made:  # the directory this run made, left empty
+            with contextlib.suppress(OSError):
+                target[1].rmdir()
+        raise
     if welds and not args.quiet:  # as surface says of one STL file
         print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
               f"at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} ({_some(list(welds))}) "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 
@@ -47,7 +48,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 def cmd_surface(args: argparse.Namespace) -> int:
     from ..digital.connectivity import default_connectivity
     from ..mesh import export
-    from ..mesh.outputs import check_output_path, check_picture_path
+    from ..mesh.outputs import check_output_path, check_picture_path, output_set
 
     if args.labels is not None:
         from .labels import cmd_surface_labels
@@ -79,23 +80,25 @@ def cmd_surface(args: argparse.Namespace) -> int:
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
-    written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                   force=args.force, comments=comments)
-    comps = mesh.components()
-    print(
-        f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
-        f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
-        + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
-    )
-    if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:
-        print(f"isoflow surface: note: {stl_move_note(out, written)}", file=sys.stderr)
-    status = read_back(args, out, mesh, obj, comps)
-    if status == 0 and args.png:
-        from ..mesh.render import render_surface
+    # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were
+    with output_set(out) if args.png else contextlib.nullcontext():
+        written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                       force=args.force, comments=comments)
+        comps = mesh.components()
+        print(
+            f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
+            f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
+            + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
+        )
+        if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:
+            print(f"isoflow surface: note: {stl_move_note(out, written)}", file=sys.stderr)
+        status = read_back(args, out, mesh, obj, comps)
+        if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
+            from ..mesh.render import render_surface
 
-        png = Path(args.png)
-        render_surface(mesh, obj, png, title=Path(args.input).name)
-        print(f"{png}: picture of the surface coloured by vertex angle")
+            render_surface(mesh, obj, Path(args.png), title=Path(args.input).name)
+    if args.png:
+        print(f"{args.png}: picture of the surface coloured by vertex angle")
     return status
 
 

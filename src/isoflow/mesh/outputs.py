@@ -12,6 +12,12 @@ leaves the previous file byte for byte as it was and no partial or
 temporary file behind; the error becomes one :class:`IsoflowError` line
 naming the file and the cause. Writers of new formats (volumes, pictures,
 zarr stores) should go through the same two functions.
+
+Files that belong together (a mesh and its picture, a file per label) are
+written inside one :func:`output_set`: each goes to its temporary name as
+above, and none is renamed into place until every one is written; a failure
+or an interruption before then removes them all and leaves every previous
+file as it was, so a folder never holds new files beside old ones.
 """
 
 from __future__ import annotations
@@ -24,6 +30,7 @@ import re
 import secrets
 import shutil
 import stat
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ..errors import IsoflowError
@@ -229,8 +236,19 @@ def write_error(path: Path, exc: BaseException, existed: bool) -> IsoflowError:
     cause = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc) or type(exc).__name__
     cause = short_write_cause(cause, path.parent) or cause
     cause = " ".join(cause.split())  # one line: a library's message (HDF5's) may hold line breaks
-    kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
-    return IsoflowError(f"{path}: could not write ({cause}); {kept}")
+    return IsoflowError(f"{path}: could not write ({cause}); {_kept(path, existed)}")
+
+
+#: what a failed set says of its files (:func:`output_set`)
+NOTHING_REPLACED = "nothing was replaced"
+
+
+def _kept(path: Path, existed: bool) -> str:
+    """What a failed write left of ``path``: within a set, none of the set's
+    files was replaced, whichever of them failed."""
+    if _SETS:
+        return NOTHING_REPLACED
+    return f"the previous {path.name} is unchanged" if existed else "nothing was written"
 
 
 #: numpy's words for a short write (``ndarray.tofile``, which ``np.save`` and tifffile use): the OS's cause is lost
@@ -320,6 +338,9 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
         if sync:
             _fsync_tree(tmp) if directory else sync_file(tmp)
         interrupted_by_signal()  # one a library swallowed while the file was written
+        if _SETS:  # renamed with the rest of its set, by output_set
+            _SETS[-1].append((tmp, path, directory))
+            return
         _replace(tmp, path, directory)
         if sync:
             sync_directory(path.parent)
@@ -330,9 +351,150 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
         if error is not None:
             raise error from None
         if isinstance(exc, KeyboardInterrupt):  # say which file, keep the exit status of an interrupt
-            kept = f"the previous {path.name} is unchanged" if existed else "nothing was written"
-            raise KeyboardInterrupt(f"{path}: interrupted while writing; {kept}") from None
+            raise KeyboardInterrupt(f"{path}: interrupted while writing; {_kept(path, existed)}") from None
         raise
+
+
+#: the sets of outputs open (:func:`output_set`), innermost last: each holds
+#: the ``(temporary, target, directory)`` of the files written in it so far
+_SETS: list[list[tuple[Path, Path, bool]]] = []
+
+
+@contextlib.contextmanager
+def output_set(name: str | os.PathLike, retire: Iterable[str | os.PathLike] = ()) -> Iterator[None]:
+    """Replace the files written in the block (through :func:`atomic_path`
+    or :func:`atomic_write`) together, when it ends without error.
+
+    Each file is written whole to its temporary name as usual, but renamed
+    into place only once the last one is written (and read back from
+    :func:`staged`): an error or an interruption anywhere in the block
+    removes every temporary and leaves each previous file byte for byte as
+    it was, and its one line ends "nothing was replaced".
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        The set, as an interruption's line names it (the mesh, or the
+        directory of a file per label).
+    retire : iterable of str or os.PathLike
+        Files of an earlier set that this one does not hold (``label_9.ply``
+        where the new image has 8 labels): removed once the set is in
+        place, so that what remains is the new set alone.
+
+    Raises
+    ------
+    IsoflowError
+        A write that failed, with "nothing was replaced".
+    KeyboardInterrupt
+        An interruption (Ctrl-C, SIGTERM) before the set was in place.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> _ = (d / "a.txt").write_text("old a"), (d / "b.txt").write_text("old b")
+    >>> try:
+    ...     with output_set(d):
+    ...         with atomic_write(d / "a.txt", "w") as fh:
+    ...             _ = fh.write("new a")
+    ...         raise OSError("the second write failed")
+    ... except OSError:
+    ...     pass
+    >>> sorted((f.name, f.read_text()) for f in d.iterdir())
+    [('a.txt', 'old a'), ('b.txt', 'old b')]
+    >>> with output_set(d, retire=[d / "b.txt"]):
+    ...     with atomic_write(d / "a.txt", "w") as fh:
+    ...         _ = fh.write("new a")
+    >>> sorted((f.name, f.read_text()) for f in d.iterdir())
+    [('a.txt', 'new a')]
+    """
+    entries: list[tuple[Path, Path, bool]] = []
+    _SETS.append(entries)
+    try:
+        yield
+        interrupted_by_signal()  # one a library swallowed after the last write
+    except BaseException as exc:
+        _SETS.pop()
+        for tmp, _, _ in entries:
+            _remove(tmp)
+        if isinstance(exc, KeyboardInterrupt):
+            raise KeyboardInterrupt(f"{name}: {NOTHING_REPLACED}") from None
+        if isinstance(exc, IsoflowError) and NOTHING_REPLACED not in str(exc):
+            error = IsoflowError(f"{exc}; {NOTHING_REPLACED}")  # in both wordings
+            if exc.command_line is not None:
+                error.command_line = f"{exc.command_line}; {NOTHING_REPLACED}"
+            raise error from None
+        raise
+    _SETS.pop()
+    if _SETS:  # an enclosing set renames these with its own
+        _SETS[-1].extend(entries)
+        return
+    _put_in_place(entries, [Path(f) for f in retire])
+
+
+def staged(path: str | os.PathLike) -> Path:
+    """Where the new ``path`` is while its :func:`output_set` is open.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An output, as it was written.
+
+    Returns
+    -------
+    Path
+        Its temporary, written and not yet renamed (to read it back), or
+        ``path`` itself where no open set holds it.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp())
+    >>> with output_set(d):
+    ...     with atomic_write(d / "a.txt", "w") as fh:
+    ...         _ = fh.write("new a")
+    ...     staged(d / "a.txt").read_text(), (d / "a.txt").exists()
+    ('new a', False)
+    >>> staged(d / "a.txt") == d / "a.txt"
+    True
+    """
+    path = Path(path)
+    for tmp, target, _ in (entry for entry_set in reversed(_SETS) for entry in reversed(entry_set)):
+        if target == path:
+            return tmp
+    return path
+
+
+def _put_in_place(entries: list[tuple[Path, Path, bool]], retire: list[Path]) -> None:
+    """Rename a set's temporaries over their targets, then remove the files
+    it retires. A signal is held back meanwhile (raised after it): the
+    renames take microseconds and, cut short, would leave the mix of new
+    and old files that the set exists to prevent."""
+    import signal
+
+    held = {signal.SIGINT, signal.SIGTERM, *([signal.SIGHUP] if hasattr(signal, "SIGHUP") else [])}
+    before = signal.pthread_sigmask(signal.SIG_BLOCK, held) if hasattr(signal, "pthread_sigmask") else None
+    try:
+        for done, (tmp, path, directory) in enumerate(entries):
+            try:
+                _replace(tmp, path, directory)
+            except OSError as exc:
+                for rest, _, _ in entries[done:]:
+                    _remove(rest)
+                cause = exc.strerror or str(exc)
+                raise IsoflowError(f"{path}: could not put it in place ({cause}); {done} of the {len(entries)} "
+                                   "files of its set were replaced before it") from None
+        for old in retire:
+            try:
+                old.unlink(missing_ok=True)
+            except OSError as exc:
+                raise IsoflowError(f"{old}: could not remove this file of an earlier set ({exc.strerror or exc}); "
+                                   "the new set is in place") from None
+        for directory in dict.fromkeys(path.parent for _, path, _ in entries):
+            sync_directory(directory)
+    finally:
+        if before is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, before)
 
 
 @contextlib.contextmanager

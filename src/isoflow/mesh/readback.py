@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .outputs import staged
+
 #: relative tolerance on the volume: coordinates may be stored as float32
 VOLUME_RTOL = 1e-4
 
@@ -168,7 +170,8 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
     ours = isoflow_figures(mesh, obj, components)
     try:
-        theirs = trimesh_figures(path, weld=path.suffix.lower() == ".stl", unit=volume_unit(obj))
+        # the new file where its set is not in place yet (its temporary keeps the suffix)
+        theirs = trimesh_figures(staged(path), weld=path.suffix.lower() == ".stl", unit=volume_unit(obj))
     except Exception as exc:  # a file trimesh cannot read is the worst disagreement
         return {"isoflow": ours, "trimesh": {k: None for k in ours}, "agree": False,
                 "problem": f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"}
@@ -197,7 +200,7 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
 
     path = Path(path)
     try:
-        scene = trimesh.load(path, force="scene", process=False)
+        scene = trimesh.load(staged(path), force="scene", process=False)
     except Exception as exc:
         return [f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"]
     problems, found, placed = [], [], []
