@@ -40,6 +40,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_flow(args: argparse.Namespace) -> int:
+    if args.out == "":  # (an unset shell variable): no run's files were asked for in silence, nor into "."
+        raise IsoflowError("--out '': an empty directory name; give --out DIR for the run's files")
     if args.out:  # before any work (the FlowWriter checks it again when it makes the directory)
         from ..flow.files import check_output_dir
 
@@ -167,7 +169,7 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:
-        raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
+        raise IsoflowError(f"--volumes {args.volumes or repr('')} writes into the --out directory; give --out DIR")
 
 
 def flow_writer(args: argparse.Namespace, obj):
