@@ -23,7 +23,8 @@ from .progress import progress_bar
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
-    p = add_command(sub, "flow", "run the digital curvature flow (section 5) with topology control")
+    p = add_command(sub, "flow", "run the digital curvature flow (section 5), its topology changes reported, "
+                                 "or prevented with --guard")
     add_input_arguments(p)
     add_connectivity(p, dims=(2, 3))
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
