@@ -465,3 +465,19 @@ def test_surfaces_do_not_apply_in_2d_and_4d(tmp_path):
     assert "closed surfaces        not applicable in 4D (the boundary is a 3-manifold)" in p.stdout
     assert "surfaces" not in json.loads(run("info", str(tmp_path / "h.npy"), "--json").stdout)
     assert analyze(np.zeros((3, 3, 3), bool)).surfaces == []
+
+
+def test_the_flow_s_summary_says_topology_control_is_guard_s(tmp_path, capsys):
+    # the command list said "the digital curvature flow (section 5) with topology control", which
+    # only --guard gives: a plain run changes the Betti numbers, as scipy counts them
+    from scipy import ndimage
+
+    two = np.zeros((12, 12, 12), bool)
+    two[1:4, 1:4, 1:4] = two[6:10, 6:10, 6:10] = True  # a 3^3 and a 4^3 box
+    np.save(tmp_path / "two.npy", two)
+    assert main(["flow", str(tmp_path / "two.npy"), "--json"]) == 0
+    steps = json.loads(capsys.readouterr().out)["steps"]
+    assert ndimage.label(two)[1] == steps[0]["betti"][0] == 2 and steps[3]["betti"][0] == 1  # the small box went first
+    assert main([]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.split()[:1] == ["flow"])
+    assert "--guard" in line and not line.endswith("with topology control"), line

@@ -189,6 +189,21 @@ def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
     assert (run_dir / "step_001.ply" / "notes.txt").read_text() == "mine"
 
 
+
+def test_flow_out_empty_is_refused_not_ignored(tmp_path):
+    # --out "" (an unset shell variable) ran the flow, wrote nothing and exited 0
+    box = np.zeros((5, 6, 7), bool)
+    box[1:4, 1:5, 1:6] = True
+    np.save(tmp_path / "box.npy", box)
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", "box.npy", "--out", ""], capture_output=True,
+                       text=True, cwd=tmp_path)
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr == "isoflow flow: error: --out '': an empty directory name; give --out DIR for the run's files\n"
+    assert sorted(os.listdir(tmp_path)) == ["box.npy"]  # nothing written into the working directory
+    p = subprocess.run([sys.executable, "-m", "isoflow", "flow", "box.npy", "--volumes", ""], capture_output=True,
+                       text=True, cwd=tmp_path)
+    assert p.returncode == 2 and "--volumes '' writes into the --out directory" in p.stderr, p.stderr
+
 @pytest.mark.parametrize("command", [("voxelize", TORUS, "--resolution", 16, "-o", "out.npz/"),
                                      ("voxelize", TORUS, "--resolution", 16, "-o", "out.h5/"),
                                      ("surface", "LABELS", "-o", "out.ply/"),

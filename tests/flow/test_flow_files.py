@@ -281,3 +281,18 @@ def test_a_store_too_large_to_flow_in_memory_names_the_block_wise_flow(tmp_path,
     assert p.stderr.startswith("isoflow flow: error: huge.zarr: a 1048576x1048576x1048576 volume of uint8 needs about "
                                f"{3 << 30:.1f} GiB of memory"), p.stderr
     assert remedy in p.stderr and not (tmp_path / "run").exists()
+
+
+def test_a_guarded_run_s_csv_has_the_move_of_every_step_as_its_json(tmp_path):
+    """flow.csv holds the columns of --json's step records: a guarded run's
+    ``move`` too (empty for step 0, the input)."""
+    import json
+
+    np.save(tmp_path / "t.npy", np.pad(np.ones((3, 4, 5), bool), 1))
+    rc, stdout, err = run("flow", tmp_path / "t.npy", "--guard", "--out", tmp_path / "run", "--json")
+    assert rc == 0, err
+    moves = [s.get("move", "") for s in json.loads(stdout)["steps"]]
+    with open(tmp_path / "run" / "flow.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["move"] for r in rows] == moves == ["", "flow", "flow", "flow"]
+    assert [int(r["voxels"]) for r in rows] == [60, 24, 6, 1]  # docs/flow.md: the 3x4x5 box, to one voxel

@@ -23,7 +23,8 @@ from .progress import progress_bar
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
-    p = add_command(sub, "flow", "run the digital curvature flow (section 5) with topology control")
+    p = add_command(sub, "flow", "run the digital curvature flow (section 5), its topology changes reported, "
+                                 "or prevented with --guard")
     add_input_arguments(p)
     add_connectivity(p, dims=(2, 3))
     p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
@@ -40,6 +41,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 
 
 def cmd_flow(args: argparse.Namespace) -> int:
+    if args.out == "":  # (an unset shell variable): no run's files were asked for in silence, nor into "."
+        raise IsoflowError("--out '': an empty directory name; give --out DIR for the run's files")
     if args.out:  # before any work (the FlowWriter checks it again when it makes the directory)
         from ..flow.files import check_output_dir
 
@@ -167,7 +170,7 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     if args.steps is not None and args.steps < 0:
         raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:
-        raise IsoflowError(f"--volumes {args.volumes} writes into the --out directory; give --out DIR")
+        raise IsoflowError(f"--volumes {args.volumes or repr('')} writes into the --out directory; give --out DIR")
 
 
 def flow_writer(args: argparse.Namespace, obj):

@@ -74,7 +74,8 @@ def packed_lattice_step(state: PackedObject, conn: int, betti: list[int]):
     """
     keep = vertex_rows(state, conn)
     cells, padded, pending, goal = fineblocks.blocks(state.bits, state.shape, keep)
-    stuck, flipped = fineblocks.realise(cells, padded, pending, goal, is_face_connectivity(conn))
+    stuck, flipped = fineblocks.realise(cells, padded, pending, goal, is_face_connectivity(conn),
+                                        backward=state.parity == 1)  # as lattice_step: no drift to one side
     del cells
     if not len(stuck):
         _toggle(keep, flipped, padded)

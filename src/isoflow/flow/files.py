@@ -129,20 +129,26 @@ def replaced_by_run(directory, path) -> bool:
 
 def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str], list[list]]:
     """The per-step figures as CSV columns and rows (bbox as min/max per
-    axis); with ``checks`` (step -> :func:`check_surface_file` result, 3D),
-    isoflow's and trimesh's reading of each step's surface file."""
+    axis), the columns of the ``steps`` records of ``isoflow flow --json``:
+    a guarded run's ``move`` too (empty for step 0, the input); with
+    ``checks`` (step -> :func:`check_surface_file` result, 3D), isoflow's
+    and trimesh's reading of each step's surface file."""
     nd = len(result.steps[0]["betti"])
     ndim = 3 if nd == 3 else 2
     axes = "xyz"[:ndim]
     header = ["step", "voxels", "parity"] + [f"b{i}" for i in range(nd)]
     header += ["euler_characteristic", "energy"]
     header += [f"bbox_min_{a}" for a in axes] + [f"bbox_max_{a}" for a in axes]
+    if result.guard:
+        header.append("move")
     if checks is not None:
         header += CHECK_COLUMNS
     rows = []
     for s in result.steps:
         box = s["bbox"] or [[""] * ndim, [""] * ndim]
         row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]]
+        if result.guard:
+            row.append(s.get("move", ""))
         if checks is not None:
             c = checks.get(s["step"])
             row += [""] * len(CHECK_COLUMNS) if c is None or c.get("skipped") else [

@@ -87,7 +87,7 @@ def fine_grid(cfg: np.ndarray) -> np.ndarray:
 
 
 def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bool = True, max_sweeps: int = 256,
-                  by_class: bool = False):
+                  by_class: bool = False, backward: bool = False):
     """Carry out the moves ``keep`` of one step by simple deformations.
 
     Every boundary vertex's block of fine cells is filled (outward) or
@@ -104,6 +104,12 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     which vertex of a vanishing part is left stuck, so :func:`change_region`
     uses it to report the same place as before for plain runs.
 
+    ``backward`` takes the octants in the reverse order. The greedy order
+    decides which side of a thin part keeps it when its inward moves are
+    reversed; the same order every step carries a thin ring half a voxel a
+    step to one side, out of the object's bounding box, so
+    :func:`lattice_step` reverses it on every other lattice.
+
     Returns ``(done, stuck)``: ``done`` is the realised keep-mask (valid when
     ``stuck`` is empty: the new object is then homotopy equivalent to the old
     one) and ``stuck`` the vertices left half-way.
@@ -115,6 +121,8 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     cells = fine.ravel()
     strides = np.array([int(np.prod(fine.shape[d + 1:])) for d in range(nd)], np.int64)
     octants = [np.array(e) @ strides for e in _octants(nd)]
+    if backward:
+        octants = octants[::-1]
     pending = np.flatnonzero((cfg != 0) & (cfg != full))
     w = np.stack(np.unravel_index(pending, cfg.shape), axis=1)
     base = (2 * w + 1) @ strides
@@ -167,7 +175,7 @@ def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):
     kind ``flow`` or ``partial``, or None when no resolution of the stuck
     blocks keeps the Betti numbers."""
     cfg, keep = flow_moves(obj, conn)
-    done, stuck = realise_moves(cfg, keep, conn)
+    done, stuck = realise_moves(cfg, keep, conn, backward=obj.parity == 1)
     if not stuck.any():
         return obj.on_dual_lattice(done).cropped(), "flow", int((done != keep).sum())
     return resolve_stuck(obj, keep, done, stuck, conn, betti)

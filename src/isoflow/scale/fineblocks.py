@@ -412,7 +412,8 @@ def _settle(pending, goal, need, n, changed, flip, reversed_, flips, full):
 
 
 @njit(cache=True, nogil=True)
-def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known, fill, face, flip, max_sweeps, flips):
+def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known, fill, face, flip, max_sweeps, flips,
+             backward):
     """The sweeps of :func:`realise` on one thread (in place on ``state``,
     ``pending`` and ``goal``). Returns ``(stuck, flipped)``: the first
     ``stuck`` of ``pending`` are left half-way, the first ``flipped`` of
@@ -424,7 +425,8 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
     reversed_ = np.int64(-1)  # not literals: numba would compile _settle once more for them
     for _ in range(max_sweeps):
         changed = np.bool_(False)
-        for e in range(cells):
+        for k in range(cells):
+            e = cells - 1 - k if backward else k
             changed |= _batch(state, pending, need, e, 0, n, tables, offsets, steps, lo, hi, masks, known, fill, face)
         n, reversed_, done = _settle(pending, goal, need, n, changed, flip, reversed_, flips, full)
         if done:
@@ -438,7 +440,8 @@ def _realise(state, pending, goal, tables, offsets, steps, lo, hi, masks, known,
 THREADED_BLOCKS = 50_000
 
 
-def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps, flips, threads):
+def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps, flips, threads,
+                      backward):
     """:func:`_realise` with every batch split among ``threads`` threads
     (each with its own table of codes, :func:`_memo`)."""
     from concurrent.futures import ThreadPoolExecutor
@@ -453,7 +456,7 @@ def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, f
         for _ in range(max_sweeps):
             parts = slabs(n, threads)
             changed = False
-            for e in range(cells):
+            for e in (range(cells - 1, -1, -1) if backward else range(cells)):
                 futures = [pool.submit(_batch, state, pending, need, e, a, b, tables, offsets, *board_, *memos[t], face)
                            for t, (a, b) in enumerate(parts)]
                 changed |= any([f.result() for f in futures])
@@ -464,7 +467,7 @@ def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, f
 
 
 def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goal: np.ndarray, face: bool,
-            flip: bool = True, max_sweeps: int = 256) -> tuple[np.ndarray, np.ndarray]:
+            flip: bool = True, max_sweeps: int = 256, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Carry out the moves ``goal`` of the blocks ``pending`` (from
     :func:`blocks`) one fine cell at a time, a cell only when it is simple
     for the object's connectivity (``face``: 6 or 4), as
@@ -484,6 +487,9 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
         Reverse the moves of the blocks left stuck, once.
     max_sweeps : int
         Sweeps at most.
+    backward : bool
+        Take the octants in the reverse order (``realise_moves``'
+        ``backward``: the flow reverses it on every other lattice).
 
     Returns
     -------
@@ -515,8 +521,8 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     threads = thread_count(len(pending) * (1_000_000 // THREADED_BLOCKS))
     if threads > 1 and len(pending) >= THREADED_BLOCKS:
         stuck, flipped = _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps,
-                                           flips, threads)
+                                           flips, threads, backward)
     else:
         stuck, flipped = _realise(state, pending, goal, tables, offsets, *board_, *_memo(nd, face), face, flip,
-                                  max_sweeps, flips)
+                                  max_sweeps, flips, backward)
     return pending[:stuck].copy(), flips[:flipped].copy()
