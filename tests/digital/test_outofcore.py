@@ -522,7 +522,7 @@ def test_missing_dask_says_what_to_install(monkeypatch):
         analyze_chunked(object())
     monkeypatch.setitem(sys.modules, "zarr", None)
     with pytest.raises(IsoflowError, match=r"isoflow\[dask\]"):
-        outofcore.open_zarr(".")
+        outofcore.zarr_volume(".")
 
 
 def test_a_failed_block_leaves_no_block_running_behind_the_error():
@@ -565,3 +565,29 @@ def test_info_of_a_store_without_voxels_is_the_files(tmp_path, capsys):
         assert main(["info", str(tmp_path / name), "--json"]) == 0
         reports.append({k: v for k, v in json.loads(capsys.readouterr().out).items() if k != "input"})
     assert reports[0] == reports[1] and reports[1]["voxels"] == 0 and reports[1]["betti"] == [0, 0, 0]
+
+
+@pytest.mark.parametrize("axes", ["zyx", "tczyx", "cyxz"])
+def test_analyze_zarr_of_an_ome_zarr_image_equals_the_in_memory_report(tmp_path, axes):
+    """An OME-Zarr image by its path (and ``:LEVEL``): the report of the
+    volume in (x, y, z) order, its channel and time axes of length 1 left
+    out, as ``isoflow info`` gives it; the shape is not the stored order's."""
+    from skimage.measure import euler_number
+
+    v = (gaussian_filter(np.random.default_rng(7).random((13, 11, 9)), 1.0) > 0.5).astype(np.uint8)
+    group = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    datasets = []
+    for level, step in (("0", 1), ("1", 2)):
+        data = v[::step, ::step, ::step]
+        stored = np.transpose(data, ["xyz".index(a) for a in axes if a in "xyz"])
+        stored = stored.reshape([1 if a in "tc" else stored.shape[[b for b in axes if b in "xyz"].index(a)]
+                                 for a in axes])
+        group.create_array(level, data=stored, chunks=tuple(1 if a in "tc" else 4 for a in axes))
+        datasets.append({"path": level})
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": list(axes), "datasets": datasets}]
+    for path, data in ((tmp_path / "image.zarr", v), (f"{tmp_path / 'image.zarr'}:1", v[::2, ::2, ::2])):
+        for conn in (6, 26):
+            report = analyze_zarr(path, conn)
+            assert report == analyze(data, conn)
+            assert report["shape"] == list(data.shape)
+            assert report["euler_characteristic"] == euler_number(np.pad(data, 1), 3 if conn == 26 else 1)
