@@ -695,3 +695,18 @@ def test_a_missing_input_is_worded_alike_by_every_command(command, tmp_path, cap
         line = fails(capsys, command, f"{tmp_path}/{given}", *after)
         assert line == f"isoflow {command}: error: {tmp_path / named}: no such file or directory", given
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("command", ["info", "voxelize", "surface", "genus", "flow"])
+def test_a_url_is_said_to_be_one_not_a_missing_file(command, tmp_path, capsys, monkeypatch):
+    """A store in a bucket (``s3://bucket/scan.zarr``) was "s3:/bucket/scan.zarr:
+    no such file or directory", the URL mangled by ``Path``; every command
+    now names the URL as given and says that isoflow reads local paths."""
+    monkeypatch.chdir(tmp_path)
+    after = {"voxelize": ["--resolution", "8", "-o", "v.npy"], "surface": ["-o", "s.ply"],
+             "flow": ["--out", "flow"]}.get(command, [])
+    for url in ("s3://bucket/scan.zarr", "gs://bucket/scan.ome.zarr:1", "https://example.org/bunny.ply",
+                "s3://bucket/ct.nii.gz", "s3://bucket/seg.h5:/v"):
+        line = fails(capsys, command, url, *after, words=["a URL", "local"])
+        assert line.startswith(f"isoflow {command}: error: {url.split('.')[0]}"), line
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MISSING, IsoflowError
+from ..errors import IsoflowError, missing
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -411,7 +411,7 @@ def refuse_volume(path) -> None:
     file = split_dataset(path)[0]
     if not is_mesh_path(path) and format_for(file) is not None:
         if not file.exists():
-            raise IsoflowError(f"{file}: {MISSING}")
+            raise missing(file)
         raise IsoflowError(f"{path}: a volume file, not a triangle mesh; voxelize and genus read meshes "
                            "(isoflow info, surface and flow read volumes)")
 
@@ -458,7 +458,7 @@ def check_mesh_file(p: Path) -> None:
     """A mesh file that exists, is a regular file, and whose format's
     library is installed, or one line saying which is not."""
     if not p.exists():
-        raise IsoflowError(f"{p}: {MISSING}")
+        raise missing(p)
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
     check_format_libraries(p)

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MISSING, IsoflowError
+from ..errors import IsoflowError, missing
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -215,7 +215,7 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
     zarr = import_zarr()
     path = Path(path)
     if not path.exists():
-        raise IsoflowError(f"{path}: {MISSING}")
+        raise missing(path)
     try:
         node = zarr.open(str(path), mode="r")
     except Exception as exc:  # zarr raises several types for what is not a store
