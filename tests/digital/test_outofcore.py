@@ -591,3 +591,33 @@ def test_analyze_zarr_of_an_ome_zarr_image_equals_the_in_memory_report(tmp_path,
             assert report == analyze(data, conn)
             assert report["shape"] == list(data.shape)
             assert report["euler_characteristic"] == euler_number(np.pad(data, 1), 3 if conn == 26 else 1)
+
+
+@pytest.mark.parametrize("fmt", [2, 3])
+def test_chunks_never_written_are_read_as_the_fill_value(tmp_path, capsys, fmt):
+    """zarr leaves out the chunks that hold nothing but the fill value, and
+    reads them as it: with fill value 1 the report is that of the volume in
+    memory; with 2 (or NaN) the refusal named "e.g. 2" only, a value no
+    voxel was written with, and now says it is the array's fill value, in
+    ``info`` and ``surface`` alike."""
+    from scipy.ndimage import label
+
+    v = (gaussian_filter(np.random.default_rng(3).random((17, 13, 11)), 1.0) > 0.5).astype(np.uint8)
+    v[:10, :8, :] = 1  # whole chunks of ones, never written with fill value 1
+    ones = zarr.create_array(str(tmp_path / "ones.zarr"), shape=v.shape, chunks=(5, 4, 11), dtype="u1",
+                             fill_value=1, zarr_format=fmt)
+    ones[...] = v
+    assert len(list((tmp_path / "ones.zarr").rglob("*"))) < 40  # some chunks are not there
+    report = analyze_zarr(tmp_path / "ones.zarr", 6)
+    assert report == analyze(v, 6) and report["betti"][0] == label(v)[1]
+    for fill, dtype, shown in ((2, "u1", "2"), (float("nan"), "f4", "nan")):
+        path = tmp_path / f"fill-{shown}.zarr"
+        z = zarr.create_array(str(path), shape=v.shape, chunks=(5, 4, 11), dtype=dtype, fill_value=fill,
+                              zarr_format=fmt)
+        z[10:] = v[10:]  # the first chunks never written
+        with pytest.raises(IsoflowError, match=rf"e\.g\. {shown}, the array's fill value, which zarr reads"):
+            analyze_zarr(path)
+        for command in (["info", str(path)], ["surface", str(path), "-o", str(tmp_path / "s.ply")]):
+            assert main(command) == 2
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and f"e.g. {shown}, the array's fill value" in err[0], err

@@ -57,7 +57,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import IsoflowError, check_callable
-from ..scale.arrays import NotBinary, binary
+from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, zarr_blocks, zarr_volume
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
@@ -118,7 +118,10 @@ def _read_zarr_block(z, job: _Job) -> dict:
         data = np.asarray(z[region])
     except Exception as exc:  # a damaged or missing chunk
         raise IsoflowError(f"{job.where}: cannot read the block at voxel {tuple(a for a, _ in job.box)} ({exc})") from None
-    return _dask_block(data, job)
+    try:
+        return _dask_block(data, job)
+    except NotBinary as exc:
+        raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
 
 
 def _dask_block(chunk, job: _Job) -> dict:
@@ -551,7 +554,10 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
             first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         except Exception as exc:  # a damaged or missing chunk, as _read_zarr_block says
             raise IsoflowError(f"{where}: cannot read the block at voxel {(0,) * z.ndim} ({exc})") from None
-        binary(first, where, near=(0,) * z.ndim)
+        try:
+            binary(first, where, near=(0,) * z.ndim)
+        except NotBinary as exc:
+            raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
     report = analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
                              surfaces=surfaces, threads=threads, progress=progress)
     # analysed in stored order (the report does not depend on it but for the shape)

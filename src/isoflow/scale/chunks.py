@@ -289,6 +289,7 @@ class SpatialAxes:
         shards = getattr(array, "shards", None)
         self.shards = None if shards is None else tuple(int(shards[i]) for i in kept)
         self.dtype, self.ndim = array.dtype, len(kept)
+        self.fill_value = getattr(array, "fill_value", None)
         self.store_path = getattr(array, "store_path", None)
 
     def __getitem__(self, region):

@@ -273,6 +273,7 @@ class _Guarded:
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
         self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
+        self.fill_value = getattr(array, "fill_value", None)
 
     def __getitem__(self, key):
         try:
