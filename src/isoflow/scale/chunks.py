@@ -205,7 +205,8 @@ def open_zarr(path, level: str | None = None) -> object:
     """The volume array of a zarr store: the array at ``path``; in an
     OME-Zarr image (a group with NGFF ``multiscales``) its first resolution
     level, or ``level`` (a dataset path such as ``'1'``, or an index); in any
-    other group its array named ``volume`` or its only array."""
+    other group the array named ``level``, else its array named ``volume``
+    or its only array."""
     return open_zarr_node(path, level)[0]
 
 
@@ -245,17 +246,23 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
         if isinstance(array, zarr.Group):
             raise IsoflowError(f"{path}: OME-Zarr level {paths[i]!r} is a group, not an array")
         return array, multiscale, datasets[i]
-    if level is not None:
-        raise IsoflowError(f"{path}: not an OME-Zarr image (no 'multiscales'), so it has no level {level!r}")
     arrays = dict(node.arrays())
-    if "volume" in arrays:
+    if level is not None:
+        # a plain group: the name picks one of its arrays (a segmentation
+        # beside its image), as FILE.h5:/dataset does
+        if level not in arrays:
+            raise IsoflowError(f"{path}: no array {level!r} in the zarr group (its arrays: {sorted(arrays)}; "
+                               "it is no OME-Zarr image, whose levels the name would also pick)")
+        node = arrays[level]
+    elif "volume" in arrays:
         node = arrays["volume"]
     elif len(arrays) == 1:
         node = next(iter(arrays.values()))
     elif not arrays:
         raise IsoflowError(f"{path}: a zarr group without arrays")
     else:
-        raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name the volume 'volume'")
+        first = sorted(arrays)[0]
+        raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name one, {path}:{first}")
     return node, None, None
 
 

@@ -13,7 +13,8 @@ translation, then those of the whole image) place voxel *centres*, as napari
 and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
 corner is the translation less half a voxel. A zarr store without
 ``multiscales`` is read as before: the array at the path, or a group's array
-named ``volume`` or its only array, axes as stored (axis 0 is x), no
+named ``volume`` or its only array (``STORE.zarr:NAME`` the array of that
+name), axes as stored (axis 0 is x), no
 placement.
 
 ``isoflow info`` reads a zarr store block by block (:func:`analyze_store`);
