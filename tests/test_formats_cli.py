@@ -794,3 +794,26 @@ def test_magicavoxel_states_its_limit_and_each_caller_its_remedy(tmp_path):
         assert p.stderr.strip().splitlines()[-1].endswith(
             "MagicaVoxel models are at most 256 voxels a side, this object is "
             + ("300x300x300" if len(meshes) == 1 else "300x100x100") + "; voxelise it coarser (--resolution 256)"), p.stderr
+
+
+def test_a_level_after_the_slash_a_shell_adds_to_a_store(tmp_path, capsys):
+    # a shell completes a store's name as "image.zarr/", and the level
+    # typed after it, "image.zarr/:1", was "no such file or directory"
+    zarr = pytest.importorskip("zarr")
+    trimesh = pytest.importorskip("trimesh")
+    v = np.zeros((12, 10, 9), np.uint8)
+    v[2:10, 2:8, 1:8] = 1
+    v[5:7, 4:6, :] = 0  # a tunnel
+    group = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    for level, step in (("0", 1), ("1", 2)):
+        group.create_array(level, data=np.ascontiguousarray(v[::step, ::step, ::step].T), chunks=(3, 4, 5))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": ["z", "y", "x"],
+                                   "datasets": [{"path": "0"}, {"path": "1"}]}]
+    level = v[::2, ::2, ::2]
+    report = isoflow.analyze(level, 6).to_dict()
+    for given in (f"{tmp_path / 'image.zarr'}/:1", f"{tmp_path / 'image.zarr'}:1"):
+        assert info(capsys, given) == report
+        run(capsys, "surface", given, "-o", tmp_path / "s.ply", "--force")
+        mesh = trimesh.load(tmp_path / "s.ply", process=False)
+        assert mesh.euler_number == sum(s["euler_characteristic"] for s in report["surfaces"])
+        assert isoflow.read_volume(given).voxels == int(level.sum())
