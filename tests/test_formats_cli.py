@@ -717,6 +717,35 @@ def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, 
         assert "raw" not in f and "seg" not in f and int(f["volume"][()].sum()) == 24
 
 
+def test_an_array_of_a_plain_zarr_group_is_named_after_a_colon(tmp_path, capsys):
+    # a zarr group of several arrays (an image, its segmentation and a mask)
+    # was refused with "name the volume 'volume'", and STORE.zarr:NAME with
+    # "not an OME-Zarr image, so it has no level": a store that cannot be
+    # written to could not be read at all; the name now picks the array
+    zarr = pytest.importorskip("zarr")
+    skimage_measure = pytest.importorskip("skimage.measure")
+    seg = np.zeros((9, 8, 7), np.uint16)
+    seg[1:4, 1:5, 1:4], seg[5:8, 0:7, 0:6] = 4, 9
+    seg[6, 3, 2] = 0  # a hole inside label 9's slab: b2 = 1
+    group = zarr.open_group(str(tmp_path / "user.zarr"), mode="w")
+    group.create_array("image", data=np.random.default_rng(0).random(seg.shape), chunks=(4, 3, 5))
+    group.create_array("seg", data=seg, chunks=(4, 3, 5))
+    group.create_array("mask", data=(seg == 9).astype(np.uint8), chunks=(2, 5, 3))
+    store = tmp_path / "user.zarr"
+    rows = json.loads(run(capsys, "info", f"{store}:seg", "--labels", "--json"))["labels"]
+    props = skimage_measure.regionprops(seg)
+    assert [r["voxels"] for r in rows] == [int(p.area) for p in props]
+    assert [r["euler_characteristic"] for r in rows] == [p.euler_number for p in props]
+    report = info(capsys, f"{store}:mask")
+    assert report == {**isoflow.analyze(seg == 9, 6).to_dict()} and report["betti"] == [1, 0, 1]
+    assert info(capsys, f"{store}:seg", "--label", 9) == report
+    assert isoflow.analyze_zarr(f"{store}:mask", 6) == isoflow.analyze(seg == 9, 6)
+    assert isoflow.read_volume(f"{store}:mask").voxels == int((seg == 9).sum())
+    fails(capsys, "info", store, words=(f"user.zarr: a zarr group with arrays ['image', 'mask', 'seg']; name one, "
+                                        f"{store}:image",))
+    fails(capsys, "info", f"{store}:nope", words=("no array 'nope' in the zarr group (its arrays: ['image', 'mask',",))
+
+
 def test_an_array_of_an_npz_archive_is_named_after_a_colon(tmp_path, capsys):
     # an archive of several arrays (a segmentation saved beside its image)
     # was refused with "name the volume 'volume'", and could not be read
@@ -765,3 +794,26 @@ def test_magicavoxel_states_its_limit_and_each_caller_its_remedy(tmp_path):
         assert p.stderr.strip().splitlines()[-1].endswith(
             "MagicaVoxel models are at most 256 voxels a side, this object is "
             + ("300x300x300" if len(meshes) == 1 else "300x100x100") + "; voxelise it coarser (--resolution 256)"), p.stderr
+
+
+def test_a_level_after_the_slash_a_shell_adds_to_a_store(tmp_path, capsys):
+    # a shell completes a store's name as "image.zarr/", and the level
+    # typed after it, "image.zarr/:1", was "no such file or directory"
+    zarr = pytest.importorskip("zarr")
+    trimesh = pytest.importorskip("trimesh")
+    v = np.zeros((12, 10, 9), np.uint8)
+    v[2:10, 2:8, 1:8] = 1
+    v[5:7, 4:6, :] = 0  # a tunnel
+    group = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    for level, step in (("0", 1), ("1", 2)):
+        group.create_array(level, data=np.ascontiguousarray(v[::step, ::step, ::step].T), chunks=(3, 4, 5))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": ["z", "y", "x"],
+                                   "datasets": [{"path": "0"}, {"path": "1"}]}]
+    level = v[::2, ::2, ::2]
+    report = isoflow.analyze(level, 6).to_dict()
+    for given in (f"{tmp_path / 'image.zarr'}/:1", f"{tmp_path / 'image.zarr'}:1"):
+        assert info(capsys, given) == report
+        run(capsys, "surface", given, "-o", tmp_path / "s.ply", "--force")
+        mesh = trimesh.load(tmp_path / "s.ply", process=False)
+        assert mesh.euler_number == sum(s["euler_characteristic"] for s in report["surfaces"])
+        assert isoflow.read_volume(given).voxels == int(level.sum())

@@ -695,3 +695,43 @@ def test_a_missing_input_is_worded_alike_by_every_command(command, tmp_path, cap
         line = fails(capsys, command, f"{tmp_path}/{given}", *after)
         assert line == f"isoflow {command}: error: {tmp_path / named}: no such file or directory", given
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("command", ["info", "voxelize", "surface", "genus", "flow"])
+def test_a_url_is_said_to_be_one_not_a_missing_file(command, tmp_path, capsys, monkeypatch):
+    """A store in a bucket (``s3://bucket/scan.zarr``) was "s3:/bucket/scan.zarr:
+    no such file or directory", the URL mangled by ``Path``; every command
+    now names the URL as given and says that isoflow reads local paths."""
+    monkeypatch.chdir(tmp_path)
+    after = {"voxelize": ["--resolution", "8", "-o", "v.npy"], "surface": ["-o", "s.ply"],
+             "flow": ["--out", "flow"]}.get(command, [])
+    for url in ("s3://bucket/scan.zarr", "gs://bucket/scan.ome.zarr:1", "https://example.org/bunny.ply",
+                "s3://bucket/ct.nii.gz", "s3://bucket/seg.h5:/v"):
+        line = fails(capsys, command, url, *after, words=["a URL", "local"])
+        assert line.startswith(f"isoflow {command}: error: {url.split('.')[0]}"), line
+    assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_a_zipped_zarr_store_is_said_to_be_one(command, tmp_path, capsys):
+    """A zarr store in a zip archive (zarr's ZipStore) was opened by trimesh
+    as a zip of meshes: "no triangles read (empty mesh, or not a valid ZIP
+    file)". It is now one line naming the archive and the command that
+    unzips it, whose directory then gives the report of the volume."""
+    import subprocess
+    import sys
+
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((9, 8, 7), np.uint8)
+    v[2:7, 2:6, 1:6] = 1
+    v[4, 3:5, :] = 0  # a tunnel
+    store = zarr.storage.ZipStore(tmp_path / "scan.zarr.zip", mode="w")
+    zarr.create_array(store, shape=v.shape, chunks=(4, 3, 5), dtype="u1")[...] = v
+    store.close()
+    after = {"surface": ["-o", tmp_path / "s.ply"], "flow": ["--out", tmp_path / "flow"]}.get(command, [])
+    line = fails(capsys, command, tmp_path / "scan.zarr.zip", *after, words=["a zipped zarr store"])
+    unzip = re.search(r"\((python -m zipfile -e \S+ \S+)\)", line)[1].split()
+    subprocess.run([sys.executable, *unzip[1:]], check=True)
+    assert main(["info", str(tmp_path / "scan.zarr"), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["betti"] == [1, 1, 0] and report["euler_characteristic"] == 0

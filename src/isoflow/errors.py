@@ -8,9 +8,45 @@ nobody has to read a traceback from inside numpy.
 
 from __future__ import annotations
 
+import re
+
 #: what every reader says of an input that is not there (a volume, a mesh,
 #: a zarr store: a directory), after its path
 MISSING = "no such file or directory"
+
+#: a URL's scheme, as ``Path`` leaves it (``s3://b/x`` becomes ``s3:/b/x``);
+#: two letters at least, so that ``C:/data`` stays a path
+_URL = re.compile(r"^(?P<scheme>[A-Za-z][A-Za-z0-9+.-]+):/+(?P<rest>.*)$")
+
+
+def missing(path: object) -> IsoflowError:
+    """The error for an input that is not there: :data:`MISSING` after its
+    path, or, for a URL (an ``s3://`` bucket, an ``https://`` file), that
+    isoflow reads local paths only (there is no file of that name, and
+    "no such file" would send the user looking for a typo).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The input as given, or as ``pathlib.Path`` made it.
+
+    Returns
+    -------
+    IsoflowError
+        The one-line error to raise.
+
+    Examples
+    --------
+    >>> str(missing("scan.npy"))
+    'scan.npy: no such file or directory'
+    >>> str(missing("s3:/bucket/scan.zarr"))  # doctest: +ELLIPSIS
+    's3://bucket/scan.zarr: a URL; isoflow reads local files and directories: ...'
+    """
+    m = _URL.match(str(path))
+    if m is None:
+        return IsoflowError(f"{path}: {MISSING}")
+    return IsoflowError(f"{m['scheme']}://{m['rest']}: a URL; isoflow reads local files and directories: "
+                        "download it, or mount the bucket (s3fs, gcsfuse, rclone mount) and give the path")
 
 
 def counted(n: int, one: str, many: str | None = None) -> str:

@@ -522,7 +522,7 @@ def test_missing_dask_says_what_to_install(monkeypatch):
         analyze_chunked(object())
     monkeypatch.setitem(sys.modules, "zarr", None)
     with pytest.raises(IsoflowError, match=r"isoflow\[dask\]"):
-        outofcore.open_zarr(".")
+        outofcore.zarr_volume(".")
 
 
 def test_a_failed_block_leaves_no_block_running_behind_the_error():
@@ -565,3 +565,59 @@ def test_info_of_a_store_without_voxels_is_the_files(tmp_path, capsys):
         assert main(["info", str(tmp_path / name), "--json"]) == 0
         reports.append({k: v for k, v in json.loads(capsys.readouterr().out).items() if k != "input"})
     assert reports[0] == reports[1] and reports[1]["voxels"] == 0 and reports[1]["betti"] == [0, 0, 0]
+
+
+@pytest.mark.parametrize("axes", ["zyx", "tczyx", "cyxz"])
+def test_analyze_zarr_of_an_ome_zarr_image_equals_the_in_memory_report(tmp_path, axes):
+    """An OME-Zarr image by its path (and ``:LEVEL``): the report of the
+    volume in (x, y, z) order, its channel and time axes of length 1 left
+    out, as ``isoflow info`` gives it; the shape is not the stored order's."""
+    from skimage.measure import euler_number
+
+    v = (gaussian_filter(np.random.default_rng(7).random((13, 11, 9)), 1.0) > 0.5).astype(np.uint8)
+    group = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    datasets = []
+    for level, step in (("0", 1), ("1", 2)):
+        data = v[::step, ::step, ::step]
+        stored = np.transpose(data, ["xyz".index(a) for a in axes if a in "xyz"])
+        stored = stored.reshape([1 if a in "tc" else stored.shape[[b for b in axes if b in "xyz"].index(a)]
+                                 for a in axes])
+        group.create_array(level, data=stored, chunks=tuple(1 if a in "tc" else 4 for a in axes))
+        datasets.append({"path": level})
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": list(axes), "datasets": datasets}]
+    for path, data in ((tmp_path / "image.zarr", v), (f"{tmp_path / 'image.zarr'}:1", v[::2, ::2, ::2])):
+        for conn in (6, 26):
+            report = analyze_zarr(path, conn)
+            assert report == analyze(data, conn)
+            assert report["shape"] == list(data.shape)
+            assert report["euler_characteristic"] == euler_number(np.pad(data, 1), 3 if conn == 26 else 1)
+
+
+@pytest.mark.parametrize("fmt", [2, 3])
+def test_chunks_never_written_are_read_as_the_fill_value(tmp_path, capsys, fmt):
+    """zarr leaves out the chunks that hold nothing but the fill value, and
+    reads them as it: with fill value 1 the report is that of the volume in
+    memory; with 2 (or NaN) the refusal named "e.g. 2" only, a value no
+    voxel was written with, and now says it is the array's fill value, in
+    ``info`` and ``surface`` alike."""
+    from scipy.ndimage import label
+
+    v = (gaussian_filter(np.random.default_rng(3).random((17, 13, 11)), 1.0) > 0.5).astype(np.uint8)
+    v[:10, :8, :] = 1  # whole chunks of ones, never written with fill value 1
+    ones = zarr.create_array(str(tmp_path / "ones.zarr"), shape=v.shape, chunks=(5, 4, 11), dtype="u1",
+                             fill_value=1, zarr_format=fmt)
+    ones[...] = v
+    assert len(list((tmp_path / "ones.zarr").rglob("*"))) < 40  # some chunks are not there
+    report = analyze_zarr(tmp_path / "ones.zarr", 6)
+    assert report == analyze(v, 6) and report["betti"][0] == label(v)[1]
+    for fill, dtype, shown in ((2, "u1", "2"), (float("nan"), "f4", "nan")):
+        path = tmp_path / f"fill-{shown}.zarr"
+        z = zarr.create_array(str(path), shape=v.shape, chunks=(5, 4, 11), dtype=dtype, fill_value=fill,
+                              zarr_format=fmt)
+        z[10:] = v[10:]  # the first chunks never written
+        with pytest.raises(IsoflowError, match=rf"e\.g\. {shown}, the array's fill value, which zarr reads"):
+            analyze_zarr(path)
+        for command in (["info", str(path)], ["surface", str(path), "-o", str(tmp_path / "s.ply")]):
+            assert main(command) == 2
+            err = capsys.readouterr().err.strip().splitlines()
+            assert len(err) == 1 and f"e.g. {shown}, the array's fill value" in err[0], err

@@ -47,6 +47,7 @@ of a component on a face), never the volume or a label volume.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import os
 import sys
@@ -56,8 +57,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..errors import IsoflowError, check_callable
-from ..scale.arrays import NotBinary, binary
-from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, open_zarr, zarr_blocks
+from ..scale.arrays import NotBinary, binary, fill_value_named
+from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, zarr_blocks, zarr_volume
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
@@ -117,7 +118,10 @@ def _read_zarr_block(z, job: _Job) -> dict:
         data = np.asarray(z[region])
     except Exception as exc:  # a damaged or missing chunk
         raise IsoflowError(f"{job.where}: cannot read the block at voxel {tuple(a for a, _ in job.box)} ({exc})") from None
-    return _dask_block(data, job)
+    try:
+        return _dask_block(data, job)
+    except NotBinary as exc:
+        raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
 
 
 def _dask_block(chunk, job: _Job) -> dict:
@@ -503,19 +507,23 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     ----------
     path : str or pathlib.Path
         A zarr array, or a group with an array named ``volume`` or only one
-        array.
+        array; an OME-Zarr image (its first level, or ``IMAGE.zarr:LEVEL``
+        by the level's path or index), whose channel and time axes of
+        length 1 are left out.
     connectivity, block_shape, scheduler, surfaces, threads, progress
         As in :func:`analyze_chunked`.
 
     Returns
     -------
     dict
-        The report, as :func:`isoflow.digital.analysis.analyze` gives it.
+        The report, as :func:`isoflow.digital.analysis.analyze` gives it,
+        ``shape`` in (x, y, z) order (an OME-Zarr image stores z, y, x).
 
     Raises
     ------
     IsoflowError
-        A path that is no zarr store, a group without one volume, or the
+        A path that is no zarr store, a group without one volume, an
+        OME-Zarr axis other than x, y, z with several entries, or the
         errors of :func:`analyze_chunked`, with the path.
 
     Notes
@@ -534,7 +542,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     ...     analyze_zarr(d + "/v.zarr")["betti"]
     [1, 0, 1]
     """
-    z: Any = open_zarr(path)
+    z, order = zarr_volume(path)
     where = str(path)
     if z.ndim not in (2, 3):
         raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {z.ndim}D with shape {tuple(z.shape)}")
@@ -546,6 +554,11 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
             first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         except Exception as exc:  # a damaged or missing chunk, as _read_zarr_block says
             raise IsoflowError(f"{where}: cannot read the block at voxel {(0,) * z.ndim} ({exc})") from None
-        binary(first, where, near=(0,) * z.ndim)
-    return analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
-                           surfaces=surfaces, threads=threads, progress=progress)
+        try:
+            binary(first, where, near=(0,) * z.ndim)
+        except NotBinary as exc:
+            raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
+    report = analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
+                             surfaces=surfaces, threads=threads, progress=progress)
+    # analysed in stored order (the report does not depend on it but for the shape)
+    return dataclasses.replace(report, shape=[int(z.shape[i]) for i in order])

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import MISSING, IsoflowError
+from ..errors import IsoflowError, missing
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -411,7 +411,7 @@ def refuse_volume(path) -> None:
     file = split_dataset(path)[0]
     if not is_mesh_path(path) and format_for(file) is not None:
         if not file.exists():
-            raise IsoflowError(f"{file}: {MISSING}")
+            raise missing(file)
         raise IsoflowError(f"{path}: a volume file, not a triangle mesh; voxelize and genus read meshes "
                            "(isoflow info, surface and flow read volumes)")
 
@@ -458,10 +458,56 @@ def check_mesh_file(p: Path) -> None:
     """A mesh file that exists, is a regular file, and whose format's
     library is installed, or one line saying which is not."""
     if not p.exists():
-        raise IsoflowError(f"{p}: {MISSING}")
+        raise missing(p)
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
+    refuse_zipped_store(p)
     check_format_libraries(p)
+
+
+#: the metadata files that make a directory a zarr store (v3, v2)
+ZARR_METADATA = ("zarr.json", ".zarray", ".zgroup")
+
+
+def refuse_zipped_store(p: Path) -> None:
+    """Refuse a zip archive that holds a zarr store (``scan.zarr.zip``, as
+    zarr's ``ZipStore`` writes it), which trimesh would open as a zip of
+    meshes and report as "no triangles read".
+
+    Parameters
+    ----------
+    p : pathlib.Path
+        A mesh input, by its name; only a ``.zip`` is looked into.
+
+    Raises
+    ------
+    IsoflowError
+        A zip whose members include zarr metadata: one line saying to unzip
+        it into a ``.zarr`` directory, which isoflow reads block by block.
+
+    Examples
+    --------
+    >>> import tempfile, zipfile
+    >>> p = Path(tempfile.mkdtemp()) / "scan.zarr.zip"
+    >>> with zipfile.ZipFile(p, "w") as z:
+    ...     z.writestr("zarr.json", "{}")
+    >>> refuse_zipped_store(p)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: ...scan.zarr.zip: a zipped zarr store; isoflow reads a zarr store as a directory: ...
+    """
+    import zipfile
+
+    if p.suffix.lower() != ".zip":
+        return
+    try:
+        with zipfile.ZipFile(p) as z:
+            names = z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return  # trimesh's reader says what is wrong with the file
+    if any(n.rstrip("/").rsplit("/", 1)[-1] in ZARR_METADATA for n in names):
+        store = p.with_suffix("") if p.stem.lower().endswith(".zarr") else p.with_suffix(".zarr")
+        raise IsoflowError(f"{p}: a zipped zarr store; isoflow reads a zarr store as a directory: unzip it "
+                           f"(python -m zipfile -e {p} {store}) and give {store}")
 
 
 @contextlib.contextmanager

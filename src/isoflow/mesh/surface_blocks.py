@@ -47,7 +47,7 @@ import numpy as np
 from ..digital.lattice import DigitalObject
 from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
-from ..scale.arrays import binary, index_dtype
+from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import is_zarr_array
 from ..scale.compiled import using
@@ -119,7 +119,11 @@ def _read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
     if hasattr(part, "compute"):
         part = part.compute(scheduler="sync")
     try:
-        return binary(np.asarray(part), where, near=near)
+        part = np.asarray(part)
+        return binary(part, where, near=near)
+    except NotBinary as exc:
+        stored = getattr(array, "array", array)  # a _Source holds the reader
+        raise fill_value_named(exc, getattr(stored, "fill_value", None), part.dtype) from None
     except IsoflowError:
         raise
     except Exception as exc:  # zarr and its codecs raise many types

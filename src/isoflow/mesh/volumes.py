@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
-from ..errors import MISSING, IsoflowError, IsoflowWarning
+from ..errors import IsoflowError, IsoflowWarning, missing
 from ..scale.arrays import NotBinary, as_array, binary
 from ..scale.memory import check_fits
 from .formats.registry import (
@@ -42,7 +42,7 @@ POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
 
 def _check_readable(path: Path, directory_ok: bool = False) -> None:
     if not path.exists():
-        raise IsoflowError(f"{path}: {MISSING}")
+        raise missing(path)
     if path.is_dir():
         if not directory_ok:
             raise IsoflowError(f"{path}: is a directory, not a volume or point list")

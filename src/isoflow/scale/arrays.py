@@ -188,6 +188,46 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     return arr.astype(bool)
 
 
+def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
+    """``exc`` of a block read from a zarr array, saying so where its example
+    value is the array's fill value: zarr reads every voxel of a chunk that
+    was never written as the fill value, so a store written sparsely with a
+    fill value other than 0 and 1 (NaN, 255) is refused for voxels nobody
+    wrote, and the value alone would not say why.
+
+    Parameters
+    ----------
+    exc : NotBinary
+        The refusal of the block (:func:`binary`).
+    fill : number or None
+        The array's ``fill_value``.
+    dtype : numpy dtype
+        The array's type, in which the value was printed.
+
+    Returns
+    -------
+    NotBinary
+        ``exc``, with the fill value named after the example where it is
+        the example.
+
+    Examples
+    --------
+    >>> e = NotBinary("s.zarr: not a binary volume (8 voxels hold values other than 0 and 1, e.g. nan); threshold")
+    >>> print(str(fill_value_named(e, float("nan"), np.float32)).split("; ")[0])  # doctest: +ELLIPSIS
+    s.zarr: not a binary volume (8 voxels hold ... e.g. nan, the array's fill value, which zarr reads for a chunk never written)
+    """
+    if fill is None:
+        return exc
+    try:
+        example = f"e.g. {np.asarray(fill).astype(dtype)[()]})"
+    except (TypeError, ValueError):
+        return exc
+    if example not in exc.bare:
+        return exc
+    named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
+    return NotBinary(str(exc.args[0]).replace(example, named, 1), exc.bare.replace(example, named, 1), exc.every)
+
+
 class NotBinary(IsoflowError):
     """A volume of values other than 0 and 1 where a mask is expected (a
     label image, most often): a kind of its own, so that a command can add

@@ -68,6 +68,8 @@ class ChunkReader:
         shards = getattr(array, "shards", None)
         self.shards = None if shards is None else tuple(int(shards[i]) for i in self.order)
         self.dtype = np.dtype(bool) if label is not None else np.dtype(array.dtype)
+        # what zarr reads for a chunk never written, named where it is refused
+        self.fill_value = None if label is not None else getattr(array, "fill_value", None)
         self.ndim = len(self.shape)
         self._stored_chunks = stored_chunks
         self._reset()

@@ -9,12 +9,14 @@ blocks big enough to be worth a task).
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from ..errors import MISSING, IsoflowError
+from ..errors import IsoflowError, missing
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -137,6 +139,8 @@ def import_zarr():
 
 def is_zarr_array(array) -> bool:
     """A zarr array, recognised without importing zarr (it may be missing)."""
+    if isinstance(array, SpatialAxes):
+        return True
     return type(array).__module__.split(".")[0] == "zarr" and all(
         hasattr(array, name) for name in ("chunks", "shape", "dtype", "__getitem__")
     )
@@ -201,7 +205,8 @@ def open_zarr(path, level: str | None = None) -> object:
     """The volume array of a zarr store: the array at ``path``; in an
     OME-Zarr image (a group with NGFF ``multiscales``) its first resolution
     level, or ``level`` (a dataset path such as ``'1'``, or an index); in any
-    other group its array named ``volume`` or its only array."""
+    other group the array named ``level``, else its array named ``volume``
+    or its only array."""
     return open_zarr_node(path, level)[0]
 
 
@@ -211,7 +216,7 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
     zarr = import_zarr()
     path = Path(path)
     if not path.exists():
-        raise IsoflowError(f"{path}: {MISSING}")
+        raise missing(path)
     try:
         node = zarr.open(str(path), mode="r")
     except Exception as exc:  # zarr raises several types for what is not a store
@@ -241,18 +246,122 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
         if isinstance(array, zarr.Group):
             raise IsoflowError(f"{path}: OME-Zarr level {paths[i]!r} is a group, not an array")
         return array, multiscale, datasets[i]
-    if level is not None:
-        raise IsoflowError(f"{path}: not an OME-Zarr image (no 'multiscales'), so it has no level {level!r}")
     arrays = dict(node.arrays())
-    if "volume" in arrays:
+    if level is not None:
+        # a plain group: the name picks one of its arrays (a segmentation
+        # beside its image), as FILE.h5:/dataset does
+        if level not in arrays:
+            raise IsoflowError(f"{path}: no array {level!r} in the zarr group (its arrays: {sorted(arrays)}; "
+                               "it is no OME-Zarr image, whose levels the name would also pick)")
+        node = arrays[level]
+    elif "volume" in arrays:
         node = arrays["volume"]
     elif len(arrays) == 1:
         node = next(iter(arrays.values()))
     elif not arrays:
         raise IsoflowError(f"{path}: a zarr group without arrays")
     else:
-        raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name the volume 'volume'")
+        first = sorted(arrays)[0]
+        raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name one, {path}:{first}")
     return node, None, None
+
+
+def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
+    """The level's axis names; NGFF 0.1-0.2 had none and meant (t, c, z, y, x)."""
+    axes = multiscale.get("axes")
+    if axes is None:
+        names = list("tczyx"[-ndim:]) if ndim <= 5 else []
+    else:
+        names = [str(a.get("name")) if isinstance(a, dict) else str(a) for a in axes]
+    if len(names) != ndim:
+        raise IsoflowError(f"{where}: OME-Zarr axes {names} do not fit a {ndim}D array")
+    return [n.lower() for n in names]
+
+
+#: ``IMAGE.zarr:LEVEL`` (the path of a resolution level, or its index)
+_LEVEL = re.compile(r"^(?P<store>.+?\.zarr)/?:(?P<level>[^:]*)$", re.IGNORECASE)
+
+
+class SpatialAxes:
+    """A zarr array without its axes of length 1 (an OME-Zarr image's
+    channel and time point), read as the zarr array is: ``shape``,
+    ``chunks``, ``shards``, ``dtype``, ``ndim`` and ``view[region]`` over the
+    kept axes, in stored order. Plain attributes, so that it pickles for
+    process workers."""
+
+    def __init__(self, array, kept: list[int]):
+        self.array, self.kept = array, list(kept)
+        self.shape = tuple(int(array.shape[i]) for i in kept)
+        self.chunks = tuple(int(array.chunks[i]) for i in kept)
+        shards = getattr(array, "shards", None)
+        self.shards = None if shards is None else tuple(int(shards[i]) for i in kept)
+        self.dtype, self.ndim = array.dtype, len(kept)
+        self.fill_value = getattr(array, "fill_value", None)
+        self.store_path = getattr(array, "store_path", None)
+
+    def __getitem__(self, region):
+        region = region if isinstance(region, tuple) else (region,)
+        full, given = [], iter(region)
+        for i in range(self.array.ndim):
+            full.append(next(given, slice(None)) if i in self.kept else 0)
+        return np.asarray(self.array[tuple(full)])
+
+
+def zarr_volume(path) -> tuple[Any, list[int]]:
+    """The volume of a zarr store as the block-wise passes read it, and the
+    order of its axes as (x, y, z).
+
+    ``path`` is ``STORE.zarr`` or ``IMAGE.zarr:LEVEL``; a plain array's axes
+    are (x, y, z) as stored; an OME-Zarr image's axes are named, and those
+    of length 1 that are not x, y or z (a channel, a time point) are left
+    out of the array returned (:class:`SpatialAxes`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store, with ``:LEVEL`` for a resolution level of an OME-Zarr
+        image (its path or index).
+
+    Returns
+    -------
+    tuple
+        ``(array, order)``: a zarr array (or its view without the axes of
+        length 1) in stored order, and for each of x, y, z present the
+        index of its axis in that array.
+
+    Raises
+    ------
+    IsoflowError
+        A path that is no zarr store, no such level, or an axis other than
+        x, y and z with more than one entry.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> d = Path(tempfile.mkdtemp()) / "image.zarr"
+    >>> g = zarr.open_group(str(d), mode="w")
+    >>> _ = g.create_array("0", shape=(1, 4, 5, 6), dtype="u1")
+    >>> g.attrs["multiscales"] = [{"axes": ["c", "z", "y", "x"], "datasets": [{"path": "0"}]}]
+    >>> array, order = zarr_volume(f"{d}:0")
+    >>> array.shape, order
+    ((4, 5, 6), [2, 1, 0])
+    """
+    text = str(path)
+    m = _LEVEL.match(text)
+    store, level = (text, None) if m is None or Path(text).exists() else (m["store"], m["level"] or None)
+    array, multiscale, _ = open_zarr_node(store, level)
+    if multiscale is None:
+        return array, list(range(array.ndim))
+    names = axis_names(multiscale, array.ndim, text)
+    xyz = [names.index(a) for a in "xyz" if a in names]
+    for i, name in enumerate(names):
+        if i not in xyz and int(array.shape[i]) != 1:
+            raise IsoflowError(f"{text}: axis {name!r} has {int(array.shape[i])} entries; the block-wise "
+                               "report reads one 2D or 3D volume (isoflow info reads a time series in "
+                               "memory; isoflow.read_volume(path, time=t) gives one time point)")
+    if len(xyz) == array.ndim:
+        return array, xyz
+    return SpatialAxes(array, sorted(xyz)), [sorted(xyz).index(i) for i in xyz]
 
 
 def ome_multiscales(attrs) -> dict | None:

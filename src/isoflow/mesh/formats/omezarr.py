@@ -13,7 +13,8 @@ translation, then those of the whole image) place voxel *centres*, as napari
 and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
 corner is the translation less half a voxel. A zarr store without
 ``multiscales`` is read as before: the array at the path, or a group's array
-named ``volume`` or its only array, axes as stored (axis 0 is x), no
+named ``volume`` or its only array (``STORE.zarr:NAME`` the array of that
+name), axes as stored (axis 0 is x), no
 placement.
 
 ``isoflow info`` reads a zarr store block by block (:func:`analyze_store`);
@@ -36,7 +37,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from ...scale.chunks import open_zarr_node
+from ...scale.chunks import axis_names, open_zarr_node
 from .registry import (
     RawVolume,
     check_label,
@@ -55,18 +56,6 @@ from .registry import (
 
 CHUNK = 128
 NGFF_VERSION = "0.4"
-
-
-def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
-    """The level's axis names; NGFF 0.1-0.2 had none and meant (t, c, z, y, x)."""
-    axes = multiscale.get("axes")
-    if axes is None:
-        names = list("tczyx"[-ndim:]) if ndim <= 5 else []
-    else:
-        names = [str(a.get("name")) if isinstance(a, dict) else str(a) for a in axes]
-    if len(names) != ndim:
-        raise IsoflowError(f"{where}: OME-Zarr axes {names} do not fit a {ndim}D array")
-    return [n.lower() for n in names]
 
 
 def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -187,6 +176,8 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     from ...scale.chunks import import_dask
 
     import_library("zarr", "OME-Zarr")
+    if label is None:
+        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, _ = open_zarr_node(file, level)
@@ -195,22 +186,15 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     else:
         names = axis_names(multiscale, array.ndim, where)
         order, other = spatial_axes(names, array.shape, where)
-    if label is None and not other:
-        options = {"progress": progress, "surfaces": surfaces, "threads": threads}
-        report = analyze_zarr(file, connectivity, **options) if multiscale is None and level is None else \
-            analyze_chunked(array, connectivity, where=where, **options)
-    else:
-        _, da = import_dask()
-        if label is not None:
-            check_label(label, array.dtype, where)
-        # chunks read through a guard, so that a damaged one is one line
-        raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
-        raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
-        lazy = raw if label is None else raw == label
-        report = analyze_chunked(lazy, connectivity, where=where, progress=progress, surfaces=surfaces,
-                                 threads=threads)
-        if label is not None and report["voxels"] == 0:
-            raise label_absent(path, label)
+    _, da = import_dask()
+    check_label(label, array.dtype, where)
+    # chunks read through a guard, so that a damaged one is one line
+    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
+    report = analyze_chunked(raw == label, connectivity, where=where, progress=progress, surfaces=surfaces,
+                             threads=threads)
+    if report["voxels"] == 0:
+        raise label_absent(path, label)
     if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report = dataclasses.replace(report, shape=[int(array.shape[i]) for i in order])
     return report
@@ -290,6 +274,7 @@ class _Guarded:
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
         self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
+        self.fill_value = getattr(array, "fill_value", None)
 
     def __getitem__(self, key):
         try:

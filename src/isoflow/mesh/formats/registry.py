@@ -88,12 +88,14 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
-_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|zarr|npz)):(?P<dataset>.*)$", re.IGNORECASE)
+#: a zarr store is a directory, so its name may end in the "/" that a
+#: shell's completion adds, before the level: ``IMAGE.zarr/:1``
+_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|npz|zarr(?=/?:)))/?:(?P<dataset>.*)$", re.IGNORECASE)
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
     """``FILE.h5:/group/volume`` -> (FILE.h5, '/group/volume'); ``IMG.zarr:1``
-    -> (IMG.zarr, '1'), a resolution level; ``ARCHIVE.npz:seg`` -> one of
+    (or ``IMG.zarr/:1``) -> (IMG.zarr, '1'), a resolution level; ``ARCHIVE.npz:seg`` -> one of
     its arrays (read only); any other path -> (path, None).
 
     Only after an HDF5, zarr or npz suffix, so that ``C:\\data\\a.nii`` stays a path."""
