@@ -14,9 +14,10 @@ from .progress import progress_bar
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
     p.add_argument("mesh", help="a mesh file: any format trimesh reads")
-    p.add_argument("--resolution", type=resolution_value, nargs="+",
-                   help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
-                        "digital Betti numbers of the last two agree")
+    # extend: "--resolution 32 --resolution 64" tries both, as "--resolution 32 64" does
+    p.add_argument("--resolution", type=resolution_value, nargs="+", action="extend",
+                   help="voxels along the longest side, tried first (default: 64 128; repeated, all are tried); "
+                        "then doubled until the digital Betti numbers of the last two agree")
     p.add_argument("--max-resolution", type=resolution_value,
                    help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
