@@ -883,3 +883,22 @@ def test_voxelize_mesh_takes_a_mesh_alone_as_every_voxeliser_does():
     for bad in (mesh.vertices, "torus.stl"):
         with pytest.raises(IsoflowError, match="^voxelize: faces are missing"):
             voxelize_mesh(bad, resolution=8)
+
+
+def test_cli_voxelize_prints_a_micrometre_origin(tmp_path, capsys):
+    """The printed origin of a torus 2.6e-6 across (its corner at
+    -1.3e-6) was rounded to 6 decimal places: [-1e-06, -1e-06, -0.0]."""
+    import trimesh
+
+    from isoflow.cli import main
+
+    torus = trimesh.creation.torus(1, 0.3).apply_scale(1e-6)  # scaled after: trimesh welds within 1e-8
+    torus.export(tmp_path / "t.ply")
+    assert main(["voxelize", str(tmp_path / "t.ply"), "--resolution", "16", "-o", str(tmp_path / "t.npz")]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    printed = json.loads(line.split("origin ")[1])
+    origin = np.load(tmp_path / "t.npz")["origin"]
+    np.testing.assert_allclose(printed, origin, rtol=1e-5)
+    # the grid's corner is at or below the mesh's, within a voxel
+    assert np.all(np.asarray(printed) <= torus.bounds[0] * (1 - 1e-6))
+    assert np.all(np.asarray(printed) > torus.bounds[0] - 2.6e-6 / 16)
