@@ -42,7 +42,9 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
     Components are edge-connected face sets. A component's genus is
     ``(2 - chi_c) / 2`` when it is closed (no boundary edge), every edge has
-    two faces, and every vertex has one fan of faces in it; otherwise None.
+    two faces, every vertex has one fan of faces in it and it is orientable
+    (its faces may be turned inconsistently: the genus is the surface's);
+    otherwise None.
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
     closed surfaces touching at a point, like ``hourglass_ico.obj``).
     With ``return_components``, also each face's component number.
@@ -94,13 +96,15 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         pinched_in_comp[np.unique(comp[hit])] = True
 
     chi = V - E + F
-    closed = ~bad_edge & ~pinched_in_comp
+    closed = ~bad_edge & ~pinched_in_comp & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
     used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))
     euler = int(used - len(edge_start) + nf)
     known = [g for g in genus_c if g is not None]
-    total = sum(known) if genus_c and len(known) == len(genus_c) and defects["inconsistent_edges"] == 0 else None
+    # a closed component with faces turned the wrong way still has a genus: the surface's, as pymeshlab
+    # counts it and trimesh's fix_normals leaves it; a non-orientable one (no consistent turning) has none
+    total = sum(known) if genus_c and len(known) == len(genus_c) else None
     report = {
         "watertight": bool(defects["watertight"]),
         "components": int(ncomp),
@@ -117,6 +121,31 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
     }
     return (report, comp) if return_components else report
+
+
+def _orientable(nf: int, f1: np.ndarray, f2: np.ndarray, same_dir: np.ndarray, comp: np.ndarray,
+                ncomp: int) -> np.ndarray:
+    """Whether each component's faces can be turned so that every edge of
+    two faces is walked once each way: the faces' orientation double cover
+    (a face and its turned copy, joined across each such edge to the copy
+    of the other face that agrees with it) keeps the two copies of a face
+    apart exactly where they can. ``f1``, ``f2``: the two faces of each
+    edge with two faces; ``same_dir``: whether they walk it the same way.
+
+    Examples
+    --------
+    >>> # two triangles on the edge 0-1, the second walking it the same way: turn one of them
+    >>> _orientable(2, np.array([0]), np.array([1]), np.array([True]), np.zeros(2, np.int64), 1).tolist()
+    [True]
+    """
+    from ..scale.graphs import components
+
+    turn = same_dir.astype(np.int64)
+    a = np.concatenate([2 * f1, 2 * f1 + 1])
+    b = np.concatenate([2 * f2 + turn, 2 * f2 + 1 - turn])
+    _, cover = components(2 * nf, a, b)
+    apart = cover[0::2] != cover[1::2]
+    return np.bincount(comp, weights=~apart, minlength=ncomp) == 0
 
 
 def whole_manifold(vertices, faces) -> tuple[Any, int]:
@@ -554,9 +583,11 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     A face listed again the same way round (the same three corners) is
     dropped before anything is counted, as a degenerate face is: it draws
     no more surface, only non-manifold edges (a note names it).
-    An open or inconsistently oriented mesh has no genus of its own; its
-    solid is read by the generalised winding number (``|w| > 1/2``) and its
-    digital topology reported; ``strict`` refuses it (IsoflowError).
+    An open mesh has no genus of its own; an inconsistently oriented one has
+    the genus of its surface where its faces can be turned consistently
+    (none where they cannot: a non-orientable surface). The solid of
+    either is read by the generalised winding number (``|w| > 1/2``) and
+    its digital topology reported; ``strict`` refuses it (IsoflowError).
 
     Parameters
     ----------
@@ -780,7 +811,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
                                    "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill}))
     elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
-        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill}))
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill,
+                                           **({"genus": mesh["genus"]} if mesh["genus"] is not None else {})}))
     if mesh["nonmanifold_edges"]:
         notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:

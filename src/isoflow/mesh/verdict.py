@@ -215,10 +215,15 @@ def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "windi
             + "): it bounds no solid, so it has no genus as a closed surface; " + _READ_AS[fill])
 
 
-def _inconsistent_words(edges: int, fill: str = "winding") -> str:
+def _inconsistent_words(edges: int, fill: str = "winding", genus: int | None = None) -> str:
+    if genus is None:
+        surface = "so it has no genus as a closed surface; " + _READ_AS[fill]
+    else:  # the voxeliser turns the faces as trimesh.repair.fix_winding does: the edges balance
+        read = ("its solid is read by the exact nonzero winding number, the faces turned so" if fill == "winding"
+                else _READ_AS[fill])
+        surface = f"its faces turned consistently make a closed surface of genus {genus}; {read}"
     return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
-            "(used more often one way than the other): it bounds no solid as given, so it has no genus as a "
-            "closed surface; " + _READ_AS[fill])
+            f"(used more often one way than the other): it bounds no solid as given, {surface}")
 
 
 def _point(p) -> str:
