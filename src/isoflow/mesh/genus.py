@@ -842,6 +842,10 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
         if reference is not None and stable:
             notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})
                       for d in digital[:-2] if d["genus"] != reference]
+    if fill == "flood" and w["solid"].get("cavities"):
+        # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it, and
+        # "disagree" would otherwise blame the mesh
+        notes.append(Note("flood_cavities", {"n": w["solid"]["cavities"]}))
     if "error" in w["manifold3d"]:
         notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))
     mesh = w["mesh"]

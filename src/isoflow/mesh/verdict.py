@@ -27,7 +27,8 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
-                   "zero_area_faces", "cavities", "coarse", "manifold3d_refused", "no_mesh_genus"]
+                   "zero_area_faces", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
+                   "no_mesh_genus"]
 
 
 @dataclass(frozen=True)
@@ -289,6 +290,9 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
            "no crossing" if along else "")),
     "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
+    "flood_cavities": lambda n: (
+        f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d) and the surfaces "
+        "inside, whose handles its digital genus lacks; the default --fill winding keeps them"),
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
