@@ -63,6 +63,10 @@ def cmd_genus(args: argparse.Namespace) -> int:
 FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
+def _volume(volume: float | None) -> str:
+    return "volume beyond float64's range" if volume is None else f"volume {volume:.6g}"
+
+
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
@@ -80,7 +84,7 @@ def format_genus(report, name: str) -> str:
                            f"genus {m3['genus']} over {m3['components']} components "
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
-                            f"{counted(solid['cavities'], 'cavity', 'cavities')}, volume {solid['volume']:.6g} "
+                            f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
     ]

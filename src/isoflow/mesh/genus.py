@@ -190,14 +190,41 @@ def manifold3d_report(vertices, faces, whole: tuple[Any, int] | None = None) -> 
     if status != m3.Error.NoError:
         return {"error": status.name}
     parts = mf.decompose()
-    with np.errstate(over="ignore", under="ignore"):
-        volume = float(np.ldexp(mf.volume(), 3 * e))
+    volume = unscaled_volume(mf.volume(), e)
     return {
         "genus": int(sum(p.genus() for p in parts)),
         "genus_whole_mesh": int(mf.genus()),
         "components": len(parts),
         "volume": volume,
     }
+
+
+def unscaled_volume(scaled: float, e: int) -> float | None:
+    """The volume of the mesh as given, from manifold3d's of the copy
+    scaled by ``2**-e`` (:func:`normalized`), or None where float64 cannot
+    hold it: it overflowed to inf, which the JSON printed as ``Infinity``
+    (no JSON parser's number), or underflowed to 0.
+
+    Parameters
+    ----------
+    scaled : float
+        manifold3d's volume of the scaled copy.
+    e : int
+        The exponent of the scaling.
+
+    Returns
+    -------
+    float or None
+        ``scaled * 2**(3 e)``, or None beyond float64's range.
+
+    Examples
+    --------
+    >>> unscaled_volume(1.5, 2), unscaled_volume(1.5, 400), unscaled_volume(1.5, -400), unscaled_volume(0.0, 400)
+    (96.0, None, None, 0.0)
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        volume = float(np.ldexp(scaled, 3 * e))
+    return volume if math.isfinite(volume) and (volume != 0 or scaled == 0) else None
 
 
 def pymeshlab_report(vertices, faces) -> dict:
@@ -302,8 +329,7 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     except Exception as exc:  # the binding raises for malformed input (its first line says what)
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return {"error": f"{type(exc).__name__}: {detail}"}
-    with np.errstate(over="ignore", under="ignore"):
-        volume = float(np.ldexp(solid.volume(), 3 * e))
+    volume = unscaled_volume(solid.volume(), e)
     # decompose() splits the solid into its shells: a body's outer one
     # (positive volume) and its cavities' (negative)
     bodies = sum(1 for p in pieces if p.volume() > 0)
