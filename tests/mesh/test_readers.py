@@ -17,6 +17,7 @@ import trimesh
 
 from isoflow.errors import IsoflowError
 from isoflow.mesh import ply, readers
+from isoflow.mesh.genus import mesh_topology
 from isoflow.mesh.load import load_mesh
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -264,6 +265,23 @@ def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):
         _same(p, monkeypatch, fast=False)
         with pytest.raises(IsoflowError, match=str(p)):
             load_mesh(p)
+
+
+def test_ascii_stl_without_endsolid_is_read(tmp_path):
+    """An ASCII STL whose last facet is whole but whose "endsolid" line is
+    missing was "not a valid STL file" (trimesh reads no triangles of it;
+    pymeshlab reads them all); one cut inside a facet still is."""
+    torus = trimesh.creation.torus(1, 0.3)
+    text = torus.export(file_type="stl_ascii")
+    p = tmp_path / "t.stl"
+    p.write_text(text.rsplit("endsolid", 1)[0])
+    v, f = load_mesh(p)
+    assert len(f) == len(torus.faces)
+    r = mesh_topology(v, f)
+    assert r["euler_number"] == torus.euler_number and r["genus"] == (2 - torus.euler_number) // 2
+    p.write_text(text[:text.find("endloop", 2000)])
+    with pytest.raises(IsoflowError, match="not a valid STL file"):
+        load_mesh(p)
 
 
 def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
