@@ -611,3 +611,34 @@ def test_the_cli_refuses_a_broken_ply_in_one_line_with_exit_2(case, tmp_path):
                        capture_output=True, text=True, env=dict(os.environ), timeout=300)
     assert r.returncode == 2
     assert r.stderr.strip() == f"isoflow info: error: {p}: {PLY_BROKEN[case]}"
+
+
+@pytest.mark.parametrize("form", ["ascii", "binary_little_endian"])
+@pytest.mark.parametrize("kept", ["xz", "xy", ""])
+def test_a_ply_whose_vertices_lack_a_coordinate_says_which(form, kept, tmp_path):
+    """A vertex element without x, y or z was handed to trimesh, which
+    fails on a KeyError ("cannot read as a mesh (KeyError: 'y')"): the line
+    now names the missing coordinate and the properties there are."""
+    import struct
+
+    import trimesh
+
+    props = "".join(f"property float {c}\n" for c in kept) + "property uchar red\n"
+    head = (f"ply\nformat {form} 1.0\nelement vertex 3\n{props}element face 1\n"
+            "property list uchar int vertex_indices\nend_header\n").encode()
+    rows = [[0.0] * len(kept) + [9], [1.0] * len(kept) + [9], [2.0] * len(kept) + [9]]
+    if form == "ascii":
+        body = "".join(" ".join(map(str, r)) + "\n" for r in rows).encode() + b"3 0 1 2\n"
+    else:
+        body = b"".join(struct.pack(f"<{len(kept)}fB", *r) for r in rows) + struct.pack("<B3i", 3, 0, 1, 2)
+    p = tmp_path / "m.ply"
+    p.write_bytes(head + body)
+    with pytest.raises((KeyError, ValueError)):  # the independent reader cannot place these vertices either
+        trimesh.load(p, process=False)
+    lost = ", ".join(repr(c) for c in "xyz" if c not in kept)
+    listed = ", ".join([*kept, "red"])
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(p), "--resolution", "8"],
+                       capture_output=True, text=True, env=dict(os.environ), timeout=300)
+    assert r.returncode == 2
+    assert r.stderr.strip() == (f"isoflow info: error: {p}: the header's element 'vertex' has no property {lost} "
+                                f"(its properties: {listed}), so its vertices have no positions")
