@@ -398,8 +398,8 @@ def test_cli_flow_out_of_a_2d_object_names_the_files_it_writes(tmp_path, capsys)
     np.save(tmp_path / "disc.npy", disc)
     assert main(["flow", str(tmp_path / "disc.npy"), "--out", str(tmp_path / "run")]) == 0
     said = capsys.readouterr().out.strip().splitlines()[-1]
-    assert said == f"{tmp_path / 'run'}: flow.csv, flow.png (figures)"
-    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["flow.csv", "flow.png"]
+    assert said == f"{tmp_path / 'run'}: flow.csv, flow.png (figures), shapes.png (the object at a few steps)"
+    assert sorted(p.name for p in (tmp_path / "run").iterdir()) == ["flow.csv", "flow.png", "shapes.png"]
 
 
 def test_cli_flow_bad_input(tmp_path, capsys):
@@ -423,7 +423,7 @@ def test_cli_flow_of_a_2d_image(tmp_path, capsys):
     r = json.loads(capsys.readouterr().out)
     assert [s["voxels"] for s in r["steps"]] == [28, 18, 10, 4, 0] and r["connectivity"] == 4
     assert r["limit"] == {"center": [2.0, 3.5], "last_shape": "cuboid", "last_step": 3}
-    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"]  # no surfaces in 2D
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png", "shapes.png"]  # no surfaces in 2D
 
 
 def test_cli_flow_force_removes_the_previous_runs_steps(tmp_path, capsys):

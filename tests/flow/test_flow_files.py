@@ -296,3 +296,36 @@ def test_a_guarded_run_s_csv_has_the_move_of_every_step_as_its_json(tmp_path):
         rows = list(csv.DictReader(fh))
     assert [r["move"] for r in rows] == moves == ["", "flow", "flow", "flow"]
     assert [int(r["voxels"]) for r in rows] == [60, 24, 6, 1]  # docs/flow.md: the 3x4x5 box, to one voxel
+
+
+def test_2d_out_writes_shapes_png_and_counts_pixels(tmp_path, monkeypatch):
+    """A 2D run's --out writes shapes.png as the help says, and its table
+    and flow.png count pixels, as ``isoflow info`` does for a 2D image."""
+    from PIL import Image
+
+    from isoflow.flow import pictures
+
+    labels = {}
+    save = pictures.save_figure
+
+    def keep_labels(fig, path):
+        labels[path.name] = [ax.get_ylabel() for ax in fig.axes] + [ax.get_title() for ax in fig.axes]
+        return save(fig, path)
+
+    monkeypatch.setattr(pictures, "save_figure", keep_labels)
+    img = np.zeros((9, 8), bool)
+    img[1:7, 2:7] = True
+    img[3:5, 4] = False  # a hole, closed at step 1
+    np.save(tmp_path / "img.npy", img)
+    out = tmp_path / "run"
+    rc, stdout, err = run("flow", tmp_path / "img.npy", "--out", out)
+    assert rc == 0, err
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png", "shapes.png"]
+    assert "shapes.png" in stdout
+    header = stdout.splitlines()[1].split()
+    assert header[:2] == ["step", "pixels"] and "voxels" not in stdout
+    assert labels["flow.png"][0] == "pixels"
+    assert "step 0: 28 pixels, betti (1, 1)" in labels["shapes.png"]
+    with Image.open(out / "shapes.png") as picture:  # a picture, with the object drawn in it
+        grey = np.asarray(picture.convert("L"))
+    assert grey.shape[0] > 200 and (grey < 200).mean() > 0.05

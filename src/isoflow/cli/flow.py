@@ -31,7 +31,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
                         "cannot be; ends at a thin fixed point")
-    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces, flow.csv, flow.png and shapes.png into DIR")
+    p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
@@ -62,8 +62,8 @@ def cmd_flow(args: argparse.Namespace) -> int:
     else:
         print(format_flow(result, str(args.input)))
         if args.out:
-            written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + ["flow.csv", "flow.png (figures)"] + (
-                ["shapes.png (the object at a few steps)"] if obj.ndim == 3 else [])
+            written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + [
+                "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
             print(f"{args.out}: {', '.join(written)}"
                   + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
     return 0 if writer is None else say_read_back(args, writer)
@@ -245,11 +245,13 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
 
 
 def format_flow(result, name: str) -> str:
-    """The flow's records as a table, its stop and its limit point."""
+    """The flow's records as a table, its stop and its limit point (a 2D
+    object's cells are pixels, as ``isoflow info`` says)."""
+    cells = "pixels" if result.steps and len(result.steps[0]["betti"]) == 2 else "voxels"
     lines = [
         f"{name}: digital curvature flow, {result.connectivity}-connectivity"
         + (", guard" if result.guard else ""),
-        f"  {'step':>5} {'voxels':>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}",
+        f"  {'step':>5} {cells:>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}",
     ]
     for s in result.steps:
         lines.append(

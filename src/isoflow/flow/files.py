@@ -193,8 +193,8 @@ def export_flow(result: FlowResult, directory, force: bool = False, plot: bool =
     """Write a flow's files into ``directory``: ``step_NNN.ply`` (the boundary
     surface of every non-empty 3D state, world coordinates, per-vertex
     curvature data), ``flow.csv`` (one row per step), ``flow.png`` (voxels,
-    energy and Betti numbers against the step) and, in 3D, ``shapes.png``
-    (the object at a few steps).
+    energy and Betti numbers against the step) and ``shapes.png`` (the
+    object at a few steps: its surface in 3D, its pixels in 2D).
 
     Refuses a directory that already holds files unless ``force``. Needs a
     result run with ``keep_states=True``; :class:`FlowWriter` writes the same
@@ -369,7 +369,7 @@ class FlowWriter:
             frames = list(self.frames)
             if self.last is not None and (not frames or frames[-1][0] != self.last[0]):
                 frames.append(self.last)
-            if frames and frames[0][1].ndim == 3:
+            if frames:
                 records = {rec["step"]: rec for rec in result.steps}
                 shown = [(state, records[step]) for step, state in frames]
                 with self._named():

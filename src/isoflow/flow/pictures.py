@@ -15,13 +15,17 @@ from ..mesh.render import FACE_BUDGET, colour_key, draw_surface, pyplot, save_fi
 def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
                        elev: float = 25, azim: float = -55) -> Path:
     """Write a PNG of the flowing object itself: up to ``panels`` of the
-    ``(state, step record)`` frames of a 3D flow, evenly spaced from the first
-    to the last, all in the first frame's box so that the shrinking shows,
-    coloured like :func:`isoflow.mesh.render.render_surface`."""
+    ``(state, step record)`` frames of a flow, evenly spaced from the first
+    to the last, all in the first frame's box so that the shrinking shows.
+    A 3D state is drawn as its surface, coloured like
+    :func:`isoflow.mesh.render.render_surface`; a 2D state as its pixels
+    (:func:`draw_pixels`)."""
     plt = pyplot()
     if len(frames) > panels:
         frames = [frames[round(k * (len(frames) - 1) / (panels - 1))] for k in range(panels)]
     box = frames[0][0].bbox()
+    if frames[0][0].ndim == 2:
+        return _render_planar_shapes(plt, frames, box, path)
     cols = min(3, len(frames))
     rows = -(-len(frames) // cols)
     fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
@@ -38,6 +42,52 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
     return save_figure(fig, path)
 
 
+def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
+    """:func:`render_flow_shapes` of a 2D flow: each state's pixels in the
+    first state's box, widened by a pixel, since a state can grow half a
+    pixel past its input before it shrinks."""
+    cols = min(3, len(frames))
+    rows = -(-len(frames) // cols)
+    fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
+    pad = frames[0][0].spacing
+    for k, (state, rec) in enumerate(frames):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        draw_pixels(ax, state)
+        ax.set_xlim(box[0][0] - pad[0], box[1][0] + pad[0])
+        ax.set_ylim(box[0][1] - pad[1], box[1][1] + pad[1])
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=6)
+        ax.set_title(f"step {rec['step']}: {rec['voxels']} pixels, betti {tuple(rec['betti'])}", fontsize=8)
+    fig.suptitle("digital curvature flow", fontsize=9)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def draw_pixels(ax, state) -> None:
+    """Draw a 2D object's pixels into a matplotlib axes, in world
+    coordinates (x to the right, y up).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    state : DigitalObject
+        A 2D object.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import DigitalObject
+    >>> fig = pyplot().figure()
+    >>> draw_pixels(fig.add_subplot(), DigitalObject(np.eye(3, dtype=bool)))
+    >>> pyplot().close(fig)
+    """
+    lo = state.world(np.zeros(2))
+    hi = state.world(np.array(state.volume.shape, float))
+    ax.imshow(state.volume.T, origin="lower", extent=(lo[0], hi[0], lo[1], hi[1]), cmap="Greys", vmin=0, vmax=1.6,
+              interpolation="nearest")
+
+
 def render_flow(result, path: Path, title: str = "") -> Path:
     """Write a PNG of a digital curvature flow (:class:`isoflow.flow.run.FlowResult`):
     voxels, energy ``E = k^T n`` and Betti numbers against the step, with the
@@ -47,7 +97,7 @@ def render_flow(result, path: Path, title: str = "") -> Path:
     betti = np.array([s["betti"] for s in result.steps])
     fig, axes = plt.subplots(3, 1, figsize=(7, 7.5), dpi=110, sharex=True)
     axes[0].plot(steps, [s["voxels"] for s in result.steps], "o-", ms=3)
-    axes[0].set_ylabel("voxels")
+    axes[0].set_ylabel("pixels" if len(result.steps[0]["betti"]) == 2 else "voxels")
     axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
     axes[1].set_ylabel("energy E = k^T n")
     for i in range(betti.shape[1]):
