@@ -329,3 +329,48 @@ def test_2d_out_writes_shapes_png_and_counts_pixels(tmp_path, monkeypatch):
     with Image.open(out / "shapes.png") as picture:  # a picture, with the object drawn in it
         grey = np.asarray(picture.convert("L"))
     assert grey.shape[0] > 200 and (grey < 200).mean() > 0.05
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_huge_steps_name_files_by_the_reachable_step_and_count_without_a_bar(tmp_path, monkeypatch):
+    """--steps far past what the object lasts: the names are padded for the
+    steps a run of it can reach (docs/flow.md), not for --steps, and a
+    terminal gets a counter, not a bar at 0 % with an estimate of hours."""
+    box = np.ones((3, 4, 5), bool)
+    np.save(tmp_path / "box.npy", box)
+    out = tmp_path / "run"
+    err = _Terminal()
+    o = io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(err):
+        rc = main(["flow", str(tmp_path / "box.npy"), "--steps", "1000000000000", "--out", str(out), "--volumes", ".npz"])
+    assert rc == 0, err.getvalue()
+    assert sorted(p.name for p in out.glob("step_*")) == [
+        "step_000.npz", "step_000.ply", "step_001.npz", "step_001.ply", "step_002.npz", "step_002.ply"]
+    assert isoflow.read_volume(out / "step_002.npz").voxels == 6
+    assert "%|" not in err.getvalue() and "flow: " in err.getvalue()  # a counter was shown
+    assert "stopped: vanished" in o.getvalue()
+
+
+def test_steps_the_run_can_reach_get_a_bar(tmp_path):
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    err = _Terminal()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert main(["flow", str(tmp_path / "box.npy"), "--steps", "2"]) == 0
+    assert "%|" in err.getvalue()
+
+
+def test_a_run_past_its_expected_last_step_widens_every_name(tmp_path):
+    """The writer pads for the step it expects; a run that goes on past it
+    has all its names widened before they are moved into place."""
+    from isoflow.flow.files import FlowWriter
+
+    result = isoflow.run_flow(np.ones((2, 2, 2), bool))  # steps 0 and 1
+    writer = FlowWriter(tmp_path / "run", 6, last_step=5, check=False)
+    writer.add(0, result.states[0])
+    writer.add(1000, result.states[0])  # (as a step 1000 would)
+    writer.finish(result, plot=False)
+    assert sorted(p.name for p in (tmp_path / "run").glob("step_*")) == ["step_0000.ply", "step_1000.ply"]

@@ -126,7 +126,7 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.chunked import flow_chunked, guard_refusal, source_volume
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
-    from ..flow.run import max_steps_for
+    from ..flow.run import reachable_steps
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
@@ -138,12 +138,13 @@ def flow_store(args: argparse.Namespace) -> int:
         raise IsoflowError(guard_refusal(str(args.input), volume.shape))
     check_flow_input(args, None)
     conn = flow_connectivity(3, args.connectivity)
-    last = args.steps if args.steps is not None else max_steps_for(volume.shape)
+    last = reachable_steps(args.steps, volume.shape)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
+    total = bar_total(args.steps, volume.shape)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps") as show, label_options(args):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
-                                  progress=None if show is None else (lambda step, state: show(step, args.steps)))
+                                  progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
     except BaseException:
@@ -179,9 +180,9 @@ def flow_writer(args: argparse.Namespace, obj):
     would cost about s^4/4 bytes)."""
     from ..flow.files import FlowWriter, check_step_volume, step_width
     from ..flow.motion import flow_connectivity
-    from ..flow.run import default_max_steps
+    from ..flow.run import reachable_steps
 
-    last = args.steps if args.steps is not None else default_max_steps(obj)
+    last = reachable_steps(args.steps, obj.volume.shape)
     if args.volumes is not None:  # ("" too: refused, not ignored)
         from ..mesh.volumes import check_volume_suffix
 
@@ -204,14 +205,15 @@ def run_with_files(args: argparse.Namespace, obj, writer):
     """The flow, each state handed to the writer as it comes."""
     from ..flow.run import run_flow
 
+    total = bar_total(args.steps, obj.volume.shape)
     try:  # the writer's staging directory is made: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps") as show:
 
             def progress(step, state):
                 if writer is not None:
                     writer.add(step, state)
-                if show is not None:  # a counter unless --steps says how many
-                    show(step, args.steps)
+                if show is not None:
+                    show(step, total)
 
             if writer is not None:
                 writer.add(0, obj.cropped())
@@ -227,6 +229,22 @@ def run_with_files(args: argparse.Namespace, obj, writer):
             writer.abort()
         raise
     return result
+
+
+def bar_total(steps: int | None, shape: tuple[int, ...]) -> int | None:
+    """The progress bar's length: ``--steps`` where a run of an array of
+    ``shape`` can be expected to reach it (:func:`~isoflow.flow.run.reachable_steps`),
+    else None, a counter of the steps done: a bar sized by ``--steps
+    1000000000000`` stayed at 0 % with an estimate of millions of hours.
+
+    Examples
+    --------
+    >>> bar_total(10, (20, 20, 20)), bar_total(10**12, (20, 20, 20)), bar_total(None, (20, 20, 20))
+    (10, None, None)
+    """
+    from ..flow.run import reachable_steps
+
+    return steps if steps is not None and reachable_steps(steps, shape) == steps else None
 
 
 def say_read_back(args: argparse.Namespace, writer) -> int:

@@ -352,6 +352,7 @@ class FlowWriter:
         while self._pending:
             self._collect()
         self._stop_checks()
+        self._widen()
         three_d = result.steps and len(result.steps[0]["betti"]) == 3
         header, rows = flow_table(result, self.checks if three_d and self.check else None)
         with self._named(), atomic_write(self.stage / "flow.csv", "w", newline="") as fh:
@@ -376,6 +377,27 @@ class FlowWriter:
                     render_flow_shapes(shown, self.stage / "shapes.png", result.connectivity, self.PANELS)
                 self.staged.append("shapes.png")
         return self._commit()
+
+    def _widen(self) -> None:
+        """Rename the staged step files to the width of the last step
+        written where the run went past the step it was expected to reach
+        (``last_step``: a guarded run can), so that every name of the run
+        has the same width and names sort as steps do."""
+        numbered = [(name, re.fullmatch(r"step_(\d+)(.*)", name)) for name in self.staged]
+        steps = [int(m[1]) for _, m in numbered if m]
+        width = step_width(max(steps, default=0))
+        if width <= self.width:
+            return
+        renamed = {name: f"step_{int(m[1]):0{width}d}{m[2]}" for name, m in numbered if m}
+        try:
+            for old, new in renamed.items():
+                os.replace(self.stage / old, self.stage / new)
+        except OSError as exc:
+            raise write_error(self.out, exc, existed=self.had_files) from None
+        self.staged = [renamed.get(name, name) for name in self.staged]
+        for old, new in renamed.items():
+            self.problems = [line.replace(str(self.out / old), str(self.out / new)) for line in self.problems]
+        self.width = width
 
     @contextlib.contextmanager
     def _named(self):

@@ -141,6 +141,35 @@ def max_steps_for(shape: tuple[int, ...]) -> int:
     return 4 * max(shape, default=0) + 16
 
 
+def reachable_steps(steps: int | None, shape: tuple[int, ...]) -> int:
+    """The last step a run of an array of ``shape`` is taken to reach, for
+    the width of its file names and the length of its progress bar:
+    ``steps`` where given, but never more than the plain run's cap
+    (:func:`max_steps_for`), which a flow of that array ends before in
+    every run measured (a box of side s vanishes in s steps); ``--steps
+    1000000000000`` asks for far more steps than the object lasts.
+
+    Parameters
+    ----------
+    steps : int or None
+        The steps asked (None: until the object vanishes).
+    shape : tuple of int
+        The input array's shape.
+
+    Returns
+    -------
+    int
+        ``min(steps, max_steps_for(shape))``.
+
+    Examples
+    --------
+    >>> reachable_steps(None, (10, 20, 5)), reachable_steps(10**12, (10, 20, 5)), reachable_steps(7, (10, 20, 5))
+    (96, 96, 7)
+    """
+    cap = max_steps_for(shape)
+    return cap if steps is None else min(steps, cap)
+
+
 @dataclass
 class _Trace:
     """What a run keeps as it goes: the records, the states (when kept), the
