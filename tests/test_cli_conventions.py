@@ -132,6 +132,14 @@ def test_progress_bars_on_a_terminal_only(tmp_path, monkeypatch):
         assert stderr_of(monkeypatch, io.StringIO(), argv) == "", argv  # a pipe or a log file
 
 
+def test_flow_counter_says_its_steps_in_words(tmp_path, monkeypatch):
+    """The flow's counter from its first step (docs/flow.md): ``1 step``,
+    not tqdm's ``1 steps`` and a rate."""
+    np.save(tmp_path / "box.npy", np.ones((3, 3, 3), bool))  # 27, 8, 1, 0 voxels
+    shown = stderr_of(monkeypatch, Terminal(), ["flow", tmp_path / "box.npy"])
+    assert "\rflow: 1 step [" in shown and "1 steps" not in shown and "/s" not in shown
+
+
 def test_progress_bar_on_a_pseudo_terminal(tmp_path):
     """The installed command, its stderr a real pseudo-terminal of 80 columns."""
     def run(*extra):

@@ -142,7 +142,7 @@ def flow_store(args: argparse.Namespace) -> int:
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     total = bar_total(args.steps, volume.shape)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
-        with progress_bar(args, "flow", unit=" steps") as show, label_options(args):
+        with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
@@ -207,7 +207,7 @@ def run_with_files(args: argparse.Namespace, obj, writer):
 
     total = bar_total(args.steps, obj.volume.shape)
     try:  # the writer's staging directory is made: an interrupt anywhere (an import, a bar) removes it
-        with progress_bar(args, "flow", unit=" steps") as show:
+        with progress_bar(args, "flow", unit=" steps", noun="step") as show:
 
             def progress(step, state):
                 if writer is not None:

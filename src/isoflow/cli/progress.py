@@ -8,16 +8,22 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 
+from ..errors import counted
+
 #: the bar once the total is known: the share done and the time left (the
 #: core's units, chunks of columns or layers of blocks, mean nothing to a user)
 BAR_FORMAT = "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]"
+
+#: a counter whose count is said in words (``noun``): the count, and the time taken
+COUNT_FORMAT = "{desc} [{elapsed}]"
 
 Progress = Callable[[int, "int | None"], None]
 
 
 @contextlib.contextmanager
 def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
-                 estimate: bool = False, hint: str | None = None) -> Iterator[Progress | None]:
+                 estimate: bool = False, hint: str | None = None,
+                 noun: str | None = None) -> Iterator[Progress | None]:
     """A tqdm bar on stderr fed by a core ``progress(done, total)`` callback.
 
     Yields the callback, or None (no bar, and tqdm not imported) when
@@ -29,6 +35,9 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     (work whose shares are alike, as the voxeliser's pieces), a pipe gets
     a :class:`TimeNote` instead of nothing, with ``hint`` (what would take
     less) after its estimate where the core says its rule sums solid angles.
+    With ``noun``, a counter says the count in words (``flow: 1 step``,
+    ``flow: 12 steps``, :func:`~isoflow.errors.counted`) and the time
+    taken, not tqdm's ``1 steps`` and a rate.
     """
     if args.quiet or not sys.stderr.isatty():
         yield TimeNote(args, label, hint) if estimate and not args.quiet else None
@@ -38,11 +47,16 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     bars: list = []
 
     def show(done: int, total: int | None) -> None:
+        words = total is None and noun is not None
+        desc = f"{label}: {counted(done, noun)}" if words else label
         if not bars:
-            bars.append(tqdm(desc=label, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
-                             dynamic_ncols=True, bar_format=None if total is None else BAR_FORMAT))
+            form = BAR_FORMAT if total is not None else COUNT_FORMAT if words else None
+            bars.append(tqdm(desc=desc, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
+                             dynamic_ncols=True, bar_format=form))
         if total != bars[0].total:  # genus: the stepping adds a resolution
             bars[0].total = total
+        if words:
+            bars[0].set_description_str(desc, refresh=False)
         bars[0].update(done - bars[0].n)
 
     try:
