@@ -481,3 +481,42 @@ def test_the_flow_s_summary_says_topology_control_is_guard_s(tmp_path, capsys):
     assert main([]) == 0
     line = next(x for x in capsys.readouterr().out.splitlines() if x.split()[:1] == ["flow"])
     assert "--guard" in line and not line.endswith("with topology control"), line
+
+
+def test_a_slice_saved_as_3d_gets_a_note_with_the_line_that_saves_it_2d(tmp_path, capsys):
+    """A segmentation of one slice saved as (X, Y, 1) is read as a plate one
+    voxel thick, as before, with a note that gives the line saving the 2D
+    image; that image analyses as scikit-image counts the slice."""
+    import shlex
+
+    import nibabel as nib
+
+    img = np.zeros((9, 8), np.uint8)
+    img[1:7, 2:7] = 1
+    img[3:5, 4] = 0  # a hole
+    img[8, 0] = 1  # and a second piece: b = (2, 1)
+    nib.save(nib.Nifti1Image(img[:, :, None], np.diag([0.5, 0.7, 2.0, 1])), tmp_path / "slice.nii.gz")
+    np.save(tmp_path / "plate.npy", img[None, :, :].astype(bool))  # one voxel along x
+    np.save(tmp_path / "thick.npy", np.repeat(img[:, :, None], 3, axis=2).astype(bool))
+    slice_path = str(tmp_path / "slice.nii.gz")
+
+    assert main(["info", slice_path, "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["dimension"] == 3  # read as it was: a 3D plate
+    [note] = err.splitlines()
+    assert note.startswith(f"isoflow info: note: {slice_path}: shape 9x8x1, one voxel along z: read as a 3D plate")
+    code = shlex.split(note.split("give it: ", 1)[1])
+    assert code[:2] == ["python", "-c"]
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    r = info_json(capsys, tmp_path / "slice_2d.npz")
+    assert r["dimension"] == 2 and r["betti"] == [2, 1]
+    assert r["euler_characteristic"] == euler_number(img, connectivity=1)
+
+    assert main(["flow", slice_path, "--json"]) == 0
+    assert "isoflow flow: note: " in capsys.readouterr().err
+    assert main(["info", str(tmp_path / "plate.npy")]) == 0
+    assert "shape 1x9x8, one voxel along x" in capsys.readouterr().err
+    for quiet in (["info", slice_path, "--quiet"], ["flow", slice_path, "--quiet"], ["info", str(tmp_path / "thick.npy")]):
+        assert main(quiet) == 0
+        assert capsys.readouterr().err == "", quiet

@@ -17,6 +17,7 @@ from .inputs import (
     refuse_mesh_options,
     refuse_points_option,
     refuse_time_series_store,
+    say_plate,
     why_empty,
 )
 from .progress import progress_bar
@@ -131,6 +132,7 @@ def flow_store(args: argparse.Namespace) -> int:
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
     volume, _ = source_volume(args.input)
+    say_plate(args, tuple(volume.shape))
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
                            "store of their own, or flow it without --volumes .zarr")

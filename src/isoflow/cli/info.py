@@ -20,6 +20,7 @@ from .inputs import (
     refuse_mesh_options,
     refuse_points_option,
     say_note,
+    say_plate,
     thread_count,
     why_empty,
 )
@@ -71,12 +72,13 @@ def cmd_info(args: argparse.Namespace) -> int:
 def info_of_store(args: argparse.Namespace) -> Report:
     """Out of core: block by block, never the whole volume in memory (4D
     arrays are read whole, as from the other formats)."""
-    from ..mesh.formats.omezarr import analyze_store
+    from ..mesh.formats.omezarr import analyze_store, stored_shape
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
     if args.gpu:
         raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
+    say_plate(args, stored_shape(args.input))
     with progress_bar(args, "blocks") as show, label_options(args):
         return analyze_store(args.input, args.connectivity, label=args.label, progress=show,
                              surfaces=not args.no_surfaces, threads=args.threads)

@@ -213,7 +213,82 @@ def load_input(args: argparse.Namespace):
     with label_options(args), warnings.catch_warnings():
         # an empty point model: each command says why in its own words (why_empty)
         warnings.filterwarnings("ignore", message=re.escape(f"{path}: {NO_CUBE}"), category=IsoflowWarning)
-        return read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+        obj = read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    if is_volume(args.input):
+        say_plate(args, obj.volume.shape)
+    return obj
+
+
+#: the commands that take a 2D image as well as a 3D volume: where a plate
+#: one voxel thick is analysed or flowed in 3D, they would take the 2D slice
+PLANAR_COMMANDS = ("info", "flow")
+
+
+def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
+    """Say, once on stderr (dropped by --quiet), that a 3D volume one voxel
+    thick along one axis and two or more along the others is read as a 3D
+    plate, as it is: a segmentation of one slice saved as (X, Y, 1) is
+    then a plate that the flow empties in one step, with the Euler
+    characteristic of a solid; the note gives the line that saves the 2D
+    image (:func:`slice_as_2d`). Only ``info`` and ``flow``, which take 2D
+    images, say it.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``command``, ``input``, ``quiet``, and
+        ``label`` where it has one.
+    shape : tuple of int
+        The volume's shape as read (x, y, z).
+    """
+    thin = [k for k, n in enumerate(shape) if n == 1]
+    if args.quiet or args.command not in PLANAR_COMMANDS or len(shape) != 3 or len(thin) != 1:
+        return
+    if any(n < 2 for k, n in enumerate(shape) if k != thin[0]):
+        return
+    print(f"isoflow {args.command}: note: {args.input}: "
+          f"{slice_as_2d(args.input, shape, thin[0], getattr(args, 'label', None))}", file=sys.stderr)
+
+
+def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: float | None = None) -> str:
+    """The note on a volume one voxel thick along ``axis``: it is read as
+    a 3D plate, and the one line of Python that saves the slice as a 2D
+    image, voxel size and origin of the other two axes kept.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The input as given on the command line.
+    shape : tuple of int
+        The volume's shape (x, y, z).
+    axis : int
+        The axis of one voxel.
+    label : float, optional
+        The ``--label`` given: the line reads that label.
+
+    Returns
+    -------
+    str
+        The note, after the input's name.
+
+    Examples
+    --------
+    >>> print(slice_as_2d("slice.nii.gz", (64, 48, 1), 2))
+    shape 64x48x1, one voxel along z: read as a 3D plate one voxel thick; to analyse it as the 2D image, save that and give it: \
+python -c 'import isoflow; v = isoflow.read_volume("slice.nii.gz"); k = [0, 1]; \
+isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, 0], pitch=v.spacing[k], origin=v.origin[k]), "slice_2d.npz")'
+    """
+    import json
+    import shlex
+
+    kept = [k for k in range(3) if k != axis]
+    index = ", ".join("0" if k == axis else ":" for k in range(3))
+    label_arg = "" if label is None else f", label={label!r}"
+    code = (f"import isoflow; v = isoflow.read_volume({json.dumps(str(path))}{label_arg}); k = {kept}; "
+            f'isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k]), '
+            '"slice_2d.npz")')
+    return (f"shape {'x'.join(map(str, shape))}, one voxel along {'xyz'[axis]}: read as a 3D plate one voxel thick; "
+            f"to analyse it as the 2D image, save that and give it: python -c {shlex.quote(code)}")
 
 
 def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:
