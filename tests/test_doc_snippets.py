@@ -344,3 +344,22 @@ def test_the_readme_s_label_table_of_a_file_is_in_its_world_units(tmp_path):
     nibabel.save(nibabel.Nifti1Image(image, np.diag([0.5, 0.5, 2.0, 1.0])), tmp_path / "seg.nii.gz")
     table = isoflow.label_table(isoflow.read_labels(tmp_path / "seg.nii.gz"))
     assert table["voxels"].tolist() == [8] and table["volume"].tolist() == [8 * 0.5 * 0.5 * 2.0]
+
+
+def test_getting_started_says_which_values_a_file_may_hold(tmp_path):
+    """getting-started.md said 2 or 255 is refused; an array of them is,
+    but a file of 0 and one other value is read as that value's mask (as
+    formats.md says), and one of two other values is a label image."""
+    text = " ".join((ROOT / "docs" / "getting-started.md").read_text().split())
+    assert "A file is read as a mask where it holds 0 and one other value" in text
+    volume = np.zeros((4, 4, 4), np.uint8)
+    volume[1:3, 1:3, 1:3] = 255
+    with pytest.raises(isoflow.IsoflowError):
+        isoflow.analyze(volume)
+    np.save(tmp_path / "mask.npy", volume)
+    assert isoflow.read_volume(tmp_path / "mask.npy").voxels == 8
+    volume[1, 1, 1] = 2
+    np.save(tmp_path / "labels.npy", volume)
+    with pytest.raises(isoflow.IsoflowError, match="--label"):
+        isoflow.read_volume(tmp_path / "labels.npy")
+    assert isoflow.read_volume(tmp_path / "labels.npy", label=2).voxels == 1
