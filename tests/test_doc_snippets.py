@@ -363,3 +363,16 @@ def test_getting_started_says_which_values_a_file_may_hold(tmp_path):
     with pytest.raises(isoflow.IsoflowError, match="--label"):
         isoflow.read_volume(tmp_path / "labels.npy")
     assert isoflow.read_volume(tmp_path / "labels.npy", label=2).voxels == 1
+
+
+def test_the_pages_say_surface_takes_3d_volumes_only(tmp_path, capsys):
+    """cli.md and the README listed 2D volumes (PNG masks) among
+    ``surface``'s inputs; ``surface`` refuses them in one line."""
+    cli = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    assert "a 2D or 3D boolean or 0/1 array (3D only for `surface`; 4D for `info`)" in cli
+    assert "2D PNG for `info` and `flow`" in " ".join((ROOT / "README.md").read_text().split())
+    np.save(tmp_path / "square.npy", np.ones((3, 3), bool))
+    capsys.readouterr()
+    assert main(["surface", str(tmp_path / "square.npy"), "-o", str(tmp_path / "square.ply")]) == 2
+    assert "needs a 3D object" in capsys.readouterr().err
+    assert main(["flow", str(tmp_path / "square.npy"), "-q"]) == 0
