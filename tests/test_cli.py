@@ -500,3 +500,5 @@ def test_flow_refuses_a_3d_connectivity_for_a_2d_object(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["connectivity"] == 4
     assert main(["flow", str(tmp_path / "square.npy"), "--connectivity", "8", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["connectivity"] == 8
+    said = " ".join((ROOT / "docs" / "flow.md").read_text().split())
+    assert "`isoflow flow --connectivity` takes 4 or 8 for a 2D image, as `info` does, and refuses 6 and 26" in said
