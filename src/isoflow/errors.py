@@ -61,6 +61,31 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+def coordinates(values, digits: int = 6) -> str:
+    """A point (an origin, a corner) in a message, each coordinate to
+    ``digits`` significant digits: rounding to decimal places would print
+    the origin of a model in micrometres as 0 or -1e-06.
+
+    Parameters
+    ----------
+    values : sequence of float
+        The coordinates.
+    digits : int
+        Significant digits of each.
+
+    Returns
+    -------
+    str
+        ``[x, y, z]``.
+
+    Examples
+    --------
+    >>> coordinates([-1.3e-06, -3.25e-07, -0.2734375]), coordinates([1.0, 2.0, 3.0])
+    ('[-1.3e-06, -3.25e-07, -0.273438]', '[1, 2, 3]')
+    """
+    return "[" + ", ".join(f"{float(x):.{digits}g}" for x in values) + "]"
+
+
 def check_callable(value: object, name: str, call: str) -> None:
     """Refuse, before any work, a callback that cannot be called: it failed
     at its first call, after a step or a slab, as ``TypeError: 'int' object

@@ -72,3 +72,29 @@ def test_voxels_finer_than_the_coordinates_are_refused(tmp_path, command):
         "spacing 16.0 of the coordinates near 1e+17: the grid cannot be placed there; at most --resolution 4 can "
         "be, or move the mesh nearer the origin"]
     assert not (tmp_path / "far.npy").exists()
+
+
+@pytest.mark.parametrize("scale", [2.0 ** 500, 2.0 ** -500])
+def test_genus_json_of_a_volume_beyond_float64(scale, tmp_path, capsys):
+    """A torus scaled by 2^500 has volume about 1.75 * 2^1500, past
+    float64: --json printed "volume": Infinity, which no JSON parser
+    reads (2^-500: "volume": 0, for a solid of one body). Its genus is
+    manifold3d's, 1, at any scale."""
+    import trimesh
+
+    from isoflow.cli import main
+
+    torus = trimesh.creation.torus(1, 0.3)
+    path = tmp_path / "t.obj"
+    path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in (torus.vertices * scale).tolist())
+                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in torus.faces.tolist()))
+    assert main(["genus", str(path), "--resolution", "24", "48", "--no-step", "--json", "-q"]) == 0
+
+    def refuse(constant):
+        raise ValueError(f"not a JSON number: {constant}")
+
+    r = json.loads(capsys.readouterr().out, parse_constant=refuse)
+    assert r["manifold3d"]["genus"] == r["solid"]["genus"] == 1 and r["kind"] == "agree"
+    assert r["solid"]["volume"] is None and r["manifold3d"]["volume"] is None
+    assert main(["genus", str(path), "--resolution", "24", "48", "--no-step", "-q"]) == 0
+    assert "volume beyond float64's range" in capsys.readouterr().out

@@ -26,9 +26,11 @@ from isoflow.cli import main
 from isoflow.errors import IsoflowError, MeshNote
 from isoflow.mesh.census import census, one_face_per_pair, opposite_pairs
 from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization
+from isoflow.mesh.genus import verify_genus
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.shell import ShellGrid, fill_shell, grid_planes, surface_area
 from isoflow.mesh.shell_bound import shell_voxels_at_most
+from isoflow.mesh.verdict import Note
 from isoflow.mesh.voxelize import voxelize, voxelize_file, voxelize_mesh
 
 trimesh = pytest.importorskip("trimesh")
@@ -632,3 +634,24 @@ def test_a_label_image_s_time_note_offers_the_fills_where_a_mesh_sums_solid_angl
     assert len(notes) == 1 and "solid angles" not in notes[0], notes
     notes = piped_notes("voxelize", open_, closed, "--resolution", "24", "-o", out, "--force")
     assert len(notes) == 1 and notes[0].endswith(HINT), notes
+
+
+def test_flood_fill_names_the_cavities_it_fills():
+    """A torus turned inside out within a ball: the solid is the ball less
+    the torus, one cavity, genus 1 (the torus's, as manifold3d counts it).
+    The flood fill fills the cavity (digital genus 0) and the verdict said
+    "disagree: mesh genus 1, digital genus 0" with no word of why."""
+    import manifold3d as m3
+    import trimesh
+
+    torus = trimesh.creation.torus(1, 0.3)
+    torus_genus = m3.Manifold(m3.Mesh(vert_properties=np.asarray(torus.vertices, np.float32),
+                                      tri_verts=np.asarray(torus.faces, np.uint32))).genus()
+    torus.invert()
+    mesh = trimesh.util.concatenate([trimesh.creation.icosphere(3, 2.0), torus])
+    flood = verify_genus((mesh.vertices, mesh.faces), (24, 48), step=False, fill="flood")
+    assert flood.reference == torus_genus == 1 and flood.digital[-1]["genus"] == 0 and flood.kind == "disagree"
+    assert Note("flood_cavities", {"n": 1}) in flood.notes
+    assert "--fill flood fills the solid's 1 cavity (manifold3d)" in flood.verdict
+    winding = verify_genus((mesh.vertices, mesh.faces), (24, 48), step=False)
+    assert winding.kind == "agree" and "flood_cavities" not in {n.kind for n in winding.notes}

@@ -297,6 +297,16 @@ def test_cli_genus_options(capsys):
         "isoflow genus: error: argument --max-resolution: must be a whole number of voxels from 1 to 2147483647, got 0"]
 
 
+def test_cli_genus_repeated_resolution_tries_each(tmp_path, capsys):
+    box = tmp_path / "box.stl"
+    trimesh.creation.box().export(box)
+    assert main(["genus", str(box), "--resolution", "16", "--resolution", "24", "--no-step", "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    # a repeated option adds its resolutions, as one option listing both does
+    assert [d["resolution"] for d in r["digital"]] == [16, 24]
+    assert r["kind"] == "agree" and r["reference"] == (2 - trimesh.creation.box().euler_number) // 2
+
+
 def test_cli_voxelize_and_surface_in_world_coordinates(tmp_path, capsys):
     out = tmp_path / "t.npz"
     assert main(["voxelize", str(MESHES / "torus.obj"), "--resolution", "40", "-o", str(out)]) == 0

@@ -17,6 +17,7 @@ import trimesh
 
 from isoflow.errors import IsoflowError
 from isoflow.mesh import ply, readers
+from isoflow.mesh.genus import mesh_topology
 from isoflow.mesh.load import load_mesh
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -264,6 +265,23 @@ def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):
         _same(p, monkeypatch, fast=False)
         with pytest.raises(IsoflowError, match=str(p)):
             load_mesh(p)
+
+
+def test_ascii_stl_without_endsolid_is_read(tmp_path):
+    """An ASCII STL whose last facet is whole but whose "endsolid" line is
+    missing was "not a valid STL file" (trimesh reads no triangles of it;
+    pymeshlab reads them all); one cut inside a facet still is."""
+    torus = trimesh.creation.torus(1, 0.3)
+    text = torus.export(file_type="stl_ascii")
+    p = tmp_path / "t.stl"
+    p.write_text(text.rsplit("endsolid", 1)[0])
+    v, f = load_mesh(p)
+    assert len(f) == len(torus.faces)
+    r = mesh_topology(v, f)
+    assert r["euler_number"] == torus.euler_number and r["genus"] == (2 - torus.euler_number) // 2
+    p.write_text(text[:text.find("endloop", 2000)])
+    with pytest.raises(IsoflowError, match="not a valid STL file"):
+        load_mesh(p)
 
 
 def test_a_command_on_a_plain_obj_does_not_import_trimesh(tmp_path):
@@ -593,3 +611,34 @@ def test_the_cli_refuses_a_broken_ply_in_one_line_with_exit_2(case, tmp_path):
                        capture_output=True, text=True, env=dict(os.environ), timeout=300)
     assert r.returncode == 2
     assert r.stderr.strip() == f"isoflow info: error: {p}: {PLY_BROKEN[case]}"
+
+
+@pytest.mark.parametrize("form", ["ascii", "binary_little_endian"])
+@pytest.mark.parametrize("kept", ["xz", "xy", ""])
+def test_a_ply_whose_vertices_lack_a_coordinate_says_which(form, kept, tmp_path):
+    """A vertex element without x, y or z was handed to trimesh, which
+    fails on a KeyError ("cannot read as a mesh (KeyError: 'y')"): the line
+    now names the missing coordinate and the properties there are."""
+    import struct
+
+    import trimesh
+
+    props = "".join(f"property float {c}\n" for c in kept) + "property uchar red\n"
+    head = (f"ply\nformat {form} 1.0\nelement vertex 3\n{props}element face 1\n"
+            "property list uchar int vertex_indices\nend_header\n").encode()
+    rows = [[0.0] * len(kept) + [9], [1.0] * len(kept) + [9], [2.0] * len(kept) + [9]]
+    if form == "ascii":
+        body = "".join(" ".join(map(str, r)) + "\n" for r in rows).encode() + b"3 0 1 2\n"
+    else:
+        body = b"".join(struct.pack(f"<{len(kept)}fB", *r) for r in rows) + struct.pack("<B3i", 3, 0, 1, 2)
+    p = tmp_path / "m.ply"
+    p.write_bytes(head + body)
+    with pytest.raises((KeyError, ValueError)):  # the independent reader cannot place these vertices either
+        trimesh.load(p, process=False)
+    lost = ", ".join(repr(c) for c in "xyz" if c not in kept)
+    listed = ", ".join([*kept, "red"])
+    r = subprocess.run([sys.executable, "-m", "isoflow", "info", str(p), "--resolution", "8"],
+                       capture_output=True, text=True, env=dict(os.environ), timeout=300)
+    assert r.returncode == 2
+    assert r.stderr.strip() == (f"isoflow info: error: {p}: the header's element 'vertex' has no property {lost} "
+                                f"(its properties: {listed}), so its vertices have no positions")

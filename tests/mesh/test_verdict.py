@@ -8,6 +8,7 @@ import io
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from isoflow.cli import main
@@ -192,7 +193,8 @@ def test_open_and_turned_meshes_keep_their_words(tmp_path):
     path.write_text(text.replace(first, f"f {a} {c} {b}", 1))
     v = verify_genus(path, (16, 32), step=False)
     kinds = [n.kind for n in v.notes]
-    assert Note("inconsistent", {"edges": 3, "fill": "winding"}) in v.notes
+    # the box's surface, whatever way its faces turn: genus 0
+    assert Note("inconsistent", {"edges": 3, "fill": "winding", "genus": 0}) in v.notes
     assert "open" not in kinds and "double_sided" not in kinds
 
 
@@ -280,3 +282,48 @@ def test_the_printed_json_gives_the_verdict_back():
     back = GenusVerdict.from_dict(json.loads(json.dumps(rabbit.to_dict())))
     assert [n.kind for n in back.notes] == [n.kind for n in rabbit.notes] and back.notes[0].facts["components"] == 9
     assert back.verdict == rabbit.verdict and back.stop == rabbit.stop
+
+
+def test_a_torus_with_faces_turned_over_keeps_its_genus(tmp_path):
+    """A closed torus with 100 faces turned over had "no mesh genus to
+    compare" (it bounds no solid as given, "so it has no genus as a closed
+    surface"), where pymeshlab counts genus 1 and trimesh's fix_normals
+    turns it back, Euler number 0: the surface is the torus."""
+    import trimesh
+
+    torus = trimesh.creation.torus(1, 0.3)
+    faces = torus.faces.copy()
+    faces[:100] = faces[:100, ::-1]
+    turned = trimesh.Trimesh(torus.vertices, faces, process=False)
+    assert not turned.is_winding_consistent
+    fixed = turned.copy()
+    fixed.fix_normals()
+    genus = (2 - fixed.euler_number) // 2
+    v = verify_genus((turned.vertices, turned.faces), (24, 48), step=False)
+    assert v.mesh["genus"] == genus == 1 and v.reference == genus
+    assert v.kind == "agree"
+    assert Note("inconsistent", {"edges": v.mesh["inconsistent_edges"], "fill": "winding", "genus": 1}) in v.notes
+    assert "its faces turned consistently make a closed surface of genus 1" in v.verdict
+    # as the voxeliser reads it (its note: "100 flipped faces (turned over ...); its edges balance")
+    assert "its solid is read by the exact nonzero winding number, the faces turned so" in v.verdict
+    assert "no genus" not in v.verdict
+
+
+def test_a_klein_bottle_has_no_genus():
+    """A closed surface whose faces cannot be turned consistently (a Klein
+    bottle: a grid glued to itself with a flip, Euler number 0) has no
+    genus; (2 - 0) / 2 = 1 would call it a torus."""
+    from isoflow.mesh.genus import mesh_topology
+
+    n, m = 5, 4
+    def at(i, j):  # rows wrap with a flip of the columns
+        return (i % n) * m + (j % m) if i < n else at(0, -j)
+    faces = []
+    for i in range(n):
+        for j in range(m):
+            a, b, c, d = at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i + 1, j)
+            faces += [(a, b, c), (a, c, d)]
+    rng = np.random.default_rng(3)
+    r = mesh_topology(rng.random((n * m, 3)), np.array(faces))
+    assert r["euler_number"] == 0 and r["boundary_edges"] == 0 and r["nonmanifold_edges"] == 0
+    assert r["genus"] is None and r["genus_per_component"] == [None]

@@ -508,7 +508,8 @@ def test_error_nan_and_out_of_range(tmp_path):
     (tmp_path / "nan.obj").write_text(tet.format(z="nan", k=4))
     with pytest.raises(IsoflowError) as e:
         load_mesh(tmp_path / "nan.obj")
-    assert "nan.obj" in _oneline(e) and "1 of 4 vertices" in _oneline(e)
+    # it named neither the vertex nor its value, and counted "(1 values)"
+    assert _oneline(e).endswith("nan.obj: 1 of 4 vertices has NaN or infinite coordinates (1 value; at (0, 0, nan))")
     (tmp_path / "oor.off").write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
                                       "3 0 2 1\n3 0 1 3\n3 1 2 7\n3 0 3 2\n")
     with pytest.raises(IsoflowError) as e:
@@ -520,7 +521,8 @@ def test_error_nan_and_out_of_range(tmp_path):
     bad = v.copy()
     bad[1, 0] = np.inf
     bad[2, 1] = np.nan
-    with pytest.raises(IsoflowError, match="2 of 4 vertices"):
+    with pytest.raises(IsoflowError, match=r"2 of 4 vertices have NaN or infinite coordinates \(2 values; the first "
+                                           r"at \(inf, 0, 0\)\)"):
         voxelize(bad, f, resolution=4)
     with pytest.raises(IsoflowError, match="out of range.*7"):
         voxelize(v, np.where(f == 3, 7, f), resolution=4)
@@ -883,3 +885,22 @@ def test_voxelize_mesh_takes_a_mesh_alone_as_every_voxeliser_does():
     for bad in (mesh.vertices, "torus.stl"):
         with pytest.raises(IsoflowError, match="^voxelize: faces are missing"):
             voxelize_mesh(bad, resolution=8)
+
+
+def test_cli_voxelize_prints_a_micrometre_origin(tmp_path, capsys):
+    """The printed origin of a torus 2.6e-6 across (its corner at
+    -1.3e-6) was rounded to 6 decimal places: [-1e-06, -1e-06, -0.0]."""
+    import trimesh
+
+    from isoflow.cli import main
+
+    torus = trimesh.creation.torus(1, 0.3).apply_scale(1e-6)  # scaled after: trimesh welds within 1e-8
+    torus.export(tmp_path / "t.ply")
+    assert main(["voxelize", str(tmp_path / "t.ply"), "--resolution", "16", "-o", str(tmp_path / "t.npz")]) == 0
+    line = capsys.readouterr().out.strip().splitlines()[-1]
+    printed = json.loads(line.split("origin ")[1])
+    origin = np.load(tmp_path / "t.npz")["origin"]
+    np.testing.assert_allclose(printed, origin, rtol=1e-5)
+    # the grid's corner is at or below the mesh's, within a voxel
+    assert np.all(np.asarray(printed) <= torus.bounds[0] * (1 - 1e-6))
+    assert np.all(np.asarray(printed) > torus.bounds[0] - 2.6e-6 / 16)

@@ -14,9 +14,10 @@ from .progress import progress_bar
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "genus", "verify a mesh's genus: mesh, manifold3d, pymeshlab and digital side by side")
     p.add_argument("mesh", help="a mesh file: any format trimesh reads")
-    p.add_argument("--resolution", type=resolution_value, nargs="+",
-                   help="voxels along the longest side, tried first (default: 64 128); then doubled until the "
-                        "digital Betti numbers of the last two agree")
+    # extend: "--resolution 32 --resolution 64" tries both, as "--resolution 32 64" does
+    p.add_argument("--resolution", type=resolution_value, nargs="+", action="extend",
+                   help="voxels along the longest side, tried first (default: 64 128; repeated, all are tried); "
+                        "then doubled until the digital Betti numbers of the last two agree")
     p.add_argument("--max-resolution", type=resolution_value,
                    help="stop doubling beyond this (default 1024); the resolutions given are tried whatever it says")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
@@ -62,6 +63,10 @@ def cmd_genus(args: argparse.Namespace) -> int:
 FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
+def _volume(volume: float | None) -> str:
+    return "volume beyond float64's range" if volume is None else f"volume {volume:.6g}"
+
+
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
@@ -79,7 +84,7 @@ def format_genus(report, name: str) -> str:
                            f"genus {m3['genus']} over {m3['components']} components "
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
-                            f"{counted(solid['cavities'], 'cavity', 'cavities')}, volume {solid['volume']:.6g} "
+                            f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
     ]

@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError
+from ..errors import IsoflowError, coordinates
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -160,7 +160,7 @@ def format_info(r: Report, name: str, grid: dict | None = None) -> str:
     if grid:
         # (as voxelize prints them)
         lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}, "
-                     f"origin {[round(x, 6) for x in grid['origin']]}")
+                     f"origin {coordinates(grid['origin'])}")
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]

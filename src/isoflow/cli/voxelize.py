@@ -7,9 +7,7 @@ import contextlib
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, coordinates, counted
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar
 
@@ -72,7 +70,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     with coarser_for_magicavoxel():
         out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
-    print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {np.round(obj.origin, 6).tolist()}")
+    print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {coordinates(obj.origin)}")
     return 0
 
 
@@ -88,7 +86,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
     say_note(args, args.mesh, details.note)
     shape = "x".join(map(str, z["shape"]))
     print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
-          f"pitch {z['pitch']:.6g}, origin {np.round(z['origin'], 6).tolist()}")
+          f"pitch {z['pitch']:.6g}, origin {coordinates(z['origin'])}")
     return 0
 
 
@@ -157,7 +155,7 @@ def label_summary(out: str | Path, r) -> str:
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
     lines = [f"{out}: {counted(len(r.names), 'label')} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
-             f"origin {np.round(r.origin, 6).tolist()}"]
+             f"origin {coordinates(r.origin)}"]
     width = max(6, len(f"{max(r.voxels, default=0):,}"))
     lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")
     for i, (name, n) in enumerate(zip(r.names[:LISTED_LABELS], r.voxels), 1):

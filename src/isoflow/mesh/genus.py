@@ -42,7 +42,9 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
     Components are edge-connected face sets. A component's genus is
     ``(2 - chi_c) / 2`` when it is closed (no boundary edge), every edge has
-    two faces, and every vertex has one fan of faces in it; otherwise None.
+    two faces, every vertex has one fan of faces in it and it is orientable
+    (its faces may be turned inconsistently: the genus is the surface's);
+    otherwise None.
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
     closed surfaces touching at a point, like ``hourglass_ico.obj``).
     With ``return_components``, also each face's component number.
@@ -94,13 +96,15 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         pinched_in_comp[np.unique(comp[hit])] = True
 
     chi = V - E + F
-    closed = ~bad_edge & ~pinched_in_comp
+    closed = ~bad_edge & ~pinched_in_comp & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
     used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))
     euler = int(used - len(edge_start) + nf)
     known = [g for g in genus_c if g is not None]
-    total = sum(known) if genus_c and len(known) == len(genus_c) and defects["inconsistent_edges"] == 0 else None
+    # a closed component with faces turned the wrong way still has a genus: the surface's, as pymeshlab
+    # counts it and trimesh's fix_normals leaves it; a non-orientable one (no consistent turning) has none
+    total = sum(known) if genus_c and len(known) == len(genus_c) else None
     report = {
         "watertight": bool(defects["watertight"]),
         "components": int(ncomp),
@@ -117,6 +121,31 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "shared_vertices": int(np.count_nonzero(comps_per_vertex > 1)),
     }
     return (report, comp) if return_components else report
+
+
+def _orientable(nf: int, f1: np.ndarray, f2: np.ndarray, same_dir: np.ndarray, comp: np.ndarray,
+                ncomp: int) -> np.ndarray:
+    """Whether each component's faces can be turned so that every edge of
+    two faces is walked once each way: the faces' orientation double cover
+    (a face and its turned copy, joined across each such edge to the copy
+    of the other face that agrees with it) keeps the two copies of a face
+    apart exactly where they can. ``f1``, ``f2``: the two faces of each
+    edge with two faces; ``same_dir``: whether they walk it the same way.
+
+    Examples
+    --------
+    >>> # two triangles on the edge 0-1, the second walking it the same way: turn one of them
+    >>> _orientable(2, np.array([0]), np.array([1]), np.array([True]), np.zeros(2, np.int64), 1).tolist()
+    [True]
+    """
+    from ..scale.graphs import components
+
+    turn = same_dir.astype(np.int64)
+    a = np.concatenate([2 * f1, 2 * f1 + 1])
+    b = np.concatenate([2 * f2 + turn, 2 * f2 + 1 - turn])
+    _, cover = components(2 * nf, a, b)
+    apart = cover[0::2] != cover[1::2]
+    return np.bincount(comp, weights=~apart, minlength=ncomp) == 0
 
 
 def whole_manifold(vertices, faces) -> tuple[Any, int]:
@@ -161,14 +190,41 @@ def manifold3d_report(vertices, faces, whole: tuple[Any, int] | None = None) -> 
     if status != m3.Error.NoError:
         return {"error": status.name}
     parts = mf.decompose()
-    with np.errstate(over="ignore", under="ignore"):
-        volume = float(np.ldexp(mf.volume(), 3 * e))
+    volume = unscaled_volume(mf.volume(), e)
     return {
         "genus": int(sum(p.genus() for p in parts)),
         "genus_whole_mesh": int(mf.genus()),
         "components": len(parts),
         "volume": volume,
     }
+
+
+def unscaled_volume(scaled: float, e: int) -> float | None:
+    """The volume of the mesh as given, from manifold3d's of the copy
+    scaled by ``2**-e`` (:func:`normalized`), or None where float64 cannot
+    hold it: it overflowed to inf, which the JSON printed as ``Infinity``
+    (no JSON parser's number), or underflowed to 0.
+
+    Parameters
+    ----------
+    scaled : float
+        manifold3d's volume of the scaled copy.
+    e : int
+        The exponent of the scaling.
+
+    Returns
+    -------
+    float or None
+        ``scaled * 2**(3 e)``, or None beyond float64's range.
+
+    Examples
+    --------
+    >>> unscaled_volume(1.5, 2), unscaled_volume(1.5, 400), unscaled_volume(1.5, -400), unscaled_volume(0.0, 400)
+    (96.0, None, None, 0.0)
+    """
+    with np.errstate(over="ignore", under="ignore"):
+        volume = float(np.ldexp(scaled, 3 * e))
+    return volume if math.isfinite(volume) and (volume != 0 or scaled == 0) else None
 
 
 def pymeshlab_report(vertices, faces) -> dict:
@@ -273,8 +329,7 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     except Exception as exc:  # the binding raises for malformed input (its first line says what)
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return {"error": f"{type(exc).__name__}: {detail}"}
-    with np.errstate(over="ignore", under="ignore"):
-        volume = float(np.ldexp(solid.volume(), 3 * e))
+    volume = unscaled_volume(solid.volume(), e)
     # decompose() splits the solid into its shells: a body's outer one
     # (positive volume) and its cavities' (negative)
     bodies = sum(1 for p in pieces if p.volume() > 0)
@@ -554,9 +609,11 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     A face listed again the same way round (the same three corners) is
     dropped before anything is counted, as a degenerate face is: it draws
     no more surface, only non-manifold edges (a note names it).
-    An open or inconsistently oriented mesh has no genus of its own; its
-    solid is read by the generalised winding number (``|w| > 1/2``) and its
-    digital topology reported; ``strict`` refuses it (IsoflowError).
+    An open mesh has no genus of its own; an inconsistently oriented one has
+    the genus of its surface where its faces can be turned consistently
+    (none where they cannot: a non-orientable surface). The solid of
+    either is read by the generalised winding number (``|w| > 1/2``) and
+    its digital topology reported; ``strict`` refuses it (IsoflowError).
 
     Parameters
     ----------
@@ -780,7 +837,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
                                    "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill}))
     elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
-        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill}))
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill,
+                                           **({"genus": mesh["genus"]} if mesh["genus"] is not None else {})}))
     if mesh["nonmanifold_edges"]:
         notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
     if mesh["nonmanifold_vertices"]:
@@ -810,6 +868,10 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
         if reference is not None and stable:
             notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})
                       for d in digital[:-2] if d["genus"] != reference]
+    if fill == "flood" and w["solid"].get("cavities"):
+        # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it, and
+        # "disagree" would otherwise blame the mesh
+        notes.append(Note("flood_cavities", {"n": w["solid"]["cavities"]}))
     if "error" in w["manifold3d"]:
         notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))
     mesh = w["mesh"]

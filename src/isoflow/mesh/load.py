@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, missing
+from ..errors import IsoflowError, counted, missing
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -107,9 +107,12 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
     bad = ~np.isfinite(v)
     if bad.any():
         nv = int(bad.any(axis=1).sum())
+        # the position, not an index: a reader may number the vertices otherwise than the file lists them
+        first = v[np.flatnonzero(bad.any(axis=1))[0]]
         raise IsoflowError(
-            f"{where}: {nv} of {len(v)} vertices have NaN or infinite coordinates "
-            f"({int(bad.sum())} values)")
+            f"{where}: {nv} of {counted(len(v), 'vertex', 'vertices')} {'has' if nv == 1 else 'have'} NaN or "
+            f"infinite coordinates ({counted(int(bad.sum()), 'value')}; {'the first ' if nv > 1 else ''}at "
+            f"({', '.join(f'{x:.6g}' for x in first.tolist())}))")
     # checked in the faces' own type: int64 wraps a uint64 index from 2**63 on (and a float one
     # beyond int64) to a negative number, which the message then named instead of the index given
     lo, hi = int(f.min()), int(f.max())

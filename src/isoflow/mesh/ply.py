@@ -157,6 +157,12 @@ def _header(data: bytes, where: str) -> tuple[str, int, list[Element]] | None:
     if len(set(names)) != len(names) or "vertex" not in names or "face" not in names:
         return None
     vertex, face = elements[names.index("vertex")], elements[names.index("face")]
+    scalars = [p.name for p in vertex.properties if p.count_type is None]
+    lost = [c for c in "xyz" if c not in scalars]
+    if lost:  # no reader places such vertices (trimesh's fails on a KeyError): say which coordinate is missing
+        raise IsoflowError(f"{where}: the header's element 'vertex' has no property {', '.join(map(repr, lost))} "
+                           f"(its properties: {', '.join(p.name for p in vertex.properties) or 'none'}), so its "
+                           "vertices have no positions")
     corners = [p for p in face.properties if p.name in CORNERS and p.count_type is not None]
     if not {"x", "y", "z"} <= {p.name for p in vertex.properties if p.count_type is None} or len(corners) != 1 \
             or corners[0].kind[0] not in "iu" or face.rows == 0 \

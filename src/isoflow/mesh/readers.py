@@ -72,8 +72,9 @@ def read_simple(path: Path) -> Mesh | None:
 
 def read_stl(data: bytes) -> Mesh | None:
     """A binary STL (80-byte header, count, 50-byte records; read as binary
-    whenever the size says so, as trimesh does) or an ASCII STL of one solid:
-    three corners per facet, none shared."""
+    whenever the size says so, as trimesh does) or an ASCII STL of one solid
+    (its "endsolid" line may be missing after a whole last facet): three
+    corners per facet, none shared."""
     if len(data) >= 84:
         n = int(np.frombuffer(data, "<u4", 1, 80)[0])
         if len(data) == 84 + 50 * n:
@@ -121,7 +122,11 @@ def stl_size_error(path, data: bytes) -> str | None:
 
 def _read_stl_ascii(data: bytes) -> Mesh | None:
     low = data.lower()
-    if not low.lstrip().startswith(b"solid") or low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid"):
+    # a solid whose last facet is whole but whose "endsolid" line is missing (a writer that left it
+    # out, a file cut at a facet's end) is read: trimesh reads no triangles of it, pymeshlab all
+    unended = low.count(b"endsolid") == 0 and low.rstrip().endswith(b"endfacet")
+    if not low.lstrip().startswith(b"solid") or not unended and (
+            low.count(b"endsolid") != 1 or low.rfind(b"vertex") > low.find(b"endsolid")):
         return None  # several solids (or none): trimesh's scene of them
     lines = [ln.split() for ln in low.splitlines()]
     corners = [w[1:] for w in lines if w[:1] == [b"vertex"]]

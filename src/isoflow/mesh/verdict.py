@@ -27,7 +27,8 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
-                   "zero_area_faces", "cavities", "coarse", "manifold3d_refused", "no_mesh_genus"]
+                   "zero_area_faces", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
+                   "no_mesh_genus"]
 
 
 @dataclass(frozen=True)
@@ -215,10 +216,15 @@ def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "windi
             + "): it bounds no solid, so it has no genus as a closed surface; " + _READ_AS[fill])
 
 
-def _inconsistent_words(edges: int, fill: str = "winding") -> str:
+def _inconsistent_words(edges: int, fill: str = "winding", genus: int | None = None) -> str:
+    if genus is None:
+        surface = "so it has no genus as a closed surface; " + _READ_AS[fill]
+    else:  # the voxeliser turns the faces as trimesh.repair.fix_winding does: the edges balance
+        read = ("its solid is read by the exact nonzero winding number, the faces turned so" if fill == "winding"
+                else _READ_AS[fill])
+        surface = f"its faces turned consistently make a closed surface of genus {genus}; {read}"
     return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
-            "(used more often one way than the other): it bounds no solid as given, so it has no genus as a "
-            "closed surface; " + _READ_AS[fill])
+            f"(used more often one way than the other): it bounds no solid as given, {surface}")
 
 
 def _point(p) -> str:
@@ -284,6 +290,9 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
            "no crossing" if along else "")),
     "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
+    "flood_cavities": lambda n: (
+        f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d) and the surfaces "
+        "inside, whose handles its digital genus lacks; the default --fill winding keeps them"),
     "coarse": lambda resolution, genus, pitch: (
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
