@@ -6,9 +6,11 @@ Each step of the digital curvature flow (Definition 18) moves the object to
 the other lattice (eq. 5.1): a voxel is kept at every old lattice vertex
 that is interior or moves outward, so convex parts shrink and concave parts
 fill. A voxelised torus (from :mod:`isoflow.data`) shrinks until it
-vanishes at its limit point; the step where the tunnel closes is a change
-of the Betti numbers, reported with where it happened. With ``--guard``, no
-step may change them (Theorem 21).
+vanishes at its limit point, its centre. At the default 24 voxels across it
+keeps its tunnel to its last non-empty step (the step to the empty set is
+the limit, not a change of topology); at ``--resolution 16`` its ring
+breaks into pieces first, and each change of the Betti numbers is printed
+with its step. With ``--guard``, no step may change them (Theorem 21).
 
 Prints every step's figures and writes ``OUT/flow.csv`` (voxels, parity,
 Betti numbers, chi and energy per step), ``OUT/step_NNN.ply`` (each step's

@@ -520,3 +520,24 @@ def test_a_slice_saved_as_3d_gets_a_note_with_the_line_that_saves_it_2d(tmp_path
     for quiet in (["info", slice_path, "--quiet"], ["flow", slice_path, "--quiet"], ["info", str(tmp_path / "thick.npy")]):
         assert main(quiet) == 0
         assert capsys.readouterr().err == "", quiet
+
+
+def test_flow_refuses_a_3d_connectivity_for_a_2d_object(tmp_path, capsys):
+    """``flow --connectivity 6`` of a 2D image ran at 4 (and 26 at 8) with
+    exit status 0, where ``info`` refuses it and the help says 4 or 8 in
+    2D: one line, exit 2, before any work. Unasked, 2D flows at 4."""
+    square = np.zeros((6, 6), bool)
+    square[1:5, 1:5] = True
+    np.save(tmp_path / "square.npy", square)
+    for conn in ("6", "26"):
+        capsys.readouterr()
+        assert main(["flow", str(tmp_path / "square.npy"), "--connectivity", conn, "--out", str(tmp_path / "run")]) == 2
+        assert f"connectivity {conn} is not valid in 2D (use 4 or 8)" in capsys.readouterr().err
+        assert not (tmp_path / "run").exists()
+    capsys.readouterr()
+    assert main(["flow", str(tmp_path / "square.npy"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["connectivity"] == 4
+    assert main(["flow", str(tmp_path / "square.npy"), "--connectivity", "8", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["connectivity"] == 8
+    said = " ".join((ROOT / "docs" / "flow.md").read_text().split())
+    assert "`isoflow flow --connectivity` takes 4 or 8 for a 2D image, as `info` does, and refuses 6 and 26" in said

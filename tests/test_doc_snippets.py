@@ -307,3 +307,72 @@ def test_the_flow_figures_of_flow_md_are_the_code_s():
     finally:
         sys.path.remove(str(ROOT / "tests" / "flow"))
     assert int(shapes.solid_torus(7, 3).sum()) == 1280
+
+
+def test_the_stl_rule_of_formats_md_is_the_code_s(tmp_path, capsys):
+    """formats.md said that an STL that would move a vertex is refused;
+    ``surface`` writes one wherever float32 keeps the corners apart (a
+    pitch of 1/3 moves them) and refuses only where it would merge them
+    (a pitch of 0.1 at 4e6, where float32 positions are 0.25 apart)."""
+    text = " ".join((ROOT / "docs" / "formats.md").read_text().split())
+    rule = text[text.index("Binary STL holds float32 only"):]
+    rule = rule[:rule.index("Tested on")]
+    assert "written where float32 keeps" in rule and "refused (exit 2, nothing written) where float32 would merge" in rule
+    volume = np.zeros((6, 6, 6), bool)
+    volume[1:5, 1:5, 1:5] = True
+    isoflow.write_volume(isoflow.DigitalObject(volume, pitch=1 / 3), tmp_path / "third.npz")
+    assert main(["surface", str(tmp_path / "third.npz"), "-o", str(tmp_path / "third.stl"), "-q"]) == 0
+    corners = np.fromfile(tmp_path / "third.stl", dtype=np.uint8)[84:].reshape(-1, 50)[:, 12:48].copy()
+    moved = corners.view(np.float32).astype(float) * 3
+    assert not np.allclose(moved, np.round(moved), rtol=0, atol=1e-12)  # float32 moved them, and it is written
+    isoflow.write_volume(isoflow.DigitalObject(volume, pitch=0.1, origin=(4e6, 0, 0)), tmp_path / "far.npz")
+    capsys.readouterr()
+    assert main(["surface", str(tmp_path / "far.npz"), "-o", str(tmp_path / "far.stl")]) == 2
+    assert "would merge" in capsys.readouterr().err and not (tmp_path / "far.stl").exists()
+
+
+def test_the_readme_s_label_table_of_a_file_is_in_its_world_units(tmp_path):
+    """README.md said ``label_table(read_labels(FILE))`` is "in its voxel
+    units"; the file's voxel size and origin place and scale the rows."""
+    import nibabel
+
+    readme = (ROOT / "README.md").read_text()
+    line = next(s for s in readme.splitlines() if "isoflow.label_table(isoflow.read_labels(" in s)
+    assert "voxel units" not in line and "voxel size and origin" in line
+    image = np.zeros((4, 4, 4), np.uint8)
+    image[1:3, 1:3, 1:3] = 3
+    nibabel.save(nibabel.Nifti1Image(image, np.diag([0.5, 0.5, 2.0, 1.0])), tmp_path / "seg.nii.gz")
+    table = isoflow.label_table(isoflow.read_labels(tmp_path / "seg.nii.gz"))
+    assert table["voxels"].tolist() == [8] and table["volume"].tolist() == [8 * 0.5 * 0.5 * 2.0]
+
+
+def test_getting_started_says_which_values_a_file_may_hold(tmp_path):
+    """getting-started.md said 2 or 255 is refused; an array of them is,
+    but a file of 0 and one other value is read as that value's mask (as
+    formats.md says), and one of two other values is a label image."""
+    text = " ".join((ROOT / "docs" / "getting-started.md").read_text().split())
+    assert "A file is read as a mask where it holds 0 and one other value" in text
+    volume = np.zeros((4, 4, 4), np.uint8)
+    volume[1:3, 1:3, 1:3] = 255
+    with pytest.raises(isoflow.IsoflowError):
+        isoflow.analyze(volume)
+    np.save(tmp_path / "mask.npy", volume)
+    assert isoflow.read_volume(tmp_path / "mask.npy").voxels == 8
+    volume[1, 1, 1] = 2
+    np.save(tmp_path / "labels.npy", volume)
+    with pytest.raises(isoflow.IsoflowError, match="--label"):
+        isoflow.read_volume(tmp_path / "labels.npy")
+    assert isoflow.read_volume(tmp_path / "labels.npy", label=2).voxels == 1
+
+
+def test_the_pages_say_surface_takes_3d_volumes_only(tmp_path, capsys):
+    """cli.md and the README listed 2D volumes (PNG masks) among
+    ``surface``'s inputs; ``surface`` refuses them in one line."""
+    cli = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    assert "a 2D or 3D boolean or 0/1 array (3D only for `surface`; 4D for `info`)" in cli
+    assert "2D PNG for `info` and `flow`" in " ".join((ROOT / "README.md").read_text().split())
+    np.save(tmp_path / "square.npy", np.ones((3, 3), bool))
+    capsys.readouterr()
+    assert main(["surface", str(tmp_path / "square.npy"), "-o", str(tmp_path / "square.ply")]) == 2
+    assert "needs a 3D object" in capsys.readouterr().err
+    assert main(["flow", str(tmp_path / "square.npy"), "-q"]) == 0

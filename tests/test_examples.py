@@ -24,6 +24,7 @@ import trimesh
 from docs_site import EXAMPLES, example_names
 from skimage.measure import euler_number
 
+import isoflow
 from isoflow import data
 
 
@@ -110,6 +111,23 @@ def test_flow_export(example_run):
     centre = trimesh.load(data.torus()).bounds.mean(axis=0)
     limit = [float(c) for c in printed.split("limit point (")[1].split(")")[0].split(",")]
     assert np.allclose(limit, centre, atol=0.1)
+
+
+def test_flow_export_says_when_the_torus_changes_topology():
+    """The docstring's account of the run: at the default resolution the
+    torus keeps its tunnel until it vanishes (no change printed), at 16
+    across its ring breaks into pieces first."""
+    import ast
+
+    doc = " ".join(ast.get_docstring(ast.parse((EXAMPLES / "flow_export.py").read_text())).split())
+    assert "keeps its tunnel to its last non-empty step" in doc and "``--resolution 16``" in doc
+    g = genus("torus.obj")
+    default = isoflow.run_flow(isoflow.voxelize_file(data.torus(), resolution=24), connectivity=6)
+    assert default.topology_changes == []
+    assert all(s["betti"] == [1, g, 0] for s in default.steps if s["voxels"])
+    coarse = isoflow.run_flow(isoflow.voxelize_file(data.torus(), resolution=16), connectivity=6)
+    first = coarse.topology_changes[0]
+    assert first["before"] == [1, g, 0] and first["after"][0] > 1
 
 
 def test_genus_table(example_run):

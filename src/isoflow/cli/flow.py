@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..digital.connectivity import check_connectivity
 from ..errors import IsoflowError
 from .inputs import (
     add_connectivity,
@@ -167,6 +168,10 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
         hint = one_time_point(args.input, obj.volume.shape, args.label) if obj.ndim == 4 else ""
         raise IsoflowError(f"{args.input}: the digital curvature flow is defined for 2D and 3D objects, "
                            f"this one is {obj.ndim}D{hint}")
+    if obj is not None and args.connectivity is not None:
+        # run_flow reads 6 and 26 as 4 and 8 in 2D (its default, 6, names the 3D
+        # adjacency); one asked for here must fit the object, as for info
+        check_connectivity(obj.ndim, args.connectivity)
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
