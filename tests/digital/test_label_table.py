@@ -262,6 +262,26 @@ def test_signed_labels_come_in_increasing_order(rng, method):
 
 
 @pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("shape", [(60, 50, 45), (40, 30)])
+def test_a_big_endian_image_gives_the_native_images_table(rng, method, shape):
+    """NRRD, HDF5 and ``>i4`` arrays are big-endian: the table, column
+    types included, is the native image's, so no column is big-endian."""
+    from skimage.measure import regionprops
+
+    image = rng.integers(0, 5, shape).astype(np.int32) * 1000003
+    big = image.astype(">i4")
+    native, table = label_table(image, method=method), label_table(big, method=method)
+    assert table.keys() == native.keys()
+    for key, column in table.items():
+        assert column.dtype == native[key].dtype and column.dtype.isnative, key
+        assert column.tolist() == native[key].tolist(), key
+    props = regionprops(image)
+    assert table["label"].tolist() == [p.label for p in props]
+    assert table["voxels"].tolist() == [p.area for p in props]
+    assert label_table(big, labels=[3000009, 1000003])["label"].dtype == np.int32
+
+
+@pytest.mark.parametrize("method", METHODS)
 def test_a_float_image_of_whole_numbers_is_read_as_int64(rng, method):
     image = nested(rng)
     want = label_table(image.astype(np.int64), method=method)

@@ -254,14 +254,17 @@ def checked_image(image) -> np.ndarray:
 
 
 def label_dtype(dtype) -> np.dtype:
-    """The type of an image's labels: its own for integers, uint8 for a
-    bool image (labels 0 and 1), int64 for a float image of whole numbers
-    (as NIfTI's scaling gives)."""
+    """The type of an image's labels: its own for integers, in the
+    machine's byte order (a big-endian image, as NRRD, HDF5 and ``>i4``
+    arrays give, would otherwise make a big-endian ``label`` column that
+    differs from the native image's), uint8 for a bool image (labels 0
+    and 1), int64 for a float image of whole numbers (as NIfTI's scaling
+    gives)."""
     dtype = np.dtype(dtype)
     if dtype == np.bool_:
         return np.dtype(np.uint8)
     if dtype.kind in "iu":
-        return dtype
+        return dtype.newbyteorder("=")
     if dtype.kind == "f":
         return np.dtype(np.int64)
     raise IsoflowError(f"a label image holds integers, not {dtype}")
@@ -277,7 +280,7 @@ def as_labels(array, first_layer: int = 0) -> np.ndarray:
     if vol.dtype == np.bool_:
         return vol.view(np.uint8)
     if vol.dtype.kind != "f":
-        return vol
+        return vol.astype(kind, copy=False)
     flat = vol.reshape(-1)
     wide = flat.astype(np.float64)  # float16 holds no 2**63 to compare with
     for bad, why in ((~np.isfinite(flat), f"not a label (a {vol.dtype} label image holds whole numbers)"),
