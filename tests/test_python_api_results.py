@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 import isoflow
 
@@ -25,6 +26,23 @@ def test_a_report_comes_back_from_its_json():
     for conn in (6, 26):
         report = isoflow.analyze(ring, conn)
         assert isoflow.Report.from_dict(json.loads(json.dumps(report.to_dict()))) == report
+
+
+def test_every_result_equals_the_dict_of_its_own_items():
+    """Results read as mappings, so each equals a dict of the same items,
+    a report as a flow result and a surface census do; and none is
+    hashed by its fields (whose lists made a TypeError from inside)."""
+    box = np.ones((5, 5, 5), bool)
+    box[2, 2, 2] = False
+    results = (isoflow.analyze(box), isoflow.analyze(box[1]), isoflow.run_flow(box, steps=2), isoflow.closed_surfaces(box))
+    for result in results:
+        items = dict(result)
+        assert result == items and items == result and not result != items, type(result).__name__
+        assert result == json.loads(json.dumps(result.to_dict())) or not isinstance(result, isoflow.Report)
+        with pytest.raises(TypeError, match=type(result).__name__):
+            hash(result)
+    report = results[0]
+    assert report["betti"] == [1, 0, 1] and report != dict(report, betti=[1, 0, 0])
 
 
 def test_a_4d_report_comes_back_from_its_json():

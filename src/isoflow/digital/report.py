@@ -21,7 +21,9 @@ class ClosedSurface(TypedDict):
     faces: int
 
 
-@dataclasses.dataclass(frozen=True, kw_only=True)
+# eq=False: the equality is Result's, a mapping's (a generated one would
+# find a report unequal to the dict of its own items)
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
 class Report(Result):
     """Everything ``isoflow info --json`` prints about one object.
 
