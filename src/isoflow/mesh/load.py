@@ -498,6 +498,7 @@ def refuse_zipped_store(p: Path) -> None:
     Traceback (most recent call last):
     isoflow.errors.IsoflowError: ...scan.zarr.zip: a zipped zarr store; isoflow reads a zarr store as a directory: ...
     """
+    import shlex
     import zipfile
 
     if p.suffix.lower() != ".zip":
@@ -510,7 +511,7 @@ def refuse_zipped_store(p: Path) -> None:
     if any(n.rstrip("/").rsplit("/", 1)[-1] in ZARR_METADATA for n in names):
         store = p.with_suffix("") if p.stem.lower().endswith(".zarr") else p.with_suffix(".zarr")
         raise IsoflowError(f"{p}: a zipped zarr store; isoflow reads a zarr store as a directory: unzip it "
-                           f"(python -m zipfile -e {p} {store}) and give {store}")
+                           f"(python -m zipfile -e {shlex.quote(str(p))} {shlex.quote(str(store))}) and give {store}")
 
 
 @contextlib.contextmanager
