@@ -409,3 +409,26 @@ def test_the_glb_curvature_columns_are_as_formats_md_says(tmp_path):
         got = glb.vertex_attributes[f"_{name}"]
         assert got.shape == (len(ply.vertices), 4) and not got[:, 1:].any()
         assert (got[order, 0] == columns[name][row]).all()
+
+
+def test_surface_md_names_what_the_file_holds(tmp_path):
+    """surface.md pointed to a "DESIGN section 3" that is nowhere in the
+    project and said every vertex carries the codes and the normal, which
+    no file holds; it now names the PLY's columns, which the header lists,
+    and the tables that give the normal from ``config``: on one voxel,
+    each corner's normal points away from the voxel's centre."""
+    import trimesh
+
+    text = " ".join((ROOT / "docs" / "surface.md").read_text().split())
+    assert "DESIGN" not in text and not list(ROOT.glob("DESIGN*"))
+    assert "DESIGN" not in isoflow.ClosedSurface.__doc__  # the API page's text
+    np.save(tmp_path / "v.npy", np.ones((1, 1, 1), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "-q"]) == 0
+    header = (tmp_path / "s.ply").read_bytes().split(b"end_header")[0].decode()
+    columns = [line.split()[-1] for line in header.splitlines() if line.startswith("property ") and "list" not in line]
+    named = [c for c in columns if c not in ("x", "y", "z", "red", "green", "blue")]
+    assert "written as the PLY columns " + ", ".join(f"`{c}`" for c in named[:-1]) + f", `{named[-1]}`" in text
+    assert "`isoflow.normal_lut()[config]`" in text
+    ply = trimesh.load(tmp_path / "s.ply", process=False)
+    config = ply.metadata["_ply_raw"]["vertex"]["data"]["config"]
+    assert (isoflow.normal_lut()[config] == np.sign(ply.vertices - 0.5)).all()
