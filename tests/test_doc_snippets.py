@@ -376,3 +376,59 @@ def test_the_pages_say_surface_takes_3d_volumes_only(tmp_path, capsys):
     assert main(["surface", str(tmp_path / "square.npy"), "-o", str(tmp_path / "square.ply")]) == 2
     assert "needs a 3D object" in capsys.readouterr().err
     assert main(["flow", str(tmp_path / "square.npy"), "-q"]) == 0
+
+
+def test_the_glb_curvature_columns_are_as_formats_md_says(tmp_path):
+    """formats.md listed the GLB's ``_config``, ``_gamma``... beside the
+    PLY's columns as if alike; the file's accessors are VEC4 (glTF's 4-byte
+    alignment), the value first: what the page now says, checked on the
+    file's own JSON and on trimesh's reading against the PLY's columns."""
+    import struct
+
+    import trimesh
+
+    text = " ".join((ROOT / "docs" / "formats.md").read_text().split())
+    assert "are each a `VEC4` whose first component is the value" in text and "`[:, 0]` is the PLY's `gamma`" in text
+    volume = np.zeros((4, 4, 3), bool)
+    volume[1:3, 1:3, 1] = True
+    volume[1, 1, 1] = False  # an L of three voxels: convex, flat and concave vertices
+    np.save(tmp_path / "v.npy", volume)
+    for suffix in (".glb", ".ply"):
+        assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / f"s{suffix}"), "-q"]) == 0
+    data = (tmp_path / "s.glb").read_bytes()
+    gltf = json.loads(data[20:20 + struct.unpack("<I", data[12:16])[0]])
+    attributes = gltf["meshes"][0]["primitives"][0]["attributes"]
+    types = {name: (gltf["accessors"][i]["type"], gltf["accessors"][i]["componentType"]) for name, i in attributes.items()}
+    assert types["_config"] == ("VEC4", 5121) and all(types[f"_{n}"] == ("VEC4", 5120) for n in ("class", "gamma", "a", "f"))
+    glb = next(iter(trimesh.load(tmp_path / "s.glb", process=False).geometry.values()))
+    ply = trimesh.load(tmp_path / "s.ply", process=False)
+    row = np.lexsort(ply.vertices.T)
+    order = np.lexsort(glb.vertices.T)
+    columns = ply.metadata["_ply_raw"]["vertex"]["data"]
+    for name in ("config", "class", "gamma", "a", "f"):
+        got = glb.vertex_attributes[f"_{name}"]
+        assert got.shape == (len(ply.vertices), 4) and not got[:, 1:].any()
+        assert (got[order, 0] == columns[name][row]).all()
+
+
+def test_surface_md_names_what_the_file_holds(tmp_path):
+    """surface.md pointed to a "DESIGN section 3" that is nowhere in the
+    project and said every vertex carries the codes and the normal, which
+    no file holds; it now names the PLY's columns, which the header lists,
+    and the tables that give the normal from ``config``: on one voxel,
+    each corner's normal points away from the voxel's centre."""
+    import trimesh
+
+    text = " ".join((ROOT / "docs" / "surface.md").read_text().split())
+    assert "DESIGN" not in text and not list(ROOT.glob("DESIGN*"))
+    assert "DESIGN" not in isoflow.ClosedSurface.__doc__  # the API page's text
+    np.save(tmp_path / "v.npy", np.ones((1, 1, 1), bool))
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(tmp_path / "s.ply"), "-q"]) == 0
+    header = (tmp_path / "s.ply").read_bytes().split(b"end_header")[0].decode()
+    columns = [line.split()[-1] for line in header.splitlines() if line.startswith("property ") and "list" not in line]
+    named = [c for c in columns if c not in ("x", "y", "z", "red", "green", "blue")]
+    assert "written as the PLY columns " + ", ".join(f"`{c}`" for c in named[:-1]) + f", `{named[-1]}`" in text
+    assert "`isoflow.normal_lut()[config]`" in text
+    ply = trimesh.load(tmp_path / "s.ply", process=False)
+    config = ply.metadata["_ply_raw"]["vertex"]["data"]["config"]
+    assert (isoflow.normal_lut()[config] == np.sign(ply.vertices - 0.5)).all()

@@ -305,3 +305,23 @@ def test_pictures_name_the_green_they_draw(tmp_path, monkeypatch):
     assert corner.sum() == 2 and (mesh.vertex_class[corner] == -1).all()
     r, g, b = gamma_colours(mesh.gamma, mesh.vertex_class)[corner][0].astype(int)
     assert g > r and g > b
+
+
+def test_one_pinched_vertex_is_counted_in_the_singular(tmp_path):
+    """Two voxels meeting at a corner, 26-connected: one object (scikit-image
+    chi 1) whose mesh splits the corner, V - E + F = 4 = 2 chi + 2 p, so
+    p = 1, said as "1 pinched vertex" (in memory and from a zarr store)."""
+    v = np.zeros((3, 3, 3), bool)
+    v[0, 0, 0] = v[1, 1, 1] = True
+    chi = euler_number(v, SKIMAGE_CONN[26])
+    rc, path, out, _ = surface(tmp_path, v, 26, ".ply")
+    pinched = (read_pymeshlab(path)["euler"] - 2 * chi) // 2
+    assert rc == 0 and pinched == 1
+    assert out.splitlines()[0].endswith(", 1 pinched vertex")
+    zarr = pytest.importorskip("zarr")
+    store = zarr.open_array(str(tmp_path / "v.zarr"), mode="w", shape=v.shape, chunks=(2, 2, 2), dtype="u1")
+    store[:] = v
+    o = io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(io.StringIO()):
+        rc = main(["surface", str(tmp_path / "v.zarr"), "-o", str(tmp_path / "z.ply"), "--connectivity", "26"])
+    assert rc == 0 and ", 1 pinched vertex (written block by block" in o.getvalue()

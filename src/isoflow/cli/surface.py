@@ -88,7 +88,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
         print(
             f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
             f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
-            + (f", {mesh.pinched} pinched vertices" if mesh.pinched else "")
+            + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
         )
         if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:
             print(f"isoflow surface: note: {stl_move_note(out, written)}", file=sys.stderr)
@@ -204,7 +204,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     out = written["path"]
     print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
           f"V-E+F = {written['euler_characteristic']}"
-          + (f", {written['pinched']} pinched vertices" if written["pinched"] else "")
+          + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
           + " (written block by block; isoflow info counts its closed surfaces)")
     if args.no_check:
         return 0

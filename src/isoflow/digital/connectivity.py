@@ -1,7 +1,7 @@
 """Which cells count as neighbours: the object's connectivity and the background's.
 
 The paper takes 6-connectivity for the object and so 26 for the background
-(DESIGN section 1); both pairs are offered wherever the answer depends on
+(docs/mathematics.md); both pairs are offered wherever the answer depends on
 it. In ``n`` dimensions the two are the face adjacency ``2n`` (cells sharing
 an (n-1)-face: 2, 4, 6, 8 for n = 1..4) and the full adjacency ``3^n - 1``
 (cells sharing any corner: 2, 8, 26, 80); the background always takes the

@@ -20,7 +20,7 @@ found for all labels at once:
   connectivity) and ``b1 = b0 + b2 - chi`` come from a graph of pieces,
   label by label, without another pass over the voxels
   (:mod:`isoflow.scale.piece_graph`);
-* the closed surfaces of a label's boundary mesh (DESIGN section 3) are the
+* the closed surfaces of a label's boundary mesh (docs/mathematics.md) are the
   pairs (component of the label, component of its complement) under the
   mesh's adjacencies that its boundary faces separate
   (:mod:`isoflow.digital.closed_surfaces`), each with ``chi = V - F``

@@ -12,7 +12,7 @@ from ..results import OMIT_NONE, Result
 
 
 class ClosedSurface(TypedDict):
-    """One closed surface of the boundary mesh (DESIGN section 3): its Euler
+    """One closed surface of the boundary mesh (docs/mathematics.md): its Euler
     characteristic ``V - E + F``, its genus ``1 - chi / 2`` and its number
     of quads."""
 

@@ -20,7 +20,7 @@ It checks, from the file alone:
   voxels' volume;
 * in a PLY, **Gauss-Bonnet** on the vertex records: the ``a`` column adds
   up to ``8 chi`` (eq. 4.10) with ``2 chi = V - E + F - 2 pinched``
-  (DESIGN section 3);
+  (docs/mathematics.md, the boundary mesh);
 * in an STL, each triangle's normal along its corners' orientation.
 """
 

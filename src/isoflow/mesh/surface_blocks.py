@@ -1,5 +1,5 @@
 """The boundary mesh of a volume larger than memory, written block by block
-into a binary PLY or STL (DESIGN sections 3 and 6).
+into a binary PLY or STL (docs/surface.md).
 
 The volume (a zarr array, a dask array, any array that slices) is cut into
 blocks along its chunks. Each block is read with a halo (one voxel below,
@@ -561,8 +561,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
 
     Notes
     -----
-    The mesh is :func:`isoflow.digital.surface.boundary_mesh`'s (DESIGN
-    section 3: ``V - E + F = 2 chi + 2 pinched``), up to the order of its
+    The mesh is :func:`isoflow.digital.surface.boundary_mesh`'s (docs/mathematics.md,
+    the boundary mesh: ``V - E + F = 2 chi + 2 pinched``), up to the order of its
     vertices and faces, with the same per-vertex attributes.
 
     Examples
