@@ -242,7 +242,8 @@ def bar_total(steps: int | None, shape: tuple[int, ...]) -> int | None:
     """The progress bar's length: ``--steps`` where a run of an array of
     ``shape`` can be expected to reach it (:func:`~isoflow.flow.run.reachable_steps`),
     else None, a counter of the steps done: a bar sized by ``--steps
-    1000000000000`` stayed at 0 % with an estimate of millions of hours.
+    1000000000000`` would stand at 0 % with an estimate of millions of
+    hours.
 
     Examples
     --------
