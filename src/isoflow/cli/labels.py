@@ -506,7 +506,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
               f"({_some([f.name for f in earlier])}); --force makes the directory hold this run's alone",
               file=sys.stderr)
     try:
-        # replaced together: a failure at any label leaves the directory's earlier set as it was
+        # one set: a folder holding some labels' new files beside others' old ones would look complete
         with output_set(f"{target[1]}/", retire=earlier if args.force else ()):
             for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
                 path = target[1] / f"{name}{target[2]}"
