@@ -666,12 +666,17 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
 
+    A bool image is written as uint8 labels 0 and 1, a float image of whole
+    numbers (as NIfTI's scaling gives) in the smallest unsigned type that
+    holds its labels: the images :func:`isoflow.label_table` takes.
+
     Parameters
     ----------
     labels : ndarray
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
-        not binvox or MagicaVoxel); 0 is the background. Not 4D:
+        not binvox or MagicaVoxel); 0 is the background; or a bool image,
+        or a float image of whole numbers from 0 on. Not 4D:
         :func:`read_labels` would not read it back.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
@@ -693,8 +698,10 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     ------
     IsoflowError
         For an existing file without ``force``, an array that is not 2D or
-        3D integers, a negative label, a format that keeps fewer labels
-        than the image has (:func:`check_label_output`) or no 2D image.
+        3D integers, bools or floats, a negative label, a float that is no
+        whole number (NaN, 1.5: its voxel named), a format that keeps
+        fewer labels than the image has (:func:`check_label_output`) or no
+        2D image.
 
     Examples
     --------
@@ -718,8 +725,11 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
         raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
                            "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
-    if arr.ndim not in (2, 3) or arr.dtype.kind not in "iu":
-        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers, got {arr.ndim}D {arr.dtype}")
+    if arr.ndim not in (2, 3) or arr.dtype.kind not in "biuf":
+        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
+                           f"numbers), got {arr.ndim}D {arr.dtype}")
+    if arr.dtype.kind in "bf":
+        arr = _whole_labels(arr, path)
     if arr.dtype.kind == "i":
         # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
         # label's output): written as the unsigned type of their width, whose bits are the same for
@@ -738,3 +748,22 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
     return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)
+
+
+def _whole_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
+    """A bool or float label image as :func:`isoflow.label_table` takes it
+    (a bool image as uint8 labels 0 and 1, a float image of whole numbers
+    as integers), in the smallest unsigned type that holds its labels: a
+    float image has no integer type of its own, and label_table's int64
+    would make every file 8 bytes a voxel. A value that is no label (NaN,
+    not whole, negative) is refused naming its voxel."""
+    try:
+        labels = as_labels(arr)
+    except IsoflowError as exc:
+        raise exc.at(path) from None
+    low, high = int(labels.min(initial=0)), int(labels.max(initial=0))
+    if low < 0:
+        voxel = ", ".join(str(int(i)) for i in np.unravel_index(int(np.argmin(labels)), labels.shape))
+        raise IsoflowError(f"{path}: voxel ({voxel}) holds {arr.reshape(-1)[int(np.argmin(labels))].item()!r}: "
+                           "a label image holds labels from 0 on")
+    return labels.astype(np.min_scalar_type(high), copy=False)

@@ -1,0 +1,82 @@
+"""Label images written by ``isoflow.write_labels`` in every format isoflow
+writes, read back by ``read_labels`` and by the format's own library: what
+the file holds against the array as written, and what docs/labels.md says
+each format keeps of its voxel size and origin."""
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.errors import IsoflowError, IsoflowWarning
+
+ROOT = Path(__file__).resolve().parents[2]
+
+#: labels 0, 1 and 2 in a 3x4x5 image, each voxel's label known by hand
+LABELS = np.zeros((3, 4, 5), np.uint8)
+LABELS[0, 0, 0] = LABELS[2, 3, 4] = 1
+LABELS[1, 1:3, 2:4] = 2
+
+
+def own_reading(path: Path) -> np.ndarray:
+    """The labels of ``path`` as the format's own library reads them, turned
+    into isoflow's (x, y, z) order."""
+    name = path.name
+    if name.endswith(".npz"):
+        with np.load(path) as z:
+            return z["volume"]
+    if name.endswith(".nii.gz"):
+        nib = pytest.importorskip("nibabel")
+        return np.asarray(nib.load(path).dataobj)
+    if name.endswith(".h5"):
+        h5py = pytest.importorskip("h5py")
+        with h5py.File(path, "r") as f:
+            return f["volume"][()]
+    if name.endswith(".tif"):
+        return pytest.importorskip("tifffile").imread(path).T
+    raise AssertionError(name)
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".nii.gz", ".h5", ".tif"])
+@pytest.mark.parametrize("dtype", [np.bool_, np.float32, np.float64])
+def test_write_labels_takes_the_bool_and_float_images_that_label_table_takes(tmp_path, suffix, dtype):
+    """write_labels refused a bool or float image ("a 3D or 2D array of
+    integers, got 3D float32") that label_table takes: a bool image as
+    labels 0 and 1, a float one of whole numbers as its integers. The file
+    holds those integers, as its own library reads them, and the image read
+    back gives label_table's rows of the array as given."""
+    image = (LABELS > 0) if dtype is np.bool_ else LABELS.astype(dtype)
+    expected = LABELS > 0 if dtype is np.bool_ else LABELS
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IsoflowWarning)  # TIFF's origin, said and tested below
+        path = isoflow.write_labels(image, tmp_path / f"labels{suffix}", pitch=(0.5, 0.25, 2.0), origin=(1, 2, 3))
+    stored = own_reading(path)
+    assert stored.dtype == np.uint8 and np.array_equal(stored, expected.astype(np.uint8))
+    back = isoflow.read_labels(path)
+    table = isoflow.label_table(back, 6, origin=(1, 2, 3))
+    given = isoflow.label_table(image, 6, pitch=(0.5, 0.25, 2.0), origin=(1, 2, 3))
+    assert table.keys() == given.keys()
+    for column in given:
+        assert np.array_equal(table[column], given[column], equal_nan=given[column].dtype.kind == "f"), column
+    assert table["voxels"].tolist() == ([6] if dtype is np.bool_ else [2, 4])
+
+
+@pytest.mark.parametrize(("value", "words"), [
+    (1.5, "holds 1.5: not a whole number"),
+    (np.nan, "holds nan: not a label"),
+    (-2.0, "holds -2.0: a label image holds labels from 0 on"),
+])
+def test_write_labels_refuses_a_float_that_is_no_label_naming_its_voxel(tmp_path, value, words):
+    image = LABELS.astype(np.float32)
+    image[2, 1, 3] = value
+    path = tmp_path / "labels.nii.gz"
+    with pytest.raises(IsoflowError) as info:
+        isoflow.write_labels(image, path)
+    assert str(info.value) == f"{path}: voxel (2, 1, 3) {words}" + str(info.value).split(words, 1)[1]
+    assert "\n" not in str(info.value) and not path.exists()
+    if value >= 0 or np.isnan(value):  # (label_table takes negative labels; a file holds them from 0 on)
+        with pytest.raises(IsoflowError, match=re.escape(f"voxel (2, 1, 3) {words}")):
+            isoflow.label_table(image)
