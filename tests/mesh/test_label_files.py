@@ -80,3 +80,20 @@ def test_write_labels_refuses_a_float_that_is_no_label_naming_its_voxel(tmp_path
     if value >= 0 or np.isnan(value):  # (label_table takes negative labels; a file holds them from 0 on)
         with pytest.raises(IsoflowError, match=re.escape(f"voxel (2, 1, 3) {words}")):
             isoflow.label_table(image)
+
+
+@pytest.mark.parametrize(("suffix", "fmt"), [(".binvox", "binvox holds 3D voxels"),
+                                              (".vox", "MagicaVoxel holds 3D models")])
+@pytest.mark.parametrize("top", [2, 300])
+def test_a_2d_label_image_for_a_3d_format_is_refused_as_2d(tmp_path, suffix, fmt, top):
+    """A 2D image with labels beyond what binvox (one) or MagicaVoxel (255)
+    keeps was refused for its labels ("keeps labels up to 255, this image's
+    labels go up to 300"), though no label count would make it fit: a 2D
+    image is refused as 2D first."""
+    cells = np.zeros((4, 5), np.uint16)
+    cells[0, 0], cells[3, 4] = 1, top
+    path = tmp_path / f"cells{suffix}"
+    with pytest.raises(IsoflowError) as info:
+        isoflow.write_labels(cells, path)
+    assert str(info.value) == f"{path}: {fmt}, this object is 2D"
+    assert not path.exists()

@@ -559,7 +559,7 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
     return suffix
 
 
-def check_volume_holds(path: str | os.PathLike, obj: DigitalObject) -> None:
+def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume) -> None:
     """Refuse now, in one line, what the format of ``path`` could not hold
     of ``obj`` (a 2D object as binvox, a pitch per axis as MagicaVoxel),
     for work that writes such files later (the flow's step volumes); what
@@ -699,9 +699,9 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     IsoflowError
         For an existing file without ``force``, an array that is not 2D or
         3D integers, bools or floats, a negative label, a float that is no
-        whole number (NaN, 1.5: its voxel named), a format that keeps
-        fewer labels than the image has (:func:`check_label_output`) or no
-        2D image.
+        whole number (NaN, 1.5: its voxel named), a 2D image for a format
+        of 3D only (binvox, MagicaVoxel), a format that keeps fewer labels
+        than the image has (:func:`check_label_output`).
 
     Examples
     --------
@@ -741,6 +741,8 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
+    check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
