@@ -685,7 +685,10 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
         The voxel size, one value or one per axis, kept where the format
         has room for it.
     origin : array_like, optional
-        The lower corner of voxel (0, 0, 0) in world units (zero if None).
+        The lower corner of voxel (0, 0, 0) in world units (zero if None),
+        kept where the format has room for it: not in TIFF, ``.npy`` or
+        MagicaVoxel, which a warning says (docs/labels.md lists what each
+        format keeps).
     force : bool
         Overwrite an existing file.
 
