@@ -731,16 +731,7 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     if arr.ndim not in (2, 3) or arr.dtype.kind not in "biuf":
         raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
                            f"numbers), got {arr.ndim}D {arr.dtype}")
-    if arr.dtype.kind in "bf":
-        arr = _whole_labels(arr, path)
-    if arr.dtype.kind == "i":
-        # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
-        # label's output): written as the unsigned type of their width, whose bits are the same for
-        # labels from 0 on (a view, no copy)
-        low = int(arr.min(initial=0))
-        if low < 0:
-            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {low}")
-        arr = arr.view(arr.dtype.str.replace("i", "u"))
+    arr = _unsigned_labels(arr, path)
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
@@ -755,20 +746,27 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)
 
 
-def _whole_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
-    """A bool or float label image as :func:`isoflow.label_table` takes it
-    (a bool image as uint8 labels 0 and 1, a float image of whole numbers
-    as integers), in the smallest unsigned type that holds its labels: a
-    float image has no integer type of its own, and label_table's int64
-    would make every file 8 bytes a voxel. A value that is no label (NaN,
-    not whole, negative) is refused naming its voxel."""
-    try:
-        labels = as_labels(arr)
-    except IsoflowError as exc:
-        raise exc.at(path) from None
-    low, high = int(labels.min(initial=0)), int(labels.max(initial=0))
-    if low < 0:
-        voxel = ", ".join(str(int(i)) for i in np.unravel_index(int(np.argmin(labels)), labels.shape))
-        raise IsoflowError(f"{path}: voxel ({voxel}) holds {arr.reshape(-1)[int(np.argmin(labels))].item()!r}: "
-                           "a label image holds labels from 0 on")
-    return labels.astype(np.min_scalar_type(high), copy=False)
+def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
+    """The labels of an image of integers, bools or floats as unsigned
+    integers, as :func:`write_labels` writes them; a value that is no label
+    (negative, NaN, not whole) is refused naming its voxel."""
+    labels = arr
+    if arr.dtype.kind in "bf":
+        try:  # as label_table takes them: a bool image as uint8 0 and 1, whole floats as int64
+            labels = as_labels(arr)
+        except IsoflowError as exc:
+            raise exc.at(path) from None
+    if labels.dtype.kind == "i":
+        # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
+        # label's output): written as the unsigned type of their width, whose bits are the same for
+        # labels from 0 on (a view, no copy)
+        if labels.size and labels.min() < 0:
+            at = np.unravel_index(int(np.argmin(labels)), labels.shape)
+            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
+                               f"voxel ({', '.join(str(int(i)) for i in at)})")
+        labels = labels.view(labels.dtype.str.replace("i", "u"))
+    if arr.dtype.kind == "f":
+        # a float image has no integer type of its own, and label_table's int64 would make every file
+        # 8 bytes a voxel: the smallest type that holds its labels
+        labels = labels.astype(np.min_scalar_type(int(labels.max(initial=0))), copy=False)
+    return labels
