@@ -110,6 +110,18 @@ def test_a_2d_label_image_for_a_3d_format_is_refused_as_2d(tmp_path, suffix, fmt
     assert not path.exists()
 
 
+def test_a_dataset_named_like_a_3d_format_is_no_such_format(tmp_path):
+    """The refusal of a 2D image by a format of 3D only looked at the name
+    after the last slash: ``l.h5:/cells.vox`` was refused as MagicaVoxel,
+    though it names a dataset of an HDF5 file, which holds 2D."""
+    h5py = pytest.importorskip("h5py")
+    cells = np.zeros((4, 5), np.uint16)
+    cells[0, 0], cells[3, 4] = 1, 300
+    file = isoflow.write_labels(cells, f"{tmp_path / 'l.h5'}:/cells.vox", pitch=0.5)
+    with h5py.File(file, "r") as f:
+        assert np.array_equal(f["cells.vox"][()], cells) and f["cells.vox"].dtype == np.uint16
+
+
 def kept_by_the_docs() -> dict[str, tuple[str, str]]:
     """docs/labels.md's table of label files: (voxel size, origin) as it
     says each suffix keeps them."""

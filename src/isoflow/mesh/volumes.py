@@ -576,13 +576,13 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume
     """
     import warnings
 
-    file = Path(path)
+    file, dataset = split_dataset(path)  # FILE.h5:/cells.vox is HDF5, whatever its dataset's name
     fmt = format_for(file, writing=True)
     module = None if fmt is None else fmt.load()
     if module is not None and hasattr(module, "check"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            module.check(file, obj, None)
+            module.check(file, obj, dataset)
 
 
 def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
