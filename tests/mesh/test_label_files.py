@@ -122,6 +122,22 @@ def test_a_dataset_named_like_a_3d_format_is_no_such_format(tmp_path):
         assert np.array_equal(f["cells.vox"][()], cells) and f["cells.vox"].dtype == np.uint16
 
 
+def test_a_label_image_read_back_is_written_with_its_place(tmp_path):
+    """write_labels refused what read_labels gives ("got 0D object"), though
+    label_table takes it in place of the array, its pitch and origin: it is
+    written with its spacing and origin, which pynrrd reads from the header
+    (space origin: voxel 0's centre), unless a pitch or origin is given."""
+    nrrd = pytest.importorskip("nrrd")
+    first = isoflow.write_labels(LABELS, tmp_path / "first.npz", pitch=(0.5, 0.25, 2.0), origin=(1, 2, 3))
+    path = isoflow.write_labels(isoflow.read_labels(first), tmp_path / "again.nrrd")
+    data, header = nrrd.read(str(path), index_order="F")
+    assert np.array_equal(data, LABELS)
+    assert np.allclose(header["space directions"], np.diag([0.5, 0.25, 2.0]))
+    assert np.allclose(header["space origin"], [1.25, 2.125, 4.0])
+    back = isoflow.read_labels(isoflow.write_labels(isoflow.read_labels(first), tmp_path / "moved.npz", origin=(0, 0, 0)))
+    assert back.spacing.tolist() == [0.5, 0.25, 2.0] and back.origin.tolist() == [0.0, 0.0, 0.0]
+
+
 def kept_by_the_docs() -> dict[str, tuple[str, str]]:
     """docs/labels.md's table of label files: (voxel size, origin) as it
     says each suffix keeps them."""

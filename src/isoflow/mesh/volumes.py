@@ -661,7 +661,7 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     return file, dataset
 
 
-def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | np.ndarray = 1.0,
+def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pitch: float | np.ndarray | None = None,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
@@ -677,15 +677,18 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
         cell segmentation, a section's grain map: the formats that hold 2D,
         not binvox or MagicaVoxel); 0 is the background; or a bool image,
         or a float image of whole numbers from 0 on. Not 4D:
-        :func:`read_labels` would not read it back.
+        :func:`read_labels` would not read it back. Or a
+        :class:`~isoflow.LabelImage`, as :func:`read_labels` gives it, with
+        its voxel size and origin.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
-    pitch : float or ndarray
+    pitch : float or ndarray, optional
         The voxel size, one value or one per axis, kept where the format
-        has room for it.
+        has room for it (if None: a LabelImage's spacing, else 1).
     origin : array_like, optional
-        The lower corner of voxel (0, 0, 0) in world units (zero if None),
+        The lower corner of voxel (0, 0, 0) in world units (if None: a
+        LabelImage's origin, else zero),
         kept where the format has room for it: not in TIFF, ``.npy`` or
         MagicaVoxel, which a warning says (docs/labels.md lists what each
         format keeps).
@@ -722,7 +725,18 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     >>> back = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.nii.gz", pitch=(0.5, 0.25)))
     >>> np.array_equal(back.array, cells), back.spacing.tolist()
     (True, [0.5, 0.25])
+
+    A label image read from one file, written to another with its place:
+
+    >>> again = read_labels(write_labels(back, pathlib.Path(tempfile.mkdtemp()) / "cells.h5"))
+    >>> np.array_equal(again.array, cells), again.spacing.tolist()
+    (True, [0.5, 0.25])
     """
+    if isinstance(labels, LabelImage):  # its place, unless given, as label_table takes it
+        pitch = labels.spacing if pitch is None else pitch
+        origin = labels.origin if origin is None else origin
+        labels = labels.array
+    pitch = 1.0 if pitch is None else pitch
     arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
