@@ -138,6 +138,28 @@ def test_a_label_image_read_back_is_written_with_its_place(tmp_path):
     assert back.spacing.tolist() == [0.5, 0.25, 2.0] and back.origin.tolist() == [0.0, 0.0, 0.0]
 
 
+def test_voxelize_says_that_a_tiff_of_labels_drops_the_origin(tmp_path, capsys):
+    """``voxelize A B -o labels.tif`` writes the labels that the same run
+    writes to NIfTI (as tifffile and nibabel read them), and says in one
+    ``warning:`` line that the TIFF holds no origin; the NIfTI keeps it, and
+    is written without a word."""
+    tifffile = pytest.importorskip("tifffile")
+    nib = pytest.importorskip("nibabel")
+    from isoflow.cli import main
+
+    meshes = [str(ROOT / "meshes" / "torus.obj"), str(ROOT / "meshes" / "eight.off")]
+    warned = {}
+    for suffix in (".tif", ".nii.gz"):
+        assert main(["voxelize", *meshes, "--resolution", "12", "-o", str(tmp_path / f"l{suffix}")]) == 0
+        warned[suffix] = [line for line in capsys.readouterr().err.splitlines() if "warning:" in line]
+    stored = tifffile.imread(tmp_path / "l.tif").T
+    assert np.array_equal(stored, np.asarray(nib.load(tmp_path / "l.nii.gz").dataobj)) and set(np.unique(stored)) == {0, 1, 2}
+    origin = isoflow.read_labels(tmp_path / "l.nii.gz").origin
+    assert origin.any() and isoflow.read_labels(tmp_path / "l.tif").origin.tolist() == [0.0, 0.0, 0.0]
+    assert warned[".nii.gz"] == [] and len(warned[".tif"]) == 1
+    assert f"{tmp_path / 'l.tif'}: TIFF keeps no origin" in warned[".tif"][0]
+
+
 def kept_by_the_docs() -> dict[str, tuple[str, str]]:
     """docs/labels.md's table of label files: (voxel size, origin) as it
     says each suffix keeps them."""
