@@ -160,17 +160,22 @@ def test_voxelize_says_that_a_tiff_of_labels_drops_the_origin(tmp_path, capsys):
     assert f"{tmp_path / 'l.tif'}: TIFF keeps no origin" in warned[".tif"][0]
 
 
-def kept_by_the_docs() -> dict[str, tuple[str, str]]:
-    """docs/labels.md's table of label files: (voxel size, origin) as it
-    says each suffix keeps them."""
+def docs_rows() -> dict[str, list[str]]:
+    """docs/labels.md's table of label files: its cells (labels, 2D, voxel
+    size, origin) by suffix."""
     text = (ROOT / "docs" / "labels.md").read_text()
     table = text[text.index("| format | labels | 2D | voxel size | origin |"):].split("\n\n", 1)[0]
     rows = {}
     for line in table.splitlines()[2:]:
         cells = [c.strip() for c in line.strip("|").split("|")]
         for suffix in re.findall(r"`([^`]+)`", cells[0]):
-            rows[suffix] = (cells[3], cells[4])
+            rows[suffix] = cells[1:]
     return rows
+
+
+def kept_by_the_docs() -> dict[str, tuple[str, str]]:
+    """(voxel size, origin) as docs/labels.md says each suffix keeps them."""
+    return {suffix: (cells[2], cells[3]) for suffix, cells in docs_rows().items()}
 
 
 #: every format write_labels writes, by one suffix each
@@ -210,3 +215,29 @@ def test_each_format_keeps_the_voxel_size_and_origin_the_docs_say_and_warns_of_t
     assert bool(lost) == ("not kept" in (size, place)), lost
     if place == "not kept":
         assert len(lost) == 1 and str(path) in lost[0] and "origin" in lost[0] and "not" in lost[0]
+
+
+@pytest.mark.parametrize("suffix", WRITTEN)
+def test_each_format_keeps_the_labels_and_2d_images_the_docs_say(tmp_path, suffix):
+    """The table's labels column (the largest label a file keeps) and its
+    2D column, on files written: the largest label it gives is written and
+    read back, one more is refused; a 2D image is written or refused."""
+    labels, flat = docs_rows().get(suffix, ["(no row)", "(no row)"])[:2]
+    top = {"any": 2**64 - 1, "one": 1}.get(labels) or int(labels.removeprefix("up to ").replace(",", ""))
+    image = np.zeros((3, 4, 5), np.uint64)
+    image[1, 2, 3] = top
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IsoflowWarning)
+        back = isoflow.read_labels(isoflow.write_labels(image, tmp_path / f"top{suffix}"))
+        assert int(back.array.max()) == top and tuple(np.argwhere(back.array)[0]) == (1, 2, 3)
+        if labels != "any":
+            image[1, 2, 3] = top + 1
+            with pytest.raises(IsoflowError, match=f"keeps (one label|labels up to {top})"):
+                isoflow.write_labels(image, tmp_path / f"more{suffix}")
+        cells = np.array([[0, 1, 1], [0, 0, 1]], np.uint8)
+        if flat == "yes":
+            assert np.array_equal(isoflow.read_labels(isoflow.write_labels(cells, tmp_path / f"c{suffix}")).array, cells)
+        else:
+            assert flat == "no"
+            with pytest.raises(IsoflowError, match="this object is 2D"):
+                isoflow.write_labels(cells, tmp_path / f"c{suffix}")
