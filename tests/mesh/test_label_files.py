@@ -241,3 +241,20 @@ def test_each_format_keeps_the_labels_and_2d_images_the_docs_say(tmp_path, suffi
             assert flat == "no"
             with pytest.raises(IsoflowError, match="this object is 2D"):
                 isoflow.write_labels(cells, tmp_path / f"c{suffix}")
+
+
+@pytest.mark.parametrize(("pitch", "origin", "named"), [
+    ((0.5, 0.5, 0.5), None, "its pitch [0.5, 0.5, 0.5] is not kept"),
+    (1.0, (1, 2, 3), "its origin [1, 2, 3] is not kept"),
+    ((0.5, 0.25, 2.0), (1, 2, 3), "its pitch [0.5, 0.25, 2], origin [1, 2, 3] are not kept"),
+])
+def test_a_npy_of_labels_names_what_it_drops_with_its_value(tmp_path, pitch, origin, named):
+    """A label image to .npy was said to lose "pitch, origin, offset and
+    parity" whatever it held: a label image has no lattice offset or
+    parity. The warning names what this image holds and the file drops,
+    with its value; the array as written is in the file."""
+    with pytest.warns(IsoflowWarning) as caught:
+        path = isoflow.write_labels(LABELS, tmp_path / "labels.npy", pitch=pitch, origin=origin)
+    said = [str(w.message) for w in caught]
+    assert len(said) == 1 and named in said[0] and "offset" not in said[0] and "parity" not in said[0], said
+    assert np.array_equal(np.load(path), LABELS)
