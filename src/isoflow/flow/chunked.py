@@ -312,8 +312,8 @@ def source_volume(path):
     ((2, 3, 4), [0.5, 0.5, 0.5])
     """
     from ..mesh.formats.omezarr import axis_names, placement_of
-    from ..mesh.formats.registry import spatial_axes, split_dataset
-    from ..scale.chunks import open_zarr_node
+    from ..mesh.formats.registry import split_dataset
+    from ..scale.chunks import open_zarr_node, spatial_axes
 
     _, da = import_dask()
     file, level = split_dataset(path)

@@ -37,7 +37,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from ...scale.chunks import axis_names, open_zarr_node
+from ...scale.chunks import axis_names, open_zarr_node, spatial_axes
 from .registry import (
     RawVolume,
     check_label,
@@ -48,7 +48,6 @@ from .registry import (
     one_time_point_labels,
     placement,
     reading,
-    spatial_axes,
     split_dataset,
     stored_values,
     to_xyz,
