@@ -176,3 +176,22 @@ def test_command_text_says_changes_are_not_located(tmp_path, capsys):
     changes = [line for line in capsys.readouterr().out.splitlines() if "topology change" in line]
     assert changes and all(line.endswith("not located (block by block)") for line in changes)
     assert not any("None" in line for line in changes)
+
+
+def test_command_names_the_fill_value_of_chunks_never_written(tmp_path):
+    """A store whose second chunk was never written reads it as the
+    array's fill value, 2 here: the flow block by block refused it with
+    "e.g. 2" alone, a value no voxel was written with; the line now says it
+    is the fill value, and why zarr reads it, as ``info`` does."""
+    store = tmp_path / "sparse.zarr"
+    z = zarr.create_array(str(store), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1", fill_value=2)
+    z[:4] = crossing_volume()[:4, :8, :8]
+    assert len(list(store.rglob("c/*/*/*"))) == 1  # one chunk of two written
+    run = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(store), "--out", str(tmp_path / "run"),
+                          "--volumes", ".zarr"], capture_output=True, text=True, timeout=300)
+    # (where numba's cache is cold a process may say so first, in a note line)
+    err = [line for line in run.stderr.strip().splitlines() if not line.startswith("isoflow flow: note: ")]
+    assert run.returncode == 2 and len(err) == 1, run.stderr
+    assert err[0].startswith(f"isoflow flow: error: {store}: not a binary volume (256 voxels "), err  # 4 x 8 x 8
+    assert "e.g. 2, the array's fill value, which zarr reads for a chunk never written" in err[0], err
+    assert not (tmp_path / "run").exists()

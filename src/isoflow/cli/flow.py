@@ -132,7 +132,7 @@ def flow_store(args: argparse.Namespace) -> int:
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
-    volume, _ = source_volume(args.input)
+    volume = source_volume(args.input)[0]
     say_plate(args, tuple(volume.shape))
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
