@@ -195,3 +195,17 @@ def test_command_names_the_fill_value_of_chunks_never_written(tmp_path):
     assert err[0].startswith(f"isoflow flow: error: {store}: not a binary volume (256 voxels "), err  # 4 x 8 x 8
     assert "e.g. 2, the array's fill value, which zarr reads for a chunk never written" in err[0], err
     assert not (tmp_path / "run").exists()
+
+
+def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
+    """A chunk that does not decode (zarr's codec raises) ended the flow
+    block by block in a traceback, exit status 1; it is one line naming the
+    store and the region of the chunk, exit status 2, as ``info`` and
+    ``surface`` refuse it."""
+    store = tmp_path / "damaged.zarr"
+    plain_store(store, crossing_volume()[:8, :8, :8], (4, 8, 8))
+    (store / "c" / "1" / "0" / "0").write_bytes(b"not a chunk")
+    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"isoflow flow: error: {store}: cannot read a chunk in [4:8, 0:8, 0:8] ("), err
+    assert not (tmp_path / "run").exists()

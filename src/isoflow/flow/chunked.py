@@ -319,7 +319,7 @@ def source_volume(path):
     >>> volume.shape, place.spacing.tolist(), int(fill)
     ((2, 3, 4), [0.5, 0.5, 0.5], 0)
     """
-    from ..mesh.formats.omezarr import axis_names, placement_of
+    from ..mesh.formats.omezarr import Guarded, axis_names, placement_of
     from ..mesh.formats.registry import split_dataset
     from ..scale.chunks import open_zarr_node, spatial_axes
 
@@ -327,7 +327,8 @@ def source_volume(path):
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
-    lazy = da.from_zarr(array)
+    # chunks read through a guard, so that a damaged one is one line
+    lazy = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     pitch, origin = 1.0, None
     if multiscale is None:
         attrs = dict(getattr(array, "attrs", {}) or {})

@@ -188,7 +188,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     _, da = import_dask()
     check_label(label, array.dtype, where)
     # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
     report = analyze_chunked(raw == label, connectivity, where=where, progress=progress, surfaces=surfaces,
                              threads=threads)
@@ -212,7 +212,7 @@ def label_absent(path, label) -> IsoflowError:
     array, multiscale, _ = open_zarr_node(file, level)
     other = [] if multiscale is None else spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)[1]
     # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
     return no_such_label(label, np.unique(da.unique(raw).compute()), where)
 
@@ -262,12 +262,29 @@ def store_volume(path, label=None) -> tuple:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
     if label is not None:
         check_label(label, array.dtype, where)
-    return ChunkReader(_Guarded(array, where), order, other, label), pitch, origin
+    return ChunkReader(Guarded(array, where), order, other, label), pitch, origin
 
 
-class _Guarded:
+class Guarded:
     """A zarr array whose reads raise one IsoflowError line naming the
-    store (a damaged chunk), for ``dask.array.from_array``."""
+    store and the region read (a damaged chunk), for
+    ``dask.array.from_array``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = Path(tempfile.mkdtemp()) / "v.zarr"
+    >>> z = zarr.create_array(str(path), shape=(4, 4), chunks=(2, 4), dtype="u1")
+    >>> z[...] = 1
+    >>> _ = (path / "c" / "1" / "0").write_bytes(b"not a chunk")
+    >>> int(Guarded(z, "v.zarr")[:2].sum())
+    8
+    >>> try:
+    ...     Guarded(z, "v.zarr")[2:4, 0:4]
+    ... except IsoflowError as error:
+    ...     print(str(error).split(" (")[0])
+    v.zarr: cannot read a chunk in [2:4, 0:4]
+    """
 
     def __init__(self, array, where: str):
         self.array, self.where = array, where
@@ -399,7 +416,7 @@ class LabelSlabs:
                                                                         "(label_table)" if len(self.xyz) == 2 else ""))
         if multiscale is not None:
             pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
-        self.array, self.guarded = array, _Guarded(array, self.where)
+        self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
