@@ -209,3 +209,21 @@ def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"isoflow flow: error: {store}: cannot read a chunk in [4:8, 0:8, 0:8] ("), err
     assert not (tmp_path / "run").exists()
+
+
+def test_command_on_a_label_image_names_the_way_to_one_label(tmp_path, capsys):
+    """A label image flowed block by block was refused with "or select one
+    label with --label N", an option that flow refuses ("--label is not
+    read block by block"); the line now names the flow in memory, where
+    --label flows the label's voxels."""
+    v = crossing_volume()[:8, :8, :8].astype(np.uint8)
+    v[1:3, 1:4, 1:6] = 2
+    store = tmp_path / "labels.zarr"
+    plain_store(store, v, (4, 8, 8))
+    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"({np.count_nonzero(v[:4] == 2)} voxels in the block at voxel (0, 0, 0)" in err[0], err
+    assert err[0].endswith("or select one label with --label N in the flow in memory (without --volumes .zarr), "
+                           "or write its voxels as a store of their own"), err
+    assert main(["flow", str(store), "--label", "2", "--steps", "0", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == np.count_nonzero(v == 2) == 30

@@ -145,7 +145,7 @@ def flow_store(args: argparse.Namespace) -> int:
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     total = bar_total(args.steps, volume.shape)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
-        with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args):
+        with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
