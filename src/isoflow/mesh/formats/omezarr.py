@@ -102,6 +102,7 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
         data = np.asarray(array[index])
+    fill = getattr(array, "fill_value", None)
     if multiscale is None:
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
@@ -113,14 +114,14 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
-            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)))
-        return RawVolume(data)
+            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill)
+        return RawVolume(data, fill=fill)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(to_xyz(data, names, where), pitch, origin)
+    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill)
 
 
 def stored_ndim(path) -> int:

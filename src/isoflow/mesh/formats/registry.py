@@ -159,7 +159,9 @@ def quiet_logs(logger: str):
 class RawVolume:
     """What a reader found: the array in isoflow's (x, y, z) order and where
     it sits. ``paint``: the values are colours, not labels, so any nonzero
-    voxel is in the object unless one value is selected (MagicaVoxel)."""
+    voxel is in the object unless one value is selected (MagicaVoxel).
+    ``fill``: a zarr array's fill value, which it reads for a chunk never
+    written (a refusal of that value says so); None for other formats."""
 
     array: np.ndarray
     pitch: float | np.ndarray = 1.0
@@ -167,6 +169,7 @@ class RawVolume:
     offset: tuple[int, ...] | None = None
     parity: int = 0
     paint: bool = False
+    fill: object = None
 
 
 @dataclass(frozen=True)
