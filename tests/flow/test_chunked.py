@@ -227,3 +227,15 @@ def test_command_on_a_label_image_names_the_way_to_one_label(tmp_path, capsys):
                            "or write its voxels as a store of their own"), err
     assert main(["flow", str(store), "--label", "2", "--steps", "0", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == np.count_nonzero(v == 2) == 30
+
+
+def test_help_names_the_flow_block_by_block(capsys):
+    """``flow --help`` said nothing of the flow of a store block by block:
+    its --volumes and --out read as if every run wrote surfaces and
+    shapes.png. It now names ``--volumes .zarr`` and what that run leaves
+    out (docs/flow.md, "Beyond memory")."""
+    with pytest.raises(SystemExit):
+        main(["flow", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert ("a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its --out gets no "
+            "surfaces or shapes.png)") in text
