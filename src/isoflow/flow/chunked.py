@@ -34,9 +34,11 @@ The tasks take paths, so they run on a ``dask.distributed`` cluster
 
 from __future__ import annotations
 
+import os
 import shutil
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -297,7 +299,7 @@ def _binary_block(block: np.ndarray, where: str = "volume", fill=None, block_inf
         raise fill_value_named(exc, fill, block.dtype) from None
 
 
-def source_volume(path):
+def source_volume(path: str | os.PathLike) -> tuple[Any, DigitalObject, Any]:
     """The volume of a zarr store (``IMAGE.zarr:LEVEL`` too) as a dask array
     in x, y, z order, its placement (a :class:`DigitalObject` with an empty
     volume), and the array's fill value (what zarr reads for a chunk never

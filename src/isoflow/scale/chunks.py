@@ -11,6 +11,7 @@ a task).
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -341,7 +342,7 @@ def spatial_axes(names, shape, where: str, time: bool = False) -> tuple[list[int
     return xyz, other
 
 
-def split_store(path, suffixes: tuple[str, ...] = ("zarr",)) -> tuple[Path, str | None]:
+def split_store(path: str | os.PathLike, suffixes: tuple[str, ...] = ("zarr",)) -> tuple[Path, str | None]:
     """The file or store a path names and the name after its colon:
     ``IMAGE.zarr:1`` -> (IMAGE.zarr, '1'), a resolution level or an array of
     a group; with ``suffixes`` ("h5", "npz", ...) a dataset or array inside

@@ -271,6 +271,14 @@ class Guarded:
     store and the region read (a damaged chunk), for
     ``dask.array.from_array``.
 
+    Parameters
+    ----------
+    array : zarr.Array
+        The stored array, read as it is (``shape``, ``dtype``, ``chunks``,
+        ``shards`` and ``fill_value`` are its own).
+    where : str
+        The store as the error names it (``IMAGE.zarr:LEVEL``).
+
     Examples
     --------
     >>> import tempfile, zarr
@@ -287,13 +295,13 @@ class Guarded:
     v.zarr: cannot read a chunk in [2:4, 0:4]
     """
 
-    def __init__(self, array, where: str):
+    def __init__(self, array, where: str) -> None:
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
         self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
         self.fill_value = getattr(array, "fill_value", None)
 
-    def __getitem__(self, key):
+    def __getitem__(self, key) -> np.ndarray:
         try:
             return np.asarray(self.array[key])
         except Exception as exc:  # zarr and its codecs raise many types
