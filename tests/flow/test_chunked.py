@@ -239,3 +239,16 @@ def test_help_names_the_flow_block_by_block(capsys):
     text = " ".join(capsys.readouterr().out.split())
     assert ("a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its --out gets no "
             "surfaces or shapes.png)") in text
+
+
+@pytest.mark.parametrize("suffix", ["zarr", "ZARR"])
+def test_the_suffix_without_its_dot_flows_block_by_block(tmp_path, capsys, suffix):
+    """``--volumes zarr`` names the suffix ``.zarr`` (the dot may be left
+    out, as for every suffix) but flowed the store in memory, writing the
+    surfaces and shapes.png that the flow block by block leaves out; it now
+    flows it block by block, as ``--volumes .zarr`` does."""
+    plain_store(tmp_path / "in.zarr", crossing_volume(3), (8, 8, 8))
+    out = tmp_path / "run"
+    assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "2", "--out", str(out), "--volumes", suffix, "-q"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"] + [f"step_{s:03d}.zarr" for s in range(3)]
+    assert "volumes (step_*.zarr, read block by block)" in capsys.readouterr().out

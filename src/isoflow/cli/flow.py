@@ -74,12 +74,14 @@ def cmd_flow(args: argparse.Namespace) -> int:
 
 
 def block_wise(args: argparse.Namespace) -> bool:
-    """A .zarr input whose states go to .zarr stores (``--volumes .zarr``)
-    is flowed block by block, never read into memory."""
+    """A .zarr input whose states go to .zarr stores (``--volumes .zarr``,
+    or ``zarr``: the dot may be left out, as for every suffix) is flowed
+    block by block, never read into memory."""
     from ..mesh.formats.registry import split_dataset
 
-    return (split_dataset(args.input)[0].suffix.lower() == ".zarr" and args.volumes is not None
-            and args.volumes.lower() == ".zarr")
+    if split_dataset(args.input)[0].suffix.lower() != ".zarr" or args.volumes is None:
+        return False
+    return (args.volumes if args.volumes.startswith(".") else "." + args.volumes).lower() == ".zarr"
 
 
 def refuse_store_read_whole(args: argparse.Namespace) -> None:
