@@ -176,3 +176,79 @@ def test_command_text_says_changes_are_not_located(tmp_path, capsys):
     changes = [line for line in capsys.readouterr().out.splitlines() if "topology change" in line]
     assert changes and all(line.endswith("not located (block by block)") for line in changes)
     assert not any("None" in line for line in changes)
+
+
+def test_command_names_the_fill_value_of_chunks_never_written(tmp_path):
+    """A store whose second chunk was never written reads it as the
+    array's fill value, 2 here: the flow block by block refused it with
+    "e.g. 2" alone, a value no voxel was written with; the line now says it
+    is the fill value, and why zarr reads it, as ``info`` does."""
+    store = tmp_path / "sparse.zarr"
+    z = zarr.create_array(str(store), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1", fill_value=2)
+    z[:4] = crossing_volume()[:4, :8, :8]
+    assert len(list(store.rglob("c/*/*/*"))) == 1  # one chunk of two written
+    run = subprocess.run([sys.executable, "-m", "isoflow", "flow", str(store), "--out", str(tmp_path / "run"),
+                          "--volumes", ".zarr"], capture_output=True, text=True, timeout=300)
+    # (where numba's cache is cold a process may say so first, in a note line)
+    err = [line for line in run.stderr.strip().splitlines() if not line.startswith("isoflow flow: note: ")]
+    assert run.returncode == 2 and len(err) == 1, run.stderr
+    assert err[0].startswith(f"isoflow flow: error: {store}: not a binary volume (256 voxels "), err  # 4 x 8 x 8
+    assert "e.g. 2, the array's fill value, which zarr reads for a chunk never written" in err[0], err
+    assert not (tmp_path / "run").exists()
+
+
+def test_command_names_a_damaged_chunk_in_one_line(tmp_path, capsys):
+    """A chunk that does not decode (zarr's codec raises) ended the flow
+    block by block in a traceback, exit status 1; it is one line naming the
+    store and the region of the chunk, exit status 2, as ``info`` and
+    ``surface`` refuse it."""
+    store = tmp_path / "damaged.zarr"
+    plain_store(store, crossing_volume()[:8, :8, :8], (4, 8, 8))
+    (store / "c" / "1" / "0" / "0").write_bytes(b"not a chunk")
+    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"isoflow flow: error: {store}: cannot read a chunk in [4:8, 0:8, 0:8] ("), err
+    assert not (tmp_path / "run").exists()
+
+
+def test_command_on_a_label_image_names_the_way_to_one_label(tmp_path, capsys):
+    """A label image flowed block by block was refused with "or select one
+    label with --label N", an option that flow refuses ("--label is not
+    read block by block"); the line now names the flow in memory, where
+    --label flows the label's voxels."""
+    v = crossing_volume()[:8, :8, :8].astype(np.uint8)
+    v[1:3, 1:4, 1:6] = 2
+    store = tmp_path / "labels.zarr"
+    plain_store(store, v, (4, 8, 8))
+    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"({np.count_nonzero(v[:4] == 2)} voxels in the block at voxel (0, 0, 0)" in err[0], err
+    assert err[0].endswith("or select one label with --label N in the flow in memory (without --volumes .zarr), "
+                           "or write its voxels as a store of their own"), err
+    assert main(["flow", str(store), "--label", "2", "--steps", "0", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == np.count_nonzero(v == 2) == 30
+
+
+def test_help_names_the_flow_block_by_block(capsys):
+    """``flow --help`` said nothing of the flow of a store block by block:
+    its --volumes and --out read as if every run wrote surfaces and
+    shapes.png. It now names ``--volumes .zarr`` and what that run leaves
+    out (docs/flow.md, "Beyond memory")."""
+    with pytest.raises(SystemExit):
+        main(["flow", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert ("a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its --out gets no "
+            "surfaces or shapes.png)") in text
+
+
+@pytest.mark.parametrize("suffix", ["zarr", "ZARR"])
+def test_the_suffix_without_its_dot_flows_block_by_block(tmp_path, capsys, suffix):
+    """``--volumes zarr`` names the suffix ``.zarr`` (the dot may be left
+    out, as for every suffix) but flowed the store in memory, writing the
+    surfaces and shapes.png that the flow block by block leaves out; it now
+    flows it block by block, as ``--volumes .zarr`` does."""
+    plain_store(tmp_path / "in.zarr", crossing_volume(3), (8, 8, 8))
+    out = tmp_path / "run"
+    assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "2", "--out", str(out), "--volumes", suffix, "-q"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"] + [f"step_{s:03d}.zarr" for s in range(3)]
+    assert "volumes (step_*.zarr, read block by block)" in capsys.readouterr().out

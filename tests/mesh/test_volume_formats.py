@@ -5,6 +5,7 @@ and origin; files written by the other tools are read with their placement.
 Volumes are small and seeded, with edge and vertex contacts (random fill).
 """
 
+import re
 import warnings
 
 import numpy as np
@@ -393,3 +394,25 @@ def test_npy_voxel_count_from_the_header_alone(tmp_path):
     assert voxel_count(tmp_path / "z.npy.npz") is None
     assert voxel_count(tmp_path / "bad.npy") is None
     assert voxel_count(tmp_path / "missing.npy") is None
+
+
+def test_a_store_read_whole_names_the_fill_value_of_chunks_never_written(tmp_path, capsys):
+    """A zarr store read into memory (``read_volume``; ``flow`` without
+    ``--volumes .zarr``) whose second chunk was never written reads it as
+    the fill value, 2 here: the refusal said "e.g. 2" alone, a value no
+    voxel was written with; it now says it is the fill value, as the
+    commands that read the store block by block do."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.cli import main
+
+    store = tmp_path / "sparse.zarr"
+    z = zarr.create_array(str(store), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1", fill_value=2)
+    z[:4] = 1
+    named = "(256 voxels hold values other than 0 and 1, e.g. 2, the array's fill value, which zarr reads"  # 4 x 8 x 8
+    with pytest.raises(IsoflowError, match=re.escape(f"{store}: not a binary volume {named}")):
+        isoflow.read_volume(store)
+    assert main(["flow", str(store), "--steps", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and named in err[0], err
+    z[4:] = 0  # every chunk written: 2 is no voxel's value, and the store reads as a mask
+    assert isoflow.read_volume(store).voxels == 256

@@ -35,7 +35,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                         "cannot be; ends at a thin fixed point")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
-                   help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...)")
+                   help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...); "
+                        "a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its "
+                        "--out gets no surfaces or shapes.png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
@@ -72,12 +74,14 @@ def cmd_flow(args: argparse.Namespace) -> int:
 
 
 def block_wise(args: argparse.Namespace) -> bool:
-    """A .zarr input whose states go to .zarr stores (``--volumes .zarr``)
-    is flowed block by block, never read into memory."""
+    """A .zarr input whose states go to .zarr stores (``--volumes .zarr``,
+    or ``zarr``: the dot may be left out, as for every suffix) is flowed
+    block by block, never read into memory."""
     from ..mesh.formats.registry import split_dataset
 
-    return (split_dataset(args.input)[0].suffix.lower() == ".zarr" and args.volumes is not None
-            and args.volumes.lower() == ".zarr")
+    if split_dataset(args.input)[0].suffix.lower() != ".zarr" or args.volumes is None:
+        return False
+    return (args.volumes if args.volumes.startswith(".") else "." + args.volumes).lower() == ".zarr"
 
 
 def refuse_store_read_whole(args: argparse.Namespace) -> None:
@@ -132,7 +136,7 @@ def flow_store(args: argparse.Namespace) -> int:
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
-    volume, _ = source_volume(args.input)
+    volume = source_volume(args.input)[0]
     say_plate(args, tuple(volume.shape))
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
@@ -145,7 +149,7 @@ def flow_store(args: argparse.Namespace) -> int:
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     total = bar_total(args.steps, volume.shape)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
-        with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args):
+        with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))

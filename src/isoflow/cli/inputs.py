@@ -364,17 +364,26 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
         raise IsoflowError(f"{args.input}: {needs}, this one is 4D{hint}")
 
 
+#: what the refusal of a label image flowed block by block adds: that flow
+#: takes no --label, so the way to one label is the flow in memory
+BLOCK_LABEL = (", or select one label with --label N in the flow in memory (without --volumes .zarr), or write "
+               "its voxels as a store of their own")
+
+
 @contextlib.contextmanager
-def label_options(args: argparse.Namespace) -> Iterator[None]:
+def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterator[None]:
     """A label image where a mask is expected, in memory or found block by
     block in a store: its refusal names the options of this command that
     select labels (``--label N``; ``--labels`` where the command takes it:
-    not flow, which flows one object)."""
+    not flow, which flows one object); ``block_wise``: the flow of a store
+    block by block, which takes neither (:data:`BLOCK_LABEL`)."""
     from ..scale.arrays import NotBinary
 
     try:
         yield
     except NotBinary as exc:
+        if block_wise:
+            raise NotBinary(exc.bare + BLOCK_LABEL, bare=exc.bare, every=False) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
 
         raise with_label_options(exc, every=args.command != "flow") from None

@@ -34,9 +34,11 @@ The tasks take paths, so they run on a ``dask.distributed`` cluster
 
 from __future__ import annotations
 
+import os
 import shutil
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -197,10 +199,10 @@ class ChunkedFlow(ArrayFlow):
     def start(self, source) -> StoredObject:
         """The input (a zarr store's volume, see :func:`source_volume`),
         cropped, as step 0's store."""
-        volume, place = source_volume(source)
+        volume, place, fill = source_volume(source)
         self.source_shape = tuple(int(s) for s in volume.shape)
         _, da = import_dask()
-        checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source))
+        checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
         extents = self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
                                   for axis in range(3)))
         if not len(extents[0]):
@@ -284,17 +286,25 @@ class ChunkedFlow(ArrayFlow):
         return state.voxels == int(np.prod(state.shape))
 
 
-def _binary_block(block: np.ndarray, where: str = "volume", block_info=None) -> np.ndarray:
-    from ..scale.arrays import binary
+def _binary_block(block: np.ndarray, where: str = "volume", fill=None, block_info=None) -> np.ndarray:
+    """A block of the store as booleans; a value other than 0 and 1 that
+    is the array's ``fill`` value is said to be it (zarr reads a chunk
+    never written as the fill value)."""
+    from ..scale.arrays import NotBinary, binary, fill_value_named
 
     near = None if block_info is None else tuple(lo for lo, _ in block_info[0]["array-location"])
-    return binary(block, where, near=near)
+    try:
+        return binary(block, where, near=near)
+    except NotBinary as exc:
+        raise fill_value_named(exc, fill, block.dtype) from None
 
 
-def source_volume(path):
+def source_volume(path: str | os.PathLike) -> tuple[Any, DigitalObject, Any]:
     """The volume of a zarr store (``IMAGE.zarr:LEVEL`` too) as a dask array
-    in x, y, z order, and its placement (a :class:`DigitalObject` with an
-    empty volume): what :func:`isoflow.read_volume` reads, lazily.
+    in x, y, z order, its placement (a :class:`DigitalObject` with an empty
+    volume), and the array's fill value (what zarr reads for a chunk never
+    written; None where the array has none): what
+    :func:`isoflow.read_volume` reads, lazily.
 
     Raises
     ------
@@ -307,19 +317,20 @@ def source_volume(path):
     >>> from isoflow.mesh.volumes import write_volume
     >>> path = tempfile.mkdtemp() + "/v.zarr"
     >>> _ = write_volume(DigitalObject(np.ones((2, 3, 4), bool), pitch=0.5), path)
-    >>> volume, place = source_volume(path)
-    >>> volume.shape, place.spacing.tolist()
-    ((2, 3, 4), [0.5, 0.5, 0.5])
+    >>> volume, place, fill = source_volume(path)
+    >>> volume.shape, place.spacing.tolist(), int(fill)
+    ((2, 3, 4), [0.5, 0.5, 0.5], 0)
     """
-    from ..mesh.formats.omezarr import axis_names, placement_of
-    from ..mesh.formats.registry import spatial_axes, split_dataset
-    from ..scale.chunks import open_zarr_node
+    from ..mesh.formats.omezarr import Guarded, axis_names, placement_of
+    from ..mesh.formats.registry import split_dataset
+    from ..scale.chunks import open_zarr_node, spatial_axes
 
     _, da = import_dask()
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
-    lazy = da.from_zarr(array)
+    # chunks read through a guard, so that a damaged one is one line
+    lazy = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     pitch, origin = 1.0, None
     if multiscale is None:
         attrs = dict(getattr(array, "attrs", {}) or {})
@@ -337,7 +348,7 @@ def source_volume(path):
     if lazy.ndim != 3:
         raise IsoflowError(f"{where}: the flow runs block by block on 3D volumes; this one is {lazy.ndim}D "
                            "(a 2D image is read into memory without --volumes .zarr)")
-    return lazy, DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin)
+    return lazy, DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin), getattr(array, "fill_value", None)
 
 
 def guard_refusal(where: str, shape: tuple[int, ...]) -> str:

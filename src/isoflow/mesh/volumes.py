@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError, IsoflowWarning, missing
-from ..scale.arrays import NotBinary, as_array, binary
+from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.memory import check_fits
 from .formats.registry import (
     LabelVolume,
@@ -188,7 +188,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
             vol = binary(arr, where)
         except NotBinary as exc:
             # a label table takes 2D and 3D images: --labels is no way out in 4D
-            raise with_label_options(exc, every=arr.ndim != 4) from None
+            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4) from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)

@@ -3,12 +3,15 @@
 What the out-of-core passes share and that knows nothing of digital
 topology: the optional imports with the message that names the extra, a
 dask compute that leaves no task running behind it, a zarr store's volume
-array, and the block grid over an array (zarr chunks or shards grouped into
-blocks big enough to be worth a task).
+array (``STORE.zarr:LEVEL``, the name after the colon split off as for an
+HDF5 dataset, and its named axes read as x, y, z), and the block grid over
+an array (zarr chunks or shards grouped into blocks big enough to be worth
+a task).
 """
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -278,8 +281,106 @@ def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
     return [n.lower() for n in names]
 
 
-#: ``IMAGE.zarr:LEVEL`` (the path of a resolution level, or its index)
-_LEVEL = re.compile(r"^(?P<store>.+?\.zarr)/?:(?P<level>[^:]*)$", re.IGNORECASE)
+def spatial_axes(names, shape, where: str, time: bool = False) -> tuple[list[int], list[int]]:
+    """Given the format's axis names (letters), the indices of x, y and z
+    (those present, in that order) and of the other axes, which must have
+    length 1 (a time point or channel among several is refused).
+
+    Parameters
+    ----------
+    names : sequence of str
+        The stored axes' names, one letter each (``"tczyx"``).
+    shape : sequence of int
+        The stored array's shape.
+    where : str
+        The file, as an error names it.
+    time : bool
+        Keep a time axis ``t`` of several entries beside x, y and z as a
+        fourth axis, after z: a time series of 3D volumes is the 4D volume
+        ``info`` analyses, as a 4D NIfTI is (a series of 2D images is still
+        refused: read as 3D, its time would pass for z).
+
+    Returns
+    -------
+    tuple of list of int
+        The indices of x, y, z (and t) in that order, and of the others.
+
+    Raises
+    ------
+    IsoflowError
+        Axes that name x, y or z twice, hold fewer than two of them, or a
+        channel or time axis of several entries that is not kept.
+
+    Examples
+    --------
+    >>> spatial_axes("tczyx", (3, 1, 4, 5, 6), "series.zarr", time=True)
+    ([4, 3, 2, 0], [1])
+    """
+    names = [n.lower() for n in names]
+    spatial = [n for n in names if n in ("x", "y", "z")]
+    if len(set(spatial)) != len(spatial):
+        raise IsoflowError(f"{where}: axes {''.join(names)} name a spatial axis twice")
+    xyz = [names.index(a) for a in "xyz" if a in names]
+    if len(xyz) < 2:
+        raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
+    other = [i for i in range(len(names)) if i not in xyz]
+    series = [i for i in other if names[i] == "t" and shape[i] > 1]
+    if time and len(xyz) == 3 and len(series) == 1:
+        xyz, other = xyz + series, [i for i in other if i not in series]
+    for i in other:
+        if shape[i] != 1:
+            if names[i] != "t":
+                remedy = "save one channel"
+            elif len(xyz) == 3:  # a series of 3D volumes: refused only where the reader wants one volume
+                remedy = "save one time point (only isoflow info's report takes a time series of 3D volumes, as 4D)"
+            else:
+                remedy = "save one time point (a time series is read as 4D only of 3D volumes)"
+            raise IsoflowError(
+                f"{where}: axis '{names[i]}' has {shape[i]} entries (axes {''.join(names)}, shape "
+                f"{tuple(shape)}); isoflow reads one volume: {remedy}"
+            )
+    return xyz, other
+
+
+def split_store(path: str | os.PathLike, suffixes: tuple[str, ...] = ("zarr",)) -> tuple[Path, str | None]:
+    """The file or store a path names and the name after its colon:
+    ``IMAGE.zarr:1`` -> (IMAGE.zarr, '1'), a resolution level or an array of
+    a group; with ``suffixes`` ("h5", "npz", ...) a dataset or array inside
+    such a file too (``FILE.h5:/group/volume``); any other path -> (path,
+    None).
+
+    Only after one of ``suffixes`` (any case), so that ``C:\\data\\a.nii``
+    stays a path; the first such suffix followed by the colon ends the file.
+    A zarr store is a directory, so its name may end in the "/" that a
+    shell's completion adds, before the colon: ``IMAGE.zarr/:1``. An empty
+    name is None.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The path as given.
+    suffixes : tuple of str
+        The suffixes (without the dot) of the files that hold named arrays.
+
+    Returns
+    -------
+    tuple
+        ``(file, name)``: the file's path and the name, or None.
+
+    Examples
+    --------
+    >>> file, name = split_store("image.zarr/:1")
+    >>> str(file), name
+    ('image.zarr', '1')
+    >>> split_store("v.h5:/a", ("h5", "zarr"))[1], split_store("v.h5:/a")[1]
+    ('/a', None)
+    """
+    text = str(path)
+    pattern = "|".join(re.escape(s) for s in suffixes)
+    m = re.match(rf"^(?P<file>.+?\.(?:{pattern}))/?:(?P<name>.*)$", text, re.IGNORECASE)
+    if m is None:
+        return Path(text), None
+    return Path(m["file"]), (m["name"] or None)
 
 
 class SpatialAxes:
@@ -332,8 +433,9 @@ def zarr_volume(path) -> tuple[Any, list[int]]:
     Raises
     ------
     IsoflowError
-        A path that is no zarr store, no such level, or an axis other than
-        x, y and z with more than one entry.
+        A path that is no zarr store, no such level, or axes that
+        :func:`spatial_axes` refuses (x, y or z named twice, fewer than two
+        of them, another axis with more than one entry).
 
     Examples
     --------
@@ -347,18 +449,11 @@ def zarr_volume(path) -> tuple[Any, list[int]]:
     ((4, 5, 6), [2, 1, 0])
     """
     text = str(path)
-    m = _LEVEL.match(text)
-    store, level = (text, None) if m is None or Path(text).exists() else (m["store"], m["level"] or None)
+    store, level = (Path(text), None) if Path(text).exists() else split_store(text)
     array, multiscale, _ = open_zarr_node(store, level)
     if multiscale is None:
         return array, list(range(array.ndim))
-    names = axis_names(multiscale, array.ndim, text)
-    xyz = [names.index(a) for a in "xyz" if a in names]
-    for i, name in enumerate(names):
-        if i not in xyz and int(array.shape[i]) != 1:
-            raise IsoflowError(f"{text}: axis {name!r} has {int(array.shape[i])} entries; the block-wise "
-                               "report reads one 2D or 3D volume (isoflow info reads a time series in "
-                               "memory; isoflow.read_volume(path, time=t) gives one time point)")
+    xyz, _ = spatial_axes(axis_names(multiscale, array.ndim, text), array.shape, text)
     if len(xyz) == array.ndim:
         return array, xyz
     return SpatialAxes(array, sorted(xyz)), [sorted(xyz).index(i) for i in xyz]

@@ -37,7 +37,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from ...scale.chunks import axis_names, open_zarr_node
+from ...scale.chunks import axis_names, open_zarr_node, spatial_axes
 from .registry import (
     RawVolume,
     check_label,
@@ -48,7 +48,6 @@ from .registry import (
     one_time_point_labels,
     placement,
     reading,
-    spatial_axes,
     split_dataset,
     stored_values,
     to_xyz,
@@ -103,6 +102,7 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
         data = np.asarray(array[index])
+    fill = getattr(array, "fill_value", None)
     if multiscale is None:
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
@@ -114,14 +114,14 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
-            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)))
-        return RawVolume(data)
+            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill)
+        return RawVolume(data, fill=fill)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(to_xyz(data, names, where), pitch, origin)
+    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill)
 
 
 def stored_ndim(path) -> int:
@@ -189,7 +189,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     _, da = import_dask()
     check_label(label, array.dtype, where)
     # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
     report = analyze_chunked(raw == label, connectivity, where=where, progress=progress, surfaces=surfaces,
                              threads=threads)
@@ -213,7 +213,7 @@ def label_absent(path, label) -> IsoflowError:
     array, multiscale, _ = open_zarr_node(file, level)
     other = [] if multiscale is None else spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)[1]
     # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(_Guarded(array, where), chunks=array.chunks, asarray=True)
+    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
     raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
     return no_such_label(label, np.unique(da.unique(raw).compute()), where)
 
@@ -263,20 +263,45 @@ def store_volume(path, label=None) -> tuple:
         raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
     if label is not None:
         check_label(label, array.dtype, where)
-    return ChunkReader(_Guarded(array, where), order, other, label), pitch, origin
+    return ChunkReader(Guarded(array, where), order, other, label), pitch, origin
 
 
-class _Guarded:
+class Guarded:
     """A zarr array whose reads raise one IsoflowError line naming the
-    store (a damaged chunk), for ``dask.array.from_array``."""
+    store and the region read (a damaged chunk), for
+    ``dask.array.from_array``.
 
-    def __init__(self, array, where: str):
+    Parameters
+    ----------
+    array : zarr.Array
+        The stored array, read as it is (``shape``, ``dtype``, ``chunks``,
+        ``shards`` and ``fill_value`` are its own).
+    where : str
+        The store as the error names it (``IMAGE.zarr:LEVEL``).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = Path(tempfile.mkdtemp()) / "v.zarr"
+    >>> z = zarr.create_array(str(path), shape=(4, 4), chunks=(2, 4), dtype="u1")
+    >>> z[...] = 1
+    >>> _ = (path / "c" / "1" / "0").write_bytes(b"not a chunk")
+    >>> int(Guarded(z, "v.zarr")[:2].sum())
+    8
+    >>> try:
+    ...     Guarded(z, "v.zarr")[2:4, 0:4]
+    ... except IsoflowError as error:
+    ...     print(str(error).split(" (")[0])
+    v.zarr: cannot read a chunk in [2:4, 0:4]
+    """
+
+    def __init__(self, array, where: str) -> None:
         self.array, self.where = array, where
         self.shape, self.dtype, self.ndim = array.shape, array.dtype, array.ndim
         self.chunks, self.shards = array.chunks, getattr(array, "shards", None)
         self.fill_value = getattr(array, "fill_value", None)
 
-    def __getitem__(self, key):
+    def __getitem__(self, key) -> np.ndarray:
         try:
             return np.asarray(self.array[key])
         except Exception as exc:  # zarr and its codecs raise many types
@@ -400,7 +425,7 @@ class LabelSlabs:
                                                                         "(label_table)" if len(self.xyz) == 2 else ""))
         if multiscale is not None:
             pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
-        self.array, self.guarded = array, _Guarded(array, self.where)
+        self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])

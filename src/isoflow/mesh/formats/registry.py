@@ -23,7 +23,6 @@ import contextlib
 import importlib
 import logging
 import os
-import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, IsoflowWarning
+from ...scale.chunks import spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
 EXTRA = "formats"
@@ -88,9 +88,8 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
-#: a zarr store is a directory, so its name may end in the "/" that a
-#: shell's completion adds, before the level: ``IMAGE.zarr/:1``
-_DATASET = re.compile(r"^(?P<file>.+?\.(?:h5|hdf5|he5|npz|zarr(?=/?:)))/?:(?P<dataset>.*)$", re.IGNORECASE)
+#: the files in which ``FILE:NAME`` names a dataset, an array or a level
+_CONTAINERS = ("h5", "hdf5", "he5", "npz", "zarr")
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
@@ -99,11 +98,7 @@ def split_dataset(path) -> tuple[Path, str | None]:
     its arrays (read only); any other path -> (path, None).
 
     Only after an HDF5, zarr or npz suffix, so that ``C:\\data\\a.nii`` stays a path."""
-    text = str(path)
-    m = _DATASET.match(text)
-    if m is None:
-        return Path(text), None
-    return Path(m["file"]), (m["dataset"] or None)
+    return split_store(path, _CONTAINERS)
 
 
 def format_for(path, writing: bool = False) -> VolumeFormat | None:
@@ -164,7 +159,9 @@ def quiet_logs(logger: str):
 class RawVolume:
     """What a reader found: the array in isoflow's (x, y, z) order and where
     it sits. ``paint``: the values are colours, not labels, so any nonzero
-    voxel is in the object unless one value is selected (MagicaVoxel)."""
+    voxel is in the object unless one value is selected (MagicaVoxel).
+    ``fill``: a zarr array's fill value, which it reads for a chunk never
+    written (a refusal of that value says so); None for other formats."""
 
     array: np.ndarray
     pitch: float | np.ndarray = 1.0
@@ -172,6 +169,7 @@ class RawVolume:
     offset: tuple[int, ...] | None = None
     parity: int = 0
     paint: bool = False
+    fill: object = None
 
 
 @dataclass(frozen=True)
@@ -355,67 +353,6 @@ def note(message: str) -> None:
     """A one-line warning (metadata a format cannot keep, an affine's
     rotation dropped); the command line prints it as ``warning: ...``."""
     warnings.warn(message, IsoflowWarning, stacklevel=3)
-
-
-def spatial_axes(names, shape, where: str, time: bool = False) -> tuple[list[int], list[int]]:
-    """Given the format's axis names (letters), the indices of x, y and z
-    (those present, in that order) and of the other axes, which must have
-    length 1 (a time point or channel among several is refused).
-
-    Parameters
-    ----------
-    names : sequence of str
-        The stored axes' names, one letter each (``"tczyx"``).
-    shape : sequence of int
-        The stored array's shape.
-    where : str
-        The file, as an error names it.
-    time : bool
-        Keep a time axis ``t`` of several entries beside x, y and z as a
-        fourth axis, after z: a time series of 3D volumes is the 4D volume
-        ``info`` analyses, as a 4D NIfTI is (a series of 2D images is still
-        refused: read as 3D, its time would pass for z).
-
-    Returns
-    -------
-    tuple of list of int
-        The indices of x, y, z (and t) in that order, and of the others.
-
-    Raises
-    ------
-    IsoflowError
-        Axes that name x, y or z twice, hold fewer than two of them, or a
-        channel or time axis of several entries that is not kept.
-
-    Examples
-    --------
-    >>> spatial_axes("tczyx", (3, 1, 4, 5, 6), "series.zarr", time=True)
-    ([4, 3, 2, 0], [1])
-    """
-    names = [n.lower() for n in names]
-    spatial = [n for n in names if n in ("x", "y", "z")]
-    if len(set(spatial)) != len(spatial):
-        raise IsoflowError(f"{where}: axes {''.join(names)} name a spatial axis twice")
-    xyz = [names.index(a) for a in "xyz" if a in names]
-    if len(xyz) < 2:
-        raise IsoflowError(f"{where}: axes {''.join(names)} hold fewer than two of x, y, z")
-    other = [i for i in range(len(names)) if i not in xyz]
-    series = [i for i in other if names[i] == "t" and shape[i] > 1]
-    if time and len(xyz) == 3 and len(series) == 1:
-        xyz, other = xyz + series, [i for i in other if i not in series]
-    for i in other:
-        if shape[i] != 1:
-            if names[i] != "t":
-                remedy = "save one channel"
-            elif len(xyz) == 3:  # a series of 3D volumes: refused only where the reader wants one volume
-                remedy = "save one time point (only isoflow info's report takes a time series of 3D volumes, as 4D)"
-            else:
-                remedy = "save one time point (a time series is read as 4D only of 3D volumes)"
-            raise IsoflowError(
-                f"{where}: axis '{names[i]}' has {shape[i]} entries (axes {''.join(names)}, shape "
-                f"{tuple(shape)}); isoflow reads one volume: {remedy}"
-            )
-    return xyz, other
 
 
 def to_xyz(array: np.ndarray, names, where: str) -> np.ndarray:
