@@ -327,3 +327,16 @@ def test_a_klein_bottle_has_no_genus():
     r = mesh_topology(rng.random((n * m, 3)), np.array(faces))
     assert r["euler_number"] == 0 and r["boundary_edges"] == 0 and r["nonmanifold_edges"] == 0
     assert r["genus"] is None and r["genus_per_component"] == [None]
+
+
+def test_the_witness_lines_say_one_in_the_singular(capsys):
+    """torus.obj: one component of genus 1 (the manifest's count), so its
+    lines say "1 component", "1 tunnel". Were "1 components", "1 tunnels"."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"] if m["filename"] == "torus.obj")
+    assert (known["components"], known["genus"]) == (1, 1)
+    assert main(["genus", str(MESHES / "torus.obj"), "--resolution", "24", "--resolution", "48", "--no-step"]) == 0
+    out = capsys.readouterr().out
+    assert "watertight True, 1 component, V-E+F 0" in out and "over 1 component (" in out
+    assert "solid: 1 component, 1 tunnel, 0 cavities -> genus 1" in out
+    assert "0 faces cross their own component, 0 cross another component" in out
+    assert "1 components" not in out and "1 tunnels" not in out
