@@ -42,11 +42,16 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
     Components are edge-connected face sets. A component's genus is
     ``(2 - chi_c) / 2`` when it is closed (no boundary edge), every edge has
-    two faces, every vertex has one fan of faces in it and it is orientable
-    (its faces may be turned inconsistently: the genus is the surface's);
-    otherwise None.
+    two faces and it is orientable (its faces may be turned inconsistently:
+    the genus is the surface's); otherwise None. A vertex with more than
+    one fan of faces in it (a pinch: sheets that touch at a point) counts
+    once per fan in ``chi_c``: the genus is that of the closed surface
+    whose sheets are apart there, as manifold3d counts it (it splits such
+    vertices) and as the 6-connected voxels see it.
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
-    closed surfaces touching at a point, like ``hourglass_ico.obj``).
+    closed surfaces touching at a point, like ``hourglass_ico.obj``, or
+    two parts of one surface, like a chain of voxels whose ends touch at a
+    corner).
     With ``return_components``, also each face's component number.
     """
     from ..scale.graphs import components
@@ -70,11 +75,10 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     first_face = face_of[order][np.repeat(edge_start, edge_count)]
     ncomp, comp = components(nf, face_of[order], first_face)
 
-    # per component: V (vertices used), E (edges), F, and whether closed
+    # per component: E (edges), F, and whether closed
     comp_of_edge = comp[face_of[order][edge_start]]
     E = np.bincount(comp_of_edge, minlength=ncomp)
     F = np.bincount(comp, minlength=ncomp)
-    V = distinct_counts(np.repeat(comp, 3), ncomp, f.ravel(), len(v))
     bad_edge = np.bincount(comp_of_edge, weights=(edge_count != 2), minlength=ncomp) > 0
 
     # fans: corners around a vertex joined across the manifold edges
@@ -89,14 +93,12 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     _, fan = components(3 * nf, src, dst)
     fans_per_vertex = distinct_counts(f.ravel(), len(v), fan, 3 * nf)
     comps_per_vertex = distinct_counts(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
-    pinched_in_comp = np.zeros(ncomp, dtype=bool)
-    inner_pinch = np.flatnonzero(fans_per_vertex > np.maximum(comps_per_vertex, 1))
-    if len(inner_pinch):
-        hit = np.isin(f, inner_pinch).any(axis=1)
-        pinched_in_comp[np.unique(comp[hit])] = True
 
-    chi = V - E + F
-    closed = ~bad_edge & ~pinched_in_comp & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
+    # V - E + F with a pinched vertex counted once per fan: the surface with its sheets
+    # apart there, the closed surface its faces make (manifold3d splits
+    # such vertices; isoflow's own boundary meshes count pinches so)
+    chi = distinct_counts(np.repeat(comp, 3), ncomp, fan, 3 * nf) - E + F
+    closed = ~bad_edge & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
     used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))

@@ -276,7 +276,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
                                     "genus undefined"),
     "nonmanifold_vertices": lambda n: (f"{counted(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
                                        "sheets touch at a point; "
-                                       "genus counted per edge-connected component"),
+                                       "genus counted with the sheets apart there (as manifold3d counts)"),
     "nested": lambda components, solid_genus: (
         f"the mesh's {components} components nest with shells facing the same way (a winding "
         "number of 2 or more inside): the solid they bound by the nonzero rule swallows the inner ones, "
