@@ -459,11 +459,12 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False, fill: Fill = "winding") -> tuple[list, Stop | None]:
+                  strict: bool = False, fill: Fill = "winding", bodies: int | None = None) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
-    a genus other than ``target``: two coarse grids can both close the
-    same thin hole), at twice the last, within ``max_resolution``,
+    a genus other than ``target``, or on components other than ``bodies``:
+    two coarse grids can both close the same thin hole, or join two bodies
+    across the same thin gap), at twice the last, within ``max_resolution``,
     ``time_limit`` seconds and the memory budget.
 
     Returns the entries (resolution, pitch, shape, voxels, Betti numbers,
@@ -488,7 +489,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
             res = todo.pop(0)
         else:
             res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
-                                        time_limit=time_limit, elapsed=time.monotonic() - start)
+                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies)
             if res is None:
                 return out, stop
         weight = res**3
@@ -512,14 +513,16 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 
 def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
-                    elapsed: float) -> tuple[int | None, Stop | None]:
+                    elapsed: float, bodies: int | None = None) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
-    why not: the Betti numbers settled on ``target`` (no :class:`Stop`), or
+    why not: the Betti numbers settled on ``target`` and, where given,
+    ``bodies`` components (no :class:`Stop`), or
     a limit (the time that ``elapsed`` seconds leave, the memory budget).
     ``max_resolution`` caps the doubling only: where the resolutions asked
     already pass it, they are what ended the stepping (a Stop "asked")."""
     stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
-    if stable and (target is None or done[-1]["genus"] == target):
+    if stable and (target is None or done[-1]["genus"] == target) and (bodies is None or
+                                                                       done[-1]["betti"][0] == bodies):
         return None, None
     if not step:
         return None, Stop("asked")
@@ -689,22 +692,23 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
+    bodies = reference_bodies(w, fill)
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill)
+            strict=strict, fill=fill, bodies=bodies)
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
-    kind = verdict_kind(w, digital, reference, stable)
+    kind = verdict_kind(w, digital, reference, stable, bodies)
     return GenusVerdict(
         input=name, mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
-        stop=stop,
+        stop=stop, bodies=bodies,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill)
                     + digital_notes(w, digital, reference, stable, fill)))
 
@@ -797,11 +801,26 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     return out
 
 
-def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) -> VerdictKind:
+def reference_bodies(w: dict, fill: Fill) -> int | None:
+    """The bodies the digital components (b0) are compared with: those of
+    the solid manifold3d builds (edge-connected, so two balls touching at
+    a point are two), or None where there is no such solid or the voxels
+    are not it: a shell (whose components are surfaces) and a flood fill
+    of a solid with cavities (which swallows the bodies inside them)."""
+    solid = w["solid"]
+    if "bodies" not in solid or fill == "shell" or fill == "flood" and solid["cavities"]:
+        return None
+    return int(solid["bodies"])
+
+
+def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool,
+                 bodies: int | None = None) -> VerdictKind:
     """What the verdict says first (see :data:`~isoflow.mesh.verdict.VerdictKind`).
     An empty grid comes first: it has genus 0 and would "agree" with a
     surface's genus 0 for nothing (a flat or zero-volume mesh, whose faces
-    may also lie on each other)."""
+    may also lie on each other). The digital components are compared with
+    ``bodies`` as the digital genus is with ``reference``: a mesh of two
+    bodies whose voxels are one component disagrees."""
     if digital and digital[-1]["betti"][0] == 0:
         return "no_solid"
     if w["crossing_self"]:
@@ -810,7 +829,8 @@ def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) ->
         return "no_reference"
     if not stable:
         return "not_converged"
-    return "agree" if digital[-1]["genus"] == reference else "disagree"
+    same_bodies = bodies is None or digital[-1]["betti"][0] == bodies
+    return "agree" if digital[-1]["genus"] == reference and same_bodies else "disagree"
 
 
 def load_notes(stats: dict) -> list[Note]:
