@@ -51,7 +51,8 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
     closed surfaces touching at a point, like ``hourglass_ico.obj``, or
     two parts of one surface, like a chain of voxels whose ends touch at a
-    corner).
+    corner), less the ends of non-manifold edges, whose sheets meet along
+    the edge (as pymeshlab counts them).
     With ``return_components``, also each face's component number.
     """
     from ..scale.graphs import components
@@ -93,6 +94,12 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     _, fan = components(3 * nf, src, dst)
     fans_per_vertex = distinct_counts(f.ravel(), len(v), fan, 3 * nf)
     comps_per_vertex = distinct_counts(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
+    # the ends of an edge of more than two faces have a fan per sheet along
+    # it: sheets that meet along an edge, which its own note names, not at
+    # a point (pymeshlab counts no such vertex either)
+    on_nonmanifold_edge = np.zeros(len(v), dtype=bool)
+    crowded = order[edge_start[edge_count > 2]]
+    on_nonmanifold_edge[a[crowded]] = on_nonmanifold_edge[b[crowded]] = True
 
     # V - E + F with a pinched vertex counted once per fan: the surface with its sheets
     # apart there, the closed surface its faces make (manifold3d splits
@@ -116,7 +123,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "boundary_edges": int(defects["boundary_edges"]),
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
-        "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex > 1)),
+        "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex[~on_nonmanifold_edge] > 1)),
         "vertices": int(used),
         "faces": int(nf),
         # vertices on faces of more than one component: components touching
