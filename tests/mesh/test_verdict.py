@@ -340,3 +340,19 @@ def test_the_witness_lines_say_one_in_the_singular(capsys):
     assert "solid: 1 component, 1 tunnel, 0 cavities -> genus 1" in out
     assert "0 faces cross their own component, 0 cross another component" in out
     assert "1 components" not in out and "1 tunnels" not in out
+
+
+def test_a_verdict_without_bodies_still_names_what_it_compares():
+    """hourglass_ico.obj at 16 and 32: two bodies (trimesh's split), one
+    digital component. Its JSON read back without "bodies" (as a verdict
+    printed before the count was compared) says the genera it compares, not
+    "disagree:  (the same ...)"."""
+    import trimesh
+
+    path = MESHES / "hourglass_ico.obj"
+    v = verify_genus(path, (16, 32), step=False)
+    assert v.bodies == len(trimesh.load(path, process=True).split(only_watertight=False)) == 2
+    assert v.verdict.startswith("disagree: the solid has 2 bodies, the digital solid 1 component")
+    printed = json.loads(json.dumps(v.to_dict()))
+    del printed["bodies"]
+    assert GenusVerdict.from_dict(printed).verdict.startswith("disagree: solid genus 0, digital genus 0 (the same at 16")

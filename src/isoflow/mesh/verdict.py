@@ -203,7 +203,7 @@ def head_text(v: GenusVerdict) -> str:
     b0 = digital[-1]["betti"][0]
     parts = ([f"the solid has {counted(v.bodies, 'body', 'bodies')}, the digital solid "
               f"{counted(b0, 'component')}"] if v.bodies is not None and b0 != v.bodies else [])
-    if digital[-1]["genus"] != v.reference:
+    if digital[-1]["genus"] != v.reference or not parts:  # (a verdict's JSON without "bodies" compares the genus)
         parts.insert(0, f"{ref_name} {v.reference}, digital genus {digital[-1]['genus']}")
     else:
         same += f", both of genus {v.reference}"
