@@ -356,3 +356,15 @@ def test_a_verdict_without_bodies_still_names_what_it_compares():
     printed = json.loads(json.dumps(v.to_dict()))
     del printed["bodies"]
     assert GenusVerdict.from_dict(printed).verdict.startswith("disagree: solid genus 0, digital genus 0 (the same at 16")
+
+
+def test_pymeshlab_s_genus_of_an_open_mesh_says_it_is_open(capsys):
+    """plane_holes.obj is open (the manifest: 341 boundary edges, 27 holes);
+    pymeshlab gives it genus 0, the genus with its holes filled, which the
+    line printed bare beside the mesh's "genus None"."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"]
+                 if m["filename"] == "plane_holes.obj")["tool_results"]["pymeshlab"]["as_loaded"]
+    assert main(["genus", str(MESHES / "plane_holes.obj"), "--resolution", "16", "--no-step", "-q"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  pymeshlab"))
+    assert line == (f"  pymeshlab   genus {known['genus']} (of the surface with its holes filled: "
+                    f"{known['boundary_edges']} boundary edges)")

@@ -63,6 +63,14 @@ def cmd_genus(args: argparse.Namespace) -> int:
 FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
+def _open_words(boundary_edges: int) -> str:
+    # pymeshlab gives an open surface a genus (that of the closed one its
+    # holes filled by disks make): beside the mesh line's "genus None" a
+    # bare "genus 0" reads as a closed surface that isoflow failed to count
+    return (f" (of the surface with its holes filled: {counted(boundary_edges, 'boundary edge')})"
+            if boundary_edges else "")
+
+
 def _volume(volume: float | None) -> str:
     return "volume beyond float64's range" if volume is None else f"volume {volume:.6g}"
 
@@ -87,7 +95,8 @@ def format_genus(report, name: str) -> str:
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
                             f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
-        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
+        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else
+                                                        _open_words(pm.get("boundary_edges", 0)))),
     ]
     what = FILL_WORDS[report.get("fill", "winding")]
     for d in report["digital"]:
