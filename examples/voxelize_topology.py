@@ -26,6 +26,7 @@ from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
+from isoflow.errors import betti_words
 
 
 def arguments(parser):
@@ -42,10 +43,9 @@ def main():
     isoflow.write_volume(solid, volume_path, force=args.force)
     report_path.write_text(json.dumps(report.to_dict(), indent=1))
 
-    b0, b1, b2 = report["betti"]
     print(f"{Path(args.mesh).name} at {args.resolution} voxels across: {report['voxels']} voxels, pitch {solid.pitch:.4g}")
     print(f"  Euler characteristic {report['euler_characteristic']}, a^T n = {report['a_dot_n']} (8 chi)")
-    print(f"  Betti numbers: {b0} components, {b1} tunnels, {b2} cavities")
+    print(f"  Betti numbers: {betti_words(report['betti'])}")
     for i, s in enumerate(report["surfaces"]):
         print(f"  closed surface {i}: genus {s['genus']}, {s['faces']} faces")
     print("  vertex classes: " + ", ".join(f"{k} {v}" for k, v in report["classes"].items() if v))

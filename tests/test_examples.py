@@ -54,7 +54,7 @@ def test_an_example_run_as_a_user_runs_it(tmp_path):
     env = dict(os.environ, MPLBACKEND="Agg")
     first = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
     assert first.returncode == 0, first.stderr
-    assert "1 components, 2 tunnels, 0 cavities" in first.stdout
+    assert "1 component, 2 tunnels, 0 cavities" in first.stdout
     with np.load(out / "solid.npz") as z:
         assert euler_number(z["volume"], 1) == 1 - genus("eight.off")
     again = subprocess.run(command, capture_output=True, text=True, cwd=tmp_path, env=env)
@@ -68,7 +68,7 @@ def test_voxelize_topology(example_run):
     assert report["betti"] == [1, g, 0]
     assert report["euler_characteristic"] == 1 - g and report["a_dot_n"] == 8 * (1 - g)
     assert [s["genus"] for s in report["surfaces"]] == [g]
-    assert f"1 components, {g} tunnels, 0 cavities" in printed
+    assert f"1 component, {g} tunnel, 0 cavities" in printed
     with np.load(out / "solid.npz") as z:
         volume = z["volume"]
     assert int(volume.sum()) == report["voxels"]

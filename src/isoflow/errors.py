@@ -61,6 +61,40 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+#: the nouns of the Betti numbers b0, b1, ... of a volume of each dimension
+#: (singular, plural); a 4-D volume's b1 and b2 have no everyday name
+_BETTI_NOUNS = {
+    2: (("component", "components"), ("hole", "holes")),
+    3: (("component", "components"), ("tunnel", "tunnels"), ("cavity", "cavities")),
+    4: (("component", "components"), ("b1", "b1"), ("b2", "b2"), ("enclosed background", "enclosed background")),
+}
+
+
+def betti_words(betti) -> str:
+    """The Betti numbers of a 2-, 3- or 4-D volume as a message says them,
+    each noun singular for 1 (an unknown number is ``?``).
+
+    Parameters
+    ----------
+    betti : sequence of int or None
+        b0, b1, ... (two, three or four of them).
+
+    Returns
+    -------
+    str
+        The counts and their nouns, comma-separated.
+
+    Examples
+    --------
+    >>> betti_words([1, 2, 0])
+    '1 component, 2 tunnels, 0 cavities'
+    >>> betti_words([2, 1]), betti_words([1, None, 1])
+    ('2 components, 1 hole', '1 component, ? tunnels, 1 cavity')
+    """
+    return ", ".join(f"? {many}" if b is None else counted(b, one, many)
+                     for b, (one, many) in zip(betti, _BETTI_NOUNS[len(betti)]))
+
+
 def coordinates(values, digits: int = 6) -> str:
     """A point (an origin, a corner) in a message, each coordinate to
     ``digits`` significant digits: rounding to decimal places would print

@@ -432,7 +432,7 @@ def test_cli_info_on_zarr(tmp_path, capsys):
     assert sorted(s["genus"] for s in got["surfaces"]) == [0, 1]  # the ball, the torus
     assert main(["info", str(path), "--connectivity", "26"]) == 0
     out = capsys.readouterr().out
-    assert "2 components, 1 tunnels" in out and "#0: genus 1" in out
+    assert "2 components, 1 tunnel" in out and "#0: genus 1" in out
     assert main(["info", str(path), "--json", "--no-surfaces"]) == 0
     assert "surfaces" not in json.loads(capsys.readouterr().out)
 

@@ -98,3 +98,27 @@ def test_genus_json_of_a_volume_beyond_float64(scale, tmp_path, capsys):
     assert r["solid"]["volume"] is None and r["manifold3d"]["volume"] is None
     assert main(["genus", str(path), "--resolution", "24", "48", "--no-step", "-q"]) == 0
     assert "volume beyond float64's range" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".zarr"])
+def test_a_volume_beyond_float64_is_compared_in_voxel_units(tmp_path, suffix):
+    """A 4^3 cube of voxels 1e150 across at 1e150: its volume, 64e450, is
+    past float64 (inf), and "volume inf: as isoflow counts" said that inf
+    equals inf. The line gives the volume in exact decimal (Python
+    integers: 64 times the cube of the float 1e150) and the unit it was
+    compared in."""
+    from fractions import Fraction
+
+    import isoflow as api
+
+    volume = np.zeros((6, 6, 6), bool)
+    volume[1:5, 1:5, 1:5] = True
+    obj = api.DigitalObject(volume, pitch=1e150, origin=(1e150, 1e150, 1e150))
+    source = api.write_volume(obj, tmp_path / f"cube{suffix}")
+    p = isoflow("surface", source, "-o", tmp_path / "cube.ply")
+    assert p.returncode == 0, p.stderr
+    exact = 64 * int(1e150) ** 3
+    assert exact > sys.float_info.max  # inf in float64
+    mantissa = float(Fraction(exact, 10**451))
+    assert f"volume {mantissa:.6g}e+451 (beyond float64: compared in voxel units, " in p.stdout
+    assert "volume inf" not in p.stdout

@@ -327,3 +327,44 @@ def test_a_klein_bottle_has_no_genus():
     r = mesh_topology(rng.random((n * m, 3)), np.array(faces))
     assert r["euler_number"] == 0 and r["boundary_edges"] == 0 and r["nonmanifold_edges"] == 0
     assert r["genus"] is None and r["genus_per_component"] == [None]
+
+
+def test_the_witness_lines_say_one_in_the_singular(capsys):
+    """torus.obj: one component of genus 1 (the manifest's count), so its
+    lines say "1 component", "1 tunnel". Were "1 components", "1 tunnels"."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"] if m["filename"] == "torus.obj")
+    assert (known["components"], known["genus"]) == (1, 1)
+    assert main(["genus", str(MESHES / "torus.obj"), "--resolution", "24", "--resolution", "48", "--no-step"]) == 0
+    out = capsys.readouterr().out
+    assert "watertight True, 1 component, V-E+F 0" in out and "over 1 component (" in out
+    assert "solid: 1 component, 1 tunnel, 0 cavities -> genus 1" in out
+    assert "0 faces cross their own component, 0 cross another component" in out
+    assert "1 components" not in out and "1 tunnels" not in out
+
+
+def test_a_verdict_without_bodies_still_names_what_it_compares():
+    """hourglass_ico.obj at 16 and 32: two bodies (trimesh's split), one
+    digital component. Its JSON read back without "bodies" (as a verdict
+    printed before the count was compared) says the genera it compares, not
+    "disagree:  (the same ...)"."""
+    import trimesh
+
+    path = MESHES / "hourglass_ico.obj"
+    v = verify_genus(path, (16, 32), step=False)
+    assert v.bodies == len(trimesh.load(path, process=True).split(only_watertight=False)) == 2
+    assert v.verdict.startswith("disagree: the solid has 2 bodies, the digital solid 1 component")
+    printed = json.loads(json.dumps(v.to_dict()))
+    del printed["bodies"]
+    assert GenusVerdict.from_dict(printed).verdict.startswith("disagree: solid genus 0, digital genus 0 (the same at 16")
+
+
+def test_pymeshlab_s_genus_of_an_open_mesh_says_it_is_open(capsys):
+    """plane_holes.obj is open (the manifest: 341 boundary edges, 27 holes);
+    pymeshlab gives it genus 0, the genus with its holes filled, which the
+    line printed bare beside the mesh's "genus None"."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"]
+                 if m["filename"] == "plane_holes.obj")["tool_results"]["pymeshlab"]["as_loaded"]
+    assert main(["genus", str(MESHES / "plane_holes.obj"), "--resolution", "16", "--no-step", "-q"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  pymeshlab"))
+    assert line == (f"  pymeshlab   genus {known['genus']} (of the surface with its holes filled: "
+                    f"{known['boundary_edges']} boundary edges)")

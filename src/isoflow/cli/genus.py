@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, betti_words, counted
 from .inputs import add_mesh_rule, mesh_fill, resolution_value
 from .progress import progress_bar
 
@@ -63,6 +63,14 @@ def cmd_genus(args: argparse.Namespace) -> int:
 FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flood fill (--fill flood)"}
 
 
+def _open_words(boundary_edges: int) -> str:
+    # pymeshlab gives an open surface a genus (that of the closed one its
+    # holes filled by disks make): beside the mesh line's "genus None" a
+    # bare "genus 0" reads as a closed surface that isoflow failed to count
+    return (f" (of the surface with its holes filled: {counted(boundary_edges, 'boundary edge')})"
+            if boundary_edges else "")
+
+
 def _volume(volume: float | None) -> str:
     return "volume beyond float64's range" if volume is None else f"volume {volume:.6g}"
 
@@ -72,26 +80,27 @@ def format_genus(report, name: str) -> str:
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
     per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
     solid = report["solid"]
-    crossings = ("?" if report["self_intersecting_faces"] is None else
-                 f"{report['self_intersecting_faces']} faces cross their own component, "
-                 f"{report['faces_crossing_other_components']} cross another component")
+    own, other = report["self_intersecting_faces"], report["faces_crossing_other_components"]
+    crossings = ("?" if own is None else
+                 f"{counted(own, 'face')} {'crosses its' if own == 1 else 'cross their'} own component, "
+                 f"{other} {'crosses' if other == 1 else 'cross'} another component")
     lines = [
-        f"{name}: {m['vertices']} vertices, {m['faces']} faces",
-        f"  mesh        watertight {m['watertight']}, {m['components']} components, V-E+F {m['euler_number']}, "
+        f"{name}: {counted(m['vertices'], 'vertex', 'vertices')}, {counted(m['faces'], 'face')}",
+        f"  mesh        watertight {m['watertight']}, {counted(m['components'], 'component')}, V-E+F {m['euler_number']}, "
         f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
         f"  crossings   {crossings} (exact test)",
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
-                           f"genus {m3['genus']} over {m3['components']} components "
+                           f"genus {m3['genus']} over {counted(m3['components'], 'component')} "
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
                             f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
                             "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
-        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else "")),
+        "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else
+                                                        _open_words(pm.get("boundary_edges", 0)))),
     ]
     what = FILL_WORDS[report.get("fill", "winding")]
     for d in report["digital"]:
         b = d["betti"]
-        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn {what}: {b[0]} components, {b[1]} tunnels, "
-                     f"{b[2]} cavities -> genus {d['genus']}")
+        lines.append(f"  digital {d['resolution']:>4}  {d['connectivity']}-conn {what}: {betti_words(b)} -> genus {d['genus']}")
     lines.append(f"  verdict     {report['verdict']}")
     return "\n".join(lines)

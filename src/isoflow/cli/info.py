@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, coordinates
+from ..errors import IsoflowError, betti_words, coordinates
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -166,12 +166,7 @@ def format_info(r: Report, name: str, grid: dict | None = None) -> str:
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
-    names = {2: ["components", "holes"], 3: ["components", "tunnels", "cavities"],
-             4: ["components", "b1", "b2", "enclosed background"]}[r["dimension"]]
-    lines.append(
-        "  Betti numbers          "
-        + ", ".join(f"{'?' if b is None else b} {name}" for b, name in zip(r["betti"], names))
-    )
+    lines.append("  Betti numbers          " + betti_words(r["betti"]))
     lines.append("  vertex classes (eq. 4.9):")
     for label, count in r["classes"].items():
         lines.append(f"    {label:<10} {count:>12}")

@@ -132,7 +132,7 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     """The written file read back by trimesh and compared, in words; 1 when
     it does not agree with isoflow's counts."""
     from ..mesh import export
-    from ..mesh.readback import check_surface_file
+    from ..mesh.readback import check_surface_file, volume_unit, volume_words
     from .progress import reading_back
 
     shared = export.shared_positions(mesh)
@@ -152,9 +152,9 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
-    t = check["trimesh"]
+    t, unit = check["trimesh"], volume_unit(obj)
     if welded:
-        print(f"{out}: trimesh reads back volume {t['volume']:.6g} after its weld, as isoflow counts "
+        print(f"{out}: trimesh reads back volume {volume_words(t['volume_units'], unit)} after its weld, as isoflow counts "
               "(the welded contacts leave no manifold to compare)")
     else:
         # trimesh.load merges equal positions by default, which joins the
@@ -162,7 +162,7 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
         how = (f" with process=False (its default merge joins the split copies at {shared} edge/vertex contacts "
                "into non-manifold points)" if shared else "")
         print(f"{out}: trimesh reads it back watertight{how}, V-E+F = {t['euler_number']}, genus {t['genus']}, "
-              f"volume {t['volume']:.6g}: as isoflow counts")
+              f"volume {volume_words(t['volume_units'], unit)}: as isoflow counts")
     return 0
 
 
@@ -180,7 +180,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import label_absent, store_volume
-    from ..mesh.readback import volume_unit
+    from ..mesh.readback import volume_unit, volume_words
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from .progress import progress_bar
@@ -213,7 +213,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
     print(f"{out}: read back in chunks (every face): closed and consistently wound, volume "
-          f"{check['figures']['volume_units'] * volume_unit(frame) ** 3:.6g}"
+          f"{volume_words(check['figures']['volume_units'], volume_unit(frame))}"
           + ("" if out.suffix.lower() == ".stl" else f", V-E+F = {check['figures']['euler_number']}, "
              "sum of a = 8 chi") + ": as isoflow counts")
     return 0

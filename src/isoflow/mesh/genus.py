@@ -42,11 +42,17 @@ def mesh_topology(vertices, faces, return_components: bool = False):
 
     Components are edge-connected face sets. A component's genus is
     ``(2 - chi_c) / 2`` when it is closed (no boundary edge), every edge has
-    two faces, every vertex has one fan of faces in it and it is orientable
-    (its faces may be turned inconsistently: the genus is the surface's);
-    otherwise None.
+    two faces and it is orientable (its faces may be turned inconsistently:
+    the genus is the surface's); otherwise None. A vertex with more than
+    one fan of faces in it (a pinch: sheets that touch at a point) counts
+    once per fan in ``chi_c``: the genus is that of the closed surface
+    whose sheets are apart there, as manifold3d counts it (it splits such
+    vertices) and as the 6-connected voxels see it.
     ``nonmanifold_vertices`` counts vertices with more than one fan (two
-    closed surfaces touching at a point, like ``hourglass_ico.obj``).
+    closed surfaces touching at a point, like ``hourglass_ico.obj``, or
+    two parts of one surface, like a chain of voxels whose ends touch at a
+    corner), less the ends of non-manifold edges, whose sheets meet along
+    the edge (as pymeshlab counts them).
     With ``return_components``, also each face's component number.
     """
     from ..scale.graphs import components
@@ -70,11 +76,10 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     first_face = face_of[order][np.repeat(edge_start, edge_count)]
     ncomp, comp = components(nf, face_of[order], first_face)
 
-    # per component: V (vertices used), E (edges), F, and whether closed
+    # per component: E (edges), F, and whether closed
     comp_of_edge = comp[face_of[order][edge_start]]
     E = np.bincount(comp_of_edge, minlength=ncomp)
     F = np.bincount(comp, minlength=ncomp)
-    V = distinct_counts(np.repeat(comp, 3), ncomp, f.ravel(), len(v))
     bad_edge = np.bincount(comp_of_edge, weights=(edge_count != 2), minlength=ncomp) > 0
 
     # fans: corners around a vertex joined across the manifold edges
@@ -89,14 +94,18 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     _, fan = components(3 * nf, src, dst)
     fans_per_vertex = distinct_counts(f.ravel(), len(v), fan, 3 * nf)
     comps_per_vertex = distinct_counts(f.ravel(), len(v), np.repeat(comp, 3), ncomp)
-    pinched_in_comp = np.zeros(ncomp, dtype=bool)
-    inner_pinch = np.flatnonzero(fans_per_vertex > np.maximum(comps_per_vertex, 1))
-    if len(inner_pinch):
-        hit = np.isin(f, inner_pinch).any(axis=1)
-        pinched_in_comp[np.unique(comp[hit])] = True
+    # the ends of an edge of more than two faces have a fan per sheet along
+    # it: sheets that meet along an edge, which its own note names, not at
+    # a point (pymeshlab counts no such vertex either)
+    on_nonmanifold_edge = np.zeros(len(v), dtype=bool)
+    crowded = order[edge_start[edge_count > 2]]
+    on_nonmanifold_edge[a[crowded]] = on_nonmanifold_edge[b[crowded]] = True
 
-    chi = V - E + F
-    closed = ~bad_edge & ~pinched_in_comp & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
+    # V - E + F with a pinched vertex counted once per fan: the surface with its sheets
+    # apart there, the closed surface its faces make (manifold3d splits
+    # such vertices; isoflow's own boundary meshes count pinches so)
+    chi = distinct_counts(np.repeat(comp, 3), ncomp, fan, 3 * nf) - E + F
+    closed = ~bad_edge & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
     used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))
@@ -114,7 +123,7 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "boundary_edges": int(defects["boundary_edges"]),
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
-        "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex > 1)),
+        "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex[~on_nonmanifold_edge] > 1)),
         "vertices": int(used),
         "faces": int(nf),
         # vertices on faces of more than one component: components touching
@@ -457,11 +466,12 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False, fill: Fill = "winding") -> tuple[list, Stop | None]:
+                  strict: bool = False, fill: Fill = "winding", bodies: int | None = None) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
-    a genus other than ``target``: two coarse grids can both close the
-    same thin hole), at twice the last, within ``max_resolution``,
+    a genus other than ``target``, or on components other than ``bodies``:
+    two coarse grids can both close the same thin hole, or join two bodies
+    across the same thin gap), at twice the last, within ``max_resolution``,
     ``time_limit`` seconds and the memory budget.
 
     Returns the entries (resolution, pitch, shape, voxels, Betti numbers,
@@ -486,7 +496,7 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
             res = todo.pop(0)
         else:
             res, stop = next_resolution(out, target, step=step, max_resolution=max_resolution,
-                                        time_limit=time_limit, elapsed=time.monotonic() - start)
+                                        time_limit=time_limit, elapsed=time.monotonic() - start, bodies=bodies)
             if res is None:
                 return out, stop
         weight = res**3
@@ -510,14 +520,16 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
 
 def next_resolution(done: list, target: int | None, *, step: bool, max_resolution: int, time_limit: float,
-                    elapsed: float) -> tuple[int | None, Stop | None]:
+                    elapsed: float, bodies: int | None = None) -> tuple[int | None, Stop | None]:
     """The resolution to try after ``done`` (twice the last), or None with
-    why not: the Betti numbers settled on ``target`` (no :class:`Stop`), or
+    why not: the Betti numbers settled on ``target`` and, where given,
+    ``bodies`` components (no :class:`Stop`), or
     a limit (the time that ``elapsed`` seconds leave, the memory budget).
     ``max_resolution`` caps the doubling only: where the resolutions asked
     already pass it, they are what ended the stepping (a Stop "asked")."""
     stable = len(done) >= 2 and done[-1]["betti"] == done[-2]["betti"]
-    if stable and (target is None or done[-1]["genus"] == target):
+    if stable and (target is None or done[-1]["genus"] == target) and (bodies is None or
+                                                                       done[-1]["betti"][0] == bodies):
         return None, None
     if not step:
         return None, Stop("asked")
@@ -687,22 +699,23 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
+    bodies = reference_bodies(w, fill)
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill)
+            strict=strict, fill=fill, bodies=bodies)
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
-    kind = verdict_kind(w, digital, reference, stable)
+    kind = verdict_kind(w, digital, reference, stable, bodies)
     return GenusVerdict(
         input=name, mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
-        stop=stop,
+        stop=stop, bodies=bodies,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill)
                     + digital_notes(w, digital, reference, stable, fill)))
 
@@ -795,11 +808,26 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     return out
 
 
-def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) -> VerdictKind:
+def reference_bodies(w: dict, fill: Fill) -> int | None:
+    """The bodies the digital components (b0) are compared with: those of
+    the solid manifold3d builds (edge-connected, so two balls touching at
+    a point are two), or None where there is no such solid or the voxels
+    are not it: a shell (whose components are surfaces) and a flood fill
+    of a solid with cavities (which swallows the bodies inside them)."""
+    solid = w["solid"]
+    if "bodies" not in solid or fill == "shell" or fill == "flood" and solid["cavities"]:
+        return None
+    return int(solid["bodies"])
+
+
+def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool,
+                 bodies: int | None = None) -> VerdictKind:
     """What the verdict says first (see :data:`~isoflow.mesh.verdict.VerdictKind`).
     An empty grid comes first: it has genus 0 and would "agree" with a
     surface's genus 0 for nothing (a flat or zero-volume mesh, whose faces
-    may also lie on each other)."""
+    may also lie on each other). The digital components are compared with
+    ``bodies`` as the digital genus is with ``reference``: a mesh of two
+    bodies whose voxels are one component disagrees."""
     if digital and digital[-1]["betti"][0] == 0:
         return "no_solid"
     if w["crossing_self"]:
@@ -808,7 +836,8 @@ def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool) ->
         return "no_reference"
     if not stable:
         return "not_converged"
-    return "agree" if digital[-1]["genus"] == reference else "disagree"
+    same_bodies = bodies is None or digital[-1]["betti"][0] == bodies
+    return "agree" if digital[-1]["genus"] == reference and same_bodies else "disagree"
 
 
 def load_notes(stats: dict) -> list[Note]:

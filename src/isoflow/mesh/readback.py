@@ -35,6 +35,55 @@ def volume_unit(obj) -> float:
     1e200 neither underflows nor overflows (its volume in world units
     may: 1e600 is no float)."""
     return float(2.0 ** np.round(np.log2(np.max(obj.spacing))))
+
+
+def volume_words(units: float, unit: float, digits: int = 6) -> str:
+    """A volume of ``units`` cubes of side ``unit`` (:func:`volume_unit`, a
+    power of two) in world units, to ``digits`` significant digits. Where
+    float64 cannot hold it (a voxel size of 1e150 makes a volume of 1e450, which
+    float64 makes inf, and inf equals inf whatever the file holds) it is
+    written from exact decimal arithmetic and says that it was compared in
+    that unit.
+
+    Parameters
+    ----------
+    units : float
+        The volume in ``unit`` cubed, what the read-back compares.
+    unit : float
+        The length unit, a power of two.
+    digits : int
+        Significant digits.
+
+    Returns
+    -------
+    str
+        The volume as a message says it.
+
+    Examples
+    --------
+    >>> volume_words(64.0, 0.5)
+    '8'
+    >>> volume_words(64.0, 2.0 ** 500)
+    '2.24478e+453 (beyond float64: compared in voxel units, 64 cubes of 2^500)'
+    >>> volume_words(1.0, 2.0 ** -400)
+    '5.80771e-362 (beyond float64: compared in voxel units, 1 cube of 2^-400)'
+    """
+    from decimal import Decimal, localcontext
+
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        world = units * np.float64(unit) ** 3
+    if units == 0.0 or np.isfinite(world) and world != 0.0:
+        return f"{world if units else 0.0:.{digits}g}"
+    exponent = int(np.log2(unit))
+    with localcontext() as ctx:
+        ctx.prec = 40
+        exact = Decimal(units) * Decimal(2) ** (3 * exponent)
+        ctx.prec = digits
+        exact = (+exact).normalize()  # rounded to the digits, without the trailing zeros "g" drops for a float
+    return (f"{exact:g} (beyond float64: compared in voxel units, {units:.{digits}g} "
+            f"{'cube' if units == 1 else 'cubes'} of 2^{exponent})")
+
+
 #: peak bytes of trimesh's read-back per triangle (measured 320, rounded up)
 READBACK_BYTES_PER_TRIANGLE = 400
 
@@ -185,7 +234,9 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
         moved = (float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0) / volume_unit(obj)
         slack = 2 * moved * theirs["area_units"]
     if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=slack):
-        problems.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
+        unit = volume_unit(obj)
+        problems.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
+                        f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
     problem = f"{path}: trimesh reads " + ", ".join(problems) if problems else None
     return {"isoflow": ours, "trimesh": theirs, "agree": not problems, "problem": problem}
 
@@ -218,7 +269,9 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]
         if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=0):
-            wrong.append(f"volume {theirs['volume']:.9g} (isoflow: {ours['volume']:.9g})")
+            unit = volume_unit(obj)
+            wrong.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
+                         f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
         if wrong:
             problems.append(f"{path}: node {name}: trimesh reads " + ", ".join(wrong))
     return problems

@@ -67,7 +67,10 @@ class GenusVerdict(Result):
     ``reference`` is the genus the digital genus is compared with, taken
     from ``reference_source`` (``"mesh"``: the mesh's own genus; ``"solid"``:
     the genus of the solid manifold3d builds, where components overlap,
-    touch or nest).
+    touch or nest). ``bodies`` is the number of bodies the digital
+    components (b0) are compared with: the solid's (None where not
+    compared: no solid, ``fill="shell"``, or a flood fill of a solid with
+    cavities); a verdict with other digital components is ``disagree``.
     """
 
     input: str
@@ -87,6 +90,7 @@ class GenusVerdict(Result):
     reference_source: Literal["mesh", "solid"]
     stop: Stop | None = None
     notes: tuple[Note, ...] = ()
+    bodies: int | None = None
 
     #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order:
     #: the sentence, then the facts it is written from, so that a script
@@ -94,7 +98,7 @@ class GenusVerdict(Result):
     #: the JSON back
     KEYS = ("input", "mesh", "manifold3d", "pymeshlab", "self_intersecting_faces",
             "faces_crossing_other_components", "solid_genus", "fill", "digital", "solid", "converged", "agree", "verdict",
-            "kind", "reference", "reference_source", "stop", "notes")
+            "kind", "reference", "reference_source", "bodies", "stop", "notes")
 
     @property
     def verdict(self) -> str:
@@ -195,8 +199,15 @@ def head_text(v: GenusVerdict) -> str:
         return f"not converged at {digital[-1]['resolution']}: {why} ({trail})" + stop
     if v.kind == "agree":
         return f"agree: {'solid genus' if v.reference_source == 'solid' else 'genus'} {v.reference}"
-    return (f"disagree: {ref_name} {v.reference}, digital genus {digital[-1]['genus']} "
-            f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})" + stop)
+    same = f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})"
+    b0 = digital[-1]["betti"][0]
+    parts = ([f"the solid has {counted(v.bodies, 'body', 'bodies')}, the digital solid "
+              f"{counted(b0, 'component')}"] if v.bodies is not None and b0 != v.bodies else [])
+    if digital[-1]["genus"] != v.reference or not parts:  # (a verdict's JSON without "bodies" compares the genus)
+        parts.insert(0, f"{ref_name} {v.reference}, digital genus {digital[-1]['genus']}")
+    else:
+        same += f", both of genus {v.reference}"
+    return f"disagree: {'; '.join(parts)} {same}" + stop
 
 
 def note_text(note: Note) -> str:
@@ -276,7 +287,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
                                     "genus undefined"),
     "nonmanifold_vertices": lambda n: (f"{counted(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
                                        "sheets touch at a point; "
-                                       "genus counted per edge-connected component"),
+                                       "genus counted with the sheets apart there (as manifold3d counts)"),
     "nested": lambda components, solid_genus: (
         f"the mesh's {components} components nest with shells facing the same way (a winding "
         "number of 2 or more inside): the solid they bound by the nonzero rule swallows the inner ones, "
