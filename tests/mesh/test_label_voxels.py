@@ -127,6 +127,19 @@ def test_split_keeps_a_cavity_with_its_body():
     assert r.labels[tuple(centre)] == 0  # the cavity is empty
 
 
+def test_split_names_a_hollow_body_alone_as_its_file(tmp_path):
+    # a mesh of one body keeps the name FILE (docs/labels.md); a hollow one,
+    # two shells of one body, was named FILE:1
+    outer, inner = trimesh.creation.box((2, 2, 2)), trimesh.creation.box((1, 1, 1))
+    inner.invert()
+    path = tmp_path / "hollow.obj"
+    trimesh.util.concatenate([outer, inner]).export(path)
+    assert len(trimesh.load(path, force="mesh").split(only_watertight=False)) == 2
+    r = voxelize_meshes([path], pitch=0.125, split=True)
+    assert r.names == (str(path),) and r.voxels == (16**3 - 8**3,)  # the cavity empty
+    assert voxelize_meshes([path], pitch=0.125).names == r.names
+
+
 def welded(*meshes):
     """Meshes concatenated and welded, as a file of them is read."""
     m = trimesh.util.concatenate(meshes)

@@ -147,6 +147,8 @@ def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
     groups: dict[int, list[int]] = {}
     for c in range(len(parts)):
         groups.setdefault(owner[c], []).append(c)
+    if len(groups) == 1:  # shells that are one body (a cavity's wall with its solid) keep the mesh's name
+        return [Body(name, v, f)]
     bodies = []
     for k, members in enumerate(groups.values(), 1):
         faces = f[np.concatenate([parts[c] for c in members])]
