@@ -181,10 +181,13 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # the count is of voxels (not of distinct values), and of this block
         # only where the volume is checked block by block
         place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        raise NotBinary(
-            f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
-            f"e.g. {value}); threshold it first, e.g. volume > 0"
-        )
+        bare = (f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
+                f"e.g. {value}); threshold it first, e.g. volume > 0")
+        # integers in memory are most often a label image, which has a table
+        # (a command adds its own options to ``bare`` instead)
+        table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3)
+        raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
+                        bare)
     return arr.astype(bool)
 
 
