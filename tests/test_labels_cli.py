@@ -249,6 +249,27 @@ def test_bad_label_options_are_one_line(tmp_path, capsys, segmentation, extra, w
     fails(capsys, "info", tmp_path / "seg.npy", *extra, words=words)
 
 
+@pytest.mark.parametrize("command", ["info", "surface"])
+@pytest.mark.parametrize("spec", ["-3--1", "-2,3"])
+def test_a_negative_choice_without_its_equals_sign_is_one_line_naming_the_form_that_works(tmp_path, capsys, command,
+                                                                                           spec):
+    # argparse read it as an unknown option: the usage and "unrecognized
+    # arguments", where docs/labels.md gives the form --labels=-5,-3--1
+    image = np.zeros((4, 4, 4), np.int8)
+    image[0, 0, 0], image[2, 2, 2], image[3, 3, 3] = -2, 3, 5
+    np.save(tmp_path / "neg.npy", image)
+    out = ["-o", str(tmp_path / "n.glb")] if command == "surface" else ["--json"]
+    with pytest.raises(SystemExit) as done:
+        main([command, str(tmp_path / "neg.npy"), "--labels", spec, *out])
+    err = capsys.readouterr().err
+    assert done.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"isoflow {command}: error: --labels {spec}: ") and f"--labels={spec} " in err, err
+    assert main([command, str(tmp_path / "neg.npy"), f"--labels={spec}", *out]) == 0
+    if command == "info":
+        rows = json.loads(capsys.readouterr().out)["labels"]
+        assert [row["label"] for row in rows] == {"-3--1": [-2], "-2,3": [-2, 3]}[spec]
+
+
 def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply", words=(".glb", "DIR/"))

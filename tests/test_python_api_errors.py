@@ -441,6 +441,25 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.analyze(volume)
 
 
+@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, lambda v: isoflow.boundary_mesh(v, 6)])
+def test_a_label_image_given_for_a_mask_names_label_table(call):
+    # the refusal said only "threshold it first": a label image has a
+    # table of its own, as the command line's refusal says (--labels)
+    from skimage.measure import regionprops_table
+
+    labels = np.zeros((6, 5, 4), np.int32)
+    labels[1:3, 1:4, 1:3], labels[4, 2:4, 1] = 3, 8
+    with pytest.raises(IsoflowError, match=r"threshold it first, e\.g\. volume > 0, or give every label its row with "
+                                           r"isoflow\.label_table\(volume\)$"):
+        call(labels)
+    table, props = isoflow.label_table(labels), regionprops_table(labels, properties=("label", "area"))
+    assert table["label"].tolist() == props["label"].tolist() == [3, 8]
+    assert table["voxels"].tolist() == props["area"].tolist() == [12, 2]
+    with pytest.raises(IsoflowError) as probability:  # a probability map is no label image
+        call(labels * 0.25)
+    assert str(probability.value).endswith("threshold it first, e.g. volume > 0")
+
+
 @pytest.mark.parametrize("method", ["numpy", "compiled"])
 @pytest.mark.parametrize("value", [2, 255, 0.5, np.nan])
 def test_boundary_mesh_refuses_a_volume_that_is_not_binary_as_analyze_does(method, value):

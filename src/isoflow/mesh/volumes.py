@@ -188,7 +188,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
             vol = binary(arr, where)
         except NotBinary as exc:
             # a label table takes 2D and 3D images: --labels is no way out in 4D
-            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4) from None
+            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4,
+                                     ndim=arr.ndim) from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -228,22 +229,31 @@ def one_value_mask(arr: np.ndarray) -> np.ndarray:
 
 #: what the refusal of a label image where a mask is expected adds
 EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table(isoflow.read_labels(path)))"
+#: the same for surface, whose --labels writes a surface per label, not a table
+SURFACE_PER_LABEL = "or write a closed surface per label with --labels"
 
 
-def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
+def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = False,
+                       ndim: int | None = None) -> NotBinary:
     """The refusal of a label image where a mask is expected, with the
     options that select its labels: one (``--label N``) and, where the
     command takes it (``every``) and the image has a table (``exc.every``:
-    2D and 3D), all (``--labels``).
+    2D and 3D), all (``--labels``): its table, or with ``surfaces`` (the
+    surface command) a surface per label.  ``ndim``: the image's
+    dimension, kept for the command (else ``exc.ndim``).
 
     Examples
     --------
     >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), every=False))
     'v.npy: not a binary volume, or select one label with --label N (label=N)'
+    >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), surfaces=True))
+    'v.npy: not a binary volume, or select one label with --label N (label=N), or write a closed surface per label with --labels'
     """
+    ndim = exc.ndim if ndim is None else ndim
     every = every and exc.every
-    options = ", or select one label with --label N (label=N)" + (f", {EVERY_LABEL}" if every else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=every)
+    offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
+    options = ", or select one label with --label N (label=N)" + (f", {offer}" if every else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=every, ndim=ndim)
 
 
 def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:
