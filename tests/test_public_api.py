@@ -101,6 +101,7 @@ reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
 reveal_type(isoflow.write_volume(obj, "v.npz"))
 reveal_type(isoflow.write_labels(np.zeros((2, 2, 2), np.uint8), "l.npz", pitch=0.5))
+reveal_type(isoflow.write_surface(obj, "s.ply", 6, mesh=isoflow.boundary_mesh(vol, 6), ascii=True))
 reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has no py.typed: Manifold is Any)
 reveal_type(isoflow.data.bob())
 '''
