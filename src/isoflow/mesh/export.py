@@ -28,12 +28,14 @@ units (a mesh in units of 1e-200, map coordinates of 4e6 with a pitch of
 smaller files) and as double otherwise; OBJ prints as many digits as they
 need (9 at least); GLB, whose positions are float32 by its spec, then stores
 them in voxel units with the voxel size and the origin as its node's
-transform (float64 in the JSON), which readers apply. Binary STL holds
-float32 only, and no shared vertices (readers weld equal positions): it is
-written wherever float32 keeps the surface's distinct positions distinct,
-so that the weld gives back the same closed surface, and refused (nothing
-written) only where float32 would merge some, with the numbers;
-:func:`float32_effect` says how far float32 moves the positions.
+transform (float64 in the JSON), which trimesh applies when it makes one
+mesh and pymeshlab keeps apart until ``apply_matrix_freeze``
+(docs/formats.md, "Surface files"). Binary STL holds float32 only, and no
+shared vertices (readers weld equal positions): it is written wherever
+float32 keeps the surface's distinct positions distinct, so that the weld
+gives back the same closed surface, and refused (nothing written) only
+where float32 would merge some, with the numbers; :func:`float32_effect`
+says how far float32 moves the positions.
 """
 
 from __future__ import annotations
