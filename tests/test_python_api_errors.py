@@ -365,6 +365,25 @@ def test_complex_vertices_are_refused_naming_them(voxelize):
             voxelize(box.vertices + 1j, box.faces)
 
 
+@pytest.mark.parametrize("voxelize", [
+    lambda v, f: isoflow.voxelize_mesh(v, f, resolution=4),
+    lambda v, f: isoflow.voxelize_meshes([(v, f)], resolution=4),
+    lambda v, f: isoflow.verify_genus((v, f), resolutions=(4,)),
+])
+@pytest.mark.parametrize("kind", [object, str])
+def test_vertices_of_objects_or_strings_are_refused_as_volumes_are(voxelize, kind):
+    # they were cast to float64 and voxelised (strings such as "0.5" too), where
+    # analyze refuses an array of the same type in one line
+    box = _box()
+    vertices = np.array(box.vertices.tolist(), dtype=kind)
+    with pytest.raises(IsoflowError, match=r"array of type object is not a binary volume"):
+        isoflow.analyze(np.ones((2, 2, 2), dtype=object))
+    with pytest.raises(IsoflowError) as e:
+        voxelize(vertices, box.faces)
+    assert str(e.value).endswith(f"vertices: array of type {vertices.dtype} is not an array of coordinates")
+    assert "\n" not in str(e.value)
+
+
 @pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
 def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
     # a dask array was rechunked as given: ZeroDivisionError, dask's
