@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import isoflow
@@ -127,6 +128,52 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
     labels = calls.index('reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))')
     assert "isoflow.mesh.label_voxels.LabelVoxelization" in revealed[labels][1]
 
+
+# calls the functions take at run time (as their docstrings say), which the
+# annotations refused: a bare array for write_volume, a tuple or list pitch
+# and nested lists for write_labels (its own example), array_like volumes,
+# connectivity=None (the paper's default, as for analyze)
+TAKEN_SCRIPT = """
+import numpy as np
+import isoflow
+
+vol = np.zeros((4, 4, 4), dtype=bool)
+vol[1:3, 1:3, 1:3] = True
+isoflow.write_volume(vol, "v.npz")
+isoflow.write_labels(np.ones((2, 2), np.uint16), "l.nii.gz", pitch=(0.5, 0.25))
+isoflow.write_labels([[1, 2], [0, 1]], "m.nii.gz", pitch=[0.5, 0.25], origin=(1, 2))
+isoflow.boundary_mesh(vol.tolist(), None)
+isoflow.closed_surfaces(vol, None)
+isoflow.to_manifold(vol, connectivity=None)
+isoflow.write_surface(vol.tolist(), "s.ply", None)
+isoflow.planar_index([[1, 0], [0, 1]])
+isoflow.class_histogram(isoflow.configuration_histogram(vol).tolist())
+"""
+
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_mypy_takes_the_arguments_the_functions_take(tmp_path):
+    script = tmp_path / "user.py"
+    script.write_text(TAKEN_SCRIPT)
+    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
+    p = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
+                        "--cache-dir", str(tmp_path / "cache"), str(script)],
+                       capture_output=True, text=True, cwd=tmp_path, env=env)
+    assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
+
+
+def test_the_script_s_calls_run(tmp_path, monkeypatch):
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(TAKEN_SCRIPT, "user.py", "exec"), {})
+    assert trimesh.load(tmp_path / "s.ply", process=False).euler_number == 2  # one cube's sphere
+    assert isoflow.read_labels(tmp_path / "l.nii.gz").spacing.tolist() == [0.5, 0.25]
+    vol = np.load(tmp_path / "v.npz")["volume"]
+    assert isoflow.boundary_mesh(vol, None) == isoflow.boundary_mesh(vol, 6)
+    assert isoflow.closed_surfaces(vol, None)["surfaces"] == isoflow.closed_surfaces(vol, 6)["surfaces"]
+    assert isoflow.to_manifold(vol, None).volume() == 8.0
 
 def public_functions() -> list[tuple[str, object]]:
     """Every public function: the names of ``__all__`` and of the public

@@ -16,6 +16,7 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import as_array, binary
@@ -393,12 +394,12 @@ def code_string(config: int) -> str:
     return "(" + ",".join(CODE_CHARS[int(v)] for v in code_lut()[config]) + ")"
 
 
-def class_histogram(config_hist: np.ndarray) -> np.ndarray:
+def class_histogram(config_hist: ArrayLike) -> np.ndarray:
     """The paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
 
     Parameters
     ----------
-    config_hist : numpy.ndarray
+    config_hist : array_like
         The 256 configuration counts
         (:func:`~isoflow.digital.configurations.configuration_histogram`).
 
@@ -449,12 +450,12 @@ def planar_class_lut() -> np.ndarray:
     return out
 
 
-def planar_index(points: np.ndarray) -> np.ndarray:
+def planar_index(points: ArrayLike) -> np.ndarray:
     """Four times the planar curvature index ``r`` of eq. 4.2, at every point.
 
     Parameters
     ----------
-    points : numpy.ndarray
+    points : array_like
         A 2D binary array of lattice points (bool or 0/1).
 
     Returns

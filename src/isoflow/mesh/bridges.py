@@ -104,7 +104,7 @@ def cube_union(voxels):
 # --------------------------------------------------------------------------
 
 
-def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int = 6) -> Manifold:
+def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> Manifold:
     """The union of the object's voxels as a ``manifold3d.Manifold`` in world
     coordinates.
 
@@ -120,8 +120,8 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int = 6) -> Manifo
     Parameters
     ----------
     obj : DigitalObject or array_like of bool, 3D
-    connectivity : {6, 26}
-        The object's.
+    connectivity : {6, 26} or None
+        The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
 
     Returns
     -------

@@ -585,7 +585,7 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject) -> None:
             module.check(file, obj, None)
 
 
-def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
+def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``:
     a dataset of an HDF5 file, new or existing, whose other datasets are
     kept), with its voxel size and origin where the format has room for
@@ -661,14 +661,14 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     return file, dataset
 
 
-def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | np.ndarray = 1.0,
+def write_labels(labels: ArrayLike, path: str | os.PathLike, *, pitch: float | ArrayLike = 1.0,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
 
     Parameters
     ----------
-    labels : ndarray
+    labels : array_like
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
         not binvox or MagicaVoxel); 0 is the background. Not 4D:
@@ -676,7 +676,7 @@ def write_labels(labels: np.ndarray, path: str | os.PathLike, *, pitch: float | 
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
-    pitch : float or ndarray
+    pitch : float or array_like
         The voxel size, one value or one per axis, kept where the format
         has room for it.
     origin : array_like, optional
