@@ -565,3 +565,28 @@ def test_a_trimesh_scene_is_read_as_its_file_is(tmp_path):
     assert isoflow.verify_genus(scene, (16, 32)).verdict == "agree: genus 0"
     with pytest.raises(IsoflowError, match="mesh 1: no node of the scene holds a triangle mesh"):
         isoflow.voxelize_meshes(trimesh.Scene(), resolution=8, split=True)
+
+
+@pytest.mark.parametrize("name,call", [
+    ("s.ply", lambda p, **k: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", **k)),
+    ("v.npz", lambda p, **k: isoflow.write_volume(np.ones((2, 2, 2), bool), p / "v.npz", **k)),
+    ("l.nii.gz", lambda p, **k: isoflow.write_labels(np.ones((2, 2, 2), np.uint8), p / "l.nii.gz", **k)),
+    ("m.zarr", lambda p, **k: isoflow.voxelize_to_zarr(_box(), p / "m.zarr", resolution=4, **k)),
+])
+def test_a_force_that_is_no_bool_is_refused_and_the_file_kept(tmp_path, name, call):
+    # force="no" is truthy: the existing file was replaced
+    (tmp_path / name).mkdir() if name.endswith(".zarr") else (tmp_path / name).write_text("kept")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    with pytest.raises(IsoflowError) as e:
+        call(tmp_path, force="no")
+    assert str(e.value) == f"{tmp_path / name}: force must be True or False, got 'no'"
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+    if not name.endswith(".zarr"):
+        assert (tmp_path / name).read_text() == "kept"
+
+
+@pytest.mark.parametrize("switch", ["ascii", "triangulate"])
+def test_write_surface_refuses_a_switch_that_is_no_bool(tmp_path, switch):
+    with pytest.raises(IsoflowError, match=rf"s\.ply: {switch} must be True or False, got 'no'$"):
+        isoflow.write_surface(np.ones((2, 2, 2), bool), tmp_path / "s.ply", **{switch: "no"})
+    assert not (tmp_path / "s.ply").exists()

@@ -48,7 +48,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, IsoflowWarning
-from .outputs import atomic_write, check_output_path
+from .outputs import atomic_write, check_output_path, check_switch
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -580,6 +580,7 @@ def write_surface(
 
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
+    ascii, triangulate = check_switch(ascii, "ascii", str(path)), check_switch(triangulate, "triangulate", str(path))
     if ascii and suffix != ".ply":
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
     obj = DigitalObject.of(obj)

@@ -33,7 +33,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
-from .outputs import atomic_path, check_output_path, refuse_directory_spelling
+from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -525,6 +525,7 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     """The file (and dataset) a volume will be written to, checked before
     any work: a suffix isoflow writes, its library installed, the path free
     (or ``force``). Returns ``(file, dataset)``."""
+    check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
     if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written
