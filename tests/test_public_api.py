@@ -107,15 +107,20 @@ reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has 
 reveal_type(isoflow.data.bob())
 '''
 
+def mypy(tmp_path: Path, script: str) -> subprocess.CompletedProcess:
+    """mypy run on ``script`` as a user's ``user.py``, isoflow found by its stub."""
+    path = tmp_path / "user.py"
+    path.write_text(script)
+    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
+    return subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
+                           "--cache-dir", str(tmp_path / "cache"), str(path)],
+                          capture_output=True, text=True, cwd=tmp_path, env=env)
+
+
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
 def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
-    script = tmp_path / "user.py"
-    script.write_text(USER_SCRIPT)
-    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
-    p = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-                        "--cache-dir", str(tmp_path / "cache"), str(script)],
-                       capture_output=True, text=True, cwd=tmp_path, env=env)
+    p = mypy(tmp_path, USER_SCRIPT)
     revealed = re.findall(r"user\.py:(\d+): note: Revealed type is \"(.*)\"", p.stdout)
     calls = [line for line in USER_SCRIPT.splitlines() if line.startswith("reveal_type")]
     assert len(revealed) == len(calls), p.stdout + p.stderr
@@ -154,12 +159,7 @@ isoflow.class_histogram(isoflow.configuration_histogram(vol).tolist())
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
 def test_mypy_takes_the_arguments_the_functions_take(tmp_path):
-    script = tmp_path / "user.py"
-    script.write_text(TAKEN_SCRIPT)
-    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
-    p = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-                        "--cache-dir", str(tmp_path / "cache"), str(script)],
-                       capture_output=True, text=True, cwd=tmp_path, env=env)
+    p = mypy(tmp_path, TAKEN_SCRIPT)
     assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
 
 
