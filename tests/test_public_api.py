@@ -136,8 +136,9 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
 
 # calls the functions take at run time (as their docstrings say), which the
 # annotations refused: a bare array for write_volume, a tuple or list pitch
-# and nested lists for write_labels (its own example), array_like volumes,
-# connectivity=None (the paper's default, as for analyze)
+# and nested lists for write_labels (its own example) and DigitalObject,
+# array_like volumes and origins, connectivity=None (the paper's default,
+# as for analyze)
 TAKEN_SCRIPT = """
 import numpy as np
 import isoflow
@@ -153,6 +154,10 @@ isoflow.to_manifold(vol, connectivity=None)
 isoflow.write_surface(vol.tolist(), "s.ply", None)
 isoflow.planar_index([[1, 0], [0, 1]])
 isoflow.class_histogram(isoflow.configuration_histogram(vol).tolist())
+obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3])
+isoflow.from_manifold(isoflow.to_manifold(obj), pitch=0.5, origin=[1, 2, 3])
+isoflow.label_table(vol.astype(np.uint8), pitch=np.array([0.5, 0.5, 1.0]), origin=np.zeros(3))
+isoflow.run_flow(vol.tolist(), steps=1)
 """
 
 
@@ -174,6 +179,8 @@ def test_the_script_s_calls_run(tmp_path, monkeypatch):
     assert isoflow.boundary_mesh(vol, None) == isoflow.boundary_mesh(vol, 6)
     assert isoflow.closed_surfaces(vol, None)["surfaces"] == isoflow.closed_surfaces(vol, 6)["surfaces"]
     assert isoflow.to_manifold(vol, None).volume() == 8.0
+    obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3])
+    assert obj.spacing.tolist() == [0.5, 0.5, 1.0] and obj.world(np.zeros((1, 3))).tolist() == [[1.0, 2.0, 3.0]]
 
 def public_functions() -> list[tuple[str, object]]:
     """Every public function: the names of ``__all__`` and of the public

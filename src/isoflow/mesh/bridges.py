@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 
 def from_manifold(manifold: Manifold, pitch: float = 1.0,
-                  origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> DigitalObject:
+                  origin: ArrayLike = (0.0, 0.0, 0.0)) -> DigitalObject:
     """Digitise a manifold3d solid on the grid ``origin + pitch * Z^3``.
 
     Voxel ``v`` (the cube ``[origin + pitch v, origin + pitch (v+1)]``) is in
@@ -37,7 +37,7 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     manifold : manifold3d.Manifold
     pitch : float
         The voxel size.
-    origin : tuple of float
+    origin : array_like of 3 floats
         A corner of the grid.
 
     Returns
