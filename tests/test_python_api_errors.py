@@ -72,6 +72,27 @@ def test_a_digital_object_where_an_array_is_taken_is_named(function):
         function(obj)
 
 
+@pytest.mark.parametrize("call,where", [
+    (lambda image, p: isoflow.analyze(image), "volume"),
+    (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh"),
+    (lambda image, p: isoflow.run_flow(image), "DigitalObject volume"),
+    (lambda image, p: isoflow.DigitalObject(image), "DigitalObject volume"),
+    (lambda image, p: isoflow.write_surface(image, p / "s.ply"), "DigitalObject volume"),
+])
+def test_a_label_image_where_a_binary_volume_is_taken_is_named(tmp_path, call, where):
+    # NumPy made the LabelImage a 0D object array: refused as "array of type object"
+    image = isoflow.read_labels(isoflow.write_labels(np.array([[[1, 2]]], np.uint8), tmp_path / "l.npz", pitch=0.5))
+    with pytest.raises(IsoflowError) as e:
+        call(image, tmp_path)
+    assert str(e.value) == (f"{where}: a LabelImage, not a binary volume; pass one label's mask, "
+                            "DigitalObject(image.array == N, pitch=image.spacing, origin=image.origin) "
+                            "(label_table reports every label)")
+    # what the message says to do runs, and places the label as the file does
+    obj = isoflow.DigitalObject(image.array == 2, pitch=image.spacing, origin=image.origin)
+    assert obj.voxels == 1 and obj.world(np.zeros((1, 3))).tolist() == [[0.0, 0.0, 0.0]]
+    assert isoflow.label_table(image)["voxels"].tolist() == [1, 1]
+
+
 @pytest.mark.parametrize("function", [
     isoflow.analyze, isoflow.run_flow, isoflow.closed_surfaces, isoflow.boundary_mesh, isoflow.label_table,
 ])
