@@ -560,7 +560,7 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
     return suffix
 
 
-def check_volume_holds(path: str | os.PathLike, obj: DigitalObject) -> None:
+def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume) -> None:
     """Refuse now, in one line, what the format of ``path`` could not hold
     of ``obj`` (a 2D object as binvox, a pitch per axis as MagicaVoxel),
     for work that writes such files later (the flow's step volumes); what
@@ -577,13 +577,13 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject) -> None:
     """
     import warnings
 
-    file = Path(path)
+    file, dataset = split_dataset(path)  # FILE.h5:/cells.vox is HDF5, whatever its dataset's name
     fmt = format_for(file, writing=True)
     module = None if fmt is None else fmt.load()
     if module is not None and hasattr(module, "check"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            module.check(file, obj, None)
+            module.check(file, obj, dataset)
 
 
 def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False) -> Path:
@@ -662,26 +662,37 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     return file, dataset
 
 
-def write_labels(labels: ArrayLike, path: str | os.PathLike, *, pitch: float | ArrayLike = 1.0,
+def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
+
+    A bool image is written as uint8 labels 0 and 1, a float image of whole
+    numbers (as NIfTI's scaling gives) in the smallest unsigned type that
+    holds its labels: the images :func:`isoflow.label_table` takes.
 
     Parameters
     ----------
     labels : array_like
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
-        not binvox or MagicaVoxel); 0 is the background. Not 4D:
-        :func:`read_labels` would not read it back.
+        not binvox or MagicaVoxel); 0 is the background; or a bool image,
+        or a float image of whole numbers from 0 on. Not 4D:
+        :func:`read_labels` would not read it back. Or a
+        :class:`~isoflow.LabelImage`, as :func:`read_labels` gives it, with
+        its voxel size and origin.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
-    pitch : float or array_like
+    pitch : float or array_like, optional
         The voxel size, one value or one per axis, kept where the format
-        has room for it.
+        has room for it (if None: a LabelImage's spacing, else 1).
     origin : array_like, optional
-        The lower corner of voxel (0, 0, 0) in world units (zero if None).
+        The lower corner of voxel (0, 0, 0) in world units (if None: a
+        LabelImage's origin, else zero),
+        kept where the format has room for it: not in TIFF, ``.npy`` or
+        MagicaVoxel, which a warning says (docs/labels.md lists what each
+        format keeps).
     force : bool
         Overwrite an existing file.
 
@@ -694,8 +705,10 @@ def write_labels(labels: ArrayLike, path: str | os.PathLike, *, pitch: float | A
     ------
     IsoflowError
         For an existing file without ``force``, an array that is not 2D or
-        3D integers, a negative label, a format that keeps fewer labels
-        than the image has (:func:`check_label_output`) or no 2D image.
+        3D integers, bools or floats, a negative label, a float that is no
+        whole number (NaN, 1.5: its voxel named), a 2D image for a format
+        of 3D only (binvox, MagicaVoxel), a format that keeps fewer labels
+        than the image has (:func:`check_label_output`).
 
     Examples
     --------
@@ -713,25 +726,32 @@ def write_labels(labels: ArrayLike, path: str | os.PathLike, *, pitch: float | A
     >>> back = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.nii.gz", pitch=(0.5, 0.25)))
     >>> np.array_equal(back.array, cells), back.spacing.tolist()
     (True, [0.5, 0.25])
+
+    A label image read from one file, written to another with its place:
+
+    >>> again = read_labels(write_labels(back, pathlib.Path(tempfile.mkdtemp()) / "cells.h5"))
+    >>> np.array_equal(again.array, cells), again.spacing.tolist()
+    (True, [0.5, 0.25])
     """
+    if isinstance(labels, LabelImage):  # its place, unless given, as label_table takes it
+        pitch = labels.spacing if pitch is None else pitch
+        origin = labels.origin if origin is None else origin
+        labels = labels.array
+    pitch = 1.0 if pitch is None else pitch
     arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
         raise IsoflowError(f"{path}: a label image is written in 2D or 3D, as read_labels reads it back; this one "
                            "is 4D (np.save keeps it, and read_volume(path, label=N) reads one label of it as 4D)")
-    if arr.ndim not in (2, 3) or arr.dtype.kind not in "iu":
-        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers, got {arr.ndim}D {arr.dtype}")
-    if arr.dtype.kind == "i":
-        # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
-        # label's output): written as the unsigned type of their width, whose bits are the same for
-        # labels from 0 on (a view, no copy)
-        low = int(arr.min(initial=0))
-        if low < 0:
-            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {low}")
-        arr = arr.view(arr.dtype.str.replace("i", "u"))
+    if arr.ndim not in (2, 3) or arr.dtype.kind not in "biuf":
+        raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
+                           f"numbers), got {arr.ndim}D {arr.dtype}")
+    arr = _unsigned_labels(arr, path)
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
+    check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
@@ -739,3 +759,29 @@ def write_labels(labels: ArrayLike, path: str | os.PathLike, *, pitch: float | A
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
     return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)
+
+
+def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:
+    """The labels of an image of integers, bools or floats as unsigned
+    integers, as :func:`write_labels` writes them; a value that is no label
+    (negative, NaN, not whole) is refused naming its voxel."""
+    labels = arr
+    if arr.dtype.kind in "bf":
+        try:  # as label_table takes them: a bool image as uint8 0 and 1, whole floats as int64
+            labels = as_labels(arr)
+        except IsoflowError as exc:
+            raise exc.at(path) from None
+    if labels.dtype.kind == "i":
+        # signed labels (an int16 or int32 NIfTI read back, scipy.ndimage.label's and scikit-image's
+        # label's output): written as the unsigned type of their width, whose bits are the same for
+        # labels from 0 on (a view, no copy)
+        if labels.size and labels.min() < 0:
+            at = np.unravel_index(int(np.argmin(labels)), labels.shape)
+            raise IsoflowError(f"{path}: a label image holds labels from 0 on, this one holds {arr[at].item()!r} at "
+                               f"voxel ({', '.join(str(int(i)) for i in at)})")
+        labels = labels.view(labels.dtype.str.replace("i", "u"))
+    if arr.dtype.kind == "f":
+        # a float image has no integer type of its own, and label_table's int64 would make every file
+        # 8 bytes a voxel: the smallest type that holds its labels
+        labels = labels.astype(np.min_scalar_type(int(labels.max(initial=0))), copy=False)
+    return labels

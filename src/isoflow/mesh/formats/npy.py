@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .registry import RawVolume, note
 
 
@@ -71,10 +71,18 @@ def voxel_count(path: Path) -> int | None:
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
-    if path.name.lower().endswith(".npy") and (
-            np.any(obj.spacing != 1.0) or obj.origin.any() or any(obj.offset) or obj.parity):
-        note(f"{path}: a .npy holds the array alone; pitch, origin, offset and parity are not kept "
-             "(use .npz to keep them)")
+    if not path.name.lower().endswith(".npy"):
+        return
+    # only what this object holds beyond the defaults, with its value: a
+    # label image has no lattice offset or parity to lose
+    lost = [f"{name} {value}" for name, value, held in (
+        ("pitch", coordinates(obj.spacing), np.any(obj.spacing != 1.0)),
+        ("origin", coordinates(obj.origin), obj.origin.any()),
+        ("lattice offset", coordinates(obj.offset), any(obj.offset)),
+        ("parity", str(obj.parity), obj.parity)) if held]
+    if lost:
+        note(f"{path}: a .npy holds the array alone; its {', '.join(lost)} {'is' if len(lost) == 1 else 'are'} "
+             "not kept (use .npz to keep them)")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
