@@ -158,6 +158,7 @@ obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3
 isoflow.from_manifold(isoflow.to_manifold(obj), pitch=0.5, origin=[1, 2, 3])
 isoflow.label_table(vol.astype(np.uint8), pitch=np.array([0.5, 0.5, 1.0]), origin=np.zeros(3))
 isoflow.run_flow(vol.tolist(), steps=1)
+isoflow.a_lut(None)
 """
 
 
