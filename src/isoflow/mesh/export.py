@@ -526,12 +526,12 @@ def write_surface(
     triangulate : bool
         Triangles in every format (two per plain quad).
     force : bool
-        Replace an existing file.
+        Replace an existing file (True or False only: ``"no"`` is refused).
 
     Returns
     -------
     pathlib.Path
-        The file written.
+        The file written, which trimesh, pymeshlab and MeshLab open.
 
     Raises
     ------
