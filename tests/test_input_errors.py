@@ -517,7 +517,7 @@ def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_
     import trimesh
 
     from isoflow import voxelize_meshes
-    from isoflow.mesh.export import write_surface
+    from isoflow.mesh.export import write_mesh_file
     from isoflow.mesh.voxelize import voxelize_file
 
     vol = np.zeros((4, 4, 4), bool)
@@ -528,7 +528,7 @@ def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_
     from isoflow import boundary_mesh
 
     with pytest.raises(IsoflowError, match=r"exists; pass force=True to overwrite$"):
-        write_surface(tmp_path / "s.ply", boundary_mesh(vol), None)
+        write_mesh_file(tmp_path / "s.ply", boundary_mesh(vol), None)
     open_box = trimesh.creation.box()
     open_box.faces = open_box.faces[1:]
     open_box.export(tmp_path / "open.obj")

@@ -120,7 +120,7 @@ def test_an_interrupt_while_writing_names_the_directory(tmp_path, capsys, monkey
     def stop(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(export, "write_surface", stop)
+    monkeypatch.setattr(export, "write_mesh_file", stop)
     assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o"), "--force"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while writing the flow's files; the previous "

@@ -281,7 +281,7 @@ class FlowWriter:
         name = f"step_{step:0{self.width}d}.ply"
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
         with self._named():  # flushed to the disk on the worker thread
-            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
+            written = export.write_mesh_file(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
         self.staged.append(name)
         if self._pool is None:
             from concurrent.futures import ThreadPoolExecutor

@@ -33,7 +33,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
-from .outputs import atomic_path, check_output_path, refuse_directory_spelling
+from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -535,6 +535,7 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     """The file (and dataset) a volume will be written to, checked before
     any work: a suffix isoflow writes, its library installed, the path free
     (or ``force``). Returns ``(file, dataset)``."""
+    check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
     if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written
@@ -595,7 +596,7 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume
             module.check(file, obj, dataset)
 
 
-def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
+def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``:
     a dataset of an HDF5 file, new or existing, whose other datasets are
     kept), with its voxel size and origin where the format has room for
@@ -671,7 +672,7 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     return file, dataset
 
 
-def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pitch: float | np.ndarray | None = None,
+def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
@@ -682,7 +683,7 @@ def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pi
 
     Parameters
     ----------
-    labels : ndarray
+    labels : array_like
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
         not binvox or MagicaVoxel); 0 is the background; or a bool image,
@@ -693,7 +694,7 @@ def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pi
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
-    pitch : float or ndarray, optional
+    pitch : float or array_like, optional
         The voxel size, one value or one per axis, kept where the format
         has room for it (if None: a LabelImage's spacing, else 1).
     origin : array_like, optional

@@ -51,16 +51,21 @@ def is_host(xp) -> bool:
 
 
 def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read_object") -> None:
-    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` or a path
-    where an array is taken: NumPy would make either a 0D array, refused
-    for its shape or type rather than named (an object is known by its
-    fields: this layer cannot import the class). ``then``: what to do with
+    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject`, a
+    :class:`~isoflow.digital.label_table.LabelImage` or a path where an
+    array is taken: NumPy would make each a 0D array, refused for its
+    shape or type rather than named (an object is known by its fields:
+    this layer cannot import the classes). ``then``: what to do with
     the result to place it as the object is placed; ``reader``: the
     function that reads such a file."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with {reader}")
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
+    if all(hasattr(array, name) for name in ("array", "spacing", "origin")):  # a LabelImage (read_labels)
+        raise IsoflowError(f"{where}: a LabelImage, not a binary volume; pass one label's mask, "
+                           "DigitalObject(image.array == N, pitch=image.spacing, origin=image.origin) "
+                           "(label_table reports every label)")
 
 
 def as_array(array, where: str = "volume") -> np.ndarray:
