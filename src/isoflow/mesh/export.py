@@ -625,6 +625,7 @@ def check_mesh_fits(path: Path, mesh: QuadMesh, obj: DigitalObject, connectivity
                            f"array of shape {shape.tolist()} (array-corner units): pass the object it was built "
                            "from")
 
+
 def grid_frame(mesh, obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
     """The mesh's vertices in array-corner units (multiples of 1/2: exact
     in float32) and the 4x4 affine map that :meth:`DigitalObject.world`
