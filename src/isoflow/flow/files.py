@@ -403,8 +403,8 @@ class FlowWriter:
     def _named(self):
         """A failed write names the file it was for, not its staging copy,
         and says that the previous run is kept; a warning names it too, and
-        what every step's file would repeat (``TIFF keeps no origin``) is
-        said once per run, of the first step's file."""
+        what every step's file would repeat (``MagicaVoxel keeps no voxel
+        size or origin``) is said once per run, of the first step's file."""
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
