@@ -46,6 +46,7 @@ from .registry import (
     check_time,
     import_library,
     no_such_label,
+    note,
     one_time_point_labels,
     placement,
     reading,
@@ -439,6 +440,52 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
     }]
 
 
+def fill_label(array) -> int | None:
+    """The fill value of a zarr array (what zarr reads for a chunk never
+    written) as the label it passes for: a whole number, else None (no fill
+    value, or one that is no label, such as NaN)."""
+    fill = getattr(array, "fill_value", None)
+    try:
+        value = float(fill)
+    except (TypeError, ValueError):
+        return None
+    return int(value) if np.isfinite(value) and value.is_integer() else None
+
+
+def unwritten(array) -> tuple[int, int, str]:
+    """How many of a zarr array's stored objects are not in its store
+    (never written, or left out because they held nothing but the fill
+    value): ``(missing, total, unit)``, the unit ``"chunks"``, or
+    ``"shards"`` for a sharded array (chunks left out inside a written
+    shard are not counted). The store's keys are listed, no chunk is read.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The stored array.
+
+    Returns
+    -------
+    tuple
+        ``(missing, total, unit)``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=2)
+    >>> z[:2] = 1
+    >>> unwritten(z)
+    (2, 3, 'chunks')
+    """
+    total, written = int(array.nchunks), int(array.nchunks_initialized)
+    shards = getattr(array, "shards", None)
+    if not shards:
+        return total - written, total, "chunks"
+    # zarr counts every chunk of a written shard as written
+    per = int(np.prod([s // c for s, c in zip(shards, array.chunks)]))
+    return (total - written) // per, total // per, "shards"
+
+
 class LabelSlabs:
     """A zarr store's 3D label image read in slabs along x, whatever the
     stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
@@ -485,6 +532,12 @@ class LabelSlabs:
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
         self.pitch, self.origin = pitch, origin
+        fill = fill_label(array)
+        if fill:  # (the store's keys are listed only where a missing chunk would pass for a label)
+            missing, total, unit = unwritten(array)
+            if missing:
+                note(f"{self.where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the "
+                     f"fill value {fill}, so they count as label {fill}")
 
     def __getitem__(self, x):
         index = [0] * len(self.array.shape)
