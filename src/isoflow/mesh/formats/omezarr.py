@@ -132,7 +132,18 @@ class StoreArray:
     array, the store as messages name it, the OME-Zarr ``multiscales`` entry
     and level (None for a plain array), and the indices of its x, y and z
     axes (every axis, in stored order, for a plain array) and of its other
-    axes (each of length 1)."""
+    axes (each of length 1).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = tempfile.mkdtemp() + "/v.zarr"
+    >>> z = zarr.create_array(path, shape=(2, 3, 4), dtype="u1")
+    >>> z.attrs.update(pitch=[0.5, 0.5, 2.0], origin=[0, 0, 1])
+    >>> store = open_store(path)
+    >>> store.xyz, [v.tolist() for v in store.placement()]
+    ([0, 1, 2], [[0.5, 0.5, 2.0], [0.0, 0.0, 1.0]])
+    """
 
     array: Any
     where: str
@@ -442,8 +453,26 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
 
 def fill_label(array) -> int | None:
     """The fill value of a zarr array (what zarr reads for a chunk never
-    written) as the label it passes for: a whole number, else None (no fill
-    value, or one that is no label, such as NaN)."""
+    written) as the label it passes for.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The array whose ``fill_value`` is read (any object with one).
+
+    Returns
+    -------
+    int or None
+        The fill value as a whole number, else None (no fill value, or one
+        that is no label, such as NaN).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(4,), dtype="f4", fill_value=2.0)
+    >>> fill_label(z), fill_label(zarr.create_array({}, shape=(4,), dtype="f4", fill_value=float("nan")))
+    (2, None)
+    """
     fill = getattr(array, "fill_value", None)
     try:
         value = float(fill)
