@@ -41,11 +41,22 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--threads", type=thread_count, metavar="N",
-                   help="blocks of a .zarr store meshed at a time (default: $ISOFLOW_THREADS, else every CPU)")
+                   help="threads for the compiled passes; for a .zarr store read block by block, the blocks meshed "
+                        "at a time (default: $ISOFLOW_THREADS, else every CPU)")
     p.set_defaults(func=cmd_surface)
 
 
 def cmd_surface(args: argparse.Namespace) -> int:
+    """``isoflow surface``, its compiled passes on ``--threads`` threads
+    (a store's blocks take them as the blocks meshed at a time)."""
+    from ..scale.compiled import using
+
+    with using(args.threads):
+        return surface_of(args)
+
+
+def surface_of(args: argparse.Namespace) -> int:
+    """``isoflow surface`` of a file, a store or a label image."""
     from ..digital.connectivity import default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path, output_set
