@@ -121,8 +121,8 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
     ``FILE:MEMBER`` (``FILE:MEMBER:NODE`` where the member is a scene of
     several), in the natural order of the member names. trimesh's scene of
     a whole archive names the nodes of its members at random
-    (``geometry_0f7d...``), so their order, the labels', changed from one
-    run to the next."""
+    (``geometry_0f7d...``), so that order, the labels', would change from
+    one run to the next."""
     import trimesh
     from trimesh.exchange.load import mesh_formats
 

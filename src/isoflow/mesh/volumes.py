@@ -700,7 +700,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     origin : array_like, optional
         The lower corner of voxel (0, 0, 0) in world units (if None: a
         LabelImage's origin, else zero),
-        kept where the format has room for it: not in TIFF, ``.npy`` or
+        kept where the format has room for it: not in ``.npy`` or
         MagicaVoxel, which a warning says (docs/labels.md lists what each
         format keeps).
     force : bool
