@@ -130,6 +130,25 @@ def test_flow_export_says_when_the_torus_changes_topology():
     assert first["before"] == [1, g, 0] and first["after"][0] > 1
 
 
+def test_flow_export_forced_over_a_longer_run_keeps_only_its_own_steps(tmp_path):
+    """Rerun with --force where an earlier, finer run left more steps: the
+    step surfaces in OUT are this flow's non-empty steps only (as
+    ``isoflow flow --out`` leaves them), each enclosing its step's voxels."""
+    out = tmp_path / "out"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    script = str(EXAMPLES / "flow_export.py")
+    for extra in (["--resolution", "16"], ["--resolution", "10", "--force"]):
+        done = subprocess.run([sys.executable, script, str(out), *extra], capture_output=True, text=True, env=env)
+        assert done.returncode == 0, done.stderr
+    solid = isoflow.voxelize_file(data.torus(), resolution=10)
+    steps = isoflow.run_flow(solid, connectivity=6).steps
+    kept = [s for s in steps if s["voxels"]]
+    assert sorted(p.name for p in out.glob("step_*.ply")) == [f"step_{s['step']:03d}.ply" for s in kept]
+    for s in kept:
+        volume = trimesh.load(out / f"step_{s['step']:03d}.ply", process=False).volume
+        assert np.isclose(volume, s["voxels"] * solid.pitch ** 3)
+
+
 def test_genus_table(example_run):
     out, _ = example_run("genus_table")
     with open(out / "genus.csv") as fh:
