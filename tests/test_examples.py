@@ -91,6 +91,7 @@ def test_curvature_surface(example_run):
 
     assert matplotlib.image.imread(out / "surface.png").ndim == 3
     assert f"= {8 * (1 - g)} = 8 chi" in printed and f"genus {g}" in printed
+    assert f"surface.ply: {len(ply.vertices)} vertices, {len(ply.faces)} triangles" in printed  # what the file holds
 
 
 def test_flow_export(example_run):
