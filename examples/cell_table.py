@@ -13,7 +13,7 @@ hole that reaches its cell's edge, or the image's, is no hole: the table
 says which cells hold one.
 
 Writes the table (``OUT/cells.csv``), the image (``OUT/cells.npy``, for
-``isoflow info OUT/cells.npy --labels``) and a picture.
+``isoflow info OUT/cells.npy --labels``) and a picture (``OUT/cells.png``).
 
 .. code-block:: bash
 

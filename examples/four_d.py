@@ -12,8 +12,8 @@ Here the voxelised "eight" of :mod:`isoflow.data` moves one voxel per frame
 along x, so consecutive frames overlap and the space-time object has the
 topology of the solid itself; the hollow 4-ball (the cells between two
 3-spheres) encloses one 4D cavity. Writes the volumes (``OUT/moving.npy``,
-``OUT/shell.npy``: try ``isoflow info OUT/shell.npy``) and the reports
-(``OUT/report.json``).
+``OUT/shell.npy``: try ``isoflow info OUT/shell.npy``), the reports
+(``OUT/report.json``) and slices of a few frames (``OUT/frames.png``).
 
 .. code-block:: bash
 

@@ -10,8 +10,9 @@ numbers, the genus of every closed boundary surface, and the counts of the
 paper's nine curvature classes (eq. 4.9).
 
 Writes the volume (``OUT/solid.npz``, with its pitch and origin: read it
-back with :func:`isoflow.read_volume` or ``isoflow info OUT/solid.npz``) and
-the report (``OUT/report.json``, what ``isoflow info --json`` prints).
+back with :func:`isoflow.read_volume` or ``isoflow info OUT/solid.npz``),
+the report (``OUT/report.json``, what ``isoflow info --json`` prints) and
+a picture of a slice and the class counts (``OUT/topology.png``).
 
 .. code-block:: bash
 

@@ -45,6 +45,23 @@ def test_every_example_is_tested_and_listed():
         assert "meshes/" not in text and "parents[" not in text, script
 
 
+def test_every_example_s_docstring_names_the_files_it_writes():
+    """The docstring is the gallery page's text: every file an example
+    claims in OUT (the names it refuses to overwrite) is named there as
+    ``OUT/NAME``."""
+    import ast
+
+    unnamed = []
+    for script in example_names():
+        tree = ast.parse((EXAMPLES / f"{script}.py").read_text())
+        doc = " ".join(ast.get_docstring(tree).split())
+        claimed = [a.value for node in ast.walk(tree) if isinstance(node, ast.Call)
+                   and getattr(node.func, "id", None) == "outputs" for a in node.args if isinstance(a, ast.Constant)]
+        assert claimed, script
+        unnamed += [f"{script}: {name}" for name in claimed if f"``OUT/{name}``" not in doc]
+    assert not unnamed, unnamed
+
+
 def test_an_example_run_as_a_user_runs_it(tmp_path):
     """From another directory, with its options; a second run does not
     replace the outputs: one line, exit 2."""
