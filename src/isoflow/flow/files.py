@@ -284,9 +284,16 @@ class FlowWriter:
             written = export.write_mesh_file(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
         self.staged.append(name)
         if self._pool is None:
-            from concurrent.futures import ThreadPoolExecutor
+            # the first check on this thread: it imports trimesh, scipy and numba, and a first import of a package
+            # on two threads at once can fail (KeyError: 'scipy' as this thread imports scipy.ndimage)
+            from concurrent.futures import Future, ThreadPoolExecutor
 
+            first: Future = Future()
+            with self._named():
+                first.set_result(self._sync_and_check(written["path"], mesh, state))
+            self._pending.append((step, name, first))
             self._pool = ThreadPoolExecutor(1, thread_name_prefix="isoflow-readback")
+            return
         self._pending.append((step, name, self._pool.submit(self._sync_and_check, written["path"], mesh, state)))
         while len(self._pending) > self.PENDING:
             self._collect()
