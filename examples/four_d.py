@@ -58,7 +58,8 @@ def plot_slices(volumes):
     fig, axes = plt.subplots(len(volumes), 6, figsize=(12, 4.4))
     for row, (name, vol) in zip(axes, volumes.items()):
         for ax, t in zip(row, np.linspace(0, len(vol) - 1, len(row)).round().astype(int)):
-            ax.imshow(vol[t, :, :, vol.shape[3] // 2].T, origin="lower", cmap="Greys")
+            # background light grey, not white: the frame's extent shows, and with it the solid's move
+            ax.imshow(vol[t, :, :, vol.shape[3] // 2].T, origin="lower", cmap="Greys", vmin=-0.15, vmax=1)
             ax.set_title(f"{name}, t = {t}", fontsize=8)
             ax.set_axis_off()
     fig.tight_layout()

@@ -211,6 +211,20 @@ def test_four_d(example_run):
         assert (m["betti"][0], m["betti"][3], m["euler_characteristic"]) == (1, 0, 1 - g)
         assert (s["betti"][0], s["betti"][3], s["euler_characteristic"]) == (1, 1, 0)
         assert m["a_dot_n"] == 16 * m["euler_characteristic"]
+    # the picture shows the move: in the moving row's panels (each a frame,
+    # its empty cells grey) the solid's black cells go one column in
+    # moving.shape[1] to the right from one frame to the next
+    import matplotlib.image
+
+    rgb = matplotlib.image.imread(out / "frames.png")[..., :3]
+    top = rgb[: len(rgb) // 2]
+    grey, black = np.all((top > 0.85) & (top < 0.97), axis=-1), np.all(top < 0.25, axis=-1)
+    rows = grey.sum(axis=1) > 100  # across the panels, below their titles
+    columns = (grey | black)[rows].sum(axis=0) > 0.9 * rows.sum()
+    edges = np.flatnonzero(np.diff(np.r_[0, columns.astype(int), 0]))
+    where = [np.nonzero(black[rows][:, a:b])[1].mean() / (b - a) for a, b in zip(edges[::2], edges[1::2])]
+    assert len(where) == len(moving) == 6
+    assert np.allclose(np.diff(where), 1 / moving.shape[1], atol=0.01)
 
 
 def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
