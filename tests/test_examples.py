@@ -240,20 +240,34 @@ def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
     return list(zip(rows, masks))
 
 
-def test_cell_table(example_run):
+def holes(mask: np.ndarray) -> int:
+    """A cell's holes: the 8-components of its complement that keep off
+    the image's edge, by scipy."""
     from scipy import ndimage
 
+    return ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))[1] - 1
+
+
+def test_cell_table(example_run):
     out, printed = example_run("cell_table")
     rows = table_example_rows(out, "cells")
     for row, mask in rows:
-        # the holes: the 8-components of the complement that keep off the
-        # image's edge, by scipy; pixels of 0.25 units
-        parts, count = ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))
-        assert int(row["b1"]) == count - 1
-        assert float(row["area"]) == mask.sum() * 0.0625
-    holes = sum(int(r["b1"]) for r, _ in rows)
-    assert rows[0][0]["b1"] == "2" and f"{holes} holes in all" in printed and holes > 10
+        assert int(row["b1"]) == holes(mask)
+        assert float(row["area"]) == mask.sum() * 0.0625  # pixels of 0.25 units
+    total = sum(int(r["b1"]) for r, _ in rows)
+    assert rows[0][0]["b1"] == "2" and f"{total} holes in all" in printed and total > 10
     assert (out / "cells.png").stat().st_size > 0
+
+
+def test_cell_table_says_one_cell_and_one_hole_in_the_singular(tmp_path):
+    """Three cells on 32 pixels: one cell holds one hole (scipy's count of
+    the components of its complement off the image's edge)."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, str(EXAMPLES / "cell_table.py"), str(out), "--cells", "3", "--size", "32"],
+                          capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0, done.stderr
+    assert sorted(holes(mask) for _, mask in table_example_rows(out, "cells")) == [0, 0, 1]
+    assert "1 cell with holes, 1 hole in all" in done.stdout
 
 
 def test_label_table(example_run):
