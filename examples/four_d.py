@@ -85,7 +85,7 @@ def main():
                   f"b1 - b2 = {b0 - b3 - r['euler_characteristic']}, a^T n = {r['a_dot_n']} (16 chi)")
     report_path.write_text(json.dumps(reports, indent=1))
     plot_slices(volumes).savefig(picture)
-    print(f"{Path(args.mesh).name} moved over {args.frames} frames keeps its own topology; "
+    print(f"{Path(args.mesh).name} moved over {args.frames} frame{'s' * (args.frames != 1)} keeps its own topology; "
           f"the shell encloses one 4D cavity. Wrote {report_path.name} and {picture.name} to {args.out}")
 
 

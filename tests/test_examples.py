@@ -270,6 +270,17 @@ def test_cell_table_says_one_cell_and_one_hole_in_the_singular(tmp_path):
     assert "1 cell with holes, 1 hole in all" in done.stdout
 
 
+def test_four_d_says_one_frame_in_the_singular(tmp_path):
+    """One frame: the moving solid is the solid itself, and the line says
+    "1 frame"; the frames in moving.npy are the one asked for."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, str(EXAMPLES / "four_d.py"), str(out), "--frames", "1"],
+                          capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0, done.stderr
+    assert np.load(out / "moving.npy").shape[0] == 1
+    assert "moved over 1 frame keeps" in done.stdout
+
+
 def test_label_table(example_run):
     out, printed = example_run("label_table")
     rows = table_example_rows(out, "labels")
