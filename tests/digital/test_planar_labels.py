@@ -207,7 +207,7 @@ def test_a_4d_store_is_refused_as_a_4d_file_is(tmp_path):
     for name in ("seg4.npy", "seg4.zarr"):
         proc = run("info", name, "--labels", cwd=tmp_path)
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
-        assert f"{name}: a label table needs a 3D or 2D image, this array is 4D with shape (3, 4, 5, 2)" in proc.stderr
+        assert f"{name}: a label image is read in 3D or 2D, this array is 4D with shape (3, 4, 5, 2)" in proc.stderr
 
 
 def test_a_4d_label_image_is_told_how_to_take_one_time_point(tmp_path):

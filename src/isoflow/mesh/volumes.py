@@ -300,7 +300,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
-        raise IsoflowError(f"{path}: a label table needs a 3D or 2D image, this array is {arr.ndim}D with shape "
+        raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "
                            f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
     if arr.dtype.kind == "f":
         try:

@@ -538,7 +538,7 @@ class LabelSlabs:
             scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
         if names is None and array.ndim not in (2, 3):
             # as a file's: no label table is 4D, whether read whole or by blocks
-            raise IsoflowError(f"{self.where}: a label table needs a 3D or 2D image, this array is {array.ndim}D "
+            raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is {array.ndim}D "
                                f"with shape {tuple(array.shape)}"
                                + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
         if names is None:
@@ -548,7 +548,7 @@ class LabelSlabs:
         self.xyz, self.other = spatial_axes(names, array.shape, self.where, time=True)
         if len(self.xyz) == 4:
             shape = tuple(int(array.shape[i]) for i in self.xyz)
-            raise IsoflowError(f"{self.where}: a label table needs a 3D or 2D image, this array is 4D with shape "
+            raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is 4D with shape "
                                f"{shape}" + one_time_point_labels(self.where))
         if len(self.xyz) != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "

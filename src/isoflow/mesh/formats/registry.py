@@ -294,14 +294,13 @@ def one_time_point_labels(path: str | os.PathLike) -> str:
     --------
     >>> print(one_time_point_labels("cells.zarr"))  # doctest: +NORMALIZE_WHITESPACE
      (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save it as 3D and
-     give that: python -c 'import isoflow; i = isoflow.read_labels("cells.zarr", time=0);
-     isoflow.write_labels(i.array, "t0.npz", pitch=i.spacing, origin=i.origin)'
+     give that: python -c 'import isoflow; isoflow.write_labels(isoflow.read_labels("cells.zarr", time=0),
+     "t0.npz")'
     """
     import json
     import shlex
 
-    code = (f"import isoflow; i = isoflow.read_labels({json.dumps(str(path))}, time=0); "
-            'isoflow.write_labels(i.array, "t0.npz", pitch=i.spacing, origin=i.origin)')
+    code = f'import isoflow; isoflow.write_labels(isoflow.read_labels({json.dumps(str(path))}, time=0), "t0.npz")'
     return (f" (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save "
             f"it as 3D and give that: python -c {shlex.quote(code)}")
 
