@@ -406,6 +406,29 @@ def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
 
 
+@pytest.mark.parametrize("how", ["imagej", "ome", "pages"])
+def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, capsys, rng, how):
+    """A stack cut short where tifffile reads on: ImageJ's stack as its
+    first page alone (2D), an OME-TIFF without its OME-XML (no voxel size),
+    a file written page by page (Pillow) as the pages before the cut."""
+    from PIL import Image
+
+    stack = (rng.random((20, 30, 40)) < 0.5).astype(np.uint8) * 255  # (z, y, x)
+    whole = tmp_path / f"whole_{how}.tif"
+    if how == "imagej":
+        tifffile.imwrite(whole, stack, imagej=True, metadata={"axes": "ZYX", "spacing": 2.0})
+    elif how == "ome":
+        tifffile.imwrite(whole, stack, ome=True, metadata={"axes": "ZYX", "PhysicalSizeX": 0.5})
+    else:
+        pages = [Image.fromarray(page) for page in stack]
+        pages[0].save(whole, save_all=True, append_images=pages[1:])
+    report = info(capsys, whole)
+    assert report["shape"] == [40, 30, 20] and report["voxels"] == np.count_nonzero(stack)
+    cut = tmp_path / f"cut_{how}.tif"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 3 // 10])
+    fails(capsys, "info", cut, words=(f"cut_{how}.tif: not a readable TIFF file (cut short or damaged: ",))
+
+
 def test_tiff_spacing_that_is_not_a_number(tmp_path, capsys, labels):
     description = "ImageJ=1.54f\nimages=5\nslices=5\nspacing=abc\n"
     tifffile.imwrite(tmp_path / "s.tif", (labels[:5] == 3).astype(np.uint8), description=description, metadata=None)

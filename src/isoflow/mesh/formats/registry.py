@@ -146,13 +146,29 @@ def quiet_logs(logger: str):
     """Silence a library's logger while it reads a file: what it logs about
     a damaged file (nibabel prints its checks on stderr, tifffile logs
     before raising) is said by the one error line, or is no concern of the
-    user's when the file reads."""
+    user's when the file reads. Yields the list of the messages it logged
+    at level ERROR or above: tifffile logs a page it cannot reach (a file
+    cut short) and reads on, so a reader can refuse what it read."""
     log = logging.getLogger(logger)
-    disabled, log.disabled = log.disabled, True
+    errors: list[str] = []
+    keep = _KeepErrors(errors)
+    saved = log.handlers[:], log.propagate, log.disabled
+    log.handlers, log.propagate, log.disabled = [keep], False, False
     try:
-        yield
+        yield errors
     finally:
-        log.disabled = disabled
+        log.handlers, log.propagate, log.disabled = saved
+
+
+class _KeepErrors(logging.Handler):
+    """A handler that keeps the messages of error records and prints nothing."""
+
+    def __init__(self, errors: list[str]) -> None:
+        super().__init__(logging.ERROR)
+        self.errors = errors
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.errors.append(record.getMessage())
 
 
 @dataclass

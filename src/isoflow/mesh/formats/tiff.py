@@ -25,6 +25,7 @@ Resolutions are rationals in TIFF: a pitch is kept to about 9 digits.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -51,7 +52,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     tifffile = import_library("tifffile", "TIFF")
     where = str(path)
     # tifffile logs what it finds wrong before raising: the error line says it
-    with reading(path, "TIFF"), quiet_logs("tifffile"), tifffile.TiffFile(path) as tif:
+    with reading(path, "TIFF"), quiet_logs("tifffile") as damage, tifffile.TiffFile(path) as tif:
         if not tif.series:
             raise IsoflowError(f"{where}: a TIFF without an image (damaged, or no pages)")
         if len(tif.series) > 1:
@@ -69,6 +70,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
+        if damage:
+            # tifffile reads on past a page it cannot reach or metadata it
+            # cannot parse: the stack it gives is then short (a 2D page
+            # where ImageJ's header says 20 slices) or uncalibrated
+            detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
+            detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
+            raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
