@@ -175,7 +175,7 @@ def _bad(tmp_path):
     np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
     return [
         (["info", tmp_path / "missing.npy"], "no such file"),
-        (["info", tmp_path / "garbage.npy"], "not a readable numpy file"),
+        (["info", tmp_path / "garbage.npy"], "not a numpy file: it starts with b'not nump'"),
         (["info", tmp_path / "nonbinary.npy"], "not a binary volume"),
         (["info", tmp_path / "line.npy"], "1D"),
         (["info", tmp_path / "frac.txt"], "0.5 is not an integer"),

@@ -81,6 +81,26 @@ def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
         assert f'"voxels": {voxels}' in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("name", ["v.npy", "v.npz"])
+@pytest.mark.parametrize("content, words", [
+    (b"\x00garbage" * 50, "not a numpy file: it starts with b'\\x00garbage', not .npy's b'\\x93NUMPY'"),
+    (b"", "not a numpy file: it is empty"),
+], ids=["garbage", "empty"])
+def test_a_file_that_is_no_numpy_file_says_what_it_starts_with(tmp_path, capsys, name, content, words):
+    """np.load takes such a file for a pickle ("load it unsafely"), though
+    it starts with neither NumPy's magic nor a pickle's b'\\x80'."""
+    (tmp_path / name).write_bytes(content)
+    line = fails(capsys, "info", tmp_path / name, words=(f"{name}: {words}",))
+    assert "pickle" not in line and "unsafely" not in line
+
+
+def test_a_pickle_named_npy_keeps_numpys_word_on_pickles(tmp_path, capsys):
+    import pickle
+
+    (tmp_path / "p.npy").write_bytes(pickle.dumps(np.ones(3)))
+    fails(capsys, "info", tmp_path / "p.npy", words=("p.npy: not a readable numpy file", "pickled"))
+
+
 # ------------------------------------------------------------- point lists
 
 @pytest.mark.parametrize("big", ["1e300", "1e999", "-1e999", "9223372036854775807", "-9223372036854775808"])
