@@ -365,6 +365,17 @@ def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
     fails(capsys, "info", path, words=("data.bin", "binary data"))
 
 
+def test_a_binary_volume_of_a_format_isoflow_does_not_read_lists_the_volume_suffixes(tmp_path, capsys):
+    """A MetaImage (ITK's .mha) falls to the point-list reader; the line
+    listed .npy/.npz alone as volumes, not the formats docs/formats.md reads."""
+    path = tmp_path / "scan.mha"
+    path.write_bytes(b"ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_UCHAR\n"
+                     b"ElementDataFile = LOCAL\n" + bytes(64))
+    line = fails(capsys, "info", path, words=("scan.mha: binary data, not a text point list",))
+    for suffix in (".npy", ".tif", ".nii.gz", ".nrrd", ".h5", ".zarr", ".png"):
+        assert suffix in line, (suffix, line)
+
+
 def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):
     # every command reads .zarr now (info block by block, the others in memory)
     (tmp_path / "v.zarr").mkdir()

@@ -359,7 +359,7 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         if b"\0" in head:
             raise IsoflowError(
                 f"{path}: binary data, not a text point list (x y z per line); "
-                f"volumes are .npy/.npz"
+                f"volumes are read by their suffix: {', '.join(volume_suffixes())}"
             )
         # a point takes at least 4 bytes of text ("0 0" and a line end) and
         # 8 bytes a coordinate once read: 4 to 6 bytes per byte of text
