@@ -469,6 +469,24 @@ def test_nrrd_fields_that_do_not_fit_the_array(tmp_path, capsys, fields, words):
     fails(capsys, "info", path, words=("v.nrrd", *words))
 
 
+def test_an_nrrd_component_axis_is_told_by_its_kind_without_a_space(tmp_path, capsys, rng):
+    """Without space directions, "kinds" is what says an axis holds
+    components (pynrrd writes no space unless asked): a colour or vector
+    axis was read as a fourth lattice axis, a 4D volume of its channels."""
+    nrrd = pytest.importorskip("nrrd")
+    vol = rng.random((6, 5, 4)) < 0.5
+    domain = ["domain"] * 3
+    nrrd.write(str(tmp_path / "rgb.nrrd"), np.stack([vol] * 3).astype(np.uint8), {"kinds": ["RGB-color", *domain]})
+    fails(capsys, "info", tmp_path / "rgb.nrrd", words=("rgb.nrrd: axis 0 is of NRRD kind 'RGB-color' with 3 entries",))
+    nrrd.write(str(tmp_path / "one.nrrd"), vol[None].astype(np.uint8), {"kinds": ["vector", *domain]})
+    report = info(capsys, tmp_path / "one.nrrd")
+    assert report["shape"] == [6, 5, 4] and report["voxels"] == np.count_nonzero(vol)
+    measure = pytest.importorskip("skimage.measure")
+    assert report["euler_characteristic"] == measure.euler_number(np.pad(vol, 1), connectivity=1)
+    nrrd.write(str(tmp_path / "t.nrrd"), np.stack([vol, vol], -1).astype(np.uint8), {"kinds": [*domain, "time"]})
+    assert info(capsys, tmp_path / "t.nrrd")["shape"] == [6, 5, 4, 2]  # a time axis stays the fourth
+
+
 def test_nrrd_spacings_and_origin_that_are_not_numbers(tmp_path, capsys, recwarn):
     pytest.importorskip("nrrd")
     vol = np.zeros((5, 1, 3), np.uint8)
