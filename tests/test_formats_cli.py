@@ -193,6 +193,14 @@ def test_corrupt_files_give_one_line(tmp_path, capsys, command):
     assert not (tmp_path / "s.ply").exists()
 
 
+@pytest.mark.parametrize("name", ["e.nrrd", "e.tif", "e.nii.gz", "e.nii", "e.h5", "e.png"])
+def test_an_empty_file_is_said_to_be_empty(tmp_path, capsys, name):
+    """A file of 0 bytes (a download or copy that failed): pynrrd said
+    "StopIteration", the others each their own words for no header."""
+    (tmp_path / name).write_bytes(b"")
+    fails(capsys, "info", tmp_path / name, words=(f"{name}: an empty file (0 bytes), not a readable ",))
+
+
 def test_wrong_dataset_or_level(tmp_path, capsys, labels):
     pytest.importorskip("h5py")
     isoflow.write_volume(isoflow.DigitalObject(labels == 3), f"{tmp_path / 'v.h5'}:/a/b")

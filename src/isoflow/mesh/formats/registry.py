@@ -135,6 +135,9 @@ def reading(path, what: str):
     except (IsoflowError, MemoryError):
         raise
     except Exception as exc:  # libraries raise many types for a bad file
+        if os.path.isfile(path) and os.path.getsize(path) == 0:
+            # what a library says of no bytes at all rarely names it (pynrrd: "StopIteration")
+            raise IsoflowError(f"{path}: an empty file (0 bytes), not a readable {what} file") from None
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         raise IsoflowError(
             f"{path}: not a readable {what} file ({exc.__class__.__name__}{': ' + detail if detail else ''})"
