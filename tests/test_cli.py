@@ -557,6 +557,23 @@ def test_a_4d_volume_one_voxel_thick_says_how_to_read_it_as_3d(tmp_path, capsys)
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
 
 
+@pytest.mark.parametrize("command", ["info", "flow"])
+@pytest.mark.parametrize("shape, connectivity, words", [
+    ((4, 5, 6), 8, "connectivity 8 is not valid in 3D (use 6 or 26)"),
+    ((4, 5), 26, "connectivity 26 is not valid in 2D (use 4 or 8)"),
+    ((3, 4, 5, 2), 6, "connectivity 6 is not valid in 4D (use 8 or 80)"),
+])
+def test_a_connectivity_that_does_not_fit_the_file_names_the_file(tmp_path, capsys, command, shape, connectivity, words):
+    """The dimension is the file's: the line names the file, as info
+    --labels's does (flow refuses a 4D file for its dimension first)."""
+    np.save(tmp_path / "v.npy", np.ones(shape, bool))
+    assert main([command, str(tmp_path / "v.npy"), "--connectivity", str(connectivity)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    expected = "is 4D" if command == "flow" and len(shape) == 4 else words
+    assert lines[0].startswith(f"isoflow {command}: error: {tmp_path / 'v.npy'}: ") and expected in lines[0], lines
+
+
 def test_flow_refuses_a_3d_connectivity_for_a_2d_object(tmp_path, capsys):
     """``flow --connectivity 6`` of a 2D image ran at 4 (and 26 at 8) with
     exit status 0, where ``info`` refuses it and the help says 4 or 8 in

@@ -219,6 +219,34 @@ def load_input(args: argparse.Namespace):
     return obj
 
 
+def check_input_connectivity(args: argparse.Namespace, ndim: int) -> None:
+    """Refuse a ``--connectivity`` that does not fit the input's dimension,
+    in one line naming the input: the dimension is the file's, not the
+    option's.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``input`` and ``connectivity`` (None: the
+        default, which fits any dimension).
+    ndim : int
+        The input's dimension.
+
+    Examples
+    --------
+    >>> check_input_connectivity(argparse.Namespace(input="a.npy", connectivity=8), 3)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: a.npy: connectivity 8 is not valid in 3D (use 6 or 26)
+    """
+    from ..digital.connectivity import resolve_connectivity
+
+    try:
+        resolve_connectivity(ndim, args.connectivity)
+    except IsoflowError as exc:
+        raise exc.at(args.input) from None
+
+
 #: the commands that take a 2D image as well as a 3D volume: where a plate
 #: one voxel thick is analysed or flowed in 3D, they would take the 2D slice
 PLANAR_COMMANDS = ("info", "flow")
