@@ -349,6 +349,20 @@ def test_hdf5_from_h5py_with_element_size(tmp_path, vol):
         isoflow.read_volume(tmp_path / "d.h5")
 
 
+@pytest.mark.parametrize("size", [[1.0, 0.5], [0.0, 1.0, 1.0], [b"x", b"y", b"z"]])
+def test_hdf5_element_size_that_is_no_voxel_size_is_named(tmp_path, vol, size):
+    """The refusal names the file's attribute and value, not isoflow's
+    word for it ("'pitch' must be 3 numbers")."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(tmp_path / "e.h5", "w") as f:
+        f.create_dataset("mask", data=vol.astype(np.uint8)).attrs["element_size_um"] = size
+    with pytest.raises(IsoflowError, match=r"e\.h5:mask: attribute 'element_size_um' .* is not 3 positive voxel sizes"):
+        isoflow.read_volume(f"{tmp_path / 'e.h5'}:mask")
+    with h5py.File(tmp_path / "one.h5", "w") as f:  # one number: the same size along every axis, as before
+        f.create_dataset("mask", data=vol.astype(np.uint8)).attrs["element_size_um"] = 0.25
+    assert isoflow.read_volume(tmp_path / "one.h5").pitch == 0.25
+
+
 def test_vox_from_py_vox_io_colours_are_paint(tmp_path):
     pytest.importorskip("pyvox")
     from pyvox.models import Vox
