@@ -201,6 +201,29 @@ def test_an_empty_file_is_said_to_be_empty(tmp_path, capsys, name):
     fails(capsys, "info", tmp_path / name, words=(f"{name}: an empty file (0 bytes), not a readable ",))
 
 
+@pytest.mark.parametrize("written, named, words", [
+    ("v.nii.gz", "v.nii", "its content is gzip-compressed NIfTI: rename it v.nii.gz"),
+    ("v.nii", "v.nii.gz", "its content is uncompressed NIfTI: rename it v.nii"),
+    ("v.tif", "v.nii.gz", "its content is TIFF, not NIfTI: rename it v.tif"),
+    ("v.nii", "v.tif", "its content is NIfTI, not TIFF: rename it v.nii"),
+    ("v.h5", "v.nrrd", "its content is HDF5, not NRRD: rename it v.h5"),
+    ("v.nii.gz", "v.npy", "its content is NIfTI, not NumPy: rename it v.nii.gz"),
+    ("v.npy", "v.h5", "its content is NumPy, not HDF5: rename it v.npy"),
+])
+def test_a_volume_saved_under_another_suffix_is_named_by_its_content(tmp_path, capsys, written, named, words):
+    """The reader goes by the suffix (nibabel too: "Cannot work out file
+    type" of a gzip-compressed .nii); the line says what the content is
+    and what to call the file, as for a mesh."""
+    vol = np.zeros((4, 5, 6), bool)
+    vol[1:3, 1:4, 1:5] = True
+    isoflow.write_volume(isoflow.DigitalObject(vol), tmp_path / written)
+    (tmp_path / written).rename(tmp_path / "renamed")
+    (tmp_path / "renamed").rename(tmp_path / named)
+    fails(capsys, "info", tmp_path / named, words=(f"{named}: not a ", words))
+    (tmp_path / named).rename(tmp_path / words.rsplit(" ", 1)[1])  # as the line says: the file reads
+    assert info(capsys, tmp_path / words.rsplit(" ", 1)[1])["voxels"] == vol.sum()
+
+
 def test_wrong_dataset_or_level(tmp_path, capsys, labels):
     pytest.importorskip("h5py")
     isoflow.write_volume(isoflow.DigitalObject(labels == 3), f"{tmp_path / 'v.h5'}:/a/b")

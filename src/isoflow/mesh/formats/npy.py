@@ -15,7 +15,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, note
+from .registry import RawVolume, content_hint, note
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -55,7 +55,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             # for a pickle too, and says to load it "unsafely", which no
             # damaged or foreign file calls for
             raise IsoflowError(f"{path}: not a numpy file: it " + (
-                f"starts with {head!r}, not .npy's b'\\x93NUMPY' or an .npz's (zip) b'PK'" if head else "is empty")) from None
+                f"starts with {head!r}, not .npy's b'\\x93NUMPY' or an .npz's (zip) b'PK'" if head else "is empty")
+                + content_hint(path, "NumPy")) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0))
 
