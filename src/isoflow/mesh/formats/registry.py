@@ -141,7 +141,8 @@ def sniff_volume_format(path) -> tuple[str, str] | None:
     Parameters
     ----------
     path : str or os.PathLike
-        The file.
+        The file; only its first bytes are read (of a gzip stream, its
+        first bytes once inflated).
 
     Returns
     -------
