@@ -129,13 +129,18 @@ def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
 
 
 def _spacing(value, where: str) -> float:
-    """The z voxel size from ImageJ's ``spacing`` (1 where absent)."""
+    """The z voxel size from ImageJ's ``spacing`` (1 where absent); a
+    negative one (ImageJ keeps the sign of a stack whose slices run
+    backwards) is its size, as NRRD's spacings are."""
     if value is None or value == "":
         return 1.0
     try:
-        return float(value)
+        size = abs(float(value))
     except (TypeError, ValueError):
         raise IsoflowError(f"{where}: ImageJ's spacing {value!r} is not a number") from None
+    if not (np.isfinite(size) and size > 0):
+        raise IsoflowError(f"{where}: ImageJ's spacing {value!r} is not a positive voxel size")
+    return size
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
