@@ -249,6 +249,22 @@ def test_nifti_from_nibabel_with_flips_and_a_permutation(tmp_path, rng):
     assert sorted(map(tuple, np.round(mine, 9))) == sorted(map(tuple, np.round(theirs, 9)))
 
 
+@pytest.mark.parametrize("srow_x", [(float("nan"), 0, 0, 0), (1, 0, 0, float("inf"))])
+def test_a_nifti_affine_that_is_not_finite_says_so(tmp_path, srow_x):
+    """A NaN voxel step or an infinite translation in the sform was said
+    not to "fit a 3D array", which it does."""
+    import struct
+
+    nib = pytest.importorskip("nibabel")
+    nib.save(nib.Nifti1Image(np.ones((3, 4, 5), np.uint8), np.eye(4)), tmp_path / "a.nii")
+    raw = bytearray((tmp_path / "a.nii").read_bytes())
+    struct.pack_into("<4f", raw, 280, *srow_x)  # srow_x: the sform's first row
+    (tmp_path / "a.nii").write_bytes(bytes(raw))
+    assert not np.isfinite(nib.load(tmp_path / "a.nii").affine).all()
+    with pytest.raises(IsoflowError, match=r"a\.nii: the voxel-to-world map .* holds values that are not finite numbers$"):
+        isoflow.read_volume(tmp_path / "a.nii")
+
+
 def test_oblique_nifti_keeps_the_voxel_sizes_and_warns(tmp_path):
     nib = pytest.importorskip("nibabel")
     c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
