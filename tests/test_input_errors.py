@@ -376,6 +376,22 @@ def test_a_binary_volume_of_a_format_isoflow_does_not_read_lists_the_volume_suff
         assert suffix in line, (suffix, line)
 
 
+@pytest.mark.parametrize("written, named, renamed", [
+    ("v.nii.gz", "scan", "scan.nii.gz"), ("v.nii", "scan.img", "scan.nii"), ("v.tif", "stack.bin", "stack.tif"),
+])
+def test_a_volume_without_a_volume_suffix_is_named_by_its_content(tmp_path, capsys, written, named, renamed):
+    """It falls to the point-list reader ("binary data"); the line says
+    what the content is and the name that reads it."""
+    vol = np.zeros((3, 4, 5), bool)
+    vol[1:, 1:3, 2:] = True
+    write_volume(DigitalObject(vol), tmp_path / written)
+    (tmp_path / written).rename(tmp_path / named)
+    line = fails(capsys, "info", tmp_path / named, words=(f"{named}: its content is ",))
+    assert line.endswith(f"rename it {renamed}"), line
+    (tmp_path / named).rename(tmp_path / renamed)
+    assert read_volume(tmp_path / renamed).voxels == vol.sum()
+
+
 def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):
     # every command reads .zarr now (info block by block, the others in memory)
     (tmp_path / "v.zarr").mkdir()

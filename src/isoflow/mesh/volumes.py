@@ -30,6 +30,7 @@ from .formats.registry import (
     format_for,
     no_such_label,
     one_time_point_labels,
+    sniff_volume_format,
     split_dataset,
     volume_suffixes,
 )
@@ -357,6 +358,10 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         with open(path, "rb") as fh:
             head = fh.read(1024)
         if b"\0" in head:
+            found = sniff_volume_format(path)
+            if found is not None:  # a volume without its suffix (or under another one)
+                raise IsoflowError(f"{path}: its content is {found[0]}, but volumes are read by their suffix: rename it "
+                                   f"{path.stem if path.suffix else path.name}{found[1]}")
             raise IsoflowError(
                 f"{path}: binary data, not a text point list (x y z per line); "
                 f"volumes are read by their suffix: {', '.join(volume_suffixes())}"
