@@ -257,7 +257,10 @@ class _KeepErrors(logging.Handler):
         self.errors = errors
 
     def emit(self, record: logging.LogRecord) -> None:
-        self.errors.append(record.getMessage())
+        try:
+            self.errors.append(record.getMessage())
+        except Exception:  # arguments that do not fit the message: the message itself
+            self.errors.append(str(record.msg))
 
 
 @dataclass
