@@ -460,6 +460,28 @@ def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, ca
     fails(capsys, "info", cut, words=(f"cut_{how}.tif: not a readable TIFF file (cut short or damaged: ",))
 
 
+def test_a_tiff_written_a_page_at_a_time_says_how_to_save_its_pages_as_one_stack(tmp_path, capsys, rng):
+    """tifffile's TiffWriter.write per slice makes one series per page,
+    refused as several series ("save the stack on its own", which it is);
+    the line gives the command that saves the pages as one stack, whose
+    numbers are the slices' (scikit-image)."""
+    import shlex
+
+    measure = pytest.importorskip("skimage.measure")
+    stack = rng.random((6, 7, 9)) < 0.4  # (z, y, x)
+    with tifffile.TiffWriter(tmp_path / "pages.tif") as tif:
+        for page in stack:
+            tif.write(page.astype(np.uint8) * 255)
+    line = fails(capsys, "info", tmp_path / "pages.tif", words=("pages.tif: holds 6 image series", "a page at a time"))
+    code = shlex.split(line.split("give that: ", 1)[1])
+    p = subprocess.run([sys.executable, *code[1:]], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    report = info(capsys, tmp_path / "pages_stack.tif")
+    vol = np.pad(stack.T, 1)  # isoflow's (x, y, z)
+    assert report["shape"] == [9, 7, 6] and report["euler_characteristic"] == measure.euler_number(vol, connectivity=1)
+    assert report["betti"][0] == measure.label(vol, connectivity=1).max()
+
+
 def test_tiff_spacing_that_is_not_a_number(tmp_path, capsys, labels):
     description = "ImageJ=1.54f\nimages=5\nslices=5\nspacing=abc\n"
     tifffile.imwrite(tmp_path / "s.tif", (labels[:5] == 3).astype(np.uint8), description=description, metadata=None)

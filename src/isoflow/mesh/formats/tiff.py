@@ -59,7 +59,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             shapes = ", ".join("x".join(map(str, s.shape)) for s in tif.series[:5])
             raise IsoflowError(f"{where}: holds {len(tif.series)} image series (shapes {shapes}"
                                f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
-                               "save the stack on its own")
+                               + (_pages_as_stack(where) if _one_page_each(tif.series) else "save the stack on its own"))
         series = tif.series[0]
         check_shape(series.shape, series.dtype, where)
         data = series.asarray()
@@ -90,6 +90,25 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch.append(1.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     return RawVolume(vol, np.array(pitch))
+
+
+def _one_page_each(series) -> bool:
+    """Whether every series is one 2D page of one shape and type: a stack
+    written a page at a time (tifffile's ``TiffWriter.write`` per slice),
+    which may also be images of different things, so it is not read as z."""
+    return all(len(s.shape) == 2 and s.shape == series[0].shape and s.dtype == series[0].dtype for s in series)
+
+
+def _pages_as_stack(where: str) -> str:
+    """The line that saves one-page series as one z-stack, if they are one."""
+    import json
+    import shlex
+
+    stack = str(Path(where).with_name(Path(where).stem + "_stack.tif"))
+    code = (f"import tifffile; tifffile.imwrite({json.dumps(stack)}, tifffile.imread({json.dumps(where)}, "
+            'key=slice(None)), photometric="minisblack")')
+    return ("each a page of one shape, as a stack written a page at a time is; if its pages are the slices of "
+            f"one volume, save them as one stack and give that: python -c {shlex.quote(code)}")
 
 
 def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
