@@ -224,6 +224,17 @@ def test_a_volume_saved_under_another_suffix_is_named_by_its_content(tmp_path, c
     assert info(capsys, tmp_path / words.rsplit(" ", 1)[1])["voxels"] == vol.sum()
 
 
+def test_a_zip_archive_of_other_files_is_not_called_an_npz(tmp_path, capsys):
+    """An .npz is a zip of .npy files; another zip under a volume suffix
+    gets the reader's line alone, no "rename it x.npz"."""
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "x.tif", "w") as z:
+        z.writestr("notes.txt", "not a volume")
+    line = fails(capsys, "info", tmp_path / "x.tif", words=("x.tif: not a readable TIFF file",))
+    assert "its content is" not in line, line
+
+
 def test_wrong_dataset_or_level(tmp_path, capsys, labels):
     pytest.importorskip("h5py")
     isoflow.write_volume(isoflow.DigitalObject(labels == 3), f"{tmp_path / 'v.h5'}:/a/b")

@@ -170,7 +170,22 @@ def sniff_volume_format(path) -> tuple[str, str] | None:
         return None
     if _nifti(head):
         return ("NIfTI", ".nii")
-    return next(((name, suffix) for magic, name, suffix in MAGIC if head.startswith(magic)), None)
+    found = next(((name, suffix) for magic, name, suffix in MAGIC if head.startswith(magic)), None)
+    if found == ("NumPy", ".npz") and not _npz(path):
+        return None  # a zip archive of something else
+    return found
+
+
+def _npz(path) -> bool:
+    """Whether a zip archive holds ``.npy`` files alone, as an ``.npz`` does."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            names = z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+    return bool(names) and all(n.endswith(".npy") for n in names)
 
 
 def _nifti(head: bytes) -> bool:
