@@ -471,6 +471,23 @@ def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, ca
     fails(capsys, "info", cut, words=(f"cut_{how}.tif: not a readable TIFF file (cut short or damaged: ",))
 
 
+def test_a_tiff_whose_private_tag_points_past_its_end_still_reads(tmp_path, capsys, rng):
+    """tifffile logs the tag it cannot read as an error, as it does a page
+    cut off; a vendor's private tag is no part of the volume, so the file
+    is read, not refused as damaged."""
+    import struct
+
+    stack = (rng.random((3, 20, 30)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "ok.tif", stack, photometric="minisblack", extratags=[(65000, "s", 0, "x" * 100, True)])
+    with tifffile.TiffFile(tmp_path / "ok.tif") as tif:
+        entry = tif.pages[0].tags[65000].offset
+    raw = bytearray((tmp_path / "ok.tif").read_bytes())
+    struct.pack_into("<I", raw, entry + 8, 10**8)  # the tag's value offset, far past the end
+    (tmp_path / "tag.tif").write_bytes(bytes(raw))
+    report = info(capsys, tmp_path / "tag.tif")
+    assert report["shape"] == [30, 20, 3] and report["voxels"] == np.count_nonzero(stack)
+
+
 def test_a_tiff_written_a_page_at_a_time_says_how_to_save_its_pages_as_one_stack(tmp_path, capsys, rng):
     """tifffile's TiffWriter.write per slice makes one series per page,
     refused as several series ("save the stack on its own", which it is);

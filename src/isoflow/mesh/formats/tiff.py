@@ -70,6 +70,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
+        damage = [d for d in damage if _tag_read(d)]
         if damage:
             # tifffile reads on past a page it cannot reach or metadata it
             # cannot parse: the stack it gives is then short (a 2D page
@@ -90,6 +91,20 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch.append(1.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     return RawVolume(vol, np.array(pitch))
+
+
+#: the tags whose values shape the pixels or hold what isoflow reads (the
+#: ImageJ and OME metadata in ImageDescription 270, the resolution)
+READ_TAGS = frozenset((254, 256, 257, 258, 259, 262, 266, 270, 273, 277, 278, 279, 282, 283, 284, 296, 317, 322, 323,
+                       324, 325, 338, 339, 347))
+
+
+def _tag_read(message: str) -> bool:
+    """Whether an error tifffile logged is damage to what is read: any but
+    a tag it could not read that isoflow does not use (a vendor's private
+    tag pointing past the end of the file leaves the pixels whole)."""
+    tag = re.search(r"TiffTag (\d+) ", message)
+    return tag is None or int(tag.group(1)) in READ_TAGS
 
 
 def _one_page_each(series) -> bool:
