@@ -71,9 +71,9 @@ def in_process(inp: Path, out: Path, extra: list[str]) -> dict:
                 spent[key] += time.thread_time() - t
         return wrapper
 
-    real_check, real_write = files.check_surface_file, files.export.write_surface
+    real_check, real_write = files.check_surface_file, files.export.write_mesh_file
     files.check_surface_file = timed(real_check, "readback")
-    files.export.write_surface = timed(real_write, "write")
+    files.export.write_mesh_file = timed(real_write, "write")
     try:
         shutil.rmtree(out, ignore_errors=True)
         t = time.process_time()
@@ -81,7 +81,7 @@ def in_process(inp: Path, out: Path, extra: list[str]) -> dict:
             main(["flow", str(inp), "--out", str(out), *extra])
         total = time.process_time() - t
     finally:
-        files.check_surface_file, files.export.write_surface = real_check, real_write
+        files.check_surface_file, files.export.write_mesh_file = real_check, real_write
     steps = len(list(out.glob("step_*.ply")))
     return {"cpu_total": total, "steps": steps, **spent}
 

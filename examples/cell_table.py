@@ -13,7 +13,7 @@ hole that reaches its cell's edge, or the image's, is no hole: the table
 says which cells hold one.
 
 Writes the table (``OUT/cells.csv``), the image (``OUT/cells.npy``, for
-``isoflow info OUT/cells.npy --labels``) and a picture.
+``isoflow info OUT/cells.npy --labels``) and a picture (``OUT/cells.png``).
 
 .. code-block:: bash
 
@@ -62,7 +62,8 @@ def main():
         print(f"{table['label'][r]:>6} {table['voxels'][r]:>7} {table['area'][r]:>8.3f} "
               f"{table['perimeter'][r]:>9.2f} {table['euler_characteristic'][r]:>4} {table['b0'][r]:>3} "
               f"{holes[r]:>3}")
-    print(f"{np.count_nonzero(holes)} cells with holes, {int(holes.sum())} holes in all")
+    cells, count = np.count_nonzero(holes), int(holes.sum())
+    print(f"{cells} cell{'' if cells == 1 else 's'} with holes, {count} hole{'' if count == 1 else 's'} in all")
     with open(table_path, "w", newline="") as fh:
         writer = csv.writer(fh)
         writer.writerow(list(table))

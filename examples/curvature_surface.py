@@ -76,7 +76,8 @@ def main():
     draw(mesh, solid, f"{name} at {args.resolution} voxels across").savefig(png)
 
     chi = isoflow.euler_characteristic(solid.volume, 6)
-    print(f"{ply.name}: {len(mesh.vertices)} vertices, {len(mesh.faces)} quads, V-E+F = {mesh.euler_characteristic}")
+    print(f"{ply.name}: {len(mesh.vertices)} vertices, {len(surface.faces)} triangles ({len(mesh.faces)} quads split), "
+          f"V-E+F = {mesh.euler_characteristic}")
     print(f"  sum of a over the vertices = {int(mesh.a.sum())} = 8 chi of the solid (chi = {chi})")
     for i, s in enumerate(mesh.components()):
         print(f"  closed surface {i}: genus {s['genus']}")

@@ -107,6 +107,7 @@ def main():
     print(f"{Path(args.mesh).name} at {args.resolution} voxels across, flow with 6-connectivity"
           f"{', guarded' if args.guard else ''}")
     print(f"  {'step':>4} {'voxels':>7}  betti      chi  energy")
+    written = set()
     for s, state in zip(result.steps, result.states):
         print(f"  {s['step']:>4} {s['voxels']:>7}  {str(tuple(s['betti'])):<10} {s['euler_characteristic']:>3} "
               f"{s['energy']:>7}")
@@ -114,6 +115,9 @@ def main():
             mesh = isoflow.boundary_mesh(state.volume, 6)
             ply = args.out / f"step_{s['step']:03d}.ply"
             trimesh.Trimesh(state.world(mesh.vertices), mesh.triangles(), process=False).export(ply)
+            written.add(ply)
+    for stale in set(args.out.glob("step_*.ply")) - written:  # an earlier run's (--force): not steps of this flow
+        stale.unlink()
     centre = result.limit["center"]
     where = "none" if centre is None else "(" + ", ".join(f"{c + 0:.3g}" for c in np.round(centre, 9)) + ")"
     print(f"  stopped: {result.stop_reason}; limit point {where}")

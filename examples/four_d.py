@@ -12,8 +12,8 @@ Here the voxelised "eight" of :mod:`isoflow.data` moves one voxel per frame
 along x, so consecutive frames overlap and the space-time object has the
 topology of the solid itself; the hollow 4-ball (the cells between two
 3-spheres) encloses one 4D cavity. Writes the volumes (``OUT/moving.npy``,
-``OUT/shell.npy``: try ``isoflow info OUT/shell.npy``) and the reports
-(``OUT/report.json``).
+``OUT/shell.npy``: try ``isoflow info OUT/shell.npy``), the reports
+(``OUT/report.json``) and slices of a few frames (``OUT/frames.png``).
 
 .. code-block:: bash
 
@@ -58,7 +58,8 @@ def plot_slices(volumes):
     fig, axes = plt.subplots(len(volumes), 6, figsize=(12, 4.4))
     for row, (name, vol) in zip(axes, volumes.items()):
         for ax, t in zip(row, np.linspace(0, len(vol) - 1, len(row)).round().astype(int)):
-            ax.imshow(vol[t, :, :, vol.shape[3] // 2].T, origin="lower", cmap="Greys")
+            # background light grey, not white: the frame's extent shows, and with it the solid's move
+            ax.imshow(vol[t, :, :, vol.shape[3] // 2].T, origin="lower", cmap="Greys", vmin=-0.15, vmax=1)
             ax.set_title(f"{name}, t = {t}", fontsize=8)
             ax.set_axis_off()
     fig.tight_layout()
@@ -84,7 +85,7 @@ def main():
                   f"b1 - b2 = {b0 - b3 - r['euler_characteristic']}, a^T n = {r['a_dot_n']} (16 chi)")
     report_path.write_text(json.dumps(reports, indent=1))
     plot_slices(volumes).savefig(picture)
-    print(f"{Path(args.mesh).name} moved over {args.frames} frames keeps its own topology; "
+    print(f"{Path(args.mesh).name} moved over {args.frames} frame{'s' * (args.frames != 1)} keeps its own topology; "
           f"the shell encloses one 4D cavity. Wrote {report_path.name} and {picture.name} to {args.out}")
 
 

@@ -10,7 +10,7 @@ genera of its closed surfaces. Every row equals :func:`isoflow.analyze` of
 that label's mask; the columns go into pandas or a CSV as they are.
 
 Writes the table (``OUT/labels.csv``), the image (``OUT/labels.npy``, for
-``isoflow info OUT/labels.npy --labels``) and a picture.
+``isoflow info OUT/labels.npy --labels``) and a picture (``OUT/labels.png``).
 
 .. code-block:: bash
 

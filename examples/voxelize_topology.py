@@ -10,8 +10,9 @@ numbers, the genus of every closed boundary surface, and the counts of the
 paper's nine curvature classes (eq. 4.9).
 
 Writes the volume (``OUT/solid.npz``, with its pitch and origin: read it
-back with :func:`isoflow.read_volume` or ``isoflow info OUT/solid.npz``) and
-the report (``OUT/report.json``, what ``isoflow info --json`` prints).
+back with :func:`isoflow.read_volume` or ``isoflow info OUT/solid.npz``),
+the report (``OUT/report.json``, what ``isoflow info --json`` prints) and
+a picture of a slice and the class counts (``OUT/topology.png``).
 
 .. code-block:: bash
 
@@ -26,7 +27,6 @@ from _common import outputs, parse_args, run
 
 import isoflow
 from isoflow import data
-from isoflow.errors import betti_words
 
 
 def arguments(parser):
@@ -45,7 +45,9 @@ def main():
 
     print(f"{Path(args.mesh).name} at {args.resolution} voxels across: {report['voxels']} voxels, pitch {solid.pitch:.4g}")
     print(f"  Euler characteristic {report['euler_characteristic']}, a^T n = {report['a_dot_n']} (8 chi)")
-    print(f"  Betti numbers: {betti_words(report['betti'])}")
+    b0, b1, b2 = report["betti"]
+    print(f"  Betti numbers: {b0} component{'' if b0 == 1 else 's'}, {b1} tunnel{'' if b1 == 1 else 's'}, "
+          f"{b2} {'cavity' if b2 == 1 else 'cavities'}")
     for i, s in enumerate(report["surfaces"]):
         print(f"  closed surface {i}: genus {s['genus']}, {s['faces']} faces")
     print("  vertex classes: " + ", ".join(f"{k} {v}" for k, v in report["classes"].items() if v))

@@ -15,7 +15,8 @@ a real cluster.
 Because this sample is small, the script also loads the volume and checks
 that the report equals the in-memory one in every field, the doubled
 edges across block faces included. Prints both and writes
-``OUT/report.json``. Needs ``pip install 'isoflow[dask]'``.
+``OUT/report.json`` and a slice with the block faces (``OUT/blocks.png``).
+Needs ``pip install 'isoflow[dask]'``.
 
 .. code-block:: bash
 

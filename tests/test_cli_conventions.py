@@ -65,6 +65,62 @@ def test_isoflow_alone_lists_the_commands_one_line_each():
     assert lines[0].startswith("usage: isoflow")
 
 
+def test_threads_help_says_what_the_docs_say_it_sets():
+    """``--threads`` is the compiled passes' threads (docs/cli.md), for a
+    .zarr store read block by block by ``info`` the threads of dask's
+    threaded scheduler (docs/outofcore.md), and for ``surface`` of a
+    store the blocks meshed at a time (docs/cli.md, docs/surface.md):
+    each command's help says what the pages say it sets."""
+    import argparse
+
+    from isoflow.cli.main import build_parser
+
+    def page(name):
+        return " ".join((ROOT / "docs" / name).read_text().split())
+
+    # the pages' own claims, which the help must repeat
+    assert "`--threads N` sets how many threads the compiled passes use" in page("cli.md")
+    assert "| `threads` (`--threads`) | threads of dask's threaded scheduler" in page("outofcore.md")
+    assert "would fit (`--threads N`)" in page("surface.md") and "how many blocks at a time" in page("surface.md")
+    assert ("`surface --threads N` sets the threads of the compiled passes too, and for a 3D `.zarr` store written "
+            "block by block the blocks meshed at a time") in page("cli.md")
+    claims = {"info": ["threads for the compiled passes", ".zarr store", "threads of dask's threaded scheduler",
+                       "each block's passes on one", "$ISOFLOW_THREADS"],
+              "surface": ["threads for the compiled passes", "the blocks meshed at a time", "$ISOFLOW_THREADS"]}
+    commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
+    helps = {name: " ".join(action.help.split()) for name, sub in commands.items() for action in sub._actions
+             if "--threads" in action.option_strings}
+    assert set(helps) == set(claims)  # a command that takes --threads is checked here
+    for name, said in claims.items():
+        for claim in said:
+            assert claim in helps[name], (name, claim, helps[name])
+
+
+def test_surface_threads_sets_the_compiled_passes_threads(tmp_path, capsys, monkeypatch):
+    """``surface --threads N`` in memory: the compiled passes that mesh the
+    volume run on N threads (they ran on every CPU whatever was asked).
+    7 is more than the default gives a volume of 5 M voxels (one thread
+    per million voxels, at most the CPUs)."""
+    pytest.importorskip("numba")
+    from isoflow.scale import compiled, kernels
+
+    seen = []
+
+    def counted(voxels=None):
+        seen.append(compiled.thread_count(voxels))
+        return seen[-1]
+
+    monkeypatch.setattr(kernels, "thread_count", counted)
+    monkeypatch.delenv("ISOFLOW_THREADS", raising=False)
+    volume = np.zeros((170, 170, 170), bool)  # above least_voxels(surfaces=True): the compiled path
+    volume[5:165, 5:165, 5:165] = True
+    np.save(tmp_path / "cube.npy", volume)
+    assert volume.size >= compiled.least_voxels(surfaces=True)
+    assert main(["surface", str(tmp_path / "cube.npy"), "-o", str(tmp_path / "cube.ply"), "--threads", "7",
+                 "--no-check"]) == 0, capsys.readouterr().err
+    assert seen and set(seen) == {7}
+
+
 def test_quiet_on_every_command(tmp_path, capsys):
     np.save(tmp_path / "t.npy", torus(5, 2))
     runs = [

@@ -432,3 +432,49 @@ def test_surface_md_names_what_the_file_holds(tmp_path):
     ply = trimesh.load(tmp_path / "s.ply", process=False)
     config = ply.metadata["_ply_raw"]["vertex"]["data"]["config"]
     assert (isoflow.normal_lut()[config] == np.sign(ply.vertices - 0.5)).all()
+
+
+def test_the_glb_transform_is_read_as_formats_md_says(tmp_path):
+    """formats.md said that readers apply a GLB node's transform; trimesh
+    applies it when it makes one mesh, pymeshlab keeps it apart (voxel
+    units, the transform beside them) until ``apply_matrix_freeze``: what
+    the page now says, on the file ``surface`` writes at 4e6 with a pitch
+    of 0.1, and that a pitch of 0.5 at (1, 2, 3) has no transform."""
+    import pymeshlab
+    import trimesh
+
+    text = " ".join((ROOT / "docs" / "formats.md").read_text().split())
+    assert "trimesh applies it when it makes one mesh of the scene" in text
+    assert ("pymeshlab keeps it apart: `MeshSet.load_new_mesh(path)` gives a mesh whose `vertex_matrix()` is in "
+            "voxel units") in text
+    assert "a pitch of 0.5 at (1, 2, 3) is stored in world units with no transform" in text
+    volume = np.zeros((4, 4, 4), bool)
+    volume[1:3, 1:3, 1:3] = True
+    corners = np.array([[1.0, 1.0, 1.0], [3.0, 3.0, 3.0]])  # the object's box in voxel units
+    for name, pitch, origin in (("far", 0.1, (4e6, 2e6, -3e6)), ("near", 0.5, (1.0, 2.0, 3.0))):
+        isoflow.write_volume(isoflow.DigitalObject(volume, pitch=pitch, origin=origin), tmp_path / f"{name}.npz")
+        path = tmp_path / f"{name}.glb"
+        assert main(["surface", str(tmp_path / f"{name}.npz"), "-o", str(path), "-q"]) == 0
+        world = np.asarray(origin) + pitch * corners
+        assert np.allclose(trimesh.load(path, force="mesh", process=False).bounds, world, rtol=0, atol=1e-9)
+        geometry = next(iter(trimesh.load(path).geometry.values()))
+        ms = pymeshlab.MeshSet()
+        ms.load_new_mesh(str(path))
+        mesh = ms.current_mesh()
+        box = np.array([mesh.vertex_matrix().min(axis=0), mesh.vertex_matrix().max(axis=0)])
+        if name == "near":  # float32 holds the world positions: no transform, both readers alike
+            assert np.array_equal(mesh.transform_matrix(), np.eye(4)) and np.allclose(box, world, rtol=0, atol=1e-6)
+            assert np.allclose(geometry.bounds, world, rtol=0, atol=1e-6)
+            continue
+        assert np.array_equal(box, corners) and np.array_equal(geometry.bounds, corners)  # voxel units
+        transform = np.diag([pitch, pitch, pitch, 1.0])
+        transform[:3, 3] = origin
+        assert np.array_equal(mesh.transform_matrix(), transform)
+        placed = mesh.transformed_vertex_matrix()
+        assert np.allclose([placed.min(axis=0), placed.max(axis=0)], world, rtol=0, atol=1e-6)
+        assert np.array_equal(ms.get_geometric_measures()["bbox"].min(), corners[0])
+        ms.save_current_mesh(str(tmp_path / "saved.ply"))
+        assert np.allclose(trimesh.load(tmp_path / "saved.ply").bounds, corners, atol=1e-6)  # the transform lost
+        ms.apply_filter("apply_matrix_freeze")
+        frozen = ms.current_mesh().vertex_matrix()
+        assert np.allclose([frozen.min(axis=0), frozen.max(axis=0)], world, rtol=0, atol=1e-6)

@@ -45,6 +45,23 @@ def test_every_example_is_tested_and_listed():
         assert "meshes/" not in text and "parents[" not in text, script
 
 
+def test_every_example_s_docstring_names_the_files_it_writes():
+    """The docstring is the gallery page's text: every file an example
+    claims in OUT (the names it refuses to overwrite) is named there as
+    ``OUT/NAME``."""
+    import ast
+
+    unnamed = []
+    for script in example_names():
+        tree = ast.parse((EXAMPLES / f"{script}.py").read_text())
+        doc = " ".join(ast.get_docstring(tree).split())
+        claimed = [a.value for node in ast.walk(tree) if isinstance(node, ast.Call)
+                   and getattr(node.func, "id", None) == "outputs" for a in node.args if isinstance(a, ast.Constant)]
+        assert claimed, script
+        unnamed += [f"{script}: {name}" for name in claimed if f"``OUT/{name}``" not in doc]
+    assert not unnamed, unnamed
+
+
 def test_an_example_run_as_a_user_runs_it(tmp_path):
     """From another directory, with its options; a second run does not
     replace the outputs: one line, exit 2."""
@@ -91,6 +108,7 @@ def test_curvature_surface(example_run):
 
     assert matplotlib.image.imread(out / "surface.png").ndim == 3
     assert f"= {8 * (1 - g)} = 8 chi" in printed and f"genus {g}" in printed
+    assert f"surface.ply: {len(ply.vertices)} vertices, {len(ply.faces)} triangles" in printed  # what the file holds
 
 
 def test_flow_export(example_run):
@@ -128,6 +146,25 @@ def test_flow_export_says_when_the_torus_changes_topology():
     coarse = isoflow.run_flow(isoflow.voxelize_file(data.torus(), resolution=16), connectivity=6)
     first = coarse.topology_changes[0]
     assert first["before"] == [1, g, 0] and first["after"][0] > 1
+
+
+def test_flow_export_forced_over_a_longer_run_keeps_only_its_own_steps(tmp_path):
+    """Rerun with --force where an earlier, finer run left more steps: the
+    step surfaces in OUT are this flow's non-empty steps only (as
+    ``isoflow flow --out`` leaves them), each enclosing its step's voxels."""
+    out = tmp_path / "out"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    script = str(EXAMPLES / "flow_export.py")
+    for extra in (["--resolution", "16"], ["--resolution", "10", "--force"]):
+        done = subprocess.run([sys.executable, script, str(out), *extra], capture_output=True, text=True, env=env)
+        assert done.returncode == 0, done.stderr
+    solid = isoflow.voxelize_file(data.torus(), resolution=10)
+    steps = isoflow.run_flow(solid, connectivity=6).steps
+    kept = [s for s in steps if s["voxels"]]
+    assert sorted(p.name for p in out.glob("step_*.ply")) == [f"step_{s['step']:03d}.ply" for s in kept]
+    for s in kept:
+        volume = trimesh.load(out / f"step_{s['step']:03d}.ply", process=False).volume
+        assert np.isclose(volume, s["voxels"] * solid.pitch ** 3)
 
 
 def test_genus_table(example_run):
@@ -174,6 +211,20 @@ def test_four_d(example_run):
         assert (m["betti"][0], m["betti"][3], m["euler_characteristic"]) == (1, 0, 1 - g)
         assert (s["betti"][0], s["betti"][3], s["euler_characteristic"]) == (1, 1, 0)
         assert m["a_dot_n"] == 16 * m["euler_characteristic"]
+    # the picture shows the move: in the moving row's panels (each a frame,
+    # its empty cells grey) the solid's black cells go one column in
+    # moving.shape[1] to the right from one frame to the next
+    import matplotlib.image
+
+    rgb = matplotlib.image.imread(out / "frames.png")[..., :3]
+    top = rgb[: len(rgb) // 2]
+    grey, black = np.all((top > 0.85) & (top < 0.97), axis=-1), np.all(top < 0.25, axis=-1)
+    rows = grey.sum(axis=1) > 100  # across the panels, below their titles
+    columns = (grey | black)[rows].sum(axis=0) > 0.9 * rows.sum()
+    edges = np.flatnonzero(np.diff(np.r_[0, columns.astype(int), 0]))
+    where = [np.nonzero(black[rows][:, a:b])[1].mean() / (b - a) for a, b in zip(edges[::2], edges[1::2])]
+    assert len(where) == len(moving) == 6
+    assert np.allclose(np.diff(where), 1 / moving.shape[1], atol=0.01)
 
 
 def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
@@ -189,20 +240,45 @@ def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
     return list(zip(rows, masks))
 
 
-def test_cell_table(example_run):
+def holes(mask: np.ndarray) -> int:
+    """A cell's holes: the 8-components of its complement that keep off
+    the image's edge, by scipy."""
     from scipy import ndimage
 
+    return ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))[1] - 1
+
+
+def test_cell_table(example_run):
     out, printed = example_run("cell_table")
     rows = table_example_rows(out, "cells")
     for row, mask in rows:
-        # the holes: the 8-components of the complement that keep off the
-        # image's edge, by scipy; pixels of 0.25 units
-        parts, count = ndimage.label(np.pad(~mask, 1, constant_values=True), np.ones((3, 3)))
-        assert int(row["b1"]) == count - 1
-        assert float(row["area"]) == mask.sum() * 0.0625
-    holes = sum(int(r["b1"]) for r, _ in rows)
-    assert rows[0][0]["b1"] == "2" and f"{holes} holes in all" in printed and holes > 10
+        assert int(row["b1"]) == holes(mask)
+        assert float(row["area"]) == mask.sum() * 0.0625  # pixels of 0.25 units
+    total = sum(int(r["b1"]) for r, _ in rows)
+    assert rows[0][0]["b1"] == "2" and f"{total} holes in all" in printed and total > 10
     assert (out / "cells.png").stat().st_size > 0
+
+
+def test_cell_table_says_one_cell_and_one_hole_in_the_singular(tmp_path):
+    """Three cells on 32 pixels: one cell holds one hole (scipy's count of
+    the components of its complement off the image's edge)."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, str(EXAMPLES / "cell_table.py"), str(out), "--cells", "3", "--size", "32"],
+                          capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0, done.stderr
+    assert sorted(holes(mask) for _, mask in table_example_rows(out, "cells")) == [0, 0, 1]
+    assert "1 cell with holes, 1 hole in all" in done.stdout
+
+
+def test_four_d_says_one_frame_in_the_singular(tmp_path):
+    """One frame: the moving solid is the solid itself, and the line says
+    "1 frame"; the frames in moving.npy are the one asked for."""
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, str(EXAMPLES / "four_d.py"), str(out), "--frames", "1"],
+                          capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0, done.stderr
+    assert np.load(out / "moving.npy").shape[0] == 1
+    assert "moved over 1 frame keeps" in done.stdout
 
 
 def test_label_table(example_run):

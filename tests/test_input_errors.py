@@ -307,6 +307,28 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     assert ("--labels" in line) == names_labels
 
 
+def test_surface_offers_its_labels_option_for_what_it_does_and_only_in_3d(tmp_path, capsys):
+    # surface --labels writes a closed surface per label of a 3D image (no
+    # table), and surface takes no 2D image at all (docs/labels.md): the
+    # refusal of a label image offered "every label its row with --labels"
+    # in 3D, and in 2D options (--label N, --labels) that are refused next
+    labels = np.zeros((5, 5, 5), np.uint8)
+    labels[1:3, 1:3, 1:3], labels[3, 3, 3] = 2, 7
+    np.save(tmp_path / "l.npy", labels)
+    line = fails(capsys, "surface", tmp_path / "l.npy", "-o", tmp_path / "s.ply")
+    assert line.endswith("or write a closed surface per label with --labels"), line
+    assert main(["surface", str(tmp_path / "l.npy"), "--labels", "-o", str(tmp_path / "s.glb")]) == 0
+    assert sorted(trimesh.load(tmp_path / "s.glb").graph.nodes_geometry) == ["label_2", "label_7"]
+    capsys.readouterr()
+    np.save(tmp_path / "c.npy", labels[:, :, 1] + labels[:, :, 3])  # 2D, labels 2 and 7
+    said = "c.npy: surface needs a 3D object, this one is 2D"
+    line = fails(capsys, "surface", tmp_path / "c.npy", "-o", tmp_path / "c.ply", words=(said,))
+    assert line == fails(capsys, "surface", tmp_path / "c.npy", "--label", "2", "-o", tmp_path / "c.ply")
+    # info's --labels gives the 2D image its table
+    line = fails(capsys, "info", tmp_path / "c.npy", words=("c.npy", "--label N"))
+    assert line.endswith("or give every label its row with --labels (isoflow.label_table(isoflow.read_labels(path)))")
+
+
 @pytest.mark.parametrize("points,cell", [("0 0 0\n-5 3 2\n", "cube has all 8"), ("0 0\n1 0\n", "square has all 4")])
 def test_a_point_list_that_gives_no_voxel_says_why(tmp_path, capsys, points, cell):
     # points with no cube of the paper's point model among them: the object
@@ -542,7 +564,7 @@ def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_
     import trimesh
 
     from isoflow import voxelize_meshes
-    from isoflow.mesh.export import write_surface
+    from isoflow.mesh.export import write_mesh_file
     from isoflow.mesh.voxelize import voxelize_file
 
     vol = np.zeros((4, 4, 4), bool)
@@ -553,7 +575,7 @@ def test_messages_name_options_on_the_command_line_and_parameters_in_python(tmp_
     from isoflow import boundary_mesh
 
     with pytest.raises(IsoflowError, match=r"exists; pass force=True to overwrite$"):
-        write_surface(tmp_path / "s.ply", boundary_mesh(vol), None)
+        write_mesh_file(tmp_path / "s.ply", boundary_mesh(vol), None)
     open_box = trimesh.creation.box()
     open_box.faces = open_box.faces[1:]
     open_box.export(tmp_path / "open.obj")

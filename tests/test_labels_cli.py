@@ -175,6 +175,49 @@ def test_surface_labels_of_a_zarr_store_in_its_units(tmp_path, capsys, segmentat
         assert abs(mesh.volume) == pytest.approx(row["volume"])
 
 
+def test_info_labels_of_a_store_notes_chunks_read_as_a_nonzero_fill_value(tmp_path):
+    """zarr reads a chunk never written as the fill value: where that is a
+    label, the table counts those voxels as it, and says so once, with
+    zarr's own count of the chunks (of the shards in a sharded array);
+    nothing is said where every chunk is written or the fill value is 0."""
+    zarr = pytest.importorskip("zarr")
+
+    def info(path):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--labels", "--json"],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        notes = [line for line in p.stderr.splitlines() if "never written" in line]
+        return {r["label"]: r["voxels"] for r in json.loads(p.stdout)["labels"]}, notes
+
+    def store(name, fill, shards=None):
+        z = zarr.create_array(str(tmp_path / name), shape=(8, 4, 4), chunks=(2, 4, 4), shards=shards,
+                              dtype="u1", fill_value=fill)
+        z[:2] = 1  # the first chunk; the others never written
+        return z
+
+    z = store("fill2.zarr", 2)
+    missing = z.nchunks - z.nchunks_initialized
+    assert missing == 3
+    rows, notes = info(tmp_path / "fill2.zarr")
+    assert rows == {1: 32, 2: int(np.count_nonzero(z[...] == 2))} == {1: 32, 2: 96}
+    assert notes == [f"isoflow info: warning: {tmp_path / 'fill2.zarr'}: 3 of 4 chunks were never written; zarr "
+                     "reads their voxels as the fill value 2, so they count as label 2"]
+
+    z = store("sharded.zarr", 2, shards=(4, 4, 4))
+    assert (z.nchunks - z.nchunks_initialized) // 2 == 1  # zarr counts the written shard's two chunks
+    assert info(tmp_path / "sharded.zarr")[1] == [f"isoflow info: warning: {tmp_path / 'sharded.zarr'}: 1 of 2 "
+                                                  "shards were never written; zarr reads their voxels as the fill "
+                                                  "value 2, so they count as label 2"]
+
+    z = store("whole.zarr", 2)
+    z[2:] = 3
+    assert z.nchunks_initialized == z.nchunks
+    assert info(tmp_path / "whole.zarr") == ({1: 32, 3: 96}, [])
+
+    store("fill0.zarr", 0)
+    assert info(tmp_path / "fill0.zarr") == ({1: 32}, [])
+
+
 def test_surface_labels_glb_opens_in_pymeshlab(tmp_path, capsys, segmentation):
     pymeshlab = pytest.importorskip("pymeshlab")
     np.save(tmp_path / "seg.npy", segmentation)
@@ -247,6 +290,27 @@ def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentati
 def test_bad_label_options_are_one_line(tmp_path, capsys, segmentation, extra, words):
     np.save(tmp_path / "seg.npy", segmentation)
     fails(capsys, "info", tmp_path / "seg.npy", *extra, words=words)
+
+
+@pytest.mark.parametrize("command", ["info", "surface"])
+@pytest.mark.parametrize("spec", ["-3--1", "-2,3"])
+def test_a_negative_choice_without_its_equals_sign_is_one_line_naming_the_form_that_works(tmp_path, capsys, command,
+                                                                                           spec):
+    # argparse read it as an unknown option: the usage and "unrecognized
+    # arguments", where docs/labels.md gives the form --labels=-5,-3--1
+    image = np.zeros((4, 4, 4), np.int8)
+    image[0, 0, 0], image[2, 2, 2], image[3, 3, 3] = -2, 3, 5
+    np.save(tmp_path / "neg.npy", image)
+    out = ["-o", str(tmp_path / "n.glb")] if command == "surface" else ["--json"]
+    with pytest.raises(SystemExit) as done:
+        main([command, str(tmp_path / "neg.npy"), "--labels", spec, *out])
+    err = capsys.readouterr().err
+    assert done.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith(f"isoflow {command}: error: --labels {spec}: ") and f"--labels={spec} " in err, err
+    assert main([command, str(tmp_path / "neg.npy"), f"--labels={spec}", *out]) == 0
+    if command == "info":
+        rows = json.loads(capsys.readouterr().out)["labels"]
+        assert [row["label"] for row in rows] == {"-3--1": [-2], "-2,3": [-2, 3]}[spec]
 
 
 def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation):

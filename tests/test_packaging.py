@@ -86,7 +86,12 @@ def test_wheel_installs_and_runs_the_readme_command(tmp_path):
 
 def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):
     """At most 150 lines; its first commands are what .ci/run runs; its
-    Python quick start runs as written and says what it prints."""
+    Python quick start runs as written and says what it prints, twice, in
+    the directory where the first line's ``surface ... -o bob.ply`` ran (it
+    refused that ``bob.ply``: "exists; pass force=True"), and writes the
+    file the command wrote."""
+    from isoflow.cli.main import main
+
     readme = (ROOT / "README.md").read_text()
     assert len(readme.splitlines()) <= 150
     first, second = readme.split("```bash\n")[1].splitlines()[:2]
@@ -95,8 +100,12 @@ def test_readme_is_one_screen_and_its_python_runs(tmp_path, monkeypatch):
     assert (ROOT / ".ci" / "run").read_text().rstrip().splitlines()[-1] == second
     code = readme.split("```python\n")[1].split("```")[0]
     monkeypatch.chdir(tmp_path)
-    namespace: dict = {}
-    exec(compile(code, "README.md", "exec"), namespace)
+    assert main(["surface", str(data.bob()), "--resolution", "64", "-o", "bob.ply", "--force", "-q"]) == 0
+    command = (tmp_path / "bob.ply").read_bytes().split(b"end_header")[1]
+    for _ in range(2):
+        namespace: dict = {}
+        exec(compile(code, "README.md", "exec"), namespace)
+    assert (tmp_path / "bob.ply").read_bytes().split(b"end_header")[1] == command
     report = namespace["report"]
     assert [report["betti"], report["euler_characteristic"]] == [[1, 1, 0], 0]  # as its comment says
     assert list(namespace["table"]["label"]) == [3] and list(namespace["table"]["b1"]) == [1]

@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import isoflow
@@ -101,19 +102,25 @@ reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
 reveal_type(isoflow.write_volume(obj, "v.npz"))
 reveal_type(isoflow.write_labels(np.zeros((2, 2, 2), np.uint8), "l.npz", pitch=0.5))
+reveal_type(isoflow.write_surface(obj, "s.ply", 6, mesh=isoflow.boundary_mesh(vol, 6), ascii=True))
 reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has no py.typed: Manifold is Any)
 reveal_type(isoflow.data.bob())
 '''
 
+def mypy(tmp_path: Path, script: str) -> subprocess.CompletedProcess:
+    """mypy run on ``script`` as a user's ``user.py``, isoflow found by its stub."""
+    path = tmp_path / "user.py"
+    path.write_text(script)
+    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
+    return subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
+                           "--cache-dir", str(tmp_path / "cache"), str(path)],
+                          capture_output=True, text=True, cwd=tmp_path, env=env)
+
+
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
 def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
-    script = tmp_path / "user.py"
-    script.write_text(USER_SCRIPT)
-    env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
-    p = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-                        "--cache-dir", str(tmp_path / "cache"), str(script)],
-                       capture_output=True, text=True, cwd=tmp_path, env=env)
+    p = mypy(tmp_path, USER_SCRIPT)
     revealed = re.findall(r"user\.py:(\d+): note: Revealed type is \"(.*)\"", p.stdout)
     calls = [line for line in USER_SCRIPT.splitlines() if line.startswith("reveal_type")]
     assert len(revealed) == len(calls), p.stdout + p.stderr
@@ -126,6 +133,55 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
     labels = calls.index('reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))')
     assert "isoflow.mesh.label_voxels.LabelVoxelization" in revealed[labels][1]
 
+
+# calls the functions take at run time (as their docstrings say), which the
+# annotations refused: a bare array for write_volume, a tuple or list pitch
+# and nested lists for write_labels (its own example) and DigitalObject,
+# array_like volumes and origins, connectivity=None (the paper's default,
+# as for analyze)
+TAKEN_SCRIPT = """
+import numpy as np
+import isoflow
+
+vol = np.zeros((4, 4, 4), dtype=bool)
+vol[1:3, 1:3, 1:3] = True
+isoflow.write_volume(vol, "v.npz")
+isoflow.write_labels(np.ones((2, 2), np.uint16), "l.nii.gz", pitch=(0.5, 0.25))
+isoflow.write_labels([[1, 2], [0, 1]], "m.nii.gz", pitch=[0.5, 0.25], origin=(1, 2))
+isoflow.boundary_mesh(vol.tolist(), None)
+isoflow.closed_surfaces(vol, None)
+isoflow.to_manifold(vol, connectivity=None)
+isoflow.write_surface(vol.tolist(), "s.ply", None)
+isoflow.planar_index([[1, 0], [0, 1]])
+isoflow.class_histogram(isoflow.configuration_histogram(vol).tolist())
+obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3])
+isoflow.from_manifold(isoflow.to_manifold(obj), pitch=0.5, origin=[1, 2, 3])
+isoflow.label_table(vol.astype(np.uint8), pitch=np.array([0.5, 0.5, 1.0]), origin=np.zeros(3))
+isoflow.run_flow(vol.tolist(), steps=1)
+isoflow.a_lut(None)
+"""
+
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_mypy_takes_the_arguments_the_functions_take(tmp_path):
+    p = mypy(tmp_path, TAKEN_SCRIPT)
+    assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
+
+
+def test_the_script_s_calls_run(tmp_path, monkeypatch):
+    import trimesh
+
+    monkeypatch.chdir(tmp_path)
+    exec(compile(TAKEN_SCRIPT, "user.py", "exec"), {})
+    assert trimesh.load(tmp_path / "s.ply", process=False).euler_number == 2  # one cube's sphere
+    assert isoflow.read_labels(tmp_path / "l.nii.gz").spacing.tolist() == [0.5, 0.25]
+    vol = np.load(tmp_path / "v.npz")["volume"]
+    assert isoflow.boundary_mesh(vol, None) == isoflow.boundary_mesh(vol, 6)
+    assert isoflow.closed_surfaces(vol, None)["surfaces"] == isoflow.closed_surfaces(vol, 6)["surfaces"]
+    assert isoflow.to_manifold(vol, None).volume() == 8.0
+    obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3])
+    assert obj.spacing.tolist() == [0.5, 0.5, 1.0] and obj.world(np.zeros((1, 3))).tolist() == [[1.0, 2.0, 3.0]]
 
 def public_functions() -> list[tuple[str, object]]:
     """Every public function: the names of ``__all__`` and of the public

@@ -72,6 +72,27 @@ def test_a_digital_object_where_an_array_is_taken_is_named(function):
         function(obj)
 
 
+@pytest.mark.parametrize("call,where", [
+    (lambda image, p: isoflow.analyze(image), "volume"),
+    (lambda image, p: isoflow.boundary_mesh(image), "boundary_mesh"),
+    (lambda image, p: isoflow.run_flow(image), "DigitalObject volume"),
+    (lambda image, p: isoflow.DigitalObject(image), "DigitalObject volume"),
+    (lambda image, p: isoflow.write_surface(image, p / "s.ply"), "DigitalObject volume"),
+])
+def test_a_label_image_where_a_binary_volume_is_taken_is_named(tmp_path, call, where):
+    # NumPy made the LabelImage a 0D object array: refused as "array of type object"
+    image = isoflow.read_labels(isoflow.write_labels(np.array([[[1, 2]]], np.uint8), tmp_path / "l.npz", pitch=0.5))
+    with pytest.raises(IsoflowError) as e:
+        call(image, tmp_path)
+    assert str(e.value) == (f"{where}: a LabelImage, not a binary volume; pass one label's mask, "
+                            "DigitalObject(image.array == N, pitch=image.spacing, origin=image.origin) "
+                            "(label_table reports every label)")
+    # what the message says to do runs, and places the label as the file does
+    obj = isoflow.DigitalObject(image.array == 2, pitch=image.spacing, origin=image.origin)
+    assert obj.voxels == 1 and obj.world(np.zeros((1, 3))).tolist() == [[0.0, 0.0, 0.0]]
+    assert isoflow.label_table(image)["voxels"].tolist() == [1, 1]
+
+
 @pytest.mark.parametrize("function", [
     isoflow.analyze, isoflow.run_flow, isoflow.closed_surfaces, isoflow.boundary_mesh, isoflow.label_table,
 ])
@@ -365,6 +386,25 @@ def test_complex_vertices_are_refused_naming_them(voxelize):
             voxelize(box.vertices + 1j, box.faces)
 
 
+@pytest.mark.parametrize("voxelize", [
+    lambda v, f: isoflow.voxelize_mesh(v, f, resolution=4),
+    lambda v, f: isoflow.voxelize_meshes([(v, f)], resolution=4),
+    lambda v, f: isoflow.verify_genus((v, f), resolutions=(4,)),
+])
+@pytest.mark.parametrize("kind", [object, str])
+def test_vertices_of_objects_or_strings_are_refused_as_volumes_are(voxelize, kind):
+    # they were cast to float64 and voxelised (strings such as "0.5" too), where
+    # analyze refuses an array of the same type in one line
+    box = _box()
+    vertices = np.array(box.vertices.tolist(), dtype=kind)
+    with pytest.raises(IsoflowError, match=r"array of type object is not a binary volume"):
+        isoflow.analyze(np.ones((2, 2, 2), dtype=object))
+    with pytest.raises(IsoflowError) as e:
+        voxelize(vertices, box.faces)
+    assert str(e.value).endswith(f"vertices: array of type {vertices.dtype} is not an array of coordinates")
+    assert "\n" not in str(e.value)
+
+
 @pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
 def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
     # a dask array was rechunked as given: ZeroDivisionError, dask's
@@ -439,6 +479,25 @@ def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(val
         isoflow.closed_surfaces(volume)
     with pytest.raises(IsoflowError, match="not a binary volume"):
         isoflow.analyze(volume)
+
+
+@pytest.mark.parametrize("call", [isoflow.analyze, isoflow.closed_surfaces, lambda v: isoflow.boundary_mesh(v, 6)])
+def test_a_label_image_given_for_a_mask_names_label_table(call):
+    # the refusal said only "threshold it first": a label image has a
+    # table of its own, as the command line's refusal says (--labels)
+    from skimage.measure import regionprops_table
+
+    labels = np.zeros((6, 5, 4), np.int32)
+    labels[1:3, 1:4, 1:3], labels[4, 2:4, 1] = 3, 8
+    with pytest.raises(IsoflowError, match=r"threshold it first, e\.g\. volume > 0, or give every label its row with "
+                                           r"isoflow\.label_table\(volume\)$"):
+        call(labels)
+    table, props = isoflow.label_table(labels), regionprops_table(labels, properties=("label", "area"))
+    assert table["label"].tolist() == props["label"].tolist() == [3, 8]
+    assert table["voxels"].tolist() == props["area"].tolist() == [12, 2]
+    with pytest.raises(IsoflowError) as probability:  # a probability map is no label image
+        call(labels * 0.25)
+    assert str(probability.value).endswith("threshold it first, e.g. volume > 0")
 
 
 @pytest.mark.parametrize("method", ["numpy", "compiled"])
@@ -546,3 +605,28 @@ def test_a_trimesh_scene_is_read_as_its_file_is(tmp_path):
     assert isoflow.verify_genus(scene, (16, 32)).verdict == "agree: genus 0"
     with pytest.raises(IsoflowError, match="mesh 1: no node of the scene holds a triangle mesh"):
         isoflow.voxelize_meshes(trimesh.Scene(), resolution=8, split=True)
+
+
+@pytest.mark.parametrize("name,call", [
+    ("s.ply", lambda p, **k: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", **k)),
+    ("v.npz", lambda p, **k: isoflow.write_volume(np.ones((2, 2, 2), bool), p / "v.npz", **k)),
+    ("l.nii.gz", lambda p, **k: isoflow.write_labels(np.ones((2, 2, 2), np.uint8), p / "l.nii.gz", **k)),
+    ("m.zarr", lambda p, **k: isoflow.voxelize_to_zarr(_box(), p / "m.zarr", resolution=4, **k)),
+])
+def test_a_force_that_is_no_bool_is_refused_and_the_file_kept(tmp_path, name, call):
+    # force="no" is truthy: the existing file was replaced
+    (tmp_path / name).mkdir() if name.endswith(".zarr") else (tmp_path / name).write_text("kept")
+    before = sorted(p.name for p in tmp_path.rglob("*"))
+    with pytest.raises(IsoflowError) as e:
+        call(tmp_path, force="no")
+    assert str(e.value) == f"{tmp_path / name}: force must be True or False, got 'no'"
+    assert sorted(p.name for p in tmp_path.rglob("*")) == before
+    if not name.endswith(".zarr"):
+        assert (tmp_path / name).read_text() == "kept"
+
+
+@pytest.mark.parametrize("switch", ["ascii", "triangulate"])
+def test_write_surface_refuses_a_switch_that_is_no_bool(tmp_path, switch):
+    with pytest.raises(IsoflowError, match=rf"s\.ply: {switch} must be True or False, got 'no'$"):
+        isoflow.write_surface(np.ones((2, 2, 2), bool), tmp_path / "s.ply", **{switch: "no"})
+    assert not (tmp_path / "s.ply").exists()

@@ -84,7 +84,7 @@ def test_a_surface_census_comes_back_from_its_json():
 
 def test_a_4d_nifti_warns_of_the_fourth_axis_placement_it_cannot_keep(tmp_path):
     # the fourth axis's pitch and origin were dropped without a word, read
-    # back as 1 and 0 (TIFF's dropped origin is warned of)
+    # back as 1 and 0 (a .npy's dropped placement is warned of)
     import pytest
 
     pytest.importorskip("nibabel")

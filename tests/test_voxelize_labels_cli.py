@@ -69,6 +69,8 @@ def test_overlap_error_refuses_in_one_line_and_writes_nothing(tmp_path, capsys, 
     line = fails(capsys, "voxelize", a, b, "--resolution", "40", "--overlap", "error", "-o", out,
                  words=("the meshes overlap", "voxels lie inside two or more meshes (labels 1 and 2: "))
     assert not out.exists() and "--overlap later" in line
+    # nothing is listed: the line says which mesh each label is (it named numbers alone)
+    assert f"), label 1 {a}, 2 {b}; " in line, line
     assert main(["voxelize", str(a), str(b), "--resolution", "40", "-o", str(out)]) == 0
     capsys.readouterr()
     fails(capsys, "voxelize", a, b, "--resolution", "40", "-o", out, words=("exists",))  # no --force

@@ -55,6 +55,7 @@ _WHERE = {
     "read_points": ".mesh.volumes",
     "write_volume": ".mesh.volumes",
     "write_labels": ".mesh.volumes",
+    "write_surface": ".mesh.export",
     "to_manifold": ".mesh.bridges",
     "from_manifold": ".mesh.bridges",
     "IsoflowError": ".errors",

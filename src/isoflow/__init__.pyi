@@ -58,6 +58,7 @@ from .flow.run import FlowResult as FlowResult
 from .flow.run import run_flow as run_flow
 from .mesh.bridges import from_manifold as from_manifold
 from .mesh.bridges import to_manifold as to_manifold
+from .mesh.export import write_surface as write_surface
 from .mesh.genus import verify_genus as verify_genus
 from .mesh.label_voxels import voxelize_meshes as voxelize_meshes
 from .mesh.slabs import voxelize_to_zarr as voxelize_to_zarr

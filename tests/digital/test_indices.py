@@ -166,3 +166,16 @@ def test_planar_index_sums_to_four_chi(rng):
     for _ in range(200):
         pts = rng.random(rng.integers(1, 12, 2)) < rng.uniform(0.2, 0.9)
         assert I.planar_index(pts).sum() == 4 * euler_number(pts, connectivity=1)
+
+
+def test_euler_lut_defaults_to_the_face_connectivity_of_its_dimension():
+    # euler_lut(2) raised "connectivity 6 is not valid in 2D": its default was the 3D one
+    import isoflow
+
+    for n, face in ((1, 2), (2, 4), (3, 6), (4, 8)):
+        assert np.array_equal(isoflow.euler_lut(n), isoflow.euler_lut(n, face))
+    ring = np.ones((3, 3), bool)
+    ring[1, 1] = False  # a ring of 8 pixels: chi 0 under 4-connectivity, as scikit-image counts
+    chi = int(isoflow.configuration_histogram(ring) @ isoflow.euler_lut(2)) // 4
+    assert chi == euler_number(np.pad(ring, 1), connectivity=1) == 0
+    assert np.array_equal(isoflow.a_lut(None), isoflow.a_lut(6))

@@ -73,7 +73,7 @@ def test_surface_blocks_on_process_workers(client, tmp_path, conn):
     import trimesh
 
     from isoflow import boundary_mesh
-    from isoflow.mesh.export import write_surface
+    from isoflow.mesh.export import write_mesh_file
     from isoflow.mesh.streamed_readback import check_streamed
     from isoflow.mesh.surface_blocks import write_surface_blocks
 
@@ -85,7 +85,7 @@ def test_surface_blocks_on_process_workers(client, tmp_path, conn):
     got = write_surface_blocks(zarr.open_array(str(tmp_path / "v.zarr"), mode="r"), tmp_path / "s.ply", conn,
                                scheduler=client.get)
     mesh = boundary_mesh(v, conn)
-    want = write_surface(tmp_path / "m.ply", mesh, DigitalObject(v))
+    want = write_mesh_file(tmp_path / "m.ply", mesh, DigitalObject(v))
     assert got["pinched"] == mesh.pinched and got["euler_characteristic"] == mesh.euler_characteristic
     assert check_streamed(got["path"], dict(got, centre=np.array(v.shape) / 2), DigitalObject(v))["agree"]
 

@@ -141,7 +141,7 @@ def test_written_file_reads_back(tmp_path, rng, conn):
     assert m.midpoints and m.pinched
     for suffix in (".ply", ".obj"):
         path = tmp_path / f"s{conn}{suffix}"
-        export.write_surface(path, m, obj)
+        export.write_mesh_file(path, m, obj)
         check = check_surface_file(path, m, obj, components=m.components())
         assert check["agree"], check["problem"]
         ms = pymeshlab.MeshSet()

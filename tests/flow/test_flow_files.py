@@ -120,7 +120,7 @@ def test_an_interrupt_while_writing_names_the_directory(tmp_path, capsys, monkey
     def stop(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(export, "write_surface", stop)
+    monkeypatch.setattr(export, "write_mesh_file", stop)
     assert main(["flow", str(tmp_path / "b.npy"), "--out", str(tmp_path / "o"), "--force"]) == 130
     err = capsys.readouterr().err.strip().splitlines()
     assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while writing the flow's files; the previous "
@@ -374,3 +374,40 @@ def test_a_run_past_its_expected_last_step_widens_every_name(tmp_path):
     writer.add(1000, result.states[0])  # (as a step 1000 would)
     writer.finish(result, plot=False)
     assert sorted(p.name for p in (tmp_path / "run").glob("step_*")) == ["step_0000.ply", "step_1000.ply"]
+
+
+#: a fresh interpreter's ``isoflow flow --guard --out`` of Example 19, which
+#: prints the modules a thread other than the main one imports first
+FIRST_IMPORTS = """
+import builtins, importlib.util, json, sys, threading
+first, real = [], builtins.__import__
+def watch(name, globals=None, locals=None, fromlist=(), level=0):
+    if threading.current_thread() is not threading.main_thread():
+        full = importlib.util.resolve_name("." * level + name, (globals or {}).get("__package__")) if level else name
+        if full not in sys.modules:
+            first.append(full)
+    return real(name, globals, locals, fromlist, level)
+builtins.__import__ = watch
+from isoflow import data
+from isoflow.cli import main
+print(json.dumps([main(["flow", str(data.example19()), "--guard", "--out", sys.argv[1], "-q"]), first]))
+"""
+
+
+def test_the_step_files_check_imports_nothing_on_its_thread(tmp_path):
+    """``isoflow flow meshes/example19.txt --guard --out run/`` (a README
+    command) failed once with ``KeyError: 'scipy'``: the read-back thread
+    imported trimesh (and with it scipy) for the first time while the flow
+    imported scipy.ndimage for step 1's components. The first check runs
+    on the flow's thread, so the thread imports nothing of its own."""
+    import json
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", FIRST_IMPORTS, str(tmp_path / "run")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    rc, first = json.loads(done.stdout.splitlines()[-1])
+    assert rc == 0 and first == []
+    with open(tmp_path / "run" / "flow.csv") as fh:  # the checks are made: trimesh's reading of both steps
+        rows = list(csv.DictReader(fh))
+    assert [r["trimesh_euler"] for r in rows] == ["2", "2"]

@@ -127,6 +127,42 @@ def test_split_keeps_a_cavity_with_its_body():
     assert r.labels[tuple(centre)] == 0  # the cavity is empty
 
 
+def test_split_names_a_hollow_body_alone_as_its_file(tmp_path):
+    # a mesh of one body keeps the name FILE (docs/labels.md); a hollow one,
+    # two shells of one body, was named FILE:1
+    outer, inner = trimesh.creation.box((2, 2, 2)), trimesh.creation.box((1, 1, 1))
+    inner.invert()
+    path = tmp_path / "hollow.obj"
+    trimesh.util.concatenate([outer, inner]).export(path)
+    assert len(trimesh.load(path, force="mesh").split(only_watertight=False)) == 2
+    r = voxelize_meshes([path], pitch=0.125, split=True)
+    assert r.names == (str(path),) and r.voxels == (16**3 - 8**3,)  # the cavity empty
+    assert voxelize_meshes([path], pitch=0.125).names == r.names
+
+
+def test_split_names_an_archives_bodies_by_its_files_in_their_natural_order(tmp_path):
+    # trimesh's scene of an archive names its members' nodes at random
+    # (geometry_0f7d...): the labels' names and order changed from run to run
+    import zipfile
+
+    parts = {}
+    for n in (10, 2, 1):
+        box = trimesh.creation.box((1, 1, 0.5 + 0.1 * n))
+        box.apply_translation((2.0 * n, 0, 0))
+        parts[f"part{n}.stl"] = box
+    path = tmp_path / "parts.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, box in parts.items():
+            box.export(tmp_path / name)  # the member, outside the archive too (STL's float32 corners)
+            archive.write(tmp_path / name, name)
+    r = voxelize_meshes([path], pitch=0.1, split=True)
+    order = ["part1.stl", "part2.stl", "part10.stl"]
+    assert r.names == tuple(f"{path}:{name}" for name in order)
+    for k, name in enumerate(order, 1):
+        assert np.array_equal(r.labels == k, alone(tmp_path / name, r))
+    assert voxelize_meshes([path], pitch=0.1, split=True).names == r.names
+
+
 def welded(*meshes):
     """Meshes concatenated and welded, as a file of them is read."""
     m = trimesh.util.concatenate(meshes)

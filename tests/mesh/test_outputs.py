@@ -261,7 +261,7 @@ def test_flow_force_keeps_the_old_run_until_the_new_one_is_written(tmp_path, mon
     # the new run fails while writing its second step file
     from isoflow.flow import files
 
-    real = files.export.write_surface
+    real = files.export.write_mesh_file
     calls = []
 
     def failing(path, *a, **k):
@@ -270,7 +270,7 @@ def test_flow_force_keeps_the_old_run_until_the_new_one_is_written(tmp_path, mon
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
         return real(path, *a, **k)
 
-    monkeypatch.setattr(files.export, "write_surface", failing)
+    monkeypatch.setattr(files.export, "write_mesh_file", failing)
     rc, _, err = run("flow", tmp_path / "b3.npy", "--out", out, "--force")
     line, = err.strip().splitlines()
     assert rc == 2 and "No space left on device" in line and f"{out}/step_001.ply" in line, line

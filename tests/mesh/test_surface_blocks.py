@@ -115,7 +115,7 @@ def test_written_files_equal_the_in_memory_files(tmp_path, rng, conn):
     assert mesh.pinched and (conn == 6 or mesh.midpoints)
     for suffix in (".ply", ".stl"):
         got = write_surface_blocks(array, tmp_path / f"blocks{suffix}", conn, frame=frame)
-        want = export.write_surface(tmp_path / f"memory{suffix}", mesh, obj)
+        want = export.write_mesh_file(tmp_path / f"memory{suffix}", mesh, obj)
         assert got["faces"] == want["face_count"] and got["kind"] == want["faces"].replace("polygons", "quads")
         assert got["vertices"] == len(mesh.vertices) and got["pinched"] == mesh.pinched
         assert got["euler_characteristic"] == mesh.euler_characteristic
@@ -265,7 +265,7 @@ def test_ome_zarr_in_zyx_order_with_its_placement(tmp_path, rng, capsys):
     path = write_volume(obj, tmp_path / "img.zarr")
     assert main(["surface", str(path), "-o", str(tmp_path / "s.ply")]) == 0
     assert "written block by block" in capsys.readouterr().out
-    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(v, 6), obj)
+    want = export.write_mesh_file(tmp_path / "m.ply", boundary_mesh(v, 6), obj)
     assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
 
 
@@ -275,7 +275,7 @@ def test_label_image_store(tmp_path, rng):
     z = zarr.open_array(str(path), mode="w", shape=labels.shape, chunks=(4, 5, 3), dtype=np.uint8)
     z[:] = labels
     assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--label", "3", "--connectivity", "26"]) == 0
-    want = export.write_surface(tmp_path / "m.ply", boundary_mesh(labels == 3, 26), DigitalObject(labels == 3))
+    want = export.write_mesh_file(tmp_path / "m.ply", boundary_mesh(labels == 3, 26), DigitalObject(labels == 3))
     assert faces_as_records(tmp_path / "s.ply") == faces_as_records(want["path"])
 
 

@@ -89,19 +89,57 @@ def test_npz_keeps_a_vector_pitch(tmp_path, vol):
 
 # --------------------------------------------------------------- written by isoflow, read by the library
 
+def imagej_origin(origin, pitch):
+    """ImageJ's ``xorigin``, ``yorigin``, ``zorigin`` for a corner ``origin``:
+    ImageJ's Calibration puts pixel coordinate ``p`` at ``(p - xorigin) *
+    pixelWidth``, and its Image > Adjust > Coordinates spans an image from
+    coordinate 0 (left edge) to its width (right edge), so coordinate 0 is
+    voxel 0's lowest corner: ``origin = -xorigin * pitch``."""
+    return {f"{axis}origin": -o / p for axis, o, p in zip("xyz", origin, pitch)}
+
+
 def test_tiff_round_trip(tmp_path, vol):
     tifffile = pytest.importorskip("tifffile")
     obj = placed(vol)
     path = tmp_path / "v.tif"
-    with pytest.warns(IsoflowWarning, match="no origin"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the origin is written: nothing to warn of
         isoflow.write_volume(obj, path)
     with tifffile.TiffFile(path) as tif:
         assert np.array_equal(tif.asarray(), vol.transpose(2, 1, 0))  # pages, rows, columns = z, y, x
         np.testing.assert_allclose(1 / np.array(tif.pages[0].get_resolution()), PITCH[:2])
         assert tif.imagej_metadata["spacing"] == PITCH[2]
+        written = {k: tif.imagej_metadata[k] for k in ("xorigin", "yorigin", "zorigin")}
+    assert written == pytest.approx(imagej_origin(corner(obj), PITCH), rel=1e-12)
     back = isoflow.read_volume(path)
     assert np.array_equal(back.volume, vol)
     np.testing.assert_allclose(back.pitch, PITCH)
+    np.testing.assert_allclose(corner(back), corner(obj), rtol=1e-12)
+
+
+@pytest.mark.parametrize("kind", ["volume", "labels"])
+def test_tiff_keeps_the_origin_as_imagej_calibration(tmp_path, vol, kind):
+    """A TIFF kept no origin (read back at 0, with a warning on writing):
+    the origin is written as ImageJ's calibration origin, in pixels, and
+    read back, for a volume and for a label image."""
+    tifffile = pytest.importorskip("tifffile")
+    pitch, origin = (0.5, 0.25, 2.0), (1.0, 2.0, 3.0)
+    path = tmp_path / f"{kind}.tif"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        if kind == "volume":
+            isoflow.write_volume(DigitalObject(vol, pitch=pitch, origin=origin), path)
+            back = isoflow.read_volume(path)
+            assert np.array_equal(back.volume, vol)
+        else:
+            labels = vol.astype(np.uint16) * 300
+            isoflow.write_labels(labels, path, pitch=pitch, origin=origin)
+            back = isoflow.read_labels(path)
+            assert np.array_equal(back.array, labels)
+    assert back.origin.tolist() == list(origin) and back.spacing.tolist() == list(pitch)
+    with tifffile.TiffFile(path) as tif:
+        meta = tif.imagej_metadata
+    assert {k: meta[k] for k in ("xorigin", "yorigin", "zorigin")} == imagej_origin(origin, pitch)
 
 
 @pytest.mark.parametrize("shape", [(4, 5, 1), (1, 5, 4), (4, 1, 5), (1, 1, 5), (1, 1, 1), (5, 1), (1, 1)])
@@ -288,6 +326,50 @@ def test_tiff_stack_from_tifffile(tmp_path, vol):
     assert np.array_equal(plain.volume, vol) and plain.pitch == 1.0
     tifffile.imwrite(tmp_path / "page.tif", stack[0])  # one page: 2D (x, y)
     assert np.array_equal(isoflow.read_volume(tmp_path / "page.tif").volume, vol[:, :, 0])
+
+
+def test_tiff_origin_as_fiji_writes_it(tmp_path, vol):
+    """Fiji's Image > Properties "Origin" is saved as ImageJ's ``xorigin``,
+    ``yorigin``, ``zorigin`` (pixels; a key only for an origin not 0): read
+    as the world position of voxel 0's lowest corner, ``-xorigin * pitch``,
+    for a stack (a volume and a label image) and a single image."""
+    tifffile = pytest.importorskip("tifffile")
+    stack = vol.transpose(2, 1, 0).astype(np.uint8)  # z, y, x
+    pitch, pixels = (0.2, 0.4, 1.5), {"xorigin": 12.5, "yorigin": -3.0, "zorigin": 4.0}
+    tifffile.imwrite(tmp_path / "fiji.tif", stack, imagej=True, resolution=(1 / pitch[0], 1 / pitch[1]),
+                     metadata={"spacing": pitch[2], "unit": "micron", "axes": "ZYX", **pixels})
+    want = [-pixels[f"{axis}origin"] * p for axis, p in zip("xyz", pitch)]
+    obj = isoflow.read_volume(tmp_path / "fiji.tif")
+    assert np.array_equal(obj.volume, vol)
+    np.testing.assert_allclose(obj.origin, want, rtol=1e-9)
+    np.testing.assert_allclose(corner(obj), want, rtol=1e-9)
+    np.testing.assert_allclose(isoflow.read_labels(tmp_path / "fiji.tif").origin, want, rtol=1e-9)
+    tifffile.imwrite(tmp_path / "flat.tif", stack[0], imagej=True, resolution=(1 / pitch[0], 1 / pitch[1]),
+                     metadata={"axes": "YX", "yorigin": 10.0})
+    flat = isoflow.read_volume(tmp_path / "flat.tif")
+    assert flat.ndim == 2
+    np.testing.assert_allclose(flat.origin, [0.0, -10.0 * pitch[1]], rtol=1e-9)
+
+
+def test_tiff_origin_with_imagej_inverted_y_is_read_from_the_top_row_with_a_warning(tmp_path, vol):
+    """ImageJ's ``inverty`` counts y up from the bottom row, which isoflow's
+    y down the rows cannot hold: y is read from 0 and a warning says so."""
+    tifffile = pytest.importorskip("tifffile")
+    stack = vol.transpose(2, 1, 0).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "up.tif", stack, imagej=True,
+                     metadata={"spacing": 2.0, "axes": "ZYX", "xorigin": 1.0, "yorigin": 5.0, "inverty": True})
+    with pytest.warns(IsoflowWarning, match=r"up\.tif: ImageJ's inverted y \(inverty\) is not applied"):
+        obj = isoflow.read_volume(tmp_path / "up.tif")
+    assert obj.origin.tolist() == [-1.0, 0.0, 0.0] and np.array_equal(obj.volume, vol)
+
+
+@pytest.mark.parametrize("value", ["abc", "inf"])
+def test_tiff_origin_that_is_no_number_is_refused(tmp_path, value):
+    tifffile = pytest.importorskip("tifffile")
+    tifffile.imwrite(tmp_path / "bad.tif", np.ones((2, 3, 4), np.uint8), imagej=True,
+                     metadata={"axes": "ZYX", "zorigin": value})
+    with pytest.raises(IsoflowError, match=f"bad.tif: ImageJ's zorigin '?{value}'? is not a"):
+        isoflow.read_volume(tmp_path / "bad.tif")
 
 
 @pytest.mark.parametrize("version", ["0.4", "0.5"])

@@ -39,7 +39,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--force", action="store_true", help="overwrite an existing --csv file")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
     p.add_argument("--threads", type=thread_count, metavar="N",
-                   help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU)")
+                   help="threads for the compiled passes; for a 2D or 3D .zarr store without --labels, read block by "
+                        "block, the threads of dask's threaded scheduler, each block's passes on one (default: "
+                        "$ISOFLOW_THREADS, else every CPU)")
     p.add_argument(
         "--gpu",
         action="store_true",

@@ -422,8 +422,10 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
     """A label image where a mask is expected, in memory or found block by
     block in a store: its refusal names the options of this command that
     select labels (``--label N``; ``--labels`` where the command takes it:
-    not flow, which flows one object); ``block_wise``: the flow of a store
-    block by block, which takes neither (:data:`BLOCK_LABEL`)."""
+    not flow, which flows one object; surface's writes a surface per label;
+    a 2D image is no surface's, whatever its labels); ``block_wise``: the
+    flow of a store block by block, which takes neither
+    (:data:`BLOCK_LABEL`)."""
     from ..scale.arrays import NotBinary
 
     try:
@@ -433,4 +435,7 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
             raise NotBinary(exc.bare + BLOCK_LABEL, bare=exc.bare, every=False) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
 
-        raise with_label_options(exc, every=args.command != "flow") from None
+        if args.command == "surface" and exc.ndim == 2:
+            # no choice of labels makes a 2D image a surface: say what would
+            raise IsoflowError(f"{args.input}: surface needs a 3D object, this one is 2D") from None
+        raise with_label_options(exc, every=args.command != "flow", surfaces=args.command == "surface") from None

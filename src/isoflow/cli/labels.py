@@ -510,7 +510,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         with output_set(f"{target[1]}/", retire=earlier if args.force else ()):
             for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
                 path = target[1] / f"{name}{target[2]}"
-                written = export.write_surface(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                                force=args.force, comments=(f"isoflow surface --labels: {name}",))
                 count += written["face_count"]
                 kinds[written["faces"]] = None

@@ -99,6 +99,21 @@ def unrecognized(parser: argparse.ArgumentParser, extra: list[str]) -> str:
     return f"unrecognized arguments: {' '.join(extra)}" + (f" ({'; '.join(meant)})" if meant else "")
 
 
+def refuse_negative_choice(command: argparse.ArgumentParser | None, args: argparse.Namespace,
+                           extra: list[str]) -> None:
+    """One line for ``--labels -2,3``: argparse reads a choice that starts
+    with a minus sign (other than one number) as an unknown option and
+    leaves ``--labels`` without it; the choice is written ``--labels=-2,3``."""
+    from .labels import reads_as_choice
+
+    if command is None or getattr(args, "labels", None) != "all":
+        return
+    for word in extra:
+        if word.startswith("-") and reads_as_choice(word):
+            command.exit(2, f"{command.prog}: error: --labels {word}: a choice that starts with a minus sign is "
+                            f"written --labels={word} (else it reads as an option)\n")
+
+
 def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
     """A sub-command whose one-line summary is both its entry in the command
     list and the description of its own -h."""
@@ -376,6 +391,7 @@ def main(argv: list[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # the command's usage, not isoflow's, and the option meant where one is close
         command = parser.commands.get(args.command) if args.command else None  # type: ignore[attr-defined]
+        refuse_negative_choice(command, args, extra)
         (command or parser).error(unrecognized(command or parser, extra))
     if args.command is None:  # `isoflow` alone: what it can do, not an error
         print(command_list(parser))

@@ -41,11 +41,22 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
     p.add_argument("--threads", type=thread_count, metavar="N",
-                   help="blocks of a .zarr store meshed at a time (default: $ISOFLOW_THREADS, else every CPU)")
+                   help="threads for the compiled passes; for a .zarr store read block by block, the blocks meshed "
+                        "at a time (default: $ISOFLOW_THREADS, else every CPU)")
     p.set_defaults(func=cmd_surface)
 
 
 def cmd_surface(args: argparse.Namespace) -> int:
+    """``isoflow surface``, its compiled passes on ``--threads`` threads
+    (a store's blocks take them as the blocks meshed at a time)."""
+    from ..scale.compiled import using
+
+    with using(args.threads):
+        return surface_of(args)
+
+
+def surface_of(args: argparse.Namespace) -> int:
+    """``isoflow surface`` of a file, a store or a label image."""
     from ..digital.connectivity import default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path, output_set
@@ -82,7 +93,7 @@ def cmd_surface(args: argparse.Namespace) -> int:
     comments = surface_comments(args.input, conn)
     # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were
     with output_set(out) if args.png else contextlib.nullcontext():
-        written = export.write_surface(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+        written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                        force=args.force, comments=comments)
         comps = mesh.components()
         print(
@@ -90,8 +101,8 @@ def cmd_surface(args: argparse.Namespace) -> int:
             f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
             + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
         )
-        if written.get("moved_voxels", 0) > STL_NOTE_VOXELS and not args.quiet:
-            print(f"isoflow surface: note: {stl_move_note(out, written)}", file=sys.stderr)
+        if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS and not args.quiet:
+            print(f"isoflow surface: note: {export.stl_move_note(out, written)}", file=sys.stderr)
         status = read_back(args, out, mesh, obj, comps)
         if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
             from ..mesh.render import render_surface
@@ -100,17 +111,6 @@ def cmd_surface(args: argparse.Namespace) -> int:
     if args.png:
         print(f"{args.png}: picture of the surface coloured by vertex angle")
     return status
-
-
-#: an STL's float32 positions are said to move the surface when they move a
-#: corner by more than this many voxels (below it, nothing a user can see)
-STL_NOTE_VOXELS = 1e-3
-
-
-def stl_move_note(out: Path, written: dict) -> str:
-    """How far an STL's float32 positions moved the surface."""
-    return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
-            f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
 
 
 def checked_mesh(name: str, obj, conn: int):
@@ -138,9 +138,7 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     shared = export.shared_positions(mesh)
     welded = shared if out.suffix.lower() == ".stl" else 0
     if welded and not args.quiet:
-        print(f"isoflow surface: note: {out}: STL keeps no shared vertices, so readers weld the split copies at "
-              f"{welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart",
-              file=sys.stderr)
+        print(f"isoflow surface: note: {export.stl_weld_note(out, welded)}", file=sys.stderr)
     if args.no_check:
         return 0
     with reading_back(out):
@@ -245,8 +243,6 @@ def refuse_store_beyond_memory(args: argparse.Namespace) -> None:
 
 def surface_comments(name: str, conn: int) -> tuple[str, ...]:
     """The PLY header comments of ``surface``."""
-    return (
-        f"isoflow surface of {Path(name).name}, {conn}-connectivity",
-        "per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
-        "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)",
-    )
+    from ..mesh.export import VERTEX_COMMENT
+
+    return f"isoflow surface of {Path(name).name}, {conn}-connectivity", VERTEX_COMMENT

@@ -64,7 +64,7 @@ from ..scale.arrays import binary, count_codes, refuse_object
 from ..scale.compiled import Method, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
-from .connectivity import check_connectivity
+from .connectivity import check_connectivity, resolve_connectivity
 from .report import SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 
@@ -132,7 +132,7 @@ def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dic
     ]
 
 
-def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "auto") -> SurfaceCensus:
+def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Method = "auto") -> SurfaceCensus:
     """The closed surfaces of the boundary of a 3D host volume and their genus.
 
     The surfaces are read off the labels of the object and background
@@ -143,8 +143,8 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     Parameters
     ----------
     volume : array_like of bool or 0/1, 3D
-    connectivity : {6, 26}
-        The object's.
+    connectivity : {6, 26} or None
+        The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
     method : {"auto", "numpy", "compiled"}
         One compiled sweep, the NumPy census, or by the volume's size.
 
@@ -177,7 +177,7 @@ def closed_surfaces(volume: ArrayLike, connectivity: int = 6, method: Method = "
     vol = binary(volume)
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
-    connectivity = check_connectivity(3, connectivity)  # as an int
+    connectivity = resolve_connectivity(3, connectivity)  # as an int
     census = compiled_census(vol, connectivity) if use_census(vol, method=method) else small_census(vol, connectivity)
     return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                          doubled_edges=census["doubled_edges"], hist=census["hist"],

@@ -16,11 +16,12 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import as_array, binary
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
-from .connectivity import check_connectivity, is_face_connectivity
+from .connectivity import is_face_connectivity, resolve_connectivity
 
 #: class value of a configuration that is not well-composed
 NOT_WELL_COMPOSED = -1
@@ -66,8 +67,7 @@ def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
 # --------------------------------------------------------------------------
 
 
-@cache
-def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
+def euler_lut(ndim: int = 3, connectivity: int | None = None) -> np.ndarray:
     """``2^n`` times every configuration's share of chi: the vector ``a``.
 
     Summed over all vertices the table gives ``2^n chi`` on every image,
@@ -79,9 +79,10 @@ def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
     ----------
     ndim : int
         1 to 4.
-    connectivity : int
+    connectivity : int, optional
         The object's: ``2n`` (4, 6, 8 in 2D, 3D, 4D) or ``3^n - 1`` (8, 26,
-        80); the background takes the other.
+        80); the background takes the other. None: ``2n``, the paper's
+        (as for :func:`isoflow.analyze`).
 
     Returns
     -------
@@ -107,9 +108,20 @@ def euler_lut(ndim: int = 3, connectivity: int = 6) -> np.ndarray:
 
     >>> euler_lut(3, 6)[1], euler_lut(3, 26)[1]
     (np.int64(1), np.int64(1))
+
+    A pixel's four corners in the plane, at its default 4-connectivity:
+
+    >>> euler_lut(2)[1], len(euler_lut(2))
+    (np.int64(1), 16)
     """
     n = check_dimension(ndim)
-    face = is_face_connectivity(check_connectivity(n, connectivity), n)
+    return _euler_table(n, resolve_connectivity(n, connectivity))
+
+
+@cache
+def _euler_table(n: int, connectivity: int) -> np.ndarray:
+    """:func:`euler_lut` of a checked dimension and connectivity, built once."""
+    face = is_face_connectivity(connectivity, n)
     c = np.arange(1 << (1 << n), dtype=np.int64)
     lut = np.zeros(c.shape, dtype=np.int64)
     for mask, k in window_faces(n):
@@ -342,7 +354,7 @@ def f_lut() -> np.ndarray:
     return read_only(s.sum(axis=1) * np.abs(s).sum(axis=1))  # cached: shared with every later caller
 
 
-def a_lut(connectivity: int = 6) -> np.ndarray:
+def a_lut(connectivity: int | None = 6) -> np.ndarray:
     """The Gauss-Bonnet weight ``a`` of eq. 4.10 of every 3D configuration.
 
     ``a = 8 x`` the vertex's share of the Euler characteristic, so that
@@ -352,8 +364,8 @@ def a_lut(connectivity: int = 6) -> np.ndarray:
 
     Parameters
     ----------
-    connectivity : {6, 26}
-        The object's.
+    connectivity : {6, 26} or None
+        The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
 
     Returns
     -------
@@ -393,12 +405,12 @@ def code_string(config: int) -> str:
     return "(" + ",".join(CODE_CHARS[int(v)] for v in code_lut()[config]) + ")"
 
 
-def class_histogram(config_hist: np.ndarray) -> np.ndarray:
+def class_histogram(config_hist: ArrayLike) -> np.ndarray:
     """The paper's vector ``n = (n_-4, ..., n_4)`` of eq. 4.9.
 
     Parameters
     ----------
-    config_hist : numpy.ndarray
+    config_hist : array_like
         The 256 configuration counts
         (:func:`~isoflow.digital.configurations.configuration_histogram`).
 
@@ -449,12 +461,12 @@ def planar_class_lut() -> np.ndarray:
     return out
 
 
-def planar_index(points: np.ndarray) -> np.ndarray:
+def planar_index(points: ArrayLike) -> np.ndarray:
     """Four times the planar curvature index ``r`` of eq. 4.2, at every point.
 
     Parameters
     ----------
-    points : numpy.ndarray
+    points : array_like
         A 2D binary array of lattice points (bool or 0/1).
 
     Returns

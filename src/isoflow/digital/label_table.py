@@ -33,7 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -118,8 +118,8 @@ def label_table(
     image: ArrayLike | LabelImage,
     connectivity: int | None = None,
     *,
-    pitch: float | Sequence[float] | None = None,
-    origin: Sequence[float] | None = None,
+    pitch: float | ArrayLike | None = None,
+    origin: ArrayLike | None = None,
     labels: Iterable[int] | None = None,
     surfaces: bool = True,
     method: Literal["auto", "numpy", "compiled"] = "auto",
@@ -138,10 +138,10 @@ def label_table(
     connectivity : {6, 26} in 3D, {4, 8} in 2D, optional
         Every label's connectivity (default the paper's: 6, in 2D 4); its
         complement takes the other one.
-    pitch : float or sequence of floats, optional
+    pitch : float or array_like of floats, optional
         Voxel size (per axis); volumes, areas, boxes and centroids are in
         its units (default 1).
-    origin : sequence of floats, optional
+    origin : array_like of floats, optional
         World position of voxel (0, 0, 0)'s lowest corner (default 0).
     labels : sequence of int, optional
         The labels to report, in this order (default: every nonzero label

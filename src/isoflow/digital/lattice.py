@@ -18,8 +18,9 @@ Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -43,14 +44,14 @@ class DigitalObject:
 
     Parameters
     ----------
-    volume : numpy.ndarray of bool or 0/1
+    volume : array_like of bool or 0/1
     offset : tuple of int, optional
         Lattice index of voxel ``(0, ..., 0)`` (default zeros).
     parity : {0, 1}
         The lattice (0) or the dual lattice (1).
-    pitch : float or array of float
+    pitch : float or array_like of float
         The voxel size, one number or one per axis.
-    origin : array of float, optional
+    origin : array_like of float, optional
         World position of lattice point 0 (default zeros).
 
     Raises
@@ -83,6 +84,12 @@ class DigitalObject:
     # unhashable, as the volume, a NumPy array, can change
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
+
+    if TYPE_CHECKING:
+        # what the constructor takes (__post_init__ checks and converts it),
+        # beside the fields' types, which say what the object then holds
+        def __init__(self, volume: ArrayLike, offset: Sequence[int] | np.ndarray | None = None, parity: int = 0,
+                     pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None) -> None: ...
 
     def __post_init__(self):
         vol = binary(self.volume, "DigitalObject volume")

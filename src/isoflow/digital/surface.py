@@ -33,13 +33,14 @@ from functools import cache
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..results import same_fields
 from ..scale.arrays import as_array, binary, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
-from .connectivity import check_connectivity
+from .connectivity import check_connectivity, resolve_connectivity
 from .indices import OFF_SURFACE, a_lut, class_lut, code_lut, f_lut, gamma_lut, normal_lut
 
 # --------------------------------------------------------------------------
@@ -473,17 +474,18 @@ def row_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     return tables
 
 
-def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "auto") -> QuadMesh:
+def boundary_mesh(volume: ArrayLike, connectivity: int | None = 6, method: Method = "auto") -> QuadMesh:
     """The closed quad mesh of a 3D object's boundary (docs/mathematics.md).
 
     Parameters
     ----------
-    volume : numpy.ndarray
+    volume : array_like
         A 3D array of 0/1 values (bool or any numeric type), 1 for the
         object (any memory order).
-    connectivity : {6, 26}
+    connectivity : {6, 26} or None
         The object's connectivity: faces meeting at an edge contact are
-        paired inside each object voxel under 6, across the edge under 26.
+        paired inside each object voxel under 6, across the edge under 26;
+        None is the paper's 6, as for :func:`isoflow.analyze`.
     method : {"auto", "numpy", "compiled"}
         How the mesh is built (see :func:`mesh_method`); every method gives
         the same mesh up to the order of its vertices and faces.
@@ -518,7 +520,7 @@ def boundary_mesh(volume: np.ndarray, connectivity: int = 6, method: Method = "a
     vol = as_array(volume)
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
-    connectivity = check_connectivity(3, connectivity)  # as an int
+    connectivity = resolve_connectivity(3, connectivity)  # as an int
     how = mesh_method(vol, method)
     # 2, 255 and NaN are refused as analyze refuses them, not meshed as
     # object; the bit rows read any nonzero byte of a bool array as set, so

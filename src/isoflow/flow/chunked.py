@@ -321,34 +321,19 @@ def source_volume(path: str | os.PathLike) -> tuple[Any, DigitalObject, Any]:
     >>> volume.shape, place.spacing.tolist(), int(fill)
     ((2, 3, 4), [0.5, 0.5, 0.5], 0)
     """
-    from ..mesh.formats.omezarr import Guarded, axis_names, placement_of
-    from ..mesh.formats.registry import split_dataset
-    from ..scale.chunks import open_zarr_node, spatial_axes
+    from ..mesh.formats.omezarr import open_store
 
-    _, da = import_dask()
-    file, level = split_dataset(path)
-    where = str(path)
-    array, multiscale, dataset = open_zarr_node(file, level)
-    # chunks read through a guard, so that a damaged one is one line
-    lazy = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
-    pitch, origin = 1.0, None
-    if multiscale is None:
-        attrs = dict(getattr(array, "attrs", {}) or {})
-        if "pitch" in attrs and "origin" in attrs:
-            pitch, origin = np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
-    else:
-        names = axis_names(multiscale, array.ndim, where)
-        scale, shift = placement_of(multiscale, dataset, array.ndim, where)
-        xyz, other = spatial_axes(names, array.shape, where)
-        lazy = lazy[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
-        kept = [i for i in range(array.ndim) if i not in other]
-        lazy = lazy.transpose([kept.index(i) for i in xyz])
-        pitch = scale[xyz]
-        origin = shift[xyz] - pitch / 2
+    store = open_store(path)
+    lazy = store.lazy()
+    if store.multiscale is not None:  # the kept axes in stored order, turned to x, y, z
+        kept = [i for i in range(store.array.ndim) if i not in store.other]
+        lazy = lazy.transpose([kept.index(i) for i in store.xyz])
+    pitch, origin = store.placement()
     if lazy.ndim != 3:
-        raise IsoflowError(f"{where}: the flow runs block by block on 3D volumes; this one is {lazy.ndim}D "
+        raise IsoflowError(f"{store.where}: the flow runs block by block on 3D volumes; this one is {lazy.ndim}D "
                            "(a 2D image is read into memory without --volumes .zarr)")
-    return lazy, DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=origin), getattr(array, "fill_value", None)
+    place = DigitalObject(np.zeros((0, 0, 0), bool), pitch=1.0 if pitch is None else pitch, origin=origin)
+    return lazy, place, getattr(store.array, "fill_value", None)
 
 
 def guard_refusal(where: str, shape: tuple[int, ...]) -> str:

@@ -281,12 +281,19 @@ class FlowWriter:
         name = f"step_{step:0{self.width}d}.ply"
         comments = (f"isoflow flow step {step}, parity {state.parity}, {self.connectivity}-connectivity",)
         with self._named():  # flushed to the disk on the worker thread
-            written = export.write_surface(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
+            written = export.write_mesh_file(self.stage / name, mesh, state, force=True, comments=comments, sync=False)
         self.staged.append(name)
         if self._pool is None:
-            from concurrent.futures import ThreadPoolExecutor
+            # the first check on this thread: it imports trimesh, scipy and numba, and a first import of a package
+            # on two threads at once can fail (KeyError: 'scipy' as this thread imports scipy.ndimage)
+            from concurrent.futures import Future, ThreadPoolExecutor
 
+            first: Future = Future()
+            with self._named():
+                first.set_result(self._sync_and_check(written["path"], mesh, state))
+            self._pending.append((step, name, first))
             self._pool = ThreadPoolExecutor(1, thread_name_prefix="isoflow-readback")
+            return
         self._pending.append((step, name, self._pool.submit(self._sync_and_check, written["path"], mesh, state)))
         while len(self._pending) > self.PENDING:
             self._collect()
@@ -403,8 +410,8 @@ class FlowWriter:
     def _named(self):
         """A failed write names the file it was for, not its staging copy,
         and says that the previous run is kept; a warning names it too, and
-        what every step's file would repeat (``TIFF keeps no origin``) is
-        said once per run, of the first step's file."""
+        what every step's file would repeat (``MagicaVoxel keeps no voxel
+        size or origin``) is said once per run, of the first step's file."""
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")

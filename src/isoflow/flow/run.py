@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable
@@ -277,7 +278,7 @@ def _limit(trace: _Trace, reached: bool) -> dict:
 
 
 def run_flow(
-    obj: DigitalObject | np.ndarray,
+    obj: DigitalObject | ArrayLike,
     steps: int | None = None,
     guard: bool = False,
     connectivity: int | None = 6,
@@ -292,7 +293,7 @@ def run_flow(
 
     Parameters
     ----------
-    obj : DigitalObject or numpy.ndarray
+    obj : DigitalObject or array_like
         A 2D or 3D object (a bare binary array sits at the origin).
     steps : int, optional
         Run this many steps at most; by default until the object vanishes

@@ -9,6 +9,8 @@ meshes joined, as every command reads it). With ``split``:
   node's transform applied; a geometry placed by two nodes is two bodies),
   named ``FILE:NODE`` and taken in the natural order of the node names
   (``part2`` before ``part10``: trimesh does not keep the file's order);
+  an archive's nodes are named by its files, ``FILE:MEMBER``
+  (:func:`archive_bodies`);
 * any other mesh (STL with one or several solids, OBJ, PLY, OFF, or
   arrays) gives one body per **connected body**, named ``FILE:1``,
   ``FILE:2``, ... in the order of their first face. Faces are joined
@@ -42,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .load import check_mesh, is_scene, load_mesh, mesh_arrays, mesh_bbox, trimesh_load, weld
+from .load import check_mesh, check_mesh_file, is_scene, load_mesh, mesh_arrays, mesh_bbox, reading_mesh, trimesh_load, weld
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -101,10 +103,48 @@ def file_bodies(path, split: bool) -> list[Body]:
     return connected_bodies(*load_mesh(path), str(name))
 
 
+#: archives of mesh files (trimesh's file types), read member by member
+ARCHIVE_TYPES = {".zip": "zip", ".tar.gz": "tar.gz", ".tar.bz2": "tar.bz2"}
+
+
 def node_bodies(path: Path) -> list[Body]:
     """One body per node of a scene file that holds a triangle mesh, in
     world coordinates, in the natural order of the node names."""
+    kind = next((t for suffix, t in ARCHIVE_TYPES.items() if path.name.lower().endswith(suffix)), None)
+    if kind is not None:
+        return archive_bodies(path, kind)
     return scene_bodies(trimesh_load(path, "scene"), str(path))
+
+
+def archive_bodies(path: Path, kind: str) -> list[Body]:
+    """One body per node of each mesh file in an archive, named
+    ``FILE:MEMBER`` (``FILE:MEMBER:NODE`` where the member is a scene of
+    several), in the natural order of the member names. trimesh's scene of
+    a whole archive names the nodes of its members at random
+    (``geometry_0f7d...``), so that order, the labels', would change from
+    one run to the next."""
+    import trimesh
+    from trimesh.exchange.load import mesh_formats
+
+    check_mesh_file(path)
+    bodies: list[Body] = []
+    with reading_mesh(path), open(path, "rb") as f:
+        archive = trimesh.util.decompress(f, file_type=kind)
+        resolver = trimesh.resolvers.ZipResolver(archive)
+        for member in sorted(archive, key=natural_key):
+            member_kind = trimesh.util.split_extension(member).lower()
+            if member_kind not in mesh_formats():
+                continue  # a texture, a material, metadata
+            scene = trimesh.load_scene(archive[member], file_type=member_kind, resolver=resolver, process=False)
+            meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
+                                                                            trimesh.Trimesh)]
+            if not meshes:
+                continue  # a point cloud or a path: nothing to fill
+            named = scene_bodies(scene, f"{path}:{member}")
+            bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
+    if not bodies:
+        raise IsoflowError(f"{path}: no file of the archive holds a triangle mesh")
+    return bodies
 
 
 def scene_bodies(scene, name: str) -> list[Body]:
@@ -147,6 +187,8 @@ def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
     groups: dict[int, list[int]] = {}
     for c in range(len(parts)):
         groups.setdefault(owner[c], []).append(c)
+    if len(groups) == 1:  # shells that are one body (a cavity's wall with its solid) keep the mesh's name
+        return [Body(name, v, f)]
     bodies = []
     for k, members in enumerate(groups.values(), 1):
         faces = f[np.concatenate([parts[c] for c in members])]

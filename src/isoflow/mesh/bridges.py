@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 
 def from_manifold(manifold: Manifold, pitch: float = 1.0,
-                  origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> DigitalObject:
+                  origin: ArrayLike = (0.0, 0.0, 0.0)) -> DigitalObject:
     """Digitise a manifold3d solid on the grid ``origin + pitch * Z^3``.
 
     Voxel ``v`` (the cube ``[origin + pitch v, origin + pitch (v+1)]``) is in
@@ -37,7 +37,7 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     manifold : manifold3d.Manifold
     pitch : float
         The voxel size.
-    origin : tuple of float
+    origin : array_like of 3 floats
         A corner of the grid.
 
     Returns
@@ -104,7 +104,7 @@ def cube_union(voxels):
 # --------------------------------------------------------------------------
 
 
-def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int = 6) -> Manifold:
+def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> Manifold:
     """The union of the object's voxels as a ``manifold3d.Manifold`` in world
     coordinates.
 
@@ -120,8 +120,8 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int = 6) -> Manifo
     Parameters
     ----------
     obj : DigitalObject or array_like of bool, 3D
-    connectivity : {6, 26}
-        The object's.
+    connectivity : {6, 26} or None
+        The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
 
     Returns
     -------

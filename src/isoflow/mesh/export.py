@@ -3,7 +3,7 @@
 The writers take plain arrays (vertex columns, faces padded with -1) so that
 any polygon mesh can be written; :func:`mesh_vertex_table` makes the columns
 of a boundary quad mesh (:class:`isoflow.digital.surface.QuadMesh`) and
-:func:`write_surface` picks, per format, what the file holds so that every
+:func:`write_mesh_file` picks, per format, what the file holds so that every
 reader opens it as the closed, oriented 2-manifold isoflow counts:
 
 ========================  =========================================  =======================================
@@ -28,12 +28,14 @@ units (a mesh in units of 1e-200, map coordinates of 4e6 with a pitch of
 smaller files) and as double otherwise; OBJ prints as many digits as they
 need (9 at least); GLB, whose positions are float32 by its spec, then stores
 them in voxel units with the voxel size and the origin as its node's
-transform (float64 in the JSON), which readers apply. Binary STL holds
-float32 only, and no shared vertices (readers weld equal positions): it is
-written wherever float32 keeps the surface's distinct positions distinct,
-so that the weld gives back the same closed surface, and refused (nothing
-written) only where float32 would merge some, with the numbers;
-:func:`float32_effect` says how far float32 moves the positions.
+transform (float64 in the JSON), which trimesh applies when it makes one
+mesh and pymeshlab keeps apart until ``apply_matrix_freeze``
+(docs/formats.md, "Surface files"). Binary STL holds float32 only, and no
+shared vertices (readers weld equal positions): it is written wherever
+float32 keeps the surface's distinct positions distinct, so that the weld
+gives back the same closed surface, and refused (nothing written) only
+where float32 would merge some, with the numbers; :func:`float32_effect`
+says how far float32 moves the positions.
 """
 
 from __future__ import annotations
@@ -45,11 +47,14 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
-from .outputs import atomic_write, check_output_path
+from ..errors import IsoflowError, IsoflowWarning
+from .outputs import atomic_write, check_output_path, check_switch
 
 if TYPE_CHECKING:
+    from numpy.typing import ArrayLike
+
     from ..digital.label_meshes import Batch
+    from ..digital.surface import QuadMesh
 
 #: a position is held exactly enough when it is off by at most this many voxels
 POSITION_TOLERANCE = 1e-6
@@ -419,7 +424,7 @@ def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool =
     return ("polygons" if mesh.midpoints else "quads"), mesh.polygons()
 
 
-def write_surface(
+def write_mesh_file(
     path: str | os.PathLike,
     mesh,
     obj: DigitalObject,
@@ -436,7 +441,8 @@ def write_surface(
     ``moved_voxels``, how far float32 moved the positions
     (:func:`float32_effect`). Raises IsoflowError, writing nothing, for an
     STL in which float32 would merge distinct positions. ``sync=False`` leaves the
-    ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`)."""
+    ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`);
+    :func:`write_surface` is the public call."""
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
     kind, faces = surface_faces(mesh, suffix, ascii=ascii, triangulate=triangulate)
@@ -458,6 +464,166 @@ def write_surface(
         table, frame = glb_columns(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
     return {"path": path, "faces": kind, "face_count": len(faces)}
+
+
+#: an STL's float32 positions are said to move the surface when they move a
+#: corner by more than this many voxels (below it, nothing a user can see)
+STL_NOTE_VOXELS = 1e-3
+
+#: the header comment of PLY and OBJ that says what the per-vertex columns are
+VERTEX_COMMENT = ("per-vertex: config byte, class (gamma+4; -1 not well-composed; -2 edge midpoint), "
+                  "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)")
+
+
+def stl_move_note(out: Path, written: dict) -> str:
+    """How far an STL's float32 positions moved the surface."""
+    return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
+            f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
+
+
+def stl_weld_note(out: Path, welded: int) -> str:
+    """What a reader's weld of an STL does to the split copies at contacts."""
+    return (f"{out}: STL keeps no shared vertices, so readers weld the split copies at {welded} edge/vertex "
+            "contacts into non-manifold points; PLY, OBJ or GLB keep them apart")
+
+
+def write_surface(
+    obj: DigitalObject | ArrayLike,
+    path: str | os.PathLike,
+    connectivity: int | None = None,
+    *,
+    mesh: QuadMesh | None = None,
+    ascii: bool = False,
+    triangulate: bool = False,
+    force: bool = False,
+) -> Path:
+    """Write the boundary mesh of a 3D object as the file ``isoflow surface``
+    writes: PLY, OBJ, STL or GLB by the suffix, in world coordinates.
+
+    The file holds the closed, outward-oriented boundary (docs/formats.md,
+    "Surface files"): binary PLY with the per-vertex curvature columns
+    ``config``, ``class``, ``gamma``, ``a``, ``f`` and colours; OBJ with
+    positions; binary STL (triangles, no shared vertices); GLB (triangles,
+    ``COLOR_0`` and the attributes ``_config`` ... ``_f``). It is written
+    beside the target and renamed when complete, so an interrupted write
+    leaves any previous file as it was.
+
+    Parameters
+    ----------
+    obj : DigitalObject or array_like
+        The object, placed by its pitch and origin (a bare 3D binary array
+        is taken at the origin with voxels of size 1).
+    path : str or os.PathLike
+        The file: ``.ply``, ``.obj``, ``.stl`` or ``.glb`` (any case).
+    connectivity : {6, 26}, optional
+        The object's connectivity (6 if None; with ``mesh``, the mesh's).
+    mesh : QuadMesh, optional
+        ``boundary_mesh(obj.volume, connectivity)`` where it is already
+        built, so that it is not built again; refused where it does not fit
+        the object's array or has another connectivity.
+    ascii : bool
+        ASCII PLY instead of binary (``.ply`` only).
+    triangulate : bool
+        Triangles in every format (two per plain quad).
+    force : bool
+        Replace an existing file (True or False only: ``"no"`` is refused).
+
+    Returns
+    -------
+    pathlib.Path
+        The file written, which trimesh, pymeshlab and MeshLab open.
+
+    Raises
+    ------
+    IsoflowError
+        Before anything is written: an existing file without ``force``, a
+        suffix other than the four, ``ascii`` with another format, an
+        object that is not 3D or is empty, a mesh of another object or
+        connectivity, a binary STL whose float32 positions would merge
+        distinct corners (the message says by how much).
+
+    Warns
+    -----
+    IsoflowWarning
+        An STL whose float32 positions move a corner by more than a
+        thousandth of a voxel, or whose readers weld the split copies at
+        edge and vertex contacts into non-manifold points.
+
+    See Also
+    --------
+    boundary_mesh : the mesh in memory, in array-corner units.
+    write_volume : the object itself as a volume file.
+
+    Examples
+    --------
+    A box of 2 x 3 x 4 voxels of 0.5 placed at (1, 2, 3), read back by
+    trimesh: 54 corners, 52 quads (104 triangles), closed, volume 24 / 8:
+
+    >>> import tempfile, pathlib
+    >>> import numpy as np
+    >>> import trimesh
+    >>> from isoflow import DigitalObject
+    >>> obj = DigitalObject(np.ones((2, 3, 4), bool), pitch=0.5, origin=(1.0, 2.0, 3.0))
+    >>> path = write_surface(obj, pathlib.Path(tempfile.mkdtemp()) / "box.ply")
+    >>> m = trimesh.load(path, process=False)
+    >>> len(m.vertices), len(m.faces), bool(m.is_watertight), float(m.volume), m.bounds.tolist()
+    (54, 104, True, 3.0, [[1.0, 2.0, 3.0], [2.0, 3.5, 5.0]])
+
+    The curvature columns: the ``a`` of the corners sums to 8 chi (the
+    digital Gauss-Bonnet theorem; a box's chi is 1):
+
+    >>> int(m.metadata["_ply_raw"]["vertex"]["data"]["a"].sum())
+    8
+    """
+    from ..digital.connectivity import resolve_connectivity
+    from ..digital.surface import boundary_mesh
+
+    path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
+    suffix = path.suffix.lower()
+    ascii, triangulate = check_switch(ascii, "ascii", str(path)), check_switch(triangulate, "triangulate", str(path))
+    if ascii and suffix != ".ply":
+        raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
+    obj = DigitalObject.of(obj)
+    if obj.ndim != 3:
+        raise IsoflowError(f"{path}: a surface is written of a 3D object, this one is {obj.ndim}D")
+    if mesh is None:
+        if obj.voxels == 0:
+            raise IsoflowError(f"{path}: the object is empty, there is no surface to write")
+        mesh = boundary_mesh(obj.volume, resolve_connectivity(3, connectivity))
+    else:
+        check_mesh_fits(path, mesh, obj, connectivity)
+    comments = (f"isoflow write_surface, {mesh.connectivity}-connectivity", VERTEX_COMMENT)
+    written = write_mesh_file(path, mesh, obj, ascii=ascii, triangulate=triangulate, force=force, comments=comments)
+    if suffix == ".stl":
+        import warnings
+
+        if written["moved_voxels"] > STL_NOTE_VOXELS:
+            warnings.warn(stl_move_note(path, written), IsoflowWarning, stacklevel=2)
+        welded = shared_positions(mesh)
+        if welded:
+            warnings.warn(stl_weld_note(path, welded), IsoflowWarning, stacklevel=2)
+    return path
+
+
+def check_mesh_fits(path: Path, mesh: QuadMesh, obj: DigitalObject, connectivity: int | None) -> None:
+    """Refuse, in one line, a mesh given to :func:`write_surface` that is not
+    a boundary mesh of the object's array: another type, another
+    connectivity, no faces, or vertices outside the array's box."""
+    from ..digital.surface import QuadMesh
+
+    if not isinstance(mesh, QuadMesh):
+        raise IsoflowError(f"{path}: mesh= takes the QuadMesh of boundary_mesh(obj.volume), got "
+                           f"{type(mesh).__name__}")
+    if connectivity is not None and connectivity != mesh.connectivity:
+        raise IsoflowError(f"{path}: the mesh is {mesh.connectivity}-connected, connectivity={connectivity!r} "
+                           "was asked")
+    if len(mesh.faces) == 0:
+        raise IsoflowError(f"{path}: the mesh is empty, there is no surface to write")
+    shape = np.asarray(obj.volume.shape)
+    if np.any(mesh.vertices.min(axis=0) < 0) or np.any(mesh.vertices.max(axis=0) > shape):
+        raise IsoflowError(f"{path}: the mesh reaches {mesh.vertices.max(axis=0).tolist()}, outside the object's "
+                           f"array of shape {shape.tolist()} (array-corner units): pass the object it was built "
+                           "from")
 
 
 def grid_frame(mesh, obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:

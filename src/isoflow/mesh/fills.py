@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import IsoflowError, counted
 from ..results import Result
+from .outputs import check_switch
 
 #: the rule that decides which voxels a mesh fills
 Fill = Literal["winding", "shell", "flood"]
@@ -177,9 +178,7 @@ def check_strict(strict: object, where: str = "voxelize") -> bool:
     ...
     isoflow.errors.IsoflowError: voxelize: strict must be True or False, got 'no'
     """
-    if not isinstance(strict, (bool, np.bool_)):
-        raise IsoflowError(f"{where}: strict must be True or False, got {strict!r}")
-    return bool(strict)
+    return check_switch(strict, "strict", where)
 
 
 def sampled_points(T: np.ndarray, origin, pitch: float) -> tuple[np.ndarray, np.ndarray] | None:

@@ -13,7 +13,7 @@ Overlaps
 Where meshes overlap, ``overlap="later"`` (default) gives the voxel the
 label of the later mesh: the order of the meshes is their priority, as
 painting them one over the other would. ``overlap="error"`` refuses, naming
-the pairs. Either way the result counts the voxels inside two or more
+the pairs and their meshes. Either way the result counts the voxels inside two or more
 meshes (each once) and, per pair of labels ``(i, j)``, ``i < j``, the
 voxels of mesh j that held label i when mesh j was placed: the voxels label
 i lost to label j. Where no voxel lies in three or more meshes, that is
@@ -221,7 +221,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         Every mesh's fill (:mod:`isoflow.mesh.fills`).
     overlap : {"later", "error"}
         A voxel inside several meshes gets the later one's label, or the
-        overlap is refused (IsoflowError naming the pairs and counts).
+        overlap is refused (IsoflowError naming the pairs and counts, and
+        the mesh of each label it names).
     split
         One label per body instead of per file: a scene's nodes, a mesh's
         connected bodies (:mod:`isoflow.mesh.bodies`).
@@ -301,7 +302,10 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         overlap_voxels=int(np.bitwise_count(shared).sum(dtype=np.int64)),
         overlaps=tuple((i, j, c) for (i, j), c in sorted(pairs.items())), notes=tuple(notes))
     if overlap == "error" and result.overlaps:
-        said = f"the meshes overlap: {overlap_text(result)}; "
+        # nothing is written or listed: the line says which mesh each label it names is
+        shown = sorted({k for i, j, _ in result.overlaps[:NAMED_PAIRS] for k in (i, j)})
+        which = ", ".join(f"{k} {names[k - 1]}" for k in shown)
+        said = f"the meshes overlap: {overlap_text(result)}, label {which}; "
         raise IsoflowError.worded(f"voxelize: {said}overlap='later' gives a shared voxel the later mesh's label",
                                   f"{said}--overlap later gives a shared voxel the later mesh's label")
     return _with_note(result)

@@ -85,13 +85,15 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
     refuse_masked(vertices, f"{where}: vertices")  # the faces are checked by as_array
     try:
         v = np.asarray(vertices)
-        complex_ = v.dtype.kind == "c"
-        if not complex_:
-            v = v.astype(np.float64, copy=False)
     except (TypeError, ValueError) as exc:
         raise IsoflowError(f"{where}: vertices are not a numeric array ({exc})") from None
-    if complex_:  # a cast to float64 drops the imaginary part with NumPy's ComplexWarning alone
+    if v.dtype.kind not in "biufc":
+        # refused as the volume functions refuse them (isoflow.scale.arrays.binary): a cast to float64
+        # would read Python objects or strings ("1e3") as numbers, whatever they hold
+        raise IsoflowError(f"{where}: vertices: array of type {v.dtype} is not an array of coordinates")
+    if v.dtype.kind == "c":  # a cast to float64 drops the imaginary part with NumPy's ComplexWarning alone
         raise IsoflowError(f"{where}: vertices must be real coordinates, got complex numbers ({v.dtype})")
+    v = v.astype(np.float64, copy=False)
     if v.ndim != 2 or v.shape[1] != 3:
         raise IsoflowError(f"{where}: vertices must have shape (N, 3), got {v.shape}")
     f = as_array(faces, f"{where}: faces")

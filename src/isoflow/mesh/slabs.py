@@ -39,7 +39,7 @@ from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
-from .outputs import atomic_path, check_writable_dir
+from .outputs import atomic_path, check_switch, check_writable_dir
 from .store_plan import WORKERS, in_store, slab_chunks, slab_layout, store_need
 
 
@@ -47,6 +47,7 @@ def check_store_path(path, force: bool) -> Path:
     """A ``.zarr`` output checked before any work: an existing store is
     replaced only with ``force``, and only if it is a zarr store (never an
     arbitrary directory)."""
+    check_switch(force, "force", str(path))
     path = Path(path)
     if path.suffix.lower() != ".zarr":
         raise IsoflowError(f"{path}: a zarr store must end in .zarr")

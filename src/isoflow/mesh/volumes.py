@@ -34,7 +34,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
-from .outputs import atomic_path, check_output_path, refuse_directory_spelling
+from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -189,7 +189,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
             vol = binary(arr, where)
         except NotBinary as exc:
             # a label table takes 2D and 3D images: --labels is no way out in 4D
-            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4) from None
+            raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4,
+                                     ndim=arr.ndim) from None
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -229,22 +230,31 @@ def one_value_mask(arr: np.ndarray) -> np.ndarray:
 
 #: what the refusal of a label image where a mask is expected adds
 EVERY_LABEL = "or give every label its row with --labels (isoflow.label_table(isoflow.read_labels(path)))"
+#: the same for surface, whose --labels writes a surface per label, not a table
+SURFACE_PER_LABEL = "or write a closed surface per label with --labels"
 
 
-def with_label_options(exc: NotBinary, every: bool = True) -> NotBinary:
+def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = False,
+                       ndim: int | None = None) -> NotBinary:
     """The refusal of a label image where a mask is expected, with the
     options that select its labels: one (``--label N``) and, where the
     command takes it (``every``) and the image has a table (``exc.every``:
-    2D and 3D), all (``--labels``).
+    2D and 3D), all (``--labels``): its table, or with ``surfaces`` (the
+    surface command) a surface per label.  ``ndim``: the image's
+    dimension, kept for the command (else ``exc.ndim``).
 
     Examples
     --------
     >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), every=False))
     'v.npy: not a binary volume, or select one label with --label N (label=N)'
+    >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), surfaces=True))
+    'v.npy: not a binary volume, or select one label with --label N (label=N), or write a closed surface per label with --labels'
     """
+    ndim = exc.ndim if ndim is None else ndim
     every = every and exc.every
-    options = ", or select one label with --label N (label=N)" + (f", {EVERY_LABEL}" if every else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=every)
+    offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
+    options = ", or select one label with --label N (label=N)" + (f", {offer}" if every else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=every, ndim=ndim)
 
 
 def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:
@@ -530,6 +540,7 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     """The file (and dataset) a volume will be written to, checked before
     any work: a suffix isoflow writes, its library installed, the path free
     (or ``force``). Returns ``(file, dataset)``."""
+    check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
     if fmt is None and Path(file).is_dir():  # "-o out/": say it is a directory, not only which suffixes are written
@@ -590,7 +601,7 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume
             module.check(file, obj, dataset)
 
 
-def write_volume(obj: DigitalObject, path: str | os.PathLike, force: bool = False) -> Path:
+def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``:
     a dataset of an HDF5 file, new or existing, whose other datasets are
     kept), with its voxel size and origin where the format has room for
@@ -666,7 +677,7 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     return file, dataset
 
 
-def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pitch: float | np.ndarray | None = None,
+def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, force: bool = False) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
@@ -677,7 +688,7 @@ def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pi
 
     Parameters
     ----------
-    labels : ndarray
+    labels : array_like
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
         not binvox or MagicaVoxel); 0 is the background; or a bool image,
@@ -688,13 +699,13 @@ def write_labels(labels: np.ndarray | LabelImage, path: str | os.PathLike, *, pi
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
-    pitch : float or ndarray, optional
+    pitch : float or array_like, optional
         The voxel size, one value or one per axis, kept where the format
         has room for it (if None: a LabelImage's spacing, else 1).
     origin : array_like, optional
         The lower corner of voxel (0, 0, 0) in world units (if None: a
         LabelImage's origin, else zero),
-        kept where the format has room for it: not in TIFF, ``.npy`` or
+        kept where the format has room for it: not in ``.npy`` or
         MagicaVoxel, which a warning says (docs/labels.md lists what each
         format keeps).
     force : bool

@@ -51,16 +51,21 @@ def is_host(xp) -> bool:
 
 
 def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read_object") -> None:
-    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject` or a path
-    where an array is taken: NumPy would make either a 0D array, refused
-    for its shape or type rather than named (an object is known by its
-    fields: this layer cannot import the class). ``then``: what to do with
+    """Refuse a :class:`~isoflow.digital.lattice.DigitalObject`, a
+    :class:`~isoflow.digital.label_table.LabelImage` or a path where an
+    array is taken: NumPy would make each a 0D array, refused for its
+    shape or type rather than named (an object is known by its fields:
+    this layer cannot import the classes). ``then``: what to do with
     the result to place it as the object is placed; ``reader``: the
     function that reads such a file."""
     if isinstance(array, (str, os.PathLike)):
         raise IsoflowError(f"{array}: a path, not an array; read it with {reader}")
     if all(hasattr(array, name) for name in ("volume", "pitch", "origin", "parity")):
         raise IsoflowError(f"{where}: a DigitalObject, not an array; pass its .volume" + (f" ({then})" if then else ""))
+    if all(hasattr(array, name) for name in ("array", "spacing", "origin")):  # a LabelImage (read_labels)
+        raise IsoflowError(f"{where}: a LabelImage, not a binary volume; pass one label's mask, "
+                           "DigitalObject(image.array == N, pitch=image.spacing, origin=image.origin) "
+                           "(label_table reports every label)")
 
 
 def as_array(array, where: str = "volume") -> np.ndarray:
@@ -181,10 +186,13 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # the count is of voxels (not of distinct values), and of this block
         # only where the volume is checked block by block
         place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        raise NotBinary(
-            f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
-            f"e.g. {value}); threshold it first, e.g. volume > 0"
-        )
+        bare = (f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
+                f"e.g. {value}); threshold it first, e.g. volume > 0")
+        # integers in memory are most often a label image, which has a table
+        # (a command adds its own options to ``bare`` instead)
+        table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3)
+        raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
+                        bare)
     return arr.astype(bool)
 
 
@@ -225,7 +233,7 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     if example not in exc.bare:
         return exc
     named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
-    return NotBinary(str(exc.args[0]).replace(example, named, 1), exc.bare.replace(example, named, 1), exc.every)
+    return NotBinary(str(exc.args[0]).replace(example, named, 1), exc.bare.replace(example, named, 1), exc.every, exc.ndim)
 
 
 class NotBinary(IsoflowError):
@@ -233,12 +241,15 @@ class NotBinary(IsoflowError):
     label image, most often): a kind of its own, so that a command can add
     the options that select its labels, in memory or block by block, to
     ``bare`` (the message without them). ``every``: whether ``--labels``
-    can take the image (a label table is 2D or 3D), so may be offered."""
+    can take the image (a label table is 2D or 3D), so may be offered;
+    ``ndim``: the image's dimension where known (``surface --labels`` takes
+    3D images only)."""
 
-    def __init__(self, message: str, bare: str | None = None, every: bool = True):
+    def __init__(self, message: str, bare: str | None = None, every: bool = True, ndim: int | None = None):
         super().__init__(message)
         self.bare = message if bare is None else bare
         self.every = every
+        self.ndim = ndim
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):

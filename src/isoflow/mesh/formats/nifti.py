@@ -53,7 +53,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     """Refuse an array with a side of length 0; warn of a fourth axis's
     placement, which the affine has no room for (read back as voxel size 1
-    from 0): it was dropped without a word, as TIFF's origin is not."""
+    from 0), as every format says what of the placement it drops."""
     # a NIfTI dimension of 0 is written, but nibabel reads the file back as shape (0,)
     refuse_empty(path, obj.volume.shape, "NIfTI")
     if obj.ndim != 4:

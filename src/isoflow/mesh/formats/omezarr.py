@@ -32,6 +32,7 @@ import dataclasses
 import os
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from .registry import (
     check_time,
     import_library,
     no_such_label,
+    note,
     one_time_point_labels,
     placement,
     reading,
@@ -124,6 +126,101 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill)
 
 
+@dataclasses.dataclass(frozen=True)
+class StoreArray:
+    """A zarr store's volume array as :func:`open_store` opens it: the
+    array, the store as messages name it, the OME-Zarr ``multiscales`` entry
+    and level (None for a plain array), and the indices of its x, y and z
+    axes (every axis, in stored order, for a plain array) and of its other
+    axes (each of length 1).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> path = tempfile.mkdtemp() + "/v.zarr"
+    >>> z = zarr.create_array(path, shape=(2, 3, 4), dtype="u1")
+    >>> z.attrs.update(pitch=[0.5, 0.5, 2.0], origin=[0, 0, 1])
+    >>> store = open_store(path)
+    >>> store.xyz, [v.tolist() for v in store.placement()]
+    ([0, 1, 2], [[0.5, 0.5, 2.0], [0.0, 0.0, 1.0]])
+    """
+
+    array: Any
+    where: str
+    multiscale: dict | None
+    dataset: dict | None
+    xyz: list[int]
+    other: list[int]
+
+    def guarded(self) -> Guarded:
+        """The array read through :class:`Guarded` (a damaged chunk is one
+        line naming the store)."""
+        return Guarded(self.array, self.where)
+
+    def lazy(self):
+        """The array as a dask array along its chunks, read through
+        :meth:`guarded`, without its other axes (stored order)."""
+        from ...scale.chunks import import_dask
+
+        _, da = import_dask()
+        lazy = da.from_array(self.guarded(), chunks=self.array.chunks, asarray=True)
+        return lazy[tuple(0 if i in self.other else slice(None) for i in range(self.array.ndim))]
+
+    def placement(self) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """``(pitch, origin)`` in x, y, z order: the OME-Zarr level's scale
+        and translation (voxel centres, so the origin is half a voxel
+        lower), a plain array's ``pitch`` and ``origin`` attributes (as
+        isoflow writes them), else ``(None, None)``."""
+        if self.multiscale is None:
+            attrs = dict(getattr(self.array, "attrs", {}) or {})
+            if "pitch" in attrs and "origin" in attrs:
+                return np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
+            return None, None
+        scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where)
+        return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
+
+
+def open_store(path: str | os.PathLike) -> StoreArray:
+    """A zarr store's volume array with its axes matched by name, not
+    read: what the block-by-block readers share.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store; ``:LEVEL`` after it picks a resolution level of an
+        OME-Zarr image (its path or index), ``:NAME`` an array of a group.
+
+    Returns
+    -------
+    StoreArray
+        The array, its placement and its x, y, z and other axes.
+
+    Raises
+    ------
+    IsoflowError
+        Not a zarr store, no such level, or axes that
+        :func:`~isoflow.scale.chunks.spatial_axes` refuses.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> d = Path(tempfile.mkdtemp()) / "image.zarr"
+    >>> g = zarr.open_group(str(d), mode="w")
+    >>> _ = g.create_array("0", shape=(1, 4, 5, 6), chunks=(1, 2, 5, 6), dtype="u1")
+    >>> g.attrs["multiscales"] = [{"axes": ["c", "z", "y", "x"], "datasets": [{"path": "0"}]}]
+    >>> store = open_store(f"{d}:0")
+    >>> store.xyz, store.other, store.lazy().shape, store.lazy().chunks
+    ([3, 2, 1], [0], (4, 5, 6), ((2, 2), (5,), (6,)))
+    """
+    file, level = split_dataset(path)
+    where = str(path)
+    array, multiscale, dataset = open_zarr_node(file, level)
+    if multiscale is None:
+        return StoreArray(array, where, None, None, list(range(array.ndim)), [])
+    xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)
+    return StoreArray(array, where, multiscale, dataset, xyz, other)
+
+
 def stored_ndim(path) -> int:
     """The dimension of a zarr store's volume (``IMAGE.zarr:LEVEL`` too):
     its x, y and z axes in an OME-Zarr image (and a time axis of several
@@ -173,30 +270,18 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass)."""
     from ...digital.outofcore import analyze_chunked, analyze_zarr
-    from ...scale.chunks import import_dask
 
     import_library("zarr", "OME-Zarr")
     if label is None:
         return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
-    file, level = split_dataset(path)
-    where = str(path)
-    array, multiscale, _ = open_zarr_node(file, level)
-    if multiscale is None:
-        names, order, other = None, list(range(array.ndim)), []
-    else:
-        names = axis_names(multiscale, array.ndim, where)
-        order, other = spatial_axes(names, array.shape, where)
-    _, da = import_dask()
-    check_label(label, array.dtype, where)
-    # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
-    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
-    report = analyze_chunked(raw == label, connectivity, where=where, progress=progress, surfaces=surfaces,
-                             threads=threads)
+    store = open_store(path)
+    check_label(label, store.array.dtype, store.where)
+    report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
+                             surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
         raise label_absent(path, label)
-    if names is not None:  # the analysed axes are in stored order; report them as (x, y, z)
-        report = dataclasses.replace(report, shape=[int(array.shape[i]) for i in order])
+    if store.multiscale is not None:  # the analysed axes are in stored order; report them as (x, y, z)
+        report = dataclasses.replace(report, shape=[int(store.array.shape[i]) for i in store.xyz])
     return report
 
 
@@ -208,14 +293,8 @@ def label_absent(path, label) -> IsoflowError:
     from ...scale.chunks import import_dask
 
     _, da = import_dask()
-    file, level = split_dataset(path)
-    where = str(path)
-    array, multiscale, _ = open_zarr_node(file, level)
-    other = [] if multiscale is None else spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)[1]
-    # chunks read through a guard, so that a damaged one is one line
-    raw = da.from_array(Guarded(array, where), chunks=array.chunks, asarray=True)
-    raw = raw[tuple(0 if i in other else slice(None) for i in range(array.ndim))]
-    return no_such_label(label, np.unique(da.unique(raw).compute()), where)
+    store = open_store(path)
+    return no_such_label(label, np.unique(da.unique(store.lazy()).compute()), store.where)
 
 
 def store_volume(path, label=None) -> tuple:
@@ -245,25 +324,13 @@ def store_volume(path, label=None) -> tuple:
     from ...scale.chunkcache import ChunkReader
 
     import_library("zarr", "OME-Zarr")
-    file, level = split_dataset(path)
-    where = str(path)
-    array, multiscale, dataset = open_zarr_node(file, level)
-    pitch = origin = None
-    if multiscale is None:
-        order, other = list(range(array.ndim)), []
-        attrs = dict(getattr(array, "attrs", {}) or {})
-        if "pitch" in attrs and "origin" in attrs:
-            pitch, origin = np.asarray(attrs["pitch"], np.float64), np.asarray(attrs["origin"], np.float64)
-    else:
-        names = axis_names(multiscale, array.ndim, where)
-        order, other = spatial_axes(names, array.shape, where)
-        scale, shift = placement_of(multiscale, dataset, array.ndim, where)
-        pitch, origin = scale[order], shift[order] - scale[order] / 2
-    if len(order) != 3:
-        raise IsoflowError(f"{where}: surface needs a 3D volume, this store holds {len(order)}D")
+    store = open_store(path)
+    if len(store.xyz) != 3:
+        raise IsoflowError(f"{store.where}: surface needs a 3D volume, this store holds {len(store.xyz)}D")
+    pitch, origin = store.placement()
     if label is not None:
-        check_label(label, array.dtype, where)
-    return ChunkReader(Guarded(array, where), order, other, label), pitch, origin
+        check_label(label, store.array.dtype, store.where)
+    return ChunkReader(store.guarded(), store.xyz, store.other, label), pitch, origin
 
 
 class Guarded:
@@ -384,6 +451,70 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
     }]
 
 
+def fill_label(array) -> int | None:
+    """The fill value of a zarr array (what zarr reads for a chunk never
+    written) as the label it passes for.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The array whose ``fill_value`` is read (any object with one).
+
+    Returns
+    -------
+    int or None
+        The fill value as a whole number, else None (no fill value, or one
+        that is no label, such as NaN).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(4,), dtype="f4", fill_value=2.0)
+    >>> fill_label(z), fill_label(zarr.create_array({}, shape=(4,), dtype="f4", fill_value=float("nan")))
+    (2, None)
+    """
+    fill = getattr(array, "fill_value", None)
+    try:
+        value = float(fill)
+    except (TypeError, ValueError):
+        return None
+    return int(value) if np.isfinite(value) and value.is_integer() else None
+
+
+def unwritten(array) -> tuple[int, int, str]:
+    """How many of a zarr array's stored objects are not in its store
+    (never written, or left out because they held nothing but the fill
+    value): ``(missing, total, unit)``, the unit ``"chunks"``, or
+    ``"shards"`` for a sharded array (chunks left out inside a written
+    shard are not counted). The store's keys are listed, no chunk is read.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The stored array.
+
+    Returns
+    -------
+    tuple
+        ``(missing, total, unit)``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=2)
+    >>> z[:2] = 1
+    >>> unwritten(z)
+    (2, 3, 'chunks')
+    """
+    total, written = int(array.nchunks), int(array.nchunks_initialized)
+    shards = getattr(array, "shards", None)
+    if not shards:
+        return total - written, total, "chunks"
+    # zarr counts every chunk of a written shard as written
+    per = int(np.prod([s // c for s, c in zip(shards, array.chunks)]))
+    return (total - written) // per, total // per, "shards"
+
+
 class LabelSlabs:
     """A zarr store's 3D label image read in slabs along x, whatever the
     stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
@@ -430,6 +561,12 @@ class LabelSlabs:
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
         self.pitch, self.origin = pitch, origin
+        fill = fill_label(array)
+        if fill:  # (the store's keys are listed only where a missing chunk would pass for a label)
+            missing, total, unit = unwritten(array)
+            if missing:
+                note(f"{self.where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the "
+                     f"fill value {fill}, so they count as label {fill}")
 
     def __getitem__(self, x):
         index = [0] * len(self.array.shape)

@@ -17,10 +17,24 @@ volume is not said by the file.
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) where present, z from
 ImageJ's ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (its
-units as written); 1 where absent. TIFF has no origin (0 on reading; a
-warning when writing an object whose origin is not 0). Written as an ImageJ
-hyperstack of uint8 0/1 with those tags, so that Fiji opens it calibrated.
-Resolutions are rationals in TIFF: a pitch is kept to about 9 digits.
+units as written); 1 where absent.
+
+Origin: ImageJ's calibration origin, ``xorigin``, ``yorigin`` and ``zorigin``
+in its description (Fiji's Image > Properties "Origin"), in pixels of the
+columns, rows and slices, that is of isoflow's x, y and z. ImageJ places
+pixel coordinate ``p`` at ``(p - xorigin) * pixelWidth`` (its
+``Calibration.getX``) and its Image > Adjust > Coordinates gives an image's
+left edge as coordinate 0 and its right edge as its width: integer pixel
+coordinates are pixel corners, so voxel 0's lowest corner is at
+``-xorigin * pitch``, isoflow's origin, and an origin is written as
+``xorigin = -origin / pitch`` (a key for each axis whose origin is not 0, as
+ImageJ writes them). 0 where absent; a time axis's origin is 0. ImageJ's
+``inverty`` (y upward from the bottom row) is not applied: y runs down the
+rows, with a warning, and the y origin is then read as 0.
+
+Written as an ImageJ hyperstack of uint8 0/1 with those tags, so that Fiji
+opens it calibrated and placed. Resolutions are rationals in TIFF: a pitch
+is kept to about 9 digits, and so an origin read back through it.
 """
 
 from __future__ import annotations
@@ -66,7 +80,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         page = series.keyframe
         res = [page.tags[t].value for t in (X_RESOLUTION, Y_RESOLUTION) if t in page.tags]
         resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
-        spacing = (tif.imagej_metadata or {}).get("spacing")
+        imagej = tif.imagej_metadata or {}
+        spacing = imagej.get("spacing")
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
@@ -86,11 +101,27 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     vol = to_xyz(data, names, where)
     pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
     if vol.ndim >= 3:
-        pitch.append(_spacing(spacing, where))
+        pitch.append(_spacing(imagej, where))
+    # ImageJ's origin counts its own pixels, so it scales by its own calibration, not by an OME size
+    origin = _imagej_origin(imagej, pitch, where)
     if vol.ndim == 4:  # time keeps step 1, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch.append(1.0)
+        origin.append(0.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
-    return RawVolume(vol, np.array(pitch))
+    return RawVolume(vol, np.array(pitch), np.array(origin))
+
+
+def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
+    """The world position of voxel 0's lowest corner per spatial axis from
+    ImageJ's ``xorigin``, ``yorigin`` and ``zorigin`` (pixels; 0 where
+    absent): ImageJ's pixel coordinate 0 is that corner, at ``-origin *
+    pitch``. ImageJ's ``inverty`` runs y up from the bottom row, which a
+    positive step down the rows cannot say: y is then read from 0."""
+    origin = [-_imagej_number(imagej, f"{axis}origin", where, 0.0) * p for axis, p in zip("xyz", pitch)]
+    if str(imagej.get("inverty", "")).lower() == "true":
+        note(f"{where}: ImageJ's inverted y (inverty) is not applied: y runs down the rows, from 0")
+        origin[1] = 0.0
+    return [o + 0.0 for o in origin]  # no -0.0 from an origin of 0
 
 
 #: the tags whose values shape the pixels or hold what isoflow reads (the
@@ -162,37 +193,47 @@ def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
     return [axes[i] for i in keep], [shape[i] for i in keep]
 
 
-def _spacing(value, where: str) -> float:
+def _spacing(imagej: dict, where: str) -> float:
     """The z voxel size from ImageJ's ``spacing`` (1 where absent); a
     negative one (ImageJ keeps the sign of a stack whose slices run
     backwards) is its size, as NRRD's spacings are."""
-    if value is None or value == "":
-        return 1.0
-    try:
-        size = abs(float(value))
-    except (TypeError, ValueError):
-        raise IsoflowError(f"{where}: ImageJ's spacing {value!r} is not a number") from None
-    if not (np.isfinite(size) and size > 0):
-        raise IsoflowError(f"{where}: ImageJ's spacing {value!r} is not a positive voxel size")
+    size = abs(_imagej_number(imagej, "spacing", where, 1.0))
+    if size == 0:
+        raise IsoflowError(f"{where}: ImageJ's spacing {imagej['spacing']!r} is not a positive voxel size")
     return size
+
+
+def _imagej_number(imagej: dict, key: str, where: str, default: float) -> float:
+    """ImageJ's number ``key`` (its z ``spacing``, an ``xorigin``), ``default``
+    where absent."""
+    value = imagej.get(key)
+    if value is None or value == "":
+        return default
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise IsoflowError(f"{where}: ImageJ's {key} {value!r} is not a number") from None
+    if not np.isfinite(number):
+        raise IsoflowError(f"{where}: ImageJ's {key} {value!r} is not a finite number")
+    return number
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
-    origin = placement(obj)[1]
-    if origin.any():
-        note(f"{path}: TIFF keeps no origin; the origin {np.round(origin, 9).tolist()} is not written")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
-    spacing = placement(obj)[0]
+    spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
-    metadata = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
+    metadata: dict[str, str | float] = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
     if obj.ndim == 3:
         metadata["spacing"] = float(spacing[2])
+    for axis, c, p in zip("xyz", corner, spacing):
+        if c != 0:  # ImageJ writes an origin of 0 as no key
+            metadata[f"{axis}origin"] = float(-c / p)
     z, y, x = data.shape if obj.ndim == 3 else (1, *data.shape)
     tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=(1 / spacing[0], 1 / spacing[1]),
                      metadata=metadata)

@@ -1,0 +1,159 @@
+"""``isoflow.write_surface``: the Python call that writes the file ``isoflow
+surface`` writes, read back by trimesh and pymeshlab and held to the
+counts of ``analyze`` (docs/formats.md, "Surface files")."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import warnings
+
+import numpy as np
+import pymeshlab
+import pytest
+import trimesh
+
+import isoflow
+from isoflow import IsoflowError, IsoflowWarning
+from isoflow.cli import main
+
+RING = [(0, 0, 0), (0, 1, 0), (0, 1, 1), (0, 1, 2), (1, 0, 0), (1, 0, 1), (1, 0, 2), (1, 1, 2)]
+PITCH, ORIGIN = 0.5, (1.0, -2.0, 3.25)
+
+# (suffix, ascii, triangulate): every file the command writes
+FILES = [(".ply", False, False), (".ply", True, False), (".obj", False, False), (".stl", False, False),
+         (".glb", False, False), (".ply", False, True), (".obj", False, True)]
+
+
+def object_with_contacts() -> isoflow.DigitalObject:
+    """The ring of eight voxels (doubled edges at 6: pentagons) and two
+    voxels meeting at a vertex (a split vertex at 6), placed off the
+    origin with voxels of 0.5."""
+    v = np.zeros((6, 4, 5), bool)
+    v[tuple((np.array(RING) + 1).T)] = True
+    v[4, 1, 1] = v[5, 2, 2] = True
+    return isoflow.DigitalObject(v, pitch=PITCH, origin=ORIGIN)
+
+
+def command(tmp_path, obj, out, *options) -> None:
+    src = isoflow.write_volume(obj, tmp_path / "in.npz", force=True)
+    o, e = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(o), contextlib.redirect_stderr(e):
+        rc = main(["surface", str(src), "-o", str(out), "--connectivity", "6", *options])
+    assert rc == 0, e.getvalue()
+
+
+def without_comments(data: bytes) -> bytes:
+    """A file's bytes less its first comment line (which names the input or
+    the call); everything else is the same file."""
+    lines = data.split(b"\n")
+    first = next(i for i, line in enumerate(lines) if line.startswith((b"comment ", b"# ")))
+    return b"\n".join(lines[:first] + lines[first + 1:])
+
+
+@pytest.mark.parametrize("suffix,ascii,triangulate", FILES)
+def test_the_file_is_the_one_the_command_writes(tmp_path, suffix, ascii, triangulate):
+    obj = object_with_contacts()
+    report = isoflow.analyze(obj, 6)
+    mesh = isoflow.boundary_mesh(obj.volume, 6)
+    assert mesh.midpoints and (mesh.sheet > 0).any()  # doubled edges and split copies at contacts
+    by_command = tmp_path / f"command{suffix}"
+    command(tmp_path, obj, by_command, *(["--ascii"] if ascii else []), *(["--triangulate"] if triangulate else []))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IsoflowWarning)  # the STL's weld, said in test_stl_says_what_readers_do
+        path = isoflow.write_surface(obj, tmp_path / f"call{suffix}", ascii=ascii, triangulate=triangulate)
+    assert path == tmp_path / f"call{suffix}"
+    if suffix == ".glb":  # the comment is in the JSON chunk, whose length it changes
+        a, b = (trimesh.load(p, force="mesh", process=False) for p in (by_command, path))
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+        assert all(np.array_equal(a.vertex_attributes[k], b.vertex_attributes[k]) for k in ("_gamma", "_a", "_config"))
+    elif suffix == ".stl":
+        assert path.read_bytes() == by_command.read_bytes()
+    else:
+        assert without_comments(path.read_bytes()) == without_comments(by_command.read_bytes())
+    if suffix == ".stl":  # readers weld the split copies: only the volume is the object's
+        assert trimesh.load(path).volume == pytest.approx(obj.voxels * PITCH**3)
+        return
+    # read back by both readers: closed, the Euler number of analyze's surfaces, in world units
+    euler = sum(s["euler_characteristic"] for s in report["surfaces"])
+    tm = trimesh.load(path, force="mesh", process=False)
+    assert tm.is_watertight and tm.is_winding_consistent
+    assert tm.euler_number == euler == 4  # the ring's torus (0) and the two cubes' spheres (2 + 2)
+    assert tm.volume == pytest.approx(obj.voxels * PITCH**3)
+    assert tm.bounds[0].tolist() == [ORIGIN[0] + PITCH, ORIGIN[1] + PITCH, ORIGIN[2] + PITCH]
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    t = ms.get_topological_measures()
+    assert t["boundary_edges"] == 0 and t["is_mesh_two_manifold"]
+    assert t["vertices_number"] - t["edges_number"] + t["faces_number"] == euler
+    if suffix == ".ply":
+        a = tm.metadata["_ply_raw"]["vertex"]["data"]["a"]
+        assert int(a.sum()) == 8 * report["euler_characteristic"] == 16  # chi: torus 0, cubes 1 + 1
+    if ascii:  # quads, and pentagons through the midpoints: a face per boundary square
+        faces = tm.metadata["_ply_raw"]["face"]["data"]["vertex_indices"]
+        assert len(faces) == sum(s["faces"] for s in report["surfaces"]) == 32 + 12
+
+
+def test_a_bare_array_and_a_mesh_given_write_the_same_file(tmp_path):
+    v = object_with_contacts().volume
+    first = isoflow.write_surface(v, tmp_path / "a.ply", 26)
+    mesh = isoflow.boundary_mesh(v, 26)
+    second = isoflow.write_surface(v, tmp_path / "b.ply", mesh=mesh)
+    assert first.read_bytes() == second.read_bytes()
+    tm = trimesh.load(first, process=False)
+    assert tm.bounds[0].tolist() == [1.0, 1.0, 1.0]  # a bare array: voxels of 1 at the origin
+    assert tm.euler_number == sum(s["euler_characteristic"] for s in isoflow.analyze(v, 26)["surfaces"])
+
+
+def test_an_existing_file_is_refused_without_force(tmp_path):
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool))
+    out = tmp_path / "s.obj"
+    out.write_text("taken")
+    with pytest.raises(IsoflowError, match=r"s\.obj: exists; pass force=True to overwrite$"):
+        isoflow.write_surface(obj, out)
+    assert out.read_text() == "taken"
+    isoflow.write_surface(obj, out, force=True)
+    assert len(trimesh.load(out, process=False).vertices) == 26
+
+
+@pytest.mark.parametrize("call,words", [
+    (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.obj", ascii=True),
+     "s.obj: ascii=True applies to .ply output only"),
+    (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.txt"), "s.txt: surface must end in .ply"),
+    (lambda p: isoflow.write_surface(np.ones((2, 2), bool), p / "s.ply"),
+     "s.ply: a surface is written of a 3D object, this one is 2D"),
+    (lambda p: isoflow.write_surface(np.zeros((2, 2, 2), bool), p / "s.ply"), "s.ply: the object is empty"),
+    (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", 8), "connectivity"),
+    (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", 26,
+                                     mesh=isoflow.boundary_mesh(np.ones((2, 2, 2), bool), 6)),
+     "s.ply: the mesh is 6-connected, connectivity=26 was asked"),
+    (lambda p: isoflow.write_surface(np.ones((1, 1, 1), bool), p / "s.ply",
+                                     mesh=isoflow.boundary_mesh(np.ones((2, 2, 2), bool))),
+     "s.ply: the mesh reaches [2.0, 2.0, 2.0], outside the object's array of shape [1, 1, 1]"),
+    (lambda p: isoflow.write_surface(np.ones((1, 1, 1), bool), p / "s.ply", mesh=np.zeros((3, 3))),  # type: ignore[arg-type]
+     "s.ply: mesh= takes the QuadMesh of boundary_mesh(obj.volume), got ndarray"),
+])
+def test_bad_input_is_one_line_and_nothing_is_written(tmp_path, call, words):
+    with pytest.raises(IsoflowError) as e:
+        call(tmp_path)
+    assert words in str(e.value) and "\n" not in str(e.value)
+    assert not any(tmp_path.iterdir())
+
+
+def test_stl_says_what_readers_do(tmp_path):
+    # split copies at contacts: welded by every STL reader, said as a warning
+    with pytest.warns(IsoflowWarning, match=r"s\.stl: STL keeps no shared vertices, so readers weld the split "
+                      r"copies at \d+ edge/vertex contacts"):
+        isoflow.write_surface(object_with_contacts(), tmp_path / "s.stl")
+    # float32 moves corners 1e5 + 0.3 away by about 0.004: said with the numbers
+    far = isoflow.DigitalObject(np.ones((2, 2, 2), bool), origin=(1e5 + 0.3, 0.0, 0.0))
+    with pytest.warns(IsoflowWarning, match=r"far\.stl: STL stores float32 positions, which move the corners by up "
+                      r"to 0\.00\d+"):
+        isoflow.write_surface(far, tmp_path / "far.stl")
+    x = trimesh.load(tmp_path / "far.stl").vertices[:, 0]
+    assert np.abs(np.unique(x) - (1e5 + 0.3 + np.arange(3))).max() < 0.004
+    # float32 would merge corners: refused, nothing written
+    merged = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.1, origin=(4e6, 0.0, 0.0))
+    with pytest.raises(IsoflowError, match=r"merged\.stl: binary STL holds float32 positions, which would merge"):
+        isoflow.write_surface(merged, tmp_path / "merged.stl")
+    assert not (tmp_path / "merged.stl").exists()
