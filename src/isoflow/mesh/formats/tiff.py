@@ -194,11 +194,11 @@ def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
 
 
 def _spacing(imagej: dict, where: str) -> float:
-    """The z voxel size from ImageJ's ``spacing`` (1 where absent); a
-    negative one (ImageJ keeps the sign of a stack whose slices run
-    backwards) is its size, as NRRD's spacings are."""
-    size = abs(_imagej_number(imagej, "spacing", where, 1.0))
-    if size == 0:
+    """The z voxel size from ImageJ's ``spacing`` (1 where absent), or one
+    line naming that field where it is no positive size (a negative one,
+    slices running backwards, would need the stack turned to be placed)."""
+    size = _imagej_number(imagej, "spacing", where, 1.0)
+    if size <= 0:
         raise IsoflowError(f"{where}: ImageJ's spacing {imagej['spacing']!r} is not a positive voxel size")
     return size
 
