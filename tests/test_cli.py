@@ -175,7 +175,7 @@ def _bad(tmp_path):
     np.save(tmp_path / "ok.npy", np.ones((2, 2, 2), bool))
     return [
         (["info", tmp_path / "missing.npy"], "no such file"),
-        (["info", tmp_path / "garbage.npy"], "not a readable numpy file"),
+        (["info", tmp_path / "garbage.npy"], "not a numpy file: it starts with b'not nump'"),
         (["info", tmp_path / "nonbinary.npy"], "not a binary volume"),
         (["info", tmp_path / "line.npy"], "1D"),
         (["info", tmp_path / "frac.txt"], "0.5 is not an integer"),
@@ -520,6 +520,58 @@ def test_a_slice_saved_as_3d_gets_a_note_with_the_line_that_saves_it_2d(tmp_path
     for quiet in (["info", slice_path, "--quiet"], ["flow", slice_path, "--quiet"], ["info", str(tmp_path / "thick.npy")]):
         assert main(quiet) == 0
         assert capsys.readouterr().err == "", quiet
+
+
+def test_a_4d_volume_one_voxel_thick_says_how_to_read_it_as_3d(tmp_path, capsys):
+    """A 3D mask saved with a channel axis (ilastik's HDF5 (z, y, x, 1)) is
+    read as stored, 4D, where b1, b2 and the surfaces are not counted; the
+    note gives the line that saves the 3D volume, whose numbers are the
+    mask's (scikit-image)."""
+    import shlex
+
+    h5py = pytest.importorskip("h5py")
+    measure = pytest.importorskip("skimage.measure")
+    vol = np.zeros((7, 6, 5), np.uint8)
+    vol[1:6, 1:5, 1:4] = 1
+    vol[3, 2:4, 1:4] = 0  # a tunnel through the block
+    vol[2:5, 2:4, 2] = 0
+    with h5py.File(tmp_path / "seg.h5", "w") as f:
+        f["exported_data"] = vol[..., None]
+    seg = str(tmp_path / "seg.h5")
+    assert main(["info", seg, "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["dimension"] == 4
+    [note] = err.splitlines()
+    assert note.startswith(f"isoflow info: note: {seg}: shape 7x6x5x1, one voxel along axis 3: read as a 4D volume")
+    code = shlex.split(note.split("give it: ", 1)[1])
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    r = info_json(capsys, tmp_path / "volume_3d.npz")
+    chi = measure.euler_number(np.pad(vol, 1), connectivity=1)
+    cavities = measure.label(np.pad(vol == 0, 1, constant_values=True), connectivity=3).max() - 1
+    assert r["shape"] == [7, 6, 5] and r["euler_characteristic"] == chi
+    assert r["betti"] == [1, 1 + cavities - chi, cavities]
+    assert main(["info", seg, "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["flow", seg]) == 2  # refused in one line, with no note before it
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("command", ["info", "flow"])
+@pytest.mark.parametrize("shape, connectivity, words", [
+    ((4, 5, 6), 8, "connectivity 8 is not valid in 3D (use 6 or 26)"),
+    ((4, 5), 26, "connectivity 26 is not valid in 2D (use 4 or 8)"),
+    ((3, 4, 5, 2), 6, "connectivity 6 is not valid in 4D (use 8 or 80)"),
+])
+def test_a_connectivity_that_does_not_fit_the_file_names_the_file(tmp_path, capsys, command, shape, connectivity, words):
+    """The dimension is the file's: the line names the file, as info
+    --labels's does (flow refuses a 4D file for its dimension first)."""
+    np.save(tmp_path / "v.npy", np.ones(shape, bool))
+    assert main([command, str(tmp_path / "v.npy"), "--connectivity", str(connectivity)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    expected = "is 4D" if command == "flow" and len(shape) == 4 else words
+    assert lines[0].startswith(f"isoflow {command}: error: {tmp_path / 'v.npy'}: ") and expected in lines[0], lines
 
 
 def test_flow_refuses_a_3d_connectivity_for_a_2d_object(tmp_path, capsys):

@@ -193,6 +193,48 @@ def test_corrupt_files_give_one_line(tmp_path, capsys, command):
     assert not (tmp_path / "s.ply").exists()
 
 
+@pytest.mark.parametrize("name", ["e.nrrd", "e.tif", "e.nii.gz", "e.nii", "e.h5", "e.png"])
+def test_an_empty_file_is_said_to_be_empty(tmp_path, capsys, name):
+    """A file of 0 bytes (a download or copy that failed): pynrrd said
+    "StopIteration", the others each their own words for no header."""
+    (tmp_path / name).write_bytes(b"")
+    fails(capsys, "info", tmp_path / name, words=(f"{name}: an empty file (0 bytes), not a readable ",))
+
+
+@pytest.mark.parametrize("written, named, words", [
+    ("v.nii.gz", "v.nii", "its content is gzip-compressed NIfTI: rename it v.nii.gz"),
+    ("v.nii", "v.nii.gz", "its content is uncompressed NIfTI: rename it v.nii"),
+    ("v.tif", "v.nii.gz", "its content is TIFF, not NIfTI: rename it v.tif"),
+    ("v.nii", "v.tif", "its content is NIfTI, not TIFF: rename it v.nii"),
+    ("v.h5", "v.nrrd", "its content is HDF5, not NRRD: rename it v.h5"),
+    ("v.nii.gz", "v.npy", "its content is NIfTI, not NumPy: rename it v.nii.gz"),
+    ("v.npy", "v.h5", "its content is NumPy, not HDF5: rename it v.npy"),
+])
+def test_a_volume_saved_under_another_suffix_is_named_by_its_content(tmp_path, capsys, written, named, words):
+    """The reader goes by the suffix (nibabel too: "Cannot work out file
+    type" of a gzip-compressed .nii); the line says what the content is
+    and what to call the file, as for a mesh."""
+    vol = np.zeros((4, 5, 6), bool)
+    vol[1:3, 1:4, 1:5] = True
+    isoflow.write_volume(isoflow.DigitalObject(vol), tmp_path / written)
+    (tmp_path / written).rename(tmp_path / "renamed")
+    (tmp_path / "renamed").rename(tmp_path / named)
+    fails(capsys, "info", tmp_path / named, words=(f"{named}: not a ", words))
+    (tmp_path / named).rename(tmp_path / words.rsplit(" ", 1)[1])  # as the line says: the file reads
+    assert info(capsys, tmp_path / words.rsplit(" ", 1)[1])["voxels"] == vol.sum()
+
+
+def test_a_zip_archive_of_other_files_is_not_called_an_npz(tmp_path, capsys):
+    """An .npz is a zip of .npy files; another zip under a volume suffix
+    gets the reader's line alone, no "rename it x.npz"."""
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "x.tif", "w") as z:
+        z.writestr("notes.txt", "not a volume")
+    line = fails(capsys, "info", tmp_path / "x.tif", words=("x.tif: not a readable TIFF file",))
+    assert "its content is" not in line, line
+
+
 def test_wrong_dataset_or_level(tmp_path, capsys, labels):
     pytest.importorskip("h5py")
     isoflow.write_volume(isoflow.DigitalObject(labels == 3), f"{tmp_path / 'v.h5'}:/a/b")
@@ -406,10 +448,81 @@ def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "two.tif", words=("two.tif", "2 image series", "3x4x5", "6x7"))
 
 
+@pytest.mark.parametrize("how", ["imagej", "ome", "pages"])
+def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, capsys, rng, how):
+    """A stack cut short where tifffile reads on: ImageJ's stack as its
+    first page alone (2D), an OME-TIFF without its OME-XML (no voxel size),
+    a file written page by page (Pillow) as the pages before the cut."""
+    from PIL import Image
+
+    stack = (rng.random((20, 30, 40)) < 0.5).astype(np.uint8) * 255  # (z, y, x)
+    whole = tmp_path / f"whole_{how}.tif"
+    if how == "imagej":
+        tifffile.imwrite(whole, stack, imagej=True, metadata={"axes": "ZYX", "spacing": 2.0})
+    elif how == "ome":
+        tifffile.imwrite(whole, stack, ome=True, metadata={"axes": "ZYX", "PhysicalSizeX": 0.5})
+    else:
+        pages = [Image.fromarray(page) for page in stack]
+        pages[0].save(whole, save_all=True, append_images=pages[1:])
+    report = info(capsys, whole)
+    assert report["shape"] == [40, 30, 20] and report["voxels"] == np.count_nonzero(stack)
+    cut = tmp_path / f"cut_{how}.tif"
+    cut.write_bytes(whole.read_bytes()[: whole.stat().st_size * 3 // 10])
+    fails(capsys, "info", cut, words=(f"cut_{how}.tif: not a readable TIFF file (cut short or damaged: ",))
+
+
+def test_a_tiff_whose_private_tag_points_past_its_end_still_reads(tmp_path, capsys, rng):
+    """tifffile logs the tag it cannot read as an error, as it does a page
+    cut off; a vendor's private tag is no part of the volume, so the file
+    is read, not refused as damaged."""
+    import struct
+
+    stack = (rng.random((3, 20, 30)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "ok.tif", stack, photometric="minisblack", extratags=[(65000, "s", 0, "x" * 100, True)])
+    with tifffile.TiffFile(tmp_path / "ok.tif") as tif:
+        entry = tif.pages[0].tags[65000].offset
+    raw = bytearray((tmp_path / "ok.tif").read_bytes())
+    struct.pack_into("<I", raw, entry + 8, 10**8)  # the tag's value offset, far past the end
+    (tmp_path / "tag.tif").write_bytes(bytes(raw))
+    report = info(capsys, tmp_path / "tag.tif")
+    assert report["shape"] == [30, 20, 3] and report["voxels"] == np.count_nonzero(stack)
+
+
+def test_a_tiff_written_a_page_at_a_time_says_how_to_save_its_pages_as_one_stack(tmp_path, capsys, rng):
+    """tifffile's TiffWriter.write per slice makes one series per page,
+    refused as several series ("save the stack on its own", which it is);
+    the line gives the command that saves the pages as one stack, whose
+    numbers are the slices' (scikit-image)."""
+    import shlex
+
+    measure = pytest.importorskip("skimage.measure")
+    stack = rng.random((6, 7, 9)) < 0.4  # (z, y, x)
+    with tifffile.TiffWriter(tmp_path / "pages.tif") as tif:
+        for page in stack:
+            tif.write(page.astype(np.uint8) * 255)
+    line = fails(capsys, "info", tmp_path / "pages.tif", words=("pages.tif: holds 6 image series", "a page at a time"))
+    code = shlex.split(line.split("give that: ", 1)[1])
+    p = subprocess.run([sys.executable, *code[1:]], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    report = info(capsys, tmp_path / "pages_stack.tif")
+    vol = np.pad(stack.T, 1)  # isoflow's (x, y, z)
+    assert report["shape"] == [9, 7, 6] and report["euler_characteristic"] == measure.euler_number(vol, connectivity=1)
+    assert report["betti"][0] == measure.label(vol, connectivity=1).max()
+
+
 def test_tiff_spacing_that_is_not_a_number(tmp_path, capsys, labels):
     description = "ImageJ=1.54f\nimages=5\nslices=5\nspacing=abc\n"
     tifffile.imwrite(tmp_path / "s.tif", (labels[:5] == 3).astype(np.uint8), description=description, metadata=None)
     fails(capsys, "info", tmp_path / "s.tif", words=("s.tif", "spacing 'abc' is not a number"))
+
+
+@pytest.mark.parametrize("spacing", [0.0, -2.5])
+def test_tiff_spacing_that_is_no_voxel_size_is_named(tmp_path, capsys, labels, spacing):
+    """The line names ImageJ's field, not isoflow's word for it ("'pitch'
+    must be positive")."""
+    stack = (labels[:5] == 3).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "s.tif", stack, imagej=True, metadata={"axes": "ZYX", "spacing": spacing})
+    fails(capsys, "info", tmp_path / "s.tif", words=(f"s.tif: ImageJ's spacing {spacing!r} is not a positive voxel size",))
 
 
 def test_nibabel_says_nothing_beside_the_error_line(tmp_path):
@@ -444,6 +557,24 @@ def test_nrrd_fields_that_do_not_fit_the_array(tmp_path, capsys, fields, words):
     pytest.importorskip("nrrd")
     path = nrrd_file(tmp_path / "v.nrrd", fields, np.ones((5, 4, 3), np.uint8))
     fails(capsys, "info", path, words=("v.nrrd", *words))
+
+
+def test_an_nrrd_component_axis_is_told_by_its_kind_without_a_space(tmp_path, capsys, rng):
+    """Without space directions, "kinds" is what says an axis holds
+    components (pynrrd writes no space unless asked): a colour or vector
+    axis was read as a fourth lattice axis, a 4D volume of its channels."""
+    nrrd = pytest.importorskip("nrrd")
+    vol = rng.random((6, 5, 4)) < 0.5
+    domain = ["domain"] * 3
+    nrrd.write(str(tmp_path / "rgb.nrrd"), np.stack([vol] * 3).astype(np.uint8), {"kinds": ["RGB-color", *domain]})
+    fails(capsys, "info", tmp_path / "rgb.nrrd", words=("rgb.nrrd: axis 0 is of NRRD kind 'RGB-color' with 3 entries",))
+    nrrd.write(str(tmp_path / "one.nrrd"), vol[None].astype(np.uint8), {"kinds": ["vector", *domain]})
+    report = info(capsys, tmp_path / "one.nrrd")
+    assert report["shape"] == [6, 5, 4] and report["voxels"] == np.count_nonzero(vol)
+    measure = pytest.importorskip("skimage.measure")
+    assert report["euler_characteristic"] == measure.euler_number(np.pad(vol, 1), connectivity=1)
+    nrrd.write(str(tmp_path / "t.nrrd"), np.stack([vol, vol], -1).astype(np.uint8), {"kinds": [*domain, "time"]})
+    assert info(capsys, tmp_path / "t.nrrd")["shape"] == [6, 5, 4, 2]  # a time axis stays the fourth
 
 
 def test_nrrd_spacings_and_origin_that_are_not_numbers(tmp_path, capsys, recwarn):

@@ -81,6 +81,26 @@ def test_volume_type_comes_from_the_content_not_the_suffix(tmp_path, capsys):
         assert f'"voxels": {voxels}' in capsys.readouterr().out
 
 
+@pytest.mark.parametrize("name", ["v.npy", "v.npz"])
+@pytest.mark.parametrize("content, words", [
+    (b"\x00garbage" * 50, "not a numpy file: it starts with b'\\x00garbage', not .npy's b'\\x93NUMPY'"),
+    (b"", "not a numpy file: it is empty"),
+], ids=["garbage", "empty"])
+def test_a_file_that_is_no_numpy_file_says_what_it_starts_with(tmp_path, capsys, name, content, words):
+    """np.load takes such a file for a pickle ("load it unsafely"), though
+    it starts with neither NumPy's magic nor a pickle's b'\\x80'."""
+    (tmp_path / name).write_bytes(content)
+    line = fails(capsys, "info", tmp_path / name, words=(f"{name}: {words}",))
+    assert "pickle" not in line and "unsafely" not in line
+
+
+def test_a_pickle_named_npy_keeps_numpys_word_on_pickles(tmp_path, capsys):
+    import pickle
+
+    (tmp_path / "p.npy").write_bytes(pickle.dumps(np.ones(3)))
+    fails(capsys, "info", tmp_path / "p.npy", words=("p.npy: not a readable numpy file", "pickled"))
+
+
 # ------------------------------------------------------------- point lists
 
 @pytest.mark.parametrize("big", ["1e300", "1e999", "-1e999", "9223372036854775807", "-9223372036854775808"])
@@ -365,6 +385,33 @@ def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
     path = tmp_path / "data.bin"
     path.write_bytes(b"0 0 0\n\0\0\0\0\n1 1 1\n" + bytes(range(256)) * 100)
     fails(capsys, "info", path, words=("data.bin", "binary data"))
+
+
+def test_a_binary_volume_of_a_format_isoflow_does_not_read_lists_the_volume_suffixes(tmp_path, capsys):
+    """A MetaImage (ITK's .mha) falls to the point-list reader; the line
+    listed .npy/.npz alone as volumes, not the formats docs/formats.md reads."""
+    path = tmp_path / "scan.mha"
+    path.write_bytes(b"ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_UCHAR\n"
+                     b"ElementDataFile = LOCAL\n" + bytes(64))
+    line = fails(capsys, "info", path, words=("scan.mha: binary data, not a text point list",))
+    for suffix in (".npy", ".tif", ".nii.gz", ".nrrd", ".h5", ".zarr", ".png"):
+        assert suffix in line, (suffix, line)
+
+
+@pytest.mark.parametrize("written, named, renamed", [
+    ("v.nii.gz", "scan", "scan.nii.gz"), ("v.nii", "scan.img", "scan.nii"), ("v.tif", "stack.bin", "stack.tif"),
+])
+def test_a_volume_without_a_volume_suffix_is_named_by_its_content(tmp_path, capsys, written, named, renamed):
+    """It falls to the point-list reader ("binary data"); the line says
+    what the content is and the name that reads it."""
+    vol = np.zeros((3, 4, 5), bool)
+    vol[1:, 1:3, 2:] = True
+    write_volume(DigitalObject(vol), tmp_path / written)
+    (tmp_path / written).rename(tmp_path / named)
+    line = fails(capsys, "info", tmp_path / named, words=(f"{named}: its content is ",))
+    assert line.endswith(f"rename it {renamed}"), line
+    (tmp_path / named).rename(tmp_path / renamed)
+    assert read_volume(tmp_path / renamed).voxels == vol.sum()
 
 
 def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):

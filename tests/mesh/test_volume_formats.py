@@ -287,6 +287,22 @@ def test_nifti_from_nibabel_with_flips_and_a_permutation(tmp_path, rng):
     assert sorted(map(tuple, np.round(mine, 9))) == sorted(map(tuple, np.round(theirs, 9)))
 
 
+@pytest.mark.parametrize("srow_x", [(float("nan"), 0, 0, 0), (1, 0, 0, float("inf"))])
+def test_a_nifti_affine_that_is_not_finite_says_so(tmp_path, srow_x):
+    """A NaN voxel step or an infinite translation in the sform was said
+    not to "fit a 3D array", which it does."""
+    import struct
+
+    nib = pytest.importorskip("nibabel")
+    nib.save(nib.Nifti1Image(np.ones((3, 4, 5), np.uint8), np.eye(4)), tmp_path / "a.nii")
+    raw = bytearray((tmp_path / "a.nii").read_bytes())
+    struct.pack_into("<4f", raw, 280, *srow_x)  # srow_x: the sform's first row
+    (tmp_path / "a.nii").write_bytes(bytes(raw))
+    assert not np.isfinite(nib.load(tmp_path / "a.nii").affine).all()
+    with pytest.raises(IsoflowError, match=r"a\.nii: the voxel-to-world map .* holds values that are not finite numbers$"):
+        isoflow.read_volume(tmp_path / "a.nii")
+
+
 def test_oblique_nifti_keeps_the_voxel_sizes_and_warns(tmp_path):
     nib = pytest.importorskip("nibabel")
     c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
@@ -429,6 +445,20 @@ def test_hdf5_from_h5py_with_element_size(tmp_path, vol):
     np.testing.assert_allclose(obj.pitch, [1.0, 0.5, 0.5])
     with pytest.raises(IsoflowError, match="holds datasets /raw, /seg/mask; name one"):
         isoflow.read_volume(tmp_path / "d.h5")
+
+
+@pytest.mark.parametrize("size", [[1.0, 0.5], [0.0, 1.0, 1.0], [b"x", b"y", b"z"]])
+def test_hdf5_element_size_that_is_no_voxel_size_is_named(tmp_path, vol, size):
+    """The refusal names the file's attribute and value, not isoflow's
+    word for it ("'pitch' must be 3 numbers")."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(tmp_path / "e.h5", "w") as f:
+        f.create_dataset("mask", data=vol.astype(np.uint8)).attrs["element_size_um"] = size
+    with pytest.raises(IsoflowError, match=r"e\.h5:mask: attribute 'element_size_um' .* is not 3 positive voxel sizes"):
+        isoflow.read_volume(f"{tmp_path / 'e.h5'}:mask")
+    with h5py.File(tmp_path / "one.h5", "w") as f:  # one number: the same size along every axis, as before
+        f.create_dataset("mask", data=vol.astype(np.uint8)).attrs["element_size_um"] = 0.25
+    assert isoflow.read_volume(tmp_path / "one.h5").pitch == 0.25
 
 
 def test_vox_from_py_vox_io_colours_are_paint(tmp_path):

@@ -7,11 +7,11 @@ import json
 import sys
 from pathlib import Path
 
-from ..digital.connectivity import check_connectivity
 from ..errors import IsoflowError
 from .inputs import (
     add_connectivity,
     add_input_arguments,
+    check_input_connectivity,
     label_options,
     load_input,
     one_time_point,
@@ -175,7 +175,7 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     if obj is not None and args.connectivity is not None:
         # run_flow reads 6 and 26 as 4 and 8 in 2D (its default, 6, names the 3D
         # adjacency); one asked for here must fit the object, as for info
-        check_connectivity(obj.ndim, args.connectivity)
+        check_input_connectivity(args, obj.ndim)
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))

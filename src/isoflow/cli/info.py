@@ -14,6 +14,7 @@ from ..errors import IsoflowError, betti_words, coordinates
 from .inputs import (
     add_connectivity,
     add_input_arguments,
+    check_input_connectivity,
     label_options,
     load_input,
     mesh_fill,
@@ -80,7 +81,9 @@ def info_of_store(args: argparse.Namespace) -> Report:
     refuse_points_option(args, "volume")
     if args.gpu:
         raise IsoflowError(f"{args.input}: --gpu takes volumes that fit in memory; .zarr is read block by block on the host")
-    say_plate(args, stored_shape(args.input))
+    shape = stored_shape(args.input)
+    check_input_connectivity(args, len(shape))
+    say_plate(args, shape)
     with progress_bar(args, "blocks") as show, label_options(args):
         return analyze_store(args.input, args.connectivity, label=args.label, progress=show,
                              surfaces=not args.no_surfaces, threads=args.threads)
@@ -100,6 +103,7 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None]:
         # and says them again when it ends, in whatever runs then
         if warming is not None:
             warming.join()
+    check_input_connectivity(args, obj.ndim)
     # an empty report is an answer, but of a point list with points it needs
     # the reason
     say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)

@@ -219,6 +219,34 @@ def load_input(args: argparse.Namespace):
     return obj
 
 
+def check_input_connectivity(args: argparse.Namespace, ndim: int) -> None:
+    """Refuse a ``--connectivity`` that does not fit the input's dimension,
+    in one line naming the input: the dimension is the file's, not the
+    option's.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``input`` and ``connectivity`` (None: the
+        default, which fits any dimension).
+    ndim : int
+        The input's dimension.
+
+    Examples
+    --------
+    >>> check_input_connectivity(argparse.Namespace(input="a.npy", connectivity=8), 3)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: a.npy: connectivity 8 is not valid in 3D (use 6 or 26)
+    """
+    from ..digital.connectivity import resolve_connectivity
+
+    try:
+        resolve_connectivity(ndim, args.connectivity)
+    except IsoflowError as exc:
+        raise exc.at(args.input) from None
+
+
 #: the commands that take a 2D image as well as a 3D volume: where a plate
 #: one voxel thick is analysed or flowed in 3D, they would take the 2D slice
 PLANAR_COMMANDS = ("info", "flow")
@@ -231,7 +259,11 @@ def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
     then a plate that the flow empties in one step, with the Euler
     characteristic of a solid; the note gives the line that saves the 2D
     image (:func:`slice_as_2d`). Only ``info`` and ``flow``, which take 2D
-    images, say it.
+    images, say it. ``info`` says it of a 4D volume of one entry along its
+    last axis too (a 3D mask saved with a channel axis, as ilastik's
+    (z, y, x, 1)): in 4D its b1, b2 and closed surfaces are not counted.
+    Not of one voxel along another axis: that may be a time series of 2D
+    images (a NIfTI's (x, y, 1, t)), whose time is no third axis.
 
     Parameters
     ----------
@@ -239,10 +271,12 @@ def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
         The command's arguments: ``command``, ``input``, ``quiet``, and
         ``label`` where it has one.
     shape : tuple of int
-        The volume's shape as read (x, y, z).
+        The volume's shape as read (x, y, z), or (x, y, z, t).
     """
     thin = [k for k, n in enumerate(shape) if n == 1]
-    if args.quiet or args.command not in PLANAR_COMMANDS or len(shape) != 3 or len(thin) != 1:
+    if args.quiet or args.command not in PLANAR_COMMANDS or len(shape) not in (3, 4) or len(thin) != 1:
+        return
+    if len(shape) == 4 and (args.command != "info" or thin[0] != 3):  # (the others refuse 4D in one line)
         return
     if any(n < 2 for k, n in enumerate(shape) if k != thin[0]):
         return
@@ -252,15 +286,16 @@ def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
 
 def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: float | None = None) -> str:
     """The note on a volume one voxel thick along ``axis``: it is read as
-    a 3D plate, and the one line of Python that saves the slice as a 2D
-    image, voxel size and origin of the other two axes kept.
+    a 3D plate (a 4D volume), and the one line of Python that saves the
+    slice as a 2D image (the 3D volume), voxel size and origin of the other
+    axes kept.
 
     Parameters
     ----------
     path : str or pathlib.Path
         The input as given on the command line.
     shape : tuple of int
-        The volume's shape (x, y, z).
+        The volume's shape (x, y, z), or (x, y, z, t).
     axis : int
         The axis of one voxel.
     label : float, optional
@@ -277,18 +312,30 @@ def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: floa
     shape 64x48x1, one voxel along z: read as a 3D plate one voxel thick; to analyse it as the 2D image, save that and give it: \
 python -c 'import isoflow; v = isoflow.read_volume("slice.nii.gz"); k = [0, 1]; \
 isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, 0], pitch=v.spacing[k], origin=v.origin[k]), "slice_2d.npz")'
+    >>> print(slice_as_2d("seg.h5", (64, 48, 32, 1), 3))
+    shape 64x48x32x1, one voxel along axis 3: read as a 4D volume one voxel thick, whose b1, b2 and closed surfaces \
+are not counted; to analyse it as the 3D volume, save that and give it: python -c 'import isoflow; \
+v = isoflow.read_volume("seg.h5"); k = [0, 1, 2]; \
+isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing[k], origin=v.origin[k]), "volume_3d.npz")'
     """
     import json
     import shlex
 
-    kept = [k for k in range(3) if k != axis]
-    index = ", ".join("0" if k == axis else ":" for k in range(3))
+    n = len(shape)
+    kept = [k for k in range(n) if k != axis]
+    index = ", ".join("0" if k == axis else ":" for k in range(n))
     label_arg = "" if label is None else f", label={label!r}"
+    out = "slice_2d.npz" if n == 3 else "volume_3d.npz"
     code = (f"import isoflow; v = isoflow.read_volume({json.dumps(str(path))}{label_arg}); k = {kept}; "
             f'isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k]), '
-            '"slice_2d.npz")')
-    return (f"shape {'x'.join(map(str, shape))}, one voxel along {'xyz'[axis]}: read as a 3D plate one voxel thick; "
-            f"to analyse it as the 2D image, save that and give it: python -c {shlex.quote(code)}")
+            f'"{out}")')
+    if n == 3:
+        read = (f"one voxel along {'xyz'[axis]}: read as a 3D plate one voxel thick; "
+                "to analyse it as the 2D image")
+    else:
+        read = (f"one voxel along axis {axis}: read as a 4D volume one voxel thick, whose b1, b2 and closed "
+                "surfaces are not counted; to analyse it as the 3D volume")
+    return f"shape {'x'.join(map(str, shape))}, {read}, save that and give it: python -c {shlex.quote(code)}"
 
 
 def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:

@@ -30,6 +30,7 @@ from .formats.registry import (
     format_for,
     no_such_label,
     one_time_point_labels,
+    sniff_volume_format,
     split_dataset,
     volume_suffixes,
 )
@@ -367,9 +368,13 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         with open(path, "rb") as fh:
             head = fh.read(1024)
         if b"\0" in head:
+            found = sniff_volume_format(path)
+            if found is not None:  # a volume without its suffix (or under another one)
+                raise IsoflowError(f"{path}: its content is {found[0]}, but volumes are read by their suffix: rename it "
+                                   f"{path.stem if path.suffix else path.name}{found[1]}")
             raise IsoflowError(
                 f"{path}: binary data, not a text point list (x y z per line); "
-                f"volumes are .npy/.npz"
+                f"volumes are read by their suffix: {', '.join(volume_suffixes())}"
             )
         # a point takes at least 4 bytes of text ("0 0" and a line end) and
         # 8 bytes a coordinate once read: 4 to 6 bytes per byte of text

@@ -39,8 +39,11 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
     m = np.asarray(matrix, np.float64)
     c0 = np.asarray(centre0, np.float64)
     n = m.shape[1] if m.ndim == 2 else -1
-    if not 0 < n <= array.ndim or not np.isfinite(m).all() or not np.isfinite(c0).all():
+    if not 0 < n <= array.ndim:
         raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} does not fit a {n}D array")
+    if not (np.isfinite(m).all() and np.isfinite(c0).all()):
+        raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} with the first voxel at {c0.tolist()} "
+                           "holds values that are not finite numbers")
     norms = np.linalg.norm(m, axis=0)
     if not (norms > 0).all():
         raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} has a zero voxel size")

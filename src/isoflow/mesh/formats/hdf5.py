@@ -43,8 +43,25 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         array = ds[()]
         attrs = dict(ds.attrs)
     pitch = attrs.get("pitch", attrs.get("element_size_um", 1.0))
+    if "pitch" not in attrs and "element_size_um" in attrs:
+        pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0))
+
+
+def _element_size(value, ndim: int, where: str) -> np.ndarray:
+    """The voxel size from Fiji's ``element_size_um`` (one per axis, or one
+    number), or one line naming that attribute (not isoflow's word for it,
+    'pitch')."""
+    try:
+        size = np.asarray(value, np.float64)
+    except (TypeError, ValueError):
+        size = None
+    if size is None or size.shape not in ((), (ndim,)) or not (np.isfinite(size).all() and (size > 0).all()):
+        shown = value.tolist() if isinstance(value, np.ndarray) else value
+        raise IsoflowError(f"{where}: attribute 'element_size_um' {shown!r} is not {ndim} positive voxel sizes, "
+                           "one per axis of the dataset (or one for all)")
+    return size
 
 
 def _choose(f, h5py, path, dataset) -> str:

@@ -15,7 +15,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, note
+from .registry import RawVolume, content_hint, note
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -49,8 +49,25 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     except IsoflowError:
         raise
     except Exception as exc:  # numpy raises several types for a bad file
+        head = _head(path)
+        if not head.startswith((b"\x93NUMPY", b"PK", b"\x80")):
+            # np.load takes any file but an .npy, an .npz or a pickle (b"\x80")
+            # for a pickle too, and says to load it "unsafely", which no
+            # damaged or foreign file calls for
+            raise IsoflowError(f"{path}: not a numpy file: it " + (
+                f"starts with {head!r}, not .npy's b'\\x93NUMPY' or an .npz's (zip) b'PK'" if head else "is empty")
+                + content_hint(path, "NumPy")) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0))
+
+
+def _head(path: Path) -> bytes:
+    """The first bytes of a file (none where it cannot be read)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(8)
+    except OSError:
+        return b""
 
 
 def voxel_count(path: Path) -> int | None:

@@ -9,7 +9,8 @@ part with a warning). World coordinates are the file's ``space`` (3D Slicer
 writes LPS). Axes without a direction (``none``: a vector or list axis) must
 have length 1. A file with ``spacings`` instead of a space keeps them as the
 voxel sizes, origin 0; an axis whose spacing is ``nan`` (the format's "not
-a space axis") must have length 1 too. A header whose lists do not fit the
+a space axis"), or, without a space, whose ``kinds`` entry is a component
+kind (``vector``, ``RGB-color``, ``list``, ...), must have length 1 too. A header whose lists do not fit the
 array (fewer directions than axes, an origin of another dimension) is
 refused; a non-finite ``space origin`` is read as 0 with a warning.
 
@@ -50,13 +51,25 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             origin = np.zeros(dim)
         vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
         return RawVolume(vol, pitch, corner)
+    # without space directions, only "kinds" tells a component axis (an
+    # RGB colour, a vector, a list of layers) from a domain axis
+    kinds = header.get("kinds")
+    placed = list(range(data.ndim))
+    if kinds is not None and len(kinds) == data.ndim:
+        placed = [i for i in placed if str(kinds[i]).lower() in DOMAIN_KINDS]
     pitch = 1.0
     if "spacings" in header:
         spacings = _field(header, "spacings", (data.ndim,), where)
-        placed = [i for i in range(data.ndim) if np.isfinite(spacings[i])]
-        data = _scalar_axes(data, placed, "spacing", where)
+        placed = [i for i in placed if np.isfinite(spacings[i])]
         pitch = np.abs(spacings[placed])
+    if len(placed) < data.ndim:
+        data = _scalar_axes(data, placed, "spacing", where, kinds)
     return RawVolume(data, pitch)
+
+
+#: the NRRD kinds of axes along which samples lie ("???" and "none": not
+#: said); every other kind (vector, RGB-color, list, ...) is a component axis
+DOMAIN_KINDS = ("domain", "space", "time", "???", "none")
 
 
 def _field(header: dict, name: str, shape: tuple, where: str) -> np.ndarray:
@@ -73,14 +86,16 @@ def _field(header: dict, name: str, shape: tuple, where: str) -> np.ndarray:
     return value
 
 
-def _scalar_axes(data: np.ndarray, placed: list[int], what: str, where: str) -> np.ndarray:
-    """``data`` with only its ``placed`` axes; the others (no ``what``: a
-    vector or list axis) must have length 1."""
+def _scalar_axes(data: np.ndarray, placed: list[int], what: str, where: str, kinds=None) -> np.ndarray:
+    """``data`` with only its ``placed`` axes; the others (no ``what``, or a
+    component kind in ``kinds``: a vector or list axis) must have length 1."""
     others = [i for i in range(data.ndim) if i not in placed]
     for i in others:
         if data.shape[i] != 1:
+            component = kinds is not None and str(kinds[i]).lower() not in DOMAIN_KINDS
+            why = f"is of NRRD kind {kinds[i]!r} with" if component else f"has no {what} and"
             raise IsoflowError(
-                f"{where}: axis {i} has no {what} and {data.shape[i]} entries "
+                f"{where}: axis {i} {why} {data.shape[i]} entries "
                 f"(shape {data.shape}); isoflow reads one scalar volume"
             )
     return np.transpose(data, placed + others).reshape([data.shape[i] for i in placed])

@@ -116,6 +116,106 @@ def format_for(path, writing: bool = False) -> VolumeFormat | None:
     return None if best is None else best[0]
 
 
+#: the first bytes of the volume formats that have a magic number, with
+#: the format's name (as in FORMATS) and the suffix its reader takes
+MAGIC = (
+    (b"\x93NUMPY", "NumPy", ".npy"),
+    (b"PK\x03\x04", "NumPy", ".npz"),
+    (b"II*\x00", "TIFF", ".tif"),
+    (b"MM\x00*", "TIFF", ".tif"),
+    (b"II+\x00", "TIFF", ".tif"),
+    (b"MM\x00+", "TIFF", ".tif"),
+    (b"NRRD000", "NRRD", ".nrrd"),
+    (b"\x89HDF\r\n\x1a\n", "HDF5", ".h5"),
+    (b"#binvox", "binvox", ".binvox"),
+    (b"VOX ", "MagicaVoxel", ".vox"),
+    (b"\x89PNG\r\n\x1a\n", "PNG", ".png"),
+)
+
+
+def sniff_volume_format(path) -> tuple[str, str] | None:
+    """The volume format a file's first bytes say it holds, as ``(name,
+    suffix)``, or None: a magic number of :data:`MAGIC`, NIfTI's ``n+1`` or
+    ``n+2`` (a ``.nii.gz`` where that lies in a gzip stream).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file; only its first bytes are read (of a gzip stream, its
+        first bytes once inflated).
+
+    Returns
+    -------
+    tuple of str, or None
+        The format's name and the suffix its reader takes.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = open(os.path.join(d, "scan.nii"), "wb").write(b"II*" + bytes(100))
+    ...     sniff_volume_format(os.path.join(d, "scan.nii"))
+    ('TIFF', '.tif')
+    """
+    import gzip
+
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(352)
+        if head.startswith(b"\x1f\x8b"):
+            with gzip.open(path, "rb") as fh:
+                inner = fh.read(352)
+            return ("NIfTI", ".nii.gz") if _nifti(inner) else None
+    except (OSError, EOFError):  # unreadable, or a gzip stream cut short in its header
+        return None
+    if _nifti(head):
+        return ("NIfTI", ".nii")
+    found = next(((name, suffix) for magic, name, suffix in MAGIC if head.startswith(magic)), None)
+    if found == ("NumPy", ".npz") and not _npz(path):
+        return None  # a zip archive of something else
+    return found
+
+
+def _npz(path) -> bool:
+    """Whether a zip archive holds ``.npy`` files alone, as an ``.npz`` does."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as z:
+            names = z.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+    return bool(names) and all(n.endswith(".npy") for n in names)
+
+
+def _nifti(head: bytes) -> bool:
+    """Whether a file's first bytes are a NIfTI-1 or NIfTI-2 header."""
+    return head[344:348] == b"n+1\x00" or head[4:8] == b"n+2\x00"
+
+
+def content_hint(path, what: str) -> str:
+    """What to add to a refusal of ``path`` as a ``what`` file where its
+    content is another volume format: ``; its content is TIFF, not NIfTI:
+    rename it scan.tif``, or is NIfTI compressed where the name says
+    uncompressed or the other way round (nibabel goes by the name);
+    nothing otherwise."""
+    found = sniff_volume_format(path)
+    name = Path(path).name
+    if found is None:
+        return ""
+    if found[0] == what:
+        if what != "NIfTI" or (found[1] == ".nii.gz") == name.lower().endswith(".gz"):
+            return ""
+        content = "gzip-compressed NIfTI" if found[1] == ".nii.gz" else "uncompressed NIfTI"
+    else:
+        content = f"{found[0]}, not {what}"
+    fmt = format_for(name)
+    stem = name
+    if fmt is not None:  # the suffix the name has, as format_for matched it
+        stem = name[: -max(len(s) for s in fmt.suffixes if name.lower().endswith(s))]
+    return f"; its content is {content}: rename it {stem}{found[1]}"
+
+
 def import_library(module: str, fmt: str, package: str | None = None):
     """``module`` imported, or one line naming the extra that brings it."""
     try:
@@ -135,9 +235,13 @@ def reading(path, what: str):
     except (IsoflowError, MemoryError):
         raise
     except Exception as exc:  # libraries raise many types for a bad file
+        if os.path.isfile(path) and os.path.getsize(path) == 0:
+            # what a library says of no bytes at all rarely names it (pynrrd: "StopIteration")
+            raise IsoflowError(f"{path}: an empty file (0 bytes), not a readable {what} file") from None
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         raise IsoflowError(
             f"{path}: not a readable {what} file ({exc.__class__.__name__}{': ' + detail if detail else ''})"
+            + content_hint(path, what)
         ) from None
 
 
@@ -146,13 +250,32 @@ def quiet_logs(logger: str):
     """Silence a library's logger while it reads a file: what it logs about
     a damaged file (nibabel prints its checks on stderr, tifffile logs
     before raising) is said by the one error line, or is no concern of the
-    user's when the file reads."""
+    user's when the file reads. Yields the list of the messages it logged
+    at level ERROR or above: tifffile logs a page it cannot reach (a file
+    cut short) and reads on, so a reader can refuse what it read."""
     log = logging.getLogger(logger)
-    disabled, log.disabled = log.disabled, True
+    errors: list[str] = []
+    keep = _KeepErrors(errors)
+    saved = log.handlers[:], log.propagate, log.disabled
+    log.handlers, log.propagate, log.disabled = [keep], False, False
     try:
-        yield
+        yield errors
     finally:
-        log.disabled = disabled
+        log.handlers, log.propagate, log.disabled = saved
+
+
+class _KeepErrors(logging.Handler):
+    """A handler that keeps the messages of error records and prints nothing."""
+
+    def __init__(self, errors: list[str]) -> None:
+        super().__init__(logging.ERROR)
+        self.errors = errors
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self.errors.append(record.getMessage())
+        except Exception:  # arguments that do not fit the message: the message itself
+            self.errors.append(str(record.msg))
 
 
 @dataclass

@@ -39,6 +39,7 @@ is kept to about 9 digits, and so an origin read back through it.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -65,14 +66,14 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     tifffile = import_library("tifffile", "TIFF")
     where = str(path)
     # tifffile logs what it finds wrong before raising: the error line says it
-    with reading(path, "TIFF"), quiet_logs("tifffile"), tifffile.TiffFile(path) as tif:
+    with reading(path, "TIFF"), quiet_logs("tifffile") as damage, tifffile.TiffFile(path) as tif:
         if not tif.series:
             raise IsoflowError(f"{where}: a TIFF without an image (damaged, or no pages)")
         if len(tif.series) > 1:
             shapes = ", ".join("x".join(map(str, s.shape)) for s in tif.series[:5])
             raise IsoflowError(f"{where}: holds {len(tif.series)} image series (shapes {shapes}"
                                f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
-                               "save the stack on its own")
+                               + (_pages_as_stack(where) if _one_page_each(tif.series) else "save the stack on its own"))
         series = tif.series[0]
         check_shape(series.shape, series.dtype, where)
         data = series.asarray()
@@ -84,6 +85,14 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
+        damage = [d for d in damage if _tag_read(d)]
+        if damage:
+            # tifffile reads on past a page it cannot reach or metadata it
+            # cannot parse: the stack it gives is then short (a 2D page
+            # where ImageJ's header says 20 slices) or uncalibrated
+            detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
+            detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
+            raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
@@ -92,7 +101,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     vol = to_xyz(data, names, where)
     pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
     if vol.ndim >= 3:
-        pitch.append(_imagej_number(imagej, "spacing", where, 1.0))
+        pitch.append(_spacing(imagej, where))
     # ImageJ's origin counts its own pixels, so it scales by its own calibration, not by an OME size
     origin = _imagej_origin(imagej, pitch, where)
     if vol.ndim == 4:  # time keeps step 1, as a 4D NIfTI's does: a lattice axis, not seconds
@@ -113,6 +122,39 @@ def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
         note(f"{where}: ImageJ's inverted y (inverty) is not applied: y runs down the rows, from 0")
         origin[1] = 0.0
     return [o + 0.0 for o in origin]  # no -0.0 from an origin of 0
+
+
+#: the tags whose values shape the pixels or hold what isoflow reads (the
+#: ImageJ and OME metadata in ImageDescription 270, the resolution)
+READ_TAGS = frozenset((254, 256, 257, 258, 259, 262, 266, 270, 273, 277, 278, 279, 282, 283, 284, 296, 317, 322, 323,
+                       324, 325, 338, 339, 347))
+
+
+def _tag_read(message: str) -> bool:
+    """Whether an error tifffile logged is damage to what is read: any but
+    a tag it could not read that isoflow does not use (a vendor's private
+    tag pointing past the end of the file leaves the pixels whole)."""
+    tag = re.search(r"TiffTag (\d+) ", message)
+    return tag is None or int(tag.group(1)) in READ_TAGS
+
+
+def _one_page_each(series) -> bool:
+    """Whether every series is one 2D page of one shape and type: a stack
+    written a page at a time (tifffile's ``TiffWriter.write`` per slice),
+    which may also be images of different things, so it is not read as z."""
+    return all(len(s.shape) == 2 and s.shape == series[0].shape and s.dtype == series[0].dtype for s in series)
+
+
+def _pages_as_stack(where: str) -> str:
+    """The line that saves one-page series as one z-stack, if they are one."""
+    import json
+    import shlex
+
+    stack = str(Path(where).with_name(Path(where).stem + "_stack.tif"))
+    code = (f"import tifffile; tifffile.imwrite({json.dumps(stack)}, tifffile.imread({json.dumps(where)}, "
+            'key=slice(None)), photometric="minisblack")')
+    return ("each a page of one shape, as a stack written a page at a time is; if its pages are the slices of "
+            f"one volume, save them as one stack and give that: python -c {shlex.quote(code)}")
 
 
 def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
@@ -149,6 +191,16 @@ def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
     axes, shape = series.get_axes(False).upper(), series.get_shape(False)
     keep = [i for i, (a, n) in enumerate(zip(axes, shape)) if n > 1 or a in "YX" or (a == "Z" and stack)]
     return [axes[i] for i in keep], [shape[i] for i in keep]
+
+
+def _spacing(imagej: dict, where: str) -> float:
+    """The z voxel size from ImageJ's ``spacing`` (1 where absent), or one
+    line naming that field where it is no positive size (a negative one,
+    slices running backwards, would need the stack turned to be placed)."""
+    size = _imagej_number(imagej, "spacing", where, 1.0)
+    if size <= 0:
+        raise IsoflowError(f"{where}: ImageJ's spacing {imagej['spacing']!r} is not a positive voxel size")
+    return size
 
 
 def _imagej_number(imagej: dict, key: str, where: str, default: float) -> float:
