@@ -528,3 +528,50 @@ def test_a_store_read_whole_names_the_fill_value_of_chunks_never_written(tmp_pat
     assert len(err) == 1 and named in err[0], err
     z[4:] = 0  # every chunk written: 2 is no voxel's value, and the store reads as a mask
     assert isoflow.read_volume(store).voxels == 256
+
+
+def _pillow_tiff(path, image, **save):
+    Image = pytest.importorskip("PIL.Image")
+    Image.fromarray(image).save(path, **save)
+
+
+# ImageJ's rule (ij/io/TiffDecoder.java OpenIFD, ij/io/FileOpener.java
+# setCalibration): 1 / resolution where a unit is given, 1 at 72 per inch and
+# where no ResolutionUnit tag nor ImageJ description gives one
+@pytest.mark.parametrize(("writer", "save", "pitch"), [
+    ("pillow", {}, [1.0, 1.0]),  # no resolution tags
+    ("pillow", {"dpi": (72, 72)}, [1.0, 1.0]),  # the print default: uncalibrated
+    ("pillow", {"dpi": (300, 300)}, [1 / 300, 1 / 300]),  # a scan's inches
+    ("pillow", {"tiffinfo": {282: 2.0, 283: 4.0}}, [1.0, 1.0]),  # no ResolutionUnit: no unit
+    ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH"}, [1.0, 1.0]),
+    ("tifffile", {"resolution": (2, 4), "resolutionunit": "INCH"}, [0.5, 0.25]),
+    ("tifffile", {"resolution": (1e4, 2e4), "resolutionunit": "CENTIMETER"}, [1e-4, 5e-5]),
+    ("tifffile", {"resolution": (2, 4), "resolutionunit": "NONE"}, [0.5, 0.25]),
+    ("tifffile", {"resolution": (2, 4), "imagej": True, "metadata": {"unit": "micron"}}, [0.5, 0.25]),
+    ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH", "imagej": True,
+                  "metadata": {"unit": "micron"}}, [1.0, 1.0]),
+])
+def test_tiff_pixel_size_follows_imagejs_calibration_rule(tmp_path, writer, save, pitch):
+    """A TIFF at the print resolution of 72 dpi, or whose resolution has no
+    unit, is uncalibrated, as ImageJ opens it: pitch 1 on x and y, as on
+    z, not inches beside pixels; a resolution with a unit keeps its size."""
+    image = np.zeros((4, 5), np.uint8)
+    image[1:3, 1:4] = 255
+    if writer == "pillow":
+        _pillow_tiff(tmp_path / "a.tif", image, **save)
+    else:
+        pytest.importorskip("tifffile").imwrite(tmp_path / "a.tif", image, **save)
+    obj = isoflow.read_volume(tmp_path / "a.tif")
+    assert np.array_equal(obj.volume, image.T == 255)
+    np.testing.assert_allclose(np.broadcast_to(obj.pitch, 2), pitch, rtol=1e-9)
+
+
+def test_tiff_stack_at_72_dpi_has_pitch_1_on_every_axis(tmp_path):
+    tifffile = pytest.importorskip("tifffile")
+    stack = np.zeros((3, 4, 5), np.uint8)
+    stack[1, 1:3, 1:4] = 1
+    tifffile.imwrite(tmp_path / "s.tif", stack, resolution=(72, 72), resolutionunit="INCH",
+                     photometric="minisblack")
+    obj = isoflow.read_volume(tmp_path / "s.tif")
+    assert obj.volume.shape == (5, 4, 3)
+    np.testing.assert_array_equal(np.broadcast_to(obj.pitch, 3), [1.0, 1.0, 1.0])

@@ -15,9 +15,12 @@ however alike their pages look. A file of several image series
 volume is not said by the file.
 
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
-1 / pixels per unit, in the file's resolution unit) where present, z from
-ImageJ's ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (its
-units as written); 1 where absent.
+1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
+(:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
+resolution of 72 dpi that Pillow and others give an image without a scale,
+or without a ResolutionUnit tag or ImageJ description; z from ImageJ's
+``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (its units as
+written); 1 where absent.
 
 Origin: ImageJ's calibration origin, ``xorigin``, ``yorigin`` and ``zorigin``
 in its description (Fiji's Image > Properties "Origin"), in pixels of the
@@ -59,7 +62,8 @@ from .registry import (
     to_xyz,
 )
 
-X_RESOLUTION, Y_RESOLUTION = 282, 283
+X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT = 282, 283, 296
+RESOLUTION_TAGS = (X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT)
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -78,9 +82,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         check_shape(series.shape, series.dtype, where)
         data = series.asarray()
         page = series.keyframe
-        res = [page.tags[t].value for t in (X_RESOLUTION, Y_RESOLUTION) if t in page.tags]
-        resolution = page.get_resolution() if len(res) == 2 else (1.0, 1.0)
         imagej = tif.imagej_metadata or {}
+        pitch = resolution_pitch({t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}, tif.is_imagej, where)
         spacing = imagej.get("spacing")
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
@@ -99,7 +102,6 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             axes[stack[0]] = "Z"
     names = ["x" if a == "X" else "y" if a == "Y" else "z" if a == "Z" else a for a in axes]
     vol = to_xyz(data, names, where)
-    pitch = [1.0 / float(r) if float(r) > 0 else 1.0 for r in resolution]
     if vol.ndim >= 3:
         pitch.append(_spacing(imagej, where))
     # ImageJ's origin counts its own pixels, so it scales by its own calibration, not by an OME size
@@ -109,6 +111,71 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         origin.append(0.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     return RawVolume(vol, np.array(pitch), np.array(origin))
+
+
+def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str = "TIFF") -> list[float]:
+    """The x and y voxel size a TIFF's resolution tags give, by ImageJ's rule.
+
+    ImageJ 1.x (``ij/io/TiffDecoder.java``, ``OpenIFD``, the cases
+    ``X_RESOLUTION``, ``Y_RESOLUTION`` and ``RESOLUTION_UNIT``;
+    ``ij/io/FileOpener.java``, ``decodeDescriptionString`` and
+    ``setCalibration``) takes the pixel size as 1 / XResolution and
+    1 / YResolution, but calls the image calibrated only where it has a
+    unit: ResolutionUnit 1 (none) or 3 (centimetre), 2 (inch) unless the
+    x resolution is exactly 72 per inch (the print resolution that
+    Pillow, GIMP and most other writers give an image with no scale:
+    ImageJ then sets the pixel size to 1), or an ImageJ description
+    (whose ``unit``, or none, replaces the tag's). Without a
+    ResolutionUnit tag and an ImageJ description the resolution is not
+    read: TIFF's default unit, inch, is what a writer leaves unsaid.
+
+    Parameters
+    ----------
+    tags : dict of int to object
+        The page's XResolution (282), YResolution (283) and ResolutionUnit
+        (296) tag values where present: rationals as (numerator,
+        denominator), the unit as its number.
+    imagej : bool
+        Whether the file has an ImageJ description (``ImageJ=...``).
+    where : str
+        The file, for the line that refuses a resolution that is no
+        rational.
+
+    Returns
+    -------
+    list of float
+        The x and y pitch in the file's unit; 1 for an uncalibrated image
+        and for a resolution that is not positive (ImageJ ignores it).
+
+    Examples
+    --------
+    >>> resolution_pitch({282: (72, 1), 283: (72, 1), 296: 2})
+    [1.0, 1.0]
+    >>> resolution_pitch({282: (300, 1), 283: (300, 1), 296: 2})
+    [0.0033333333333333335, 0.0033333333333333335]
+    >>> resolution_pitch({282: (2, 1), 283: (4, 1)}, imagej=True)
+    [0.5, 0.25]
+    >>> resolution_pitch({282: (2, 1), 283: (2, 1)})
+    [1.0, 1.0]
+    """
+    pitch = [1.0, 1.0]
+    for i, tag in enumerate((X_RESOLUTION, Y_RESOLUTION)):
+        if tag not in tags:
+            continue
+        value = tags[tag]
+        try:
+            numerator, denominator = (float(v) for v in value)  # type: ignore[attr-defined]
+        except (TypeError, ValueError):
+            name = "XResolution" if tag == X_RESOLUTION else "YResolution"
+            raise IsoflowError(f"{where}: the TIFF's {name} {value!r} is not a rational") from None
+        scale = numerator / denominator if denominator else 0.0
+        if np.isfinite(scale) and scale > 0:
+            pitch[i] = 1.0 / scale
+    unit = tags.get(RESOLUTION_UNIT)
+    unit = int(unit) if isinstance(unit, (int, np.integer)) else None
+    if unit == 2 and pitch[0] == 1.0 / 72.0:
+        return [1.0, 1.0]
+    return pitch if imagej or unit in (1, 2, 3) else [1.0, 1.0]
 
 
 def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
