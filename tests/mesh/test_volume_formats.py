@@ -575,3 +575,64 @@ def test_tiff_stack_at_72_dpi_has_pitch_1_on_every_axis(tmp_path):
     obj = isoflow.read_volume(tmp_path / "s.tif")
     assert obj.volume.shape == (5, 4, 3)
     np.testing.assert_array_equal(np.broadcast_to(obj.pitch, 3), [1.0, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("mode", ["RGB", "RGBA"])
+def test_tiff_grey_stored_as_colour_is_read_as_grey_as_png_is(tmp_path, mode):
+    """Pillow's RGB(A) TIFF of a grey image holds three equal channels (and
+    an alpha): read as that grey, as the same image saved as PNG is."""
+    grey = np.zeros((6, 7), np.uint8)
+    grey[1:5, 2:6] = 255
+    grey[2:4, 3:5] = 0  # a hole: Euler number 0
+    pixels = np.stack([grey] * 3 + ([np.full_like(grey, 200)] if mode == "RGBA" else []), axis=-1)
+    _pillow_tiff(tmp_path / "c.tif", pixels)
+    _pillow_tiff(tmp_path / "c.png", pixels)
+    tif, png = isoflow.read_volume(tmp_path / "c.tif"), isoflow.read_volume(tmp_path / "c.png")
+    assert np.array_equal(tif.volume, grey.T == 255) and np.array_equal(tif.volume, png.volume)
+    measure = pytest.importorskip("skimage.measure")
+    assert measure.euler_number(tif.volume, connectivity=2) == 0
+
+
+def test_tiff_colours_that_differ_are_refused_in_one_line(tmp_path):
+    tifffile = pytest.importorskip("tifffile")
+    pixels = np.zeros((4, 5, 3), np.uint8)
+    pixels[1, 1] = (255, 0, 0)
+    tifffile.imwrite(tmp_path / "c.tif", pixels)
+    with pytest.raises(IsoflowError, match=r"^\S*c\.tif: holds colours, not labels or a mask \(its RGB channels "
+                                           r"differ\); save it as a grey \(8- or 16-bit\) TIFF$"):
+        isoflow.read_volume(tmp_path / "c.tif")
+
+
+@pytest.mark.parametrize("slices", [3, 4])
+def test_tiff_stack_that_tifffile_saved_as_planar_colour(tmp_path, slices):
+    """tifffile writes a (3 or 4, Y, X) uint8 stack as one planar RGB(A)
+    image unless told ``photometric='minisblack'``, and ImageJ opens it so:
+    equal planes are read as one grey image with a warning; planes that
+    differ are refused with the command that saves them as a stack, which
+    is then read as its slices."""
+    tifffile = pytest.importorskip("tifffile")
+    plane = np.zeros((4, 5), np.uint8)
+    plane[1:3, 1:4] = 1
+    with warnings.catch_warnings():  # tifffile's notice that a later version writes such data as pages
+        warnings.simplefilter("ignore", DeprecationWarning)
+        tifffile.imwrite(tmp_path / "same.tif", np.stack([plane] * slices))
+        stack = np.stack([plane * (k % 2) for k in range(slices)])
+        tifffile.imwrite(tmp_path / "differ.tif", stack)
+    with tifffile.TiffFile(tmp_path / "same.tif") as tif:  # what the file says it holds
+        assert tif.pages[0].photometric == 2 and tif.pages[0].planarconfig == 2
+    with pytest.warns(IsoflowWarning, match=rf"same\.tif: its {slices} equal planes, .* are read as one grey 2D image"):
+        obj = isoflow.read_volume(tmp_path / "same.tif")
+    assert np.array_equal(obj.volume, plane.T == 1)
+    with pytest.raises(IsoflowError, match=r"differ\.tif: holds \d planes that differ") as refused:
+        isoflow.read_volume(tmp_path / "differ.tif")
+    assert "\n" not in str(refused.value) and 'photometric="minisblack"' in str(refused.value)
+    tifffile.imwrite(tmp_path / "differ_stack.tif", tifffile.imread(tmp_path / "differ.tif"), photometric="minisblack")
+    assert np.array_equal(isoflow.read_volume(tmp_path / "differ_stack.tif").volume, stack.transpose(2, 1, 0) == 1)
+
+
+def test_tiff_stack_of_grey_rgb_pages(tmp_path):
+    tifffile = pytest.importorskip("tifffile")
+    stack = np.zeros((2, 4, 5), np.uint8)
+    stack[:, 1:3, 1:4] = 255
+    tifffile.imwrite(tmp_path / "s.tif", np.stack([stack] * 3, axis=-1))
+    assert np.array_equal(isoflow.read_volume(tmp_path / "s.tif").volume, stack.transpose(2, 1, 0) == 255)

@@ -14,6 +14,16 @@ however alike their pages look. A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
+Grey stored as colour is read as that grey, as a PNG's is: RGB whose three
+channels are equal, or grey, either with an alpha channel (ignored); RGB
+whose channels differ is refused. A (3 or 4, Y, X) stack saved by
+tifffile's ``imwrite`` without ``photometric='minisblack'`` is stored as
+one RGB(A) image in planes (PlanarConfiguration 2), and ImageJ opens it as
+one colour image: the file's tags say so, and isoflow reads it so, as one
+grey 2D image where every plane is equal (with a warning, and the command
+that saves it as a stack), and refuses it with that command where they
+differ.
+
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
 (:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
@@ -64,6 +74,12 @@ from .registry import (
 
 X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT = 282, 283, 296
 RESOLUTION_TAGS = (X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT)
+#: TIFF's PhotometricInterpretation values whose first samples are grey or colour
+MINISBLACK, RGB = 1, 2
+#: colour (or grey) samples per pixel, before the extra samples
+COLOUR_SAMPLES = {MINISBLACK: 1, RGB: 3}
+#: TIFF's ExtraSamples values of an alpha channel (associated, unassociated)
+ALPHA = (1, 2)
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -84,6 +100,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         page = series.keyframe
         imagej = tif.imagej_metadata or {}
         pitch = resolution_pitch({t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}, tif.is_imagej, where)
+        photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
         spacing = imagej.get("spacing")
         sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
         axes, shape = _unsqueezed(series, spacing is not None)
@@ -96,6 +113,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
             detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
             raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
+    data, axes = _grey(data, axes, photometric, planar, extra, where)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
@@ -178,6 +196,42 @@ def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str =
     return pitch if imagej or unit in (1, 2, 3) else [1.0, 1.0]
 
 
+def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, extra: tuple,
+          where: str) -> tuple[np.ndarray, list[str]]:
+    """``data`` without its samples axis ``S`` where the samples are grey
+    stored as colour, as a PNG's are read (see :mod:`.png`): RGB whose
+    three channels are equal, or grey, either with alpha (ignored). Other
+    samples are left for :func:`to_xyz` to refuse as channels.
+
+    Samples stored as planes (PlanarConfiguration 2) are what tifffile
+    writes for a stack of 3 or 4 slices not marked ``minisblack``: the
+    file says RGB(A), and ImageJ opens it as one colour image, so it is
+    read as one; but every plane, alpha too, must then be equal, and the
+    reading is said, for such a stack's slices would be its planes."""
+    colours = COLOUR_SAMPLES.get(photometric)
+    if "S" not in axes or colours is None or not all(int(e) in ALPHA for e in extra):
+        return data, axes
+    s = axes.index("S")
+    samples = np.moveaxis(data, s, 0)
+    if samples.shape[0] != colours + len(extra):
+        return data, axes
+    channels = samples if planar else samples[:colours]
+    grey = channels[0]
+    kind = ("RGB" if photometric == RGB else "grey") + (" and alpha" if extra else "")
+    if planar and not (channels == grey).all():
+        raise IsoflowError(f"{where}: holds {len(channels)} planes that differ, stored as the colours of one "
+                           f"image ({kind}, planar); isoflow reads no colours: "
+                           + _as_stack(where, "", "if its planes are the slices of one volume"))
+    if not (channels == grey).all():
+        raise IsoflowError(f"{where}: holds colours, not labels or a mask (its RGB channels differ); save it as "
+                           "a grey (8- or 16-bit) TIFF")
+    if planar:
+        note(f"{where}: its {len(channels)} equal planes, stored as the colours of one image ({kind}, "
+             "planar), are read as one grey 2D image; "
+             + _as_stack(where, "", "if they are the slices of one volume"))
+    return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
+
+
 def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
     """The world position of voxel 0's lowest corner per spatial axis from
     ImageJ's ``xorigin``, ``yorigin`` and ``zorigin`` (pixels; 0 where
@@ -214,14 +268,21 @@ def _one_page_each(series) -> bool:
 
 def _pages_as_stack(where: str) -> str:
     """The line that saves one-page series as one z-stack, if they are one."""
+    return ("each a page of one shape, as a stack written a page at a time is; "
+            + _as_stack(where, ", key=slice(None)", "if its pages are the slices of one volume"))
+
+
+def _as_stack(where: str, key: str, condition: str) -> str:
+    """The advice, under ``condition``, to save the file's pixels (read
+    with tifffile's ``imread`` arguments ``key``) as one grey z-stack, with
+    the command that does it."""
     import json
     import shlex
 
     stack = str(Path(where).with_name(Path(where).stem + "_stack.tif"))
-    code = (f"import tifffile; tifffile.imwrite({json.dumps(stack)}, tifffile.imread({json.dumps(where)}, "
-            'key=slice(None)), photometric="minisblack")')
-    return ("each a page of one shape, as a stack written a page at a time is; if its pages are the slices of "
-            f"one volume, save them as one stack and give that: python -c {shlex.quote(code)}")
+    code = (f"import tifffile; tifffile.imwrite({json.dumps(stack)}, tifffile.imread({json.dumps(where)}"
+            f'{key}), photometric="minisblack")')
+    return f"{condition}, save them as one stack and give that: python -c {shlex.quote(code)}"
 
 
 def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
