@@ -5,6 +5,7 @@ and origin; files written by the other tools are read with their placement.
 Volumes are small and seeded, with edge and vertex contacts (random fill).
 """
 
+import importlib.util
 import re
 import warnings
 
@@ -636,3 +637,17 @@ def test_tiff_stack_of_grey_rgb_pages(tmp_path):
     stack[:, 1:3, 1:4] = 255
     tifffile.imwrite(tmp_path / "s.tif", np.stack([stack] * 3, axis=-1))
     assert np.array_equal(isoflow.read_volume(tmp_path / "s.tif").volume, stack.transpose(2, 1, 0) == 255)
+
+
+def test_tiff_compressed_with_a_codec_tifffile_lacks_names_the_package(tmp_path):
+    """An LZW TIFF (Pillow's ``tiff_lzw``, as many tools save) is whole;
+    tifffile decodes it only with imagecodecs, which the line names."""
+    tifffile = pytest.importorskip("tifffile")
+    if importlib.util.find_spec("imagecodecs") is not None:
+        pytest.skip("imagecodecs is installed: the file reads")
+    _pillow_tiff(tmp_path / "lzw.tif", np.eye(4, dtype=np.uint8), compression="tiff_lzw")
+    with tifffile.TiffFile(tmp_path / "lzw.tif") as tif:
+        assert tif.pages[0].compression == 5  # LZW, as the file records it
+    with pytest.raises(IsoflowError, match=r"^\S*lzw\.tif: its pixels are LZW-compressed, which tifffile decodes only "
+                                           r"with the imagecodecs package: pip install imagecodecs$"):
+        isoflow.read_volume(tmp_path / "lzw.tif")

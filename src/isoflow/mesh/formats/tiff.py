@@ -96,8 +96,15 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                                + (_pages_as_stack(where) if _one_page_each(tif.series) else "save the stack on its own"))
         series = tif.series[0]
         check_shape(series.shape, series.dtype, where)
-        data = series.asarray()
         page = series.keyframe
+        try:
+            data = series.asarray()
+        except ValueError as exc:
+            if "imagecodecs" not in str(exc):
+                raise
+            # tifffile decodes only zlib and PackBits itself: the file is whole, a package is missing
+            raise IsoflowError(f"{where}: its pixels are {page.compression.name}-compressed, which tifffile decodes "
+                               "only with the imagecodecs package: pip install imagecodecs") from None
         imagej = tif.imagej_metadata or {}
         pitch = resolution_pitch({t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}, tif.is_imagej, where)
         photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
