@@ -651,3 +651,24 @@ def test_tiff_compressed_with_a_codec_tifffile_lacks_names_the_package(tmp_path)
     with pytest.raises(IsoflowError, match=r"^\S*lzw\.tif: its pixels are LZW-compressed, which tifffile decodes only "
                                            r"with the imagecodecs package: pip install imagecodecs$"):
         isoflow.read_volume(tmp_path / "lzw.tif")
+
+
+@pytest.mark.parametrize("planar", [False, True])
+def test_tiff_grey_with_alpha_is_read_as_the_grey(tmp_path, planar):
+    """Grey with an alpha channel (Pillow's ``LA``, or in planes) is read as
+    its grey, the alpha ignored, as a PNG's ``LA`` is."""
+    tifffile = pytest.importorskip("tifffile")
+    grey = np.zeros((4, 5), np.uint8)
+    grey[1:3, 1:4] = 7
+    alpha = np.full_like(grey, 255)
+    if planar:
+        tifffile.imwrite(tmp_path / "la.tif", np.stack([grey, alpha]), photometric="minisblack",
+                         planarconfig="separate", extrasamples=["unassalpha"])
+    else:
+        _pillow_tiff(tmp_path / "la.tif", np.stack([grey, alpha], axis=-1))
+    with tifffile.TiffFile(tmp_path / "la.tif") as tif:  # grey and one alpha sample, as the file records it
+        assert tif.pages[0].photometric == 1 and tuple(tif.pages[0].extrasamples) == (2,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", IsoflowWarning)
+        obj = isoflow.read_volume(tmp_path / "la.tif", label=7)
+    assert np.array_equal(obj.volume, grey.T == 7)

@@ -220,11 +220,12 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, ext
         return data, axes
     s = axes.index("S")
     samples = np.moveaxis(data, s, 0)
+    planar = planar and photometric == RGB  # only RGB(A) planes are what tifffile makes of 3 or 4 slices
     if samples.shape[0] != colours + len(extra):
         return data, axes
     channels = samples if planar else samples[:colours]
     grey = channels[0]
-    kind = ("RGB" if photometric == RGB else "grey") + (" and alpha" if extra else "")
+    kind = "RGB" + ("A" if extra else "")
     if planar and not (channels == grey).all():
         raise IsoflowError(f"{where}: holds {len(channels)} planes that differ, stored as the colours of one "
                            f"image ({kind}, planar); isoflow reads no colours: "
