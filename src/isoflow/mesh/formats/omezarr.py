@@ -45,8 +45,8 @@ from .registry import (
     check_shape,
     check_time,
     import_library,
+    never_written,
     no_such_label,
-    note,
     one_time_point_labels,
     placement,
     reading,
@@ -104,7 +104,9 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
         data = np.asarray(array[index])
-    fill = getattr(array, "fill_value", None)
+    # the label is chosen later (as_object): counted for any nonzero fill
+    # value; the store's keys are not told apart by time point
+    fill, blank = getattr(array, "fill_value", None), unwritten_fill(array) if time is None else None
     if multiscale is None:
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
@@ -116,14 +118,15 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
-            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill)
-        return RawVolume(data, fill=fill)
+            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill,
+                             unwritten=blank)
+        return RawVolume(data, fill=fill, unwritten=blank)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill)
+    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -273,13 +276,16 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
 
     import_library("zarr", "OME-Zarr")
     if label is None:
-        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
+        report = analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
+        never_written(str(path), unwritten_fill(open_store(path).array))
+        return report
     store = open_store(path)
     check_label(label, store.array.dtype, store.where)
     report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
                              surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
         raise label_absent(path, label)
+    never_written(store.where, unwritten_fill(store.array, label), label)
     if store.multiscale is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report = dataclasses.replace(report, shape=[int(store.array.shape[i]) for i in store.xyz])
     return report
@@ -515,6 +521,28 @@ def unwritten(array) -> tuple[int, int, str]:
     return (total - written) // per, total // per, "shards"
 
 
+def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | None:
+    """``(fill, missing, total, unit)`` of a zarr array (:func:`fill_label`
+    and :func:`unwritten`), as :func:`~isoflow.mesh.formats.registry.never_written`
+    takes it; None where no chunk would pass for a voxel: a fill value of
+    0 or no label, one other than ``label`` when given, or every chunk
+    written. The store's keys are listed only where they would matter.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=1)
+    >>> z[:2] = 0
+    >>> unwritten_fill(z), unwritten_fill(z, label=3)
+    ((1, 2, 3, 'chunks'), None)
+    """
+    fill = fill_label(array)
+    if not fill or (label is not None and label != fill):
+        return None
+    missing, total, unit = unwritten(array)
+    return (fill, missing, total, unit) if missing else None
+
+
 class LabelSlabs:
     """A zarr store's 3D label image read in slabs along x, whatever the
     stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
@@ -561,12 +589,7 @@ class LabelSlabs:
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
         self.pitch, self.origin = pitch, origin
-        fill = fill_label(array)
-        if fill:  # (the store's keys are listed only where a missing chunk would pass for a label)
-            missing, total, unit = unwritten(array)
-            if missing:
-                note(f"{self.where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the "
-                     f"fill value {fill}, so they count as label {fill}")
+        never_written(self.where, unwritten_fill(array), table=True)
 
     def __getitem__(self, x):
         index = [0] * len(self.array.shape)
