@@ -183,7 +183,7 @@ class StoreArray:
         return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
 
 
-def open_store(path: str | os.PathLike) -> StoreArray:
+def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
     """A zarr store's volume array with its axes matched by name, not
     read: what the block-by-block readers share.
 
@@ -192,6 +192,11 @@ def open_store(path: str | os.PathLike) -> StoreArray:
     path : str or os.PathLike
         The store; ``:LEVEL`` after it picks a resolution level of an
         OME-Zarr image (its path or index), ``:NAME`` an array of a group.
+    time : bool
+        An OME-Zarr time axis of several entries beside x, y and z is kept
+        as a fourth entry of ``xyz``, as :func:`read` reads it (see
+        :func:`~isoflow.scale.chunks.spatial_axes`); by default it is
+        refused.
 
     Returns
     -------
@@ -214,13 +219,17 @@ def open_store(path: str | os.PathLike) -> StoreArray:
     >>> store = open_store(f"{d}:0")
     >>> store.xyz, store.other, store.lazy().shape, store.lazy().chunks
     ([3, 2, 1], [0], (4, 5, 6), ((2, 2), (5,), (6,)))
+    >>> _ = g.create_array("t", shape=(3, 4, 5, 6), dtype="u1")
+    >>> g.attrs["multiscales"] = [{"axes": ["t", "z", "y", "x"], "datasets": [{"path": "t"}]}]
+    >>> open_store(f"{d}:t", time=True).xyz
+    [3, 2, 1, 0]
     """
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
         return StoreArray(array, where, None, None, list(range(array.ndim)), [])
-    xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)
+    xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where, time=time)
     return StoreArray(array, where, multiscale, dataset, xyz, other)
 
 
@@ -255,12 +264,8 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     (5, 4, 3, 2)
     """
     import_library("zarr", "OME-Zarr")
-    file, level = split_dataset(path)
-    array, multiscale, _ = open_zarr_node(file, level)
-    if multiscale is None:
-        return tuple(int(n) for n in array.shape)
-    xyz = spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path), time=True)[0]
-    return tuple(int(array.shape[i]) for i in xyz)
+    store = open_store(path, time=True)
+    return tuple(int(store.array.shape[i]) for i in store.xyz)
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
@@ -554,36 +559,32 @@ class LabelSlabs:
         from ...scale.chunks import zarr_blocks
 
         import_library("zarr", "OME-Zarr")
-        file, level = split_dataset(path)
-        self.where = str(path)
-        array, multiscale, dataset = open_zarr_node(file, level)
-        if multiscale is None:
-            names = "xyz"[:array.ndim] if array.ndim == 3 else None
+        store = open_store(path, time=True)
+        array, self.where = store.array, store.where
+        if store.multiscale is None:
             attrs = dict(getattr(array, "attrs", {}) or {})
             pitch, origin = attrs.get("pitch", 1.0), attrs.get("origin")
         else:
-            names = axis_names(multiscale, array.ndim, self.where)
-            scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
-        if names is None and array.ndim not in (2, 3):
+            pitch, origin = store.placement()
+        if store.multiscale is None and array.ndim not in (2, 3):
             # as a file's: no label table is 4D, whether read whole or by blocks
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is {array.ndim}D "
                                f"with shape {tuple(array.shape)}"
                                + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
-        if names is None:
+        if store.multiscale is None and array.ndim != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if array.ndim == 2 else ""))
-        self.xyz, self.other = spatial_axes(names, array.shape, self.where, time=True)
+        self.xyz, self.other = store.xyz, store.other
         if len(self.xyz) == 4:
             shape = tuple(int(array.shape[i]) for i in self.xyz)
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is 4D with shape "
                                f"{shape}" + one_time_point_labels(self.where))
         if len(self.xyz) != 3:
+            names = None if store.multiscale is None else axis_names(store.multiscale, array.ndim, self.where)
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this image has axes {names}" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if len(self.xyz) == 2 else ""))
-        if multiscale is not None:
-            pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
         self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
