@@ -88,6 +88,31 @@ def test_info_table_is_readable(capsys):
     assert "Euler characteristic   1" in out and "(+,-,-)+" in out
 
 
+@pytest.mark.parametrize("counts, nwc, end", [
+    ([3, 40, 7], 2, 27),  # the table as it always read: every count ends at column 27
+    ([3, 10**5, 7], 123456, 28),
+    ([10**12, 10**6, 7], 10**12, 35),  # 13 digits
+])
+def test_info_table_counts_share_one_column_whatever_their_size(counts, nwc, end):
+    import dataclasses
+
+    from isoflow import analyze
+    from isoflow.cli.info import format_info
+
+    v = np.zeros((6, 6, 6), bool)
+    v[1:5, 1:5, 1:5] = True
+    r = analyze(v)
+    labels = list(r["classes"])[:3]
+    r = dataclasses.replace(r, classes=dict(zip(labels, counts)), non_well_composed=nwc)
+    lines = format_info(r, "big").splitlines()
+    start = lines.index("  vertex classes (eq. 4.9):") + 1
+    rows = lines[start:start + len(labels) + 1]
+    assert [int(row.split()[-1]) for row in rows] == counts + [nwc]
+    assert [len(row) for row in rows] == [end] * len(rows)
+    assert [row[4:4 + len(str(name))] for row, name in zip(rows, labels + ["not well-composed"])] == [
+        str(name) for name in labels + ["not well-composed"]]
+
+
 def test_surface_writes_ply_and_obj(tmp_path, capsys):
     v = torus(5, 2)
     np.save(tmp_path / "t.npy", v)

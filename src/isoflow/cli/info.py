@@ -174,9 +174,12 @@ def format_info(r: Report, name: str, grid: dict | None = None) -> str:
     ]
     lines.append("  Betti numbers          " + betti_words(r["betti"]))
     lines.append("  vertex classes (eq. 4.9):")
-    for label, count in r["classes"].items():
-        lines.append(f"    {label:<10} {count:>12}")
-    lines.append(f"    {'not well-composed':<10} {r['non_well_composed']:>5}")
+    # one column for every count: as wide as the widest, so that
+    # 10^12 voxels' rows still end where the others do
+    rows = [(str(label), count) for label, count in r["classes"].items()]
+    rows.append(("not well-composed", r["non_well_composed"]))
+    width = max([5] + [len(str(count)) for _, count in rows])
+    lines += [f"    {label:<17} {count:>{width}}" for label, count in rows]
     scale = 1 << r["dimension"]
     lines.append(f"  a^T n                  {r['a_dot_n']}  (= {scale} chi)")
     lines.append(f"  energy E = k^T n       {r['energy']}")

@@ -177,7 +177,8 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.formats.omezarr import label_absent, store_volume
+    from ..mesh.formats.omezarr import label_absent, open_store, store_volume, unwritten_fill
+    from ..mesh.formats.registry import never_written
     from ..mesh.readback import volume_unit, volume_words
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
@@ -199,6 +200,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
             # the label's voxels are none: say that no voxel has it and what
             # the store holds (as in memory), not "the object is empty"
             raise label_absent(args.input, args.label) from None
+    never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
     out = written["path"]
     print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
           f"V-E+F = {written['euler_characteristic']}"

@@ -28,6 +28,7 @@ from .formats.registry import (
     check_label,
     check_time,
     format_for,
+    never_written,
     no_such_label,
     one_time_point_labels,
     sniff_volume_format,
@@ -191,6 +192,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
             # a label table takes 2D and 3D images: --labels is no way out in 4D
             raise with_label_options(fill_value_named(exc, raw.fill, arr.dtype), every=arr.ndim != 4,
                                      ndim=arr.ndim) from None
+    never_written(where, raw.unwritten, label)
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
@@ -314,6 +316,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
         obj = DigitalObject.placement(arr.ndim, raw.pitch, raw.origin, raw.offset, raw.parity)
     except IsoflowError as exc:
         raise exc.at(path) from None
+    never_written(str(path), raw.unwritten, table=True)
     return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0])
 
 

@@ -45,8 +45,8 @@ from .registry import (
     check_shape,
     check_time,
     import_library,
+    never_written,
     no_such_label,
-    note,
     one_time_point_labels,
     placement,
     reading,
@@ -104,7 +104,9 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
         data = np.asarray(array[index])
-    fill = getattr(array, "fill_value", None)
+    # the label is chosen later (as_object): counted for any nonzero fill
+    # value; the store's keys are not told apart by time point
+    fill, blank = getattr(array, "fill_value", None), unwritten_fill(array) if time is None else None
     if multiscale is None:
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps
@@ -116,14 +118,15 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
             except (TypeError, ValueError):
                 raise IsoflowError(f"{where}: the attributes pitch {attrs['pitch']!r} and origin "
                                    f"{attrs['origin']!r} are not numbers") from None
-            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill)
-        return RawVolume(data, fill=fill)
+            return RawVolume(data, *(v if time is None or not v.ndim else v[:3] for v in (pitch, origin)), fill=fill,
+                             unwritten=blank)
+        return RawVolume(data, fill=fill, unwritten=blank)
     scale, shift = placement_of(multiscale, level, data.ndim, where)
     xyz, _ = spatial_axes(names, data.shape, where, time=True)
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill)
+    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -180,7 +183,7 @@ class StoreArray:
         return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
 
 
-def open_store(path: str | os.PathLike) -> StoreArray:
+def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
     """A zarr store's volume array with its axes matched by name, not
     read: what the block-by-block readers share.
 
@@ -189,6 +192,11 @@ def open_store(path: str | os.PathLike) -> StoreArray:
     path : str or os.PathLike
         The store; ``:LEVEL`` after it picks a resolution level of an
         OME-Zarr image (its path or index), ``:NAME`` an array of a group.
+    time : bool
+        An OME-Zarr time axis of several entries beside x, y and z is kept
+        as a fourth entry of ``xyz``, as :func:`read` reads it (see
+        :func:`~isoflow.scale.chunks.spatial_axes`); by default it is
+        refused.
 
     Returns
     -------
@@ -211,13 +219,17 @@ def open_store(path: str | os.PathLike) -> StoreArray:
     >>> store = open_store(f"{d}:0")
     >>> store.xyz, store.other, store.lazy().shape, store.lazy().chunks
     ([3, 2, 1], [0], (4, 5, 6), ((2, 2), (5,), (6,)))
+    >>> _ = g.create_array("t", shape=(3, 4, 5, 6), dtype="u1")
+    >>> g.attrs["multiscales"] = [{"axes": ["t", "z", "y", "x"], "datasets": [{"path": "t"}]}]
+    >>> open_store(f"{d}:t", time=True).xyz
+    [3, 2, 1, 0]
     """
     file, level = split_dataset(path)
     where = str(path)
     array, multiscale, dataset = open_zarr_node(file, level)
     if multiscale is None:
         return StoreArray(array, where, None, None, list(range(array.ndim)), [])
-    xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where)
+    xyz, other = spatial_axes(axis_names(multiscale, array.ndim, where), array.shape, where, time=time)
     return StoreArray(array, where, multiscale, dataset, xyz, other)
 
 
@@ -252,12 +264,8 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     (5, 4, 3, 2)
     """
     import_library("zarr", "OME-Zarr")
-    file, level = split_dataset(path)
-    array, multiscale, _ = open_zarr_node(file, level)
-    if multiscale is None:
-        return tuple(int(n) for n in array.shape)
-    xyz = spatial_axes(axis_names(multiscale, array.ndim, str(path)), array.shape, str(path), time=True)[0]
-    return tuple(int(array.shape[i]) for i in xyz)
+    store = open_store(path, time=True)
+    return tuple(int(store.array.shape[i]) for i in store.xyz)
 
 
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
@@ -273,13 +281,16 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
 
     import_library("zarr", "OME-Zarr")
     if label is None:
-        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
+        report = analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
+        never_written(str(path), unwritten_fill(open_store(path).array))
+        return report
     store = open_store(path)
     check_label(label, store.array.dtype, store.where)
     report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
                              surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
         raise label_absent(path, label)
+    never_written(store.where, unwritten_fill(store.array, label), label)
     if store.multiscale is not None:  # the analysed axes are in stored order; report them as (x, y, z)
         report = dataclasses.replace(report, shape=[int(store.array.shape[i]) for i in store.xyz])
     return report
@@ -515,6 +526,28 @@ def unwritten(array) -> tuple[int, int, str]:
     return (total - written) // per, total // per, "shards"
 
 
+def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | None:
+    """``(fill, missing, total, unit)`` of a zarr array (:func:`fill_label`
+    and :func:`unwritten`), as :func:`~isoflow.mesh.formats.registry.never_written`
+    takes it; None where no chunk would pass for a voxel: a fill value of
+    0 or no label, one other than ``label`` when given, or every chunk
+    written. The store's keys are listed only where they would matter.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=1)
+    >>> z[:2] = 0
+    >>> unwritten_fill(z), unwritten_fill(z, label=3)
+    ((1, 2, 3, 'chunks'), None)
+    """
+    fill = fill_label(array)
+    if not fill or (label is not None and label != fill):
+        return None
+    missing, total, unit = unwritten(array)
+    return (fill, missing, total, unit) if missing else None
+
+
 class LabelSlabs:
     """A zarr store's 3D label image read in slabs along x, whatever the
     stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
@@ -526,47 +559,38 @@ class LabelSlabs:
         from ...scale.chunks import zarr_blocks
 
         import_library("zarr", "OME-Zarr")
-        file, level = split_dataset(path)
-        self.where = str(path)
-        array, multiscale, dataset = open_zarr_node(file, level)
-        if multiscale is None:
-            names = "xyz"[:array.ndim] if array.ndim == 3 else None
+        store = open_store(path, time=True)
+        array, self.where = store.array, store.where
+        if store.multiscale is None:
             attrs = dict(getattr(array, "attrs", {}) or {})
             pitch, origin = attrs.get("pitch", 1.0), attrs.get("origin")
         else:
-            names = axis_names(multiscale, array.ndim, self.where)
-            scale, shift = placement_of(multiscale, dataset, array.ndim, self.where)
-        if names is None and array.ndim not in (2, 3):
+            pitch, origin = store.placement()
+        if store.multiscale is None and array.ndim not in (2, 3):
             # as a file's: no label table is 4D, whether read whole or by blocks
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is {array.ndim}D "
                                f"with shape {tuple(array.shape)}"
                                + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
-        if names is None:
+        if store.multiscale is None and array.ndim != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if array.ndim == 2 else ""))
-        self.xyz, self.other = spatial_axes(names, array.shape, self.where, time=True)
+        self.xyz, self.other = store.xyz, store.other
         if len(self.xyz) == 4:
             shape = tuple(int(array.shape[i]) for i in self.xyz)
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is 4D with shape "
                                f"{shape}" + one_time_point_labels(self.where))
         if len(self.xyz) != 3:
+            names = None if store.multiscale is None else axis_names(store.multiscale, array.ndim, self.where)
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this image has axes {names}" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if len(self.xyz) == 2 else ""))
-        if multiscale is not None:
-            pitch, origin = scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
         self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
         self.pitch, self.origin = pitch, origin
-        fill = fill_label(array)
-        if fill:  # (the store's keys are listed only where a missing chunk would pass for a label)
-            missing, total, unit = unwritten(array)
-            if missing:
-                note(f"{self.where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the "
-                     f"fill value {fill}, so they count as label {fill}")
+        never_written(self.where, unwritten_fill(array), table=True)
 
     def __getitem__(self, x):
         index = [0] * len(self.array.shape)
