@@ -614,7 +614,7 @@ def test_a_trimesh_scene_is_read_as_its_file_is(tmp_path):
     ("m.zarr", lambda p, **k: isoflow.voxelize_to_zarr(_box(), p / "m.zarr", resolution=4, **k)),
 ])
 def test_a_force_that_is_no_bool_is_refused_and_the_file_kept(tmp_path, name, call):
-    # force="no" is truthy: the existing file was replaced
+    # force="no" is truthy, and must not replace the existing file
     (tmp_path / name).mkdir() if name.endswith(".zarr") else (tmp_path / name).write_text("kept")
     before = sorted(p.name for p in tmp_path.rglob("*"))
     with pytest.raises(IsoflowError) as e:

@@ -169,7 +169,7 @@ def test_planar_index_sums_to_four_chi(rng):
 
 
 def test_euler_lut_defaults_to_the_face_connectivity_of_its_dimension():
-    # euler_lut(2) raised "connectivity 6 is not valid in 2D": its default was the 3D one
+    # each dimension's own default connectivity (2n), not the 3D one
     import isoflow
 
     for n, face in ((1, 2), (2, 4), (3, 6), (4, 8)):

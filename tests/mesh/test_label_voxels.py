@@ -129,7 +129,7 @@ def test_split_keeps_a_cavity_with_its_body():
 
 def test_split_names_a_hollow_body_alone_as_its_file(tmp_path):
     # a mesh of one body keeps the name FILE (docs/labels.md); a hollow one,
-    # two shells of one body, was named FILE:1
+    # two shells of one body: the file's name, not FILE:1
     outer, inner = trimesh.creation.box((2, 2, 2)), trimesh.creation.box((1, 1, 1))
     inner.invert()
     path = tmp_path / "hollow.obj"
