@@ -8,7 +8,12 @@ nobody has to read a traceback from inside numpy.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import re
+import sys
+import warnings
+from types import FrameType
 
 #: what every reader says of an input that is not there (a volume, a mesh,
 #: a zarr store: a directory), after its path
@@ -217,6 +222,39 @@ class IsoflowWarning(UserWarning):
     """Something a user should know that is not an error: a file format that
     cannot keep the voxel size, an affine's rotation left out. The command
     line prints it as one ``warning:`` line."""
+
+
+#: the files whose frames a warning skips: isoflow's own, and contextlib's
+#: (a ``with`` block's exit runs isoflow code from there)
+_INSIDE = (os.path.dirname(os.path.abspath(__file__)) + os.sep, os.path.abspath(contextlib.__file__))
+
+
+def warn(message: str, category: type[Warning] = IsoflowWarning) -> None:
+    """Issue a warning attributed to the first caller outside isoflow: the
+    user's line, however deep inside isoflow it was raised (a fixed
+    ``stacklevel`` points at isoflow's own code where the depth varies).
+
+    Parameters
+    ----------
+    message : str
+        The warning's one line.
+    category : type, optional
+        A :class:`Warning` subclass; :class:`IsoflowWarning` by default.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     warn("pitch dropped")
+    >>> str(caught[0].message), caught[0].category.__name__, caught[0].filename.endswith("errors.py")
+    ('pitch dropped', 'IsoflowWarning', False)
+    """
+    frame: FrameType | None = sys._getframe(1)
+    level = 2
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(_INSIDE):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, category, stacklevel=level)
 
 
 class MeshNote(IsoflowWarning):

@@ -28,7 +28,7 @@ from pathlib import Path
 
 from ..digital.lattice import DigitalObject
 from ..digital.surface import boundary_mesh
-from ..errors import IsoflowError
+from ..errors import IsoflowError, warn
 from ..mesh import export
 from ..mesh.outputs import (
     atomic_write,
@@ -422,7 +422,7 @@ class FlowWriter:
                 key = re.sub(r"step_\d+|\[[^]]*\]", "*", text.replace(str(self.out), ""))
                 if key not in self._said:
                     self._said.add(key)
-                    warnings.warn(text, w.category, stacklevel=3)
+                    warn(text, w.category)
         except (OSError, IsoflowError, KeyboardInterrupt) as exc:
             if isinstance(exc, OSError):
                 exc = write_error(Path(exc.filename or self.stage), exc, existed=False)

@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, IsoflowWarning
+from ..errors import IsoflowError, warn
 from .outputs import atomic_write, check_output_path, check_switch
 
 if TYPE_CHECKING:
@@ -595,13 +595,11 @@ def write_surface(
     comments = (f"isoflow write_surface, {mesh.connectivity}-connectivity", VERTEX_COMMENT)
     written = write_mesh_file(path, mesh, obj, ascii=ascii, triangulate=triangulate, force=force, comments=comments)
     if suffix == ".stl":
-        import warnings
-
         if written["moved_voxels"] > STL_NOTE_VOXELS:
-            warnings.warn(stl_move_note(path, written), IsoflowWarning, stacklevel=2)
+            warn(stl_move_note(path, written))
         welded = shared_positions(mesh)
         if welded:
-            warnings.warn(stl_weld_note(path, welded), IsoflowWarning, stacklevel=2)
+            warn(stl_weld_note(path, welded))
     return path
 
 

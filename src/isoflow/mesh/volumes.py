@@ -10,7 +10,6 @@ from __future__ import annotations
 import dataclasses
 import os
 import re
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
-from ..errors import IsoflowError, IsoflowWarning, missing
+from ..errors import IsoflowError, missing, warn
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.memory import check_fits
 from .formats.registry import (
@@ -514,8 +513,7 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     except IsoflowError as exc:  # e.g. the grid beyond the memory budget: say which file
         raise exc.at(path) from None
     if not obj.voxels and points_are == "corners":  # points, and no cube: say why, as the command line does
-        warnings.warn(f"{path}: {no_cube_reason(obj.ndim, 'points_are=' + repr('voxels'))}", IsoflowWarning,
-                      stacklevel=2)
+        warn(f"{path}: {no_cube_reason(obj.ndim, 'points_are=' + repr('voxels'))}")
     return obj
 
 

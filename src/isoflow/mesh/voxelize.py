@@ -34,7 +34,6 @@ shell nested inside another with the opposite orientation is a cavity.
 from __future__ import annotations
 
 import os
-import warnings
 from collections.abc import Callable
 from typing import Any, Literal, Protocol, overload, runtime_checkable
 
@@ -42,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, counted
+from ..errors import IsoflowError, MeshNote, check_callable, counted, warn
 from ..scale import memory
 from .fills import (
     THIN_SHARE,
@@ -700,11 +699,11 @@ def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch:
                         overlap_voxels=int(stats[0]), shell_voxels=shell, note=note)
 
 
-def say_note(note: str | None, stacklevel: int = 3) -> None:
+def say_note(note: str | None) -> None:
     """Issue a voxelisation's note as a :class:`~isoflow.errors.MeshNote`
     warning (for callers that did not ask for the details)."""
     if note:
-        warnings.warn(note, MeshNote, stacklevel=stacklevel)
+        warn(note, MeshNote)
 
 
 @overload

@@ -23,14 +23,13 @@ import contextlib
 import importlib
 import logging
 import os
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError, IsoflowWarning
+from ...errors import IsoflowError, warn
 from ...scale.chunks import spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -478,7 +477,7 @@ def _number(value) -> str:
 def note(message: str) -> None:
     """A one-line warning (metadata a format cannot keep, an affine's
     rotation dropped); the command line prints it as ``warning: ...``."""
-    warnings.warn(message, IsoflowWarning, stacklevel=3)
+    warn(message)
 
 
 def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label: object = None, *,
