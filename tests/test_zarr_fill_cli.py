@@ -94,3 +94,15 @@ def test_store_read_into_memory_says_its_unwritten_chunks_are_voxels(tmp_path):
     store(tmp_path / "zero.zarr", (8, 6), 0, 1)
     assert isoflow(code=f"import isoflow; print(isoflow.read_volume({str(tmp_path / 'zero.zarr')!r}).voxels)") == (
         "12\n", [])
+
+
+def test_analyze_zarr_says_its_unwritten_chunks_are_voxels_once(tmp_path):
+    from isoflow import IsoflowWarning, analyze_zarr
+
+    z = store(tmp_path / "one.zarr", (8, 6, 6), 1, 1)
+    assert z.nchunks - z.nchunks_initialized == 3
+    with pytest.warns(IsoflowWarning) as caught:
+        report = analyze_zarr(tmp_path / "one.zarr")
+    assert report["voxels"] == int(np.count_nonzero(z[...])) == 6 * 6 * 6
+    assert [str(w.message) for w in caught] == [said(tmp_path / "one.zarr", z, "voxels of the object")]
+    assert caught[0].filename == __file__  # the caller's line, not isoflow's

@@ -177,11 +177,11 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.formats.omezarr import label_absent, open_store, store_volume, unwritten_fill
-    from ..mesh.formats.registry import never_written
+    from ..mesh.formats.omezarr import label_absent, open_store, store_volume
     from ..mesh.readback import volume_unit, volume_words
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
+    from ..scale.chunks import never_written, unwritten_fill
     from .progress import progress_bar
 
     refuse_mesh_options(args, ".zarr")

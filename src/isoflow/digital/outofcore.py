@@ -58,7 +58,17 @@ import numpy as np
 
 from ..errors import IsoflowError, check_callable
 from ..scale.arrays import NotBinary, binary, fill_value_named
-from ..scale.chunks import block_bounds, checked_block_shape, import_dask, is_zarr_array, zarr_blocks, zarr_volume
+from ..scale.chunks import (
+    SpatialAxes,
+    block_bounds,
+    checked_block_shape,
+    import_dask,
+    is_zarr_array,
+    never_written,
+    unwritten_fill,
+    zarr_blocks,
+    zarr_volume,
+)
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
 from .analysis import report_from_histogram
@@ -526,6 +536,12 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
         OME-Zarr axis other than x, y, z with several entries, or the
         errors of :func:`analyze_chunked`, with the path.
 
+    Warns
+    -----
+    IsoflowWarning
+        Chunks never written whose fill value is nonzero: zarr reads them
+        as the fill value, so their voxels count as the object's.
+
     Notes
     -----
     Before the full pass, the dtype and the first block's values are
@@ -560,5 +576,6 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
             raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
     report = analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
                              surfaces=surfaces, threads=threads, progress=progress)
+    never_written(where, unwritten_fill(z.array if isinstance(z, SpatialAxes) else z))
     # analysed in stored order (the report does not depend on it but for the shape)
     return dataclasses.replace(report, shape=[int(z.shape[i]) for i in order])

@@ -20,6 +20,7 @@ from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..errors import IsoflowError, missing, warn
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
+from ..scale.chunks import never_written
 from ..scale.memory import check_fits
 from .formats.registry import (
     LabelVolume,
@@ -27,7 +28,6 @@ from .formats.registry import (
     check_label,
     check_time,
     format_for,
-    never_written,
     no_such_label,
     one_time_point_labels,
     sniff_volume_format,

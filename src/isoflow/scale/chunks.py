@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, missing
+from ..errors import IsoflowError, missing, warn
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -468,3 +468,129 @@ def ome_multiscales(attrs) -> dict | None:
     if isinstance(found, list) and found and isinstance(found[0], dict):
         return found[0]
     return None
+
+
+def fill_label(array) -> int | None:
+    """The fill value of a zarr array (what zarr reads for a chunk never
+    written) as the label it passes for.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The array whose ``fill_value`` is read (any object with one).
+
+    Returns
+    -------
+    int or None
+        The fill value as a whole number, else None (no fill value, or one
+        that is no label, such as NaN).
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(4,), dtype="f4", fill_value=2.0)
+    >>> fill_label(z), fill_label(zarr.create_array({}, shape=(4,), dtype="f4", fill_value=float("nan")))
+    (2, None)
+    """
+    fill = getattr(array, "fill_value", None)
+    try:
+        value = float(fill)
+    except (TypeError, ValueError):
+        return None
+    return int(value) if np.isfinite(value) and value.is_integer() else None
+
+
+def unwritten(array) -> tuple[int, int, str]:
+    """How many of a zarr array's stored objects are not in its store
+    (never written, or left out because they held nothing but the fill
+    value): ``(missing, total, unit)``, the unit ``"chunks"``, or
+    ``"shards"`` for a sharded array (chunks left out inside a written
+    shard are not counted). The store's keys are listed, no chunk is read.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        The stored array.
+
+    Returns
+    -------
+    tuple
+        ``(missing, total, unit)``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=2)
+    >>> z[:2] = 1
+    >>> unwritten(z)
+    (2, 3, 'chunks')
+    """
+    total, written = int(array.nchunks), int(array.nchunks_initialized)
+    shards = getattr(array, "shards", None)
+    if not shards:
+        return total - written, total, "chunks"
+    # zarr counts every chunk of a written shard as written
+    per = int(np.prod([s // c for s, c in zip(shards, array.chunks)]))
+    return (total - written) // per, total // per, "shards"
+
+
+def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | None:
+    """``(fill, missing, total, unit)`` of a zarr array (:func:`fill_label`
+    and :func:`unwritten`), as :func:`never_written`
+    takes it; None where no chunk would pass for a voxel: a fill value of
+    0 or no label, one other than ``label`` when given, or every chunk
+    written. The store's keys are listed only where they would matter.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=1)
+    >>> z[:2] = 0
+    >>> unwritten_fill(z), unwritten_fill(z, label=3)
+    ((1, 2, 3, 'chunks'), None)
+    """
+    fill = fill_label(array)
+    if not fill or (label is not None and label != fill):
+        return None
+    missing, total, unit = unwritten(array)
+    return (fill, missing, total, unit) if missing else None
+
+
+def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label: object = None, *,
+                  table: bool = False) -> None:
+    """The one warning that a zarr store's chunks never written are read
+    as a nonzero fill value and so count as voxels: of the object (a
+    binary volume), of ``label`` where it is the fill value, or of the
+    label the fill value is (``table``, a label table).
+
+    Parameters
+    ----------
+    where : str
+        The store, as messages name it.
+    unwritten : tuple or None
+        ``(fill, missing, total, unit)``: the fill value as a label, the
+        chunks (or shards, the ``unit``) not in the store and all of them;
+        None says nothing.
+    label : number, optional
+        The label selected; nothing is said unless it is the fill value.
+    table : bool
+        Every label is counted (``--labels``).
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     never_written("v.zarr", (1, 3, 4, "chunks"))
+    ...     never_written("v.zarr", (2, 3, 4, "chunks"), label=5)  # another label: its count is right
+    >>> [str(w.message).split("; ")[1] for w in caught]
+    ['zarr reads their voxels as the fill value 1, so they count as voxels of the object']
+    """
+    if unwritten is None:
+        return
+    fill, missing, total, unit = unwritten
+    if not fill or not missing or (label is not None and label != fill):
+        return
+    counted = f"label {fill}" if table or label is not None else "voxels of the object"
+    warn(f"{where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the fill value {fill}, "
+         f"so they count as {counted}")

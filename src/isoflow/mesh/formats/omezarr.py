@@ -38,14 +38,13 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from ...scale.chunks import axis_names, open_zarr_node, spatial_axes
+from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
 from .registry import (
     RawVolume,
     check_label,
     check_shape,
     check_time,
     import_library,
-    never_written,
     no_such_label,
     one_time_point_labels,
     placement,
@@ -281,9 +280,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
 
     import_library("zarr", "OME-Zarr")
     if label is None:
-        report = analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
-        never_written(str(path), unwritten_fill(open_store(path).array))
-        return report
+        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
     store = open_store(path)
     check_label(label, store.array.dtype, store.where)
     report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
@@ -460,92 +457,6 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
             {"type": "translation", "translation": centre[order].tolist()},
         ]}],
     }]
-
-
-def fill_label(array) -> int | None:
-    """The fill value of a zarr array (what zarr reads for a chunk never
-    written) as the label it passes for.
-
-    Parameters
-    ----------
-    array : zarr.Array
-        The array whose ``fill_value`` is read (any object with one).
-
-    Returns
-    -------
-    int or None
-        The fill value as a whole number, else None (no fill value, or one
-        that is no label, such as NaN).
-
-    Examples
-    --------
-    >>> import tempfile, zarr
-    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(4,), dtype="f4", fill_value=2.0)
-    >>> fill_label(z), fill_label(zarr.create_array({}, shape=(4,), dtype="f4", fill_value=float("nan")))
-    (2, None)
-    """
-    fill = getattr(array, "fill_value", None)
-    try:
-        value = float(fill)
-    except (TypeError, ValueError):
-        return None
-    return int(value) if np.isfinite(value) and value.is_integer() else None
-
-
-def unwritten(array) -> tuple[int, int, str]:
-    """How many of a zarr array's stored objects are not in its store
-    (never written, or left out because they held nothing but the fill
-    value): ``(missing, total, unit)``, the unit ``"chunks"``, or
-    ``"shards"`` for a sharded array (chunks left out inside a written
-    shard are not counted). The store's keys are listed, no chunk is read.
-
-    Parameters
-    ----------
-    array : zarr.Array
-        The stored array.
-
-    Returns
-    -------
-    tuple
-        ``(missing, total, unit)``.
-
-    Examples
-    --------
-    >>> import tempfile, zarr
-    >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=2)
-    >>> z[:2] = 1
-    >>> unwritten(z)
-    (2, 3, 'chunks')
-    """
-    total, written = int(array.nchunks), int(array.nchunks_initialized)
-    shards = getattr(array, "shards", None)
-    if not shards:
-        return total - written, total, "chunks"
-    # zarr counts every chunk of a written shard as written
-    per = int(np.prod([s // c for s, c in zip(shards, array.chunks)]))
-    return (total - written) // per, total // per, "shards"
-
-
-def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | None:
-    """``(fill, missing, total, unit)`` of a zarr array (:func:`fill_label`
-    and :func:`unwritten`), as :func:`~isoflow.mesh.formats.registry.never_written`
-    takes it; None where no chunk would pass for a voxel: a fill value of
-    0 or no label, one other than ``label`` when given, or every chunk
-    written. The store's keys are listed only where they would matter.
-
-    Examples
-    --------
-    >>> import zarr
-    >>> z = zarr.create_array({}, shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=1)
-    >>> z[:2] = 0
-    >>> unwritten_fill(z), unwritten_fill(z, label=3)
-    ((1, 2, 3, 'chunks'), None)
-    """
-    fill = fill_label(array)
-    if not fill or (label is not None and label != fill):
-        return None
-    missing, total, unit = unwritten(array)
-    return (fill, missing, total, unit) if missing else None
 
 
 class LabelSlabs:

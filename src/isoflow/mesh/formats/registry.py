@@ -286,7 +286,7 @@ class RawVolume:
     written (a refusal of that value says so); None for other formats.
     ``unwritten``: ``(fill, missing, total, unit)`` where that fill value
     is a nonzero whole number and chunks were never written (see
-    :func:`never_written`); None otherwise."""
+    :func:`~isoflow.scale.chunks.never_written`); None otherwise."""
 
     array: np.ndarray
     pitch: float | np.ndarray = 1.0
@@ -478,46 +478,6 @@ def note(message: str) -> None:
     """A one-line warning (metadata a format cannot keep, an affine's
     rotation dropped); the command line prints it as ``warning: ...``."""
     warn(message)
-
-
-def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label: object = None, *,
-                  table: bool = False) -> None:
-    """The one warning that a zarr store's chunks never written are read
-    as a nonzero fill value and so count as voxels: of the object (a
-    binary volume), of ``label`` where it is the fill value, or of the
-    label the fill value is (``table``, a label table).
-
-    Parameters
-    ----------
-    where : str
-        The store, as messages name it.
-    unwritten : tuple or None
-        ``(fill, missing, total, unit)``: the fill value as a label, the
-        chunks (or shards, the ``unit``) not in the store and all of them;
-        None says nothing.
-    label : number, optional
-        The label selected; nothing is said unless it is the fill value.
-    table : bool
-        Every label is counted (``--labels``).
-
-    Examples
-    --------
-    >>> import warnings
-    >>> with warnings.catch_warnings(record=True) as caught:
-    ...     warnings.simplefilter("always")
-    ...     never_written("v.zarr", (1, 3, 4, "chunks"))
-    ...     never_written("v.zarr", (2, 3, 4, "chunks"), label=5)  # another label: its count is right
-    >>> [str(w.message).split("; ")[1] for w in caught]
-    ['zarr reads their voxels as the fill value 1, so they count as voxels of the object']
-    """
-    if unwritten is None:
-        return
-    fill, missing, total, unit = unwritten
-    if not fill or not missing or (label is not None and label != fill):
-        return
-    counted = f"label {fill}" if table or label is not None else "voxels of the object"
-    note(f"{where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the fill value {fill}, "
-         f"so they count as {counted}")
 
 
 def to_xyz(array: np.ndarray, names, where: str) -> np.ndarray:
