@@ -449,6 +449,23 @@ def test_digital_object_refuses_a_bool_pitch(pitch, shown):
     assert isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=(1, 2.0, 1)).pitch.tolist() == [1.0, 2.0, 1.0]
 
 
+def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
+    # an object array of Python numbers (what a pandas column or a list
+    # through np.array(..., dtype=object) gives) is numbers: the object is
+    # placed as by the same values in a float array; strings and None are not
+    as_objects = {"pitch": np.array([1, 0.5, 2], dtype=object), "origin": np.array([1, 2.5, 3], dtype=object),
+                  "offset": np.array([1, 2, 3], dtype=object)}
+    got = isoflow.DigitalObject(np.ones((2, 2, 2), bool), **as_objects)
+    want = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=[1.0, 0.5, 2.0], origin=[1.0, 2.5, 3.0], offset=(1, 2, 3))
+    assert got.spacing.tolist() == want.spacing.tolist() == [1.0, 0.5, 2.0]
+    assert got.origin.tolist() == want.origin.tolist() and got.offset == want.offset == (1, 2, 3)
+    for bad, shown in ((np.array(["1", "1", "1"], dtype=object), "['1', '1', '1']"),
+                       (np.array([1, None, 1], dtype=object), "[1, None, 1]")):
+        with pytest.raises(IsoflowError) as info:
+            isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=bad)
+        assert str(info.value) == f"'pitch' must be 3 numbers, one per axis, got {shown}"
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"pitch": 0}, "'pitch' must be positive"),
     ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),

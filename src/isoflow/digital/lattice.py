@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from numbers import Real
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -321,7 +322,11 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     want = ("an integer" if integral else "a number") if length is None else (
         f"{length} {'integers' if integral else 'numbers'}, one per axis")
     bad = IsoflowError(f"'{name}' must be {want}, got {shown}")
-    if arr.dtype.kind not in "biuf":  # strings, complex, objects
+    if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
+        # numbers held as Python objects (a list of ints and floats through
+        # np.array(..., dtype=object), a pandas column): numbers all the same
+        arr = arr.astype(np.float64)
+    if arr.dtype.kind not in "biuf":  # strings, complex, other objects
         raise bad
     if (arr.size != 1) if length is None else (arr.shape != (length,)):
         raise bad
