@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, import_library, reading
+from .registry import RawVolume, check_shape, colours_refused, import_library, reading
 
 #: Pillow's modes read as they are (their integer type)
 GREY = {"1": np.bool_, "L": np.uint8, "P": np.uint8, "I;16": np.uint16, "I;16B": np.uint16, "I;16L": np.uint16,
@@ -49,8 +49,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         channels = data[..., :COLOUR[mode]]
         grey = channels[..., 0]
         if not (channels == grey[..., None]).all():
-            raise IsoflowError(f"{where}: holds colours, not labels or a mask (its {mode} channels differ); save "
-                               "it as a grey (8- or 16-bit) or palette PNG")
+            raise colours_refused(where, mode, "a grey (8- or 16-bit) or palette PNG")
         data = grey
     data = np.asarray(data, dtype=GREY.get(mode, np.uint8))
     return RawVolume(np.ascontiguousarray(data.T), np.ones(2))

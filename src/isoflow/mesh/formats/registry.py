@@ -372,6 +372,20 @@ def refuse_empty(path: Path, shape: tuple[int, ...], fmt: str) -> None:
 READ_HINT = "crop it, or use a .zarr store with 'isoflow info' (read block by block)"
 
 
+def colours_refused(where: str, kind: str, save_as: str) -> IsoflowError:
+    """The refusal of an image whose colour channels differ (grey stored as
+    colour, whose channels are equal, is read as that grey), for every
+    format that stores colour.
+
+    Examples
+    --------
+    >>> str(colours_refused("a.png", "RGB", "a grey PNG"))
+    'a.png: holds colours, not labels or a mask (its RGB channels differ); save it as a grey PNG'
+    """
+    return IsoflowError(f"{where}: holds colours, not labels or a mask (its {kind} channels differ); save it as "
+                        f"{save_as}")
+
+
 def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     """Refuse, before reading, an array that will not fit in memory (the
     file's array plus the boolean volume), the line ending in ``hint``:

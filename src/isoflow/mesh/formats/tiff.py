@@ -62,6 +62,7 @@ from ...errors import IsoflowError
 from .registry import (
     RawVolume,
     check_shape,
+    colours_refused,
     import_library,
     note,
     placement,
@@ -226,13 +227,13 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, ext
     channels = samples if planar else samples[:colours]
     grey = channels[0]
     kind = "RGB" + ("A" if extra else "")
-    if planar and not (channels == grey).all():
+    same = bool((channels == grey).all())
+    if planar and not same:
         raise IsoflowError(f"{where}: holds {len(channels)} planes that differ, stored as the colours of one "
                            f"image ({kind}, planar); isoflow reads no colours: "
                            + _as_stack(where, "", "if its planes are the slices of one volume"))
-    if not (channels == grey).all():
-        raise IsoflowError(f"{where}: holds colours, not labels or a mask (its RGB channels differ); save it as "
-                           "a grey (8- or 16-bit) TIFF")
+    if not same:
+        raise colours_refused(where, "RGB", "a grey (8- or 16-bit) TIFF")
     if planar:
         note(f"{where}: its {len(channels)} equal planes, stored as the colours of one image ({kind}, "
              "planar), are read as one grey 2D image; "
