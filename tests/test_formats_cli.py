@@ -948,3 +948,20 @@ def test_a_level_after_the_slash_a_shell_adds_to_a_store(tmp_path, capsys):
         mesh = trimesh.load(tmp_path / "s.ply", process=False)
         assert mesh.euler_number == sum(s["euler_characteristic"] for s in report["surfaces"])
         assert isoflow.read_volume(given).voxels == int(level.sum())
+
+
+def test_one_voxel_is_said_in_the_singular(tmp_path, capsys):
+    # "1 voxels" in info's first line, voxelize's and the binary check's
+    one = np.zeros((3, 3, 3), np.uint8)
+    one[1, 1, 1] = 1
+    np.save(tmp_path / "one.npy", one)
+    assert main(["info", str(tmp_path / "one.npy")]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    assert f", {int(one.sum())} voxel, 6-connectivity" in first, first
+    one[0, 0, 0] = 7
+    np.save(tmp_path / "bad.npy", one)
+    fails(capsys, "info", tmp_path / "bad.npy", words=("(1 voxel holds values other than 0 and 1, e.g. 7)",))
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    assert main(["voxelize", str(tmp_path / "box.stl"), "--resolution", "1", "-o", str(tmp_path / "box.npy")]) == 0
+    said = capsys.readouterr().out
+    assert np.load(tmp_path / "box.npy").sum() == 1 and ": 1 voxel in a 1x1x1 grid" in said, said

@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, betti_words, coordinates
+from ..errors import IsoflowError, betti_words, coordinates, counted
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -163,7 +163,7 @@ def format_info(r: Report, name: str, grid: dict | None = None) -> str:
     """The report as a terminal reads it (``grid``: a mesh's, :func:`mesh_grid`)."""
     lines = [
         f"{name}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
-        f"{r['voxels']} {'pixels' if r['dimension'] == 2 else 'voxels'}, {r['connectivity']}-connectivity",
+        f"{counted(r['voxels'], 'pixel' if r['dimension'] == 2 else 'voxel')}, {r['connectivity']}-connectivity",
     ]
     if grid:
         # (as voxelize prints them)

@@ -70,7 +70,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     with coarser_for_magicavoxel():
         out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
-    print(f"{out}: {obj.voxels} voxels in a {shape} grid, pitch {obj.pitch:.6g}, origin {coordinates(obj.origin)}")
+    print(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, origin {coordinates(obj.origin)}")
     return 0
 
 

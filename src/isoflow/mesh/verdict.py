@@ -183,7 +183,7 @@ def head_text(v: GenusVerdict) -> str:
     digital, stop = v.digital, (f"; stopped by {stop_text(v.stop)}" if v.stop else "")
     ref_name = f"{v.reference_source} genus"
     if v.kind == "self_intersecting":
-        return (f"self-intersecting: {v.self_intersecting_faces} faces cross faces of their own component, "
+        return (f"self-intersecting: {_NOTE_WORDS['self_intersecting'](v.self_intersecting_faces)}, "
                 "so the surface bounds no well-defined solid and no finer grid settles its genus")
     if v.kind == "no_solid":
         volume = v.solid.get("volume")
@@ -293,7 +293,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         "number of 2 or more inside): the solid they bound by the nonzero rule swallows the inner ones, "
         f"genus {solid_genus} (manifold3d)"),
     "overlap": _overlap_words,
-    "self_intersecting": lambda n: f"{n} faces cross faces of their own component",
+    "self_intersecting": lambda n: f"{counted(n, 'face')} cross{'es' if n == 1 else ''} faces of their own component",
     "zero_area_faces": lambda n, along: (
         f"{n} zero-area face{'s' if n > 1 else ''} (corners in a line) left out of the crossing test"
         + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "

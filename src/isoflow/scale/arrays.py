@@ -182,11 +182,12 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
     bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
     if bad.any():
-        value = arr[bad].flat[0]
+        value, nbad = arr[bad].flat[0], int(bad.sum())
         # the count is of voxels (not of distinct values), and of this block
         # only where the volume is checked block by block
         place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        bare = (f"{where}: not a binary volume ({int(bad.sum())} voxels{place} hold values other than 0 and 1, "
+        bare = (f"{where}: not a binary volume ({counted(nbad, 'voxel')}{place} hold{'s' if nbad == 1 else ''} "
+                "values other than 0 and 1, "
                 f"e.g. {value}); threshold it first, e.g. volume > 0")
         # integers in memory are most often a label image, which has a table
         # (a command adds its own options to ``bare`` instead)
