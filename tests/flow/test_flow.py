@@ -368,6 +368,32 @@ def test_cli_flow_steps_guard_and_connectivity(tmp_path, capsys):
     assert "topology change at step 2" in capsys.readouterr().out
 
 
+def test_cli_flow_text_says_boxes_and_limit_as_info_prints_coordinates(tmp_path, capsys):
+    # a NIfTI's zooms are float32 (0.7 is 0.699999988...): the text printed
+    # the boxes as Python lists, [5.5, 6.299999892711639, ...]
+    import re
+
+    nib = pytest.importorskip("nibabel")
+    rng = np.random.default_rng(1)
+    labels = rng.integers(0, 4, (12, 10, 8)).astype(np.int16)
+    nib.save(nib.Nifti1Image(labels, np.diag([0.5, 0.7, 1.2, 1])), tmp_path / "seg.nii.gz")
+    args = ["flow", str(tmp_path / "seg.nii.gz"), "--label", "2"]
+    assert main([*args, "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    said = re.findall(r"topology change at step (\d+): .* in the box \[(.*)\] to \[(.*)\]", text)
+    assert len(said) == len(r["topology_changes"]) > 0, text
+    for (step, lo, hi), change in zip(said, r["topology_changes"]):
+        assert int(step) == change["step"]
+        for printed, value in zip(lo.split(", ") + hi.split(", "), change["where"][0] + change["where"][1]):
+            assert len(printed.replace("-", "").replace(".", "").lstrip("0")) <= 6, printed
+            assert float(printed) == pytest.approx(value, rel=1e-5)
+    limit = re.search(r"limit: \[(.*)\], the centre of the last non-empty state \(step (\d+): ", text)
+    assert limit and int(limit.group(2)) == r["limit"]["last_step"], text
+    assert [float(c) for c in limit.group(1).split(", ")] == pytest.approx(r["limit"]["center"], rel=1e-5)
+
+
 def test_cli_flow_out_files(tmp_path, capsys):
     np.save(tmp_path / "d.npy", dumbbell())
     out = tmp_path / "run"

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, coordinates
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -291,11 +291,14 @@ def format_flow(result, name: str) -> str:
     lim = result.limit
     lines.append(f"  stopped: {result.stop_reason}")
     if lim["center"] is not None:
-        centre = ", ".join(f"{c:g}" for c in lim["center"])
-        lines.append(f"  limit: ({centre}), last non-empty state {lim['last_shape']} at step {lim['last_step']}")
+        shape = {"cuboid": "a cuboid", "other": "not a cuboid", "not-reached": "the run stopped before its end"}
+        lines.append(f"  limit: {coordinates(lim['center'])}, the centre of the last non-empty state (step "
+                     f"{lim['last_step']}: {shape.get(lim['last_shape'], lim['last_shape'])})")
     for c in result.topology_changes:
         # a store flowed block by block finds changes but does not locate
-        # them (where is None): say so, not "in None"
-        place = "not located (block by block)" if c["where"] is None else f"in {c['where']}"
+        # them (where is None): say so, not "in None"; a box in a pitch read
+        # from float32 (NIfTI's zooms) prints as that pitch does
+        place = ("not located (block by block)" if c["where"] is None
+                 else f"in the box {coordinates(c['where'][0])} to {coordinates(c['where'][1])}")
         lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
     return "\n".join(lines)
