@@ -948,3 +948,38 @@ def test_a_level_after_the_slash_a_shell_adds_to_a_store(tmp_path, capsys):
         mesh = trimesh.load(tmp_path / "s.ply", process=False)
         assert mesh.euler_number == sum(s["euler_characteristic"] for s in report["surfaces"])
         assert isoflow.read_volume(given).voxels == int(level.sum())
+
+
+@pytest.mark.parametrize("bits", [8, 1])
+def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_path, bits):
+    """A mask saved MinIsWhite (PhotometricInterpretation 0: 0 is shown
+    white; 1-bit as fax-style writers save it, 8-bit as Fiji with an
+    inverting LUT) was read as stored without a word, though a viewer
+    shows its 0s as white: the values are still those that tifffile and
+    scikit-image read (and ImageJ keeps under its inverted LUT), and a
+    warning names the photometric, which voxels are the object and
+    --label 0 for the voxels shown white."""
+    measure = pytest.importorskip("skimage.measure")
+    mask = np.zeros((6, 9, 10), bool)  # (z, y, x)
+    mask[1:5, 1:4, 1:4] = mask[1:5, 5:8, 5:9] = True  # two boxes
+    path = tmp_path / "white.tif"
+    tifffile.imwrite(path, mask if bits == 1 else mask.astype(np.uint8), photometric="miniswhite")
+    with tifffile.TiffFile(path) as tif:
+        assert tif.pages[0].photometric == tifffile.PHOTOMETRIC.MINISWHITE and tif.pages[0].bitspersample == bits
+        stored = tif.asarray() != 0
+
+    def report(*extra):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json", *extra],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout), p.stderr.strip().splitlines()
+
+    stored_report, err = report()
+    assert stored_report["voxels"] == np.count_nonzero(stored)
+    assert stored_report["betti"][0] == measure.label(stored, connectivity=1).max() == 2
+    assert err == [f"isoflow info: warning: {path}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown "
+                   "white); its values are read as stored, as ImageJ, scikit-image and tifffile read them, so a "
+                   "mask's object is its nonzero voxels, shown dark; --label 0 (label=0) takes the voxels shown "
+                   "white instead"], err
+    shown_white, _ = report("--label", "0")
+    assert shown_white["voxels"] == np.count_nonzero(~stored)

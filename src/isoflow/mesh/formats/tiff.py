@@ -24,6 +24,13 @@ grey 2D image where every plane is equal (with a warning, and the command
 that saves it as a stack), and refuses it with that command where they
 differ.
 
+MinIsWhite (PhotometricInterpretation 0: 0 is shown white, as scanners,
+fax-style 1-bit writers and Fiji's inverting LUT save masks) is read as
+stored, with a warning: ImageJ keeps the stored values under an inverted
+grey LUT (and reads a set 1-bit pixel as 255), and scikit-image and
+tifffile keep them, so the object is the nonzero voxels that all of them
+measure, shown dark; ``--label 0`` takes the voxels shown white.
+
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
 (:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
@@ -76,7 +83,7 @@ from .registry import (
 X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT = 282, 283, 296
 RESOLUTION_TAGS = (X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT)
 #: TIFF's PhotometricInterpretation values whose first samples are grey or colour
-MINISBLACK, RGB = 1, 2
+MINISWHITE, MINISBLACK, RGB = 0, 1, 2
 #: colour (or grey) samples per pixel, before the extra samples
 COLOUR_SAMPLES = {MINISBLACK: 1, RGB: 3}
 #: TIFF's ExtraSamples values of an alpha channel (associated, unassociated)
@@ -121,6 +128,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
             detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
             raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
+    if photometric == MINISWHITE:
+        note(_white_is_zero(where))
     data, axes = _grey(data, axes, photometric, planar, extra, where)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
@@ -239,6 +248,17 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, ext
              "planar), are read as one grey 2D image; "
              + _as_stack(where, "", "if they are the slices of one volume"))
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
+
+
+def _white_is_zero(where: str) -> str:
+    """The warning for a MinIsWhite file, whose viewers show 0 as white:
+    its values are kept as stored, as ImageJ (an inverted grey LUT over
+    the stored values; 1-bit pixels set read as 255), scikit-image and
+    tifffile keep them, so that the object is what every one of them
+    measures; but what a viewer shows as the object may be the 0s."""
+    return (f"{where}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown white); its values are read "
+            "as stored, as ImageJ, scikit-image and tifffile read them, so a mask's object is its nonzero voxels, "
+            "shown dark; --label 0 (label=0) takes the voxels shown white instead")
 
 
 def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
