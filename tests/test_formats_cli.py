@@ -965,3 +965,73 @@ def test_one_voxel_is_said_in_the_singular(tmp_path, capsys):
     assert main(["voxelize", str(tmp_path / "box.stl"), "--resolution", "1", "-o", str(tmp_path / "box.npy")]) == 0
     said = capsys.readouterr().out
     assert np.load(tmp_path / "box.npy").sum() == 1 and ": 1 voxel in a 1x1x1 grid" in said, said
+
+
+@pytest.mark.parametrize("bits", [8, 1])
+def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_path, bits):
+    """A mask saved MinIsWhite (PhotometricInterpretation 0: 0 is shown
+    white; 1-bit as fax-style writers save it, 8-bit as Fiji with an
+    inverting LUT) was read as stored without a word, though a viewer
+    shows its 0s as white: the values are still those that tifffile and
+    scikit-image read (and ImageJ keeps under its inverted LUT), and a
+    warning names the photometric, which voxels are the object and
+    --label 0 for the voxels shown white."""
+    measure = pytest.importorskip("skimage.measure")
+    mask = np.zeros((6, 9, 10), bool)  # (z, y, x)
+    mask[1:5, 1:4, 1:4] = mask[1:5, 5:8, 5:9] = True  # two boxes
+    path = tmp_path / "white.tif"
+    tifffile.imwrite(path, mask if bits == 1 else mask.astype(np.uint8), photometric="miniswhite")
+    with tifffile.TiffFile(path) as tif:
+        assert tif.pages[0].photometric == tifffile.PHOTOMETRIC.MINISWHITE and tif.pages[0].bitspersample == bits
+        stored = tif.asarray() != 0
+
+    def report(*extra):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), "--json", *extra],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout), p.stderr.strip().splitlines()
+
+    stored_report, err = report()
+    assert stored_report["voxels"] == np.count_nonzero(stored)
+    assert stored_report["betti"][0] == measure.label(stored, connectivity=1).max() == 2
+    assert err == [f"isoflow info: warning: {path}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown "
+                   "white); its values are read as stored, as ImageJ, scikit-image and tifffile read them, so a "
+                   "mask's object is its nonzero voxels, shown dark; --label 0 (label=0) takes the voxels shown "
+                   "white instead"], err
+    shown_white, _ = report("--label", "0")
+    assert shown_white["voxels"] == np.count_nonzero(~stored)
+
+
+def test_an_ome_tiff_is_placed_by_its_first_planes_stage_position_in_its_voxel_size_unit(tmp_path, capsys):
+    """An OME-TIFF's Plane PositionX/Y/Z (the stage's place of the image)
+    was not read, so its surface landed at 0 where an OME-Zarr's lands at
+    its translation, and a PhysicalSizeZ in nm beside an x in um was read
+    as um. The first plane's position is voxel 0's centre, as an
+    OME-Zarr translation is, converted to PhysicalSizeX's unit (um), and
+    so are the voxel sizes: the surface's box is where the values written
+    put it. A position in a unit that is no length is refused in one line."""
+    mask = np.zeros((4, 6, 7), np.uint8)  # (z, y, x)
+    mask[1:3, 2:5, 1:6] = 1
+    pitch = np.array([0.5, 0.25, 400 * 1e-3])  # x, y in um; z written in nm
+    centre = np.array([1.5 * 1e3, 20.0, 3000 * 1e-3])  # x written in mm, y in the default unit, z in nm
+    planes = {"PositionX": [1.5] * 4, "PositionXUnit": ["mm"] * 4, "PositionY": [20.0] * 4,
+              "PositionZ": [3000.0 + 400 * k for k in range(4)], "PositionZUnit": ["nm"] * 4}
+    path = tmp_path / "placed.ome.tif"
+    tifffile.imwrite(path, mask, ome=True, metadata={"axes": "ZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25,
+                                                     "PhysicalSizeZ": 400.0, "PhysicalSizeZUnit": "nm",
+                                                     "Plane": planes})
+    xml = tifffile.TiffFile(path).ome_metadata
+    assert 'PositionX="1.5" PositionXUnit="mm"' in xml and 'PhysicalSizeZUnit="nm"' in xml
+    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(path), "-o", str(tmp_path / "s.ply")],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    vertices = ply_vertices(tmp_path / "s.ply")
+    lowest = np.array([1, 2, 1])  # the box's lowest voxel (x, y, z)
+    np.testing.assert_allclose(vertices.min(axis=0), centre - pitch / 2 + lowest * pitch, rtol=1e-6)  # PLY: float32
+    np.testing.assert_allclose(vertices.max(axis=0) - vertices.min(axis=0), [5, 3, 2] * pitch, rtol=1e-4)
+
+    planes["PositionXUnit"] = ["pixel"] * 4
+    tifffile.imwrite(tmp_path / "pixel.ome.tif", mask, ome=True, metadata={"axes": "ZYX", "PhysicalSizeX": 0.5,
+                                                                           "Plane": planes})
+    fails(capsys, "info", tmp_path / "pixel.ome.tif",
+          words=("pixel.ome.tif: OME-XML's PositionXUnit 'pixel' does not convert to PhysicalSizeXUnit",))

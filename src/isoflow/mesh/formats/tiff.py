@@ -24,13 +24,21 @@ grey 2D image where every plane is equal (with a warning, and the command
 that saves it as a stack), and refuses it with that command where they
 differ.
 
+MinIsWhite (PhotometricInterpretation 0: 0 is shown white, as scanners,
+fax-style 1-bit writers and Fiji's inverting LUT save masks) is read as
+stored, with a warning: ImageJ keeps the stored values under an inverted
+grey LUT (and reads a set 1-bit pixel as 255), and scikit-image and
+tifffile keep them, so the object is the nonzero voxels that all of them
+measure, shown dark; ``--label 0`` takes the voxels shown white.
+
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
 (:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
 resolution of 72 dpi that Pillow and others give an image without a scale,
 or without a ResolutionUnit tag or ImageJ description; z from ImageJ's
-``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (its units as
-written); 1 where absent.
+``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (in
+PhysicalSizeX's unit, µm where not said, the others converted to it); 1
+where absent.
 
 Origin: ImageJ's calibration origin, ``xorigin``, ``yorigin`` and ``zorigin``
 in its description (Fiji's Image > Properties "Origin"), in pixels of the
@@ -43,7 +51,11 @@ coordinates are pixel corners, so voxel 0's lowest corner is at
 ``xorigin = -origin / pitch`` (a key for each axis whose origin is not 0, as
 ImageJ writes them). 0 where absent; a time axis's origin is 0. ImageJ's
 ``inverty`` (y upward from the bottom row) is not applied: y runs down the
-rows, with a warning, and the y origin is then read as 0.
+rows, with a warning, and the y origin is then read as 0. An OME-TIFF's
+first plane's PositionX/Y/Z, where given, is the place of voxel 0's
+centre, as an OME-Zarr translation is: the origin is it less half a
+voxel, converted to the voxel size's unit (a position in "reference
+frame" units, the schema's default, is taken in that unit).
 
 Written as an ImageJ hyperstack of uint8 0/1 with those tags, so that Fiji
 opens it calibrated and placed. Resolutions are rationals in TIFF: a pitch
@@ -76,7 +88,7 @@ from .registry import (
 X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT = 282, 283, 296
 RESOLUTION_TAGS = (X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT)
 #: TIFF's PhotometricInterpretation values whose first samples are grey or colour
-MINISBLACK, RGB = 1, 2
+MINISWHITE, MINISBLACK, RGB = 0, 1, 2
 #: colour (or grey) samples per pixel, before the extra samples
 COLOUR_SAMPLES = {MINISBLACK: 1, RGB: 3}
 #: TIFF's ExtraSamples values of an alpha channel (associated, unassociated)
@@ -110,7 +122,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch = resolution_pitch({t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}, tif.is_imagej, where)
         photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
         spacing = imagej.get("spacing")
-        sizes = _ome_sizes(tif.ome_metadata, where) if tif.is_ome else {}
+        sizes, centres = _ome_placement(tif.ome_metadata, where) if tif.is_ome else ({}, {})
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
         damage = [d for d in damage if _tag_read(d)]
@@ -121,6 +133,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
             detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
             raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
+    if photometric == MINISWHITE:
+        note(_white_is_zero(where))
     data, axes = _grey(data, axes, photometric, planar, extra, where)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
@@ -136,6 +150,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch.append(1.0)
         origin.append(0.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
+    origin = [centres[axis] - p / 2 + 0.0 if axis in centres else o for axis, p, o in zip("XYZT", pitch, origin)]
     return RawVolume(vol, np.array(pitch), np.array(origin))
 
 
@@ -241,6 +256,17 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, ext
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
 
 
+def _white_is_zero(where: str) -> str:
+    """The warning for a MinIsWhite file, whose viewers show 0 as white:
+    its values are kept as stored, as ImageJ (an inverted grey LUT over
+    the stored values; 1-bit pixels set read as 255), scikit-image and
+    tifffile keep them, so that the object is what every one of them
+    measures; but what a viewer shows as the object may be the 0s."""
+    return (f"{where}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown white); its values are read "
+            "as stored, as ImageJ, scikit-image and tifffile read them, so a mask's object is its nonzero voxels, "
+            "shown dark; --label 0 (label=0) takes the voxels shown white instead")
+
+
 def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
     """The world position of voxel 0's lowest corner per spatial axis from
     ImageJ's ``xorigin``, ``yorigin`` and ``zorigin`` (pixels; 0 where
@@ -294,29 +320,82 @@ def _as_stack(where: str, key: str, condition: str) -> str:
     return f"{condition}, save them as one stack and give that: python -c {shlex.quote(code)}"
 
 
-def _ome_sizes(xml: str | None, where: str) -> dict[str, float]:
-    """An OME-TIFF's voxel size per axis (``X``, ``Y``, ``Z``) from its
-    ``Pixels`` element's PhysicalSize attributes, where given: the file's
-    own calibration, which the resolution tags need not carry."""
+#: metres per length unit of OME-XML (``UnitsLength``, schema 2016-06), and
+#: "um", which writers put for micrometres though the schema spells it "µm"
+OME_METRES = {
+    "Ym": 1e24, "Zm": 1e21, "Em": 1e18, "Pm": 1e15, "Tm": 1e12, "Gm": 1e9, "Mm": 1e6, "km": 1e3, "hm": 1e2,
+    "dam": 1e1, "m": 1.0, "dm": 1e-1, "cm": 1e-2, "mm": 1e-3, "\u00b5m": 1e-6, "\u03bcm": 1e-6, "um": 1e-6,
+    "nm": 1e-9, "pm": 1e-12, "fm": 1e-15, "am": 1e-18, "zm": 1e-21, "ym": 1e-24, "\u00c5": 1e-10,
+    "thou": 2.54e-5, "li": 2.54e-2 / 12, "in": 2.54e-2, "ft": 0.3048, "yd": 0.9144, "mi": 1609.344,
+    "ua": 149597870700.0, "ly": 9460730472580800.0, "pc": 3.0856775814913673e16, "pt": 2.54e-2 / 72,
+}
+#: OME-XML's unit of a stage position not tied to a length (the schema's
+#: default for ``PositionXUnit``): taken as the voxel size's unit
+REFERENCE_FRAME = "reference frame"
+
+
+def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[str, float]]:
+    """An OME-TIFF's voxel size and voxel 0's centre per axis (``X``,
+    ``Y``, ``Z``), where given: the ``Pixels`` element's PhysicalSize
+    attributes, the file's own calibration, which the resolution tags
+    need not carry, and the first plane's PositionX/Y/Z (the plane of
+    ``TheZ``, ``TheT`` and ``TheC`` 0), the stage's place of the image.
+
+    Both are in the unit of PhysicalSizeX (the schema's default, µm, where
+    not said), the others converted to it: a PhysicalSizeZ in nm beside an
+    x in µm is 1000 times smaller. A position is the place of voxel 0's
+    centre, as an OME-Zarr translation is, and as BigStitcher places a
+    tile at its stage position (imglib2's pixel coordinates are pixel
+    centres); one in "reference frame" units, the schema's default, is
+    taken in the voxel size's unit."""
     import xml.etree.ElementTree as ET
 
     try:
         pixels = ET.fromstring(xml or "").find(".//{*}Pixels")
     except ET.ParseError:
-        return {}  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
+        return {}, {}  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
+    if pixels is None:
+        return {}, {}
+    unit = pixels.get("PhysicalSizeXUnit") or "\u00b5m"
     sizes = {}
     for axis in "XYZ":
-        value = None if pixels is None else pixels.get(f"PhysicalSize{axis}")
-        if value is None:
+        size = _ome_length(pixels, f"PhysicalSize{axis}", unit, where)
+        if size is None:
             continue
-        try:
-            size = float(value)
-        except ValueError:
-            raise IsoflowError(f"{where}: OME-XML's PhysicalSize{axis} {value!r} is not a number") from None
-        if not (np.isfinite(size) and size > 0):
-            raise IsoflowError(f"{where}: OME-XML's PhysicalSize{axis} {value!r} is not a positive voxel size")
+        if not size > 0:
+            raise IsoflowError(f"{where}: OME-XML's PhysicalSize{axis} {pixels.get(f'PhysicalSize{axis}')!r} is not "
+                               "a positive voxel size")
         sizes[axis] = size
-    return sizes
+    planes = pixels.findall("{*}Plane")
+    first = [p for p in planes if all(p.get(f"The{a}", "0") == "0" for a in "ZTC")]
+    centres = {}
+    for axis in "XYZ" if planes else "":
+        centre = _ome_length((first or planes)[0], f"Position{axis}", unit, where)
+        if centre is not None:
+            centres[axis] = centre
+    return sizes, centres
+
+
+def _ome_length(element, name: str, unit: str, where: str) -> float | None:
+    """The OME-XML length attribute ``name`` of ``element`` in ``unit`` (None
+    where absent), or one line naming it where it is no finite number or
+    its unit is none that converts to ``unit``."""
+    value = element.get(name)
+    if value is None:
+        return None
+    try:
+        length = float(value)
+    except ValueError:
+        raise IsoflowError(f"{where}: OME-XML's {name} {value!r} is not a number") from None
+    if not np.isfinite(length):
+        raise IsoflowError(f"{where}: OME-XML's {name} {value!r} is not a finite number")
+    own = element.get(f"{name}Unit") or ("\u00b5m" if name.startswith("Physical") else REFERENCE_FRAME)
+    if own in (unit, REFERENCE_FRAME):
+        return length
+    if own not in OME_METRES or unit not in OME_METRES:
+        raise IsoflowError(f"{where}: OME-XML's {name}Unit {own!r} does not convert to PhysicalSizeXUnit {unit!r}, "
+                           "the voxel size's unit")
+    return length * OME_METRES[own] / OME_METRES[unit]
 
 
 def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
