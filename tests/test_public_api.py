@@ -97,6 +97,8 @@ reveal_type(isoflow.voxelize_file("m.stl", resolution=4))
 reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))
 reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4).overlaps)
 reveal_type(isoflow.verify_genus("m.stl"))
+reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4))
+reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4, details=True))
 reveal_type(isoflow.read_volume("v.npy"))
 reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
@@ -132,6 +134,9 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
     assert "isoflow.mesh.verdict.GenusVerdict" in revealed[calls.index('reveal_type(isoflow.verify_genus("m.stl"))')][1]
     labels = calls.index('reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))')
     assert "isoflow.mesh.label_voxels.LabelVoxelization" in revealed[labels][1]
+    store = calls.index('reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4))')
+    assert revealed[store][1] == "isoflow.mesh.slabs.ZarrStore"
+    assert revealed[store + 1][1] == "tuple[isoflow.mesh.slabs.ZarrStore, isoflow.mesh.fills.Voxelization]"
 
 
 # calls the functions take at run time (as their docstrings say), which the
