@@ -144,29 +144,32 @@ class ZarrStore(Result):
         return super().from_dict(given)
 
 
+#: what :func:`voxelize_to_zarr` voxelises: a mesh file, (vertices, faces), or an object with both (a trimesh.Trimesh)
+MeshSource = str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any
+#: ``progress(done, total)``
+Progress = Callable[[int, int], object]
+
+
 @overload
-def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
-                     pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
-                     strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
-                     scheduler: Callable | None = None, max_bytes: int | None = None,
-                     progress: Callable[[int, int], object] | None = None,
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
                      details: Literal[False] = False) -> ZarrStore: ...
 
 
 @overload
-def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
-                     pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
-                     strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
-                     scheduler: Callable | None = None, max_bytes: int | None = None,
-                     progress: Callable[[int, int], object] | None = None,
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
                      details: Literal[True]) -> tuple[ZarrStore, Voxelization]: ...
 
 
-def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
-                     pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
-                     strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
-                     scheduler: Callable | None = None, max_bytes: int | None = None,
-                     progress: Callable[[int, int], object] | None = None,
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
                      details: bool = False) -> ZarrStore | tuple[ZarrStore, Voxelization]:
     """Voxelise a mesh into a chunked zarr array at ``path`` without holding
     the volume.
