@@ -71,7 +71,7 @@ def main():
     report_path.write_text(json.dumps({"chunked": chunked.to_dict(), "in_memory": in_memory.to_dict()}, indent=1))
     plot_blocks(volume, CHUNKS).savefig(picture)
 
-    shape = tuple(written["shape"])
+    shape = written.shape
     blocks = math.prod(math.ceil(s / c) for s, c in zip(shape, CHUNKS))
     print(f"{store.name}: shape {shape}, {blocks} blocks of up to {CHUNKS}, 2 worker processes")
     for name, r in (("out of core", chunked), ("in memory", in_memory)):
@@ -79,7 +79,7 @@ def main():
               f"energy {r['energy']}, {len(r['surfaces'])} closed surfaces")
     print(f"  the two reports are {'identical' if chunked == in_memory else 'DIFFERENT'}")
     print(f"wrote {report_path.name} and {picture.name} to {args.out}")
-    if chunked != in_memory or int(np.count_nonzero(volume)) != written["voxels"]:
+    if chunked != in_memory or int(np.count_nonzero(volume)) != written.voxels:
         raise SystemExit(1)
 
 

@@ -97,6 +97,8 @@ reveal_type(isoflow.voxelize_file("m.stl", resolution=4))
 reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))
 reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4).overlaps)
 reveal_type(isoflow.verify_genus("m.stl"))
+reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4))
+reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4, details=True))
 reveal_type(isoflow.read_volume("v.npy"))
 reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
@@ -132,6 +134,9 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
     assert "isoflow.mesh.verdict.GenusVerdict" in revealed[calls.index('reveal_type(isoflow.verify_genus("m.stl"))')][1]
     labels = calls.index('reveal_type(isoflow.voxelize_meshes(["a.stl", "b.obj"], resolution=4))')
     assert "isoflow.mesh.label_voxels.LabelVoxelization" in revealed[labels][1]
+    store = calls.index('reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4))')
+    assert revealed[store][1] == "isoflow.mesh.slabs.ZarrStore"
+    assert revealed[store + 1][1] == "tuple[isoflow.mesh.slabs.ZarrStore, isoflow.mesh.fills.Voxelization]"
 
 
 # calls the functions take at run time (as their docstrings say), which the
@@ -167,6 +172,33 @@ isoflow.a_lut(None)
 def test_mypy_takes_the_arguments_the_functions_take(tmp_path):
     p = mypy(tmp_path, TAKEN_SCRIPT)
     assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
+
+
+# a closed set of words (a Literal): a misspelt one is a type error, and
+# still refused at run time, before any file is read
+MISSPELT = [
+    'isoflow.read_object("p.txt", points_are="voxel")',
+    'isoflow.voxelize_mesh(np.zeros((3, 3)), np.zeros((1, 3), int), resolution=4, fill="windings")',
+    'isoflow.voxelize_meshes(["a.stl"], resolution=4, overlap="earlier")',
+    'isoflow.analyze(vol, method="fast")',
+]
+
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_mypy_refuses_a_word_outside_a_closed_set(tmp_path):
+    head = "import numpy as np\nimport isoflow\n\nvol = np.zeros((4, 4, 4), dtype=bool)\n"
+    p = mypy(tmp_path, head + "\n".join(MISSPELT) + "\n")
+    first = head.count("\n") + 1
+    lines = {int(n) for n in re.findall(r"user\.py:(\d+): error:", p.stdout)}
+    assert lines == set(range(first, first + len(MISSPELT))), p.stdout + p.stderr
+
+
+@pytest.mark.parametrize("call", MISSPELT)
+def test_a_word_outside_a_closed_set_is_refused_at_run_time(call, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises((isoflow.IsoflowError, ValueError)):
+        eval(call, {"np": np, "isoflow": isoflow, "vol": np.zeros((4, 4, 4), dtype=bool)})
 
 
 def test_the_script_s_calls_run(tmp_path, monkeypatch):

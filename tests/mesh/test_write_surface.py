@@ -138,6 +138,8 @@ def test_an_existing_file_is_refused_without_force(tmp_path):
      "s.ply: the mesh reaches [2.0, 2.0, 2.0], outside the object's array of shape [1, 1, 1]"),
     (lambda p: isoflow.write_surface(np.ones((1, 1, 1), bool), p / "s.ply", mesh=np.zeros((3, 3))),  # type: ignore[arg-type]
      "s.ply: mesh= takes the QuadMesh of boundary_mesh(obj.volume), got ndarray"),
+    (lambda p: isoflow.write_surface(np.ones((2, 2, 2), bool), p / "s.ply", check="no"),  # type: ignore[arg-type]
+     "s.ply: check must be True or False, got 'no'"),
 ])
 def test_bad_input_is_one_line_and_nothing_is_written(tmp_path, call, words):
     with pytest.raises(IsoflowError) as e:
@@ -195,3 +197,87 @@ def test_random_volumes_with_contacts_read_back_closed_by_both_readers(tmp_path,
         if suffix == ".ply":
             assert int(tm.metadata["_ply_raw"]["vertex"]["data"]["a"].sum()) == 8 * report["euler_characteristic"]
     assert contacts >= 3
+
+
+@pytest.mark.parametrize("connectivity", [6, 26])
+def test_a_mesh_of_another_object_in_the_same_box_is_refused(tmp_path, rng, connectivity):
+    """mesh= of another random object of the array's shape, which reaches
+    the same corners of the box: refused in one line, nothing written (only
+    its bounds and connectivity were checked, and the other object's
+    surface was written as this one's)."""
+    from conftest import random_volume
+
+    for i in range(8):
+        a = random_volume(rng)
+        b = rng.random(a.shape) < 0.5
+        a[0, 0, 0] = a[-1, -1, -1] = b[0, 0, 0] = b[-1, -1, -1] = True  # the same bounding box
+        if np.array_equal(a, b):
+            continue
+        with pytest.raises(IsoflowError) as e:
+            isoflow.write_surface(a, tmp_path / f"s{i}.ply", connectivity, mesh=isoflow.boundary_mesh(b, connectivity))
+        assert str(e.value).startswith(f"{tmp_path / f's{i}.ply'}: the mesh") and "\n" not in str(e.value)
+        assert str(e.value).endswith("pass the mesh of this object")
+        assert not any(tmp_path.iterdir())
+
+
+def test_a_mesh_of_the_same_counts_but_another_object_is_refused(tmp_path):
+    """Two voxels on one diagonal of a 3 x 2 x 1 box, or on the other: the
+    same box, and meshes of the same faces, vertices and V - E + F as
+    trimesh reads them, yet not the same surface; the corner whose
+    configuration differs is named."""
+    a, b = np.zeros((3, 2, 1), bool), np.zeros((3, 2, 1), bool)
+    a[0, 0, 0] = a[2, 1, 0] = True
+    b[0, 1, 0] = b[2, 0, 0] = True
+    isoflow.write_surface(a, tmp_path / "a.ply")
+    isoflow.write_surface(b, tmp_path / "b.ply")
+    ta, tb = (trimesh.load(tmp_path / n, process=False) for n in ("a.ply", "b.ply"))
+    assert (len(ta.vertices), len(ta.faces), ta.euler_number) == (len(tb.vertices), len(tb.faces), tb.euler_number)
+    assert ta.bounds.tolist() == tb.bounds.tolist() and not np.array_equal(ta.vertices, tb.vertices)
+    with pytest.raises(IsoflowError, match=r"s\.ply: the mesh's corner \[\d, \d, \d\] \(array-corner units\) has "
+                       r"configuration \d+, the object's there is \d+ \(\d+ corners differ\): pass the mesh of this "
+                       r"object$"):
+        isoflow.write_surface(a, tmp_path / "s.ply", mesh=isoflow.boundary_mesh(b))
+    assert not (tmp_path / "s.ply").exists()
+
+
+@pytest.mark.parametrize("suffix,ascii,triangulate", FILES)
+def test_the_read_back_check_writes_the_same_file(tmp_path, rng, suffix, ascii, triangulate):
+    """check=True (the default, as ``isoflow surface``) and check=False
+    write the same bytes, and the read-back passes on random volumes and
+    on the object with doubled edges and contacts."""
+    from conftest import random_volume
+
+    objects = [object_with_contacts()] + [np.pad(random_volume(rng), 1) for _ in range(4)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IsoflowWarning)  # the STL's weld, said in test_stl_says_what_readers_do
+        for i, obj in enumerate(o for o in objects if np.any(o)):
+            checked = isoflow.write_surface(obj, tmp_path / f"c{i}{suffix}", ascii=ascii, triangulate=triangulate)
+            unchecked = isoflow.write_surface(obj, tmp_path / f"u{i}{suffix}", ascii=ascii, triangulate=triangulate,
+                                              check=False)
+            assert checked.read_bytes() == unchecked.read_bytes()
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left
+
+
+def test_a_file_that_reads_back_otherwise_is_refused_and_nothing_replaced(tmp_path, monkeypatch):
+    """A writer that loses a face (as a defect of it would): trimesh reads
+    the file open, the check names the file and what differs, and the
+    previous file stays as it was; check=False writes the open file."""
+    import dataclasses
+
+    from isoflow.mesh import export
+
+    whole = export.write_mesh_file
+
+    def losing_a_face(path, mesh, obj, **kw):
+        cut = {k: getattr(mesh, k)[:-1] for k in ("faces", "edge_midpoint", "face_normals")}
+        return whole(path, dataclasses.replace(mesh, **cut), obj, **kw)
+
+    monkeypatch.setattr(export, "write_mesh_file", losing_a_face)
+    out = tmp_path / "s.ply"
+    out.write_text("previous")
+    with pytest.raises(IsoflowError, match=r"s\.ply: trimesh reads watertight False \(isoflow: True\).*; nothing was "
+                       r"replaced$") as e:
+        isoflow.write_surface(np.ones((2, 2, 2), bool), out, force=True)
+    assert "\n" not in str(e.value) and out.read_text() == "previous" and sorted(tmp_path.iterdir()) == [out]
+    isoflow.write_surface(np.ones((2, 2, 2), bool), out, force=True, check=False)
+    assert not trimesh.load(out, process=False).is_watertight

@@ -84,9 +84,9 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
                                       fill=mesh_fill(args), strict=args.strict, force=args.force, progress=show,
                                       details=True)
     say_note(args, args.mesh, details.note)
-    shape = "x".join(map(str, z["shape"]))
-    print(f"{out}: {z['voxels']} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z['chunks']))}), "
-          f"pitch {z['pitch']:.6g}, origin {coordinates(z['origin'])}")
+    shape = "x".join(map(str, z.shape))
+    print(f"{out}: {z.voxels} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
+          f"pitch {z.pitch:.6g}, origin {coordinates(z.origin)}")
     return 0
 
 

@@ -34,12 +34,13 @@ mesh and pymeshlab keeps apart until ``apply_matrix_freeze``
 shared vertices (readers weld equal positions): it is written wherever
 float32 keeps the surface's distinct positions distinct, so that the weld
 gives back the same closed surface, and refused (nothing written) only
-where float32 would merge some, with the numbers; :func:`float32_effect`
+where float32 would merge some, with the numbers; :func:`~isoflow.mesh.float32.float32_effect`
 says how far float32 moves the positions.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -48,7 +49,8 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, warn
-from .outputs import atomic_write, check_output_path, check_switch
+from .float32 import float32_effect
+from .outputs import atomic_write, check_output_path, check_switch, output_set
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike
@@ -98,53 +100,6 @@ def float32_held(xyz: np.ndarray, spacing) -> np.ndarray:
     with np.errstate(over="ignore", invalid="ignore"):
         error = np.abs(xyz.astype(np.float32).astype(np.float64) - xyz)
     return np.asarray(error <= POSITION_TOLERANCE * np.asarray(spacing, np.float64))
-
-
-def float32_effect(xyz: np.ndarray, spacing) -> dict:
-    """What storing the positions ``xyz`` (world units, voxel size
-    ``spacing``) as float32 does to them.
-
-    Parameters
-    ----------
-    xyz : ndarray, shape (N, 3)
-        Positions, float64.
-    spacing : array_like
-        Voxel size per axis.
-
-    Returns
-    -------
-    dict
-        ``positions``: distinct positions; ``merged``: how many of them
-        float32 makes equal to another (0: a reader's weld of equal
-        positions gives the same surface back); ``finite``: whether every
-        coordinate stays within float32's range; ``moved``: the largest
-        change of a coordinate, and ``moved_voxels`` in voxels of its axis;
-        ``largest``: the largest coordinate magnitude, and ``step``:
-        float32's spacing there.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> e = float32_effect(np.array([[1e6, 0, 0], [1e6 + 0.1, 0, 0]]), 0.1)
-    >>> e["merged"], e["moved"] <= e["step"] / 2, e["step"]
-    (0, True, 0.0625)
-    """
-    xyz = np.asarray(xyz, np.float64).reshape(-1, 3)
-    with np.errstate(over="ignore", invalid="ignore"):
-        xyz32 = xyz.astype(np.float32)
-    finite = bool(np.all(np.isfinite(xyz32)))
-    largest = float(np.max(np.abs(xyz))) if len(xyz) else 0.0
-    step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
-    positions = len(np.unique(xyz, axis=0)) if len(xyz) else 0
-    if not finite:
-        return {"positions": positions, "merged": None, "finite": False, "moved": None, "moved_voxels": None,
-                "largest": largest, "step": step}
-    change = np.abs(xyz32.astype(np.float64) - xyz)
-    moved = float(change.max()) if len(xyz) else 0.0
-    moved_voxels = float((change / np.asarray(spacing, np.float64)).max()) if len(xyz) else 0.0
-    merged = positions - (len(np.unique(xyz32, axis=0)) if len(xyz) else 0)
-    return {"positions": positions, "merged": int(merged), "finite": True, "moved": moved,
-            "moved_voxels": moved_voxels, "largest": largest, "step": step}
 
 
 def stl_refusal(path, effect: dict, spacing) -> str:
@@ -439,7 +394,7 @@ def write_mesh_file(
     GLB), in world coordinates. Returns what was written: ``path``,
     ``faces`` (the kind) and ``face_count``; for STL also ``moved`` and
     ``moved_voxels``, how far float32 moved the positions
-    (:func:`float32_effect`). Raises IsoflowError, writing nothing, for an
+    (:func:`~isoflow.mesh.float32.float32_effect`). Raises IsoflowError, writing nothing, for an
     STL in which float32 would merge distinct positions. ``sync=False`` leaves the
     ``fsync`` to the caller (:func:`isoflow.mesh.outputs.sync_file`);
     :func:`write_surface` is the public call."""
@@ -496,9 +451,11 @@ def write_surface(
     ascii: bool = False,
     triangulate: bool = False,
     force: bool = False,
+    check: bool = True,
 ) -> Path:
     """Write the boundary mesh of a 3D object as the file ``isoflow surface``
-    writes: PLY, OBJ, STL or GLB by the suffix, in world coordinates.
+    writes: PLY, OBJ, STL or GLB by the suffix, in world coordinates, and
+    read it back, as the command does.
 
     The file holds the closed, outward-oriented boundary (docs/formats.md,
     "Surface files"): binary PLY with the per-vertex curvature columns
@@ -520,13 +477,21 @@ def write_surface(
     mesh : QuadMesh, optional
         ``boundary_mesh(obj.volume, connectivity)`` where it is already
         built, so that it is not built again; refused where it does not fit
-        the object's array or has another connectivity.
+        the object's array, has another connectivity, or is not this
+        object's boundary (its face count, or the configuration of a vertex,
+        differs from the object's).
     ascii : bool
         ASCII PLY instead of binary (``.ply`` only).
     triangulate : bool
         Triangles in every format (two per plain quad).
     force : bool
         Replace an existing file (True or False only: ``"no"`` is refused).
+    check : bool
+        Read the file back with trimesh before it replaces ``path``, as
+        ``isoflow surface`` does (without ``--no-check``): its
+        watertightness, Euler number, genus and volume must be isoflow's
+        (the volume alone for an STL whose weld joins split copies). A
+        read-back that would not fit in memory is skipped with a warning.
 
     Returns
     -------
@@ -540,14 +505,17 @@ def write_surface(
         suffix other than the four, ``ascii`` with another format, an
         object that is not 3D or is empty, a mesh of another object or
         connectivity, a binary STL whose float32 positions would merge
-        distinct corners (the message says by how much).
+        distinct corners (the message says by how much). With ``check``, a
+        file that trimesh reads back otherwise, naming it and what differs:
+        nothing is replaced.
 
     Warns
     -----
     IsoflowWarning
         An STL whose float32 positions move a corner by more than a
         thousandth of a voxel, or whose readers weld the split copies at
-        edge and vertex contacts into non-manifold points.
+        edge and vertex contacts into non-manifold points; a read-back
+        skipped for memory.
 
     See Also
     --------
@@ -581,6 +549,7 @@ def write_surface(
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
     ascii, triangulate = check_switch(ascii, "ascii", str(path)), check_switch(triangulate, "triangulate", str(path))
+    check = check_switch(check, "check", str(path))
     if ascii and suffix != ".ply":
         raise IsoflowError(f"{path}: ascii=True applies to .ply output only")
     obj = DigitalObject.of(obj)
@@ -593,21 +562,43 @@ def write_surface(
     else:
         check_mesh_fits(path, mesh, obj, connectivity)
     comments = (f"isoflow write_surface, {mesh.connectivity}-connectivity", VERTEX_COMMENT)
-    written = write_mesh_file(path, mesh, obj, ascii=ascii, triangulate=triangulate, force=force, comments=comments)
+    welded = shared_positions(mesh) if suffix == ".stl" else 0
+    # the file is put in place only once it reads back as isoflow counts it
+    with output_set(path) if check else contextlib.nullcontext():
+        written = write_mesh_file(path, mesh, obj, ascii=ascii, triangulate=triangulate, force=force,
+                                  comments=comments)
+        if check:
+            read_back(path, mesh, obj, welded)
     if suffix == ".stl":
         if written["moved_voxels"] > STL_NOTE_VOXELS:
             warn(stl_move_note(path, written))
-        welded = shared_positions(mesh)
         if welded:
             warn(stl_weld_note(path, welded))
     return path
 
 
+def read_back(path: Path, mesh: QuadMesh, obj: DigitalObject, welded: int) -> None:
+    """The file just written read back by trimesh
+    (:func:`~isoflow.mesh.readback.check_surface_file`), refused in one line
+    where it disagrees with isoflow's counts; the volume alone where an
+    STL's weld joins ``welded`` split copies, as ``isoflow surface`` does."""
+    from .readback import check_surface_file
+
+    found = check_surface_file(path, mesh, obj, topology=not welded, components=mesh.components())
+    if found.get("skipped"):
+        warn(f"{path}: not read back ({found['skipped']})")
+    elif not found["agree"]:
+        raise IsoflowError(found["problem"])
+
+
 def check_mesh_fits(path: Path, mesh: QuadMesh, obj: DigitalObject, connectivity: int | None) -> None:
     """Refuse, in one line, a mesh given to :func:`write_surface` that is not
     a boundary mesh of the object's array: another type, another
-    connectivity, no faces, or vertices outside the array's box."""
-    from ..digital.surface import QuadMesh
+    connectivity, no faces, vertices outside the array's box, or the
+    boundary of another object (another face count, or a corner whose
+    configuration is not the object's there)."""
+    from ..digital.configurations import configuration_histogram, configurations_at
+    from ..digital.surface import QuadMesh, boundary_faces
 
     if not isinstance(mesh, QuadMesh):
         raise IsoflowError(f"{path}: mesh= takes the QuadMesh of boundary_mesh(obj.volume), got "
@@ -622,6 +613,23 @@ def check_mesh_fits(path: Path, mesh: QuadMesh, obj: DigitalObject, connectivity
         raise IsoflowError(f"{path}: the mesh reaches {mesh.vertices.max(axis=0).tolist()}, outside the object's "
                            f"array of shape {shape.tolist()} (array-corner units): pass the object it was built "
                            "from")
+    # a mesh of another object inside the same box: the object's face count
+    # (from its configuration histogram, without meshing it) and the
+    # configuration at each of the mesh's corners. Equal, every face of the
+    # mesh is a face of the object's boundary, and there are as many.
+    faces = boundary_faces(configuration_histogram(obj.volume))
+    if len(mesh.faces) != faces:
+        raise IsoflowError(f"{path}: the mesh has {len(mesh.faces):,} faces, the object's boundary {faces:,}: "
+                           "pass the mesh of this object")
+    corner = mesh.sheet >= 0  # the midpoints of doubled edges are no lattice vertices
+    at = np.asarray(mesh.vertices[corner], np.int64)
+    differ = np.flatnonzero(configurations_at(obj.volume, at) != mesh.config[corner])
+    if len(differ):
+        w = at[differ[0]]
+        raise IsoflowError(f"{path}: the mesh's corner {w.tolist()} (array-corner units) has configuration "
+                           f"{int(mesh.config[corner][differ[0]])}, the object's there is "
+                           f"{int(configurations_at(obj.volume, w[None])[0])} ({len(differ):,} corners differ): "
+                           "pass the mesh of this object")
 
 
 def grid_frame(mesh, obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:

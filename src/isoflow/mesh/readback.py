@@ -207,7 +207,7 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     or vertex contacts the weld joins copies the mesh keeps apart, so
     ``topology=False`` then compares the volume only (the caller says why).
     STL's float32 positions move the surface by up to ``moved``
-    (:func:`isoflow.mesh.export.float32_effect`), which changes the volume
+    (:func:`isoflow.mesh.float32.float32_effect`), which changes the volume
     by at most ``moved`` times the area: the volume is compared within that.
     """
     from ..scale.memory import default_budget, sized
@@ -229,7 +229,7 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     # the signed volume needs no manifold: a welded STL still encloses it
     slack = 0.0
     if path.suffix.lower() == ".stl":
-        from .export import float32_effect
+        from .float32 import float32_effect
 
         moved = (float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0) / volume_unit(obj)
         slack = 2 * moved * theirs["area_units"]

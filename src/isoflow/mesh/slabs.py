@@ -24,15 +24,17 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from contextlib import nullcontext
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, check_callable
+from ..results import Result
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
 from .fills import Fill, Voxelization, look_up
@@ -93,12 +95,82 @@ def slab_points(plan, slabs):
     return flat, area, parts
 
 
-def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any, path: str | os.PathLike, *,
-                     pitch: float | None = None, resolution: int | None = None, fill: Fill = "winding",
-                     strict: bool = False, force: bool = False, chunks: tuple[int, int, int] | None = None,
-                     scheduler: Callable | None = None, max_bytes: int | None = None,
-                     progress: Callable[[int, int], object] | None = None,
-                     details: bool = False) -> dict[str, Any] | tuple[dict[str, Any], Voxelization]:
+@dataclass(frozen=True, eq=False)
+class ZarrStore(Result):
+    """The store :func:`voxelize_to_zarr` wrote, in a few numbers.
+
+    Reads as a mapping too (``z["voxels"]``, ``dict(z)``), as the results of
+    isoflow's other functions do; :meth:`to_dict` is the same fields as JSON
+    takes them (origin a list).
+
+    Attributes
+    ----------
+    shape : tuple of int
+        Level ``0``'s shape, (nx, ny, nz).
+    chunks : tuple of int
+        Level ``0``'s chunks.
+    voxels : int
+        Voxels in.
+    pitch : float
+    origin : float64 ndarray (3,)
+        Lower corner of voxel (0, 0, 0).
+    """
+
+    shape: tuple[int, int, int]
+    chunks: tuple[int, int, int]
+    voxels: int
+    pitch: float
+    origin: np.ndarray
+
+    @classmethod
+    def from_dict(cls, values: Mapping[str, Any]) -> ZarrStore:
+        """The store's summary of :meth:`to_dict`'s JSON: the shape and the
+        chunks tuples, the origin an array again.
+
+        Examples
+        --------
+        >>> import json
+        >>> z = ZarrStore((2, 3, 4), (1, 3, 4), 5, 0.5, np.zeros(3))
+        >>> back = ZarrStore.from_dict(json.loads(json.dumps(z.to_dict())))
+        >>> back == z, back.shape, back.origin.tolist()
+        (True, (2, 3, 4), [0.0, 0.0, 0.0])
+        """
+        given = dict(values)
+        for key in ("shape", "chunks"):
+            if key in given:
+                given[key] = tuple(int(n) for n in given[key])
+        if "origin" in given:
+            given["origin"] = np.asarray(given["origin"], dtype=np.float64)
+        return super().from_dict(given)
+
+
+#: what :func:`voxelize_to_zarr` voxelises: a mesh file, (vertices, faces), or an object with both (a trimesh.Trimesh)
+MeshSource = str | os.PathLike | tuple[ArrayLike, ArrayLike] | Any
+#: ``progress(done, total)``
+Progress = Callable[[int, int], object]
+
+
+@overload
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
+                     details: Literal[False] = False) -> ZarrStore: ...
+
+
+@overload
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
+                     details: Literal[True]) -> tuple[ZarrStore, Voxelization]: ...
+
+
+def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
+                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
+                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
+                     max_bytes: int | None = None, progress: Progress | None = None,
+                     details: bool = False) -> ZarrStore | tuple[ZarrStore, Voxelization]:
     """Voxelise a mesh into a chunked zarr array at ``path`` without holding
     the volume.
 
@@ -137,8 +209,9 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
 
     Returns
     -------
-    dict or (dict, Voxelization)
-        ``shape``, ``chunks``, ``voxels``, ``pitch``, ``origin``.
+    ZarrStore or (ZarrStore, Voxelization)
+        The store's ``shape``, ``chunks``, ``voxels``, ``pitch`` and
+        ``origin``, as attributes and as keys (:class:`ZarrStore`).
 
     Examples
     --------
@@ -146,8 +219,11 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
     >>> from isoflow import data, read_volume
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "torus.zarr"
     >>> z = voxelize_to_zarr(data.torus(), store, resolution=24)
-    >>> z["voxels"] == read_volume(store).voxels, z["origin"] == read_volume(store).origin.tolist()
-    (True, True)
+    >>> back = read_volume(store)
+    >>> z.voxels == back.voxels, z["shape"] == back.volume.shape, z.origin.tolist() == back.origin.tolist()
+    (True, True, True)
+    >>> sorted(z.to_dict())
+    ['chunks', 'origin', 'pitch', 'shape', 'voxels']
     """
     from .fills import check_fill, check_strict
     from .voxelize import Solid, plan_voxels, say_note, tell_rule, voxelization
@@ -228,8 +304,9 @@ def voxelize_to_zarr(source: str | os.PathLike | tuple[ArrayLike, ArrayLike] | A
             result = voxelization(made(), plan, None, voxels, origin, pitch, stats, shell_before=shell, found=found)
         except IsoflowError as exc:
             raise exc.at(where) from None
-    store = {"shape": list(shape), "chunks": list(chunks), "voxels": int(voxels), "pitch": float(pitch),
-             "origin": [float(x) for x in origin]}  # plain numbers, as shape's: the dict is JSON as it is
+    nx, ny, nz = (int(n) for n in shape)
+    cx, cy, cz = (int(n) for n in chunks)
+    store = ZarrStore((nx, ny, nz), (cx, cy, cz), int(voxels), float(pitch), np.asarray(origin, dtype=np.float64))
     if details:
         return store, result
     say_note(result.note)

@@ -11,7 +11,7 @@ import dataclasses
 import os
 import re
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -461,7 +461,11 @@ def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
     return point
 
 
-def read_object(path: str | os.PathLike, points_are: str = "corners", label: int | float | None = None) -> DigitalObject:
+#: how :func:`read_object` reads a point list: cube corners (the paper's point model) or voxel indices
+PointsAre = Literal["corners", "voxels"]
+
+
+def read_object(path: str | os.PathLike, points_are: PointsAre = "corners", label: int | float | None = None) -> DigitalObject:
     """A digital object from a volume file (any format of :func:`read_volume`,
     ``label`` selecting one value of a label image) or a point list.
 
@@ -497,7 +501,7 @@ def read_object(path: str | os.PathLike, points_are: str = "corners", label: int
     >>> read_object(data.example19()).voxels, read_object(data.example19(), points_are="voxels").voxels
     (4, 20)
     """
-    if points_are not in ("corners", "voxels"):
+    if points_are not in get_args(PointsAre):  # the annotation binds type checkers only
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {points_are!r}")
     if is_volume(path):
         if points_are != "corners":  # the default, kept for any path; "voxels" would be ignored
