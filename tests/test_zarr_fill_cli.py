@@ -106,3 +106,109 @@ def test_analyze_zarr_says_its_unwritten_chunks_are_voxels_once(tmp_path):
     assert report["voxels"] == int(np.count_nonzero(z[...])) == 6 * 6 * 6
     assert [str(w.message) for w in caught] == [said(tmp_path / "one.zarr", z, "voxels of the object")]
     assert caught[0].filename == __file__  # the caller's line, not isoflow's
+
+
+def shard_holds(path, key, chunk_bytes, chunks_per_shard):
+    """The inner chunks a shard file holds, from its size alone: zarr v3
+    sharding stores the inner chunks' bytes (uncompressed here) and an
+    index of 16 bytes per inner chunk and a 4-byte checksum."""
+    size = (path / key).stat().st_size - (16 * chunks_per_shard + 4)
+    assert size % chunk_bytes == 0
+    return size // chunk_bytes
+
+
+def test_sharded_store_counts_the_chunks_never_written_inside_a_written_shard(tmp_path):
+    """A written shard may hold some of its inner chunks only (zarr leaves
+    out the others, read as the fill value): those count as never written
+    too, not the missing shards alone."""
+    path = tmp_path / "sharded.zarr"
+    z = zarr.create_array(str(path), shape=(8, 6, 6), chunks=(2, 6, 6), shards=(4, 6, 6), dtype="u1",
+                          fill_value=1, compressors=None)
+    z[:2] = 0  # the first shard's first chunk: three of the four chunks never written
+    assert sorted(p.name for p in (path / "c").iterdir()) == ["0"]  # one shard of two stored
+    assert shard_holds(path, "c/0/0/0", 2 * 6 * 6, 2) == 1
+    assert z.nchunks - z.nchunks_initialized == 2  # zarr takes the stored shard's chunks as written
+    out, notes = isoflow("info", path, "--json")
+    assert json.loads(out)["voxels"] == int(np.count_nonzero(z[...])) == 3 * 2 * 6 * 6
+    said = (f"{path}: 3 of 4 chunks were never written; zarr reads their voxels as the fill value 1, so they "
+            "count as voxels of the object")
+    assert notes == [f"isoflow info: warning: {said}"]
+    assert isoflow("surface", path, "-o", tmp_path / "s.ply")[1] == [f"isoflow surface: warning: {said}"]
+    out, notes = isoflow(code=f"import isoflow; print(isoflow.read_volume({str(path)!r}).voxels)")
+    assert int(out) == 216 and len(notes) == 1 and notes[0].endswith(said)
+    z[2:] = 0
+    assert isoflow("info", path, "--json")[1] == []
+
+
+def test_sharded_store_written_whole_whose_last_shard_reaches_past_it_says_nothing(tmp_path):
+    """zarr's count of chunks written (stored shards times chunks per
+    shard) takes in the chunks of the last shard that lie past the array:
+    more than the array has, which read as -1 shards never written."""
+    edge = tmp_path / "edge.zarr"  # 3 chunks in 2 shards, the second shard's second chunk past the array
+    z = zarr.create_array(str(edge), shape=(6, 6, 6), chunks=(2, 6, 6), shards=(4, 6, 6), dtype="u1",
+                          fill_value=1, compressors=None)
+    z[:] = 0
+    z[3, 3, 3] = 1
+    assert (z.nchunks, z.nchunks_initialized) == (3, 4)
+    assert isoflow("info", edge, "--json")[1] == []
+    assert isoflow("surface", edge, "-o", tmp_path / "e.ply")[1] == []
+
+
+def time_series(path, shards=None, ome=False):
+    """A 4D store of fill value 1, chunks of 2 along z and 1 along t: time
+    point 0 written whole but for a cube of 8 voxels of 1, 1 in its first
+    chunk alone, 2 and 3 never written. A plain array (x, y, z, t), or
+    (``ome``) an OME-Zarr image of axes t, c, z, y, x (c of length 1).
+    Returns the array and a function of a time point giving its voxels."""
+    if ome:
+        g = zarr.open_group(str(path), mode="w")
+        z = g.create_array("0", shape=(4, 1, 8, 6, 6), chunks=(1, 1, 2, 6, 6), dtype="u1", fill_value=1)
+        g.attrs["multiscales"] = [{"axes": [{"name": "t", "type": "time"}, {"name": "c", "type": "channel"},
+                                            "z", "y", "x"], "datasets": [{"path": "0"}]}]
+        z[0] = 0
+        z[0, 0, 2:4, 2:4, 2:4] = 1
+        z[1, 0, :2] = 0
+        return z, lambda time: z[time]
+    z = zarr.create_array(str(path), shape=(6, 6, 8, 4), chunks=(6, 6, 2, 1), shards=shards, dtype="u1",
+                          fill_value=1, compressors=None)
+    z[..., 0] = 0
+    z[2:4, 2:4, 2:4, 0] = 1
+    z[:, :, :2, 1] = 0
+    return z, lambda time: z[..., time]
+
+
+@pytest.mark.parametrize(("shards", "ome"), [(None, False), ((6, 6, 4, 2), False), (None, True)])
+def test_one_time_point_says_how_many_of_its_own_chunks_were_never_written(tmp_path, shards, ome):
+    """``read_volume(STORE, time=T)`` and ``read_labels(STORE, time=T)``
+    read that time point's chunks alone and count its chunks never
+    written, told apart by the time axis's index in their keys (in the
+    shard's index for a sharded store); a time point written whole says
+    nothing."""
+    path = tmp_path / "series.zarr"
+    z, at = time_series(path, shards, ome)
+    if shards is None:  # the time point's chunks are those whose key has T as the time axis's index
+        chunks = path / "0" / "c" if ome else path / "c"
+        keys = [p.relative_to(chunks).parts for p in chunks.rglob("*") if p.is_file()]
+        assert sorted(k[0 if ome else 3] for k in keys) == ["0"] * 4 + ["1"]
+    else:  # shard c/0/0/Z/0 holds time points 0 and 1; no shard of 2 and 3
+        assert sorted(p.name for p in (path / "c/0/0/0").iterdir()) == ["0"]
+        assert sorted(p.name for p in (path / "c/0/0/1").iterdir()) == ["0"]
+        assert shard_holds(path, "c/0/0/0/0", 6 * 6 * 2, 4) == 2 + 1  # time point 0's two, 1's one
+        assert shard_holds(path, "c/0/0/1/0", 6 * 6 * 2, 4) == 2  # time point 0's
+    chunk = 6 * 6 * 2
+
+    def read(time, labels=False):
+        call = f"(isoflow.read_labels({str(path)!r}, time={time}).array == 1).sum()" if labels else \
+            f"isoflow.read_volume({str(path)!r}, time={time}).voxels"
+        return isoflow(code=f"import isoflow; print({call})")
+
+    for time, missing in [(1, 3), (2, 4)]:  # the chunks left unwritten, read back as the fill value
+        assert int(np.count_nonzero(at(time) == 1)) == missing * chunk
+        said = (f"{path}: {missing} of 4 chunks were never written; zarr reads their voxels as the fill value 1, "
+                "so they count as ")
+        for labels, counted in [(False, "voxels of the object"), (True, "label 1")]:
+            out, notes = read(time, labels)
+            assert int(out) == missing * chunk
+            assert len(notes) == 1 and notes[0].endswith(said + counted), notes
+    assert int(np.count_nonzero(at(0))) == 8
+    assert read(0) == ("8\n", [])

@@ -500,45 +500,161 @@ def fill_label(array) -> int | None:
     return int(value) if np.isfinite(value) and value.is_integer() else None
 
 
-def unwritten(array) -> tuple[int, int, str]:
-    """How many of a zarr array's stored objects are not in its store
-    (never written, or left out because they held nothing but the fill
-    value): ``(missing, total, unit)``, the unit ``"chunks"``, or
-    ``"shards"`` for a sharded array (chunks left out inside a written
-    shard are not counted). The store's keys are listed, no chunk is read.
+#: an inner chunk of a shard that was never written has this offset and
+#: length in the shard's index (the zarr v3 sharding codec)
+EMPTY_INNER = 2**64 - 1
+
+
+def unwritten(array, at: dict[int, int] | None = None) -> tuple[int, int]:
+    """How many of a zarr array's chunks are not in its store (never
+    written, or left out because they held nothing but the fill value):
+    ``(missing, total)``. ``at`` maps an axis to one index along it (a time
+    point): only the chunks holding that index are counted.
+
+    The store's keys are listed and no chunk is read. In a sharded array
+    the chunks are the shards' inner chunks, each told written or not by
+    its shard's index (read from the end or start of the shard, as the
+    sharding codec places it): zarr's own count (``nchunks_initialized``)
+    takes every chunk of a written shard as written. A shard whose index
+    cannot be read, or is coded other than as the sharding codec's plain
+    bytes and checksum, counts as zarr counts it.
 
     Parameters
     ----------
     array : zarr.Array
         The stored array.
+    at : dict, optional
+        ``{axis: index}``: count only the chunks that hold that index.
 
     Returns
     -------
     tuple
-        ``(missing, total, unit)``.
+        ``(missing, total)``.
 
     Examples
     --------
     >>> import tempfile, zarr
     >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=2)
     >>> z[:2] = 1
-    >>> unwritten(z)
-    (2, 3, 'chunks')
+    >>> unwritten(z), unwritten(z, at={0: 3})
+    ((2, 3), (1, 1))
+    >>> s = zarr.create_array(tempfile.mkdtemp() + "/s.zarr", shape=(8, 4), chunks=(2, 4), shards=(4, 4),
+    ...                       dtype="u1", fill_value=2)
+    >>> s[:2] = 1  # one of the first shard's two chunks
+    >>> unwritten(s), s.nchunks - s.nchunks_initialized
+    ((3, 4), 2)
     """
-    total, written = int(array.nchunks), int(array.nchunks_initialized)
+    import itertools
+
+    at = at or {}
+    chunks = [int(c) for c in array.chunks]
+    grid = [-(-int(n) // c) for n, c in zip(array.shape, chunks)]
+    # the chunk indices counted along each axis
+    spans = [range(at[i] // c, at[i] // c + 1) if i in at else range(g) for i, (c, g) in enumerate(zip(chunks, grid))]
+    total = int(np.prod([len(s) for s in spans]))
+    if not total:
+        return 0, 0
     shards = getattr(array, "shards", None)
+    per = [s // c for s, c in zip(shards, chunks)] if shards else [1] * len(chunks)
+    stored = set(store_keys(array))
+    found = [coords for coords in itertools.product(*(range(s.start // p, (s.stop - 1) // p + 1)
+                                                      for s, p in zip(spans, per)))
+             if array.metadata.encode_chunk_key(coords) in stored]
     if not shards:
-        return total - written, total, "chunks"
-    # zarr counts every chunk of a written shard as written
-    per = int(np.prod([s // c for s, c in zip(shards, array.chunks)]))
-    return (total - written) // per, total // per, "shards"
+        return total - len(found), total
+    written = 0
+    for coords, index in zip(found, shard_indexes(array, found, per)):
+        inside = tuple(slice(max(s.start - c * p, 0), min(s.stop - c * p, p)) for s, c, p in zip(spans, coords, per))
+        written += int(np.count_nonzero(index[inside])) if index is not None else int(
+            np.prod([t.stop - t.start for t in inside]))
+    return total - written, total
 
 
-def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | None:
-    """``(fill, missing, total, unit)`` of a zarr array (:func:`fill_label`
-    and :func:`unwritten`), as :func:`never_written`
-    takes it; None where no chunk would pass for a voxel: a fill value of
-    0 or no label, one other than ``label`` when given, or every chunk
+def store_keys(array) -> list[str]:
+    """The keys of a zarr array's store under the array, relative to it
+    (``c/0/1``, ``zarr.json``): what is stored, nothing read.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(4, 2), chunks=(2, 2), dtype="u1")
+    >>> z[2:] = 1
+    >>> sorted(store_keys(z))
+    ['c/1/0', 'zarr.json']
+    """
+    # zarr's stores are asynchronous; its own synchronous calls run them
+    # on its I/O loop this way
+    from zarr.core.sync import sync
+
+    prefix = array.store_path.path
+    prefix = prefix + "/" if prefix else ""
+
+    async def listed() -> list[str]:
+        return [k[len(prefix):] async for k in array.store_path.store.list_prefix(prefix)]
+
+    return sync(listed())
+
+
+def shard_indexes(array, shards: list[tuple[int, ...]], per: list[int]) -> list[np.ndarray | None]:
+    """Which inner chunks of each stored shard (its grid coordinates) hold
+    data, from the shard's index alone: a boolean array of ``per`` (inner
+    chunks per shard along each axis). None for a shard whose index is not
+    read: a codec before the sharding codec, index codecs other than the
+    plain bytes (and a checksum), or an index that does not come back.
+
+    Examples
+    --------
+    >>> import zarr
+    >>> z = zarr.create_array({}, shape=(8, 2), chunks=(2, 2), shards=(4, 2), dtype="u1")
+    >>> z[2:4] = 1  # the first shard's second chunk
+    >>> [m.ravel().tolist() for m in shard_indexes(z, [(0, 0)], [2, 1])]
+    [[False, True]]
+    """
+    import asyncio
+
+    from zarr.abc.store import RangeByteRequest, SuffixByteRequest
+    from zarr.buffer import default_buffer_prototype
+    from zarr.codecs import BytesCodec, Crc32cCodec, ShardingCodec
+    from zarr.core.sync import sync
+
+    codecs = list(getattr(array.metadata, "codecs", ()))
+    sharding = codecs[0] if codecs else None
+    index_codecs = list(getattr(sharding, "index_codecs", ()))
+    if (not isinstance(sharding, ShardingCodec) or not index_codecs or not isinstance(index_codecs[0], BytesCodec)
+            or any(not isinstance(c, Crc32cCodec) for c in index_codecs[1:])):
+        return [None] * len(shards)
+    n = int(np.prod(per))
+    size = 16 * n + 4 * (len(index_codecs) - 1)
+    order = ">" if getattr(index_codecs[0].endian, "value", "little") == "big" else "<"
+    at_start = getattr(sharding.index_location, "value", sharding.index_location) == "start"
+    request = RangeByteRequest(0, size) if at_start else SuffixByteRequest(size)
+
+    async def one(coords: tuple[int, ...], gate: asyncio.Semaphore) -> np.ndarray | None:
+        async with gate:
+            try:
+                got = await (array.store_path / array.metadata.encode_chunk_key(coords)).get(
+                    prototype=default_buffer_prototype(), byte_range=request)
+            except Exception:  # (counted as zarr counts it; reading the chunks says what is wrong)
+                return None
+        raw = None if got is None else got.to_bytes()
+        if raw is None or len(raw) != size:
+            return None
+        table = np.frombuffer(raw[:16 * n], dtype=f"{order}u8").reshape(*per, 2)
+        return table[..., 0] != EMPTY_INNER
+
+    async def every() -> list[np.ndarray | None]:
+        # a few shards at a time: an index is small, the files may be many
+        gate = asyncio.Semaphore(64)
+        return list(await asyncio.gather(*(one(c, gate) for c in shards)))
+
+    return sync(every()) if shards else []
+
+
+def unwritten_fill(array, label: object = None, at: dict[int, int] | None = None) -> tuple[int, int, int] | None:
+    """``(fill, missing, total)`` of a zarr array (:func:`fill_label` and
+    :func:`unwritten`, ``at`` as there), as :func:`never_written` takes
+    it; None where no chunk would pass for a voxel: a fill value of 0 or
+    no label, one other than ``label`` when given, or every chunk
     written. The store's keys are listed only where they would matter.
 
     Examples
@@ -546,17 +662,17 @@ def unwritten_fill(array, label: object = None) -> tuple[int, int, int, str] | N
     >>> import zarr
     >>> z = zarr.create_array({}, shape=(6, 4), chunks=(2, 4), dtype="u1", fill_value=1)
     >>> z[:2] = 0
-    >>> unwritten_fill(z), unwritten_fill(z, label=3)
-    ((1, 2, 3, 'chunks'), None)
+    >>> unwritten_fill(z), unwritten_fill(z, label=3), unwritten_fill(z, at={0: 1})
+    ((1, 2, 3), None, None)
     """
     fill = fill_label(array)
     if not fill or (label is not None and label != fill):
         return None
-    missing, total, unit = unwritten(array)
-    return (fill, missing, total, unit) if missing else None
+    missing, total = unwritten(array, at)
+    return (fill, missing, total) if missing else None
 
 
-def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label: object = None, *,
+def never_written(where: str, unwritten: tuple[int, int, int] | None, label: object = None, *,
                   table: bool = False) -> None:
     """The one warning that a zarr store's chunks never written are read
     as a nonzero fill value and so count as voxels: of the object (a
@@ -568,9 +684,9 @@ def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label
     where : str
         The store, as messages name it.
     unwritten : tuple or None
-        ``(fill, missing, total, unit)``: the fill value as a label, the
-        chunks (or shards, the ``unit``) not in the store and all of them;
-        None says nothing.
+        ``(fill, missing, total)``: the fill value as a label, the chunks
+        not in the store (of a sharded array: its inner chunks) and all of
+        them (of the time point read); None says nothing.
     label : number, optional
         The label selected; nothing is said unless it is the fill value.
     table : bool
@@ -581,16 +697,16 @@ def never_written(where: str, unwritten: tuple[int, int, int, str] | None, label
     >>> import warnings
     >>> with warnings.catch_warnings(record=True) as caught:
     ...     warnings.simplefilter("always")
-    ...     never_written("v.zarr", (1, 3, 4, "chunks"))
-    ...     never_written("v.zarr", (2, 3, 4, "chunks"), label=5)  # another label: its count is right
+    ...     never_written("v.zarr", (1, 3, 4))
+    ...     never_written("v.zarr", (2, 3, 4), label=5)  # another label: its count is right
     >>> [str(w.message).split("; ")[1] for w in caught]
     ['zarr reads their voxels as the fill value 1, so they count as voxels of the object']
     """
     if unwritten is None:
         return
-    fill, missing, total, unit = unwritten
+    fill, missing, total = unwritten
     if not fill or not missing or (label is not None and label != fill):
         return
     counted = f"label {fill}" if table or label is not None else "voxels of the object"
-    warn(f"{where}: {missing} of {total} {unit} were never written; zarr reads their voxels as the fill value {fill}, "
+    warn(f"{where}: {missing} of {total} chunks were never written; zarr reads their voxels as the fill value {fill}, "
          f"so they count as {counted}")

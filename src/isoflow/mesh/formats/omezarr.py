@@ -94,18 +94,21 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     names = None if multiscale is None else axis_names(multiscale, array.ndim, where)
     index: tuple = (Ellipsis,)
     shape = tuple(array.shape)
+    at = None
     if time is not None:
         xyz = list(range(array.ndim)) if names is None else spatial_axes(names, array.shape, where, time=True)[0]
         check_time(time, [array.shape[i] for i in xyz], where)
         # the time axis kept, of length 1, so that the axes stay as stored
         index = tuple(slice(int(time), int(time) + 1) if i == xyz[3] else slice(None) for i in range(array.ndim))
         shape = tuple(1 if i == xyz[3] else n for i, n in enumerate(shape))
+        at = {xyz[3]: int(time)}
     check_shape(shape, array.dtype, where)
     with reading(where, "zarr"):
         data = np.asarray(array[index])
     # the label is chosen later (as_object): counted for any nonzero fill
-    # value; the store's keys are not told apart by time point
-    fill, blank = getattr(array, "fill_value", None), unwritten_fill(array) if time is None else None
+    # value, over the chunks read (those of the time point)
+    fill = getattr(array, "fill_value", None)
+    blank = unwritten_fill(array, at=at)
     if multiscale is None:
         data = data if time is None else data[..., 0]
         # a plain array: isoflow's slab voxeliser (isoflow.mesh.slabs) keeps

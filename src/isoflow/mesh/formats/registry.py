@@ -284,7 +284,7 @@ class RawVolume:
     voxel is in the object unless one value is selected (MagicaVoxel).
     ``fill``: a zarr array's fill value, which it reads for a chunk never
     written (a refusal of that value says so); None for other formats.
-    ``unwritten``: ``(fill, missing, total, unit)`` where that fill value
+    ``unwritten``: ``(fill, missing, total)`` where that fill value
     is a nonzero whole number and chunks were never written (see
     :func:`~isoflow.scale.chunks.never_written`); None otherwise."""
 
@@ -295,7 +295,7 @@ class RawVolume:
     parity: int = 0
     paint: bool = False
     fill: object = None
-    unwritten: tuple[int, int, int, str] | None = None
+    unwritten: tuple[int, int, int] | None = None
 
 
 @dataclass(frozen=True)
