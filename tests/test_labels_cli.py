@@ -719,5 +719,35 @@ def test_surface_labels_without_force_says_an_earlier_run_s_files_are_kept(tmp_p
     run(capsys, "surface", tmp_path / "four.npy", "--labels", "4", "-o", f"{out}/", "--suffix", "ply")
     assert main(["surface", str(tmp_path / "four.npy"), "--labels", "1-3", "-o", f"{out}/", "--suffix", "ply"]) == 0
     err = capsys.readouterr().err
-    assert "1 label file of an earlier run kept (label_4.ply); --force makes the directory hold" in err, err
+    assert "1 label file of an earlier run kept (label_4.ply); a choice of labels replaces those labels' files" in err
     assert sorted(files_in(out)) == ["label_1.ply", "label_2.ply", "label_3.ply", "label_4.ply"]
+    run(capsys, "surface", tmp_path / "four.npy", "--labels", "1-3", "-o", f"{out}/", "--suffix", "ply", "--force")
+    assert main(["surface", str(tmp_path / "four.npy"), "--labels", "-o", f"{out}/", "--suffix", "stl"]) == 0
+    err = capsys.readouterr().err  # every label: --force would make the directory hold this run's alone
+    assert "of an earlier run kept" not in err  # the .ply files are of another suffix, none of this set's
+
+
+@pytest.mark.parametrize(("choice", "replaced", "kept"), [
+    (["--labels", "2,4"], {2: 4}, ["label_1.ply", "label_3.ply"]),
+    (["--labels=1-2"], {1: 3, 2: 4}, ["label_3.ply", "label_4.ply"]),
+])
+def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alone(tmp_path, capsys, choice, replaced,
+                                                                                   kept):
+    # redoing one label with --force removed every other label's file of the earlier run
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4, 2]))  # label 4 no longer occurs
+    out = tmp_path / "out"
+    for suffix in ("ply", "obj"):
+        run(capsys, "surface", tmp_path / "old.npy", "--labels", "-o", f"{out}/", "--suffix", suffix)
+    before = files_in(out)
+    assert main(["surface", str(tmp_path / "new.npy"), *choice, "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
+    err = capsys.readouterr().err
+    assert f"{len(kept)} label files of an earlier run kept ({', '.join(kept)})" in err, err
+    after = files_in(out)
+    # the chosen labels' files replaced (label 4's removed: the image has no surface for it), every other one kept
+    assert sorted(after) == sorted([f"label_{v}.ply" for v in replaced] + kept + [f"label_{v}.obj" for v in (1, 2, 3, 4)])
+    assert {name: after[name] for name in after if name not in {f"label_{v}.ply" for v in replaced}} == \
+        {name: before[name] for name in after if name not in {f"label_{v}.ply" for v in replaced}}
+    for label, size in replaced.items():
+        mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+        assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)

@@ -39,7 +39,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
     p.add_argument("--no-check", action="store_true",
                    help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output files")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite existing output files; with --labels -o DIR/, a choice of labels replaces those "
+                        "labels' files alone, every label makes the directory hold this run's files alone")
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes; for a .zarr store read block by block, the blocks meshed "
                         "at a time (default: $ISOFLOW_THREADS, else every CPU)")
