@@ -551,6 +551,33 @@ def test_surface_labels_as_stl_notes_the_contacts_a_weld_joins(tmp_path, capsys)
     assert not welded[1].is_watertight and welded[2].is_watertight
     assert main(["surface", str(tmp_path / "e.npy"), "--labels", "2", "-o", f"{tmp_path}/c/", "--suffix", "stl"]) == 0
     assert "STL keeps" not in capsys.readouterr().err
+    # a warning (what readers get is not the surface written): --quiet keeps it
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl", "--force",
+                 "-q"]) == 0
+    assert "warning: " in (err := capsys.readouterr().err) and "of 1 file (label_1.stl)" in err, err
+
+
+def test_surface_labels_as_stl_far_from_the_origin_warns_of_the_float32_move(tmp_path, capsys):
+    """surface says how far an STL's float32 positions moved the corners;
+    a file per label as STL said nothing of it."""
+    from isoflow import DigitalObject, boundary_mesh, write_labels
+
+    image = boxes([3, 4])
+    write_labels(image, tmp_path / "far.npz", pitch=0.01, origin=(1e5, 0, 0))
+    # numpy's float32 of the corners in world units: the farthest move, in voxels
+    moves = []
+    for label in (1, 2):
+        obj = DigitalObject(image == label, pitch=0.01, origin=(1e5, 0, 0))
+        corners = obj.world(boundary_mesh(obj.volume, 6).vertices)
+        moves.append(np.abs(corners.astype(np.float32) - corners).max() / 0.01)
+    assert max(moves) > 1e-3  # more than a thousandth of a voxel: surface's threshold for saying it
+    assert main(["surface", str(tmp_path / "far.npz"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl", "-q"]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "float32" in line]
+    assert len(warned) == 1 and warned[0].startswith(f"isoflow surface: warning: {tmp_path}/d/: STL stores float32 "
+                                                     "positions, which move the corners by up to "), warned
+    assert f"({max(moves):.2g} voxels)" in warned[0], (warned, moves)
+    assert main(["surface", str(tmp_path / "far.npz"), "--labels", "-o", f"{tmp_path}/p/", "--suffix", "ply"]) == 0
+    assert "float32" not in capsys.readouterr().err  # PLY keeps float64
 
 
 def test_surface_labels_counts_the_faces_its_files_hold(tmp_path, capsys, segmentation):

@@ -544,6 +544,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
+    moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file
     earlier = earlier_label_files(target[1], target[2], [name for name, *_ in meshes])
     asked = label_choice(args.labels) if earlier and args.force else None
     retire, kept = retired_label_files(earlier, target[2], asked, args.force)
@@ -561,6 +562,8 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
                                                force=args.force, comments=(f"isoflow surface --labels: {name}",))
                 count += written["face_count"]
                 kinds[written["faces"]] = None
+                if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
+                    moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
                 welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
                 if welded:
                     welds[path.name] = welded
@@ -576,8 +579,10 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             with contextlib.suppress(OSError):
                 target[1].rmdir()
         raise
-    if welds and not args.quiet:  # as surface says of one STL file
-        print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
+    if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
+        print(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}", file=sys.stderr)
+    if welds:  # as surface says of one STL file, under --quiet too
+        print(f"isoflow surface: warning: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
               f"at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} ({_some(list(welds))}) "
               "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
     return problems, f"{count} faces ({', '.join(kinds)})"
