@@ -552,6 +552,33 @@ def test_surface_labels_as_stl_notes_the_contacts_a_weld_joins(tmp_path, capsys)
     assert not welded[1].is_watertight and welded[2].is_watertight
     assert main(["surface", str(tmp_path / "e.npy"), "--labels", "2", "-o", f"{tmp_path}/c/", "--suffix", "stl"]) == 0
     assert "STL keeps" not in capsys.readouterr().err
+    # a warning (what readers get is not the surface written): --quiet keeps it
+    assert main(["surface", str(tmp_path / "e.npy"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl", "--force",
+                 "-q"]) == 0
+    assert "warning: " in (err := capsys.readouterr().err) and "of 1 file (label_1.stl)" in err, err
+
+
+def test_surface_labels_as_stl_far_from_the_origin_warns_of_the_float32_move(tmp_path, capsys):
+    """surface says how far an STL's float32 positions moved the corners;
+    a file per label as STL said nothing of it."""
+    from isoflow import DigitalObject, boundary_mesh, write_labels
+
+    image = boxes([3, 4])
+    write_labels(image, tmp_path / "far.npz", pitch=0.01, origin=(1e5, 0, 0))
+    # numpy's float32 of the corners in world units: the farthest move, in voxels
+    moves = []
+    for label in (1, 2):
+        obj = DigitalObject(image == label, pitch=0.01, origin=(1e5, 0, 0))
+        corners = obj.world(boundary_mesh(obj.volume, 6).vertices)
+        moves.append(np.abs(corners.astype(np.float32) - corners).max() / 0.01)
+    assert max(moves) > 1e-3  # more than a thousandth of a voxel: surface's threshold for saying it
+    assert main(["surface", str(tmp_path / "far.npz"), "--labels", "-o", f"{tmp_path}/d/", "--suffix", "stl", "-q"]) == 0
+    warned = [line for line in capsys.readouterr().err.splitlines() if "float32" in line]
+    assert len(warned) == 1 and warned[0].startswith(f"isoflow surface: warning: {tmp_path}/d/: STL stores float32 "
+                                                     "positions, which move the corners by up to "), warned
+    assert f"({max(moves):.2g} voxels)" in warned[0], (warned, moves)
+    assert main(["surface", str(tmp_path / "far.npz"), "--labels", "-o", f"{tmp_path}/p/", "--suffix", "ply"]) == 0
+    assert "float32" not in capsys.readouterr().err  # PLY keeps float64
 
 
 def test_surface_labels_counts_the_faces_its_files_hold(tmp_path, capsys, segmentation):
@@ -720,5 +747,35 @@ def test_surface_labels_without_force_says_an_earlier_run_s_files_are_kept(tmp_p
     run(capsys, "surface", tmp_path / "four.npy", "--labels", "4", "-o", f"{out}/", "--suffix", "ply")
     assert main(["surface", str(tmp_path / "four.npy"), "--labels", "1-3", "-o", f"{out}/", "--suffix", "ply"]) == 0
     err = capsys.readouterr().err
-    assert "1 label file of an earlier run kept (label_4.ply); --force makes the directory hold" in err, err
+    assert "1 label file of an earlier run kept (label_4.ply); a choice of labels replaces those labels' files" in err
     assert sorted(files_in(out)) == ["label_1.ply", "label_2.ply", "label_3.ply", "label_4.ply"]
+    run(capsys, "surface", tmp_path / "four.npy", "--labels", "1-3", "-o", f"{out}/", "--suffix", "ply", "--force")
+    assert main(["surface", str(tmp_path / "four.npy"), "--labels", "-o", f"{out}/", "--suffix", "stl"]) == 0
+    err = capsys.readouterr().err  # every label: --force would make the directory hold this run's alone
+    assert "of an earlier run kept" not in err  # the .ply files are of another suffix, none of this set's
+
+
+@pytest.mark.parametrize(("choice", "replaced", "kept"), [
+    (["--labels", "2,4"], {2: 4}, ["label_1.ply", "label_3.ply"]),
+    (["--labels=1-2"], {1: 3, 2: 4}, ["label_3.ply", "label_4.ply"]),
+])
+def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alone(tmp_path, capsys, choice, replaced,
+                                                                                   kept):
+    # redoing one label with --force removed every other label's file of the earlier run
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4, 2]))  # label 4 no longer occurs
+    out = tmp_path / "out"
+    for suffix in ("ply", "obj"):
+        run(capsys, "surface", tmp_path / "old.npy", "--labels", "-o", f"{out}/", "--suffix", suffix)
+    before = files_in(out)
+    assert main(["surface", str(tmp_path / "new.npy"), *choice, "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
+    err = capsys.readouterr().err
+    assert f"{len(kept)} label files of an earlier run kept ({', '.join(kept)})" in err, err
+    after = files_in(out)
+    # the chosen labels' files replaced (label 4's removed: the image has no surface for it), every other one kept
+    assert sorted(after) == sorted([f"label_{v}.ply" for v in replaced] + kept + [f"label_{v}.obj" for v in (1, 2, 3, 4)])
+    assert {name: after[name] for name in after if name not in {f"label_{v}.ply" for v in replaced}} == \
+        {name: before[name] for name in after if name not in {f"label_{v}.ply" for v in replaced}}
+    for label, size in replaced.items():
+        mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+        assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)

@@ -178,6 +178,9 @@ def test_regionprops_gives_the_same_counts_boxes_centroids_and_euler_numbers(rng
         assert [table[f"bbox-{d}"][r] for d in range(6)] == list(p.bbox)
         # a voxel v spans [v, v + 1]: its centre is scikit-image's v + 0.5
         assert np.allclose([table[f"centroid-{d}"][r] - 0.5 for d in range(3)], p.centroid)
+    # not at 6 (the default): the noise labels' edge and vertex contacts join at 26 alone (docs/labels.md)
+    six = label_table(image, 6, method=method)["euler_characteristic"]
+    assert six.tolist() != [props[v].euler_number for v in table["label"].tolist()]
 
 
 def test_world_units_follow_the_pitch_per_axis_and_the_origin():

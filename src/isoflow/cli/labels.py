@@ -475,6 +475,50 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     return sorted(found)
 
 
+def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | None,
+                        force: bool) -> tuple[list[Path], list[Path]]:
+    """Which of an earlier run's label files (:func:`earlier_label_files`)
+    a run removes and which it keeps, as ``(retire, kept)``.
+
+    Without ``force`` every one is kept. With it, a run of every label
+    (``asked`` None) makes the directory hold its own files alone; a run of
+    a choice replaces the files of the labels chosen only: it removes those
+    of chosen labels that no longer occur (the image has no surface for
+    them) and keeps every other label's.
+
+    Parameters
+    ----------
+    earlier : list of Path
+        The label files of the directory that this run does not write.
+    suffix : str
+        Their suffix (``.ply``).
+    asked : list of int or None
+        The labels of ``--labels SPEC``; None for every label.
+    force : bool
+        Whether ``--force`` was given.
+
+    Returns
+    -------
+    tuple of list of Path
+        ``(retire, kept)``, each in the order of ``earlier``.
+
+    Examples
+    --------
+    >>> files = [Path("out/label_5.ply"), Path("out/label_7.ply")]
+    >>> [[f.name for f in part] for part in retired_label_files(files, ".ply", [3, 5], True)]
+    [['label_5.ply'], ['label_7.ply']]
+    >>> [[f.name for f in part] for part in retired_label_files(files, ".ply", None, True)]
+    [['label_5.ply', 'label_7.ply'], []]
+    """
+    if not force:
+        return [], list(earlier)
+    if asked is None:
+        return list(earlier), []
+    chosen = set(asked)
+    retire = [f for f in earlier if int(f.name[len("label_"): -len(suffix)]) in chosen]
+    return retire, [f for f in earlier if f not in retire]
+
+
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
                          progress=None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, from ``glb_parts``,
@@ -500,20 +544,26 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
+    moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file
     earlier = earlier_label_files(target[1], target[2], [name for name, *_ in meshes])
-    if earlier and not args.force and not args.quiet:
-        print(f"isoflow surface: note: {target[1]}/: {counted(len(earlier), 'label file')} of an earlier run kept "
-              f"({_some([f.name for f in earlier])}); --force makes the directory hold this run's alone",
-              file=sys.stderr)
+    asked = label_choice(args.labels) if earlier and args.force else None
+    retire, kept = retired_label_files(earlier, target[2], asked, args.force)
+    if kept and not args.quiet:
+        print(f"isoflow surface: note: {target[1]}/: {counted(len(kept), 'label file')} of an earlier run kept "
+              f"({_some([f.name for f in kept])}); "
+              + ("--force makes the directory hold this run's alone" if args.labels == "all" else
+                 "a choice of labels replaces those labels' files alone, with --force too"), file=sys.stderr)
     try:
         # one set: a folder holding some labels' new files beside others' old ones would look complete
-        with output_set(f"{target[1]}/", retire=earlier if args.force else ()):
+        with output_set(f"{target[1]}/", retire=retire):
             for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
                 path = target[1] / f"{name}{target[2]}"
                 written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                                force=args.force, comments=(f"isoflow surface --labels: {name}",))
                 count += written["face_count"]
                 kinds[written["faces"]] = None
+                if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
+                    moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
                 welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
                 if welded:
                     welds[path.name] = welded
@@ -529,8 +579,10 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             with contextlib.suppress(OSError):
                 target[1].rmdir()
         raise
-    if welds and not args.quiet:  # as surface says of one STL file
-        print(f"isoflow surface: note: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
+    if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
+        print(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}", file=sys.stderr)
+    if welds:  # as surface says of one STL file, under --quiet too
+        print(f"isoflow surface: warning: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
               f"at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} ({_some(list(welds))}) "
               "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
     return problems, f"{count} faces ({', '.join(kinds)})"

@@ -134,7 +134,8 @@ def build_parser() -> argparse.ArgumentParser:
         command.add_parser(sub, add_command)
     for p in sub.choices.values():
         p.add_argument("-q", "--quiet", action="store_true",
-                       help="no progress bars or warnings on stderr (errors are still printed)")
+                       help="no progress bars or notes on stderr (errors, and warnings that the result differs from "
+                            "what was asked, are still printed)")
     return parser
 
 
@@ -284,7 +285,10 @@ def restore_handlers(before: dict, raise_late: bool = True) -> None:
 def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
     """Each :class:`~isoflow.errors.IsoflowWarning` as one ``warning:`` line
     on stderr (a :class:`~isoflow.errors.MeshNote` as a ``note:`` line),
-    without the source line Python adds; others as Python shows them."""
+    without the source line Python adds; others as Python shows them.
+    --quiet drops the notes and other libraries' warnings, not isoflow's
+    warnings: each says the result differs from what was asked (a voxel
+    size a format cannot keep, a rotation left out)."""
     import warnings
 
     from ..errors import IsoflowWarning, MeshNote
@@ -300,9 +304,10 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
             else:
                 shown(message, category, filename, lineno, file, line)
 
-        if not args.quiet:
-            warnings.simplefilter("always", IsoflowWarning)
-            warnings.showwarning = show
+        warnings.simplefilter("always", IsoflowWarning)
+        if args.quiet:  # a warning says the result differs from what was asked: --quiet drops notes alone
+            warnings.simplefilter("ignore", MeshNote)
+        warnings.showwarning = show
         yield
 
 

@@ -39,7 +39,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--png", help="also write a picture of the surface coloured by vertex angle")
     p.add_argument("--no-check", action="store_true",
                    help="do not read the written file back (with trimesh; in chunks for a .zarr store)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output files")
+    p.add_argument("--force", action="store_true",
+                   help="overwrite existing output files; with --labels -o DIR/, a choice of labels replaces those "
+                        "labels' files alone, every label makes the directory hold this run's files alone")
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes; for a .zarr store read block by block, the blocks meshed "
                         "at a time (default: $ISOFLOW_THREADS, else every CPU)")
@@ -101,8 +103,8 @@ def surface_of(args: argparse.Namespace) -> int:
             f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
             + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
         )
-        if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS and not args.quiet:
-            print(f"isoflow surface: note: {export.stl_move_note(out, written)}", file=sys.stderr)
+        if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
+            print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
         status = read_back(args, out, mesh, obj, comps)
         if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
             from ..mesh.render import render_surface
@@ -137,8 +139,8 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
 
     shared = export.shared_positions(mesh)
     welded = shared if out.suffix.lower() == ".stl" else 0
-    if welded and not args.quiet:
-        print(f"isoflow surface: note: {export.stl_weld_note(out, welded)}", file=sys.stderr)
+    if welded:  # readers see other topology than the one written: said under --quiet too
+        print(f"isoflow surface: warning: {export.stl_weld_note(out, welded)}", file=sys.stderr)
     if args.no_check:
         return 0
     with reading_back(out):

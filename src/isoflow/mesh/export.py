@@ -430,7 +430,7 @@ VERTEX_COMMENT = ("per-vertex: config byte, class (gamma+4; -1 not well-composed
                   "gamma (eighths, eq. 4.6), a (eq. 4.10), f (eq. 4.8)")
 
 
-def stl_move_note(out: Path, written: dict) -> str:
+def stl_move_note(out: str | os.PathLike, written: dict) -> str:
     """How far an STL's float32 positions moved the surface."""
     return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
             f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")

@@ -658,14 +658,23 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
     fmt = format_for(file, writing=True)
     assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
     module = fmt.load()
-    if hasattr(module, "check"):  # refusals and warnings name the output, before it is written
-        module.check(file, obj, dataset)
+    import warnings
+
+    # refusals come before the write; what the format drops is said once the
+    # file is written: of a write that failed it would be a second line
+    # about a file that is not there
+    with warnings.catch_warnings(record=True) as dropped:
+        warnings.simplefilter("always")
+        if hasattr(module, "check"):
+            module.check(file, obj, dataset)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
         if fmt.datasets and dataset is not None:  # FILE.h5:/name: the file's other datasets are kept
             module.write(tmp, obj, dataset, name=file.name, into=file)
         else:
             module.write(tmp, obj, dataset, name=file.name)
+    for w in dropped:
+        warn(str(w.message), w.category)
     return file
 
 
