@@ -153,6 +153,14 @@ def test_nrrd_unit_is_its_space_units(tmp_path, capsys, units, unit):
         assert same(r["pitch"], PITCH) and same(r["origin"], np.array([1.0, 2.0, 3.0]) - np.array(PITCH) / 2)
 
 
+def test_nrrd_without_a_space_takes_the_units_of_its_spacings(tmp_path, capsys):
+    nrrd = pytest.importorskip("nrrd")
+    nrrd.write(str(tmp_path / "seg.nrrd"), cube(), {"spacings": list(PITCH), "units": ["nm"] * 3}, index_order="F")
+    assert nrrd.read_header(str(tmp_path / "seg.nrrd"))["units"] == ["nm"] * 3
+    for r in both(capsys, tmp_path / "seg.nrrd"):
+        assert r["unit"] == "nm" and same(r["pitch"], PITCH) and r["origin"] == [0, 0, 0]
+
+
 def test_nrrd_with_differing_space_units_says_so(tmp_path):
     nrrd = pytest.importorskip("nrrd")
     header = {"space dimension": 3, "space directions": np.diag(PITCH), "space units": ["mm", "mm", "cm"],
