@@ -16,7 +16,7 @@ from .inputs import (
     add_input_arguments,
     check_input_connectivity,
     label_options,
-    load_input,
+    load_input_with_unit,
     mesh_fill,
     refuse_mesh_options,
     refuse_points_option,
@@ -63,13 +63,40 @@ def cmd_info(args: argparse.Namespace) -> int:
     grid = None
     if split_dataset(args.input)[0].suffix.lower() == ".zarr" and stored_ndim(args.input) in (2, 3):
         report = info_of_store(args)
+        placed: dict | None = store_placement(args.input)
     else:
-        report, grid = info_in_memory(args)
+        report, grid, placed = info_in_memory(args)
     if args.json:
-        print(json.dumps({**report.to_dict(), **({"voxelised": grid} if grid else {}), "input": str(args.input)}))
+        print(json.dumps({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
+                          "input": str(args.input)}))
         return 0
-    print(format_info(report, str(args.input), grid))
+    print(format_info(report, str(args.input), grid, placed))
     return 0
+
+
+def calibration(obj, unit: str | None) -> dict:
+    """A volume file's voxel size per axis, the world position of voxel
+    0's lowest corner and their length unit (None where the file says
+    none): what ``info`` says it read, so that a calibration can be checked."""
+    from ..mesh.formats.registry import placement
+
+    spacing, corner = placement(obj)
+    return {"pitch": [float(p) for p in spacing], "origin": [float(c) + 0.0 for c in corner], "unit": unit}
+
+
+def store_placement(path) -> dict:
+    """:func:`calibration` of a zarr store read block by block, from its
+    metadata (the volume is not read)."""
+    from ..digital.lattice import DigitalObject
+    from ..mesh.formats.omezarr import open_store
+
+    store = open_store(path, time=True)
+    pitch, origin = store.placement()
+    try:
+        place = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
+    except IsoflowError as exc:
+        raise exc.at(path) from None
+    return calibration(place, store.unit())
 
 
 def info_of_store(args: argparse.Namespace) -> Report:
@@ -89,14 +116,16 @@ def info_of_store(args: argparse.Namespace) -> Report:
                              surfaces=not args.no_surfaces, threads=args.threads)
 
 
-def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None]:
-    """The report, and for a mesh the grid it was voxelised on
-    (:func:`mesh_grid`)."""
+def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict | None]:
+    """The report, for a mesh the grid it was voxelised on
+    (:func:`mesh_grid`), and for a volume file its voxel size, origin and
+    unit (:func:`calibration`)."""
     from ..digital.analysis import analyze
+    from ..mesh.volumes import is_volume
 
     warming = warm_up_while_reading(args)
     try:
-        obj = load_input(args)
+        obj, unit = load_input_with_unit(args)
     finally:
         # joined on a refusal too: a thread left compiling would outlive the
         # command, and numba's compile records the warnings of every thread
@@ -108,12 +137,13 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None]:
     # the reason
     say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
     grid = mesh_grid(args, obj)
+    placed = calibration(obj, unit) if grid is None and is_volume(args.input) else None
     if args.gpu:
         from ..scale.arrays import to_gpu
 
         report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
-        return dataclasses.replace(report, parity=obj.parity), grid  # a bare array has no lattice place
-    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads), grid
+        return dataclasses.replace(report, parity=obj.parity), grid, placed  # a bare array has no lattice place
+    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads), grid, placed
 
 
 def mesh_grid(args: argparse.Namespace, obj) -> dict | None:
@@ -159,8 +189,9 @@ def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
     return thread
 
 
-def format_info(r: Report, name: str, grid: dict | None = None) -> str:
-    """The report as a terminal reads it (``grid``: a mesh's, :func:`mesh_grid`)."""
+def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | None = None) -> str:
+    """The report as a terminal reads it (``grid``: a mesh's, :func:`mesh_grid`;
+    ``placed``: a volume file's, :func:`calibration`)."""
     lines = [
         f"{name}: {r['dimension']}D, shape {'x'.join(map(str, r['shape']))}, "
         f"{counted(r['voxels'], 'pixel' if r['dimension'] == 2 else 'voxel')}, {r['connectivity']}-connectivity",
@@ -169,6 +200,11 @@ def format_info(r: Report, name: str, grid: dict | None = None) -> str:
         # (as voxelize prints them)
         lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}, "
                      f"origin {coordinates(grid['origin'])}")
+    if placed:
+        unit = f" {placed['unit']}" if placed["unit"] else ""
+        size = f"{'pixel' if r['dimension'] == 2 else 'voxel'} size"
+        lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'])}{unit}, "
+                     f"origin {coordinates(placed['origin'])}{unit}{'' if unit else ' (the file says no unit)'}")
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]

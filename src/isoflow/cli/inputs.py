@@ -10,9 +10,13 @@ import sys
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import IsoflowError, IsoflowWarning
 from .progress import progress_bar
+
+if TYPE_CHECKING:
+    from ..digital.lattice import DigitalObject
 
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
@@ -197,26 +201,39 @@ def why_empty(args: argparse.Namespace, obj) -> str | None:
 
 def load_input(args: argparse.Namespace):
     """The digital object named on the command line (volume, points or mesh)."""
+    return load_input_with_unit(args)[0]
+
+
+def load_input_with_unit(args: argparse.Namespace) -> tuple[DigitalObject, str | None]:
+    """:func:`load_input`'s object and, for a volume file, the length unit
+    of its voxel size and origin as the file says it
+    (:func:`~isoflow.mesh.volumes.read_volume_with_unit`); None for a
+    mesh, a point list, or a file that says none."""
     from ..mesh.load import is_mesh_path
-    from ..mesh.volumes import NO_CUBE, is_volume, read_object
+    from ..mesh.volumes import NO_CUBE, is_volume, read_object, read_volume_with_unit
 
     path = Path(args.input)
     if is_mesh_path(path):
         if getattr(args, "label", None) is not None:
             raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
         refuse_points_option(args, "mesh")
-        return voxelize_input(path, args)
+        return voxelize_input(path, args), None
     refuse_mesh_options(args, path.suffix or "this")
-    if is_volume(args.input):  # anything else is read as a point list
+    volume = is_volume(args.input)  # anything else is read as a point list
+    if volume:
         refuse_points_option(args, "volume")
+    unit = None
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
     with label_options(args), warnings.catch_warnings():
         # an empty point model: each command says why in its own words (why_empty)
         warnings.filterwarnings("ignore", message=re.escape(f"{path}: {NO_CUBE}"), category=IsoflowWarning)
-        obj = read_object(args.input, points_are=args.points_are or "corners", label=args.label)
-    if is_volume(args.input):
+        if volume:
+            obj, unit = read_volume_with_unit(args.input, label=args.label)
+        else:
+            obj = read_object(args.input, points_are=args.points_are or "corners", label=args.label)
+    if volume:
         say_plate(args, obj.volume.shape)
-    return obj
+    return obj, unit
 
 
 def check_input_connectivity(args: argparse.Namespace, ndim: int) -> None:

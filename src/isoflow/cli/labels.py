@@ -81,7 +81,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     """The label image named on the command line and its table, with only
     the labels that occur (a note names those asked for that do not):
     ``(about, connectivity, table, image)``, ``about`` its shape, type,
-    voxel size and origin, ``image`` None for a zarr store (read block by
+    voxel size, origin and their length unit, ``image`` None for a zarr store (read block by
     block)."""
     from ..digital.connectivity import resolve_connectivity
     from ..digital.label_table import label_table
@@ -110,7 +110,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         about, table = table_of_store(args, conn, None if every else asked, surfaces)
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
-                 "origin": image.origin}
+                 "origin": image.origin, "unit": image.unit}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
@@ -168,7 +168,8 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
             raise (exc if named else exc.at(args.input)) from None
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
-    return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin}, table
+    return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
+            "unit": slabs.unit}, table
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)
@@ -272,7 +273,8 @@ def json_text(name, about: dict, conn: int, table: dict) -> Iterator[str]:
     """What ``--json`` prints, in pieces: one object, the image and then
     ``labels``, one object per label (NaN as null)."""
     head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
-            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "connectivity": conn}
+            "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
+            "connectivity": conn}
     yield json.dumps(head)[:-1] + ', "labels": '
     yield from json_rows(table)
     yield "}"
@@ -297,7 +299,8 @@ def _cell(value, width: int) -> str:
 def format_table(name, about: dict, conn: int, table: dict) -> str:
     """The compact table: the first rows, then a summary of all."""
     n = len(table["label"])
-    pitch = "x".join(f"{p:g}" for p in about["spacing"])
+    # the unit of the world columns (bbox, centroid; area, volume in its square, cube), where the file says it
+    pitch = "x".join(f"{p:g}" for p in about["spacing"]) + (f" {about['unit']}" if about["unit"] else "")
     shape = "x".join(map(str, about["shape"]))
     planar = len(about["shape"]) == 2
     lines = [f"{name}: {counted(n, 'label')}, shape {shape}, {'pixel' if planar else 'voxel'} {pitch}, "

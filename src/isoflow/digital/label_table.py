@@ -93,9 +93,11 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
 class LabelImage:
     """A label image with its place: integers in (x, y, z) order, the voxel
     size per axis and the world position of voxel (0, 0, 0)'s lowest
-    corner, as :func:`~isoflow.mesh.volumes.read_labels` reads a file.
-    :func:`label_table` takes it in place of the array and its ``pitch``
-    and ``origin``.
+    corner, as :func:`~isoflow.mesh.volumes.read_labels` reads a file,
+    and ``unit``, the length unit of both as the file says it (``mm``,
+    ``µm``, ...; None where it says none). :func:`label_table` takes it in
+    place of the array and its ``pitch`` and ``origin``; its world columns
+    are in that unit (areas and volumes in its square and cube).
 
     Examples
     --------
@@ -107,8 +109,9 @@ class LabelImage:
     array: np.ndarray
     spacing: np.ndarray
     origin: np.ndarray
+    unit: str | None = None
 
-    # equal when the three arrays are, by their elements (the generated
+    # equal when the three arrays (and the unit) are, by their elements (the generated
     # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]

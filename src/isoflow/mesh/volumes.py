@@ -114,7 +114,50 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None, *, ti
     >>> frame.volume.shape, frame.voxels
     ((4, 4, 4), 56)
     """
-    return as_object(_read_raw(path, time=time), str(path), label)
+    return read_volume_with_unit(path, label, time=time)[0]
+
+
+def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = None, *,
+                          time: int | None = None) -> tuple[DigitalObject, str | None]:
+    """:func:`read_volume`'s object and the length unit of its ``pitch`` and
+    ``origin`` as the file says it, in one spelling per unit (``mm``,
+    ``µm``, ``nm``, ``m``, ``cm``, ...: see docs/formats.md): NIfTI's xyzt
+    units, NRRD's space units, ImageJ's or OME-XML's unit in a TIFF, HDF5's
+    ``element_size_um``, OME-Zarr's axis units.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A volume file, optionally ``:dataset``, as :func:`read_volume` takes it.
+    label : int or float, optional
+        The value whose voxels are the object, in a label image.
+    time : int, optional
+        One time point of a time series (see :func:`read_volume`).
+
+    Returns
+    -------
+    tuple of DigitalObject and str or None
+        The object, and its unit (None where the file says none).
+
+    Raises
+    ------
+    IsoflowError
+        As :func:`read_volume`.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> import nibabel as nib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "cube.nii.gz"
+    >>> img = nib.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.diag([0.5, 0.5, 2.0, 1.0]))
+    >>> img.header.set_xyzt_units("micron")
+    >>> nib.save(img, path)
+    >>> obj, unit = read_volume_with_unit(path)
+    >>> obj.spacing.tolist(), unit
+    ([0.5, 0.5, 2.0], '\u00b5m')
+    """
+    raw = _read_raw(path, time=time)
+    return as_object(raw, str(path), label), raw.unit
 
 
 def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | None = None) -> RawVolume:
@@ -276,8 +319,9 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
         ``array``: the labels in isoflow's (x, y, z) order, as integers (a
         float array whose values are all whole numbers, as NIfTI scaling
         may give, becomes int64); ``spacing`` and ``origin`` as
-        :func:`read_volume` gives them. :func:`isoflow.label_table` takes
-        it as it is, in the file's units.
+        :func:`read_volume` gives them, and ``unit``, their length unit as
+        the file says it (:func:`read_volume_with_unit`). :func:`isoflow.label_table`
+        takes it as it is, in the file's units.
 
     Raises
     ------
@@ -316,7 +360,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
     except IsoflowError as exc:
         raise exc.at(path) from None
     never_written(str(path), raw.unwritten, table=True)
-    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0])
+    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0], raw.unit)
 
 
 def select_label(array, label, where: str) -> np.ndarray:

@@ -8,7 +8,7 @@ Metadata: isoflow writes the attributes ``pitch`` (one number, or one per
 axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
 back, so a round trip is exact. Files from other tools: their
 ``element_size_um`` attribute (ilastik and Fiji's HDF5 plug-in, one size per
-dataset axis) is read as the voxel size when ``pitch`` is absent.
+dataset axis) is read as the voxel size when ``pitch`` is absent, in µm.
 
 Written as uint8 0/1, gzip-compressed and chunked. ``FILE.h5`` names the
 file: a new one (``--force`` replaces it). ``FILE.h5:/group/name`` names one
@@ -46,7 +46,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if "pitch" not in attrs and "element_size_um" in attrs:
         pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
-    return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0))
+    # element_size_um is in micrometres by its name; isoflow's own pitch says no unit
+    unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
+    return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit)
 
 
 def _element_size(value, ndim: int, where: str) -> np.ndarray:

@@ -13,7 +13,8 @@ a 4D object written with another voxel size or origin along it is warned of.
 Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
 NIfTI stores the affine in float32: pitch and origin are kept to float32
-precision.
+precision. The length unit is the header's xyzt spatial unit
+(``mm``, ``micron``, ``meter``; ``unknown``, which isoflow writes, is none).
 """
 
 from __future__ import annotations
@@ -25,7 +26,18 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, note, placement, quiet_logs, reading, refuse_empty, stored_values
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    length_unit,
+    note,
+    placement,
+    quiet_logs,
+    reading,
+    refuse_empty,
+    stored_values,
+)
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -39,6 +51,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         check_shape(shape, img.get_data_dtype(), where)
         data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
         affine = np.asarray(img.affine, np.float64)
+        unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     while data.ndim > 3 and data.shape[-1] == 1:
         data = data[..., 0]
     if data.ndim not in (2, 3, 4):
@@ -47,7 +60,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     vol, pitch, origin = axis_aligned(data, affine[:3, :spatial], affine[:3, 3], where)
     if data.ndim == 4:
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(vol, pitch, origin)
+    return RawVolume(vol, pitch, origin, unit=unit)
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:

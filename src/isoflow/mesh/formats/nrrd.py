@@ -13,6 +13,8 @@ a space axis"), or, without a space, whose ``kinds`` entry is a component
 kind (``vector``, ``RGB-color``, ``list``, ...), must have length 1 too. A header whose lists do not fit the
 array (fewer directions than axes, an origin of another dimension) is
 refused; a non-finite ``space origin`` is read as 0 with a warning.
+The length unit is ``space units`` (with a space) or ``units`` of the
+axes with ``spacings``, where every axis has the same one.
 
 Written with ``space dimension``, diagonal ``space directions`` (the voxel
 sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
@@ -28,7 +30,7 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, note, placement, reading, stored_values
+from .registry import RawVolume, check_shape, import_library, note, placement, reading, shared_unit, stored_values
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -50,7 +52,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             note(f"{where}: space origin {origin.tolist()} is not finite; the origin is taken as 0")
             origin = np.zeros(dim)
         vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
-        return RawVolume(vol, pitch, corner)
+        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where))
     # without space directions, only "kinds" tells a component axis (an
     # RGB colour, a vector, a list of layers) from a domain axis
     kinds = header.get("kinds")
@@ -64,7 +66,20 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch = np.abs(spacings[placed])
     if len(placed) < data.ndim:
         data = _scalar_axes(data, placed, "spacing", where, kinds)
-    return RawVolume(data, pitch)
+    return RawVolume(data, pitch, unit=_unit(header, "units", placed if "spacings" in header else None, where))
+
+
+def _unit(header: dict, name: str, axes: list[int] | None, where: str) -> str | None:
+    """The length unit of a header's ``space units`` (one per world axis)
+    or ``units`` (one per array axis, of which ``axes`` are placed; None:
+    none are, the voxel size is 1 in no unit), where they agree."""
+    units = header.get(name)
+    if units is None or (name == "units" and axes is None):
+        return None
+    units = [units] if isinstance(units, str) else list(units)
+    if axes is not None:
+        units = [units[i] for i in axes if i < len(units)]
+    return shared_unit(units, where, f"NRRD {name!r}")
 
 
 #: the NRRD kinds of axes along which samples lie ("???" and "none": not

@@ -11,7 +11,8 @@ volume ``info`` analyses (in memory, not block by block); ``time`` reads
 the chunks of one time point alone, as 3D. The level's ``coordinateTransformations`` (scale, then
 translation, then those of the whole image) place voxel *centres*, as napari
 and ome-zarr-py take them: the voxel size is the scale and voxel 0's lowest
-corner is the translation less half a voxel. A zarr store without
+corner is the translation less half a voxel, in the length unit of the x,
+y and z ``axes`` entries (NGFF 0.4 on; :func:`axis_unit`). A zarr store without
 ``multiscales`` is read as before: the array at the path, or a group's array
 named ``volume`` or its only array (``STORE.zarr:NAME`` the array of that
 name), axes as stored (axis 0 is x), no
@@ -49,6 +50,7 @@ from .registry import (
     one_time_point_labels,
     placement,
     reading,
+    shared_unit,
     split_dataset,
     stored_values,
     to_xyz,
@@ -82,6 +84,25 @@ def placement_of(multiscale: dict, dataset: dict, ndim: int, where: str) -> tupl
         else:
             shift = shift + values
     return scale, shift
+
+
+def axis_unit(multiscale: dict | None, xyz: list[int], where: str) -> str | None:
+    """The length unit of an OME-Zarr image's x, y and z axes (the
+    ``unit`` of each of their ``axes`` entries, NGFF 0.4 on: a UDUNITS name
+    such as ``micrometer``), where they agree (:func:`shared_unit`); None
+    for a plain array and for axes without one.
+
+    Examples
+    --------
+    >>> axes = [{"name": n, "type": "space", "unit": "micrometer"} for n in "zyx"]
+    >>> axis_unit({"axes": [{"name": "t", "unit": "second"}] + axes}, [3, 2, 1], "a.zarr")
+    '\u00b5m'
+    """
+    axes = None if multiscale is None else multiscale.get("axes")
+    if not isinstance(axes, list):
+        return None
+    units = [axes[i].get("unit") if i < len(axes) and isinstance(axes[i], dict) else None for i in xyz[:3]]
+    return shared_unit(units, where, "OME-Zarr axis units")
 
 
 def read(path: Path, dataset: str | None = None, time: int | None = None) -> RawVolume:
@@ -128,7 +149,8 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     pitch, origin = scale[xyz[:3]], shift[xyz[:3]] - scale[xyz[:3]] / 2
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank)
+    return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank,
+                     unit=axis_unit(multiscale, xyz, where))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -183,6 +205,10 @@ class StoreArray:
             return None, None
         scale, shift = placement_of(self.multiscale, self.dataset, self.array.ndim, self.where)
         return scale[self.xyz], shift[self.xyz] - scale[self.xyz] / 2
+
+    def unit(self) -> str | None:
+        """The length unit of the placement (:func:`axis_unit`)."""
+        return axis_unit(self.multiscale, self.xyz, self.where)
 
 
 def open_store(path: str | os.PathLike, time: bool = False) -> StoreArray:
@@ -467,7 +493,8 @@ class LabelSlabs:
     stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
     order, ``slabs[a:b]`` the x layers a .. b - 1 as a NumPy array (a
     damaged chunk is one line), ``layers`` the stored chunks along x,
-    ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest corner)."""
+    ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest corner), ``unit``
+    their length unit (:func:`axis_unit`)."""
 
     def __init__(self, path):
         from ...scale.chunks import zarr_blocks
@@ -503,7 +530,7 @@ class LabelSlabs:
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
         self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
-        self.pitch, self.origin = pitch, origin
+        self.pitch, self.origin, self.unit = pitch, origin, store.unit()
         never_written(self.where, unwritten_fill(array), table=True)
 
     def __getitem__(self, x):

@@ -23,6 +23,7 @@ import contextlib
 import importlib
 import logging
 import os
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -296,6 +297,91 @@ class RawVolume:
     paint: bool = False
     fill: object = None
     unwritten: tuple[int, int, int] | None = None
+    #: the length unit of ``pitch`` and ``origin`` as the file says it, in
+    #: one spelling (:func:`length_unit`); None where the file says none
+    unit: str | None = None
+
+
+#: one spelling per length unit, so that reports of files from different
+#: tools compare: each spelling isoflow gives, with the names and symbols
+#: the formats write for it (NIfTI's xyzt units, NRRD's and ImageJ's free
+#: text, OME-XML's symbols, OME-Zarr's UDUNITS names); names are matched
+#: in any case, symbols as written (OME-XML's "Mm" is a megametre)
+LENGTH_UNITS = {
+    "m": ("m", "meter", "metre", "meters", "metres"),
+    "cm": ("cm", "centimeter", "centimetre", "centimeters", "centimetres"),
+    "mm": ("mm", "millimeter", "millimetre", "millimeters", "millimetres"),
+    "\u00b5m": ("\u00b5m", "\u03bcm", "um", "micron", "microns", "micrometer", "micrometre", "micrometers",
+                "micrometres"),
+    "nm": ("nm", "nanometer", "nanometre", "nanometers", "nanometres"),
+    "pm": ("pm", "picometer", "picometre", "picometers", "picometres"),
+    "\u00c5": ("\u00c5", "angstrom", "angstroms", "\u00e5ngstr\u00f6m"),
+    "km": ("km", "kilometer", "kilometre", "kilometers", "kilometres"),
+    "in": ("in", "inch", "inches"),
+    "ft": ("ft", "foot", "feet"),
+    "yd": ("yd", "yard", "yards"),
+    "mi": ("mi", "mile", "miles"),
+}
+#: what the formats write for "no unit": NIfTI's "unknown", ImageJ's
+#: "pixel" (an uncalibrated image), NRRD's "???"
+NO_UNIT = ("", "unknown", "pixel", "pixels", "voxel", "voxels", "none", "???")
+_SYMBOLS = {name: unit for unit, names in LENGTH_UNITS.items() for name in names if len(name) <= 2}
+_NAMES = {name.casefold(): unit for unit, names in LENGTH_UNITS.items() for name in names if len(name) > 2}
+
+
+def length_unit(text: object) -> str | None:
+    """A file's length unit in isoflow's one spelling per unit
+    (:data:`LENGTH_UNITS`: ``m``, ``cm``, ``mm``, ``µm``, ``nm``, ``pm``,
+    ``Å``, ``km``, ``in``, ``ft``, ``yd``, ``mi``); None for none said
+    (:data:`NO_UNIT`); any other text as written (a unit isoflow does not
+    know is still the file's).
+
+    Parameters
+    ----------
+    text : object
+        The unit as the file holds it: a string (ImageJ's ``\\u00B5m``
+        escapes too), bytes, or None.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> length_unit("micron"), length_unit("micrometer"), length_unit("\\u00B5m"), length_unit("Millimeter")
+    ('\u00b5m', '\u00b5m', '\u00b5m', 'mm')
+    >>> length_unit("pixel") is None, length_unit(None) is None, length_unit("furlong")
+    (True, True, 'furlong')
+    """
+    if text is None:
+        return None
+    if isinstance(text, bytes):
+        text = text.decode("utf-8", "replace")
+    # ImageJ escapes what is not ASCII in its description as \uXXXX
+    words = re.sub(r"\\u([0-9a-fA-F]{4})", lambda m: chr(int(m.group(1), 16)), str(text)).strip()
+    if words.casefold() in NO_UNIT:
+        return None
+    return _SYMBOLS.get(words) or _NAMES.get(words.casefold(), words)
+
+
+def shared_unit(units, where: str, what: str) -> str | None:
+    """The one length unit of several axes (:func:`length_unit` of each),
+    or None, said in a warning, where they differ: one voxel size and
+    origin cannot be in two units.
+
+    Examples
+    --------
+    >>> shared_unit(["mm", "millimeter", "Millimetre"], "a.nrrd", "NRRD space units")
+    'mm'
+    >>> shared_unit([None, None], "a.nrrd", "NRRD space units") is None
+    True
+    """
+    spelled = {length_unit(u) for u in units}
+    if len(spelled) == 1:
+        return spelled.pop()
+    if spelled:
+        note(f"{where}: the {what} differ by axis ({', '.join(str(u) for u in units)}); no unit is reported")
+    return None
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,12 @@ or without a ResolutionUnit tag or ImageJ description; z from ImageJ's
 PhysicalSizeX's unit, µm where not said, the others converted to it); 1
 where absent.
 
+Length unit: ImageJ's ``unit`` in its description (``micron``, ``um``
+(ImageJ's spelling of µm), ``mm``, ...; ``pixel`` is none), the OME-XML
+PhysicalSizeXUnit where an OME-TIFF gives a voxel size (µm where not
+said), else the ResolutionUnit tag by ImageJ's rule (:func:`resolution_unit`:
+centimetre, or inch unless at 72 dpi).
+
 Origin: ImageJ's calibration origin, ``xorigin``, ``yorigin`` and ``zorigin``
 in its description (Fiji's Image > Properties "Origin"), in pixels of the
 columns, rows and slices, that is of isoflow's x, y and z. ImageJ places
@@ -76,6 +82,7 @@ from .registry import (
     check_shape,
     colours_refused,
     import_library,
+    length_unit,
     note,
     placement,
     quiet_logs,
@@ -119,10 +126,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             raise IsoflowError(f"{where}: its pixels are {page.compression.name}-compressed, which tifffile decodes "
                                "only with the imagecodecs package: pip install imagecodecs") from None
         imagej = tif.imagej_metadata or {}
-        pitch = resolution_pitch({t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}, tif.is_imagej, where)
+        tags = {t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}
+        pitch = resolution_pitch(tags, tif.is_imagej, where)
+        unit = length_unit(imagej.get("unit")) if tif.is_imagej else resolution_unit(tags)
         photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
         spacing = imagej.get("spacing")
-        sizes, centres = _ome_placement(tif.ome_metadata, where) if tif.is_ome else ({}, {})
+        sizes, centres, ome_unit = _ome_placement(tif.ome_metadata, where) if tif.is_ome else ({}, {}, None)
+        unit = ome_unit if sizes else unit  # (the OME voxel sizes replace the tags' and ImageJ's)
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
         damage = [d for d in damage if _tag_read(d)]
@@ -151,7 +161,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         origin.append(0.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     origin = [centres[axis] - p / 2 + 0.0 if axis in centres else o for axis, p, o in zip("XYZT", pitch, origin)]
-    return RawVolume(vol, np.array(pitch), np.array(origin))
+    return RawVolume(vol, np.array(pitch), np.array(origin), unit=unit)
 
 
 def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str = "TIFF") -> list[float]:
@@ -217,6 +227,28 @@ def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str =
     if unit == 2 and pitch[0] == 1.0 / 72.0:
         return [1.0, 1.0]
     return pitch if imagej or unit in (1, 2, 3) else [1.0, 1.0]
+
+
+def resolution_unit(tags: dict[int, object]) -> str | None:
+    """The length unit of a TIFF's resolution tags without an ImageJ
+    description, by ImageJ's rule (see :func:`resolution_pitch`):
+    centimetre for ResolutionUnit 3, inch for 2 unless at the print
+    resolution of 72 dpi (no scale), none otherwise (1, or no tag).
+
+    Examples
+    --------
+    >>> resolution_unit({282: (300, 1), 283: (300, 1), 296: 2}), resolution_unit({282: (72, 1), 296: 2})
+    ('in', None)
+    >>> resolution_unit({282: (1000, 1), 296: 3}), resolution_unit({282: (1000, 1), 296: 1})
+    ('cm', None)
+    """
+    unit = tags.get(RESOLUTION_UNIT)
+    unit = int(unit) if isinstance(unit, (int, np.integer)) else None
+    if unit == 3:
+        return "cm"
+    if unit == 2 and resolution_pitch(tags) != [1.0, 1.0]:
+        return "in"
+    return None
 
 
 def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, extra: tuple,
@@ -334,7 +366,7 @@ OME_METRES = {
 REFERENCE_FRAME = "reference frame"
 
 
-def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[str, float]]:
+def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[str, float], str | None]:
     """An OME-TIFF's voxel size and voxel 0's centre per axis (``X``,
     ``Y``, ``Z``), where given: the ``Pixels`` element's PhysicalSize
     attributes, the file's own calibration, which the resolution tags
@@ -347,15 +379,16 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
     centre, as an OME-Zarr translation is, and as BigStitcher places a
     tile at its stage position (imglib2's pixel coordinates are pixel
     centres); one in "reference frame" units, the schema's default, is
-    taken in the voxel size's unit."""
+    taken in the voxel size's unit. The third item is that unit
+    (:func:`length_unit`)."""
     import xml.etree.ElementTree as ET
 
     try:
         pixels = ET.fromstring(xml or "").find(".//{*}Pixels")
     except ET.ParseError:
-        return {}, {}  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
+        return {}, {}, None  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
     if pixels is None:
-        return {}, {}
+        return {}, {}, None
     unit = pixels.get("PhysicalSizeXUnit") or "\u00b5m"
     sizes = {}
     for axis in "XYZ":
@@ -373,7 +406,7 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
         centre = _ome_length((first or planes)[0], f"Position{axis}", unit, where)
         if centre is not None:
             centres[axis] = centre
-    return sizes, centres
+    return sizes, centres, length_unit(unit)
 
 
 def _ome_length(element, name: str, unit: str, where: str) -> float | None:

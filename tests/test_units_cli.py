@@ -1,0 +1,213 @@
+"""The length unit of a volume file, read and reported: ``isoflow info``
+says the voxel size, origin and unit it read (text and --json), and
+``info --labels`` the unit of its table's world columns, for files written
+by each format's own library with a known unit."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.cli import main
+
+nib = pytest.importorskip("nibabel")
+tifffile = pytest.importorskip("tifffile")
+
+MICRO = "\u00b5m"
+PITCH = (0.5, 0.75, 1.25)  # exact in float32 (NIfTI) and as TIFF rationals
+
+
+def cube() -> np.ndarray:
+    """Two labels in an (x, y, z) array of 8x6x4."""
+    labels = np.zeros((8, 6, 4), np.uint8)
+    labels[2:6, 1:4, 1:3] = 1
+    labels[6:8, 4:6, 1:3] = 2
+    return labels
+
+
+def report(capsys, *args) -> dict:
+    assert main(["info", *map(str, args), "--json"]) == 0, capsys.readouterr().err
+    return json.loads(capsys.readouterr().out)
+
+
+def both(capsys, path, label=1) -> tuple[dict, dict]:
+    """``info --label`` (one object) and ``info --labels`` (the table) of ``path``."""
+    return report(capsys, path, "--label", label), report(capsys, path, "--labels")
+
+
+def same(a, b) -> bool:
+    return np.allclose(a, b, rtol=1e-6, atol=1e-9)
+
+
+# ------------------------------------------------------------------ NIfTI
+
+@pytest.mark.parametrize("written, unit", [("mm", "mm"), ("micron", MICRO), ("meter", "m"), ("unknown", None)])
+def test_nifti_unit_is_the_headers_xyzt_unit(tmp_path, capsys, written, unit):
+    affine = np.diag([*PITCH, 1.0])
+    affine[:3, 3] = (10.0, -20.0, 30.0)  # voxel 0's centre (NIfTI's affine maps centres)
+    img = nib.Nifti1Image(cube(), affine)
+    img.header.set_xyzt_units(written)
+    nib.save(img, tmp_path / "seg.nii.gz")
+    back = nib.load(tmp_path / "seg.nii.gz")
+    assert back.header.get_xyzt_units()[0] == written
+    one, table = both(capsys, tmp_path / "seg.nii.gz")
+    zooms = np.asarray(back.header.get_zooms()[:3], np.float64)
+    corner = back.affine[:3, 3] - zooms / 2
+    for r in one, table:
+        assert r["unit"] == unit
+        assert same(r["pitch"], zooms) and same(r["origin"], corner)
+    assert isoflow.read_labels(tmp_path / "seg.nii.gz").unit == unit
+
+
+def test_info_text_says_voxel_size_origin_and_unit(tmp_path):
+    img = nib.Nifti1Image(cube(), np.diag([*PITCH, 1.0]))
+    img.header.set_xyzt_units("mm")
+    nib.save(img, tmp_path / "mm.nii.gz")
+    nib.save(nib.Nifti1Image(cube(), np.diag([*PITCH, 1.0])), tmp_path / "bare.nii.gz")  # xyzt units 0: unknown
+
+    def second_line(name, *options):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), *options],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        return done.stdout.splitlines()[:2]
+
+    head = second_line("mm.nii.gz", "--label", "1")[1]
+    assert head.split()[:2] == ["voxel", "size"]
+    assert "0.5 x 0.75 x 1.25 mm, origin [-0.25, -0.375, -0.625] mm" in head
+    assert second_line("bare.nii.gz", "--label", "1")[1].endswith("origin [-0.25, -0.375, -0.625] (the file says no unit)")
+    assert "voxel 0.5x0.75x1.25 mm," in second_line("mm.nii.gz", "--labels")[0]
+    assert "voxel 0.5x0.75x1.25," in second_line("bare.nii.gz", "--labels")[0]
+
+
+# ------------------------------------------------------------------ TIFF
+
+@pytest.mark.parametrize("written, unit", [("um", MICRO), ("micron", MICRO), ("\\u00B5m", MICRO),
+                                           ("cm", "cm"), ("nm", "nm"), ("pixel", None)])
+def test_imagej_tiff_unit_is_its_descriptions_unit(tmp_path, capsys, written, unit):
+    # ImageJ's FileSaver writes µm as "um"; "\u00B5m" as an escape; "pixel" for an uncalibrated image
+    tifffile.imwrite(tmp_path / "seg.tif", cube().T, imagej=True, resolution=(1 / PITCH[0], 1 / PITCH[1]),
+                     metadata={"axes": "ZYX", "unit": written, "spacing": PITCH[2]})
+    with tifffile.TiffFile(tmp_path / "seg.tif") as tif:
+        assert tif.imagej_metadata["unit"] == written
+        x, y = (n / d for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
+    one, table = both(capsys, tmp_path / "seg.tif")
+    for r in one, table:
+        assert r["unit"] == unit
+        assert same(r["pitch"], [1 / x, 1 / y, PITCH[2]]) and r["origin"] == [0, 0, 0]
+
+
+def test_imagej_tiff_without_a_unit_gives_none(tmp_path, capsys):
+    tifffile.imwrite(tmp_path / "seg.tif", cube().T, imagej=True, metadata={"axes": "ZYX"})
+    for r in both(capsys, tmp_path / "seg.tif"):
+        assert r["unit"] is None and r["pitch"] == [1, 1, 1]
+
+
+@pytest.mark.parametrize("written, unit", [({"PhysicalSizeXUnit": "nm", "PhysicalSizeYUnit": "nm",
+                                             "PhysicalSizeZUnit": "nm"}, "nm"),
+                                            ({}, MICRO)])  # the OME schema's default
+def test_ome_tiff_unit_is_physical_size_x_unit(tmp_path, capsys, written, unit):
+    sizes = dict(zip(("PhysicalSizeX", "PhysicalSizeY", "PhysicalSizeZ"), PITCH))
+    tifffile.imwrite(tmp_path / "seg.ome.tif", cube().T, ome=True, metadata={"axes": "ZYX", **sizes, **written})
+    for r in both(capsys, tmp_path / "seg.ome.tif"):
+        assert r["unit"] == unit and same(r["pitch"], PITCH)
+
+
+@pytest.mark.parametrize("resolution, tag, unit", [(20.0, "CENTIMETER", "cm"), (300.0, "INCH", "in"),
+                                                   (72.0, "INCH", None), (4.0, "NONE", None)])
+def test_plain_tiff_unit_is_its_resolution_unit_by_imagej_rule(tmp_path, capsys, resolution, tag, unit):
+    # ImageJ: ResolutionUnit 3 is cm, 2 inch unless at 72 dpi (no scale), 1 none
+    tifffile.imwrite(tmp_path / "seg.tif", cube()[:, :, 1].T, resolution=(resolution, resolution),
+                     resolutionunit=tag)
+    r = report(capsys, tmp_path / "seg.tif", "--label", 1)
+    assert r["unit"] == unit
+    assert same(r["pitch"], [1.0, 1.0] if resolution == 72.0 else [1 / resolution] * 2)
+
+
+# ------------------------------------------------------------------ HDF5, NRRD, OME-Zarr, NumPy
+
+def test_hdf5_element_size_um_is_in_micrometres(tmp_path, capsys):
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(tmp_path / "fiji.h5", "w") as f:
+        f.create_dataset("volume", data=cube()).attrs["element_size_um"] = PITCH
+    isoflow.write_labels(cube(), tmp_path / "own.h5", pitch=PITCH)  # isoflow's pitch attribute: no unit
+    for r in both(capsys, tmp_path / "fiji.h5"):
+        assert r["unit"] == MICRO and same(r["pitch"], PITCH)
+    for r in both(capsys, tmp_path / "own.h5"):
+        assert r["unit"] is None and same(r["pitch"], PITCH)
+
+
+@pytest.mark.parametrize("units, unit", [(["mm", "mm", "mm"], "mm"), (["micron"] * 3, MICRO),
+                                         (["mm", "mm", "cm"], None)])
+def test_nrrd_unit_is_its_space_units(tmp_path, capsys, units, unit):
+    nrrd = pytest.importorskip("nrrd")
+    header = {"space dimension": 3, "space directions": np.diag(PITCH), "space origin": np.array([1.0, 2.0, 3.0]),
+              "space units": units, "kinds": ["domain"] * 3}
+    nrrd.write(str(tmp_path / "seg.nrrd"), cube(), header, index_order="F")
+    assert nrrd.read_header(str(tmp_path / "seg.nrrd"))["space units"] == units
+    for r in both(capsys, tmp_path / "seg.nrrd"):
+        assert r["unit"] == unit
+        # space origin is the first sample's centre
+        assert same(r["pitch"], PITCH) and same(r["origin"], np.array([1.0, 2.0, 3.0]) - np.array(PITCH) / 2)
+
+
+def test_nrrd_without_a_space_takes_the_units_of_its_spacings(tmp_path, capsys):
+    nrrd = pytest.importorskip("nrrd")
+    nrrd.write(str(tmp_path / "seg.nrrd"), cube(), {"spacings": list(PITCH), "units": ["nm"] * 3}, index_order="F")
+    assert nrrd.read_header(str(tmp_path / "seg.nrrd"))["units"] == ["nm"] * 3
+    for r in both(capsys, tmp_path / "seg.nrrd"):
+        assert r["unit"] == "nm" and same(r["pitch"], PITCH) and r["origin"] == [0, 0, 0]
+
+
+def test_nrrd_with_differing_space_units_says_so(tmp_path):
+    nrrd = pytest.importorskip("nrrd")
+    header = {"space dimension": 3, "space directions": np.diag(PITCH), "space units": ["mm", "mm", "cm"],
+              "kinds": ["domain"] * 3}
+    nrrd.write(str(tmp_path / "seg.nrrd"), cube(), header, index_order="F")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "seg.nrrd"), "--labels", "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["unit"] is None
+    assert "space units' differ by axis (mm, mm, cm)" in done.stderr
+
+
+def ome_zarr(path, unit: str | None, ndim: int = 3):
+    """An NGFF 0.4 image written with zarr itself: (z, y, x), scale and
+    translation, each spatial axis in ``unit``."""
+    zarr = pytest.importorskip("zarr")
+    data = cube().T if ndim == 3 else cube()[:, :, 1].T
+    names = "zyx"[3 - ndim:]
+    group = zarr.open_group(str(path), mode="w", zarr_format=2)
+    group.create_array("0", shape=data.shape, dtype=data.dtype, chunks=(2,) * ndim)[...] = data
+    axes = [{"name": n, "type": "space", **({"unit": unit} if unit else {})} for n in names]
+    scale = list(PITCH[:ndim][::-1])
+    transforms = [{"type": "scale", "scale": scale}, {"type": "translation", "translation": [3.0, 2.0, 1.0][3 - ndim:]}]
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": axes,
+                                   "datasets": [{"path": "0", "coordinateTransformations": transforms}]}]
+    return np.array(PITCH[:ndim]), np.array([1.0, 2.0, 3.0][:ndim]) - np.array(PITCH[:ndim]) / 2
+
+
+@pytest.mark.parametrize("ndim", [3, 2])  # 3D: read block by block; 2D: whole
+@pytest.mark.parametrize("written, unit", [("micrometer", MICRO), ("millimeter", "mm"), (None, None)])
+def test_ome_zarr_unit_is_its_spatial_axes_unit(tmp_path, capsys, written, unit, ndim):
+    pitch, corner = ome_zarr(tmp_path / "seg.zarr", written, ndim)
+    for r in both(capsys, tmp_path / "seg.zarr"):
+        assert r["unit"] == unit and same(r["pitch"], pitch) and same(r["origin"], corner)
+    assert isoflow.read_labels(tmp_path / "seg.zarr").unit == unit
+
+
+def test_npy_has_no_unit(tmp_path, capsys):
+    np.save(tmp_path / "seg.npy", cube())
+    for r in both(capsys, tmp_path / "seg.npy"):
+        assert r["unit"] is None and r["pitch"] == [1, 1, 1] and r["origin"] == [0, 0, 0]
+
+
+def test_the_csv_keeps_plain_column_names(tmp_path, capsys):
+    img = nib.Nifti1Image(cube(), np.diag([*PITCH, 1.0]))
+    img.header.set_xyzt_units("mm")
+    nib.save(img, tmp_path / "seg.nii.gz")
+    assert main(["info", str(tmp_path / "seg.nii.gz"), "--labels", "--csv", "-"]) == 0
+    head = capsys.readouterr().out.splitlines()[0].split(",")
+    assert head[:4] == ["label", "voxels", "volume", "surface_area"]  # the unit is said by --json and the text
