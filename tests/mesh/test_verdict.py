@@ -61,6 +61,22 @@ def test_the_stop_and_the_facts_are_data():
     assert [n.kind for n in v.notes][:1] == ["overlap"] and v.notes[0].facts["components"] == 9
 
 
+def test_a_time_limit_stop_says_its_estimate(capsys):
+    """``--time-limit`` stops where the time spent plus the next
+    resolution's predicted time (8x the last: cubic) passes the limit. The
+    sentence said "512 would take about 0 s" for a prediction under half a
+    second, and a prediction below the limit read as a contradiction."""
+    assert main(["genus", str(MESHES / "hourglass_ico.obj"), "--time-limit", "0.5", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    stop = printed["stop"]
+    assert stop["kind"] == "time_limit"
+    # the documented prediction, from the resolution the run measured last
+    assert stop["estimate"] == pytest.approx(8 * printed["digital"][-1]["seconds"])
+    said = f"{stop['estimate']:.0f}" if stop["estimate"] >= 10 else f"{stop['estimate']:.2g}"
+    assert f"{stop['resolution']} would end past it (about {said} s more)" in printed["verdict"]
+    assert "about 0 s" not in printed["verdict"]
+
+
 def test_no_option_name_in_the_deciding_code():
     """The library decides with data; only the words (mesh/verdict.py) turn
     a parameter into its command-line spelling."""
