@@ -96,6 +96,29 @@ def test_threads_help_says_what_the_docs_say_it_sets():
             assert claim in helps[name], (name, claim, helps[name])
 
 
+@pytest.mark.parametrize("command", ["info", "flow", "surface"])
+def test_a_bad_isoflow_threads_is_refused_whatever_the_input_size(tmp_path, capsys, monkeypatch, command):
+    """ISOFLOW_THREADS is the default of ``--threads`` (docs/cli.md), which
+    refuses ``abc``; the variable was read only where a compiled pass ran,
+    so ``abc`` passed unseen on a small volume and failed the same command
+    on a large one."""
+    path = tmp_path / "small.npy"
+    np.save(path, np.ones((3, 3, 3), bool))
+    extra = ["-o", str(tmp_path / "s.ply")] if command == "surface" else []
+    with pytest.raises(SystemExit) as refused:  # the option's own rule
+        main(["info", str(path), "--threads", "abc"])
+    assert refused.value.code == 2
+    capsys.readouterr()
+    monkeypatch.setenv("ISOFLOW_THREADS", "abc")
+    assert main([command, str(path), *extra]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow {command}: error: the environment variable ISOFLOW_THREADS must be a positive integer, "
+                   "got 'abc'"]
+    assert not (tmp_path / "s.ply").exists()
+    if command != "flow":  # --threads, where a command takes it, is what is asked: the variable is not read
+        assert main([command, str(path), *extra, "--threads", "2"]) == 0
+
+
 def test_surface_threads_sets_the_compiled_passes_threads(tmp_path, capsys, monkeypatch):
     """``surface --threads N`` in memory: the compiled passes that mesh the
     volume run on N threads (they ran on every CPU whatever was asked).

@@ -362,6 +362,20 @@ def test_a_volume_given_where_a_mesh_is_read_says_so(tmp_path, capsys, name, com
     assert not (tmp_path / "out.npy").exists()
 
 
+@pytest.mark.parametrize("command", ["voxelize", "genus"])
+def test_a_point_list_given_where_a_mesh_is_read_says_so(tmp_path, capsys, command):
+    # trimesh said "cannot read as a mesh (NotImplementedError: file_type
+    # 'txt' not supported)", leaving the user to guess what would read it
+    points = Path(__file__).parent.parent / "meshes" / "example19.txt"
+    extra = ["--pitch", "1", "-o", tmp_path / "out.npy"] if command == "voxelize" else []
+    line = fails(capsys, command, points, *extra,
+                 words=(f"{points}: the suffix .txt names no mesh format", "point list", "isoflow info"))
+    assert "NotImplementedError" not in line and not (tmp_path / "out.npy").exists()
+    # the command the line names reads it: the paper's Example 19, 4 unit cubes (the file's own comment)
+    assert main(["info", str(points), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["voxels"] == 4
+
+
 def test_device_input_is_refused(capsys):
     # /dev/null stands in for /dev/zero (which would never end) and FIFOs
     fails(capsys, "info", os.devnull, words=(os.devnull, "not a regular file"))

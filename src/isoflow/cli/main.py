@@ -414,6 +414,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         with quiet_stderr(args.quiet), warnings_as_lines(args), log_records_as_notes(args), \
                 termination_as_interrupt(terminated):
+            if args.command != "completion" and getattr(args, "threads", None) is None:
+                compiled.check_env_threads()  # the default of --threads, said before any file is read
             refuse_output_over_input(args)
             status = args.func(args)
             if terminated:  # a signal a library swallowed: the command still ends as interrupted

@@ -895,8 +895,12 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:
+            # too coarse: a grid whose genus the finer, settled ones do not
+            # repeat; one that gives the settled genus is not, even where
+            # that genus is not the reference (a flood fill loses the
+            # handles inside cavities at every resolution)
             notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})
-                      for d in digital[:-2] if d["genus"] != reference]
+                      for d in digital[:-2] if d["genus"] != last["genus"]]
     if fill == "flood" and w["solid"].get("cavities"):
         # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it, and
         # "disagree" would otherwise blame the mesh

@@ -538,7 +538,27 @@ def reading_mesh(p: Path):
     except Exception as exc:  # trimesh raises anything from KeyError to struct.error
         msg = " ".join(str(exc).split())[:200] or "no detail"
         hint = misnamed_mesh(p)
+        if hint is None and isinstance(exc, NotImplementedError) and "not supported" in msg:
+            hint = not_a_mesh_format(p)
         raise IsoflowError(hint or f"{p}: cannot read as a mesh ({type(exc).__name__}: {msg})") from None
+
+
+def not_a_mesh_format(p: Path) -> str:
+    """The line for a file whose suffix names no format a mesh reader
+    knows: trimesh says only ``file_type 'txt' not supported``, which
+    leaves a user of ``genus example19.txt`` to guess that the point lists
+    the other commands read are no mesh.
+
+    Examples
+    --------
+    >>> print(not_a_mesh_format(Path("example19.txt")))  # doctest: +ELLIPSIS
+    example19.txt: the suffix .txt names no mesh format (STL, OBJ, PLY, OFF, GLB, ...); voxelize and genus read \
+triangle meshes (a text point list, x y z per line, is read by isoflow info, surface and flow)
+    """
+    kind = f"the suffix {p.suffix.lower()}" if p.suffix else "a name without a suffix"
+    names = ", ".join(s.lstrip(".").upper() for s in MESH_SUFFIXES[:6] if s != ".stl_ascii")
+    return (f"{p}: {kind} names no mesh format ({names}, ...); voxelize and genus read triangle meshes "
+            "(a text point list, x y z per line, is read by isoflow info, surface and flow)")
 
 
 def misnamed_mesh(p: Path) -> str | None:

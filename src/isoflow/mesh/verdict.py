@@ -158,6 +158,8 @@ def stop_text(stop: Stop) -> str:
     'the largest resolution allowed (256, --max-resolution)'
     >>> stop_text(Stop("asked", limit=64, resolution=256, option="max_resolution"))
     'the resolutions asked (256 is past --max-resolution 64, which caps only the doubling)'
+    >>> stop_text(Stop("time_limit", limit=0.5, resolution=512, estimate=0.456, option="time_limit"))
+    'the time limit (0.5 s, --time-limit): 512 would end past it (about 0.46 s more)'
     """
     flag = option_flag(stop.option) if stop.option else ""
     if stop.kind == "asked":
@@ -167,8 +169,13 @@ def stop_text(stop: Stop) -> str:
     if stop.kind == "max_resolution":
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":
-        return (f"the time limit ({stop.limit:g} s, {flag}): {stop.resolution} would take about "
-                f"{stop.estimate:.0f} s")
+        # the run stops where the time spent plus this estimate passes the
+        # limit, so the estimate alone may be below it: "would take about
+        # 45 s" under a 60 s limit read as a contradiction, and "about 0 s"
+        # for an estimate under half a second as none at all
+        est = stop.estimate or 0.0
+        more = f"{est:.0f}" if est >= 10 else f"{est:.2g}"
+        return f"the time limit ({stop.limit:g} s, {flag}): {stop.resolution} would end past it (about {more} s more)"
     return f"the memory budget: {stop.resolution} would need about {sized(int(stop.estimate or 0))}"
 
 

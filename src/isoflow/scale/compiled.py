@@ -145,6 +145,26 @@ def check_threads(n, where: str = "threads") -> int:
     return value
 
 
+def check_env_threads() -> None:
+    """Refuse an :data:`ENV` that is not a thread count before any work:
+    read only where a compiled pass runs, it passed unseen on a small input
+    and failed the same command on a large one.
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ[ENV] = "abc"
+    >>> check_env_threads()
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: the environment variable ISOFLOW_THREADS must be a positive integer, got 'abc'
+    >>> del os.environ[ENV]; check_env_threads()
+    """
+    env = os.environ.get(ENV, "").strip()
+    if env:
+        check_threads(env, f"the environment variable {ENV}")
+
+
 def available_cpus() -> int:
     try:
         return max(1, len(os.sched_getaffinity(0)))
