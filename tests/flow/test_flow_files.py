@@ -174,7 +174,7 @@ def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path, monkeypat
     # earlier run it is kept
     import isoflow.mesh.volumes as volumes
 
-    def full(obj, path, force=False):
+    def full(obj, path, force=False, unit=None):
         raise isoflow.IsoflowError(f"{path}: no space left on the device")
 
     np.save(tmp_path / "img.npy", np.ones((4, 5), bool))

@@ -135,15 +135,16 @@ def _hand_on(ends: list) -> tuple[list, list]:
     return below, above[::-1]
 
 
-def _create_store(path: Path, shape, chunks, place: DigitalObject) -> None:
+def _create_store(path: Path, shape, chunks, place: DigitalObject, unit: str | None = None) -> None:
     """An empty OME-Zarr image (NGFF 0.4, one level ``0`` of uint8, axes
-    stored x, y, z) placed as ``place``, for slabs to write into."""
+    stored x, y, z) placed as ``place``, in the length ``unit`` (isoflow's
+    spelling, or None), for slabs to write into."""
     from ..mesh.formats.omezarr import multiscales
 
     root = import_zarr().open_group(str(path), mode="w", zarr_format=2)
     root.create_array("0", shape=tuple(shape), chunks=tuple(chunks), dtype=np.uint8, fill_value=0)
     corner = place.world(np.zeros(3))
-    root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz")
+    root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz", unit=unit)
 
 
 def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int) -> int:
@@ -185,6 +186,7 @@ class ChunkedFlow(ArrayFlow):
         self.scheduler, self.workers = scheduler, workers
         self.written: list[str] = []
         self.source_shape: tuple[int, ...] = ()
+        self.unit: str | None = None  # the input's length unit, which every step's store keeps
         self._step = 0
 
     def _compute(self, *tasks):
@@ -199,7 +201,10 @@ class ChunkedFlow(ArrayFlow):
     def start(self, source) -> StoredObject:
         """The input (a zarr store's volume, see :func:`source_volume`),
         cropped, as step 0's store."""
+        from ..mesh.formats.omezarr import open_store
+
         volume, place, fill = source_volume(source)
+        self.unit = open_store(source).unit()
         self.source_shape = tuple(int(s) for s in volume.shape)
         _, da = import_dask()
         checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
@@ -218,7 +223,7 @@ class ChunkedFlow(ArrayFlow):
         shape = tuple(int(s) for s in box.shape)
         path = self._name()
         chunks = (slab_thickness(shape, self.slab, self.workers), min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
-        _create_store(path, shape, chunks, place)
+        _create_store(path, shape, chunks, place, self.unit)
         target = import_zarr().open_group(str(path), mode="r+")["0"]
         voxels = box.astype(np.uint8).rechunk(chunks)
         count = voxels.sum(dtype=np.int64)

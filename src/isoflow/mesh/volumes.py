@@ -28,10 +28,12 @@ from .formats.registry import (
     check_label,
     check_time,
     format_for,
+    length_unit,
     no_such_label,
     one_time_point_labels,
     sniff_volume_format,
     split_dataset,
+    unit_given,
     volume_suffixes,
 )
 from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
@@ -123,7 +125,8 @@ def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = N
     ``origin`` as the file says it, in one spelling per unit (``mm``,
     ``µm``, ``nm``, ``m``, ``cm``, ...: see docs/formats.md): NIfTI's xyzt
     units, NRRD's space units, ImageJ's or OME-XML's unit in a TIFF, HDF5's
-    ``element_size_um``, OME-Zarr's axis units.
+    ``unit`` attribute or ``element_size_um``, OME-Zarr's axis units, an
+    ``.npz``'s ``unit`` (what :func:`write_volume` writes with ``unit=``).
 
     Parameters
     ----------
@@ -650,12 +653,14 @@ def check_volume_holds(path: str | os.PathLike, obj: DigitalObject | LabelVolume
             module.check(file, obj, dataset)
 
 
-def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False) -> Path:
+def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force: bool = False, *,
+                 unit: str | None = None) -> Path:
     """Save an object in the format its suffix names (``FILE.h5:/dataset``:
     a dataset of an HDF5 file, new or existing, whose other datasets are
-    kept), with its voxel size and origin where the format has room for
-    them; a warning says what a format cannot keep. Refuses an existing file
-    (or dataset) unless ``force``. Returns the file's path.
+    kept), with its voxel size and origin, and their length ``unit``, where
+    the format has room for them; a warning says what a format cannot keep.
+    Refuses an existing file (or dataset) unless ``force``. Returns the
+    file's path.
 
     ``.npz`` keeps everything (offset and parity too); the other formats
     keep the world position of every voxel (see the table of docs/formats.md).
@@ -670,6 +675,13 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
         The file; its suffix names the format (``FILE.h5:/dataset`` too).
     force : bool
         Replace an existing file (``FILE.h5:/dataset``: only that dataset).
+    unit : str, optional
+        The length unit of the object's pitch and origin, in any spelling
+        :func:`~isoflow.mesh.formats.registry.length_unit` reads
+        (``"mm"``, ``"micron"``, ``"micrometer"``, ...), as
+        :func:`read_volume_with_unit` gives it; written in the format's own
+        spelling where it has one (docs/formats.md, "Length unit"), else
+        said in a warning. None: no unit is written.
 
     Returns
     -------
@@ -680,7 +692,8 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     ------
     IsoflowError
         An existing file without ``force``, a suffix isoflow does not write,
-        a library missing, an unwritable place.
+        a library missing, an unwritable place, a ``unit`` that is no length
+        unit.
 
     Examples
     --------
@@ -692,12 +705,20 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     >>> back = read_volume(path)
     >>> back.voxels, float(back.pitch), back.origin.tolist()
     (24, 0.5, [1.0, 2.0, 3.0])
+
+    With its length unit, which a NIfTI file keeps in its header:
+
+    >>> path = write_volume(obj, pathlib.Path(tempfile.mkdtemp()) / "box.nii.gz", unit="millimeter")
+    >>> read_volume_with_unit(path)[1]
+    'mm'
     """
-    return write_placed(DigitalObject.of(obj), path, force)
+    return write_placed(DigitalObject.of(obj), path, force, unit=unit_given(unit, str(path)))
 
 
-def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False) -> Path:
-    """:func:`write_volume` of a digital object or a placed label image."""
+def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False,
+                 unit: str | None = None) -> Path:
+    """:func:`write_volume` of a digital object or a placed label image,
+    ``unit`` in isoflow's spelling (:func:`~isoflow.mesh.formats.registry.length_unit`)."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
     assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
@@ -710,13 +731,13 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
     with warnings.catch_warnings(record=True) as dropped:
         warnings.simplefilter("always")
         if hasattr(module, "check"):
-            module.check(file, obj, dataset)
+            module.check(file, obj, dataset, unit=unit)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
         if fmt.datasets and dataset is not None:  # FILE.h5:/name: the file's other datasets are kept
-            module.write(tmp, obj, dataset, name=file.name, into=file)
+            module.write(tmp, obj, dataset, name=file.name, into=file, unit=unit)
         else:
-            module.write(tmp, obj, dataset, name=file.name)
+            module.write(tmp, obj, dataset, name=file.name, unit=unit)
     for w in dropped:
         warn(str(w.message), w.category)
     return file
@@ -736,7 +757,7 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
 
 
 def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,
-                 origin: ArrayLike | None = None, force: bool = False) -> Path:
+                 origin: ArrayLike | None = None, force: bool = False, unit: str | None = None) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
 
@@ -753,7 +774,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         or a float image of whole numbers from 0 on. Not 4D:
         :func:`read_labels` would not read it back. Or a
         :class:`~isoflow.LabelImage`, as :func:`read_labels` gives it, with
-        its voxel size and origin.
+        its voxel size, origin and length unit.
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
@@ -768,6 +789,13 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         format keeps).
     force : bool
         Overwrite an existing file.
+    unit : str, optional
+        The length unit of the voxel size and origin, in any spelling
+        :func:`~isoflow.mesh.formats.registry.length_unit` reads (if None:
+        a LabelImage's ``unit``, else none); one given replaces a
+        LabelImage's, as ``pitch`` and ``origin`` do. Written where the
+        format has room for it (docs/formats.md, "Length unit"), else said
+        in a warning.
 
     Returns
     -------
@@ -781,7 +809,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         3D integers, bools or floats, a negative label, a float that is no
         whole number (NaN, 1.5: its voxel named), a 2D image for a format
         of 3D only (binvox, MagicaVoxel), a format that keeps fewer labels
-        than the image has (:func:`check_label_output`).
+        than the image has (:func:`check_label_output`), a ``unit`` that is
+        no length unit.
 
     Examples
     --------
@@ -805,10 +834,19 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     >>> again = read_labels(write_labels(back, pathlib.Path(tempfile.mkdtemp()) / "cells.h5"))
     >>> np.array_equal(again.array, cells), again.spacing.tolist()
     (True, [0.5, 0.25])
+
+    With a length unit, which the next write of the image read back keeps:
+
+    >>> first = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.tif", unit="micron"))
+    >>> first.unit, read_labels(write_labels(first, pathlib.Path(tempfile.mkdtemp()) / "cells.nrrd")).unit
+    ('\u00b5m', '\u00b5m')
     """
+    unit = unit_given(unit, str(path))
     if isinstance(labels, LabelImage):  # its place, unless given, as label_table takes it
         pitch = labels.spacing if pitch is None else pitch
         origin = labels.origin if origin is None else origin
+        # a unit read from a file is kept as the file spelled it where isoflow knows no other spelling
+        unit = length_unit(labels.unit) if unit is None else unit
         labels = labels.array
     pitch = 1.0 if pitch is None else pitch
     arr = as_array(labels, f"{path}: labels")
@@ -831,7 +869,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
-    return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force)
+    return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force, unit=unit)
 
 
 def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:

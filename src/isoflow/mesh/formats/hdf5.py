@@ -9,6 +9,10 @@ axis), ``origin``, ``offset`` and ``parity`` on the dataset and reads them
 back, so a round trip is exact. Files from other tools: their
 ``element_size_um`` attribute (ilastik and Fiji's HDF5 plug-in, one size per
 dataset axis) is read as the voxel size when ``pitch`` is absent, in µm.
+The length unit: isoflow's attribute ``unit`` (a string) where present, else
+µm where ``element_size_um`` gives the voxel size. A unit given is written
+as ``unit``; and, where it is µm, ``element_size_um`` too (the pitch per
+dataset axis), for Fiji and ilastik.
 
 Written as uint8 0/1, gzip-compressed and chunked. ``FILE.h5`` names the
 file: a new one (``--force`` replaces it). ``FILE.h5:/group/name`` names one
@@ -29,7 +33,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, import_library, reading, stored_values
+from .registry import RawVolume, check_shape, import_library, length_unit, reading, stored_values
 
 DEFAULT_DATASET = "volume"
 
@@ -46,8 +50,10 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if "pitch" not in attrs and "element_size_um" in attrs:
         pitch = _element_size(pitch, np.ndim(array), where)
     offset = attrs.get("offset")
-    # element_size_um is in micrometres by its name; isoflow's own pitch says no unit
+    # element_size_um is in micrometres by its name; isoflow's own pitch has its unit beside it, if any
     unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
+    if "unit" in attrs:
+        unit = length_unit(attrs["unit"])
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit)
 
 
@@ -136,7 +142,7 @@ def check_output(path: str | Path, force: bool = False, dataset: str | None = No
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          into: Path | None = None) -> None:
+          into: Path | None = None, unit: str | None = None) -> None:
     """Write ``obj`` as the dataset; ``into``: the existing file whose other
     datasets the written file keeps (``path`` is then a copy of it)."""
     h5py = import_library("h5py", "HDF5")
@@ -156,6 +162,10 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         ds.attrs["origin"] = obj.origin
         ds.attrs["offset"] = np.array(obj.offset, np.int64)
         ds.attrs["parity"] = np.int64(obj.parity)
+        if unit is not None:
+            ds.attrs["unit"] = unit
+        if unit == "\u00b5m":
+            ds.attrs["element_size_um"] = obj.spacing
         f.flush()
         image = f.id.get_file_image()
     with open(path, "wb") as fh:

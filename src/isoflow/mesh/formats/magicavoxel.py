@@ -99,19 +99,20 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, paint=True)
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: MagicaVoxel holds 3D models, this object is {obj.ndim}D")
     if max(obj.volume.shape, default=0) > MAX_SIDE:
         raise ModelTooLarge(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
                             f"{'x'.join(map(str, obj.volume.shape))}")
     spacing, corner = placement(obj)
-    if (spacing != 1).any() or corner.any():
+    if (spacing != 1).any() or corner.any() or unit is not None:
         note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "
-             f"and origin {np.round(corner, 9).tolist()} are not written")
+             f"and origin {np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit} are not written")
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     xyz = np.argwhere(obj.volume)
     colour = np.ones(len(xyz), np.uint8) if obj.volume.dtype == np.bool_ else obj.volume[tuple(xyz.T)]
     xyzi = np.column_stack([xyz, colour]).astype(np.uint8) if len(xyz) else np.zeros((0, 4), np.uint8)

@@ -14,7 +14,10 @@ Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagon
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
 NIfTI stores the affine in float32: pitch and origin are kept to float32
 precision. The length unit is the header's xyzt spatial unit
-(``mm``, ``micron``, ``meter``; ``unknown``, which isoflow writes, is none).
+(``mm``, ``micron``, ``meter``; ``unknown`` is none). It is written so
+where the unit is one of those three; NIfTI has no code for another (cm,
+nm, inch, ...), which is written as ``unknown`` with a warning, the voxel
+size and origin as they are (not converted to mm).
 """
 
 from __future__ import annotations
@@ -37,7 +40,12 @@ from .registry import (
     reading,
     refuse_empty,
     stored_values,
+    unit_not_kept,
 )
+
+#: NIfTI's xyzt spatial units (nibabel's names) of isoflow's spellings: the
+#: format has codes for these three lengths only
+XYZT_UNITS = {"m": "meter", "mm": "mm", "\u00b5m": "micron"}
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -63,12 +71,14 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, pitch, origin, unit=unit)
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     """Refuse an array with a side of length 0; warn of a fourth axis's
     placement, which the affine has no room for (read back as voxel size 1
     from 0), as every format says what of the placement it drops."""
     # a NIfTI dimension of 0 is written, but nibabel reads the file back as shape (0,)
     refuse_empty(path, obj.volume.shape, "NIfTI")
+    if unit not in XYZT_UNITS:
+        unit_not_kept(path, "NIfTI", unit, "the length units m, mm and \u00b5m only")
     if obj.ndim != 4:
         return
     spacing, corner = placement(obj)
@@ -77,7 +87,8 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
              f"{float(spacing[3]):.9g} and origin {float(corner[3]):.9g} are not written (read back as 1 and 0)")
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     nib = import_library("nibabel", "NIfTI")
     spacing, corner = placement_3d(obj)
     steps, centre0 = centre_affine(spacing, corner)
@@ -90,7 +101,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     img = nib.Nifti1Image(values, affine, dtype=values.dtype)
     img.set_sform(affine, code=1)
     img.set_qform(affine, code=1)
-    img.header.set_xyzt_units("unknown")
+    img.header.set_xyzt_units(XYZT_UNITS.get(unit or "", "unknown"))
     # the file named exactly: nib.save takes "bob.Nii.gz" for "bob.nii.gz" and writes that other file,
     # leaving the named one (a temporary file renamed over the output) empty
     img.to_file_map(img.make_file_map({"image": str(path)}))

@@ -2,7 +2,8 @@
 
 The array's axes are isoflow's (axis 0 is x). An ``.npz`` written by isoflow
 carries ``volume`` plus ``offset``, ``parity``, ``pitch`` (one number or one
-per axis) and ``origin``, so that it round-trips exactly, the lattice parity
+per axis) and ``origin``, and ``unit``, their length unit (a string, where
+one is given), so that it round-trips exactly, the lattice parity
 of a flow's step included; any other ``.npz`` must hold exactly one array
 (or one named ``volume``). A ``.npy`` holds the array alone.
 """
@@ -15,7 +16,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, content_hint, note
+from .registry import RawVolume, content_hint, length_unit, note
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -32,7 +33,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                     arr = z[dataset]
                 elif "volume" in names:
                     arr = z["volume"]
-                    for key in ("offset", "parity", "pitch", "origin"):
+                    for key in ("offset", "parity", "pitch", "origin", "unit"):
                         if key in names:
                             meta[key] = z[key]
                 elif len(names) == 1:
@@ -58,7 +59,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                 f"starts with {head!r}, not .npy's b'\\x93NUMPY' or an .npz's (zip) b'PK'" if head else "is empty")
                 + content_hint(path, "NumPy")) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
-    return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0))
+    unit = length_unit(str(meta["unit"])) if "unit" in meta else None
+    return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
+                     unit=unit)
 
 
 def _head(path: Path) -> bytes:
@@ -87,7 +90,7 @@ def voxel_count(path: Path) -> int | None:
     return int(np.prod(shape, dtype=np.int64))
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     if not path.name.lower().endswith(".npy"):
         return
     # only what this object holds beyond the defaults, with its value: a
@@ -96,13 +99,15 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
         ("pitch", coordinates(obj.spacing), np.any(obj.spacing != 1.0)),
         ("origin", coordinates(obj.origin), obj.origin.any()),
         ("lattice offset", coordinates(obj.offset), any(obj.offset)),
-        ("parity", str(obj.parity), obj.parity)) if held]
+        ("parity", str(obj.parity), obj.parity),
+        ("unit", str(unit), unit is not None)) if held]
     if lost:
         note(f"{path}: a .npy holds the array alone; its {', '.join(lost)} {'is' if len(lost) == 1 else 'are'} "
              "not kept (use .npz to keep them)")
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     with open(path, "wb") as fh:
         if path.name.lower().endswith(".npy"):
             np.save(fh, obj.volume)
@@ -114,4 +119,6 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
             parity=np.int64(obj.parity),
             pitch=np.asarray(obj.pitch, np.float64),
             origin=obj.origin,
+            # a string array, which np.load reads without pickle
+            **({} if unit is None else {"unit": np.str_(unit)}),
         )

@@ -18,7 +18,9 @@ axes with ``spacings``, where every axis has the same one.
 
 Written with ``space dimension``, diagonal ``space directions`` (the voxel
 sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
-float64 in the text header, so pitch and origin are kept exactly.
+float64 in the text header, so pitch and origin are kept exactly; and,
+where a length unit is given, ``space units`` (one per axis, in ASCII:
+``um`` for \u00b5m, as ImageJ and ITK write it).
 """
 
 from __future__ import annotations
@@ -30,7 +32,17 @@ import numpy as np
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
-from .registry import RawVolume, check_shape, import_library, note, placement, reading, shared_unit, stored_values
+from .registry import (
+    RawVolume,
+    ascii_unit,
+    check_shape,
+    import_library,
+    note,
+    placement,
+    reading,
+    shared_unit,
+    stored_values,
+)
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -116,7 +128,8 @@ def _scalar_axes(data: np.ndarray, placed: list[int], what: str, where: str, kin
     return np.transpose(data, placed + others).reshape([data.shape[i] for i in placed])
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     nrrd = import_library("nrrd", "NRRD", "pynrrd")
     spacing, corner = placement(obj)
     steps, centre0 = centre_affine(spacing, corner)
@@ -127,4 +140,6 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         "kinds": ["domain"] * obj.ndim,
         "encoding": "gzip",
     }
+    if unit is not None:
+        header["space units"] = [ascii_unit(unit)] * obj.ndim
     nrrd.write(str(path), stored_values(obj.volume), header, index_order="F")

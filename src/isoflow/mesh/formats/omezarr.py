@@ -24,7 +24,9 @@ would not fit.
 
 Written as NGFF 0.4 (zarr format 2, which the most viewers read): one level
 ``0`` of uint8 0/1 in (z, y, x) order, chunks of at most 128 a side, with
-the scale and translation that put every voxel where it was.
+the scale and translation that put every voxel where it was, and a length
+unit given as each axis's ``unit`` in its UDUNITS name (``micrometer``,
+``millimeter``, ...).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
 from .registry import (
+    UDUNITS,
     RawVolume,
     check_label,
     check_shape,
@@ -54,6 +57,7 @@ from .registry import (
     split_dataset,
     stored_values,
     to_xyz,
+    unit_not_kept,
 )
 
 CHUNK = 128
@@ -445,14 +449,17 @@ def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
     return path
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     if dataset is not None:
         raise IsoflowError(f"{path}:{dataset}: a level is named to read an OME-Zarr image; write to {path}")
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D")
+    if unit is not None and unit not in UDUNITS:
+        unit_not_kept(path, "OME-Zarr", unit, "the UDUNITS length units of NGFF only")
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     zarr = import_library("zarr", "OME-Zarr")
     spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (x, y, z) -> (z, y, x)
@@ -462,17 +469,18 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         path.unlink()
     root = zarr.open_group(str(path), mode="w", zarr_format=2)
     root.create_array("0", data=data, chunks=tuple(max(1, min(s, CHUNK)) for s in data.shape))
-    root.attrs["multiscales"] = multiscales(name or path.name, spacing, corner)
+    root.attrs["multiscales"] = multiscales(name or path.name, spacing, corner, unit=unit)
 
 
-def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
+def multiscales(name: str, spacing, corner, stored: str = "zyx", unit: str | None = None) -> list[dict]:
     """NGFF 0.4 ``multiscales`` of one level ``0`` for a grid of voxel size
     ``spacing`` whose voxel 0 has its lowest corner at ``corner`` (both in
     isoflow's x, y, z order): the scale and the translation of voxel 0's
     centre, as NGFF places voxels, listed in the ``stored`` order of the
     axes (``"zyx"``, NGFF's usual order, ``"yx"`` in 2D, or ``"xyz"``: the
     spec asks that axes be named and space last, and only recommends z, y,
-    x)."""
+    x); ``unit`` (isoflow's spelling) as each axis's UDUNITS ``unit`` where
+    NGFF has a name for it."""
     spacing, corner = np.asarray(spacing, np.float64), np.asarray(corner, np.float64)
     centre = corner + spacing / 2
     stored = stored[-len(spacing):] if stored == "zyx" else stored
@@ -480,7 +488,7 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx") -> list[dict]:
     return [{
         "version": NGFF_VERSION,
         "name": name,
-        "axes": [{"name": a, "type": "space"} for a in stored],
+        "axes": [{"name": a, "type": "space", **({"unit": UDUNITS[unit]} if unit in UDUNITS else {})} for a in stored],
         "datasets": [{"path": "0", "coordinateTransformations": [
             {"type": "scale", "scale": spacing[order].tolist()},
             {"type": "translation", "translation": centre[order].tolist()},

@@ -384,6 +384,60 @@ def shared_unit(units, where: str, what: str) -> str | None:
     return None
 
 
+def unit_given(unit: object, where: str) -> str | None:
+    """A length unit given to a writer (``unit=``) in isoflow's spelling
+    (:func:`length_unit`: ``"micron"`` is ``"\u00b5m"``), None for None; one
+    line naming it where it is no length unit isoflow knows
+    (:data:`LENGTH_UNITS`): a writer stores it in the format's own
+    spelling, which it knows only for those.
+
+    Examples
+    --------
+    >>> unit_given("Millimeter", "a.nii"), unit_given(None, "a.nii") is None
+    ('mm', True)
+    >>> unit_given("pixel", "a.nii")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: a.nii: unit 'pixel' is not a length unit (one of m, cm, mm, \u00b5m, nm,
+    pm, \u00c5, km, in, ft, yd, mi, in any spelling of length_unit)
+    """
+    if unit is None:
+        return None
+    spelled = length_unit(unit) if isinstance(unit, (str, bytes)) else None
+    if spelled not in LENGTH_UNITS:
+        raise IsoflowError(f"{where}: unit {unit!r} is not a length unit (one of {', '.join(LENGTH_UNITS)}, in any "
+                           "spelling of length_unit)")
+    return spelled
+
+
+#: OME-Zarr's axis units (NGFF 0.4: UDUNITS-2 names) of isoflow's spellings
+UDUNITS = {"m": "meter", "cm": "centimeter", "mm": "millimeter", "\u00b5m": "micrometer", "nm": "nanometer",
+           "pm": "picometer", "\u00c5": "angstrom", "km": "kilometer", "in": "inch", "ft": "foot", "yd": "yard",
+           "mi": "mile"}
+
+
+def ascii_unit(unit: str) -> str:
+    """``unit`` in ASCII, for a header of free text (ImageJ's description,
+    NRRD's): ``um`` for \u00b5m, as ImageJ writes it, ``angstrom`` for
+    \u00c5, any other letter beyond ASCII as ImageJ escapes it
+    (``\\u00XX``), which :func:`length_unit` reads back.
+
+    Examples
+    --------
+    >>> ascii_unit("\u00b5m"), ascii_unit("mm"), length_unit(ascii_unit("\u00c5"))
+    ('um', 'mm', '\u00c5')
+    """
+    unit = {"\u00b5m": "um", "\u00c5": "angstrom"}.get(unit, unit)
+    return "".join(c if ord(c) < 128 else f"\\u{ord(c):04X}" for c in unit)
+
+
+def unit_not_kept(path, fmt: str, unit: str | None, keeps: str = "no length unit") -> None:
+    """Warn that the format of ``path`` does not keep ``unit`` (nothing for
+    None), as a format says what of the placement it drops."""
+    if unit is not None:
+        note(f"{path}: {fmt} keeps {keeps}; the unit {unit} of the voxel size and origin is not written")
+
+
 @dataclass(frozen=True)
 class LabelVolume:
     """A label image placed in the world, as the writers take it in place

@@ -64,7 +64,9 @@ voxel, converted to the voxel size's unit (a position in "reference
 frame" units, the schema's default, is taken in that unit).
 
 Written as an ImageJ hyperstack of uint8 0/1 with those tags, so that Fiji
-opens it calibrated and placed. Resolutions are rationals in TIFF: a pitch
+opens it calibrated and placed, and a length unit given as ImageJ's
+``unit`` (``um`` for \u00b5m, as ImageJ's ``FileSaver`` writes it; no key,
+Fiji's "pixel", where none is given). Resolutions are rationals in TIFF: a pitch
 is kept to about 9 digits, and so an origin read back through it.
 """
 
@@ -79,6 +81,7 @@ from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .registry import (
     RawVolume,
+    ascii_unit,
     check_shape,
     colours_refused,
     import_library,
@@ -467,19 +470,22 @@ def _imagej_number(imagej: dict, key: str, where: str, default: float) -> float:
     return number
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
 
 
-def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None) -> None:
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
     spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
     metadata: dict[str, str | float] = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
     if obj.ndim == 3:
         metadata["spacing"] = float(spacing[2])
+    if unit is not None:
+        metadata["unit"] = ascii_unit(unit)
     for axis, c, p in zip("xyz", corner, spacing):
         if c != 0:  # ImageJ writes an origin of 0 as no key
             metadata[f"{axis}origin"] = float(-c / p)
