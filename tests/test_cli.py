@@ -618,3 +618,29 @@ def test_flow_refuses_a_3d_connectivity_for_a_2d_object(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["connectivity"] == 8
     said = " ".join((ROOT / "docs" / "flow.md").read_text().split())
     assert "`isoflow flow --connectivity` takes 4 or 8 for a 2D image, as `info` does, and refuses 6 and 26" in said
+
+
+def test_info_takes_the_compiled_pass_once_numba_is_loaded_for_the_file(tmp_path, capsys, monkeypatch):
+    """info loads numba while it reads a file that may hold a large volume
+    (by its size: a bit per voxel at the least), and docs/large-volumes.md
+    says the compiled pass then takes the volume whatever its size. An
+    uncompressed NIfTI of 0.5 M voxels (a byte each) loaded numba and then
+    went the NumPy way, below the size "auto" weighs numba's start against:
+    the command paid that start for nothing."""
+    nib = pytest.importorskip("nibabel")
+    from isoflow.digital import analysis
+    from isoflow.scale.compiled import have_numba, least_voxels
+
+    if not have_numba():
+        pytest.skip("numba not installed: no warm-up")
+    side = int((least_voxels(surfaces=True) // 8) ** (1 / 3)) + 1  # the file is large enough, the volume is not
+    assert side**3 < least_voxels(surfaces=True)
+    v = np.zeros((side,) * 3, np.uint8)
+    v[2:-2, 2:-2, 2:-2] = np.random.default_rng(5).random((side - 4,) * 3) < 0.3
+    nib.save(nib.Nifti1Image(v, np.eye(4)), tmp_path / "scan.nii")
+    swept = []
+    census = analysis.compiled_census
+    monkeypatch.setattr(analysis, "compiled_census", lambda *a, **k: swept.append(1) or census(*a, **k))
+    r = info_json(capsys, tmp_path / "scan.nii")
+    assert swept  # the compiled pass, numba being loaded
+    assert r["voxels"] == int(v.sum()) and r["euler_characteristic"] == euler_number(v, 1)

@@ -177,6 +177,40 @@ def test_a_label_image_refusal_counts_voxels_in_memory_and_per_block_in_a_store(
     assert count == np.count_nonzero(block > 1) < many
 
 
+def block_named(line: str) -> tuple[int, list[int]]:
+    """The count and the first voxel of the block a store's refusal names."""
+    found = re.search(r"\((\d+) voxels? in the block at voxel \((\d+), (\d+), (\d+)\) holds? values other than 0 and 1",
+                      line)
+    assert found, line
+    count, *corner = map(int, found.groups())
+    return count, corner
+
+
+@pytest.mark.parametrize("threads", ["1", "2"])
+def test_surface_of_a_store_counts_the_voxels_of_the_block_it_names(tmp_path, capsys, labels, threads):
+    """surface reads each block of a store with a voxel layer of margin
+    around it; a refusal named the margin's first voxel, which is no
+    block's (4, 9, ...: the chunks start at multiples of 5), and counted
+    the margins' voxels too, and where only a block's margin held a value
+    other than 0 and 1, it named that block, which holds none. The line
+    now names a chunk of the store and counts that chunk's voxels, as
+    info's line does."""
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(5, 5, 5), zarr_format=2)
+    line = fails(capsys, "surface", tmp_path / "l.zarr", "-o", tmp_path / "l.ply", "--threads", threads,
+                 words=("l.zarr: not a binary volume",))
+    count, corner = block_named(line)
+    assert all(c % 5 == 0 for c in corner), line
+    assert count == np.count_nonzero(labels[tuple(slice(c, c + 5) for c in corner)] > 1) > 0
+    # a 2 on the first layer of the second chunk: in the margin the first block reads
+    lone = np.zeros((10, 10, 10), np.uint8)
+    lone[5, 0, 0] = 2
+    zarr.create_array(str(tmp_path / "m.zarr"), data=lone, chunks=(5, 5, 5), zarr_format=2)
+    line = fails(capsys, "surface", tmp_path / "m.zarr", "-o", tmp_path / "m.ply", "--threads", threads,
+                 words=("m.zarr: not a binary volume",))
+    assert block_named(line) == (1, [5, 0, 0])
+
+
 def corrupt_files(tmp_path):
     (tmp_path / "junk.tif").write_bytes(b"II*\x00" + b"\xff" * 40)
     (tmp_path / "junk.nii.gz").write_bytes(b"\x1f\x8b\x08\x00garbage")

@@ -737,6 +737,7 @@ def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatc
     import threading
     import time
 
+    from isoflow.cli.info import WARM_UP_THREAD
     from isoflow.digital import closed_surfaces
     from isoflow.scale.compiled import have_numba, least_voxels
 
@@ -755,7 +756,7 @@ def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatc
     monkeypatch.setattr(closed_surfaces, "warm_up", slow_warm_up)
     fails(capsys, "info", tmp_path / "big.npy", words=("big.npy", "not a binary volume"))
     assert warming.is_set()  # (the warm-up ran: the input is large enough)
-    assert not [t.name for t in threading.enumerate() if t.name.endswith("(quietly)") and t.is_alive()]
+    assert not [t.name for t in threading.enumerate() if t.name == WARM_UP_THREAD and t.is_alive()]
 
 
 # ------------------------------------------------- a missing input, worded once

@@ -143,7 +143,12 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict 
 
         report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
         return dataclasses.replace(report, parity=obj.parity), grid, placed  # a bare array has no lattice place
-    return analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads), grid, placed
+    # numba loaded while the file was read: its pass is then the faster at
+    # any size ("auto" weighs numba's start against the volume, and that
+    # start is paid)
+    method = "compiled" if warming is not None and warming.loaded and obj.ndim == 3 else "auto"
+    report = analyze(obj, args.connectivity, surfaces=not args.no_surfaces, threads=args.threads, method=method)
+    return report, grid, placed
 
 
 def mesh_grid(args: argparse.Namespace, obj) -> dict | None:
@@ -157,11 +162,34 @@ def mesh_grid(args: argparse.Namespace, obj) -> dict | None:
     return {"fill": mesh_fill(args), "pitch": float(obj.pitch), "origin": [float(x) for x in obj.origin]}
 
 
-def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
-    """A thread that loads the compiled passes (numba and its cached code,
-    once per process) while the input is read, which releases the GIL; only
-    for volumes large enough to use them (a small one answers in the NumPy
-    passes, without numba's start)."""
+#: the name of the thread that loads numba while the input is read
+WARM_UP_THREAD = "isoflow info: loading the compiled passes"
+
+
+class WarmUp(threading.Thread):
+    """Loads the compiled 3D pass (numba and its cached code, once per
+    process) on a thread of its own; ``loaded`` says whether it did."""
+
+    def __init__(self, surfaces: bool) -> None:
+        super().__init__(name=WARM_UP_THREAD, daemon=True)
+        self.surfaces = surfaces
+        self.loaded = False
+
+    def run(self) -> None:
+        from ..digital.closed_surfaces import warm_up
+
+        with contextlib.suppress(Exception):  # the command itself says what fails
+            warm_up(surfaces=self.surfaces)
+            self.loaded = True
+
+
+def warm_up_while_reading(args: argparse.Namespace) -> WarmUp | None:
+    """A thread that loads the compiled passes while the input is read,
+    which releases the GIL; only for files that may hold a volume large
+    enough to use them (a small one answers in the NumPy passes, without
+    numba's start). A file's size says little of its voxels (compression),
+    so a volume read while numba loaded takes the compiled pass whatever
+    its size (:func:`info_in_memory`)."""
     from ..mesh.formats.npy import voxel_count
     from ..mesh.formats.registry import split_dataset
     from ..mesh.load import is_mesh_path
@@ -178,13 +206,7 @@ def warm_up_while_reading(args: argparse.Namespace) -> threading.Thread | None:
         return None
     if args.gpu or not big or is_mesh_path(path) or not have_numba():
         return None
-    from ..digital.closed_surfaces import warm_up
-
-    def quietly() -> None:
-        with contextlib.suppress(Exception):  # the command itself says what fails
-            warm_up(surfaces=not args.no_surfaces)
-
-    thread = threading.Thread(target=quietly, daemon=True)
+    thread = WarmUp(surfaces=not args.no_surfaces)
     thread.start()
     return thread
 

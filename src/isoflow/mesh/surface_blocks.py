@@ -112,9 +112,12 @@ class BlockGrid:
                      for (a, b) in (self.bounds[axis][i] for axis, i in enumerate(index)))
 
 
-def _read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
-    """A block of voxels as a host bool array (a dask array is computed
-    here, in the task, on its synchronous scheduler)."""
+def _read_box(array, grid: BlockGrid, index, where: str) -> np.ndarray:
+    """The voxels :meth:`BlockGrid.box` says block ``index`` reads, as a host
+    bool array (a dask array is computed here, in the task, on its
+    synchronous scheduler)."""
+    slices, own = grid.box(index)[0], grid.own(index)
+    near = [grid.bounds[axis][i][0] for axis, i in enumerate(index)]  # the block's first voxel
     part = array[slices]
     if hasattr(part, "compute"):
         part = part.compute(scheduler="sync")
@@ -122,13 +125,29 @@ def _read_box(array, slices: tuple[slice, ...], where: str, near) -> np.ndarray:
         part = np.asarray(part)
         return binary(part, where, near=near)
     except NotBinary as exc:
-        stored = getattr(array, "array", array)  # a _Source holds the reader
-        raise fill_value_named(exc, getattr(stored, "fill_value", None), part.dtype) from None
+        refusal = exc
     except IsoflowError:
         raise
     except Exception as exc:  # zarr and its codecs raise many types
         raise IsoflowError(f"{where}: cannot read the block at voxel {tuple(int(n) for n in near)} "
                            f"({type(exc).__name__}: {exc})") from None
+    # the line counts the voxels of one block, its own or, where only the
+    # margins read with them hold such values, the neighbour's that holds
+    # the first, as info's blocks do
+    voxels = part[own]
+    if not ((voxels != 0) & (voxels != 1)).any():
+        first = np.argwhere((part != 0) & (part != 1))[0] + [s.start for s in slices]
+        index = tuple(next(i for i, (a, b) in enumerate(grid.bounds[axis]) if a <= c < b)
+                      for axis, c in enumerate(first))
+        near = [grid.bounds[axis][i][0] for axis, i in enumerate(index)]
+        voxels = array[tuple(slice(*grid.bounds[axis][i]) for axis, i in enumerate(index))]
+        voxels = np.asarray(voxels.compute(scheduler="sync") if hasattr(voxels, "compute") else voxels)
+    try:
+        binary(voxels, where, near=near)
+    except NotBinary as exc:
+        refusal = exc
+    stored = getattr(array, "array", array)  # a _Source holds the reader
+    raise fill_value_named(refusal, getattr(stored, "fill_value", None), part.dtype) from None
 
 
 def count_block(array, grid: BlockGrid, index, connectivity: int, where: str) -> dict:
@@ -169,8 +188,8 @@ def count_block(array, grid: BlockGrid, index, connectivity: int, where: str) ->
     from ..scale.bitrows import pack
     from ..scale.quads import count_planes
 
-    slices, box, origin = grid.box(index)
-    vol = _read_box(array, slices, where, [s.start for s in slices])
+    _, box, origin = grid.box(index)
+    vol = _read_box(array, grid, index, where)
     with using(1):
         bits = pack(vol)[0]
         # every plane of the box: the faces below the upper seam name the
@@ -303,8 +322,8 @@ def mesh_block(array, grid: BlockGrid, block: BlockPlan, connectivity: int, wher
     from ..scale.bitrows import pack
     from ..scale.quads import fill_planes
 
-    slices, box, origin = grid.box(block.index)
-    vol = _read_box(array, slices, where, [s.start for s in slices])
+    _, box, origin = grid.box(block.index)
+    vol = _read_box(array, grid, block.index, where)
     idx = index_dtype(block.vertices)
     n, f = block.items, block.quads
     out = (np.empty((n, 3)), np.empty(n, np.uint8), np.empty(n, np.int8), np.empty((f, 4), idx),
