@@ -10,7 +10,10 @@ ball, edge and vertex contacts, random unions of boxes and noise, in 3D and
 2D). Both ways of stepping (``method="numpy"`` and ``"compiled"``, on bit
 rows) must give them. The last, empty state of each run was digested again
 when an empty object's offset became zeros (it kept the dual lattice's
-offset of the step that emptied it); every other state is 0b245b6's.
+offset of the step that emptied it); every other state is 0b245b6's. The
+places of the topology changes were written again when a place became the
+voxels around every stuck vertex and the parts vanishing or filling whole
+there (each new box holds the old one; test_change_place.py checks them).
 """
 
 import json

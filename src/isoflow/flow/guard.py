@@ -43,10 +43,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..digital.configurations import configurations
+from ..digital.connectivity import complement
 from ..digital.indices import f_lut, planar_class_lut
 from ..digital.lattice import DigitalObject
 from ..digital.simple import delete_simple, neighbourhood_codes, simple_codes
 from ..digital.topology import betti_numbers
+from ..scale.labels import label
 from ..scale.memory import check_fits
 from .motion import flow_connectivity, flow_moves
 
@@ -101,8 +103,9 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     ``by_class`` keeps the order of the first implementation: the blocks of
     one sub-lattice class (``w`` modulo 2) after the other, each class octant
     by octant (64 batches a sweep instead of 8). The greedy order decides
-    which vertex of a vanishing part is left stuck, so :func:`change_region`
-    uses it to report the same place as before for plain runs.
+    which vertex of a vanishing part is left stuck; :func:`change_region`
+    takes this order, the one the plain runs' reference places
+    (tests/flow/plain_reference.json) are written in.
 
     ``backward`` takes the octants in the reverse order. The greedy order
     decides which side of a thin part keeps it when its inward moves are
@@ -160,12 +163,57 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     return target, stuck
 
 
+def corners_any(vertices: np.ndarray, outside: bool = False) -> np.ndarray:
+    """Per voxel of the object's array padded by one: whether any of its
+    ``2^n`` corners is set in ``vertices`` (a vertex-grid mask, one larger
+    than the array along each axis, as :func:`flow_moves`' ``keep``); a
+    corner off that grid reads ``outside``. The voxels around a vertex are
+    those it is a corner of, so this is also the ``2^n`` voxels around
+    every set vertex.
+
+    Examples
+    --------
+    >>> corners_any(np.array([[False, False], [False, True]])).astype(int)
+    array([[0, 0, 0],
+           [0, 1, 1],
+           [0, 1, 1]])
+    """
+    padded = np.pad(np.asarray(vertices, bool), 1, constant_values=outside)
+    out = np.zeros(tuple(n - 1 for n in padded.shape), bool)
+    for d in itertools.product((0, 1), repeat=padded.ndim):
+        out |= padded[tuple(slice(di, di + n) for di, n in zip(d, out.shape))]
+    return out
+
+
 def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int):
-    """World bbox [min, max] of the vertices whose plain move is not a simple
-    deformation (module docstring), or of the new object when none is."""
+    """World bbox [min, max] of where the plain move ``keep`` from ``obj``
+    changes its topology, None when empty.
+
+    The greedy sweeps of :func:`realise_moves` carry out every move they
+    can by simple deformations; the vertices left stuck are where the
+    topology changes, but the greedy order decides which fine cell of a
+    vanishing part or a closing hole is the last, so a stuck vertex alone
+    may miss the part. The region is therefore the ``2^n`` voxels around
+    every stuck vertex, together with each part that the step removes or
+    fills whole and that meets them: a connected set (``conn``) of voxels
+    none of whose corners is kept, or a connected set of background voxels
+    (the complementary connectivity) all of whose corners are kept. When no
+    vertex is stuck, the new object's bounding box.
+    """
     _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
-    where = stuck if stuck.any() else keep
-    box = obj.on_dual_lattice(where).bbox()
+    if not stuck.any():
+        box = obj.on_dual_lattice(keep).bbox()
+        return None if box is None else [box[0].tolist(), box[1].tolist()]
+    region = corners_any(stuck)
+    volume = np.pad(obj.volume, 1)
+    vanished = volume & ~corners_any(keep)
+    filled = ~volume & ~corners_any(~keep, outside=True)  # a vertex off the grid is never kept
+    for part, c in ((vanished, conn), (filled, complement(obj.ndim, conn))):
+        if part.any():
+            labels, _ = label(part, c)
+            met = np.unique(labels[region & part])
+            region |= np.isin(labels, met[met > 0])
+    box = replace(obj, volume=region, offset=tuple(o - 1 for o in obj.offset)).bbox()
     return None if box is None else [box[0].tolist(), box[1].tolist()]
 
 

@@ -7,7 +7,8 @@ and records per step the voxels, parity, Betti numbers, chi, energy
 
 * **Without** ``guard`` consecutive states' Betti numbers are compared and
   each change is reported with the step and *where*: the world bounding box
-  of the vertices whose plain move is not a simple deformation
+  of the voxels around the vertices whose plain move is not a simple
+  deformation and of the parts that vanish or fill whole there
   (:func:`isoflow.flow.guard.change_region`); the bounding box of the new
   object when none is found. The last step, to the empty set, is the limit
   of the flow and not reported.
