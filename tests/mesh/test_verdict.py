@@ -77,6 +77,66 @@ def test_a_time_limit_stop_says_its_estimate(capsys):
     assert stop["estimate"] == 0 or "about 0 s" not in printed["verdict"]
 
 
+def _torus_in_hollow_ball(tmp_path):
+    """An outer sphere, an inner one facing inward (the cavity's wall) and
+    a torus inside the cavity, written as OBJ; with manifold3d's genus of
+    the outer sphere alone (the solid with its cavity filled) and of the
+    whole mesh (summed over its parts)."""
+    import manifold3d as m3
+    import trimesh
+
+    def genus(m):
+        made = m3.Manifold(m3.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
+                                   tri_verts=np.asarray(m.faces, np.uint32)))
+        return sum(p.genus() for p in made.decompose())
+
+    outer = trimesh.creation.icosphere(3, radius=2)
+    inner = trimesh.creation.icosphere(3, radius=1.6)
+    inner.invert()
+    mesh = trimesh.util.concatenate([outer, inner, trimesh.creation.torus(0.8, 0.2)])
+    path = tmp_path / "hollow_torus.obj"
+    mesh.export(path)
+    return path, genus(outer), genus(mesh)
+
+
+def test_flood_of_a_hollow_ball_stops_at_the_filled_solids_genus(tmp_path):
+    """``genus --fill flood`` of a torus inside a hollow ball: the flood
+    fill is the ball with its cavity filled (genus 0), which never reaches
+    the mesh's genus 1, and the stepping doubled to --max-resolution 1024
+    (disagree, "stopped by the largest resolution allowed"). The flood's
+    target is the filled solid's genus: the run stops where the digital
+    genus settles on it, and the verdict names both genera."""
+    path, filled, whole = _torus_in_hollow_ball(tmp_path)
+    assert (filled, whole) == (0, 1)
+    flood = json_of(path, "--fill", "flood")
+    runs = [d["resolution"] for d in flood["digital"]]
+    assert flood["stop"] is None and max(runs) < 1024, runs  # settled, not stopped by the cap
+    assert flood["filled_genus"] == filled and flood["reference"] == whole
+    assert flood["solid"]["filled_genus"] == filled and flood["solid"]["filled_bodies"] == 1
+    assert flood["kind"] == "agree" and flood["digital"][-1]["genus"] == filled and flood["bodies"] == 1
+    assert f"filled solid genus {filled}" in flood["verdict"] and f"the mesh's genus is {whole}" in flood["verdict"]
+    # the winding fill keeps the torus: compared with the mesh's genus, as before
+    winding = json_of(path)
+    assert winding["filled_genus"] is None and winding["kind"] == "agree" and winding["reference"] == whole
+    assert winding["verdict"].startswith(f"agree: genus {whole}")
+
+
+def test_flood_of_a_solid_without_cavities_keeps_the_mesh_genus():
+    """Without cavities the flood fill is the solid: its target is the
+    mesh's genus (a torus: trimesh's Euler number 0, genus 1), and the
+    verdict is the winding fill's."""
+    import trimesh
+
+    torus = trimesh.load(MESHES / "torus.obj", force="mesh")
+    genus = (2 - torus.euler_number) // 2
+    assert genus == 1
+    flood = json_of(MESHES / "torus.obj", "--fill", "flood", "--resolution", 32, 64)
+    winding = json_of(MESHES / "torus.obj", "--resolution", 32, 64)
+    assert flood["filled_genus"] is None and flood["solid"]["filled_genus"] == flood["solid"]["genus"] == genus
+    assert flood["kind"] == winding["kind"] == "agree" and flood["reference"] == genus
+    assert flood["verdict"] == winding["verdict"] == f"agree: genus {genus}"
+
+
 def test_a_grid_is_called_too_coarse_only_where_finer_ones_differ():
     """A torus inside a hollow ball, filled by ``--fill flood``: the flood
     fills the cavity and loses the torus's handle at every resolution, so
@@ -91,7 +151,7 @@ def test_a_grid_is_called_too_coarse_only_where_finer_ones_differ():
     mesh = trimesh.util.concatenate([trimesh.creation.icosphere(2, radius=3), inner, torus])
     assert torus.euler_number == 0 and torus.is_watertight  # genus 1: the handle the flood loses
     v = verify_genus(mesh, (16, 32, 64), step=False, fill="flood")
-    assert v.kind == "disagree" and v.reference == 1
+    assert v.kind == "agree" and v.reference == 1 and v.filled_genus == 0
     settled = v.digital[-1]["genus"]
     assert [d["genus"] for d in v.digital] == [settled] * 3  # no grid differs from the finer ones
     assert [n.kind for n in v.notes if n.kind == "coarse"] == []

@@ -316,7 +316,10 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     ``genus`` is the number of handles of the solid's boundary (its b1, what
     the digital genus measures); ``surfaces`` its closed boundary surfaces,
     ``bodies`` and ``cavities`` those that bound a body from outside and a
-    cavity (its b0 and b2); ``boundary`` says whether the mesh is the
+    cavity (its b0 and b2); ``filled_genus`` and ``filled_bodies`` the
+    genus and bodies of the solid with its cavities filled (what a flood
+    fill voxelises: the union of the outer surfaces' solids, which swallows
+    the bodies inside cavities); ``boundary`` says whether the mesh is the
     solid's boundary (every surface between a region of winding 0 and one
     of winding not 0), so that the mesh's own genus is the one to compare.
     ``{"error": ...}`` where manifold3d refuses the mesh. ``whole``:
@@ -335,6 +338,7 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
         solids = [p if s > 0 else _inside_out(m3, p) for p, s in zip(parts, signs)]
         solid, boundary, approximate = _nonzero_solid(m3, solids, signs)
         pieces = solid.decompose()
+        filled_genus, filled_bodies = _filled(m3, pieces)
     except Exception as exc:  # the binding raises for malformed input (its first line says what)
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return {"error": f"{type(exc).__name__}: {detail}"}
@@ -343,7 +347,22 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     # (positive volume) and its cavities' (negative)
     bodies = sum(1 for p in pieces if p.volume() > 0)
     return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "bodies": bodies,
-            "cavities": len(pieces) - bodies, "volume": volume, "boundary": boundary, "approximate": approximate}
+            "cavities": len(pieces) - bodies, "filled_genus": filled_genus, "filled_bodies": filled_bodies,
+            "volume": volume, "boundary": boundary, "approximate": approximate}
+
+
+def _filled(m3, pieces: list) -> tuple[int, int]:
+    """``(genus, bodies)`` of the solid whose shells are ``pieces`` with
+    its cavities filled: the union of the solids its outer surfaces
+    (positive volume) bound, of which a body inside a cavity is part, and
+    whose own cavities (outer surfaces closing a space between them) are
+    left out in turn."""
+    outer = [p for p in pieces if p.volume() > 0]
+    if len(outer) == len(pieces):  # no cavity: the solid itself
+        return int(sum(p.genus() for p in pieces)), len(pieces)
+    filled = m3.Manifold.batch_boolean(outer, m3.OpType.Add).decompose() if len(outer) > 1 else outer
+    shells = [p for p in filled if p.volume() > 0]
+    return int(sum(p.genus() for p in shells)), len(shells)
 
 
 #: relative volume below which two solids are taken not to overlap (float32 booleans)
@@ -699,25 +718,27 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     f = _drop_repeated_faces(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
+    filled = filled_genus(w, fill)
+    target = reference if filled is None else filled
     bodies = reference_bodies(w, fill)
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
-            time_limit=time_limit, target=reference, progress=progress, on_resolution=on_resolution,
+            time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill, bodies=bodies)
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
-    kind = verdict_kind(w, digital, reference, stable, bodies)
+    kind = verdict_kind(w, digital, target, stable, bodies)
     return GenusVerdict(
         input=name, mesh=w["mesh"], manifold3d=w["manifold3d"], pymeshlab=w["pymeshlab"],
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
-        stop=stop, bodies=bodies,
+        stop=stop, bodies=bodies, filled_genus=filled,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill)
-                    + digital_notes(w, digital, reference, stable, fill)))
+                    + digital_notes(w, digital, target, stable, fill)))
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
@@ -808,21 +829,46 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     return out
 
 
+def filled_genus(w: dict, fill: Fill) -> int | None:
+    """The genus the digital genus of a flood fill is compared with where
+    the solid has cavities: that of the solid with its cavities filled
+    (:func:`solid_report`'s ``filled_genus``), which the flood fill is, and
+    which has none of the handles inside the cavities (a torus inside a
+    hollow ball: 0, where the mesh's genus is 1); None for the other fills,
+    a solid without cavities (the reference is its genus) or no solid.
+
+    Examples
+    --------
+    >>> w = {"solid": {"genus": 1, "bodies": 2, "cavities": 1, "filled_genus": 0, "filled_bodies": 1}}
+    >>> filled_genus(w, "flood"), filled_genus(w, "winding")
+    (0, None)
+    """
+    solid = w["solid"]
+    if fill != "flood" or not solid.get("cavities") or "filled_genus" not in solid:
+        return None
+    return int(solid["filled_genus"])
+
+
 def reference_bodies(w: dict, fill: Fill) -> int | None:
     """The bodies the digital components (b0) are compared with: those of
     the solid manifold3d builds (edge-connected, so two balls touching at
-    a point are two), or None where there is no such solid or the voxels
-    are not it: a shell (whose components are surfaces) and a flood fill
-    of a solid with cavities (which swallows the bodies inside them)."""
+    a point are two), for a flood fill of a solid with cavities those of
+    the solid with its cavities filled (which swallows the bodies inside
+    them), or None where there is no such solid or the voxels are not it:
+    a shell (whose components are surfaces)."""
     solid = w["solid"]
-    if "bodies" not in solid or fill == "shell" or fill == "flood" and solid["cavities"]:
+    if "bodies" not in solid or fill == "shell":
         return None
+    if fill == "flood" and solid["cavities"]:
+        return int(solid["filled_bodies"]) if "filled_bodies" in solid else None
     return int(solid["bodies"])
 
 
 def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool,
                  bodies: int | None = None) -> VerdictKind:
-    """What the verdict says first (see :data:`~isoflow.mesh.verdict.VerdictKind`).
+    """What the verdict says first (see :data:`~isoflow.mesh.verdict.VerdictKind`);
+    ``reference`` is the genus the digital genus should reach (a flood
+    fill's: :func:`filled_genus`).
     An empty grid comes first: it has genus 0 and would "agree" with a
     surface's genus 0 for nothing (a flat or zero-volume mesh, whose faces
     may also lie on each other). The digital components are compared with
@@ -897,13 +943,12 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
         if reference is not None and stable:
             # too coarse: a grid whose genus the finer, settled ones do not
             # repeat; one that gives the settled genus is not, even where
-            # that genus is not the reference (a flood fill loses the
-            # handles inside cavities at every resolution)
+            # that genus is not the reference
             notes += [Note("coarse", {"resolution": d["resolution"], "genus": d["genus"], "pitch": d["pitch"]})
                       for d in digital[:-2] if d["genus"] != last["genus"]]
     if fill == "flood" and w["solid"].get("cavities"):
-        # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it, and
-        # "disagree" would otherwise blame the mesh
+        # the flood fill is the solid with its cavities filled: a torus inside a hollow ball is lost to it,
+        # which is why its target is not the mesh's genus
         notes.append(Note("flood_cavities", {"n": w["solid"]["cavities"]}))
     if "error" in w["manifold3d"]:
         notes.append(Note("manifold3d_refused", {"error": w["manifold3d"]["error"]}))

@@ -69,8 +69,13 @@ class GenusVerdict(Result):
     the genus of the solid manifold3d builds, where components overlap,
     touch or nest). ``bodies`` is the number of bodies the digital
     components (b0) are compared with: the solid's (None where not
-    compared: no solid, ``fill="shell"``, or a flood fill of a solid with
-    cavities); a verdict with other digital components is ``disagree``.
+    compared: no solid, ``fill="shell"``; for a flood fill of a solid with
+    cavities, the filled solid's); a verdict with other digital components
+    is ``disagree``. ``filled_genus`` is, for ``fill="flood"`` of a solid
+    with cavities, the genus of the solid with its cavities filled (what
+    the flood fill voxelises, without the handles inside the cavities):
+    the digital genus is compared with it instead of ``reference``, which
+    stays the mesh's (or the solid's); None otherwise.
     """
 
     input: str
@@ -91,6 +96,7 @@ class GenusVerdict(Result):
     stop: Stop | None = None
     notes: tuple[Note, ...] = ()
     bodies: int | None = None
+    filled_genus: int | None = None
 
     #: the keys of the mapping and of :meth:`to_dict`, in the JSON's order:
     #: the sentence, then the facts it is written from, so that a script
@@ -98,7 +104,7 @@ class GenusVerdict(Result):
     #: the JSON back
     KEYS = ("input", "mesh", "manifold3d", "pymeshlab", "self_intersecting_faces",
             "faces_crossing_other_components", "solid_genus", "fill", "digital", "solid", "converged", "agree", "verdict",
-            "kind", "reference", "reference_source", "bodies", "stop", "notes")
+            "kind", "reference", "reference_source", "filled_genus", "bodies", "stop", "notes")
 
     @property
     def verdict(self) -> str:
@@ -205,16 +211,27 @@ def head_text(v: GenusVerdict) -> str:
                "one resolution cannot show that the digital Betti numbers have settled")
         return f"not converged at {digital[-1]['resolution']}: {why} ({trail})" + stop
     if v.kind == "agree":
+        if v.filled_genus is not None:
+            return f"agree: {_filled_words(v)}"
         return f"agree: {'solid genus' if v.reference_source == 'solid' else 'genus'} {v.reference}"
     same = f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})"
     b0 = digital[-1]["betti"][0]
-    parts = ([f"the solid has {counted(v.bodies, 'body', 'bodies')}, the digital solid "
+    solid = "the solid" if v.filled_genus is None else "the filled solid"
+    parts = ([f"{solid} has {counted(v.bodies, 'body', 'bodies')}, the digital solid "
               f"{counted(b0, 'component')}"] if v.bodies is not None and b0 != v.bodies else [])
-    if digital[-1]["genus"] != v.reference or not parts:  # (a verdict's JSON without "bodies" compares the genus)
-        parts.insert(0, f"{ref_name} {v.reference}, digital genus {digital[-1]['genus']}")
+    target = v.reference if v.filled_genus is None else v.filled_genus
+    if digital[-1]["genus"] != target or not parts:  # (a verdict's JSON without "bodies" compares the genus)
+        said = f"{ref_name} {v.reference}" if v.filled_genus is None else _filled_words(v)
+        parts.insert(0, f"{said}, digital genus {digital[-1]['genus']}")
     else:
-        same += f", both of genus {v.reference}"
+        same += f", both of genus {target}"
     return f"disagree: {'; '.join(parts)} {same}" + stop
+
+
+def _filled_words(v: GenusVerdict) -> str:
+    """A flood fill's target and the reference it stands in for, both."""
+    return (f"filled solid genus {v.filled_genus} (the --fill flood target: the solid with its cavities filled; "
+            f"the {v.reference_source}'s genus is {v.reference})")
 
 
 def note_text(note: Note) -> str:
