@@ -34,9 +34,10 @@ the warning, which offers it, is then not given: :func:`white_is_zero`).
 
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
-(:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
-resolution of 72 dpi that Pillow and others give an image without a scale,
-or without a ResolutionUnit tag or ImageJ description; z from ImageJ's
+(:func:`resolution_pitch`): 1 at the print resolution of 72 per inch that
+Pillow and others give an image without a scale, with an ImageJ
+description or without, and 1 where the file has neither a ResolutionUnit
+tag nor an ImageJ description; z from ImageJ's
 ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (in
 PhysicalSizeX's unit, µm where not said, the others converted to it); 1
 where absent.
@@ -180,8 +181,9 @@ def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str =
     unit: ResolutionUnit 1 (none) or 3 (centimetre), 2 (inch) unless the
     x resolution is exactly 72 per inch (the print resolution that
     Pillow, GIMP and most other writers give an image with no scale:
-    ImageJ then sets the pixel size to 1), or an ImageJ description
-    (whose ``unit``, or none, replaces the tag's). Without a
+    ImageJ then sets the pixel size to 1, and an ImageJ description does
+    not undo it), or an ImageJ description (whose ``unit``, or none,
+    replaces the tag's). Without a
     ResolutionUnit tag and an ImageJ description the resolution is not
     read: TIFF's default unit, inch, is what a writer leaves unsaid.
 
