@@ -644,3 +644,51 @@ def test_info_takes_the_compiled_pass_once_numba_is_loaded_for_the_file(tmp_path
     r = info_json(capsys, tmp_path / "scan.nii")
     assert swept  # the compiled pass, numba being loaded
     assert r["voxels"] == int(v.sum()) and r["euler_characteristic"] == euler_number(v, 1)
+
+
+@pytest.mark.parametrize("shape", [(9, 8), (6, 5, 7), (4, 4, 4, 3)])
+def test_info_json_classes_are_what_docs_cli_md_says(tmp_path, shape):
+    """docs/cli.md's `classes`: in 2D and 3D every class, 0 included; in 4D
+    only the classes that occur, each keyed by the least configuration of
+    its orbit under the cube's symmetries; in every dimension the counts
+    add up to the sum of `n`, and with `non_well_composed` to the vertices
+    whose cells are neither all in the object nor all out (counted here
+    with numpy)."""
+    import itertools
+
+    rng = np.random.default_rng(7)
+    volume = rng.random(shape) < 0.5
+    np.save(tmp_path / "v.npy", volume)
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "v.npy"), "--json"],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    report = json.loads(p.stdout)
+    d, classes = volume.ndim, report["classes"]
+    padded = np.pad(volume, 1).astype(int)
+    window = [s - 1 for s in padded.shape]
+    cells = sum(padded[tuple(slice(o, o + s) for o, s in zip(offset, window))]
+                for offset in itertools.product((0, 1), repeat=d))
+    boundary = int(np.count_nonzero((cells > 0) & (cells < 2 ** d)))
+    assert sum(classes.values()) == sum(report["n"])
+    assert sum(classes.values()) + report["non_well_composed"] == boundary
+    if d < 4:
+        assert len(classes) == len(report["n"]) and list(classes.values()) == report["n"]
+        return
+    assert 0 not in classes.values() and list(classes.values()) == [k for k in report["n"] if k]
+
+    def image(config, axes, flips):
+        # cell d (bit d0 + 2 d1 + 4 d2 + 8 d3) goes to the cell of the permuted, flipped axes
+        out = 0
+        for bit in range(16):
+            if config >> bit & 1:
+                cell = [bit >> a & 1 for a in range(4)]
+                moved = [cell[axes[a]] ^ flips[a] for a in range(4)]
+                out |= 1 << sum(c << a for a, c in enumerate(moved))
+        return out
+
+    group = [(axes, flips) for axes in itertools.permutations(range(4))
+             for flips in itertools.product((0, 1), repeat=4)]
+    keys = [int(k) for k in classes]
+    assert keys == sorted(keys)
+    for key in keys:
+        assert key == min(image(key, axes, flips) for axes, flips in group), key

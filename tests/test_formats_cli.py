@@ -1014,7 +1014,8 @@ def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_pa
     shows its 0s as white: the values are still those that tifffile and
     scikit-image read (and ImageJ keeps under its inverted LUT), and a
     warning names the photometric, which voxels are the object and
-    --label 0 for the voxels shown white."""
+    --label 0 for the voxels shown white; given --label 0, that advice
+    is not said again."""
     measure = pytest.importorskip("skimage.measure")
     mask = np.zeros((6, 9, 10), bool)  # (z, y, x)
     mask[1:5, 1:4, 1:4] = mask[1:5, 5:8, 5:9] = True  # two boxes
@@ -1037,8 +1038,14 @@ def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_pa
                    "white); its values are read as stored, as ImageJ, scikit-image and tifffile read them, so a "
                    "mask's object is its nonzero voxels, shown dark; --label 0 (label=0) takes the voxels shown "
                    "white instead"], err
-    shown_white, _ = report("--label", "0")
+    # --label 0 is the choice the warning offers: nothing is left to say
+    shown_white, err = report("--label", "0")
     assert shown_white["voxels"] == np.count_nonzero(~stored)
+    assert err == [], err
+    # another label is a stored value, as tifffile reads it: said so, with no advice
+    shown_dark, err = report("--label", "1")
+    assert shown_dark["voxels"] == np.count_nonzero(stored)
+    assert len(err) == 1 and err[0].endswith("read them, so label 1 selects the voxels stored as 1"), err
 
 
 def test_an_ome_tiff_is_placed_by_its_first_planes_stage_position_in_its_voxel_size_unit(tmp_path, capsys):

@@ -175,6 +175,51 @@ def test_surface_labels_of_a_zarr_store_in_its_units(tmp_path, capsys, segmentat
         assert abs(mesh.volume) == pytest.approx(row["volume"])
 
 
+def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read_it(tmp_path):
+    """A float store whose fill value is NaN reads its chunks never written
+    as NaN: ``info`` refused it and offered --labels, which refuses NaN as
+    no label. The line names the fill value and the ways that read it (a
+    threshold, a store written with fill_value=0), not --labels; an
+    integer label store is still offered --labels, which reads it."""
+    zarr = pytest.importorskip("zarr")
+
+    def info(path, *extra):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), *extra], capture_output=True, text=True)
+        # (where numba's cache is cold a process may say so first, in a note line)
+        return p.returncode, [line for line in p.stderr.splitlines() if not line.startswith("isoflow info: note: ")], p.stdout
+
+    mask = np.zeros((8, 8, 8), np.float32)
+    mask[1:3, 1:3, 1:3] = 1
+    z = zarr.create_array(str(tmp_path / "nan.zarr"), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="float32",
+                          fill_value=float("nan"))
+    z[:4] = mask[:4]  # the second chunk never written
+    assert z.nchunks_initialized == 1
+    nan = int(np.isnan(z[...]).sum())
+    assert nan == 4 * 8 * 8
+    code, err, _ = info(tmp_path / "nan.zarr")
+    assert code == 2 and len(err) == 1, err
+    assert err[0].startswith(f"isoflow info: error: {tmp_path / 'nan.zarr'}: not a binary volume ({nan} voxels "), err
+    assert "e.g. nan, the array's fill value, which zarr reads for a chunk never written" in err[0], err
+    assert "fill_value=0" in err[0] and "--labels" not in err[0], err
+    # --labels refuses NaN as no label: why the line must not offer it
+    assert info(tmp_path / "nan.zarr", "--labels")[0] == 2
+    # the way out it names: the same voxels in a store whose fill value is 0
+    zero = zarr.create_array(str(tmp_path / "zero.zarr"), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="float32",
+                             fill_value=0)
+    zero[:4] = mask[:4]
+    code, err, out = info(tmp_path / "zero.zarr", "--json")
+    assert code == 0 and json.loads(out)["voxels"] == int(np.count_nonzero(zero[...] == 1)) == 8, err
+
+    labels = zarr.create_array(str(tmp_path / "labels.zarr"), shape=(8, 8, 8), chunks=(4, 8, 8), dtype="u1",
+                               fill_value=0)
+    labels[:4] = mask[:4] * 2
+    code, err, _ = info(tmp_path / "labels.zarr")
+    assert code == 2 and len(err) == 1 and err[0].endswith("or give every label its row with --labels "
+                                                           "(isoflow.label_table(isoflow.read_labels(path)))"), err
+    assert "fill_value=0" not in err[0], err
+    assert info(tmp_path / "labels.zarr", "--labels")[0] == 0
+
+
 def test_info_labels_of_a_store_notes_chunks_read_as_a_nonzero_fill_value(tmp_path):
     """zarr reads a chunk never written as the fill value: where that is a
     label, the table counts those voxels as it, and says so once, with

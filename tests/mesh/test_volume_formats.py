@@ -537,8 +537,9 @@ def _pillow_tiff(path, image, **save):
 
 
 # ImageJ's rule (ij/io/TiffDecoder.java OpenIFD, ij/io/FileOpener.java
-# setCalibration): 1 / resolution where a unit is given, 1 at 72 per inch and
-# where no ResolutionUnit tag nor ImageJ description gives one
+# setCalibration), row by row as docs/formats.md's table gives it: 1 at 72
+# per inch, ImageJ description or not; 1 / resolution where a ResolutionUnit
+# tag or an ImageJ description is present; 1 where neither is
 @pytest.mark.parametrize(("writer", "save", "pitch"), [
     ("pillow", {}, [1.0, 1.0]),  # no resolution tags
     ("pillow", {"dpi": (72, 72)}, [1.0, 1.0]),  # the print default: uncalibrated
@@ -551,6 +552,11 @@ def _pillow_tiff(path, image, **save):
     ("tifffile", {"resolution": (2, 4), "imagej": True, "metadata": {"unit": "micron"}}, [0.5, 0.25]),
     ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH", "imagej": True,
                   "metadata": {"unit": "micron"}}, [1.0, 1.0]),
+    ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH", "imagej": True}, [1.0, 1.0]),
+    ("tifffile", {"resolution": (2, 4), "resolutionunit": "INCH", "imagej": True}, [0.5, 0.25]),
+    # an ImageJ description without a ResolutionUnit tag: calibrated, as ImageJ's unit is then ""
+    ("pillow", {"tiffinfo": {270: "ImageJ=1.54f\nunit=micron\n", 282: 2.0, 283: 4.0}}, [0.5, 0.25]),
+    ("pillow", {"tiffinfo": {270: "ImageJ=1.54f\n", 282: 2.0, 283: 4.0}}, [0.5, 0.25]),
 ])
 def test_tiff_pixel_size_follows_imagejs_calibration_rule(tmp_path, writer, save, pitch):
     """A TIFF at the print resolution of 72 dpi, or whose resolution has no

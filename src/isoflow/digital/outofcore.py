@@ -501,9 +501,11 @@ def analyze_chunked(
     except IsoflowError as exc:
         # a process worker's error comes back with its traceback in str();
         # keep the one-line message (and a label image's kind: the command
-        # names the options that select labels)
+        # names the options that select labels, and which of them can)
         message = str(exc.args[0]) if exc.args else str(exc)
-        raise (NotBinary if isinstance(exc, NotBinary) else IsoflowError)(message) from None
+        if isinstance(exc, NotBinary):
+            raise NotBinary(message, exc.bare, exc.every, exc.ndim) from None
+        raise IsoflowError(message) from None
     return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged))
 
 

@@ -225,6 +225,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3, 4):
         raise IsoflowError(f"{where}: a volume must be 2D, 3D or 4D, this array is {arr.ndim}D with shape {arr.shape}")
+    said_of(raw, label)
     if label is not None:
         vol = select_label(arr, label, where)
     elif raw.paint:
@@ -246,6 +247,14 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise exc.at(where) from None
+
+
+def said_of(raw: RawVolume, label: object = None) -> None:
+    """The reader's warning that depends on the label selected, if any
+    (``raw.said``): None for no label, and for a label table."""
+    said = raw.said(label) if raw.said is not None else None
+    if said:
+        warn(said)
 
 
 def one_value_mask(arr: np.ndarray) -> np.ndarray:
@@ -347,6 +356,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
     # a mesh voxelises to one object; a label image of meshes is voxelize's
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
+    said_of(raw)
     arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "

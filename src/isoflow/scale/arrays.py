@@ -202,7 +202,10 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     value is the array's fill value: zarr reads every voxel of a chunk that
     was never written as the fill value, so a store written sparsely with a
     fill value other than 0 and 1 (NaN, 255) is refused for voxels nobody
-    wrote, and the value alone would not say why.
+    wrote, and the value alone would not say why. A fill value that is no
+    label (NaN, infinite, not whole) is refused by a label table too, so
+    the refusal offers a store written with ``fill_value=0`` instead of
+    one (``every`` False: no ``--labels``).
 
     Parameters
     ----------
@@ -222,19 +225,31 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     Examples
     --------
     >>> e = NotBinary("s.zarr: not a binary volume (8 voxels hold values other than 0 and 1, e.g. nan); threshold")
-    >>> print(str(fill_value_named(e, float("nan"), np.float32)).split("; ")[0])  # doctest: +ELLIPSIS
+    >>> named = fill_value_named(e, float("nan"), np.float32)
+    >>> print(str(named).split("; ")[0])  # doctest: +ELLIPSIS
     s.zarr: not a binary volume (8 voxels hold ... e.g. nan, the array's fill value, which zarr reads for a chunk never written)
+    >>> print(str(named).split("; ")[1])
+    threshold, or write the store with fill_value=0, which a chunk never written then reads as 0
+    >>> named.every  # a label table refuses NaN too: no --labels offered
+    False
     """
     if fill is None:
         return exc
     try:
-        example = f"e.g. {np.asarray(fill).astype(dtype)[()]})"
+        value = np.asarray(fill).astype(dtype)[()]
     except (TypeError, ValueError):
         return exc
+    example = f"e.g. {value})"
     if example not in exc.bare:
         return exc
     named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
-    return NotBinary(str(exc.args[0]).replace(example, named, 1), exc.bare.replace(example, named, 1), exc.every, exc.ndim)
+    bare = exc.bare.replace(example, named, 1)
+    label = bool(np.isfinite(value) and value == np.round(value)) if np.asarray(value).dtype.kind == "f" else True
+    if label:
+        return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim)
+    # a label table refuses the value as it does here: a store with fill 0 is read either way
+    unlabelled = bare + ", or write the store with fill_value=0, which a chunk never written then reads as 0"
+    return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim)
 
 
 class NotBinary(IsoflowError):

@@ -24,6 +24,7 @@ import importlib
 import logging
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -287,7 +288,10 @@ class RawVolume:
     written (a refusal of that value says so); None for other formats.
     ``unwritten``: ``(fill, missing, total)`` where that fill value
     is a nonzero whole number and chunks were never written (see
-    :func:`~isoflow.scale.chunks.never_written`); None otherwise."""
+    :func:`~isoflow.scale.chunks.never_written`); None otherwise.
+    ``said``: a warning that depends on the label selected (a TIFF
+    MinIsWhite's), called with it (None where none is, or for a label
+    table) and said where it gives a line; None where there is none."""
 
     array: np.ndarray
     pitch: float | np.ndarray = 1.0
@@ -300,6 +304,7 @@ class RawVolume:
     #: the length unit of ``pitch`` and ``origin`` as the file says it, in
     #: one spelling (:func:`length_unit`); None where the file says none
     unit: str | None = None
+    said: Callable[[object], str | None] | None = None
 
 
 #: one spelling per length unit, so that reports of files from different

@@ -29,13 +29,15 @@ fax-style 1-bit writers and Fiji's inverting LUT save masks) is read as
 stored, with a warning: ImageJ keeps the stored values under an inverted
 grey LUT (and reads a set 1-bit pixel as 255), and scikit-image and
 tifffile keep them, so the object is the nonzero voxels that all of them
-measure, shown dark; ``--label 0`` takes the voxels shown white.
+measure, shown dark; ``--label 0`` takes the voxels shown white (and
+the warning, which offers it, is then not given: :func:`white_is_zero`).
 
 Voxel size: x and y from the XResolution and YResolution tags (pitch =
 1 / pixels per unit, in the file's resolution unit) by ImageJ's rule
-(:func:`resolution_pitch`): 1 for an uncalibrated image, one at the print
-resolution of 72 dpi that Pillow and others give an image without a scale,
-or without a ResolutionUnit tag or ImageJ description; z from ImageJ's
+(:func:`resolution_pitch`): 1 at the print resolution of 72 per inch that
+Pillow and others give an image without a scale, with an ImageJ
+description or without, and 1 where the file has neither a ResolutionUnit
+tag nor an ImageJ description; z from ImageJ's
 ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (in
 PhysicalSizeX's unit, µm where not said, the others converted to it); 1
 where absent.
@@ -72,6 +74,7 @@ is kept to about 9 digits, and so an origin read back through it.
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path
 
@@ -146,8 +149,6 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
             detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
             raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
-    if photometric == MINISWHITE:
-        note(_white_is_zero(where))
     data, axes = _grey(data, axes, photometric, planar, extra, where)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
@@ -164,7 +165,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         origin.append(0.0)
     pitch = [sizes.get(axis, p) for axis, p in zip("XYZT", pitch)]
     origin = [centres[axis] - p / 2 + 0.0 if axis in centres else o for axis, p, o in zip("XYZT", pitch, origin)]
-    return RawVolume(vol, np.array(pitch), np.array(origin), unit=unit)
+    # which voxels are the object is said once the label selected is known
+    said = functools.partial(white_is_zero, where) if photometric == MINISWHITE else None
+    return RawVolume(vol, np.array(pitch), np.array(origin), unit=unit, said=said)
 
 
 def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str = "TIFF") -> list[float]:
@@ -178,8 +181,9 @@ def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str =
     unit: ResolutionUnit 1 (none) or 3 (centimetre), 2 (inch) unless the
     x resolution is exactly 72 per inch (the print resolution that
     Pillow, GIMP and most other writers give an image with no scale:
-    ImageJ then sets the pixel size to 1), or an ImageJ description
-    (whose ``unit``, or none, replaces the tag's). Without a
+    ImageJ then sets the pixel size to 1, and an ImageJ description does
+    not undo it), or an ImageJ description (whose ``unit``, or none,
+    replaces the tag's). Without a
     ResolutionUnit tag and an ImageJ description the resolution is not
     read: TIFF's default unit, inch, is what a writer leaves unsaid.
 
@@ -291,15 +295,45 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, ext
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
 
 
-def _white_is_zero(where: str) -> str:
+def white_is_zero(where: str, label: object = None) -> str | None:
     """The warning for a MinIsWhite file, whose viewers show 0 as white:
     its values are kept as stored, as ImageJ (an inverted grey LUT over
     the stored values; 1-bit pixels set read as 255), scikit-image and
     tifffile keep them, so that the object is what every one of them
-    measures; but what a viewer shows as the object may be the 0s."""
-    return (f"{where}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown white); its values are read "
-            "as stored, as ImageJ, scikit-image and tifffile read them, so a mask's object is its nonzero voxels, "
-            "shown dark; --label 0 (label=0) takes the voxels shown white instead")
+    measures; but what a viewer shows as the object may be the 0s.
+
+    Parameters
+    ----------
+    where : str
+        The file, as messages name it.
+    label : number, optional
+        The label selected. With none, the warning offers ``--label 0``
+        for the voxels shown white; with another, it says that the label
+        is a stored value; with 0 itself the user has chosen the voxels
+        shown white, and nothing is said (None).
+
+    Returns
+    -------
+    str or None
+        The warning's one line, or None.
+
+    Examples
+    --------
+    >>> white_is_zero("m.tif").endswith("--label 0 (label=0) takes the voxels shown white instead")
+    True
+    >>> white_is_zero("m.tif", label=1).endswith("so label 1 selects the voxels stored as 1")
+    True
+    >>> white_is_zero("m.tif", label=0) is None
+    True
+    """
+    if label is not None and label == 0:
+        return None
+    said = (f"{where}: stored MinIsWhite (TIFF PhotometricInterpretation 0: 0 is shown white); its values are read "
+            "as stored, as ImageJ, scikit-image and tifffile read them, ")
+    if label is not None:
+        return said + f"so label {label} selects the voxels stored as {label}"
+    return said + ("so a mask's object is its nonzero voxels, shown dark; --label 0 (label=0) takes the voxels shown "
+                   "white instead")
 
 
 def _imagej_origin(imagej: dict, pitch: list[float], where: str) -> list[float]:
