@@ -171,7 +171,12 @@ def test_the_keys_named_for_info_json_are_those_printed(tmp_path, capsys):
     # a mesh's report adds the grid its voxels are
     mesh = printed(capsys, ["info", str(ROOT / "meshes" / "torus.obj"), "--resolution", "8", "--json", "-q"])
     assert set(mesh) <= named, set(mesh) - named
-    assert named <= keys_in(report) | keys_in(mesh), named - keys_in(report) - keys_in(mesh)
+    # a 2D report keys its classes by name (convex, flat, concave)
+    np.save(tmp_path / "square.npy", np.pad(np.ones((3, 3), bool), 1))
+    planar = printed(capsys, ["info", str(tmp_path / "square.npy"), "--json"])
+    assert set(planar) <= named, set(planar) - named
+    printed_keys = keys_in(report) | keys_in(mesh) | keys_in(planar)
+    assert named <= printed_keys, named - printed_keys
     bare = printed(capsys, ["info", str(tmp_path / "tube.npy"), "--json", "--no-surfaces"])
     assert set(report) - set(bare) == {"surfaces", "pinched_vertices", "doubled_edges"}
 
