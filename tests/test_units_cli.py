@@ -126,6 +126,63 @@ def test_plain_tiff_unit_is_its_resolution_unit_by_imagej_rule(tmp_path, capsys,
     assert same(r["pitch"], [1.0, 1.0] if resolution == 72.0 else [1 / resolution] * 2)
 
 
+def imagej_calibration(tags: dict, description: dict | None, spacing: float = 1.0) -> tuple[list, float, str]:
+    """x and y pitch, z spacing and unit as ImageJ 1.x computes them for a
+    ResolutionUnit-3 (centimetre) TIFF, transcribed from its source
+    (imagej/ImageJ commit 03dc240): TiffDecoder.OpenIFD sets pixelWidth =
+    1 / XResolution and unit "cm"; FileOpener.decodeDescriptionString
+    multiplies pixelWidth and pixelHeight by 10000 where the unit is "cm"
+    and the description's unit is "um", then takes the description's unit;
+    FileOpener.setCalibration, with Prefs.convertToMicrons (true by
+    default), multiplies them by 10000, and pixelDepth unless it is 1.0,
+    where pixelWidth <= 0.0001 and the unit is "cm", and sets "um"."""
+    assert int(tags[296]) == 3
+    width, height = (d / n for n, d in (tags[282], tags[283]))
+    depth, unit = 1.0, "cm"
+    if description is not None:
+        if unit == "cm" and description.get("unit", "") == "um":
+            width, height = width * 10000, height * 10000
+        unit = description.get("unit", "")
+        depth = abs(spacing)
+    if width <= 0.0001 and unit == "cm":
+        width, height = width * 10000.0, height * 10000.0
+        depth = depth * 10000.0 if depth != 1.0 else depth
+        unit = "um"
+    return [width, height], depth, unit
+
+
+# (pixels per cm, ImageJ description's unit or None for no description, spacing)
+@pytest.mark.parametrize("per_cm, written, spacing", [
+    (1e4 / 0.5, "um", 0.5),  # what tifffile users write for 0.5 um pixels: ImageJ reads 0.5 um
+    (2e4, "micron", 0.5),  # only "um" is converted: 1 / resolution, in microns
+    (2e4, None, 1.0),  # 0.5 um in cm with no description: ImageJ's convertToMicrons
+    (2e4, "cm", 2e-4),  # a description in cm of 1 um or less: in um, z too
+    (2e4, "cm", 1.0),  # ... but for a pixelDepth of 1, ImageJ's "no spacing"
+    (20.0, None, 1.0),  # 0.05 cm: kept in cm
+])
+def test_centimetre_tiff_is_read_in_microns_as_imagej_reads_it(tmp_path, capsys, per_cm, written, spacing):
+    """A TIFF whose ResolutionUnit is centimetre gives pitch and unit by
+    ImageJ's conversions to microns (ij/io/FileOpener.java), computed here
+    from the tags and description tifffile reads back."""
+    stack = cube().T  # z, y, x
+    if written is None:
+        tifffile.imwrite(tmp_path / "seg.tif", stack, resolution=(per_cm, per_cm), resolutionunit="CENTIMETER",
+                         photometric="minisblack")
+    else:
+        tifffile.imwrite(tmp_path / "seg.tif", stack, imagej=True, resolution=(per_cm, per_cm),
+                         resolutionunit="CENTIMETER", metadata={"axes": "ZYX", "unit": written, "spacing": spacing})
+    with tifffile.TiffFile(tmp_path / "seg.tif") as tif:
+        tags = {t: tif.pages[0].tags[t].value for t in (282, 283, 296)}
+        description = tif.imagej_metadata
+        assert (description is not None) == (written is not None)
+    xy, z, unit = imagej_calibration(tags, description, spacing)
+    for r in both(capsys, tmp_path / "seg.tif"):
+        assert r["unit"] == {"um": MICRO, "micron": MICRO, "cm": "cm"}[unit]
+        assert same(r["pitch"], [*xy, z])
+    if written == "um":  # the case as Fiji shows it: 0.5 x 0.5 x 0.5 um
+        assert same(xy + [z], [0.5, 0.5, 0.5]) and unit == "um"
+
+
 # ------------------------------------------------------------------ HDF5, NRRD, OME-Zarr, NumPy
 
 def test_hdf5_element_size_um_is_in_micrometres(tmp_path, capsys):

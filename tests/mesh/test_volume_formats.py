@@ -537,9 +537,11 @@ def _pillow_tiff(path, image, **save):
 
 
 # ImageJ's rule (ij/io/TiffDecoder.java OpenIFD, ij/io/FileOpener.java
-# setCalibration), row by row as docs/formats.md's table gives it: 1 at 72
-# per inch, ImageJ description or not; 1 / resolution where a ResolutionUnit
-# tag or an ImageJ description is present; 1 where neither is
+# decodeDescriptionString and setCalibration), row by row as
+# docs/formats.md's table gives it: 1 at 72 per inch, ImageJ description or
+# not; 1 / resolution where a ResolutionUnit tag or an ImageJ description is
+# present, times 10000 where ImageJ converts centimetres to microns; 1 where
+# neither is
 @pytest.mark.parametrize(("writer", "save", "pitch"), [
     ("pillow", {}, [1.0, 1.0]),  # no resolution tags
     ("pillow", {"dpi": (72, 72)}, [1.0, 1.0]),  # the print default: uncalibrated
@@ -547,7 +549,12 @@ def _pillow_tiff(path, image, **save):
     ("pillow", {"tiffinfo": {282: 2.0, 283: 4.0}}, [1.0, 1.0]),  # no ResolutionUnit: no unit
     ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH"}, [1.0, 1.0]),
     ("tifffile", {"resolution": (2, 4), "resolutionunit": "INCH"}, [0.5, 0.25]),
-    ("tifffile", {"resolution": (1e4, 2e4), "resolutionunit": "CENTIMETER"}, [1e-4, 5e-5]),
+    ("tifffile", {"resolution": (20, 40), "resolutionunit": "CENTIMETER"}, [0.05, 0.025]),
+    # centimetres of 1 um or less (FileOpener.setCalibration, Prefs.convertToMicrons): in um
+    ("tifffile", {"resolution": (1e4, 2e4), "resolutionunit": "CENTIMETER"}, [1.0, 0.5]),
+    # pixels per cm beside a description in "um" (FileOpener.decodeDescriptionString): times 10000
+    ("tifffile", {"resolution": (2e4, 2e4), "resolutionunit": "CENTIMETER", "imagej": True,
+                  "metadata": {"unit": "um"}}, [0.5, 0.5]),
     ("tifffile", {"resolution": (2, 4), "resolutionunit": "NONE"}, [0.5, 0.25]),
     ("tifffile", {"resolution": (2, 4), "imagej": True, "metadata": {"unit": "micron"}}, [0.5, 0.25]),
     ("tifffile", {"resolution": (72, 72), "resolutionunit": "INCH", "imagej": True,

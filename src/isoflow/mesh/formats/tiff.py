@@ -10,7 +10,10 @@ axis of several entries beside z (an OME-TIFF's or an ImageJ hyperstack's
 ``T``) is read as a fourth axis, (x, y, z, t) with voxel size 1 along t, the
 4D volume ``info`` analyses; other axes (channels, RGB samples, the time of
 a series of 2D images) must have length 1: a time series is not a z-stack,
-however alike their pages look. A file of several image series
+however alike their pages look. One slice of several channels is what
+tifffile's ``imwrite(f, stack, imagej=True)`` makes of a (slices, rows,
+columns) stack, and Fiji opens it as channels: it is refused with the
+command that saves the channels as slices. A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
@@ -37,7 +40,9 @@ Voxel size: x and y from the XResolution and YResolution tags (pitch =
 (:func:`resolution_pitch`): 1 at the print resolution of 72 per inch that
 Pillow and others give an image without a scale, with an ImageJ
 description or without, and 1 where the file has neither a ResolutionUnit
-tag nor an ImageJ description; z from ImageJ's
+tag nor an ImageJ description; in µm, 10000 times the centimetres, where
+ImageJ converts them (:func:`micron_scale`: pixels per cm beside ImageJ's
+``unit=um``, or a pixel of 0.0001 cm or less); z from ImageJ's
 ``spacing``; an OME-TIFF's PhysicalSizeX/Y/Z where given (in
 PhysicalSizeX's unit, µm where not said, the others converted to it); 1
 where absent.
@@ -46,7 +51,8 @@ Length unit: ImageJ's ``unit`` in its description (``micron``, ``um``
 (ImageJ's spelling of µm), ``mm``, ...; ``pixel`` is none), the OME-XML
 PhysicalSizeXUnit where an OME-TIFF gives a voxel size (µm where not
 said), else the ResolutionUnit tag by ImageJ's rule (:func:`resolution_unit`:
-centimetre, or inch unless at 72 dpi).
+centimetre, or inch unless at 72 dpi); µm where ImageJ converts
+centimetres (:func:`micron_scale`).
 
 Origin: ImageJ's calibration origin, ``xorigin``, ``yorigin`` and ``zorigin``
 in its description (Fiji's Image > Properties "Origin"), in pixels of the
@@ -135,6 +141,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         tags = {t: page.tags[t].value for t in RESOLUTION_TAGS if t in page.tags}
         pitch = resolution_pitch(tags, tif.is_imagej, where)
         unit = length_unit(imagej.get("unit")) if tif.is_imagej else resolution_unit(tags)
+        scale, z_scale = micron_scale(tags, pitch[0], imagej.get("unit"), tif.is_imagej)
+        if scale != 1.0:
+            pitch, unit = [p * scale for p in pitch], "\u00b5m"
         photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
         spacing = imagej.get("spacing")
         sizes, centres, ome_unit = _ome_placement(tif.ome_metadata, where) if tif.is_ome else ({}, {}, None)
@@ -155,9 +164,16 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         if len(stack) == 1:
             axes[stack[0]] = "Z"
     names = ["x" if a == "X" else "y" if a == "Y" else "z" if a == "Z" else a for a in axes]
-    vol = to_xyz(data, names, where)
+    try:
+        vol = to_xyz(data, names, where)
+    except IsoflowError as exc:
+        if not _channels_of_one_slice(axes, data.shape):
+            raise
+        raise IsoflowError(f"{exc}; " + _as_slices(where, data.shape[axes.index("C")])) from None
     if vol.ndim >= 3:
-        pitch.append(_spacing(imagej, where))
+        depth = _spacing(imagej, where)
+        # ImageJ scales a pixelDepth other than its default 1 (FileOpener.setCalibration)
+        pitch.append(depth * z_scale if depth != 1.0 else depth)
     # ImageJ's origin counts its own pixels, so it scales by its own calibration, not by an OME size
     origin = _imagej_origin(imagej, pitch, where)
     if vol.ndim == 4:  # time keeps step 1, as a 4D NIfTI's does: a lattice axis, not seconds
@@ -186,6 +202,8 @@ def resolution_pitch(tags: dict[int, object], imagej: bool = False, where: str =
     replaces the tag's). Without a
     ResolutionUnit tag and an ImageJ description the resolution is not
     read: TIFF's default unit, inch, is what a writer leaves unsaid.
+    ImageJ's conversions of centimetres to microns are
+    :func:`micron_scale`'s, applied to what this gives.
 
     Parameters
     ----------
@@ -256,6 +274,90 @@ def resolution_unit(tags: dict[int, object]) -> str | None:
     if unit == 2 and resolution_pitch(tags) != [1.0, 1.0]:
         return "in"
     return None
+
+
+#: micrometres per centimetre, the factor of ImageJ's conversions
+MICRONS_PER_CM = 10000.0
+
+
+def micron_scale(tags: dict[int, object], pitch: float, unit: object = None, imagej: bool = False) -> tuple[float, float]:
+    """The factors by which ImageJ turns a TIFF's centimetre calibration
+    into micrometres: of the x and y pitch, and of a z spacing other than 1.
+
+    ImageJ 1.x (``ij/io/FileOpener.java``, imagej/ImageJ commit 03dc240)
+    converts in two places, and nowhere else (no other unit, no inch, no
+    ``mm``):
+
+    * ``decodeDescriptionString``, for a file with an ImageJ description,
+      whose ``unit`` replaces the tag's::
+
+          String dsUnit = props.getProperty("unit","");
+          if ("cm".equals(fi.unit) && "um".equals(dsUnit)) {
+              fi.pixelWidth *= 10000;
+              fi.pixelHeight *= 10000;
+          }
+          fi.unit = dsUnit;
+
+      ``fi.unit`` is ``"cm"`` for ResolutionUnit 3 only
+      (``ij/io/TiffDecoder.java``, ``OpenIFD``, case ``RESOLUTION_UNIT``):
+      the tags give pixels per centimetre, the description says µm, and
+      so the pitch is 10000 times 1 / resolution, µm; z is not scaled (the
+      description's ``spacing`` is in its own unit). Only the text ``um``
+      is matched, ImageJ's own spelling of µm (``micron`` or ``\u00B5m``
+      are not, and stay 1 / resolution).
+    * ``setCalibration``, after it, with ``Prefs.convertToMicrons`` (true
+      unless changed: ``ij/Prefs.java``)::
+
+          if (Prefs.convertToMicrons && fi.pixelWidth<=0.0001 && fi.unit.equals("cm")) {
+              fi.pixelWidth *= 10000.0;
+              fi.pixelHeight *= 10000.0;
+              if (fi.pixelDepth!=1.0)
+                  fi.pixelDepth *= 10000.0;
+              fi.unit = "um";
+          }
+
+      so a centimetre calibration of 1 µm or less per pixel (ResolutionUnit
+      3 without an ImageJ description, or a description whose ``unit`` is
+      ``cm``) is read in µm, its z spacing too unless it is 1 (ImageJ's
+      ``pixelDepth`` where no spacing is given).
+
+    Parameters
+    ----------
+    tags : dict of int to object
+        The page's resolution tags, as :func:`resolution_pitch` takes them.
+    pitch : float
+        The x pitch :func:`resolution_pitch` gives (ImageJ's
+        ``pixelWidth``).
+    unit : object
+        The ImageJ description's ``unit`` as written (None where absent).
+    imagej : bool
+        Whether the file has an ImageJ description.
+
+    Returns
+    -------
+    tuple of float
+        The factor of the x and y pitch and that of a z spacing other than
+        1: 1 where ImageJ does not convert; where it does, the unit is µm.
+
+    Examples
+    --------
+    >>> micron_scale({282: (20000, 1), 283: (20000, 1), 296: 3}, 5e-05, "um", imagej=True)
+    (10000.0, 1.0)
+    >>> micron_scale({282: (20000, 1), 283: (20000, 1), 296: 3}, 5e-05)
+    (10000.0, 10000.0)
+    >>> micron_scale({282: (20000, 1), 283: (20000, 1), 296: 3}, 5e-05, "micron", imagej=True)
+    (1.0, 1.0)
+    >>> micron_scale({282: (20, 1), 283: (20, 1), 296: 3}, 0.05)
+    (1.0, 1.0)
+    """
+    code = tags.get(RESOLUTION_UNIT)
+    cm = isinstance(code, (int, np.integer)) and int(code) == 3
+    if imagej and cm and unit == "um":
+        return MICRONS_PER_CM, 1.0
+    said = unit if imagej else "cm" if cm else None
+    if said == "cm" and 0 < pitch <= 0.0001:
+        return MICRONS_PER_CM, MICRONS_PER_CM
+    return 1.0, 1.0
 
 
 def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, extra: tuple,
@@ -380,12 +482,40 @@ def _as_stack(where: str, key: str, condition: str) -> str:
     """The advice, under ``condition``, to save the file's pixels (read
     with tifffile's ``imread`` arguments ``key``) as one grey z-stack, with
     the command that does it."""
+    return _resaved(where, condition, lambda src, dst: f"tifffile.imwrite({dst}, tifffile.imread({src}{key}), "
+                                                       'photometric="minisblack")')
+
+
+def _channels_of_one_slice(axes: list[str], shape: tuple[int, ...]) -> bool:
+    """Whether the only axis beside the rows and columns with more than one
+    entry is the channels: what tifffile's ``imwrite(..., imagej=True)``
+    makes of a (slices, rows, columns) array (ImageJ's description then
+    says ``channels=``, and Fiji opens it as channels too)."""
+    return "C" in axes and all(n == 1 or a in "CYX" for a, n in zip(axes, shape))
+
+
+def _as_slices(where: str, channels: int) -> str:
+    """The advice to save a file of ``channels`` channels and one slice as
+    that many slices, keeping its resolution tags and ImageJ metadata
+    (tifffile's ``metadata={'axes': 'ZYX'}``), with the command that does
+    it."""
+    return _resaved(where, f"if its {channels} channels are the slices of one volume",
+                    lambda src, dst: f"t = tifffile.TiffFile({src}); p = t.pages[0]; tifffile.imwrite({dst}, "
+                                     "t.asarray(), imagej=t.is_imagej, resolution=p.resolution, "
+                                     'resolutionunit=p.resolutionunit, metadata={**(t.imagej_metadata or {}), '
+                                     '"axes": "ZYX"})')
+
+
+def _resaved(where: str, condition: str, write) -> str:
+    """The advice, under ``condition``, to save the file as one stack
+    beside it (``NAME_stack.tif``) and give that, with the ``python -c``
+    command whose tifffile call ``write(source, stack)`` (the two paths as
+    Python literals) writes it."""
     import json
     import shlex
 
     stack = str(Path(where).with_name(Path(where).stem + "_stack.tif"))
-    code = (f"import tifffile; tifffile.imwrite({json.dumps(stack)}, tifffile.imread({json.dumps(where)}"
-            f'{key}), photometric="minisblack")')
+    code = f"import tifffile; {write(json.dumps(where), json.dumps(stack))}"
     return f"{condition}, save them as one stack and give that: python -c {shlex.quote(code)}"
 
 
