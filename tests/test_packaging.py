@@ -33,6 +33,39 @@ def test_every_package_is_listed():
     assert PYPROJECT["tool"]["setuptools"]["package-dir"]["isoflow.data.meshes"] == "meshes"
 
 
+def test_users_extras_bring_only_what_isoflow_uses():
+    """``isoflow[dask]``, ``[formats]`` and ``[gpu]`` are what a user
+    installs to run isoflow, not its tests: each of their distributions must
+    hold a module that isoflow's code imports, or names to import or look up
+    (``"lxml"`` for trimesh's readers, ``"distributed"`` in ``sys.modules``).
+    The distribution -> module map is the installed distributions' own
+    (importlib.metadata); one not installed here cannot be checked."""
+    import ast
+    import importlib.metadata
+    import re
+
+    used: set[str] = set()
+    for path in (ROOT / "src" / "isoflow").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                used |= {alias.name.split(".")[0] for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                used.add(node.module.split(".")[0])
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.isidentifier():
+                used.add(node.value)
+    modules: dict[str, set[str]] = {}
+    for module, dists in importlib.metadata.packages_distributions().items():
+        for dist in dists:
+            modules.setdefault(re.sub(r"[-_.]+", "-", dist).lower(), set()).add(module)
+    unused = []
+    for extra in ("dask", "formats", "gpu"):
+        for req in PYPROJECT["project"]["optional-dependencies"][extra]:
+            dist = re.sub(r"[-_.]+", "-", re.split(r"[<>=\[ ]", req)[0]).lower()
+            if dist in modules and not modules[dist] & used:
+                unused.append(f"{extra}: {req}")
+    assert not unused, unused
+
+
 def test_package_data_takes_every_sample_file():
     patterns = PYPROJECT["tool"]["setuptools"]["package-data"]["isoflow.data.meshes"]
     files = [p for p in (ROOT / "meshes").iterdir() if p.is_file()]
