@@ -115,6 +115,13 @@ def test_flood_of_a_hollow_ball_stops_at_the_filled_solids_genus(tmp_path):
     assert flood["solid"]["filled_genus"] == filled and flood["solid"]["filled_bodies"] == 1
     assert flood["kind"] == "agree" and flood["digital"][-1]["genus"] == filled and flood["bodies"] == 1
     assert f"filled solid genus {filled}" in flood["verdict"] and f"the mesh's genus is {whole}" in flood["verdict"]
+    # the text's solid line names the filled solid beside the solid
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["genus", str(path), "--fill", "flood", "-q"]) == 0
+    solid_line = next(line for line in out.getvalue().splitlines() if line.startswith("  solid "))
+    assert solid_line.startswith(f"  solid       genus {whole}, 2 bodies, 1 cavity,"), solid_line
+    assert solid_line.endswith(f"with its cavities filled (what --fill flood voxelises): genus {filled}, 1 body"), solid_line
     # the winding fill keeps the torus: compared with the mesh's genus, as before
     winding = json_of(path)
     assert winding["filled_genus"] is None and winding["kind"] == "agree" and winding["reference"] == whole

@@ -75,6 +75,16 @@ def _volume(volume: float | None) -> str:
     return "volume beyond float64's range" if volume is None else f"volume {volume:.6g}"
 
 
+def _filled_words(report) -> str:
+    # a flood fill's target beside the solid's own genus: the verdict
+    # compares the voxels with it, so the witness line says it too
+    if report.get("filled_genus") is None:
+        return ""
+    solid = report["solid"]
+    return (f"; with its cavities filled (what --fill flood voxelises): genus {report['filled_genus']}, "
+            f"{counted(solid['filled_bodies'], 'body', 'bodies')}")
+
+
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
@@ -94,7 +104,8 @@ def format_genus(report, name: str) -> str:
                            f"(genus() of the whole mesh: {m3['genus_whole_mesh']})"),
         "  solid       " + (f"genus {solid['genus']}, {counted(solid['bodies'], 'body', 'bodies')}, "
                             f"{counted(solid['cavities'], 'cavity', 'cavities')}, {_volume(solid['volume'])} "
-                            "(manifold3d's union of the components)" if "genus" in solid else f"none ({solid['error']})"),
+                            "(manifold3d's union of the components)" + _filled_words(report)
+                            if "genus" in solid else f"none ({solid['error']})"),
         "  pymeshlab   " + (f"genus {pm.get('genus')}" + (f" ({pm['error']})" if "error" in pm else
                                                         _open_words(pm.get("boundary_edges", 0)))),
     ]
