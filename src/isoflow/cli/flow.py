@@ -13,7 +13,7 @@ from .inputs import (
     add_input_arguments,
     check_input_connectivity,
     label_options,
-    load_input_with_unit,
+    load_input,
     one_time_point,
     refuse_mesh_options,
     refuse_points_option,
@@ -57,9 +57,9 @@ def cmd_flow(args: argparse.Namespace) -> int:
     if block_wise(args):
         return flow_store(args)
     refuse_store_read_whole(args)
-    obj, unit = load_input_with_unit(args)
+    obj = load_input(args)
     check_flow_input(args, obj)
-    writer = flow_writer(args, obj, unit)
+    writer = flow_writer(args, obj)
     result = run_with_files(args, obj, writer)
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
@@ -185,11 +185,11 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
         raise IsoflowError(f"--volumes {args.volumes or repr('')} writes into the --out directory; give --out DIR")
 
 
-def flow_writer(args: argparse.Namespace, obj, unit: str | None = None):
+def flow_writer(args: argparse.Namespace, obj):
     """The writer of ``--out``, or None. Files are written while the flow
     runs, so no state is kept in memory (every state of a box of side s
-    would cost about s^4/4 bytes). ``unit``: the input's length unit, which
-    the step volumes are written with."""
+    would cost about s^4/4 bytes). The step volumes are written with the
+    object's length unit, which every state keeps."""
     from ..flow.files import FlowWriter, check_step_volume, step_width
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
@@ -209,7 +209,7 @@ def flow_writer(args: argparse.Namespace, obj, unit: str | None = None):
     conn = flow_connectivity(obj.ndim, args.connectivity)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
     if args.volumes is not None:
-        writer.write_volumes(args.volumes, unit)
+        writer.write_volumes(args.volumes)
     return writer
 
 

@@ -9,7 +9,10 @@ cubes. Here it is a boolean array plus where that array sits:
 * ``pitch`` and ``origin``: world coordinates, so that an object voxelised
   from a mesh exports back onto the mesh. ``pitch`` is one number, or one
   per axis for anisotropic voxels (a CT scan's 0.5 x 0.5 x 2 mm); the
-  digital topology never looks at it, the exported coordinates do.
+  digital topology never looks at it, the exported coordinates do;
+* ``unit``: the length unit of ``pitch`` and ``origin`` (``mm``, ``µm``,
+  ...; None for none), as the file read said it, kept by every step and
+  written with the object.
 
 Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
 ``offset + v + parity/2`` and world coordinates ``origin + pitch * (that)``
@@ -29,6 +32,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError
 from ..results import same_fields
 from ..scale.arrays import as_array, binary
+from .units import unit_given
 
 
 @dataclass(frozen=True, eq=False)
@@ -54,12 +58,19 @@ class DigitalObject:
         The voxel size, one number or one per axis.
     origin : array_like of float, optional
         World position of lattice point 0 (default zeros).
+    unit : str, optional
+        The length unit of ``pitch`` and ``origin``, in any spelling
+        :func:`~isoflow.digital.units.length_unit` reads (``"mm"``,
+        ``"micron"``, ...), held in isoflow's (``"\u00b5m"``); None (the
+        default) for none. :func:`~isoflow.mesh.volumes.read_volume` sets
+        it from the file, every step that keeps the object's place keeps
+        it, and :func:`~isoflow.mesh.volumes.write_volume` writes it.
 
     Raises
     ------
     IsoflowError
         When the volume is not binary or not 2D to 4D, or a field is not
-        what it must be.
+        what it must be (a ``unit`` that is no length unit among them).
 
     Examples
     --------
@@ -72,6 +83,13 @@ class DigitalObject:
     >>> obj = DigitalObject.from_points(sorted(points))
     >>> len(points), obj.voxels, obj.volume.shape
     (20, 4, (2, 2, 2))
+
+    A CT scan's voxels of 0.5 x 0.5 x 2 millimetres, the unit in isoflow's
+    spelling:
+
+    >>> scan = DigitalObject(np.ones((4, 4, 2), bool), pitch=(0.5, 0.5, 2.0), unit="millimetre")
+    >>> scan.unit, scan.cropped().unit
+    ('mm', 'mm')
     """
 
     volume: np.ndarray
@@ -79,6 +97,7 @@ class DigitalObject:
     parity: int = 0
     pitch: float | np.ndarray = 1.0
     origin: np.ndarray = field(default=None)  # type: ignore[arg-type]
+    unit: str | None = None
 
     # equal when every field is, the volume by its elements: the generated
     # __eq__ compared the arrays with ==, whose truth NumPy refuses; and
@@ -90,7 +109,8 @@ class DigitalObject:
         # what the constructor takes (__post_init__ checks and converts it),
         # beside the fields' types, which say what the object then holds
         def __init__(self, volume: ArrayLike, offset: Sequence[int] | np.ndarray | None = None, parity: int = 0,
-                     pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None) -> None: ...
+                     pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None,
+                     unit: str | None = None) -> None: ...
 
     def __post_init__(self):
         vol = binary(self.volume, "DigitalObject volume")
@@ -108,6 +128,7 @@ class DigitalObject:
             raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {parity!r}")
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
+        object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
 
     # ------------------------------------------------------------ builders
     @classmethod
@@ -234,7 +255,7 @@ class DigitalObject:
         return (
             f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
             f"offset={self.offset}, parity={self.parity}, pitch={np.round(self.pitch, 12).tolist()}, "
-            f"origin={self.origin.tolist()})"
+            f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}") + ")"
         )
 
 

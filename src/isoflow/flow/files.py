@@ -252,7 +252,6 @@ class FlowWriter:
             raise write_error(out, exc, existed=not self.created) from None
         self.out, self.connectivity = out, connectivity
         self.volume_suffix = None  # set by write_volumes
-        self.volume_unit: str | None = None  # ... and the length unit the volumes are written with
         self._said: set[str] = set()  # warnings said already (see _named)
         self.width = step_width(last_step)
         self.staged: list[str] = []  # names written into the staging directory
@@ -315,18 +314,18 @@ class FlowWriter:
             self.problems.append(check["problem"].replace(str(self.stage / name), str(self.out / name)))
 
     # ------------------------------------------------ per-step volumes (--volumes)
-    def write_volumes(self, suffix: str, unit: str | None = None) -> None:
+    def write_volumes(self, suffix: str) -> None:
         """Also write every non-empty step's volume as ``step_NNN{suffix}``
         (any format :func:`isoflow.mesh.volumes.write_volume` writes, with
-        voxel size and origin, and their length ``unit``, the input's, where
-        the format keeps one; ``.npz`` keeps the lattice parity too).
+        voxel size and origin, and their length unit, the input's (each
+        state keeps the object's ``unit``), where the format keeps one;
+        ``.npz`` keeps the lattice parity too).
         Checked now, before the flow runs; like the step surfaces they are
         staged, and the volumes an earlier run left with that suffix are
         removed only when this run is complete (:meth:`finish`)."""
         from ..mesh.volumes import check_volume_suffix
 
         self.volume_suffix = check_volume_suffix(suffix)
-        self.volume_unit = unit
 
     def add_volume(self, step: int, state: DigitalObject) -> None:
         """Write ``state`` as ``step_NNN{suffix}`` into the staging
@@ -351,7 +350,7 @@ class FlowWriter:
         name = f"step_{step:0{self.width}d}{self.volume_suffix}"
         with self._named():
             check_step_volume(self.stage / name, step, state)
-            write_volume(state, self.stage / name, force=True, unit=self.volume_unit)
+            write_volume(state, self.stage / name, force=True)
         self.staged.append(name)
 
     def finish(self, result: FlowResult, plot: bool = True) -> list:

@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
+from ..digital.units import LENGTH_UNITS, length_unit, unit_given
 from ..errors import IsoflowError, missing, warn
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -28,12 +29,10 @@ from .formats.registry import (
     check_label,
     check_time,
     format_for,
-    length_unit,
     no_such_label,
     one_time_point_labels,
     sniff_volume_format,
     split_dataset,
-    unit_given,
     volume_suffixes,
 )
 from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
@@ -91,7 +90,9 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None, *, ti
     -------
     DigitalObject
         With the file's voxel size as ``pitch`` and its first voxel's place
-        as ``origin``, in isoflow's (x, y, z) axis order.
+        as ``origin``, in isoflow's (x, y, z) axis order, and their length
+        unit as ``unit`` (None where the file says none, or names a unit
+        isoflow does not know: :func:`read_volume_with_unit` gives that).
 
     Raises
     ------
@@ -242,7 +243,10 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     # a format stored (z, y, x) comes back turned, in Fortran order: the
     # kernels run about five times faster on C order than on that view
     vol = np.ascontiguousarray(vol)
-    meta: dict[str, Any] = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity}
+    meta: dict[str, Any] = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity,
+                            # a unit isoflow cannot write (free text of NRRD or ImageJ) is not carried:
+                            # read_volume_with_unit gives it as the file says it
+                            "unit": raw.unit if raw.unit in LENGTH_UNITS else None}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
@@ -687,11 +691,12 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
         Replace an existing file (``FILE.h5:/dataset``: only that dataset).
     unit : str, optional
         The length unit of the object's pitch and origin, in any spelling
-        :func:`~isoflow.mesh.formats.registry.length_unit` reads
+        :func:`~isoflow.digital.units.length_unit` reads
         (``"mm"``, ``"micron"``, ``"micrometer"``, ...), as
         :func:`read_volume_with_unit` gives it; written in the format's own
         spelling where it has one (docs/formats.md, "Length unit"), else
-        said in a warning. None: no unit is written.
+        said in a warning. None: the object's ``unit`` (as
+        :func:`read_volume` sets it from its file; none if it has none).
 
     Returns
     -------
@@ -719,16 +724,22 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     With its length unit, which a NIfTI file keeps in its header:
 
     >>> path = write_volume(obj, pathlib.Path(tempfile.mkdtemp()) / "box.nii.gz", unit="millimeter")
-    >>> read_volume_with_unit(path)[1]
+    >>> read_volume(path).unit
+    'mm'
+
+    The object read keeps it, and writes it again:
+
+    >>> read_volume(write_volume(read_volume(path), pathlib.Path(tempfile.mkdtemp()) / "box.nrrd")).unit
     'mm'
     """
-    return write_placed(DigitalObject.of(obj), path, force, unit=unit_given(unit, str(path)))
+    obj = DigitalObject.of(obj)
+    return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)))
 
 
 def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False,
                  unit: str | None = None) -> Path:
     """:func:`write_volume` of a digital object or a placed label image,
-    ``unit`` in isoflow's spelling (:func:`~isoflow.mesh.formats.registry.length_unit`)."""
+    ``unit`` in isoflow's spelling (:func:`~isoflow.digital.units.length_unit`)."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
     assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
@@ -801,7 +812,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         Overwrite an existing file.
     unit : str, optional
         The length unit of the voxel size and origin, in any spelling
-        :func:`~isoflow.mesh.formats.registry.length_unit` reads (if None:
+        :func:`~isoflow.digital.units.length_unit` reads (if None:
         a LabelImage's ``unit``, else none); one given replaces a
         LabelImage's, as ``pitch`` and ``origin`` do. Written where the
         format has room for it (docs/formats.md, "Length unit"), else said
