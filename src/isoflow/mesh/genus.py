@@ -27,7 +27,7 @@ from ..errors import IsoflowError, check_callable
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill, check_strict
-from .grid import GridTooLarge, finest_fit, grid_fits, grid_need, grid_words, near_origin
+from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
@@ -737,7 +737,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop, bodies=bodies, filled_genus=filled,
-        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill)
+        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + rounding_notes(v, f, w, stats)
                     + digital_notes(w, digital, target, stable, fill)))
 
 
@@ -930,6 +930,21 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
     if w["zero_area_faces"]:
         notes.append(Note("zero_area_faces", {"n": w["zero_area_faces"], "along": w["pairs_along_slivers"]}))
     return notes
+
+
+def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[Note]:
+    """Coordinates that float64 holds coarsely against the mesh's edges
+    (:func:`~isoflow.mesh.grid.float64_rounding`), with the defects found
+    that the rounding may have made."""
+    facts = float64_rounding(v, f)
+    if facts is None:
+        return []
+    mesh = w["mesh"]
+    found = {"crossings": w["self_intersecting_faces"] or w["faces_crossing_other_components"],
+             "degenerate faces": stats.get("dropped_faces"), "welds": stats.get("welded"),
+             "non-manifold edges": mesh["nonmanifold_edges"], "non-manifold vertices": mesh["nonmanifold_vertices"],
+             "zero-area faces": w["zero_area_faces"]}
+    return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
 
 
 def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding") -> list[Note]:

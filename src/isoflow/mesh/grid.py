@@ -537,3 +537,91 @@ def finest_fit(v: np.ndarray, f: np.ndarray, what: str, shape, fits: Callable[[t
             return pitch
         lo -= max(1, lo // 100)
     return None
+
+
+#: the float64 spacing at the mesh's largest coordinate, as a share of its
+#: median edge, from which :func:`float64_rounding` says the coordinates
+#: are held coarsely: a hundredth of an edge already bends faces by a
+#: percent of their size, where rounding makes crossings and welds
+ROUNDING_SHARE = 0.01
+
+
+def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
+    """Whether float64 holds the mesh's coordinates coarsely against its
+    edges: the spacing of float64 at the largest coordinate magnitude of
+    the vertices the faces use (``np.spacing``) at least
+    :data:`ROUNDING_SHARE` of the median length of the mesh's distinct
+    edges. A mesh saved far from the origin is already rounded onto that
+    grid in its file: crossings, welded vertices and non-manifold edges
+    that the surface itself does not have.
+
+    Parameters
+    ----------
+    v : ndarray, shape (N, 3)
+        Vertex positions, float64.
+    f : ndarray, shape (M, 3)
+        Faces, indices into ``v`` (as :func:`~isoflow.mesh.load.check_mesh`
+        returns them).
+
+    Returns
+    -------
+    dict or None
+        ``near``: the largest coordinate magnitude; ``spacing``: float64's
+        spacing there; ``median_edge``: the median length of the distinct
+        edges (each pair of corners once, as trimesh's
+        ``edges_unique_length``); ``share``: ``spacing / median_edge``.
+        None where the spacing is below :data:`ROUNDING_SHARE` of the
+        median edge.
+
+    Examples
+    --------
+    >>> v = np.array([[1e15, 0, 0], [1e15 + 1, 0, 0], [1e15, 1, 0]])
+    >>> r = float64_rounding(v, np.array([[0, 1, 2]]))
+    >>> r["spacing"], r["median_edge"], r["share"]
+    (0.125, 1.0, 0.125)
+    >>> float64_rounding(v - [1e15, 0, 0], np.array([[0, 1, 2]])) is None
+    True
+    """
+    if not len(f):
+        return None
+    lo, hi, _ = mesh_bbox(v, f, "mesh")
+    near = float(np.maximum(np.abs(lo), np.abs(hi)).max())
+    spacing = float(np.spacing(near))
+    if not spacing > 0:
+        return None
+    pairs = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
+    with np.errstate(over="ignore", invalid="ignore"):
+        lengths = np.linalg.norm(v[pairs[:, 0]] - v[pairs[:, 1]], axis=1)
+    # the median of the distinct edges is above the bound where no edge
+    # is below it: most meshes, near the origin, stop here without a sort
+    bound = spacing / ROUNDING_SHARE
+    if not np.any(lengths <= bound):
+        return None
+    pairs.sort(axis=1)
+    _, first = np.unique(pairs, axis=0, return_index=True)
+    median = float(np.median(lengths[first]))
+    if not (median > 0 and spacing >= ROUNDING_SHARE * median):
+        return None
+    return {"near": near, "spacing": spacing, "median_edge": median, "share": spacing / median}
+
+
+def rounding_words(near: float, spacing: float, median_edge: float, share: float, defects: tuple = (),
+                   where: str = "") -> str:
+    """:func:`float64_rounding`'s facts in words: the spacing, its share of
+    the median edge, the ``defects`` (words naming what was found, such as
+    ``"crossings"``) it may have made, said ``where`` (``" above"``), and
+    the way out.
+
+    Examples
+    --------
+    >>> print(rounding_words(1e15, 0.125, 0.1618, 0.125 / 0.1618, ("crossings", "welds"), " above"))
+    coordinates near 1e+15 are held by float64 to 0.125, 77 % of the median edge (0.162): the crossings and
+    welds above may be that rounding; move the mesh nearer the origin (subtract its centre) before saving it
+    """
+    pct = 100 * share
+    said = (f"coordinates near {near:.6g} are held by float64 to {spacing!r}, "
+            f"{f'{pct:.0f}' if pct >= 10 else f'{pct:.2g}'} % of the median edge ({median_edge:.3g})")
+    if defects:
+        listed = ", ".join(defects[:-1]) + " and " + defects[-1] if len(defects) > 1 else defects[0]
+        said += f": the {listed}{where} may be that rounding"
+    return said + "; move the mesh nearer the origin (subtract its centre) before saving it"

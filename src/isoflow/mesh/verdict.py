@@ -19,6 +19,7 @@ from ..errors import counted
 from ..results import Result
 from ..scale.memory import sized
 from .fills import Fill
+from .grid import rounding_words
 
 #: what the verdict says, first
 VerdictKind = Literal["agree", "disagree", "not_converged", "self_intersecting", "no_solid", "no_reference"]
@@ -27,7 +28,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 #: the facts said after the verdict
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
-                   "zero_area_faces", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
+                   "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
                    "no_mesh_genus"]
 
 
@@ -323,6 +324,8 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "
            f"{'them' if n > 1 else 'it'} where {'they close' if n > 1 else 'it closes'} a split edge (a T-junction): "
            "no crossing" if along else "")),
+    "float64_rounding": lambda near, spacing, median_edge, share, defects=(): rounding_words(
+        near, spacing, median_edge, share, tuple(defects), " above"),
     "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
     "flood_cavities": lambda n: (

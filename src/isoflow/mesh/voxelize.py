@@ -57,7 +57,17 @@ from .fills import (
     unbounded_area,
     unbounded_share,
 )
-from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
+from .grid import (
+    GridTooLarge,
+    check_placement,
+    finest_fit,
+    float64_rounding,
+    grid_fits,
+    grid_need,
+    grid_words,
+    rounding_words,
+    voxel_grid,
+)
 from .load import (  # noqa: F401
     chain_of,
     check_mesh,
@@ -168,6 +178,7 @@ class Solid:
 
         self.strict = strict
         self.fill = fill
+        self.rounding = float64_rounding(v, f)
         edges = census(f, len(v))
         self.defects = defect_counts(*edges[2:])
         faces = f
@@ -265,8 +276,22 @@ class Solid:
 
     def note(self, stats=None) -> str | None:
         """One line on what is unusual about the mesh and the rule that read
-        it; None for a closed, consistently oriented mesh without overlaps,
-        and for a shell (which any surface has)."""
+        it, and on coordinates that float64 holds coarsely against the edges
+        (:func:`~isoflow.mesh.grid.float64_rounding`); None for a closed,
+        consistently oriented mesh without overlaps held finely, and for a
+        shell (which any surface has) held finely."""
+        said = self.defects_note(stats)
+        if self.rounding is None:
+            return said
+        c = self.census
+        found = {"joined edges": self.joined, "boundary edges": c["boundary_edges"],
+                 "non-manifold edges": c["nonmanifold_edges"],
+                 "overlapping layers": stats is not None and stats[0]} if said else {}
+        rounding = rounding_words(**self.rounding, defects=tuple(k for k, n in found.items() if n))
+        return f"{said}; {rounding}" if said else rounding
+
+    def defects_note(self, stats=None) -> str | None:
+        """The defects and the rule that read the mesh, for :meth:`note`."""
         if self.fill != "winding":
             return None
         c = self.census
