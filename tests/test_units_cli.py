@@ -82,6 +82,24 @@ def test_info_text_says_voxel_size_origin_and_unit(tmp_path):
     assert "voxel 0.5x0.75x1.25," in second_line("bare.nii.gz", "--labels")[0]
 
 
+def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_path):
+    # a time series: the fourth axis is frames, not millimetres
+    series = np.repeat((cube() == 1).astype(np.uint8)[..., None], 3, axis=3)
+    img = nib.Nifti1Image(series, np.diag([*PITCH, 1.0]))
+    img.header.set_xyzt_units("mm", "sec")
+    nib.save(img, tmp_path / "t.nii.gz")
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz"), "--json"],
+                          capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    got = json.loads(done.stdout)
+    assert got["unit"] == img.header.get_xyzt_units()[0] and got["pitch"][:3] == list(img.header.get_zooms()[:3])
+    text = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz")],
+                          capture_output=True, text=True).stdout.splitlines()[1]
+    sizes = " x ".join(f"{p:g}" for p in got["pitch"][:3])
+    assert f"{sizes} mm, origin [" in text and text.endswith(
+        f"] mm (4th axis: size {got['pitch'][3]:g}, origin {got['origin'][3]:g})"), text
+
+
 # ------------------------------------------------------------------ TIFF
 
 @pytest.mark.parametrize("written, unit", [("um", MICRO), ("micron", MICRO), ("\\u00B5m", MICRO),

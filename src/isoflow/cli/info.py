@@ -225,8 +225,13 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
     if placed:
         unit = f" {placed['unit']}" if placed["unit"] else ""
         size = f"{'pixel' if r['dimension'] == 2 else 'voxel'} size"
-        lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'])}{unit}, "
-                     f"origin {coordinates(placed['origin'])}{unit}{'' if unit else ' (the file says no unit)'}")
+        # the length unit is of the three spatial axes: a 4D file's fourth
+        # axis (a time series' frames) is said apart, without it
+        space, beyond = min(3, len(placed["pitch"])), len(placed["pitch"]) > 3
+        fourth = (f" (4th axis: size {placed['pitch'][3]:.6g}, origin {placed['origin'][3]:.6g})" if beyond else "")
+        lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'][:space])}{unit}, "
+                     f"origin {coordinates(placed['origin'][:space])}{unit}{'' if unit else ' (the file says no unit)'}"
+                     + fourth)
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
