@@ -345,3 +345,81 @@ def test_bad_choices_are_one_line():
     for text, dims in (("6", 3), ("4", 2)):
         with pytest.raises(IsoflowError, match=f"^connectivity '{text}' is not valid in {dims}D"):
             label_table(image if dims == 3 else image[0], text)
+
+
+def test_auto_takes_the_compiled_pass_from_the_start_it_pays():
+    """The rule of ``method="auto"``: with numba imported, the compiled
+    pass from LABEL_PASS_VOXELS on; without, the NumPy pass while its work
+    (a share per label and the labels' boxes) stays below numba's start."""
+    from isoflow.digital.label_table import LABEL_PASS_VOXELS, NUMBA_START_WORK, compiled_sooner, numpy_work
+
+    assert compiled_sooner(LABEL_PASS_VOXELS, numba_loaded=True)
+    assert not compiled_sooner(LABEL_PASS_VOXELS - 1, numba_loaded=True)
+    few = 100
+    boxes = NUMBA_START_WORK - numpy_work(few, 0)
+    assert not compiled_sooner(2 * LABEL_PASS_VOXELS, False, few, boxes - 1)
+    assert compiled_sooner(2 * LABEL_PASS_VOXELS, False, few, boxes)
+    assert numpy_work(few + 1, boxes) > numpy_work(few, boxes)
+    with pytest.raises(IsoflowError, match="box_voxels"):
+        compiled_sooner(64**3, False)
+
+
+def contacts(rng, size, labels):
+    """Random labels on 2^3 blocks, so that neighbours touch by faces,
+    edges and vertices; every label's voxels compact (a block of its
+    own grid cell) where ``labels`` is a cube."""
+    side = round(labels ** (1 / 3))
+    coarse = rng.integers(0, labels + 1, (size // 2,) * 3)
+    cell = np.arange(size // 2) * side // (size // 2)
+    grid = (cell[:, None, None] * side + cell[None, :, None]) * side + cell[None, None, :] + 1
+    return np.kron(np.where(coarse % 3 == 0, 0, grid), np.ones((2, 2, 2), np.int64)).astype(np.uint16)
+
+
+@needs_numba
+@pytest.mark.parametrize("labels", [8, 27, 1000])
+@pytest.mark.parametrize("conn", [6, 26])
+def test_both_passes_give_one_table_near_the_threshold(rng, labels, conn):
+    """Either side of LABEL_PASS_VOXELS (a 62^3 and a 64^3 image), on few
+    compact labels and on many, the NumPy and compiled tables are equal,
+    and scikit-image's counts and Euler numbers (26) agree with both."""
+    from skimage.measure import regionprops
+
+    for size in (62, 64):
+        image = contacts(rng, size, labels)
+        numpy, compiled = (label_table(image, conn, method=m) for m in ("numpy", "compiled"))
+        assert numpy.keys() == compiled.keys()
+        for key in numpy:
+            assert np.array_equal(numpy[key], compiled[key], equal_nan=key.startswith(("bbox", "centroid"))), key
+        props = {p.label: p for p in regionprops(image)}
+        assert numpy["label"].tolist() == sorted(props)
+        assert numpy["voxels"].tolist() == [props[v].area for v in sorted(props)]
+        if conn == 26:
+            assert numpy["euler_characteristic"].tolist() == [props[v].euler_number for v in sorted(props)]
+
+
+@needs_numba
+@pytest.mark.parametrize(("labels", "numba_started"), [(27, False), (1000, True)])
+def test_a_fresh_process_starts_numba_only_for_many_labels(tmp_path, rng, labels, numba_started):
+    """``isoflow info LABELS --labels`` on a 64^3 image of few compact
+    labels answers without importing numba (its start would take longer
+    than the NumPy pass), and gives the table the compiled pass gives;
+    on many labels it takes the compiled pass."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    image = contacts(rng, 64, labels)
+    path = tmp_path / "labels.npy"
+    np.save(path, image)
+    script = ("import runpy, sys; sys.argv = ['isoflow', 'info', sys.argv[1], '--labels', '--json']\n"
+              "try:\n    runpy.run_module('isoflow', run_name='__main__')\n"
+              "finally:\n    print('numba' in sys.modules, file=sys.stderr)")
+    run = subprocess.run([sys.executable, "-c", script, str(path)], capture_output=True, text=True,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert run.stderr.strip().splitlines()[-1] == str(numba_started), run.stderr
+    rows = json.loads(run.stdout)["labels"]
+    compiled = label_table(image, 6, method="compiled")
+    for key in ("label", "voxels", "euler_characteristic", "b0", "b1", "b2", "energy", "surfaces", "surface_euler",
+                *(f"n-{i}" for i in range(9))):
+        assert [row[key] for row in rows] == compiled[key].tolist(), key

@@ -157,8 +157,10 @@ def label_table(
     method : {"auto", "numpy", "compiled"}
         "compiled": one pass for all labels (numba); "numpy": ``analyze``
         on each label's box plus one voxel; "auto": the compiled pass
-        where numba is installed, unless the image is small and has few
-        labels. A 2D image takes one NumPy pass for all labels
+        where numba is installed, unless the NumPy pass answers before
+        numba would start (few labels with small boxes, in a process
+        that has not imported numba; see :func:`compiled_sooner`). A 2D
+        image takes one NumPy pass for all labels
         (:mod:`isoflow.digital.planar_labels`) whatever the method.
     threads : int, optional
         Threads for the compiled passes (default: ``ISOFLOW_THREADS``,
@@ -239,7 +241,7 @@ def label_table(
     if vol.ndim == 2:
         from .planar_labels import planar_table
 
-        _use_compiled(vol, method)  # the method checked as in 3D
+        _use_compiled(vol, "numpy" if method == "auto" else method)  # the method checked as in 3D
         return planar_table(vol, conn, place.spacing, place.origin, wanted)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
@@ -297,19 +299,103 @@ def as_labels(array, first_layer: int = 0) -> np.ndarray:
     return flat.astype(kind).reshape(vol.shape)
 
 
-#: the one pass over the label image pays numba's start from this many
-#: voxels on; below it, :func:`analyze` on each label's box answers sooner
+#: with numba already imported, the one pass over the label image answers
+#: sooner than :func:`analyze` on each label's box from this many voxels on
 LABEL_PASS_VOXELS = 250_000
+#: the NumPy pass's work (:func:`numpy_work`) that takes as long as
+#: importing numba and loading its cached label kernels, which a process
+#: pays once before the compiled pass's first answer
+NUMBA_START_WORK = 9_000_000
+#: the work of one label's ``analyze`` call beyond its box's voxels, in voxels
+LABEL_WORK = 13_000
+
+
+def numpy_work(labels: int, box_voxels: int) -> int:
+    """What :func:`box_rows` costs, in voxels: a fixed share per label and
+    the voxels of every label's box (plus one voxel round)."""
+    return labels * LABEL_WORK + box_voxels
+
+
+def compiled_sooner(voxels: int, numba_loaded: bool, labels: int | None = None,
+                    box_voxels: int | None = None) -> bool:
+    """Whether ``method="auto"`` takes the compiled pass for an image of
+    ``voxels`` voxels.
+
+    Where numba is already imported (a process that used a compiled pass,
+    or ``isoflow info`` that loaded numba while the file was read), the
+    compiled pass is the sooner from :data:`LABEL_PASS_VOXELS` on. Where it
+    is not, the compiled pass first pays numba's start, which the NumPy
+    pass outruns only on few labels with small boxes: the NumPy pass's
+    cost grows with the labels and their boxes, not with the image, so the
+    choice compares :func:`numpy_work` with :data:`NUMBA_START_WORK`
+    (``labels``: the nonzero labels; ``box_voxels``: their boxes' voxels
+    together, or a lower bound such as the nonzero voxels, which decides
+    for the compiled pass where it already reaches the start's work).
+    On grain maps of 100 labels that is about 140^3 voxels; with 1,000
+    labels or more, or labels scattered over the image, the compiled pass
+    is the sooner from the smallest images on.
+
+    Examples
+    --------
+    >>> compiled_sooner(64**3, numba_loaded=True)
+    True
+    >>> compiled_sooner(64**3, numba_loaded=False, labels=100, box_voxels=3 * 64**3)
+    False
+    >>> compiled_sooner(64**3, numba_loaded=False, labels=1000, box_voxels=3 * 64**3)
+    True
+    """
+    if numba_loaded:
+        return voxels >= LABEL_PASS_VOXELS
+    if labels is None or box_voxels is None:
+        raise IsoflowError("compiled_sooner needs labels and box_voxels where numba is not loaded")
+    return numpy_work(labels, box_voxels) >= NUMBA_START_WORK
 
 
 def _use_compiled(vol: np.ndarray, method: str) -> bool:
+    """The pass to take (see :func:`compiled_sooner`)."""
+    import sys
+
     from ..scale.compiled import METHODS, have_numba
 
     if method not in METHODS:
         raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba: pip install numba")
-    return method == "compiled" or (method == "auto" and have_numba() and vol.size >= LABEL_PASS_VOXELS)
+    if method != "auto" or not have_numba():
+        return method == "compiled"
+    if "numba" in sys.modules or vol.size == 0:
+        return compiled_sooner(vol.size, numba_loaded=True)
+    # the NumPy pass sorts the image before any box, which costs about as
+    # much a voxel as the boxes' analyze: from half the start's work the
+    # sort and the labels' own voxels alone take as long
+    if 2 * vol.size >= NUMBA_START_WORK:
+        return True
+    flat = vol.reshape(-1)
+    if int(flat.min()) < 0 or int(flat.max()) > 4 * flat.size:
+        return True  # labels beyond one count of the voxels: rare enough to take the general pass
+    # the labels and the nonzero voxels (a lower bound of the boxes) in one
+    # count decide on many labels or large ones; else the boxes, from every
+    # other voxel along each axis (an estimate only: both passes give the
+    # same table)
+    counts = np.bincount(flat.astype(np.intp, copy=False), minlength=1)
+    labels = int(np.count_nonzero(counts[1:]))
+    if compiled_sooner(vol.size, False, labels, flat.size - int(counts[0])):
+        return True
+    return compiled_sooner(vol.size, False, labels, every_other_boxes(vol))
+
+
+def every_other_boxes(vol: np.ndarray) -> int:
+    """The voxels of the nonzero labels' boxes (each with one voxel round
+    it, as :func:`box_rows` pads it) estimated from every other voxel
+    along each axis: a label missed there has a box a voxel or two thin."""
+    step = vol[::2, ::2, ::2]
+    flat = step.reshape(-1)
+    order = np.argsort(flat, kind="stable")
+    values, starts = np.unique(flat[order], return_index=True)
+    extent = np.ones((len(starts), vol.ndim), np.int64)
+    for axis, coords in enumerate(np.unravel_index(order, step.shape)):
+        extent[:, axis] = 2 * (np.maximum.reduceat(coords, starts) - np.minimum.reduceat(coords, starts)) + 4
+    return int(np.prod(extent, axis=1)[values != 0].sum())
 
 
 def wanted_labels(labels, dtype) -> np.ndarray:
