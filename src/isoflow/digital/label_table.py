@@ -302,10 +302,12 @@ def as_labels(array, first_layer: int = 0) -> np.ndarray:
 #: with numba already imported, the one pass over the label image answers
 #: sooner than :func:`analyze` on each label's box from this many voxels on
 LABEL_PASS_VOXELS = 250_000
-#: the NumPy pass's work (:func:`numpy_work`) that takes as long as
-#: importing numba and loading its cached label kernels, which a process
-#: pays once before the compiled pass's first answer
-NUMBA_START_WORK = 9_000_000
+#: the NumPy pass's work (:func:`numpy_work`) from which the compiled pass,
+#: with the import of numba and its cached label kernels that a process
+#: pays once before its first answer, is the sooner; somewhat below the
+#: measured tie, as a whole command shows no difference near it and the
+#: compiled pass is then loaded for the next image
+NUMBA_START_WORK = 6_000_000
 #: the work of one label's ``analyze`` call beyond its box's voxels, in voxels
 LABEL_WORK = 13_000
 
@@ -331,7 +333,7 @@ def compiled_sooner(voxels: int, numba_loaded: bool, labels: int | None = None,
     (``labels``: the nonzero labels; ``box_voxels``: their boxes' voxels
     together, or a lower bound such as the nonzero voxels, which decides
     for the compiled pass where it already reaches the start's work).
-    On grain maps of 100 labels that is about 140^3 voxels; with 1,000
+    On grain maps of 100 labels that is about 115^3 voxels; with 1,000
     labels or more, or labels scattered over the image, the compiled pass
     is the sooner from the smallest images on.
 
