@@ -398,18 +398,21 @@ def test_both_passes_give_one_table_near_the_threshold(rng, labels, conn):
 
 
 @needs_numba
-@pytest.mark.parametrize(("labels", "numba_started"), [(27, False), (1000, True)])
-def test_a_fresh_process_starts_numba_only_for_many_labels(tmp_path, rng, labels, numba_started):
+@pytest.mark.parametrize(("labels", "offset", "numba_started"), [(27, 0, False), (1000, 0, True), (27, 2 * 64**3, True)])
+def test_a_fresh_process_starts_numba_only_for_many_labels(tmp_path, rng, labels, offset, numba_started):
     """``isoflow info LABELS --labels`` on a 64^3 image of few compact
     labels answers without importing numba (its start would take longer
     than the NumPy pass), and gives the table the compiled pass gives;
-    on many labels it takes the compiled pass."""
+    on many labels it takes the compiled pass, and on labels beyond the
+    voxel count (whose count would hold an entry per value, 8 bytes a
+    voxel and more) too."""
     import json
     import os
     import subprocess
     import sys
 
-    image = contacts(rng, 64, labels)
+    image = contacts(rng, 64, labels).astype(np.uint32)
+    image[image > 0] += offset
     path = tmp_path / "labels.npy"
     np.save(path, image)
     script = ("import runpy, sys; sys.argv = ['isoflow', 'info', sys.argv[1], '--labels', '--json']\n"

@@ -373,8 +373,11 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     if 2 * vol.size >= NUMBA_START_WORK:
         return True
     flat = vol.reshape(-1)
-    if int(flat.min()) < 0 or int(flat.max()) > 4 * flat.size:
-        return True  # labels beyond one count of the voxels: rare enough to take the general pass
+    if int(flat.min()) < 0 or int(flat.max()) > flat.size:
+        # the count below holds one entry per value up to the largest (8
+        # bytes a voxel at most): labels beyond the voxel count take the
+        # general pass, as do negative ones
+        return True
     # the labels and the nonzero voxels (a lower bound of the boxes) in one
     # count decide on many labels or large ones; else the boxes, from every
     # other voxel along each axis (an estimate only: both passes give the
