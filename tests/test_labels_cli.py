@@ -220,6 +220,31 @@ def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read
     assert info(tmp_path / "labels.zarr", "--labels")[0] == 0
 
 
+def test_a_volume_holding_a_value_that_is_no_label_is_not_offered_labels(tmp_path):
+    """Where the first value named is a label (2) but the volume also holds
+    one that is not (a fraction), the refusal offered --labels, which
+    refuses that other value."""
+
+    def info(path, *extra):
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path), *extra], capture_output=True, text=True)
+        return p.returncode, [line for line in p.stderr.splitlines() if not line.startswith("isoflow info: note: ")]
+
+    volume = np.zeros((8, 8, 8))
+    volume[1:3, 1:3, 1:3] = 2
+    volume[5, 5, 5] = 2.5
+    np.save(tmp_path / "frac.npy", volume)
+    code, err = info(tmp_path / "frac.npy")
+    assert code == 2 and len(err) == 1 and "not a binary volume" in err[0] and "e.g. 2.0" in err[0], err
+    assert "--labels" not in err[0], err
+    assert info(tmp_path / "frac.npy", "--labels")[0] == 2  # what it offered is refused
+    # a label image of whole numbers in a float file is still offered --labels, which reads it
+    volume[5, 5, 5] = 3  # (three values: one nonzero value alone is read as a mask)
+    np.save(tmp_path / "whole.npy", volume)
+    code, err = info(tmp_path / "whole.npy")
+    assert code == 2 and "--labels" in err[0], err
+    assert info(tmp_path / "whole.npy", "--labels")[0] == 0
+
+
 def test_info_labels_of_a_store_notes_chunks_read_as_a_nonzero_fill_value(tmp_path):
     """zarr reads a chunk never written as the fill value: where that is a
     label, the table counts those voxels as it, and says so once, with

@@ -192,8 +192,12 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # integers in memory are most often a label image, which has a table
         # (a command adds its own options to ``bare`` instead)
         table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3)
+        # a value that is no label (NaN, infinite, not whole) anywhere in
+        # the array is refused by a label table too: --labels is not offered
+        values = arr[bad]
+        labels = arr.dtype.kind in "iu" or bool(np.all(np.isfinite(values) & (values == np.round(values))))
         raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare)
+                        bare, every=labels)
     return arr.astype(bool)
 
 
