@@ -177,9 +177,9 @@ def stop_text(stop: Stop) -> str:
         return f"the largest resolution allowed ({stop.limit}, {flag})"
     if stop.kind == "time_limit":
         # the run stops where the time spent plus this estimate passes the
-        # limit, so the estimate alone may be below it: "would take about
-        # 45 s" under a 60 s limit read as a contradiction, and "about 0 s"
-        # for an estimate under half a second as none at all
+        # limit, so the estimate alone may be below the limit: the sentence
+        # says the next grid would end past it, and gives a short estimate
+        # two digits so that it never reads as none at all
         est = stop.estimate or 0.0
         more = f"{est:.0f}" if est >= 10 else f"{est:.2g}"
         return f"the time limit ({stop.limit:g} s, {flag}): {stop.resolution} would end past it (about {more} s more)"
