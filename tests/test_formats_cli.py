@@ -6,6 +6,7 @@ import json
 import re
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -345,6 +346,61 @@ def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp
     assert report["shape"] == list(series.shape[::-1]) and report["voxels"] == np.count_nonzero(stack)
     assert np.allclose(report["pitch"], [x, y, 2.0 if save else 1.0])
     assert report["unit"] == ("\u00b5m" if save else None)
+
+
+@pytest.mark.parametrize("channels", [2, 5])
+def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, channels):
+    """An OME-TIFF of one slice in several channels holds its voxel size in
+    its OME-XML's PhysicalSizeX/Y/Z, not in its resolution tags: the
+    command the refusal gives, run as the user would, saves the channels
+    as slices with the voxel size and unit tifffile reads in the original."""
+    import shlex
+
+    data = (rng.random((1, channels, 6, 7)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={
+        "axes": "ZCYX", "PhysicalSizeX": 0.5, "PhysicalSizeXUnit": "nm", "PhysicalSizeY": 0.25,
+        "PhysicalSizeYUnit": "nm", "PhysicalSizeZ": 3.0, "PhysicalSizeZUnit": "nm"})
+    with tifffile.TiffFile(tmp_path / "c.ome.tif") as tif:
+        assert tif.series[0].axes == "CYX"
+        pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.ome.tif")], capture_output=True,
+                          text=True)
+    assert done.returncode == 2 and done.stdout == ""
+    line, = done.stderr.splitlines()
+    assert f"axis 'c' has {channels} entries" in line and "Traceback" not in line
+    command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
+    assert command[:2] == ["python", "-c"]
+    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
+    report = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.ome_stack.tif"),
+                                        "--json"], capture_output=True, text=True, check=True).stdout)
+    assert report["shape"] == [7, 6, channels] and report["voxels"] == np.count_nonzero(data)
+    assert report["pitch"] == [pixels[f"PhysicalSize{axis}"] for axis in "XYZ"]
+    assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
+
+
+@pytest.mark.parametrize("slices", [3, 4])
+def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(tmp_path, rng, slices):
+    """``tifffile.imwrite(f, a)`` of a (3 or 4, Y, X) array stores one RGB(A)
+    image in planes, and every Python reader gives ``a`` back: ``isoflow
+    info --json``, run as the user runs it, reports that array's shape,
+    voxels and Euler characteristic (scikit-image's), with one warning line
+    that ``--quiet`` keeps."""
+    measure = pytest.importorskip("skimage.measure")
+    stack = (rng.random((slices, 12, 10)) < 0.5).astype(np.uint8)
+    with warnings.catch_warnings():  # tifffile's notice that a later version writes such data as pages
+        warnings.simplefilter("ignore", DeprecationWarning)
+        tifffile.imwrite(tmp_path / "t.tif", stack)
+    read = tifffile.imread(tmp_path / "t.tif")
+    for quiet in ([], ["--quiet"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.tif"), "--json", *quiet],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        line, = done.stderr.splitlines()
+        assert line.startswith(f"isoflow info: warning: {tmp_path / 't.tif'}: ")
+        assert "PhotometricInterpretation 2" in line and "PlanarConfiguration 2" in line and "colours" in line
+        report = json.loads(done.stdout)
+        assert report["shape"] == list(read.shape[::-1]) and report["voxels"] == np.count_nonzero(read)
+        assert report["euler_characteristic"] == measure.euler_number(read != 0, connectivity=1)
 
 
 def moving_ball() -> np.ndarray:
