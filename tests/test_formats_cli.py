@@ -316,31 +316,33 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
     assert info(capsys, tmp_path / "pages.tif")["shape"] == [12, 16, 5]
 
 
+@pytest.mark.parametrize("channels", [2, 3, 5])
 @pytest.mark.parametrize("save", [{}, {"resolution": (2, 4), "metadata": {"axes": "ZCYX", "unit": "um", "spacing": 2.0}}])
-def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save):
-    """tifffile's ``imwrite(f, stack, imagej=True)`` stores a (3, Y, X) stack
-    as 3 channels, which Fiji opens as channels and isoflow refuses; the
+def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save, channels):
+    """tifffile's ``imwrite(f, stack, imagej=True)`` stores a (N, Y, X) stack
+    as N channels, which Fiji opens as channels and isoflow refuses; the
     refusal, one line, gives the command that re-saves them as slices, and
-    what it writes is read as those slices, calibrated as before."""
+    what it writes is read as those slices, with the pixel size tifffile
+    reads in the original."""
     import shlex
 
-    stack = (labels[:, :, :3] == 3).T.astype(np.uint8)  # 3 slices of 16x14, as (z, y, x)
-    data = stack[None] if save else stack  # ZCYX: one slice of 3 channels
+    stack = (labels[:, :, :channels] == 3).T.astype(np.uint8)  # N slices of 16x14, as (z, y, x)
+    data = stack[None] if save else stack  # ZCYX: one slice of N channels
     tifffile.imwrite(tmp_path / "c.tif", data, imagej=True, **save)
     with tifffile.TiffFile(tmp_path / "c.tif") as tif:
-        assert tif.series[0].axes == "CYX" and tif.imagej_metadata["channels"] == 3
+        assert tif.series[0].axes == "CYX" and tif.imagej_metadata["channels"] == channels
+        x, y = (d / n for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
     done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.tif")], capture_output=True,
                           text=True)
     assert done.returncode == 2 and done.stdout == ""
     line, = done.stderr.splitlines()
-    assert "c.tif: axis 'c' has 3 entries" in line and "Traceback" not in line
+    assert f"c.tif: axis 'c' has {channels} entries" in line and "Traceback" not in line
     command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
     assert command[:2] == ["python", "-c"]
     subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
     with tifffile.TiffFile(tmp_path / "c_stack.tif") as tif:
         series = tif.series[0]
         assert series.axes == "ZYX" and series.shape == stack.shape
-        x, y = (d / n for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
     report = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c_stack.tif"),
                                         "--json"], capture_output=True, text=True, check=True).stdout)
     assert report["shape"] == list(series.shape[::-1]) and report["voxels"] == np.count_nonzero(stack)
