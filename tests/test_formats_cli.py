@@ -316,6 +316,24 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
     assert info(capsys, tmp_path / "pages.tif")["shape"] == [12, 16, 5]
 
 
+def resaved_as_the_refusal_says(path, channels: int) -> dict:
+    """The ``info --json`` report of ``path``'s channels saved as slices by
+    the command that the refusal of ``path`` (one line, exit 2) gives, run
+    as the user runs it, beside ``path`` as ``NAME_stack.tif``."""
+    import shlex
+
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path)], capture_output=True, text=True)
+    assert done.returncode == 2 and done.stdout == ""
+    line, = done.stderr.splitlines()
+    assert f"{path.name}: axis 'c' has {channels} entries" in line and "Traceback" not in line
+    command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
+    assert command[:2] == ["python", "-c"]
+    subprocess.run([sys.executable, *command[1:]], check=True, cwd=path.parent)
+    stack = path.with_name(path.name.rsplit(".", 1)[0] + "_stack.tif")
+    return json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(stack), "--json"],
+                                     capture_output=True, text=True, check=True).stdout)
+
+
 @pytest.mark.parametrize("channels", [2, 3, 5])
 @pytest.mark.parametrize("save", [{}, {"resolution": (2, 4), "metadata": {"axes": "ZCYX", "unit": "um", "spacing": 2.0}}])
 def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save, channels):
@@ -324,27 +342,16 @@ def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp
     refusal, one line, gives the command that re-saves them as slices, and
     what it writes is read as those slices, with the pixel size tifffile
     reads in the original."""
-    import shlex
-
     stack = (labels[:, :, :channels] == 3).T.astype(np.uint8)  # N slices of 16x14, as (z, y, x)
     data = stack[None] if save else stack  # ZCYX: one slice of N channels
     tifffile.imwrite(tmp_path / "c.tif", data, imagej=True, **save)
     with tifffile.TiffFile(tmp_path / "c.tif") as tif:
         assert tif.series[0].axes == "CYX" and tif.imagej_metadata["channels"] == channels
         x, y = (d / n for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.tif")], capture_output=True,
-                          text=True)
-    assert done.returncode == 2 and done.stdout == ""
-    line, = done.stderr.splitlines()
-    assert f"c.tif: axis 'c' has {channels} entries" in line and "Traceback" not in line
-    command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
-    assert command[:2] == ["python", "-c"]
-    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
+    report = resaved_as_the_refusal_says(tmp_path / "c.tif", channels)
     with tifffile.TiffFile(tmp_path / "c_stack.tif") as tif:
         series = tif.series[0]
         assert series.axes == "ZYX" and series.shape == stack.shape
-    report = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c_stack.tif"),
-                                        "--json"], capture_output=True, text=True, check=True).stdout)
     assert report["shape"] == list(series.shape[::-1]) and report["voxels"] == np.count_nonzero(stack)
     assert np.allclose(report["pitch"], [x, y, 2.0 if save else 1.0])
     assert report["unit"] == ("\u00b5m" if save else None)
@@ -356,8 +363,6 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
     its OME-XML's PhysicalSizeX/Y/Z, not in its resolution tags: the
     command the refusal gives, run as the user would, saves the channels
     as slices with the voxel size and unit tifffile reads in the original."""
-    import shlex
-
     data = (rng.random((1, channels, 6, 7)) < 0.5).astype(np.uint8)
     tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={
         "axes": "ZCYX", "PhysicalSizeX": 0.5, "PhysicalSizeXUnit": "nm", "PhysicalSizeY": 0.25,
@@ -365,16 +370,7 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
     with tifffile.TiffFile(tmp_path / "c.ome.tif") as tif:
         assert tif.series[0].axes == "CYX"
         pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.ome.tif")], capture_output=True,
-                          text=True)
-    assert done.returncode == 2 and done.stdout == ""
-    line, = done.stderr.splitlines()
-    assert f"axis 'c' has {channels} entries" in line and "Traceback" not in line
-    command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
-    assert command[:2] == ["python", "-c"]
-    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
-    report = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.ome_stack.tif"),
-                                        "--json"], capture_output=True, text=True, check=True).stdout)
+    report = resaved_as_the_refusal_says(tmp_path / "c.ome.tif", channels)
     assert report["shape"] == [7, 6, channels] and report["voxels"] == np.count_nonzero(data)
     assert report["pitch"] == [pixels[f"PhysicalSize{axis}"] for axis in "XYZ"]
     assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
