@@ -63,6 +63,47 @@ def test_info_labels_choice_keeps_its_order_and_notes_absent_labels(tmp_path, ca
     assert "1 of the labels asked for does not occur (70000)" in capsys.readouterr().err
 
 
+def test_labels_asked_for_that_do_not_occur_are_a_warning_quiet_keeps_and_json_lists(tmp_path, segmentation):
+    """A label asked for that no voxel has (or the type cannot hold) was a
+    note, which --quiet dropped and --json did not say: a quiet run or a
+    script never learnt its table lacked a row it asked for. It is a
+    warning line, under --quiet too, and --json lists them as ``absent``;
+    the CSV, the JSON's ``labels`` and the surfaces hold the labels that
+    occur alone."""
+    path = tmp_path / "seg.npy"
+    np.save(path, segmentation)
+    present = set(np.unique(segmentation).tolist())
+    asked = [9, 40, 2, 70000, 3, 41]  # 70000: beyond uint16
+    absent = [v for v in asked if v not in present]
+    rows = [v for v in asked if v in present]
+    assert absent == [40, 70000, 41] and rows == [9, 2, 3]
+    spec = ",".join(map(str, asked))
+    line = f"warning: {path}: 3 of the labels asked for do not occur (40, 70000, 41)"
+
+    def isoflow(*args):
+        p = subprocess.run([sys.executable, "-m", "isoflow", *map(str, args), "--quiet"], capture_output=True,
+                           text=True)
+        assert p.returncode == 0, p.stderr
+        return p.stdout, p.stderr.splitlines()
+
+    out, err = isoflow("info", path, "--labels", spec, "--json", "--csv", tmp_path / "seg.csv")
+    assert err == [f"isoflow info: {line}"]
+    report = json.loads(out)
+    assert report["absent"] == absent
+    assert [r["label"] for r in report["labels"]] == rows
+    with open(tmp_path / "seg.csv", newline="") as fh:
+        assert [int(r["label"]) for r in csv.DictReader(fh)] == rows
+    out, err = isoflow("info", path, "--labels", "9,2", "--json")
+    assert (json.loads(out)["absent"], err) == ([], [])
+    assert json.loads(isoflow("info", path, "--labels", "--json")[0])["absent"] == []
+    out, err = isoflow("surface", path, "--labels", spec, "-o", f"{tmp_path}/each/", "--suffix", ".ply")
+    assert err == [f"isoflow surface: {line}"]
+    assert sorted(f.name for f in (tmp_path / "each").iterdir()) == sorted(f"label_{v}.ply" for v in rows)
+    out, err = isoflow("surface", path, "--labels", spec, "-o", tmp_path / "seg.glb")
+    assert err == [f"isoflow surface: {line}"]
+    assert len(trimesh.load(tmp_path / "seg.glb").geometry) == len(rows)
+
+
 def test_a_float_label_file_names_the_voxel_that_is_no_label(tmp_path, capsys, segmentation):
     scaled = segmentation.astype(np.float16)  # NIfTI's scaling gives floats; float16 warned of an overflow
     np.save(tmp_path / "f.npy", scaled)
