@@ -316,12 +316,12 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     'or, if every voxel holds a whole number, write a closed surface per label with --labels'
     """
     ndim = exc.ndim if ndim is None else ndim
-    every = every and exc.every
+    table = exc.every if every else False
     offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
-    if every is None:  # (not known: said as a condition, not a promise)
+    if table is None:  # (not known: said as a condition, not a promise)
         offer = offer.replace("or ", "or, if every voxel holds a whole number, ", 1)
-    options = ", or select one label with --label N (label=N)" + (f", {offer}" if every is not False else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=every, ndim=ndim)
+    options = ", or select one label with --label N (label=N)" + (f", {offer}" if table is not False else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim)
 
 
 def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:
