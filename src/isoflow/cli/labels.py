@@ -458,7 +458,10 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         if target[0] == "dir" or not args.no_check:
             obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
                                 origin=image.origin)
-        meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
+        # the read-back compares the file's genus with the table's surfaces
+        # (counted from the pieces, not from this mesh), as info --labels prints them
+        surfaces = None if args.no_check else [{"genus": g} for g in table["genera"][r]]
+        meshes[r] = (names[r], mesh, obj, surfaces)
 
 
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:
