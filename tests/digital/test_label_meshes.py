@@ -99,3 +99,21 @@ def test_batch_glb_parts_are_each_parts_own(rng, monkeypatch, origin):
                     np.testing.assert_array_equal(frame[0], want[3][0])
                     np.testing.assert_array_equal(frame[1], want[3][1])
     assert frames > 0 or origin[0] < 1e6
+
+
+def test_batches_take_the_compiled_mesh_on_their_voxels_together():
+    """numba's start is paid once for all the batches: boxes each below the
+    compiled mesh's threshold, but above it together, are meshed compiled
+    (where one volume of their size would be), and so are all of them."""
+    from isoflow.digital.surface import mesh_method
+    from isoflow.scale.compiled import have_numba, least_voxels
+
+    side = 40
+    box = np.array([side - 1, side, side])  # with its empty layer, side^3 voxels
+    count = least_voxels(surfaces=True) // side**3 + 1
+    assert mesh_method(np.zeros((side, side, side), bool)) == "numpy"
+    together = np.zeros((count * side, side, side), bool)
+    want = mesh_method(together)
+    assert want == ("compiled" if have_numba() else "numpy")
+    assert lm.batches_method(np.tile(box, (count, 1))) == want
+    assert lm.batches_method(np.tile(box, (count - 2, 1))) == "numpy"

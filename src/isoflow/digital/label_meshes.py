@@ -119,6 +119,7 @@ def label_batches(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.
     """
     lo, hi = np.asarray(lo, np.int64).reshape(-1, 3), np.asarray(hi, np.int64).reshape(-1, 3)
     extent = hi - lo
+    method = batches_method(extent, method)
     order = np.argsort(-(extent[:, 1] * extent[:, 2]), kind="stable")
     at = 0
     while at < len(order):
@@ -135,6 +136,28 @@ def label_batches(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.
             ny, nz, nx = wide, deep, nx + int(extent[t, 0]) + 1
             at += 1
         yield _batch(image, labels, lo, extent, rows, (nx, ny, nz), connectivity, method)
+
+
+def batches_method(extent: np.ndarray, method: Method = "auto") -> Method:
+    """How every batch of boxes of ``extent`` (one row per box) is meshed:
+    ``"auto"`` decides once for all of them, on their voxels together (each
+    box and its empty layer), as :func:`~isoflow.digital.surface.mesh_method`
+    decides for one volume: numba's start is paid once for every batch, so
+    many batches each below the compiled passes' threshold take them
+    together.
+
+    Examples
+    --------
+    >>> few = np.array([[4, 4, 4]] * 10)
+    >>> batches_method(few), batches_method(few, "compiled")
+    ('numpy', 'compiled')
+    """
+    from ..scale.compiled import have_numba, least_voxels
+
+    if method != "auto":
+        return method
+    voxels = int(((extent[:, 0] + 1) * extent[:, 1] * extent[:, 2]).sum()) if len(extent) else 0
+    return "compiled" if voxels >= least_voxels(surfaces=True) and have_numba() else "numpy"
 
 
 def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, int], connectivity: int,
@@ -155,16 +178,22 @@ def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, in
     # own, the empty layer after it has no vertex; a midpoint lies within)
     slot_of_layer = np.repeat(np.arange(len(rows)), np.diff(starts))
     slot = slot_of_layer[np.floor(mesh.vertices[:, 0]).astype(np.int64)]
-    vorder = np.argsort(slot, kind="stable")
-    new_index = np.empty(len(vorder), np.int64)
-    new_index[vorder] = np.arange(len(vorder))
-    vfirst = np.searchsorted(slot[vorder], np.arange(len(rows) + 1))
+    if len(slot) and (slot[1:] >= slot[:-1]).all():
+        # the compiled passes give the vertices layer by layer, so part by part already
+        new_index, vslot = np.arange(len(slot)), slot  # (vslot: each new vertex's part)
+        vertices, config, sheet = mesh.vertices.copy(), mesh.config, mesh.sheet
+    else:
+        vorder = np.argsort(slot, kind="stable")
+        new_index = np.empty(len(vorder), np.int64)
+        new_index[vorder] = np.arange(len(vorder))
+        vertices, config, sheet = mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder]
+        vslot = slot[vorder]
+    vfirst = np.searchsorted(vslot, np.arange(len(rows) + 1))
     face_slot = slot[mesh.faces[:, 0]]
     forder = np.argsort(face_slot, kind="stable")
     ffirst = np.searchsorted(face_slot[forder], np.arange(len(rows) + 1))
     # every part's arrays at once, in its box's units and numbering
-    vertices, config, sheet = mesh.vertices[vorder], mesh.config[vorder], mesh.sheet[vorder]
-    vertices[:, 0] -= starts[slot[vorder]]
+    vertices[:, 0] -= starts[vslot]
     idx = index_dtype(int(np.diff(vfirst).max(initial=0)))
     local = new_index - vfirst[slot]  # each vertex's number within its part
     midpoint = mesh.edge_midpoint[forder]
