@@ -77,3 +77,29 @@ def test_scene_nodes_placed_as_trimesh_places_them(tmp_path, nested):
         np.testing.assert_allclose(vertices, trimesh.transform_points(tm.vertices, transform), atol=1e-9)
     if nested:  # the ball under the box: both transforms apply
         np.testing.assert_allclose(nodes["ball"][0].mean(axis=0), (move @ turn)[:3, 3], atol=1e-6)
+
+
+def test_shared_positions_counts_the_positions_trimesh_welds(rng):
+    """The positions that carry two mesh vertices or more (what a reader of
+    an STL welds): trimesh's merge of the mesh's own vertices removes one
+    vertex for each extra copy, on boundary meshes of random objects with
+    edge and vertex contacts at 6 and 26, away from the origin too."""
+    from types import SimpleNamespace
+
+    from isoflow.mesh.export import shared_positions
+
+    seen = 0
+    for t in range(16):
+        vol = rng.random((6, 5, 7)) < 0.45
+        mesh = boundary_mesh(vol, 6 if t % 2 else 26)
+        vertices = np.asarray(mesh.vertices, float) - (3.0 if t % 3 else 0.0)
+        keys = np.round(2 * vertices).astype(np.int64)
+        _, counts = np.unique(keys, axis=0, return_counts=True)
+        want = int(np.count_nonzero(counts > 1))
+        assert shared_positions(SimpleNamespace(vertices=vertices)) == want, t
+        merged = trimesh.Trimesh(vertices, np.zeros((0, 3), np.int64), process=False)
+        merged.merge_vertices(merge_tex=True, merge_norm=True)
+        assert len(vertices) - len(merged.vertices) == (counts - 1).sum()
+        seen += want
+    assert seen > 0
+    assert shared_positions(SimpleNamespace(vertices=np.zeros((0, 3)))) == 0

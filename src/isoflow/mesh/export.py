@@ -656,7 +656,16 @@ def shared_positions(mesh) -> int:
     weld them by position."""
     if len(mesh.vertices) == 0:
         return 0
-    # lattice points and edge midpoints are multiples of 1/2: exact keys
+    # lattice points and edge midpoints are multiples of 1/2: exact keys,
+    # one integer each where their box's cells can be numbered in int64
+    # (a sort of numbers, not of rows)
     keys = np.round(2 * mesh.vertices).astype(np.int64)
-    _, counts = np.unique(keys, axis=0, return_counts=True)
-    return int(np.count_nonzero(counts > 1))
+    lo = keys.min(axis=0)
+    span = keys.max(axis=0) - lo + 1
+    if float(np.prod(span.astype(np.float64))) >= 2.0**62:
+        _, counts = np.unique(keys, axis=0, return_counts=True)
+        return int(np.count_nonzero(counts > 1))
+    flat = np.sort(np.ravel_multi_index(tuple((keys - lo).T), tuple(int(n) for n in span)))
+    again = flat[1:] == flat[:-1]
+    # a position held twice or more: where a run of equal keys starts repeating
+    return int(np.count_nonzero(again & np.concatenate([[True], ~again[:-1]])))
