@@ -8,7 +8,7 @@ import pytest
 import trimesh
 
 from isoflow.digital.surface import boundary_mesh
-from isoflow.mesh.node_topology import node_topology
+from isoflow.mesh.node_topology import node_topology, node_volumes
 from isoflow.mesh.readback import scene_nodes
 
 
@@ -37,7 +37,11 @@ def test_every_node_as_trimesh_measures_it_alone(rng):
     parts = meshes(rng, 12)
     vfirst = np.concatenate([[0], np.cumsum([len(v) for v, _ in parts])])
     ffirst = np.concatenate([[0], np.cumsum([len(f) for _, f in parts])])
-    found = node_topology(np.concatenate([f + at for (_, f), at in zip(parts, vfirst)]), vfirst, ffirst)
+    faces = np.concatenate([f + at for (_, f), at in zip(parts, vfirst)])
+    found = node_topology(faces, vfirst, ffirst)
+    # far from the origin and in small units, as a world-placed node
+    units = np.full(len(parts), 0.25)
+    volumes = node_volumes(np.concatenate([v for v, _ in parts]) * 0.25 + 1e5, faces, vfirst, ffirst, units)
     assert found["closed"][:12].all() and not found["closed"][12:16].any() and found["closed"][16]
     for t, (vertices, triangles) in enumerate(parts):
         tm = trimesh.Trimesh(vertices, triangles, process=False)
@@ -45,8 +49,10 @@ def test_every_node_as_trimesh_measures_it_alone(rng):
         used = np.count_nonzero(tm.referenced_vertices)
         assert found["vertices"][t] == used
         assert found["bodies"][t] == tm.body_count - (len(vertices) - used), t
+        assert found["edges"][t] == len(tm.edges_unique), t
+        assert found["euler"][t] == tm.euler_number, t
         if found["closed"][t]:
-            assert found["euler"][t] == tm.euler_number, t
+            assert volumes[t] == pytest.approx(tm.volume, rel=1e-12), t  # trimesh's, in voxel units
 
 
 def test_a_triangle_naming_another_nodes_vertex_is_not_closed():
@@ -55,6 +61,10 @@ def test_a_triangle_naming_another_nodes_vertex_is_not_closed():
     faces[5, 0] = 2  # the second node's triangle on the first node's vertex
     found = node_topology(faces, np.array([0, 4, 8]), np.array([0, 4, 8]))
     assert found["closed"].tolist() == [True, False] and found["bodies"].tolist() == [1, -1]
+    assert found["edges"].tolist() == [6, -1]
+    corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    volumes = node_volumes(np.concatenate([corners, corners]), faces, [0, 4, 8], [0, 4, 8])
+    assert volumes[0] == pytest.approx(1 / 6) and np.isnan(volumes[1])
 
 
 @pytest.mark.parametrize("nested", [False, True])

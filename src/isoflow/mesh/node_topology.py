@@ -1,6 +1,7 @@
 """The topology of many disjoint triangle meshes at once: the nodes of a
 scene as a reader gives them back, each closed or not, its Euler number
-and its bodies, in one compiled pass over their triangles.
+and its bodies, in one compiled pass over their triangles; and the volume
+each encloses (:func:`node_volumes`).
 
 The read-back of ``surface --labels -o OUT.glb`` measures every label's
 node of the file as trimesh parsed it. trimesh's own figures
@@ -15,8 +16,9 @@ definitions:
   which run along it in opposite directions (trimesh's watertight and
   consistently wound): each directed edge ``a -> b`` occurs once, its
   reverse ``b -> a`` once, and no triangle repeats a vertex;
-* *Euler number* of a closed node: ``V - E + F`` with ``E = 3F / 2``, its
-  vertices counted where a triangle uses them;
+* *Euler number*: ``V - E + F``, its vertices counted where a triangle
+  uses them and its edges once each (trimesh's ``euler_number``, over
+  its ``edges_unique``); ``E = 3F / 2`` where it is closed;
 * *bodies*: the components of the graph of its triangles' edges, over the
   vertices some triangle uses (trimesh's ``body_count`` less its unused
   vertices).
@@ -40,10 +42,10 @@ def _root(parent, v):
 
 @njit(cache=True, nogil=True)
 def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
-    """``(closed, used vertices, bodies)`` of one node: its triangles
-    ``faces[f0:f1]`` on the vertices ``v0 .. v0 + nv - 1`` (-1s where a
-    triangle names a vertex outside them). ``start``, ``heads``, ``parent``
-    and ``used``: scratch of the largest node's size."""
+    """``(closed, used vertices, bodies, edges)`` of one node: its
+    triangles ``faces[f0:f1]`` on the vertices ``v0 .. v0 + nv - 1`` (-1s
+    where a triangle names a vertex outside them). ``start``, ``heads``,
+    ``parent`` and ``used``: scratch of the largest node's size."""
     for v in range(nv + 1):
         start[v] = 0
     for v in range(nv):
@@ -53,7 +55,7 @@ def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
         for c in range(3):
             a = faces[f, c] - v0
             if a < 0 or a >= nv:
-                return False, -1, -1
+                return False, -1, -1, -1
             start[a + 1] += 1
             used[a] = True
     for v in range(nv):
@@ -73,29 +75,30 @@ def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
     for v in range(nv, 0, -1):
         start[v] = start[v - 1]
     start[0] = 0
+    edges = 0
     for a in range(nv):
-        if not closed:
-            break
         for e in range(start[a], start[a + 1]):
             b = heads[e]
-            once, back = 0, 0
+            once, first, back = 0, True, 0
             for g in range(start[a], start[a + 1]):
-                once += heads[g] == b
+                if heads[g] == b:
+                    once += 1
+                    first = first and g >= e
             for g in range(start[b], start[b + 1]):
                 back += heads[g] == a
-            if once != 1 or back != 1:
-                closed = False
-                break
+            # an edge counted once: at its smaller end, or at the only end it runs from
+            edges += first and (a <= b or back == 0)
+            closed = closed and once == 1 and back == 1
     vertices, bodies = 0, 0
     for v in range(nv):
         if used[v]:
             vertices += 1
             bodies += _root(parent, v) == v
-    return closed, vertices, bodies
+    return closed, vertices, bodies, edges
 
 
 @njit(cache=True, nogil=True)
-def _nodes(faces, vfirst, ffirst, closed, vertices, bodies):
+def _nodes(faces, vfirst, ffirst, closed, vertices, bodies, edges):
     """:func:`_node` of every node ``t``: vertices ``vfirst[t] ..
     vfirst[t + 1] - 1``, triangles ``ffirst[t] .. ffirst[t + 1] - 1``."""
     n = len(vfirst) - 1
@@ -108,8 +111,8 @@ def _nodes(faces, vfirst, ffirst, closed, vertices, bodies):
     parent = np.empty(most_v, np.int64)
     used = np.empty(most_v, np.bool_)
     for t in range(n):
-        closed[t], vertices[t], bodies[t] = _node(faces, vfirst[t], vfirst[t + 1] - vfirst[t], ffirst[t],
-                                                  ffirst[t + 1], start, heads, parent, used)
+        closed[t], vertices[t], bodies[t], edges[t] = _node(faces, vfirst[t], vfirst[t + 1] - vfirst[t], ffirst[t],
+                                                            ffirst[t + 1], start, heads, parent, used)
 
 
 def node_topology(faces: np.ndarray, vfirst: np.ndarray, ffirst: np.ndarray) -> dict[str, np.ndarray]:
@@ -130,9 +133,10 @@ def node_topology(faces: np.ndarray, vfirst: np.ndarray, ffirst: np.ndarray) -> 
     -------
     dict of numpy.ndarray
         Per node: ``closed`` (bool), ``vertices`` (those its triangles
-        use), ``euler`` (``vertices - F / 2``, meaningful where closed) and
-        ``bodies``; a node whose triangles name a vertex not its own is not
-        closed and has ``vertices`` and ``bodies`` -1.
+        use), ``edges`` (distinct, whichever way they run), ``euler``
+        (``vertices - edges + F``) and ``bodies``; a node whose triangles
+        name a vertex not its own is not closed and has ``vertices``,
+        ``edges`` and ``bodies`` -1.
 
     Examples
     --------
@@ -152,6 +156,81 @@ def node_topology(faces: np.ndarray, vfirst: np.ndarray, ffirst: np.ndarray) -> 
     faces = np.ascontiguousarray(faces, np.int64).reshape(-1, 3)
     vfirst, ffirst = np.asarray(vfirst, np.int64), np.asarray(ffirst, np.int64)
     n = len(vfirst) - 1
-    closed, vertices, bodies = np.zeros(n, np.bool_), np.zeros(n, np.int64), np.zeros(n, np.int64)
-    _nodes(faces, vfirst, ffirst, closed, vertices, bodies)
-    return {"closed": closed, "vertices": vertices, "euler": vertices - np.diff(ffirst) // 2, "bodies": bodies}
+    closed, vertices, bodies, edges = (np.zeros(n, np.bool_), np.zeros(n, np.int64), np.zeros(n, np.int64),
+                                       np.zeros(n, np.int64))
+    _nodes(faces, vfirst, ffirst, closed, vertices, bodies, edges)
+    return {"closed": closed, "vertices": vertices, "edges": edges, "euler": vertices - edges + np.diff(ffirst),
+            "bodies": bodies}
+
+
+@njit(cache=True, nogil=True)
+def _volumes(vertices, faces, vfirst, ffirst, units, out):
+    """:func:`node_volumes` into ``out``."""
+    for t in range(len(vfirst) - 1):
+        v0, v1 = vfirst[t], vfirst[t + 1]
+        mx, my, mz = 0.0, 0.0, 0.0
+        for v in range(v0, v1):
+            mx += vertices[v, 0]
+            my += vertices[v, 1]
+            mz += vertices[v, 2]
+        n = max(v1 - v0, 1)
+        mx, my, mz = mx / n, my / n, mz / n
+        u = units[t]
+        total = 0.0
+        for f in range(ffirst[t], ffirst[t + 1]):
+            a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+            if min(a, b, c) < v0 or max(a, b, c) >= v1:
+                total = np.nan
+                break
+            ax, ay, az = (vertices[a, 0] - mx) / u, (vertices[a, 1] - my) / u, (vertices[a, 2] - mz) / u
+            bx, by, bz = (vertices[b, 0] - mx) / u, (vertices[b, 1] - my) / u, (vertices[b, 2] - mz) / u
+            cx, cy, cz = (vertices[c, 0] - mx) / u, (vertices[c, 1] - my) / u, (vertices[c, 2] - mz) / u
+            total += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
+        out[t] = total / 6.0
+
+
+def node_volumes(vertices: np.ndarray, faces: np.ndarray, vfirst: np.ndarray, ffirst: np.ndarray,
+                 units: np.ndarray | float = 1.0) -> np.ndarray:
+    """The signed volume each node's triangles enclose (the divergence
+    theorem: a sixth of the sum of ``a . (b x c)``), in its ``units`` cubed,
+    about the mean of its vertices (far from the origin, triple products
+    of world coordinates cancel to a few digits).
+
+    Parameters
+    ----------
+    vertices : numpy.ndarray
+        ``(V, 3)`` positions of every node's vertices, node after node.
+    faces, vfirst, ffirst : numpy.ndarray
+        As for :func:`node_topology` (the triangles on one numbering of
+        all the vertices).
+    units : numpy.ndarray or float
+        Per node (or one for all), the length the volume is counted in.
+
+    Returns
+    -------
+    numpy.ndarray
+        Per node, its volume in ``units`` cubed: positive for a closed
+        surface wound outward (counter-clockwise seen from outside); NaN
+        for a node whose triangles name a vertex not its own.
+
+    Examples
+    --------
+    A tetrahedron of volume 1/6, and a unit cube in units of 1/2:
+
+    >>> import numpy as np
+    >>> tet = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> corners = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    >>> import trimesh
+    >>> cube = trimesh.creation.box()
+    >>> vertices = np.concatenate([corners, cube.vertices])
+    >>> faces = np.concatenate([tet, cube.faces + 4])
+    >>> node_volumes(vertices, faces, [0, 4, 12], [0, 4, 16], [1.0, 0.5]).round(6).tolist()
+    [0.166667, 8.0]
+    """
+    vfirst, ffirst = np.asarray(vfirst, np.int64), np.asarray(ffirst, np.int64)
+    n = len(vfirst) - 1
+    units = np.broadcast_to(np.asarray(units, np.float64), (n,)).copy()
+    out = np.zeros(n, np.float64)
+    _volumes(np.ascontiguousarray(vertices, np.float64).reshape(-1, 3),
+             np.ascontiguousarray(faces, np.int64).reshape(-1, 3), vfirst, ffirst, units, out)
+    return out

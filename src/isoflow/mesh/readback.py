@@ -135,12 +135,17 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
     import trimesh
 
     path = Path(path)
-    if path.suffix.lower() == ".ply" and not weld:
+    if path.suffix.lower() in (".ply", ".stl"):
+        # the format's own reader, whose arrays make the mesh as they are
+        # (trimesh.load of an STL copies the mesh twice through a scene)
         from trimesh.exchange.ply import load_ply
+        from trimesh.exchange.stl import load_stl
 
         with open(path, "rb") as fh:
-            kw = load_ply(fh)
+            kw = (load_ply if path.suffix.lower() == ".ply" else load_stl)(fh)
         tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
+        if weld:
+            tm = weld_equal_positions(tm)
     else:
         import warnings
 
@@ -155,7 +160,7 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
 def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
     """The figures of :func:`trimesh_figures` of a trimesh mesh (``area``:
     with its surface area, as an STL's read-back needs)."""
-    from .node_topology import node_topology
+    from .node_topology import node_topology, node_volumes
 
     faces = np.asarray(tm.faces, np.int64).reshape(-1, 3)
     # trimesh's figures (is_watertight and is_winding_consistent, V - E + F,
@@ -163,20 +168,20 @@ def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
     # arrays, where trimesh sorts every edge (most of a large read-back)
     topology = node_topology(faces, [0, len(tm.vertices)], [0, len(faces)])
     closed = bool(topology["closed"][0])
-    # open, the edges are counted by trimesh itself (only a broken file)
-    euler = int(topology["euler"][0]) if closed else int(tm.euler_number)
-    bodies = int(topology["bodies"][0])
-    if bodies < 0:  # a triangle on a vertex the file does not hold: trimesh's own count
+    euler, bodies = int(topology["euler"][0]), int(topology["bodies"][0])
+    if bodies < 0:  # a triangle on a vertex the file does not hold: trimesh's own counts
+        euler = int(tm.euler_number)
         bodies = int(tm.body_count) - int(np.count_nonzero(~tm.referenced_vertices))
     genus = bodies - euler // 2 if closed and euler % 2 == 0 else None
     v = np.asarray(tm.vertices, np.float64)
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        local = (v - (v.mean(axis=0) if len(v) else 0.0)) / unit
-        units = signed_volume(local, faces)
+        units = float(node_volumes(v, faces, [0, len(v)], [0, len(faces)], unit)[0])
         volume = units * np.float64(unit) ** 3
-        area_units = float(np.linalg.norm(np.cross(local[faces[:, 1]] - local[faces[:, 0]],
-                                                   local[faces[:, 2]] - local[faces[:, 0]]), axis=1).sum() / 2
-                           ) if area else None
+        area_units = None
+        if area:
+            local = (v - (v.mean(axis=0) if len(v) else 0.0)) / unit
+            area_units = float(np.linalg.norm(np.cross(local[faces[:, 1]] - local[faces[:, 0]],
+                                                       local[faces[:, 2]] - local[faces[:, 0]]), axis=1).sum() / 2)
     return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": volume, "volume_units": units,
             "area_units": area_units}
 
@@ -186,22 +191,10 @@ def weld_equal_positions(tm):
     of an STL, where float32 keeps distinct positions distinct)."""
     import trimesh
 
-    points, at = np.unique(np.asarray(tm.vertices), axis=0, return_inverse=True)
+    from .load import distinct_rows
+
+    points, at = distinct_rows(np.asarray(tm.vertices))
     return trimesh.Trimesh(points, at.reshape(-1)[np.asarray(tm.faces)], process=False)
-
-
-def signed_volume(vertices, triangles) -> float:
-    """The volume a closed, outward-oriented triangle mesh encloses (the
-    divergence theorem: a sixth of the sum of ``a . (b x c)``), by
-    coordinate columns (three times faster than ``np.cross`` on stacks)."""
-    v = np.asarray(vertices, np.float64)
-    t = np.asarray(triangles)
-    if not len(t):
-        return 0.0
-    x, y, z = (np.ascontiguousarray(v[:, i]) for i in range(3))
-    a, b, c = (np.ascontiguousarray(t[:, i]) for i in range(3))
-    bx, by, bz, cx, cy, cz = x[b], y[b], z[b], x[c], y[c], z[c]
-    return float((x[a] * (by * cz - bz * cy) + y[a] * (bz * cx - bx * cz) + z[a] * (bx * cy - by * cx)).sum() / 6)
 
 
 def check_surface_file(path, mesh, obj, *, topology: bool = True, components: list | None = None) -> dict:
@@ -336,12 +329,13 @@ def union_figures(placed: list) -> list[dict]:
     """:func:`mesh_figures` of some nodes of a scene, measured together:
     each node's closedness, Euler number and bodies by
     :func:`isoflow.mesh.node_topology.node_topology` (trimesh's
-    definitions), its volume as :func:`mesh_figures` takes it. A node that
+    definitions) and its volume (:func:`~isoflow.mesh.node_topology.node_volumes`), as
+    :func:`mesh_figures` takes them. A node that
     is not closed is measured alone by trimesh, so that its figures are
     trimesh's own."""
     import trimesh
 
-    from .node_topology import node_topology
+    from .node_topology import node_topology, node_volumes
 
     n = len(placed)
     counts = np.array([len(v) for v, _, _ in placed], np.int64)
@@ -349,14 +343,10 @@ def union_figures(placed: list) -> list[dict]:
     vfirst, ffirst = np.concatenate([[0], np.cumsum(counts)]), np.concatenate([[0], np.cumsum(sizes)])
     faces = np.concatenate([np.asarray(f, np.int64).reshape(-1, 3) + at for (_, f, _), at in zip(placed, vfirst)])
     topology = node_topology(faces, vfirst, ffirst)
-    of_vertex, of_face = np.repeat(np.arange(n), counts), np.repeat(np.arange(n), sizes)
     units = np.array([unit for _, _, unit in placed], np.float64)
     v = np.concatenate([v for v, _, _ in placed]) if n else np.zeros((0, 3))
-    means = np.stack([np.bincount(of_vertex, v[:, d], n) for d in range(3)], axis=1) / np.maximum(counts, 1)[:, None]
+    volume_units = node_volumes(v, faces, vfirst, ffirst, units)
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        local = (v - means[of_vertex]) / units[of_vertex, None]
-        a, b, c = (local[faces[:, k]] for k in range(3))
-        volume_units = np.bincount(of_face, (a * np.cross(b, c)).sum(axis=1), n) / 6
         volume = volume_units * units ** 3
     euler, bodies = topology["euler"], topology["bodies"]
     return [{"watertight": True, "euler_number": int(euler[t]),
