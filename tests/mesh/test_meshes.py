@@ -528,20 +528,26 @@ def test_the_verdict_does_not_depend_on_units_or_placement(tmp_path, scale, shif
         assert r["self_intersecting_faces"] == 0 and r["verdict"].startswith(want), (name, r["verdict"])
 
 
-def test_distinct_rows_and_counts_equal_numpys_unique(rng):
+@pytest.mark.parametrize("hashed", [False, True])
+def test_distinct_rows_and_counts_equal_numpys_unique(rng, monkeypatch, hashed):
     """The weld's and the crossing test's distinct rows are what
     ``np.unique(axis=0, return_inverse=True)`` gives (rows repeated, -0.0
-    beside 0.0); the per-value distinct counts of ``mesh_topology`` what
+    beside 0.0, float32 and integer rows), sorted or first hashed (as for
+    large arrays); the per-value distinct counts of ``mesh_topology`` what
     ``np.unique`` of the pairs counts."""
+    from isoflow.mesh import load
     from isoflow.mesh.census import distinct_counts
     from isoflow.mesh.load import distinct_rows
 
-    for _ in range(20):
+    monkeypatch.setattr(load, "HASHED_ROWS", 1 if hashed else 1 << 62)
+    for t in range(20):
         rows = rng.integers(-2, 3, size=(int(rng.integers(1, 200)), 3)).astype(np.float64)
         rows[rng.random(rows.shape) < 0.1] = -0.0
+        rows = rows.astype([np.float64, np.float32, np.int32][t % 3])
         got, inverse = distinct_rows(rows)
         want, want_inverse = np.unique(rows, axis=0, return_inverse=True)
         assert np.array_equal(got, want) and np.array_equal(inverse, want_inverse.reshape(-1))
+        assert got.dtype == rows.dtype
         first, second = rng.integers(0, 7, 300), rng.integers(0, 11, 300)
         pairs = np.unique(np.stack([first, second], axis=1), axis=0)
         assert np.array_equal(distinct_counts(first, 9, second, 11), np.bincount(pairs[:, 0], minlength=9))

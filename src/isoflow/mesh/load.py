@@ -190,6 +190,12 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     return v[first[groups[order]]].copy(), remap[f]
 
 
+#: rows from which :func:`distinct_rows` finds the copies by hashing
+#: (compiled) before it sorts; below, its sort alone answers before numba
+#: would have started
+HASHED_ROWS = 1 << 20
+
+
 def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``points`` (equal values: ``-0.0`` is ``0.0``),
     in increasing order, and each row's number among them: what
@@ -218,9 +224,25 @@ def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([[0.0, 5.0], [1.0, 2.0]], [1, 0, 1])
     """
     p = np.asarray(points)
-    inverse = np.zeros(len(p), np.int64)
     if not len(p):
-        return p.copy(), inverse
+        return p.copy(), np.zeros(0, np.int64)
+    if len(p) >= HASHED_ROWS and p.dtype.kind in "fiu" and p.dtype.itemsize <= 8:
+        # many rows (an STL's corners): each row's first copy by hashing, then
+        # only the distinct rows sorted
+        from .equal_rows import first_equal
+
+        first = first_equal(p)
+        (once,) = np.nonzero(first == np.arange(len(p)))
+        distinct, at = _sorted_distinct(p[once])
+        slot = np.empty(len(p), np.int64)
+        slot[once] = at
+        return distinct, slot[first]
+    return _sorted_distinct(p)
+
+
+def _sorted_distinct(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`distinct_rows` of a non-empty array by sorting every row."""
+    inverse = np.zeros(len(p), np.int64)
     order = np.lexsort(p.T[::-1])
     rows = p[order]
     new = np.r_[True, np.any(rows[1:] != rows[:-1], axis=1)]
