@@ -622,15 +622,18 @@ def genera_column(rows: np.ndarray, genera: np.ndarray, n: int) -> np.ndarray:
     common case, share one tuple per genus, put in place all at once."""
     out = np.empty(n, object)
     out.fill(())
-    cuts = np.searchsorted(rows, np.arange(n + 1))
-    count = np.diff(cuts)
+    count = np.bincount(rows, minlength=n)
+    cuts = np.concatenate([np.zeros(1, np.int64), np.cumsum(count)])
     one = np.flatnonzero(count == 1)
-    kinds, which = np.unique(genera[cuts[one]], return_inverse=True)
+    single = genera[cuts[one]]
+    # the kinds looked up, not unique's inverse: that argsorts, and NumPy's default argsort slows
+    # on keys that are nearly all equal, as genera are (nearly all 0)
+    kinds = np.unique(single)
     shared = np.empty(len(kinds), object)
     for k, genus in enumerate(kinds.tolist()):
         shared[k] = (genus,)
-    out[one] = shared[which.reshape(-1)]
-    every = genera.tolist()
+    out[one] = shared[np.searchsorted(kinds, single)]
+    every, cuts = genera.tolist(), cuts.tolist()
     for r in np.flatnonzero(count > 1).tolist():
         out[r] = tuple(every[cuts[r]:cuts[r + 1]])
     return out

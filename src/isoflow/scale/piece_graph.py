@@ -52,9 +52,10 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     ``kind``: ``parent`` (local roots, one per piece of ``own``; ``local``
     gives a piece's place in ``own``). Returns their number.
 
-    Called twice per label by :func:`_label_loop`, so compiled once on its
-    own rather than inline at both calls (a shorter first compile, the
-    same speed); without reference counting, as its caller."""
+    Called twice by :func:`_own_parts` where the kinds differ, so
+    compiled once on its own rather than inline at both calls (a shorter
+    first compile, the same speed); without reference counting, as its
+    caller."""
     m = len(own)
     for t in range(m):
         parent[t] = t
@@ -120,6 +121,20 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind):
+    """Whether every piece of the rest that touches the label's pieces
+    ``own`` by a face reaches the label's box: then every component of the
+    rest that :func:`_rest_components` would walk is the outside's, under
+    any kind of edge."""
+    for p in own:
+        for e in range(adj_start[p], adj_start[p + 1]):
+            q = adj_to[e]
+            if adj_kind[e] == 1 and piece_label[q] != label and not _open(q, plo, phi, blo, bhi):
+                return False
+    return True
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _sort_by(order, n, first, second):
     """Sort ``order[:n]`` by ``first`` then ``second`` (insertion sort: a
     label has few entries), stable."""
@@ -161,12 +176,13 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
               sfaces, nsurf):
     """The label's surfaces from its sheets summed per (own component,
     rest component), appended at ``nsurf`` in the report's order (most
-    faces first, then chi). Returns the new ``nsurf``."""
+    faces first, then chi). Returns the new ``nsurf``; with ``m`` 0, ``comp``
+    is not read (:func:`_all_open` stamps none)."""
     n = np.int64(0)  # not the literal 0: numba would compile _heap_sort once more for it
     for t in range(len(own)):
         p = own[t]
         for e in range(sh_start[p], sh_start[p + 1]):
-            key[n] = parent[t] * (m + 1) + comp[sh_to[e]]
+            key[n] = parent[t] * (m + 1) + (comp[sh_to[e]] if m > 0 else 0)  # none enclosed: the outside's
             verts[n] = sh_n[e]
             quarters[n] = sh_q[e]
             order[n] = n
@@ -198,6 +214,40 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
     return nsurf
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _one_surface(own, sh_start, sh_n, sh_q, r, srow, schi, sfaces, nsurf):
+    """:func:`_surfaces` where the label's sheets all join one pair of
+    components: their sums, without the keys and their sort."""
+    entries = 0
+    chi = np.int64(0)
+    quarters = np.int64(0)
+    for p in own:
+        entries += sh_start[p + 1] - sh_start[p]
+        for e in range(sh_start[p], sh_start[p + 1]):
+            chi += sh_n[e]
+            quarters += sh_q[e]
+    if entries == 0:
+        return nsurf
+    srow[nsurf] = r
+    sfaces[nsurf] = quarters // 4
+    schi[nsurf] = chi - quarters // 4
+    return nsurf + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind, obj_kind, b0_kind):
+    """The label's components under ``b0_kind`` (in ``parent0``) and under
+    ``obj_kind`` (in ``parent``, or ``parent0`` where the kinds agree):
+    their numbers."""
+    if len(own) == 1:  # most labels of a map of many small ones: one piece, no edge to look at
+        parent[0] = parent0[0] = 0
+        return 1, 1
+    b0 = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
+    if obj_kind == b0_kind:
+        return b0, b0
+    return b0, _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
+
+
 @njit(cache=True, nogil=True, _nrt=False)
 def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
                 sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
@@ -218,17 +268,26 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             for d in range(3):
                 blo[d] = min(blo[d], plo[p, d])
                 bhi[d] = max(bhi[d], phi[p, d])
-        b0[r] = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
-        _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
-        m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
-                             r + 1, stamp, comp, queue)
-        if cc_kind == bg_kind:
+        joined = parent if obj_kind != b0_kind else parent0  # the same components: found once
+        b0[r], parts = _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind,
+                                  obj_kind, b0_kind)
+        if _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind):
+            m = 0  # nothing enclosed, and no piece stamped: _surfaces reads no component with m 0
+        else:
+            m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
+                                 r + 1, stamp, comp, queue)
+        if cc_kind == bg_kind or m == 0:
+            # the rest's components over edges up to cc_kind (>= bg_kind) are unions of those up to bg_kind:
+            # where each of these reaches the outside, so does each of those
             b2[r] = m
         else:
             b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
                                      cc_kind, r + 1, stamp2, comp2, queue)
-        nsurf = _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow,
-                          schi, sfaces, nsurf)
+        if m == 0 and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
+            nsurf = _one_surface(own, sh_start, sh_n, sh_q, r, srow, schi, sfaces, nsurf)
+        else:
+            nsurf = _surfaces(own, joined, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r,
+                              srow, schi, sfaces, nsurf)
     return nsurf
 
 
@@ -250,6 +309,9 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     its sheets with their sheet and quarter counts. Returns ``b0``, ``b2``
     and the surfaces as ``row`` (index into ``rows``), ``chi``, ``faces``,
     each label's in the report's order (most faces first, then chi).
+    ``cc_kind`` joins at least what ``bg_kind`` does (the rest's components
+    under it are unions of those under ``bg_kind``), as every
+    connectivity's does.
 
     The labels are independent: the rows are cut into runs of about equal
     work (pieces and sheet entries), each walked on a thread of its own
