@@ -379,6 +379,27 @@ def add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_
 
 
 @njit(cache=True, nogil=True)
+def box_by_label(of, lo, hi, out_lo, out_hi):
+    """Per label, the box of its pieces' boxes (``of[p]``: piece p's
+    label; ``out_lo`` and ``out_hi`` start above and below every voxel),
+    in one pass over the pieces.
+
+    Examples
+    --------
+    >>> lo, hi = np.full((2, 3), 99), np.full((2, 3), -1)
+    >>> box_by_label(np.array([1, 0, 1]), np.array([[0, 0, 0], [1, 1, 1], [2, 0, 5]]),
+    ...              np.array([[1, 1, 1], [2, 2, 2], [3, 4, 6]]), lo, hi)
+    >>> lo[1].tolist(), hi[1].tolist()
+    ([0, 0, 0], [3, 4, 6])
+    """
+    for p in range(len(of)):
+        label = of[p]
+        for d in range(3):
+            out_lo[label, d] = min(out_lo[label, d], lo[p, d])
+            out_hi[label, d] = max(out_hi[label, d], hi[p, d])
+
+
+@njit(cache=True, nogil=True)
 def _counting_order(source, n):
     """Where each row goes when rows are grouped by ``source`` (0..n-1),
     keeping their order within a group, and the groups' starts."""
