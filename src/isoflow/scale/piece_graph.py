@@ -59,6 +59,9 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     m = len(own)
     for t in range(m):
         parent[t] = t
+    if kind == 1:  # pieces are face-connected: none touches another of its label by a face
+        return m
+    for t in range(m):
         local[own[t]] = t
     count = m
     for t in range(m):
