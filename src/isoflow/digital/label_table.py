@@ -589,13 +589,13 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     from ..scale.pieces import NONE
 
     n = len(piece_label)
-    adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
+    graph = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
     for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
         passed[key] = passed[key][:0].copy()  # (a view would keep them)
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
-                           pieces["hi"], *adj, *sheets, obj_kind, b0_kind, bg_kind, cc_kind)
+                           pieces["hi"], *graph, obj_kind, b0_kind, bg_kind, cc_kind)
     b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],

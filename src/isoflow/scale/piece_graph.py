@@ -175,7 +175,7 @@ def _heap_sort(order, n, key):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow, schi,
+def _surfaces(own, parent, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r, srow, schi,
               sfaces, nsurf):
     """The label's surfaces from its sheets summed per (own component,
     rest component), appended at ``nsurf`` in the report's order (most
@@ -184,10 +184,12 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
     n = np.int64(0)  # not the literal 0: numba would compile _heap_sort once more for it
     for t in range(len(own)):
         p = own[t]
-        for e in range(sh_start[p], sh_start[p + 1]):
-            key[n] = parent[t] * (m + 1) + (comp[sh_to[e]] if m > 0 else 0)  # none enclosed: the outside's
-            verts[n] = sh_n[e]
-            quarters[n] = sh_q[e]
+        for e in range(adj_start[p], adj_start[p + 1]):
+            if adj_n[e] == 0:  # a neighbour that none of its sheets reach
+                continue
+            key[n] = parent[t] * (m + 1) + (comp[adj_to[e]] if m > 0 else 0)  # none enclosed: the outside's
+            verts[n] = adj_n[e]
+            quarters[n] = adj_q[e]
             order[n] = n
             n += 1
     if n > 32:
@@ -218,18 +220,16 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _one_surface(own, sh_start, sh_n, sh_q, r, srow, schi, sfaces, nsurf):
+def _one_surface(own, adj_start, adj_n, adj_q, r, srow, schi, sfaces, nsurf):
     """:func:`_surfaces` where the label's sheets all join one pair of
     components: their sums, without the keys and their sort."""
-    entries = 0
     chi = np.int64(0)
     quarters = np.int64(0)
     for p in own:
-        entries += sh_start[p + 1] - sh_start[p]
-        for e in range(sh_start[p], sh_start[p + 1]):
-            chi += sh_n[e]
-            quarters += sh_q[e]
-    if entries == 0:
+        for e in range(adj_start[p], adj_start[p + 1]):
+            chi += adj_n[e]
+            quarters += adj_q[e]
+    if chi == 0:  # no sheet (a neighbour's entry holds one at least, or none and no quarters)
         return nsurf
     srow[nsurf] = r
     sfaces[nsurf] = quarters // 4
@@ -252,8 +252,8 @@ def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_t
 
 
 @njit(cache=True, nogil=True, _nrt=False)
-def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
-                sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
+def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
+                obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
                 parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
@@ -287,9 +287,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
                                      cc_kind, r + 1, stamp2, comp2, queue)
         if m == 0 and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
-            nsurf = _one_surface(own, sh_start, sh_n, sh_q, r, srow, schi, sfaces, nsurf)
+            nsurf = _one_surface(own, adj_start, adj_n, adj_q, r, srow, schi, sfaces, nsurf)
         else:
-            nsurf = _surfaces(own, joined, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r,
+            nsurf = _surfaces(own, joined, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r,
                               srow, schi, sfaces, nsurf)
     return nsurf
 
@@ -299,8 +299,8 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
 TOPOLOGY_BYTES = 6 * 4
 
 
-def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
-                   sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
+def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
+                   obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
     """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
     (enclosed components of the rest under ``cc_kind``), and the closed
     surfaces of its boundary mesh: the pairs (component of the label under
@@ -308,8 +308,9 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     join, each with its mesh vertices (sheets) and faces.
 
     ``lab_start``/``lab_pieces``: each label's pieces; ``adj_*``: the
-    edges, both ways; ``sh_*``: per object piece, the background pieces of
-    its sheets with their sheet and quarter counts. Returns ``b0``, ``b2``
+    edges, both ways, each with the sheets and quarters of its first piece
+    as the object and its second as the background (:func:`pair_graph`).
+    Returns ``b0``, ``b2``
     and the surfaces as ``row`` (index into ``rows``), ``chi``, ``faces``,
     each label's in the report's order (most faces first, then chi).
     ``cc_kind`` joins at least what ``bg_kind`` does (the rest's components
@@ -317,7 +318,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     connectivity's does.
 
     The labels are independent: the rows are cut into runs of about equal
-    work (pieces and sheet entries), each walked on a thread of its own
+    work (pieces and edges), each walked on a thread of its own
     with scratch of its own (:data:`TOPOLOGY_BYTES` per piece).
     """
     from .compiled import run, thread_count
@@ -326,7 +327,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     rows = np.asarray(rows, np.int64)
     npieces = len(piece_label)
     sizes = np.diff(lab_start)
-    per_label = np.add.reduceat(np.diff(sh_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
+    per_label = np.add.reduceat(np.diff(adj_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
     per_label = np.where(sizes > 0, per_label, 0)
     work = np.cumsum(per_label[rows] + sizes[rows]) if len(rows) else np.zeros(0, np.int64)
     # a thread per run of rows where the walks outweigh its scratch's pages
@@ -347,8 +348,8 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
         b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
         surf = [np.zeros(total, np.int64) for _ in range(3)]
-        nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start,
-                            sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
+        nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
+                            adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
                             parent0, *small, b0, b2, *surf)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
@@ -426,64 +427,72 @@ def grouped(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarra
     return (start,) + tuple(np.ascontiguousarray(np.take(c, order)) for c in columns)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _listed(kind, sums, r, none):
+    """Whether pair ``r`` is an edge of the graph: its pieces touch, or
+    sheets join them (the pass gives sheets only to pieces that touch; an
+    edge holds them all the same, unread by the walks past ``none``)."""
+    low = np.uint64(0xFFFFFFFF)
+    return kind[r] < none or (sums[r, 0] & low) != 0 or (sums[r, 1] & low) != 0
+
+
 @njit(cache=True, nogil=True)
-def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, sh_start, sh_to, sh_n, sh_q):
-    """Both groupings of :func:`pair_graph` (their starts hold each group's
-    size, shifted by one, on entry)."""
+def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, adj_n, adj_q):
+    """The edges of :func:`pair_graph` grouped by piece (``adj_start``
+    holds each piece's count, shifted by one, on entry)."""
     for g in range(len(adj_start) - 1):
         adj_start[g + 1] += adj_start[g]
-        sh_start[g + 1] += sh_start[g]
     adj_fill = adj_start[:-1].copy()
-    sh_fill = sh_start[:-1].copy()
+    low = np.uint64(0xFFFFFFFF)
     for r in range(len(keys)):
-        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
-        if kind[r] < none:
-            for p, q in ((a, b), (b, a)):
-                adj_to[adj_fill[p]] = q
-                adj_kind[adj_fill[p]] = kind[r]
-                adj_fill[p] += 1
+        if not _listed(kind, sums, r, none):
+            continue
+        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & low)
         for p, q, c in ((a, b, 0), (b, a, 1)):
-            if sums[r, c] & np.uint64(0xFFFFFFFF):
-                sh_to[sh_fill[p]] = q
-                sh_n[sh_fill[p]] = sums[r, c] & np.uint64(0xFFFFFFFF)
-                sh_q[sh_fill[p]] = sums[r, c] >> np.uint64(32)
-                sh_fill[p] += 1
+            f = adj_fill[p]
+            adj_to[f] = q
+            adj_kind[f] = kind[r]
+            sheets = sums[r, c] & low
+            adj_n[f] = sheets
+            adj_q[f] = sums[r, c] >> np.uint64(32) if sheets else np.uint64(0)  # quarters go with a sheet
+            adj_fill[p] = f + 1
 
 
 @njit(cache=True, nogil=True)
-def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
-    """Each piece's edges and sheet entries, counted at its start + 1."""
+def _pair_degrees(keys, kind, sums, none, adj_start):
+    """Each piece's edges, counted at its start + 1; returns their number
+    (both ways)."""
     touching = 0
-    sheets = 0
     for r in range(len(keys)):
-        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
-        if kind[r] < none:
-            adj_start[a + 1] += 1
-            adj_start[b + 1] += 1
+        if _listed(kind, sums, r, none):
+            adj_start[np.int64(keys[r] >> np.uint64(32)) + 1] += 1
+            adj_start[np.int64(keys[r] & np.uint64(0xFFFFFFFF)) + 1] += 1
             touching += 2
-        if sums[r, 0] & np.uint64(0xFFFFFFFF):
-            sh_start[a + 1] += 1
-            sheets += 1
-        if sums[r, 1] & np.uint64(0xFFFFFFFF):
-            sh_start[b + 1] += 1
-            sheets += 1
-    return touching, sheets
+    return touching
 
 
-def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
-               none: int) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray],
-                                  tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int, none: int) -> tuple[np.ndarray, ...]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
     piece in the high 32 bits; ``kind`` below ``none`` where they touch;
-    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece in one
-    counting pass: the edges both ways (``adj_start``, ``adj_to``,
-    ``adj_kind``) and, per object piece, its sheets' background pieces with
-    their sheet and quarter counts (``sh_start``, ``sh_to``, ``sh_n``,
-    ``sh_q``). Piece numbers and counts are held in 32 bits (the pass packs
-    them so)."""
-    adj_start, sh_start = np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64)
-    touching, sheets = _pair_degrees(keys, kind, sums, none, adj_start, sh_start)
-    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8))
-    sh = (sh_start, mapped(sheets, np.uint32), mapped(sheets, np.uint32), mapped(sheets, np.uint32))
-    _fill_pair_graph(keys, kind, sums, none, *adj, *sh)
-    return adj, sh
+    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece
+    in one counting pass: the edges both ways (``adj_start``, ``adj_to``,
+    ``adj_kind``), each with the sheets (``adj_n``) and quarters
+    (``adj_q``) of the mesh of its piece as the object where the other is
+    the background, so that a label's surfaces are summed over the edges
+    its walks read. Piece numbers and counts are held in 32 bits (the pass
+    packs them so).
+
+    Examples
+    --------
+    >>> keys = np.array([(1 << 32) | 2, (1 << 32) | 3], np.uint64)  # pieces 1-2 and 1-3
+    >>> sums = np.array([[(4 << 32) | 2, 0], [0, 0]], np.uint64)  # 1 over 2: 2 sheets, 4 quarters
+    >>> start, to, kind, sheets, quarters = pair_graph(keys, np.array([1, 2], np.uint8), sums, 4, 4)
+    >>> start.tolist(), to.tolist(), sheets.tolist(), quarters.tolist()
+    ([0, 0, 2, 3, 4], [2, 3, 1, 1], [2, 0, 0, 0], [4, 0, 0, 0])
+    """
+    adj_start = np.zeros(n + 1, np.int64)
+    touching = _pair_degrees(keys, kind, sums, none, adj_start)
+    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8), mapped(touching, np.uint32),
+           mapped(touching, np.uint32))
+    _fill_pair_graph(keys, kind, sums, none, *adj)
+    return adj
