@@ -124,17 +124,22 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind):
+def _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, adj_n, adj_q):
     """Whether every piece of the rest that touches the label's pieces
     ``own`` by a face reaches the label's box: then every component of the
     rest that :func:`_rest_components` would walk is the outside's, under
-    any kind of edge."""
+    any kind of edge. Returns that, and where it holds, the sums of the
+    label's sheets and quarters (read on the same pass over its edges)."""
+    sheets = np.int64(0)
+    quarters = np.int64(0)
     for p in own:
         for e in range(adj_start[p], adj_start[p + 1]):
             q = adj_to[e]
             if adj_kind[e] == 1 and piece_label[q] != label and not _open(q, plo, phi, blo, bhi):
-                return False
-    return True
+                return False, sheets, quarters
+            sheets += adj_n[e]
+            quarters += adj_q[e]
+    return True, sheets, quarters
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -220,20 +225,15 @@ def _surfaces(own, parent, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts,
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _one_surface(own, adj_start, adj_n, adj_q, r, srow, schi, sfaces, nsurf):
-    """:func:`_surfaces` where the label's sheets all join one pair of
-    components: their sums, without the keys and their sort."""
-    chi = np.int64(0)
-    quarters = np.int64(0)
-    for p in own:
-        for e in range(adj_start[p], adj_start[p + 1]):
-            chi += adj_n[e]
-            quarters += adj_q[e]
-    if chi == 0:  # no sheet (a neighbour's entry holds one at least, or none and no quarters)
+def _one_surface(sheets, quarters, r, srow, schi, sfaces, nsurf):
+    """:func:`_surfaces` where the label's ``sheets`` (with their
+    ``quarters``) all join one pair of components: their sums make one
+    surface, without keys and their sort."""
+    if sheets == 0:
         return nsurf
     srow[nsurf] = r
     sfaces[nsurf] = quarters // 4
-    schi[nsurf] = chi - quarters // 4
+    schi[nsurf] = sheets - quarters // 4
     return nsurf + 1
 
 
@@ -274,7 +274,9 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
         joined = parent if obj_kind != b0_kind else parent0  # the same components: found once
         b0[r], parts = _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind,
                                   obj_kind, b0_kind)
-        if _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind):
+        is_open, sheet_sum, quarter_sum = _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start,
+                                                    adj_to, adj_kind, adj_n, adj_q)
+        if is_open:
             m = 0  # nothing enclosed, and no piece stamped: _surfaces reads no component with m 0
         else:
             m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
@@ -286,8 +288,8 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
         else:
             b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
                                      cc_kind, r + 1, stamp2, comp2, queue)
-        if m == 0 and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
-            nsurf = _one_surface(own, adj_start, adj_n, adj_q, r, srow, schi, sfaces, nsurf)
+        if is_open and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
+            nsurf = _one_surface(sheet_sum, quarter_sum, r, srow, schi, sfaces, nsurf)
         else:
             nsurf = _surfaces(own, joined, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r,
                               srow, schi, sfaces, nsurf)
