@@ -3,7 +3,9 @@ own, and those of everything else, without a pass over the voxels.
 
 The nodes are the pieces of :mod:`isoflow.scale.pieces` (node 0 the
 region outside the array), each with its label and bounding box; an edge
-joins two pieces that touch, with how closely (1 face, 2 edge, 3 vertex).
+joins two pieces that touch, with how closely (1 face, 2 edge, 3 vertex),
+and holds, each way, the sheets of the boundary mesh of the one against
+the other, from which a label's surfaces are summed.
 Under an adjacency that joins up to ``kind``, the components of a label
 are those of its pieces over the edges of at most that kind, and the
 components of the rest of the image (every other label and the outside)
@@ -15,7 +17,11 @@ bounding box (or lies beyond it) is joined to the outside by a straight
 line of voxels that leaves the box, so its component is the outside's.
 Only the components enclosed by the label are walked whole, and they lie
 inside its box; a label's cost is its neighbours and what it encloses,
-whatever the number of labels.
+whatever the number of labels. Most labels of a map of many small ones
+are walked not at all: a label's components over faces are its pieces
+(a piece is face-connected), and where every piece touching it by a face
+reaches its box, it encloses nothing and, of one component, has one
+surface: its sheets summed on the pass that looked at those pieces.
 """
 
 from __future__ import annotations
@@ -473,7 +479,8 @@ def _pair_degrees(keys, kind, sums, none, adj_start):
     return touching
 
 
-def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int, none: int) -> tuple[np.ndarray, ...]:
+def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
+               none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
     piece in the high 32 bits; ``kind`` below ``none`` where they touch;
     ``sums``: sheets plus quarters times 2^32, each way), grouped by piece
