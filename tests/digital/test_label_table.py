@@ -10,6 +10,7 @@ import pytest
 from conftest import ball
 
 from isoflow import analyze, label_table
+from isoflow.digital.label_table import distinct
 from isoflow.errors import IsoflowError
 from isoflow.scale.compiled import have_numba
 
@@ -230,6 +231,22 @@ def test_without_surfaces_the_surface_columns_are_left_out(rng):
     assert set(full) - set(short) == {"surfaces", "genera", "surface_euler", "pinched_vertices", "doubled_edges"}
     for key in short:
         assert np.array_equal(short[key], full[key], equal_nan=True), key
+
+
+@pytest.mark.parametrize("dtype", [np.int8, np.int16, np.int64, np.uint8, np.uint16, np.uint64])
+def test_distinct_labels_equal_numpys_unique(rng, dtype):
+    """The labels' distinct values and each one's index among them, from a
+    table over their range where it is short, are NumPy's unique: also
+    where the range spans the type's ends (a difference the type cannot
+    hold) and where it is too sparse for a table."""
+    info = np.iinfo(dtype)
+    ends = [info.min, info.max, info.min + 2, info.max - 1, info.min, info.max - 1]
+    cases = [rng.integers(info.min, info.max, size, dtype=dtype, endpoint=True) for size in (0, 7, 70_000)]
+    cases += [np.array(ends[:2] * 3, dtype), np.array(ends[2:], dtype), rng.integers(0, 9, 500).astype(dtype)]
+    for values in cases:
+        want, got = np.unique(values, return_inverse=True), distinct(values)
+        assert got[0].dtype == values.dtype and got[0].tolist() == want[0].tolist(), values[:4]
+        assert got[1].tolist() == want[1].tolist(), values[:4]
 
 
 def test_pandas_takes_the_columns_as_they_are(rng):

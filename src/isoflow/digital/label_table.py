@@ -489,7 +489,7 @@ def rows_of_pieces(pieces: dict, passed: dict, dtype, conn: int, wanted: np.ndar
     # every label's pieces, for its sums and for the graph (each label has one piece at least)
     by = grouped(piece_label[1:], len(values), np.arange(1, len(piece_label), dtype=np.int64))
     topology = graph_topology(pieces, piece_label, rows, passed, conn, *by)
-    by_label = label_sums(pieces, piece_label, passed, *by)
+    by_label = label_sums(pieces, piece_label, passed, len(values))
     found = {key: at_rows(column, rows) for key, column in by_label.items()}
     found.update(topology)
     dtype = np.dtype(dtype)
@@ -502,7 +502,7 @@ def label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.
     """The distinct values of the pieces (their bits, uint64), each piece's
     index among them (-1 for the outside, piece 0) and the index of every
     row of the table (-1 for a label asked for that is absent)."""
-    values, inverse = np.unique(piece_values[1:], return_inverse=True)
+    values, inverse = distinct(piece_values[1:])
     piece_label = np.concatenate([[-1], inverse]).astype(np.int64)
     if wanted is None:
         rows = np.flatnonzero(values != 0)
@@ -517,27 +517,62 @@ def label_rows(piece_values: np.ndarray, dtype, wanted) -> tuple[np.ndarray, np.
     return values, piece_label, np.where(found, at, -1)
 
 
+#: :func:`distinct` counts values spanning up to this many times their
+#: number (plus :data:`DISTINCT_SLACK`) in a table over their range, and
+#: sorts sparser ones
+DISTINCT_SPAN = 4
+DISTINCT_SLACK = 1024
+
+
+def distinct(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(values, return_inverse=True)`` of a 1D integer array:
+    the distinct values, in order, and each value's index among them.
+
+    Labels are mostly numbered densely, so their range is counted in a
+    table, without a sort (unique's inverse takes NumPy's default argsort,
+    slow on many equal keys); sparse values are sorted, as unique does.
+
+    Examples
+    --------
+    >>> values, inverse = distinct(np.array([7, 3, 7, 5], np.uint32))
+    >>> values.tolist(), inverse.tolist()
+    ([3, 5, 7], [2, 0, 2, 1])
+    """
+    if len(values) == 0:
+        return np.unique(values, return_inverse=True)
+    lo, hi = int(values.min()), int(values.max())
+    if hi - lo > DISTINCT_SPAN * len(values) + DISTINCT_SLACK:
+        return np.unique(values, return_inverse=True)
+    wide = values.astype(np.int64 if values.dtype.kind == "i" else np.uint64)  # a narrow type wraps round
+    shift = (wide - wide.dtype.type(lo)).astype(np.intp)
+    seen = np.zeros(hi - lo + 1, bool)
+    seen[shift] = True
+    kinds = np.flatnonzero(seen).astype(wide.dtype) + wide.dtype.type(lo)
+    return kinds.astype(values.dtype), (np.cumsum(seen) - 1)[shift]
+
+
 def at_rows(column: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """A per-label column at the table's rows, zero where a row's label is absent."""
+    """A per-label column at the table's rows, zero where a row's label is
+    absent: a view where the rows are a run of labels (every label, the
+    common case), no copy."""
+    if len(rows) and rows[0] >= 0 and rows[-1] - rows[0] == len(rows) - 1 and (np.diff(rows) == 1).all():
+        return column[rows[0]:rows[-1] + 1]
     out = column[np.maximum(rows, 0)] if len(column) else np.zeros((len(rows),) + column.shape[1:], column.dtype)
     out[rows < 0] = 0
     return out
 
 
-def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, lab_start: np.ndarray,
-               lab_pieces: np.ndarray) -> dict:
-    """Per label (all of them): voxels, coordinate sums, box, features and
-    doubled edges, added up over its pieces (``lab_pieces[lab_start[l]:
-    lab_start[l + 1]]``, one at least)."""
-    from ..scale.piece_graph import add_by_label
+def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int) -> dict:
+    """Per label (all ``nlabels`` of them, each with one piece at least):
+    voxels, coordinate sums, box, features and doubled edges, added up
+    over its pieces (``piece_label``: each piece's label, -1 for piece 0,
+    the outside)."""
+    from ..scale.piece_graph import add_by_label, box_by_label
 
     of = piece_label[1:]
-    nlabels = len(lab_start) - 1
     lo = np.full((nlabels, 3), np.iinfo(np.int64).max, np.int64)
     hi = np.full((nlabels, 3), -1, np.int64)
-    if nlabels:  # each label's box from its pieces' boxes
-        lo = np.minimum.reduceat(pieces["lo"][lab_pieces], lab_start[:-1], axis=0)
-        hi = np.maximum.reduceat(pieces["hi"][lab_pieces], lab_start[:-1], axis=0)
+    box_by_label(of, pieces["lo"][1:], pieces["hi"][1:], lo, hi)
     totals = {key: np.zeros((nlabels,) + column.shape[1:], np.int64)
               for key, column in (("voxels", pieces["counts"]), ("sums", pieces["sums"]),
                                   ("features", passed["features"]), ("doubled", passed["doubled"]))}
@@ -554,13 +589,13 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     from ..scale.pieces import NONE
 
     n = len(piece_label)
-    adj, sheets = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
+    graph = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
     for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
         passed[key] = passed[key][:0].copy()  # (a view would keep them)
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],
-                           pieces["hi"], *adj, *sheets, obj_kind, b0_kind, bg_kind, cc_kind)
+                           pieces["hi"], *graph, obj_kind, b0_kind, bg_kind, cc_kind)
     b0, b2 = np.zeros(len(rows), np.int64), np.zeros(len(rows), np.int64)
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],
@@ -622,15 +657,15 @@ def genera_column(rows: np.ndarray, genera: np.ndarray, n: int) -> np.ndarray:
     common case, share one tuple per genus, put in place all at once."""
     out = np.empty(n, object)
     out.fill(())
-    cuts = np.searchsorted(rows, np.arange(n + 1))
-    count = np.diff(cuts)
+    count = np.bincount(rows, minlength=n)
+    cuts = np.concatenate([np.zeros(1, np.int64), np.cumsum(count)])
     one = np.flatnonzero(count == 1)
-    kinds, which = np.unique(genera[cuts[one]], return_inverse=True)
+    kinds, which = distinct(genera[cuts[one]])
     shared = np.empty(len(kinds), object)
     for k, genus in enumerate(kinds.tolist()):
         shared[k] = (genus,)
-    out[one] = shared[which.reshape(-1)]
-    every = genera.tolist()
+    out[one] = shared[which]
+    every, cuts = genera.tolist(), cuts.tolist()
     for r in np.flatnonzero(count > 1).tolist():
         out[r] = tuple(every[cuts[r]:cuts[r + 1]])
     return out

@@ -3,7 +3,9 @@ own, and those of everything else, without a pass over the voxels.
 
 The nodes are the pieces of :mod:`isoflow.scale.pieces` (node 0 the
 region outside the array), each with its label and bounding box; an edge
-joins two pieces that touch, with how closely (1 face, 2 edge, 3 vertex).
+joins two pieces that touch, with how closely (1 face, 2 edge, 3 vertex),
+and holds, each way, the sheets of the boundary mesh of the one against
+the other, from which a label's surfaces are summed.
 Under an adjacency that joins up to ``kind``, the components of a label
 are those of its pieces over the edges of at most that kind, and the
 components of the rest of the image (every other label and the outside)
@@ -15,7 +17,11 @@ bounding box (or lies beyond it) is joined to the outside by a straight
 line of voxels that leaves the box, so its component is the outside's.
 Only the components enclosed by the label are walked whole, and they lie
 inside its box; a label's cost is its neighbours and what it encloses,
-whatever the number of labels.
+whatever the number of labels. Most labels of a map of many small ones
+are walked not at all: a label's components over faces are its pieces
+(a piece is face-connected), and where every piece touching it by a face
+reaches its box, it encloses nothing and, of one component, has one
+surface: its sheets summed on the pass that looked at those pieces.
 """
 
 from __future__ import annotations
@@ -52,12 +58,16 @@ def _own_components(own, label, piece_label, local, parent, adj_start, adj_to, a
     ``kind``: ``parent`` (local roots, one per piece of ``own``; ``local``
     gives a piece's place in ``own``). Returns their number.
 
-    Called twice per label by :func:`_label_loop`, so compiled once on its
-    own rather than inline at both calls (a shorter first compile, the
-    same speed); without reference counting, as its caller."""
+    Called twice by :func:`_own_parts` where the kinds differ, so
+    compiled once on its own rather than inline at both calls (a shorter
+    first compile, the same speed); without reference counting, as its
+    caller."""
     m = len(own)
     for t in range(m):
         parent[t] = t
+    if kind == 1:  # pieces are face-connected: none touches another of its label by a face
+        return m
+    for t in range(m):
         local[own[t]] = t
     count = m
     for t in range(m):
@@ -120,6 +130,25 @@ def _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, adj_n, adj_q):
+    """Whether every piece of the rest that touches the label's pieces
+    ``own`` by a face reaches the label's box: then every component of the
+    rest that :func:`_rest_components` would walk is the outside's, under
+    any kind of edge. Returns that, and where it holds, the sums of the
+    label's sheets and quarters (read on the same pass over its edges)."""
+    sheets = np.int64(0)
+    quarters = np.int64(0)
+    for p in own:
+        for e in range(adj_start[p], adj_start[p + 1]):
+            q = adj_to[e]
+            if adj_kind[e] == 1 and piece_label[q] != label and not _open(q, plo, phi, blo, bhi):
+                return False, sheets, quarters
+            sheets += adj_n[e]
+            quarters += adj_q[e]
+    return True, sheets, quarters
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _sort_by(order, n, first, second):
     """Sort ``order[:n]`` by ``first`` then ``second`` (insertion sort: a
     label has few entries), stable."""
@@ -157,18 +186,21 @@ def _heap_sort(order, n, key):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow, schi,
+def _surfaces(own, parent, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r, srow, schi,
               sfaces, nsurf):
     """The label's surfaces from its sheets summed per (own component,
     rest component), appended at ``nsurf`` in the report's order (most
-    faces first, then chi). Returns the new ``nsurf``."""
+    faces first, then chi). Returns the new ``nsurf``; with ``m`` 0, ``comp``
+    is not read (:func:`_all_open` stamps none)."""
     n = np.int64(0)  # not the literal 0: numba would compile _heap_sort once more for it
     for t in range(len(own)):
         p = own[t]
-        for e in range(sh_start[p], sh_start[p + 1]):
-            key[n] = parent[t] * (m + 1) + comp[sh_to[e]]
-            verts[n] = sh_n[e]
-            quarters[n] = sh_q[e]
+        for e in range(adj_start[p], adj_start[p + 1]):
+            if adj_n[e] == 0:  # a neighbour that none of its sheets reach
+                continue
+            key[n] = parent[t] * (m + 1) + (comp[adj_to[e]] if m > 0 else 0)  # none enclosed: the outside's
+            verts[n] = adj_n[e]
+            quarters[n] = adj_q[e]
             order[n] = n
             n += 1
     if n > 32:
@@ -198,9 +230,36 @@ def _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, qua
     return nsurf
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _one_surface(sheets, quarters, r, srow, schi, sfaces, nsurf):
+    """:func:`_surfaces` where the label's ``sheets`` (with their
+    ``quarters``) all join one pair of components: their sums make one
+    surface, without keys and their sort."""
+    if sheets == 0:
+        return nsurf
+    srow[nsurf] = r
+    sfaces[nsurf] = quarters // 4
+    schi[nsurf] = sheets - quarters // 4
+    return nsurf + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind, obj_kind, b0_kind):
+    """The label's components under ``b0_kind`` (in ``parent0``) and under
+    ``obj_kind`` (in ``parent``, or ``parent0`` where the kinds agree):
+    their numbers."""
+    if len(own) == 1:  # most labels of a map of many small ones: one piece, no edge to look at
+        parent[0] = parent0[0] = 0
+        return 1, 1
+    b0 = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
+    if obj_kind == b0_kind:
+        return b0, b0
+    return b0, _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
+
+
 @njit(cache=True, nogil=True, _nrt=False)
-def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
-                sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
+def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
+                obj_kind, b0_kind, bg_kind, cc_kind, local, stamp, comp, stamp2, comp2, queue, parent,
                 parent0, blo, bhi, key, verts, quarters, order, b0, b2, srow, schi, sfaces):
     """The loop of :func:`label_topology` over its rows, on scratch arrays
     (compiled without reference counting: nothing is allocated here).
@@ -218,17 +277,28 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
             for d in range(3):
                 blo[d] = min(blo[d], plo[p, d])
                 bhi[d] = max(bhi[d], phi[p, d])
-        b0[r] = _own_components(own, label, piece_label, local, parent0, adj_start, adj_to, adj_kind, b0_kind)
-        _own_components(own, label, piece_label, local, parent, adj_start, adj_to, adj_kind, obj_kind)
-        m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
-                             r + 1, stamp, comp, queue)
-        if cc_kind == bg_kind:
+        joined = parent if obj_kind != b0_kind else parent0  # the same components: found once
+        b0[r], parts = _own_parts(own, label, piece_label, local, parent, parent0, adj_start, adj_to, adj_kind,
+                                  obj_kind, b0_kind)
+        is_open, sheet_sum, quarter_sum = _all_open(own, label, piece_label, plo, phi, blo, bhi, adj_start,
+                                                    adj_to, adj_kind, adj_n, adj_q)
+        if is_open:
+            m = 0  # nothing enclosed, and no piece stamped: _surfaces reads no component with m 0
+        else:
+            m = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind, bg_kind,
+                                 r + 1, stamp, comp, queue)
+        if cc_kind == bg_kind or m == 0:
+            # the rest's components over edges up to cc_kind (>= bg_kind) are unions of those up to bg_kind:
+            # where each of these reaches the outside, so does each of those
             b2[r] = m
         else:
             b2[r] = _rest_components(own, label, piece_label, plo, phi, blo, bhi, adj_start, adj_to, adj_kind,
                                      cc_kind, r + 1, stamp2, comp2, queue)
-        nsurf = _surfaces(own, parent, comp, m, sh_start, sh_to, sh_n, sh_q, key, verts, quarters, order, r, srow,
-                          schi, sfaces, nsurf)
+        if is_open and parts == 1:  # one component, nothing enclosed: every sheet is on one surface
+            nsurf = _one_surface(sheet_sum, quarter_sum, r, srow, schi, sfaces, nsurf)
+        else:
+            nsurf = _surfaces(own, joined, comp, m, adj_start, adj_to, adj_n, adj_q, key, verts, quarters, order, r,
+                              srow, schi, sfaces, nsurf)
     return nsurf
 
 
@@ -237,8 +307,8 @@ def _label_loop(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, a
 TOPOLOGY_BYTES = 6 * 4
 
 
-def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start, sh_to,
-                   sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
+def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n, adj_q,
+                   obj_kind, b0_kind, bg_kind, cc_kind) -> tuple[np.ndarray, ...]:
     """Per label index in ``rows``: b0 (components under ``b0_kind``), b2
     (enclosed components of the rest under ``cc_kind``), and the closed
     surfaces of its boundary mesh: the pairs (component of the label under
@@ -246,13 +316,17 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     join, each with its mesh vertices (sheets) and faces.
 
     ``lab_start``/``lab_pieces``: each label's pieces; ``adj_*``: the
-    edges, both ways; ``sh_*``: per object piece, the background pieces of
-    its sheets with their sheet and quarter counts. Returns ``b0``, ``b2``
+    edges, both ways, each with the sheets and quarters of its first piece
+    as the object and its second as the background (:func:`pair_graph`).
+    Returns ``b0``, ``b2``
     and the surfaces as ``row`` (index into ``rows``), ``chi``, ``faces``,
     each label's in the report's order (most faces first, then chi).
+    ``cc_kind`` joins at least what ``bg_kind`` does (the rest's components
+    under it are unions of those under ``bg_kind``), as every
+    connectivity's does.
 
     The labels are independent: the rows are cut into runs of about equal
-    work (pieces and sheet entries), each walked on a thread of its own
+    work (pieces and edges), each walked on a thread of its own
     with scratch of its own (:data:`TOPOLOGY_BYTES` per piece).
     """
     from .compiled import run, thread_count
@@ -261,7 +335,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
     rows = np.asarray(rows, np.int64)
     npieces = len(piece_label)
     sizes = np.diff(lab_start)
-    per_label = np.add.reduceat(np.diff(sh_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
+    per_label = np.add.reduceat(np.diff(adj_start)[lab_pieces], lab_start[:-1]) if len(lab_pieces) else np.zeros(0)
     per_label = np.where(sizes > 0, per_label, 0)
     work = np.cumsum(per_label[rows] + sizes[rows]) if len(rows) else np.zeros(0, np.int64)
     # a thread per run of rows where the walks outweigh its scratch's pages
@@ -282,8 +356,8 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
         b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
         surf = [np.zeros(total, np.int64) for _ in range(3)]
-        nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, sh_start,
-                            sh_to, sh_n, sh_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
+        nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
+                            adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
                             parent0, *small, b0, b2, *surf)
         surf[0][:nsurf] += a  # rows of the whole
         return (b0, b2) + tuple(s[:nsurf] for s in surf)
@@ -317,6 +391,27 @@ def add_by_label(of, counts, sums, features, doubled, out_counts, out_sums, out_
 
 
 @njit(cache=True, nogil=True)
+def box_by_label(of, lo, hi, out_lo, out_hi):
+    """Per label, the box of its pieces' boxes (``of[p]``: piece p's
+    label; ``out_lo`` and ``out_hi`` start above and below every voxel),
+    in one pass over the pieces.
+
+    Examples
+    --------
+    >>> lo, hi = np.full((2, 3), 99), np.full((2, 3), -1)
+    >>> box_by_label(np.array([1, 0, 1]), np.array([[0, 0, 0], [1, 1, 1], [2, 0, 5]]),
+    ...              np.array([[1, 1, 1], [2, 2, 2], [3, 4, 6]]), lo, hi)
+    >>> lo[1].tolist(), hi[1].tolist()
+    ([0, 0, 0], [3, 4, 6])
+    """
+    for p in range(len(of)):
+        label = of[p]
+        for d in range(3):
+            out_lo[label, d] = min(out_lo[label, d], lo[p, d])
+            out_hi[label, d] = max(out_hi[label, d], hi[p, d])
+
+
+@njit(cache=True, nogil=True)
 def _counting_order(source, n):
     """Where each row goes when rows are grouped by ``source`` (0..n-1),
     keeping their order within a group, and the groups' starts."""
@@ -340,64 +435,73 @@ def grouped(source: np.ndarray, n: int, *columns: np.ndarray) -> tuple[np.ndarra
     return (start,) + tuple(np.ascontiguousarray(np.take(c, order)) for c in columns)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _listed(kind, sums, r, none):
+    """Whether pair ``r`` is an edge of the graph: its pieces touch, or
+    sheets join them (the pass gives sheets only to pieces that touch; an
+    edge holds them all the same, unread by the walks past ``none``)."""
+    low = np.uint64(0xFFFFFFFF)
+    return kind[r] < none or (sums[r, 0] & low) != 0 or (sums[r, 1] & low) != 0
+
+
 @njit(cache=True, nogil=True)
-def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, sh_start, sh_to, sh_n, sh_q):
-    """Both groupings of :func:`pair_graph` (their starts hold each group's
-    size, shifted by one, on entry)."""
+def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, adj_n, adj_q):
+    """The edges of :func:`pair_graph` grouped by piece (``adj_start``
+    holds each piece's count, shifted by one, on entry)."""
     for g in range(len(adj_start) - 1):
         adj_start[g + 1] += adj_start[g]
-        sh_start[g + 1] += sh_start[g]
     adj_fill = adj_start[:-1].copy()
-    sh_fill = sh_start[:-1].copy()
+    low = np.uint64(0xFFFFFFFF)
     for r in range(len(keys)):
-        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
-        if kind[r] < none:
-            for p, q in ((a, b), (b, a)):
-                adj_to[adj_fill[p]] = q
-                adj_kind[adj_fill[p]] = kind[r]
-                adj_fill[p] += 1
+        if not _listed(kind, sums, r, none):
+            continue
+        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & low)
         for p, q, c in ((a, b, 0), (b, a, 1)):
-            if sums[r, c] & np.uint64(0xFFFFFFFF):
-                sh_to[sh_fill[p]] = q
-                sh_n[sh_fill[p]] = sums[r, c] & np.uint64(0xFFFFFFFF)
-                sh_q[sh_fill[p]] = sums[r, c] >> np.uint64(32)
-                sh_fill[p] += 1
+            f = adj_fill[p]
+            adj_to[f] = q
+            adj_kind[f] = kind[r]
+            sheets = sums[r, c] & low
+            adj_n[f] = sheets
+            adj_q[f] = sums[r, c] >> np.uint64(32) if sheets else np.uint64(0)  # quarters go with a sheet
+            adj_fill[p] = f + 1
 
 
 @njit(cache=True, nogil=True)
-def _pair_degrees(keys, kind, sums, none, adj_start, sh_start):
-    """Each piece's edges and sheet entries, counted at its start + 1."""
+def _pair_degrees(keys, kind, sums, none, adj_start):
+    """Each piece's edges, counted at its start + 1; returns their number
+    (both ways)."""
     touching = 0
-    sheets = 0
     for r in range(len(keys)):
-        a, b = np.int64(keys[r] >> np.uint64(32)), np.int64(keys[r] & np.uint64(0xFFFFFFFF))
-        if kind[r] < none:
-            adj_start[a + 1] += 1
-            adj_start[b + 1] += 1
+        if _listed(kind, sums, r, none):
+            adj_start[np.int64(keys[r] >> np.uint64(32)) + 1] += 1
+            adj_start[np.int64(keys[r] & np.uint64(0xFFFFFFFF)) + 1] += 1
             touching += 2
-        if sums[r, 0] & np.uint64(0xFFFFFFFF):
-            sh_start[a + 1] += 1
-            sheets += 1
-        if sums[r, 1] & np.uint64(0xFFFFFFFF):
-            sh_start[b + 1] += 1
-            sheets += 1
-    return touching, sheets
+    return touching
 
 
 def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
-               none: int) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray],
-                                  tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+               none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
     piece in the high 32 bits; ``kind`` below ``none`` where they touch;
-    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece in one
-    counting pass: the edges both ways (``adj_start``, ``adj_to``,
-    ``adj_kind``) and, per object piece, its sheets' background pieces with
-    their sheet and quarter counts (``sh_start``, ``sh_to``, ``sh_n``,
-    ``sh_q``). Piece numbers and counts are held in 32 bits (the pass packs
-    them so)."""
-    adj_start, sh_start = np.zeros(n + 1, np.int64), np.zeros(n + 1, np.int64)
-    touching, sheets = _pair_degrees(keys, kind, sums, none, adj_start, sh_start)
-    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8))
-    sh = (sh_start, mapped(sheets, np.uint32), mapped(sheets, np.uint32), mapped(sheets, np.uint32))
-    _fill_pair_graph(keys, kind, sums, none, *adj, *sh)
-    return adj, sh
+    ``sums``: sheets plus quarters times 2^32, each way), grouped by piece
+    in one counting pass: the edges both ways (``adj_start``, ``adj_to``,
+    ``adj_kind``), each with the sheets (``adj_n``) and quarters
+    (``adj_q``) of the mesh of its piece as the object where the other is
+    the background, so that a label's surfaces are summed over the edges
+    its walks read. Piece numbers and counts are held in 32 bits (the pass
+    packs them so).
+
+    Examples
+    --------
+    >>> keys = np.array([(1 << 32) | 2, (1 << 32) | 3], np.uint64)  # pieces 1-2 and 1-3
+    >>> sums = np.array([[(4 << 32) | 2, 0], [0, 0]], np.uint64)  # 1 over 2: 2 sheets, 4 quarters
+    >>> start, to, kind, sheets, quarters = pair_graph(keys, np.array([1, 2], np.uint8), sums, 4, 4)
+    >>> start.tolist(), to.tolist(), sheets.tolist(), quarters.tolist()
+    ([0, 0, 2, 3, 4], [2, 3, 1, 1], [2, 0, 0, 0], [4, 0, 0, 0])
+    """
+    adj_start = np.zeros(n + 1, np.int64)
+    touching = _pair_degrees(keys, kind, sums, none, adj_start)
+    adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8), mapped(touching, np.uint32),
+           mapped(touching, np.uint32))
+    _fill_pair_graph(keys, kind, sums, none, *adj)
+    return adj
