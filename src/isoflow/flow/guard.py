@@ -197,8 +197,13 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     every stuck vertex, together with each part that the step removes or
     fills whole and that meets them: a connected set (``conn``) of voxels
     none of whose corners is kept, or a connected set of background voxels
-    (the complementary connectivity) all of whose corners are kept. When no
-    vertex is stuck, the new object's bounding box.
+    (the complementary connectivity) all of whose corners are kept; and
+    every cavity (hole in 2D) that the step closes off
+    (:func:`appeared_cavities`), which the stuck vertex of its mouth meets
+    only at the mouth. Its box is then widened (:func:`box_holding_change`)
+    until the step taken inside the box alone gives the new Betti numbers
+    and the step taken outside it alone keeps the old ones. When no vertex
+    is stuck, the new object's bounding box.
     """
     _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
     if not stuck.any():
@@ -213,8 +218,113 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
             labels, _ = label(part, c)
             met = np.unique(labels[region & part])
             region |= np.isin(labels, met[met > 0])
-    box = replace(obj, volume=region, offset=tuple(o - 1 for o in obj.offset)).bbox()
+    old, new = fine_grid(cfg), fine_grid(np.where(keep, (1 << (1 << obj.ndim)) - 1, 0))
+    # fine cells 2p and 2p + 1 along each axis lie in voxel p of the padded array
+    region |= appeared_cavities(old, new, conn).reshape([d for n in region.shape for d in (n, 2)]).any(
+        axis=tuple(range(1, 2 * obj.ndim, 2)))
+    want = betti_numbers(obj.volume, conn), betti_numbers(keep, conn)  # refining twice keeps them
+    lo, hi = box_holding_change(old, new, conn, region, volume | corners_any(keep), want)
+    inside = np.zeros(region.shape, bool)
+    inside[tuple(slice(a, b) for a, b in zip(lo, hi))] = True
+    box = replace(obj, volume=inside, offset=tuple(o - 1 for o in obj.offset)).bbox()
     return None if box is None else [box[0].tolist(), box[1].tolist()]
+
+
+def appeared_cavities(old: np.ndarray, new: np.ndarray, conn: int) -> np.ndarray:
+    """The cavities (holes in 2D) of ``new`` that no cavity of ``old``
+    overlaps: the background components, under the connectivity
+    complementary to ``conn``, that do not reach the outside (the array's
+    first cell, which :func:`fine_grid`'s pad keeps background), and that
+    hold no cell of such a component of ``old`` (both on one grid).
+
+    Examples
+    --------
+    >>> old = np.zeros((5, 5), bool)
+    >>> old[1:4, 1:4] = True
+    >>> old[2, 2:4] = False  # a pocket, open to the right
+    >>> new = old.copy()
+    >>> new[2, 3] = True  # its mouth closed
+    >>> appeared_cavities(old, new, 4).astype(int)[2]
+    array([0, 0, 1, 0, 0])
+    """
+    back = complement(old.ndim, conn)
+    origin = (0,) * old.ndim
+
+    def enclosed(volume):
+        labels, _ = label(~volume, back)
+        return labels, (labels > 0) & (labels != labels[origin])
+
+    _, was = enclosed(old)
+    labels, now = enclosed(new)
+    kept = np.unique(labels[was & now])
+    return now & ~np.isin(labels, kept)
+
+
+def box_holding_change(old: np.ndarray, new: np.ndarray, conn: int, region: np.ndarray, extent: np.ndarray,
+                       want: tuple[list, list]) -> tuple[np.ndarray, np.ndarray]:
+    """The box ``[lo, hi)`` (indices of the old object's array padded by
+    one, as ``region``) around ``region`` inside which the step from
+    ``old`` to ``new`` (both on the grid refined twice, :func:`fine_grid`,
+    where the padded array's voxel ``p`` is cells ``2p .. 2p + 1``)
+    changes the topology: taken inside it alone (the old object outside)
+    the step gives the new Betti numbers, taken outside it alone it keeps
+    the old ones (``want``: the old and the new).
+
+    On that grid an old voxel and a new one are each a ``2^n`` block of
+    cells, half a voxel apart. A box that crosses a thin part where the
+    two differ joins or cuts it there (a pocket whose mouth the step closes
+    inside the box while its far end stays open outside is a hole of
+    neither object), so the box of ``region`` grows on every side, by one
+    voxel at a time and by half its margin once that is more, until the
+    step splits there cleanly. It never grows past the voxels ``extent``
+    that either object covers (and ``region``): a box holding them all
+    takes the whole step inside.
+
+    Examples
+    --------
+    >>> from isoflow.flow.motion import flow_moves
+    >>> obj = DigitalObject(np.array([[1, 0, 0, 0], [0, 0, 1, 1], [0, 0, 1, 1]], bool))
+    >>> cfg, keep = flow_moves(obj, 4)
+    >>> old, new = fine_grid(cfg), fine_grid(np.where(keep, 15, 0))
+    >>> region = np.zeros((5, 6), bool)
+    >>> region[1, 1] = True  # the isolated pixel, which vanishes
+    >>> extent = np.pad(obj.volume, 1) | corners_any(keep)
+    >>> [b.tolist() for b in box_holding_change(old, new, 4, region, extent, ([2, 0], [1, 0]))]
+    [[1, 1], [2, 2]]
+    """
+    idx = np.argwhere(extent | region)
+    floor, ceil = idx.min(0), idx.max(0) + 1
+    idx = np.argwhere(region)
+    lo, hi = idx.min(0), idx.max(0) + 1
+    margin = 0
+    while True:
+        lo_k, hi_k = np.maximum(lo - margin, floor), np.minimum(hi + margin, ceil)
+        fine = tuple(slice(2 * a, 2 * b) for a, b in zip(lo_k, hi_k))
+        if ((lo_k == floor).all() and (hi_k == ceil).all()) or step_splits_at(old, new, fine, conn, want):
+            return lo_k, hi_k
+        margin += max(1, margin // 2)
+
+
+def step_splits_at(old: np.ndarray, new: np.ndarray, box: tuple[slice, ...], conn: int,
+                   want: tuple[list, list]) -> bool:
+    """Whether the step from ``old`` to ``new`` (one grid), taken only
+    inside ``box``, gives ``new``'s Betti numbers and, taken only outside
+    it, keeps ``old``'s (``want``: the two, in that order).
+
+    Examples
+    --------
+    >>> old = np.zeros((6, 6), bool)
+    >>> old[1:3, 1:3] = old[4, 4] = True
+    >>> new = old.copy()
+    >>> new[4, 4] = False  # a component vanishes
+    >>> step_splits_at(old, new, (slice(3, 6), slice(3, 6)), 4, ([2, 0], [1, 0]))
+    True
+    >>> step_splits_at(old, new, (slice(0, 3), slice(0, 3)), 4, ([2, 0], [1, 0]))
+    False
+    """
+    inside, outside = old.copy(), new.copy()
+    inside[box], outside[box] = new[box], old[box]
+    return betti_numbers(inside, conn) == want[1] and betti_numbers(outside, conn) == want[0]
 
 
 def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):
