@@ -6,6 +6,7 @@ import json
 import re
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -315,36 +316,89 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
     assert info(capsys, tmp_path / "pages.tif")["shape"] == [12, 16, 5]
 
 
-@pytest.mark.parametrize("save", [{}, {"resolution": (2, 4), "metadata": {"axes": "ZCYX", "unit": "um", "spacing": 2.0}}])
-def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save):
-    """tifffile's ``imwrite(f, stack, imagej=True)`` stores a (3, Y, X) stack
-    as 3 channels, which Fiji opens as channels and isoflow refuses; the
-    refusal, one line, gives the command that re-saves them as slices, and
-    what it writes is read as those slices, calibrated as before."""
+def resaved_as_the_refusal_says(path, channels: int) -> dict:
+    """The ``info --json`` report of ``path``'s channels saved as slices by
+    the command that the refusal of ``path`` (one line, exit 2) gives, run
+    as the user runs it, beside ``path`` as ``NAME_stack.tif``."""
     import shlex
 
-    stack = (labels[:, :, :3] == 3).T.astype(np.uint8)  # 3 slices of 16x14, as (z, y, x)
-    data = stack[None] if save else stack  # ZCYX: one slice of 3 channels
-    tifffile.imwrite(tmp_path / "c.tif", data, imagej=True, **save)
-    with tifffile.TiffFile(tmp_path / "c.tif") as tif:
-        assert tif.series[0].axes == "CYX" and tif.imagej_metadata["channels"] == 3
-    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c.tif")], capture_output=True,
-                          text=True)
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path)], capture_output=True, text=True)
     assert done.returncode == 2 and done.stdout == ""
     line, = done.stderr.splitlines()
-    assert "c.tif: axis 'c' has 3 entries" in line and "Traceback" not in line
+    assert f"{path.name}: axis 'c' has {channels} entries" in line and "Traceback" not in line
     command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
     assert command[:2] == ["python", "-c"]
-    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
+    subprocess.run([sys.executable, *command[1:]], check=True, cwd=path.parent)
+    stack = path.with_name(path.name.rsplit(".", 1)[0] + "_stack.tif")
+    return json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(stack), "--json"],
+                                     capture_output=True, text=True, check=True).stdout)
+
+
+@pytest.mark.parametrize("channels", [2, 3, 5])
+@pytest.mark.parametrize("save", [{}, {"resolution": (2, 4), "metadata": {"axes": "ZCYX", "unit": "um", "spacing": 2.0}}])
+def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save, channels):
+    """tifffile's ``imwrite(f, stack, imagej=True)`` stores a (N, Y, X) stack
+    as N channels, which Fiji opens as channels and isoflow refuses; the
+    refusal, one line, gives the command that re-saves them as slices, and
+    what it writes is read as those slices, with the pixel size tifffile
+    reads in the original."""
+    stack = (labels[:, :, :channels] == 3).T.astype(np.uint8)  # N slices of 16x14, as (z, y, x)
+    data = stack[None] if save else stack  # ZCYX: one slice of N channels
+    tifffile.imwrite(tmp_path / "c.tif", data, imagej=True, **save)
+    with tifffile.TiffFile(tmp_path / "c.tif") as tif:
+        assert tif.series[0].axes == "CYX" and tif.imagej_metadata["channels"] == channels
+        x, y = (d / n for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
+    report = resaved_as_the_refusal_says(tmp_path / "c.tif", channels)
     with tifffile.TiffFile(tmp_path / "c_stack.tif") as tif:
         series = tif.series[0]
         assert series.axes == "ZYX" and series.shape == stack.shape
-        x, y = (d / n for n, d in (tif.pages[0].tags[t].value for t in (282, 283)))
-    report = json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "c_stack.tif"),
-                                        "--json"], capture_output=True, text=True, check=True).stdout)
     assert report["shape"] == list(series.shape[::-1]) and report["voxels"] == np.count_nonzero(stack)
     assert np.allclose(report["pitch"], [x, y, 2.0 if save else 1.0])
     assert report["unit"] == ("\u00b5m" if save else None)
+
+
+@pytest.mark.parametrize("channels", [2, 5])
+def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, channels):
+    """An OME-TIFF of one slice in several channels holds its voxel size in
+    its OME-XML's PhysicalSizeX/Y/Z, not in its resolution tags: the
+    command the refusal gives, run as the user would, saves the channels
+    as slices with the voxel size and unit tifffile reads in the original."""
+    data = (rng.random((1, channels, 6, 7)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={
+        "axes": "ZCYX", "PhysicalSizeX": 0.5, "PhysicalSizeXUnit": "nm", "PhysicalSizeY": 0.25,
+        "PhysicalSizeYUnit": "nm", "PhysicalSizeZ": 3.0, "PhysicalSizeZUnit": "nm"})
+    with tifffile.TiffFile(tmp_path / "c.ome.tif") as tif:
+        assert tif.series[0].axes == "CYX"
+        pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+    report = resaved_as_the_refusal_says(tmp_path / "c.ome.tif", channels)
+    assert report["shape"] == [7, 6, channels] and report["voxels"] == np.count_nonzero(data)
+    assert report["pitch"] == [pixels[f"PhysicalSize{axis}"] for axis in "XYZ"]
+    assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
+
+
+@pytest.mark.parametrize("slices", [3, 4])
+def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(tmp_path, rng, slices):
+    """``tifffile.imwrite(f, a)`` of a (3 or 4, Y, X) array stores one RGB(A)
+    image in planes, and every Python reader gives ``a`` back: ``isoflow
+    info --json``, run as the user runs it, reports that array's shape,
+    voxels and Euler characteristic (scikit-image's), with one warning line
+    that ``--quiet`` keeps."""
+    measure = pytest.importorskip("skimage.measure")
+    stack = (rng.random((slices, 12, 10)) < 0.5).astype(np.uint8)
+    with warnings.catch_warnings():  # tifffile's notice that a later version writes such data as pages
+        warnings.simplefilter("ignore", DeprecationWarning)
+        tifffile.imwrite(tmp_path / "t.tif", stack)
+    read = tifffile.imread(tmp_path / "t.tif")
+    for quiet in ([], ["--quiet"]):
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.tif"), "--json", *quiet],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        line, = done.stderr.splitlines()
+        assert line.startswith(f"isoflow info: warning: {tmp_path / 't.tif'}: ")
+        assert "PhotometricInterpretation 2" in line and "PlanarConfiguration 2" in line and "colours" in line
+        report = json.loads(done.stdout)
+        assert report["shape"] == list(read.shape[::-1]) and report["voxels"] == np.count_nonzero(read)
+        assert report["euler_characteristic"] == measure.euler_number(read != 0, connectivity=1)
 
 
 def moving_ball() -> np.ndarray:

@@ -63,6 +63,47 @@ def test_info_labels_choice_keeps_its_order_and_notes_absent_labels(tmp_path, ca
     assert "1 of the labels asked for does not occur (70000)" in capsys.readouterr().err
 
 
+def test_labels_asked_for_that_do_not_occur_are_a_warning_quiet_keeps_and_json_lists(tmp_path, segmentation):
+    """A label asked for that no voxel has (or the type cannot hold) was a
+    note, which --quiet dropped and --json did not say: a quiet run or a
+    script never learnt its table lacked a row it asked for. It is a
+    warning line, under --quiet too, and --json lists them as ``absent``;
+    the CSV, the JSON's ``labels`` and the surfaces hold the labels that
+    occur alone."""
+    path = tmp_path / "seg.npy"
+    np.save(path, segmentation)
+    present = set(np.unique(segmentation).tolist())
+    asked = [9, 40, 2, 70000, 3, 41]  # 70000: beyond uint16
+    absent = [v for v in asked if v not in present]
+    rows = [v for v in asked if v in present]
+    assert absent == [40, 70000, 41] and rows == [9, 2, 3]
+    spec = ",".join(map(str, asked))
+    line = f"warning: {path}: 3 of the labels asked for do not occur (40, 70000, 41)"
+
+    def isoflow(*args):
+        p = subprocess.run([sys.executable, "-m", "isoflow", *map(str, args), "--quiet"], capture_output=True,
+                           text=True)
+        assert p.returncode == 0, p.stderr
+        return p.stdout, p.stderr.splitlines()
+
+    out, err = isoflow("info", path, "--labels", spec, "--json", "--csv", tmp_path / "seg.csv")
+    assert err == [f"isoflow info: {line}"]
+    report = json.loads(out)
+    assert report["absent"] == absent
+    assert [r["label"] for r in report["labels"]] == rows
+    with open(tmp_path / "seg.csv", newline="") as fh:
+        assert [int(r["label"]) for r in csv.DictReader(fh)] == rows
+    out, err = isoflow("info", path, "--labels", "9,2", "--json")
+    assert (json.loads(out)["absent"], err) == ([], [])
+    assert json.loads(isoflow("info", path, "--labels", "--json")[0])["absent"] == []
+    out, err = isoflow("surface", path, "--labels", spec, "-o", f"{tmp_path}/each/", "--suffix", ".ply")
+    assert err == [f"isoflow surface: {line}"]
+    assert sorted(f.name for f in (tmp_path / "each").iterdir()) == sorted(f"label_{v}.ply" for v in rows)
+    out, err = isoflow("surface", path, "--labels", spec, "-o", tmp_path / "seg.glb")
+    assert err == [f"isoflow surface: {line}"]
+    assert len(trimesh.load(tmp_path / "seg.glb").geometry) == len(rows)
+
+
 def test_a_float_label_file_names_the_voxel_that_is_no_label(tmp_path, capsys, segmentation):
     scaled = segmentation.astype(np.float16)  # NIfTI's scaling gives floats; float16 warned of an overflow
     np.save(tmp_path / "f.npy", scaled)
@@ -243,6 +284,57 @@ def test_a_volume_holding_a_value_that_is_no_label_is_not_offered_labels(tmp_pat
     code, err = info(tmp_path / "whole.npy")
     assert code == 2 and "--labels" in err[0], err
     assert info(tmp_path / "whole.npy", "--labels")[0] == 0
+
+
+def test_a_float_store_refused_block_by_block_does_not_promise_labels(tmp_path):
+    """A float store is refused at its first block of values other than 0
+    and 1; where that block held whole values, the line offered --labels,
+    which then refused the NaN or the fraction of a later block, or the
+    NaN fill value of a chunk never written. Without reading every block
+    it cannot tell: --labels is offered on the condition that every voxel
+    holds a whole number, and not at all where the fill value is NaN and a
+    chunk was never written."""
+    zarr = pytest.importorskip("zarr")
+    offer = "or give every label its row with --labels"
+    maybe = "or, if every voxel holds a whole number, give every label its row with --labels"
+
+    def isoflow(*args):
+        p = subprocess.run([sys.executable, "-m", "isoflow", *map(str, args), "-q"], capture_output=True, text=True)
+        return p.returncode, p.stderr.splitlines()
+
+    def store(name, values, fill=0.0, written=None):
+        z = zarr.create_array(str(tmp_path / name), shape=values.shape, chunks=(4, 8, 8), dtype="float32",
+                              fill_value=fill)
+        z[: written or len(values)] = values[: written or len(values)]
+        return z[...]  # as zarr reads it
+
+    volume = np.zeros((12, 8, 8), np.float32)
+    volume[1:3, 1:3, 1:3] = 1  # the first block is binary
+    volume[5:7, 5:7, 5:7] = 2  # the second holds a label
+    for name, value in (("fraction.zarr", 2.5), ("nan.zarr", np.nan)):
+        volume[9, 5, 5] = value  # the third a value that is no label
+        read = store(name, volume)
+        assert not np.all(read == np.round(read))  # (NaN and 2.5 are no whole numbers)
+        code, err = isoflow("info", tmp_path / name)
+        assert code == 2 and len(err) == 1 and "e.g. 2.0)" in err[0], err
+        assert maybe in err[0] and offer not in err[0], err
+        assert isoflow("info", tmp_path / name, "--labels")[0] == 2  # what it would have promised is refused
+        code, err = isoflow("surface", tmp_path / name, "-o", tmp_path / "s.ply")
+        assert code == 2 and "or, if every voxel holds a whole number, write a closed surface per label" in err[0], err
+    # the condition holds: --labels reads it
+    volume[9, 5, 5] = 3
+    read = store("whole.zarr", volume)
+    assert np.all(read == np.round(read))
+    code, err = isoflow("info", tmp_path / "whole.zarr")
+    assert code == 2 and maybe in err[0], err
+    assert isoflow("info", tmp_path / "whole.zarr", "--labels")[0] == 0
+    # a NaN fill value: the chunk never written reads as NaN, which --labels refuses
+    read = store("nanfill.zarr", volume, fill=float("nan"), written=8)
+    assert np.isnan(read[8:]).all() and not np.isnan(read[:8]).any()
+    code, err = isoflow("info", tmp_path / "nanfill.zarr")
+    assert code == 2 and "--labels" not in err[0], err
+    assert "the array's fill value, nan, which is no label" in err[0], err
+    assert isoflow("info", tmp_path / "nanfill.zarr", "--labels")[0] == 2
 
 
 def test_info_labels_of_a_store_notes_chunks_read_as_a_nonzero_fill_value(tmp_path):

@@ -617,31 +617,93 @@ def test_tiff_colours_that_differ_are_refused_in_one_line(tmp_path):
         isoflow.read_volume(tmp_path / "c.tif")
 
 
+def _planes_saved_by(writer: str, path, stack: np.ndarray) -> None:
+    """``stack``, a (3 or 4, Y, X) array, saved as ``writer`` saves it: one
+    RGB(A) image in planes, through tifffile."""
+    with warnings.catch_warnings():  # tifffile's notice that a later version writes such data as pages
+        warnings.simplefilter("ignore", DeprecationWarning)
+        if writer == "tifffile":
+            pytest.importorskip("tifffile").imwrite(path, stack)
+        elif writer == "skimage":
+            pytest.importorskip("skimage.io").imsave(path, stack, check_contrast=False)
+        else:
+            pytest.importorskip("imageio.v3").imwrite(path, stack)
+
+
+@pytest.mark.parametrize("writer", ["tifffile", "skimage", "imageio"])
 @pytest.mark.parametrize("slices", [3, 4])
-def test_tiff_stack_that_tifffile_saved_as_planar_colour(tmp_path, slices):
-    """tifffile writes a (3 or 4, Y, X) uint8 stack as one planar RGB(A)
-    image unless told ``photometric='minisblack'``, and ImageJ opens it so:
-    equal planes are read as one grey image with a warning; planes that
-    differ are refused with the command that saves them as a stack, which
-    is then read as its slices."""
+def test_tiff_rgb_planes_are_read_as_the_slices_every_python_reader_gives(tmp_path, rng, writer, slices):
+    """tifffile, and scikit-image and imageio through it, save a (3 or 4,
+    Y, X) array as one RGB(A) image in planes, and read it back as that
+    array: isoflow reads the array tifffile reads, with one warning that
+    names the storage and says a viewer shows the planes as colours."""
+    tifffile = pytest.importorskip("tifffile")
+    measure = pytest.importorskip("skimage.measure")
+    stack = (rng.random((slices, 9, 11)) < 0.5).astype(np.uint8)
+    _planes_saved_by(writer, tmp_path / "p.tif", stack)
+    with tifffile.TiffFile(tmp_path / "p.tif") as tif:  # what the file says it holds
+        assert tif.pages[0].photometric == 2 and tif.pages[0].planarconfig == 2
+    read = tifffile.imread(tmp_path / "p.tif")
+    assert read.shape == stack.shape
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        obj = isoflow.read_volume(tmp_path / "p.tif")
+    said = [str(w.message) for w in caught if issubclass(w.category, IsoflowWarning)]
+    assert len(said) == 1 and said[0].startswith(str(tmp_path / "p.tif"))
+    assert "PhotometricInterpretation 2" in said[0] and "PlanarConfiguration 2" in said[0]
+    assert "an image viewer shows the planes as the colours of one image" in said[0]
+    assert np.array_equal(obj.volume, read.transpose(2, 1, 0) != 0)
+    assert obj.volume.sum() == np.count_nonzero(read)
+    assert isoflow.analyze(obj)["euler_characteristic"] == measure.euler_number(read != 0, connectivity=1)
+
+
+@pytest.mark.parametrize("slices", [3, 4])
+def test_tiff_equal_rgb_planes_are_slices_and_the_warning_saves_the_grey_image(tmp_path, slices):
+    """Equal planes are the slices tifffile reads too (a volume whose slices
+    are alike, or empty, is not read as 2D by its values); an image viewer
+    shows them as one grey image, and the command the warning gives saves
+    that image, which is then read as tifffile reads it."""
+    import shlex
+    import subprocess
+    import sys
+
     tifffile = pytest.importorskip("tifffile")
     plane = np.zeros((4, 5), np.uint8)
     plane[1:3, 1:4] = 1
-    with warnings.catch_warnings():  # tifffile's notice that a later version writes such data as pages
-        warnings.simplefilter("ignore", DeprecationWarning)
-        tifffile.imwrite(tmp_path / "same.tif", np.stack([plane] * slices))
-        stack = np.stack([plane * (k % 2) for k in range(slices)])
-        tifffile.imwrite(tmp_path / "differ.tif", stack)
-    with tifffile.TiffFile(tmp_path / "same.tif") as tif:  # what the file says it holds
-        assert tif.pages[0].photometric == 2 and tif.pages[0].planarconfig == 2
-    with pytest.warns(IsoflowWarning, match=rf"same\.tif: its {slices} equal planes, .* are read as one grey 2D image"):
-        obj = isoflow.read_volume(tmp_path / "same.tif")
-    assert np.array_equal(obj.volume, plane.T == 1)
-    with pytest.raises(IsoflowError, match=r"differ\.tif: holds \d planes that differ") as refused:
-        isoflow.read_volume(tmp_path / "differ.tif")
-    assert "\n" not in str(refused.value) and 'photometric="minisblack"' in str(refused.value)
-    tifffile.imwrite(tmp_path / "differ_stack.tif", tifffile.imread(tmp_path / "differ.tif"), photometric="minisblack")
-    assert np.array_equal(isoflow.read_volume(tmp_path / "differ_stack.tif").volume, stack.transpose(2, 1, 0) == 1)
+    _planes_saved_by("tifffile", tmp_path / "same.tif", np.stack([plane] * 3 + [np.full_like(plane, 255)] * (slices - 3)))
+    read = tifffile.imread(tmp_path / "same.tif")
+    with pytest.warns(IsoflowWarning, match=r"same\.tif: .* its colour planes are equal, shown as one grey image") as said:
+        obj = isoflow.read_volume(tmp_path / "same.tif", label=1)  # (the alpha plane holds 255)
+    assert np.array_equal(obj.volume, read.transpose(2, 1, 0) == 1)
+    command = shlex.split(str(said[0].message).split("save its first plane as a grey image and give that: ", 1)[1])
+    assert command[:2] == ["python", "-c"]
+    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", IsoflowWarning)
+        grey = isoflow.read_volume(tmp_path / "same_grey.tif")
+    assert np.array_equal(grey.volume, tifffile.imread(tmp_path / "same_grey.tif").T == 1)
+    assert np.array_equal(grey.volume, plane.T == 1)
+
+
+def test_tiff_stack_of_rgb_pages_in_planes_is_read_as_rgb_pages_are(tmp_path):
+    """A stack of RGB pages stored in planes, a (slices, 3, Y, X) array that
+    tifffile reads back 4D, is read as a stack of interleaved RGB pages is:
+    grey where the colours are equal, refused in one line where they
+    differ."""
+    tifffile = pytest.importorskip("tifffile")
+    stack = np.zeros((2, 4, 5), np.uint8)
+    stack[:, 1:3, 1:4] = 255
+    tifffile.imwrite(tmp_path / "s.tif", np.stack([stack] * 3, axis=1), photometric="rgb", planarconfig="separate")
+    tifffile.imwrite(tmp_path / "c.tif", np.stack([stack, stack, stack // 5], axis=1), photometric="rgb",
+                     planarconfig="separate")
+    with tifffile.TiffFile(tmp_path / "s.tif") as tif:
+        assert tif.series[0].axes == "QSYX" and tif.pages[0].planarconfig == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", IsoflowWarning)
+        obj = isoflow.read_volume(tmp_path / "s.tif")
+    assert np.array_equal(obj.volume, tifffile.imread(tmp_path / "s.tif")[:, 0].transpose(2, 1, 0) == 255)
+    with pytest.raises(IsoflowError, match=r"^\S*c\.tif: holds colours, not labels or a mask \(its RGB channels differ\)"):
+        isoflow.read_volume(tmp_path / "c.tif")
 
 
 def test_tiff_stack_of_grey_rgb_pages(tmp_path):

@@ -79,10 +79,11 @@ def refuse_single_label(args: argparse.Namespace) -> None:
 
 def read_table(args: argparse.Namespace, surfaces: bool = True):
     """The label image named on the command line and its table, with only
-    the labels that occur (a note names those asked for that do not):
-    ``(about, connectivity, table, image)``, ``about`` its shape, type,
-    voxel size, origin and their length unit, ``image`` None for a zarr store (read block by
-    block)."""
+    the labels that occur (a warning names those asked for that do not):
+    ``(about, connectivity, table, image, absent)``, ``about`` its shape,
+    type, voxel size, origin and their length unit, ``image`` None for a
+    zarr store (read block by block), ``absent`` the labels asked for that
+    have no row, in the order asked."""
     from ..digital.connectivity import resolve_connectivity
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
@@ -120,18 +121,35 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     if every:
         table, missing = chosen_rows(table, within)
     present = table["voxels"] > 0
+    absent: list[int] = []
     if every or not present.all() or beyond:
-        absent = (missing if every else table["label"][~present].tolist()) + beyond
+        absent = in_order_asked((missing if every else table["label"][~present].tolist()), beyond, asked)
         if not present.any():
             raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
-        if not args.quiet:
-            verb = "does" if len(absent) == 1 else "do"
-            print(f"isoflow {args.command}: note: {args.input}: {len(absent)} of the labels asked for {verb} not "
-                  f"occur ({_some(absent)})", file=sys.stderr)
+        # a warning, which --quiet keeps: the table lacks rows that were asked for
+        verb = "does" if len(absent) == 1 else "do"
+        print(f"isoflow {args.command}: warning: {args.input}: {len(absent)} of the labels asked for {verb} not "
+              f"occur ({_some(absent)})", file=sys.stderr)
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
         raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
-    return about, conn, table, image
+    return about, conn, table, image, absent
+
+
+def in_order_asked(missing: list[int], beyond: list[int], asked: list[int]) -> list[int]:
+    """The labels asked for that have no row, in the order asked: those
+    the image's type holds but no voxel has (``missing``, in that order)
+    and those it cannot hold (``beyond``, in that order too).
+
+    Examples
+    --------
+    >>> in_order_asked([7, 9], [300], [7, 300, 3, 9])
+    [7, 300, 9]
+    """
+    if not beyond or not missing:  # each already in the order asked
+        return missing + beyond
+    gone = set(missing).union(beyond)
+    return [v for v in asked if v in gone]
 
 
 def is_store(path) -> bool:
@@ -253,14 +271,14 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{args.input}: --csv - and --json both print on stdout: give one of them")
     if args.csv and not to_stdout:
         check_output_path(args.csv, args.force)
-    about, conn, table, _ = read_table(args, surfaces=not args.no_surfaces)
+    about, conn, table, _, absent = read_table(args, surfaces=not args.no_surfaces)
     if to_stdout:  # the table alone on stdout, for a pipe
         sys.stdout.writelines(csv_rows(table))
         return 0
     if args.csv:
         write_csv(args.csv, table, args.force)
     if args.json:
-        sys.stdout.writelines(json_text(args.input, about, conn, table))
+        sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
         sys.stdout.write("\n")
         return 0
     print(format_table(args.input, about, conn, table))
@@ -269,12 +287,13 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     return 0
 
 
-def json_text(name, about: dict, conn: int, table: dict) -> Iterator[str]:
-    """What ``--json`` prints, in pieces: one object, the image and then
-    ``labels``, one object per label (NaN as null)."""
+def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> Iterator[str]:
+    """What ``--json`` prints, in pieces: one object, the image, ``absent``
+    (the labels asked for that have no row) and then ``labels``, one
+    object per label (NaN as null)."""
     head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
-            "connectivity": conn}
+            "connectivity": conn, "absent": absent}
     yield json.dumps(head)[:-1] + ', "labels": '
     yield from json_rows(table)
     yield "}"
@@ -388,7 +407,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                            "triangles in binary")
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
-    _, conn, table, image = read_table(args)
+    _, conn, table, image, _ = read_table(args)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]
@@ -439,7 +458,10 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         if target[0] == "dir" or not args.no_check:
             obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
                                 origin=image.origin)
-        meshes[r] = (names[r], mesh, obj, None if args.no_check else mesh.components())
+        # the read-back compares the file's genus with the table's surfaces
+        # (counted from the pieces, not from this mesh), as info --labels prints them
+        surfaces = None if args.no_check else [{"genus": g} for g in table["genera"][r]]
+        meshes[r] = (names[r], mesh, obj, surfaces)
 
 
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:

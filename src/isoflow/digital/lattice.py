@@ -338,22 +338,27 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     """A finite number (``length`` None; a one-element array will do) or a
     vector of ``length`` numbers, integers where ``integral``, within
     ``+-bound``; otherwise an error naming the field and the value."""
-    arr = np.asarray(value)
-    shown = repr(arr.tolist()) if arr.size <= 8 else f"an array of shape {arr.shape}"
-    want = ("an integer" if integral else "a number") if length is None else (
-        f"{length} {'integers' if integral else 'numbers'}, one per axis")
-    bad = IsoflowError(f"'{name}' must be {want}, got {shown}")
+    arr = given = np.asarray(value)
+
+    def shown() -> str:
+        return repr(given.tolist()) if given.size <= 8 else f"an array of shape {given.shape}"
+
+    def bad() -> IsoflowError:
+        want = ("an integer" if integral else "a number") if length is None else (
+            f"{length} {'integers' if integral else 'numbers'}, one per axis")
+        return IsoflowError(f"'{name}' must be {want}, got {shown()}")
+
     if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
         # numbers held as Python objects (a list of ints and floats through
         # np.array(..., dtype=object), a pandas column): numbers all the same
         arr = arr.astype(np.float64)
     if arr.dtype.kind not in "biuf":  # strings, complex, other objects
-        raise bad
+        raise bad()
     if (arr.size != 1) if length is None else (arr.shape != (length,)):
-        raise bad
+        raise bad()
     f = arr.astype(np.float64)
     if not np.isfinite(f).all() or (integral and (f != np.round(f)).any()):
-        raise bad
+        raise bad()
     if bound is not None and (np.abs(f) > bound).any():
-        raise IsoflowError(f"'{name}' {shown} is out of range (beyond +-{bound})")
+        raise IsoflowError(f"'{name}' {shown()} is out of range (beyond +-{bound})")
     return f.item() if length is None else f

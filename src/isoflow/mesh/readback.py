@@ -247,22 +247,17 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
     isoflow's counts: ``parts`` holds ``(name, mesh, obj, components)``;
     ``progress(done, total)`` hears of the nodes measured. Returns the
     problems, one line each (none: every node agrees)."""
-    import trimesh
-
     path = Path(path)
     try:
-        scene = trimesh.load(staged(path), force="scene", process=False)
+        nodes = scene_nodes(staged(path))
     except Exception as exc:
         return [f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"]
     problems, found, placed = [], [], []
     for name, mesh, obj, components in parts:
-        if name not in scene.graph.nodes_geometry:
+        if name not in nodes:
             problems.append(f"{path}: no node {name}")
             continue
-        transform, geometry = scene.graph[name]
-        tm = scene.geometry[geometry]
-        placed.append((np.asarray(tm.vertices, np.float64) @ transform[:3, :3].T + transform[:3, 3],
-                       np.asarray(tm.faces), volume_unit(obj)))
+        placed.append((*nodes[name], volume_unit(obj)))
         found.append((name, mesh, obj, components))
     for (name, mesh, obj, components), theirs in zip(found, scene_figures(placed, progress)):
         ours = isoflow_figures(mesh, obj, components)
@@ -277,8 +272,41 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
     return problems
 
 
-#: triangles of the nodes :func:`scene_figures` measures at once (about
-#: what trimesh's sorts of edges keep in the processor's caches)
+def scene_nodes(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every node of a binary glTF that holds a mesh, as trimesh's glTF
+    reader parses it: ``name -> (vertices, triangles)``, the vertices
+    placed by the node's transform and those of the nodes above it. The
+    reader's arrays are taken as they are, without the mesh object per
+    node that ``trimesh.load`` builds (most of a scene's read-back where
+    it has thousands of nodes)."""
+    from trimesh.exchange.gltf import load_glb
+
+    with open(path, "rb") as fh:
+        read = load_glb(fh)
+    edges = {edge["frame_to"]: edge for edge in read["graph"]}
+
+    def placement(frame: str) -> np.ndarray:
+        edge = edges.get(frame)
+        if edge is None:  # the root
+            return np.eye(4)
+        matrix = np.asarray(edge.get("matrix", np.eye(4)), np.float64)
+        return placement(edge["frame_from"]) @ matrix
+
+    nodes = {}
+    for frame, edge in edges.items():
+        if "geometry" not in edge:
+            continue
+        geometry = read["geometry"][edge["geometry"]]
+        vertices = np.asarray(geometry["vertices"], np.float64)
+        transform = placement(frame)
+        if not np.array_equal(transform, np.eye(4)):
+            vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
+        nodes[frame] = (vertices, np.asarray(geometry["faces"], np.int64).reshape(-1, 3))
+    return nodes
+
+
+#: triangles of the nodes :func:`scene_figures` measures at once (the
+#: volume's temporaries, some 100 bytes a triangle, stay in the caches)
 UNION_TRIANGLES = 1 << 17
 
 
@@ -298,41 +326,35 @@ def scene_figures(placed: list, progress=None) -> list[dict]:
 
 
 def union_figures(placed: list) -> list[dict]:
-    """:func:`mesh_figures` of some nodes of a scene from one mesh of them
-    all: trimesh's watertight and winding tests, and its vertex components
-    (``body_count``'s), run once over the union, whose nodes share no
-    vertex, then counted per node. Where the union is not closed each node
-    is measured alone, so that the open ones are named."""
+    """:func:`mesh_figures` of some nodes of a scene, measured together:
+    each node's closedness, Euler number and bodies by
+    :func:`isoflow.mesh.node_topology.node_topology` (trimesh's
+    definitions), its volume as :func:`mesh_figures` takes it. A node that
+    is not closed is measured alone by trimesh, so that its figures are
+    trimesh's own."""
     import trimesh
-    from trimesh.graph import csgraph
 
+    from .node_topology import node_topology
+
+    n = len(placed)
     counts = np.array([len(v) for v, _, _ in placed], np.int64)
     sizes = np.array([len(f) for _, f, _ in placed], np.int64)
-    first = np.concatenate([[0], np.cumsum(counts)])
-    union = None
-    if len(placed) and sizes.all():
-        union = trimesh.Trimesh(np.concatenate([v for v, _, _ in placed]),
-                                np.concatenate([f + at for (_, f, _), at in zip(placed, first)]), process=False)
-    if union is None or not (union.is_watertight and union.is_winding_consistent):
-        return [mesh_figures(trimesh.Trimesh(v, f, process=False), unit) for v, f, unit in placed]
-    n = len(placed)
+    vfirst, ffirst = np.concatenate([[0], np.cumsum(counts)]), np.concatenate([[0], np.cumsum(sizes)])
+    faces = np.concatenate([np.asarray(f, np.int64).reshape(-1, 3) + at for (_, f, _), at in zip(placed, vfirst)])
+    topology = node_topology(faces, vfirst, ffirst)
     of_vertex, of_face = np.repeat(np.arange(n), counts), np.repeat(np.arange(n), sizes)
-    referenced = union.referenced_vertices
-    # closed: every edge in two faces, so V - E + F = V - F / 2 (as mesh_figures)
-    euler = np.bincount(of_vertex, referenced, n).astype(np.int64) - sizes // 2
-    _, labels = csgraph.connected_components(union.edges_sparse, directed=False, return_labels=True)
-    groups = np.unique(of_vertex * (int(labels.max()) + 1) + labels) // (int(labels.max()) + 1)
-    bodies = np.bincount(groups, minlength=n) - np.bincount(of_vertex, ~referenced, n).astype(np.int64)
     units = np.array([unit for _, _, unit in placed], np.float64)
-    v = np.asarray(union.vertices, np.float64)
-    means = np.stack([np.bincount(of_vertex, v[:, d], n) for d in range(3)], axis=1) / counts[:, None]
+    v = np.concatenate([v for v, _, _ in placed]) if n else np.zeros((0, 3))
+    means = np.stack([np.bincount(of_vertex, v[:, d], n) for d in range(3)], axis=1) / np.maximum(counts, 1)[:, None]
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
         local = (v - means[of_vertex]) / units[of_vertex, None]
-        a, b, c = (local[union.faces[:, k]] for k in range(3))
-        triple = (a * np.cross(b, c)).sum(axis=1)
-        volume_units = np.bincount(of_face, triple, n) / 6
+        a, b, c = (local[faces[:, k]] for k in range(3))
+        volume_units = np.bincount(of_face, (a * np.cross(b, c)).sum(axis=1), n) / 6
         volume = volume_units * units ** 3
+    euler, bodies = topology["euler"], topology["bodies"]
     return [{"watertight": True, "euler_number": int(euler[t]),
              "genus": int(bodies[t] - euler[t] // 2) if euler[t] % 2 == 0 else None,
              "volume": float(volume[t]), "volume_units": float(volume_units[t]), "area_units": None}
+            if topology["closed"][t] else
+            mesh_figures(trimesh.Trimesh(placed[t][0], placed[t][1], process=False), placed[t][2])
             for t in range(n)]

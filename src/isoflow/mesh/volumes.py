@@ -300,8 +300,11 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     options that select its labels: one (``--label N``) and, where the
     command takes it (``every``) and the image has a table (``exc.every``:
     2D and 3D), all (``--labels``): its table, or with ``surfaces`` (the
-    surface command) a surface per label.  ``ndim``: the image's
-    dimension, kept for the command (else ``exc.ndim``).
+    surface command) a surface per label; on the condition that every
+    voxel holds a whole number where ``exc.every`` is None (a float store
+    refused at a block of whole values: the blocks not read may hold
+    NaN or a fraction, which ``--labels`` refuses).  ``ndim``: the
+    image's dimension, kept for the command (else ``exc.ndim``).
 
     Examples
     --------
@@ -309,12 +312,16 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     'v.npy: not a binary volume, or select one label with --label N (label=N)'
     >>> str(with_label_options(NotBinary("v.npy: not a binary volume"), surfaces=True))
     'v.npy: not a binary volume, or select one label with --label N (label=N), or write a closed surface per label with --labels'
+    >>> str(with_label_options(NotBinary("v.zarr: not a binary volume", every=None), surfaces=True)).split("), ")[1]
+    'or, if every voxel holds a whole number, write a closed surface per label with --labels'
     """
     ndim = exc.ndim if ndim is None else ndim
-    every = every and exc.every
+    table = exc.every if every else False
     offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
-    options = ", or select one label with --label N (label=N)" + (f", {offer}" if every else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=every, ndim=ndim)
+    if table is None:  # (not known: said as a condition, not a promise)
+        offer = offer.replace("or ", "or, if every voxel holds a whole number, ", 1)
+    options = ", or select one label with --label N (label=N)" + (f", {offer}" if table is not False else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim)
 
 
 def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:

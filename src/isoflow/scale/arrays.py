@@ -196,8 +196,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # the array is refused by a label table too: --labels is not offered
         values = arr[bad]
         labels = arr.dtype.kind in "iu" or bool(np.all(np.isfinite(values) & (values == np.round(values))))
+        # a float block's whole values say nothing of the blocks not read,
+        # which a label table reads too: whether it takes them is not known
+        every = None if labels and near is not None and arr.dtype.kind == "f" else labels
         raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare, every=labels)
+                        bare, every=every)
     return arr.astype(bool)
 
 
@@ -209,7 +212,10 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     wrote, and the value alone would not say why. A fill value that is no
     label (NaN, infinite, not whole) is refused by a label table too, so
     the refusal offers a store written with ``fill_value=0`` instead of
-    one (``every`` False: no ``--labels``).
+    one (``every`` False: no ``--labels``). So is a block of whole values
+    whose other blocks are not read (``every`` None) where the fill value
+    is no label: the chunks never written, read as it, would be refused;
+    the line names the fill value.
 
     Parameters
     ----------
@@ -236,6 +242,11 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     threshold, or write the store with fill_value=0, which a chunk never written then reads as 0
     >>> named.every  # a label table refuses NaN too: no --labels offered
     False
+    >>> e = NotBinary("s.zarr: not a binary volume (8 voxels hold values other than 0 and 1, e.g. 2.0); threshold",
+    ...               every=None)
+    >>> other = fill_value_named(e, float("nan"), np.float32)  # a block of whole values, of a store filled with NaN
+    >>> other.every, str(other).split("; ")[1]
+    (False, "zarr reads a chunk never written as the array's fill value, nan, which is no label)")
     """
     if fill is None:
         return exc
@@ -244,11 +255,17 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     except (TypeError, ValueError):
         return exc
     example = f"e.g. {value})"
+    label = bool(np.isfinite(value) and value == np.round(value)) if np.asarray(value).dtype.kind == "f" else True
     if example not in exc.bare:
-        return exc
+        if label or exc.every is not None:
+            return exc
+        # a block of whole values, of a store whose chunks never written a
+        # label table refuses: --labels is not offered, and the line says why
+        told = f"; zarr reads a chunk never written as the array's fill value, {value}, which is no label); "
+        unlabelled = exc.bare.replace("); ", told, 1)  # (the end of binary's example)
+        return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim)
     named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
     bare = exc.bare.replace(example, named, 1)
-    label = bool(np.isfinite(value) and value == np.round(value)) if np.asarray(value).dtype.kind == "f" else True
     if label:
         return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim)
     # a label table refuses the value as it does here: a store with fill 0 is read either way
@@ -262,10 +279,13 @@ class NotBinary(IsoflowError):
     the options that select its labels, in memory or block by block, to
     ``bare`` (the message without them). ``every``: whether ``--labels``
     can take the image (a label table is 2D or 3D), so may be offered;
+    None where that is not known (a float block of whole values, read
+    before the blocks that may hold a value that is no label), so that it
+    is offered on that condition;
     ``ndim``: the image's dimension where known (``surface --labels`` takes
     3D images only)."""
 
-    def __init__(self, message: str, bare: str | None = None, every: bool = True, ndim: int | None = None):
+    def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None):
         super().__init__(message)
         self.bare = message if bare is None else bare
         self.every = every

@@ -13,19 +13,23 @@ a series of 2D images) must have length 1: a time series is not a z-stack,
 however alike their pages look. One slice of several channels is what
 tifffile's ``imwrite(f, stack, imagej=True)`` makes of a (slices, rows,
 columns) stack, and Fiji opens it as channels: it is refused with the
-command that saves the channels as slices. A file of several image series
+command that saves the channels as slices, keeping the voxel size (an
+OME-TIFF's PhysicalSizeX/Y/Z too). A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
 Grey stored as colour is read as that grey, as a PNG's is: RGB whose three
 channels are equal, or grey, either with an alpha channel (ignored); RGB
-whose channels differ is refused. A (3 or 4, Y, X) stack saved by
-tifffile's ``imwrite`` without ``photometric='minisblack'`` is stored as
-one RGB(A) image in planes (PlanarConfiguration 2), and ImageJ opens it as
-one colour image: the file's tags say so, and isoflow reads it so, as one
-grey 2D image where every plane is equal (with a warning, and the command
-that saves it as a stack), and refuses it with that command where they
-differ.
+whose channels differ is refused; so are a stack's RGB pages, whether
+their samples are interleaved or in planes. One RGB image whose samples
+are stored as planes (PhotometricInterpretation 2, PlanarConfiguration 2)
+is what tifffile's ``imwrite``, and scikit-image's and imageio's through
+it, make of a (3 or 4, Y, X) array, and what all of them read back as that
+array; image editors write RGB interleaved. Its planes are read as the
+slices of a volume, the array tifffile reads, equal or not (a volume whose
+slices are alike, or empty, is not read as 2D by its values), with a
+warning that an image viewer shows them as the colours of one image (and,
+where the colour planes are equal, the command that saves that grey image).
 
 MinIsWhite (PhotometricInterpretation 0: 0 is shown white, as scanners,
 fax-style 1-bit writers and Fiji's inverting LUT save masks) is read as
@@ -81,6 +85,7 @@ is kept to about 9 digits, and so an origin read back through it.
 from __future__ import annotations
 
 import functools
+import json
 import re
 from pathlib import Path
 
@@ -146,7 +151,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             pitch, unit = [p * scale for p in pitch], "\u00b5m"
         photometric, planar, extra = int(page.photometric), int(page.planarconfig) == 2, tuple(page.extrasamples)
         spacing = imagej.get("spacing")
-        sizes, centres, ome_unit = _ome_placement(tif.ome_metadata, where) if tif.is_ome else ({}, {}, None)
+        ome = tif.ome_metadata if tif.is_ome else None
+        sizes, centres, ome_unit = _ome_placement(ome, where) if ome else ({}, {}, None)
         unit = ome_unit if sizes else unit  # (the OME voxel sizes replace the tags' and ImageJ's)
         axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
@@ -158,7 +164,10 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             detail = re.sub(r"<[^<>]*>\s*", "", damage[0])  # tifffile's object names
             detail = re.sub(r"^raised \w+\((['\"])(.*)\1\)$", r"\2", detail)
             raise IsoflowError(f"{where}: not a readable TIFF file (cut short or damaged: {detail})")
-    data, axes = _grey(data, axes, photometric, planar, extra, where)
+    if _planes_of_one_image(axes, data.shape, photometric, planar):
+        axes[axes.index("S")] = "Z"
+        note(_planes_as_slices(where, np.moveaxis(data, axes.index("Z"), 0), extra))
+    data, axes = _grey(data, axes, photometric, extra, where)
     if "Z" not in axes:  # a plain page stack: tifffile names its axis Q or I
         stack = [i for i, a in enumerate(axes) if a in "QI" and data.shape[i] > 1]
         if len(stack) == 1:
@@ -169,7 +178,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     except IsoflowError as exc:
         if not _channels_of_one_slice(axes, data.shape):
             raise
-        raise IsoflowError(f"{exc}; " + _as_slices(where, data.shape[axes.index("C")])) from None
+        raise IsoflowError(f"{exc}; " + _as_slices(where, data.shape[axes.index("C")], ome)) from None
     if vol.ndim >= 3:
         depth = _spacing(imagej, where)
         # ImageJ scales a pixelDepth other than its default 1 (FileOpener.setCalibration)
@@ -360,41 +369,54 @@ def micron_scale(tags: dict[int, object], pitch: float, unit: object = None, ima
     return 1.0, 1.0
 
 
-def _grey(data: np.ndarray, axes: list[str], photometric: int, planar: bool, extra: tuple,
-          where: str) -> tuple[np.ndarray, list[str]]:
+def _grey(data: np.ndarray, axes: list[str], photometric: int, extra: tuple, where: str) -> tuple[np.ndarray, list[str]]:
     """``data`` without its samples axis ``S`` where the samples are grey
     stored as colour, as a PNG's are read (see :mod:`.png`): RGB whose
     three channels are equal, or grey, either with alpha (ignored). Other
     samples are left for :func:`to_xyz` to refuse as channels.
 
-    Samples stored as planes (PlanarConfiguration 2) are what tifffile
-    writes for a stack of 3 or 4 slices not marked ``minisblack``: the
-    file says RGB(A), and ImageJ opens it as one colour image, so it is
-    read as one; but every plane, alpha too, must then be equal, and the
-    reading is said, for such a stack's slices would be its planes."""
+    The samples of a stack's RGB pages are read so whether they are stored
+    interleaved or as planes: there the planes cannot be slices, the pages
+    are (one RGB image in planes is :func:`_planes_of_one_image`)."""
     colours = COLOUR_SAMPLES.get(photometric)
     if "S" not in axes or colours is None or not all(int(e) in ALPHA for e in extra):
         return data, axes
     s = axes.index("S")
     samples = np.moveaxis(data, s, 0)
-    planar = planar and photometric == RGB  # only RGB(A) planes are what tifffile makes of 3 or 4 slices
     if samples.shape[0] != colours + len(extra):
         return data, axes
-    channels = samples if planar else samples[:colours]
-    grey = channels[0]
-    kind = "RGB" + ("A" if extra else "")
-    same = bool((channels == grey).all())
-    if planar and not same:
-        raise IsoflowError(f"{where}: holds {len(channels)} planes that differ, stored as the colours of one "
-                           f"image ({kind}, planar); isoflow reads no colours: "
-                           + _as_stack(where, "", "if its planes are the slices of one volume"))
-    if not same:
+    grey = samples[0]
+    if not (samples[:colours] == grey).all():
         raise colours_refused(where, "RGB", "a grey (8- or 16-bit) TIFF")
-    if planar:
-        note(f"{where}: its {len(channels)} equal planes, stored as the colours of one image ({kind}, "
-             "planar), are read as one grey 2D image; "
-             + _as_stack(where, "", "if they are the slices of one volume"))
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
+
+
+def _planes_of_one_image(axes: list[str], shape: tuple[int, ...], photometric: int, planar: bool) -> bool:
+    """Whether the file is one RGB image whose samples are stored as planes
+    (PlanarConfiguration 2), the samples being its only axis beside the
+    rows and columns with more than one entry: what tifffile, and
+    scikit-image's and imageio's ``imsave`` through it, make of a (3 or 4,
+    Y, X) array, which all of them read back as that array."""
+    return planar and photometric == RGB and "S" in axes and all(n == 1 or a in "SYX" for a, n in zip(axes, shape))
+
+
+def _planes_as_slices(where: str, planes: np.ndarray, extra: tuple) -> str:
+    """The warning for one RGB image stored in ``planes`` (the first axis),
+    read as the slices of a volume: an image viewer shows them as the
+    colours of one image, which a user who meant that image must know; where
+    its colour planes are equal, the image shown is grey, and the line
+    gives the command that saves it as that grey image."""
+    kind = "RGBA" if len(planes) == 4 and extra and int(extra[0]) in ALPHA else "RGB"
+    said = (f"{where}: one {kind} image stored in {len(planes)} separate planes (PhotometricInterpretation 2, RGB; "
+            f"PlanarConfiguration 2, separate), as tifffile, scikit-image and imageio save a ({len(planes)}, rows, "
+            "columns) array, is read as the slices of a volume, the array they read back; an image viewer shows "
+            "the planes as the colours of one image")
+    if not (planes[1:3] == planes[0]).all():
+        return said
+    return said + "; its colour planes are equal, shown as one grey image: " + _resaved(
+        where, "if it is that image", lambda src, dst: f"t = tifffile.TiffFile({src}); p = t.pages[0]; "
+        f"tifffile.imwrite({dst}, p.asarray()[0], resolution=p.resolution, resolutionunit=p.resolutionunit)",
+        "save its first plane as a grey image", "_grey")
 
 
 def white_is_zero(where: str, label: object = None) -> str | None:
@@ -494,11 +516,20 @@ def _channels_of_one_slice(axes: list[str], shape: tuple[int, ...]) -> bool:
     return "C" in axes and all(n == 1 or a in "CYX" for a, n in zip(axes, shape))
 
 
-def _as_slices(where: str, channels: int) -> str:
+def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
     """The advice to save a file of ``channels`` channels and one slice as
     that many slices, keeping its resolution tags and ImageJ metadata
     (tifffile's ``metadata={'axes': 'ZYX'}``), with the command that does
-    it."""
+    it; an OME-TIFF (``ome``, its OME-XML) whose voxel size is its
+    PhysicalSizeX/Y/Z is saved as an OME-TIFF with those, which its
+    resolution tags need not hold."""
+    sizes = _ome_sizes(ome)
+    if sizes:
+        kept = ", ".join(f'"{name}": {float(value)!r}' if not name.endswith("Unit") else f'"{name}": {json.dumps(value)}'
+                         for name, value in sizes.items())
+        return _resaved(where, f"if its {channels} channels are the slices of one volume",
+                        lambda src, dst: f"tifffile.imwrite({dst}, tifffile.imread({src}), ome=True, "
+                                         f'metadata={{"axes": "ZYX", {kept}}})')
     return _resaved(where, f"if its {channels} channels are the slices of one volume",
                     lambda src, dst: f"t = tifffile.TiffFile({src}); p = t.pages[0]; tifffile.imwrite({dst}, "
                                      "t.asarray(), imagej=t.is_imagej, resolution=p.resolution, "
@@ -506,17 +537,16 @@ def _as_slices(where: str, channels: int) -> str:
                                      '"axes": "ZYX"})')
 
 
-def _resaved(where: str, condition: str, write) -> str:
-    """The advice, under ``condition``, to save the file as one stack
-    beside it (``NAME_stack.tif``) and give that, with the ``python -c``
-    command whose tifffile call ``write(source, stack)`` (the two paths as
-    Python literals) writes it."""
-    import json
+def _resaved(where: str, condition: str, write, saved: str = "save them as one stack", suffix: str = "_stack") -> str:
+    """The advice, under ``condition``, to ``saved`` (save the file as one
+    stack) beside it (``NAME_stack.tif``, the stem ending in ``suffix``)
+    and give that, with the ``python -c`` command whose tifffile call
+    ``write(source, stack)`` (the two paths as Python literals) writes it."""
     import shlex
 
-    stack = str(Path(where).with_name(Path(where).stem + "_stack.tif"))
+    stack = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
     code = f"import tifffile; {write(json.dumps(where), json.dumps(stack))}"
-    return f"{condition}, save them as one stack and give that: python -c {shlex.quote(code)}"
+    return f"{condition}, {saved} and give that: python -c {shlex.quote(code)}"
 
 
 #: metres per length unit of OME-XML (``UnitsLength``, schema 2016-06), and
@@ -548,12 +578,7 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
     centres); one in "reference frame" units, the schema's default, is
     taken in the voxel size's unit. The third item is that unit
     (:func:`length_unit`)."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        pixels = ET.fromstring(xml or "").find(".//{*}Pixels")
-    except ET.ParseError:
-        return {}, {}, None  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
+    pixels = _ome_pixels(xml)
     if pixels is None:
         return {}, {}, None
     unit = pixels.get("PhysicalSizeXUnit") or "\u00b5m"
@@ -574,6 +599,26 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
         if centre is not None:
             centres[axis] = centre
     return sizes, centres, length_unit(unit)
+
+
+def _ome_sizes(xml: str | None) -> dict[str, str]:
+    """The ``Pixels`` element's PhysicalSizeX/Y/Z attributes and their
+    units, as an OME-TIFF's XML ``xml`` writes them (none where absent or
+    unreadable)."""
+    pixels = _ome_pixels(xml)
+    names = [f"PhysicalSize{axis}{unit}" for axis in "XYZ" for unit in ("", "Unit")]
+    return {} if pixels is None else {name: pixels.get(name) for name in names if pixels.get(name) is not None}
+
+
+def _ome_pixels(xml: str | None):
+    """The ``Pixels`` element of OME-XML ``xml`` (the first image's), or
+    None where there is none or the XML is unreadable."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        return ET.fromstring(xml or "").find(".//{*}Pixels")
+    except ET.ParseError:
+        return None  # (unreadable OME-XML: the tags and ImageJ's spacing, as for any TIFF)
 
 
 def _ome_length(element, name: str, unit: str, where: str) -> float | None:
