@@ -81,10 +81,11 @@ class ArrayFlow:
         _, keep = flow_moves(state, self.conn)
         return state.on_dual_lattice(keep).cropped()
 
-    def change_region(self, state: DigitalObject):
+    def change_region(self, state: DigitalObject, betti: tuple[list, list] | None = None):
         """Where the plain step from ``state`` is no simple deformation
-        (:func:`isoflow.flow.guard.change_region`)."""
-        return control.change_region(state, *flow_moves(state, self.conn), self.conn)
+        (:func:`isoflow.flow.guard.change_region`); ``betti``: the Betti
+        numbers of ``state`` and of the next state, where known."""
+        return control.change_region(state, *flow_moves(state, self.conn), self.conn, betti)
 
     def guarded(self, state: DigitalObject, betti: list[int], seen: set, may_grow: bool):
         got = control.guarded_step(state, self.conn, betti, seen=seen, may_grow=may_grow)
@@ -124,8 +125,8 @@ class BitFlow(ArrayFlow):
 
         return packed_step(state, self.conn)
 
-    def change_region(self, state):
-        return super().change_region(state.to_object())
+    def change_region(self, state, betti: tuple[list, list] | None = None):
+        return super().change_region(state.to_object(), betti)
 
     def guarded(self, state, betti: list[int], seen: set, may_grow: bool):
         from .bitguard import packed_guarded_step

@@ -228,8 +228,9 @@ def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: Sto
         record = engine.record(new, step + 1)
         before = trace.records[-1]["betti"]
         if record["betti"] != before and new.voxels:
-            changes.append({"step": step + 1, "before": before, "after": record["betti"],
-                            "where": engine.change_region(state), "applied": not until_topology_change})
+            where = engine.change_region(state, (before, record["betti"]))
+            changes.append({"step": step + 1, "before": before, "after": record["betti"], "where": where,
+                            "applied": not until_topology_change})
             if until_topology_change:
                 return "topology-change", changes
         step += 1
