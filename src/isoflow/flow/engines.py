@@ -107,7 +107,8 @@ class ArrayFlow:
 class BitFlow(ArrayFlow):
     """States as bit rows (:class:`isoflow.flow.bitflow.PackedObject`);
     the compiled step and guard. Where a topology change is reported, the
-    place is found on the arrays, as :class:`ArrayFlow` finds it. (The bit
+    place is found on the arrays, as :class:`ArrayFlow` finds it, but for
+    the vertices the step leaves stuck, found on the bit rows. (The bit
     row modules are imported on use: they start numba.)"""
 
     def start(self, obj: DigitalObject):
@@ -126,7 +127,10 @@ class BitFlow(ArrayFlow):
         return packed_step(state, self.conn)
 
     def change_region(self, state, betti: tuple[list, list] | None = None):
-        return super().change_region(state.to_object(), betti)
+        from .bitguard import packed_stuck
+
+        obj = state.to_object()
+        return control.change_region(obj, *flow_moves(obj, self.conn), self.conn, betti, packed_stuck(state, self.conn))
 
     def guarded(self, state, betti: list[int], seen: set, may_grow: bool):
         from .bitguard import packed_guarded_step

@@ -128,25 +128,30 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
         octants = octants[::-1]
     pending = np.flatnonzero((cfg != 0) & (cfg != full))
     w = np.stack(np.unravel_index(pending, cfg.shape), axis=1)
+    klass = (w & 1) @ (1 << np.arange(nd))[::-1] if by_class else np.zeros(len(pending), np.int64)
+    # one class after the other: each class's blocks lie together, and stay
+    # so as the blocks done leave; a batch's cells are tested at once, so
+    # their order within it changes nothing
+    order = np.argsort(klass, kind="stable")
+    pending, w, klass = pending[order], w[order], klass[order]
     base = (2 * w + 1) @ strides
-    klass = (w & 1) @ (1 << np.arange(nd))[::-1]  # the classes in itertools.product order
     goal = target.ravel()[pending]
     flipped = np.zeros(len(pending), bool)
-    batches = [(k, off) for k in range(1 << nd) for off in octants] if by_class else [(None, off) for off in octants]
+    classes = np.arange((1 << nd) + 1 if by_class else 2)
     for _ in range(max_sweeps):
         changed = False
-        for k, off in batches:
-            c, want = base + off, goal
-            if k is not None:
-                c, want = c[klass == k], goal[klass == k]
-            todo = cells[c] != want
-            if not todo.any():
-                continue
-            c, want = c[todo], want[todo]
-            ok = simple_codes(neighbourhood_codes(fine, c), nd, connectivity)
-            if ok.any():
-                cells[c[ok]] = want[ok]
-                changed = True
+        bounds = np.searchsorted(klass, classes)
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            for off in octants:
+                c, want = base[a:b] + off, goal[a:b]
+                todo = cells[c] != want
+                if not todo.any():
+                    continue
+                c, want = c[todo], want[todo]
+                ok = simple_codes(neighbourhood_codes(fine, c), nd, connectivity)
+                if ok.any():
+                    cells[c[ok]] = want[ok]
+                    changed = True
         # blocks now uniform are done
         left = np.zeros(len(base), bool)
         for off in octants:
@@ -200,7 +205,7 @@ def corners_any(vertices: np.ndarray, outside: bool = False) -> np.ndarray:
 
 
 def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int,
-                  betti: tuple[list, list] | None = None):
+                  betti: tuple[list, list] | None = None, stuck: np.ndarray | None = None):
     """World bbox [min, max] of where the plain move ``keep`` from ``obj``
     changes its topology, None when empty.
 
@@ -221,7 +226,10 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     is stuck, the new object's bounding box.
 
     ``betti``: the Betti numbers of ``obj`` and of the object ``keep``,
-    where the caller has them (a run records every state's); counted here
+    where the caller has them (a run records every state's); ``stuck``:
+    the vertices that ``realise_moves(cfg, keep, conn, flip=False,
+    by_class=True)`` leaves stuck, where the caller has them (compiled,
+    :func:`isoflow.flow.bitguard.packed_stuck`); each is found here
     otherwise.
 
     Examples
@@ -233,7 +241,8 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     >>> change_region(DigitalObject(square), *flow_moves(DigitalObject(square), 4), 4)
     [[2.0, 2.0], [4.0, 4.0]]
     """
-    _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
+    if stuck is None:
+        _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
     if not stuck.any():
         box = obj.on_dual_lattice(keep).bbox()
         return None if box is None else [box[0].tolist(), box[1].tolist()]
