@@ -17,7 +17,7 @@ from isoflow.digital.connectivity import is_face_connectivity
 from isoflow.digital.simple import simple_codes
 from isoflow.digital.topology import betti_numbers
 from isoflow.flow.bitflow import PackedObject, packed_record, packed_step, vertex_rows, vertex_shape
-from isoflow.flow.bitguard import packed_guarded_step, packed_key
+from isoflow.flow.bitguard import packed_guarded_step, packed_key, packed_stuck
 from isoflow.flow.engines import step_record
 from isoflow.flow.guard import guarded_step, realise_moves, shape_key
 from isoflow.flow.motion import flow_moves, flow_step
@@ -138,6 +138,22 @@ def test_realised_moves_equal_the_numpy_sweeps(ndim):
             stuck_seen += stuck.any()
             flipped_seen += (target != keep).any()
     assert stuck_seen > 10 and flipped_seen > 10  # both ways are exercised
+
+
+@pytest.mark.parametrize("ndim", [3, 2])
+def test_stuck_blocks_class_by_class_equal_the_numpy_sweeps(ndim):
+    """The stuck vertices that place a topology change (realise_moves with
+    by_class, no flip), on the bit rows, as the NumPy sweeps find them."""
+    seen = 0
+    for v in random_volumes(ndim, 150, seed=40 + ndim):
+        obj = DigitalObject(v).cropped()
+        if not obj.voxels:
+            continue
+        for conn in connectivities(ndim):
+            stuck = realise_moves(*flow_moves(obj, conn), conn, flip=False, by_class=True)[1]
+            assert np.array_equal(packed_stuck(PackedObject.of(obj), conn), stuck)
+            seen += stuck.any()
+    assert seen > 10
 
 
 @pytest.mark.parametrize("ndim", [3, 2])

@@ -13,7 +13,9 @@ when an empty object's offset became zeros (it kept the dual lattice's
 offset of the step that emptied it); every other state is 0b245b6's. The
 places of the topology changes were written again when a place became the
 voxels around every stuck vertex and the parts vanishing or filling whole
-there (each new box holds the old one; test_change_place.py checks them).
+there, and again when it took in the cavities closed off and grew until the
+step split cleanly at its edge (each new box holds the old one;
+test_change_place.py checks them).
 """
 
 import json

@@ -114,16 +114,23 @@ def topological_numbers(codes: np.ndarray, ndim: int, connectivity: int) -> tupl
     return full_number(board), face_number(background)
 
 
+@cache
+def _relative(shape: tuple[int, ...]) -> np.ndarray:
+    """The flat offsets of the ``3^n`` neighbourhood in a C-ordered array
+    of ``shape``, in bit order: made once per shape, as the sweeps of one
+    step ask for them batch after batch."""
+    strides = np.array([int(np.prod(shape[d + 1:])) for d in range(len(shape))], np.int64)
+    rel = _neighbourhood(len(shape))["cells"] @ strides
+    rel.flags.writeable = False  # one array for every caller
+    return rel
+
+
 def neighbourhood_codes(padded: np.ndarray, flat: np.ndarray) -> np.ndarray:
     """Packed ``3^n`` neighbourhoods (uint32, centre bit clear) of the points
     with flat indices ``flat`` in a C-contiguous boolean volume ``padded``;
     the points must not lie on its border."""
-    nd = padded.ndim
-    nb = _neighbourhood(nd)
-    strides = np.array([int(np.prod(padded.shape[d + 1:])) for d in range(nd)], np.int64)
-    rel = nb["cells"] @ strides
-    bits = padded.ravel()[np.asarray(flat, np.int64)[:, None] + rel]
-    bits[:, nb["centre"]] = False
+    bits = padded.ravel()[np.asarray(flat, np.int64)[:, None] + _relative(padded.shape)]
+    bits[:, _neighbourhood(padded.ndim)["centre"]] = False
     packed = np.packbits(bits, axis=1, bitorder="little")
     out = np.zeros((len(bits), 4), np.uint8)
     out[:, : packed.shape[1]] = packed

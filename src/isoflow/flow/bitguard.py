@@ -54,6 +54,31 @@ def _toggle(rows: np.ndarray, indices: np.ndarray, padded: tuple[int, ...]) -> N
     np.bitwise_xor.at(rows, (row, k >> 6), np.left_shift(np.uint64(1), (k & 63).astype(np.uint64)))
 
 
+def packed_stuck(state: PackedObject, conn: int) -> np.ndarray:
+    """The vertices that the plain flow step of a packed state leaves
+    stuck when it is carried out by simple deformations in the order that
+    places a topology change: :func:`isoflow.flow.guard.realise_moves`
+    with ``flip=False, by_class=True``, compiled.
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, on the vertex grid (one larger than the state along each axis).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> v = np.zeros((5, 5), bool)
+    >>> v[0, 0] = True
+    >>> v[2:, 2:] = True
+    >>> np.argwhere(packed_stuck(PackedObject.of(v), 4)).tolist()  # a corner of the isolated pixel, which vanishes
+    [[1, 1]]
+    """
+    cells, padded, pending, goal = fineblocks.blocks(state.bits, state.shape, vertex_rows(state, conn))
+    stuck, _ = fineblocks.realise(cells, padded, pending, goal, is_face_connectivity(conn), flip=False, by_class=True)
+    return _vertex_mask(stuck, padded, tuple(s + 1 for s in state.shape))
+
+
 def packed_lattice_step(state: PackedObject, conn: int, betti: list[int]):
     """:func:`isoflow.flow.guard.lattice_step` of a packed state: the flow
     step by simple deformations (Theorem 21), else its stuck blocks

@@ -275,7 +275,7 @@ class ChunkedFlow(ArrayFlow):
         finally:
             shutil.rmtree(scratch, ignore_errors=True)
 
-    def change_region(self, state: StoredObject):
+    def change_region(self, state: StoredObject, betti: tuple[list, list] | None = None):
         return None  # not located out of core (module docstring)
 
     def same(self, a: StoredObject, b: StoredObject) -> bool:

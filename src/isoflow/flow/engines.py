@@ -81,10 +81,11 @@ class ArrayFlow:
         _, keep = flow_moves(state, self.conn)
         return state.on_dual_lattice(keep).cropped()
 
-    def change_region(self, state: DigitalObject):
+    def change_region(self, state: DigitalObject, betti: tuple[list, list] | None = None):
         """Where the plain step from ``state`` is no simple deformation
-        (:func:`isoflow.flow.guard.change_region`)."""
-        return control.change_region(state, *flow_moves(state, self.conn), self.conn)
+        (:func:`isoflow.flow.guard.change_region`); ``betti``: the Betti
+        numbers of ``state`` and of the next state, where known."""
+        return control.change_region(state, *flow_moves(state, self.conn), self.conn, betti)
 
     def guarded(self, state: DigitalObject, betti: list[int], seen: set, may_grow: bool):
         got = control.guarded_step(state, self.conn, betti, seen=seen, may_grow=may_grow)
@@ -106,7 +107,8 @@ class ArrayFlow:
 class BitFlow(ArrayFlow):
     """States as bit rows (:class:`isoflow.flow.bitflow.PackedObject`);
     the compiled step and guard. Where a topology change is reported, the
-    place is found on the arrays, as :class:`ArrayFlow` finds it. (The bit
+    place is found on the arrays, as :class:`ArrayFlow` finds it, but for
+    the vertices the step leaves stuck, found on the bit rows. (The bit
     row modules are imported on use: they start numba.)"""
 
     def start(self, obj: DigitalObject):
@@ -124,8 +126,11 @@ class BitFlow(ArrayFlow):
 
         return packed_step(state, self.conn)
 
-    def change_region(self, state):
-        return super().change_region(state.to_object())
+    def change_region(self, state, betti: tuple[list, list] | None = None):
+        from .bitguard import packed_stuck
+
+        obj = state.to_object()
+        return control.change_region(obj, *flow_moves(obj, self.conn), self.conn, betti, packed_stuck(state, self.conn))
 
     def guarded(self, state, betti: list[int], seen: set, may_grow: bool):
         from .bitguard import packed_guarded_step

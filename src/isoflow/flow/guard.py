@@ -128,25 +128,30 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
         octants = octants[::-1]
     pending = np.flatnonzero((cfg != 0) & (cfg != full))
     w = np.stack(np.unravel_index(pending, cfg.shape), axis=1)
+    klass = (w & 1) @ (1 << np.arange(nd))[::-1] if by_class else np.zeros(len(pending), np.int64)
+    # one class after the other: each class's blocks lie together, and stay
+    # so as the blocks done leave; a batch's cells are tested at once, so
+    # their order within it changes nothing
+    order = np.argsort(klass, kind="stable")
+    pending, w, klass = pending[order], w[order], klass[order]
     base = (2 * w + 1) @ strides
-    klass = (w & 1) @ (1 << np.arange(nd))[::-1]  # the classes in itertools.product order
     goal = target.ravel()[pending]
     flipped = np.zeros(len(pending), bool)
-    batches = [(k, off) for k in range(1 << nd) for off in octants] if by_class else [(None, off) for off in octants]
+    classes = np.arange((1 << nd) + 1 if by_class else 2)
     for _ in range(max_sweeps):
         changed = False
-        for k, off in batches:
-            c, want = base + off, goal
-            if k is not None:
-                c, want = c[klass == k], goal[klass == k]
-            todo = cells[c] != want
-            if not todo.any():
-                continue
-            c, want = c[todo], want[todo]
-            ok = simple_codes(neighbourhood_codes(fine, c), nd, connectivity)
-            if ok.any():
-                cells[c[ok]] = want[ok]
-                changed = True
+        bounds = np.searchsorted(klass, classes)
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            for off in octants:
+                c, want = base[a:b] + off, goal[a:b]
+                todo = cells[c] != want
+                if not todo.any():
+                    continue
+                c, want = c[todo], want[todo]
+                ok = simple_codes(neighbourhood_codes(fine, c), nd, connectivity)
+                if ok.any():
+                    cells[c[ok]] = want[ok]
+                    changed = True
         # blocks now uniform are done
         left = np.zeros(len(base), bool)
         for off in octants:
@@ -161,6 +166,24 @@ def realise_moves(cfg: np.ndarray, keep: np.ndarray, connectivity: int, flip: bo
     stuck = np.zeros(cfg.shape, bool)
     stuck.ravel()[pending] = True
     return target, stuck
+
+
+def around_any(voxels: np.ndarray) -> np.ndarray:
+    """Per vertex of the grid one smaller than ``voxels`` along each axis:
+    whether any of the ``2^n`` voxels around it (``voxels[w + e]``, ``e``
+    in ``{0, 1}^n``) is set. On an array padded by one these are the
+    vertices of the unpadded array, each the corner the voxels share.
+
+    Examples
+    --------
+    >>> around_any(np.array([[0, 0, 0], [0, 0, 0], [0, 0, 1]], bool)).astype(int)
+    array([[0, 0],
+           [0, 1]])
+    """
+    out = np.zeros(tuple(n - 1 for n in voxels.shape), bool)
+    for d in itertools.product((0, 1), repeat=voxels.ndim):
+        out |= voxels[tuple(slice(di, di + n) for di, n in zip(d, out.shape))]
+    return out
 
 
 def corners_any(vertices: np.ndarray, outside: bool = False) -> np.ndarray:
@@ -178,14 +201,11 @@ def corners_any(vertices: np.ndarray, outside: bool = False) -> np.ndarray:
            [0, 1, 1],
            [0, 1, 1]])
     """
-    padded = np.pad(np.asarray(vertices, bool), 1, constant_values=outside)
-    out = np.zeros(tuple(n - 1 for n in padded.shape), bool)
-    for d in itertools.product((0, 1), repeat=padded.ndim):
-        out |= padded[tuple(slice(di, di + n) for di, n in zip(d, out.shape))]
-    return out
+    return around_any(np.pad(np.asarray(vertices, bool), 1, constant_values=outside))
 
 
-def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int):
+def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int,
+                  betti: tuple[list, list] | None = None, stuck: np.ndarray | None = None):
     """World bbox [min, max] of where the plain move ``keep`` from ``obj``
     changes its topology, None when empty.
 
@@ -197,10 +217,32 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     every stuck vertex, together with each part that the step removes or
     fills whole and that meets them: a connected set (``conn``) of voxels
     none of whose corners is kept, or a connected set of background voxels
-    (the complementary connectivity) all of whose corners are kept. When no
-    vertex is stuck, the new object's bounding box.
+    (the complementary connectivity) all of whose corners are kept; and
+    every cavity (hole in 2D) that the step closes off
+    (:func:`appeared_cavities`), which the stuck vertex of its mouth meets
+    only at the mouth. Its box is then widened (:func:`box_holding_change`)
+    until the step taken inside the box alone gives the new Betti numbers
+    and the step taken outside it alone keeps the old ones. When no vertex
+    is stuck, the new object's bounding box.
+
+    ``betti``: the Betti numbers of ``obj`` and of the object ``keep``,
+    where the caller has them (a run records every state's); ``stuck``:
+    the vertices that ``realise_moves(cfg, keep, conn, flip=False,
+    by_class=True)`` leaves stuck, where the caller has them (compiled,
+    :func:`isoflow.flow.bitguard.packed_stuck`); each is found here
+    otherwise.
+
+    Examples
+    --------
+    >>> from isoflow.flow.motion import flow_moves
+    >>> square = np.zeros((7, 7), bool)
+    >>> square[1:6, 1:6] = True
+    >>> square[3, 3] = False  # a one-pixel hole [3, 4]^2, which the step closes
+    >>> change_region(DigitalObject(square), *flow_moves(DigitalObject(square), 4), 4)
+    [[2.0, 2.0], [4.0, 4.0]]
     """
-    _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
+    if stuck is None:
+        _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
     if not stuck.any():
         box = obj.on_dual_lattice(keep).bbox()
         return None if box is None else [box[0].tolist(), box[1].tolist()]
@@ -213,8 +255,133 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
             labels, _ = label(part, c)
             met = np.unique(labels[region & part])
             region |= np.isin(labels, met[met > 0])
-    box = replace(obj, volume=region, offset=tuple(o - 1 for o in obj.offset)).bbox()
+    region |= corners_any(appeared_cavities(volume, keep, conn))  # new voxel w is the voxels around vertex w
+    if betti is None:
+        betti = betti_numbers(obj.volume, conn), betti_numbers(keep, conn)
+    lo, hi = box_holding_change(cfg, keep, conn, region, volume | corners_any(keep), betti)
+    inside = np.zeros(region.shape, bool)
+    inside[tuple(slice(a, b) for a, b in zip(lo, hi))] = True
+    box = replace(obj, volume=inside, offset=tuple(o - 1 for o in obj.offset)).bbox()
     return None if box is None else [box[0].tolist(), box[1].tolist()]
+
+
+def enclosed(volume: np.ndarray, conn: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(labels, mask)``: the background components of ``volume`` under
+    the connectivity complementary to ``conn``, and those of them that do
+    not reach the array's first cell (background where ``volume`` is
+    padded: its cavities, holes in 2D).
+
+    Examples
+    --------
+    >>> ring = np.pad(np.ones((3, 3), bool), 1)
+    >>> ring[2, 2] = False
+    >>> enclosed(ring, 4)[1].astype(int)[2]
+    array([0, 0, 1, 0, 0])
+    """
+    labels, _ = label(~volume, complement(volume.ndim, conn))
+    return labels, (labels > 0) & (labels != labels[(0,) * volume.ndim])
+
+
+def appeared_cavities(volume: np.ndarray, keep: np.ndarray, conn: int) -> np.ndarray:
+    """Per vertex (``keep``'s grid): whether new voxel ``keep`` lies in a
+    cavity (hole in 2D) of the new object that no cavity of the old one
+    overlaps, the old object's array ``volume`` padded by one.
+
+    On the grid refined twice (:func:`fine_grid`) each voxel of either
+    object is a ``2^n`` block of cells, and blocks meet as their voxels do
+    under every connectivity, so each object's background components are
+    its voxels' (each padded by one: the old voxels by ``volume``'s pad,
+    the new ones by a pad of ``keep``, both background), and new voxel
+    ``w`` shares cells with the old voxels around vertex ``w``: exactly the
+    fine grids' cavities that no cavity of the old object overlaps,
+    counted on 8 times fewer cells (4 in 2D).
+
+    Examples
+    --------
+    >>> c_shape = np.array([[1, 1, 1], [1, 0, 0], [1, 1, 1]], bool)  # a pocket, open to the right
+    >>> ring = np.array([[0, 0, 0, 0], [0, 1, 1, 1], [0, 1, 0, 1], [0, 1, 1, 1]], bool)  # its mouth closed
+    >>> appeared_cavities(np.pad(c_shape, 1), ring, 4).astype(int)[2]
+    array([0, 0, 1, 0])
+    >>> c_shape[1, 2] = True  # the pocket a hole already: the ring's overlaps it
+    >>> bool(appeared_cavities(np.pad(c_shape, 1), ring, 4).any())
+    False
+    """
+    _, was = enclosed(volume, conn)
+    labels, now = enclosed(np.pad(keep, 1), conn)
+    labels, now = labels[(slice(1, -1),) * keep.ndim], now[(slice(1, -1),) * keep.ndim]
+    kept = np.unique(labels[around_any(was) & now])
+    return now & ~np.isin(labels, kept)
+
+
+def box_holding_change(cfg: np.ndarray, keep: np.ndarray, conn: int, region: np.ndarray, extent: np.ndarray,
+                       want: tuple[list, list]) -> tuple[np.ndarray, np.ndarray]:
+    """The box ``[lo, hi)`` (indices of the old object's array padded by
+    one, as ``region``) around ``region`` inside which the step from the
+    old object (its configurations ``cfg``) to the new one (``keep``)
+    changes the topology: taken inside it alone (the old object outside)
+    the step gives the new Betti numbers, taken outside it alone it keeps
+    the old ones (``want``: the old and the new). Both objects are laid on
+    the grid refined twice (:func:`fine_grid`), where the padded array's
+    voxel ``p`` is cells ``2p .. 2p + 1``.
+
+    On that grid an old voxel and a new one are each a ``2^n`` block of
+    cells, half a voxel apart. A box that crosses a thin part where the
+    two differ joins or cuts it there (a pocket whose mouth the step closes
+    inside the box while its far end stays open outside is a hole of
+    neither object), so the box of ``region`` grows on every side, by one
+    voxel at a time and by half its margin once that is more, until the
+    step splits there cleanly. It never grows past the voxels ``extent``
+    that either object covers (and ``region``): a box holding them all
+    takes the whole step inside, and the refined grids are then never made.
+
+    Examples
+    --------
+    >>> from isoflow.flow.motion import flow_moves
+    >>> obj = DigitalObject(np.array([[1, 0, 0, 0], [0, 0, 1, 1], [0, 0, 1, 1]], bool))
+    >>> cfg, keep = flow_moves(obj, 4)
+    >>> region = np.zeros((5, 6), bool)
+    >>> region[1, 1] = True  # the isolated pixel, which vanishes
+    >>> extent = np.pad(obj.volume, 1) | corners_any(keep)
+    >>> [b.tolist() for b in box_holding_change(cfg, keep, 4, region, extent, ([2, 0], [1, 0]))]
+    [[1, 1], [2, 2]]
+    """
+    idx = np.argwhere(extent | region)
+    floor, ceil = idx.min(0), idx.max(0) + 1
+    idx = np.argwhere(region)
+    lo, hi = idx.min(0), idx.max(0) + 1
+    grids = None
+    margin = 0
+    while True:
+        lo_k, hi_k = np.maximum(lo - margin, floor), np.minimum(hi + margin, ceil)
+        if (lo_k == floor).all() and (hi_k == ceil).all():
+            return lo_k, hi_k
+        if grids is None:
+            grids = fine_grid(cfg), fine_grid(np.where(keep, (1 << (1 << keep.ndim)) - 1, 0))
+        if step_splits_at(*grids, tuple(slice(2 * a, 2 * b) for a, b in zip(lo_k, hi_k)), conn, want):
+            return lo_k, hi_k
+        margin += max(1, margin // 2)
+
+
+def step_splits_at(old: np.ndarray, new: np.ndarray, box: tuple[slice, ...], conn: int,
+                   want: tuple[list, list]) -> bool:
+    """Whether the step from ``old`` to ``new`` (one grid), taken only
+    inside ``box``, gives ``new``'s Betti numbers and, taken only outside
+    it, keeps ``old``'s (``want``: the two, in that order).
+
+    Examples
+    --------
+    >>> old = np.zeros((6, 6), bool)
+    >>> old[1:3, 1:3] = old[4, 4] = True
+    >>> new = old.copy()
+    >>> new[4, 4] = False  # a component vanishes
+    >>> step_splits_at(old, new, (slice(3, 6), slice(3, 6)), 4, ([2, 0], [1, 0]))
+    True
+    >>> step_splits_at(old, new, (slice(0, 3), slice(0, 3)), 4, ([2, 0], [1, 0]))
+    False
+    """
+    inside, outside = old.copy(), new.copy()
+    inside[box], outside[box] = new[box], old[box]
+    return betti_numbers(inside, conn) == want[1] and betti_numbers(outside, conn) == want[0]
 
 
 def lattice_step(obj: DigitalObject, conn: int, betti: list[int]):

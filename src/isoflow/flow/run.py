@@ -8,7 +8,9 @@ and records per step the voxels, parity, Betti numbers, chi, energy
 * **Without** ``guard`` consecutive states' Betti numbers are compared and
   each change is reported with the step and *where*: the world bounding box
   of the voxels around the vertices whose plain move is not a simple
-  deformation and of the parts that vanish or fill whole there
+  deformation, of the parts that vanish or fill whole there and of the
+  cavities closed off, grown until the step taken inside it alone gives
+  the new Betti numbers and outside it alone keeps the old ones
   (:func:`isoflow.flow.guard.change_region`); the bounding box of the new
   object when none is found. The last step, to the empty set, is the limit
   of the flow and not reported.
@@ -226,8 +228,9 @@ def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: Sto
         record = engine.record(new, step + 1)
         before = trace.records[-1]["betti"]
         if record["betti"] != before and new.voxels:
-            changes.append({"step": step + 1, "before": before, "after": record["betti"],
-                            "where": engine.change_region(state), "applied": not until_topology_change})
+            where = engine.change_region(state, (before, record["betti"]))
+            changes.append({"step": step + 1, "before": before, "after": record["betti"], "where": where,
+                            "applied": not until_topology_change})
             if until_topology_change:
                 return "topology-change", changes
         step += 1

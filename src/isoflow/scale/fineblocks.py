@@ -466,8 +466,42 @@ def _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, f
     return n, max(reversed_, 0)
 
 
+def _classes(pending: np.ndarray, padded: tuple[int, ...]) -> np.ndarray:
+    """Per block (flat index into the padded vertex grid): its vertex's
+    class, the vertex modulo 2 in the unpadded grid, axis ``d`` at bit
+    ``n - 1 - d`` (``itertools.product``'s order)."""
+    coords = np.unravel_index(pending, padded)
+    return sum(((c - 1) & 1) << (len(padded) - 1 - d) for d, c in enumerate(coords))
+
+
+def _realise_by_class(state, pending, goal, tables, offsets, board_, memo, face, flip, max_sweeps, flips, backward,
+                      padded):
+    """:func:`_realise` with the blocks of one class after the other, each
+    class octant by octant. The blocks are sorted by class, stably, and
+    stay so as those done leave (:func:`_settle` keeps their order), so a
+    class is one run of ``pending`` and a batch one call of :func:`_batch`."""
+    cells = tables.shape[0]
+    full = (1 << cells) - 1
+    order = np.argsort(_classes(pending, padded), kind="stable")
+    pending[:], goal[:] = pending[order], goal[order]
+    need = _needs(state, pending, goal, full)
+    n, reversed_ = len(pending), np.int64(-1)
+    for _ in range(max_sweeps):
+        bounds = np.searchsorted(_classes(pending[:n], padded), np.arange(cells + 1))
+        changed = False
+        for k in range(cells):
+            for e in (range(cells - 1, -1, -1) if backward else range(cells)):
+                changed |= _batch(state, pending, need, e, bounds[k], bounds[k + 1], tables, offsets, *board_, *memo,
+                                  face)
+        n, reversed_, done = _settle(pending, goal, need, n, changed, flip, reversed_, flips, full)
+        if done:
+            break
+    return n, max(reversed_, 0)
+
+
 def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goal: np.ndarray, face: bool,
-            flip: bool = True, max_sweeps: int = 256, backward: bool = False) -> tuple[np.ndarray, np.ndarray]:
+            flip: bool = True, max_sweeps: int = 256, backward: bool = False,
+            by_class: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Carry out the moves ``goal`` of the blocks ``pending`` (from
     :func:`blocks`) one fine cell at a time, a cell only when it is simple
     for the object's connectivity (``face``: 6 or 4), as
@@ -490,6 +524,10 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     backward : bool
         Take the octants in the reverse order (``realise_moves``'
         ``backward``: the flow reverses it on every other lattice).
+    by_class : bool
+        The blocks of one class (vertex modulo 2) after the other, each
+        class octant by octant, on one thread (``realise_moves``'
+        ``by_class``: the order in which a topology change is placed).
 
     Returns
     -------
@@ -519,7 +557,10 @@ def realise(state: np.ndarray, padded: tuple[int, ...], pending: np.ndarray, goa
     board_ = _board_tuples(nd)
     flips = np.empty(len(pending), np.int64)
     threads = thread_count(len(pending) * (1_000_000 // THREADED_BLOCKS))
-    if threads > 1 and len(pending) >= THREADED_BLOCKS:
+    if by_class:
+        stuck, flipped = _realise_by_class(state, pending, goal, tables, offsets, board_, _memo(nd, face), face, flip,
+                                           max_sweeps, flips, backward, padded)
+    elif threads > 1 and len(pending) >= THREADED_BLOCKS:
         stuck, flipped = _realise_threaded(state, pending, goal, tables, offsets, board_, nd, face, flip, max_sweeps,
                                            flips, threads, backward)
     else:
