@@ -3,14 +3,14 @@ scene as a reader gives them back, each closed or not, its Euler number
 and its bodies, in one compiled pass over their triangles; and the volume
 each encloses (:func:`node_volumes`).
 
-The read-back of ``surface --labels -o OUT.glb`` measures every label's
-node of the file as trimesh parsed it. trimesh's own figures
-(``is_watertight``, ``is_winding_consistent``, ``body_count``) sort the
-edges of a mesh object built per node; a scene of thousands of labels
-then spends most of its read-back building those objects. Here every node
-is measured in place, its edges grouped by their first vertex (a counting
-sort: a closed surface's vertices have a few edges each), with the same
-definitions:
+The read-back of every surface file (:mod:`isoflow.mesh.readback`)
+measures the mesh trimesh parsed from it, one node, or every label's node
+of a ``surface --labels`` scene. trimesh's own figures (``is_watertight``,
+``is_winding_consistent``, ``euler_number``, ``body_count``) sort every
+edge of a mesh object built per node, most of a large file's read-back,
+and of a scene of thousands of labels. Here every node is measured in
+place, its edges grouped by their first vertex (a counting sort: a closed
+surface's vertices have a few edges each), with the same definitions:
 
 * *closed*: every edge of the node lies in exactly two of its triangles,
   which run along it in opposite directions (trimesh's watertight and

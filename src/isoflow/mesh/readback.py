@@ -14,10 +14,11 @@ genus ``(2 - chi_c) / 2``, so the total is ``bodies - euler / 2`` with
 trimesh parses the file; the figures are counted by their trimesh
 definitions in one compiled pass over its arrays
 (:mod:`isoflow.mesh.node_topology`), which sorts no edge. The read-back
-needs about 200 bytes per triangle (measured: 203 for the 4.9 million
-triangles of a 192^3 porous field's PLY, the parse included); a file
-whose read-back would not fit in the memory budget is not read back, and
-the caller says so.
+needs about 110 bytes per triangle of a PLY and 180 of an STL whose
+positions are welded (measured: 107 and 182 on the 4.9 million triangles
+of a 192^3 porous field, the parse included); a file whose read-back
+would not fit in the memory budget is not read back, and the caller says
+so.
 """
 
 from __future__ import annotations
@@ -87,7 +88,8 @@ def volume_words(units: float, unit: float, digits: int = 6) -> str:
             f"{'cube' if units == 1 else 'cubes'} of 2^{exponent})")
 
 
-#: peak bytes of the read-back per triangle (measured 203, rounded up)
+#: peak bytes of the read-back per triangle (measured 107 for a PLY, 182
+#: for a welded STL; rounded up)
 READBACK_BYTES_PER_TRIANGLE = 250
 
 
