@@ -226,7 +226,9 @@ def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     p = np.asarray(points)
     if not len(p):
         return p.copy(), np.zeros(0, np.int64)
-    if len(p) >= HASHED_ROWS and p.dtype.kind in "fiu" and p.dtype.itemsize <= 8:
+    # (compared as float64, which holds every such float and integer exactly)
+    exact = (p.dtype.kind == "f" and p.dtype.itemsize <= 8) or (p.dtype.kind in "iu" and p.dtype.itemsize <= 4)
+    if len(p) >= HASHED_ROWS and exact:
         # many rows (an STL's corners): each row's first copy by hashing, then
         # only the distinct rows sorted
         from .equal_rows import first_equal
