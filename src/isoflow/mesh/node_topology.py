@@ -29,15 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scale.jit import njit
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _root(parent, v):
-    """The root of v in the union-find, halving the path on the way."""
-    while parent[v] != v:
-        parent[v] = parent[parent[v]]
-        v = parent[v]
-    return v
+from ..scale.kernels import find
 
 
 @njit(cache=True, nogil=True)
@@ -69,7 +61,7 @@ def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
             closed = closed and a != b
             heads[start[a]] = b
             start[a] += 1
-            ra, rb = _root(parent, a), _root(parent, b)
+            ra, rb = find(parent, a), find(parent, b)
             if ra != rb:
                 parent[max(ra, rb)] = min(ra, rb)
     for v in range(nv, 0, -1):
@@ -93,7 +85,7 @@ def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
     for v in range(nv):
         if used[v]:
             vertices += 1
-            bodies += _root(parent, v) == v
+            bodies += find(parent, v) == v
     return closed, vertices, bodies, edges
 
 
