@@ -84,6 +84,12 @@ def test_scene_follows_the_specifications_layout(tmp_path, rng, large):
     assert tree["buffers"] == [{"byteLength": bin_length}]
     for view in tree["bufferViews"]:
         assert view["byteOffset"] % 4 == 0 and view["byteOffset"] + view["byteLength"] <= bin_length
+    # a view that two vertex attributes' accessors share declares its stride (section 3.6.2.4)
+    for v, view in enumerate(tree["bufferViews"]):
+        shared = [a for a in tree["accessors"][len(parts):] if a["bufferView"] == v]
+        if len(shared) > 1:
+            element = COMPONENT_BYTES[shared[0]["componentType"]] * COMPONENTS[shared[0]["type"]]
+            assert view.get("byteStride") == element and 4 <= element <= 252 and element % 4 == 0
     for mesh in tree["meshes"]:
         primitive, = mesh["primitives"]
         for key, at in [("indices", primitive["indices"]), *primitive["attributes"].items()]:

@@ -12,11 +12,11 @@ specification requires), ``COLOR_0`` (uint8 VEC4, normalised) and every
 custom attribute under a name starting with ``_``, its rows padded with
 zeros to a multiple of 4 bytes (the specification's alignment of vertex
 attributes), float64 stored as float32; each mesh's ``extras`` may hold a
-comment. Each kind of array of every mesh lies in one buffer view, each
-mesh's part an accessor at its offset there; the indices in two, one
-uint16 and one uint32, so that no accessor's offset needs padding to its
-component size (the specification does not say whether one view may mix
-them).
+comment. Each kind of array of every mesh lies in one buffer view (a
+vertex attribute's with its ``byteStride``), each mesh's part an accessor
+at its offset there; the indices in two, one uint16 and one uint32, so
+that no accessor's offset needs padding to its component size (the
+specification does not say whether one view may mix them).
 """
 
 from __future__ import annotations
@@ -139,7 +139,11 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list:
     for data, target in [*((d, ELEMENT_ARRAY_BUFFER) for d in index_data), *((d, ARRAY_BUFFER) for d in columns.values())]:
         # the array's own bytes, little-endian, not a copy where they are so
         raw = np.ascontiguousarray(data, data.dtype.newbyteorder("<")).reshape(-1).data.cast("B")
-        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(raw), "target": target})
+        # every mesh's accessor shares the view, and the specification asks a
+        # view shared by vertex attributes for its stride (and one of indices
+        # for none)
+        stride = {"byteStride": data.dtype.itemsize * data.shape[1]} if target == ARRAY_BUFFER else {}
+        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(raw), "target": target, **stride})
         chunks += [raw, b"\0" * (-len(raw) % 4)]
         offset += len(raw) + -len(raw) % 4
     # the accessors kind by kind: mesh t's of kind k is accessor k * n + t
