@@ -20,10 +20,18 @@ COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
 COMPONENTS = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4}
 
 
-def scene_parts(rng, count=5):
+def scene_parts(rng, count=5, large=False):
     """Boundary meshes of random objects (edge and vertex contacts, at 6
-    and 26), one of them far from the origin (stored under a node matrix)."""
+    and 26), one of them far from the origin (stored under a node matrix);
+    ``large`` adds, second, a slab's of 72,194 vertices, past what uint16
+    indices can number."""
     parts, written = [], []
+    if large:
+        vol = np.zeros((4, 190, 190), bool)
+        vol[1:3, 1:189, 1:189] = True
+        obj, mesh = DigitalObject(vol, pitch=(0.5, 1.0, 2.0)), boundary_mesh(vol, 6)
+        parts.append(export.glb_part("slab", mesh, obj))
+        written.append(("slab", mesh, obj, mesh.components()))
     for t in range(count):
         vol = rng.random((5, 4, 6)) < 0.45
         vol[2, 2, 2] = True
@@ -33,11 +41,15 @@ def scene_parts(rng, count=5):
         mesh = boundary_mesh(vol, conn)
         parts.append(export.glb_part(f"part_{t}", mesh, obj))
         written.append((f"part_{t}", mesh, obj, mesh.components()))
+    if large:
+        parts.insert(1, parts.pop(0))
+        written.insert(1, written.pop(0))
     return parts, written
 
 
-def test_scene_reads_back_node_by_node_as_written(tmp_path, rng):
-    parts, _ = scene_parts(rng)
+@pytest.mark.parametrize("large", [False, True])
+def test_scene_reads_back_node_by_node_as_written(tmp_path, rng, large):
+    parts, _ = scene_parts(rng, large=large)
     path = export.write_glb_scene(tmp_path / "s.glb", parts, comment="a test")
     scene = trimesh.load(path, force="scene", process=False)
     assert sorted(scene.graph.nodes_geometry) == sorted(name for name, *_ in parts)
@@ -57,8 +69,9 @@ def test_scene_reads_back_node_by_node_as_written(tmp_path, rng):
         assert "a test" in json.dumps(tm.metadata)
 
 
-def test_scene_follows_the_specifications_layout(tmp_path, rng):
-    parts, _ = scene_parts(rng)
+@pytest.mark.parametrize("large", [False, True])
+def test_scene_follows_the_specifications_layout(tmp_path, rng, large):
+    parts, _ = scene_parts(rng, large=large)
     data = export.write_glb_scene(tmp_path / "s.glb", parts).read_bytes()
     magic, version, total = struct.unpack_from("<4sII", data)
     assert (magic, version, total) == (b"glTF", 2, len(data))
@@ -71,6 +84,12 @@ def test_scene_follows_the_specifications_layout(tmp_path, rng):
     assert tree["buffers"] == [{"byteLength": bin_length}]
     for view in tree["bufferViews"]:
         assert view["byteOffset"] % 4 == 0 and view["byteOffset"] + view["byteLength"] <= bin_length
+    # a view that two vertex attributes' accessors share declares its stride (section 3.6.2.4)
+    for v, view in enumerate(tree["bufferViews"]):
+        shared = [a for a in tree["accessors"][len(parts):] if a["bufferView"] == v]
+        if len(shared) > 1:
+            element = COMPONENT_BYTES[shared[0]["componentType"]] * COMPONENTS[shared[0]["type"]]
+            assert view.get("byteStride") == element and 4 <= element <= 252 and element % 4 == 0
     for mesh in tree["meshes"]:
         primitive, = mesh["primitives"]
         for key, at in [("indices", primitive["indices"]), *primitive["attributes"].items()]:
@@ -78,7 +97,7 @@ def test_scene_follows_the_specifications_layout(tmp_path, rng):
             view = tree["bufferViews"][acc["bufferView"]]
             size = COMPONENT_BYTES[acc["componentType"]]
             element = size * COMPONENTS[acc["type"]]
-            assert acc["count"] >= 1 and acc["byteOffset"] % size == 0
+            assert acc["count"] >= 1 and acc["byteOffset"] % size == 0 and view["byteOffset"] % size == 0
             assert acc["byteOffset"] + acc["count"] * element <= view["byteLength"]
             if key != "indices":
                 assert element % 4 == 0 and (key.startswith("_") or key in ("POSITION", "COLOR_0"))
@@ -86,27 +105,72 @@ def test_scene_follows_the_specifications_layout(tmp_path, rng):
                 start = view["byteOffset"] + acc["byteOffset"]
                 xyz = np.frombuffer(binary, np.float32, 3 * acc["count"], start).reshape(-1, 3)
                 assert acc["min"] == xyz.min(axis=0).tolist() and acc["max"] == xyz.max(axis=0).tolist()
+        check_indices(tree, binary, primitive)
     assert [n["name"] for n in tree["nodes"]] == [name for name, *_ in parts]
+    types = [tree["accessors"][m["primitives"][0]["indices"]]["componentType"] for m in tree["meshes"]]
+    assert types == [5125 if len(columns["x"]) > 65535 else 5123 for _, columns, *_ in parts]
+    # a view holds one component type: the spec is silent on mixing them
+    for v in {tree["accessors"][i]["bufferView"] for i in range(len(parts))}:
+        assert len({a["componentType"] for a in tree["accessors"] if a["bufferView"] == v}) == 1
 
 
-def test_scene_opens_in_pymeshlab_closed(tmp_path, rng):
+def check_indices(tree, binary, primitive):
+    """A primitive's indices as the specification has them: an unsigned
+    type, in a view of indices without a stride, each naming a vertex, and
+    none the type's largest value (a primitive restart)."""
+    acc = tree["accessors"][primitive["indices"]]
+    view = tree["bufferViews"][acc["bufferView"]]
+    assert acc["type"] == "SCALAR" and acc["componentType"] in (5121, 5123, 5125) and acc["count"] % 3 == 0
+    assert view["target"] == 34963 and "byteStride" not in view
+    dtype = {5121: np.uint8, 5123: np.uint16, 5125: np.uint32}[acc["componentType"]]
+    index = np.frombuffer(binary, dtype, acc["count"], view["byteOffset"] + acc["byteOffset"])
+    vertices = tree["accessors"][primitive["attributes"]["POSITION"]]["count"]
+    assert index.max() < vertices and index.max() < np.iinfo(dtype).max
+
+
+@pytest.mark.parametrize("large", [False, True])
+def test_scene_opens_in_pymeshlab_closed(tmp_path, rng, large):
     """pymeshlab loads a layer per node, each the node's closed surface."""
     pymeshlab = pytest.importorskip("pymeshlab")
-    parts, written = scene_parts(rng)
+    parts, written = scene_parts(rng, large=large)
     path = export.write_glb_scene(tmp_path / "s.glb", parts)
     ms = pymeshlab.MeshSet()
     ms.load_new_mesh(str(path))
     assert ms.mesh_number() == len(parts)
-    faces = []
+    faces, vertices = [], []
     for layer in range(ms.mesh_number()):
         ms.set_current_mesh(layer)
         measures = ms.get_topological_measures()
         assert measures["boundary_edges"] == 0 and measures["non_two_manifold_edges"] == 0
         m = ms.current_mesh()
         faces.append(m.face_number())
+        vertices.append(m.vertex_number())
         euler = m.vertex_number() - measures["edges_number"] + m.face_number()
         assert euler in [mesh.euler_characteristic for _, mesh, _, _ in written]
     assert sorted(faces) == sorted(len(t) for _, _, t, _ in parts)
+    assert sorted(vertices) == sorted(len(columns["x"]) for _, columns, _, _ in parts)
+
+
+@pytest.mark.parametrize("count", [65535, 65536])
+def test_a_mesh_at_the_edge_of_uint16_indices_reads_back(tmp_path, count):
+    """A strip of triangles over ``count`` vertices, its last triangle on
+    the last vertex: 65,535 vertices still fit uint16 indices (the last
+    index, 65534, is no restart value), 65,536 do not; trimesh and
+    pymeshlab read each strip's every triangle."""
+    triangles = np.column_stack([np.arange(count - 2), np.arange(1, count - 1), np.arange(2, count)])
+    triangles[1::2] = triangles[1::2, [0, 2, 1]]  # one winding along the strip
+    t = np.arange(count, dtype=np.float64)
+    columns = {"x": t, "y": t % 2, "z": np.zeros(count), **{c: np.full(count, 200, np.uint8) for c in ("red", "green", "blue")}}
+    path = export.write_glb_scene(tmp_path / "s.glb", [("strip", columns, triangles, None)])
+    tm = trimesh.load(path, force="mesh", process=False)
+    np.testing.assert_array_equal(tm.faces, triangles)
+    data = path.read_bytes()
+    tree = json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
+    assert tree["accessors"][0]["componentType"] == (5123 if count <= 65535 else 5125)
+    pymeshlab = pytest.importorskip("pymeshlab")
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    assert (ms.current_mesh().vertex_number(), ms.current_mesh().face_number()) == (count, count - 2)
 
 
 def test_scene_read_back_agrees_and_names_a_node_that_reads_wrong(tmp_path, rng):
