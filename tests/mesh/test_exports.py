@@ -188,17 +188,20 @@ def test_readback_disagreement_exits_1_naming_the_file(tmp_path, monkeypatch):
 
 
 def test_readback_beyond_the_memory_budget_is_skipped_and_said(tmp_path, monkeypatch):
-    """The file is written; the read-back (about 250 bytes a triangle) is
-    skipped with one note when it would not fit."""
+    """The file is written; the read-back (an OBJ's asks 350 bytes a
+    triangle) is skipped with one note when it would not fit."""
     from isoflow.scale import memory
 
     v = np.ones((3, 3, 3), bool)
-    # meshing needs about 17 kB (16 B a lattice point, 300 a face), the read-back 27 kB (108 triangles)
-    monkeypatch.setattr(memory, "default_budget", lambda: 22_000)
-    rc, path, out, err = surface(tmp_path, v, 6, ".ply")
+    # meshing needs about 17 kB (16 B a lattice point, 300 a face), the read-back 38 kB (108 triangles)
+    monkeypatch.setattr(memory, "default_budget", lambda: 30_000)
+    rc, path, out, err = surface(tmp_path, v, 6, ".obj")
     assert rc == 0 and path.exists() and "trimesh reads" not in out
     line, = err.strip().splitlines()
     assert "not read back" in line and "budget" in line and str(path) in line
+    # a PLY's read-back (150 bytes a triangle: 16 kB) fits the same budget
+    rc, path, out, err = surface(tmp_path, v, 6, ".ply")
+    assert rc == 0 and "trimesh reads" in out and err == ""
     monkeypatch.undo()
     rc, path, out, err = surface(tmp_path, v, 6, ".ply", ("--no-check",))
     assert rc == 0 and err == "" and "trimesh reads" not in out

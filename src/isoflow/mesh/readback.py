@@ -14,11 +14,11 @@ genus ``(2 - chi_c) / 2``, so the total is ``bodies - euler / 2`` with
 trimesh parses the file; the figures are counted by their trimesh
 definitions in one compiled pass over its arrays
 (:mod:`isoflow.mesh.node_topology`), which sorts no edge. The read-back
-needs about 110 bytes per triangle of a PLY and 180 of an STL whose
-positions are welded (measured: 107 and 182 on the 4.9 million triangles
-of a 192^3 porous field, the parse included); a file whose read-back
-would not fit in the memory budget is not read back, and the caller says
-so.
+needs about 110 bytes per triangle of a PLY, 180 of an STL whose
+positions are welded and 270 of an OBJ (measured on the 4.9 million
+triangles of a 192^3 porous field, the parse included); a file whose
+read-back would not fit in the memory budget is not read back, and the
+caller says so.
 """
 
 from __future__ import annotations
@@ -88,16 +88,19 @@ def volume_words(units: float, unit: float, digits: int = 6) -> str:
             f"{'cube' if units == 1 else 'cubes'} of 2^{exponent})")
 
 
-#: peak bytes of the read-back per triangle (measured 107 for a PLY, 182
-#: for a welded STL; rounded up)
-READBACK_BYTES_PER_TRIANGLE = 250
+#: peak bytes of the read-back per triangle, by suffix (measured on 4.9
+#: million triangles: 107 for a PLY, 182 for a welded STL, 270 for an OBJ,
+#: whose text trimesh parses line by line; rounded up), and for the others
+READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".obj": 350}
+READBACK_BYTES_OTHER = 350
 
 
-def readback_memory(mesh) -> int:
-    """Estimated peak bytes of reading the mesh's file back with trimesh:
-    two triangles per quad and one more per edge midpoint of a face."""
+def readback_memory(mesh, suffix: str = "") -> int:
+    """Estimated peak bytes of reading the mesh's file (of ``suffix``)
+    back with trimesh: two triangles per quad and one more per edge
+    midpoint of a face."""
     triangles = 2 * len(mesh.faces) + int(np.count_nonzero(mesh.edge_midpoint >= 0))
-    return triangles * READBACK_BYTES_PER_TRIANGLE
+    return triangles * READBACK_BYTES_PER_TRIANGLE.get(suffix.lower(), READBACK_BYTES_OTHER)
 
 
 def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
@@ -215,7 +218,7 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     from ..scale.memory import default_budget, sized
 
     path = Path(path)
-    need, budget = readback_memory(mesh), default_budget()
+    need, budget = readback_memory(mesh, path.suffix), default_budget()
     if need > budget:
         why = f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}"
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
