@@ -23,6 +23,7 @@ caller says so.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -277,13 +278,35 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
     return problems
 
 
-def scene_nodes(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Every node of a binary glTF that holds a mesh, as trimesh's glTF
-    reader parses it: ``name -> (vertices, triangles)``, the vertices
-    placed by the node's transform and those of the nodes above it. The
-    reader's arrays are taken as they are, without the mesh object per
-    node that ``trimesh.load`` builds (most of a scene's read-back where
-    it has thousands of nodes)."""
+    reader parses it. The reader's arrays are taken as they are, without
+    the mesh object per node that ``trimesh.load`` builds (most of a
+    scene's read-back where it has thousands of nodes).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A ``.glb`` file.
+
+    Returns
+    -------
+    dict
+        ``name -> (vertices, triangles)``: float64 vertices placed by the
+        node's transform and those of the nodes above it, int64 triangles.
+
+    Examples
+    --------
+    >>> import tempfile, trimesh
+    >>> scene = trimesh.Scene()
+    >>> _ = scene.add_geometry(trimesh.creation.box(), node_name="box", geom_name="box",
+    ...                        transform=trimesh.transformations.translation_matrix([5.0, 0.0, 0.0]))
+    >>> path = Path(tempfile.mkdtemp()) / "s.glb"
+    >>> _ = scene.export(path)
+    >>> vertices, triangles = scene_nodes(path)["box"]
+    >>> vertices.mean(axis=0).tolist(), triangles.shape
+    ([5.0, 0.0, 0.0], (12, 3))
+    """
     from trimesh.exchange.gltf import load_glb
 
     with open(path, "rb") as fh:
