@@ -582,17 +582,39 @@ def store_keys(array) -> list[str]:
     >>> sorted(store_keys(z))
     ['c/1/0', 'zarr.json']
     """
-    # zarr's stores are asynchronous; its own synchronous calls run them
-    # on its I/O loop this way
-    from zarr.core.sync import sync
-
     prefix = array.store_path.path
     prefix = prefix + "/" if prefix else ""
 
     async def listed() -> list[str]:
         return [k[len(prefix):] async for k in array.store_path.store.list_prefix(prefix)]
 
-    return sync(listed())
+    return run_zarr(listed())
+
+
+def run_zarr(coroutine):
+    """Run a coroutine on a zarr store to its end and return its result:
+    zarr's stores are asynchronous, and zarr's own synchronous calls run
+    them on its I/O loop (``zarr.core.sync.sync``), which this takes where
+    it is; a zarr without it (the module is not among zarr's documented
+    API) runs the coroutine on a loop of its own, in a thread, so that a
+    caller inside a running loop is not blocked by it.
+
+    Examples
+    --------
+    >>> async def three():
+    ...     return 3
+    >>> run_zarr(three())
+    3
+    """
+    try:
+        from zarr.core.sync import sync
+    except ImportError:
+        import asyncio
+        from concurrent.futures import ThreadPoolExecutor
+
+        with ThreadPoolExecutor(1) as pool:
+            return pool.submit(asyncio.run, coroutine).result()
+    return sync(coroutine)
 
 
 def shard_indexes(array, shards: list[tuple[int, ...]], per: list[int]) -> list[np.ndarray | None]:
@@ -615,7 +637,6 @@ def shard_indexes(array, shards: list[tuple[int, ...]], per: list[int]) -> list[
     from zarr.abc.store import RangeByteRequest, SuffixByteRequest
     from zarr.buffer import default_buffer_prototype
     from zarr.codecs import BytesCodec, Crc32cCodec, ShardingCodec
-    from zarr.core.sync import sync
 
     codecs = list(getattr(array.metadata, "codecs", ()))
     sharding = codecs[0] if codecs else None
@@ -647,7 +668,7 @@ def shard_indexes(array, shards: list[tuple[int, ...]], per: list[int]) -> list[
         gate = asyncio.Semaphore(64)
         return list(await asyncio.gather(*(one(c, gate) for c in shards)))
 
-    return sync(every()) if shards else []
+    return run_zarr(every()) if shards else []
 
 
 def unwritten_fill(array, label: object = None, at: dict[int, int] | None = None) -> tuple[int, int, int] | None:
