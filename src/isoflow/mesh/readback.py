@@ -132,9 +132,9 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
     ``area_units``: the surface's area in ``unit`` squared (STL only:
     the volume's tolerance for float32's move; None otherwise).
 
-    A PLY is parsed by trimesh's PLY reader and the mesh built without its
-    colours, which cost a third of the read (measured on flow steps) and do
-    not touch the topology. The volume is the signed volume of the
+    A PLY or an STL is parsed by trimesh's reader of the format and the
+    mesh built from its arrays alone (a PLY's colours cost a third of the
+    read, measured on flow steps, and do not touch the topology). The volume is the signed volume of the
     triangles trimesh read (``trimesh.volume`` also integrates the inertia:
     another third).
     """
@@ -150,16 +150,14 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
         with open(path, "rb") as fh:
             kw = (load_ply if path.suffix.lower() == ".ply" else load_stl)(fh)
         tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
-        if weld:
-            tm = weld_equal_positions(tm)
     else:
         import warnings
 
         with warnings.catch_warnings():  # NumPy's, on degenerate triangles: the verdict says what is wrong
             warnings.simplefilter("ignore", RuntimeWarning)
             tm = trimesh.load(path, force="mesh", process=False)
-        if weld:
-            tm = weld_equal_positions(tm)
+    if weld:
+        tm = weld_equal_positions(tm)
     return mesh_figures(tm, unit, area=weld)
 
 
@@ -173,23 +171,31 @@ def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
     # body_count) by their definitions in one compiled pass over its
     # arrays, where trimesh sorts every edge (most of a large read-back)
     topology = node_topology(faces, [0, len(tm.vertices)], [0, len(faces)])
-    closed = bool(topology["closed"][0])
     euler, bodies = int(topology["euler"][0]), int(topology["bodies"][0])
     if bodies < 0:  # a triangle on a vertex the file does not hold: trimesh's own counts
         euler = int(tm.euler_number)
         bodies = int(tm.body_count) - int(np.count_nonzero(~tm.referenced_vertices))
-    genus = bodies - euler // 2 if closed and euler % 2 == 0 else None
     v = np.asarray(tm.vertices, np.float64)
-    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        units = float(node_volumes(v, faces, [0, len(v)], [0, len(faces)], unit)[0])
-        volume = units * np.float64(unit) ** 3
-        area_units = None
-        if area:
+    units = float(node_volumes(v, faces, [0, len(v)], [0, len(faces)], unit)[0])
+    area_units = None
+    if area:
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
             local = (v - (v.mean(axis=0) if len(v) else 0.0)) / unit
             area_units = float(np.linalg.norm(np.cross(local[faces[:, 1]] - local[faces[:, 0]],
                                                        local[faces[:, 2]] - local[faces[:, 0]]), axis=1).sum() / 2)
-    return {"watertight": closed, "euler_number": euler, "genus": genus, "volume": volume, "volume_units": units,
-            "area_units": area_units}
+    return figures(bool(topology["closed"][0]), euler, bodies, units, unit, area_units)
+
+
+def figures(closed: bool, euler: int, bodies: int, volume_units: float, unit: float,
+            area_units: float | None = None) -> dict:
+    """The figures of one mesh as :func:`mesh_figures` gives them, from its
+    counts: the genus where it is closed and its Euler number even, the
+    volume in world units from ``volume_units`` (in ``unit`` cubed)."""
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        volume = float(volume_units * np.float64(unit) ** 3)
+    return {"watertight": closed, "euler_number": int(euler),
+            "genus": int(bodies - euler // 2) if closed and euler % 2 == 0 else None,
+            "volume": volume, "volume_units": float(volume_units), "area_units": area_units}
 
 
 def weld_equal_positions(tm):
@@ -357,29 +363,22 @@ def union_figures(placed: list) -> list[dict]:
     """:func:`mesh_figures` of some nodes of a scene, measured together:
     each node's closedness, Euler number and bodies by
     :func:`isoflow.mesh.node_topology.node_topology` (trimesh's
-    definitions) and its volume (:func:`~isoflow.mesh.node_topology.node_volumes`), as
-    :func:`mesh_figures` takes them. A node that
-    is not closed is measured alone by trimesh, so that its figures are
-    trimesh's own."""
+    definitions) and its volume by
+    :func:`~isoflow.mesh.node_topology.node_volumes`. A node whose
+    triangles name a vertex it does not hold is measured alone, by
+    trimesh's own counts."""
     import trimesh
 
     from .node_topology import node_topology, node_volumes
 
-    n = len(placed)
     counts = np.array([len(v) for v, _, _ in placed], np.int64)
     sizes = np.array([len(f) for _, f, _ in placed], np.int64)
     vfirst, ffirst = np.concatenate([[0], np.cumsum(counts)]), np.concatenate([[0], np.cumsum(sizes)])
     faces = np.concatenate([np.asarray(f, np.int64).reshape(-1, 3) + at for (_, f, _), at in zip(placed, vfirst)])
     topology = node_topology(faces, vfirst, ffirst)
     units = np.array([unit for _, _, unit in placed], np.float64)
-    v = np.concatenate([v for v, _, _ in placed]) if n else np.zeros((0, 3))
-    volume_units = node_volumes(v, faces, vfirst, ffirst, units)
-    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        volume = volume_units * units ** 3
-    euler, bodies = topology["euler"], topology["bodies"]
-    return [{"watertight": True, "euler_number": int(euler[t]),
-             "genus": int(bodies[t] - euler[t] // 2) if euler[t] % 2 == 0 else None,
-             "volume": float(volume[t]), "volume_units": float(volume_units[t]), "area_units": None}
-            if topology["closed"][t] else
-            mesh_figures(trimesh.Trimesh(placed[t][0], placed[t][1], process=False), placed[t][2])
-            for t in range(n)]
+    volume_units = node_volumes(np.concatenate([v for v, _, _ in placed]), faces, vfirst, ffirst, units)
+    closed, euler, bodies = topology["closed"], topology["euler"], topology["bodies"]
+    return [figures(bool(closed[t]), int(euler[t]), int(bodies[t]), volume_units[t], units[t]) if bodies[t] >= 0
+            else mesh_figures(trimesh.Trimesh(v, f, process=False), unit)
+            for t, (v, f, unit) in enumerate(placed)]
