@@ -280,7 +280,7 @@ def main(argv=None) -> int:
     ap.add_argument("--labels", type=int, nargs="+", default=[1000, 100_000])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--commands", type=int, default=1, help="pairs of whole commands per input (0: none)")
-    ap.add_argument("--tools", nargs="+", default=list(TOOLS))
+    ap.add_argument("--tools", nargs="+", default=list(TOOLS), choices=list(TOOLS))
     ap.add_argument("--json", default=str(ROOT / "benchmarks" / "results" / "labels.json"))
     ap.add_argument("--stages", type=int, default=0,
                     help="also time the label table's stages in one warm child, best of N (0: not)")
