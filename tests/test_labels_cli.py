@@ -186,6 +186,9 @@ def test_surface_labels_glb_one_closed_manifold_per_label(tmp_path, capsys, segm
     table = label_table(segmentation, 26)
     scene = trimesh.load(out, force="scene", process=False)
     assert sorted(scene.graph.nodes_geometry) == sorted(f"label_{v}" for v in table["label"])
+    data = out.read_bytes()
+    nodes = json.loads(data[20:20 + int.from_bytes(data[12:16], "little")])["nodes"]
+    assert [n["name"] for n in nodes] == [f"label_{v}" for v in table["label"]]  # the labels' order, not the batches'
     for r, label in enumerate(table["label"]):
         _, geometry = scene.graph[f"label_{label}"]
         mesh = scene.geometry[geometry]

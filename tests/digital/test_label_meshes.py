@@ -56,6 +56,23 @@ def test_each_labels_part_is_its_boxs_mesh(rng, monkeypatch, method, conn):
     assert midpoints > 0 or conn == 6  # the random images have doubled edges at 26
 
 
+@pytest.mark.parametrize("dtype", ["u1", "i2", "u4", "i8", "u8", ">u2"])
+def test_masks_of_every_integer_type_are_the_labels_voxels(rng, monkeypatch, dtype):
+    """Each label's mask, as the batch's one compiled pass (native types)
+    or NumPy (a big-endian image) lays it, is ``image[box] == label`` (of
+    values near the type's top too, where a conversion would be off by
+    one)."""
+    monkeypatch.setattr(lm, "BATCH_VOXELS", 400)
+    top = np.iinfo(np.dtype(dtype)).max
+    values = np.array([0, 1, 2, top - 1, top], dtype=np.dtype(dtype).newbyteorder("="))
+    image = values[rng.choice(5, size=(9, 8, 7), p=[0.3, 0.2, 0.2, 0.15, 0.15])].astype(dtype)
+    labels, lo, hi = boxes(image)
+    found = lm.label_meshes(image, labels, lo, hi, 26, method="compiled")
+    for label, a, b, (mesh, mask) in zip(labels, lo, hi, found):
+        np.testing.assert_array_equal(mask, image[a[0]:b[0], a[1]:b[1], a[2]:b[2]] == label)
+        assert mesh.euler_characteristic == boundary_mesh(mask.copy(), 26, method="numpy").euler_characteristic
+
+
 def test_a_box_larger_than_a_batch_is_meshed_alone(monkeypatch):
     monkeypatch.setattr(lm, "BATCH_VOXELS", 10)
     image = np.zeros((6, 5, 4), np.uint8)
@@ -82,22 +99,26 @@ def test_batch_glb_parts_are_each_parts_own(rng, monkeypatch, origin):
     frames = 0
     for conn in (6, 26):
         for batch in lm.label_batches(image, labels, lo, hi, conn):
-            for s, (name, columns, triangles, frame) in enumerate(export.batch_glb_parts(batch, names, lo, pitch,
-                                                                                           origin)):
-                t = batch.rows[s]
+            parts = export.batch_glb_parts(batch, names, lo, pitch, origin)
+            assert parts.names == [names[t] for t in batch.rows]
+            for s, t in enumerate(batch.rows):
                 obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[t]), pitch=pitch, origin=origin)
-                want = export.glb_part(names[t], batch.part(s), obj)
-                assert name == want[0]
-                assert columns.keys() == want[1].keys()
-                for key in columns:
-                    np.testing.assert_array_equal(columns[key], want[1][key], err_msg=key)
-                    assert columns[key].dtype == want[1][key].dtype
-                np.testing.assert_array_equal(triangles, want[2])
-                assert (frame is None) == (want[3] is None)
+                name, columns, triangles, frame = export.glb_part(names[t], batch.part(s), obj)
+                v, f = slice(*parts.vfirst[s:s + 2]), slice(*parts.tfirst[s:s + 2])
+                stored = np.column_stack([columns[k] for k in "xyz"]) if frame is None else frame[0]
+                np.testing.assert_array_equal(parts.positions[v], np.asarray(stored, np.float32))
+                np.testing.assert_array_equal(parts.colors[v, :3], np.column_stack([columns[k] for k in
+                                                                                       ("red", "green", "blue")]))
+                assert parts.attributes.keys() == {f"_{k}" for k in columns} - {"_x", "_y", "_z", "_red", "_green",
+                                                                                   "_blue"}
+                for key, column in parts.attributes.items():
+                    np.testing.assert_array_equal(column[v], columns[key[1:]], err_msg=key)
+                    assert column.dtype == columns[key[1:]].dtype
+                np.testing.assert_array_equal(parts.triangles[f], triangles)
+                assert (frame is None) == (s not in parts.matrices)
                 if frame is not None:
                     frames += 1
-                    np.testing.assert_array_equal(frame[0], want[3][0])
-                    np.testing.assert_array_equal(frame[1], want[3][1])
+                    np.testing.assert_array_equal(parts.matrices[s], frame[1])
     assert frames > 0 or origin[0] < 1e6
 
 

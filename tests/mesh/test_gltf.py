@@ -188,3 +188,32 @@ def test_scene_read_back_agrees_and_names_a_node_that_reads_wrong(tmp_path, rng)
     export.write_glb_scene(tmp_path / "s.glb", parts, force=True)
     problems = check_scene_file(path, written)
     assert any("node part_3" in p for p in problems) and not any("node part_2" in p for p in problems)
+
+
+def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):
+    """Parts given as columns in two sets (as the batches of label boxes
+    are), written in another order than they are given: trimesh reads
+    each node with its own part's positions, triangles and attributes, and
+    the nodes are listed in the order asked."""
+    from isoflow.mesh.gltf import SceneParts
+    parts, _ = scene_parts(rng, 6)
+    meshes = [{"name": name, "positions": np.column_stack([c[k] for k in "xyz"]) if frame is None else frame[0],
+               "triangles": triangles, "colors": np.column_stack([c["red"], c["green"], c["blue"],
+                                                                  np.full(len(c["x"]), 255, np.uint8)]),
+               "attributes": {f"_{k}": c[k] for k in ("config", "class", "gamma", "a", "f")},
+               "matrix": None if frame is None else frame[1]} for name, c, triangles, frame in parts]
+    sets = [SceneParts.of_meshes(meshes[:2]), SceneParts.of_meshes(meshes[2:])]
+    order = np.array([4, 0, 5, 2, 1, 3])
+    path = export.write_glb_sets(tmp_path / "s.glb", sets, order)
+    data = path.read_bytes()
+    tree = json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
+    assert [n["name"] for n in tree["nodes"]] == [meshes[p]["name"] for p in order]
+    scene = trimesh.load(path, force="scene", process=False)
+    for mesh in meshes:
+        transform, geometry = scene.graph[mesh["name"]]
+        tm = scene.geometry[geometry]
+        np.testing.assert_array_equal(tm.faces, mesh["triangles"])
+        np.testing.assert_array_equal(tm.vertices, np.asarray(mesh["positions"], np.float32))
+        np.testing.assert_allclose(transform, np.eye(4) if mesh["matrix"] is None else mesh["matrix"])
+        np.testing.assert_array_equal(np.asarray(tm.vertex_attributes["_class"]).reshape(len(tm.vertices), -1)[:, 0],
+                                      mesh["attributes"]["_class"])

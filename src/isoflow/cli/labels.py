@@ -418,7 +418,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     lo, hi = (np.round((np.stack([table[f"bbox-{d}"] for d in axes], axis=1) - image.origin) / image.spacing)
               .astype(np.int64) for axes in ((0, 1, 2), (3, 4, 5)))
     meshes: list = [None] * len(names)
-    glb_parts: list = [None] * len(names)
+    glb_parts: list = []  # (SceneParts of a batch, its labels' rows)
     with progress_bar(args, "label surfaces", estimate=True) as show:
         # one count: each label meshed, then each written (a file each) or read back
         total = len(names) * (2 if target[0] == "dir" or not args.no_check else 1)
@@ -441,14 +441,14 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
 def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: list[str], lo: np.ndarray, image,
                 meshes: list, glb_parts: list) -> None:
     """A batch of labels' meshes (:func:`isoflow.digital.label_meshes.label_batches`)
-    into ``meshes`` (and ``glb_parts`` for one glTF file) at the labels'
-    rows, each mesh checked against the table's V - E + F."""
+    into ``meshes`` at the labels' rows (and, for one glTF file, the
+    batch's glTF parts with those rows into ``glb_parts``), each mesh
+    checked against the table's V - E + F."""
     from ..digital.lattice import DigitalObject
     from ..mesh.export import batch_glb_parts
 
     if target[0] == "glb":
-        for s, part in enumerate(batch_glb_parts(batch, names, lo, image.spacing, image.origin)):
-            glb_parts[batch.rows[s]] = part
+        glb_parts.append((batch_glb_parts(batch, names, lo, image.spacing, image.origin), batch.rows))
     for s, r in enumerate(batch.rows):
         mesh = batch.part(s)
         if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
@@ -546,8 +546,8 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
                          progress=None) -> tuple[list[str], str]:
-    """Write every label's surface (a glTF node each, from ``glb_parts``,
-    or a file each) and read them back (unless --no-check), telling
+    """Write every label's surface (a glTF node each, in the labels'
+    order, from the batches' parts in ``glb_parts``, or a file each) and read them back (unless --no-check), telling
     ``progress(done, total)`` of the labels written (a file each) or read
     back. Returns the problems found and the faces written in words
     (``18944 faces (triangles)``: as the files hold them, as surface says of one)."""
@@ -556,9 +556,11 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     from .progress import reading_back
 
     if target[0] == "glb":
-        faces = f"{sum(len(part[2]) for part in glb_parts)} faces (triangles)"
-        export.write_glb_scene(target[1], glb_parts, force=args.force, comment=f"isoflow surface --labels of "
-                               f"{args.input}, {args.connectivity or 6}-connectivity")
+        faces = f"{sum(len(parts.triangles) for parts, _ in glb_parts)} faces (triangles)"
+        rows = np.concatenate([r for _, r in glb_parts]) if glb_parts else np.zeros(0, np.int64)
+        export.write_glb_sets(target[1], [parts for parts, _ in glb_parts], np.argsort(rows), force=args.force,
+                              comment=f"isoflow surface --labels of {args.input}, "
+                                      f"{args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if args.no_check else check_scene_file(target[1], meshes, progress)), faces

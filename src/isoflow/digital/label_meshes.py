@@ -165,14 +165,16 @@ def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, in
     """The boxes of ``rows`` laid along axis 0 in a volume of ``shape``
     (each box, then an empty layer), meshed once and cut apart."""
     vol = np.zeros(shape, bool)
-    starts = np.zeros(len(rows) + 1, np.int64)
-    masks = []
-    for s, t in enumerate(rows):
-        a, e = lo[t], extent[t]
-        x = int(starts[s])
-        vol[x:x + e[0], :e[1], :e[2]] = image[a[0]:a[0] + e[0], a[1]:a[1] + e[1], a[2]:a[2] + e[2]] == labels[t]
-        masks.append(vol[x:x + e[0], :e[1], :e[2]])
-        starts[s + 1] = x + e[0] + 1
+    starts = np.concatenate([[0], np.cumsum(extent[rows, 0] + 1)])
+    if method == "compiled" and image.dtype.isnative and image.dtype.kind in "iu":  # one pass for every box
+        from ..scale.box_masks import box_masks
+
+        box_masks(image, np.asarray(labels[rows], image.dtype), lo[rows], extent[rows], starts, vol)
+    else:
+        for s, t in enumerate(rows):
+            a, e, x = lo[t], extent[t], starts[s]
+            vol[x:x + e[0], :e[1], :e[2]] = image[a[0]:a[0] + e[0], a[1]:a[1] + e[1], a[2]:a[2] + e[2]] == labels[t]
+    masks = [vol[x:x + e[0], :e[1], :e[2]] for x, e in zip(starts.tolist(), extent[rows].tolist())]
     mesh = boundary_mesh(vol, connectivity, method)
     # a vertex's box: that of its lattice layer (a box's last layer is its
     # own, the empty layer after it has no vertex; a midpoint lies within)

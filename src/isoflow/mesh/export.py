@@ -301,25 +301,44 @@ def write_glb_scene(path: str | os.PathLike, parts: list, *, force: bool = False
     ``parts`` holds ``(name, columns, triangles, frame)`` as
     :func:`write_glb` takes them (a name of None: ``geometry_<i>``), in
     the layout of :mod:`isoflow.mesh.gltf`."""
-    from .gltf import glb_chunks
+    from .gltf import SceneParts
 
-    path = check_output_path(path, force)
     meshes = []
     for t, (name, columns, triangles, frame) in enumerate(parts):
         xyz = np.column_stack([columns["x"], columns["y"], columns["z"]])
-        rgb = np.column_stack([columns["red"], columns["green"], columns["blue"],
-                               np.full(len(xyz), 255, np.uint8)])
         meshes.append({"name": f"geometry_{t}" if name is None else name,
-                       "positions": xyz if frame is None else frame[0], "triangles": triangles, "colors": rgb,
-                       "attributes": {f"_{k}": v for k, v in columns.items()
-                                      if k not in ("x", "y", "z", "red", "green", "blue")},
+                       "positions": xyz if frame is None else frame[0], "triangles": triangles,
+                       "colors": _rgba(columns), "attributes": _glb_attributes(columns),
                        "matrix": None if frame is None else frame[1]})
-    chunks = glb_chunks(meshes, comment)
-    del meshes
+    return write_glb_sets(path, [SceneParts.of_meshes(meshes)], force=force, comment=comment, sync=sync)
+
+
+def write_glb_sets(path: str | os.PathLike, sets: list, order: np.ndarray | None = None, *, force: bool = False,
+                   comment: str = "", sync: bool = True) -> Path:
+    """Write the parts of ``sets`` (:class:`isoflow.mesh.gltf.SceneParts`,
+    as :func:`batch_glb_parts` gives them) into one binary glTF, a node
+    each, node ``t`` showing part ``order[t]`` of all the sets' parts in
+    turn (:func:`isoflow.mesh.gltf.scene_chunks`)."""
+    from .gltf import scene_chunks
+
+    path = check_output_path(path, force)
+    chunks = scene_chunks(sets, order, comment)
     with atomic_write(path, sync=sync) as fh:
         for chunk in chunks:
             fh.write(chunk)
     return path
+
+
+def _rgba(columns: dict) -> np.ndarray:
+    """The vertex colours of ``columns`` as glTF's ``COLOR_0`` (opaque)."""
+    return np.column_stack([columns["red"], columns["green"], columns["blue"],
+                            np.full(len(columns["red"]), 255, np.uint8)])
+
+
+def _glb_attributes(columns: dict) -> dict:
+    """The columns a glTF keeps as custom vertex attributes: all but the
+    position and the colour, each under ``_`` and its name."""
+    return {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
 
 
 def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
@@ -338,13 +357,16 @@ def glb_columns(mesh, obj: DigitalObject) -> tuple[dict[str, np.ndarray], tuple 
     return table, None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
 
 
-def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin) -> list[tuple]:
-    """The parts of :func:`write_glb_scene` of every box of a batch of
-    :func:`isoflow.digital.label_meshes.label_batches` (``names`` and
-    ``offsets``, the boxes' first voxels, per label index): what
-    :func:`glb_part` gives for each part and its box, the columns and the
-    triangles computed once over the batch and sliced."""
+def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin):
+    """The glTF parts (:class:`isoflow.mesh.gltf.SceneParts`) of every box
+    of a batch of :func:`isoflow.digital.label_meshes.label_batches`
+    (``names`` and ``offsets``, the boxes' first voxels, per label index),
+    in the batch's order: for each part what :func:`glb_part` gives for it
+    and its box, computed once over the batch. A part whose world
+    positions float32 cannot hold stores voxel units under its node's
+    transform (:func:`grid_frame`)."""
     from ..digital.surface import triangle_rows
+    from .gltf import SceneParts
 
     mesh = batch.joined()
     parts = len(batch.rows)
@@ -355,20 +377,18 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     held = float32_held(xyz, spacing).all(axis=1)
     holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
     table = vertex_columns(mesh, xyz, np.float32)
+    positions = np.column_stack([table["x"], table["y"], table["z"]])
+    framed = np.flatnonzero(~holds)
+    if len(framed):
+        in_frame = ~holds[of_vertex]
+        positions[in_frame] = mesh.vertices[in_frame]
     triangles, face = triangle_rows(mesh.faces, mesh.edge_midpoint)
     of_face = np.repeat(np.arange(parts), np.diff(batch.ffirst))[face]
     order = np.argsort(of_face, kind="stable")  # a part's triangles in the order of its own triangle_rows
-    triangles, tfirst = triangles[order], np.searchsorted(of_face[order], np.arange(parts + 1))
-    out = []
-    for s, t in enumerate(batch.rows):
-        v0, v1 = batch.vfirst[s], batch.vfirst[s + 1]
-        columns = {key: column[v0:v1] for key, column in table.items()}
-        frame = None
-        if not holds[s]:  # positions in voxel units under the node's transform (grid_frame)
-            columns.update(x=xyz[v0:v1, 0], y=xyz[v0:v1, 1], z=xyz[v0:v1, 2])  # (float64, as glb_part's)
-            frame = (np.asarray(mesh.vertices[v0:v1], np.float64), grid_transform(spacing, origin + spacing * corner[s]))
-        out.append((names[t], columns, triangles[tfirst[s]:tfirst[s + 1]], frame))
-    return out
+    return SceneParts(names=[names[t] for t in batch.rows], positions=positions, colors=_rgba(table),
+                      attributes=_glb_attributes(table), vfirst=np.asarray(batch.vfirst, np.int64),
+                      triangles=triangles[order], tfirst=np.searchsorted(of_face[order], np.arange(parts + 1)),
+                      matrices={int(s): grid_transform(spacing, origin + spacing * corner[s]) for s in framed})
 
 
 def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool = False) -> tuple[str, np.ndarray]:

@@ -1,14 +1,17 @@
 """Binary glTF 2.0 (GLB) of many triangle meshes at once, each its own
-node: the file's JSON and binary chunks built from arrays concatenated
-over the meshes, so that a scene of a hundred thousand labels costs a few
-NumPy passes, not a hundred thousand meshes through a general exporter.
+node: the file's JSON and binary chunks built from columns over the meshes
+(:class:`SceneParts`, a set of them per batch of labels, the sets' arrays
+written one after another, not joined), so that a scene of a hundred
+thousand labels costs a few NumPy passes and a line of JSON text per mesh,
+not a hundred thousand meshes through a general exporter.
 
 The layout is the one trimesh's exporter writes for a mesh with vertex
 colours and custom vertex attributes (and reads back alike), but for the
 indices' type: per mesh one primitive of triangles with ``indices``
 (uint16 where the mesh has at most 65,535 vertices, else uint32; trimesh
-writes uint32 always), ``POSITION`` (float32 VEC3, with its bounds as the
-specification requires), ``COLOR_0`` (uint8 VEC4, normalised) and every
+writes uint32 always), ``POSITION`` (float32 VEC3, with its bounds, which
+the specification asks of it alone; no other accessor carries them),
+``COLOR_0`` (uint8 VEC4, normalised) and every
 custom attribute under a name starting with ``_``, its rows padded with
 zeros to a multiple of 4 bytes (the specification's alignment of vertex
 attributes), float64 stored as float32; each mesh's ``extras`` may hold a
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import json
 import struct
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -63,61 +67,159 @@ def padded_rows(data: np.ndarray) -> np.ndarray:
 SHORT_VERTICES = 65535
 
 
-def index_columns(meshes: list[dict], counts: np.ndarray, sizes: np.ndarray) -> tuple[list, np.ndarray]:
-    """The triangle indices of ``meshes`` (of ``counts`` vertices and
-    ``sizes`` triangles) as glTF stores them: uint16 for a mesh of at most
-    :data:`SHORT_VERTICES` vertices, uint32 otherwise, each type in a column
-    of its own (a column that no mesh fills is left out), and per mesh its
-    column and byte offset there. Kept apart, each column's offsets are
-    multiples of its component size, as the specification requires of an
-    accessor.
+@dataclass
+class SceneParts:
+    """Meshes of a glTF scene as columns over all of them: part ``s`` holds
+    vertices ``vfirst[s]:vfirst[s + 1]`` and triangles ``tfirst[s]:tfirst[s
+    + 1]`` (numbered within the part); each part becomes a mesh and a node.
 
     Examples
     --------
-    >>> tri = {"triangles": np.array([[0, 1, 2]])}
-    >>> data, where = index_columns([tri, tri], np.array([3, 70000]), np.array([1, 1]))
-    >>> [d.dtype.name for d in data], where.tolist()
+    >>> tet = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> two = SceneParts(names=["a", "b"], positions=np.vstack([np.eye(4, 3), np.eye(4, 3) + 2]),
+    ...                  colors=np.full((8, 4), 255, np.uint8), attributes={"_k": np.arange(8)},
+    ...                  vfirst=np.array([0, 4, 8]), triangles=np.vstack([tet, tet]), tfirst=np.array([0, 4, 8]))
+    >>> two.counts().tolist(), two.sizes().tolist()
+    ([4, 4], [4, 4])
+    """
+
+    names: list[str]
+    positions: np.ndarray  # (n, 3), stored as float32
+    colors: np.ndarray  # (n, 4) uint8
+    attributes: dict[str, np.ndarray]  # name -> (n,) or (n, k), as padded_rows stores them
+    vfirst: np.ndarray
+    triangles: np.ndarray  # (m, 3)
+    tfirst: np.ndarray
+    matrices: dict[int, np.ndarray] = field(default_factory=dict)  # part -> its node's 4x4 transform
+
+    def counts(self) -> np.ndarray:
+        """Vertices of each part."""
+        return np.diff(np.asarray(self.vfirst, np.int64))
+
+    def sizes(self) -> np.ndarray:
+        """Triangles of each part."""
+        return np.diff(np.asarray(self.tfirst, np.int64))
+
+    @classmethod
+    def of_meshes(cls, meshes: list[dict]) -> SceneParts:
+        """Meshes given one by one (``{"name", "positions", "triangles",
+        "colors", "attributes", "matrix"}``) as one set of parts.
+
+        Examples
+        --------
+        >>> tri = {"name": "t", "positions": np.eye(3), "triangles": np.array([[0, 1, 2]]),
+        ...        "colors": np.zeros((3, 4), np.uint8), "attributes": {}, "matrix": None}
+        >>> SceneParts.of_meshes([tri, tri]).vfirst.tolist()
+        [0, 3, 6]
+        """
+        def joined(arrays: list, width: int) -> np.ndarray:
+            return np.concatenate(arrays) if len(arrays) != 1 else np.asarray(arrays[0]).reshape(-1, width)
+
+        names = [m["name"] for m in meshes]
+        counts = [len(m["positions"]) for m in meshes]
+        sizes = [len(m["triangles"]) for m in meshes]
+        keys = list(meshes[0]["attributes"]) if meshes else []
+        return cls(names=names, positions=joined([m["positions"] for m in meshes], 3) if meshes else np.zeros((0, 3)),
+                   colors=joined([m["colors"] for m in meshes], 4) if meshes else np.zeros((0, 4), np.uint8),
+                   attributes={k: np.concatenate([np.asarray(m["attributes"][k]) for m in meshes]) for k in keys},
+                   vfirst=np.concatenate([[0], np.cumsum(counts, dtype=np.int64)]),
+                   triangles=joined([m["triangles"] for m in meshes], 3) if meshes else np.zeros((0, 3), np.int64),
+                   tfirst=np.concatenate([[0], np.cumsum(sizes, dtype=np.int64)]),
+                   matrices={t: m["matrix"] for t, m in enumerate(meshes) if m.get("matrix") is not None})
+
+
+def index_columns(sets: list[SceneParts]) -> tuple[list[list[np.ndarray]], np.ndarray]:
+    """The triangle indices of every part of ``sets`` as glTF stores them:
+    uint16 for a part of at most :data:`SHORT_VERTICES` vertices, uint32
+    otherwise, each type a column of its own (a list of arrays, one per
+    set, to lie one after another; a type no part takes is left out), and
+    per part (numbered over the sets) its column and byte offset there.
+    Kept apart, each column's offsets are multiples of its component size,
+    as the specification requires of an accessor.
+
+    Examples
+    --------
+    >>> tri = np.array([[0, 1, 2]])
+    >>> parts = SceneParts(names=["s", "l"], positions=np.zeros((70003, 3)), colors=np.zeros((70003, 4), np.uint8),
+    ...                    attributes={}, vfirst=np.array([0, 3, 70003]), triangles=np.vstack([tri, tri]),
+    ...                    tfirst=np.array([0, 1, 2]))
+    >>> data, where = index_columns([parts])
+    >>> [d[0].dtype.name for d in data], where.tolist()
     (['uint16', 'uint32'], [[0, 0], [1, 0]])
     """
+    counts = np.concatenate([s.counts() for s in sets]) if sets else np.zeros(0, np.int64)
+    sizes = np.concatenate([s.sizes() for s in sets]) if sets else np.zeros(0, np.int64)
     small = counts <= SHORT_VERTICES
-    data, where = [], np.zeros((len(meshes), 2), np.int64)
+    data, where = [], np.zeros((len(counts), 2), np.int64)
     for dtype, chosen in ((np.dtype(np.uint16), small), (np.dtype(np.uint32), ~small)):
         picked = np.flatnonzero(chosen)
-        if len(picked):
-            data.append(np.concatenate([np.asarray(meshes[t]["triangles"]).astype(dtype).reshape(-1) for t in picked]))
-            where[picked, 0] = len(data) - 1
-            where[picked, 1] = np.concatenate([[0], np.cumsum(3 * sizes[picked])])[:-1] * dtype.itemsize
+        if not len(picked):
+            continue
+        column, first = [], 0
+        for s in sets:
+            mine = chosen[first:first + len(s.names)]
+            first += len(s.names)
+            if mine.all():
+                column.append(np.asarray(s.triangles).astype(dtype).reshape(-1))
+            elif mine.any():
+                column.append(np.asarray(s.triangles)[np.repeat(mine, s.sizes())].astype(dtype).reshape(-1))
+        data.append(column)
+        where[picked, 0] = len(data) - 1
+        where[picked, 1] = np.concatenate([[0], np.cumsum(3 * sizes[picked])])[:-1] * dtype.itemsize
     return data, where
 
 
-def vertex_columns(meshes: list[dict]) -> dict[str, np.ndarray]:
-    """Each vertex attribute of every mesh of ``meshes`` concatenated, 2D,
-    in its glTF type: ``POSITION`` float32, ``COLOR_0`` uint8 and the
-    custom attributes as :func:`padded_rows` gives them.
+def vertex_columns(sets: list[SceneParts]) -> dict[str, list[np.ndarray]]:
+    """Each vertex attribute of every part of ``sets`` in its glTF type,
+    2D, as a list of arrays (one per set) to lie one after another:
+    ``POSITION`` float32, ``COLOR_0`` uint8 and the custom attributes as
+    :func:`padded_rows` gives them.
 
     Examples
     --------
-    >>> mesh = {"positions": np.zeros((2, 3)), "colors": np.zeros((2, 4), np.uint8),
-    ...         "attributes": {"_k": np.arange(2)}}
-    >>> {k: (v.dtype.name, v.shape) for k, v in vertex_columns([mesh, mesh]).items()}
-    {'POSITION': ('float32', (4, 3)), 'COLOR_0': ('uint8', (4, 4)), '_k': ('int32', (4, 1))}
+    >>> tri = SceneParts(names=["t"], positions=np.zeros((3, 3)), colors=np.zeros((3, 4), np.uint8),
+    ...                  attributes={"_k": np.arange(3)}, vfirst=np.array([0, 3]), triangles=np.array([[0, 1, 2]]),
+    ...                  tfirst=np.array([0, 1]))
+    >>> {k: [(v.dtype.name, v.shape) for v in c] for k, c in vertex_columns([tri, tri]).items()}
+    {'POSITION': [('float32', (3, 3)), ('float32', (3, 3))], 'COLOR_0': [('uint8', (3, 4)), ('uint8', (3, 4))],
+     '_k': [('int32', (3, 1)), ('int32', (3, 1))]}
     """
-    if not meshes:
-        return {"POSITION": np.zeros((0, 3), np.float32), "COLOR_0": np.zeros((0, 4), np.uint8)}
-    columns = {"POSITION": np.concatenate([np.asarray(m["positions"], np.float32) for m in meshes]).reshape(-1, 3),
-               "COLOR_0": np.concatenate([np.asarray(m["colors"], np.uint8) for m in meshes]).reshape(-1, 4)}
-    for name in meshes[0]["attributes"]:
-        columns[name] = padded_rows(np.concatenate([np.asarray(m["attributes"][name]) for m in meshes]))
+    columns = {"POSITION": [np.asarray(s.positions, np.float32).reshape(-1, 3) for s in sets],
+               "COLOR_0": [np.asarray(s.colors, np.uint8).reshape(-1, 4) for s in sets]}
+    for name in (sets[0].attributes if sets else {}):
+        columns[name] = [padded_rows(s.attributes[name]) for s in sets]
     return columns
+
+
+def _buffer_views(index_data: list, columns: dict) -> tuple[list, list, list, int]:
+    """Each column a buffer view over its arrays laid one after another:
+    the views, the chunks to write (the arrays' own little-endian bytes,
+    not a copy where they are so, and the padding to 4 bytes), each view's
+    element (dtype and row width) and the binary chunk's length."""
+    views, chunks, elements, offset = [], [], [], 0
+    for arrays, target in [*((d, ELEMENT_ARRAY_BUFFER) for d in index_data),
+                           *((d, ARRAY_BUFFER) for d in columns.values())]:
+        raws = [np.ascontiguousarray(a, a.dtype.newbyteorder("<")).reshape(-1).data.cast("B") for a in arrays]
+        length = sum(len(r) for r in raws)
+        dtype, row = arrays[0].dtype, (arrays[0].shape[1] if arrays[0].ndim == 2 else 1)
+        # every part's accessor shares the view, and the specification asks a
+        # view shared by vertex attributes for its stride (and one of indices
+        # for none)
+        stride = {"byteStride": dtype.itemsize * row} if target == ARRAY_BUFFER else {}
+        views.append({"buffer": 0, "byteOffset": offset, "byteLength": length, "target": target, **stride})
+        chunks += [*raws, b"\0" * (-length % 4)]
+        elements.append((np.dtype(dtype.name), row))
+        offset += length + -length % 4
+    return views, chunks, elements, offset
 
 
 def glb_chunks(meshes: list[dict], comment: str = "") -> list:
     """The GLB file of ``meshes`` as the pieces to write one after the
-    other (bytes, and the arrays' own memory as memoryviews: the header, the
-    JSON chunk, the binary chunk's header and its arrays): ``meshes`` holds each ``{"name", "positions" (n, 3),
-    "triangles" (m, 3), "colors" (n, 4) uint8, "attributes": {name: (n,)
-    or (n, k)}, "matrix": 4x4 or None}``, every mesh with the same
-    attribute names and at least one triangle; a node each, in order.
+    other (:func:`scene_chunks`): ``meshes`` holds each ``{"name",
+    "positions" (n, 3), "triangles" (m, 3), "colors" (n, 4) uint8,
+    "attributes": {name: (n,) or (n, k)}, "matrix": 4x4 or None}``, every
+    mesh with the same attribute names and at least one triangle; a node
+    each, in order.
 
     Examples
     --------
@@ -128,53 +230,87 @@ def glb_chunks(meshes: list[dict], comment: str = "") -> list:
     >>> data[:4], len(data) % 4
     (b'glTF', 0)
     """
-    counts = np.array([len(m["positions"]) for m in meshes], np.int64)
-    sizes = np.array([len(m["triangles"]) for m in meshes], np.int64)
-    if len(meshes) and (not counts.all() or not sizes.all()):
+    return scene_chunks([SceneParts.of_meshes(meshes)], comment=comment)
+
+
+def scene_chunks(sets: list[SceneParts], order: np.ndarray | None = None, comment: str = "") -> list:
+    """The GLB file of every part of ``sets`` as the pieces to write one
+    after the other (bytes, and the arrays' own memory as memoryviews: the
+    header, the JSON chunk, the binary chunk's header and its arrays),
+    node ``t`` showing part ``order[t]`` (parts numbered over the sets in
+    turn; all of them in that order where None). Each part needs a
+    triangle; every set has the same attribute names.
+
+    Examples
+    --------
+    >>> tet = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    >>> one = SceneParts(names=["tet"], positions=np.eye(4, 3), colors=np.full((4, 4), 255, np.uint8),
+    ...                  attributes={}, vfirst=np.array([0, 4]), triangles=tet, tfirst=np.array([0, 4]))
+    >>> data = b"".join(scene_chunks([one, one], order=np.array([1, 0])))
+    >>> data[:4], len(data) % 4
+    (b'glTF', 0)
+    """
+    sets = [s for s in sets if len(s.names)]
+    counts = np.concatenate([s.counts() for s in sets]) if sets else np.zeros(0, np.int64)
+    sizes = np.concatenate([s.sizes() for s in sets]) if sets else np.zeros(0, np.int64)
+    if not counts.all() or not sizes.all():
         raise ValueError("every mesh of a glTF scene needs a triangle")
+    n = len(counts)
+    order = np.arange(n) if order is None else np.asarray(order, np.int64)
+    index_data, index_of = index_columns(sets)
+    columns = vertex_columns(sets)
+    views, chunks, elements, length = _buffer_views(index_data, columns)
     first = np.concatenate([[0], np.cumsum(counts)])[:-1]
-    index_data, index_of = index_columns(meshes, counts, sizes)
-    columns = vertex_columns(meshes)
-    views, chunks, offset = [], [], 0
-    for data, target in [*((d, ELEMENT_ARRAY_BUFFER) for d in index_data), *((d, ARRAY_BUFFER) for d in columns.values())]:
-        # the array's own bytes, little-endian, not a copy where they are so
-        raw = np.ascontiguousarray(data, data.dtype.newbyteorder("<")).reshape(-1).data.cast("B")
-        # every mesh's accessor shares the view, and the specification asks a
-        # view shared by vertex attributes for its stride (and one of indices
-        # for none)
-        stride = {"byteStride": data.dtype.itemsize * data.shape[1]} if target == ARRAY_BUFFER else {}
-        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(raw), "target": target, **stride})
-        chunks += [raw, b"\0" * (-len(raw) % 4)]
-        offset += len(raw) + -len(raw) % 4
-    # the accessors kind by kind: mesh t's of kind k is accessor k * n + t
-    # (the indices are the first kind)
-    n = len(meshes)
-    accessors = [{"bufferView": v, "componentType": COMPONENT[index_data[v].dtype], "type": "SCALAR",
-                  "byteOffset": o, "count": c} for (v, o), c in zip(index_of.tolist(), (3 * sizes).tolist())]
-    for v, (key, data) in enumerate(columns.items(), len(index_data)):
-        row = data.shape[1]
-        head = {"bufferView": v, "componentType": COMPONENT[np.dtype(data.dtype.name)], "type": VECTOR[row],
-                **({"normalized": True} if key == "COLOR_0" else {})}
-        low, high = ((np.minimum.reduceat(data, first, axis=0).tolist(), np.maximum.reduceat(data, first, axis=0).tolist())
-                     if len(data) else ([], []))
-        accessors += [{**head, "byteOffset": o, "count": c, "min": a, "max": b}
-                      for o, c, a, b in zip((first * row * data.dtype.itemsize).tolist(), counts.tolist(), low, high)]
     kinds = ["indices", *columns]
-    extras = {"extras": {"isoflow": comment}} if comment else {}
-    gltf_meshes = [{"name": mesh["name"], "primitives": [{
-        "attributes": {key: k * n + t for k, key in enumerate(kinds) if key != "indices"},
-        "indices": t, "mode": 4}], **extras} for t, mesh in enumerate(meshes)]
-    nodes = []
-    for t, mesh in enumerate(meshes):
-        node = {"name": mesh["name"], "mesh": t}
-        if mesh.get("matrix") is not None:
-            node["matrix"] = np.asarray(mesh["matrix"], np.float64).T.reshape(-1).tolist()  # column-major
-        nodes.append(node)
-    tree = {"asset": {"version": "2.0", "generator": "isoflow"}, "scene": 0,
-            "scenes": [{"nodes": list(range(len(nodes)))}], "nodes": nodes, "meshes": gltf_meshes,
-            "accessors": accessors, "bufferViews": views, "buffers": [{"byteLength": offset}]}
-    text = json.dumps(tree, separators=(",", ":")).encode("utf-8")
+    accessors = [_index_accessors(index_of[order], 3 * sizes[order], [e[0] for e in elements[:len(index_data)]])]
+    for v, key in enumerate(columns, len(index_data)):
+        dtype, row = elements[v]
+        head = {"bufferView": v, "componentType": COMPONENT[dtype], "type": VECTOR[row],
+                **({"normalized": True} if key == "COLOR_0" else {})}
+        bounds = None
+        if key == "POSITION":  # the specification asks POSITION's bounds alone
+            low = np.concatenate([np.minimum.reduceat(p, s.vfirst[:-1], axis=0) for p, s in zip(columns[key], sets)])
+            high = np.concatenate([np.maximum.reduceat(p, s.vfirst[:-1], axis=0) for p, s in zip(columns[key], sets)])
+            bounds = low[order].tolist(), high[order].tolist()
+        accessors.append(_vertex_accessors(head, (first * row * dtype.itemsize)[order], counts[order], bounds))
+    names = [json.dumps(name) for s in sets for name in s.names]
+    matrices = {}
+    for base, s in zip(np.concatenate([[0], np.cumsum([len(s.names) for s in sets])]).tolist(), sets):
+        matrices.update({base + p: m for p, m in s.matrices.items()})
+    extras = f',"extras":{json.dumps({"isoflow": comment}, separators=(",", ":"))}' if comment else ""
+    meshes, nodes = [], []
+    for t, p in enumerate(order.tolist()):
+        attributes = ",".join(f'"{key}":{k * n + t}' for k, key in enumerate(kinds) if key != "indices")
+        meshes.append(f'{{"name":{names[p]},"primitives":[{{"attributes":{{{attributes}}},"indices":{t},"mode":4}}]'
+                      f'{extras}}}')
+        matrix = matrices.get(p)
+        node = f',"matrix":{json.dumps(np.asarray(matrix, np.float64).T.reshape(-1).tolist())}' if matrix is not None else ""
+        nodes.append(f'{{"name":{names[p]},"mesh":{t}{node}}}')
+    head = json.dumps({"asset": {"version": "2.0", "generator": "isoflow"}, "scene": 0,
+                       "scenes": [{"nodes": list(range(n))}]}, separators=(",", ":"))
+    tail = json.dumps({"bufferViews": views, "buffers": [{"byteLength": length}]}, separators=(",", ":"))
+    text = (f'{head[:-1]},"nodes":[{",".join(nodes)}],"meshes":[{",".join(meshes)}],'
+            f'"accessors":[{",".join(a for a in accessors if a)}],{tail[1:]}').encode()
     text += b" " * (-len(text) % 4)
-    total = 12 + 8 + len(text) + 8 + offset
+    total = 12 + 8 + len(text) + 8 + length
     return [struct.pack("<4sII", b"glTF", 2, total), struct.pack("<I4s", len(text), b"JSON"), text,
-            struct.pack("<I4s", offset, b"BIN\0"), *chunks]
+            struct.pack("<I4s", length, b"BIN\0"), *chunks]
+
+
+def _index_accessors(index_of: np.ndarray, count: np.ndarray, dtypes: list) -> str:
+    """The JSON of the index accessors, one per node: its view, offset and
+    count (``index_of`` and ``count`` in node order)."""
+    types = [COMPONENT[d] for d in dtypes]
+    return ",".join(f'{{"bufferView":{v},"componentType":{types[v]},"type":"SCALAR","byteOffset":{o},"count":{c}}}'
+                    for (v, o), c in zip(index_of.tolist(), count.tolist()))
+
+
+def _vertex_accessors(head: dict, offsets: np.ndarray, counts: np.ndarray, bounds: tuple | None) -> str:
+    """The JSON of one vertex attribute's accessors, one per node: ``head``
+    (view, type) with each node's offset and count, and ``bounds`` (each
+    node's min and max) where given."""
+    start = json.dumps(head, separators=(",", ":"))[:-1]
+    if bounds is None:
+        return ",".join(f'{start},"byteOffset":{o},"count":{c}}}' for o, c in zip(offsets.tolist(), counts.tolist()))
+    return ",".join(f'{start},"byteOffset":{o},"count":{c},"min":{json.dumps(a)},"max":{json.dumps(b)}}}'
+                    for o, c, a, b in zip(offsets.tolist(), counts.tolist(), *bounds))
