@@ -941,3 +941,48 @@ def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alo
     for label, size in replaced.items():
         mesh = trimesh.load(out / f"label_{label}.ply", process=False)
         assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+
+
+def test_a_label_slice_saved_as_3d_gets_the_note_with_the_line_that_saves_its_2d_labels(tmp_path, capsys):
+    """``info --labels`` read a segmentation of one slice saved as (X, Y, 1)
+    as a plate one voxel thick without a word, where ``info`` of a mask
+    says so: its table had volumes and surface areas (the plate's top and
+    bottom faces) for the slice's areas and perimeters. It gets info's
+    note, whose line saves the 2D label image (read_labels, write_labels,
+    the pixel size and unit kept), and that image's table is the slice's
+    as scikit-image counts it (area, Euler number at 8) in the file's
+    millimetres as nibabel reads them."""
+    import shlex
+
+    nib = pytest.importorskip("nibabel")
+    measure = pytest.importorskip("skimage.measure")
+    cells = np.zeros((9, 8), np.int16)
+    cells[1:7, 2:7] = 4
+    cells[3:5, 4] = 0  # a hole in label 4
+    cells[8, 0] = 4  # and a second piece
+    cells[0:3, 0:2] = 9
+    image = nib.Nifti1Image(cells[:, :, None], np.diag([0.5, 0.7, 2.0, 1]))
+    image.header.set_xyzt_units("mm")
+    path = tmp_path / "slice.nii.gz"
+    nib.save(image, path)
+    assert main(["info", str(path), "--labels", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["shape"] == [9, 8, 1]  # read as it is, a plate
+    [note] = err.splitlines()
+    assert note.startswith(f"isoflow info: note: {path}: shape 9x8x1, one voxel along z: read as a 3D plate"), note
+    code = shlex.split(note.split("give it: ", 1)[1])
+    assert code[:2] == ["python", "-c"]
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    table = json.loads(run(capsys, "info", tmp_path / "slice_2d.npz", "--labels", "--json", "--connectivity", "8"))
+    zooms = [float(z) for z in nib.load(path).header.get_zooms()[:2]]
+    assert table["shape"] == [9, 8] and table["pitch"] == pytest.approx(zooms) and table["unit"] == "mm"
+    want = measure.regionprops_table(cells, properties=("label", "area", "euler_number"))
+    assert [r["label"] for r in table["labels"]] == want["label"].tolist()
+    assert [r["area"] for r in table["labels"]] == pytest.approx(want["area"] * zooms[0] * zooms[1])
+    assert [r["euler_characteristic"] for r in table["labels"]] == want["euler_number"].tolist()
+    # --quiet drops it, and surface (3D only, a plate is its input) does not say it
+    assert main(["info", str(path), "--labels", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "s.glb"), "--no-check"]) == 0
+    assert "3D plate" not in capsys.readouterr().err

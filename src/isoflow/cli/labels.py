@@ -88,6 +88,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_labels
+    from .inputs import say_plate
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
@@ -115,6 +116,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
+    # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
+    say_plate(args, tuple(about["shape"]))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
         raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
     within, beyond = ([], []) if asked is None else _by_type(args.input, asked, about["dtype"])
