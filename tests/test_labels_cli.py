@@ -986,3 +986,51 @@ def test_a_label_slice_saved_as_3d_gets_the_note_with_the_line_that_saves_its_2d
     assert capsys.readouterr().err == ""
     assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "s.glb"), "--no-check"]) == 0
     assert "3D plate" not in capsys.readouterr().err
+
+
+def test_an_ome_zarr_image_s_segmentation_under_labels_is_read_by_its_name(tmp_path, capsys, segmentation):
+    """An OME-Zarr image keeps its segmentations as images of their own in
+    its ``labels/`` group (NGFF's image-label: ``image.zarr/labels/cells``).
+    Neither ``image.zarr/labels/cells`` ("not a volume file") nor
+    ``image.zarr:labels/cells`` ("no resolution level") read it. The name
+    after the colon picks the group (and a level after it), and the path
+    given as a directory inside the store is one line naming the form that
+    reads it. The rows are scikit-image's regionprops of the array zarr
+    reads, placed by the label image's own scale and translation."""
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space", "unit": "micrometer"} for a in "zyx"]
+    scale, shift = [2.0, 0.75, 0.5], [5.0, -20.0, 10.0]  # (z, y, x); voxel centres
+
+    def image(group, data):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": scale}, {"type": "translation", "translation": shift}]}]}]
+
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    image(root, (zyx > 0).astype(np.uint8) * 200)  # the microscope's image
+    root.require_group("labels").attrs["labels"] = ["cells"]
+    cells = root.require_group("labels/cells")
+    image(cells, zyx)
+    cells.attrs["image-label"] = {"version": "0.4"}
+    stored = zarr.open_array(str(tmp_path / "image.zarr" / "labels" / "cells" / "0"), mode="r")[:]
+    want = measure.regionprops_table(stored.astype(np.int64), properties=("label", "area", "bbox", "centroid"))
+    pitch = np.array(scale[::-1])
+    corner = np.array(shift[::-1]) - pitch / 2
+    for name in ("labels/cells", "labels/cells/0"):
+        report = json.loads(run(capsys, "info", f"{tmp_path / 'image.zarr'}:{name}", "--labels", "--json"))
+        assert report["pitch"] == pytest.approx(pitch) and report["unit"] == "µm"
+        rows = report["labels"]
+        assert [r["label"] for r in rows] == want["label"].tolist()
+        assert [r["voxels"] for r in rows] == want["area"].tolist()
+        for r, row in enumerate(rows):  # regionprops' axes are the stored (z, y, x)
+            low = np.array([want[f"bbox-{2 - d}"][r] for d in range(3)])
+            mean = np.array([want[f"centroid-{2 - d}"][r] for d in range(3)])
+            assert [row[f"bbox-{d}"] for d in range(3)] == pytest.approx(corner + pitch * low)
+            assert [row[f"centroid-{d}"] for d in range(3)] == pytest.approx(corner + pitch * (mean + 0.5))
+    inside = tmp_path / "image.zarr" / "labels" / "cells"
+    fails(capsys, "info", inside, "--labels", words=(f"inside the zarr store {tmp_path / 'image.zarr'}; name it as "
+                                                     f"{tmp_path / 'image.zarr'}:labels/cells",))
+    fails(capsys, "info", f"{tmp_path / 'image.zarr'}:labels", "--labels",
+          words=("a zarr group without arrays (its groups: ['cells']; name one", ":labels/cells)"))
