@@ -1034,3 +1034,22 @@ def test_an_ome_zarr_image_s_segmentation_under_labels_is_read_by_its_name(tmp_p
                                                      f"{tmp_path / 'image.zarr'}:labels/cells",))
     fails(capsys, "info", f"{tmp_path / 'image.zarr'}:labels", "--labels",
           words=("a zarr group without arrays (its groups: ['cells']; name one", ":labels/cells)"))
+
+
+def test_absent_labels_beyond_int64_are_named_in_all_their_digits(tmp_path, capsys):
+    """An int64 image asked for labels on both sides of 2**63 (a range up
+    to the type's end and past it) named them, in its warning and its
+    refusal, as NumPy's float64 of the lot: "9.223372036854776e+18" four
+    times for four labels. Each is named as asked, in all its digits, as
+    Python writes the integers and the JSON's ``absent`` lists them."""
+    image = np.zeros((4, 4, 4), np.int64)
+    image[1:3, 1:3, 1:3] = 2**40
+    np.save(tmp_path / "big.npy", image)
+    asked = [2**40, *range(2**63 - 2, 2**63 + 2)]
+    spec = f"{asked[0]},{asked[1]}-{asked[-1]}"
+    assert main(["info", str(tmp_path / "big.npy"), "--labels", spec, "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["absent"] == asked[1:]
+    assert f"4 of the labels asked for do not occur ({', '.join(map(str, asked[1:]))})" in err, err
+    fails(capsys, "info", tmp_path / "big.npy", "--labels", f"{asked[1]}-{asked[-1]}",
+          words=(f"none of the labels asked for occur ({', '.join(map(str, asked[1:]))})",))

@@ -261,7 +261,9 @@ def _by_type(name, asked: list[int], dtype) -> tuple[list[int], list[int]]:
 
 
 def _some(values, most: int = 8) -> str:
-    shown = ", ".join(str(v) for v in np.asarray(values)[:most].tolist())
+    # each value as it is: NumPy makes float64 of ints that no one integer type
+    # holds together (2**63 beside 5, or beside -1), which would print 9.223372036854776e+18
+    shown = ", ".join(str(v) for v in list(values[:most]))
     return shown + (f", ... ({len(values) - most} more)" if len(values) > most else "")
 
 
