@@ -1053,3 +1053,27 @@ def test_absent_labels_beyond_int64_are_named_in_all_their_digits(tmp_path, caps
     assert f"4 of the labels asked for do not occur ({', '.join(map(str, asked[1:]))})" in err, err
     fails(capsys, "info", tmp_path / "big.npy", "--labels", f"{asked[1]}-{asked[-1]}",
           words=(f"none of the labels asked for occur ({', '.join(map(str, asked[1:]))})",))
+
+
+def test_a_big_endian_label_file_s_type_is_named_as_numpy_names_it(tmp_path, capsys, segmentation):
+    """A big-endian label image (NRRD's ``endian: big``, a zarr store of
+    ``>u2``, an old Analyze or NIfTI file) had ``"dtype": ">i2"`` in
+    ``--json`` where the same labels little-endian have ``"int16"``, and
+    the refusal of a label the type cannot hold said int16: a script that
+    compared types saw two. It is the type's name, as NumPy names what
+    pynrrd and zarr read (``dtype.name``), with the rows scikit-image
+    counts."""
+    nrrd = pytest.importorskip("nrrd")
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    nrrd.write(str(tmp_path / "be.nrrd"), segmentation.astype(">i2"), {"endian": "big"})
+    data, header = nrrd.read(str(tmp_path / "be.nrrd"))
+    assert header["endian"] == "big" and data.dtype.byteorder == ">"
+    store = zarr.open_array(str(tmp_path / "be.zarr"), mode="w", shape=segmentation.shape, chunks=(5, 5, 5),
+                            dtype=">u2", zarr_format=2)
+    store[:] = segmentation
+    want = measure.regionprops_table(segmentation.astype(np.int64), properties=("label", "area"))
+    for path, stored in ((tmp_path / "be.nrrd", data.dtype), (tmp_path / "be.zarr", store.dtype)):
+        report = json.loads(run(capsys, "info", path, "--labels", "--json"))
+        assert report["dtype"] == np.dtype(stored).name, path
+        assert [(r["label"], r["voxels"]) for r in report["labels"]] == list(zip(want["label"], want["area"]))

@@ -296,7 +296,9 @@ def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> I
     """What ``--json`` prints, in pieces: one object, the image, ``absent``
     (the labels asked for that have no row) and then ``labels``, one
     object per label (NaN as null)."""
-    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
+    # the type by its name, in any byte order: a big-endian file's labels (NRRD's
+    # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
+    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
             "connectivity": conn, "absent": absent}
     yield json.dumps(head)[:-1] + ', "labels": '
