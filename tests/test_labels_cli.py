@@ -1077,3 +1077,33 @@ def test_a_big_endian_label_file_s_type_is_named_as_numpy_names_it(tmp_path, cap
         report = json.loads(run(capsys, "info", path, "--labels", "--json"))
         assert report["dtype"] == np.dtype(stored).name, path
         assert [(r["label"], r["voxels"]) for r in report["labels"]] == list(zip(want["label"], want["area"]))
+
+
+def test_cellpose_s_seg_npy_is_one_line_with_the_line_that_saves_its_masks(tmp_path, capsys):
+    """Cellpose saves its segmentation as ``IMG_seg.npy``, a pickled dict
+    holding ``masks`` (rows, columns). ``info IMG_seg.npy --labels`` said
+    "not a readable numpy file (ValueError: Object arrays cannot be loaded
+    when allow_pickle=False)". isoflow still unpickles nothing: the line
+    says the file holds Python objects and gives the line that saves the
+    masks x first, whose table is scikit-image's regionprops of the masks
+    (area, Euler number at 8, the box with columns as x)."""
+    import shlex
+
+    measure = pytest.importorskip("skimage.measure")
+    masks = np.zeros((7, 9), np.uint16)  # (rows, columns), as Cellpose's
+    masks[1:4, 1:8] = 1
+    masks[2, 3] = 0  # a hole
+    masks[5:7, 0:3] = 2
+    np.save(tmp_path / "img_seg.npy", {"masks": masks, "outlines": masks * 0, "filename": "img.tif"},
+            allow_pickle=True)
+    line = fails(capsys, "info", tmp_path / "img_seg.npy", "--labels",
+                 words=(f"{tmp_path / 'img_seg.npy'}: holds Python objects", "Cellpose's _seg.npy"))
+    code = shlex.split(line.split("give that: ", 1)[1])
+    assert code[:2] == ["python", "-c"]
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    rows = json.loads(run(capsys, "info", tmp_path / "masks.npy", "--labels", "--json", "--connectivity", "8"))["labels"]
+    want = measure.regionprops_table(masks, properties=("label", "area", "euler_number", "bbox"))
+    assert [(r["label"], r["voxels"], r["euler_characteristic"]) for r in rows] == list(
+        zip(want["label"], want["area"], want["euler_number"]))
+    assert [[r["bbox-0"], r["bbox-1"]] for r in rows] == [[c, r] for r, c in zip(want["bbox-0"], want["bbox-1"])]
