@@ -1107,3 +1107,41 @@ def test_cellpose_s_seg_npy_is_one_line_with_the_line_that_saves_its_masks(tmp_p
     assert [(r["label"], r["voxels"], r["euler_characteristic"]) for r in rows] == list(
         zip(want["label"], want["area"], want["euler_number"]))
     assert [[r["bbox-0"], r["bbox-1"]] for r in rows] == [[c, r] for r, c in zip(want["bbox-0"], want["bbox-1"])]
+
+
+def test_labels_of_an_ome_zarr_image_name_the_segmentations_its_labels_group_holds(tmp_path, capsys, segmentation):
+    """``info image.zarr --labels`` of an OME-Zarr image that keeps its
+    segmentation in ``labels/`` (NGFF's image-label) read the image's
+    intensities as labels without a word: a table of grey values. It still
+    reads what it is given, with a note naming the segmentations and the
+    name that reads one; that name's rows are scikit-image's regionprops
+    of the array zarr reads there. --quiet drops the note; a store without
+    ``labels/`` gets none."""
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space"} for a in "zyx"]
+
+    def image(group, data):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0"}]}]
+
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    image(root, (zyx * 37 + 5).astype(np.uint16))  # intensities
+    root.require_group("labels").attrs["labels"] = ["nuclei", "cells"]
+    image(root.require_group("labels/nuclei"), zyx)
+    store = str(tmp_path / "image.zarr")
+    assert main(["info", store, "--labels"]) == 0
+    [note] = [line for line in capsys.readouterr().err.splitlines() if "labels/ group" in line]
+    assert note == (f"isoflow info: note: {store}: an OME-Zarr image whose labels/ group holds 2 segmentations (nuclei, "
+                    f"cells); this reads the image itself: for a segmentation's labels, give {store}:labels/nuclei")
+    named = note.rsplit("give ", 1)[1]
+    rows = json.loads(run(capsys, "info", named, "--labels", "--json"))["labels"]
+    stored = zarr.open_array(f"{store}/labels/nuclei/0", mode="r")[:]
+    want = measure.regionprops_table(stored.astype(np.int64), properties=("label", "area"))
+    assert [(r["label"], r["voxels"]) for r in rows] == list(zip(want["label"], want["area"]))
+    assert main(["info", store, "--labels", "--quiet"]) == 0
+    assert "labels/ group" not in capsys.readouterr().err
+    zarr.open_array(str(tmp_path / "plain.zarr"), mode="w", shape=zyx.shape, dtype="u2")[:] = zyx
+    assert main(["info", str(tmp_path / "plain.zarr"), "--labels"]) == 0
+    assert "labels/ group" not in capsys.readouterr().err

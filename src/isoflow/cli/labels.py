@@ -96,6 +96,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # surfaces are written, whole (as a file is, refused up front where it
     # would not fit)
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
+    say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
     ndim = 3 if image is None else image.array.ndim
     if ndim == 2 and getattr(args, "command", "") == "surface":
@@ -137,6 +138,21 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     if not len(table["label"]):
         raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
     return about, conn, table, image, absent
+
+
+def say_declared_labels(args: argparse.Namespace) -> None:
+    """A note where the input is an OME-Zarr image that keeps its
+    segmentations in its ``labels/`` group: ``--labels`` of the image
+    itself takes its intensities for labels, and the note names the
+    segmentations (``IMAGE.zarr:labels/NAME``) that hold the labels."""
+    from ..scale.chunks import declared_labels
+
+    names = declared_labels(args.input) if is_store(args.input) and not args.quiet else []
+    if names:
+        store = str(args.input).rstrip("/")
+        print(f"isoflow {args.command}: note: {args.input}: an OME-Zarr image whose labels/ group holds "
+              f"{counted(len(names), 'segmentation')} ({_some(names)}); this reads the image itself: for a "
+              f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
 
 
 def in_order_asked(missing: list[int], beyond: list[int], asked: list[int]) -> list[int]:

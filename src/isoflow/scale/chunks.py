@@ -528,6 +528,45 @@ def ome_multiscales(attrs) -> dict | None:
     return None
 
 
+def declared_labels(path) -> list[str]:
+    """The segmentations an OME-Zarr image declares in its ``labels/``
+    group (NGFF's image-label: its ``labels`` attribute, under ``ome`` in
+    0.5), each an image of its own read as ``IMAGE.zarr:labels/NAME``;
+    none for any other store, a level or array named after its colon, or
+    what zarr does not open.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store as given.
+
+    Returns
+    -------
+    list of str
+        The names, as the image lists them.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> d = tempfile.mkdtemp() + "/image.zarr"
+    >>> g = zarr.open_group(d, mode="w")
+    >>> g.require_group("labels").attrs["labels"] = ["cells", "nuclei"]
+    >>> declared_labels(d), declared_labels(d + ":0")
+    (['cells', 'nuclei'], [])
+    """
+    file, name = split_store(path)
+    if name is not None:
+        return []
+    try:
+        group = import_zarr().open_group(str(file), mode="r")["labels"]
+        attrs = dict(group.attrs)
+    except Exception:  # no group, no labels/ in it, or no store: nothing declared
+        return []
+    ome = attrs.get("ome")
+    names = attrs.get("labels") or (ome.get("labels") if isinstance(ome, dict) else None)
+    return [str(n) for n in names] if isinstance(names, list) else []
+
+
 def fill_label(array) -> int | None:
     """The fill value of a zarr array (what zarr reads for a chunk never
     written) as the label it passes for.
