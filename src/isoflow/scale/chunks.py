@@ -270,11 +270,13 @@ def inner_group(zarr, node, level: str | None) -> tuple[str, str | None] | None:
     return None
 
 
-def _volume_of_node(zarr, node, path: Path, level: str | None) -> tuple:
-    """:func:`open_zarr_node` of the opened store ``node``."""
+def _volume_of_node(zarr, node, path: Path, level: str | None, inside: bool = False) -> tuple:
+    """:func:`open_zarr_node` of the opened store ``node`` (``inside``: a
+    group inside the store, ``path`` naming it as ``STORE.zarr:GROUP``)."""
     if isinstance(node, zarr.Group) and (inner := inner_group(zarr, node, level)) is not None:
         if level not in _level_names(node):  # (a level's own path is the level)
-            return _volume_of_node(zarr, node[inner[0]], Path(f"{path}:{inner[0]}"), inner[1])
+            named = Path(f"{path}{'/' if inside else ':'}{inner[0]}")
+            return _volume_of_node(zarr, node[inner[0]], named, inner[1], inside=True)
     if not isinstance(node, zarr.Group):
         if level is not None:
             raise IsoflowError(f"{path}: a zarr array has no resolution level {level!r}")
@@ -313,7 +315,7 @@ def _volume_of_node(zarr, node, path: Path, level: str | None) -> tuple:
     elif not arrays:
         groups = sorted(name for name, _ in node.groups())
         # an OME-Zarr image's labels/ group holds an image per segmentation
-        pick = f" (its groups: {groups}; name one, {path}{'/' if ':' in str(path) else ':'}{groups[0]})" if groups else ""
+        pick = f" (its groups: {groups}; name one, {path}{'/' if inside else ':'}{groups[0]})" if groups else ""
         raise IsoflowError(f"{path}: a zarr group without arrays{pick}")
     else:
         first = sorted(arrays)[0]
