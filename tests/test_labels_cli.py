@@ -1145,3 +1145,39 @@ def test_labels_of_an_ome_zarr_image_name_the_segmentations_its_labels_group_hol
     zarr.open_array(str(tmp_path / "plain.zarr"), mode="w", shape=zyx.shape, dtype="u2")[:] = zyx
     assert main(["info", str(tmp_path / "plain.zarr"), "--labels"]) == 0
     assert "labels/ group" not in capsys.readouterr().err
+
+
+def test_an_empty_segmentation_s_table_has_no_row_and_exit_0(tmp_path, capsys):
+    """A segmentation with no label (no lesion found: every voxel 0) was
+    refused, exit 2, and ``--csv`` wrote no file, so a batch over a
+    cohort's files stopped at the first empty one; label_table gives an
+    empty table there, as scikit-image's regionprops_table does. The
+    table has no row: the text, ``--json``'s ``labels`` ``[]``, a CSV of
+    its header alone with the columns of any 3D table, exit 0, and a
+    warning (under --quiet too) says why. surface, with no surface to
+    write, still refuses it in one line."""
+    nib = pytest.importorskip("nibabel")
+    measure = pytest.importorskip("skimage.measure")
+    empty = np.zeros((6, 5, 4), np.int16)
+    image = nib.Nifti1Image(empty, np.diag([0.5, 0.7, 2.0, 1]))
+    image.header.set_xyzt_units("mm")
+    nib.save(image, tmp_path / "empty.nii.gz")
+    assert len(measure.regionprops_table(empty, properties=("label", "area"))["label"]) == 0
+    assert main(["info", str(tmp_path / "empty.nii.gz"), "--labels", "--json", "--quiet"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["labels"] == [] and json.loads(out)["unit"] == "mm"
+    assert "no nonzero label: the image is all 0" in err
+    assert main(["info", str(tmp_path / "empty.nii.gz"), "--labels", "--csv", str(tmp_path / "empty.csv")]) == 0
+    one = empty.copy()
+    one[1, 1, 1] = 3
+    np.save(tmp_path / "one.npy", one)
+    assert main(["info", str(tmp_path / "one.npy"), "--labels", "--csv", str(tmp_path / "one.csv")]) == 0
+    capsys.readouterr()
+    with open(tmp_path / "empty.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    with open(tmp_path / "one.csv", newline="") as fh:
+        header = next(csv.reader(fh))
+    assert rows == [header]
+    fails(capsys, "surface", tmp_path / "empty.nii.gz", "--labels", "-o", tmp_path / "e.glb",
+          words=("no nonzero label: the image is all 0",))
+    assert not (tmp_path / "e.glb").exists()

@@ -136,7 +136,12 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
               f"occur ({_some(absent)})", file=sys.stderr)
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
-        raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+        if args.command == "surface":  # no surface to write
+            raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+        # an empty segmentation (no lesion found) is an answer: its table has no row, as
+        # label_table's and regionprops_table's, and a warning (kept by --quiet) says why
+        print(f"isoflow {args.command}: warning: {args.input}: no nonzero label: the image is all 0; the table has "
+              "no row", file=sys.stderr)
     return about, conn, table, image, absent
 
 
