@@ -149,7 +149,13 @@ def say_declared_labels(args: argparse.Namespace) -> None:
     """A note where the input is an OME-Zarr image that keeps its
     segmentations in its ``labels/`` group: ``--labels`` of the image
     itself takes its intensities for labels, and the note names the
-    segmentations (``IMAGE.zarr:labels/NAME``) that hold the labels."""
+    segmentations (``IMAGE.zarr:labels/NAME``) that hold the labels.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``command``, ``input`` and ``quiet``.
+    """
     from ..scale.chunks import declared_labels
 
     names = declared_labels(args.input) if is_store(args.input) and not args.quiet else []

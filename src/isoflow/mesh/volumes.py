@@ -188,9 +188,29 @@ def zarr_around(path: Path) -> Path | None:
     return next((p for p in path.parents if p.suffix.lower() == ".zarr"), None)
 
 
-def refuse_inside_store(file: Path, shown) -> None:
+def refuse_inside_store(file: Path, shown: str | os.PathLike) -> None:
     """One line for a path inside a zarr store (:func:`zarr_around`),
-    with the name that reads it: ``STORE.zarr:labels/cells``."""
+    with the name that reads it: ``STORE.zarr:labels/cells``.
+
+    Parameters
+    ----------
+    file : pathlib.Path
+        The path, without a ``:dataset``.
+    shown : str or os.PathLike
+        The input as the line names it.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``file`` lies inside a ``.zarr`` directory.
+
+    Examples
+    --------
+    >>> refuse_inside_store(Path("image.zarr/labels/cells"), "image.zarr/labels/cells")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: image.zarr/labels/cells: inside the zarr store image.zarr; name it as image.zarr:labels/cells
+    """
     if (store := zarr_around(file)) is not None:
         raise IsoflowError(f"{shown}: inside the zarr store {store}; name it as {store}:{file.relative_to(store).as_posix()}")
 
