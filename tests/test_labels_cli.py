@@ -944,3 +944,243 @@ def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alo
     for label, size in replaced.items():
         mesh = trimesh.load(out / f"label_{label}.ply", process=False)
         assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+
+
+def test_a_label_slice_saved_as_3d_gets_the_note_with_the_line_that_saves_its_2d_labels(tmp_path, capsys):
+    """``info --labels`` read a segmentation of one slice saved as (X, Y, 1)
+    as a plate one voxel thick without a word, where ``info`` of a mask
+    says so: its table had volumes and surface areas (the plate's top and
+    bottom faces) for the slice's areas and perimeters. It gets info's
+    note, whose line saves the 2D label image (read_labels, write_labels,
+    the pixel size and unit kept), and that image's table is the slice's
+    as scikit-image counts it (area, Euler number at 8) in the file's
+    millimetres as nibabel reads them."""
+    import shlex
+
+    nib = pytest.importorskip("nibabel")
+    measure = pytest.importorskip("skimage.measure")
+    cells = np.zeros((9, 8), np.int16)
+    cells[1:7, 2:7] = 4
+    cells[3:5, 4] = 0  # a hole in label 4
+    cells[8, 0] = 4  # and a second piece
+    cells[0:3, 0:2] = 9
+    image = nib.Nifti1Image(cells[:, :, None], np.diag([0.5, 0.7, 2.0, 1]))
+    image.header.set_xyzt_units("mm")
+    path = tmp_path / "slice.nii.gz"
+    nib.save(image, path)
+    assert main(["info", str(path), "--labels", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["shape"] == [9, 8, 1]  # read as it is, a plate
+    [note] = err.splitlines()
+    assert note.startswith(f"isoflow info: note: {path}: shape 9x8x1, one voxel along z: read as a 3D plate"), note
+    code = shlex.split(note.split("give it: ", 1)[1])
+    assert code[:2] == ["python", "-c"]
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    table = json.loads(run(capsys, "info", tmp_path / "slice_2d.npz", "--labels", "--json", "--connectivity", "8"))
+    zooms = [float(z) for z in nib.load(path).header.get_zooms()[:2]]
+    assert table["shape"] == [9, 8] and table["pitch"] == pytest.approx(zooms) and table["unit"] == "mm"
+    want = measure.regionprops_table(cells, properties=("label", "area", "euler_number"))
+    assert [r["label"] for r in table["labels"]] == want["label"].tolist()
+    assert [r["area"] for r in table["labels"]] == pytest.approx(want["area"] * zooms[0] * zooms[1])
+    assert [r["euler_characteristic"] for r in table["labels"]] == want["euler_number"].tolist()
+    # --quiet drops it, and surface (3D only, a plate is its input) does not say it
+    assert main(["info", str(path), "--labels", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "s.glb"), "--no-check"]) == 0
+    assert "3D plate" not in capsys.readouterr().err
+
+
+def test_an_ome_zarr_image_s_segmentation_under_labels_is_read_by_its_name(tmp_path, capsys, segmentation):
+    """An OME-Zarr image keeps its segmentations as images of their own in
+    its ``labels/`` group (NGFF's image-label: ``image.zarr/labels/cells``).
+    Neither ``image.zarr/labels/cells`` ("not a volume file") nor
+    ``image.zarr:labels/cells`` ("no resolution level") read it. The name
+    after the colon picks the group (and a level after it), and the path
+    given as a directory inside the store is one line naming the form that
+    reads it. The rows are scikit-image's regionprops of the array zarr
+    reads, placed by the label image's own scale and translation."""
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space", "unit": "micrometer"} for a in "zyx"]
+    scale, shift = [2.0, 0.75, 0.5], [5.0, -20.0, 10.0]  # (z, y, x); voxel centres
+
+    def image(group, data):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": scale}, {"type": "translation", "translation": shift}]}]}]
+
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    image(root, (zyx > 0).astype(np.uint8) * 200)  # the microscope's image
+    root.require_group("labels").attrs["labels"] = ["cells"]
+    cells = root.require_group("labels/cells")
+    image(cells, zyx)
+    cells.attrs["image-label"] = {"version": "0.4"}
+    stored = zarr.open_array(str(tmp_path / "image.zarr" / "labels" / "cells" / "0"), mode="r")[:]
+    want = measure.regionprops_table(stored.astype(np.int64), properties=("label", "area", "bbox", "centroid"))
+    pitch = np.array(scale[::-1])
+    corner = np.array(shift[::-1]) - pitch / 2
+    for name in ("labels/cells", "labels/cells/0"):
+        report = json.loads(run(capsys, "info", f"{tmp_path / 'image.zarr'}:{name}", "--labels", "--json"))
+        assert report["pitch"] == pytest.approx(pitch) and report["unit"] == "µm"
+        rows = report["labels"]
+        assert [r["label"] for r in rows] == want["label"].tolist()
+        assert [r["voxels"] for r in rows] == want["area"].tolist()
+        for r, row in enumerate(rows):  # regionprops' axes are the stored (z, y, x)
+            low = np.array([want[f"bbox-{2 - d}"][r] for d in range(3)])
+            mean = np.array([want[f"centroid-{2 - d}"][r] for d in range(3)])
+            assert [row[f"bbox-{d}"] for d in range(3)] == pytest.approx(corner + pitch * low)
+            assert [row[f"centroid-{d}"] for d in range(3)] == pytest.approx(corner + pitch * (mean + 0.5))
+    inside = tmp_path / "image.zarr" / "labels" / "cells"
+    fails(capsys, "info", inside, "--labels", words=(f"inside the zarr store {tmp_path / 'image.zarr'}; name it as "
+                                                     f"{tmp_path / 'image.zarr'}:labels/cells",))
+    fails(capsys, "info", f"{tmp_path / 'image.zarr'}:labels", "--labels",
+          words=("a zarr group without arrays (its groups: ['cells']; name one", ":labels/cells)"))
+
+
+def test_absent_labels_beyond_int64_are_named_in_all_their_digits(tmp_path, capsys):
+    """An int64 image asked for labels on both sides of 2**63 (a range up
+    to the type's end and past it) named them, in its warning and its
+    refusal, as NumPy's float64 of the lot: "9.223372036854776e+18" four
+    times for four labels. Each is named as asked, in all its digits, as
+    Python writes the integers and the JSON's ``absent`` lists them."""
+    image = np.zeros((4, 4, 4), np.int64)
+    image[1:3, 1:3, 1:3] = 2**40
+    np.save(tmp_path / "big.npy", image)
+    asked = [2**40, *range(2**63 - 2, 2**63 + 2)]
+    spec = f"{asked[0]},{asked[1]}-{asked[-1]}"
+    assert main(["info", str(tmp_path / "big.npy"), "--labels", spec, "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["absent"] == asked[1:]
+    assert f"4 of the labels asked for do not occur ({', '.join(map(str, asked[1:]))})" in err, err
+    fails(capsys, "info", tmp_path / "big.npy", "--labels", f"{asked[1]}-{asked[-1]}",
+          words=(f"none of the labels asked for occur ({', '.join(map(str, asked[1:]))})",))
+
+
+def test_a_big_endian_label_file_s_type_is_named_as_numpy_names_it(tmp_path, capsys, segmentation):
+    """A big-endian label image (NRRD's ``endian: big``, a zarr store of
+    ``>u2``, an old Analyze or NIfTI file) had ``"dtype": ">i2"`` in
+    ``--json`` where the same labels little-endian have ``"int16"``, and
+    the refusal of a label the type cannot hold said int16: a script that
+    compared types saw two. It is the type's name, as NumPy names what
+    pynrrd and zarr read (``dtype.name``), with the rows scikit-image
+    counts."""
+    nrrd = pytest.importorskip("nrrd")
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    nrrd.write(str(tmp_path / "be.nrrd"), segmentation.astype(">i2"), {"endian": "big"})
+    data, header = nrrd.read(str(tmp_path / "be.nrrd"))
+    assert header["endian"] == "big" and data.dtype.byteorder == ">"
+    store = zarr.open_array(str(tmp_path / "be.zarr"), mode="w", shape=segmentation.shape, chunks=(5, 5, 5),
+                            dtype=">u2", zarr_format=2)
+    store[:] = segmentation
+    want = measure.regionprops_table(segmentation.astype(np.int64), properties=("label", "area"))
+    for path, stored in ((tmp_path / "be.nrrd", data.dtype), (tmp_path / "be.zarr", store.dtype)):
+        report = json.loads(run(capsys, "info", path, "--labels", "--json"))
+        assert report["dtype"] == np.dtype(stored).name, path
+        assert [(r["label"], r["voxels"]) for r in report["labels"]] == list(zip(want["label"], want["area"]))
+
+
+def test_cellpose_s_seg_npy_is_one_line_with_the_line_that_saves_its_masks(tmp_path, capsys):
+    """Cellpose saves its segmentation as ``IMG_seg.npy``, a pickled dict
+    holding ``masks`` (rows, columns). ``info IMG_seg.npy --labels`` said
+    "not a readable numpy file (ValueError: Object arrays cannot be loaded
+    when allow_pickle=False)". isoflow still unpickles nothing: the line
+    says the file holds Python objects and gives the line that saves the
+    masks x first, whose table is scikit-image's regionprops of the masks
+    (area, Euler number at 8, the box with columns as x)."""
+    import shlex
+
+    measure = pytest.importorskip("skimage.measure")
+    masks = np.zeros((7, 9), np.uint16)  # (rows, columns), as Cellpose's
+    masks[1:4, 1:8] = 1
+    masks[2, 3] = 0  # a hole
+    masks[5:7, 0:3] = 2
+    np.save(tmp_path / "img_seg.npy", {"masks": masks, "outlines": masks * 0, "filename": "img.tif"},
+            allow_pickle=True)
+    line = fails(capsys, "info", tmp_path / "img_seg.npy", "--labels",
+                 words=(f"{tmp_path / 'img_seg.npy'}: holds Python objects", "Cellpose's _seg.npy"))
+    code = shlex.split(line.split("give that: ", 1)[1])
+    assert code[:2] == ["python", "-c"]
+    p = subprocess.run([sys.executable, "-c", code[2]], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    rows = json.loads(run(capsys, "info", tmp_path / "masks.npy", "--labels", "--json", "--connectivity", "8"))["labels"]
+    want = measure.regionprops_table(masks, properties=("label", "area", "euler_number", "bbox"))
+    assert [(r["label"], r["voxels"], r["euler_characteristic"]) for r in rows] == list(
+        zip(want["label"], want["area"], want["euler_number"]))
+    assert [[r["bbox-0"], r["bbox-1"]] for r in rows] == [[c, r] for r, c in zip(want["bbox-0"], want["bbox-1"])]
+
+
+def test_labels_of_an_ome_zarr_image_name_the_segmentations_its_labels_group_holds(tmp_path, capsys, segmentation):
+    """``info image.zarr --labels`` of an OME-Zarr image that keeps its
+    segmentation in ``labels/`` (NGFF's image-label) read the image's
+    intensities as labels without a word: a table of grey values. It still
+    reads what it is given, with a note naming the segmentations and the
+    name that reads one; that name's rows are scikit-image's regionprops
+    of the array zarr reads there. --quiet drops the note; a store without
+    ``labels/`` gets none."""
+    zarr = pytest.importorskip("zarr")
+    measure = pytest.importorskip("skimage.measure")
+    zyx = np.ascontiguousarray(segmentation.transpose(2, 1, 0))
+    axes = [{"name": a, "type": "space"} for a in "zyx"]
+
+    def image(group, data):
+        group.create_array("0", data=data, chunks=(5, 5, 5))
+        group.attrs["multiscales"] = [{"version": "0.4", "axes": axes, "datasets": [{"path": "0"}]}]
+
+    root = zarr.open_group(str(tmp_path / "image.zarr"), mode="w", zarr_format=2)
+    image(root, (zyx * 37 + 5).astype(np.uint16))  # intensities
+    root.require_group("labels").attrs["labels"] = ["nuclei", "cells"]
+    image(root.require_group("labels/nuclei"), zyx)
+    store = str(tmp_path / "image.zarr")
+    assert main(["info", store, "--labels"]) == 0
+    [note] = [line for line in capsys.readouterr().err.splitlines() if "labels/ group" in line]
+    assert note == (f"isoflow info: note: {store}: an OME-Zarr image whose labels/ group holds 2 segmentations (nuclei, "
+                    f"cells); this reads the image itself: for a segmentation's labels, give {store}:labels/nuclei")
+    named = note.rsplit("give ", 1)[1]
+    rows = json.loads(run(capsys, "info", named, "--labels", "--json"))["labels"]
+    stored = zarr.open_array(f"{store}/labels/nuclei/0", mode="r")[:]
+    want = measure.regionprops_table(stored.astype(np.int64), properties=("label", "area"))
+    assert [(r["label"], r["voxels"]) for r in rows] == list(zip(want["label"], want["area"]))
+    assert main(["info", store, "--labels", "--quiet"]) == 0
+    assert "labels/ group" not in capsys.readouterr().err
+    zarr.open_array(str(tmp_path / "plain.zarr"), mode="w", shape=zyx.shape, dtype="u2")[:] = zyx
+    assert main(["info", str(tmp_path / "plain.zarr"), "--labels"]) == 0
+    assert "labels/ group" not in capsys.readouterr().err
+
+
+def test_an_empty_segmentation_s_table_has_no_row_and_exit_0(tmp_path, capsys):
+    """A segmentation with no label (no lesion found: every voxel 0) was
+    refused, exit 2, and ``--csv`` wrote no file, so a batch over a
+    cohort's files stopped at the first empty one; label_table gives an
+    empty table there, as scikit-image's regionprops_table does. The
+    table has no row: the text, ``--json``'s ``labels`` ``[]``, a CSV of
+    its header alone with the columns of any 3D table, exit 0, and a
+    warning (under --quiet too) says why. surface, with no surface to
+    write, still refuses it in one line."""
+    nib = pytest.importorskip("nibabel")
+    measure = pytest.importorskip("skimage.measure")
+    empty = np.zeros((6, 5, 4), np.int16)
+    image = nib.Nifti1Image(empty, np.diag([0.5, 0.7, 2.0, 1]))
+    image.header.set_xyzt_units("mm")
+    nib.save(image, tmp_path / "empty.nii.gz")
+    assert len(measure.regionprops_table(empty, properties=("label", "area"))["label"]) == 0
+    assert main(["info", str(tmp_path / "empty.nii.gz"), "--labels", "--json", "--quiet"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["labels"] == [] and json.loads(out)["unit"] == "mm"
+    assert "no nonzero label: the image is all 0" in err
+    assert main(["info", str(tmp_path / "empty.nii.gz"), "--labels", "--csv", str(tmp_path / "empty.csv")]) == 0
+    one = empty.copy()
+    one[1, 1, 1] = 3
+    np.save(tmp_path / "one.npy", one)
+    assert main(["info", str(tmp_path / "one.npy"), "--labels", "--csv", str(tmp_path / "one.csv")]) == 0
+    capsys.readouterr()
+    with open(tmp_path / "empty.csv", newline="") as fh:
+        rows = list(csv.reader(fh))
+    with open(tmp_path / "one.csv", newline="") as fh:
+        header = next(csv.reader(fh))
+    assert rows == [header]
+    fails(capsys, "surface", tmp_path / "empty.nii.gz", "--labels", "-o", tmp_path / "e.glb",
+          words=("no nonzero label: the image is all 0",))
+    assert not (tmp_path / "e.glb").exists()

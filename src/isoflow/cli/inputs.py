@@ -297,15 +297,19 @@ def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
         return
     if any(n < 2 for k, n in enumerate(shape) if k != thin[0]):
         return
+    labels = getattr(args, "labels", None) is not None
     print(f"isoflow {args.command}: note: {args.input}: "
-          f"{slice_as_2d(args.input, shape, thin[0], getattr(args, 'label', None))}", file=sys.stderr)
+          f"{slice_as_2d(args.input, shape, thin[0], getattr(args, 'label', None), labels=labels)}", file=sys.stderr)
 
 
-def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: float | None = None) -> str:
+def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: float | None = None, *,
+                labels: bool = False) -> str:
     """The note on a volume one voxel thick along ``axis``: it is read as
     a 3D plate (a 4D volume), and the one line of Python that saves the
     slice as a 2D image (the 3D volume), voxel size and origin of the other
-    axes kept.
+    axes kept; of a label image (``labels``), with ``read_labels`` and
+    ``write_labels``, which keep the labels and their unit, so that
+    ``info --labels`` gives the 2D table of that slice.
 
     Parameters
     ----------
@@ -317,6 +321,8 @@ def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: floa
         The axis of one voxel.
     label : float, optional
         The ``--label`` given: the line reads that label.
+    labels : bool
+        The input is read as a label image (``--labels``).
 
     Returns
     -------
@@ -325,6 +331,10 @@ def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: floa
 
     Examples
     --------
+    >>> print(slice_as_2d("seg.nii.gz", (64, 48, 1), 2, labels=True))
+    shape 64x48x1, one voxel along z: read as a 3D plate one voxel thick; to analyse it as the 2D image, save that and give it: \
+python -c 'import isoflow; v = isoflow.read_labels("seg.nii.gz"); k = [0, 1]; \
+isoflow.write_labels(v.array[:, :, 0], "slice_2d.npz", pitch=v.spacing[k], origin=v.origin[k], unit=v.unit)'
     >>> print(slice_as_2d("slice.nii.gz", (64, 48, 1), 2))
     shape 64x48x1, one voxel along z: read as a 3D plate one voxel thick; to analyse it as the 2D image, save that and give it: \
 python -c 'import isoflow; v = isoflow.read_volume("slice.nii.gz"); k = [0, 1]; \
@@ -343,9 +353,13 @@ isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing
     index = ", ".join("0" if k == axis else ":" for k in range(n))
     label_arg = "" if label is None else f", label={label!r}"
     out = "slice_2d.npz" if n == 3 else "volume_3d.npz"
-    code = (f"import isoflow; v = isoflow.read_volume({json.dumps(str(path))}{label_arg}); k = {kept}; "
-            f'isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k]), '
-            f'"{out}")')
+    if labels:  # (a label image has no 4D note: read_labels reads an (x, y, z, 1) file as 3D)
+        code = (f"import isoflow; v = isoflow.read_labels({json.dumps(str(path))}); k = {kept}; "
+                f'isoflow.write_labels(v.array[{index}], "{out}", pitch=v.spacing[k], origin=v.origin[k], unit=v.unit)')
+    else:
+        code = (f"import isoflow; v = isoflow.read_volume({json.dumps(str(path))}{label_arg}); k = {kept}; "
+                f'isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k]), '
+                f'"{out}")')
     if n == 3:
         read = (f"one voxel along {'xyz'[axis]}: read as a 3D plate one voxel thick; "
                 "to analyse it as the 2D image")

@@ -88,6 +88,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_labels
+    from .inputs import say_plate
 
     refuse_single_label(args)
     asked = label_choice(args.labels)
@@ -95,6 +96,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # surfaces are written, whole (as a file is, refused up front where it
     # would not fit)
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
+    say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
     ndim = 3 if image is None else image.array.ndim
     if ndim == 2 and getattr(args, "command", "") == "surface":
@@ -115,6 +117,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
                             surfaces=surfaces, threads=getattr(args, "threads", None))
+    # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
+    say_plate(args, tuple(about["shape"]))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
         raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
     within, beyond = ([], []) if asked is None else _by_type(args.input, asked, about["dtype"])
@@ -132,8 +136,34 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
               f"occur ({_some(absent)})", file=sys.stderr)
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
-        raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+        if args.command == "surface":  # no surface to write
+            raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+        # an empty segmentation (no lesion found) is an answer: its table has no row, as
+        # label_table's and regionprops_table's, and a warning (kept by --quiet) says why
+        print(f"isoflow {args.command}: warning: {args.input}: no nonzero label: the image is all 0; the table has "
+              "no row", file=sys.stderr)
     return about, conn, table, image, absent
+
+
+def say_declared_labels(args: argparse.Namespace) -> None:
+    """A note where the input is an OME-Zarr image that keeps its
+    segmentations in its ``labels/`` group: ``--labels`` of the image
+    itself takes its intensities for labels, and the note names the
+    segmentations (``IMAGE.zarr:labels/NAME``) that hold the labels.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``command``, ``input`` and ``quiet``.
+    """
+    from ..scale.chunks import declared_labels
+
+    names = declared_labels(args.input) if is_store(args.input) and not args.quiet else []
+    if names:
+        store = str(args.input).rstrip("/")
+        print(f"isoflow {args.command}: note: {args.input}: an OME-Zarr image whose labels/ group holds "
+              f"{counted(len(names), 'segmentation')} ({_some(names)}); this reads the image itself: for a "
+              f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
 
 
 def in_order_asked(missing: list[int], beyond: list[int], asked: list[int]) -> list[int]:
@@ -258,7 +288,9 @@ def _by_type(name, asked: list[int], dtype) -> tuple[list[int], list[int]]:
 
 
 def _some(values, most: int = 8) -> str:
-    shown = ", ".join(str(v) for v in np.asarray(values)[:most].tolist())
+    # each value as it is: NumPy makes float64 of ints that no one integer type
+    # holds together (2**63 beside 5, or beside -1), which would print 9.223372036854776e+18
+    shown = ", ".join(str(v) for v in list(values[:most]))
     return shown + (f", ... ({len(values) - most} more)" if len(values) > most else "")
 
 
@@ -291,7 +323,9 @@ def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> I
     """What ``--json`` prints, in pieces: one object, the image, ``absent``
     (the labels asked for that have no row) and then ``labels``, one
     object per label (NaN as null)."""
-    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": str(about["dtype"]),
+    # the type by its name, in any byte order: a big-endian file's labels (NRRD's
+    # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
+    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
             "connectivity": conn, "absent": absent}
     yield json.dumps(head)[:-1] + ', "labels": '

@@ -47,6 +47,7 @@ def _check_readable(path: Path, directory_ok: bool = False) -> None:
         raise missing(path)
     if path.is_dir():
         if not directory_ok:
+            refuse_inside_store(path, path)
             raise IsoflowError(f"{path}: is a directory, not a volume or point list")
     elif not path.is_file():
         # a device or FIFO would be read until memory runs out (/dev/zero)
@@ -164,6 +165,56 @@ def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = N
     return as_object(raw, str(path), label), raw.unit
 
 
+def zarr_around(path: Path) -> Path | None:
+    """The zarr store (a directory named ``*.zarr``) that holds ``path``,
+    a group or array inside it (an OME-Zarr image's ``labels/cells``), or
+    None.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The path as given.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The innermost store around it.
+
+    Examples
+    --------
+    >>> str(zarr_around(Path("image.zarr/labels/cells"))), zarr_around(Path("scan.nii.gz"))
+    ('image.zarr', None)
+    """
+    return next((p for p in path.parents if p.suffix.lower() == ".zarr"), None)
+
+
+def refuse_inside_store(file: Path, shown: str | os.PathLike) -> None:
+    """One line for a path inside a zarr store (:func:`zarr_around`),
+    with the name that reads it: ``STORE.zarr:labels/cells``.
+
+    Parameters
+    ----------
+    file : pathlib.Path
+        The path, without a ``:dataset``.
+    shown : str or os.PathLike
+        The input as the line names it.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``file`` lies inside a ``.zarr`` directory.
+
+    Examples
+    --------
+    >>> refuse_inside_store(Path("image.zarr/labels/cells"), "image.zarr/labels/cells")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: image.zarr/labels/cells: inside the zarr store image.zarr; name it as image.zarr:labels/cells
+    """
+    if (store := zarr_around(file)) is not None:
+        raise IsoflowError(f"{shown}: inside the zarr store {store}; name it as {store}:{file.relative_to(store).as_posix()}")
+
+
 def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | None = None) -> RawVolume:
     """What the format of ``path`` (``FILE:dataset`` too) reads, once the
     suffix, the file and the dataset named are checked: the one prologue of
@@ -199,6 +250,7 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | None
 
         if mesh is not None and is_mesh_path(file):
             raise IsoflowError(f"{path}: {mesh}")
+        refuse_inside_store(file, path)
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
     check_dataset_read(path, fmt, dataset)
@@ -577,6 +629,7 @@ def read_object(path: str | os.PathLike, points_are: PointsAre = "corners", labe
                                "not to volume input")
         return read_volume(path, label=label)
     path = Path(path)
+    refuse_inside_store(path, path)  # (a group or array of a store is no point list)
     if label is not None:
         raise IsoflowError(f"{path}: a label selects voxels of a volume, not of a point list")
     pts = read_points(path)

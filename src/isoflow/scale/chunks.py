@@ -215,7 +215,10 @@ def open_zarr(path, level: str | None = None) -> object:
 
 def open_zarr_node(path, level: str | None = None) -> tuple:
     """``(array, multiscales entry or None, that level's dataset entry or
-    None)`` of a zarr store, chosen as :func:`open_zarr` says."""
+    None)`` of a zarr store, chosen as :func:`open_zarr` says; a name that
+    is the path of a group inside it (an OME-Zarr image's segmentation,
+    ``labels/cells``, an image of its own) picks that group's volume, and
+    what follows the group in the name (``labels/cells/1``) its level."""
     zarr = import_zarr()
     path = Path(path)
     if not path.exists():
@@ -226,6 +229,54 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
         raise IsoflowError(
             f"{path}: not a zarr array or group ({exc.__class__.__name__}: {exc})"
         ) from None
+    return _volume_of_node(zarr, node, path, level)
+
+
+def inner_group(zarr, node, level: str | None) -> tuple[str, str | None] | None:
+    """The longest leading part of ``level`` that is a group inside the
+    zarr group ``node``, and the rest of ``level`` (None where nothing is
+    left); None where no part of it is a group.
+
+    Parameters
+    ----------
+    zarr : module
+        The zarr package.
+    node : zarr.Group
+        The store's root group.
+    level : str or None
+        The name after the store's colon.
+
+    Returns
+    -------
+    tuple of (str, str or None), or None
+        ``(group path, rest)``.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> g = zarr.open_group(tempfile.mkdtemp() + "/image.zarr", mode="w")
+    >>> _ = g.create_array("labels/cells/0", shape=(2, 2, 2), dtype="u1")
+    >>> inner_group(zarr, g, "labels/cells/0"), inner_group(zarr, g, "labels/cells"), inner_group(zarr, g, "0")
+    (('labels/cells', '0'), ('labels/cells', None), None)
+    """
+    parts = [] if level is None else [p for p in level.split("/") if p]
+    for cut in range(len(parts), 0, -1):
+        try:
+            inner = node["/".join(parts[:cut])]
+        except (KeyError, ValueError):  # (zarr's KeyError, or its refusal of an odd name)
+            continue
+        if isinstance(inner, zarr.Group):
+            return "/".join(parts[:cut]), "/".join(parts[cut:]) or None
+    return None
+
+
+def _volume_of_node(zarr, node, path: Path, level: str | None, inside: bool = False) -> tuple:
+    """:func:`open_zarr_node` of the opened store ``node`` (``inside``: a
+    group inside the store, ``path`` naming it as ``STORE.zarr:GROUP``)."""
+    if isinstance(node, zarr.Group) and (inner := inner_group(zarr, node, level)) is not None:
+        if level not in _level_names(node):  # (a level's own path is the level)
+            named = Path(f"{path}{'/' if inside else ':'}{inner[0]}")
+            return _volume_of_node(zarr, node[inner[0]], named, inner[1], inside=True)
     if not isinstance(node, zarr.Group):
         if level is not None:
             raise IsoflowError(f"{path}: a zarr array has no resolution level {level!r}")
@@ -262,11 +313,20 @@ def open_zarr_node(path, level: str | None = None) -> tuple:
     elif len(arrays) == 1:
         node = next(iter(arrays.values()))
     elif not arrays:
-        raise IsoflowError(f"{path}: a zarr group without arrays")
+        groups = sorted(name for name, _ in node.groups())
+        # an OME-Zarr image's labels/ group holds an image per segmentation
+        pick = f" (its groups: {groups}; name one, {path}{'/' if inside else ':'}{groups[0]})" if groups else ""
+        raise IsoflowError(f"{path}: a zarr group without arrays{pick}")
     else:
         first = sorted(arrays)[0]
         raise IsoflowError(f"{path}: a zarr group with arrays {sorted(arrays)}; name one, {path}:{first}")
     return node, None, None
+
+
+def _level_names(node) -> list[str]:
+    """The dataset paths of an OME-Zarr image's levels (none for another group)."""
+    multiscale = ome_multiscales(node.attrs)
+    return [str(d.get("path")) for d in (multiscale or {}).get("datasets") or [] if isinstance(d, dict)]
 
 
 def axis_names(multiscale: dict, ndim: int, where: str) -> list[str]:
@@ -468,6 +528,45 @@ def ome_multiscales(attrs) -> dict | None:
     if isinstance(found, list) and found and isinstance(found[0], dict):
         return found[0]
     return None
+
+
+def declared_labels(path) -> list[str]:
+    """The segmentations an OME-Zarr image declares in its ``labels/``
+    group (NGFF's image-label: its ``labels`` attribute, under ``ome`` in
+    0.5), each an image of its own read as ``IMAGE.zarr:labels/NAME``;
+    none for any other store, a level or array named after its colon, or
+    what zarr does not open.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The store as given.
+
+    Returns
+    -------
+    list of str
+        The names, as the image lists them.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> d = tempfile.mkdtemp() + "/image.zarr"
+    >>> g = zarr.open_group(d, mode="w")
+    >>> g.require_group("labels").attrs["labels"] = ["cells", "nuclei"]
+    >>> declared_labels(d), declared_labels(d + ":0")
+    (['cells', 'nuclei'], [])
+    """
+    file, name = split_store(path)
+    if name is not None:
+        return []
+    try:
+        group = import_zarr().open_group(str(file), mode="r")["labels"]
+        attrs = dict(group.attrs)
+    except Exception:  # no group, no labels/ in it, or no store: nothing declared
+        return []
+    ome = attrs.get("ome")
+    names = attrs.get("labels") or (ome.get("labels") if isinstance(ome, dict) else None)
+    return [str(n) for n in names] if isinstance(names, list) else []
 
 
 def fill_label(array) -> int | None:

@@ -58,10 +58,51 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             raise IsoflowError(f"{path}: not a numpy file: it " + (
                 f"starts with {head!r}, not .npy's b'\\x93NUMPY' or an .npz's (zip) b'PK'" if head else "is empty")
                 + content_hint(path, "NumPy")) from None
+        if _holds_objects(path):
+            raise IsoflowError(pickled_objects(path)) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     unit = length_unit(str(meta["unit"])) if "unit" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
                      unit=unit)
+
+
+def _holds_objects(path: Path) -> bool:
+    """Whether an ``.npy`` file's header says it holds Python objects
+    (a pickle, which ``np.load`` reads only with ``allow_pickle``)."""
+    header = _header(path)
+    return header is not None and header[2].hasobject
+
+
+def pickled_objects(path: Path) -> str:
+    """The refusal of an ``.npy`` of Python objects (Cellpose's
+    ``_seg.npy`` is a dict holding its ``masks``), which isoflow does not
+    unpickle, with the line that saves its masks as an array in isoflow's
+    axis order (x first: NumPy's (y, x) or (z, y, x) reversed).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file as given.
+
+    Returns
+    -------
+    str
+        One line.
+
+    Examples
+    --------
+    >>> print(pickled_objects(Path("img_seg.npy")))
+    img_seg.npy: holds Python objects (a pickle, such as Cellpose's _seg.npy, a dict with its 'masks'), which isoflow \
+does not load; for a file you trust, save its masks as an array (x first) and give that: python -c 'import numpy as np; \
+np.save("masks.npy", np.load("img_seg.npy", allow_pickle=True).item()["masks"].T)'
+    """
+    import json
+    import shlex
+
+    code = f'import numpy as np; np.save("masks.npy", np.load({json.dumps(str(path))}, allow_pickle=True).item()["masks"].T)'
+    return (f"{path}: holds Python objects (a pickle, such as Cellpose's _seg.npy, a dict with its 'masks'), which "
+            f"isoflow does not load; for a file you trust, save its masks as an array (x first) and give that: "
+            f"python -c {shlex.quote(code)}")
 
 
 def _head(path: Path) -> bytes:
@@ -77,6 +118,13 @@ def voxel_count(path: Path) -> int | None:
     """The number of voxels of a ``.npy`` file from its header alone (None
     when the file is not a plain ``.npy``), so that a command can choose its
     path before reading the array."""
+    header = _header(path)
+    return None if header is None else int(np.prod(header[0], dtype=np.int64))
+
+
+def _header(path: Path) -> tuple | None:
+    """An ``.npy`` file's header, ``(shape, fortran_order, dtype)``, read
+    alone; None for what is not a plain ``.npy``."""
     try:
         with open(path, "rb") as fh:
             version = np.lib.format.read_magic(fh)
@@ -84,10 +132,9 @@ def voxel_count(path: Path) -> int | None:
                       (2, 0): np.lib.format.read_array_header_2_0}.get(version)
             if header is None:  # (3.0: the same header in UTF-8; rare)
                 return None
-            shape = header(fh)[0]
+            return header(fh)
     except Exception:  # not an .npy (an .npz by another name, a bad file): the reader says what
         return None
-    return int(np.prod(shape, dtype=np.int64))
 
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
