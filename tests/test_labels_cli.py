@@ -199,6 +199,31 @@ def test_surface_labels_glb_one_closed_manifold_per_label(tmp_path, capsys, segm
         assert abs(mesh.volume) == pytest.approx(table["volume"][r])
 
 
+def test_surface_labels_glb_names_the_node_that_reads_wrong(tmp_path, capsys, monkeypatch, segmentation):
+    """A scene whose label 9 lost a triangle on its way into the file: the
+    read-back (against the table's figures) names that node, open, and
+    the command exits 1; the other labels read as the table says."""
+    from isoflow.mesh import export
+
+    batch_parts = export.batch_glb_parts
+
+    def losing_a_triangle(batch, names, *rest):
+        parts = batch_parts(batch, names, *rest)
+        if "label_9" in parts.names:
+            s = parts.names.index("label_9")
+            parts.triangles = np.delete(parts.triangles, parts.tfirst[s], axis=0)
+            parts.tfirst[s + 1:] -= 1
+        return parts
+
+    monkeypatch.setattr(export, "batch_glb_parts", losing_a_triangle)
+    np.save(tmp_path / "seg.npy", segmentation)
+    assert main(["surface", str(tmp_path / "seg.npy"), "--labels", "-o", str(tmp_path / "s.glb")]) == 1
+    err = capsys.readouterr().err
+    assert "node label_9: trimesh reads watertight False" in err and err.count("trimesh reads") == 1
+    scene = trimesh.load(tmp_path / "s.glb", force="scene", process=False)
+    assert not scene.geometry[scene.graph["label_9"][1]].is_watertight
+
+
 def test_surface_labels_of_a_zarr_store_in_its_units(tmp_path, capsys, segmentation):
     """A store's surfaces are meshed from the image read whole (info reads
     it block by block): each node closed, with the volume and V - E + F of

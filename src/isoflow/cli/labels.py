@@ -463,7 +463,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             _take_batch(args, target, batch, table, names, lo, image, meshes, glb_parts)
             if show is not None:
                 show(meshed, total)
-        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report)
+        expected = None if args.no_check or target[0] != "glb" else scene_expected(table, names, image.spacing)
+        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
@@ -474,10 +475,10 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
 
 def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: list[str], lo: np.ndarray, image,
                 meshes: list, glb_parts: list) -> None:
-    """A batch of labels' meshes (:func:`isoflow.digital.label_meshes.label_batches`)
-    into ``meshes`` at the labels' rows (and, for one glTF file, the
-    batch's glTF parts with those rows into ``glb_parts``), each mesh
-    checked against the table's V - E + F."""
+    """A batch of labels' meshes (:func:`isoflow.digital.label_meshes.label_batches`),
+    each checked against the table's V - E + F: for one glTF file, the
+    batch's glTF parts with their labels' rows into ``glb_parts``; for a
+    file each, each mesh and its object into ``meshes`` at its row."""
     from ..digital.lattice import DigitalObject
     from ..mesh.export import batch_glb_parts
 
@@ -488,14 +489,27 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
             raise AssertionError(f"label {table['label'][r]}: the mesh has V-E+F {mesh.euler_characteristic}, "
                                  f"the table {table['surface_euler'][r]}")
-        obj = None  # (only the files of a directory and the read-back need each label's object)
-        if target[0] == "dir" or not args.no_check:
-            obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
-                                origin=image.origin)
+        if target[0] == "glb":  # the scene is read back against the table's figures (scene_expected)
+            continue
+        obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
+                            origin=image.origin)  # (a file's world positions)
         # the read-back compares the file's genus with the table's surfaces
         # (counted from the pieces, not from this mesh), as info --labels prints them
         surfaces = None if args.no_check else [{"genus": g} for g in table["genera"][r]]
         meshes[r] = (names[r], mesh, obj, surfaces)
+
+
+def scene_expected(table: dict, names: list[str], spacing) -> list[tuple[str, dict, float]]:
+    """What each label's node of the scene must read as, from the table
+    (``info --labels``'s figures, counted from the pieces, not from the
+    meshes): its surface's V - E + F, the sum of its closed surfaces'
+    genera, and its volume; with the unit the volumes are compared in
+    (:func:`isoflow.mesh.readback.check_scene_figures`)."""
+    from ..mesh.readback import expected_figures, unit_of
+
+    unit = unit_of(spacing)
+    return [(name, expected_figures(euler, sum(genera), voxels, spacing), unit) for name, euler, genera, voxels
+            in zip(names, table["surface_euler"].tolist(), table["genera"], table["voxels"].tolist())]
 
 
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:
@@ -579,14 +593,16 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
-                         progress=None) -> tuple[list[str], str]:
+                         progress=None, expected: list | None = None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, in the labels'
-    order, from the batches' parts in ``glb_parts``, or a file each) and read them back (unless --no-check), telling
-    ``progress(done, total)`` of the labels written (a file each) or read
-    back. Returns the problems found and the faces written in words
-    (``18944 faces (triangles)``: as the files hold them, as surface says of one)."""
+    order, from the batches' parts in ``glb_parts``, and read back against
+    ``expected``, :func:`scene_expected`; or a file each, read back
+    against ``meshes``) unless --no-check, telling ``progress(done,
+    total)`` of the labels written (a file each) or read back. Returns
+    the problems found and the faces written in words (``18944 faces
+    (triangles)``: as the files hold them, as surface says of one)."""
     from ..mesh import export
-    from ..mesh.readback import check_scene_file, check_surface_file
+    from ..mesh.readback import check_scene_figures, check_surface_file
     from .progress import reading_back
 
     if target[0] == "glb":
@@ -597,7 +613,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
                                       f"{args.connectivity or 6}-connectivity")
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
-            return ([] if args.no_check else check_scene_file(target[1], meshes, progress)), faces
+            return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
     from ..mesh.outputs import output_set
 
     made = not target[1].is_dir()

@@ -35,11 +35,23 @@ VOLUME_RTOL = 1e-4
 
 
 def volume_unit(obj) -> float:
+    """The length unit the volumes of ``obj``'s surface are compared in
+    (:func:`unit_of` its voxel size)."""
+    return unit_of(obj.spacing)
+
+
+def unit_of(spacing) -> float:
     """The length unit the volumes are compared in: the power of two
     nearest the largest voxel size, so that a mesh in units of 1e-200 or
     1e200 neither underflows nor overflows (its volume in world units
-    may: 1e600 is no float)."""
-    return float(2.0 ** np.round(np.log2(np.max(obj.spacing))))
+    may: 1e600 is no float).
+
+    Examples
+    --------
+    >>> unit_of((0.3, 0.3, 1.2)), unit_of(1e-200) == 2.0 ** -664
+    (1.0, True)
+    """
+    return float(2.0 ** np.round(np.log2(np.max(spacing))))
 
 
 def volume_words(units: float, unit: float, digits: int = 6) -> str:
@@ -108,16 +120,27 @@ def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
     """What the file must read as: isoflow's own counts of the boundary mesh
     (``components``: ``mesh.components()`` when the caller has them)."""
     comps = mesh.components() if components is None else components
-    unit = volume_unit(obj)
+    return expected_figures(int(mesh.euler_characteristic), int(sum(c["genus"] for c in comps)), int(obj.voxels),
+                            obj.spacing)
+
+
+def expected_figures(euler: int, genus: int, voxels: int, spacing) -> dict:
+    """What the boundary surface of an object of ``voxels`` voxels of size
+    ``spacing``, of Euler characteristic ``euler`` and total genus ``genus``,
+    must read as (watertight; the volume in world units and in
+    :func:`volume_unit` cubed).
+
+    Examples
+    --------
+    >>> expected_figures(2, 0, 8, (0.5, 0.5, 2.0))["volume"]
+    4.0
+    """
+    spacing = np.asarray(spacing, np.float64)
+    unit = unit_of(spacing)
     with np.errstate(over="ignore", under="ignore"):
-        volume = float(obj.voxels) * float(np.prod(obj.spacing))
-    return {
-        "watertight": True,
-        "euler_number": int(mesh.euler_characteristic),
-        "genus": int(sum(c["genus"] for c in comps)),
-        "volume": volume,
-        "volume_units": float(obj.voxels) * float(np.prod(obj.spacing / unit)),
-    }
+        volume = float(voxels) * float(np.prod(spacing))
+    return {"watertight": True, "euler_number": int(euler), "genus": int(genus), "volume": volume,
+            "volume_units": float(voxels) * float(np.prod(spacing / unit))}
 
 
 def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
@@ -259,24 +282,31 @@ def check_scene_file(path, parts: list, progress=None) -> list[str]:
     isoflow's counts: ``parts`` holds ``(name, mesh, obj, components)``;
     ``progress(done, total)`` hears of the nodes measured. Returns the
     problems, one line each (none: every node agrees)."""
+    return check_scene_figures(path, [(name, isoflow_figures(mesh, obj, components), volume_unit(obj))
+                                      for name, mesh, obj, components in parts], progress)
+
+
+def check_scene_figures(path, expected: list, progress=None) -> list[str]:
+    """:func:`check_scene_file` of the figures each node must read as:
+    ``expected`` holds ``(name, figures, unit)``, the figures as
+    :func:`expected_figures` gives them and the unit the volume is compared
+    in (:func:`unit_of`)."""
     path = Path(path)
     try:
         nodes = scene_nodes(staged(path))
     except Exception as exc:
         return [f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"]
     problems, found, placed = [], [], []
-    for name, mesh, obj, components in parts:
+    for name, ours, unit in expected:
         if name not in nodes:
             problems.append(f"{path}: no node {name}")
             continue
-        placed.append((*nodes[name], volume_unit(obj)))
-        found.append((name, mesh, obj, components))
-    for (name, mesh, obj, components), theirs in zip(found, scene_figures(placed, progress)):
-        ours = isoflow_figures(mesh, obj, components)
+        placed.append((*nodes[name], unit))
+        found.append((name, ours, unit))
+    for (name, ours, unit), theirs in zip(found, scene_figures(placed, progress)):
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]
         if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=0):
-            unit = volume_unit(obj)
             wrong.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
                          f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
         if wrong:
