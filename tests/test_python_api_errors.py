@@ -557,6 +557,22 @@ def test_class_histogram_names_a_histogram_that_is_not_3d():
     assert isoflow.class_histogram(isoflow.configuration_histogram(box)).tolist() == isoflow.analyze(box).n
 
 
+@pytest.mark.parametrize(("entry", "shown"), [(np.nan, "nan"), (-1.0, "-1.0"), (0.5, "0.5"), (-1, "-1")])
+def test_class_histogram_refuses_an_entry_that_is_no_count(entry, shown):
+    # NaN came back as the most negative int64 in every class, -1 and 0.5 as class counts
+    hist = isoflow.configuration_histogram(np.ones((3, 3, 3), bool)).astype(type(entry))
+    hist[7] = entry
+    with pytest.raises(IsoflowError, match=rf"^config_hist: entry 7 is {shown}, not a count"):
+        isoflow.class_histogram(hist)
+
+
+def test_class_histogram_counts_a_float_histogram_of_whole_numbers_as_its_integers():
+    # a histogram summed as floats (a mean over scans times their number) is still counts
+    box = np.ones((3, 3, 3), bool)
+    hist = isoflow.configuration_histogram(box)
+    assert isoflow.class_histogram(hist.astype(float)).tolist() == isoflow.analyze(box).n
+
+
 @pytest.mark.parametrize("points,ndim", [("0 0 0\n-5 3 2\n", 3), ("0 0\n1 0\n", 2)])
 def test_read_object_says_why_a_point_list_gives_no_voxel(tmp_path, points, ndim):
     # the paper's point model keeps a cube only where all 2^n corners are
