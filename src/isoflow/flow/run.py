@@ -56,7 +56,7 @@ StopReason = Literal["vanished", "steps", "topology-change", "converged", "cycle
 GuardKind = Literal["flow", "partial", "thinning"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FlowResult(Result):
     """What :func:`run_flow` returns; it also reads as the mapping that
     ``isoflow flow --json`` prints (``r["steps"]`` is ``r.steps``; the

@@ -54,7 +54,7 @@ SAMPLED_FACES = 8192
 THIN_TRIGGER = 2.0
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Voxelization(Result):
     """What a voxelisation gave, and what it found in the mesh.
 

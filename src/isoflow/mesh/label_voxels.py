@@ -54,7 +54,7 @@ COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolut
 NAMED_PAIRS = 8
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LabelVoxelization(Result):
     """Several meshes voxelised into one label image.
 

@@ -95,7 +95,7 @@ def slab_points(plan, slabs):
     return flat, area, parts
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class ZarrStore(Result):
     """The store :func:`voxelize_to_zarr` wrote, in a few numbers.
 

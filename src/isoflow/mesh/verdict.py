@@ -59,7 +59,7 @@ class Note:
     facts: Mapping[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class GenusVerdict(Result):
     """What :func:`~isoflow.mesh.genus.verify_genus` found, as fields and as
     a mapping of the keys ``isoflow genus --json`` prints (``v.agree``,
