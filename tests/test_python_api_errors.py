@@ -487,6 +487,20 @@ def test_from_manifold_names_what_is_not_a_manifold():
         isoflow.from_manifold(np.ones((2, 2, 2), bool))
 
 
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 1e-20}, "pitch=1e-20 and origin=[0.0, 0.0, 0.0] put the manifold's voxels at index 4e+20"),
+    ({"pitch": 1e-300}, "pitch=1e-300 and origin=[0.0, 0.0, 0.0] put the manifold's voxels at index 4e+300"),
+    ({"origin": (1e300, 0, 0)}, "pitch=1.0 and origin=[1e+300, 0.0, 0.0] put the manifold's voxels at index 1e+300"),
+])
+def test_from_manifold_names_a_pitch_or_origin_beyond_the_lattice(kwargs, words):
+    # int64 wrapped round: a ZeroDivisionError from inside the voxeliser
+    m3 = pytest.importorskip("manifold3d")
+    with pytest.raises(IsoflowError, match=re.escape(f"from_manifold: {words}, beyond the +-{2**40}")):
+        isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), **kwargs)
+    # a pitch that fits: the 2x3x4 box in voxels of 1/2, 8 a unit cube
+    assert isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), pitch=0.5).voxels == 2 * 3 * 4 * 8
+
+
 @pytest.mark.parametrize("value", [2, np.nan])
 def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(value):
     # the volume was converted to bool first: 2 and NaN read as True
