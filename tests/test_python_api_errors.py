@@ -334,6 +334,35 @@ def test_a_strict_that_is_no_bool_is_refused_naming_it(call, words, strict):
         call(strict)
 
 
+CUBE = np.pad(np.ones((3, 3, 3), bool), 1)
+
+
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda s: isoflow.analyze(CUBE, surfaces=s), "analyze: surfaces"),
+    (lambda s: isoflow.label_table(CUBE.astype(np.uint8), surfaces=s), "label_table: surfaces"),
+    (lambda s: isoflow.run_flow(CUBE, 1, guard=s), "run_flow: guard"),
+    (lambda s: isoflow.run_flow(CUBE, 1, until_topology_change=s), "run_flow: until_topology_change"),
+    (lambda s: isoflow.run_flow(CUBE, 1, keep_states=s), "run_flow: keep_states"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, split=s), "voxelize_meshes: split"),
+    (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), step=s), "verify_genus: step"),
+])
+@pytest.mark.parametrize("switch", ["no", 2, None])
+def test_a_switch_that_is_no_bool_is_refused_naming_it(call, words, switch):
+    # "no" and 2 switched on, None off: run_flow(guard="no") ran the guard
+    # and its FlowResult held guard="no" where a bool is documented
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)} must be True or False, got {re.escape(repr(switch))}$"):
+        call(switch)
+
+
+def test_a_switch_given_as_a_numpy_bool_is_taken_as_the_bool():
+    flow = isoflow.run_flow(CUBE, 1, guard=np.True_)
+    assert flow.guard is True and flow.to_dict()["guard"] is True
+    assert "surfaces" not in isoflow.analyze(CUBE, surfaces=np.False_)
+
+
 @pytest.mark.parametrize("call", [
     lambda s, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, strict=s),
     lambda s, tmp: isoflow.voxelize_file(tmp / "box.stl", resolution=4, strict=s),

@@ -41,7 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_switch
 from ..results import same_fields
 from ..scale.arrays import as_array, refuse_object
 from .closed_surfaces import sweep_tables
@@ -232,6 +232,7 @@ def label_table(
         image = image.array
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
+    surfaces = check_switch(surfaces, "surfaces", "label_table")
     # the pitch and origin checked as every object's are
     # (without a dtype: a float conversion here would raise NumPy's
     # ValueError on a string before the check could name the field)

@@ -56,7 +56,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import (
     SpatialAxes,
@@ -481,6 +481,7 @@ def analyze_chunked(
     ([1, 1, 0], True)
     """
     check_callable(progress, "progress", "progress(done, total)")
+    surfaces = check_switch(surfaces, "surfaces", "analyze_chunked")
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)

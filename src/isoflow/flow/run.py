@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -349,6 +349,9 @@ def run_flow(
     check_callable(progress, "progress", "progress(step, state)")
     _check_count("steps", steps)
     _check_count("max_steps", max_steps)
+    guard, until_topology_change, keep_states = (
+        check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
+        check_switch(keep_states, "keep_states", "run_flow"))
     engine = flow_engine(method, obj, conn)
     cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:

@@ -29,9 +29,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, check_switch, counted
 from ..results import Result
-from .outputs import check_switch
 
 #: the rule that decides which voxels a mesh fills
 Fill = Literal["winding", "shell", "flood"]

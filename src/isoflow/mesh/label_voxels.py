@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
@@ -266,6 +266,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
     """
     fill, overlap, strict = check_fill(fill), check_overlap(overlap), check_strict(strict)
+    split = check_switch(split, "split", "voxelize_meshes")
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:
         resolution = 64

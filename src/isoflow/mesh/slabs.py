@@ -33,7 +33,7 @@ from typing import Any, Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
@@ -41,7 +41,7 @@ from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
-from .outputs import atomic_path, check_switch, check_writable_dir
+from .outputs import atomic_path, check_writable_dir
 from .store_plan import WORKERS, in_store, slab_chunks, slab_layout, store_need
 
 
