@@ -706,3 +706,20 @@ def test_write_surface_refuses_a_switch_that_is_no_bool(tmp_path, switch):
     with pytest.raises(IsoflowError, match=rf"s\.ply: {switch} must be True or False, got 'no'$"):
         isoflow.write_surface(np.ones((2, 2, 2), bool), tmp_path / "s.ply", **{switch: "no"})
     assert not (tmp_path / "s.ply").exists()
+
+
+@pytest.mark.parametrize("method", ["world", "lattice_coordinates"])
+def test_points_of_another_dimension_are_refused_naming_array_points(method):
+    # NumPy's "operands could not be broadcast together with shapes (2,2) (3,)"
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5, origin=(10, 0, 0))
+    where = getattr(obj, method)
+    with pytest.raises(IsoflowError, match=re.escape("array_points: a 3D object's points have 3 coordinates "
+                                                     "(the last axis), got shape (2, 2)")):
+        where(np.zeros((2, 2)))
+    with pytest.raises(IsoflowError, match="array_points: coordinates must be numbers, got an array of type <U3"):
+        where("abc")
+    # the corners of the object's box, as trimesh reads them off its surface
+    trimesh = pytest.importorskip("trimesh")
+    mesh = isoflow.boundary_mesh(obj.volume)
+    surface = trimesh.Trimesh(obj.world(mesh.vertices), mesh.triangles(), process=False)
+    assert obj.world([[0, 0, 0], [2, 2, 2]]).tolist() == surface.bounds.tolist() == [[10, 0, 0], [11, 1, 1]]

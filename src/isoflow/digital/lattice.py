@@ -194,18 +194,79 @@ class DigitalObject:
         """How many voxels the object has."""
         return int(np.count_nonzero(self.volume))
 
-    def lattice_coordinates(self, array_points: np.ndarray) -> np.ndarray:
-        """Lattice coordinates of points given in array-corner units."""
-        return np.asarray(array_points, float) + np.array(self.offset) + 0.5 * self.parity
+    def lattice_coordinates(self, array_points: ArrayLike) -> np.ndarray:
+        """Lattice coordinates of points given in array-corner units.
+
+        Parameters
+        ----------
+        array_points : array_like of float, shape (..., ndim)
+            Points in the array's own units: ``(i, j, k)`` is the lowest
+            corner of voxel ``[i, j, k]``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The points shifted by ``offset`` (and by 1/2 on the dual
+            lattice), float64, of the same shape.
+
+        Raises
+        ------
+        IsoflowError
+            Points that are not numbers, or whose last axis does not hold
+            one coordinate per axis of the object.
+
+        Examples
+        --------
+        >>> obj = DigitalObject(np.ones((2, 2, 2), bool), offset=(5, 0, 0), parity=1)
+        >>> obj.lattice_coordinates([[0, 0, 0], [2, 2, 2]]).tolist()
+        [[5.5, 0.5, 0.5], [7.5, 2.5, 2.5]]
+        """
+        return self._points(array_points) + np.array(self.offset) + 0.5 * self.parity
 
     @property
     def spacing(self) -> np.ndarray:
         """The voxel size along each axis (``pitch`` as a vector)."""
         return np.broadcast_to(np.asarray(self.pitch, np.float64), (self.ndim,)).copy()
 
-    def world(self, array_points: np.ndarray) -> np.ndarray:
-        """World coordinates of points given in array-corner units."""
+    def world(self, array_points: ArrayLike) -> np.ndarray:
+        """World coordinates of points given in array-corner units.
+
+        Parameters
+        ----------
+        array_points : array_like of float, shape (..., ndim)
+            As in :meth:`lattice_coordinates`.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``origin + pitch * lattice_coordinates(array_points)``.
+
+        Raises
+        ------
+        IsoflowError
+            As :meth:`lattice_coordinates`.
+
+        Examples
+        --------
+        Voxel ``[1, 0, 0]`` of a 0.5 mm grid whose lattice point 0 is at
+        x = 10 spans x = 10.5 to 11:
+
+        >>> obj = DigitalObject(np.ones((2, 1, 1), bool), pitch=0.5, origin=(10, 0, 0))
+        >>> obj.world([[1, 0, 0], [2, 1, 1]]).tolist()
+        [[10.5, 0.0, 0.0], [11.0, 0.5, 0.5]]
+        """
         return self.origin + self.spacing * self.lattice_coordinates(array_points)
+
+    def _points(self, array_points: ArrayLike) -> np.ndarray:
+        # checked here: NumPy's broadcast error named neither the argument
+        # nor the object's dimension, and a string gave "could not convert"
+        points = as_array(array_points, "array_points")
+        if points.dtype.kind not in "biuf":
+            raise IsoflowError(f"array_points: coordinates must be numbers, got an array of type {points.dtype}")
+        if points.ndim == 0 or points.shape[-1] != self.ndim:
+            raise IsoflowError(f"array_points: a {self.ndim}D object's points have {self.ndim} coordinates "
+                               f"(the last axis), got shape {points.shape}")
+        return np.asarray(points, np.float64)
 
     def bbox(self) -> tuple[np.ndarray, np.ndarray] | None:
         """World [min corner, max corner] of the object's voxels; None if empty."""
