@@ -723,3 +723,25 @@ def test_points_of_another_dimension_are_refused_naming_array_points(method):
     mesh = isoflow.boundary_mesh(obj.volume)
     surface = trimesh.Trimesh(obj.world(mesh.vertices), mesh.triangles(), process=False)
     assert obj.world([[0, 0, 0], [2, 2, 2]]).tolist() == surface.bounds.tolist() == [[10, 0, 0], [11, 1, 1]]
+
+
+@pytest.mark.parametrize("max_bytes", ["8GB", "1000000", 2.5, 0, -5, True])
+@pytest.mark.parametrize("call", [
+    lambda b, tmp: isoflow.voxelize_meshes([_box()], resolution=4, max_bytes=b),
+    lambda b, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, max_bytes=b),
+])
+def test_a_max_bytes_that_is_no_byte_count_is_refused_naming_it(call, max_bytes, tmp_path):
+    # int() raised its own ValueError for "8GB", and took "1000000", 2.5 and True in silence
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=re.escape(f"max_bytes must be a positive whole number of bytes, "
+                                                     f"got {max_bytes!r}")):
+        call(max_bytes, tmp_path)
+    assert not (tmp_path / "v.zarr").exists()
+
+
+def test_a_max_bytes_given_as_a_whole_float_is_that_many_bytes():
+    # 1e6 bytes hold the box at 4 voxels across: its voxels are trimesh's volume over a voxel's
+    pytest.importorskip("trimesh")
+    box = _box()
+    done = isoflow.voxelize_meshes([box], resolution=4, max_bytes=1e6)
+    assert done.voxels == (round(box.volume / done.pitch**3),) == (64,)

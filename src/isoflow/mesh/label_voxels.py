@@ -275,7 +275,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hints=COARSER)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
@@ -287,7 +287,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         step = None if progress is None else _Share(progress, n - 1, len(bodies))
         try:
             r = voxelize(body.vertices, body.faces, pitch=pitch, grid=(origin, shape), window=window, fill=fill,
-                         strict=strict, max_bytes=budget - fixed, progress=step, details=True)
+                         strict=strict, max_bytes=max(budget - fixed, 1), progress=step, details=True)
         except IsoflowError as exc:
             raise exc.at(body.name) from None  # a refused grid keeps its command-line words
         assert r.volume is not None  # voxelize keeps the voxels in memory unless given a store

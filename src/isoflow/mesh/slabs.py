@@ -236,7 +236,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
-        budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+        budget = memory.budget_of(max_bytes)
         solid = None
 
         def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries

@@ -621,7 +621,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
