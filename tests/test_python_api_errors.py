@@ -445,6 +445,31 @@ def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(bloc
     assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
 
 
+@pytest.mark.parametrize("scheduler", [5, "thread", "x"])
+def test_analyze_chunked_names_a_scheduler_dask_does_not_know(scheduler):
+    # dask's ValueError ("Unexpected scheduler: 5", "Expected one of [...]") named neither the argument nor isoflow
+    da = pytest.importorskip("dask.array")
+    with pytest.raises(IsoflowError, match=rf"^scheduler must be a dask scheduler's name \(.*\), a get function, "
+                                           rf"a client or executor, or None, got {re.escape(repr(scheduler))}$"):
+        isoflow.analyze_chunked(da.from_array(np.ones((4, 4, 4), bool), chunks=2), scheduler=scheduler)
+
+
+def test_analyze_chunked_runs_on_an_executor():
+    # dask takes a concurrent.futures executor: it stopped with "get_async() got multiple values for argument
+    # 'num_workers'"; the report is scikit-image's and SciPy's reading of the volume
+    from concurrent.futures import ThreadPoolExecutor
+
+    da = pytest.importorskip("dask.array")
+    measure = pytest.importorskip("skimage.measure")
+    from scipy import ndimage
+
+    volume = np.random.default_rng(3).random((9, 8, 7)) < 0.4
+    with ThreadPoolExecutor(2) as pool:
+        report = isoflow.analyze_chunked(da.from_array(volume, chunks=4), 6, scheduler=pool)
+    assert report.euler_characteristic == measure.euler_number(volume, connectivity=1)
+    assert report.betti[0] == ndimage.label(volume)[1] and report == isoflow.analyze(volume, 6)
+
+
 @pytest.mark.parametrize("connectivity", [26.0, np.int64(26), np.float32(26)])
 def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivity):
     # 26.0 passed the check and was reported as given ("connectivity": 26.0)
