@@ -193,3 +193,16 @@ def test_the_repr_of_a_big_result_is_short_and_counts_what_it_leaves_out():
     # a small result's repr keeps every item: the nine classes of a 3D report
     box = isoflow.analyze(np.ones((2, 2, 2), bool))
     assert f"n={box.n}," in repr(box) and "more" not in repr(box)
+
+
+@pytest.mark.parametrize(("pitch", "shown"), [
+    (8.249e-11, "8.249e-11"), (1e-13, "1e-13"), (1e300, "1e+300"), (0.1 + 0.2, "0.3"), ((0.5, 1e-12, 2), "[0.5, 1e-12, 2.0]"),
+])
+def test_an_objects_repr_shows_its_pitch_to_twelve_significant_digits(pitch, shown):
+    # 12 decimals showed 0.8249 Angstrom in metres as 8.2e-11 and 1e-13 as 0.0; 1e300 overflowed to inf
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # NumPy's "overflow encountered in multiply"
+        text = repr(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch))
+    assert f"pitch={shown}," in text

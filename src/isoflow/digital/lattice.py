@@ -315,9 +315,17 @@ class DigitalObject:
     def __repr__(self) -> str:
         return (
             f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
-            f"offset={self.offset}, parity={self.parity}, pitch={np.round(self.pitch, 12).tolist()}, "
+            f"offset={self.offset}, parity={self.parity}, pitch={_significant(self.pitch)}, "
             f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}") + ")"
         )
+
+
+def _significant(pitch: float | np.ndarray) -> float | list[float]:
+    """The pitch to 12 significant digits, as the repr shows it: 0.1 where
+    arithmetic left 0.10000000000000002, and 8.249e-11 (0.8249 Angstrom in
+    metres) whole, which 12 decimals cut to 8.2e-11 (and 1e-13 to 0.0)."""
+    shown = [float(f"{p:.12g}") for p in np.atleast_1d(np.asarray(pitch, np.float64))]
+    return shown if np.ndim(pitch) else shown[0]
 
 
 def _nonzero_bounds(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
