@@ -770,3 +770,26 @@ def test_a_max_bytes_given_as_a_whole_float_is_that_many_bytes():
     box = _box()
     done = isoflow.voxelize_meshes([box], resolution=4, max_bytes=1e6)
     assert done.voxels == (round(box.volume / done.pitch**3),) == (64,)
+
+
+def test_a_label_image_takes_its_spacing_and_origin_as_lists_or_one_number():
+    # a list was kept as given: label_table stopped with "'list' object has no attribute 'tolist'"
+    measure = pytest.importorskip("skimage.measure")
+    labels = np.zeros((4, 5, 6), np.uint16)
+    labels[1:3, 1:4, 2:5] = 7
+    for spacing, origin in (([0.5, 1.0, 2.0], [1, 2, 3]), ((0.5, 1.0, 2.0), (1, 2, 3))):
+        image = isoflow.LabelImage(labels, spacing, origin)
+        assert image.spacing.tolist() == [0.5, 1.0, 2.0] and image.origin.tolist() == [1.0, 2.0, 3.0]
+        region = measure.regionprops(labels, spacing=(0.5, 1.0, 2.0))[0]
+        assert isoflow.label_table(image)["volume"].tolist() == [region.area]
+    assert isoflow.LabelImage(labels, 0.5, [0, 0, 0]).spacing.tolist() == [0.5] * 3
+
+
+@pytest.mark.parametrize(("spacing", "origin", "words"), [
+    ([1, -1, 1], [0, 0, 0], "'spacing' must be positive (one number, or one per axis), got [1.0, -1.0, 1.0]"),
+    ([1, 1], [0, 0, 0], "'spacing' must be 3 numbers, one per axis, got [1, 1]"),
+    (1, "abc", "'origin' must be 3 numbers, one per axis, got 'abc'"),
+])
+def test_a_label_image_names_a_bad_spacing_or_origin(spacing, origin, words):
+    with pytest.raises(IsoflowError, match=re.escape(f"LabelImage: {words}")):
+        isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), spacing, origin)
