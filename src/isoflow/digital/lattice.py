@@ -138,8 +138,28 @@ class DigitalObject:
         return x if isinstance(x, cls) else cls(x)
 
     @classmethod
-    def from_voxels(cls, indices, **kw) -> DigitalObject:
-        """Object made of the voxels with the given integer indices (N, n)."""
+    def from_voxels(cls, indices: ArrayLike, **kw: Any) -> DigitalObject:
+        """Object made of the voxels with the given integer indices (N, n).
+
+        Parameters
+        ----------
+        indices : array_like of int, shape (N, 2) or (N, 3)
+            The voxels' lattice indices (repeats are one voxel).
+        **kw
+            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+
+        Returns
+        -------
+        DigitalObject
+            In the smallest array that holds the voxels, ``offset`` its
+            lowest index.
+
+        Examples
+        --------
+        >>> obj = DigitalObject.from_voxels([[0, 0, 0], [2, 0, 0]], pitch=0.5)
+        >>> obj.volume.shape, obj.voxels, [c.tolist() for c in obj.bbox()]
+        ((3, 1, 1), 2, [[0.0, 0.0, 0.0], [1.5, 0.5, 0.5]])
+        """
         idx = _integer_points(indices, "voxel index")
         lo = idx.min(axis=0)
         _check_grid(lo, idx.max(axis=0), len(idx), "voxel indices", 1)
@@ -148,11 +168,30 @@ class DigitalObject:
         return cls(vol, offset=tuple(lo), **kw)
 
     @classmethod
-    def from_points(cls, points, **kw) -> DigitalObject:
+    def from_points(cls, points: ArrayLike, **kw: Any) -> DigitalObject:
         """The paper's point model (Definitions 1-2).
 
         A set of lattice points defines the object made of every unit cube
         (square in 2D) whose 2^n corners all belong to the set.
+
+        Parameters
+        ----------
+        points : array_like of int, shape (N, 2) or (N, 3)
+            The lattice points.
+        **kw
+            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+
+        Returns
+        -------
+        DigitalObject
+
+        Examples
+        --------
+        The 12 points of a 3x2x2 block are the corners of two unit cubes:
+
+        >>> points = [[x, y, z] for x in range(3) for y in range(2) for z in range(2)]
+        >>> DigitalObject.from_points(points).voxels
+        2
         """
         pts = _integer_points(points, "lattice point")
         lo = pts.min(axis=0)
@@ -269,7 +308,16 @@ class DigitalObject:
         return np.asarray(points, np.float64)
 
     def bbox(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """World [min corner, max corner] of the object's voxels; None if empty."""
+        """World [min corner, max corner] of the object's voxels; None if empty.
+
+        Examples
+        --------
+        >>> v = np.zeros((4, 4), bool); v[1:3, 2] = True
+        >>> [c.tolist() for c in DigitalObject(v, pitch=0.5, origin=(10, 0)).bbox()]
+        [[10.5, 1.0], [11.5, 1.5]]
+        >>> DigitalObject(np.zeros((2, 2), bool)).bbox() is None
+        True
+        """
         if not self.volume.any():
             return None
         lo, hi = _nonzero_bounds(self.volume)

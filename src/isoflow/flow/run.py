@@ -90,6 +90,18 @@ class FlowResult(Result):
     guard_steps : dict or None
         Guarded runs: how many steps were ``flow``, ``partial`` and
         ``thinning``.
+
+    Examples
+    --------
+    A 3x3x3 cube shrinks by one layer a step, from one lattice to the
+    other, until it vanishes:
+
+    >>> import numpy as np
+    >>> r = run_flow(np.ones((3, 3, 3), bool))
+    >>> r.stop_reason, [s["voxels"] for s in r.steps], [s.parity for s in r.states]
+    ('vanished', [27, 8, 1, 0], [0, 1, 0, 1])
+    >>> r["limit"]["last_shape"], r.to_dict()["guard"]
+    ('cuboid', False)
     """
 
     steps: list[dict]
