@@ -793,3 +793,11 @@ def test_a_label_image_takes_its_spacing_and_origin_as_lists_or_one_number():
 def test_a_label_image_names_a_bad_spacing_or_origin(spacing, origin, words):
     with pytest.raises(IsoflowError, match=re.escape(f"LabelImage: {words}")):
         isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), spacing, origin)
+
+
+@pytest.mark.parametrize("ndim", ["a", 3.0, True])
+def test_placement_names_an_ndim_that_is_no_integer(ndim):
+    # (1,) * ndim: Python's "can't multiply sequence by non-int of type 'str'"
+    with pytest.raises(IsoflowError, match=re.escape(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")):
+        isoflow.DigitalObject.placement(ndim)
+    assert isoflow.DigitalObject.placement(np.int64(3), pitch=0.5).spacing.tolist() == [0.5] * 3

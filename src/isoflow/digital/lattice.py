@@ -219,8 +219,12 @@ class DigitalObject:
         >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
         """
+        if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
+            # (1,) * "a" was Python's "can't multiply sequence by non-int of type 'str'"; another
+            # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
+            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
-        return cls(np.zeros((1,) * ndim, bool), **{k: v for k, v in given.items() if v is not None})
+        return cls(np.zeros((1,) * int(ndim), bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
     @property
