@@ -801,3 +801,14 @@ def test_placement_names_an_ndim_that_is_no_integer(ndim):
     with pytest.raises(IsoflowError, match=re.escape(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")):
         isoflow.DigitalObject.placement(ndim)
     assert isoflow.DigitalObject.placement(np.int64(3), pitch=0.5).spacing.tolist() == [0.5] * 3
+
+
+@pytest.mark.parametrize("label", [2.0**63, np.float64(2.0**63), 2**63])
+def test_a_whole_float_label_selects_exactly_that_label_of_a_uint64_image(tmp_path, label):
+    # compared as a float, 2.0**63 matched 2**63 + 1 too (both round to it): two voxels for one
+    labels = np.zeros((3, 3, 3), np.uint64)
+    labels[0, 0, 0], labels[1, 1, 1], labels[2, 2, 2] = 2**63, 2**63 + 1, 2**64 - 1
+    np.save(tmp_path / "big.npy", labels)
+    obj = isoflow.read_volume(tmp_path / "big.npy", label=label)
+    assert obj.voxels == np.count_nonzero(labels == np.uint64(2**63)) == 1
+    assert np.argwhere(obj.volume).tolist() == [[0, 0, 0]]

@@ -391,7 +391,7 @@ def select_label(array, label, where: str) -> np.ndarray:
     """The voxels of ``array`` equal to ``label``; an error listing the
     values present when there are none."""
     arr = np.asarray(array)
-    check_label(label, arr.dtype, where)
+    label = check_label(label, arr.dtype, where)
     vol = arr == label
     if not vol.any():
         raise no_such_label(label, np.unique(arr), where)
