@@ -812,3 +812,14 @@ def test_a_whole_float_label_selects_exactly_that_label_of_a_uint64_image(tmp_pa
     obj = isoflow.read_volume(tmp_path / "big.npy", label=label)
     assert obj.voxels == np.count_nonzero(labels == np.uint64(2**63)) == 1
     assert np.argwhere(obj.volume).tolist() == [[0, 0, 0]]
+
+
+@pytest.mark.parametrize("call", [
+    lambda t: isoflow.analyze(CUBE, threads=t),
+    lambda t: isoflow.label_table(CUBE.astype(np.uint8), threads=t),
+])
+def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
+    # "2" was taken as 2 while 2.0 was refused as no positive integer
+    with pytest.raises(IsoflowError, match=re.escape("threads must be a positive integer, got '2'")):
+        call("2")
+    call(np.int64(2))
