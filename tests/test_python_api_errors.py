@@ -823,3 +823,11 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     with pytest.raises(IsoflowError, match=re.escape("threads must be a positive integer, got '2'")):
         call("2")
     call(np.int64(2))
+
+
+@pytest.mark.parametrize(("ndim", "words"), [(5, "ndim must be 1..4, got 5"), ("3", "ndim must be an integer 1..4, got '3'")])
+def test_euler_lut_names_its_ndim(ndim, words):
+    # the message spoke of a "dimension n" that euler_lut has no parameter of
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)}$"):
+        isoflow.euler_lut(ndim)
+    assert len(isoflow.euler_lut(np.int64(2))) == 2**4  # one entry per configuration of a 2x2 window

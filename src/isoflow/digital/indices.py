@@ -114,7 +114,7 @@ def euler_lut(ndim: int = 3, connectivity: int | None = None) -> np.ndarray:
     >>> euler_lut(2)[1], len(euler_lut(2))
     (np.int64(1), 16)
     """
-    n = check_dimension(ndim)
+    n = check_dimension(ndim, "ndim")
     return _euler_table(n, resolve_connectivity(n, connectivity))
 
 
@@ -153,7 +153,7 @@ def well_composed(ndim: int = 3) -> np.ndarray:
     >>> int(well_composed(3).sum()), int(well_composed(2).sum())
     (126, 12)
     """
-    n = check_dimension(ndim)
+    n = check_dimension(ndim, "ndim")
     c = np.arange(1 << (1 << n), dtype=np.int64)
     bg = full_window(n) ^ c
     boundary = (c != 0) & (bg != 0)
