@@ -264,3 +264,38 @@ class MeshNote(IsoflowWarning):
     :class:`~isoflow.mesh.voxelize.Voxelization`, issued as a warning
     when the caller did not ask for the details. The command line prints it
     as one ``note:`` line."""
+
+
+def check_switch(value: object, name: str, where: str) -> bool:
+    """``value`` as a bool where it is True or False (NumPy's bools too),
+    else IsoflowError naming ``where`` and the argument: a string such as
+    "no" is truthy, and would replace a file, change a format or run a
+    guarded flow unasked (and a result would hold "no" for a bool).
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    name : str
+        The argument's name.
+    where : str
+        The function or file, for the message.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> check_switch(False, "force", "s.ply")
+    False
+    >>> check_switch("no", "force", "s.ply")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: s.ply: force must be True or False, got 'no'
+    """
+    import numpy as np
+
+    if not isinstance(value, (bool, np.bool_)):
+        raise IsoflowError(f"{where}: {name} must be True or False, got {value!r}")
+    return bool(value)

@@ -29,9 +29,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, check_switch, counted
 from ..results import Result
-from .outputs import check_switch
 
 #: the rule that decides which voxels a mesh fills
 Fill = Literal["winding", "shell", "flood"]
@@ -54,7 +53,7 @@ SAMPLED_FACES = 8192
 THIN_TRIGGER = 2.0
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Voxelization(Result):
     """What a voxelisation gave, and what it found in the mesh.
 

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill, check_strict
@@ -713,6 +713,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+    step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
     f = _drop_repeated_faces(v, f, stats)

@@ -33,29 +33,7 @@ import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError
-
-
-def check_switch(value: object, name: str, where: str) -> bool:
-    """``value`` as a bool where it is True or False (NumPy's bools too),
-    else IsoflowError naming ``where`` and the argument: a string such as
-    "no" is truthy, and would replace a file or change a format unasked.
-
-    Examples
-    --------
-    >>> check_switch(False, "force", "s.ply")
-    False
-    >>> check_switch("no", "force", "s.ply")
-    Traceback (most recent call last):
-    ...
-    isoflow.errors.IsoflowError: s.ply: force must be True or False, got 'no'
-    """
-    import numpy as np
-
-    if not isinstance(value, (bool, np.bool_)):
-        raise IsoflowError(f"{where}: {name} must be True or False, got {value!r}")
-    return bool(value)
-
+from ..errors import IsoflowError, check_switch
 
 #: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"

@@ -59,7 +59,7 @@ class Note:
     facts: Mapping[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class GenusVerdict(Result):
     """What :func:`~isoflow.mesh.genus.verify_genus` found, as fields and as
     a mapping of the keys ``isoflow genus --json`` prints (``v.agree``,
@@ -77,6 +77,14 @@ class GenusVerdict(Result):
     the flood fill voxelises, without the handles inside the cavities):
     the digital genus is compared with it instead of ``reference``, which
     stays the mesh's (or the solid's); None otherwise.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> from isoflow.mesh.genus import verify_genus
+    >>> v = verify_genus(data.torus(), resolutions=[16, 32])
+    >>> v.kind, v.reference, v["agree"], [d["betti"] for d in v.digital]
+    ('agree', 1, True, [[1, 1, 0], [1, 1, 0]])
     """
 
     input: str

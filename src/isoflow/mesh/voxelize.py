@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, counted, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_switch, counted, warn
 from ..scale import memory
 from .fills import (
     THIN_SHARE,
@@ -621,7 +621,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
@@ -785,6 +785,7 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     >>> voxelize_mesh(box, resolution=4).voxels
     64
     """
+    details = check_switch(details, "details", "voxelize")
     if faces is None:
         if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)):
             raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
@@ -846,6 +847,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     (32, [1, 1, 0])
     """
     check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
+    details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)
     try:
         obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
