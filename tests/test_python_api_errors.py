@@ -831,3 +831,13 @@ def test_euler_lut_names_its_ndim(ndim, words):
     with pytest.raises(IsoflowError, match=f"^{re.escape(words)}$"):
         isoflow.euler_lut(ndim)
     assert len(isoflow.euler_lut(np.int64(2))) == 2**4  # one entry per configuration of a 2x2 window
+
+
+@pytest.mark.parametrize("bad", [5, None, ["s.ply"]])
+def test_a_surface_path_that_is_no_path_is_named(bad):
+    """A surface path that is not a str or os.PathLike (the arguments
+    swapped, None) is one IsoflowError naming the kind of path and the
+    value, not os.fspath's TypeError that names neither."""
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool))
+    with pytest.raises(IsoflowError, match=r"surface path must be a str or os\.PathLike, got " + type(bad).__name__):
+        isoflow.write_surface(obj, bad)

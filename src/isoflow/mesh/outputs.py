@@ -45,6 +45,8 @@ def check_output_path(
     """The output file as a Path, checked before any work is done: it ends in
     one of ``suffixes`` (any case; none: any name), is not a directory, does
     not exist unless ``force``, and its directory exists and is writable."""
+    if not isinstance(path, (str, os.PathLike)):  # (os.fspath's TypeError names no argument)
+        raise IsoflowError(f"the {what} path must be a str or os.PathLike, got {type(path).__name__} {path!r}")
     check_switch(force, "force", str(path))
     refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)
