@@ -631,6 +631,29 @@ def test_an_obj_face_index_that_names_no_vertex_is_one_line_naming_it(tmp_path, 
     assert not any(tmp_path.glob("out.*"))
 
 
+@pytest.mark.parametrize(
+    "line, words",  # each was "cannot read as a mesh (ValueError: string or file could not be read to its end ...)"
+    [("v 0,5 1 1", ("'v 0,5 1 1': '0,5' is not a coordinate", "decimals with a point: 0.5")),
+     ("v 1.0.0 1 1", ("'1.0.0' is not a coordinate",)),
+     ("vt 0 a", ("'vt 0 a': 'a' is not a texture coordinate",)),
+     ("f 1 3 x", ("'f 1 3 x': 'x' is not a vertex index",)),
+     ("v 1 1", ("'v 1 1': 2 coordinates, where a vertex has 3",))],  # was "vertices must have shape (N, 3)"
+)
+def test_an_obj_word_that_is_no_number_is_one_line_naming_it(tmp_path, capsys, line, words):
+    """The bad line is line 6 of the file; trimesh, the reader of such a
+    file, cannot read it either."""
+    path = tmp_path / "bad.obj"
+    path.write_text(TET + "# a comment\n" + line + "\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+        read = mesh.vertices.shape[1:] == (3,) and len(mesh.faces) == 4  # a 2-coordinate vertex: (N, 2)
+    except ValueError:
+        read = False
+    assert not read
+    fails(capsys, "voxelize", path, "--resolution", 8, "-o", tmp_path / "out.npy", words=("bad.obj:6: ", *words))
+    assert not (tmp_path / "out.npy").exists()
+
+
 def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys):
     path = tmp_path / "bad.off"
     path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n# a comment\n\n3 0 3 4\n3 1 2 3\n")

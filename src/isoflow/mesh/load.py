@@ -457,13 +457,16 @@ def _read(p: Path, ext: str):
     try:
         mesh = trimesh_load(p, "mesh")
     except IsoflowError:
-        if ext == "obj":  # trimesh's IndexError on an index past the vertices: name the line
+        if ext == "obj":  # trimesh's IndexError on an index past the vertices, its ValueError on a word: the line
             _check_obj_indices(p, failed=True)
+            _check_obj_numbers(p)
         raise
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if ext == "obj":
         _check_obj_indices(p)
+        if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
+            _check_obj_numbers(p)
     return vertices, faces
 
 
@@ -708,6 +711,16 @@ def _check_obj_indices(path: Path, failed: bool = False) -> None:
         message = obj_index_error(path, data)
         if message is not None:
             raise IsoflowError(message)
+
+
+def _check_obj_numbers(path: Path) -> None:
+    """One line naming the OBJ line whose word is not the number it must be
+    (:func:`isoflow.mesh.readers.obj_number_error`), where there is one."""
+    from .readers import obj_number_error
+
+    message = obj_number_error(path, path.read_bytes())
+    if message is not None:
+        raise IsoflowError(message)
 
 
 # ---------------------------------------------------------------------------

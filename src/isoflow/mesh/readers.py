@@ -18,6 +18,7 @@ not import trimesh (and the scipy modules it pulls in).
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -381,6 +382,75 @@ def obj_index_error(path, data: bytes) -> str | None:
                 else:
                     why = "but OBJ numbers vertices from 1 (-1 for the last)"
                 return f"{path}:{lineno}: face {shown!r} uses vertex index {written.decode()}, {why}"
+    return None
+
+
+#: a number as an OBJ reader parses one (C's strtod, NumPy's fromstring)
+_NUMBER = re.compile(rb"[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf(inity)?|nan)", re.IGNORECASE)
+#: what each kind of OBJ line holds, by its first word: a number per word
+_OBJ_NUMBERS = {b"v": "a coordinate", b"vt": "a texture coordinate", b"vn": "a normal's coordinate"}
+
+
+def obj_number_error(path, data: bytes) -> str | None:
+    """The one line that names the first ``v``, ``vt``, ``vn`` or ``f``
+    line of an OBJ file holding a word that is not the number it must be
+    (a decimal comma, a stray letter), or a ``v`` line with fewer than
+    three coordinates, or ``None`` where there is none.  trimesh says only
+    "string or file could not be read to its end due to unmatched data".
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file's name, as the line shows it.
+    data : bytes
+        The file's contents.
+
+    Returns
+    -------
+    str or None
+        ``path:LINE: 'v 0,5 0 0': '0,5' is not a coordinate``, with a hint
+        for a decimal comma.
+
+    Examples
+    --------
+    >>> obj_number_error("t.obj", b"v 0 0 0\\nv 0,5 1 0\\nv 0 1 0\\nf 1 2 3\\n")
+    "t.obj:2: 'v 0,5 1 0': '0,5' is not a coordinate (OBJ writes decimals with a point: 0.5)"
+    >>> obj_number_error("t.obj", b"v 0 0\\n"), obj_number_error("t.obj", b"v 0 0 0\\nf 1/1 2//3 -1\\n")
+    ("t.obj:1: 'v 0 0': 2 coordinates, where a vertex has 3 (x y z)", None)
+    """
+    for lineno, line in enumerate(data.removeprefix(b"\xef\xbb\xbf").splitlines(), 1):
+        words = line.split(b"#", 1)[0].split()
+        bad = _bad_obj_word(words)
+        if bad is None:
+            continue
+        shown = line.strip().decode(errors="replace")
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        return f"{path}:{lineno}: {shown!r}: {bad}"
+    return None
+
+
+def _bad_obj_word(words: list[bytes]) -> str | None:
+    """What is wrong with an OBJ line's words, or None (a line of a kind
+    that holds no numbers, or whose numbers are numbers)."""
+    head = words[0] if words else b""
+    if head == b"f":
+        for word in words[1:]:
+            parts = word.split(b"/")
+            if not all(q.lstrip(b"-").isdigit() for q in parts[:1]) or not all(
+                    q.lstrip(b"-").isdigit() or not q for q in parts[1:3]) or len(parts) > 3:
+                return f"{word.decode(errors='replace')!r} is not a vertex index (i, i/t, i//n or i/t/n)"
+        return None
+    what = _OBJ_NUMBERS.get(head)
+    if what is None:
+        return None
+    for word in words[1:]:
+        if _NUMBER.fullmatch(word) is None:
+            shown = word.decode(errors="replace")
+            comma = _NUMBER.fullmatch(word.replace(b",", b".", 1)) is not None
+            hint = f" (OBJ writes decimals with a point: {shown.replace(',', '.', 1)})" if comma else ""
+            return f"{shown!r} is not {what}{hint}"
+    if head == b"v" and len(words) < 4:
+        return f"{len(words) - 1} coordinate{'s' if len(words) != 2 else ''}, where a vertex has 3 (x y z)"
     return None
 
 
