@@ -654,6 +654,23 @@ def test_an_obj_word_that_is_no_number_is_one_line_naming_it(tmp_path, capsys, l
     assert not (tmp_path / "out.npy").exists()
 
 
+@pytest.mark.parametrize("name", ["e.glb", "e.ply", "e.stl", "e.obj", "e.off", "e.gltf"])
+@pytest.mark.parametrize("command", [("genus",), ("info",), ("voxelize", "--resolution", "8", "-o", "out.npy")])
+def test_an_empty_mesh_file_is_said_to_be_empty(tmp_path, capsys, name, command):
+    """A mesh file of 0 bytes (a download or copy that failed), as the
+    volume files are: trimesh said "IndexError: index 0 is out of bounds
+    for axis 0 with size 0" of a GLB, "Not a ply file!" of a PLY, and of
+    an STL "no triangles read (empty mesh, or not a valid STL file)"."""
+    path = tmp_path / name
+    path.write_bytes(b"")
+    assert os.path.getsize(path) == 0
+    what = name.split(".")[-1].upper()
+    name_, *rest = command
+    rest = [str(tmp_path / w) if w.startswith("out.") else w for w in rest]
+    fails(capsys, name_, path, *rest, words=(f"{name}: an empty file (0 bytes), not a readable {what} file",))
+    assert not (tmp_path / "out.npy").exists()
+
+
 def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys):
     path = tmp_path / "bad.off"
     path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n# a comment\n\n3 0 3 4\n3 1 2 3\n")
@@ -699,7 +716,7 @@ def test_mesh_content_in_another_format_than_its_suffix_names_it(tmp_path, capsy
     assert main(["genus", str(renamed)]) == 0
 
 
-@pytest.mark.parametrize("content", [bytes(range(256)) * 20, b"", b"hello\nworld\n", b"solid x\nendsolid x\n"])
+@pytest.mark.parametrize("content", [bytes(range(256)) * 20, b"hello\nworld\n", b"solid x\nendsolid x\n"])
 def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, content):
     path = tmp_path / "junk.stl"
     path.write_bytes(content)

@@ -493,6 +493,9 @@ def check_mesh_file(p: Path) -> None:
         raise missing(p)
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
+    if p.stat().st_size == 0:  # (a download or copy that failed) trimesh said "IndexError: index 0 is out of bounds"
+        kind = p.suffix.lstrip(".").upper() or "mesh"
+        raise IsoflowError(f"{p}: an empty file (0 bytes), not a readable {kind} file")
     refuse_zipped_store(p)
     check_format_libraries(p)
 
