@@ -632,8 +632,14 @@ def trimesh_load(p: Path, force: str):
     isoflow's), ``force`` "mesh" (a scene's meshes as one, transforms
     applied) or "scene"; an OBJ's texture and normal seams are asked to be
     merged (the weld merges what trimesh leaves split); a PLY's concave
-    polygons are cut by ears (:func:`_ply_polygons_cut`)."""
+    polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
+    uses a geometry extension trimesh does not apply is refused
+    (:func:`~isoflow.mesh.gltf_extensions.unapplied_extension`)."""
+    from .gltf_extensions import unapplied_extension
+
     check_mesh_file(p)
+    if (refusal := unapplied_extension(p)) is not None:  # trimesh would read another model, without a word
+        raise IsoflowError(refusal)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}
