@@ -75,3 +75,13 @@ def test_an_open_edge_with_no_vertex_on_it_is_left_open():
     v = trimesh.creation.box().vertices
     f = trimesh.creation.box().faces[1:]  # a box less one triangle: a hole, no T-junction
     assert split_t_junctions(v, f, 1e-9)[2] is None
+
+
+@pytest.mark.parametrize("scale", [1e-200, 1e200])
+def test_t_junctions_close_in_any_unit(scale):
+    """The box with its cracks in units of 1e-200 and 1e200: as at 1, with
+    no overflow on the way (the split measures in units of the box)."""
+    v, f = with_t_junctions(trimesh.creation.box(), every=2)
+    with np.errstate(over="raise"):
+        verdict = verify_genus((v * scale, f), resolutions=[16, 32], step=False)
+    assert verdict.mesh["watertight"] and verdict.mesh["genus"] == 0 and verdict.kind == "agree"

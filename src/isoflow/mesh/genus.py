@@ -774,12 +774,18 @@ def _split_t_junctions(v: np.ndarray, f: np.ndarray, stats: dict) -> tuple[np.nd
     used = v[np.unique(f)] if len(f) else v[:0]
     if not len(used):
         return v, f
-    diagonal = float(np.linalg.norm(used.max(axis=0) - used.min(axis=0)))
-    v2, f2, facts = split_t_junctions(v, f, T_JUNCTION_RTOL * diagonal)
+    # in units of a power of two near the longest side, from the box's corner, as the weld measures:
+    # the diagonal and the products along an edge neither overflow at 1e200 nor underflow at 1e-200
+    lo = used.min(axis=0)
+    e = math.frexp(float((used.max(axis=0) - lo).max()) or 1.0)[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        scaled = np.ldexp(v - lo, -e)
+    diagonal = float(np.linalg.norm(np.ldexp(used.max(axis=0) - lo, -e)))
+    v2, f2, facts = split_t_junctions(scaled, f, T_JUNCTION_RTOL * diagonal)
     if facts is None:
         return v, f
     stats["t_junctions"] = facts
-    return v2, f2
+    return np.vstack([v, np.ldexp(v2[len(v):], e) + lo]), f2
 
 
 def _corners_of(v: np.ndarray, face: np.ndarray) -> tuple:
