@@ -373,8 +373,7 @@ def obj_index_error(path, data: bytes) -> str | None:
                     continue  # not a number: the reader's own message says so
                 if 0 < k <= total or -seen <= k < 0:
                     continue
-                shown = line.strip().decode(errors="replace")
-                shown = shown if len(shown) <= 60 else shown[:57] + "..."
+                shown = shown_line(line)
                 if k > 0:
                     why = f"past the file's {total} vertices"
                 elif k < 0:
@@ -401,9 +400,9 @@ def obj_number_error(path, data: bytes) -> str | None:
     Parameters
     ----------
     path : str or os.PathLike
-        The file's name, as the line shows it.
+        The file, as the line names it.
     data : bytes
-        The file's contents.
+        What the file holds.
 
     Returns
     -------
@@ -423,9 +422,7 @@ def obj_number_error(path, data: bytes) -> str | None:
         bad = _bad_obj_word(words)
         if bad is None:
             continue
-        shown = line.strip().decode(errors="replace")
-        shown = shown if len(shown) <= 60 else shown[:57] + "..."
-        return f"{path}:{lineno}: {shown!r}: {bad}"
+        return f"{path}:{lineno}: {shown_line(line)!r}: {bad}"
     return None
 
 
@@ -452,6 +449,18 @@ def _bad_obj_word(words: list[bytes]) -> str | None:
     if head == b"v" and len(words) < 4:
         return f"{len(words) - 1} coordinate{'s' if len(words) != 2 else ''}, where a vertex has 3 (x y z)"
     return None
+
+
+def shown_line(line: bytes) -> str:
+    """A file's line as a message quotes it: stripped, at most 60 characters.
+
+    Examples
+    --------
+    >>> shown_line(b"  f 1 2 3 "), len(shown_line(b"f " + b"1 " * 40))
+    ('f 1 2 3', 60)
+    """
+    shown = line.strip().decode(errors="replace")
+    return shown if len(shown) <= 60 else shown[:57] + "..."
 
 
 def may_name_vertex_0(data: bytes) -> bool:
