@@ -383,9 +383,12 @@ def test_device_input_is_refused(capsys):
 
 @pytest.mark.parametrize("change, words", [
     (lambda d: d + bytes(10), ("counts 12 facets (684 bytes)", "has 694 bytes (12 facets and 10 bytes after")),
+    # a header that starts "solid" and names a facet, as some CAD writers fill it: was "not a valid STL file"
+    (lambda d: b"solid part; facet normals by CAD".ljust(80) + d[80:300],
+     ("counts 12 facets (684 bytes)", "has 300 bytes (4 facets and 16 bytes after")),
     (lambda d: d[:80] + bytes(4) + d[84:], ("counts 0 facets (84 bytes)", "has 684 bytes (12 facets after")),
     (lambda d: d[:300], ("counts 12 facets (684 bytes)", "has 300 bytes (4 facets and 16 bytes after")),
-], ids=["padded", "count 0", "truncated"])
+], ids=["padded", "solid header truncated", "count 0", "truncated"])
 def test_a_binary_stl_of_the_wrong_size_says_so(tmp_path, capsys, change, words):
     """A box's 12 facets (50 bytes each after the 84-byte header) padded,
     with a count of 0, or cut short: the line said only "not a valid STL
@@ -393,6 +396,47 @@ def test_a_binary_stl_of_the_wrong_size_says_so(tmp_path, capsys, change, words)
     path = box_stl(tmp_path)
     path.write_bytes(change(path.read_bytes()))
     fails(capsys, "info", path, words=("box.stl: no triangles read: as a binary STL its header", *words))
+
+
+def ascii_box_stl() -> list[str]:
+    """The lines of a box's ASCII STL, as trimesh writes it."""
+    return trimesh.exchange.stl.export_stl_ascii(trimesh.creation.box()).splitlines()
+
+
+@pytest.mark.parametrize("edit, words", [
+    # each was "cannot read as a mesh (ValueError: cannot reshape array of size 37 into shape (3))" or the like
+    (lambda ln, k: ln[:k + 1] + ["vertex 9 9 9"] + ln[k + 1:], ("facet 1's loop has 4 vertices, where an STL facet has 3",)),
+    (lambda ln, k: ln[:k] + ln[k + 1:], ("facet 1's loop has 2 vertices, where an STL facet has 3",)),
+    (lambda ln, k: ln[:k] + [ln[k].replace("-0.5", "-0,5", 1)] + ln[k + 1:],
+     ("'-0,5' is not a coordinate (STL writes decimals with a point: -0.5)",)),
+])
+def test_an_ascii_stl_facet_that_is_no_triangle_names_its_line(tmp_path, capsys, edit, words):
+    """Facet 1's third vertex line (file line 6) given a fourth vertex after
+    it, dropped, or a decimal comma: the line named is the one where the
+    fault shows (the loop's end, or the vertex), which trimesh cannot read."""
+    lines = ascii_box_stl()
+    third = [i for i, ln in enumerate(lines) if ln.startswith("vertex")][2]
+    bad = edit(lines, third)
+    path = tmp_path / "box.stl"
+    path.write_text("\n".join(bad) + "\n")
+    try:
+        read = len(trimesh.load(path, force="mesh", process=False).faces) == 12
+    except ValueError:
+        read = False
+    assert not read
+    shown = next(i for i, ln in enumerate(bad, 1) if ln.startswith("endloop") or "0,5" in ln)
+    fails(capsys, "genus", path, words=(f"box.stl:{shown}: ", *words))
+
+
+def test_an_ascii_stl_cut_short_says_so(tmp_path, capsys):
+    """Cut in facet 6's loop: trimesh read no triangle ("not a valid STL
+    file"); the line names the facet and the line it starts on."""
+    lines = ascii_box_stl()[:40]
+    starts = [i for i, ln in enumerate(lines, 1) if ln.startswith("facet")]
+    path = tmp_path / "box.stl"
+    path.write_text("\n".join(lines) + "\n")
+    fails(capsys, "genus", path, words=(f"box.stl: the file ends inside facet {len(starts)} (line {starts[-1]}, its last)",
+                                         "cut short"))
 
 
 def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):

@@ -321,13 +321,16 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
 
 def _stl_size_line(p: Path) -> str | None:
     """The line for a binary STL whose size does not match its facet count
-    (:func:`isoflow.mesh.readers.stl_size_error`), or None."""
-    from .readers import stl_size_error
+    (:func:`isoflow.mesh.readers.stl_size_error`), or for an ASCII STL
+    whose facets are not three vertices of three numbers each, or that is
+    cut short (:func:`isoflow.mesh.readers.stl_text_error`), or None."""
+    from .readers import stl_size_error, stl_text_error
 
     try:
-        return stl_size_error(p, p.read_bytes())
+        data = p.read_bytes()
     except OSError:
         return None
+    return stl_size_error(p, data) or stl_text_error(p, data)
 
 
 def weld_tolerance(merge_rtol) -> float:
@@ -460,6 +463,8 @@ def _read(p: Path, ext: str):
         if ext == "obj":  # trimesh's IndexError on an index past the vertices, its ValueError on a word: the line
             _check_obj_indices(p, failed=True)
             _check_obj_numbers(p)
+        if ext == "stl" and (line := _stl_size_line(p)) is not None:  # trimesh's "cannot reshape array"
+            raise IsoflowError(line) from None
         raise
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)

@@ -34,6 +34,8 @@ _OBJ_IGNORED = frozenset((b"#", b"vt", b"vn", b"o", b"g", b"s", b"mtllib"))
 _SPACE = np.isin(np.arange(256), list(b" \t\n\r\x0b\x0c"))
 #: the bytes of a face line's words and the spaces between them
 _FACE_BYTES = np.isin(np.arange(256), list(b"0123456789-/ \t\n"))
+#: the bytes of a text file's lines
+_TEXT = bytes(range(32, 127)) + b"\t\n\r"
 #: polygons whose fans :func:`_cut_by_ears` tests at a time
 _CHUNK = 1 << 16
 
@@ -101,10 +103,8 @@ def stl_size_error(path, data: bytes) -> str | None:
     194 bytes (2 facets and 10 bytes after the header): truncated, padded, or its facet count is wrong
     """
     head = data[:1024]
-    if len(data) < 84 or (data.lstrip()[:5].lower() == b"solid" and b"facet" in head.lower()):
-        return None
-    if not head.translate(None, bytes(range(32, 127)) + b"\t\n\r"):
-        return None  # text, not a header and facets: the reader's own line
+    if len(data) < 84 or not head.translate(None, _TEXT):
+        return None  # text (an ASCII STL among it), not a header and facets: the reader's own line
     n = int(np.frombuffer(data, "<u4", 1, 80)[0])
     whole, rest = divmod(len(data) - 84, 50)
     if len(data) == 84 + 50 * n or not whole:
@@ -119,6 +119,60 @@ def stl_size_error(path, data: bytes) -> str | None:
     return (f"{path}: no triangles read: as a binary STL its header counts {counted(n, 'facet')} "
             f"({84 + 50 * n} bytes), but the file has {len(data)} bytes ({held} after the header): "
             "truncated, padded, or its facet count is wrong")
+
+
+def stl_text_error(path, data: bytes) -> str | None:
+    """The one line naming the first fault of an ASCII STL file's facets:
+    a ``vertex`` line whose word is not a number (a decimal comma) or that
+    holds other than three, a loop of other than three vertices, or a file
+    that ends inside a facet (cut short); ``None`` where there is none or
+    the file is no ASCII STL.  trimesh says "cannot reshape array of size
+    37 into shape (3)", or reads no triangle at all.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The STL file's name, for the message.
+    data : bytes
+        Its bytes: a text file of ``solid``, ``facet``, ``vertex`` ... lines.
+
+    Returns
+    -------
+    str or None
+        ``path:LINE: ...``, or ``path: ...`` for a file cut short.
+
+    Examples
+    --------
+    >>> loop = b"facet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\nvertex 0 1 0\\n"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop + b"vertex 1 1 0\\nendloop\\nendfacet\\nendsolid t\\n")
+    "t.stl:8: 'endloop': facet 1's loop has 4 vertices, where an STL facet has 3"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop.replace(b"1 0 0", b"1,5 0 0"))
+    "t.stl:5: 'vertex 1,5 0 0': '1,5' is not a coordinate (STL writes decimals with a point: 1.5)"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop)
+    't.stl: the file ends inside facet 1 (line 2, its last): cut short'
+    """
+    if not data.lstrip()[:5].lower() == b"solid" or data[:4096].translate(None, _TEXT):
+        return None  # a binary STL whose header starts "solid": its size says what is wrong
+    facet, corners, opened = 0, 0, None
+    lines = data.splitlines()
+    for lineno, line in enumerate(lines, 1):
+        words = line.lower().split()
+        head = words[0] if words else b""
+        if head == b"facet":
+            facet, corners, opened = facet + 1, 0, lineno
+        elif head == b"vertex":
+            bad = _bad_obj_word([b"v", *line.split()[1:]])
+            if bad is not None:
+                return f"{path}:{lineno}: {shown_line(line)!r}: {bad.replace('OBJ', 'STL')}"
+            corners += 1
+        elif head == b"endloop" and corners != 3:
+            return (f"{path}:{lineno}: {shown_line(line)!r}: facet {facet}'s loop has "
+                    f"{counted(corners, 'vertex', 'vertices')}, where an STL facet has 3")
+        elif head == b"endfacet":
+            opened = None
+    if opened is not None:
+        return f"{path}: the file ends inside facet {facet} (line {opened}, its last): cut short"
+    return None
 
 
 def _read_stl_ascii(data: bytes) -> Mesh | None:
