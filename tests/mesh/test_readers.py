@@ -593,7 +593,7 @@ PLY_BROKEN = {
                                  "properties or counts do not match the data)",
     "ASCII one face more than the header's": "the header's rows take 154 numbers, but the body holds 168 (the "
                                              "header's counts do not match the data)",
-    "ASCII word not a number": "line 12: a word that is not a number",
+    "ASCII word not a number": "line 12: 'x",  # the word named: was "line 12: a word that is not a number"
 }
 
 
@@ -603,6 +603,25 @@ def test_a_ply_that_does_not_match_its_header_is_refused_in_one_line(case, tmp_p
     with pytest.raises(IsoflowError) as exc:
         load_mesh(p)
     assert str(exc.value).startswith(f"{p}: {PLY_BROKEN[case]}"), str(exc.value)
+
+
+def test_an_ascii_ply_with_a_decimal_comma_names_the_word(tmp_path):
+    """A vertex row ``1,5 0 0`` (a writer in a locale with decimal commas):
+    the line named the line alone, not the word; trimesh cannot read it."""
+    import trimesh
+
+    rows = ["0 0 0", "1,5 0 0", "0 1 0", "0 0 1"]
+    text = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 4\nproperty list uchar int vertex_indices\nend_header\n" + "\n".join(rows)
+            + "\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+    p = tmp_path / "m.ply"
+    p.write_text(text)
+    with pytest.raises(ValueError):
+        trimesh.load(p, process=False)
+    line = text.splitlines().index("1,5 0 0") + 1
+    with pytest.raises(IsoflowError) as exc:
+        load_mesh(p)
+    assert str(exc.value) == f"{p}: line {line}: '1,5' is not a number (PLY writes decimals with a point: 1.5)"
 
 
 @pytest.mark.parametrize("case", ["binary cut short", "binary index past the vertices"])
