@@ -245,3 +245,21 @@ def test_meshopt_compressed_gltf_is_refused(tmp_path, capsys):
     assert main(["genus", str(path)]) == 2
     err = capsys.readouterr().err
     assert "compressed by the glTF extension EXT_meshopt_compression" in err and "Traceback" not in err
+
+
+def test_a_gltf_without_its_buffer_file_names_it(tmp_path, capsys):
+    """A glTF scene written with its .bin beside it, then copied without
+    it: trimesh said "FileNotFoundError: gltf_buffer_0.bin"."""
+    from isoflow.cli import main
+
+    scene = trimesh.Scene([trimesh.creation.box()])
+    for name, data in scene.export(file_type="gltf").items():
+        (tmp_path / name).write_bytes(data)
+    tree = json.loads((tmp_path / "model.gltf").read_text())
+    uri = tree["buffers"][0]["uri"]
+    assert main(["genus", str(tmp_path / "model.gltf"), "--no-step", "--resolution", "8"]) == 0
+    capsys.readouterr()
+    (tmp_path / uri).unlink()
+    assert main(["genus", str(tmp_path / "model.gltf")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"model.gltf: buffer 0 is the file '{uri}', which is not there ({tmp_path / uri})" in err[0]

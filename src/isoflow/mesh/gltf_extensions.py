@@ -7,8 +7,10 @@ instanced boxes was read, voxelised and counted as one box.
 ``EXT_meshopt_compression`` (and its ``KHR_`` successor) stores buffer
 views compressed; trimesh reads the compressed bytes as if they were the
 data.  A file that uses either is refused in one line naming the node or
-extension, rather than read as another model.  The file's JSON is looked
-at only (a GLB's first chunk), never its buffers.
+extension, rather than read as another model; so is a ``.gltf`` whose
+buffer file is not beside it (:func:`missing_buffer`: trimesh said only
+"FileNotFoundError: model.bin").  The file's JSON is looked at only (a
+GLB's first chunk), never its buffers.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from __future__ import annotations
 import json
 import struct
 from pathlib import Path
+from urllib.parse import unquote
 
 #: buffer-view compression that trimesh reads as if it were the data
 COMPRESSIONS = ("EXT_meshopt_compression", "KHR_meshopt_compression")
@@ -103,6 +106,44 @@ def unapplied_extension(path: Path) -> str | None:
                     "EXT_mesh_gpu_instancing, which isoflow's reader (trimesh) does not apply: it would read "
                     "one copy; export the model with each instance as a node of its own (Blender: "
                     "Realize Instances before the glTF export)")
+    return None
+
+
+def missing_buffer(path: Path) -> str | None:
+    """The one line refusing a ``.gltf`` file whose buffer names a file
+    that is not there, or None (images are not looked at: a model reads
+    without its textures).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The mesh file; any other suffix than ``.gltf`` gives None.
+
+    Returns
+    -------
+    str or None
+        ``PATH: buffer 0 is the file 'model.bin', which is not there
+        (DIR/model.bin); ...``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
+    >>> _ = p.write_text(json.dumps({"buffers": [{"uri": "a.bin", "byteLength": 4}]}))
+    >>> print(missing_buffer(p).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
+    DIR/a.gltf: buffer 0 is the file 'a.bin', which is not there (DIR/a.bin); ...
+    """
+    if path.suffix.lower() != ".gltf":
+        return None
+    tree = gltf_json(path)
+    for index, buffer in enumerate(_list((tree or {}).get("buffers"))):
+        uri = buffer.get("uri") if isinstance(buffer, dict) else None
+        if not isinstance(uri, str) or uri.startswith("data:"):
+            continue
+        where = path.parent / unquote(uri)
+        if not where.is_file():
+            return (f"{path}: buffer {index} is the file {uri!r}, which is not there ({where}); a glTF file "
+                    "needs its .bin beside it (copy it too, or export a single .glb)")
     return None
 
 

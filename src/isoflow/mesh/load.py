@@ -640,10 +640,10 @@ def trimesh_load(p: Path, force: str):
     polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
     uses a geometry extension trimesh does not apply is refused
     (:func:`~isoflow.mesh.gltf_extensions.unapplied_extension`)."""
-    from .gltf_extensions import unapplied_extension
+    from .gltf_extensions import missing_buffer, unapplied_extension
 
     check_mesh_file(p)
-    if (refusal := unapplied_extension(p)) is not None:  # trimesh would read another model, without a word
+    if (refusal := unapplied_extension(p) or missing_buffer(p)) is not None:  # trimesh: another model, or its bare error
         raise IsoflowError(refusal)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
