@@ -715,6 +715,34 @@ def test_an_empty_mesh_file_is_said_to_be_empty(tmp_path, capsys, name, command)
     assert not (tmp_path / "out.npy").exists()
 
 
+STEP = "ISO-10303-21;\nHEADER;\nFILE_NAME('part.step');\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n"
+
+
+@pytest.mark.parametrize("name", ["part.step", "part.STP", "part.igs"])
+@pytest.mark.parametrize("command", [("genus",), ("info",), ("surface", "-o", "out.ply"),
+                                     ("voxelize", "--resolution", "8", "-o", "out.npy")])
+def test_a_cad_file_says_it_is_one_and_how_to_get_a_mesh(tmp_path, capsys, name, command):
+    """A STEP file was "cannot read as a mesh (ModuleNotFoundError: No
+    module named 'cascadio')" to genus and voxelize, and a point list to
+    info and surface ("part.step:1: not a number: 'ISO-10303-21;'"); an
+    IGES file "names no mesh format", or a point list too."""
+    import importlib.util
+
+    if importlib.util.find_spec("cascadio") is not None and name.lower().endswith((".step", ".stp")):
+        pytest.skip("cascadio tessellates STEP files: trimesh reads them")
+    path = tmp_path / name
+    path.write_text(STEP)
+    if name.lower().endswith((".step", ".stp")):
+        with pytest.raises(ModuleNotFoundError, match="cascadio"):  # trimesh's own reader, without cascadio
+            trimesh.load(path)
+    name_, *rest = command
+    rest = [str(tmp_path / w) if w.startswith("out.") else w for w in rest]
+    kind = name.rsplit(".", 1)[1].upper()
+    fails(capsys, name_, path, *rest, words=(f"{name}: a CAD file ({kind}: surfaces, not triangles)",
+                                             "export it from the CAD tool as STL, OBJ, PLY or GLB"))
+    assert not any(tmp_path.glob("out.*"))
+
+
 def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys):
     path = tmp_path / "bad.off"
     path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n# a comment\n\n3 0 3 4\n3 1 2 3\n")

@@ -29,7 +29,12 @@ MERGE_RTOL = 1e-10
 #: reads, and its archives (a test checks this against
 #: ``trimesh.available_formats()``; ``.xyz`` is a point list here).
 MESH_SUFFIXES = (".stl", ".stl_ascii", ".obj", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae", ".zae",
-                 ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
+                 ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2", ".step", ".stp")
+#: CAD (boundary representation) formats: surfaces, no triangles until a CAD kernel tessellates them
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".sat", ".x_t", ".x_b", ".sldprt", ".sldasm", ".ipt",
+                ".iam", ".catpart", ".catproduct", ".prt", ".f3d", ".3dm", ".jt")
+#: of them, those trimesh tessellates where cascadio (OpenCASCADE) is installed (not in isoflow's extras)
+CASCADIO_SUFFIXES = (".step", ".stp")
 #: Formats whose reader needs an optional library: ``isoflow[formats]``.
 FORMAT_NEEDS = {".3mf": ("lxml",), ".dae": ("collada",), ".zae": ("collada",),
                 ".3dxml": ("lxml",), ".xaml": ("lxml",)}
@@ -53,6 +58,45 @@ def check_format_libraries(path: Path) -> None:
         raise IsoflowError(
             f"{path}: reading {suffix.lstrip('.').upper()} files needs {names}: "
             "pip install 'isoflow[formats]'")
+
+
+def refuse_cad(path) -> None:
+    """One line for a CAD file (:data:`CAD_SUFFIXES`), which holds surfaces
+    and no triangles: trimesh said "ModuleNotFoundError: No module named
+    'cascadio'" of a STEP file, the point-list reader "not a number:
+    'ISO-10303-21;'". A STEP file passes where cascadio is installed
+    (trimesh then tessellates it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An input, by its name.
+
+    Raises
+    ------
+    IsoflowError
+        A CAD file that cannot be read as a mesh here.
+
+    Examples
+    --------
+    >>> refuse_cad("part.igs")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: part.igs: a CAD file (IGS: surfaces, not triangles); export it ... as STL, OBJ, PLY or GLB
+    """
+    import importlib.util
+
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix not in CAD_SUFFIXES:
+        return
+    if suffix in CASCADIO_SUFFIXES:
+        if importlib.util.find_spec("cascadio") is not None:
+            return
+        how = " (or pip install cascadio, with which trimesh tessellates STEP files)"
+    else:
+        how = ""
+    raise IsoflowError(f"{path}: a CAD file ({suffix.lstrip('.').upper()}: surfaces, not triangles); export it from "
+                       f"the CAD tool as STL, OBJ, PLY or GLB{how}")
 
 
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
@@ -498,6 +542,7 @@ def check_mesh_file(p: Path) -> None:
         raise missing(p)
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
+    refuse_cad(p)
     if p.stat().st_size == 0:  # (a download or copy that failed) trimesh said "IndexError: index 0 is out of bounds"
         kind = p.suffix.lstrip(".").upper() or "mesh"
         raise IsoflowError(f"{p}: an empty file (0 bytes), not a readable {kind} file")
