@@ -3,13 +3,13 @@ reader of glTF and GLB files, does not apply.
 
 ``EXT_mesh_gpu_instancing`` draws a node's mesh once per row of its
 instance transforms; trimesh reads the node's mesh once, so a file of three
-instanced boxes was read, voxelised and counted as one box.
+instanced boxes would be voxelised and counted as one box.
 ``EXT_meshopt_compression`` (and its ``KHR_`` successor) stores buffer
 views compressed; trimesh reads the compressed bytes as if they were the
 data.  A file that uses either is refused in one line naming the node or
 extension, rather than read as another model; so is a ``.gltf`` whose
-buffer file is not beside it (:func:`missing_buffer`: trimesh said only
-"FileNotFoundError: model.bin").  The file's JSON is looked at only (a
+buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
+"FileNotFoundError: model.bin", no more).  The file's JSON is looked at only (a
 GLB's first chunk), never its buffers.
 """
 

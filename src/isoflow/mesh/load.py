@@ -62,10 +62,10 @@ def check_format_libraries(path: Path) -> None:
 
 def refuse_cad(path) -> None:
     """One line for a CAD file (:data:`CAD_SUFFIXES`), which holds surfaces
-    and no triangles: trimesh said "ModuleNotFoundError: No module named
-    'cascadio'" of a STEP file, the point-list reader "not a number:
-    'ISO-10303-21;'". A STEP file passes where cascadio is installed
-    (trimesh then tessellates it).
+    and no triangles: trimesh's reader of a STEP file raises
+    "ModuleNotFoundError: No module named 'cascadio'", and the point-list
+    reader "not a number: 'ISO-10303-21;'". A STEP file passes where
+    cascadio is installed (trimesh then tessellates it).
 
     Parameters
     ----------
@@ -543,7 +543,7 @@ def check_mesh_file(p: Path) -> None:
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
     refuse_cad(p)
-    if p.stat().st_size == 0:  # (a download or copy that failed) trimesh said "IndexError: index 0 is out of bounds"
+    if p.stat().st_size == 0:  # a download or copy that failed: trimesh's readers raise IndexError and the like
         kind = p.suffix.lstrip(".").upper() or "mesh"
         raise IsoflowError(f"{p}: an empty file (0 bytes), not a readable {kind} file")
     refuse_zipped_store(p)
