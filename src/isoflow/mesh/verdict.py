@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus"]
+                   "no_mesh_genus", "t_junctions"]
 
 
 @dataclass(frozen=True)
@@ -313,6 +313,10 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
     "repeated_faces": _repeated_words,
+    "t_junctions": lambda points, faces, edges: (
+        f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one face "
+        f"on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split there "
+        "before counting"),
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,

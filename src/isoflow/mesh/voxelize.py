@@ -44,6 +44,7 @@ from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, MeshNote, check_callable, check_switch, counted, warn
 from ..scale import memory
 from .fills import (
+    NO_AREA,
     THIN_SHARE,
     THIN_TRIGGER,
     UNBOUNDED_SHARE,
@@ -440,8 +441,8 @@ class VoxelPlan:
 
         Tm = self.Tm
         area = surface_area(Tm)
-        if not area > 0:
-            return None, None
+        if not area > 0:  # no area: nothing to bound, whatever the grid
+            return None, NO_AREA if voxels == 0 else None
         if volume is not None:
             corner = self.origin + self.pitch * np.asarray(self.start)
             share = unbounded_area(Tm, volume, corner, self.pitch)

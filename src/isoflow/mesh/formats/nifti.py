@@ -13,7 +13,10 @@ a 4D object written with another voxel size or origin along it is warned of.
 Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
 NIfTI stores the affine in float32: pitch and origin are kept to float32
-precision. The length unit is the header's xyzt spatial unit
+precision, and where that moves a voxel centre by more than
+:data:`FLOAT32_SLACK` of a voxel (a model far from the origin: float32's
+positions near 1e6 are 0.0625 apart) a warning says by how much and names
+the formats that keep the placement. The length unit is the header's xyzt spatial unit
 (``mm``, ``micron``, ``meter``; ``unknown`` is none). It is written so
 where the unit is one of those three; NIfTI has no code for another (cm,
 nm, inch, ...), which is written as ``unknown`` with a warning, the voxel
@@ -27,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .affine import axis_aligned, centre_affine
 from .registry import (
     RawVolume,
@@ -46,6 +49,9 @@ from .registry import (
 #: NIfTI's xyzt spatial units (nibabel's names) of isoflow's spellings: the
 #: format has codes for these three lengths only
 XYZT_UNITS = {"m": "meter", "mm": "mm", "\u00b5m": "micron"}
+#: voxels by which float32's rounding of the affine may move a voxel centre
+#: unsaid: far below any voxel a reader would pick differently
+FLOAT32_SLACK = 1e-3
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -79,6 +85,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     refuse_empty(path, obj.volume.shape, "NIfTI")
     if unit not in XYZT_UNITS:
         unit_not_kept(path, "NIfTI", unit, "the length units m, mm and \u00b5m only")
+    float32_placement(path, obj)
     if obj.ndim != 4:
         return
     spacing, corner = placement(obj)
@@ -129,6 +136,54 @@ def _load(nib, path: Path):
         return nib.Nifti1Image.from_file_map(nib.Nifti1Image.make_file_map({"image": str(path)}))
     except nib.spatialimages.HeaderDataError:  # not NIfTI-1: a NIfTI-2 header, or no NIfTI at all
         return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
+
+
+def float32_placement(path: Path, obj: DigitalObject) -> None:
+    """Warn where the float32 affine moves a voxel centre of ``obj`` by more
+    than :data:`FLOAT32_SLACK` voxels, as a format says what of the
+    placement it drops."""
+    spacing, corner = placement_3d(obj)
+    moved, corner32 = float32_moved(spacing, corner, obj.volume.shape[:len(spacing)])
+    if moved > FLOAT32_SLACK:
+        note(f"{path}: NIfTI stores the voxel-to-world map as float32, which moves this volume's voxels by up to "
+             f"{moved:.3g} voxels (voxel 0's lowest corner {coordinates(corner, 12)} is read back as "
+             f"{coordinates(corner32, 12)}); .nrrd, .h5 and .npz keep the placement")
+
+
+def float32_moved(spacing, corner, shape) -> tuple[float, np.ndarray]:
+    """How far float32 storage of NIfTI's affine moves a voxel centre.
+
+    Parameters
+    ----------
+    spacing : array_like
+        Voxel size per axis.
+    corner : array_like
+        World position of voxel 0's lowest corner.
+    shape : tuple of int
+        The array's shape along the same axes.
+
+    Returns
+    -------
+    moved : float
+        The largest change of a voxel centre's coordinate, in voxels of its
+        axis (the first and last voxels bound it: the map is affine).
+    corner32 : ndarray
+        Voxel 0's lowest corner as a reader of the file places it.
+
+    Examples
+    --------
+    >>> moved, corner32 = float32_moved([0.04, 0.04, 0.04], [999998.7, 0, 0], (64, 64, 16))
+    >>> round(moved, 2), round(float(corner32[0]), 2)
+    (0.75, 999998.73)
+    >>> float32_moved([0.5, 0.5, 0.5], [-100, 0, 0], (64, 64, 16))[0]
+    0.0
+    """
+    steps, centre0 = centre_affine(spacing, corner)
+    pitch = np.diag(steps)
+    pitch32, centre32 = pitch.astype(np.float32).astype(np.float64), centre0.astype(np.float32).astype(np.float64)
+    last = np.asarray(shape, np.float64) - 1
+    moved = np.maximum(np.abs(centre32 - centre0), np.abs(centre32 + pitch32 * last - centre0 - pitch * last))
+    return float((moved / pitch).max()), centre32 - pitch32 / 2
 
 
 def placement_3d(obj: DigitalObject):
