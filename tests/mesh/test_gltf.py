@@ -218,6 +218,7 @@ def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):
         np.testing.assert_array_equal(np.asarray(tm.vertex_attributes["_class"]).reshape(len(tm.vertices), -1)[:, 0],
                                       mesh["attributes"]["_class"])
 
+
 # ------------------------------------------------ extensions trimesh ignores
 
 def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing",)) -> None:
