@@ -182,3 +182,19 @@ def test_a_layer_is_not_written(tmp_path):
     with pytest.raises(isoflow.IsoflowError, match="a layer of a 3D Slicer .seg.nrrd is read, not written"):
         isoflow.write_volume(isoflow.DigitalObject(np.ones((3, 3, 3), bool)), f"{tmp_path / 'out.seg.nrrd'}:1")
 
+
+def test_the_file_of_the_layer_read_is_no_output(tmp_path, capsys, layers):
+    """``--csv SEG.seg.nrrd --force`` while reading ``SEG.seg.nrrd:1``
+    replaced the segmentation with its table (the output named no layer,
+    the input one, so they were not taken for the same file); so did the
+    whole ``FILE.h5`` while reading ``FILE.h5:/seg``."""
+    h5py = pytest.importorskip("h5py")
+    path = write(tmp_path / "two.seg.nrrd", layers, header(4, SEGMENTS))
+    with h5py.File(tmp_path / "f.h5", "w") as f:
+        f["seg"] = layers[0]
+    kept = {p: p.read_bytes() for p in (path, tmp_path / "f.h5")}
+    for read, out in ((f"{path}:1", path), (f"{tmp_path / 'f.h5'}:/seg", tmp_path / "f.h5")):
+        fails(capsys, "info", read, "--labels", "--csv", out, "--force", words=(f"{out}: is the input {read}",))
+    assert all(p.read_bytes() == b for p, b in kept.items())
+    data, _ = nrrd.read(str(path), index_order="F")
+    assert np.array_equal(data, layers)
