@@ -795,10 +795,13 @@ def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, co
     fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid STL file)",))
 
 
-def test_a_file_in_its_suffix_format_without_triangles_keeps_the_plain_line(tmp_path, capsys):
+def test_a_file_in_its_suffix_format_without_triangles_says_what_it_holds(tmp_path, capsys):
+    """A PLY of its format holding the tetrahedron's 4 points and no face
+    is named a point cloud, not another format, nor a broken file."""
     path = tmp_path / "points.ply"
     path.write_text(PLY_TET.replace("element face 4", "element face 0").rsplit("\n", 5)[0] + "\n")  # points only
-    fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid PLY file)",))
+    held = len(trimesh.load(path).vertices)
+    fails(capsys, "genus", path, words=(f"{path}: no triangles read: it holds {held} points and no faces",))
 
 
 @pytest.mark.parametrize("input_name", ["b.npy", "b.zarr"])
