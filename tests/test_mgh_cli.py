@@ -132,12 +132,24 @@ def test_an_mgz_of_several_frames_is_4d_and_one_frame_3d(tmp_path, capsys):
     assert json.loads(run(capsys, "info", one, "--json"))["shape"] == [4, 5, 6]
 
 
-@pytest.mark.parametrize("suffix", [".mgz", ".mgh"])
+def test_an_oblique_mgz_keeps_nibabel_s_zooms_and_warns_as_nifti_does(tmp_path):
+    c, s = np.cos(np.radians(10)), np.sin(np.radians(10))
+    affine = np.array([[c, -s, 0, 4], [s, c, 0, -3], [0, 0, 1, 2], [0, 0, 0, 1]]) @ np.diag([2.0, 3.0, 4.0, 1])
+    path = save_mgz(tmp_path / "o.mgz", np.ones((2, 2, 2), np.uint8), affine)
+    with pytest.warns(IsoflowWarning, match="rotated or sheared by up to 10 degrees"):
+        obj = isoflow.read_volume(path)
+    assert obj.spacing.tolist() == pytest.approx(nib.load(path).header.get_zooms())
+    # the first voxel's centre stays where nibabel's affine puts it
+    assert (obj.origin + obj.spacing / 2).tolist() == pytest.approx(nib.affines.apply_affine(nib.load(path).affine,
+                                                                                             [0, 0, 0]))
+
+
+@pytest.mark.parametrize("suffix", [".mgz", ".mgh", ".MGZ"])
 def test_an_mgh_round_trip_keeps_voxels_pitch_and_origin(tmp_path, rng, suffix):
     vol = rng.random((5, 6, 7)) < 0.5
     obj = isoflow.DigitalObject(vol, pitch=(0.5, 0.25, 2.0), origin=(1.5, -2.0, 10.0))  # exact in float32
     path = isoflow.write_volume(obj, tmp_path / f"v{suffix}")
-    assert (path.read_bytes()[:2] == b"\x1f\x8b") == (suffix == ".mgz")
+    assert (path.read_bytes()[:2] == b"\x1f\x8b") == (suffix.lower() == ".mgz")
     img = nib.load(path)
     assert np.array_equal(np.asanyarray(img.dataobj), vol)
     assert img.header.get_zooms() == pytest.approx((0.5, 0.25, 2.0))
