@@ -383,9 +383,12 @@ def test_device_input_is_refused(capsys):
 
 @pytest.mark.parametrize("change, words", [
     (lambda d: d + bytes(10), ("counts 12 facets (684 bytes)", "has 694 bytes (12 facets and 10 bytes after")),
+    # a header that starts "solid" and names a facet, as some CAD writers fill it: was "not a valid STL file"
+    (lambda d: b"solid part; facet normals by CAD".ljust(80) + d[80:300],
+     ("counts 12 facets (684 bytes)", "has 300 bytes (4 facets and 16 bytes after")),
     (lambda d: d[:80] + bytes(4) + d[84:], ("counts 0 facets (84 bytes)", "has 684 bytes (12 facets after")),
     (lambda d: d[:300], ("counts 12 facets (684 bytes)", "has 300 bytes (4 facets and 16 bytes after")),
-], ids=["padded", "count 0", "truncated"])
+], ids=["padded", "solid header truncated", "count 0", "truncated"])
 def test_a_binary_stl_of_the_wrong_size_says_so(tmp_path, capsys, change, words):
     """A box's 12 facets (50 bytes each after the 84-byte header) padded,
     with a count of 0, or cut short: the line said only "not a valid STL
@@ -393,6 +396,47 @@ def test_a_binary_stl_of_the_wrong_size_says_so(tmp_path, capsys, change, words)
     path = box_stl(tmp_path)
     path.write_bytes(change(path.read_bytes()))
     fails(capsys, "info", path, words=("box.stl: no triangles read: as a binary STL its header", *words))
+
+
+def ascii_box_stl() -> list[str]:
+    """The lines of a box's ASCII STL, as trimesh writes it."""
+    return trimesh.exchange.stl.export_stl_ascii(trimesh.creation.box()).splitlines()
+
+
+@pytest.mark.parametrize("edit, words", [
+    # each was "cannot read as a mesh (ValueError: cannot reshape array of size 37 into shape (3))" or the like
+    (lambda ln, k: ln[:k + 1] + ["vertex 9 9 9"] + ln[k + 1:], ("facet 1's loop has 4 vertices, where an STL facet has 3",)),
+    (lambda ln, k: ln[:k] + ln[k + 1:], ("facet 1's loop has 2 vertices, where an STL facet has 3",)),
+    (lambda ln, k: ln[:k] + [ln[k].replace("-0.5", "-0,5", 1)] + ln[k + 1:],
+     ("'-0,5' is not a coordinate (STL writes decimals with a point: -0.5)",)),
+])
+def test_an_ascii_stl_facet_that_is_no_triangle_names_its_line(tmp_path, capsys, edit, words):
+    """Facet 1's third vertex line (file line 6) given a fourth vertex after
+    it, dropped, or a decimal comma: the line named is the one where the
+    fault shows (the loop's end, or the vertex), which trimesh cannot read."""
+    lines = ascii_box_stl()
+    third = [i for i, ln in enumerate(lines) if ln.startswith("vertex")][2]
+    bad = edit(lines, third)
+    path = tmp_path / "box.stl"
+    path.write_text("\n".join(bad) + "\n")
+    try:
+        read = len(trimesh.load(path, force="mesh", process=False).faces) == 12
+    except ValueError:
+        read = False
+    assert not read
+    shown = next(i for i, ln in enumerate(bad, 1) if ln.startswith("endloop") or "0,5" in ln)
+    fails(capsys, "genus", path, words=(f"box.stl:{shown}: ", *words))
+
+
+def test_an_ascii_stl_cut_short_says_so(tmp_path, capsys):
+    """Cut in facet 6's loop: trimesh read no triangle ("not a valid STL
+    file"); the line names the facet and the line it starts on."""
+    lines = ascii_box_stl()[:40]
+    starts = [i for i, ln in enumerate(lines, 1) if ln.startswith("facet")]
+    path = tmp_path / "box.stl"
+    path.write_text("\n".join(lines) + "\n")
+    fails(capsys, "genus", path, words=(f"box.stl: the file ends inside facet {len(starts)} (line {starts[-1]}, its last)",
+                                         "cut short"))
 
 
 def test_binary_file_is_not_read_as_a_point_list(tmp_path, capsys):
@@ -631,6 +675,74 @@ def test_an_obj_face_index_that_names_no_vertex_is_one_line_naming_it(tmp_path, 
     assert not any(tmp_path.glob("out.*"))
 
 
+@pytest.mark.parametrize(
+    "line, words",  # each was "cannot read as a mesh (ValueError: string or file could not be read to its end ...)"
+    [("v 0,5 1 1", ("'v 0,5 1 1': '0,5' is not a coordinate", "decimals with a point: 0.5")),
+     ("v 1.0.0 1 1", ("'1.0.0' is not a coordinate",)),
+     ("vt 0 a", ("'vt 0 a': 'a' is not a texture coordinate",)),
+     ("f 1 3 x", ("'f 1 3 x': 'x' is not a vertex index",)),
+     ("v 1 1", ("'v 1 1': 2 coordinates, where a vertex has 3",))],  # was "vertices must have shape (N, 3)"
+)
+def test_an_obj_word_that_is_no_number_is_one_line_naming_it(tmp_path, capsys, line, words):
+    """The bad line is line 6 of the file; trimesh, the reader of such a
+    file, cannot read it either."""
+    path = tmp_path / "bad.obj"
+    path.write_text(TET + "# a comment\n" + line + "\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    try:
+        mesh = trimesh.load(path, force="mesh", process=False)
+        read = mesh.vertices.shape[1:] == (3,) and len(mesh.faces) == 4  # a 2-coordinate vertex: (N, 2)
+    except ValueError:
+        read = False
+    assert not read
+    fails(capsys, "voxelize", path, "--resolution", 8, "-o", tmp_path / "out.npy", words=("bad.obj:6: ", *words))
+    assert not (tmp_path / "out.npy").exists()
+
+
+@pytest.mark.parametrize("name", ["e.glb", "e.ply", "e.stl", "e.obj", "e.off", "e.gltf"])
+@pytest.mark.parametrize("command", [("genus",), ("info",), ("voxelize", "--resolution", "8", "-o", "out.npy")])
+def test_an_empty_mesh_file_is_said_to_be_empty(tmp_path, capsys, name, command):
+    """A mesh file of 0 bytes (a download or copy that failed), as the
+    volume files are: trimesh said "IndexError: index 0 is out of bounds
+    for axis 0 with size 0" of a GLB, "Not a ply file!" of a PLY, and of
+    an STL "no triangles read (empty mesh, or not a valid STL file)"."""
+    path = tmp_path / name
+    path.write_bytes(b"")
+    assert os.path.getsize(path) == 0
+    what = name.split(".")[-1].upper()
+    name_, *rest = command
+    rest = [str(tmp_path / w) if w.startswith("out.") else w for w in rest]
+    fails(capsys, name_, path, *rest, words=(f"{name}: an empty file (0 bytes), not a readable {what} file",))
+    assert not (tmp_path / "out.npy").exists()
+
+
+STEP = "ISO-10303-21;\nHEADER;\nFILE_NAME('part.step');\nENDSEC;\nDATA;\nENDSEC;\nEND-ISO-10303-21;\n"
+
+
+@pytest.mark.parametrize("name", ["part.step", "part.STP", "part.igs"])
+@pytest.mark.parametrize("command", [("genus",), ("info",), ("surface", "-o", "out.ply"),
+                                     ("voxelize", "--resolution", "8", "-o", "out.npy")])
+def test_a_cad_file_says_it_is_one_and_how_to_get_a_mesh(tmp_path, capsys, name, command):
+    """A STEP file was "cannot read as a mesh (ModuleNotFoundError: No
+    module named 'cascadio')" to genus and voxelize, and a point list to
+    info and surface ("part.step:1: not a number: 'ISO-10303-21;'"); an
+    IGES file "names no mesh format", or a point list too."""
+    import importlib.util
+
+    if importlib.util.find_spec("cascadio") is not None and name.lower().endswith((".step", ".stp")):
+        pytest.skip("cascadio tessellates STEP files: trimesh reads them")
+    path = tmp_path / name
+    path.write_text(STEP)
+    if name.lower().endswith((".step", ".stp")):
+        with pytest.raises(ModuleNotFoundError, match="cascadio"):  # trimesh's own reader, without cascadio
+            trimesh.load(path)
+    name_, *rest = command
+    rest = [str(tmp_path / w) if w.startswith("out.") else w for w in rest]
+    kind = name.rsplit(".", 1)[1].upper()
+    fails(capsys, name_, path, *rest, words=(f"{name}: a CAD file ({kind}: surfaces, not triangles)",
+                                             "export it from the CAD tool as STL, OBJ, PLY or GLB"))
+    assert not any(tmp_path.glob("out.*"))
+
+
 def test_an_off_face_index_that_names_no_vertex_names_its_line(tmp_path, capsys):
     path = tmp_path / "bad.off"
     path.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n# a comment\n\n3 0 3 4\n3 1 2 3\n")
@@ -676,7 +788,7 @@ def test_mesh_content_in_another_format_than_its_suffix_names_it(tmp_path, capsy
     assert main(["genus", str(renamed)]) == 0
 
 
-@pytest.mark.parametrize("content", [bytes(range(256)) * 20, b"", b"hello\nworld\n", b"solid x\nendsolid x\n"])
+@pytest.mark.parametrize("content", [bytes(range(256)) * 20, b"hello\nworld\n", b"solid x\nendsolid x\n"])
 def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, content):
     path = tmp_path / "junk.stl"
     path.write_bytes(content)

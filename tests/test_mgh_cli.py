@@ -160,6 +160,27 @@ def test_an_mgh_round_trip_keeps_voxels_pitch_and_origin(tmp_path, rng, suffix):
     assert back.origin.tolist() == [1.5, -2.0, 10.0]
 
 
+def test_an_mgz_far_from_the_origin_says_how_far_float32_moves_its_voxels(tmp_path):
+    """MGH stores the volume's centre in float32: near 1e6 float32 steps
+    are 0.0625, more than a voxel of 0.04 moves. The warning's figure is
+    the move nibabel's affine of the file shows; near the origin nothing is said."""
+    vol = np.zeros((64, 64, 16), bool)
+    vol[1:-1, 1:-1, 1:-1] = True
+    far = isoflow.DigitalObject(vol, pitch=0.04, origin=(999998.7123, 0, 0))  # its centre no float32 number
+    with pytest.warns(IsoflowWarning, match=r"MGH stores the voxel-to-world map as float32, which moves this "
+                                            r"volume's voxels by up to (\S+) voxels") as caught:
+        path = isoflow.write_volume(far, tmp_path / "far.mgz")
+    said = float(str(caught[0].message).split("by up to ")[1].split(" ")[0])
+    affine = nib.load(path).affine
+    ends = np.array([[0, 0, 0], [63, 63, 15]])
+    moved = np.abs(nib.affines.apply_affine(affine, ends) - (far.origin + 0.04 * (ends + 0.5))).max() / 0.04
+    assert moved > 1e-3 and said == pytest.approx(moved, rel=1e-2)
+    near = isoflow.DigitalObject(vol, pitch=0.04, origin=(-1.5, 2.0, 0.25))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", IsoflowWarning)
+        isoflow.write_volume(near, tmp_path / "near.mgz")
+
+
 def test_labels_are_written_in_a_type_freesurfer_reads(tmp_path, aseg):
     for top, kind in ((200, np.uint8), (2035, np.int16), (14175, np.int16), (70000, np.int32)):
         labels = np.where(aseg > 0, np.minimum(aseg, top), 0).astype(np.uint32)

@@ -334,6 +334,35 @@ def test_a_strict_that_is_no_bool_is_refused_naming_it(call, words, strict):
         call(strict)
 
 
+CUBE = np.pad(np.ones((3, 3, 3), bool), 1)
+
+
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda s: isoflow.analyze(CUBE, surfaces=s), "analyze: surfaces"),
+    (lambda s: isoflow.label_table(CUBE.astype(np.uint8), surfaces=s), "label_table: surfaces"),
+    (lambda s: isoflow.run_flow(CUBE, 1, guard=s), "run_flow: guard"),
+    (lambda s: isoflow.run_flow(CUBE, 1, until_topology_change=s), "run_flow: until_topology_change"),
+    (lambda s: isoflow.run_flow(CUBE, 1, keep_states=s), "run_flow: keep_states"),
+    (lambda s: isoflow.voxelize_mesh(_box(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_file(isoflow.data.torus(), resolution=4, details=s), "voxelize: details"),
+    (lambda s: isoflow.voxelize_meshes([_box()], resolution=4, split=s), "voxelize_meshes: split"),
+    (lambda s: isoflow.verify_genus(_box(), resolutions=(4,), step=s), "verify_genus: step"),
+])
+@pytest.mark.parametrize("switch", ["no", 2, None])
+def test_a_switch_that_is_no_bool_is_refused_naming_it(call, words, switch):
+    # "no" and 2 switched on, None off: run_flow(guard="no") ran the guard
+    # and its FlowResult held guard="no" where a bool is documented
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)} must be True or False, got {re.escape(repr(switch))}$"):
+        call(switch)
+
+
+def test_a_switch_given_as_a_numpy_bool_is_taken_as_the_bool():
+    flow = isoflow.run_flow(CUBE, 1, guard=np.True_)
+    assert flow.guard is True and flow.to_dict()["guard"] is True
+    assert "surfaces" not in isoflow.analyze(CUBE, surfaces=np.False_)
+
+
 @pytest.mark.parametrize("call", [
     lambda s, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, strict=s),
     lambda s, tmp: isoflow.voxelize_file(tmp / "box.stl", resolution=4, strict=s),
@@ -416,6 +445,31 @@ def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(bloc
     assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
 
 
+@pytest.mark.parametrize("scheduler", [5, "thread", "x"])
+def test_analyze_chunked_names_a_scheduler_dask_does_not_know(scheduler):
+    # dask's ValueError ("Unexpected scheduler: 5", "Expected one of [...]") named neither the argument nor isoflow
+    da = pytest.importorskip("dask.array")
+    with pytest.raises(IsoflowError, match=rf"^scheduler must be a dask scheduler's name \(.*\), a get function, "
+                                           rf"a client or executor, or None, got {re.escape(repr(scheduler))}$"):
+        isoflow.analyze_chunked(da.from_array(np.ones((4, 4, 4), bool), chunks=2), scheduler=scheduler)
+
+
+def test_analyze_chunked_runs_on_an_executor():
+    # dask takes a concurrent.futures executor: it stopped with "get_async() got multiple values for argument
+    # 'num_workers'"; the report is scikit-image's and SciPy's reading of the volume
+    from concurrent.futures import ThreadPoolExecutor
+
+    da = pytest.importorskip("dask.array")
+    measure = pytest.importorskip("skimage.measure")
+    from scipy import ndimage
+
+    volume = np.random.default_rng(3).random((9, 8, 7)) < 0.4
+    with ThreadPoolExecutor(2) as pool:
+        report = isoflow.analyze_chunked(da.from_array(volume, chunks=4), 6, scheduler=pool)
+    assert report.euler_characteristic == measure.euler_number(volume, connectivity=1)
+    assert report.betti[0] == ndimage.label(volume)[1] and report == isoflow.analyze(volume, 6)
+
+
 @pytest.mark.parametrize("connectivity", [26.0, np.int64(26), np.float32(26)])
 def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivity):
     # 26.0 passed the check and was reported as given ("connectivity": 26.0)
@@ -487,6 +541,20 @@ def test_from_manifold_names_what_is_not_a_manifold():
         isoflow.from_manifold(np.ones((2, 2, 2), bool))
 
 
+@pytest.mark.parametrize(("kwargs", "words"), [
+    ({"pitch": 1e-20}, "pitch=1e-20 and origin=[0.0, 0.0, 0.0] put the manifold's voxels at index 4e+20"),
+    ({"pitch": 1e-300}, "pitch=1e-300 and origin=[0.0, 0.0, 0.0] put the manifold's voxels at index 4e+300"),
+    ({"origin": (1e300, 0, 0)}, "pitch=1.0 and origin=[1e+300, 0.0, 0.0] put the manifold's voxels at index 1e+300"),
+])
+def test_from_manifold_names_a_pitch_or_origin_beyond_the_lattice(kwargs, words):
+    # int64 wrapped round: a ZeroDivisionError from inside the voxeliser
+    m3 = pytest.importorskip("manifold3d")
+    with pytest.raises(IsoflowError, match=re.escape(f"from_manifold: {words}, beyond the +-{2**40}")):
+        isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), **kwargs)
+    # a pitch that fits: the 2x3x4 box in voxels of 1/2, 8 a unit cube
+    assert isoflow.from_manifold(m3.Manifold.cube([2.0, 3.0, 4.0]), pitch=0.5).voxels == 2 * 3 * 4 * 8
+
+
 @pytest.mark.parametrize("value", [2, np.nan])
 def test_closed_surfaces_refuses_a_volume_that_is_not_binary_as_analyze_does(value):
     # the volume was converted to bool first: 2 and NaN read as True
@@ -555,6 +623,22 @@ def test_class_histogram_names_a_histogram_that_is_not_3d():
     # the box of the paper's example: 8 convex corners (class (+,+,+), index 7), as analyze counts them
     box = np.ones((3, 3, 3), bool)
     assert isoflow.class_histogram(isoflow.configuration_histogram(box)).tolist() == isoflow.analyze(box).n
+
+
+@pytest.mark.parametrize(("entry", "shown"), [(np.nan, "nan"), (-1.0, "-1.0"), (0.5, "0.5"), (-1, "-1")])
+def test_class_histogram_refuses_an_entry_that_is_no_count(entry, shown):
+    # NaN came back as the most negative int64 in every class, -1 and 0.5 as class counts
+    hist = isoflow.configuration_histogram(np.ones((3, 3, 3), bool)).astype(type(entry))
+    hist[7] = entry
+    with pytest.raises(IsoflowError, match=rf"^config_hist: entry 7 is {shown}, not a count"):
+        isoflow.class_histogram(hist)
+
+
+def test_class_histogram_counts_a_float_histogram_of_whole_numbers_as_its_integers():
+    # a histogram summed as floats (a mean over scans times their number) is still counts
+    box = np.ones((3, 3, 3), bool)
+    hist = isoflow.configuration_histogram(box)
+    assert isoflow.class_histogram(hist.astype(float)).tolist() == isoflow.analyze(box).n
 
 
 @pytest.mark.parametrize("points,ndim", [("0 0 0\n-5 3 2\n", 3), ("0 0\n1 0\n", 2)])
@@ -647,3 +731,113 @@ def test_write_surface_refuses_a_switch_that_is_no_bool(tmp_path, switch):
     with pytest.raises(IsoflowError, match=rf"s\.ply: {switch} must be True or False, got 'no'$"):
         isoflow.write_surface(np.ones((2, 2, 2), bool), tmp_path / "s.ply", **{switch: "no"})
     assert not (tmp_path / "s.ply").exists()
+
+
+@pytest.mark.parametrize("method", ["world", "lattice_coordinates"])
+def test_points_of_another_dimension_are_refused_naming_array_points(method):
+    # NumPy's "operands could not be broadcast together with shapes (2,2) (3,)"
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5, origin=(10, 0, 0))
+    where = getattr(obj, method)
+    with pytest.raises(IsoflowError, match=re.escape("array_points: a 3D object's points have 3 coordinates "
+                                                     "(the last axis), got shape (2, 2)")):
+        where(np.zeros((2, 2)))
+    with pytest.raises(IsoflowError, match="array_points: coordinates must be numbers, got an array of type <U3"):
+        where("abc")
+    # the corners of the object's box, as trimesh reads them off its surface
+    trimesh = pytest.importorskip("trimesh")
+    mesh = isoflow.boundary_mesh(obj.volume)
+    surface = trimesh.Trimesh(obj.world(mesh.vertices), mesh.triangles(), process=False)
+    assert obj.world([[0, 0, 0], [2, 2, 2]]).tolist() == surface.bounds.tolist() == [[10, 0, 0], [11, 1, 1]]
+
+
+@pytest.mark.parametrize("max_bytes", ["8GB", "1000000", 2.5, 0, -5, True])
+@pytest.mark.parametrize("call", [
+    lambda b, tmp: isoflow.voxelize_meshes([_box()], resolution=4, max_bytes=b),
+    lambda b, tmp: isoflow.voxelize_to_zarr(_box(), tmp / "v.zarr", resolution=4, max_bytes=b),
+])
+def test_a_max_bytes_that_is_no_byte_count_is_refused_naming_it(call, max_bytes, tmp_path):
+    # int() raised its own ValueError for "8GB", and took "1000000", 2.5 and True in silence
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError, match=re.escape(f"max_bytes must be a positive whole number of bytes, "
+                                                     f"got {max_bytes!r}")):
+        call(max_bytes, tmp_path)
+    assert not (tmp_path / "v.zarr").exists()
+
+
+def test_a_max_bytes_given_as_a_whole_float_is_that_many_bytes():
+    # 1e6 bytes hold the box at 4 voxels across: its voxels are trimesh's volume over a voxel's
+    pytest.importorskip("trimesh")
+    box = _box()
+    done = isoflow.voxelize_meshes([box], resolution=4, max_bytes=1e6)
+    assert done.voxels == (round(box.volume / done.pitch**3),) == (64,)
+
+
+def test_a_label_image_takes_its_spacing_and_origin_as_lists_or_one_number():
+    # a list was kept as given: label_table stopped with "'list' object has no attribute 'tolist'"
+    measure = pytest.importorskip("skimage.measure")
+    labels = np.zeros((4, 5, 6), np.uint16)
+    labels[1:3, 1:4, 2:5] = 7
+    for spacing, origin in (([0.5, 1.0, 2.0], [1, 2, 3]), ((0.5, 1.0, 2.0), (1, 2, 3))):
+        image = isoflow.LabelImage(labels, spacing, origin)
+        assert image.spacing.tolist() == [0.5, 1.0, 2.0] and image.origin.tolist() == [1.0, 2.0, 3.0]
+        region = measure.regionprops(labels, spacing=(0.5, 1.0, 2.0))[0]
+        assert isoflow.label_table(image)["volume"].tolist() == [region.area]
+    assert isoflow.LabelImage(labels, 0.5, [0, 0, 0]).spacing.tolist() == [0.5] * 3
+
+
+@pytest.mark.parametrize(("spacing", "origin", "words"), [
+    ([1, -1, 1], [0, 0, 0], "'spacing' must be positive (one number, or one per axis), got [1.0, -1.0, 1.0]"),
+    ([1, 1], [0, 0, 0], "'spacing' must be 3 numbers, one per axis, got [1, 1]"),
+    (1, "abc", "'origin' must be 3 numbers, one per axis, got 'abc'"),
+])
+def test_a_label_image_names_a_bad_spacing_or_origin(spacing, origin, words):
+    with pytest.raises(IsoflowError, match=re.escape(f"LabelImage: {words}")):
+        isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), spacing, origin)
+
+
+@pytest.mark.parametrize("ndim", ["a", 3.0, True])
+def test_placement_names_an_ndim_that_is_no_integer(ndim):
+    # (1,) * ndim: Python's "can't multiply sequence by non-int of type 'str'"
+    with pytest.raises(IsoflowError, match=re.escape(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")):
+        isoflow.DigitalObject.placement(ndim)
+    assert isoflow.DigitalObject.placement(np.int64(3), pitch=0.5).spacing.tolist() == [0.5] * 3
+
+
+@pytest.mark.parametrize("label", [2.0**63, np.float64(2.0**63), 2**63])
+def test_a_whole_float_label_selects_exactly_that_label_of_a_uint64_image(tmp_path, label):
+    # compared as a float, 2.0**63 matched 2**63 + 1 too (both round to it): two voxels for one
+    labels = np.zeros((3, 3, 3), np.uint64)
+    labels[0, 0, 0], labels[1, 1, 1], labels[2, 2, 2] = 2**63, 2**63 + 1, 2**64 - 1
+    np.save(tmp_path / "big.npy", labels)
+    obj = isoflow.read_volume(tmp_path / "big.npy", label=label)
+    assert obj.voxels == np.count_nonzero(labels == np.uint64(2**63)) == 1
+    assert np.argwhere(obj.volume).tolist() == [[0, 0, 0]]
+
+
+@pytest.mark.parametrize("call", [
+    lambda t: isoflow.analyze(CUBE, threads=t),
+    lambda t: isoflow.label_table(CUBE.astype(np.uint8), threads=t),
+])
+def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
+    # "2" was taken as 2 while 2.0 was refused as no positive integer
+    with pytest.raises(IsoflowError, match=re.escape("threads must be a positive integer, got '2'")):
+        call("2")
+    call(np.int64(2))
+
+
+@pytest.mark.parametrize(("ndim", "words"), [(5, "ndim must be 1..4, got 5"), ("3", "ndim must be an integer 1..4, got '3'")])
+def test_euler_lut_names_its_ndim(ndim, words):
+    # the message spoke of a "dimension n" that euler_lut has no parameter of
+    with pytest.raises(IsoflowError, match=f"^{re.escape(words)}$"):
+        isoflow.euler_lut(ndim)
+    assert len(isoflow.euler_lut(np.int64(2))) == 2**4  # one entry per configuration of a 2x2 window
+
+
+@pytest.mark.parametrize("bad", [5, None, ["s.ply"]])
+def test_a_surface_path_that_is_no_path_is_named(bad):
+    """A surface path that is not a str or os.PathLike (the arguments
+    swapped, None) is one IsoflowError naming the kind of path and the
+    value, not os.fspath's TypeError that names neither."""
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool))
+    with pytest.raises(IsoflowError, match=r"surface path must be a str or os\.PathLike, got " + type(bad).__name__):
+        isoflow.write_surface(obj, bad)

@@ -173,3 +173,36 @@ def test_a_1d_array_is_counted_by_euler_characteristic_betti_numbers_and_analyze
         isoflow.betti_numbers(np.ones(3, bool), chi=2)
     with pytest.raises(isoflow.IsoflowError, match=r"^connectivity 4 is not valid in 1D \(use 2\)"):
         isoflow.analyze(np.ones(3, bool), 4)
+
+
+def test_the_repr_of_a_big_result_is_short_and_counts_what_it_leaves_out():
+    # a noisy volume's report and census printed every one of its thousands
+    # of surfaces (megabytes of repr), a long flow every step and state
+    skimage_measure = pytest.importorskip("skimage.measure")
+    noisy = np.random.default_rng(0).random((40, 40, 40)) < 0.3
+    report, census = isoflow.analyze(noisy), isoflow.closed_surfaces(noisy)
+    chi = skimage_measure.euler_number(noisy, connectivity=1)
+    assert len(report.surfaces) > 1000 and len(census.surfaces) == len(report.surfaces)
+    for result in (report, census):
+        text = repr(result)
+        assert len(text) < 3000 and f"... {len(result.surfaces) - 10} more]" in text
+    assert f"euler_characteristic={chi}," in repr(report) and "n=[" in repr(report)
+    z, y, x = np.mgrid[:40, :40, :40]
+    flow = isoflow.run_flow((z - 20) ** 2 + (y - 20) ** 2 + (x - 20) ** 2 < 18**2)  # a ball: one step a layer
+    assert len(flow.states) > 30 and len(repr(flow)) < 4000 and f"... {len(flow.states) - 10} more]" in repr(flow)
+    # a small result's repr keeps every item: the nine classes of a 3D report
+    box = isoflow.analyze(np.ones((2, 2, 2), bool))
+    assert f"n={box.n}," in repr(box) and "more" not in repr(box)
+
+
+@pytest.mark.parametrize(("pitch", "shown"), [
+    (8.249e-11, "8.249e-11"), (1e-13, "1e-13"), (1e300, "1e+300"), (0.1 + 0.2, "0.3"), ((0.5, 1e-12, 2), "[0.5, 1e-12, 2.0]"),
+])
+def test_an_objects_repr_shows_its_pitch_to_twelve_significant_digits(pitch, shown):
+    # 12 decimals showed 0.8249 Angstrom in metres as 8.2e-11 and 1e-13 as 0.0; 1e300 overflowed to inf
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # NumPy's "overflow encountered in multiply"
+        text = repr(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch))
+    assert f"pitch={shown}," in text

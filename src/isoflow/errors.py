@@ -9,6 +9,7 @@ nobody has to read a traceback from inside numpy.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import re
 import sys
@@ -100,17 +101,22 @@ def betti_words(betti) -> str:
                      for b, (one, many) in zip(betti, _BETTI_NOUNS[len(betti)]))
 
 
-def coordinates(values, digits: int = 6) -> str:
+def coordinates(values, digits: int = 6, step=None) -> str:
     """A point (an origin, a corner) in a message, each coordinate to
     ``digits`` significant digits: rounding to decimal places would print
-    the origin of a model in micrometres as 0 or -1e-06.
+    the origin of a model in micrometres as 0 or -1e-06; with ``step`` (a
+    voxel size: one number, or one per coordinate) to as many more as keep
+    it within a 200th of a step, so that the origin of a model near 1e6 in
+    voxels of 0.04 is not printed seven voxels away, as 1e+06.
 
     Parameters
     ----------
     values : sequence of float
         The coordinates.
     digits : int
-        Significant digits of each.
+        Significant digits of each, at least.
+    step : float or sequence of float, optional
+        The finest difference that must show, per coordinate.
 
     Returns
     -------
@@ -121,8 +127,20 @@ def coordinates(values, digits: int = 6) -> str:
     --------
     >>> coordinates([-1.3e-06, -3.25e-07, -0.2734375]), coordinates([1.0, 2.0, 3.0])
     ('[-1.3e-06, -3.25e-07, -0.273438]', '[1, 2, 3]')
+    >>> coordinates([999998.7, 0.0, 999999.6953125]), coordinates([999998.7, 0.0, 999999.6953125], step=0.04)
+    ('[999999, 0, 1e+06]', '[999998.7, 0, 999999.69531]')
     """
-    return "[" + ", ".join(f"{float(x):.{digits}g}" for x in values) + "]"
+    values = [float(x) for x in values]
+    steps = [step] * len(values) if step is None or not hasattr(step, "__len__") else [float(s) for s in step]
+    return "[" + ", ".join(f"{x:.{_digits_for(x, s, digits)}g}" for x, s in zip(values, steps)) + "]"
+
+
+def _digits_for(x: float, step, digits: int) -> int:
+    """Significant digits of ``x`` that keep it within a 200th of ``step``
+    (at least ``digits``, at most 17: float64 holds no more)."""
+    if step is None or not (math.isfinite(x) and math.isfinite(step := float(step)) and x != 0 and step > 0):
+        return digits
+    return min(17, max(digits, math.ceil(math.log10(abs(x) / step)) + 3))
 
 
 def check_callable(value: object, name: str, call: str) -> None:
@@ -264,3 +282,38 @@ class MeshNote(IsoflowWarning):
     :class:`~isoflow.mesh.voxelize.Voxelization`, issued as a warning
     when the caller did not ask for the details. The command line prints it
     as one ``note:`` line."""
+
+
+def check_switch(value: object, name: str, where: str) -> bool:
+    """``value`` as a bool where it is True or False (NumPy's bools too),
+    else IsoflowError naming ``where`` and the argument: a string such as
+    "no" is truthy, and would replace a file, change a format or run a
+    guarded flow unasked (and a result would hold "no" for a bool).
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    name : str
+        The argument's name.
+    where : str
+        The function or file, for the message.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> check_switch(False, "force", "s.ply")
+    False
+    >>> check_switch("no", "force", "s.ply")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: s.ply: force must be True or False, got 'no'
+    """
+    import numpy as np
+
+    if not isinstance(value, (bool, np.bool_)):
+        raise IsoflowError(f"{where}: {name} must be True or False, got {value!r}")
+    return bool(value)

@@ -108,13 +108,67 @@ def same_fields(a: Any, b: object) -> bool:
     return all(same_values(getattr(a, name), getattr(b, name)) for name in names)
 
 
+#: items of a list and entries of a dict that a result's repr shows (a 3D
+#: report's nine classes in full): a noisy scan has thousands of surfaces
+#: and a long flow thousands of steps, which made the repr megabytes long
+SHOWN_ITEMS = 10
+#: elements of an array shown at each end of an axis, as NumPy cuts them
+ARRAY_EDGE = 3
+
+
+def brief(value: Any) -> str:
+    """The repr of ``value`` with its long lists, dicts and arrays cut to
+    their first :data:`SHOWN_ITEMS` items and a count of the rest.
+
+    Parameters
+    ----------
+    value : Any
+        A result's field.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> brief([{"genus": 0}] * 12)  # doctest: +ELLIPSIS
+    "[{'genus': 0}, {'genus': 0}, ..., {'genus': 0}, ... 2 more]"
+    >>> brief(np.arange(256))  # doctest: +ELLIPSIS
+    'array([  0,   1,   2, ..., 253, 254, 255]...)'
+    >>> brief((1, 2))
+    '(1, 2)'
+    """
+    if isinstance(value, np.ndarray):
+        with np.printoptions(threshold=2 * ARRAY_EDGE, edgeitems=ARRAY_EDGE):
+            return repr(value)
+    if isinstance(value, (list, tuple)) and not hasattr(value, "_fields"):  # a named tuple reprs its names
+        items = [brief(v) for v in value[:SHOWN_ITEMS]] + more(len(value))
+        return ("[{}]" if isinstance(value, list) else "({},)" if len(value) == 1 else "({})").format(", ".join(items))
+    if isinstance(value, dict):
+        items = [f"{k!r}: {brief(v)}" for k, v in list(value.items())[:SHOWN_ITEMS]] + more(len(value))
+        return "{" + ", ".join(items) + "}"
+    return repr(value)
+
+
+def more(count: int) -> list[str]:
+    """What :func:`brief` says of the items past the first shown."""
+    return [f"... {count - SHOWN_ITEMS} more"] if count > SHOWN_ITEMS else []
+
+
 class Result(Mapping[str, Any]):
     """Base of isoflow's result dataclasses: fields read as attributes and
     as keys, and :meth:`to_dict` is the command line's JSON.
 
-    Subclasses are ``@dataclasses.dataclass(frozen=True)``; a field with
-    ``metadata=OMIT_NONE`` is not a key while it is None.
+    Subclasses are ``@dataclasses.dataclass(frozen=True, repr=False)``,
+    taking this class's short repr; a field with ``metadata=OMIT_NONE`` is
+    not a key while it is None.
     """
+
+    def __repr__(self) -> str:
+        # the fields a dataclass repr shows, each cut short by brief: the
+        # whole of a big result stays in to_dict and the attributes
+        shown = [f.name for f in dataclasses.fields(self) if f.repr]  # type: ignore[arg-type]
+        return f"{type(self).__name__}({', '.join(f'{k}={brief(getattr(self, k))}' for k in shown)})"
 
     def _keys(self) -> list[str]:
         return [

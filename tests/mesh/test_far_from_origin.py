@@ -185,3 +185,23 @@ def test_genus_of_coordinates_held_finely_says_nothing_of_rounding(path, tmp_pat
     assert not [n for n in report["notes"] if n["kind"] == "float64_rounding"]
     r = isoflow("info", path, "--resolution", 16)
     assert r.returncode == 0 and "float64" not in r.stderr
+
+
+def test_printed_origin_of_a_far_grid_is_the_files(tmp_path):
+    """A box at x = 999998.5 in voxels of 0.039: the origin printed by
+    voxelize and info is the one pynrrd reads from the written file (NRRD's
+    space origin is voxel 0's centre) to a hundredth of a voxel, not
+    999998 (6 significant digits: 13 voxels away)."""
+    nrrd = pytest.importorskip("nrrd")
+    path, out = tmp_path / "far.obj", tmp_path / "far.nrrd"
+    box_obj(path, 999998.5, (2.5, 2.5, 0.625))
+    r = isoflow("voxelize", path, "--resolution", 64, "-o", out)
+    assert r.returncode == 0, r.stderr
+    data, header = nrrd.read(str(out))
+    pitch = np.abs(np.diag(header["space directions"]))
+    corner = header["space origin"] - pitch / 2
+    info = isoflow("info", path, "--resolution", 64)
+    assert info.returncode == 0, info.stderr
+    for text in (r.stdout, info.stdout):
+        printed = [float(x) for x in text.split("origin [", 1)[1].split("]", 1)[0].split(",")]
+        assert np.abs(np.array(printed) - corner).max() < pitch.min() / 100, text

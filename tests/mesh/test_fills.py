@@ -397,6 +397,18 @@ def test_zero_thickness_panel_says_why_and_which_fill():
         voxelize(v, f, resolution=32, strict=True)
 
 
+@pytest.mark.parametrize("faces", [[[0, 1, 2], [1, 2, 0], [2, 1, 0]], [[0, 1, 2], [0, 0, 3]]])
+def test_a_mesh_without_area_says_why_it_fills_nothing(faces):
+    """Faces whose corners lie in a line (and one that names a corner
+    twice): trimesh gives every face area 0, and the winding rule no voxel;
+    the note said only the mesh's open or non-manifold edges."""
+    v = np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [0, 1, 0]], dtype=float)
+    assert trimesh.Trimesh(v, faces, process=False).area == 0
+    r = voxelize(v, faces, resolution=16, details=True)
+    assert r.voxels == 0 and "every face has zero area" in r.note and "--fill shell" in r.note
+    assert voxelize(v, faces, resolution=16, fill="shell", details=True).voxels > 0  # the fill the note names
+
+
 @pytest.mark.parametrize("panel", ["panel.obj", "squashed box"])
 def test_a_store_says_the_thin_note_of_memory(tmp_path, capsys, panel):
     # into a store the grid is not held: the share of the area that bounds

@@ -217,3 +217,78 @@ def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):
         np.testing.assert_allclose(transform, np.eye(4) if mesh["matrix"] is None else mesh["matrix"])
         np.testing.assert_array_equal(np.asarray(tm.vertex_attributes["_class"]).reshape(len(tm.vertices), -1)[:, 0],
                                       mesh["attributes"]["_class"])
+
+
+# ------------------------------------------------ extensions trimesh ignores
+
+def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing",)) -> None:
+    """A GLB of one unit box drawn at each of ``offsets`` by
+    EXT_mesh_gpu_instancing (its TRANSLATION accessor, one row each)."""
+    box = trimesh.creation.box()
+    v, f = box.vertices.astype(np.float32), box.faces.astype(np.uint32)
+    t = np.asarray(offsets, np.float32)
+    binary = v.tobytes() + f.tobytes() + t.tobytes()
+    views = [(0, v.nbytes), (v.nbytes, f.nbytes), (v.nbytes + f.nbytes, t.nbytes)]
+    tree = {
+        "asset": {"version": "2.0"}, "extensionsUsed": list(extensions_used), "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 2}}}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n} for o, n in views],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(v), "type": "VEC3",
+                       "min": v.min(0).tolist(), "max": v.max(0).tolist()},
+                      {"bufferView": 1, "componentType": 5125, "count": f.size, "type": "SCALAR"},
+                      {"bufferView": 2, "componentType": 5126, "count": len(t), "type": "VEC3"}],
+    }
+    text = json.dumps(tree).encode()
+    text += b" " * (-len(text) % 4)
+    binary += bytes(-len(binary) % 4)
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    path.write_bytes(b"glTF" + struct.pack("<II", 2, total) + struct.pack("<I", len(text)) + b"JSON" + text
+                     + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
+
+
+@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
+                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+def test_instanced_gltf_is_refused_not_read_as_one_copy(tmp_path, capsys, command):
+    """Three unit boxes, 3 apart, drawn by EXT_mesh_gpu_instancing: trimesh
+    reads one box (volume 1, not 3), which isoflow counted as the model."""
+    from isoflow.cli import main
+
+    path = tmp_path / "boxes.glb"
+    instanced_boxes_glb(path, [[0, 0, 0], [3, 0, 0], [0, 3, 0]])
+    read = trimesh.load(path, force="mesh", process=False)
+    assert read.volume == pytest.approx(1.0)  # one copy of the three
+    out = tmp_path / "out.npz"
+    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "node 0 draws its mesh 3 times by the glTF extension EXT_mesh_gpu_instancing" in err[0]
+    assert str(path) in err[0] and not out.exists()
+
+
+def test_meshopt_compressed_gltf_is_refused(tmp_path, capsys):
+    from isoflow.cli import main
+
+    path = tmp_path / "packed.glb"
+    instanced_boxes_glb(path, [[0, 0, 0]], extensions_used=("EXT_meshopt_compression", "EXT_mesh_gpu_instancing"))
+    assert main(["genus", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "compressed by the glTF extension EXT_meshopt_compression" in err and "Traceback" not in err
+
+
+def test_a_gltf_without_its_buffer_file_names_it(tmp_path, capsys):
+    """A glTF scene written with its .bin beside it, then copied without
+    it: trimesh said "FileNotFoundError: gltf_buffer_0.bin"."""
+    from isoflow.cli import main
+
+    scene = trimesh.Scene([trimesh.creation.box()])
+    for name, data in scene.export(file_type="gltf").items():
+        (tmp_path / name).write_bytes(data)
+    tree = json.loads((tmp_path / "model.gltf").read_text())
+    uri = tree["buffers"][0]["uri"]
+    assert main(["genus", str(tmp_path / "model.gltf"), "--no-step", "--resolution", "8"]) == 0
+    capsys.readouterr()
+    (tmp_path / uri).unlink()
+    assert main(["genus", str(tmp_path / "model.gltf")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"model.gltf: buffer 0 is the file '{uri}', which is not there ({tmp_path / uri})" in err[0]

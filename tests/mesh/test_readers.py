@@ -270,7 +270,8 @@ def test_binary_stl_with_a_solid_header_and_bad_files(tmp_path, monkeypatch):
 def test_ascii_stl_without_endsolid_is_read(tmp_path):
     """An ASCII STL whose last facet is whole but whose "endsolid" line is
     missing was "not a valid STL file" (trimesh reads no triangles of it;
-    pymeshlab reads them all); one cut inside a facet still is."""
+    pymeshlab reads them all); one cut inside a facet is refused, naming
+    the facet."""
     torus = trimesh.creation.torus(1, 0.3)
     text = torus.export(file_type="stl_ascii")
     p = tmp_path / "t.stl"
@@ -280,7 +281,7 @@ def test_ascii_stl_without_endsolid_is_read(tmp_path):
     r = mesh_topology(v, f)
     assert r["euler_number"] == torus.euler_number and r["genus"] == (2 - torus.euler_number) // 2
     p.write_text(text[:text.find("endloop", 2000)])
-    with pytest.raises(IsoflowError, match="not a valid STL file"):
+    with pytest.raises(IsoflowError, match=r"t\.stl: the file ends inside facet \d+ \(line \d+, its last\): cut short"):
         load_mesh(p)
 
 
@@ -592,7 +593,7 @@ PLY_BROKEN = {
                                  "properties or counts do not match the data)",
     "ASCII one face more than the header's": "the header's rows take 154 numbers, but the body holds 168 (the "
                                              "header's counts do not match the data)",
-    "ASCII word not a number": "line 12: a word that is not a number",
+    "ASCII word not a number": "line 12: 'x",  # the word named: was "line 12: a word that is not a number"
 }
 
 
@@ -602,6 +603,25 @@ def test_a_ply_that_does_not_match_its_header_is_refused_in_one_line(case, tmp_p
     with pytest.raises(IsoflowError) as exc:
         load_mesh(p)
     assert str(exc.value).startswith(f"{p}: {PLY_BROKEN[case]}"), str(exc.value)
+
+
+def test_an_ascii_ply_with_a_decimal_comma_names_the_word(tmp_path):
+    """A vertex row ``1,5 0 0`` (a writer in a locale with decimal commas):
+    the line named the line alone, not the word; trimesh cannot read it."""
+    import trimesh
+
+    rows = ["0 0 0", "1,5 0 0", "0 1 0", "0 0 1"]
+    text = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+            "element face 4\nproperty list uchar int vertex_indices\nend_header\n" + "\n".join(rows)
+            + "\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n")
+    p = tmp_path / "m.ply"
+    p.write_text(text)
+    with pytest.raises(ValueError):
+        trimesh.load(p, process=False)
+    line = text.splitlines().index("1,5 0 0") + 1
+    with pytest.raises(IsoflowError) as exc:
+        load_mesh(p)
+    assert str(exc.value) == f"{p}: line {line}: '1,5' is not a number (PLY writes decimals with a point: 1.5)"
 
 
 @pytest.mark.parametrize("case", ["binary cut short", "binary index past the vertices"])

@@ -171,6 +171,30 @@ def test_nifti_round_trip(tmp_path, vol):
     check_same_place(isoflow.read_volume(path), obj)
 
 
+def test_nifti_says_how_far_its_float32_affine_moves_a_far_volume(tmp_path, vol):
+    """Voxels of 0.04 at x = 999998.7: float32's positions there are 0.0625
+    apart, so nibabel places the file's voxels most of a voxel away from
+    where they were; the warning gives that distance, in voxels."""
+    nib = pytest.importorskip("nibabel")
+    obj = DigitalObject(vol, pitch=0.04, origin=[999998.7, -3.0, 12.0])
+    with pytest.warns(IsoflowWarning, match=r"far\.nii\.gz: NIfTI stores the voxel-to-world map as float32") as seen:
+        path = isoflow.write_volume(obj, tmp_path / "far.nii.gz")
+    said = float(re.search(r"by up to (\S+) voxels", str(seen[0].message)).group(1))
+    img = nib.load(path)
+    ends = np.array([[0, 0, 0], np.array(vol.shape) - 1])
+    asked = centre0(obj) + ends * 0.04
+    moved = np.abs(nib.affines.apply_affine(img.affine, ends) - asked).max() / 0.04
+    assert moved > 0.5 and said == pytest.approx(moved, rel=1e-2)
+
+
+def test_nifti_of_an_ordinary_placement_warns_of_nothing(tmp_path, vol):
+    obj = DigitalObject(vol, pitch=0.0290063, origin=[-0.916228, -0.51953, -0.741088])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        path = isoflow.write_volume(obj, tmp_path / "v.nii.gz")
+    np.testing.assert_allclose(corner(isoflow.read_volume(path)), corner(obj), atol=1e-6 * 0.0290063)
+
+
 def test_nrrd_round_trip(tmp_path, vol):
     nrrd = pytest.importorskip("nrrd")
     obj = placed(vol, pitch=[0.1, 0.3, 0.7])  # NRRD's text header keeps float64 exactly

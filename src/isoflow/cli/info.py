@@ -221,7 +221,7 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
     if grid:
         # (as voxelize prints them)
         lines.append(f"  voxelised              --fill {grid['fill']}, pitch {grid['pitch']:.6g}, "
-                     f"origin {coordinates(grid['origin'])}")
+                     f"origin {coordinates(grid['origin'], step=grid['pitch'])}")
     if placed:
         unit = f" {placed['unit']}" if placed["unit"] else ""
         size = f"{'pixel' if r['dimension'] == 2 else 'voxel'} size"
@@ -229,8 +229,9 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
         # axis (a time series' frames) is said apart, without it
         space, beyond = min(3, len(placed["pitch"])), len(placed["pitch"]) > 3
         fourth = (f" (4th axis: size {placed['pitch'][3]:.6g}, origin {placed['origin'][3]:.6g})" if beyond else "")
+        origin = coordinates(placed["origin"][:space], step=placed["pitch"][:space])
         lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'][:space])}{unit}, "
-                     f"origin {coordinates(placed['origin'][:space])}{unit}{'' if unit else ' (the file says no unit)'}"
+                     f"origin {origin}{unit}{'' if unit else ' (the file says no unit)'}"
                      + fourth)
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",

@@ -210,10 +210,11 @@ def load_input_with_unit(args: argparse.Namespace) -> tuple[DigitalObject, str |
     of its voxel size and origin as the file says it
     (:func:`~isoflow.mesh.volumes.read_volume_with_unit`); None for a
     mesh, a point list, or a file that says none."""
-    from ..mesh.load import is_mesh_path
+    from ..mesh.load import is_mesh_path, refuse_cad
     from ..mesh.volumes import NO_CUBE, is_volume, read_object, read_volume_with_unit
 
     path = Path(args.input)
+    refuse_cad(path)  # (else read as a point list: "not a number: 'ISO-10303-21;'")
     if is_mesh_path(path):
         if getattr(args, "label", None) is not None:
             raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")

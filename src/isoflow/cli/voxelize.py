@@ -70,7 +70,8 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     with coarser_for_magicavoxel():
         out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
-    print(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, origin {coordinates(obj.origin)}")
+    print(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, "
+          f"origin {coordinates(obj.origin, step=obj.pitch)}")
     return 0
 
 
@@ -86,7 +87,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
     say_note(args, args.mesh, details.note)
     shape = "x".join(map(str, z.shape))
     print(f"{out}: {z.voxels} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
-          f"pitch {z.pitch:.6g}, origin {coordinates(z.origin)}")
+          f"pitch {z.pitch:.6g}, origin {coordinates(z.origin, step=z.pitch)}")
     return 0
 
 
@@ -155,7 +156,7 @@ def label_summary(out: str | Path, r) -> str:
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
     lines = [f"{out}: {counted(len(r.names), 'label')} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
-             f"origin {coordinates(r.origin)}"]
+             f"origin {coordinates(r.origin, step=r.pitch)}"]
     width = max(6, len(f"{max(r.voxels, default=0):,}"))
     lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")
     for i, (name, n) in enumerate(zip(r.names[:LISTED_LABELS], r.voxels), 1):

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..errors import check_switch
 from ..scale import arrays
 from ..scale.compiled import Method, using
 from .closed_surfaces import closed_surfaces, compiled_census, small_census, use_census
@@ -107,6 +108,7 @@ def analyze(
     >>> r.betti, r.euler_characteristic, r.classes, r.energy
     ([2], 2, {'convex': 4, 'flat': 0, 'concave': 0}, 4)
     """
+    surfaces = check_switch(surfaces, "surfaces", "analyze")
     with using(threads):
         return Report.from_dict(_analyze(obj, connectivity, surfaces, method))
 

@@ -42,12 +42,13 @@ MAX_DIM = 4
 DIMENSIONS = (1, 2, 3, 4)
 
 
-def check_dimension(n: object) -> int:
-    """The dimension of a window, an integer 1..4, or one line saying why not."""
+def check_dimension(n: object, name: str = "dimension n") -> int:
+    """The dimension of a window, an integer 1..4, or one line saying why
+    not, naming it as its caller's parameter ``name``."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise IsoflowError(f"dimension n must be an integer 1..{MAX_DIM}, got {n!r}")
+        raise IsoflowError(f"{name} must be an integer 1..{MAX_DIM}, got {n!r}")
     if not 1 <= int(n) <= MAX_DIM:
-        raise IsoflowError(f"dimension n must be 1..{MAX_DIM}, got {n}")
+        raise IsoflowError(f"{name} must be 1..{MAX_DIM}, got {n}")
     return int(n)
 
 

@@ -114,7 +114,7 @@ def euler_lut(ndim: int = 3, connectivity: int | None = None) -> np.ndarray:
     >>> euler_lut(2)[1], len(euler_lut(2))
     (np.int64(1), 16)
     """
-    n = check_dimension(ndim)
+    n = check_dimension(ndim, "ndim")
     return _euler_table(n, resolve_connectivity(n, connectivity))
 
 
@@ -153,7 +153,7 @@ def well_composed(ndim: int = 3) -> np.ndarray:
     >>> int(well_composed(3).sum()), int(well_composed(2).sum())
     (126, 12)
     """
-    n = check_dimension(ndim)
+    n = check_dimension(ndim, "ndim")
     c = np.arange(1 << (1 << n), dtype=np.int64)
     bg = full_window(n) ^ c
     boundary = (c != 0) & (bg != 0)
@@ -436,9 +436,22 @@ def class_histogram(config_hist: ArrayLike) -> np.ndarray:
         # (a 2D histogram has 16 counts, a 4D one 65536: a bare IndexError or a wrong n otherwise)
         raise IsoflowError(f"class_histogram takes the 256 counts of a 3D configuration histogram, got "
                            f"{'an array of type ' + str(hist.dtype) if hist.dtype.kind not in 'iuf' else hist.shape}")
+    check_counts(hist)
     cls = class_lut()
     on = cls >= 0
     return np.bincount(cls[on], weights=hist[on], minlength=9).astype(np.int64)
+
+
+def check_counts(hist: np.ndarray) -> None:
+    """Refuse a histogram entry that is no count: the classes' sums of
+    NaN, negative or fractional entries are no counts either (NaN cast to
+    the most negative int64)."""
+    with np.errstate(invalid="ignore"):
+        bad = ~np.isfinite(hist) | (hist < 0) | (hist != np.round(hist)) if hist.dtype.kind == "f" else hist < 0
+    if bad.any():
+        at = int(np.flatnonzero(bad)[0])
+        raise IsoflowError(f"config_hist: entry {at} is {hist[at].item()!r}, not a count "
+                           f"(a configuration histogram holds whole numbers >= 0)")
 
 
 # --------------------------------------------------------------------------

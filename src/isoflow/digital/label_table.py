@@ -41,7 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_switch
 from ..results import same_fields
 from ..scale.arrays import as_array, refuse_object
 from .closed_surfaces import sweep_tables
@@ -49,6 +49,7 @@ from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .surface import face_slots, pinch_lut, slot_octants
+from .units import unit_given
 
 #: the columns of :func:`label_table`, in order ("bbox" and "centroid"
 #: stand for their numbered columns, "n" for n-0 .. n-8)
@@ -115,6 +116,23 @@ class LabelImage:
     # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
+
+    def __post_init__(self):
+        # the spacing and origin as float arrays, one number per axis, checked
+        # as an object's pitch and origin are: a list or one number was kept
+        # as given, and label_table stopped on it with an AttributeError
+        try:
+            n = np.ndim(self.array)
+        except ValueError:  # nested lists of uneven lengths: label_table names them
+            n = None
+        if n in (2, 3, 4):
+            try:
+                place = DigitalObject.placement(n, pitch=self.spacing, origin=self.origin)
+            except IsoflowError as exc:
+                raise IsoflowError("LabelImage: " + str(exc).replace("'pitch'", "'spacing'")) from None
+            object.__setattr__(self, "spacing", place.spacing)
+            object.__setattr__(self, "origin", place.origin)
+        object.__setattr__(self, "unit", unit_given(self.unit, "LabelImage"))
 
 
 def label_table(
@@ -232,6 +250,7 @@ def label_table(
         image = image.array
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
+    surfaces = check_switch(surfaces, "surfaces", "label_table")
     # the pitch and origin checked as every object's are
     # (without a dtype: a float conversion here would raise NumPy's
     # ValueError on a string before the check could name the field)

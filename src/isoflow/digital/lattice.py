@@ -138,8 +138,28 @@ class DigitalObject:
         return x if isinstance(x, cls) else cls(x)
 
     @classmethod
-    def from_voxels(cls, indices, **kw) -> DigitalObject:
-        """Object made of the voxels with the given integer indices (N, n)."""
+    def from_voxels(cls, indices: ArrayLike, **kw: Any) -> DigitalObject:
+        """Object made of the voxels with the given integer indices (N, n).
+
+        Parameters
+        ----------
+        indices : array_like of int, shape (N, 2) or (N, 3)
+            The voxels' lattice indices (repeats are one voxel).
+        **kw
+            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+
+        Returns
+        -------
+        DigitalObject
+            In the smallest array that holds the voxels, ``offset`` its
+            lowest index.
+
+        Examples
+        --------
+        >>> obj = DigitalObject.from_voxels([[0, 0, 0], [2, 0, 0]], pitch=0.5)
+        >>> obj.volume.shape, obj.voxels, [c.tolist() for c in obj.bbox()]
+        ((3, 1, 1), 2, [[0.0, 0.0, 0.0], [1.5, 0.5, 0.5]])
+        """
         idx = _integer_points(indices, "voxel index")
         lo = idx.min(axis=0)
         _check_grid(lo, idx.max(axis=0), len(idx), "voxel indices", 1)
@@ -148,11 +168,30 @@ class DigitalObject:
         return cls(vol, offset=tuple(lo), **kw)
 
     @classmethod
-    def from_points(cls, points, **kw) -> DigitalObject:
+    def from_points(cls, points: ArrayLike, **kw: Any) -> DigitalObject:
         """The paper's point model (Definitions 1-2).
 
         A set of lattice points defines the object made of every unit cube
         (square in 2D) whose 2^n corners all belong to the set.
+
+        Parameters
+        ----------
+        points : array_like of int, shape (N, 2) or (N, 3)
+            The lattice points.
+        **kw
+            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+
+        Returns
+        -------
+        DigitalObject
+
+        Examples
+        --------
+        The 12 points of a 3x2x2 block are the corners of two unit cubes:
+
+        >>> points = [[x, y, z] for x in range(3) for y in range(2) for z in range(2)]
+        >>> DigitalObject.from_points(points).voxels
+        2
         """
         pts = _integer_points(points, "lattice point")
         lo = pts.min(axis=0)
@@ -180,8 +219,12 @@ class DigitalObject:
         >>> place.spacing.tolist(), place.origin.tolist(), place.voxels
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
         """
+        if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
+            # (1,) * "a" was Python's "can't multiply sequence by non-int of type 'str'"; another
+            # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
+            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
-        return cls(np.zeros((1,) * ndim, bool), **{k: v for k, v in given.items() if v is not None})
+        return cls(np.zeros((1,) * int(ndim), bool), **{k: v for k, v in given.items() if v is not None})
 
     # ------------------------------------------------------------ geometry
     @property
@@ -194,21 +237,91 @@ class DigitalObject:
         """How many voxels the object has."""
         return int(np.count_nonzero(self.volume))
 
-    def lattice_coordinates(self, array_points: np.ndarray) -> np.ndarray:
-        """Lattice coordinates of points given in array-corner units."""
-        return np.asarray(array_points, float) + np.array(self.offset) + 0.5 * self.parity
+    def lattice_coordinates(self, array_points: ArrayLike) -> np.ndarray:
+        """Lattice coordinates of points given in array-corner units.
+
+        Parameters
+        ----------
+        array_points : array_like of float, shape (..., ndim)
+            Points in the array's own units: ``(i, j, k)`` is the lowest
+            corner of voxel ``[i, j, k]``.
+
+        Returns
+        -------
+        numpy.ndarray
+            The points shifted by ``offset`` (and by 1/2 on the dual
+            lattice), float64, of the same shape.
+
+        Raises
+        ------
+        IsoflowError
+            Points that are not numbers, or whose last axis does not hold
+            one coordinate per axis of the object.
+
+        Examples
+        --------
+        >>> obj = DigitalObject(np.ones((2, 2, 2), bool), offset=(5, 0, 0), parity=1)
+        >>> obj.lattice_coordinates([[0, 0, 0], [2, 2, 2]]).tolist()
+        [[5.5, 0.5, 0.5], [7.5, 2.5, 2.5]]
+        """
+        return self._points(array_points) + np.array(self.offset) + 0.5 * self.parity
 
     @property
     def spacing(self) -> np.ndarray:
         """The voxel size along each axis (``pitch`` as a vector)."""
         return np.broadcast_to(np.asarray(self.pitch, np.float64), (self.ndim,)).copy()
 
-    def world(self, array_points: np.ndarray) -> np.ndarray:
-        """World coordinates of points given in array-corner units."""
+    def world(self, array_points: ArrayLike) -> np.ndarray:
+        """World coordinates of points given in array-corner units.
+
+        Parameters
+        ----------
+        array_points : array_like of float, shape (..., ndim)
+            As in :meth:`lattice_coordinates`.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``origin + pitch * lattice_coordinates(array_points)``.
+
+        Raises
+        ------
+        IsoflowError
+            As :meth:`lattice_coordinates`.
+
+        Examples
+        --------
+        Voxel ``[1, 0, 0]`` of a 0.5 mm grid whose lattice point 0 is at
+        x = 10 spans x = 10.5 to 11:
+
+        >>> obj = DigitalObject(np.ones((2, 1, 1), bool), pitch=0.5, origin=(10, 0, 0))
+        >>> obj.world([[1, 0, 0], [2, 1, 1]]).tolist()
+        [[10.5, 0.0, 0.0], [11.0, 0.5, 0.5]]
+        """
         return self.origin + self.spacing * self.lattice_coordinates(array_points)
 
+    def _points(self, array_points: ArrayLike) -> np.ndarray:
+        # checked here: NumPy's broadcast error named neither the argument
+        # nor the object's dimension, and a string gave "could not convert"
+        points = as_array(array_points, "array_points")
+        if points.dtype.kind not in "biuf":
+            raise IsoflowError(f"array_points: coordinates must be numbers, got an array of type {points.dtype}")
+        if points.ndim == 0 or points.shape[-1] != self.ndim:
+            raise IsoflowError(f"array_points: a {self.ndim}D object's points have {self.ndim} coordinates "
+                               f"(the last axis), got shape {points.shape}")
+        return np.asarray(points, np.float64)
+
     def bbox(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """World [min corner, max corner] of the object's voxels; None if empty."""
+        """World [min corner, max corner] of the object's voxels; None if empty.
+
+        Examples
+        --------
+        >>> v = np.zeros((4, 4), bool); v[1:3, 2] = True
+        >>> [c.tolist() for c in DigitalObject(v, pitch=0.5, origin=(10, 0)).bbox()]
+        [[10.5, 1.0], [11.5, 1.5]]
+        >>> DigitalObject(np.zeros((2, 2), bool)).bbox() is None
+        True
+        """
         if not self.volume.any():
             return None
         lo, hi = _nonzero_bounds(self.volume)
@@ -254,9 +367,17 @@ class DigitalObject:
     def __repr__(self) -> str:
         return (
             f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
-            f"offset={self.offset}, parity={self.parity}, pitch={np.round(self.pitch, 12).tolist()}, "
+            f"offset={self.offset}, parity={self.parity}, pitch={_significant(self.pitch)}, "
             f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}") + ")"
         )
+
+
+def _significant(pitch: float | np.ndarray) -> float | list[float]:
+    """The pitch to 12 significant digits, as the repr shows it: 0.1 where
+    arithmetic left 0.10000000000000002, and 8.249e-11 (0.8249 Angstrom in
+    metres) whole, which 12 decimals cut to 8.2e-11 (and 1e-13 to 0.0)."""
+    shown = [float(f"{p:.12g}") for p in np.atleast_1d(np.asarray(pitch, np.float64))]
+    return shown if np.ndim(pitch) else shown[0]
 
 
 def _nonzero_bounds(volume: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

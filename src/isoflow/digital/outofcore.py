@@ -56,7 +56,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import (
     SpatialAxes,
@@ -395,10 +395,20 @@ def _scheduler(dask, scheduler):
     does for a name, to look for a client: that import takes longer than
     the report of a small volume, and with distributed not imported no
     client exists."""
-    if "distributed" in sys.modules or not (scheduler is None or isinstance(scheduler, str)):
-        return scheduler
+    from concurrent.futures import Executor
+
     from dask.base import named_schedulers
 
+    # refused here, naming the argument: dask's ValueError ("Unexpected
+    # scheduler: 5", "Expected one of [...]") named neither it nor isoflow;
+    # what dask.compute takes passes (a name, a get function, a client, an executor)
+    known = isinstance(scheduler, str) and scheduler.lower() in {*named_schedulers, "distributed", "dask.distributed"}
+    if not (scheduler is None or known or callable(scheduler) or hasattr(scheduler, "get")
+            or isinstance(scheduler, Executor)):
+        raise IsoflowError(f"scheduler must be a dask scheduler's name ({', '.join(sorted(named_schedulers))}, "
+                           f"distributed), a get function, a client or executor, or None, got {scheduler!r}")
+    if "distributed" in sys.modules or not (scheduler is None or isinstance(scheduler, str)):
+        return scheduler
     name = scheduler or dask.config.get("scheduler", None) or "threads"
     return named_schedulers.get(name.lower(), scheduler) if isinstance(name, str) else name
 
@@ -436,7 +446,9 @@ def analyze_chunked(
         Passed to ``dask.compute``: default dask's configured one, threads;
         ``"processes"`` runs blocks in worker processes (only from code
         under ``if __name__ == "__main__":``); a ``dask.distributed``
-        client's ``get`` runs them on its workers.
+        client's ``get`` runs them on its workers, a
+        ``concurrent.futures`` executor on its own. Anything else is
+        refused naming it.
     where : str, optional
         The input's name in error messages.
     progress : callable, optional
@@ -481,6 +493,7 @@ def analyze_chunked(
     ([1, 1, 0], True)
     """
     check_callable(progress, "progress", "progress(done, total)")
+    surfaces = check_switch(surfaces, "surfaces", "analyze_chunked")
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)

@@ -23,7 +23,7 @@ class ClosedSurface(TypedDict):
 
 # eq=False: the equality is Result's, a mapping's (a generated one would
 # find a report unequal to the dict of its own items)
-@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class Report(Result):
     """Everything ``isoflow info --json`` prints about one object.
 
@@ -148,7 +148,7 @@ class Report(Result):
         return super().from_dict(values)
 
 
-@dataclasses.dataclass(frozen=True, kw_only=True, eq=False)
+@dataclasses.dataclass(frozen=True, kw_only=True, eq=False, repr=False)
 class SurfaceCensus(Result):
     """The closed surfaces of a 3D object's boundary mesh, counted without
     the mesh (:func:`~isoflow.digital.closed_surfaces.closed_surfaces`), and

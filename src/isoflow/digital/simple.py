@@ -203,7 +203,11 @@ def delete_simple(padded: np.ndarray, flat: np.ndarray, connectivity: int) -> np
     Within a subfield the points are two apart, so each is tested against the
     volume left by the previous subfields and all of them go at once: the
     whole is a sequence of simple deletions and keeps every Betti number.
+    ``padded`` is C-contiguous, as :func:`neighbourhood_codes` reads it.
     """
+    if not padded.flags.c_contiguous:
+        # ravel() of another layout is a copy: the deletions would be lost in silence
+        raise ValueError("delete_simple deletes in place from a C-contiguous volume")
     flat = np.asarray(flat, np.int64)
     field = subfields(flat, padded.shape)
     gone = []

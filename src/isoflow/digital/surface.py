@@ -201,6 +201,14 @@ class QuadMesh:
 
     @property
     def midpoints(self) -> int:
+        """How many vertices sit at the midpoint of a lattice edge one sheet
+        passes twice (see the class's description; 0 on most shapes).
+
+        Examples
+        --------
+        >>> boundary_mesh(np.ones((2, 2, 2), bool)).midpoints
+        0
+        """
         return int(np.count_nonzero(self.sheet < 0))
 
     @property
@@ -211,14 +219,45 @@ class QuadMesh:
 
     @property
     def vertex_class(self) -> np.ndarray:
+        """Each vertex's class of eq. 4.9, an index into
+        :data:`~isoflow.digital.indices.CLASS_LABELS` (``OFF_SURFACE`` on
+        midpoints), as :attr:`Report.n <isoflow.Report>` counts them.
+
+        Examples
+        --------
+        A 2x2x2 box: 8 convex corners (+,+,+), 12 edge vertices (+,0,0)
+        and 6 face centres (0,0,empty):
+
+        >>> from isoflow.digital.indices import CLASS_LABELS
+        >>> m = boundary_mesh(np.ones((2, 2, 2), bool))
+        >>> {CLASS_LABELS[c]: int(k) for c, k in zip(*np.unique(m.vertex_class, return_counts=True))}
+        {'(0,0,∅)': 6, '(+,+,+)': 8, '(+,0,0)': 12}
+        """
         return np.where(self.sheet >= 0, class_lut()[self.config], OFF_SURFACE)
 
     @property
     def gamma(self) -> np.ndarray:
+        """Each vertex's curvature index gamma (eq. 4.5,
+        :func:`~isoflow.digital.indices.gamma_lut`).
+
+        Examples
+        --------
+        >>> m = boundary_mesh(np.ones((2, 2, 2), bool))
+        >>> sorted(set(m.gamma.tolist()))  # flat face centres, convex edges and corners
+        [0, 1, 2]
+        """
         return gamma_lut()[self.config]
 
     @property
     def f(self) -> np.ndarray:
+        """Each vertex's index f of eq. 4.6 (:func:`~isoflow.digital.indices.f_lut`).
+
+        Examples
+        --------
+        >>> m = boundary_mesh(np.ones((2, 2, 2), bool))
+        >>> sorted(set(m.f.tolist()))
+        [0, 1, 9]
+        """
         return f_lut()[self.config]
 
     @property
@@ -247,13 +286,29 @@ class QuadMesh:
     def triangles(self) -> np.ndarray:
         """Triangles with the faces' orientation and no degenerate ones: two
         per plain quad, a fan from the first midpoint (see :meth:`polygons`)
-        for a face with midpoints."""
+        for a face with midpoints.
+
+        Examples
+        --------
+        >>> boundary_mesh(np.ones((2, 2, 2), bool)).triangles().shape  # 24 quads
+        (48, 3)
+        """
         return triangle_rows(self.faces, self.edge_midpoint)[0]
 
     def components(self) -> list[dict]:
         """Closed surface components, largest first, each with its Euler
         characteristic and genus (``1 - chi/2``: every component is a closed
-        orientable 2-manifold)."""
+        orientable 2-manifold).
+
+        Examples
+        --------
+        Two voxels that share one edge: at 6-connectivity the mesh splits
+        the edge, two spheres:
+
+        >>> v = np.zeros((2, 2, 1), bool); v[0, 0, 0] = v[1, 1, 0] = True
+        >>> [c["genus"] for c in boundary_mesh(v, 6).components()], boundary_mesh(v, 6).euler_characteristic
+        ([0, 0], 4)
+        """
         nv = len(self.vertices)
         if nv == 0:
             return []

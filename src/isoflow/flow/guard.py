@@ -447,7 +447,9 @@ def thinning_step(volume: np.ndarray, connectivity: int) -> np.ndarray | None:
     number. Returns the thinned volume (same shape), or None when no voxel
     is simple.
     """
-    padded = np.pad(np.asarray(volume, bool), 1)
+    # C order whatever the input's: np.pad keeps a Fortran-ordered array's
+    # order, and delete_simple deletes through flat indices in place
+    padded = np.pad(np.ascontiguousarray(volume, dtype=bool), 1)
     conv = np.pad(convexity(volume), 1)
     # only voxels next to the background can be simple
     inner = np.ones(volume.shape, bool)

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -56,7 +56,7 @@ StopReason = Literal["vanished", "steps", "topology-change", "converged", "cycle
 GuardKind = Literal["flow", "partial", "thinning"]
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class FlowResult(Result):
     """What :func:`run_flow` returns; it also reads as the mapping that
     ``isoflow flow --json`` prints (``r["steps"]`` is ``r.steps``; the
@@ -90,6 +90,18 @@ class FlowResult(Result):
     guard_steps : dict or None
         Guarded runs: how many steps were ``flow``, ``partial`` and
         ``thinning``.
+
+    Examples
+    --------
+    A 3x3x3 cube shrinks by one layer a step, from one lattice to the
+    other, until it vanishes:
+
+    >>> import numpy as np
+    >>> r = run_flow(np.ones((3, 3, 3), bool))
+    >>> r.stop_reason, [s["voxels"] for s in r.steps], [s.parity for s in r.states]
+    ('vanished', [27, 8, 1, 0], [0, 1, 0, 1])
+    >>> r["limit"]["last_shape"], r.to_dict()["guard"]
+    ('cuboid', False)
     """
 
     steps: list[dict]
@@ -349,6 +361,9 @@ def run_flow(
     check_callable(progress, "progress", "progress(step, state)")
     _check_count("steps", steps)
     _check_count("max_steps", max_steps)
+    guard, until_topology_change, keep_states = (
+        check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
+        check_switch(keep_states, "keep_states", "run_flow"))
     engine = flow_engine(method, obj, conn)
     cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..digital.lattice import DigitalObject
+from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.surface import boundary_mesh
 from ..errors import IsoflowError
 from .voxelize import say_note, voxelize
@@ -49,7 +49,9 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     ------
     IsoflowError
         For something other than a Manifold, a pitch that is not one
-        positive number, or an origin that is not three numbers.
+        positive number, an origin that is not three numbers, or a pitch
+        and origin that put the manifold beyond the voxel indices a
+        :class:`DigitalObject` holds (+-2**40).
 
     Examples
     --------
@@ -75,8 +77,7 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     tris = np.asarray(mesh.tri_verts, dtype=np.int64)
     if len(tris) == 0:
         return DigitalObject(np.zeros((0, 0, 0), bool), pitch=pitch, origin=corner)
-    lo = np.floor((verts.min(axis=0) - corner) / pitch).astype(np.int64)
-    hi = np.ceil((verts.max(axis=0) - corner) / pitch).astype(np.int64)
+    lo, hi = lattice_box(verts, pitch, corner)
     shape = np.maximum(hi - lo, 1)
     found = voxelize(verts, tris, pitch=pitch, grid=(corner + pitch * lo, shape), details=True)
     # a manifold is closed and bounds what it draws (no double-sided or
@@ -87,6 +88,20 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     if not vol.any():
         say_note(found.note)
     return DigitalObject(vol, offset=tuple(int(v) for v in lo), pitch=pitch, origin=corner).cropped()
+
+
+def lattice_box(verts: np.ndarray, pitch: float, corner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The voxel indices of the lowest and one past the highest corner of
+    the vertices' box; refused beyond the indices a DigitalObject holds,
+    where a fine pitch or a far origin made int64 wrap round (and the
+    voxeliser divide by a pitch squared to zero)."""
+    lo, hi = np.floor((verts.min(axis=0) - corner) / pitch), np.ceil((verts.max(axis=0) - corner) / pitch)
+    far = float(np.max(np.abs(np.concatenate([lo, hi]))))
+    if not far <= MAX_COORDINATE:
+        raise IsoflowError(f"from_manifold: pitch={pitch!r} and origin={corner.tolist()} put the manifold's voxels "
+                           f"at index {far:.3g}, beyond the +-{MAX_COORDINATE} a DigitalObject holds; "
+                           "give a coarser pitch, or an origin nearer the manifold")
+    return lo.astype(np.int64), hi.astype(np.int64)
 
 
 def cube_union(voxels):

@@ -48,9 +48,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, warn
+from ..errors import IsoflowError, check_switch, warn
 from .float32 import float32_effect
-from .outputs import atomic_write, check_output_path, check_switch, output_set
+from .outputs import atomic_write, check_output_path, output_set
 
 if TYPE_CHECKING:
     from numpy.typing import ArrayLike

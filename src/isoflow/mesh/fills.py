@@ -18,7 +18,8 @@ Three fills (``fill=`` of :func:`~isoflow.mesh.voxelize.voxelize`,
 
 The details of a voxelisation are a :class:`Voxelization`; where the
 winding rule leaves a mesh with area a tiny or empty solid,
-:func:`thin_solid` says so and why.
+:func:`thin_solid` says so and why, and :data:`NO_AREA` where the mesh
+has no area at all.
 """
 
 from __future__ import annotations
@@ -29,9 +30,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, check_switch, counted
 from ..results import Result
-from .outputs import check_switch
 
 #: the rule that decides which voxels a mesh fills
 Fill = Literal["winding", "shell", "flood"]
@@ -54,7 +54,7 @@ SAMPLED_FACES = 8192
 THIN_TRIGGER = 2.0
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class Voxelization(Result):
     """What a voxelisation gave, and what it found in the mesh.
 
@@ -271,6 +271,12 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     return (f"the winding rule leaves {what} in{against}: {reason}; "
             "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
             "(fill='flood' / 'shell')")
+
+
+#: :func:`thin_solid`'s line where every face has zero area: there is no
+#: area to share out, and no reason would be given for the empty solid
+NO_AREA = ("every face has zero area (its corners in a line or at one point), so the mesh bounds nothing and "
+           "the winding rule leaves no voxel in; --fill shell gives the voxels its edges pass through (fill='shell')")
 
 
 def flood_adds_nothing(voxels: int, shell_voxels: int | None, boundary_edges: int, grid_voxels: int) -> str | None:

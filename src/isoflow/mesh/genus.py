@@ -23,12 +23,13 @@ from typing import Any
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale import memory
 from .crossings import find_crossings
 from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
+from .t_junctions import split_t_junctions
 from .verdict import GenusVerdict, Note, Stop, VerdictKind
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -713,9 +714,11 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+    step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
     f = _drop_repeated_faces(v, f, stats)
+    v, f = _split_t_junctions(v, f, stats)
     w = witnesses(v, f)
     reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
     filled = filled_genus(w, fill)
@@ -755,6 +758,35 @@ def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarra
     stats["repeated_faces"] = {"n": len(listed), "copies": int(np.count_nonzero(repeat)),
                                "corners": _corners_of(v, f[listed[0]])}
     return f[~repeat]
+
+
+#: how far from an edge, as a share of the bounding box's diagonal, a vertex
+#: lies on it for :func:`_split_t_junctions`: above float32's rounding (a
+#: CAD export's STL), far below any feature
+T_JUNCTION_RTOL = 1e-6
+
+
+def _split_t_junctions(v: np.ndarray, f: np.ndarray, stats: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh with the edges that a vertex of another face splits (a
+    T-junction: :func:`~isoflow.mesh.t_junctions.split_t_junctions`) split
+    there, where that closes them; ``stats["t_junctions"]`` holds the
+    facts of their note. The faces were counted as open though the
+    surface is closed as drawn."""
+    used = v[np.unique(f)] if len(f) else v[:0]
+    if not len(used):
+        return v, f
+    # in units of a power of two near the longest side, from the box's corner, as the weld measures:
+    # the diagonal and the products along an edge neither overflow at 1e200 nor underflow at 1e-200
+    lo = used.min(axis=0)
+    e = math.frexp(float((used.max(axis=0) - lo).max()) or 1.0)[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        scaled = np.ldexp(v - lo, -e)
+    diagonal = float(np.linalg.norm(np.ldexp(used.max(axis=0) - lo, -e)))
+    v2, f2, facts = split_t_junctions(scaled, f, T_JUNCTION_RTOL * diagonal)
+    if facts is None:
+        return v, f
+    stats["t_junctions"] = facts
+    return np.vstack([v, np.ldexp(v2[len(v):], e) + lo]), f2
 
 
 def _corners_of(v: np.ndarray, face: np.ndarray) -> tuple:
@@ -888,7 +920,7 @@ def verdict_kind(w: dict, digital: list, reference: int | None, stable: bool,
 
 def load_notes(stats: dict) -> list[Note]:
     """What the loading did: faces dropped, positions merged, repeated
-    faces dropped."""
+    faces dropped, edges split at T-junctions."""
     notes = []
     if stats.get("dropped_faces"):
         notes.append(Note("dropped_faces", {"n": stats["dropped_faces"]}))
@@ -896,6 +928,8 @@ def load_notes(stats: dict) -> list[Note]:
         notes.append(Note("welded", {"n": stats["welded"]}))
     if stats.get("repeated_faces"):
         notes.append(Note("repeated_faces", stats["repeated_faces"]))
+    if stats.get("t_junctions"):
+        notes.append(Note("t_junctions", stats["t_junctions"]))
     return notes
 
 

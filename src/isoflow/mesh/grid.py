@@ -345,7 +345,7 @@ def check_grid_memory(shape, what, bytes_per_voxel: float, extra: int, max_bytes
     per voxel) and ``extra`` bytes of temporaries exceed ``max_bytes``
     (default: the memory budget), naming its size; ``hints`` say what to do
     instead, in the Python API's words and the command line's."""
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     if not grid_fits(shape, bytes_per_voxel, extra, budget):
         need = grid_need(shape, bytes_per_voxel, extra)
         raise GridTooLarge(what, grid_words(shape, need), budget, shape=tuple(shape),

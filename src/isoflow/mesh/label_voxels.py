@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
@@ -54,7 +54,7 @@ COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolut
 NAMED_PAIRS = 8
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LabelVoxelization(Result):
     """Several meshes voxelised into one label image.
 
@@ -266,6 +266,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     ((6, 4, 4), 'uint8', (32, 64), ((1, 2, 32),))
     """
     fill, overlap, strict = check_fill(fill), check_overlap(overlap), check_strict(strict)
+    split = check_switch(split, "split", "voxelize_meshes")
     check_callable(progress, "progress", "progress(done, total)")  # wrapped per mesh below, so checked here
     if pitch is None and resolution is None:
         resolution = 64
@@ -274,7 +275,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hints=COARSER)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
@@ -286,7 +287,7 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         step = None if progress is None else _Share(progress, n - 1, len(bodies))
         try:
             r = voxelize(body.vertices, body.faces, pitch=pitch, grid=(origin, shape), window=window, fill=fill,
-                         strict=strict, max_bytes=budget - fixed, progress=step, details=True)
+                         strict=strict, max_bytes=max(budget - fixed, 1), progress=step, details=True)
         except IsoflowError as exc:
             raise exc.at(body.name) from None  # a refused grid keeps its command-line words
         assert r.volume is not None  # voxelize keeps the voxels in memory unless given a store

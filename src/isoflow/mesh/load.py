@@ -29,7 +29,12 @@ MERGE_RTOL = 1e-10
 #: reads, and its archives (a test checks this against
 #: ``trimesh.available_formats()``; ``.xyz`` is a point list here).
 MESH_SUFFIXES = (".stl", ".stl_ascii", ".obj", ".ply", ".off", ".glb", ".gltf", ".3mf", ".dae", ".zae",
-                 ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
+                 ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2", ".step", ".stp")
+#: CAD (boundary representation) formats: surfaces, no triangles until a CAD kernel tessellates them
+CAD_SUFFIXES = (".step", ".stp", ".iges", ".igs", ".brep", ".sat", ".x_t", ".x_b", ".sldprt", ".sldasm", ".ipt",
+                ".iam", ".catpart", ".catproduct", ".prt", ".f3d", ".3dm", ".jt")
+#: of them, those trimesh tessellates where cascadio (OpenCASCADE) is installed (not in isoflow's extras)
+CASCADIO_SUFFIXES = (".step", ".stp")
 #: Formats whose reader needs an optional library: ``isoflow[formats]``.
 FORMAT_NEEDS = {".3mf": ("lxml",), ".dae": ("collada",), ".zae": ("collada",),
                 ".3dxml": ("lxml",), ".xaml": ("lxml",)}
@@ -53,6 +58,45 @@ def check_format_libraries(path: Path) -> None:
         raise IsoflowError(
             f"{path}: reading {suffix.lstrip('.').upper()} files needs {names}: "
             "pip install 'isoflow[formats]'")
+
+
+def refuse_cad(path) -> None:
+    """One line for a CAD file (:data:`CAD_SUFFIXES`), which holds surfaces
+    and no triangles: trimesh's reader of a STEP file raises
+    "ModuleNotFoundError: No module named 'cascadio'", and the point-list
+    reader "not a number: 'ISO-10303-21;'". A STEP file passes where
+    cascadio is installed (trimesh then tessellates it).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An input, by its name.
+
+    Raises
+    ------
+    IsoflowError
+        A CAD file that cannot be read as a mesh here.
+
+    Examples
+    --------
+    >>> refuse_cad("part.igs")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: part.igs: a CAD file (IGS: surfaces, not triangles); export it ... as STL, OBJ, PLY or GLB
+    """
+    import importlib.util
+
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix not in CAD_SUFFIXES:
+        return
+    if suffix in CASCADIO_SUFFIXES:
+        if importlib.util.find_spec("cascadio") is not None:
+            return
+        how = " (or pip install cascadio, with which trimesh tessellates STEP files)"
+    else:
+        how = ""
+    raise IsoflowError(f"{path}: a CAD file ({suffix.lstrip('.').upper()}: surfaces, not triangles); export it from "
+                       f"the CAD tool as STL, OBJ, PLY or GLB{how}")
 
 
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
@@ -321,13 +365,16 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
 
 def _stl_size_line(p: Path) -> str | None:
     """The line for a binary STL whose size does not match its facet count
-    (:func:`isoflow.mesh.readers.stl_size_error`), or None."""
-    from .readers import stl_size_error
+    (:func:`isoflow.mesh.readers.stl_size_error`), or for an ASCII STL
+    whose facets are not three vertices of three numbers each, or that is
+    cut short (:func:`isoflow.mesh.readers.stl_text_error`), or None."""
+    from .readers import stl_size_error, stl_text_error
 
     try:
-        return stl_size_error(p, p.read_bytes())
+        data = p.read_bytes()
     except OSError:
         return None
+    return stl_size_error(p, data) or stl_text_error(p, data)
 
 
 def weld_tolerance(merge_rtol) -> float:
@@ -457,13 +504,18 @@ def _read(p: Path, ext: str):
     try:
         mesh = trimesh_load(p, "mesh")
     except IsoflowError:
-        if ext == "obj":  # trimesh's IndexError on an index past the vertices: name the line
+        if ext == "obj":  # trimesh's IndexError on an index past the vertices, its ValueError on a word: the line
             _check_obj_indices(p, failed=True)
+            _check_obj_numbers(p)
+        if ext == "stl" and (line := _stl_size_line(p)) is not None:  # trimesh's "cannot reshape array"
+            raise IsoflowError(line) from None
         raise
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if ext == "obj":
         _check_obj_indices(p)
+        if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
+            _check_obj_numbers(p)
     return vertices, faces
 
 
@@ -490,6 +542,10 @@ def check_mesh_file(p: Path) -> None:
         raise missing(p)
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
+    refuse_cad(p)
+    if p.stat().st_size == 0:  # a download or copy that failed: trimesh's readers raise IndexError and the like
+        kind = p.suffix.lstrip(".").upper() or "mesh"
+        raise IsoflowError(f"{p}: an empty file (0 bytes), not a readable {kind} file")
     refuse_zipped_store(p)
     check_format_libraries(p)
 
@@ -626,8 +682,14 @@ def trimesh_load(p: Path, force: str):
     isoflow's), ``force`` "mesh" (a scene's meshes as one, transforms
     applied) or "scene"; an OBJ's texture and normal seams are asked to be
     merged (the weld merges what trimesh leaves split); a PLY's concave
-    polygons are cut by ears (:func:`_ply_polygons_cut`)."""
+    polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
+    uses a geometry extension trimesh does not apply is refused
+    (:func:`~isoflow.mesh.gltf_extensions.unapplied_extension`)."""
+    from .gltf_extensions import missing_buffer, unapplied_extension
+
     check_mesh_file(p)
+    if (refusal := unapplied_extension(p) or missing_buffer(p)) is not None:  # trimesh: another model, or its bare error
+        raise IsoflowError(refusal)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}
@@ -708,6 +770,16 @@ def _check_obj_indices(path: Path, failed: bool = False) -> None:
         message = obj_index_error(path, data)
         if message is not None:
             raise IsoflowError(message)
+
+
+def _check_obj_numbers(path: Path) -> None:
+    """One line naming the OBJ line whose word is not the number it must be
+    (:func:`isoflow.mesh.readers.obj_number_error`), where there is one."""
+    from .readers import obj_number_error
+
+    message = obj_number_error(path, path.read_bytes())
+    if message is not None:
+        raise IsoflowError(message)
 
 
 # ---------------------------------------------------------------------------

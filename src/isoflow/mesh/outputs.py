@@ -33,29 +33,7 @@ import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError
-
-
-def check_switch(value: object, name: str, where: str) -> bool:
-    """``value`` as a bool where it is True or False (NumPy's bools too),
-    else IsoflowError naming ``where`` and the argument: a string such as
-    "no" is truthy, and would replace a file or change a format unasked.
-
-    Examples
-    --------
-    >>> check_switch(False, "force", "s.ply")
-    False
-    >>> check_switch("no", "force", "s.ply")
-    Traceback (most recent call last):
-    ...
-    isoflow.errors.IsoflowError: s.ply: force must be True or False, got 'no'
-    """
-    import numpy as np
-
-    if not isinstance(value, (bool, np.bool_)):
-        raise IsoflowError(f"{where}: {name} must be True or False, got {value!r}")
-    return bool(value)
-
+from ..errors import IsoflowError, check_switch
 
 #: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"
@@ -67,6 +45,8 @@ def check_output_path(
     """The output file as a Path, checked before any work is done: it ends in
     one of ``suffixes`` (any case; none: any name), is not a directory, does
     not exist unless ``force``, and its directory exists and is writable."""
+    if not isinstance(path, (str, os.PathLike)):  # (os.fspath's TypeError names no argument)
+        raise IsoflowError(f"the {what} path must be a str or os.PathLike, got {type(path).__name__} {path!r}")
     check_switch(force, "force", str(path))
     refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)

@@ -309,9 +309,14 @@ def _ascii(text: bytes, elements: list[Element], where: str, header_lines: int) 
     except ValueError:
         tokens = np.zeros(0)
     if len(tokens) != words.sum():
-        line = next((i for i, t in enumerate(text.split(b"\n")) if not _all_numbers(t)), None)
-        at_line = f"line {header_lines + line + 1}: " if line is not None else ""
-        raise IsoflowError(f"{where}: {at_line}a word that is not a number")
+        lines = text.split(b"\n")
+        line = next((i for i, t in enumerate(lines) if not _all_numbers(t)), None)
+        if line is None:
+            raise IsoflowError(f"{where}: a word that is not a number")
+        word = next(w for w in lines[line].split() if not _all_numbers(w)).decode(errors="replace")
+        comma = _all_numbers(word.replace(",", ".", 1).encode())
+        hint = f" (PLY writes decimals with a point: {word.replace(',', '.', 1)})" if comma else ""
+        raise IsoflowError(f"{where}: line {header_lines + line + 1}: {word!r} is not a number{hint}")
     lines = np.flatnonzero(words)
     rows = sum(e.rows for e in elements if e.properties)
     got: dict[str, dict] = {}

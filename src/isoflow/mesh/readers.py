@@ -18,6 +18,7 @@ not import trimesh (and the scipy modules it pulls in).
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -33,6 +34,8 @@ _OBJ_IGNORED = frozenset((b"#", b"vt", b"vn", b"o", b"g", b"s", b"mtllib"))
 _SPACE = np.isin(np.arange(256), list(b" \t\n\r\x0b\x0c"))
 #: the bytes of a face line's words and the spaces between them
 _FACE_BYTES = np.isin(np.arange(256), list(b"0123456789-/ \t\n"))
+#: the bytes of a text file's lines
+_TEXT = bytes(range(32, 127)) + b"\t\n\r"
 #: polygons whose fans :func:`_cut_by_ears` tests at a time
 _CHUNK = 1 << 16
 
@@ -100,10 +103,8 @@ def stl_size_error(path, data: bytes) -> str | None:
     194 bytes (2 facets and 10 bytes after the header): truncated, padded, or its facet count is wrong
     """
     head = data[:1024]
-    if len(data) < 84 or (data.lstrip()[:5].lower() == b"solid" and b"facet" in head.lower()):
-        return None
-    if not head.translate(None, bytes(range(32, 127)) + b"\t\n\r"):
-        return None  # text, not a header and facets: the reader's own line
+    if len(data) < 84 or not head.translate(None, _TEXT):
+        return None  # text (an ASCII STL among it), not a header and facets: the reader's own line
     n = int(np.frombuffer(data, "<u4", 1, 80)[0])
     whole, rest = divmod(len(data) - 84, 50)
     if len(data) == 84 + 50 * n or not whole:
@@ -118,6 +119,60 @@ def stl_size_error(path, data: bytes) -> str | None:
     return (f"{path}: no triangles read: as a binary STL its header counts {counted(n, 'facet')} "
             f"({84 + 50 * n} bytes), but the file has {len(data)} bytes ({held} after the header): "
             "truncated, padded, or its facet count is wrong")
+
+
+def stl_text_error(path, data: bytes) -> str | None:
+    """The one line naming the first fault of an ASCII STL file's facets:
+    a ``vertex`` line whose word is not a number (a decimal comma) or that
+    holds other than three, a loop of other than three vertices, or a file
+    that ends inside a facet (cut short); ``None`` where there is none or
+    the file is no ASCII STL.  trimesh says "cannot reshape array of size
+    37 into shape (3)", or reads no triangle at all.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The STL file's name, for the message.
+    data : bytes
+        Its bytes: a text file of ``solid``, ``facet``, ``vertex`` ... lines.
+
+    Returns
+    -------
+    str or None
+        ``path:LINE: ...``, or ``path: ...`` for a file cut short.
+
+    Examples
+    --------
+    >>> loop = b"facet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\nvertex 0 1 0\\n"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop + b"vertex 1 1 0\\nendloop\\nendfacet\\nendsolid t\\n")
+    "t.stl:8: 'endloop': facet 1's loop has 4 vertices, where an STL facet has 3"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop.replace(b"1 0 0", b"1,5 0 0"))
+    "t.stl:5: 'vertex 1,5 0 0': '1,5' is not a coordinate (STL writes decimals with a point: 1.5)"
+    >>> stl_text_error("t.stl", b"solid t\\n" + loop)
+    't.stl: the file ends inside facet 1 (line 2, its last): cut short'
+    """
+    if not data.lstrip()[:5].lower() == b"solid" or data[:4096].translate(None, _TEXT):
+        return None  # a binary STL whose header starts "solid": its size says what is wrong
+    facet, corners, opened = 0, 0, None
+    lines = data.splitlines()
+    for lineno, line in enumerate(lines, 1):
+        words = line.lower().split()
+        head = words[0] if words else b""
+        if head == b"facet":
+            facet, corners, opened = facet + 1, 0, lineno
+        elif head == b"vertex":
+            bad = _bad_obj_word([b"v", *line.split()[1:]])
+            if bad is not None:
+                return f"{path}:{lineno}: {shown_line(line)!r}: {bad.replace('OBJ', 'STL')}"
+            corners += 1
+        elif head == b"endloop" and corners != 3:
+            return (f"{path}:{lineno}: {shown_line(line)!r}: facet {facet}'s loop has "
+                    f"{counted(corners, 'vertex', 'vertices')}, where an STL facet has 3")
+        elif head == b"endfacet":
+            opened = None
+    if opened is not None:
+        return f"{path}: the file ends inside facet {facet} (line {opened}, its last): cut short"
+    return None
 
 
 def _read_stl_ascii(data: bytes) -> Mesh | None:
@@ -372,8 +427,7 @@ def obj_index_error(path, data: bytes) -> str | None:
                     continue  # not a number: the reader's own message says so
                 if 0 < k <= total or -seen <= k < 0:
                     continue
-                shown = line.strip().decode(errors="replace")
-                shown = shown if len(shown) <= 60 else shown[:57] + "..."
+                shown = shown_line(line)
                 if k > 0:
                     why = f"past the file's {total} vertices"
                 elif k < 0:
@@ -382,6 +436,85 @@ def obj_index_error(path, data: bytes) -> str | None:
                     why = "but OBJ numbers vertices from 1 (-1 for the last)"
                 return f"{path}:{lineno}: face {shown!r} uses vertex index {written.decode()}, {why}"
     return None
+
+
+#: a number as an OBJ reader parses one (C's strtod, NumPy's fromstring)
+_NUMBER = re.compile(rb"[+-]?((\d+\.?\d*|\.\d+)([eE][+-]?\d+)?|inf(inity)?|nan)", re.IGNORECASE)
+#: what each kind of OBJ line holds, by its first word: a number per word
+_OBJ_NUMBERS = {b"v": "a coordinate", b"vt": "a texture coordinate", b"vn": "a normal's coordinate"}
+
+
+def obj_number_error(path, data: bytes) -> str | None:
+    """The one line that names the first ``v``, ``vt``, ``vn`` or ``f``
+    line of an OBJ file holding a word that is not the number it must be
+    (a decimal comma, a stray letter), or a ``v`` line with fewer than
+    three coordinates, or ``None`` where there is none.  trimesh says only
+    "string or file could not be read to its end due to unmatched data".
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, as the line names it.
+    data : bytes
+        What the file holds.
+
+    Returns
+    -------
+    str or None
+        ``path:LINE: 'v 0,5 0 0': '0,5' is not a coordinate``, with a hint
+        for a decimal comma.
+
+    Examples
+    --------
+    >>> obj_number_error("t.obj", b"v 0 0 0\\nv 0,5 1 0\\nv 0 1 0\\nf 1 2 3\\n")
+    "t.obj:2: 'v 0,5 1 0': '0,5' is not a coordinate (OBJ writes decimals with a point: 0.5)"
+    >>> obj_number_error("t.obj", b"v 0 0\\n"), obj_number_error("t.obj", b"v 0 0 0\\nf 1/1 2//3 -1\\n")
+    ("t.obj:1: 'v 0 0': 2 coordinates, where a vertex has 3 (x y z)", None)
+    """
+    for lineno, line in enumerate(data.removeprefix(b"\xef\xbb\xbf").splitlines(), 1):
+        words = line.split(b"#", 1)[0].split()
+        bad = _bad_obj_word(words)
+        if bad is None:
+            continue
+        return f"{path}:{lineno}: {shown_line(line)!r}: {bad}"
+    return None
+
+
+def _bad_obj_word(words: list[bytes]) -> str | None:
+    """What is wrong with an OBJ line's words, or None (a line of a kind
+    that holds no numbers, or whose numbers are numbers)."""
+    head = words[0] if words else b""
+    if head == b"f":
+        for word in words[1:]:
+            parts = word.split(b"/")
+            if not all(q.lstrip(b"-").isdigit() for q in parts[:1]) or not all(
+                    q.lstrip(b"-").isdigit() or not q for q in parts[1:3]) or len(parts) > 3:
+                return f"{word.decode(errors='replace')!r} is not a vertex index (i, i/t, i//n or i/t/n)"
+        return None
+    what = _OBJ_NUMBERS.get(head)
+    if what is None:
+        return None
+    for word in words[1:]:
+        if _NUMBER.fullmatch(word) is None:
+            shown = word.decode(errors="replace")
+            comma = _NUMBER.fullmatch(word.replace(b",", b".", 1)) is not None
+            hint = f" (OBJ writes decimals with a point: {shown.replace(',', '.', 1)})" if comma else ""
+            return f"{shown!r} is not {what}{hint}"
+    if head == b"v" and len(words) < 4:
+        return f"{len(words) - 1} coordinate{'s' if len(words) != 2 else ''}, where a vertex has 3 (x y z)"
+    return None
+
+
+def shown_line(line: bytes) -> str:
+    """A file's line as a message quotes it: stripped, at most 60 characters.
+
+    Examples
+    --------
+    >>> shown_line(b"  f 1 2 3 "), len(shown_line(b"f " + b"1 " * 40))
+    ('f 1 2 3', 60)
+    """
+    shown = line.strip().decode(errors="replace")
+    return shown if len(shown) <= 60 else shown[:57] + "..."
 
 
 def may_name_vertex_0(data: bytes) -> bool:

@@ -33,7 +33,7 @@ from typing import Any, Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
@@ -41,7 +41,7 @@ from .fills import Fill, Voxelization, look_up
 from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
-from .outputs import atomic_path, check_switch, check_writable_dir
+from .outputs import atomic_path, check_writable_dir
 from .store_plan import WORKERS, in_store, slab_chunks, slab_layout, store_need
 
 
@@ -95,7 +95,7 @@ def slab_points(plan, slabs):
     return flat, area, parts
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class ZarrStore(Result):
     """The store :func:`voxelize_to_zarr` wrote, in a few numbers.
 
@@ -236,7 +236,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:
         v, f, shape, what, frame, origin, pitch = plan_voxels(v, f, pitch=pitch, resolution=resolution)
-        budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+        budget = memory.budget_of(max_bytes)
         solid = None
 
         def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries

@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus"]
+                   "no_mesh_genus", "t_junctions"]
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ class Note:
     facts: Mapping[str, Any] = field(default_factory=dict)
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class GenusVerdict(Result):
     """What :func:`~isoflow.mesh.genus.verify_genus` found, as fields and as
     a mapping of the keys ``isoflow genus --json`` prints (``v.agree``,
@@ -77,6 +77,14 @@ class GenusVerdict(Result):
     the flood fill voxelises, without the handles inside the cavities):
     the digital genus is compared with it instead of ``reference``, which
     stays the mesh's (or the solid's); None otherwise.
+
+    Examples
+    --------
+    >>> from isoflow import data
+    >>> from isoflow.mesh.genus import verify_genus
+    >>> v = verify_genus(data.torus(), resolutions=[16, 32])
+    >>> v.kind, v.reference, v["agree"], [d["betti"] for d in v.digital]
+    ('agree', 1, True, [[1, 1, 0], [1, 1, 0]])
     """
 
     input: str
@@ -305,6 +313,10 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
     "repeated_faces": _repeated_words,
+    "t_junctions": lambda points, faces, edges: (
+        f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one face "
+        f"on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split there "
+        "before counting"),
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,

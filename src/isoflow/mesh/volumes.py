@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, missing, warn
+from ..errors import IsoflowError, check_switch, missing, warn
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
 from ..scale.memory import check_fits
@@ -35,7 +35,7 @@ from .formats.registry import (
     split_dataset,
     volume_suffixes,
 )
-from .outputs import atomic_path, check_output_path, check_switch, refuse_directory_spelling
+from .outputs import atomic_path, check_output_path, refuse_directory_spelling
 
 #: every volume suffix read_volume takes (see isoflow.mesh.formats.registry)
 VOLUME_SUFFIXES = volume_suffixes()
@@ -443,7 +443,7 @@ def select_label(array, label, where: str) -> np.ndarray:
     """The voxels of ``array`` equal to ``label``; an error listing the
     values present when there are none."""
     arr = np.asarray(array)
-    check_label(label, arr.dtype, where)
+    label = check_label(label, arr.dtype, where)
     vol = arr == label
     if not vol.any():
         raise no_such_label(label, np.unique(arr), where)

@@ -41,9 +41,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, counted, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_switch, counted, warn
 from ..scale import memory
 from .fills import (
+    NO_AREA,
     THIN_SHARE,
     THIN_TRIGGER,
     UNBOUNDED_SHARE,
@@ -440,8 +441,8 @@ class VoxelPlan:
 
         Tm = self.Tm
         area = surface_area(Tm)
-        if not area > 0:
-            return None, None
+        if not area > 0:  # no area: nothing to bound, whatever the grid
+            return None, NO_AREA if voxels == 0 else None
         if volume is not None:
             corner = self.origin + self.pitch * np.asarray(self.start)
             share = unbounded_area(Tm, volume, corner, self.pitch)
@@ -621,7 +622,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
-    budget = memory.default_budget() if max_bytes is None else int(max_bytes)
+    budget = memory.budget_of(max_bytes)
     solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
@@ -785,6 +786,7 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     >>> voxelize_mesh(box, resolution=4).voxels
     64
     """
+    details = check_switch(details, "details", "voxelize")
     if faces is None:
         if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)):
             raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
@@ -846,6 +848,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     (32, [1, 1, 0])
     """
     check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
+    details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)
     try:
         obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,

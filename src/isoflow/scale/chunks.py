@@ -57,7 +57,8 @@ def compute(*tasks, scheduler=None, workers: int | None = None, **kwargs) -> tup
     (a Python caller goes on with other work beside them; a command's
     interrupt stops them through :data:`isoflow.scale.cancel.STOP`). Other
     schedulers (``"sync"``, a process pool, a distributed client's ``get``)
-    are called as they are, ``workers`` as their ``num_workers``.
+    are called as they are, ``workers`` as their ``num_workers`` (an
+    executor, ``concurrent.futures``, keeps its own).
 
     Examples
     --------
@@ -66,13 +67,15 @@ def compute(*tasks, scheduler=None, workers: int | None = None, **kwargs) -> tup
     (3, 4)
     """
     import_dask(array=False)  # where dask is missing: the message that names the extra
+    from concurrent.futures import Executor, ThreadPoolExecutor
+
     import dask.system
     import dask.threaded
 
     if not _threaded(scheduler):
-        extra = {} if workers is None else {"num_workers": workers}
+        # dask gives an executor num_workers itself: a second one is a TypeError
+        extra = {} if workers is None or isinstance(scheduler, Executor) else {"num_workers": workers}
         return dask.compute(*tasks, scheduler=scheduler, **extra, **kwargs)
-    from concurrent.futures import ThreadPoolExecutor
 
     pool = ThreadPoolExecutor(workers or dask.system.CPU_COUNT, thread_name_prefix="isoflow-block")
     try:

@@ -193,6 +193,10 @@ def using(threads: int | None):
     if threads is None:
         yield
         return
+    if isinstance(threads, (str, bytes)):
+        # a text is a count in the environment and on the command line; an
+        # argument is a number, as the message says ("2" was taken as 2)
+        raise IsoflowError(f"threads must be a positive integer, got {threads!r}")
     token = _asked.set(check_threads(threads))
     try:
         yield

@@ -34,6 +34,41 @@ def default_budget() -> int:
         return 4 << 30
 
 
+def budget_of(max_bytes: object, where: str = "voxelize") -> int:
+    """The memory budget a caller's ``max_bytes`` sets: the default
+    (:func:`default_budget`) for None, else a positive whole number of bytes
+    (``8e9`` too); anything else is refused naming it, where ``int()`` took
+    "1000000" and 2.5 in silence and raised its own ValueError for "8GB".
+
+    Parameters
+    ----------
+    max_bytes : int, float or None
+        What was given.
+    where : str
+        The function, for the message.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> budget_of(8e9)
+    8000000000
+    >>> budget_of("8GB")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: voxelize: max_bytes must be a positive whole number of bytes, got '8GB'
+    """
+    if max_bytes is None:
+        return default_budget()
+    whole = isinstance(max_bytes, (int, np.integer)) or (
+        isinstance(max_bytes, (float, np.floating)) and float(max_bytes).is_integer())
+    if isinstance(max_bytes, (bool, np.bool_)) or not whole or max_bytes < 1:
+        raise IsoflowError(f"{where}: max_bytes must be a positive whole number of bytes, got {max_bytes!r}")
+    return int(max_bytes)
+
+
 def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) -> None:
     """Raise :class:`IsoflowError` when ``need`` bytes exceed the budget."""
     budget = default_budget() if budget is None else int(budget)

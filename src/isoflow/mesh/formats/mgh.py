@@ -20,8 +20,10 @@ along the frames, as NIfTI's; one frame is 3D.
 Written as ``.mgz`` or ``.mgh`` (uint8 0/1; a label image in the smallest
 of uint8, int16 and int32 that holds it, the types every FreeSurfer
 version reads) with a diagonal affine; MGH stores its header in float32,
-and stores the volume's centre, not its first voxel, so an origin comes
-back within float32 rounding of the centre's coordinates. It holds 3D
+and stores the volume's centre, not its first voxel (nibabel builds the
+affine from it in float32), so an origin comes back within float32
+rounding of the centre's coordinates and of voxel 0's (a warning says
+where that moves a voxel by more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
 and 4D volumes only, labels up to 2**31 - 1, in mm: a unit other than mm
 is not written (a warning says so; the numbers are kept, read back as
 mm), and a volume without one is read back in mm.
@@ -35,7 +37,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .nifti import diagonal_affine, fourth_axis_dropped, placed_by_affine
+from .nifti import diagonal_affine, float32_placement, fourth_axis_dropped, placed_by_affine
 from .registry import (
     RawVolume,
     check_shape,
@@ -67,13 +69,15 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     """Refuse what MGH cannot hold (a 2D object, a side of length 0; labels
     beyond int32 are refused by the format's ``max_label``); warn of a unit
-    other than mm and of a fourth axis's placement, which it does not keep."""
+    other than mm, of voxels that float32 moves, and of a fourth axis's
+    placement, which it does not keep."""
     if obj.ndim not in (3, 4):
         raise IsoflowError(f"{path}: MGH holds 3D volumes (and 4D frames), this object is {obj.ndim}D; "
                            "write .nii.gz, .nrrd or .npz")
     refuse_empty(path, obj.volume.shape, "MGH")
     if unit != "mm":
         unit_not_kept(path, "MGH", unit, "millimetres only (read back as mm)")
+    float32_placement(path, obj, "MGH", centred=True)
     fourth_axis_dropped(path, obj, "MGH")
 
 

@@ -13,7 +13,10 @@ a 4D object written with another voxel size or origin along it is warned of.
 Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
 whose translation is voxel 0's centre, sform and qform code 1 (scanner).
 NIfTI stores the affine in float32: pitch and origin are kept to float32
-precision. The length unit is the header's xyzt spatial unit
+precision, and where that moves a voxel centre by more than
+:data:`FLOAT32_SLACK` of a voxel (a model far from the origin: float32's
+positions near 1e6 are 0.0625 apart) a warning says by how much and names
+the formats that keep the placement. The length unit is the header's xyzt spatial unit
 (``mm``, ``micron``, ``meter``; ``unknown`` is none). It is written so
 where the unit is one of those three; NIfTI has no code for another (cm,
 nm, inch, ...), which is written as ``unknown`` with a warning, the voxel
@@ -27,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, coordinates
 from .affine import axis_aligned, centre_affine
 from .registry import (
     RawVolume,
@@ -46,6 +49,9 @@ from .registry import (
 #: NIfTI's xyzt spatial units (nibabel's names) of isoflow's spellings: the
 #: format has codes for these three lengths only
 XYZT_UNITS = {"m": "meter", "mm": "mm", "\u00b5m": "micron"}
+#: voxels by which float32's rounding of the affine may move a voxel centre
+#: unsaid: far below any voxel a reader would pick differently
+FLOAT32_SLACK = 1e-3
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -139,6 +145,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     refuse_empty(path, obj.volume.shape, "NIfTI")
     if unit not in XYZT_UNITS:
         unit_not_kept(path, "NIfTI", unit, "the length units m, mm and \u00b5m only")
+    float32_placement(path, obj)
     fourth_axis_dropped(path, obj, "NIfTI")
 
 
@@ -224,6 +231,65 @@ def diagonal_affine(obj: DigitalObject) -> np.ndarray:
     affine[:n, :n] = steps
     affine[:n, 3] = centre0
     return affine
+
+
+def float32_placement(path: Path, obj: DigitalObject, fmt: str = "NIfTI", centred: bool = False) -> None:
+    """Warn where the float32 affine moves a voxel centre of ``obj`` by more
+    than :data:`FLOAT32_SLACK` voxels, as a format says what of the
+    placement it drops; ``centred``: the format stores the volume's centre
+    (FreeSurfer MGH's ``Pxyz_c``), not voxel 0's (NIfTI's)."""
+    spacing, corner = placement_3d(obj)
+    shape = obj.volume.shape[:len(spacing)]
+    moved, corner32 = float32_moved(spacing, corner, shape, np.asarray(shape) / 2 if centred else 0)
+    if moved > FLOAT32_SLACK:
+        note(f"{path}: {fmt} stores the voxel-to-world map as float32, which moves this volume's voxels by up to "
+             f"{moved:.3g} voxels (voxel 0's lowest corner {coordinates(corner, 12)} is read back as "
+             f"{coordinates(corner32, 12)}); .nrrd, .h5 and .npz keep the placement")
+
+
+def float32_moved(spacing, corner, shape, anchor=0) -> tuple[float, np.ndarray]:
+    """How far float32 storage of NIfTI's (or MGH's) affine moves a voxel centre.
+
+    Parameters
+    ----------
+    spacing : array_like
+        Voxel size per axis.
+    corner : array_like
+        World position of voxel 0's lowest corner.
+    shape : tuple of int
+        The array's shape along the same axes.
+    anchor : float or array_like
+        The voxel index whose world position the file stores beside the
+        voxel sizes: 0 (NIfTI's translation, voxel 0's centre), or half the
+        shape (MGH's ``Pxyz_c``, the volume's centre).
+
+    Returns
+    -------
+    moved : float
+        The largest change of a voxel centre's coordinate, in voxels of its
+        axis (the first and last voxels bound it: the map is affine).
+    corner32 : ndarray
+        Voxel 0's lowest corner as a reader of the file places it.
+
+    Examples
+    --------
+    >>> moved, corner32 = float32_moved([0.04, 0.04, 0.04], [999998.7, 0, 0], (64, 64, 16))
+    >>> round(moved, 2), round(float(corner32[0]), 2)
+    (0.75, 999998.73)
+    >>> float32_moved([0.5, 0.5, 0.5], [-100, 0, 0], (64, 64, 16))[0]
+    0.0
+    >>> float32_moved([0.5, 0.5, 0.5], [-100, 0, 0], (64, 64, 16), anchor=np.array([32, 32, 8]))[0]
+    0.0
+    """
+    steps, centre0 = centre_affine(spacing, corner)
+    pitch = np.diag(steps)
+    pitch32 = pitch.astype(np.float32).astype(np.float64)
+    stored32 = (centre0 + pitch * anchor).astype(np.float32).astype(np.float64)
+    # voxel 0's centre as nibabel reads it: it builds MGH's affine in float32 too (a no-op for NIfTI's)
+    centre32 = (stored32 - pitch32 * anchor).astype(np.float32).astype(np.float64)
+    last = np.asarray(shape, np.float64) - 1
+    moved = np.maximum(np.abs(centre32 - centre0), np.abs(centre32 + pitch32 * last - centre0 - pitch * last))
+    return float((moved / pitch).max()), centre32 - pitch32 / 2
 
 
 def placement_3d(obj: DigitalObject):

@@ -315,7 +315,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     if label is None:
         return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
     store = open_store(path)
-    check_label(label, store.array.dtype, store.where)
+    label = check_label(label, store.array.dtype, store.where)
     report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
                              surfaces=surfaces, threads=threads)
     if report["voxels"] == 0:
@@ -370,7 +370,7 @@ def store_volume(path, label=None) -> tuple:
         raise IsoflowError(f"{store.where}: surface needs a 3D volume, this store holds {len(store.xyz)}D")
     pitch, origin = store.placement()
     if label is not None:
-        check_label(label, store.array.dtype, store.where)
+        label = check_label(label, store.array.dtype, store.where)
     return ChunkReader(store.guarded(), store.xyz, store.other, label), pitch, origin
 
 

@@ -522,8 +522,11 @@ def one_time_point_labels(path: str | os.PathLike) -> str:
             f"it as 3D and give that: python -c {shlex.quote(code)}")
 
 
-def check_label(label, dtype, where: str) -> None:
-    """A label selects voxels of an array of numbers by one finite number."""
+def check_label(label, dtype, where: str) -> int | float:
+    """A label selects voxels of an array of numbers by one finite number:
+    returned as the array compares it exactly, a whole number as a Python
+    int for an integer array (a float 2.0**63 compared with a uint64 array
+    as a float, which also matched 2**63 + 1 and its neighbours)."""
     if np.dtype(dtype).kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
     if not np.isscalar(label) or isinstance(label, (str, bytes)):
@@ -543,6 +546,7 @@ def check_label(label, dtype, where: str) -> None:
                                f"({info.min} to {info.max})")
     elif not np.isfinite(value):
         raise IsoflowError(f"{where}: label {label} is beyond the values a {dtype} array holds")
+    return int(label) if dtype.kind in "iu" and whole else label
 
 
 def no_such_label(label, values, where: str) -> IsoflowError:

@@ -1,0 +1,176 @@
+"""glTF extensions that change a model's geometry and that trimesh, the
+reader of glTF and GLB files, does not apply.
+
+``EXT_mesh_gpu_instancing`` draws a node's mesh once per row of its
+instance transforms; trimesh reads the node's mesh once, so a file of three
+instanced boxes would be voxelised and counted as one box.
+``EXT_meshopt_compression`` (and its ``KHR_`` successor) stores buffer
+views compressed; trimesh reads the compressed bytes as if they were the
+data.  A file that uses either is refused in one line naming the node or
+extension, rather than read as another model; so is a ``.gltf`` whose
+buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
+"FileNotFoundError: model.bin", no more).  The file's JSON is looked at only (a
+GLB's first chunk), never its buffers.
+"""
+
+from __future__ import annotations
+
+import json
+import struct
+from pathlib import Path
+from urllib.parse import unquote
+
+#: buffer-view compression that trimesh reads as if it were the data
+COMPRESSIONS = ("EXT_meshopt_compression", "KHR_meshopt_compression")
+#: the GLB header (magic, version, length) and the first chunk's (length, type)
+_GLB_HEAD = struct.Struct("<4sII")
+_CHUNK_HEAD = struct.Struct("<I4s")
+
+
+def gltf_json(path: Path) -> dict | None:
+    """The JSON of a ``.gltf`` file or of a ``.glb`` file's first chunk, or
+    None where the file is neither (its reader then says what is wrong).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        A ``.gltf`` or ``.glb`` file.
+
+    Returns
+    -------
+    dict or None
+        The parsed JSON object.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
+    >>> _ = p.write_text('{"asset": {"version": "2.0"}}')
+    >>> gltf_json(p)
+    {'asset': {'version': '2.0'}}
+    """
+    try:
+        with open(path, "rb") as fh:
+            if path.suffix.lower() != ".glb":
+                text = fh.read()
+            else:
+                magic, _, _ = _GLB_HEAD.unpack(fh.read(_GLB_HEAD.size))
+                length, kind = _CHUNK_HEAD.unpack(fh.read(_CHUNK_HEAD.size))
+                if magic != b"glTF" or kind != b"JSON":
+                    return None
+                text = fh.read(length)
+        tree = json.loads(text)
+    except (OSError, struct.error, ValueError):
+        return None
+    return tree if isinstance(tree, dict) else None
+
+
+def unapplied_extension(path: Path) -> str | None:
+    """The one line refusing a glTF or GLB file that uses a geometry
+    extension trimesh does not apply (see the module's text), or None.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The mesh file; any other suffix than ``.gltf`` or ``.glb`` gives None.
+
+    Returns
+    -------
+    str or None
+        ``PATH: node 0 draws its mesh 3 times by the glTF extension
+        EXT_mesh_gpu_instancing, ...``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
+    >>> node = {"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0}}}}
+    >>> _ = p.write_text(json.dumps({"nodes": [node], "accessors": [{"count": 3}]}))
+    >>> print(unapplied_extension(p).replace(str(p), "a.gltf"))  # doctest: +ELLIPSIS
+    a.gltf: node 0 draws its mesh 3 times by the glTF extension EXT_mesh_gpu_instancing, which ...
+    """
+    if path.suffix.lower() not in (".gltf", ".glb"):
+        return None
+    tree = gltf_json(path)
+    if tree is None:
+        return None
+    used = [name for name in COMPRESSIONS if name in _names(tree.get("extensionsUsed"))]
+    if used:
+        return (f"{path}: its buffers are compressed by the glTF extension {used[0]}, which isoflow's reader "
+                "(trimesh) does not decompress: it would read the compressed bytes as the model; export it "
+                "without meshopt compression (gltfpack without -c, Blender's glTF exporter)")
+    for index, node in enumerate(_list(tree.get("nodes"))):
+        instances = _instances(node, tree)
+        if instances is not None:
+            return (f"{path}: node {index} draws its mesh {instances} times by the glTF extension "
+                    "EXT_mesh_gpu_instancing, which isoflow's reader (trimesh) does not apply: it would read "
+                    "one copy; export the model with each instance as a node of its own (Blender: "
+                    "Realize Instances before the glTF export)")
+    return None
+
+
+def missing_buffer(path: Path) -> str | None:
+    """The one line refusing a ``.gltf`` file whose buffer names a file
+    that is not there, or None (images are not looked at: a model reads
+    without its textures).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The mesh file; any other suffix than ``.gltf`` gives None.
+
+    Returns
+    -------
+    str or None
+        ``PATH: buffer 0 is the file 'model.bin', which is not there
+        (DIR/model.bin); ...``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
+    >>> _ = p.write_text(json.dumps({"buffers": [{"uri": "a.bin", "byteLength": 4}]}))
+    >>> print(missing_buffer(p).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
+    DIR/a.gltf: buffer 0 is the file 'a.bin', which is not there (DIR/a.bin); ...
+    """
+    if path.suffix.lower() != ".gltf":
+        return None
+    tree = gltf_json(path)
+    for index, buffer in enumerate(_list((tree or {}).get("buffers"))):
+        uri = buffer.get("uri") if isinstance(buffer, dict) else None
+        if not isinstance(uri, str) or uri.startswith("data:"):
+            continue
+        where = path.parent / unquote(uri)
+        if not where.is_file():
+            return (f"{path}: buffer {index} is the file {uri!r}, which is not there ({where}); a glTF file "
+                    "needs its .bin beside it (copy it too, or export a single .glb)")
+    return None
+
+
+def _instances(node: object, tree: dict) -> int | str | None:
+    """How many times ``node`` draws its mesh by EXT_mesh_gpu_instancing
+    (the count of its first attribute's accessor, or "several" where the
+    file does not say), or None where it does not use the extension."""
+    ext = node.get("extensions") if isinstance(node, dict) else None
+    inst = ext.get("EXT_mesh_gpu_instancing") if isinstance(ext, dict) else None
+    if not isinstance(inst, dict):
+        return None
+    attributes = inst.get("attributes")
+    accessors = _list(tree.get("accessors"))
+    for index in (attributes.values() if isinstance(attributes, dict) else ()):
+        if isinstance(index, int) and 0 <= index < len(accessors) and isinstance(accessors[index], dict):
+            count = accessors[index].get("count")
+            if isinstance(count, int):
+                return count
+    return "several"
+
+
+def _list(value: object) -> list:
+    """``value`` where it is a list, else an empty one (a file's JSON is
+    not trusted to hold the types the specification names)."""
+    return value if isinstance(value, list) else []
+
+
+def _names(value: object) -> list[str]:
+    """The strings of a list of extension names."""
+    return [v for v in _list(value) if isinstance(v, str)]
