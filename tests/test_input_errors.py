@@ -931,3 +931,26 @@ def test_a_zipped_zarr_store_is_said_to_be_one(command, tmp_path, capsys):
     assert main(["info", str(tmp_path / "scan.zarr"), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["betti"] == [1, 1, 0] and report["euler_characteristic"] == 0
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".glb", ".obj"])
+@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"]])
+def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, command):
+    """A scan's point cloud given where a surface is taken: one line that
+    says it holds points and no faces (as many points as trimesh reads from
+    the file), exit 2, nothing written."""
+    cloud = tmp_path / f"scan{suffix}"
+    points = np.random.default_rng(3).random((37, 3))
+    if suffix == ".obj":
+        cloud.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in points))
+        held = len(trimesh.load(cloud, process=False).vertices)
+    else:
+        trimesh.PointCloud(points).export(cloud)
+        geometry = trimesh.load(cloud, force="scene").geometry.values() if suffix == ".glb" else [trimesh.load(cloud)]
+        held = sum(len(g.vertices) for g in geometry if isinstance(g, trimesh.PointCloud))
+    assert held == 37
+    args = [str(tmp_path / a) if a == "OUT.npy" else a for a in command]
+    assert main([args[0], str(cloud), *args[1:]]) == 2
+    err = capsys.readouterr().err
+    assert f"holds {held} points and no faces, a point cloud, not a surface" in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "OUT.npy").exists()

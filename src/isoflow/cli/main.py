@@ -313,8 +313,9 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
 
 def refuse_output_over_input(args: argparse.Namespace) -> None:
     """An output that is the command's own input (the same file, and the
-    same dataset of an HDF5 or zarr file) is refused, --force or not: the
-    file being read would be replaced by what was made from it."""
+    same dataset of an HDF5 or zarr file, or the whole file of which a
+    dataset or a layer of a .seg.nrrd is read) is refused, --force or not:
+    the file being read would be replaced by what was made from it."""
     import os
 
     from ..mesh.formats.registry import split_dataset
@@ -335,7 +336,7 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
                 # -o STORE/) change the input, --force or not
                 raise IsoflowError(f"{out}: lies inside the input {name}; write the output elsewhere (--force "
                                    "replaces an output, never the input)")
-            if out_set != in_set:
+            if out_set is not None and out_set != in_set:  # another dataset of the file: the input's is kept
                 continue
             both = out_file.exists() and in_file.exists()
             if os.path.samefile(out_file, in_file) if both else out_file.resolve() == in_file.resolve():

@@ -12,6 +12,7 @@ import contextlib
 import io
 import math
 import os
+import re
 import warnings
 from pathlib import Path
 from typing import Any
@@ -332,13 +333,50 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
         vertices, faces = _read(p, ext)
         if faces.size == 0 or faces.ndim != 2:
             # trimesh returns an empty mesh rather than failing on many garbage files
-            raise IsoflowError((_stl_size_line(p) if ext == "stl" else None)
+            raise IsoflowError((_stl_size_line(p) if ext == "stl" else None) or _point_cloud_line(p, vertices)
                                or f"{p}: no triangles read (empty mesh, or not a valid {ext.upper() or 'mesh'} file)")
     vertices, faces = check_mesh(vertices, faces, where=str(p))
     welded, kept = weld(vertices, faces, rtol, where=str(p), stats=stats)
     if len(kept) == 0:
         raise IsoflowError(why_no_face(vertices, faces, rtol, str(p)))
     return welded, kept
+
+
+def _point_cloud_line(path: Path, vertices: np.ndarray) -> str | None:
+    """The line for a file that holds points and no face (a scan's point
+    cloud saved as PLY, OBJ or GLB): what it holds, and that a surface is
+    made from it elsewhere; None where it holds no point either."""
+    n = len(np.asarray(vertices).reshape(-1, 3)) if np.size(vertices) else _points_held(path)
+    if not n:
+        return None
+    return (f"{path}: no triangles read: it holds {counted(n, 'point')} and no faces, a point cloud, not a surface; "
+            "reconstruct a surface from it first (MeshLab's Screened Poisson, Open3D's "
+            "create_from_point_cloud_poisson) and give that mesh")
+
+
+def _points_held(path: Path) -> int:
+    """The points of a file whose reader gave no vertex for want of faces:
+    a PLY's ``element vertex`` count (its header alone), an OBJ's ``v``
+    lines where it has no ``f`` line, a glTF's point clouds as trimesh reads
+    its scene; 0 otherwise."""
+    ext = path.suffix.lower()
+    try:
+        if ext == ".ply":
+            head = path.read_bytes()[:65536].split(b"end_header", 1)[0].decode("ascii", "replace")
+            found = re.search(r"^element\s+vertex\s+(\d+)", head, flags=re.M)
+            faces = re.search(r"^element\s+face\s+(\d+)", head, flags=re.M)
+            return int(found.group(1)) if found and not (faces and int(faces.group(1))) else 0
+        if ext == ".obj":
+            text = path.read_bytes()
+            return 0 if re.search(rb"^f\s", text, flags=re.M) else len(re.findall(rb"^v\s", text, flags=re.M))
+        if ext in (".glb", ".gltf"):
+            import trimesh
+
+            scene = trimesh.load(path, force="scene")
+            return sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
+    except Exception:  # (the plain "no triangles read" line is said then)
+        return 0
+    return 0
 
 
 def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str) -> str:

@@ -269,7 +269,8 @@ def check_dataset_read(path, fmt, dataset: str | None) -> None:
     """A dataset named in a path is one the format can read: a dataset of
     HDF5 and zarr, an array of an .npz."""
     if dataset is not None and not (fmt.datasets or fmt.read_datasets):
-        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5, zarr and .npz")
+        raise IsoflowError(f"{path}: a dataset inside the file is named only for HDF5, zarr, .npz and a 3D Slicer "
+                           ".seg.nrrd (a layer)")
 
 
 def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
@@ -677,7 +678,8 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
     if dataset is None and not fmt.directory:  # split_dataset's Path dropped a trailing slash: check the path given
         refuse_directory_spelling(path, "volume")
     if dataset is not None and not fmt.datasets:
-        whole = " (an .npz is written whole: volume, offset, parity, pitch and origin)" if fmt.read_datasets else ""
+        whole = {"NumPy": " (an .npz is written whole: volume, offset, parity, pitch and origin)",
+                 "NRRD": " (a layer of a 3D Slicer .seg.nrrd is read, not written)"}.get(fmt.name, "")
         raise IsoflowError(f"{path}: a dataset inside the file is written only for HDF5 and zarr{whole}")
     fmt.require()  # a missing library fails before anything is written
     # a zarr store is a directory: its module checks (and with force clears) it

@@ -16,6 +16,11 @@ refused; a non-finite ``space origin`` is read as 0 with a warning.
 The length unit is ``space units`` (with a space) or ``units`` of the
 axes with ``spacings``, where every axis has the same one.
 
+A 3D Slicer segmentation (``.seg.nrrd``, :mod:`isoflow.mesh.formats.slicer`)
+of one layer is a label image; of several (4D, the layers on axis 0),
+``FILE.seg.nrrd:N`` reads layer ``N`` and the file alone is refused with
+a line listing each layer's segments.
+
 Written with ``space dimension``, diagonal ``space directions`` (the voxel
 sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
 float64 in the text header, so pitch and origin are kept exactly; and,
@@ -43,6 +48,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
+from .slicer import layer_of
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -53,11 +59,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
         data, header = nrrd.read(str(path), index_order="F")
+    # a 3D Slicer segmentation: the layer named (FILE.seg.nrrd:N), placed as any NRRD
+    data, header = layer_of(data, header, dataset, where)
     directions = header.get("space directions")
     if directions is not None:
         directions = _field(header, "space directions", (data.ndim, None), where)
         placed = [i for i in range(data.ndim) if np.isfinite(directions[i]).all()]
-        data = _scalar_axes(data, placed, "space direction", where)
+        data = _scalar_axes(data, placed, "space direction", where, _kinds(header, data.ndim))
         dim = directions.shape[1]
         origin = _field(header, "space origin", (dim,), where) if "space origin" in header else np.zeros(dim)
         if not np.isfinite(origin).all():
@@ -67,9 +75,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where))
     # without space directions, only "kinds" tells a component axis (an
     # RGB colour, a vector, a list of layers) from a domain axis
-    kinds = header.get("kinds")
+    kinds = _kinds(header, data.ndim)
     placed = list(range(data.ndim))
-    if kinds is not None and len(kinds) == data.ndim:
+    if kinds is not None:
         placed = [i for i in placed if str(kinds[i]).lower() in DOMAIN_KINDS]
     pitch = 1.0
     if "spacings" in header:
@@ -79,6 +87,12 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if len(placed) < data.ndim:
         data = _scalar_axes(data, placed, "spacing", where, kinds)
     return RawVolume(data, pitch, unit=_unit(header, "units", placed if "spacings" in header else None, where))
+
+
+def _kinds(header: dict, ndim: int) -> list | None:
+    """The header's ``kinds``, one per axis, or None where it has none that fit."""
+    kinds = header.get("kinds")
+    return list(kinds) if kinds is not None and len(kinds) == ndim else None
 
 
 def _unit(header: dict, name: str, axes: list[int] | None, where: str) -> str | None:

@@ -48,7 +48,8 @@ class VolumeFormat:
     library: str | None  # the pip package it needs beyond isoflow's own dependencies
     #: a path may name a dataset inside the file: FILE.h5:/group/volume
     datasets: bool = False
-    #: ... when reading only (an .npz's arrays: it is written whole)
+    #: ... when reading only (an .npz's arrays: it is written whole; a
+    #: 3D Slicer .seg.nrrd's layers: FILE.seg.nrrd:1)
     read_datasets: bool = False
     #: the module the library installs, when it differs from the package name
     imports: str | None = None
@@ -78,7 +79,8 @@ FORMATS = (
     VolumeFormat("MGH", (".mgh", ".mgz"), "mgh", "nibabel", max_label=2**31 - 1),
     # a header and its image beside it, either named: Analyze 7.5, or a NIfTI pair
     VolumeFormat("Analyze", (".hdr", ".img"), "analyze", "nibabel", read_only=(".hdr", ".img")),
-    VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", imports="nrrd", read_only=(".nhdr",)),
+    VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", read_datasets=True, imports="nrrd",
+                 read_only=(".nhdr",)),
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),  # a bit per voxel
     VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255),  # colour indices
@@ -93,16 +95,18 @@ def volume_suffixes(writable: bool = False) -> tuple[str, ...]:
     return tuple(s for f in FORMATS for s in f.suffixes if not writable or s not in f.read_only)
 
 
-#: the files in which ``FILE:NAME`` names a dataset, an array or a level
-_CONTAINERS = ("h5", "hdf5", "he5", "npz", "zarr")
+#: the files in which ``FILE:NAME`` names a dataset, an array, a level or
+#: a layer (of a 3D Slicer segmentation)
+_CONTAINERS = ("h5", "hdf5", "he5", "npz", "zarr", "nrrd", "nhdr")
 
 
 def split_dataset(path) -> tuple[Path, str | None]:
     """``FILE.h5:/group/volume`` -> (FILE.h5, '/group/volume'); ``IMG.zarr:1``
     (or ``IMG.zarr/:1``) -> (IMG.zarr, '1'), a resolution level; ``ARCHIVE.npz:seg`` -> one of
-    its arrays (read only); any other path -> (path, None).
+    its arrays (read only); ``SEG.seg.nrrd:1`` -> a layer of a 3D Slicer
+    segmentation (read only); any other path -> (path, None).
 
-    Only after an HDF5, zarr or npz suffix, so that ``C:\\data\\a.nii`` stays a path."""
+    Only after an HDF5, zarr, npz or NRRD suffix, so that ``C:\\data\\a.nii`` stays a path."""
     return split_store(path, _CONTAINERS)
 
 

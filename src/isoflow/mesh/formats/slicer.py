@@ -1,0 +1,216 @@
+"""3D Slicer segmentations, ``.seg.nrrd``: which layer of a NRRD to read.
+
+3D Slicer (``vtkMRMLSegmentationStorageNode``) saves a segmentation as a
+NRRD whose header holds a key per segment property, ``Segment{i}_ID``,
+``Segment{i}_Name``, ``Segment{i}_LabelValue``, ``Segment{i}_Layer``, ...
+for segments ``i = 0, 1, ...``. A segment is the voxels of its layer that
+equal its label value. Segments that do not overlap share a layer, and a
+file of one layer is a 3D label image; segments that overlap lie in
+different layers, which Slicer stores on the first axis of a 4D array
+(``kinds: list domain domain domain``, no space direction). Slicer's reader
+takes a segment without ``Layer`` to have a layer of its own (its index:
+the files of Slicer 4.10 and before, a 0/1 layer per segment) and one
+without ``LabelValue`` to have label 1.
+
+A 4D segmentation is no label image: ``FILE.seg.nrrd:N`` reads its layer
+``N`` (0 the first) as one, with the placement of the other three axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import IsoflowError
+
+#: the keys of a NRRD header's per-axis fields, which lose the layer axis
+AXIS_FIELDS = ("sizes", "space directions", "kinds", "spacings", "thicknesses", "axis mins", "axis maxs",
+               "centerings", "labels", "units")
+
+#: the segments a refusal lists per layer before it counts the rest
+SHOWN = 8
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One segment of a 3D Slicer segmentation: its name (its ID where it
+    has none), the layer that holds it and its value there."""
+
+    name: str
+    layer: int
+    label: int
+
+
+def segments(header: dict, where: str) -> list[Segment]:
+    """The segments a NRRD header declares, in their order (empty for a
+    NRRD that is no 3D Slicer segmentation: no ``Segment0_ID``).
+
+    Parameters
+    ----------
+    header : dict
+        The header as pynrrd reads it (its own keys as strings).
+    where : str
+        The file, as a refusal names it.
+
+    Returns
+    -------
+    list of Segment
+        One per ``Segment{i}_ID``, ``i = 0, 1, ...`` until one is missing,
+        as Slicer reads them.
+
+    Raises
+    ------
+    IsoflowError
+        A ``Layer`` or ``LabelValue`` that is no whole number, named with
+        its value.
+
+    Examples
+    --------
+    >>> head = {"Segment0_ID": "Segment_1", "Segment0_Name": "liver", "Segment0_LabelValue": "3",
+    ...         "Segment0_Layer": "0", "Segment1_ID": "Segment_2"}
+    >>> segments(head, "a.seg.nrrd")
+    [Segment(name='liver', layer=0, label=3), Segment(name='Segment_2', layer=1, label=1)]
+    """
+    found = []
+    while f"Segment{len(found)}_ID" in header:
+        i = len(found)
+        name = str(header.get(f"Segment{i}_Name") or header[f"Segment{i}_ID"])
+        found.append(Segment(name, _whole(header, f"Segment{i}_Layer", i, where),
+                             _whole(header, f"Segment{i}_LabelValue", 1, where)))
+    return found
+
+
+def _whole(header: dict, key: str, default: int, where: str) -> int:
+    """A header's whole number ``key``, ``default`` where it is absent."""
+    text = header.get(key)
+    if text is None:
+        return default
+    try:
+        return int(str(text).strip())
+    except ValueError:
+        raise IsoflowError(f"{where}: NRRD field '{key}' {text!r} is no whole number") from None
+
+
+def layer_of(data: np.ndarray, header: dict, layer: str | None, where: str) -> tuple[np.ndarray, dict]:
+    """The array and header of a NRRD as one label image: a 3D Slicer
+    segmentation's layer ``layer`` (``FILE.seg.nrrd:N``; None: the file's
+    one layer), the layer axis dropped from the header's per-axis fields;
+    any other NRRD as it is, with ``layer`` None.
+
+    Parameters
+    ----------
+    data : numpy.ndarray
+        The array as pynrrd reads it with ``index_order='F'`` (a layer axis
+        first).
+    header : dict
+        Its header.
+    layer : str or None
+        What the path names after its colon.
+    where : str
+        The file, as a refusal names it.
+
+    Returns
+    -------
+    tuple of numpy.ndarray and dict
+        The array and the header to place it by.
+
+    Raises
+    ------
+    IsoflowError
+        A segmentation of several layers without ``layer`` (the line lists
+        each layer's segments, names and values), a ``layer`` it has not,
+        a layer named in a NRRD that is no segmentation, a segment in a
+        layer the array has not.
+
+    Examples
+    --------
+    >>> head = {"kinds": ["list", "domain", "domain", "domain"], "sizes": [2, 4, 4, 4],
+    ...         "Segment0_ID": "a", "Segment0_Layer": "0", "Segment1_ID": "b", "Segment1_Layer": "1"}
+    >>> array, placed = layer_of(np.zeros((2, 4, 4, 4)), head, "1", "s.seg.nrrd")
+    >>> array.shape, placed["kinds"], placed["sizes"]
+    ((4, 4, 4), ['domain', 'domain', 'domain'], [4, 4, 4])
+    """
+    found = segments(header, where)
+    if not found:
+        if layer is not None:
+            raise IsoflowError(f"{where}:{layer}: names a layer of a 3D Slicer segmentation (.seg.nrrd), and this "
+                               f"NRRD is none (its header has no field 'Segment0_ID'); give the file alone")
+        return data, header
+    layered = data.ndim == 4
+    count = data.shape[0] if layered else 1
+    _check_layers(found, count, where)
+    if layer is None and count > 1:
+        raise IsoflowError(f"{where}: a 3D Slicer segmentation of {count} layers, whose segments may overlap: "
+                           f"read one layer as {where}:N ({listing(found, count)})")
+    index = 0 if layer is None else _layer_index(layer, found, count, where)
+    if not layered:
+        return data, header
+    _check_layer_axis(header, where)
+    kept = {k: (v[1:] if k in AXIS_FIELDS and _per_axis(v, data.ndim) else v) for k, v in header.items()}
+    return data[index], kept
+
+
+def _per_axis(value, ndim: int) -> bool:
+    """Whether a header field holds one entry per axis."""
+    return not isinstance(value, str) and np.ndim(value) >= 1 and len(value) == ndim
+
+
+def _check_layers(found: list[Segment], count: int, where: str) -> None:
+    """Every segment's layer is one the array has."""
+    for i, s in enumerate(found):
+        if not 0 <= s.layer < count:
+            raise IsoflowError(f"{where}: NRRD field 'Segment{i}_Layer' {str(s.layer)!r} names no layer of the "
+                               f"array, which has {count} (0 to {count - 1})")
+
+
+def _check_layer_axis(header: dict, where: str) -> None:
+    """The layers lie on the first axis, as 3D Slicer writes them: one
+    without a space direction, or of a component kind."""
+    directions = header.get("space directions")
+    kinds = header.get("kinds")
+    placed = directions is not None and np.isfinite(np.asarray(directions[0], np.float64)).all()
+    if placed or (kinds is not None and str(kinds[0]).lower() in ("domain", "space", "time")):
+        field, value = ("space directions", np.asarray(directions[0]).tolist()) if placed else ("kinds", kinds[0])
+        raise IsoflowError(f"{where}: NRRD field '{field}' of axis 0 is {value!r}: a 3D Slicer segmentation keeps "
+                           "its layers on axis 0, of kind 'list' without a space direction")
+
+
+def _layer_index(layer: str, found: list[Segment], count: int, where: str) -> int:
+    """The layer that ``FILE.seg.nrrd:N`` names, or one line listing them."""
+    text = layer.strip()
+    if not (text.isdigit() and text.isascii()) or int(text) >= count:
+        layers = "its one layer is 0" if count == 1 else f"its layers are 0 to {count - 1}"
+        raise IsoflowError(f"{where}:{layer}: layer {layer!r} is no layer of this 3D Slicer segmentation; {layers} "
+                           f"({listing(found, count)})")
+    return int(text)
+
+
+def listing(found: list[Segment], count: int) -> str:
+    """Each layer's segments as a refusal lists them, by name and value
+    in their layer: ``layer 0: liver (label 1), tumor (label 2); layer 1:
+    vessel (label 1)``.
+
+    Parameters
+    ----------
+    found : list of Segment
+        The segments (:func:`segments`).
+    count : int
+        The number of layers.
+
+    Returns
+    -------
+    str
+        A layer's first segments, then how many more it holds.
+
+    Examples
+    --------
+    >>> listing([Segment("liver", 0, 1), Segment("tumor", 0, 2), Segment("vessel", 1, 1)], 2)
+    'layer 0: liver (label 1), tumor (label 2); layer 1: vessel (label 1)'
+    """
+    parts = []
+    for n in range(count):
+        held = [f"{s.name} (label {s.label})" for s in found if s.layer == n]
+        more = f", and {len(held) - SHOWN} more" if len(held) > SHOWN else ""
+        parts.append(f"layer {n}: " + (", ".join(held[:SHOWN]) + more if held else "no segment"))
+    return "; ".join(parts)
