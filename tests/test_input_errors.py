@@ -457,7 +457,7 @@ def test_a_binary_volume_of_a_format_isoflow_does_not_read_lists_the_volume_suff
 
 
 @pytest.mark.parametrize("written, named, renamed", [
-    ("v.nii.gz", "scan", "scan.nii.gz"), ("v.nii", "scan.img", "scan.nii"), ("v.tif", "stack.bin", "stack.tif"),
+    ("v.nii.gz", "scan", "scan.nii.gz"), ("v.nii", "scan.raw", "scan.nii"), ("v.tif", "stack.bin", "stack.tif"),
 ])
 def test_a_volume_without_a_volume_suffix_is_named_by_its_content(tmp_path, capsys, written, named, renamed):
     """It falls to the point-list reader ("binary data"); the line says

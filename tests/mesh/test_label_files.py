@@ -180,7 +180,7 @@ def kept_by_the_docs() -> dict[str, tuple[str, str]]:
 
 
 #: every format write_labels writes, by one suffix each
-WRITTEN = [".npz", ".nii", ".nii.gz", ".nrrd", ".h5", ".zarr", ".tif", ".npy", ".binvox", ".vox"]
+WRITTEN = [".npz", ".nii", ".nii.gz", ".mgz", ".mgh", ".nrrd", ".h5", ".zarr", ".tif", ".npy", ".binvox", ".vox"]
 
 
 def test_the_docs_list_every_format_write_labels_writes():

@@ -56,6 +56,7 @@ def check_same_place(back, obj):
     ("a.npy", "npy"), ("a.NPZ", "npy"), ("a.tif", "tiff"), ("a.TIFF", "tiff"), ("scan.nii.gz", "nifti"),
     ("a.nii", "nifti"), ("a.nrrd", "nrrd"), ("a.nhdr", "nrrd"), ("a.h5", "hdf5"), ("a.hdf5", "hdf5"),
     ("a.binvox", "binvox"), ("a.vox", "magicavoxel"), ("a.zarr", "omezarr"), ("a.ome.zarr", "omezarr"),
+    ("aseg.mgz", "mgh"), ("T1.MGH", "mgh"), ("scan.hdr", "analyze"), ("scan.img", "analyze"),
 ])
 def test_suffix_finds_the_format(name, module):
     assert format_for(name).module == module

@@ -22,7 +22,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     grid.add_argument("--pitch", type=pitch_value, help="voxel size in mesh units")
     grid.add_argument("--resolution", type=resolution_value, help="voxels along the longest side")
     p.add_argument("-o", "--output", required=True,
-                   help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .nrrd, .h5[:/dataset], .binvox, .vox), or "
+                   help="OUT.npz (or .npy, .tif, .nii, .nii.gz, .mgz, .mgh, .nrrd, .h5[:/dataset], .binvox, .vox), or "
                         "OUT.zarr: one mesh's written slab by slab as dask tasks, never held in memory (a label "
                         "image of several meshes or --split is written whole)")
     add_mesh_rule(p)

@@ -1,4 +1,4 @@
-"""Affine voxel-to-world maps (NIfTI, NRRD) as isoflow's axis-aligned grid.
+"""Affine voxel-to-world maps (NIfTI, MGH, NRRD) as isoflow's axis-aligned grid.
 
 NIfTI's affine and NRRD's space directions map a voxel's *centre* index
 ``(i, j, k)`` to world coordinates. isoflow's grid is axis-aligned with a

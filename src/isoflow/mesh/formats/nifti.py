@@ -61,11 +61,71 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         img = _load(nib, path)
         if not isinstance(img, (nib.Nifti1Image, nib.Nifti2Image)):
             raise IsoflowError(f"{where}: not a NIfTI image ({type(img).__name__})")
-        shape = img.shape
-        check_shape(shape, img.get_data_dtype(), where)
-        data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
-        affine = np.asarray(img.affine, np.float64)
-        unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
+        return image_volume(img, where)
+
+
+def image_volume(img, where: str) -> RawVolume:
+    """The volume of a NIfTI image nibabel opened (a single file or a
+    ``.hdr``/``.img`` pair): its data as stored, placed by its affine, in
+    its xyzt spatial unit.
+
+    Parameters
+    ----------
+    img : nibabel.Nifti1Pair or nibabel.Nifti2Pair
+        The image (``Nifti1Image`` is one).
+    where : str
+        The file, as refusals name it.
+
+    Returns
+    -------
+    RawVolume
+        As :func:`placed_by_affine` gives it.
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.diag([0.5, 0.5, 2, 1]))
+    >>> img.header.set_xyzt_units("mm")
+    >>> raw = image_volume(img, "a.nii")
+    >>> raw.pitch.tolist(), raw.origin.tolist(), raw.unit
+    ([0.5, 0.5, 2.0], [-0.25, -0.25, -1.0], 'mm')
+    """
+    check_shape(img.shape, img.get_data_dtype(), where)
+    data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
+    affine = np.asarray(img.affine, np.float64)
+    unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
+    return placed_by_affine(data, affine, where, unit)
+
+
+def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str | None) -> RawVolume:
+    """The volume of an image placed by a 4x4 voxel-to-world ``affine`` (of
+    voxel centres, as NIfTI's and FreeSurfer MGH's), on isoflow's grid.
+
+    Parameters
+    ----------
+    data : numpy.ndarray
+        The image's array as stored, (i, j, k) or (i, j, k, t); trailing
+        axes of length 1 are dropped.
+    affine : numpy.ndarray
+        The 4x4 map of voxel centre indices to world coordinates.
+    where : str
+        The file, as refusals name it.
+    unit : str or None
+        The length unit of the world coordinates.
+
+    Returns
+    -------
+    RawVolume
+        The array turned to (x, y, z) with positive steps
+        (:func:`~isoflow.mesh.formats.affine.axis_aligned`), a fourth axis
+        with voxel size 1 from 0.
+
+    Examples
+    --------
+    >>> raw = placed_by_affine(np.zeros((2, 3, 4, 1)), np.diag([-2.0, 1, 1, 1]), "a.nii", "mm")
+    >>> raw.array.shape, raw.pitch.tolist(), raw.origin.tolist()
+    ((2, 3, 4), [2.0, 1.0, 1.0], [-3.0, -0.5, -0.5])
+    """
     while data.ndim > 3 and data.shape[-1] == 1:
         data = data[..., 0]
     if data.ndim not in (2, 3, 4):
@@ -86,23 +146,39 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     if unit not in XYZT_UNITS:
         unit_not_kept(path, "NIfTI", unit, "the length units m, mm and \u00b5m only")
     float32_placement(path, obj)
+    fourth_axis_dropped(path, obj, "NIfTI")
+
+
+def fourth_axis_dropped(path: Path, obj: DigitalObject, fmt: str) -> None:
+    """Warn that a 4D object's voxel size and origin along its fourth axis,
+    which a format placed by a 4x4 affine has no room for, are read back as
+    1 and 0 (nothing where they are those).
+
+    Parameters
+    ----------
+    path : Path
+        The file to be written, named in the warning.
+    obj : DigitalObject
+        The object.
+    fmt : str
+        The format's name.
+
+    Examples
+    --------
+    >>> fourth_axis_dropped(Path("a.nii"), DigitalObject(np.ones((2, 2, 2, 3), bool)), "NIfTI")  # nothing to say
+    """
     if obj.ndim != 4:
         return
     spacing, corner = placement(obj)
     if spacing[3] != 1 or corner[3] != 0:
-        note(f"{path}: NIfTI places the first three axes only; the fourth axis's voxel size "
+        note(f"{path}: {fmt} places the first three axes only; the fourth axis's voxel size "
              f"{float(spacing[3]):.9g} and origin {float(corner[3]):.9g} are not written (read back as 1 and 0)")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None) -> None:
     nib = import_library("nibabel", "NIfTI")
-    spacing, corner = placement_3d(obj)
-    steps, centre0 = centre_affine(spacing, corner)
-    affine = np.eye(4)
-    n = len(spacing)
-    affine[:n, :n] = steps
-    affine[:n, 3] = centre0
+    affine = diagonal_affine(obj)
     values = stored_values(obj.volume)
     # the type named: nibabel refuses int64 and uint64 data unless it is (64-bit labels)
     img = nib.Nifti1Image(values, affine, dtype=values.dtype)
@@ -138,20 +214,41 @@ def _load(nib, path: Path):
         return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
 
 
-def float32_placement(path: Path, obj: DigitalObject) -> None:
+def diagonal_affine(obj: DigitalObject) -> np.ndarray:
+    """The 4x4 voxel-to-world map of ``obj``'s spatial axes: its voxel sizes
+    on the diagonal, voxel 0's centre as the translation (what NIfTI and
+    FreeSurfer MGH store).
+
+    Examples
+    --------
+    >>> diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)).tolist()[0]
+    [0.5, 0.0, 0.0, 0.25]
+    """
+    spacing, corner = placement_3d(obj)
+    steps, centre0 = centre_affine(spacing, corner)
+    affine = np.eye(4)
+    n = len(spacing)
+    affine[:n, :n] = steps
+    affine[:n, 3] = centre0
+    return affine
+
+
+def float32_placement(path: Path, obj: DigitalObject, fmt: str = "NIfTI", centred: bool = False) -> None:
     """Warn where the float32 affine moves a voxel centre of ``obj`` by more
     than :data:`FLOAT32_SLACK` voxels, as a format says what of the
-    placement it drops."""
+    placement it drops; ``centred``: the format stores the volume's centre
+    (FreeSurfer MGH's ``Pxyz_c``), not voxel 0's (NIfTI's)."""
     spacing, corner = placement_3d(obj)
-    moved, corner32 = float32_moved(spacing, corner, obj.volume.shape[:len(spacing)])
+    shape = obj.volume.shape[:len(spacing)]
+    moved, corner32 = float32_moved(spacing, corner, shape, np.asarray(shape) / 2 if centred else 0)
     if moved > FLOAT32_SLACK:
-        note(f"{path}: NIfTI stores the voxel-to-world map as float32, which moves this volume's voxels by up to "
+        note(f"{path}: {fmt} stores the voxel-to-world map as float32, which moves this volume's voxels by up to "
              f"{moved:.3g} voxels (voxel 0's lowest corner {coordinates(corner, 12)} is read back as "
              f"{coordinates(corner32, 12)}); .nrrd, .h5 and .npz keep the placement")
 
 
-def float32_moved(spacing, corner, shape) -> tuple[float, np.ndarray]:
-    """How far float32 storage of NIfTI's affine moves a voxel centre.
+def float32_moved(spacing, corner, shape, anchor=0) -> tuple[float, np.ndarray]:
+    """How far float32 storage of NIfTI's (or MGH's) affine moves a voxel centre.
 
     Parameters
     ----------
@@ -161,6 +258,10 @@ def float32_moved(spacing, corner, shape) -> tuple[float, np.ndarray]:
         World position of voxel 0's lowest corner.
     shape : tuple of int
         The array's shape along the same axes.
+    anchor : float or array_like
+        The voxel index whose world position the file stores beside the
+        voxel sizes: 0 (NIfTI's translation, voxel 0's centre), or half the
+        shape (MGH's ``Pxyz_c``, the volume's centre).
 
     Returns
     -------
@@ -177,10 +278,15 @@ def float32_moved(spacing, corner, shape) -> tuple[float, np.ndarray]:
     (0.75, 999998.73)
     >>> float32_moved([0.5, 0.5, 0.5], [-100, 0, 0], (64, 64, 16))[0]
     0.0
+    >>> float32_moved([0.5, 0.5, 0.5], [-100, 0, 0], (64, 64, 16), anchor=np.array([32, 32, 8]))[0]
+    0.0
     """
     steps, centre0 = centre_affine(spacing, corner)
     pitch = np.diag(steps)
-    pitch32, centre32 = pitch.astype(np.float32).astype(np.float64), centre0.astype(np.float32).astype(np.float64)
+    pitch32 = pitch.astype(np.float32).astype(np.float64)
+    stored32 = (centre0 + pitch * anchor).astype(np.float32).astype(np.float64)
+    # voxel 0's centre as nibabel reads it: it builds MGH's affine in float32 too (a no-op for NIfTI's)
+    centre32 = (stored32 - pitch32 * anchor).astype(np.float32).astype(np.float64)
     last = np.asarray(shape, np.float64) - 1
     moved = np.maximum(np.abs(centre32 - centre0), np.abs(centre32 + pitch32 * last - centre0 - pitch * last))
     return float((moved / pitch).max()), centre32 - pitch32 / 2

@@ -75,6 +75,10 @@ FORMATS = (
     VolumeFormat("NumPy", (".npy", ".npz"), "npy", None, read_datasets=True),
     VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1),  # ImageJ: 8 or 16 bits
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
+    # FreeSurfer's volumes (aseg.mgz); labels in int32 at most
+    VolumeFormat("MGH", (".mgh", ".mgz"), "mgh", "nibabel", max_label=2**31 - 1),
+    # a header and its image beside it, either named: Analyze 7.5, or a NIfTI pair
+    VolumeFormat("Analyze", (".hdr", ".img"), "analyze", "nibabel", read_only=(".hdr", ".img")),
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", read_datasets=True, imports="nrrd",
                  read_only=(".nhdr",)),
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
@@ -141,7 +145,8 @@ MAGIC = (
 def sniff_volume_format(path) -> tuple[str, str] | None:
     """The volume format a file's first bytes say it holds, as ``(name,
     suffix)``, or None: a magic number of :data:`MAGIC`, NIfTI's ``n+1`` or
-    ``n+2`` (a ``.nii.gz`` where that lies in a gzip stream).
+    ``n+2`` (a ``.nii.gz`` where that lies in a gzip stream), a FreeSurfer MGH
+    header (an ``.mgz`` where that lies in a gzip stream).
 
     Parameters
     ----------
@@ -170,12 +175,14 @@ def sniff_volume_format(path) -> tuple[str, str] | None:
         if head.startswith(b"\x1f\x8b"):
             with gzip.open(path, "rb") as fh:
                 inner = fh.read(352)
-            return ("NIfTI", ".nii.gz") if _nifti(inner) else None
+            return ("NIfTI", ".nii.gz") if _nifti(inner) else ("MGH", ".mgz") if _mgh(inner) else None
     except (OSError, EOFError):  # unreadable, or a gzip stream cut short in its header
         return None
     if _nifti(head):
         return ("NIfTI", ".nii")
     found = next(((name, suffix) for magic, name, suffix in MAGIC if head.startswith(magic)), None)
+    if found is None and _mgh(head):
+        return ("MGH", ".mgh")
     if found == ("NumPy", ".npz") and not _npz(path):
         return None  # a zip archive of something else
     return found
@@ -198,10 +205,22 @@ def _nifti(head: bytes) -> bool:
     return head[344:348] == b"n+1\x00" or head[4:8] == b"n+2\x00"
 
 
+def _mgh(head: bytes) -> bool:
+    """Whether a file's first bytes are a FreeSurfer MGH header: version 1,
+    four sizes from 1 on and a type FreeSurfer writes (uchar, int, float,
+    short, ushort), big-endian, as nibabel's ``MGHHeader`` reads them."""
+    import struct
+
+    if len(head) < 24:
+        return False
+    version, *dims, kind = struct.unpack(">6i", head[:24])
+    return version == 1 and min(dims) >= 1 and kind in (0, 1, 3, 4, 10)
+
+
 def content_hint(path, what: str) -> str:
     """What to add to a refusal of ``path`` as a ``what`` file where its
     content is another volume format: ``; its content is TIFF, not NIfTI:
-    rename it scan.tif``, or is NIfTI compressed where the name says
+    rename it scan.tif``, or is NIfTI or MGH compressed where the name says
     uncompressed or the other way round (nibabel goes by the name);
     nothing otherwise."""
     found = sniff_volume_format(path)
@@ -209,9 +228,10 @@ def content_hint(path, what: str) -> str:
     if found is None:
         return ""
     if found[0] == what:
-        if what != "NIfTI" or (found[1] == ".nii.gz") == name.lower().endswith(".gz"):
+        packed = found[1] in (".nii.gz", ".mgz")
+        if what not in ("NIfTI", "MGH") or packed == name.lower().endswith((".gz", ".mgz")):
             return ""
-        content = "gzip-compressed NIfTI" if found[1] == ".nii.gz" else "uncompressed NIfTI"
+        content = f"{'gzip-compressed' if packed else 'uncompressed'} {what}"
     else:
         content = f"{found[0]}, not {what}"
     fmt = format_for(name)

@@ -1,0 +1,103 @@
+"""FreeSurfer MGH, ``.mgh`` and ``.mgz`` (gzip-compressed) (nibabel).
+
+The volumes FreeSurfer writes: ``aseg.mgz`` and ``aparc+aseg.mgz`` (label
+images), ``brainmask.mgz``, ``T1.mgz``. nibabel reads them as ``MGHImage``.
+
+Axes: the header's direction cosines, voxel sizes and centre (``Mdc``,
+``delta``, ``Pxyz_c``) make the vox2ras affine (nibabel's ``img.affine``),
+which maps a voxel's *centre* index to RAS millimetres, as NIfTI's does:
+isoflow turns and places the array by it exactly as a NIfTI image's
+(:func:`isoflow.mesh.formats.nifti.placed_by_affine`: flips and
+permutations exact, a rotation kept as its axis-aligned part with a
+warning). A file whose ``goodRASFlag`` is 0 has no valid direction cosines:
+nibabel then gives FreeSurfer's default (coronal, voxel size 1), and so
+does isoflow. The length unit is mm, which the format has by definition. The
+data type is as stored (uint8, int16, int32, float32; uint16 from
+FreeSurfer 7.3 on), in the machine's byte order (MGH stores big-endian).
+A file of several frames is read as 4D (``info`` only), voxel size 1
+along the frames, as NIfTI's; one frame is 3D.
+
+Written as ``.mgz`` or ``.mgh`` (uint8 0/1; a label image in the smallest
+of uint8, int16 and int32 that holds it, the types every FreeSurfer
+version reads) with a diagonal affine; MGH stores its header in float32,
+and stores the volume's centre, not its first voxel (nibabel builds the
+affine from it in float32), so an origin comes back within float32
+rounding of the centre's coordinates and of voxel 0's (a warning says
+where that moves a voxel by more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
+and 4D volumes only, labels up to 2**31 - 1, in mm: a unit other than mm
+is not written (a warning says so; the numbers are kept, read back as
+mm), and a volume without one is read back in mm.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...digital.lattice import DigitalObject
+from ...errors import IsoflowError
+from .nifti import diagonal_affine, float32_placement, fourth_axis_dropped, placed_by_affine
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    quiet_logs,
+    reading,
+    refuse_empty,
+    stored_values,
+    unit_not_kept,
+)
+
+#: the types FreeSurfer has read since its first releases, smallest first
+WRITTEN_TYPES = (np.uint8, np.int16, np.int32)
+
+
+def read(path: Path, dataset: str | None = None) -> RawVolume:
+    nib = import_library("nibabel", "MGH")
+    where = str(path)
+    with reading(path, "MGH"), quiet_logs("nibabel.global"):
+        img = nib.MGHImage.from_file_map(nib.MGHImage.make_file_map({"image": str(path)}))
+        check_shape(img.shape, img.get_data_dtype(), where)
+        data = np.asanyarray(img.dataobj)
+        affine = np.asarray(img.affine, np.float64)
+    # big-endian in the file: the kernels take the machine's order
+    data = data.astype(data.dtype.newbyteorder("="), copy=False)
+    return placed_by_affine(data, affine, where, "mm")
+
+
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+    """Refuse what MGH cannot hold (a 2D object, a side of length 0; labels
+    beyond int32 are refused by the format's ``max_label``); warn of a unit
+    other than mm, of voxels that float32 moves, and of a fourth axis's
+    placement, which it does not keep."""
+    if obj.ndim not in (3, 4):
+        raise IsoflowError(f"{path}: MGH holds 3D volumes (and 4D frames), this object is {obj.ndim}D; "
+                           "write .nii.gz, .nrrd or .npz")
+    refuse_empty(path, obj.volume.shape, "MGH")
+    if unit != "mm":
+        unit_not_kept(path, "MGH", unit, "millimetres only (read back as mm)")
+    float32_placement(path, obj, "MGH", centred=True)
+    fourth_axis_dropped(path, obj, "MGH")
+
+
+def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
+    nib = import_library("nibabel", "MGH")
+    img = nib.MGHImage(mgh_values(stored_values(obj.volume)), diagonal_affine(obj))
+    # the file named exactly: nibabel gzips by the name's suffix, which a temporary name keeps
+    img.to_file_map(img.make_file_map({"image": str(path)}))
+
+
+def mgh_values(values: np.ndarray) -> np.ndarray:
+    """A mask or a label image in the smallest type of
+    :data:`WRITTEN_TYPES` that holds its values (0/1 bytes stay bytes).
+
+    Examples
+    --------
+    >>> mgh_values(np.array([0, 300], np.uint16)).dtype.name, mgh_values(np.array([0, 3], np.uint64)).dtype.name
+    ('int16', 'uint8')
+    """
+    top = int(values.max(initial=0))
+    kind = next(t for t in WRITTEN_TYPES if np.iinfo(t).max >= top)
+    return values.astype(kind, copy=False)
