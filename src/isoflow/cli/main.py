@@ -330,14 +330,15 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
         refuse_unusable_output(out_file)  # before exists() below raises on it
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
-            if in_file.is_dir() and in_file.resolve() in out_file.resolve().parents:
+            # os.path's tests: an input that cannot be looked at is not the output, and its reader says why
+            if os.path.isdir(in_file) and in_file.resolve() in out_file.resolve().parents:
                 # a zarr store is a directory: files written into it (flow --out STORE/run, surface --labels
                 # -o STORE/) change the input, --force or not
                 raise IsoflowError(f"{out}: lies inside the input {name}; write the output elsewhere (--force "
                                    "replaces an output, never the input)")
             if out_set != in_set:
                 continue
-            both = out_file.exists() and in_file.exists()
+            both = os.path.exists(out_file) and os.path.exists(in_file)
             if os.path.samefile(out_file, in_file) if both else out_file.resolve() == in_file.resolve():
                 raise IsoflowError(f"{out}: is the input {name}; write the output to another file (--force "
                                    "replaces an output, never the input)")

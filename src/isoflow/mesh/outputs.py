@@ -98,7 +98,8 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     ------
     IsoflowError
         Naming the path and the cause: ``Path.exists`` raised the bare
-        ``OSError`` (a traceback on the command line) for a name too long;
+        ``OSError`` (a traceback on the command line) for a name too long
+        or one in a directory that may not be searched;
         a file is written beside its target and renamed over it, so
         ``-o /dev/null --force`` run as root replaced the system's
         ``/dev/null`` with a regular file.
@@ -106,7 +107,8 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     try:
         mode = os.stat(path).st_mode  # the link's target: /dev/stdout is a link to a pipe or terminal
     except OSError as exc:
-        if exc.errno == errno.ENAMETOOLONG:
+        if exc.errno not in (errno.ENOENT, errno.ENOTDIR):
+            # a name too long, a directory on the way that may not be searched (permission denied)
             raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
         return  # missing, or a dangling link: a new file is made
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
