@@ -385,6 +385,69 @@ def forget_escaped_interrupt() -> None:
     exec("", {})
 
 
+class StdoutError(OSError):
+    """A write to standard output that failed, other than a closed pipe
+    (a full disk or quota under a redirection, ``> /dev/full``): such an
+    error names no file."""
+
+
+class NamedStdout:
+    """Standard output whose write errors are :class:`StdoutError`, so that
+    the command line can name standard output as what failed."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        return guard_stdout(self.stream.write, text)
+
+    def writelines(self, lines) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        guard_stdout(self.stream.flush)
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
+def guard_stdout(call, *args):
+    """``call(*args)``, a write to standard output, with its OSError raised
+    as :class:`StdoutError` (BrokenPipeError as it is: ``| head`` is no error)."""
+    try:
+        return call(*args)
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise StdoutError(exc.errno, exc.strerror) from None
+
+
+@contextlib.contextmanager
+def stdout_named() -> Iterator[None]:
+    """Run a command with :class:`NamedStdout` in place of ``sys.stdout``,
+    flushed before it is put back: block-buffered output to a file fails
+    only when flushed, which would be as the interpreter exits."""
+    stream = sys.stdout
+    if stream is None:  # started with standard output closed
+        yield
+        return
+    sys.stdout = NamedStdout(stream)
+    try:
+        yield
+        sys.stdout.flush()
+    finally:
+        sys.stdout = stream
+
+
+def drop_stdout() -> None:
+    """Point standard output at the null device: what it still buffers
+    would fail again as the interpreter exits, with a second message."""
+    import os
+
+    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``isoflow`` command line; returns its exit status (0 done,
     1 a written file did not read back as counted, 2 bad input, 128 + the
@@ -414,7 +477,7 @@ def main(argv: list[str] | None = None) -> int:
     compiled.on_first_compile = None if args.quiet else compiling
     try:
         with quiet_stderr(args.quiet), warnings_as_lines(args), log_records_as_notes(args), \
-                termination_as_interrupt(terminated):
+                termination_as_interrupt(terminated), stdout_named():
             if args.command != "completion" and getattr(args, "threads", None) is None:
                 compiled.check_env_threads()  # the default of --threads, said before any file is read
             refuse_output_over_input(args)
@@ -434,10 +497,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
         return interrupted(terminated, str(exc))
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        drop_stdout()
         return 0
+    except StdoutError as exc:
+        print(f"isoflow {args.command}: error: standard output: cannot be written ({exc.strerror})", file=sys.stderr)
+        drop_stdout()
+        return 2
     except Exception:
         if not terminated:
             raise
