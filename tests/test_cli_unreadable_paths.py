@@ -30,11 +30,11 @@ for name in ("numpy", "trimesh", "isoflow.cli.main", "isoflow.cli.info", "isoflo
              "isoflow.mesh.formats.tiff", "nibabel", "tifffile", "numpy.lib.format", "zipfile"):
     importlib.import_module(name)
 if os.geteuid() == 0:
-    os.setgid(%d)
-    os.setuid(%d)
+    os.setgid(NOBODY)
+    os.setuid(NOBODY)
 from isoflow.cli.main import main
 sys.exit(main(sys.argv[1:]))
-""" % (NOBODY, NOBODY)
+""".replace("NOBODY", str(NOBODY))
 
 
 def one_line(capsys, *args) -> str:
