@@ -575,3 +575,20 @@ def test_an_unknown_argument_shows_its_commands_usage(capsys, argv, meant):
     last = err.strip().splitlines()[-1]
     assert last.startswith(f"isoflow {argv[0]}: error: unrecognized arguments: {' '.join(argv[2:])}"), last
     assert (meant in last) if meant else "did you mean" not in last, last
+
+
+@pytest.mark.parametrize("value, said", [("-1", "must be 0 or more, got -1"), ("1.5", "not a whole number of steps")])
+def test_a_bad_steps_is_refused_before_the_input_is_read(tmp_path, capsys, monkeypatch, value, said):
+    from isoflow.cli import flow
+
+    def never(args):
+        raise AssertionError(f"{args.input} was read")
+
+    monkeypatch.setattr(flow, "load_input", never)
+    blob = tmp_path / "blob.npy"
+    np.save(blob, np.ones((3, 3, 3), bool))
+    with pytest.raises(SystemExit) as stop:  # as argparse ends on a bad value
+        main(["flow", str(blob), "--steps", value])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err == f"isoflow flow: error: argument --steps: {said}" + (f": '{value}'\n" if "whole" in said else "\n")

@@ -29,7 +29,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                                  "or prevented with --guard")
     add_input_arguments(p)
     add_connectivity(p, dims=(2, 3))
-    p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
+    p.add_argument("--steps", type=step_count, help="number of steps (default: until the object vanishes)")
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
                         "cannot be; ends at a thin fixed point")
@@ -42,6 +42,24 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)
+
+
+def step_count(text: str) -> int:
+    """argparse type of ``--steps``: a whole number, 0 or more, refused as
+    the command line is read, before the input (however large) is loaded.
+
+    Examples
+    --------
+    >>> step_count("3")
+    3
+    """
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number of steps: {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {value}")
+    return value
 
 
 def cmd_flow(args: argparse.Namespace) -> int:
@@ -179,8 +197,6 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
-    if args.steps is not None and args.steps < 0:
-        raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:
         raise IsoflowError(f"--volumes {args.volumes or repr('')} writes into the --out directory; give --out DIR")
 
