@@ -592,3 +592,32 @@ def test_a_bad_steps_is_refused_before_the_input_is_read(tmp_path, capsys, monke
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert err == f"isoflow flow: error: argument --steps: {said}" + (f": '{value}'\n" if "whole" in said else "\n")
+
+
+def shortenings():
+    """Each command's long options, each with its shortest beginning that
+    no other option of the command shares (what argparse took for it)."""
+    from isoflow.cli.main import build_parser
+
+    for name, command in build_parser().commands.items():
+        options = [o for action in command._actions for o in action.option_strings if o.startswith("--")]
+        for option in options:
+            cut = next((option[:n] for n in range(3, len(option))
+                        if not any(o.startswith(option[:n]) for o in options if o != option)), None)
+            if cut is not None:
+                yield name, option, cut
+
+
+@pytest.mark.parametrize("command, option, cut", list(shortenings()), ids=lambda v: str(v))
+def test_a_shortened_option_is_refused_naming_the_option(capsys, command, option, cut):
+    """argparse read any unique beginning as the option (``surface --out``
+    as --output, ``info --no`` as --no-surfaces): a script's shortening
+    would change meaning once another option began the same way."""
+    required = {"completion": ["bash"], "surface": ["in.npy", "-o", "out.ply"],
+                "voxelize": ["in.stl", "--pitch", "1", "-o", "out.npz"]}
+    argv = [command, *required.get(command, ["in.npy"]), cut]
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    assert done.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"unrecognized arguments: {cut}" in last and f"{cut}: did you mean {option}" in last, last

@@ -92,8 +92,11 @@ def unrecognized(parser: argparse.ArgumentParser, extra: list[str]) -> str:
         if not word.startswith("-") or word in options:
             continue
         name = word.split("=")[0]
-        close = [o for o in options if o.startswith("--") and o[2:].startswith(name.lstrip("-"))] if len(
-            name.lstrip("-")) == 1 else difflib.get_close_matches(name, options, n=1, cutoff=0.7)
+        stem = name.lstrip("-")
+        # a shortening (`--no`, `-o` of flow) names the options it begins; a typo the closest one
+        begun = [o for o in options if o.startswith("--") and o[2:].startswith(stem)]
+        close = begun if begun and (name.startswith("--") or len(stem) == 1) else difflib.get_close_matches(
+            name, options, n=1, cutoff=0.7)
         if close:
             meant.append(f"{name}: did you mean {' or '.join(close[:2])}?")
     return f"unrecognized arguments: {' '.join(extra)}" + (f" ({'; '.join(meant)})" if meant else "")
@@ -117,7 +120,9 @@ def refuse_negative_choice(command: argparse.ArgumentParser | None, args: argpar
 def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
     """A sub-command whose one-line summary is both its entry in the command
     list and the description of its own -h."""
-    return sub.add_parser(name, help=summary, description=summary)
+    # allow_abbrev=False: argparse took any unique prefix as the option (`surface --out` as --output, `info --no`
+    # as --no-surfaces), so a script's shortening silently changed meaning when a later option shared it
+    return sub.add_parser(name, help=summary, description=summary, allow_abbrev=False)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -126,6 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="isoflow",
         description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
+        allow_abbrev=False,
     )
     parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", parser_class=CommandParser)
