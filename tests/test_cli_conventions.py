@@ -621,3 +621,28 @@ def test_a_shortened_option_is_refused_naming_the_option(capsys, command, option
     assert done.value.code == 2
     last = capsys.readouterr().err.strip().splitlines()[-1]
     assert f"unrecognized arguments: {cut}" in last and f"{cut}: did you mean {option}" in last, last
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["info", ""], "input"),
+    (["info", "{labels}", "--labels", "--csv", ""], "--csv"),
+    (["surface", "{blob}", "-o", ""], "-o/--output"),
+    (["surface", "{blob}", "-o", "{tmp}/s.ply", "--png", ""], "--png"),
+    (["voxelize", "", "--pitch", "1", "-o", "{tmp}/v.npz"], "mesh"),
+    (["voxelize", "{box}", "--pitch", "1", "-o", ""], "-o/--output"),
+    (["genus", ""], "mesh"),
+])
+def test_an_empty_path_is_refused_naming_its_argument(tmp_path, capsys, argv, named):
+    """An unset shell variable (``--csv "$OUT"``): ``--csv ''`` and ``--png
+    ''`` were taken as not given (no file, exit status 0), an empty input
+    or -o was named as ".", the directory an empty path is."""
+    import trimesh
+
+    np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
+    np.save(tmp_path / "labels.npy", np.arange(8, dtype=np.uint8).reshape(2, 2, 2))
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    where = {"blob": tmp_path / "blob.npy", "labels": tmp_path / "labels.npy", "box": tmp_path / "box.stl", "tmp": tmp_path}
+    assert main([a.format(**where) for a in argv]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == f"isoflow {argv[0]}: error: {named} '': an empty file name; give the file's name\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blob.npy", "box.stl", "labels.npy"]

@@ -317,6 +317,22 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
         yield
 
 
+#: the path arguments of the commands, by their attribute, as the command line spells them
+PATH_ARGUMENTS = {"input": "input", "mesh": "mesh", "output": "-o/--output", "csv": "--csv", "png": "--png"}
+
+
+def refuse_empty_paths(args: argparse.Namespace) -> None:
+    """An empty path (an unset shell variable: ``--csv "$OUT"``) is refused
+    in one line naming the argument: ``--csv ''`` and ``--png ''`` read as
+    not given and wrote nothing with exit status 0, and an empty input or
+    ``-o`` was named as ``.``, the directory ``Path('')`` is. (``flow --out
+    ''`` says it in flow's own words.)"""
+    for key, spelled in PATH_ARGUMENTS.items():
+        value = getattr(args, key, None)
+        if value == "" or isinstance(value, list) and "" in value:
+            raise IsoflowError(f"{spelled} '': an empty file name; give the file's name")
+
+
 def refuse_output_over_input(args: argparse.Namespace) -> None:
     """An output that is the command's own input (the same file, and the
     same dataset of an HDF5 or zarr file) is refused, --force or not: the
@@ -486,6 +502,7 @@ def main(argv: list[str] | None = None) -> int:
                 termination_as_interrupt(terminated), stdout_named():
             if args.command != "completion" and getattr(args, "threads", None) is None:
                 compiled.check_env_threads()  # the default of --threads, said before any file is read
+            refuse_empty_paths(args)
             refuse_output_over_input(args)
             status = args.func(args)
             if terminated:  # a signal a library swallowed: the command still ends as interrupted
