@@ -646,3 +646,11 @@ def test_an_empty_path_is_refused_naming_its_argument(tmp_path, capsys, argv, na
     captured = capsys.readouterr()
     assert captured.err == f"isoflow {argv[0]}: error: {named} '': an empty file name; give the file's name\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["blob.npy", "box.stl", "labels.npy"]
+
+
+def test_an_empty_volumes_suffix_is_named_as_given(tmp_path, capsys):
+    np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
+    assert main(["flow", str(tmp_path / "blob.npy"), "--out", str(tmp_path / "run"), "--volumes", ""]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("isoflow flow: error: --volumes '': volumes are written as .npy, "), err
+    assert not (tmp_path / "run").exists()

@@ -711,10 +711,13 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
     """A suffix volumes are written with (``.nii.gz``; the dot may be left
     out), its library installed: checked before any work. Returns it with
     its dot."""
+    given = suffix
     suffix = suffix if suffix.startswith(".") else "." + suffix
     fmt = format_for("step" + suffix, writing=True)
     if fmt is None:
-        raise IsoflowError(f"{where} {suffix}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+        # named as given: an empty one ('', an unset shell variable) read as "."
+        raise IsoflowError(f"{where} {given or repr(given)}: volumes are written as "
+                           f"{', '.join(volume_suffixes(writable=True))}")
     fmt.require()
     return suffix
 
