@@ -106,3 +106,24 @@ def test_a_path_through_a_closed_directory_is_one_line(shared_dir, argv):
     lines = done.stderr.strip().splitlines()
     assert done.returncode == 2 and len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
     assert "closed" in lines[0] and os.strerror(errno.EACCES) in lines[0], lines[0]
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/fd"), reason="needs /proc (Linux)")
+@pytest.mark.parametrize("argv", [
+    ["info", "{labels}", "--labels", "--csv", "{link}", "--force"],
+    ["surface", "{blob}", "-o", "{link}", "--force"],
+])
+def test_a_link_to_standard_output_is_refused_not_replaced(tmp_path, capsys, argv):
+    """``--csv /dev/stdout --force`` with standard output redirected to a
+    file: the link's target is a regular file, and the output, written
+    beside the link and renamed over it, replaced /dev/stdout (run as
+    root) with a regular file. A link of the user's own to the process's
+    descriptor stands for /dev/stdout here."""
+    link = tmp_path / ("out.ply" if argv[0] == "surface" else "out.csv")
+    link.symlink_to("/proc/self/fd/1")
+    np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
+    np.save(tmp_path / "labels.npy", np.arange(8, dtype=np.uint8).reshape(2, 2, 2))
+    where = {"blob": tmp_path / "blob.npy", "labels": tmp_path / "labels.npy", "link": link}
+    line = one_line(capsys, *[a.format(**where) for a in argv])
+    assert line.startswith(f"isoflow {argv[0]}: error: {link}: names an open file of this process"), line
+    assert link.is_symlink() and os.readlink(link) == "/proc/self/fd/1"

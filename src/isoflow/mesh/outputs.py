@@ -114,6 +114,28 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
         raise IsoflowError(f"{path}: is a device, pipe or socket, not a file; an output is written beside it and "
                            "renamed over it, which would replace it: give a file name")
+    if names_open_file(path):
+        # standard output redirected to a file is a regular file at the end
+        # of the link: renamed over, /dev/stdout (run as root) became a file
+        raise IsoflowError(f"{path}: names an open file of this process (standard output, a descriptor), not a "
+                           "file; an output is written beside it and renamed over it, which would replace the "
+                           "link: give a file name")
+
+
+def names_open_file(path: str | os.PathLike) -> bool:
+    """Whether ``path`` reaches a file through the kernel's links to a
+    process's open files (``/dev/stdout``, ``/dev/fd/1``,
+    ``/proc/self/fd/1``) rather than by its name.
+
+    Examples
+    --------
+    >>> names_open_file("/proc/self/fd/1"), names_open_file("out.csv")
+    (True, False)
+    """
+    absolute = os.path.abspath(path)
+    if os.path.realpath(os.path.dirname(absolute)).startswith("/proc/"):
+        return True
+    return os.path.islink(absolute) and os.readlink(absolute).startswith("/proc/")
 
 
 def check_writable_dir(directory: str | os.PathLike, purpose: str) -> Path:
