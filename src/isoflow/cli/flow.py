@@ -19,6 +19,7 @@ from .inputs import (
     refuse_points_option,
     refuse_time_series_store,
     say_plate,
+    step_count,
     why_empty,
 )
 from .progress import progress_bar
@@ -42,24 +43,6 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
     p.set_defaults(func=cmd_flow)
-
-
-def step_count(text: str) -> int:
-    """argparse type of ``--steps``: a whole number, 0 or more, refused as
-    the command line is read, before the input (however large) is loaded.
-
-    Examples
-    --------
-    >>> step_count("3")
-    3
-    """
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number of steps: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {value}")
-    return value
 
 
 def cmd_flow(args: argparse.Namespace) -> int:
