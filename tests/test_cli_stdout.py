@@ -53,3 +53,23 @@ def test_a_pipe_closed_early_is_no_error(inputs):
         proc.stdout.close()
         err = proc.stderr.read().decode()
         assert proc.wait(timeout=300) == 0 and "Traceback" not in err and "Error" not in err, err
+
+
+@pytest.mark.parametrize("encoding", ["cp1252", "ascii"])
+def test_an_encoding_without_a_printed_character_is_written_escaped(inputs, encoding):
+    """Standard output in an encoding that lacks a character the report
+    prints (the class ``(0,0,∅)``: cp1252 is Windows' for a redirection,
+    ``> report.txt``) ended ``isoflow info`` in UnicodeEncodeError."""
+    from skimage.measure import euler_number
+
+    blob = np.load(inputs / "blob.npy")
+    blob[2, 2, :] = False  # a tunnel: chi 0
+    np.save(inputs / "ring.npy", blob)
+    env = {**os.environ, "PYTHONPATH": SRC, "PYTHONIOENCODING": encoding}
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "ring.npy"], cwd=inputs, env=env,
+                          capture_output=True, timeout=300)
+    assert done.returncode == 0 and b"Traceback" not in done.stderr, done.stderr.decode()
+    text = done.stdout.decode(encoding)
+    chi = next(line.split()[-1] for line in text.splitlines() if line.strip().startswith("Euler characteristic"))
+    assert int(chi) == euler_number(blob, connectivity=1) == 0
+    assert "(0,0,\\u2205)" in text

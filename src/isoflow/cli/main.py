@@ -448,18 +448,27 @@ def guard_stdout(call, *args):
 @contextlib.contextmanager
 def stdout_named() -> Iterator[None]:
     """Run a command with :class:`NamedStdout` in place of ``sys.stdout``,
-    flushed before it is put back: block-buffered output to a file fails
-    only when flushed, which would be as the interpreter exits."""
+    flushed before it is put back (block-buffered output to a file fails
+    only when flushed, which would be as the interpreter exits), and a
+    character its encoding lacks written as a backslash escape."""
     stream = sys.stdout
     if stream is None:  # started with standard output closed
         yield
         return
+    errors = getattr(stream, "errors", None)
+    if errors == "strict" and hasattr(stream, "reconfigure"):
+        # an encoding without a character printed (the class (0,0,∅) in
+        # cp1252, Windows' for a redirection; a path's ü in ASCII) ended the
+        # command in UnicodeEncodeError: written escaped, as stderr does
+        stream.reconfigure(errors="backslashreplace")
     sys.stdout = NamedStdout(stream)
     try:
         yield
         sys.stdout.flush()
     finally:
         sys.stdout = stream
+        if errors == "strict" and hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors=errors)
 
 
 def drop_stdout() -> None:
