@@ -5,6 +5,7 @@ a traceback; a pipe closed early (``| head``) is no error."""
 
 import errno
 import os
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -73,3 +74,18 @@ def test_an_encoding_without_a_printed_character_is_written_escaped(inputs, enco
     chi = next(line.split()[-1] for line in text.splitlines() if line.strip().startswith("Euler characteristic"))
     assert int(chi) == euler_number(blob, connectivity=1) == 0
     assert "(0,0,\\u2205)" in text
+
+
+@pytest.mark.skipif(not os.path.exists("/bin/sh"), reason="needs a POSIX shell to close standard output")
+@pytest.mark.parametrize("argv", [["info", "blob.npy", "--json"], ["completion", "bash"]], ids=" ".join)
+def test_a_closed_standard_output_is_one_line(inputs, argv):
+    """Started with standard output closed (``>&-``), Python sets
+    sys.stdout to None and print() drops what it is given: the report was
+    lost and the command ended with exit status 0."""
+    env = {**os.environ, "PYTHONPATH": SRC}
+    line = " ".join(map(shlex.quote, [sys.executable, "-m", "isoflow", *argv]))
+    done = subprocess.run(["/bin/sh", "-c", f"exec {line} >&-"], cwd=inputs, env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == (f"isoflow {argv[0]}: error: standard output: cannot be written "
+                           f"({os.strerror(errno.EBADF)})\n")

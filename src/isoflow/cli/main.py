@@ -434,6 +434,23 @@ class NamedStdout:
         return getattr(self.stream, name)
 
 
+class ClosedStdout:
+    """Standard output where the process started without one: each write
+    fails as a write to a closed file descriptor does."""
+
+    def write(self, text: str) -> int:
+        import errno
+        import os
+
+        raise OSError(errno.EBADF, os.strerror(errno.EBADF))
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+
 def guard_stdout(call, *args):
     """``call(*args)``, a write to standard output, with its OSError raised
     as :class:`StdoutError` (BrokenPipeError as it is: ``| head`` is no error)."""
@@ -452,8 +469,15 @@ def stdout_named() -> Iterator[None]:
     only when flushed, which would be as the interpreter exits), and a
     character its encoding lacks written as a backslash escape."""
     stream = sys.stdout
-    if stream is None:  # started with standard output closed
-        yield
+    if stream is None:
+        # started with standard output closed (`>&-`): print() drops what it
+        # is given when sys.stdout is None, and the command said nothing and
+        # ended with exit status 0
+        sys.stdout = NamedStdout(ClosedStdout())
+        try:
+            yield
+        finally:
+            sys.stdout = stream
         return
     errors = getattr(stream, "errors", None)
     if errors == "strict" and hasattr(stream, "reconfigure"):
@@ -476,7 +500,8 @@ def drop_stdout() -> None:
     would fail again as the interpreter exits, with a second message."""
     import os
 
-    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    if sys.stdout is not None:  # (None: there was none to begin with)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def main(argv: list[str] | None = None) -> int:
