@@ -575,3 +575,82 @@ def test_an_unknown_argument_shows_its_commands_usage(capsys, argv, meant):
     last = err.strip().splitlines()[-1]
     assert last.startswith(f"isoflow {argv[0]}: error: unrecognized arguments: {' '.join(argv[2:])}"), last
     assert (meant in last) if meant else "did you mean" not in last, last
+
+
+@pytest.mark.parametrize("value, said", [("-1", "must be 0 or more, got -1"), ("1.5", "not a whole number of steps")])
+def test_a_bad_steps_is_refused_before_the_input_is_read(tmp_path, capsys, monkeypatch, value, said):
+    from isoflow.cli import flow
+
+    def never(args):
+        raise AssertionError(f"{args.input} was read")
+
+    monkeypatch.setattr(flow, "load_input", never)
+    blob = tmp_path / "blob.npy"
+    np.save(blob, np.ones((3, 3, 3), bool))
+    with pytest.raises(SystemExit) as stop:  # as argparse ends on a bad value
+        main(["flow", str(blob), "--steps", value])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err == f"isoflow flow: error: argument --steps: {said}" + (f": '{value}'\n" if "whole" in said else "\n")
+
+
+def shortenings():
+    """Each command's long options, each with its shortest beginning that
+    no other option of the command shares (what argparse took for it)."""
+    from isoflow.cli.main import build_parser
+
+    for name, command in build_parser().commands.items():
+        options = [o for action in command._actions for o in action.option_strings if o.startswith("--")]
+        for option in options:
+            cut = next((option[:n] for n in range(3, len(option))
+                        if not any(o.startswith(option[:n]) for o in options if o != option)), None)
+            if cut is not None:
+                yield name, option, cut
+
+
+@pytest.mark.parametrize("command, option, cut", list(shortenings()), ids=lambda v: str(v))
+def test_a_shortened_option_is_refused_naming_the_option(capsys, command, option, cut):
+    """argparse read any unique beginning as the option (``surface --out``
+    as --output, ``info --no`` as --no-surfaces): a script's shortening
+    would change meaning once another option began the same way."""
+    required = {"completion": ["bash"], "surface": ["in.npy", "-o", "out.ply"],
+                "voxelize": ["in.stl", "--pitch", "1", "-o", "out.npz"]}
+    argv = [command, *required.get(command, ["in.npy"]), cut]
+    with pytest.raises(SystemExit) as done:
+        main(argv)
+    assert done.value.code == 2
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert f"unrecognized arguments: {cut}" in last and f"{cut}: did you mean {option}" in last, last
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["info", ""], "input"),
+    (["info", "{labels}", "--labels", "--csv", ""], "--csv"),
+    (["surface", "{blob}", "-o", ""], "-o/--output"),
+    (["surface", "{blob}", "-o", "{tmp}/s.ply", "--png", ""], "--png"),
+    (["voxelize", "", "--pitch", "1", "-o", "{tmp}/v.npz"], "mesh"),
+    (["voxelize", "{box}", "--pitch", "1", "-o", ""], "-o/--output"),
+    (["genus", ""], "mesh"),
+])
+def test_an_empty_path_is_refused_naming_its_argument(tmp_path, capsys, argv, named):
+    """An unset shell variable (``--csv "$OUT"``): ``--csv ''`` and ``--png
+    ''`` were taken as not given (no file, exit status 0), an empty input
+    or -o was named as ".", the directory an empty path is."""
+    import trimesh
+
+    np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
+    np.save(tmp_path / "labels.npy", np.arange(8, dtype=np.uint8).reshape(2, 2, 2))
+    trimesh.creation.box().export(tmp_path / "box.stl")
+    where = {"blob": tmp_path / "blob.npy", "labels": tmp_path / "labels.npy", "box": tmp_path / "box.stl", "tmp": tmp_path}
+    assert main([a.format(**where) for a in argv]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == f"isoflow {argv[0]}: error: {named} '': an empty file name; give the file's name\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["blob.npy", "box.stl", "labels.npy"]
+
+
+def test_an_empty_volumes_suffix_is_named_as_given(tmp_path, capsys):
+    np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
+    assert main(["flow", str(tmp_path / "blob.npy"), "--out", str(tmp_path / "run"), "--volumes", ""]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("isoflow flow: error: --volumes '': volumes are written as .npy, "), err
+    assert not (tmp_path / "run").exists()

@@ -19,6 +19,7 @@ from .inputs import (
     refuse_points_option,
     refuse_time_series_store,
     say_plate,
+    step_count,
     why_empty,
 )
 from .progress import progress_bar
@@ -29,7 +30,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                                  "or prevented with --guard")
     add_input_arguments(p)
     add_connectivity(p, dims=(2, 3))
-    p.add_argument("--steps", type=int, help="number of steps (default: until the object vanishes)")
+    p.add_argument("--steps", type=step_count, help="number of steps (default: until the object vanishes)")
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
                         "cannot be; ends at a thin fixed point")
@@ -179,8 +180,6 @@ def check_flow_input(args: argparse.Namespace, obj) -> None:
     if obj is not None and obj.voxels == 0:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty" + (f": {why}" if why else ", there is nothing to flow"))
-    if args.steps is not None and args.steps < 0:
-        raise IsoflowError(f"--steps must be 0 or more, got {args.steps}")
     if args.volumes is not None and not args.out:
         raise IsoflowError(f"--volumes {args.volumes or repr('')} writes into the --out directory; give --out DIR")
 

@@ -110,12 +110,39 @@ def resolution_value(text: str) -> int:
     """
     from ..mesh.grid import MAX_RESOLUTION
 
+    return whole_number(text, "voxels", 1, MAX_RESOLUTION)
+
+
+def step_count(text: str) -> int:
+    """argparse type of ``flow --steps``: a whole number, 0 or more,
+    refused as the command line is read, before the input (however large)
+    is loaded.
+
+    Examples
+    --------
+    >>> step_count("3")
+    3
+    """
+    return whole_number(text, "steps", 0)
+
+
+def whole_number(text: str, noun: str, least: int, most: int | None = None) -> int:
+    """``text`` read as a whole number of ``noun`` from ``least`` (up to
+    ``most``), or argparse's error saying what it must be.
+
+    Examples
+    --------
+    >>> whole_number("12", "voxels", 1, 64)
+    12
+    """
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number of voxels: {text!r}") from None
-    if not 1 <= value <= MAX_RESOLUTION:
-        raise argparse.ArgumentTypeError(f"must be a whole number of voxels from 1 to {MAX_RESOLUTION}, got {value}")
+        raise argparse.ArgumentTypeError(f"not a whole number of {noun}: {text!r}") from None
+    if most is not None and not least <= value <= most:
+        raise argparse.ArgumentTypeError(f"must be a whole number of {noun} from {least} to {most}, got {value}")
+    if value < least:
+        raise argparse.ArgumentTypeError(f"must be {least} or more, got {value}")
     return value
 
 

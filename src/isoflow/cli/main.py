@@ -92,8 +92,11 @@ def unrecognized(parser: argparse.ArgumentParser, extra: list[str]) -> str:
         if not word.startswith("-") or word in options:
             continue
         name = word.split("=")[0]
-        close = [o for o in options if o.startswith("--") and o[2:].startswith(name.lstrip("-"))] if len(
-            name.lstrip("-")) == 1 else difflib.get_close_matches(name, options, n=1, cutoff=0.7)
+        stem = name.lstrip("-")
+        # a shortening (`--no`, `-o` of flow) names the options it begins; a typo the closest one
+        begun = [o for o in options if o.startswith("--") and o[2:].startswith(stem)]
+        close = begun if begun and (name.startswith("--") or len(stem) == 1) else difflib.get_close_matches(
+            name, options, n=1, cutoff=0.7)
         if close:
             meant.append(f"{name}: did you mean {' or '.join(close[:2])}?")
     return f"unrecognized arguments: {' '.join(extra)}" + (f" ({'; '.join(meant)})" if meant else "")
@@ -117,7 +120,9 @@ def refuse_negative_choice(command: argparse.ArgumentParser | None, args: argpar
 def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> argparse.ArgumentParser:
     """A sub-command whose one-line summary is both its entry in the command
     list and the description of its own -h."""
-    return sub.add_parser(name, help=summary, description=summary)
+    # allow_abbrev=False: argparse took any unique prefix as the option (`surface --out` as --output, `info --no`
+    # as --no-surfaces), so a script's shortening silently changed meaning when a later option shared it
+    return sub.add_parser(name, help=summary, description=summary, allow_abbrev=False)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -126,6 +131,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="isoflow",
         description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
+        allow_abbrev=False,
     )
     parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", parser_class=CommandParser)
@@ -311,6 +317,22 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
         yield
 
 
+#: the path arguments of the commands, by their attribute, as the command line spells them
+PATH_ARGUMENTS = {"input": "input", "mesh": "mesh", "output": "-o/--output", "csv": "--csv", "png": "--png"}
+
+
+def refuse_empty_paths(args: argparse.Namespace) -> None:
+    """An empty path (an unset shell variable: ``--csv "$OUT"``) is refused
+    in one line naming the argument: ``--csv ''`` and ``--png ''`` read as
+    not given and wrote nothing with exit status 0, and an empty input or
+    ``-o`` was named as ``.``, the directory ``Path('')`` is. (``flow --out
+    ''`` says it in flow's own words.)"""
+    for key, spelled in PATH_ARGUMENTS.items():
+        value = getattr(args, key, None)
+        if value == "" or isinstance(value, list) and "" in value:
+            raise IsoflowError(f"{spelled} '': an empty file name; give the file's name")
+
+
 def refuse_output_over_input(args: argparse.Namespace) -> None:
     """An output that is the command's own input (the same file, and the
     same dataset of an HDF5 or zarr file, or the whole file of which a
@@ -331,14 +353,15 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
         refuse_unusable_output(out_file)  # before exists() below raises on it
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
-            if in_file.is_dir() and in_file.resolve() in out_file.resolve().parents:
+            # os.path's tests: an input that cannot be looked at is not the output, and its reader says why
+            if os.path.isdir(in_file) and in_file.resolve() in out_file.resolve().parents:
                 # a zarr store is a directory: files written into it (flow --out STORE/run, surface --labels
                 # -o STORE/) change the input, --force or not
                 raise IsoflowError(f"{out}: lies inside the input {name}; write the output elsewhere (--force "
                                    "replaces an output, never the input)")
             if out_set is not None and out_set != in_set:  # another dataset of the file: the input's is kept
                 continue
-            both = out_file.exists() and in_file.exists()
+            both = os.path.exists(out_file) and os.path.exists(in_file)
             if os.path.samefile(out_file, in_file) if both else out_file.resolve() == in_file.resolve():
                 raise IsoflowError(f"{out}: is the input {name}; write the output to another file (--force "
                                    "replaces an output, never the input)")
@@ -385,6 +408,103 @@ def forget_escaped_interrupt() -> None:
     exec("", {})
 
 
+class StdoutError(OSError):
+    """A write to standard output that failed, other than a closed pipe
+    (a full disk or quota under a redirection, ``> /dev/full``): such an
+    error names no file."""
+
+
+class NamedStdout:
+    """Standard output whose write errors are :class:`StdoutError`, so that
+    the command line can name standard output as what failed."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        return guard_stdout(self.stream.write, text)
+
+    def writelines(self, lines) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        guard_stdout(self.stream.flush)
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
+class ClosedStdout:
+    """Standard output where the process started without one: each write
+    fails as a write to a closed file descriptor does."""
+
+    def write(self, text: str) -> int:
+        import errno
+        import os
+
+        raise OSError(errno.EBADF, os.strerror(errno.EBADF))
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+
+def guard_stdout(call, *args):
+    """``call(*args)``, a write to standard output, with its OSError raised
+    as :class:`StdoutError` (BrokenPipeError as it is: ``| head`` is no error)."""
+    try:
+        return call(*args)
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise StdoutError(exc.errno, exc.strerror) from None
+
+
+@contextlib.contextmanager
+def stdout_named() -> Iterator[None]:
+    """Run a command with :class:`NamedStdout` in place of ``sys.stdout``,
+    flushed before it is put back (block-buffered output to a file fails
+    only when flushed, which would be as the interpreter exits), and a
+    character its encoding lacks written as a backslash escape."""
+    stream = sys.stdout
+    if stream is None:
+        # started with standard output closed (`>&-`): print() drops what it
+        # is given when sys.stdout is None, and the command said nothing and
+        # ended with exit status 0
+        sys.stdout = NamedStdout(ClosedStdout())
+        try:
+            yield
+        finally:
+            sys.stdout = stream
+        return
+    errors = getattr(stream, "errors", None)
+    if errors == "strict" and hasattr(stream, "reconfigure"):
+        # an encoding without a character printed (the class (0,0,∅) in
+        # cp1252, Windows' for a redirection; a path's ü in ASCII) ended the
+        # command in UnicodeEncodeError: written escaped, as stderr does
+        stream.reconfigure(errors="backslashreplace")
+    sys.stdout = NamedStdout(stream)
+    try:
+        yield
+        sys.stdout.flush()
+    finally:
+        sys.stdout = stream
+        if errors == "strict" and hasattr(stream, "reconfigure"):
+            stream.reconfigure(errors=errors)
+
+
+def drop_stdout() -> None:
+    """Point standard output at the null device: what it still buffers
+    would fail again as the interpreter exits, with a second message."""
+    import os
+
+    if sys.stdout is not None:  # (None: there was none to begin with)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``isoflow`` command line; returns its exit status (0 done,
     1 a written file did not read back as counted, 2 bad input, 128 + the
@@ -414,9 +534,10 @@ def main(argv: list[str] | None = None) -> int:
     compiled.on_first_compile = None if args.quiet else compiling
     try:
         with quiet_stderr(args.quiet), warnings_as_lines(args), log_records_as_notes(args), \
-                termination_as_interrupt(terminated):
+                termination_as_interrupt(terminated), stdout_named():
             if args.command != "completion" and getattr(args, "threads", None) is None:
                 compiled.check_env_threads()  # the default of --threads, said before any file is read
+            refuse_empty_paths(args)
             refuse_output_over_input(args)
             status = args.func(args)
             if terminated:  # a signal a library swallowed: the command still ends as interrupted
@@ -434,10 +555,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
         return interrupted(terminated, str(exc))
     except BrokenPipeError:  # `isoflow info ... | head`: not an error
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        drop_stdout()
         return 0
+    except StdoutError as exc:
+        print(f"isoflow {args.command}: error: standard output: cannot be written ({exc.strerror})", file=sys.stderr)
+        drop_stdout()
+        return 2
     except Exception:
         if not terminated:
             raise

@@ -98,7 +98,8 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     ------
     IsoflowError
         Naming the path and the cause: ``Path.exists`` raised the bare
-        ``OSError`` (a traceback on the command line) for a name too long;
+        ``OSError`` (a traceback on the command line) for a name too long
+        or one in a directory that may not be searched;
         a file is written beside its target and renamed over it, so
         ``-o /dev/null --force`` run as root replaced the system's
         ``/dev/null`` with a regular file.
@@ -106,12 +107,35 @@ def refuse_unusable_output(path: str | os.PathLike) -> None:
     try:
         mode = os.stat(path).st_mode  # the link's target: /dev/stdout is a link to a pipe or terminal
     except OSError as exc:
-        if exc.errno == errno.ENAMETOOLONG:
+        if exc.errno not in (errno.ENOENT, errno.ENOTDIR):
+            # a name too long, a directory on the way that may not be searched (permission denied)
             raise IsoflowError(f"{path}: cannot be an output ({exc.strerror})") from None
         return  # missing, or a dangling link: a new file is made
     if not (stat.S_ISREG(mode) or stat.S_ISDIR(mode)):
         raise IsoflowError(f"{path}: is a device, pipe or socket, not a file; an output is written beside it and "
                            "renamed over it, which would replace it: give a file name")
+    if names_open_file(path):
+        # standard output redirected to a file is a regular file at the end
+        # of the link: renamed over, /dev/stdout (run as root) became a file
+        raise IsoflowError(f"{path}: names an open file of this process (standard output, a descriptor), not a "
+                           "file; an output is written beside it and renamed over it, which would replace the "
+                           "link: give a file name")
+
+
+def names_open_file(path: str | os.PathLike) -> bool:
+    """Whether ``path`` reaches a file through the kernel's links to a
+    process's open files (``/dev/stdout``, ``/dev/fd/1``,
+    ``/proc/self/fd/1``) rather than by its name.
+
+    Examples
+    --------
+    >>> names_open_file("/proc/self/fd/1"), names_open_file("out.csv")
+    (True, False)
+    """
+    absolute = os.path.abspath(path)
+    if os.path.realpath(os.path.dirname(absolute)).startswith("/proc/"):
+        return True
+    return os.path.islink(absolute) and os.readlink(absolute).startswith("/proc/")
 
 
 def check_writable_dir(directory: str | os.PathLike, purpose: str) -> Path:

@@ -8,8 +8,10 @@ and what is wrong; every writer refuses to replace an existing file unless
 from __future__ import annotations
 
 import dataclasses
+import errno
 import os
 import re
+import stat
 from pathlib import Path
 from typing import Any, Literal, get_args
 
@@ -42,16 +44,32 @@ VOLUME_SUFFIXES = volume_suffixes()
 POINT_SUFFIXES = (".txt", ".xyz", ".pts", ".csv")
 
 
+#: what ``os.stat`` says of a path that is not there
+NOT_THERE = (errno.ENOENT, errno.ENOTDIR)
+
+
 def _check_readable(path: Path, directory_ok: bool = False) -> None:
-    if not path.exists():
-        raise missing(path)
-    if path.is_dir():
+    try:
+        mode = path.stat().st_mode
+    except OSError as exc:
+        if exc.errno in NOT_THERE:
+            raise missing(path) from None
+        # a name too long, a directory on the way that may not be searched, a
+        # loop of links: Path.exists raised the first two as a bare OSError
+        raise IsoflowError(f"{path}: cannot be read ({exc.strerror})") from None
+    if stat.S_ISDIR(mode):
         if not directory_ok:
             refuse_inside_store(path, path)
             raise IsoflowError(f"{path}: is a directory, not a volume or point list")
-    elif not path.is_file():
+        return
+    if not stat.S_ISREG(mode):
         # a device or FIFO would be read until memory runs out (/dev/zero)
         raise IsoflowError(f"{path}: not a regular file (a device, pipe or socket)")
+    try:
+        path.open("rb").close()
+    except OSError as exc:
+        # no read permission: np.load's error made it "an empty file", nibabel's "could not read"
+        raise IsoflowError(f"{path}: cannot be read ({exc.strerror})") from None
 
 
 def is_volume(path) -> bool:
@@ -695,10 +713,13 @@ def check_volume_suffix(suffix: str, where: str = "--volumes") -> str:
     """A suffix volumes are written with (``.nii.gz``; the dot may be left
     out), its library installed: checked before any work. Returns it with
     its dot."""
+    given = suffix
     suffix = suffix if suffix.startswith(".") else "." + suffix
     fmt = format_for("step" + suffix, writing=True)
     if fmt is None:
-        raise IsoflowError(f"{where} {suffix}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+        # named as given: an empty one ('', an unset shell variable) read as "."
+        raise IsoflowError(f"{where} {given or repr(given)}: volumes are written as "
+                           f"{', '.join(volume_suffixes(writable=True))}")
     fmt.require()
     return suffix
 
