@@ -252,3 +252,31 @@ def test_the_suffix_without_its_dot_flows_block_by_block(tmp_path, capsys, suffi
     assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "2", "--out", str(out), "--volumes", suffix, "-q"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"] + [f"step_{s:03d}.zarr" for s in range(3)]
     assert "volumes (step_*.zarr, read block by block)" in capsys.readouterr().out
+
+
+def edge_touching_boxes() -> np.ndarray:
+    """Two 4x4x4 boxes sharing an edge: two 6-components, which the third
+    plain step merges into one."""
+    v = np.zeros((12, 8, 8), bool)
+    v[1:5, 1:5, 1:5] = True
+    v[5:9, 5:7, 1:5] = True
+    return v
+
+
+def test_until_topology_change_leaves_no_store_of_the_step_not_taken(tmp_path):
+    """The step that would change the Betti numbers is reported, not
+    taken: no store of it is left beside the states taken (a step_002.zarr
+    of one piece was left in the directory)."""
+    from scipy import ndimage
+
+    v = edge_touching_boxes()
+    plain_store(tmp_path / "in.zarr", v, (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    got = flow_chunked(tmp_path / "in.zarr", out, until_topology_change=True, slab=2)
+    assert got.stop_reason == "topology-change"
+    stores = sorted(out.glob("step_*.zarr"))
+    assert [p.name for p in stores] == [f"step_{s['step']:03d}.zarr" for s in got.steps]
+    # scipy's 6-components of the input, and of every state left
+    assert ndimage.label(v)[1] == 2
+    assert [ndimage.label(zarr.open_group(str(p), mode="r")["0"][...] != 0)[1] for p in stores] == [2] * len(stores)

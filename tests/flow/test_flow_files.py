@@ -4,6 +4,7 @@ counts, and flow.csv records trimesh's reading of each (issue 15, item 3)."""
 import contextlib
 import csv
 import io
+import json
 
 import numpy as np
 import pymeshlab
@@ -411,3 +412,29 @@ def test_the_step_files_check_imports_nothing_on_its_thread(tmp_path):
     with open(tmp_path / "run" / "flow.csv") as fh:  # the checks are made: trimesh's reading of both steps
         rows = list(csv.DictReader(fh))
     assert [r["trimesh_euler"] for r in rows] == ["2", "2"]
+
+
+def test_until_topology_change_stops_before_the_step_that_merges(tmp_path):
+    """``isoflow flow --until-topology-change`` (run_flow's
+    until_topology_change, which the command had no option for) stops
+    before the step that would change the Betti numbers: every state
+    written has scipy's two 6-components of the input, and the plain run's
+    next state, the step not taken, has one."""
+    from scipy import ndimage
+
+    v = np.zeros((12, 8, 8), bool)
+    v[1:5, 1:5, 1:5] = True
+    v[5:9, 5:7, 1:5] = True  # shares an edge with the first box
+    np.save(tmp_path / "two.npy", v)
+    assert ndimage.label(v)[1] == 2
+    rc, out, _ = run("flow", tmp_path / "two.npy", "--until-topology-change", "--out", tmp_path / "run",
+                     "--volumes", ".npz", "--json", "-q")
+    assert rc == 0
+    got = json.loads(out)
+    assert got["stop_reason"] == "topology-change"
+    files = sorted((tmp_path / "run").glob("step_*.npz"))
+    assert len(files) == len(got["steps"])
+    assert [ndimage.label(np.load(f)["volume"])[1] for f in files] == [2] * len(files)
+    rc, _, _ = run("flow", tmp_path / "two.npy", "--out", tmp_path / "plain", "--volumes", ".npz", "-q")
+    taken = np.load(tmp_path / "plain" / f"step_{len(files):03d}.npz")["volume"]
+    assert rc == 0 and ndimage.label(taken)[1] == 1

@@ -33,6 +33,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
                         "cannot be; ends at a thin fixed point")
+    p.add_argument("--until-topology-change", action="store_true",
+                   help="stop before the first step that would change the Betti numbers (that step is reported, "
+                        "not taken; a guarded run never takes one)")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...); "
@@ -151,6 +154,7 @@ def flow_store(args: argparse.Namespace) -> int:
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
+                                  until_topology_change=args.until_topology_change,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
@@ -232,6 +236,7 @@ def run_with_files(args: argparse.Namespace, obj, writer):
             # (no callback when nothing uses the states: a compiled run then
             # never unpacks them)
             result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                              until_topology_change=args.until_topology_change,
                               progress=progress if writer is not None or show is not None else None,
                               keep_states=False)
             if writer is not None:

@@ -278,6 +278,13 @@ class ChunkedFlow(ArrayFlow):
     def change_region(self, state: StoredObject, betti: tuple[list, list] | None = None):
         return None  # not located out of core (module docstring)
 
+    def discard(self, state: StoredObject) -> None:
+        """Remove the store of a step not taken, so that the directory holds
+        the states of the run's records only."""
+        if state.path is not None:
+            shutil.rmtree(state.path, ignore_errors=True)
+            self.written.remove(Path(state.path).name)
+
     def same(self, a: StoredObject, b: StoredObject) -> bool:
         if a.shape != b.shape or a.voxels != b.voxels or not a.voxels:
             return False
