@@ -280,3 +280,15 @@ def test_until_topology_change_leaves_no_store_of_the_step_not_taken(tmp_path):
     # scipy's 6-components of the input, and of every state left
     assert ndimage.label(v)[1] == 2
     assert [ndimage.label(zarr.open_group(str(p), mode="r")["0"][...] != 0)[1] for p in stores] == [2] * len(stores)
+
+
+def test_command_names_the_store_of_a_connectivity_that_does_not_fit(tmp_path, capsys):
+    """A 2D connectivity for a 3D store is refused in one line naming the
+    store, as the in-memory flow names its file (the line named none)."""
+    plain_store(tmp_path / "in.zarr", edge_touching_boxes(), (5, 3, 4))
+    assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr",
+                 "--connectivity", "4"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"isoflow flow: error: {tmp_path / 'in.zarr'}: connectivity 4 is not valid in 3D")
+    assert not (tmp_path / "run").exists()

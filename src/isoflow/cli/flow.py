@@ -147,6 +147,8 @@ def flow_store(args: argparse.Namespace) -> int:
     if args.guard:
         raise IsoflowError(guard_refusal(str(args.input), volume.shape))
     check_flow_input(args, None)
+    if args.connectivity is not None:  # named with the input, as in memory: the dimension is the store's
+        check_input_connectivity(args, 3)
     conn = flow_connectivity(3, args.connectivity)
     last = reachable_steps(args.steps, volume.shape)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
