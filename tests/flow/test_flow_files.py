@@ -438,3 +438,35 @@ def test_until_topology_change_stops_before_the_step_that_merges(tmp_path):
     rc, _, _ = run("flow", tmp_path / "two.npy", "--out", tmp_path / "plain", "--volumes", ".npz", "-q")
     taken = np.load(tmp_path / "plain" / f"step_{len(files):03d}.npz")["volume"]
     assert rc == 0 and ndimage.label(taken)[1] == 1
+
+
+def test_the_text_places_the_limit_and_a_change_of_a_far_origin_to_a_fraction_of_a_voxel(tmp_path):
+    """At an origin far from 0 in fine voxels the table's limit and the box
+    of a topology change were printed to 6 digits: a box's limit at
+    [123456, -654321, 1e+06], voxels away from its centre, and a change in
+    the box [123456, ...] to [123456, ...], of no size. The centre is
+    pynrrd's reading of the file: a box flows to its centre."""
+    nrrd = pytest.importorskip("nrrd")
+    import re
+
+    pitch, origin = np.array([0.01, 0.02, 0.04]), np.array([123456.0, -654321.0, 1.0e6])
+    header = {"space directions": np.diag(pitch), "space origin": origin, "space": "left-posterior-superior"}
+    box = np.zeros((8, 9, 10), np.uint8)
+    box[2:5, 2:6, 2:7] = 1  # 3 x 4 x 5
+    nrrd.write(str(tmp_path / "box.nrrd"), box, header)
+    back, head = nrrd.read(str(tmp_path / "box.nrrd"))
+    idx = np.argwhere(back)
+    # the space origin is the centre of voxel 0: the box's centre is the mean of its voxels' centres
+    centre = np.asarray(head["space origin"]) + np.diag(head["space directions"]) * idx.mean(0)
+    rc, out, _ = run("flow", tmp_path / "box.nrrd", "-q")
+    limit = re.search(r"limit: \[([^\]]*)\]", out).group(1)
+    assert rc == 0 and np.allclose([float(x) for x in limit.split(",")], centre, rtol=0, atol=pitch / 200)
+
+    two = np.zeros((12, 8, 8), np.uint8)
+    two[1:5, 1:5, 1:5] = 1
+    two[5:9, 5:7, 1:5] = 1  # shares an edge: the third step merges the two pieces
+    nrrd.write(str(tmp_path / "two.nrrd"), two, header)
+    rc, out, _ = run("flow", tmp_path / "two.nrrd", "-q")
+    lo, hi = re.search(r"in the box \[([^\]]*)\] to \[([^\]]*)\]", out).groups()
+    lo, hi = (np.array([float(x) for x in c.split(",")]) for c in (lo, hi))
+    assert rc == 0 and (hi - lo > pitch / 2).all()

@@ -67,7 +67,7 @@ def cmd_flow(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input)))
+        print(format_flow(result, str(args.input), pitch=obj.spacing))
         if args.out:
             written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + [
                 "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
@@ -139,7 +139,7 @@ def flow_store(args: argparse.Namespace) -> int:
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
-    volume = source_volume(args.input)[0]
+    volume, place, _ = source_volume(args.input)
     say_plate(args, tuple(volume.shape))
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
@@ -166,7 +166,7 @@ def flow_store(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"input": str(args.input), **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input)))
+        print(format_flow(result, str(args.input), pitch=place.spacing))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
     return 0
 
@@ -282,9 +282,21 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
     return 1 if writer.problems else 0
 
 
-def format_flow(result, name: str) -> str:
+def format_flow(result, name: str, pitch=None) -> str:
     """The flow's records as a table, its stop and its limit point (a 2D
-    object's cells are pixels, as ``isoflow info`` says)."""
+    object's cells are pixels, as ``isoflow info`` says); the points to as
+    many digits as keep them within a 200th of ``pitch`` (the voxel size,
+    one number or one per axis), so that a far origin does not round them
+    to the same number.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import DigitalObject, run_flow
+    >>> far = DigitalObject(np.ones((2, 2, 2), bool), pitch=0.01, origin=(123456.0, 0.0, 0.0))
+    >>> format_flow(run_flow(far), "far.npz", pitch=0.01).splitlines()[-1].split(", the")[0]
+    '  limit: [123456.01, 0.01, 0.01]'
+    """
     cells = "pixels" if result.steps and len(result.steps[0]["betti"]) == 2 else "voxels"
     lines = [
         f"{name}: digital curvature flow, {result.connectivity}-connectivity"
@@ -300,13 +312,13 @@ def format_flow(result, name: str) -> str:
     lines.append(f"  stopped: {result.stop_reason}")
     if lim["center"] is not None:
         shape = {"cuboid": "a cuboid", "other": "not a cuboid", "not-reached": "the run stopped before its end"}
-        lines.append(f"  limit: {coordinates(lim['center'])}, the centre of the last non-empty state (step "
+        lines.append(f"  limit: {coordinates(lim['center'], step=pitch)}, the centre of the last non-empty state (step "
                      f"{lim['last_step']}: {shape.get(lim['last_shape'], lim['last_shape'])})")
     for c in result.topology_changes:
         # a store flowed block by block finds changes but does not locate
         # them (where is None): say so, not "in None"; a box in a pitch read
         # from float32 (NIfTI's zooms) prints as that pitch does
         place = ("not located (block by block)" if c["where"] is None
-                 else f"in the box {coordinates(c['where'][0])} to {coordinates(c['where'][1])}")
+                 else f"in the box {coordinates(c['where'][0], step=pitch)} to {coordinates(c['where'][1], step=pitch)}")
         lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
     return "\n".join(lines)
