@@ -470,3 +470,29 @@ def test_the_text_places_the_limit_and_a_change_of_a_far_origin_to_a_fraction_of
     lo, hi = re.search(r"in the box \[([^\]]*)\] to \[([^\]]*)\]", out).groups()
     lo, hi = (np.array([float(x) for x in c.split(",")]) for c in (lo, hi))
     assert rc == 0 and (hi - lo > pitch / 2).all()
+
+
+def test_the_report_names_the_length_unit_of_its_coordinates(tmp_path):
+    """The limit and the boxes of topology changes are world coordinates
+    in the input's length unit, which neither the text nor --json said:
+    the unit nibabel reads from the NIfTI header, where it names one."""
+    nib = pytest.importorskip("nibabel")
+
+    two = np.zeros((12, 8, 8), np.uint8)
+    two[1:5, 1:5, 1:5] = 1
+    two[5:9, 5:7, 1:5] = 1  # shares an edge: the third step merges the two pieces
+    image = nib.Nifti1Image(two, np.diag([0.5, 0.7, 1.2, 1.0]))
+    image.header.set_xyzt_units("mm")
+    nib.save(image, tmp_path / "two.nii.gz")
+    unit = nib.load(tmp_path / "two.nii.gz").header.get_xyzt_units()[0]
+    rc, out, _ = run("flow", tmp_path / "two.nii.gz", "--json", "-q")
+    assert rc == 0 and json.loads(out)["unit"] == unit == "mm"
+    rc, out, _ = run("flow", tmp_path / "two.nii.gz", "-q")
+    placed = [line for line in out.splitlines() if line.lstrip().startswith(("limit:", "topology change"))]
+    assert rc == 0 and len(placed) == 2
+    assert "] mm, the centre" in placed[0] and placed[1].endswith("] mm")
+
+    nib.save(nib.Nifti1Image(two, np.eye(4)), tmp_path / "plain.nii.gz")  # no unit in the header
+    assert nib.load(tmp_path / "plain.nii.gz").header.get_xyzt_units()[0] == "unknown"
+    rc, out, _ = run("flow", tmp_path / "plain.nii.gz", "--json", "-q")
+    assert rc == 0 and json.loads(out)["unit"] is None

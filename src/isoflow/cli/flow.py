@@ -65,9 +65,9 @@ def cmd_flow(args: argparse.Namespace) -> int:
     writer = flow_writer(args, obj)
     result = run_with_files(args, obj, writer)
     if args.json:
-        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+        print(json.dumps({"input": str(args.input), "unit": obj.unit, **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input), pitch=obj.spacing))
+        print(format_flow(result, str(args.input), pitch=obj.spacing, unit=obj.unit))
         if args.out:
             written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + [
                 "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
@@ -136,6 +136,7 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
+    from ..mesh.formats.omezarr import open_store
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
@@ -163,10 +164,11 @@ def flow_store(args: argparse.Namespace) -> int:
     except BaseException:
         writer.abort()  # the previous run's files stay as they were
         raise
+    unit = open_store(args.input).unit()
     if args.json:
-        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+        print(json.dumps({"input": str(args.input), "unit": unit, **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input), pitch=place.spacing))
+        print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
     return 0
 
@@ -282,12 +284,13 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
     return 1 if writer.problems else 0
 
 
-def format_flow(result, name: str, pitch=None) -> str:
+def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     """The flow's records as a table, its stop and its limit point (a 2D
     object's cells are pixels, as ``isoflow info`` says); the points to as
     many digits as keep them within a 200th of ``pitch`` (the voxel size,
     one number or one per axis), so that a far origin does not round them
-    to the same number.
+    to the same number, followed by their length ``unit`` where the input
+    names one.
 
     Examples
     --------
@@ -309,16 +312,18 @@ def format_flow(result, name: str, pitch=None) -> str:
             f"{s['euler_characteristic']:>4} {s['energy']:>8}"
         )
     lim = result.limit
+    said = f" {unit}" if unit else ""
     lines.append(f"  stopped: {result.stop_reason}")
     if lim["center"] is not None:
         shape = {"cuboid": "a cuboid", "other": "not a cuboid", "not-reached": "the run stopped before its end"}
-        lines.append(f"  limit: {coordinates(lim['center'], step=pitch)}, the centre of the last non-empty state (step "
+        lines.append(f"  limit: {coordinates(lim['center'], step=pitch)}{said}, the centre of the last non-empty state (step "
                      f"{lim['last_step']}: {shape.get(lim['last_shape'], lim['last_shape'])})")
     for c in result.topology_changes:
         # a store flowed block by block finds changes but does not locate
         # them (where is None): say so, not "in None"; a box in a pitch read
         # from float32 (NIfTI's zooms) prints as that pitch does
         place = ("not located (block by block)" if c["where"] is None
-                 else f"in the box {coordinates(c['where'][0], step=pitch)} to {coordinates(c['where'][1], step=pitch)}")
+                 else f"in the box {coordinates(c['where'][0], step=pitch)} to "
+                      f"{coordinates(c['where'][1], step=pitch)}{said}")
         lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
     return "\n".join(lines)
