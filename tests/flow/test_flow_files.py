@@ -438,6 +438,11 @@ def test_until_topology_change_stops_before_the_step_that_merges(tmp_path):
     rc, _, _ = run("flow", tmp_path / "two.npy", "--out", tmp_path / "plain", "--volumes", ".npz", "-q")
     taken = np.load(tmp_path / "plain" / f"step_{len(files):03d}.npz")["volume"]
     assert rc == 0 and ndimage.label(taken)[1] == 1
+    rc, out, _ = run("flow", tmp_path / "two.npy", "--until-topology-change", "-q")
+    rows = [line.split()[0] for line in out.splitlines() if line.strip()[:1].isdigit()]
+    change = [line for line in out.splitlines() if "topology change at step" in line]
+    assert rc == 0 and rows == [str(s) for s in range(len(files))] and len(change) == 1
+    assert change[0].endswith("(the step is not taken: the run stopped before it)")
 
 
 def test_the_text_places_the_limit_and_a_change_of_a_far_origin_to_a_fraction_of_a_voxel(tmp_path):

@@ -325,5 +325,8 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
         place = ("not located (block by block)" if c["where"] is None
                  else f"in the box {coordinates(c['where'][0], step=pitch)} to "
                       f"{coordinates(c['where'][1], step=pitch)}{said}")
-        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
+        # the step --until-topology-change stopped before is not in the table: say so, or it reads as taken
+        taken = "" if c.get("applied", True) else " (the step is not taken: the run stopped before it)"
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}"
+                     + taken)
     return "\n".join(lines)
