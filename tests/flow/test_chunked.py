@@ -292,3 +292,17 @@ def test_command_names_the_store_of_a_connectivity_that_does_not_fit(tmp_path, c
     assert len(err.splitlines()) == 1
     assert err.startswith(f"isoflow flow: error: {tmp_path / 'in.zarr'}: connectivity 4 is not valid in 3D")
     assert not (tmp_path / "run").exists()
+
+
+def test_a_progress_that_cannot_be_called_is_refused_before_any_store(tmp_path):
+    """``progress=5`` failed after the input was cropped into its first
+    store and a step was computed, as "'int' object is not callable",
+    which names no argument; run_flow refuses it up front."""
+    plain_store(tmp_path / "in.zarr", edge_touching_boxes(), (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    with pytest.raises(TypeError, match="progress"):
+        flow_chunked(tmp_path / "in.zarr", out, progress=5)
+    with pytest.raises(TypeError, match="progress"):  # the in-memory flow's refusal, for the same argument
+        run_flow(read_object(tmp_path / "in.zarr"), progress=5)
+    assert list(out.iterdir()) == []

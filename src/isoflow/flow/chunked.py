@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable
 from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
@@ -420,6 +420,8 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     from .run import max_steps_for, run_engine
 
     conn = flow_connectivity(3, connectivity)
+    # before the input is cropped into the first store: called after the first step, it failed there
+    check_callable(progress, "progress", "progress(step, state)")
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)
     cap = steps if steps is not None else max_steps_for(engine.source_shape) if max_steps is None else max_steps
