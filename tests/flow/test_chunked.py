@@ -294,15 +294,23 @@ def test_command_names_the_store_of_a_connectivity_that_does_not_fit(tmp_path, c
     assert not (tmp_path / "run").exists()
 
 
-def test_a_progress_that_cannot_be_called_is_refused_before_any_store(tmp_path):
-    """``progress=5`` failed after the input was cropped into its first
-    store and a step was computed, as "'int' object is not callable",
-    which names no argument; run_flow refuses it up front."""
+@pytest.mark.parametrize("argument,value", [("progress", 5), ("steps", -1), ("steps", 1.5), ("steps", True),
+                                            ("max_steps", -2), ("until_topology_change", "yes"),
+                                            ("workers", 0), ("width", -1)])
+def test_a_bad_argument_is_refused_before_any_store(tmp_path, argument, value):
+    """Arguments run_flow refuses were taken, or failed late: steps=-1 ran
+    no step, 1.5 two, True one, max_steps=-2 none, until_topology_change=
+    "yes" stopped at a change; progress=5 failed after a step as "'int'
+    object is not callable", workers=0 after the first store naming
+    "threads", width=-1 as a format specifier. Each is refused up front,
+    naming the argument, with nothing written; run_flow refuses those it
+    shares."""
     plain_store(tmp_path / "in.zarr", edge_touching_boxes(), (5, 3, 4))
     out = tmp_path / "run"
     out.mkdir()
-    with pytest.raises(TypeError, match="progress"):
-        flow_chunked(tmp_path / "in.zarr", out, progress=5)
-    with pytest.raises(TypeError, match="progress"):  # the in-memory flow's refusal, for the same argument
-        run_flow(read_object(tmp_path / "in.zarr"), progress=5)
+    with pytest.raises((IsoflowError, TypeError), match=argument):
+        flow_chunked(tmp_path / "in.zarr", out, **{argument: value})
     assert list(out.iterdir()) == []
+    if argument not in ("workers", "width"):
+        with pytest.raises((IsoflowError, TypeError), match=argument):
+            run_flow(read_object(tmp_path / "in.zarr"), **{argument: value})

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_callable
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
@@ -416,12 +416,19 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
     ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
     """
+    from ..scale.compiled import check_threads
     from .motion import flow_connectivity
-    from .run import max_steps_for, run_engine
+    from .run import check_count, max_steps_for, run_engine
 
     conn = flow_connectivity(3, connectivity)
-    # before the input is cropped into the first store: called after the first step, it failed there
+    # as run_flow refuses them, and before the input is cropped into the
+    # first store: a bad one failed after it (progress, workers, width),
+    # or ran another flow (steps=-1 none, 1.5 two steps, "no" stopped at a change)
+    check_count("steps", steps)
+    check_count("max_steps", max_steps)
+    until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
+    workers, width = check_threads(workers, "workers"), check_threads(width, "width")
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)
     cap = steps if steps is not None else max_steps_for(engine.source_shape) if max_steps is None else max_steps
