@@ -314,3 +314,28 @@ def test_a_bad_argument_is_refused_before_any_store(tmp_path, argument, value):
     if argument not in ("workers", "width"):
         with pytest.raises((IsoflowError, TypeError), match=argument):
             run_flow(read_object(tmp_path / "in.zarr"), **{argument: value})
+
+
+def test_an_earlier_run_s_stores_are_refused_without_force(tmp_path):
+    """A second run into the same directory wrote over the first one's
+    first stores and left the rest: after a run of 3 steps, a run of 1
+    left step_002.zarr of the other run beside its own. Now the earlier
+    stores are refused (zarr reads them back unchanged) and force=True
+    replaces all of them."""
+    v = edge_touching_boxes()
+    plain_store(tmp_path / "in.zarr", v, (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    flow_chunked(tmp_path / "in.zarr", out, steps=3)
+    before = {p.name: zarr.open_group(str(p), mode="r")["0"][...] for p in out.glob("step_*.zarr")}
+    assert sorted(before) == [f"step_{s:03d}.zarr" for s in range(4)]
+    with pytest.raises(IsoflowError, match="earlier run"):
+        flow_chunked(tmp_path / "in.zarr", out, steps=1)
+    assert all(np.array_equal(zarr.open_group(str(out / n), mode="r")["0"][...], a) for n, a in before.items())
+    flow_chunked(tmp_path / "in.zarr", out, steps=1, force=True)
+    assert sorted(p.name for p in out.glob("step_*.zarr")) == ["step_000.zarr", "step_001.zarr"]
+    # the input cropped to its bounding box: step 0 as scipy finds the object
+    from scipy import ndimage
+
+    box = ndimage.find_objects(v.astype(np.uint8))[0]
+    assert np.array_equal(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...] != 0, v[box])
