@@ -501,3 +501,20 @@ def test_the_report_names_the_length_unit_of_its_coordinates(tmp_path):
     assert nib.load(tmp_path / "plain.nii.gz").header.get_xyzt_units()[0] == "unknown"
     rc, out, _ = run("flow", tmp_path / "plain.nii.gz", "--json", "-q")
     assert rc == 0 and json.loads(out)["unit"] is None
+
+
+def test_export_flow_names_force_in_python_words(tmp_path):
+    """``export_flow`` into a directory that holds files told a Python
+    caller to "pass --force", an option of the command line; it names its
+    own ``force=True``, and the command still says --force."""
+    from isoflow.errors import IsoflowError
+    from isoflow.flow.files import export_flow
+
+    result = isoflow.run_flow(isoflow.DigitalObject(np.ones((3, 4, 5), bool)))
+    export_flow(result, tmp_path / "run", plot=False)
+    with pytest.raises(IsoflowError, match="force=True") as refused:
+        export_flow(result, tmp_path / "run", plot=False)
+    assert "--force" not in str(refused.value)
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    rc, _, err = run("flow", tmp_path / "box.npy", "--out", tmp_path / "run")
+    assert rc == 2 and "pass --force" in err and "force=True" not in err

@@ -177,7 +177,8 @@ def check_output_dir(directory, force: bool = False):
     if out.is_dir():  # a killed run's staging directory does not make it taken
         remove_abandoned(out / STAGE)
     if out.is_dir() and any(out.iterdir()) and not force:
-        raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
+        raise IsoflowError.worded(f"{out}: directory is not empty; pass force=True to overwrite its files",
+                                  f"{out}: directory is not empty; pass --force to overwrite its files")
     if out.is_dir():
         for taken in _run_names(out):
             # --force replaces a run's files, never a directory of the user's that bears one's name
