@@ -518,3 +518,35 @@ def test_export_flow_names_force_in_python_words(tmp_path):
     np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
     rc, _, err = run("flow", tmp_path / "box.npy", "--out", tmp_path / "run")
     assert rc == 2 and "pass --force" in err and "force=True" not in err
+
+
+def test_flow_png_shows_the_betti_numbers_of_a_run_of_one_state(tmp_path):
+    """``flow --steps 0 --out`` (or a run stopped before its first step)
+    drew an empty Betti panel: a step line of one point draws nothing.
+    Read back by Pillow, the panel (less the legend, at its right) now
+    holds pixels of b0's colour, matplotlib's tab:blue."""
+    from PIL import Image
+
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    rc, _, _ = run("flow", tmp_path / "box.npy", "--steps", "0", "--out", tmp_path / "run", "-q")
+    assert rc == 0
+    picture = np.asarray(Image.open(tmp_path / "run" / "flow.png").convert("RGB")).astype(int)
+    height, width = picture.shape[:2]
+    betti_panel = picture[height * 63 // 100 : height * 93 // 100, width // 8 : width * 3 // 4]
+    blue = np.abs(betti_panel - np.array([31, 119, 180])).sum(-1) < 60  # tab:blue, #1f77b4
+    assert blue.sum() > 4
+
+
+def test_flow_png_of_one_state_ticks_whole_steps(tmp_path, monkeypatch):
+    """The step axis of a run of one state was ticked -0.045, -0.03, ...:
+    the steps shown are whole numbers."""
+    from isoflow.flow import pictures
+
+    drawn = []
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append(fig) or path)
+    result = isoflow.run_flow(isoflow.DigitalObject(np.ones((3, 4, 5), bool)), steps=0)
+    pictures.render_flow(result, tmp_path / "flow.png")
+    axis = drawn[0].axes[2]
+    low, high = axis.get_xlim()
+    ticks = [t for t in axis.get_xticks() if low <= t <= high]
+    assert ticks and all(float(t).is_integer() for t in ticks)
