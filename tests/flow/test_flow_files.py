@@ -550,3 +550,41 @@ def test_flow_png_of_one_state_ticks_whole_steps(tmp_path, monkeypatch):
     low, high = axis.get_xlim()
     ticks = [t for t in axis.get_xticks() if low <= t <= high]
     assert ticks and all(float(t).is_integer() for t in ticks)
+
+
+def pinched_vertices(v: np.ndarray, conn: int) -> int:
+    """Lattice vertices whose eight cells are two opposite cells of one
+    kind and six of the other, of the kind the connectivity joins and the
+    surface splits: background under 6, object under 26 (counted here on
+    the padded array, without isoflow)."""
+    p = np.pad(v, 1)
+    cells = np.stack([p[a:p.shape[0] - 1 + a, b:p.shape[1] - 1 + b, c:p.shape[2] - 1 + c]
+                      for a in (0, 1) for b in (0, 1) for c in (0, 1)])  # octant k = 4a + 2b + c
+    pair = ~cells if conn == 6 else cells
+    count = pair.sum(0) == 2
+    opposite = np.zeros(count.shape, bool)
+    for k in range(4):
+        opposite |= pair[k] & pair[7 - k]
+    return int((count & opposite).sum())
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_flow_csv_mesh_euler_is_twice_chi_and_twice_the_pinched_vertices(tmp_path, conn):
+    """docs/flow.md: ``mesh_euler`` is ``2 chi + 2 p``, with chi
+    scikit-image's Euler number of each written state and p its pinched
+    vertices counted on the array."""
+    rng = np.random.default_rng(3)
+    v = rng.random((9, 9, 9)) < 0.5
+    np.save(tmp_path / "noise.npy", v)
+    rc, _, _ = run("flow", tmp_path / "noise.npy", "--connectivity", conn, "--out", tmp_path / "run",
+                   "--volumes", ".npz", "-q")
+    assert rc == 0
+    rows = list(csv.DictReader(open(tmp_path / "run" / "flow.csv")))
+    pinched = 0
+    for row in rows[:-1]:  # the last state is empty: no surface
+        state = np.load(tmp_path / "run" / f"step_{int(row['step']):03d}.npz")["volume"]
+        chi = euler_number(np.pad(state, 1), connectivity=1 if conn == 6 else 3)
+        p = pinched_vertices(state, conn)
+        pinched += p
+        assert int(row["mesh_euler"]) == 2 * chi + 2 * p
+    assert pinched  # the noise has pinched vertices: the two numbers differ
