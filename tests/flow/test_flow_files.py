@@ -588,3 +588,34 @@ def test_flow_csv_mesh_euler_is_twice_chi_and_twice_the_pinched_vertices(tmp_pat
         pinched += p
         assert int(row["mesh_euler"]) == 2 * chi + 2 * p
     assert pinched  # the noise has pinched vertices: the two numbers differ
+
+
+@pytest.mark.parametrize("store", [False, True])
+def test_an_interrupt_while_the_flow_computes_names_the_directory(tmp_path, capsys, monkeypatch, store):
+    """Ctrl-C while a step is computed (no file being written) said only
+    "isoflow: interrupted", where one while a file is written says the
+    previous run's files are unchanged. Both now say it, in memory and
+    block by block, and the earlier run's files are byte for byte as
+    they were."""
+    from isoflow.flow import engines
+    from isoflow.flow.chunked import ChunkedFlow
+
+    v = np.zeros((8, 8, 8), bool)
+    v[1:7, 1:7, 1:7] = True
+    source = tmp_path / ("b.zarr" if store else "b.npy")
+    isoflow.write_volume(isoflow.DigitalObject(v), source) if store else np.save(source, v)
+    extra = ["--volumes", ".zarr"] if store else ["--no-check"]
+    assert main(["flow", str(source), "--out", str(tmp_path / "o"), *extra]) == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()}
+    capsys.readouterr()
+
+    def stop(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ChunkedFlow if store else engines.ArrayFlow, "step", stop)
+    monkeypatch.setattr(engines.BitFlow, "step", stop)
+    assert main(["flow", str(source), "--out", str(tmp_path / "o"), "--force", *extra]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while the flow ran; the previous run's files "
+                   "in the directory are unchanged"], err
+    assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()} == before

@@ -161,8 +161,11 @@ def flow_store(args: argparse.Namespace) -> int:
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
-    except BaseException:
+    except KeyboardInterrupt as exc:
         writer.abort()  # the previous run's files stay as they were
+        raise writer.interrupted(exc) from None
+    except BaseException:
+        writer.abort()
         raise
     unit = open_store(args.input).unit()
     if args.json:
@@ -245,9 +248,12 @@ def run_with_files(args: argparse.Namespace, obj, writer):
                               keep_states=False)
             if writer is not None:
                 writer.finish(result)
-    except BaseException:
-        if writer is not None:  # the previous run's files stay as they were
-            writer.abort()
+    except BaseException as exc:
+        if writer is None:
+            raise
+        writer.abort()  # the previous run's files stay as they were
+        if isinstance(exc, KeyboardInterrupt):
+            raise writer.interrupted(exc) from None
         raise
     return result
 
