@@ -169,6 +169,22 @@ def test_a_format_without_a_unit_says_it_is_not_kept(tmp_path, suffix):
     assert read_volume_with_unit(path)[1] is None
 
 
+def test_a_npy_names_a_far_origin_it_does_not_keep_to_a_fraction_of_a_voxel(tmp_path):
+    """The warning of a .npy (every step of `flow --volumes .npy`) names
+    the origin to put back by hand; at x = 123455.995 in voxels of 0.01 it
+    said 123456, half a voxel off, and 1e+06 for 999999.98, voxels off."""
+    import re
+
+    given = np.array([123455.995, -654321.01, 999999.98])
+    obj = DigitalObject(box().volume, pitch=(0.01, 0.02, 0.04), origin=given)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        write_volume(obj, tmp_path / "far.npy")
+    said = [str(w.message) for w in caught if "origin" in str(w.message)]
+    origin = re.search(r"origin \[([^\]]*)\]", said[0]).group(1)
+    assert np.allclose([float(x) for x in origin.split(",")], given, rtol=0, atol=np.array([0.01, 0.02, 0.04]) / 200)
+
+
 # ------------------------------------------------------------------ the command line
 
 def run(*args, cwd):

@@ -252,3 +252,90 @@ def test_the_suffix_without_its_dot_flows_block_by_block(tmp_path, capsys, suffi
     assert main(["flow", str(tmp_path / "in.zarr"), "--steps", "2", "--out", str(out), "--volumes", suffix, "-q"]) == 0
     assert sorted(p.name for p in out.iterdir()) == ["flow.csv", "flow.png"] + [f"step_{s:03d}.zarr" for s in range(3)]
     assert "volumes (step_*.zarr, read block by block)" in capsys.readouterr().out
+
+
+def edge_touching_boxes() -> np.ndarray:
+    """Two 4x4x4 boxes sharing an edge: two 6-components, which the third
+    plain step merges into one."""
+    v = np.zeros((12, 8, 8), bool)
+    v[1:5, 1:5, 1:5] = True
+    v[5:9, 5:7, 1:5] = True
+    return v
+
+
+def test_until_topology_change_leaves_no_store_of_the_step_not_taken(tmp_path):
+    """The step that would change the Betti numbers is reported, not
+    taken: no store of it is left beside the states taken (a step_002.zarr
+    of one piece was left in the directory)."""
+    from scipy import ndimage
+
+    v = edge_touching_boxes()
+    plain_store(tmp_path / "in.zarr", v, (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    got = flow_chunked(tmp_path / "in.zarr", out, until_topology_change=True, slab=2)
+    assert got.stop_reason == "topology-change"
+    stores = sorted(out.glob("step_*.zarr"))
+    assert [p.name for p in stores] == [f"step_{s['step']:03d}.zarr" for s in got.steps]
+    # scipy's 6-components of the input, and of every state left
+    assert ndimage.label(v)[1] == 2
+    assert [ndimage.label(zarr.open_group(str(p), mode="r")["0"][...] != 0)[1] for p in stores] == [2] * len(stores)
+
+
+def test_command_names_the_store_of_a_connectivity_that_does_not_fit(tmp_path, capsys):
+    """A 2D connectivity for a 3D store is refused in one line naming the
+    store, as the in-memory flow names its file (the line named none)."""
+    plain_store(tmp_path / "in.zarr", edge_touching_boxes(), (5, 3, 4))
+    assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr",
+                 "--connectivity", "4"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"isoflow flow: error: {tmp_path / 'in.zarr'}: connectivity 4 is not valid in 3D")
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("argument,value", [("progress", 5), ("steps", -1), ("steps", 1.5), ("steps", True),
+                                            ("max_steps", -2), ("until_topology_change", "yes"),
+                                            ("workers", 0), ("width", -1)])
+def test_a_bad_argument_is_refused_before_any_store(tmp_path, argument, value):
+    """Arguments run_flow refuses were taken, or failed late: steps=-1 ran
+    no step, 1.5 two, True one, max_steps=-2 none, until_topology_change=
+    "yes" stopped at a change; progress=5 failed after a step as "'int'
+    object is not callable", workers=0 after the first store naming
+    "threads", width=-1 as a format specifier. Each is refused up front,
+    naming the argument, with nothing written; run_flow refuses those it
+    shares."""
+    plain_store(tmp_path / "in.zarr", edge_touching_boxes(), (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    with pytest.raises((IsoflowError, TypeError), match=argument):
+        flow_chunked(tmp_path / "in.zarr", out, **{argument: value})
+    assert list(out.iterdir()) == []
+    if argument not in ("workers", "width"):
+        with pytest.raises((IsoflowError, TypeError), match=argument):
+            run_flow(read_object(tmp_path / "in.zarr"), **{argument: value})
+
+
+def test_an_earlier_run_s_stores_are_refused_without_force(tmp_path):
+    """A second run into the same directory wrote over the first one's
+    first stores and left the rest: after a run of 3 steps, a run of 1
+    left step_002.zarr of the other run beside its own. Now the earlier
+    stores are refused (zarr reads them back unchanged) and force=True
+    replaces all of them."""
+    v = edge_touching_boxes()
+    plain_store(tmp_path / "in.zarr", v, (5, 3, 4))
+    out = tmp_path / "run"
+    out.mkdir()
+    flow_chunked(tmp_path / "in.zarr", out, steps=3)
+    before = {p.name: zarr.open_group(str(p), mode="r")["0"][...] for p in out.glob("step_*.zarr")}
+    assert sorted(before) == [f"step_{s:03d}.zarr" for s in range(4)]
+    with pytest.raises(IsoflowError, match="earlier run"):
+        flow_chunked(tmp_path / "in.zarr", out, steps=1)
+    assert all(np.array_equal(zarr.open_group(str(out / n), mode="r")["0"][...], a) for n, a in before.items())
+    flow_chunked(tmp_path / "in.zarr", out, steps=1, force=True)
+    assert sorted(p.name for p in out.glob("step_*.zarr")) == ["step_000.zarr", "step_001.zarr"]
+    # the input cropped to its bounding box: step 0 as scipy finds the object
+    from scipy import ndimage
+
+    box = ndimage.find_objects(v.astype(np.uint8))[0]
+    assert np.array_equal(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...] != 0, v[box])

@@ -4,6 +4,7 @@ counts, and flow.csv records trimesh's reading of each (issue 15, item 3)."""
 import contextlib
 import csv
 import io
+import json
 
 import numpy as np
 import pymeshlab
@@ -411,3 +412,210 @@ def test_the_step_files_check_imports_nothing_on_its_thread(tmp_path):
     with open(tmp_path / "run" / "flow.csv") as fh:  # the checks are made: trimesh's reading of both steps
         rows = list(csv.DictReader(fh))
     assert [r["trimesh_euler"] for r in rows] == ["2", "2"]
+
+
+def test_until_topology_change_stops_before_the_step_that_merges(tmp_path):
+    """``isoflow flow --until-topology-change`` (run_flow's
+    until_topology_change, which the command had no option for) stops
+    before the step that would change the Betti numbers: every state
+    written has scipy's two 6-components of the input, and the plain run's
+    next state, the step not taken, has one."""
+    from scipy import ndimage
+
+    v = np.zeros((12, 8, 8), bool)
+    v[1:5, 1:5, 1:5] = True
+    v[5:9, 5:7, 1:5] = True  # shares an edge with the first box
+    np.save(tmp_path / "two.npy", v)
+    assert ndimage.label(v)[1] == 2
+    rc, out, _ = run("flow", tmp_path / "two.npy", "--until-topology-change", "--out", tmp_path / "run",
+                     "--volumes", ".npz", "--json", "-q")
+    assert rc == 0
+    got = json.loads(out)
+    assert got["stop_reason"] == "topology-change"
+    files = sorted((tmp_path / "run").glob("step_*.npz"))
+    assert len(files) == len(got["steps"])
+    assert [ndimage.label(np.load(f)["volume"])[1] for f in files] == [2] * len(files)
+    rc, _, _ = run("flow", tmp_path / "two.npy", "--out", tmp_path / "plain", "--volumes", ".npz", "-q")
+    taken = np.load(tmp_path / "plain" / f"step_{len(files):03d}.npz")["volume"]
+    assert rc == 0 and ndimage.label(taken)[1] == 1
+    rc, out, _ = run("flow", tmp_path / "two.npy", "--until-topology-change", "-q")
+    rows = [line.split()[0] for line in out.splitlines() if line.strip()[:1].isdigit()]
+    change = [line for line in out.splitlines() if "topology change at step" in line]
+    assert rc == 0 and rows == [str(s) for s in range(len(files))] and len(change) == 1
+    assert change[0].endswith("(the step is not taken: the run stopped before it)")
+
+
+def test_the_text_places_the_limit_and_a_change_of_a_far_origin_to_a_fraction_of_a_voxel(tmp_path):
+    """At an origin far from 0 in fine voxels the table's limit and the box
+    of a topology change were printed to 6 digits: a box's limit at
+    [123456, -654321, 1e+06], voxels away from its centre, and a change in
+    the box [123456, ...] to [123456, ...], of no size. The centre is
+    pynrrd's reading of the file: a box flows to its centre."""
+    nrrd = pytest.importorskip("nrrd")
+    import re
+
+    pitch, origin = np.array([0.01, 0.02, 0.04]), np.array([123456.0, -654321.0, 1.0e6])
+    header = {"space directions": np.diag(pitch), "space origin": origin, "space": "left-posterior-superior"}
+    box = np.zeros((8, 9, 10), np.uint8)
+    box[2:5, 2:6, 2:7] = 1  # 3 x 4 x 5
+    nrrd.write(str(tmp_path / "box.nrrd"), box, header)
+    back, head = nrrd.read(str(tmp_path / "box.nrrd"))
+    idx = np.argwhere(back)
+    # the space origin is the centre of voxel 0: the box's centre is the mean of its voxels' centres
+    centre = np.asarray(head["space origin"]) + np.diag(head["space directions"]) * idx.mean(0)
+    rc, out, _ = run("flow", tmp_path / "box.nrrd", "-q")
+    limit = re.search(r"limit: \[([^\]]*)\]", out).group(1)
+    assert rc == 0 and np.allclose([float(x) for x in limit.split(",")], centre, rtol=0, atol=pitch / 200)
+
+    two = np.zeros((12, 8, 8), np.uint8)
+    two[1:5, 1:5, 1:5] = 1
+    two[5:9, 5:7, 1:5] = 1  # shares an edge: the third step merges the two pieces
+    nrrd.write(str(tmp_path / "two.nrrd"), two, header)
+    rc, out, _ = run("flow", tmp_path / "two.nrrd", "-q")
+    lo, hi = re.search(r"in the box \[([^\]]*)\] to \[([^\]]*)\]", out).groups()
+    lo, hi = (np.array([float(x) for x in c.split(",")]) for c in (lo, hi))
+    assert rc == 0 and (hi - lo > pitch / 2).all()
+
+
+def test_the_report_names_the_length_unit_of_its_coordinates(tmp_path):
+    """The limit and the boxes of topology changes are world coordinates
+    in the input's length unit, which neither the text nor --json said:
+    the unit nibabel reads from the NIfTI header, where it names one."""
+    nib = pytest.importorskip("nibabel")
+
+    two = np.zeros((12, 8, 8), np.uint8)
+    two[1:5, 1:5, 1:5] = 1
+    two[5:9, 5:7, 1:5] = 1  # shares an edge: the third step merges the two pieces
+    image = nib.Nifti1Image(two, np.diag([0.5, 0.7, 1.2, 1.0]))
+    image.header.set_xyzt_units("mm")
+    nib.save(image, tmp_path / "two.nii.gz")
+    unit = nib.load(tmp_path / "two.nii.gz").header.get_xyzt_units()[0]
+    rc, out, _ = run("flow", tmp_path / "two.nii.gz", "--json", "-q")
+    assert rc == 0 and json.loads(out)["unit"] == unit == "mm"
+    rc, out, _ = run("flow", tmp_path / "two.nii.gz", "-q")
+    placed = [line for line in out.splitlines() if line.lstrip().startswith(("limit:", "topology change"))]
+    assert rc == 0 and len(placed) == 2
+    assert "] mm, the centre" in placed[0] and placed[1].endswith("] mm")
+
+    nib.save(nib.Nifti1Image(two, np.eye(4)), tmp_path / "plain.nii.gz")  # no unit in the header
+    assert nib.load(tmp_path / "plain.nii.gz").header.get_xyzt_units()[0] == "unknown"
+    rc, out, _ = run("flow", tmp_path / "plain.nii.gz", "--json", "-q")
+    assert rc == 0 and json.loads(out)["unit"] is None
+
+
+def test_export_flow_names_force_in_python_words(tmp_path):
+    """``export_flow`` into a directory that holds files told a Python
+    caller to "pass --force", an option of the command line; it names its
+    own ``force=True``, and the command still says --force."""
+    from isoflow.errors import IsoflowError
+    from isoflow.flow.files import export_flow
+
+    result = isoflow.run_flow(isoflow.DigitalObject(np.ones((3, 4, 5), bool)))
+    export_flow(result, tmp_path / "run", plot=False)
+    with pytest.raises(IsoflowError, match="force=True") as refused:
+        export_flow(result, tmp_path / "run", plot=False)
+    assert "--force" not in str(refused.value)
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    rc, _, err = run("flow", tmp_path / "box.npy", "--out", tmp_path / "run")
+    assert rc == 2 and "pass --force" in err and "force=True" not in err
+
+
+def test_flow_png_shows_the_betti_numbers_of_a_run_of_one_state(tmp_path):
+    """``flow --steps 0 --out`` (or a run stopped before its first step)
+    drew an empty Betti panel: a step line of one point draws nothing.
+    Read back by Pillow, the panel (less the legend, at its right) now
+    holds pixels of b0's colour, matplotlib's tab:blue."""
+    from PIL import Image
+
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    rc, _, _ = run("flow", tmp_path / "box.npy", "--steps", "0", "--out", tmp_path / "run", "-q")
+    assert rc == 0
+    picture = np.asarray(Image.open(tmp_path / "run" / "flow.png").convert("RGB")).astype(int)
+    height, width = picture.shape[:2]
+    betti_panel = picture[height * 63 // 100 : height * 93 // 100, width // 8 : width * 3 // 4]
+    blue = np.abs(betti_panel - np.array([31, 119, 180])).sum(-1) < 60  # tab:blue, #1f77b4
+    assert blue.sum() > 4
+
+
+def test_flow_png_of_one_state_ticks_whole_steps(tmp_path, monkeypatch):
+    """The step axis of a run of one state was ticked -0.045, -0.03, ...:
+    the steps shown are whole numbers."""
+    from isoflow.flow import pictures
+
+    drawn = []
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append(fig) or path)
+    result = isoflow.run_flow(isoflow.DigitalObject(np.ones((3, 4, 5), bool)), steps=0)
+    pictures.render_flow(result, tmp_path / "flow.png")
+    axis = drawn[0].axes[2]
+    low, high = axis.get_xlim()
+    ticks = [t for t in axis.get_xticks() if low <= t <= high]
+    assert ticks and all(float(t).is_integer() for t in ticks)
+
+
+def pinched_vertices(v: np.ndarray, conn: int) -> int:
+    """Lattice vertices whose eight cells are two opposite cells of one
+    kind and six of the other, of the kind the connectivity joins and the
+    surface splits: background under 6, object under 26 (counted here on
+    the padded array, without isoflow)."""
+    p = np.pad(v, 1)
+    cells = np.stack([p[a:p.shape[0] - 1 + a, b:p.shape[1] - 1 + b, c:p.shape[2] - 1 + c]
+                      for a in (0, 1) for b in (0, 1) for c in (0, 1)])  # octant k = 4a + 2b + c
+    pair = ~cells if conn == 6 else cells
+    count = pair.sum(0) == 2
+    opposite = np.zeros(count.shape, bool)
+    for k in range(4):
+        opposite |= pair[k] & pair[7 - k]
+    return int((count & opposite).sum())
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_flow_csv_mesh_euler_is_twice_chi_and_twice_the_pinched_vertices(tmp_path, conn):
+    """docs/flow.md: ``mesh_euler`` is ``2 chi + 2 p``, with chi
+    scikit-image's Euler number of each written state and p its pinched
+    vertices counted on the array."""
+    rng = np.random.default_rng(3)
+    v = rng.random((9, 9, 9)) < 0.5
+    np.save(tmp_path / "noise.npy", v)
+    rc, _, _ = run("flow", tmp_path / "noise.npy", "--connectivity", conn, "--out", tmp_path / "run",
+                   "--volumes", ".npz", "-q")
+    assert rc == 0
+    rows = list(csv.DictReader(open(tmp_path / "run" / "flow.csv")))
+    pinched = 0
+    for row in rows[:-1]:  # the last state is empty: no surface
+        state = np.load(tmp_path / "run" / f"step_{int(row['step']):03d}.npz")["volume"]
+        chi = euler_number(np.pad(state, 1), connectivity=1 if conn == 6 else 3)
+        p = pinched_vertices(state, conn)
+        pinched += p
+        assert int(row["mesh_euler"]) == 2 * chi + 2 * p
+    assert pinched  # the noise has pinched vertices: the two numbers differ
+
+
+@pytest.mark.parametrize("store", [False, True])
+def test_an_interrupt_while_the_flow_computes_names_the_directory(tmp_path, capsys, monkeypatch, store):
+    """Ctrl-C while a step is computed (no file being written) said only
+    "isoflow: interrupted", where one while a file is written says the
+    previous run's files are unchanged. Both now say it, in memory and
+    block by block, and the earlier run's files are byte for byte as
+    they were."""
+    from isoflow.flow import engines
+    from isoflow.flow.chunked import ChunkedFlow
+
+    v = np.zeros((8, 8, 8), bool)
+    v[1:7, 1:7, 1:7] = True
+    source = tmp_path / ("b.zarr" if store else "b.npy")
+    isoflow.write_volume(isoflow.DigitalObject(v), source) if store else np.save(source, v)
+    extra = ["--volumes", ".zarr"] if store else ["--no-check"]
+    assert main(["flow", str(source), "--out", str(tmp_path / "o"), *extra]) == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()}
+    capsys.readouterr()
+
+    def stop(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(ChunkedFlow if store else engines.ArrayFlow, "step", stop)
+    monkeypatch.setattr(engines.BitFlow, "step", stop)
+    assert main(["flow", str(source), "--out", str(tmp_path / "o"), "--force", *extra]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while the flow ran; the previous run's files "
+                   "in the directory are unchanged"], err
+    assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()} == before

@@ -34,6 +34,9 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--guard", action="store_true",
                    help="topology control (Theorem 21): every step by simple deformations, thinning where a step "
                         "cannot be; ends at a thin fixed point")
+    p.add_argument("--until-topology-change", action="store_true",
+                   help="stop before the first step that would change the Betti numbers (that step is reported, "
+                        "not taken; a guarded run never takes one)")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...); "
@@ -63,9 +66,9 @@ def cmd_flow(args: argparse.Namespace) -> int:
     writer = flow_writer(args, obj)
     result = run_with_files(args, obj, writer)
     if args.json:
-        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+        print(json.dumps({"input": str(args.input), "unit": obj.unit, **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input)))
+        print(format_flow(result, str(args.input), pitch=obj.spacing, unit=obj.unit))
         if args.out:
             written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + [
                 "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
@@ -134,10 +137,11 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
+    from ..mesh.formats.omezarr import open_store
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
-    volume = source_volume(args.input)[0]
+    volume, place, _ = source_volume(args.input)
     say_plate(args, tuple(volume.shape))
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
@@ -145,6 +149,8 @@ def flow_store(args: argparse.Namespace) -> int:
     if args.guard:
         raise IsoflowError(guard_refusal(str(args.input), volume.shape))
     check_flow_input(args, None)
+    if args.connectivity is not None:  # named with the input, as in memory: the dimension is the store's
+        check_input_connectivity(args, 3)
     conn = flow_connectivity(3, args.connectivity)
     last = reachable_steps(args.steps, volume.shape)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
@@ -152,16 +158,21 @@ def flow_store(args: argparse.Namespace) -> int:
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
+                                  until_topology_change=args.until_topology_change,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
-    except BaseException:
+    except KeyboardInterrupt as exc:
         writer.abort()  # the previous run's files stay as they were
+        raise writer.interrupted(exc) from None
+    except BaseException:
+        writer.abort()
         raise
+    unit = open_store(args.input).unit()
     if args.json:
-        print(json.dumps({"input": str(args.input), **result.to_dict()}))
+        print(json.dumps({"input": str(args.input), "unit": unit, **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input)))
+        print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
     return 0
 
@@ -231,13 +242,17 @@ def run_with_files(args: argparse.Namespace, obj, writer):
             # (no callback when nothing uses the states: a compiled run then
             # never unpacks them)
             result = run_flow(obj, steps=args.steps, guard=args.guard, connectivity=args.connectivity,
+                              until_topology_change=args.until_topology_change,
                               progress=progress if writer is not None or show is not None else None,
                               keep_states=False)
             if writer is not None:
                 writer.finish(result)
-    except BaseException:
-        if writer is not None:  # the previous run's files stay as they were
-            writer.abort()
+    except BaseException as exc:
+        if writer is None:
+            raise
+        writer.abort()  # the previous run's files stay as they were
+        if isinstance(exc, KeyboardInterrupt):
+            raise writer.interrupted(exc) from None
         raise
     return result
 
@@ -274,9 +289,22 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
     return 1 if writer.problems else 0
 
 
-def format_flow(result, name: str) -> str:
+def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     """The flow's records as a table, its stop and its limit point (a 2D
-    object's cells are pixels, as ``isoflow info`` says)."""
+    object's cells are pixels, as ``isoflow info`` says); the points to as
+    many digits as keep them within a 200th of ``pitch`` (the voxel size,
+    one number or one per axis), so that a far origin does not round them
+    to the same number, followed by their length ``unit`` where the input
+    names one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import DigitalObject, run_flow
+    >>> far = DigitalObject(np.ones((2, 2, 2), bool), pitch=0.01, origin=(123456.0, 0.0, 0.0))
+    >>> format_flow(run_flow(far), "far.npz", pitch=0.01).splitlines()[-1].split(", the")[0]
+    '  limit: [123456.01, 0.01, 0.01]'
+    """
     cells = "pixels" if result.steps and len(result.steps[0]["betti"]) == 2 else "voxels"
     lines = [
         f"{name}: digital curvature flow, {result.connectivity}-connectivity"
@@ -289,16 +317,21 @@ def format_flow(result, name: str) -> str:
             f"{s['euler_characteristic']:>4} {s['energy']:>8}"
         )
     lim = result.limit
+    said = f" {unit}" if unit else ""
     lines.append(f"  stopped: {result.stop_reason}")
     if lim["center"] is not None:
         shape = {"cuboid": "a cuboid", "other": "not a cuboid", "not-reached": "the run stopped before its end"}
-        lines.append(f"  limit: {coordinates(lim['center'])}, the centre of the last non-empty state (step "
+        lines.append(f"  limit: {coordinates(lim['center'], step=pitch)}{said}, the centre of the last non-empty state (step "
                      f"{lim['last_step']}: {shape.get(lim['last_shape'], lim['last_shape'])})")
     for c in result.topology_changes:
         # a store flowed block by block finds changes but does not locate
         # them (where is None): say so, not "in None"; a box in a pitch read
         # from float32 (NIfTI's zooms) prints as that pitch does
         place = ("not located (block by block)" if c["where"] is None
-                 else f"in the box {coordinates(c['where'][0])} to {coordinates(c['where'][1])}")
-        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}")
+                 else f"in the box {coordinates(c['where'][0], step=pitch)} to "
+                      f"{coordinates(c['where'][1], step=pitch)}{said}")
+        # the step --until-topology-change stopped before is not in the table: say so, or it reads as taken
+        taken = "" if c.get("applied", True) else " (the step is not taken: the run stopped before it)"
+        lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}"
+                     + taken)
     return "\n".join(lines)

@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
@@ -278,6 +278,13 @@ class ChunkedFlow(ArrayFlow):
     def change_region(self, state: StoredObject, betti: tuple[list, list] | None = None):
         return None  # not located out of core (module docstring)
 
+    def discard(self, state: StoredObject) -> None:
+        """Remove the store of a step not taken, so that the directory holds
+        the states of the run's records only."""
+        if state.path is not None:
+            shutil.rmtree(state.path, ignore_errors=True)
+            self.written.remove(Path(state.path).name)
+
     def same(self, a: StoredObject, b: StoredObject) -> bool:
         if a.shape != b.shape or a.voxels != b.voxels or not a.voxels:
             return False
@@ -358,9 +365,35 @@ def guard_refusal(where: str, shape: tuple[int, ...]) -> str:
             "--guard")
 
 
+def clear_earlier_run(directory: Path, force: bool) -> None:
+    """Remove the ``step_*.zarr`` stores an earlier run left in
+    ``directory`` where ``force``, else refuse them: a shorter run wrote
+    over the first of them and left the rest, states of another run.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> (folder / "step_000.zarr").mkdir()
+    >>> clear_earlier_run(folder, force=False)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: ...: holds the stores of an earlier run (step_000.zarr); ...
+    >>> clear_earlier_run(folder, force=True); list(folder.iterdir())
+    []
+    """
+    earlier = sorted(directory.glob("step_*.zarr")) if directory.is_dir() else []
+    if earlier and not force:
+        raise IsoflowError(f"{directory}: holds the stores of an earlier run ({earlier[0].name}"
+                           f"{f' and {len(earlier) - 1} more' if len(earlier) > 1 else ''}); give an empty directory, "
+                           "or force=True to replace them")
+    for store in earlier:
+        shutil.rmtree(store)
+
+
 def flow_chunked(source, directory, steps: int | None = None, connectivity: int = 6, *, max_steps: int | None = None,
                  until_topology_change: bool = False, slab: int | None = None, scheduler=None, workers: int = 2,
-                 width: int = 3, progress=None):
+                 width: int = 3, progress=None, force: bool = False):
     """The plain flow of a zarr store's volume, block by block.
 
     Parameters
@@ -381,6 +414,10 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
         ``dask.distributed`` client too.
     workers : int
         Tasks in flight on the local schedulers (memory is sized for them).
+    force : bool
+        Replace the ``step_*.zarr`` stores of an earlier run in
+        ``directory`` (removed before this run starts); without it they
+        are refused.
 
     Returns
     -------
@@ -392,7 +429,8 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     ------
     IsoflowError
         A store that is not a 3D binary volume, an empty one, slabs that do
-        not fit in memory.
+        not fit in memory, a directory holding an earlier run's stores
+        without ``force``.
 
     Notes
     -----
@@ -409,10 +447,20 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     >>> [s["voxels"] for s in r.steps], sorted(p.name for p in folder.glob("step_*"))
     ([27, 8, 1, 0], ['step_000.zarr', 'step_001.zarr', 'step_002.zarr'])
     """
+    from ..scale.compiled import check_threads
     from .motion import flow_connectivity
-    from .run import max_steps_for, run_engine
+    from .run import check_count, max_steps_for, run_engine
 
     conn = flow_connectivity(3, connectivity)
+    # as run_flow refuses them, and before the input is cropped into the
+    # first store: a bad one failed after it (progress, workers, width),
+    # or ran another flow (steps=-1 none, 1.5 two steps, "no" stopped at a change)
+    check_count("steps", steps)
+    check_count("max_steps", max_steps)
+    until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
+    check_callable(progress, "progress", "progress(step, state)")
+    workers, width = check_threads(workers, "workers"), check_threads(width, "width")
+    clear_earlier_run(Path(directory), check_switch(force, "force", "flow_chunked"))
     engine = ChunkedFlow(conn, directory, width=width, slab=slab, scheduler=scheduler, workers=workers)
     state = engine.start(source)
     cap = steps if steps is not None else max_steps_for(engine.source_shape) if max_steps is None else max_steps

@@ -100,6 +100,10 @@ class ArrayFlow:
     def to_object(self, state: DigitalObject) -> DigitalObject:
         return state
 
+    def discard(self, state: DigitalObject) -> None:
+        """Let go of a state computed but not taken (the step that
+        ``until_topology_change`` stops before); an array is simply dropped."""
+
     def is_cuboid(self, state: DigitalObject) -> bool:
         return is_box(state.volume)
 

@@ -177,7 +177,8 @@ def check_output_dir(directory, force: bool = False):
     if out.is_dir():  # a killed run's staging directory does not make it taken
         remove_abandoned(out / STAGE)
     if out.is_dir() and any(out.iterdir()) and not force:
-        raise IsoflowError(f"{out}: directory is not empty; pass --force to overwrite its files")
+        raise IsoflowError.worded(f"{out}: directory is not empty; pass force=True to overwrite its files",
+                                  f"{out}: directory is not empty; pass --force to overwrite its files")
     if out.is_dir():
         for taken in _run_names(out):
             # --force replaces a run's files, never a directory of the user's that bears one's name
@@ -431,11 +432,21 @@ class FlowWriter:
             msg = str(exc).replace(str(self.stage), str(self.out)).replace("nothing was written", "")
             if not msg.strip():  # an interrupt between two writes: name the run's directory
                 msg = f"{self.out}: stopped while writing the flow's files"
-            # a directory without files before this run holds no previous run
-            # to keep: there, nothing of the run is left (abort)
-            msg = msg.rstrip("; ") + ("; the previous run's files in the directory are unchanged" if self.had_files
-                                      else "; nothing was written")
-            raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(msg) from None
+            raise (KeyboardInterrupt if isinstance(exc, KeyboardInterrupt) else IsoflowError)(self.kept(msg)) from None
+
+    def kept(self, msg: str) -> str:
+        """``msg`` followed by what an interrupted or failed run leaves in
+        the output directory: a directory without files before this run
+        holds no previous run to keep, and there nothing of it is left
+        (:meth:`abort`)."""
+        return msg.rstrip("; ") + ("; the previous run's files in the directory are unchanged" if self.had_files
+                                   else "; nothing was written")
+
+    def interrupted(self, exc: KeyboardInterrupt) -> KeyboardInterrupt:
+        """The interrupt of a run, named: one raised while the flow computes
+        a step (not while a file is written) says nothing, and the command
+        then did not say that the previous run's files are unchanged."""
+        return exc if str(exc).strip() else KeyboardInterrupt(self.kept(f"{self.out}: stopped while the flow ran"))
 
     def _commit(self) -> list:
         """Move the staged files over the output directory's, then remove the

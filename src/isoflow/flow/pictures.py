@@ -101,12 +101,16 @@ def render_flow(result, path: Path, title: str = "") -> Path:
     axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
     axes[1].set_ylabel("energy E = k^T n")
     for i in range(betti.shape[1]):
-        axes[2].step(steps, betti[:, i], where="post", label=f"b{i}")
+        # a marker at every state: a step line alone draws nothing for a run of
+        # one state (--steps 0) and no more than a tick for the last state
+        axes[2].step(steps, betti[:, i], where="post", marker="o", ms=3, label=f"b{i}")
     axes[2].set_ylabel("Betti numbers")
     axes[2].set_xlabel("step")
     from matplotlib.ticker import MaxNLocator
 
     axes[2].xaxis.set_major_locator(MaxNLocator(integer=True))
+    if len(steps) == 1:  # a range of no length: the locator ticks it in fractions of a step
+        axes[2].set_xticks(steps)
     axes[2].legend(loc="upper right", fontsize=8)
     for change in result.topology_changes:
         for ax in axes:

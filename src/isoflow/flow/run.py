@@ -219,7 +219,30 @@ class _Guarded:
     reversed_moves: int = 0
 
 
-def _check_count(name: str, value) -> None:
+def check_count(name: str, value) -> None:
+    """Refuse a count of steps that is not None or an integer >= 0 (a
+    bool, a float, a negative number), naming the argument.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : object
+        What was given.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``name`` and ``value``.
+
+    Examples
+    --------
+    >>> check_count("steps", 3)
+    >>> check_count("steps", 1.5)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: steps must be an integer >= 0, got 1.5
+    """
     if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
         raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
 
@@ -244,6 +267,7 @@ def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: Sto
             changes.append({"step": step + 1, "before": before, "after": record["betti"], "where": where,
                             "applied": not until_topology_change})
             if until_topology_change:
+                engine.discard(new)  # not taken: a state written as it was computed goes too
                 return "topology-change", changes
         step += 1
         trace.add(new, record)
@@ -359,8 +383,8 @@ def run_flow(
     obj = DigitalObject.of(obj)
     conn = flow_connectivity(obj.ndim, connectivity)
     check_callable(progress, "progress", "progress(step, state)")
-    _check_count("steps", steps)
-    _check_count("max_steps", max_steps)
+    check_count("steps", steps)
+    check_count("max_steps", max_steps)
     guard, until_topology_change, keep_states = (
         check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
         check_switch(keep_states, "keep_states", "run_flow"))

@@ -144,7 +144,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     # label image has no lattice offset or parity to lose
     lost = [f"{name} {value}" for name, value, held in (
         ("pitch", coordinates(obj.spacing), np.any(obj.spacing != 1.0)),
-        ("origin", coordinates(obj.origin), obj.origin.any()),
+        ("origin", coordinates(obj.origin, step=obj.spacing), obj.origin.any()),
         ("lattice offset", coordinates(obj.offset), any(obj.offset)),
         ("parity", str(obj.parity), obj.parity),
         ("unit", str(unit), unit is not None)) if held]
