@@ -441,8 +441,9 @@ def test_cli_flow_bad_input(tmp_path, capsys):
     assert err.startswith("isoflow flow: error:") and "\n" not in err
     np.save(tmp_path / "v.npy", np.ones((3, 3, 3), bool))
     assert main(["flow", str(tmp_path / "v.npy"), "--connectivity", "4"]) == 2
-    assert main(["flow", str(tmp_path / "v.npy"), "--steps", "-1"]) == 2
-    assert "--steps" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:  # refused as the command line is read
+        main(["flow", str(tmp_path / "v.npy"), "--steps", "-1"])
+    assert stop.value.code == 2 and "--steps" in capsys.readouterr().err
     np.save(tmp_path / "e.npy", np.zeros((3, 3, 3), bool))
     assert main(["flow", str(tmp_path / "e.npy")]) == 2
     assert "empty" in capsys.readouterr().err
