@@ -191,3 +191,36 @@ def test_a_damaged_chunk_is_one_line_naming_the_store_once(tmp_path, capsys):
         err = capsys.readouterr().err.splitlines()
         assert len(err) == 1 and err[0].count("d.zarr") == 1 and "cannot read a chunk in [" in err[0], err
         assert "slice(" not in err[0]
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_a_chunk_of_more_voxels_than_the_pieces_number_is_read_in_slabs_within_it(rng, conn, monkeypatch):
+    """A zarr chunk of 256 layers of 4096 x 4096 voxels (4.3 G voxels, more
+    than the 2^32 - 2 that a slab's pieces are numbered in) ended
+    ``isoflow info STORE.zarr --labels`` in a ValueError traceback. Here the
+    limit is lowered to 300 voxels so that one chunk of 20 layers of 10 x 10
+    is over it: the table is read in slabs within it, every label's voxels,
+    components and Euler characteristic those of scipy and scikit-image."""
+    from scipy import ndimage
+    from skimage.measure import euler_number
+
+    from isoflow.scale import pieces
+
+    image = rng.integers(0, 4, (20, 10, 10)).astype(np.uint16)
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 300)
+    table = label_table_blocks(image, conn, layers=[20])
+    structure = ndimage.generate_binary_structure(3, 1 if conn == 6 else 3)
+    for row, value in enumerate(table["label"].tolist()):
+        solid = image == value
+        assert table["voxels"][row] == solid.sum()
+        assert table["b0"][row] == ndimage.label(solid, structure)[1]
+        assert table["euler_characteristic"][row] == euler_number(solid, 1 if conn == 6 else 3)
+
+
+def test_a_label_image_whose_three_layers_exceed_the_numbering_is_refused_in_one_line(monkeypatch):
+    from isoflow import IsoflowError
+    from isoflow.scale import pieces
+
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 250)
+    with pytest.raises(IsoflowError, match=r"layers hold 100 voxels each .* crop or split it"):
+        label_table_blocks(np.ones((5, 10, 10), np.uint8), 6)

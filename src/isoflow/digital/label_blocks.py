@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from ..errors import IsoflowError
 from ..scale.memory import check_fits
 from .connectivity import check_connectivity
 from .label_table import (
@@ -99,6 +100,7 @@ def label_table_blocks(
                            labels=labels, surfaces=surfaces)
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
+    sizes = _numbered_at_once(sizes, array.shape)
     stream = _Stream(array, conn, wanted, surfaces)
     stops = np.cumsum(sizes)
     for t, (x0, x1) in enumerate(zip(stops - sizes, stops)):
@@ -107,6 +109,22 @@ def label_table_blocks(
             progress(t + 1, len(sizes))
     found = rows_of_pieces(*stream.joined(), kind, conn, wanted)
     return columns(found, place.spacing, place.origin, surfaces)
+
+
+def _numbered_at_once(sizes: list[int], shape) -> list[int]:
+    """The slabs cut where one, with its voxel layer either side, would hold
+    more voxels than the pieces' 32-bit numbers reach: a store whose chunks
+    are 256 layers of 4096 x 4096 voxels is read in slabs of 253 layers.
+    The table is the same for any slabs, so only their size changes."""
+    from ..scale.pieces import MAX_PIECE_VOXELS
+
+    area = int(np.prod([int(n) for n in shape[1:]], dtype=np.int64))
+    most = MAX_PIECE_VOXELS // max(area, 1) - 2
+    if most < 1:
+        raise IsoflowError(f"a label image whose layers hold {area} voxels each is read three layers at a time, "
+                           f"more than the {MAX_PIECE_VOXELS} voxels its pieces are numbered in; "
+                           "crop or split it along its last two axes")
+    return [part for n in sizes for part in [most] * (n // most) + [n % most] if part]
 
 
 class _Stream:

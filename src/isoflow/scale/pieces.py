@@ -298,6 +298,11 @@ def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape
 RUN_BYTES = 4 + 4
 
 
+#: the most voxels :func:`piece_runs` numbers at once: runs and pieces are
+#: uint32, and 0xFFFFFFFF marks no piece
+MAX_PIECE_VOXELS = 0xFFFFFFFF - 1
+
+
 def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0) -> dict:
     """The 6-connected pieces of every value of a 3D integer image, as runs.
 
@@ -317,8 +322,8 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     """
     flat_vol = unsigned(volume)
     nx, ny, nz = flat_vol.shape
-    if flat_vol.size >= 0xFFFFFFFF:
-        raise ValueError("label_pieces numbers at most 2^32 - 2 voxels at once (use slabs)")
+    if flat_vol.size > MAX_PIECE_VOXELS:
+        raise ValueError(f"label_pieces numbers at most {MAX_PIECE_VOXELS} voxels at once (use slabs)")
     flat = flat_vol.reshape(-1)
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
