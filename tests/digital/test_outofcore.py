@@ -399,6 +399,27 @@ def test_zarr_blocks_follow_the_chunks(tmp_path):
     assert [c[0] for c in chunks_mod.zarr_blocks(small, (10, 30, 4))] == [10, 30, 4]
 
 
+@pytest.mark.parametrize("scheduler", ["sync", "threads"])
+@pytest.mark.parametrize("chunks", [(7, 13, 5), (30, 13, 5)])
+def test_progress_is_reported_per_block_not_per_layer(tmp_path, rng, scheduler, chunks):
+    """A store of one layer of blocks along its first axis (or a layer of
+    hundreds, 4096^3 in chunks of 256^3) said nothing until the layer was
+    done: progress came once per layer. Every block summed and merged is
+    reported now: twice zarr's count of the store's chunks in all, one
+    step at a time, and the report still scikit-image's chi."""
+    from skimage.measure import euler_number
+
+    v = rng.random((30, 40, 25)) < 0.4
+    z = zarr.create_array(store=str(tmp_path / "p.zarr"), shape=v.shape, chunks=chunks, dtype=bool)
+    z[...] = v
+    calls = []
+    got = analyze_zarr(str(tmp_path / "p.zarr"), 26, scheduler=scheduler,
+                       progress=lambda done, total: calls.append((done, total)))
+    total = 2 * z.nchunks
+    assert calls == [(k, total) for k in range(1, total + 1)]
+    assert got["euler_characteristic"] == euler_number(v, 3)
+
+
 def test_cli_info_on_zarr(tmp_path, capsys):
     v = torus(9, 3) | ball(3, torus(9, 3).shape[0])
     path = write_zarr(tmp_path / "t.zarr", v, CHUNKS3)

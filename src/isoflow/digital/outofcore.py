@@ -47,6 +47,7 @@ of a component on a face), never the volume or a label volume.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import itertools
 import os
@@ -358,24 +359,55 @@ def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, 
     most blocks before merging any). Within a layer the blocks and merges
     run in parallel."""
     dask, _ = import_dask(array=False)
+    per_layer = int(np.prod(grid.numblocks[1:], dtype=np.int64))
+    ticks = _Ticks(progress, 2 * per_layer * grid.numblocks[0])
     merged = []
-    first = _block_tasks(grid, 0, conn, where, surfaces, shape)
-    current = dict(zip(first, compute(*first.values())))
-    for i in range(grid.numblocks[0]):
-        upper = _block_tasks(grid, i + 1, conn, where, surfaces, shape) if i + 1 < grid.numblocks[0] else {}
-        # the summaries computed already as leaves of the graph (dask would
-        # walk through every dict and array of them as arguments)
-        both = {**{index: dask.delayed(s, pure=False, traverse=False) for index, s in current.items()}, **upper}
-        tasks = [dask.delayed(_merge, pure=False)(_Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
-                                                      where, surfaces),
-                                                  *(both[u] for u in _uppers(index, grid.numblocks)))
-                 for index in current]
-        done = compute(*tasks, *upper.values())
-        merged.extend(done[:len(tasks)])
-        current = dict(zip(upper, done[len(tasks):]))
-        if progress is not None:
-            progress(i + 1, grid.numblocks[0])
+    with ticks.callback():
+        first = _block_tasks(grid, 0, conn, where, surfaces, shape)
+        current = dict(zip(first, compute(*first.values())))
+        for i in range(grid.numblocks[0]):
+            upper = _block_tasks(grid, i + 1, conn, where, surfaces, shape) if i + 1 < grid.numblocks[0] else {}
+            # the summaries computed already as leaves of the graph (dask would
+            # walk through every dict and array of them as arguments)
+            both = {**{index: dask.delayed(s, pure=False, traverse=False) for index, s in current.items()}, **upper}
+            tasks = [dask.delayed(_merge, pure=False)(_Job(index, grid.box(index), grid.numblocks, tuple(shape), conn,
+                                                          where, surfaces),
+                                                      *(both[u] for u in _uppers(index, grid.numblocks)))
+                     for index in current]
+            done = compute(*tasks, *upper.values())
+            merged.extend(done[:len(tasks)])
+            current = dict(zip(upper, done[len(tasks):]))
+            ticks.at((i + 1 + min(i + 2, grid.numblocks[0])) * per_layer)
     return merged
+
+
+class _Ticks:
+    """``progress(done, total)`` per block summed and per block merged: a
+    store of one layer of blocks, or a layer of thousands (4096^3 in chunks
+    of 256^3 has 256), is long work that a count of layers leaves silent.
+    Local schedulers report each task as it ends (a dask callback, run on
+    the calling thread); a cluster's, which runs no such callback, each
+    layer."""
+
+    TASKS = ("_read_zarr_block-", "_dask_block-", "_merge-")
+
+    def __init__(self, progress, total: int):
+        self.progress, self.total, self.done, self.told = progress, total, 0, 0
+
+    def callback(self):
+        from dask.callbacks import Callback
+
+        return Callback(posttask=self.posttask) if self.progress is not None else contextlib.nullcontext()
+
+    def posttask(self, key, result, dsk, state, worker_id) -> None:
+        if str(key).startswith(self.TASKS):
+            self.at(self.done + 1)
+
+    def at(self, done: int) -> None:
+        self.done = max(self.done, min(done, self.total))
+        if self.progress is not None and self.done > self.told:
+            self.told = self.done
+            self.progress(self.done, self.total)
 
 
 def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:
@@ -452,9 +484,9 @@ def analyze_chunked(
     where : str, optional
         The input's name in error messages.
     progress : callable, optional
-        ``progress(done, total)``, called after each layer of blocks along
-        the first axis (``total`` layers), the unit of work between two
-        computes.
+        ``progress(done, total)``, called as each block is summed and
+        merged (``total`` twice the blocks; on a ``dask.distributed``
+        cluster after each layer of blocks along the first axis).
     surfaces : bool
         Count the closed surfaces, pinched vertices and doubled edges (3D).
     threads : int, optional

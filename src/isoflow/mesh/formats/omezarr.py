@@ -305,7 +305,7 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     """``isoflow info``'s report of a zarr store (``IMAGE.zarr:LEVEL`` too),
     block by block (:func:`isoflow.digital.outofcore.analyze_chunked`), with
     ``shape`` in isoflow's (x, y, z) order. ``label`` selects one value;
-    ``progress(done, total)`` is called once per layer of blocks;
+    ``progress(done, total)`` is called as each block is summed and merged;
     ``surfaces`` and ``threads`` as in :func:`~isoflow.digital.outofcore.analyze_chunked`.
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass)."""
