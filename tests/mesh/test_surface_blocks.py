@@ -147,6 +147,25 @@ def test_dask_array_and_block_shapes(tmp_path, rng):
         assert check["agree"], check["problem"]
 
 
+@pytest.mark.parametrize("chunks", [(5, 7, 6), (17, 7, 6)])
+def test_progress_is_reported_per_block_of_both_passes(tmp_path, rng, chunks):
+    """``surface STORE.zarr`` of one layer of blocks along the first axis
+    (or of a layer of hundreds) showed no progress until a layer was done.
+    Each block of the counting and the writing pass is reported now: twice
+    zarr's count of the store's chunks in all, one at a time; the file is
+    trimesh's closed mesh of the voxels' volume."""
+    v = seam_volume(rng)
+    z = zarr.create_array(store=str(tmp_path / "p.zarr"), shape=v.shape, chunks=chunks, dtype=bool)
+    z[...] = v
+    calls = []
+    write_surface_blocks(z, tmp_path / "p.ply", 6, scheduler="threads", threads=2,
+                         progress=lambda done, total: calls.append((done, total)))
+    total = 2 * z.nchunks
+    assert calls == [(k, total) for k in range(1, total + 1)]
+    mesh = trimesh.load(tmp_path / "p.ply", process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(v.sum())
+
+
 def test_the_check_sees_a_broken_file(tmp_path, rng):
     v = seam_volume(rng)
     got = write_surface_blocks(v, tmp_path / "b.ply", 6, block_shape=CHUNKS)

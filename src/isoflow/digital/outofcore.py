@@ -47,7 +47,6 @@ of a component on a face), never the volume or a label volume.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import itertools
 import os
@@ -60,6 +59,7 @@ import numpy as np
 from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import (
+    BlockTicks,
     SpatialAxes,
     block_bounds,
     checked_block_shape,
@@ -360,7 +360,9 @@ def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, 
     run in parallel."""
     dask, _ = import_dask(array=False)
     per_layer = int(np.prod(grid.numblocks[1:], dtype=np.int64))
-    ticks = _Ticks(progress, 2 * per_layer * grid.numblocks[0])
+    # a store of one layer of blocks, or a layer of thousands (4096^3 in chunks of 256^3 has 256),
+    # is long work that a count of layers would leave silent: each block summed and merged is told
+    ticks = BlockTicks(progress, 2 * per_layer * grid.numblocks[0], ("_read_zarr_block", "_dask_block", "_merge"))
     merged = []
     with ticks.callback():
         first = _block_tasks(grid, 0, conn, where, surfaces, shape)
@@ -379,35 +381,6 @@ def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, 
             current = dict(zip(upper, done[len(tasks):]))
             ticks.at((i + 1 + min(i + 2, grid.numblocks[0])) * per_layer)
     return merged
-
-
-class _Ticks:
-    """``progress(done, total)`` per block summed and per block merged: a
-    store of one layer of blocks, or a layer of thousands (4096^3 in chunks
-    of 256^3 has 256), is long work that a count of layers leaves silent.
-    Local schedulers report each task as it ends (a dask callback, run on
-    the calling thread); a cluster's, which runs no such callback, each
-    layer."""
-
-    TASKS = ("_read_zarr_block-", "_dask_block-", "_merge-")
-
-    def __init__(self, progress, total: int):
-        self.progress, self.total, self.done, self.told = progress, total, 0, 0
-
-    def callback(self):
-        from dask.callbacks import Callback
-
-        return Callback(posttask=self.posttask) if self.progress is not None else contextlib.nullcontext()
-
-    def posttask(self, key, result, dsk, state, worker_id) -> None:
-        if str(key).startswith(self.TASKS):
-            self.at(self.done + 1)
-
-    def at(self, done: int) -> None:
-        self.done = max(self.done, min(done, self.total))
-        if self.progress is not None and self.done > self.told:
-            self.told = self.done
-            self.progress(self.done, self.total)
 
 
 def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:

@@ -49,7 +49,7 @@ from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
-from ..scale.chunks import is_zarr_array
+from ..scale.chunks import BlockTicks, is_zarr_array
 from ..scale.compiled import using
 from .export import float32_holds, mesh_vertex_table, ply_header
 
@@ -506,21 +506,22 @@ def _position_type(shape, frame: DigitalObject) -> type:
     return np.float32
 
 
-def _by_layers(grid: BlockGrid, task, scheduler, workers: int, progress, before: int) -> dict:
+def _by_layers(grid: BlockGrid, task, scheduler, workers: int, ticks, before: int) -> dict:
     """``task(index)`` (a dask.delayed call) for every block, computed one
-    layer of blocks along the first axis at a time; ``progress(done,
-    total)`` after each layer, the layers of both passes counted
-    (``before``: those done before this pass)."""
+    layer of blocks along the first axis at a time; ``ticks`` (a
+    :class:`~isoflow.scale.chunks.BlockTicks` of both passes) told of each
+    block, ``before`` blocks done before this pass. A store of one layer
+    of blocks, or of thousands to a layer, is long work that a count of
+    layers would leave silent."""
     from ..scale.chunks import compute
 
     out = {}
-    layers = grid.numblocks[0]
-    for i in range(layers):
-        indices = [ix for ix in grid.indices() if ix[0] == i]
-        (done,) = compute([task(ix) for ix in indices], scheduler=scheduler, workers=workers)
-        out.update(zip(indices, done))
-        if progress is not None:
-            progress(before + i + 1, 2 * layers)
+    with ticks.callback():
+        for i in range(grid.numblocks[0]):
+            indices = [ix for ix in grid.indices() if ix[0] == i]
+            (done,) = compute([task(ix) for ix in indices], scheduler=scheduler, workers=workers)
+            out.update(zip(indices, done))
+            ticks.at(before + len(out))
     return out
 
 
@@ -551,8 +552,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     threads : int, optional
         Workers of dask's local schedulers (default: the CPUs).
     progress : callable, optional
-        ``progress(done, total)`` after each layer of blocks along the first
-        axis, of the two passes (``total``: twice the layers).
+        ``progress(done, total)`` as each block of the two passes is done
+        (``total``: twice the blocks; on a ``dask.distributed`` cluster,
+        which runs no dask callback, after each layer of blocks).
     force : bool
         Replace an existing output.
     where : str, optional
@@ -609,8 +611,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     read = _largest_read(grid) * (2 * np.dtype(array.dtype).itemsize + 2)
     _check_memory(where, workers, read, "counting", cache)
     source = _Source(array)
+    ticks = BlockTicks(progress, 2 * len(grid.indices()), ("count_block", "write_block"))
     counts = _by_layers(grid, lambda i: _delayed(count_block)(source, grid, i, conn, where), scheduler, workers,
-                        progress, 0)
+                        ticks, 0)
     triangles = triangulate or out.suffix.lower() == ".stl" or any(
         c["triangles"] != 2 * c["faces"] for c in counts.values())
     layout = plan(grid, counts, triangles)
@@ -621,8 +624,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     target, size = _prepared(out, layout, frame, comments, conn, where)
     with _filling(out, target, size) as target:
         written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
-                                                                   where), scheduler, workers, progress,
-                             grid.numblocks[0])
+                                                                   where), scheduler, workers, ticks,
+                             len(counts))
     quads = sum(layout.quads.values())
     midpoints = sum(c["triangles"] - 2 * c["faces"] for c in counts.values()) // 2
     return {"path": out, "vertices": layout.vertices, "faces": layout.faces, "kind": layout.kind, "quads": quads,
