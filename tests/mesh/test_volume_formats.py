@@ -794,3 +794,18 @@ def test_a_float32_affine_is_read_back_by_nibabel_or_refused(tmp_path, suffix, p
     affine = nib.load(path).affine
     np.testing.assert_allclose(np.diag(affine)[:3], [pitch] * 3, rtol=1e-6)
     np.testing.assert_allclose(affine[:3, 3], [origin + pitch / 2, pitch / 2, pitch / 2], rtol=1e-6)
+
+
+@pytest.mark.parametrize("size", [1e-300, 1e-170, 1e170, 1e300])
+def test_an_nrrd_voxel_size_far_from_1_is_read_as_pynrrd_reads_it(tmp_path, size):
+    """A voxel size whose square underflows or overflows float64 is still a
+    voxel size: read as the diagonal of the ``space directions`` pynrrd
+    gives, not refused as zero or as two axes along one world axis."""
+    nrrd = pytest.importorskip("nrrd")
+    path = tmp_path / "v.nrrd"
+    nrrd.write(str(path), np.ones((2, 3, 4), np.uint8),
+               {"space": "left-posterior-superior", "space directions": np.diag([size] * 3), "space origin": [0, 0, 0]})
+    _, header = nrrd.read(str(path))
+    back = isoflow.read_volume(path)
+    np.testing.assert_allclose(back.spacing, np.abs(np.diag(header["space directions"])), rtol=1e-12)
+    assert back.volume.shape == (2, 3, 4)
