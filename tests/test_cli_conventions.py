@@ -654,3 +654,29 @@ def test_an_empty_volumes_suffix_is_named_as_given(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("isoflow flow: error: --volumes '': volumes are written as .npy, "), err
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".npy"])
+def test_a_terminal_is_told_while_the_volume_is_written(tmp_path, monkeypatch, suffix):
+    """Compressing a large volume can take as long as voxelising it, after
+    the bar has cleared: while the file is written, the terminal's last
+    line names it; then that line is cleared, a warning of the write (.npy
+    drops the pitch) on a line of its own, and a pipe gets none of it."""
+    from isoflow.mesh.formats.registry import format_for
+
+    module = format_for(tmp_path / f"v{suffix}", writing=True).load()
+    write, seen = module.write, []
+
+    def recorded(*args, **kwargs):
+        seen.append(sys.stderr.getvalue().rsplit("\r", 1)[-1])  # what the terminal's line shows now
+        return write(*args, **kwargs)
+
+    monkeypatch.setattr(module, "write", recorded)
+    argv = ["voxelize", TORUS, "--resolution", 16, "-o", tmp_path / f"v{suffix}", "--force"]
+    shown = stderr_of(monkeypatch, Terminal(), argv)  # which undoes the patch once the command is done
+    line = f"voxelize: writing {tmp_path / f'v{suffix}'}"
+    assert seen == [line]
+    assert f"\r{line}\r{' ' * len(line)}\r" in shown  # cleared once the file is written
+    for line in shown.split("\n"):
+        assert "warning:" not in line or line.rsplit("\r", 1)[-1].startswith("isoflow voxelize: warning:"), line
+    assert "writing" not in stderr_of(monkeypatch, io.StringIO(), argv)  # a pipe or a log file

@@ -104,6 +104,27 @@ def test_info_on_omezarr_block_by_block_with_a_label(tmp_path, capsys, labels):
 
 # --------------------------------------------------------------- writing by suffix
 
+@pytest.mark.parametrize("radius", [1e-12, 1e-7, 2e10, 1e11])
+def test_a_tiff_voxel_size_is_read_back_by_tifffile_or_refused(tmp_path, capsys, radius):
+    """TIFF keeps x and y voxel sizes as 1 / size in two uint32s: a size it
+    holds is what tifffile's tags give back, one it cannot hold is refused
+    (tifffile wrote the resolution 0, read as no calibration, or raised)."""
+    mesh = tmp_path / "ball.stl"
+    ball = trimesh.creation.icosphere(2, radius=radius)
+    ball.export(mesh)
+    pitch = float(ball.extents.max()) / 20  # --resolution 20: 20 voxels along the longest side
+    out = tmp_path / "ball.tif"
+    if 1 / pitch > 2**32 - 1 or pitch > 2**32 - 1:
+        fails(capsys, "voxelize", mesh, "--resolution", "20", "-o", out, words=("XResolution", f"{pitch:.6g}", ".nrrd"))
+        assert not out.exists()
+        return
+    run(capsys, "voxelize", mesh, "--resolution", "20", "-o", out)
+    with tifffile.TiffFile(out) as tif:
+        for tag in ("XResolution", "YResolution"):
+            num, den = tif.pages[0].tags[tag].value
+            assert den / num == pytest.approx(pitch, rel=1e-6), tag
+
+
 @pytest.mark.parametrize("suffix", [".nii.gz", ".tif", ".nrrd", ".h5", ".binvox", ".vox", ".zarr"])
 def test_voxelize_writes_every_format(tmp_path, capsys, suffix):
     pytest.importorskip({".nrrd": "nrrd", ".h5": "h5py", ".zarr": "zarr"}.get(suffix, "numpy"))

@@ -279,3 +279,20 @@ def test_a_short_write_on_a_full_disk_says_no_space_left(full_disk, suffix):
     assert "No space left on device: " in p.stderr and "requested" not in p.stderr, p.stderr
     assert out.read_bytes() == b"old"
     assert sorted(f.name for f in full_disk.iterdir()) == [out.name]
+
+
+@pytest.mark.parametrize("name", ["x.npz", "x.h5", "x.zarr"])
+def test_an_output_under_a_file_is_said_to_be_under_a_file(tmp_path, name):
+    """``-o mesh.stl/x.npz`` names a file where a directory must be: the
+    line says so, as the OS does (ENOTDIR), not that no such directory is
+    there (the user can see it is)."""
+    import errno
+
+    stl = tmp_path / "box.stl"
+    stl.write_bytes(TORUS.read_bytes())
+    with pytest.raises(NotADirectoryError):  # the OS's own reading of the path
+        open(stl / name, "w")
+    got = run("voxelize", TORUS, "--resolution", 8, "-o", stl / name)
+    lines = got.stderr.strip().splitlines()
+    assert got.returncode == 2 and len(lines) == 1, got.stderr
+    assert os.strerror(errno.ENOTDIR).lower() in lines[0].lower() and str(stl) in lines[0], lines[0]

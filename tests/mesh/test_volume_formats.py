@@ -772,3 +772,40 @@ def test_tiff_grey_with_alpha_is_read_as_the_grey(tmp_path, planar):
         warnings.simplefilter("error", IsoflowWarning)
         obj = isoflow.read_volume(tmp_path / "la.tif", label=7)
     assert np.array_equal(obj.volume, grey.T == 7)
+
+
+@pytest.mark.parametrize("suffix", [".nii.gz", ".mgz"])
+@pytest.mark.parametrize(("pitch", "origin"), [(0.5, -3.0), (1e39, 0.0), (1e-300, 0.0), (1.0, 1e39)])
+def test_a_float32_affine_is_read_back_by_nibabel_or_refused(tmp_path, suffix, pitch, origin):
+    """NIfTI and MGH keep the affine in float32: a placement it holds is
+    what nibabel's affine gives back; one past float32 (a size that rounds
+    to 0 or to inf, a coordinate past 3.4e38) is refused before the file is
+    written, not written as a file nibabel reads as inf, nan or 0."""
+    nib = pytest.importorskip("nibabel")
+    path = tmp_path / f"v{suffix}"
+    obj = DigitalObject(np.ones((2, 3, 4), np.uint8), pitch=pitch, origin=(origin, 0.0, 0.0))
+    holds = 1.5e-45 < pitch < 3.4e38 and abs(origin) < 3.4e38
+    if not holds:
+        with pytest.raises(IsoflowError, match=r"float32.*\.nrrd"):
+            isoflow.write_volume(obj, path)
+        assert not path.exists()
+        return
+    isoflow.write_volume(obj, path)
+    affine = nib.load(path).affine
+    np.testing.assert_allclose(np.diag(affine)[:3], [pitch] * 3, rtol=1e-6)
+    np.testing.assert_allclose(affine[:3, 3], [origin + pitch / 2, pitch / 2, pitch / 2], rtol=1e-6)
+
+
+@pytest.mark.parametrize("size", [1e-300, 1e-170, 1e170, 1e300])
+def test_an_nrrd_voxel_size_far_from_1_is_read_as_pynrrd_reads_it(tmp_path, size):
+    """A voxel size whose square underflows or overflows float64 is still a
+    voxel size: read as the diagonal of the ``space directions`` pynrrd
+    gives, not refused as zero or as two axes along one world axis."""
+    nrrd = pytest.importorskip("nrrd")
+    path = tmp_path / "v.nrrd"
+    nrrd.write(str(path), np.ones((2, 3, 4), np.uint8),
+               {"space": "left-posterior-superior", "space directions": np.diag([size] * 3), "space origin": [0, 0, 0]})
+    _, header = nrrd.read(str(path))
+    back = isoflow.read_volume(path)
+    np.testing.assert_allclose(back.spacing, np.abs(np.diag(header["space directions"])), rtol=1e-12)
+    assert back.volume.shape == (2, 3, 4)

@@ -66,6 +66,49 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
             bar.close()
 
 
+@contextlib.contextmanager
+def writing_line(args: argparse.Namespace, path: object) -> Iterator[None]:
+    """On a terminal, one line saying that ``path`` is being written, for as
+    long as it is, then cleared (as the bars are): compressing a large
+    volume can take as long as voxelising it, and the bar, cleared at its
+    end, would leave the terminal silent meanwhile. Nothing with
+    ``--quiet`` or on a pipe, whose log gets the result line.
+
+    Examples
+    --------
+    >>> import argparse
+    >>> with writing_line(argparse.Namespace(quiet=True, command="voxelize"), "out.nii.gz"):
+    ...     pass
+    """
+    import warnings
+
+    if args.quiet or not sys.stderr.isatty():
+        yield
+        return
+    line = f"{args.command}: writing {path}"
+    sys.stderr.write(line)
+    sys.stderr.flush()
+    shown, up = warnings.showwarning, True
+
+    def clear() -> None:
+        nonlocal up
+        if up:
+            sys.stderr.write("\r" + " " * len(line) + "\r")
+            sys.stderr.flush()
+            up = False
+
+    def show(*warning, **where) -> None:  # a warning of the write gets a line of its own
+        clear()
+        shown(*warning, **where)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = shown
+        clear()
+
+
 #: a piped run says how long it will take once it has worked this long (seconds) ...
 NOTE_AFTER = 2.0
 #: ... if the whole will take at least this long

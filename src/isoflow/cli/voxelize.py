@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import IsoflowError, coordinates, counted
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
-from .progress import progress_bar
+from .progress import progress_bar, writing_line
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -67,7 +67,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
         raise
-    with coarser_for_magicavoxel():
+    with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
     print(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, "
@@ -106,7 +106,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
-    with coarser_for_magicavoxel():
+    with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force),
                       args.output)
     say_note(args, out, r.note)

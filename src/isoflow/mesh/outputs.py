@@ -146,6 +146,8 @@ def check_writable_dir(directory: str | os.PathLike, purpose: str) -> Path:
     but not a read-only mount, which the write itself then reports.
     """
     directory = Path(directory)
+    if directory.exists() and not directory.is_dir():  # the OS's own word, as open() would say it
+        raise IsoflowError(f"{directory}: not a directory, a file (for {purpose})")
     if not directory.is_dir():
         raise IsoflowError(f"{directory}: no such directory (for {purpose})")
     if not os.access(directory, os.W_OK | os.X_OK):

@@ -60,7 +60,7 @@ def check_store_path(path, force: bool) -> Path:
         marks = ("zarr.json", ".zarray", ".zgroup")
         if not path.is_dir() or not (any((path / m).exists() for m in marks) or not any(path.iterdir())):
             raise IsoflowError(f"{path}: exists and is not a zarr store; not replacing it")
-    if not path.parent.is_dir():
+    if not path.parent.exists():  # a file in its place is named as one by check_writable_dir
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
     check_writable_dir(path.parent, f"the zarr store {path.name}")
     return path

@@ -44,7 +44,10 @@ def axis_aligned(array: np.ndarray, matrix, centre0, where: str):
     if not (np.isfinite(m).all() and np.isfinite(c0).all()):
         raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} with the first voxel at {c0.tolist()} "
                            "holds values that are not finite numbers")
-    norms = np.linalg.norm(m, axis=0)
+    # each column scaled by its largest entry first: the squares of a step of
+    # 1e-300 (or 1e300) underflow to 0 (or overflow to inf) where the step does not
+    scale = np.abs(m).max(axis=0)
+    norms = scale * np.linalg.norm(m / np.where(scale > 0, scale, 1.0), axis=0)
     if not (norms > 0).all():
         raise IsoflowError(f"{where}: the voxel-to-world map {m.tolist()} has a zero voxel size")
     rows = _world_axes(m, norms)  # the world axis each array axis runs along

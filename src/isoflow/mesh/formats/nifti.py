@@ -237,14 +237,27 @@ def float32_placement(path: Path, obj: DigitalObject, fmt: str = "NIfTI", centre
     """Warn where the float32 affine moves a voxel centre of ``obj`` by more
     than :data:`FLOAT32_SLACK` voxels, as a format says what of the
     placement it drops; ``centred``: the format stores the volume's centre
-    (FreeSurfer MGH's ``Pxyz_c``), not voxel 0's (NIfTI's)."""
+    (FreeSurfer MGH's ``Pxyz_c``), not voxel 0's (NIfTI's). A placement
+    that float32 cannot hold at all (a voxel size that rounds to 0, a
+    coordinate past float32's largest) is refused: the file would be
+    written, and read back by no one (nibabel's affine of 0 or inf)."""
     spacing, corner = placement_3d(obj)
     shape = obj.volume.shape[:len(spacing)]
-    moved, corner32 = float32_moved(spacing, corner, shape, np.asarray(shape) / 2 if centred else 0)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        moved, corner32 = float32_moved(spacing, corner, shape, np.asarray(shape) / 2 if centred else 0)
+        size32 = np.asarray(spacing, np.float64).astype(np.float32)
+    if not (np.all(size32 > 0) and np.all(np.isfinite(size32)) and np.all(np.isfinite(corner32)) and np.isfinite(moved)):
+        _past_float32(path, fmt, spacing, corner)
     if moved > FLOAT32_SLACK:
         note(f"{path}: {fmt} stores the voxel-to-world map as float32, which moves this volume's voxels by up to "
              f"{moved:.3g} voxels (voxel 0's lowest corner {coordinates(corner, 12)} is read back as "
              f"{coordinates(corner32, 12)}); .nrrd, .h5 and .npz keep the placement")
+
+
+def _past_float32(path: Path, fmt: str, spacing, corner) -> None:
+    raise IsoflowError(f"{path}: {fmt} stores the voxel-to-world map as float32 (no number past about 3.4e+38, no size "
+                       f"below about 1.4e-45), which cannot hold voxel size {coordinates(spacing, 12)} with voxel 0's "
+                       f"lowest corner {coordinates(corner, 12)}; write .nrrd, .h5 or .npz, which keep the placement")
 
 
 def float32_moved(spacing, corner, shape, anchor=0) -> tuple[float, np.ndarray]:

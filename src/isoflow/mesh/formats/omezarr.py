@@ -436,7 +436,7 @@ def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
 
     path = Path(path)
     refuse_unusable_output(path)  # --force would unlink a device or pipe and put a store in its place
-    if not path.parent.is_dir():
+    if not path.parent.exists():  # a file in its place is named as one by check_writable_dir
         raise IsoflowError(f"{path.parent}: no such directory (for the output {path.name})")
     check_writable_dir(path.parent, f"the zarr store {path.name}")
     if path.exists() or path.is_symlink():

@@ -87,6 +87,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -110,6 +111,11 @@ from .registry import (
 )
 
 X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT = 282, 283, 296
+#: the largest numerator or denominator of a TIFF RATIONAL (two uint32)
+RATIONAL_MAX = 2**32 - 1
+#: how far a voxel size read back from its resolution tag may stray: TIFF's
+#: rational holds about 9 digits wherever the size fits at all
+RATIONAL_TOLERANCE = 1e-6
 RESOLUTION_TAGS = (X_RESOLUTION, Y_RESOLUTION, RESOLUTION_UNIT)
 #: TIFF's PhotometricInterpretation values whose first samples are grey or colour
 MINISWHITE, MINISBLACK, RGB = 0, 1, 2
@@ -679,10 +685,42 @@ def _imagej_number(imagej: dict, key: str, where: str, default: float) -> float:
     return number
 
 
+def _resolution_rational(pitch: float) -> tuple[int, int]:
+    """1 / ``pitch`` as a TIFF RATIONAL, the fraction tifffile writes for
+    that float: the nearest whose numerator and denominator are both 32-bit
+    unsigned integers; ``(0, 1)`` where the resolution is below the smallest
+    such fraction, and no fraction where it is above the largest."""
+    f = Fraction(1 / pitch)
+    largest = min(RATIONAL_MAX, int(RATIONAL_MAX / f))  # the numerator must fit too
+    if largest < 1:
+        raise OverflowError(f"1 / {pitch} is past {RATIONAL_MAX}")
+    f = f.limit_denominator(largest)
+    return f.numerator, f.denominator
+
+
+def _check_resolution(path: Path, obj: DigitalObject) -> None:
+    """Refuse a voxel size that the resolution tags cannot hold, before
+    anything is written: tifffile fails on a pitch too fine with a
+    ValueError, and writes one too coarse as a resolution of 0, which
+    readers (ImageJ, isoflow) take as no calibration, a pitch of 1."""
+    spacing, _ = placement(obj)
+    for axis, tag, p in zip("xy", ("XResolution", "YResolution"), spacing):
+        try:
+            num, den = _resolution_rational(float(p))
+        except OverflowError:
+            num, den = 0, 1
+        if num == 0 or abs(den / num - p) > RATIONAL_TOLERANCE * p:
+            back = "" if num == 0 else f" (it would be read back as {den / num:.6g})"
+            raise IsoflowError(f"{path}: TIFF's {tag} holds 1 / voxel size as a ratio of two 32-bit integers, which "
+                               f"cannot hold the {axis} voxel size {float(p):.6g}{back}; write .nrrd, .h5 or .npz, "
+                               "which keep it, or use another length unit")
+
+
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
+    _check_resolution(path, obj)
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
@@ -699,5 +737,5 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         if c != 0:  # ImageJ writes an origin of 0 as no key
             metadata[f"{axis}origin"] = float(-c / p)
     z, y, x = data.shape if obj.ndim == 3 else (1, *data.shape)
-    tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=(1 / spacing[0], 1 / spacing[1]),
-                     metadata=metadata)
+    resolution = (_resolution_rational(spacing[0]), _resolution_rational(spacing[1]))  # as check() found them
+    tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=resolution, metadata=metadata)
