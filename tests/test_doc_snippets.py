@@ -503,3 +503,22 @@ def test_the_readme_says_which_install_reads_the_volumes_it_uses():
     python = "\n".join(snippets(ROOT / "README.md")).splitlines()
     assert all("isoflow[formats]" in line for line in python if any(f'{s}"' in line for s in extra) and "write_" in line)
     assert "pillow" in core  # PNG masks, said to come with the plain install
+
+
+def test_the_files_the_readme_names_are_in_a_checkout():
+    """The README listed ``docs/api.rst`` among the pages "readable here
+    too"; Sphinx's build writes it (.gitignore), so a fresh clone has none.
+    Every file the README links or names is tracked by git, or its line
+    says the build writes it."""
+    import shutil
+    import subprocess
+
+    git = shutil.which("git")
+    if git is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    tracked = set(subprocess.run([git, "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split())
+    missing = []
+    for line in (ROOT / "README.md").read_text().splitlines():
+        named = re.findall(r"\]\(([^)#]+)\)", line) + re.findall(r"`([\w.-]+/[\w./-]*\.\w+)`", line)
+        missing += [name for name in named if name not in tracked and "written by the build" not in line]
+    assert not missing, missing
