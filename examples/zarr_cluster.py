@@ -29,7 +29,6 @@ import math
 import matplotlib.pyplot as plt
 import numpy as np
 from _common import outputs, parse_args, run
-from dask.distributed import Client, LocalCluster
 
 import isoflow
 from isoflow import data
@@ -57,9 +56,20 @@ def plot_blocks(volume, chunks):
     return fig
 
 
+def cluster_classes():
+    """dask.distributed's ``Client`` and ``LocalCluster``; imported here so
+    that an install without ``isoflow[dask]`` gets one line, not a traceback."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError as exc:
+        raise isoflow.IsoflowError(f"this example needs dask.distributed: pip install 'isoflow[dask]' ({exc})") from None
+    return Client, LocalCluster
+
+
 def main():
     args = parse_args("A chunked zarr volume analysed out of core on a dask.distributed cluster.", arguments)
     store, report_path, picture = outputs(args, "solid.zarr", "report.json", "blocks.png")
+    Client, LocalCluster = cluster_classes()
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \
             Client(cluster) as client:

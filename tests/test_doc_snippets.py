@@ -483,3 +483,42 @@ def test_the_glb_transform_is_read_as_formats_md_says(tmp_path):
         ms.apply_filter("apply_matrix_freeze")
         frozen = ms.current_mesh().vertex_matrix()
         assert np.allclose([frozen.min(axis=0), frozen.max(axis=0)], world, rtol=0, atol=1e-6)
+
+
+def test_the_readme_says_which_install_reads_the_volumes_it_uses():
+    """The README's install line is ``pip install -e .`` and its snippets
+    wrote and read ``.nii.gz``, ``.tif`` and ``.zarr`` volumes, whose
+    libraries pyproject.toml lists under ``formats`` only: a new user met
+    "NIfTI files need nibabel" with nothing in the README saying so."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    core = {re.split(r"[<>=\[ ]", d)[0].lower() for d in project["dependencies"]}
+    formats = {re.split(r"[<>=\[ ]", d)[0].lower() for d in project["optional-dependencies"]["formats"]}
+    readme = (ROOT / "README.md").read_text()
+    code = "\n".join(re.findall(r"```(?:bash|python)\n(.*?)```", readme, re.S))
+    library = {".nii.gz": "nibabel", ".tif": "tifffile", ".zarr": "zarr", ".h5": "h5py", ".nrrd": "pynrrd"}
+    extra = {suffix for suffix, name in library.items() if suffix in code and name not in core and name in formats}
+    assert extra and "pip install -e '.[formats]'" in readme
+    python = "\n".join(snippets(ROOT / "README.md")).splitlines()
+    assert all("isoflow[formats]" in line for line in python if any(f'{s}"' in line for s in extra) and "write_" in line)
+    assert "pillow" in core  # PNG masks, said to come with the plain install
+
+
+def test_the_files_the_readme_names_are_in_a_checkout():
+    """The README listed ``docs/api.rst`` among the pages "readable here
+    too"; Sphinx's build writes it (.gitignore), so a fresh clone has none.
+    Every file the README links or names is tracked by git, or its line
+    says the build writes it."""
+    import shutil
+    import subprocess
+
+    git = shutil.which("git")
+    if git is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    tracked = set(subprocess.run([git, "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split())
+    missing = []
+    for line in (ROOT / "README.md").read_text().splitlines():
+        named = re.findall(r"\]\(([^)#]+)\)", line) + re.findall(r"`([\w.-]+/[\w./-]*\.\w+)`", line)
+        missing += [name for name in named if name not in tracked and "written by the build" not in line]
+    assert not missing, missing

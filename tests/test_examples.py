@@ -199,6 +199,27 @@ def test_zarr_cluster(example_run):
     assert "identical" in printed and "2 worker processes" in printed
 
 
+
+def test_zarr_cluster_without_dask_is_one_line(tmp_path):
+    """Without dask (``pip install -e .`` alone) the example stopped with
+    a traceback; it names the extra pyproject.toml gives dask.distributed
+    in, in one line, exit 2, and writes nothing."""
+    import tomllib
+
+    extras = tomllib.loads((EXAMPLES.parent / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    extra = next(name for name, deps in extras.items() if name != "test" and any(d.startswith("distributed") for d in deps))
+    shadow = tmp_path / "shadow" / "dask"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text("raise ImportError(\"No module named 'dask'\")\n")  # as if not installed
+    path = os.pathsep.join([str(tmp_path / "shadow"), os.environ.get("PYTHONPATH", "")])
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=path)
+    out = tmp_path / "out"
+    done = subprocess.run([sys.executable, str(EXAMPLES / "zarr_cluster.py"), str(out)], capture_output=True, text=True,
+                          env=env)
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert len(done.stderr.splitlines()) == 1 and f"pip install 'isoflow[{extra}]'" in done.stderr
+    assert not any(out.iterdir())
+
 def test_four_d(example_run):
     out, _ = example_run("four_d")
     g = genus("eight.off")

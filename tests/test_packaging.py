@@ -8,6 +8,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import subprocess
 import sys
 import tomllib
@@ -160,3 +161,43 @@ def test_no_path_outside_the_repository():
         text = path.read_text(errors="replace")
         found += [f"{path.relative_to(ROOT)}: {root}" for root in roots if root in text]
     assert not found, found
+
+
+def extra_closure(extra: str, extras: dict[str, list[str]]) -> set[str]:
+    """The distributions an extra brings, its ``isoflow[...]`` ones followed."""
+    names: set[str] = set()
+    for requirement in extras[extra]:
+        name = re.split(r"[<>=; ]", requirement)[0]
+        if name.startswith("isoflow["):
+            names |= {n for inner in name[8:-1].split(",") for n in extra_closure(inner, extras)}
+        else:
+            names.add(re.sub(r"\[.*\]", "", name).lower().replace("_", "-"))
+    return names
+
+
+def test_the_docs_extra_brings_what_the_gallery_runs():
+    """README.md builds the site with ``pip install -e '.[docs]'``; the
+    gallery runs every example, and zarr_cluster.py imports dask, which
+    that extra did not bring: the build stopped there. Every module an
+    example imports is one of the core dependencies or of ``docs``, by
+    the installed distributions' own metadata."""
+    import ast
+    import importlib.metadata
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    allowed = extra_closure("docs", project["optional-dependencies"])
+    allowed |= {re.split(r"[<>=\[ ]", d)[0].lower() for d in project["dependencies"]}
+    owners = importlib.metadata.packages_distributions()
+    missing = []
+    for script in sorted((ROOT / "examples").glob("*.py")):
+        for node in ast.walk(ast.parse(script.read_text())):
+            modules = [a.name for a in node.names] if isinstance(node, ast.Import) else \
+                [node.module] if isinstance(node, ast.ImportFrom) and node.module and not node.level else []
+            for module in modules:
+                top = module.split(".")[0]
+                if top in sys.stdlib_module_names or top in ("isoflow", "_common"):
+                    continue
+                distributions = {d.lower().replace("_", "-") for d in owners.get(top, [top])}
+                if not distributions & allowed:
+                    missing.append(f"{script.name}: {module}")
+    assert not missing, missing
