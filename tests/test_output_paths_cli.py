@@ -296,3 +296,20 @@ def test_an_output_under_a_file_is_said_to_be_under_a_file(tmp_path, name):
     lines = got.stderr.strip().splitlines()
     assert got.returncode == 2 and len(lines) == 1, got.stderr
     assert os.strerror(errno.ENOTDIR).lower() in lines[0].lower() and str(stl) in lines[0], lines[0]
+
+
+def test_a_flow_directory_under_a_file_is_said_to_be_under_a_file(tmp_path):
+    """``flow --out mesh.stl/run`` names a file where a directory must be,
+    as the OS does (ENOTDIR), not that no such directory is there."""
+    import errno
+
+    stl = tmp_path / "box.stl"
+    stl.write_bytes(TORUS.read_bytes())
+    with pytest.raises(NotADirectoryError):  # the OS's own reading of the path
+        os.mkdir(stl / "run")
+    vol = tmp_path / "v.npy"
+    np.save(vol, np.ones((3, 3, 3), bool))
+    got = run("flow", vol, "--out", stl / "run")
+    lines = got.stderr.strip().splitlines()
+    assert got.returncode == 2 and len(lines) == 1, got.stderr
+    assert os.strerror(errno.ENOTDIR).lower() in lines[0].lower() and str(stl) in lines[0], lines[0]

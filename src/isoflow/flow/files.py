@@ -172,6 +172,8 @@ def check_output_dir(directory, force: bool = False):
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
+    if not out.exists() and out.parent.exists() and not out.parent.is_dir():  # the OS's own word, as mkdir would say it
+        raise IsoflowError(f"{out.parent}: not a directory, a file (for the output directory {out.name})")
     if not out.exists() and not out.parent.is_dir():
         raise IsoflowError(f"{out.parent}: no such directory (for the output directory {out.name})")
     if out.is_dir():  # a killed run's staging directory does not make it taken
