@@ -501,7 +501,7 @@ def drop_stdout() -> None:
     would fail again as the interpreter exits, with a second message."""
     import os
 
-    if sys.stdout is not None:  # (None: there was none to begin with)
+    if sys.stdout is not None:  # (None: the process started without one)
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 

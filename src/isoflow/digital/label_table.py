@@ -119,8 +119,8 @@ class LabelImage:
 
     def __post_init__(self):
         # the spacing and origin as float arrays, one number per axis, checked
-        # as an object's pitch and origin are: a list or one number was kept
-        # as given, and label_table stopped on it with an AttributeError
+        # as an object's pitch and origin are, so that label_table can take
+        # a list or one number as it takes an array
         try:
             n = np.ndim(self.array)
         except ValueError:  # nested lists of uneven lengths: label_table names them

@@ -220,7 +220,7 @@ class DigitalObject:
         ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0], 0)
         """
         if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
-            # (1,) * "a" was Python's "can't multiply sequence by non-int of type 'str'"; another
+            # named here, as Python's own error for (1,) * ndim names no argument; another
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
             raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}

@@ -267,7 +267,7 @@ def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: Sto
             changes.append({"step": step + 1, "before": before, "after": record["betti"], "where": where,
                             "applied": not until_topology_change})
             if until_topology_change:
-                engine.discard(new)  # not taken: a state written as it was computed goes too
+                engine.discard(new)  # not taken: a store the engine wrote for it goes too
                 return "topology-change", changes
         step += 1
         trace.add(new, record)

@@ -195,7 +195,7 @@ def using(threads: int | None):
         return
     if isinstance(threads, (str, bytes)):
         # a text is a count in the environment and on the command line; an
-        # argument is a number, as the message says ("2" was taken as 2)
+        # argument is a number, as the message says
         raise IsoflowError(f"threads must be a positive integer, got {threads!r}")
     token = _asked.set(check_threads(threads))
     try:
