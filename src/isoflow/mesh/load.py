@@ -362,10 +362,11 @@ def _points_held(path: Path) -> int:
     ext = path.suffix.lower()
     try:
         if ext == ".ply":
-            head = path.read_bytes()[:65536].split(b"end_header", 1)[0].decode("ascii", "replace")
-            found = re.search(r"^element\s+vertex\s+(\d+)", head, flags=re.M)
-            faces = re.search(r"^element\s+face\s+(\d+)", head, flags=re.M)
-            return int(found.group(1)) if found and not (faces and int(faces.group(1))) else 0
+            from .ply import header_elements
+
+            parsed = header_elements(path.read_bytes(), str(path))
+            rows = {} if parsed is None else {e.name: e.rows for e in parsed[2]}
+            return 0 if rows.get("face") else rows.get("vertex", 0)
         if ext == ".obj":
             text = path.read_bytes()
             return 0 if re.search(rb"^f\s", text, flags=re.M) else len(re.findall(rb"^v\s", text, flags=re.M))

@@ -124,10 +124,18 @@ def read_ply(data: bytes, where: str = "PLY file") -> Mesh | None:
     return _mesh(xyz, corners, sizes, where)
 
 
-def _header(data: bytes, where: str) -> tuple[str, int, list[Element]] | None:
-    """The header's format, where the body begins and the elements; None
-    for a header this reader leaves to trimesh (out of the grammar, or no
-    mesh of vertices and faces), IsoflowError for a type PLY has not."""
+def header_elements(data: bytes, where: str = "PLY file") -> tuple[str, int, list[Element]] | None:
+    """A PLY header's format, where the body begins and its elements (each
+    with its row count and properties), whatever they hold; None for a
+    header out of the grammar, IsoflowError for a type PLY has not.
+
+    Examples
+    --------
+    >>> fmt, start, elements = header_elements(b"ply\\nformat ascii 1.0\\nelement vertex 2\\n"
+    ...                                        b"property float x\\nend_header\\n0\\n1\\n")
+    >>> fmt, [(e.name, e.rows) for e in elements]
+    ('ascii', [('vertex', 2)])
+    """
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
         return None
@@ -153,6 +161,17 @@ def _header(data: bytes, where: str) -> tuple[str, int, list[Element]] | None:
             elements[-1].properties.append(_property(w, where))
         else:
             return None
+    return words[1], stop + 1, elements
+
+
+def _header(data: bytes, where: str) -> tuple[str, int, list[Element]] | None:
+    """The header's format, where the body begins and the elements; None
+    for a header this reader leaves to trimesh (out of the grammar, or no
+    mesh of vertices and faces), IsoflowError for a type PLY has not."""
+    parsed = header_elements(data, where)
+    if parsed is None:
+        return None
+    elements = parsed[2]
     names = [e.name for e in elements]
     if len(set(names)) != len(names) or "vertex" not in names or "face" not in names:
         return None
@@ -168,7 +187,7 @@ def _header(data: bytes, where: str) -> tuple[str, int, list[Element]] | None:
             or corners[0].kind[0] not in "iu" or face.rows == 0 \
             or any(len({p.name for p in e.properties}) != len(e.properties) for e in (vertex, face)):
         return None
-    return words[1], stop + 1, elements
+    return parsed
 
 
 def _property(words: list[str], where: str) -> Property:
