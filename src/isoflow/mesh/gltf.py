@@ -213,26 +213,6 @@ def _buffer_views(index_data: list, columns: dict) -> tuple[list, list, list, in
     return views, chunks, elements, offset
 
 
-def glb_chunks(meshes: list[dict], comment: str = "") -> list:
-    """The GLB file of ``meshes`` as the pieces to write one after the
-    other (:func:`scene_chunks`): ``meshes`` holds each ``{"name",
-    "positions" (n, 3), "triangles" (m, 3), "colors" (n, 4) uint8,
-    "attributes": {name: (n,) or (n, k)}, "matrix": 4x4 or None}``, every
-    mesh with the same attribute names and at least one triangle; a node
-    each, in order.
-
-    Examples
-    --------
-    >>> tet = {"name": "tet", "positions": np.eye(4, 3), "triangles": np.array([[0, 2, 1], [0, 1, 3],
-    ...        [0, 3, 2], [1, 2, 3]]), "colors": np.full((4, 4), 255, np.uint8),
-    ...        "attributes": {"_k": np.arange(4, dtype=np.int8)}, "matrix": None}
-    >>> data = b"".join(glb_chunks([tet]))
-    >>> data[:4], len(data) % 4
-    (b'glTF', 0)
-    """
-    return scene_chunks([SceneParts.of_meshes(meshes)], comment=comment)
-
-
 def scene_chunks(sets: list[SceneParts], order: np.ndarray | None = None, comment: str = "") -> list:
     """The GLB file of every part of ``sets`` as the pieces to write one
     after the other (bytes, and the arrays' own memory as memoryviews: the
