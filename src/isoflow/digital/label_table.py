@@ -33,7 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -44,6 +44,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError, check_switch
 from ..results import same_fields
 from ..scale.arrays import as_array, refuse_object
+from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
@@ -462,17 +463,36 @@ PIECE_BYTES_PER_VOXEL = 1
 
 def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
     """The rows by the compiled passes: the pieces, one vertex pass, the
-    graph of pieces label by label (see the module docs)."""
-    from ..scale.memory import check_fits
-    from ..scale.pieces import piece_runs, vertex_pass
+    graph of pieces label by label (see the module docs); an image of more
+    voxels than the pieces are numbered in, in slabs along axis 0 as a
+    store is read (:func:`slab_rows`)."""
+    from ..scale.pieces import MAX_PIECE_VOXELS, piece_runs, vertex_pass
 
     copy = 0 if vol.flags.c_contiguous else vol.nbytes
     check_fits(PIECE_BYTES_PER_VOXEL * vol.size + copy, f"the label table of a {'x'.join(map(str, vol.shape))} "
                f"label image", hint="store it as .zarr and run isoflow info --labels on that (block by block)")
+    if vol.size > MAX_PIECE_VOXELS:
+        return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]])
     pieces = piece_runs(vol)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
     passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False)
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
+
+
+def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes: list[int],
+              progress: Callable[[int, int], None] | None = None) -> dict:
+    """The rows of a 3D label array read in slabs of ``sizes`` voxel layers
+    along axis 0 (``array[a:b]``, never whole; cut further where a slab
+    would hold more voxels than the pieces are numbered in), with
+    ``progress(done, total)`` after each slab."""
+    sizes = slab_sizes(sizes, array.shape)
+    stream = SlabStream(array, conn, wanted, surfaces)
+    stops = np.cumsum(sizes)
+    for t, (x0, x1) in enumerate(zip(stops - sizes, stops)):
+        stream.slab(int(x0), int(x1))
+        if progress is not None:
+            progress(t + 1, len(sizes))
+    return rows_of_pieces(*stream.joined(), label_dtype(array.dtype), conn, wanted)
 
 
 def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
@@ -619,6 +639,117 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
     b0[present], b2[present] = found[0], found[1]
     return {"b0": b0, "b2": b2, "surface_rows": present[found[2]], "surface_chi": found[3],
             "surface_faces": found[4]}
+
+
+def slab_sizes(sizes: list[int], shape) -> list[int]:
+    """The slabs cut where one, with its voxel layer either side, would hold
+    more voxels than the pieces' 32-bit numbers reach: a store whose chunks
+    are 256 layers of 4096 x 4096 voxels is read in slabs of 253 layers.
+    The table is the same for any slabs, so only their size changes."""
+    from ..scale.pieces import MAX_PIECE_VOXELS
+
+    area = int(np.prod([int(n) for n in shape[1:]], dtype=np.int64))
+    most = MAX_PIECE_VOXELS // max(area, 1) - 2
+    if most < 1:
+        raise IsoflowError(f"a label image whose layers hold {area} voxels each is read three layers at a time, "
+                           f"more than the {MAX_PIECE_VOXELS} voxels its pieces are numbered in; "
+                           "crop or split it along its last two axes")
+    return [part for n in sizes for part in [most] * (n // most) + [n % most] if part]
+
+
+class SlabStream:
+    """What the slabs found so far: per piece (numbered across slabs) its
+    statistics, features and doubled edges, the pairs of pieces, and the
+    pairs of numbers that name one piece in two slabs."""
+
+    def __init__(self, array, conn: int, wanted, surfaces: bool):
+        self.array, self.conn, self.wanted, self.surfaces = array, conn, wanted, surfaces
+        self.nx = int(array.shape[0])
+        self.total = 0  # pieces numbered so far (0: the outside)
+        self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
+                                                       "doubled", "keys", "kind", "sums_pairs", "same")}
+        self.tail: np.ndarray | None = None  # the previous slab's last two voxel layers, numbered across slabs
+
+    def slab(self, x0: int, x1: int) -> None:
+        """The pieces and the vertex pass of voxel layers x0 .. x1 - 1."""
+        from ..scale.pieces import piece_ids, piece_runs, vertex_pass
+
+        a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
+        shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
+        stored = np.dtype(self.array.dtype)
+        converted = label_dtype(stored).itemsize if stored.kind == "f" else 0  # a float slab's int64 copy
+        check_fits((PIECE_BYTES_PER_VOXEL + stored.itemsize + converted) * int(np.prod(shape)),
+                   f"a slab of {'x'.join(map(str, shape))} voxels of the label image",
+                   hint="write the store with smaller chunks along its first axis")
+        vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a))
+        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a)
+        want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
+        passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
+                             layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total)
+        if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
+            head = piece_ids(pieces, vol.shape, (0, 2)).astype(np.int64) + self.total
+            pairs = np.stack([self.tail.reshape(-1), head.reshape(-1)], axis=1)
+            self.parts["same"].append(np.unique(pairs, axis=0))
+        self.tail = None
+        if x1 < self.nx:
+            self.tail = piece_ids(pieces, vol.shape, (x1 - 1 - a, x1 + 1 - a)).astype(np.int64) + self.total
+        for key in ("values", "counts", "sums", "lo", "hi"):
+            self.parts[key].append(pieces[key][1:])
+        self.parts["features"].append(passed["features"][1:])
+        self.parts["doubled"].append(passed["doubled"][1:])
+        self.parts["keys"].append(passed["keys"])
+        self.parts["kind"].append(passed["kind"])
+        self.parts["sums_pairs"].append(passed["sums"])
+        self.total += pieces["n"]
+
+    def joined(self) -> tuple[dict, dict]:
+        """The pieces and the vertex pass's findings of the whole image:
+        pieces named in two slabs made one (numbered 1.. in order of their
+        first number), their sums added, their boxes joined."""
+        from ..scale.pieces import merge_pairs
+
+        one = same_pieces(self.total, self.parts["same"])
+        n = int(one.max(initial=0))
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.parts.items() if k != "same"}
+        at = one[1:]
+        pieces = {"values": np.zeros(n + 1, np.uint64), "counts": np.zeros(n + 1, np.int64),
+                  "sums": np.zeros((n + 1, 3), np.int64), "lo": np.full((n + 1, 3), np.iinfo(np.int64).max),
+                  "hi": np.full((n + 1, 3), -1, np.int64)}
+        pieces["values"][at] = cat["values"]
+        np.add.at(pieces["counts"], at, cat["counts"])
+        np.add.at(pieces["sums"], at, cat["sums"])
+        np.minimum.at(pieces["lo"], at, cat["lo"])
+        np.maximum.at(pieces["hi"], at, cat["hi"])
+        features = np.zeros((n + 1, cat["features"].shape[1]), np.int64)
+        np.add.at(features, at, cat["features"])
+        doubled = np.bincount(at, cat["doubled"], n + 1).astype(np.int64)
+        keys = cat["keys"].astype(np.uint64)
+        p = one[(keys >> np.uint64(32)).astype(np.int64)]
+        q = one[(keys & np.uint64(0xFFFFFFFF)).astype(np.int64)]
+        sums = cat["sums_pairs"].astype(np.uint64).reshape(-1, 2)
+        keep = p != q  # pairs within one piece (named in two slabs) touch nothing else
+        flip = p > q
+        sums = np.where(flip[:, None], sums[:, ::-1], sums)
+        lo, hi = np.minimum(p, q), np.maximum(p, q)
+        keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
+        keys, kind, sums = merge_pairs(keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep])
+        return pieces, {"features": features, "doubled": doubled, "keys": keys, "kind": kind, "sums": sums}
+
+
+def same_pieces(total: int, same: list) -> np.ndarray:
+    """Per piece number (0 .. total), the number of the piece it is once
+    the numbers that name one piece in two slabs are made one: 0 for the
+    outside, then 1.. in order of each piece's first number."""
+    from ..scale.graphs import components
+
+    pairs = np.concatenate(same) if same else np.zeros((0, 2), np.int64)
+    _, comp = components(total + 1, pairs[:, 0], pairs[:, 1])
+    first = np.full(comp.max(initial=0) + 1, total + 1)
+    np.minimum.at(first, comp, np.arange(total + 1))
+    order = np.argsort(first)  # components by their first number: the outside's (0) first
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return rank[comp]
 
 
 def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bool) -> dict:
