@@ -619,3 +619,53 @@ def test_an_interrupt_while_the_flow_computes_names_the_directory(tmp_path, caps
     assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while the flow ran; the previous run's files "
                    "in the directory are unchanged"], err
     assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()} == before
+
+
+def test_a_terminal_sees_the_bar_while_step_0_is_written_and_a_line_while_the_files_are_finished(tmp_path, monkeypatch):
+    """A large object's ``flow --out`` was silent on a terminal while step
+    0's surface was written (as long as a step) and while the last step
+    files were read back and the pictures drawn (seconds at 300^3): the
+    bar appeared only after step 1 and was gone during the finish."""
+    from isoflow.flow.files import FlowWriter
+
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    err = _Terminal()
+    seen = {}
+    add, finish = FlowWriter.add, FlowWriter.finish
+
+    def spy_add(self, step, state):
+        seen.setdefault(step, err.getvalue())
+        return add(self, step, state)
+
+    def spy_finish(self, result, plot=True):
+        seen["finish"] = err.getvalue()
+        return finish(self, result, plot)
+
+    monkeypatch.setattr(FlowWriter, "add", spy_add)
+    monkeypatch.setattr(FlowWriter, "finish", spy_finish)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert main(["flow", str(tmp_path / "box.npy"), "--steps", "2", "--out", str(tmp_path / "run")]) == 0
+    assert "flow:   0%|" in seen[0]  # the bar, before step 0's surface is written
+    last = seen["finish"].rsplit("\r", 1)[-1]
+    assert last == f"flow: writing {tmp_path / 'run'}", seen["finish"][-200:]
+
+
+def test_a_store_flowed_block_by_block_shows_the_bar_from_step_0(tmp_path, monkeypatch):
+    """``flow STORE.zarr --volumes .zarr`` said nothing on a terminal while
+    step 0 (the store read block by block) was analysed."""
+    from isoflow.flow import chunked
+
+    isoflow.write_volume(np.ones((3, 4, 5), bool), tmp_path / "box.zarr")
+    err = _Terminal()
+    seen = []
+    start = chunked.ChunkedFlow.start
+
+    def spy_start(self, source):
+        seen.append(err.getvalue())
+        return start(self, source)
+
+    monkeypatch.setattr(chunked.ChunkedFlow, "start", spy_start)
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert main(["flow", str(tmp_path / "box.zarr"), "--steps", "2", "--volumes", ".zarr",
+                     "--out", str(tmp_path / "run")]) == 0
+    assert "flow:   0%|" in seen[0]

@@ -22,7 +22,7 @@ from .inputs import (
     step_count,
     why_empty,
 )
-from .progress import progress_bar
+from .progress import progress_bar, writing_line
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -157,6 +157,8 @@ def flow_store(args: argparse.Namespace) -> int:
     total = bar_total(args.steps, volume.shape)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
+            if show is not None:  # step 0, the store's analysis block by block, takes as long as a step
+                show(0, total)
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   until_topology_change=args.until_topology_change,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
@@ -238,6 +240,8 @@ def run_with_files(args: argparse.Namespace, obj, writer):
                     show(step, total)
 
             if writer is not None:
+                if show is not None:  # step 0's surface of a large object takes as long as a step
+                    show(0, total)
                 writer.add(0, obj.cropped())
             # (no callback when nothing uses the states: a compiled run then
             # never unpacks them)
@@ -245,7 +249,8 @@ def run_with_files(args: argparse.Namespace, obj, writer):
                               until_topology_change=args.until_topology_change,
                               progress=progress if writer is not None or show is not None else None,
                               keep_states=False)
-            if writer is not None:
+        if writer is not None:  # the last surfaces' read-back and the pictures: a line while they take
+            with writing_line(args, writer.out):
                 writer.finish(result)
     except BaseException as exc:
         if writer is None:
