@@ -30,6 +30,22 @@ LONGEST_FIRST = ("winding", "test_plain_reference.py", "test_packaging.py", "lab
                  "test_bitflow.py", "site", "test_chunked.py")
 
 
+def pytest_configure(config):
+    """isoflow's modules compiled to bytecode once, before the workers
+    start: the tests run hundreds of commands (``python -m isoflow ...``),
+    and where ``PYTHONDONTWRITEBYTECODE`` is set each would compile every
+    module it imports from source again, which an installed package (pip
+    compiles it at install) never does."""
+    if hasattr(config, "workerinput"):  # a pytest-xdist worker: the controller did it
+        return
+    import compileall
+    from pathlib import Path
+
+    import isoflow
+
+    compileall.compile_dir(Path(isoflow.__file__).parent, quiet=2)  # quiet: a read-only install stays as it is
+
+
 @pytest.hookimpl(tryfirst=True)  # before pytest-xdist's own, which reads the groups
 def pytest_collection_modifyitems(config, items):
     """Each test file on one worker of pytest-xdist (``--dist loadgroup``
