@@ -692,3 +692,25 @@ def test_info_json_classes_are_what_docs_cli_md_says(tmp_path, shape):
     assert keys == sorted(keys)
     for key in keys:
         assert key == min(image(key, axes, flips) for axes, flips in group), key
+
+
+@pytest.mark.parametrize("extra", [[], ["--labels"], ["--json"]])
+def test_info_force_without_csv_is_refused_not_ignored(tmp_path, capsys, extra):
+    """``info x --force`` printed the report as if --force were not there:
+    it overwrites an existing --csv file and nothing else, so the --csv
+    it was meant for was left out. Refused in one line, as --points-are
+    with a volume is; with --csv it replaces the file (the csv module
+    reads the new table back)."""
+    import csv
+
+    from test_input_errors import fails
+
+    v = torus(6, 2)
+    np.save(tmp_path / "t.npy", v)
+    fails(capsys, "info", tmp_path / "t.npy", *extra, "--force", words=("t.npy", "--force", "--csv"))
+    (tmp_path / "t.csv").write_text("old\n")
+    assert main(["info", str(tmp_path / "t.npy"), "--labels", "--csv", str(tmp_path / "t.csv"), "--force"]) == 0
+    with open(tmp_path / "t.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [(int(r["label"]), int(r["voxels"]), int(r["euler_characteristic"])) for r in rows] == [
+        (1, int(v.sum()), euler_number(v, 1))]

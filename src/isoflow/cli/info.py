@@ -54,6 +54,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
+    if args.force and not args.csv:
+        # refused, as --points-are with a volume is: a --force that overwrites nothing was a --csv left out
+        raise IsoflowError(f"{args.input}: --force overwrites an existing --csv file; info writes no other file, "
+                           f"and without --csv it prints the report")
     if args.labels is not None:
         from .labels import cmd_info_labels
 
