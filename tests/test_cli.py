@@ -1,6 +1,7 @@
 """The command line: JSON contract, outputs, and one-line errors (exit 2)."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -714,3 +715,25 @@ def test_info_force_without_csv_is_refused_not_ignored(tmp_path, capsys, extra):
         rows = list(csv.DictReader(f))
     assert [(int(r["label"]), int(r["voxels"]), int(r["euler_characteristic"])) for r in rows] == [
         (1, int(v.sum()), euler_number(v, 1))]
+
+
+@pytest.mark.parametrize("argv", [["info"], ["info", "--labels"], ["flow", "--steps", "1"]])
+def test_an_input_name_the_file_system_does_not_decode_is_text_in_json(tmp_path, capsys, argv):
+    """A name with a byte that is not UTF-8 (Latin-1 ``café`` as
+    ``caf\\xe9``) was written ``"caf\\udce9.npy"``, a lone surrogate that
+    no string holds: Perl's JSON::PP refused the line, jq read U+FFFD.
+    Its ``input`` is the byte as Python's ``backslashreplace`` writes it,
+    as the text report's first line says it."""
+    name = os.fsdecode(b"caf\xe9.npy")
+    try:
+        np.save(tmp_path / name, np.ones((2, 2, 2), bool))
+    except (OSError, UnicodeEncodeError):
+        pytest.skip("the file system takes only names that decode")
+    path = str(tmp_path / name)
+    assert main([argv[0], path, *argv[1:], "--json"]) == 0
+    given = json.loads(capsys.readouterr().out)["input"]
+    assert given.encode("utf-8") == os.fsencode(path).decode("utf-8", "backslashreplace").encode("utf-8")
+    assert given.endswith("caf\\xe9.npy")
+    if argv == ["info"]:
+        assert main(["info", path]) == 0
+        assert capsys.readouterr().out.startswith(f"{given}: 3D, shape 2x2x2, 8 voxels")

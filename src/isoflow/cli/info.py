@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, betti_words, coordinates, counted
+from ..errors import IsoflowError, betti_words, coordinates, counted, path_text
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -72,9 +72,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         report, grid, placed = info_in_memory(args)
     if args.json:
         print(json.dumps({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
-                          "input": str(args.input)}))
+                          "input": path_text(args.input)}))
         return 0
-    print(format_info(report, str(args.input), grid, placed))
+    print(format_info(report, path_text(args.input), grid, placed))
     return 0
 
 
