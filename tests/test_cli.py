@@ -737,3 +737,29 @@ def test_an_input_name_the_file_system_does_not_decode_is_text_in_json(tmp_path,
     if argv == ["info"]:
         assert main(["info", path]) == 0
         assert capsys.readouterr().out.startswith(f"{given}: 3D, shape 2x2x2, 8 voxels")
+
+
+@pytest.mark.parametrize("shape", ["empty", "ball", "shell", "two balls"])
+def test_info_text_says_how_many_closed_surfaces_even_none(tmp_path, capsys, shape):
+    """An empty volume's report had no "closed surfaces" line at all, as
+    one run with --no-surfaces, while --json said ``"surfaces": []``.
+    The count is the boundary's components: for these well-composed
+    objects the components of the object and of its bounded complement
+    (scipy.ndimage.label)."""
+    from scipy import ndimage
+
+    v = np.zeros((12, 12, 12), bool)
+    if shape != "empty":
+        v[1:7, 1:7, 1:7] = True
+    if shape == "shell":
+        v[3:5, 3:5, 3:5] = False
+    if shape == "two balls":
+        v[8:11, 8:11, 8:11] = True
+    np.save(tmp_path / "v.npy", v)
+    expected = ndimage.label(v)[1] + ndimage.label(np.pad(~v, 1, constant_values=True),
+                                                   np.ones((3, 3, 3)))[1] - 1
+    assert main(["info", str(tmp_path / "v.npy")]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("  closed surfaces ")]
+    assert lines == [f"  closed surfaces        {expected}"]
+    assert main(["info", str(tmp_path / "v.npy"), "--no-surfaces"]) == 0
+    assert "closed surfaces" not in capsys.readouterr().out

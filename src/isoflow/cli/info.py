@@ -257,7 +257,7 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
 
 def format_surfaces(r: Report) -> list[str]:
     lines = []
-    if r.get("surfaces"):
+    if r.surfaces is not None:  # counted, and said when none: an empty object's 0 is an answer, as --json's []
         lines.append(f"  closed surfaces        {len(r['surfaces'])}")
         for i, s in enumerate(r["surfaces"][:10]):
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")
