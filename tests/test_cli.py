@@ -1,6 +1,7 @@
 """The command line: JSON contract, outputs, and one-line errors (exit 2)."""
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -692,3 +693,73 @@ def test_info_json_classes_are_what_docs_cli_md_says(tmp_path, shape):
     assert keys == sorted(keys)
     for key in keys:
         assert key == min(image(key, axes, flips) for axes, flips in group), key
+
+
+@pytest.mark.parametrize("extra", [[], ["--labels"], ["--json"]])
+def test_info_force_without_csv_is_refused_not_ignored(tmp_path, capsys, extra):
+    """``info x --force`` printed the report as if --force were not there:
+    it overwrites an existing --csv file and nothing else, so the --csv
+    it was meant for was left out. Refused in one line, as --points-are
+    with a volume is; with --csv it replaces the file (the csv module
+    reads the new table back)."""
+    import csv
+
+    from test_input_errors import fails
+
+    v = torus(6, 2)
+    np.save(tmp_path / "t.npy", v)
+    fails(capsys, "info", tmp_path / "t.npy", *extra, "--force", words=("t.npy", "--force", "--csv"))
+    (tmp_path / "t.csv").write_text("old\n")
+    assert main(["info", str(tmp_path / "t.npy"), "--labels", "--csv", str(tmp_path / "t.csv"), "--force"]) == 0
+    with open(tmp_path / "t.csv", newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [(int(r["label"]), int(r["voxels"]), int(r["euler_characteristic"])) for r in rows] == [
+        (1, int(v.sum()), euler_number(v, 1))]
+
+
+@pytest.mark.parametrize("argv", [["info"], ["info", "--labels"], ["flow", "--steps", "1"]])
+def test_an_input_name_the_file_system_does_not_decode_is_text_in_json(tmp_path, capsys, argv):
+    """A name with a byte that is not UTF-8 (Latin-1 ``café`` as
+    ``caf\\xe9``) was written ``"caf\\udce9.npy"``, a lone surrogate that
+    no string holds: Perl's JSON::PP refused the line, jq read U+FFFD.
+    Its ``input`` is the byte as Python's ``backslashreplace`` writes it,
+    as the text report's first line says it."""
+    name = os.fsdecode(b"caf\xe9.npy")
+    try:
+        np.save(tmp_path / name, np.ones((2, 2, 2), bool))
+    except (OSError, UnicodeEncodeError):
+        pytest.skip("the file system takes only names that decode")
+    path = str(tmp_path / name)
+    assert main([argv[0], path, *argv[1:], "--json"]) == 0
+    given = json.loads(capsys.readouterr().out)["input"]
+    assert given.encode("utf-8") == os.fsencode(path).decode("utf-8", "backslashreplace").encode("utf-8")
+    assert given.endswith("caf\\xe9.npy")
+    if argv == ["info"]:
+        assert main(["info", path]) == 0
+        assert capsys.readouterr().out.startswith(f"{given}: 3D, shape 2x2x2, 8 voxels")
+
+
+@pytest.mark.parametrize("shape", ["empty", "ball", "shell", "two balls"])
+def test_info_text_says_how_many_closed_surfaces_even_none(tmp_path, capsys, shape):
+    """An empty volume's report had no "closed surfaces" line at all, as
+    one run with --no-surfaces, while --json said ``"surfaces": []``.
+    The count is the boundary's components: for these well-composed
+    objects the components of the object and of its bounded complement
+    (scipy.ndimage.label)."""
+    from scipy import ndimage
+
+    v = np.zeros((12, 12, 12), bool)
+    if shape != "empty":
+        v[1:7, 1:7, 1:7] = True
+    if shape == "shell":
+        v[3:5, 3:5, 3:5] = False
+    if shape == "two balls":
+        v[8:11, 8:11, 8:11] = True
+    np.save(tmp_path / "v.npy", v)
+    expected = ndimage.label(v)[1] + ndimage.label(np.pad(~v, 1, constant_values=True),
+                                                   np.ones((3, 3, 3)))[1] - 1
+    assert main(["info", str(tmp_path / "v.npy")]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("  closed surfaces ")]
+    assert lines == [f"  closed surfaces        {expected}"]
+    assert main(["info", str(tmp_path / "v.npy"), "--no-surfaces"]) == 0
+    assert "closed surfaces" not in capsys.readouterr().out

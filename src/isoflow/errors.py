@@ -67,6 +67,36 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+def path_text(path: str | os.PathLike) -> str:
+    """A path as text that every reader of UTF-8 takes: a byte of the name
+    that the file system's encoding does not decode is written ``\\xNN``.
+    Python holds such a byte as a lone surrogate (PEP 383), which
+    ``json.dumps`` writes as ``\\udcNN``: not a character, so that strict
+    JSON parsers (Perl's JSON::PP) refuse the line and others (jq) read
+    U+FFFD in its place.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The path as the command line or the caller gave it.
+
+    Returns
+    -------
+    str
+        The path, unchanged where it decodes.
+
+    Examples
+    --------
+    >>> path_text("scan.nii.gz"), path_text(os.fsdecode(b"caf\\xe9.npy"))
+    ('scan.nii.gz', 'caf\\\\xe9.npy')
+    """
+    text = os.fsdecode(path)
+    try:
+        return os.fsencode(text).decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:  # a surrogate that no file system byte gave (written in the string itself)
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 #: the nouns of the Betti numbers b0, b1, ... of a volume of each dimension
 #: (singular, plural); a 4-D volume's b1 and b2 have no everyday name
 _BETTI_NOUNS = {

@@ -125,8 +125,8 @@ def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp
     store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
     store[...] = image
 
-    def rows(path, *more):
-        assert main(["info", str(path), "--labels", "--json", *more]) == 0
+    def rows(path, spec="--labels"):
+        assert main(["info", str(path), spec, "--json"]) == 0
         out = capsys.readouterr()
         return json.loads(out.out)["labels"], out.err
 

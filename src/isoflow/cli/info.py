@@ -10,7 +10,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, betti_words, coordinates, counted
+from ..errors import IsoflowError, betti_words, coordinates, counted, path_text
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -54,6 +54,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
+    if args.force and not args.csv:
+        # refused, as --points-are with a volume is: a --force that overwrites nothing was a --csv left out
+        raise IsoflowError(f"{args.input}: --force overwrites an existing --csv file; info writes no other file, "
+                           f"and without --csv it prints the report")
     if args.labels is not None:
         from .labels import cmd_info_labels
 
@@ -68,9 +72,9 @@ def cmd_info(args: argparse.Namespace) -> int:
         report, grid, placed = info_in_memory(args)
     if args.json:
         print(json.dumps({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
-                          "input": str(args.input)}))
+                          "input": path_text(args.input)}))
         return 0
-    print(format_info(report, str(args.input), grid, placed))
+    print(format_info(report, path_text(args.input), grid, placed))
     return 0
 
 
@@ -253,7 +257,7 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
 
 def format_surfaces(r: Report) -> list[str]:
     lines = []
-    if r.get("surfaces"):
+    if r.surfaces is not None:  # counted, and said when none: an empty object's 0 is an answer, as --json's []
         lines.append(f"  closed surfaces        {len(r['surfaces'])}")
         for i, s in enumerate(r["surfaces"][:10]):
             lines.append(f"    #{i}: genus {s['genus']}, chi {s['euler_characteristic']}, {s['faces']} faces")

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, counted, path_text
 from .table_text import csv_rows, json_rows
 
 #: rows the terminal shows before the summary
@@ -313,7 +313,7 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
         sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
         sys.stdout.write("\n")
         return 0
-    print(format_table(args.input, about, conn, table))
+    print(format_table(path_text(args.input), about, conn, table))
     if args.csv:
         print(f"{args.csv}: {len(table['label'])} rows, {len(table)} columns")
     return 0
@@ -325,7 +325,7 @@ def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> I
     object per label (NaN as null)."""
     # the type by its name, in any byte order: a big-endian file's labels (NRRD's
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
-    head = {"input": str(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
+    head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
             "connectivity": conn, "absent": absent}
     yield json.dumps(head)[:-1] + ', "labels": '

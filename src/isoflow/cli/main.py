@@ -68,6 +68,9 @@ class CommandParser(argparse.ArgumentParser):
     def parse_known_args(self, args=None, namespace=None):
         # error() reads what the options took: --labels' optional SPEC may have taken the input
         self.namespace = argparse.Namespace() if namespace is None else namespace
+        twice = repeated_option(self, args or [])
+        if twice:
+            self.error(twice)
         return super().parse_known_args(args, self.namespace)
 
     def error(self, message: str):
@@ -81,6 +84,33 @@ class CommandParser(argparse.ArgumentParser):
             self.exit(2, f"{self.prog}: error: no input: --labels took {taken!r} as its labels; give the input "
                          f"before --labels ({self.prog} {taken} --labels) or a choice after it (--labels 3,7)\n")
         super().error(message)
+
+
+def repeated_option(parser: argparse.ArgumentParser, words: list[str]) -> str | None:
+    """argparse's message for the first option that takes a value and is
+    given twice in ``words`` (``-o a.ply -o b.ply``), None where none is.
+    argparse keeps the last and drops the first without a word, so a script
+    that adds an option to a command line that had it ran on another value
+    than its author read; options that gather their values (``genus
+    --resolution 32 --resolution 64``) and flags are not refused."""
+    def option(word: str) -> tuple[str, argparse.Action | None]:
+        name = word.split("=", 1)[0] if word.startswith("--") else word[:2]
+        return name, parser._option_string_actions.get(name)  # (argparse's own table: exact, as allow_abbrev=False)
+
+    seen: dict[argparse.Action, str] = {}
+    for i, word in enumerate(words):
+        if word == "--":  # what follows is positional
+            break
+        name, action = option(word)
+        if action is None or action.nargs == 0 or isinstance(action, (argparse._AppendAction, argparse._ExtendAction)):
+            continue
+        value = words[i + 1] if word == name and i + 1 < len(words) and option(words[i + 1])[1] is None else None
+        given = word if value is None else f"{word} {value}"
+        if action in seen:
+            return (f"argument {'/'.join(action.option_strings)}: given twice ({seen[action]}, then {given}); "
+                    f"give it once")
+        seen[action] = given
+    return None
 
 
 def unrecognized(parser: argparse.ArgumentParser, extra: list[str]) -> str:
