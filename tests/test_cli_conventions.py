@@ -683,18 +683,17 @@ def test_a_terminal_is_told_while_the_volume_is_written(tmp_path, monkeypatch, s
 
 
 @pytest.mark.parametrize("argv, option, first, then", [
-    (["info", "{blob}", "--connectivity", "6", "--connectivity", "26"], "--connectivity",
-     "--connectivity 6", "--connectivity 26"),
-    (["info", "{blob}", "--label", "1", "--label=2"], "--label", "--label 1", "--label=2"),
     (["info", "{blob}", "--labels", "--csv", "{tmp}/a.csv", "--csv", "{tmp}/b.csv"], "--csv",
      "--csv {tmp}/a.csv", "--csv {tmp}/b.csv"),
     (["surface", "{blob}", "-o", "{tmp}/a.ply", "--output", "{tmp}/b.ply"], "-o/--output",
      "-o {tmp}/a.ply", "--output {tmp}/b.ply"),
+    (["surface", "{blob}", "-o", "{tmp}/a.ply", "--png", "{tmp}/a.png", "--png={tmp}/b.png"], "--png",
+     "--png {tmp}/a.png", "--png={tmp}/b.png"),
+    (["flow", "{blob}", "--out", "{tmp}/a", "--out", "{tmp}/b"], "--out", "--out {tmp}/a", "--out {tmp}/b"),
 ])
-def test_an_option_given_twice_is_refused_naming_it(tmp_path, capsys, argv, option, first, then):
+def test_an_output_given_twice_is_refused_naming_it(tmp_path, capsys, argv, option, first, then):
     """argparse keeps the last of an option given twice and drops the
-    first without a word: ``info x --connectivity 6 --connectivity 26``
-    answered at 26, ``-o a.ply -o b.ply`` wrote b.ply alone. One line
+    first without a word: ``-o a.ply -o b.ply`` wrote b.ply alone. One line
     naming the option and both values, exit status 2, no file written."""
     np.save(tmp_path / "blob.npy", np.ones((3, 3, 3), bool))
     fill = {"blob": tmp_path / "blob.npy", "tmp": tmp_path}
@@ -708,11 +707,14 @@ def test_an_option_given_twice_is_refused_naming_it(tmp_path, capsys, argv, opti
     assert sorted(p.name for p in tmp_path.iterdir()) == ["blob.npy"]
 
 
-def test_options_that_gather_values_and_flags_may_be_repeated():
-    """What argparse itself makes of a repetition that is not a conflict:
-    genus --resolution gathers every value, a flag stays set."""
+def test_settings_flags_and_options_that_gather_values_may_be_repeated():
+    """What argparse itself makes of a repetition that drops no output:
+    genus --resolution gathers every value, a flag stays set, a setting
+    keeps its last value."""
     from isoflow.cli.main import build_parser
 
     parser = build_parser()
     assert parser.parse_args(["genus", "m.obj", "--resolution", "8", "--resolution", "12"]).resolution == [8, 12]
+    # a setting given twice: the last, so that an alias's default can be replaced
+    assert parser.parse_args(["info", "v.npy", "--connectivity", "6", "--connectivity", "26"]).connectivity == 26
     assert parser.parse_args(["info", "v.npy", "--json", "--json", "-q", "-q"]).json is True

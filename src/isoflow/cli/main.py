@@ -86,13 +86,20 @@ class CommandParser(argparse.ArgumentParser):
         super().error(message)
 
 
+#: the options that name a file a command writes (dests): given twice, the
+#: first would be dropped unwritten
+OUTPUT_OPTIONS = ("output", "out", "csv", "png")
+
+
 def repeated_option(parser: argparse.ArgumentParser, words: list[str]) -> str | None:
-    """argparse's message for the first option that takes a value and is
-    given twice in ``words`` (``-o a.ply -o b.ply``), None where none is.
-    argparse keeps the last and drops the first without a word, so a script
-    that adds an option to a command line that had it ran on another value
-    than its author read; options that gather their values (``genus
-    --resolution 32 --resolution 64``) and flags are not refused."""
+    """argparse's message for the first option naming an output file that
+    is given twice in ``words`` (``-o a.ply -o b.ply``), None where none is.
+    argparse keeps the last and drops the first without a word, so the file
+    asked for first was never written (a compiler refuses ``-o`` twice for
+    the same reason). A setting given twice keeps its last value, as
+    argparse and most tools do, so that an alias or a script can give a
+    default that the command line then replaces
+    (``info x --connectivity 6 --connectivity 26`` answers at 26)."""
     def option(word: str) -> tuple[str, argparse.Action | None]:
         name = word.split("=", 1)[0] if word.startswith("--") else word[:2]
         return name, parser._option_string_actions.get(name)  # (argparse's own table: exact, as allow_abbrev=False)
@@ -102,7 +109,7 @@ def repeated_option(parser: argparse.ArgumentParser, words: list[str]) -> str | 
         if word == "--":  # what follows is positional
             break
         name, action = option(word)
-        if action is None or action.nargs == 0 or isinstance(action, (argparse._AppendAction, argparse._ExtendAction)):
+        if action is None or action.dest not in OUTPUT_OPTIONS:
             continue
         value = words[i + 1] if word == name and i + 1 < len(words) and option(words[i + 1])[1] is None else None
         given = word if value is None else f"{word} {value}"
