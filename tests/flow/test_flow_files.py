@@ -619,3 +619,35 @@ def test_an_interrupt_while_the_flow_computes_names_the_directory(tmp_path, caps
     assert err == [f"isoflow: interrupted: {tmp_path / 'o'}: stopped while the flow ran; the previous run's files "
                    "in the directory are unchanged"], err
     assert {p.name: p.read_bytes() for p in (tmp_path / "o").iterdir() if p.is_file()} == before
+
+
+def test_2d_shapes_png_draws_a_png_mask_as_pillow_reads_it(tmp_path):
+    """shapes.png of a PNG mask shows the mask the right way up: the object
+    in its one panel (--steps 0), sampled at the pixel centres, is the
+    mask as Pillow reads the file (rows down, columns across), not that
+    mask upside down."""
+    from PIL import Image
+    from scipy import ndimage
+
+    mask = np.zeros((20, 30), np.uint8)  # an F: not symmetric top to bottom
+    mask[2:16, 3:7] = 255
+    mask[2:6, 3:20] = 255
+    mask[8:11, 3:14] = 255
+    Image.fromarray(mask).save(tmp_path / "f.png")
+    with Image.open(tmp_path / "f.png") as png:
+        read = np.asarray(png) > 0
+    rows, cols = np.nonzero(read)
+    expected = read[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1]
+    rc, _, err = run("flow", tmp_path / "f.png", "--steps", 0, "--out", tmp_path / "run")
+    assert rc == 0, err
+    with Image.open(tmp_path / "run" / "shapes.png") as picture:
+        rgb = np.asarray(picture.convert("RGB")).astype(int)
+    # the pixels' fill: one mid grey (the text and the axes are black, the background white)
+    grey = (np.ptp(rgb, axis=2) == 0) & (np.abs(rgb[..., 0] - 115) < 15)
+    parts, count = ndimage.label(grey)
+    drawn = parts == 1 + np.argmax(ndimage.sum(grey, parts, range(1, count + 1)))
+    y, x = np.nonzero(drawn)
+    h, w = expected.shape
+    centres_y = (y.min() + (np.arange(h) + 0.5) * (y.max() + 1 - y.min()) / h).astype(int)
+    centres_x = (x.min() + (np.arange(w) + 0.5) * (x.max() + 1 - x.min()) / w).astype(int)
+    np.testing.assert_array_equal(drawn[np.ix_(centres_y, centres_x)], expected)
