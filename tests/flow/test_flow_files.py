@@ -5,6 +5,7 @@ import contextlib
 import csv
 import io
 import json
+import re
 
 import numpy as np
 import pymeshlab
@@ -651,3 +652,25 @@ def test_2d_shapes_png_draws_a_png_mask_as_pillow_reads_it(tmp_path):
     centres_y = (y.min() + (np.arange(h) + 0.5) * (y.max() + 1 - y.min()) / h).astype(int)
     centres_x = (x.min() + (np.arange(w) + 0.5) * (x.max() + 1 - x.min()) / w).astype(int)
     np.testing.assert_array_equal(drawn[np.ix_(centres_y, centres_x)], expected)
+
+
+def test_2d_flow_text_names_its_last_state_a_rectangle_or_not(tmp_path):
+    """In the plane the text's limit line says rectangle, not cuboid: the
+    last non-empty state of a 5x7 rectangle's flow, read back from its
+    step file by NumPy, fills its box (scikit-image's extent 1), and a
+    checkerboard, whose 18 pixels vanish in one step, does not."""
+    from skimage.measure import regionprops
+
+    np.save(tmp_path / "box.npy", np.ones((5, 7), bool))
+    rc, out, err = run("flow", tmp_path / "box.npy", "--out", tmp_path / "run", "--volumes", ".npy")
+    assert rc == 0, err
+    last = int(re.search(r"\(step (\d+): ", out).group(1))
+    state = np.load(tmp_path / "run" / f"step_{last:03d}.npy")
+    assert regionprops(state.astype(np.uint8))[0].extent == 1
+    assert f"(step {last}: a rectangle)" in out and "cuboid" not in out
+    checker = np.indices((6, 6)).sum(axis=0) % 2 == 0
+    assert regionprops(checker.astype(np.uint8))[0].extent < 1
+    np.save(tmp_path / "checker.npy", checker)
+    rc, out, err = run("flow", tmp_path / "checker.npy")
+    assert rc == 0, err
+    assert "(step 0: not a rectangle)" in out and "cuboid" not in out
