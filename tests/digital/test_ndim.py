@@ -550,5 +550,15 @@ def test_bad_input_raises():
         nd.curvature_index(1, 3, equation="5.1")
     with pytest.raises(IsoflowError):
         S.apply_symmetry(np.zeros((2, 2), dtype=bool), 8)
+    # an index that is no integer: 2.5 was cut to 2 by the range check, then
+    # NumPy's IndexError; True would be element 1
+    for g in (2.5, True, "3"):
+        with pytest.raises(IsoflowError, match=f"symmetry index must be an integer 0..7, got {g!r}"):
+            S.apply_symmetry(np.zeros((2, 2), dtype=bool), g)
+    # the elements it takes: (p, f) as np.transpose(np.flip(X, f), p), all eight of the square
+    image = np.arange(6).reshape(2, 3)
+    seen = {str(S.apply_symmetry(image, np.int64(g)).tolist()) for g in range(8)}
+    expected = {str(np.transpose(np.flip(image, f), p).tolist()) for p in ((0, 1), (1, 0)) for f in ((), (0,), (1,), (0, 1))}
+    assert seen == expected and len(seen) == 8
     with pytest.raises(IsoflowError):
         hom.gf2_betti_numbers(np.ones((6, 6, 6, 6), dtype=bool), max_faces=1000)
