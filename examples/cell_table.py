@@ -37,15 +37,16 @@ def arguments(parser):
 
 def cell_map(size: int, cells: int, seed: int = 3) -> np.ndarray:
     """Voronoi cells of random seeds, labels 1..cells; every fifth cell
-    gets a round hole at its seed, cell 1 two of them."""
+    gets a round hole at its seed, cell 1 two of them. Axis 0 is x and
+    axis 1 is y, as isoflow reads a 2D array."""
     rng = np.random.default_rng(seed)
     seeds = rng.uniform(0, size, (cells, 2))
     centres = np.indices((size, size)).reshape(2, -1).T + 0.5
     image = (cKDTree(seeds).query(centres)[1] + 1).reshape(size, size).astype(np.uint16)
-    y, x = np.indices(image.shape) + 0.5
+    x, y = np.indices(image.shape) + 0.5
     for label in range(1, cells + 1, 5):
-        for dy in ((-2.5, 2.5) if label == 1 else (0.0,)):
-            hole = (y - seeds[label - 1, 0] - dy) ** 2 + (x - seeds[label - 1, 1]) ** 2 <= 1.6**2
+        for dx in ((-2.5, 2.5) if label == 1 else (0.0,)):
+            hole = (x - seeds[label - 1, 0] - dx) ** 2 + (y - seeds[label - 1, 1]) ** 2 <= 1.6**2
             image[hole & (image == label)] = 0
     return image
 
@@ -70,12 +71,15 @@ def main():
         writer.writerows(zip(*[column.tolist() for column in table.values()]))
     np.save(image_path, image)
 
-    # the cells, those with holes outlined in red; each cell's perimeter
-    # against its area
+    # the cells, those with holes outlined in red, x across and y down as an
+    # image viewer shows the image's PNG or TIFF (and isoflow flow's
+    # shapes.png); each cell's perimeter against its area
     fig, (left, right) = plt.subplots(1, 2, figsize=(10, 4.5))
-    left.imshow(image, cmap="tab20", interpolation="nearest")
+    left.imshow(image.T, cmap="tab20", interpolation="nearest")
     with_holes = np.isin(image, table["label"][holes > 0])
-    left.contour(with_holes, levels=[0.5], colors="red", linewidths=0.8)
+    left.contour(with_holes.T, levels=[0.5], colors="red", linewidths=0.8)
+    left.set_xlabel("x (axis 0)")
+    left.set_ylabel("y (axis 1)")
     left.set_title("cells; those with holes outlined")
     plain = holes == 0
     right.scatter(table["area"][plain], table["perimeter"][plain], s=12, label="b1 = 0")

@@ -548,6 +548,28 @@ def test_a_slice_saved_as_3d_gets_a_note_with_the_line_that_saves_it_2d(tmp_path
         assert capsys.readouterr().err == "", quiet
 
 
+def test_the_line_that_saves_a_slice_2d_keeps_its_length_unit(tmp_path, capsys):
+    """The note's line for a mask keeps the file's length unit, as the one
+    for a label image does: the 2D image it saves is in the millimetres
+    nibabel reads from the NIfTI header, not "the file says no unit"."""
+    import shlex
+
+    import nibabel as nib
+
+    img = nib.Nifti1Image(np.pad(np.ones((3, 4, 1), np.uint8), ((1, 1), (1, 1), (0, 0))), np.diag([0.5, 0.7, 2.0, 1]))
+    img.header.set_xyzt_units("mm")
+    nib.save(img, tmp_path / "slice.nii.gz")
+    unit = nib.load(tmp_path / "slice.nii.gz").header.get_xyzt_units()[0]
+    assert main(["info", str(tmp_path / "slice.nii.gz"), "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["unit"] == unit == "mm"
+    code = shlex.split(err.split("give it: ", 1)[1])[2]
+    p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    r = info_json(capsys, tmp_path / "slice_2d.npz")
+    assert r["dimension"] == 2 and r["unit"] == unit and r["pitch"] == pytest.approx([0.5, 0.7])
+
+
 def test_a_4d_volume_one_voxel_thick_says_how_to_read_it_as_3d(tmp_path, capsys):
     """A 3D mask saved with a channel axis (ilastik's HDF5 (z, y, x, 1)) is
     read as stored, 4D, where b1, b2 and the surfaces are not counted; the

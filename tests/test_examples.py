@@ -311,3 +311,33 @@ def test_label_table(example_run):
     assert (int(rows[0][0]["b2"]), int(rows[1][0]["b1"])) == (1, 1)
     assert rows[0][0]["genera"] == "0;0" and f"{len(rows)} labels" in printed
     assert (out / "labels.png").stat().st_size > 0
+
+
+def test_cell_table_draws_the_cells_as_a_viewer_shows_their_png(tmp_path, monkeypatch):
+    """The picture's cells are the label image as tifffile reads the TIFF
+    that ``write_labels`` makes of it (rows are y, columns x): x across and
+    y down, as an image viewer shows it and shapes.png draws a 2D flow,
+    not the array's axis 0 down."""
+    import runpy
+
+    import matplotlib
+    import tifffile
+    from matplotlib.figure import Figure
+
+    matplotlib.use("Agg")
+    drawn = []
+    save = Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        drawn.append(fig.axes[0].images[0].get_array())
+        return save(fig, *args, **kwargs)
+
+    out = tmp_path / "out"
+    monkeypatch.setattr(Figure, "savefig", keep)
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    monkeypatch.setattr(sys, "argv", ["cell_table.py", str(out), "--cells", "5", "--size", "24"])
+    runpy.run_path(str(EXAMPLES / "cell_table.py"), run_name="__main__")
+    image = np.load(out / "cells.npy")
+    assert image.shape == (24, 24) and not np.array_equal(image, image.T)
+    isoflow.write_labels(image, tmp_path / "cells.tif")
+    np.testing.assert_array_equal(np.asarray(drawn[0]), tifffile.imread(tmp_path / "cells.tif"))

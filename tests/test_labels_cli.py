@@ -1209,3 +1209,28 @@ def test_an_empty_segmentation_s_table_has_no_row_and_exit_0(tmp_path, capsys):
     fails(capsys, "surface", tmp_path / "empty.nii.gz", "--labels", "-o", tmp_path / "e.glb",
           words=("no nonzero label: the image is all 0",))
     assert not (tmp_path / "e.glb").exists()
+
+
+def test_a_2d_label_image_s_refusals_count_pixels(tmp_path, capsys):
+    """A 2D image's refusals count its cells as pixels, as info's text
+    does: a PNG label map without --label says how many pixels (as Pillow
+    reads the file) hold values other than 0 and 1, a label no pixel has
+    lists the values Pillow reads, a 2D store read block by block names
+    the pixel its block starts at, and an image of no pixels says so."""
+    from PIL import Image
+
+    cells = np.zeros((6, 9), np.uint8)
+    cells[1:3, 1:4], cells[4:6, 2:8] = 1, 7
+    Image.fromarray(cells).save(tmp_path / "cells.png")
+    with Image.open(tmp_path / "cells.png") as png:
+        many = int(np.count_nonzero(np.asarray(png) > 1))
+        present = ", ".join(map(str, np.unique(np.asarray(png)).tolist()))
+    fails(capsys, "info", tmp_path / "cells.png", words=(f"({many} pixels hold values other than 0 and 1, e.g. 7)",))
+    fails(capsys, "info", tmp_path / "cells.png", "--label", 99, words=(f"no pixel has label 99 (values present: {present})",))
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "cells.zarr"), data=cells.T, chunks=(5, 5), zarr_format=2)
+    fails(capsys, "info", tmp_path / "cells.zarr", words=("pixels in the block at pixel (", "hold values other than 0 and 1"))
+    # (a store's --label is selected block by block, the values read in a second pass)
+    fails(capsys, "info", tmp_path / "cells.zarr", "--label", 99, words=(f"no pixel has label 99 (values present: {present})",))
+    np.save(tmp_path / "none.npy", np.zeros((0, 5), np.uint8))
+    fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no pixels (shape 0x5)",))

@@ -133,6 +133,26 @@ def test_planar_index_eq_4_2_values():
     assert ell4[1, 1] == -1  # the re-entrant corner: r = -1/4, concave
 
 
+def test_planar_index_on_lines_one_point_wide():
+    """The values the docstring gives for thin sets, whose sum is 4 chi by
+    scikit-image (connectivity 1: vertices, 4-adjacent edges, squares):
+    a line's ends turn by a half turn each, a junction of 3 or 4 lines by
+    -2 or -4, an isolated point by a whole turn."""
+    from skimage.measure import euler_number
+
+    plus = np.zeros((5, 5), bool)
+    plus[2, :] = plus[:, 2] = True
+    tee = plus.copy()
+    tee[2, :2] = False
+    dot = np.zeros((3, 3), bool)
+    dot[1, 1] = True
+    for points, middle, ends, turn in ((plus, (2, 2), 4, -4), (tee, (2, 2), 3, -2), (dot, (1, 1), 0, 4)):
+        r4 = I.planar_index(points)
+        assert r4[middle] == turn
+        assert np.count_nonzero(r4 == 2) == ends and set(np.unique(r4[points])) <= {turn, 0, 2}
+        assert r4.sum() == 4 * euler_number(points, 1) == 4
+
+
 @pytest.mark.parametrize("table", [I.gamma_lut, I.class_lut, I.code_lut, I.normal_lut, I.f_lut])
 def test_the_public_tables_cannot_be_written_into(table):
     # they are cached: a caller's class_lut()[:] = 0 made every later analyze of a box with a cavity

@@ -552,3 +552,35 @@ def test_bad_input_raises():
         S.apply_symmetry(np.zeros((2, 2), dtype=bool), 8)
     with pytest.raises(IsoflowError):
         hom.gf2_betti_numbers(np.ones((6, 6, 6, 6), dtype=bool), max_faces=1000)
+
+
+def test_symmetry_indices_and_codes_that_are_none_are_refused():
+    """apply_symmetry, index_61, index_48 and link_betti_numbers refuse what
+    is no element, no code or not one configuration with IsoflowError, and
+    compute what is (the group by NumPy's flips and transposes,
+    Definition 9 by hand)."""
+    # an index that is no integer: 2.5 was cut to 2 by the range check, then
+    # NumPy's IndexError; True would be element 1
+    for g in (2.5, True, "3"):
+        with pytest.raises(IsoflowError, match=f"symmetry index must be an integer 0..7, got {g!r}"):
+            S.apply_symmetry(np.zeros((2, 2), dtype=bool), g)
+    # codes that are no codes: 5 and 0.5 counted as flat (index 0), a string
+    # ended in NumPy's UFuncTypeError; an array of configurations in a
+    # TypeError of its own
+    for codes in ([5, 1], [0.5, 1], [True, False], "ab"):
+        for index in (nd.index_61, nd.index_48):
+            with pytest.raises(IsoflowError, match="codes must be"):
+                index(np.asarray(codes))
+    with pytest.raises(IsoflowError, match="takes one configuration, got an array of shape"):
+        nd.link_betti_numbers(np.array([1, 2]), 2)
+    # Definition 9 by hand: s(+) = 1, s(-) = -1, s(0) = s(∅) = 0
+    codes = np.array([[1, 1], [1, -1], [0, 2], [-1, -2]])
+    s = [[1, 1], [1, -1], [0, 0]]
+    np.testing.assert_array_equal(nd.index_61(codes)[:3], [sum(v) * np.prod(np.abs(v)) for v in s])
+    np.testing.assert_array_equal(nd.index_48(codes)[:3], [sum(v) * sum(np.abs(v)) for v in s])
+    assert np.isnan(nd.index_61(codes)[3]) and np.isnan(nd.index_48(codes)[3])  # UNDEFINED
+    # the elements it takes: (p, f) as np.transpose(np.flip(X, f), p), all eight of the square
+    image = np.arange(6).reshape(2, 3)
+    seen = {str(S.apply_symmetry(image, np.int64(g)).tolist()) for g in range(8)}
+    expected = {str(np.transpose(np.flip(image, f), p).tolist()) for p in ((0, 1), (1, 0)) for f in ((), (0,), (1,), (0, 1))}
+    assert seen == expected and len(seen) == 8

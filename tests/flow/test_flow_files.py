@@ -5,6 +5,7 @@ import contextlib
 import csv
 import io
 import json
+import re
 
 import numpy as np
 import pymeshlab
@@ -669,3 +670,56 @@ def test_a_store_flowed_block_by_block_shows_the_bar_from_step_0(tmp_path, monke
         assert main(["flow", str(tmp_path / "box.zarr"), "--steps", "2", "--volumes", ".zarr",
                      "--out", str(tmp_path / "run")]) == 0
     assert "flow:   0%|" in seen[0]
+
+def test_2d_shapes_png_draws_a_png_mask_as_pillow_reads_it(tmp_path):
+    """shapes.png of a PNG mask shows the mask the right way up: the object
+    in its one panel (--steps 0), sampled at the pixel centres, is the
+    mask as Pillow reads the file (rows down, columns across), not that
+    mask upside down."""
+    from PIL import Image
+    from scipy import ndimage
+
+    mask = np.zeros((20, 30), np.uint8)  # an F: not symmetric top to bottom
+    mask[2:16, 3:7] = 255
+    mask[2:6, 3:20] = 255
+    mask[8:11, 3:14] = 255
+    Image.fromarray(mask).save(tmp_path / "f.png")
+    with Image.open(tmp_path / "f.png") as png:
+        read = np.asarray(png) > 0
+    rows, cols = np.nonzero(read)
+    expected = read[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1]
+    rc, _, err = run("flow", tmp_path / "f.png", "--steps", 0, "--out", tmp_path / "run")
+    assert rc == 0, err
+    with Image.open(tmp_path / "run" / "shapes.png") as picture:
+        rgb = np.asarray(picture.convert("RGB")).astype(int)
+    # the pixels' fill: one mid grey (the text and the axes are black, the background white)
+    grey = (np.ptp(rgb, axis=2) == 0) & (np.abs(rgb[..., 0] - 115) < 15)
+    parts, count = ndimage.label(grey)
+    drawn = parts == 1 + np.argmax(ndimage.sum(grey, parts, range(1, count + 1)))
+    y, x = np.nonzero(drawn)
+    h, w = expected.shape
+    centres_y = (y.min() + (np.arange(h) + 0.5) * (y.max() + 1 - y.min()) / h).astype(int)
+    centres_x = (x.min() + (np.arange(w) + 0.5) * (x.max() + 1 - x.min()) / w).astype(int)
+    np.testing.assert_array_equal(drawn[np.ix_(centres_y, centres_x)], expected)
+
+
+def test_2d_flow_text_names_its_last_state_a_rectangle_or_not(tmp_path):
+    """In the plane the text's limit line says rectangle, not cuboid: the
+    last non-empty state of a 5x7 rectangle's flow, read back from its
+    step file by NumPy, fills its box (scikit-image's extent 1), and a
+    checkerboard, whose 18 pixels vanish in one step, does not."""
+    from skimage.measure import regionprops
+
+    np.save(tmp_path / "box.npy", np.ones((5, 7), bool))
+    rc, out, err = run("flow", tmp_path / "box.npy", "--out", tmp_path / "run", "--volumes", ".npy")
+    assert rc == 0, err
+    last = int(re.search(r"\(step (\d+): ", out).group(1))
+    state = np.load(tmp_path / "run" / f"step_{last:03d}.npy")
+    assert regionprops(state.astype(np.uint8))[0].extent == 1
+    assert f"(step {last}: a rectangle)" in out and "cuboid" not in out
+    checker = np.indices((6, 6)).sum(axis=0) % 2 == 0
+    assert regionprops(checker.astype(np.uint8))[0].extent < 1
+    np.save(tmp_path / "checker.npy", checker)
+    rc, out, err = run("flow", tmp_path / "checker.npy")
+    assert rc == 0, err
+    assert "(step 0: not a rectangle)" in out and "cuboid" not in out

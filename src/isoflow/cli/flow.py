@@ -296,7 +296,8 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
 
 def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     """The flow's records as a table, its stop and its limit point (a 2D
-    object's cells are pixels, as ``isoflow info`` says); the points to as
+    object's cells are pixels, as ``isoflow info`` says, and its full box
+    a rectangle); the points to as
     many digits as keep them within a 200th of ``pitch`` (the voxel size,
     one number or one per axis), so that a far origin does not round them
     to the same number, followed by their length ``unit`` where the input
@@ -310,7 +311,8 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     >>> format_flow(run_flow(far), "far.npz", pitch=0.01).splitlines()[-1].split(", the")[0]
     '  limit: [123456.01, 0.01, 0.01]'
     """
-    cells = "pixels" if result.steps and len(result.steps[0]["betti"]) == 2 else "voxels"
+    planar = bool(result.steps) and len(result.steps[0]["betti"]) == 2
+    cells = "pixels" if planar else "voxels"
     lines = [
         f"{name}: digital curvature flow, {result.connectivity}-connectivity"
         + (", guard" if result.guard else ""),
@@ -325,7 +327,9 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     said = f" {unit}" if unit else ""
     lines.append(f"  stopped: {result.stop_reason}")
     if lim["center"] is not None:
-        shape = {"cuboid": "a cuboid", "other": "not a cuboid", "not-reached": "the run stopped before its end"}
+        # the JSON's "cuboid" names a full box in either dimension; in the plane that box is a rectangle
+        box = "rectangle" if planar else "cuboid"
+        shape = {"cuboid": f"a {box}", "other": f"not a {box}", "not-reached": "the run stopped before its end"}
         lines.append(f"  limit: {coordinates(lim['center'], step=pitch)}{said}, the centre of the last non-empty state (step "
                      f"{lim['last_step']}: {shape.get(lim['last_shape'], lim['last_shape'])})")
     for c in result.topology_changes:

@@ -336,7 +336,7 @@ def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: floa
     """The note on a volume one voxel thick along ``axis``: it is read as
     a 3D plate (a 4D volume), and the one line of Python that saves the
     slice as a 2D image (the 3D volume), voxel size and origin of the other
-    axes kept; of a label image (``labels``), with ``read_labels`` and
+    axes and the length unit kept; of a label image (``labels``), with ``read_labels`` and
     ``write_labels``, which keep the labels and their unit, so that
     ``info --labels`` gives the 2D table of that slice.
 
@@ -367,12 +367,14 @@ isoflow.write_labels(v.array[:, :, 0], "slice_2d.npz", pitch=v.spacing[k], origi
     >>> print(slice_as_2d("slice.nii.gz", (64, 48, 1), 2))
     shape 64x48x1, one voxel along z: read as a 3D plate one voxel thick; to analyse it as the 2D image, save that and give it: \
 python -c 'import isoflow; v = isoflow.read_volume("slice.nii.gz"); k = [0, 1]; \
-isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, 0], pitch=v.spacing[k], origin=v.origin[k]), "slice_2d.npz")'
+isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, 0], pitch=v.spacing[k], origin=v.origin[k], unit=v.unit), \
+"slice_2d.npz")'
     >>> print(slice_as_2d("seg.h5", (64, 48, 32, 1), 3))
     shape 64x48x32x1, one voxel along axis 3: read as a 4D volume one voxel thick, whose b1, b2 and closed surfaces \
 are not counted; to analyse it as the 3D volume, save that and give it: python -c 'import isoflow; \
 v = isoflow.read_volume("seg.h5"); k = [0, 1, 2]; \
-isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing[k], origin=v.origin[k]), "volume_3d.npz")'
+isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing[k], origin=v.origin[k], unit=v.unit), \
+"volume_3d.npz")'
     """
     import json
     import shlex
@@ -387,8 +389,8 @@ isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing
                 f'isoflow.write_labels(v.array[{index}], "{out}", pitch=v.spacing[k], origin=v.origin[k], unit=v.unit)')
     else:
         code = (f"import isoflow; v = isoflow.read_volume({json.dumps(str(path))}{label_arg}); k = {kept}; "
-                f'isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k]), '
-                f'"{out}")')
+                f"isoflow.write_volume(isoflow.DigitalObject(v.volume[{index}], pitch=v.spacing[k], origin=v.origin[k], "
+                f'unit=v.unit), "{out}")')
     if n == 3:
         read = (f"one voxel along {'xyz'[axis]}: read as a 3D plate one voxel thick; "
                 "to analyse it as the 2D image")

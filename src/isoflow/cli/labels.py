@@ -120,7 +120,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
-        raise IsoflowError(f"{args.input}: the image has no voxels (shape {'x'.join(map(str, about['shape']))})")
+        cells = "pixels" if len(about["shape"]) == 2 else "voxels"
+        raise IsoflowError(f"{args.input}: the image has no {cells} (shape {'x'.join(map(str, about['shape']))})")
     within, beyond = ([], []) if asked is None else _by_type(args.input, asked, about["dtype"])
     if every:
         table, missing = chosen_rows(table, within)

@@ -488,7 +488,10 @@ def planar_index(points: ArrayLike) -> np.ndarray:
         int64 of the same shape: ``4 r = 4 - 2 sum_k f_k + sum_k f_k f_k+1
         f_k+2`` over the 4-neighbours ``k`` in {1, 3, 5, 7} (the products are
         the unit squares at the point): +1, 0, -1 at convex, flat, concave
-        boundary points, 0 inside and off the set.
+        boundary points, 0 inside and off the set. A thin part turns more:
+        2 at the end of a line one point wide (a half turn), 4 at an
+        isolated point, -2 where three such lines meet and -4 where four
+        cross.
 
     Raises
     ------
@@ -509,6 +512,11 @@ def planar_index(points: ArrayLike) -> np.ndarray:
     >>> r = planar_index(np.ones((3, 3), bool))
     >>> r.tolist(), int(r.sum()) // 4
     ([[1, 0, 1], [0, 0, 0], [1, 0, 1]], 1)
+
+    A line of points, one wide: its two ends turn by half a turn each.
+
+    >>> planar_index(np.ones((1, 4), bool)).tolist()
+    [[2, 0, 0, 2]]
     """
     # a 2D mask of 0/1 only, as every mask of the API: another shape has no
     # planar index, and 0.5 or NaN are no lattice points

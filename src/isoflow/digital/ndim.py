@@ -198,7 +198,10 @@ def link_betti_numbers(config: int, n: int) -> dict:
     boundary of X). Returns ``{piece: (b~_0, ..., b~_(n-1))}``.
     """
     n = check_dimension(n)
-    c = int(_check_configs(config, n))
+    c = _check_configs(config, n)
+    if c.ndim:  # the link of one vertex: several are as many calls
+        raise IsoflowError(f"link_betti_numbers takes one configuration, got an array of shape {c.shape}")
+    c = int(c)
     full = full_window(n)
     signs = _face_signs(n)
     masks = [m for m, _ in window_faces(n)]
@@ -330,12 +333,25 @@ def _signs(codes: np.ndarray) -> np.ndarray:
     return np.where(np.abs(codes) <= 1, codes, 0).astype(np.int64)
 
 
+def _check_codes(codes: ArrayLike) -> np.ndarray:
+    """Code vectors of :func:`curvature_code`, or one line saying why not:
+    a value that is no code (5, 0.5, a string) has no sign, and would
+    count as flat."""
+    c = np.asarray(codes)
+    if c.ndim == 0 or not (np.issubdtype(c.dtype, np.integer) and not np.issubdtype(c.dtype, np.bool_)):
+        raise IsoflowError(f"codes must be integer vectors (last axis: the n axes), got {c.dtype} of shape {c.shape}")
+    if c.size and not np.isin(c, list(CODE_CHARS)).all():
+        raise IsoflowError("codes must be -2 (UNDEFINED), -1 (CONCAVE), 0 (FLAT), 1 (CONVEX) or 2 (NONE), "
+                           f"got {c[~np.isin(c, list(CODE_CHARS))].ravel()[0]}")
+    return c.astype(np.int64)
+
+
 def index_61(codes) -> np.ndarray:
     """Eq. 6.1: ``f = (sum_i s(alpha_i)) (prod_i |s(alpha_i)|)``, last axis = i.
 
     NaN where an axis code is UNDEFINED (the paper's code does not apply).
     """
-    codes = np.asarray(codes)
+    codes = _check_codes(codes)
     s = _signs(codes)
     f = (s.sum(axis=-1) * np.abs(s).prod(axis=-1)).astype(np.float64)
     return np.where((codes == UNDEFINED).any(axis=-1), np.nan, f)
@@ -347,7 +363,7 @@ def index_48(codes) -> np.ndarray:
     The paper defines it for n = 3 (values 0, +-1, +-3, +-9); the formula is
     evaluated for any n. NaN where an axis code is UNDEFINED.
     """
-    codes = np.asarray(codes)
+    codes = _check_codes(codes)
     s = _signs(codes)
     f = (s.sum(axis=-1) * np.abs(s).sum(axis=-1)).astype(np.float64)
     return np.where((codes == UNDEFINED).any(axis=-1), np.nan, f)

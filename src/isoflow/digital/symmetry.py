@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from functools import cache
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from .configurations import check_dimension, octants, read_only
@@ -87,16 +88,42 @@ def hyperoctahedral_group(n: int) -> CubeGroup:
     )
 
 
-def apply_symmetry(volume, g: int) -> np.ndarray:
+def apply_symmetry(volume: ArrayLike, g: int) -> np.ndarray:
     """Image of ``volume`` under element ``g`` of :func:`hyperoctahedral_group`.
 
     Flips the axes with ``flips[g]``, then transposes with
     ``axis_permutations[g]`` (output axis ``j`` is input axis ``p_j``).
+
+    Parameters
+    ----------
+    volume : array_like
+        An image of dimension 1 to 4.
+    g : int
+        The element, ``0 .. 2^n n! - 1``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The transformed image (a view of ``volume`` where NumPy gives one).
+
+    Raises
+    ------
+    IsoflowError
+        A ``g`` that is no integer of that range, an image not 1D to 4D.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> image = np.array([[1, 2, 3], [4, 5, 6]])
+    >>> [apply_symmetry(image, g).tolist() for g in (0, 1, 4)]  # none, axis 1 flipped, transposed
+    [[[1, 2, 3], [4, 5, 6]], [[3, 2, 1], [6, 5, 4]], [[1, 4], [2, 5], [3, 6]]]
     """
     x = np.asarray(volume)
     group = hyperoctahedral_group(x.ndim)
-    if not 0 <= int(g) < len(group):
-        raise IsoflowError(f"symmetry index must be 0..{len(group) - 1}, got {g}")
+    # an index that is no integer (2.5, True, "3") would be cut or read as
+    # another element, or fail in NumPy's indexing
+    if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= int(g) < len(group):
+        raise IsoflowError(f"symmetry index must be an integer 0..{len(group) - 1}, got {g!r}")
     flip_axes = tuple(int(i) for i in np.flatnonzero(group.flips[g]))
     y = np.flip(x, axis=flip_axes) if flip_axes else x
     return np.transpose(y, tuple(int(i) for i in group.axis_permutations[g]))

@@ -54,7 +54,7 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
         ax = fig.add_subplot(rows, cols, k + 1)
         draw_pixels(ax, state)
         ax.set_xlim(box[0][0] - pad[0], box[1][0] + pad[0])
-        ax.set_ylim(box[0][1] - pad[1], box[1][1] + pad[1])
+        ax.set_ylim(box[1][1] + pad[1], box[0][1] - pad[1])  # y down, as draw_pixels draws it
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
         ax.set_title(f"step {rec['step']}: {rec['voxels']} pixels, betti {tuple(rec['betti'])}", fontsize=8)
@@ -65,7 +65,10 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
 
 def draw_pixels(ax, state) -> None:
     """Draw a 2D object's pixels into a matplotlib axes, in world
-    coordinates (x to the right, y up).
+    coordinates, as an image viewer shows the file: x (axis 0) to the
+    right, y (axis 1) down, since a PNG's or a TIFF's rows are its y
+    (:func:`isoflow.read_volume`), so the mask looks as it does in any
+    viewer; a ``.npy`` array appears as ``imshow(array.T)`` shows it.
 
     Parameters
     ----------
@@ -84,7 +87,7 @@ def draw_pixels(ax, state) -> None:
     """
     lo = state.world(np.zeros(2))
     hi = state.world(np.array(state.volume.shape, float))
-    ax.imshow(state.volume.T, origin="lower", extent=(lo[0], hi[0], lo[1], hi[1]), cmap="Greys", vmin=0, vmax=1.6,
+    ax.imshow(state.volume.T, origin="upper", extent=(lo[0], hi[0], hi[1], lo[1]), cmap="Greys", vmin=0, vmax=1.6,
               interpolation="nearest")
 
 

@@ -465,7 +465,7 @@ def select_label(array, label, where: str) -> np.ndarray:
     label = check_label(label, arr.dtype, where)
     vol = arr == label
     if not vol.any():
-        raise no_such_label(label, np.unique(arr), where)
+        raise no_such_label(label, np.unique(arr), where, arr.ndim)
     return vol
 
 

@@ -184,9 +184,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
     if bad.any():
         value, nbad = arr[bad].flat[0], int(bad.sum())
         # the count is of voxels (not of distinct values), and of this block
-        # only where the volume is checked block by block
-        place = f" in the block at voxel {tuple(int(o) for o in near)}" if near is not None else ""
-        bare = (f"{where}: not a binary volume ({counted(nbad, 'voxel')}{place} hold{'s' if nbad == 1 else ''} "
+        # only where the volume is checked block by block; a 2D image's cells
+        # are pixels, as info calls them
+        cell = "pixel" if arr.ndim == 2 else "voxel"
+        place = f" in the block at {cell} {tuple(int(o) for o in near)}" if near is not None else ""
+        bare = (f"{where}: not a binary volume ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
                 "values other than 0 and 1, "
                 f"e.g. {value}); threshold it first, e.g. volume > 0")
         # integers in memory are most often a label image, which has a table

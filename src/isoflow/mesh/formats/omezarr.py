@@ -335,7 +335,7 @@ def label_absent(path, label) -> IsoflowError:
 
     _, da = import_dask()
     store = open_store(path)
-    return no_such_label(label, np.unique(da.unique(store.lazy()).compute()), store.where)
+    return no_such_label(label, np.unique(da.unique(store.lazy()).compute()), store.where, len(store.xyz))
 
 
 def store_volume(path, label=None) -> tuple:

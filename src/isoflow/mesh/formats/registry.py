@@ -553,13 +553,15 @@ def check_label(label, dtype, where: str) -> int | float:
     return int(label) if dtype.kind in "iu" and whole else label
 
 
-def no_such_label(label, values, where: str) -> IsoflowError:
+def no_such_label(label, values, where: str, ndim: int = 3) -> IsoflowError:
     """The error for a label no voxel has, listing the ``values`` present
-    (none in an array without voxels)."""
+    (none in an array without voxels); the cells of an ``ndim`` 2 image are
+    pixels, as ``isoflow info`` calls them."""
+    cell = "pixel" if ndim == 2 else "voxel"
     if not len(values):
-        return IsoflowError(f"{where}: no voxel has label {_number(label)}: the array has no voxels")
+        return IsoflowError(f"{where}: no {cell} has label {_number(label)}: the array has no {cell}s")
     shown = ", ".join(_number(v) for v in values[:20]) + (", ..." if len(values) > 20 else "")
-    return IsoflowError(f"{where}: no voxel has label {_number(label)} (values present: {shown})")
+    return IsoflowError(f"{where}: no {cell} has label {_number(label)} (values present: {shown})")
 
 
 def _number(value) -> str:
