@@ -671,6 +671,7 @@ def test_a_store_flowed_block_by_block_shows_the_bar_from_step_0(tmp_path, monke
                      "--out", str(tmp_path / "run")]) == 0
     assert "flow:   0%|" in seen[0]
 
+
 def test_2d_shapes_png_draws_a_png_mask_as_pillow_reads_it(tmp_path):
     """shapes.png of a PNG mask shows the mask the right way up: the object
     in its one panel (--steps 0), sampled at the pixel centres, is the
