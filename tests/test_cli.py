@@ -785,3 +785,36 @@ def test_info_text_says_how_many_closed_surfaces_even_none(tmp_path, capsys, sha
     assert lines == [f"  closed surfaces        {expected}"]
     assert main(["info", str(tmp_path / "v.npy"), "--no-surfaces"]) == 0
     assert "closed surfaces" not in capsys.readouterr().out
+
+
+def test_an_error_line_writes_a_name_s_undecodable_byte_as_the_reports_do(tmp_path, capsys):
+    """The reports write a name's byte that is not UTF-8 as ``\\xe9``; an
+    error line about the same file wrote ``\\udce9``, Python's lone
+    surrogate for it, so one file had two names. The error line's name is
+    the reports' (Python's ``backslashreplace`` of the file's bytes)."""
+    name = os.fsdecode(b"caf\xe9.npy")
+    try:
+        np.save(tmp_path / name, np.arange(8).reshape(2, 2, 2))  # not binary: refused
+    except (OSError, UnicodeEncodeError):
+        pytest.skip("the file system takes only names that decode")
+    assert main(["info", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err
+    assert os.fsencode(str(tmp_path / name)).decode("utf-8", "backslashreplace") in err
+    assert "\\udce9" not in err and "\udce9" not in err
+
+
+@pytest.mark.parametrize("flag", ["--force", "--no-check"])
+def test_flow_options_for_the_out_files_without_out_are_refused_not_ignored(tmp_path, capsys, flag):
+    """``flow x --force`` and ``flow x --no-check`` ran as if the option
+    were not there: both are about the files of --out, so the --out they
+    were meant for was left out. One line naming the option and --out, as
+    --volumes without --out; with --out both are taken (the step surfaces
+    are written and, without --no-check, read back by trimesh)."""
+    from test_input_errors import fails
+
+    np.save(tmp_path / "b.npy", np.ones((3, 4, 5), bool))
+    fails(capsys, "flow", tmp_path / "b.npy", "--steps", "1", flag, words=(flag, "--out"))
+    out = tmp_path / "run"
+    assert main(["flow", str(tmp_path / "b.npy"), "--steps", "1", flag, "--out", str(out)]) == 0
+    surface = trimesh.load(out / "step_000.ply")
+    assert surface.is_watertight and surface.euler_number == 2  # a box's surface: one sphere

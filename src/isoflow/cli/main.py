@@ -17,7 +17,7 @@ import difflib
 import sys
 from collections.abc import Iterator
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, path_text
 from . import completion, flow, genus, info, surface, voxelize
 
 #: the commands in the order ``isoflow`` lists them
@@ -583,6 +583,7 @@ def main(argv: list[str] | None = None) -> int:
     except IsoflowError as exc:  # in the command line's words (its options) where they differ from Python's
         # one line, as the exit status 2 promises: a path given with a line break in it is shown escaped
         line = str(exc.command_line or exc).replace("\r", "\\r").replace("\n", "\\n")
+        line = path_text(line)  # a name's byte that is not UTF-8 as \xNN, as the reports write it
         print(f"isoflow {args.command}: error: {line}", file=sys.stderr)
         return 2
     except MemoryError:
