@@ -611,6 +611,9 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         export.write_glb_sets(target[1], [parts for parts, _ in glb_parts], np.argsort(rows), force=args.force,
                               comment=f"isoflow surface --labels of {args.input}, "
                                       f"{args.connectivity or 6}-connectivity")
+        framed = sum(len(parts.matrices) for parts, _ in glb_parts)
+        if framed and not args.quiet:  # MeshLab reads those nodes in voxel units
+            print(f"isoflow surface: note: {export.glb_transform_note(target[1], framed, len(rows))}", file=sys.stderr)
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
@@ -622,6 +625,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
     moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file
+    framed = 0  # GLB files whose positions are in voxel units under the node's transform
     earlier = earlier_label_files(target[1], target[2], [name for name, *_ in meshes])
     asked = label_choice(args.labels) if earlier and args.force else None
     retire, kept = retired_label_files(earlier, target[2], asked, args.force)
@@ -638,6 +642,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
                 written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                                force=args.force, comments=(f"isoflow surface --labels: {name}",))
                 count += written["face_count"]
+                framed += bool(written.get("framed"))
                 kinds[written["faces"]] = None
                 if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
                     moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
@@ -656,6 +661,9 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             with contextlib.suppress(OSError):
                 target[1].rmdir()
         raise
+    if framed and not args.quiet:  # as surface says of one GLB file
+        where = f"{target[1]}/" if len(meshes) > 1 else target[1] / f"{meshes[0][0]}{target[2]}"
+        print(f"isoflow surface: note: {export.glb_transform_note(where, framed, len(meshes), 'file')}", file=sys.stderr)
     if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
         print(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}", file=sys.stderr)
     if welds:  # as surface says of one STL file, under --quiet too

@@ -438,6 +438,7 @@ def write_mesh_file(
     else:
         table, frame = glb_columns(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
+        return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None}
     return {"path": path, "faces": kind, "face_count": len(faces)}
 
 
@@ -454,6 +455,34 @@ def stl_move_note(out: str | os.PathLike, written: dict) -> str:
     """How far an STL's float32 positions moved the surface."""
     return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
             f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
+
+
+def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, kind: str = "node") -> str:
+    """Where a GLB's positions read as voxel units: ``framed`` of the
+    ``of`` nodes of a scene (or of the ``of`` files of a directory,
+    ``kind="file"``) store them under the node's transform
+    (:func:`grid_frame`), which MeshLab keeps apart from the vertices
+    (docs/formats.md, "Surface files").
+
+    Examples
+    --------
+    >>> note = glb_transform_note("far.glb")
+    >>> note.split(",")[0]
+    'far.glb: float32 cannot hold its world positions to a millionth of a voxel'
+    >>> "Apply to all visible Layers" in glb_transform_note("seg.glb", 3, 4)
+    True
+    """
+    if of == 1:
+        head = "float32 cannot hold its world positions to a millionth of a voxel, so the GLB stores"
+    else:
+        which = f"all {of}" if framed == of else f"{framed} of the {of}"
+        head = f"float32 cannot hold the world positions of {which} {kind}s to a millionth of a voxel, so they store"
+    every = kind == "node" and of > 1  # MeshLab freezes the current layer alone unless told otherwise
+    return (f"{where}: {head} voxel units with the voxel size and origin as {'each' if of > 1 else 'its'} node's "
+            "transform: trimesh (force=\"mesh\") and Blender apply it; MeshLab keeps it apart (its measures and "
+            "saved files in voxel units) until Filters > Normals, Curvatures and Orientation > Matrix: Freeze "
+            f"Current Matrix{' with Apply to all visible Layers' if every else ''} "
+            f"(pymeshlab: apply_matrix_freeze{'(alllayers=True)' if every else ''})")
 
 
 def stl_weld_note(out: Path, welded: int) -> str:

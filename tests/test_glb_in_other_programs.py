@@ -1,0 +1,114 @@
+"""A GLB as other programs read it. MeshLab (pymeshlab): where ``surface``
+stores voxel units under a node's transform, MeshLab keeps the transform
+apart from the vertices, so the command says so and names the filter that
+puts them in place; where the world positions are stored, it says nothing.
+Blender: the turn formats.md gives undoes its importer's +Y up."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import isoflow
+from isoflow.cli import main
+
+pymeshlab = pytest.importorskip("pymeshlab")
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: name, voxel size, origin: a model far from the origin, a CT scan's
+#: placement (millimetres), and one float32 holds to a millionth of a voxel
+PLACEMENTS = [("far", (0.1, 0.2, 0.3), (4e6, -2e6, 1e6)),
+              ("scan", (0.5, 0.5, 0.8), (-120.3, -200.7, 50.2)),
+              ("near", (0.5, 0.5, 0.5), (1.0, 2.0, 3.0))]
+
+
+def contacts(seed: int = 1) -> np.ndarray:
+    """A random volume with edge and vertex contacts."""
+    return np.random.default_rng(seed).random((6, 7, 5)) < 0.4
+
+
+def world_box(mask: np.ndarray, pitch, origin) -> np.ndarray:
+    """The world bounds of a mask's voxels, from its indices."""
+    at = np.argwhere(mask)
+    return np.asarray(origin) + np.asarray(pitch) * np.array([at.min(axis=0), at.max(axis=0) + 1])
+
+
+def meshlab_boxes(path, freeze: bool = False) -> dict:
+    """Each layer of a file as pymeshlab loads it: label -> the bounds of
+    its vertices (after Freeze Current Matrix on every layer where
+    ``freeze``)."""
+    ms = pymeshlab.MeshSet()
+    ms.load_new_mesh(str(path))
+    if freeze:
+        ms.apply_matrix_freeze(alllayers=True)
+    boxes = {}
+    for i in range(ms.mesh_number()):
+        v = ms.mesh(i).vertex_matrix()
+        boxes[ms.mesh(i).label()] = np.array([v.min(axis=0), v.max(axis=0)])
+    return boxes
+
+
+@pytest.mark.parametrize("name, pitch, origin", PLACEMENTS, ids=[p[0] for p in PLACEMENTS])
+def test_surface_says_where_meshlab_reads_the_glb_in_voxel_units(tmp_path, capsys, name, pitch, origin):
+    mask = contacts()
+    isoflow.write_volume(isoflow.DigitalObject(mask, pitch=pitch, origin=origin), tmp_path / "v.npz")
+    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.glb")]) == 0
+    err = capsys.readouterr().err
+    world = world_box(mask, pitch, origin)
+    (box,) = meshlab_boxes(tmp_path / "s.glb").values()
+    apart = not np.allclose(box, world, rtol=0, atol=1e-6 * min(pitch))
+    assert apart == (name != "near")
+    assert ("Freeze Current Matrix" in err) == apart, err
+    (frozen,) = meshlab_boxes(tmp_path / "s.glb", freeze=True).values()
+    assert np.allclose(frozen, world, rtol=0, atol=1e-6 * min(pitch))  # the filter the note names places it
+    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.glb"), "--force", "-q"]) == 0
+    assert "Freeze" not in capsys.readouterr().err
+
+
+def test_surface_labels_says_meshlab_needs_every_layer_frozen(tmp_path, capsys):
+    """pymeshlab opens every node of a label scene as a layer named as the
+    node; the note asks for every layer, and each layer then lies at its
+    label's voxels."""
+    image = np.random.default_rng(3).integers(0, 4, (8, 9, 7)).astype(np.uint8)
+    pitch, origin = (0.1, 0.2, 0.3), (1e6, 0.0, 0.0)
+    isoflow.write_labels(image, tmp_path / "seg.nrrd", pitch=pitch, origin=origin)
+    assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "seg.glb")]) == 0
+    err = capsys.readouterr().err
+    assert "Freeze Current Matrix with Apply to all visible Layers" in err and "all 3 nodes" in err, err
+    boxes = meshlab_boxes(tmp_path / "seg.glb", freeze=True)
+    assert sorted(boxes) == ["label_1", "label_2", "label_3"]
+    for label in (1, 2, 3):
+        assert np.allclose(boxes[f"label_{label}"], world_box(image == label, pitch, origin), rtol=0, atol=1e-7)
+    assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "out") + "/",
+                 "--suffix", ".glb"]) == 0
+    err = capsys.readouterr().err
+    assert "all 3 files" in err and "Freeze Current Matrix (pymeshlab" in err, err
+    (box,) = meshlab_boxes(tmp_path / "out" / "label_2.glb", freeze=True).values()
+    assert np.allclose(box, world_box(image == 2, pitch, origin), rtol=0, atol=1e-7)
+
+
+def test_the_turn_formats_md_gives_blender_puts_the_glb_back(tmp_path):
+    """Blender's importer puts a glTF point (x, y, z) at (x, -z, y) and a
+    node's matrix M at C M C^T (C that swizzle, glTF-Blender-IO's
+    ``locs_yup_to_zup``); the turn formats.md gives, -90 degrees about x
+    on the objects' world matrices, gives back the positions trimesh reads,
+    a node's transform (far) or none (near) alike."""
+    text = " ".join((ROOT / "docs" / "formats.md").read_text().split())
+    assert 'o.matrix_world = Matrix.Rotation(-pi / 2, 4, "X") @ o.matrix_world' in text
+    swizzle = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
+    turn = np.array([[1.0, 0, 0, 0], [0, 0, 1, 0], [0, -1, 0, 0], [0, 0, 0, 1]])  # Matrix.Rotation(-pi/2, 4, "X")
+    for name, pitch, origin in PLACEMENTS:
+        isoflow.write_volume(isoflow.DigitalObject(contacts(), pitch=pitch, origin=origin), tmp_path / f"{name}.npz")
+        path = tmp_path / f"{name}.glb"
+        assert main(["surface", str(tmp_path / f"{name}.npz"), "-o", str(path), "-q", "--no-check"]) == 0
+        scene = trimesh.load(path, process=False)
+        (node,) = scene.graph.nodes_geometry
+        matrix, geometry = scene.graph[node]
+        local = np.column_stack([scene.geometry[geometry].vertices, np.ones(len(scene.geometry[geometry].vertices))])
+        in_blender = (swizzle @ matrix @ swizzle.T) @ (swizzle @ local.T)
+        back = (turn @ in_blender).T[:, :3]
+        world = trimesh.load(path, force="mesh", process=False).vertices
+        assert np.allclose(back, world, rtol=1e-12, atol=0)
+        assert not np.allclose(in_blender.T[:, :3], world, rtol=1e-12, atol=0)  # the import alone turns it
