@@ -112,3 +112,43 @@ def test_the_turn_formats_md_gives_blender_puts_the_glb_back(tmp_path):
         world = trimesh.load(path, force="mesh", process=False).vertices
         assert np.allclose(back, world, rtol=1e-12, atol=0)
         assert not np.allclose(in_blender.T[:, :3], world, rtol=1e-12, atol=0)  # the import alone turns it
+
+
+def blender_srgb(stored: np.ndarray) -> np.ndarray:
+    """A GLB's COLOR_0 bytes as Blender shows them: glTF's linear values
+    turned to sRGB (glTF-Blender-IO's ``colors_linear_to_srgb``), in bytes."""
+    c = np.asarray(stored, np.float64) / 255.0
+    srgb = np.where(c >= 0.0031308, 1.055 * np.power(c, 1.0 / 2.4) - 0.055, c * 12.92)
+    return np.round(255.0 * srgb).astype(np.int64)
+
+
+def by_place(vertices, colours) -> np.ndarray:
+    """Colours in the order of their vertices' positions (and colours):
+    two files of one surface side by side, whatever their vertex order."""
+    rows = np.column_stack([np.asarray(vertices, np.float64), colours])
+    return rows[np.lexsort(rows.T[::-1])][:, 3:]
+
+
+def test_the_glb_colours_are_the_ply_colours_once_blender_reads_them(tmp_path):
+    """glTF's COLOR_0 is linear, and Blender's importer turns it to sRGB
+    for display: the GLB's colours, so turned, are the PLY's (sRGB bytes,
+    as PLY readers show them) to 2 of 255 (8 bits of linear), for one
+    surface and for a label scene's nodes."""
+    pitch, origin = (0.5, 0.5, 0.5), (1.0, 2.0, 3.0)  # float32 holds it: world positions in both files
+    isoflow.write_volume(isoflow.DigitalObject(contacts(), pitch=pitch, origin=origin), tmp_path / "v.npz")
+    image = np.random.default_rng(3).integers(0, 3, (6, 5, 7)).astype(np.uint8)
+    isoflow.write_labels(image, tmp_path / "seg.nrrd", pitch=pitch, origin=origin)
+    for out in ("s.ply", "s.glb"):
+        assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / out), "-q"]) == 0
+    assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "seg.glb"), "-q"]) == 0
+    assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "ply") + "/", "--suffix", ".ply",
+                 "-q"]) == 0
+    pairs = [(tmp_path / "s.ply", tmp_path / "s.glb", None)]
+    pairs += [(tmp_path / "ply" / f"label_{k}.ply", tmp_path / "seg.glb", f"label_{k}") for k in (1, 2)]
+    for ply_path, glb_path, node in pairs:
+        ply = trimesh.load(ply_path, process=False)
+        scene = trimesh.load(glb_path, process=False)
+        glb = scene.geometry[scene.graph[node][1]] if node else next(iter(scene.geometry.values()))
+        want = by_place(ply.vertices, ply.visual.vertex_colors[:, :3])
+        shown = by_place(glb.vertices, blender_srgb(glb.visual.vertex_colors[:, :3]))
+        assert len(np.unique(want, axis=0)) > 2 and np.abs(shown - want).max() <= 2, (ply_path.name, node)

@@ -15,8 +15,8 @@ PLY, binary (default)     quads; triangles for the whole file when   position, c
 PLY ``--ascii``, OBJ      quads, and polygons starting at a midpoint  PLY: as binary; OBJ: position
                           where an edge is doubled (readers fan them)
 STL (binary)              triangles, no shared vertices              none (a normal per triangle)
-GLB                       triangles, shared vertices                 position, COLOR_0, _config, _class,
-                                                                     _gamma, _a, _f
+GLB                       triangles, shared vertices                 position, COLOR_0 (linear), _config,
+                                                                     _class, _gamma, _a, _f
 ========================  =========================================  =======================================
 
 ``triangulate`` writes triangles in every format. Every file goes through
@@ -287,8 +287,9 @@ def write_glb(
 ) -> Path:
     """Write a binary glTF (:mod:`isoflow.mesh.gltf`): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
-    (``COLOR_0``) and the other columns but the position as custom vertex
-    attributes (``_config``, ``_class``, ...). ``frame``: ``(positions,
+    (``COLOR_0``, linear: :func:`linear_bytes`) and the other columns but
+    the position as custom vertex attributes (``_config``, ``_class``,
+    ...). ``frame``: ``(positions,
     transform)``, positions in the file's float32 with the 4x4 transform
     that puts them in place as the node's matrix (where float32 cannot
     hold the world positions; see the module docs)."""
@@ -329,10 +330,36 @@ def write_glb_sets(path: str | os.PathLike, sets: list, order: np.ndarray | None
     return path
 
 
+def linear_bytes(srgb: np.ndarray) -> np.ndarray:
+    """sRGB colour bytes (as PLY holds them and its readers show them) as
+    the linear bytes of glTF's ``COLOR_0``, which the specification makes
+    a linear multiplier and which Blender's importer and web viewers turn
+    back to sRGB for display (IEC 61966-2-1's curve; 8 bits lose up to 2
+    of 255 in the darkest channels once turned back).
+
+    Examples
+    --------
+    >>> linear_bytes(np.array([0, 30, 128, 200, 255], np.uint8)).tolist()
+    [0, 3, 55, 147, 255]
+    """
+    return _LINEAR[np.asarray(srgb, np.uint8)]  # a gather, not float math per vertex
+
+
+def _linear_table() -> np.ndarray:
+    """The linear byte of each sRGB byte (IEC 61966-2-1)."""
+    c = np.arange(256) / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.round(255.0 * linear).astype(np.uint8)
+
+
+_LINEAR = _linear_table()
+
+
 def _rgba(columns: dict) -> np.ndarray:
-    """The vertex colours of ``columns`` as glTF's ``COLOR_0`` (opaque)."""
-    return np.column_stack([columns["red"], columns["green"], columns["blue"],
-                            np.full(len(columns["red"]), 255, np.uint8)])
+    """The vertex colours of ``columns`` as glTF's ``COLOR_0`` (linear,
+    :func:`linear_bytes`; opaque)."""
+    rgb = linear_bytes(np.column_stack([columns["red"], columns["green"], columns["blue"]]))
+    return np.column_stack([rgb, np.full(len(rgb), 255, np.uint8)])
 
 
 def _glb_attributes(columns: dict) -> dict:
