@@ -442,6 +442,13 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     _, conn, table, image, _ = read_table(args)
+    if target[0] == "glb":  # before the meshes are made
+        from ..mesh.export import glb_placement_refusal
+
+        refusal = glb_placement_refusal(target[1], image.spacing, image.array.shape, image.origin,
+                                        fix="write -o DIR/ --suffix .ply or .obj")
+        if refusal:
+            raise IsoflowError(refusal)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]

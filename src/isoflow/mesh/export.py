@@ -330,12 +330,22 @@ def write_glb_sets(path: str | os.PathLike, sets: list, order: np.ndarray | None
     return path
 
 
-def linear_bytes(srgb: np.ndarray) -> np.ndarray:
+def linear_bytes(srgb: ArrayLike) -> np.ndarray:
     """sRGB colour bytes (as PLY holds them and its readers show them) as
     the linear bytes of glTF's ``COLOR_0``, which the specification makes
     a linear multiplier and which Blender's importer and web viewers turn
     back to sRGB for display (IEC 61966-2-1's curve; 8 bits lose up to 2
     of 255 in the darkest channels once turned back).
+
+    Parameters
+    ----------
+    srgb : array_like of uint8
+        Colour channels, any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, the same shape.
 
     Examples
     --------
@@ -366,6 +376,52 @@ def _glb_attributes(columns: dict) -> dict:
     """The columns a glTF keeps as custom vertex attributes: all but the
     position and the colour, each under ``_`` and its name."""
     return {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
+
+
+def glb_placement_refusal(path: str | os.PathLike, spacing: ArrayLike, shape: tuple, origin: ArrayLike,
+                          fix: str = "write .ply or .obj") -> str | None:
+    """Why a GLB cannot place a grid of ``shape`` voxels of size
+    ``spacing`` from ``origin`` (None where it can): its viewers hold a
+    node's transform (:func:`grid_transform`) in float32, as Blender's
+    matrices, web viewers' and the Khronos validator's are (it finds a
+    matrix past float32 not decomposable to translation, rotation and
+    scale), so a voxel size that float32 makes 0 or infinite, or a corner
+    past float32's range, leaves the node nowhere.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, as the line names it.
+    spacing, shape, origin : array_like
+        The voxel size per axis, the grid's shape and its lowest corner.
+    fix : str
+        What the line tells to write instead.
+
+    Returns
+    -------
+    str or None
+        The refusal in one line, or None.
+
+    Examples
+    --------
+    >>> glb_placement_refusal("ok.glb", (0.1,) * 3, (4, 4, 4), (4e6, 0.0, 0.0)) is None
+    True
+    >>> glb_placement_refusal("big.glb", (1e150,) * 3, (4, 4, 4), (0.0,) * 3).split(", and ")[1]
+    'a voxel size of 1e+150 is beyond its range (magnitudes 1.4e-45 to 3.4e+38); write .ply or .obj, which keep the positions'
+    """
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (3,))
+    corners = np.asarray(origin, np.float64) + np.array([np.zeros(3), spacing * np.asarray(shape)])
+    with np.errstate(over="ignore", under="ignore"):
+        size32, corners32 = spacing.astype(np.float32), corners.astype(np.float32)
+    lost_size, lost_corner = ~np.isfinite(size32) | (size32 == 0), ~np.isfinite(corners32)
+    if not lost_size.any() and not lost_corner.any():
+        return None
+    what = (f"a voxel size of {spacing[lost_size][0]:.3g}" if lost_size.any() else
+            f"a corner at {corners[lost_corner][0]:.3g}")
+    return (f"{path}: glTF viewers (Blender, three.js, the Khronos validator) hold a node's transform in float32, "
+            f"and {what} is beyond its range "
+            f"(magnitudes {float(np.finfo(np.float32).smallest_subnormal):.2g} to {float(np.finfo(np.float32).max):.2g})"
+            f"; {fix}, which keep the positions")
 
 
 def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
@@ -463,6 +519,9 @@ def write_mesh_file(
         return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
                 "moved_voxels": effect["moved_voxels"]}
     else:
+        refusal = glb_placement_refusal(path, obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
+        if refusal:  # nothing written: a node placed past float32 is no place its readers can show
+            raise IsoflowError(refusal)
         table, frame = glb_columns(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
         return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None}
@@ -490,6 +549,20 @@ def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, k
     ``kind="file"``) store them under the node's transform
     (:func:`grid_frame`), which MeshLab keeps apart from the vertices
     (docs/formats.md, "Surface files").
+
+    Parameters
+    ----------
+    where : str or os.PathLike
+        The file, or the directory of a file per label.
+    framed, of : int
+        The nodes (files) with a transform, of how many.
+    kind : {"node", "file"}
+        What ``of`` counts.
+
+    Returns
+    -------
+    str
+        The note in one line.
 
     Examples
     --------
@@ -581,7 +654,9 @@ def write_surface(
         suffix other than the four, ``ascii`` with another format, an
         object that is not 3D or is empty, a mesh of another object or
         connectivity, a binary STL whose float32 positions would merge
-        distinct corners (the message says by how much). With ``check``, a
+        distinct corners (the message says by how much), a GLB placed
+        where float32 cannot hold its node's transform (a voxel size or
+        a corner beyond float32's range). With ``check``, a
         file that trimesh reads back otherwise, naming it and what differs:
         nothing is replaced.
 
