@@ -10,7 +10,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import trimesh
-from test_input_errors import fails  # one line on stderr, exit 2
 
 import isoflow
 from isoflow.cli import main
@@ -162,26 +161,38 @@ BEYOND_FLOAT32 = [(1e150, 0.0), (1e-150, 0.0), (1e36, 1e43)]
 
 
 @pytest.mark.parametrize("pitch, origin", BEYOND_FLOAT32, ids=["1e150", "1e-150", "at 1e43"])
-def test_a_glb_placed_beyond_float32_is_refused_and_a_ply_written(tmp_path, capsys, pitch, origin):
-    """glTF viewers hold a node's matrix in float32 (the Khronos validator
-    finds one past float32 not decomposable to TRS): such a GLB is refused
-    in one line, nothing written, and the PLY it names is written."""
-    isoflow.write_volume(isoflow.DigitalObject(contacts(), pitch=pitch, origin=(origin, 0.0, 0.0)), tmp_path / "v.npz")
-    line = fails(capsys, "surface", tmp_path / "v.npz", "-o", tmp_path / "s.glb", words=("s.glb", "float32", ".ply"))
-    assert "beyond its range" in line and not (tmp_path / "s.glb").exists()
-    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.ply"), "-q"]) == 0
-    isoflow.write_labels(contacts().astype(np.uint8) * 2, tmp_path / "seg.nrrd", pitch=pitch, origin=(origin, 0.0, 0.0))
-    fails(capsys, "surface", tmp_path / "seg.nrrd", "--labels", "-o", tmp_path / "seg.glb",
-          words=("seg.glb", "float32", "--suffix .ply"))
-    assert not (tmp_path / "seg.glb").exists()
+def test_a_glb_placed_beyond_float32_says_which_readers_cannot_place_it(tmp_path, capsys, pitch, origin):
+    """Blender, web viewers and the Khronos validator hold a node's matrix
+    in float32 (the validator finds one past float32 not decomposable to
+    TRS: NODE_MATRIX_NON_TRS), trimesh in float64: the GLB is written, as
+    trimesh reads it where its voxels are, and the note says which readers
+    cannot place it and names the files that keep the positions."""
+    mask = contacts()
+    isoflow.write_volume(isoflow.DigitalObject(mask, pitch=pitch, origin=(origin, 0.0, 0.0)), tmp_path / "v.npz")
+    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.glb")]) == 0
+    err = capsys.readouterr().err
+    assert "the Khronos validator hold the transform in float32" in err and "write .ply or .obj" in err, err
+    with np.errstate(over="ignore", under="ignore"):  # trimesh's determinant of the matrix
+        scene = trimesh.load(tmp_path / "s.glb", process=False)
+        matrix = scene.graph[next(iter(scene.graph.nodes_geometry))][0]
+        held = matrix.astype(np.float32)
+        bounds = trimesh.load(tmp_path / "s.glb", force="mesh", process=False).bounds
+    assert not (np.all(np.isfinite(held)) and np.all(np.diag(held)[:3] != 0))  # what float32 readers get
+    assert np.allclose(bounds, world_box(mask, pitch, (origin, 0.0, 0.0)), rtol=1e-12, atol=0)
+    isoflow.write_labels(mask.astype(np.uint8) * 2, tmp_path / "seg.nrrd", pitch=pitch, origin=(origin, 0.0, 0.0))
+    assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "seg.glb")]) == 0
+    assert "hold the transform in float32" in capsys.readouterr().err
 
 
-def test_a_glb_placed_within_float32_holds_a_matrix_float32_keeps(tmp_path):
+def test_a_glb_placed_within_float32_holds_a_matrix_float32_keeps(tmp_path, capsys):
     """At a voxel size of 1e30 from 1e38 (float32's range, but not its
     precision there) the node's matrix is written, every entry a finite
-    float32 and the voxel size nonzero in it."""
+    float32 and the voxel size nonzero in it, and the note says nothing of
+    float32 readers."""
     isoflow.write_volume(isoflow.DigitalObject(contacts(), pitch=1e30, origin=(1e38, 0.0, 0.0)), tmp_path / "v.npz")
-    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.glb"), "-q"]) == 0
+    assert main(["surface", str(tmp_path / "v.npz"), "-o", str(tmp_path / "s.glb")]) == 0
+    err = capsys.readouterr().err
+    assert "Freeze Current Matrix" in err and "Khronos" not in err, err
     scene = trimesh.load(tmp_path / "s.glb", process=False)
     matrix = scene.graph[next(iter(scene.graph.nodes_geometry))][0]
     with np.errstate(over="ignore"):
@@ -191,9 +202,9 @@ def test_a_glb_placed_within_float32_holds_a_matrix_float32_keeps(tmp_path):
 
 def test_label_surfaces_of_huge_voxels_print_no_numpy_warning(tmp_path, capsys):
     """A label image of voxels of 1e150 (volumes past float64) printed
-    NumPy's "overflow encountered in reduce" on the terminal under
-    ``surface --labels`` and ``info --labels``; each label's PLY is still
-    where its voxels are, as trimesh reads it."""
+    NumPy's "overflow encountered in reduce" (and, to a .glb, "in cast")
+    on the terminal under ``surface --labels`` and ``info --labels``; each
+    label's PLY is still where its voxels are, as trimesh reads it."""
     image = contacts().astype(np.uint8) * 2
     isoflow.write_labels(image, tmp_path / "seg.nrrd", pitch=1e150)
     with warnings.catch_warnings():
@@ -201,6 +212,7 @@ def test_label_surfaces_of_huge_voxels_print_no_numpy_warning(tmp_path, capsys):
         assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "out") + "/",
                      "--suffix", ".ply", "-q"]) == 0
         assert main(["info", str(tmp_path / "seg.nrrd"), "--labels"]) == 0
+        assert main(["surface", str(tmp_path / "seg.nrrd"), "--labels", "-o", str(tmp_path / "seg.glb"), "-q"]) == 0
     assert capsys.readouterr().err == ""
     bounds = trimesh.load(tmp_path / "out" / "label_2.ply", process=False).bounds
     assert np.allclose(bounds, world_box(image == 2, 1e150, (0.0, 0.0, 0.0)), rtol=1e-12, atol=0)

@@ -378,36 +378,32 @@ def _glb_attributes(columns: dict) -> dict:
     return {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
 
 
-def glb_placement_refusal(path: str | os.PathLike, spacing: ArrayLike, shape: tuple, origin: ArrayLike,
-                          fix: str = "write .ply or .obj") -> str | None:
-    """Why a GLB cannot place a grid of ``shape`` voxels of size
-    ``spacing`` from ``origin`` (None where it can): its viewers hold a
-    node's transform (:func:`grid_transform`) in float32, as Blender's
-    matrices, web viewers' and the Khronos validator's are (it finds a
-    matrix past float32 not decomposable to translation, rotation and
-    scale), so a voxel size that float32 makes 0 or infinite, or a corner
-    past float32's range, leaves the node nowhere.
+def float32_transform_problem(spacing: ArrayLike, shape: tuple, origin: ArrayLike) -> str | None:
+    """What of a grid of ``shape`` voxels of size ``spacing`` from
+    ``origin`` a GLB node's transform (:func:`grid_transform`) cannot hold
+    in float32 (None where it can hold all of it). trimesh reads the
+    transform in float64, but Blender's matrices, web viewers' and the
+    Khronos validator's are float32 (the validator finds a matrix past
+    float32 not decomposable to translation, rotation and scale): a voxel
+    size that float32 makes 0 or infinite, or a corner past its range,
+    leaves the node nowhere there.
 
     Parameters
     ----------
-    path : str or os.PathLike
-        The file, as the line names it.
     spacing, shape, origin : array_like
         The voxel size per axis, the grid's shape and its lowest corner.
-    fix : str
-        What the line tells to write instead.
 
     Returns
     -------
     str or None
-        The refusal in one line, or None.
+        The value beyond float32's range in words, or None.
 
     Examples
     --------
-    >>> glb_placement_refusal("ok.glb", (0.1,) * 3, (4, 4, 4), (4e6, 0.0, 0.0)) is None
+    >>> float32_transform_problem((0.1,) * 3, (4, 4, 4), (4e6, 0.0, 0.0)) is None
     True
-    >>> glb_placement_refusal("big.glb", (1e150,) * 3, (4, 4, 4), (0.0,) * 3).split(", and ")[1]
-    'a voxel size of 1e+150 is beyond its range (magnitudes 1.4e-45 to 3.4e+38); write .ply or .obj, which keep the positions'
+    >>> float32_transform_problem((1e150,) * 3, (4, 4, 4), (0.0,) * 3)
+    'a voxel size of 1e+150 is beyond float32 (magnitudes 1.4e-45 to 3.4e+38)'
     """
     spacing = np.broadcast_to(np.asarray(spacing, np.float64), (3,))
     corners = np.asarray(origin, np.float64) + np.array([np.zeros(3), spacing * np.asarray(shape)])
@@ -418,10 +414,8 @@ def glb_placement_refusal(path: str | os.PathLike, spacing: ArrayLike, shape: tu
         return None
     what = (f"a voxel size of {spacing[lost_size][0]:.3g}" if lost_size.any() else
             f"a corner at {corners[lost_corner][0]:.3g}")
-    return (f"{path}: glTF viewers (Blender, three.js, the Khronos validator) hold a node's transform in float32, "
-            f"and {what} is beyond its range "
-            f"(magnitudes {float(np.finfo(np.float32).smallest_subnormal):.2g} to {float(np.finfo(np.float32).max):.2g})"
-            f"; {fix}, which keep the positions")
+    return (f"{what} is beyond float32 (magnitudes {float(np.finfo(np.float32).smallest_subnormal):.2g} to "
+            f"{float(np.finfo(np.float32).max):.2g})")
 
 
 def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
@@ -459,7 +453,10 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
     held = float32_held(xyz, spacing).all(axis=1)
     holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
-    table = vertex_columns(mesh, xyz, np.float32)
+    # a part past float32's range casts to inf here, and is framed below:
+    # its positions replaced by voxel units, not a NumPy warning on the terminal
+    with np.errstate(over="ignore"):
+        table = vertex_columns(mesh, xyz, np.float32)
     positions = np.column_stack([table["x"], table["y"], table["z"]])
     framed = np.flatnonzero(~holds)
     if len(framed):
@@ -519,12 +516,11 @@ def write_mesh_file(
         return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
                 "moved_voxels": effect["moved_voxels"]}
     else:
-        refusal = glb_placement_refusal(path, obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
-        if refusal:  # nothing written: a node placed past float32 is no place its readers can show
-            raise IsoflowError(refusal)
         table, frame = glb_columns(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
-        return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None}
+        beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
+        return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
+                "beyond": beyond}
     return {"path": path, "faces": kind, "face_count": len(faces)}
 
 
@@ -543,7 +539,8 @@ def stl_move_note(out: str | os.PathLike, written: dict) -> str:
             f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
 
 
-def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, kind: str = "node") -> str:
+def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, kind: str = "node",
+                       beyond: str | None = None, instead: str = ".ply or .obj") -> str:
     """Where a GLB's positions read as voxel units: ``framed`` of the
     ``of`` nodes of a scene (or of the ``of`` files of a directory,
     ``kind="file"``) store them under the node's transform
@@ -558,6 +555,12 @@ def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, k
         The nodes (files) with a transform, of how many.
     kind : {"node", "file"}
         What ``of`` counts.
+    beyond : str, optional
+        What of the transform float32 cannot hold
+        (:func:`float32_transform_problem`): the note then says which
+        readers cannot place the file, and to write ``instead``.
+    instead : str
+        What keeps the positions for those readers.
 
     Returns
     -------
@@ -579,10 +582,13 @@ def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, k
         head = f"float32 cannot hold the world positions of {which} {kind}s to a millionth of a voxel, so they store"
     every = kind == "node" and of > 1  # MeshLab freezes the current layer alone unless told otherwise
     return (f"{where}: {head} voxel units with the voxel size and origin as {'each' if of > 1 else 'its'} node's "
-            "transform: trimesh (force=\"mesh\") and Blender apply it; MeshLab keeps it apart (its measures and "
-            "saved files in voxel units) until Filters > Normals, Curvatures and Orientation > Matrix: Freeze "
+            f"transform: trimesh (force=\"mesh\") {'applies' if beyond else 'and Blender apply'} it; MeshLab keeps it "
+            "apart (its measures and saved files in voxel units) until Filters > Normals, Curvatures and "
+            "Orientation > Matrix: Freeze "
             f"Current Matrix{' with Apply to all visible Layers' if every else ''} "
-            f"(pymeshlab: apply_matrix_freeze{'(alllayers=True)' if every else ''})")
+            f"(pymeshlab: apply_matrix_freeze{'(alllayers=True)' if every else ''})"
+            + (f"; Blender, web viewers and the Khronos validator hold the transform in float32, and {beyond}: "
+               f"for them write {instead}, which keep the positions" if beyond else ""))
 
 
 def stl_weld_note(out: Path, welded: int) -> str:
@@ -654,9 +660,7 @@ def write_surface(
         suffix other than the four, ``ascii`` with another format, an
         object that is not 3D or is empty, a mesh of another object or
         connectivity, a binary STL whose float32 positions would merge
-        distinct corners (the message says by how much), a GLB placed
-        where float32 cannot hold its node's transform (a voxel size or
-        a corner beyond float32's range). With ``check``, a
+        distinct corners (the message says by how much). With ``check``, a
         file that trimesh reads back otherwise, naming it and what differs:
         nothing is replaced.
 
