@@ -431,6 +431,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
     columns computed per batch."""
     from ..digital.label_meshes import label_batches
+    from ..mesh.export import float32_transform_problem
     from ..mesh.outputs import check_output_path
     from .progress import progress_bar
 
@@ -465,7 +466,9 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             if show is not None:
                 show(meshed, total)
         expected = None if args.no_check or target[0] != "glb" else scene_expected(table, names, image.spacing)
-        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected)
+        # what of a .glb's node transforms float32 cannot hold: said with the note on them
+        beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
+        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
@@ -594,14 +597,16 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
-                         progress=None, expected: list | None = None) -> tuple[list[str], str]:
+                         progress=None, expected: list | None = None, beyond: str | None = None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, in the labels'
     order, from the batches' parts in ``glb_parts``, and read back against
     ``expected``, :func:`scene_expected`; or a file each, read back
     against ``meshes``) unless --no-check, telling ``progress(done,
     total)`` of the labels written (a file each) or read back. Returns
     the problems found and the faces written in words (``18944 faces
-    (triangles)``: as the files hold them, as surface says of one)."""
+    (triangles)``: as the files hold them, as surface says of one).
+    ``beyond``: what of the image's placement a GLB node's transform
+    cannot hold in float32, said in the note on the transforms."""
     from ..mesh import export
     from ..mesh.readback import check_scene_figures, check_surface_file
     from .progress import reading_back
@@ -612,6 +617,11 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         export.write_glb_sets(target[1], [parts for parts, _ in glb_parts], np.argsort(rows), force=args.force,
                               comment=f"isoflow surface --labels of {args.input}, "
                                       f"{args.connectivity or 6}-connectivity")
+        framed = sum(len(parts.matrices) for parts, _ in glb_parts)
+        if framed and not args.quiet:  # MeshLab reads those nodes in voxel units
+            note = export.glb_transform_note(target[1], framed, len(rows), beyond=beyond,
+                                             instead="-o DIR/ --suffix .ply or .obj")
+            print(f"isoflow surface: note: {note}", file=sys.stderr)
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
@@ -623,6 +633,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
     moved = {"moved": 0.0, "moved_voxels": 0.0}  # the farthest float32 moved an STL's corners, of every file
+    framed = 0  # GLB files whose positions are in voxel units under the node's transform
     earlier = earlier_label_files(target[1], target[2], [name for name, *_ in meshes])
     asked = label_choice(args.labels) if earlier and args.force else None
     retire, kept = retired_label_files(earlier, target[2], asked, args.force)
@@ -639,6 +650,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
                 written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                                force=args.force, comments=(f"isoflow surface --labels: {name}",))
                 count += written["face_count"]
+                framed += bool(written.get("framed"))
                 kinds[written["faces"]] = None
                 if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
                     moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
@@ -657,6 +669,11 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             with contextlib.suppress(OSError):
                 target[1].rmdir()
         raise
+    if framed and not args.quiet:  # as surface says of one GLB file
+        where = f"{target[1]}/" if len(meshes) > 1 else target[1] / f"{meshes[0][0]}{target[2]}"
+        note = export.glb_transform_note(where, framed, len(meshes), "file", beyond=beyond,
+                                         instead="--suffix .ply or .obj")
+        print(f"isoflow surface: note: {note}", file=sys.stderr)
     if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
         print(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}", file=sys.stderr)
     if welds:  # as surface says of one STL file, under --quiet too

@@ -105,6 +105,8 @@ def surface_of(args: argparse.Namespace) -> int:
         )
         if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
             print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
+        if written.get("framed") and not args.quiet:  # MeshLab reads such a GLB in voxel units
+            print(f"isoflow surface: note: {export.glb_transform_note(out, beyond=written['beyond'])}", file=sys.stderr)
         status = read_back(args, out, mesh, obj, comps)
         if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
             from ..mesh.render import render_surface

@@ -825,11 +825,15 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     """The table's columns (see :func:`label_table`) from the rows' sums."""
     voxels = found["voxels"]
     features = found["features"]
-    out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
-                                  "volume": voxels * float(np.prod(spacing))}
-    faces = features[:, _FACES] // 4
-    out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
-                                            spacing[0] * spacing[1]])
+    # a voxel size of 1e150 (or 1e-150) makes volumes and areas past
+    # float64: inf (or 0) in the float columns, not a NumPy warning on
+    # the user's terminal
+    with np.errstate(over="ignore", under="ignore"):
+        out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
+                                      "volume": voxels * float(np.prod(spacing))}
+        faces = features[:, _FACES] // 4
+        out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
+                                                spacing[0] * spacing[1]])
     present = voxels > 0
     with np.errstate(invalid="ignore", divide="ignore"):
         for d in range(3):

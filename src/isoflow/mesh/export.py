@@ -15,8 +15,8 @@ PLY, binary (default)     quads; triangles for the whole file when   position, c
 PLY ``--ascii``, OBJ      quads, and polygons starting at a midpoint  PLY: as binary; OBJ: position
                           where an edge is doubled (readers fan them)
 STL (binary)              triangles, no shared vertices              none (a normal per triangle)
-GLB                       triangles, shared vertices                 position, COLOR_0, _config, _class,
-                                                                     _gamma, _a, _f
+GLB                       triangles, shared vertices                 position, COLOR_0 (linear), _config,
+                                                                     _class, _gamma, _a, _f
 ========================  =========================================  =======================================
 
 ``triangulate`` writes triangles in every format. Every file goes through
@@ -287,8 +287,9 @@ def write_glb(
 ) -> Path:
     """Write a binary glTF (:mod:`isoflow.mesh.gltf`): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
-    (``COLOR_0``) and the other columns but the position as custom vertex
-    attributes (``_config``, ``_class``, ...). ``frame``: ``(positions,
+    (``COLOR_0``, linear: :func:`linear_bytes`) and the other columns but
+    the position as custom vertex attributes (``_config``, ``_class``,
+    ...). ``frame``: ``(positions,
     transform)``, positions in the file's float32 with the 4x4 transform
     that puts them in place as the node's matrix (where float32 cannot
     hold the world positions; see the module docs)."""
@@ -329,16 +330,92 @@ def write_glb_sets(path: str | os.PathLike, sets: list, order: np.ndarray | None
     return path
 
 
+def linear_bytes(srgb: ArrayLike) -> np.ndarray:
+    """sRGB colour bytes (as PLY holds them and its readers show them) as
+    the linear bytes of glTF's ``COLOR_0``, which the specification makes
+    a linear multiplier and which Blender's importer and web viewers turn
+    back to sRGB for display (IEC 61966-2-1's curve; 8 bits lose up to 2
+    of 255 in the darkest channels once turned back).
+
+    Parameters
+    ----------
+    srgb : array_like of uint8
+        Colour channels, any shape.
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, the same shape.
+
+    Examples
+    --------
+    >>> linear_bytes(np.array([0, 30, 128, 200, 255], np.uint8)).tolist()
+    [0, 3, 55, 147, 255]
+    """
+    return _LINEAR[np.asarray(srgb, np.uint8)]  # a gather, not float math per vertex
+
+
+def _linear_table() -> np.ndarray:
+    """The linear byte of each sRGB byte (IEC 61966-2-1)."""
+    c = np.arange(256) / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.round(255.0 * linear).astype(np.uint8)
+
+
+_LINEAR = _linear_table()
+
+
 def _rgba(columns: dict) -> np.ndarray:
-    """The vertex colours of ``columns`` as glTF's ``COLOR_0`` (opaque)."""
-    return np.column_stack([columns["red"], columns["green"], columns["blue"],
-                            np.full(len(columns["red"]), 255, np.uint8)])
+    """The vertex colours of ``columns`` as glTF's ``COLOR_0`` (linear,
+    :func:`linear_bytes`; opaque)."""
+    rgb = linear_bytes(np.column_stack([columns["red"], columns["green"], columns["blue"]]))
+    return np.column_stack([rgb, np.full(len(rgb), 255, np.uint8)])
 
 
 def _glb_attributes(columns: dict) -> dict:
     """The columns a glTF keeps as custom vertex attributes: all but the
     position and the colour, each under ``_`` and its name."""
     return {f"_{k}": v for k, v in columns.items() if k not in ("x", "y", "z", "red", "green", "blue")}
+
+
+def float32_transform_problem(spacing: ArrayLike, shape: tuple, origin: ArrayLike) -> str | None:
+    """What of a grid of ``shape`` voxels of size ``spacing`` from
+    ``origin`` a GLB node's transform (:func:`grid_transform`) cannot hold
+    in float32 (None where it can hold all of it). trimesh reads the
+    transform in float64, but Blender's matrices, web viewers' and the
+    Khronos validator's are float32 (the validator finds a matrix past
+    float32 not decomposable to translation, rotation and scale): a voxel
+    size that float32 makes 0 or infinite, or a corner past its range,
+    leaves the node nowhere there.
+
+    Parameters
+    ----------
+    spacing, shape, origin : array_like
+        The voxel size per axis, the grid's shape and its lowest corner.
+
+    Returns
+    -------
+    str or None
+        The value beyond float32's range in words, or None.
+
+    Examples
+    --------
+    >>> float32_transform_problem((0.1,) * 3, (4, 4, 4), (4e6, 0.0, 0.0)) is None
+    True
+    >>> float32_transform_problem((1e150,) * 3, (4, 4, 4), (0.0,) * 3)
+    'a voxel size of 1e+150 is beyond float32 (magnitudes 1.4e-45 to 3.4e+38)'
+    """
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (3,))
+    corners = np.asarray(origin, np.float64) + np.array([np.zeros(3), spacing * np.asarray(shape)])
+    with np.errstate(over="ignore", under="ignore"):
+        size32, corners32 = spacing.astype(np.float32), corners.astype(np.float32)
+    lost_size, lost_corner = ~np.isfinite(size32) | (size32 == 0), ~np.isfinite(corners32)
+    if not lost_size.any() and not lost_corner.any():
+        return None
+    what = (f"a voxel size of {spacing[lost_size][0]:.3g}" if lost_size.any() else
+            f"a corner at {corners[lost_corner][0]:.3g}")
+    return (f"{what} is beyond float32 (magnitudes {float(np.finfo(np.float32).smallest_subnormal):.2g} to "
+            f"{float(np.finfo(np.float32).max):.2g})")
 
 
 def glb_part(name: str, mesh, obj: DigitalObject) -> tuple:
@@ -376,7 +453,10 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     xyz = origin + spacing * (np.asarray(mesh.vertices, float) + corner[of_vertex])  # as DigitalObject.world
     held = float32_held(xyz, spacing).all(axis=1)
     holds = np.logical_and.reduceat(held, batch.vfirst[:-1]) if len(xyz) else np.ones(parts, bool)
-    table = vertex_columns(mesh, xyz, np.float32)
+    # a part past float32's range casts to inf here, and is framed below:
+    # its positions replaced by voxel units, not a NumPy warning on the terminal
+    with np.errstate(over="ignore"):
+        table = vertex_columns(mesh, xyz, np.float32)
     positions = np.column_stack([table["x"], table["y"], table["z"]])
     framed = np.flatnonzero(~holds)
     if len(framed):
@@ -438,6 +518,9 @@ def write_mesh_file(
     else:
         table, frame = glb_columns(mesh, obj)
         write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
+        beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
+        return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
+                "beyond": beyond}
     return {"path": path, "faces": kind, "face_count": len(faces)}
 
 
@@ -454,6 +537,58 @@ def stl_move_note(out: str | os.PathLike, written: dict) -> str:
     """How far an STL's float32 positions moved the surface."""
     return (f"{out}: STL stores float32 positions, which move the corners by up to {written['moved']:.3g} "
             f"({written['moved_voxels']:.2g} voxels); .ply, .obj and .glb keep them exactly")
+
+
+def glb_transform_note(where: str | os.PathLike, framed: int = 1, of: int = 1, kind: str = "node",
+                       beyond: str | None = None, instead: str = ".ply or .obj") -> str:
+    """Where a GLB's positions read as voxel units: ``framed`` of the
+    ``of`` nodes of a scene (or of the ``of`` files of a directory,
+    ``kind="file"``) store them under the node's transform
+    (:func:`grid_frame`), which MeshLab keeps apart from the vertices
+    (docs/formats.md, "Surface files").
+
+    Parameters
+    ----------
+    where : str or os.PathLike
+        The file, or the directory of a file per label.
+    framed, of : int
+        The nodes (files) with a transform, of how many.
+    kind : {"node", "file"}
+        What ``of`` counts.
+    beyond : str, optional
+        What of the transform float32 cannot hold
+        (:func:`float32_transform_problem`): the note then says which
+        readers cannot place the file, and to write ``instead``.
+    instead : str
+        What keeps the positions for those readers.
+
+    Returns
+    -------
+    str
+        The note in one line.
+
+    Examples
+    --------
+    >>> note = glb_transform_note("far.glb")
+    >>> note.split(",")[0]
+    'far.glb: float32 cannot hold its world positions to a millionth of a voxel'
+    >>> "Apply to all visible Layers" in glb_transform_note("seg.glb", 3, 4)
+    True
+    """
+    if of == 1:
+        head = "float32 cannot hold its world positions to a millionth of a voxel, so the GLB stores"
+    else:
+        which = f"all {of}" if framed == of else f"{framed} of the {of}"
+        head = f"float32 cannot hold the world positions of {which} {kind}s to a millionth of a voxel, so they store"
+    every = kind == "node" and of > 1  # MeshLab freezes the current layer alone unless told otherwise
+    return (f"{where}: {head} voxel units with the voxel size and origin as {'each' if of > 1 else 'its'} node's "
+            f"transform: trimesh (force=\"mesh\") {'applies' if beyond else 'and Blender apply'} it; MeshLab keeps it "
+            "apart (its measures and saved files in voxel units) until Filters > Normals, Curvatures and "
+            "Orientation > Matrix: Freeze "
+            f"Current Matrix{' with Apply to all visible Layers' if every else ''} "
+            f"(pymeshlab: apply_matrix_freeze{'(alllayers=True)' if every else ''})"
+            + (f"; Blender, web viewers and the Khronos validator hold the transform in float32, and {beyond}: "
+               f"for them write {instead}, which keep the positions" if beyond else ""))
 
 
 def stl_weld_note(out: Path, welded: int) -> str:
