@@ -78,6 +78,38 @@ def test_an_example_run_as_a_user_runs_it(tmp_path):
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
 
 
+#: a script as the examples are written (``_common``), whose one call takes a compiled pass (2 million voxels)
+COMPILING = """
+import sys
+sys.path.insert(0, sys.argv[1])
+sys.argv = ["chi.py", sys.argv[2]]
+import numpy as np
+from _common import parse_args
+import isoflow
+parse_args("chi of a cube")
+volume = np.zeros((128, 128, 128), bool)
+volume[10:20, 10:20, 10:20] = True
+print(isoflow.euler_characteristic(volume, 6))
+"""
+
+
+def test_an_example_says_that_numba_compiles(tmp_path):
+    """On numba's empty cache the examples ran for up to minutes (82-164 s,
+    233 s for zarr_cluster.py, on a shared 2-core machine) without a word:
+    the library logs its note at level INFO, which Python's default handler
+    drops. An example prints it on stderr, once, when numba compiles (its
+    cache gains the compiled pass's files), and says nothing when numba
+    loads the pass from its cache."""
+    env = dict(os.environ, MPLBACKEND="Agg", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    command = [sys.executable, "-c", COMPILING, str(EXAMPLES), str(tmp_path / "out")]
+    runs = [subprocess.run(command, capture_output=True, text=True, env=env) for _ in range(2)]
+    assert [r.returncode for r in runs] == [0, 0] and [r.stdout for r in runs] == ["1\n", "1\n"], runs[0].stderr
+    assert list((tmp_path / "cache").rglob("*.nbi"))  # numba compiled on the first run and cached the pass
+    first = runs[0].stderr.splitlines()
+    assert len(first) == 1 and first[0].startswith("chi.py: note: numba is compiling isoflow's passes"), first
+    assert runs[1].stderr == ""
+
+
 def test_voxelize_topology(example_run):
     out, printed = example_run("voxelize_topology")
     g = genus("torus.obj")
