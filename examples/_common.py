@@ -36,6 +36,21 @@ class NoteFormat(logging.Formatter):
         return f"{Path(sys.argv[0]).name}: note: {record.getMessage()}"
 
 
+class Once(logging.Filter):
+    """Each message once: a cluster's worker processes each say that numba
+    compiles, and one line says it for all."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.said: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        new = message not in self.said
+        self.said.add(message)
+        return new
+
+
 def show_notes() -> None:
     """Print what isoflow logs at level INFO (its ``isoflow`` logger) on
     stderr, as ``NAME.py: note: ...``. Python's default handler drops
@@ -49,6 +64,7 @@ def show_notes() -> None:
     handler = logging.StreamHandler(sys.stderr)
     handler.set_name("examples")
     handler.setFormatter(NoteFormat())
+    handler.addFilter(Once())
     log.addHandler(handler)
     log.setLevel(logging.INFO)
 

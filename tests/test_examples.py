@@ -110,6 +110,52 @@ def test_an_example_says_that_numba_compiles(tmp_path):
     assert runs[1].stderr == ""
 
 
+#: zarr_cluster.py's cluster, whose two workers each say what the library says when numba starts compiling
+WORKERS_COMPILING = """
+import logging
+import sys
+import time
+
+if __name__ == "__main__":  # the workers' processes import this file again
+    sys.path.insert(0, sys.argv[1])
+    sys.argv = ["zarr_cluster.py", sys.argv[2]]
+    import zarr_cluster
+    from _common import parse_args
+    from dask.distributed import Client, LocalCluster
+
+    from isoflow.scale.compiled import note_compile
+
+    parse_args("notes")
+    came = []  # the records that reach this process, printed or not
+    seen = logging.Handler()
+    seen.emit = came.append
+    logging.getLogger("isoflow").addHandler(seen)
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \\
+            Client(cluster) as client:
+        zarr_cluster.show_worker_notes(client)
+        client.run(note_compile)
+        start = time.monotonic()
+        while len(came) < 2 and time.monotonic() - start < 30:  # the records come from the workers a moment later
+            time.sleep(0.1)
+    print(len(came))
+"""
+
+
+def test_zarr_cluster_says_that_its_workers_compile(tmp_path):
+    """zarr_cluster.py ran for about four minutes on numba's empty cache
+    with nothing on the screen: its worker processes compile the
+    voxeliser, and what they log stays in them. Their note is printed by
+    the script, once for both workers."""
+    pytest.importorskip("distributed")
+    from isoflow.scale.compiled import COMPILE_NOTE
+
+    command = [sys.executable, "-c", WORKERS_COMPILING, str(EXAMPLES), str(tmp_path / "out")]
+    done = subprocess.run(command, capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0 and done.stdout == "2\n", done.stderr  # a record from each worker
+    notes = [line for line in done.stderr.splitlines() if "note:" in line]
+    assert notes == [f"zarr_cluster.py: note: {COMPILE_NOTE}"], done.stderr
+
+
 def test_voxelize_topology(example_run):
     out, printed = example_run("voxelize_topology")
     g = genus("torus.obj")
