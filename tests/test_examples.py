@@ -94,8 +94,7 @@ print(isoflow.euler_characteristic(volume, 6))
 
 
 def test_an_example_says_that_numba_compiles(tmp_path):
-    """On numba's empty cache the examples ran for up to minutes (82-164 s,
-    233 s for zarr_cluster.py, on a shared 2-core machine) without a word:
+    """On numba's empty cache the examples ran for minutes without a word:
     the library logs its note at level INFO, which Python's default handler
     drops. An example prints it on stderr, once, when numba compiles (its
     cache gains the compiled pass's files), and says nothing when numba
@@ -116,7 +115,7 @@ import logging
 import sys
 import time
 
-if __name__ == "__main__":  # the workers' processes import this file again
+if __name__ == "__main__":  # not in a worker process, where spawn may run the main module again
     sys.path.insert(0, sys.argv[1])
     sys.argv = ["zarr_cluster.py", sys.argv[2]]
     import zarr_cluster
@@ -142,8 +141,8 @@ if __name__ == "__main__":  # the workers' processes import this file again
 
 
 def test_zarr_cluster_says_that_its_workers_compile(tmp_path):
-    """zarr_cluster.py ran for about four minutes on numba's empty cache
-    with nothing on the screen: its worker processes compile the
+    """zarr_cluster.py ran for minutes on numba's empty cache with nothing
+    on the screen: its worker processes compile the
     voxeliser, and what they log stays in them. Their note is printed by
     the script, once for both workers."""
     pytest.importorskip("distributed")
