@@ -21,7 +21,7 @@ Tasks, each measured in the same run on the same arrays:
   * the usual way to get Betti numbers: ``scipy.ndimage.label`` of the object
     (6-structure) and of the background (26-structure; cavities are background
     components off the array border) plus ``euler_number`` for chi;
-  * the same with ``cc3d.connected_components`` (optional dependency).
+  * the same with ``cc3d.connected_components`` (a dependency of isoflow's, which labels with it).
   isoflow's chi (6 and 26) and Betti numbers must equal the others' numbers,
   and its surfaces (count, faces, genus sum) the mesh's components when
   ``isoflow.mesh`` runs too.

@@ -1,10 +1,12 @@
 """What every example shares: its command line (an output directory,
---force), outputs that are not overwritten without --force, and one-line
-errors. Not an example itself (the gallery skips files starting with _)."""
+--force), outputs that are not overwritten without --force, isoflow's notes
+on stderr, and one-line errors. Not an example itself (the gallery skips
+files starting with _)."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import tempfile
 from pathlib import Path
@@ -21,9 +23,50 @@ def parse_args(description: str, add_arguments=None) -> argparse.Namespace:
     if add_arguments is not None:
         add_arguments(parser)
     args = parser.parse_args()
+    show_notes()
     args.out = Path(args.out) if args.out else Path(tempfile.mkdtemp(prefix="isoflow-example-"))
     args.out.mkdir(parents=True, exist_ok=True)
     return args
+
+
+class NoteFormat(logging.Formatter):
+    """``NAME.py: note: MESSAGE``, NAME the script running when it is said."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return f"{Path(sys.argv[0]).name}: note: {record.getMessage()}"
+
+
+class Once(logging.Filter):
+    """Each message once: a cluster's worker processes each say that numba
+    compiles, and one line says it for all."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.said: set[str] = set()
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        message = record.getMessage()
+        new = message not in self.said
+        self.said.add(message)
+        return new
+
+
+def show_notes() -> None:
+    """Print what isoflow logs at level INFO (its ``isoflow`` logger) on
+    stderr, as ``NAME.py: note: ...``. Python's default handler drops
+    such records, and the first run after installing waits while numba
+    compiles isoflow's passes (up to minutes) with only that note to
+    explain the wait. Once per process: the gallery runs every example in
+    one."""
+    log = logging.getLogger("isoflow")
+    if any(h.get_name() == "examples" for h in log.handlers):
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.set_name("examples")
+    handler.setFormatter(NoteFormat())
+    handler.addFilter(Once())
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
 
 
 def outputs(args: argparse.Namespace, *names: str) -> list[Path]:

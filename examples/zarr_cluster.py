@@ -24,6 +24,7 @@ Needs ``pip install 'isoflow[dask]'``.
 """
 
 import json
+import logging
 import math
 
 import matplotlib.pyplot as plt
@@ -66,6 +67,14 @@ def cluster_classes():
     return Client, LocalCluster
 
 
+def show_worker_notes(client):
+    """isoflow's notes from the worker processes, printed here as this
+    process's own: on numba's empty cache each worker compiles the
+    voxeliser's passes for minutes, which only its note explains."""
+    client.run(lambda: logging.getLogger("isoflow").setLevel(logging.INFO))
+    client.forward_logging("isoflow", level=logging.INFO)
+
+
 def main():
     args = parse_args("A chunked zarr volume analysed out of core on a dask.distributed cluster.", arguments)
     store, report_path, picture = outputs(args, "solid.zarr", "report.json", "blocks.png")
@@ -73,6 +82,7 @@ def main():
 
     with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \
             Client(cluster) as client:
+        show_worker_notes(client)
         written = isoflow.voxelize_to_zarr(args.mesh, store, resolution=args.resolution, chunks=CHUNKS,
                                            scheduler=client.get, force=args.force)
         chunked = isoflow.analyze_zarr(store, connectivity=6, scheduler=client.get)

@@ -522,3 +522,18 @@ def test_the_files_the_readme_names_are_in_a_checkout():
         named = re.findall(r"\]\(([^)#]+)\)", line) + re.findall(r"`([\w.-]+/[\w./-]*\.\w+)`", line)
         missing += [name for name in named if name not in tracked and "written by the build" not in line]
     assert not missing, missing
+
+
+def test_cli_md_says_what_a_shortened_option_prints(capsys):
+    """cli.md said a shortened option (``--res``) is "refused in one line";
+    the command prints its usage first, as for any argument it does not know
+    (the usage lists the options), then the error line the page quotes."""
+    text = " ".join((ROOT / "docs" / "cli.md").read_text().split())
+    quoted = "unrecognized arguments: --res 32 (--res: did you mean --resolution?)"
+    assert "refused in one line naming the options it begins" not in text
+    assert f"with the command's usage and one error line naming the options it begins (`{quoted}`)" in text
+    with pytest.raises(SystemExit) as done:
+        main(["info", str(ROOT / "meshes" / "bob_small.ply"), "--res", "32"])
+    err = capsys.readouterr().err
+    assert done.value.code == 2 and err.startswith("usage: isoflow info ") and "--resolution" in err
+    assert err.strip().splitlines()[-1] == f"isoflow info: error: {quoted}"

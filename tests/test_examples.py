@@ -78,6 +78,83 @@ def test_an_example_run_as_a_user_runs_it(tmp_path):
     assert again.returncode == 2 and "exists" in again.stderr and "Traceback" not in again.stderr
 
 
+#: a script as the examples are written (``_common``), whose one call takes a compiled pass (2 million voxels)
+COMPILING = """
+import sys
+sys.path.insert(0, sys.argv[1])
+sys.argv = ["chi.py", sys.argv[2]]
+import numpy as np
+from _common import parse_args
+import isoflow
+parse_args("chi of a cube")
+volume = np.zeros((128, 128, 128), bool)
+volume[10:20, 10:20, 10:20] = True
+print(isoflow.euler_characteristic(volume, 6))
+"""
+
+
+def test_an_example_says_that_numba_compiles(tmp_path):
+    """On numba's empty cache the examples ran for minutes without a word:
+    the library logs its note at level INFO, which Python's default handler
+    drops. An example prints it on stderr, once, when numba compiles (its
+    cache gains the compiled pass's files), and says nothing when numba
+    loads the pass from its cache."""
+    env = dict(os.environ, MPLBACKEND="Agg", NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    command = [sys.executable, "-c", COMPILING, str(EXAMPLES), str(tmp_path / "out")]
+    runs = [subprocess.run(command, capture_output=True, text=True, env=env) for _ in range(2)]
+    assert [r.returncode for r in runs] == [0, 0] and [r.stdout for r in runs] == ["1\n", "1\n"], runs[0].stderr
+    assert list((tmp_path / "cache").rglob("*.nbi"))  # numba compiled on the first run and cached the pass
+    first = runs[0].stderr.splitlines()
+    assert len(first) == 1 and first[0].startswith("chi.py: note: numba is compiling isoflow's passes"), first
+    assert runs[1].stderr == ""
+
+
+#: zarr_cluster.py's cluster, whose two workers each say what the library says when numba starts compiling
+WORKERS_COMPILING = """
+import logging
+import sys
+import time
+
+if __name__ == "__main__":  # not in a worker process, where spawn may run the main module again
+    sys.path.insert(0, sys.argv[1])
+    sys.argv = ["zarr_cluster.py", sys.argv[2]]
+    import zarr_cluster
+    from _common import parse_args
+    from dask.distributed import Client, LocalCluster
+
+    from isoflow.scale.compiled import note_compile
+
+    parse_args("notes")
+    came = []  # the records that reach this process, printed or not
+    seen = logging.Handler()
+    seen.emit = came.append
+    logging.getLogger("isoflow").addHandler(seen)
+    with LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0") as cluster, \\
+            Client(cluster) as client:
+        zarr_cluster.show_worker_notes(client)
+        client.run(note_compile)
+        start = time.monotonic()
+        while len(came) < 2 and time.monotonic() - start < 30:  # the records come from the workers a moment later
+            time.sleep(0.1)
+    print(len(came))
+"""
+
+
+def test_zarr_cluster_says_that_its_workers_compile(tmp_path):
+    """zarr_cluster.py ran for minutes on numba's empty cache with nothing
+    on the screen: its worker processes compile the
+    voxeliser, and what they log stays in them. Their note is printed by
+    the script, once for both workers."""
+    pytest.importorskip("distributed")
+    from isoflow.scale.compiled import COMPILE_NOTE
+
+    command = [sys.executable, "-c", WORKERS_COMPILING, str(EXAMPLES), str(tmp_path / "out")]
+    done = subprocess.run(command, capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert done.returncode == 0 and done.stdout == "2\n", done.stderr  # a record from each worker
+    notes = [line for line in done.stderr.splitlines() if "note:" in line]
+    assert notes == [f"zarr_cluster.py: note: {COMPILE_NOTE}"], done.stderr
+
+
 def test_voxelize_topology(example_run):
     out, printed = example_run("voxelize_topology")
     g = genus("torus.obj")

@@ -201,3 +201,62 @@ def test_the_docs_extra_brings_what_the_gallery_runs():
                 if not distributions & allowed:
                     missing.append(f"{script.name}: {module}")
     assert not missing, missing
+
+
+def distribution_names(requirements: list[str]) -> set[str]:
+    """The normalised distribution names of requirement strings."""
+    return {re.sub(r"[-_.]+", "-", re.split(r"[<>=\[ ;]", r)[0]).lower() for r in requirements}
+
+
+def test_every_module_isoflow_imports_is_declared():
+    """src imported llvmlite (two compiled intrinsics) that pyproject.toml
+    did not list: it came only as numba's own dependency, at whatever
+    release numba picked. Every third-party module that src/isoflow imports
+    belongs, by the installed distributions' metadata, to a dependency or an
+    extra (a module not installed here, as CuPy without a GPU, cannot be
+    checked)."""
+    import ast
+    import importlib.metadata
+
+    project = PYPROJECT["project"]
+    declared = distribution_names(project["dependencies"])
+    for extra in project["optional-dependencies"].values():
+        declared |= distribution_names([r for r in extra if not r.startswith("isoflow[")])
+    owners = importlib.metadata.packages_distributions()
+    undeclared = set()
+    for path in (ROOT / "src" / "isoflow").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                modules = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                modules = [node.module]
+            else:
+                continue
+            for top in {m.split(".")[0] for m in modules} - set(sys.stdlib_module_names) - {"isoflow"}:
+                dists = distribution_names(owners.get(top, []))
+                if dists and not dists & declared:
+                    undeclared.add(f"{path.relative_to(ROOT)}: {top} ({', '.join(sorted(dists))})")
+    assert not undeclared, sorted(undeclared)
+
+
+def test_no_extra_repeats_a_dependency():
+    """``isoflow[bench]`` listed connected-components-3d, which every install
+    already has: an extra names only what the plain install lacks."""
+    project = PYPROJECT["project"]
+    core = distribution_names(project["dependencies"])
+    repeated = {f"{name}: {d}" for name, extra in project["optional-dependencies"].items()
+                for d in distribution_names(extra) & core}
+    assert not repeated, sorted(repeated)
+
+
+def test_every_extra_the_pages_name_exists():
+    """The install lines of README.md and docs/*.md name extras
+    (``pip install -e '.[formats]'``, ``isoflow[gpu]``): each is one of
+    pyproject.toml's."""
+    extras = set(PYPROJECT["project"]["optional-dependencies"])
+    named = {}
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")), *sorted((ROOT / "examples").glob("*"))]:
+        for extra in re.findall(r"(?:\.|isoflow)\[([a-z0-9_,-]+)\]", page.read_text()):
+            named.update({name: page.name for name in extra.split(",")})
+    assert set(named) >= {"formats", "dask", "gpu", "test", "docs"}
+    assert not set(named) - extras, {name: named[name] for name in set(named) - extras}

@@ -250,3 +250,13 @@ def test_every_public_function_has_a_numpydoc_docstring_with_an_example():
     assert not lacking, lacking
     classes = [n for n in isoflow.__all__ if inspect.isclass(getattr(isoflow, n))]
     assert all(inspect.getdoc(getattr(isoflow, n)) for n in classes)
+
+
+def test_every_public_class_s_page_has_an_example():
+    """The API pages of IsoflowWarning and ClosedSurface showed no example,
+    where every function's does: each public class's docstring (its page)
+    has one, which the suite runs."""
+    classes = [n for n in isoflow.__all__ if inspect.isclass(getattr(isoflow, n))]
+    assert "IsoflowWarning" in classes and "ClosedSurface" in classes
+    lacking = [n for n in classes if ">>>" not in (getattr(isoflow, n).__doc__ or "")]
+    assert not lacking, lacking

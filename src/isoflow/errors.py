@@ -269,7 +269,27 @@ class IsoflowError(ValueError):
 class IsoflowWarning(UserWarning):
     """Something a user should know that is not an error: a file format that
     cannot keep the voxel size, an affine's rotation left out. The command
-    line prints it as one ``warning:`` line."""
+    line prints it as one ``warning:`` line.
+
+    Examples
+    --------
+    A ``.npy`` file holds the array alone, so writing one says that the
+    pitch is lost (once the file is written); a program can make that an
+    error, to stop there:
+
+    >>> import tempfile
+    >>> import warnings
+    >>> import numpy as np
+    >>> import isoflow
+    >>> obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)
+    >>> path = tempfile.mkdtemp() + "/cube.npy"
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("error", isoflow.IsoflowWarning)
+    ...     isoflow.write_volume(obj, path)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowWarning: .../cube.npy: a .npy holds the array alone; its pitch [0.5, 0.5, 0.5] is not kept ...
+    """
 
 
 #: the files whose frames a warning skips: isoflow's own, and contextlib's

@@ -14,7 +14,19 @@ from ..results import OMIT_NONE, Result
 class ClosedSurface(TypedDict):
     """One closed surface of the boundary mesh (docs/mathematics.md): its Euler
     characteristic ``V - E + F``, its genus ``1 - chi / 2`` and its number
-    of quads."""
+    of quads.
+
+    Examples
+    --------
+    A ring of eight voxels, two thick, has one closed surface, a torus:
+
+    >>> import numpy as np
+    >>> from isoflow import closed_surfaces
+    >>> ring = np.ones((3, 3, 2), bool)
+    >>> ring[1, 1] = False
+    >>> closed_surfaces(ring, 6)["surfaces"]
+    [{'euler_characteristic': 0, 'genus': 1, 'faces': 48}]
+    """
 
     euler_characteristic: int
     genus: int
