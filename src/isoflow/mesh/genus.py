@@ -665,7 +665,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     on_resolution : callable, optional
         Called with each resolution's entry as it is done.
     strict : bool
-        Refuse a mesh that is not watertight.
+        Refuse a mesh that is not watertight as written, as
+        ``voxelize(strict=True)`` does: the repairs made before counting
+        (repeated faces dropped, edges split at T-junctions) are not made
+        for it.
     fill : {"winding", "shell", "flood"}
         The voxels compared (:mod:`isoflow.mesh.fills`; the verdict's ``fill``).
 
@@ -717,6 +720,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
+    if strict:
+        _refuse_as_voxelize(name, v, f, fill)
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
     w = witnesses(v, f)
@@ -742,6 +747,18 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         stop=stop, bodies=bodies, filled_genus=filled,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + rounding_notes(v, f, w, stats)
                     + digital_notes(w, digital, target, stable, fill)))
+
+
+def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> None:
+    """With ``strict``, refuse what ``voxelize(strict=True)`` refuses, on
+    the mesh as loaded: the repairs the genus makes before counting
+    (repeated faces dropped, edges split at T-junctions) would otherwise
+    let through a mesh that ``isoflow voxelize --strict`` refuses for the
+    open or non-manifold edges it has."""
+    try:
+        Solid(v, f, strict=True, fill=fill)
+    except IsoflowError as exc:
+        raise exc.at(name) from None
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
