@@ -753,8 +753,8 @@ def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> 
     """With ``strict``, refuse what ``voxelize(strict=True)`` refuses, on
     the mesh as loaded: the repairs the genus makes before counting
     (repeated faces dropped, edges split at T-junctions) would otherwise
-    let through a mesh that ``isoflow voxelize --strict`` refuses for the
-    open or non-manifold edges it has."""
+    let through a mesh that the strict voxeliser refuses for the open or
+    non-manifold edges it has."""
     try:
         Solid(v, f, strict=True, fill=fill)
     except IsoflowError as exc:
@@ -853,7 +853,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     consistently oriented), ``nested`` (shells nest facing the same way, so
     the mesh is not the solid's boundary), ``overlap`` (the solid's genus
     is the reference: components overlap, touch or nest, or faces of one
-    component touch) and
+    component touch, or ``edge_joined``: closed oriented sheets meet along
+    non-manifold edges, solids touching along an edge) and
     ``double_sided`` (faces listed once each way round, or None), and
     ``walled`` with ``walled_genus``: every such pair lies in a wall
     between solids, and the genus of the mesh without the walls, the
@@ -870,9 +871,14 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"]
                     or out["faces_touching_own_component"])
     nested = solid.get("boundary") is False and not touching
+    double_sided = _double_sided(v, f)
+    # closed, oriented, and no wall drawn from both sides: sheets that meet
+    # along a non-manifold edge are solids touching along it (two boxes on
+    # a common edge), whose union manifold3d builds as it splits the edge
+    edge_joined = bool(balanced and mesh["nonmanifold_edges"] and not double_sided and not touching and not nested)
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
-               nested=nested, overlap=touching or nested,
-               double_sided=_double_sided(v, f))
+               nested=nested, overlap=touching or nested or edge_joined, edge_joined=edge_joined,
+               double_sided=double_sided)
     sided = out["double_sided"] or {}
     out.update(walled=sided.get("walls", 0) == sided.get("n", -1), walled_genus=sided.get("union_genus"))
     return out
@@ -966,12 +972,13 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
         notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill,
                                            **({"genus": mesh["genus"]} if mesh["genus"] is not None else {})}))
     if mesh["nonmanifold_edges"]:
-        notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
+        joined = {"solid_genus": w["solid_genus"], "error": w["solid"].get("error")} if w["edge_joined"] else {}
+        notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"], **joined}))
     if mesh["nonmanifold_vertices"]:
         notes.append(Note("nonmanifold_vertices", {"n": mesh["nonmanifold_vertices"]}))
     if w["nested"]:
         notes.append(Note("nested", {"components": mesh["components"], "solid_genus": w["solid_genus"]}))
-    elif w["overlap"]:
+    elif w["overlap"] and not w["edge_joined"]:  # (the non-manifold edges' note says where they touch)
         notes.append(Note("overlap", {
             "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
             "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error"),

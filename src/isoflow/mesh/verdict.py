@@ -308,6 +308,15 @@ def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int
             f"is their union, {union}")
 
 
+def _nonmanifold_edge_words(n: int, solid_genus: int | None = None, error: str | None = None) -> str:
+    said = f"{counted(n, 'non-manifold edge')} (more than two faces)"
+    if solid_genus is None and error is None:
+        return said + ": not a 2-manifold, genus undefined"
+    # closed sheets meeting along the edges: solids touching there, whose union is the reference
+    union = f"genus {solid_genus} (manifold3d)" if solid_genus is not None else f"which manifold3d could not build ({error})"
+    return said + f" where solids touch along an edge: the solid the mesh bounds is their union, {union}"
+
+
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
@@ -320,8 +329,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,
-    "nonmanifold_edges": lambda n: (f"{counted(n, 'non-manifold edge')} (more than two faces): not a 2-manifold, "
-                                    "genus undefined"),
+    "nonmanifold_edges": _nonmanifold_edge_words,
     "nonmanifold_vertices": lambda n: (f"{counted(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
                                        "sheets touch at a point; "
                                        "genus counted with the sheets apart there (as manifold3d counts)"),
