@@ -344,8 +344,8 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "
            f"{'them' if n > 1 else 'it'} where {'they close' if n > 1 else 'it closes'} a split edge (a T-junction): "
            "no crossing" if along else "")),
-    "float64_rounding": lambda near, spacing, median_edge, share, defects=(): rounding_words(
-        near, spacing, median_edge, share, tuple(defects), " above"),
+    "float64_rounding": lambda near, spacing, median_edge, share, defects=(), precision="float64": rounding_words(
+        near, spacing, median_edge, share, tuple(defects), " above", precision),
     "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
     "flood_cavities": lambda n: (
