@@ -25,7 +25,7 @@ import numpy as np
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable, check_switch
 from ..scale import memory
-from .crossings import find_crossings
+from .crossings import CubeGrid, find_crossings
 from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
@@ -427,10 +427,8 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
     if n == 0:
         return m3.Manifold(), True, False
     vols = [s.volume() for s in solids]
-    boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
-    lo, hi = boxes[:, 0], boxes[:, 1]
-    meet = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
-    if n > 1 and (np.count_nonzero(meet) - n) // 2 > MAX_PAIRS:
+    meeting = _boxes_meeting(solids)
+    if len(meeting) > MAX_PAIRS:
         return _outward_less_inside_out(m3, solids, signs), False, True
     group = list(range(n))  # union-find of crossing components
 
@@ -441,21 +439,18 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
         return i
 
     inside: dict[int, list[int]] = {}  # i -> components j whose solid holds solid i
-    for i in range(n):
-        for j in range(i + 1, n):
-            if not meet[i, j]:
-                continue
-            common = (solids[i] ^ solids[j]).volume()
-            small = min(vols[i], vols[j])
-            if common <= _OVERLAP_RTOL * small:
-                continue  # apart (or touching)
-            if common >= (1 - _OVERLAP_RTOL) * small:  # the smaller one inside the larger
-                a, b = (i, j) if vols[i] <= vols[j] else (j, i)
-                inside.setdefault(a, []).append(b)
-                continue
-            if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
-                return _outward_less_inside_out(m3, solids, signs), False, True
-            group[root(i)] = root(j)
+    for i, j in meeting.tolist():
+        common = (solids[i] ^ solids[j]).volume()
+        small = min(vols[i], vols[j])
+        if common <= _OVERLAP_RTOL * small:
+            continue  # apart (or touching)
+        if common >= (1 - _OVERLAP_RTOL) * small:  # the smaller one inside the larger
+            a, b = (i, j) if vols[i] <= vols[j] else (j, i)
+            inside.setdefault(a, []).append(b)
+            continue
+        if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
+            return _outward_less_inside_out(m3, solids, signs), False, True
+        group[root(i)] = root(j)
     # bodies: crossing components of one way united
     members: dict[int, list[int]] = {}
     for i in range(n):
@@ -493,6 +488,19 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
             regions.append(region)
     solid = m3.Manifold.batch_boolean(regions, m3.OpType.Add) if regions else m3.Manifold()
     return solid, boundary, False
+
+
+def _boxes_meeting(solids: list) -> np.ndarray:
+    """Pairs ``(i, j)``, ``i < j``, in order, of the solids whose bounding
+    boxes meet: found through a grid of cubes (:class:`~isoflow.mesh.crossings.CubeGrid`)
+    rather than by testing every pair, whose table grows with the square
+    of the components (gigabytes for a mesh of twenty thousand boxes)."""
+    if len(solids) < 2:
+        return np.zeros((0, 2), np.int64)
+    boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
+    pairs = list(CubeGrid(boxes[:, 0], boxes[:, 1]).pairs())
+    pairs = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def _outward_less_inside_out(m3, solids: list, signs: list):
