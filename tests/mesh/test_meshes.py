@@ -88,6 +88,16 @@ def test_bodies_the_voxels_join_disagree():
     assert [d["resolution"] for d in r.digital] == [16, 32, 64, 128]
 
 
+def test_a_verdict_is_exit_status_0_whatever_it_says(capsys):
+    """docs/cli.md and docs/genus.md: a disagree is an answer, exit 0; a
+    script reads ``kind``. hourglass_ico.obj (2 bodies by the manifest,
+    joined by the voxels at 32 and 64) disagrees."""
+    assert main(["genus", str(MESHES / "hourglass_ico.obj"), "--resolution", "32", "64", "--no-step", "--json",
+                 "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert (printed["kind"], printed["bodies"]) == ("disagree", MANIFEST["hourglass_ico.obj"]["components"])
+
+
 @pytest.mark.parametrize("name", ["joined_tetrahedra.obj", "not_convex.obj", "wallhole.obj", "hourglass_ico.obj"])
 def test_non_manifold_vertices_are_pymeshlab_s(name, tmp_path):
     """The ends of an edge of more than two faces are no vertex "where
