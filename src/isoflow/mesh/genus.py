@@ -498,8 +498,8 @@ def _boxes_meeting(solids: list) -> np.ndarray:
     if len(solids) < 2:
         return np.zeros((0, 2), np.int64)
     boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
-    pairs = list(CubeGrid(boxes[:, 0], boxes[:, 1]).pairs())
-    pairs = np.concatenate(pairs) if pairs else np.zeros((0, 2), np.int64)
+    chunks = list(CubeGrid(boxes[:, 0], boxes[:, 1]).pairs())
+    pairs = np.concatenate(chunks) if chunks else np.zeros((0, 2), np.int64)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
