@@ -245,3 +245,23 @@ def test_solids_touching_along_an_edge_compare_the_union(tmp_path, handle):
     assert (d["kind"], d["reference"], d["reference_source"], d["bodies"]) == ("agree", expected, "solid", 2)
     assert d["digital"][-1]["betti"][:2] == [len(bodies), expected]
     assert f"where solids touch along an edge: the solid the mesh bounds is their union, genus {expected}" in d["verdict"]
+
+
+def test_26_connected_voxels_joining_solids_on_an_edge_say_so(tmp_path):
+    """Two boxes on a common edge: manifold3d builds 2 bodies; trimesh's
+    vertex-connected body_count, which joins solids that touch, is 1, and
+    so are 26-connected voxels at any resolution. The disagreement is
+    named as the connectivity's, not left bare."""
+    m3 = pytest.importorskip("manifold3d")
+    boxes_obj(tmp_path / "edge.obj", [[0, 0, 0], [1, 1, 1]], [[1, 1, 0], [2, 2, 1]])
+    mesh = trimesh.load(tmp_path / "edge.obj", force="mesh")
+    bodies = len(m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose())
+    assert (bodies, mesh.body_count) == (2, 1)
+    r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "edge.obj"), "--resolution", "16",
+                        "32", "--no-step", "--connectivity", "26", "--json"], capture_output=True, text=True)
+    d = json.loads(r.stdout)
+    assert (d["kind"], d["bodies"], d["digital"][-1]["betti"][0]) == ("disagree", bodies, mesh.body_count)
+    [note] = [n for n in d["notes"] if n["kind"] == "corner_joins"]
+    assert note["facts"] == {"bodies": bodies, "components": mesh.body_count}
+    assert ("26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
+            "meeting at a corner or an edge are one component): 1 component for the solid's 2 bodies") in d["verdict"]

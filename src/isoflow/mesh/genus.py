@@ -800,7 +800,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop, bodies=bodies, filled_genus=filled,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + rounding_notes(v, f, w, stats)
-                    + digital_notes(w, digital, target, stable, fill)))
+                    + digital_notes(w, digital, target, stable, fill, bodies)))
 
 
 def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> None:
@@ -1059,12 +1059,27 @@ def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[N
     return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
 
 
-def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding") -> list[Note]:
-    """What the grids showed (cavities, resolutions too coarse) and what
-    the peers could not say."""
+def _corner_joined(w: dict, last: dict, bodies: int | None) -> bool:
+    """Whether the last grid's 26-connected voxels are fewer components than
+    the solid's bodies where solids touch at a point or along an edge (a
+    shared or pinched vertex, a non-manifold edge): 26-connectivity joins
+    voxels that meet at a corner or an edge, where manifold3d splits the
+    vertex or edge and 6-connectivity keeps the bodies apart."""
+    mesh = w["mesh"]
+    touch = mesh["shared_vertices"] or mesh["nonmanifold_vertices"] or mesh["nonmanifold_edges"]
+    return bool(last["connectivity"] == 26 and bodies is not None and touch and last["betti"][0] < bodies)
+
+
+def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding",
+                  bodies: int | None = None) -> list[Note]:
+    """What the grids showed (cavities, resolutions too coarse, 26-connected
+    voxels joining solids that touch, fewer components than ``bodies``)
+    and what the peers could not say."""
     notes = []
     if digital:
         last = digital[-1]
+        if _corner_joined(w, last, bodies):
+            notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0]}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:

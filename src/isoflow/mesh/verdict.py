@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions"]
+                   "no_mesh_genus", "t_junctions", "corner_joins"]
 
 
 @dataclass(frozen=True)
@@ -355,5 +355,10 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
     "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
+    "corner_joins": lambda bodies, components: (
+        f"26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
+        f"meeting at a corner or an edge are one component): {counted(components, 'component')} for the solid's "
+        f"{counted(bodies, 'body', 'bodies')}; 6-connected voxels part them on a fine enough grid, as manifold3d "
+        "does"),
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
 }
