@@ -247,21 +247,26 @@ def test_solids_touching_along_an_edge_compare_the_union(tmp_path, handle):
     assert f"where solids touch along an edge: the solid the mesh bounds is their union, genus {expected}" in d["verdict"]
 
 
-def test_26_connected_voxels_joining_solids_on_an_edge_say_so(tmp_path):
+@pytest.mark.parametrize("option, by, said", [
+    (["--connectivity", "26"], "connectivity", "26-connected voxels join solids that touch at a point or along an edge "
+     "at any resolution (voxels meeting at a corner or an edge are one component): "),
+    (["--fill", "flood"], "flood", "a flood fill holds the voxels the surface meets, which join solids that touch at "
+     "a point or along an edge at any resolution: ")])
+def test_voxels_joining_solids_on_an_edge_say_so(tmp_path, option, by, said):
     """Two boxes on a common edge: manifold3d builds 2 bodies; trimesh's
     vertex-connected body_count, which joins solids that touch, is 1, and
-    so are 26-connected voxels at any resolution. The disagreement is
-    named as the connectivity's, not left bare."""
+    so are 26-connected voxels, and a flood fill's (whose shell voxels the
+    two surfaces share), at any resolution. The disagreement is named as
+    the connectivity's or the fill's, not left bare."""
     m3 = pytest.importorskip("manifold3d")
     boxes_obj(tmp_path / "edge.obj", [[0, 0, 0], [1, 1, 1]], [[1, 1, 0], [2, 2, 1]])
     mesh = trimesh.load(tmp_path / "edge.obj", force="mesh")
     bodies = len(m3.Manifold(m3.Mesh(mesh.vertices.astype(np.float32), mesh.faces.astype(np.uint32))).decompose())
     assert (bodies, mesh.body_count) == (2, 1)
     r = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(tmp_path / "edge.obj"), "--resolution", "16",
-                        "32", "--no-step", "--connectivity", "26", "--json"], capture_output=True, text=True)
+                        "32", "--no-step", "--json", *option], capture_output=True, text=True)
     d = json.loads(r.stdout)
     assert (d["kind"], d["bodies"], d["digital"][-1]["betti"][0]) == ("disagree", bodies, mesh.body_count)
     [note] = [n for n in d["notes"] if n["kind"] == "corner_joins"]
-    assert note["facts"] == {"bodies": bodies, "components": mesh.body_count}
-    assert ("26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
-            "meeting at a corner or an edge are one component): 1 component for the solid's 2 bodies") in d["verdict"]
+    assert note["facts"] == {"bodies": bodies, "components": mesh.body_count, "by": by}
+    assert said + "1 component for the solid's 2 bodies" in d["verdict"]

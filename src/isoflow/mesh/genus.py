@@ -1059,15 +1059,18 @@ def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[N
     return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
 
 
-def _corner_joined(w: dict, last: dict, bodies: int | None) -> bool:
-    """Whether the last grid's 26-connected voxels are fewer components than
-    the solid's bodies where solids touch at a point or along an edge (a
-    shared or pinched vertex, a non-manifold edge): 26-connectivity joins
-    voxels that meet at a corner or an edge, where manifold3d splits the
-    vertex or edge and 6-connectivity keeps the bodies apart."""
+def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:
+    """Whether the last grid is fewer components than the solid's bodies
+    where solids touch at a point or along an edge (a shared or pinched
+    vertex, a non-manifold edge) and its voxels join them at any
+    resolution: 26-connected ones meeting at a corner or an edge, or a
+    flood fill's shell, whose voxels the touching surfaces share; manifold3d
+    splits the vertex or edge, and 6-connected winding voxels part the
+    bodies on a fine enough grid."""
     mesh = w["mesh"]
     touch = mesh["shared_vertices"] or mesh["nonmanifold_vertices"] or mesh["nonmanifold_edges"]
-    return bool(last["connectivity"] == 26 and bodies is not None and touch and last["betti"][0] < bodies)
+    joins = last["connectivity"] == 26 or fill == "flood"
+    return bool(joins and bodies is not None and touch and last["betti"][0] < bodies)
 
 
 def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding",
@@ -1078,8 +1081,9 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
     notes = []
     if digital:
         last = digital[-1]
-        if _corner_joined(w, last, bodies):
-            notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0]}))
+        if _corner_joined(w, last, bodies, fill):
+            notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
+                                               "by": "flood" if fill == "flood" else "connectivity"}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:

@@ -317,6 +317,17 @@ def _nonmanifold_edge_words(n: int, solid_genus: int | None = None, error: str |
     return said + f" where solids touch along an edge: the solid the mesh bounds is their union, {union}"
 
 
+def _corner_join_words(bodies: int, components: int, by: str = "connectivity") -> str:
+    counts = f"{counted(components, 'component')} for the solid's {counted(bodies, 'body', 'bodies')}"
+    if by == "flood":  # the shell's voxels, which the surface meets, are shared where the solids touch
+        return (f"a flood fill holds the voxels the surface meets, which join solids that touch at a point or along "
+                f"an edge at any resolution: {counts}; the winding fill parts them on a fine enough grid, as "
+                "manifold3d does")
+    return (f"26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
+            f"meeting at a corner or an edge are one component): {counts}; 6-connected voxels part them on a fine "
+            "enough grid, as manifold3d does")
+
+
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
@@ -355,10 +366,6 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
     "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
-    "corner_joins": lambda bodies, components: (
-        f"26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
-        f"meeting at a corner or an edge are one component): {counted(components, 'component')} for the solid's "
-        f"{counted(bodies, 'body', 'bodies')}; 6-connected voxels part them on a fine enough grid, as manifold3d "
-        "does"),
+    "corner_joins": _corner_join_words,
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
 }
