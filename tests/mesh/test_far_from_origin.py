@@ -205,3 +205,31 @@ def test_printed_origin_of_a_far_grid_is_the_files(tmp_path):
     for text in (r.stdout, info.stdout):
         printed = [float(x) for x in text.split("origin [", 1)[1].split("]", 1)[0].split(",")]
         assert np.abs(np.array(printed) - corner).max() < pitch.min() / 100, text
+
+
+def test_genus_names_coordinates_a_float32_file_rounded(tmp_path):
+    """A PLY of float properties (trimesh writes float32) stores a torus
+    at 2e6 on float32's grid there, 0.125 apart (np.spacing): trimesh reads
+    the file as not watertight, where the torus is, and genus called it
+    self-intersecting without a word of why, as float64 holds 2e6 finely.
+    The note names float32's spacing as the likely cause."""
+    import trimesh
+
+    torus = trimesh.creation.torus(1.0, 0.3)
+    assert torus.is_watertight
+    path = tmp_path / "far.ply"
+    trimesh.Trimesh(torus.vertices + [1e6, -2e6, 5e5], torus.faces, process=False).export(path)
+    read = trimesh.load(path, process=False)
+    assert b"property float x" in path.read_bytes()[:300]  # the file's own type
+    assert not trimesh.Trimesh(read.vertices, read.faces).is_watertight  # trimesh: the rounding opened it
+    spacing = float(np.spacing(np.float32(np.abs(read.vertices).max())))
+    assert spacing == 0.125
+    median = float(np.median(read.edges_unique_length))
+    r = isoflow("genus", path, "--json", "--resolution", 32, 64, "--no-step")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(r.stdout)
+    [note] = [n for n in report["notes"] if n["kind"] == "float64_rounding"]
+    assert (note["facts"]["precision"], note["facts"]["spacing"]) == ("float32", spacing)
+    assert note["facts"]["median_edge"] == pytest.approx(median, rel=0.05)
+    assert "are held by float32 (every coordinate is one, as the file stores them) to 0.125, " in report["verdict"]
+    assert "or store float64 coordinates, before saving it" in report["verdict"]

@@ -85,3 +85,28 @@ def test_t_junctions_close_in_any_unit(scale):
     with np.errstate(over="raise"):
         verdict = verify_genus((v * scale, f), resolutions=[16, 32], step=False)
     assert verdict.mesh["watertight"] and verdict.mesh["genus"] == 0 and verdict.kind == "agree"
+
+
+@pytest.mark.parametrize("repair", ["t_junctions", "repeated_faces"])
+def test_strict_genus_refuses_what_strict_voxelize_refuses(tmp_path, repair):
+    """``--strict`` means the mesh as written, unrepaired: a mesh trimesh
+    calls open (a T-junction) or not watertight (a face listed twice) is
+    refused by ``genus --strict`` as by ``voxelize --strict``, though
+    without ``--strict`` genus repairs it and counts the closed surface."""
+    from isoflow.cli.main import main
+    from isoflow.errors import IsoflowError
+    from isoflow.mesh.voxelize import voxelize_mesh
+
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    v, f = with_t_junctions(torus) if repair == "t_junctions" else (torus.vertices, np.vstack([torus.faces,
+                                                                                               torus.faces[:5]]))
+    assert not trimesh.Trimesh(v, f, process=False).is_watertight  # trimesh's reading of the mesh as written
+    with pytest.raises(IsoflowError, match="not watertight"):
+        voxelize_mesh((v, f), resolution=32, strict=True)
+    with pytest.raises(IsoflowError, match="not watertight"):
+        verify_genus((v, f), resolutions=[32], step=False, strict=True)
+    assert verify_genus((v, f), resolutions=[32, 64], step=False).kind == "agree"  # repaired without strict
+    path = tmp_path / "cracked.ply"
+    trimesh.Trimesh(v, f, process=False).export(path)
+    assert main(["genus", str(path), "--strict", "--resolution", "32", "--no-step", "-q"]) == 2
+    assert main(["voxelize", str(path), "--strict", "--resolution", "32", "-o", str(tmp_path / "v.npy"), "-q"]) == 2

@@ -25,7 +25,7 @@ import numpy as np
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable, check_switch
 from ..scale import memory
-from .crossings import find_crossings
+from .crossings import CubeGrid, find_crossings
 from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
@@ -186,6 +186,52 @@ def whole_manifold(vertices, faces) -> tuple[Any, int]:
         return exc, e
 
 
+def manifold_parts(mf) -> list:
+    """A manifold3d ``Manifold``'s connected parts, as its ``decompose()``
+    gives them (a pinched vertex, which manifold3d splits, parts them too),
+    in time linear in its size: ``decompose()`` takes time quadratic in the
+    number of parts.
+
+    Parameters
+    ----------
+    mf : manifold3d.Manifold
+        A manifold without error.
+
+    Returns
+    -------
+    list of manifold3d.Manifold
+        One per connected part (none for an empty manifold; ``mf`` itself
+        where it is one part).
+
+    Examples
+    --------
+    >>> import manifold3d as m3
+    >>> two = m3.Manifold.cube([1, 1, 1]) + m3.Manifold.cube([1, 1, 1]).translate([3, 0, 0])
+    >>> sorted(p.volume() for p in manifold_parts(two)), len(two.decompose())
+    ([1.0, 1.0], 2)
+    """
+    import manifold3d as m3
+
+    from ..scale.graphs import components
+
+    mesh = mf.to_mesh()
+    f = np.asarray(mesh.tri_verts, np.int64)
+    if not len(f):
+        return []
+    v = np.asarray(mesh.vert_properties)[:, :3]
+    count, label = components(len(v), np.r_[f[:, 0], f[:, 0]], np.r_[f[:, 1], f[:, 2]])
+    if count == 1:
+        return [mf]
+    face_label = label[f[:, 0]]
+    order = np.argsort(face_label, kind="stable")
+    parts = []
+    for chosen in np.split(order, np.searchsorted(face_label[order], np.arange(1, count))):
+        used, local = np.unique(f[chosen], return_inverse=True)
+        parts.append(m3.Manifold(m3.Mesh(vert_properties=np.ascontiguousarray(v[used], np.float32),
+                                         tri_verts=local.reshape(-1, 3).astype(np.uint32))))
+    return parts
+
+
 def manifold3d_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
     """manifold3d's genus of the mesh (the sum over its parts), of the whole
     mesh, its number of parts and volume, or ``{"error": ...}`` where it
@@ -199,7 +245,7 @@ def manifold3d_report(vertices, faces, whole: tuple[Any, int] | None = None) -> 
     status = mf.status()
     if status != m3.Error.NoError:
         return {"error": status.name}
-    parts = mf.decompose()
+    parts = manifold_parts(mf)
     volume = unscaled_volume(mf.volume(), e)
     return {
         "genus": int(sum(p.genus() for p in parts)),
@@ -334,11 +380,11 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
             raise made
         if made.status() != m3.Error.NoError:
             return {"error": made.status().name}
-        parts = made.decompose()
+        parts = manifold_parts(made)
         signs = [1 if p.volume() >= 0 else -1 for p in parts]
         solids = [p if s > 0 else _inside_out(m3, p) for p, s in zip(parts, signs)]
         solid, boundary, approximate = _nonzero_solid(m3, solids, signs)
-        pieces = solid.decompose()
+        pieces = manifold_parts(solid)
         filled_genus, filled_bodies = _filled(m3, pieces)
     except Exception as exc:  # the binding raises for malformed input (its first line says what)
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
@@ -361,7 +407,7 @@ def _filled(m3, pieces: list) -> tuple[int, int]:
     outer = [p for p in pieces if p.volume() > 0]
     if len(outer) == len(pieces):  # no cavity: the solid itself
         return int(sum(p.genus() for p in pieces)), len(pieces)
-    filled = m3.Manifold.batch_boolean(outer, m3.OpType.Add).decompose() if len(outer) > 1 else outer
+    filled = manifold_parts(m3.Manifold.batch_boolean(outer, m3.OpType.Add)) if len(outer) > 1 else outer
     shells = [p for p in filled if p.volume() > 0]
     return int(sum(p.genus() for p in shells)), len(shells)
 
@@ -381,10 +427,8 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
     if n == 0:
         return m3.Manifold(), True, False
     vols = [s.volume() for s in solids]
-    boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
-    lo, hi = boxes[:, 0], boxes[:, 1]
-    meet = np.all((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None]), axis=2)
-    if n > 1 and (np.count_nonzero(meet) - n) // 2 > MAX_PAIRS:
+    meeting = _boxes_meeting(solids)
+    if len(meeting) > MAX_PAIRS:
         return _outward_less_inside_out(m3, solids, signs), False, True
     group = list(range(n))  # union-find of crossing components
 
@@ -395,21 +439,18 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
         return i
 
     inside: dict[int, list[int]] = {}  # i -> components j whose solid holds solid i
-    for i in range(n):
-        for j in range(i + 1, n):
-            if not meet[i, j]:
-                continue
-            common = (solids[i] ^ solids[j]).volume()
-            small = min(vols[i], vols[j])
-            if common <= _OVERLAP_RTOL * small:
-                continue  # apart (or touching)
-            if common >= (1 - _OVERLAP_RTOL) * small:  # the smaller one inside the larger
-                a, b = (i, j) if vols[i] <= vols[j] else (j, i)
-                inside.setdefault(a, []).append(b)
-                continue
-            if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
-                return _outward_less_inside_out(m3, solids, signs), False, True
-            group[root(i)] = root(j)
+    for i, j in meeting.tolist():
+        common = (solids[i] ^ solids[j]).volume()
+        small = min(vols[i], vols[j])
+        if common <= _OVERLAP_RTOL * small:
+            continue  # apart (or touching)
+        if common >= (1 - _OVERLAP_RTOL) * small:  # the smaller one inside the larger
+            a, b = (i, j) if vols[i] <= vols[j] else (j, i)
+            inside.setdefault(a, []).append(b)
+            continue
+        if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
+            return _outward_less_inside_out(m3, solids, signs), False, True
+        group[root(i)] = root(j)
     # bodies: crossing components of one way united
     members: dict[int, list[int]] = {}
     for i in range(n):
@@ -447,6 +488,19 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
             regions.append(region)
     solid = m3.Manifold.batch_boolean(regions, m3.OpType.Add) if regions else m3.Manifold()
     return solid, boundary, False
+
+
+def _boxes_meeting(solids: list) -> np.ndarray:
+    """Pairs ``(i, j)``, ``i < j``, in order, of the solids whose bounding
+    boxes meet: found through a grid of cubes (:class:`~isoflow.mesh.crossings.CubeGrid`)
+    rather than by testing every pair, whose table grows with the square
+    of the components (gigabytes for a mesh of twenty thousand boxes)."""
+    if len(solids) < 2:
+        return np.zeros((0, 2), np.int64)
+    boxes = np.array([np.asarray(s.bounding_box(), np.float64).reshape(2, 3) for s in solids])
+    chunks = list(CubeGrid(boxes[:, 0], boxes[:, 1]).pairs())
+    pairs = np.concatenate(chunks) if chunks else np.zeros((0, 2), np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def _outward_less_inside_out(m3, solids: list, signs: list):
@@ -665,7 +719,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     on_resolution : callable, optional
         Called with each resolution's entry as it is done.
     strict : bool
-        Refuse a mesh that is not watertight.
+        Refuse a mesh that is not watertight as written, as
+        ``voxelize(strict=True)`` does: the repairs made before counting
+        (repeated faces dropped, edges split at T-junctions) are not made
+        for it.
     fill : {"winding", "shell", "flood"}
         The voxels compared (:mod:`isoflow.mesh.fills`; the verdict's ``fill``).
 
@@ -717,6 +774,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)
+    if strict:
+        _refuse_as_voxelize(name, v, f, fill)
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
     w = witnesses(v, f)
@@ -741,7 +800,19 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
         stop=stop, bodies=bodies, filled_genus=filled,
         notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + rounding_notes(v, f, w, stats)
-                    + digital_notes(w, digital, target, stable, fill)))
+                    + digital_notes(w, digital, target, stable, fill, bodies)))
+
+
+def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> None:
+    """With ``strict``, refuse what ``voxelize(strict=True)`` refuses, on
+    the mesh as loaded: the repairs the genus makes before counting
+    (repeated faces dropped, edges split at T-junctions) would otherwise
+    let through a mesh that the strict voxeliser refuses for the open or
+    non-manifold edges it has."""
+    try:
+        Solid(v, f, strict=True, fill=fill)
+    except IsoflowError as exc:
+        raise exc.at(name) from None
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:
@@ -836,7 +907,8 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     consistently oriented), ``nested`` (shells nest facing the same way, so
     the mesh is not the solid's boundary), ``overlap`` (the solid's genus
     is the reference: components overlap, touch or nest, or faces of one
-    component touch) and
+    component touch, or ``edge_joined``: closed oriented sheets meet along
+    non-manifold edges, solids touching along an edge) and
     ``double_sided`` (faces listed once each way round, or None), and
     ``walled`` with ``walled_genus``: every such pair lies in a wall
     between solids, and the genus of the mesh without the walls, the
@@ -853,9 +925,14 @@ def witnesses(v: np.ndarray, f: np.ndarray) -> dict:
     touching = bool(out["faces_crossing_other_components"] or mesh["shared_vertices"]
                     or out["faces_touching_own_component"])
     nested = solid.get("boundary") is False and not touching
+    double_sided = _double_sided(v, f)
+    # closed, oriented, and no wall drawn from both sides: sheets that meet
+    # along a non-manifold edge are solids touching along it (two boxes on
+    # a common edge), whose union manifold3d builds as it splits the edge
+    edge_joined = bool(balanced and mesh["nonmanifold_edges"] and not double_sided and not touching and not nested)
     out.update(solid=solid, solid_genus=solid.get("genus"), crossing_self=crossing_self, balanced=balanced,
-               nested=nested, overlap=touching or nested,
-               double_sided=_double_sided(v, f))
+               nested=nested, overlap=touching or nested or edge_joined, edge_joined=edge_joined,
+               double_sided=double_sided)
     sided = out["double_sided"] or {}
     out.update(walled=sided.get("walls", 0) == sided.get("n", -1), walled_genus=sided.get("union_genus"))
     return out
@@ -949,12 +1026,13 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note
         notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill,
                                            **({"genus": mesh["genus"]} if mesh["genus"] is not None else {})}))
     if mesh["nonmanifold_edges"]:
-        notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"]}))
+        joined = {"solid_genus": w["solid_genus"], "error": w["solid"].get("error")} if w["edge_joined"] else {}
+        notes.append(Note("nonmanifold_edges", {"n": mesh["nonmanifold_edges"], **joined}))
     if mesh["nonmanifold_vertices"]:
         notes.append(Note("nonmanifold_vertices", {"n": mesh["nonmanifold_vertices"]}))
     if w["nested"]:
         notes.append(Note("nested", {"components": mesh["components"], "solid_genus": w["solid_genus"]}))
-    elif w["overlap"]:
+    elif w["overlap"] and not w["edge_joined"]:  # (the non-manifold edges' note says where they touch)
         notes.append(Note("overlap", {
             "components": mesh["components"], "crossing": w["faces_crossing_other_components"] or 0,
             "shared": mesh["shared_vertices"], "solid_genus": w["solid_genus"], "error": w["solid"].get("error"),
@@ -981,12 +1059,31 @@ def rounding_notes(v: np.ndarray, f: np.ndarray, w: dict, stats: dict) -> list[N
     return [Note("float64_rounding", {**facts, "defects": [k for k, n in found.items() if n]})]
 
 
-def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding") -> list[Note]:
-    """What the grids showed (cavities, resolutions too coarse) and what
-    the peers could not say."""
+def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:
+    """Whether the last grid is fewer components than the solid's bodies
+    where solids touch at a point or along an edge (a shared or pinched
+    vertex, a non-manifold edge) and its voxels join them at any
+    resolution: 26-connected ones meeting at a corner or an edge, or a
+    flood fill's shell, whose voxels the touching surfaces share; manifold3d
+    splits the vertex or edge, and 6-connected winding voxels part the
+    bodies on a fine enough grid."""
+    mesh = w["mesh"]
+    touch = mesh["shared_vertices"] or mesh["nonmanifold_vertices"] or mesh["nonmanifold_edges"]
+    joins = last["connectivity"] == 26 or fill == "flood"
+    return bool(joins and bodies is not None and touch and last["betti"][0] < bodies)
+
+
+def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding",
+                  bodies: int | None = None) -> list[Note]:
+    """What the grids showed (cavities, resolutions too coarse, 26-connected
+    voxels joining solids that touch, fewer components than ``bodies``)
+    and what the peers could not say."""
     notes = []
     if digital:
         last = digital[-1]
+        if _corner_joined(w, last, bodies, fill):
+            notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
+                                               "by": "flood" if fill == "flood" else "connectivity"}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
         if reference is not None and stable:

@@ -548,8 +548,10 @@ ROUNDING_SHARE = 0.01
 
 def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
     """Whether float64 holds the mesh's coordinates coarsely against its
-    edges: the spacing of float64 at the largest coordinate magnitude of
-    the vertices the faces use (``np.spacing``) at least
+    edges: the spacing of float64 (of float32 where every coordinate is
+    one, :func:`stored_precision`: the file stored them so) at the largest
+    coordinate magnitude of the vertices the faces use (``np.spacing``) at
+    least
     :data:`ROUNDING_SHARE` of the median length of the mesh's distinct
     edges. A mesh saved far from the origin is already rounded onto that
     grid in its file: crossings, welded vertices and non-manifold edges
@@ -569,7 +571,8 @@ def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
         ``near``: the largest coordinate magnitude; ``spacing``: float64's
         spacing there; ``median_edge``: the median length of the distinct
         edges (each pair of corners once, as trimesh's
-        ``edges_unique_length``); ``share``: ``spacing / median_edge``.
+        ``edges_unique_length``); ``share``: ``spacing / median_edge``;
+        ``precision``: ``"float32"`` or ``"float64"``.
         None where the spacing is below :data:`ROUNDING_SHARE` of the
         median edge.
 
@@ -586,7 +589,8 @@ def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
         return None
     lo, hi, _ = mesh_bbox(v, f, "mesh")
     near = float(np.maximum(np.abs(lo), np.abs(hi)).max())
-    spacing = float(np.spacing(near))
+    precision = stored_precision(v, f)
+    spacing = float(np.spacing(np.float32(near) if precision == "float32" else near))
     if not spacing > 0:
         return None
     pairs = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
@@ -602,11 +606,30 @@ def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
     median = float(np.median(lengths[first]))
     if not (median > 0 and spacing >= ROUNDING_SHARE * median):
         return None
-    return {"near": near, "spacing": spacing, "median_edge": median, "share": spacing / median}
+    return {"near": near, "spacing": spacing, "median_edge": median, "share": spacing / median, "precision": precision}
+
+
+def stored_precision(v: np.ndarray, f: np.ndarray) -> str:
+    """``"float32"`` where every coordinate of the vertices the faces use
+    is a float32 (as an STL, or a PLY of ``float`` properties, stores
+    them), else ``"float64"``: the grid a file far from the origin was
+    rounded onto when it was written.
+
+    Examples
+    --------
+    >>> stored_precision(np.array([[2e6, 0.25, 1.5]]), np.array([[0, 0, 0]]))
+    'float32'
+    >>> stored_precision(np.array([[2e6 + 0.1, 0.25, 1.5]]), np.array([[0, 0, 0]]))
+    'float64'
+    """
+    used = v[np.unique(f)]
+    with np.errstate(over="ignore", invalid="ignore"):
+        held = used.astype(np.float32).astype(np.float64) == used
+    return "float32" if len(used) and bool(held.all()) else "float64"
 
 
 def rounding_words(near: float, spacing: float, median_edge: float, share: float, defects: tuple = (),
-                   where: str = "") -> str:
+                   where: str = "", precision: str = "float64") -> str:
     """:func:`float64_rounding`'s facts in words: the spacing, its share of
     the median edge, the ``defects`` (words naming what was found, such as
     ``"crossings"``) it may have made, said ``where`` (``" above"``), and
@@ -619,9 +642,13 @@ def rounding_words(near: float, spacing: float, median_edge: float, share: float
     welds above may be that rounding; move the mesh nearer the origin (subtract its centre) before saving it
     """
     pct = 100 * share
-    said = (f"coordinates near {near:.6g} are held by float64 to {spacing!r}, "
+    # every coordinate a float32: the file stored them so (an STL, a PLY of float properties), and
+    # float64 storage is a second way out
+    held = "float32 (every coordinate is one, as the file stores them)" if precision == "float32" else "float64"
+    said = (f"coordinates near {near:.6g} are held by {held} to {spacing!r}, "
             f"{f'{pct:.0f}' if pct >= 10 else f'{pct:.2g}'} % of the median edge ({median_edge:.3g})")
     if defects:
         listed = ", ".join(defects[:-1]) + " and " + defects[-1] if len(defects) > 1 else defects[0]
         said += f": the {listed}{where} may be that rounding"
-    return said + "; move the mesh nearer the origin (subtract its centre) before saving it"
+    return said + ("; move the mesh nearer the origin (subtract its centre)"
+                   + (", or store float64 coordinates," if precision == "float32" else "") + " before saving it")

@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions"]
+                   "no_mesh_genus", "t_junctions", "corner_joins"]
 
 
 @dataclass(frozen=True)
@@ -308,6 +308,26 @@ def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int
             f"is their union, {union}")
 
 
+def _nonmanifold_edge_words(n: int, solid_genus: int | None = None, error: str | None = None) -> str:
+    said = f"{counted(n, 'non-manifold edge')} (more than two faces)"
+    if solid_genus is None and error is None:
+        return said + ": not a 2-manifold, genus undefined"
+    # closed sheets meeting along the edges: solids touching there, whose union is the reference
+    union = f"genus {solid_genus} (manifold3d)" if solid_genus is not None else f"which manifold3d could not build ({error})"
+    return said + f" where solids touch along an edge: the solid the mesh bounds is their union, {union}"
+
+
+def _corner_join_words(bodies: int, components: int, by: str = "connectivity") -> str:
+    counts = f"{counted(components, 'component')} for the solid's {counted(bodies, 'body', 'bodies')}"
+    if by == "flood":  # the shell's voxels, which the surface meets, are shared where the solids touch
+        return (f"a flood fill holds the voxels the surface meets, which join solids that touch at a point or along "
+                f"an edge at any resolution: {counts}; the winding fill parts them on a fine enough grid, as "
+                "manifold3d does")
+    return (f"26-connected voxels join solids that touch at a point or along an edge at any resolution (voxels "
+            f"meeting at a corner or an edge are one component): {counts}; 6-connected voxels part them on a fine "
+            "enough grid, as manifold3d does")
+
+
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
@@ -320,8 +340,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,
-    "nonmanifold_edges": lambda n: (f"{counted(n, 'non-manifold edge')} (more than two faces): not a 2-manifold, "
-                                    "genus undefined"),
+    "nonmanifold_edges": _nonmanifold_edge_words,
     "nonmanifold_vertices": lambda n: (f"{counted(n, 'non-manifold vertex', 'non-manifold vertices')} where separate "
                                        "sheets touch at a point; "
                                        "genus counted with the sheets apart there (as manifold3d counts)"),
@@ -336,8 +355,8 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         + (f"; {along} face pair{'s' if along > 1 else ''} meet{'' if along > 1 else 's'} along "
            f"{'them' if n > 1 else 'it'} where {'they close' if n > 1 else 'it closes'} a split edge (a T-junction): "
            "no crossing" if along else "")),
-    "float64_rounding": lambda near, spacing, median_edge, share, defects=(): rounding_words(
-        near, spacing, median_edge, share, tuple(defects), " above"),
+    "float64_rounding": lambda near, spacing, median_edge, share, defects=(), precision="float64": rounding_words(
+        near, spacing, median_edge, share, tuple(defects), " above", precision),
     "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
                                        f"at resolution {resolution}"),
     "flood_cavities": lambda n: (
@@ -347,5 +366,6 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"at resolution {resolution} the grid is too coarse: digital genus {genus} "
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
     "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
+    "corner_joins": _corner_join_words,
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
 }
