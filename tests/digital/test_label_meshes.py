@@ -107,8 +107,8 @@ def test_batch_glb_parts_are_each_parts_own(rng, monkeypatch, origin):
                 v, f = slice(*parts.vfirst[s:s + 2]), slice(*parts.tfirst[s:s + 2])
                 stored = np.column_stack([columns[k] for k in "xyz"]) if frame is None else frame[0]
                 np.testing.assert_array_equal(parts.positions[v], np.asarray(stored, np.float32))
-                np.testing.assert_array_equal(parts.colors[v, :3], np.column_stack([columns[k] for k in
-                                                                                       ("red", "green", "blue")]))
+                srgb = np.column_stack([columns[k] for k in ("red", "green", "blue")])
+                np.testing.assert_array_equal(parts.colors[v, :3], export.linear_bytes(srgb))  # glTF's COLOR_0 is linear
                 assert parts.attributes.keys() == {f"_{k}" for k in columns} - {"_x", "_y", "_z", "_red", "_green",
                                                                                    "_blue"}
                 for key, column in parts.attributes.items():
