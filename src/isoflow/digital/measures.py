@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..scale.arrays import namespace, to_host
+from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
 
 #: the report's names of the size and of the boundary measure, by dimension
@@ -75,7 +75,8 @@ def faces_per_axis(hist: np.ndarray, ndim: int) -> np.ndarray:
 
 def extent_of(vol) -> Extent | None:
     """The :class:`Extent` of a binary volume (0/1 bytes; a device array
-    reduced on its device), None where it has no voxel: one sum per axis.
+    reduced on its device), None where it has no voxel: two sums over the
+    volume, along the last axis and across it.
 
     Examples
     --------
@@ -84,9 +85,12 @@ def extent_of(vol) -> Extent | None:
     [[1, 2], [3, 4], [4, 6]]
     """
     xp = namespace(vol)
-    counts = [to_host(xp.sum(vol, axis=tuple(a for a in range(vol.ndim) if a != axis), dtype=xp.int64))
-              for axis in range(vol.ndim)]
-    return extent_of_counts(counts)
+    if not is_host(xp):  # the array API sums numbers, not bools (one byte a voxel on the device, for the sums)
+        vol = xp.astype(vol, xp.uint8)
+    rows = to_host(xp.sum(vol, axis=vol.ndim - 1, dtype=xp.int64))
+    last = to_host(xp.sum(vol, axis=tuple(range(vol.ndim - 1)), dtype=xp.int64))
+    return extent_of_counts([rows.sum(axis=tuple(a for a in range(rows.ndim) if a != axis)) for axis in range(rows.ndim)]
+                            + [last])
 
 
 def extent_of_counts(counts: list[np.ndarray]) -> Extent | None:
