@@ -97,10 +97,11 @@ class Report(Result):
         The length unit of the world measures: the object's (a file's, as
         :func:`isoflow.read_volume` reads it), None where it has none.
         Without a placement the voxels are unit cubes at 0, the measures in
-        voxels. These five are :func:`isoflow.label_table`'s columns of
-        one label, and are keys in 2D and 3D only: a 4D object's fourth
-        axis is mostly time, whose step is no length (a hypervolume would
-        mix frames and space), and a bare 1D array has no placement.
+        voxels. The measures are :func:`isoflow.label_table`'s columns of
+        one label; they and ``unit`` are keys in 2D and 3D only: a 4D
+        object's fourth axis is mostly time, whose step is no length (a
+        hypervolume would mix frames and space), and a bare 1D array has
+        no placement.
 
     Examples
     --------
