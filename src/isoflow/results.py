@@ -6,7 +6,8 @@ properties are; :meth:`Result.to_dict` gives exactly the JSON object the
 command line prints. Fields whose metadata says ``omit_none`` and whose
 value is None are left out of the keys and of the JSON (a report without
 surfaces has no ``surfaces`` key), so that a key is present iff it was
-computed.
+computed; a field of :func:`omitted_with` is left out with the fields it
+names.
 """
 
 from __future__ import annotations
@@ -19,6 +20,19 @@ import numpy as np
 
 #: field metadata of a field that is absent (not a key, not in the JSON) when None
 OMIT_NONE = {"omit_none": True}
+
+
+def omitted_with(*names: str) -> dict[str, tuple[str, ...]]:
+    """Field metadata of a field that is a key exactly where one of the
+    fields ``names`` is (None among its values is then an answer, as an
+    empty object's box: ``null`` in the JSON, not a key left out).
+
+    Examples
+    --------
+    >>> omitted_with("volume", "area")
+    {'omit_with': ('volume', 'area')}
+    """
+    return {"omit_with": names}
 
 
 def json_ready(value: Any) -> Any:
@@ -171,10 +185,12 @@ class Result(Mapping[str, Any]):
         return f"{type(self).__name__}({', '.join(f'{k}={brief(getattr(self, k))}' for k in shown)})"
 
     def _keys(self) -> list[str]:
+        fields = dataclasses.fields(self)  # type: ignore[arg-type]
+        absent = {f.name for f in fields if f.metadata.get("omit_none") and getattr(self, f.name) is None}
         return [
             f.name
-            for f in dataclasses.fields(self)  # type: ignore[arg-type]
-            if not (f.metadata.get("omit_none") and getattr(self, f.name) is None)
+            for f in fields
+            if f.name not in absent and not ("omit_with" in f.metadata and absent.issuperset(f.metadata["omit_with"]))
         ]
 
     def __getitem__(self, key: str) -> Any:

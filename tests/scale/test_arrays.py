@@ -153,6 +153,29 @@ def test_info_gpu_reports_what_info_reports(tmp_path, capsys, monkeypatch):
     assert gpu == host and gpu["betti"] == [1, 1, 0]
 
 
+def test_info_gpu_places_the_world_measures_as_info_does(tmp_path, capsys, monkeypatch):
+    # the device array is bare: the file's voxel size, origin and unit go with it
+    import isoflow
+
+    v = torus(6, 2)
+    isoflow.write_volume(DigitalObject(v, pitch=(0.5, 1.0, 2.0), origin=(1, 2, 3), unit="mm"), tmp_path / "t.npz")
+    assert main(["info", str(tmp_path / "t.npz"), "--json"]) == 0
+    host = json.loads(capsys.readouterr().out)
+    fake_cupy(monkeypatch, free_bytes=2**30)
+    assert main(["info", str(tmp_path / "t.npz"), "--json", "--gpu"]) == 0
+    gpu = json.loads(capsys.readouterr().out)
+    assert gpu == host and gpu["unit"] == "mm"
+    assert gpu["volume"] == pytest.approx(int(v.sum()) * 1.0)  # voxels of 0.5 x 1 x 2
+
+
+@pytest.mark.parametrize("ndim", [2, 3])
+def test_world_measures_of_a_device_volume_equal_the_host_ones(rng, ndim):
+    for _ in range(10):
+        v = random_volume(rng, 9, ndim=ndim)
+        pitch = rng.uniform(0.5, 2.0, ndim)
+        assert analyze(on_device(v), pitch=pitch, unit="mm") == analyze(v, pitch=pitch, unit="mm")
+
+
 def test_info_gpu_refuses_a_volume_larger_than_the_free_memory(tmp_path, capsys, monkeypatch):
     np.save(tmp_path / "t.npy", torus(6, 2))
     fake_cupy(monkeypatch, free_bytes=1000)

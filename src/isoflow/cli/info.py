@@ -145,8 +145,10 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict 
     if args.gpu:
         from ..scale.arrays import to_gpu
 
-        report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads)
-        return dataclasses.replace(report, parity=obj.parity), grid, placed  # a bare array has no lattice place
+        # a bare array has no lattice place: the object's given with it
+        report = analyze(to_gpu(obj.volume), args.connectivity, surfaces=not args.no_surfaces, threads=args.threads,
+                         pitch=obj.spacing, origin=obj.world([0] * obj.ndim), unit=obj.unit)
+        return dataclasses.replace(report, parity=obj.parity), grid, placed
     # numba loaded while the file was read: its pass is then the faster at
     # any size ("auto" weighs numba's start against the volume, and that
     # start is paid)
@@ -237,6 +239,7 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
         lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'][:space])}{unit}, "
                      f"origin {origin}{unit}{'' if unit else ' (the file says no unit)'}"
                      + fourth)
+    lines += format_measures(r, placed["pitch"][:3] if placed else grid["pitch"] if grid else None)
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",
     ]
@@ -253,6 +256,26 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
     lines.append(f"  energy E = k^T n       {r['energy']}")
     lines += format_surfaces(r)
     return "\n".join(lines)
+
+
+def format_measures(r: Report, step=None) -> list[str]:
+    """The world measures in two lines, in the report's unit (none said
+    where it has none); coordinates to within a 200th of ``step``, the
+    voxel size, where known (:func:`~isoflow.errors.coordinates`)."""
+    if r.get("bbox", False) is False:  # no measures in this dimension (4D, 1D)
+        return []
+    size, boundary = ("volume", "surface_area") if r.dimension == 3 else ("area", "perimeter")
+    unit = f" {r.unit}" if r.unit else ""
+    # the boundary's unit: squared in 3D (an area), a length in 2D
+    power = {size: f"{unit}^{r.dimension}" if unit else "", boundary: f"{unit}^2" if unit and r.dimension == 3 else unit}
+    lines = [f"  {size:<23}{r[size]:.6g}{power[size]}, {boundary.replace('_', ' ')} {r[boundary]:.6g}{power[boundary]}"]
+    if r.bbox is None:
+        lines.append("  bounding box           none (no voxels)")
+    else:
+        lo, hi = r.bbox[:r.dimension], r.bbox[r.dimension:]
+        lines.append(f"  bounding box           {coordinates(lo, step=step)} to {coordinates(hi, step=step)}{unit}, "
+                     f"centroid {coordinates(r.centroid, step=step)}{unit}")
+    return lines
 
 
 def format_surfaces(r: Report) -> list[str]:

@@ -11,12 +11,12 @@ of every boundary face give the closed surfaces and their genus
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import check_switch
+from ..errors import IsoflowError, check_switch
 from ..scale import arrays
 from ..scale.compiled import Method, using
 from .closed_surfaces import closed_surfaces, compiled_census, small_census, use_census
@@ -33,8 +33,10 @@ from .indices import (
     planar_class_lut,
 )
 from .lattice import DigitalObject
+from .measures import MEASURE_NAMES, Extent, extent_of, faces_per_axis, world_measures
 from .report import Report
 from .topology import DIMENSIONS, betti_numbers, euler_from_histogram
+from .units import unit_given
 
 
 def analyze(
@@ -43,6 +45,10 @@ def analyze(
     surfaces: bool = True,
     threads: int | None = None,
     method: Method = "auto",
+    *,
+    pitch: float | ArrayLike | None = None,
+    origin: ArrayLike | None = None,
+    unit: str | None = None,
 ) -> Report:
     """Everything ``isoflow info`` reports about a 2D, 3D or 4D object (a
     bare 1D array too, as :func:`~isoflow.digital.topology.euler_characteristic`
@@ -73,10 +79,21 @@ def analyze(
     method : {"auto", "numpy", "compiled"}
         The NumPy passes, the compiled ones (numba), or by the volume's size.
         The report is the same either way.
+    pitch, origin, unit : optional
+        The voxel size (one number or one per axis), the world position
+        of lattice point 0 (of voxel 0's lowest corner for an array) and
+        their length unit, in which the report's world measures are
+        given; a :class:`~isoflow.digital.lattice.DigitalObject` brings
+        its own, which those given replace (default: unit voxels at 0 and
+        no unit).
 
     Returns
     -------
     Report
+        In 2D and 3D with the object's world measures: ``volume`` and
+        ``surface_area`` (``area`` and ``perimeter`` in 2D), ``bbox``,
+        ``centroid`` and ``unit``, as :func:`~isoflow.digital.label_table.label_table`
+        gives a label's.
         ``a_dot_n`` sums the Gauss-Bonnet weight over every vertex, the
         configurations that are not well-composed included, and so equals
         ``2^n chi`` on every object; ``a_dot_n_well_composed`` is the paper's
@@ -107,19 +124,66 @@ def analyze(
     >>> r = analyze(np.array([0, 1, 1, 0, 1], bool))
     >>> r.betti, r.euler_characteristic, r.classes, r.energy
     ([2], 2, {'convex': 4, 'flat': 0, 'concave': 0}, 4)
+
+    Two CT voxels of 0.5 x 0.5 x 2 mm, side by side along x:
+
+    >>> r = analyze(np.ones((2, 1, 1), bool), pitch=(0.5, 0.5, 2.0), unit="mm")
+    >>> r.volume, r.surface_area, r.bbox, r.centroid, r.unit
+    (1.0, 7.0, [0.0, 0.0, 0.0, 1.0, 0.5, 2.0], [0.5, 0.25, 1.0], 'mm')
     """
     surfaces = check_switch(surfaces, "surfaces", "analyze")
     with using(threads):
-        return Report.from_dict(_analyze(obj, connectivity, surfaces, method))
+        return Report.from_dict(_analyze(obj, connectivity, surfaces, method, Place(pitch, origin, unit)))
 
 
-def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
+class Place(NamedTuple):
+    """The placement given to :func:`analyze` (None: the object's, else the default).
+
+    Examples
+    --------
+    >>> Place(pitch=0.5).unit is None
+    True
+    """
+
+    pitch: Any = None
+    origin: Any = None
+    unit: str | None = None
+
+
+def placed(obj, ndim: int, given: Place) -> tuple[np.ndarray, np.ndarray, str | None]:
+    """``(spacing, corner, unit)`` of the report's world measures: the
+    voxel size, the world position of voxel 0's lowest corner and the
+    length unit, of ``obj`` (a DigitalObject) with those ``given`` in
+    place of its own, checked as an object's are.
+
+    Examples
+    --------
+    >>> obj = DigitalObject(np.ones((1, 1), bool), offset=(2, 0), pitch=0.5, unit="mm")
+    >>> [x.tolist() if hasattr(x, "tolist") else x for x in placed(obj, 2, Place(origin=(10, 0)))]
+    [[0.5, 0.5], [11.0, 0.0], 'mm']
+    """
+    if ndim not in (2, 3, 4):
+        if any(v is not None for v in given):
+            raise IsoflowError(f"analyze: pitch, origin and unit place 2D to 4D objects, got a {ndim}D array")
+        return np.ones(ndim), np.zeros(ndim), None
+    own = obj if isinstance(obj, DigitalObject) else DigitalObject.placement(ndim)
+    pitch = own.pitch if given.pitch is None else given.pitch
+    origin = own.origin if given.origin is None else given.origin
+    # (without a dtype: a float conversion here would raise NumPy's ValueError on a string before the check)
+    place = DigitalObject.placement(ndim, pitch=np.asarray(pitch), origin=np.asarray(origin), offset=own.offset,
+                                    parity=own.parity)
+    return place.spacing, place.world(np.zeros(ndim)), unit_given(own.unit if given.unit is None else given.unit,
+                                                                   "analyze")
+
+
+def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) -> dict:
     if isinstance(obj, DigitalObject):
         vol, parity = obj.volume, obj.parity
     else:
         # a bool array's bytes are made 0/1 only for the NumPy passes: the
         # compiled pass reads any nonzero byte as set
         vol, parity = arrays.as_volume(obj, canonical=False, dims=DIMENSIONS)[1], 0
+    spacing, corner, unit = placed(obj, vol.ndim, given)
     conn = resolve_connectivity(vol.ndim, connectivity)
     census: Mapping[str, Any] | None = _census(vol, conn, surfaces, method)
     if census is not None:
@@ -132,8 +196,13 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method) -> dict:
         hist = configuration_histogram(vol, method=method)
         chi = euler_from_histogram(hist, vol.ndim, conn)
         betti = betti_numbers(vol, conn, chi=chi, method=method)
+    if vol.ndim in MEASURE_NAMES:
+        # the compiled census has it from its bit rows; else one sum per axis
+        extent = census["extent"] if census is not None and "extent" in census else extent_of(_binary(vol))
+    else:
+        extent = None
     out = report_from_histogram(hist, vol.ndim, conn, voxels=voxels_from_histogram(hist), shape=vol.shape,
-                                betti=betti, parity=parity)
+                                betti=betti, parity=parity, extent=extent, place=(spacing, corner, unit))
     if vol.ndim == 3 and surfaces:
         if census is None:  # a device volume: its surfaces from a host copy
             census = closed_surfaces(arrays.to_host(vol), conn)
@@ -155,6 +224,11 @@ def _census(vol, conn: int, surfaces: bool, method: Method) -> dict | None:
     return None
 
 
+def _binary(vol):
+    """A host volume's bytes made 0 and 1 (a device volume is already)."""
+    return arrays.binary(vol) if isinstance(vol, np.ndarray) else vol
+
+
 def voxels_from_histogram(hist: np.ndarray) -> int:
     """Object voxels: each is an octant of exactly ``2^n`` vertices, so the
     octant bits set over all configurations count every voxel ``2^n`` times."""
@@ -173,6 +247,8 @@ def report_from_histogram(
     shape,
     betti: list[int],
     parity: int = 0,
+    extent: Extent | None = None,
+    place: tuple | None = None,
 ) -> dict:
     """The report's histogram part, from numbers any pass over the volume gives.
 
@@ -181,7 +257,10 @@ def report_from_histogram(
     same dict from its block-wise histogram and component counts. In 3D
     :func:`analyze` appends the surfaces when asked; in 2D and 4D there are
     none to count (the boundary is curves, a 3-manifold), so the report has
-    no ``surfaces`` key.
+    no ``surfaces`` key. In 2D and 3D the world measures
+    (:mod:`isoflow.digital.measures`) from the histogram's faces, the
+    voxels' ``extent`` and ``place``, ``(spacing, corner, unit)`` (default
+    unit voxels at 0).
     """
     hist = np.asarray(hist)
     chi = euler_from_histogram(hist, ndim, conn)
@@ -231,6 +310,9 @@ def report_from_histogram(
             a_dot_n=int(np.dot(hist, euler_lut(2, conn))),
             energy=int(n[0] + n[2]),
         )
+    spacing, corner, unit = (np.ones(ndim), np.zeros(ndim), None) if place is None else place
+    out.update(world_measures(ndim, int(voxels), faces_per_axis(hist, ndim) if ndim in MEASURE_NAMES else None,
+                              extent, spacing, corner, unit))
     return out
 
 

@@ -52,6 +52,7 @@ from ..scale.labels import label
 from .closed_surfaces import MESH_ADJACENCY, component_parents, subtree_sums, surface_counts, sweep_tables
 from .configurations import configuration_histogram, configurations
 from .connectivity import complement
+from .measures import extent_of, extent_of_rows, shifted
 
 #: a block's numbers live in the low 32 bits of a node key, the block in the high bits
 SHIFT = 32
@@ -204,7 +205,8 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
     dict
         ``hist`` (the configurations of the vertices it counts), ``voxels``,
         ``faces`` (per face inside the volume its ``n``umbers and its
-        ``vox``els), ``nodes``
+        ``vox``els), ``extent`` (the voxels' place, in the volume's indices,
+        :class:`~isoflow.digital.measures.Extent`), ``nodes``
         and ``pinches`` (for the Betti numbers); with ``surfaces`` in 3D also
         ``pieces``, ``pending``, ``surfaces``, ``doubled``, ``loose`` and
         ``parents`` (see the module docs).
@@ -231,7 +233,9 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
         core = binary(block, where, near=origin, canonical=np.ndim(block) != 3)
         if core.ndim == 3:
             return _swept_block(core, index, numblocks, origin, shape, conn, surfaces)
-        return _labelled_block(core, index, numblocks, conn)
+        out = _labelled_block(core, index, numblocks, conn)
+        out["extent"] = shifted(extent_of(core), origin, out["voxels"])
+        return out
 
 
 def _ends(index, numblocks) -> tuple[list[bool], list[bool]]:
@@ -305,7 +309,9 @@ def _swept(core, first, last, conn: int, surfaces: bool):
     found = sweep.sweep(bits, core.shape, off, goff, kernels.ADJACENCY[obj_adj] + kernels.ADJACENCY[bg_adj],
                         sweep_tables(conn), pinch_objects=conn == 26, surfaces=surfaces, counted=counted,
                         border=[flag for f, e in zip(first, last) for flag in (f, e)])
-    found["voxels"] = int(np.bitwise_count(bits).sum())
+    counts, sums, ends_lo, ends_hi = bitrows.row_extents(bits)
+    found["voxels"] = int(counts.sum())
+    found["extent"] = extent_of_rows(counts, sums, ends_lo, ends_hi, core.shape)
     return found, bits, off, goff
 
 
@@ -324,7 +330,8 @@ def _swept_block(core, index, numblocks, origin, shape, conn: int, surfaces: boo
     block = int(np.ravel_multi_index(index, numblocks))
     keys = np.concatenate([node_keys(numbers[0], block), node_keys(numbers[1], block)])
     keys[(np.concatenate(seen) == 0)] = -1
-    out = {"hist": found["hist"], "voxels": found["voxels"], "faces": faces}
+    out = {"hist": found["hist"], "voxels": found["voxels"], "faces": faces,
+           "extent": shifted(found["extent"], origin, found["voxels"])}
     out.update(_betti_nodes(found, keys, seen, sizes, outside, conn))
     if surfaces:
         starts = (bits[:-1, 0] & 1).astype(np.int64)  # the rows that start with a run

@@ -61,10 +61,11 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
 from ..scale.arrays import binary, count_codes, refuse_object
-from ..scale.compiled import Method, use_compiled
+from ..scale.compiled import Method, thread_count, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
 from .connectivity import check_connectivity, resolve_connectivity
+from .measures import extent_of_rows
 from .report import SurfaceCensus
 from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, slot_octants
 
@@ -334,11 +335,14 @@ def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
     under the mesh's adjacencies and adds up, per component, the vertices
     and faces of its whole boundary; the surfaces follow from the tree of
     components (:func:`surface_tree`). The pinches found by the sweep join
-    the components into the connectivity's own for the Betti numbers."""
+    the components into the connectivity's own for the Betti numbers.
+    ``extent``: the voxels' :class:`~isoflow.digital.measures.Extent` (None
+    where there are none), read off the bit rows, an eighth of the volume."""
     from ..scale import bitrows
 
     bits, off, goff = bitrows.pack(vol)
-    return census_of_rows(bits, vol.shape, off, goff, conn, surfaces)
+    extent = extent_of_rows(*bitrows.row_extents(bits, thread_count(vol.size)), vol.shape)
+    return {**census_of_rows(bits, vol.shape, off, goff, conn, surfaces), "extent": extent}
 
 
 def census_of_rows(bits: np.ndarray, shape: tuple[int, int, int], off: np.ndarray, goff: np.ndarray, conn: int,

@@ -55,6 +55,7 @@ from collections.abc import Callable
 from typing import Any, NamedTuple
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, check_callable, check_switch
 from ..scale.arrays import NotBinary, binary, fill_value_named
@@ -72,10 +73,11 @@ from ..scale.chunks import (
 )
 from ..scale.chunks import compute as compute_tasks
 from ..scale.compiled import thread_count, using
-from .analysis import report_from_histogram
+from .analysis import Place, placed, report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
 from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
 from .connectivity import resolve_connectivity
+from .measures import joined
 from .report import Report
 from .seams import merge_block
 from .surface import boundary_faces, pinch_lut
@@ -247,13 +249,14 @@ def _surfaces(conn: int, chi: int, hist: np.ndarray, merged) -> dict:
     return {"surfaces": found, "pinched_vertices": pinched, "doubled_edges": doubled}
 
 
-def _finish(ndim: int, conn: int, shape, surfaces: bool, merged) -> dict:
+def _finish(ndim: int, conn: int, shape, surfaces: bool, merged, place: tuple) -> dict:
     """Add up the blocks and build the report."""
     hist = np.sum([m["hist"] for m in merged], axis=0)
     chi = euler_from_histogram(hist, ndim, conn)
     betti = _betti(ndim, conn, chi, merged)
     voxels = sum(m["voxels"] for m in merged)
-    report = report_from_histogram(hist, ndim, conn, voxels=voxels, shape=shape, betti=betti, parity=0)
+    report = report_from_histogram(hist, ndim, conn, voxels=voxels, shape=shape, betti=betti, parity=0,
+                                   extent=joined([m["extent"] for m in merged]), place=place)
     if surfaces and ndim == 3:
         report.update(_surfaces(conn, chi, hist, merged))
     return report
@@ -433,6 +436,9 @@ def analyze_chunked(
     progress: Callable[[int, int], object] | None = None,
     surfaces: bool = True,
     threads: int | None = None,
+    pitch: float | ArrayLike | None = None,
+    origin: ArrayLike | None = None,
+    unit: str | None = None,
 ) -> Report:
     """The report of :func:`isoflow.digital.analysis.analyze`, computed block
     by block.
@@ -467,12 +473,16 @@ def analyze_chunked(
         :func:`isoflow.scale.compiled.thread_count`); each block's passes
         run on one thread and release the GIL. Blocks read from zarr run
         two tasks per thread, one of them mostly waiting for its chunk.
+    pitch, origin, unit : optional
+        The voxel size, the world position of voxel 0's lowest corner and
+        their length unit, along the array's axes, as
+        :func:`~isoflow.digital.analysis.analyze` takes them.
 
     Returns
     -------
     dict
-        ``analyze(DigitalObject(np.asarray(array)), connectivity, surfaces)``,
-        key for key.
+        ``analyze(np.asarray(array), connectivity, surfaces, pitch=pitch,
+        origin=origin, unit=unit)``, key for key.
 
     Raises
     ------
@@ -502,10 +512,11 @@ def analyze_chunked(
     dask, _ = import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
+    place = placed(None, len(shape), Place(pitch, origin, unit))
     if 0 in shape:  # no block to read: the report of the empty array, as analyze gives it
         from .analysis import analyze
 
-        return analyze(np.zeros(shape, bool), conn, surfaces=surfaces)
+        return analyze(np.zeros(shape, bool), conn, surfaces=surfaces, pitch=place[0], origin=place[1], unit=place[2])
     grid = _grid(array, block_shape, where)
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
@@ -524,13 +535,40 @@ def analyze_chunked(
         if isinstance(exc, NotBinary):
             raise NotBinary(message, exc.bare, exc.every, exc.ndim) from None
         raise IsoflowError(message) from None
-    return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged))
+    return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged, place))
+
+
+def analyze_in_xyz(array: Any, order: list[int], connectivity: int | None = None, *, pitch=None, origin=None,
+                   unit: str | None = None, **options: Any) -> Report:
+    """:func:`analyze_chunked` of an array whose x, y, z axes are its axes
+    ``order`` (an OME-Zarr image stores z, y, x), with its ``pitch`` and
+    ``origin`` in x, y, z order: the report's shape, box and centroid in
+    x, y, z order too (the rest does not depend on the order).
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> v = np.zeros((4, 3, 2), bool); v[3, 0, 1] = True  # stored (z, y, x): x = 1, y = 0, z = 3
+    >>> r = analyze_in_xyz(da.from_array(v), [2, 1, 0], pitch=(1, 1, 2))
+    >>> r.shape, r.bbox, r.centroid
+    ([2, 3, 4], [1.0, 0.0, 6.0, 2.0, 1.0, 8.0], [1.5, 0.5, 7.0])
+    """
+    spacing, corner, unit = placed(None, len(order), Place(pitch, origin, unit))
+    stored = np.argsort(order)  # stored axis i is axis stored[i] of x, y, z
+    report = analyze_chunked(array, connectivity, pitch=spacing[stored], origin=corner[stored], unit=unit, **options)
+    report = dataclasses.replace(report, shape=[int(report.shape[i]) for i in order])
+    if report.bbox is None or report.centroid is None:  # an empty object's, or none in this dimension
+        return report
+    lo, hi = report.bbox[:len(order)], report.bbox[len(order):]
+    return dataclasses.replace(report, bbox=[lo[i] for i in order] + [hi[i] for i in order],
+                               centroid=[report.centroid[i] for i in order])
 
 
 def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
                  block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
                  surfaces: bool = True, threads: int | None = None,
-                 progress: Callable[[int, int], object] | None = None) -> Report:
+                 progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
+                 origin: ArrayLike | None = None, unit: str | None = None) -> Report:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
 
     Parameters
@@ -542,12 +580,18 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
         length 1 are left out.
     connectivity, block_shape, scheduler, surfaces, threads, progress
         As in :func:`analyze_chunked`.
+    pitch, origin, unit : optional
+        The voxel size, the world position of voxel 0's lowest corner and
+        their unit, in (x, y, z) order, for the world measures (default
+        unit voxels at 0: ``isoflow info`` passes the store's own, which
+        :func:`isoflow.read_volume` reads).
 
     Returns
     -------
     dict
         The report, as :func:`isoflow.digital.analysis.analyze` gives it,
-        ``shape`` in (x, y, z) order (an OME-Zarr image stores z, y, x).
+        ``shape``, ``bbox`` and ``centroid`` in (x, y, z) order (an
+        OME-Zarr image stores z, y, x).
 
     Raises
     ------
@@ -594,8 +638,8 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
             binary(first, where, near=(0,) * z.ndim)
         except NotBinary as exc:
             raise fill_value_named(exc, getattr(z, "fill_value", None), z.dtype) from None
-    report = analyze_chunked(z, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
-                             surfaces=surfaces, threads=threads, progress=progress)
+    report = analyze_in_xyz(z, order, connectivity, block_shape=block_shape, scheduler=scheduler, where=where,
+                            surfaces=surfaces, threads=threads, progress=progress, pitch=pitch, origin=origin,
+                            unit=unit)
     never_written(where, unwritten_fill(z.array if isinstance(z, SpatialAxes) else z))
-    # analysed in stored order (the report does not depend on it but for the shape)
-    return dataclasses.replace(report, shape=[int(z.shape[i]) for i in order])
+    return report

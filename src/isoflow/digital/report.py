@@ -8,7 +8,7 @@ from typing import Any, TypedDict
 
 import numpy as np
 
-from ..results import OMIT_NONE, Result
+from ..results import OMIT_NONE, Result, omitted_with
 
 
 class ClosedSurface(TypedDict):
@@ -89,6 +89,31 @@ class Report(Result):
         Vertex contacts the mesh splits although the connectivity joins them.
     doubled_edges : int or None
         Lattice edges one sheet of the surface passes twice.
+    volume, surface_area : float or None
+        3D: the voxels times the volume of one, and the boundary faces
+        times their area (per normal axis the product of the two other
+        voxel sizes), in ``unit`` cubed and squared. None, and no key, in
+        another dimension.
+    area, perimeter : float or None
+        The same in 2D: the pixels times the area of one, and the boundary
+        pixel edges times their length (the pixel size along the edge).
+    bbox : list of float or None
+        The lowest corner of the voxels, then the highest (x, y, z, then x,
+        y, z; 4 numbers in 2D), world coordinates; None (``null``) for an
+        empty object. With unit voxels at 0, scikit-image's ``bbox``.
+    centroid : list of float or None
+        The mean of the voxels' centres, world coordinates (voxel ``v``
+        spans ``[v, v + 1]``: with unit voxels at 0, scikit-image's
+        ``centroid + 0.5``); None for an empty object.
+    unit : str or None
+        The length unit of the world measures: the object's (a file's, as
+        :func:`isoflow.read_volume` reads it), None where it has none.
+        Without a placement the voxels are unit cubes at 0, the measures in
+        voxels. The measures are :func:`isoflow.label_table`'s columns of
+        one label; they and ``unit`` are keys in 2D and 3D only: a 4D
+        object's fourth axis is mostly time, whose step is no length (a
+        hypervolume would mix frames and space), and a bare 1D array has
+        no placement.
 
     Examples
     --------
@@ -114,6 +139,16 @@ class Report(Result):
     >>> r = analyze(cells, 80)
     >>> len(r.n), r.non_well_composed, r.energy, r.a_dot_n_well_composed, r.a_dot_n
     (45, 1, 30, 30, 16)
+
+    World measures in the object's unit, the box and centroid ``null`` where
+    it is empty:
+
+    >>> from isoflow import DigitalObject
+    >>> r = analyze(DigitalObject(np.ones((2, 2, 1), bool), pitch=(0.5, 0.5, 2.0), unit="mm"))
+    >>> r.volume, r.surface_area, r.unit
+    (2.0, 10.0, 'mm')
+    >>> analyze(np.zeros((2, 2, 2), bool)).to_dict()["bbox"] is None
+    True
     """
 
     voxels: int
@@ -132,6 +167,13 @@ class Report(Result):
     surfaces: list[ClosedSurface] | None = dataclasses.field(default=None, metadata=OMIT_NONE)
     pinched_vertices: int | None = dataclasses.field(default=None, metadata=OMIT_NONE)
     doubled_edges: int | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    volume: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    surface_area: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    area: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    perimeter: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
+    bbox: list[float] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
+    centroid: list[float] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
+    unit: str | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
 
     @property
     def genus(self) -> list[int]:

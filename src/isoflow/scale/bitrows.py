@@ -24,28 +24,39 @@ from .compiled import run, slabs, thread_count
 from .jit import njit
 
 
-@intrinsic
-def popcount(typingctx, x):
-    """Set bits of an integer (one instruction where the CPU has it)."""
-    if not isinstance(x, types.Integer):
-        return None
+def integer_intrinsic(name: str, doc: str, emit):
+    """An intrinsic that maps an integer to one of its type, by one LLVM
+    instruction that ``emit(builder, value)`` adds.
 
-    def codegen(context, builder, signature, args):
-        return builder.ctpop(args[0])
+    Examples
+    --------
+    >>> bits = integer_intrinsic("bits", "Set bits.", lambda builder, x: builder.ctpop(x))
+    >>> int(njit(lambda x: bits(x))(np.uint64(0b1011)))
+    3
+    """
 
-    return x(x), codegen
+    def typer(typingctx, x):
+        if not isinstance(x, types.Integer):
+            return None
+
+        def codegen(context, builder, signature, args):
+            return emit(builder, args[0])
+
+        return x(x), codegen
+
+    typer.__name__ = typer.__qualname__ = name
+    typer.__doc__ = doc
+    return intrinsic(typer)
 
 
-@intrinsic
-def trailing_zeros(typingctx, x):
-    """The number of clear bits below the lowest set bit (undefined for x = 0)."""
-    if not isinstance(x, types.Integer):
-        return None
-
-    def codegen(context, builder, signature, args):
-        return builder.cttz(args[0], ir.Constant(ir.IntType(1), 1))
-
-    return x(x), codegen
+#: (cttz's and ctlz's flag: the result of 0 may be undefined, which keeps them one instruction)
+_UNDEFINED_AT_ZERO = ir.Constant(ir.IntType(1), 1)
+popcount = integer_intrinsic("popcount", "Set bits of an integer (one instruction where the CPU has it).",
+                             lambda builder, x: builder.ctpop(x))
+trailing_zeros = integer_intrinsic("trailing_zeros", "The number of clear bits below the lowest set bit (undefined "
+                                   "for x = 0).", lambda builder, x: builder.cttz(x, _UNDEFINED_AT_ZERO))
+leading_zeros = integer_intrinsic("leading_zeros", "The number of clear bits above the highest set bit (undefined "
+                                  "for x = 0).", lambda builder, x: builder.ctlz(x, _UNDEFINED_AT_ZERO))
 
 
 @njit(cache=True, nogil=True)
@@ -121,6 +132,50 @@ def pack(volume: np.ndarray):
     ngaps = np.zeros(nx * ny + 2, np.int64)
     run([(_pack_rows, v, bits, nruns, ngaps, a, b) for a, b in slabs(nx, thread_count(v.size))])
     return bits, np.cumsum(nruns), np.cumsum(ngaps)
+
+
+@njit(cache=True, nogil=True)
+def _row_extents(bits, counts, sums, first, last, r0, r1):
+    """Per row ``r0 <= r < r1`` its set bits, the sum of their positions
+    and the lowest and highest (-1 in a clear row). A word's position sum
+    is that of its bit planes: the bits whose position has bit ``j`` set,
+    counted ``2^j`` times each."""
+    planes = (np.uint64(0xAAAAAAAAAAAAAAAA), np.uint64(0xCCCCCCCCCCCCCCCC), np.uint64(0xF0F0F0F0F0F0F0F0),
+              np.uint64(0xFF00FF00FF00FF00), np.uint64(0xFFFF0000FFFF0000), np.uint64(0xFFFFFFFF00000000))
+    zero = np.uint64(0)
+    for r in range(r0, r1):
+        count, total, lo, hi = 0, 0, -1, -1
+        for w in range(bits.shape[1]):
+            u = bits[r, w]
+            if u == zero:
+                continue
+            n = np.int64(popcount(u))
+            count += n
+            total += 64 * w * n
+            for j in range(6):
+                total += np.int64(popcount(u & planes[j])) << j
+            if lo < 0:
+                lo = 64 * w + np.int64(trailing_zeros(u))
+            hi = 64 * w + 63 - np.int64(leading_zeros(u))
+        counts[r], sums[r], first[r], last[r] = count, total, lo, hi
+
+
+def row_extents(bits: np.ndarray, threads: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(counts, sums, first, last)`` of the rows of :func:`pack` (the
+    clear last row left out): each row's set bits, the sum of their
+    positions along the row, the lowest and the highest (-1 where none),
+    int64, on up to ``threads`` threads.
+
+    Examples
+    --------
+    >>> v = np.zeros((1, 2, 70), bool); v[0, 1, [3, 69]] = True
+    >>> [a.tolist() for a in row_extents(pack(v)[0])]
+    [[0, 2], [0, 72], [-1, 3], [-1, 69]]
+    """
+    rows = bits.shape[0] - 1
+    counts, sums, first, last = (np.empty(rows, np.int64) for _ in range(4))
+    run([(_row_extents, bits, counts, sums, first, last, a, b) for a, b in slabs(rows, threads)])
+    return counts, sums, first, last
 
 
 @njit(cache=True, nogil=True, inline="always")

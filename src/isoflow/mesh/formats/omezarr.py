@@ -308,21 +308,28 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     ``progress(done, total)`` is called as each block is summed and merged;
     ``surfaces`` and ``threads`` as in :func:`~isoflow.digital.outofcore.analyze_chunked`.
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
-    refuses it (the values present are then read in a second pass)."""
-    from ...digital.outofcore import analyze_chunked, analyze_zarr
+    refuses it (the values present are then read in a second pass). The
+    world measures are placed as :func:`read` places the volume."""
+    from ...digital.outofcore import analyze_in_xyz, analyze_zarr
 
     import_library("zarr", "OME-Zarr")
-    if label is None:
-        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads)
     store = open_store(path)
+    pitch, origin = store.placement()
+    try:  # checked up front, named as info names the placement it prints
+        at = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
+    except IsoflowError as exc:
+        raise exc.at(path) from None
+    place = {"pitch": at.spacing, "origin": at.origin, "unit": store.unit()}
+    if label is None:
+        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
     label = check_label(label, store.array.dtype, store.where)
-    report = analyze_chunked(store.lazy() == label, connectivity, where=store.where, progress=progress,
-                             surfaces=surfaces, threads=threads)
+    # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
+    order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
+    report = analyze_in_xyz(store.lazy() == label, order, connectivity, where=store.where, progress=progress,
+                            surfaces=surfaces, threads=threads, **place)
     if report["voxels"] == 0:
         raise label_absent(path, label)
     never_written(store.where, unwritten_fill(store.array, label), label)
-    if store.multiscale is not None:  # the analysed axes are in stored order; report them as (x, y, z)
-        report = dataclasses.replace(report, shape=[int(store.array.shape[i]) for i in store.xyz])
     return report
 
 
