@@ -818,3 +818,27 @@ def test_flow_options_for_the_out_files_without_out_are_refused_not_ignored(tmp_
     assert main(["flow", str(tmp_path / "b.npy"), "--steps", "1", flag, "--out", str(out)]) == 0
     surface = trimesh.load(out / "step_000.ply")
     assert surface.is_watertight and surface.euler_number == 2  # a box's surface: one sphere
+
+
+def test_info_json_of_voxels_of_1e150_is_json_and_prints_no_numpy_warning(tmp_path, capfd):
+    """The single object's volume of voxels of 1e150 is past float64
+    (27 x 1e450): ``info --json`` wrote ``Infinity``, which no JSON parser
+    in strict mode takes, after NumPy's "overflow encountered in reduce"
+    on the terminal. It is null; the surface area (54 x 1e300) and the box
+    (3e150) are numbers float64 holds, as Python computes them."""
+    import warnings
+
+    from isoflow import DigitalObject, write_volume
+
+    write_volume(DigitalObject(np.ones((3, 3, 3), bool), pitch=1e150), tmp_path / "huge.npz")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        assert main(["info", str(tmp_path / "huge.npz"), "--json"]) == 0
+    out, err = capfd.readouterr()
+    assert err == ""
+    report = json.loads(out, parse_constant=lambda name: pytest.fail(f"{name} is no JSON"))
+    with np.errstate(over="ignore"):
+        assert np.isinf(np.float64(27) * np.float64(1e150) ** 3)  # beyond float64 ...
+    assert report["volume"] is None  # ... so null
+    assert report["surface_area"] == 54 * (1e150 * 1e150)
+    assert report["bbox"] == [0.0, 0.0, 0.0] + [3 * 1e150] * 3

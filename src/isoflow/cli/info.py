@@ -6,6 +6,7 @@ import argparse
 import contextlib
 import dataclasses
 import json
+import math
 import threading
 from pathlib import Path
 
@@ -71,8 +72,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         report, grid, placed = info_in_memory(args)
     if args.json:
-        print(json.dumps({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
-                          "input": path_text(args.input)}))
+        print(json.dumps(finite_or_null({**report.to_dict(), **(placed or {}), **({"voxelised": grid} if grid else {}),
+                                         "input": path_text(args.input)})))
         return 0
     print(format_info(report, path_text(args.input), grid, placed))
     return 0
@@ -256,6 +257,25 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
     lines.append(f"  energy E = k^T n       {r['energy']}")
     lines += format_surfaces(r)
     return "\n".join(lines)
+
+
+def finite_or_null(report: dict) -> dict:
+    """The report's values with every float beyond float64 (a volume of
+    voxels of 1e150: inf) as None, which JSON writes ``null``: ``Infinity``
+    is no JSON, and strict parsers refuse the line (as the label table's
+    JSON writes such a volume).
+
+    Examples
+    --------
+    >>> finite_or_null({"volume": float("inf"), "bbox": [0.0, float("inf")], "voxels": 3})
+    {'volume': None, 'bbox': [0.0, None], 'voxels': 3}
+    """
+    def finite(x):
+        if isinstance(x, float) and not math.isfinite(x):
+            return None
+        return [finite(y) for y in x] if isinstance(x, list) else x
+
+    return {key: finite(value) for key, value in report.items()}
 
 
 def format_measures(r: Report, step=None) -> list[str]:

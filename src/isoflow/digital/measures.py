@@ -181,10 +181,14 @@ def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Ext
         return {}
     size, boundary = MEASURE_NAMES[ndim]
     spacing = np.asarray(spacing, np.float64)
-    areas = np.array([np.prod(np.delete(spacing, axis)) for axis in range(ndim)])
-    out: dict = {size: voxels * float(np.prod(spacing)), boundary: float(np.asarray(faces, np.int64) @ areas),
-                 "bbox": None, "centroid": None, "unit": unit}
-    if extent is not None:
-        out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()
-        out["centroid"] = (corner + spacing * (extent.sums / voxels + 0.5)).tolist()
+    # a voxel size of 1e150 (or 1e-150) puts a volume past float64: inf
+    # (or 0), as the label table's columns, without a NumPy warning on the
+    # user's terminal (``info --json`` writes inf as null)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        areas = np.array([np.prod(np.delete(spacing, axis)) for axis in range(ndim)])
+        out: dict = {size: voxels * float(np.prod(spacing)), boundary: float(np.asarray(faces, np.int64) @ areas),
+                     "bbox": None, "centroid": None, "unit": unit}
+        if extent is not None:
+            out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()
+            out["centroid"] = (corner + spacing * (extent.sums / voxels + 0.5)).tolist()
     return out
