@@ -92,8 +92,9 @@ class Report(Result):
     volume, surface_area : float or None
         3D: the voxels times the volume of one, and the boundary faces
         times their area (per normal axis the product of the two other
-        voxel sizes), in ``unit`` cubed and squared. None, and no key, in
-        another dimension.
+        voxel sizes), in ``unit`` cubed and squared; inf past float64
+        (``info --json`` writes null). None, and no key, in another
+        dimension.
     area, perimeter : float or None
         The same in 2D: the pixels times the area of one, and the boundary
         pixel edges times their length (the pixel size along the edge).
