@@ -96,7 +96,7 @@ def surface_of(args: argparse.Namespace) -> int:
     # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were
     with output_set(out) if args.png else contextlib.nullcontext():
         written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                       force=args.force, comments=comments)
+                                       force=args.force, comments=comments, name=input_stem(args.input))
         comps = mesh.components()
         print(
             f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
@@ -115,6 +115,17 @@ def surface_of(args: argparse.Namespace) -> int:
     if args.png:
         print(f"{args.png}: picture of the surface coloured by vertex angle")
     return status
+
+
+def input_stem(name: str) -> str:
+    """The input's file name less its volume or mesh suffix (``scan`` of
+    ``scan.nii.gz``, of ``scan.h5:/seg`` and of ``scan.ply``), which names
+    a GLB's node as ``--labels`` names them ``label_N``."""
+    from ..mesh.formats.registry import split_dataset, volume_suffixes
+
+    file = split_dataset(name)[0].name
+    known = [s for s in volume_suffixes() if file.lower().endswith(s) and len(s) < len(file)]
+    return file[:-len(max(known, key=len))] if known else Path(file).stem or file
 
 
 def checked_mesh(name: str, obj, conn: int):

@@ -284,6 +284,7 @@ def write_glb(
     comment: str = "",
     sync: bool = True,
     frame=None,
+    name: str | None = None,
 ) -> Path:
     """Write a binary glTF (:mod:`isoflow.mesh.gltf`): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
@@ -292,8 +293,11 @@ def write_glb(
     ...). ``frame``: ``(positions,
     transform)``, positions in the file's float32 with the 4x4 transform
     that puts them in place as the node's matrix (where float32 cannot
-    hold the world positions; see the module docs)."""
-    return write_glb_scene(path, [(None, columns, triangles, frame)], force=force, comment=comment, sync=sync)
+    hold the world positions; see the module docs). ``name`` names the
+    node and its mesh, which Blender and viewers' scene trees show as the
+    object's name (None: the file's stem)."""
+    name = Path(path).stem if name is None else name
+    return write_glb_scene(path, [(name, columns, triangles, frame)], force=force, comment=comment, sync=sync)
 
 
 def write_glb_scene(path: str | os.PathLike, parts: list, *, force: bool = False, comment: str = "",
@@ -489,9 +493,11 @@ def write_mesh_file(
     force: bool = False,
     comments: tuple[str, ...] = (),
     sync: bool = True,
+    name: str | None = None,
 ) -> dict:
     """Write a boundary mesh in the format its suffix names (PLY, OBJ, STL,
-    GLB), in world coordinates. Returns what was written: ``path``,
+    GLB), in world coordinates; ``name`` names a GLB's node (None: the
+    file's stem, :func:`write_glb`). Returns what was written: ``path``,
     ``faces`` (the kind) and ``face_count``; for STL also ``moved`` and
     ``moved_voxels``, how far float32 moved the positions
     (:func:`~isoflow.mesh.float32.float32_effect`). Raises IsoflowError, writing nothing, for an
@@ -517,7 +523,7 @@ def write_mesh_file(
                 "moved_voxels": effect["moved_voxels"]}
     else:
         table, frame = glb_columns(mesh, obj)
-        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
+        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame, name=name)
         beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
         return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
                 "beyond": beyond}
