@@ -139,10 +139,9 @@ def check_float64_corners(where, origin, spacing, shape) -> dict:
     ----------
     where : str or os.PathLike
         The input (or the file), as the line names it.
-    origin, spacing : array_like
-        The grid's origin and voxel size per axis.
-    shape : tuple of int
-        Voxels per axis.
+    origin, spacing, shape
+        The grid's placement and voxels per axis, as
+        :func:`~isoflow.mesh.float32.float64_corners` takes them.
 
     Returns
     -------
