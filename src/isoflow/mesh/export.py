@@ -708,7 +708,8 @@ def write_surface(
     "Surface files"): binary PLY with the per-vertex curvature columns
     ``config``, ``class``, ``gamma``, ``a``, ``f`` and colours; OBJ with
     positions; binary STL (triangles, no shared vertices); GLB (triangles,
-    ``COLOR_0`` and the attributes ``_config`` ... ``_f``). It is written
+    ``COLOR_0`` and the attributes ``_config`` ... ``_f``, in one node
+    named after the file, less its suffix). It is written
     beside the target and renamed when complete, so an interrupted write
     leaves any previous file as it was.
 
