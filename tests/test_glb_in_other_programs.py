@@ -216,3 +216,32 @@ def test_label_surfaces_of_huge_voxels_print_no_numpy_warning(tmp_path, capsys):
     assert capsys.readouterr().err == ""
     bounds = trimesh.load(tmp_path / "out" / "label_2.ply", process=False).bounds
     assert np.allclose(bounds, world_box(image == 2, 1e150, (0.0, 0.0, 0.0)), rtol=1e-12, atol=0)
+
+
+def glb_json(path) -> dict:
+    """The JSON chunk of a GLB, read by the spec's layout: a 12-byte
+    header, then the chunk's length, its type "JSON" and its bytes."""
+    import json
+    import struct
+
+    data = Path(path).read_bytes()
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert data[:4] == b"glTF" and kind == b"JSON"
+    return json.loads(data[20:20 + length])
+
+
+@pytest.mark.parametrize("name", ["bob_small.nii.gz", "bob_small.npz"])
+def test_a_surface_glb_node_is_named_after_its_input(tmp_path, capsys, name):
+    # the node was trimesh's default "geometry_0", Blender's object name
+    pytest.importorskip("nibabel")
+    mask = contacts()
+    isoflow.write_volume(isoflow.DigitalObject(mask, pitch=(0.5, 0.5, 0.5)), tmp_path / name)
+    assert main(["surface", str(tmp_path / name), "-o", str(tmp_path / "s.glb"), "-q"]) == 0
+    doc = glb_json(tmp_path / "s.glb")
+    assert [n["name"] for n in doc["nodes"]] == ["bob_small"] == [m["name"] for m in doc["meshes"]]
+    scene = trimesh.load(tmp_path / "s.glb")
+    assert list(scene.geometry) == ["bob_small"] and scene.graph.nodes_geometry == ["bob_small"]
+    assert list(meshlab_boxes(tmp_path / "s.glb")) == ["bob_small"]  # MeshLab's layer name
+    # written from Python, the node is named after the file written
+    isoflow.write_surface(isoflow.DigitalObject(mask), tmp_path / "part.glb")
+    assert [n["name"] for n in glb_json(tmp_path / "part.glb")["nodes"]] == ["part"]

@@ -313,3 +313,21 @@ def test_a_flow_directory_under_a_file_is_said_to_be_under_a_file(tmp_path):
     lines = got.stderr.strip().splitlines()
     assert got.returncode == 2 and len(lines) == 1, got.stderr
     assert os.strerror(errno.ENOTDIR).lower() in lines[0].lower() and str(stl) in lines[0], lines[0]
+
+
+def test_a_gltf_output_names_the_glb_that_holds_the_same_scene(tmp_path):
+    # the refusal listed the suffixes only: nothing said that .glb is glTF
+    trimesh = pytest.importorskip("trimesh")
+    vol = np.zeros((5, 5, 5), bool)
+    vol[1:4, 1:4, 1:4] = True
+    np.save(tmp_path / "cube.npy", vol)
+    refused = run("surface", tmp_path / "cube.npy", "-o", tmp_path / "cube.gltf")
+    line = refused.stderr.strip()
+    assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["cube.npy"]
+    assert line.endswith("; write cube.glb (binary glTF, the same scene in one file)")
+    # the file named is glTF as trimesh reads it: the cube's closed surface
+    done = run("surface", tmp_path / "cube.npy", "-o", tmp_path / "cube.glb", "-q")
+    assert done.returncode == 0, done.stderr
+    mesh = trimesh.load(tmp_path / "cube.glb", force="mesh")
+    assert mesh.is_watertight and mesh.volume == pytest.approx(27.0)

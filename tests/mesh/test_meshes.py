@@ -57,7 +57,7 @@ def test_open_mesh_has_no_genus_but_a_solid():
     assert "open (341 boundary edges)" in r["verdict"] and "generalised winding number" in r["verdict"]
     vol, _, _ = voxelize(*load_mesh(MESHES / "plane_holes.obj"), resolution=32)
     assert r["digital"][0]["voxels"] == int(vol.sum()) > 0
-    with pytest.raises(IsoflowError, match="plane_holes.obj: voxelize: mesh is not watertight: 341 boundary edges"):
+    with pytest.raises(IsoflowError, match="plane_holes.obj: mesh is not watertight: 341 boundary edges"):
         verify_genus(MESHES / "plane_holes.obj", (32,), strict=True)
 
 

@@ -6,10 +6,14 @@ there and counts the closed mesh; trimesh, on the same faces, calls it open.
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 import trimesh
 
+from isoflow.errors import IsoflowError
 from isoflow.mesh.genus import verify_genus
 from isoflow.mesh.t_junctions import split_t_junctions
 
@@ -110,3 +114,40 @@ def test_strict_genus_refuses_what_strict_voxelize_refuses(tmp_path, repair):
     trimesh.Trimesh(v, f, process=False).export(path)
     assert main(["genus", str(path), "--strict", "--resolution", "32", "--no-step", "-q"]) == 2
     assert main(["voxelize", str(path), "--strict", "--resolution", "32", "-o", str(tmp_path / "v.npy"), "-q"]) == 2
+
+
+@pytest.mark.parametrize("repair", ["t_junctions", "repeated_faces"])
+def test_strict_genus_says_what_genus_does_without_it(tmp_path, repair):
+    """The refusal said voxelize's "(without --strict it is read by the
+    generalised winding number)": genus without --strict repairs such a
+    mesh and counts it closed. The line names the repairs, as many as the
+    mesh was built with, and the mesh they give is closed with trimesh's
+    genus of the torus."""
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    if repair == "t_junctions":
+        v, f = with_t_junctions(torus)
+        said = f"splits the edges at {len(v) - len(torus.vertices)} T-junctions"  # one new vertex each
+    else:
+        v, f = torus.vertices, np.vstack([torus.faces, torus.faces[:5]])
+        said = "drops 5 repeated faces"
+    path = tmp_path / "cracked.ply"
+    trimesh.Trimesh(v, f, process=False).export(path)
+    refused = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--strict", "--resolution", "16",
+                              "--no-step", "-q"], capture_output=True, text=True)
+    line = refused.stderr.strip()
+    assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line
+    assert line.endswith(f"(without --strict genus {said}, which closes the mesh, and counts its genus)")
+    assert "voxelize" not in line and "winding number" not in line
+    with pytest.raises(IsoflowError, match=rf"\(without strict=True genus {said},"):
+        verify_genus((v, f), resolutions=[16], step=False, strict=True)
+    verdict = verify_genus((v, f), resolutions=[16, 32], step=False)
+    assert verdict.mesh["watertight"] and verdict.mesh["genus"] == (2 - torus.euler_number) // 2 == 1
+
+
+def test_strict_genus_of_an_open_mesh_says_it_is_taken_as_it_stands(tmp_path):
+    box = trimesh.creation.box()
+    trimesh.Trimesh(box.vertices, box.faces[1:], process=False).export(tmp_path / "open.ply")
+    assert len(trimesh.grouping.group_rows(box.edges_sorted[3:], require_count=1)) == 3  # trimesh: 3 open edges
+    with pytest.raises(IsoflowError, match=r"3 boundary edges.*\(without strict=True genus gives its verdict on the "
+                                           r"mesh as it stands: it is read by the generalised winding number\)$"):
+        verify_genus(str(tmp_path / "open.ply"), resolutions=[16], step=False, strict=True)

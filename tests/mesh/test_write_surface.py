@@ -248,14 +248,17 @@ def test_the_read_back_check_writes_the_same_file(tmp_path, rng, suffix, ascii, 
     from conftest import random_volume
 
     objects = [object_with_contacts()] + [np.pad(random_volume(rng), 1) for _ in range(4)]
+    (tmp_path / "c").mkdir()
+    (tmp_path / "u").mkdir()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IsoflowWarning)  # the STL's weld, said in test_stl_says_what_readers_do
         for i, obj in enumerate(o for o in objects if np.any(o)):
-            checked = isoflow.write_surface(obj, tmp_path / f"c{i}{suffix}", ascii=ascii, triangulate=triangulate)
-            unchecked = isoflow.write_surface(obj, tmp_path / f"u{i}{suffix}", ascii=ascii, triangulate=triangulate,
-                                              check=False)
+            # one name in two folders: a GLB's node is named after the file
+            checked = isoflow.write_surface(obj, tmp_path / "c" / f"{i}{suffix}", ascii=ascii, triangulate=triangulate)
+            unchecked = isoflow.write_surface(obj, tmp_path / "u" / f"{i}{suffix}", ascii=ascii,
+                                              triangulate=triangulate, check=False)
             assert checked.read_bytes() == unchecked.read_bytes()
-    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temporary left
+    assert not [p.name for d in ("c", "u") for p in (tmp_path / d).iterdir() if p.name.startswith(".")]  # no temporary
 
 
 def test_a_file_that_reads_back_otherwise_is_refused_and_nothing_replaced(tmp_path, monkeypatch):

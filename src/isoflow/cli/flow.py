@@ -70,6 +70,7 @@ def cmd_flow(args: argparse.Namespace) -> int:
     refuse_store_read_whole(args)
     obj = load_input(args)
     check_flow_input(args, obj)
+    corners = out_placement(args, obj)
     writer = flow_writer(args, obj)
     result = run_with_files(args, obj, writer)
     if args.json:
@@ -81,7 +82,25 @@ def cmd_flow(args: argparse.Namespace) -> int:
                 "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
             print(f"{args.out}: {', '.join(written)}"
                   + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
+    from ..mesh.export import float64_move_note
+
+    moved = None if corners is None else float64_move_note(args.out, corners)
+    if moved:  # the step surfaces' corners moved by float64 itself
+        print(f"isoflow flow: warning: {moved}", file=sys.stderr)
     return 0 if writer is None else say_read_back(args, writer)
+
+
+def out_placement(args: argparse.Namespace, obj) -> dict | None:
+    """Where ``--out`` writes step surfaces, the object's placement as
+    :func:`isoflow.mesh.export.check_float64_corners` takes it: refused
+    before the run where float64 cannot keep the voxel corners apart (the
+    surfaces would collapse in every file), else what float64 does to
+    them; None without step surfaces."""
+    if not args.out or obj.ndim != 3:
+        return None
+    from ..mesh.export import check_float64_corners
+
+    return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape)
 
 
 def block_wise(args: argparse.Namespace) -> bool:

@@ -431,7 +431,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
     columns computed per batch."""
     from ..digital.label_meshes import label_batches
-    from ..mesh.export import float32_transform_problem
+    from ..mesh.export import check_float64_corners, float32_transform_problem, float64_move_note
+    from ..mesh.float32 import float64_moved
     from ..mesh.outputs import check_output_path
     from .progress import progress_bar
 
@@ -444,6 +445,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     _, conn, table, image, _ = read_table(args)
+    # a placement no file holds: refused before any surface
+    corners = check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]
@@ -465,13 +468,17 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
             _take_batch(args, target, batch, table, names, lo, image, meshes, glb_parts)
             if show is not None:
                 show(meshed, total)
-        expected = None if args.no_check or target[0] != "glb" else scene_expected(table, names, image.spacing)
+        expected = None if args.no_check or target[0] != "glb" else scene_expected(table, names, image.spacing,
+                                                                                  float64_moved(corners))
         # what of a .glb's node transforms float32 cannot hold: said with the note on them
         beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
         problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
           + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
+    moved = float64_move_note(target[1], corners)
+    if moved:  # every file's corners moved by float64 itself
+        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
     return 1 if problems else 0
@@ -503,17 +510,21 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         meshes[r] = (names[r], mesh, obj, surfaces)
 
 
-def scene_expected(table: dict, names: list[str], spacing) -> list[tuple[str, dict, float]]:
+def scene_expected(table: dict, names: list[str], spacing, moved: float = 0.0) -> list[tuple[str, dict, float]]:
     """What each label's node of the scene must read as, from the table
     (``info --labels``'s figures, counted from the pieces, not from the
     meshes): its surface's V - E + F, the sum of its closed surfaces'
-    genera, and its volume; with the unit the volumes are compared in
+    genera, and its volume, within ``moved`` (float64's move of the
+    corners, :func:`isoflow.mesh.float32.float64_moved`) times twice its
+    surface's area; with the unit the volumes are compared in
     (:func:`isoflow.mesh.readback.check_scene_figures`)."""
     from ..mesh.readback import expected_figures, unit_of
 
     unit = unit_of(spacing)
-    return [(name, expected_figures(euler, sum(genera), voxels, spacing), unit) for name, euler, genera, voxels
-            in zip(names, table["surface_euler"].tolist(), table["genera"], table["voxels"].tolist())]
+    areas = table["surface_area"].tolist() if moved else [0.0] * len(names)
+    return [(name, expected_figures(euler, sum(genera), voxels, spacing, slack=2 * moved * area), unit)
+            for name, euler, genera, voxels, area
+            in zip(names, table["surface_euler"].tolist(), table["genera"], table["voxels"].tolist(), areas)]
 
 
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:

@@ -90,13 +90,15 @@ def surface_of(args: argparse.Namespace) -> int:
         why = why_empty(args, obj)  # a point list with points: say why none is in
         raise IsoflowError(f"{args.input}: the object is empty"
                            + (f": {why}" if why else ", there is no surface to write"))
+    # a placement no file holds: refused before any work
+    corners = export.check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape)
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
     # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were
     with output_set(out) if args.png else contextlib.nullcontext():
         written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                       force=args.force, comments=comments)
+                                       force=args.force, comments=comments, name=input_stem(args.input))
         comps = mesh.components()
         print(
             f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
@@ -105,6 +107,9 @@ def surface_of(args: argparse.Namespace) -> int:
         )
         if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
             print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
+        moved = export.float64_move_note(out, corners)
+        if moved:  # nor where float64 itself moves the corners
+            print(f"isoflow surface: warning: {moved}", file=sys.stderr)
         if written.get("framed") and not args.quiet:  # MeshLab reads such a GLB in voxel units
             print(f"isoflow surface: note: {export.glb_transform_note(out, beyond=written['beyond'])}", file=sys.stderr)
         status = read_back(args, out, mesh, obj, comps)
@@ -115,6 +120,17 @@ def surface_of(args: argparse.Namespace) -> int:
     if args.png:
         print(f"{args.png}: picture of the surface coloured by vertex angle")
     return status
+
+
+def input_stem(name: str) -> str:
+    """The input's file name less its volume or mesh suffix (``scan`` of
+    ``scan.nii.gz``, of ``scan.h5:/seg`` and of ``scan.ply``), which names
+    a GLB's node as ``--labels`` names them ``label_N``."""
+    from ..mesh.formats.registry import split_dataset, volume_suffixes
+
+    file = split_dataset(name)[0].name
+    known = [s for s in volume_suffixes() if file.lower().endswith(s) and len(s) < len(file)]
+    return file[:-len(max(known, key=len))] if known else Path(file).stem or file
 
 
 def checked_mesh(name: str, obj, conn: int):
@@ -181,6 +197,8 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
+    from ..mesh.export import check_float64_corners, float64_move_note
+    from ..mesh.float32 import float64_moved
     from ..mesh.formats.omezarr import label_absent, open_store, store_volume
     from ..mesh.readback import volume_unit, volume_words
     from ..mesh.streamed_readback import check_streamed
@@ -192,6 +210,8 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     refuse_points_option(args, "volume")
     array, pitch, origin = store_volume(args.input, args.label)
     frame = DigitalObject.placement(3, pitch=pitch, origin=origin)
+    # a placement no file holds: refused before any block
+    corners = check_float64_corners(args.input, frame.origin, frame.spacing, array.shape)
     conn = args.connectivity or default_connectivity(3)
     with progress_bar(args, "blocks") as show, label_options(args):
         try:
@@ -210,9 +230,12 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
           f"V-E+F = {written['euler_characteristic']}"
           + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
           + " (written block by block; isoflow info counts its closed surfaces)")
+    moved = float64_move_note(out, corners)
+    if moved:  # the corners moved by float64 itself
+        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
     if args.no_check:
         return 0
-    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2), frame)
+    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1

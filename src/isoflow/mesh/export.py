@@ -49,7 +49,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, warn
-from .float32 import float32_effect
+from .float32 import float32_effect, float64_corners, float64_moved
 from .outputs import atomic_write, check_output_path, output_set
 
 if TYPE_CHECKING:
@@ -112,6 +112,92 @@ def stl_refusal(path, effect: dict, spacing) -> str:
             f"surface's {effect['positions']} distinct corner positions into others (voxel size "
             f"{float(np.min(spacing)):.3g}, coordinates up to {effect['largest']:.3g}, where float32 positions "
             f"are {effect['step']:.3g} apart); write .ply, .obj or .glb, which keep them")
+
+
+def placement_words(origin, spacing) -> str:
+    """A grid's origin and voxel size, as the float64 lines name them.
+
+    Examples
+    --------
+    >>> placement_words((1e6, 0, 0), (1e-9, 1e-9, 2e-9))
+    'origin (1e+06, 0, 0), voxel size (1e-09, 1e-09, 2e-09)'
+    """
+    def listed(values) -> str:
+        return "(" + ", ".join(f"{float(x):.6g}" for x in np.asarray(values, np.float64).ravel()) + ")"
+
+    return f"origin {listed(origin)}, voxel size {listed(spacing)}"
+
+
+def check_float64_corners(where, origin, spacing, shape) -> dict:
+    """Refuse, before anything is written, a surface of a grid placed
+    where float64 itself cannot keep its voxel corners apart (a voxel size
+    of 1 at an origin of 1e43): every format holds world positions in
+    float64 at most, so the surface would collapse onto fewer corners in
+    every file, its faces without area and its volume lost.
+
+    Parameters
+    ----------
+    where : str or os.PathLike
+        The input (or the file), as the line names it.
+    origin, spacing, shape
+        The grid's placement and voxels per axis, as
+        :func:`~isoflow.mesh.float32.float64_corners` takes them.
+
+    Returns
+    -------
+    dict
+        :func:`~isoflow.mesh.float32.float64_corners` of the grid, with its
+        ``origin`` and ``spacing``, for :func:`float64_move_note` where the
+        corners are kept apart.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the origin, the voxel size and float64's spacing
+        there (``np.spacing``).
+
+    Examples
+    --------
+    >>> check_float64_corners("far.npz", (1e43, 0, 0), (1.0, 1.0, 1.0), (2, 2, 2))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: far.npz: the voxel corners are not distinct in float64 at this placement (origin
+    (1e+43, 0, 0), voxel size (1, 1, 1)): near 1e+43 float64 values are 1.24e+27 apart (np.spacing), ...
+    >>> check_float64_corners("near.npz", (0, 0, 0), (1.0, 1.0, 1.0), (2, 2, 2))["merged"]
+    False
+    """
+    corners = {**float64_corners(origin, spacing, shape), "origin": origin, "spacing": spacing}
+    if corners["merged"]:
+        raise IsoflowError(
+            f"{where}: the voxel corners are not distinct in float64 at this placement "
+            f"({placement_words(origin, spacing)}): near {corners['near']:.3g} float64 values are "
+            f"{corners['step']:.3g} apart (np.spacing), so corners a voxel apart along axis {corners['axis']} are "
+            "one value and every surface file would collapse; place the object nearer the origin (subtract its origin)")
+    return corners
+
+
+def float64_move_note(where, corners: dict) -> str | None:
+    """How far float64 itself moves the corners of a surface placed far
+    from the origin against its voxel size (``corners``:
+    :func:`check_float64_corners`), or None where
+    :func:`~isoflow.mesh.float32.float64_moved` finds it too small to say.
+
+    Examples
+    --------
+    >>> corners = check_float64_corners("s.ply", (1e6, 0, 0), (1e-9,) * 3, (2, 2, 2))
+    >>> print(float64_move_note("s.ply", corners))  # doctest: +ELLIPSIS
+    s.ply: float64 holds the voxel corners of this placement (origin (1e+06, 0, 0), voxel size (1e-09, 1e-09, 1e-09))
+    only to its spacing near 1e+06, 1.16e-10 (np.spacing): every format's positions move by up to 0.12 voxels ...
+    >>> float64_move_note("s.ply", check_float64_corners("s.ply", (0, 0, 0), (1.0,) * 3, (2, 2, 2))) is None
+    True
+    """
+    if not float64_moved(corners):
+        return None
+    return (f"{where}: float64 holds the voxel corners of this placement "
+            f"({placement_words(corners['origin'], corners['spacing'])}) only to its spacing near "
+            f"{corners['near']:.3g}, {corners['step']:.3g} (np.spacing): every format's positions move by up to "
+            f"{corners['moved_voxels']:.2g} voxels along axis {corners['axis']}, and the read-back compares the "
+            "volume within that; place the object nearer the origin (subtract its origin) to keep them")
 
 
 def mesh_vertex_table(mesh, obj: DigitalObject, position=None) -> dict[str, np.ndarray]:
@@ -284,6 +370,7 @@ def write_glb(
     comment: str = "",
     sync: bool = True,
     frame=None,
+    name: str | None = None,
 ) -> Path:
     """Write a binary glTF (:mod:`isoflow.mesh.gltf`): triangles on shared
     vertices, the ``red/green/blue`` columns as the vertex colours
@@ -292,8 +379,11 @@ def write_glb(
     ...). ``frame``: ``(positions,
     transform)``, positions in the file's float32 with the 4x4 transform
     that puts them in place as the node's matrix (where float32 cannot
-    hold the world positions; see the module docs)."""
-    return write_glb_scene(path, [(None, columns, triangles, frame)], force=force, comment=comment, sync=sync)
+    hold the world positions; see the module docs). ``name`` names the
+    node and its mesh, which Blender and viewers' scene trees show as the
+    object's name (None: the file's stem)."""
+    name = Path(path).stem if name is None else name
+    return write_glb_scene(path, [(name, columns, triangles, frame)], force=force, comment=comment, sync=sync)
 
 
 def write_glb_scene(path: str | os.PathLike, parts: list, *, force: bool = False, comment: str = "",
@@ -489,9 +579,11 @@ def write_mesh_file(
     force: bool = False,
     comments: tuple[str, ...] = (),
     sync: bool = True,
+    name: str | None = None,
 ) -> dict:
     """Write a boundary mesh in the format its suffix names (PLY, OBJ, STL,
-    GLB), in world coordinates. Returns what was written: ``path``,
+    GLB), in world coordinates; ``name`` names a GLB's node (None: the
+    file's stem, :func:`write_glb`). Returns what was written: ``path``,
     ``faces`` (the kind) and ``face_count``; for STL also ``moved`` and
     ``moved_voxels``, how far float32 moved the positions
     (:func:`~isoflow.mesh.float32.float32_effect`). Raises IsoflowError, writing nothing, for an
@@ -517,7 +609,7 @@ def write_mesh_file(
                 "moved_voxels": effect["moved_voxels"]}
     else:
         table, frame = glb_columns(mesh, obj)
-        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame)
+        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame, name=name)
         beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
         return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
                 "beyond": beyond}
@@ -616,7 +708,8 @@ def write_surface(
     "Surface files"): binary PLY with the per-vertex curvature columns
     ``config``, ``class``, ``gamma``, ``a``, ``f`` and colours; OBJ with
     positions; binary STL (triangles, no shared vertices); GLB (triangles,
-    ``COLOR_0`` and the attributes ``_config`` ... ``_f``). It is written
+    ``COLOR_0`` and the attributes ``_config`` ... ``_f``, in one node
+    named after the file, less its suffix). It is written
     beside the target and renamed when complete, so an interrupted write
     leaves any previous file as it was.
 
@@ -660,7 +753,10 @@ def write_surface(
         suffix other than the four, ``ascii`` with another format, an
         object that is not 3D or is empty, a mesh of another object or
         connectivity, a binary STL whose float32 positions would merge
-        distinct corners (the message says by how much). With ``check``, a
+        distinct corners (the message says by how much), an object placed
+        where float64 itself cannot keep its voxel corners apart (a voxel
+        size of 1 at 1e43: the line names float64's spacing there). With
+        ``check``, a
         file that trimesh reads back otherwise, naming it and what differs:
         nothing is replaced.
 
@@ -669,8 +765,10 @@ def write_surface(
     IsoflowWarning
         An STL whose float32 positions move a corner by more than a
         thousandth of a voxel, or whose readers weld the split copies at
-        edge and vertex contacts into non-manifold points; a read-back
-        skipped for memory.
+        edge and vertex contacts into non-manifold points; a file of any
+        format whose corners float64 moves by more than a thousandth of a
+        voxel (a voxel size of 1e-9 at 1e6); a read-back skipped for
+        memory.
 
     See Also
     --------
@@ -716,6 +814,7 @@ def write_surface(
         mesh = boundary_mesh(obj.volume, resolve_connectivity(3, connectivity))
     else:
         check_mesh_fits(path, mesh, obj, connectivity)
+    corners = check_float64_corners(path, obj.origin, obj.spacing, obj.volume.shape)
     comments = (f"isoflow write_surface, {mesh.connectivity}-connectivity", VERTEX_COMMENT)
     welded = shared_positions(mesh) if suffix == ".stl" else 0
     # the file is put in place only once it reads back as isoflow counts it
@@ -729,6 +828,9 @@ def write_surface(
             warn(stl_move_note(path, written))
         if welded:
             warn(stl_weld_note(path, welded))
+    moved = float64_move_note(path, corners)
+    if moved:
+        warn(moved)
     return path
 
 

@@ -1,7 +1,10 @@
 """What float32 does to positions: a binary STL's coordinates, which
 :mod:`isoflow.mesh.export` writes, and the slack of their read-back in
-:mod:`isoflow.mesh.readback`. Here, below both, because the writer reads
-its files back: readback taking it from export would be an import cycle.
+:mod:`isoflow.mesh.readback`; and what float64 itself does to the voxel
+corners of a grid placed far from the origin against its voxel size,
+which every surface file holds in world units. Here, below both, because
+the writer reads its files back: readback taking it from export would be
+an import cycle.
 """
 
 from __future__ import annotations
@@ -43,7 +46,8 @@ def float32_effect(xyz: np.ndarray, spacing) -> dict:
         xyz32 = xyz.astype(np.float32)
     finite = bool(np.all(np.isfinite(xyz32)))
     largest = float(np.max(np.abs(xyz))) if len(xyz) else 0.0
-    step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
+    with np.errstate(over="ignore"):  # the spacing at float32's largest value is inf: that step is past its range
+        step = float(np.spacing(np.float32(min(largest, float(np.finfo(np.float32).max)))))
     positions = len(np.unique(xyz, axis=0)) if len(xyz) else 0
     if not finite:
         return {"positions": positions, "merged": None, "finite": False, "moved": None, "moved_voxels": None,
@@ -54,3 +58,75 @@ def float32_effect(xyz: np.ndarray, spacing) -> dict:
     merged = positions - (len(np.unique(xyz32, axis=0)) if len(xyz) else 0)
     return {"positions": positions, "merged": int(merged), "finite": True, "moved": moved,
             "moved_voxels": moved_voxels, "largest": largest, "step": step}
+
+
+#: float64 is said to move a grid's voxel corners when its spacing at the
+#: corners reaches this many voxels (as an STL's float32 move is said)
+FLOAT64_NOTE_VOXELS = 1e-3
+
+
+def float64_corners(origin, spacing, shape) -> dict:
+    """What float64 does to the voxel corners ``origin + spacing * i``
+    (``i`` from 0 to the shape, as
+    :meth:`isoflow.DigitalObject.world` computes them) of a grid placed
+    far from the origin against its voxel size.
+
+    Parameters
+    ----------
+    origin, spacing : array_like
+        The grid's origin and voxel size per axis.
+    shape : tuple of int
+        Voxels per axis.
+
+    Returns
+    -------
+    dict
+        ``axis``: the axis where float64's spacing is largest against the
+        voxel size; ``near``: the largest corner coordinate magnitude
+        along it, and ``step``: float64's spacing there (``np.spacing``);
+        ``moved_voxels``: ``step`` in voxels, a bound on how far the
+        rounding of the product and the sum moves a corner, and ``moved``
+        the same in world units; ``merged``: whether two corners next to
+        each other along some axis are the same float64 value, so that
+        the surface's positions collapse in every format.
+
+    Examples
+    --------
+    >>> c = float64_corners((1e6, 0.0, 0.0), 1e-9, (6, 6, 6))
+    >>> c["axis"], c["step"] == float(np.spacing(1e6)), c["merged"], round(c["moved_voxels"], 3)
+    (0, True, False, 0.116)
+    >>> float64_corners((1e43, 0.0, 0.0), 1.0, (6, 6, 6))["merged"]
+    True
+    >>> float64_corners((-120.3, -200.7, 50.2), 0.5, (256, 256, 100))["moved_voxels"] < 1e-12
+    True
+    """
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    merged, worst = False, None
+    for axis, (o, s, n) in enumerate(zip(origin.tolist(), spacing.tolist(), shape)):
+        with np.errstate(over="ignore", invalid="ignore"):
+            corners = o + s * np.arange(int(n) + 1, dtype=np.float64)
+            # the product's rounding is on the scale of s * n, the sum's on the corner's
+            near = float(np.max(np.abs(np.concatenate([corners, [s * n]]))))
+            step = float(np.spacing(near))
+            merged = merged or bool(np.any(np.diff(corners) == 0))
+        voxels = step / abs(s) if s else np.inf
+        if worst is None or voxels > worst["moved_voxels"]:
+            worst = {"axis": axis, "near": near, "step": step, "moved_voxels": voxels, "moved": step}
+    return {**worst, "merged": merged}
+
+
+def float64_moved(corners: dict) -> float:
+    """How far float64 moves a grid's corners (``corners``:
+    :func:`float64_corners`), in world units, where that reaches
+    :data:`FLOAT64_NOTE_VOXELS` of a voxel, else 0: what a surface's
+    read-back allows its volume for it, and what its writer says.
+
+    Examples
+    --------
+    >>> float64_moved(float64_corners((1e6, 0.0, 0.0), 1e-9, (6, 6, 6))) == float(np.spacing(1e6))
+    True
+    >>> float64_moved(float64_corners((1.0, 2.0, 3.0), 0.5, (6, 6, 6)))
+    0.0
+    """
+    return corners["moved"] if corners["moved_voxels"] > FLOAT64_NOTE_VOXELS else 0.0

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, counted
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
 from .fills import Fill, check_strict
@@ -808,11 +808,32 @@ def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> 
     the mesh as loaded: the repairs the genus makes before counting
     (repeated faces dropped, edges split at T-junctions) would otherwise
     let through a mesh that the strict voxeliser refuses for the open or
-    non-manifold edges it has."""
-    try:
-        Solid(v, f, strict=True, fill=fill)
-    except IsoflowError as exc:
-        raise exc.at(name) from None
+    non-manifold edges it has. The line says what genus does without
+    ``strict``, which is not what voxelize does: it makes those repairs."""
+    found = Solid(v, f, fill=fill).strict_defects()
+    if found is None:
+        return
+    said = f"{name}: mesh is not watertight: {found[0]}"
+    unstrict = _without_strict(v, f, found[1])
+    raise IsoflowError.worded(f"{said} (without strict=True {unstrict})", f"{said} (without --strict {unstrict})")
+
+
+def _without_strict(v: np.ndarray, f: np.ndarray, rule: str) -> str:
+    """What :func:`verify_genus` does without ``strict`` with a mesh that
+    ``strict`` refuses: the repairs it makes (repeated faces dropped, edges
+    split at T-junctions), and whether they close the mesh, or else the
+    ``rule`` that reads the mesh as it stands (:meth:`Solid.strict_defects`)."""
+    facts: dict = {}
+    v2, f2 = _split_t_junctions(v, _drop_repeated_faces(v, f, facts), facts)
+    repairs = []
+    if "repeated_faces" in facts:
+        repairs.append(f"drops {counted(facts['repeated_faces']['copies'], 'repeated face')}")
+    if "t_junctions" in facts:
+        repairs.append(f"splits the edges at {counted(facts['t_junctions']['points'], 'T-junction')}")
+    done = " and ".join(repairs)
+    if repairs and Solid(v2, f2).strict_defects() is None:
+        return f"genus {done}, which closes the mesh, and counts its genus"
+    return f"genus {done + ', then ' if repairs else ''}gives its verdict on the mesh as it stands: {rule}"
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:

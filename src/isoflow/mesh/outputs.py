@@ -37,6 +37,9 @@ from ..errors import IsoflowError, check_switch
 
 #: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"
+#: suffixes of formats that are not written, each with the written one that
+#: holds the same thing, named where the output's suffix is refused
+NEAR_SUFFIXES = {".gltf": (".glb", "binary glTF, the same scene in one file")}
 
 
 def check_output_path(
@@ -52,7 +55,7 @@ def check_output_path(
     path = Path(path)
     refuse_unusable_output(path)
     if suffixes and path.suffix.lower() not in suffixes:
-        raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}")
+        raise IsoflowError(f"{path}: {what} must end in {' or '.join(suffixes)}{near_suffix_hint(path, suffixes)}")
     if path.is_dir():  # --force must not mean "replace a directory"
         raise IsoflowError(f"{path}: is a directory; give a file name for the {what}")
     if (path.exists() or path.is_symlink()) and not force:  # a dangling link is there too
@@ -60,6 +63,37 @@ def check_output_path(
                                       f"{path}: exists; pass --force to overwrite")
     check_writable_dir(path.parent, f"the {what} {path.name}")
     return path
+
+
+def near_suffix_hint(path: Path, suffixes: tuple[str, ...]) -> str:
+    """The written format that holds what a refused suffix names, as the end
+    of the refusal, or "".
+
+    Parameters
+    ----------
+    path : Path
+        The output, whose suffix is not among ``suffixes``.
+    suffixes : tuple of str
+        The suffixes the output may have.
+
+    Returns
+    -------
+    str
+        ``"; write NAME.glb (binary glTF, ...)"`` where the suffix has a
+        written near kin among ``suffixes`` (a ``.gltf`` is a ``.glb``'s
+        JSON and buffers in separate files), else "".
+
+    Examples
+    --------
+    >>> near_suffix_hint(Path("out.gltf"), (".ply", ".glb"))
+    '; write out.glb (binary glTF, the same scene in one file)'
+    >>> near_suffix_hint(Path("out.vtk"), (".ply", ".glb"))
+    ''
+    """
+    near = NEAR_SUFFIXES.get(path.suffix.lower())
+    if near is None or near[0] not in suffixes:
+        return ""
+    return f"; write {path.with_suffix(near[0]).name} ({near[1]})"
 
 
 def refuse_directory_spelling(path: str | os.PathLike, what: str = "output") -> None:

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .float32 import float32_effect, float64_corners, float64_moved
 from .outputs import staged
 
 #: relative tolerance on the volume: coordinates may be stored as float32
@@ -124,11 +125,13 @@ def isoflow_figures(mesh, obj, components: list | None = None) -> dict:
                             obj.spacing)
 
 
-def expected_figures(euler: int, genus: int, voxels: int, spacing) -> dict:
+def expected_figures(euler: int, genus: int, voxels: int, spacing, slack: float = 0.0) -> dict:
     """What the boundary surface of an object of ``voxels`` voxels of size
     ``spacing``, of Euler characteristic ``euler`` and total genus ``genus``,
     must read as (watertight; the volume in world units and in
-    :func:`volume_unit` cubed).
+    :func:`volume_unit` cubed; ``slack``, in world units cubed, how far
+    the volume may differ, as ``slack_units`` in the unit cubed: where
+    float64 moves the corners, :func:`~isoflow.mesh.float32.float64_moved`).
 
     Examples
     --------
@@ -140,10 +143,11 @@ def expected_figures(euler: int, genus: int, voxels: int, spacing) -> dict:
     with np.errstate(over="ignore", under="ignore"):
         volume = float(voxels) * float(np.prod(spacing))
     return {"watertight": True, "euler_number": int(euler), "genus": int(genus), "volume": volume,
-            "volume_units": float(voxels) * float(np.prod(spacing / unit))}
+            "volume_units": float(voxels) * float(np.prod(spacing / unit)),
+            "slack_units": float(slack / unit ** 3) if slack else 0.0}
 
 
-def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
+def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = False) -> dict:
     """Watertightness (every edge in two faces, consistently wound), Euler
     number, genus and volume (``volume_units``: in ``unit`` cubed, about
     the vertices' mean: far from the origin, the triple products in world
@@ -152,8 +156,9 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
     ``weld`` (STL stores no shared vertices) with equal positions welded
     into one vertex (trimesh's own merge rounds positions to 1e-8 in any
     units, which joins distinct corners of a surface in units of 1e-6).
-    ``area_units``: the surface's area in ``unit`` squared (STL only:
-    the volume's tolerance for float32's move; None otherwise).
+    ``area_units``: the surface's area in ``unit`` squared (an STL's, and
+    with ``area``: the volume's tolerance for float32's or float64's move;
+    None otherwise).
 
     A PLY or an STL is parsed by trimesh's reader of the format and the
     mesh built from its arrays alone (a PLY's colours cost a third of the
@@ -181,7 +186,7 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0) -> dict:
             tm = trimesh.load(path, force="mesh", process=False)
     if weld:
         tm = weld_equal_positions(tm)
-    return mesh_figures(tm, unit, area=weld)
+    return mesh_figures(tm, unit, area=weld or area)
 
 
 def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
@@ -243,7 +248,10 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     ``topology=False`` then compares the volume only (the caller says why).
     STL's float32 positions move the surface by up to ``moved``
     (:func:`isoflow.mesh.float32.float32_effect`), which changes the volume
-    by at most ``moved`` times the area: the volume is compared within that.
+    by at most ``moved`` times the area: the volume is compared within that,
+    and within float64's own move of the corners where the object lies far
+    from the origin against its voxel size
+    (:func:`isoflow.mesh.float32.float64_corners`).
     """
     from ..scale.memory import default_budget, sized
 
@@ -253,21 +261,22 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
         why = f"trimesh would need about {sized(need)}, more than the budget of {sized(budget)}"
         return {"isoflow": None, "trimesh": None, "agree": None, "problem": None, "skipped": why}
     ours = isoflow_figures(mesh, obj, components)
+    # far from the origin against the voxel size float64 itself moves the
+    # corners (float64_move_note): every format's volume moves with them
+    moved = float64_moved(float64_corners(obj.origin, obj.spacing, obj.volume.shape))
     try:
         # the new file where its set is not in place yet (its temporary keeps the suffix)
-        theirs = trimesh_figures(staged(path), weld=path.suffix.lower() == ".stl", unit=volume_unit(obj))
+        theirs = trimesh_figures(staged(path), weld=path.suffix.lower() == ".stl", unit=volume_unit(obj),
+                                 area=moved > 0)
     except Exception as exc:  # a file trimesh cannot read is the worst disagreement
         return {"isoflow": ours, "trimesh": {k: None for k in ours}, "agree": False,
                 "problem": f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"}
     keys = ("watertight", "euler_number", "genus") if topology else ()
     problems = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in keys if theirs[k] != ours[k]]
     # the signed volume needs no manifold: a welded STL still encloses it
-    slack = 0.0
     if path.suffix.lower() == ".stl":
-        from .float32 import float32_effect
-
-        moved = (float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0) / volume_unit(obj)
-        slack = 2 * moved * theirs["area_units"]
+        moved = max(moved, float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0)
+    slack = 2 * moved / volume_unit(obj) * theirs["area_units"] if moved else 0.0
     if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=slack):
         unit = volume_unit(obj)
         problems.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
@@ -306,7 +315,8 @@ def check_scene_figures(path, expected: list, progress=None) -> list[str]:
     for (name, ours, unit), theirs in zip(found, scene_figures(placed, progress)):
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]
-        if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=0):
+        if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL,
+                          atol=ours.get("slack_units", 0.0)):
             wrong.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
                          f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
         if wrong:

@@ -229,22 +229,34 @@ class Solid:
             across a boundary chain, or the exact nonzero rule where the
             edges balance once double-sided faces are read as one).
         """
-        d = self.defects
-        if not self.strict or (d["watertight"] and not self.double_sided):
+        found = self.strict_defects()
+        if not self.strict or found is None:
             return
+        said = "voxelize: mesh is not watertight: " + found[0]
+        raise IsoflowError.worded(said + f" (without strict=True {found[1]})", said + f" (without --strict {found[1]})")
+
+    def strict_defects(self) -> tuple[str, str] | None:
+        """What ``strict`` refuses in the mesh as given, whatever ``strict``
+        is: its counts of open, non-manifold and inconsistently oriented
+        edges and of double-sided faces, and the rule that reads the mesh
+        without ``strict``; None for a watertight mesh without double-sided
+        faces. ``isoflow genus --strict`` refuses the same counts, saying
+        what genus does without it."""
+        d = self.defects
+        if d["watertight"] and not self.double_sided:
+            return None
         what = [f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
                 f"{d['inconsistent_edges']} inconsistently oriented edges"]
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
-        said = "voxelize: mesh is not watertight: " + "; ".join(what)
         if self.fill != "winding":
             rule = f"the {self.fill} fill takes its faces as they are"
         elif self.chain_edges:
             rule = "it is read by the generalised winding number"
         else:  # double-sided faces read as one, coincident corners joined: closed
             rule = "its edges balance, so it bounds a solid: it is read by the exact nonzero winding number"
-        raise IsoflowError.worded(said + f" (without strict=True {rule})", said + f" (without --strict {rule})")
+        return "; ".join(what), rule
 
     def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
         """The :class:`VoxelPlan` of the grid ``origin_s``, ``pitch_s`` (in

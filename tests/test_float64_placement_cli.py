@@ -1,0 +1,148 @@
+"""Surfaces of volumes placed where float64 itself holds the voxel corners
+coarsely: far from the origin against the voxel size. Every surface format
+holds world positions in float64 at most (PLY doubles, OBJ's digits, a
+GLB's node transform as trimesh applies it).
+
+Where float64 cannot keep neighbouring corners apart (a voxel of 1 at
+1e43, where NumPy's ``np.spacing`` is 1.2e27) the surface would collapse in
+every file: refused before anything is written, in one line naming the
+placement and float64's spacing there. Where it keeps them apart but moves
+them by a share of a voxel (1e-9 at 1e6, a spacing of 1.2e-10) the files
+are written, said in one line, and read back by trimesh within that move.
+The input files are written by their own libraries (pynrrd, nibabel).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import trimesh
+
+#: a torus of voxels: a 4^3 block less a 2x2 hole through it
+MASK = np.zeros((6, 6, 6), np.uint8)
+MASK[1:5, 1:5, 1:5] = 1
+MASK[2:4, 2:4, :] = 0
+
+
+def isoflow(*args) -> subprocess.CompletedProcess:
+    """The command as a user runs it."""
+    return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+
+
+def nrrd_at(path, origin, pitch: float) -> None:
+    """The mask as pynrrd writes it, voxel 0's centre at ``origin``."""
+    nrrd = pytest.importorskip("nrrd")
+    nrrd.write(str(path), MASK, {"space": "left-posterior-superior", "space directions": np.eye(3) * pitch,
+                                 "space origin": np.asarray(origin, float)}, index_order="C")
+
+
+def nifti_at(path, origin, pitch: float) -> None:
+    """The mask as nibabel writes it, voxel 0's centre at ``origin``."""
+    nib = pytest.importorskip("nibabel")
+    affine = np.diag([pitch, pitch, pitch, 1.0])
+    affine[:3, 3] = origin
+    nib.save(nib.Nifti1Image(MASK, affine), str(path))
+
+
+def nib_zooms(path) -> tuple:
+    """The voxel sizes of a NIfTI as nibabel reads them."""
+    nib = pytest.importorskip("nibabel")
+    return nib.load(str(path)).header.get_zooms()
+
+
+def one_line(p: subprocess.CompletedProcess) -> str:
+    line = p.stderr.strip()
+    assert "\n" not in line and "Traceback" not in line, p.stderr
+    return line
+
+
+def test_float64_cannot_keep_a_voxel_apart_at_1e43():
+    # what the refusal rests on, as NumPy reads it: 1e43 and 1e43 + 1 are one float64
+    assert np.float64(1e43) + 1.0 == np.float64(1e43) and np.spacing(1e43) > 1e27
+
+
+@pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["surface", "-o", "s.obj"],
+                                     ["surface", "-o", "s.glb"], ["surface", "--labels", "-o", "s.glb"],
+                                     ["surface", "--labels", "-o", "dir/", "--suffix", ".ply"],
+                                     ["flow", "--steps", "1", "--out", "run"]])
+def test_corners_float64_cannot_keep_apart_are_refused_before_anything_is_written(tmp_path, command):
+    # every format was written and left in place, then the read-back failed with exit 1 and
+    # "trimesh reads volume 0 (isoflow: 48)"; --labels ended in an AssertionError's traceback
+    nrrd_at(tmp_path / "far.nrrd", (1e43, 0.0, 0.0), 1.0)
+    args = [tmp_path / a if a in ("s.ply", "s.obj", "s.glb", "run") else f"{tmp_path}/{a}" if a == "dir/" else a
+            for a in command[1:]]
+    p = isoflow(command[0], tmp_path / "far.nrrd", *args)
+    line = one_line(p)
+    assert p.returncode == 2 and sorted(f.name for f in tmp_path.iterdir()) == ["far.nrrd"]
+    # NRRD's space origin is voxel 0's centre: its corner half a voxel before
+    assert "not distinct in float64" in line and "origin (1e+43, -0.5, -0.5), voxel size (1, 1, 1)" in line
+    assert f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
+
+
+def test_a_zarr_store_read_block_by_block_is_refused_too(tmp_path):
+    import isoflow as iso
+
+    iso.write_volume(iso.DigitalObject(MASK.astype(bool), pitch=1.0, origin=(1e43, 0, 0)), tmp_path / "far.zarr")
+    p = isoflow("surface", tmp_path / "far.zarr", "-o", tmp_path / "s.ply")
+    assert p.returncode == 2 and "not distinct in float64" in one_line(p) and not (tmp_path / "s.ply").exists()
+
+
+def distinct_positions(path) -> int:
+    return len(np.unique(np.asarray(trimesh.load(path, force="mesh", process=False).vertices), axis=0))
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".glb"])
+def test_corners_float64_moves_are_written_and_said(tmp_path, suffix):
+    # the files were written, then the read-back failed with exit 1 and no reason:
+    # "trimesh reads volume 4.74974513e-26 (isoflow: 4.8e-26)"
+    pitch = 1e-9
+    nifti_at(tmp_path / "far.nii.gz", (1e6, 0.0, 0.0), pitch)
+    nifti_at(tmp_path / "near.nii.gz", (0.0, 0.0, 0.0), pitch)
+    far, near = tmp_path / f"far{suffix}", tmp_path / f"near{suffix}"
+    p = isoflow("surface", tmp_path / "far.nii.gz", "-o", far, "-q")
+    assert p.returncode == 0, p.stderr
+    line = one_line(p)
+    assert line.startswith(f"isoflow surface: warning: {far}: float64 holds the voxel corners")
+    assert f"near 1e+06, {np.spacing(1e6):.3g} (np.spacing)" in line
+    assert isoflow("surface", tmp_path / "near.nii.gz", "-o", near, "-q").returncode == 0
+    # trimesh reads the far file as the surface of the file at the origin: as many distinct
+    # corners, closed, of the torus's genus, its volume within float64's move at 1e6
+    assert distinct_positions(far) == distinct_positions(near)
+    mesh = trimesh.load(far, force="mesh", process=False)
+    assert mesh.is_watertight and mesh.euler_number == 0
+    box = trimesh.load(near, force="mesh", process=False)
+    # 48 voxels of the sizes nibabel reads from the header (float32)
+    volume = 48 * float(np.prod(np.asarray(nib_zooms(tmp_path / "far.nii.gz"), np.float64)))
+    assert box.volume == pytest.approx(volume, rel=1e-6, abs=0)  # (float32 positions where they hold it)
+    slack = 2 * np.spacing(1e6) * box.area
+    assert abs(mesh.volume - volume) <= slack and mesh.volume != pytest.approx(volume, rel=1e-4, abs=0)
+
+
+def test_flow_out_where_float64_moves_the_corners_says_so(tmp_path):
+    nifti_at(tmp_path / "far.nii.gz", (1e6, 0.0, 0.0), 1e-9)
+    p = isoflow("flow", tmp_path / "far.nii.gz", "--steps", "1", "--out", tmp_path / "run", "-q")
+    assert p.returncode == 0, p.stderr
+    assert "float64 holds the voxel corners" in p.stderr and f"{np.spacing(1e6):.3g} (np.spacing)" in p.stderr
+    assert trimesh.load(tmp_path / "run" / "step_000.ply", process=False).is_watertight
+
+
+def test_write_surface_refuses_and_warns_as_the_command_does(tmp_path):
+    import isoflow as iso
+
+    with pytest.raises(iso.IsoflowError, match=r"not distinct in float64"):
+        iso.write_surface(iso.DigitalObject(MASK.astype(bool), origin=(1e43, 0, 0)), tmp_path / "s.ply")
+    assert not (tmp_path / "s.ply").exists()
+    with pytest.warns(iso.IsoflowWarning, match=r"float64 holds the voxel corners"):
+        iso.write_surface(iso.DigitalObject(MASK.astype(bool), pitch=1e-9, origin=(1e6, 0, 0)), tmp_path / "s.ply")
+    assert trimesh.load(tmp_path / "s.ply", process=False).is_watertight
+
+
+def test_an_stl_beyond_float32_is_one_line_without_numpys_warning(tmp_path):
+    # NumPy's "overflow encountered in spacing" came before the refusal: float32's step at its largest value
+    assert np.float64(1e39) > np.finfo(np.float32).max  # beyond float32, as NumPy reads it
+    nrrd_at(tmp_path / "far.nrrd", (1e39, 0.0, 0.0), 1e30)
+    p = isoflow("surface", tmp_path / "far.nrrd", "-o", tmp_path / "s.stl")
+    assert p.returncode == 2 and "exceed float32's range" in one_line(p) and not (tmp_path / "s.stl").exists()
