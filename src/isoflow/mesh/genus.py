@@ -30,7 +30,7 @@ from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .t_junctions import split_t_junctions
-from .verdict import GenusVerdict, Note, Stop, VerdictKind
+from .verdict import GenusVerdict, Note, Stop, VerdictKind, strict_refusal
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
 # --------------------------------------------------------------------------
@@ -815,7 +815,7 @@ def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> 
         return
     said = f"{name}: mesh is not watertight: {found[0]}"
     unstrict = _without_strict(v, f, found[1])
-    raise IsoflowError.worded(f"{said} (without strict=True {unstrict})", f"{said} (without --strict {unstrict})")
+    raise strict_refusal(said, unstrict)
 
 
 def _without_strict(v: np.ndarray, f: np.ndarray, rule: str) -> str:

@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from ..errors import counted
+from ..errors import IsoflowError, counted
 from ..results import Result
 from ..scale.memory import sized
 from .fills import Fill
@@ -369,3 +369,16 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "corner_joins": _corner_join_words,
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
 }
+
+
+def strict_refusal(said: str, unstrict: str) -> IsoflowError:
+    """The refusal of ``verify_genus(strict=True)``: ``said``, why the mesh
+    is refused, then ``unstrict``, what genus does without the option, in
+    Python's words and the command line's.
+
+    Examples
+    --------
+    >>> strict_refusal("m.obj: mesh is not watertight", "genus counts it").command_line
+    'm.obj: mesh is not watertight (without --strict genus counts it)'
+    """
+    return IsoflowError.worded(f"{said} (without strict=True {unstrict})", f"{said} (without --strict {unstrict})")
