@@ -146,3 +146,31 @@ def test_an_stl_beyond_float32_is_one_line_without_numpys_warning(tmp_path):
     nrrd_at(tmp_path / "far.nrrd", (1e39, 0.0, 0.0), 1e30)
     p = isoflow("surface", tmp_path / "far.nrrd", "-o", tmp_path / "s.stl")
     assert p.returncode == 2 and "exceed float32's range" in one_line(p) and not (tmp_path / "s.stl").exists()
+
+
+@pytest.mark.parametrize("volumes", [[], ["--volumes", ".nrrd"]])
+def test_flow_out_of_a_2d_image_float64_cannot_place_is_refused(tmp_path, volumes):
+    """A 2D image at x = 1e43 in pixels of 1 (pynrrd writes it): its run
+    wrote flow.csv with every box 0 wide in x (bbox_min_x = bbox_max_x =
+    1e43, where the ring is 20 pixels wide), a shapes.png of empty panels
+    and --volumes states cropped at x = 1e43, exit 0. It is refused before
+    anything is written, as a 3D volume there is; at the origin the run
+    writes the boxes 20 pixels wide."""
+    nrrd = pytest.importorskip("nrrd")
+    ring = np.zeros((24, 24), np.uint8)
+    ring[2:22, 2:22] = 1
+    ring[8:16, 8:16] = 0
+    for name, x in (("far", 1e43), ("near", 0.0)):
+        nrrd.write(str(tmp_path / f"{name}.nrrd"), ring, {"space dimension": 2, "space directions": np.eye(2),
+                                                         "space origin": np.array([x, 0.0])}, index_order="C")
+    p = isoflow("flow", tmp_path / "far.nrrd", "--steps", "2", "--out", tmp_path / "run", *volumes)
+    line = one_line(p)
+    assert p.returncode == 2 and not (tmp_path / "run").exists()
+    assert "not distinct in float64" in line and "origin (1e+43, -0.5), voxel size (1, 1)" in line
+    assert f"{np.spacing(1e43):.3g} apart (np.spacing)" in line and "flow.csv" in line
+    p = isoflow("flow", tmp_path / "near.nrrd", "--steps", "2", "--out", tmp_path / "near", *volumes, "-q")
+    assert p.returncode == 0, p.stderr
+    first = (tmp_path / "near" / "flow.csv").read_text().splitlines()[1].split(",")
+    header = (tmp_path / "near" / "flow.csv").read_text().splitlines()[0].split(",")
+    row = dict(zip(header, first))
+    assert float(row["bbox_max_x"]) - float(row["bbox_min_x"]) == 20

@@ -4,8 +4,10 @@ says the voxel size, origin and unit it read (text and --json), and
 by each format's own library with a known unit."""
 
 import json
+import re
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -82,8 +84,9 @@ def test_info_text_says_voxel_size_origin_and_unit(tmp_path):
     assert "voxel 0.5x0.75x1.25," in second_line("bare.nii.gz", "--labels")[0]
 
 
-def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_path):
-    # a time series: the fourth axis is frames, not millimetres
+def series_json(tmp_path):
+    """A time series in mm as nibabel writes it (the fourth axis frames,
+    not millimetres) and ``info --json`` of it."""
     series = np.repeat((cube() == 1).astype(np.uint8)[..., None], 3, axis=3)
     img = nib.Nifti1Image(series, np.diag([*PITCH, 1.0]))
     img.header.set_xyzt_units("mm", "sec")
@@ -91,7 +94,12 @@ def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_pat
     done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz"), "--json"],
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    got = json.loads(done.stdout)
+    return img, json.loads(done.stdout)
+
+
+def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_path):
+    # a time series: the fourth axis is frames, not millimetres
+    img, got = series_json(tmp_path)
     assert got["unit"] == img.header.get_xyzt_units()[0] and got["pitch"][:3] == list(img.header.get_zooms()[:3])
     text = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "t.nii.gz")],
                           capture_output=True, text=True).stdout.splitlines()[1]
@@ -286,3 +294,19 @@ def test_the_csv_keeps_plain_column_names(tmp_path, capsys):
     assert main(["info", str(tmp_path / "seg.nii.gz"), "--labels", "--csv", "-"]) == 0
     head = capsys.readouterr().out.splitlines()[0].split(",")
     assert head[:4] == ["label", "voxels", "volume", "surface_area"]  # the unit is said by --json and the text
+
+
+def test_cli_md_says_what_the_4d_json_carries(tmp_path):
+    """docs/cli.md said the world measures are 2D and 3D only while a 4D
+    file's --json carried "unit": the page names the 4D report's keys, and
+    the unit it carries is the file's, nibabel's reading of the spatial
+    axes' unit, the one the text's second line gives them."""
+    page = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text()
+    start = page.index("A 4D report has")
+    sentence = page[start:page.index(". A `.zarr`", start)]
+    absent, present = sentence.split("but for a volume file", 1)
+    assert set(re.findall(r"`([a-z_]+)`", absent)) == {"volume", "surface_area", "bbox", "centroid"}
+    assert {"pitch", "origin", "unit"} <= set(re.findall(r"`([a-z_]+)`", present))
+    img, got = series_json(tmp_path)
+    assert not {"volume", "surface_area", "bbox", "centroid"} & set(got)
+    assert got["unit"] == img.header.get_xyzt_units()[0] and len(got["pitch"]) == len(got["origin"]) == 4

@@ -233,3 +233,40 @@ def test_genus_names_coordinates_a_float32_file_rounded(tmp_path):
     assert note["facts"]["median_edge"] == pytest.approx(median, rel=0.05)
     assert "are held by float32 (every coordinate is one, as the file stores them) to 0.125, " in report["verdict"]
     assert "or store float64 coordinates, before saving it" in report["verdict"]
+
+
+def significant_digits(number: str) -> int:
+    """How many significant digits a printed number shows."""
+    mantissa = number.lower().split("e")[0].lstrip("+-").replace(".", "").lstrip("0")
+    return len(mantissa)
+
+
+@pytest.mark.parametrize("centre, side", [((1e9, 1e9, 1e9), 2.0 ** -20), ((1e6, 0.0, 0.0), 1e-30)])
+def test_rounding_note_prints_numbers_a_reader_needs(centre, side, tmp_path):
+    """A box of side 2^-20 at 1e9 (float64 spacing there 2^-23, np.spacing)
+    and, the other way round, a box of side 1e-30 at x = 1e6 (its corners
+    differ in y and z only): the note printed the spacing with every float64
+    digit (1.1920928955078125e-07) and the second share as a percent of 23
+    digits. Each number it prints has at most 6 significant digits and
+    reads back as numpy's spacing and its share of trimesh's median edge."""
+    import re
+
+    import trimesh
+
+    box = trimesh.creation.box(extents=(side, side, side))
+    vertices = box.vertices + np.asarray(centre)
+    path = tmp_path / "far.obj"
+    path.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in vertices.tolist())
+                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in box.faces.tolist()))
+    read = trimesh.load(path, process=False)
+    spacing = float(np.spacing(np.abs(read.vertices).max()))
+    share = spacing / float(np.median(read.edges_unique_length))
+    r = isoflow("voxelize", path, "--resolution", 8, "-o", tmp_path / "far.npz")
+    assert r.returncode == 0, r.stderr
+    said = re.search(r"held by float64 to (\S+), (\S+) (% of|times) the median edge \((\S+)\)", r.stderr)
+    assert said, r.stderr
+    assert all(significant_digits(n) <= 6 for n in re.findall(r"\d[\d.]*(?:e[-+]\d+)?", said.group(0))), said.group(0)
+    assert float(said.group(1)) == pytest.approx(spacing, rel=1e-5)
+    printed = float(said.group(2)) / (100 if said.group(3) == "% of" else 1)
+    assert printed == pytest.approx(share, rel=0.05)
+    assert (said.group(3) == "times") == (100 * share >= 1e6)

@@ -95,11 +95,18 @@ def out_placement(args: argparse.Namespace, obj) -> dict | None:
     :func:`isoflow.mesh.export.check_float64_corners` takes it: refused
     before the run where float64 cannot keep the voxel corners apart (the
     surfaces would collapse in every file), else what float64 does to
-    them; None without step surfaces."""
-    if not args.out or obj.ndim != 3:
+    them; None without step surfaces. A 2D run is refused alike: its
+    boxes in flow.csv, the pictures in shapes.png and the cropped states'
+    origins are world coordinates, which collapse there too."""
+    if not args.out:
         return None
     from ..mesh.export import check_float64_corners
 
+    if obj.ndim == 2:
+        what = ("the boxes in flow.csv, the pictures in shapes.png and the --volumes states' origins"
+                if args.volumes is not None else "the boxes in flow.csv and the pictures in shapes.png")
+        check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape, what)
+        return None
     return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape)
 
 

@@ -128,7 +128,7 @@ def placement_words(origin, spacing) -> str:
     return f"origin {listed(origin)}, voxel size {listed(spacing)}"
 
 
-def check_float64_corners(where, origin, spacing, shape) -> dict:
+def check_float64_corners(where, origin, spacing, shape, collapses: str = "every surface file") -> dict:
     """Refuse, before anything is written, a surface of a grid placed
     where float64 itself cannot keep its voxel corners apart (a voxel size
     of 1 at an origin of 1e43): every format holds world positions in
@@ -142,6 +142,9 @@ def check_float64_corners(where, origin, spacing, shape) -> dict:
     origin, spacing, shape
         The grid's placement and voxels per axis, as
         :func:`~isoflow.mesh.float32.float64_corners` takes them.
+    collapses : str
+        What would collapse there, as the line names it (a 2D flow's
+        files have no surface).
 
     Returns
     -------
@@ -172,7 +175,7 @@ def check_float64_corners(where, origin, spacing, shape) -> dict:
             f"{where}: the voxel corners are not distinct in float64 at this placement "
             f"({placement_words(origin, spacing)}): near {corners['near']:.3g} float64 values are "
             f"{corners['step']:.3g} apart (np.spacing), so corners a voxel apart along axis {corners['axis']} are "
-            "one value and every surface file would collapse; place the object nearer the origin (subtract its origin)")
+            f"one value and {collapses} would collapse; place the object nearer the origin (subtract its origin)")
     return corners
 
 

@@ -628,6 +628,32 @@ def stored_precision(v: np.ndarray, f: np.ndarray) -> str:
     return "float32" if len(used) and bool(held.all()) else "float64"
 
 
+def share_words(share: float) -> str:
+    """A share of a length in words, for :func:`rounding_words`: a percent
+    to the digits a reader compares (two below 10 %), and a multiple past
+    a million percent, whose digits in percent would only count zeros.
+
+    Parameters
+    ----------
+    share : float
+        The ratio of two lengths (1.0: equal).
+
+    Returns
+    -------
+    str
+        ``"N % of"`` or ``"N times"``, followed by what it is a share of.
+
+    Examples
+    --------
+    >>> share_words(0.0123), share_words(0.773), share_words(64.0), share_words(1.1641532182693481e20)
+    ('1.2 % of', '77 % of', '6400 % of', '1.16e+20 times')
+    """
+    pct = 100 * share
+    if pct >= 1e6:
+        return f"{share:.3g} times"
+    return f"{pct:.0f} % of" if pct >= 10 else f"{pct:.2g} % of"
+
+
 def rounding_words(near: float, spacing: float, median_edge: float, share: float, defects: tuple = (),
                    where: str = "", precision: str = "float64") -> str:
     """:func:`float64_rounding`'s facts in words: the spacing, its share of
@@ -641,12 +667,11 @@ def rounding_words(near: float, spacing: float, median_edge: float, share: float
     coordinates near 1e+15 are held by float64 to 0.125, 77 % of the median edge (0.162): the crossings and
     welds above may be that rounding; move the mesh nearer the origin (subtract its centre) before saving it
     """
-    pct = 100 * share
     # every coordinate a float32: the file stored them so (an STL, a PLY of float properties), and
     # float64 storage is a second way out
     held = "float32 (every coordinate is one, as the file stores them)" if precision == "float32" else "float64"
-    said = (f"coordinates near {near:.6g} are held by {held} to {spacing!r}, "
-            f"{f'{pct:.0f}' if pct >= 10 else f'{pct:.2g}'} % of the median edge ({median_edge:.3g})")
+    said = (f"coordinates near {near:.6g} are held by {held} to {spacing:.6g}, "
+            f"{share_words(share)} the median edge ({median_edge:.3g})")
     if defects:
         listed = ", ".join(defects[:-1]) + " and " + defects[-1] if len(defects) > 1 else defects[0]
         said += f": the {listed}{where} may be that rounding"
