@@ -718,3 +718,34 @@ def test_settings_flags_and_options_that_gather_values_may_be_repeated():
     # a setting given twice: the last, so that an alias's default can be replaced
     assert parser.parse_args(["info", "v.npy", "--connectivity", "6", "--connectivity", "26"]).connectivity == 26
     assert parser.parse_args(["info", "v.npy", "--json", "--json", "-q", "-q"]).json is True
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="a pseudo-terminal needs fork")
+def test_a_terminal_that_reports_no_size_still_sees_the_bar(tmp_path):
+    """A pseudo-terminal never sized (``script``, some containers' ttys)
+    reports 0 columns and 0 rows (``os.get_terminal_size``), and tqdm then
+    drew nothing: a long run was silent on it. The bar is drawn 80
+    columns wide there."""
+    import pty
+    import select
+
+    np.save(tmp_path / "box.npy", np.ones((6, 7, 8), bool))
+    pid, fd = pty.fork()
+    if pid == 0:  # the child: stdout and stderr are the unsized terminal
+        os.execvp(sys.executable, [sys.executable, "-c", "import os, sys; print(os.get_terminal_size(2).columns); "
+                                   "from isoflow.cli import console; sys.argv[0] = 'isoflow'; console()",
+                                   "flow", str(tmp_path / "box.npy"), "--steps", "2"])
+    out = b""
+    while select.select([fd], [], [], 60)[0]:
+        try:
+            chunk = os.read(fd, 4096)
+        except OSError:  # the child closed the terminal
+            break
+        if not chunk:
+            break
+        out += chunk
+    _, status = os.waitpid(pid, 0)
+    text = out.decode()
+    assert os.waitstatus_to_exitcode(status) == 0, text
+    assert text.split()[0] == "0"  # the terminal reports no width
+    assert "flow:" in text and "%|" in text, text

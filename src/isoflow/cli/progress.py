@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -18,6 +19,24 @@ BAR_FORMAT = "{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]"
 COUNT_FORMAT = "{desc} [{elapsed}]"
 
 Progress = Callable[[int, "int | None"], None]
+
+
+#: the bar's width where the terminal reports no size
+NARROWEST = 80
+
+
+def terminal_columns() -> int:
+    """The columns of the terminal on stderr, 0 where it reports none.
+
+    Examples
+    --------
+    >>> terminal_columns() >= 0
+    True
+    """
+    try:
+        return os.get_terminal_size(sys.stderr.fileno()).columns
+    except (OSError, ValueError, AttributeError):  # not a terminal, or a stand-in without a descriptor
+        return 0
 
 
 @contextlib.contextmanager
@@ -45,6 +64,10 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     from tqdm import tqdm
 
     bars: list = []
+    # a terminal that reports no size (a pty never sized: `script`, some
+    # containers' ttys) makes tqdm's bar zero wide on zero rows, which it
+    # does not draw
+    width = {} if terminal_columns() else {"ncols": NARROWEST, "nrows": 24, "dynamic_ncols": False}
 
     def show(done: int, total: int | None) -> None:
         words = total is None and noun is not None
@@ -52,7 +75,7 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
         if not bars:
             form = BAR_FORMAT if total is not None else COUNT_FORMAT if words else None
             bars.append(tqdm(desc=desc, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
-                             dynamic_ncols=True, bar_format=form))
+                             **({"dynamic_ncols": True} | width), bar_format=form))
         if total != bars[0].total:  # genus: the stepping adds a resolution
             bars[0].total = total
         if words:
