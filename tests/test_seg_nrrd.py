@@ -198,3 +198,30 @@ def test_the_file_of_the_layer_read_is_no_output(tmp_path, capsys, layers):
     assert all(p.read_bytes() == b for p, b in kept.items())
     data, _ = nrrd.read(str(path), index_order="F")
     assert np.array_equal(data, layers)
+
+
+def test_the_segments_names_are_said_with_their_label_values(tmp_path, capsys, layers):
+    """``info SEG.seg.nrrd --labels`` printed a table of label values
+    whose names (liver, tumor: the ``Segment{i}_Name`` of the header)
+    were said only when the file was refused for holding several layers:
+    the values of one layer read alone had no names. A note says the
+    segments of the layer read, by the names and values pynrrd reads."""
+    one = write(tmp_path / "one.seg.nrrd", layers[0], header(3, [("liver", 1, 0), ("tumor", 2, 0)]))
+    two = write(tmp_path / "two.seg.nrrd", layers, header(4, [("liver", 1, 0), ("tumor", 2, 0), ("vessel", 1, 1)]))
+    named = {}
+    for path in (one, two):
+        hdr = nrrd.read_header(str(path))
+        for i in range(3):
+            if f"Segment{i}_Name" in hdr:
+                named.setdefault(str(path), []).append(
+                    (hdr[f"Segment{i}_Name"], hdr[f"Segment{i}_LabelValue"], hdr[f"Segment{i}_Layer"]))
+    assert main(["info", str(one), "--labels"]) == 0
+    err = capsys.readouterr().err
+    said = ", ".join(f"{name} (label {value})" for name, value, _ in named[str(one)])
+    assert err == f"isoflow info: note: {one}: 3D Slicer segments {said}\n"
+    assert main(["info", f"{two}:1", "--labels"]) == 0
+    err = capsys.readouterr().err
+    said = ", ".join(f"{name} (label {value})" for name, value, layer in named[str(two)] if layer == "1")
+    assert err == f"isoflow info: note: {two}:1: 3D Slicer segments {said}\n"
+    assert main(["info", str(one), "--labels", "-q"]) == 0
+    assert capsys.readouterr().err == ""

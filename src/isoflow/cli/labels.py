@@ -98,6 +98,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
     say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
+    say_segments(args)
     ndim = 3 if image is None else image.array.ndim
     if ndim == 2 and getattr(args, "command", "") == "surface":
         raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
@@ -165,6 +166,28 @@ def say_declared_labels(args: argparse.Namespace) -> None:
         print(f"isoflow {args.command}: note: {args.input}: an OME-Zarr image whose labels/ group holds "
               f"{counted(len(names), 'segmentation')} ({_some(names)}); this reads the image itself: for a "
               f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
+
+
+def say_segments(args: argparse.Namespace) -> None:
+    """A note where the input is a 3D Slicer segmentation (``.seg.nrrd``,
+    a layer of it read): which label value is which structure, the names
+    its header gives the segments, since the table and the ``label_N``
+    surfaces go by value.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``command``, ``input`` and ``quiet``.
+    """
+    from ..mesh.formats.registry import split_dataset
+    from ..mesh.formats.slicer import layer_segments
+
+    path, layer = split_dataset(args.input)
+    if args.quiet or not path.name.lower().endswith(".seg.nrrd"):
+        return
+    said = layer_segments(path, layer)
+    if said:
+        print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
 
 
 def in_order_asked(missing: list[int], beyond: list[int], asked: list[int]) -> list[int]:

@@ -186,6 +186,61 @@ def _layer_index(layer: str, found: list[Segment], count: int, where: str) -> in
     return int(text)
 
 
+def layer_segments(path, layer: str | None) -> str | None:
+    """The segments of the layer of a 3D Slicer segmentation that
+    ``FILE.seg.nrrd`` (its one layer) or ``FILE.seg.nrrd:N`` reads, by
+    name and label value (:func:`segment_names`), from its header alone;
+    None for a NRRD that is no segmentation or a layer it has not (the
+    reading says why).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    layer : str or None
+        What the path names after its colon.
+
+    Returns
+    -------
+    str or None
+        ``liver (label 1), tumor (label 2)``, or None.
+
+    Examples
+    --------
+    >>> import nrrd, tempfile
+    >>> path = tempfile.mkdtemp() + "/s.seg.nrrd"
+    >>> nrrd.write(path, np.zeros((2, 2, 2), np.uint8), {"Segment0_ID": "Segment_1", "Segment0_Name": "liver",
+    ...                                                   "Segment0_LabelValue": "1", "Segment0_Layer": "0"})
+    >>> layer_segments(path, None)
+    'liver (label 1)'
+    """
+    import nrrd
+
+    header = nrrd.read_header(str(path))
+    try:
+        found = segments(header, str(path))
+        count = int(header["sizes"][0]) if len(header.get("sizes", ())) == 4 else 1
+        _check_layers(found, count, str(path))
+        index = 0 if layer is None else _layer_index(layer, found, count, str(path))
+    except IsoflowError:
+        return None
+    return segment_names(found, index) if found and (layer is not None or count == 1) else None
+
+
+def segment_names(found: list[Segment], layer: int) -> str:
+    """The segments of one layer by name and label value, as
+    :func:`listing` names them: ``liver (label 1), tumor (label 2)``.
+
+    Examples
+    --------
+    >>> segment_names([Segment("liver", 0, 1), Segment("tumor", 0, 2), Segment("vessel", 1, 1)], 0)
+    'liver (label 1), tumor (label 2)'
+    """
+    held = [f"{s.name} (label {s.label})" for s in found if s.layer == layer]
+    more = f", and {len(held) - SHOWN} more" if len(held) > SHOWN else ""
+    return ", ".join(held[:SHOWN]) + more if held else "no segment"
+
+
 def listing(found: list[Segment], count: int) -> str:
     """Each layer's segments as a refusal lists them, by name and value
     in their layer: ``layer 0: liver (label 1), tumor (label 2); layer 1:
@@ -208,9 +263,4 @@ def listing(found: list[Segment], count: int) -> str:
     >>> listing([Segment("liver", 0, 1), Segment("tumor", 0, 2), Segment("vessel", 1, 1)], 2)
     'layer 0: liver (label 1), tumor (label 2); layer 1: vessel (label 1)'
     """
-    parts = []
-    for n in range(count):
-        held = [f"{s.name} (label {s.label})" for s in found if s.layer == n]
-        more = f", and {len(held) - SHOWN} more" if len(held) > SHOWN else ""
-        parts.append(f"layer {n}: " + (", ".join(held[:SHOWN]) + more if held else "no segment"))
-    return "; ".join(parts)
+    return "; ".join(f"layer {n}: {segment_names(found, n)}" for n in range(count))
