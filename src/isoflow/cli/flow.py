@@ -16,6 +16,7 @@ from .inputs import (
     load_input,
     one_time_point,
     refuse_mesh_options,
+    refuse_options_without,
     refuse_points_option,
     refuse_time_series_store,
     say_plate,
@@ -51,13 +52,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
 def cmd_flow(args: argparse.Namespace) -> int:
     if args.out == "":  # (an unset shell variable): no run's files were asked for in silence, nor into "."
         raise IsoflowError("--out '': an empty directory name; give --out DIR for the run's files")
-    # refused, as info's --force without --csv: an option for the run's files
-    # without --out was an --out left out, which the run would not show
-    for flag, what in (("force", "overwrites files in a non-empty --out directory"),
-                       ("no_check", "skips the read-back of the --out step surfaces")):
-        if getattr(args, flag) and not args.out:
-            raise IsoflowError(f"--{flag.replace('_', '-')} {what}; without --out the flow writes no file "
-                               f"(give --out DIR)")
+    refuse_options_without(args, "out", {"force": "overwrites files in a non-empty --out directory",
+                                         "no_check": "skips the read-back of the --out step surfaces"})
     if args.out:  # before any work (the FlowWriter checks it again when it makes the directory)
         from ..flow.files import check_output_dir
 

@@ -20,6 +20,7 @@ from .inputs import (
     load_input_with_unit,
     mesh_fill,
     refuse_mesh_options,
+    refuse_options_without,
     refuse_points_option,
     say_note,
     say_plate,
@@ -55,10 +56,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
-    if args.force and not args.csv:
-        # refused, as --points-are with a volume is: a --force that overwrites nothing was a --csv left out
-        raise IsoflowError(f"{args.input}: --force overwrites an existing --csv file; info writes no other file, "
-                           f"and without --csv it prints the report")
+    try:
+        refuse_options_without(args, "csv", {"force": "overwrites an existing --csv file"})
+    except IsoflowError as exc:
+        raise exc.at(args.input) from None
     if args.labels is not None:
         from .labels import cmd_info_labels
 

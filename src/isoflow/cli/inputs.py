@@ -214,6 +214,38 @@ def refuse_points_option(args: argparse.Namespace, what: str) -> None:
                            f"not to {what} input")
 
 
+def refuse_options_without(args: argparse.Namespace, output: str, meanings: dict[str, str]) -> None:
+    """Refuse an option that acts on the file(s) of ``output`` (an
+    attribute of ``args``) where that output is not given: the option says
+    the output was meant, and was left out, which the command's result
+    would not show.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments.
+    output : str
+        The attribute of the output option (``csv``, ``out``).
+    meanings : dict of str to str
+        Each such option's attribute and what it does, as the line says it.
+
+    Examples
+    --------
+    >>> refuse_options_without(argparse.Namespace(force=True, csv=None, command="info"), "csv",
+    ...                        {"force": "overwrites an existing --csv file"})
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: --force overwrites an existing --csv file; without --csv info writes no file (give --csv FILE)
+    """
+    if getattr(args, output):
+        return
+    for flag, does in meanings.items():
+        if getattr(args, flag):
+            metavar = "DIR" if output == "out" else "FILE"
+            raise IsoflowError(f"--{flag.replace('_', '-')} {does}; without --{output} {args.command} writes no file "
+                               f"(give --{output} {metavar})")
+
+
 def why_empty(args: argparse.Namespace, obj) -> str | None:
     """Why the object read is empty, where the input was not: a point list
     read with the paper's point model, in which no cube has all its corners
