@@ -185,20 +185,22 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) ->
         vol, parity = arrays.as_volume(obj, canonical=False, dims=DIMENSIONS)[1], 0
     spacing, corner, unit = placed(obj, vol.ndim, given)
     conn = resolve_connectivity(vol.ndim, connectivity)
-    census: Mapping[str, Any] | None = _census(vol, conn, surfaces, method)
+    compiled = use_census(vol, surfaces, method)
+    if not compiled and isinstance(vol, np.ndarray):
+        vol = arrays.binary(vol)  # the NumPy passes and the extent read 0/1 bytes: checked once, here
+    census: Mapping[str, Any] | None = _census(vol, conn, surfaces, compiled)
     if census is not None:
         hist = census["hist"]
         chi = euler_from_histogram(hist, 3, conn)
         b0, enclosed = census["betti_counts"]
         betti = [b0, b0 + enclosed - chi, enclosed]
     else:
-        vol = arrays.binary(vol) if isinstance(vol, np.ndarray) else vol
         hist = configuration_histogram(vol, method=method)
         chi = euler_from_histogram(hist, vol.ndim, conn)
         betti = betti_numbers(vol, conn, chi=chi, method=method)
     if vol.ndim in MEASURE_NAMES:
         # the compiled census has it from its bit rows; else one sum per axis
-        extent = census["extent"] if census is not None and "extent" in census else extent_of(_binary(vol))
+        extent = census["extent"] if compiled and census is not None else extent_of(vol)
     else:
         extent = None
     out = report_from_histogram(hist, vol.ndim, conn, voxels=voxels_from_histogram(hist), shape=vol.shape,
@@ -213,20 +215,17 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) ->
     return out
 
 
-def _census(vol, conn: int, surfaces: bool, method: Method) -> dict | None:
+def _census(vol, conn: int, surfaces: bool, compiled: bool) -> dict | None:
     """One pass that gives the histogram, the Betti counts and (when asked)
-    the surfaces of a 3D host volume: compiled, or from one configuration
-    array and its labellings; None where the passes go one by one."""
-    if use_census(vol, surfaces, method):
+    the surfaces of a 3D host volume: compiled (``compiled``, by
+    :func:`~isoflow.digital.closed_surfaces.use_census`), or from one
+    configuration array and its labellings (``vol`` then 0/1 bytes); None
+    where the passes go one by one."""
+    if compiled:
         return compiled_census(vol, conn, surfaces)
     if vol.ndim == 3 and surfaces and isinstance(vol, np.ndarray):
-        return small_census(arrays.binary(vol), conn)
+        return small_census(vol, conn)
     return None
-
-
-def _binary(vol):
-    """A host volume's bytes made 0 and 1 (a device volume is already)."""
-    return arrays.binary(vol) if isinstance(vol, np.ndarray) else vol
 
 
 def voxels_from_histogram(hist: np.ndarray) -> int:
