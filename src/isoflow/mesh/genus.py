@@ -383,19 +383,23 @@ def solid_report(vertices, faces, whole: tuple[Any, int] | None = None) -> dict:
         parts = manifold_parts(made)
         signs = [1 if p.volume() >= 0 else -1 for p in parts]
         solids = [p if s > 0 else _inside_out(m3, p) for p, s in zip(parts, signs)]
-        solid, boundary, approximate = _nonzero_solid(m3, solids, signs)
+        solid, boundary, approximate, lens = _nonzero_solid(m3, solids, signs)
         pieces = manifold_parts(solid)
         filled_genus, filled_bodies = _filled(m3, pieces)
     except Exception as exc:  # the binding raises for malformed input (its first line says what)
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return {"error": f"{type(exc).__name__}: {detail}"}
     volume = unscaled_volume(solid.volume(), e)
+    if lens is not None:  # back to the mesh's own lengths and place
+        v = np.asarray(vertices, np.float64)
+        middle = (v.min(axis=0) + v.max(axis=0)) / 2
+        lens = {"thickness": float(np.ldexp(lens[0], e)), "at": (middle + np.ldexp(lens[1], e)).tolist()}
     # decompose() splits the solid into its shells: a body's outer one
     # (positive volume) and its cavities' (negative)
     bodies = sum(1 for p in pieces if p.volume() > 0)
     return {"genus": int(sum(p.genus() for p in pieces)), "surfaces": len(pieces), "bodies": bodies,
             "cavities": len(pieces) - bodies, "filled_genus": filled_genus, "filled_bodies": filled_bodies,
-            "volume": volume, "boundary": boundary, "approximate": approximate}
+            "volume": volume, "boundary": boundary, "approximate": approximate, "thinnest_lens": lens}
 
 
 def _filled(m3, pieces: list) -> tuple[int, int]:
@@ -421,15 +425,17 @@ MAX_PAIRS = 5000
 
 
 def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
-    """``(solid, boundary, approximate)`` of :func:`solid_report` from the
-    components as solids and their windings (+1 / -1)."""
+    """``(solid, boundary, approximate, lens)`` of :func:`solid_report`
+    from the components as solids and their windings (+1 / -1); ``lens``:
+    :func:`lens_of` the thinnest overlap of two crossing components (None
+    where none cross)."""
     n = len(solids)
     if n == 0:
-        return m3.Manifold(), True, False
+        return m3.Manifold(), True, False, None
     vols = [s.volume() for s in solids]
     meeting = _boxes_meeting(solids)
     if len(meeting) > MAX_PAIRS:
-        return _outward_less_inside_out(m3, solids, signs), False, True
+        return _outward_less_inside_out(m3, solids, signs), False, True, None
     group = list(range(n))  # union-find of crossing components
 
     def root(i):
@@ -439,8 +445,10 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
         return i
 
     inside: dict[int, list[int]] = {}  # i -> components j whose solid holds solid i
+    lens = None
     for i, j in meeting.tolist():
-        common = (solids[i] ^ solids[j]).volume()
+        overlap = solids[i] ^ solids[j]
+        common = overlap.volume()
         small = min(vols[i], vols[j])
         if common <= _OVERLAP_RTOL * small:
             continue  # apart (or touching)
@@ -449,7 +457,9 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
             inside.setdefault(a, []).append(b)
             continue
         if signs[i] != signs[j]:  # crossing, facing opposite ways: no nesting to follow
-            return _outward_less_inside_out(m3, solids, signs), False, True
+            return _outward_less_inside_out(m3, solids, signs), False, True, None
+        this = lens_of(overlap)
+        lens = this if lens is None or this[0] < lens[0] else lens
         group[root(i)] = root(j)
     # bodies: crossing components of one way united
     members: dict[int, list[int]] = {}
@@ -487,7 +497,27 @@ def _nonzero_solid(m3, solids: list, signs: list) -> tuple:
                 region = region - m3.Manifold.batch_boolean([body[c] for c in children[k]], m3.OpType.Add)
             regions.append(region)
     solid = m3.Manifold.batch_boolean(regions, m3.OpType.Add) if regions else m3.Manifold()
-    return solid, boundary, False
+    return solid, boundary, False, lens
+
+
+def lens_of(overlap) -> tuple[float, np.ndarray]:
+    """``(thickness, centre)`` of the solid two crossing solids share (a
+    manifold3d ``Manifold``): its mean thickness, twice its volume over its
+    surface area (a sheet of thickness t and area S has volume S t and
+    surface area 2 S, its rim aside), and the centre of its bounding box.
+    Where two surfaces meet almost tangentially this lens is thin, and the
+    crevice around it narrower than a voxel over a wide band.
+
+    Examples
+    --------
+    >>> import manifold3d as m3
+    >>> a = m3.Manifold.cube([1.0, 1.0, 1.0])
+    >>> t, centre = lens_of(a ^ a.translate([0.0, 0.0, 0.9]))  # a slab 0.1 thick, 1 x 1
+    >>> round(t, 4), centre.round(2).tolist()
+    (0.0833, [0.5, 0.5, 0.95])
+    """
+    box = np.asarray(overlap.bounding_box(), np.float64)
+    return 2 * overlap.volume() / overlap.surface_area(), (box[:3] + box[3:]) / 2
 
 
 def _boxes_meeting(solids: list) -> np.ndarray:
@@ -1094,11 +1124,18 @@ def _corner_joined(w: dict, last: dict, bodies: int | None, fill: Fill) -> bool:
     return bool(joins and bodies is not None and touch and last["betti"][0] < bodies)
 
 
+#: a lens (:func:`lens_of`) thinner than this many voxels of the finest
+#: grid is named where the digital Betti numbers do not settle
+THIN_LENS_VOXELS = 2
+
+
 def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding",
                   bodies: int | None = None) -> list[Note]:
     """What the grids showed (cavities, resolutions too coarse, 26-connected
     voxels joining solids that touch, fewer components than ``bodies``)
-    and what the peers could not say."""
+    and what the peers could not say; where the Betti numbers do not
+    settle, the thinnest overlap of crossing components, if the finest
+    grid does not resolve it."""
     notes = []
     if digital:
         last = digital[-1]
@@ -1107,6 +1144,10 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
                                                "by": "flood" if fill == "flood" else "connectivity"}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
+        lens = w["solid"].get("thinnest_lens")
+        if not stable and lens is not None and lens["thickness"] < THIN_LENS_VOXELS * last["pitch"]:
+            notes.append(Note("thin_overlap", {**lens, "voxels": lens["thickness"] / last["pitch"],
+                                               "resolution": last["resolution"]}))
         if reference is not None and stable:
             # too coarse: a grid whose genus the finer, settled ones do not
             # repeat; one that gives the settled genus is not, even where

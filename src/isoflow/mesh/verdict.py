@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions", "corner_joins"]
+                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap"]
 
 
 @dataclass(frozen=True)
@@ -367,6 +367,11 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
     "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
     "corner_joins": _corner_join_words,
+    "thin_overlap": lambda thickness, at, voxels, resolution: (
+        f"two components overlap in a lens {thickness:.2g} thick on average at {_point(at)}, {voxels:.2g} "
+        f"voxel{'s' if voxels >= 1.5 else ''} at resolution {resolution}: their surfaces meet almost tangentially, "
+        "and the crevice around the lens, narrower than a voxel over a band many voxels wide, leaves pockets and "
+        "tunnels of outside that change with the grid"),
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
 }
 
