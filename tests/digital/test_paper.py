@@ -195,6 +195,17 @@ def test_example_19_lands_on_the_cube_of_eq_5_21():
     assert [s["energy"] for s in run.steps] == [20, 8, 0]
 
 
+def test_the_docs_cite_the_paper_as_published():
+    """The paper's first page: Actes des rencontres du CIRM, Vol. 3, no. 1
+    (2013), pp. 183-194; the citing sections gave only the title and year."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    for page in ("README.md", "docs/index.md", "docs/mathematics.md"):
+        text = " ".join((root / page).read_text(encoding="utf-8").split())
+        assert "Curvature and Flow in Digital Space" in text and "CIRM 3(1) (2013), pp. 183-194" in text, page
+
+
 def cell_counts(config: int) -> tuple[int, ...]:
     """Octants in the object, and the vertex's 6 half-edges and 12
     quarter-faces (of the lattice cells around it) that have some or all of
