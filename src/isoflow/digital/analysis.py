@@ -110,7 +110,7 @@ def analyze(
     Examples
     --------
     A solid torus: one component, one tunnel, no cavity, its boundary one
-    surface of genus 1, and ``a^T n = 8 chi = 0`` (Theorem 10):
+    surface of genus 1, and ``a^T n = 8 chi = 0`` (Theorem 11, one tunnel):
 
     >>> import numpy as np
     >>> x, y, z = np.indices((12, 12, 5)) - np.array([5.5, 5.5, 2]).reshape(3, 1, 1, 1)

@@ -237,7 +237,7 @@ class QuadMesh:
 
     @property
     def gamma(self) -> np.ndarray:
-        """Each vertex's curvature index gamma (eq. 4.5,
+        """The vertex angle gamma of each vertex (eq. 4.6, in eighths,
         :func:`~isoflow.digital.indices.gamma_lut`).
 
         Examples
@@ -250,7 +250,7 @@ class QuadMesh:
 
     @property
     def f(self) -> np.ndarray:
-        """Each vertex's index f of eq. 4.6 (:func:`~isoflow.digital.indices.f_lut`).
+        """The vertex index f of each vertex (eq. 4.8 of Definition 9, :func:`~isoflow.digital.indices.f_lut`).
 
         Examples
         --------
