@@ -19,8 +19,11 @@ OME-TIFF's PhysicalSizeX/Y/Z too). A file of several image series
 volume is not said by the file.
 
 Grey stored as colour is read as that grey, as a PNG's is: RGB whose three
-channels are equal, or grey, either with an alpha channel (ignored); RGB
-whose channels differ is refused; so are a stack's RGB pages, whether
+channels are equal, or grey, either with an alpha channel where the alpha
+adds nothing to the grey (one opacity everywhere, or transparent exactly
+where the grey is 0; another alpha is refused with the command that saves
+it as the mask: :func:`.registry.check_alpha`); RGB whose channels differ
+is refused; so are a stack's RGB pages, whether
 their samples are interleaved or in planes. One RGB image whose samples
 are stored as planes (PhotometricInterpretation 2, PlanarConfiguration 2)
 is what tifffile's ``imwrite``, and scikit-image's and imageio's through
@@ -97,6 +100,7 @@ from ...errors import IsoflowError
 from .registry import (
     RawVolume,
     ascii_unit,
+    check_alpha,
     check_shape,
     colours_refused,
     import_library,
@@ -378,8 +382,9 @@ def micron_scale(tags: dict[int, object], pitch: float, unit: object = None, ima
 def _grey(data: np.ndarray, axes: list[str], photometric: int, extra: tuple, where: str) -> tuple[np.ndarray, list[str]]:
     """``data`` without its samples axis ``S`` where the samples are grey
     stored as colour, as a PNG's are read (see :mod:`.png`): RGB whose
-    three channels are equal, or grey, either with alpha (ignored). Other
-    samples are left for :func:`to_xyz` to refuse as channels.
+    three channels are equal, or grey, either with an alpha that adds
+    nothing to the grey (:func:`.registry.check_alpha`). Other samples are
+    left for :func:`to_xyz` to refuse as channels.
 
     The samples of a stack's RGB pages are read so whether they are stored
     interleaved or as planes: there the planes cannot be slices, the pages
@@ -394,7 +399,17 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, extra: tuple, whe
     grey = samples[0]
     if not (samples[:colours] == grey).all():
         raise colours_refused(where, "RGB", "a grey (8- or 16-bit) TIFF")
+    for i, kind in enumerate(extra, start=colours):
+        check_alpha(grey, samples[i], where, f"TIFF ExtraSamples {int(kind)}", _command(where, _alpha_as_grey, "_alpha"))
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
+
+
+def _alpha_as_grey(src: str, dst: str) -> str:
+    """The tifffile call that saves the last sample (the alpha) of the TIFF
+    ``src`` as the grey TIFF ``dst``, keeping its resolution tags."""
+    return ("t = tifffile.TiffFile(" + src + "); s = t.series[0]; p = t.pages[0]; tifffile.imwrite(" + dst
+            + ', numpy.take(s.asarray(), -1, axis=s.axes.index("S")), photometric="minisblack", '
+            "resolution=p.resolution, resolutionunit=p.resolutionunit)")
 
 
 def _planes_of_one_image(axes: list[str], shape: tuple[int, ...], photometric: int, planar: bool) -> bool:
@@ -548,11 +563,18 @@ def _resaved(where: str, condition: str, write, saved: str = "save them as one s
     stack) beside it (``NAME_stack.tif``, the stem ending in ``suffix``)
     and give that, with the ``python -c`` command whose tifffile call
     ``write(source, stack)`` (the two paths as Python literals) writes it."""
+    return f"{condition}, {saved} and give that: {_command(where, write, suffix)}"
+
+
+def _command(where: str, write, suffix: str) -> str:
+    """The ``python -c`` command whose tifffile call ``write(source,
+    saved)`` (the two paths as Python literals) saves the TIFF ``where``
+    as ``NAME{suffix}.tif`` beside it."""
     import shlex
 
-    stack = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
-    code = f"import tifffile; {write(json.dumps(where), json.dumps(stack))}"
-    return f"{condition}, {saved} and give that: python -c {shlex.quote(code)}"
+    saved = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
+    code = f"import numpy, tifffile; {write(json.dumps(where), json.dumps(saved))}"
+    return f"python -c {shlex.quote(code)}"
 
 
 #: metres per length unit of OME-XML (``UnitsLength``, schema 2016-06), and
