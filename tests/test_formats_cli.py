@@ -407,6 +407,35 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
     assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
 
 
+@pytest.mark.parametrize("count", [2, 5])
+def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, count):
+    """The command that saves an OME-TIFF's channels as slices kept the
+    voxel size but not the stage position (the first plane's
+    PositionX/Y/Z), so the stack it wrote was read at 0: it keeps them, and
+    the stack's voxel 0 is centred where tifffile reads the original's
+    first plane, in the voxel size's unit (a position in mm beside sizes in
+    um), each slice one PhysicalSizeZ above the last."""
+    data = (rng.random((count, 6, 7)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={
+        "axes": "CYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 3.0,
+        "Plane": {"PositionX": [1.5] * count, "PositionXUnit": ["mm"] * count, "PositionY": [-20.0] * count,
+                  "PositionZ": [7.0] * count}})
+    with tifffile.TiffFile(tmp_path / "c.ome.tif") as tif:
+        assert tif.series[0].axes == "CYX"
+        pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+    first = pixels["Plane"][0]
+    assert (first["TheZ"], first["TheC"], first["TheT"]) == (0, 0, 0)
+    centre = np.array([first["PositionX"] * 1000, first["PositionY"], first["PositionZ"]])  # mm in um
+    pitch = np.array([pixels[f"PhysicalSize{axis}"] for axis in "XYZ"])
+    report = resaved_as_the_refusal_says(tmp_path / "c.ome.tif", count)
+    assert report["unit"] == "\u00b5m" and report["voxels"] == np.count_nonzero(data)
+    np.testing.assert_allclose(report["pitch"], pitch)
+    np.testing.assert_allclose(report["origin"], centre - pitch / 2)
+    with tifffile.TiffFile(tmp_path / "c.ome_stack.tif") as tif:
+        planes = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]["Plane"]
+    np.testing.assert_allclose([plane["PositionZ"] for plane in planes], centre[2] + pitch[2] * np.arange(count))
+
+
 @pytest.mark.parametrize("slices", [3, 4])
 def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(tmp_path, rng, slices):
     """``tifffile.imwrite(f, a)`` of a (3 or 4, Y, X) array stores one RGB(A)

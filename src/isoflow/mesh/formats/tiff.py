@@ -14,7 +14,8 @@ however alike their pages look. One slice of several channels is what
 tifffile's ``imwrite(f, stack, imagej=True)`` makes of a (slices, rows,
 columns) stack, and Fiji opens it as channels: it is refused with the
 command that saves the channels as slices, keeping the voxel size (an
-OME-TIFF's PhysicalSizeX/Y/Z too). A file of several image series
+OME-TIFF's PhysicalSizeX/Y/Z too) and the placement (ImageJ's origin, an
+OME-TIFF's stage position). A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
@@ -542,12 +543,14 @@ def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
     that many slices, keeping its resolution tags and ImageJ metadata
     (tifffile's ``metadata={'axes': 'ZYX'}``), with the command that does
     it; an OME-TIFF (``ome``, its OME-XML) whose voxel size is its
-    PhysicalSizeX/Y/Z is saved as an OME-TIFF with those, which its
-    resolution tags need not hold."""
+    PhysicalSizeX/Y/Z, or that gives a stage position, is saved as an
+    OME-TIFF with those (:func:`_ome_stage`), which its resolution tags
+    and ImageJ metadata need not hold."""
     sizes = _ome_sizes(ome)
-    if sizes:
-        kept = ", ".join(f'"{name}": {float(value)!r}' if not name.endswith("Unit") else f'"{name}": {json.dumps(value)}'
-                         for name, value in sizes.items())
+    stage = _ome_stage(ome, where, channels)
+    if sizes or stage:
+        kept = ", ".join([f'"{name}": {float(value)!r}' if not name.endswith("Unit") else f'"{name}": {json.dumps(value)}'
+                          for name, value in sizes.items()] + stage)
         return _resaved(where, f"if its {channels} channels are the slices of one volume",
                         lambda src, dst: f"tifffile.imwrite({dst}, tifffile.imread({src}), ome=True, "
                                          f'metadata={{"axes": "ZYX", {kept}}})')
@@ -556,6 +559,26 @@ def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
                                      "t.asarray(), imagej=t.is_imagej, resolution=p.resolution, "
                                      'resolutionunit=p.resolutionunit, metadata={**(t.imagej_metadata or {}), '
                                      '"axes": "ZYX"})')
+
+
+def _ome_stage(ome: str | None, where: str, slices: int) -> list[str]:
+    """tifffile's ``Plane`` metadata, as the text of a dict entry, that
+    places ``slices`` slices at an OME-TIFF's stage position (``ome``, its
+    OME-XML): the first plane's PositionX/Y/Z, the one the reader takes,
+    in PhysicalSizeX's unit, and each further slice one PhysicalSizeZ
+    higher (none where the file gives no position)."""
+    sizes, centres, _ = _ome_placement(ome, where)
+    if not centres:
+        return []
+    pixels = _ome_pixels(ome)
+    unit = json.dumps(pixels.get("PhysicalSizeXUnit") or "\u00b5m")
+    entries = []
+    for axis, centre in centres.items():
+        # each slice's own place, for the readers that place planes one by one
+        places = (f"[{centre!r} + {sizes[axis]!r} * k for k in range({slices})]" if axis == "Z" and "Z" in sizes
+                  else f"[{centre!r}] * {slices}")
+        entries.append(f'"Position{axis}": {places}, "Position{axis}Unit": [{unit}] * {slices}')
+    return [f'"Plane": {{{", ".join(entries)}}}']
 
 
 def _resaved(where: str, condition: str, write, saved: str = "save them as one stack", suffix: str = "_stack") -> str:
