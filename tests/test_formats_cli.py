@@ -407,6 +407,51 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
     assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
 
 
+@pytest.mark.parametrize("depth", [1, 4])
+def test_an_ome_tiff_resaved_as_ome_tiff_keeps_its_stage_position(tmp_path, rng, depth):
+    """``write_volume`` of an OME-TIFF read by isoflow to ``.ome.tif`` wrote
+    an ImageJ TIFF, whose OME-XML OME readers would look for in vain: the
+    stage position was gone. It writes an OME-TIFF whose first plane is
+    centred where tifffile reads the original's (a position in mm beside
+    sizes in um), its voxel sizes and unit those of the original, and a
+    stack of one slice stays 3D; ``surface`` of the copy lands on the box
+    the original's OME-XML gives."""
+    mask = (rng.random((depth, 6, 7)) < 0.5).astype(np.uint8)  # (z, y, x)
+    mask[0, 2, 3] = 1
+    tifffile.imwrite(tmp_path / "scan.ome.tif", mask, metadata={
+        "axes": "ZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 3.0,
+        "Plane": {"PositionX": [1.5] * depth, "PositionXUnit": ["mm"] * depth, "PositionY": [-20.0] * depth,
+                  "PositionZ": [7.0 + 3.0 * k for k in range(depth)]}})
+
+    def ome(path):
+        with tifffile.TiffFile(path) as tif:
+            assert tif.is_ome
+            return tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+
+    def first_centre(pixels):
+        plane = pixels["Plane"][0] if depth > 1 else pixels["Plane"]
+        scale = {"mm": 1000.0}.get(plane.get("PositionXUnit"), 1.0)  # to the sizes' unit, um
+        return np.array([plane["PositionX"] * scale, plane["PositionY"], plane["PositionZ"]])
+
+    original = ome(tmp_path / "scan.ome.tif")
+    copy = isoflow.write_volume(isoflow.read_volume(tmp_path / "scan.ome.tif"), tmp_path / "copy.ome.tif")
+    resaved = ome(copy)
+    pitch = np.array([original[f"PhysicalSize{axis}"] for axis in "XYZ"])
+    np.testing.assert_allclose([resaved[f"PhysicalSize{axis}"] for axis in "XYZ"], pitch)
+    assert {resaved[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {"\u00b5m"}
+    np.testing.assert_allclose(first_centre(resaved), first_centre(original))
+    np.testing.assert_array_equal(tifffile.imread(copy).reshape(mask.shape), mask)
+    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(copy), "-o", str(tmp_path / "s.ply")],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    z, y, x = np.nonzero(mask)
+    voxels = np.stack([x, y, z], axis=1)
+    corner = first_centre(original) - pitch / 2
+    bounds = trimesh.load(tmp_path / "s.ply", process=False).bounds
+    np.testing.assert_allclose(bounds, [corner + voxels.min(0) * pitch, corner + (voxels.max(0) + 1) * pitch],
+                               rtol=1e-6)
+
+
 @pytest.mark.parametrize("count", [2, 5])
 def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, count):
     """The command that saves an OME-TIFF's channels as slices kept the

@@ -83,7 +83,10 @@ Written as an ImageJ hyperstack of uint8 0/1 with those tags, so that Fiji
 opens it calibrated and placed, and a length unit given as ImageJ's
 ``unit`` (``um`` for \u00b5m, as ImageJ's ``FileSaver`` writes it; no key,
 Fiji's "pixel", where none is given). Resolutions are rationals in TIFF: a pitch
-is kept to about 9 digits, and so an origin read back through it.
+is kept to about 9 digits, and so an origin read back through it. A name
+ending in ``.ome.tif`` or ``.ome.tiff`` is written as an OME-TIFF instead
+(:func:`_write_ome`): the voxel size and each plane's stage position in
+its OME-XML, which OME readers place it by, as decimals.
 """
 
 from __future__ import annotations
@@ -165,7 +168,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         ome = tif.ome_metadata if tif.is_ome else None
         sizes, centres, ome_unit = _ome_placement(ome, where) if ome else ({}, {}, None)
         unit = ome_unit if sizes else unit  # (the OME voxel sizes replace the tags' and ImageJ's)
-        axes, shape = _unsqueezed(series, spacing is not None)
+        axes, shape = _unsqueezed(series, spacing is not None or "Z" in sizes)
         data = data.reshape(shape)
         damage = [d for d in damage if _tag_read(d)]
         if damage:
@@ -697,9 +700,10 @@ def _ome_length(element, name: str, unit: str, where: str) -> float | None:
 def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
     """The series' axes and shape without its axes of length 1, but for
     the rows and columns (tifffile drops those too: a volume one voxel wide
-    would lose an axis) and, in a ``stack`` (ImageJ's z ``spacing`` is
-    given, as isoflow writes every 3D volume), the slices: a stack of one
-    slice is a volume one voxel thick, not a 2D image."""
+    would lose an axis) and, in a ``stack`` (ImageJ's z ``spacing`` or an
+    OME-TIFF's PhysicalSizeZ is given, as isoflow writes every 3D volume),
+    the slices: a stack of one slice is a volume one voxel thick, not a 2D
+    image."""
     axes, shape = series.get_axes(False).upper(), series.get_shape(False)
     keep = [i for i, (a, n) in enumerate(zip(axes, shape)) if n > 1 or a in "YX" or (a == "Z" and stack)]
     return [axes[i] for i in keep], [shape[i] for i in keep]
@@ -765,12 +769,29 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
-    _check_resolution(path, obj)
+    if not is_ome_name(path.name):  # OME-XML writes the sizes as decimals, not as TIFF rationals
+        _check_resolution(path, obj)
+
+
+def is_ome_name(name: str) -> bool:
+    """Whether a file name is an OME-TIFF's (``.ome.tif``, ``.ome.tiff``),
+    which OME readers (Bio-Formats, QuPath, BigStitcher) place by its
+    OME-XML.
+
+    Examples
+    --------
+    >>> is_ome_name("scan.ome.tif"), is_ome_name("SCAN.OME.TIFF"), is_ome_name("scan.tif")
+    (True, True, False)
+    """
+    return name.lower().endswith((".ome.tif", ".ome.tiff"))
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
+    if is_ome_name(name or path.name):
+        _write_ome(tifffile, path, obj, unit)
+        return
     spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
     metadata: dict[str, str | float] = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
@@ -784,3 +805,26 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     z, y, x = data.shape if obj.ndim == 3 else (1, *data.shape)
     resolution = (_resolution_rational(spacing[0]), _resolution_rational(spacing[1]))  # as check() found them
     tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=resolution, metadata=metadata)
+
+
+def _write_ome(tifffile, path: Path, obj: DigitalObject, unit: str | None) -> None:
+    """Write ``obj`` as an OME-TIFF: the voxel size as PhysicalSizeX/Y/Z and
+    each plane's stage position as PositionX/Y/Z, the centre of its first
+    voxel (the place :func:`_ome_placement` reads), all in ``unit``, which
+    OME-XML spells as isoflow does (``µm``, ``mm``, ``Å``, ...); without
+    one, OME's ``pixel``, which reads back as no unit (the schema's
+    default, µm, would give the object a unit it has not)."""
+    spacing, corner = placement(obj)
+    centre = [float(c + p / 2) for c, p in zip(corner, spacing)]
+    data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
+    planes = data.shape[0] if obj.ndim == 3 else 1
+    said = unit or "pixel"
+    metadata: dict[str, object] = {"axes": "ZYX" if obj.ndim == 3 else "YX"}
+    plane: dict[str, list] = {}
+    for i, axis in enumerate("XYZ"[:obj.ndim]):
+        metadata[f"PhysicalSize{axis}"], metadata[f"PhysicalSize{axis}Unit"] = float(spacing[i]), said
+        step = float(spacing[i]) if axis == "Z" else 0.0  # each slice at its own height
+        plane[f"Position{axis}"] = [centre[i] + step * k for k in range(planes)]
+        plane[f"Position{axis}Unit"] = [said] * planes
+    metadata["Plane"] = plane
+    tifffile.imwrite(path, data, ome=True, photometric="minisblack", metadata=metadata)
