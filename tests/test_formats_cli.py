@@ -452,6 +452,39 @@ def test_an_ome_tiff_resaved_as_ome_tiff_keeps_its_stage_position(tmp_path, rng,
                                rtol=1e-6)
 
 
+def test_an_ome_tiff_stage_position_in_mm_without_a_voxel_size_is_not_mixed_with_pixels(tmp_path):
+    """An OME-TIFF whose planes give PositionX/Y in mm but no PhysicalSize
+    was placed at 1499.5 voxels of size 1 in no unit: the position in um
+    beside a pitch in pixels. Its voxel size has no length, so a position
+    in one is not read (one warning line naming it) and the report's origin
+    is in the pitch's terms, 0; a position in the schema's default
+    "reference frame" units is in those terms, and is read."""
+    mask = np.zeros((3, 4, 5), np.uint8)
+    mask[1, 1:3, 1:4] = 1
+    for name, unit in (("mm.ome.tif", ["mm"] * 3), ("frame.ome.tif", None)):
+        plane = {"PositionX": [1.5] * 3, "PositionY": [2.0] * 3}
+        if unit:
+            plane.update(PositionXUnit=unit, PositionYUnit=unit)
+        tifffile.imwrite(tmp_path / name, mask, metadata={"axes": "ZYX", "Plane": plane})
+        with tifffile.TiffFile(tmp_path / name) as tif:
+            pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+        assert not any(key.startswith("PhysicalSize") for key in pixels)
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        assert report["pitch"] == [1.0, 1.0, 1.0] and report["unit"] is None
+        if unit:
+            line, = done.stderr.splitlines()
+            assert line.startswith(f"isoflow info: warning: {tmp_path / name}: OME-XML's PositionX 1.5 mm, PositionY "
+                                   "2.0 mm are not read"), line
+            assert report["origin"] == [0.0, 0.0, 0.0]
+        else:
+            assert done.stderr == ""
+            first = pixels["Plane"][0]
+            assert report["origin"] == [first["PositionX"] - 0.5, first["PositionY"] - 0.5, 0.0]
+
+
 @pytest.mark.parametrize("count", [2, 5])
 def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, count):
     """The command that saves an OME-TIFF's channels as slices kept the

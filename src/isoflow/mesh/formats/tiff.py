@@ -570,7 +570,7 @@ def _ome_stage(ome: str | None, where: str, slices: int) -> list[str]:
     OME-XML): the first plane's PositionX/Y/Z, the one the reader takes,
     in PhysicalSizeX's unit, and each further slice one PhysicalSizeZ
     higher (none where the file gives no position)."""
-    sizes, centres, _ = _ome_placement(ome, where)
+    sizes, centres, _ = _ome_placement(ome, where, quiet=True)
     if not centres:
         return []
     pixels = _ome_pixels(ome)
@@ -617,7 +617,8 @@ OME_METRES = {
 REFERENCE_FRAME = "reference frame"
 
 
-def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[str, float], str | None]:
+def _ome_placement(xml: str | None, where: str, quiet: bool = False) -> tuple[dict[str, float], dict[str, float],
+                                                                             str | None]:
     """An OME-TIFF's voxel size and voxel 0's centre per axis (``X``,
     ``Y``, ``Z``), where given: the ``Pixels`` element's PhysicalSize
     attributes, the file's own calibration, which the resolution tags
@@ -630,8 +631,10 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
     centre, as an OME-Zarr translation is, and as BigStitcher places a
     tile at its stage position (imglib2's pixel coordinates are pixel
     centres); one in "reference frame" units, the schema's default, is
-    taken in the voxel size's unit. The third item is that unit
-    (:func:`length_unit`)."""
+    taken in the voxel size's unit. Without any PhysicalSize the voxel
+    size is in no length unit: a position in one is not read, with a
+    warning (``quiet``: none, for a second reading of the same XML). The
+    third item is that unit (:func:`length_unit`)."""
     pixels = _ome_pixels(xml)
     if pixels is None:
         return {}, {}, None
@@ -647,12 +650,28 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
         sizes[axis] = size
     planes = pixels.findall("{*}Plane")
     first = [p for p in planes if all(p.get(f"The{a}", "0") == "0" for a in "ZTC")]
-    centres = {}
+    centres, unplaced = {}, []
     for axis in "XYZ" if planes else "":
-        centre = _ome_length((first or planes)[0], f"Position{axis}", unit, where)
-        if centre is not None:
+        plane = (first or planes)[0]
+        centre = _ome_length(plane, f"Position{axis}", unit, where)
+        if centre is not None and not sizes and plane.get(f"Position{axis}Unit", REFERENCE_FRAME) != REFERENCE_FRAME:
+            unplaced.append(axis)
+        elif centre is not None:
             centres[axis] = centre
+    if unplaced and not quiet:
+        note(_positions_without_size(where, unplaced, (first or planes)[0]))
     return sizes, centres, length_unit(unit)
+
+
+def _positions_without_size(where: str, axes: list[str], plane) -> str:
+    """The warning for stage positions in a length unit in an OME-TIFF that
+    gives no PhysicalSize: its voxels are of no known length, so the
+    positions have no place in them (a position in mm beside voxels of size
+    1 in no unit would be read as 1500 voxels for 1.5 mm)."""
+    said = ", ".join(f"Position{a} {plane.get(f'Position{a}')} {plane.get(f'Position{a}Unit')}" for a in axes)
+    return (f"{where}: OME-XML's {said} {'is' if len(axes) == 1 else 'are'} not read: the file gives no "
+            "PhysicalSizeX/Y/Z, so its voxel size is in no length unit to place a position in; "
+            f"{', '.join(a.lower() for a in axes)} placed as without {'it' if len(axes) == 1 else 'them'}")
 
 
 def _ome_sizes(xml: str | None) -> dict[str, str]:
