@@ -168,7 +168,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         ome = tif.ome_metadata if tif.is_ome else None
         sizes, centres, ome_unit = _ome_placement(ome, where) if ome else ({}, {}, None)
         unit = ome_unit if sizes else unit  # (the OME voxel sizes replace the tags' and ImageJ's)
-        axes, shape = _unsqueezed(series, spacing is not None or "Z" in sizes)
+        axes, shape = _unsqueezed(series, spacing is not None)
         data = data.reshape(shape)
         damage = [d for d in damage if _tag_read(d)]
         if damage:
@@ -719,10 +719,9 @@ def _ome_length(element, name: str, unit: str, where: str) -> float | None:
 def _unsqueezed(series, stack: bool) -> tuple[list[str], list[int]]:
     """The series' axes and shape without its axes of length 1, but for
     the rows and columns (tifffile drops those too: a volume one voxel wide
-    would lose an axis) and, in a ``stack`` (ImageJ's z ``spacing`` or an
-    OME-TIFF's PhysicalSizeZ is given, as isoflow writes every 3D volume),
-    the slices: a stack of one slice is a volume one voxel thick, not a 2D
-    image."""
+    would lose an axis) and, in a ``stack`` (ImageJ's z ``spacing`` is
+    given, as isoflow writes every 3D volume), the slices: a stack of one
+    slice is a volume one voxel thick, not a 2D image."""
     axes, shape = series.get_axes(False).upper(), series.get_shape(False)
     keep = [i for i, (a, n) in enumerate(zip(axes, shape)) if n > 1 or a in "YX" or (a == "Z" and stack)]
     return [axes[i] for i in keep], [shape[i] for i in keep]
@@ -790,6 +789,11 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
     if not is_ome_name(path.name):  # OME-XML writes the sizes as decimals, not as TIFF rationals
         _check_resolution(path, obj)
+    elif obj.ndim == 3 and obj.volume.shape[2] == 1:
+        # a 2D microscope image often carries a PhysicalSizeZ too, so the
+        # reader cannot take one as the mark of a stack
+        note(f"{path}: an OME-TIFF of one slice is read back as a 2D image (its OME-XML says a stack of one slice "
+             "as it says a 2D image); write .tif, .nrrd, .h5 or .npz to keep the volume one voxel thick")
 
 
 def is_ome_name(name: str) -> bool:
