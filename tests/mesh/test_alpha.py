@@ -89,3 +89,16 @@ def test_a_mask_cut_out_of_its_background_is_read_as_its_grey(tmp_path, ink, how
     got = json.loads(proc.stdout)
     assert got["voxels"] == np.count_nonzero(_alpha_read_by_its_library(path))
     assert got["euler_characteristic"] == measure.euler_number(ink.T != 0, connectivity=1)
+
+
+def test_the_refusal_formats_md_quotes_is_the_one_given(tmp_path, ink):
+    """docs/formats.md quotes the line for a 9x12 ink layer saved as LA."""
+    from pathlib import Path
+
+    _saved(tmp_path / "layer.png", np.zeros_like(ink), ink, "LA.png")
+    proc = run("info", "layer.png", cwd=tmp_path)
+    assert proc.returncode == 2
+    line = proc.stderr.strip().removeprefix("isoflow info: error: ")
+    docs = Path(__file__).resolve().parents[2] / "docs" / "formats.md"
+    text = " ".join(docs.read_text().split())
+    assert f"`{line}`" in text
