@@ -407,6 +407,124 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
     assert {pixels[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {report["unit"]}
 
 
+@pytest.mark.parametrize("depth", [2, 4])
+def test_an_ome_tiff_resaved_as_ome_tiff_keeps_its_stage_position(tmp_path, rng, depth):
+    """``write_volume`` of an OME-TIFF read by isoflow to ``.ome.tif`` wrote
+    an ImageJ TIFF, whose OME-XML OME readers would look for in vain: the
+    stage position was gone. It writes an OME-TIFF whose first plane is
+    centred where tifffile reads the original's (a position in mm beside
+    sizes in um), its voxel sizes and unit those of the original;
+    ``surface`` of the copy lands on the box the original's OME-XML
+    gives."""
+    mask = (rng.random((depth, 6, 7)) < 0.5).astype(np.uint8)  # (z, y, x)
+    mask[0, 2, 3] = 1
+    tifffile.imwrite(tmp_path / "scan.ome.tif", mask, metadata={
+        "axes": "ZYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 3.0,
+        "Plane": {"PositionX": [1.5] * depth, "PositionXUnit": ["mm"] * depth, "PositionY": [-20.0] * depth,
+                  "PositionZ": [7.0 + 3.0 * k for k in range(depth)]}})
+
+    def ome(path):
+        with tifffile.TiffFile(path) as tif:
+            assert tif.is_ome
+            return tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+
+    def first_centre(pixels):
+        plane = pixels["Plane"][0]
+        scale = {"mm": 1000.0}.get(plane.get("PositionXUnit"), 1.0)  # to the sizes' unit, um
+        return np.array([plane["PositionX"] * scale, plane["PositionY"], plane["PositionZ"]])
+
+    original = ome(tmp_path / "scan.ome.tif")
+    copy = isoflow.write_volume(isoflow.read_volume(tmp_path / "scan.ome.tif"), tmp_path / "copy.ome.tif")
+    resaved = ome(copy)
+    pitch = np.array([original[f"PhysicalSize{axis}"] for axis in "XYZ"])
+    np.testing.assert_allclose([resaved[f"PhysicalSize{axis}"] for axis in "XYZ"], pitch)
+    assert {resaved[f"PhysicalSize{axis}Unit"] for axis in "XYZ"} == {"\u00b5m"}
+    np.testing.assert_allclose(first_centre(resaved), first_centre(original))
+    np.testing.assert_array_equal(tifffile.imread(copy).reshape(mask.shape), mask)
+    p = subprocess.run([sys.executable, "-m", "isoflow", "surface", str(copy), "-o", str(tmp_path / "s.ply")],
+                       capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    z, y, x = np.nonzero(mask)
+    voxels = np.stack([x, y, z], axis=1)
+    corner = first_centre(original) - pitch / 2
+    bounds = trimesh.load(tmp_path / "s.ply", process=False).bounds
+    np.testing.assert_allclose(bounds, [corner + voxels.min(0) * pitch, corner + (voxels.max(0) + 1) * pitch],
+                               rtol=1e-6)
+
+
+def test_an_ome_tiff_of_one_slice_is_written_with_a_warning_that_it_reads_back_2d(tmp_path):
+    """OME-XML says a stack of one slice as it says a 2D image (tifffile
+    reads both as (rows, columns)): writing a volume one voxel thick to
+    .ome.tif says so, and names the formats that keep it."""
+    obj = isoflow.DigitalObject(np.ones((3, 4, 1), bool), pitch=0.5, origin=(1.0, 2.0, 3.0))
+    with pytest.warns(isoflow.IsoflowWarning, match=r"one\.ome\.tif: an OME-TIFF of one slice is read back as a 2D image"):
+        isoflow.write_volume(obj, tmp_path / "one.ome.tif")
+    assert tifffile.imread(tmp_path / "one.ome.tif").shape == (4, 3)
+    np.testing.assert_allclose(isoflow.read_volume(tmp_path / "one.ome.tif").origin, [1.0, 2.0])
+
+
+def test_an_ome_tiff_stage_position_in_mm_without_a_voxel_size_is_not_mixed_with_pixels(tmp_path):
+    """An OME-TIFF whose planes give PositionX/Y in mm but no PhysicalSize
+    was placed at 1499.5 voxels of size 1 in no unit: the position in um
+    beside a pitch in pixels. Its voxel size has no length, so a position
+    in one is not read (one warning line naming it) and the report's origin
+    is in the pitch's terms, 0; a position in the schema's default
+    "reference frame" units is in those terms, and is read."""
+    mask = np.zeros((3, 4, 5), np.uint8)
+    mask[1, 1:3, 1:4] = 1
+    for name, unit in (("mm.ome.tif", ["mm"] * 3), ("frame.ome.tif", None)):
+        plane = {"PositionX": [1.5] * 3, "PositionY": [2.0] * 3}
+        if unit:
+            plane.update(PositionXUnit=unit, PositionYUnit=unit)
+        tifffile.imwrite(tmp_path / name, mask, metadata={"axes": "ZYX", "Plane": plane})
+        with tifffile.TiffFile(tmp_path / name) as tif:
+            pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+        assert not any(key.startswith("PhysicalSize") for key in pixels)
+        done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / name), "--json"],
+                              capture_output=True, text=True)
+        assert done.returncode == 0, done.stderr
+        report = json.loads(done.stdout)
+        assert report["pitch"] == [1.0, 1.0, 1.0] and report["unit"] is None
+        if unit:
+            line, = done.stderr.splitlines()
+            assert line.startswith(f"isoflow info: warning: {tmp_path / name}: OME-XML's PositionX 1.5 mm, PositionY "
+                                   "2.0 mm are not read"), line
+            assert report["origin"] == [0.0, 0.0, 0.0]
+        else:
+            assert done.stderr == ""
+            first = pixels["Plane"][0]
+            assert report["origin"] == [first["PositionX"] - 0.5, first["PositionY"] - 0.5, 0.0]
+
+
+@pytest.mark.parametrize("count", [2, 5])
+def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, count):
+    """The command that saves an OME-TIFF's channels as slices kept the
+    voxel size but not the stage position (the first plane's
+    PositionX/Y/Z), so the stack it wrote was read at 0: it keeps them, and
+    the stack's voxel 0 is centred where tifffile reads the original's
+    first plane, in the voxel size's unit (a position in mm beside sizes in
+    um), each slice one PhysicalSizeZ above the last."""
+    data = (rng.random((count, 6, 7)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={
+        "axes": "CYX", "PhysicalSizeX": 0.5, "PhysicalSizeY": 0.25, "PhysicalSizeZ": 3.0,
+        "Plane": {"PositionX": [1.5] * count, "PositionXUnit": ["mm"] * count, "PositionY": [-20.0] * count,
+                  "PositionZ": [7.0] * count}})
+    with tifffile.TiffFile(tmp_path / "c.ome.tif") as tif:
+        assert tif.series[0].axes == "CYX"
+        pixels = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]
+    first = pixels["Plane"][0]
+    assert (first["TheZ"], first["TheC"], first["TheT"]) == (0, 0, 0)
+    centre = np.array([first["PositionX"] * 1000, first["PositionY"], first["PositionZ"]])  # mm in um
+    pitch = np.array([pixels[f"PhysicalSize{axis}"] for axis in "XYZ"])
+    report = resaved_as_the_refusal_says(tmp_path / "c.ome.tif", count)
+    assert report["unit"] == "\u00b5m" and report["voxels"] == np.count_nonzero(data)
+    np.testing.assert_allclose(report["pitch"], pitch)
+    np.testing.assert_allclose(report["origin"], centre - pitch / 2)
+    with tifffile.TiffFile(tmp_path / "c.ome_stack.tif") as tif:
+        planes = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]["Plane"]
+    np.testing.assert_allclose([plane["PositionZ"] for plane in planes], centre[2] + pitch[2] * np.arange(count))
+
+
 @pytest.mark.parametrize("slices", [3, 4])
 def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(tmp_path, rng, slices):
     """``tifffile.imwrite(f, a)`` of a (3 or 4, Y, X) array stores one RGB(A)

@@ -6,9 +6,13 @@ VOC), 8-bit masks. Axes: row ``j``, column ``i`` is pixel ``(i, j)``
 (isoflow's (x, y), as a TIFF page). Modes: bilevel (``1``) as bool; 8-,
 16- and 32-bit grey (``L``, ``I;16``, ``I``) as their integers; palette
 (``P``) as the indices, not the colours; grey stored as colour (``RGB``,
-``RGBA``, ``LA`` whose colour channels are equal, the alpha ignored) as
-that grey. Colours that differ are refused: a colour-coded image is a
-picture of labels, whose numbering its file does not say. So is colour or
+``RGBA``, ``LA`` whose colour channels are equal) as that grey, where
+the alpha adds nothing to it: one opacity everywhere, or transparent
+exactly where the grey is 0; an alpha that shows other pixels than the
+grey's (black ink on a transparent sheet) is refused, with the command
+that saves the alpha as the mask (:func:`.registry.check_alpha`).
+Colours that differ are refused: a colour-coded image is a picture of
+labels, whose numbering its file does not say. So is colour or
 grey with alpha at 16 bits a channel, which Pillow reads as 8 (label 300
 would be 1, labels 1 to 255 would be 0). An animated PNG
 (several frames) is refused. The pixel size is 1: PNG's ``pHYs`` is a
@@ -22,13 +26,15 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, colours_refused, import_library, reading
+from .registry import RawVolume, check_alpha, check_shape, colours_refused, import_library, reading
 
 #: Pillow's modes read as they are (their integer type)
 GREY = {"1": np.bool_, "L": np.uint8, "P": np.uint8, "I;16": np.uint16, "I;16B": np.uint16, "I;16L": np.uint16,
         "I": np.int32}
 #: modes of grey stored as colour: the channels that must be equal
 COLOUR = {"RGB": 3, "RGBA": 3, "LA": 1}
+#: modes with an alpha channel, their last
+ALPHA = ("RGBA", "LA")
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -50,9 +56,22 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         grey = channels[..., 0]
         if not (channels == grey[..., None]).all():
             raise colours_refused(where, mode, "a grey (8- or 16-bit) or palette PNG")
+        if mode in ALPHA:
+            check_alpha(grey, data[..., -1], where, f"PNG mode {mode}", _alpha_as_grey(where))
         data = grey
     data = np.asarray(data, dtype=GREY.get(mode, np.uint8))
     return RawVolume(np.ascontiguousarray(data.T), np.ones(2))
+
+
+def _alpha_as_grey(where: str) -> str:
+    """The command that saves the alpha of the PNG ``where`` as a grey PNG
+    beside it (``NAME_alpha.png``)."""
+    import json
+    import shlex
+
+    saved = str(Path(where).with_name(Path(where).stem + "_alpha.png"))
+    code = f'from PIL import Image; Image.open({json.dumps(where)}).getchannel("A").save({json.dumps(saved)})'
+    return f"python -c {shlex.quote(code)}"
 
 
 def wide_channels(image) -> bool:

@@ -467,6 +467,50 @@ def colours_refused(where: str, kind: str, save_as: str) -> IsoflowError:
                         f"{save_as}")
 
 
+def check_alpha(grey: np.ndarray, alpha: np.ndarray, where: str, field: str, command: str) -> None:
+    """Refuse grey whose alpha channel says which pixels are shown otherwise
+    than the grey does.
+
+    The grey is the image where the alpha adds nothing to it: one opacity
+    everywhere (a mask saved as RGBA or LA, opaque), or transparent
+    exactly where the grey is 0 (a mask whose background is cut out).
+    Anywhere else the alpha holds what a viewer shows (black ink on a
+    transparent sheet, as image editors export a painted layer, is a
+    grey of 0 everywhere): reading the grey alone would count what is
+    not drawn, or nothing at all, without a word.
+
+    Parameters
+    ----------
+    grey, alpha : numpy.ndarray
+        The grey values and their alpha, of one shape.
+    where : str
+        The file, as messages name it.
+    field : str
+        What holds the alpha, as the file says it (``PNG mode LA``).
+    command : str
+        The shell command that saves the alpha as a grey image.
+
+    Examples
+    --------
+    >>> mask = np.array([[0, 255], [255, 0]], np.uint8)
+    >>> check_alpha(mask, np.full_like(mask, 255), "m.png", "PNG mode LA", "...")
+    >>> check_alpha(mask, mask, "m.png", "PNG mode LA", "...")
+    >>> check_alpha(np.zeros_like(mask), mask, "m.png", "PNG mode LA", "...")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: m.png: its alpha channel (PNG mode LA) and its grey differ in which pixels are \
+empty (alpha 0, grey 0) at 2 of 4 pixels: a viewer shows another image than the grey; save the alpha as the mask \
+and give that (or save the grey alone): ...
+    """
+    if alpha.size == 0 or ((alpha == alpha.flat[0]).all() and alpha.flat[0] != 0):
+        return
+    differ = int(np.count_nonzero((alpha != 0) != (grey != 0)))
+    if differ:
+        raise IsoflowError(f"{where}: its alpha channel ({field}) and its grey differ in which pixels are empty "
+                           f"(alpha 0, grey 0) at {differ} of {alpha.size} pixels: a viewer shows another image than "
+                           f"the grey; save the alpha as the mask and give that (or save the grey alone): {command}")
+
+
 def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     """Refuse, before reading, an array that will not fit in memory (the
     file's array plus the boolean volume), the line ending in ``hint``:

@@ -14,13 +14,17 @@ however alike their pages look. One slice of several channels is what
 tifffile's ``imwrite(f, stack, imagej=True)`` makes of a (slices, rows,
 columns) stack, and Fiji opens it as channels: it is refused with the
 command that saves the channels as slices, keeping the voxel size (an
-OME-TIFF's PhysicalSizeX/Y/Z too). A file of several image series
+OME-TIFF's PhysicalSizeX/Y/Z too) and the placement (ImageJ's origin, an
+OME-TIFF's stage position). A file of several image series
 (pages of different shapes, a second stack) is refused: which one is the
 volume is not said by the file.
 
 Grey stored as colour is read as that grey, as a PNG's is: RGB whose three
-channels are equal, or grey, either with an alpha channel (ignored); RGB
-whose channels differ is refused; so are a stack's RGB pages, whether
+channels are equal, or grey, either with an alpha channel where the alpha
+adds nothing to the grey (one opacity everywhere, or transparent exactly
+where the grey is 0; another alpha is refused with the command that saves
+it as the mask: :func:`.registry.check_alpha`); RGB whose channels differ
+is refused; so are a stack's RGB pages, whether
 their samples are interleaved or in planes. One RGB image whose samples
 are stored as planes (PhotometricInterpretation 2, PlanarConfiguration 2)
 is what tifffile's ``imwrite``, and scikit-image's and imageio's through
@@ -79,7 +83,10 @@ Written as an ImageJ hyperstack of uint8 0/1 with those tags, so that Fiji
 opens it calibrated and placed, and a length unit given as ImageJ's
 ``unit`` (``um`` for \u00b5m, as ImageJ's ``FileSaver`` writes it; no key,
 Fiji's "pixel", where none is given). Resolutions are rationals in TIFF: a pitch
-is kept to about 9 digits, and so an origin read back through it.
+is kept to about 9 digits, and so an origin read back through it. A name
+ending in ``.ome.tif`` or ``.ome.tiff`` is written as an OME-TIFF instead
+(:func:`_write_ome`): the voxel size and each plane's stage position in
+its OME-XML, which OME readers place it by, as decimals.
 """
 
 from __future__ import annotations
@@ -97,6 +104,7 @@ from ...errors import IsoflowError
 from .registry import (
     RawVolume,
     ascii_unit,
+    check_alpha,
     check_shape,
     colours_refused,
     import_library,
@@ -378,8 +386,9 @@ def micron_scale(tags: dict[int, object], pitch: float, unit: object = None, ima
 def _grey(data: np.ndarray, axes: list[str], photometric: int, extra: tuple, where: str) -> tuple[np.ndarray, list[str]]:
     """``data`` without its samples axis ``S`` where the samples are grey
     stored as colour, as a PNG's are read (see :mod:`.png`): RGB whose
-    three channels are equal, or grey, either with alpha (ignored). Other
-    samples are left for :func:`to_xyz` to refuse as channels.
+    three channels are equal, or grey, either with an alpha that adds
+    nothing to the grey (:func:`.registry.check_alpha`). Other samples are
+    left for :func:`to_xyz` to refuse as channels.
 
     The samples of a stack's RGB pages are read so whether they are stored
     interleaved or as planes: there the planes cannot be slices, the pages
@@ -394,7 +403,17 @@ def _grey(data: np.ndarray, axes: list[str], photometric: int, extra: tuple, whe
     grey = samples[0]
     if not (samples[:colours] == grey).all():
         raise colours_refused(where, "RGB", "a grey (8- or 16-bit) TIFF")
+    for i, kind in enumerate(extra, start=colours):
+        check_alpha(grey, samples[i], where, f"TIFF ExtraSamples {int(kind)}", _command(where, _alpha_as_grey, "_alpha"))
     return np.ascontiguousarray(grey), axes[:s] + axes[s + 1:]
+
+
+def _alpha_as_grey(src: str, dst: str) -> str:
+    """The tifffile call that saves the last sample (the alpha) of the TIFF
+    ``src`` as the grey TIFF ``dst``, keeping its resolution tags."""
+    return ("t = tifffile.TiffFile(" + src + "); s = t.series[0]; p = t.pages[0]; tifffile.imwrite(" + dst
+            + ', numpy.take(s.asarray(), -1, axis=s.axes.index("S")), photometric="minisblack", '
+            "resolution=p.resolution, resolutionunit=p.resolutionunit)")
 
 
 def _planes_of_one_image(axes: list[str], shape: tuple[int, ...], photometric: int, planar: bool) -> bool:
@@ -527,12 +546,14 @@ def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
     that many slices, keeping its resolution tags and ImageJ metadata
     (tifffile's ``metadata={'axes': 'ZYX'}``), with the command that does
     it; an OME-TIFF (``ome``, its OME-XML) whose voxel size is its
-    PhysicalSizeX/Y/Z is saved as an OME-TIFF with those, which its
-    resolution tags need not hold."""
+    PhysicalSizeX/Y/Z, or that gives a stage position, is saved as an
+    OME-TIFF with those (:func:`_ome_stage`), which its resolution tags
+    and ImageJ metadata need not hold."""
     sizes = _ome_sizes(ome)
-    if sizes:
-        kept = ", ".join(f'"{name}": {float(value)!r}' if not name.endswith("Unit") else f'"{name}": {json.dumps(value)}'
-                         for name, value in sizes.items())
+    stage = _ome_stage(ome, where, channels)
+    if sizes or stage:
+        kept = ", ".join([f'"{name}": {float(value)!r}' if not name.endswith("Unit") else f'"{name}": {json.dumps(value)}'
+                          for name, value in sizes.items()] + stage)
         return _resaved(where, f"if its {channels} channels are the slices of one volume",
                         lambda src, dst: f"tifffile.imwrite({dst}, tifffile.imread({src}), ome=True, "
                                          f'metadata={{"axes": "ZYX", {kept}}})')
@@ -543,16 +564,43 @@ def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
                                      '"axes": "ZYX"})')
 
 
+def _ome_stage(ome: str | None, where: str, slices: int) -> list[str]:
+    """tifffile's ``Plane`` metadata, as the text of a dict entry, that
+    places ``slices`` slices at an OME-TIFF's stage position (``ome``, its
+    OME-XML): the first plane's PositionX/Y/Z, the one the reader takes,
+    in PhysicalSizeX's unit, and each further slice one PhysicalSizeZ
+    higher (none where the file gives no position)."""
+    sizes, centres, _ = _ome_placement(ome, where, quiet=True)
+    if not centres:
+        return []
+    pixels = _ome_pixels(ome)
+    unit = json.dumps(pixels.get("PhysicalSizeXUnit") or "\u00b5m")
+    entries = []
+    for axis, centre in centres.items():
+        # each slice's own place, for the readers that place planes one by one
+        places = (f"[{centre!r} + {sizes[axis]!r} * k for k in range({slices})]" if axis == "Z" and "Z" in sizes
+                  else f"[{centre!r}] * {slices}")
+        entries.append(f'"Position{axis}": {places}, "Position{axis}Unit": [{unit}] * {slices}')
+    return [f'"Plane": {{{", ".join(entries)}}}']
+
+
 def _resaved(where: str, condition: str, write, saved: str = "save them as one stack", suffix: str = "_stack") -> str:
     """The advice, under ``condition``, to ``saved`` (save the file as one
     stack) beside it (``NAME_stack.tif``, the stem ending in ``suffix``)
     and give that, with the ``python -c`` command whose tifffile call
     ``write(source, stack)`` (the two paths as Python literals) writes it."""
+    return f"{condition}, {saved} and give that: {_command(where, write, suffix)}"
+
+
+def _command(where: str, write, suffix: str) -> str:
+    """The ``python -c`` command whose tifffile call ``write(source,
+    saved)`` (the two paths as Python literals) saves the TIFF ``where``
+    as ``NAME{suffix}.tif`` beside it."""
     import shlex
 
-    stack = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
-    code = f"import tifffile; {write(json.dumps(where), json.dumps(stack))}"
-    return f"{condition}, {saved} and give that: python -c {shlex.quote(code)}"
+    saved = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
+    code = f"import numpy, tifffile; {write(json.dumps(where), json.dumps(saved))}"
+    return f"python -c {shlex.quote(code)}"
 
 
 #: metres per length unit of OME-XML (``UnitsLength``, schema 2016-06), and
@@ -569,7 +617,8 @@ OME_METRES = {
 REFERENCE_FRAME = "reference frame"
 
 
-def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[str, float], str | None]:
+def _ome_placement(xml: str | None, where: str, quiet: bool = False) -> tuple[dict[str, float], dict[str, float],
+                                                                             str | None]:
     """An OME-TIFF's voxel size and voxel 0's centre per axis (``X``,
     ``Y``, ``Z``), where given: the ``Pixels`` element's PhysicalSize
     attributes, the file's own calibration, which the resolution tags
@@ -582,8 +631,10 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
     centre, as an OME-Zarr translation is, and as BigStitcher places a
     tile at its stage position (imglib2's pixel coordinates are pixel
     centres); one in "reference frame" units, the schema's default, is
-    taken in the voxel size's unit. The third item is that unit
-    (:func:`length_unit`)."""
+    taken in the voxel size's unit. Without any PhysicalSize the voxel
+    size is in no length unit: a position in one is not read, with a
+    warning (``quiet``: none, for a second reading of the same XML). The
+    third item is that unit (:func:`length_unit`)."""
     pixels = _ome_pixels(xml)
     if pixels is None:
         return {}, {}, None
@@ -599,12 +650,28 @@ def _ome_placement(xml: str | None, where: str) -> tuple[dict[str, float], dict[
         sizes[axis] = size
     planes = pixels.findall("{*}Plane")
     first = [p for p in planes if all(p.get(f"The{a}", "0") == "0" for a in "ZTC")]
-    centres = {}
+    centres, unplaced = {}, []
     for axis in "XYZ" if planes else "":
-        centre = _ome_length((first or planes)[0], f"Position{axis}", unit, where)
-        if centre is not None:
+        plane = (first or planes)[0]
+        centre = _ome_length(plane, f"Position{axis}", unit, where)
+        if centre is not None and not sizes and plane.get(f"Position{axis}Unit", REFERENCE_FRAME) != REFERENCE_FRAME:
+            unplaced.append(axis)
+        elif centre is not None:
             centres[axis] = centre
+    if unplaced and not quiet:
+        note(_positions_without_size(where, unplaced, (first or planes)[0]))
     return sizes, centres, length_unit(unit)
+
+
+def _positions_without_size(where: str, axes: list[str], plane) -> str:
+    """The warning for stage positions in a length unit in an OME-TIFF that
+    gives no PhysicalSize: its voxels are of no known length, so the
+    positions have no place in them (a position in mm beside voxels of size
+    1 in no unit would be read as 1500 voxels for 1.5 mm)."""
+    said = ", ".join(f"Position{a} {plane.get(f'Position{a}')} {plane.get(f'Position{a}Unit')}" for a in axes)
+    return (f"{where}: OME-XML's {said} {'is' if len(axes) == 1 else 'are'} not read: the file gives no "
+            "PhysicalSizeX/Y/Z, so its voxel size is in no length unit to place a position in; "
+            f"{', '.join(a.lower() for a in axes)} placed as without {'it' if len(axes) == 1 else 'them'}")
 
 
 def _ome_sizes(xml: str | None) -> dict[str, str]:
@@ -720,12 +787,34 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
-    _check_resolution(path, obj)
+    if not is_ome_name(path.name):  # OME-XML writes the sizes as decimals, not as TIFF rationals
+        _check_resolution(path, obj)
+    elif obj.ndim == 3 and obj.volume.shape[2] == 1:
+        # a 2D microscope image often carries a PhysicalSizeZ too, so the
+        # reader cannot take one as the mark of a stack
+        note(f"{path}: an OME-TIFF of one slice is read back as a 2D image (its OME-XML says a stack of one slice "
+             "as it says a 2D image); write .tif, .nrrd, .h5 or .npz to keep the volume one voxel thick")
+
+
+def is_ome_name(name: str) -> bool:
+    """Whether a file name is an OME-TIFF's (``.ome.tif``, ``.ome.tiff``),
+    which OME readers (Bio-Formats, QuPath, BigStitcher) place by its
+    OME-XML.
+
+    Examples
+    --------
+    >>> is_ome_name("scan.ome.tif"), is_ome_name("SCAN.OME.TIFF"), is_ome_name("scan.tif")
+    (True, True, False)
+    """
+    return name.lower().endswith((".ome.tif", ".ome.tiff"))
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
+    if is_ome_name(name or path.name):
+        _write_ome(tifffile, path, obj, unit)
+        return
     spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
     metadata: dict[str, str | float] = {"axes": "TZCYXS"}  # all six: tifffile reads a last axis of length 1 as samples, not as x
@@ -739,3 +828,26 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     z, y, x = data.shape if obj.ndim == 3 else (1, *data.shape)
     resolution = (_resolution_rational(spacing[0]), _resolution_rational(spacing[1]))  # as check() found them
     tifffile.imwrite(path, data.reshape(1, z, 1, y, x, 1), imagej=True, resolution=resolution, metadata=metadata)
+
+
+def _write_ome(tifffile, path: Path, obj: DigitalObject, unit: str | None) -> None:
+    """Write ``obj`` as an OME-TIFF: the voxel size as PhysicalSizeX/Y/Z and
+    each plane's stage position as PositionX/Y/Z, the centre of its first
+    voxel (the place :func:`_ome_placement` reads), all in ``unit``, which
+    OME-XML spells as isoflow does (``µm``, ``mm``, ``Å``, ...); without
+    one, OME's ``pixel``, which reads back as no unit (the schema's
+    default, µm, would give the object a unit it has not)."""
+    spacing, corner = placement(obj)
+    centre = [float(c + p / 2) for c, p in zip(corner, spacing)]
+    data = stored_values(np.ascontiguousarray(obj.volume.T))  # (z,) y, x
+    planes = data.shape[0] if obj.ndim == 3 else 1
+    said = unit or "pixel"
+    metadata: dict[str, object] = {"axes": "ZYX" if obj.ndim == 3 else "YX"}
+    plane: dict[str, list] = {}
+    for i, axis in enumerate("XYZ"[:obj.ndim]):
+        metadata[f"PhysicalSize{axis}"], metadata[f"PhysicalSize{axis}Unit"] = float(spacing[i]), said
+        step = float(spacing[i]) if axis == "Z" else 0.0  # each slice at its own height
+        plane[f"Position{axis}"] = [centre[i] + step * k for k in range(planes)]
+        plane[f"Position{axis}Unit"] = [said] * planes
+    metadata["Plane"] = plane
+    tifffile.imwrite(path, data, ome=True, photometric="minisblack", metadata=metadata)
