@@ -81,6 +81,27 @@ def test_info_nifti_label_equals_npy_and_its_ply_lands_in_scanner_coordinates(tm
     same_points(ply_vertices(tmp_path / "s.ply"), expect)
 
 
+def test_a_nifti_without_qform_or_sform_is_placed_by_method_1(tmp_path, capsys, labels):
+    """qform_code and sform_code 0: nifti1.h's method 1 places voxel (i, j,
+    k) at (i pixdim[1], j pixdim[2], k pixdim[3]), unturned; nibabel's own
+    affine for it mirrors x and centres the volume, which the file does
+    not say. The mesh lands where method 1 puts the voxels' corners, with
+    one warning line."""
+    img = nib.Nifti1Image(labels, np.diag([0.8, 1.25, 2.5, 1.0]))
+    img.set_sform(None, code=0)
+    img.set_qform(None, code=0)
+    nib.save(img, tmp_path / "bare.nii")
+    header = nib.load(tmp_path / "bare.nii").header
+    assert int(header["qform_code"]) == int(header["sform_code"]) == 0
+    pixdim = np.asarray(header["pixdim"][1:4], np.float64)
+    assert main(["surface", str(tmp_path / "bare.nii"), "--label", "3", "-o", str(tmp_path / "s.ply")]) == 0
+    assert "no qform or sform (both codes 0)" in capsys.readouterr().err
+    np.save(tmp_path / "label3.npy", labels == 3)
+    run(capsys, "surface", tmp_path / "label3.npy", "-o", tmp_path / "n.ply")
+    # the .npy mesh is in voxel-corner index units: corners are centres' indices - 0.5
+    same_points(ply_vertices(tmp_path / "s.ply"), (ply_vertices(tmp_path / "n.ply") - 0.5) * pixdim)
+
+
 def test_surface_tiff_stack_equals_npy_and_lands_in_micrometres(tmp_path, capsys, labels):
     mask = (labels == 3).transpose(2, 1, 0).astype(np.uint8)  # a z, y, x stack as tifffile holds it
     tifffile.imwrite(tmp_path / "stack.tif", mask, imagej=True, resolution=(1 / 0.5, 1 / 0.25),

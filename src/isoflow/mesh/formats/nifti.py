@@ -2,7 +2,10 @@
 
 Axes: the data array's axes (i, j, k) are placed by the image's affine
 (nibabel's ``img.affine``: the sform, else the qform), which maps a voxel's
-*centre* index to world (scanner) coordinates, usually RAS+ millimetres.
+*centre* index to world (scanner) coordinates, usually RAS+ millimetres;
+an image with neither (both codes 0) by the standard's method 1 (the
+voxel sizes alone, voxel 0 centred at 0: :func:`method_1_affine`), with a
+warning.
 isoflow turns the array so that axis 0 runs along world x, 1 along y, 2
 along z, each with a positive step (:mod:`isoflow.mesh.formats.affine`:
 flips and permutations are exact, a rotation or shear is kept as its axis-
@@ -93,8 +96,31 @@ def image_volume(img, where: str) -> RawVolume:
     check_shape(img.shape, img.get_data_dtype(), where)
     data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
     affine = np.asarray(img.affine, np.float64)
+    if int(img.header["qform_code"]) == 0 and int(img.header["sform_code"]) == 0:
+        affine = method_1_affine(img.header.get_zooms())
+        note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
+             "at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0)")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     return placed_by_affine(data, affine, where, unit)
+
+
+def method_1_affine(zooms) -> np.ndarray:
+    """The affine of a NIfTI image whose qform and sform codes are both 0:
+    the standard's "method 1" (nifti1.h), voxel (i, j, k) centred at
+    (i pixdim[1], j pixdim[2], k pixdim[3]), unturned, as the reference C
+    library (nifti1_io) reads it. nibabel gives such an image the Analyze
+    convention instead, x mirrored and the volume centred on 0, which the
+    file does not say.
+
+    Examples
+    --------
+    >>> method_1_affine((2.0, 3.0, 4.0)).tolist()
+    [[2.0, 0.0, 0.0, 0.0], [0.0, 3.0, 0.0, 0.0], [0.0, 0.0, 4.0, 0.0], [0.0, 0.0, 0.0, 1.0]]
+    """
+    steps = np.asarray(zooms, np.float64)[:3]
+    affine = np.eye(4)
+    affine[:len(steps), :len(steps)] = np.diag(steps)
+    return affine
 
 
 def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str | None) -> RawVolume:
