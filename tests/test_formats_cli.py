@@ -1337,3 +1337,17 @@ def test_an_ome_tiff_is_placed_by_its_first_planes_stage_position_in_its_voxel_s
                                                                            "Plane": planes})
     fails(capsys, "info", tmp_path / "pixel.ome.tif",
           words=("pixel.ome.tif: OME-XML's PositionXUnit 'pixel' does not convert to PhysicalSizeXUnit",))
+
+
+def test_a_detached_nrrd_header_whose_data_file_is_gone_names_it(tmp_path, capsys, labels):
+    """A ``.nhdr`` names its data in the field ``data file`` (pynrrd reads
+    it); with that file gone the line names the field and the file, and the
+    same header reads once the file is back."""
+    nrrd = pytest.importorskip("nrrd")
+    nrrd.write(str(tmp_path / "scan.nhdr"), (labels == 3).astype(np.uint8), detached_header=True)
+    name = nrrd.read_header(str(tmp_path / "scan.nhdr"))["data file"]
+    data = tmp_path / name
+    data.rename(tmp_path / "elsewhere")
+    fails(capsys, "info", tmp_path / "scan.nhdr", words=("data file", name, "not there"))
+    (tmp_path / "elsewhere").rename(data)
+    assert json.loads(run(capsys, "info", tmp_path / "scan.nhdr", "--json"))["voxels"] == np.count_nonzero(labels == 3)

@@ -51,6 +51,19 @@ from .registry import (
 from .slicer import layer_of
 
 
+def _check_data_file(header: dict, path: Path) -> None:
+    """Refuse a detached header (``.nhdr``) whose ``data file`` is not
+    there, naming the field and the file it names (relative to the
+    header's folder, as the format reads it), before the reader fails on
+    it. A list of files (``LIST``, a ``%d`` pattern) is left to the reader."""
+    name = header.get("data file", header.get("datafile"))
+    if not isinstance(name, str) or name.startswith("LIST") or " " in name.strip() or "%" in name:
+        return
+    target = Path(name) if Path(name).is_absolute() else Path(path).parent / name
+    if not target.is_file():
+        raise IsoflowError(f"{path}: its data file, {name} (field 'data file'), is not there ({target} not found)")
+
+
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     nrrd = import_library("nrrd", "NRRD", "pynrrd")
     where = str(path)
@@ -58,6 +71,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         header = nrrd.read_header(str(path))
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
+        _check_data_file(header, path)
         data, header = nrrd.read(str(path), index_order="F")
     # a 3D Slicer segmentation: the layer named (FILE.seg.nrrd:N), placed as any NRRD
     data, header = layer_of(data, header, dataset, where)
