@@ -365,11 +365,23 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
         # a store flowed block by block finds changes but does not locate
         # them (where is None): say so, not "in None"; a box in a pitch read
         # from float32 (NIfTI's zooms) prints as that pitch does
-        place = ("not located (block by block)" if c["where"] is None
-                 else f"in the box {coordinates(c['where'][0], step=pitch)} to "
-                      f"{coordinates(c['where'][1], step=pitch)}{said}")
+        place = "not located (block by block)" if c["where"] is None else f"in the box {box_words(c['where'], pitch)}{said}"
         # the step --until-topology-change stopped before is not in the table: say so, or it reads as taken
         taken = "" if c.get("applied", True) else " (the step is not taken: the run stopped before it)"
         lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}"
                      + taken)
     return "\n".join(lines)
+
+
+def box_words(box: list, pitch=None) -> str:
+    """A flat world box (the lowest corner, then the highest, as the
+    records hold it) as ``[lo] to [hi]``, to the digits of
+    :func:`~isoflow.errors.coordinates` within a 200th of ``pitch``.
+
+    Examples
+    --------
+    >>> box_words([1.0, 2.0, 3.0, 4.5, 5.0, 6.0], pitch=0.5)
+    '[1, 2, 3] to [4.5, 5, 6]'
+    """
+    half = len(box) // 2
+    return f"{coordinates(box[:half], step=pitch)} to {coordinates(box[half:], step=pitch)}"
