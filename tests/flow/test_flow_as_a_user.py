@@ -63,3 +63,38 @@ def test_flow_json_gives_a_box_as_info_and_scikit_image_do(tmp_path):
     (change,) = run["topology_changes"]
     assert len(change["where"]) == 6 and all(isinstance(x, float) for x in change["where"])
 
+
+@pytest.mark.parametrize("json_out", [[], ["--json"]])
+def test_flow_without_out_where_float64_cannot_place_the_voxels_says_so(tmp_path, json_out):
+    # the table printed "limit: [1e+43, 2.5, 2.5]" and a change "in the box
+    # [1e+43, 1, 1] to [1e+43, 3, 3]", boxes 0 wide along x, exit 0
+    ring_nrrd(tmp_path / "ring.nrrd")
+    nrrd = pytest.importorskip("nrrd")
+    data, header = nrrd.read(str(tmp_path / "ring.nrrd"))
+    header["space origin"] = np.array([1e43, 0.0, 0.0])
+    nrrd.write(str(tmp_path / "far.nrrd"), data, header)
+    assert np.float64(1e43) + PITCH[0] == np.float64(1e43)  # a voxel apart is one float64 there
+    p = isoflow("flow", tmp_path / "far.nrrd", *json_out)
+    line = p.stderr.strip()
+    assert p.returncode == 2 and p.stdout == "" and "\n" not in line and "Traceback" not in line, p.stderr
+    assert "not distinct in float64" in line and f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
+    assert "the boxes and the limit point it prints" in line
+
+
+def test_a_store_flowed_block_by_block_where_float64_cannot_place_it_is_refused(tmp_path):
+    # flow.csv was written with every box 0 wide along x (bbox_min_x = bbox_max_x = 1e+43),
+    # the step stores beside it, exit 0; zarr-python writes the store, its placement the OME metadata
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((7, 8, 9), np.uint8)
+    v[1:6, 2:7, 1:8] = 1
+    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")
+    group.create_array("0", data=v, chunks=(4, 4, 4))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
+                                   "datasets": [{"path": "0", "coordinateTransformations": [
+                                       {"type": "scale", "scale": [1.0, 1.0, 1.0]},
+                                       {"type": "translation", "translation": [1e43, 0.0, 0.0]}]}]}]
+    p = isoflow("flow", tmp_path / "far.zarr", "--out", tmp_path / "run", "--volumes", ".zarr")
+    line = p.stderr.strip()
+    assert p.returncode == 2 and "\n" not in line and "Traceback" not in line, p.stderr
+    assert "not distinct in float64" in line and f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
+    assert not (tmp_path / "run").exists()

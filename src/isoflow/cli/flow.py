@@ -93,11 +93,15 @@ def out_placement(args: argparse.Namespace, obj) -> dict | None:
     surfaces would collapse in every file), else what float64 does to
     them; None without step surfaces. A 2D run is refused alike: its
     boxes in flow.csv, the pictures in shapes.png and the cropped states'
-    origins are world coordinates, which collapse there too."""
-    if not args.out:
-        return None
+    origins are world coordinates, which collapse there too; and so is a
+    run without ``--out``, whose printed boxes and limit point would be
+    one coordinate where the object spans voxels."""
     from ..mesh.export import check_float64_corners
 
+    if not args.out:
+        check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
+                              "the boxes and the limit point it prints")
+        return None
     if obj.ndim == 2:
         what = ("the boxes in flow.csv, the pictures in shapes.png and the --volumes states' origins"
                 if args.volumes is not None else "the boxes in flow.csv and the pictures in shapes.png")
@@ -166,12 +170,16 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
+    from ..mesh.export import check_float64_corners
     from ..mesh.formats.omezarr import open_store
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
     volume, place, _ = source_volume(args.input)
     say_plate(args, tuple(volume.shape))
+    # refused before any step store is staged, as the run in memory is
+    check_float64_corners(args.input, place.origin, place.spacing, volume.shape,
+                          "the boxes in flow.csv, the limit point and the step stores' origins")
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
                            "store of their own, or flow it without --volumes .zarr")
