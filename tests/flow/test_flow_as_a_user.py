@@ -98,3 +98,47 @@ def test_a_store_flowed_block_by_block_where_float64_cannot_place_it_is_refused(
     assert p.returncode == 2 and "\n" not in line and "Traceback" not in line, p.stderr
     assert "not distinct in float64" in line and f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
     assert not (tmp_path / "run").exists()
+
+
+def solid_torus() -> np.ndarray:
+    """A solid torus about the x axis: one component, one tunnel all along its flow."""
+    x, y, z = np.indices((12, 20, 20))
+    return np.hypot(np.hypot(y - 9.5, z - 9.5) - 6, x - 5.5) <= 2.6
+
+
+def test_flow_png_shows_b0_where_it_equals_b1(tmp_path):
+    # a solid torus keeps b0 = b1 = 1 until it vanishes: b1's line was drawn
+    # over b0's, the same width, and the panel showed no b0 at all
+    from PIL import Image
+
+    v = solid_torus()
+    measure = pytest.importorskip("skimage.measure")
+    assert measure.euler_number(v, connectivity=1) == 0  # b0 - b1 + b2 = 1 - 1 + 0, as scikit-image counts it
+    np.save(tmp_path / "torus.npy", v)
+    p = isoflow("flow", tmp_path / "torus.npy", "--out", tmp_path / "run", "--json", "-q")
+    assert p.returncode == 0, p.stderr
+    assert {tuple(s["betti"][:2]) for s in json.loads(p.stdout)["steps"][:-1]} == {(1, 1)}
+    picture = np.asarray(Image.open(tmp_path / "run" / "flow.png").convert("RGB")).astype(int)
+    height, width = picture.shape[:2]
+    betti_panel = picture[height * 63 // 100: height * 93 // 100, width // 8: width * 3 // 4]  # (the legend is right)
+    for rgb in ([31, 119, 180], [255, 127, 14]):  # b0, b1: tab:blue, tab:orange
+        assert (np.abs(betti_panel - np.array(rgb)).sum(-1) < 60).sum() > 50, rgb
+
+
+def test_flow_png_ticks_the_betti_numbers_in_whole_numbers(tmp_path, monkeypatch):
+    # the Betti axis of a ring whose holes close one by one was ticked 0.5, 1.5, 2.5
+    import isoflow
+    from isoflow.flow import pictures
+
+    v = np.zeros((30, 22), bool)
+    v[2:28, 2:20] = True
+    v[6:12, 6:16] = v[16:24, 5:9] = v[17, 14] = False
+    ndimage = pytest.importorskip("scipy.ndimage")
+    assert ndimage.label(~v)[1] - 1 == 3  # three holes, as scipy counts the background's parts
+    drawn = []
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append(fig) or path)
+    pictures.render_flow(isoflow.run_flow(v, connectivity=4), tmp_path / "flow.png")
+    axis = drawn[0].axes[2]
+    low, high = axis.get_ylim()
+    ticks = [t for t in axis.get_yticks() if low <= t <= high]
+    assert len(ticks) > 1 and all(float(t).is_integer() for t in ticks), ticks
