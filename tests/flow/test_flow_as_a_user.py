@@ -142,3 +142,20 @@ def test_flow_png_ticks_the_betti_numbers_in_whole_numbers(tmp_path, monkeypatch
     low, high = axis.get_ylim()
     ticks = [t for t in axis.get_yticks() if low <= t <= high]
     assert len(ticks) > 1 and all(float(t).is_integer() for t in ticks), ticks
+
+
+@pytest.mark.parametrize("shape", [(2, 2, 2), (2, 2)])
+def test_shapes_png_says_one_voxel_or_pixel_in_the_singular(tmp_path, monkeypatch, shape):
+    # the last panel of a cube's flow was titled "step 1: 1 voxels"
+    import isoflow
+    from isoflow.flow import pictures
+
+    run = isoflow.run_flow(np.ones(shape, bool))
+    last = run.states[1]
+    ndimage = pytest.importorskip("scipy.ndimage")
+    assert ndimage.sum(last.volume) == 1  # one cell left, as scipy counts it
+    drawn = []
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append(fig) or path)
+    pictures.render_flow_shapes([(s, r) for s, r in zip(run.states, run.steps) if r["voxels"]], tmp_path / "s.png", 6)
+    cell = "voxel" if len(shape) == 3 else "pixel"
+    assert [ax.get_title() for ax in drawn[0].axes][-1] == f"step 1: 1 {cell}, betti {(1,) + (0,) * (len(shape) - 1)}"

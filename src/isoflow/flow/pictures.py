@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.surface import boundary_mesh
+from ..errors import counted
 from ..mesh.render import FACE_BUDGET, colour_key, draw_surface, pyplot, save_figure
 
 
@@ -36,7 +37,7 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
         classes.append(np.unique(mesh.vertex_class))
         draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(frames), bounds=box)
         ax.set_axis_off()
-        ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
+        ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'voxel')}, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle(f"digital curvature flow ({colour_key(classes)})", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
@@ -57,7 +58,7 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
         ax.set_ylim(box[1][1] + pad[1], box[0][1] - pad[1])  # y down, as draw_pixels draws it
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
-        ax.set_title(f"step {rec['step']}: {rec['voxels']} pixels, betti {tuple(rec['betti'])}", fontsize=8)
+        ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'pixel')}, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle("digital curvature flow", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
