@@ -159,3 +159,26 @@ def test_shapes_png_says_one_voxel_or_pixel_in_the_singular(tmp_path, monkeypatc
     pictures.render_flow_shapes([(s, r) for s, r in zip(run.states, run.steps) if r["voxels"]], tmp_path / "s.png", 6)
     cell = "voxel" if len(shape) == 3 else "pixel"
     assert [ax.get_title() for ax in drawn[0].axes][-1] == f"step 1: 1 {cell}, betti {(1,) + (0,) * (len(shape) - 1)}"
+
+
+@pytest.mark.parametrize("json_out", [[], ["--json"]])
+def test_flow_without_out_where_float64_moves_the_corners_says_how_far(tmp_path, json_out):
+    # the boxes and the limit point were printed to digits float64 does not
+    # hold there ("limit: [1000000.0000000026, ...]"), without a word, where
+    # flow --out and surface say how far float64 moves the corners
+    nib = pytest.importorskip("nibabel")
+    mask = np.zeros((6, 6, 6), np.uint8)
+    mask[1:5, 1:5, 1:5] = 1
+    affine = np.diag([1e-9, 1e-9, 1e-9, 1.0])
+    affine[:3, 3] = (1e6, 0.0, 0.0)
+    nib.save(nib.Nifti1Image(mask, affine), str(tmp_path / "far.nii.gz"))
+    zoom = float(nib.load(str(tmp_path / "far.nii.gz")).header.get_zooms()[0])  # float32, as nibabel reads it
+    p = isoflow("flow", tmp_path / "far.nii.gz", "--steps", "1", *json_out)
+    assert p.returncode == 0, p.stderr
+    line = p.stderr.strip()
+    assert "\n" not in line and line.startswith("isoflow flow: warning: "), p.stderr
+    assert f"{np.spacing(1e6):.3g} (np.spacing)" in line
+    assert f"the boxes and the limit point printed move by up to {np.spacing(1e6) / zoom:.2g} voxels" in line
+    nib.save(nib.Nifti1Image(mask, np.diag([1e-9, 1e-9, 1e-9, 1.0])), str(tmp_path / "near.nii.gz"))
+    near = isoflow("flow", tmp_path / "near.nii.gz", "--steps", "1", *json_out)
+    assert near.returncode == 0 and near.stderr == ""  # at the origin float64 holds them

@@ -80,28 +80,29 @@ def cmd_flow(args: argparse.Namespace) -> int:
                   + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
     from ..mesh.export import float64_move_note
 
-    moved = None if corners is None else float64_move_note(args.out, corners)
-    if moved:  # the step surfaces' corners moved by float64 itself
+    # the step surfaces' corners, or without --out the world coordinates printed
+    moved = None if corners is None else (float64_move_note(args.out, corners) if args.out else
+                                          float64_move_note(args.input, corners, "the boxes and the limit point printed"))
+    if moved:  # moved by float64 itself
         print(f"isoflow flow: warning: {moved}", file=sys.stderr)
     return 0 if writer is None else say_read_back(args, writer)
 
 
 def out_placement(args: argparse.Namespace, obj) -> dict | None:
-    """Where ``--out`` writes step surfaces, the object's placement as
-    :func:`isoflow.mesh.export.check_float64_corners` takes it: refused
-    before the run where float64 cannot keep the voxel corners apart (the
-    surfaces would collapse in every file), else what float64 does to
-    them; None without step surfaces. A 2D run is refused alike: its
-    boxes in flow.csv, the pictures in shapes.png and the cropped states'
-    origins are world coordinates, which collapse there too; and so is a
-    run without ``--out``, whose printed boxes and limit point would be
-    one coordinate where the object spans voxels."""
+    """The object's placement as
+    :func:`isoflow.mesh.export.check_float64_corners` takes it, refused
+    before the run where float64 cannot keep the voxel corners apart:
+    with ``--out`` the step surfaces would collapse in every file (a 2D
+    run's boxes in flow.csv, pictures in shapes.png and cropped states'
+    origins alike), without it the boxes and the limit point printed
+    would be one coordinate where the object spans voxels. Else what
+    float64 does to the corners, for the warning that says how far it
+    moves them; None for a 2D run with ``--out``, which writes no surface."""
     from ..mesh.export import check_float64_corners
 
     if not args.out:
-        check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
-                              "the boxes and the limit point it prints")
-        return None
+        return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
+                                     "the boxes and the limit point it prints")
     if obj.ndim == 2:
         what = ("the boxes in flow.csv, the pictures in shapes.png and the --volumes states' origins"
                 if args.volumes is not None else "the boxes in flow.csv and the pictures in shapes.png")
