@@ -182,3 +182,22 @@ def test_flow_without_out_where_float64_moves_the_corners_says_how_far(tmp_path,
     nib.save(nib.Nifti1Image(mask, np.diag([1e-9, 1e-9, 1e-9, 1.0])), str(tmp_path / "near.nii.gz"))
     near = isoflow("flow", tmp_path / "near.nii.gz", "--steps", "1", *json_out)
     assert near.returncode == 0 and near.stderr == ""  # at the origin float64 holds them
+
+
+def test_a_store_flowed_block_by_block_where_float64_moves_the_corners_says_how_far(tmp_path):
+    # flow.csv's boxes and the step stores' origins moved by float64 without a word,
+    # where the same store flowed in memory with --out warns
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((7, 8, 9), np.uint8)
+    v[1:6, 2:7, 1:8] = 1
+    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")
+    group.create_array("0", data=v, chunks=(4, 4, 4))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
+                                   "datasets": [{"path": "0", "coordinateTransformations": [
+                                       {"type": "scale", "scale": [1e-9] * 3},
+                                       {"type": "translation", "translation": [1e6, 0.0, 0.0]}]}]}]
+    p = isoflow("flow", tmp_path / "far.zarr", "--out", tmp_path / "run", "--volumes", ".zarr", "--steps", "1")
+    assert p.returncode == 0, p.stderr
+    line = p.stderr.strip()
+    assert "\n" not in line and line.startswith("isoflow flow: warning: "), p.stderr
+    assert f"{np.spacing(1e6):.3g} (np.spacing)" in line and f"by up to {np.spacing(1e6) / 1e-9:.2g} voxels" in line

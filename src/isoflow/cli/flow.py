@@ -171,7 +171,7 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
-    from ..mesh.export import check_float64_corners
+    from ..mesh.export import check_float64_corners, float64_move_note
     from ..mesh.formats.omezarr import open_store
 
     refuse_mesh_options(args, ".zarr")
@@ -179,8 +179,8 @@ def flow_store(args: argparse.Namespace) -> int:
     volume, place, _ = source_volume(args.input)
     say_plate(args, tuple(volume.shape))
     # refused before any step store is staged, as the run in memory is
-    check_float64_corners(args.input, place.origin, place.spacing, volume.shape,
-                          "the boxes in flow.csv, the limit point and the step stores' origins")
+    moved = "the boxes in flow.csv, the limit point and the step stores' origins"
+    corners = check_float64_corners(args.input, place.origin, place.spacing, volume.shape, moved)
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
                            "store of their own, or flow it without --volumes .zarr")
@@ -214,6 +214,9 @@ def flow_store(args: argparse.Namespace) -> int:
     else:
         print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
+    note = float64_move_note(args.out, corners, moved)
+    if note:  # moved by float64 itself, as in memory
+        print(f"isoflow flow: warning: {note}", file=sys.stderr)
     return 0
 
 
