@@ -34,6 +34,20 @@ def ring_nrrd(path) -> np.ndarray:
     return v
 
 
+def box_store(path, pitch: float, x: float) -> None:
+    """A box of voxels as zarr-python writes an OME-Zarr image, voxel 0's
+    centre at (``x``, 0, 0) in voxels of ``pitch``."""
+    zarr = pytest.importorskip("zarr")
+    v = np.zeros((7, 8, 9), np.uint8)
+    v[1:6, 2:7, 1:8] = 1
+    group = zarr.open_group(str(path), mode="w")
+    group.create_array("0", data=v, chunks=(4, 4, 4))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
+                                   "datasets": [{"path": "0", "coordinateTransformations": [
+                                       {"type": "scale", "scale": [pitch] * 3},
+                                       {"type": "translation", "translation": [x, 0.0, 0.0]}]}]}]
+
+
 def skimage_world_box(path) -> list[float]:
     """The object's world box in a step volume, as pynrrd and scikit-image
     read it: regionprops' flat (min..., max...) voxel box, placed by the
@@ -83,16 +97,8 @@ def test_flow_without_out_where_float64_cannot_place_the_voxels_says_so(tmp_path
 
 def test_a_store_flowed_block_by_block_where_float64_cannot_place_it_is_refused(tmp_path):
     # flow.csv was written with every box 0 wide along x (bbox_min_x = bbox_max_x = 1e+43),
-    # the step stores beside it, exit 0; zarr-python writes the store, its placement the OME metadata
-    zarr = pytest.importorskip("zarr")
-    v = np.zeros((7, 8, 9), np.uint8)
-    v[1:6, 2:7, 1:8] = 1
-    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")
-    group.create_array("0", data=v, chunks=(4, 4, 4))
-    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
-                                   "datasets": [{"path": "0", "coordinateTransformations": [
-                                       {"type": "scale", "scale": [1.0, 1.0, 1.0]},
-                                       {"type": "translation", "translation": [1e43, 0.0, 0.0]}]}]}]
+    # the step stores beside it, exit 0
+    box_store(tmp_path / "far.zarr", 1.0, 1e43)
     p = isoflow("flow", tmp_path / "far.zarr", "--out", tmp_path / "run", "--volumes", ".zarr")
     line = p.stderr.strip()
     assert p.returncode == 2 and "\n" not in line and "Traceback" not in line, p.stderr
@@ -187,15 +193,7 @@ def test_flow_without_out_where_float64_moves_the_corners_says_how_far(tmp_path,
 def test_a_store_flowed_block_by_block_where_float64_moves_the_corners_says_how_far(tmp_path):
     # flow.csv's boxes and the step stores' origins moved by float64 without a word,
     # where the same store flowed in memory with --out warns
-    zarr = pytest.importorskip("zarr")
-    v = np.zeros((7, 8, 9), np.uint8)
-    v[1:6, 2:7, 1:8] = 1
-    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")
-    group.create_array("0", data=v, chunks=(4, 4, 4))
-    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
-                                   "datasets": [{"path": "0", "coordinateTransformations": [
-                                       {"type": "scale", "scale": [1e-9] * 3},
-                                       {"type": "translation", "translation": [1e6, 0.0, 0.0]}]}]}]
+    box_store(tmp_path / "far.zarr", 1e-9, 1e6)
     p = isoflow("flow", tmp_path / "far.zarr", "--out", tmp_path / "run", "--volumes", ".zarr", "--steps", "1")
     assert p.returncode == 0, p.stderr
     line = p.stderr.strip()
