@@ -291,7 +291,7 @@ def test_the_flow_figures_of_flow_md_are_the_code_s():
     assert voxels(ell, 4) == [5, 3, 1, 0]
     assert "the limit is the point `(1,1,1)`" in text and "the single cube `[0.5, 1.5]^3`" in text
     run = isoflow.run_flow(isoflow.read_object(isoflow.data.example19()))
-    assert run.steps[1]["bbox"] == [[0.5] * 3, [1.5] * 3] and run.limit["center"] == [1.0, 1.0, 1.0]
+    assert run.steps[1]["bbox"] == [0.5] * 3 + [1.5] * 3 and run.limit["center"] == [1.0, 1.0, 1.0]
     assert ("Two 2x2x2 cubes sharing an edge become two separate points under 6 and stay one piece joined along "
             "the shared edge under 26") in text
     cubes = np.zeros((4, 4, 2), bool)

@@ -14,6 +14,7 @@ The input files are written by their own libraries (pynrrd, nibabel).
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 
@@ -174,3 +175,30 @@ def test_flow_out_of_a_2d_image_float64_cannot_place_is_refused(tmp_path, volume
     header = (tmp_path / "near" / "flow.csv").read_text().splitlines()[0].split(",")
     row = dict(zip(header, first))
     assert float(row["bbox_max_x"]) - float(row["bbox_min_x"]) == 20
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".obj"])
+def test_the_read_back_line_says_the_volume_to_the_digits_it_holds(tmp_path, suffix):
+    # the line said "volume 4.74975e-26: as isoflow counts", six digits of which
+    # the second on are float64's move of the corners; info says 4.8e-26
+    nifti_at(tmp_path / "far.nii.gz", (1e6, 0.0, 0.0), 1e-9)
+    p = isoflow("surface", tmp_path / "far.nii.gz", "-o", tmp_path / f"s{suffix}")
+    assert p.returncode == 0, p.stderr
+    volume = 48 * float(np.prod(np.asarray(nib_zooms(tmp_path / "far.nii.gz"), np.float64)))  # as nibabel reads it
+    line = p.stdout.splitlines()[-1]
+    assert f"volume {volume:.6g} (read within the move of the corners): as isoflow counts" in line, line
+    assert re.search(rf"volume +{re.escape(f'{volume:.6g}')},", isoflow("info", tmp_path / "far.nii.gz").stdout)
+
+
+def test_a_store_read_back_in_chunks_says_the_volume_to_the_digits_it_holds(tmp_path):
+    zarr = pytest.importorskip("zarr")
+    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")  # zarr-python writes it, placed by OME metadata
+    group.create_array("0", data=MASK, chunks=(4, 4, 4))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "xyz"],
+                                   "datasets": [{"path": "0", "coordinateTransformations": [
+                                       {"type": "scale", "scale": [1e-9] * 3},
+                                       {"type": "translation", "translation": [1e6, 0.0, 0.0]}]}]}]
+    p = isoflow("surface", tmp_path / "far.zarr", "-o", tmp_path / "s.ply")
+    assert p.returncode == 0, p.stderr
+    volume = int(MASK.sum()) * 1e-9 ** 3
+    assert f"volume {volume:.6g} (read within the move of the corners)," in p.stdout.splitlines()[-1], p.stdout

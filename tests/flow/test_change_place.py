@@ -55,7 +55,7 @@ def on_half_grid(state, lo, shape):
 
 def half_grids(before, after, where):
     """``(A, B, R)``: the two states and the box on one half-voxel grid."""
-    box = np.rint(2 * np.array(where)).astype(int)
+    box = np.rint(2 * np.array(where)).astype(int).reshape(2, -1)  # (the record's flat lo..., hi...)
     corners = [2 * np.array(s.offset) + s.parity for s in (before, after)]
     lo = np.min([*corners, box[0]], axis=0) - 2
     hi = np.max([*(c + 2 * np.array(s.volume.shape) for c, s in zip(corners, (before, after))), box[1]], axis=0) + 2
@@ -104,7 +104,8 @@ def world_box(state, mask):
 
 
 def inside(inner, outer):
-    return bool(np.all(inner[0] >= np.array(outer[0])) and np.all(inner[1] <= np.array(outer[1])))
+    lo, hi = np.reshape(outer, (2, -1))  # (the record's flat lo..., hi...)
+    return bool(np.all(inner[0] >= lo) and np.all(inner[1] <= hi))
 
 
 def test_a_closing_hole_is_inside_its_box(tmp_path, capsys):
@@ -166,8 +167,8 @@ def test_a_lost_handle_is_placed_near_it():
     changed = [i for i in range(1, k + 1) if betti(before.volume & (labels != i), 6) != [1, 1, 0]]
     assert len(changed) == 1
     assert inside(world_box(before, labels == changed[0]), where), where
-    extent = np.prod(np.subtract(*r.steps[0]["bbox"][::-1]))
-    assert np.prod(np.subtract(where[1], where[0])) < extent / 50
+    extent = np.prod(np.subtract(*np.reshape(r.steps[0]["bbox"], (2, -1))[::-1]))
+    assert np.prod(np.subtract(*np.reshape(where, (2, -1))[::-1])) < extent / 50
     assert_box_holds_each_change(r, 6)
 
 

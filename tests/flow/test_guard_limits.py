@@ -235,7 +235,7 @@ def test_a_guarded_thin_ring_ends_inside_the_input(name, conn, method):
     lo, hi = [int(i.min()) for i in nz], [int(i.max()) + 1 for i in nz]
     r = run_flow(v, guard=True, connectivity=conn, method=method, keep_states=False)
     assert r.stop_reason == "converged"
-    end_lo, end_hi = r.steps[-1]["bbox"]
+    end_lo, end_hi = np.reshape(r.steps[-1]["bbox"], (2, -1))
     assert all(a <= b for a, b in zip(lo, end_lo)) and all(b <= a for a, b in zip(hi, end_hi)), (lo, hi, end_lo, end_hi)
 
 

@@ -80,24 +80,29 @@ def cmd_flow(args: argparse.Namespace) -> int:
                   + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
     from ..mesh.export import float64_move_note
 
-    moved = None if corners is None else float64_move_note(args.out, corners)
-    if moved:  # the step surfaces' corners moved by float64 itself
+    # the step surfaces' corners, or without --out the world coordinates printed
+    moved = None if corners is None else (float64_move_note(args.out, corners) if args.out else
+                                          float64_move_note(args.input, corners, "the boxes and the limit point printed"))
+    if moved:  # moved by float64 itself
         print(f"isoflow flow: warning: {moved}", file=sys.stderr)
     return 0 if writer is None else say_read_back(args, writer)
 
 
 def out_placement(args: argparse.Namespace, obj) -> dict | None:
-    """Where ``--out`` writes step surfaces, the object's placement as
-    :func:`isoflow.mesh.export.check_float64_corners` takes it: refused
-    before the run where float64 cannot keep the voxel corners apart (the
-    surfaces would collapse in every file), else what float64 does to
-    them; None without step surfaces. A 2D run is refused alike: its
-    boxes in flow.csv, the pictures in shapes.png and the cropped states'
-    origins are world coordinates, which collapse there too."""
-    if not args.out:
-        return None
+    """The object's placement as
+    :func:`isoflow.mesh.export.check_float64_corners` takes it, refused
+    before the run where float64 cannot keep the voxel corners apart:
+    with ``--out`` the step surfaces would collapse in every file (a 2D
+    run's boxes in flow.csv, pictures in shapes.png and cropped states'
+    origins alike), without it the boxes and the limit point printed
+    would be one coordinate where the object spans voxels. Else what
+    float64 does to the corners, for the warning that says how far it
+    moves them; None for a 2D run with ``--out``, which writes no surface."""
     from ..mesh.export import check_float64_corners
 
+    if not args.out:
+        return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
+                                     "the boxes and the limit point it prints")
     if obj.ndim == 2:
         what = ("the boxes in flow.csv, the pictures in shapes.png and the --volumes states' origins"
                 if args.volumes is not None else "the boxes in flow.csv and the pictures in shapes.png")
@@ -166,12 +171,16 @@ def flow_store(args: argparse.Namespace) -> int:
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
+    from ..mesh.export import check_float64_corners, float64_move_note
     from ..mesh.formats.omezarr import open_store
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
     volume, place, _ = source_volume(args.input)
     say_plate(args, tuple(volume.shape))
+    # refused before any step store is staged, as the run in memory is
+    moved = "the boxes in flow.csv, the limit point and the step stores' origins"
+    corners = check_float64_corners(args.input, place.origin, place.spacing, volume.shape, moved)
     if getattr(args, "label", None) is not None:
         raise IsoflowError(f"{args.input}: --label is not read block by block; write the label's voxels as a "
                            "store of their own, or flow it without --volumes .zarr")
@@ -205,6 +214,9 @@ def flow_store(args: argparse.Namespace) -> int:
     else:
         print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
+    note = float64_move_note(args.out, corners, moved)
+    if note:  # moved by float64 itself, as in memory
+        print(f"isoflow flow: warning: {note}", file=sys.stderr)
     return 0
 
 
@@ -365,11 +377,23 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
         # a store flowed block by block finds changes but does not locate
         # them (where is None): say so, not "in None"; a box in a pitch read
         # from float32 (NIfTI's zooms) prints as that pitch does
-        place = ("not located (block by block)" if c["where"] is None
-                 else f"in the box {coordinates(c['where'][0], step=pitch)} to "
-                      f"{coordinates(c['where'][1], step=pitch)}{said}")
+        place = "not located (block by block)" if c["where"] is None else f"in the box {box_words(c['where'], pitch)}{said}"
         # the step --until-topology-change stopped before is not in the table: say so, or it reads as taken
         taken = "" if c.get("applied", True) else " (the step is not taken: the run stopped before it)"
         lines.append(f"  topology change at step {c['step']}: {tuple(c['before'])} -> {tuple(c['after'])}, {place}"
                      + taken)
     return "\n".join(lines)
+
+
+def box_words(box: list, pitch=None) -> str:
+    """A flat world box (the lowest corner, then the highest, as the
+    records hold it) as ``[lo] to [hi]``, to the digits of
+    :func:`~isoflow.errors.coordinates` within a 200th of ``pitch``.
+
+    Examples
+    --------
+    >>> box_words([1.0, 2.0, 3.0, 4.5, 5.0, 6.0], pitch=0.5)
+    '[1, 2, 3] to [4.5, 5, 6]'
+    """
+    half = len(box) // 2
+    return f"{coordinates(box[:half], step=pitch)} to {coordinates(box[half:], step=pitch)}"

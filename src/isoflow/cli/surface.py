@@ -152,7 +152,7 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     """The written file read back by trimesh and compared, in words; 1 when
     it does not agree with isoflow's counts."""
     from ..mesh import export
-    from ..mesh.readback import check_surface_file, volume_unit, volume_words
+    from ..mesh.readback import agreed_volume_words, check_surface_file
     from .progress import reading_back
 
     shared = export.shared_positions(mesh)
@@ -170,9 +170,10 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
-    t, unit = check["trimesh"], volume_unit(obj)
+    t = check["trimesh"]
+    volume = agreed_volume_words(t["volume_units"], obj.voxels, obj.spacing)
     if welded:
-        print(f"{out}: trimesh reads back volume {volume_words(t['volume_units'], unit)} after its weld, as isoflow counts "
+        print(f"{out}: trimesh reads back volume {volume} after its weld, as isoflow counts "
               "(the welded contacts leave no manifold to compare)")
     else:
         # trimesh.load merges equal positions by default, which joins the
@@ -180,7 +181,7 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
         how = (f" with process=False (its default merge joins the split copies at {shared} edge/vertex contacts "
                "into non-manifold points)" if shared else "")
         print(f"{out}: trimesh reads it back watertight{how}, V-E+F = {t['euler_number']}, genus {t['genus']}, "
-              f"volume {volume_words(t['volume_units'], unit)}: as isoflow counts")
+              f"volume {volume}: as isoflow counts")
     return 0
 
 
@@ -200,7 +201,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..mesh.export import check_float64_corners, float64_move_note
     from ..mesh.float32 import float64_moved
     from ..mesh.formats.omezarr import label_absent, open_store, store_volume
-    from ..mesh.readback import volume_unit, volume_words
+    from ..mesh.readback import agreed_volume_words
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from ..scale.chunks import never_written, unwritten_fill
@@ -240,7 +241,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
     print(f"{out}: read back in chunks (every face): closed and consistently wound, volume "
-          f"{volume_words(check['figures']['volume_units'], volume_unit(frame))}"
+          f"{agreed_volume_words(check['figures']['volume_units'], written['voxels'], frame.spacing)}"
           + ("" if out.suffix.lower() == ".stl" else f", V-E+F = {check['figures']['euler_number']}, "
              "sum of a = 8 chi") + ": as isoflow counts")
     return 0

@@ -135,11 +135,12 @@ class PackedObject:
         return replace(self.place, volume=volume)
 
     def bbox_list(self) -> list | None:
-        """World ``[min corner, max corner]`` as lists, None when empty."""
+        """World min corner then max corner, one flat list (as
+        :func:`isoflow.analyze` gives a box), None when empty."""
         if not self.voxels:
             return None
         nd = self.ndim
-        return [self.place.world(np.zeros(nd)).tolist(), self.place.world(np.array(self.shape, float)).tolist()]
+        return self.place.world(np.zeros(nd)).tolist() + self.place.world(np.array(self.shape, float)).tolist()
 
     def same_shape(self, other: PackedObject) -> bool:
         """The same voxels in the same cropped array (placement aside)."""
@@ -261,7 +262,7 @@ def packed_record(state: PackedObject, step: int, connectivity: int) -> dict:
     >>> import numpy as np
     >>> r = packed_record(PackedObject.of(np.ones((2, 2, 2), bool)), 0, 6)
     >>> r["voxels"], r["betti"], r["euler_characteristic"], r["bbox"]
-    (8, [1, 0, 0], 1, [[0.0, 0.0, 0.0], [2.0, 2.0, 2.0]])
+    (8, [1, 0, 0], 1, [0.0, 0.0, 0.0, 2.0, 2.0, 2.0])
     """
     nd = state.ndim
     if not state.voxels:

@@ -239,7 +239,7 @@ class ChunkedFlow(ArrayFlow):
         if state.voxels:
             r = analyze_chunked(state.array(), self.conn, surfaces=False, scheduler=self.scheduler,
                                 threads=self.workers)
-            box = [state.place.world(np.zeros(3)).tolist(), state.place.world(np.array(state.shape, float)).tolist()]
+            box = state.place.world(np.zeros(3)).tolist() + state.place.world(np.array(state.shape, float)).tolist()
             out.update(betti=list(map(int, r["betti"])), euler_characteristic=int(r["euler_characteristic"]),
                        energy=int(r["energy"]), bbox=box)
         return out

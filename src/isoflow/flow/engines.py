@@ -44,7 +44,7 @@ def step_record(obj: DigitalObject, step: int, conn: int) -> dict:
         "betti": list(map(int, r["betti"])),
         "euler_characteristic": int(r["euler_characteristic"]),
         "energy": int(r["energy"]),
-        "bbox": None if box is None else [box[0].tolist(), box[1].tolist()],
+        "bbox": None if box is None else box[0].tolist() + box[1].tolist(),
     }
 
 

@@ -145,8 +145,8 @@ def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str
         header += CHECK_COLUMNS
     rows = []
     for s in result.steps:
-        box = s["bbox"] or [[""] * ndim, [""] * ndim]
-        row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box[0], *box[1]]
+        box = s["bbox"] or [""] * (2 * ndim)
+        row = [s["step"], s["voxels"], s["parity"], *s["betti"], s["euler_characteristic"], s["energy"], *box]
         if result.guard:
             row.append(s.get("move", ""))
         if checks is not None:

@@ -206,7 +206,7 @@ def corners_any(vertices: np.ndarray, outside: bool = False) -> np.ndarray:
 
 def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: int,
                   betti: tuple[list, list] | None = None, stuck: np.ndarray | None = None):
-    """World bbox [min, max] of where the plain move ``keep`` from ``obj``
+    """World bbox (min corner then max corner, one flat list) of where the plain move ``keep`` from ``obj``
     changes its topology, None when empty.
 
     The greedy sweeps of :func:`realise_moves` carry out every move they
@@ -239,13 +239,13 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     >>> square[1:6, 1:6] = True
     >>> square[3, 3] = False  # a one-pixel hole [3, 4]^2, which the step closes
     >>> change_region(DigitalObject(square), *flow_moves(DigitalObject(square), 4), 4)
-    [[2.0, 2.0], [4.0, 4.0]]
+    [2.0, 2.0, 4.0, 4.0]
     """
     if stuck is None:
         _, stuck = realise_moves(cfg, keep, conn, flip=False, by_class=True)
     if not stuck.any():
         box = obj.on_dual_lattice(keep).bbox()
-        return None if box is None else [box[0].tolist(), box[1].tolist()]
+        return None if box is None else box[0].tolist() + box[1].tolist()
     region = corners_any(stuck)
     volume = np.pad(obj.volume, 1)
     vanished = volume & ~corners_any(keep)
@@ -262,7 +262,7 @@ def change_region(obj: DigitalObject, cfg: np.ndarray, keep: np.ndarray, conn: i
     inside = np.zeros(region.shape, bool)
     inside[tuple(slice(a, b) for a, b in zip(lo, hi))] = True
     box = replace(obj, volume=inside, offset=tuple(o - 1 for o in obj.offset)).bbox()
-    return None if box is None else [box[0].tolist(), box[1].tolist()]
+    return None if box is None else box[0].tolist() + box[1].tolist()
 
 
 def enclosed(volume: np.ndarray, conn: int) -> tuple[np.ndarray, np.ndarray]:

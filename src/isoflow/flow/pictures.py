@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ..digital.surface import boundary_mesh
+from ..errors import counted
 from ..mesh.render import FACE_BUDGET, colour_key, draw_surface, pyplot, save_figure
 
 
@@ -36,7 +37,7 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
         classes.append(np.unique(mesh.vertex_class))
         draw_surface(ax, mesh, state, elev, azim, FACE_BUDGET // len(frames), bounds=box)
         ax.set_axis_off()
-        ax.set_title(f"step {rec['step']}: {rec['voxels']} voxels, betti {tuple(rec['betti'])}", fontsize=8)
+        ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'voxel')}, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle(f"digital curvature flow ({colour_key(classes)})", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
@@ -57,7 +58,7 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
         ax.set_ylim(box[1][1] + pad[1], box[0][1] - pad[1])  # y down, as draw_pixels draws it
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
-        ax.set_title(f"step {rec['step']}: {rec['voxels']} pixels, betti {tuple(rec['betti'])}", fontsize=8)
+        ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'pixel')}, betti {tuple(rec['betti'])}", fontsize=8)
     fig.suptitle("digital curvature flow", fontsize=9)
     fig.tight_layout()
     return save_figure(fig, path)
@@ -91,6 +92,43 @@ def draw_pixels(ax, state) -> None:
               interpolation="nearest")
 
 
+def draw_betti(ax, steps: list, betti: np.ndarray) -> None:
+    """Draw the Betti numbers ``betti`` (one row per state, one column per
+    number) against ``steps`` into a matplotlib axes, ticked in whole
+    numbers. Betti numbers are often equal (a torus keeps b0 = b1 = 1), so
+    each line is drawn narrower than the one before it, on top of it: a
+    line of one width would hide the one below it entirely.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The axes to draw into.
+    steps : list of int
+        The step of each state.
+    betti : numpy.ndarray
+        The Betti numbers, ``(states, numbers)``.
+
+    Examples
+    --------
+    >>> fig = pyplot().figure()
+    >>> ax = fig.add_subplot()
+    >>> draw_betti(ax, [0, 1, 2], np.array([[1, 1, 0], [1, 1, 0], [1, 0, 0]]))
+    >>> [line.get_linewidth() for line in ax.get_lines()]
+    [5.0, 3.0, 1.0]
+    >>> pyplot().close(fig)
+    """
+    from matplotlib.ticker import MaxNLocator
+
+    count = betti.shape[1]
+    for i in range(count):
+        width = 1.0 + 4.0 * (count - 1 - i) / max(count - 1, 1)
+        # a marker at every state: a step line alone draws nothing for a run of
+        # one state (--steps 0) and no more than a tick for the last state
+        ax.step(steps, betti[:, i], where="post", marker="o", ms=2.5 + width, lw=width, label=f"b{i}")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel("Betti numbers")
+
+
 def render_flow(result, path: Path, title: str = "") -> Path:
     """Write a PNG of a digital curvature flow (:class:`isoflow.flow.run.FlowResult`):
     voxels, energy ``E = k^T n`` and Betti numbers against the step, with the
@@ -103,18 +141,14 @@ def render_flow(result, path: Path, title: str = "") -> Path:
     axes[0].set_ylabel("pixels" if len(result.steps[0]["betti"]) == 2 else "voxels")
     axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
     axes[1].set_ylabel("energy E = k^T n")
-    for i in range(betti.shape[1]):
-        # a marker at every state: a step line alone draws nothing for a run of
-        # one state (--steps 0) and no more than a tick for the last state
-        axes[2].step(steps, betti[:, i], where="post", marker="o", ms=3, label=f"b{i}")
-    axes[2].set_ylabel("Betti numbers")
+    draw_betti(axes[2], steps, betti)
     axes[2].set_xlabel("step")
     from matplotlib.ticker import MaxNLocator
 
     axes[2].xaxis.set_major_locator(MaxNLocator(integer=True))
     if len(steps) == 1:  # a range of no length: the locator ticks it in fractions of a step
         axes[2].set_xticks(steps)
-    axes[2].legend(loc="upper right", fontsize=8)
+    axes[2].legend(loc="best", fontsize=8)
     for change in result.topology_changes:
         for ax in axes:
             ax.axvline(change["step"], color="grey", lw=0.8, ls=":")

@@ -66,7 +66,8 @@ class FlowResult(Result):
     ----------
     steps : list of dict
         One record per state, step 0 the input: step, voxels, parity,
-        betti, euler_characteristic, energy, bbox (world [min, max]), and
+        betti, euler_characteristic, energy, bbox (world: the min corner,
+        then the max corner, one flat list as :func:`isoflow.analyze` gives), and
         in guarded runs the kind of step (``move``).
     states : list of DigitalObject
         The states themselves, when kept.
@@ -80,7 +81,7 @@ class FlowResult(Result):
         whose ``stop_reason`` is ``vanished``) and ``last_step``.
     topology_changes : list of dict
         One per change of the Betti numbers in a plain run: step, before,
-        after, where (world bbox), applied.
+        after, where (world bbox, as ``bbox``), applied.
     connectivity : int
         The object's connectivity (4 or 8 in 2D).
     guard : bool
@@ -309,7 +310,8 @@ def _limit(trace: _Trace, reached: bool) -> dict:
     last = next((s for s in reversed(trace.records) if s["voxels"] > 0), None)
     if last is None or not reached:
         return {"center": None, "last_shape": "not-reached", "last_step": None if last is None else last["step"]}
-    lo, hi = np.array(last["bbox"][0]), np.array(last["bbox"][1])
+    box = np.array(last["bbox"])
+    lo, hi = np.split(box, 2)
     return {
         "center": ((lo + hi) / 2).tolist(),
         "last_shape": "cuboid" if trace.engine.is_cuboid(trace.last) else "other",

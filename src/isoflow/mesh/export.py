@@ -179,11 +179,13 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     return corners
 
 
-def float64_move_note(where, corners: dict) -> str | None:
+def float64_move_note(where, corners: dict, moved: str | None = None) -> str | None:
     """How far float64 itself moves the corners of a surface placed far
     from the origin against its voxel size (``corners``:
     :func:`check_float64_corners`), or None where
     :func:`~isoflow.mesh.float32.float64_moved` finds it too small to say.
+    ``moved``: what the move shifts, where that is not a surface file's
+    positions (the world coordinates a command prints).
 
     Examples
     --------
@@ -193,14 +195,18 @@ def float64_move_note(where, corners: dict) -> str | None:
     only to its spacing near 1e+06, 1.16e-10 (np.spacing): every format's positions move by up to 0.12 voxels ...
     >>> float64_move_note("s.ply", check_float64_corners("s.ply", (0, 0, 0), (1.0,) * 3, (2, 2, 2))) is None
     True
+    >>> print(float64_move_note("far.npz", corners, "the boxes printed"))  # doctest: +ELLIPSIS
+    far.npz: float64 holds ... (np.spacing): the boxes printed move by up to 0.12 voxels along axis 0; place ...
     """
     if not float64_moved(corners):
         return None
+    by = f"by up to {corners['moved_voxels']:.2g} voxels along axis {corners['axis']}"
+    said = (f"every format's positions move {by}, and the read-back compares the volume within that" if moved is None
+            else f"{moved} move {by}")
     return (f"{where}: float64 holds the voxel corners of this placement "
             f"({placement_words(corners['origin'], corners['spacing'])}) only to its spacing near "
-            f"{corners['near']:.3g}, {corners['step']:.3g} (np.spacing): every format's positions move by up to "
-            f"{corners['moved_voxels']:.2g} voxels along axis {corners['axis']}, and the read-back compares the "
-            "volume within that; place the object nearer the origin (subtract its origin) to keep them")
+            f"{corners['near']:.3g}, {corners['step']:.3g} (np.spacing): {said}; place the object nearer the origin "
+            "(subtract its origin) to keep them")
 
 
 def mesh_vertex_table(mesh, obj: DigitalObject, position=None) -> dict[str, np.ndarray]:

@@ -102,6 +102,43 @@ def volume_words(units: float, unit: float, digits: int = 6) -> str:
             f"{'cube' if units == 1 else 'cubes'} of 2^{exponent})")
 
 
+def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
+    """The volume of a read-back that agrees with isoflow's count, in a
+    message: the count of ``voxels`` voxels of size ``spacing``, to the
+    six digits ``isoflow info`` prints it to. The reader's own figure
+    holds fewer where the corners moved (float64 far from the origin,
+    an STL's float32), and the read-back agrees within that move: its
+    digits there are the move's, not the object's, so where it differs
+    from the count at six digits the words say it was read within the
+    move, and no figure of the move's digits.
+
+    Parameters
+    ----------
+    read_units : float
+        The volume the reader found, in :func:`volume_unit` cubed.
+    voxels : int
+        The object's voxels.
+    spacing : array_like
+        The voxel size per axis.
+
+    Returns
+    -------
+    str
+        The volume as the read-back line says it.
+
+    Examples
+    --------
+    >>> agreed_volume_words(8.0, 8, (1.0, 1.0, 1.0))
+    '8'
+    >>> agreed_volume_words(7.99999, 8, (1.0, 1.0, 1.0))  # an STL's float32 corners
+    '8 (read within the move of the corners)'
+    """
+    unit = unit_of(np.asarray(spacing, np.float64))
+    counted = volume_words(float(voxels) * float(np.prod(np.asarray(spacing, np.float64) / unit)), unit)
+    read = volume_words(read_units, unit)
+    return counted if read == counted else f"{counted} (read within the move of the corners)"
+
+
 #: peak bytes of the read-back per triangle, by suffix (measured on 4.9
 #: million triangles: 107 for a PLY, 182 for a welded STL, 270 for an OBJ,
 #: whose text trimesh parses line by line; rounded up), and for the others
