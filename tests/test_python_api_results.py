@@ -206,3 +206,47 @@ def test_an_objects_repr_shows_its_pitch_to_twelve_significant_digits(pitch, sho
         warnings.simplefilter("error")  # NumPy's "overflow encountered in multiply"
         text = repr(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch))
     assert f"pitch={shown}," in text
+
+
+def test_analyze_zarr_places_an_ome_zarr_image_as_its_metadata_and_info_do(tmp_path, capsys):
+    """``isoflow.analyze_zarr`` of an OME-Zarr image in millimetres gave its
+    volume, area, box and centroid in voxels with no unit, where ``isoflow
+    info STORE --json`` and ``analyze(read_volume(STORE))`` gave them in
+    millimetres: the store's own scale, translation and axis unit place it
+    now, and a value given replaces the store's. The store is written with
+    zarr itself, the expected measures come from scikit-image's regionprops
+    and the NGFF rule (scale per voxel, translation at voxel centres)."""
+    zarr = pytest.importorskip("zarr")
+    from skimage.measure import regionprops
+
+    from isoflow.cli.main import main
+
+    v = np.zeros((7, 6, 5), np.uint8)  # (x, y, z)
+    v[1:6, 1:5, 1:4] = 1
+    v[3, 2:4, 1:4] = 0  # a tunnel along z
+    scale, shift = np.array([0.5, 0.25, 2.0]), np.array([10.0, -4.0, 1.0])  # (x, y, z)
+    group = zarr.open_group(str(tmp_path / "img.zarr"), mode="w", zarr_format=2)
+    group.create_array("0", data=np.ascontiguousarray(v.transpose(2, 1, 0)), chunks=(2, 3, 4))
+    group.attrs["multiscales"] = [{
+        "version": "0.4", "axes": [{"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"],
+        "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": scale[::-1].tolist()}, {"type": "translation", "translation": shift[::-1].tolist()}]}]}]
+    props = regionprops(v)[0]
+    corner = shift - scale / 2  # the lowest corner of voxel 0
+    want_box = np.concatenate([corner + scale * props.bbox[:3], corner + scale * props.bbox[3:]])
+    want_centroid = shift + scale * np.asarray(props.centroid)
+
+    report = isoflow.analyze_zarr(tmp_path / "img.zarr", 6)
+    assert report.unit == "mm" and report.voxels == props.area
+    assert report.volume == pytest.approx(props.area * scale.prod())
+    np.testing.assert_allclose(report.bbox, want_box)
+    np.testing.assert_allclose(report.centroid, want_centroid)
+    assert report == isoflow.analyze(isoflow.read_volume(tmp_path / "img.zarr"), 6)
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "img.zarr"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert {k: printed[k] for k in report} == report.to_dict()  # the same numbers under the same names
+
+    given = isoflow.analyze_zarr(tmp_path / "img.zarr", 6, pitch=1.0, origin=(0, 0, 0))
+    np.testing.assert_allclose(given.bbox, list(props.bbox))
+    assert given.unit == "mm" and given.volume == props.area

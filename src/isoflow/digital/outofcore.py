@@ -569,7 +569,9 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
                  surfaces: bool = True, threads: int | None = None,
                  progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, unit: str | None = None) -> Report:
-    """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
+    """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3),
+    placed by the ``pitch``, ``origin`` and ``unit`` given alone:
+    :func:`isoflow.analyze_zarr` places it where the store says it is.
 
     Parameters
     ----------
@@ -583,8 +585,8 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     pitch, origin, unit : optional
         The voxel size, the world position of voxel 0's lowest corner and
         their unit, in (x, y, z) order, for the world measures (default
-        unit voxels at 0: ``isoflow info`` passes the store's own, which
-        :func:`isoflow.read_volume` reads).
+        unit voxels at 0: :func:`isoflow.analyze_zarr` and ``isoflow info``
+        pass the store's own, which :func:`isoflow.read_volume` reads).
 
     Returns
     -------
