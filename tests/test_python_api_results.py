@@ -250,3 +250,22 @@ def test_analyze_zarr_places_an_ome_zarr_image_as_its_metadata_and_info_do(tmp_p
     given = isoflow.analyze_zarr(tmp_path / "img.zarr", 6, pitch=1.0, origin=(0, 0, 0))
     np.testing.assert_allclose(given.bbox, list(props.bbox))
     assert given.unit == "mm" and given.volume == props.area
+
+
+def test_the_repr_of_a_small_mesh_or_label_image_is_one_short_line():
+    """A notebook cell that ended in ``boundary_mesh(cube)`` printed every
+    vertex and face of a small mesh (393 lines for a 4^3 cube: NumPy cuts
+    an array only past 1000 numbers), and ``LabelImage`` every voxel of a
+    small image. Their arrays are shown by shape and type, on one line,
+    as a result's are kept short."""
+    cube = np.ones((4, 4, 4), bool)
+    text = repr(isoflow.boundary_mesh(cube, 6))
+    # the boundary of a 4^3 cube: 5^3 - 3^3 lattice points, 6 * 4^2 squares
+    assert "\n" not in text and len(text) < 400, text
+    assert text.startswith("QuadMesh(vertices=array(..., shape=(98, 3), dtype=float64), faces=array(..., shape=(96, 4)")
+    assert text.endswith("connectivity=6, pinched=0)")
+    labels = np.arange(1000).reshape(10, 10, 10) % 5
+    text = repr(isoflow.LabelImage(labels, np.full(3, 0.5), np.zeros(3), "mm"))
+    assert "\n" not in text and len(text) < 200, text
+    assert text == ("LabelImage(array=array(..., shape=(10, 10, 10), dtype=int64), spacing=array([0.5, 0.5, 0.5]), "
+                    "origin=array([0., 0., 0.]), unit='mm')")
