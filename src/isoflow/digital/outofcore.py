@@ -311,6 +311,8 @@ def _instead(array) -> str:
         return store
     if type(array).__module__.split(".")[0] == "zarr" and hasattr(array, "arrays"):
         return f"{store}, or pass one of the group's arrays (group['0'])"
+    if isinstance(array, np.memmap):  # on disk, perhaps beyond memory: not what analyze is for
+        return "a memmap is read block by block as dask.array.from_array(volume, chunks=...); isoflow.analyze reads it whole"
     return "use isoflow.analyze for in-memory arrays"
 
 
