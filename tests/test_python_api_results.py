@@ -301,3 +301,31 @@ def test_a_report_comes_back_from_what_info_json_printed(tmp_path, capsys):
     assert eight == isoflow.analyze(isoflow.voxelize_file(data.eight(), resolution=16)) and "voxelised" in printed
     with pytest.raises(TypeError, match=r"no fields \['genus_typo'\]"):
         isoflow.Report.from_dict({**printed, "genus_typo": 1})
+
+
+def test_a_flow_result_comes_back_from_what_flow_json_printed(tmp_path, capsys):
+    """``FlowResult.from_dict``, which says it reads ``isoflow flow
+    --json``, refused what the command printed ("FlowResult has no fields
+    ['input', 'unit']"). It takes the command's keys about its input now;
+    step 0 is the file as nibabel and scikit-image read it."""
+    nibabel = pytest.importorskip("nibabel")
+    from skimage.measure import euler_number, regionprops
+
+    from isoflow.cli.main import main
+
+    v = np.zeros((7, 6, 5), np.uint8)
+    v[1:6, 1:5, 1:4] = 1
+    v[3, 2:4, 1:4] = 0  # a tunnel
+    image = nibabel.Nifti1Image(v, np.diag([0.5, 0.25, 2.0, 1.0]))
+    image.header.set_xyzt_units("mm")
+    nibabel.save(image, tmp_path / "ring.nii.gz")
+    assert main(["flow", str(tmp_path / "ring.nii.gz"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    back = isoflow.FlowResult.from_dict(printed)
+    assert back.to_dict() == isoflow.run_flow(isoflow.read_volume(tmp_path / "ring.nii.gz")).to_dict()
+    first = back.steps[0]
+    assert first["voxels"] == v.sum() and first["euler_characteristic"] == euler_number(np.pad(v, 1), 1) == 0
+    box = np.array(regionprops(v)[0].bbox).reshape(2, 3) * [0.5, 0.25, 2.0] - np.array([0.5, 0.25, 2.0]) / 2
+    np.testing.assert_allclose(first["bbox"], box)  # NIfTI places voxel centres: corner 0 is half a voxel lower
+    with pytest.raises(TypeError, match=r"no fields \['steps_typo'\]"):
+        isoflow.FlowResult.from_dict({**printed, "steps_typo": 1})
