@@ -86,8 +86,9 @@ def main():
         written = isoflow.voxelize_to_zarr(args.mesh, store, resolution=args.resolution, chunks=CHUNKS,
                                            scheduler=client.get, force=args.force)
         chunked = isoflow.analyze_zarr(store, connectivity=6, scheduler=client.get)
-    volume = isoflow.read_volume(store).volume
-    in_memory = isoflow.analyze(volume, connectivity=6)
+    solid = isoflow.read_volume(store)  # placed as the store says, as analyze_zarr places it
+    volume = solid.volume
+    in_memory = isoflow.analyze(solid, connectivity=6)
     report_path.write_text(json.dumps({"chunked": chunked.to_dict(), "in_memory": in_memory.to_dict()}, indent=1))
     plot_blocks(volume, CHUNKS).savefig(picture)
 

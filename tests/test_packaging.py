@@ -92,6 +92,20 @@ def test_named_samples_and_their_genus():
     assert len(points) == 20  # the paper's P10, P11 and P12 (eq. 5.19)
 
 
+def test_a_sample_entry_changed_by_its_caller_is_not_the_next_callers():
+    """``data.info`` handed out the nested dicts and lists of one cached
+    manifest: a notebook that edited ``entry["tool_results"]`` or
+    ``entry["extents"]`` changed what every later call returned. Each call
+    is the manifest's entry as json reads the file."""
+    name = "eight.off"
+    entry = data.info(name)
+    entry["extents"].append(99.0)
+    next(iter(entry["tool_results"].values()))["changed"] = True
+    entry["voxel_euler_64"].clear()
+    want = next(m for m in MANIFEST if m["filename"] == name)
+    assert data.info(name) == want
+
+
 def test_unknown_sample_is_one_line():
     with pytest.raises(IsoflowError, match="'nope.ply': no such sample file; the samples are bob_small.ply"):
         data.path("nope.ply")

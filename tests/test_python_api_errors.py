@@ -503,6 +503,14 @@ def test_digital_object_refuses_a_bool_pitch(pitch, shown):
     assert isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=(1, 2.0, 1)).pitch.tolist() == [1.0, 2.0, 1.0]
 
 
+@pytest.mark.parametrize(("parity", "shown"), [(2, "2"), (np.int64(-1), "-1"), (3.0, "3.0")])
+def test_a_parity_other_than_0_or_1_is_named_as_given(parity, shown):
+    # parity=2 was refused as "got 2.0": the number after its float check, not the one written
+    with pytest.raises(IsoflowError) as info:
+        isoflow.DigitalObject(np.ones((2, 2, 2), bool), parity=parity)
+    assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {shown}"
+
+
 def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
     # an object array of Python numbers (what a pandas column or a list
     # through np.array(..., dtype=object) gives) is numbers: the object is

@@ -206,3 +206,126 @@ def test_an_objects_repr_shows_its_pitch_to_twelve_significant_digits(pitch, sho
         warnings.simplefilter("error")  # NumPy's "overflow encountered in multiply"
         text = repr(isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch))
     assert f"pitch={shown}," in text
+
+
+def test_analyze_zarr_places_an_ome_zarr_image_as_its_metadata_and_info_do(tmp_path, capsys):
+    """``isoflow.analyze_zarr`` of an OME-Zarr image in millimetres gave its
+    volume, area, box and centroid in voxels with no unit, where ``isoflow
+    info STORE --json`` and ``analyze(read_volume(STORE))`` gave them in
+    millimetres: the store's own scale, translation and axis unit place it
+    now, and a value given replaces the store's. The store is written with
+    zarr itself, the expected measures come from scikit-image's regionprops
+    and the NGFF rule (scale per voxel, translation at voxel centres)."""
+    zarr = pytest.importorskip("zarr")
+    from skimage.measure import regionprops
+
+    from isoflow.cli.main import main
+
+    v = np.zeros((7, 6, 5), np.uint8)  # (x, y, z)
+    v[1:6, 1:5, 1:4] = 1
+    v[3, 2:4, 1:4] = 0  # a tunnel along z
+    scale, shift = np.array([0.5, 0.25, 2.0]), np.array([10.0, -4.0, 1.0])  # (x, y, z)
+    group = zarr.open_group(str(tmp_path / "img.zarr"), mode="w", zarr_format=2)
+    group.create_array("0", data=np.ascontiguousarray(v.transpose(2, 1, 0)), chunks=(2, 3, 4))
+    group.attrs["multiscales"] = [{
+        "version": "0.4", "axes": [{"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"],
+        "datasets": [{"path": "0", "coordinateTransformations": [
+            {"type": "scale", "scale": scale[::-1].tolist()}, {"type": "translation", "translation": shift[::-1].tolist()}]}]}]
+    props = regionprops(v)[0]
+    corner = shift - scale / 2  # the lowest corner of voxel 0
+    want_box = np.concatenate([corner + scale * props.bbox[:3], corner + scale * props.bbox[3:]])
+    want_centroid = shift + scale * np.asarray(props.centroid)
+
+    report = isoflow.analyze_zarr(tmp_path / "img.zarr", 6)
+    assert report.unit == "mm" and report.voxels == props.area
+    assert report.volume == pytest.approx(props.area * scale.prod())
+    np.testing.assert_allclose(report.bbox, want_box)
+    np.testing.assert_allclose(report.centroid, want_centroid)
+    assert report == isoflow.analyze(isoflow.read_volume(tmp_path / "img.zarr"), 6)
+    capsys.readouterr()
+    assert main(["info", str(tmp_path / "img.zarr"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert {k: printed[k] for k in report} == report.to_dict()  # the same numbers under the same names
+
+    given = isoflow.analyze_zarr(tmp_path / "img.zarr", 6, pitch=1.0, origin=(0, 0, 0))
+    np.testing.assert_allclose(given.bbox, list(props.bbox))
+    assert given.unit == "mm" and given.volume == props.area
+
+
+def test_the_repr_of_a_small_mesh_or_label_image_is_one_short_line():
+    """A notebook cell that ended in ``boundary_mesh(cube)`` printed every
+    vertex and face of a small mesh (393 lines for a 4^3 cube: NumPy cuts
+    an array only past 1000 numbers), and ``LabelImage`` every voxel of a
+    small image. Their arrays are shown by shape and type, on one line,
+    as a result's are kept short."""
+    cube = np.ones((4, 4, 4), bool)
+    text = repr(isoflow.boundary_mesh(cube, 6))
+    # the boundary of a 4^3 cube: 5^3 - 3^3 lattice points, 6 * 4^2 squares
+    assert "\n" not in text and len(text) < 400, text
+    assert text.startswith("QuadMesh(vertices=array(..., shape=(98, 3), dtype=float64), faces=array(..., shape=(96, 4)")
+    assert text.endswith("connectivity=6, pinched=0)")
+    labels = np.arange(1000).reshape(10, 10, 10) % 5
+    text = repr(isoflow.LabelImage(labels, np.full(3, 0.5), np.zeros(3), "mm"))
+    assert "\n" not in text and len(text) < 200, text
+    assert text == ("LabelImage(array=array(..., shape=(10, 10, 10), dtype=int64), spacing=array([0.5, 0.5, 0.5]), "
+                    "origin=array([0., 0., 0.]), unit='mm')")
+
+
+def test_a_report_comes_back_from_what_info_json_printed(tmp_path, capsys):
+    """``Report.from_dict`` of the object ``isoflow info FILE --json``
+    printed refused it ("Report has no fields ['input', 'origin',
+    'pitch']"): the keys the command adds about its input. It takes them
+    now, and gives the report of the file in Python; a key that is neither
+    a field nor one of the command's is still refused. The file is written
+    with nibabel, its chi counted by scikit-image."""
+    nibabel = pytest.importorskip("nibabel")
+    from skimage.measure import euler_number
+
+    from isoflow import data
+    from isoflow.cli.main import main
+
+    v = np.zeros((6, 5, 4), np.uint8)
+    v[1:5, 1:4, 1:3] = 1
+    v[2:4, 2, 1:3] = 0  # a tunnel
+    nibabel.save(nibabel.Nifti1Image(v, np.diag([0.5, 0.5, 2.0, 1.0])), tmp_path / "ring.nii.gz")
+    inputs = {str(tmp_path / "ring.nii.gz"): [], str(data.eight()): ["--resolution", "16"]}
+    reports = []
+    for path, options in inputs.items():
+        capsys.readouterr()
+        assert main(["info", path, *options, "--json", "-q"]) == 0
+        printed = json.loads(capsys.readouterr().out)
+        reports.append(isoflow.Report.from_dict(printed))
+    ring, eight = reports
+    assert ring == isoflow.analyze(isoflow.read_volume(tmp_path / "ring.nii.gz"))
+    assert ring.euler_characteristic == euler_number(np.pad(v, 1), 1) == 0 and ring.volume == v.sum() * 0.5
+    assert eight == isoflow.analyze(isoflow.voxelize_file(data.eight(), resolution=16)) and "voxelised" in printed
+    with pytest.raises(TypeError, match=r"no fields \['genus_typo'\]"):
+        isoflow.Report.from_dict({**printed, "genus_typo": 1})
+
+
+def test_a_flow_result_comes_back_from_what_flow_json_printed(tmp_path, capsys):
+    """``FlowResult.from_dict``, which says it reads ``isoflow flow
+    --json``, refused what the command printed ("FlowResult has no fields
+    ['input', 'unit']"). It takes the command's keys about its input now;
+    step 0 is the file as nibabel and scikit-image read it."""
+    nibabel = pytest.importorskip("nibabel")
+    from skimage.measure import euler_number, regionprops
+
+    from isoflow.cli.main import main
+
+    v = np.zeros((7, 6, 5), np.uint8)
+    v[1:6, 1:5, 1:4] = 1
+    v[3, 2:4, 1:4] = 0  # a tunnel
+    image = nibabel.Nifti1Image(v, np.diag([0.5, 0.25, 2.0, 1.0]))
+    image.header.set_xyzt_units("mm")
+    nibabel.save(image, tmp_path / "ring.nii.gz")
+    assert main(["flow", str(tmp_path / "ring.nii.gz"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    back = isoflow.FlowResult.from_dict(printed)
+    assert back.to_dict() == isoflow.run_flow(isoflow.read_volume(tmp_path / "ring.nii.gz")).to_dict()
+    first = back.steps[0]
+    assert first["voxels"] == v.sum() and first["euler_characteristic"] == euler_number(np.pad(v, 1), 1) == 0
+    box = np.array(regionprops(v)[0].bbox).reshape(2, 3) * [0.5, 0.25, 2.0] - np.array([0.5, 0.25, 2.0]) / 2
+    np.testing.assert_allclose(first["bbox"], box)  # NIfTI places voxel centres: corner 0 is half a voxel lower
+    with pytest.raises(TypeError, match=r"no fields \['steps_typo'\]"):
+        isoflow.FlowResult.from_dict({**printed, "steps_typo": 1})

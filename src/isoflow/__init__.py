@@ -19,7 +19,7 @@ _WHERE = {
     "Report": ".digital.report",
     "ClosedSurface": ".digital.report",
     "analyze_chunked": ".digital.outofcore",
-    "analyze_zarr": ".digital.outofcore",
+    "analyze_zarr": ".mesh.formats.omezarr",
     "label_table": ".digital.label_table",
     "LabelImage": ".digital.label_table",
     "configurations": ".digital.configurations",

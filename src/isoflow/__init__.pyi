@@ -44,7 +44,6 @@ from .digital.label_table import LabelImage as LabelImage
 from .digital.label_table import label_table as label_table
 from .digital.lattice import DigitalObject as DigitalObject
 from .digital.outofcore import analyze_chunked as analyze_chunked
-from .digital.outofcore import analyze_zarr as analyze_zarr
 from .digital.report import ClosedSurface as ClosedSurface
 from .digital.report import Report as Report
 from .digital.surface import QuadMesh as QuadMesh
@@ -59,6 +58,7 @@ from .flow.run import run_flow as run_flow
 from .mesh.bridges import from_manifold as from_manifold
 from .mesh.bridges import to_manifold as to_manifold
 from .mesh.export import write_surface as write_surface
+from .mesh.formats.omezarr import analyze_zarr as analyze_zarr
 from .mesh.genus import verify_genus as verify_genus
 from .mesh.label_voxels import voxelize_meshes as voxelize_meshes
 from .mesh.slabs import voxelize_to_zarr as voxelize_to_zarr

@@ -149,9 +149,15 @@ def brief(value: Any) -> str:
     "[{'genus': 0}, {'genus': 0}, ..., {'genus': 0}, ... 2 more]"
     >>> brief(np.arange(256))  # doctest: +ELLIPSIS
     'array([  0,   1,   2, ..., 253, 254, 255]...)'
+    >>> brief(np.zeros((98, 3)))
+    'array(..., shape=(98, 3), dtype=float64)'
     >>> brief((1, 2))
     '(1, 2)'
     """
+    if isinstance(value, np.ndarray) and value.ndim > 1:
+        # NumPy prints a row a line, every row up to 1000 numbers: a small
+        # mesh's vertices took hundreds of lines
+        return f"array(..., shape={value.shape}, dtype={value.dtype})"
     if isinstance(value, np.ndarray):
         with np.printoptions(threshold=2 * ARRAY_EDGE, edgeitems=ARRAY_EDGE):
             return repr(value)
@@ -162,6 +168,33 @@ def brief(value: Any) -> str:
         items = [f"{k!r}: {brief(v)}" for k, v in list(value.items())[:SHOWN_ITEMS]] + more(len(value))
         return "{" + ", ".join(items) + "}"
     return repr(value)
+
+
+def fields_repr(obj: Any) -> str:
+    """The repr of a dataclass instance with each field that its repr shows
+    cut short by :func:`brief`: what a result, a mesh and a label image
+    print in a notebook.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> @dataclasses.dataclass(repr=False)
+    ... class Mesh:
+    ...     vertices: np.ndarray
+    ...     connectivity: int
+    ...     __repr__ = fields_repr
+    >>> Mesh(np.zeros((98, 3)), 6)
+    Mesh(vertices=array(..., shape=(98, 3), dtype=float64), connectivity=6)
+    """
+    shown = [f.name for f in dataclasses.fields(obj) if f.repr]
+    return f"{type(obj).__name__}({', '.join(f'{k}={brief(getattr(obj, k))}' for k in shown)})"
 
 
 def more(count: int) -> list[str]:
@@ -179,10 +212,8 @@ class Result(Mapping[str, Any]):
     """
 
     def __repr__(self) -> str:
-        # the fields a dataclass repr shows, each cut short by brief: the
-        # whole of a big result stays in to_dict and the attributes
-        shown = [f.name for f in dataclasses.fields(self) if f.repr]  # type: ignore[arg-type]
-        return f"{type(self).__name__}({', '.join(f'{k}={brief(getattr(self, k))}' for k in shown)})"
+        # the whole of a big result stays in to_dict and the attributes
+        return fields_repr(self)
 
     def _keys(self) -> list[str]:
         fields = dataclasses.fields(self)  # type: ignore[arg-type]

@@ -483,6 +483,24 @@ def test_bad_arrays_raise_isoflow_error(rng):
         analyze_chunked(da.from_array(np.array([["a", "b"], ["c", "d"]]), chunks=1))
 
 
+def test_a_memmap_given_to_analyze_chunked_is_pointed_to_dask(tmp_path):
+    # a volume on disk beyond memory, as np.memmap maps a raw file, was
+    # told "use isoflow.analyze for in-memory arrays": it is not in memory,
+    # and the advice given now reads it block by block
+    from skimage.measure import euler_number
+
+    v = torus(6, 2)
+    mapped = np.memmap(tmp_path / "torus.raw", dtype=np.uint8, mode="w+", shape=v.shape)
+    mapped[...] = v
+    mapped.flush()
+    mapped = np.memmap(tmp_path / "torus.raw", dtype=np.uint8, mode="r", shape=v.shape)
+    with pytest.raises(IsoflowError) as info:
+        analyze_chunked(mapped, 6)
+    assert "in-memory" not in str(info.value) and "dask.array.from_array(volume, chunks=" in str(info.value)
+    report = analyze_chunked(da.from_array(mapped, chunks=(5, 7, 3)), 6)
+    assert report.betti == [1, 1, 0] and report.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+
+
 def test_a_store_given_to_analyze_chunked_is_pointed_to_analyze_zarr(tmp_path):
     # the OME-Zarr group voxelize_to_zarr and write_volume write, or its
     # path, was told "use isoflow.analyze for in-memory arrays", which

@@ -23,6 +23,7 @@ True
 
 from __future__ import annotations
 
+import copy
 import functools
 import json
 from pathlib import Path
@@ -125,7 +126,8 @@ def info(name: str) -> dict[str, Any]:
         The mesh's entry in ``manifest.json``: ``source_url``,
         ``model_license``, ``sha256``, ``components``, ``genus`` (``None``
         for an open mesh), ``watertight``, ``boundary_edges`` and what
-        trimesh, manifold3d, pymeshlab and scikit-image measured of it.
+        trimesh, manifold3d, pymeshlab and scikit-image measured of it;
+        each call's own copy.
 
     Raises
     ------
@@ -142,7 +144,9 @@ def info(name: str) -> dict[str, Any]:
     meshes = _manifest()
     if name not in meshes:
         raise IsoflowError(f"{name!r}: no such sample mesh; the meshes are {', '.join(sorted(meshes))}")
-    return dict(meshes[name])
+    # a deep copy: the entry's dicts and lists are the cached manifest's,
+    # which a caller's edit would change for every later call
+    return copy.deepcopy(meshes[name])
 
 
 @functools.cache

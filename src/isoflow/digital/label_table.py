@@ -42,7 +42,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, check_switch
-from ..results import same_fields
+from ..results import fields_repr, same_fields
 from ..scale.arrays import as_array, refuse_object
 from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables
@@ -91,7 +91,7 @@ def feature_table(connectivity: int = 6) -> np.ndarray:
     return out
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, repr=False)
 class LabelImage:
     """A label image with its place: integers in (x, y, z) order, the voxel
     size per axis and the world position of voxel (0, 0, 0)'s lowest
@@ -117,6 +117,7 @@ class LabelImage:
     # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
+    __repr__ = fields_repr  # the array by its shape: the generated repr printed every voxel of a small image
 
     def __post_init__(self):
         # the spacing and origin as float arrays, one number per axis, checked

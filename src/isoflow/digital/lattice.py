@@ -125,7 +125,9 @@ class DigitalObject:
         object.__setattr__(self, "origin", origin)
         parity = _field(self.parity, "parity", None, integral=True)
         if parity not in (0, 1):
-            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {parity!r}")
+            # the value as written: _field gives it back as a float
+            given = np.asarray(self.parity).item()
+            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given!r}")
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))

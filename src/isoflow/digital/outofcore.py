@@ -311,6 +311,8 @@ def _instead(array) -> str:
         return store
     if type(array).__module__.split(".")[0] == "zarr" and hasattr(array, "arrays"):
         return f"{store}, or pass one of the group's arrays (group['0'])"
+    if isinstance(array, np.memmap):  # on disk, perhaps beyond memory: not what analyze is for
+        return "a memmap is read block by block as dask.array.from_array(volume, chunks=...); isoflow.analyze reads it whole"
     return "use isoflow.analyze for in-memory arrays"
 
 
@@ -569,7 +571,9 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
                  surfaces: bool = True, threads: int | None = None,
                  progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, unit: str | None = None) -> Report:
-    """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3).
+    """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3),
+    placed by the ``pitch``, ``origin`` and ``unit`` given alone:
+    :func:`isoflow.analyze_zarr` places it where the store says it is.
 
     Parameters
     ----------
@@ -583,8 +587,8 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     pitch, origin, unit : optional
         The voxel size, the world position of voxel 0's lowest corner and
         their unit, in (x, y, z) order, for the world measures (default
-        unit voxels at 0: ``isoflow info`` passes the store's own, which
-        :func:`isoflow.read_volume` reads).
+        unit voxels at 0: :func:`isoflow.analyze_zarr` and ``isoflow info``
+        pass the store's own, which :func:`isoflow.read_volume` reads).
 
     Returns
     -------

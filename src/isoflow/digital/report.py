@@ -33,6 +33,12 @@ class ClosedSurface(TypedDict):
     faces: int
 
 
+#: what ``isoflow info --json`` prints beside a report's fields: the input
+#: as given, a volume file's voxel size and origin, a mesh's voxel grid
+#: (docs/cli.md)
+INFO_INPUT_KEYS = ("input", "pitch", "origin", "voxelised")
+
+
 # eq=False: the equality is Result's, a mapping's (a generated one would
 # find a report unequal to the dict of its own items)
 @dataclasses.dataclass(frozen=True, kw_only=True, eq=False, repr=False)
@@ -186,7 +192,9 @@ class Report(Result):
         """The report with the given fields, as :meth:`Result.from_dict`; a
         4D report's ``classes``, keyed by configuration, get their integer
         keys back from JSON, whose keys are strings (the report read back
-        was not equal to the one written).
+        was not equal to the one written). What ``isoflow info --json``
+        prints about its input beside the report (:data:`INFO_INPUT_KEYS`)
+        is left out, so that the command's JSON reads back as the report.
 
         Examples
         --------
@@ -197,7 +205,7 @@ class Report(Result):
         >>> back == r, sorted(back.classes)
         (True, [1, 3, 15, 255])
         """
-        values = dict(values)
+        values = {k: v for k, v in values.items() if k not in INFO_INPUT_KEYS}
         if values.get("dimension") == 4 and isinstance(values.get("classes"), Mapping):
             values["classes"] = {int(k): n for k, n in values["classes"].items()}
         return super().from_dict(values)

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..results import same_fields
+from ..results import fields_repr, same_fields
 from ..scale.arrays import as_array, binary, index_dtype, refuse_object
 from ..scale.compiled import Method, use_compiled
 from .configurations import configurations, octant_bit
@@ -162,7 +162,7 @@ def doubled_spoke_lut(connectivity: int = 6) -> np.ndarray:
 # --------------------------------------------------------------------------
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, repr=False)
 class QuadMesh:
     """A closed, outward-oriented quad mesh on lattice points.
 
@@ -198,6 +198,7 @@ class QuadMesh:
     pinched: int  # vertex contacts split against the connectivity
 
     __eq__ = same_fields  # the arrays by their elements: the generated __eq__ raised NumPy's ValueError
+    __repr__ = fields_repr  # the arrays by their shape: the generated repr printed every vertex of a small mesh
 
     @property
     def midpoints(self) -> int:

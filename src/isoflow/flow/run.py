@@ -54,6 +54,9 @@ StopReason = Literal["vanished", "steps", "topology-change", "converged", "cycle
 #: a guarded step: the whole flow step, the flow step with its stuck blocks
 #: resolved, or a thinning step on the same lattice (isoflow.flow.guard)
 GuardKind = Literal["flow", "partial", "thinning"]
+#: what ``isoflow flow --json`` prints beside a result's fields: the input as
+#: given and the length unit of its world coordinates (docs/flow.md)
+FLOW_INPUT_KEYS = ("input", "unit")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -126,7 +129,9 @@ class FlowResult(Result):
     def from_dict(cls, values: Mapping[str, Any]) -> FlowResult:
         """The result of :meth:`to_dict`'s JSON (``isoflow flow --json``):
         the states are not in it, so none are kept, as with
-        ``keep_states=False`` (``states`` given is taken).
+        ``keep_states=False`` (``states`` given is taken). What the command
+        prints about its input beside the result (:data:`FLOW_INPUT_KEYS`)
+        is left out.
 
         Examples
         --------
@@ -137,7 +142,7 @@ class FlowResult(Result):
         (True, [])
         """
         # the JSON holds no states, and states is a field without a default
-        return super().from_dict({"states": [], **values})
+        return super().from_dict({"states": [], **{k: v for k, v in values.items() if k not in FLOW_INPUT_KEYS}})
 
 
 def default_max_steps(obj: DigitalObject) -> int:

@@ -34,12 +34,15 @@ from __future__ import annotations
 import dataclasses
 import os
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ...digital.lattice import DigitalObject
+from ...digital.report import Report
 from ...errors import IsoflowError
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
 from .registry import (
@@ -300,6 +303,81 @@ def stored_shape(path: str | os.PathLike) -> tuple[int, ...]:
     return tuple(int(store.array.shape[i]) for i in store.xyz)
 
 
+def store_place(store: StoreArray, path: str | os.PathLike) -> dict[str, Any]:
+    """The ``pitch``, ``origin`` and ``unit`` that place the store's volume
+    as :func:`read` places it (None for a plain array without them),
+    checked up front and named as ``info`` names the placement it prints."""
+    pitch, origin = store.placement()
+    if pitch is None and origin is None:
+        return {"pitch": None, "origin": None, "unit": store.unit()}
+    try:
+        at = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
+    except IsoflowError as exc:
+        raise exc.at(path) from None
+    return {"pitch": at.spacing, "origin": at.origin, "unit": store.unit()}
+
+
+def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
+                 block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
+                 surfaces: bool = True, threads: int | None = None,
+                 progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
+                 origin: ArrayLike | None = None, unit: str | None = None) -> Report:
+    """The report of a zarr store's volume, read block by block and placed
+    where the store says it is: what ``isoflow info STORE --json`` prints.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A zarr array, a group with an array named ``volume`` or only one
+        array, or an OME-Zarr image (its first level, or
+        ``IMAGE.zarr:LEVEL`` by the level's path or index).
+    connectivity, block_shape, scheduler, surfaces, threads, progress
+        As in :func:`isoflow.analyze_chunked`.
+    pitch, origin, unit : optional
+        The voxel size, the world position of voxel 0's lowest corner and
+        their length unit, in (x, y, z) order; each given replaces the
+        store's own, which :func:`isoflow.read_volume` reads too (an
+        OME-Zarr level's scale, translation and axis unit; the ``pitch``
+        and ``origin`` attributes of a plain array; else unit voxels at 0).
+
+    Returns
+    -------
+    Report
+        As :func:`isoflow.analyze` gives it for the volume that
+        :func:`isoflow.read_volume` reads, ``shape``, ``bbox`` and
+        ``centroid`` in (x, y, z) order (an OME-Zarr image stores z, y, x).
+
+    Raises
+    ------
+    IsoflowError
+        A path that is no zarr store, a placement that is no voxel size or
+        position, or the errors of
+        :func:`isoflow.digital.outofcore.analyze_zarr`, with the path.
+
+    Examples
+    --------
+    A store of 0.5 mm voxels, as :func:`isoflow.write_volume` writes it:
+
+    >>> import tempfile
+    >>> import numpy as np
+    >>> import isoflow
+    >>> obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5, unit="mm")
+    >>> with tempfile.TemporaryDirectory() as d:
+    ...     _ = isoflow.write_volume(obj, d + "/cube.zarr")
+    ...     report = isoflow.analyze_zarr(d + "/cube.zarr")
+    >>> report.volume, report.surface_area, report.unit
+    (1.0, 6.0, 'mm')
+    """
+    from ...digital.outofcore import analyze_zarr as analyze_store_volume
+
+    import_library("zarr", "OME-Zarr")
+    own = store_place(open_store(path), path)
+    given = {"pitch": pitch, "origin": origin, "unit": unit}
+    place = {k: own[k] if v is None else v for k, v in given.items()}
+    return analyze_store_volume(path, connectivity, block_shape=block_shape, scheduler=scheduler, surfaces=surfaces,
+                                threads=threads, progress=progress, **place)
+
+
 def analyze_store(path, connectivity: int | None = None, label=None, progress=None, *,
                   surfaces: bool = True, threads: int | None = None) -> dict:
     """``isoflow info``'s report of a zarr store (``IMAGE.zarr:LEVEL`` too),
@@ -310,16 +388,11 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass). The
     world measures are placed as :func:`read` places the volume."""
-    from ...digital.outofcore import analyze_in_xyz, analyze_zarr
+    from ...digital.outofcore import analyze_in_xyz
 
     import_library("zarr", "OME-Zarr")
     store = open_store(path)
-    pitch, origin = store.placement()
-    try:  # checked up front, named as info names the placement it prints
-        at = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
-    except IsoflowError as exc:
-        raise exc.at(path) from None
-    place = {"pitch": at.spacing, "origin": at.origin, "unit": store.unit()}
+    place = store_place(store, path)
     if label is None:
         return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
     label = check_label(label, store.array.dtype, store.where)
