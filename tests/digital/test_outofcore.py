@@ -22,7 +22,8 @@ from isoflow.cli import main
 da = pytest.importorskip("dask.array")
 zarr = pytest.importorskip("zarr")
 from isoflow.digital import outofcore  # noqa: E402
-from isoflow.digital.outofcore import analyze_chunked, analyze_zarr  # noqa: E402
+from isoflow.digital.outofcore import analyze_chunked  # noqa: E402
+from isoflow.digital.outofcore import analyze_zarr_volume as analyze_zarr  # noqa: E402
 from isoflow.scale import chunks as chunks_mod  # noqa: E402
 
 CHUNKS3 = (7, 5, 9)

@@ -566,11 +566,11 @@ def analyze_in_xyz(array: Any, order: list[int], connectivity: int | None = None
                                centroid=[report.centroid[i] for i in order])
 
 
-def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
-                 block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
-                 surfaces: bool = True, threads: int | None = None,
-                 progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
-                 origin: ArrayLike | None = None, unit: str | None = None) -> Report:
+def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None, *,
+                        block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
+                        surfaces: bool = True, threads: int | None = None,
+                        progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
+                        origin: ArrayLike | None = None, unit: str | None = None) -> Report:
     """:func:`analyze_chunked` on the volume of a zarr store (v2 or v3),
     placed by the ``pitch``, ``origin`` and ``unit`` given alone:
     :func:`isoflow.analyze_zarr` places it where the store says it is.
@@ -623,7 +623,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     >>> with tempfile.TemporaryDirectory() as d:
     ...     z = zarr.create_array(store=d + "/v.zarr", shape=v.shape, chunks=(3, 5, 4), dtype=bool)
     ...     z[...] = v
-    ...     analyze_zarr(d + "/v.zarr")["betti"]
+    ...     analyze_zarr_volume(d + "/v.zarr")["betti"]
     [1, 0, 1]
     """
     z, order = zarr_volume(path)

@@ -352,7 +352,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     IsoflowError
         A path that is no zarr store, a placement that is no voxel size or
         position, or the errors of
-        :func:`isoflow.digital.outofcore.analyze_zarr`, with the path.
+        :func:`isoflow.digital.outofcore.analyze_zarr_volume`, with the path.
 
     Examples
     --------
@@ -368,13 +368,13 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     >>> report.volume, report.surface_area, report.unit
     (1.0, 6.0, 'mm')
     """
-    from ...digital.outofcore import analyze_zarr as analyze_store_volume
+    from ...digital.outofcore import analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
     own = store_place(open_store(path), path)
     given = {"pitch": pitch, "origin": origin, "unit": unit}
     place = {k: own[k] if v is None else v for k, v in given.items()}
-    return analyze_store_volume(path, connectivity, block_shape=block_shape, scheduler=scheduler, surfaces=surfaces,
+    return analyze_zarr_volume(path, connectivity, block_shape=block_shape, scheduler=scheduler, surfaces=surfaces,
                                 threads=threads, progress=progress, **place)
 
 
@@ -388,13 +388,13 @@ def analyze_store(path, connectivity: int | None = None, label=None, progress=No
     A ``label`` that no voxel has is refused, as :func:`isoflow.read_volume`
     refuses it (the values present are then read in a second pass). The
     world measures are placed as :func:`read` places the volume."""
-    from ...digital.outofcore import analyze_in_xyz
+    from ...digital.outofcore import analyze_in_xyz, analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
     store = open_store(path)
     place = store_place(store, path)
     if label is None:
-        return analyze_zarr(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
+        return analyze_zarr_volume(path, connectivity, progress=progress, surfaces=surfaces, threads=threads, **place)
     label = check_label(label, store.array.dtype, store.where)
     # the lazy array drops the other axes: the x, y, z ones, in stored order, are left
     order = [int(i) for i in np.argsort(np.argsort(store.xyz))]
