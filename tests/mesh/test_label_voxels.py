@@ -319,3 +319,37 @@ def test_bad_input_is_one_line_naming_it(tmp_path):
     with pytest.raises(IsoflowError, match="mesh 2: faces must have shape"):
         voxelize_meshes([sphere(1, (0, 0, 0)), (np.zeros((3, 3)), np.zeros((1, 2), int))])
     assert len(mesh_bodies([DATA / "panel.obj"])) == 1
+
+
+def smallest_budget(call, hi: int) -> int:
+    """The smallest ``max_bytes`` that ``call(max_bytes)`` accepts (bisection; refusals come before any work)."""
+    lo = 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        try:
+            call(mid)
+        except IsoflowError:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def test_overlapping_meshes_stay_within_the_budget_they_were_accepted_in():
+    # meshes overlapping over most of their blocks: every shared voxel is
+    # marked in the overlap bits, by tracemalloc's count (numpy reports its
+    # allocations to it) within the smallest budget the grid was let in
+    import tracemalloc
+
+    a = trimesh.creation.box((1, 1, 1))
+    b = a.copy().apply_translation((0.2, 0, 0))
+    budget = smallest_budget(lambda m: voxelize_meshes([a, b], resolution=120, max_bytes=m), 1 << 30)
+    voxelize_meshes([a, b], resolution=24)  # numba's compiled code, loaded once, is no temporary
+    tracemalloc.start()
+    try:
+        r = voxelize_meshes([a, b], resolution=120, max_bytes=budget)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert r.overlap_voxels > 0.6 * r.labels.size
+    assert peak <= budget, (peak, budget)

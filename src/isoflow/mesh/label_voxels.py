@@ -52,6 +52,8 @@ OVERLAPS: tuple[str, ...] = ("later", "error")
 COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolution or --pitch")
 #: pairs named in a note or an error; the rest are counted
 NAMED_PAIRS = 8
+#: :func:`place` writes a mesh's block into the label array about this many voxels at a time
+PLACE_VOXELS = 1 << 21
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -177,16 +179,76 @@ def body_window(body: Body, origin: np.ndarray, pitch: float, shape) -> tuple[tu
     return tuple(int(x) for x in a), tuple(int(x) for x in b)
 
 
+def packed_span(start: int, size: int) -> tuple[int, int]:
+    """The bytes ``[a, b)`` of a bit-packed axis that hold the bits
+    ``[start, start + size)``.
+
+    Examples
+    --------
+    >>> packed_span(5, 4), packed_span(8, 8)
+    ((0, 2), (1, 2))
+    """
+    return start >> 3, -(-(start + size) // 8)
+
+
+def place_rows(ny: int, nbytes: int, voxels: int = PLACE_VOXELS) -> int:
+    """Rows (first axis) of a block :func:`place` takes at a time: about
+    ``voxels`` voxels of its ``ny`` x ``8 * nbytes`` rows of packed
+    overlap bits, at least one row.
+
+    Examples
+    --------
+    >>> place_rows(100, 25, voxels=1_000_000), place_rows(2000, 250, voxels=1_000_000)
+    (50, 1)
+    """
+    return max(1, voxels // max(1, ny * 8 * nbytes))
+
+
+def place_bytes(window, itemsize: int, voxels: int = PLACE_VOXELS) -> int:
+    """Temporaries of :func:`place` for the block ``window`` (``(start,
+    stop)``) of labels of ``itemsize`` bytes, at most: per voxel of the rows
+    it takes at a time, the block's labels compared with 0 and its overlap
+    (a byte each), the overlap on whole bytes of bits (a byte) and packed
+    (an eighth), and the labels it took (``itemsize``, and 8 bytes as
+    ``np.bincount`` casts them to its index type).
+
+    Examples
+    --------
+    >>> place_bytes(((0, 0, 0), (10, 10, 16)), 1)
+    19400
+    """
+    (_, sy, sz), (nx, ey, ez) = window
+    ny = ey - sy
+    za, zb = packed_span(sz, ez - sz)
+    rows = min(place_rows(ny, zb - za, voxels), nx - window[0][0])
+    return math.ceil(rows * ny * 8 * (zb - za) * (11.125 + itemsize))
+
+
 def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label: int, taken: np.ndarray,
-          rows: int = 64) -> int:
+          voxels: int = PLACE_VOXELS) -> int:
     """Write ``label`` where the block ``vol`` (at ``start``) is in, the
     later mesh winning; count into ``taken[i]`` the voxels taken from each
     earlier label i and mark them in ``shared`` (a bit per voxel, packed
-    along the last axis). Returns the block's voxels. Row by row, so that
-    the temporaries stay a few rows of the block."""
+    along the last axis). Returns the block's voxels. A few rows of the
+    block at a time (about ``voxels`` voxels, at least one row), so that
+    the temporaries stay :func:`place_bytes` whatever the overlap: the
+    overlap's bits are packed row by row, never listed by index.
+
+    Examples
+    --------
+    >>> labels, shared, taken = np.zeros((1, 1, 10), np.uint8), np.zeros((1, 1, 2), np.uint8), np.zeros(2, np.int64)
+    >>> labels[0, 0, 3:6] = 1
+    >>> place(labels, shared, np.ones((1, 1, 4), bool), (0, 0, 4), 2, taken), labels[0, 0].tolist(), taken.tolist()
+    (4, [0, 0, 0, 1, 2, 2, 2, 2, 0, 0], [0, 2])
+    >>> np.unpackbits(shared[0, 0])[:10].tolist()
+    [0, 0, 0, 0, 1, 1, 0, 0, 0, 0]
+    """
     sx, sy, sz = start
     nx, ny, nz = vol.shape
     block = labels[sx:sx + nx, sy:sy + ny, sz:sz + nz]
+    za, zb = packed_span(sz, nz)
+    at = sz - 8 * za  # the block's first z in the bytes of ``shared`` it covers
+    rows = place_rows(ny, zb - za, voxels)
     filled = 0
     for a in range(0, nx, rows):
         m, lab = vol[a:a + rows], block[a:a + rows]
@@ -194,9 +256,9 @@ def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label:
         hit = m & (lab != 0)
         if hit.any():
             taken += np.bincount(lab[hit], minlength=len(taken))[:len(taken)]
-            i, j, k = np.nonzero(hit)
-            k = k + sz
-            np.bitwise_or.at(shared, (i + sx + a, j + sy, k >> 3), (128 >> (k & 7)).astype(np.uint8))
+            wide = np.zeros((len(hit), ny, 8 * (zb - za)), dtype=bool)
+            wide[:, :, at:at + nz] = hit
+            shared[sx + a:sx + a + len(hit), sy:sy + ny, za:zb] |= np.packbits(wide, axis=-1)
         lab[m] = label
     return filled
 
@@ -276,7 +338,8 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
     largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
     budget = memory.budget_of(max_bytes)
-    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hints=COARSER)
+    placing = max(place_bytes(w, dtype.itemsize) for w in windows)
+    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest + placing, budget, hints=COARSER)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
     shared = np.zeros((shape[0], shape[1], -(-shape[2] // 8)), np.uint8)
