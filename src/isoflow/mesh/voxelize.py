@@ -192,7 +192,12 @@ class Solid:
         if fill != "winding":  # a shell takes the faces as they are, in any orientation
             self.refuse_defects()
             return
-        if self.defects["boundary_edges"] or self.defects["inconsistent_edges"]:
+        # several components may be one surface drawn twice: a model written
+        # double-sided with its own corners for the back faces (as exporters
+        # write them for their normals) is two closed shells whose windings
+        # cancel, and is seen as pairs only once equal corners share an index
+        d = self.defects
+        if d["boundary_edges"] or d["inconsistent_edges"] or d["components"] > 1:
             faces = merge_coincident(v, f)
             edges = census(faces, len(v))
             self.census = defect_counts(*edges[2:])
