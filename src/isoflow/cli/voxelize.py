@@ -47,7 +47,7 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
     from ..mesh.grid import GridTooLarge
-    from ..mesh.volumes import check_volume_output, write_volume
+    from ..mesh.volumes import check_volume_output, write_bytes_per_voxel, write_volume
 
     if len(args.mesh) > 1 or args.split:
         return voxelize_labels(args)
@@ -62,7 +62,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
     try:
-        obj = voxelize_input(args.mesh, args)
+        obj = voxelize_input(args.mesh, args, write_bytes_per_voxel(args.output))
     except GridTooLarge as exc:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
