@@ -301,12 +301,20 @@ def test_too_big_is_refused_before_any_mesh_is_voxelised(monkeypatch):
     monkeypatch.setattr(label_voxels, "voxelize", boom)
     a, b = sphere(1.0, (0, 0, 0)), sphere(1.0, (5, 0, 0))
     voxels = 200 * 58 * 58
+    budget = int(voxels * 1.125) + 50**3
     # the label array and a bit per voxel fit, not with one sphere's block (about 61^3 bytes) as well
-    with pytest.raises(IsoflowError, match="needs a 200x58x58 grid .*coarser resolution= or pitch=") as e:
-        voxelize_meshes([a, b], resolution=200, max_bytes=int(voxels * 1.125) + 50**3)
+    with pytest.raises(IsoflowError, match=r"needs a 200x58x58 grid .*; at most resolution=\d+ fits$") as e:
+        voxelize_meshes([a, b], resolution=200, max_bytes=budget)
     # the command line names its options, not the parameters
     said = e.value.command_line
-    assert "--resolution 200 needs" in said and "coarser --resolution or --pitch" in said and "max_bytes" not in said
+    assert "--resolution 200 needs" in said and "at most --resolution" in said and "max_bytes" not in said
+    # the grid named is let in by the same budget, and is the finest: the next one is not
+    monkeypatch.undo()
+    fit = e.value.fit
+    assert 100 < fit < 200
+    assert voxelize_meshes([a, b], resolution=fit, max_bytes=budget).labels.shape[0] == fit
+    with pytest.raises(IsoflowError, match=f"resolution={fit + 1} needs"):
+        voxelize_meshes([a, b], resolution=fit + 1, max_bytes=budget)
 
 
 def test_bad_input_is_one_line_naming_it(tmp_path):

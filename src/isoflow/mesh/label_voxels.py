@@ -41,15 +41,13 @@ from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill, check_strict
-from .grid import check_grid_memory, check_placement, voxel_grid
+from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import mesh_bbox
-from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
+from .voxelize import PROGRESS_UNITS, check_write_bytes, tell_rule, voxelize
 
 #: how the voxels inside two or more meshes are labelled
 Overlap = Literal["later", "error"]
 OVERLAPS: tuple[str, ...] = ("later", "error")
-#: what to do when the label array does not fit, in the Python API's words and the command line's
-COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolution or --pitch")
 #: pairs named in a note or an error; the rest are counted
 NAMED_PAIRS = 8
 #: :func:`place` writes a mesh's block into the label array about this many voxels at a time
@@ -154,12 +152,18 @@ def label_dtype(count: int) -> np.dtype:
     return np.dtype(np.min_scalar_type(max(1, int(count))))
 
 
+def union_corners(bodies: list[Body]) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of the bodies' bounding boxes, two a body, as a mesh
+    whose faces use every corner: :func:`voxel_grid` lays on it the grid of
+    their union (it depends on the box alone)."""
+    corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
+    return corners, np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)
+
+
 def union_grid(bodies: list[Body], pitch, resolution):
     """``(pitch, origin, shape, what)`` of the grid :func:`voxel_grid` lays
-    over the union of the bodies' bounding boxes (their corners stand for
-    them: the grid depends on the box alone)."""
-    corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
-    used = np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)  # faces that use every corner
+    over the union of the bodies' bounding boxes (:func:`union_corners`)."""
+    corners, used = union_corners(bodies)
     pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
     check_placement(corners.min(axis=0), corners.max(axis=0), pitch, what)
     return pitch, origin, shape, what
@@ -263,10 +267,47 @@ def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label:
     return filled
 
 
+def label_extra(shape, windows, itemsize: int, write_bytes: float = 0) -> int:
+    """Bytes beyond the label array and its overlap bits that voxelising
+    into the label image of ``shape`` holds at most: the largest mesh's
+    block (a byte a voxel) with :func:`place`'s temporaries, or, once the
+    blocks are gone, ``write_bytes`` per byte of the labels (a writer's).
+
+    Examples
+    --------
+    >>> label_extra((10, 10, 16), [((0, 0, 0), (10, 10, 16))], 1), label_extra((10, 10, 16), [], 1, write_bytes=2)
+    (21000, 3200)
+    """
+    largest = max((math.prod(b - a for a, b in zip(*w)) + place_bytes(w, itemsize) for w in windows), default=0)
+    return max(largest, grid_need(shape, write_bytes * itemsize))
+
+
+def refuse_labels(bodies: list[Body], shape, what: str, itemsize: int, write_bytes: float, budget: int,
+                  extra: int) -> GridTooLarge:
+    """The refusal of a label image of ``shape`` (grid ``what``, needing
+    ``extra`` bytes beyond its labels and bits) beyond ``budget``, naming
+    the finest grid over the same bodies that fits
+    (:func:`~isoflow.mesh.grid.finest_fit`, with each body's block in each
+    grid it tries)."""
+    corners, used = union_corners(bodies)
+    per_voxel = itemsize + 0.125
+
+    def fits(grid, frame) -> bool:
+        shift, e, origin_s, pitch_s = frame  # the grid's origin and pitch, as voxel_grid gives them
+        origin, pitch = np.ldexp(origin_s, e) + shift, math.ldexp(pitch_s, e)
+        windows = [body_window(b, origin, pitch, grid) for b in bodies]
+        return grid_fits(grid, per_voxel, label_extra(grid, windows, itemsize, write_bytes), budget)
+
+    need = grid_need(shape, per_voxel, extra)
+    return GridTooLarge(what, grid_words(shape, need), budget, shape=tuple(shape),
+                        fit=finest_fit(corners, used, what, shape, fits), sought=True,
+                        beyond="" if need > budget else "more than one array can index")
+
+
 def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
                     fill: Fill = "winding",
                     overlap: Overlap = "later", split: bool = False, strict: bool = False,
-                    max_bytes: int | None = None,
+                    max_bytes: int | None = None, write_bytes: float = 0,
                     progress: Callable[[int, int], object] | None = None) -> LabelVoxelization:
     """Several meshes voxelised into one label image on one grid.
 
@@ -293,7 +334,13 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     max_bytes
         Memory budget (default: :func:`isoflow.scale.memory.default_budget`):
         the label array, a bit per voxel and the largest mesh's block are
-        refused up front when they exceed it.
+        refused up front when they exceed it, naming the finest grid that
+        fits (``GridTooLarge.fit``).
+    write_bytes
+        Bytes per byte of the label array that the caller needs beside it
+        once it is made (a file writer's copies,
+        :func:`~isoflow.mesh.volumes.write_bytes_per_voxel`), counted in
+        the same check.
     progress
         Optional ``callable(done, total)`` as the meshes are voxelised; one
         with a ``rule`` method too
@@ -336,10 +383,11 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     pitch, origin, shape, what = union_grid(bodies, pitch, resolution)
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
-    largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
     budget = memory.budget_of(max_bytes)
-    placing = max(place_bytes(w, dtype.itemsize) for w in windows)
-    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest + placing, budget, hints=COARSER)
+    write_bytes = check_write_bytes(write_bytes)
+    extra = label_extra(shape, windows, dtype.itemsize, write_bytes)
+    if not grid_fits(shape, dtype.itemsize + 0.125, extra, budget):
+        raise refuse_labels(bodies, shape, what, dtype.itemsize, write_bytes, budget, extra)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
     shared = np.zeros((shape[0], shape[1], -(-shape[2] // 8)), np.uint8)
