@@ -326,6 +326,25 @@ def test_double_sided_soup_copies_the_solid():
     assert r.double_sided_faces == 12
 
 
+def test_double_sided_shells_with_their_own_corners_give_the_drawn_solid():
+    """Every face also written reversed on its own copy of the corners (as
+    an exporter writes a double-sided model for its back faces' normals):
+    two closed shells, no boundary edge. The solid drawn, by libigl's
+    winding number of the single-sided mesh at the voxel centres, as when
+    the back faces share the front's corners."""
+    igl = pytest.importorskip("igl")
+    torus = trimesh.creation.torus(1.0, 0.35)
+    n = len(torus.vertices)
+    v = np.concatenate([torus.vertices, torus.vertices])
+    f = np.concatenate([torus.faces, torus.faces[:, ::-1] + n])
+    r = voxelize(v, f, resolution=40, details=True)
+    idx = np.indices(r.volume.shape).reshape(3, -1).T
+    w = igl.winding_number(torus.vertices, torus.faces.astype(np.int64), r.origin + r.pitch * (idx + 0.5))
+    assert np.abs(np.abs(w) - 0.5).min() > 0.02  # no centre on the surface
+    assert np.array_equal(r.volume.reshape(-1), np.abs(w) > 0.5)
+    assert r.double_sided_faces == len(torus.faces) and "double-sided" in r.note
+
+
 def test_walls_between_solids_cancel():
     """Boxes stacked face to face with their shared faces coincident (a
     voxel-art export) give their union, not membranes read as faces."""

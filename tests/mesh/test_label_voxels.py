@@ -301,12 +301,20 @@ def test_too_big_is_refused_before_any_mesh_is_voxelised(monkeypatch):
     monkeypatch.setattr(label_voxels, "voxelize", boom)
     a, b = sphere(1.0, (0, 0, 0)), sphere(1.0, (5, 0, 0))
     voxels = 200 * 58 * 58
+    budget = int(voxels * 1.125) + 50**3
     # the label array and a bit per voxel fit, not with one sphere's block (about 61^3 bytes) as well
-    with pytest.raises(IsoflowError, match="needs a 200x58x58 grid .*coarser resolution= or pitch=") as e:
-        voxelize_meshes([a, b], resolution=200, max_bytes=int(voxels * 1.125) + 50**3)
+    with pytest.raises(IsoflowError, match=r"needs a 200x58x58 grid .*; at most resolution=\d+ fits$") as e:
+        voxelize_meshes([a, b], resolution=200, max_bytes=budget)
     # the command line names its options, not the parameters
     said = e.value.command_line
-    assert "--resolution 200 needs" in said and "coarser --resolution or --pitch" in said and "max_bytes" not in said
+    assert "--resolution 200 needs" in said and "at most --resolution" in said and "max_bytes" not in said
+    # the grid named is let in by the same budget, and is the finest: the next one is not
+    monkeypatch.undo()
+    fit = e.value.fit
+    assert 100 < fit < 200
+    assert voxelize_meshes([a, b], resolution=fit, max_bytes=budget).labels.shape[0] == fit
+    with pytest.raises(IsoflowError, match=f"resolution={fit + 1} needs"):
+        voxelize_meshes([a, b], resolution=fit + 1, max_bytes=budget)
 
 
 def test_bad_input_is_one_line_naming_it(tmp_path):
@@ -319,3 +327,37 @@ def test_bad_input_is_one_line_naming_it(tmp_path):
     with pytest.raises(IsoflowError, match="mesh 2: faces must have shape"):
         voxelize_meshes([sphere(1, (0, 0, 0)), (np.zeros((3, 3)), np.zeros((1, 2), int))])
     assert len(mesh_bodies([DATA / "panel.obj"])) == 1
+
+
+def smallest_budget(call, hi: int) -> int:
+    """The smallest ``max_bytes`` that ``call(max_bytes)`` accepts (bisection; refusals come before any work)."""
+    lo = 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        try:
+            call(mid)
+        except IsoflowError:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def test_overlapping_meshes_stay_within_the_budget_they_were_accepted_in():
+    # meshes overlapping over most of their blocks: every shared voxel is
+    # marked in the overlap bits, by tracemalloc's count (numpy reports its
+    # allocations to it) within the smallest budget the grid was let in
+    import tracemalloc
+
+    a = trimesh.creation.box((1, 1, 1))
+    b = a.copy().apply_translation((0.2, 0, 0))
+    budget = smallest_budget(lambda m: voxelize_meshes([a, b], resolution=120, max_bytes=m), 1 << 30)
+    voxelize_meshes([a, b], resolution=24)  # numba's compiled code, loaded once, is no temporary
+    tracemalloc.start()
+    try:
+        r = voxelize_meshes([a, b], resolution=120, max_bytes=budget)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert r.overlap_voxels > 0.6 * r.labels.size
+    assert peak <= budget, (peak, budget)

@@ -184,13 +184,15 @@ def say_note(args: argparse.Namespace, path: object, note: str | None) -> None:
         print(f"isoflow {args.command}: note: {path}: {note}", file=sys.stderr)
 
 
-def voxelize_input(path: str | Path, args: argparse.Namespace):
-    """A mesh file voxelised by the one mesh reader of every command."""
+def voxelize_input(path: str | Path, args: argparse.Namespace, write_bytes: float = 0):
+    """A mesh file voxelised by the one mesh reader of every command;
+    ``write_bytes`` per voxel are needed beside the volume once it is made
+    (the writer of ``voxelize -o``), counted in its memory check."""
     from ..mesh.voxelize import voxelize_file
 
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         obj, details = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
-                                     strict=args.strict, progress=show, details=True)
+                                     strict=args.strict, write_bytes=write_bytes, progress=show, details=True)
     say_note(args, path, details.note)
     return obj
 

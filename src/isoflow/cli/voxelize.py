@@ -47,7 +47,7 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
 
 def cmd_voxelize(args: argparse.Namespace) -> int:
     from ..mesh.grid import GridTooLarge
-    from ..mesh.volumes import check_volume_output, write_volume
+    from ..mesh.volumes import check_volume_output, write_bytes_per_voxel, write_volume
 
     if len(args.mesh) > 1 or args.split:
         return voxelize_labels(args)
@@ -62,7 +62,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
     try:
-        obj = voxelize_input(args.mesh, args)
+        obj = voxelize_input(args.mesh, args, write_bytes_per_voxel(args.output))
     except GridTooLarge as exc:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
@@ -95,14 +95,15 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     """Several meshes (or one split into bodies) into one label image."""
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
-    from ..mesh.volumes import check_label_output, check_volume_output, write_labels
+    from ..mesh.volumes import check_label_output, check_volume_output, write_bytes_per_voxel, write_labels
 
     check_volume_output(args.output, args.force)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
     check_label_output(args.output, len(bodies), args.force)  # and the format's labels, before the voxels
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
-                            overlap=args.overlap, strict=args.strict, progress=show)
+                            overlap=args.overlap, strict=args.strict, write_bytes=write_bytes_per_voxel(args.output),
+                            progress=show)
     assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)

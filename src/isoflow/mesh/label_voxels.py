@@ -41,17 +41,17 @@ from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
 from .fills import Fill, check_fill, check_strict
-from .grid import check_grid_memory, check_placement, voxel_grid
+from .grid import GridTooLarge, check_placement, finest_fit, grid_fits, grid_need, grid_words, voxel_grid
 from .load import mesh_bbox
-from .voxelize import PROGRESS_UNITS, tell_rule, voxelize
+from .voxelize import PROGRESS_UNITS, check_write_bytes, tell_rule, voxelize
 
 #: how the voxels inside two or more meshes are labelled
 Overlap = Literal["later", "error"]
 OVERLAPS: tuple[str, ...] = ("later", "error")
-#: what to do when the label array does not fit, in the Python API's words and the command line's
-COARSER = ("choose a coarser resolution= or pitch=", "choose a coarser --resolution or --pitch")
 #: pairs named in a note or an error; the rest are counted
 NAMED_PAIRS = 8
+#: :func:`place` writes a mesh's block into the label array about this many voxels at a time
+PLACE_VOXELS = 1 << 21
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -152,12 +152,18 @@ def label_dtype(count: int) -> np.dtype:
     return np.dtype(np.min_scalar_type(max(1, int(count))))
 
 
+def union_corners(bodies: list[Body]) -> tuple[np.ndarray, np.ndarray]:
+    """The corners of the bodies' bounding boxes, two a body, as a mesh
+    whose faces use every corner: :func:`voxel_grid` lays on it the grid of
+    their union (it depends on the box alone)."""
+    corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
+    return corners, np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)
+
+
 def union_grid(bodies: list[Body], pitch, resolution):
     """``(pitch, origin, shape, what)`` of the grid :func:`voxel_grid` lays
-    over the union of the bodies' bounding boxes (their corners stand for
-    them: the grid depends on the box alone)."""
-    corners = np.vstack([mesh_bbox(b.vertices, b.faces, b.name)[:2] for b in bodies])
-    used = np.repeat(np.arange(len(corners)), 3).reshape(-1, 3)  # faces that use every corner
+    over the union of the bodies' bounding boxes (:func:`union_corners`)."""
+    corners, used = union_corners(bodies)
     pitch, origin, shape, what, _ = voxel_grid(corners, used, pitch, resolution)
     check_placement(corners.min(axis=0), corners.max(axis=0), pitch, what)
     return pitch, origin, shape, what
@@ -177,16 +183,76 @@ def body_window(body: Body, origin: np.ndarray, pitch: float, shape) -> tuple[tu
     return tuple(int(x) for x in a), tuple(int(x) for x in b)
 
 
+def packed_span(start: int, size: int) -> tuple[int, int]:
+    """The bytes ``[a, b)`` of a bit-packed axis that hold the bits
+    ``[start, start + size)``.
+
+    Examples
+    --------
+    >>> packed_span(5, 4), packed_span(8, 8)
+    ((0, 2), (1, 2))
+    """
+    return start >> 3, -(-(start + size) // 8)
+
+
+def place_rows(ny: int, nbytes: int, voxels: int = PLACE_VOXELS) -> int:
+    """Rows (first axis) of a block :func:`place` takes at a time: about
+    ``voxels`` voxels of its ``ny`` x ``8 * nbytes`` rows of packed
+    overlap bits, at least one row.
+
+    Examples
+    --------
+    >>> place_rows(100, 25, voxels=1_000_000), place_rows(2000, 250, voxels=1_000_000)
+    (50, 1)
+    """
+    return max(1, voxels // max(1, ny * 8 * nbytes))
+
+
+def place_bytes(window, itemsize: int, voxels: int = PLACE_VOXELS) -> int:
+    """Temporaries of :func:`place` for the block ``window`` (``(start,
+    stop)``) of labels of ``itemsize`` bytes, at most: per voxel of the rows
+    it takes at a time, the block's labels compared with 0 and its overlap
+    (a byte each), the overlap on whole bytes of bits (a byte) and packed
+    (an eighth), and the labels it took (``itemsize``, and 8 bytes as
+    ``np.bincount`` casts them to its index type).
+
+    Examples
+    --------
+    >>> place_bytes(((0, 0, 0), (10, 10, 16)), 1)
+    19400
+    """
+    (_, sy, sz), (nx, ey, ez) = window
+    ny = ey - sy
+    za, zb = packed_span(sz, ez - sz)
+    rows = min(place_rows(ny, zb - za, voxels), nx - window[0][0])
+    return math.ceil(rows * ny * 8 * (zb - za) * (11.125 + itemsize))
+
+
 def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label: int, taken: np.ndarray,
-          rows: int = 64) -> int:
+          voxels: int = PLACE_VOXELS) -> int:
     """Write ``label`` where the block ``vol`` (at ``start``) is in, the
     later mesh winning; count into ``taken[i]`` the voxels taken from each
     earlier label i and mark them in ``shared`` (a bit per voxel, packed
-    along the last axis). Returns the block's voxels. Row by row, so that
-    the temporaries stay a few rows of the block."""
+    along the last axis). Returns the block's voxels. A few rows of the
+    block at a time (about ``voxels`` voxels, at least one row), so that
+    the temporaries stay :func:`place_bytes` whatever the overlap: the
+    overlap's bits are packed row by row, never listed by index.
+
+    Examples
+    --------
+    >>> labels, shared, taken = np.zeros((1, 1, 10), np.uint8), np.zeros((1, 1, 2), np.uint8), np.zeros(2, np.int64)
+    >>> labels[0, 0, 3:6] = 1
+    >>> place(labels, shared, np.ones((1, 1, 4), bool), (0, 0, 4), 2, taken), labels[0, 0].tolist(), taken.tolist()
+    (4, [0, 0, 0, 1, 2, 2, 2, 2, 0, 0], [0, 2])
+    >>> np.unpackbits(shared[0, 0])[:10].tolist()
+    [0, 0, 0, 0, 1, 1, 0, 0, 0, 0]
+    """
     sx, sy, sz = start
     nx, ny, nz = vol.shape
     block = labels[sx:sx + nx, sy:sy + ny, sz:sz + nz]
+    za, zb = packed_span(sz, nz)
+    at = sz - 8 * za  # the block's first z in the bytes of ``shared`` it covers
+    rows = place_rows(ny, zb - za, voxels)
     filled = 0
     for a in range(0, nx, rows):
         m, lab = vol[a:a + rows], block[a:a + rows]
@@ -194,17 +260,54 @@ def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label:
         hit = m & (lab != 0)
         if hit.any():
             taken += np.bincount(lab[hit], minlength=len(taken))[:len(taken)]
-            i, j, k = np.nonzero(hit)
-            k = k + sz
-            np.bitwise_or.at(shared, (i + sx + a, j + sy, k >> 3), (128 >> (k & 7)).astype(np.uint8))
+            wide = np.zeros((len(hit), ny, 8 * (zb - za)), dtype=bool)
+            wide[:, :, at:at + nz] = hit
+            shared[sx + a:sx + a + len(hit), sy:sy + ny, za:zb] |= np.packbits(wide, axis=-1)
         lab[m] = label
     return filled
+
+
+def label_extra(shape, windows, itemsize: int, write_bytes: float = 0) -> int:
+    """Bytes beyond the label array and its overlap bits that voxelising
+    into the label image of ``shape`` holds at most: the largest mesh's
+    block (a byte a voxel) with :func:`place`'s temporaries, or, once the
+    blocks are gone, ``write_bytes`` per byte of the labels (a writer's).
+
+    Examples
+    --------
+    >>> label_extra((10, 10, 16), [((0, 0, 0), (10, 10, 16))], 1), label_extra((10, 10, 16), [], 1, write_bytes=2)
+    (21000, 3200)
+    """
+    largest = max((math.prod(b - a for a, b in zip(*w)) + place_bytes(w, itemsize) for w in windows), default=0)
+    return max(largest, grid_need(shape, write_bytes * itemsize))
+
+
+def refuse_labels(bodies: list[Body], shape, what: str, itemsize: int, write_bytes: float, budget: int,
+                  extra: int) -> GridTooLarge:
+    """The refusal of a label image of ``shape`` (grid ``what``, needing
+    ``extra`` bytes beyond its labels and bits) beyond ``budget``, naming
+    the finest grid over the same bodies that fits
+    (:func:`~isoflow.mesh.grid.finest_fit`, with each body's block in each
+    grid it tries)."""
+    corners, used = union_corners(bodies)
+    per_voxel = itemsize + 0.125
+
+    def fits(grid, frame) -> bool:
+        shift, e, origin_s, pitch_s = frame  # the grid's origin and pitch, as voxel_grid gives them
+        origin, pitch = np.ldexp(origin_s, e) + shift, math.ldexp(pitch_s, e)
+        windows = [body_window(b, origin, pitch, grid) for b in bodies]
+        return grid_fits(grid, per_voxel, label_extra(grid, windows, itemsize, write_bytes), budget)
+
+    need = grid_need(shape, per_voxel, extra)
+    return GridTooLarge(what, grid_words(shape, need), budget, shape=tuple(shape),
+                        fit=finest_fit(corners, used, what, shape, fits), sought=True,
+                        beyond="" if need > budget else "more than one array can index")
 
 
 def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
                     fill: Fill = "winding",
                     overlap: Overlap = "later", split: bool = False, strict: bool = False,
-                    max_bytes: int | None = None,
+                    max_bytes: int | None = None, write_bytes: float = 0,
                     progress: Callable[[int, int], object] | None = None) -> LabelVoxelization:
     """Several meshes voxelised into one label image on one grid.
 
@@ -231,7 +334,13 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     max_bytes
         Memory budget (default: :func:`isoflow.scale.memory.default_budget`):
         the label array, a bit per voxel and the largest mesh's block are
-        refused up front when they exceed it.
+        refused up front when they exceed it, naming the finest grid that
+        fits (``GridTooLarge.fit``).
+    write_bytes
+        Bytes per byte of the label array that the caller needs beside it
+        once it is made (a file writer's copies,
+        :func:`~isoflow.mesh.volumes.write_bytes_per_voxel`), counted in
+        the same check.
     progress
         Optional ``callable(done, total)`` as the meshes are voxelised; one
         with a ``rule`` method too
@@ -274,9 +383,11 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
     pitch, origin, shape, what = union_grid(bodies, pitch, resolution)
     dtype = label_dtype(len(bodies))
     windows = [body_window(b, origin, pitch, shape) for b in bodies]
-    largest = max(math.prod(b - a for a, b in zip(*w)) for w in windows)
     budget = memory.budget_of(max_bytes)
-    check_grid_memory(shape, what, dtype.itemsize + 0.125, largest, budget, hints=COARSER)
+    write_bytes = check_write_bytes(write_bytes)
+    extra = label_extra(shape, windows, dtype.itemsize, write_bytes)
+    if not grid_fits(shape, dtype.itemsize + 0.125, extra, budget):
+        raise refuse_labels(bodies, shape, what, dtype.itemsize, write_bytes, budget, extra)
     fixed = math.prod(shape) * dtype.itemsize + shape[0] * shape[1] * (-(-shape[2] // 8))
     labels = np.zeros(shape, dtype)
     shared = np.zeros((shape[0], shape[1], -(-shape[2] // 8)), np.uint8)

@@ -681,6 +681,22 @@ def no_cube_reason(ndim: int, option: str) -> str:
 
 
 
+def write_bytes_per_voxel(path: str | os.PathLike) -> float:
+    """Bytes per voxel that writing a mask to ``path`` holds beside it, at
+    most, by the format its suffix names: what
+    :func:`~isoflow.mesh.voxelize.voxelize` takes as ``write_bytes``, so
+    that a grid let in can also be written (0 for a suffix isoflow does
+    not write, which :func:`check_volume_output` refuses).
+
+    Examples
+    --------
+    >>> write_bytes_per_voxel("seg.nii.gz"), write_bytes_per_voxel("stack.tif") > 1
+    (0.0, True)
+    """
+    fmt = format_for(split_dataset(path)[0], writing=True)
+    return 0.0 if fmt is None else float(fmt.write_bytes)
+
+
 def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[Path, str | None]:
     """The file (and dataset) a volume will be written to, checked before
     any work: a suffix isoflow writes, its library installed, the path free

@@ -192,7 +192,12 @@ class Solid:
         if fill != "winding":  # a shell takes the faces as they are, in any orientation
             self.refuse_defects()
             return
-        if self.defects["boundary_edges"] or self.defects["inconsistent_edges"]:
+        # several components may be one surface drawn twice: a model written
+        # double-sided with its own corners for the back faces (as exporters
+        # write them for their normals) is two closed shells whose windings
+        # cancel, and is seen as pairs only once equal corners share an index
+        d = self.defects
+        if d["boundary_edges"] or d["inconsistent_edges"] or d["components"] > 1:
             faces = merge_coincident(v, f)
             edges = census(faces, len(v))
             self.census = defect_counts(*edges[2:])
@@ -520,20 +525,20 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
 @overload
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
-             progress: Callable[[int, int], object] | None = None,
+             write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[False] = False) -> tuple[np.ndarray, np.ndarray, float]: ...
 
 
 @overload
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
-             progress: Callable[[int, int], object] | None = None,
+             write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[True]) -> Voxelization: ...
 
 
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
-             progress: Callable[[int, int], object] | None = None,
+             write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: bool = False) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
     """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
 
@@ -582,6 +587,13 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         that fits (the largest ``resolution=``, or the smallest ``pitch=``
         of three significant digits) and, where one would hold the grid,
         a zarr store (:func:`~isoflow.mesh.slabs.voxelize_to_zarr`).
+    write_bytes
+        Bytes per voxel that the caller needs beside the volume once it is
+        made (0 by default), counted against ``max_bytes`` with the
+        volume, up front and for the finest grid a refusal names: the
+        copies a file's writer makes
+        (:func:`~isoflow.mesh.volumes.write_bytes_per_voxel`), so that a
+        volume let in is also written.
     progress
         Optional ``callable(done, total)``, called as the work advances
         (``PROGRESS_UNITS`` per slab); one with a ``rule`` method too
@@ -635,6 +647,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     start, shape = grid_block(shape, window)
     origin = origin + pitch * np.asarray(start, dtype=np.float64)
     budget = memory.budget_of(max_bytes)
+    write_bytes = check_write_bytes(write_bytes)
     solid: Solid | None = None
 
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
@@ -648,7 +661,8 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         # finest one that fits (grid= and window= leave no other to name)
         whole = grid is None and window is None
         store = whole and store_holds(made(), frame, shape, budget)
-        fit = finest_fit(v, f, what, shape, lambda s, fr: in_memory(made(), fr, s, budget)[0]) if whole else None
+        fit = finest_fit(v, f, what, shape,
+                         lambda s, fr: in_memory(made(), fr, s, budget, write_bytes=write_bytes)[0]) if whole else None
         need = grid_need(shape, 1, extra)
         return GridTooLarge(what, grid_words(shape, need), budget, shape=shape, fit=fit, sought=whole, store=store,
                             beyond="" if need > budget else "more than one array can index",
@@ -657,7 +671,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     # the volume itself, before anything O(grid): one byte per voxel
     if not grid_fits(shape, 1, 0, budget):
         raise refuse(0)
-    fits, plan, temp = in_memory(made(), frame, shape, budget, start)
+    fits, plan, temp = in_memory(made(), frame, shape, budget, start, write_bytes)
     if not fits:
         raise refuse(temp)
     assert plan is not None
@@ -683,17 +697,39 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     return vol, origin, pitch
 
 
-def in_memory(solid: Solid, frame, shape, budget: int, start=(0, 0, 0)) -> tuple[bool, VoxelPlan | None, int]:
+def in_memory(solid: Solid, frame, shape, budget: int, start=(0, 0, 0),
+              write_bytes: float = 0) -> tuple[bool, VoxelPlan | None, int]:
     """Whether voxelising the grid of ``shape`` (in the scaled ``frame`` of
     :func:`~isoflow.mesh.grid.voxel_grid`, or its block at ``start``) fits
-    in ``budget`` bytes: its volume, a byte per voxel, and the temporaries
-    of its largest slab. Returns ``(fits, plan, temporaries)``; no plan
-    where the volume alone does not fit (nothing O(grid) is made then)."""
+    in ``budget`` bytes: its volume, a byte per voxel, and the larger of
+    the temporaries of its largest slab and the ``write_bytes`` per voxel
+    that the caller needs once the volume is made (the slabs' are freed by
+    then). Returns ``(fits, plan, temporaries)``; no plan where the volume
+    alone does not fit (nothing O(grid) is made then)."""
     if not grid_fits(shape, 1, 0, budget):
         return False, None, 0
     plan = solid.prepare(frame, frame[2], frame[3], shape, start)
-    temp = plan.slab_bytes(max(b - a for a, b in plan.slabs()))
+    temp = max(plan.slab_bytes(max(b - a for a, b in plan.slabs())), grid_need(shape, write_bytes))
     return grid_fits(shape, 1, temp, budget), plan, temp
+
+
+def check_write_bytes(write_bytes: object) -> float:
+    """``write_bytes`` as given, a finite number from 0 on; anything else
+    is refused naming it.
+
+    Examples
+    --------
+    >>> check_write_bytes(2)
+    2.0
+    >>> check_write_bytes(-1)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: voxelize: write_bytes must be a number of bytes per voxel from 0 on, got -1
+    """
+    ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
+    if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
+        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {write_bytes!r}")
+    return float(write_bytes)  # type: ignore[arg-type]
 
 
 def store_holds(solid: Solid, frame, shape, budget: int) -> bool:
@@ -746,18 +782,18 @@ def say_note(note: str | None) -> None:
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
+                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
+                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False,
+                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:
     """A triangle mesh as a digital object: its solid, shell or flood fill.
@@ -770,7 +806,7 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
         pair) in place of ``vertices``, taken as its arrays are.
     pitch, resolution
         At most one; neither: ``resolution=DEFAULT_RESOLUTION``.
-    fill, strict, progress
+    fill, strict, write_bytes, progress
         As :func:`voxelize`.
     details
         Also return the :class:`~isoflow.mesh.fills.Voxelization`; without
@@ -807,7 +843,7 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     if pitch is None and resolution is None:
         resolution = DEFAULT_RESOLUTION
     result = voxelize(vertices, faces, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                      progress=progress, details=True)
+                      write_bytes=write_bytes, progress=progress, details=True)
     assert result.volume is not None  # voxelize keeps the voxels in memory unless given a store
     obj = DigitalObject(result.volume, pitch=result.pitch, origin=result.origin)
     if details:
@@ -818,18 +854,18 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
 
 @overload
 def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
-                  fill: Fill = "winding", strict: bool = False,
+                  fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
 def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
-                  fill: Fill = "winding", strict: bool = False,
+                  fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
 def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
-                  fill: Fill = "winding", strict: bool = False,
+                  fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:
     """Read a mesh file (any format trimesh reads) and voxelise it.
@@ -837,7 +873,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     Parameters
     ----------
     path : str or Path
-    pitch, resolution, fill, strict, progress, details
+    pitch, resolution, fill, strict, write_bytes, progress, details
         As :func:`voxelize_mesh`.
 
     Returns
@@ -864,7 +900,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     v, f = load_mesh(path)
     try:
         obj, result = voxelize_mesh(v, f, pitch=pitch, resolution=resolution, fill=fill, strict=strict,
-                                    progress=progress, details=True)
+                                    write_bytes=write_bytes, progress=progress, details=True)
     except IsoflowError as exc:
         raise exc.at(path) from None  # a refused grid keeps its kind and its command-line words
     if details:

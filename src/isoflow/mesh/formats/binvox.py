@@ -85,33 +85,85 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     unit_not_kept(path, "binvox", unit)
 
 
+#: the cube is run-length coded about this many voxels at a time
+SLAB_VOXELS = 1 << 20
+
+
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None) -> None:
     spacing, corner = placement(obj)
     side = max(obj.volume.shape)
     # scale is the cube's side in world units; the reader divides it by the side, or by 1 for an empty cube (0
     # voxels a side), whose scale must still be the voxel size: a scale of 0 is refused as damaged on reading
-    cube = np.zeros((side,) * 3, np.uint8)
-    cube[tuple(slice(0, s) for s in obj.volume.shape)] = obj.volume
     header = (f"#binvox 1\ndim {side} {side} {side}\n"
               f"translate {' '.join(repr(float(c)) for c in corner)}\n"
               f"scale {float(spacing[0]) * max(side, 1)!r}\ndata\n")
     with open(path, "wb") as fh:
         fh.write(header.encode("ascii"))
-        fh.write(run_lengths(cube.transpose(0, 2, 1).ravel()).tobytes())
+        for values, lengths in cube_runs(obj.volume, side):
+            fh.write(run_bytes(values, lengths).tobytes())
 
 
-def run_lengths(flat: np.ndarray) -> np.ndarray:
-    """binvox's (value, count) byte pairs of a flat uint8 array, runs longer
-    than 255 split."""
-    if flat.size == 0:
-        return np.zeros(0, np.uint8)
+def cube_runs(vol: np.ndarray, side: int, voxels: int = SLAB_VOXELS):
+    """The maximal runs ``(values, lengths)`` of ``vol`` padded with zeros to
+    a cube of ``side``, in binvox's order, a slab of about ``voxels`` voxels
+    at a time: neither the cube nor its runs are ever held whole (a flat
+    plate's cube is many times its grid; a thin shell has a run every few
+    voxels). The run still open at the end of a slab is carried into the
+    next, so the runs are those of the whole cube.
+
+    Examples
+    --------
+    >>> vol = np.zeros((2, 1, 1), bool); vol[1] = True
+    >>> [(v.tolist(), n.tolist()) for v, n in cube_runs(vol, 2, voxels=1)]
+    [([0], [4]), ([1], [1]), ([0], [3])]
+    """
+    nx, ny, nz = vol.shape
+    rows = max(1, voxels // max(1, side * side))
+    carry: tuple[int, int] | None = None  # the run open at the end of the slabs so far
+    for a in range(0, nx, rows):
+        b = min(a + rows, nx)
+        slab = np.zeros((b - a, side, side), np.uint8)
+        slab[:, :nz, :ny] = vol[a:b].transpose(0, 2, 1)
+        values, lengths = runs_of(slab.ravel())
+        if carry is not None and carry[0] == values[0]:
+            lengths[0] += carry[1]
+        elif carry is not None:
+            yield np.array([carry[0]], np.uint8), np.array([carry[1]], np.int64)
+        if len(values) > 1:
+            yield values[:-1], lengths[:-1]
+        carry = int(values[-1]), int(lengths[-1])
+    rest = (side - nx) * side * side  # the rows of the cube beyond the grid: empty
+    if carry is not None and carry[0] == 0:
+        carry = 0, carry[1] + rest
+    elif rest:
+        if carry is not None:
+            yield np.array([carry[0]], np.uint8), np.array([carry[1]], np.int64)
+        carry = 0, rest
+    if carry is not None:
+        yield np.array([carry[0]], np.uint8), np.array([carry[1]], np.int64)
+
+
+def runs_of(flat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The maximal runs of a flat, non-empty uint8 array: their values and
+    lengths.
+
+    Examples
+    --------
+    >>> [r.tolist() for r in runs_of(np.array([0, 0, 1, 1, 1, 0], np.uint8))]
+    [[0, 1, 0], [2, 3, 1]]
+    """
     starts = np.concatenate([[0], np.flatnonzero(flat[1:] != flat[:-1]) + 1])
-    lengths = np.diff(np.append(starts, flat.size))
+    return flat[starts], np.diff(np.append(starts, flat.size))
+
+
+def run_bytes(values: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """binvox's (value, count) byte pairs of runs, those longer than 255
+    split."""
     pieces = (lengths + 254) // 255
     counts = np.full(int(pieces.sum()), 255, np.int64)
     counts[np.cumsum(pieces) - 1] = lengths - 255 * (pieces - 1)
     out = np.empty(2 * len(counts), np.uint8)
-    out[0::2] = np.repeat(flat[starts], pieces)
+    out[0::2] = np.repeat(values, pieces)
     out[1::2] = counts
     return out

@@ -59,6 +59,12 @@ class VolumeFormat:
     directory: bool = False
     #: the largest label a label image written in it keeps (None: any unsigned integer)
     max_label: int | None = None
+    #: bytes per voxel that its writer holds beside a mask of a byte per
+    #: voxel, at most (its own copies, a library's, a compressed stream
+    #: kept in memory; a writer that works through a buffer of fixed size
+    #: holds none), so that a volume is let in only where it can also be
+    #: written
+    write_bytes: float = 0
 
     def load(self):
         """The format's module (its library is imported only when used)."""
@@ -73,18 +79,25 @@ class VolumeFormat:
 
 FORMATS = (
     VolumeFormat("NumPy", (".npy", ".npz"), "npy", None, read_datasets=True),
-    VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1),  # ImageJ: 8 or 16 bits
+    # ImageJ: 8 or 16 bits; tifffile writes a z, y, x copy
+    VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1, write_bytes=1.05),
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
     # FreeSurfer's volumes (aseg.mgz); labels in int32 at most
     VolumeFormat("MGH", (".mgh", ".mgz"), "mgh", "nibabel", max_label=2**31 - 1),
     # a header and its image beside it, either named: Analyze 7.5, or a NIfTI pair
     VolumeFormat("Analyze", (".hdr", ".img"), "analyze", "nibabel", read_only=(".hdr", ".img")),
+    # pynrrd writes the bytes in Fortran order and gzips them in memory
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", read_datasets=True, imports="nrrd",
-                 read_only=(".nhdr",)),
-    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True),
-    VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),  # a bit per voxel
-    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255),  # colour indices
-    VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True),
+                 read_only=(".nhdr",), write_bytes=1.3),
+    # the file is built in memory, compressed (a mask's bytes to a fifth at worst), and written out whole
+    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.2),
+    # a bit per voxel; run-length coded a slab at a time
+    VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),
+    # colour indices; its voxels are listed by their coordinates (at most 256 a side)
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=32),
+    # a z, y, x copy, and zarr's chunks as it encodes them
+    VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True,
+                 write_bytes=1.6),
     # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
     VolumeFormat("PNG", (".png",), "png", None, imports="PIL", read_only=(".png",)),
 )
@@ -404,8 +417,17 @@ class LabelVolume:
 
 
 def stored_values(volume: np.ndarray) -> np.ndarray:
-    """What a format stores: a mask as 0/1 bytes, labels as they are."""
-    return volume.astype(np.uint8) if volume.dtype == np.bool_ else volume
+    """What a format stores: a mask as 0/1 bytes, labels as they are. A
+    mask's bytes are 0 and 1 already: they are viewed as uint8, not copied,
+    so that writing a volume near the memory budget needs no second one.
+
+    Examples
+    --------
+    >>> mask = np.array([True, False])
+    >>> stored_values(mask).tolist(), np.shares_memory(stored_values(mask), mask)
+    ([1, 0], True)
+    """
+    return volume.view(np.uint8) if volume.dtype == np.bool_ else volume
 
 
 def placement(obj: DigitalObject) -> tuple[np.ndarray, np.ndarray]:
