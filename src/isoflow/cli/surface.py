@@ -204,7 +204,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from ..scale.chunks import never_written, unwritten_fill
-    from .progress import progress_bar
+    from .progress import progress_bar, reading_back
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
@@ -235,7 +235,8 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
         print(f"isoflow surface: warning: {moved}", file=sys.stderr)
     if args.no_check:
         return 0
-    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
+    with reading_back(out):
+        check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
