@@ -317,3 +317,21 @@ def test_other_suffixes_are_refused_naming_those_that_stream(tmp_path):
         with pytest.raises(IsoflowError, match=r"binary PLY or STL only \(\.ply, \.stl\)"):
             write_surface_blocks(np.ones((2, 2, 2), bool), tmp_path / name)
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_an_stl_written_block_by_block_warns_of_the_weld(tmp_path, rng, capsys, conn):
+    """A store's STL holds the split copies at edge and vertex contacts as
+    the in-memory STL does, and readers weld them alike, but only the
+    in-memory command said so: both now warn, counting the positions that
+    trimesh reads more than one vertex at in the PLY of the same store."""
+    v = seam_volume(rng)
+    path = store(tmp_path, v)
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--connectivity", str(conn), "-q"]) == 0
+    _, copies = np.unique(trimesh.load(tmp_path / "s.ply", process=False).vertices, axis=0, return_counts=True)
+    welded = int(np.count_nonzero(copies > 1))
+    capsys.readouterr()
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.stl"), "--connectivity", str(conn), "-q"]) == 0
+    assert welded > 0 and capsys.readouterr().err.splitlines() == [
+        f"isoflow surface: warning: {tmp_path / 's.stl'}: STL keeps no shared vertices, so readers weld the split "
+        f"copies at {welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart"]

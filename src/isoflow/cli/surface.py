@@ -197,7 +197,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.export import check_float64_corners, float64_move_note
+    from ..mesh.export import check_float64_corners, float64_move_note, stl_weld_note
     from ..mesh.float32 import float64_moved
     from ..mesh.formats.omezarr import label_absent, open_store, store_volume
     from ..mesh.readback import volume_unit, volume_words
@@ -233,6 +233,8 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     moved = float64_move_note(out, corners)
     if moved:  # the corners moved by float64 itself
         print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+    if written["shared"]:  # readers see other topology than the one written: said under --quiet too, as in memory
+        print(f"isoflow surface: warning: {stl_weld_note(out, written['shared'])}", file=sys.stderr)
     if args.no_check:
         return 0
     with reading_back(out):
