@@ -701,3 +701,25 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
     monkeypatch.setattr(memory, "default_budget", lambda: 2 * per_block)
     got = analyze_zarr(path, 6, threads=2)
     assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+
+
+def test_a_2d_block_is_counted_by_its_extent_sums(monkeypatch):
+    """A 2D block's voxels come from the sums that give its extent, not
+    from a count of every voxel of its own; the report's voxels, box and
+    centroid are NumPy's."""
+    v = np.random.default_rng(6).random((23, 17)) < 0.4
+    counting = np.count_nonzero
+    counted = []
+
+    def recorded(a, *args, **kwargs):
+        counted.append(np.shape(a))
+        return counting(a, *args, **kwargs)
+
+    monkeypatch.setattr(np, "count_nonzero", recorded)
+    got = analyze_chunked(da.from_array(v, chunks=(7, 5)), 8, scheduler="sync")
+    monkeypatch.undo()
+    assert not [s for s in counted if len(s) == 2 and s[0] * s[1] > 1]  # no block counted apart
+    at = np.argwhere(v)
+    assert got.voxels == v.sum() and got.bbox == [*at.min(0).astype(float), *(at.max(0) + 1).astype(float)]
+    assert got.centroid == pytest.approx(at.mean(0) + 0.5)
+    assert got == reference(v, 8)
