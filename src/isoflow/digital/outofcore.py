@@ -40,8 +40,9 @@ keeps; the tests check the two against each other.
 
 Zarr input is read block by block inside each block's task, a block being
 a chunk (or shard); a dask array is processed along its chunks. The blocks
-go layer by layer along the axis with the most blocks (each block's axes
-put in that order as it is read), so peak memory is a few blocks per
+go layer by layer along the first axis, or along the axis with the most
+blocks where it has many more (each block's axes put in that order as it
+is read), so peak memory is a few blocks per
 worker plus the faces of two layers of blocks (and a few numbers per piece
 of a component on a face), never the volume or a label volume. Blocks
 that would not fit in memory at the threads asked for are refused before
@@ -361,20 +362,31 @@ def _grid(array, block_shape, where: str) -> _Grid:
 
 
 def _layer_axes(numblocks: tuple) -> tuple:
-    """The order of the axes the blocks are summed in: first the axis
-    along which the blocks are the most (the earliest of them), then the
-    others as they are. Two layers of blocks across it are held at a
-    time, so the more layers, the less of the volume's faces is held:
-    chunks of (N, N, 4) are one layer along the first axis, its faces half
-    the volume's voxels, and N / 4 layers along the last.
+    """The order of the axes the blocks are summed in: the array's, or
+    first the axis along which the blocks are the most (the earliest of
+    them) where they are :data:`LAYERS_APART` times as many as along the
+    first axis, then the others as they are. Two layers of blocks across
+    the first are held at a time, so the more layers, the less of the
+    volume's faces is held: chunks of (N, N, 4) are one layer along the
+    first axis, its faces half the volume's voxels, and N / 4 layers along
+    the last. A block read across its stored order is copied into the new
+    one, which costs a fifth of its sum: where the layers differ less,
+    their faces are few beside the blocks at work.
 
     Examples
     --------
-    >>> _layer_axes((1, 1, 128)), _layer_axes((4, 2, 4))
+    >>> _layer_axes((1, 1, 128)), _layer_axes((2, 2, 4))
     ((2, 0, 1), (0, 1, 2))
     """
     first = int(np.argmax(numblocks))
+    if numblocks[first] < LAYERS_APART * numblocks[0]:
+        return tuple(range(len(numblocks)))
     return (first, *(i for i in range(len(numblocks)) if i != first))
+
+
+#: the layers along another axis than the first, as a multiple of those
+#: along the first, from which the blocks go in layers along that axis
+LAYERS_APART = 8
 
 
 def _block_tasks(grid: _Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
