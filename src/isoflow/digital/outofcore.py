@@ -42,11 +42,10 @@ Zarr input is read block by block inside each block's task, a block being
 a chunk (or shard); a dask array is processed along its chunks. The blocks
 go layer by layer along the first axis, or along the axis with the most
 blocks where it has many more (each block's axes put in that order as it
-is read), so peak memory is a few blocks per
-worker plus the faces of two layers of blocks (and a few numbers per piece
-of a component on a face), never the volume or a label volume. Blocks
-that would not fit in memory at the threads asked for are refused before
-any is read.
+is read), so peak memory is a few blocks per worker plus the faces of two
+layers of blocks (and a few numbers per piece of a component on a face),
+never the volume or a label volume. Blocks that would not fit in memory
+at the threads asked for are refused before any is read.
 """
 
 from __future__ import annotations
@@ -113,9 +112,9 @@ class _Job:
     ``numblocks``, its [start, stop) per axis ``box``), the volume's
     ``shape``, the connectivity, the name of the input, whether the surfaces
     are counted, and the order ``axes`` of the array's axes that these
-    follow (the array's own where empty). One argument of a class of its own, which dask passes on
-    as it is: it walks through every tuple, named tuple and dataclass among
-    a task's arguments, twenty per block."""
+    follow (the array's own where empty). One argument of a class of its
+    own, which dask passes on as it is: it walks through every tuple, named
+    tuple and dataclass among a task's arguments, twenty per block."""
 
     __slots__ = ("index", "box", "numblocks", "shape", "conn", "where", "surfaces", "axes")
 
