@@ -681,9 +681,9 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
     thread until the system killed the process: blocks that would not fit
     the budget (the memory available) at the threads asked for are
     refused before any is read, in one line saying how many would fit, or
-    that smaller chunks are needed; where the threads fit without zarr's
-    second task per thread, they run, and the report is the in-memory
-    one (its chi that of scikit-image)."""
+    that smaller chunks (a dask array: rechunked) are needed; where the
+    threads fit without zarr's second task per thread, they run, and the
+    report is the in-memory one (its chi that of scikit-image)."""
     from skimage.measure import euler_number
 
     from isoflow.scale import memory
@@ -698,6 +698,9 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
         with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks \\(2 at a time\\) .*; {words}") as exc:
             analyze_zarr(path, 6, threads=2, progress=lambda done, total: told.append(done))
         assert "\n" not in str(exc.value) and told == []
+    monkeypatch.setattr(memory, "default_budget", lambda: per_block // 2)
+    with pytest.raises(IsoflowError, match="^dask array: summing its blocks .*; rechunk it, or pass smaller blocks"):
+        analyze_chunked(da.from_array(v.astype(np.uint8), chunks=v.shape), 6, threads=2)
     monkeypatch.setattr(memory, "default_budget", lambda: 2 * per_block)
     got = analyze_zarr(path, 6, threads=2)
     assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)

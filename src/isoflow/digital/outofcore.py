@@ -476,7 +476,7 @@ def _block_bytes(grid: _Grid, dtype) -> int:
     return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES)
 
 
-def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, scheduler) -> int:
+def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, scheduler, is_zarr: bool) -> int:
     """The blocks summed at a time on this machine: ``workers``, or as many
     as the memory budget holds where that is fewer but at least
     ``threads`` (a zarr store's second task per thread is left out first:
@@ -495,7 +495,7 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, sche
     if fit >= workers:
         return workers
     hint = (f"sum {fit} at a time (threads={fit}, isoflow info --threads {fit})" if fit >= 1 else
-            "write the store with smaller chunks, or pass smaller blocks (block_shape)")
+            f"{'write the store with smaller chunks' if is_zarr else 'rechunk it'}, or pass smaller blocks (block_shape)")
     check_fits(threads * per_block, f"{where}: summing its blocks ({threads} at a time)", hint=hint, budget=budget)
     return int(fit)
 
@@ -625,7 +625,8 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), where, scheduler)
+        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), where, scheduler,
+                                  grid.is_zarr)
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)
