@@ -698,6 +698,7 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
         with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks \\(2 at a time\\) .*; {words}") as exc:
             analyze_zarr(path, 6, threads=2, progress=lambda done, total: told.append(done))
         assert "\n" not in str(exc.value) and told == []
+    assert analyze_zarr(path, 6, threads=2, scheduler="sync") == want  # one block at a time fits
     monkeypatch.setattr(memory, "default_budget", lambda: per_block // 2)
     with pytest.raises(IsoflowError, match="^dask array: summing its blocks .*; rechunk it, or pass smaller blocks"):
         analyze_chunked(da.from_array(v.astype(np.uint8), chunks=v.shape), 6, threads=2)

@@ -483,13 +483,16 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, sche
     it only spares the cores a wait). Blocks that would not fit ``threads``
     at a time are refused up front, before any is read, saying how many
     would, where the blocks are summed here (a ``dask.distributed``
-    cluster's workers hold their own memory)."""
+    cluster's workers hold their own memory); one at a time on the
+    synchronous scheduler."""
     from dask.base import named_schedulers
 
     from ..scale.memory import check_fits, default_budget
 
     if scheduler is not None and scheduler not in named_schedulers.values():
         return workers
+    if scheduler is named_schedulers["sync"]:  # one task at a time, whatever the threads
+        threads = workers = 1
     budget = default_budget()
     fit = budget // max(per_block, 1)
     if fit >= workers:
