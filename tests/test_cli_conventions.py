@@ -749,3 +749,31 @@ def test_a_terminal_that_reports_no_size_still_sees_the_bar(tmp_path):
     assert os.waitstatus_to_exitcode(status) == 0, text
     assert text.split()[0] == "0"  # the terminal reports no width
     assert "flow:" in text and "%|" in text, text
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_during_a_stores_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch):
+    """Ctrl-C while a store's surface, written block by block, is read back
+    in chunks: exit 130 and one line saying the file is there and only its
+    check was cut short, as for a volume in memory (it said only
+    "interrupted"); the file is the whole surface, as trimesh reads it."""
+    import trimesh
+
+    zarr = pytest.importorskip("zarr")
+    from isoflow.mesh import streamed_readback
+
+    v = np.pad(np.ones((3, 4, 5), bool), 1)
+    zarr.create_array(store=str(tmp_path / "v.zarr"), shape=v.shape, chunks=(2, 3, 4), dtype=bool)[...] = v
+    check = streamed_readback.check_streamed
+
+    def interrupted(*args, **kw):
+        os.kill(os.getpid(), signal.SIGINT)
+        return check(*args, **kw)
+
+    monkeypatch.setattr(streamed_readback, "check_streamed", interrupted)
+    out = tmp_path / "s.ply"
+    assert main(["surface", str(tmp_path / "v.zarr"), "-o", str(out), "-q"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"isoflow: interrupted: {out} is written, not read back (--no-check skips the read-back)"]
+    mesh = trimesh.load(out, process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(60)

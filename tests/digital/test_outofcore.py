@@ -662,3 +662,87 @@ def test_chunks_never_written_are_read_as_the_fill_value(tmp_path, capsys, fmt):
             assert main(command) == 2
             err = capsys.readouterr().err.strip().splitlines()
             assert len(err) == 1 and f"e.g. {shown}, the array's fill value" in err[0], err
+
+
+@pytest.mark.parametrize("kind", ["dask", "zarr"])
+def test_thin_chunks_are_summed_a_layer_at_a_time(tmp_path, kind):
+    """Chunks of (N, N, 1) are one layer of blocks along the first axis:
+    summed along it, the whole volume's faces would be held at once. The
+    blocks go in layers along the axis where they are the most, so no
+    compute holds more than the two layers of one block each that the docs
+    promise; the report is the in-memory one, whose chi and b0 are those of
+    scikit-image and scipy."""
+    from dask.local import get_sync
+    from scipy.ndimage import label
+    from skimage.measure import euler_number
+
+    v = np.random.default_rng(4).random((9, 8, 10)) < 0.4
+    if kind == "zarr":
+        array = zarr.create_array(store=str(tmp_path / "thin.zarr"), shape=v.shape, chunks=(9, 8, 1), dtype=bool)
+        array[...] = v
+    else:
+        array = da.from_array(v, chunks=(9, 8, 1))
+    summed = []
+
+    def counting(dsk, keys, **kwargs):  # the blocks summed in each compute: the tasks asked for by name
+        summed.append(sum(str(k).startswith(("_dask_block", "_read_zarr_block")) for k in np.ravel(keys)))
+        return get_sync(dsk, keys, **kwargs)
+
+    got = analyze_chunked(array, 26, scheduler=counting)
+    assert max(summed) <= 2 and sum(summed) == v.shape[2]
+    assert got == reference(v, 26)
+    assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=3)
+    assert got.betti[0] == label(v, np.ones((3, 3, 3)))[1]
+
+
+def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypatch):
+    """A store of one chunk larger than memory was read and swept on every
+    thread until the system killed the process: blocks that would not fit
+    the budget (the memory available) at the threads asked for are
+    refused before any is read, in one line saying how many would fit, or
+    that smaller chunks (a dask array: rechunked) are needed; where the
+    threads fit without zarr's second task per thread, they run, and the
+    report is the in-memory one (its chi that of scikit-image)."""
+    from skimage.measure import euler_number
+
+    from isoflow.scale import memory
+
+    v = np.random.default_rng(2).random((40, 40, 40)) < 0.3
+    path = str(tmp_path / "one.zarr")
+    zarr.create_array(store=path, shape=v.shape, chunks=v.shape, dtype=np.uint8)[...] = v
+    per_block = v.size * (2 + outofcore.CHECK_BYTES)  # the stored byte twice, the masks and the bool copy
+    want, told = reference(v, 6), []
+    for budget, words in ((per_block // 2, "write the store with smaller chunks"), (per_block + 1, "sum 1 at a time")):
+        monkeypatch.setattr(memory, "default_budget", lambda budget=budget: budget)
+        with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks \\(2 at a time\\) .*; {words}") as exc:
+            analyze_zarr(path, 6, threads=2, progress=lambda done, total: told.append(done))
+        assert "\n" not in str(exc.value) and told == []
+    assert analyze_zarr(path, 6, threads=2, scheduler="sync") == want  # one block at a time fits
+    monkeypatch.setattr(memory, "default_budget", lambda: per_block // 2)
+    with pytest.raises(IsoflowError, match="^dask array: summing its blocks .*; rechunk it, or pass smaller blocks"):
+        analyze_chunked(da.from_array(v.astype(np.uint8), chunks=v.shape), 6, threads=2)
+    monkeypatch.setattr(memory, "default_budget", lambda: 2 * per_block)
+    got = analyze_zarr(path, 6, threads=2)
+    assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+
+
+def test_a_2d_block_is_counted_by_its_extent_sums(monkeypatch):
+    """A 2D block's voxels come from the sums that give its extent, not
+    from a count of every voxel of its own; the report's voxels, box and
+    centroid are NumPy's."""
+    v = np.random.default_rng(6).random((23, 17)) < 0.4
+    counting = np.count_nonzero
+    counted = []
+
+    def recorded(a, *args, **kwargs):
+        counted.append(np.shape(a))
+        return counting(a, *args, **kwargs)
+
+    monkeypatch.setattr(np, "count_nonzero", recorded)
+    got = analyze_chunked(da.from_array(v, chunks=(7, 5)), 8, scheduler="sync")
+    monkeypatch.undo()
+    assert not [s for s in counted if len(s) == 2 and s[0] * s[1] > 1]  # no block counted apart
+    at = np.argwhere(v)
+    assert got.voxels == v.sum() and got.bbox == [*at.min(0).astype(float), *(at.max(0) + 1).astype(float)]
+    assert got.centroid == pytest.approx(at.mean(0) + 0.5)
+    assert got == reference(v, 8)

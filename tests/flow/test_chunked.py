@@ -112,8 +112,28 @@ def test_on_a_two_process_local_cluster(tmp_path):
 
 
 def test_slabs_that_do_not_fit_are_refused_up_front():
-    with pytest.raises(IsoflowError, match="slabs of 1 layers of 1000001 x 1000001 vertices .* give thinner slabs"):
+    with pytest.raises(IsoflowError, match="slabs of 1 layers of 1000001 x 1000001 vertices .* crop the volume"):
         slab_thickness((10, 10**6, 10**6), None, 2)
+    with pytest.raises(IsoflowError, match="slabs of 7 layers of 11 x 11 vertices .* give thinner slabs"):
+        slab_thickness((10, 10, 10), 7, 10**17)
+
+
+def test_slabs_are_thinned_to_fit_the_memory_budget(monkeypatch):
+    """Where the default slabs (SLAB_VOXELS) would not fit the memory
+    available, `isoflow flow STORE --volumes .zarr` was refused, telling a
+    command-line user to pass `slab=`, which only Python takes; the slabs
+    are now as thick as the budget holds, and only a slab of one layer
+    that does not fit is refused, saying how many workers would fit."""
+    from isoflow.scale import memory
+
+    layer = 1024 * 1024  # the vertices of a layer of a (1023, 1023) plane
+    per_layer = 2 * layer + 6 * layer // 8  # its bytes read and written, its bit rows and faces
+    monkeypatch.setattr(memory, "default_budget", lambda: 12 * per_layer)
+    thick = slab_thickness((100, 1023, 1023), None, 2)
+    assert thick == 4 and 2 * (thick + 2) * per_layer <= memory.default_budget()  # two workers' slabs with a seam each
+    monkeypatch.setattr(memory, "default_budget", lambda: 5 * per_layer)
+    with pytest.raises(IsoflowError, match="slabs of 1 layers .*; slabs of one layer fit 1 at a time"):
+        slab_thickness((100, 1023, 1023), None, 2)
 
 
 def test_command_writes_the_states_as_stores(tmp_path, capsys):

@@ -317,3 +317,44 @@ def test_other_suffixes_are_refused_naming_those_that_stream(tmp_path):
         with pytest.raises(IsoflowError, match=r"binary PLY or STL only \(\.ply, \.stl\)"):
             write_surface_blocks(np.ones((2, 2, 2), bool), tmp_path / name)
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_an_stl_written_block_by_block_warns_of_the_weld(tmp_path, rng, capsys, conn):
+    """A store's STL holds the split copies at edge and vertex contacts as
+    the in-memory STL does, and readers weld them alike, but only the
+    in-memory command said so: both now warn, counting the positions that
+    trimesh reads more than one vertex at in the PLY of the same store."""
+    v = seam_volume(rng)
+    path = store(tmp_path, v)
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.ply"), "--connectivity", str(conn), "-q"]) == 0
+    _, copies = np.unique(trimesh.load(tmp_path / "s.ply", process=False).vertices, axis=0, return_counts=True)
+    welded = int(np.count_nonzero(copies > 1))
+    capsys.readouterr()
+    assert main(["surface", str(path), "-o", str(tmp_path / "s.stl"), "--connectivity", str(conn), "-q"]) == 0
+    assert welded > 0 and capsys.readouterr().err.splitlines() == [
+        f"isoflow surface: warning: {tmp_path / 's.stl'}: STL keeps no shared vertices, so readers weld the split "
+        f"copies at {welded} edge/vertex contacts into non-manifold points; PLY, OBJ or GLB keep them apart"]
+
+
+def test_a_label_store_beyond_memory_is_told_what_reads_it_block_by_block(tmp_path, capsys, monkeypatch):
+    """`surface STORE.zarr --labels` reads the store whole; where it did
+    not fit, the line said "use a .zarr store with 'isoflow info'" of a
+    .zarr store. It now names the commands that read a store block by
+    block, and the one it names for a surface, `--label N -o OUT.ply`,
+    writes that label's surface within the same budget, a block at a time
+    (its volume as trimesh reads it, NumPy's count of the label's voxels)."""
+    from isoflow.scale import memory
+
+    x = np.indices((60, 60, 60)) - 30
+    lab = np.where((x ** 2).sum(0) <= 12 ** 2, 2, 1).astype(np.uint8)
+    lab[:6] = 0
+    path = tmp_path / "labels.zarr"
+    zarr.open_array(str(path), mode="w", shape=lab.shape, chunks=(15, 15, 15), dtype=np.uint8)[:] = lab
+    monkeypatch.setattr(memory, "default_budget", lambda: lab.size * 2)  # less than the volume and its copies
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "all.glb"), "-q"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and "use a .zarr store" not in err[0]
+    assert "is read block by block by 'isoflow info' (--labels too), 'isoflow surface --label N -o OUT.ply'" in err[0]
+    assert main(["surface", str(path), "--label", "2", "-o", str(tmp_path / "two.ply"), "-q", "--threads", "1"]) == 0
+    assert trimesh.load(tmp_path / "two.ply", process=False).volume == pytest.approx(np.count_nonzero(lab == 2))

@@ -198,14 +198,14 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.export import check_float64_corners, float64_move_note
+    from ..mesh.export import check_float64_corners, float64_move_note, stl_weld_note
     from ..mesh.float32 import float64_moved
     from ..mesh.formats.omezarr import label_absent, open_store, store_volume
     from ..mesh.readback import agreed_volume_words
     from ..mesh.streamed_readback import check_streamed
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
     from ..scale.chunks import never_written, unwritten_fill
-    from .progress import progress_bar
+    from .progress import progress_bar, reading_back
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
@@ -234,9 +234,12 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     moved = float64_move_note(out, corners)
     if moved:  # the corners moved by float64 itself
         print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+    if written["shared"]:  # readers see other topology than the one written: said under --quiet too, as in memory
+        print(f"isoflow surface: warning: {stl_weld_note(out, written['shared'])}", file=sys.stderr)
     if args.no_check:
         return 0
-    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
+    with reading_back(out):
+        check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1

@@ -52,7 +52,7 @@ from ..scale.labels import label
 from .closed_surfaces import MESH_ADJACENCY, component_parents, subtree_sums, surface_counts, sweep_tables
 from .configurations import configuration_histogram, configurations
 from .connectivity import complement
-from .measures import extent_of, extent_of_rows, shifted
+from .measures import counted_extent, extent_of_rows, shifted
 
 #: a block's numbers live in the low 32 bits of a node key, the block in the high bits
 SHIFT = 32
@@ -234,7 +234,8 @@ def summarize_block(block, index, numblocks, origin, shape, conn: int, where: st
         if core.ndim == 3:
             return _swept_block(core, index, numblocks, origin, shape, conn, surfaces)
         out = _labelled_block(core, index, numblocks, conn)
-        out["extent"] = shifted(extent_of(core), origin, out["voxels"])
+        out["voxels"], extent = counted_extent(core)
+        out["extent"] = shifted(extent, origin, out["voxels"])
         return out
 
 
@@ -293,7 +294,7 @@ def _labelled_block(core, index, numblocks, conn) -> dict:
         fg, bg = (np.take(labels[kind], -side, axis=axis).astype(np.int64) for kind in ("fg", "bg"))
         components[axis, side] = np.where(fg > 0, fg - 1, sizes[0] + bg - 1)
     faces, _, _ = _numbering(components, tuple(sizes), outside)
-    return {"hist": hist, "voxels": int(np.count_nonzero(core)), "faces": faces,
+    return {"hist": hist, "faces": faces,
             "nodes": {"fg": sizes[0], "bg": sizes[1] - len(outside)}, "pinches": []}
 
 

@@ -149,29 +149,46 @@ def _create_store(path: Path, shape, chunks, place: DigitalObject, unit: str | N
 
 def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int) -> int:
     """Vertex layers per slab: ``slab``, or as many as fit
-    :data:`SLAB_VOXELS`.
+    :data:`SLAB_VOXELS` and the memory budget on ``workers`` at a time.
 
     Raises
     ------
     IsoflowError
-        The workers' slabs would not fit in memory (up front), or ``slab``
-        is not positive.
+        The workers' slabs would not fit in memory (up front), saying how
+        many workers one layer per slab would fit, or ``slab`` is not
+        positive.
 
     Examples
     --------
     >>> slab_thickness((100, 1023, 1023), None, 2)
     32
     """
+    from ..scale.memory import default_budget
+
     _, ny, nz = shape
     layer = (ny + 1) * (nz + 1)
-    thick = max(1, SLAB_VOXELS // layer) if slab is None else int(slab)
+    budget = default_budget()
+    if slab is None:
+        # thinner slabs where the budget is short: the flow is the same, in more tasks
+        thick = max(1, min(SLAB_VOXELS // layer, budget // max(workers * _layer_bytes(layer), 1) - 2))
+    else:
+        thick = int(slab)
     if thick < 1:
         raise IsoflowError(f"slab must be a positive number of layers, got {slab}")
-    # a slab's bytes read and written, its bit rows (five arrays) and faces
-    check_fits(workers * (2 * (thick + 2) * layer + 6 * (thick + 2) * layer // 8),
+    fit = budget // (3 * _layer_bytes(layer))  # the workers whose slabs of one layer fit
+    hint = ("give thinner slabs (slab=)" if thick > 1 else
+            f"slabs of one layer fit {fit} at a time (flow_chunked(..., workers={fit}))" if fit >= 1 else
+            "its layers across the first axis do not fit one at a time: crop the volume across them")
+    check_fits(workers * (thick + 2) * _layer_bytes(layer),
                f"the flow's slabs of {thick} layers of {ny + 1} x {nz + 1} vertices on {workers} workers",
-               hint="give thinner slabs (slab=)")
+               hint=hint, budget=budget)
     return thick
+
+
+def _layer_bytes(layer: int) -> int:
+    """The memory of a slab's vertex layer of ``layer`` vertices: its bytes
+    read and written, its bit rows (five arrays) and faces."""
+    return 2 * layer + 6 * layer // 8
 
 
 class ChunkedFlow(ArrayFlow):

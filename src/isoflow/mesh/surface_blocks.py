@@ -51,7 +51,7 @@ from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import BlockTicks, is_zarr_array
 from ..scale.compiled import using
-from .export import float32_holds, mesh_vertex_table, ply_header
+from .export import float32_holds, mesh_vertex_table, ply_header, shared_positions
 
 #: the suffixes whose files are written block by block
 STREAM_SUFFIXES = (".ply", ".stl")
@@ -389,10 +389,16 @@ def write_block(array, grid: BlockGrid, block: BlockPlan, target: Target, connec
     Returns
     -------
     dict
-        ``pinched``: the block's pinched vertices.
+        ``pinched``: the block's pinched vertices; ``shared``: in an STL,
+        its positions that carry more than one of its vertices
+        (:func:`isoflow.mesh.export.shared_positions`), 0 in a PLY.
     """
     mesh = mesh_block(array, grid, block, connectivity, where)
+    shared = 0
     if target.suffix == ".stl":
+        # every copy at a contact is the block's own (the block that counts its lattice vertex or edge), so the
+        # blocks' counts add up to the mesh's: the copies that an STL reader welds
+        shared = shared_positions(mesh)
         records = [(STL_HEADER + block.face_start * STL_DTYPE.itemsize, _stl_records(mesh, block.first, target.frame))]
     else:
         vertices = mesh_vertex_table(mesh, target.frame, target.position)
@@ -411,7 +417,7 @@ def write_block(array, grid: BlockGrid, block: BlockPlan, target: Target, connec
             _pwrite(fd, rec, offset)
     finally:
         os.close(fd)
-    return {"pinched": mesh.pinched}
+    return {"pinched": mesh.pinched, "shared": shared}
 
 
 #: corner offsets of a face with normal +e_a from its lowest corner, in
@@ -571,7 +577,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     dict
         ``path``, ``vertices``, ``faces`` (records: quads, or triangles as
         ``kind`` says), ``quads``, ``midpoints``, ``pinched``, ``voxels``,
-        ``euler_characteristic`` (``V - E + F`` of the quad mesh), ``bytes``.
+        ``euler_characteristic`` (``V - E + F`` of the quad mesh), ``bytes``,
+        and ``shared``: in an STL, the positions of more than one vertex
+        (the copies at contacts, which readers weld), 0 in a PLY.
 
     Raises
     ------
@@ -630,7 +638,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     midpoints = sum(c["triangles"] - 2 * c["faces"] for c in counts.values()) // 2
     return {"path": out, "vertices": layout.vertices, "faces": layout.faces, "kind": layout.kind, "quads": quads,
             "midpoints": midpoints, "pinched": sum(w["pinched"] for w in written.values()), "voxels": layout.voxels,
-            "euler_characteristic": layout.vertices - quads - midpoints, "bytes": size}
+            "euler_characteristic": layout.vertices - quads - midpoints, "bytes": size,
+            "shared": sum(w["shared"] for w in written.values())}
 
 
 def _checked_output(path, force: bool) -> Path:

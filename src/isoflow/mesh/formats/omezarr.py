@@ -112,6 +112,12 @@ def axis_unit(multiscale: dict | None, xyz: list[int], where: str) -> str | None
     return shared_unit(units, where, "OME-Zarr axis units")
 
 
+#: what a store too large to read can do instead: the commands that read it block by block (the
+#: default hint, to use a .zarr store, told it to be what it is)
+STORE_HINT = ("crop it; a .zarr store is read block by block by 'isoflow info' (--labels too), "
+              "'isoflow surface --label N -o OUT.ply' (or .stl) and 'isoflow flow --volumes .zarr'")
+
+
 def read(path: Path, dataset: str | None = None, time: int | None = None) -> RawVolume:
     """The level (or plain array) as a RawVolume; ``time`` picks one time
     point of a 4D volume, and only that time point's chunks are read (a
@@ -130,7 +136,8 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
         index = tuple(slice(int(time), int(time) + 1) if i == xyz[3] else slice(None) for i in range(array.ndim))
         shape = tuple(1 if i == xyz[3] else n for i, n in enumerate(shape))
         at = {xyz[3]: int(time)}
-    check_shape(shape, array.dtype, where)
+    # a time series is read whole by every command: only cropping helps
+    check_shape(shape, array.dtype, where, hint=STORE_HINT if sum(n > 1 for n in shape) <= 3 else "crop it")
     with reading(where, "zarr"):
         data = np.asarray(array[index])
     # the label is chosen later (as_object): counted for any nonzero fill
