@@ -1351,3 +1351,32 @@ def test_a_detached_nrrd_header_whose_data_file_is_gone_names_it(tmp_path, capsy
     fails(capsys, "info", tmp_path / "scan.nhdr", words=("data file", name, "not there"))
     (tmp_path / "elsewhere").rename(data)
     assert json.loads(run(capsys, "info", tmp_path / "scan.nhdr", "--json"))["voxels"] == np.count_nonzero(labels == 3)
+
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_the_input_help_names_every_volume_format_read(command, capsys):
+    """``isoflow flow -h`` (and info's and surface's) named no ``.png``
+    though a 2D PNG is read, nor ``.tiff`` or ``.nhdr``: the help now names
+    a suffix of every format the loader reads; a PNG written by Pillow is
+    read by the commands of 2D objects, its pixels Pillow's."""
+    from isoflow.mesh.formats.registry import FORMATS
+
+    with pytest.raises(SystemExit):
+        main([command, "-h"])
+    words = set(re.split(r"[\s,()/]+", capsys.readouterr().out))
+    assert {".png", ".tiff", ".nhdr"} <= words
+    assert all(any(s in words or f"FILE{s}:" in words for s in f.suffixes) for f in FORMATS)
+
+
+@pytest.mark.parametrize("command", ["info", "flow"])
+def test_a_png_written_by_pillow_is_read(tmp_path, capsys, command):
+    from PIL import Image
+
+    square = np.zeros((9, 7), np.uint8)
+    square[2:6, 1:4] = 255
+    Image.fromarray(square).save(tmp_path / "square.png")
+    pixels = int(np.count_nonzero(np.asarray(Image.open(tmp_path / "square.png"))))
+    capsys.readouterr()
+    assert main([command, str(tmp_path / "square.png"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert (printed["voxels"] if command == "info" else printed["steps"][0]["voxels"]) == pixels == 12

@@ -21,9 +21,10 @@ if TYPE_CHECKING:
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
     """The input of ``info``, ``surface`` and ``flow``, and how it is read."""
-    p.add_argument("input", help="volume (.npy/.npz, .tif, .nii(.gz), .mgz/.mgh, .hdr/.img, .nrrd, FILE.h5:/dataset, "
-                                 ".binvox, .vox, .zarr), point list (.txt: x y z per line) or mesh (any format trimesh "
-                                 "reads)")
+    # every format of the registry's FORMATS, which the loader reads by suffix (a 2D .png too)
+    p.add_argument("input", help="volume (.npy/.npz, .tif/.tiff, .nii(.gz), .mgz/.mgh, .hdr/.img, .nrrd/.nhdr, "
+                                 "FILE.h5:/dataset, .binvox, .vox, .zarr, .png), point list (.txt: x y z per line) or "
+                                 "mesh (any format trimesh reads)")
     p.add_argument("--label", type=label_value, metavar="N",
                    help="a label image: the voxels of value N are the object (MagicaVoxel: colour index N)")
     p.add_argument(
