@@ -31,13 +31,14 @@ to stop and what to report.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
+from ..digital.measures import unheld_dropped
 from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
@@ -403,9 +404,47 @@ def run_flow(
     cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
-    return run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
-                      guard=guard, until_topology_change=until_topology_change,
-                      allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit)
+    result = run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
+                        guard=guard, until_topology_change=until_topology_change,
+                        allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit)
+    return held_boxes(result, obj)
+
+
+def held_boxes(result: FlowResult, obj: DigitalObject) -> FlowResult:
+    """``result`` with the coordinates of its boxes (``bbox``, ``where``)
+    and its limit point None along the axes where float64 cannot keep the
+    voxel corners of ``obj``'s grid apart, said in one warning
+    (:mod:`isoflow.digital.float64`); ``result`` itself elsewhere.
+
+    Parameters
+    ----------
+    result : FlowResult
+        A run of ``obj``.
+    obj : DigitalObject
+        The run's input, whose placement the boxes have.
+
+    Returns
+    -------
+    FlowResult
+
+    Examples
+    --------
+    >>> import warnings
+    >>> far = DigitalObject(np.ones((2, 2, 2), bool), origin=(1e43, 0, 0))
+    >>> with warnings.catch_warnings(record=True):
+    ...     warnings.simplefilter("always")
+    ...     held_boxes(run_flow(far, keep_states=False), far).steps[0]["bbox"]
+    [None, 0.0, 0.0, None, 2.0, 2.0]
+    """
+    boxes = [s["bbox"] for s in result.steps] + [c["where"] for c in result.topology_changes] + [result.limit["center"]]
+    kept = unheld_dropped(boxes, "the boxes and the limit point of the flow", obj.world(np.zeros(obj.ndim)),
+                          obj.spacing, obj.volume.shape)
+    if kept is boxes:
+        return result
+    steps = len(result.steps)
+    return replace(result, steps=[{**s, "bbox": b} for s, b in zip(result.steps, kept[:steps])],
+                   topology_changes=[{**c, "where": w} for c, w in zip(result.topology_changes, kept[steps:-1])],
+                   limit={**result.limit, "center": kept[-1]})
 
 
 def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
