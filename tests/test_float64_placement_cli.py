@@ -256,3 +256,16 @@ def test_analyze_and_run_flow_where_float64_cannot_keep_corners_apart_warn_and_g
     assert all(c["where"][0] is None for c in run.topology_changes) and len(run.topology_changes) == len(
         plain.topology_changes)
     assert run.limit["center"] == [None, *plain.limit["center"][1:]]
+
+
+def test_info_of_a_far_zarr_store_read_block_by_block_warns_in_x_y_z_order(tmp_path):
+    # the store holds z, y, x: the warning names the placement as written, and x's coordinates are null
+    import json
+
+    import isoflow as iso
+
+    iso.write_volume(iso.DigitalObject(MASK.astype(bool), pitch=1.0, origin=(1e43, 0, 0)), tmp_path / "far.zarr")
+    p = isoflow("info", tmp_path / "far.zarr", "--json")
+    line = one_line(p)
+    assert p.returncode == 0 and "origin (1e+43, 0, 0), voxel size (1, 1, 1)" in line and "along axis 0" in line
+    assert json.loads(p.stdout)["centroid"][0] is None

@@ -36,6 +36,8 @@ from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
 from .float64 import held, merged_axes, unheld_line
 
+#: what a far placement's warning says float64 cannot hold of a report
+BOX_AND_CENTROID = "the bounding box and centroid"
 #: the report's names of the size and of the boundary measure, by dimension
 MEASURE_NAMES = {3: ("volume", "surface_area"), 2: ("area", "perimeter")}
 
@@ -196,8 +198,8 @@ def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Ext
             out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()
             out["centroid"] = (corner + spacing * (extent.sums / voxels + 0.5)).tolist()
     if out["bbox"] is not None and shape is not None:
-        out["bbox"], out["centroid"] = unheld_dropped([out["bbox"], out["centroid"]], "the bounding box and centroid",
-                                                      corner, spacing, shape)
+        out["bbox"], out["centroid"] = unheld_dropped([out["bbox"], out["centroid"]], BOX_AND_CENTROID, corner,
+                                                      spacing, shape)
     return out
 
 

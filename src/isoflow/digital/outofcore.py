@@ -77,7 +77,7 @@ from .analysis import Place, placed, report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
 from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
 from .connectivity import resolve_connectivity
-from .measures import joined
+from .measures import BOX_AND_CENTROID, joined, unheld_dropped
 from .report import Report
 from .seams import merge_block
 from .surface import boundary_faces, pinch_lut
@@ -557,13 +557,19 @@ def analyze_in_xyz(array: Any, order: list[int], connectivity: int | None = None
     """
     spacing, corner, unit = placed(None, len(order), Place(pitch, origin, unit))
     stored = np.argsort(order)  # stored axis i is axis stored[i] of x, y, z
-    report = analyze_chunked(array, connectivity, pitch=spacing[stored], origin=corner[stored], unit=unit, **options)
+    # placed at 0 and moved to the corner below, in x, y, z order: the sum
+    # world_measures takes (corner + spacing * index), and a far
+    # placement's warning then names the axes as the user gives them
+    report = analyze_chunked(array, connectivity, pitch=spacing[stored], origin=np.zeros(len(order)), unit=unit,
+                             **options)
     report = dataclasses.replace(report, shape=[int(report.shape[i]) for i in order])
     if report.bbox is None or report.centroid is None:  # an empty object's, or none in this dimension
         return report
-    lo, hi = report.bbox[:len(order)], report.bbox[len(order):]
-    return dataclasses.replace(report, bbox=[lo[i] for i in order] + [hi[i] for i in order],
-                               centroid=[report.centroid[i] for i in order])
+    lo, hi, mid = (np.array([values[i] for i in order]) for values in
+                   (report.bbox[:len(order)], report.bbox[len(order):], report.centroid))
+    bbox, centroid = unheld_dropped([(corner + lo).tolist() + (corner + hi).tolist(), (corner + mid).tolist()],
+                                    BOX_AND_CENTROID, corner, spacing, tuple(report.shape))
+    return dataclasses.replace(report, bbox=bbox, centroid=centroid)
 
 
 def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None, *,
