@@ -528,7 +528,9 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
         yield
     except NotBinary as exc:
         if block_wise:
-            raise NotBinary(exc.bare + BLOCK_LABEL, bare=exc.bare, every=False) from None
+            # a probability map has no label to select
+            raise NotBinary(exc.bare + ("" if exc.kind == "fractions" else BLOCK_LABEL), bare=exc.bare, every=False,
+                            kind=exc.kind) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
 
         if args.command == "surface" and exc.ndim == 2:
