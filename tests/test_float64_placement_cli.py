@@ -202,3 +202,70 @@ def test_a_store_read_back_in_chunks_says_the_volume_to_the_digits_it_holds(tmp_
     assert p.returncode == 0, p.stderr
     volume = int(MASK.sum()) * 1e-9 ** 3
     assert f"volume {volume:.6g} (read within the move of the corners)," in p.stdout.splitlines()[-1], p.stdout
+
+
+def test_info_where_float64_cannot_keep_corners_apart_warns_and_gives_null(tmp_path):
+    """``isoflow info`` at 1e43 printed a box of no width along x, ``[1e+43,
+    0.5, 0.5] to [1e+43, 4.5, 4.5]``, and a centroid there, without a word.
+    It answers (the topology holds at any placement) with one warning line
+    naming the placement and float64's spacing, its box and centroid null
+    along x; the other axes, the topology and the volume are scikit-image's
+    and NumPy's reading of the mask pynrrd wrote."""
+    import json
+
+    from skimage.measure import euler_number, regionprops
+
+    nrrd_at(tmp_path / "far.nrrd", (1e43, 0.0, 0.0), 1.0)
+    p = isoflow("info", tmp_path / "far.nrrd", "--json")
+    line = one_line(p)
+    assert p.returncode == 0 and line.startswith("isoflow info: warning: ")
+    assert "origin (1e+43, -0.5, -0.5), voxel size (1, 1, 1)" in line
+    assert f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
+    report = json.loads(p.stdout)
+    # NRRD's space origin is voxel 0's centre: its corner half a voxel before
+    box = np.array(regionprops(MASK)[0].bbox, float) - 0.5
+    assert report["bbox"] == [None, *box[1:3], None, *box[4:6]]
+    assert report["centroid"][0] is None and report["centroid"][1:] == pytest.approx(np.argwhere(MASK).mean(0)[1:])
+    assert report["euler_characteristic"] == euler_number(np.pad(MASK, 1), 1) and report["volume"] == MASK.sum()
+    text = isoflow("info", tmp_path / "far.nrrd")
+    assert text.returncode == 0 and "bounding box           [?, 0.5, 0.5] to [?, 4.5, 4.5]" in text.stdout
+
+
+def test_analyze_and_run_flow_where_float64_cannot_keep_corners_apart_warn_and_give_none():
+    """``isoflow.analyze`` and ``isoflow.run_flow`` of an object at 1e43
+    returned boxes of no width along x without a warning. They warn and
+    give None along x; along y and z the values are those of the same
+    object at the origin (a move along x leaves them), and so are the
+    topology and the volume."""
+    import isoflow as iso
+
+    far = iso.DigitalObject(MASK.astype(bool), origin=(1e43, 0, 0))
+    near = iso.DigitalObject(MASK.astype(bool))
+    with pytest.warns(iso.IsoflowWarning, match=re.escape(f"{np.spacing(1e43):.3g} apart (np.spacing)")):
+        report = iso.analyze(far)
+    expected = iso.analyze(near)
+    assert report.bbox == [None, *expected.bbox[1:3], None, *expected.bbox[4:6]]
+    assert report.centroid == [None, *expected.centroid[1:]]
+    assert (report.betti, report.volume) == (expected.betti, expected.volume) == ([1, 1, 0], MASK.sum())
+    with pytest.warns(iso.IsoflowWarning, match="the boxes and the limit point of the flow cannot be held"):
+        run = iso.run_flow(far, keep_states=False)
+    plain = iso.run_flow(near, keep_states=False)
+    boxes = [s["bbox"] for s in run.steps if s["bbox"] is not None]
+    assert boxes and all(b[0] is None and b[3] is None for b in boxes)
+    assert [b[1:3] + b[4:] for b in boxes] == [s["bbox"][1:3] + s["bbox"][4:] for s in plain.steps if s["bbox"]]
+    assert all(c["where"][0] is None for c in run.topology_changes) and len(run.topology_changes) == len(
+        plain.topology_changes)
+    assert run.limit["center"] == [None, *plain.limit["center"][1:]]
+
+
+def test_info_of_a_far_zarr_store_read_block_by_block_warns_in_x_y_z_order(tmp_path):
+    # the store holds z, y, x: the warning names the placement as written, and x's coordinates are null
+    import json
+
+    import isoflow as iso
+
+    iso.write_volume(iso.DigitalObject(MASK.astype(bool), pitch=1.0, origin=(1e43, 0, 0)), tmp_path / "far.zarr")
+    p = isoflow("info", tmp_path / "far.zarr", "--json")
+    line = one_line(p)
+    assert p.returncode == 0 and "origin (1e+43, 0, 0), voxel size (1, 1, 1)" in line and "along axis 0" in line
+    assert json.loads(p.stdout)["centroid"][0] is None

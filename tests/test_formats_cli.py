@@ -136,6 +136,8 @@ def test_info_on_omezarr_block_by_block_with_a_label(tmp_path, capsys, labels):
 # --------------------------------------------------------------- writing by suffix
 
 @pytest.mark.parametrize("radius", [1e-12, 1e-7, 2e10, 1e11])
+
+
 def test_a_tiff_voxel_size_is_read_back_by_tifffile_or_refused(tmp_path, capsys, radius):
     """TIFF keeps x and y voxel sizes as 1 / size in two uint32s: a size it
     holds is what tifffile's tags give back, one it cannot hold is refused
@@ -157,6 +159,8 @@ def test_a_tiff_voxel_size_is_read_back_by_tifffile_or_refused(tmp_path, capsys,
 
 
 @pytest.mark.parametrize("suffix", [".nii.gz", ".tif", ".nrrd", ".h5", ".binvox", ".vox", ".zarr"])
+
+
 def test_voxelize_writes_every_format(tmp_path, capsys, suffix):
     pytest.importorskip({".nrrd": "nrrd", ".h5": "h5py", ".zarr": "zarr"}.get(suffix, "numpy"))
     mesh = tmp_path / "t.stl"
@@ -240,6 +244,8 @@ def block_named(line: str) -> tuple[int, list[int]]:
 
 
 @pytest.mark.parametrize("threads", ["1", "2"])
+
+
 def test_surface_of_a_store_counts_the_voxels_of_the_block_it_names(tmp_path, capsys, labels, threads):
     """surface reads each block of a store with a voxel layer of margin
     around it; a refusal named the margin's first voxel, which is no
@@ -277,6 +283,8 @@ def corrupt_files(tmp_path):
 
 
 @pytest.mark.parametrize("command", ["info", "surface"])
+
+
 def test_corrupt_files_give_one_line(tmp_path, capsys, command):
     for name in corrupt_files(tmp_path):
         out = ["-o", tmp_path / "s.ply"] if command == "surface" else []
@@ -285,6 +293,8 @@ def test_corrupt_files_give_one_line(tmp_path, capsys, command):
 
 
 @pytest.mark.parametrize("name", ["e.nrrd", "e.tif", "e.nii.gz", "e.nii", "e.h5", "e.png"])
+
+
 def test_an_empty_file_is_said_to_be_empty(tmp_path, capsys, name):
     """A file of 0 bytes (a download or copy that failed): pynrrd said
     "StopIteration", the others each their own words for no header."""
@@ -301,6 +311,8 @@ def test_an_empty_file_is_said_to_be_empty(tmp_path, capsys, name):
     ("v.nii.gz", "v.npy", "its content is NIfTI, not NumPy: rename it v.nii.gz"),
     ("v.npy", "v.h5", "its content is NumPy, not HDF5: rename it v.npy"),
 ])
+
+
 def test_a_volume_saved_under_another_suffix_is_named_by_its_content(tmp_path, capsys, written, named, words):
     """The reader goes by the suffix (nibabel too: "Cannot work out file
     type" of a gzip-compressed .nii); the line says what the content is
@@ -387,6 +399,8 @@ def resaved_as_the_refusal_says(path, channels: int) -> dict:
 
 
 @pytest.mark.parametrize("channels", [2, 3, 5])
+
+
 @pytest.mark.parametrize("save", [{}, {"resolution": (2, 4), "metadata": {"axes": "ZCYX", "unit": "um", "spacing": 2.0}}])
 def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp_path, labels, save, channels):
     """tifffile's ``imwrite(f, stack, imagej=True)`` stores a (N, Y, X) stack
@@ -410,6 +424,8 @@ def test_imagej_tiff_of_channels_gives_the_command_that_saves_them_as_slices(tmp
 
 
 @pytest.mark.parametrize("channels", [2, 5])
+
+
 def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, channels):
     """An OME-TIFF of one slice in several channels holds its voxel size in
     its OME-XML's PhysicalSizeX/Y/Z, not in its resolution tags: the
@@ -429,6 +445,8 @@ def test_ome_tiff_of_channels_command_keeps_its_physical_size(tmp_path, rng, cha
 
 
 @pytest.mark.parametrize("depth", [2, 4])
+
+
 def test_an_ome_tiff_resaved_as_ome_tiff_keeps_its_stage_position(tmp_path, rng, depth):
     """``write_volume`` of an OME-TIFF read by isoflow to ``.ome.tif`` wrote
     an ImageJ TIFF, whose OME-XML OME readers would look for in vain: the
@@ -518,6 +536,8 @@ def test_an_ome_tiff_stage_position_in_mm_without_a_voxel_size_is_not_mixed_with
 
 
 @pytest.mark.parametrize("count", [2, 5])
+
+
 def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, count):
     """The command that saves an OME-TIFF's channels as slices kept the
     voxel size but not the stage position (the first plane's
@@ -547,6 +567,8 @@ def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, co
 
 
 @pytest.mark.parametrize("slices", [3, 4])
+
+
 def test_info_of_rgb_planes_saved_by_tifffile_reports_the_array_tifffile_reads(tmp_path, rng, slices):
     """``tifffile.imwrite(f, a)`` of a (3 or 4, Y, X) array stores one RGB(A)
     image in planes, and every Python reader gives ``a`` back: ``isoflow
@@ -634,6 +656,8 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
 
 
 @pytest.mark.parametrize("name", ["ts.ome.tif", "ts.ome.zarr"])
+
+
 @pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["flow", "--steps", "1"]])
 def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(command, name, tmp_path):
     """``surface`` and ``flow`` take one 3D volume; a time series (read as
@@ -679,6 +703,8 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
 
 
 @pytest.mark.parametrize("name", ["ts.ome.tif", "ts.ome.zarr", "ts.npy"])
+
+
 def test_read_volume_takes_one_time_point_and_refuses_a_time_that_is_not_one(name, tmp_path):
     """``read_volume(path, time=t)`` (and ``read_labels``) is time point
     ``t`` of a time series as 3D, with the voxel size of x, y, z; a time
@@ -716,6 +742,8 @@ def test_read_volume_takes_one_time_point_and_refuses_a_time_that_is_not_one(nam
     (["flow", "--steps", "1", "--out", "f", "--volumes", ".zarr"],
      "the digital curvature flow is defined for 2D and 3D objects"),
 ])
+
+
 def test_a_time_series_store_too_large_to_read_whole_says_how_to_take_one_time_point(
         command, needs, tmp_path, capsys, monkeypatch):
     """A 4D OME-Zarr store beyond memory got the memory refusal ("crop it,
@@ -744,6 +772,8 @@ def test_a_tiff_of_several_image_series_is_refused(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("how", ["imagej", "ome", "pages"])
+
+
 def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, capsys, rng, how):
     """A stack cut short where tifffile reads on: ImageJ's stack as its
     first page alone (2D), an OME-TIFF without its OME-XML (no voxel size),
@@ -812,6 +842,8 @@ def test_tiff_spacing_that_is_not_a_number(tmp_path, capsys, labels):
 
 
 @pytest.mark.parametrize("spacing", [0.0, -2.5])
+
+
 def test_tiff_spacing_that_is_no_voxel_size_is_named(tmp_path, capsys, labels, spacing):
     """The line names ImageJ's field, not isoflow's word for it ("'pitch'
     must be positive")."""
@@ -848,6 +880,8 @@ def nrrd_file(path, fields: str, data: np.ndarray):
     ("space dimension: 3\nspace directions: (1,0,0) (0,1,0) (0,0,1)\nspace origin: (1,2)", ("'space origin'",)),
     ("spacings: 1 nan 3", ("axis 1 has no spacing and 4 entries",)),
 ])
+
+
 def test_nrrd_fields_that_do_not_fit_the_array(tmp_path, capsys, fields, words):
     pytest.importorskip("nrrd")
     path = nrrd_file(tmp_path / "v.nrrd", fields, np.ones((5, 4, 3), np.uint8))
@@ -888,6 +922,8 @@ def test_nrrd_spacings_and_origin_that_are_not_numbers(tmp_path, capsys, recwarn
 
 
 @pytest.mark.parametrize("chunk, content", [(b"SIZE", b"\x02\x00\x00\x00\x02\x00\x00\x00"), (b"XYZI", b"\x01\x00")])
+
+
 def test_vox_chunks_too_short_for_what_they_hold(tmp_path, capsys, chunk, content):
     import struct
 
@@ -941,6 +977,8 @@ def damaged_store(path, data, chunks=(4, 4, 4), ome=False):
 
 
 @pytest.mark.parametrize("ome", [False, True])
+
+
 def test_info_on_a_zarr_store_with_a_damaged_chunk(tmp_path, capsys, labels, ome):
     pytest.importorskip("zarr")
     store = damaged_store(tmp_path / "d.zarr", (labels == 3).astype(np.uint8), ome=ome)
@@ -1263,6 +1301,8 @@ def test_one_voxel_is_said_in_the_singular(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("bits", [8, 1])
+
+
 def test_a_miniswhite_tiff_is_read_as_stored_with_a_warning_that_names_it(tmp_path, bits):
     """A mask saved MinIsWhite (PhotometricInterpretation 0: 0 is shown
     white; 1-bit as fax-style writers save it, 8-bit as Fiji with an
@@ -1395,3 +1435,35 @@ def test_voxelize_writes_within_the_memory_budget_it_let_the_grid_in(suffix, mes
     back = isoflow.read_labels(out).array
     filled = back.size if meshes == 1 else 2 * round(back.shape[0] / 4) ** 3
     assert abs(np.count_nonzero(back) - filled) < 0.05 * filled and back.shape[0] > 90  # the cubes fill their share
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+
+
+def test_the_input_help_names_every_volume_format_read(command, capsys):
+    """``isoflow flow -h`` (and info's and surface's) named no ``.png``
+    though a 2D PNG is read, nor ``.tiff`` or ``.nhdr``: the help now names
+    a suffix of every format the loader reads; a PNG written by Pillow is
+    read by the commands of 2D objects, its pixels Pillow's."""
+    from isoflow.mesh.formats.registry import FORMATS
+
+    with pytest.raises(SystemExit):
+        main([command, "-h"])
+    words = set(re.split(r"[\s,()/]+", capsys.readouterr().out))
+    assert {".png", ".tiff", ".nhdr"} <= words
+    assert all(any(s in words or f"FILE{s}:" in words for s in f.suffixes) for f in FORMATS)
+
+
+@pytest.mark.parametrize("command", ["info", "flow"])
+
+
+def test_a_png_written_by_pillow_is_read(tmp_path, capsys, command):
+    from PIL import Image
+
+    square = np.zeros((9, 7), np.uint8)
+    square[2:6, 1:4] = 255
+    Image.fromarray(square).save(tmp_path / "square.png")
+    pixels = int(np.count_nonzero(np.asarray(Image.open(tmp_path / "square.png"))))
+    capsys.readouterr()
+    assert main([command, str(tmp_path / "square.png"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert (printed["voxels"] if command == "info" else printed["steps"][0]["voxels"]) == pixels == 12

@@ -957,3 +957,35 @@ def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, comman
     err = capsys.readouterr().err
     assert f"holds {held} points and no faces, a point cloud, not a surface" in err and len(err.splitlines()) == 1
     assert not (tmp_path / "OUT.npy").exists()
+
+
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_a_probability_map_is_offered_a_threshold_not_a_label(tmp_path, capsys, command):
+    """A probability map refused as a mask was offered ``--label N``, which
+    selects no voxel of a map of fractions; it is offered the threshold
+    half way through 0 to 1 alone. The map is nibabel's float32, its values
+    fractions in 0..1 as nibabel reads them back."""
+    nib = pytest.importorskip("nibabel")
+    probability = np.random.default_rng(7).random((6, 6, 6)).astype(np.float32)
+    nib.save(nib.Nifti1Image(probability, np.eye(4)), tmp_path / "p.nii.gz")
+    data = nib.load(tmp_path / "p.nii.gz").get_fdata()
+    assert 0 <= data.min() and data.max() <= 1 and np.any(data != np.round(data))
+    said = fails(capsys, command, tmp_path / "p.nii.gz", *(["-o", tmp_path / "p.ply"] if command == "surface" else []),
+                 words=("p.nii.gz", "threshold it first, e.g. volume > 0.5"))
+    assert "--label" not in said and said.endswith("volume > 0.5")
+
+
+def test_an_8_bit_grey_image_is_offered_a_threshold_first_and_labels_as_a_condition(tmp_path, capsys):
+    """An 8-bit grey PNG was offered ``--label N`` as if its hundreds of
+    grey levels were labels, and ``volume > 0`` as the threshold; it is
+    offered the threshold half way through its grey levels as Pillow reads
+    them (``getextrema``), and labels only if its values are labels."""
+    from PIL import Image
+
+    grey = np.arange(256, dtype=np.uint8).reshape(16, 16)
+    Image.fromarray(grey).save(tmp_path / "g.png")
+    low, high = Image.open(tmp_path / "g.png").getextrema()
+    assert len(Image.open(tmp_path / "g.png").getcolors()) == 256
+    fails(capsys, "info", tmp_path / "g.png",
+          words=(f"threshold it first, e.g. volume > {(low + high) // 2}, or, if its values are labels, select one "
+                 "with --label N",))

@@ -260,3 +260,37 @@ def test_every_public_class_s_page_has_an_example():
     assert "IsoflowWarning" in classes and "ClosedSurface" in classes
     lacking = [n for n in classes if ">>>" not in (getattr(isoflow, n).__doc__ or "")]
     assert not lacking, lacking
+
+
+BETTI_SCRIPT = """
+import numpy as np
+import isoflow
+
+v = np.zeros((4, 4, 4), dtype=bool)
+v[1:3, 1:3, 1:3] = True
+b0, b1, b2 = isoflow.betti_numbers(v)
+tunnels: int = b0 + b1 - b2
+mask = np.ones((3, 5)) > 0
+c0, c1 = isoflow.betti_numbers(mask)
+holes: int = c0 - c1
+reveal_type(isoflow.betti_numbers(np.zeros((2, 2, 2, 2), dtype=bool)))
+"""
+
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_the_betti_numbers_of_a_3d_or_2d_array_add_up_under_mypy_strict(tmp_path):
+    """``b0, b1, b2 = isoflow.betti_numbers(v)`` then ``b0 + b1`` was an
+    error under ``mypy --strict`` (the return was ``list[int | None]``, None
+    only in 4D): mypy finds no error in 2D and 3D, and still types a 4D
+    array's result with its None; at run time a 4D volume keeps b1 and b2
+    None."""
+    (tmp_path / "user.py").write_text(BETTI_SCRIPT)
+    p = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--ignore-missing-imports",
+                        "--cache-dir", str(tmp_path / "cache"), str(tmp_path / "user.py")],
+                       capture_output=True, text=True, cwd=tmp_path,
+                       env={"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"})
+    assert "error" not in p.stdout and 'Revealed type is "list[int | None]"' in p.stdout, p.stdout + p.stderr
+    four = np.zeros((3, 3, 3, 3), bool)
+    four[1, 1, 1, 1] = True
+    assert isoflow.betti_numbers(four) == [1, None, None, 0]

@@ -588,9 +588,9 @@ def test_a_label_image_given_for_a_mask_names_label_table(call):
     table, props = isoflow.label_table(labels), regionprops_table(labels, properties=("label", "area"))
     assert table["label"].tolist() == props["label"].tolist() == [3, 8]
     assert table["voxels"].tolist() == props["area"].tolist() == [12, 2]
-    with pytest.raises(IsoflowError) as probability:  # a probability map is no label image
+    with pytest.raises(IsoflowError) as probability:  # fractions are no label image: half way through 0 to 2
         call(labels * 0.25)
-    assert str(probability.value).endswith("threshold it first, e.g. volume > 0")
+    assert str(probability.value).endswith("threshold it first, e.g. volume > 1")
 
 
 @pytest.mark.parametrize("method", ["numpy", "compiled"])

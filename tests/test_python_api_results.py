@@ -329,3 +329,25 @@ def test_a_flow_result_comes_back_from_what_flow_json_printed(tmp_path, capsys):
     np.testing.assert_allclose(first["bbox"], box.ravel())  # NIfTI places voxel centres: corner 0 is half a voxel lower
     with pytest.raises(TypeError, match=r"no fields \['steps_typo'\]"):
         isoflow.FlowResult.from_dict({**printed, "steps_typo": 1})
+
+
+def test_a_flow_result_has_the_unit_that_flow_json_prints(tmp_path, capsys):
+    """``isoflow flow --json`` printed ``unit`` but ``FlowResult`` had no
+    such field, so Python could not tell the unit of the boxes it gave.
+    The result holds it now, as nibabel reads the file's unit, and keeps it
+    through ``to_dict`` and ``from_dict``."""
+    nibabel = pytest.importorskip("nibabel")
+    from isoflow.cli.main import main
+
+    v = np.zeros((5, 5, 5), np.uint8)
+    v[1:4, 1:4, 1:4] = 1
+    image = nibabel.Nifti1Image(v, np.diag([0.5, 0.5, 0.5, 1.0]))
+    image.header.set_xyzt_units("mm")
+    nibabel.save(image, tmp_path / "cube.nii.gz")
+    said = nibabel.load(tmp_path / "cube.nii.gz").header.get_xyzt_units()[0]
+    assert main(["flow", str(tmp_path / "cube.nii.gz"), "--json", "-q"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    result = isoflow.run_flow(isoflow.read_volume(tmp_path / "cube.nii.gz"))
+    assert printed["unit"] == result.unit == said == "mm"
+    assert isoflow.FlowResult.from_dict(result.to_dict()).unit == said
+    assert isoflow.run_flow(np.ones((2, 2, 2), bool)).unit is None

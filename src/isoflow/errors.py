@@ -159,10 +159,16 @@ def coordinates(values, digits: int = 6, step=None) -> str:
     ('[-1.3e-06, -3.25e-07, -0.273438]', '[1, 2, 3]')
     >>> coordinates([999998.7, 0.0, 999999.6953125]), coordinates([999998.7, 0.0, 999999.6953125], step=0.04)
     ('[999999, 0, 1e+06]', '[999998.7, 0, 999999.69531]')
+
+    A coordinate that is not known (None: float64 cannot hold it,
+    :mod:`isoflow.digital.float64`) is a ``?``:
+
+    >>> coordinates([None, 2.5])
+    '[?, 2.5]'
     """
-    values = [float(x) for x in values]
+    values = [None if x is None else float(x) for x in values]
     steps = [step] * len(values) if step is None or not hasattr(step, "__len__") else [float(s) for s in step]
-    return "[" + ", ".join(f"{x:.{_digits_for(x, s, digits)}g}" for x, s in zip(values, steps)) + "]"
+    return "[" + ", ".join("?" if x is None else f"{x:.{_digits_for(x, s, digits)}g}" for x, s in zip(values, steps)) + "]"
 
 
 def _digits_for(x: float, step, digits: int) -> int:

@@ -70,7 +70,7 @@ def cmd_flow(args: argparse.Namespace) -> int:
     writer = flow_writer(args, obj)
     result = run_with_files(args, obj, writer)
     if args.json:
-        print(json.dumps({"input": path_text(args.input), "unit": obj.unit, **result.to_dict()}))
+        print(json.dumps({"input": path_text(args.input), **result.to_dict()}))
     else:
         print(format_flow(result, str(args.input), pitch=obj.spacing, unit=obj.unit))
         if args.out:
@@ -210,7 +210,7 @@ def flow_store(args: argparse.Namespace) -> int:
         raise
     unit = open_store(args.input).unit()
     if args.json:
-        print(json.dumps({"input": path_text(args.input), "unit": unit, **result.to_dict()}))
+        print(json.dumps({"input": path_text(args.input), **result.to_dict()}))
     else:
         print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
         print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")

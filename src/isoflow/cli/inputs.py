@@ -21,9 +21,10 @@ if TYPE_CHECKING:
 
 def add_input_arguments(p: argparse.ArgumentParser) -> None:
     """The input of ``info``, ``surface`` and ``flow``, and how it is read."""
-    p.add_argument("input", help="volume (.npy/.npz, .tif, .nii(.gz), .mgz/.mgh, .hdr/.img, .nrrd, FILE.h5:/dataset, "
-                                 ".binvox, .vox, .zarr), point list (.txt: x y z per line) or mesh (any format trimesh "
-                                 "reads)")
+    # every format of the registry's FORMATS, which the loader reads by suffix (a 2D .png too)
+    p.add_argument("input", help="volume (.npy/.npz, .tif/.tiff, .nii(.gz), .mgz/.mgh, .hdr/.img, .nrrd/.nhdr, "
+                                 "FILE.h5:/dataset, .binvox, .vox, .zarr, .png), point list (.txt: x y z per line) or "
+                                 "mesh (any format trimesh reads)")
     p.add_argument("--label", type=label_value, metavar="N",
                    help="a label image: the voxels of value N are the object (MagicaVoxel: colour index N)")
     p.add_argument(
@@ -529,7 +530,9 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
         yield
     except NotBinary as exc:
         if block_wise:
-            raise NotBinary(exc.bare + BLOCK_LABEL, bare=exc.bare, every=False) from None
+            # a probability map has no label to select
+            raise NotBinary(exc.bare + ("" if exc.kind == "fractions" else BLOCK_LABEL), bare=exc.bare, every=False,
+                            kind=exc.kind) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
 
         if args.command == "surface" and exc.ndim == 2:

@@ -311,7 +311,7 @@ def report_from_histogram(
         )
     spacing, corner, unit = (np.ones(ndim), np.zeros(ndim), None) if place is None else place
     out.update(world_measures(ndim, int(voxels), faces_per_axis(hist, ndim) if ndim in MEASURE_NAMES else None,
-                              extent, spacing, corner, unit))
+                              extent, spacing, corner, unit, tuple(int(n) for n in shape)))
     return out
 
 

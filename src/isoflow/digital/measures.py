@@ -31,9 +31,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import warn
 from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
+from .float64 import held, merged_axes, unheld_line
 
+#: what a far placement's warning says float64 cannot hold of a report
+BOX_AND_CENTROID = "the bounding box and centroid"
 #: the report's names of the size and of the boundary measure, by dimension
 MEASURE_NAMES = {3: ("volume", "surface_area"), 2: ("area", "perimeter")}
 
@@ -177,13 +181,15 @@ def joined(extents: list[Extent | None]) -> Extent | None:
 
 
 def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Extent | None, spacing: np.ndarray,
-                   corner: np.ndarray, unit: str | None) -> dict:
+                   corner: np.ndarray, unit: str | None, shape: tuple[int, ...] | None = None) -> dict:
     """The report's measures (see the module) of a 2D or 3D object, placed
     by its voxel size ``spacing`` and the world position ``corner`` of
     voxel 0's lowest corner, in ``unit``; nothing in another dimension
     (whose ``faces`` may be None).
     The arithmetic is the label table's, so that a mask's report equals
-    its row to the last bit.
+    its row to the last bit. Along an axis where float64 cannot keep the
+    corners of the grid of ``shape`` apart (:mod:`isoflow.digital.float64`)
+    the box's and the centroid's coordinates are None, with a warning.
 
     Examples
     --------
@@ -206,4 +212,31 @@ def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Ext
         if extent is not None:
             out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()
             out["centroid"] = (corner + spacing * (extent.sums / voxels + 0.5)).tolist()
+    if out["bbox"] is not None and shape is not None:
+        out["bbox"], out["centroid"] = unheld_dropped([out["bbox"], out["centroid"]], BOX_AND_CENTROID, corner,
+                                                      spacing, shape)
     return out
+
+
+def unheld_dropped(boxes: list, what: str, corner, spacing, shape: tuple[int, ...]) -> list:
+    """World points and boxes (flat lists, as :func:`~isoflow.digital.float64.held`
+    takes them) of a grid placed by ``corner`` and ``spacing``, their
+    coordinates None along the axes where float64 cannot keep its corners
+    apart, said in one warning naming ``what``; as they are elsewhere.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     unheld_dropped([[1e43, 2.5]], "the centroid", np.array([1e43, 0.0]), np.ones(2), (4, 4))
+    [[None, 2.5]]
+    >>> str(caught[0].message).split(" (")[0]
+    'the centroid cannot be held in float64 at this placement'
+    """
+    line = unheld_line(what, corner, spacing, shape)
+    if line is None:
+        return boxes
+    warn(line)
+    lost = merged_axes(corner, spacing, shape)
+    return [held(box, lost) for box in boxes]

@@ -80,7 +80,7 @@ from .analysis import Place, placed, report_from_histogram
 from .blocks import OUTSIDE, PENDING, SHIFT, summarize_block
 from .closed_surfaces import subtree_sums, surface_counts, surfaces_from_counts
 from .connectivity import resolve_connectivity
-from .measures import Extent, faces_per_axis, joined, world_measures
+from .measures import BOX_AND_CENTROID, Extent, faces_per_axis, joined, unheld_dropped, world_measures
 from .report import Report
 from .seams import merge_block
 from .surface import boundary_faces, pinch_lut
@@ -284,7 +284,8 @@ def _finish(ndim: int, conn: int, shape, surfaces: bool, merged, place: tuple, a
     order = np.argsort(axes)
     extent = joined([m["extent"] for m in merged])
     extent = None if extent is None else Extent(extent.lo[order], extent.hi[order], extent.sums[order])
-    report.update(world_measures(ndim, voxels, faces_per_axis(hist, ndim)[order], extent, *place))
+    report.update(world_measures(ndim, voxels, faces_per_axis(hist, ndim)[order], extent, *place,
+                                 tuple(int(n) for n in shape)))
     if surfaces and ndim == 3:
         report.update(_surfaces(conn, chi, hist, merged))
     return report
@@ -645,7 +646,7 @@ def analyze_chunked(
         # names the options that select labels, and which of them can)
         message = str(exc.args[0]) if exc.args else str(exc)
         if isinstance(exc, NotBinary):
-            raise NotBinary(message, exc.bare, exc.every, exc.ndim) from None
+            raise NotBinary(message, exc.bare, exc.every, exc.ndim, exc.kind) from None
         raise IsoflowError(message) from None
     return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged, place, axes))
 
@@ -667,30 +668,19 @@ def analyze_in_xyz(array: Any, order: list[int], connectivity: int | None = None
     """
     spacing, corner, unit = placed(None, len(order), Place(pitch, origin, unit))
     stored = np.argsort(order)  # stored axis i is axis stored[i] of x, y, z
-    report = analyze_chunked(array, connectivity, pitch=spacing[stored], origin=corner[stored], unit=unit, **options)
-    return _in_order(report, order)
-
-
-def _in_order(report: Report, order: list[int]) -> Report:
-    """The report of an array whose axes are those of the array the report
-    was made of in the order ``order``: its shape, box and centroid in that
-    order (the rest does not depend on the order).
-
-    Examples
-    --------
-    >>> from isoflow import analyze
-    >>> v = np.zeros((4, 3, 2), bool); v[3, 0, 1] = True
-    >>> _in_order(analyze(v), [2, 1, 0]) == analyze(v.transpose(2, 1, 0))
-    True
-    """
-    if list(order) == sorted(order):
-        return report
+    # placed at 0 and moved to the corner below, in x, y, z order: the sum
+    # world_measures takes (corner + spacing * index), and a far
+    # placement's warning then names the axes as the user gives them
+    report = analyze_chunked(array, connectivity, pitch=spacing[stored], origin=np.zeros(len(order)), unit=unit,
+                             **options)
     report = dataclasses.replace(report, shape=[int(report.shape[i]) for i in order])
     if report.bbox is None or report.centroid is None:  # an empty object's, or none in this dimension
         return report
-    lo, hi = report.bbox[:len(order)], report.bbox[len(order):]
-    return dataclasses.replace(report, bbox=[lo[i] for i in order] + [hi[i] for i in order],
-                               centroid=[report.centroid[i] for i in order])
+    lo, hi, mid = (np.array([values[i] for i in order]) for values in
+                   (report.bbox[:len(order)], report.bbox[len(order):], report.centroid))
+    bbox, centroid = unheld_dropped([(corner + lo).tolist() + (corner + hi).tolist(), (corner + mid).tolist()],
+                                    BOX_AND_CENTROID, corner, spacing, tuple(report.shape))
+    return dataclasses.replace(report, bbox=bbox, centroid=centroid)
 
 
 def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None, *,

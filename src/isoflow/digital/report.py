@@ -107,11 +107,15 @@ class Report(Result):
     bbox : list of float or None
         The lowest corner of the voxels, then the highest (x, y, z, then x,
         y, z; 4 numbers in 2D), world coordinates; None (``null``) for an
-        empty object. With unit voxels at 0, scikit-image's ``bbox``.
+        empty object. With unit voxels at 0, scikit-image's ``bbox``. A
+        coordinate is None along an axis where float64 cannot keep the
+        voxel corners apart (a voxel of 1 at an origin of 1e43, said in a
+        warning: :mod:`isoflow.digital.float64`).
     centroid : list of float or None
         The mean of the voxels' centres, world coordinates (voxel ``v``
         spans ``[v, v + 1]``: with unit voxels at 0, scikit-image's
-        ``centroid + 0.5``); None for an empty object.
+        ``centroid + 0.5``); None for an empty object; its coordinates
+        None where the box's are.
     unit : str or None
         The length unit of the world measures: the object's (a file's, as
         :func:`isoflow.read_volume` reads it), None where it has none.
@@ -178,8 +182,8 @@ class Report(Result):
     surface_area: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
     area: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
     perimeter: float | None = dataclasses.field(default=None, metadata=OMIT_NONE)
-    bbox: list[float] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
-    centroid: list[float] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
+    bbox: list[float | None] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
+    centroid: list[float | None] | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
     unit: str | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
 
     @property

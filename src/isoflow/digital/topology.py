@@ -10,7 +10,7 @@ number follows from chi.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -146,8 +146,25 @@ def _count_enclosed(xp, v, label, connectivity: int) -> int:
         return int(n) - int(xp.count_nonzero(border))
 
 
+#: an array whose type says it is 1D to 3D (NumPy types the shape of
+#: ``np.zeros((4, 4, 4))``), whose Betti numbers are all known
+AtMost3D = np.ndarray[tuple[int], Any] | np.ndarray[tuple[int, int], Any] | np.ndarray[tuple[int, int, int], Any]
+
+
+# the Betti numbers are typed by the dimension where the array's type says
+# it: ints in 1D to 3D, so that ``b0 + b1`` type-checks, b1 and b2 None in
+# 4D; a volume whose type does not say (nested lists) Any
+@overload
+def betti_numbers(volume: AtMost3D, connectivity: int | None = None, chi: int | None = None,
+                  method: Method = "auto") -> list[int]: ...
+@overload
+def betti_numbers(volume: np.ndarray[tuple[int, int, int, int], Any], connectivity: int | None = None,
+                  chi: int | None = None, method: Method = "auto") -> list[int | None]: ...
+@overload
 def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
-                  method: Method = "auto") -> list[int | None]:
+                  method: Method = "auto") -> list[Any]: ...
+def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
+                  method: Method = "auto") -> list[int] | list[int | None]:
     """The Betti numbers of a 1D to 4D binary volume.
 
     b0 counts the components under ``connectivity``, the last Betti number
@@ -175,7 +192,12 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     list of int
         ``[b0, b1, b2]`` in 3D, ``[b0, b1]`` in 2D (``chi = b0 - b1`` is
         checked), ``[b0]`` in 1D (``chi = b0`` is checked); in 4D ``[b0, None, None, b3]``: chi fixes ``b1 - b2`` but
-        not each.
+        not each. Typed ``list[int]`` for an array NumPy's types say is 1D
+        to 3D (``np.zeros((4, 4, 4))``) or say no dimension of (a slice, a
+        comparison: read as the common case), so that ``b0, b1, b2 =
+        betti_numbers(v)`` then ``b0 + b1`` type-checks under ``mypy
+        --strict``; ``list[int | None]`` for one typed 4D; ``list[Any]``
+        for nested lists.
 
     Raises
     ------

@@ -482,4 +482,4 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     state = engine.start(source)
     cap = steps if steps is not None else max_steps_for(engine.source_shape) if max_steps is None else max_steps
     return run_engine(engine, state, cap=cap, capped="steps" if steps is not None else "max-steps",
-                      until_topology_change=until_topology_change, progress=progress)
+                      until_topology_change=until_topology_change, progress=progress, unit=engine.unit)

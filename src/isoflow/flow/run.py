@@ -31,13 +31,14 @@ to stop and what to report.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
+from ..digital.measures import unheld_dropped
 from ..errors import IsoflowError, check_callable, check_switch
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
@@ -55,8 +56,8 @@ StopReason = Literal["vanished", "steps", "topology-change", "converged", "cycle
 #: resolved, or a thinning step on the same lattice (isoflow.flow.guard)
 GuardKind = Literal["flow", "partial", "thinning"]
 #: what ``isoflow flow --json`` prints beside a result's fields: the input as
-#: given and the length unit of its world coordinates (docs/flow.md)
-FLOW_INPUT_KEYS = ("input", "unit")
+#: given (docs/flow.md)
+FLOW_INPUT_KEYS = ("input",)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -94,6 +95,9 @@ class FlowResult(Result):
     guard_steps : dict or None
         Guarded runs: how many steps were ``flow``, ``partial`` and
         ``thinning``.
+    unit : str or None
+        The length unit of the world coordinates (``bbox``, ``where``,
+        ``center``): the input object's, None where it has none.
 
     Examples
     --------
@@ -104,8 +108,8 @@ class FlowResult(Result):
     >>> r = run_flow(np.ones((3, 3, 3), bool))
     >>> r.stop_reason, [s["voxels"] for s in r.steps], [s.parity for s in r.states]
     ('vanished', [27, 8, 1, 0], [0, 1, 0, 1])
-    >>> r["limit"]["last_shape"], r.to_dict()["guard"]
-    ('cuboid', False)
+    >>> r["limit"]["last_shape"], r.to_dict()["guard"], r.unit
+    ('cuboid', False, None)
     """
 
     steps: list[dict]
@@ -117,12 +121,13 @@ class FlowResult(Result):
     guard: bool
     reversed_moves: int = 0
     guard_steps: dict | None = None
+    unit: str | None = None
 
     def _keys(self) -> list[str]:
         # what ``isoflow flow --json`` prints (without ``input``), in its
         # order: the states are an attribute only, the guard's counts only
         # for guarded runs
-        keys = ["connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
+        keys = ["unit", "connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
         return keys + ["guard_steps"] if self.guard else keys
 
     @classmethod
@@ -399,14 +404,53 @@ def run_flow(
     cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
-    return run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
-                      guard=guard, until_topology_change=until_topology_change,
-                      allowance=default_max_steps(obj), progress=progress, keep_states=keep_states)
+    result = run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
+                        guard=guard, until_topology_change=until_topology_change,
+                        allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit)
+    return held_boxes(result, obj)
+
+
+def held_boxes(result: FlowResult, obj: DigitalObject) -> FlowResult:
+    """``result`` with the coordinates of its boxes (``bbox``, ``where``)
+    and its limit point None along the axes where float64 cannot keep the
+    voxel corners of ``obj``'s grid apart, said in one warning
+    (:mod:`isoflow.digital.float64`); ``result`` itself elsewhere.
+
+    Parameters
+    ----------
+    result : FlowResult
+        A run of ``obj``.
+    obj : DigitalObject
+        The run's input, whose placement the boxes have.
+
+    Returns
+    -------
+    FlowResult
+
+    Examples
+    --------
+    >>> import warnings
+    >>> far = DigitalObject(np.ones((2, 2, 2), bool), origin=(1e43, 0, 0))
+    >>> with warnings.catch_warnings(record=True):
+    ...     warnings.simplefilter("always")
+    ...     held_boxes(run_flow(far, keep_states=False), far).steps[0]["bbox"]
+    [None, 0.0, 0.0, None, 2.0, 2.0]
+    """
+    boxes = [s["bbox"] for s in result.steps] + [c["where"] for c in result.topology_changes] + [result.limit["center"]]
+    kept = unheld_dropped(boxes, "the boxes and the limit point of the flow", obj.world(np.zeros(obj.ndim)),
+                          obj.spacing, obj.volume.shape)
+    if kept is boxes:
+        return result
+    steps = len(result.steps)
+    return replace(result, steps=[{**s, "bbox": b} for s, b in zip(result.steps, kept[:steps])],
+                   topology_changes=[{**c, "where": w} for c, w in zip(result.topology_changes, kept[steps:-1])],
+                   limit={**result.limit, "center": kept[-1]})
 
 
 def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
                until_topology_change: bool = False, allowance: int = 0,
-               progress: Callable[[int, Any], None] | None = None, keep_states: bool = False) -> FlowResult:
+               progress: Callable[[int, Any], None] | None = None, keep_states: bool = False,
+               unit: str | None = None) -> FlowResult:
     """The run of :func:`run_flow` from a first state that ``engine`` holds
     (one of :mod:`isoflow.flow.engines`, or the stores of
     :mod:`isoflow.flow.chunked`): records, stops and the result.
@@ -425,6 +469,8 @@ def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason,
         As in :func:`run_flow`.
     allowance : int
         Guarded runs: flow steps that may leave the object as large.
+    unit : str, optional
+        The length unit of the first state's world coordinates.
 
     Returns
     -------
@@ -458,4 +504,5 @@ def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason,
         guard=guard,
         reversed_moves=tally.reversed_moves,
         guard_steps=tally.kinds if guard else None,
+        unit=unit,
     )

@@ -47,6 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..digital.float64 import placement_words
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, warn
 from .float32 import float32_effect, float64_corners, float64_moved
@@ -112,20 +113,6 @@ def stl_refusal(path, effect: dict, spacing) -> str:
             f"surface's {effect['positions']} distinct corner positions into others (voxel size "
             f"{float(np.min(spacing)):.3g}, coordinates up to {effect['largest']:.3g}, where float32 positions "
             f"are {effect['step']:.3g} apart); write .ply, .obj or .glb, which keep them")
-
-
-def placement_words(origin, spacing) -> str:
-    """A grid's origin and voxel size, as the float64 lines name them.
-
-    Examples
-    --------
-    >>> placement_words((1e6, 0, 0), (1e-9, 1e-9, 2e-9))
-    'origin (1e+06, 0, 0), voxel size (1e-09, 1e-09, 2e-09)'
-    """
-    def listed(values) -> str:
-        return "(" + ", ".join(f"{float(x):.6g}" for x in np.asarray(values, np.float64).ravel()) + ")"
-
-    return f"origin {listed(origin)}, voxel size {listed(spacing)}"
 
 
 def check_float64_corners(where, origin, spacing, shape, collapses: str = "every surface file") -> dict:

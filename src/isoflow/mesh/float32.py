@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..digital.float64 import merged_axes
+
 
 def float32_effect(xyz: np.ndarray, spacing) -> dict:
     """What storing the positions ``xyz`` (world units, voxel size
@@ -102,18 +104,17 @@ def float64_corners(origin, spacing, shape) -> dict:
     """
     origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
     spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
-    merged, worst = False, None
+    worst = None
     for axis, (o, s, n) in enumerate(zip(origin.tolist(), spacing.tolist(), shape)):
         with np.errstate(over="ignore", invalid="ignore"):
             corners = o + s * np.arange(int(n) + 1, dtype=np.float64)
             # the product's rounding is on the scale of s * n, the sum's on the corner's
             near = float(np.max(np.abs(np.concatenate([corners, [s * n]]))))
             step = float(np.spacing(near))
-            merged = merged or bool(np.any(np.diff(corners) == 0))
         voxels = step / abs(s) if s else np.inf
         if worst is None or voxels > worst["moved_voxels"]:
             worst = {"axis": axis, "near": near, "step": step, "moved_voxels": voxels, "moved": step}
-    return {**worst, "merged": merged}
+    return {**worst, "merged": any(merged_axes(origin, spacing, shape))}
 
 
 def float64_moved(corners: dict) -> float:

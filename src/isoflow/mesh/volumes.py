@@ -388,11 +388,15 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     """
     ndim = exc.ndim if ndim is None else ndim
     table = exc.every if every else False
+    if exc.kind == "fractions":  # a probability map: its threshold, which ``bare`` says, and no label
+        return NotBinary(exc.bare, bare=exc.bare, every=False, ndim=ndim, kind=exc.kind)
     offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
     if table is None:  # (not known: said as a condition, not a promise)
         offer = offer.replace("or ", "or, if every voxel holds a whole number, ", 1)
-    options = ", or select one label with --label N (label=N)" + (f", {offer}" if table is not False else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim)
+    # many whole values are most often a grey image: its labels said as a condition
+    one = ", or, if its values are labels, select one" if exc.kind == "grey" else ", or select one label"
+    options = f"{one} with --label N (label=N)" + (f", {offer}" if table is not False else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim, kind=exc.kind)
 
 
 def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:

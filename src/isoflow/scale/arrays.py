@@ -188,22 +188,93 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # are pixels, as info calls them
         cell = "pixel" if arr.ndim == 2 else "voxel"
         place = f" in the block at {cell} {tuple(int(o) for o in near)}" if near is not None else ""
-        bare = (f"{where}: not a binary volume ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
-                "values other than 0 and 1, "
-                f"e.g. {value}); threshold it first, e.g. volume > 0")
-        # integers in memory are most often a label image, which has a table
-        # (a command adds its own options to ``bare`` instead)
-        table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3)
         # a value that is no label (NaN, infinite, not whole) anywhere in
         # the array is refused by a label table too: --labels is not offered
         values = arr[bad]
         labels = arr.dtype.kind in "iu" or bool(np.all(np.isfinite(values) & (values == np.round(values))))
+        kind = value_kind(values, labels)
+        bare = (f"{where}: not a binary volume ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
+                "values other than 0 and 1, "
+                f"e.g. {value}); threshold it first, e.g. volume > {threshold_example(arr, kind)}")
+        # integers in memory are most often a label image, which has a table
+        # (a command adds its own options to ``bare`` instead)
+        table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3) and kind == "labels"
         # a float block's whole values say nothing of the blocks not read,
         # which a label table reads too: whether it takes them is not known
         every = None if labels and near is not None and arr.dtype.kind == "f" else labels
         raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare, every=every)
+                        bare, every=every, kind=kind)
     return arr.astype(bool)
+
+
+#: more distinct values other than 0 and 1 than this read as a grey image
+#: (an 8-bit one holds up to 254) rather than a label image, whose labels
+#: are a handful to some dozens (FreeSurfer's aseg about 40)
+LABEL_HANDFUL = 64
+#: values sampled to count them: the count decides a message, not a result
+COUNTED_VALUES = 1 << 20
+
+
+def value_kind(values: np.ndarray, whole: bool) -> str:
+    """What the values other than 0 and 1 of a volume refused as a mask
+    look like: ``labels`` (a handful of whole numbers, at most
+    :data:`LABEL_HANDFUL`), ``grey`` (more whole numbers: an 8-bit grey
+    image) or ``fractions`` (a value that is not a whole number: a
+    probability map, a grey image in floats), so that the refusal offers
+    the options that fit.
+
+    Parameters
+    ----------
+    values : ndarray
+        The values other than 0 and 1.
+    whole : bool
+        Whether every one is a finite whole number.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> value_kind(np.array([2, 3, 2]), True), value_kind(np.arange(2, 200), True), value_kind(np.array([0.5]), False)
+    ('labels', 'grey', 'fractions')
+    """
+    if not whole:
+        return "fractions"
+    sample = values.ravel()[:: max(1, values.size // COUNTED_VALUES)]
+    return "labels" if len(np.unique(sample)) <= LABEL_HANDFUL else "grey"
+
+
+def threshold_example(arr: np.ndarray, kind: str) -> str:
+    """The threshold a refusal suggests: 0 for labels (every label's
+    voxels), else half way through the values (a whole number for whole
+    values), 0.5 for a probability map (values from 0 to 1).
+
+    Parameters
+    ----------
+    arr : ndarray
+        The volume refused.
+    kind : str
+        Its :func:`value_kind`.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> threshold_example(np.array([0, 2, 3]), "labels"), threshold_example(np.array([0.1, 0.9]), "fractions")
+    ('0', '0.5')
+    >>> threshold_example(np.array([0, 17, 255], np.uint8), "grey")
+    '127'
+    """
+    finite = arr[np.isfinite(arr)] if arr.dtype.kind == "f" else arr
+    if kind == "labels" or not finite.size:
+        return "0"
+    low, high = float(finite.min()), float(finite.max())
+    if kind == "grey":  # whole values: a whole threshold
+        return str(int((low + high) // 2))
+    return "0.5" if 0 <= low and high <= 1 else f"{(low + high) / 2:.3g}"
 
 
 def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
@@ -265,14 +336,14 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
         # label table refuses: --labels is not offered, and the line says why
         told = f"; zarr reads a chunk never written as the array's fill value, {value}, which is no label); "
         unlabelled = exc.bare.replace("); ", told, 1)  # (the end of binary's example)
-        return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim)
+        return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
     named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
     bare = exc.bare.replace(example, named, 1)
     if label:
-        return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim)
+        return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim, exc.kind)
     # a label table refuses the value as it does here: a store with fill 0 is read either way
     unlabelled = bare + ", or write the store with fill_value=0, which a chunk never written then reads as 0"
-    return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim)
+    return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
 
 
 class NotBinary(IsoflowError):
@@ -285,13 +356,16 @@ class NotBinary(IsoflowError):
     before the blocks that may hold a value that is no label), so that it
     is offered on that condition;
     ``ndim``: the image's dimension where known (``surface --labels`` takes
-    3D images only)."""
+    3D images only); ``kind``: what the values look like
+    (:func:`value_kind`), so that a probability map is offered no label."""
 
-    def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None):
+    def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None,
+                 kind: str = "labels"):
         super().__init__(message)
         self.bare = message if bare is None else bare
         self.every = every
         self.ndim = ndim
+        self.kind = kind
 
 
 def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple[int, ...] = (2, 3, 4)):

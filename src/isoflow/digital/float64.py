@@ -1,0 +1,111 @@
+"""What float64 cannot hold of a grid placed far from the origin against
+its voxel size (a voxel of 1 at an origin of 1e43): the voxel corners
+``origin + spacing * i`` of an axis may round to one value, and then no
+world coordinate along that axis says where the object lies. The topology
+and the counts do not depend on the placement, nor do the volume and the
+boundary measure (products of the voxel size); the world boxes,
+centroids and limit points do, and are given as None along such an axis
+rather than as the collapsed values. Here, in :mod:`isoflow.digital`, for
+the report and the flow; the surface writers refuse such a placement
+(:func:`isoflow.mesh.export.check_float64_corners`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+
+def placement_words(origin, spacing) -> str:
+    """A grid's origin and voxel size, as the float64 lines name them.
+
+    Examples
+    --------
+    >>> placement_words((1e6, 0, 0), (1e-9, 1e-9, 2e-9))
+    'origin (1e+06, 0, 0), voxel size (1e-09, 1e-09, 2e-09)'
+    """
+    def listed(values) -> str:
+        return "(" + ", ".join(f"{float(x):.6g}" for x in np.asarray(values, np.float64).ravel()) + ")"
+
+    return f"origin {listed(origin)}, voxel size {listed(spacing)}"
+
+
+def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
+    """Per axis, whether two voxel corners next to each other along it,
+    ``origin + spacing * i`` for ``i`` from 0 to the shape (as
+    :meth:`isoflow.DigitalObject.world` computes them), are one float64
+    value.
+
+    Parameters
+    ----------
+    origin, spacing : array_like
+        The world position of voxel 0's lowest corner and the voxel size,
+        per axis (or one number for every axis).
+    shape : sequence of int
+        Voxels per axis.
+
+    Returns
+    -------
+    list of bool
+
+    Examples
+    --------
+    >>> merged_axes((1e43, 0.0, 0.0), 1.0, (6, 6, 6))
+    [True, False, False]
+    >>> merged_axes((1e6, 0.0), 1e-9, (6, 6))
+    [False, False]
+    """
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    merged = []
+    for o, s, n in zip(origin.tolist(), spacing.tolist(), shape):
+        with np.errstate(over="ignore", invalid="ignore"):
+            merged.append(bool(np.any(np.diff(o + s * np.arange(int(n) + 1, dtype=np.float64)) == 0)))
+    return merged
+
+
+def unheld_line(what: str, origin, spacing, shape: Sequence[int]) -> str | None:
+    """The warning that float64 cannot hold ``what`` (world coordinates)
+    along the axes of :func:`merged_axes`, naming the placement and
+    float64's spacing there (``np.spacing``); None where every axis keeps
+    its corners apart.
+
+    Examples
+    --------
+    >>> print(unheld_line("the bounding box", (1e43, 0, 0), 1.0, (2, 2, 2)))  # doctest: +ELLIPSIS
+    the bounding box cannot be held in float64 at this placement (origin (1e+43, 0, 0), voxel size (1, 1, 1)): near
+    1e+43 float64 values are 1.24e+27 apart (np.spacing), so voxel corners a voxel apart along axis 0 are one value; ...
+    >>> unheld_line("the bounding box", (0, 0, 0), 1.0, (2, 2, 2)) is None
+    True
+    """
+    lost = [axis for axis, merged in enumerate(merged_axes(origin, spacing, shape)) if merged]
+    if not lost:
+        return None
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    axis = lost[0]
+    # the corner farthest from 0 along the axis, where float64's values are sparsest
+    near = max(abs(float(origin[axis])), abs(float(origin[axis] + spacing[axis] * shape[axis])))
+    axes = " and ".join(map(str, lost))
+    return (f"{what} cannot be held in float64 at this placement ({placement_words(origin, spacing)}): near "
+            f"{near:.3g} float64 values are {float(np.spacing(near)):.3g} apart (np.spacing), so voxel corners a voxel "
+            f"apart along axis {axes} are one value; the coordinates along {'it' if len(lost) == 1 else 'them'} are "
+            "unknown (None), the other values do not depend on the placement; place the object nearer the "
+            "origin (subtract its origin) to have them")
+
+
+def held(values: list | None, lost: Sequence[bool]) -> list | None:
+    """World coordinates (a point, or a box: its lowest then its highest
+    corner, one flat list) with those along the ``lost`` axes as None.
+
+    Examples
+    --------
+    >>> held([1e43, 0.5, 1e43, 4.5], [True, False])
+    [None, 0.5, None, 4.5]
+    >>> held(None, [True, False]) is None
+    True
+    """
+    if values is None:
+        return None
+    return [None if lost[i % len(lost)] else v for i, v in enumerate(values)]
