@@ -269,3 +269,35 @@ def test_info_of_a_far_zarr_store_read_block_by_block_warns_in_x_y_z_order(tmp_p
     line = one_line(p)
     assert p.returncode == 0 and "origin (1e+43, 0, 0), voxel size (1, 1, 1)" in line and "along axis 0" in line
     assert json.loads(p.stdout)["centroid"][0] is None
+
+
+def test_info_labels_where_float64_cannot_keep_corners_apart_warns_and_gives_null(tmp_path):
+    """The label table at 1e43: each label's box and centroid along x were
+    the collapsed 1e+43, without a word. They are null (NaN in Python)
+    along x, said in one warning line; along y and z they are
+    scikit-image's regionprops of the image pynrrd wrote; ``surface
+    --labels`` is refused in one line, before any table is counted."""
+    import json
+
+    from skimage.measure import regionprops
+
+    nrrd = pytest.importorskip("nrrd")
+    image = MASK.copy()
+    image[0, 0, 0] = 2  # a second label, touching the first at a vertex
+    nrrd.write(str(tmp_path / "far.nrrd"), image, {"space directions": np.eye(3), "space origin": [1e43, 0.0, 0.0]},
+               index_order="C")
+    p = isoflow("info", tmp_path / "far.nrrd", "--labels", "--json")
+    line = one_line(p)
+    assert p.returncode == 0 and line.startswith("isoflow info: warning: ") and "null in JSON" in line
+    assert f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
+    rows = json.loads(p.stdout)["labels"]
+    for row, region in zip(rows, regionprops(image)):
+        box = np.array(region.bbox, float) - 0.5  # NRRD's origin is voxel 0's centre
+        assert row["label"] == region.label
+        assert [row[f"bbox-{d}"] for d in range(6)] == [None, *box[1:3], None, *box[4:6]]
+        assert row["centroid-0"] is None and [row["centroid-1"], row["centroid-2"]] == pytest.approx(
+            np.array(region.centroid)[1:])
+        assert row["voxels"] == region.area
+    surface = isoflow("surface", tmp_path / "far.nrrd", "--labels", "-o", tmp_path / "far.glb")
+    assert surface.returncode == 2 and "not distinct in float64" in one_line(surface)
+    assert not (tmp_path / "far.glb").exists()

@@ -100,6 +100,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     image = None if blocks else read_labels(args.input)
     say_segments(args)
     ndim = 3 if image is None else image.array.ndim
+    if image is not None and getattr(args, "command", "") == "surface":
+        from ..mesh.export import check_float64_corners
+
+        # a placement no surface file holds: refused before the table, whose boxes would only be warned of
+        check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
     if ndim == 2 and getattr(args, "command", "") == "surface":
         raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
                            f"{args.input} --labels gives its table)")

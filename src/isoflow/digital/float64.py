@@ -65,11 +65,11 @@ def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     return merged
 
 
-def unheld_line(what: str, origin, spacing, shape: Sequence[int]) -> str | None:
+def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None") -> str | None:
     """The warning that float64 cannot hold ``what`` (world coordinates)
     along the axes of :func:`merged_axes`, naming the placement and
     float64's spacing there (``np.spacing``); None where every axis keeps
-    its corners apart.
+    its corners apart; ``unknown``: what the coordinates lost are given as.
 
     Examples
     --------
@@ -91,7 +91,7 @@ def unheld_line(what: str, origin, spacing, shape: Sequence[int]) -> str | None:
     return (f"{what} cannot be held in float64 at this placement ({placement_words(origin, spacing)}): near "
             f"{near:.3g} float64 values are {float(np.spacing(near)):.3g} apart (np.spacing), so voxel corners a voxel "
             f"apart along axis {axes} are one value; the coordinates along {'it' if len(lost) == 1 else 'them'} are "
-            "unknown (None), the other values do not depend on the placement; place the object nearer the "
+            f"unknown ({unknown}), the other values do not depend on the placement; place the object nearer the "
             "origin (subtract its origin) to have them")
 
 
@@ -109,3 +109,32 @@ def held(values: list | None, lost: Sequence[bool]) -> list | None:
     if values is None:
         return None
     return [None if lost[i % len(lost)] else v for i, v in enumerate(values)]
+
+
+def unheld_columns(table: dict, origin, spacing, shape: Sequence[int]) -> dict:
+    """A label table's columns (:func:`isoflow.label_table`) with the box and
+    centroid columns NaN along the axes of :func:`merged_axes`, said in one
+    warning; as they are where float64 keeps every axis's corners apart.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> table = {"bbox-0": np.array([1e43]), "bbox-1": np.array([1.0]), "bbox-2": np.array([1e43]),
+    ...          "bbox-3": np.array([2.0]), "centroid-0": np.array([1e43]), "centroid-1": np.array([1.5])}
+    >>> with warnings.catch_warnings(record=True):
+    ...     warnings.simplefilter("always")
+    ...     out = unheld_columns(table, (1e43, 0.0), 1.0, (4, 4))
+    >>> [float(out[k][0]) for k in ("bbox-0", "bbox-1", "bbox-2", "bbox-3", "centroid-0", "centroid-1")]
+    [nan, 1.0, nan, 2.0, nan, 1.5]
+    """
+    from ..errors import warn
+
+    n = len(shape)
+    line = unheld_line("the labels' bounding boxes and centroids", origin, spacing, shape, "NaN; null in JSON")
+    if line is None:
+        return table
+    warn(line)
+    for axis, lost in enumerate(merged_axes(origin, spacing, shape)):
+        for key in (f"bbox-{axis}", f"bbox-{axis + n}", f"centroid-{axis}") if lost else ():
+            table[key] = np.full(len(table[key]), np.nan)
+    return table

@@ -23,6 +23,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .connectivity import check_connectivity
+from .float64 import unheld_columns
 from .label_table import checked_image, columns, label_dtype, label_table, slab_rows, wanted_labels
 from .lattice import DigitalObject
 
@@ -89,4 +90,5 @@ def label_table_blocks(
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
     found = slab_rows(array, conn, wanted, surfaces, sizes, progress)
-    return columns(found, place.spacing, place.origin, surfaces)
+    return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing,
+                          tuple(int(n) for n in array.shape))

@@ -47,6 +47,7 @@ from ..scale.arrays import as_array, refuse_object
 from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables
 from .connectivity import check_connectivity, resolve_connectivity
+from .float64 import unheld_columns
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .surface import face_slots, pinch_lut, slot_octants
@@ -263,10 +264,11 @@ def label_table(
         from .planar_labels import planar_table
 
         _use_compiled(vol, "numpy" if method == "auto" else method)  # the method checked as in 3D
-        return planar_table(vol, conn, place.spacing, place.origin, wanted)
+        return unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
+                              place.spacing, vol.shape)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
-    return columns(found, place.spacing, place.origin, surfaces)
+    return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing, vol.shape)
 
 
 def checked_image(image) -> np.ndarray:
