@@ -457,7 +457,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     from ..mesh.export import check_float64_corners, float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
     from ..mesh.outputs import check_output_path
-    from .progress import progress_bar
+    from .progress import TimeNote, progress_bar
 
     if args.png:
         raise IsoflowError(f"{args.input}: --png draws one surface, not --labels")
@@ -495,6 +495,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                                                                                   float64_moved(corners))
         # what of a .glb's node transforms float32 cannot hold: said with the note on them
         beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
+        if isinstance(show, TimeNote):  # the writing (or the read-back) paces the rest, from its first label on
+            show.phase()
         problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
