@@ -663,6 +663,23 @@ def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys
     fails(capsys, "info", tmp_path / "noise.npy", "--labels", words=("label image", "needs about", "budget"))
 
 
+@pytest.mark.parametrize("shape", [(64, 64, 64), (120, 100)])
+def test_a_label_table_beyond_the_budget_names_the_file(tmp_path, capsys, monkeypatch, rng, shape):
+    """The one line that refuses a label table beyond the memory budget
+    names the file it was asked of, as every other refusal of bad input
+    does (a store's did; a file's began "the label table of a 64x64x64
+    label image" and left a batch's log to guess which of its images)."""
+    from isoflow.scale import memory
+
+    np.save(tmp_path / "cells.npy", rng.integers(0, 3000, shape).astype(np.uint16))
+    monkeypatch.setattr(memory, "default_budget", lambda: 100_000)  # below a byte a pixel or voxel
+    for command in ["info"] + ["surface"] * (len(shape) == 3):  # surface --labels takes 3D images only
+        out = ["-o", tmp_path / "cells.glb"] if command == "surface" else []
+        line = fails(capsys, command, tmp_path / "cells.npy", "--labels", *out, words=("budget",))
+        assert line.startswith(f"isoflow {command}: error: {tmp_path / 'cells.npy'}: "), line
+    assert not (tmp_path / "cells.glb").exists()
+
+
 def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     printed = run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-")

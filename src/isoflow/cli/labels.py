@@ -116,8 +116,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin, "unit": image.unit}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
-        table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                            surfaces=surfaces, threads=getattr(args, "threads", None))
+        try:
+            table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                                surfaces=surfaces, threads=getattr(args, "threads", None))
+        except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
+            raise exc.at(args.input) from None
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
