@@ -680,6 +680,30 @@ def test_a_label_table_beyond_the_budget_names_the_file(tmp_path, capsys, monkey
     assert not (tmp_path / "cells.glb").exists()
 
 
+def test_surfaces_beyond_the_budget_are_refused_up_front_saying_what_fits(tmp_path, capsys, monkeypatch, rng):
+    """``surface --labels`` holds every label's mesh until the set is
+    written, so it needs at least the bytes of the scene's triangle indices
+    (12 a triangle, as trimesh reads them back from the file). Under a
+    budget below that it is refused in one line before any mesh, naming the
+    file and the ``--labels`` choice that fits, which then runs."""
+    from scipy import ndimage
+
+    from isoflow.scale import memory
+
+    cells = ndimage.zoom(rng.integers(1, 400, (8, 8, 8)), 3, order=0).astype(np.uint16)  # 3x3x3 cells, touching
+    np.save(tmp_path / "cells.npy", cells)
+    run(capsys, "surface", tmp_path / "cells.npy", "--labels", "-o", tmp_path / "free.glb")
+    triangles = sum(len(g.faces) for g in trimesh.load(tmp_path / "free.glb").geometry.values())
+    monkeypatch.setattr(memory, "default_budget", lambda: 12 * triangles)
+    line = fails(capsys, "surface", tmp_path / "cells.npy", "--labels", "-o", tmp_path / "tight.glb",
+                 words=(str(tmp_path / "cells.npy"), "budget", "fit: --labels="))
+    assert not (tmp_path / "tight.glb").exists()
+    choice = line.split("fit: ")[-1]
+    run(capsys, "surface", tmp_path / "cells.npy", choice, "-o", tmp_path / "tight.glb")
+    fewer = sum(len(g.faces) for g in trimesh.load(tmp_path / "tight.glb").geometry.values())
+    assert 0 < fewer < triangles
+
+
 def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     printed = run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-")

@@ -471,6 +471,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     _, conn, table, image, _ = read_table(args)
+    check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
     # a placement no file holds: refused before any surface
     corners = check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
     names = [f"label_{v}" for v in table["label"].tolist()]
@@ -510,6 +511,65 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
     return 1 if problems else 0
+
+
+#: bytes a voxel face of the labels' surfaces certainly holds until they are
+#: written: its vertex (float64 position, float32 attributes) and its two
+#: triangles, in the meshes or the scene's columns and again as read back
+#: (measured peaks are higher still), so that only work that cannot fit is
+#: refused before the first mesh
+SURFACE_BYTES_PER_FACE = 64
+
+
+def check_surfaces_fit(name, table: dict, spacing, every: bool, budget: int | None = None) -> None:
+    """Refuse up front, in one line, surfaces that would not fit in memory:
+    every label's mesh is held until the set is written, about
+    :data:`SURFACE_BYTES_PER_FACE` a voxel face (their count from the
+    table's ``surface_area``, each face taken as the largest a voxel has,
+    so never more than there are). The line says how many of the labels
+    fit, in the table's order, and the ``--labels`` choice of them where
+    ``every`` label was asked for (the rows ascend).
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        The label image, as the line names it.
+    table : dict
+        Its rows to be meshed (:func:`read_table`).
+    spacing : array_like
+        The voxel size per axis.
+    every : bool
+        Whether the rows are every label (a bare ``--labels``).
+    budget : int, optional
+        Bytes that may be used; the memory available now by default.
+
+    Examples
+    --------
+    >>> table = {"label": np.array([1, 2, 5]), "surface_area": np.array([6e3, 6e3, 6e3])}
+    >>> try:
+    ...     check_surfaces_fit("seg.npy", table, np.ones(3), True, budget=10**6)
+    ... except IsoflowError as exc:
+    ...     print(str(exc).split(" needs ")[0], "...", str(exc).split("; ")[-1])
+    seg.npy: a surface for each of 3 labels (18,000 voxel faces) ... the first 2 fit: --labels=1-2
+    """
+    from ..scale.memory import check_fits, default_budget
+
+    largest = max(float(np.prod(spacing)) / float(p) for p in spacing)  # the largest face of a voxel
+    faces = np.floor(np.asarray(table["surface_area"], np.float64) / largest + 0.5).astype(np.int64)
+    need = SURFACE_BYTES_PER_FACE * np.cumsum(faces)
+    budget = default_budget() if budget is None else int(budget)
+    if not len(need) or need[-1] <= budget:
+        return
+    fit = int(np.searchsorted(need, budget, side="right"))
+    labels = table["label"]
+    if not fit:
+        hint = f"not even label {labels[0]}'s surface fits"
+    elif every:
+        hint = f"the first {fit:,} fit: --labels={labels[0]}" + (f"-{labels[fit - 1]}" if fit > 1 else "")
+    else:
+        hint = f"the first {fit:,} of the labels asked for fit"
+    check_fits(int(need[-1]), f"{name}: a surface for each of {counted(len(labels), 'label')} ({int(faces.sum()):,} "
+               "voxel faces)", hint=hint, budget=budget)
 
 
 def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: list[str], lo: np.ndarray, image,
