@@ -704,6 +704,29 @@ def test_surfaces_beyond_the_budget_are_refused_up_front_saying_what_fits(tmp_pa
     assert 0 < fewer < triangles
 
 
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+def test_an_image_beyond_the_budget_is_sized_x_first_as_info_says(tmp_path, capsys, monkeypatch, rng, suffix):
+    """The refusal of a PNG or TIFF too large to read gives its size in the
+    order every other line gives it, x first (Pillow's ``width, height``,
+    tifffile's shape reversed): a 300 wide, 200 tall cell mask was "a
+    200x300 volume" where ``info`` says "shape 300x200"."""
+    import tifffile
+    from PIL import Image
+
+    from isoflow.scale import memory
+
+    cells = rng.integers(0, 50, (200, 300)).astype(np.uint16)  # rows, columns: as Pillow and tifffile store it
+    path = tmp_path / f"cells{suffix}"
+    if suffix == ".png":
+        Image.fromarray(cells).save(path)
+    else:
+        tifffile.imwrite(path, cells)
+    wide = Image.open(path).size if suffix == ".png" else tifffile.imread(path).shape[::-1]
+    assert "shape 300x200," in run(capsys, "info", path, "--labels").splitlines()[0]
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    fails(capsys, "info", path, "--labels", words=(f"{path}: a {wide[0]}x{wide[1]} ", "budget"))
+
+
 def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     printed = run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-")
