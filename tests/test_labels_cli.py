@@ -502,6 +502,18 @@ def test_surface_labels_time_note_is_paced_after_the_set_up(tmp_path, capsys, mo
     assert "will take about" not in err, (took, err)
 
 
+@pytest.mark.parametrize("choice", [["--labels", ""], ["--labels="], ["--labels", " , "]])
+def test_an_empty_choice_of_labels_says_so(tmp_path, capsys, segmentation, choice):
+    """``--labels "$LABELS"`` of a variable that came out empty was refused
+    as "--labels : '' is not a label or a range A-B of labels"; the line
+    now says the choice is empty and how to ask for every label."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    for command in (["info"], ["surface", "-o", tmp_path / "s.glb"]):
+        fails(capsys, command[0], tmp_path / "seg.npy", *choice, *command[1:],
+              words=("--labels '", "an empty choice", "--labels alone for every nonzero label"))
+    assert not (tmp_path / "s.glb").exists()
+
+
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")

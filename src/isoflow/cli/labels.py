@@ -41,9 +41,23 @@ def add_labels_option(p: argparse.ArgumentParser) -> None:
 
 def label_choice(text: str) -> list[int] | None:
     """The labels of ``--labels SPEC`` in order, each once (None: every
-    nonzero label). ``A-B`` (or ``A..B``) is the range of A to B."""
+    nonzero label). ``A-B`` (or ``A..B``) is the range of A to B.
+
+    Examples
+    --------
+    >>> label_choice("3,7,10-12,7")
+    [3, 7, 10, 11, 12]
+    >>> label_choice("")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: --labels '': an empty choice; give labels and ranges, comma-separated \
+(--labels 3,7,10-20), or --labels alone for every nonzero label
+    """
     if text == "all":
         return None
+    if not text.replace(",", "").strip():  # --labels "" or --labels= (a variable that came out empty)
+        raise IsoflowError(f"--labels {text!r}: an empty choice; give labels and ranges, comma-separated "
+                           "(--labels 3,7,10-20), or --labels alone for every nonzero label")
     chosen: dict[int, None] = {}
     for part in text.split(","):
         match = _RANGE.fullmatch(part)
