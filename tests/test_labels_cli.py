@@ -514,6 +514,39 @@ def test_an_empty_choice_of_labels_says_so(tmp_path, capsys, segmentation, choic
     assert not (tmp_path / "s.glb").exists()
 
 
+def test_surface_labels_dir_lists_its_directory_once(tmp_path, capsys, monkeypatch, segmentation):
+    """Each file's temporary first sweeps what killed writers left beside
+    it, which listed the directory once per label file: a directory of
+    10,000 label files read 10^8 names, and the run slowed as it filled.
+    Written as one set, the directory is listed once for the sweeps (and
+    once for the earlier run's files), whatever the labels; a temporary a
+    killed writer left is still removed."""
+    import os
+
+    out = tmp_path / "out"
+    out.mkdir()
+    killed = subprocess.run([sys.executable, "-c", "import sys; from pathlib import Path; from isoflow.mesh.outputs "
+                             "import temp_sibling; print(temp_sibling(Path(sys.argv[1])))", str(out / "label_3.ply")],
+                            capture_output=True, text=True, check=True).stdout.strip()
+    assert Path(killed).exists()  # its process has ended: the temporary is abandoned
+    listed = []
+
+    def counted(real):
+        def call(path=".", *args):
+            if isinstance(path, (str, os.PathLike)) and Path(path) == out:
+                listed.append(real.__name__)
+            return real(path, *args)
+        return call
+
+    monkeypatch.setattr(os, "scandir", counted(os.scandir))
+    monkeypatch.setattr(os, "listdir", counted(os.listdir))
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{out}/", "--suffix", ".ply")
+    assert len(listed) <= 2, listed
+    assert len(list(out.glob("label_*.ply"))) == 6
+    assert not Path(killed).exists()
+
+
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")
