@@ -772,6 +772,26 @@ def test_an_image_beyond_the_budget_is_sized_x_first_as_info_says(tmp_path, caps
     fails(capsys, "info", path, "--labels", words=(f"{path}: a {wide[0]}x{wide[1]} ", "budget"))
 
 
+@pytest.mark.parametrize("pitch", [1e150, 1e200, 1e-200])
+def test_surfaces_fit_check_of_extreme_voxels_prints_no_numpy_warning(tmp_path, capfd, pitch):
+    """The memory check before the surfaces counts faces from the table's
+    areas, which pass float64's range at such voxel sizes (the area of a
+    face of 1e200 is 1e400): it counts none there, without NumPy's
+    overflow or invalid-value warnings on the terminal, and the surfaces
+    are written."""
+    from isoflow import write_labels
+
+    image = np.zeros((6, 6, 6), np.uint8)
+    image[1:3, 1:3, 1:3], image[3:5, 3:5, 3:5] = 1, 2
+    write_labels(image, tmp_path / "seg.npz", pitch=(pitch,) * 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # NumPy's, which the command line would print
+        code = main(["surface", str(tmp_path / "seg.npz"), "--labels", "-o", str(tmp_path / "s.glb")])
+    err = capfd.readouterr().err
+    assert code == 0 and "RuntimeWarning" not in err and "encountered" not in err, err
+    assert (tmp_path / "s.glb").exists()
+
+
 def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     printed = run(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-")

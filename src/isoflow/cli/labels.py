@@ -568,8 +568,10 @@ def check_surfaces_fit(name, table: dict, spacing, every: bool, budget: int | No
     """
     from ..scale.memory import check_fits, default_budget
 
-    largest = max(float(np.prod(spacing)) / float(p) for p in spacing)  # the largest face of a voxel
-    faces = np.floor(np.asarray(table["surface_area"], np.float64) / largest + 0.5).astype(np.int64)
+    wide = sorted(float(p) for p in spacing)[-2:]  # the largest face of a voxel: its two largest sides
+    with np.errstate(all="ignore"):  # areas past float64 (a voxel size of 1e200) count no face: nothing refused
+        faces = np.asarray(table["surface_area"], np.float64) / (wide[0] * wide[1])
+    faces = np.floor(np.where(np.isfinite(faces), faces, 0.0) + 0.5).astype(np.int64)
     need = SURFACE_BYTES_PER_FACE * np.cumsum(faces)
     budget = default_budget() if budget is None else int(budget)
     if not len(need) or need[-1] <= budget:
