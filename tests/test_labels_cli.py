@@ -462,6 +462,91 @@ def test_surface_labels_reports_one_growing_count(tmp_path, capsys, monkeypatch,
     assert {t for _, t in seen} == {6 * phases}
 
 
+@pytest.mark.parametrize("out, extra", [("each/", ("--suffix", ".ply")), ("s.glb", ())])
+def test_surface_labels_time_note_is_paced_after_the_set_up(tmp_path, capsys, monkeypatch, out, extra):
+    """Piped, the note on how long ``surface --labels`` will take is paced
+    by the labels written (or read back), not by the set-up of the first:
+    a first label that costs 5 s more than the others (a writer's imports,
+    a compiled pass's loading; added to the notes' clock here) made a run
+    of a few seconds say it would take minutes (40 labels of an aseg: "about
+    1 min 25 s", the run took 3 s). The note speaks of runs of 30 s or more,
+    so a run that took less on that clock, measured here, says none."""
+    import time
+    import types
+
+    from isoflow.cli import progress
+    from isoflow.mesh import export, readback
+
+    lag = {"s": 0.0}
+    clock = types.SimpleNamespace(monotonic=lambda: time.monotonic() + lag["s"])
+    monkeypatch.setattr(progress, "time", clock)
+
+    def slow_first(real):
+        def call(*args, **kwargs):
+            lag["s"] = lag["s"] or 5.0  # the first label's set-up
+            return real(*args, **kwargs)
+        return call
+
+    monkeypatch.setattr(export, "write_mesh_file", slow_first(export.write_mesh_file))
+    monkeypatch.setattr(readback, "scene_nodes", slow_first(readback.scene_nodes))
+    monkeypatch.setattr(readback, "UNION_TRIANGLES", 1)  # the read-back tells of every node
+    image = np.zeros((61, 4, 4), np.uint8)
+    for label in range(1, 21):  # 20 cubes, each touching the next by a face
+        image[3 * label - 2: 3 * label + 1, 1:3, 1:3] = label
+    np.save(tmp_path / "cubes.npy", image)
+    start = clock.monotonic()
+    assert main(["surface", str(tmp_path / "cubes.npy"), "--labels", "-o", f"{tmp_path}/{out}", *extra]) == 0
+    took = clock.monotonic() - start
+    err = capsys.readouterr().err
+    assert lag["s"] == 5.0 and took < progress.NOTE_LONG
+    assert "will take about" not in err, (took, err)
+
+
+@pytest.mark.parametrize("choice", [["--labels", ""], ["--labels="], ["--labels", " , "]])
+def test_an_empty_choice_of_labels_says_so(tmp_path, capsys, segmentation, choice):
+    """``--labels "$LABELS"`` of a variable that came out empty was refused
+    as "--labels : '' is not a label or a range A-B of labels"; the line
+    now says the choice is empty and how to ask for every label."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    for command in (["info"], ["surface", "-o", tmp_path / "s.glb"]):
+        fails(capsys, command[0], tmp_path / "seg.npy", *choice, *command[1:],
+              words=("--labels '", "an empty choice", "--labels alone for every nonzero label"))
+    assert not (tmp_path / "s.glb").exists()
+
+
+def test_surface_labels_dir_lists_its_directory_once(tmp_path, capsys, monkeypatch, segmentation):
+    """Each file's temporary first sweeps what killed writers left beside
+    it, which listed the directory once per label file: a directory of
+    10,000 label files read 10^8 names, and the run slowed as it filled.
+    Written as one set, the directory is listed once for the sweeps (and
+    once for the earlier run's files), whatever the labels; a temporary a
+    killed writer left is still removed."""
+    import os
+
+    out = tmp_path / "out"
+    out.mkdir()
+    killed = subprocess.run([sys.executable, "-c", "import sys; from pathlib import Path; from isoflow.mesh.outputs "
+                             "import temp_sibling; print(temp_sibling(Path(sys.argv[1])))", str(out / "label_3.ply")],
+                            capture_output=True, text=True, check=True).stdout.strip()
+    assert Path(killed).exists()  # its process has ended: the temporary is abandoned
+    listed = []
+
+    def counted(real):
+        def call(path=".", *args):
+            if isinstance(path, (str, os.PathLike)) and Path(path) == out:
+                listed.append(real.__name__)
+            return real(path, *args)
+        return call
+
+    monkeypatch.setattr(os, "scandir", counted(os.scandir))
+    monkeypatch.setattr(os, "listdir", counted(os.listdir))
+    np.save(tmp_path / "seg.npy", segmentation)
+    run(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{out}/", "--suffix", ".ply")
+    assert len(listed) <= 2, listed
+    assert len(list(out.glob("label_*.ply"))) == 6
+    assert not Path(killed).exists()
+
+
 def test_surface_labels_dir_writes_a_file_per_label(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
     run(capsys, "surface", tmp_path / "seg.npy", "--labels", "4,9", "-o", f"{tmp_path}/out/", "--suffix", "obj")
@@ -621,6 +706,90 @@ def test_a_label_table_beyond_the_budget_is_refused_in_one_line(tmp_path, capsys
     noise = rng.integers(1, 200, (256, 256, 256)).astype(np.uint8)
     np.save(tmp_path / "noise.npy", noise)
     fails(capsys, "info", tmp_path / "noise.npy", "--labels", words=("label image", "needs about", "budget"))
+
+
+@pytest.mark.parametrize("shape", [(64, 64, 64), (120, 100)])
+def test_a_label_table_beyond_the_budget_names_the_file(tmp_path, capsys, monkeypatch, rng, shape):
+    """The one line that refuses a label table beyond the memory budget
+    names the file it was asked of, as every other refusal of bad input
+    does (a store's did; a file's began "the label table of a 64x64x64
+    label image" and left a batch's log to guess which of its images)."""
+    from isoflow.scale import memory
+
+    np.save(tmp_path / "cells.npy", rng.integers(0, 3000, shape).astype(np.uint16))
+    monkeypatch.setattr(memory, "default_budget", lambda: 100_000)  # below a byte a pixel or voxel
+    for command in ["info"] + ["surface"] * (len(shape) == 3):  # surface --labels takes 3D images only
+        out = ["-o", tmp_path / "cells.glb"] if command == "surface" else []
+        line = fails(capsys, command, tmp_path / "cells.npy", "--labels", *out, words=("budget",))
+        assert line.startswith(f"isoflow {command}: error: {tmp_path / 'cells.npy'}: "), line
+    assert not (tmp_path / "cells.glb").exists()
+
+
+def test_surfaces_beyond_the_budget_are_refused_up_front_saying_what_fits(tmp_path, capsys, monkeypatch, rng):
+    """``surface --labels`` holds every label's mesh until the set is
+    written, so it needs at least the bytes of the scene's triangle indices
+    (12 a triangle, as trimesh reads them back from the file). Under a
+    budget below that it is refused in one line before any mesh, naming the
+    file and the ``--labels`` choice that fits, which then runs."""
+    from scipy import ndimage
+
+    from isoflow.scale import memory
+
+    cells = ndimage.zoom(rng.integers(1, 400, (8, 8, 8)), 3, order=0).astype(np.uint16)  # 3x3x3 cells, touching
+    np.save(tmp_path / "cells.npy", cells)
+    run(capsys, "surface", tmp_path / "cells.npy", "--labels", "-o", tmp_path / "free.glb")
+    triangles = sum(len(g.faces) for g in trimesh.load(tmp_path / "free.glb").geometry.values())
+    monkeypatch.setattr(memory, "default_budget", lambda: 12 * triangles)
+    line = fails(capsys, "surface", tmp_path / "cells.npy", "--labels", "-o", tmp_path / "tight.glb",
+                 words=(str(tmp_path / "cells.npy"), "budget", "fit: --labels="))
+    assert not (tmp_path / "tight.glb").exists()
+    choice = line.split("fit: ")[-1]
+    run(capsys, "surface", tmp_path / "cells.npy", choice, "-o", tmp_path / "tight.glb")
+    fewer = sum(len(g.faces) for g in trimesh.load(tmp_path / "tight.glb").geometry.values())
+    assert 0 < fewer < triangles
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+def test_an_image_beyond_the_budget_is_sized_x_first_as_info_says(tmp_path, capsys, monkeypatch, rng, suffix):
+    """The refusal of a PNG or TIFF too large to read gives its size in the
+    order every other line gives it, x first (Pillow's ``width, height``,
+    tifffile's shape reversed): a 300 wide, 200 tall cell mask was "a
+    200x300 volume" where ``info`` says "shape 300x200"."""
+    import tifffile
+    from PIL import Image
+
+    from isoflow.scale import memory
+
+    cells = rng.integers(0, 50, (200, 300)).astype(np.uint16)  # rows, columns: as Pillow and tifffile store it
+    path = tmp_path / f"cells{suffix}"
+    if suffix == ".png":
+        Image.fromarray(cells).save(path)
+    else:
+        tifffile.imwrite(path, cells)
+    wide = Image.open(path).size if suffix == ".png" else tifffile.imread(path).shape[::-1]
+    assert "shape 300x200," in run(capsys, "info", path, "--labels").splitlines()[0]
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    fails(capsys, "info", path, "--labels", words=(f"{path}: a {wide[0]}x{wide[1]} ", "budget"))
+
+
+@pytest.mark.parametrize("pitch", [1e150, 1e200, 1e-200])
+def test_surfaces_fit_check_of_extreme_voxels_prints_no_numpy_warning(tmp_path, capfd, pitch):
+    """The memory check before the surfaces counts faces from the table's
+    areas, which pass float64's range at such voxel sizes (the area of a
+    face of 1e200 is 1e400): it counts none there, without NumPy's
+    overflow or invalid-value warnings on the terminal, and the surfaces
+    are written."""
+    from isoflow import write_labels
+
+    image = np.zeros((6, 6, 6), np.uint8)
+    image[1:3, 1:3, 1:3], image[3:5, 3:5, 3:5] = 1, 2
+    write_labels(image, tmp_path / "seg.npz", pitch=(pitch,) * 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # NumPy's, which the command line would print
+        code = main(["surface", str(tmp_path / "seg.npz"), "--labels", "-o", str(tmp_path / "s.glb")])
+    err = capfd.readouterr().err
+    assert code == 0 and "RuntimeWarning" not in err and "encountered" not in err, err
+    assert (tmp_path / "s.glb").exists()
 
 
 def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentation):

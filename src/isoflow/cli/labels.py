@@ -41,9 +41,23 @@ def add_labels_option(p: argparse.ArgumentParser) -> None:
 
 def label_choice(text: str) -> list[int] | None:
     """The labels of ``--labels SPEC`` in order, each once (None: every
-    nonzero label). ``A-B`` (or ``A..B``) is the range of A to B."""
+    nonzero label). ``A-B`` (or ``A..B``) is the range of A to B.
+
+    Examples
+    --------
+    >>> label_choice("3,7,10-12,7")
+    [3, 7, 10, 11, 12]
+    >>> label_choice("")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: --labels '': an empty choice; give labels and ranges, comma-separated \
+(--labels 3,7,10-20), or --labels alone for every nonzero label
+    """
     if text == "all":
         return None
+    if not text.replace(",", "").strip():  # --labels "" or --labels= (a variable that came out empty)
+        raise IsoflowError(f"--labels {text!r}: an empty choice; give labels and ranges, comma-separated "
+                           "(--labels 3,7,10-20), or --labels alone for every nonzero label")
     chosen: dict[int, None] = {}
     for part in text.split(","):
         match = _RANGE.fullmatch(part)
@@ -121,8 +135,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin, "unit": image.unit}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
-        table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                            surfaces=surfaces, threads=getattr(args, "threads", None))
+        try:
+            table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                                surfaces=surfaces, threads=getattr(args, "threads", None))
+        except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
+            raise exc.at(args.input) from None
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
@@ -462,7 +479,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     from ..mesh.export import check_float64_corners, float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
     from ..mesh.outputs import check_output_path
-    from .progress import progress_bar
+    from .progress import TimeNote, progress_bar
 
     if args.png:
         raise IsoflowError(f"{args.input}: --png draws one surface, not --labels")
@@ -473,6 +490,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     _, conn, table, image, _ = read_table(args)
+    check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
     # a placement no file holds: refused before any surface
     corners = check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
     names = [f"label_{v}" for v in table["label"].tolist()]
@@ -500,6 +518,8 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                                                                                   float64_moved(corners))
         # what of a .glb's node transforms float32 cannot hold: said with the note on them
         beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
+        if isinstance(show, TimeNote):  # the writing (or the read-back) paces the rest, from its first label on
+            show.phase()
         problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
@@ -510,6 +530,67 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     for line in problems:
         print(f"isoflow surface: error: {line}", file=sys.stderr)
     return 1 if problems else 0
+
+
+#: bytes a voxel face of the labels' surfaces certainly holds until they are
+#: written: its vertex (float64 position, float32 attributes) and its two
+#: triangles, in the meshes or the scene's columns and again as read back
+#: (measured peaks are higher still), so that only work that cannot fit is
+#: refused before the first mesh
+SURFACE_BYTES_PER_FACE = 64
+
+
+def check_surfaces_fit(name, table: dict, spacing, every: bool, budget: int | None = None) -> None:
+    """Refuse up front, in one line, surfaces that would not fit in memory:
+    every label's mesh is held until the set is written, about
+    :data:`SURFACE_BYTES_PER_FACE` a voxel face (their count from the
+    table's ``surface_area``, each face taken as the largest a voxel has,
+    so never more than there are). The line says how many of the labels
+    fit, in the table's order, and the ``--labels`` choice of them where
+    ``every`` label was asked for (the rows ascend).
+
+    Parameters
+    ----------
+    name : str or os.PathLike
+        The label image, as the line names it.
+    table : dict
+        Its rows to be meshed (:func:`read_table`).
+    spacing : array_like
+        The voxel size per axis.
+    every : bool
+        Whether the rows are every label (a bare ``--labels``).
+    budget : int, optional
+        Bytes that may be used; the memory available now by default.
+
+    Examples
+    --------
+    >>> table = {"label": np.array([1, 2, 5]), "surface_area": np.array([6e3, 6e3, 6e3])}
+    >>> try:
+    ...     check_surfaces_fit("seg.npy", table, np.ones(3), True, budget=10**6)
+    ... except IsoflowError as exc:
+    ...     print(str(exc).split(" needs ")[0], "...", str(exc).split("; ")[-1])
+    seg.npy: a surface for each of 3 labels (18,000 voxel faces) ... the first 2 fit: --labels=1-2
+    """
+    from ..scale.memory import check_fits, default_budget
+
+    wide = sorted(float(p) for p in spacing)[-2:]  # the largest face of a voxel: its two largest sides
+    with np.errstate(all="ignore"):  # areas past float64 (a voxel size of 1e200) count no face: nothing refused
+        faces = np.asarray(table["surface_area"], np.float64) / (wide[0] * wide[1])
+    faces = np.floor(np.where(np.isfinite(faces), faces, 0.0) + 0.5).astype(np.int64)
+    need = SURFACE_BYTES_PER_FACE * np.cumsum(faces)
+    budget = default_budget() if budget is None else int(budget)
+    if not len(need) or need[-1] <= budget:
+        return
+    fit = int(np.searchsorted(need, budget, side="right"))
+    labels = table["label"]
+    if not fit:
+        hint = f"not even label {labels[0]}'s surface fits"
+    elif every:
+        hint = f"the first {fit:,} fit: --labels={labels[0]}" + (f"-{labels[fit - 1]}" if fit > 1 else "")
+    else:
+        hint = f"the first {fit:,} of the labels asked for fit"
+    check_fits(int(need[-1]), f"{name}: a surface for each of {counted(len(labels), 'label')} ({int(faces.sum()):,} "
+               "voxel faces)", hint=hint, budget=budget)
 
 
 def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: list[str], lo: np.ndarray, image,

@@ -197,6 +197,25 @@ class TimeNote:
         is enough for the hint."""
         self.solid_angles = self.solid_angles or solid_angles
 
+    def phase(self) -> None:
+        """A new kind of work begins under the same count (the files of
+        ``surface --labels`` after every label's mesh): its first share
+        bears that work's own set-up (a writer's imports, its compiled
+        passes' loading), seconds that a pace taken over it would charge
+        to every share after it, so the pace is taken afresh from the end
+        of that share.
+
+        Examples
+        --------
+        >>> import argparse
+        >>> note = TimeNote(argparse.Namespace(command="surface"), "label surfaces")
+        >>> note(40, 80); note.first is not None
+        True
+        >>> note.phase(); note.first is None
+        True
+        """
+        self.begun = self.first = None
+
     def __call__(self, done: int, total: int | None) -> None:
         if self.said or not total:
             return

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import glob
 import os
 import re
 import secrets
@@ -268,9 +267,11 @@ def remove_abandoned(path: str | os.PathLike) -> list[Path]:
     host = _owner().split("-")[0]
     removed = []
     try:
-        found = list(path.parent.glob(glob.escape(prefix) + "*" + glob.escape(suffix)))
+        names = _names(path.parent)
     except OSError:
         return removed
+    found = [path.parent / n for n in names
+             if n.startswith(prefix) and n.endswith(suffix) and len(n) > len(prefix) + len(suffix)]
     for tmp in found:
         owner = tmp.name[len(prefix): len(tmp.name) - len(suffix)].split("-")
         if len(owner) != 3 or owner[0] != host or not owner[1].isdigit():
@@ -282,6 +283,19 @@ def remove_abandoned(path: str | os.PathLike) -> list[Path]:
         _remove(tmp)
         removed.append(tmp)
     return removed
+
+
+def _names(directory: Path) -> list[str]:
+    """The temporary names in ``directory``, listed once for the output set
+    being written (:func:`output_set`), at every call outside one: a set of
+    10,000 label files listed their directory for each, 10,000 times 10,000
+    names. A writer killed while the set is written is swept by the next."""
+    if not _LISTINGS:
+        return [n for n in os.listdir(directory) if TEMP_MARK in n]
+    listed = _LISTINGS[-1]
+    if directory not in listed:
+        listed[directory] = [n for n in os.listdir(directory) if TEMP_MARK in n]
+    return listed[directory]
 
 
 def _running(pid: int) -> bool:
@@ -421,6 +435,8 @@ def atomic_path(path: str | os.PathLike, directory: bool = False, sync: bool = T
 #: the sets of outputs open (:func:`output_set`), innermost last: each holds
 #: the ``(temporary, target, directory)`` of the files written in it so far
 _SETS: list[list[tuple[Path, Path, bool]]] = []
+#: the directories each open set has listed, by :func:`_names`
+_LISTINGS: list[dict[Path, list[str]]] = []
 
 
 @contextlib.contextmanager
@@ -473,11 +489,13 @@ def output_set(name: str | os.PathLike, retire: Iterable[str | os.PathLike] = ()
     """
     entries: list[tuple[Path, Path, bool]] = []
     _SETS.append(entries)
+    _LISTINGS.append({})
     try:
         yield
         interrupted_by_signal()  # one a library swallowed after the last write
     except BaseException as exc:
         _SETS.pop()
+        _LISTINGS.pop()
         for tmp, _, _ in entries:
             _remove(tmp)
         if isinstance(exc, KeyboardInterrupt):
@@ -489,6 +507,7 @@ def output_set(name: str | os.PathLike, retire: Iterable[str | os.PathLike] = ()
             raise error from None
         raise
     _SETS.pop()
+    _LISTINGS.pop()
     if _SETS:  # an enclosing set renames these with its own
         _SETS[-1].extend(entries)
         return

@@ -49,7 +49,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         if mode in COLOUR and wide_channels(image):
             raise IsoflowError(f"{where}: a PNG of 16-bit colour or grey and alpha, whose channels Pillow reads as "
                                "8 bits (the labels would be wrong); save it as a 16-bit grey PNG")
-        check_shape((image.height, image.width), GREY.get(mode, np.uint8), where)
+        check_shape((image.width, image.height), GREY.get(mode, np.uint8), where)  # x first, as it is read
         data = np.asarray(image)
     if mode in COLOUR:
         channels = data[..., :COLOUR[mode]]

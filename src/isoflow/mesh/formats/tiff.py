@@ -146,7 +146,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                                f"{', ...' if len(tif.series) > 5 else ''}); isoflow reads one volume: "
                                + (_pages_as_stack(where) if _one_page_each(tif.series) else "save the stack on its own"))
         series = tif.series[0]
-        check_shape(series.shape, series.dtype, where)
+        check_shape(series.shape[::-1], series.dtype, where)  # x first, as the image is read (to_xyz)
         page = series.keyframe
         try:
             data = series.asarray()
