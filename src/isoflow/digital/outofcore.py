@@ -284,7 +284,8 @@ def _finish(ndim: int, conn: int, shape, surfaces: bool, merged, place: tuple, a
     order = np.argsort(axes)
     extent = joined([m["extent"] for m in merged])
     extent = None if extent is None else Extent(extent.lo[order], extent.hi[order], extent.sums[order])
-    report.update(world_measures(ndim, voxels, faces_per_axis(hist, ndim)[order], extent, *place,
+    spacing, corner, unit = place
+    report.update(world_measures(ndim, voxels, faces_per_axis(hist, ndim)[order], extent, spacing, corner, unit,
                                  tuple(int(n) for n in shape)))
     if surfaces and ndim == 3:
         report.update(_surfaces(conn, chi, hist, merged))
