@@ -199,3 +199,32 @@ def test_a_store_flowed_block_by_block_where_float64_moves_the_corners_says_how_
     line = p.stderr.strip()
     assert "\n" not in line and line.startswith("isoflow flow: warning: "), p.stderr
     assert f"{np.spacing(1e6):.3g} (np.spacing)" in line and f"by up to {np.spacing(1e6) / 1e-9:.2g} voxels" in line
+
+
+def test_a_guarded_runs_table_names_each_steps_move_as_its_json_does(tmp_path):
+    """A guarded run's text gave no sign of which steps were whole flow
+    steps, partial ones or thinning, which ``--json`` gives per step: the
+    table now has a ``move`` column and a ``moves:`` line of the counts.
+    The thin diagonal ring at 26 needs partial or thinning steps (it cannot
+    reach the other lattice by whole steps); every row's move and the
+    counts are the JSON's, and the voxels of each row NumPy's count of the
+    states the JSON reports."""
+    from collections import Counter
+
+    v = np.zeros((9, 9, 1), bool)
+    for i in range(4):
+        v[4 + i, i, 0] = v[8 - i, 4 + i, 0] = v[4 - i, 8 - i, 0] = v[i, 4 - i, 0] = True
+    np.save(tmp_path / "ring.npy", v)
+    args = ("flow", tmp_path / "ring.npy", "--guard", "--connectivity", "26")
+    text, printed = isoflow(*args), isoflow(*args, "--json")
+    assert text.returncode == printed.returncode == 0, text.stderr + printed.stderr
+    steps = json.loads(printed.stdout)["steps"]
+    rows = [line.split() for line in text.stdout.splitlines() if line.strip()[:1].isdigit()]
+    assert [r[0] for r in rows] == [str(s["step"]) for s in steps]
+    assert rows[0][1] == str(int(v.sum()))
+    # a row: step, cells, parity, betti (three words), chi, energy, then the move (none at step 0)
+    assert [r[8] if len(r) > 8 else None for r in rows] == [s.get("move") for s in steps]
+    counts = Counter(s["move"] for s in steps[1:])
+    assert counts["partial"] + counts["thinning"] > 0
+    said = [line for line in text.stdout.splitlines() if line.strip().startswith("moves:")]
+    assert said == ["  moves: " + ", ".join(f"{counts[k]} {k}" for k in ("flow", "partial", "thinning"))]

@@ -357,16 +357,20 @@ def format_flow(result, name: str, pitch=None, unit: str | None = None) -> str:
     lines = [
         f"{name}: digital curvature flow, {result.connectivity}-connectivity"
         + (", guard" if result.guard else ""),
-        f"  {'step':>5} {cells:>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}",
+        f"  {'step':>5} {cells:>10} {'parity':>6}  {'betti':<12} {'chi':>4} {'energy':>8}"
+        + (f"  {'move'}" if result.guard else ""),
     ]
     for s in result.steps:
-        lines.append(
+        # a guarded step is a whole flow step, a flow step with its stuck blocks resolved, or a thinning step
+        lines.append((
             f"  {s['step']:>5} {s['voxels']:>10} {s['parity']:>6}  {str(tuple(s['betti'])):<12} "
-            f"{s['euler_characteristic']:>4} {s['energy']:>8}"
-        )
+            f"{s['euler_characteristic']:>4} {s['energy']:>8}" + (f"  {s.get('move') or ''}" if result.guard else "")
+        ).rstrip())
     lim = result.limit
     said = f" {unit}" if unit else ""
     lines.append(f"  stopped: {result.stop_reason}")
+    if result.guard and result.guard_steps:
+        lines.append("  moves: " + ", ".join(f"{n} {kind}" for kind, n in result.guard_steps.items()))
     if lim["center"] is not None:
         # the JSON's "cuboid" names a full box in either dimension; in the plane that box is a rectangle
         box = "rectangle" if planar else "cuboid"
