@@ -754,7 +754,9 @@ def test_an_image_beyond_the_budget_is_sized_x_first_as_info_says(tmp_path, caps
     """The refusal of a PNG or TIFF too large to read gives its size in the
     order every other line gives it, x first (Pillow's ``width, height``,
     tifffile's shape reversed): a 300 wide, 200 tall cell mask was "a
-    200x300 volume" where ``info`` says "shape 300x200"."""
+    200x300 volume" where ``info`` says "shape 300x200"; and it is an
+    image, whose table a .zarr store would not spare the memory of (2D
+    tables read a store whole): the line asks to crop it."""
     import tifffile
     from PIL import Image
 
@@ -769,7 +771,8 @@ def test_an_image_beyond_the_budget_is_sized_x_first_as_info_says(tmp_path, caps
     wide = Image.open(path).size if suffix == ".png" else tifffile.imread(path).shape[::-1]
     assert "shape 300x200," in run(capsys, "info", path, "--labels").splitlines()[0]
     monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
-    fails(capsys, "info", path, "--labels", words=(f"{path}: a {wide[0]}x{wide[1]} ", "budget"))
+    line = fails(capsys, "info", path, "--labels", words=(f"{path}: a {wide[0]}x{wide[1]} image ", "budget", "crop it"))
+    assert "block by block" not in line  # a 2D table reads a .zarr store whole too
 
 
 @pytest.mark.parametrize("pitch", [1e150, 1e200, 1e-200])

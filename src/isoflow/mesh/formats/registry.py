@@ -542,9 +542,12 @@ def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     from ...scale.memory import check_fits
 
     voxels = math.prod(int(s) for s in shape)
+    planar = len(shape) == 2
+    if planar and hint == READ_HINT:  # a 2D image is read whole, from a .zarr store too: cropping is what helps
+        hint = "crop it"
     check_fits(
         voxels * (np.dtype(dtype).itemsize + 2),  # the file's array, the boolean volume, its C-ordered copy
-        f"{where}: a {'x'.join(map(str, shape))} volume of {np.dtype(dtype)}",
+        f"{where}: a {'x'.join(map(str, shape))} {'image' if planar else 'volume'} of {np.dtype(dtype)}",
         hint=hint,
     )
 
