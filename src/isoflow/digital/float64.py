@@ -16,6 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from ..errors import warn
+
 
 def placement_words(origin, spacing) -> str:
     """A grid's origin and voxel size, as the float64 lines name them.
@@ -65,11 +67,13 @@ def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     return merged
 
 
-def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None") -> str | None:
+def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None",
+                merged: Sequence[bool] | None = None) -> str | None:
     """The warning that float64 cannot hold ``what`` (world coordinates)
-    along the axes of :func:`merged_axes`, naming the placement and
-    float64's spacing there (``np.spacing``); None where every axis keeps
-    its corners apart; ``unknown``: what the coordinates lost are given as.
+    along the axes of :func:`merged_axes` (``merged``, where the caller has
+    them), naming the placement and float64's spacing there
+    (``np.spacing``); None where every axis keeps its corners apart;
+    ``unknown``: what the coordinates lost are given as.
 
     Examples
     --------
@@ -79,7 +83,8 @@ def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str =
     >>> unheld_line("the bounding box", (0, 0, 0), 1.0, (2, 2, 2)) is None
     True
     """
-    lost = [axis for axis, merged in enumerate(merged_axes(origin, spacing, shape)) if merged]
+    merged = merged_axes(origin, spacing, shape) if merged is None else merged
+    lost = [axis for axis, m in enumerate(merged) if m]
     if not lost:
         return None
     spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
@@ -93,6 +98,28 @@ def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str =
             f"apart along axis {axes} are one value; the coordinates along {'it' if len(lost) == 1 else 'them'} are "
             f"unknown ({unknown}), the other values do not depend on the placement; place the object nearer the "
             "origin (subtract its origin) to have them")
+
+
+def lost_axes(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None") -> list[bool] | None:
+    """:func:`merged_axes`, said in one warning (:func:`unheld_line`) where
+    float64 cannot keep the corners of some axis apart; None where it
+    keeps every axis's.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     lost_axes("the box", (1e43, 0.0), 1.0, (4, 4)), len(caught)
+    ([True, False], 1)
+    >>> lost_axes("the box", (0.0, 0.0), 1.0, (4, 4)) is None
+    True
+    """
+    merged = merged_axes(origin, spacing, shape)
+    if not any(merged):
+        return None
+    warn(unheld_line(what, origin, spacing, shape, unknown, merged))
+    return merged
 
 
 def held(values: list | None, lost: Sequence[bool]) -> list | None:
@@ -127,14 +154,9 @@ def unheld_columns(table: dict, origin, spacing, shape: Sequence[int]) -> dict:
     >>> [float(out[k][0]) for k in ("bbox-0", "bbox-1", "bbox-2", "bbox-3", "centroid-0", "centroid-1")]
     [nan, 1.0, nan, 2.0, nan, 1.5]
     """
-    from ..errors import warn
-
     n = len(shape)
-    line = unheld_line("the labels' bounding boxes and centroids", origin, spacing, shape, "NaN; null in JSON")
-    if line is None:
-        return table
-    warn(line)
-    for axis, lost in enumerate(merged_axes(origin, spacing, shape)):
-        for key in (f"bbox-{axis}", f"bbox-{axis + n}", f"centroid-{axis}") if lost else ():
+    lost = lost_axes("the labels' bounding boxes and centroids", origin, spacing, shape, "NaN; null in JSON")
+    for axis in range(n) if lost is not None else ():
+        for key in (f"bbox-{axis}", f"bbox-{axis + n}", f"centroid-{axis}") if lost[axis] else ():
             table[key] = np.full(len(table[key]), np.nan)
     return table

@@ -31,10 +31,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import warn
 from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
-from .float64 import held, merged_axes, unheld_line
+from .float64 import held, lost_axes
 
 #: what a far placement's warning says float64 cannot hold of a report
 BOX_AND_CENTROID = "the bounding box and centroid"
@@ -234,9 +233,5 @@ def unheld_dropped(boxes: list, what: str, corner, spacing, shape: tuple[int, ..
     >>> str(caught[0].message).split(" (")[0]
     'the centroid cannot be held in float64 at this placement'
     """
-    line = unheld_line(what, corner, spacing, shape)
-    if line is None:
-        return boxes
-    warn(line)
-    lost = merged_axes(corner, spacing, shape)
-    return [held(box, lost) for box in boxes]
+    lost = lost_axes(what, corner, spacing, shape)
+    return boxes if lost is None else [held(box, lost) for box in boxes]

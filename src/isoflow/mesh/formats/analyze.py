@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.units import length_unit
-from .nifti import image_volume, placed_by_affine
+from .nifti import image_volume, method_1_affine, placed_by_affine
 from .registry import RawVolume, check_shape, import_library, note, quiet_logs, reading
 
 
@@ -39,9 +39,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         zooms = np.asarray(img.header.get_zooms(), np.float64)
         unit = length_unit(bytes(img.header["vox_units"]).decode("latin-1").strip("\x00 "))
     # the array as stored, voxel 0's centre half a voxel from 0: Analyze has no field that turns or places it
+    affine = method_1_affine(zooms)
     n = min(len(zooms), 3)
-    affine = np.eye(4)
-    affine[:n, :n] = np.diag(zooms[:n])
     affine[:n, 3] = zooms[:n] / 2
     raw = placed_by_affine(data, affine, where, unit)
     note(f"{where}: Analyze 7.5 stores voxel sizes but no orientation or origin; read as stored (axis 0 as x) "
