@@ -720,21 +720,17 @@ def test_settings_flags_and_options_that_gather_values_may_be_repeated():
     assert parser.parse_args(["info", "v.npy", "--json", "--json", "-q", "-q"]).json is True
 
 
-@pytest.mark.skipif(not hasattr(os, "fork"), reason="a pseudo-terminal needs fork")
-def test_a_terminal_that_reports_no_size_still_sees_the_bar(tmp_path):
-    """A pseudo-terminal never sized (``script``, some containers' ttys)
-    reports 0 columns and 0 rows (``os.get_terminal_size``), and tqdm then
-    drew nothing: a long run was silent on it. The bar is drawn 80
-    columns wide there."""
+def on_a_pseudo_terminal(argv: list[str], sized: str = "pass") -> str:
+    """What the command line with ``argv`` shows on a pseudo-terminal
+    (stdout and stderr), the first line the size the terminal reports
+    once the code ``sized`` has run in the child."""
     import pty
     import select
 
-    np.save(tmp_path / "box.npy", np.ones((6, 7, 8), bool))
     pid, fd = pty.fork()
-    if pid == 0:  # the child: stdout and stderr are the unsized terminal
-        os.execvp(sys.executable, [sys.executable, "-c", "import os, sys; print(os.get_terminal_size(2).columns); "
-                                   "from isoflow.cli import console; sys.argv[0] = 'isoflow'; console()",
-                                   "flow", str(tmp_path / "box.npy"), "--steps", "2"])
+    if pid == 0:  # the child: stdout and stderr are the terminal
+        os.execvp(sys.executable, [sys.executable, "-c", f"import os, sys; {sized}; print(*os.get_terminal_size(2)); "
+                                   "from isoflow.cli import console; sys.argv[0] = 'isoflow'; console()", *argv])
     out = b""
     while select.select([fd], [], [], 60)[0]:
         try:
@@ -747,8 +743,34 @@ def test_a_terminal_that_reports_no_size_still_sees_the_bar(tmp_path):
     _, status = os.waitpid(pid, 0)
     text = out.decode()
     assert os.waitstatus_to_exitcode(status) == 0, text
-    assert text.split()[0] == "0"  # the terminal reports no width
+    return text
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="a pseudo-terminal needs fork")
+def test_a_terminal_that_reports_no_size_still_sees_the_bar(tmp_path):
+    """A pseudo-terminal never sized (``script``, some containers' ttys)
+    reports 0 columns and 0 rows (``os.get_terminal_size``), and tqdm then
+    drew nothing: a long run was silent on it. The bar is drawn 80
+    columns wide there."""
+    np.save(tmp_path / "box.npy", np.ones((6, 7, 8), bool))
+    text = on_a_pseudo_terminal(["flow", str(tmp_path / "box.npy"), "--steps", "2"])
+    assert text.split()[:2] == ["0", "0"]  # the terminal reports no size
     assert "flow:" in text and "%|" in text, text
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="a pseudo-terminal needs fork")
+def test_a_terminal_of_columns_and_no_rows_sees_the_bar(tmp_path):
+    """A terminal that reports its columns and 0 rows (``stty rows 0``,
+    some CI terminals) showed no bar: tqdm reads its row as below the
+    screen. It is drawn there, within the columns the terminal reports."""
+    np.save(tmp_path / "box.npy", np.ones((6, 7, 8), bool))
+    text = on_a_pseudo_terminal(["flow", str(tmp_path / "box.npy"), "--steps", "2"],
+                                "import fcntl, struct, termios; "
+                                f"fcntl.ioctl(2, termios.TIOCSWINSZ, {struct.pack('HHHH', 0, 100, 0, 0)!r})")
+    assert text.split()[:2] == ["100", "0"]  # as stty rows 0 sets it
+    assert "flow:" in text and "%|" in text, text
+    bar = next(line for line in text.split("\r") if "%|" in line)
+    assert len(bar) <= 100
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")

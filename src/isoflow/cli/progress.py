@@ -25,18 +25,42 @@ Progress = Callable[[int, "int | None"], None]
 NARROWEST = 80
 
 
-def terminal_columns() -> int:
-    """The columns of the terminal on stderr, 0 where it reports none.
+def terminal_size() -> tuple[int, int]:
+    """The columns and rows of the terminal on stderr, each 0 where it
+    reports none.
 
     Examples
     --------
-    >>> terminal_columns() >= 0
+    >>> columns, rows = terminal_size()
+    >>> columns >= 0 and rows >= 0
     True
     """
     try:
-        return os.get_terminal_size(sys.stderr.fileno()).columns
+        size = os.get_terminal_size(sys.stderr.fileno())
     except (OSError, ValueError, AttributeError):  # not a terminal, or a stand-in without a descriptor
-        return 0
+        return 0, 0
+    return size.columns, size.lines
+
+
+def bar_width() -> dict:
+    """tqdm's keywords for the bar's size on the terminal on stderr.
+
+    tqdm sizes a bar from the terminal as it goes (``dynamic_ncols``) and
+    draws none where the terminal reports 0 columns (a pty never sized:
+    ``script``, some containers' ttys) or 0 rows (``stty rows 0``, some CI
+    terminals), as it reads the bar's row as lying below the screen. Such
+    a terminal gets a bar of a fixed size: as wide as its columns, else
+    :data:`NARROWEST`.
+
+    Examples
+    --------
+    >>> sorted(bar_width())  # whatever the terminal, tqdm is told enough to draw the bar
+    ['dynamic_ncols', 'ncols', 'nrows']
+    """
+    columns, rows = terminal_size()
+    if columns and rows:
+        return {"ncols": None, "nrows": None, "dynamic_ncols": True}
+    return {"ncols": max(columns - 1, 1) if columns else NARROWEST, "nrows": 24, "dynamic_ncols": False}
 
 
 @contextlib.contextmanager
@@ -64,18 +88,15 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     from tqdm import tqdm
 
     bars: list = []
-    # a terminal that reports no size (a pty never sized: `script`, some
-    # containers' ttys) makes tqdm's bar zero wide on zero rows, which it
-    # does not draw
-    width = {} if terminal_columns() else {"ncols": NARROWEST, "nrows": 24, "dynamic_ncols": False}
+    width = bar_width()
 
     def show(done: int, total: int | None) -> None:
         words = total is None and noun is not None
         desc = f"{label}: {counted(done, noun)}" if words else label
         if not bars:
             form = BAR_FORMAT if total is not None else COUNT_FORMAT if words else None
-            bars.append(tqdm(desc=desc, total=total, initial=done, unit=unit, file=sys.stderr, leave=False,
-                             **({"dynamic_ncols": True} | width), bar_format=form))
+            bars.append(tqdm(desc=desc, total=total, initial=done, unit=unit, file=sys.stderr, leave=False, **width,
+                             bar_format=form))
         if total != bars[0].total:  # genus: the stepping adds a resolution
             bars[0].total = total
         if words:
