@@ -271,6 +271,35 @@ def test_info_of_a_far_zarr_store_read_block_by_block_warns_in_x_y_z_order(tmp_p
     assert json.loads(p.stdout)["centroid"][0] is None
 
 
+def test_info_labels_of_a_far_zyx_store_warns_of_the_axes_a_file_s_table_names(tmp_path):
+    # read block by block, a store whose axes are z, y, x must name the axes lost as x, y, z, as the
+    # table's columns and info's other warnings do, not in the order it stores them (there 0 and 1)
+    import json
+
+    zarr = pytest.importorskip("zarr")
+    nrrd = pytest.importorskip("nrrd")
+    image = np.zeros((6, 7, 8), np.uint8)
+    image[1:5, 1:5, 1:5] = 1
+    image[0, 0, 0] = 2
+    centre, pitch = [0.0, 1e17, 1e43], [1.0, 2.0, 3.0]  # voxel 0's centre, as both formats place it
+    nrrd.write(str(tmp_path / "far.nrrd"), image, {"space directions": np.diag(pitch), "space origin": centre},
+               index_order="C")
+    group = zarr.open_group(str(tmp_path / "far.zarr"), mode="w")  # zarr-python writes it, z first
+    group.create_array("0", data=image.transpose(2, 1, 0), chunks=(4, 4, 4))
+    group.attrs["multiscales"] = [{"version": "0.4", "axes": [{"name": a, "type": "space"} for a in "zyx"],
+                                   "datasets": [{"path": "0", "coordinateTransformations": [
+                                       {"type": "scale", "scale": pitch[::-1]},
+                                       {"type": "translation", "translation": centre[::-1]}]}]}]
+    said, rows = {}, {}
+    for name in ("far.nrrd", "far.zarr"):
+        p = isoflow("info", tmp_path / name, "--labels", "--json")
+        said[name] = one_line(p).replace(str(tmp_path / name), "INPUT")
+        rows[name] = json.loads(p.stdout)["labels"]
+    assert said["far.zarr"] == said["far.nrrd"] and "along axis 1 and 2 are one value" in said["far.zarr"]
+    assert rows["far.zarr"] == rows["far.nrrd"]
+    assert all(row[f"bbox-{d}"] is None for row in rows["far.zarr"] for d in (1, 2, 4, 5))
+
+
 def test_info_labels_where_float64_cannot_keep_corners_apart_warns_and_gives_null(tmp_path):
     """The label table at 1e43: each label's box and centroid along x were
     the collapsed 1e+43, without a word. They are null (NaN in Python)
