@@ -1125,6 +1125,31 @@ def test_surface_labels_dir_flushes_the_set_at_once_not_file_by_file(tmp_path, c
     assert flushes == [(2, False), (12, False)]
 
 
+def test_surface_labels_checks_its_placement_once(tmp_path, capsys, monkeypatch):
+    # the placement was checked before the table and again before the surfaces, the same numbers twice
+    nrrd = pytest.importorskip("nrrd")
+    from isoflow.mesh import export
+
+    # a voxel of 1e-9 at 1e6, where float64 keeps the corners apart but moves them (pynrrd writes it)
+    nrrd.write(str(tmp_path / "far.nrrd"), boxes([2, 3]), {"space directions": np.eye(3) * 1e-9,
+                                                           "space origin": [1e6, 0.0, 0.0]}, index_order="C")
+    calls, real = [], export.check_float64_corners
+
+    def check_float64_corners(*args, **kwargs):
+        calls.append(args[0])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(export, "check_float64_corners", check_float64_corners)
+    out = tmp_path / "out"
+    assert main(["surface", str(tmp_path / "far.nrrd"), "--labels", "-o", f"{out}/", "--suffix", "ply"]) == 0
+    err = capsys.readouterr().err
+    assert calls == [str(tmp_path / "far.nrrd")]
+    assert err.count("float64 holds the voxel corners of this placement") == 1, err
+    for label in (1, 2):  # a box each: a closed sphere-like surface, V - E + F = 2
+        mesh = trimesh.load(out / f"label_{label}.ply", process=False)
+        assert mesh.is_watertight and mesh.euler_number == 2
+
+
 def test_surface_labels_force_replaces_the_whole_set(tmp_path, capsys):
     # label_4.ply of an earlier image with four labels stayed beside the three files of the new one
     np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))

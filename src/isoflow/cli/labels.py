@@ -95,9 +95,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     """The label image named on the command line and its table, with only
     the labels that occur (a warning names those asked for that do not):
     ``(about, connectivity, table, image, absent)``, ``about`` its shape,
-    type, voxel size, origin and their length unit, ``image`` None for a
-    zarr store (read block by block), ``absent`` the labels asked for that
-    have no row, in the order asked."""
+    type, voxel size, origin and their length unit (and for ``surface``,
+    ``corners``: :func:`isoflow.mesh.export.check_float64_corners` of the
+    image, which refused a placement no surface file holds), ``image``
+    None for a zarr store (read block by block), ``absent`` the labels
+    asked for that have no row, in the order asked."""
     from ..digital.connectivity import resolve_connectivity
     from ..digital.label_table import label_table
     from ..mesh.formats.omezarr import stored_ndim
@@ -114,11 +116,12 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     image = None if blocks else read_labels(args.input)
     say_segments(args)
     ndim = 3 if image is None else image.array.ndim
+    corners = None
     if image is not None and getattr(args, "command", "") == "surface":
         from ..mesh.export import check_float64_corners
 
         # a placement no surface file holds: refused before the table, whose boxes would only be warned of
-        check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
+        corners = check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
     if ndim == 2 and getattr(args, "command", "") == "surface":
         raise IsoflowError(f"{args.input}: surface needs a 3D label image, this one is 2D (isoflow info "
                            f"{args.input} --labels gives its table)")
@@ -133,7 +136,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         about, table = table_of_store(args, conn, None if every else asked, surfaces)
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
-                 "origin": image.origin, "unit": image.unit}
+                 "origin": image.origin, "unit": image.unit, **({} if corners is None else {"corners": corners})}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         try:
             table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
@@ -476,7 +479,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
     columns computed per batch."""
     from ..digital.label_meshes import label_batches
-    from ..mesh.export import check_float64_corners, float32_transform_problem, float64_move_note
+    from ..mesh.export import float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
     from ..mesh.outputs import check_output_path
     from .progress import TimeNote, progress_bar
@@ -489,10 +492,9 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                            "triangles in binary")
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
-    _, conn, table, image, _ = read_table(args)
+    about, conn, table, image, _ = read_table(args)
     check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
-    # a placement no file holds: refused before any surface
-    corners = check_float64_corners(args.input, image.origin, image.spacing, image.array.shape)
+    corners = about["corners"]  # (a placement no file holds was refused before the table)
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]
