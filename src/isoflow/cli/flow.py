@@ -91,16 +91,23 @@ def cmd_flow(args: argparse.Namespace) -> int:
 def out_placement(args: argparse.Namespace, obj) -> dict | None:
     """The object's placement as
     :func:`isoflow.mesh.export.check_float64_corners` takes it, refused
-    before the run where float64 cannot keep the voxel corners apart:
-    with ``--out`` the step surfaces would collapse in every file (a 2D
+    before the run where float64 cannot keep the voxel corners apart
+    with ``--out``: the step surfaces would collapse in every file (a 2D
     run's boxes in flow.csv, pictures in shapes.png and cropped states'
-    origins alike), without it the boxes and the limit point printed
-    would be one coordinate where the object spans voxels. Else what
-    float64 does to the corners, for the warning that says how far it
-    moves them; None for a 2D run with ``--out``, which writes no surface."""
+    origins alike). Else what float64 does to the corners, for the
+    warning that says how far it moves them; None for a 2D run with
+    ``--out``, which writes no surface, and for a run without ``--out``
+    where float64 cannot keep them apart: the run answers as ``info``
+    does, its coordinates along such an axis None (``?``, ``null``),
+    said in the run's one warning
+    (:func:`isoflow.flow.run.held_boxes`)."""
+    from ..digital.float64 import merged_axes
     from ..mesh.export import check_float64_corners
 
     if not args.out:
+        # the flow works on the voxels: only the world coordinates printed are lost there, not its numbers
+        if any(merged_axes(obj.origin, obj.spacing, obj.volume.shape)):
+            return None
         return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
                                      "the boxes and the limit point it prints")
     if obj.ndim == 2:
