@@ -518,6 +518,10 @@ def output_set(name: str | os.PathLike, retire: Iterable[str | os.PathLike] = ()
     _put_in_place(entries, [Path(f) for f in retire])
 
 
+# up to this many files a set is flushed file by file (flush_set)
+FILES_PER_FSYNC = 8
+
+
 def flush_set(name: str | os.PathLike, written: list[Path]) -> None:
     """Flush the temporaries of a set to the disk before any is renamed.
 
@@ -525,7 +529,10 @@ def flush_set(name: str | os.PathLike, written: list[Path]) -> None:
     crash, an empty file where the previous one was. On Linux the set is
     flushed with one ``syncfs`` per file system: an ``fsync`` per file
     commits the file system's journal once per file, which with thousands
-    of labels' files took a large share of the run. Elsewhere each file is
+    of labels' files took a large share of the run. A set of a few files
+    (a mesh and its picture) is flushed file by file all the same: ``syncfs``
+    also waits for whatever else the file system holds unwritten, which
+    another program's large write can make long. Elsewhere each file is
     flushed in turn (``sync`` need not wait for the disk there).
 
     Parameters
@@ -548,7 +555,7 @@ def flush_set(name: str | os.PathLike, written: list[Path]) -> None:
     >>> flush_set(d, [d / "a.txt"])
     """
     try:
-        syncfs = _syncfs()
+        syncfs = _syncfs() if len(written) > FILES_PER_FSYNC else None
         if syncfs is None:
             for tmp in written:
                 _fsync_tree(tmp) if tmp.is_dir() else sync_file(tmp)
