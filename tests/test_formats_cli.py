@@ -1223,7 +1223,7 @@ def test_a_dataset_added_to_a_large_hdf5_file_counts_the_file_in_memory(tmp_path
     from isoflow.scale import memory
 
     target, warm = tmp_path / "scan.h5", tmp_path / "warm.h5"
-    raw = np.random.default_rng(0).integers(0, 255, 48 << 20, dtype=np.uint8)  # 48 MiB that gzip cannot shrink
+    raw = np.random.default_rng(0).integers(0, 255, 24 << 20, dtype=np.uint8)  # 24 MiB that gzip cannot shrink
     for path in (target, warm):
         with h5py.File(path, "w") as f:  # a file another tool wrote
             f.create_dataset("raw", data=raw if path == target else raw[:1000])
@@ -1240,7 +1240,7 @@ def test_a_dataset_added_to_a_large_hdf5_file_counts_the_file_in_memory(tmp_path
     trimesh.creation.box((2.0, 3.0, 4.0)).export(tmp_path / "box.stl")
     monkeypatch.setattr(memory, "default_budget", lambda: size)  # the voxels fit, the file's two copies do not
     err = fails(capsys, "voxelize", tmp_path / "box.stl", "--pitch", "1", "-o", f"{target}:/seg",
-                words=(f"{target}: adding /seg holds this file of 48.0 MiB in memory twice", "h5copy -i NEW.h5"))
+                words=(f"{target}: adding /seg holds this file of 24.0 MiB in memory twice", "h5copy -i NEW.h5"))
     assert "Traceback" not in err
     with h5py.File(target, "r") as f:
         assert list(f) == ["raw"] and np.array_equal(f["raw"][:1000], raw[:1000])
