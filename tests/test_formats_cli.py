@@ -3,6 +3,7 @@ the numbers of the same volume as .npy, exported PLYs land in the file's
 world coordinates, writing by suffix, and bad files give one line, exit 2."""
 
 import json
+import os
 import re
 import subprocess
 import sys
@@ -1179,6 +1180,70 @@ def test_a_dataset_written_into_an_hdf5_file_keeps_its_other_datasets(tmp_path, 
     run(capsys, "voxelize", box, "--pitch", "1", "-o", target, "--force")
     with h5py.File(target, "r") as f:
         assert "raw" not in f and "seg" not in f and int(f["volume"][()].sum()) == 24
+
+
+APPEND_PEAK = """
+import json, re, sys
+import numpy as np
+import isoflow
+from isoflow.scale import memory
+
+def status(key):
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) * 1024 for line in fh if line.startswith(key))
+
+target, warm = sys.argv[1], sys.argv[2]
+obj = isoflow.DigitalObject(np.random.default_rng(1).random((64, 64, 64)) < 0.3)
+isoflow.write_volume(obj, warm + ":/seg")  # h5py's modules loaded before the peak is taken
+with open("/proc/self/clear_refs", "w") as fh:
+    fh.write("5")
+before = status("VmRSS")
+isoflow.write_volume(obj, target + ":/seg")
+peak = status("VmHWM") - before
+memory.default_budget = lambda: 1
+try:
+    isoflow.write_volume(obj, target + ":/seg", force=True)
+    need = 0.0
+except isoflow.IsoflowError as exc:
+    need = float(re.search(r"needs about ([0-9.]+) MiB", str(exc)).group(1)) * 2**20
+print(json.dumps({"peak": peak, "estimate": need}))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the peak is read from /proc/self/status")
+def test_a_dataset_added_to_a_large_hdf5_file_counts_the_file_in_memory(tmp_path, capsys, monkeypatch):
+    """``-o FILE.h5:/name`` reads the existing file whole into memory (and
+    holds the image written out beside it), which no memory check
+    counted: a dataset of a few voxels added to a file larger than memory
+    ran until the system killed it. The file is counted, before any work
+    and again with the dataset before the write: the estimate covers the
+    peak the kernel measures, and a budget below it is refused in one line
+    naming h5copy, the file left as h5py read it."""
+    h5py = pytest.importorskip("h5py")
+    from isoflow.scale import memory
+
+    target, warm = tmp_path / "scan.h5", tmp_path / "warm.h5"
+    raw = np.random.default_rng(0).integers(0, 255, 24 << 20, dtype=np.uint8)  # 24 MiB that gzip cannot shrink
+    for path in (target, warm):
+        with h5py.File(path, "w") as f:  # a file another tool wrote
+            f.create_dataset("raw", data=raw if path == target else raw[:1000])
+    size = target.stat().st_size
+    if os.access("/proc/self/clear_refs", os.W_OK):
+        p = subprocess.run([sys.executable, "-c", APPEND_PEAK, str(target), str(warm)], capture_output=True,
+                           text=True, timeout=300)
+        assert p.returncode == 0, p.stderr
+        got = json.loads(p.stdout)
+        assert got["peak"] > 1.5 * size  # the file twice, as the kernel measures it
+        assert 0.95 * got["peak"] <= got["estimate"] <= 2 * got["peak"], got
+        with h5py.File(target, "a") as f:
+            del f["seg"]
+    trimesh.creation.box((2.0, 3.0, 4.0)).export(tmp_path / "box.stl")
+    monkeypatch.setattr(memory, "default_budget", lambda: size)  # the voxels fit, the file's two copies do not
+    err = fails(capsys, "voxelize", tmp_path / "box.stl", "--pitch", "1", "-o", f"{target}:/seg",
+                words=(f"{target}: adding /seg holds this file of 24.0 MiB in memory twice", "h5copy -i NEW.h5"))
+    assert "Traceback" not in err
+    with h5py.File(target, "r") as f:
+        assert list(f) == ["raw"] and np.array_equal(f["raw"][:1000], raw[:1000])
 
 
 def test_an_array_of_a_plain_zarr_group_is_named_after_a_colon(tmp_path, capsys):

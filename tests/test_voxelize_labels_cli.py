@@ -216,18 +216,18 @@ def test_split_of_a_glb_scene_by_node_and_info_labels_chi(tmp_path, capsys):
     assert main(["voxelize", str(path), "--split", "--resolution", "64", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     rows = [line.split() for line in printed.splitlines()[2:]]
-    assert [r[2] for r in rows] == [f"{path}:ball", f"{path}:crate", f"{path}:ring"]
+    assert [r[2] for r in rows] == [f"{path}:ring", f"{path}:ball", f"{path}:crate"]  # the file's order
     image = read_labels(out)
     report = json.loads(_run(capsys, "info", out, "--labels", "--json"))
     chis = {row["label"]: row["euler_characteristic"] for row in report["labels"]}
-    for label, node in enumerate(("ball", "crate", "ring"), 1):
+    for label, node in enumerate(("ring", "ball", "crate"), 1):
         transform, geometry = scene.graph[node]
         mesh = scene.geometry[geometry].copy().apply_transform(transform)
         own = voxelize(mesh.vertices, mesh.faces, pitch=float(image.spacing[0]), grid=(image.origin, image.array.shape),
                        details=True).volume
         assert np.array_equal(image.array == label, own), node
         assert chis[label] == analyze(np.pad(own, 1))["euler_characteristic"], node
-    assert chis == {1: 1, 2: 1, 3: 0}  # solid balls and a solid torus
+    assert chis == {1: 0, 2: 1, 3: 1}  # a solid torus, a solid ball and box
 
 
 def test_fill_applies_to_every_mesh(tmp_path, capsys):
@@ -284,3 +284,34 @@ def test_overlap_error_on_one_mesh_is_refused_and_with_split_compares_its_bodies
     assert "the meshes overlap" in p.stderr and "(labels 1 and 2: " in p.stderr
     p = run("--overlap", "later")
     assert p.returncode == 0 and out.exists(), p.stderr
+
+
+def test_split_of_a_glb_labels_its_nodes_in_the_files_order(tmp_path, capsys):
+    """``voxelize scene.glb --split`` gave the labels in the order of the
+    node names: nodes written ``b``, ``a``, ``c`` came out as labels 1 =
+    ``a``, 2 = ``b``. Label i is the file's i-th node (the order of the
+    GLB's JSON chunk, read here without isoflow or trimesh's graph), the
+    printed table names it, and its voxels lie in that node's box as
+    trimesh places it."""
+    import struct
+
+    scene = trimesh.Scene()
+    for x, name in enumerate(("b", "a", "c")):
+        scene.add_geometry(trimesh.creation.box((1, 1, 1)), node_name=name, geom_name=f"box_{name}",
+                           transform=trimesh.transformations.translation_matrix([3.0 * x, 0, 0]))
+    path, out = tmp_path / "scene.glb", tmp_path / "labels.npz"
+    scene.export(path)
+    data = path.read_bytes()
+    length = struct.unpack_from("<I", data, 12)[0]
+    nodes = [node["name"] for node in json.loads(data[20:20 + length])["nodes"]]
+    assert nodes == ["b", "a", "c"]  # the file's order, which sorting the names would change
+    table = _run(capsys, "voxelize", path, "--split", "--pitch", "0.25", "-o", out)
+    rows = [line.split() for line in table.splitlines() if line.split()[:1] in (["1"], ["2"], ["3"])]
+    assert [(int(r[0]), r[-1]) for r in rows] == [(i, f"{path}:{n}") for i, n in enumerate(nodes, 1)]
+    saved = np.load(out)  # NumPy's reading of the file: the labels, the pitch and the origin
+    labels, pitch, origin = saved["volume"], float(saved["pitch"]), saved["origin"]
+    reread = trimesh.load_scene(path)
+    for i, name in enumerate(nodes, 1):
+        centre = origin + pitch * (np.argwhere(labels == i).mean(0) + 0.5)
+        lo, hi = reread.geometry[reread.graph[name][1]].copy().apply_transform(reread.graph[name][0]).bounds
+        assert np.all(lo <= centre) and np.all(centre <= hi), (i, name, centre)

@@ -5,6 +5,8 @@ NumPy and compiled paths and on several threads; and scikit-image's
 regionprops gives the same voxel counts, Euler numbers, boxes and
 centroids."""
 
+import re
+
 import numpy as np
 import pytest
 from conftest import ball
@@ -475,3 +477,27 @@ def test_an_image_in_memory_of_more_voxels_than_the_pieces_number_is_read_in_sla
         assert table["b0"][row] == ndimage.label(solid, obj)[1]
         holes, n = ndimage.label(np.pad(~solid, 1, constant_values=True), other)
         assert table["b2"][row] == n - 1  # the complement's components but the one outside
+
+
+@needs_numba
+def test_pieces_beyond_the_budget_are_refused_naming_the_layers_that_fit(monkeypatch):
+    """The compiled pass refused an image of noise whose pieces' statistics
+    would not fit the budget without a word of what would: the line names
+    the pieces (scipy's count of every value's 6-connected components)
+    and the voxel layers whose passes fit, and the image cropped to them
+    gives its table under the same budget, each label's voxels NumPy's."""
+    from scipy import ndimage
+
+    from isoflow.scale import memory
+    from isoflow.scale.pieces import PIECE_BYTES
+
+    vol = np.random.default_rng(3).integers(1, 7, (40, 40, 40)).astype(np.uint8)
+    n = sum(ndimage.label(vol == value)[1] for value in range(1, 7))
+    monkeypatch.setattr(memory, "default_budget", lambda: PIECE_BYTES * (n + 1) // 2)
+    with pytest.raises(IsoflowError, match=f"^the statistics of {n:,} pieces of a label image needs about ") as exc:
+        label_table(vol, method="compiled")
+    found = re.search(r"; about (\d+) of the 40 voxel layers fit: crop the image along its first axis;", str(exc.value))
+    assert found and "\n" not in str(exc.value), str(exc.value)
+    fit = int(found.group(1))
+    table = label_table(vol[:fit], method="compiled")
+    assert 1 <= fit < 40 and list(table["voxels"]) == np.bincount(vol[:fit].reshape(-1))[1:].tolist()

@@ -3,6 +3,8 @@ grid each mesh fills is the whole grid's, bit for bit; the labels, the
 overlap counts and the rule are checked against every mesh voxelised alone
 on the same grid; bodies against trimesh's split and a scene's nodes."""
 
+import json
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -260,6 +262,16 @@ def test_split_of_open_meshes_and_fins_is_as_before():
     assert sorted(len(b.faces) for b in bodies) == [4, 4, 24, 24, 24, 24, 24]
 
 
+def glb_node_names(path) -> list:
+    """The names of a GLB file's nodes in the order of its JSON chunk (the
+    glTF 2.0 layout: a 12-byte header, the chunk's length and type, the
+    JSON), read without trimesh, whose scene graph holds another order."""
+    data = Path(path).read_bytes()
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert data[:4] == b"glTF" and kind == b"JSON"
+    return [node["name"] for node in json.loads(data[20:20 + length])["nodes"]]
+
+
 def test_a_scene_splits_by_node_in_world_coordinates(tmp_path):
     scene = trimesh.Scene()
     cube = trimesh.creation.box((1, 1, 1))
@@ -270,10 +282,11 @@ def test_a_scene_splits_by_node_in_world_coordinates(tmp_path):
     path = tmp_path / "car.glb"
     scene.export(path)
     r = voxelize_meshes([path], resolution=40, split=True)
-    assert r.names == (f"{path}:body", f"{path}:wheel2", f"{path}:wheel10")  # natural order of the names
+    nodes = glb_node_names(path)  # the file's order, as its JSON chunk lists the nodes
+    assert nodes == ["wheel10", "body", "wheel2"] and r.names == tuple(f"{path}:{n}" for n in nodes)
     placed = {n: g.copy().apply_transform(scene.graph[n][0]) for n, g in
               (("body", sphere(0.6, (0, 0, 0))), ("wheel2", cube), ("wheel10", cube))}
-    for i, node in enumerate(("body", "wheel2", "wheel10"), 1):
+    for i, node in enumerate(nodes, 1):
         assert np.array_equal(r.labels == i, alone(placed[node], r)), node
     whole = voxelize_meshes([path], resolution=40)  # without split: one label
     assert whole.names == (str(path),) and whole.voxels == (sum(r.voxels),)

@@ -465,12 +465,17 @@ def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:
     return threads * (2 if is_zarr and not processes else 1)
 
 
-#: bytes per voxel of a bool block read, packed and swept (about 1.8 measured on a block of 512^3 voxels of a
-#: porous field, 10.8 for float32 values)
-BLOCK_BYTES = 2
+#: bytes per voxel of a bool block at work: the block, zarr's decoded chunk it is copied from, the sweep's passes
+#: (0.6 measured on blocks of 128^3 and 256^3 voxels of a porous field) and the block freed before it, which the C
+#: allocator keeps in the heap of the thread that decoded it for the next (measured 3.7 to 4.2 with zarr's reads)
+BLOCK_BYTES = 4
 #: ... and of a block of another type beside twice its stored values (zarr's and NumPy's): the masks of its values
 #: other than 0 and 1, and its bool copy
 CHECK_BYTES = 4
+#: bytes per voxel of the blocks' faces while two layers of blocks are held: a summary keeps 3 (its faces' numbers
+#: and voxels), the merges of the seams between the layers take the rest while they run (8 to 9 measured in all on
+#: stores of 256^3 and 384^3 voxels in chunks of 64^3, where the faces outweigh the blocks at work)
+FACE_BYTES = 12
 
 
 def _block_bytes(grid: _Grid, dtype) -> int:
@@ -480,15 +485,25 @@ def _block_bytes(grid: _Grid, dtype) -> int:
     return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES)
 
 
-def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, scheduler, is_zarr: bool) -> int:
+def _faces_bytes(grid: _Grid) -> int:
+    """The memory that the faces of two layers of blocks take, held as
+    their summaries wait for the next layer's, at most (every block as
+    large as the largest, every face of it counted)."""
+    sides = [max(b - a for a, b in bounds) for bounds in grid.bounds]
+    per_block = 2 * sum(int(np.prod(sides[:i] + sides[i + 1:], dtype=np.int64)) for i in range(len(sides)))
+    blocks = min(2, grid.numblocks[0]) * int(np.prod(grid.numblocks[1:], dtype=np.int64))
+    return FACE_BYTES * per_block * blocks
+
+
+def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where: str, scheduler, is_zarr: bool) -> int:
     """The blocks summed at a time on this machine: ``workers``, or as many
-    as the memory budget holds where that is fewer but at least
-    ``threads`` (a zarr store's second task per thread is left out first:
-    it only spares the cores a wait). Blocks that would not fit ``threads``
-    at a time are refused up front, before any is read, saying how many
-    would, where the blocks are summed here (a ``dask.distributed``
-    cluster's workers hold their own memory); one at a time on the
-    synchronous scheduler."""
+    as the memory budget holds beside the ``held`` bytes of the layers'
+    faces where that is fewer but at least ``threads`` (a zarr store's
+    second task per thread is left out first: it only spares the cores a
+    wait). Blocks that would not fit ``threads`` at a time are refused up
+    front, before any is read, saying how many would, where the blocks are
+    summed here (a ``dask.distributed`` cluster's workers hold their own
+    memory); one at a time on the synchronous scheduler."""
     from dask.base import named_schedulers
 
     from ..scale.memory import check_fits, default_budget
@@ -498,12 +513,13 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, where: str, sche
     if scheduler is named_schedulers["sync"]:  # one task at a time, whatever the threads
         threads = workers = 1
     budget = default_budget()
-    fit = budget // max(per_block, 1)
+    fit = max(budget - held, 0) // max(per_block, 1)
     if fit >= workers:
         return workers
     hint = (f"sum {fit} at a time (threads={fit}, isoflow info --threads {fit})" if fit >= 1 else
             f"{'write the store with smaller chunks' if is_zarr else 'rechunk it'}, or pass smaller blocks (block_shape)")
-    check_fits(threads * per_block, f"{where}: summing its blocks ({threads} at a time)", hint=hint, budget=budget)
+    check_fits(threads * per_block + held, f"{where}: summing its blocks ({threads} at a time)", hint=hint,
+               budget=budget)
     return int(fit)
 
 
@@ -632,8 +648,8 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), where, scheduler,
-                                  grid.is_zarr)
+        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), _faces_bytes(grid), where,
+                                  scheduler, grid.is_zarr)
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)

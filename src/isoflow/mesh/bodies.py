@@ -7,8 +7,10 @@ meshes joined, as every command reads it). With ``split``:
 * a **scene** (glTF/GLB, 3MF, DAE/ZAE, 3DXML, XAML, and archives) gives one
   body per node that holds a triangle mesh, in world coordinates (the
   node's transform applied; a geometry placed by two nodes is two bodies),
-  named ``FILE:NODE`` and taken in the natural order of the node names
-  (``part2`` before ``part10``: trimesh does not keep the file's order);
+  named ``FILE:NODE`` and taken in the file's order: a glTF/GLB file's
+  ``nodes`` (trimesh's scene graph holds them in another order, its
+  traversal's), any other scene's in the natural order of the node names
+  (``part2`` before ``part10``);
   an archive's nodes are named by its files, ``FILE:MEMBER``
   (:func:`archive_bodies`);
 * any other mesh (STL with one or several solids, OBJ, PLY, OFF, or
@@ -109,11 +111,13 @@ ARCHIVE_TYPES = {".zip": "zip", ".tar.gz": "tar.gz", ".tar.bz2": "tar.bz2"}
 
 def node_bodies(path: Path) -> list[Body]:
     """One body per node of a scene file that holds a triangle mesh, in
-    world coordinates, in the natural order of the node names."""
+    world coordinates, in the file's order (:func:`scene_bodies`)."""
     kind = next((t for suffix, t in ARCHIVE_TYPES.items() if path.name.lower().endswith(suffix)), None)
     if kind is not None:
         return archive_bodies(path, kind)
-    return scene_bodies(trimesh_load(path, "scene"), str(path))
+    scene = trimesh_load(path, "scene")
+    order = gltf_node_order(path.read_bytes()) if path.suffix.lower() in GLTF_SUFFIXES else None
+    return scene_bodies(scene, str(path), order)
 
 
 def archive_bodies(path: Path, kind: str) -> list[Body]:
@@ -135,25 +139,32 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
             member_kind = trimesh.util.split_extension(member).lower()
             if member_kind not in mesh_formats():
                 continue  # a texture, a material, metadata
-            scene = trimesh.load_scene(archive[member], file_type=member_kind, resolver=resolver, process=False)
+            data = archive[member].read()
+            scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
+                                       process=False)
+            order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
             meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
                                                                             trimesh.Trimesh)]
             if not meshes:
                 continue  # a point cloud or a path: nothing to fill
-            named = scene_bodies(scene, f"{path}:{member}")
+            named = scene_bodies(scene, f"{path}:{member}", order)
             bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
     if not bodies:
         raise IsoflowError(f"{path}: no file of the archive holds a triangle mesh")
     return bodies
 
 
-def scene_bodies(scene, name: str) -> list[Body]:
+def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[Body]:
     """One body per node of a ``trimesh.Scene`` (named ``name:node``) that
-    holds a triangle mesh, as :func:`node_bodies` reads a file's."""
+    holds a triangle mesh, as :func:`node_bodies` reads a file's: in the
+    order of the file's nodes where ``order`` gives each node's index by
+    its name (:func:`gltf_node_order`; a node trimesh adds under one, a
+    primitive of a mesh of several, goes with it in trimesh's order), else
+    in the natural order of the node names."""
     import trimesh
 
     bodies = []
-    for node in sorted(scene.graph.nodes_geometry, key=natural_key):
+    for node in _scene_order(scene.graph, order):
         transform, geometry = scene.graph[node]
         mesh = scene.geometry.get(geometry)
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
@@ -166,6 +177,57 @@ def scene_bodies(scene, name: str) -> list[Body]:
     if not bodies:
         raise IsoflowError(f"{name}: no node of the scene holds a triangle mesh")
     return bodies
+
+
+#: the suffixes of glTF files, whose node order :func:`gltf_node_order` reads
+GLTF_SUFFIXES = (".glb", ".gltf")
+
+
+def gltf_node_order(data: bytes) -> dict[str, int]:
+    """Each node's index in a glTF file's ``nodes``, by the name trimesh's
+    scene graph gives it (the file's name made unique as trimesh makes
+    it, the index where it has none); empty where the JSON cannot be read.
+
+    Examples
+    --------
+    >>> gltf_node_order(b'{"nodes": [{"name": "b"}, {"name": "a"}, {"name": "b"}, {}]}')
+    {'b': 0, 'a': 1, 'b_1': 2, '3': 3}
+    """
+    import json
+    import struct
+
+    from trimesh.util import unique_name
+
+    try:
+        if data[:4] == b"glTF":  # GLB: a 12-byte header, then the JSON chunk's length and type
+            length = struct.unpack_from("<I", data, 12)[0]
+            data = data[20:20 + length]
+        nodes = json.loads(data).get("nodes", [])
+    except (ValueError, struct.error, AttributeError):  # trimesh reads it or says why; no order to follow then
+        return {}
+    names: dict[str, int] = {}
+    counts: dict = {}
+    for i, node in enumerate(nodes):
+        names[unique_name(str(node.get("name", i)) if isinstance(node, dict) else str(i), names, counts=counts)] = i
+    return names
+
+
+def _scene_order(graph, order: dict[str, int] | None) -> list:
+    """The scene's mesh nodes in the file's order: by the index of the
+    node, or of the nearest node above it that ``order`` names, then in
+    trimesh's order; by the natural order of their names without
+    ``order``."""
+    nodes = list(graph.nodes_geometry)
+    if not order:
+        return sorted(nodes, key=natural_key)
+    parents = graph.transforms.parents
+
+    def index(node) -> int:
+        while node not in order and node in parents:
+            node = parents[node]
+        return order.get(node, len(order))
+
+    return [n for _, _, n in sorted((index(n), i, n) for i, n in enumerate(nodes))]
 
 
 def natural_key(name) -> list:

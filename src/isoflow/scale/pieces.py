@@ -58,6 +58,10 @@ FACE, EDGE, VERTEX, NONE = 1, 2, 3, 4
 PIECE_BYTES = 8 + 8 + 24 + 24 + 24
 #: bytes per piece of a thread's share of the statistics (all but the value)
 STAT_BYTES = PIECE_BYTES - 8
+#: bytes per piece that the vertex pass adds beside the statistics: the
+#: counts of the 38 distinct rows of the feature table (uint32) and of the
+#: doubled edges (int64)
+FEATURE_BYTES = 38 * 4 + 8
 #: bytes per slot of the pair table (key, kind, sheets and quarters each way)
 PAIR_BYTES = 32
 #: bytes per pair of :func:`vertex_pass`' entries (key, kind, two packed sums)
@@ -66,6 +70,62 @@ PAIR_ENTRY_BYTES = 8 + 1 + 16
 #: grain map touches a few dozen others), so that the pairs a vertex row
 #: meets lie together
 SPREAD = 4
+
+
+def check_layers(need: int, what: str, layers: int, note: str = "", budget: int | None = None,
+                 whole: int | None = None) -> None:
+    """Refuse ``need`` bytes beyond the budget (default the memory
+    available now), naming how many of the ``layers`` voxel layers (along
+    the image's first axis) would fit ``whole`` bytes (default ``need``:
+    what the passes after this one take beside it, where known): what the
+    pieces, their runs and their pairs take grows with the layers.
+
+    Examples
+    --------
+    >>> from isoflow.errors import IsoflowError
+    >>> try:
+    ...     check_layers(8 << 30, "the runs of 400 layers of a label image", 400, budget=1 << 30)
+    ... except IsoflowError as exc:
+    ...     print(str(exc).split("; ")[-1])
+    about 45 of the 400 voxel layers fit: crop the image along its first axis
+    """
+    from .memory import default_budget  # read when called: the budget is the memory available now
+
+    budget = default_budget() if budget is None else int(budget)
+    if need <= budget:
+        return
+    # the need of a crop in proportion to its layers, a tenth spared: the
+    # pieces of an image are not spread evenly, and a crop cuts some in two
+    fit = 9 * layers * budget // (10 * max(need if whole is None else whole, 1))
+    hint = (f"about {fit:,} of the {layers:,} voxel layers fit: crop the image along its first axis" if fit >= 1
+            else f"not even one of the {layers:,} voxel layers fits: crop the image across its first axis")
+    check_fits(need, what, hint=hint + (f"; {note}" if note else ""), budget=budget)
+
+
+def check_threads(per_thread: int, threads: int, what: str, alone: str, budget: int | None = None) -> None:
+    """Refuse ``threads`` times ``per_thread`` bytes beyond the budget
+    (default the memory available now), naming how many threads would fit
+    (``threads=N``, ``isoflow info --labels --threads N``), or ``alone``,
+    what to do where not even one does.
+
+    Examples
+    --------
+    >>> from isoflow.errors import IsoflowError
+    >>> try:
+    ...     check_threads(3 << 20, 8, "a pair table of 98,304 slots per thread", "crop it", budget=10 << 20)
+    ... except IsoflowError as exc:
+    ...     print(str(exc).split("; ")[-1])
+    3 threads at a time fit (threads=3, isoflow info --labels --threads 3)
+    """
+    from .memory import default_budget
+
+    budget = default_budget() if budget is None else int(budget)
+    if per_thread * threads <= budget:
+        return
+    fit = budget // max(per_thread, 1)
+    hint = (alone if fit < 1 else f"{fit} thread{'s' if fit > 1 else ''} at a time fit{'' if fit > 1 else 's'} "
+            f"(threads={fit}, isoflow info --labels --threads {fit})")
+    check_fits(per_thread * threads, what, hint=hint, budget=budget)
 
 
 def unsigned(volume: np.ndarray) -> np.ndarray:
@@ -278,7 +338,10 @@ def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape
             _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, 0, counts, sums, lo, hi)
         return counts, sums, lo, hi
     windows = [pieces_held(offsets, runs, r0, r1) for r0, r1 in rows]
-    check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread")
+    # one thread adds into the whole statistics, which fit (checked before): no share of its own
+    check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread",
+               hint="one thread adds them into the whole statistics, which fit (threads=1, isoflow info --labels "
+                    "--threads 1)")
 
     def slab(r0: int, r1: int, p0: int, p1: int) -> tuple[np.ndarray, ...]:
         part = _empty_stats(p1 - p0)
@@ -347,8 +410,9 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     for lo, _ in parts[1:]:
         _join_seam(flat, ny, nz, lo, offsets, starts, parent)
     n = int(_count_roots(parent))
-    check_fits(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image",
-               hint="a label image of noise has a piece for about every other voxel")
+    check_layers(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image", nx,
+                 note="a label image of noise has a piece for about every other voxel",
+                 whole=(PIECE_BYTES + FEATURE_BYTES) * (n + 1))
     values = np.zeros(n + 1, np.uint64)
     _number_runs(flat, offsets, starts, parent, nz, values)
     counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
@@ -369,7 +433,7 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
-        check_fits(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image")
+        check_layers(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image", x_hi - x_lo)
         starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
 
 
@@ -954,8 +1018,9 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     # the pieces a thread meets: those of its voxel layers (numbered in C
     # order, mostly a narrow range), so its counts cover that range only
     windows = [piece_window(found, ny, x0, nxs, lo + p0 - 1, lo + p1 - 1) for p0, p1 in parts] or [(0, npieces)]
-    check_fits(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8),
-               f"the vertex pass over {npieces:,} pieces")
+    # the statistics of the pieces are held beside the counts
+    check_layers(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8) + PIECE_BYTES * npieces,
+                 f"the vertex pass over {npieces:,} pieces", nxs)
     features = [mapped((b - a, len(rows)), count) for a, b in windows]
     doubled = [mapped(b - a, np.int64) for a, b in windows]
     # the values as bytes and the pieces' values as uint64: one compiled pass for every width
@@ -991,7 +1056,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     if not keep_runs:
         for key in ("starts", "runs"):
             found[key] = found[key][:0].copy()  # a view would keep the buffer
-    keys, kind, sums = read_out(filled, npieces)
+    keys, kind, sums = read_out(filled, npieces, nxs)
     return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
             "keys": keys, "kind": kind, "sums": sums}
 
@@ -1030,7 +1095,9 @@ class PairSink:
         size = 2 * len(self.pairs) if grow else len(self.pairs)
         while 10 * keep > 3 * size:
             size *= 2
-        check_fits(PAIR_BYTES * size * self.threads, f"a pair table of {size:,} slots per thread")
+        alone = ("crop the image across its first axis: a thread's table holds the pairs of the pieces that its "
+                 "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
+        check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         if last:
             new = new_pairs(1)
         elif self.spare is not None and len(self.spare) == size:
@@ -1048,15 +1115,16 @@ class PairSink:
         return keep
 
 
-def read_out(filled: list, npieces: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def read_out(filled: list, npieces: int, layers: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The threads' blocks of pair entries ``[keys, kind, sums, entries]``
     in one set of arrays, each block let go as soon as it is copied. A
     pair met by two threads (pieces at the seam between their layers) has
-    an entry from each: the graph of pieces takes them as they are."""
+    an entry from each: the graph of pieces takes them as they are. A
+    refusal names the share of the image's ``layers`` that would fit."""
     blocks = [block for thread in filled for block in thread]
     filled.clear()
     total = sum(block[3] for block in blocks)
-    check_fits(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces")
+    check_layers(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces", layers)
     keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
     at = 0
     while blocks:

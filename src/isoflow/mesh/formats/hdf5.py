@@ -21,7 +21,10 @@ are kept (``--force`` only where that dataset is there already; HDF5 does not
 give back a replaced dataset's space, ``h5repack`` does). The file is built
 in memory (compressed) and written out whole, so a write that fails midway
 (a full disk) is one error line; a dataset added to an existing file holds
-that file in memory too.
+that file in memory too, twice (read whole, and its image written out):
+counted in the memory check before any work, and again with the dataset
+before the write, the refusal naming ``h5copy``, which copies a dataset
+written to a file of its own into the large one without reading it.
 """
 
 from __future__ import annotations
@@ -36,6 +39,13 @@ from ...errors import IsoflowError
 from .registry import RawVolume, check_shape, import_library, length_unit, reading, stored_values
 
 DEFAULT_DATASET = "volume"
+#: copies of an existing file that adding a dataset to it holds: the file
+#: read whole by HDF5's core driver and the image of it written out
+FILE_COPIES = 2
+#: bytes per voxel of the dataset added beside them, at most: its uint8
+#: values and their gzip stream in both copies (1.5 measured on a random
+#: mask, which compresses least)
+DATASET_BYTES = 2
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -138,7 +148,28 @@ def check_output(path: str | Path, force: bool = False, dataset: str | None = No
             if isinstance(f.get(above), h5py.Dataset):
                 raise IsoflowError(f"{path}: /{above} is a dataset, so /{name} cannot be made inside it")
     check_writable_dir(path.parent, f"the HDF5 file {path.name}")
+    _check_held(path, name, 0)
     return path
+
+
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+    """Refuse, before the file is copied, a dataset added to an existing
+    file whose copies in memory, with the dataset's, would not fit."""
+    if _kept(path, dataset):
+        _check_held(path, _name(dataset), DATASET_BYTES * int(np.asarray(obj.volume).size))
+
+
+def _check_held(path: Path, name: str, extra: int) -> None:
+    """Refuse adding ``/name`` to the existing file ``path`` where its
+    copies in memory and ``extra`` bytes (the dataset's) exceed the
+    budget, naming the way that holds only the dataset: a file of its own,
+    copied in by ``h5copy``."""
+    from ...scale.memory import check_fits, sized
+
+    size = path.stat().st_size
+    check_fits(FILE_COPIES * size + extra, f"{path}: adding /{name} holds this file of {sized(size)} in memory twice",
+               hint=f"write /{name} to a file of its own (NEW.h5:/{name}), which holds only the dataset, and copy it "
+                    f"in with h5copy -i NEW.h5 -o {path} -s /{name} -d /{name}")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
