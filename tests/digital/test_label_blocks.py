@@ -181,6 +181,19 @@ def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp
     assert "f.zarr: voxel (3, 2, 1) holds 0.5: not a whole number" in err and len(err.splitlines()) == 1
 
 
+@pytest.mark.parametrize("chunks", [(30, 18, 2), (30, 2, 17)])
+def test_a_value_that_is_no_label_in_slabs_across_x_is_named_at_its_voxel(tmp_path, capsys, rng, chunks):
+    # slabs along z (or y) hold the voxels with their axes moved: the error names the voxel in x, y, z all the same
+    zarr = pytest.importorskip("zarr")
+    image = nested(rng).astype(np.float32)
+    image[21, 13, 11] = np.nan
+    store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=chunks, dtype=image.dtype)
+    store[...] = image
+    assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
+    err = capsys.readouterr().err
+    assert "f.zarr: voxel (21, 13, 11) holds nan: not a label" in err and len(err.splitlines()) == 1
+
+
 def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):
     """A store of shape (0, y, x) holds no voxel: label_table_blocks gives
     label_table's table of that empty image (a zero row per label asked

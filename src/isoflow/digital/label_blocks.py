@@ -27,7 +27,16 @@ import numpy as np
 
 from .connectivity import check_connectivity
 from .float64 import unheld_columns
-from .label_table import checked_image, columns, label_dtype, label_table, rows_in_image_order, slab_rows, wanted_labels
+from .label_table import (
+    as_labels,
+    checked_image,
+    columns,
+    label_dtype,
+    label_table,
+    rows_in_image_order,
+    slab_rows,
+    wanted_labels,
+)
 from .lattice import DigitalObject
 
 
@@ -125,4 +134,6 @@ class _Across:
     def __getitem__(self, layers: slice) -> np.ndarray:
         index = [slice(None)] * 3
         index[self.axes[0]] = layers
-        return np.transpose(np.asarray(self.array[tuple(index)]), self.axes)
+        # made labels before the axes move, so that a value that is no label is named at its voxel in the image
+        vol = as_labels(self.array[tuple(index)], first_layer=layers.start or 0, axis=self.axes[0])
+        return np.transpose(vol, self.axes)

@@ -298,11 +298,11 @@ def label_dtype(dtype) -> np.dtype:
     raise IsoflowError(f"a label image holds integers, not {dtype}")
 
 
-def as_labels(array, first_layer: int = 0) -> np.ndarray:
+def as_labels(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
     """An image's labels as :func:`label_dtype` (a bool image viewed as
     uint8, a float one converted); an error naming the first value that is
     no label (NaN, infinite, beyond int64, not whole) and its voxel
-    (``first_layer``: the index of the array's layer 0 along axis 0)."""
+    (``first_layer``: the index of the array's layer 0 along ``axis``)."""
     vol = np.asarray(array)
     kind = label_dtype(vol.dtype)
     if vol.dtype == np.bool_:
@@ -317,7 +317,7 @@ def as_labels(array, first_layer: int = 0) -> np.ndarray:
         if bad.any():
             at = int(np.argmax(bad))
             voxel = np.unravel_index(at, vol.shape)
-            where = ", ".join(str(int(i) + (first_layer if d == 0 else 0)) for d, i in enumerate(voxel))
+            where = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
             raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
 
