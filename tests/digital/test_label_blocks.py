@@ -49,27 +49,68 @@ def test_slabs_of_any_size_give_the_whole_images_table(rng, conn):
                     label_table(image, conn, pitch=(1, 2, 3), labels=[4, 1, 99]))
 
 
-def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng):
+def nested_stores(tmp_path, rng, chunks, ome_chunks):
+    """A nested label image as n.npy, as plain.zarr in ``chunks`` and as
+    an OME-Zarr image stored z, y, x (ome.zarr) in ``ome_chunks``."""
     zarr = pytest.importorskip("zarr")
     from isoflow.mesh.formats.omezarr import multiscales
 
     image = nested(rng).astype(np.uint32)
     np.save(tmp_path / "n.npy", image)
-    plain = zarr.create_array(str(tmp_path / "plain.zarr"), shape=image.shape, chunks=(7, 9, 17), dtype=image.dtype)
+    plain = zarr.create_array(str(tmp_path / "plain.zarr"), shape=image.shape, chunks=chunks, dtype=image.dtype)
     plain[...] = image
     group = zarr.open_group(str(tmp_path / "ome.zarr"), mode="w")
     group.attrs["multiscales"] = multiscales("n", [1.0, 1.0, 1.0], [0.0, 0.0, 0.0], stored="zyx")
     stored = image.transpose(2, 1, 0)
-    level = group.create_array("0", shape=stored.shape, chunks=(5, 9, 11), dtype=stored.dtype)
+    level = group.create_array("0", shape=stored.shape, chunks=ome_chunks, dtype=stored.dtype)
     level[...] = stored
 
-    def rows(path):
-        assert main(["info", str(path), "--labels", "--json", "--connectivity", "26"]) == 0
-        return json.loads(capsys.readouterr().out)["labels"]
 
-    want = rows(tmp_path / "n.npy")
-    assert rows(tmp_path / "plain.zarr") == want
-    assert rows(tmp_path / "ome.zarr") == want
+def info_rows(capsys, path, *options):
+    assert main(["info", str(path), "--labels", "--json", *options]) == 0
+    return json.loads(capsys.readouterr().out)["labels"]
+
+
+def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng):
+    nested_stores(tmp_path, rng, (7, 9, 17), (5, 9, 11))
+    want = info_rows(capsys, tmp_path / "n.npy", "--connectivity", "26")
+    assert info_rows(capsys, tmp_path / "plain.zarr", "--connectivity", "26") == want
+    assert info_rows(capsys, tmp_path / "ome.zarr", "--connectivity", "26") == want
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_slabs_across_any_axis_give_the_whole_images_table(rng, conn):
+    # the boxes, centroids and areas (per axis, with a voxel of three sizes) come back in the image's order
+    for axes in [(2, 0, 1), (1, 0, 2), (2, 1, 0), (0, 2, 1)] * 5:
+        shape = tuple(rng.integers(2, 11, 3))
+        image = rng.choice(int(rng.integers(2, 6)), size=shape).astype(np.int16)
+        got = label_table_blocks(image, conn, layers=cuts(rng, shape[axes[0]]), axes=axes, pitch=(1, 2, 3))
+        same_tables(got, label_table(image, conn, pitch=(1, 2, 3)))
+
+
+def test_info_labels_of_stores_thin_along_z_reads_slabs_along_z(tmp_path, capsys, rng, monkeypatch):
+    """Chunks thin along z (stored last, or first as OME-Zarr's z, y, x)
+    are one layer of chunks along x: read in slabs along x, the first slab
+    was the whole image. The slabs follow the chunks as the report block
+    by block does, along z, each a layer of chunks and a voxel layer either
+    side; the rows are the in-memory table's."""
+    from isoflow.mesh.formats.omezarr import LabelSlabs
+
+    nested_stores(tmp_path, rng, (30, 18, 2), (2, 18, 30))
+    reads = []
+    read = LabelSlabs.__getitem__
+
+    def recorded(self, region):
+        out = read(self, region)
+        reads.append(out.shape)  # in x, y, z order
+        return out
+
+    monkeypatch.setattr(LabelSlabs, "__getitem__", recorded)
+    want = info_rows(capsys, tmp_path / "n.npy")
+    for name in ("plain.zarr", "ome.zarr"):
+        reads.clear()
+        assert info_rows(capsys, tmp_path / name) == want
+        assert len(reads) == 9 and all(shape[:2] == (30, 18) and shape[2] <= 4 for shape in reads)
 
 
 @pytest.mark.parametrize("conn", [6, 26])
@@ -138,6 +179,19 @@ def test_info_labels_of_a_float_store_names_it_and_counts_what_the_file_does(tmp
     assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
     err = capsys.readouterr().err
     assert "f.zarr: voxel (3, 2, 1) holds 0.5: not a whole number" in err and len(err.splitlines()) == 1
+
+
+@pytest.mark.parametrize("chunks", [(30, 18, 2), (30, 2, 17)])
+def test_a_value_that_is_no_label_in_slabs_across_x_is_named_at_its_voxel(tmp_path, capsys, rng, chunks):
+    # slabs along z (or y) hold the voxels with their axes moved: the error names the voxel in x, y, z all the same
+    zarr = pytest.importorskip("zarr")
+    image = nested(rng).astype(np.float32)
+    image[21, 13, 11] = np.nan
+    store = zarr.create_array(str(tmp_path / "f.zarr"), shape=image.shape, chunks=chunks, dtype=image.dtype)
+    store[...] = image
+    assert main(["info", str(tmp_path / "f.zarr"), "--labels"]) == 2
+    err = capsys.readouterr().err
+    assert "f.zarr: voxel (21, 13, 11) holds nan: not a label" in err and len(err.splitlines()) == 1
 
 
 def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):

@@ -696,6 +696,40 @@ def test_thin_chunks_are_summed_a_layer_at_a_time(tmp_path, kind):
     assert got.betti[0] == label(v, np.ones((3, 3, 3)))[1]
 
 
+@pytest.mark.parametrize("conn", [6, 26])
+@pytest.mark.parametrize("chunks", [(3, 41, 29), (37, 41, 3), (5, 41, 4)])
+def test_thin_chunks_hold_one_layer_of_faces(monkeypatch, conn, chunks):
+    """Thin blocks have nearly all their components on their faces: kept
+    for every block, their records grew with the volume's faces. After each
+    layer of blocks the records settle into one that holds no more open
+    keys and pieces than the voxels of one face of a layer; the report is
+    the in-memory one, whose chi and b0 are those of scikit-image and
+    scipy, with the same surfaces and doubled edges."""
+    from scipy.ndimage import generate_binary_structure, label
+    from skimage.measure import euler_number
+
+    v = smooth(np.random.default_rng(29), (37, 41, 29), sigma=1.2)  # odd sizes: no chunking divides them
+    held = []
+    settle = outofcore.settle
+
+    def settling(records, open_from, conn):
+        out = settle(records, open_from, conn)
+        held.append((sum(len(p["key"]) for p in out["pieces"]), sum(j.shape[1] for j in out["joins"]["fg"]) +
+                     sum(j.shape[1] for j in out["joins"]["bg"])))
+        return out
+
+    monkeypatch.setattr(outofcore, "settle", settling)
+    got = analyze_chunked(da.from_array(v, chunks=chunks), conn)
+    assert got == reference(v, conn)
+    assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1 if conn == 6 else 3)
+    assert got.betti[0] == label(v, generate_binary_structure(3, 1 if conn == 6 else 3))[1]
+    numblocks = [-(-n // c) for n, c in zip(v.shape, chunks)]
+    along = int(np.argmax(numblocks))  # the layers go along the axis of the most blocks
+    face = v.size // v.shape[along]
+    assert len(held) == numblocks[along] - 1 >= 6  # one settled record per layer of blocks but the last
+    assert max(pieces for pieces, _ in held) <= face and max(edges for _, edges in held) <= 2 * face
+
+
 def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypatch):
     """A store of one chunk larger than memory was read and swept on every
     thread until the system killed the process: blocks that would not fit

@@ -102,3 +102,27 @@ def test_surface_blocks_on_process_workers(client, tmp_path, conn):
     (rows_want, n_want), (faces_want, m_want) = records(want["path"])
     assert np.array_equal(rows_got, rows_want) and np.array_equal(n_got, n_want)
     assert np.array_equal(faces_got, faces_want) and np.array_equal(m_got, m_want)
+
+
+def test_the_default_clients_worker_limit_holds_the_blocks():
+    # the blocks are summed on the default client's worker, whose memory limit (200 MB) is what they must fit,
+    # not this machine's memory: a block of 2^27 voxels (about 256 MiB to sum) is refused up front, naming the
+    # worker's limit; a volume of small blocks runs there
+    import dask
+
+    from isoflow.scale.memory import default_budget
+
+    if default_budget() < 1 << 30:
+        pytest.skip("the big block must fit this machine's memory, so that only the worker's limit refuses it")
+    # the worker's own memory monitor left out: with processes=False it measures this whole test process
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set(unmonitored), \
+            distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="200MB", processes=False,
+                                     dashboard_address=None) as cluster, distributed.Client(cluster):
+        with pytest.raises(IsoflowError) as err:
+            analyze_chunked(da.zeros((512, 512, 512), bool, chunks=512), 6)
+        message = str(err.value)
+        assert "\n" not in message and f"memory limit of {200e6 / 2**20:.1f} MiB" in message
+        v = ball(12, 30)
+        got = analyze_chunked(da.from_array(v, chunks=(11, 7, 13)), 6)
+    assert got["betti"] == [1, 0, 0] and got["voxels"] == np.count_nonzero(v)

@@ -258,8 +258,8 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     wanted = None if asked is None else _by_type(args.input, asked, slabs.dtype)[0]
     with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
         try:
-            table = label_table_blocks(slabs, conn, layers=slabs.layers, pitch=place.spacing, origin=place.origin,
-                                       labels=wanted, surfaces=surfaces, progress=show)
+            table = label_table_blocks(slabs, conn, layers=slabs.layers, axes=slabs.axes, pitch=place.spacing,
+                                       origin=place.origin, labels=wanted, surfaces=surfaces, progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None

@@ -3,7 +3,10 @@ layer of blocks at a time (a zarr store: ``isoflow info LABELS.zarr
 --labels``).
 
 The passes of :mod:`isoflow.digital.label_table` run on each layer of
-blocks along axis 0 (:func:`~isoflow.digital.label_table.slab_rows`, which
+blocks along axis 0, or along the axis of the most blocks where a store's
+chunks are thin across it (the rule of the report block by block,
+:func:`isoflow.scale.chunks.layer_axes`; the table is put back in the
+image's order) (:func:`~isoflow.digital.label_table.slab_rows`, which
 also reads an image in memory of more voxels than the pieces' 32-bit
 numbers reach) with one voxel layer of each neighbour: the pieces of
 the slab (their voxels, sums and boxes counted on the slab's own layers
@@ -24,7 +27,16 @@ import numpy as np
 
 from .connectivity import check_connectivity
 from .float64 import unheld_columns
-from .label_table import checked_image, columns, label_dtype, label_table, slab_rows, wanted_labels
+from .label_table import (
+    as_labels,
+    checked_image,
+    columns,
+    label_dtype,
+    label_table,
+    rows_in_image_order,
+    slab_rows,
+    wanted_labels,
+)
 from .lattice import DigitalObject
 
 
@@ -33,6 +45,7 @@ def label_table_blocks(
     connectivity: int = 6,
     *,
     layers: Sequence[int] | None = None,
+    axes: Sequence[int] | None = None,
     pitch=None,
     origin=None,
     labels=None,
@@ -40,7 +53,8 @@ def label_table_blocks(
     progress: Callable[[int, int], None] | None = None,
 ) -> dict[str, np.ndarray]:
     """:func:`isoflow.label_table` of a 3D label array read in slabs along
-    axis 0 (a zarr array, or anything ``array[a:b]`` reads as NumPy).
+    axis 0, or another (a zarr array, or anything ``array[a:b]`` reads as
+    NumPy).
 
     Parameters
     ----------
@@ -50,8 +64,14 @@ def label_table_blocks(
     connectivity : {6, 26}
         As :func:`isoflow.label_table`.
     layers : sequence of int, optional
-        Voxel layers per slab (the array's chunks along axis 0; default:
-        one slab).
+        Voxel layers per slab (the array's chunks along the axis read
+        across; default: one slab).
+    axes : sequence of int, optional
+        The order of the array's axes in which it is read: slabs along
+        ``axes[0]`` (a store's chunks thin along it are many layers
+        there, one along the others; :func:`isoflow.scale.chunks.layer_axes`
+        picks it), each read as ``array[index]`` with a slice per axis.
+        Default: along axis 0, ``array[a:b]``.
     pitch, origin, labels, surfaces
         As :func:`isoflow.label_table`.
     progress : callable, optional
@@ -76,19 +96,44 @@ def label_table_blocks(
     >>> t = label_table_blocks(image, layers=[3, 3])
     >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist()
     ([2], [34], [1])
+    >>> across = label_table_blocks(image, layers=[2, 3], axes=(2, 0, 1))  # slabs along the last axis
+    >>> across["b2"].tolist(), across["bbox-2"].tolist() == t["bbox-2"].tolist()
+    ([1], True)
     """
     checked_image(np.zeros((1,) * len(array.shape), array.dtype))  # 3D, of labels
     kind = label_dtype(array.dtype)
     conn = check_connectivity(3, connectivity)
     place = DigitalObject.placement(3, pitch=pitch, origin=origin)
     wanted = None if labels is None else wanted_labels(labels, kind)
-    nx = int(array.shape[0])
+    across = None if axes is None or list(axes) == [0, 1, 2] else tuple(int(a) for a in axes)
+    read = array if across is None else _Across(array, across)
+    nx = int(read.shape[0])
     sizes = [nx] if layers is None else [int(n) for n in layers]
     if nx == 0 and not any(sizes):  # no layer to read (a store of shape (0, ...)): the empty image's table
         return label_table(np.zeros(array.shape, kind), conn, pitch=place.spacing, origin=place.origin,
                            labels=labels, surfaces=surfaces)
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
-    found = slab_rows(array, conn, wanted, surfaces, sizes, progress)
+    found = slab_rows(read, conn, wanted, surfaces, sizes, progress)
+    if across is not None:
+        found = rows_in_image_order(found, across)
     return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing,
                           tuple(int(n) for n in array.shape))
+
+
+class _Across:
+    """A 3D array read in slabs along its axis ``axes[0]``, its axes in
+    the order ``axes``: ``shape``, ``dtype`` and ``[a:b]`` as
+    :func:`~isoflow.digital.label_table.slab_rows` reads them."""
+
+    def __init__(self, array, axes: tuple[int, ...]) -> None:
+        self.array, self.axes = array, axes
+        self.shape = tuple(int(array.shape[i]) for i in axes)
+        self.dtype = array.dtype
+
+    def __getitem__(self, layers: slice) -> np.ndarray:
+        index = [slice(None)] * 3
+        index[self.axes[0]] = layers
+        # made labels before the axes move, so that a value that is no label is named at its voxel in the image
+        vol = as_labels(self.array[tuple(index)], first_layer=layers.start or 0, axis=self.axes[0])
+        return np.transpose(vol, self.axes)

@@ -33,7 +33,7 @@ arrays of one length, which ``pandas.DataFrame`` takes as it is.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache
 from typing import Literal
@@ -298,11 +298,11 @@ def label_dtype(dtype) -> np.dtype:
     raise IsoflowError(f"a label image holds integers, not {dtype}")
 
 
-def as_labels(array, first_layer: int = 0) -> np.ndarray:
+def as_labels(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
     """An image's labels as :func:`label_dtype` (a bool image viewed as
     uint8, a float one converted); an error naming the first value that is
     no label (NaN, infinite, beyond int64, not whole) and its voxel
-    (``first_layer``: the index of the array's layer 0 along axis 0)."""
+    (``first_layer``: the index of the array's layer 0 along ``axis``)."""
     vol = np.asarray(array)
     kind = label_dtype(vol.dtype)
     if vol.dtype == np.bool_:
@@ -317,7 +317,7 @@ def as_labels(array, first_layer: int = 0) -> np.ndarray:
         if bad.any():
             at = int(np.argmax(bad))
             voxel = np.unravel_index(at, vol.shape)
-            where = ", ".join(str(int(i) + (first_layer if d == 0 else 0)) for d, i in enumerate(voxel))
+            where = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
             raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
 
@@ -480,6 +480,41 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
     passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False)
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
+
+
+def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
+    """The rows' sums of an image read with its axes in the order ``axes``
+    (:func:`slab_rows` of its slabs across another axis than the first),
+    put back in the image's order: the boxes, the voxels' index sums and
+    the faces per normal axis. The rest (classes, energy, the graph of
+    pieces) is the same in any order of the axes.
+
+    Parameters
+    ----------
+    found : dict
+        The rows' sums (:func:`rows_of_pieces`), per axis in the order ``axes``.
+    axes : sequence of int
+        The image's axes in the order they were read.
+
+    Returns
+    -------
+    dict
+        ``found``, its per-axis columns in the image's order.
+
+    Examples
+    --------
+    >>> found = {"lo": np.array([[2, 0, 1]]), "hi": np.array([[5, 3, 4]]), "sums": np.array([[9, 1, 4]]),
+    ...          "features": np.zeros((1, 17), np.int64)}
+    >>> rows_in_image_order(found, (2, 0, 1))["lo"].tolist()  # read as (z, x, y)
+    [[0, 1, 2]]
+    """
+    back = np.argsort(np.asarray(axes))
+    out = dict(found)
+    for key in ("lo", "hi", "sums"):
+        out[key] = found[key][:, back]
+    out["features"] = found["features"].copy()
+    out["features"][:, _FACES] = found["features"][:, _FACES][:, back]
+    return out
 
 
 def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes: list[int],

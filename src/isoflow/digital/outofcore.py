@@ -43,9 +43,11 @@ a chunk (or shard); a dask array is processed along its chunks. The blocks
 go layer by layer along the first axis, or along the axis with the most
 blocks where it has many more (each block's axes put in that order as it
 is read), so peak memory is a few blocks per worker plus the faces of two
-layers of blocks (and a few numbers per piece of a component on a face),
-never the volume or a label volume. Blocks that would not fit in memory
-at the threads asked for are refused before any is read.
+layers of blocks (and a few numbers per piece of a component on a face:
+what the finished layers handed on settles into one record after each
+layer, :mod:`isoflow.digital.settle`), never the volume or a label
+volume. Blocks that would not fit in memory at the threads asked for are
+refused before any is read.
 """
 
 from __future__ import annotations
@@ -67,8 +69,10 @@ from ..scale.chunks import (
     SpatialAxes,
     block_bounds,
     checked_block_shape,
+    distributed_client,
     import_dask,
     is_zarr_array,
+    layer_axes,
     never_written,
     unwritten_fill,
     zarr_blocks,
@@ -83,6 +87,7 @@ from .connectivity import resolve_connectivity
 from .measures import BOX_AND_CENTROID, Extent, faces_per_axis, joined, unheld_dropped, world_measures
 from .report import Report
 from .seams import merge_block
+from .settle import key_components, resolved_pieces, settle
 from .surface import boundary_faces, pinch_lut
 from .topology import euler_from_histogram
 
@@ -180,21 +185,8 @@ def _components(nodes: int, edges: list[np.ndarray]) -> int:
     edges (2, E). Only nodes that appear in an edge need the union-find;
     every other node is a component by itself."""
     pairs = np.concatenate(edges, axis=1) if edges else np.zeros((2, 0), np.int64)
-    keys, comp = _labels(pairs, np.zeros(0, np.int64))
+    keys, comp = key_components(pairs, np.zeros(0, np.int64))
     return int(nodes - len(keys) + (comp.max(initial=-1) + 1))
-
-
-def _labels(pairs: np.ndarray, keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The distinct node keys of ``pairs`` (2, E) and ``keys``, sorted, and
-    the component of each (0 ..) under the edges ``pairs``: the union-find
-    of the sweep's pinches (numba's, loaded for the blocks already)."""
-    from ..scale.kernels import join_pairs
-
-    nodes, inverse = np.unique(np.concatenate([pairs.ravel(), keys]), return_inverse=True)
-    e = pairs.shape[1]
-    roots = np.arange(len(nodes), dtype=np.int64 if len(nodes) >= 1 << 31 else np.int32)
-    join_pairs(roots, np.stack([inverse[:e], inverse[e:2 * e]], axis=1))
-    return nodes, np.unique(roots, return_inverse=True)[1]
 
 
 def _betti(ndim: int, conn: int, chi: int, merged) -> list[int]:
@@ -213,27 +205,16 @@ def _betti(ndim: int, conn: int, chi: int, merged) -> list[int]:
     return [b0, b0 + enclosed - chi, enclosed]
 
 
-def _pieces(merged) -> dict:
-    """The pieces of every block, with the pending parents filled in."""
-    pieces = {name: np.concatenate([p[name] for m in merged for p in m["pieces"]])
-              for name in ("key", "obj", "sums", "order", "parent")}
-    resolved = np.concatenate([p for m in merged for p in m["parents"]] or [np.zeros((2, 0), np.int64)], axis=1)
-    order = np.argsort(pieces["key"])
-    at = order[np.searchsorted(pieces["key"], resolved[0], sorter=order)]
-    pieces["parent"][at] = resolved[1]
-    return pieces
-
-
 def _joined_surfaces(merged) -> tuple[np.ndarray, np.ndarray]:
     """Mesh vertices and faces of the surfaces between components that
     touch a block face: the tree of the joined components (each one's
     parent is that of its first piece), its sums the pieces' and the seams'
     gains, and the surfaces the signed sums over the subtrees (as in
     :func:`isoflow.digital.closed_surfaces.surface_tree`)."""
-    pieces = _pieces(merged)
+    pieces = resolved_pieces(merged)
     joins = [e for m in merged for kind in ("fg", "bg") for e in m["joins"][kind]]
-    nodes, comp = _labels(np.concatenate(joins or [np.zeros((2, 0), np.int64)], axis=1),
-                          np.append(pieces["key"], OUTSIDE))
+    nodes, comp = key_components(np.concatenate(joins or [np.zeros((2, 0), np.int64)], axis=1),
+                                 np.append(pieces["key"], OUTSIDE))
     count, root = int(comp.max()) + 1, comp[np.searchsorted(nodes, OUTSIDE)]
     mine = comp[np.searchsorted(nodes, pieces["key"])]
     total = np.zeros((count, 2), np.int64)
@@ -359,37 +340,9 @@ def _grid(array, block_shape, where: str) -> _Grid:
         chunks = array.chunks
     if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << SHIFT:
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
-    axes = _layer_axes(tuple(len(c) for c in chunks))
+    axes = layer_axes(tuple(len(c) for c in chunks))
     return _Grid(array, is_zarr_array(array), block_bounds([chunks[i] for i in axes]),
                  tuple(len(chunks[i]) for i in axes), axes)
-
-
-def _layer_axes(numblocks: tuple) -> tuple:
-    """The order of the axes the blocks are summed in: the array's, or
-    first the axis along which the blocks are the most (the earliest of
-    them) where they are :data:`LAYERS_APART` times as many as along the
-    first axis, then the others as they are. Two layers of blocks across
-    the first are held at a time, so the more layers, the less of the
-    volume's faces is held: chunks of (N, N, 4) are one layer along the
-    first axis, its faces half the volume's voxels, and N / 4 layers along
-    the last. A block read across its stored order is copied into the new
-    one, which costs a fifth of its sum: where the layers differ less,
-    their faces are few beside the blocks at work.
-
-    Examples
-    --------
-    >>> _layer_axes((1, 1, 128)), _layer_axes((2, 2, 4))
-    ((2, 0, 1), (0, 1, 2))
-    """
-    first = int(np.argmax(numblocks))
-    if numblocks[first] < LAYERS_APART * numblocks[0]:
-        return tuple(range(len(numblocks)))
-    return (first, *(i for i in range(len(numblocks)) if i != first))
-
-
-#: the layers along another axis than the first, as a multiple of those
-#: along the first, from which the blocks go in layers along that axis
-LAYERS_APART = 8
 
 
 def _block_tasks(grid: _Grid, i: int, conn: int, where: str, surfaces: bool, shape) -> dict:
@@ -449,6 +402,8 @@ def _layers(grid: _Grid, conn: int, where: str, surfaces: bool, shape, compute, 
                      for index in current]
             done = compute(*tasks, *upper.values())
             merged.extend(done[:len(tasks)])
+            if upper:  # later records name only the next layer's keys: the rest settles into one record
+                merged = [settle(merged, (i + 1) * per_layer, conn)]
             current = dict(zip(upper, done[len(tasks):]))
             ticks.at((i + 1 + min(i + 2, grid.numblocks[0])) * per_layer)
     return merged
@@ -502,12 +457,21 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     second task per thread is left out first: it only spares the cores a
     wait). Blocks that would not fit ``threads`` at a time are refused up
     front, before any is read, saying how many would, where the blocks are
-    summed here (a ``dask.distributed`` cluster's workers hold their own
-    memory); one at a time on the synchronous scheduler."""
+    summed here; one at a time on the synchronous scheduler. On a
+    ``dask.distributed`` cluster (its client, its ``get``, or the default
+    client) the workers hold their own memory: a block times a worker's
+    threads is held to the workers' memory limit instead."""
+    import dask.config
     from dask.base import named_schedulers
 
-    from ..scale.memory import check_fits, default_budget
+    from ..scale.memory import check_fits, check_workers_fit, default_budget
 
+    client = distributed_client(dask.config.get("scheduler", None) if scheduler is None else scheduler)
+    if client is not None:
+        smaller = "write the store with smaller chunks" if is_zarr else "rechunk it"
+        check_workers_fit(client, per_block, f"{where}: summing its blocks",
+                          hint=f"{smaller}, pass smaller blocks (block_shape), or give the workers more memory")
+        return workers
     if scheduler is not None and scheduler not in named_schedulers.values():
         return workers
     if scheduler is named_schedulers["sync"]:  # one task at a time, whatever the threads

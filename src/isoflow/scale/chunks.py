@@ -169,13 +169,47 @@ def _threaded(scheduler) -> bool:
 
     if scheduler is None:
         scheduler = dask.config.get("scheduler", None)
-    if scheduler is None and "distributed" in sys.modules:
-        try:
-            sys.modules["distributed"].default_client()
-            return False
-        except ValueError:  # no client
-            pass
+    if scheduler is None and distributed_client(None) is not None:
+        return False
     return scheduler is None or scheduler is dask.threaded.get or scheduler in ("threads", "threading")
+
+
+def distributed_client(scheduler: Any) -> Any:
+    """The ``dask.distributed`` client that runs the tasks given to
+    ``dask.compute`` with ``scheduler``.
+
+    Parameters
+    ----------
+    scheduler : object
+        What ``dask.compute`` is given: a client, its ``get``, the name
+        ``"distributed"``, or None for dask's configured scheduler (a
+        client made the default names itself there).
+
+    Returns
+    -------
+    distributed.Client or None
+        The client itself, the client whose ``get`` it is, or the default
+        client for None and the name (looked for only where
+        dask.distributed is imported already: no client exists without
+        it); None for any other scheduler, or where no client is found.
+
+    Examples
+    --------
+    >>> distributed_client("threads") is None
+    True
+    """
+    if hasattr(scheduler, "scheduler_info"):
+        return scheduler
+    owner = getattr(scheduler, "__self__", None)
+    if hasattr(owner, "scheduler_info"):
+        return owner
+    named = scheduler is None or (isinstance(scheduler, str) and scheduler.lower() in ("distributed", "dask.distributed"))
+    if not named or "distributed" not in sys.modules:
+        return None
+    try:
+        return sys.modules["distributed"].default_client()
+    except ValueError:  # no client
+        return None
 
 
 def import_zarr():
@@ -195,6 +229,50 @@ def is_zarr_array(array) -> bool:
     return type(array).__module__.split(".")[0] == "zarr" and all(
         hasattr(array, name) for name in ("chunks", "shape", "dtype", "__getitem__")
     )
+
+
+#: the layers along another axis than the first, as a multiple of those
+#: along the first, from which the blocks go in layers along that axis
+LAYERS_APART = 8
+
+
+def layer_axes(numblocks: tuple[int, ...]) -> tuple[int, ...]:
+    """The order of the axes in which an array's blocks are read, a layer
+    of blocks at a time along the first of them.
+
+    Parameters
+    ----------
+    numblocks : tuple of int
+        The blocks along each axis of the array.
+
+    Returns
+    -------
+    tuple of int
+        The array's axes as they are, or first the axis along which the
+        blocks are the most (the earliest of them) where they are
+        :data:`LAYERS_APART` times as many as along the first axis, then
+        the others as they are.
+
+    Notes
+    -----
+    A pass over layers of blocks holds what lies across a layer (the
+    faces of two layers of blocks of the report, a slab of the label
+    table), so the more layers, the less of the volume is held: chunks of
+    (N, N, 4) are one layer along the first axis, its faces half the
+    volume's voxels, and N / 4 layers along the last. A block read across
+    its stored order is copied into the new one, which costs a fifth of
+    its sum: where the layers differ less, their faces are few beside the
+    blocks at work.
+
+    Examples
+    --------
+    >>> layer_axes((1, 1, 128)), layer_axes((2, 2, 4))
+    ((2, 0, 1), (0, 1, 2))
+    """
+    first = int(np.argmax(numblocks))
+    if numblocks[first] < LAYERS_APART * numblocks[0]:
+        return tuple(range(len(numblocks)))
+    return (first, *(i for i in range(len(numblocks)) if i != first))
 
 
 def block_bounds(chunks) -> list[list[tuple[int, int]]]:

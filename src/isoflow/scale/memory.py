@@ -79,6 +79,56 @@ def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) 
         )
 
 
+def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
+    """Raise :class:`IsoflowError` when tasks of ``per_task`` bytes, as many
+    at a time as a worker has threads, exceed the memory limit of every
+    worker of a ``dask.distributed`` cluster: the workers hold their own
+    memory, which this machine's says nothing of.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The cluster's client (its ``scheduler_info()`` gives each worker's
+        ``memory_limit`` and ``nthreads``).
+    per_task : int
+        The bytes one task holds.
+    what : str
+        What runs, for the message.
+    hint : str
+        What to do instead, for the message.
+
+    Notes
+    -----
+    The worker with the most memory per thread decides (the scheduler may
+    give it the largest tasks); a worker without a limit (0) fits anything,
+    and a cluster with no worker yet is not refused.
+
+    Examples
+    --------
+    >>> class Cluster:  # what a client's scheduler_info() says of its workers
+    ...     def scheduler_info(self, n_workers=-1):
+    ...         return {"workers": {"tcp://w1": {"memory_limit": 200_000_000, "nthreads": 2}}}
+    >>> check_workers_fit(Cluster(), 50_000_000, "summing blocks")
+    >>> check_workers_fit(Cluster(), 150_000_000, "summing blocks")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: summing blocks needs about 286.1 MiB on a dask.distributed worker (2 threads at a
+    time), more than its memory limit of 190.7 MiB
+    """
+    try:
+        workers = client.scheduler_info(n_workers=-1)["workers"].values()
+    except TypeError:  # a dask.distributed that lists every worker without being asked
+        workers = client.scheduler_info()["workers"].values()
+    rooms = [(int(w.get("memory_limit") or 0), max(int(w.get("nthreads") or 1), 1)) for w in workers]
+    if not rooms or any(limit <= 0 for limit, _ in rooms):
+        return
+    limit, threads = max(rooms, key=lambda room: room[0] / room[1])
+    need = per_task * threads
+    if need > limit:
+        raise IsoflowError(f"{what} needs about {sized(need)} on a dask.distributed worker ({threads} threads at a "
+                           f"time), more than its memory limit of {sized(limit)}" + (f"; {hint}" if hint else ""))
+
+
 def sized(n: int) -> str:
     """A number of bytes as a person reads it: in GiB from 1 GiB on, in MiB
     or KiB below (a budget of "0.0 GiB" says nothing).

@@ -584,15 +584,19 @@ def multiscales(name: str, spacing, corner, stored: str = "zyx", unit: str | Non
 
 
 class LabelSlabs:
-    """A zarr store's 3D label image read in slabs along x, whatever the
-    stored axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z)
-    order, ``slabs[a:b]`` the x layers a .. b - 1 as a NumPy array (a
-    damaged chunk is one line), ``layers`` the stored chunks along x,
-    ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest corner), ``unit``
-    their length unit (:func:`axis_unit`)."""
+    """A zarr store's 3D label image read in slabs, whatever the stored
+    axis order: ``shape`` and ``dtype`` in isoflow's (x, y, z) order,
+    ``slabs[a:b]`` the x layers a .. b - 1 as a NumPy array, or
+    ``slabs[x, y, z]`` the region of a slice per axis (a damaged chunk is
+    one line); ``axes``, the order of x, y, z in which it is read a layer
+    of chunks at a time (:func:`~isoflow.scale.chunks.layer_axes`: along
+    the axis of the most chunks where they are thin across it, as the
+    report block by block reads a volume) and ``layers`` the chunks along
+    ``axes[0]``; ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest
+    corner), ``unit`` their length unit (:func:`axis_unit`)."""
 
     def __init__(self, path):
-        from ...scale.chunks import zarr_blocks
+        from ...scale.chunks import layer_axes, zarr_blocks
 
         import_library("zarr", "OME-Zarr")
         store = open_store(path, time=True)
@@ -624,15 +628,17 @@ class LabelSlabs:
         self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
-        self.layers = list(zarr_blocks(array, None)[self.xyz[0]])
+        blocks = zarr_blocks(array, None)
+        self.axes = layer_axes(tuple(len(blocks[i]) for i in self.xyz))
+        self.layers = list(blocks[self.xyz[self.axes[0]]])
         self.pitch, self.origin, self.unit = pitch, origin, store.unit()
         never_written(self.where, unwritten_fill(array), table=True)
 
-    def __getitem__(self, x):
+    def __getitem__(self, region):
+        parts = region if isinstance(region, tuple) else (region,)
         index = [0] * len(self.array.shape)
-        for axis in self.xyz:
-            index[axis] = slice(None)
-        index[self.xyz[0]] = x
+        for n, axis in enumerate(self.xyz):
+            index[axis] = parts[n] if n < len(parts) else slice(None)
         data = np.asarray(self.guarded[tuple(index)])
         kept = [a for a in range(len(self.array.shape)) if a not in self.other]
         return np.transpose(data, [kept.index(a) for a in self.xyz])
