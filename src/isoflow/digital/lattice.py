@@ -103,8 +103,8 @@ class DigitalObject:
 
     # equal when every field is, the volume by its elements: the generated
     # __eq__ compared the arrays with ==, whose truth NumPy refuses; and
-    # unhashable, as the arrays stay mutable through any writeable view of
-    # the memory they share
+    # unhashable, as NumPy arrays are (a read-only one's memory can still
+    # change through a writeable view of it)
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
 
@@ -390,7 +390,7 @@ def _held(vol: np.ndarray, given: Any) -> np.ndarray:
     caller's writeable array or a view of memory someone else holds (which
     they could change under the object, and its answers with it); ``vol``
     itself where :func:`binary` made it anew (a conversion from 0/1
-    integers) or no one can write it."""
+    integers) or it is read-only already (a file's, handed over)."""
     if vol.flags.writeable and (vol is given or vol.base is not None):
         vol = vol.copy()
     return read_only(vol)
@@ -487,7 +487,7 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     def shown() -> str:
         if given.size > 8:
             return f"an array of shape {given.shape}"
-        # numbers as written: asarray of (1.5, 0) holds 0.0, and -1 passed as a pitch is a float by now
+        # numbers as meant: asarray of (1.5, 0) holds 0.0, which is the 0 given
         return number_text(given) if given.dtype.kind in "biuf" else repr(given.tolist())
 
     def bad() -> IsoflowError:
