@@ -37,11 +37,11 @@ def topology(report: dict) -> dict:
 
 
 def info(capsys, *args):
-    """The report of ``info --json``, less the file's name and calibration
-    (``pitch``, ``origin``, ``unit``: the same volume's differ by format;
+    """The report of ``info --json``, less the file's name, type of values
+    and calibration (``pitch``, ``origin``, ``unit``: the same volume's differ by format;
     tests/test_units_cli.py checks them) and what it places."""
     report = json.loads(run(capsys, "info", *args, "--json"))
-    for key in ("input", "pitch", "origin"):
+    for key in ("input", "dtype", "pitch", "origin"):
         report.pop(key, None)
     return topology(report)
 
@@ -384,7 +384,7 @@ def test_a_tiff_time_series_is_not_read_as_a_z_stack(tmp_path, capsys, labels):
 def resaved_as_the_refusal_says(path, channels: int) -> dict:
     """The ``info --json`` report of ``path``'s channels saved as slices by
     the command that the refusal of ``path`` (one line, exit 2) gives, run
-    as the user runs it, beside ``path`` as ``NAME_stack.tif``."""
+    as the user runs it, beside ``path`` (the one file it writes)."""
     import shlex
 
     done = subprocess.run([sys.executable, "-m", "isoflow", "info", str(path)], capture_output=True, text=True)
@@ -393,8 +393,9 @@ def resaved_as_the_refusal_says(path, channels: int) -> dict:
     assert f"{path.name}: axis 'c' has {channels} entries" in line and "Traceback" not in line
     command = shlex.split(line.split("save them as one stack and give that: ", 1)[1])
     assert command[:2] == ["python", "-c"]
+    before = set(path.parent.iterdir())
     subprocess.run([sys.executable, *command[1:]], check=True, cwd=path.parent)
-    stack = path.with_name(path.name.rsplit(".", 1)[0] + "_stack.tif")
+    stack, = set(path.parent.iterdir()) - before  # what the command wrote, as the user finds it
     return json.loads(subprocess.run([sys.executable, "-m", "isoflow", "info", str(stack), "--json"],
                                      capture_output=True, text=True, check=True).stdout)
 
@@ -562,7 +563,7 @@ def test_ome_tiff_of_channels_command_keeps_its_stage_position(tmp_path, rng, co
     assert report["unit"] == "\u00b5m" and report["voxels"] == np.count_nonzero(data)
     np.testing.assert_allclose(report["pitch"], pitch)
     np.testing.assert_allclose(report["origin"], centre - pitch / 2)
-    with tifffile.TiffFile(tmp_path / "c.ome_stack.tif") as tif:
+    with tifffile.TiffFile(tmp_path / "c_stack.ome.tif") as tif:
         planes = tifffile.xml2dict(tif.ome_metadata)["OME"]["Image"]["Pixels"]["Plane"]
     np.testing.assert_allclose([plane["PositionZ"] for plane in planes], centre[2] + pitch[2] * np.arange(count))
 
@@ -634,7 +635,7 @@ def test_a_time_series_of_3d_volumes_is_read_as_4d(tmp_path):
                            capture_output=True, text=True)
         assert p.returncode == 0, p.stderr
         # the topology; the calibration differs by format (tests/test_units_cli.py)
-        return {k: v for k, v in json.loads(p.stdout).items() if k not in ("input", "pitch", "origin", "unit")}
+        return {k: v for k, v in json.loads(p.stdout).items() if k not in ("input", "dtype", "pitch", "origin", "unit")}
 
     np.save(tmp_path / "ts.npy", np.transpose(data, (3, 2, 1, 0)))
     report_of_npy = report("ts.npy")
@@ -1532,3 +1533,46 @@ def test_a_png_written_by_pillow_is_read(tmp_path, capsys, command):
     assert main([command, str(tmp_path / "square.png"), "--json", "-q"]) == 0
     printed = json.loads(capsys.readouterr().out)
     assert (printed["voxels"] if command == "info" else printed["steps"][0]["voxels"]) == pixels == 12
+
+
+@pytest.mark.parametrize("dtype", ["bool", "uint8", ">i2", "float32"])
+def test_info_json_of_a_mask_gives_the_type_of_the_values_the_file_holds(tmp_path, capsys, dtype):
+    """``info --json`` of a binary volume said nothing of the type of the
+    file's values, which ``info --labels --json`` gives as ``dtype``: it
+    gives ``dtype`` too, NumPy's name of the type np.load, tifffile and
+    nibabel read, and ``Report.from_dict`` still reads the JSON back."""
+    mask = np.zeros((5, 6, 7), dtype)
+    mask[1:4, 2:5, 1:6] = 1
+    np.save(tmp_path / "m.npy", mask)
+    tifffile.imwrite(tmp_path / "m.tif", mask, photometric="minisblack")
+    read = {"m.npy": np.load(tmp_path / "m.npy").dtype, "m.tif": tifffile.imread(tmp_path / "m.tif").dtype}
+    if dtype != "bool":  # NIfTI has no boolean type
+        nib.save(nib.Nifti1Image(mask, np.eye(4)), tmp_path / "m.nii")
+        read["m.nii"] = np.asanyarray(nib.load(tmp_path / "m.nii").dataobj).dtype
+    for name, want in read.items():
+        printed = json.loads(run(capsys, "info", tmp_path / name, "--json"))
+        assert printed["dtype"] == want.name, name
+        assert isoflow.Report.from_dict(printed).voxels == np.count_nonzero(mask)
+
+
+def test_the_command_that_saves_an_ome_tiffs_channels_as_slices_names_a_clean_ome_tiff(tmp_path):
+    """The refusal of an OME-TIFF of one slice in several channels gave a
+    command that wrote ``c.ome_stack.tif``, the ``.ome`` left inside the
+    name, which OME readers (and tifffile) do not take for an OME-TIFF:
+    it writes ``c_stack.ome.tif``, and what it writes holds the channels
+    as the slices tifffile reads in the original."""
+    import shlex
+
+    rng = np.random.default_rng(9)
+    data = (rng.random((1, 3, 6, 7)) < 0.5).astype(np.uint8)
+    tifffile.imwrite(tmp_path / "c.ome.tif", data, metadata={"axes": "ZCYX", "PhysicalSizeX": 0.5})
+    done = subprocess.run([sys.executable, "-m", "isoflow", "info", "c.ome.tif"], capture_output=True, text=True,
+                          cwd=tmp_path)
+    assert done.returncode == 2
+    command = shlex.split(done.stderr.split("save them as one stack and give that: ", 1)[1])
+    assert 'tifffile.imwrite("c_stack.ome.tif", tifffile.imread("c.ome.tif"), ome=True' in command[2]
+    subprocess.run([sys.executable, *command[1:]], check=True, cwd=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.ome.tif", "c_stack.ome.tif"]
+    with tifffile.TiffFile(tmp_path / "c_stack.ome.tif") as tif:
+        assert tif.is_ome and tif.series[0].axes == "ZYX"
+        assert np.array_equal(tif.asarray(), tifffile.imread(tmp_path / "c.ome.tif"))

@@ -40,13 +40,13 @@ def box_stl(tmp_path):
     "field, value, shown",
     [
         ("offset", [[1, 2, 3]], "[[1, 2, 3]]"),  # was TypeError
-        ("pitch", [1.0, 2.0], "[1.0, 2.0]"),  # was TypeError
+        ("pitch", [1.0, 2.0], "got [1, 2]"),  # was TypeError
         ("parity", np.array("x"), "'x'"),  # was ValueError
         ("origin", ["a", "b", "c"], "['a', 'b', 'c']"),  # was ValueError
         ("offset", [np.nan, 0, 0], "nan"),  # was ValueError
         ("offset", [1.5, 2, 3], "1.5"),  # was silently 1
         ("parity", 0.5, "0.5"),  # was silently 0
-        ("pitch", -1.0, "-1.0"),
+        ("pitch", -1.0, "got -1"),  # a whole number, as meant: not "-1.0"
         ("offset", [1e300, 0, 0], "1e+300"),  # would overflow later
     ],
 )
@@ -54,6 +54,26 @@ def test_npz_metadata_is_validated(tmp_path, capsys, field, value, shown):
     path = tmp_path / "meta.npz"
     np.savez(path, volume=np.ones((3, 3, 3), bool), **{field: value})
     fails(capsys, "info", path, words=("meta.npz", f"'{field}'", shown))
+
+
+@pytest.mark.parametrize("pitch", [np.int64(-1), np.array([1, -1, 1]), np.array([0.5, 0.5, -1e-07])])
+def test_a_pitch_refused_is_said_as_the_file_holds_it(tmp_path, capsys, pitch):
+    """A negative pitch was said as its conversion to float printed it
+    (``got -1.0``, ``got [1.0, -1.0, 1.0]``) where the file holds -1: the
+    line gives the numbers as NumPy reads them from the file."""
+    path = tmp_path / "meta.npz"
+    np.savez(path, volume=np.ones((3, 3, 3), bool), pitch=pitch)
+    held = np.load(path)["pitch"].tolist()
+    line = fails(capsys, "info", path)
+    assert line == f"isoflow info: error: {path}: 'pitch' must be positive (one number, or one per axis), got {held}"
+
+
+@pytest.mark.parametrize("written", ["-1", "0", "-0.5"])
+def test_a_time_limit_refused_is_said_as_written(tmp_path, capsys, written):
+    """``genus --time-limit -1`` said ``got -1.0``, argparse's float of
+    what was typed: the line gives the number as the user wrote it."""
+    line = fails(capsys, "genus", box_stl(tmp_path), "--time-limit", written)
+    assert line == f"isoflow genus: error: --time-limit must be a positive number of seconds, got {written}"
 
 
 def test_npz_metadata_that_is_valid_is_kept(tmp_path):

@@ -794,7 +794,7 @@ def test_a_label_image_takes_its_spacing_and_origin_as_lists_or_one_number():
 
 
 @pytest.mark.parametrize(("spacing", "origin", "words"), [
-    ([1, -1, 1], [0, 0, 0], "'spacing' must be positive (one number, or one per axis), got [1.0, -1.0, 1.0]"),
+    ([1, -1, 1], [0, 0, 0], "'spacing' must be positive (one number, or one per axis), got [1, -1, 1]"),
     ([1, 1], [0, 0, 0], "'spacing' must be 3 numbers, one per axis, got [1, 1]"),
     (1, "abc", "'origin' must be 3 numbers, one per axis, got 'abc'"),
 ])

@@ -351,3 +351,45 @@ def test_a_flow_result_has_the_unit_that_flow_json_prints(tmp_path, capsys):
     assert printed["unit"] == result.unit == said == "mm"
     assert isoflow.FlowResult.from_dict(result.to_dict()).unit == said
     assert isoflow.run_flow(np.ones((2, 2, 2), bool)).unit is None
+
+
+def test_an_object_answers_for_the_volume_it_was_given_after_the_caller_changes_its_array():
+    """``DigitalObject(array)`` held the caller's bool array itself, so
+    writing to the array afterwards changed the object's voxels and its
+    report: the object holds the volume as it was given, and its voxels
+    and Euler characteristic are those scikit-image gives of that volume."""
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(5)
+    volume = rng.random((9, 9, 9)) < 0.4
+    given = volume.copy()
+    obj = isoflow.DigitalObject(volume)
+    flow = isoflow.run_flow(volume, max_steps=1)
+    volume[...] = ~volume  # the caller reuses its array
+    assert obj.voxels == np.count_nonzero(given) == flow.states[0].voxels
+    assert isoflow.analyze(obj).euler_characteristic == euler_number(given, connectivity=1)  # 6-connectivity
+    assert np.array_equal(flow.states[0].volume, given)
+    assert obj.volume.flags.writeable is False
+
+
+def test_results_and_objects_hold_read_only_arrays_when_made_and_when_unpickled():
+    """A result and a digital object are frozen, but the arrays they held
+    were writeable when made and again after ``pickle.loads`` (NumPy
+    unpickles every array writeable): every array they hold is read-only,
+    both ways, and the unpickled copy equals the original."""
+    import pickle
+
+    import trimesh
+
+    box, other = trimesh.creation.box(), trimesh.creation.box().apply_translation([2, 0, 0])
+    obj, voxelization = isoflow.voxelize_mesh(box, resolution=4, details=True)
+    labels = isoflow.voxelize_meshes([box, other], resolution=8)
+    flow = isoflow.run_flow(np.pad(np.ones((3, 3, 3), bool), 1))
+    anisotropic = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=(0.5, 0.5, 2.0), origin=(1, 2, 3))
+    for made in (obj, voxelization, labels, flow, anisotropic):
+        back = pickle.loads(pickle.dumps(made))
+        assert back == made
+        for held in (made, back):
+            arrays = [v for v in vars(held).values() if isinstance(v, np.ndarray)]
+            arrays += [s.volume for s in getattr(held, "states", [])]
+            assert arrays and all(a.flags.writeable is False for a in arrays), type(held).__name__

@@ -67,6 +67,46 @@ def counted(n: int, one: str, many: str | None = None) -> str:
     return f"{n} {one if n == 1 else many or one + 's'}"
 
 
+def number_text(value: object) -> str:
+    """A number in a message as the user wrote or meant it: a whole number
+    in all its digits (``-1``, not the ``-1.0`` its conversion to float
+    prints; ``%g`` made 2**40 + 1 and 2**40 alike), any other float in its
+    shortest repr (``0.5``, ``1e-07``), a sequence as a list of them, and
+    anything else (a string, None) as its repr.
+
+    Parameters
+    ----------
+    value : object
+        The value given: a Python or NumPy number, an array or a sequence.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> number_text(-1.0), number_text(np.float32(0.5)), number_text(1e-07), number_text(True)
+    ('-1', '0.5', '1e-07', '1')
+    >>> number_text((1.5, 0.0)), number_text(np.array([2**40 + 1])), number_text(np.float32(0.1)), number_text("x")
+    ('[1.5, 0]', '[1099511627777]', '0.1', "'x'")
+    """
+    if getattr(value, "shape", None):  # a NumPy array: its elements (or rows) are NumPy's scalars
+        return "[" + ", ".join(number_text(v) for v in value) + "]"  # type: ignore[attr-defined]
+    if hasattr(value, "dtype"):
+        # NumPy's str of a float32 is its shortest (0.1), which float() widens to 0.10000000149011612
+        value = float(str(value)) if value.dtype.kind == "f" else value.item()  # type: ignore[attr-defined]
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(number_text(v) for v in value) + "]"
+    if isinstance(value, bool):  # a mask's values: 0 and 1
+        value = int(value)
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**64:
+        value = int(value)
+    if isinstance(value, float):
+        return repr(value)
+    return str(value) if isinstance(value, int) else repr(value)
+
+
 def path_text(path: str | os.PathLike) -> str:
     """A path as text that every reader of UTF-8 takes: a byte of the name
     that the file system's encoding does not decode is written ``\\xNN``.

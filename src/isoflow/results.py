@@ -59,6 +59,56 @@ def json_ready(value: Any) -> Any:
     return value
 
 
+def read_only(a: np.ndarray) -> np.ndarray:
+    """``a``, made read-only in place and returned: an array that is shared
+    (a cached table) or held by a frozen result, which no holder may change.
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        The array.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``a`` itself.
+
+    Examples
+    --------
+    >>> read_only(np.zeros(2)).flags.writeable
+    False
+    """
+    a.flags.writeable = False
+    return a
+
+
+def read_only_fields(obj: Any) -> None:
+    """Make the array fields of the dataclass instance ``obj`` read-only,
+    each as a read-only view where it is writeable, so that an array the
+    caller passed keeps its own flags.
+
+    Parameters
+    ----------
+    obj : dataclass instance
+        A frozen result; its fields are set with ``object.__setattr__``.
+
+    Examples
+    --------
+    >>> @dataclasses.dataclass(frozen=True)
+    ... class Box:
+    ...     corner: np.ndarray
+    >>> given = np.zeros(3)
+    >>> box = Box(given)
+    >>> read_only_fields(box)
+    >>> box.corner.flags.writeable, given.flags.writeable
+    (False, True)
+    """
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if isinstance(value, np.ndarray) and value.flags.writeable:
+            object.__setattr__(obj, f.name, read_only(value.view()))
+
+
 def same_values(a: Any, b: Any) -> bool:
     """Whether two values are equal, NumPy arrays among them (and in the
     lists, tuples and mappings that hold them) by shape and elements: ``==``
@@ -208,12 +258,23 @@ class Result(Mapping[str, Any]):
 
     Subclasses are ``@dataclasses.dataclass(frozen=True, repr=False)``,
     taking this class's short repr; a field with ``metadata=OMIT_NONE`` is
-    not a key while it is None.
+    not a key while it is None. Array fields are read-only, when made and
+    when unpickled alike.
     """
 
     def __repr__(self) -> str:
         # the whole of a big result stays in to_dict and the attributes
         return fields_repr(self)
+
+    def __post_init__(self) -> None:
+        # frozen fields hold arrays that could still be written in place
+        read_only_fields(self)
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # pickle restores the fields without __init__, and NumPy unpickles
+        # every array writeable
+        self.__dict__.update(state)
+        read_only_fields(self)
 
     def _keys(self) -> list[str]:
         fields = dataclasses.fields(self)  # type: ignore[arg-type]

@@ -605,6 +605,7 @@ def test_info_of_a_store_without_voxels_is_the_files(tmp_path, capsys):
     for name in ("zero.npy", "zero.zarr"):
         assert main(["info", str(tmp_path / name), "--json"]) == 0
         reports.append({k: v for k, v in json.loads(capsys.readouterr().out).items() if k != "input"})
+    assert [r.pop("dtype") for r in reports] == ["bool", "uint8"]  # what each file holds
     assert reports[0] == reports[1] and reports[1]["voxels"] == 0 and reports[1]["betti"] == [0, 0, 0]
 
 

@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from ..errors import IsoflowError, betti_words, counted
+from ..errors import IsoflowError, betti_words, counted, number_text
 from .inputs import add_mesh_rule, mesh_fill, resolution_value
 from .progress import progress_bar
 
@@ -33,7 +33,7 @@ def check_limits(args: argparse.Namespace) -> None:
     """The time limit is positive, or one line says so (the resolutions are
     checked as the command line is read: :func:`resolution_value`)."""
     if args.time_limit is not None and not args.time_limit > 0:
-        raise IsoflowError(f"--time-limit must be a positive number of seconds, got {args.time_limit}")
+        raise IsoflowError(f"--time-limit must be a positive number of seconds, got {number_text(args.time_limit)}")
 
 
 def cmd_genus(args: argparse.Namespace) -> int:

@@ -80,14 +80,19 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-def calibration(obj, unit: str | None) -> dict:
-    """A volume file's voxel size per axis, the world position of voxel
-    0's lowest corner and their length unit (None where the file says
-    none): what ``info`` says it read, so that a calibration can be checked."""
+def calibration(obj, unit: str | None, dtype) -> dict:
+    """A volume file's type of values by NumPy's name (``uint8``, ``bool``:
+    the object is boolean whatever the file held), its voxel size per axis,
+    the world position of voxel 0's lowest corner and their length unit
+    (None where the file says none): what ``info`` says it read, so that a
+    calibration can be checked."""
+    import numpy as np
+
     from ..mesh.formats.registry import placement
 
     spacing, corner = placement(obj)
-    return {"pitch": [float(p) for p in spacing], "origin": [float(c) + 0.0 for c in corner], "unit": unit}
+    return {"dtype": np.dtype(dtype).name, "pitch": [float(p) for p in spacing],
+            "origin": [float(c) + 0.0 for c in corner], "unit": unit}
 
 
 def store_placement(path) -> dict:
@@ -102,7 +107,7 @@ def store_placement(path) -> dict:
         place = DigitalObject.placement(len(store.xyz), pitch=pitch, origin=origin)
     except IsoflowError as exc:
         raise exc.at(path) from None
-    return calibration(place, store.unit())
+    return calibration(place, store.unit(), store.array.dtype)
 
 
 def info_of_store(args: argparse.Namespace) -> Report:
@@ -131,7 +136,7 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict 
 
     warming = warm_up_while_reading(args)
     try:
-        obj, unit = load_input_with_unit(args)
+        obj, unit, dtype = load_input_with_unit(args)
     finally:
         # joined on a refusal too: a thread left compiling would outlive the
         # command, and numba's compile records the warnings of every thread
@@ -143,7 +148,7 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict 
     # the reason
     say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
     grid = mesh_grid(args, obj)
-    placed = calibration(obj, unit) if grid is None and is_volume(args.input) else None
+    placed = calibration(obj, unit, dtype) if grid is None and is_volume(args.input) else None
     if args.gpu:
         from ..scale.arrays import to_gpu
 

@@ -16,6 +16,8 @@ from ..errors import IsoflowError, IsoflowWarning
 from .progress import progress_bar
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from ..digital.lattice import DigitalObject
 
 
@@ -268,13 +270,14 @@ def load_input(args: argparse.Namespace):
     return load_input_with_unit(args)[0]
 
 
-def load_input_with_unit(args: argparse.Namespace) -> tuple[DigitalObject, str | None]:
+def load_input_with_unit(args: argparse.Namespace) -> tuple[DigitalObject, str | None, np.dtype | None]:
     """:func:`load_input`'s object and, for a volume file, the length unit
-    of its voxel size and origin as the file says it
-    (:func:`~isoflow.mesh.volumes.read_volume_with_unit`); None for a
-    mesh, a point list, or a file that says none."""
+    of its voxel size and origin as the file says it (None for a mesh, a
+    point list, or a file that says none) and the type of its values
+    (:func:`~isoflow.mesh.volumes.read_volume_as_stored`; None but for a
+    volume file)."""
     from ..mesh.load import is_mesh_path, refuse_cad
-    from ..mesh.volumes import NO_CUBE, is_volume, read_object, read_volume_with_unit
+    from ..mesh.volumes import NO_CUBE, is_volume, read_object, read_volume_as_stored
 
     path = Path(args.input)
     refuse_cad(path)  # (else read as a point list: "not a number: 'ISO-10303-21;'")
@@ -282,23 +285,23 @@ def load_input_with_unit(args: argparse.Namespace) -> tuple[DigitalObject, str |
         if getattr(args, "label", None) is not None:
             raise IsoflowError(f"{path}: --label selects voxels of a volume, not of a mesh")
         refuse_points_option(args, "mesh")
-        return voxelize_input(path, args), None
+        return voxelize_input(path, args), None, None
     refuse_mesh_options(args, path.suffix or "this")
     volume = is_volume(args.input)  # anything else is read as a point list
     if volume:
         refuse_points_option(args, "volume")
-    unit = None
+    unit = dtype = None
     # the name as given: FILE.h5:/dataset and IMAGE.zarr:LEVEL name a part of a file
     with label_options(args), warnings.catch_warnings():
         # an empty point model: each command says why in its own words (why_empty)
         warnings.filterwarnings("ignore", message=re.escape(f"{path}: {NO_CUBE}"), category=IsoflowWarning)
         if volume:
-            obj, unit = read_volume_with_unit(args.input, label=args.label)
+            obj, unit, dtype = read_volume_as_stored(args.input, label=args.label)
         else:
             obj = read_object(args.input, points_are=args.points_are or "corners", label=args.label)
     if volume:
         say_plate(args, obj.volume.shape)
-    return obj, unit
+    return obj, unit, dtype
 
 
 def check_input_connectivity(args: argparse.Namespace, ndim: int) -> None:

@@ -383,6 +383,7 @@ def warm_up(surfaces: bool = True) -> None:
     process, which a command spends while it reads its input."""
     vol = np.zeros((2, 2, 3), bool)
     vol[0, 0, 1] = True
+    vol.flags.writeable = False  # as an object holds its volume: numba compiles read-only arrays apart
     compiled_census(vol, 6, surfaces)
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
+from ..results import read_only
 from ..scale import arrays
 from ..scale.compiled import Method, use_compiled
 
@@ -61,12 +62,6 @@ def octant_bit(d: Sequence[int]) -> int:
     5
     """
     return sum(int(b) << i for i, b in enumerate(d))
-
-
-def read_only(a: np.ndarray) -> np.ndarray:
-    """``a``, made read-only: the tables are cached and shared."""
-    a.flags.writeable = False
-    return a
 
 
 @cache

@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
-from ..results import same_fields
+from ..errors import IsoflowError, number_text
+from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary
 from .units import unit_given
 
@@ -50,6 +50,8 @@ class DigitalObject:
     Parameters
     ----------
     volume : array_like of bool or 0/1
+        Held read-only: a writeable array of the caller's is copied, so
+        that changing it afterwards leaves the object as it was.
     offset : tuple of int, optional
         Lattice index of voxel ``(0, ..., 0)`` (default zeros).
     parity : {0, 1}
@@ -101,7 +103,8 @@ class DigitalObject:
 
     # equal when every field is, the volume by its elements: the generated
     # __eq__ compared the arrays with ==, whose truth NumPy refuses; and
-    # unhashable, as the volume, a NumPy array, can change
+    # unhashable, as NumPy arrays are (a read-only one's memory can still
+    # change through a writeable view of it)
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
 
@@ -116,13 +119,13 @@ class DigitalObject:
         vol = binary(self.volume, "DigitalObject volume")
         if vol.ndim not in (2, 3, 4):
             raise IsoflowError(f"a digital object is 2D, 3D or 4D, got a {vol.ndim}D array")
-        object.__setattr__(self, "volume", vol)
+        object.__setattr__(self, "volume", _held(vol, self.volume))
         n = vol.ndim
         offset = (0,) * n if self.offset is None else _field(
             self.offset, "offset", n, integral=True, bound=MAX_COORDINATE)
         object.__setattr__(self, "offset", tuple(int(o) for o in offset))
         origin = np.zeros(n) if self.origin is None else _field(self.origin, "origin", n)
-        object.__setattr__(self, "origin", origin)
+        object.__setattr__(self, "origin", read_only(origin))
         parity = _field(self.parity, "parity", None, integral=True)
         if parity not in (0, 1):
             # the value as written: _field gives it back as a float
@@ -131,6 +134,14 @@ class DigitalObject:
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        # pickle restores the fields without __post_init__, and NumPy
+        # unpickles every array writeable
+        self.__dict__.update(state)
+        for value in (self.volume, self.origin, self.pitch):
+            if isinstance(value, np.ndarray):
+                read_only(value)
 
     # ------------------------------------------------------------ builders
     @classmethod
@@ -374,6 +385,17 @@ class DigitalObject:
         )
 
 
+def _held(vol: np.ndarray, given: Any) -> np.ndarray:
+    """The volume an object keeps, read-only: a copy where ``vol`` is the
+    caller's writeable array or a view of memory someone else holds (which
+    they could change under the object, and its answers with it); ``vol``
+    itself where :func:`binary` made it anew (a conversion from 0/1
+    integers) or it is read-only already (a file's, handed over)."""
+    if vol.flags.writeable and (vol is given or vol.base is not None):
+        vol = vol.copy()
+    return read_only(vol)
+
+
 def _significant(pitch: float | np.ndarray) -> float | list[float]:
     """The pitch to 12 significant digits, as the repr shows it: 0.1 where
     arithmetic left 0.10000000000000002, and 8.249e-11 (0.8249 Angstrom in
@@ -446,8 +468,7 @@ def _pitch(value, ndim: int):
     else:
         pitch = _field(value, "pitch", ndim)
     if not np.all(np.asarray(pitch) > 0):
-        shown = np.asarray(pitch).tolist()
-        raise IsoflowError(f"'pitch' must be positive (one number, or one per axis), got {shown!r}")
+        raise IsoflowError(f"'pitch' must be positive (one number, or one per axis), got {number_text(arr)}")
     if np.ndim(pitch) == 0:
         return float(pitch)
     if np.all(pitch == pitch[0]):
@@ -464,7 +485,10 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     arr = given = np.asarray(value)
 
     def shown() -> str:
-        return repr(given.tolist()) if given.size <= 8 else f"an array of shape {given.shape}"
+        if given.size > 8:
+            return f"an array of shape {given.shape}"
+        # numbers as meant: asarray of (1.5, 0) holds 0.0, which is the 0 given
+        return number_text(given) if given.dtype.kind in "biuf" else repr(given.tolist())
 
     def bad() -> IsoflowError:
         want = ("an integer" if integral else "a number") if length is None else (

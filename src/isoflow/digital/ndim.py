@@ -33,13 +33,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
+from ..results import read_only
 from .configurations import (
     check_dimension,
     configuration_histogram,
     configurations,
     full_window,
     octants,
-    read_only,
     window_faces,
 )
 from .connectivity import resolve_connectivity

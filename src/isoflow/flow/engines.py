@@ -13,6 +13,7 @@ import numpy as np
 from ..digital.analysis import analyze
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
+from ..results import read_only
 from ..scale.compiled import METHODS, Method, have_numba
 from . import guard as control
 from .motion import flow_moves
@@ -81,7 +82,7 @@ class ArrayFlow:
 
     def step(self, state: DigitalObject) -> DigitalObject:
         _, keep = flow_moves(state, self.conn)
-        return state.on_dual_lattice(keep).cropped()
+        return state.on_dual_lattice(read_only(keep)).cropped()  # handed over: no copy
 
     def change_region(self, state: DigitalObject, betti: tuple[list, list] | None = None):
         """Where the plain step from ``state`` is no simple deformation

@@ -78,6 +78,7 @@ from ..digital.indices import (
 )
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
+from ..results import read_only
 from .planar import planar_moves
 from .segments import segment_moves
 
@@ -209,4 +210,4 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> D
     """
     obj = DigitalObject.of(obj)
     cfg, keep = flow_moves(obj, connectivity)
-    return obj.on_dual_lattice(keep).cropped()
+    return obj.on_dual_lattice(read_only(keep)).cropped()  # handed over: no copy

@@ -33,6 +33,7 @@ from ..digital.configurations import configurations
 from ..digital.indices import NOT_WELL_COMPOSED, planar_class_lut
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
+from ..results import read_only
 from .segments import segment_moves
 
 __all__ = ["planar_flow_step", "planar_moves", "planar_motion_luts"]
@@ -83,4 +84,4 @@ def planar_flow_step(obj: DigitalObject, connectivity: int = 4) -> DigitalObject
     if obj.ndim != 2:
         raise IsoflowError(f"planar_flow_step needs a 2D object, got {obj.ndim}D")
     _, keep = planar_moves(obj.volume, connectivity)
-    return obj.on_dual_lattice(keep).cropped()
+    return obj.on_dual_lattice(read_only(keep)).cropped()  # handed over: no copy

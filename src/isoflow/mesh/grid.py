@@ -48,7 +48,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, number_text
 from ..scale import memory
 from ..scale.memory import sized
 from .load import mesh_bbox
@@ -125,11 +125,11 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
         if isinstance(pitch, (str, bytes, bool, np.bool_)):
             raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}")
         try:
-            pitch = float(pitch)
+            given, pitch = pitch, float(pitch)
         except (TypeError, ValueError, OverflowError):
             raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}") from None
         if not (math.isfinite(pitch) and pitch > 0):
-            raise IsoflowError(f"voxelize: pitch must be a positive finite number, got {pitch!r}")
+            raise IsoflowError(f"voxelize: pitch must be a positive finite number, got {number_text(given)}")
         if pitch > _MAX_PITCH_RATIO * longest:
             raise IsoflowError(
                 f"voxelize: pitch={pitch!r} is more than 2**40 times the mesh's size (longest "

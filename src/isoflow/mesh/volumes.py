@@ -22,6 +22,7 @@ from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
 from ..errors import IsoflowError, check_switch, missing, warn
+from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
 from ..scale.memory import check_fits
@@ -179,8 +180,44 @@ def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = N
     >>> obj.spacing.tolist(), unit
     ([0.5, 0.5, 2.0], '\u00b5m')
     """
+    obj, unit, _ = read_volume_as_stored(path, label, time=time)
+    return obj, unit
+
+
+def read_volume_as_stored(path: str | os.PathLike, label: int | float | None = None, *,
+                          time: int | None = None) -> tuple[DigitalObject, str | None, np.dtype]:
+    """:func:`read_volume_with_unit`'s object and unit, and the type of the
+    values the file holds: the object is boolean whatever they were (a
+    uint8 mask, a float map of 0 and 1), and ``isoflow info --json`` says
+    what it read.
+
+    Parameters
+    ----------
+    path, label, time
+        What :func:`read_volume_with_unit` takes.
+
+    Returns
+    -------
+    tuple of DigitalObject, str or None, and numpy.dtype
+        The object, its unit, and the values' type as read (a NIfTI's
+        scaling applied where its header gives one).
+
+    Raises
+    ------
+    IsoflowError
+        What :func:`read_volume` raises.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "mask.npy"
+    >>> np.save(path, np.ones((2, 2, 2), np.uint8))
+    >>> obj, unit, dtype = read_volume_as_stored(path)
+    >>> obj.volume.dtype.name, unit, dtype.name
+    ('bool', None, 'uint8')
+    """
     raw = _read_raw(path, time=time)
-    return as_object(raw, str(path), label), raw.unit
+    return as_object(raw, str(path), label), raw.unit, raw.array.dtype
 
 
 def zarr_around(path: Path) -> Path | None:
@@ -319,7 +356,8 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
                             # read_volume_with_unit gives it as the file says it
                             "unit": raw.unit if raw.unit in LENGTH_UNITS else None}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
-        return DigitalObject(vol, **{k: v for k, v in meta.items() if v is not None})
+        # handed over read-only: an object copies a volume someone else could still write
+        return DigitalObject(read_only(vol), **{k: v for k, v in meta.items() if v is not None})
     except IsoflowError as exc:
         raise exc.at(where) from None
 

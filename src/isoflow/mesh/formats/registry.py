@@ -31,7 +31,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...digital.units import length_unit
-from ...errors import IsoflowError, warn
+from ...errors import IsoflowError, number_text, warn
 from ...scale.chunks import spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -628,20 +628,9 @@ def no_such_label(label, values, where: str, ndim: int = 3) -> IsoflowError:
     pixels, as ``isoflow info`` calls them."""
     cell = "pixel" if ndim == 2 else "voxel"
     if not len(values):
-        return IsoflowError(f"{where}: no {cell} has label {_number(label)}: the array has no {cell}s")
-    shown = ", ".join(_number(v) for v in values[:20]) + (", ..." if len(values) > 20 else "")
-    return IsoflowError(f"{where}: no {cell} has label {_number(label)} (values present: {shown})")
-
-
-def _number(value) -> str:
-    """A label as written: a whole number in all its digits (``%g`` made
-    2**40 + 1 and 2**40 alike, and 64-bit labels one value), any other in ``%g``."""
-    value = value.item() if isinstance(value, np.generic) else value
-    if isinstance(value, bool):  # a mask's values: 0 and 1
-        value = int(value)
-    if isinstance(value, float) and value.is_integer() and abs(value) < 2.0**64:
-        value = int(value)
-    return str(value) if isinstance(value, int) and abs(value) < 2**64 else f"{value:g}"
+        return IsoflowError(f"{where}: no {cell} has label {number_text(label)}: the array has no {cell}s")
+    shown = ", ".join(number_text(v) for v in values[:20]) + (", ..." if len(values) > 20 else "")
+    return IsoflowError(f"{where}: no {cell} has label {number_text(label)} (values present: {shown})")
 
 
 def note(message: str) -> None:

@@ -556,7 +556,7 @@ def _as_slices(where: str, channels: int, ome: str | None = None) -> str:
                           for name, value in sizes.items()] + stage)
         return _resaved(where, f"if its {channels} channels are the slices of one volume",
                         lambda src, dst: f"tifffile.imwrite({dst}, tifffile.imread({src}), ome=True, "
-                                         f'metadata={{"axes": "ZYX", {kept}}})')
+                                         f'metadata={{"axes": "ZYX", {kept}}})', ome=True)
     return _resaved(where, f"if its {channels} channels are the slices of one volume",
                     lambda src, dst: f"t = tifffile.TiffFile({src}); p = t.pages[0]; tifffile.imwrite({dst}, "
                                      "t.asarray(), imagej=t.is_imagej, resolution=p.resolution, "
@@ -584,23 +584,56 @@ def _ome_stage(ome: str | None, where: str, slices: int) -> list[str]:
     return [f'"Plane": {{{", ".join(entries)}}}']
 
 
-def _resaved(where: str, condition: str, write, saved: str = "save them as one stack", suffix: str = "_stack") -> str:
+def _resaved(where: str, condition: str, write, saved: str = "save them as one stack", suffix: str = "_stack",
+             ome: bool = False) -> str:
     """The advice, under ``condition``, to ``saved`` (save the file as one
-    stack) beside it (``NAME_stack.tif``, the stem ending in ``suffix``)
-    and give that, with the ``python -c`` command whose tifffile call
+    stack) beside it (``NAME_stack.tif``, the stem ending in ``suffix``;
+    ``NAME_stack.ome.tif`` where ``ome``, the write an OME-TIFF's) and give
+    that, with the ``python -c`` command whose tifffile call
     ``write(source, stack)`` (the two paths as Python literals) writes it."""
-    return f"{condition}, {saved} and give that: {_command(where, write, suffix)}"
+    return f"{condition}, {saved} and give that: {_command(where, write, suffix, ome)}"
 
 
-def _command(where: str, write, suffix: str) -> str:
+def _command(where: str, write, suffix: str, ome: bool = False) -> str:
     """The ``python -c`` command whose tifffile call ``write(source,
     saved)`` (the two paths as Python literals) saves the TIFF ``where``
-    as ``NAME{suffix}.tif`` beside it."""
+    beside it as :func:`resaved_name` names it."""
     import shlex
 
-    saved = str(Path(where).with_name(Path(where).stem + f"{suffix}.tif"))
-    code = f"import numpy, tifffile; {write(json.dumps(where), json.dumps(saved))}"
+    code = f"import numpy, tifffile; {write(json.dumps(where), json.dumps(resaved_name(where, suffix, ome)))}"
     return f"python -c {shlex.quote(code)}"
+
+
+def resaved_name(where: str, suffix: str, ome: bool = False) -> str:
+    """The path beside the TIFF ``where`` of its re-saved copy: its name
+    without the ``.tif``/``.tiff`` and an OME-TIFF's ``.ome`` before it,
+    then ``suffix``, then ``.ome.tif`` where the copy is an OME-TIFF (the
+    name OME readers, and tifffile itself, tell one by), else ``.tif``.
+
+    Parameters
+    ----------
+    where : str
+        The TIFF as given.
+    suffix : str
+        What the copy's name adds (``_stack``, ``_grey``, ``_alpha``).
+    ome : bool
+        Whether the copy is written as an OME-TIFF.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> resaved_name("data/c.ome.tif", "_stack", ome=True), resaved_name("data/c.ome.tiff", "_grey")
+    ('data/c_stack.ome.tif', 'data/c_grey.tif')
+    >>> resaved_name("scan.TIF", "_stack")
+    'scan_stack.tif'
+    """
+    stem = Path(where).stem
+    if stem.lower().endswith(".ome"):  # c.ome.tif: c_stack.ome.tif, not c.ome_stack.tif
+        stem = stem[:-len(".ome")]
+    return str(Path(where).with_name(stem + suffix + (".ome.tif" if ome else ".tif")))
 
 
 #: metres per length unit of OME-XML (``UnitsLength``, schema 2016-06), and
