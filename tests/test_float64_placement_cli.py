@@ -295,7 +295,8 @@ def test_info_labels_of_a_far_zyx_store_warns_of_the_axes_a_file_s_table_names(t
         p = isoflow("info", tmp_path / name, "--labels", "--json")
         said[name] = one_line(p).replace(str(tmp_path / name), "INPUT")
         rows[name] = json.loads(p.stdout)["labels"]
-    assert said["far.zarr"] == said["far.nrrd"] and "along axis 1 and 2 are one value" in said["far.zarr"]
+    assert said["far.zarr"] == said["far.nrrd"] and all(
+        f"along axis {axis} are one value" in said["far.zarr"] for axis in (1, 2))
     assert rows["far.zarr"] == rows["far.nrrd"]
     assert all(row[f"bbox-{d}"] is None for row in rows["far.zarr"] for d in (1, 2, 4, 5))
 
@@ -330,3 +331,25 @@ def test_info_labels_where_float64_cannot_keep_corners_apart_warns_and_gives_nul
     surface = isoflow("surface", tmp_path / "far.nrrd", "--labels", "-o", tmp_path / "far.glb")
     assert surface.returncode == 2 and "not distinct in float64" in one_line(surface)
     assert not (tmp_path / "far.glb").exists()
+
+
+@pytest.mark.parametrize("command", [["info"], ["info", "--labels"], ["surface", "-o", "s.ply"],
+                                     ["flow", "--steps", "1", "--out", "run"], ["flow", "--steps", "1"]])
+def test_every_axis_float64_cannot_keep_apart_is_named_with_its_own_spacing(tmp_path, command):
+    """At an origin of (0, 1e17, 1e43) and a voxel of 1 float64 loses the
+    corners of two axes. ``surface`` and ``flow --out`` named axis 2 alone,
+    and ``info`` named both with float64's spacing near 1e17 (16) as the
+    reason for axis 2 too. Every command names both, each with NumPy's
+    ``np.spacing`` at that axis' own farthest corner, in one line."""
+    nrrd_at(tmp_path / "far.nrrd", (0.0, 1e17, 1e43), 1.0)
+    args = [tmp_path / a if a in ("s.ply", "run") else a for a in command[1:]]
+    p = isoflow(command[0], tmp_path / "far.nrrd", *args)
+    line = one_line(p)
+    assert p.returncode == (2 if command[0] == "surface" or "--out" in command else 0), p.stderr
+    # NRRD's space origin is voxel 0's centre: the corners run from half a voxel before it, 6 voxels on
+    for axis, centre in ((1, 1e17), (2, 1e43)):
+        far = max(abs(np.float64(centre) - 0.5), abs(np.float64(centre) - 0.5 + 6.0))
+        assert np.float64(far) + 1.0 == np.float64(far)  # float64 cannot keep a voxel apart there
+        assert (f"near {far:.3g} float64 values are {np.spacing(far):.3g} apart (np.spacing), so voxel corners a "
+                f"voxel apart along axis {axis} are one value") in line, line
+    assert line.count("np.spacing") == 2 and "axis 0" not in line

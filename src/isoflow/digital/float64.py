@@ -67,13 +67,58 @@ def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     return merged
 
 
+def lost_axes_reasons(origin, spacing, shape: Sequence[int], merged: Sequence[bool] | None = None) -> str | None:
+    """Why float64 cannot keep the voxel corners apart, axis by axis,
+    along the axes of :func:`merged_axes` (``merged``, where the caller
+    has them): each lost axis with float64's spacing (``np.spacing``) at
+    its own corner farthest from 0, one clause per axis; None where
+    every axis keeps its corners apart.
+
+    Parameters
+    ----------
+    origin, spacing : array_like
+        The world position of voxel 0's lowest corner and the voxel size,
+        per axis (or one number for every axis).
+    shape : sequence of int
+        Voxels per axis.
+    merged : sequence of bool, optional
+        :func:`merged_axes` of the grid, where the caller has it.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> print(lost_axes_reasons((1e43, 0, 0), 1.0, (2, 2, 2)))
+    near 1e+43 float64 values are 1.24e+27 apart (np.spacing), so voxel corners a voxel apart along axis 0 are one value
+    >>> print(lost_axes_reasons((0, 1e17, 1e43), 1.0, (2, 2, 2)))  # doctest: +NORMALIZE_WHITESPACE
+    near 1e+17 float64 values are 16 apart (np.spacing), so voxel corners a voxel apart along axis 1 are one value,
+    and near 1e+43 float64 values are 1.24e+27 apart (np.spacing), so voxel corners a voxel apart along axis 2 are
+    one value
+    >>> lost_axes_reasons((0, 0), 1.0, (2, 2)) is None
+    True
+    """
+    merged = merged_axes(origin, spacing, shape) if merged is None else merged
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    clauses = []
+    for axis in (a for a, m in enumerate(merged) if m):
+        # each axis' own farthest corner from 0, where float64's values are sparsest along it
+        with np.errstate(over="ignore", invalid="ignore"):
+            near = max(abs(float(origin[axis])), abs(float(origin[axis] + spacing[axis] * shape[axis])))
+        clauses.append(f"near {near:.3g} float64 values are {float(np.spacing(near)):.3g} apart (np.spacing), so voxel "
+                       f"corners a voxel apart along axis {axis} are one value")
+    return ", and ".join(clauses) or None
+
+
 def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None",
                 merged: Sequence[bool] | None = None) -> str | None:
     """The warning that float64 cannot hold ``what`` (world coordinates)
     along the axes of :func:`merged_axes` (``merged``, where the caller has
-    them), naming the placement and float64's spacing there
-    (``np.spacing``); None where every axis keeps its corners apart;
-    ``unknown``: what the coordinates lost are given as.
+    them), naming the placement and, per such axis, float64's spacing
+    there (:func:`lost_axes_reasons`); None where every axis keeps its
+    corners apart; ``unknown``: what the coordinates lost are given as.
 
     Examples
     --------
@@ -84,20 +129,15 @@ def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str =
     True
     """
     merged = merged_axes(origin, spacing, shape) if merged is None else merged
-    lost = [axis for axis, m in enumerate(merged) if m]
-    if not lost:
+    reasons = lost_axes_reasons(origin, spacing, shape, merged)
+    if reasons is None:
         return None
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
     origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    axis = lost[0]
-    # the corner farthest from 0 along the axis, where float64's values are sparsest
-    near = max(abs(float(origin[axis])), abs(float(origin[axis] + spacing[axis] * shape[axis])))
-    axes = " and ".join(map(str, lost))
-    return (f"{what} cannot be held in float64 at this placement ({placement_words(origin, spacing)}): near "
-            f"{near:.3g} float64 values are {float(np.spacing(near)):.3g} apart (np.spacing), so voxel corners a voxel "
-            f"apart along axis {axes} are one value; the coordinates along {'it' if len(lost) == 1 else 'them'} are "
-            f"unknown ({unknown}), the other values do not depend on the placement; place the object nearer the "
-            "origin (subtract its origin) to have them")
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    return (f"{what} cannot be held in float64 at this placement ({placement_words(origin, spacing)}): {reasons}; "
+            f"the coordinates along {'it' if sum(map(bool, merged)) == 1 else 'them'} are unknown ({unknown}), the "
+            "other values do not depend on the placement; place the object nearer the origin (subtract its origin) "
+            "to have them")
 
 
 def lost_axes(what: str, origin, spacing, shape: Sequence[int], unknown: str = "None") -> list[bool] | None:

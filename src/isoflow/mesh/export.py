@@ -47,7 +47,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..digital.float64 import placement_words
+from ..digital.float64 import lost_axes_reasons, placement_words
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, warn
 from .float32 import float32_effect, float64_corners, float64_moved
@@ -143,8 +143,9 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     Raises
     ------
     IsoflowError
-        One line naming the origin, the voxel size and float64's spacing
-        there (``np.spacing``).
+        One line naming the origin, the voxel size and, for every axis
+        float64 cannot keep apart, float64's spacing at that axis'
+        coordinates (``np.spacing``).
 
     Examples
     --------
@@ -160,9 +161,8 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     if corners["merged"]:
         raise IsoflowError(
             f"{where}: the voxel corners are not distinct in float64 at this placement "
-            f"({placement_words(origin, spacing)}): near {corners['near']:.3g} float64 values are "
-            f"{corners['step']:.3g} apart (np.spacing), so corners a voxel apart along axis {corners['axis']} are "
-            f"one value and {collapses} would collapse; place the object nearer the origin (subtract its origin)")
+            f"({placement_words(origin, spacing)}): {lost_axes_reasons(origin, spacing, shape)}; so {collapses} "
+            "would collapse; place the object nearer the origin (subtract its origin)")
     return corners
 
 
