@@ -195,13 +195,12 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
                 cs.small_census(v, conn)
 
 
-def test_between_the_thresholds_the_census_is_the_numpy_one_with_the_surfaces():
-    # with the surfaces, a volume between 2 and 4 million voxels takes the
-    # NumPy census by default (numba's start would cost more than it
-    # saves), the passes without the surfaces the compiled ones; both
+def test_between_the_thresholds_the_census_is_below_its_size_and_both_methods_agree():
+    # with the surfaces, a volume between 2 and 4 million voxels is below
+    # the compiled census's size (numba's start would cost more than it
+    # saves), the passes without the surfaces above theirs; both
     # methods give the same report, and the mesh's surfaces
-    from isoflow.digital import closed_surfaces as cs
-    from isoflow.scale.compiled import have_numba, least_voxels
+    from isoflow.scale.compiled import have_numba, least_voxels, use_compiled
 
     if not have_numba():
         pytest.skip("numba not installed")
@@ -210,7 +209,7 @@ def test_between_the_thresholds_the_census_is_the_numpy_one_with_the_surfaces():
     v[:40, :40, :40] = torus(12, 5, size=40)
     v[60:90, 60:90, 60:90] = ball(14, size=30)
     v[100, 100, 100] = v[101, 101, 101] = True  # a vertex contact
-    assert not cs.use_census(v) and cs.use_census(v, surfaces=False)
+    assert not use_compiled(v, surfaces=True) and use_compiled(v)  # by the size alone
     compiled_report = analyze(v, 26, method="compiled")
     for conn in (6, 26):
         report = analyze(v, conn)
@@ -339,3 +338,29 @@ def test_the_numpy_census_labels_twice_and_a_thin_volume_needs_no_scipy(conn):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["2", "False"]
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+def test_auto_takes_the_compiled_census_once_it_is_loaded_and_numpy_in_a_fresh_process():
+    # "auto" weighs numba's start against a small volume: in a fresh
+    # process it counts a small one by NumPy without importing numba; once
+    # a compiled pass has run here (numba holds the sweep's machine code)
+    # it takes the compiled census at any size, with the same report, and
+    # "numpy" still takes NumPy
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from isoflow import analyze\n"
+        "from isoflow.digital import closed_surfaces as cs\n"
+        "v = np.random.default_rng(3).random((20, 21, 19)) < 0.5\n"
+        "first = [cs.use_census(v), 'numba' in sys.modules]\n"
+        "want = analyze(v, 26)\n"
+        "numba_after_auto = 'numba' in sys.modules\n"
+        "analyze(np.ones((2, 2, 2), bool), method='compiled')\n"
+        "after = [cs.use_census(v), cs.use_census(v, method='numpy'), analyze(v, 26) == want]\n"
+        "print(*first, numba_after_auto, *after)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "False", "False", "True", "False", "True"]

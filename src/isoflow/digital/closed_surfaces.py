@@ -54,6 +54,7 @@ configuration array) count per label pair. All equal
 
 from __future__ import annotations
 
+import sys
 from functools import cache
 
 import numpy as np
@@ -154,7 +155,10 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Met
     connectivity : {6, 26} or None
         The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
     method : {"auto", "numpy", "compiled"}
-        One compiled sweep, the NumPy census, or by the volume's size.
+        One compiled sweep, the NumPy census, or ``"auto"``: the compiled
+        sweep from 4 million voxels on, or at any size once it is loaded in
+        this process (a compiled pass ran here: :func:`use_census`). The
+        answer is the same either way.
 
     Returns
     -------
@@ -528,11 +532,40 @@ def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto") 
     the ``surfaces``: by :func:`~isoflow.scale.compiled.use_compiled`, whose
     ``"auto"`` threshold is higher with the surfaces (the NumPy census holds
     out to a larger size, as numba's start is then the larger part of the
-    compiled one's time). Never for an empty or a device volume."""
+    compiled one's time), and with ``"auto"`` also at any size once the
+    compiled census is loaded in this process (:func:`census_loaded`):
+    numba's start, the one cost that the threshold weighs, is then paid.
+    Both passes give the same answer. Never for an empty or a device
+    volume.
+
+    Examples
+    --------
+    >>> v = np.zeros((4, 4, 4), bool)
+    >>> use_census(v, method="numpy"), use_census(v) == census_loaded()
+    (False, True)
+    """
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
         use_compiled(vol, surfaces, method)  # (refuses "compiled" where it cannot be)
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    return use_compiled(vol, surfaces, method)
+    return use_compiled(vol, surfaces, method) or (method == "auto" and census_loaded())
+
+
+def census_loaded() -> bool:
+    """Whether the compiled census is loaded in this process: the sweep's
+    module imported and its machine code held by numba, because a compiled
+    pass ran here (``method="compiled"``, a large volume, ``isoflow info``'s
+    warm-up). A question to numba's dispatcher (never a clock, and it never
+    imports numba itself).
+
+    Examples
+    --------
+    >>> from isoflow.scale.compiled import have_numba
+    >>> _ = closed_surfaces(np.ones((2, 2, 2), bool), method="compiled") if have_numba() else None
+    >>> census_loaded() == have_numba()
+    True
+    """
+    sweep = sys.modules.get("isoflow.scale.sweep")
+    return sweep is not None and sweep.loaded()
 
 
 def component_parents(roots, parents, off, goff, starts) -> tuple[np.ndarray, int]:
