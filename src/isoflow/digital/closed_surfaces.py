@@ -434,8 +434,10 @@ def _pair_sums(chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]], spans: t
         lo_o = lo_b = 0
     span_o, span_b = spans
     if span_o * span_b <= max(1 << 16, 4 * sum(len(chunk[0]) for chunk in chunks)):
-        counts = sum(np.bincount(_pair_keys(*chunk, lo_o, lo_b, span_b), minlength=span_o * span_b * QUARTER_SPAN)
-                     for chunk in chunks).reshape(-1, QUARTER_SPAN)
+        bins = np.zeros(span_o * span_b * QUARTER_SPAN, np.int64)
+        for chunk in chunks:
+            bins += np.bincount(_pair_keys(*chunk, lo_o, lo_b, span_b), minlength=len(bins))
+        counts = bins.reshape(-1, QUARTER_SPAN)
         vertices = counts.sum(axis=1)
         pair = np.flatnonzero(vertices)
         return {"obj": pair // span_b + lo_o, "bg": pair % span_b + lo_b, "vertices": vertices[pair],
