@@ -4,14 +4,17 @@ A script that reports on N small volumes (64^3 by default, below the
 4 million voxels from which ``analyze`` starts with numba) in a loop, as a
 fresh process each, the way a user runs it: ``isoflow.analyze(vol, 6)``
 against scikit-image's ``euler_number(vol, connectivity=1)`` (chi alone),
-and against ``analyze(vol, 6, method="compiled")``: ``"auto"`` chooses the
-passes by the volume alone, so every call below 4 million voxels takes
-the NumPy census, whatever the process has loaded; the compiled census
-pays numba's start once and then answers each small volume in
-milliseconds. The volumes are smoothed
+against ``analyze(vol, 6, method="compiled")``, and against a loop whose
+first call asks for ``"compiled"`` and the rest for ``"auto"``. ``"auto"``
+takes the NumPy census below 4 million voxels until the compiled census is
+loaded in the process (a compiled pass ran there), and the compiled one
+after, so a loop of small volumes alone stays with NumPy and one that
+starts with a compiled call (or a large volume) goes on compiled; the
+compiled census pays numba's start once and then answers each small volume
+in milliseconds. The volumes are smoothed
 random porous fields (the hard case of benchmarks/run.py), four seeds
-repeated. Whole-process seconds, imports included; pairs alternated,
-medians, the ratios of each pair.
+repeated. Whole-process seconds, imports included; the tools alternated,
+medians, the ratios of scikit-image's time to the first two.
 
 Usage::
 
@@ -21,6 +24,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import resource
 import statistics
 import subprocess
 import sys
@@ -45,20 +49,33 @@ SCRIPT = textwrap.dedent("""
         out = [euler_number(vols[i % 4], connectivity=1) for i in range(count)]
     else:
         from isoflow import analyze
-        method = "compiled" if tool == "isoflow-compiled" else "auto"
-        out = [analyze(vols[i % 4], 6, method=method)["euler_characteristic"] for i in range(count)]
+        def method(i):
+            return "compiled" if tool == "isoflow-compiled" or (tool == "compiled-then-auto" and i == 0) else "auto"
+        out = [analyze(vols[i % 4], 6, method=method(i))["euler_characteristic"] for i in range(count)]
     print(sum(out))
 """)
 
-TOOLS = ("isoflow", "isoflow-compiled", "skimage")
+TOOLS = ("isoflow", "isoflow-compiled", "compiled-then-auto", "skimage")
 
 
-def seconds(tool: str, size: int, count: int) -> tuple[float, str]:
-    """One fresh process: its wall time and what it printed (the chi sum)."""
+def seconds(tool: str, size: int, count: int) -> tuple[float, float, str]:
+    """One fresh process: its wall time, its CPU time (user and system: on
+    a shared machine the wall time also counts the other jobs' share of the
+    cores) and what it printed (the chi sum)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", SCRIPT, tool, str(size), str(count)], capture_output=True,
                          text=True, check=True)
-    return time.perf_counter() - start, out.stdout.strip()
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
+    return wall, cpu, out.stdout.strip()
+
+
+def row(count: int, med: dict) -> str:
+    """One line of a table: the medians and scikit-image's time over auto's and compiled's."""
+    return (f"{count:>8}" + "".join(f"{med[t]:>18.2f} s" for t in TOOLS)
+            + f"{med['skimage'] / med['isoflow']:>13.2f}x{med['skimage'] / med['isoflow-compiled']:>17.2f}x")
 
 
 def main() -> int:
@@ -67,23 +84,27 @@ def main() -> int:
     ap.add_argument("--count", type=int, nargs="+", default=[1, 10, 100])
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    print(f"{args.size}^3 porous volumes, one process each, medians of {args.repeat} alternated runs "
-          "(input generation included in every column)")
-    print(f"{'volumes':>8}" + "".join(f"{t:>18}" for t in TOOLS) + f"{'skimage/auto':>14}{'skimage/compiled':>18}")
+    head = f"{'volumes':>8}" + "".join(f"{t:>20}" for t in TOOLS) + f"{'skimage/auto':>14}{'skimage/compiled':>18}"
+    lines = {"wall": [], "cpu": []}
     for count in args.count:
-        times = {t: [] for t in TOOLS}
+        times = {kind: {t: [] for t in TOOLS} for kind in lines}
         chis = set()
         for _ in range(args.repeat):
             for t in TOOLS:
-                s, chi = seconds(t, args.size, count)
-                times[t].append(s)
+                wall, cpu, chi = seconds(t, args.size, count)
+                times["wall"][t].append(wall)
+                times["cpu"][t].append(cpu)
                 chis.add(chi)
         if len(chis) != 1:
             print(f"chi differs between the tools: {chis}", file=sys.stderr)
             return 1
-        med = {t: statistics.median(v) for t, v in times.items()}
-        print(f"{count:>8}" + "".join(f"{med[t]:>16.2f} s" for t in TOOLS)
-              + f"{med['skimage'] / med['isoflow']:>13.2f}x{med['skimage'] / med['isoflow-compiled']:>17.2f}x")
+        for kind in lines:
+            lines[kind].append(row(count, {t: statistics.median(v) for t, v in times[kind].items()}))
+            print(f"{kind:>4} {lines[kind][-1]}", flush=True)
+    for kind, what in (("wall", "wall-clock"), ("cpu", "CPU (user + system)")):
+        print(f"\n{args.size}^3 porous volumes, one process each, {what} seconds, medians of {args.repeat} alternated "
+              "runs (input generation included in every column)")
+        print(head, *lines[kind], sep="\n")
     return 0
 
 

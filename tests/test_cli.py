@@ -432,10 +432,12 @@ def test_the_compile_note_is_said_once_and_logged_without_a_listener(monkeypatch
 
 def test_method_chooses_the_passes_not_the_report():
     # method= picks the NumPy or the compiled passes explicitly; "auto"
-    # decides by the input alone (no state: a large volume analysed before
-    # does not change how a small one is counted); the report is the same
-    # every way, at both connectivities, with edge and vertex contacts and
-    # empty volumes (a flow shrinks to nothing)
+    # decides by the input's size, and for a 3D census also takes the
+    # compiled one at any size once it is loaded in the process (a large
+    # volume analysed before: numba's start is paid; the fresh process's
+    # choice is tested in tests/digital/test_closed_surfaces.py); the
+    # report is the same every way, at both connectivities, with edge and
+    # vertex contacts and empty volumes (a flow shrinks to nothing)
     from isoflow.digital import closed_surfaces
     from isoflow.digital.analysis import analyze
     from isoflow.scale.compiled import have_numba, least_voxels
@@ -450,9 +452,10 @@ def test_method_chooses_the_passes_not_the_report():
             want = analyze(v, c, method="numpy")
             assert analyze(v, c, method="compiled") == want == analyze(v, c)
     big = np.zeros((least_voxels(surfaces=True) // 10_000 + 1, 100, 100), bool)
-    assert closed_surfaces.use_census(big) and not closed_surfaces.use_census(vols[0])
+    assert closed_surfaces.use_census(big)
     analyze(big)
-    assert not closed_surfaces.use_census(vols[0])  # still by its size alone
+    assert closed_surfaces.census_loaded() and closed_surfaces.use_census(vols[0])  # loaded: at any size
+    assert not closed_surfaces.use_census(vols[0], method="numpy")
     assert closed_surfaces.use_census(vols[0], method="compiled")
     assert not closed_surfaces.use_census(big, method="numpy")
 

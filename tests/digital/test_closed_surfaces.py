@@ -195,13 +195,12 @@ def test_the_small_path_stays_within_its_memory_estimate_and_refuses_beyond_it(m
                 cs.small_census(v, conn)
 
 
-def test_between_the_thresholds_the_census_is_the_numpy_one_with_the_surfaces():
-    # with the surfaces, a volume between 2 and 4 million voxels takes the
-    # NumPy census by default (numba's start would cost more than it
-    # saves), the passes without the surfaces the compiled ones; both
+def test_between_the_thresholds_the_census_is_below_its_size_and_both_methods_agree():
+    # with the surfaces, a volume between 2 and 4 million voxels is below
+    # the compiled census's size (numba's start would cost more than it
+    # saves), the passes without the surfaces above theirs; both
     # methods give the same report, and the mesh's surfaces
-    from isoflow.digital import closed_surfaces as cs
-    from isoflow.scale.compiled import have_numba, least_voxels
+    from isoflow.scale.compiled import have_numba, least_voxels, use_compiled
 
     if not have_numba():
         pytest.skip("numba not installed")
@@ -210,7 +209,7 @@ def test_between_the_thresholds_the_census_is_the_numpy_one_with_the_surfaces():
     v[:40, :40, :40] = torus(12, 5, size=40)
     v[60:90, 60:90, 60:90] = ball(14, size=30)
     v[100, 100, 100] = v[101, 101, 101] = True  # a vertex contact
-    assert not cs.use_census(v) and cs.use_census(v, surfaces=False)
+    assert not use_compiled(v, surfaces=True) and use_compiled(v)  # by the size alone
     compiled_report = analyze(v, 26, method="compiled")
     for conn in (6, 26):
         report = analyze(v, conn)
@@ -290,3 +289,78 @@ def test_sweep_counts_a_box_of_vertices(rng, conn):
         assert {tuple(map(int, e)) for e in found["loose"]} == loose
         seen_loose += len(loose)
     assert seen_loose > 20
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+@pytest.mark.parametrize("conn", [6, 26])
+def test_numpy_and_compiled_reports_are_identical_and_the_betti_numbers_scipys(rng, conn):
+    # the NumPy census (the object and the background labelled once each,
+    # the connectivity's components joined at the pinches) and the compiled
+    # sweep give the same report, every field, on volumes full of edge and
+    # vertex contacts; b0 and b2 are scipy's labellings' counts (the
+    # background padded: its outside component is not enclosed)
+    from scipy import ndimage
+
+    full, faces = ndimage.generate_binary_structure(3, 3), ndimage.generate_binary_structure(3, 1)
+    obj_structure, bg_structure = (faces, full) if conn == 6 else (full, faces)
+    seen = np.zeros(3, int)
+    for _ in range(300):
+        v = rng.random(rng.integers(1, 12, 3)) < rng.uniform(0.1, 0.9)
+        numpy_report = analyze(v, conn, method="numpy")
+        assert numpy_report.to_dict() == analyze(v, conn, method="compiled").to_dict()
+        b0 = ndimage.label(v, obj_structure)[1]
+        enclosed = ndimage.label(np.pad(~v, 1, constant_values=True), bg_structure)[1] - 1
+        assert (numpy_report.betti[0], numpy_report.betti[2]) == (b0, enclosed)
+        seen += [numpy_report.pinched_vertices > 0, numpy_report.doubled_edges > 0, len(numpy_report.surfaces) > 1]
+    assert (seen > 30).all(), seen
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+def test_the_numpy_census_labels_twice_and_a_thin_volume_needs_no_scipy(conn):
+    # the object and the background are labelled once each (the
+    # connectivity's own components are the mesh's joined at the pinches),
+    # and a volume one voxel thick is labelled padded, by cc3d, so that the
+    # census never imports scipy.ndimage (as docs/performance.md says of
+    # every volume below the compiled pass's size)
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from isoflow.scale import labels\n"
+        "from isoflow.digital import closed_surfaces as cs\n"
+        "calls = []\n"
+        "real = labels.label\n"
+        "labels.label = lambda *a, **k: calls.append(a[0].shape) or real(*a, **k)\n"
+        "v = np.random.default_rng(1).random((1, 30, 30)) < 0.5\n"
+        f"cs.small_census(v, {conn})\n"
+        "print(len(calls), 'scipy.ndimage' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["2", "False"]
+
+
+@pytest.mark.skipif(not compiled.have_numba(), reason="numba not installed")
+def test_auto_takes_the_compiled_census_once_it_is_loaded_and_numpy_in_a_fresh_process():
+    # "auto" weighs numba's start against a small volume: in a fresh
+    # process it counts a small one by NumPy without importing numba; once
+    # a compiled pass has run here (numba holds the sweep's machine code)
+    # it takes the compiled census at any size, with the same report, and
+    # "numpy" still takes NumPy
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from isoflow import analyze\n"
+        "from isoflow.digital import closed_surfaces as cs\n"
+        "v = np.random.default_rng(3).random((20, 21, 19)) < 0.5\n"
+        "first = [cs.use_census(v), 'numba' in sys.modules]\n"
+        "want = analyze(v, 26)\n"
+        "numba_after_auto = 'numba' in sys.modules\n"
+        "analyze(np.ones((2, 2, 2), bool), method='compiled')\n"
+        "after = [cs.use_census(v), cs.use_census(v, method='numpy'), analyze(v, 26) == want]\n"
+        "print(*first, numba_after_auto, *after)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "False", "False", "True", "False", "True"]

@@ -77,8 +77,12 @@ def analyze(
         Threads of the compiled passes (default: the ``ISOFLOW_THREADS``
         environment variable, else every CPU).
     method : {"auto", "numpy", "compiled"}
-        The NumPy passes, the compiled ones (numba), or by the volume's size.
-        The report is the same either way.
+        The NumPy passes, the compiled ones (numba), or ``"auto"``: by the
+        volume's size, and for a 3D volume the compiled pass at any size
+        once it is loaded in this process (a compiled pass ran here, so
+        numba's start is paid; see
+        :func:`~isoflow.digital.closed_surfaces.use_census`). The report
+        is the same either way.
     pitch, origin, unit : optional
         The voxel size (one number or one per axis), the world position
         of lattice point 0 (of voxel 0's lowest corner for an array) and

@@ -54,13 +54,14 @@ configuration array) count per label pair. All equal
 
 from __future__ import annotations
 
+import sys
 from functools import cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import binary, count_codes, refuse_object
+from ..scale.arrays import binary, refuse_object
 from ..scale.compiled import Method, thread_count, use_compiled
 from ..scale.memory import check_fits
 from .configurations import configurations
@@ -71,6 +72,10 @@ from .surface import boundary_faces, doubled_spoke_lut, pinch_lut, sheet_lut, sl
 
 #: connectivity -> (object adjacency, background adjacency) of the mesh's solid
 MESH_ADJACENCY = {6: (6, 18), 26: (18, 6)}
+
+#: one more than the most faces a sheet has at one vertex (seven: a vertex
+#: with one background octant)
+QUARTER_SPAN = 8
 
 
 @cache
@@ -115,6 +120,9 @@ def sweep_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     layers = [n | (n << 4) for n in range(1, 15)]
     assert (spokes[layers] == 0).all()
     assert all((quarters[c, : nsheet[c]] == 4).all() for c in layers)
+    # the small path visits the configurations 1 .. 254 as the boundary's
+    # and keeps each sheet's faces in one digit of its count
+    assert (nsheet[1:255] > 0).all() and quarters.max() < QUARTER_SPAN
     return nsheet, sheet_obj, sheet_bg, quarters, spokes, pinch
 
 
@@ -147,7 +155,10 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Met
     connectivity : {6, 26} or None
         The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
     method : {"auto", "numpy", "compiled"}
-        One compiled sweep, the NumPy census, or by the volume's size.
+        One compiled sweep, the NumPy census, or ``"auto"``: the compiled
+        sweep from 4 million voxels on, or at any size once it is loaded in
+        this process (a compiled pass ran here: :func:`use_census`). The
+        answer is the same either way.
 
     Returns
     -------
@@ -186,58 +197,188 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Met
 
 
 #: peak bytes of :func:`small_census`: per voxel (the int32 labels of both
-#: sides, their padded copies, the configurations) and per mesh vertex (the
-#: sheets' labels, octants and flat indices); measured with tracemalloc at
-#: 20-23 and 81-85 on a ball, a torus, porous fields and noise
-SMALL_BYTES_PER_VOXEL = 24
-SMALL_BYTES_PER_SHEET = 96
+#: sides on the padded grid, the padded volume, its complement and its
+#: configurations) and per mesh vertex (the boundary vertices' indices and
+#: configurations, the sheets' labels, offsets and bins); measured with
+#: tracemalloc at 13-14 and up to 35 on a ball, a torus, porous fields and
+#: noise
+SMALL_BYTES_PER_VOXEL = 16
+SMALL_BYTES_PER_SHEET = 48
 
 
 def small_census(vol: np.ndarray, conn: int) -> dict:
     """What :func:`compiled_census` gives, by NumPy and cc3d, for a 3D host
-    volume (bool, 0/1 bytes) below the compiled pass's size: one
-    configuration array, the labels of the volume and of its background
-    padded by one layer (the outside is one background component) under the
-    mesh's adjacencies, and one more labelling for the Betti counts. The
-    mesh's adjacency is the connectivity's on one side (the object's under
-    6, the background's under 26); the other side is labelled again under
-    the connectivity's own (26 for the background under 6, for the object
-    under 26) rather than joined through the pinches."""
+    volume (bool, 0/1 bytes) below the compiled pass's size.
+
+    The volume is padded by one layer of background once, and everything
+    is laid out on that padded grid: the configuration of vertex ``w`` sits
+    at the padded voxel ``w`` (:func:`padded_configurations`), so each of
+    its octants is the padded voxel at a fixed flat offset from it, and the
+    labels of the object and of the background (the outside one component)
+    under the mesh's adjacencies are read there without copies. Only the
+    boundary vertices (neither all object nor all background) are visited.
+    The connectivity's own components, for the Betti counts, are the
+    mesh's joined at the pinches (the object's under 26, the background's
+    under 6: two voxels that meet at a vertex alone are joined by the
+    18-adjacency through any third voxel of their kind at that vertex), as
+    the compiled pass joins them, rather than a third labelling."""
     from ..scale.labels import label
 
-    cfg = configurations(vol)
-    hist = count_codes(np, cfg, 256)
-    sheets = int(hist @ sweep_tables(conn)[0])
-    check_fits(SMALL_BYTES_PER_VOXEL * vol.size + SMALL_BYTES_PER_SHEET * sheets,
+    padded = np.pad(vol, 1)
+    cfg = padded_configurations(padded)
+    flat = cfg.ravel()
+    on = np.flatnonzero(flat - np.uint8(1) < 254)  # (configurations 1 .. 254: the boundary's)
+    c_on = flat[on]
+    hist = np.bincount(c_on, minlength=256)
+    hist[255] = np.count_nonzero(flat == 255)
+    hist[0] = np.prod(np.add(vol.shape, 1)) - hist.sum()
+    check_fits(SMALL_BYTES_PER_VOXEL * vol.size + SMALL_BYTES_PER_SHEET * int(hist @ sweep_tables(conn)[0]),
                f"labelling a {'x'.join(map(str, vol.shape))} volume for its surfaces and Betti numbers",
                hint="store it as .zarr and run isoflow info on that (block by block)")
     obj_adj, bg_adj = MESH_ADJACENCY[conn]
-    obj_labels, nobj = label(vol, obj_adj)
-    background = np.pad(~vol, 1, constant_values=True)
-    bg_padded, nbg = label(background, bg_adj)
+    obj_labels, nobj = label(padded, obj_adj)
+    bg_labels, nbg = label(~padded, bg_adj)
+    strides = np.array(padded.strides) // padded.itemsize  # (every array here is C ordered, of this shape)
+    rare = np.flatnonzero(_rare_configurations(conn).take(c_on))
+    found = _sheet_sums(on, c_on, rare, (obj_labels.ravel(), bg_labels.ravel()), _octant_steps(strides), conn,
+                       spans=(nobj + 1, nbg + 1))
     if conn == 6:
-        b0, enclosed = nobj, label(background, 26)[1] - 1
+        b0, enclosed = nobj, joined_count(nbg, found["pairs"]) - 1
     else:
-        b0, enclosed = label(vol, 26)[1], nbg - 1
-    outside = int(bg_padded[0, 0, 0])
-    whole = tuple(slice(None) for _ in range(3))
-    found = box_sheets(vol, obj_labels, bg_padded[1:-1, 1:-1, 1:-1], whole, conn, outside, cfg=cfg)
-    # doubled lattice edges: a spoke doubled at both ends (bit 2 axis + 1 of
-    # the lower end, bit 2 axis of the upper), on small uint8 arrays
-    spokes = sweep_tables(conn)[4][cfg]
-    doubled = 0
-    for axis in range(3):
-        lo = [slice(None)] * 3
-        hi = [slice(None)] * 3
-        lo[axis], hi[axis] = slice(None, -1), slice(1, None)
-        doubled += int(np.count_nonzero((spokes[tuple(lo)] >> (2 * axis + 1)) & (spokes[tuple(hi)] >> (2 * axis)) & 1))
+        b0, enclosed = joined_count(nobj, found["pairs"]), nbg - 1
     return {
         "hist": hist,
         "betti_counts": (b0, enclosed),
         "surfaces": surfaces_from_counts(found["vertices"], found["quarters"]),
         "pinched_vertices": int(hist[pinch_lut(conn)].sum()),
-        "doubled_edges": doubled,
+        "doubled_edges": _doubled_edges(on[rare], c_on[rare], strides, conn),
     }
+
+
+def padded_configurations(padded: np.ndarray) -> np.ndarray:
+    """The configurations of a 3D volume padded by one layer of
+    background (bool), on the padded grid: vertex ``w`` (``0 <= w <=
+    volume.shape``) at index ``w``, its octant ``d`` being the padded voxel
+    ``w + d``, as in :func:`~isoflow.digital.configurations.configurations`;
+    the last layer along each axis (no vertex) holds 0.
+
+    Examples
+    --------
+    >>> c = padded_configurations(np.pad(np.ones((1, 1, 1), bool), 1))
+    >>> c.shape, sorted(int(x) for x in c[:2, :2, :2].ravel()), int(c[2].max())
+    ((3, 3, 3), [1, 2, 4, 8, 16, 32, 64, 128], 0)
+    """
+    code = padded.astype(np.uint8)
+    for axis in range(3):
+        lo = [slice(None)] * 3
+        hi = [slice(None)] * 3
+        lo[axis], hi[axis] = slice(None, -1), slice(1, None)
+        # (the shifted copy is made before the in-place or: no overlap)
+        code[tuple(lo)] |= code[tuple(hi)] << (1 << axis)
+    return code
+
+
+def _octant_steps(strides: np.ndarray) -> np.ndarray:
+    """The flat offsets of the eight octants of a vertex from its own index,
+    on a C-ordered grid of these element ``strides`` (octant ``d`` is bit
+    ``d_0 + 2 d_1 + 4 d_2``)."""
+    octant = np.array([[o & 1, (o >> 1) & 1, o >> 2] for o in range(8)])
+    return octant @ strides
+
+
+@cache
+def _rare_configurations(connectivity: int = 6) -> np.ndarray:
+    """The configurations (256, bool) with more than one sheet, a pinch or
+    a doubled spoke: the few boundary vertices that :func:`_sheet_sums` and
+    :func:`_doubled_edges` look at one by one, past every vertex's first
+    sheet."""
+    nsheet, _, _, _, spokes, pinch = sweep_tables(connectivity)
+    return (nsheet > 1) | (pinch[:, 0] >= 0) | (spokes != 0)
+
+
+def _sheet_sums(base: np.ndarray, c_on: np.ndarray, rare: np.ndarray, labels: tuple[np.ndarray, np.ndarray],
+                step: np.ndarray, conn: int, spans: tuple[int, int] | None = None) -> dict:
+    """The sheets of some boundary vertices summed per label pair.
+
+    ``base``: the flat index (int64) of each vertex's octant 0 in the flat
+    object and background ``labels``, whose octant ``d`` is at ``base +
+    step[d]``; ``c_on``: the vertices' configurations (none 0 or 255);
+    ``rare``: the positions of those of :func:`_rare_configurations`;
+    ``spans``: one more than the largest object and background label,
+    where the labels are 0 .. span - 1 (else read off them). Returns what
+    :func:`box_sheets` does."""
+    nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
+    # per sheet and configuration, the offsets of the sheet's object and
+    # background octant from the vertex (an unused sheet's is never read)
+    # and its faces
+    offsets = step[np.stack([sheet_obj.T, sheet_bg.T], axis=1)]  # (sheet, side, configuration)
+    faces = np.ascontiguousarray(quarters.T)
+    chunks = [_sheet_labels(base, c_on, offsets[0], faces[0], labels)]
+    idx, c = base[rare], c_on[rare]
+    for s in range(1, int(nsheet.max(initial=0))):
+        more = nsheet[c] > s
+        idx, c = idx[more], c[more]
+        chunks.append(_sheet_labels(idx, c, offsets[s], faces[s], labels))
+    found = _pair_sums(chunks, spans)
+    idx, c = base[rare], c_on[rare]
+    pinched = pinch[c, 0] >= 0
+    # the pinch joins two object octants under 26, two background ones under 6
+    ends = labels[1 if conn == 6 else 0].take(step[pinch[c[pinched]]] + idx[pinched, None]).astype(np.int64).reshape(-1, 2)
+    found["pairs"] = ends[ends[:, 0] != ends[:, 1]]  # only those that join two pieces
+    return found
+
+
+def _sheet_labels(idx: np.ndarray, c: np.ndarray, offsets: np.ndarray, faces: np.ndarray,
+                  labels: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One sheet of each vertex: its object and background labels and its
+    faces, read through the offset table of that sheet (2, 256)."""
+    at = offsets.take(c, axis=1)
+    at += idx
+    return labels[0].take(at[0]), labels[1].take(at[1]), faces.take(c)
+
+
+def _doubled_edges(on: np.ndarray, c_on: np.ndarray, strides: np.ndarray, conn: int) -> int:
+    """The doubled lattice edges among boundary vertices ``on`` (flat
+    indices on a grid of element ``strides``, ascending) of configurations
+    ``c_on``: a spoke doubled at both ends (bit ``2 axis + 1`` of the lower
+    end, bit ``2 axis`` of the upper one, the vertex one stride further)."""
+    spokes = sweep_tables(conn)[4][c_on]
+    some = spokes != 0
+    idx, spokes = on[some], spokes[some]
+    doubled = 0
+    for axis in range(3):
+        low = idx[(spokes >> (2 * axis + 1)) & 1 == 1] + strides[axis]
+        high = idx[(spokes >> (2 * axis)) & 1 == 1]
+        doubled += len(np.intersect1d(low, high, assume_unique=True))
+    return doubled
+
+
+def joined_count(n: int, pairs: np.ndarray) -> int:
+    """The components left when pieces labelled ``1 .. n`` are joined by
+    the label ``pairs`` (k, 2): hooking every root onto the smallest root
+    it is paired with, then pointer jumping, until no pair spans two
+    roots.
+
+    Examples
+    --------
+    >>> joined_count(5, np.array([[1, 2], [4, 2], [5, 5]]))
+    3
+    """
+    root = np.arange(n + 1)
+    a, b = pairs[:, 0], pairs[:, 1]
+    while True:
+        ra, rb = root[a], root[b]
+        apart = ra != rb
+        if not apart.any():
+            return int(np.count_nonzero(root[1:] == np.arange(1, n + 1)))
+        a, b, ra, rb = a[apart], b[apart], ra[apart], rb[apart]
+        # a root points to a smaller one, so no cycle forms
+        np.minimum.at(root, np.maximum(ra, rb), np.minimum(ra, rb))
+        while True:
+            jumped = root[root]
+            if np.array_equal(jumped, root):
+                break
+            root = jumped
 
 
 def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, keep, conn: int, outside,
@@ -253,67 +394,55 @@ def box_sheets(vox: np.ndarray, obj_labels: np.ndarray, bg_labels: np.ndarray, k
     (``obj``, ``bg`` label arrays), their mesh ``vertices`` and ``quarters``
     of faces, and the pinch ``pairs`` (labels of the two octants to join for
     the connectivity's components: object labels under 26, background under
-    6). Used by the small path (:func:`small_census`: no numba below
-    :func:`~isoflow.scale.compiled.least_voxels`). ``cfg``:
-    ``configurations(vox)``, where the caller has it.
+    6). The reference of the seams' census (tests/digital/test_outofcore.py);
+    :func:`small_census` sums a whole volume's sheets the same way
+    (:func:`_sheet_sums`). ``cfg``: ``configurations(vox)``, where the caller
+    has it.
     """
-    nsheet, sheet_obj, sheet_bg, quarters, _, pinch = sweep_tables(conn)
     cfg = (configurations(vox) if cfg is None else cfg)[keep]
     origin = np.array([k.indices(n + 1)[0] for k, n in zip(keep, vox.shape)])
-    # (C order: the flat views below are indexed with these strides)
+    # (C order, both of one shape: the flat views below share these strides)
     obj_padded = np.ascontiguousarray(np.pad(obj_labels, 1))
     bg_padded = np.ascontiguousarray(np.pad(bg_labels, 1, constant_values=outside))
-    # vertex w's octant d is the padded voxel w + d, at flat index base(w) +
-    # step[d] of the padded labels
     strides = np.array(obj_padded.strides) // obj_padded.itemsize
-    bg_strides = np.array(bg_padded.strides) // bg_padded.itemsize
-    octant = np.array([[o & 1, (o >> 1) & 1, o >> 2] for o in range(8)])
-    step, bg_step = octant @ strides, octant @ bg_strides
     flat = cfg.ravel()
-    on = np.flatnonzero(nsheet[flat])
-    c_on = flat[on]
+    on = np.flatnonzero(sweep_tables(conn)[0][flat])
+    # vertex w's octant d is the padded voxel w + d
     corner = np.unravel_index(on, cfg.shape)
-    base = sum((c + o) * s for c, o, s in zip(corner, origin, strides))
-    bg_base = sum((c + o) * s for c, o, s in zip(corner, origin, bg_strides))
-    obj_flat, bg_flat = obj_padded.ravel(), bg_padded.ravel()
-    objs, bgs, quarter = [], [], []
-    for s in range(int(nsheet.max(initial=0))):
-        has = nsheet[c_on] > s
-        c = c_on[has]
-        objs.append(obj_flat[base[has] + step[sheet_obj[c, s]]])
-        bgs.append(bg_flat[bg_base[has] + bg_step[sheet_bg[c, s]]])
-        quarter.append(quarters[c, s])
-    obj, bg = np.concatenate(objs).astype(np.int64), np.concatenate(bgs).astype(np.int64)
-    found = _pair_sums(obj, bg, np.concatenate(quarter).astype(np.int64))
-    pinched = pinch[c_on, 0] >= 0
-    side_obj = conn == 26  # the pinch joins two object octants under 26
-    either = []
-    for e in (0, 1):
-        oct_ = pinch[c_on[pinched], e]
-        either.append(obj_flat[base[pinched] + step[oct_]] if side_obj else bg_flat[bg_base[pinched] + bg_step[oct_]])
-    ends = np.stack(either, axis=1).astype(np.int64).reshape(-1, 2)
-    found["pairs"] = ends[ends[:, 0] != ends[:, 1]]  # only those that join two pieces
-    return found
+    base = np.asarray(sum((c + o) * s for c, o, s in zip(corner, origin, strides)), np.int64)
+    rare = np.flatnonzero(_rare_configurations(conn)[flat[on]])
+    return _sheet_sums(base, flat[on], rare, (obj_padded.ravel(), bg_padded.ravel()), _octant_steps(strides), conn)
 
 
-def _pair_sums(obj: np.ndarray, bg: np.ndarray, quarter: np.ndarray) -> dict:
+def _pair_sums(chunks: list[tuple[np.ndarray, np.ndarray, np.ndarray]], spans: tuple[int, int] | None) -> dict:
     """The distinct (``obj``, ``bg``) label pairs of the sheets, in order,
-    with each one's ``vertices`` (sheets) and ``quarters`` (summed).
+    with each one's ``vertices`` (sheets) and ``quarters`` (summed), from
+    chunks of sheets ``(obj, bg, quarter)`` (each quarter below
+    :data:`QUARTER_SPAN`).
 
-    A whole volume's labels are 1..n on each side, so the pairs are counted
-    in bins, without sorting (three sorts took two thirds of the small
-    path's time); labels spread wider (node keys out of core) are sorted."""
-    if len(obj) == 0:
-        return {"obj": obj, "bg": bg, "vertices": obj.copy(), "quarters": obj.copy()}
-    lo_o, lo_b = int(obj.min()), int(bg.min())
-    span_o, span_b = int(obj.max()) - lo_o + 1, int(bg.max()) - lo_b + 1
-    if span_o * span_b <= max(1 << 16, 4 * len(obj)):
-        key = (obj - lo_o) * span_b + (bg - lo_b)
-        vertices = np.bincount(key, minlength=span_o * span_b)
+    A whole volume's labels are 1..n on each side (``spans`` given), so
+    the pairs are counted in bins, without sorting, and a sheet's quarters
+    in the bin's low digit, so that one unweighted count gives both sums;
+    labels spread wider (node keys out of core) are sorted."""
+    if spans is None:
+        obj, bg = (np.concatenate(part) for part in list(zip(*chunks))[:2])
+        if len(obj) == 0:
+            return {"obj": obj, "bg": bg, "vertices": np.zeros(0, np.int64), "quarters": np.zeros(0, np.int64)}
+        lo_o, lo_b = int(obj.min()), int(bg.min())
+        spans = int(obj.max()) - lo_o + 1, int(bg.max()) - lo_b + 1
+    else:
+        lo_o = lo_b = 0
+    span_o, span_b = spans
+    if span_o * span_b <= max(1 << 16, 4 * sum(len(chunk[0]) for chunk in chunks)):
+        bins = np.zeros(span_o * span_b * QUARTER_SPAN, np.int64)
+        for chunk in chunks:
+            bins += np.bincount(_pair_keys(*chunk, lo_o, lo_b, span_b), minlength=len(bins))
+        counts = bins.reshape(-1, QUARTER_SPAN)
+        vertices = counts.sum(axis=1)
         pair = np.flatnonzero(vertices)
-        quarters = np.bincount(key, weights=quarter, minlength=span_o * span_b)[pair]
         return {"obj": pair // span_b + lo_o, "bg": pair % span_b + lo_b, "vertices": vertices[pair],
-                "quarters": quarters.astype(np.int64)}
+                "quarters": counts[pair] @ np.arange(QUARTER_SPAN)}
+    obj, bg, quarter = (np.concatenate(part).astype(np.int64) for part in zip(*chunks))
     uo, io = np.unique(obj, return_inverse=True)
     ub, ib = np.unique(bg, return_inverse=True)
     pair, inverse = np.unique(io * len(ub) + ib, return_inverse=True)
@@ -323,6 +452,20 @@ def _pair_sums(obj: np.ndarray, bg: np.ndarray, quarter: np.ndarray) -> dict:
         "vertices": np.bincount(inverse, minlength=len(pair)).astype(np.int64),
         "quarters": np.bincount(inverse, weights=quarter, minlength=len(pair)).astype(np.int64),
     }
+
+
+def _pair_keys(obj: np.ndarray, bg: np.ndarray, quarter: np.ndarray, lo_o: int, lo_b: int, span_b: int) -> np.ndarray:
+    """The bin of every sheet: its pair's, times :data:`QUARTER_SPAN`, plus
+    its quarters, computed in place on one int64 array (no temporary per
+    step)."""
+    key = np.subtract(obj, lo_o, dtype=np.int64)
+    key *= span_b
+    key += bg
+    if lo_b:
+        key -= lo_b
+    key *= QUARTER_SPAN
+    key += quarter
+    return key
 
 
 def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:
@@ -392,11 +535,40 @@ def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto") 
     the ``surfaces``: by :func:`~isoflow.scale.compiled.use_compiled`, whose
     ``"auto"`` threshold is higher with the surfaces (the NumPy census holds
     out to a larger size, as numba's start is then the larger part of the
-    compiled one's time). Never for an empty or a device volume."""
+    compiled one's time), and with ``"auto"`` also at any size once the
+    compiled census is loaded in this process (:func:`census_loaded`):
+    numba's start, the one cost that the threshold weighs, is then paid.
+    Both passes give the same answer. Never for an empty or a device
+    volume.
+
+    Examples
+    --------
+    >>> v = np.zeros((4, 4, 4), bool)
+    >>> use_census(v, method="numpy"), use_census(v) == census_loaded()
+    (False, True)
+    """
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
         use_compiled(vol, surfaces, method)  # (refuses "compiled" where it cannot be)
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    return use_compiled(vol, surfaces, method)
+    return use_compiled(vol, surfaces, method) or (method == "auto" and census_loaded())
+
+
+def census_loaded() -> bool:
+    """Whether the compiled census is loaded in this process: the sweep's
+    module imported and its machine code held by numba, because a compiled
+    pass ran here (``method="compiled"``, a large volume, ``isoflow info``'s
+    warm-up). A question to numba's dispatcher (never a clock, and it never
+    imports numba itself).
+
+    Examples
+    --------
+    >>> from isoflow.scale.compiled import have_numba
+    >>> _ = closed_surfaces(np.ones((2, 2, 2), bool), method="compiled") if have_numba() else None
+    >>> census_loaded() == have_numba()
+    True
+    """
+    sweep = sys.modules.get("isoflow.scale.sweep")
+    return sweep is not None and sweep.loaded()
 
 
 def component_parents(roots, parents, off, goff, starts) -> tuple[np.ndarray, int]:

@@ -6,9 +6,14 @@ are compiled with numba. They are used for host volumes from
 can start (importing numba and loading its cached machine code is paid
 once per process), so one small volume never imports numba at all.
 The choice is a function of the input alone (:func:`use_compiled`); a
-caller that knows better (a loop over many small volumes, which pays
-numba's start once) says so with ``method="compiled"``, as scikit-image's
-functions take ``method=``.
+caller that knows better says so with ``method="compiled"``, as
+scikit-image's functions take ``method=``. The 3D census of ``analyze``
+and ``closed_surfaces`` also takes the compiled pass at any size once
+numba holds its machine code in the process (a compiled pass ran there:
+numba's start, what the size threshold weighs, is paid), so a loop over
+many small volumes pays that start once, after its first large or
+compiled call (:func:`isoflow.digital.closed_surfaces.use_census`; a
+question to numba, not a clock). Both passes give the same answers.
 
 The passes release the GIL, so plain Python threads run them in parallel
 (no OpenMP pool, no parallel compile). Each pass splits the volume into as

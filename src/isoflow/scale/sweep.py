@@ -603,6 +603,20 @@ def _sweep_layers(rows, nodes, tables, rules, slab):
     return doubled, npairs, nloose
 
 
+def loaded() -> bool:
+    """Whether numba holds the sweep's machine code in this process already:
+    a sweep ran here, so numba compiled it or loaded it from its cache
+    (what :func:`isoflow.digital.closed_surfaces.use_census` asks; a
+    question to numba's dispatcher, not a clock).
+
+    Examples
+    --------
+    >>> loaded() in (True, False)
+    True
+    """
+    return bool(_sweep_layers.signatures)
+
+
 @njit(cache=True, nogil=True)
 def _join_reps(pbg, reps, outside):
     for r in reps:
