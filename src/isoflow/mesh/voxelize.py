@@ -326,7 +326,8 @@ class Solid:
             what.append(counted(c["nonmanifold_edges"], "non-manifold edge"))
         if self.flipped:
             what.append(counted(self.flipped, "flipped face") + " (turned over to agree with their neighbours; where "
-                        "the mesh is open or non-manifold, only across edges where they meet almost flat)")
+                        "the mesh is open or non-manifold, only across edges where they meet almost flat or that "
+                        "make half or more of the rim of a part)")
         elif c["inconsistent_edges"] and not c["nonmanifold_edges"]:
             what.append(counted(c["inconsistent_edges"], "inconsistently oriented edge"))
         if stats is not None and stats[0]:
