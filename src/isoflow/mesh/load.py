@@ -919,38 +919,6 @@ def merge_coincident(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return first[inverse.reshape(-1)][faces]  # each position's first vertex
 
 
-def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, int]:
-    """Faces with a consistent orientation across every edge two faces share,
-    and how many faces were turned over.
-
-    trimesh's ``repair.fix_winding`` propagates the orientation of one seed
-    face through each component (faces joined across two-face edges); where
-    the seed was itself the flipped face, the whole component comes out
-    inverted, which for nested shells would turn a cavity into solid.  So
-    each component then keeps the orientation of most of its original area:
-    a component whose flipped faces outweigh the others is turned back.
-    """
-    import trimesh
-
-    from ..scale.graphs import components
-
-    mesh = trimesh.Trimesh(vertices, faces, process=False, validate=False)
-    if mesh.is_winding_consistent:
-        return faces, 0
-    trimesh.repair.fix_winding(mesh)
-    fixed = np.asarray(mesh.faces, dtype=np.int64)
-    flipped = np.any(fixed != faces, axis=1)
-    adj = np.asarray(mesh.face_adjacency, dtype=np.int64).reshape(-1, 2)
-    ncomp, comp = components(len(faces), adj[:, 0], adj[:, 1])
-    area = np.asarray(mesh.area_faces, dtype=np.float64)
-    turned = np.bincount(comp, weights=area * flipped, minlength=ncomp)
-    total = np.bincount(comp, weights=area, minlength=ncomp)
-    back = (turned > total / 2)[comp]
-    fixed[back] = fixed[back][:, ::-1]
-    flipped ^= back
-    return fixed, int(flipped.sum())
-
-
 def boundary_chain(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
     """The boundary of the faces as an integer 1-chain: directed edges
     ``a[e] -> b[e]``, each repeated by its net multiplicity (uses a -> b

@@ -263,7 +263,7 @@ def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "windi
 def _inconsistent_words(edges: int, fill: str = "winding", genus: int | None = None) -> str:
     if genus is None:
         surface = "so it has no genus as a closed surface; " + _READ_AS[fill]
-    else:  # the voxeliser turns the faces as trimesh.repair.fix_winding does: the edges balance
+    else:  # the voxeliser turns a closed component's faces to agree (isoflow.mesh.orientation): the edges balance
         read = ("its solid is read by the exact nonzero winding number, the faces turned so" if fill == "winding"
                 else _READ_AS[fill])
         surface = f"its faces turned consistently make a closed surface of genus {genus}; {read}"

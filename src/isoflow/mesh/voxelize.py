@@ -15,10 +15,10 @@ A voxel is in iff the generalised winding number of its centre satisfies
 ``|w| > 1/2`` (Jacobson et al. 2013).  On a closed, consistently oriented
 mesh w is the integer winding number and the rule is the nonzero rule, which
 the scanline computes exactly (with a documented tie rule for centres on the
-surface).  Any other mesh is first made consistently oriented where it can be
-(trimesh's ``fix_winding``), then read by the same scanline on the mesh
-closed by a cap, minus the cap's own winding number (exact; see
-:mod:`isoflow.mesh.winding`).
+surface).  Any other mesh is first made consistently oriented where its
+faces show how (:func:`~isoflow.mesh.orientation.orient_faces`), then read
+by the same scanline on the mesh closed by a cap, minus the cap's own
+winding number (exact; see :mod:`isoflow.mesh.winding`).
 
 Why a winding number and not parity
 -----------------------------------
@@ -79,7 +79,6 @@ from .load import (  # noqa: F401
     mesh_arrays,
     mesh_bbox,
     mesh_defects,
-    orient_faces,
 )
 
 #: a progress callback: ``progress(done, total)``
@@ -169,13 +168,15 @@ class Solid:
     after exact duplicates of vertex positions are merged (a triangle soup)
     and double-sided faces are read as one (``double_sided`` pairs, see
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
-    them.  ``flipped`` faces were turned over by :func:`orient_faces`;
+    them.  ``flipped`` faces were turned over by
+    :func:`~isoflow.mesh.orientation.orient_faces`;
     ``chain_edges`` is the length of the boundary chain that the cap closes
     (0: the exact scanline alone decides).
     """
 
     def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False, fill: Fill = "winding"):
         from .census import census, one_face_per_pair  # compiled: loaded when a mesh is voxelised
+        from .orientation import orient_faces
 
         self.strict = strict
         self.fill = fill
@@ -324,7 +325,9 @@ class Solid:
         if c["nonmanifold_edges"]:
             what.append(counted(c["nonmanifold_edges"], "non-manifold edge"))
         if self.flipped:
-            what.append(counted(self.flipped, "flipped face") + " (turned over with trimesh.repair.fix_winding)")
+            what.append(counted(self.flipped, "flipped face") + " (turned over to agree with their neighbours; where "
+                        "the mesh is open or non-manifold, only across edges where they meet almost flat or that "
+                        "make half or more of the rim of a part)")
         elif c["inconsistent_edges"] and not c["nonmanifold_edges"]:
             what.append(counted(c["inconsistent_edges"], "inconsistently oriented edge"))
         if stats is not None and stats[0]:
