@@ -224,7 +224,10 @@ def small_census(vol: np.ndarray, conn: int) -> dict:
     the compiled pass joins them, rather than a third labelling."""
     from ..scale.labels import label
 
-    padded = np.pad(vol, 1)
+    # C ordered whatever the caller's layout: np.pad keeps a Fortran array's
+    # order, and the octant steps and the labels' flat indices assume C
+    padded = np.zeros(np.add(vol.shape, 2), dtype=bool)
+    padded[1:-1, 1:-1, 1:-1] = vol
     cfg = padded_configurations(padded)
     flat = cfg.ravel()
     on = np.flatnonzero(flat - np.uint8(1) < 254)  # (configurations 1 .. 254: the boundary's)
