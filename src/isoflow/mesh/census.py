@@ -238,10 +238,13 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
     winding number 0 everywhere, the two layers cancelling; read with one
     face per pair it bounds the solid it draws.  Two closed solids that
     touch along coincident faces (boxes stacked face to face, voxel-art
-    exports) also give pairs: there the pairs form a wall whose every free
-    edge is an edge of the unpaired faces, and the wall is dropped whole,
-    both faces of each pair, leaving the union that the winding number
-    gave anyway (one face of each pair would leave membranes inside it).
+    exports, a tetrahedral mesh's cells) also give pairs: there the pairs
+    form a wall whose every free edge is an edge of the unpaired faces, or
+    that lies inside the solid the unpaired faces bound (a wall parting a
+    box whose sides are not split where it meets them), and the wall is
+    dropped whole, both faces of each pair, leaving the union that the
+    winding number gave anyway (one face of each pair would leave
+    membranes inside it, and call the union double-sided).
     A pair of zero-area faces (three corners on a line) draws nothing and
     is left as it is.
 
@@ -281,6 +284,8 @@ def one_face_per_pair(vertices: np.ndarray, faces: np.ndarray, mate: np.ndarray 
         return f, 0
     first = paired & (np.arange(len(f)) < mate)
     wall = _walls(f[first], f[~paired & ~flat], n_vertices)
+    if not wall.all():
+        wall |= _inside_walls(p[first], p[~paired & ~flat], edge_table(f[first], n_vertices)[5], ~wall)
     drop = paired.copy()
     kept = np.nonzero(first)[0][~wall]
     drop[kept] = False
@@ -314,6 +319,44 @@ def _walls(kept: np.ndarray, single: np.ndarray, n_vertices: int) -> np.ndarray:
     bare = np.zeros(len(kept), dtype=bool)
     bare[np.repeat(root, 3)[~reached[kept.ravel()]]] = True
     return ((has_free & ~open_edge) | (~has_free & ~bare))[root]
+
+
+#: the most (point, triangle) solid angles that :func:`_inside_walls`
+#: sums (about a second on one core); past it walls are found by their
+#: edges alone, and the pairs inside the solid are read as one face each,
+#: which leaves the same voxels (a membrane inside a solid keeps |w| >= 1/2)
+INSIDE_WALL_TERMS = 1 << 27
+
+
+def _inside_walls(kept: np.ndarray, single: np.ndarray, root: np.ndarray, candidate: np.ndarray) -> np.ndarray:
+    """Which of the ``kept`` faces (one per pair, as corner coordinates,
+    ``root`` their components) lie in a wall inside the solid that the
+    unpaired faces ``single`` bound: the generalised winding number of the
+    unpaired faces at the centroid of the largest face of each
+    ``candidate`` component is beyond 1/2 (a wall whose rim meets the
+    solid's faces away from their edges, which the edge test of
+    :func:`_walls` cannot see).  The pairs' own windings cancel, so
+    dropping both faces leaves the winding number as it is, where keeping
+    one would put a membrane inside the solid, across which w jumps by 1."""
+    from .solid_angles import winding_numbers
+
+    out = np.zeros(len(kept), dtype=bool)
+    if len(single) == 0 or not candidate.any():
+        return out
+    area = np.linalg.norm(np.cross(kept[:, 1] - kept[:, 0], kept[:, 2] - kept[:, 0]), axis=1)
+    faces = np.flatnonzero(candidate)
+    order = faces[np.lexsort((-area[faces], root[faces]))]
+    largest = order[np.r_[True, root[order][1:] != root[order][:-1]]]
+    points = kept[largest].mean(axis=1)
+    # a point outside the unpaired faces' box is outside their solid
+    within = np.all((points >= single.min(axis=(0, 1))) & (points <= single.max(axis=(0, 1))), axis=1)
+    largest, points = largest[within], points[within]
+    if len(largest) == 0 or len(largest) * len(single) > INSIDE_WALL_TERMS:
+        return out
+    w, _ = winding_numbers(points, single)
+    # a centroid on an unpaired face (|w| = 1/2) says nothing of either side
+    out[root[largest]] = np.abs(w) > 0.5 + 1e-9
+    return out[root] & candidate
 
 
 @njit(cache=True, nogil=True)

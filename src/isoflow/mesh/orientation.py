@@ -87,13 +87,52 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     (1, True)
     """
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    label, seams, area = followed_seams(np.asarray(vertices, dtype=np.float64)[f], f)
+    # copies of a face (the same corners the same way round) add their
+    # windings (a wall listed twice jumps w by 2): they are oriented as one
+    # face, so that a copy is never turned against its twin to cancel it
+    one, copy_of = single_copies(f)
+    label, seams, area = followed_seams(np.asarray(vertices, dtype=np.float64)[one], one)
     if len(seams) == 0:
         return f, 0
-    turn = turned_patches(seams, area)[label]
+    turn = turned_patches(seams, area)[label][copy_of]
     fixed = f.copy()
     fixed[turn] = fixed[turn][:, ::-1]
     return fixed, int(turn.sum())
+
+
+def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each face once: of faces on the same three corners the same way
+    round (any rotation of them) the first in file order, and for every
+    face the index of its copy among those kept.
+
+    Parameters
+    ----------
+    faces : int ndarray (M, 3)
+
+    Returns
+    -------
+    one : int64 ndarray (M', 3)
+        The distinct faces, in file order.
+    copy_of : int64 ndarray (M,)
+        ``one[copy_of[i]]`` is face i (up to a rotation of its corners).
+
+    Examples
+    --------
+    >>> one, copy_of = single_copies(np.array([[0, 1, 2], [1, 2, 0], [0, 2, 1]]))
+    >>> one.tolist(), copy_of.tolist()
+    ([[0, 1, 2], [0, 2, 1]], [0, 0, 1])
+    """
+    f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if len(f) == 0:
+        return f, np.zeros(0, dtype=np.int64)
+    # the rotation that puts the smallest corner first names a face's copies
+    start = np.argmin(f, axis=1)
+    key = f[np.arange(len(f))[:, None], (start[:, None] + np.arange(3)) % 3]
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    keep = np.sort(first)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(first))
+    return f[keep], rank[inverse.reshape(-1)]
 
 
 def edge_sides(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -284,11 +284,13 @@ def _repeated_words(n: int, copies: int, corners) -> str:
 
 def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, union_genus: int | None = None) -> str:
     s = "s" if n > 1 else ""
-    said = (f"{n} double-sided face{s} (the same three corners listed once each way round; "
-            f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))})")
+    at = f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))}"
+    if walls == n:  # solids glued face to face, not a surface drawn from both sides
+        return (f"{counted(n, 'pair')} of faces on the same three corners, once each way round ({at}), all in walls "
+                f"between solids: without the walls the mesh is closed, genus {union_genus}")
+    said = f"{n} double-sided face{s} (the same three corners listed once each way round; {at})"
     if walls:  # walls between solids: both faces of each pair dropped leave the union's surface
-        which = ("all" if walls == n else str(walls)) + f" in walls between solids{'' if walls == n else f' of the {n}'}"
-        return f"{said}, {which}: without the walls the mesh is closed, genus {union_genus}"
+        return f"{said}, {walls} in walls between solids of the {n}: without the walls the mesh is closed, genus {union_genus}"
     return said + (f"; without the later face of {'each' if n > 1 else 'the'} pair the mesh is closed, genus {genus}"
                    if genus is not None else "")
 

@@ -168,7 +168,9 @@ class Solid:
     after exact duplicates of vertex positions are merged (a triangle soup)
     and double-sided faces are read as one (``double_sided`` pairs, see
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
-    them.  ``flipped`` faces were turned over by
+    them; ``walls`` pairs lay in walls between solids or inside the solid
+    (solids glued face to face, a tetrahedral mesh's cells) and were
+    dropped, both faces, whose windings cancel.  ``flipped`` faces were turned over by
     :func:`~isoflow.mesh.orientation.orient_faces`;
     ``chain_edges`` is the length of the boundary chain that the cap closes
     (0: the exact scanline alone decides).
@@ -186,7 +188,7 @@ class Solid:
         faces = f
         self.census = self.defects
         self.joined = 0  # edges joined by merging vertices at equal positions
-        self.double_sided = self.flipped = self.chain_edges = 0
+        self.double_sided = self.walls = self.flipped = self.chain_edges = 0
         self.v = v
         self.faces = faces
         self.chain = (np.zeros(0, dtype=np.int64),) * 2
@@ -206,7 +208,9 @@ class Solid:
         # a pair shares its three edges, each then used at least twice: on
         # a manifold mesh the pair is a component of its own
         if self.census["nonmanifold_edges"] or self.census["components"] > 1:
+            given = len(faces)
             faces, self.double_sided = one_face_per_pair(v, faces)
+            self.walls = (given - len(faces) - self.double_sided) // 2
             if self.double_sided:
                 edges = census(faces, len(v))
                 self.census = defect_counts(*edges[2:])
@@ -320,6 +324,10 @@ class Solid:
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation, each read as one face)")
+        if self.walls:
+            what.append(counted(self.walls, "pair") + " of coincident faces of opposite orientation in walls "
+                        "inside the solid (as solids glued face to face and a tetrahedral mesh's cells give them: "
+                        "both faces left out, their windings cancel)")
         if c["boundary_edges"]:
             what.append(counted(c["boundary_edges"], "boundary edge"))
         if c["nonmanifold_edges"]:
