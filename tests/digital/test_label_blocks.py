@@ -4,6 +4,7 @@ and from zarr stores (plain, and OME-Zarr stored z, y, x) on the command
 line."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -276,5 +277,57 @@ def test_a_label_image_whose_three_layers_exceed_the_numbering_is_refused_in_one
     from isoflow.scale import pieces
 
     monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 250)
-    with pytest.raises(IsoflowError, match=r"layers hold 100 voxels each .* crop or split it"):
+    with pytest.raises(IsoflowError, match=r"layers across x hold 100 voxels each .* crop or split it along y and z"):
         label_table_blocks(np.ones((5, 10, 10), np.uint8), 6)
+
+
+def thin_along_z(tmp_path):
+    """A label store of chunks one voxel thick along z: layer_axes reads it in layers along z."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.scale.chunks import layer_axes
+
+    image = np.zeros((6, 5, 40), np.uint8)
+    image[1:4, 1:4, 2:30] = 3
+    z = zarr.open_array(str(tmp_path / "labels.zarr"), mode="w", shape=image.shape, chunks=(6, 5, 1), dtype="u1")
+    z[:] = image
+    assert layer_axes((1, 1, 40))[0] == 2
+    return tmp_path / "labels.zarr"
+
+
+def test_a_slab_beyond_memory_names_the_axis_it_is_read_along(tmp_path, capsys, monkeypatch):
+    # the store is read in slabs of layers along z (one chunk thick): the refusal of a slab names z, where the
+    # layers go and thinner chunks would help, and the slab's shape in the image's order (x, y, z), not
+    # "its first axis" of the store's axes turned for the reading
+    from isoflow.scale import memory
+
+    store = thin_along_z(tmp_path)
+    monkeypatch.setattr(memory, "default_budget", lambda: 100)  # less than one slab of 6 x 5 voxels takes
+    assert main(["info", str(store), "--labels"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "smaller chunks along z" in err[0] and "first axis" not in err[0], err
+    assert "a slab of 6x5x2 voxels" in err[0], err  # one layer and the next one's, read with it
+
+
+def test_layers_beyond_the_pieces_numbers_name_the_axes_across_them(tmp_path, capsys, monkeypatch):
+    # read along z, a layer is x by y: too many voxels for the pieces' numbers, the image is to be split along
+    # x and y (the store's last two axes are y and z)
+    from isoflow.scale import pieces
+
+    store = thin_along_z(tmp_path)
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 6 * 5 * 3 - 1)  # three layers of 6 x 5 do not fit
+    assert main(["info", str(store), "--labels"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "layers across z hold 30 voxels" in err[0] and "along x and y" in err[0], err
+
+
+def test_the_pieces_of_a_slab_beyond_memory_name_the_axis_it_is_read_along(tmp_path, capsys, monkeypatch):
+    # the slab fits (two layers of 6 x 5 voxels, 120 bytes as read) but the runs and pieces found in it do
+    # not: the layers they are counted in go along z, which the refusal names
+    from isoflow.scale import memory
+
+    store = thin_along_z(tmp_path)
+    monkeypatch.setattr(memory, "default_budget", lambda: 150)
+    assert main(["info", str(store), "--labels"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search(r"crop the image (along|across) z$", err[0]), err
+    assert "first axis" not in err[0], err

@@ -126,3 +126,34 @@ def test_the_default_clients_worker_limit_holds_the_blocks():
         v = ball(12, 30)
         got = analyze_chunked(da.from_array(v, chunks=(11, 7, 13)), 6)
     assert got["betti"] == [1, 0, 0] and got["voxels"] == np.count_nonzero(v)
+
+
+def test_the_surface_blocks_are_held_to_the_workers_memory_limit(tmp_path):
+    # the surface of a store written block by block on a default client's worker whose memory limit (50 MB) is
+    # smaller than counting one block of 256^3 voxels takes (its voxels and halo as read, at least a byte each twice,
+    # 2^25 bytes alone) though this machine holds it: refused up front, in one line naming the worker's limit, and
+    # no file written; a store of small blocks is written there
+    import dask
+
+    from isoflow.mesh.surface_blocks import write_surface_blocks
+    from isoflow.scale.memory import default_budget
+
+    if default_budget() < 1 << 30:
+        pytest.skip("the big block must fit this machine's memory, so that only the worker's limit refuses it")
+    big = zarr.open_array(str(tmp_path / "big.zarr"), mode="w", shape=(256, 256, 256), chunks=256, dtype=bool)
+    big[100:150, 100:150, 100:150] = True
+    v = ball(12, 30)
+    small = zarr.open_array(str(tmp_path / "small.zarr"), mode="w", shape=v.shape, chunks=(11, 7, 13), dtype=bool)
+    small[:] = v
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set(unmonitored), \
+            distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="50MB", processes=False,
+                                     dashboard_address=None) as cluster, distributed.Client(cluster):
+        with pytest.raises(IsoflowError) as err:
+            write_surface_blocks(zarr.open_array(str(tmp_path / "big.zarr"), mode="r"), tmp_path / "big.ply")
+        got = write_surface_blocks(zarr.open_array(str(tmp_path / "small.zarr"), mode="r"), tmp_path / "small.ply")
+    message = str(err.value)
+    assert "\n" not in message and f"memory limit of {50e6 / 2**20:.1f} MiB" in message
+    assert "smaller chunks" in message  # what would fit: not even one block at a time does
+    assert not (tmp_path / "big.ply").exists() and not list(tmp_path.glob(".big*"))
+    assert got["voxels"] == np.count_nonzero(v) and got["euler_characteristic"] == 2  # a ball's surface, a sphere

@@ -359,3 +359,61 @@ def test_an_earlier_run_s_stores_are_refused_without_force(tmp_path):
 
     box = ndimage.find_objects(v.astype(np.uint8))[0]
     assert np.array_equal(zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"][...] != 0, v[box])
+
+
+@pytest.fixture
+def small_worker(request):
+    """A default client of one worker of one thread whose memory limit
+    (``request.param`` bytes) is far below this machine's memory (the
+    worker's own monitor left out: in this process it would measure the
+    whole test)."""
+    import dask
+
+    distributed = pytest.importorskip("distributed")
+    from isoflow.scale.memory import default_budget
+
+    if default_budget() < 1 << 30:
+        pytest.skip("the slabs must fit this machine's memory, so that only the worker's limit bounds them")
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set(unmonitored), \
+            distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit=request.param, processes=False,
+                                     dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+@pytest.mark.parametrize("small_worker", [5_000_000], indirect=True)
+def test_slabs_beyond_a_workers_memory_limit_are_refused_up_front(tmp_path, small_worker):
+    # one vertex layer of a 1500 x 1500 cross-section reads two voxel layers and writes one, 6.75 MB as bytes
+    # alone, more than the worker's 5 MB though this machine holds it: refused in one line before any step's
+    # store is written (the flow went ahead, holding the workers' memory to nothing)
+    v = np.zeros((3, 1500, 1500), np.uint8)
+    v[1, 0, 0] = v[1, -1, -1] = 1  # kept whole by the crop to the object's box
+    plain_store(tmp_path / "in.zarr", v, (3, 500, 500))
+    out = tmp_path / "run"
+    out.mkdir()
+    with pytest.raises(IsoflowError) as err:
+        flow_chunked(tmp_path / "in.zarr", out, steps=2, scheduler=small_worker.get)
+    message = str(err.value)
+    assert "\n" not in message and f"memory limit of {5e6 / 2**20:.1f} MiB" in message
+    assert "do not fit one at a time on a worker" in message
+    assert not list(out.glob("step_*"))
+
+
+@pytest.mark.parametrize("small_worker", [8_000_000], indirect=True)
+def test_slabs_are_thinned_to_a_workers_memory_limit(tmp_path, small_worker):
+    # slabs sized to this machine's memory (the whole 200^3 volume in one) would hold the worker's 8 MB twice
+    # over with their bytes read and written alone (two per vertex of 202 layers of 201 x 201), and the
+    # record's report refused the step's store, a chunk of that size, after it was written: they are sized to
+    # the worker, and the run equals the in-memory flow
+    v = np.zeros((200, 200, 200), np.uint8)
+    v[:, 0, 0] = 1  # a bar along x, across every slab
+    v[-1, -1, -1] = 1
+    plain_store(tmp_path / "in.zarr", v, (50, 200, 200))
+    mem, expected = in_memory(tmp_path / "in.zarr", 6, steps=1)
+    out = tmp_path / "run"
+    out.mkdir()
+    got = flow_chunked(tmp_path / "in.zarr", out, steps=1, scheduler=small_worker.get)
+    assert got.to_dict() == expected
+    check_states(mem, out)
+    thick = zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"].chunks[0]
+    assert (min(thick, 201) + 2) * 2 * 201 * 201 <= 8_000_000

@@ -327,3 +327,38 @@ def test_a_killed_writers_temporaries_are_removed_by_the_next_write(tmp_path):
     import trimesh
 
     assert trimesh.load(out, process=False).is_watertight
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="names an fsync's directory by /proc/self/fd")
+@pytest.mark.parametrize("command", ["labels", "flow"])
+def test_a_new_output_directory_is_flushed_into_its_parent(tmp_path, monkeypatch, command):
+    # the files renamed into a directory are durable once the directory is flushed, but the directory's own
+    # entry is in its parent: unflushed, a crash could lose the new directory, files and all
+    synced = []
+    real_fsync = os.fsync
+
+    def fsync(fd):
+        with contextlib.suppress(OSError):
+            synced.append(os.readlink(f"/proc/self/fd/{fd}"))
+        real_fsync(fd)
+
+    image = np.zeros((8, 8, 8), np.uint8)
+    image[1:3, 1:3, 1:3], image[4:7, 4:7, 4:7] = 1, 2
+    np.save(tmp_path / "in.npy", image if command == "labels" else image > 0)
+    parent = tmp_path / "parent"
+    parent.mkdir()
+    monkeypatch.setattr(os, "fsync", fsync)
+    if command == "labels":
+        rc, _, err = run("surface", tmp_path / "in.npy", "--labels", "-o", f"{parent / 'out'}/", "--suffix", ".ply")
+        made = {"label_1.ply", "label_2.ply"}
+    else:
+        rc, _, err = run("flow", tmp_path / "in.npy", "--out", parent / "out")
+        made = {"flow.csv"}
+    assert rc == 0, err
+    assert made <= {p.name for p in (parent / "out").iterdir()}
+    assert str(parent / "out") in synced and str(parent) in synced
+    synced.clear()
+    rc, _, err = run(*(["surface", tmp_path / "in.npy", "--labels", "-o", f"{parent / 'out'}/", "--suffix", ".ply"]
+                       if command == "labels" else ["flow", tmp_path / "in.npy", "--out", parent / "out"]), "--force")
+    assert rc == 0, err
+    assert str(parent) not in synced  # an existing directory's entry is there already

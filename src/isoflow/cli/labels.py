@@ -747,10 +747,9 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
-    from ..mesh.outputs import output_set
+    from ..mesh.outputs import make_output_dir, output_set
 
-    made = not target[1].is_dir()
-    target[1].mkdir(exist_ok=True)
+    made = make_output_dir(target[1])
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart

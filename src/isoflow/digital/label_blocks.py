@@ -114,7 +114,7 @@ def label_table_blocks(
                            labels=labels, surfaces=surfaces)
     if sum(sizes) != nx or min(sizes) < 1:
         raise ValueError(f"layers {sizes} do not add up to the array's {nx} layers")
-    found = slab_rows(read, conn, wanted, surfaces, sizes, progress)
+    found = slab_rows(read, conn, wanted, surfaces, sizes, progress, axes=across or (0, 1, 2))
     if across is not None:
         found = rows_in_image_order(found, across)
     return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing,

@@ -518,13 +518,14 @@ def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
 
 
 def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes: list[int],
-              progress: Callable[[int, int], None] | None = None) -> dict:
+              progress: Callable[[int, int], None] | None = None, axes: Sequence[int] = (0, 1, 2)) -> dict:
     """The rows of a 3D label array read in slabs of ``sizes`` voxel layers
     along axis 0 (``array[a:b]``, never whole; cut further where a slab
     would hold more voxels than the pieces are numbered in), with
-    ``progress(done, total)`` after each slab."""
-    sizes = slab_sizes(sizes, array.shape)
-    stream = SlabStream(array, conn, wanted, surfaces)
+    ``progress(done, total)`` after each slab; ``axes``: the image's axes
+    in the order the array reads them, which its refusals name."""
+    sizes = slab_sizes(sizes, array.shape, axes)
+    stream = SlabStream(array, conn, wanted, surfaces, axes)
     stops = np.cumsum(sizes)
     for t, (x0, x1) in enumerate(zip(stops - sizes, stops)):
         stream.slab(int(x0), int(x1))
@@ -679,19 +680,22 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
             "surface_faces": found[4]}
 
 
-def slab_sizes(sizes: list[int], shape) -> list[int]:
+def slab_sizes(sizes: list[int], shape, axes: Sequence[int] = (0, 1, 2)) -> list[int]:
     """The slabs cut where one, with its voxel layer either side, would hold
     more voxels than the pieces' 32-bit numbers reach: a store whose chunks
     are 256 layers of 4096 x 4096 voxels is read in slabs of 253 layers.
-    The table is the same for any slabs, so only their size changes."""
+    The table is the same for any slabs, so only their size changes.
+    ``shape`` is as read, ``axes`` the image's axes in that order (the
+    refusal names them as the image has them)."""
     from ..scale.pieces import MAX_PIECE_VOXELS
 
     area = int(np.prod([int(n) for n in shape[1:]], dtype=np.int64))
     most = MAX_PIECE_VOXELS // max(area, 1) - 2
     if most < 1:
-        raise IsoflowError(f"a label image whose layers hold {area} voxels each is read three layers at a time, "
-                           f"more than the {MAX_PIECE_VOXELS} voxels its pieces are numbered in; "
-                           "crop or split it along its last two axes")
+        across, other = "xyz"[axes[0]], " and ".join(sorted("xyz"[a] for a in axes[1:]))
+        raise IsoflowError(f"a label image whose layers across {across} hold {area} voxels each is read three "
+                           f"layers at a time, more than the {MAX_PIECE_VOXELS} voxels its pieces are numbered in; "
+                           f"crop or split it along {other}")
     return [part for n in sizes for part in [most] * (n // most) + [n % most] if part]
 
 
@@ -700,8 +704,9 @@ class SlabStream:
     statistics, features and doubled edges, the pairs of pieces, and the
     pairs of numbers that name one piece in two slabs."""
 
-    def __init__(self, array, conn: int, wanted, surfaces: bool):
+    def __init__(self, array, conn: int, wanted, surfaces: bool, axes: Sequence[int] = (0, 1, 2)):
         self.array, self.conn, self.wanted, self.surfaces = array, conn, wanted, surfaces
+        self.axes = tuple(int(a) for a in axes)  # the image's axes as the array reads them
         self.nx = int(array.shape[0])
         self.total = 0  # pieces numbered so far (0: the outside)
         self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
@@ -716,14 +721,17 @@ class SlabStream:
         shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
         stored = np.dtype(self.array.dtype)
         converted = label_dtype(stored).itemsize if stored.kind == "f" else 0  # a float slab's int64 copy
+        # refusals name the image's axes as the user has them: the slab's layers go along axes[0]
+        along = "xyz"[self.axes[0]]
+        seen = [shape[self.axes.index(axis)] for axis in range(3)]
         check_fits((PIECE_BYTES_PER_VOXEL + stored.itemsize + converted) * int(np.prod(shape)),
-                   f"a slab of {'x'.join(map(str, shape))} voxels of the label image",
-                   hint="write the store with smaller chunks along its first axis")
+                   f"a slab of {'x'.join(map(str, seen))} voxels of the label image",
+                   hint=f"write the store with smaller chunks along {along}")
         vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a))
-        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a)
+        pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
-                             layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total)
+                             layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total, axis=along)
         if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
             head = piece_ids(pieces, vol.shape, (0, 2)).astype(np.int64) + self.total
             pairs = np.stack([self.tail.reshape(-1), head.reshape(-1)], axis=1)

@@ -461,12 +461,11 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     ``dask.distributed`` cluster (its client, its ``get``, or the default
     client) the workers hold their own memory: a block times a worker's
     threads is held to the workers' memory limit instead."""
-    import dask.config
     from dask.base import named_schedulers
 
     from ..scale.memory import check_fits, check_workers_fit, default_budget
 
-    client = distributed_client(dask.config.get("scheduler", None) if scheduler is None else scheduler)
+    client = distributed_client(scheduler)
     if client is not None:
         smaller = "write the store with smaller chunks" if is_zarr else "rechunk it"
         check_workers_fit(client, per_block, f"{where}: summing its blocks",

@@ -147,42 +147,86 @@ def _create_store(path: Path, shape, chunks, place: DigitalObject, unit: str | N
     root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz", unit=unit)
 
 
-def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int) -> int:
+def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, scheduler: Any = "threads") -> int:
     """Vertex layers per slab: ``slab``, or as many as fit
-    :data:`SLAB_VOXELS` and the memory budget on ``workers`` at a time.
+    :data:`SLAB_VOXELS` and the memory budget on ``workers`` at a time; on
+    a ``dask.distributed`` cluster, as many as fit a worker's memory limit
+    as many at a time as it has threads (the workers hold their own
+    memory, which this machine's says nothing of).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The state's volume (x, y, z); the slabs go along x.
+    slab : int or None
+        Vertex layers per slab, or None to size them.
+    workers : int
+        Slabs at a time on dask's local schedulers.
+    scheduler : optional
+        What the slabs' tasks are computed with (default: dask's threads
+        here; a client or its ``get`` runs them on its workers, and None
+        on dask's configured scheduler, a default client's too).
+
+    Returns
+    -------
+    int
 
     Raises
     ------
     IsoflowError
         The workers' slabs would not fit in memory (up front), saying how
-        many workers one layer per slab would fit, or ``slab`` is not
-        positive.
+        many workers one layer per slab would fit, how thick a slab would
+        fit a cluster's worker, or ``slab`` is not positive.
 
     Examples
     --------
     >>> slab_thickness((100, 1023, 1023), None, 2)
     32
     """
-    from ..scale.memory import default_budget
+    from ..scale.chunks import distributed_client
+    from ..scale.memory import check_workers_fit, default_budget, worker_room
 
     _, ny, nz = shape
     layer = (ny + 1) * (nz + 1)
-    budget = default_budget()
+    client = distributed_client(scheduler)
+    per_layer = _layer_bytes(layer)
+    if client is None:
+        budget: int | None = default_budget()
+    else:  # a slab per thread of a worker, in the worker's memory
+        room = worker_room(client)
+        budget, workers = (None if room is None else room[0] // room[1]), 1
+        # a worker also sums the blocks of the step's store for its record, a chunk of the slab's layers each
+        per_layer = max(per_layer, _record_layer_bytes(shape))
     if slab is None:
         # thinner slabs where the budget is short: the flow is the same, in more tasks
-        thick = max(1, min(SLAB_VOXELS // layer, budget // max(workers * _layer_bytes(layer), 1) - 2))
+        thick = SLAB_VOXELS // layer if budget is None else budget // max(workers * per_layer, 1) - 2
+        thick = max(1, min(SLAB_VOXELS // layer, thick))
     else:
         thick = int(slab)
     if thick < 1:
         raise IsoflowError(f"slab must be a positive number of layers, got {slab}")
-    fit = budget // (3 * _layer_bytes(layer))  # the workers whose slabs of one layer fit
+    what = f"the flow's slabs of {thick} layers of {ny + 1} x {nz + 1} vertices"
+    across = "its layers across x do not fit one at a time"
+    if client is not None:
+        fit = -1 if budget is None else budget // per_layer - 2  # the thickest slab a worker's thread holds
+        hint = f"slabs of {fit} layers fit (slab={fit})" if fit >= 1 else f"{across} on a worker: crop the volume across them"
+        check_workers_fit(client, (thick + 2) * per_layer, what, hint=f"{hint}, or give the workers more memory")
+        return thick
+    fit = budget // (3 * per_layer)  # the workers whose slabs of one layer fit
     hint = ("give thinner slabs (slab=)" if thick > 1 else
             f"slabs of one layer fit {fit} at a time (flow_chunked(..., workers={fit}))" if fit >= 1 else
-            "its layers across the first axis do not fit one at a time: crop the volume across them")
-    check_fits(workers * (thick + 2) * _layer_bytes(layer),
-               f"the flow's slabs of {thick} layers of {ny + 1} x {nz + 1} vertices on {workers} workers",
-               hint=hint, budget=budget)
+            f"{across}: crop the volume across them")
+    check_fits(workers * (thick + 2) * per_layer, f"{what} on {workers} workers", hint=hint, budget=budget)
     return thick
+
+
+def _record_layer_bytes(shape: tuple[int, int, int]) -> int:
+    """The memory of a layer of a step store's chunk (``CHUNK_YZ`` across)
+    while the record's report sums it as a block of uint8
+    (:data:`isoflow.digital.outofcore.CHECK_BYTES` beside its two copies)."""
+    from ..digital.outofcore import CHECK_BYTES
+
+    return min(CHUNK_YZ, shape[1]) * min(CHUNK_YZ, shape[2]) * (2 + CHECK_BYTES)
 
 
 def _layer_bytes(layer: int) -> int:
@@ -206,9 +250,13 @@ class ChunkedFlow(ArrayFlow):
         self.unit: str | None = None  # the input's length unit, which every step's store keeps
         self._step = 0
 
+    def _scheduler(self):
+        """What the slabs are computed with: ``workers`` threads by default."""
+        return self.scheduler or "threads"
+
     def _compute(self, *tasks):
         workers = self.workers if self.scheduler in (None, "threads") else None
-        return compute(*tasks, scheduler=self.scheduler or "threads", workers=workers)
+        return compute(*tasks, scheduler=self._scheduler(), workers=workers)
 
     def _name(self) -> Path:
         name = f"step_{self._step:0{self.width}d}.zarr"
@@ -239,7 +287,8 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         shape = tuple(int(s) for s in box.shape)
         path = self._name()
-        chunks = (slab_thickness(shape, self.slab, self.workers), min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
+        thick = slab_thickness(shape, self.slab, self.workers, self._scheduler())
+        chunks = (thick, min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
         _create_store(path, shape, chunks, place, self.unit)
         target = import_zarr().open_group(str(path), mode="r+")["0"]
         voxels = box.astype(np.uint8).rechunk(chunks)
@@ -269,7 +318,7 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         table = step_table(3, self.conn)
         shape = state.shape
-        thick = slab_thickness(shape, self.slab, self.workers)
+        thick = slab_thickness(shape, self.slab, self.workers, self._scheduler())
         parts = [(a, min(a + thick, shape[0] + 1)) for a in range(0, shape[0] + 1, thick)]
         ends = self._compute(*(delayed(_slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
         below, above = _hand_on(list(ends))

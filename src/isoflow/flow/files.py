@@ -34,6 +34,7 @@ from ..mesh.outputs import (
     atomic_write,
     check_writable_dir,
     interrupted_by_signal,
+    make_output_dir,
     remove_abandoned,
     sync_directory,
     sync_file,
@@ -249,7 +250,7 @@ class FlowWriter:
         self.created = not out.exists()
         self.had_files = not self.created and any(out.iterdir())  # (a killed run's staging is gone: check_output_dir)
         try:
-            out.mkdir(exist_ok=True)
+            make_output_dir(out)
             self.stage = temp_sibling(out / STAGE, directory=True)
         except OSError as exc:
             raise write_error(out, exc, existed=not self.created) from None

@@ -685,6 +685,44 @@ def _fsync_tree(root: Path) -> None:
         sync_directory(Path(parent))
 
 
+def make_output_dir(directory: str | os.PathLike) -> bool:
+    """Make an output directory where there is none, and make its entry in
+    its parent durable (``fsync`` of the parent, as :func:`sync_directory`
+    does it): the renames of the files into it are flushed with the
+    directory, but after a crash the directory itself, files and all,
+    could be gone.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike
+        The directory (``-o DIR/`` of a file per label, a flow's ``--out``).
+
+    Returns
+    -------
+    bool
+        Whether it was made (an existing one is left as it is).
+
+    Raises
+    ------
+    OSError
+        As ``Path.mkdir`` raises it: a file of that name, a missing or
+        read-only parent.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp()) / "labels"
+    >>> make_output_dir(d), make_output_dir(d), d.is_dir()
+    (True, False, True)
+    """
+    directory = Path(directory)
+    made = not directory.is_dir()
+    directory.mkdir(exist_ok=True)
+    if made:
+        sync_directory(directory.parent)
+    return made
+
+
 def sync_directory(directory: str | os.PathLike) -> None:
     """Make the renames in a directory durable (``fsync`` of the directory;
     some file systems cannot sync one, and that is not an error)."""

@@ -617,7 +617,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     with using(threads):
         workers = thread_count()
     read = _largest_read(grid) * (2 * np.dtype(array.dtype).itemsize + 2)
-    _check_memory(where, workers, read, "counting", cache)
+    _check_memory(where, workers, read, "counting", cache, scheduler)
     source = _Source(array)
     ticks = BlockTicks(progress, 2 * len(grid.indices()), ("count_block", "write_block"))
     counts = _by_layers(grid, lambda i: _delayed(count_block)(source, grid, i, conn, where), scheduler, workers,
@@ -628,7 +628,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     if layout.voxels == 0:
         raise EmptySurface(f"{where}: the object is empty, there is no surface to write")
     per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
-    _check_memory(where, workers, per_task, "writing", cache)
+    _check_memory(where, workers, per_task, "writing", cache, scheduler)
     target, size = _prepared(out, layout, frame, comments, conn, where)
     with _filling(out, target, size) as target:
         written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
@@ -705,11 +705,21 @@ def _largest_read(grid: BlockGrid) -> int:
     return int(np.prod([max(b - a for a, b in bounds) + 3 for bounds in grid.bounds]))
 
 
-def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0) -> None:
+def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None) -> None:
     """Refuse, before the pass, blocks that would not fit ``workers`` at a
-    time (beside the chunk cache), saying how many would."""
-    from ..scale.memory import check_fits, default_budget
+    time (beside the chunk cache), saying how many would; on a
+    ``dask.distributed`` cluster, blocks that would not fit a worker's
+    memory limit as many at a time as it has threads."""
+    from ..scale.chunks import distributed_client
+    from ..scale.memory import check_fits, check_workers_fit, default_budget
 
+    client = distributed_client(scheduler)
+    if client is not None:
+        # a task's copy of the chunk reader keeps the chunks its own block reads, which per_task counts
+        check_workers_fit(client, per_task, f"{where}: {what} the surface's blocks",
+                          hint="write the store with smaller chunks (or pass smaller blocks), "
+                               "or give the workers more memory")
+        return
     fit = (default_budget() - cache) // max(per_task, 1)
     hint = (f"run {fit} at a time (--threads {fit})" if fit >= 1 else
             "write the store with smaller chunks (or pass smaller blocks)")

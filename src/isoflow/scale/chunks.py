@@ -189,15 +189,20 @@ def distributed_client(scheduler: Any) -> Any:
     -------
     distributed.Client or None
         The client itself, the client whose ``get`` it is, or the default
-        client for None and the name (looked for only where
-        dask.distributed is imported already: no client exists without
-        it); None for any other scheduler, or where no client is found.
+        client for the name, and for None where dask's configuration names
+        no other scheduler (looked for only where dask.distributed is
+        imported already: no client exists without it); None for any
+        other scheduler, or where no client is found.
 
     Examples
     --------
     >>> distributed_client("threads") is None
     True
     """
+    if scheduler is None and "dask" in sys.modules:  # "sync" configured runs here, a default client or not
+        import dask.config
+
+        scheduler = dask.config.get("scheduler", None)
     if hasattr(scheduler, "scheduler_info"):
         return scheduler
     owner = getattr(scheduler, "__self__", None)

@@ -79,11 +79,48 @@ def check_fits(need: int, what: str, hint: str = "", budget: int | None = None) 
         )
 
 
+def worker_room(client) -> tuple[int, int] | None:
+    """The memory limit and threads of the ``dask.distributed`` worker
+    with the most memory per thread: the workers hold their own memory,
+    which this machine's says nothing of.
+
+    Parameters
+    ----------
+    client : distributed.Client
+        The cluster's client (its ``scheduler_info()`` gives each worker's
+        ``memory_limit`` and ``nthreads``).
+
+    Returns
+    -------
+    tuple of int or None
+        ``(memory_limit, nthreads)``; None where a worker has no limit (0:
+        it holds anything) or the cluster has no worker yet.
+
+    Examples
+    --------
+    >>> class Cluster:  # what a client's scheduler_info() says of its workers
+    ...     def scheduler_info(self, n_workers=-1):
+    ...         return {"workers": {"tcp://w1": {"memory_limit": 200_000_000, "nthreads": 2},
+    ...                             "tcp://w2": {"memory_limit": 150_000_000, "nthreads": 1}}}
+    >>> worker_room(Cluster())
+    (150000000, 1)
+    """
+    try:
+        workers = client.scheduler_info(n_workers=-1)["workers"].values()
+    except TypeError:  # a dask.distributed that lists every worker without being asked
+        workers = client.scheduler_info()["workers"].values()
+    rooms = [(int(w.get("memory_limit") or 0), max(int(w.get("nthreads") or 1), 1)) for w in workers]
+    if not rooms or any(limit <= 0 for limit, _ in rooms):
+        return None
+    # the scheduler may give the largest tasks to the worker with the most memory per thread
+    return max(rooms, key=lambda room: room[0] / room[1])
+
+
 def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
     """Raise :class:`IsoflowError` when tasks of ``per_task`` bytes, as many
     at a time as a worker has threads, exceed the memory limit of every
-    worker of a ``dask.distributed`` cluster: the workers hold their own
-    memory, which this machine's says nothing of.
+    worker of a ``dask.distributed`` cluster (:func:`worker_room`), saying
+    how many at a time would fit a worker where one does.
 
     Parameters
     ----------
@@ -99,9 +136,9 @@ def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
 
     Notes
     -----
-    The worker with the most memory per thread decides (the scheduler may
-    give it the largest tasks); a worker without a limit (0) fits anything,
-    and a cluster with no worker yet is not refused.
+    The worker with the most memory per thread decides; a worker without a
+    limit (0) fits anything, and a cluster with no worker yet is not
+    refused.
 
     Examples
     --------
@@ -109,24 +146,28 @@ def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
     ...     def scheduler_info(self, n_workers=-1):
     ...         return {"workers": {"tcp://w1": {"memory_limit": 200_000_000, "nthreads": 2}}}
     >>> check_workers_fit(Cluster(), 50_000_000, "summing blocks")
-    >>> check_workers_fit(Cluster(), 150_000_000, "summing blocks")
+    >>> check_workers_fit(Cluster(), 150_000_000, "summing blocks", hint="write smaller chunks")
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: summing blocks needs about 286.1 MiB on a dask.distributed worker (2 threads at a
-    time), more than its memory limit of 190.7 MiB
+    time), more than its memory limit of 190.7 MiB; one at a time fits it (workers of one thread each), or write
+    smaller chunks
     """
-    try:
-        workers = client.scheduler_info(n_workers=-1)["workers"].values()
-    except TypeError:  # a dask.distributed that lists every worker without being asked
-        workers = client.scheduler_info()["workers"].values()
-    rooms = [(int(w.get("memory_limit") or 0), max(int(w.get("nthreads") or 1), 1)) for w in workers]
-    if not rooms or any(limit <= 0 for limit, _ in rooms):
+    room = worker_room(client)
+    if room is None:
         return
-    limit, threads = max(rooms, key=lambda room: room[0] / room[1])
+    limit, threads = room
     need = per_task * threads
-    if need > limit:
-        raise IsoflowError(f"{what} needs about {sized(need)} on a dask.distributed worker ({threads} threads at a "
-                           f"time), more than its memory limit of {sized(limit)}" + (f"; {hint}" if hint else ""))
+    if need <= limit:
+        return
+    fit = limit // max(per_task, 1)
+    if fit >= 1:  # fewer threads per worker would do
+        fits = ("one at a time fits it (workers of one thread each)" if fit == 1 else
+                f"{fit} at a time fit it (workers of {fit} threads each)")
+        hint = f"{fits}, or {hint}" if hint else fits
+    raise IsoflowError(f"{what} needs about {sized(need)} on a dask.distributed worker ({threads} "
+                       f"thread{'s' if threads > 1 else ''} at a time), more than its memory limit of {sized(limit)}"
+                       + (f"; {hint}" if hint else ""))
 
 
 def sized(n: int) -> str:

@@ -73,10 +73,11 @@ SPREAD = 4
 
 
 def check_layers(need: int, what: str, layers: int, note: str = "", budget: int | None = None,
-                 whole: int | None = None) -> None:
+                 whole: int | None = None, axis: str = "its first axis") -> None:
     """Refuse ``need`` bytes beyond the budget (default the memory
     available now), naming how many of the ``layers`` voxel layers (along
-    the image's first axis) would fit ``whole`` bytes (default ``need``:
+    the image's first axis, which ``axis`` names: ``"z"`` where a store is
+    read in layers along z) would fit ``whole`` bytes (default ``need``:
     what the passes after this one take beside it, where known): what the
     pieces, their runs and their pairs take grows with the layers.
 
@@ -97,8 +98,8 @@ def check_layers(need: int, what: str, layers: int, note: str = "", budget: int 
     # the need of a crop in proportion to its layers, a tenth spared: the
     # pieces of an image are not spread evenly, and a crop cuts some in two
     fit = 9 * layers * budget // (10 * max(need if whole is None else whole, 1))
-    hint = (f"about {fit:,} of the {layers:,} voxel layers fit: crop the image along its first axis" if fit >= 1
-            else f"not even one of the {layers:,} voxel layers fits: crop the image across its first axis")
+    hint = (f"about {fit:,} of the {layers:,} voxel layers fit: crop the image along {axis}" if fit >= 1
+            else f"not even one of the {layers:,} voxel layers fits: crop the image across {axis}")
     check_fits(need, what, hint=hint + (f"; {note}" if note else ""), budget=budget)
 
 
@@ -366,7 +367,8 @@ RUN_BYTES = 4 + 4
 MAX_PIECE_VOXELS = 0xFFFFFFFF - 1
 
 
-def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0) -> dict:
+def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: int = 0,
+               axis: str = "its first axis") -> dict:
     """The 6-connected pieces of every value of a 3D integer image, as runs.
 
     A run is a maximal stretch of one value along a row of the last axis;
@@ -378,7 +380,8 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     the value's bits), ``counts``, ``sums`` (coordinate sums, (n + 1, 3)),
     ``lo``/``hi`` (bounding box corners, inclusive). The statistics count
     the layers ``first <= x < last`` of axis 0 only (all by default), at
-    global coordinate ``x + x0`` (for slabs of a larger volume).
+    global coordinate ``x + x0`` (for slabs of a larger volume). A refusal
+    names the image's first axis as ``axis`` (:func:`check_layers`).
 
     The runs of each slab of layers are found and joined with the rows
     before them on a thread of their own, the slabs' seams joined after.
@@ -390,7 +393,7 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     flat = flat_vol.reshape(-1)
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
-    found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets) for lo, hi in parts])
+    found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets, axis) for lo, hi in parts])
     at = np.cumsum([0] + [len(s) for s, _ in found]).tolist()
     total = at[-1]
     starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
@@ -412,7 +415,7 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     n = int(_count_roots(parent))
     check_layers(PIECE_BYTES * (n + 1), f"the statistics of {n:,} pieces of a label image", nx,
                  note="a label image of noise has a piece for about every other voxel",
-                 whole=(PIECE_BYTES + FEATURE_BYTES) * (n + 1))
+                 whole=(PIECE_BYTES + FEATURE_BYTES) * (n + 1), axis=axis)
     values = np.zeros(n + 1, np.uint64)
     _number_runs(flat, offsets, starts, parent, nz, values)
     counts, sums, lo, hi = piece_stats(offsets, starts, parent, (nx, ny, nz), n, (first, nx if last is None else last),
@@ -421,7 +424,8 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
             "sums": sums, "lo": lo, "hi": hi}
 
 
-def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray):
+def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray,
+                 axis: str = "its first axis"):
     """The runs of one slab of layers, joined within it (slab-local
     indices), in buffers that grow as they fill."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
@@ -433,7 +437,7 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
-        check_layers(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image", x_hi - x_lo)
+        check_layers(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image", x_hi - x_lo, axis=axis)
         starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
 
 
@@ -983,7 +987,7 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
                 layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0,
-                keep_runs: bool = True) -> dict:
+                keep_runs: bool = True, axis: str = "its first axis") -> dict:
     """The vertex pass (see the module docs) over a slab of a label image.
 
     ``values``: the slab (voxel layers ``x0 ..`` of a volume of ``nx``
@@ -1001,7 +1005,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     2^32; then the same the other way; each count below 2^32, so that
     sums of entries add them both).
     A pair met by two threads has an entry from each (:func:`merge_pairs`
-    makes them one). Without ``keep_runs`` the runs of ``found``
+    makes them one). A refusal names the image's first axis as ``axis``
+    (:func:`check_layers`). Without ``keep_runs`` the runs of ``found``
     (``starts`` and ``runs``) are let go once the sweep is done, before
     the pairs are read out.
     """
@@ -1020,7 +1025,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     windows = [piece_window(found, ny, x0, nxs, lo + p0 - 1, lo + p1 - 1) for p0, p1 in parts] or [(0, npieces)]
     # the statistics of the pieces are held beside the counts
     check_layers(sum(b - a for a, b in windows) * (len(rows) * np.dtype(count).itemsize + 8) + PIECE_BYTES * npieces,
-                 f"the vertex pass over {npieces:,} pieces", nxs)
+                 f"the vertex pass over {npieces:,} pieces", nxs, axis=axis)
     features = [mapped((b - a, len(rows)), count) for a, b in windows]
     doubled = [mapped(b - a, np.int64) for a, b in windows]
     # the values as bytes and the pieces' values as uint64: one compiled pass for every width
@@ -1039,7 +1044,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
                    np.zeros(8, np.uint64), np.zeros(8, np.int64), np.zeros((8, 8, 2), np.int64),
                    np.zeros(8, np.int64))
         put_off = (np.zeros((8 * nz + 2, 10), np.int64), np.zeros(1, np.int64))
-        sink = PairSink(top, base, len(parts))
+        sink = PairSink(top, base, len(parts), axis)
         used, i, j, end = 0, lo + parts[t][0], 0, lo + parts[t][1]
         while i < end:
             at = (i, j)
@@ -1056,7 +1061,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     if not keep_runs:
         for key in ("starts", "runs"):
             found[key] = found[key][:0].copy()  # a view would keep the buffer
-    keys, kind, sums = read_out(filled, npieces, nxs)
+    keys, kind, sums = read_out(filled, npieces, nxs, axis)
     return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
             "keys": keys, "kind": kind, "sums": sums}
 
@@ -1075,8 +1080,9 @@ class PairSink:
     table holds the pairs of the pieces the sweep is crossing, not of the
     whole image: it stays small, and its lookups hit the cache."""
 
-    def __init__(self, top: np.ndarray, base: int, threads: int):
+    def __init__(self, top: np.ndarray, base: int, threads: int, axis: str = "its first axis"):
         self.top, self.base, self.threads = top, base, threads
+        self.axis = axis  # the image's first axis, as a refusal names it
         self.pairs = new_pairs(FIRST_SLOTS)
         self.near = new_pairs(NEAR_SLOTS)
         self.spare: np.ndarray | None = None
@@ -1095,7 +1101,7 @@ class PairSink:
         size = 2 * len(self.pairs) if grow else len(self.pairs)
         while 10 * keep > 3 * size:
             size *= 2
-        alone = ("crop the image across its first axis: a thread's table holds the pairs of the pieces that its "
+        alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
                  "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
         check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         if last:
@@ -1115,7 +1121,8 @@ class PairSink:
         return keep
 
 
-def read_out(filled: list, npieces: int, layers: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def read_out(filled: list, npieces: int, layers: int = 1,
+             axis: str = "its first axis") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The threads' blocks of pair entries ``[keys, kind, sums, entries]``
     in one set of arrays, each block let go as soon as it is copied. A
     pair met by two threads (pieces at the seam between their layers) has
@@ -1124,7 +1131,7 @@ def read_out(filled: list, npieces: int, layers: int = 1) -> tuple[np.ndarray, n
     blocks = [block for thread in filled for block in thread]
     filled.clear()
     total = sum(block[3] for block in blocks)
-    check_layers(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces", layers)
+    check_layers(PAIR_ENTRY_BYTES * total, f"the {total:,} pairs of {npieces:,} pieces", layers, axis=axis)
     keys, kind, sums = mapped(total, np.uint64), mapped(total, np.uint8), mapped((total, 2), np.uint64)
     at = 0
     while blocks:
