@@ -225,3 +225,29 @@ def test_the_segments_names_are_said_with_their_label_values(tmp_path, capsys, l
     assert err == f"isoflow info: note: {two}:1: 3D Slicer segments {said}\n"
     assert main(["info", str(one), "--labels", "-q"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_the_note_on_segments_takes_the_header_the_read_parsed(tmp_path, capsys, monkeypatch, layers):
+    """``info --labels`` of a segmentation names its segments from the
+    header its read parsed: pynrrd parses the header once (the read parsed
+    it twice, its check and then pynrrd's read, and the note a third
+    time). The note is still the header's own names, and a file rewritten
+    since its read is named from its new header."""
+    path = write(tmp_path / "one.seg.nrrd", layers[0], header(3, SEGMENTS[:2]))
+    parsed = []
+    real = nrrd.reader.read_header
+
+    def counted(*args, **kwargs):
+        parsed.append(args[0])
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(nrrd.reader, "read_header", counted)
+    monkeypatch.setattr(nrrd, "read_header", counted)
+    assert main(["info", str(path), "--labels"]) == 0
+    assert capsys.readouterr().err == f"isoflow info: note: {path}: 3D Slicer segments liver (label 1), tumor (label 2)\n"
+    assert len(parsed) == 1
+    from isoflow.mesh.formats.slicer import layer_segments
+
+    isoflow.read_labels(path)
+    write(path, layers[0], header(3, [("spleen", 1, 0), ("kidney", 2, 0)]))
+    assert layer_segments(path, None) == "spleen (label 1), kidney (label 2)"

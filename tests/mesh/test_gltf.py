@@ -3,6 +3,7 @@ and pymeshlab read it, node by node, against the arrays written, and the
 layout rules of the glTF 2.0 specification checked on the file's own JSON;
 and the scene's read-back check, which names a node that reads wrong."""
 
+import io
 import json
 import struct
 
@@ -13,7 +14,7 @@ import trimesh
 from isoflow.digital.lattice import DigitalObject
 from isoflow.digital.surface import boundary_mesh
 from isoflow.mesh import export
-from isoflow.mesh.readback import check_scene_file
+from isoflow.mesh.readback import check_scene_file, scene_nodes
 
 #: bytes of each glTF component type, and components of each element type
 COMPONENT_BYTES = {5120: 1, 5121: 1, 5122: 2, 5123: 2, 5125: 4, 5126: 4}
@@ -188,6 +189,80 @@ def test_scene_read_back_agrees_and_names_a_node_that_reads_wrong(tmp_path, rng)
     export.write_glb_scene(tmp_path / "s.glb", parts, force=True)
     problems = check_scene_file(path, written)
     assert any("node part_3" in p for p in problems) and not any("node part_2" in p for p in problems)
+
+
+def glb_tree(data: bytes) -> dict:
+    """The JSON chunk of a GLB's bytes."""
+    return json.loads(data[20:20 + struct.unpack_from("<I", data, 12)[0]])
+
+
+def with_tree(path, tree: dict) -> None:
+    """Rewrite the GLB at ``path`` with ``tree`` as its JSON, its binary chunk as it is."""
+    data = path.read_bytes()
+    rest = data[20 + struct.unpack_from("<I", data, 12)[0]:]
+    text = json.dumps(tree).encode()
+    text += b" " * (-len(text) % 4)
+    path.write_bytes(struct.pack("<4sIII4s", b"glTF", 2, 20 + len(text) + len(rest), len(text), b"JSON") + text + rest)
+
+
+def test_scene_read_back_gives_trimesh_the_geometry_accessors_alone(tmp_path, rng, monkeypatch):
+    """trimesh's glTF reader makes an array of every accessor, 8 a node in
+    isoflow's scenes, and the read-back measures two: the reader is given
+    those alone, and each node reads as trimesh reads it from the whole
+    file (its triangles, its positions placed by its transform)."""
+    import trimesh.exchange.gltf as gltf
+
+    parts, written = scene_parts(rng, 6)
+    path = export.write_glb_scene(tmp_path / "s.glb", parts)
+    assert len(glb_tree(path.read_bytes())["accessors"]) == 8 * len(parts)
+    scene = trimesh.load(path, force="scene", process=False)
+    given, real = [], gltf.load_glb
+
+    def spy(fh, *args, **kwargs):
+        data = fh.read()
+        given.append(glb_tree(data))
+        return real(io.BytesIO(data), *args, **kwargs)
+
+    monkeypatch.setattr(gltf, "load_glb", spy)
+    nodes = scene_nodes(path)
+    assert len(given) == 1 and len(given[0]["accessors"]) == 2 * len(parts)
+    assert sorted(nodes) == sorted(scene.graph.nodes_geometry)
+    for name, (vertices, triangles) in nodes.items():
+        transform, geometry = scene.graph[name]
+        np.testing.assert_array_equal(triangles, scene.geometry[geometry].faces)
+        np.testing.assert_allclose(vertices, trimesh.transform_points(scene.geometry[geometry].vertices, transform),
+                                   rtol=1e-12, atol=0)
+    assert check_scene_file(path, written) == []
+
+
+def _past_its_view(tree, at):
+    view = tree["bufferViews"][tree["accessors"][at]["bufferView"]]
+    tree["accessors"][at]["byteOffset"] = view["byteLength"]
+
+
+@pytest.mark.parametrize("corrupt", [
+    lambda t, m: _past_its_view(t, m["attributes"]["_gamma"]),
+    lambda t, m: t["accessors"][m["attributes"]["COLOR_0"]].update(componentType=9999),
+    lambda t, m: t["accessors"][m["attributes"]["_a"]].update(count=10 ** 7),
+    lambda t, m: t["accessors"][m["attributes"]["_f"]].update(type="VEC9"),
+    lambda t, m: m["attributes"].update(_config=len(t["accessors"])),
+    lambda t, m: _past_its_view(t, m["attributes"]["POSITION"]),
+    lambda t, m: t["bufferViews"][0].update(byteLength=10 ** 9),
+], ids=["attribute-past-its-view", "unknown-component-type", "count-past-its-view", "unknown-type",
+        "attribute-of-no-accessor", "positions-past-their-view", "view-past-the-buffer"])
+def test_a_scene_trimesh_cannot_read_reads_back_as_unreadable(tmp_path, rng, corrupt):
+    """A scene whose accessor trimesh's reader fails on, one the figures
+    use or not, is still refused as unreadable: trimesh.load of the whole
+    file fails on each of these."""
+    parts, written = scene_parts(rng, 4)
+    path = export.write_glb_scene(tmp_path / "s.glb", parts)
+    tree = glb_tree(path.read_bytes())
+    corrupt(tree, tree["meshes"][2]["primitives"][0])
+    with_tree(path, tree)
+    with pytest.raises((AssertionError, IndexError, KeyError, ValueError)):  # trimesh's reader's failures
+        trimesh.load(path, force="scene", process=False)
+    problems = check_scene_file(path, written)
+    assert len(problems) == 1 and "trimesh cannot read it" in problems[0], problems
 
 
 def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):

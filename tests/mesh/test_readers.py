@@ -662,3 +662,19 @@ def test_a_ply_whose_vertices_lack_a_coordinate_says_which(form, kept, tmp_path)
     assert r.returncode == 2
     assert r.stderr.strip() == (f"isoflow info: error: {p}: the header's element 'vertex' has no property {lost} "
                                 f"(its properties: {listed}), so its vertices have no positions")
+
+
+def test_obj_polygons_fanned_as_trimesh_fans_them_where_asked(tmp_path):
+    """``read_obj(ears=False)`` gives trimesh.load's triangles for every
+    polygon, a concave L too (whose fan from its first corner leaves it,
+    and which the reader otherwise cuts by ears), among quads and
+    triangles."""
+    text = (b"v 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\nv 0 0 1\nv 2 0 1\n"
+            b"f 1 2 3 4 5 6\nf 1 6 7 8\nf 2 1 8\n")
+    path = tmp_path / "l.obj"
+    path.write_bytes(text)
+    tm = trimesh.load(path, force="mesh", process=False)
+    vertices, faces = readers.read_obj(text, ears=False)
+    np.testing.assert_array_equal(vertices, tm.vertices)
+    np.testing.assert_array_equal(faces, tm.faces)
+    assert not np.array_equal(readers.read_obj(text)[1], tm.faces)  # cut by ears there

@@ -284,3 +284,66 @@ def test_a_file_that_reads_back_otherwise_is_refused_and_nothing_replaced(tmp_pa
     assert "\n" not in str(e.value) and out.read_text() == "previous" and sorted(tmp_path.iterdir()) == [out]
     isoflow.write_surface(np.ones((2, 2, 2), bool), out, force=True, check=False)
     assert not trimesh.load(out, process=False).is_watertight
+
+
+def test_an_obj_of_mixed_polygons_reads_back_without_trimeshs_line_parser(tmp_path, rng, monkeypatch):
+    """An OBJ of quads and pentagons (doubled edges at 6) is one that
+    trimesh parses line by line in Python; the read-back reads its arrays
+    on the file's bytes, the vertices and triangles trimesh.load gives,
+    and agrees with isoflow's counts without trimesh.load."""
+    from conftest import random_volume
+
+    from isoflow.digital.surface import boundary_mesh
+    from isoflow.mesh.readback import check_surface_file, obj_as_trimesh_reads
+
+    objects = [object_with_contacts()] + [isoflow.DigitalObject(np.pad(random_volume(rng), 1)) for _ in range(4)]
+    written = []
+    for i, obj in enumerate(objects):
+        mesh = boundary_mesh(obj.volume, 6)
+        path = isoflow.write_surface(obj, tmp_path / f"{i}.obj", mesh=mesh, check=False)
+        sizes = {len(line.split()) - 1 for line in path.read_text().splitlines() if line.startswith("f ")}
+        tm = trimesh.load(path, force="mesh", process=False)
+        vertices, triangles = obj_as_trimesh_reads(path)
+        np.testing.assert_array_equal(vertices, tm.vertices)
+        np.testing.assert_array_equal(triangles, tm.faces)
+        written.append((path, mesh, obj, len(sizes) > 1))
+    assert written[0][3]  # the ring's pentagons among its quads
+
+    def unread(*args, **kwargs):
+        raise AssertionError("trimesh.load called")
+
+    monkeypatch.setattr(trimesh, "load", unread)
+    for path, mesh, obj, _ in written:
+        check = check_surface_file(path, mesh, obj)
+        assert check["agree"], check["problem"]
+
+
+@pytest.mark.parametrize("corrupt", [
+    lambda lines, f: lines.__setitem__(f[3], f"f 1 2 {10 ** 6}"),
+    lambda lines, f: lines.__setitem__(f[3], " ".join(lines[f[3]].split()[:3])),
+    lambda lines, f: lines.__delitem__(slice(f[len(f) // 2], None)),
+    lambda lines, f: lines.__setitem__(f[0], lines[f[0]].replace("f ", "f 0 ", 1)),
+    lambda lines, f: lines.__setitem__(f[0] - 1, "v 9 9 9"),
+], ids=["index-past-the-vertices", "a-face-of-two-corners", "cut-short", "index-0", "a-vertex-moved"])
+def test_an_obj_that_reads_otherwise_is_refused(tmp_path, corrupt):
+    """An OBJ of quads and pentagons altered after writing reads back as
+    not isoflow's surface: trimesh fails on it or reads it open, of
+    another Euler number or volume."""
+    from isoflow.digital.surface import boundary_mesh
+    from isoflow.mesh.readback import check_surface_file
+
+    obj = object_with_contacts()
+    mesh = boundary_mesh(obj.volume, 6)
+    path = isoflow.write_surface(obj, tmp_path / "s.obj", mesh=mesh, check=False)
+    lines = path.read_text().split("\n")
+    corrupt(lines, [i for i, line in enumerate(lines) if line.startswith("f ")])
+    path.write_text("\n".join(lines))
+    try:
+        tm = trimesh.load(path, force="mesh", process=False)
+        differs = (not tm.is_watertight or tm.euler_number != mesh.euler_characteristic
+                   or not np.isclose(tm.volume, obj.voxels * PITCH ** 3))
+    except Exception:
+        differs = True
+    assert differs  # trimesh's own reading of the altered file
+    check = check_surface_file(path, mesh, obj)
+    assert check["agree"] is False and check["problem"].startswith(f"{path}: trimesh"), check

@@ -11,12 +11,16 @@ Genus from trimesh's figures: every closed surface component ``c`` has
 genus ``(2 - chi_c) / 2``, so the total is ``bodies - euler / 2`` with
 ``bodies`` trimesh's vertex-connected groups (``body_count``).
 
-trimesh parses the file; the figures are counted by their trimesh
-definitions in one compiled pass over its arrays
+trimesh parses the file (an OBJ of plain ``v`` and ``f`` lines, as
+isoflow writes it, is read on its bytes into the arrays trimesh's parser
+gives: :func:`obj_as_trimesh_reads`; a GLB's trimesh reader is given
+the accessors the figures use: :func:`scene_nodes`); the figures are
+counted by their trimesh definitions in one compiled pass over its arrays
 (:mod:`isoflow.mesh.node_topology`), which sorts no edge. The read-back
 needs about 110 bytes per triangle of a PLY, 180 of an STL whose
-positions are welded and 270 of an OBJ (measured on the 4.9 million
-triangles of a 192^3 porous field, the parse included); a file whose
+positions are welded (measured on the 4.9 million triangles of a 192^3
+porous field, the parse included) and 300 of an OBJ (measured on a ball
+of 850,000 triangles, where trimesh's parse needed 270); a file whose
 read-back would not fit in the memory budget is not read back, and the
 caller says so.
 """
@@ -140,8 +144,9 @@ def agreed_volume_words(read_units: float, voxels: int, spacing) -> str:
 
 
 #: peak bytes of the read-back per triangle, by suffix (measured on 4.9
-#: million triangles: 107 for a PLY, 182 for a welded STL, 270 for an OBJ,
-#: whose text trimesh parses line by line; rounded up), and for the others
+#: million triangles: 107 for a PLY, 182 for a welded STL; on 850,000: 295
+#: for an OBJ, whose text is read as arrays of its bytes; rounded up), and
+#: for the others
 READBACK_BYTES_PER_TRIANGLE = {".ply": 150, ".stl": 250, ".obj": 350}
 READBACK_BYTES_OTHER = 350
 
@@ -215,6 +220,8 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = Fa
         with open(path, "rb") as fh:
             kw = (load_ply if path.suffix.lower() == ".ply" else load_stl)(fh)
         tm = trimesh.Trimesh(kw["vertices"], kw["faces"], process=False)
+    elif (read := obj_as_trimesh_reads(path)) is not None:
+        tm = trimesh.Trimesh(*read, process=False)
     else:
         import warnings
 
@@ -224,6 +231,50 @@ def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = Fa
     if weld:
         tm = weld_equal_positions(tm)
     return mesh_figures(tm, unit, area=weld or area)
+
+
+def obj_as_trimesh_reads(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray] | None:
+    """The vertices and triangles ``trimesh.load`` (``process=False``,
+    ``force="mesh"``) gives for an OBJ file of plain ``v`` and ``f`` lines,
+    as isoflow writes them, read on the file's bytes as arrays
+    (:func:`isoflow.mesh.readers.read_obj`, every polygon fanned from its
+    first corner as trimesh fans it); None for any other file or suffix,
+    and for a face index that names no vertex: trimesh's read says what it
+    makes of those.
+
+    trimesh parses a file of faces of one size as one array, but one of
+    quads and pentagons (a surface with edge midpoints) line by line in
+    Python, most of such a file's read-back.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The surface file written (``.obj``: any other suffix gives None).
+
+    Returns
+    -------
+    tuple of numpy.ndarray or None
+        float64 (N, 3) vertices (those a face uses, in the file's order) and
+        int64 (M, 3) triangles.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = Path(tempfile.mkdtemp()) / "p.obj"
+    >>> _ = path.write_text("v 0 0 0\\nv 2 0 0\\nv 2 2 0\\nv 0 2 0\\nv 1 0 0\\nv 3 3 3\\nf 5 2 3 4 1\\nf 1 2 6\\n")
+    >>> vertices, triangles = obj_as_trimesh_reads(path)
+    >>> len(vertices), triangles.tolist()
+    (6, [[4, 1, 2], [4, 2, 3], [4, 3, 0], [0, 1, 5]])
+    """
+    from .readers import BadFaceIndex, read_obj
+
+    path = Path(path)
+    if path.suffix.lower() != ".obj":
+        return None
+    try:
+        return read_obj(path.read_bytes(), ears=False)
+    except BadFaceIndex:
+        return None
 
 
 def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
@@ -349,11 +400,15 @@ def check_scene_figures(path, expected: list, progress=None) -> list[str]:
             continue
         placed.append((*nodes[name], unit))
         found.append((name, ours, unit))
-    for (name, ours, unit), theirs in zip(found, scene_figures(placed, progress)):
+    measured = scene_figures(placed, progress)
+    # every node's volume in one comparison: a call per node costs more than measuring the node
+    close = np.isclose([theirs["volume_units"] for theirs in measured],
+                       [ours["volume_units"] for _, ours, _ in found], rtol=VOLUME_RTOL,
+                       atol=[ours.get("slack_units", 0.0) for _, ours, _ in found]) if found else []
+    for (name, ours, unit), theirs, volume_agrees in zip(found, measured, close):
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]
-        if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL,
-                          atol=ours.get("slack_units", 0.0)):
+        if not volume_agrees:
             wrong.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
                          f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
         if wrong:
@@ -365,7 +420,10 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
     """Every node of a binary glTF that holds a mesh, as trimesh's glTF
     reader parses it. The reader's arrays are taken as they are, without
     the mesh object per node that ``trimesh.load`` builds (most of a
-    scene's read-back where it has thousands of nodes).
+    scene's read-back where it has thousands of nodes), and the reader is
+    given the positions' and triangles' accessors alone where the others
+    are ones it would read without fail
+    (:func:`isoflow.mesh.glb_geometry.geometry_glb`).
 
     Parameters
     ----------
@@ -392,16 +450,27 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
     """
     from trimesh.exchange.gltf import load_glb
 
+    from .glb_geometry import geometry_glb
+
     with open(path, "rb") as fh:
-        read = load_glb(fh)
+        # the accessors the figures do not use are checked, not made arrays
+        # (most of trimesh's parse of a scene of thousands of nodes)
+        geometry = geometry_glb(fh)
+        if geometry is None:
+            fh.seek(0)
+        read = load_glb(fh if geometry is None else geometry)
     edges = {edge["frame_to"]: edge for edge in read["graph"]}
 
-    def placement(frame: str) -> np.ndarray:
+    def placement(frame: str) -> np.ndarray | None:
+        """The node's transform and those above it, None where none has
+        one (most nodes of isoflow's scenes: no matrix per node to make)."""
         edge = edges.get(frame)
         if edge is None:  # the root
-            return np.eye(4)
-        matrix = np.asarray(edge.get("matrix", np.eye(4)), np.float64)
-        return placement(edge["frame_from"]) @ matrix
+            return None
+        above = placement(edge["frame_from"])
+        if "matrix" not in edge:
+            return above
+        return (np.eye(4) if above is None else above) @ np.asarray(edge["matrix"], np.float64)
 
     nodes = {}
     for frame, edge in edges.items():
@@ -410,7 +479,7 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
         geometry = read["geometry"][edge["geometry"]]
         vertices = np.asarray(geometry["vertices"], np.float64)
         transform = placement(frame)
-        if not np.array_equal(transform, np.eye(4)):
+        if transform is not None and not np.array_equal(transform, np.eye(4)):
             vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
         nodes[frame] = (vertices, np.asarray(geometry["faces"], np.int64).reshape(-1, 3))
     return nodes

@@ -198,15 +198,16 @@ def _soup(v: np.ndarray) -> Mesh:
     return v, np.arange(len(v), dtype=np.int64).reshape(-1, 3)
 
 
-def read_obj(data: bytes) -> Mesh | None:
+def read_obj(data: bytes, *, ears: bool = True) -> Mesh | None:
     """An OBJ file of ``v`` and ``f`` lines (``vt``, ``vn``, ``#``, ``o``,
     ``g``, ``s``, ``mtllib`` and one material's ``usemtl`` lines ignored).
 
     Faces use the position indices only; a polygon is split as trimesh
     splits it (quads of a file of quads as two blocks, first triangles then
     second; other polygons as fans) unless its fan would leave it (a
-    concave polygon: cut by ears, :func:`triangulate`); vertices no face
-    uses are dropped.
+    concave polygon: cut by ears, :func:`triangulate`; with ``ears``
+    False fanned too, as trimesh fans it: then the faces are trimesh's
+    every one); vertices no face uses are dropped.
     Negative indices are read only where every ``v`` line comes before every
     ``f`` line (there trimesh's count from the end and OBJ's count back from
     the face agree), and with ``/`` only where every index is negative.
@@ -243,8 +244,8 @@ def read_obj(data: bytes) -> Mesh | None:
         return None
     v = v.reshape(-1, 3)
     first_line = data[starts[f_at[0]] + 2:ends[f_at[0]]]
-    faces = _obj_faces(first_line, _tails(a, starts, ends, is_f), len(f_at), v,
-                       negatives_ok=v_at[-1] < f_at[0])
+    faces = _obj_faces(first_line, _tails(a, starts, ends, is_f), len(f_at), v if ears else None,
+                       negatives_ok=v_at[-1] < f_at[0], vertices=len(v))
     if faces is None:
         return None
     used = np.zeros(len(v), dtype=bool)
@@ -352,12 +353,14 @@ def numbers(text: bytes, dtype, count: int) -> np.ndarray | None:
     return a if len(a) == count else None
 
 
-def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, v: np.ndarray, *,
-               negatives_ok: bool) -> np.ndarray | None:
+def _obj_faces(first_line: bytes, text: np.ndarray, n_lines: int, v: np.ndarray | None, *,
+               negatives_ok: bool, vertices: int) -> np.ndarray | None:
     """Triangles (position indices from 0) of the face lines, ``text``
     their text after ``f`` joined by newlines (bytes, a new array: changed
-    here), ``first_line`` the first one's, ``v`` the positions; or ``None``."""
-    nv = len(v)
+    here), ``first_line`` the first one's, over ``vertices`` positions
+    ``v``, which tell a concave polygon to cut by ears (None: every polygon
+    fanned); or ``None``."""
+    nv = vertices
     first = first_line.split()[0]
     form = 2 if b"//" in first else 3 if first.count(b"/") == 2 else first.count(b"/")
     if form > 3:

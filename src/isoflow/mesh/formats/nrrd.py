@@ -48,7 +48,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
-from .slicer import layer_of
+from .slicer import layer_of, remember_segments
 
 
 def _check_data_file(header: dict, path: Path) -> None:
@@ -67,12 +67,15 @@ def _check_data_file(header: dict, path: Path) -> None:
 def read(path: Path, dataset: str | None = None) -> RawVolume:
     nrrd = import_library("nrrd", "NRRD", "pynrrd")
     where = str(path)
-    with reading(path, "NRRD"):
-        header = nrrd.read_header(str(path))
+    with reading(path, "NRRD"), open(path, "rb") as fh:
+        # the header parsed once (a segmentation's holds ten fields a
+        # segment), checked, then the data read on from the same handle
+        header = nrrd.read_header(fh)
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
         _check_data_file(header, path)
-        data, header = nrrd.read(str(path), index_order="F")
+        data = nrrd.read_data(header, fh, str(path), index_order="F")
+    remember_segments(path, header)  # named after the read (isoflow info --labels's note) from this header
     # a 3D Slicer segmentation: the layer named (FILE.seg.nrrd:N), placed as any NRRD
     data, header = layer_of(data, header, dataset, where)
     directions = header.get("space directions")

@@ -18,6 +18,7 @@ A 4D segmentation is no label image: ``FILE.seg.nrrd:N`` reads its layer
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -189,7 +190,8 @@ def _layer_index(layer: str, found: list[Segment], count: int, where: str) -> in
 def layer_segments(path, layer: str | None) -> str | None:
     """The segments of the layer of a 3D Slicer segmentation that
     ``FILE.seg.nrrd`` (its one layer) or ``FILE.seg.nrrd:N`` reads, by
-    name and label value (:func:`segment_names`), from its header alone;
+    name and label value (:func:`segment_names`), from its header alone:
+    the one its read kept (:func:`remember_segments`), else parsed here;
     None for a NRRD that is no segmentation or a layer it has not (the
     reading says why).
 
@@ -216,15 +218,106 @@ def layer_segments(path, layer: str | None) -> str | None:
     """
     import nrrd
 
-    header = nrrd.read_header(str(path))
+    known = _read.get(file_identity(path))
     try:
-        found = segments(header, str(path))
-        count = int(header["sizes"][0]) if len(header.get("sizes", ())) == 4 else 1
+        if known is None:
+            header = nrrd.read_header(str(path))
+            known = segments(header, str(path)), layer_count(header)
+        found, count = known
         _check_layers(found, count, str(path))
         index = 0 if layer is None else _layer_index(layer, found, count, str(path))
     except IsoflowError:
         return None
     return segment_names(found, index) if found and (layer is not None or count == 1) else None
+
+
+def layer_count(header: dict) -> int:
+    """The layers of a NRRD as a 3D Slicer segmentation holds them: the
+    first axis of a 4D array, else one.
+
+    Parameters
+    ----------
+    header : dict
+        The header as pynrrd reads it.
+
+    Returns
+    -------
+    int
+        The number of layers.
+
+    Examples
+    --------
+    >>> layer_count({"sizes": [3, 64, 64, 40]}), layer_count({"sizes": [64, 64, 40]})
+    (3, 1)
+    """
+    return int(header["sizes"][0]) if len(header.get("sizes", ())) == 4 else 1
+
+
+def file_identity(path) -> tuple[int, int, int, int] | None:
+    """A file's device, inode, size and modification time in nanoseconds
+    (a file rewritten since has another), or None where it cannot be seen.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file or folder, as ``os.stat`` takes it.
+
+    Returns
+    -------
+    tuple of int or None
+        ``(st_dev, st_ino, st_size, st_mtime_ns)``.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = tempfile.mkdtemp() + "/a.seg.nrrd"
+    >>> file_identity(path) is None, len(file_identity(tempfile.gettempdir()))
+    (True, 4)
+    """
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns
+
+
+#: the segments and layer count of the NRRD header read last, by its file's
+#: identity (:func:`remember_segments`): one file's at a time
+_read: dict[tuple[int, int, int, int] | None, tuple[list[Segment], int]] = {}
+
+
+def remember_segments(path, header: dict) -> None:
+    """Keep the segments and layer count of the header just read from
+    ``path``, so that :func:`layer_segments` names them without parsing
+    the header again (a segmentation's holds ten fields a segment); the
+    file's earlier ones, or another file's, are let go. A header whose
+    segments cannot be read is not kept (its reading says why).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The NRRD file the header was read from.
+    header : dict
+        The header as pynrrd reads it.
+
+    Examples
+    --------
+    >>> import nrrd, tempfile
+    >>> path = tempfile.mkdtemp() + "/s.seg.nrrd"
+    >>> header = {"Segment0_ID": "Segment_1", "Segment0_Name": "liver", "Segment0_LabelValue": "2"}
+    >>> nrrd.write(path, np.zeros((2, 2, 2), np.uint8), header)
+    >>> remember_segments(path, {**header, "Segment0_Name": "spleen", "sizes": [2, 2, 2]})
+    >>> layer_segments(path, None)  # from the header kept, not from the file's
+    'spleen (label 2)'
+    """
+    _read.clear()
+    key = file_identity(path)
+    if key is None:
+        return
+    try:
+        _read[key] = segments(header, str(path)), layer_count(header)
+    except IsoflowError:
+        return
 
 
 def segment_names(found: list[Segment], layer: int) -> str:
