@@ -723,20 +723,39 @@ def no_cube_reason(ndim: int, option: str) -> str:
 
 
 
-def write_bytes_per_voxel(path: str | os.PathLike) -> float:
+def write_bytes_per_voxel(path: str | os.PathLike, labels: bool = False) -> float:
     """Bytes per voxel that writing a mask to ``path`` holds beside it, at
     most, by the format its suffix names: what
     :func:`~isoflow.mesh.voxelize.voxelize` takes as ``write_bytes``, so
     that a grid let in can also be written (0 for a suffix isoflow does
     not write, which :func:`check_volume_output` refuses).
 
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output; its suffix names the format (``FILE.h5:/dataset`` too).
+    labels : bool
+        Bytes per byte of a label image's labels instead, what
+        :func:`~isoflow.mesh.label_voxels.voxelize_meshes` takes as
+        ``write_bytes``: a format may store labels in a type of its own
+        (MGH's signed ones), which a mask's bytes need not.
+
+    Returns
+    -------
+    float
+        The bytes, from 0 on.
+
     Examples
     --------
     >>> write_bytes_per_voxel("seg.nii.gz"), write_bytes_per_voxel("stack.tif") > 1
     (0.0, True)
+    >>> write_bytes_per_voxel("aseg.mgz"), write_bytes_per_voxel("aseg.mgz", labels=True)
+    (0.0, 2.0)
     """
     fmt = format_for(split_dataset(path)[0], writing=True)
-    return 0.0 if fmt is None else float(fmt.write_bytes)
+    if fmt is None:
+        return 0.0
+    return float(fmt.write_bytes if not labels or fmt.label_bytes is None else fmt.label_bytes)
 
 
 def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[Path, str | None]:

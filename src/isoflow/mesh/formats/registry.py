@@ -63,8 +63,11 @@ class VolumeFormat:
     #: voxel, at most (its own copies, a library's, a compressed stream
     #: kept in memory; a writer that works through a buffer of fixed size
     #: holds none), so that a volume is let in only where it can also be
-    #: written
+    #: written; benchmarks/bench_write_memory.py measures them
     write_bytes: float = 0
+    #: ... beside a label image, per byte of its labels, where that differs
+    #: (None: ``write_bytes``)
+    label_bytes: float | None = None
 
     def load(self):
         """The format's module (its library is imported only when used)."""
@@ -82,20 +85,25 @@ FORMATS = (
     # ImageJ: 8 or 16 bits; tifffile writes a z, y, x copy
     VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1, write_bytes=1.05),
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
-    # FreeSurfer's volumes (aseg.mgz); labels in int32 at most
-    VolumeFormat("MGH", (".mgh", ".mgz"), "mgh", "nibabel", max_label=2**31 - 1),
+    # FreeSurfer's volumes (aseg.mgz); labels in int32 at most; a mask's bytes are written as they are,
+    # labels as a copy in MGH's signed types: uint16 above 32767 as int32, twice their bytes
+    VolumeFormat("MGH", (".mgh", ".mgz"), "mgh", "nibabel", max_label=2**31 - 1, label_bytes=2),
     # a header and its image beside it, either named: Analyze 7.5, or a NIfTI pair
     VolumeFormat("Analyze", (".hdr", ".img"), "analyze", "nibabel", read_only=(".hdr", ".img")),
-    # pynrrd writes the bytes in Fortran order and gzips them in memory
+    # pynrrd copies the bytes in Fortran order (a byte a byte) and gzips that copy into the file a piece at a time
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", read_datasets=True, imports="nrrd",
                  read_only=(".nhdr",), write_bytes=1.3),
-    # the file is built in memory, compressed (a mask's bytes to a fifth at worst), and written out whole
-    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.2),
+    # the file is built in memory (HDF5's core driver) and copied out whole: its gzip stream is held two to
+    # three times, as the image grows and as its copy; a random mask's bytes shrink to a sixth, random
+    # labels' not at all
+    VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
+                 label_bytes=2.5),
     # a bit per voxel; run-length coded a slab at a time
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),
-    # colour indices; its voxels are listed by their coordinates (at most 256 a side)
-    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=32),
-    # a z, y, x copy, and zarr's chunks as it encodes them
+    # colour indices; its voxels are listed by their coordinates (at most 256 a side): np.argwhere's int64
+    # coordinates (24 bytes a voxel set), stacked with the colour as int64 (32) and cast to bytes (4)
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=64),
+    # a z, y, x copy (a byte a byte), and the chunks zarr encodes at once (a few, of 128^3 voxels each)
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True,
                  write_bytes=1.6),
     # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
