@@ -97,16 +97,39 @@ def test_placed_ome_zarr_input_and_its_stops(tmp_path):
         check_states(mem, out)
 
 
-def test_on_a_two_process_local_cluster(tmp_path):
-    distributed = pytest.importorskip("distributed")
-    v = crossing_volume(2)
-    plain_store(tmp_path / "in.zarr", v, (6, 10, 16))
-    mem, expected = in_memory(tmp_path / "in.zarr", 26, steps=6)
+def cluster_run(tmp_path, seed: int, conn: int, steps: int):
+    """A crossing volume's store, its in-memory flow and the run's directory."""
+    plain_store(tmp_path / "in.zarr", crossing_volume(seed), (6, 10, 16))
+    mem, expected = in_memory(tmp_path / "in.zarr", conn, steps=steps)
     out = tmp_path / "run"
     out.mkdir()
+    return mem, expected, out
+
+
+def test_on_a_two_process_local_cluster(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    mem, expected, out = cluster_run(tmp_path, 2, 26, 6)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
             distributed.Client(cluster) as client:
         got = flow_chunked(tmp_path / "in.zarr", out, connectivity=26, slab=4, steps=6, scheduler=client.get)
+    assert got.to_dict() == expected
+    check_states(mem, out)
+
+
+def test_a_default_client_runs_the_slabs_and_the_records_alike(tmp_path):
+    """With scheduler=None and a dask.distributed default client, the slabs
+    ran on local threads while each step's record ran on the cluster: both
+    run on the cluster now (its task stream holds the slabs' tasks and the
+    report's blocks), and the run equals the in-memory flow."""
+    distributed = pytest.importorskip("distributed")
+    from distributed.utils import key_split
+
+    mem, expected, out = cluster_run(tmp_path, 3, 6, 2)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client, distributed.get_task_stream(client) as stream:
+        got = flow_chunked(tmp_path / "in.zarr", out, slab=4, steps=2)
+    ran = {key_split(t["key"]) for t in stream.data}
+    assert {"slab_ends", "slab_keep", "read_zarr_block"} <= ran  # (key_split drops the leading underscore)
     assert got.to_dict() == expected
     check_states(mem, out)
 

@@ -358,3 +358,46 @@ def test_a_label_store_beyond_memory_is_told_what_reads_it_block_by_block(tmp_pa
     assert "is read block by block by 'isoflow info' (--labels too), 'isoflow surface --label N -o OUT.ply'" in err[0]
     assert main(["surface", str(path), "--label", "2", "-o", str(tmp_path / "two.ply"), "-q", "--threads", "1"]) == 0
     assert trimesh.load(tmp_path / "two.ply", process=False).volume == pytest.approx(np.count_nonzero(lab == 2))
+
+
+def _estimate(message: str) -> float:
+    """The bytes a refusal says the work needs (as ``sized`` writes them)."""
+    import re
+
+    number, unit = re.search(r"needs about ([0-9.]+) (bytes|KiB|MiB|GiB)", message).groups()
+    return float(number) * {"bytes": 1, "KiB": 2**10, "MiB": 2**20, "GiB": 2**30}[unit]
+
+
+def test_a_chunk_larger_than_the_blocks_is_counted_whole(tmp_path, monkeypatch):
+    """zarr decodes a whole chunk to give any part of it: blocks of 4^3 read
+    from chunks of 4 x 256 x 256 (256 KiB) have each of the tasks at a time
+    hold one such chunk, here and on a dask.distributed worker alike. The
+    estimate grows by those chunks against chunks of 4 x 8 x 8 (which the
+    blocks with their halo hold whole anyway), and where the blocks are the
+    chunks it is the same whatever the chunks inside the blocks."""
+    from isoflow.scale import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    chunk = 4 * 256 * 256  # bytes of a bool chunk
+
+    def refusal(chunks, block_shape, scheduler=None):
+        name = "x".join(map(str, chunks))
+        z = zarr.create_array(store=str(tmp_path / f"{name}.zarr"), shape=(8, 256, 256), chunks=chunks, dtype=bool,
+                              overwrite=True)
+        z[2:6, 100:150, 100:150] = True
+        with pytest.raises(IsoflowError) as err:
+            write_surface_blocks(z, tmp_path / "s.ply", 6, block_shape=block_shape, threads=2, scheduler=scheduler)
+        return _estimate(str(err.value))
+
+    small, large = refusal((4, 8, 8), (4, 4, 4)), refusal((4, 256, 256), (4, 4, 4))
+    # the chunk cache is the same (it follows the chunks along the first axis only)
+    assert large - small >= 0.95 * 2 * chunk
+
+    class Cluster:  # a cluster's client as write_surface_blocks sees it: its workers' limits and threads
+        def scheduler_info(self, n_workers=-1):
+            return {"workers": {"tcp://w1": {"memory_limit": 1_000, "nthreads": 2}}}
+
+    assert refusal((4, 256, 256), (4, 4, 4), Cluster()) >= 2 * chunk > 100 * refusal((4, 8, 8), (4, 4, 4), Cluster())
+    # blocks that hold their chunks: nothing decoded beyond what the blocks read
+    assert refusal((4, 8, 8), (4, 8, 8)) == refusal((4, 4, 4), (4, 8, 8))
+    assert not (tmp_path / "s.ply").exists()

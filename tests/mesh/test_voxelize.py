@@ -694,6 +694,34 @@ def test_inconsistent_and_nonmanifold_counts():
     assert d["nonmanifold_edges"] == 1 and d["inconsistent_edges"] == 1 and d["boundary_edges"] == 6
 
 
+def test_note_names_repeated_faces_on_a_nonmanifold_mesh():
+    """A closed sphere with faces listed again, one starting at another
+    corner: each repeat uses its edges once more the same way, so the mesh
+    is non-manifold and inconsistently oriented. The note names the repeats
+    and those edges as counted independently (trimesh's group_rows of the
+    sorted faces; the uses of each edge each way), also for the same mesh
+    as a triangle soup, whose repeats show once equal corners are joined."""
+    from collections import Counter
+
+    m = trimesh.creation.icosphere(2)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    f2 = np.vstack([f, f[:3], np.roll(f[40], 1)[None], f[40:41]])
+    groups = trimesh.grouping.group_rows(np.sort(f2, axis=1))
+    repeats = sum(len(g) - 1 for g in groups)
+    # no face is also listed the other way round (a double-sided face, not a repeat)
+    assert repeats == 5 and all(len({tuple(np.roll(f2[i], -int(np.argmin(f2[i])))) for i in g}) == 1 for g in groups)
+    uses = Counter((int(a), int(b)) for t in f2 for a, b in zip(t, np.roll(t, -1)))
+    edges = {tuple(sorted(e)) for e in uses}
+    nonmanifold = sum(uses[e] + uses[e[::-1]] > 2 for e in edges)
+    inconsistent = sum(uses[e] + uses[e[::-1]] >= 2 and uses[e] != uses[e[::-1]] for e in edges)
+    assert nonmanifold > 0 and inconsistent > 0
+    soup_v, soup_f = v[f2].reshape(-1, 3), np.arange(3 * len(f2)).reshape(-1, 3)
+    for vv, ff in ((v, f2), (soup_v, soup_f)):
+        note = voxelize(vv, ff, resolution=12, details=True)["note"]
+        assert f"{nonmanifold} non-manifold edges, {repeats} repeated faces " in note
+        assert f", {inconsistent} inconsistently oriented edges" in note
+
+
 def test_edge_contact_cubes_use_exact_scanline():
     """Two cubes sharing one edge (after welding): 4 faces on that edge, but
     balanced orientation -> still a solid: the exact scanline, no cap, a

@@ -277,10 +277,11 @@ def test_non_manifold_fin_on_a_box(rng):
     e = box.edges_unique[0]
     f = np.concatenate([box.faces, [[e[0], e[1], len(v) - 1]]])
     d = mesh_defects(v, f)
-    assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 2
+    # the fin's edge is used twice one way, once the other: also inconsistently oriented
+    assert d["nonmanifold_edges"] == 1 and d["boundary_edges"] == 2 and d["inconsistent_edges"] == 1
     report = voxelize(v, f, resolution=16, details=True)
     vol, origin, pitch = report.volume, report.origin, report.pitch
-    assert "1 non-manifold edge;" in report["note"] and "|w| > 1/2" in report["note"]
+    assert "1 non-manifold edge, 1 inconsistently oriented edge;" in report["note"] and "|w| > 1/2" in report["note"]
     assert_gwn_rule(v, f, vol, origin, pitch, rng)
 
 

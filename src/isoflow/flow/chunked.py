@@ -29,7 +29,9 @@ is None. For the same reason the guarded flow is not done block by block
 Memory is a few slabs per worker (two bytes per voxel of a slab, and its
 bit rows) and faces; the slabs are as thick as fits :data:`SLAB_VOXELS`.
 The tasks take paths, so they run on a ``dask.distributed`` cluster
-(``scheduler=client.get``) where the stores are on a shared file system.
+(``scheduler=client.get``, or the default client where the scheduler is
+None, for the slabs and the records alike) where the stores are on a
+shared file system.
 """
 
 from __future__ import annotations
@@ -250,13 +252,14 @@ class ChunkedFlow(ArrayFlow):
         self.unit: str | None = None  # the input's length unit, which every step's store keeps
         self._step = 0
 
-    def _scheduler(self):
-        """What the slabs are computed with: ``workers`` threads by default."""
-        return self.scheduler or "threads"
-
     def _compute(self, *tasks):
-        workers = self.workers if self.scheduler in (None, "threads") else None
-        return compute(*tasks, scheduler=self._scheduler(), workers=workers)
+        """The tasks computed on ``scheduler``: None is dask's configured
+        scheduler or the default client where there is one, as the records'
+        report takes it, else ``workers`` threads."""
+        from ..scale.chunks import distributed_client
+
+        local = self.scheduler in (None, "threads") and distributed_client(self.scheduler) is None
+        return compute(*tasks, scheduler=self.scheduler, workers=self.workers if local else None)
 
     def _name(self) -> Path:
         name = f"step_{self._step:0{self.width}d}.zarr"
@@ -287,7 +290,7 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         shape = tuple(int(s) for s in box.shape)
         path = self._name()
-        thick = slab_thickness(shape, self.slab, self.workers, self._scheduler())
+        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler)
         chunks = (thick, min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
         _create_store(path, shape, chunks, place, self.unit)
         target = import_zarr().open_group(str(path), mode="r+")["0"]
@@ -318,7 +321,7 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         table = step_table(3, self.conn)
         shape = state.shape
-        thick = slab_thickness(shape, self.slab, self.workers, self._scheduler())
+        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler)
         parts = [(a, min(a + thick, shape[0] + 1)) for a in range(0, shape[0] + 1, thick)]
         ends = self._compute(*(delayed(_slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
         below, above = _hand_on(list(ends))
@@ -476,8 +479,11 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     slab : int, optional
         Vertex layers per task (default: :data:`SLAB_VOXELS` voxels).
     scheduler
-        A dask scheduler (default: ``workers`` threads), ``client.get`` of a
-        ``dask.distributed`` client too.
+        A dask scheduler, ``client.get`` of a ``dask.distributed`` client
+        too; None (default): dask's configured scheduler, or the default
+        client where there is one, else ``workers`` threads. The slabs and
+        each step's record (:func:`isoflow.digital.outofcore.analyze_chunked`)
+        run on it alike.
     workers : int
         Tasks in flight on the local schedulers (memory is sized for them).
     force : bool

@@ -616,7 +616,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     array, grid, cache = _reader(array, block_shape)
     with using(threads):
         workers = thread_count()
-    read = _largest_read(grid) * (2 * np.dtype(array.dtype).itemsize + 2)
+    read = _read_bytes(array, grid)
     _check_memory(where, workers, read, "counting", cache, scheduler)
     source = _Source(array)
     ticks = BlockTicks(progress, 2 * len(grid.indices()), ("count_block", "write_block"))
@@ -705,6 +705,28 @@ def _largest_read(grid: BlockGrid) -> int:
     return int(np.prod([max(b - a for a, b in bounds) + 3 for bounds in grid.bounds]))
 
 
+def _read_bytes(array, grid: BlockGrid) -> int:
+    """Peak bytes of one task's read of the largest block with its halo:
+    the voxels read, their bool copy and the decoded chunk they are copied
+    from, counted whole where it is larger than what the block reads (zarr
+    decodes a whole chunk to give any part of it, as dask computes a whole
+    chunk of its array, and the task holds it before the shared chunk
+    cache can drop it)."""
+    voxels = _largest_read(grid)
+    itemsize = np.dtype(array.dtype).itemsize
+    return voxels * (itemsize + 2) + max(voxels, _chunk_voxels(array)) * itemsize
+
+
+def _chunk_voxels(array) -> int:
+    """Voxels of the largest chunk a read decodes whole (0: an array in
+    memory, read without decoding)."""
+    if isinstance(array, ChunkReader):
+        return int(np.prod(array.chunks, dtype=np.int64))
+    if hasattr(array, "chunks") and hasattr(array, "compute"):
+        return int(np.prod([max(c) for c in array.chunks], dtype=np.int64))
+    return 0
+
+
 def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None) -> None:
     """Refuse, before the pass, blocks that would not fit ``workers`` at a
     time (beside the chunk cache), saying how many would; on a
@@ -715,7 +737,8 @@ def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int
 
     client = distributed_client(scheduler)
     if client is not None:
-        # a task's copy of the chunk reader keeps the chunks its own block reads, which per_task counts
+        # a task's copy of the chunk reader starts empty: per_task counts the
+        # chunk it decodes, whole where it is larger than the block
         check_workers_fit(client, per_task, f"{where}: {what} the surface's blocks",
                           hint="write the store with smaller chunks (or pass smaller blocks), "
                                "or give the workers more memory")

@@ -79,6 +79,7 @@ from .load import (  # noqa: F401
     mesh_arrays,
     mesh_bbox,
     mesh_defects,
+    repeated_faces,
 )
 
 #: a progress callback: ``progress(done, total)``
@@ -170,8 +171,12 @@ class Solid:
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
     them; ``walls`` pairs lay in walls between solids or inside the solid
     (solids glued face to face, a tetrahedral mesh's cells) and were
-    dropped, both faces, whose windings cancel.  ``flipped`` faces were turned over by
-    :func:`~isoflow.mesh.orientation.orient_faces`;
+    dropped, both faces, whose windings cancel.  ``repeated`` faces list
+    the same three corners the same way round as an earlier face (on the
+    faces ``census`` counts: :func:`~isoflow.mesh.load.repeated_faces`).
+    ``flipped`` faces were turned over by
+    :func:`~isoflow.mesh.orientation.orient_faces`, which leaves
+    ``inconsistent`` edges still used more often one way than the other;
     ``chain_edges`` is the length of the boundary chain that the cap closes
     (0: the exact scanline alone decides).
     """
@@ -188,7 +193,8 @@ class Solid:
         faces = f
         self.census = self.defects
         self.joined = 0  # edges joined by merging vertices at equal positions
-        self.double_sided = self.walls = self.flipped = self.chain_edges = 0
+        self.double_sided = self.walls = self.flipped = self.chain_edges = self.repeated = 0
+        self.inconsistent = self.defects["inconsistent_edges"]
         self.v = v
         self.faces = faces
         self.chain = (np.zeros(0, dtype=np.int64),) * 2
@@ -214,9 +220,14 @@ class Solid:
             if self.double_sided:
                 edges = census(faces, len(v))
                 self.census = defect_counts(*edges[2:])
-        if self.census["inconsistent_edges"]:
+        self.inconsistent = self.census["inconsistent_edges"]
+        if self.inconsistent:
+            # a repeat uses each of its edges once more the same way: only
+            # inconsistently oriented edges can come of one
+            self.repeated = int((repeated_faces(faces) != np.arange(len(faces))).sum())
             faces, self.flipped = orient_faces(v, faces)
             edges = census(faces, len(v))
+            self.inconsistent = defect_counts(*edges[2:])["inconsistent_edges"]
         a, b = chain_of(*edges[:4])
         self.chain = (a, b)
         self.chain_edges = int(len(a))
@@ -332,12 +343,16 @@ class Solid:
             what.append(counted(c["boundary_edges"], "boundary edge"))
         if c["nonmanifold_edges"]:
             what.append(counted(c["nonmanifold_edges"], "non-manifold edge"))
+        if self.repeated:
+            what.append(counted(self.repeated, "repeated face") + " (the same three corners the same way round as "
+                        "an earlier face: each copy counted)")
         if self.flipped:
             what.append(counted(self.flipped, "flipped face") + " (turned over to agree with their neighbours; where "
                         "the mesh is open or non-manifold, only across edges where they meet almost flat or that "
                         "make half or more of the rim of a part)")
-        elif c["inconsistent_edges"] and not c["nonmanifold_edges"]:
-            what.append(counted(c["inconsistent_edges"], "inconsistently oriented edge"))
+        if self.inconsistent:  # as the faces are read, after any turned over
+            what.append(counted(self.inconsistent, "inconsistently oriented edge")
+                        + (" left" if self.flipped else ""))
         if stats is not None and stats[0]:
             what.append(counted(int(stats[0]), "voxel") + " inside two or more layers (self-intersecting "
                         "or overlapping shells: counted once, the union)")
