@@ -292,6 +292,90 @@ def test_vox_round_trip_read_by_py_vox_io(tmp_path, vol):
     assert np.array_equal(isoflow.read_volume(path).volume, vol)
 
 
+def argwhere_vox(path, volume):
+    """The MagicaVoxel writer as it was before it built its list a slab at
+    a time (np.argwhere of the whole volume): the bytes to match."""
+    import struct
+
+    def chunk(cid, content):
+        return cid + struct.pack("<ii", len(content), 0) + content
+
+    xyz = np.argwhere(volume)
+    colour = np.ones(len(xyz), np.uint8) if volume.dtype == np.bool_ else volume[tuple(xyz.T)]
+    xyzi = np.column_stack([xyz, colour]).astype(np.uint8) if len(xyz) else np.zeros((0, 4), np.uint8)
+    children = chunk(b"SIZE", struct.pack("<3i", *volume.shape)) + chunk(b"XYZI", struct.pack("<i", len(xyzi))
+                                                                          + xyzi.tobytes())
+    with open(path, "wb") as fh:
+        fh.write(b"VOX " + struct.pack("<i", 150) + b"MAIN" + struct.pack("<ii", 0, len(children)) + children)
+
+
+def vox_cases(rng, vol):
+    """Masks and label images for the .vox writer: random ones with edge and
+    vertex contacts, a full one, empty ones, one as a transposed view, the
+    largest side on every axis, labels of many colours."""
+    largest = rng.random((256, 256, 256)) < 0.002
+    largest[255, 255, 255] = largest[0, 0, 0] = largest[255, 0, 255] = True
+    colours = rng.integers(0, 256, (40, 30, 20)).astype(np.uint8)
+    return [("vertex and edge contacts", vol), ("random", rng.random((17, 9, 31)) < 0.5),
+            ("full", np.ones((12, 20, 9), bool)), ("empty", np.zeros((6, 5, 4), bool)),
+            ("no voxels", np.zeros((0, 0, 0), bool)), ("a slab of side 0", np.zeros((3, 0, 4), bool)),
+            ("transposed", np.transpose(rng.random((8, 11, 6)) < 0.3, (2, 0, 1))),
+            ("largest", largest), ("256 x 1 x 256", rng.random((256, 1, 256)) < 0.5),
+            ("labels", colours), ("labels uint16", colours.astype(np.uint16)),
+            ("full labels", np.full((7, 7, 7), 255, np.uint8))]
+
+
+def test_vox_writes_the_bytes_that_the_argwhere_writer_wrote(tmp_path, rng, vol, monkeypatch):
+    """The .vox writer builds its voxel list a slab at a time (4 bytes a
+    voxel set, where np.argwhere's list held 61): the file is the same byte
+    for byte, and py-vox-io reads each voxel with its colour."""
+    pytest.importorskip("pyvox")
+    from pyvox.parser import VoxParser
+
+    from isoflow.mesh.formats import magicavoxel
+
+    given = []
+    write = magicavoxel.write
+    monkeypatch.setattr(magicavoxel, "write", lambda path, obj, *a, **k: (given.append(obj.volume), write(path, obj, *a, **k)))
+    for what, volume in vox_cases(rng, vol):
+        new, old = tmp_path / f"{what}.vox", tmp_path / f"{what} old.vox"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", IsoflowWarning)
+            if volume.dtype == np.bool_:
+                isoflow.write_volume(DigitalObject(volume), new)
+            else:
+                isoflow.write_labels(volume, new)
+        argwhere_vox(old, given[-1])  # the array the writer was handed (write_labels may narrow its type)
+        assert new.read_bytes() == old.read_bytes(), what
+        if volume.size:  # py-vox-io's parser takes a model of no side for no model
+            model = VoxParser(str(new)).parse().models[0]
+            assert tuple(model.size) == volume.shape, what
+            expect = volume.astype(np.uint8) if volume.dtype != np.bool_ else volume.view(np.uint8)
+            got = {(v.x, v.y, v.z): v.c for v in model.voxels}
+            assert got == {tuple(p): int(expect[tuple(p)]) for p in np.argwhere(volume).tolist()}, what
+
+
+def test_vox_writer_holds_four_bytes_a_voxel_set(tmp_path):
+    """A .vox lists each voxel set as 4 bytes (x, y, z, colour): a full
+    128^3 mask's writer holds that list and one slab's indices (tracemalloc
+    sees numpy's arrays), where np.argwhere's int64 list held 61 bytes a
+    voxel and its copies into bytes 12 more."""
+    import tracemalloc
+
+    side = 128
+    obj = DigitalObject(np.ones((side, side, side), bool))
+    isoflow.write_volume(DigitalObject(np.ones((2, 2, 2), bool)), tmp_path / "warm.vox")
+    tracemalloc.start()
+    try:
+        isoflow.write_volume(obj, tmp_path / "full.vox")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    listed = 4 * side**3
+    assert (tmp_path / "full.vox").stat().st_size == 60 + listed  # "VOX ", version, MAIN, SIZE, XYZI, its count, its list
+    assert peak <= 1.1 * listed, peak / side**3
+
+
 def test_vox_refuses_more_than_256_a_side(tmp_path):
     with pytest.raises(IsoflowError, match="at most 256"):
         isoflow.write_volume(DigitalObject(np.ones((257, 1, 1), bool)), tmp_path / "v.vox")

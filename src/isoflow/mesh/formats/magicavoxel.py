@@ -113,15 +113,57 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None) -> None:
-    xyz = np.argwhere(obj.volume)
-    colour = np.ones(len(xyz), np.uint8) if obj.volume.dtype == np.bool_ else obj.volume[tuple(xyz.T)]
-    xyzi = np.column_stack([xyz, colour]).astype(np.uint8) if len(xyz) else np.zeros((0, 4), np.uint8)
+    xyzi = voxel_list(obj.volume)
     size = struct.pack("<3i", *obj.volume.shape)
-    voxels = struct.pack("<i", len(xyzi)) + xyzi.tobytes()
-    children = _chunk(b"SIZE", size) + _chunk(b"XYZI", voxels)
+    voxels = 4 + xyzi.nbytes  # the count, then (x, y, z, colour) a byte each
+    children = _chunk(b"SIZE", size) + b"XYZI" + struct.pack("<iii", voxels, 0, len(xyzi))
     with open(path, "wb") as fh:
         fh.write(b"VOX " + struct.pack("<i", VERSION))
-        fh.write(b"MAIN" + struct.pack("<ii", 0, len(children)) + children)
+        fh.write(b"MAIN" + struct.pack("<ii", 0, len(children) + xyzi.nbytes) + children)
+        fh.write(xyzi.reshape(-1))  # a view of the list: a copy into bytes would hold it twice
+
+
+def voxel_list(volume: np.ndarray) -> np.ndarray:
+    """The (x, y, z, colour index) bytes of an ``XYZI`` chunk: a row a
+    voxel that is not 0, in C order (x slowest), its colour 1 in a boolean
+    volume and its value in a label image (1 to 255: what the format keeps).
+
+    Built a slab of constant x at a time into one uint8 array of the set
+    voxels' count, so that a volume's list holds 4 bytes a set voxel beside
+    one slab's indices, where ``np.argwhere`` of the whole volume would hold
+    24 and a stack of them with the colours 32 more.
+
+    Parameters
+    ----------
+    volume : numpy.ndarray
+        A 3D array of at most 256 voxels a side (each coordinate a byte).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8 of shape (voxels set, 4).
+
+    Examples
+    --------
+    >>> vol = np.zeros((2, 3, 4), np.uint8)
+    >>> vol[1, 2, 3], vol[0, 1, 0] = 7, 200
+    >>> voxel_list(vol).tolist()
+    [[0, 1, 0, 200], [1, 2, 3, 7]]
+    >>> voxel_list(vol > 0)[:, 3].tolist()
+    [1, 1]
+    """
+    xyzi = np.empty((np.count_nonzero(volume), 4), np.uint8)
+    xyzi[:, 3] = 1
+    row = 0
+    for x, slab in enumerate(volume):
+        y, z = np.nonzero(slab)
+        end = row + len(y)
+        # coordinates below 256 (check refuses more) and colours of 1 to 255 are a byte each
+        xyzi[row:end, 0], xyzi[row:end, 1], xyzi[row:end, 2] = x, y, z
+        if volume.dtype != np.bool_:
+            xyzi[row:end, 3] = slab[y, z]
+        row = end
+    return xyzi
 
 
 def _chunk(cid: bytes, content: bytes) -> bytes:

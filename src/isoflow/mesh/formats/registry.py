@@ -100,9 +100,9 @@ FORMATS = (
                  label_bytes=2.5),
     # a bit per voxel; run-length coded a slab at a time
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),
-    # colour indices; its voxels are listed by their coordinates (at most 256 a side): np.argwhere's int64
-    # coordinates (24 bytes a voxel set), stacked with the colour as int64 (32) and cast to bytes (4)
-    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=64),
+    # colour indices; its voxels are listed by their coordinates (at most 256 a side), built a slab at a time
+    # into a byte each of x, y, z and colour (4 bytes a voxel set) beside one slab's indices
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=4.5),
     # a z, y, x copy (a byte a byte), and the chunks zarr encodes at once (a few, of 128^3 voxels each)
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True,
                  write_bytes=1.6),
