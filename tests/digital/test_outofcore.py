@@ -839,3 +839,49 @@ def test_a_2d_block_is_counted_by_its_extent_sums(monkeypatch):
     assert got.voxels == v.sum() and got.bbox == [*at.min(0).astype(float), *(at.max(0) + 1).astype(float)]
     assert got.centroid == pytest.approx(at.mean(0) + 0.5)
     assert got == reference(v, 8)
+
+
+def test_a_chunk_larger_than_the_blocks_is_counted_in_the_estimate(tmp_path, monkeypatch):
+    """zarr decodes a whole chunk to give any part of it: blocks of 4^3
+    summed from chunks of 4 x 256 x 256 (256 KiB of bools) hold such a
+    chunk each, which the estimate counted at the block's size. With a
+    budget of nothing the refusal says what the work needs: it grows by
+    at least a chunk against chunks of 4 x 8 x 8 (the same blocks), and
+    where the blocks hold their chunks it is the same whatever the chunks
+    inside them (chunks of 4^3 or 4 x 8 x 8 in blocks of 4 x 8 x 8)."""
+    import re
+
+    from isoflow.scale import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    chunk = 4 * 256 * 256
+
+    def needs(chunks, block_shape):
+        z = zarr.create_array(store=str(tmp_path / ("x".join(map(str, chunks)) + ".zarr")), shape=(8, 256, 256),
+                              chunks=chunks, dtype=bool, overwrite=True)
+        z[2:6, 100:150, 100:150] = True
+        with pytest.raises(IsoflowError, match="summing its blocks") as err:  # refused before any block is read
+            analyze_chunked(z, 6, block_shape=block_shape, threads=1, scheduler="sync")
+        number, unit = re.search(r"needs about ([0-9.]+) (bytes|KiB|MiB|GiB)", str(err.value)).groups()
+        return float(number) * {"bytes": 1, "KiB": 2**10, "MiB": 2**20, "GiB": 2**30}[unit]
+
+    assert needs((4, 256, 256), (4, 4, 4)) - needs((4, 8, 8), (4, 4, 4)) >= 0.95 * chunk
+    assert needs((4, 4, 4), (4, 8, 8)) == needs((4, 8, 8), (4, 8, 8))
+
+
+def test_a_scheduler_named_is_held_to_the_memory_budget_with_distributed_imported(tmp_path, monkeypatch):
+    """Once dask.distributed is imported (a notebook with a cluster made
+    earlier), a scheduler given by name ("sync", "threads") reached the
+    memory check as a string, which it took for an unknown scheduler and
+    let pass: blocks that do not fit ran. They are refused as without it."""
+    pytest.importorskip("distributed")
+    import distributed  # noqa: F401
+
+    from isoflow.scale import memory
+
+    monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    z = zarr.create_array(store=str(tmp_path / "v.zarr"), shape=(16, 16, 16), chunks=(8, 8, 8), dtype=bool)
+    z[2:12, 3:9, 4:14] = True
+    for name in ("sync", "threads", "THREADS"):
+        with pytest.raises(IsoflowError, match="summing its blocks"):  # refused before any block is read
+            analyze_chunked(z, 6, scheduler=name)

@@ -69,6 +69,7 @@ from ..scale.chunks import (
     SpatialAxes,
     block_bounds,
     checked_block_shape,
+    decoded_chunk_voxels,
     distributed_client,
     import_dask,
     is_zarr_array,
@@ -434,10 +435,13 @@ FACE_BYTES = 12
 
 
 def _block_bytes(grid: _Grid, dtype) -> int:
-    """The memory that summing the largest block of ``grid`` takes."""
+    """The memory that summing the largest block of ``grid`` takes: with
+    the rest of the chunk decoded for it where a chunk is larger than the
+    block (zarr decodes a whole chunk to give any part of it)."""
     voxels = int(np.prod([max(b - a for a, b in bounds) for bounds in grid.bounds], dtype=np.int64))
     dtype = np.dtype(dtype)
-    return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES)
+    beyond = max(decoded_chunk_voxels(grid.array) - voxels, 0) * dtype.itemsize
+    return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
 
 
 def _faces_bytes(grid: _Grid) -> int:
@@ -471,6 +475,8 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
         check_workers_fit(client, per_block, f"{where}: summing its blocks",
                           hint=f"{smaller}, pass smaller blocks (block_shape), or give the workers more memory")
         return workers
+    if isinstance(scheduler, str):  # a name, as _scheduler leaves it once dask.distributed is imported
+        scheduler = named_schedulers.get(scheduler.lower(), scheduler)
     if scheduler is not None and scheduler not in named_schedulers.values():
         return workers
     if scheduler is named_schedulers["sync"]:  # one task at a time, whatever the threads

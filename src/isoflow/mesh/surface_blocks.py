@@ -49,7 +49,7 @@ from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
-from ..scale.chunks import BlockTicks, is_zarr_array
+from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array
 from ..scale.compiled import using
 from .export import float32_holds, mesh_vertex_table, ply_header, shared_positions
 
@@ -714,17 +714,7 @@ def _read_bytes(array, grid: BlockGrid) -> int:
     cache can drop it)."""
     voxels = _largest_read(grid)
     itemsize = np.dtype(array.dtype).itemsize
-    return voxels * (itemsize + 2) + max(voxels, _chunk_voxels(array)) * itemsize
-
-
-def _chunk_voxels(array) -> int:
-    """Voxels of the largest chunk a read decodes whole (0: an array in
-    memory, read without decoding)."""
-    if isinstance(array, ChunkReader):
-        return int(np.prod(array.chunks, dtype=np.int64))
-    if hasattr(array, "chunks") and hasattr(array, "compute"):
-        return int(np.prod([max(c) for c in array.chunks], dtype=np.int64))
-    return 0
+    return voxels * (itemsize + 2) + max(voxels, decoded_chunk_voxels(array)) * itemsize
 
 
 def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None) -> None:

@@ -236,6 +236,34 @@ def is_zarr_array(array) -> bool:
     )
 
 
+def decoded_chunk_voxels(array: Any) -> int:
+    """Voxels of the largest chunk that a read of any part of ``array``
+    decodes whole: zarr decodes a whole chunk (an inner chunk of a shard)
+    to give any part of it, and dask computes a whole chunk of its array;
+    0 for an array in memory, read without decoding.
+
+    Parameters
+    ----------
+    array : zarr.Array, dask.array.Array, a chunk reader or numpy.ndarray
+        Anything with ``chunks`` (a tuple of ints, or dask's tuple of
+        tuples); ``chunks`` None or absent: read as it is.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> decoded_chunk_voxels(da.zeros((10, 10), chunks=(4, 5))), decoded_chunk_voxels(np.zeros((10, 10)))
+    (20, 0)
+    """
+    chunks = None if isinstance(array, np.ndarray) else getattr(array, "chunks", None)
+    if not chunks:
+        return 0
+    return int(np.prod([max(c) if isinstance(c, tuple) else int(c) for c in chunks], dtype=np.int64))
+
+
 #: the layers along another axis than the first, as a multiple of those
 #: along the first, from which the blocks go in layers along that axis
 LAYERS_APART = 8
