@@ -20,7 +20,6 @@ from .inputs import (
     load_input_with_unit,
     mesh_fill,
     refuse_mesh_options,
-    refuse_options_without,
     refuse_points_option,
     say_note,
     say_plate,
@@ -38,7 +37,10 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     add_labels_option(p)
     p.add_argument("--csv", metavar="FILE", help="with --labels: write the full table as CSV (- prints it on stdout)")
-    p.add_argument("--force", action="store_true", help="overwrite an existing --csv file")
+    p.add_argument("--png", metavar="FILE",
+                   help="with --labels: also draw the table as a picture (labels by Betti numbers, the volumes' "
+                        "histogram, surface area against volume)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing --csv or --png file")
     p.add_argument("--no-surfaces", action="store_true", help="skip the per-surface genus")
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes; for a 2D or 3D .zarr store without --labels, read block by "
@@ -56,10 +58,12 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
-    try:
-        refuse_options_without(args, "csv", {"force": "overwrites an existing --csv file"})
-    except IsoflowError as exc:
-        raise exc.at(args.input) from None
+    if args.force and not (args.csv or args.png):  # the file it was meant for was left out
+        raise IsoflowError(f"{args.input}: --force overwrites an existing --csv or --png file; without them info "
+                           "writes no file (give --csv FILE, or --png FILE with --labels)")
+    if args.png and args.labels is None:  # one object's report has no distribution to draw
+        raise IsoflowError(f"{args.input}: --png draws the table of --labels (info {args.input} --labels --png "
+                           f"{args.png}); one object's report has no picture")
     if args.labels is not None:
         from .labels import cmd_info_labels
 

@@ -345,19 +345,27 @@ def _some(values, most: int = 8) -> str:
 
 def cmd_info_labels(args: argparse.Namespace) -> int:
     """``isoflow info LABELS --labels``."""
-    from ..mesh.outputs import check_output_path
+    from ..mesh.outputs import check_output_path, check_picture_path, output_set
 
     to_stdout = args.csv == "-"
     if to_stdout and args.json:
         raise IsoflowError(f"{args.input}: --csv - and --json both print on stdout: give one of them")
     if args.csv and not to_stdout:
         check_output_path(args.csv, args.force)
+    if args.png:
+        check_picture_path(args.png, args.force)
+        if args.csv and not to_stdout and Path(args.csv).resolve() == Path(args.png).resolve():
+            raise IsoflowError(f"{args.png}: --csv and --png name one file; give each its own")
     about, conn, table, _, absent = read_table(args, surfaces=not args.no_surfaces)
+    # the table and its picture replaced together: a failure between them leaves both as they were
+    with output_set(args.png) if args.png and args.csv and not to_stdout else contextlib.nullcontext():
+        if args.csv and not to_stdout:
+            write_csv(args.csv, table, args.force)
+        if args.png:
+            draw_table(args, about, conn, table)
     if to_stdout:  # the table alone on stdout, for a pipe
         sys.stdout.writelines(csv_rows(table))
         return 0
-    if args.csv:
-        write_csv(args.csv, table, args.force)
     if args.json:
         sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
         sys.stdout.write("\n")
@@ -365,7 +373,36 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
     print(format_table(path_text(args.input), about, conn, table))
     if args.csv:
         print(f"{args.csv}: {len(table['label'])} rows, {len(table)} columns")
+    if args.png:
+        print(f"{args.png}: picture of {counted(len(table['label']), 'label')} (Betti numbers, "
+              f"{'area, perimeter' if len(about['shape']) == 2 else 'volume, surface area'})")
     return 0
+
+
+def draw_table(args: argparse.Namespace, about: dict, conn: int, table: dict) -> None:
+    """``--png``: the table as a picture
+    (:func:`isoflow.mesh.label_picture.render_label_table`), its title
+    naming the file and the choice of labels.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``input``, ``labels`` and ``png``.
+    about : dict
+        The image as read (:func:`read_table`): its ``unit`` names the axes.
+    conn : int
+        The labels' connectivity.
+    table : dict
+        The rows drawn, those of the labels that occur.
+    """
+    from ..mesh.formats.registry import split_dataset
+    from ..mesh.label_picture import render_label_table
+
+    # the file's name without its folders, a dataset or level of it kept (cells.zarr:labels/nuclei)
+    path, dataset = split_dataset(args.input)
+    name = path_text(path.name) + (f":{dataset}" if dataset is not None else "")
+    name += "" if args.labels == "all" else f" --labels {args.labels}"
+    render_label_table(table, args.png, name=name, connectivity=conn, unit=about["unit"])
 
 
 def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> Iterator[str]:
