@@ -182,3 +182,59 @@ def test_a_failed_picture_leaves_the_csv_as_it_was(tmp_path, capsys, monkeypatch
           "--force", words=("t.png", "No space left", "nothing was replaced"))
     assert (tmp_path / "t.csv").read_text() == "old\n" and (tmp_path / "t.png").read_bytes() == b"old"
     assert sorted(f.name for f in tmp_path.iterdir()) == ["seg.npy", "t.csv", "t.png"]
+
+
+def drawn_figure_problems(fig) -> list[str]:
+    """What a reader could not read in a drawn figure: tick labels of one
+    axis that run into each other, scatter points under the legend, a count
+    axis with fractions."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    problems = []
+    for i, ax in enumerate(fig.axes):
+        for name, axis in (("x", ax.xaxis), ("y", ax.yaxis)):
+            boxes = [t.get_window_extent(renderer) for t in axis.get_ticklabels(which="both")
+                     if t.get_visible() and t.get_text()]
+            if any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1:]):
+                problems.append(f"panel {i}: {name} tick labels overlap")
+        legend = ax.get_legend()
+        for points in ax.collections if legend is not None else ():
+            box = legend.get_window_extent(renderer)
+            at = ax.transData.transform(points.get_offsets())
+            if ((at[:, 0] >= box.x0) & (at[:, 0] <= box.x1) & (at[:, 1] >= box.y0) & (at[:, 1] <= box.y1)).any():
+                problems.append(f"panel {i}: the legend hides points")
+    for i, axis in ((0, fig.axes[0].xaxis), (1, fig.axes[1].yaxis)):  # the bars' and the histogram's counts
+        lo, hi = sorted(axis.get_view_interval())
+        if any(not float(v).is_integer() for v in axis.get_majorticklocs() if lo <= v <= hi):
+            problems.append(f"panel {i}: a count axis with fractions")
+    return problems
+
+
+@pytest.mark.parametrize("pick", [None, range(3, 25)])
+def test_a_picture_of_cells_of_like_size_is_readable(tmp_path, monkeypatch, pick):
+    """A few cells of like size (or a few labels asked for out of many)
+    span less than a decade of area: matplotlib's log-axis labels
+    (1.52 x 10^-1 at every tick) ran into each other, the legend in the
+    upper left hid the labels of much perimeter, and the count axes had
+    fractions of a label."""
+    rng = np.random.default_rng(4)
+    cells = np.zeros((40, 40), np.int32)
+    for k in range(30):  # cells of 12 to 20 pixels, some with a hole or in two pieces
+        y, x = divmod(k, 6)
+        h, w = int(rng.integers(3, 5)), int(rng.integers(4, 6))
+        cells[y * 8:y * 8 + h, x * 6:x * 6 + w] = k + 1
+        if k % 4 == 0:
+            cells[y * 8 + 1, x * 6 + 1] = 0
+        if k % 5 == 0:
+            cells[y * 8 + h + 1, x * 6] = k + 1
+    table = label_table(cells, pitch=0.1, labels=pick)
+    seen = []
+
+    def check(fig, path):
+        seen.extend(drawn_figure_problems(fig))
+        return save_figure(fig, path)
+
+    save_figure = label_picture.save_figure
+    monkeypatch.setattr(label_picture, "save_figure", check)
+    render_label_table(table, tmp_path / "cells.png", unit="µm")
+    assert seen == []

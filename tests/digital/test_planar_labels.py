@@ -141,6 +141,52 @@ def test_pitch_origin_and_labels_asked_for():
         label_table(image[0])
 
 
+@pytest.mark.parametrize("pitch", [1e200, 4e307, 1e-200])
+def test_a_pixel_size_past_float64_gives_what_a_3d_table_gives_without_numpy_warnings(pitch):
+    """A pixel of 1e200 has an area of 1e400 (and a perimeter of four
+    pixels of 4e307 is past float64's largest, 1.8e308): the 2D table let
+    NumPy's overflow warning out where the 3D one gives inf quietly; both
+    now give inf (0 for 1e-200, whose area is 1e-400) and the boxes and
+    centroids that still fit."""
+    import warnings
+
+    image = np.zeros((4, 4), np.uint8)
+    image[1:3, 1:3] = 1
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        flat = label_table(image, pitch=pitch)
+        solid = label_table(np.repeat(image[None], 3, axis=0), pitch=pitch)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert flat["area"][0] == solid["volume"][0] == (np.inf if pitch > 1 else 0.0)
+    assert flat["perimeter"][0] == (8 * pitch if 8 * pitch < np.finfo(float).max else np.inf)
+    for d in range(2):  # a 3D table's axes 1 and 2 are the image's
+        assert flat[f"bbox-{d}"][0] == solid[f"bbox-{d + 1}"][0] == pitch
+        assert flat[f"bbox-{d + 2}"][0] == solid[f"bbox-{d + 4}"][0] == 3 * pitch
+        assert flat[f"centroid-{d}"][0] == solid[f"centroid-{d + 1}"][0] == 2 * pitch
+
+
+@pytest.mark.parametrize("method", ["numpy", "compiled"])
+def test_a_box_corner_past_float64_is_inf_without_numpy_warnings(method):
+    """An origin near float64's largest (1.8e308) puts the far corner of a
+    box past it: inf, as ``analyze`` gives it and as Python's float sum
+    gives it, in a 2D and a 3D table, not NumPy's overflow warning."""
+    import warnings
+
+    if method == "compiled":
+        pytest.importorskip("numba")
+    image = np.zeros((4, 4), np.uint8)
+    image[1:3, 1:3] = 1
+    far, pitch = 1.7e308, 1e307
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        flat = label_table(image, pitch=pitch, origin=(far, 0.0), method=method)
+        solid = label_table(image[None], pitch=pitch, origin=(0.0, far, 0.0), method=method)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], [str(w.message) for w in caught]
+    assert flat["bbox-0"][0] == solid["bbox-1"][0] == far + pitch == np.inf
+    assert flat["bbox-2"][0] == solid["bbox-4"][0] == far + 3 * pitch == np.inf
+    assert flat["bbox-3"][0] == solid["bbox-5"][0] == 3 * pitch and flat["centroid-1"][0] == 2 * pitch
+
+
 def run(*args, cwd, flags=()):
     return subprocess.run([sys.executable, *flags, "-m", "isoflow", *map(str, args)], capture_output=True, text=True,
                           cwd=cwd)

@@ -881,7 +881,9 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
         out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
                                                 spacing[0] * spacing[1]])
     present = voxels > 0
-    with np.errstate(invalid="ignore", divide="ignore"):
+    # an absent label's box is NaN (0 / 0), and a corner past float64 (an
+    # origin near 1.8e308) is inf, as ``analyze`` gives it, not a NumPy warning
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for d in range(3):
             out[f"bbox-{d}"] = np.where(present, origin[d] + spacing[d] * found["lo"][:, d], np.nan)
         for d in range(3):

@@ -105,11 +105,17 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
         rows = np.where(values[at] == wanted, at + 1, 0)  # row 0: an absent label's zeros
         labels = np.asarray(wanted, dtype=values.dtype)
     chi = features[:, 0] // 4
-    out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
-                                  "area": counts[rows] * float(spacing[0] * spacing[1]),
-                                  "perimeter": edges[rows] @ np.array([spacing[1], spacing[0]])}
+    # a pixel size of 1e200 (or 1e-200) makes areas and perimeters past
+    # float64: inf (or 0) in the float columns, as a 3D table's volumes,
+    # not a NumPy warning on the user's terminal
+    with np.errstate(over="ignore", under="ignore"):
+        out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
+                                      "area": counts[rows] * float(spacing[0] * spacing[1]),
+                                      "perimeter": edges[rows] @ np.array([spacing[1], spacing[0]])}
     present = counts[rows] > 0
-    with np.errstate(invalid="ignore", divide="ignore"):
+    # an absent label's box is NaN (0 / 0), and a corner past float64 (an
+    # origin near 1.8e308) is inf, as ``analyze`` gives it, not a NumPy warning
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for d in range(2):
             out[f"bbox-{d}"] = np.where(present, origin[d] + spacing[d] * lo[rows, d], np.nan)
         for d in range(2):

@@ -12,9 +12,10 @@ the table's own columns; matplotlib is imported through
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -214,6 +215,86 @@ def log_bins(values: np.ndarray, most: int = 40) -> np.ndarray:
     return np.geomspace(lo, hi, int(np.clip(np.sqrt(len(values)), 5, most)) + 1)
 
 
+def plain_number(value: float, ticks: Sequence[float] = ()) -> str:
+    """A tick's value as a plain number, with the fewest significant digits
+    (three at least) that tell apart all of ``ticks``.
+
+    Parameters
+    ----------
+    value : float
+        The tick's value.
+    ticks : sequence of float
+        The axis's ticks that are labelled along with it.
+
+    Returns
+    -------
+    str
+        ``value`` written out (``%g`` form below 1e-4 and from 1e6 on).
+
+    Examples
+    --------
+    >>> plain_number(0.152), plain_number(20.0), plain_number(2000.0), plain_number(1e200)
+    ('0.152', '20', '2000', '1e+200')
+    >>> ticks = [0.1502, 0.1504, 0.1506]
+    >>> [plain_number(t, ticks) for t in ticks]
+    ['0.1502', '0.1504', '0.1506']
+    """
+    def written(v: float, digits: int) -> str:
+        if v == 0 or 1e-4 <= abs(v) < 1e6:  # positional, as an axis of 1000 and 2000 reads best
+            return np.format_float_positional(v, precision=digits, fractional=False, trim="-")
+        return f"{v:.{digits}g}"
+
+    distinct = len(set(ticks))
+    digits = next((d for d in range(3, 17) if len({written(t, d) for t in ticks}) == distinct), 17)
+    return written(value, digits)
+
+
+def plain_log_labels(axis: Any) -> None:
+    """Label a matplotlib log axis's ticks as plain numbers (0.152, 20,
+    1e+200); matplotlib still picks which ticks it labels. Its own labels
+    of a narrow range (cells of like size, or a few labels asked for),
+    ``1.52 x 10^-1`` at every tick, run into each other.
+
+    Parameters
+    ----------
+    axis : matplotlib.axis.Axis
+        The axis (``ax.xaxis``, ``ax.yaxis``), on a log scale.
+
+    Examples
+    --------
+    >>> plt = pyplot()
+    >>> fig, ax = plt.subplots()
+    >>> ax.set_xscale("log")
+    >>> _ = ax.set_xlim(0.15, 0.16)
+    >>> plain_log_labels(ax.xaxis)
+    >>> fig.canvas.draw()
+    >>> shown = ax.xaxis.get_ticklabels(which="both")
+    >>> [t.get_text() for t in shown if t.get_text() and 0.15 <= t.get_position()[0] <= 0.16]
+    ['0.15', '0.152', '0.154', '0.156', '0.158', '0.16']
+    >>> plt.close(fig)
+    """
+    from matplotlib.ticker import Formatter, LogFormatterSciNotation
+
+    class Plain(Formatter):
+        def __init__(self):
+            self.which = LogFormatterSciNotation()  # the ticks matplotlib would label
+            self.labelled: list[float] = []
+
+        def set_axis(self, axis):
+            super().set_axis(axis)
+            self.which.set_axis(axis)
+
+        def set_locs(self, locs):
+            self.which.set_locs(locs)
+            self.labelled = [t for t in locs if self.which(t)]
+
+        def __call__(self, x, pos=None):
+            return plain_number(x, self.labelled) if self.which(x, pos) else ""
+
+    axis.set_major_formatter(Plain())
+    axis.set_minor_formatter(Plain())
+
+
 def pattern_name(pattern: tuple[int, ...]) -> str:
     """A Betti pattern as a bar's label; the ball's named.
 
@@ -287,6 +368,8 @@ def render_label_table(table: Mapping[str, np.ndarray], path: str | os.PathLike,
     """
     panels = label_panels(table)
     plt = pyplot()
+    from matplotlib.ticker import MaxNLocator  # (after pyplot: its backend first)
+
     size_word, boundary_word = ("volume", "surface area") if panels.dimension == 3 else ("area", "perimeter")
     power = (3, 2) if panels.dimension == 3 else (2, 1)
     units = [f" ({unit}^{p})" if p > 1 else f" ({unit})" for p in power] if unit else [" (no unit given)"] * 2
@@ -296,6 +379,8 @@ def render_label_table(table: Mapping[str, np.ndarray], path: str | os.PathLike,
         ax = axes[1]
         ax.hist(panels.size, bins=log_bins(panels.size), color="tab:blue", edgecolor="white")
         ax.set_xscale("log")
+        plain_log_labels(ax.xaxis)
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))  # a count of labels has no fractions
         ax.set_ylabel("labels")
         _draw_measures(axes[2], panels, boundary_word)
     else:
@@ -323,6 +408,8 @@ def render_label_table(table: Mapping[str, np.ndarray], path: str | os.PathLike,
 
 def _draw_patterns(ax, panels: LabelPanels) -> None:
     """Panel 1: a horizontal bar per Betti pattern, the most common on top."""
+    from matplotlib.ticker import MaxNLocator
+
     names = [pattern_name(p) for p in panels.patterns]
     counts = list(panels.counts)
     colours = ["tab:green" if name.endswith((" ball", " disc")) else "tab:blue" for name in names]
@@ -337,6 +424,7 @@ def _draw_patterns(ax, panels: LabelPanels) -> None:
     for r, c in zip(rows, counts):
         ax.text(c, r, f" {c}", va="center", fontsize=7)
     ax.set_xlabel("labels")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # a count of labels has no fractions
     betti = "(b0, b1, b2)" if panels.dimension == 3 else "(b0, b1)"
     ax.set_title(f"labels by Betti numbers {betti}", fontsize=9)
     ax.margins(x=0.15)
@@ -358,4 +446,9 @@ def _draw_measures(ax, panels: LabelPanels, boundary_word: str) -> None:
             label=f"the {shape}'s {boundary_word}: {formula}")
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.legend(fontsize=7, loc="upper left")
+    plain_log_labels(ax.xaxis)
+    plain_log_labels(ax.yaxis)
+    # below the curve no label lies (none has less boundary for its size),
+    # so the lower right corner is empty; labels of much boundary for their
+    # size lie in the upper left
+    ax.legend(fontsize=7, loc="lower right")
