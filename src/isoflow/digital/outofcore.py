@@ -464,7 +464,8 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     summed here; one at a time on the synchronous scheduler. On a
     ``dask.distributed`` cluster (its client, its ``get``, or the default
     client) the workers hold their own memory: a block times a worker's
-    threads is held to the workers' memory limit instead."""
+    threads, beside a layer's faces, is held to the workers' memory limit
+    instead."""
     from dask.base import named_schedulers
 
     from ..scale.memory import check_fits, check_workers_fit, default_budget
@@ -472,8 +473,11 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     client = distributed_client(scheduler)
     if client is not None:
         smaller = "write the store with smaller chunks" if is_zarr else "rechunk it"
+        # the client holds the layers' summaries between layers (compute gathers them); a worker holds
+        # those its merges take and give while they run, about one layer's faces where it is the only one
         check_workers_fit(client, per_block, f"{where}: summing its blocks",
-                          hint=f"{smaller}, pass smaller blocks (block_shape), or give the workers more memory")
+                          hint=f"{smaller}, pass smaller blocks (block_shape), or give the workers more memory",
+                          held=held // 2)
         return workers
     if isinstance(scheduler, str):  # a name, as _scheduler leaves it once dask.distributed is imported
         scheduler = named_schedulers.get(scheduler.lower(), scheduler)

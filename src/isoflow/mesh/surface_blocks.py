@@ -727,8 +727,9 @@ def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int
 
     client = distributed_client(scheduler)
     if client is not None:
-        # a task's copy of the chunk reader starts empty: per_task counts the
-        # chunk it decodes, whole where it is larger than the block
+        # a task's copy of the chunk reader keeps no chunk past its read:
+        # per_task counts the chunk it decodes, whole where it is larger
+        # than the block
         check_workers_fit(client, per_task, f"{where}: {what} the surface's blocks",
                           hint="write the store with smaller chunks (or pass smaller blocks), "
                                "or give the workers more memory")

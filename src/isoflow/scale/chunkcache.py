@@ -13,9 +13,14 @@ OME-Zarr image stores (z, y, x), and may have a time or channel axis of
 length 1) and can select one label's voxels, so that a block read is one
 call whatever the store's layout.
 
-The cache lives in the reader: the threads of one process share it; a
-reader sent to another process (a dask.distributed worker) starts with an
-empty one.
+The cache lives in the reader: the threads of one process share it. A
+reader sent to another process (a dask.distributed worker, dask's process
+pool) keeps no chunk past the read that decoded it: each task there
+unpickles a copy of its own, which no other task reads through, and the
+worker holds every task's copy until its layer of blocks is done, so
+copies that kept the chunks their block and halo touched (up to 27 each)
+held that many chunks for every block of the layer, where the memory
+check counts the one chunk a read decodes at a time.
 """
 
 from __future__ import annotations
@@ -43,7 +48,8 @@ class ChunkReader:
     label : number, optional
         Read ``array == label`` instead of the values.
     max_bytes : int
-        The decoded chunks kept (default: 256 MiB).
+        The decoded chunks kept (default: 256 MiB); a copy unpickled in
+        another process keeps none.
 
     Examples
     --------
@@ -72,6 +78,7 @@ class ChunkReader:
         self.fill_value = None if label is not None else getattr(array, "fill_value", None)
         self.ndim = len(self.shape)
         self._stored_chunks = stored_chunks
+        self._keeps = True
         self._reset()
 
     def _reset(self) -> None:
@@ -81,12 +88,15 @@ class ChunkReader:
 
     def __getstate__(self) -> dict:
         state = dict(self.__dict__)
-        for name in ("_cache", "_bytes", "_lock"):
+        for name in ("_cache", "_bytes", "_lock", "_keeps"):
             del state[name]
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
+        # a copy unpickled in another process reads for one task only, and the worker holds it until the
+        # layer is done: the chunks it kept would outlive the read that needed them
+        self._keeps = False
         self._reset()
 
     def __getitem__(self, key) -> np.ndarray:
@@ -118,6 +128,8 @@ class ChunkReader:
         stored = np.asarray(self.array[tuple(key)])
         kept = [i for i in range(len(self.array.shape)) if i not in self.fixed]
         data = np.transpose(stored, [kept.index(i) for i in self.order])
+        if not self._keeps:
+            return data, start
         with self._lock:
             self._cache[index] = data
             self._bytes += data.nbytes

@@ -116,11 +116,12 @@ def worker_room(client) -> tuple[int, int] | None:
     return max(rooms, key=lambda room: room[0] / room[1])
 
 
-def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
+def check_workers_fit(client, per_task: int, what: str, hint: str = "", held: int = 0) -> None:
     """Raise :class:`IsoflowError` when tasks of ``per_task`` bytes, as many
-    at a time as a worker has threads, exceed the memory limit of every
-    worker of a ``dask.distributed`` cluster (:func:`worker_room`), saying
-    how many at a time would fit a worker where one does.
+    at a time as a worker has threads, beside ``held`` bytes, exceed the
+    memory limit of every worker of a ``dask.distributed`` cluster
+    (:func:`worker_room`), saying how many at a time would fit a worker
+    where one does.
 
     Parameters
     ----------
@@ -133,6 +134,9 @@ def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
         What runs, for the message.
     hint : str
         What to do instead, for the message.
+    held : int
+        The bytes a worker may hold beside its tasks at work (the results
+        that later tasks take), whatever its threads.
 
     Notes
     -----
@@ -157,10 +161,10 @@ def check_workers_fit(client, per_task: int, what: str, hint: str = "") -> None:
     if room is None:
         return
     limit, threads = room
-    need = per_task * threads
+    need = per_task * threads + held
     if need <= limit:
         return
-    fit = limit // max(per_task, 1)
+    fit = max(limit - held, 0) // max(per_task, 1)
     if fit >= 1:  # fewer threads per worker would do
         fits = ("one at a time fits it (workers of one thread each)" if fit == 1 else
                 f"{fit} at a time fit it (workers of {fit} threads each)")
