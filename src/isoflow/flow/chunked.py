@@ -196,9 +196,11 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
         budget: int | None = default_budget()
     else:  # a slab per thread of a worker, in the worker's memory
         room = worker_room(client)
-        budget, workers = (None if room is None else room[0] // room[1]), 1
-        # a worker also sums the blocks of the step's store for its record, a chunk of the slab's layers each
-        per_layer = max(per_layer, _record_layer_bytes(shape))
+        # a worker also sums the blocks of the step's store for its record, a chunk of the slab's layers
+        # each, beside a layer of those blocks' faces
+        record_layer, held = _record_bytes(shape)
+        budget, workers = (None if room is None else room[0] // room[1] - held), 1
+        per_layer = max(per_layer, record_layer)
     if slab is None:
         # thinner slabs where the budget is short: the flow is the same, in more tasks
         thick = SLAB_VOXELS // layer if budget is None else budget // max(workers * per_layer, 1) - 2
@@ -212,7 +214,8 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
     if client is not None:
         fit = -1 if budget is None else budget // per_layer - 2  # the thickest slab a worker's thread holds
         hint = f"slabs of {fit} layers fit (slab={fit})" if fit >= 1 else f"{across} on a worker: crop the volume across them"
-        check_workers_fit(client, (thick + 2) * per_layer, what, hint=f"{hint}, or give the workers more memory")
+        check_workers_fit(client, (thick + 2) * per_layer, what, hint=f"{hint}, or give the workers more memory",
+                          held=held)
         return thick
     fit = budget // (3 * per_layer)  # the workers whose slabs of one layer fit
     hint = ("give thinner slabs (slab=)" if thick > 1 else
@@ -222,13 +225,21 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
     return thick
 
 
-def _record_layer_bytes(shape: tuple[int, int, int]) -> int:
-    """The memory of a layer of a step store's chunk (``CHUNK_YZ`` across)
-    while the record's report sums it as a block of uint8
-    (:data:`isoflow.digital.outofcore.CHECK_BYTES` beside its two copies)."""
-    from ..digital.outofcore import CHECK_BYTES
+def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
+    """The memory a worker holds while the record's report sums the step's
+    store in blocks of its chunks (``CHUNK_YZ`` across), as
+    :func:`isoflow.digital.outofcore.analyze_chunked` counts it on a
+    cluster: per layer of a chunk, its voxels as uint8
+    (:data:`~isoflow.digital.outofcore.CHECK_BYTES` beside their two
+    copies) and the part of a layer of blocks' faces that grows with the
+    chunk's layers; and the rest of those faces, whatever the layers
+    (:data:`~isoflow.digital.outofcore.FACE_BYTES` a face voxel)."""
+    from ..digital.outofcore import CHECK_BYTES, FACE_BYTES
 
-    return min(CHUNK_YZ, shape[1]) * min(CHUNK_YZ, shape[2]) * (2 + CHECK_BYTES)
+    cy, cz = min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2])
+    blocks = -(-shape[1] // cy) * -(-shape[2] // cz)  # a layer of blocks: one chunk along x
+    per_layer = cy * cz * (2 + CHECK_BYTES) + FACE_BYTES * 2 * (cy + cz) * blocks
+    return per_layer, FACE_BYTES * 2 * cy * cz * blocks
 
 
 def _layer_bytes(layer: int) -> int:

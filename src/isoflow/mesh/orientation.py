@@ -42,7 +42,7 @@ from ..scale.graphs import components
 SMOOTH_SEAM = -0.5
 
 #: a sharp seam is followed where the seam edges between its two patches
-#: are at least this share of the rim of either patch
+#: are at least this share of the rim of the patch with less area
 WIDE_SEAM = 0.5
 
 
