@@ -76,11 +76,8 @@ def lost_axes_reasons(origin, spacing, shape: Sequence[int], merged: Sequence[bo
 
     Parameters
     ----------
-    origin, spacing : array_like
-        The world position of voxel 0's lowest corner and the voxel size,
-        per axis (or one number for every axis).
-    shape : sequence of int
-        Voxels per axis.
+    origin, spacing, shape
+        The grid, as :func:`merged_axes` takes it.
     merged : sequence of bool, optional
         :func:`merged_axes` of the grid, where the caller has it.
 
