@@ -1007,5 +1007,5 @@ def test_an_8_bit_grey_image_is_offered_a_threshold_first_and_labels_as_a_condit
     low, high = Image.open(tmp_path / "g.png").getextrema()
     assert len(Image.open(tmp_path / "g.png").getcolors()) == 256
     fails(capsys, "info", tmp_path / "g.png",
-          words=(f"threshold it first, e.g. volume > {(low + high) // 2}, or, if its values are labels, select one "
+          words=(f"threshold it first, e.g. image > {(low + high) // 2}, or, if its values are labels, select one "
                  "with --label N",))

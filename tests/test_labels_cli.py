@@ -1468,3 +1468,30 @@ def test_a_2d_label_image_s_refusals_count_pixels(tmp_path, capsys):
     fails(capsys, "info", tmp_path / "cells.zarr", "--label", 99, words=(f"no pixel has label 99 (values present: {present})",))
     np.save(tmp_path / "none.npy", np.zeros((0, 5), np.uint8))
     fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no pixels (shape 0x5)",))
+
+
+@pytest.mark.parametrize("suffix", [".png", ".tif"])
+def test_a_2d_label_image_refused_without_label_is_called_an_image(tmp_path, capsys, suffix):
+    """A cell segmentation saved as a PNG or TIFF, given to info without
+    --label N or --labels, is refused in a 2D image's words (a binary
+    image of pixels, thresholded as ``image > ...``), as the other 2D
+    refusals are, and still names both ways to its labels; a 2D store
+    read block by block says the same, and a 3D one still says volume."""
+    from PIL import Image
+
+    cells = np.zeros((8, 12), np.uint8)
+    cells[1:4, 1:5], cells[5:8, 6:11] = 2, 3
+    path = tmp_path / f"cells{suffix}"
+    Image.fromarray(cells).save(path)
+    with Image.open(path) as image:  # the pixels as Pillow reads them, not as isoflow does
+        held = np.asarray(image)
+    many = int(np.count_nonzero((held != 0) & (held != 1)))
+    line = fails(capsys, "info", path, words=(f"cells{suffix}: not a binary image ({many} pixels hold values other than 0 and 1",
+                                              "threshold it first, e.g. image > ", "--label N", "--labels"))
+    assert "volume" not in line and "voxel" not in line, line
+    zarr = pytest.importorskip("zarr")
+    zarr.create_array(str(tmp_path / "cells.zarr"), data=cells.T, chunks=(5, 5), zarr_format=2)
+    line = fails(capsys, "info", tmp_path / "cells.zarr", words=("cells.zarr: not a binary image (", "e.g. image > "))
+    assert "volume" not in line and "voxel" not in line, line
+    np.save(tmp_path / "stack.npy", np.stack([cells.T] * 3, axis=2))
+    fails(capsys, "info", tmp_path / "stack.npy", words=("stack.npy: not a binary volume (", "voxels hold", "e.g. volume > "))

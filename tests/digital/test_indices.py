@@ -176,7 +176,7 @@ def test_planar_index_refuses_what_is_no_2d_set_of_points():
     with pytest.raises(IsoflowError, match="points: planar_index takes a 2D array, got a 1D array"):
         I.planar_index(np.ones(3, bool))
     for value in (0.5, np.nan):
-        with pytest.raises(IsoflowError, match=f"points: not a binary volume .* e.g. {value}"):
+        with pytest.raises(IsoflowError, match=f"points: not a binary image .* e.g. {value}"):
             I.planar_index(np.full((3, 3), value))
     square = I.planar_index(np.ones((3, 3), np.float32))  # 0/1 of any type is a set of points
     assert square.shape == (3, 3) and int(square.sum()) == 4

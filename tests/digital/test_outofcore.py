@@ -764,6 +764,38 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
     assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
 
 
+def test_blocks_smaller_than_the_chunks_are_not_told_to_shrink(tmp_path, monkeypatch):
+    """Each block holds the chunk it reads decoded whole: below a budget
+    smaller than one chunk's stored bytes (as NumPy counts them) no block
+    shape fits, so a refusal of blocks already smaller than the chunks
+    offers smaller chunks and more memory, not smaller blocks; blocks as
+    large as the chunks are still offered smaller ones."""
+    from isoflow.scale import memory
+
+    v = np.random.default_rng(3).random((40, 40, 40)) < 0.3
+    path = str(tmp_path / "one.zarr")
+    zarr.create_array(store=path, shape=v.shape, chunks=v.shape, dtype=np.uint8)[...] = v
+    monkeypatch.setattr(memory, "default_budget", lambda: v.astype(np.uint8).nbytes // 2)
+    for block_shape in ((10, 40, 40), (1, 40, 40)):
+        with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks ") as exc:
+            analyze_zarr(path, 6, threads=1, block_shape=block_shape)
+        said = str(exc.value)
+        assert "; write the store with smaller chunks" in said and "more memory" in said, said
+        assert "smaller blocks" not in said and "block_shape" not in said, said
+    with pytest.raises(IsoflowError, match="write the store with smaller chunks, or pass smaller blocks"):
+        analyze_zarr(path, 6, threads=1)
+
+    class Cluster:  # what a client's scheduler_info() says of a worker of one thread, as small as the budget
+        def scheduler_info(self, n_workers=-1):
+            return {"workers": {"tcp://w1": {"memory_limit": v.nbytes // 2, "nthreads": 1}}}
+
+    monkeypatch.setattr(outofcore, "distributed_client", lambda scheduler: Cluster())
+    with pytest.raises(IsoflowError, match="on a dask.distributed worker") as exc:
+        analyze_zarr(path, 6, block_shape=(10, 40, 40))
+    said = str(exc.value)
+    assert "smaller chunks" in said and "give the workers more memory" in said and "smaller blocks" not in said, said
+
+
 MEASURED_PEAK = """
 import ctypes, json, re, sys, tempfile
 import numpy as np, zarr

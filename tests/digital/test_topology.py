@@ -114,7 +114,7 @@ def test_api_refuses_what_is_not_a_binary_volume():
         analyze("volume.npy")
     with pytest.raises(IsoflowError, match="connectivity 0 is not valid"):
         euler_characteristic(np.ones((2, 2, 2), bool), 0)
-    with pytest.raises(IsoflowError, match="not a binary volume"):
+    with pytest.raises(IsoflowError, match="not a binary image"):  # (2D: an image of pixels)
         DigitalObject(np.array([[0.5, 1.0]]))
     # 0/1 in any numeric type is fine, and equals the bool result
     v = random_volume(np.random.default_rng(5), 7)

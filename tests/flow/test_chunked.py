@@ -135,7 +135,7 @@ def test_a_default_client_runs_the_slabs_and_the_records_alike(tmp_path):
 
 
 def test_slabs_that_do_not_fit_are_refused_up_front():
-    with pytest.raises(IsoflowError, match="slabs of 1 layers of 1000001 x 1000001 vertices .* crop the volume"):
+    with pytest.raises(IsoflowError, match="slabs of 1 layer of 1000001 x 1000001 vertices .* crop the volume"):
         slab_thickness((10, 10**6, 10**6), None, 2)
     with pytest.raises(IsoflowError, match="slabs of 7 layers of 11 x 11 vertices .* give thinner slabs"):
         slab_thickness((10, 10, 10), 7, 10**17)
@@ -155,8 +155,58 @@ def test_slabs_are_thinned_to_fit_the_memory_budget(monkeypatch):
     thick = slab_thickness((100, 1023, 1023), None, 2)
     assert thick == 4 and 2 * (thick + 2) * per_layer <= memory.default_budget()  # two workers' slabs with a seam each
     monkeypatch.setattr(memory, "default_budget", lambda: 5 * per_layer)
-    with pytest.raises(IsoflowError, match="slabs of 1 layers .*; slabs of one layer fit 1 at a time"):
+    with pytest.raises(IsoflowError, match="slabs of 1 layer .*; slabs of one layer fit 1 at a time"):
         slab_thickness((100, 1023, 1023), None, 2)
+
+
+def test_command_counts_a_slab_of_one_layer_in_the_singular(tmp_path, capsys, monkeypatch):
+    """The refusal of slabs that do not fit, as `isoflow flow STORE --volumes
+    .zarr` prints it, says "1 layer", and several layers in the plural: a
+    budget that holds no slab of one layer refuses the flow at once (no
+    step written), and a slab thickness asked of Python beyond one that a
+    worker holds is refused in the plural."""
+    from isoflow.scale import memory
+
+    plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
+    monkeypatch.setattr(memory, "default_budget", lambda: 1)
+    assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    line = capsys.readouterr().err.strip()
+    assert "\n" not in line and "slabs of 1 layer of " in line and "1 layers" not in line, line
+    assert not list((tmp_path / "run").glob("step_*"))
+    with pytest.raises(IsoflowError, match="slabs of 3 layers of 11 x 11 vertices"):
+        slab_thickness((10, 10, 10), 3, 10**17)
+
+
+def test_a_workers_slab_thickness_is_counted_in_the_singular_and_plural(monkeypatch):
+    """On a cluster the refusal of slabs too thick for a worker says the
+    thickest that fits: "1 layer" for one, "N layers" for more, and the
+    slab it names does fit the worker, one layer more does not."""
+    import re
+
+    from isoflow.scale import chunks
+
+    limit = [0]
+
+    class Cluster:  # what a client's scheduler_info() says of a worker of one thread
+        def scheduler_info(self, n_workers=-1):
+            return {"workers": {"tcp://w1": {"memory_limit": limit[0], "nthreads": 1}}}
+
+    monkeypatch.setattr(chunks, "distributed_client", lambda scheduler: Cluster())
+    shape, told = (40, 100, 100), {}
+    for limit[0] in np.geomspace(1e4, 1e8, 80).astype(int):
+        try:
+            slab_thickness(shape, 40, 1, scheduler=None)
+            continue  # a worker this large holds the slab asked for
+        except IsoflowError as err:
+            named = re.search(r"slabs of (\d+) (layers?) fit \(slab=\1\)", str(err))
+        if named:
+            told.setdefault(int(named[1]) == 1, (int(limit[0]), int(named[1]), named[2]))
+    assert set(told) == {True, False}, told
+    for limit[0], fit, word in told.values():
+        assert word == ("layer" if fit == 1 else "layers")
+        assert slab_thickness(shape, fit, 1, scheduler=None) == fit
+        with pytest.raises(IsoflowError, match="on a dask.distributed worker"):
+            slab_thickness(shape, fit + 1, 1, scheduler=None)
 
 
 def test_command_writes_the_states_as_stores(tmp_path, capsys):

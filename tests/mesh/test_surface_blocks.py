@@ -273,6 +273,39 @@ def test_work_that_does_not_fit_is_refused_up_front(tmp_path, rng, monkeypatch):
     assert not list(tmp_path.iterdir())
 
 
+def test_blocks_smaller_than_the_chunks_are_not_told_to_shrink(tmp_path, rng, monkeypatch):
+    """A task holds the chunk its block reads decoded whole: below a budget
+    smaller than one chunk's stored bytes (as NumPy counts them) no block
+    shape fits, so the refusal of blocks already smaller than the chunks
+    offers smaller chunks and more memory, not smaller blocks; blocks as
+    large as the chunks are still offered smaller ones."""
+    from isoflow.scale import chunks, memory
+
+    v = seam_volume(rng).astype(np.uint8)
+    store = zarr.create_array(str(tmp_path / "one.zarr"), shape=v.shape, chunks=v.shape, dtype=np.uint8)
+    store[...] = v
+    monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
+    for block_shape in (CHUNKS, (1, 1, 1)):
+        with pytest.raises(IsoflowError, match="surface's blocks") as exc:
+            write_surface_blocks(store, tmp_path / "s.ply", 6, block_shape=block_shape, threads=1)
+        said = str(exc.value)
+        assert "; write the store with smaller chunks" in said and "more memory" in said, said
+        assert "smaller blocks" not in said, said
+    with pytest.raises(IsoflowError, match=r"write the store with smaller chunks \(or pass smaller blocks\)"):
+        write_surface_blocks(store, tmp_path / "s.ply", 6, threads=1)
+
+    class Cluster:  # what a client's scheduler_info() says of a worker of one thread, as small as the budget
+        def scheduler_info(self, n_workers=-1):
+            return {"workers": {"tcp://w1": {"memory_limit": v.nbytes // 2, "nthreads": 1}}}
+
+    monkeypatch.setattr(chunks, "distributed_client", lambda scheduler: Cluster())
+    with pytest.raises(IsoflowError, match="on a dask.distributed worker") as exc:
+        write_surface_blocks(store, tmp_path / "s.ply", 6, block_shape=CHUNKS)
+    said = str(exc.value)
+    assert "smaller chunks" in said and "give the workers more memory" in said and "smaller blocks" not in said, said
+    assert not (tmp_path / "s.ply").exists()
+
+
 def test_ome_zarr_in_zyx_order_with_its_placement(tmp_path, rng, capsys):
     # isoflow's OME-Zarr stores (z, y, x) with a scale and a translation:
     # the streamed file's records (world positions) equal those of the

@@ -75,6 +75,7 @@ from ..scale.chunks import (
     is_zarr_array,
     layer_axes,
     never_written,
+    smaller_blocks_help,
     unwritten_fill,
     zarr_blocks,
     zarr_volume,
@@ -454,7 +455,8 @@ def _faces_bytes(grid: _Grid) -> int:
     return FACE_BYTES * per_block * blocks
 
 
-def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where: str, scheduler, is_zarr: bool) -> int:
+def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where: str, scheduler, is_zarr: bool,
+                    blocks_help: bool) -> int:
     """The blocks summed at a time on this machine: ``workers``, or as many
     as the memory budget holds beside the ``held`` bytes of the layers'
     faces where that is fewer but at least ``threads`` (a zarr store's
@@ -465,19 +467,23 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     ``dask.distributed`` cluster (its client, its ``get``, or the default
     client) the workers hold their own memory: a block times a worker's
     threads, beside a layer's faces, is held to the workers' memory limit
-    instead."""
+    instead. ``blocks_help``: whether smaller blocks would take less
+    memory (:func:`~isoflow.scale.chunks.smaller_blocks_help`), else the
+    refusal offers smaller chunks and more memory alone."""
     from dask.base import named_schedulers
 
     from ..scale.memory import check_fits, check_workers_fit, default_budget
 
+    smaller = "write the store with smaller chunks" if is_zarr else "rechunk it"
+    if not blocks_help:  # the chunk each block decodes is held whole, however small the block
+        smaller += " (a chunk is decoded whole, however small the blocks)"
     client = distributed_client(scheduler)
     if client is not None:
-        smaller = "write the store with smaller chunks" if is_zarr else "rechunk it"
         # the client holds the layers' summaries between layers (compute gathers them); a worker holds
         # those its merges take and give while they run, about one layer's faces where it is the only one
+        blocks = ", pass smaller blocks (block_shape)," if blocks_help else ","
         check_workers_fit(client, per_block, f"{where}: summing its blocks",
-                          hint=f"{smaller}, pass smaller blocks (block_shape), or give the workers more memory",
-                          held=held // 2)
+                          hint=f"{smaller}{blocks} or give the workers more memory", held=held // 2)
         return workers
     if isinstance(scheduler, str):  # a name, as _scheduler leaves it once dask.distributed is imported
         scheduler = named_schedulers.get(scheduler.lower(), scheduler)
@@ -489,8 +495,8 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     fit = max(budget - held, 0) // max(per_block, 1)
     if fit >= workers:
         return workers
-    hint = (f"sum {fit} at a time (threads={fit}, isoflow info --threads {fit})" if fit >= 1 else
-            f"{'write the store with smaller chunks' if is_zarr else 'rechunk it'}, or pass smaller blocks (block_shape)")
+    room = ", or pass smaller blocks (block_shape)" if blocks_help else ", or make more memory available"
+    hint = f"sum {fit} at a time (threads={fit}, isoflow info --threads {fit})" if fit >= 1 else smaller + room
     check_fits(threads * per_block + held, f"{where}: summing its blocks ({threads} at a time)", hint=hint,
                budget=budget)
     return int(fit)
@@ -622,7 +628,7 @@ def analyze_chunked(
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
         workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), _faces_bytes(grid), where,
-                                  scheduler, grid.is_zarr)
+                                  scheduler, grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)

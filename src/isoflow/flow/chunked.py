@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, counted
 from ..scale.chunks import compute, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
@@ -209,11 +209,12 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
         thick = int(slab)
     if thick < 1:
         raise IsoflowError(f"slab must be a positive number of layers, got {slab}")
-    what = f"the flow's slabs of {thick} layers of {ny + 1} x {nz + 1} vertices"
+    what = f"the flow's slabs of {counted(thick, 'layer')} of {ny + 1} x {nz + 1} vertices"
     across = "its layers across x do not fit one at a time"
     if client is not None:
         fit = -1 if budget is None else budget // per_layer - 2  # the thickest slab a worker's thread holds
-        hint = f"slabs of {fit} layers fit (slab={fit})" if fit >= 1 else f"{across} on a worker: crop the volume across them"
+        hint = (f"slabs of {counted(fit, 'layer')} fit (slab={fit})" if fit >= 1 else
+                f"{across} on a worker: crop the volume across them")
         check_workers_fit(client, (thick + 2) * per_layer, what, hint=f"{hint}, or give the workers more memory",
                           held=held)
         return thick

@@ -49,7 +49,7 @@ from ..digital.surface import QuadMesh, row_tables, triangle_rows
 from ..errors import IsoflowError
 from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
-from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array
+from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
 from .export import float32_holds, mesh_vertex_table, ply_header, shared_positions
 
@@ -617,7 +617,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     with using(threads):
         workers = thread_count()
     read = _read_bytes(array, grid)
-    _check_memory(where, workers, read, "counting", cache, scheduler)
+    blocks_help = smaller_blocks_help(grid.bounds, array)
+    _check_memory(where, workers, read, "counting", cache, scheduler, blocks_help)
     source = _Source(array)
     ticks = BlockTicks(progress, 2 * len(grid.indices()), ("count_block", "write_block"))
     counts = _by_layers(grid, lambda i: _delayed(count_block)(source, grid, i, conn, where), scheduler, workers,
@@ -628,7 +629,7 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     if layout.voxels == 0:
         raise EmptySurface(f"{where}: the object is empty, there is no surface to write")
     per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
-    _check_memory(where, workers, per_task, "writing", cache, scheduler)
+    _check_memory(where, workers, per_task, "writing", cache, scheduler, blocks_help)
     target, size = _prepared(out, layout, frame, comments, conn, where)
     with _filling(out, target, size) as target:
         written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
@@ -717,26 +718,33 @@ def _read_bytes(array, grid: BlockGrid) -> int:
     return voxels * (itemsize + 2) + max(voxels, decoded_chunk_voxels(array)) * itemsize
 
 
-def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None) -> None:
+def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None,
+                  blocks_help: bool = True) -> None:
     """Refuse, before the pass, blocks that would not fit ``workers`` at a
     time (beside the chunk cache), saying how many would; on a
     ``dask.distributed`` cluster, blocks that would not fit a worker's
-    memory limit as many at a time as it has threads."""
+    memory limit as many at a time as it has threads. ``blocks_help``:
+    whether smaller blocks would take less memory
+    (:func:`~isoflow.scale.chunks.smaller_blocks_help`), else the refusal
+    offers smaller chunks and more memory alone."""
     from ..scale.chunks import distributed_client
     from ..scale.memory import check_fits, check_workers_fit, default_budget
 
+    # a task holds the chunk its block decodes whole, however small the block:
+    # smaller blocks are offered only where they are not smaller than the chunks
+    smaller = ("write the store with smaller chunks (or pass smaller blocks)" if blocks_help else
+               "write the store with smaller chunks (a chunk is decoded whole, however small the blocks)")
     client = distributed_client(scheduler)
     if client is not None:
         # a task's copy of the chunk reader keeps no chunk past its read:
         # per_task counts the chunk it decodes, whole where it is larger
         # than the block
         check_workers_fit(client, per_task, f"{where}: {what} the surface's blocks",
-                          hint="write the store with smaller chunks (or pass smaller blocks), "
-                               "or give the workers more memory")
+                          hint=f"{smaller}, or give the workers more memory")
         return
     fit = (default_budget() - cache) // max(per_task, 1)
     hint = (f"run {fit} at a time (--threads {fit})" if fit >= 1 else
-            "write the store with smaller chunks (or pass smaller blocks)")
+            smaller if blocks_help else f"{smaller}, or make more memory available")
     check_fits(workers * per_task + cache, f"{where}: {what} the surface's blocks ({workers} at a time)", hint=hint)
 
 

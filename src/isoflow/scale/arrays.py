@@ -178,14 +178,16 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         if arr.size and arr.view(np.uint8).max() > 1:
             arr = arr.view(np.uint8) != 0
         return arr
+    # a 2D image (a PNG or TIFF segmentation) is an image of pixels, as info
+    # calls it, in the refusal and in its threshold example alike
+    thing = "image" if arr.ndim == 2 else "volume"
     if arr.dtype.kind not in "iuf":
-        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary volume")
+        raise IsoflowError(f"{where}: array of type {arr.dtype} is not a binary {thing}")
     bad = (arr != 0) & (arr != 1)  # NaN is caught too: NaN != 0 and NaN != 1
     if bad.any():
         value, nbad = arr[bad].flat[0], int(bad.sum())
         # the count is of voxels (not of distinct values), and of this block
-        # only where the volume is checked block by block; a 2D image's cells
-        # are pixels, as info calls them
+        # only where the volume is checked block by block
         cell = "pixel" if arr.ndim == 2 else "voxel"
         place = f" in the block at {cell} {tuple(int(o) for o in near)}" if near is not None else ""
         # a value that is no label (NaN, infinite, not whole) anywhere in
@@ -193,9 +195,9 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         values = arr[bad]
         labels = arr.dtype.kind in "iu" or bool(np.all(np.isfinite(values) & (values == np.round(values))))
         kind = value_kind(values, labels)
-        bare = (f"{where}: not a binary volume ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
+        bare = (f"{where}: not a binary {thing} ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
                 "values other than 0 and 1, "
-                f"e.g. {value}); threshold it first, e.g. volume > {threshold_example(arr, kind)}")
+                f"e.g. {value}); threshold it first, e.g. {thing} > {threshold_example(arr, kind)}")
         # integers in memory are most often a label image, which has a table
         # (a command adds its own options to ``bare`` instead)
         table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3) and kind == "labels"

@@ -264,6 +264,37 @@ def decoded_chunk_voxels(array: Any) -> int:
     return int(np.prod([max(c) if isinstance(c, tuple) else int(c) for c in chunks], dtype=np.int64))
 
 
+def smaller_blocks_help(bounds: Any, array: Any) -> bool:
+    """Whether blocks smaller than those of ``bounds`` would take less
+    memory: not where the largest block is already smaller than the chunk
+    a read of it decodes whole (:func:`decoded_chunk_voxels`), which a
+    task holds whatever part of it the block takes; a refusal offers
+    smaller blocks only where this is true.
+
+    Parameters
+    ----------
+    bounds : sequence of sequences of (int, int)
+        Per axis, each block's [start, stop).
+    array : zarr.Array, dask.array.Array, a chunk reader or numpy.ndarray
+        What the blocks are read from.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> a = da.zeros((10, 10), chunks=(4, 5))  # chunks of 20 elements
+    >>> smaller_blocks_help([[(0, 4), (4, 8)], [(0, 5), (5, 10)]], a)  # blocks of 20
+    True
+    >>> smaller_blocks_help([[(0, 2), (2, 4)], [(0, 5), (5, 10)]], a)  # blocks of 10
+    False
+    """
+    voxels = int(np.prod([max(b - a for a, b in axis) for axis in bounds], dtype=np.int64))
+    return voxels >= decoded_chunk_voxels(array)
+
+
 #: the layers along another axis than the first, as a multiple of those
 #: along the first, from which the blocks go in layers along that axis
 LAYERS_APART = 8
