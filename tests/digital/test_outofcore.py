@@ -920,3 +920,13 @@ def test_a_scheduler_named_is_held_to_the_memory_budget_with_distributed_importe
     for name in ("sync", "threads", "THREADS"):
         with pytest.raises(IsoflowError, match="summing its blocks"):  # refused before any block is read
             analyze_chunked(z, 6, scheduler=name)
+
+
+def test_a_2d_array_of_another_type_is_called_an_image(tmp_path):
+    """A 2D store or dask array of strings is refused as an image, as a 2D
+    array in memory is (3D: a volume)."""
+    import dask.array as da
+
+    for shape, word in (((4, 5), "image"), ((4, 5, 2), "volume")):
+        with pytest.raises(IsoflowError, match=f"array of type <U1 is not a binary {word}$"):
+            analyze_chunked(da.from_array(np.full(shape, "a")), 6 if len(shape) == 3 else 4)

@@ -295,7 +295,7 @@ def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
         raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {len(shape)}D with shape {shape}")
     dtype = np.dtype(array.dtype)
     if dtype.kind not in "biuf":
-        raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
+        raise IsoflowError(f"{where}: array of type {dtype} is not a binary {'image' if len(shape) == 2 else 'volume'}")
     return shape, where
 
 
@@ -745,7 +745,7 @@ def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None
         raise IsoflowError(f"{where}: a volume must be 2D or 3D, this array is {z.ndim}D with shape {tuple(z.shape)}")
     dtype = np.dtype(z.dtype)
     if dtype.kind not in "biuf":
-        raise IsoflowError(f"{where}: array of type {dtype} is not a binary volume")
+        raise IsoflowError(f"{where}: array of type {dtype} is not a binary {'image' if z.ndim == 2 else 'volume'}")
     if dtype.kind != "b" and 0 not in z.shape:
         try:
             first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])

@@ -42,6 +42,7 @@ from functools import cache
 
 import numpy as np
 
+from ..errors import counted
 from .bitrows import trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
@@ -437,7 +438,7 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
         if x == x_hi:
             return starts[:used], parent[:used]
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
-        check_layers(RUN_BYTES * size, f"the runs of {x_hi - x_lo} layers of a label image", x_hi - x_lo, axis=axis)
+        check_layers(RUN_BYTES * size, f"the runs of {counted(x_hi - x_lo, 'layer')} of a label image", x_hi - x_lo, axis=axis)
         starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
 
 
