@@ -104,6 +104,8 @@ def test_device_volumes_follow_the_host_rule_for_values(rng):
     assert euler_characteristic(on_device(v.astype(np.uint8))) == euler_number(v, connectivity=1)
     with pytest.raises(IsoflowError, match="not a binary volume"):
         euler_characteristic(on_device(v.astype(np.uint8) * 3))
+    with pytest.raises(IsoflowError, match="not a binary image"):  # 2D: an image, as on the host
+        euler_characteristic(on_device(v[:, :, 0].astype(np.uint8) * 3))
 
 
 def test_4d_histogram_on_the_device_equals_host(rng):

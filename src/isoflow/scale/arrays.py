@@ -381,7 +381,8 @@ def as_volume(volume, where: str = "volume", canonical: bool = True, dims: tuple
         v = volume
         if v.dtype != xp.bool:
             if bool(xp.any((v != 0) & (v != 1))):
-                raise IsoflowError(f"{where}: not a binary volume (values other than 0 and 1)")
+                raise IsoflowError(f"{where}: not a binary {'image' if v.ndim == 2 else 'volume'} (values other than 0 "
+                                   "and 1)")
             v = xp.astype(v, xp.bool)
     if v.ndim not in dims:
         allowed = ", ".join(f"{d}D" for d in dims[:-1]) + f" or {dims[-1]}D"
