@@ -63,10 +63,29 @@ PARTS = np.array([px + 3 * py + 9 * pz for pz in (0, 1) for py in (0, 1) for px 
 #: bytes of an STL triangle record and of its header
 STL_RECORD, STL_HEADER = 50, 84
 
-#: peak bytes per item (mesh vertex) and per face of a block's write task:
-#: the vertex arrays and PLY columns, the faces, midpoints, triangles and
-#: their records
-BYTES_PER_ITEM, BYTES_PER_FACE = 160, 200
+#: peak bytes of a block's write task per item (mesh vertex): its float64
+#: position, configuration and sheet (26), and a PLY's vertex table made
+#: from them (world positions, columns, records: 67 at its peak), measured
+#: with tracemalloc on the largest 128^3 block of a 256^3 porous field
+#: (``benchmarks/bench_worker_memory.py``'s); the rest is the allocator's
+#: slack that the kernel's peak of a dask.distributed worker shows
+BYTES_PER_ITEM = 112
+#: ... per face (quad): its corners and midpoints (int32) and its normal
+#: (35), and its PLY quad record (17), on the same block
+BYTES_PER_FACE = 64
+#: ... per triangle of a PLY of triangles: the int64 rows that
+#: ``triangle_rows`` cuts and their records (48.5 on the same block)
+BYTES_PER_TRIANGLE = 56
+#: ... per triangle of an STL: the float64 corners, midpoints and world
+#: positions of each face and the records (481 on the same block; about
+#: 625 as the kernel measures the task beside the chunk cache, written
+#: from a 384^3 porous store in 128^3 chunks)
+BYTES_PER_STL_TRIANGLE = 640
+#: copies of a decoded chunk at the peak of a read through zarr: the
+#: compressed and decoded buffers and the array zarr gives (the kernel's
+#: peak of the counting pass on a worker: 6.5 MiB for a block of 64^3 in
+#: chunks of 128^3, 2 MiB each, and 8.2 MiB for a block of 128^3)
+DECODED_COPIES = 3
 
 
 class EmptySurface(IsoflowError):
@@ -630,6 +649,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
         raise EmptySurface(f"{where}: the object is empty, there is no surface to write")
     per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
     _check_memory(where, workers, per_task, "writing", cache, scheduler, blocks_help)
+
+    per_task = max(_write_bytes(read, layout, counts[i]["triangles"], i, out.suffix.lower()) for i in grid.indices())
+    _check_memory(where, workers, per_task, "writing", cache, scheduler)
     target, size = _prepared(out, layout, frame, comments, conn, where)
     with _filling(out, target, size) as target:
         written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
@@ -709,13 +731,22 @@ def _largest_read(grid: BlockGrid) -> int:
 def _read_bytes(array, grid: BlockGrid) -> int:
     """Peak bytes of one task's read of the largest block with its halo:
     the voxels read, their bool copy and the decoded chunk they are copied
-    from, counted whole where it is larger than what the block reads (zarr
-    decodes a whole chunk to give any part of it, as dask computes a whole
-    chunk of its array, and the task holds it before the shared chunk
-    cache can drop it)."""
+    from (:data:`DECODED_COPIES` times), counted whole where it is larger
+    than what the block reads (zarr decodes a whole chunk to give any part
+    of it, as dask computes a whole chunk of its array, and the task holds
+    it before the shared chunk cache can drop it)."""
     voxels = _largest_read(grid)
     itemsize = np.dtype(array.dtype).itemsize
-    return voxels * (itemsize + 2) + max(voxels, decoded_chunk_voxels(array)) * itemsize
+    return voxels * (itemsize + 2) + max(voxels, DECODED_COPIES * decoded_chunk_voxels(array)) * itemsize
+
+
+def _write_bytes(read: int, layout: Layout, triangles: int, index, suffix: str) -> int:
+    """Peak bytes of block ``index``'s write task: its read, its mesh and
+    its records (``triangles``: the block's, written where the layout
+    writes triangles; an STL's cost the most)."""
+    per_triangle = BYTES_PER_STL_TRIANGLE if suffix == ".stl" else BYTES_PER_TRIANGLE
+    records = triangles * per_triangle if layout.kind == "triangles" else 0
+    return read + layout.items[index] * BYTES_PER_ITEM + layout.quads[index] * BYTES_PER_FACE + records
 
 
 def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None,
