@@ -647,11 +647,8 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
     layout = plan(grid, counts, triangles)
     if layout.voxels == 0:
         raise EmptySurface(f"{where}: the object is empty, there is no surface to write")
-    per_task = max(read + layout.items[i] * BYTES_PER_ITEM + layout.quads[i] * BYTES_PER_FACE for i in grid.indices())
-    _check_memory(where, workers, per_task, "writing", cache, scheduler, blocks_help)
-
     per_task = max(_write_bytes(read, layout, counts[i]["triangles"], i, out.suffix.lower()) for i in grid.indices())
-    _check_memory(where, workers, per_task, "writing", cache, scheduler)
+    _check_memory(where, workers, per_task, "writing", cache, scheduler, blocks_help)
     target, size = _prepared(out, layout, frame, comments, conn, where)
     with _filling(out, target, size) as target:
         written = _by_layers(grid, lambda i: _delayed(write_block)(source, grid, block_plan(layout, i), target, conn,
