@@ -481,7 +481,7 @@ def test_bad_arrays_raise_isoflow_error(rng):
     assert analyze_chunked(da.zeros((0, 4, 5), chunks=2, dtype=bool)) == analyze(np.zeros((0, 4, 5), bool))
     with pytest.raises(IsoflowError, match="dask or zarr array"):
         analyze_chunked(np.zeros((4, 4, 4), bool))
-    with pytest.raises(IsoflowError, match="not a binary volume"):
+    with pytest.raises(IsoflowError, match="not a binary image"):
         analyze_chunked(da.from_array(np.array([["a", "b"], ["c", "d"]]), chunks=1))
 
 
