@@ -139,3 +139,47 @@ def test_every_sample_mesh_whose_ply_is_written_gets_its_stl(tmp_path, scale, of
             if suffix == ".stl" and status[".ply"] == 0:
                 assert rc == 0, (path.name, err)
     assert written[".stl"] == written[".ply"] == 15
+
+
+@pytest.mark.parametrize("batch", [3, 8192])
+def test_stl_in_batches_is_trimeshs_file(tmp_path, monkeypatch, batch):
+    """The STL writer makes its records a batch of triangles at a time:
+    the bytes of trimesh's exporter of the whole mesh, a degenerate
+    triangle's zero normal included, at 6 and 26."""
+    from isoflow.mesh import export
+
+    monkeypatch.setattr(export, "STL_BATCH_TRIANGLES", batch)
+    rng = np.random.default_rng(5)
+    v = rng.random((9, 8, 7)) < 0.4
+    obj = DigitalObject(v, pitch=(0.5, 0.25, 0.75), origin=(10.0, 0.5, -1.0))
+    for conn in (6, 26):
+        mesh = boundary_mesh(v, conn)
+        xyz, tris = obj.world(mesh.vertices), mesh.triangles()
+        tris = np.concatenate([tris[:5], [[0, 0, 1]], tris[5:]])
+        export.write_stl(tmp_path / f"{conn}.stl", xyz, tris, force=True)
+        want = trimesh.exchange.stl.export_stl(trimesh.Trimesh(xyz, tris, process=False))
+        assert (tmp_path / f"{conn}.stl").read_bytes() == want
+
+
+def test_stl_writer_holds_a_batch_of_records(tmp_path):
+    """trimesh's exporter made the float64 corners, normals and records of
+    every triangle at once (294 bytes per triangle by tracemalloc, which
+    numpy reports its buffers to); the writer holds a batch of them."""
+    import tracemalloc
+
+    from scipy.ndimage import gaussian_filter
+
+    from isoflow.mesh.export import write_stl
+
+    field = gaussian_filter(np.random.default_rng(0).standard_normal((32, 32, 32)), 2) > 0
+    v = np.repeat(np.repeat(np.repeat(field, 4, 0), 4, 1), 4, 2)
+    mesh = boundary_mesh(v, 6)
+    xyz, tris = DigitalObject(v).world(mesh.vertices), mesh.triangles()
+    tracemalloc.start()
+    try:
+        held = tracemalloc.get_traced_memory()[0]
+        write_stl(tmp_path / "p.stl", xyz, tris)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(tris) > 100_000 and (peak - held) / len(tris) < 294 / 4

@@ -4,6 +4,7 @@ faces, up to order, on odd chunkings with objects, tunnels, cavities, edge
 and vertex contacts across block faces, edges and corners, at 6 and 26;
 the files read back by trimesh and pymeshlab as the in-memory files do."""
 
+import os
 import sys
 from pathlib import Path
 
@@ -14,7 +15,7 @@ from conftest import ball, torus
 
 from isoflow import DigitalObject, boundary_mesh
 from isoflow.cli import main
-from isoflow.digital.surface import QuadMesh
+from isoflow.digital.surface import QuadMesh, triangle_rows
 from isoflow.errors import IsoflowError
 from isoflow.mesh import export, surface_blocks
 from isoflow.mesh.streamed_readback import check_streamed, read_ply_header
@@ -434,3 +435,93 @@ def test_a_chunk_larger_than_the_blocks_is_counted_whole(tmp_path, monkeypatch):
     # blocks that hold their chunks: nothing decoded beyond what the blocks read
     assert refusal((4, 8, 8), (4, 8, 8)) == refusal((4, 4, 4), (4, 8, 8))
     assert not (tmp_path / "s.ply").exists()
+
+
+def _whole_block_stl(fd, mesh, first, frame, offset):
+    """The STL records of a block made all at once (the writer before its
+    batches): the bytes the batched writer must give back."""
+    corner_offsets = np.zeros((3, 4, 3))
+    for a in range(3):
+        j, k = (a + 1) % 3, (a + 2) % 3
+        for t, (dj, dk) in enumerate(((1, 1), (0, 1), (0, 0), (1, 0))):
+            corner_offsets[a, t, j], corner_offsets[a, t, k] = 1 - dj, 1 - dk
+    faces, normals = mesh.faces, mesh.face_normals
+    plus = normals.sum(axis=1) > 0
+    low = mesh.vertices[np.where(plus, faces[:, 0], faces[:, 3]) - first]
+    axis = np.abs(normals).argmax(axis=1)
+    order = np.where(plus[:, None], np.arange(4), np.arange(3, -1, -1))
+    corners = low[:, None, :] + corner_offsets[axis[:, None], order]
+    mids = (corners + np.roll(corners, -1, axis=1)) / 2
+    n = len(faces)
+    codes = np.arange(4 * n).reshape(n, 4)
+    tris, face = triangle_rows(codes, np.where(mesh.edge_midpoint >= 0, 4 * n + codes, -1))
+    xyz = frame.world(np.concatenate([corners.reshape(-1, 3), mids.reshape(-1, 3)]))
+    rec = np.zeros(len(tris), surface_blocks.STL_DTYPE)
+    rec["normal"] = normals[face]
+    rec["v"] = xyz[tris]
+    assert os.pwrite(fd, rec.tobytes(), offset) == rec.nbytes
+
+
+@pytest.mark.parametrize("conn", [6, 26])
+@pytest.mark.parametrize("chunks", [CHUNKS, (17, 3, 19), (4, 20, 5)])
+def test_an_stl_written_in_batches_of_faces_is_the_whole_blocks_file(tmp_path, rng, monkeypatch, conn, chunks):
+    """A block's STL records are made a batch of faces at a time, byte for
+    byte those made of the whole block at once, on random voxels with
+    edge and vertex contacts across odd chunkings, in batches of a few
+    faces and of the default size; trimesh reads every triangle, and they
+    enclose the volume of the voxels (their signed volume)."""
+    v = seam_volume(rng)
+    frame = DigitalObject(np.zeros((1, 1, 1), bool), pitch=(0.5, 0.25, 0.75), origin=(10.0, 0.5, -1.0))
+    array = zarr.open_array(str(store(tmp_path, v, chunks)), mode="r")
+    written = {}
+    for batch in (5, surface_blocks.STL_BATCH_FACES, None):
+        with monkeypatch.context() as m:
+            if batch is None:
+                m.setattr(surface_blocks, "_write_stl_records", _whole_block_stl)
+            else:
+                m.setattr(surface_blocks, "STL_BATCH_FACES", batch)
+            got = write_surface_blocks(array, tmp_path / f"{batch}.stl", conn, frame=frame)
+        written[batch] = Path(got["path"]).read_bytes()
+    assert written[5] == written[None] and written[surface_blocks.STL_BATCH_FACES] == written[None]
+    tm = trimesh.load(tmp_path / "5.stl", process=False)
+    assert len(tm.faces) == got["faces"] == len(boundary_mesh(v, conn).triangles())
+    assert tm.volume == pytest.approx(v.sum() * 0.5 * 0.25 * 0.75, rel=1e-9)
+
+
+def test_an_stl_block_holds_little_beside_its_mesh(tmp_path, monkeypatch):
+    """Writing a block's STL made the float64 corners, midpoints and world
+    positions of every face of the block at once: 481 bytes per triangle
+    beside the block's mesh (tracemalloc, which numpy reports its buffers
+    to), where a PLY holds about 56. A batch of faces at a time holds a
+    small part of that on a porous field's largest 64^3 block."""
+    import tracemalloc
+
+    from scipy.ndimage import gaussian_filter
+
+    field = gaussian_filter(np.random.default_rng(0).standard_normal((32, 32, 32)), 2) > 0
+    v = np.repeat(np.repeat(np.repeat(field, 4, 0), 4, 1), 4, 2)
+    array = zarr.open_array(str(store(tmp_path, v, (64, 64, 64))), mode="r")
+    got = []
+    mesh_of, write = surface_blocks.mesh_block, surface_blocks.write_block
+
+    def meshed(*args):
+        mesh = mesh_of(*args)
+        got.append([mesh, tracemalloc.get_traced_memory()[0]])
+        tracemalloc.reset_peak()
+        return mesh
+
+    def measured(*args):
+        tracemalloc.start()
+        try:
+            out = write(*args)
+            got[-1].append(tracemalloc.get_traced_memory()[1])
+        finally:
+            tracemalloc.stop()
+        return out
+
+    monkeypatch.setattr(surface_blocks, "mesh_block", meshed)
+    monkeypatch.setattr(surface_blocks, "write_block", measured)
+    write_surface_blocks(array, tmp_path / "p.stl", 6, scheduler="synchronous")
+    mesh, held, peak = max(got, key=lambda g: len(g[0].faces))
+    triangles = len(triangle_rows(mesh.faces, mesh.edge_midpoint)[0])
+    assert triangles > 50_000 and (peak - held) / triangles < 481 / 4

@@ -51,7 +51,7 @@ from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
-from .export import float32_holds, mesh_vertex_table, ply_header, shared_positions
+from .export import STL_DTYPE, float32_holds, mesh_vertex_table, ply_header, shared_positions
 
 #: the suffixes whose files are written block by block
 STREAM_SUFFIXES = (".ply", ".stl")
@@ -76,11 +76,15 @@ BYTES_PER_FACE = 64
 #: ... per triangle of a PLY of triangles: the int64 rows that
 #: ``triangle_rows`` cuts and their records (48.5 on the same block)
 BYTES_PER_TRIANGLE = 56
-#: ... per triangle of an STL: the float64 corners, midpoints and world
-#: positions of each face and the records (481 on the same block; about
-#: 625 as the kernel measures the task beside the chunk cache, written
-#: from a 384^3 porous store in 128^3 chunks)
-BYTES_PER_STL_TRIANGLE = 640
+#: ... per triangle of an STL: each face's polygon size and the faces of
+#: its size group (4.5 on the same block), beside one batch of records
+#: (:data:`STL_BATCH_BYTES`); the STL's copies at contacts
+#: (``shared_positions``, 56 per mesh vertex) fit in ``BYTES_PER_ITEM``
+BYTES_PER_STL_TRIANGLE = 8
+#: ... and one batch of :data:`STL_BATCH_FACES` faces of an STL: their
+#: float64 corners, midpoints, world positions and records (2.2 MiB
+#: measured on the same block and on a 64^3 block of the same field)
+STL_BATCH_BYTES = 3 * 2**20
 #: copies of a decoded chunk at the peak of a read through zarr: the
 #: compressed and decoded buffers and the array zarr gives (the kernel's
 #: peak of the counting pass on a worker: 6.5 MiB for a block of 64^3 in
@@ -383,10 +387,6 @@ def _face_dtype(kind: Literal["quads", "triangles"]) -> np.dtype:
     return np.dtype([("n", "u1"), ("i", "<i4", (4 if kind == "quads" else 3,))])
 
 
-#: a binary STL triangle record
-STL_DTYPE = np.dtype([("normal", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
-
-
 def _pwrite(fd: int, data: np.ndarray, offset: int) -> None:
     view = memoryview(np.ascontiguousarray(data)).cast("B")
     while len(view):
@@ -418,7 +418,7 @@ def write_block(array, grid: BlockGrid, block: BlockPlan, target: Target, connec
         # every copy at a contact is the block's own (the block that counts its lattice vertex or edge), so the
         # blocks' counts add up to the mesh's: the copies that an STL reader welds
         shared = shared_positions(mesh)
-        records = [(STL_HEADER + block.face_start * STL_DTYPE.itemsize, _stl_records(mesh, block.first, target.frame))]
+        records = []
     else:
         vertices = mesh_vertex_table(mesh, target.frame, target.position)
         vrec = np.empty(len(mesh.vertices), _vertex_dtype(target.position))
@@ -432,6 +432,8 @@ def write_block(array, grid: BlockGrid, block: BlockPlan, target: Target, connec
                    (target.face_offset + block.face_start * fdt.itemsize, frec)]
     fd = os.open(target.path, os.O_WRONLY)
     try:
+        if target.suffix == ".stl":
+            _write_stl_records(fd, mesh, block.first, target.frame, STL_HEADER + block.face_start * STL_DTYPE.itemsize)
         for offset, rec in records:
             _pwrite(fd, rec, offset)
     finally:
@@ -450,27 +452,59 @@ def _corner_offsets() -> np.ndarray:
     return out
 
 
-def _stl_records(mesh: QuadMesh, first: int, frame: DigitalObject) -> np.ndarray:
-    """The STL triangles of a block's faces, as :func:`triangle_rows` cuts
-    them. A face's positions come from its lowest corner, which is the
-    block's own vertex (its first corner, or its last where the normal is
-    negative and the corners run the other way)."""
-    faces, normals = mesh.faces, mesh.face_normals
+def _stl_records(mesh: QuadMesh, faces: np.ndarray, first: int, frame: DigitalObject) -> np.ndarray:
+    """The STL triangles of some of a block's faces (``faces``: their
+    numbers in the block), as :func:`triangle_rows` cuts them. A face's
+    positions come from its lowest corner, which is the block's own vertex
+    (its first corner, or its last where the normal is negative and the
+    corners run the other way)."""
+    normals = mesh.face_normals[faces]
     plus = normals.sum(axis=1) > 0
-    low = mesh.vertices[np.where(plus, faces[:, 0], faces[:, 3]) - first]
+    low = mesh.vertices[np.where(plus, mesh.faces[faces, 0], mesh.faces[faces, 3]) - first]
     axis = np.abs(normals).argmax(axis=1)
     order = np.where(plus[:, None], np.arange(4), np.arange(3, -1, -1))
     corners = low[:, None, :] + _corner_offsets()[axis[:, None], order]
     mids = (corners + np.roll(corners, -1, axis=1)) / 2
     n = len(faces)
     codes = np.arange(4 * n).reshape(n, 4)
-    mid_codes = np.where(mesh.edge_midpoint >= 0, 4 * n + codes, -1)
+    mid_codes = np.where(mesh.edge_midpoint[faces] >= 0, 4 * n + codes, -1)
     tris, face = triangle_rows(codes, mid_codes)
     xyz = frame.world(np.concatenate([corners.reshape(-1, 3), mids.reshape(-1, 3)]))
     rec = np.zeros(len(tris), STL_DTYPE)
     rec["normal"] = normals[face]
     rec["v"] = xyz[tris]
     return rec
+
+
+#: faces whose STL records a block's write makes at a time: their float64
+#: corners, midpoints and world positions and their records take about
+#: 1.1 KiB a face, so a batch holds a few MiB whatever the block's size
+STL_BATCH_FACES = 2048
+
+
+def _write_stl_records(fd: int, mesh: QuadMesh, first: int, frame: DigitalObject, offset: int) -> None:
+    """Write a block's STL triangles from byte ``offset`` on, a batch of
+    faces at a time, in the order :func:`triangle_rows` gives the whole
+    block: two per plain quad in face order, then the faces with midpoints
+    grouped by polygon size, each group's fans triangle by triangle (the
+    first triangle of every face of the group, then the second, ...). A
+    batch's records are those of :func:`_stl_records` on the whole block,
+    made with the same arithmetic per face, so the bytes do not depend on
+    the batch size."""
+    size = 4 + (mesh.edge_midpoint >= 0).sum(axis=1, dtype=np.int8)  # at most 8 corners
+    row = 0  # the block's triangles before the group
+    for polygon in np.unique(np.concatenate([[4], size])):
+        group = np.flatnonzero(size == polygon)
+        fans = polygon - 2  # triangles per face
+        for start in range(0, len(group), STL_BATCH_FACES):
+            rec = _stl_records(mesh, group[start:start + STL_BATCH_FACES], first, frame)
+            if polygon == 4:  # a plain quad's two triangles are next to each other
+                _pwrite(fd, rec, offset + (row + 2 * start) * STL_DTYPE.itemsize)
+                continue
+            k = len(rec) // fans
+            for t in range(fans):
+                _pwrite(fd, rec[t * k:(t + 1) * k], offset + (row + t * len(group) + start) * STL_DTYPE.itemsize)
+        row += fans * len(group)
 
 
 class _Source:
@@ -741,8 +775,10 @@ def _write_bytes(read: int, layout: Layout, triangles: int, index, suffix: str) 
     """Peak bytes of block ``index``'s write task: its read, its mesh and
     its records (``triangles``: the block's, written where the layout
     writes triangles; an STL's cost the most)."""
-    per_triangle = BYTES_PER_STL_TRIANGLE if suffix == ".stl" else BYTES_PER_TRIANGLE
-    records = triangles * per_triangle if layout.kind == "triangles" else 0
+    if suffix == ".stl":
+        records = triangles * BYTES_PER_STL_TRIANGLE + STL_BATCH_BYTES
+    else:
+        records = triangles * BYTES_PER_TRIANGLE if layout.kind == "triangles" else 0
     return read + layout.items[index] * BYTES_PER_ITEM + layout.quads[index] * BYTES_PER_FACE + records
 
 
