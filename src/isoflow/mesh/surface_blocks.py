@@ -60,8 +60,8 @@ STREAM_SUFFIXES = (".ply", ".stl")
 #: eight parts, part ``px + 2 py + 4 pz`` (0: on the lower seam, 1: inside)
 PARTS = np.array([px + 3 * py + 9 * pz for pz in (0, 1) for py in (0, 1) for px in (0, 1)])
 
-#: bytes of an STL triangle record and of its header
-STL_RECORD, STL_HEADER = 50, 84
+#: bytes of an STL header (its records: :data:`isoflow.mesh.export.STL_DTYPE`)
+STL_HEADER = 84
 
 #: peak bytes of a block's write task per item (mesh vertex): its float64
 #: position, configuration and sheet (26), and a PLY's vertex table made
