@@ -58,7 +58,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.formats.registry import split_dataset
 
-    if args.force and not (args.csv or args.png):  # the file it was meant for was left out
+    if args.force and not (args.csv or args.png):  # alone it would overwrite nothing: a file option is missing
         raise IsoflowError(f"{args.input}: --force overwrites an existing --csv or --png file; without them info "
                            "writes no file (give --csv FILE, or --png FILE with --labels)")
     if args.png and args.labels is None:  # one object's report has no distribution to draw

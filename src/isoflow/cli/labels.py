@@ -531,7 +531,7 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
     about, conn, table, image, _ = read_table(args)
     check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
-    corners = about["corners"]  # (a placement no file holds was refused before the table)
+    corners = about["corners"]  # read_table checks the placement's corners before it counts the table
     names = [f"label_{v}" for v in table["label"].tolist()]
     if target[0] == "dir":
         files = [target[1] / f"{name}{target[2]}" for name in names]

@@ -36,6 +36,7 @@ from collections import deque
 import numpy as np
 
 from ..scale.graphs import components
+from .load import repeated_faces
 
 #: a seam is smooth where its faces' given unit normals have a dot product
 #: below this: turned to agree, they bend by less than 60 degrees
@@ -103,7 +104,8 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
 def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each face once: of faces on the same three corners the same way
     round (any rotation of them) the first in file order, and for every
-    face the index of its copy among those kept.
+    face the index of its copy among those kept
+    (:func:`~isoflow.mesh.load.repeated_faces`).
 
     Parameters
     ----------
@@ -123,16 +125,11 @@ def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([[0, 1, 2], [0, 2, 1]], [0, 0, 1])
     """
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    if len(f) == 0:
-        return f, np.zeros(0, dtype=np.int64)
-    # the rotation that puts the smallest corner first names a face's copies
-    start = np.argmin(f, axis=1)
-    key = f[np.arange(len(f))[:, None], (start[:, None] + np.arange(3)) % 3]
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    keep = np.sort(first)
-    rank = np.empty(len(first), dtype=np.int64)
-    rank[np.argsort(first)] = np.arange(len(first))
-    return f[keep], rank[inverse.reshape(-1)]
+    first = repeated_faces(f)
+    keep = np.flatnonzero(first == np.arange(len(f)))
+    rank = np.zeros(len(f), dtype=np.int64)
+    rank[keep] = np.arange(len(keep))
+    return f[keep], rank[first]
 
 
 def edge_sides(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
