@@ -206,6 +206,27 @@ def test_nrrd_round_trip(tmp_path, vol):
     check_same_place(isoflow.read_volume(path), obj)
 
 
+@pytest.mark.parametrize("write", ["write_volume", "write_labels"])
+def test_nrrd_is_gzipped_at_zlibs_default_level_not_its_slowest(tmp_path, vol, write):
+    # gzip's header says how hard the stream was packed (RFC 1952, XFL): 2
+    # for the slowest level, 9 (pynrrd's default, several times the time for
+    # files a few per cent smaller), 4 for the fastest, 0 for the levels
+    # between, zlib's default 6 among them
+    nrrd = pytest.importorskip("nrrd")
+    image = vol.astype(np.uint16) * 300
+    path = tmp_path / "v.nrrd"
+    if write == "write_volume":
+        isoflow.write_volume(placed(vol), path)
+    else:
+        isoflow.write_labels(image, path)
+    raw = path.read_bytes()
+    stream = raw[raw.index(b"\n\n") + 2:]
+    assert stream[:3] == b"\x1f\x8b\x08"  # a gzip member of deflate data
+    assert stream[8] == 0
+    data = nrrd.read(str(path), index_order="F")[0]
+    assert np.array_equal(data, vol if write == "write_volume" else image)
+
+
 def test_hdf5_round_trip_with_a_dataset_path(tmp_path, vol):
     h5py = pytest.importorskip("h5py")
     obj = placed(vol)
