@@ -723,8 +723,14 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     well-defined solid, and no grid settles that.
 
     A face listed again the same way round (the same three corners) is
-    dropped before anything is counted, as a degenerate face is: it draws
-    no more surface, only non-manifold edges (a note names it).
+    dropped before the mesh, its crossings, manifold3d, pymeshlab and the
+    solid count it (it draws no more surface, only non-manifold edges),
+    and edges that a vertex of another face splits (T-junctions) are split
+    there; the digital rows voxelise the faces as loaded, each copy
+    counted, exactly as :func:`~isoflow.mesh.voxelize.voxelize_file` reads
+    the file (the generalised winding number adds a copy's winding: a wall
+    listed twice parts the solid). A note names each repair and the rows
+    it was made for.
     An open mesh has no genus of its own; an inconsistently oriented one has
     the genus of its surface where its faces can be turned consistently
     (none where they cannot: a non-orientable surface). The solid of
@@ -806,6 +812,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     name, v, f = mesh_input(mesh, stats=stats)
     if strict:
         _refuse_as_voxelize(name, v, f, fill)
+    # the digital rows voxelise the faces as loaded, as isoflow voxelize
+    # reads the same file: a copy of a face adds its winding (a wall listed
+    # twice parts the solid), which the surface counted below has not
+    given = v, f
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
     w = witnesses(v, f)
@@ -815,7 +825,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     bodies = reference_bodies(w, fill)
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
-            v, f, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
+            *given, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill, bodies=bodies)
     except IsoflowError as exc:

@@ -47,7 +47,7 @@ SMOOTH_SEAM = -0.5
 WIDE_SEAM = 0.5
 
 
-def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, int]:
+def orient_faces(vertices: np.ndarray, faces: np.ndarray, first: np.ndarray | None = None) -> tuple[np.ndarray, int]:
     """Faces turned over to agree with their neighbours across the seams
     that show a turned face, and how many were turned.
 
@@ -55,6 +55,9 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     ----------
     vertices : float ndarray (N, 3)
     faces : int ndarray (M, 3)
+    first : int ndarray (M,), optional
+        :func:`~isoflow.mesh.load.repeated_faces` of ``faces``, where the
+        caller has it already; found here otherwise.
 
     Returns
     -------
@@ -91,7 +94,7 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     # copies of a face (the same corners the same way round) add their
     # windings (a wall listed twice jumps w by 2): they are oriented as one
     # face, so that a copy is never turned against its twin to cancel it
-    one, copy_of = single_copies(f)
+    one, copy_of = single_copies(f, first)
     label, seams, area = followed_seams(np.asarray(vertices, dtype=np.float64)[one], one)
     if len(seams) == 0:
         return f, 0
@@ -101,7 +104,7 @@ def orient_faces(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, i
     return fixed, int(turn.sum())
 
 
-def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def single_copies(faces: np.ndarray, first: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Each face once: of faces on the same three corners the same way
     round (any rotation of them) the first in file order, and for every
     face the index of its copy among those kept
@@ -110,6 +113,9 @@ def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Parameters
     ----------
     faces : int ndarray (M, 3)
+    first : int ndarray (M,), optional
+        :func:`~isoflow.mesh.load.repeated_faces` of ``faces``, where the
+        caller has it already; found here otherwise.
 
     Returns
     -------
@@ -125,7 +131,7 @@ def single_copies(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ([[0, 1, 2], [0, 2, 1]], [0, 0, 1])
     """
     f = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    first = repeated_faces(f)
+    first = repeated_faces(f) if first is None else np.asarray(first, dtype=np.int64)
     keep = np.flatnonzero(first == np.arange(len(f)))
     rank = np.zeros(len(f), dtype=np.int64)
     rank[keep] = np.arange(len(keep))

@@ -275,11 +275,24 @@ def _point(p) -> str:
     return "(" + ", ".join(f"{x:.6g}" for x in p) + ")"
 
 
+#: the rows of ``isoflow genus`` that read the mesh after its repairs (a
+#: repeated face dropped, T-junctions split); the digital rows read it as
+#: isoflow voxelize does, as loaded
+_REPAIRED_ROWS = "the mesh, crossings, manifold3d, solid and pymeshlab rows"
+
+
 def _repeated_words(n: int, copies: int, corners) -> str:
     listed = "twice (" if copies == n else f"more than once ({copies} copies; "
     return (f"{n} face{'s' if n > 1 else ''} listed {listed}the same three corners, the same way round; "
             f"{'the first ' if n > 1 else ''}at {', '.join(map(_point, corners))}): "
-            f"{'the copies' if copies > 1 else 'the copy'} dropped")
+            f"{'the copies' if copies > 1 else 'the copy'} dropped for {_REPAIRED_ROWS}; the digital rows count "
+            "each copy, as voxelize does (a copy adds its winding number)")
+
+
+def _t_junction_words(points: int, faces: int, edges: int) -> str:
+    return (f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one "
+            f"face on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split "
+            f"there for {_REPAIRED_ROWS}; the digital rows voxelise the faces as given, as voxelize does")
 
 
 def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, union_genus: int | None = None) -> str:
@@ -335,10 +348,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
                          "(tools that merge exact duplicates only see a different, open or higher-genus mesh)"),
     "repeated_faces": _repeated_words,
-    "t_junctions": lambda points, faces, edges: (
-        f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one face "
-        f"on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split there "
-        "before counting"),
+    "t_junctions": _t_junction_words,
     "double_sided": _double_sided_words,
     "open": _open_words,
     "inconsistent": _inconsistent_words,

@@ -224,8 +224,9 @@ class Solid:
         if self.inconsistent:
             # a repeat uses each of its edges once more the same way: only
             # inconsistently oriented edges can come of one
-            self.repeated = int((repeated_faces(faces) != np.arange(len(faces))).sum())
-            faces, self.flipped = orient_faces(v, faces)
+            first = repeated_faces(faces)
+            self.repeated = int((first != np.arange(len(faces))).sum())
+            faces, self.flipped = orient_faces(v, faces, first)
             edges = census(faces, len(v))
             self.inconsistent = defect_counts(*edges[2:])["inconsistent_edges"]
         a, b = chain_of(*edges[:4])
