@@ -6,12 +6,12 @@ fresh process each, the way a user runs it: ``isoflow.analyze(vol, 6)``
 against scikit-image's ``euler_number(vol, connectivity=1)`` (chi alone),
 against ``analyze(vol, 6, method="compiled")``, and against a loop whose
 first call asks for ``"compiled"`` and the rest for ``"auto"``. ``"auto"``
-takes the NumPy census below 4 million voxels until the compiled census is
-loaded in the process (a compiled pass ran there), and the compiled one
-after, so a loop of small volumes alone stays with NumPy and one that
-starts with a compiled call (or a large volume) goes on compiled; the
-compiled census pays numba's start once and then answers each small volume
-in milliseconds. The volumes are smoothed
+takes the NumPy census until the voxels it has sent down it and the
+volume at hand reach 4 million (the ski-rental rule: 15 volumes of 64^3),
+or the compiled census is loaded in the process (a compiled pass ran
+there), and the compiled one after, so one or ten small volumes never
+import numba and a long loop pays its start once; the compiled census
+then answers each small volume in milliseconds. The volumes are smoothed
 random porous fields (the hard case of benchmarks/run.py), four seeds
 repeated. Whole-process seconds, imports included; the tools alternated,
 medians, the ratios of scikit-image's time to the first two.

@@ -108,3 +108,14 @@ def _as_in_a_single_call(monkeypatch):
     from isoflow.scale import compiled
 
     monkeypatch.setattr(compiled, "_compile_noted", True)
+
+
+@pytest.fixture(autouse=True)
+def _fresh_tally():
+    """Each test's ``method="auto"`` weighs its volumes as a fresh process
+    would: the tests share a process, and the voxels earlier tests sent
+    down the NumPy passes would otherwise take later ones compiled
+    (:func:`isoflow.scale.compiled.reset_tally`)."""
+    from isoflow.scale import compiled
+
+    compiled.reset_tally()

@@ -78,9 +78,12 @@ def analyze(
         environment variable, else every CPU).
     method : {"auto", "numpy", "compiled"}
         The NumPy passes, the compiled ones (numba), or ``"auto"``: by the
-        volume's size, and for a 3D volume the compiled pass at any size
-        once it is loaded in this process (a compiled pass ran here, so
-        numba's start is paid; see
+        volume's size together with the voxels that ``"auto"`` has already
+        sent down the NumPy passes in this process (a loop over many small
+        volumes takes the compiled passes once they add up to the
+        threshold, so numba's start is paid once), and for a 3D volume the
+        compiled pass at any size once it is loaded in this process (a
+        compiled pass ran here; see
         :func:`~isoflow.digital.closed_surfaces.use_census`). The report
         is the same either way.
     pitch, origin, unit : optional
@@ -189,9 +192,11 @@ def _analyze(obj, connectivity, surfaces: bool, method: Method, given: Place) ->
         vol, parity = arrays.as_volume(obj, canonical=False, dims=DIMENSIONS)[1], 0
     spacing, corner, unit = placed(obj, vol.ndim, given)
     conn = resolve_connectivity(vol.ndim, connectivity)
-    compiled = use_census(vol, surfaces, method)
+    compiled = use_census(vol, surfaces, method, record=True)
     if not compiled and isinstance(vol, np.ndarray):
         vol = arrays.binary(vol)  # the NumPy passes and the extent read 0/1 bytes: checked once, here
+        if vol.ndim == 3 and method == "auto":
+            method = "numpy"  # chosen (and counted in the tally) once, above
     census: Mapping[str, Any] | None = _census(vol, conn, surfaces, compiled)
     if census is not None:
         hist = census["hist"]

@@ -156,9 +156,11 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Met
         The object's (None: the paper's 6, as for :func:`isoflow.analyze`).
     method : {"auto", "numpy", "compiled"}
         One compiled sweep, the NumPy census, or ``"auto"``: the compiled
-        sweep from 4 million voxels on, or at any size once it is loaded in
-        this process (a compiled pass ran here: :func:`use_census`). The
-        answer is the same either way.
+        sweep from 4 million voxels on, counting those that ``"auto"`` has
+        already sent down the NumPy census in this process (many small
+        volumes take it once they add up to that), or at any size once it
+        is loaded in this process (a compiled pass ran here:
+        :func:`use_census`). The answer is the same either way.
 
     Returns
     -------
@@ -190,7 +192,8 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Met
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
     connectivity = resolve_connectivity(3, connectivity)  # as an int
-    census = compiled_census(vol, connectivity) if use_census(vol, method=method) else small_census(vol, connectivity)
+    compiled = use_census(vol, method=method, record=True)
+    census = compiled_census(vol, connectivity) if compiled else small_census(vol, connectivity)
     return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                          doubled_edges=census["doubled_edges"], hist=census["hist"],
                          betti_counts=tuple(census["betti_counts"]))
@@ -533,35 +536,39 @@ def warm_up(surfaces: bool = True) -> None:
     compiled_census(vol, 6, surfaces)
 
 
-def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto") -> bool:
+def use_census(vol: np.ndarray, surfaces: bool = True, method: Method = "auto", record: bool = False) -> bool:
     """Whether :func:`compiled_census` counts a 3D volume, with or without
     the ``surfaces``: by :func:`~isoflow.scale.compiled.use_compiled`, whose
     ``"auto"`` threshold is higher with the surfaces (the NumPy census holds
     out to a larger size, as numba's start is then the larger part of the
-    compiled one's time), and with ``"auto"`` also at any size once the
-    compiled census is loaded in this process (:func:`census_loaded`):
-    numba's start, the one cost that the threshold weighs, is then paid.
-    Both passes give the same answer. Never for an empty or a device
-    volume.
+    compiled one's time) and counts the voxels that ``"auto"`` has already
+    sent down the NumPy census in this process (the ski-rental rule: many
+    small volumes take the compiled census once they add up to the
+    threshold), and with ``"auto"`` also at any size once the compiled
+    census is loaded in this process (:func:`census_loaded`): numba's
+    start, the one cost that the threshold weighs, is then paid. Both
+    passes give the same answer. Never for an empty or a device volume.
+    ``record``: the census runs now (the volume is counted in the tally).
 
     Examples
     --------
     >>> v = np.zeros((4, 4, 4), bool)
-    >>> use_census(v, method="numpy"), use_census(v) == census_loaded()
-    (False, True)
+    >>> use_census(v, method="numpy"), use_census(np.zeros((0, 4, 4), bool))
+    (False, False)
     """
     if vol.ndim != 3 or not isinstance(vol, np.ndarray) or vol.size == 0:
         use_compiled(vol, surfaces, method)  # (refuses "compiled" where it cannot be)
         return False  # (an empty volume: nothing to sweep, no slab to split)
-    return use_compiled(vol, surfaces, method) or (method == "auto" and census_loaded())
+    return use_compiled(vol, surfaces, method, record) or (method == "auto" and census_loaded())
 
 
 def census_loaded() -> bool:
     """Whether the compiled census is loaded in this process: the sweep's
     module imported and its machine code held by numba, because a compiled
-    pass ran here (``method="compiled"``, a large volume, ``isoflow info``'s
-    warm-up). A question to numba's dispatcher (never a clock, and it never
-    imports numba itself).
+    pass ran here (``method="compiled"``, a large volume, small volumes
+    that added up to one under ``"auto"``, ``isoflow info``'s warm-up). A
+    question to numba's dispatcher (never a clock, and it never imports
+    numba itself).
 
     Examples
     --------

@@ -255,7 +255,9 @@ def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: 
         slab voxel whatever the volume.
     method : {"auto", "numpy", "compiled"}
         The streaming compiled kernel (3D host volumes), the NumPy passes, or
-        by the volume's size (:func:`~isoflow.scale.compiled.use_compiled`).
+        ``"auto"``: by the volume's size together with the voxels that
+        ``"auto"`` has already sent down the NumPy passes in this process
+        (:func:`~isoflow.scale.compiled.use_compiled`).
 
     Returns
     -------
@@ -284,7 +286,7 @@ def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: 
         raise IsoflowError(f"slab must be an integer >= 1, got {slab!r}")
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     size = 1 << (1 << v.ndim)
-    if use_compiled(v, method=method) and v.ndim == 3:
+    if use_compiled(v, method=method, record=v.ndim == 3) and v.ndim == 3:
         from ..scale.kernels import histogram3d
 
         return histogram3d(v)

@@ -119,7 +119,7 @@ def label_batches(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.
     """
     lo, hi = np.asarray(lo, np.int64).reshape(-1, 3), np.asarray(hi, np.int64).reshape(-1, 3)
     extent = hi - lo
-    method = batches_method(extent, method)
+    method = batches_method(extent, method, record=True)
     order = np.argsort(-(extent[:, 1] * extent[:, 2]), kind="stable")
     at = 0
     while at < len(order):
@@ -138,26 +138,29 @@ def label_batches(image: np.ndarray, labels: np.ndarray, lo: np.ndarray, hi: np.
         yield _batch(image, labels, lo, extent, rows, (nx, ny, nz), connectivity, method)
 
 
-def batches_method(extent: np.ndarray, method: Method = "auto") -> Method:
+def batches_method(extent: np.ndarray, method: Method = "auto", record: bool = False) -> Method:
     """How every batch of boxes of ``extent`` (one row per box) is meshed:
     ``"auto"`` decides once for all of them, on their voxels together (each
     box and its empty layer), as :func:`~isoflow.digital.surface.mesh_method`
     decides for one volume: numba's start is paid once for every batch, so
     many batches each below the compiled passes' threshold take them
-    together.
+    together (and with them the voxels that ``"auto"`` has already sent
+    down the NumPy passes in this process,
+    :func:`~isoflow.scale.compiled.weigh`; ``record``: the batches are
+    meshed now, and are counted in that tally).
 
     Examples
     --------
     >>> few = np.array([[4, 4, 4]] * 10)
-    >>> batches_method(few), batches_method(few, "compiled")
+    >>> batches_method(few, "numpy"), batches_method(few, "compiled")
     ('numpy', 'compiled')
     """
-    from ..scale.compiled import have_numba, least_voxels
+    from ..scale.compiled import have_numba, weigh
 
     if method != "auto":
         return method
     voxels = int(((extent[:, 0] + 1) * extent[:, 1] * extent[:, 2]).sum()) if len(extent) else 0
-    return "compiled" if voxels >= least_voxels(surfaces=True) and have_numba() else "numpy"
+    return "compiled" if have_numba() and weigh(voxels, surfaces=True, record=record) else "numpy"
 
 
 def _batch(image, labels, lo, extent, rows: list[int], shape: tuple[int, int, int], connectivity: int,

@@ -45,7 +45,7 @@ from ..errors import IsoflowError, check_switch
 from ..results import fields_repr, same_fields
 from ..scale.arrays import as_array, refuse_object
 from ..scale.memory import check_fits
-from .closed_surfaces import sweep_tables
+from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
 from .float64 import unheld_columns
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
@@ -180,7 +180,8 @@ def label_table(
         on each label's box plus one voxel; "auto": the compiled pass
         where numba is installed, unless the NumPy pass answers before
         numba would start (few labels with small boxes, in a process
-        that has not imported numba; see :func:`compiled_sooner`). A 2D
+        that has not imported numba, counting the NumPy work of earlier
+        images there; see :func:`compiled_sooner`). A 2D
         image takes one NumPy pass for all labels
         (:mod:`isoflow.digital.planar_labels`) whatever the method.
     threads : int, optional
@@ -342,7 +343,7 @@ def numpy_work(labels: int, box_voxels: int) -> int:
 
 
 def compiled_sooner(voxels: int, numba_loaded: bool, labels: int | None = None,
-                    box_voxels: int | None = None) -> bool:
+                    box_voxels: int | None = None, spent: int = 0) -> bool:
     """Whether ``method="auto"`` takes the compiled pass for an image of
     ``voxels`` voxels.
 
@@ -355,7 +356,11 @@ def compiled_sooner(voxels: int, numba_loaded: bool, labels: int | None = None,
     choice compares :func:`numpy_work` with :data:`NUMBA_START_WORK`
     (``labels``: the nonzero labels; ``box_voxels``: their boxes' voxels
     together, or a lower bound such as the nonzero voxels, which decides
-    for the compiled pass where it already reaches the start's work).
+    for the compiled pass where it already reaches the start's work;
+    ``spent``: the NumPy work that ``"auto"`` has already done on earlier
+    images in this process, :data:`TALLY`, so that a loop over many
+    small images pays numba's start once their work adds up to it, the
+    ski-rental rule of :mod:`isoflow.scale.compiled`).
     On grain maps of 100 labels that is about 115^3 voxels; with 1,000
     labels or more, or labels scattered over the image, the compiled pass
     is the sooner from the smallest images on.
@@ -373,14 +378,20 @@ def compiled_sooner(voxels: int, numba_loaded: bool, labels: int | None = None,
         return voxels >= LABEL_PASS_VOXELS
     if labels is None or box_voxels is None:
         raise IsoflowError("compiled_sooner needs labels and box_voxels where numba is not loaded")
-    return numpy_work(labels, box_voxels) >= NUMBA_START_WORK
+    return numpy_work(labels, box_voxels) + spent >= NUMBA_START_WORK
+
+
+#: the kind under which ``"auto"`` tallies the NumPy work of label tables
+#: (:func:`isoflow.scale.compiled.tallied`)
+TALLY = "label_table"
 
 
 def _use_compiled(vol: np.ndarray, method: str) -> bool:
-    """The pass to take (see :func:`compiled_sooner`)."""
+    """The pass to take (see :func:`compiled_sooner`); the NumPy pass that
+    ``"auto"`` takes before numba is imported is counted in :data:`TALLY`."""
     import sys
 
-    from ..scale.compiled import METHODS, have_numba
+    from ..scale.compiled import METHODS, add_to_tally, have_numba, tallied
 
     if method not in METHODS:
         raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -407,9 +418,14 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     # same table)
     counts = np.bincount(flat.astype(np.intp, copy=False), minlength=1)
     labels = int(np.count_nonzero(counts[1:]))
-    if compiled_sooner(vol.size, False, labels, flat.size - int(counts[0])):
+    spent = tallied(TALLY)
+    if compiled_sooner(vol.size, False, labels, flat.size - int(counts[0]), spent):
         return True
-    return compiled_sooner(vol.size, False, labels, every_other_boxes(vol))
+    boxes = every_other_boxes(vol)
+    if compiled_sooner(vol.size, False, labels, boxes, spent):
+        return True
+    add_to_tally(TALLY, numpy_work(labels, boxes))
+    return False
 
 
 def every_other_boxes(vol: np.ndarray) -> int:
@@ -821,7 +837,9 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
         where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
         lo, hi = where.min(axis=0), where.max(axis=0)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        report = analyze(box, conn, surfaces=surfaces)
+        # the pass was chosen for the whole image: the boxes do not add to
+        # the tally of "auto" (which would load numba inside this call)
+        report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
         found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
         found["lo"][row], found["hi"][row] = lo, hi
         found["b0"][row], found["b2"][row] = report["betti"][0], report["betti"][2]

@@ -465,7 +465,7 @@ def _empty_mesh(connectivity: int) -> QuadMesh:
     )
 
 
-def mesh_method(volume: np.ndarray, method: Method = "auto") -> Literal["numpy", "compiled"]:
+def mesh_method(volume: np.ndarray, method: Method = "auto", record: bool = False) -> Literal["numpy", "compiled"]:
     """The way :func:`boundary_mesh` builds the mesh of ``volume``: from the
     bit rows (numba, :mod:`isoflow.scale.quads`) or with NumPy over the
     whole volume.
@@ -478,7 +478,11 @@ def mesh_method(volume: np.ndarray, method: Method = "auto") -> Literal["numpy",
         ``"auto"``: the bit rows where numba is installed and the volume has
         at least :func:`~isoflow.scale.compiled.least_voxels` voxels (with
         the surfaces: below that the NumPy mesh is done before numba has
-        started; ``benchmarks/bench_mesh.py --small``), else NumPy.
+        started; ``benchmarks/bench_mesh.py --small``), counting those that
+        ``"auto"`` has already sent down the NumPy passes in this process
+        (:func:`~isoflow.scale.compiled.use_compiled`), else NumPy.
+    record : bool
+        The mesh is built now: ``"auto"`` counts the volume in that tally.
 
     Returns
     -------
@@ -491,10 +495,10 @@ def mesh_method(volume: np.ndarray, method: Method = "auto") -> Literal["numpy",
 
     Examples
     --------
-    >>> mesh_method(np.zeros((4, 4, 4), bool)), mesh_method(np.zeros((4, 4, 4), bool), "compiled")
+    >>> mesh_method(np.zeros((4, 4, 4), bool), "numpy"), mesh_method(np.zeros((4, 4, 4), bool), "compiled")
     ('numpy', 'compiled')
     """
-    return "compiled" if use_compiled(volume, surfaces=True, method=method) else "numpy"
+    return "compiled" if use_compiled(volume, surfaces=True, method=method, record=record) else "numpy"
 
 
 @cache
@@ -577,7 +581,7 @@ def boundary_mesh(volume: ArrayLike, connectivity: int | None = 6, method: Metho
     if vol.ndim != 3:  # an IsoflowError is the ValueError documented, as one line
         raise IsoflowError(f"boundary_mesh needs a 3D volume, got a {vol.ndim}D array")
     connectivity = resolve_connectivity(3, connectivity)  # as an int
-    how = mesh_method(vol, method)
+    how = mesh_method(vol, method, record=True)
     # 2, 255 and NaN are refused as analyze refuses them, not meshed as
     # object; the bit rows read any nonzero byte of a bool array as set, so
     # only the NumPy faces need its bytes made 0/1

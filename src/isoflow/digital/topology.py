@@ -104,11 +104,22 @@ def count_components(volume, connectivity: int) -> int:
     (no label volume); small ones :func:`isoflow.scale.labels.label`, CuPy
     volumes ``cupyx.scipy.ndimage.label`` on their GPU.
     """
-    return _count_components(*_labeller(*arrays.as_volume(volume)), connectivity)
+    xp, v, label = _labeller(*arrays.as_volume(volume))
+    return _count_components(xp, v, label, connectivity, _chosen(v))
 
 
-def _count_components(xp, v, label, connectivity: int) -> int:
-    if use_compiled(v):
+def _chosen(v, method: Method = "auto") -> Method:
+    """The method of every pass over ``v``, chosen once: for a host volume
+    ``"auto"`` becomes ``"compiled"`` or ``"numpy"``, the volume counted in
+    the tally of :func:`~isoflow.scale.compiled.use_compiled` once (its
+    passes then take the same path)."""
+    if method == "auto" and isinstance(v, np.ndarray):
+        return "compiled" if use_compiled(v, method=method, record=True) else "numpy"
+    return method
+
+
+def _count_components(xp, v, label, connectivity: int, method: Method = "auto") -> int:
+    if use_compiled(v, method=method):
         from ..scale.kernels import count_components as compiled
 
         return compiled(v, connectivity)
@@ -123,13 +134,14 @@ def count_enclosed(volume, connectivity: int) -> int:
     The region outside the array is background and touches every border
     component, so those merge into one exterior; no padded copy is needed.
     """
-    return _count_enclosed(*_labeller(*arrays.as_volume(volume)), connectivity)
+    xp, v, label = _labeller(*arrays.as_volume(volume))
+    return _count_enclosed(xp, v, label, connectivity, _chosen(v))
 
 
-def _count_enclosed(xp, v, label, connectivity: int) -> int:
+def _count_enclosed(xp, v, label, connectivity: int, method: Method = "auto") -> int:
     if v.size == 0:
         return 0
-    if use_compiled(v):
+    if use_compiled(v, method=method):
         from ..scale.kernels import count_enclosed as compiled
 
         return compiled(v, connectivity)
@@ -185,7 +197,9 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         be the volume's is refused, and so is one that is not an integer).
     method : {"auto", "numpy", "compiled"}
         The labellings (cc3d, scipy, CuPy), the compiled run-based
-        union-find, or by the volume's size.
+        union-find, or ``"auto"``: by the volume's size together with the
+        voxels that ``"auto"`` has already sent down the NumPy passes in
+        this process (:func:`~isoflow.scale.compiled.use_compiled`).
 
     Returns
     -------
@@ -226,6 +240,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     # 1D as euler_characteristic takes it (docs/ndim.md: the same functions serve 1D to 4D)
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     conn = resolve_connectivity(v.ndim, connectivity)
+    method = _chosen(v, method)  # one choice for the histogram and the labellings
     # b1 = b0 + b2 - chi is a count only for an integer chi
     if chi is not None:
         if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
@@ -243,13 +258,14 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
         return [runs]
     # the volume is checked once here; one host copy where the library cannot label
     xp, v, label = _labeller(xp, v, method)
+    method = _chosen(v, method)  # (a device volume copied to the host)
     if use_compiled(v, method=method):
         from ..scale.kernels import count_object_and_enclosed
 
         b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))
     else:
-        b0 = _count_components(xp, v, label, conn)
-        enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn))
+        b0 = _count_components(xp, v, label, conn, method)
+        enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn), method)
     if v.ndim == 4:
         return [b0, None, None, enclosed]
     # a ``chi`` given that is not the volume's: in 2D chi = b0 - b1 exactly,

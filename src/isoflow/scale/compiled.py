@@ -5,15 +5,26 @@ are compiled with numba. They are used for host volumes from
 :data:`MIN_VOXELS` on; below that, numpy and cc3d answer sooner than numba
 can start (importing numba and loading its cached machine code is paid
 once per process), so one small volume never imports numba at all.
-The choice is a function of the input alone (:func:`use_compiled`); a
+The choice is a function of the input and of the voxels already counted
+in the process (:func:`use_compiled`, below), never of a clock; a
 caller that knows better says so with ``method="compiled"``, as
-scikit-image's functions take ``method=``. The 3D census of ``analyze``
-and ``closed_surfaces`` also takes the compiled pass at any size once
-numba holds its machine code in the process (a compiled pass ran there:
-numba's start, what the size threshold weighs, is paid), so a loop over
-many small volumes pays that start once, after its first large or
-compiled call (:func:`isoflow.digital.closed_surfaces.use_census`; a
-question to numba, not a clock). Both passes give the same answers.
+scikit-image's functions take ``method=``. Both passes give the same
+answers.
+
+Many small volumes in one process are weighed together, by the
+ski-rental rule: ``"auto"`` keeps a tally of the voxels it has sent down
+the NumPy passes in the process (one per threshold, :func:`least_voxels`
+with and without the surfaces), and takes the compiled pass once that
+tally and the volume at hand reach the threshold, which is the size at
+which one volume's compiled pass, numba's start included, costs what its
+NumPy pass does. NumPy's share is then at most what numba's start costs,
+so any sequence of volumes costs at most about twice the better of
+always NumPy and always compiled; a single small volume still never
+imports numba. From then on the tally stays past the threshold, and the
+3D census of ``analyze`` and ``closed_surfaces`` takes the compiled pass
+at any size once numba holds its machine code in the process (a compiled
+pass ran there, so numba's start is paid:
+:func:`isoflow.digital.closed_surfaces.use_census`).
 
 The passes release the GIL, so plain Python threads run them in parallel
 (no OpenMP pool, no parallel compile). Each pass splits the volume into as
@@ -109,18 +120,69 @@ Method = Literal["auto", "numpy", "compiled"]
 METHODS = ("auto", "numpy", "compiled")
 
 
-def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto") -> bool:
+#: the voxels that ``"auto"`` has weighed below the threshold in this
+#: process, per threshold (True: with the surfaces): those it sent down
+#: the NumPy passes, and then the volume that took it past the threshold
+_tally: dict[object, int] = {}
+
+
+def tallied(kind: object) -> int:
+    """The work that ``"auto"`` has sent down the NumPy passes of ``kind``
+    in this process (:func:`use_compiled`; ``kind``: True or False for the
+    thresholds with and without the surfaces, or a caller's own name for
+    a pass that weighs its work otherwise).
+
+    Examples
+    --------
+    >>> tallied("a kind nothing counts")
+    0
+    """
+    return _tally.get(kind, 0)
+
+
+def add_to_tally(kind: object, work: int) -> None:
+    """Count ``work`` that ``"auto"`` sends down the NumPy passes of
+    ``kind`` (see :func:`tallied`).
+
+    Examples
+    --------
+    >>> add_to_tally("an example's kind", 5); tallied("an example's kind")
+    5
+    """
+    _tally[kind] = _tally.get(kind, 0) + int(work)
+
+
+def reset_tally() -> None:
+    """Forget what ``"auto"`` has tallied in this process, so that the
+    next volume is weighed as in a fresh process (for tests, which share
+    one process; the compiled passes numba has loaded stay loaded).
+
+    Examples
+    --------
+    >>> add_to_tally(False, 10); reset_tally(); tallied(False)
+    0
+    """
+    _tally.clear()
+
+
+def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto", record: bool = False) -> bool:
     """Whether a pass over ``volume`` takes the compiled path.
 
-    ``"auto"``: a host NumPy volume of 2 or 3 dimensions with at least
-    :func:`least_voxels` voxels, where numba is installed. ``"numpy"``:
+    ``"auto"``: a host NumPy volume of 2 or 3 dimensions, where numba is
+    installed, whose voxels and those ``"auto"`` has already sent down the
+    NumPy passes of this threshold in the process (:func:`tallied`)
+    together reach :func:`least_voxels` (see the module). ``"numpy"``:
     never. ``"compiled"``: always, or one line saying why it cannot (no
     numba, a device array, a 4D volume).
+
+    ``record``: the pass runs now, and ``"auto"`` counts a volume below
+    the threshold in the tally, once per pass (a question alone leaves it
+    as it is).
 
     Examples
     --------
     >>> import numpy as np
-    >>> use_compiled(np.zeros((8, 8, 8), bool)), use_compiled(np.zeros((8, 8, 8), bool), method="numpy")
+    >>> use_compiled(np.zeros((8, 8, 8), bool), method="numpy"), use_compiled(np.zeros((0, 8, 8), bool))
     (False, False)
     """
     import numpy as np
@@ -136,7 +198,28 @@ def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto"
         if not have_numba():
             raise IsoflowError("method='compiled' needs numba: pip install numba")
         return True
-    return host and volume.size >= least_voxels(surfaces) and have_numba()  # type: ignore[attr-defined]
+    return host and have_numba() and weigh(int(volume.size), surfaces, record)  # type: ignore[attr-defined]
+
+
+def weigh(voxels: int, surfaces: bool = False, record: bool = False) -> bool:
+    """``"auto"``'s choice for a pass over ``voxels`` host voxels (numba
+    installed): the compiled pass where they and the voxels of this
+    threshold that ``"auto"`` has already sent down the NumPy passes in
+    the process (:func:`tallied`) reach :func:`least_voxels`; ``record``
+    as for :func:`use_compiled`.
+
+    Examples
+    --------
+    >>> weigh(least_voxels()), weigh(0)
+    (True, False)
+    """
+    least = least_voxels(surfaces)
+    compiled = voxels > 0 and tallied(surfaces) + voxels >= least  # (nothing to sweep in an empty one)
+    if record and voxels < least:
+        # the volume that takes the tally past the threshold is counted
+        # too, so that it stays past it for the next volumes
+        add_to_tally(surfaces, voxels)
+    return compiled
 
 
 def check_threads(n, where: str = "threads") -> int:
