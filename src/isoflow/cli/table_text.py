@@ -31,8 +31,10 @@ from functools import partial
 
 import numpy as np
 
-#: rows turned into text at once
-BLOCK_ROWS = 1 << 14
+#: rows turned into text at once: a block's cells and text (about 1.4 kB a
+#: row of a label table's JSON) are read back from the processor's cache
+#: when the rows are joined, and each thread's buffers stay that small
+BLOCK_ROWS = 1 << 12
 #: a table of at most this many rows is written by Python's own text of
 #: each cell (the same text): numba's start would cost a small table (a
 #: few organs) more than the compiled digits save; where numba is not
