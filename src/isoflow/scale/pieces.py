@@ -1104,14 +1104,14 @@ class PairSink:
         size = 2 * len(self.pairs) if grow else len(self.pairs)
         while 10 * keep > 3 * size:
             size *= 2
-        alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
-                 "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
-        check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         if last:
             new = new_pairs(1)
         elif self.spare is not None and len(self.spare) == size:
             new = _emptied(self.spare)
-        else:
+        else:  # a new table: checked before it is made (a spare one was, and the budget is read from /proc)
+            alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
+                     "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
+            check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
             new = new_pairs(size)
         s = 0
         while s < len(self.pairs):
