@@ -639,11 +639,15 @@ def assert_text_as_json_and_csv_write(table: dict) -> None:
 WRITERS = {"plain": (10**9, 10**9), "compiled": (-1, -1)}
 
 
+@pytest.mark.parametrize("threads", [1, 3])
 @pytest.mark.parametrize("writer", WRITERS)
 @pytest.mark.parametrize("rows", [0, 1, 5, 23])
-def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows, writer):
-    """Random cells, across blocks of rows."""
+def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, rows, writer, threads):
+    """Random cells, across blocks of rows (23 rows: six blocks, on three
+    threads the compiled ones made three at a time, each thread's buffers
+    used again for a block of fewer rows)."""
     from isoflow.cli import table_text
+    from isoflow.scale.compiled import using
 
     monkeypatch.setattr(table_text, "BLOCK_ROWS", 4)
     monkeypatch.setattr(table_text, "PLAIN_ROWS", WRITERS[writer][0])
@@ -654,9 +658,38 @@ def test_table_text_is_what_the_json_and_csv_modules_write(monkeypatch, rng, row
     floats[2::7] = -np.inf
     genera = np.empty(rows, object)
     genera[:] = [tuple(rng.integers(0, 4, rng.integers(0, 4)).tolist()) for _ in range(rows)]
-    assert_text_as_json_and_csv_write(
-        {"label": np.arange(rows, dtype=np.uint64) + np.uint64(2**63), "voxels": rng.integers(-9, 10**12, rows),
-         "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera})
+    with using(threads):
+        assert_text_as_json_and_csv_write(
+            {"label": np.arange(rows, dtype=np.uint64) + np.uint64(2**63), "voxels": rng.integers(-9, 10**12, rows),
+             "x": floats, "ok": rng.integers(0, 2, rows).astype(bool), "genera": genera})
+
+
+def test_table_text_blocks_are_made_on_two_threads_at_once(monkeypatch, rng):
+    """A large table's blocks of rows are made two at a time on two
+    threads (each of the first two waits for the other: one thread alone
+    would wait in vain), and the text is still what json and csv write."""
+    import threading
+
+    from isoflow.cli import table_text
+    from isoflow.scale.compiled import using
+
+    monkeypatch.setattr(table_text, "BLOCK_ROWS", 8)
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", -1)
+    monkeypatch.setattr(table_text, "PLAIN_ROWS_COLD", -1)
+    made, meet = table_text._rows, threading.Barrier(2, timeout=20)
+
+    def met(table, lo, *rest):
+        if lo < 16:  # the first two blocks, of every text
+            meet.wait()
+        return made(table, lo, *rest)
+
+    monkeypatch.setattr(table_text, "_rows", met)
+    rows = 50
+    genera = np.empty(rows, object)
+    genera[:] = [tuple(rng.integers(0, 3, rng.integers(0, 3)).tolist()) for _ in range(rows)]
+    with using(2):
+        assert_text_as_json_and_csv_write({"label": np.arange(1, rows + 1, dtype=np.uint32),
+                                           "centroid": rng.normal(0, 100, rows), "genera": genera})
 
 
 @pytest.mark.parametrize("writer", WRITERS)

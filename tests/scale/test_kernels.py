@@ -83,6 +83,48 @@ def test_small_passes_take_fewer_threads_unless_asked(monkeypatch):
     assert compiled.thread_count(10) == 7
 
 
+def test_run_ahead_yields_in_order_with_the_next_calls_on_threads():
+    """The results come in the order of the calls, while the calls after
+    the one asked for run at once: two that each wait for the other (a
+    barrier of two) finish only on two threads."""
+    import threading
+
+    meet = threading.Barrier(2, timeout=20)
+
+    def both(k):
+        meet.wait()
+        return k * k
+
+    assert list(compiled.run_ahead([(both, k) for k in range(6)], threads=2)) == [0, 1, 4, 9, 16, 25]
+    assert list(compiled.run_ahead([(pow, 2, k) for k in range(5)], threads=1)) == [1, 2, 4, 8, 16]
+    assert list(compiled.run_ahead([], threads=4)) == []
+
+
+def test_run_ahead_stopped_early_starts_no_more_calls():
+    """A caller that stops after the first result (a closed pipe) leaves
+    the calls beyond the threads' look-ahead unstarted, and each started
+    one finished (none left running after the generator is closed)."""
+    import threading
+    import time
+
+    started, done = [], []
+    lock = threading.Lock()
+
+    def slow(k):
+        with lock:
+            started.append(k)
+        time.sleep(0.02)
+        with lock:
+            done.append(k)
+        return k
+
+    results = compiled.run_ahead([(slow, k) for k in range(40)], threads=2)
+    assert next(results) == 0
+    results.close()
+    assert len(started) <= 3  # the one yielded and the two ahead of it
+    assert sorted(done) == sorted(started)
+
+
 def test_analyze_gives_the_same_report_with_the_kernels(rng):
     v = rng.random((30, 31, 29)) < 0.45
     slow = analyze(DigitalObject(v), 26, surfaces=False)

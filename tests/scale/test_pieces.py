@@ -78,6 +78,33 @@ def test_pieces_of_long_rows_on_several_threads(rng, nz):
         assert (found[0]["lo"][1:, d] == lo[1:]).all() and (found[0]["hi"][1:, d] == hi[1:]).all()
 
 
+def test_a_growable_buffer_keeps_its_entries_moved_or_copied(rng):
+    """A buffer grown, with no array of it held, keeps its entries and is
+    zero beyond them; grown while an array of it is held (it cannot move
+    its pages then), it copies them, and the array held still reads what it
+    did; shrunk, it keeps what fits."""
+    from isoflow.scale.memory import Growable
+
+    values = rng.integers(-(2**31), 2**31, 300_000).astype(np.int32)
+    buffer = Growable(300_000, np.int32)
+    a = buffer.array()
+    a[:] = values
+    del a
+    for size in (1_000_000, 5_000_000):
+        buffer.resize(size, used=300_000)
+        b = buffer.array()
+        assert len(b) == size and (b[:300_000] == values).all() and not b[300_000:].any()
+        del b
+    held = buffer.array()
+    buffer.resize(6_000_000, used=300_000)
+    assert (held[:300_000] == values).all()
+    b = buffer.array()
+    assert len(b) == 6_000_000 and (b[:300_000] == values).all() and not b[300_000:].any()
+    del b
+    buffer.resize(1000, used=300_000)
+    assert (buffer.array() == values[:1000]).all()
+
+
 def test_contact_table_counts_each_pair_of_voxels_once():
     """Every pair of voxels of a 3x3x3 neighbourhood is in exactly one block
     of BLOCK_PAIRS, with the adjacency its offset says."""

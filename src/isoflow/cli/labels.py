@@ -346,6 +346,7 @@ def _some(values, most: int = 8) -> str:
 def cmd_info_labels(args: argparse.Namespace) -> int:
     """``isoflow info LABELS --labels``."""
     from ..mesh.outputs import check_output_path, check_picture_path, output_set
+    from ..scale.compiled import using
 
     to_stdout = args.csv == "-"
     if to_stdout and args.json:
@@ -357,17 +358,21 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
         if args.csv and not to_stdout and Path(args.csv).resolve() == Path(args.png).resolve():
             raise IsoflowError(f"{args.png}: --csv and --png name one file; give each its own")
     about, conn, table, _, absent = read_table(args, surfaces=not args.no_surfaces)
+    threads = getattr(args, "threads", None)
     # the table and its picture replaced together: a failure between them leaves both as they were
     with output_set(args.png) if args.png and args.csv and not to_stdout else contextlib.nullcontext():
         if args.csv and not to_stdout:
-            write_csv(args.csv, table, args.force)
+            with using(threads):  # a large table's text is made on the passes' threads too
+                write_csv(args.csv, table, args.force)
         if args.png:
             draw_table(args, about, conn, table)
     if to_stdout:  # the table alone on stdout, for a pipe
-        sys.stdout.writelines(csv_rows(table))
+        with using(threads):
+            sys.stdout.writelines(csv_rows(table))
         return 0
     if args.json:
-        sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
+        with using(threads):
+            sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
         sys.stdout.write("\n")
         return 0
     print(format_table(path_text(args.input), about, conn, table))

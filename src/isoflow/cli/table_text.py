@@ -8,12 +8,16 @@ matrix, with each cell's length (:mod:`isoflow.scale.text_rows`):
 integers as compiled digits; floats as compiled digits too, the text
 ``repr`` writes (the shortest that reads back as the float: what
 :mod:`json` and :mod:`csv` write), by :mod:`isoflow.scale.float_text`;
-tuples of an object column through ``str``, once per distinct tuple. A
-block's rows are then joined from the columns' cells and the separators
-and names between them in one compiled pass. So a table of a million rows
-is neither a million dicts for the JSON encoder nor a Python string per
-number, and the text is written a block of rows at a time rather than
-held whole.
+tuples of an object column through ``str``, once per distinct tuple.
+Each column's matrix lies in its own part of one buffer, so that none is
+copied beside the others. A block's rows are then joined from the
+columns' cells and the separators and names between them in one compiled
+pass. So a table of a million rows is neither a million dicts for the
+JSON encoder nor a Python string per number, and the text is written a
+block of rows at a time rather than held whole. The blocks are made on
+the compiled passes' threads (the digits and the joins release the GIL),
+the next ones while one is written out, each thread in buffers it keeps
+from one block to the next.
 """
 
 from __future__ import annotations
@@ -21,12 +25,16 @@ from __future__ import annotations
 import json
 import math
 import sys
-from collections.abc import Iterator
+import threading
+from collections.abc import Callable, Iterator
+from functools import partial
 
 import numpy as np
 
-#: rows turned into text at once
-BLOCK_ROWS = 1 << 14
+#: rows turned into text at once: a block's cells and text (about 1.4 kB a
+#: row of a label table's JSON) are read back from the processor's cache
+#: when the rows are joined, and each thread's buffers stay that small
+BLOCK_ROWS = 1 << 12
 #: a table of at most this many rows is written by Python's own text of
 #: each cell (the same text): numba's start would cost a small table (a
 #: few organs) more than the compiled digits save; where numba is not
@@ -58,53 +66,44 @@ def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> li
     return [booleans[v] for v in column.tolist()]
 
 
-def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """ASCII texts right-aligned in the rows of a (n, longest) uint8
-    matrix, and their lengths."""
-    n = len(texts)
-    lengths = np.fromiter(map(len, texts), np.int64, n)
-    width = int(lengths.max()) if n else 0
-    chars = np.zeros((n, width), np.uint8)
+def _fill_texts(texts: list[str], chars: np.ndarray, lengths: np.ndarray) -> None:
+    """ASCII texts right-aligned in the rows of ``chars`` (uint8, (n, at
+    least the longest)); their lengths in ``lengths``."""
+    n, width = chars.shape
+    lengths[:] = np.fromiter(map(len, texts), np.int64, n)
     text = np.frombuffer("".join(texts).encode("ascii"), np.uint8)
     row = np.repeat(np.arange(n), lengths)
     # a character's place: its row's padding, then its place in its text
     chars[row, np.arange(len(text)) - np.repeat(np.cumsum(lengths) - width, lengths)] = text
+
+
+def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """ASCII texts right-aligned in the rows of a (n, longest) uint8
+    matrix, and their lengths."""
+    chars = np.zeros((len(texts), max(map(len, texts), default=0)), np.uint8)
+    lengths = np.zeros(len(texts), np.int64)
+    _fill_texts(texts, chars, lengths)
     return chars, lengths
 
 
-def _integer_cells(magnitude: np.ndarray, negative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Integers (their magnitudes as uint64 and signs) as decimal text, as
-    :func:`_text_cells` gives texts."""
-    from ..scale.text_rows import decimal_cells, decimal_width  # numba: not for a command without a table
-
-    width = decimal_width(magnitude) + bool(negative.any())
-    chars = np.empty((len(magnitude), width), np.uint8)
-    lengths = np.empty(len(magnitude), np.int64)
-    decimal_cells(magnitude, negative, chars, lengths)
-    return chars, lengths
-
-
-def _int_cells(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """An integer column (any width, signed or not) as decimal text."""
+def _int_parts(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An integer column (any width, signed or not) as its magnitudes
+    (uint64) and signs."""
     if column.dtype.kind == "u":
-        return _integer_cells(column.astype(np.uint64), np.zeros(len(column), np.bool_))
+        return column.astype(np.uint64), np.zeros(len(column), np.bool_)
     wide = column.astype(np.int64)
     negative = wide < 0
     # two's complement: -v as uint64 is |v|, for the most negative int64 too
     # (whose negation wraps to itself, 2**63 as uint64)
-    magnitude = np.where(negative, (-wide).astype(np.uint64), wide.astype(np.uint64))
-    return _integer_cells(magnitude, negative)
+    return np.where(negative, (-wide).astype(np.uint64), wide.astype(np.uint64)), negative
 
 
-def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarray]:
-    """A float column as ``repr`` writes it (NaN and infinities as
-    ``missing``): compiled, but for the subnormal floats, which go
-    through ``repr``."""
+def _float_cells(values: np.ndarray, missing: str, chars: np.ndarray, lengths: np.ndarray) -> None:
+    """Float64 ``values`` as ``repr`` writes them (NaN and infinities as
+    ``missing``) into ``chars`` ((n, FLOAT_WIDTH) uint8) and ``lengths``:
+    compiled, but for the subnormal floats, which go through ``repr``."""
     from ..scale.float_text import FLOAT_WIDTH, power_table, shortest_cells
 
-    values = np.ascontiguousarray(column, dtype=np.float64)
-    chars = np.zeros((len(values), FLOAT_WIDTH), np.uint8)
-    lengths = np.zeros(len(values), np.int64)
     shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
     left = np.flatnonzero(lengths == 0)  # NaN, infinities, subnormal floats
     if len(left):
@@ -112,7 +111,23 @@ def _float_cells(column: np.ndarray, missing: str) -> tuple[np.ndarray, np.ndarr
         some, their = _text_cells(texts)
         chars[left, FLOAT_WIDTH - some.shape[1]:] = some
         lengths[left] = their
-    return chars[:, FLOAT_WIDTH - int(lengths.max(initial=0)):], lengths
+
+
+def _cells(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, str]) -> tuple[int, Callable]:
+    """A column's cells before they are written: their width, and a call
+    ``write(chars, lengths)`` that writes them right-aligned into the rows
+    of a (n, width) uint8 matrix and their lengths into ``lengths``."""
+    if column.dtype.kind in "iu":
+        from ..scale.text_rows import decimal_cells, decimal_width  # numba: not for a command without a table
+
+        magnitude, negative = _int_parts(column)
+        return decimal_width(magnitude) + bool(negative.any()), partial(decimal_cells, magnitude, negative)
+    if column.dtype.kind == "f":
+        from ..scale.float_text import FLOAT_WIDTH
+
+        return FLOAT_WIDTH, partial(_float_cells, np.ascontiguousarray(column, dtype=np.float64), missing)
+    texts = cell_texts(column, joined, booleans)
+    return max(map(len, texts), default=0), partial(_fill_texts, texts)
 
 
 def cell_bytes(column: np.ndarray, missing: str, joined: str,
@@ -131,11 +146,11 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
     >>> [bytes(row[len(row) - n:]).decode() for row, n in zip(chars, lengths)]
     ['8.0', '0.1', 'null']
     """
-    if column.dtype.kind in "iu":
-        return _int_cells(column)
-    if column.dtype.kind == "f":
-        return _float_cells(column, missing)
-    return _text_cells(cell_texts(column, joined, booleans))
+    width, write = _cells(column, missing, joined, booleans)
+    chars = np.zeros((len(column), width), np.uint8)
+    lengths = np.zeros(len(column), np.int64)
+    write(chars, lengths)
+    return chars[:, width - int(lengths.max(initial=0)):], lengths
 
 
 def plain(n: int) -> bool:
@@ -160,20 +175,59 @@ def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str
     return "".join("".join(sep + cell for sep, cell in zip(seps, row)) for row in zip(*columns))
 
 
-def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
-          booleans: tuple[str, str]) -> str:
-    """Rows lo .. hi - 1 as one text, each cell after its column's
-    ``before[c]`` (the first column's holds the end of the row before)."""
-    from ..scale.text_rows import join_rows
+def _scratch(held: threading.local, name: str, size: int, dtype: type) -> np.ndarray:
+    """``size`` entries of the calling thread's buffer ``name``, made anew
+    only where the one it holds is smaller: the blocks of a table are
+    alike, and memory a process touches for the first time costs about
+    what writing the text into it does."""
+    buffers = held.__dict__
+    if name not in buffers or len(buffers[name]) < size:
+        buffers[name] = np.empty(size, dtype)
+    return buffers[name][:size]
 
-    cells = [cell_bytes(column[lo:hi], missing, joined, booleans) for column in table.values()]
-    chars = np.concatenate([c for c, _ in cells], axis=1)
-    lengths = np.stack([n for _, n in cells], axis=1)
+
+def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
+          booleans: tuple[str, str], held: threading.local | None = None) -> str:
+    """Rows lo .. hi - 1 as one text, each cell after its column's
+    ``before[c]`` (the first column's holds the end of the row before):
+    each column's cells written into their own part of one buffer, then
+    the rows joined from them. The buffers are the calling thread's in
+    ``held`` (new ones where None)."""
+    from ..scale.text_rows import join_cells
+
+    held = threading.local() if held is None else held
+    n = hi - lo
+    columns = [_cells(column[lo:hi], missing, joined, booleans) for column in table.values()]
+    widths = np.array([width for width, _ in columns], np.int64)
+    starts = np.cumsum(widths * n) - widths * n
+    cells = _scratch(held, "cells", int(widths.sum()) * n, np.uint8)
+    lengths = _scratch(held, "lengths", len(columns) * n, np.int64).reshape(len(columns), n)
+    for c, (width, write) in enumerate(columns):
+        write(cells[starts[c]:starts[c] + width * n].reshape(n, width), lengths[c])
     seps = np.frombuffer(b"".join(before), np.uint8)
-    out = np.empty(int(lengths.sum()) + (hi - lo) * len(seps), np.uint8)
-    size = join_rows(chars, lengths, np.cumsum([c.shape[1] for c, _ in cells]), seps,
-                     np.cumsum([len(b) for b in before]), out)
-    return out[:size].tobytes().decode("ascii")
+    out = _scratch(held, "out", int(lengths.sum()) + n * len(seps), np.uint8)
+    size = join_cells(cells, starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
+    return str(out[:size], "ascii")
+
+
+def _blocks(table: dict, before: list[bytes], missing: str, joined: str, booleans: tuple[str, str]) -> Iterator[str]:
+    """The rows' text a block of :data:`BLOCK_ROWS` rows at a time, in
+    order. The compiled blocks are made on the threads of the compiled
+    passes (:func:`isoflow.scale.compiled.run_ahead`: their digits and
+    joins release the GIL), the next ones while the caller writes one out;
+    Python's text of a small table on the calling thread."""
+    n = len(next(iter(table.values()))) if table else 0
+    rows = _plain_rows if plain(n) else _rows
+    calls = [(rows, table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
+             for lo in range(0, n, BLOCK_ROWS)]
+    if rows is _plain_rows:
+        for fn, *args in calls:
+            yield fn(*args)
+        return
+    from ..scale.compiled import run_ahead
+
+    held = threading.local()  # each thread's buffers, let go with the text
+    yield from run_ahead([(*call, held) for call in calls])
 
 
 def json_rows(table: dict) -> Iterator[str]:
@@ -189,12 +243,11 @@ def json_rows(table: dict) -> Iterator[str]:
     """
     keys = [json.dumps(str(k)) for k in table]
     before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
-    n = len(next(iter(table.values()))) if table else 0
-    rows = _plain_rows if plain(n) else _rows
     yield "["
-    for lo in range(0, n, BLOCK_ROWS):
-        text = rows(table, lo, min(lo + BLOCK_ROWS, n), before, "null", ", ", ("false", "true"))
-        yield text[3:] if lo == 0 else text  # the first row has no "}, " before it
+    n = 0
+    for text in _blocks(table, before, "null", ", ", ("false", "true")):
+        yield text if n else text[3:]  # the first row has no "}, " before it
+        n += 1
     yield "}]" if n else "]"
 
 
@@ -211,8 +264,5 @@ def csv_rows(table: dict) -> Iterator[str]:
     """
     yield ",".join(map(str, table))
     before = [b"\r\n"] + [b","] * (len(table) - 1)
-    n = len(next(iter(table.values()))) if table else 0
-    rows = _plain_rows if plain(n) else _rows
-    for lo in range(0, n, BLOCK_ROWS):
-        yield rows(table, lo, min(lo + BLOCK_ROWS, n), before, "", ";", ("False", "True"))
+    yield from _blocks(table, before, "", ";", ("False", "True"))
     yield "\r\n"

@@ -46,6 +46,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+from collections.abc import Iterator
 from functools import cache
 from typing import Literal
 
@@ -311,3 +312,39 @@ def run(calls: list) -> list:
     with ThreadPoolExecutor(max_workers=len(calls)) as pool:
         futures = [pool.submit(fn, *args) for fn, *args in calls]
         return [f.result() for f in futures]
+
+
+def run_ahead(calls: list, threads: int | None = None) -> Iterator:
+    """The results of ``(fn, *args)`` calls, in order, each yielded as soon
+    as it is done, while the next ``threads`` calls run on threads of
+    their own (default :func:`thread_count`): what the caller does with
+    one result (writes it out) overlaps the work on the next, and at most
+    ``threads + 1`` results are held at once. A caller that stops early
+    (an error, a closed pipe) cancels the calls not yet started and waits
+    for those running. One thread, or one call: each runs on the calling
+    thread when its result is asked for.
+
+    Examples
+    --------
+    >>> list(run_ahead([(pow, 2, k) for k in range(5)], threads=2))
+    [1, 2, 4, 8, 16]
+    """
+    threads = thread_count() if threads is None else threads
+    if threads <= 1 or len(calls) <= 1:
+        for fn, *args in calls:
+            yield fn(*args)
+        return
+    from collections import deque
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = ThreadPoolExecutor(max_workers=min(threads, len(calls)))
+    pending: deque = deque()
+    try:
+        for fn, *args in calls:
+            pending.append(pool.submit(fn, *args))
+            if len(pending) > threads:
+                yield pending.popleft().result()
+        while pending:
+            yield pending.popleft().result()
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

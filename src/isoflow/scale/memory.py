@@ -197,6 +197,20 @@ def sized(n: int) -> str:
 HUGE_PAGES_FROM = 4 << 20
 
 
+def _pages(nbytes: int):
+    """A private anonymous memory map of ``nbytes`` (at least 1), in large
+    pages from :data:`HUGE_PAGES_FROM` bytes on."""
+    import mmap
+
+    if hasattr(mmap, "MAP_PRIVATE"):  # POSIX: a private map (a shared one faults slower)
+        pages = mmap.mmap(-1, max(nbytes, 1), flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+    else:  # Windows: its anonymous maps take no flags
+        pages = mmap.mmap(-1, max(nbytes, 1))
+    if nbytes >= HUGE_PAGES_FROM and hasattr(mmap, "MADV_HUGEPAGE"):
+        pages.madvise(mmap.MADV_HUGEPAGE)
+    return pages
+
+
 def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) -> np.ndarray:
     """An array in pages of its own (a private anonymous memory map, in
     large pages from :data:`HUGE_PAGES_FROM` bytes on), zeros or ``fill``:
@@ -205,20 +219,74 @@ def mapped(shape: int | tuple[int, ...], dtype: DTypeLike, fill: object = None) 
     back once one of that size was freed, so a pass that makes and frees
     many of them holds far more memory than it uses; the large passes over
     label images take their tables this way."""
-    import mmap
-
     kind = np.dtype(dtype)
     count = int(np.prod(shape, dtype=np.int64))
     if count * kind.itemsize < 1 << 20:  # small: the allocator's pools serve it as well
         out = np.zeros(shape, kind)
     else:
-        if hasattr(mmap, "MAP_PRIVATE"):  # POSIX: a private map (a shared one faults slower)
-            pages = mmap.mmap(-1, count * kind.itemsize, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-        else:  # Windows: its anonymous maps take no flags
-            pages = mmap.mmap(-1, count * kind.itemsize)
-        if count * kind.itemsize >= HUGE_PAGES_FROM and hasattr(mmap, "MADV_HUGEPAGE"):
-            pages.madvise(mmap.MADV_HUGEPAGE)
-        out = np.frombuffer(pages, kind, count).reshape(shape)
+        out = np.frombuffer(_pages(count * kind.itemsize), kind, count).reshape(shape)
     if fill is not None:
         out[...] = fill
     return out
+
+
+class Growable:
+    """A 1D buffer of ``size`` entries of ``dtype`` in pages of its own
+    (zeros, as :func:`mapped`) that changes its size without a copy where
+    the system can move its pages (Linux's ``mremap``): its entries stay
+    where they are and the pages beyond them are not touched until
+    written. A copy would write each entry a second time into memory the
+    process touches for the first time, which costs about what finding
+    the entries did.
+
+    :meth:`array` gives the buffer as an array; :meth:`resize` moves the
+    pages only where no such array is held any more (else it copies).
+
+    Parameters
+    ----------
+    size : int
+        Entries at first.
+    dtype : numpy dtype
+        Their type.
+
+    Examples
+    --------
+    >>> runs = Growable(1 << 20, np.int32)
+    >>> a = runs.array()
+    >>> a[:3] = 7
+    >>> del a
+    >>> runs.resize(1 << 22, used=3)
+    >>> b = runs.array()
+    >>> len(b), b[:4].tolist()
+    (4194304, [7, 7, 7, 0])
+    """
+
+    def __init__(self, size: int, dtype: DTypeLike) -> None:
+        self.dtype = np.dtype(dtype)
+        self.size = int(size)
+        self._pages = _pages(self.size * self.dtype.itemsize)
+
+    def array(self) -> np.ndarray:
+        """The buffer's ``size`` entries (a view of its pages)."""
+        return np.frombuffer(self._pages, self.dtype, self.size)
+
+    def resize(self, size: int, used: int) -> None:
+        """``size`` entries, of which the first ``used`` are kept (the rest
+        zeros)."""
+        nbytes = max(int(size) * self.dtype.itemsize, 1)
+        used = min(used, int(size))
+        try:
+            self._pages.resize(nbytes)
+        except (BufferError, OSError, SystemError, ValueError):
+            # an array of the buffer still held, or a system that cannot move
+            # pages: new pages, the entries copied
+            pages = _pages(nbytes)
+            np.frombuffer(pages, self.dtype, used)[:] = np.frombuffer(self._pages, self.dtype, used)
+            self._pages = pages
+        else:
+            if nbytes >= HUGE_PAGES_FROM and hasattr(self._pages, "madvise"):
+                import mmap
+
+                if hasattr(mmap, "MADV_HUGEPAGE"):
+                    self._pages.madvise(mmap.MADV_HUGEPAGE)
+        self.size = int(size)

@@ -47,7 +47,7 @@ from .bitrows import trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 from .kernels import union
-from .memory import check_fits, mapped
+from .memory import Growable, check_fits, mapped
 
 #: the key of an empty slot of the pair table
 EMPTY = np.uint64(0xFFFFFFFFFFFFFFFF)
@@ -395,18 +395,23 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
     offsets = np.zeros(nx * ny + 1, np.int64)
     parts = slabs(nx, thread_count(flat.size)) if flat.size else []
     found = run([(_slab_pieces, flat, ny, nz, lo, hi, offsets, axis) for lo, hi in parts])
-    at = np.cumsum([0] + [len(s) for s, _ in found]).tolist()
+    at = np.cumsum([0] + [used for _, _, used in found]).tolist()
     total = at[-1]
-    starts, parent = mapped(total, np.int32), mapped(total, np.uint32)
+    if found:  # the first slab's buffers become the whole's, in place (its runs are numbered from 0 already)
+        for buffer in found[0][:2]:
+            buffer.resize(total, at[1])
+        starts, parent = found[0][0].array(), found[0][1].array()
+    else:
+        starts, parent = np.zeros(0, np.int32), np.zeros(0, np.uint32)
 
-    def place(t: int, slab_starts: np.ndarray, slab_parent: np.ndarray) -> None:
+    def place(t: int, slab_starts: Growable, slab_parent: Growable) -> None:
         """Slab t's runs at their place in the whole, numbered globally."""
         lo, hi = parts[t]
-        starts[at[t]:at[t + 1]] = slab_starts
-        np.add(slab_parent, np.uint32(at[t]), out=parent[at[t]:at[t + 1]])
+        starts[at[t]:at[t + 1]] = slab_starts.array()[:at[t + 1] - at[t]]
+        np.add(slab_parent.array()[:at[t + 1] - at[t]], np.uint32(at[t]), out=parent[at[t]:at[t + 1]])
         offsets[lo * ny:hi * ny] += at[t]
 
-    calls = [(place, t, *found[t]) for t in range(len(parts))]
+    calls = [(place, t, *found[t][:2]) for t in range(1, len(parts))]
     del found
     run(calls)
     del calls
@@ -426,27 +431,24 @@ def piece_runs(volume: np.ndarray, first: int = 0, last: int | None = None, x0: 
 
 
 def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offsets: np.ndarray,
-                 axis: str = "its first axis"):
+                 axis: str = "its first axis") -> tuple[Growable, Growable, int]:
     """The runs of one slab of layers, joined within it (slab-local
-    indices), in buffers that grow as they fill."""
+    indices), in buffers that grow as they fill: ``(starts, parent,
+    used)``, the runs the first ``used`` entries of each."""
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
-    starts, parent = mapped(size, np.int32), mapped(size, np.uint32)
+    buffers = Growable(size, np.int32), Growable(size, np.uint32)
     words = np.zeros(max(MARK_VOXELS, nz) // 64 + 2, np.uint64)
     used, x, y = 0, x_lo, 0
     while True:
+        starts, parent = (buffer.array() for buffer in buffers)
         used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words)
+        del starts, parent  # no array of the buffers held: they grow in place
         if x == x_hi:
-            return starts[:used], parent[:used]
+            return (*buffers, used)
         size = min(2 * size, (x_hi - x_lo) * ny * nz)
         check_layers(RUN_BYTES * size, f"the runs of {counted(x_hi - x_lo, 'layer')} of a label image", x_hi - x_lo, axis=axis)
-        starts, parent = _grown_to(starts, size, used), _grown_to(parent, size, used)
-
-
-def _grown_to(buffer: np.ndarray, size: int, used: int) -> np.ndarray:
-    """A buffer of ``size`` holding the first ``used`` entries of ``buffer``."""
-    out = mapped(size, buffer.dtype)
-    out[:used] = buffer[:used]
-    return out
+        for buffer in buffers:
+            buffer.resize(size, used)
 
 
 @njit(cache=True, nogil=True)
@@ -1102,14 +1104,14 @@ class PairSink:
         size = 2 * len(self.pairs) if grow else len(self.pairs)
         while 10 * keep > 3 * size:
             size *= 2
-        alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
-                 "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
-        check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
         if last:
             new = new_pairs(1)
         elif self.spare is not None and len(self.spare) == size:
             new = _emptied(self.spare)
-        else:
+        else:  # a new table: checked before it is made (a spare one was, and the budget is read from /proc)
+            alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
+                     "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
+            check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
             new = new_pairs(size)
         s = 0
         while s < len(self.pairs):

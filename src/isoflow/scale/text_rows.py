@@ -60,32 +60,36 @@ def decimal_cells(magnitude, negative, chars, lengths):
 
 
 @njit(cache=True, nogil=True)
-def join_rows(cells, lengths, ends, seps, sep_ends, out):
+def join_cells(cells, starts, widths, lengths, seps, sep_ends, out):
     """Rows of text: row ``r`` is, for every column ``c``, its separator
     ``seps[sep_ends[c - 1]:sep_ends[c]]`` then its cell, the last
-    ``lengths[r, c]`` bytes of ``cells[r, :ends[c]]`` (the columns'
-    right-aligned cells side by side). Written into ``out`` (uint8, at
-    least the text's length); returns the length.
+    ``lengths[c, r]`` bytes of row ``r`` of the column's cells: a
+    (rows, ``widths[c]``) matrix of right-aligned cells that starts at
+    ``cells[starts[c]]`` (each column's matrix apart in one buffer, so
+    that each is written where it lies, none copied beside the others).
+    Written into ``out`` (uint8, at least the text's length); returns the
+    length.
 
     Examples
     --------
-    >>> cells = np.frombuffer(b" 1 x" b"23yy", np.uint8).reshape(2, 4)
-    >>> lengths = np.array([[1, 1], [2, 2]])
+    >>> cells = np.frombuffer(b" 1" b"23" b"x" b"y", np.uint8)   # column 0 two wide, column 1 one
+    >>> lengths = np.array([[1, 2], [1, 1]])
     >>> seps = np.frombuffer(b";a=,b=", np.uint8)
     >>> out = np.zeros(32, np.uint8)
-    >>> n = join_rows(cells, lengths, np.array([2, 4]), seps, np.array([3, 6]), out)
+    >>> n = join_cells(cells, np.array([0, 4]), np.array([2, 1]), lengths, seps, np.array([3, 6]), out)
     >>> bytes(out[:n]).decode()
-    ';a=1,b=x;a=23,b=yy'
+    ';a=1,b=x;a=23,b=y'
     """
     at = 0
-    for r in range(cells.shape[0]):
+    for r in range(lengths.shape[1]):
         s = 0
-        for c in range(len(ends)):
+        for c in range(len(starts)):
             for q in range(s, sep_ends[c]):
                 out[at] = seps[q]
                 at += 1
             s = sep_ends[c]
-            for q in range(ends[c] - lengths[r, c], ends[c]):
-                out[at] = cells[r, q]
+            end = starts[c] + (r + 1) * widths[c]
+            for q in range(end - lengths[c, r], end):
+                out[at] = cells[q]
                 at += 1
     return at
