@@ -51,10 +51,10 @@ def add_mesh_rule(p: argparse.ArgumentParser) -> None:
                         "winding number), shell (every voxel whose closed cube the surface meets) or flood (the "
                         "shell and what it encloses)")
     p.add_argument("--strict", action="store_true",
-                   help="refuse a mesh that is not watertight as written (genus mends no T-junction or repeated "
-                        "face for it) or has double-sided faces, whose voxels lie in overlapping layers, or whose "
-                        "winding solid is thin or empty against its shell (by default it is read by the generalised "
-                        "winding number)")
+                   help="refuse a mesh that is not watertight as written (neither genus nor voxelize mends a "
+                        "T-junction for it, nor genus a repeated face) or has double-sided faces, whose voxels lie "
+                        "in overlapping layers, or whose winding solid is thin or empty against its shell (by "
+                        "default it is read by the generalised winding number)")
 
 
 def mesh_fill(args: argparse.Namespace) -> str:

@@ -29,7 +29,7 @@ from .crossings import CubeGrid, find_crossings
 from .fills import Fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
-from .t_junctions import split_t_junctions
+from .t_junctions import close_t_junctions
 from .verdict import GenusVerdict, Note, Stop, VerdictKind, strict_refusal
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
@@ -729,8 +729,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     there; the digital rows voxelise the faces as loaded, each copy
     counted, exactly as :func:`~isoflow.mesh.voxelize.voxelize_file` reads
     the file (the generalised winding number adds a copy's winding: a wall
-    listed twice parts the solid). A note names each repair and the rows
-    it was made for.
+    listed twice parts the solid; the voxeliser splits the T-junctions
+    too, with :func:`~isoflow.mesh.t_junctions.close_t_junctions`, and
+    reads a mesh closed so by the exact scanline). A note names each
+    repair and the rows it was made for.
     An open mesh has no genus of its own; an inconsistently oriented one has
     the genus of its surface where its faces can be turned consistently
     (none where they cannot: a non-orientable surface). The solid of
@@ -814,7 +816,8 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         _refuse_as_voxelize(name, v, f, fill)
     # the digital rows voxelise the faces as loaded, as isoflow voxelize
     # reads the same file: a copy of a face adds its winding (a wall listed
-    # twice parts the solid), which the surface counted below has not
+    # twice parts the solid), which the surface counted below has not; the
+    # voxeliser splits T-junctions itself, so that it reads the same mesh
     given = v, f
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
@@ -849,7 +852,8 @@ def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> 
     (repeated faces dropped, edges split at T-junctions) would otherwise
     let through a mesh that the strict voxeliser refuses for the open or
     non-manifold edges it has. The line says what genus does without
-    ``strict``, which is not what voxelize does: it makes those repairs."""
+    ``strict``: it makes those repairs (voxelize splits the T-junctions
+    too, but keeps each repeated face)."""
     found = Solid(v, f, fill=fill).strict_defects()
     if found is None:
         return
@@ -892,33 +896,16 @@ def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarra
     return f[~repeat]
 
 
-#: how far from an edge, as a share of the bounding box's diagonal, a vertex
-#: lies on it for :func:`_split_t_junctions`: above float32's rounding (a
-#: CAD export's STL), far below any feature
-T_JUNCTION_RTOL = 1e-6
-
-
 def _split_t_junctions(v: np.ndarray, f: np.ndarray, stats: dict) -> tuple[np.ndarray, np.ndarray]:
     """The mesh with the edges that a vertex of another face splits (a
-    T-junction: :func:`~isoflow.mesh.t_junctions.split_t_junctions`) split
+    T-junction: :func:`~isoflow.mesh.t_junctions.close_t_junctions`) split
     there, where that closes them; ``stats["t_junctions"]`` holds the
     facts of their note. The faces were counted as open though the
     surface is closed as drawn."""
-    used = v[np.unique(f)] if len(f) else v[:0]
-    if not len(used):
-        return v, f
-    # in units of a power of two near the longest side, from the box's corner, as the weld measures:
-    # the diagonal and the products along an edge neither overflow at 1e200 nor underflow at 1e-200
-    lo = used.min(axis=0)
-    e = math.frexp(float((used.max(axis=0) - lo).max()) or 1.0)[1]
-    with np.errstate(over="ignore", invalid="ignore"):
-        scaled = np.ldexp(v - lo, -e)
-    diagonal = float(np.linalg.norm(np.ldexp(used.max(axis=0) - lo, -e)))
-    v2, f2, facts = split_t_junctions(scaled, f, T_JUNCTION_RTOL * diagonal)
-    if facts is None:
-        return v, f
-    stats["t_junctions"] = facts
-    return np.vstack([v, np.ldexp(v2[len(v):], e) + lo]), f2
+    v2, f2, facts = close_t_junctions(v, f)
+    if facts is not None:
+        stats["t_junctions"] = facts
+    return v2, f2
 
 
 def _corners_of(v: np.ndarray, face: np.ndarray) -> tuple:

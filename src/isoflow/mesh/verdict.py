@@ -275,9 +275,9 @@ def _point(p) -> str:
     return "(" + ", ".join(f"{x:.6g}" for x in p) + ")"
 
 
-#: the rows of ``isoflow genus`` that read the mesh after its repairs (a
-#: repeated face dropped, T-junctions split); the digital rows read it as
-#: isoflow voxelize does, as loaded
+#: the rows of ``isoflow genus`` that read the mesh with its repeated faces
+#: dropped; the digital rows read it as isoflow voxelize does, each copy
+#: counted
 _REPAIRED_ROWS = "the mesh, crossings, manifold3d, solid and pymeshlab rows"
 
 
@@ -292,7 +292,8 @@ def _repeated_words(n: int, copies: int, corners) -> str:
 def _t_junction_words(points: int, faces: int, edges: int) -> str:
     return (f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one "
             f"face on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split "
-            f"there for {_REPAIRED_ROWS}; the digital rows voxelise the faces as given, as voxelize does")
+            "there before counting, for every row (the digital rows voxelise the mesh as voxelize reads it, which "
+            "splits them too: the surface drawn is the same)")
 
 
 def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, union_genus: int | None = None) -> str:

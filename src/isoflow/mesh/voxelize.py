@@ -15,7 +15,11 @@ A voxel is in iff the generalised winding number of its centre satisfies
 ``|w| > 1/2`` (Jacobson et al. 2013).  On a closed, consistently oriented
 mesh w is the integer winding number and the rule is the nonzero rule, which
 the scanline computes exactly (with a documented tie rule for centres on the
-surface).  Any other mesh is first made consistently oriented where its
+surface).  Edges that vertices of other faces split (T-junctions, a CAD
+export's cracks) are split there first where that closes them
+(:func:`~isoflow.mesh.t_junctions.close_t_junctions`): the surface drawn,
+and so w off it, is the same, and a mesh closed so takes the scanline
+alone.  Any other mesh is first made consistently oriented where its
 faces show how (:func:`~isoflow.mesh.orientation.orient_faces`), then read
 by the same scanline on the mesh closed by a cap, minus the cap's own
 winding number (exact; see :mod:`isoflow.mesh.winding`).
@@ -81,6 +85,7 @@ from .load import (  # noqa: F401
     mesh_defects,
     repeated_faces,
 )
+from .t_junctions import close_t_junctions
 
 #: a progress callback: ``progress(done, total)``
 Progress = Callable[[int, int], object]
@@ -166,8 +171,12 @@ class Solid:
     and the cap that closes it.
 
     ``defects`` are the counts of :func:`mesh_defects` on the faces as given;
-    after exact duplicates of vertex positions are merged (a triangle soup)
-    and double-sided faces are read as one (``double_sided`` pairs, see
+    after exact duplicates of vertex positions are merged (a triangle soup),
+    boundary edges are split at T-junctions where that closes them
+    (``t_junctions``: the facts of
+    :func:`~isoflow.mesh.t_junctions.close_t_junctions`, or None; the
+    surface drawn is the same, each repeated face kept) and double-sided
+    faces are read as one (``double_sided`` pairs, see
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
     them; ``walls`` pairs lay in walls between solids or inside the solid
     (solids glued face to face, a tetrahedral mesh's cells) and were
@@ -194,6 +203,7 @@ class Solid:
         self.census = self.defects
         self.joined = 0  # edges joined by merging vertices at equal positions
         self.double_sided = self.walls = self.flipped = self.chain_edges = self.repeated = 0
+        self.t_junctions: dict | None = None  # facts of the edges split at T-junctions, if any closed
         self.inconsistent = self.defects["inconsistent_edges"]
         self.v = v
         self.faces = faces
@@ -211,6 +221,16 @@ class Solid:
             edges = census(faces, len(v))
             self.census = defect_counts(*edges[2:])
             self.joined = max(0, self.defects["boundary_edges"] - self.census["boundary_edges"])
+        if self.census["boundary_edges"]:
+            # a CAD export's faces tessellated apart leave cracks at
+            # T-junctions: split there, the surface drawn is the same (and so
+            # is w off it), but the edges balance and the exact scanline reads
+            # the mesh without a cap's solid angles; repeated faces are kept,
+            # each copy adds its winding
+            v, faces, self.t_junctions = close_t_junctions(v, faces)
+            if self.t_junctions is not None:
+                edges = census(faces, len(v))
+                self.census = defect_counts(*edges[2:])
         # a pair shares its three edges, each then used at least twice: on
         # a manifold mesh the pair is a component of its own
         if self.census["nonmanifold_edges"] or self.census["components"] > 1:
@@ -276,8 +296,9 @@ class Solid:
             rule = f"the {self.fill} fill takes its faces as they are"
         elif self.chain_edges:
             rule = "it is read by the generalised winding number"
-        else:  # double-sided faces read as one, coincident corners joined: closed
-            rule = "its edges balance, so it bounds a solid: it is read by the exact nonzero winding number"
+        else:  # double-sided faces read as one, coincident corners joined, T-junctions split: closed
+            split = f" once split at its {counted(self.t_junctions['points'], 'T-junction')}" if self.t_junctions else ""
+            rule = f"its edges balance{split}, so it bounds a solid: it is read by the exact nonzero winding number"
         return "; ".join(what), rule
 
     def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
@@ -333,6 +354,12 @@ class Solid:
         what = []
         if self.joined:
             what.append(counted(self.joined, "edge") + " joined by merging vertices at equal positions (a triangle soup)")
+        if self.t_junctions:
+            t = self.t_junctions
+            what.append(counted(t["edges"], "boundary edge") + " closed at T-junctions ("
+                        f"{counted(t['points'], 'vertex', 'vertices')} of one face on another face's edge, "
+                        "as faces tessellated apart leave them: "
+                        f"{counted(t['faces'], 'face')} split there, the surface drawn the same)")
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation, each read as one face)")
@@ -589,9 +616,10 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         voxel it encloses (no 6-path outside the shell to the outside of
         the grid).  See :mod:`isoflow.mesh.fills`.
     strict
-        Refuse a mesh that is not watertight (see :func:`mesh_defects`) or
-        has double-sided faces, instead of reading it by the generalised
-        winding number; with ``fill="winding"`` also one whose voxels lie
+        Refuse a mesh that is not watertight as given (see
+        :func:`mesh_defects`; cracks at T-junctions, which are otherwise
+        split and read closed, included) or has double-sided faces,
+        instead of reading it by the generalised winding number; with ``fill="winding"`` also one whose voxels lie
         inside two or more layers or have winding numbers of both signs
         (overlapping or self-intersecting shells, as far as the voxel
         centres see them), and one whose solid is thin or empty against its
