@@ -441,26 +441,67 @@ FACE_BYTES = 12
 DECODED_COPIES = 2
 
 
-def _block_bytes(grid: _Grid, dtype) -> int:
-    """The memory that summing the largest block of ``grid`` takes: with
-    the chunk decoded for it (:data:`DECODED_COPIES`) where a chunk is
-    larger than the block (zarr decodes a whole chunk to give any part of
-    it)."""
-    voxels = int(np.prod([max(b - a for a, b in bounds) for bounds in grid.bounds], dtype=np.int64))
+class StoreMemory(NamedTuple):
+    """What summing an array in blocks holds: ``block``, the bytes of one
+    block's task at work; ``faces``, the bytes of the faces of two layers
+    of blocks, held between the layers for the merges."""
+
+    block: int
+    faces: int
+
+
+def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any, chunk_voxels: int = 0) -> StoreMemory:
+    """The memory that :func:`analyze_chunked` counts for an array summed in
+    blocks: what one block's task holds at work (:data:`BLOCK_BYTES` a
+    voxel of a bool block, twice the stored bytes and
+    :data:`CHECK_BYTES` for another type, and the chunk it is read from,
+    :data:`DECODED_COPIES` times, where that chunk is larger), and the
+    faces of two layers of blocks (:data:`FACE_BYTES` a face voxel).
+
+    Parameters
+    ----------
+    block : tuple of int
+        The sides of the largest block, the layers' axis first.
+    numblocks : tuple of int
+        The blocks along each axis in the same order: layers of blocks go
+        along the first.
+    dtype : numpy dtype or its name
+        The stored values.
+    chunk_voxels : int
+        The voxels of the chunk zarr decodes to give a block
+        (:func:`~isoflow.scale.chunks.decoded_chunk_voxels`), counted where
+        it is larger than the block; 0 where the blocks are the chunks.
+
+    Returns
+    -------
+    StoreMemory
+        ``(block, faces)`` in bytes. The local check holds ``threads *
+        block + faces`` to the budget; a ``dask.distributed`` worker holds
+        the block times its threads beside one layer's faces,
+        ``faces // 2``.
+
+    Examples
+    --------
+    >>> store_memory((64, 64, 64), (4, 4, 4), bool)  # a 256^3 store of bools in chunks of 64^3
+    StoreMemory(block=1048576, faces=9437184)
+    >>> store_memory((4, 4, 4), (2, 64, 64), "uint8", chunk_voxels=4 * 256 * 256).block  # 4^3 blocks of larger chunks
+    524608
+    """
+    voxels = int(np.prod(block, dtype=np.int64))
     dtype = np.dtype(dtype)
-    chunk = decoded_chunk_voxels(grid.array)
-    beyond = (DECODED_COPIES * chunk - voxels) * dtype.itemsize if chunk > voxels else 0
-    return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
-
-
-def _faces_bytes(grid: _Grid) -> int:
-    """The memory that the faces of two layers of blocks take, held as
-    their summaries wait for the next layer's, at most (every block as
-    large as the largest, every face of it counted)."""
-    sides = [max(b - a for a, b in bounds) for bounds in grid.bounds]
+    beyond = (DECODED_COPIES * chunk_voxels - voxels) * dtype.itemsize if chunk_voxels > voxels else 0
+    at_work = voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
+    sides = [int(s) for s in block]
     per_block = 2 * sum(int(np.prod(sides[:i] + sides[i + 1:], dtype=np.int64)) for i in range(len(sides)))
-    blocks = min(2, grid.numblocks[0]) * int(np.prod(grid.numblocks[1:], dtype=np.int64))
-    return FACE_BYTES * per_block * blocks
+    layers = min(2, int(numblocks[0])) * int(np.prod(numblocks[1:], dtype=np.int64))
+    return StoreMemory(at_work, FACE_BYTES * per_block * layers)
+
+
+def _grid_memory(grid: _Grid, dtype) -> StoreMemory:
+    """:func:`store_memory` of ``grid``'s largest block (every block of
+    the grid counted as large, every face of it)."""
+    sides = tuple(max(b - a for a, b in bounds) for bounds in grid.bounds)
+    return store_memory(sides, grid.numblocks, dtype, decoded_chunk_voxels(grid.array))
 
 
 def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where: str, scheduler, is_zarr: bool,
@@ -635,8 +676,9 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), _faces_bytes(grid), where,
-                                  scheduler, grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
+        need = _grid_memory(grid, array.dtype)
+        workers = _tasks_that_fit(workers, thread_count(), need.block, need.faces, where, scheduler, grid.is_zarr,
+                                  smaller_blocks_help(grid.bounds, grid.array))
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)
