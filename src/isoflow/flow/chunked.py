@@ -239,9 +239,9 @@ def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
     across = (-(-shape[1] // cy), -(-shape[2] // cz))
 
     def worker(layers: int) -> int:
-        # the store's layers of blocks go along x, as many as its slabs: the faces held are of two
+        # the store's layers of blocks go along x, as many as its slabs
         need = store_memory((layers, cy, cz), (2, *across), np.uint8)
-        return need.block + need.faces // 2
+        return need.block + need.faces
 
     # what the worker holds grows linearly with the chunk's layers: its slope and its value at none
     per_layer = worker(2) - worker(1)
