@@ -422,17 +422,24 @@ def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:
     return threads * (2 if is_zarr and not processes else 1)
 
 
-#: bytes per voxel of a bool block at work: the block, zarr's decoded chunk it is copied from, the sweep's passes
-#: (0.6 measured on blocks of 128^3 and 256^3 voxels of a porous field) and the block freed before it, which the C
-#: allocator keeps in the heap of the thread that decoded it for the next (measured 3.7 to 4.2 with zarr's reads)
-BLOCK_BYTES = 4
+#: bytes per voxel of a bool block at work: the block, zarr's decoded chunk it is copied from and the sweep's passes
+#: (2.6 measured on a store of one block of 256^3 voxels of a porous field, 0.6 of it the passes)
+BLOCK_BYTES = 3
 #: ... and of a block of another type beside twice its stored values (zarr's and NumPy's): the masks of its values
 #: other than 0 and 1, and its bool copy
 CHECK_BYTES = 4
-#: bytes per voxel of the blocks' faces while two layers of blocks are held: a summary keeps 3 (its faces' numbers
-#: and voxels), the merges of the seams between the layers take the rest while they run (8 to 9 measured in all on
-#: stores of 256^3 and 384^3 voxels in chunks of 64^3, where the faces outweigh the blocks at work)
-FACE_BYTES = 12
+#: bytes per voxel of the faces of a layer of blocks: a summary keeps 3 (its faces' numbers and voxels) and the
+#: merges of the seams take the rest while they run. The summaries of two layers are held between layers (here;
+#: a dask.distributed worker holds one layer's while the client holds the rest), and the merges' part does not
+#: double with them: 10 to 13 measured in all per voxel of a layer's faces on stores of 256^3 to 640^3 voxels in
+#: blocks of 64^3 and 128^3, where the faces outweigh the blocks at work (benchmarks/bench_store_estimate.py)
+FACE_BYTES = 14
+#: blocks (or the larger chunks they are read from) that the C allocator keeps in its heaps once freed: glibc
+#: serves buffers of up to 32 MiB from per-thread heaps after the first is freed and keeps the freed ones there,
+#: one or two in each heap of the threads that decode chunks (zarr's) and sum blocks. 1.3 to 4 blocks of 256^3 were
+#: kept on 2 CPUs (a store of 512^3 peaked at 107 to 127 MiB, 43 MiB with MALLOC_ARENA_MAX=1, 37 MiB with
+#: MALLOC_TRIM_THRESHOLD_=65536, which dask.distributed's nanny sets for its workers: these hold none)
+KEPT_BLOCKS = 4
 
 
 #: copies of a chunk larger than the block that a block's read holds at its peak: zarr's decoded chunk and
@@ -441,41 +448,87 @@ FACE_BYTES = 12
 DECODED_COPIES = 2
 
 
-def _block_bytes(grid: _Grid, dtype) -> int:
-    """The memory that summing the largest block of ``grid`` takes: with
-    the chunk decoded for it (:data:`DECODED_COPIES`) where a chunk is
-    larger than the block (zarr decodes a whole chunk to give any part of
-    it)."""
-    voxels = int(np.prod([max(b - a for a, b in bounds) for bounds in grid.bounds], dtype=np.int64))
+class StoreMemory(NamedTuple):
+    """What summing an array in blocks holds, in bytes: ``block``, one
+    block's task at work; ``faces``, the faces of the layers of blocks
+    held between the layers for the merges; ``kept``, the blocks freed
+    before that the C allocator keeps in its heaps in this process."""
+
+    block: int
+    faces: int
+    kept: int
+
+
+def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any, chunk_voxels: int = 0) -> StoreMemory:
+    """The memory that :func:`analyze_chunked` counts for an array summed in
+    blocks: what one block's task holds at work (:data:`BLOCK_BYTES` a
+    voxel of a bool block, twice the stored bytes and
+    :data:`CHECK_BYTES` for another type, and the chunk it is read from,
+    :data:`DECODED_COPIES` times, where that chunk is larger), the faces
+    of a layer of blocks (:data:`FACE_BYTES` a face voxel), and the
+    blocks freed before that the allocator keeps (:data:`KEPT_BLOCKS`,
+    as many as were read before the last).
+
+    Parameters
+    ----------
+    block : tuple of int
+        The sides of the largest block, the layers' axis first.
+    numblocks : tuple of int
+        The blocks along each axis in the same order: layers of blocks go
+        along the first.
+    dtype : numpy dtype or its name
+        The stored values.
+    chunk_voxels : int
+        The voxels of the chunk zarr decodes to give a block
+        (:func:`~isoflow.scale.chunks.decoded_chunk_voxels`), counted where
+        it is larger than the block; 0 where the blocks are the chunks.
+
+    Returns
+    -------
+    StoreMemory
+        ``(block, faces, kept)``. The check here holds ``threads * block +
+        faces + kept`` to the memory budget; a ``dask.distributed`` worker
+        (whose allocator gives freed blocks back) holds ``threads * block
+        + faces`` to its memory limit.
+
+    Examples
+    --------
+    >>> store_memory((64, 64, 64), (4, 4, 4), bool)  # a 256^3 store of bools in chunks of 64^3
+    StoreMemory(block=786432, faces=5505024, kept=1048576)
+    >>> store_memory((4, 4, 4), (2, 64, 64), "uint8", chunk_voxels=4 * 256 * 256).block  # 4^3 blocks of larger chunks
+    524608
+    """
+    voxels = int(np.prod(block, dtype=np.int64))
     dtype = np.dtype(dtype)
-    chunk = decoded_chunk_voxels(grid.array)
-    beyond = (DECODED_COPIES * chunk - voxels) * dtype.itemsize if chunk > voxels else 0
-    return voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
-
-
-def _faces_bytes(grid: _Grid) -> int:
-    """The memory that the faces of two layers of blocks take, held as
-    their summaries wait for the next layer's, at most (every block as
-    large as the largest, every face of it counted)."""
-    sides = [max(b - a for a, b in bounds) for bounds in grid.bounds]
+    beyond = (DECODED_COPIES * chunk_voxels - voxels) * dtype.itemsize if chunk_voxels > voxels else 0
+    at_work = voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
+    sides = [int(s) for s in block]
     per_block = 2 * sum(int(np.prod(sides[:i] + sides[i + 1:], dtype=np.int64)) for i in range(len(sides)))
-    blocks = min(2, grid.numblocks[0]) * int(np.prod(grid.numblocks[1:], dtype=np.int64))
-    return FACE_BYTES * per_block * blocks
+    layer = int(np.prod(numblocks[1:], dtype=np.int64))
+    kept = min(KEPT_BLOCKS, int(np.prod(numblocks, dtype=np.int64)) - 1) * max(voxels, chunk_voxels) * dtype.itemsize
+    return StoreMemory(at_work, FACE_BYTES * per_block * layer, kept)
 
 
-def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where: str, scheduler, is_zarr: bool,
+def _grid_memory(grid: _Grid, dtype) -> StoreMemory:
+    """:func:`store_memory` of ``grid``'s largest block (every block of
+    the grid counted as large, every face of it)."""
+    sides = tuple(max(b - a for a, b in bounds) for bounds in grid.bounds)
+    return store_memory(sides, grid.numblocks, dtype, decoded_chunk_voxels(grid.array))
+
+
+def _tasks_that_fit(workers: int, threads: int, need: StoreMemory, where: str, scheduler, is_zarr: bool,
                     blocks_help: bool) -> int:
     """The blocks summed at a time on this machine: ``workers``, or as many
-    as the memory budget holds beside the ``held`` bytes of the layers'
-    faces where that is fewer but at least ``threads`` (a zarr store's
-    second task per thread is left out first: it only spares the cores a
-    wait). Blocks that would not fit ``threads`` at a time are refused up
-    front, before any is read, saying how many would, where the blocks are
-    summed here; one at a time on the synchronous scheduler. On a
-    ``dask.distributed`` cluster (its client, its ``get``, or the default
-    client) the workers hold their own memory: a block times a worker's
-    threads, beside a layer's faces, is held to the workers' memory limit
-    instead. ``blocks_help``: whether smaller blocks would take less
+    as the memory budget holds beside the layers' faces and the blocks the
+    allocator keeps (``need``, :func:`store_memory`) where that is fewer
+    but at least ``threads`` (a zarr store's second task per thread is
+    left out first: it only spares the cores a wait). Blocks that would
+    not fit ``threads`` at a time are refused up front, before any is
+    read, saying how many would, where the blocks are summed here; one at
+    a time on the synchronous scheduler. On a ``dask.distributed`` cluster
+    (its client, its ``get``, or the default client) the workers hold
+    their own memory: a block times a worker's threads, beside a layer's
+    faces, is held to the workers' memory limit instead. ``blocks_help``: whether smaller blocks would take less
     memory (:func:`~isoflow.scale.chunks.smaller_blocks_help`), else the
     refusal offers smaller chunks and more memory alone."""
     from dask.base import named_schedulers
@@ -488,10 +541,11 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
     client = distributed_client(scheduler)
     if client is not None:
         # the client holds the layers' summaries between layers (compute gathers them); a worker holds
-        # those its merges take and give while they run, about one layer's faces where it is the only one
+        # those its merges take and give while they run, about one layer's faces where it is the only one.
+        # dask's nanny starts its workers with MALLOC_TRIM_THRESHOLD_ set: their allocator keeps no freed block
         blocks = ", pass smaller blocks (block_shape)," if blocks_help else ","
-        check_workers_fit(client, per_block, f"{where}: summing its blocks",
-                          hint=f"{smaller}{blocks} or give the workers more memory", held=held // 2)
+        check_workers_fit(client, need.block, f"{where}: summing its blocks",
+                          hint=f"{smaller}{blocks} or give the workers more memory", held=need.faces)
         return workers
     if isinstance(scheduler, str):  # a name, as _scheduler leaves it once dask.distributed is imported
         scheduler = named_schedulers.get(scheduler.lower(), scheduler)
@@ -499,6 +553,7 @@ def _tasks_that_fit(workers: int, threads: int, per_block: int, held: int, where
         return workers
     if scheduler is named_schedulers["sync"]:  # one task at a time, whatever the threads
         threads = workers = 1
+    per_block, held = need.block, need.faces + need.kept
     budget = default_budget()
     fit = max(budget - held, 0) // max(per_block, 1)
     if fit >= workers:
@@ -635,8 +690,8 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _block_bytes(grid, array.dtype), _faces_bytes(grid), where,
-                                  scheduler, grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
+        workers = _tasks_that_fit(workers, thread_count(), _grid_memory(grid, array.dtype), where, scheduler,
+                                  grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)

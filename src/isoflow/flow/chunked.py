@@ -228,19 +228,24 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
 
 def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
     """The memory a worker holds while the record's report sums the step's
-    store in blocks of its chunks (``CHUNK_YZ`` across), as
-    :func:`isoflow.digital.outofcore.analyze_chunked` counts it on a
-    cluster: per layer of a chunk, its voxels as uint8
-    (:data:`~isoflow.digital.outofcore.CHECK_BYTES` beside their two
-    copies) and the part of a layer of blocks' faces that grows with the
-    chunk's layers; and the rest of those faces, whatever the layers
-    (:data:`~isoflow.digital.outofcore.FACE_BYTES` a face voxel)."""
-    from ..digital.outofcore import CHECK_BYTES, FACE_BYTES
+    store in blocks of its chunks (``CHUNK_YZ`` across, a slab's layers
+    along x), as :func:`isoflow.digital.outofcore.analyze_chunked` counts it
+    on a cluster (:func:`~isoflow.digital.outofcore.store_memory`: a block
+    at work beside one layer's faces): the part that grows with the
+    chunk's layers, per layer, and the rest."""
+    from ..digital.outofcore import store_memory
 
     cy, cz = min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2])
-    blocks = -(-shape[1] // cy) * -(-shape[2] // cz)  # a layer of blocks: one chunk along x
-    per_layer = cy * cz * (2 + CHECK_BYTES) + FACE_BYTES * 2 * (cy + cz) * blocks
-    return per_layer, FACE_BYTES * 2 * cy * cz * blocks
+    across = (-(-shape[1] // cy), -(-shape[2] // cz))
+
+    def worker(layers: int) -> int:
+        # the store's layers of blocks go along x, as many as its slabs
+        need = store_memory((layers, cy, cz), (2, *across), np.uint8)
+        return need.block + need.faces
+
+    # what the worker holds grows linearly with the chunk's layers: its slope and its value at none
+    per_layer = worker(2) - worker(1)
+    return per_layer, worker(1) - per_layer
 
 
 def _layer_bytes(layer: int) -> int:
