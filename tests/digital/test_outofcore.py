@@ -893,8 +893,8 @@ def test_info_of_a_store_runs_under_a_memory_limit_just_above_its_peak(tmp_path)
     layers of blocks, where the two layers' summaries and the merges take
     10 to 13 a voxel of one layer's faces: a 384^3 store in chunks of 64^3,
     whose faces outweigh its blocks at work, was refused under a budget
-    half again its peak (the estimate was twice the peak the kernel
-    measures). It runs there now, as the command would on a machine with
+    of 1.5 to 1.75 times its peak (the estimate, 21.2 MiB, was up to twice
+    the peak the kernel measures). It runs there now, as the command would on a machine with
     that much memory available (the budget is what the system says is
     available: a fresh process for each run, as the user's command), its
     peak within the budget and its chi that of scikit-image."""
@@ -910,7 +910,10 @@ def test_info_of_a_store_runs_under_a_memory_limit_just_above_its_peak(tmp_path)
 
     free = info("none")
     assert free["code"] == 0, free["error"]
-    limit = int(1.5 * free["peak"])
+    # 1.75: the most the estimate is of a measured peak over the stores of
+    # benchmarks/bench_store_estimate.py (the peak of one run reads 10-21 MiB
+    # here by the state of the process; main's estimate was 21.2 MiB)
+    limit = int(1.75 * free["peak"])
     got = info(limit)
     assert got["code"] == 0, got["error"]  # main: "summing its blocks (1 at a time) needs about 21.2 MiB"
     assert got["peak"] <= limit
