@@ -30,7 +30,14 @@ sigma 2, > 0.5, seed 0), a solid torus (R = 0.3 n, r = 0.15 n) in 128^3.
    baseline tree's plain run (minutes).
 4. ``torus``: the torus flowed to its end plain and guarded at 6 and 26 in
    process, by each method.
-5. ``zarr`` (only when asked, ``--only zarr``): a ``--zarr-size``^3 ball
+5. ``small`` (only when asked, ``--only small``): ``--small-count``
+   plain flows of small volumes (balls of 20-44 across, to their end, at
+   6 and 26 in turn) in one fresh process per method (``auto``,
+   ``numpy``, ``compiled``), as a user's loop runs them, alternately,
+   best of ``--repeat``; wall and CPU seconds of the whole process,
+   whose results are checked equal across the methods. With
+   ``--baseline SRC``, the baseline tree's ``auto`` beside.
+6. ``zarr`` (only when asked, ``--only zarr``): a ``--zarr-size``^3 ball
    written as a zarr store slab by slab, then ``isoflow flow BALL.zarr
    --out DIR --volumes .zarr --steps --zarr-steps`` as a whole command (the
    flow block by block): its wall and CPU seconds and the peak resident
@@ -288,6 +295,38 @@ def torus_runs(n: int, repeat: int) -> dict:
     return out
 
 
+#: the loop of ``small``: argv[1] flows, method argv[2]; prints a digest of
+#: every run's records (the same whichever method ran them)
+SMALL_LOOP = """
+import hashlib, json, sys
+import numpy as np
+from isoflow.flow.run import run_flow
+
+count, method = int(sys.argv[1]), sys.argv[2]
+digest = hashlib.sha1()
+for i in range(count):
+    n = 20 + (7 * i) % 25
+    x = np.indices((n,) * 3, dtype=np.float32) - (n - 1) / 2
+    ball = (x**2).sum(0) <= (0.45 * n) ** 2
+    r = run_flow(ball, connectivity=(6, 26)[i % 2], keep_states=False, method=method)
+    digest.update(json.dumps(r.to_dict(), sort_keys=True).encode())
+print(digest.hexdigest())
+"""
+
+
+def small_flows(count: int, repeat: int, baseline: Path | None) -> dict:
+    here = str(ROOT / "src")
+    cmds = {m: ([sys.executable, "-c", SMALL_LOOP, str(count), m], here) for m in ("auto", "numpy", "compiled")}
+    if baseline is not None:
+        cmds["baseline_auto"] = ([sys.executable, "-c", SMALL_LOOP, str(count), "auto"], str(baseline))
+    digests = {m: subprocess.run(argv, env=dict(os.environ, PYTHONPATH=src), check=True, capture_output=True,
+                                 text=True).stdout for m, (argv, src) in cmds.items()}  # (numba's cache warm, too)
+    assert len(set(digests.values())) == 1, f"the methods' runs differ: {digests}"
+    times = best_commands(cmds, repeat)
+    print(f"{count} small flows in one process, CPU seconds: " + ", ".join(f"{k} {v['cpu_s']:.2f}" for k, v in times.items()))
+    return {"count": count, "commands": times}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--size", type=int, default=256, help="side of the ball and porous field (default 256)")
@@ -295,7 +334,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--baseline", type=Path, help="another isoflow source tree whose commands are timed beside")
     ap.add_argument("--baseline-limit", action="store_true", help="also run the baseline's flow to the limit")
-    ap.add_argument("--only", nargs="+", choices=["step", "commands", "limit", "torus", "zarr"])
+    ap.add_argument("--only", nargs="+", choices=["step", "commands", "limit", "torus", "zarr", "small"])
+    ap.add_argument("--small-count", type=int, default=200, help="flows in the loop of --only small (default 200)")
     ap.add_argument("--zarr-size", type=int, default=1024, help="side of the ball flowed from zarr (--only zarr)")
     ap.add_argument("--zarr-steps", type=int, default=20)
     ap.add_argument("--json", help="also write the figures to this file")
@@ -312,6 +352,8 @@ def main(argv=None):
                                               args.baseline if args.baseline_limit else None)
     if "torus" in parts:
         report[f"torus{args.torus}"] = torus_runs(args.torus, args.repeat)
+    if "small" in parts:
+        report[f"small_flows{args.small_count}"] = small_flows(args.small_count, args.repeat, args.baseline)
     if "zarr" in parts:
         report[f"zarr_ball{args.zarr_size}"] = zarr_flow(args.zarr_size, args.zarr_steps)
     if args.json:

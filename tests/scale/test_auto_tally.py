@@ -2,9 +2,6 @@
 rule of :mod:`isoflow.scale.compiled`. Each loop runs in a fresh process,
 as a user's script would, so that nothing else has loaded numba there."""
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -44,10 +41,9 @@ print(json.dumps(rows))
 def _run(script: str, *args) -> list:
     """What ``script`` prints as JSON, run in a fresh process with ``args``
     and this file's folder (for its inputs)."""
-    run = subprocess.run([sys.executable, "-c", script, *map(str, args), str(Path(__file__).parent)],
-                         capture_output=True, text=True)
-    assert run.returncode == 0, run.stderr
-    return json.loads(run.stdout)
+    from fresh_process import run_json  # (here: the script imports this file, beside none of tests/)
+
+    return run_json(script, *args, folder=Path(__file__).parent)
 
 
 def volume(seed: int, ndim: int) -> np.ndarray:

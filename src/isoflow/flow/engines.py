@@ -3,7 +3,8 @@ arrays (:class:`ArrayFlow`: :mod:`isoflow.flow.motion`,
 :mod:`isoflow.flow.guard`, the reference) and bit rows (:class:`BitFlow`:
 :mod:`isoflow.flow.bitflow`, :mod:`isoflow.flow.bitguard`, compiled).
 Both give the same states and records, step for step; :func:`flow_engine`
-chooses one for a run (``method``).
+chooses one for a run (``method``), and ``"auto"`` may move a plain run
+from the first to the second between two steps (:class:`AutoFlow`).
 """
 
 from __future__ import annotations
@@ -14,15 +15,105 @@ from ..digital.analysis import analyze
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError
 from ..results import read_only
-from ..scale.compiled import METHODS, Method, have_numba
+from ..scale.compiled import METHODS, Method, add_to_tally, have_numba, tallied
 from . import guard as control
 from .motion import flow_moves
 
-#: from this many voxels ``auto`` takes the compiled steps: starting numba
-#: (once per process) is then paid back within the first few dozen steps; a
-#: caller that runs many small flows in one process says
-#: ``method="compiled"``
+#: a flow of this many voxels in its array takes the compiled steps from its
+#: first one (unless capped at fewer than :data:`PAYBACK_STEPS` steps):
+#: numba's start is paid back within its first few dozen steps
 COMPILED_VOXELS = 1 << 18
+
+#: the steps of a :data:`COMPILED_VOXELS` flow on the arrays that cost what
+#: numba's start for the compiled step does (about 0.33 s of CPU in a fresh
+#: process, importing numba and loading the step's and the record's machine
+#: code from its cache, against about 1.7 ms + 39 ns a voxel for a NumPy
+#: step with its record and 0.6 ms + 2 ns a voxel for a compiled one, on
+#: balls of 30^3 to 64^3); also the most steps ahead that ``"auto"``
+#: counts on in a run (:func:`weigh_flow`)
+PAYBACK_STEPS = 32
+
+#: a NumPy step's fixed cost over a compiled one's, in voxels of the
+#: difference per voxel (1.2 ms at 37 ns): small arrays cost more per voxel
+STEP_VOXELS = 1 << 15
+
+#: the work, in voxel-steps, whose NumPy steps cost what numba's start does
+#: (:func:`weigh_flow`)
+FLOW_WORK = COMPILED_VOXELS * PAYBACK_STEPS
+
+#: the kind under which ``"auto"`` tallies the flow's NumPy steps
+#: (:func:`isoflow.scale.compiled.tallied`), in voxel-steps
+FLOW_TALLY = "flow steps"
+
+
+def step_work(voxels: int) -> int:
+    """The work of one NumPy flow step over an array of ``voxels`` voxels,
+    in the voxel-steps of :data:`FLOW_WORK`.
+
+    Examples
+    --------
+    >>> step_work(0) == STEP_VOXELS
+    True
+    """
+    return int(voxels) + STEP_VOXELS
+
+
+def weigh_flow(voxels: int, steps_ahead: int | None = None, record: bool = False) -> bool:
+    """``"auto"``'s choice for the next flow step over an array of
+    ``voxels`` voxels (numba installed): the compiled step where the work
+    that ``"auto"`` has sent down the NumPy steps in this process
+    (:func:`isoflow.scale.compiled.tallied` of :data:`FLOW_TALLY`) and the
+    work this run has still ahead, ``steps_ahead`` steps of this array (at
+    most :data:`PAYBACK_STEPS`; None: no cap), reach :data:`FLOW_WORK`.
+
+    This is the ski-rental rule of :mod:`isoflow.scale.compiled`, in the
+    unit that the cost of a flow is measured in. numba's start is paid once
+    per process and each compiled step then saves about the same share of
+    a NumPy step's cost per voxel, so what decides is the work of the NumPy
+    steps, steps times voxels, not the voxels of one input: the threshold
+    is where that work costs what the start does (:data:`PAYBACK_STEPS`
+    steps of :data:`COMPILED_VOXELS` voxels, measured on whole steps with
+    their records). So the question is asked before every step, not once
+    per flow: a plain run of many steps over one small volume takes the
+    compiled step from the step at which its own work reaches the
+    threshold, and a loop of small flows from the step at which theirs
+    does (:class:`AutoFlow`; a guarded run only at its start). The work
+    ahead, up to :data:`PAYBACK_STEPS` steps, lets a large uncapped flow
+    start compiled, as its first few dozen steps pay numba's start back,
+    and keeps a run capped at a few steps on the arrays. ``record``: the
+    step runs now, and a NumPy step's work is counted, as is the step that
+    takes the tally past the threshold (so that it stays past it for the
+    next flows).
+
+    Parameters
+    ----------
+    voxels : int
+        The voxels of the state's array.
+    steps_ahead : int, optional
+        The steps the run may still take (None: no cap).
+    record : bool
+        Count the step in the tally.
+
+    Returns
+    -------
+    bool
+        True: the compiled step.
+
+    Examples
+    --------
+    >>> from isoflow.scale.compiled import reset_tally
+    >>> reset_tally()  # (as a fresh process starts)
+    >>> weigh_flow(COMPILED_VOXELS), weigh_flow(COMPILED_VOXELS, steps_ahead=1), weigh_flow(0)
+    (True, False, False)
+    """
+    ahead = PAYBACK_STEPS if steps_ahead is None else max(1, min(int(steps_ahead), PAYBACK_STEPS))
+    done = tallied(FLOW_TALLY)
+    compiled = voxels > 0 and done + step_work(voxels) * ahead >= FLOW_WORK
+    if record and done < FLOW_WORK:
+        # numba's start is paid once a compiled step runs: the later flows
+        # of the process take the compiled step at any size
+        add_to_tally(FLOW_TALLY, FLOW_WORK - done if compiled else step_work(voxels))
+    return compiled
 
 
 def step_record(obj: DigitalObject, step: int, conn: int) -> dict:
@@ -159,24 +250,127 @@ class BitFlow(ArrayFlow):
         return state.voxels == int(np.prod(state.shape))
 
 
-def flow_engine(method: Method, obj: DigitalObject, conn: int) -> ArrayFlow:
+class AutoFlow(ArrayFlow):
+    """``method="auto"`` (numba installed): a run on the arrays that asks
+    :func:`weigh_flow` before each step (recording the NumPy steps in the
+    tally) and holds its states as bit rows (:class:`BitFlow`) from the
+    step that takes the compiled path on, or from its start where the
+    first question says so. Both engines hold the same states and give the
+    same records, so the run is the same whichever step it moves at; a
+    state is stepped, recorded and compared by the engine that holds its
+    kind. A guarded run (``move=False``) keeps the engine it starts with,
+    as the shapes it has seen are keyed in that engine's form, and still
+    counts its NumPy steps for the runs after it.
+
+    Parameters
+    ----------
+    conn : int
+        The object's connectivity.
+    cap : int, optional
+        The most steps the run takes (None: no cap).
+    move : bool
+        Move to bit rows between two steps.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> engine = AutoFlow(6, cap=3)
+    >>> state = engine.start(DigitalObject(np.ones((3, 3, 3), bool)))
+    >>> engine.step(state).voxels
+    8
+    """
+
+    def __init__(self, conn: int, cap: int | None = None, move: bool = True):
+        super().__init__(conn)
+        self.cap = cap
+        self.move = move
+        self.taken = 0
+        self.bits = BitFlow(conn)
+
+    def _holds_bits(self, state) -> bool:
+        return not isinstance(state, DigitalObject)
+
+    def _weigh(self, state: DigitalObject) -> bool:
+        """Whether the step from ``state`` on the arrays moves to bit rows
+        (the step is counted either way)."""
+        ahead = None if self.cap is None else self.cap - self.taken
+        self.taken += 1
+        if self.move:
+            return weigh_flow(state.volume.size, ahead, record=True)
+        if tallied(FLOW_TALLY) < FLOW_WORK:
+            # the step runs on the arrays whatever the rule says: its work
+            # is counted as done, not numba's start as paid
+            add_to_tally(FLOW_TALLY, step_work(state.volume.size))
+        return False
+
+    def start(self, obj: DigitalObject):
+        state = obj.cropped()
+        if weigh_flow(state.volume.size, self.cap):
+            weigh_flow(state.volume.size, self.cap, record=True)  # (numba's start paid: the tally past it)
+            return self.bits.start(state)
+        return state
+
+    def step(self, state):
+        if self._holds_bits(state):
+            return self.bits.step(state)
+        if self._weigh(state):
+            return self.bits.step(self.bits.start(state))
+        return super().step(state)
+
+    def guarded(self, state, betti: list[int], seen: set, may_grow: bool):
+        if self._holds_bits(state):
+            return self.bits.guarded(state, betti, seen, may_grow)
+        self._weigh(state)
+        return super().guarded(state, betti, seen, may_grow)
+
+    def record(self, state, step: int) -> dict:
+        return self.bits.record(state, step) if self._holds_bits(state) else super().record(state, step)
+
+    def change_region(self, state, betti: tuple[list, list] | None = None):
+        if self._holds_bits(state):
+            return self.bits.change_region(state, betti)
+        return super().change_region(state, betti)
+
+    def key(self, state) -> bytes:
+        return self.bits.key(state) if self._holds_bits(state) else super().key(state)
+
+    def same(self, a, b) -> bool:
+        if self._holds_bits(a) and self._holds_bits(b):
+            return self.bits.same(a, b)
+        return super().same(self.to_object(a), self.to_object(b))
+
+    def to_object(self, state) -> DigitalObject:
+        return self.bits.to_object(state) if self._holds_bits(state) else state
+
+    def is_cuboid(self, state) -> bool:
+        return self.bits.is_cuboid(state) if self._holds_bits(state) else super().is_cuboid(state)
+
+
+def flow_engine(method: Method, obj: DigitalObject, conn: int, cap: int | None = None,
+                guard: bool = False) -> ArrayFlow:
     """The way a run steps ``obj``: ``numpy`` (arrays), ``compiled`` (bit
-    rows, numba), or ``auto``: compiled where numba is installed and the
-    object has :data:`COMPILED_VOXELS` voxels in its array.
+    rows, numba), or ``auto``: where numba is installed, :class:`AutoFlow`,
+    which takes the compiled steps from the step at which
+    :func:`weigh_flow` says so (a guarded run: from its start or never),
+    else the arrays.
 
     Parameters
     ----------
     method : {"auto", "numpy", "compiled"}
         How to hold and step the states.
     obj : DigitalObject
-        The run's input (its array's size decides ``auto``).
+        The run's input.
     conn : int
         The object's connectivity.
+    cap : int, optional
+        The most steps the run takes (None: no cap), weighed by ``auto``.
+    guard : bool
+        The run is guarded.
 
     Returns
     -------
     ArrayFlow
-        :class:`ArrayFlow` or :class:`BitFlow`.
+        :class:`ArrayFlow`, :class:`AutoFlow` or :class:`BitFlow`.
 
     Raises
     ------
@@ -193,6 +387,8 @@ def flow_engine(method: Method, obj: DigitalObject, conn: int) -> ArrayFlow:
         raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba (pip install numba)")
-    compiled = method == "compiled" or (
-        method == "auto" and have_numba() and obj.volume.size >= COMPILED_VOXELS)
-    return BitFlow(conn) if compiled else ArrayFlow(conn)
+    if method == "compiled":
+        return BitFlow(conn)
+    if method == "numpy" or not have_numba():
+        return ArrayFlow(conn)
+    return AutoFlow(conn, cap, move=not guard)

@@ -366,8 +366,10 @@ def run_flow(
     keep_states : bool
         Keep every state in the result (``states``).
     method : {"auto", "numpy", "compiled"}
-        How the states are held and stepped (:func:`isoflow.flow.engines.flow_engine`);
-        every method gives the same result.
+        How the states are held and stepped (:func:`isoflow.flow.engines.flow_engine`;
+        ``auto``: the NumPy steps until their work in the process reaches
+        numba's start, :func:`isoflow.flow.engines.weigh_flow`); every
+        method gives the same result.
 
     Returns
     -------
@@ -400,10 +402,10 @@ def run_flow(
     guard, until_topology_change, keep_states = (
         check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
         check_switch(keep_states, "keep_states", "run_flow"))
-    engine = flow_engine(method, obj, conn)
     cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
+    engine = flow_engine(method, obj, conn, cap, guard)
     result = run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
                         guard=guard, until_topology_change=until_topology_change,
                         allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit)
