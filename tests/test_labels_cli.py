@@ -632,6 +632,9 @@ def assert_text_as_json_and_csv_write(table: dict) -> None:
     writer.writerow(list(table))
     writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column] for column in cells]))
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
+    # the bytes written to a binary stream are that text's
+    assert b"".join(table_text.json_rows(table, raw=True)) == want.encode("ascii")
+    assert b"".join(table_text.csv_rows(table, raw=True)) == fh.getvalue().encode("ascii")
 
 
 #: table_text.PLAIN_ROWS and PLAIN_ROWS_COLD for each way of writing a
@@ -1528,3 +1531,44 @@ def test_a_2d_label_image_refused_without_label_is_called_an_image(tmp_path, cap
     assert "volume" not in line and "voxel" not in line, line
     np.save(tmp_path / "stack.npy", np.stack([cells.T] * 3, axis=2))
     fails(capsys, "info", tmp_path / "stack.npy", words=("stack.npy: not a binary volume (", "voxels hold", "e.g. volume > "))
+
+
+@pytest.mark.parametrize("encoding", ["utf-8", "utf-16"])
+def test_info_labels_rows_go_to_stdout_as_bytes_where_ascii_is_its_own(tmp_path, monkeypatch, rng, encoding):
+    """``info --labels --json`` and ``--csv -`` write the rows' ASCII text
+    to standard output's binary buffer (not decoded and encoded again)
+    where its encoding writes ASCII as itself; through the text where it
+    does not (UTF-16). Either way the output is what the json and csv
+    modules write of the table."""
+    import io
+
+    from isoflow.cli import table_text
+
+    monkeypatch.setattr(table_text, "PLAIN_ROWS", -1)  # the compiled text, which is written as bytes
+    monkeypatch.setattr(table_text, "PLAIN_ROWS_COLD", -1)
+    image = rng.integers(0, 300, (12, 11, 10)).astype(np.uint16)
+    np.save(tmp_path / "many.npy", image)
+    from skimage.measure import euler_number
+
+    labels = sorted(set(np.unique(image).tolist()) - {0})
+    chi = [int(euler_number(image == label, connectivity=1)) for label in labels]
+
+    class Counted(io.TextIOWrapper):
+        chars = 0
+
+        def write(self, text):
+            self.chars += len(text)
+            return super().write(text)
+
+    for args in (["--json"], ["--csv", "-"]):
+        stream = Counted(io.BytesIO(), encoding=encoding)
+        monkeypatch.setattr(sys, "stdout", stream)
+        assert main(["info", str(tmp_path / "many.npy"), "--labels", *args]) == 0
+        stream.flush()
+        text = stream.buffer.getvalue().decode(encoding)
+        rows = json.loads(text)["labels"] if args == ["--json"] else list(csv.DictReader(io.StringIO(text)))
+        assert [int(row["label"]) for row in rows] == labels
+        assert [int(row["voxels"]) for row in rows] == np.bincount(image.reshape(-1))[labels].tolist()
+        assert [int(row["euler_characteristic"]) for row in rows] == chi
+        through_text = stream.chars < 2000 if encoding == "utf-8" else stream.chars == len(text)
+        assert len(text) > 20000 and through_text, (stream.chars, len(text))

@@ -10,7 +10,7 @@ import json
 import os
 import re
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -368,11 +368,11 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
             draw_table(args, about, conn, table)
     if to_stdout:  # the table alone on stdout, for a pipe
         with using(threads):
-            sys.stdout.writelines(csv_rows(table))
+            _write_ascii(csv_rows(table, raw=True))
         return 0
     if args.json:
         with using(threads):
-            sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
+            _write_ascii(json_text(args.input, about, conn, table, absent, raw=True))
         sys.stdout.write("\n")
         return 0
     print(format_table(path_text(args.input), about, conn, table))
@@ -410,18 +410,31 @@ def draw_table(args: argparse.Namespace, about: dict, conn: int, table: dict) ->
     render_label_table(table, args.png, name=name, connectivity=conn, unit=about["unit"])
 
 
-def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> Iterator[str]:
+def _write_ascii(pieces: Iterable[bytes]) -> None:
+    """ASCII text in pieces on standard output: as bytes where it is the
+    command line's (:meth:`isoflow.cli.main.NamedStdout.write_ascii`),
+    else each piece decoded and written as text."""
+    write = getattr(sys.stdout, "write_ascii", None)
+    if write is not None:
+        write(pieces)
+    else:
+        sys.stdout.writelines(piece.decode("ascii") for piece in pieces)
+
+
+def json_text(name, about: dict, conn: int, table: dict, absent: list[int], raw: bool = False) -> Iterator[str | bytes]:
     """What ``--json`` prints, in pieces: one object, the image, ``absent``
     (the labels asked for that have no row) and then ``labels``, one
-    object per label (NaN as null)."""
+    object per label (NaN as null); ASCII bytes where ``raw`` (the JSON
+    text escapes every other character)."""
     # the type by its name, in any byte order: a big-endian file's labels (NRRD's
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
     head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
             "connectivity": conn, "absent": absent}
-    yield json.dumps(head)[:-1] + ', "labels": '
-    yield from json_rows(table)
-    yield "}"
+    start = json.dumps(head)[:-1] + ', "labels": '
+    yield start.encode("ascii") if raw else start
+    yield from json_rows(table, raw)
+    yield b"}" if raw else "}"
 
 
 def write_csv(path, table: dict, force: bool) -> None:

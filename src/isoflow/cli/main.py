@@ -15,7 +15,7 @@ import argparse
 import contextlib
 import difflib
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 
 from ..errors import IsoflowError, path_text
 from . import completion, flow, genus, info, surface, voxelize
@@ -451,6 +451,25 @@ class StdoutError(OSError):
     error names no file."""
 
 
+#: every printable ASCII character, a tab and both line ends
+_ASCII_PROBE = bytes(range(32, 127)) + b"\t\r\n"
+
+
+def _ascii_as_itself(stream) -> bool:
+    """Whether the text stream writes ASCII as the same bytes: an encoding
+    that keeps ASCII (not UTF-16's) and no line end translated."""
+    import codecs
+    import os
+
+    encoding = getattr(stream, "encoding", None)
+    if not encoding or os.linesep != "\n":
+        return False
+    try:
+        return codecs.encode(_ASCII_PROBE.decode("ascii"), encoding) == _ASCII_PROBE
+    except LookupError:
+        return False
+
+
 class NamedStdout:
     """Standard output whose write errors are :class:`StdoutError`, so that
     the command line can name standard output as what failed."""
@@ -464,6 +483,36 @@ class NamedStdout:
     def writelines(self, lines) -> None:
         for line in lines:
             self.write(line)
+
+    def write_ascii(self, pieces: Iterable[bytes]) -> None:
+        """ASCII text given as bytes, written to the stream's binary buffer
+        as it is where the stream would write those characters as those
+        bytes (a large table's text is not decoded only to be encoded
+        again), else through the stream's text as ``write`` does.
+
+        Parameters
+        ----------
+        pieces : Iterable[bytes]
+            The text's pieces, in order, each ASCII.
+
+        Examples
+        --------
+        >>> import io
+        >>> stream = io.TextIOWrapper(io.BytesIO(), encoding="utf-8")
+        >>> out = NamedStdout(stream)
+        >>> _ = out.write("head ")
+        >>> out.write_ascii([b"1,2", b"\\r\\n"])
+        >>> out.flush()
+        >>> stream.buffer.getvalue()
+        b'head 1,2\\r\\n'
+        """
+        buffer = getattr(self.stream, "buffer", None)
+        if buffer is None or not _ascii_as_itself(self.stream):
+            self.writelines(piece.decode("ascii") for piece in pieces)
+            return
+        self.flush()  # what the text layer holds goes out first
+        for piece in pieces:
+            guard_stdout(buffer.write, piece)
 
     def flush(self) -> None:
         guard_stdout(self.stream.flush)

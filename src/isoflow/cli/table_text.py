@@ -159,7 +159,7 @@ def plain(n: int) -> bool:
 
 
 def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
-                booleans: tuple[str, str]) -> str:
+                booleans: tuple[str, str], raw: bool = False) -> str | bytes:
     """:func:`_rows` in Python: each cell's text from ``str`` (integers)
     and ``repr`` (floats: the text :mod:`json` and :mod:`csv` write)."""
     columns = []
@@ -172,7 +172,8 @@ def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str
         else:
             columns.append(cell_texts(part, joined, booleans))
     seps = [b.decode("ascii") for b in before]
-    return "".join("".join(sep + cell for sep, cell in zip(seps, row)) for row in zip(*columns))
+    text = "".join("".join(sep + cell for sep, cell in zip(seps, row)) for row in zip(*columns))
+    return text.encode("ascii") if raw else text
 
 
 def _scratch(held: threading.local, name: str, size: int, dtype: type) -> np.ndarray:
@@ -187,12 +188,12 @@ def _scratch(held: threading.local, name: str, size: int, dtype: type) -> np.nda
 
 
 def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
-          booleans: tuple[str, str], held: threading.local | None = None) -> str:
-    """Rows lo .. hi - 1 as one text, each cell after its column's
-    ``before[c]`` (the first column's holds the end of the row before):
-    each column's cells written into their own part of one buffer, then
-    the rows joined from them. The buffers are the calling thread's in
-    ``held`` (new ones where None)."""
+          booleans: tuple[str, str], raw: bool = False, held: threading.local | None = None) -> str | bytes:
+    """Rows lo .. hi - 1 as one text (ASCII bytes where ``raw``), each
+    cell after its column's ``before[c]`` (the first column's holds the
+    end of the row before): each column's cells written into their own
+    part of one buffer, then the rows joined from them. The buffers are
+    the calling thread's in ``held`` (new ones where None)."""
     from ..scale.text_rows import join_cells
 
     held = threading.local() if held is None else held
@@ -207,18 +208,19 @@ def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, join
     seps = np.frombuffer(b"".join(before), np.uint8)
     out = _scratch(held, "out", int(lengths.sum()) + n * len(seps), np.uint8)
     size = join_cells(cells, starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
-    return str(out[:size], "ascii")
+    return bytes(out[:size]) if raw else str(out[:size], "ascii")
 
 
-def _blocks(table: dict, before: list[bytes], missing: str, joined: str, booleans: tuple[str, str]) -> Iterator[str]:
-    """The rows' text a block of :data:`BLOCK_ROWS` rows at a time, in
-    order. The compiled blocks are made on the threads of the compiled
+def _blocks(table: dict, before: list[bytes], missing: str, joined: str, booleans: tuple[str, str],
+            raw: bool = False) -> Iterator[str | bytes]:
+    """The rows' text (ASCII bytes where ``raw``) a block of
+    :data:`BLOCK_ROWS` rows at a time, in order. The compiled blocks are made on the threads of the compiled
     passes (:func:`isoflow.scale.compiled.run_ahead`: their digits and
     joins release the GIL), the next ones while the caller writes one out;
     Python's text of a small table on the calling thread."""
     n = len(next(iter(table.values()))) if table else 0
     rows = _plain_rows if plain(n) else _rows
-    calls = [(rows, table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
+    calls = [(rows, table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans, raw)
              for lo in range(0, n, BLOCK_ROWS)]
     if rows is _plain_rows:
         for fn, *args in calls:
@@ -230,39 +232,71 @@ def _blocks(table: dict, before: list[bytes], missing: str, joined: str, boolean
     yield from run_ahead([(*call, held) for call in calls])
 
 
-def json_rows(table: dict) -> Iterator[str]:
+def json_rows(table: dict, raw: bool = False) -> Iterator[str | bytes]:
     """The table as the text of a JSON array of one object per row (what
     ``json.dumps([dict(zip(table, row)) for row in ...])`` writes, NaN as
     null), in blocks of rows.
+
+    Parameters
+    ----------
+    table : dict
+        Equal-length columns, as :func:`isoflow.label_table` returns.
+    raw : bool
+        Each piece as ASCII bytes rather than ``str``: the same text, for a
+        binary stream, never decoded and encoded again.
+
+    Returns
+    -------
+    Iterator[str | bytes]
+        The pieces of the text, in order.
 
     Examples
     --------
     >>> table = {"label": np.array([1, 2]), "volume": np.array([8.0, np.nan])}
     >>> "".join(json_rows(table))
     '[{"label": 1, "volume": 8.0}, {"label": 2, "volume": null}]'
+    >>> b"".join(json_rows(table, raw=True))
+    b'[{"label": 1, "volume": 8.0}, {"label": 2, "volume": null}]'
     """
     keys = [json.dumps(str(k)) for k in table]
     before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
-    yield "["
+    yield b"[" if raw else "["
     n = 0
-    for text in _blocks(table, before, "null", ", ", ("false", "true")):
+    for text in _blocks(table, before, "null", ", ", ("false", "true"), raw):
         yield text if n else text[3:]  # the first row has no "}, " before it
         n += 1
-    yield "}]" if n else "]"
+    end = "}]" if n else "]"
+    yield end.encode("ascii") if raw else end
 
 
-def csv_rows(table: dict) -> Iterator[str]:
+def csv_rows(table: dict, raw: bool = False) -> Iterator[str | bytes]:
     """The table as CSV text (what :mod:`csv`'s writer writes with
     ``lineterminator="\\r\\n"``: the header, then a line per row; NaN
     empty, a tuple of integers as ``0;1``), in blocks of rows. The names
     and cells hold no comma, quote or line break, so none is quoted.
 
+    Parameters
+    ----------
+    table : dict
+        Equal-length columns with ASCII names, as :func:`isoflow.label_table`
+        returns.
+    raw : bool
+        Each piece as ASCII bytes rather than ``str`` (:func:`json_rows`).
+
+    Returns
+    -------
+    Iterator[str | bytes]
+        The pieces of the text, in order.
+
     Examples
     --------
     >>> "".join(csv_rows({"label": np.array([1, 2]), "genera": np.array([(0,), (1, 2)], dtype=object)}))
     'label,genera\\r\\n1,0\\r\\n2,1;2\\r\\n'
+    >>> b"".join(csv_rows({"label": np.array([1, 2])}, raw=True))
+    b'label\\r\\n1\\r\\n2\\r\\n'
     """
-    yield ",".join(map(str, table))
+    head = ",".join(map(str, table))
+    yield head.encode("ascii") if raw else head
     before = [b"\r\n"] + [b","] * (len(table) - 1)
-    yield from _blocks(table, before, "", ";", ("False", "True"))
-    yield "\r\n"
+    yield from _blocks(table, before, "", ";", ("False", "True"), raw)
+    yield b"\r\n" if raw else "\r\n"

@@ -512,17 +512,6 @@ def _slot(pairs, key):
         s = (s + np.uint64(1)) & mask
 
 
-@njit(cache=True, nogil=True)
-def _emptied(pairs):
-    """The pair table with every slot emptied."""
-    for s in range(len(pairs)):
-        pairs[s, 0] = EMPTY
-        pairs[s, 1] = NONE
-        pairs[s, 2] = 0
-        pairs[s, 3] = 0
-    return pairs
-
-
 def new_pairs(cap: int) -> np.ndarray:
     """An empty pair table of ``cap`` slots (a power of two): per slot its
     key, kind, and sheets and quarters each way (one cache line holds two
@@ -567,9 +556,12 @@ def _count_open(pairs, top, base, below):
 def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
     """From slot ``s0`` of ``old`` on: the pairs behind the sweep (voxel
     layer ``below``) written out as entries at ``n`` of ``keys``/``kind``/
-    ``sums``, the others moved into the empty table ``new``. Returns
-    ``(s, n)``: the slot where it stopped because the entries were full
-    (``len(old)`` when done) and the entries written."""
+    ``sums``, the others moved into the empty table ``new``, and each slot
+    read emptied, so that ``old`` ends empty (the next table, its slots
+    cleared while their cache lines are read anyway rather than in a pass
+    of their own). Returns ``(s, n)``: the slot where it stopped because
+    the entries were full (``len(old)`` when done) and the entries
+    written."""
     for s in range(s0, len(old)):
         k = old[s, 0]
         if k == EMPTY:
@@ -586,6 +578,10 @@ def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
             t = _slot(new, k)
             for c in range(4):
                 new[t, c] = old[s, c]
+        old[s, 0] = EMPTY
+        old[s, 1] = NONE
+        old[s, 2] = 0
+        old[s, 3] = 0
     return len(old), n
 
 
@@ -1107,7 +1103,7 @@ class PairSink:
         if last:
             new = new_pairs(1)
         elif self.spare is not None and len(self.spare) == size:
-            new = _emptied(self.spare)
+            new = self.spare  # emptied by the drain that made it the spare
         else:  # a new table: checked before it is made (a spare one was, and the budget is read from /proc)
             alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
                      "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
@@ -1120,7 +1116,8 @@ class PairSink:
                                     mapped((ENTRY_BLOCK, 2), np.uint64), 0])
             block = self.blocks[-1]
             s, block[3] = _drain(self.pairs, new, self.top, self.base, below, *block, s)
-        self.pairs, self.spare = new, self.pairs  # the old table is the next one (no fresh pages to fault in)
+        # the old table, emptied by the drain, is the next one (no fresh pages to fault in)
+        self.pairs, self.spare = new, self.pairs
         return keep
 
 
