@@ -129,13 +129,16 @@ def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng
     ends before the layer), keeps the others with their kind and sums, and
     leaves the old table (the next one) with every slot empty: what
     counting, draining and then clearing the spare in passes of their own
-    gave, tables of several sizes, grown and reused."""
+    gave, tables of several sizes, grown (asked to, or crowded by the
+    pairs kept) and reused."""
     from isoflow.scale import pieces
 
     monkeypatch.setattr(pieces, "FIRST_SLOTS", 128)  # a drain leaves it at most 30 % full: room for a batch
     npieces, base = 400, 1
     top = rng.integers(0, 60, npieces).astype(np.int64)  # piece p ends in layer top[p - base]
     sink = pieces.PairSink(top, base, 1)
+    rehashed, rehash = [], pieces._rehash
+    monkeypatch.setattr(pieces, "_rehash", lambda old, new: rehashed.append(len(new)) or rehash(old, new))
 
     def done(key, below):
         p, q = key >> 32, key & 0xFFFFFFFF
@@ -146,7 +149,7 @@ def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng
             old = into.get(key, (pieces.NONE, 0, 0))
             into[key] = (min(old[0], kind), old[1] + a, old[2] + b)
 
-    want_open, want_out = {}, {}
+    want_open, want_out, sizes = {}, {}, []
     for below in [*range(0, 61, 3), None]:
         if below is not None:  # a batch of pairs, repeated keys among them, through the near cache
             count = int(rng.integers(1, 41))
@@ -157,6 +160,7 @@ def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng
             sink.near[:count] = np.stack([keys, kinds.astype(np.uint64), a.astype(np.uint64), b.astype(np.uint64)], 1)
             merged(zip(keys.tolist(), kinds.tolist(), a.tolist(), b.tolist()), want_open)
         keep = sink.drain(0, below, grow=below is not None and below % 9 == 0)
+        sizes.append(len(sink.pairs))
         for key in [k for k in want_open if below is None or done(k, below)]:
             merged([(key, *want_open.pop(key))], want_out)
         held = sink.pairs[sink.pairs[:, 0] != pieces.EMPTY]
@@ -168,5 +172,6 @@ def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng
         assert out == want_out
         spare = sink.spare
         assert (spare[:, 0] == pieces.EMPTY).all() and (spare[:, 1] == pieces.NONE).all() and not spare[:, 2:].any()
-    assert not want_open and len(want_out) > 100
+    # the table grew, asked to and because the pairs kept crowded it, and was used again at its size
+    assert not want_open and len(want_out) > 100 and rehashed and len(set(sizes)) > 1 and len(sizes) > len(set(sizes))
 
