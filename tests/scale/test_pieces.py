@@ -121,3 +121,57 @@ def test_contact_table_counts_each_pair_of_voxels_once():
                 seen[key] = how
     assert len(seen) == 28  # every pair of the 8 voxels
     assert all(how == int(np.abs(np.subtract(*k)).sum()) for k, how in seen.items())
+
+
+def test_a_pair_table_drain_writes_out_keeps_and_empties_as_three_passes_did(rng, monkeypatch):
+    """On random streams of pairs, each drain of a thread's pair table
+    writes out exactly the pairs behind the sweep (one of the two pieces
+    ends before the layer), keeps the others with their kind and sums, and
+    leaves the old table (the next one) with every slot empty: what
+    counting, draining and then clearing the spare in passes of their own
+    gave, tables of several sizes, grown (asked to, or crowded by the
+    pairs kept) and reused."""
+    from isoflow.scale import pieces
+
+    monkeypatch.setattr(pieces, "FIRST_SLOTS", 128)  # a drain leaves it at most 30 % full: room for a batch
+    npieces, base = 400, 1
+    top = rng.integers(0, 60, npieces).astype(np.int64)  # piece p ends in layer top[p - base]
+    sink = pieces.PairSink(top, base, 1)
+    rehashed, rehash = [], pieces._rehash
+    monkeypatch.setattr(pieces, "_rehash", lambda old, new: rehashed.append(len(new)) or rehash(old, new))
+
+    def done(key, below):
+        p, q = key >> 32, key & 0xFFFFFFFF
+        return (p != 0 and top[p - base] < below) or (q != 0 and top[q - base] < below)
+
+    def merged(entries, into):
+        for key, kind, a, b in entries:
+            old = into.get(key, (pieces.NONE, 0, 0))
+            into[key] = (min(old[0], kind), old[1] + a, old[2] + b)
+
+    want_open, want_out, sizes = {}, {}, []
+    for below in [*range(0, 61, 3), None]:
+        if below is not None:  # a batch of pairs, repeated keys among them, through the near cache
+            count = int(rng.integers(1, 41))
+            p = rng.integers(0, npieces, count)
+            q = np.minimum(p + rng.integers(1, 12, count), npieces)
+            keys = (p.astype(np.uint64) << np.uint64(32)) | q.astype(np.uint64)
+            kinds, a, b = rng.integers(1, 4, count), rng.integers(0, 9, count), rng.integers(0, 9, count)
+            sink.near[:count] = np.stack([keys, kinds.astype(np.uint64), a.astype(np.uint64), b.astype(np.uint64)], 1)
+            merged(zip(keys.tolist(), kinds.tolist(), a.tolist(), b.tolist()), want_open)
+        keep = sink.drain(0, below, grow=below is not None and below % 9 == 0)
+        sizes.append(len(sink.pairs))
+        for key in [k for k in want_open if below is None or done(k, below)]:
+            merged([(key, *want_open.pop(key))], want_out)
+        held = sink.pairs[sink.pairs[:, 0] != pieces.EMPTY]
+        assert keep == len(want_open) == len(held)
+        assert {int(k): (int(c), int(s), int(t)) for k, c, s, t in held} == want_open
+        out = {}
+        merged(((int(k), int(c), int(s[0]), int(s[1])) for keys, kind, sums, n in sink.blocks
+                for k, c, s in zip(keys[:n], kind[:n], sums[:n])), out)
+        assert out == want_out
+        spare = sink.spare
+        assert (spare[:, 0] == pieces.EMPTY).all() and (spare[:, 1] == pieces.NONE).all() and not spare[:, 2:].any()
+    # the table grew, asked to and because the pairs kept crowded it, and was used again at its size
+    assert not want_open and len(want_out) > 100 and rehashed and len(set(sizes)) > 1 and len(sizes) > len(set(sizes))
+

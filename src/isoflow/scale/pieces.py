@@ -512,17 +512,6 @@ def _slot(pairs, key):
         s = (s + np.uint64(1)) & mask
 
 
-@njit(cache=True, nogil=True)
-def _emptied(pairs):
-    """The pair table with every slot emptied."""
-    for s in range(len(pairs)):
-        pairs[s, 0] = EMPTY
-        pairs[s, 1] = NONE
-        pairs[s, 2] = 0
-        pairs[s, 3] = 0
-    return pairs
-
-
 def new_pairs(cap: int) -> np.ndarray:
     """An empty pair table of ``cap`` slots (a power of two): per slot its
     key, kind, and sheets and quarters each way (one cache line holds two
@@ -554,29 +543,39 @@ def _done(key, top, base, below):
 
 
 @njit(cache=True, nogil=True)
-def _count_open(pairs, top, base, below):
-    """The entries of the table whose pieces may still meet."""
-    n = 0
-    for s in range(len(pairs)):
-        k = pairs[s, 0]
-        n += k != EMPTY and not _done(k, top, base, below)
-    return n
+def _rehash(old, new):
+    """Every pair of ``old`` moved into the empty, larger table ``new``,
+    ``old`` left empty."""
+    for s in range(len(old)):
+        k = old[s, 0]
+        if k != EMPTY:
+            t = _slot(new, k)
+            for c in range(4):
+                new[t, c] = old[s, c]
+            old[s, 0] = EMPTY
+            old[s, 1] = NONE
+            old[s, 2] = 0
+            old[s, 3] = 0
 
 
 @njit(cache=True, nogil=True)
 def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
     """From slot ``s0`` of ``old`` on: the pairs behind the sweep (voxel
     layer ``below``) written out as entries at ``n`` of ``keys``/``kind``/
-    ``sums``, the others moved into the empty table ``new``. Returns
-    ``(s, n)``: the slot where it stopped because the entries were full
-    (``len(old)`` when done) and the entries written."""
+    ``sums``, the others moved into the empty table ``new``, and each slot
+    read emptied, so that ``old`` ends empty (the next table, its slots
+    cleared while their cache lines are read anyway rather than in a pass
+    of their own). Returns ``(s, n, moved)``: the slot where it stopped
+    because the entries were full (``len(old)`` when done), the entries
+    written, and the pairs moved into ``new``."""
+    moved = 0
     for s in range(s0, len(old)):
         k = old[s, 0]
         if k == EMPTY:
             continue
         if _done(k, top, base, below):
             if n == len(keys):
-                return s, n
+                return s, n, moved
             keys[n] = k
             kind[n] = old[s, 1]
             sums[n, 0] = old[s, 2]
@@ -586,7 +585,12 @@ def _drain(old, new, top, base, below, keys, kind, sums, n, s0):
             t = _slot(new, k)
             for c in range(4):
                 new[t, c] = old[s, c]
-    return len(old), n
+            moved += 1
+        old[s, 0] = EMPTY
+        old[s, 1] = NONE
+        old[s, 2] = 0
+        old[s, 3] = 0
+    return len(old), n, moved
 
 
 #: slots of a thread's cache of the pairs met last (a power of two): the
@@ -1094,34 +1098,46 @@ class PairSink:
     def drain(self, used: int, below: int | None, grow: bool = False) -> int:
         """The pairs of the table that lie behind voxel layer ``below``
         (all of them where None) written out, the others moved into a new
-        table, larger where they would fill more than 30 % of it or where
-        ``grow``. Returns the pairs in the new table."""
+        table, larger where ``grow`` or where they fill more than 30 % of
+        it (then moved once more, into a table that they fill less).
+        Returns the pairs in the new table."""
         last = below is None  # all out: the new table stays empty
         below = np.iinfo(np.int64).max if below is None else below
         # the vertex rows stop while the table holds the near cache's pairs too
         used += _spill_all(self.pairs, self.near)
-        keep = int(_count_open(self.pairs, self.top, self.base, below))
         size = 2 * len(self.pairs) if grow else len(self.pairs)
-        while 10 * keep > 3 * size:
-            size *= 2
-        if last:
-            new = new_pairs(1)
-        elif self.spare is not None and len(self.spare) == size:
-            new = _emptied(self.spare)
-        else:  # a new table: checked before it is made (a spare one was, and the budget is read from /proc)
-            alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
-                     "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
-            check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
-            new = new_pairs(size)
-        s = 0
+        new = new_pairs(1) if last else self._table(size)
+        keep, s = 0, 0
         while s < len(self.pairs):
             if not self.blocks or self.blocks[-1][3] == len(self.blocks[-1][0]):
                 self.blocks.append([mapped(ENTRY_BLOCK, np.uint64), mapped(ENTRY_BLOCK, np.uint8),
                                     mapped((ENTRY_BLOCK, 2), np.uint64), 0])
             block = self.blocks[-1]
-            s, block[3] = _drain(self.pairs, new, self.top, self.base, below, *block, s)
-        self.pairs, self.spare = new, self.pairs  # the old table is the next one (no fresh pages to fault in)
+            s, block[3], moved = _drain(self.pairs, new, self.top, self.base, below, *block, s)
+            keep += moved
+        # the pairs kept are counted as they move, not in a pass before: a
+        # table they crowd is rare (the sweep's pairs grow slowly), moving
+        # them twice then costs less than counting them at every drain
+        if 10 * keep > 3 * size:
+            while 10 * keep > 3 * size:
+                size *= 2
+            crowded, new = new, self._table(size)
+            _rehash(crowded, new)
+        # the old table, emptied by the drain, is the next one (no fresh pages to fault in)
+        self.pairs, self.spare = new, self.pairs
         return keep
+
+    def _table(self, size: int) -> np.ndarray:
+        """An empty table of ``size`` slots: the spare where it is that
+        size (emptied by the drain that made it the spare), else a new one,
+        checked before it is made (the budget is read from /proc)."""
+        if self.spare is not None and len(self.spare) == size:
+            new, self.spare = self.spare, None
+            return new
+        alone = (f"crop the image across {self.axis}: a thread's table holds the pairs of the pieces that its "
+                 "voxel layers cross" if size > FIRST_SLOTS else "not even one thread's first table fits")
+        check_threads(PAIR_BYTES * size, self.threads, f"a pair table of {size:,} slots per thread", alone)
+        return new_pairs(size)
 
 
 def read_out(filled: list, npieces: int, layers: int = 1,
