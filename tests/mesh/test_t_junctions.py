@@ -56,6 +56,24 @@ def test_genus_of_a_mesh_with_t_junctions_is_the_closed_surfaces(mesh, genus):
     assert "closed at T-junctions" in verdict.verdict
 
 
+@pytest.mark.parametrize("pairs", [0, 1 << 40])
+def test_the_vertices_on_edges_are_found_alike_with_and_without_a_kd_tree(monkeypatch, pairs):
+    """Below ``ALL_PAIRS`` every (edge, corner) pair is tried, above it a KD
+    tree picks them (scipy.spatial, not imported for a small mesh): both
+    close every edge trimesh finds open in a cracked torus, the same way."""
+    from isoflow.mesh import t_junctions
+
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    v, f = with_t_junctions(torus)
+    open_edges = len(trimesh.grouping.group_rows(trimesh.Trimesh(v, f, process=False).edges_sorted, require_count=1))
+    monkeypatch.setattr(t_junctions, "ALL_PAIRS", pairs)
+    v2, f2, facts = t_junctions.close_t_junctions(v, f)
+    assert facts["edges"] == open_edges > 0
+    closed = trimesh.Trimesh(v2, f2, process=False)
+    assert closed.is_watertight and closed.is_winding_consistent
+    assert closed.volume == pytest.approx(torus.volume, rel=1e-12)  # the same surface, split
+
+
 def test_edges_sampled_differently_on_either_side_close():
     """A square's two halves along x = 0: the left one's edge has a vertex
     at 1/2, the right one's at 1/3 and 2/3; every piece pairs once split

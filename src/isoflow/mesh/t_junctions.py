@@ -153,13 +153,40 @@ def _open_slots(slots: np.ndarray) -> np.ndarray:
     return np.flatnonzero(counts[inverse.ravel()] == 1)
 
 
+#: open edges times their corners up to which every pair is tried (a block
+#: of edges at a time) to find the corners that lie on edges: above it a KD
+#: tree picks the pairs, but importing scipy.spatial would be a large share
+#: of a short command on a small open mesh or soup
+ALL_PAIRS = 1 << 20
+#: pairs tried at a time below :data:`ALL_PAIRS`
+PAIR_BLOCK = 1 << 16
+
+
 def _points_on_edges(v: np.ndarray, slots: np.ndarray, open_slots: np.ndarray, tol: float) -> dict:
     """Per open edge slot, the boundary vertices strictly inside it (within
     ``tol`` of the segment), in order from its first corner."""
-    from scipy.spatial import cKDTree
-
     ends = slots[open_slots]
     points = np.unique(ends)
+    if len(ends) * len(points) <= ALL_PAIRS:
+        step = max(1, PAIR_BLOCK // max(len(points), 1))
+        found = [_on_edges(v, ends, np.repeat(np.arange(lo, min(lo + step, len(ends))), len(points)),
+                           np.tile(points, min(step, len(ends) - lo)), tol) for lo in range(0, len(ends), step)]
+    else:
+        found = [_on_edges(v, ends, *_near_pairs(v, ends, points, tol), tol)]
+    k = np.concatenate([f[0] for f in found]) if found else np.zeros(0, np.int64)
+    c = np.concatenate([f[1] for f in found]) if found else np.zeros(0, np.int64)
+    t = np.concatenate([f[2] for f in found]) if found else np.zeros(0)
+    order = np.lexsort((t, k))  # by edge, then along it
+    k, c = k[order], c[order]
+    runs = np.flatnonzero(np.diff(k)) + 1
+    return {int(open_slots[run[0]]): pts for run, pts in zip(np.split(k, runs), np.split(c, runs)) if len(run)}
+
+
+def _near_pairs(v: np.ndarray, ends: np.ndarray, points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The (edge, corner) pairs whose corner lies in the ball around the
+    edge that holds every point within ``tol`` of it (a KD tree's query)."""
+    from scipy.spatial import cKDTree
+
     a, b = v[ends[:, 0]], v[ends[:, 1]]
     middle, radius = (a + b) / 2, np.linalg.norm(b - a, axis=1) / 2 + tol
     tree = cKDTree(v[points])
@@ -167,22 +194,26 @@ def _points_on_edges(v: np.ndarray, slots: np.ndarray, open_slots: np.ndarray, t
     # every edge open): only the others are listed
     busy = np.flatnonzero(tree.query_ball_point(middle, radius, return_length=True) > 2)
     if not len(busy):
-        return {}
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
     near = tree.query_ball_point(middle[busy], radius[busy])
     lengths = np.fromiter(map(len, near), dtype=np.int64, count=len(busy))
-    k = np.repeat(busy, lengths)
-    c = points[np.concatenate([np.asarray(n, dtype=np.int64) for n in near])]
+    return np.repeat(busy, lengths), points[np.concatenate([np.asarray(n, dtype=np.int64) for n in near])]
+
+
+def _on_edges(v: np.ndarray, ends: np.ndarray, k: np.ndarray, c: np.ndarray, tol: float
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Of the pairs of edge ``k`` and corner ``c``, those whose corner lies
+    strictly inside the edge within ``tol`` (not one of its own corners):
+    the edges, the corners and where along the edge (0 to 1)."""
     other = (c != ends[k, 0]) & (c != ends[k, 1])
     k, c = k[other], c[other]
-    d = b[k] - a[k]
-    t = np.einsum("ij,ij->i", v[c] - a[k], d) / np.einsum("ij,ij->i", d, d)
-    off = np.linalg.norm(a[k] + t[:, None] * d - v[c], axis=1)
+    a = v[ends[k, 0]]
+    d = v[ends[k, 1]] - a
+    with np.errstate(invalid="ignore", divide="ignore"):  # (a zero-length edge holds no point inside)
+        t = np.einsum("ij,ij->i", v[c] - a, d) / np.einsum("ij,ij->i", d, d)
+    off = np.linalg.norm(a + t[:, None] * d - v[c], axis=1)
     on = (t > 0) & (t < 1) & (off <= tol)
-    k, c, t = k[on], c[on], t[on]
-    order = np.lexsort((t, k))  # by edge, then along it
-    k, c = k[order], c[order]
-    runs = np.flatnonzero(np.diff(k)) + 1
-    return {int(open_slots[run[0]]): pts for run, pts in zip(np.split(k, runs), np.split(c, runs)) if len(run)}
+    return k[on], c[on], t[on]
 
 
 def _closing(slots: np.ndarray, open_slots: np.ndarray, inserts: dict) -> dict:
