@@ -25,16 +25,17 @@ from .motion import flow_moves
 COMPILED_VOXELS = 1 << 18
 
 #: the steps of a :data:`COMPILED_VOXELS` flow on the arrays that cost what
-#: numba's start for the compiled step does (about 0.33 s of CPU in a fresh
-#: process, importing numba and loading the step's and the record's machine
-#: code from its cache, against about 1.7 ms + 39 ns a voxel for a NumPy
-#: step with its record and 0.6 ms + 2 ns a voxel for a compiled one, on
-#: balls of 30^3 to 64^3); also the most steps ahead that ``"auto"``
-#: counts on in a run (:func:`weigh_flow`)
+#: numba's start for the compiled step does (importing numba and loading the
+#: step's and the record's machine code from its cache, once per process),
+#: beyond what its compiled steps cost: a NumPy step with its record costs
+#: a fixed part and about twenty times a compiled one's per voxel
+#: (measured by ``benchmarks/bench_flow.py --only small``, the figures in
+#: docs/flow.md); also the most steps ahead that ``"auto"`` counts on in a
+#: run (:func:`weigh_flow`)
 PAYBACK_STEPS = 32
 
 #: a NumPy step's fixed cost over a compiled one's, in voxels of the
-#: difference per voxel (1.2 ms at 37 ns): small arrays cost more per voxel
+#: difference per voxel: small arrays cost more per voxel
 STEP_VOXELS = 1 << 15
 
 #: the work, in voxel-steps, whose NumPy steps cost what numba's start does
