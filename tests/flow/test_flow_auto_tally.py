@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from isoflow.digital.lattice import DigitalObject
 from isoflow.flow import engines
 from isoflow.flow.run import run_flow
 from isoflow.scale import compiled
@@ -132,3 +133,18 @@ def test_the_flow_tally_counts_numpy_steps_and_stays_past_the_threshold_once_com
     assert engines.weigh_flow(1000, 1, record=True) and compiled.tallied(tally) >= engines.FLOW_WORK
     assert engines.weigh_flow(1, 1)
     assert compiled.tallied(False) == compiled.tallied(True) == 0  # the other thresholds keep their own
+
+
+@needs_numba
+def test_a_compiled_flow_pays_numbas_start_for_the_auto_flows_after_it():
+    # a run with method="compiled" loads the compiled step: a small "auto"
+    # flow after it takes the compiled step from its first (before, it
+    # started on the arrays until its own work reached the threshold); both
+    # give what the arrays give
+    small = DigitalObject(small_volume(3))
+    assert not engines.weigh_flow(small.volume.size)
+    run_flow(small, connectivity=6, method="compiled", steps=2)
+    assert engines.weigh_flow(small.volume.size)
+    engine = engines.flow_engine("auto", small, 6)
+    assert not isinstance(engine.start(small), DigitalObject)  # bit rows from the start
+    assert run_flow(small, connectivity=6).to_dict() == run_flow(small, connectivity=6, method="numpy").to_dict()
