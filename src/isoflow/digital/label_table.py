@@ -837,8 +837,9 @@ def box_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: bo
         where = np.stack(np.unravel_index(order[starts[at]:ends[at]], vol.shape), axis=1)
         lo, hi = where.min(axis=0), where.max(axis=0)
         box = np.pad(vol[tuple(slice(a, b + 1) for a, b in zip(lo, hi))] == label, 1)
-        # the pass was chosen for the whole image: the boxes do not add to
-        # the tally of "auto" (which would load numba inside this call)
+        # the pass is chosen once for the whole image (_use_compiled): the
+        # boxes do not add to the tally of "auto", which would load numba
+        # part way through this call
         report = analyze(box, conn, surfaces=surfaces, method="compiled" if use_census(box, surfaces) else "numpy")
         found["voxels"][row], found["sums"][row] = len(where), where.sum(axis=0)
         found["lo"][row], found["hi"][row] = lo, hi

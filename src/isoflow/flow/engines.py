@@ -110,10 +110,10 @@ def weigh_flow(voxels: int, steps_ahead: int | None = None, record: bool = False
     ahead = PAYBACK_STEPS if steps_ahead is None else max(1, min(int(steps_ahead), PAYBACK_STEPS))
     done = tallied(FLOW_TALLY)
     compiled = voxels > 0 and done + step_work(voxels) * ahead >= FLOW_WORK
-    if record and done < FLOW_WORK:
-        # numba's start is paid once a compiled step runs: the later flows
-        # of the process take the compiled step at any size
-        add_to_tally(FLOW_TALLY, FLOW_WORK - done if compiled else step_work(voxels))
+    if record and compiled:
+        paid()  # the later flows of the process take the compiled step at any size
+    elif record and done < FLOW_WORK:
+        add_to_tally(FLOW_TALLY, step_work(voxels))
     return compiled
 
 
@@ -326,7 +326,7 @@ class AutoFlow(ArrayFlow):
     def start(self, obj: DigitalObject):
         state = obj.cropped()
         if weigh_flow(state.volume.size, self.cap):
-            weigh_flow(state.volume.size, self.cap, record=True)  # (numba's start paid: the tally past it)
+            paid()
             return self.bits.start(state)
         return state
 
