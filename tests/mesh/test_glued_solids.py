@@ -302,3 +302,37 @@ def test_voxelize_closes_t_junctions_and_keeps_the_voxels(tmp_path, resolution):
     assert genus["digital"][0]["betti"] == expected == cli_json("info", tmp_path / "v.npz")["betti"]
     assert genus["digital"][0]["voxels"] == int(vol.sum())
     assert "the digital rows voxelise the mesh as voxelize reads it, which splits them too" in genus["verdict"]
+
+
+@pytest.mark.parametrize("which", ["whole", "piece"])
+def test_a_face_listed_twice_on_a_crack_is_split_too(tmp_path, which):
+    """meshes/spot.ply cracked at T-junctions, with a face on a crack listed
+    twice (the face across the split edge, or a piece of the split one):
+    the copy used its edge twice, which looked closed, so that crack stayed
+    open and the cap's boundary chain ran along it too. Every copy split
+    alike, every edge trimesh finds open closes, and the chain is the copy's
+    own outline, once round (the vertices on its three sides, as an uncracked
+    mesh's copy leaves its corners): what the repeat adds to w, whatever the
+    cracks. The voxels are libigl's |w| > 1/2 of the faces as written."""
+    from test_t_junctions import repeated_on_a_crack
+
+    from isoflow.mesh.voxelize import voxelize_file
+
+    spot = trimesh.load(MESHES / "spot.ply", process=False, force="mesh")
+    v, _, twice, k = repeated_on_a_crack(spot, which)
+    listed = trimesh.Trimesh(v, twice, process=False)
+    open_edges = len(trimesh.grouping.group_rows(listed.edges_sorted, require_count=1))
+    assert open_edges > 100 and not listed.is_watertight
+    # the vertices on the sides of the repeated face, its corners among them (numpy's distances to its segments)
+    a, b = v[twice[k]], v[twice[k][[1, 2, 0]]]
+    t = np.clip(np.einsum("pij,ij->pi", v[:, None] - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
+    off = np.linalg.norm(a + t[..., None] * (b - a) - v[:, None], axis=2).min(axis=1)
+    outline = int(np.count_nonzero(off < 1e-9 * np.linalg.norm(np.ptp(v, axis=0))))
+    assert outline == (4 if which == "whole" else 3)  # a split edge's midpoint on the whole face's side
+    path = written(v, twice, tmp_path / "cracked.ply")
+    _, report = voxelize_file(path, resolution=24, details=True)
+    assert f"{open_edges} boundary edges closed at T-junctions" in report.note
+    assert "boundary edge" not in report.note.replace(f"{open_edges} boundary edges closed", "")
+    assert report["chain_edges"] == outline
+    vol, _ = voxelized_as_libigl(path, v, twice, 24, tmp_path)
+    assert np.array_equal(vol, report.volume)

@@ -6,6 +6,8 @@ there and counts the closed mesh; trimesh, on the same faces, calls it open.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import subprocess
 import sys
 
@@ -15,7 +17,7 @@ import trimesh
 
 from isoflow.errors import IsoflowError
 from isoflow.mesh.genus import verify_genus
-from isoflow.mesh.t_junctions import split_t_junctions
+from isoflow.mesh.t_junctions import close_t_junctions, split_t_junctions
 
 
 def with_t_junctions(mesh: trimesh.Trimesh, every: int = 7) -> tuple[np.ndarray, np.ndarray]:
@@ -54,6 +56,70 @@ def test_genus_of_a_mesh_with_t_junctions_is_the_closed_surfaces(mesh, genus):
     # every edge trimesh finds open in the cracked mesh is closed
     assert note.facts["edges"] == len(trimesh.grouping.group_rows(cracked.edges_sorted, require_count=1)) > 0
     assert "closed at T-junctions" in verdict.verdict
+
+
+def repeated_on_a_crack(mesh: trimesh.Trimesh, which: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """``mesh`` cracked by :func:`with_t_junctions`, then one face on a
+    crack listed again, its corners rotated (the same face the same way
+    round): the face left whole across a split edge (``which="whole"``) or
+    a piece of the split one (``"piece"``). The vertices, the cracked faces,
+    the faces with the copy and the face repeated."""
+    v, f = with_t_junctions(mesh)
+    cracked = trimesh.Trimesh(v, f, process=False)
+    on_crack = np.unique(cracked.edges_face[trimesh.grouping.group_rows(cracked.edges_sorted, require_count=1)])
+    new = (f >= len(mesh.vertices)).any(axis=1)  # the pieces hold a vertex the cracking added
+    k = next(i for i in on_crack if new[i] == (which == "piece"))
+    return v, f, np.vstack([f, f[k][[1, 2, 0]]]), int(k)
+
+
+@pytest.mark.parametrize("which", ["whole", "piece"])
+def test_every_copy_of_a_face_on_a_crack_is_split_alike(which):
+    """A face listed twice on a crack used its edge twice, which looked
+    closed, and left the other side's pieces open: the crack stayed. Each
+    copy is now split as the first is, so every edge trimesh finds open
+    closes, the copies stay copies, and one copy of each dropped leaves
+    trimesh's watertight torus, of its volume."""
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    v, f, twice, k = repeated_on_a_crack(torus, which)
+    listed = trimesh.Trimesh(v, twice, process=False)
+    open_edges = len(trimesh.grouping.group_rows(listed.edges_sorted, require_count=1))
+    v2, f2, facts = close_t_junctions(v, twice)
+    assert facts["edges"] == open_edges > 0
+    # one copy of each face (numpy's unique rows of the sorted corners): the repeats are the copy's pieces alone
+    once = np.sort(np.unique(np.sort(f2, axis=1), axis=0, return_index=True)[1])
+    assert len(f2) - len(once) == (2 if which == "whole" else 1)  # the whole face is split in two, a piece is not
+    closed = trimesh.Trimesh(v2, f2[once], process=False)
+    assert closed.is_watertight and closed.is_winding_consistent
+    assert closed.volume == pytest.approx(torus.volume, rel=1e-12)
+
+
+def test_genus_says_what_it_split_for_which_rows(tmp_path):
+    """A cracked torus with a face on a crack listed twice: genus drops the
+    copy for the mesh rows and splits the faces on the cracks (one per
+    crack); the digital rows read the file's faces, and voxelize splits the
+    copy too. The header says both face counts; the note says both splits,
+    not that one was made for every row; ``--strict``'s line says that the
+    digital rows count every copy."""
+    from isoflow.cli.main import main
+
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    v, f, twice, _ = repeated_on_a_crack(torus, "whole")
+    cracks = len(v) - len(torus.vertices)  # one new vertex, one face split, per crack
+    path = tmp_path / "cracked.ply"
+    trimesh.Trimesh(v, twice, process=False).export(path)
+    verdict = verify_genus(str(path), resolutions=[16], step=False)
+    note = next(n for n in verdict.notes if n.kind == "t_junctions")
+    assert note.facts["faces"] == cracks and note.facts["digital_faces"] == cracks + 1
+    assert "for every row" not in verdict.verdict
+    assert f"voxelize splits {cracks + 1} faces there, each copy of a face alike" in verdict.verdict
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["genus", str(path), "--resolution", "16", "--no-step", "-q"]) == 0
+    # repaired: the cracked faces, each split one in two; as loaded: the file's, with the copy
+    assert out.getvalue().splitlines()[0] == (f"{path}: {len(torus.vertices) + cracks} vertices, {len(f) + cracks} faces "
+                                              f"once repaired ({len(twice)} as loaded, which the digital rows voxelise)")
+    with pytest.raises(IsoflowError, match=r"counts its genus; its digital rows count every copy of a face\)$"):
+        verify_genus(str(path), resolutions=[16], step=False, strict=True)
 
 
 @pytest.mark.parametrize("pairs", [0, 1 << 40])
@@ -148,13 +214,14 @@ def test_strict_genus_says_what_genus_does_without_it(tmp_path, repair):
     else:
         v, f = torus.vertices, np.vstack([torus.faces, torus.faces[:5]])
         said = "drops 5 repeated faces"
+    copies = "; its digital rows count every copy of a face" if repair == "repeated_faces" else ""
     path = tmp_path / "cracked.ply"
     trimesh.Trimesh(v, f, process=False).export(path)
     refused = subprocess.run([sys.executable, "-m", "isoflow", "genus", str(path), "--strict", "--resolution", "16",
                               "--no-step", "-q"], capture_output=True, text=True)
     line = refused.stderr.strip()
     assert refused.returncode == 2 and "\n" not in line and "Traceback" not in line
-    assert line.endswith(f"(without --strict genus {said}, which closes the mesh, and counts its genus)")
+    assert line.endswith(f"(without --strict genus {said}, which closes the mesh, and counts its genus{copies})")
     assert "voxelize" not in line and "winding number" not in line
     with pytest.raises(IsoflowError, match=rf"\(without strict=True genus {said},"):
         verify_genus((v, f), resolutions=[16], step=False, strict=True)

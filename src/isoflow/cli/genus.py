@@ -85,6 +85,16 @@ def _filled_words(report) -> str:
             f"{counted(solid['filled_bodies'], 'body', 'bodies')}")
 
 
+def _loaded_words(m: dict) -> str:
+    """The faces as loaded where the repairs (repeated faces dropped, edges
+    split at T-junctions) changed their count: the digital rows voxelise
+    those, as voxelize reads the file, and the mesh rows count the rest."""
+    loaded = m.get("faces_as_loaded")
+    if loaded is None or loaded == m["faces"]:
+        return ""
+    return f" once repaired ({loaded} as loaded, which the digital rows voxelise)"
+
+
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
@@ -95,7 +105,7 @@ def format_genus(report, name: str) -> str:
                  f"{counted(own, 'face')} {'crosses its' if own == 1 else 'cross their'} own component, "
                  f"{other} {'crosses' if other == 1 else 'cross'} another component")
     lines = [
-        f"{name}: {counted(m['vertices'], 'vertex', 'vertices')}, {counted(m['faces'], 'face')}",
+        f"{name}: {counted(m['vertices'], 'vertex', 'vertices')}, {counted(m['faces'], 'face')}" + _loaded_words(m),
         f"  mesh        watertight {m['watertight']}, {counted(m['components'], 'component')}, V-E+F {m['euler_number']}, "
         f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
         f"  crossings   {crossings} (exact test)",

@@ -821,7 +821,14 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     given = v, f
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
+    if "repeated_faces" in stats and "t_junctions" in stats:
+        # the digital rows' voxeliser splits the faces as loaded, each copy
+        # too: the note says how many it split, not the mesh rows' count
+        split = close_t_junctions(*given)[2]
+        stats["t_junctions"] = dict(stats["t_junctions"], digital_faces=0 if split is None else split["faces"])
     w = witnesses(v, f)
+    # the header says the faces the digital rows read beside the mesh's
+    w["mesh"] = dict(w["mesh"], faces_as_loaded=len(given[1]))
     reference = w["solid_genus"] if w["overlap"] else w["walled_genus"] if w["walled"] else w["mesh"]["genus"]
     filled = filled_genus(w, fill)
     target = reference if filled is None else filled
@@ -875,9 +882,11 @@ def _without_strict(v: np.ndarray, f: np.ndarray, rule: str) -> str:
     if "t_junctions" in facts:
         repairs.append(f"splits the edges at {counted(facts['t_junctions']['points'], 'T-junction')}")
     done = " and ".join(repairs)
+    # the copies are dropped for the mesh rows alone: the digital rows read the faces as loaded
+    copies = "; its digital rows count every copy of a face" if "repeated_faces" in facts else ""
     if repairs and Solid(v2, f2).strict_defects() is None:
-        return f"genus {done}, which closes the mesh, and counts its genus"
-    return f"genus {done + ', then ' if repairs else ''}gives its verdict on the mesh as it stands: {rule}"
+        return f"genus {done}, which closes the mesh, and counts its genus{copies}"
+    return f"genus {done + ', then ' if repairs else ''}gives its verdict on the mesh as it stands: {rule}{copies}"
 
 
 def _drop_repeated_faces(v: np.ndarray, f: np.ndarray, stats: dict) -> np.ndarray:

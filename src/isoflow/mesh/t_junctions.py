@@ -12,8 +12,11 @@ pymeshlab's) can be counted, and the voxeliser reads the mesh as closed
 edges and their vertices are looked at; the geometry is unchanged (the new
 corners lie on the edges, a face split along two or more edges gets a
 vertex at its centroid), so the generalised winding number at every point
-off the surface is too.  :func:`close_t_junctions` is the split that
-``isoflow genus`` and ``isoflow voxelize`` both make, at one tolerance.
+off the surface is too.  A face listed more than once the same way round
+is looked at once and each copy cut as the first, so that a copy on a
+crack closes it as the face alone does.  :func:`close_t_junctions` is the
+split that ``isoflow genus`` and ``isoflow voxelize`` both make, at one
+tolerance.
 """
 
 from __future__ import annotations
@@ -21,6 +24,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
+from .load import repeated_faces
 
 #: how far from an edge, as a share of the bounding box's diagonal, a vertex
 #: lies on it for :func:`close_t_junctions`: above float32's rounding (a
@@ -38,7 +43,8 @@ def close_t_junctions(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     vertices : ndarray, shape (N, 3)
         Positions (welded), in any unit.
     faces : ndarray, shape (M, 3)
-        Triangles; a face listed twice keeps both copies.
+        Triangles; a face listed twice keeps both copies, each split as the
+        first.
 
     Returns
     -------
@@ -98,7 +104,9 @@ def split_t_junctions(vertices: np.ndarray, faces: np.ndarray, tolerance: float
     vertices : ndarray, shape (N, 3)
         Positions (welded).
     faces : ndarray, shape (M, 3)
-        Triangles.
+        Triangles. A face listed again the same way round (the same three
+        corners, :func:`~isoflow.mesh.load.repeated_faces`) is a copy: the
+        split is found on the first and made on each copy alike.
     tolerance : float
         How far from an edge a vertex may lie and count as on it (the
         weld's distance).
@@ -109,8 +117,9 @@ def split_t_junctions(vertices: np.ndarray, faces: np.ndarray, tolerance: float
         The split mesh (vertices appended: a centroid per face split along
         two or more edges), or the arrays given where nothing closes.
     facts : dict or None
-        ``points`` (vertices that split an edge), ``faces`` (faces split)
-        and ``edges`` (boundary edges closed), or None.
+        ``points`` (vertices that split an edge), ``faces`` (faces split,
+        every copy counted) and ``edges`` (boundary edges of the faces
+        given closed), or None.
 
     Examples
     --------
@@ -122,9 +131,23 @@ def split_t_junctions(vertices: np.ndarray, faces: np.ndarray, tolerance: float
     >>> _, f2, facts = split_t_junctions(v, f, 1e-9)
     >>> facts, len(f2)
     ({'points': 1, 'faces': 1, 'edges': 3}, 4)
+
+    The face across the split edge listed twice: its edge, used twice,
+    is not open, yet both copies are split, alike, and the two open
+    pieces close.
+
+    >>> _, f3, facts = split_t_junctions(v, np.vstack([f, f[:1]]), 1e-9)
+    >>> facts, f3.tolist()
+    ({'points': 1, 'faces': 2, 'edges': 2}, [[1, 3, 2], [3, 0, 2], [0, 3, 2], [3, 1, 2], [0, 3, 2], [3, 1, 2]])
     """
     faces = np.asarray(faces, np.int64)
-    slots = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)  # edge j of face i is slot 3 i + j
+    # the split is found on each face once and made on every copy of it: a
+    # copy on a crack uses the whole side's edge twice, which then looks
+    # closed, and leaves the other side's pieces open
+    first = repeated_faces(faces)
+    once = first == np.arange(len(faces))
+    unique = faces[once]
+    slots = unique[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)  # edge j of face i is slot 3 i + j
     open_slots = _open_slots(slots)
     if not len(open_slots):
         return vertices, faces, None
@@ -132,10 +155,17 @@ def split_t_junctions(vertices: np.ndarray, faces: np.ndarray, tolerance: float
     inserts = _closing(slots, open_slots, inserts)
     if not inserts:
         return vertices, faces, None
-    new_v, new_f, split = _split_faces(vertices, faces, inserts)
+    new_v, pieces = _split_faces(vertices, unique, inserts)
+    # each face's first listing among the faces listed once; a copy is cut
+    # into its first's pieces, so that the copies stay copies
+    of = (np.cumsum(once) - 1)[first]
+    split = np.isin(of, np.fromiter(pieces, dtype=np.int64, count=len(pieces)))
+    cut = [pieces[int(i)] for i in of[split]]
+    new_f = np.vstack([faces[~split], *cut])
+    before = len(_open_slots(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)))
     after = len(_open_slots(new_f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)))
     points = len(np.unique(np.concatenate(list(inserts.values()))))
-    return new_v, new_f, {"points": points, "faces": split, "edges": len(open_slots) - after}
+    return new_v, new_f, {"points": points, "faces": int(split.sum()), "edges": max(0, before - after)}
 
 
 def _edge_keys(p: np.ndarray, q: np.ndarray, n: int) -> np.ndarray:
@@ -232,27 +262,24 @@ def _closing(slots: np.ndarray, open_slots: np.ndarray, inserts: dict) -> dict:
     return {s: pts for s, pts in inserts.items() if all(q * n + p in directed for p, q in pieces[s])}
 
 
-def _split_faces(v: np.ndarray, faces: np.ndarray, inserts: dict) -> tuple[np.ndarray, np.ndarray, int]:
-    """Each face with inserted corners cut into triangles of its own
-    orientation: a fan from the opposite corner where one edge is split,
-    else from a new vertex at its centroid."""
+def _split_faces(v: np.ndarray, faces: np.ndarray, inserts: dict) -> tuple[np.ndarray, dict[int, np.ndarray]]:
+    """The vertices with a centroid per face split along two or more edges,
+    and the triangles each face with inserted corners is cut into, of its
+    own orientation: a fan from the opposite corner where one edge is
+    split, else from its centroid."""
     by_face: dict[int, dict[int, np.ndarray]] = {}
     for s, pts in inserts.items():
         by_face.setdefault(s // 3, {})[s % 3] = pts
-    keep = np.ones(len(faces), dtype=bool)
-    new_faces, new_points = [], []
+    pieces, new_points = {}, []
     for i, edges in by_face.items():
-        keep[i] = False
         corners = faces[i]
         if len(edges) == 1:
             (j, pts), = edges.items()
             path = [corners[j], *pts, corners[(j + 1) % 3]]
-            new_faces += [(p, q, corners[(j + 2) % 3]) for p, q in zip(path[:-1], path[1:])]
+            pieces[i] = np.array([(p, q, corners[(j + 2) % 3]) for p, q in zip(path[:-1], path[1:])], np.int64)
             continue
         ring = [c for j in range(3) for c in (corners[j], *edges.get(j, ()))]
         centre = len(v) + len(new_points)
         new_points.append(v[corners].mean(axis=0))
-        new_faces += [(p, q, centre) for p, q in zip(ring, ring[1:] + ring[:1])]
-    out_v = np.vstack([v, np.asarray(new_points).reshape(-1, 3)])
-    out_f = np.vstack([faces[keep], np.asarray(new_faces, np.int64).reshape(-1, 3)])
-    return out_v, out_f, len(by_face)
+        pieces[i] = np.array([(p, q, centre) for p, q in zip(ring, ring[1:] + ring[:1])], np.int64)
+    return np.vstack([v, np.asarray(new_points).reshape(-1, 3)]), pieces

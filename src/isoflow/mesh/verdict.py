@@ -289,11 +289,18 @@ def _repeated_words(n: int, copies: int, corners) -> str:
             "each copy, as voxelize does (a copy adds its winding number)")
 
 
-def _t_junction_words(points: int, faces: int, edges: int) -> str:
-    return (f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one "
+def _t_junction_words(points: int, faces: int, edges: int, digital_faces: int | None = None) -> str:
+    said = (f"{counted(edges, 'boundary edge')} closed at T-junctions ({counted(points, 'vertex', 'vertices')} of one "
             f"face on another face's edge, as faces tessellated apart leave them): {counted(faces, 'face')} split "
-            "there before counting, for every row (the digital rows voxelise the mesh as voxelize reads it, which "
-            "splits them too: the surface drawn is the same)")
+            "there before counting")
+    if digital_faces is None or digital_faces == faces:
+        return said + (", for every row (the digital rows voxelise the mesh as voxelize reads it, which splits them "
+                       "too: the surface drawn is the same)")
+    # a repeated face dropped for the mesh rows is kept for the digital rows, which split each copy alike
+    split = f"splits {counted(digital_faces, 'face')} there, each copy of a face alike" if digital_faces else \
+        "leaves them whole"
+    return said + (" the mesh; the digital rows voxelise it as voxelize reads it, with its repeated faces, and "
+                   f"voxelize {split} (the surface drawn is the same)")
 
 
 def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, union_genus: int | None = None) -> str:

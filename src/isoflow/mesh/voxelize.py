@@ -175,8 +175,8 @@ class Solid:
     boundary edges are split at T-junctions where that closes them
     (``t_junctions``: the facts of
     :func:`~isoflow.mesh.t_junctions.close_t_junctions`, or None; the
-    surface drawn is the same, each repeated face kept) and double-sided
-    faces are read as one (``double_sided`` pairs, see
+    surface drawn is the same, each repeated face kept and split as its
+    first) and double-sided faces are read as one (``double_sided`` pairs, see
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
     them; ``walls`` pairs lay in walls between solids or inside the solid
     (solids glued face to face, a tetrahedral mesh's cells) and were
@@ -226,7 +226,8 @@ class Solid:
             # T-junctions: split there, the surface drawn is the same (and so
             # is w off it), but the edges balance and the exact scanline reads
             # the mesh without a cap's solid angles; repeated faces are kept,
-            # each copy adds its winding
+            # each copy adds its winding, and each is split as its first, so
+            # that a copy on a crack leaves no edge of it open
             v, faces, self.t_junctions = close_t_junctions(v, faces)
             if self.t_junctions is not None:
                 edges = census(faces, len(v))
