@@ -289,6 +289,44 @@ def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read
     assert info(tmp_path / "labels.zarr", "--labels")[0] == 0
 
 
+@pytest.mark.parametrize("fill", [float("nan"), 2.5])
+def test_labels_of_a_float_store_name_a_fill_value_that_is_no_label(tmp_path, fill):
+    """``info --labels`` (block by block, 3D; whole, 2D) and ``surface
+    --labels`` refuse a float store whose chunks never written read as a
+    fill value that is no label: the line says the refused value is the
+    fill value zarr reads for those chunks, and names the store that
+    reads them as 0. That store gives the rows of the voxels written."""
+    zarr = pytest.importorskip("zarr")
+
+    def refused(*args):
+        p = subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+        return p.returncode, [line for line in p.stderr.splitlines() if not line.startswith("isoflow info: note: ")]
+
+    for shape, chunks in [((8, 6, 6), (4, 6, 6)), ((8, 6, 6), (8, 6, 1)), ((8, 6), (4, 6))]:
+        path = tmp_path / f"s{len(shape)}{chunks[-1]}.zarr"
+        z = zarr.create_array(str(path), shape=shape, chunks=chunks, dtype="float32", fill_value=fill)
+        written = tuple(slice(0, c) for c in chunks)  # the first chunk alone
+        z[written] = 3
+        assert z.nchunks_initialized == 1 and z.nchunks > 1
+        first = np.argwhere(~(z[...] == 3))[0]  # the first voxel zarr reads as the fill value
+        commands = [("info", path, "--labels")] + ([("surface", path, "--labels", "-o", tmp_path / "s.glb")]
+                                                   if len(shape) == 3 else [])
+        for command in commands:
+            code, err = refused(*command)
+            assert code == 2 and len(err) == 1, err
+            voxel = ", ".join(map(str, first))
+            assert f"voxel ({voxel}) holds {fill!r}, the array's fill value, which zarr reads for a chunk never " \
+                   "written" in err[0], err
+            assert err[0].endswith("write the store with fill_value=0, which a chunk never written then reads as 0")
+        zero = zarr.create_array(str(tmp_path / "zero.zarr"), shape=shape, chunks=chunks, dtype="float32",
+                                 fill_value=0, overwrite=True)
+        zero[written] = 3
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "zero.zarr"), "--labels", "--json"],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        assert {r["label"]: r["voxels"] for r in json.loads(p.stdout)["labels"]} == {3: int(np.prod(chunks))}
+
+
 def test_a_volume_holding_a_value_that_is_no_label_is_not_offered_labels(tmp_path):
     """Where the first value named is a label (2) but the volume also holds
     one that is not (a fraction), the refusal offered --labels, which
