@@ -1276,6 +1276,32 @@ def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alo
         assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
 
 
+@pytest.mark.parametrize("choice", [["--labels"], ["--labels", "2"]])
+def test_surface_labels_force_leaves_files_of_names_it_never_writes(tmp_path, capsys, choice):
+    """A --force run removes the ``label_N`` files an earlier run left, as
+    this command names them (``str(N)``): ``label_02.ply`` and
+    ``label_002.ply`` (another program's zero-padded names) were read as
+    label 2's and removed, though this command never writes them; they
+    keep their bytes, while label 4's file of an image that no longer has
+    it goes."""
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4]))
+    out = tmp_path / "out"
+    run(capsys, "surface", tmp_path / "old.npy", "--labels", "4", "-o", f"{out}/", "--suffix", "ply")
+    theirs = {"label_02.ply": b"ply padded 2", "label_002.ply": b"ply padded 2 again", "label_+2.ply": b"ply plus"}
+    for name, data in theirs.items():
+        (out / name).write_bytes(data)
+    assert main(["surface", str(tmp_path / "new.npy"), *choice, "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
+    capsys.readouterr()
+    after = files_in(out)
+    assert {name: after.get(name) for name in theirs} == theirs
+    written = ["label_1.ply", "label_2.ply"] if choice == ["--labels"] else ["label_2.ply"]
+    kept = ["label_4.ply"] if choice != ["--labels"] else []  # a choice keeps every other label's file
+    assert sorted(after) == sorted([*theirs, *written, *kept])
+    mesh = trimesh.load(out / "label_2.ply", process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(4 ** 3)
+
+
 def test_a_label_slice_saved_as_3d_gets_the_note_with_the_line_that_saves_its_2d_labels(tmp_path, capsys):
     """``info --labels`` read a segmentation of one slice saved as (X, Y, 1)
     as a plate one voxel thick without a word, where ``info`` of a mask
