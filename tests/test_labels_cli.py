@@ -289,6 +289,44 @@ def test_a_store_read_as_nan_where_never_written_is_refused_with_what_would_read
     assert info(tmp_path / "labels.zarr", "--labels")[0] == 0
 
 
+@pytest.mark.parametrize("fill", [float("nan"), 2.5])
+def test_labels_of_a_float_store_name_a_fill_value_that_is_no_label(tmp_path, fill):
+    """``info --labels`` (block by block, 3D; whole, 2D) and ``surface
+    --labels`` refuse a float store whose chunks never written read as a
+    fill value that is no label: the line says the refused value is the
+    fill value zarr reads for those chunks, and names the store that
+    reads them as 0. That store gives the rows of the voxels written."""
+    zarr = pytest.importorskip("zarr")
+
+    def refused(*args):
+        p = subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+        return p.returncode, [line for line in p.stderr.splitlines() if not line.startswith("isoflow info: note: ")]
+
+    for shape, chunks in [((8, 6, 6), (4, 6, 6)), ((8, 6, 6), (8, 6, 1)), ((8, 6), (4, 6))]:
+        path = tmp_path / f"s{len(shape)}{chunks[-1]}.zarr"
+        z = zarr.create_array(str(path), shape=shape, chunks=chunks, dtype="float32", fill_value=fill)
+        written = tuple(slice(0, c) for c in chunks)  # the first chunk alone
+        z[written] = 3
+        assert z.nchunks_initialized == 1 and z.nchunks > 1
+        first = np.argwhere(~(z[...] == 3))[0]  # the first voxel zarr reads as the fill value
+        commands = [("info", path, "--labels")] + ([("surface", path, "--labels", "-o", tmp_path / "s.glb")]
+                                                   if len(shape) == 3 else [])
+        for command in commands:
+            code, err = refused(*command)
+            assert code == 2 and len(err) == 1, err
+            voxel = ", ".join(map(str, first))
+            assert f"voxel ({voxel}) holds {fill!r}, the array's fill value, which zarr reads for a chunk never " \
+                   "written" in err[0], err
+            assert err[0].endswith("write the store with fill_value=0, which a chunk never written then reads as 0")
+        zero = zarr.create_array(str(tmp_path / "zero.zarr"), shape=shape, chunks=chunks, dtype="float32",
+                                 fill_value=0, overwrite=True)
+        zero[written] = 3
+        p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "zero.zarr"), "--labels", "--json"],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        assert {r["label"]: r["voxels"] for r in json.loads(p.stdout)["labels"]} == {3: int(np.prod(chunks))}
+
+
 def test_a_volume_holding_a_value_that_is_no_label_is_not_offered_labels(tmp_path):
     """Where the first value named is a label (2) but the volume also holds
     one that is not (a fraction), the refusal offered --labels, which
@@ -1236,6 +1274,32 @@ def test_surface_labels_force_with_a_choice_replaces_the_chosen_labels_files_alo
     for label, size in replaced.items():
         mesh = trimesh.load(out / f"label_{label}.ply", process=False)
         assert mesh.is_watertight and mesh.volume == pytest.approx(size ** 3)
+
+
+@pytest.mark.parametrize("choice", [["--labels"], ["--labels", "2"]])
+def test_surface_labels_force_leaves_files_of_names_it_never_writes(tmp_path, capsys, choice):
+    """A --force run removes the ``label_N`` files an earlier run left, as
+    this command names them (``str(N)``): ``label_02.ply`` and
+    ``label_002.ply`` (another program's zero-padded names) were read as
+    label 2's and removed, though this command never writes them; they
+    keep their bytes, while label 4's file of an image that no longer has
+    it goes."""
+    np.save(tmp_path / "old.npy", boxes([2, 2, 2, 2]))
+    np.save(tmp_path / "new.npy", boxes([3, 4]))
+    out = tmp_path / "out"
+    run(capsys, "surface", tmp_path / "old.npy", "--labels", "4", "-o", f"{out}/", "--suffix", "ply")
+    theirs = {"label_02.ply": b"ply padded 2", "label_002.ply": b"ply padded 2 again", "label_+2.ply": b"ply plus"}
+    for name, data in theirs.items():
+        (out / name).write_bytes(data)
+    assert main(["surface", str(tmp_path / "new.npy"), *choice, "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
+    capsys.readouterr()
+    after = files_in(out)
+    assert {name: after.get(name) for name in theirs} == theirs
+    written = ["label_1.ply", "label_2.ply"] if choice == ["--labels"] else ["label_2.ply"]
+    kept = ["label_4.ply"] if choice != ["--labels"] else []  # a choice keeps every other label's file
+    assert sorted(after) == sorted([*theirs, *written, *kept])
+    mesh = trimesh.load(out / "label_2.ply", process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(4 ** 3)
 
 
 def test_a_label_slice_saved_as_3d_gets_the_note_with_the_line_that_saves_its_2d_labels(tmp_path, capsys):

@@ -73,6 +73,25 @@ def test_label_of_a_store_that_is_its_fill_value_says_its_unwritten_chunks_count
     assert isoflow("surface", path, "--label", 1, "-o", tmp_path / "one.ply")[1] == []
 
 
+@pytest.mark.parametrize(("dtype", "fill"), [("i8", 2**53 + 1), ("u8", 2**64 - 3)])
+def test_a_fill_value_past_2_53_is_named_and_matched_exactly(tmp_path, dtype, fill):
+    """A 64-bit fill value that no float64 holds (2**53 + 1 reads as
+    2**53 through a float) is the label zarr itself reads: the warning
+    names zarr's own value, and ``--label`` of that value is warned
+    about, not its float neighbour."""
+    path = tmp_path / "big.zarr"
+    z = zarr.create_array(str(path), shape=(4, 4, 4), chunks=(2, 4, 4), dtype=dtype, fill_value=fill)
+    z[:2] = 0
+    z[0, 1:3, 1:3] = fill
+    assert int(z.fill_value) == fill and float(fill) != fill
+    out, notes = isoflow("info", path, "--labels", "--json")
+    assert {r["label"]: r["voxels"] for r in json.loads(out)["labels"]} == {fill: int(np.count_nonzero(z[...] == fill))}
+    assert notes == [f"isoflow info: warning: {said(path, z, f'label {fill}')}"]
+    out, notes = isoflow("info", path, "--label", fill, "--json")
+    assert json.loads(out)["voxels"] == 4 + 32
+    assert notes == [f"isoflow info: warning: {said(path, z, f'label {fill}')}"]
+
+
 def test_store_read_into_memory_says_its_unwritten_chunks_are_voxels(tmp_path):
     path = tmp_path / "flat.zarr"
     z = store(path, (8, 6), 1, 1)

@@ -683,6 +683,8 @@ def scene_expected(table: dict, names: list[str], spacing, moved: float = 0.0) -
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:
     """The label files (``label_N`` with ``suffix``) in ``directory`` that
     are not among ``names``: an earlier run's, of labels this run has not.
+    ``N`` is a label as this command writes it (no leading zero, ASCII
+    digits): ``label_007.ply`` is another program's file, not label 7's.
 
     Parameters
     ----------
@@ -702,7 +704,7 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     --------
     >>> import tempfile
     >>> d = Path(tempfile.mkdtemp())
-    >>> for f in ("label_1.ply", "label_9.ply", "label_9.obj", "notes.ply"):
+    >>> for f in ("label_1.ply", "label_9.ply", "label_9.obj", "label_09.ply", "notes.ply"):
     ...     _ = (d / f).write_bytes(b"")
     >>> [f.name for f in earlier_label_files(d, ".ply", ["label_1"])]
     ['label_9.ply']
@@ -711,7 +713,8 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     found = []
     for f in Path(directory).glob(f"label_*{suffix}"):
         stem = f.name[: -len(suffix)]
-        if re.fullmatch(r"label_-?\d+", stem) and stem not in wanted and not f.is_dir():
+        # the names this command writes, str(label): label_07 (or digits other than ASCII) is another program's file
+        if re.fullmatch(r"label_(0|-?[1-9][0-9]*)", stem) and stem not in wanted and not f.is_dir():
             found.append(f)
     return sorted(found)
 

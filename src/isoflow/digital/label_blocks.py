@@ -135,5 +135,6 @@ class _Across:
         index = [slice(None)] * 3
         index[self.axes[0]] = layers
         # made labels before the axes move, so that a value that is no label is named at its voxel in the image
-        vol = as_labels(self.array[tuple(index)], first_layer=layers.start or 0, axis=self.axes[0])
+        vol = as_labels(self.array[tuple(index)], first_layer=layers.start or 0, axis=self.axes[0],
+                        fill=getattr(self.array, "fill_value", None))
         return np.transpose(vol, self.axes)

@@ -299,11 +299,13 @@ def label_dtype(dtype) -> np.dtype:
     raise IsoflowError(f"a label image holds integers, not {dtype}")
 
 
-def as_labels(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
+def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -> np.ndarray:
     """An image's labels as :func:`label_dtype` (a bool image viewed as
     uint8, a float one converted); an error naming the first value that is
     no label (NaN, infinite, beyond int64, not whole) and its voxel
-    (``first_layer``: the index of the array's layer 0 along ``axis``)."""
+    (``first_layer``: the index of the array's layer 0 along ``axis``),
+    and, where that value is ``fill`` (a zarr array's fill value), that
+    zarr reads it for a chunk never written."""
     vol = np.asarray(array)
     kind = label_dtype(vol.dtype)
     if vol.dtype == np.bool_:
@@ -319,8 +321,26 @@ def as_labels(array, first_layer: int = 0, axis: int = 0) -> np.ndarray:
             at = int(np.argmax(bad))
             voxel = np.unravel_index(at, vol.shape)
             where = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
+            if _is_fill(flat[at], fill):
+                # a store written sparsely holds the value in voxels nobody wrote: the value alone would not say why
+                raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}, the array's fill value, which zarr "
+                                   f"reads for a chunk never written: {why}; write the store with fill_value=0, "
+                                   "which a chunk never written then reads as 0")
             raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
+
+
+def _is_fill(value: np.floating, fill: object) -> bool:
+    """Whether a float voxel's ``value`` is the array's fill value ``fill``
+    (NaN matching NaN), in the voxel's own type."""
+    if fill is None:
+        return False
+    try:
+        with np.errstate(all="ignore"):
+            same = np.asarray(fill).astype(np.asarray(value).dtype)[()]
+    except (TypeError, ValueError):
+        return False
+    return bool(value == same or (np.isnan(value) and np.isnan(same)))
 
 
 #: with numba already imported, the one pass over the label image answers
@@ -743,7 +763,8 @@ class SlabStream:
         check_fits((PIECE_BYTES_PER_VOXEL + stored.itemsize + converted) * int(np.prod(shape)),
                    f"a slab of {'x'.join(map(str, seen))} voxels of the label image",
                    hint=f"write the store with smaller chunks along {along}")
-        vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a))
+        vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a,
+                                             fill=getattr(self.array, "fill_value", None)))
         pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),

@@ -487,7 +487,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
                            f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
     if arr.dtype.kind == "f":
         try:
-            arr = as_labels(arr)
+            arr = as_labels(arr, fill=raw.fill)
         except IsoflowError as exc:
             raise exc.at(path) from None
     elif arr.dtype.kind not in "biu":

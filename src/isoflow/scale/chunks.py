@@ -780,8 +780,14 @@ def fill_label(array) -> int | None:
     >>> z = zarr.create_array(tempfile.mkdtemp() + "/v.zarr", shape=(4,), dtype="f4", fill_value=2.0)
     >>> fill_label(z), fill_label(zarr.create_array({}, shape=(4,), dtype="f4", fill_value=float("nan")))
     (2, None)
+    >>> fill_label(zarr.create_array({}, shape=(4,), dtype="u8", fill_value=2**64 - 3))
+    18446744073709551613
     """
     fill = getattr(array, "fill_value", None)
+    if isinstance(fill, (bool, int, np.bool_, np.integer)):
+        # exact: a float holds whole numbers only up to 2**53, so a uint64 or
+        # int64 fill value beyond would name a neighbouring label
+        return int(fill)
     try:
         value = float(fill)
     except (TypeError, ValueError):

@@ -593,7 +593,8 @@ class LabelSlabs:
     the axis of the most chunks where they are thin across it, as the
     report block by block reads a volume) and ``layers`` the chunks along
     ``axes[0]``; ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest
-    corner), ``unit`` their length unit (:func:`axis_unit`)."""
+    corner), ``unit`` their length unit (:func:`axis_unit`), ``fill_value``
+    the array's (what zarr reads for a chunk never written)."""
 
     def __init__(self, path):
         from ...scale.chunks import layer_axes, zarr_blocks
@@ -628,6 +629,7 @@ class LabelSlabs:
         self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
+        self.fill_value = getattr(array, "fill_value", None)  # what zarr reads for a chunk never written
         blocks = zarr_blocks(array, None)
         self.axes = layer_axes(tuple(len(blocks[i]) for i in self.xyz))
         self.layers = list(blocks[self.xyz[self.axes[0]]])
