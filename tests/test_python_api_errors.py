@@ -922,3 +922,24 @@ def test_a_sample_name_that_is_no_str_is_named(bad):
     for call in (isoflow.data.path, isoflow.data.info):
         with pytest.raises(IsoflowError, match=r"^name must be a str, got " + type(bad).__name__):
             call(bad)
+
+
+@pytest.mark.parametrize("shape", [(4, 5, 6), (5, 7)])
+@pytest.mark.parametrize("fraction", [0.0, 0.5])
+def test_an_object_of_voxel_indices_is_the_mask_they_come_from_an_empty_one_too(shape, fraction):
+    """``from_voxels(np.argwhere(mask))`` of an all-zero mask (a label that
+    is absent) is the empty object, as ``DigitalObject(mask)`` is: the
+    builders refused (0, n) indices as "expected a list of 3D coordinates"
+    although the voxels of a mask are such a list, and an empty one."""
+    measure = pytest.importorskip("skimage.measure")
+    mask = np.random.default_rng(4).random(shape) < fraction
+    for build in (isoflow.DigitalObject.from_voxels, isoflow.DigitalObject.from_points):
+        obj = build(np.argwhere(mask), pitch=0.5)
+        assert obj.ndim == mask.ndim and obj.spacing.tolist() == [0.5] * mask.ndim
+    obj = isoflow.DigitalObject.from_voxels(np.argwhere(mask))
+    assert obj.voxels == np.count_nonzero(mask)
+    assert isoflow.euler_characteristic(obj.volume) == measure.euler_number(mask, connectivity=1)
+    assert isoflow.analyze(obj).betti == isoflow.betti_numbers(mask)
+    # no lattice point gives the object that one point gives: no cube has all its corners
+    assert isoflow.DigitalObject.from_points(np.zeros((0, mask.ndim), int)).voxels == 0
+    assert isoflow.DigitalObject.from_points(np.zeros((1, mask.ndim), int)).voxels == 0
