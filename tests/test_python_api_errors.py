@@ -884,7 +884,7 @@ def test_path_calls_cover_every_public_function_that_takes_a_path_alone():
 ])
 def test_a_path_that_is_no_path_is_refused_in_one_line_naming_it(name, bad, shown, tmp_path, monkeypatch):
     """A path argument that is not a str or os.PathLike is one IsoflowError
-    of one line that names the argument and what was given, and nothing is
+    (and TypeError) of one line that names the argument and what was given, and nothing is
     written: open()'s TypeError named neither, a message made of str(path)
     printed a whole array over many lines, and write_volume wrote an array
     to a file named after its str() (OSError: File name too long)."""
@@ -894,6 +894,8 @@ def test_a_path_that_is_no_path_is_refused_in_one_line_naming_it(name, bad, show
     message = str(caught.value)
     assert "\n" not in message
     assert "path must be a str or os.PathLike, got " + shown in message
+    # still the TypeError os.fspath raised, for code that catches that
+    assert isinstance(caught.value, TypeError)
     assert list(tmp_path.iterdir()) == []
 
 

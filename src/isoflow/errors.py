@@ -308,8 +308,9 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
 
     Raises
     ------
-    IsoflowError
-        If ``value`` is neither a str nor an os.PathLike.
+    NotAPath
+        If ``value`` is neither a str nor an os.PathLike: an
+        :class:`IsoflowError` and a ``TypeError``.
 
     Examples
     --------
@@ -318,13 +319,13 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
     >>> check_path(np.zeros((3, 3, 3), bool), "path", "read_volume", "give the array to DigitalObject")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    isoflow.errors.IsoflowError: read_volume: path must be a str or os.PathLike, got ndarray of shape (3, 3, 3); give the ...
+    isoflow.errors.NotAPath: read_volume: path must be a str or os.PathLike, got ndarray of shape (3, 3, 3); give the ...
     """
     if not isinstance(value, (str, os.PathLike)):
         if array_hint and isinstance(getattr(value, "shape", None), tuple):
             hint = array_hint
-        raise IsoflowError(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
-                           + (f"; {hint}" if hint else ""))
+        raise NotAPath(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
+                       + (f"; {hint}" if hint else ""))
 
 
 class IsoflowError(ValueError):
@@ -387,6 +388,19 @@ class IsoflowError(ValueError):
         if self.command_line is not None:
             out.command_line = f"{where}: {self.command_line}"
         return out
+
+
+class NotAPath(IsoflowError, TypeError):
+    """A path argument that is no ``str`` or ``os.PathLike`` (an array, a
+    mesh, None): one line as every :class:`IsoflowError`, and a
+    ``TypeError``, what ``os.fspath`` raises, so that code catching that
+    still does.
+
+    Examples
+    --------
+    >>> issubclass(NotAPath, IsoflowError), issubclass(NotAPath, TypeError)
+    (True, True)
+    """
 
 
 class IsoflowWarning(UserWarning):
