@@ -143,10 +143,19 @@ def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
 # annotations refused: a bare array for write_volume, a tuple or list pitch
 # and nested lists for write_labels (its own example) and DigitalObject,
 # array_like volumes and origins, connectivity=None (the paper's default,
-# as for analyze)
+# as for analyze), a progress callback that returns a value (a progress
+# bar's update; run_flow's alone wanted one returning None)
 TAKEN_SCRIPT = """
 import numpy as np
 import isoflow
+
+seen: list[int] = []
+
+
+def tell(step: int, state: isoflow.DigitalObject) -> int:
+    seen.append(state.voxels)
+    return step
+
 
 vol = np.zeros((4, 4, 4), dtype=bool)
 vol[1:3, 1:3, 1:3] = True
@@ -163,6 +172,7 @@ obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3
 isoflow.from_manifold(isoflow.to_manifold(obj), pitch=0.5, origin=[1, 2, 3])
 isoflow.label_table(vol.astype(np.uint8), pitch=np.array([0.5, 0.5, 1.0]), origin=np.zeros(3))
 isoflow.run_flow(vol.tolist(), steps=1)
+isoflow.run_flow(vol, steps=2, progress=tell)
 isoflow.a_lut(None)
 """
 
@@ -205,7 +215,10 @@ def test_the_script_s_calls_run(tmp_path, monkeypatch):
     import trimesh
 
     monkeypatch.chdir(tmp_path)
-    exec(compile(TAKEN_SCRIPT, "user.py", "exec"), {})
+    names: dict = {}
+    exec(compile(TAKEN_SCRIPT, "user.py", "exec"), names)
+    # the callback was told of every state after the first, as the states kept say them
+    assert names["seen"] == [s.voxels for s in isoflow.run_flow(names["vol"], steps=2).states[1:]]
     assert trimesh.load(tmp_path / "s.ply", process=False).euler_number == 2  # one cube's sphere
     assert isoflow.read_labels(tmp_path / "l.nii.gz").spacing.tolist() == [0.5, 0.25]
     vol = np.load(tmp_path / "v.npz")["volume"]

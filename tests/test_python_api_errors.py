@@ -849,3 +849,99 @@ def test_a_surface_path_that_is_no_path_is_named(bad):
     obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool))
     with pytest.raises(IsoflowError, match=r"surface path must be a str or os\.PathLike, got " + type(bad).__name__):
         isoflow.write_surface(obj, bad)
+
+
+# every public function that takes a file or store by its path, called with
+# that path replaced by ``bad``
+PATH_CALLS = {
+    "read_volume": lambda bad: isoflow.read_volume(bad),
+    "read_labels": lambda bad: isoflow.read_labels(bad),
+    "read_object": lambda bad: isoflow.read_object(bad),
+    "read_points": lambda bad: isoflow.read_points(bad),
+    "write_volume": lambda bad: isoflow.write_volume(np.ones((2, 2, 2), bool), bad),
+    "write_labels": lambda bad: isoflow.write_labels(np.ones((2, 2, 2), np.uint8), bad),
+    "write_surface": lambda bad: isoflow.write_surface(np.ones((2, 2, 2), bool), bad),
+    "voxelize_file": lambda bad: isoflow.voxelize_file(bad, resolution=4),
+    "voxelize_to_zarr": lambda bad: isoflow.voxelize_to_zarr(isoflow.data.torus(), bad, resolution=4),
+    "analyze_zarr": lambda bad: isoflow.analyze_zarr(bad),
+}
+
+
+def test_path_calls_cover_every_public_function_that_takes_a_path_alone():
+    import inspect
+
+    taking = {name for name in isoflow.__all__ if inspect.isfunction(f := getattr(isoflow, name))
+              and any(str(p.annotation) == "str | os.PathLike" for p in inspect.signature(f).parameters.values())}
+    assert taking == set(PATH_CALLS)
+
+
+@pytest.mark.parametrize("name", sorted(PATH_CALLS))
+@pytest.mark.parametrize(("bad", "shown"), [
+    (np.zeros((3, 4, 5), bool), "ndarray of shape (3, 4, 5)"),  # the arguments swapped, or an array for its file
+    (None, "NoneType None"),
+    (5, "int 5"),
+    (b"v.npy", "bytes b'v.npy'"),
+])
+def test_a_path_that_is_no_path_is_refused_in_one_line_naming_it(name, bad, shown, tmp_path, monkeypatch):
+    """A path argument that is not a str or os.PathLike is one IsoflowError
+    (and TypeError) of one line that names the argument and what was given, and nothing is
+    written: open()'s TypeError named neither, a message made of str(path)
+    printed a whole array over many lines, and write_volume wrote an array
+    to a file named after its str() (OSError: File name too long)."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(IsoflowError) as caught:
+        PATH_CALLS[name](bad)
+    message = str(caught.value)
+    assert "\n" not in message
+    assert "path must be a str or os.PathLike, got " + shown in message
+    # still the TypeError os.fspath raised, for code that catches that
+    assert isinstance(caught.value, TypeError)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda p: isoflow.write_volume(p, np.ones((2, 2, 2), bool)), "the object comes first: write_volume(obj, path)"),
+    (lambda p: isoflow.write_labels(p, np.ones((2, 2, 2), np.uint8)), "the labels come first: write_labels(labels, path)"),
+    (lambda p: isoflow.read_volume(np.load(p)), "an array in memory: DigitalObject(array)"),
+    (lambda p: isoflow.voxelize_file(trimesh_box(), resolution=4), "a mesh in memory: voxelize_mesh(mesh)"),
+])
+def test_a_path_given_something_else_says_what_takes_it(call, words, tmp_path):
+    path = tmp_path / "v.npy"
+    np.save(path, np.ones((2, 2, 2), bool))
+    with pytest.raises(IsoflowError, match=re.escape(words)):
+        call(path)
+    assert [p.name for p in tmp_path.iterdir()] == ["v.npy"]
+
+
+def trimesh_box():
+    trimesh = pytest.importorskip("trimesh")
+    return trimesh.creation.box()
+
+
+@pytest.mark.parametrize("bad", [np.array(["torus.obj", "eight.off"]), None, ["torus.obj"]])
+def test_a_sample_name_that_is_no_str_is_named(bad):
+    # an array's ``in`` raised NumPy's "truth value of an array ... is ambiguous"; a list is no dict key
+    for call in (isoflow.data.path, isoflow.data.info):
+        with pytest.raises(IsoflowError, match=r"^name must be a str, got " + type(bad).__name__):
+            call(bad)
+
+
+@pytest.mark.parametrize("shape", [(4, 5, 6), (5, 7)])
+@pytest.mark.parametrize("fraction", [0.0, 0.5])
+def test_an_object_of_voxel_indices_is_the_mask_they_come_from_an_empty_one_too(shape, fraction):
+    """``from_voxels(np.argwhere(mask))`` of an all-zero mask (a label that
+    is absent) is the empty object, as ``DigitalObject(mask)`` is: the
+    builders refused (0, n) indices as "expected a list of 3D coordinates"
+    although the voxels of a mask are such a list, and an empty one."""
+    measure = pytest.importorskip("skimage.measure")
+    mask = np.random.default_rng(4).random(shape) < fraction
+    for build in (isoflow.DigitalObject.from_voxels, isoflow.DigitalObject.from_points):
+        obj = build(np.argwhere(mask), pitch=0.5)
+        assert obj.ndim == mask.ndim and obj.spacing.tolist() == [0.5] * mask.ndim
+    obj = isoflow.DigitalObject.from_voxels(np.argwhere(mask))
+    assert obj.voxels == np.count_nonzero(mask)
+    assert isoflow.euler_characteristic(obj.volume) == measure.euler_number(mask, connectivity=1)
+    assert isoflow.analyze(obj).betti == isoflow.betti_numbers(mask)
+    # no lattice point gives the object that one point gives: no cube has all its corners
+    assert isoflow.DigitalObject.from_points(np.zeros((0, mask.ndim), int)).voxels == 0
+    assert isoflow.DigitalObject.from_points(np.zeros((1, mask.ndim), int)).voxels == 0

@@ -250,6 +250,84 @@ def check_callable(value: object, name: str, call: str) -> None:
         raise TypeError(f"{name} must be a callable, {call}, or None; got {value!r}")
 
 
+def value_kind(value: object, width: int = 60) -> str:
+    """What a value is, in one short line of a message: its type, and its
+    shape where it has one (an array's repr runs over many lines), else its
+    repr cut to about ``width`` characters.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    width : int
+        The most characters of a repr kept.
+
+    Returns
+    -------
+    str
+        ``TYPE of shape (...)`` or ``TYPE REPR`` (a repr that begins with
+        its type's name alone).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> value_kind(np.zeros((3, 3, 3), bool)), value_kind(None), value_kind(["a.npy"])
+    ('ndarray of shape (3, 3, 3)', 'NoneType None', "list ['a.npy']")
+    >>> value_kind(ValueError("a" * 80))
+    "ValueError('aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa..."
+    """
+    name = type(value).__name__
+    shape = getattr(value, "shape", None)
+    if isinstance(shape, tuple):
+        return f"{name} of shape {shape}"
+    text = " ".join(repr(value).split())
+    text = text if len(text) <= width else text[:width - 3] + "..."
+    return text if text.startswith(name + "(") else f"{name} {text}"  # DigitalObject(...) names its type
+
+
+def check_path(value: object, name: str, where: str, array_hint: str = "", hint: str = "") -> None:
+    """Refuse, before any work, a path that is not a str or os.PathLike (the
+    arguments swapped, an array or a mesh where its file is taken, None):
+    ``Path()`` and ``open()`` raise a TypeError that names neither the
+    argument nor the function, and a message built on ``str(path)`` printed
+    a whole array.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+    name : str
+        The argument's name.
+    where : str
+        The function, for the message.
+    array_hint : str, optional
+        What takes an array, said where ``value`` is one (its shape is
+        said): a volume in memory given to a reader of files.
+    hint : str, optional
+        What to do instead, said whatever ``value`` is.
+
+    Raises
+    ------
+    NotAPath
+        If ``value`` is neither a str nor an os.PathLike: an
+        :class:`IsoflowError` and a ``TypeError``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_path("scan.npy", "path", "read_volume")
+    >>> check_path(np.zeros((3, 3, 3), bool), "path", "read_volume", "give the array to DigitalObject")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.NotAPath: read_volume: path must be a str or os.PathLike, got ndarray of shape (3, 3, 3); give the ...
+    """
+    if not isinstance(value, (str, os.PathLike)):
+        if array_hint and isinstance(getattr(value, "shape", None), tuple):
+            hint = array_hint
+        raise NotAPath(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
+                       + (f"; {hint}" if hint else ""))
+
+
 class IsoflowError(ValueError):
     """Bad input: a missing or unreadable file, an empty or open mesh, ...
 
@@ -310,6 +388,19 @@ class IsoflowError(ValueError):
         if self.command_line is not None:
             out.command_line = f"{where}: {self.command_line}"
         return out
+
+
+class NotAPath(IsoflowError, TypeError):
+    """A path argument that is no ``str`` or ``os.PathLike`` (an array, a
+    mesh, None): one line as every :class:`IsoflowError`, and a
+    ``TypeError``, what ``os.fspath`` raises, so that code catching that
+    still does.
+
+    Examples
+    --------
+    >>> issubclass(NotAPath, IsoflowError), issubclass(NotAPath, TypeError)
+    (True, True)
+    """
 
 
 class IsoflowWarning(UserWarning):

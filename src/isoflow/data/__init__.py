@@ -29,9 +29,15 @@ import json
 from pathlib import Path
 from typing import Any
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, value_kind
 
 __all__ = ["bob", "eight", "example19", "folder", "info", "names", "path", "spot", "torus"]
+
+
+def _named(name: object) -> str:
+    """A sample's name as a message says it: a str by its repr, anything
+    else as no name, by its type (and shape: an array's repr is many lines)."""
+    return repr(name) if isinstance(name, str) else f"name must be a str, got {value_kind(name)}"
 
 
 @functools.cache
@@ -106,8 +112,8 @@ def path(name: str) -> Path:
     >>> data.path("eight.off").suffix
     '.off'
     """
-    if name not in names():
-        raise IsoflowError(f"{name!r}: no such sample file; the samples are {', '.join(names())}")
+    if not isinstance(name, str) or name not in names():  # (an array's ``in`` raised NumPy's ambiguous truth value)
+        raise IsoflowError(f"{_named(name)}: no such sample file; the samples are {', '.join(names())}")
     return folder() / name
 
 
@@ -142,8 +148,8 @@ def info(name: str) -> dict[str, Any]:
     (2, 1, True)
     """
     meshes = _manifest()
-    if name not in meshes:
-        raise IsoflowError(f"{name!r}: no such sample mesh; the meshes are {', '.join(sorted(meshes))}")
+    if not isinstance(name, str) or name not in meshes:  # (an array or a list is no key: TypeError)
+        raise IsoflowError(f"{_named(name)}: no such sample mesh; the meshes are {', '.join(sorted(meshes))}")
     # a deep copy: the entry's dicts and lists are the cached manifest's,
     # which a caller's edit would change for every later call
     return copy.deepcopy(meshes[name])

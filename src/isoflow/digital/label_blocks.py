@@ -50,7 +50,7 @@ def label_table_blocks(
     origin=None,
     labels=None,
     surfaces: bool = True,
-    progress: Callable[[int, int], None] | None = None,
+    progress: Callable[[int, int], object] | None = None,
 ) -> dict[str, np.ndarray]:
     """:func:`isoflow.label_table` of a 3D label array read in slabs along
     axis 0, or another (a zarr array, or anything ``array[a:b]`` reads as

@@ -554,7 +554,7 @@ def rows_in_image_order(found: dict, axes: Sequence[int]) -> dict:
 
 
 def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes: list[int],
-              progress: Callable[[int, int], None] | None = None, axes: Sequence[int] = (0, 1, 2)) -> dict:
+              progress: Callable[[int, int], object] | None = None, axes: Sequence[int] = (0, 1, 2)) -> dict:
     """The rows of a 3D label array read in slabs of ``sizes`` voxel layers
     along axis 0 (``array[a:b]``, never whole; cut further where a slab
     would hold more voxels than the pieces are numbered in), with

@@ -165,15 +165,20 @@ class DigitalObject:
         -------
         DigitalObject
             In the smallest array that holds the voxels, ``offset`` its
-            lowest index.
+            lowest index; no indices (shape ``(0, n)``) give the empty
+            object, as the all-zero volume they come from.
 
         Examples
         --------
         >>> obj = DigitalObject.from_voxels([[0, 0, 0], [2, 0, 0]], pitch=0.5)
         >>> obj.volume.shape, obj.voxels, [c.tolist() for c in obj.bbox()]
         ((3, 1, 1), 2, [[0.0, 0.0, 0.0], [1.5, 0.5, 0.5]])
+        >>> DigitalObject.from_voxels(np.argwhere(np.zeros((4, 4, 4), bool))).voxels
+        0
         """
         idx = _integer_points(indices, "voxel index")
+        if not len(idx):  # np.argwhere of an all-zero mask, a label that is absent
+            return cls(np.zeros((0,) * idx.shape[1], bool), **kw)
         lo = idx.min(axis=0)
         _check_grid(lo, idx.max(axis=0), len(idx), "voxel indices", 1)
         vol = np.zeros(idx.max(axis=0) - lo + 1, dtype=bool)
@@ -205,8 +210,12 @@ class DigitalObject:
         >>> points = [[x, y, z] for x in range(3) for y in range(2) for z in range(2)]
         >>> DigitalObject.from_points(points).voxels
         2
+
+        No points (shape ``(0, n)``) are the empty object, as one point is.
         """
         pts = _integer_points(points, "lattice point")
+        if not len(pts):  # np.argwhere of an all-zero mask: no cube has its corners
+            return cls(np.zeros((0,) * pts.shape[1], bool), **kw)
         lo = pts.min(axis=0)
         _check_grid(lo, pts.max(axis=0), len(pts), "lattice points", 2)  # the point grid and the cubes
         grid = np.zeros(pts.max(axis=0) - lo + 1, dtype=bool)
@@ -422,7 +431,7 @@ MAX_COORDINATE = 2**40
 
 def _integer_points(points, what: str) -> np.ndarray:
     arr = as_array(points, f"{what} coordinates")
-    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] not in (2, 3):
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3):  # (0, n): none, which still says its dimension
         raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
     if arr.dtype.kind not in "biuf":
         raise IsoflowError(f"{what} coordinates must be integers, got an array of type {arr.dtype}")

@@ -204,7 +204,7 @@ class _Trace:
 
     engine: ArrayFlow
     keep_states: bool
-    progress: Callable[[int, DigitalObject], None] | None
+    progress: Callable[[int, DigitalObject], object] | None
     records: list[dict] = field(default_factory=list)
     states: list[DigitalObject] = field(default_factory=list)
     last: Any = None
@@ -335,7 +335,7 @@ def run_flow(
     guard: bool = False,
     connectivity: int | None = 6,
     until_topology_change: bool = False,
-    progress: Callable[[int, DigitalObject], None] | None = None,
+    progress: Callable[[int, DigitalObject], object] | None = None,
     *,
     max_steps: int | None = None,
     keep_states: bool = True,
@@ -360,7 +360,8 @@ def run_flow(
         Plain runs: stop before the first step that changes the Betti
         numbers.
     progress : callable, optional
-        ``progress(step, state)`` after every step.
+        ``progress(step, state)`` after every step; what it returns is not
+        used (a progress bar's ``update`` may return anything).
     max_steps : int, optional
         The cap of a run without ``steps``.
     keep_states : bool
@@ -451,7 +452,7 @@ def held_boxes(result: FlowResult, obj: DigitalObject) -> FlowResult:
 
 def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
                until_topology_change: bool = False, allowance: int = 0,
-               progress: Callable[[int, Any], None] | None = None, keep_states: bool = False,
+               progress: Callable[[int, Any], object] | None = None, keep_states: bool = False,
                unit: str | None = None) -> FlowResult:
     """The run of :func:`run_flow` from a first state that ``engine`` holds
     (one of :mod:`isoflow.flow.engines`, or the stores of

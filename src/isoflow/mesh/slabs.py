@@ -33,7 +33,7 @@ from typing import Any, Literal, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_path, check_switch
 from ..results import Result
 from ..scale import memory
 from ..scale.chunks import compute, import_dask, import_zarr
@@ -230,6 +230,7 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
 
     fill, strict = check_fill(fill), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")
+    check_path(path, "path", "voxelize_to_zarr")
     path = check_store_path(path, force)
     where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"
     # a file names itself in its errors

@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, check_switch, missing, warn
+from ..errors import IsoflowError, check_path, check_switch, missing, warn
 from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -137,6 +137,7 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None, *, ti
     >>> frame.volume.shape, frame.voxels
     ((4, 4, 4), 56)
     """
+    check_path(path, "path", "read_volume", "an array in memory: DigitalObject(array)")
     return read_volume_with_unit(path, label, time=time)[0]
 
 
@@ -477,6 +478,7 @@ def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelIma
     >>> image.spacing.tolist(), label_table(image)["volume"].tolist()
     ([0.5, 0.5, 2.0], [8.0, 16.0])
     """
+    check_path(path, "path", "read_labels", "an array in memory: label_table(array)")
     # a mesh voxelises to one object; a label image of meshes is voxelize's
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
@@ -543,6 +545,7 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     >>> read_points(data.example19()).shape  # the paper's 20 points of Example 19
     (20, 3)
     """
+    check_path(path, "path", "read_points")
     path = Path(path)
     _check_readable(path)
     try:
@@ -682,6 +685,7 @@ def read_object(path: str | os.PathLike, points_are: PointsAre = "corners", labe
     >>> read_object(data.example19()).voxels, read_object(data.example19(), points_are="voxels").voxels
     (4, 20)
     """
+    check_path(path, "path", "read_object", "an array in memory: DigitalObject(array)")
     if points_are not in get_args(PointsAre):  # the annotation binds type checkers only
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {points_are!r}")
     if is_volume(path):
@@ -892,6 +896,8 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     >>> read_volume(write_volume(read_volume(path), pathlib.Path(tempfile.mkdtemp()) / "box.nrrd")).unit
     'mm'
     """
+    check_path(path, "path", "write_volume",
+               hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
     obj = DigitalObject.of(obj)
     return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)))
 
@@ -1022,6 +1028,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     >>> first.unit, read_labels(write_labels(first, pathlib.Path(tempfile.mkdtemp()) / "cells.nrrd")).unit
     ('\u00b5m', '\u00b5m')
     """
+    check_path(path, "path", "write_labels",
+               hint="the labels come first: write_labels(labels, path)" if isinstance(labels, (str, os.PathLike)) else "")
     unit = unit_given(unit, str(path))
     if isinstance(labels, LabelImage):  # its place, unless given, as label_table takes it
         pitch = labels.spacing if pitch is None else pitch

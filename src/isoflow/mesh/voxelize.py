@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_switch, counted, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, warn
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -951,6 +951,8 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     >>> max(obj.volume.shape), betti_numbers(obj.volume)
     (32, [1, 1, 0])
     """
+    in_memory = hasattr(path, "vertices") or isinstance(path, tuple)  # a trimesh, or (vertices, faces)
+    check_path(path, "path", "voxelize_file", hint="a mesh in memory: voxelize_mesh(mesh)" if in_memory else "")
     check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
     details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)

@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
-from ...errors import IsoflowError
+from ...errors import IsoflowError, check_path
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
 from .registry import (
     UDUNITS,
@@ -375,6 +375,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
     >>> report.volume, report.surface_area, report.unit
     (1.0, 6.0, 'mm')
     """
+    check_path(path, "path", "analyze_zarr", "an array in memory: analyze(array), or a dask array: analyze_chunked(array)")
     from ...digital.outofcore import analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
