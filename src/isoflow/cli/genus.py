@@ -86,8 +86,8 @@ def _filled_words(report) -> str:
 
 
 def _mesh_genus_words(m: dict) -> str:
-    # an open surface's genus goes with its boundary loops (chi = 2 - 2g - b
-    # per component): "genus None" named no value where the mesh has one
+    # an open surface has a genus with its boundary loops (chi = 2 - 2g - b
+    # per component): a bare "None" would name no value where there is one
     if m["genus"] is None and m.get("genus_with_boundary") is not None:
         return (f"genus {m['genus_with_boundary']} with {counted(m['boundary_loops'], 'boundary loop')} "
                 "(an open surface: no genus as a closed one)")
