@@ -492,6 +492,40 @@ def test_a_volume_without_a_volume_suffix_is_named_by_its_content(tmp_path, caps
     assert read_volume(tmp_path / renamed).voxels == vol.sum()
 
 
+MESHES = Path(__file__).resolve().parents[1] / "meshes"
+
+
+@pytest.mark.parametrize("named", ["torus", "torus.txt", "torus.dat"])
+@pytest.mark.parametrize("command", ["info", "surface", "flow"])
+def test_a_mesh_without_its_suffix_is_named_by_its_content(tmp_path, capsys, named, command):
+    """torus.obj under another name fell to the point-list reader, which
+    said "torus:3: not a number: 'v'", as if a point list had a typo. The
+    line names the OBJ content and the name that reads it; under that
+    name trimesh reads the manifest's mesh."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"]
+                 if m["filename"] == "torus.obj")
+    path = tmp_path / named
+    path.write_bytes((MESHES / "torus.obj").read_bytes())
+    out = ["-o", tmp_path / "out.ply"] if command == "surface" else []
+    line = fails(capsys, command, path, *out, words=(f"{named}: its content is an OBJ file",))
+    renamed = re.search(r"rename it (\S+)$", line).group(1)
+    path.rename(tmp_path / renamed)
+    loaded = trimesh.load(tmp_path / renamed, force="mesh")
+    merged = trimesh.Trimesh(loaded.vertices, loaded.faces, process=True)
+    assert (len(merged.vertices), len(merged.faces), merged.euler_number) == (
+        known["vertices"], known["faces"], known["euler"])
+    assert not (tmp_path / "out.ply").exists()
+
+
+def test_a_text_file_of_no_known_suffix_says_it_was_read_as_a_point_list(tmp_path, capsys):
+    """manifest.json is neither volume nor mesh nor point list: its line
+    said only "manifest.json:1: not a number: '{'"."""
+    path = tmp_path / "manifest.json"
+    path.write_bytes((MESHES / "manifest.json").read_bytes())
+    line = fails(capsys, "info", path, words=("manifest.json:1: not a number",))
+    assert line.endswith("(read as a text point list, x y z per line: the suffix .json names no volume or mesh format)")
+
+
 def test_zarr_directory_that_is_no_store_says_so(tmp_path, capsys):
     # every command reads .zarr now (info block by block, the others in memory)
     (tmp_path / "v.zarr").mkdir()

@@ -479,3 +479,34 @@ def test_pymeshlab_s_genus_of_an_open_mesh_says_it_is_open(capsys):
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  pymeshlab"))
     assert line == (f"  pymeshlab   genus {known['genus']} (of the surface with its holes filled: "
                     f"{known['boundary_edges']} boundary edges)")
+
+def test_an_open_mesh_s_genus_goes_with_its_boundary_loops(capsys):
+    """plane_holes.obj is an open surface: the manifest (trimesh) gives it
+    27 boundary loops and genus 0 with them (chi = 2 - 2g - b); the mesh
+    line named no genus ("genus None") and --json had no loops."""
+    known = next(m for m in json.loads((MESHES / "manifest.json").read_text())["meshes"]
+                 if m["filename"] == "plane_holes.obj")
+    mesh = json_of(MESHES / "plane_holes.obj", "--resolution", 16, "--no-step", "-q")["mesh"]
+    assert (mesh["genus"], mesh["genus_with_boundary"], mesh["boundary_loops"]) == (
+        None, known["genus_with_boundary"], known["boundary_loops"])
+    assert main(["genus", str(MESHES / "plane_holes.obj"), "--resolution", "16", "--no-step", "-q"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  mesh"))
+    assert line.endswith(f"genus {known['genus_with_boundary']} with {known['boundary_loops']} boundary loops "
+                         "(an open surface: no genus as a closed one)")
+
+
+@pytest.mark.parametrize("name", ["cube_no_bottom.obj", "target.obj"])
+def test_boundary_loops_and_genus_with_them_as_trimesh_counts(name):
+    """trimesh's outline of the merged mesh is its boundary loops, and its
+    Euler number gives the genus with them: 2 - 2g - b = chi."""
+    import trimesh
+
+    from isoflow.mesh.genus import mesh_topology
+
+    loaded = trimesh.load(MESHES / name, force="mesh")
+    tm = trimesh.Trimesh(loaded.vertices, loaded.faces, process=True)
+    loops = len(tm.outline().entities)
+    r = mesh_topology(tm.vertices, tm.faces)
+    assert r["boundary_loops"] == loops > 0
+    assert r["genus_with_boundary"] == (2 - tm.euler_number - loops) // 2
+

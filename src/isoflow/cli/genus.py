@@ -65,8 +65,8 @@ FILL_WORDS = {"winding": "solid", "shell": "shell (--fill shell)", "flood": "flo
 
 def _open_words(boundary_edges: int) -> str:
     # pymeshlab gives an open surface a genus (that of the closed one its
-    # holes filled by disks make): beside the mesh line's "genus None" a
-    # bare "genus 0" reads as a closed surface that isoflow failed to count
+    # holes filled by disks make): a bare "genus 0" reads as a closed
+    # surface's, beside a mesh line that says the mesh is open
     return (f" (of the surface with its holes filled: {counted(boundary_edges, 'boundary edge')})"
             if boundary_edges else "")
 
@@ -95,10 +95,20 @@ def _loaded_words(m: dict) -> str:
     return f" once repaired ({loaded} as loaded, which the digital rows voxelise)"
 
 
+def _mesh_genus_words(m: dict) -> str:
+    # an open surface has a genus with its boundary loops (chi = 2 - 2g - b
+    # per component): a bare "None" would name no value where there is one
+    if m["genus"] is None and m.get("genus_with_boundary") is not None:
+        return (f"genus {m['genus_with_boundary']} with {counted(m['boundary_loops'], 'boundary loop')} "
+                "(an open surface: no genus as a closed one)")
+    per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
+    more = ", ..." if len(m["genus_per_component"]) > 12 else ""
+    return f"{'no genus' if m['genus'] is None else 'genus ' + str(m['genus'])} (per component: {per}{more})"
+
+
 def format_genus(report, name: str) -> str:
     """The verdict as a terminal reads it: one line per witness."""
     m, m3, pm = report["mesh"], report["manifold3d"], report["pymeshlab"]
-    per = ", ".join("?" if g is None else str(g) for g in m["genus_per_component"][:12])
     solid = report["solid"]
     own, other = report["self_intersecting_faces"], report["faces_crossing_other_components"]
     crossings = ("?" if own is None else
@@ -107,7 +117,7 @@ def format_genus(report, name: str) -> str:
     lines = [
         f"{name}: {counted(m['vertices'], 'vertex', 'vertices')}, {counted(m['faces'], 'face')}" + _loaded_words(m),
         f"  mesh        watertight {m['watertight']}, {counted(m['components'], 'component')}, V-E+F {m['euler_number']}, "
-        f"genus {m['genus']} (per component: {per}{', ...' if len(m['genus_per_component']) > 12 else ''})",
+        + _mesh_genus_words(m),
         f"  crossings   {crossings} (exact test)",
         "  manifold3d  " + (f"refused: {m3['error']}" if "error" in m3 else
                            f"genus {m3['genus']} over {counted(m3['components'], 'component')} "

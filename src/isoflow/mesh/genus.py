@@ -54,7 +54,19 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     two parts of one surface, like a chain of voxels whose ends touch at a
     corner), less the ends of non-manifold edges, whose sheets meet along
     the edge (as pymeshlab counts them).
+    ``boundary_loops`` counts the chains of open edges (joined through the
+    fans at their ends) and ``genus_with_boundary`` sums ``(2 - chi_c -
+    b_c) / 2`` over the components, closed or open: None where an edge has
+    more than two faces or a component is not orientable.
     With ``return_components``, also each face's component number.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> square = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    >>> r = mesh_topology(square, np.array([[0, 1, 2], [0, 2, 3]]))
+    >>> r["genus"], r["boundary_loops"], r["genus_with_boundary"]
+    (None, 1, 0)
     """
     from ..scale.graphs import components
     from .census import distinct_counts  # compiled: loaded with the census, when a mesh is counted
@@ -106,15 +118,30 @@ def mesh_topology(vertices, faces, return_components: bool = False):
     # apart there, the closed surface its faces make (manifold3d splits
     # such vertices; isoflow's own boundary meshes count pinches so)
     chi = distinct_counts(np.repeat(comp, 3), ncomp, fan, 3 * nf) - E + F
-    closed = ~bad_edge & _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
+    orientable = _orientable(nf, face_of[h1], face_of[h2], same_dir, comp, ncomp)
+    closed = ~bad_edge & orientable
     genus_c: list[int | None] = [int((2 - c) // 2) if ok and c % 2 == 0 else None
                                  for c, ok in zip(chi.tolist(), closed)]
+    # an open surface has a genus too, with its holes: chi_c = 2 - 2 g - b
+    # (b boundary loops), as trimesh and pymeshlab count an open mesh's
+    # handles. A loop is a chain of open edges joined through the fans at
+    # their ends, so two holes that touch at a vertex (a fan each, as chi
+    # counts it) stay two loops
+    open_h = order[edge_start[edge_count == 1]]
+    _, loop = components(3 * nf, fan[corner_a[open_h]], fan[corner_b[open_h]])
+    _, first = np.unique(loop[fan[corner_a[open_h]]], return_index=True)
+    loops_c = np.bincount(comp[face_of[open_h[first]]], minlength=ncomp)
+    crowded_c = np.bincount(comp_of_edge, weights=edge_count > 2, minlength=ncomp) > 0
+    with_boundary = 2 - chi - loops_c
+    genus_b: list[int | None] = [int(c // 2) if ok and c % 2 == 0 and c >= 0 else None
+                                 for c, ok in zip(with_boundary.tolist(), ~crowded_c & orientable)]
     used = np.count_nonzero(np.bincount(f.ravel(), minlength=len(v)))
     euler = int(used - len(edge_start) + nf)
     known = [g for g in genus_c if g is not None]
     # a closed component with faces turned the wrong way still has a genus: the surface's, as pymeshlab
     # counts it and trimesh's fix_normals leaves it; a non-orientable one (no consistent turning) has none
     total = sum(known) if genus_c and len(known) == len(genus_c) else None
+    known_b = [g for g in genus_b if g is not None]
     report = {
         "watertight": bool(defects["watertight"]),
         "components": int(ncomp),
@@ -122,6 +149,10 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "genus": total,
         "genus_per_component": genus_c,
         "boundary_edges": int(defects["boundary_edges"]),
+        "boundary_loops": int(loops_c.sum()),
+        # every component a surface, closed or with holes: the handles of all
+        # of them (the genus where the mesh is closed)
+        "genus_with_boundary": sum(known_b) if genus_b and len(known_b) == len(genus_b) else None,
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
         "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex[~on_nonmanifold_edge] > 1)),

@@ -13,7 +13,10 @@ bounding box of the vertices the faces use, on every axis the same way::
     origin_a = centre_a - n_a * pitch / 2              (grid centred on the bbox)
 
 so the grid always covers the bounding box, by less than one voxel of slack
-per axis, split evenly on both sides.  With ``resolution=R`` the pitch is
+per axis, split evenly on both sides; an extent that is a whole number of
+pitches up to rounding (1e-9 of it, or a float32 step of the bounds of a
+mesh stored in float32: :func:`float32_slack`) gets that number, so the
+centres stay half a voxel off its axis-aligned faces.  With ``resolution=R`` the pitch is
 ``max(extent) / R``.  The returned volume is the whole grid: empty border
 layers are **not** trimmed and no padding is added, so the shape depends only
 on the bounding box and the pitch (reproducible, and ``origin`` keeps its
@@ -139,6 +142,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
         what = f"pitch={pitch!r}"
         with np.errstate(over="ignore"):
             cells = ext / pitch  # the exact quantities' ratio, correctly rounded
+    slack = float32_slack(lo, hi, pitch)
     shape = []
     for a in range(3):
         if resolution is not None and ext[a] == longest:
@@ -149,8 +153,9 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
                 # a relative 1e-9 guard so that an extent that is an exact
                 # multiple of the pitch up to rounding does not gain a voxel,
                 # but never dropping more than 1e-6 of a voxel of extent (a
-                # huge c would otherwise lose whole layers)
-                n = max(1, math.ceil(c * (1 - 1e-9)), math.ceil(c - 1e-6))
+                # huge c would otherwise lose whole layers); bounds a file
+                # stored in float32 may be a float32 step off
+                n = max(1, math.ceil(c - max(min(1e-9 * c, 1e-6), float(slack[a]))))
             else:  # the true count, in Python ints (it is refused as too big)
                 from fractions import Fraction
 
@@ -164,6 +169,42 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     with np.errstate(over="ignore", invalid="ignore"):
         origin = np.ldexp(origin_s, e) + shift
     return float(pitch), origin.astype(np.float64), tuple(shape), what, (shift, e, origin_s, pitch_s)
+
+
+def float32_slack(lo: np.ndarray, hi: np.ndarray, pitch: float) -> np.ndarray:
+    """Per axis, how many voxels of ``pitch`` the extent ``hi - lo`` may
+    overstate when both bounds are float32 (as an STL, or a PLY of
+    ``float`` properties, stores them): one float32 step at the larger
+    bound, at most 1e-3 of a voxel; zero where a bound is no float32.
+
+    A part 304.8 long stored in float32 reads 304.8000183: at a pitch of
+    1.5875 that is 192.0000115 voxels, and a 193rd voxel centred over the
+    part would put every voxel centre on its two end faces.
+
+    Parameters
+    ----------
+    lo, hi : numpy.ndarray
+        The bounding box's corners, shape (3,).
+    pitch : float
+        The voxel size.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, shape (3,): the slack in voxels.
+
+    Examples
+    --------
+    >>> s = float32_slack(np.zeros(3), np.array([304.8000183105469, 304.8, 1.0]), 1.5875)
+    >>> bool(0 < s[0] < 1e-4), float(s[1])
+    (True, 0.0)
+    """
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        held = (lo.astype(np.float32) == lo) & (hi.astype(np.float32) == hi)
+        step = np.spacing(np.maximum(np.abs(lo), np.abs(hi)).astype(np.float32)).astype(np.float64)
+        slack = np.minimum(step / pitch, 1e-3)
+    return np.where(held & np.isfinite(slack), slack, 0.0)
 
 
 def local_shift(lo: np.ndarray, hi: np.ndarray, e: int) -> np.ndarray:

@@ -566,10 +566,68 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         # 8 bytes a coordinate once read: 4 to 6 bytes per byte of text
         check_fits(6 * path.stat().st_size, f"reading the point list {path}",
                    hint="a volume file (.npy, .zarr) holds points far more compactly")
-        points = _read_points_fast(path, b"," in head)
-        return points if points is not None else _read_points_by_line(path)
+        try:
+            points = _read_points_fast(path, b"," in head)
+            return points if points is not None else _read_points_by_line(path)
+        except IsoflowError as exc:
+            raise IsoflowError(not_points(path, str(exc))) from None
     except (OSError, UnicodeDecodeError) as exc:
         raise IsoflowError(f"{path}: cannot read as text ({exc})") from None
+
+
+#: Suffixes a text point list goes by (any file of no volume or mesh
+#: suffix is read as one).
+POINT_SUFFIXES = (".txt", ".csv", ".xyz", ".pts")
+
+
+def not_points(path: str | os.PathLike, said: str) -> str:
+    """The line for a text file that the point reader refused with
+    ``said``: a mesh file without its suffix (or under another one) is
+    named as such, with the name to give it, as a volume's content is;
+    under a suffix no point list goes by, ``said`` gains what the file was
+    read as. The point reader's own line for an OBJ named ``part``,
+    ``part:3: not a number: 'v'``, reads as a typo in a point list.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file read.
+    said : str
+        The point reader's line.
+
+    Returns
+    -------
+    str
+        The line to refuse the file with.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "part"
+    >>> _ = p.write_text("# a mesh\\nv 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
+    >>> print(not_points(p, f"{p}:2: not a number: 'v'").replace(str(p.parent), "DIR"))
+    DIR/part: its content is an OBJ file (lines 'v x y z' and 'f ...'), but meshes are read by their suffix: \
+rename it part.obj
+    >>> print(not_points("scene.vtp", "scene.vtp:1: not a number: '<?xml'"))
+    scene.vtp:1: not a number: '<?xml' (read as a text point list, x y z per line: the suffix .vtp names no \
+volume or mesh format)
+    """
+    from .sniff import FORMATS, SNIFF_BYTES, sniff_mesh_format
+
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            kind = sniff_mesh_format(fh.read(SNIFF_BYTES), os.fstat(fh.fileno()).st_size)
+    except OSError:
+        kind = ""
+    if kind:
+        what, suffix = FORMATS[kind]
+        return (f"{path}: its content is {what}, but meshes are read by their suffix: rename it "
+                f"{path.stem if path.suffix else path.name}{suffix}")
+    if path.suffix.lower() not in POINT_SUFFIXES:
+        named = f"the suffix {path.suffix.lower()}" if path.suffix else "a name without a suffix"
+        return f"{said} (read as a text point list, x y z per line: {named} names no volume or mesh format)"
+    return said
 
 
 def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
