@@ -1592,3 +1592,41 @@ def test_a_2d_label_image_refused_without_label_is_called_an_image(tmp_path, cap
     assert "volume" not in line and "voxel" not in line, line
     np.save(tmp_path / "stack.npy", np.stack([cells.T] * 3, axis=2))
     fails(capsys, "info", tmp_path / "stack.npy", words=("stack.npy: not a binary volume (", "voxels hold", "e.g. volume > "))
+
+
+@pytest.mark.parametrize("choice", ["٣", "1,٣-4", "３"])
+def test_a_labels_choice_of_non_ascii_digits_is_refused(tmp_path, capsys, segmentation, choice):
+    """Python's int() reads an Arabic-Indic or a full-width digit as the
+    number (``int("٣") == 3``), so ``--labels ٣`` gave label 3's row; a
+    choice is written in ASCII digits, and the line names the part that
+    is not."""
+    np.save(tmp_path / "a.npy", segmentation)
+    part = choice.split(",")[-1]
+    assert int(part.split("-")[0]) == 3 and not part.isascii()
+    fails(capsys, "info", tmp_path / "a.npy", "--labels", choice,
+          words=(f"--labels {choice}", repr(part), "is not a label or a range"))
+
+
+@pytest.mark.skipif(not Path("/sys/kernel").is_dir(), reason="needs Linux's sysfs, where no directory can be made")
+def test_surface_labels_into_a_directory_that_cannot_be_made_fails_before_the_work(tmp_path, capsys, segmentation):
+    """``-o /sys/out/``: os.access says root may write in /sys, and making
+    the directory after all the labels were meshed raised OSError (a
+    traceback, exit 1). It is made before the work, and a failure is one
+    line naming it."""
+    np.save(tmp_path / "a.npy", segmentation)
+    target = Path("/sys/isoflow_test_out")
+    with pytest.raises(OSError):
+        target.mkdir()  # the system's own answer for this path
+    fails(capsys, "surface", tmp_path / "a.npy", "--labels", "-o", f"{target}/", "--suffix", ".ply",
+          words=(f"{target}/", "cannot make the directory"))
+
+
+def test_surface_labels_directory_made_up_front_is_removed_when_the_work_fails(tmp_path, capsys, segmentation):
+    """The directory made before the work is not left behind, empty, by
+    work that fails (a choice of labels none of which occur)."""
+    np.save(tmp_path / "a.npy", segmentation)
+    assert not np.any(segmentation == 7)
+    assert main(["surface", str(tmp_path / "a.npy"), "--labels", "7", "-o", f"{tmp_path / 'new'}/",
+                 "--suffix", ".ply"]) == 2
+    assert "none of the labels asked for occur" in capsys.readouterr().err.strip().splitlines()[-1]
+    assert not (tmp_path / "new").exists()

@@ -315,3 +315,88 @@ def test_split_of_a_glb_labels_its_nodes_in_the_files_order(tmp_path, capsys):
         centre = origin + pitch * (np.argwhere(labels == i).mean(0) + 0.5)
         lo, hi = reread.geometry[reread.graph[name][1]].copy().apply_transform(reread.graph[name][0]).bounds
         assert np.all(lo <= centre) and np.all(centre <= hi), (i, name, centre)
+
+
+@pytest.mark.parametrize("kind", ["zip", "tar.gz"])
+def test_split_of_an_archive_refuses_an_empty_mesh_member_as_given_alone(tmp_path, capsys, kind):
+    """An empty STL in an archive was dropped without a word: ``--split``
+    labelled the archive's other meshes alone. It is refused as the file
+    given alone is, in one line naming the member (as the archive's own
+    library lists it), with ``--split`` or not; an empty file that is no
+    mesh (a readme) is no mesh left out."""
+    import tarfile
+    import zipfile
+
+    ball(tmp_path, "p10.stl", 1.0, (0, 0, 0))
+    (tmp_path / "empty.stl").write_bytes(b"")
+    (tmp_path / "readme.txt").write_bytes(b"")
+    archive = tmp_path / f"arch2.{kind}"
+    if kind == "zip":
+        with zipfile.ZipFile(archive, "w") as z:
+            for name in ("p10.stl", "empty.stl", "readme.txt"):
+                z.write(tmp_path / name, name)
+        with zipfile.ZipFile(archive) as z:
+            sizes = {i.filename: i.file_size for i in z.infolist()}
+    else:
+        with tarfile.open(archive, "w:gz") as t:
+            for name in ("p10.stl", "empty.stl", "readme.txt"):
+                t.add(tmp_path / name, name)
+        with tarfile.open(archive) as t:
+            sizes = {m.name: m.size for m in t.getmembers()}
+    assert sizes["empty.stl"] == 0 and sizes["p10.stl"] > 0  # the member is there, and empty
+    alone = fails(capsys, "voxelize", tmp_path / "p10.stl", tmp_path / "empty.stl", "--resolution", "16",
+                  "-o", tmp_path / "x.npz")
+    assert alone.endswith("empty.stl: an empty file (0 bytes), not a readable STL file")
+    for split in (["--split"], []):
+        fails(capsys, "voxelize", archive, *split, "--resolution", "16", "-o", tmp_path / "z.npz",
+              words=(f"{archive}:empty.stl: an empty file (0 bytes), not a readable STL file",))
+        assert not (tmp_path / "z.npz").exists()
+
+
+def test_split_of_an_archive_refuses_a_member_without_triangles(tmp_path, capsys):
+    """A binary STL member of no facet (its 84 bytes: header and a count
+    of 0) was dropped too; alone it is "no triangles read"."""
+    import struct
+    import zipfile
+
+    ball(tmp_path, "p10.stl", 1.0, (0, 0, 0))
+    (tmp_path / "zero.stl").write_bytes(b"\0" * 80 + struct.pack("<I", 0))
+    assert len(trimesh.load_scene(tmp_path / "zero.stl").geometry) == 0  # trimesh reads nothing from it
+    archive = tmp_path / "a3.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(tmp_path / "p10.stl", "p10.stl")
+        z.write(tmp_path / "zero.stl", "zero.stl")
+    fails(capsys, "voxelize", archive, "--split", "--resolution", "16", "-o", tmp_path / "z.npz",
+          words=(f"{archive}:zero.stl: no triangles read",))
+
+
+def test_a_directory_among_the_meshes_is_said_to_be_one(tmp_path, capsys, monkeypatch):
+    """``voxelize b1.stl . -o l2.nii.gz`` said the output "lies inside the
+    input ." (the test for a zarr store given as input): a directory is
+    no mesh, and the line says that of it."""
+    trimesh.creation.box().export(tmp_path / "b1.stl")
+    monkeypatch.chdir(tmp_path)
+    assert Path(".").is_dir()
+    line = fails(capsys, "voxelize", "b1.stl", ".", "--resolution", "8", "-o", "l2.nii.gz",
+                 words=(".: is a directory, not a mesh file",))
+    assert "lies inside" not in line and not Path("l2.nii.gz").exists()
+
+
+def test_a_degenerate_node_is_noted_as_bounding_nothing_alone(tmp_path, capsys):
+    """A glTF node of collinear triangles (trimesh gives it zero area) got
+    a note saying both "its edges balance, so it bounds a solid" and "the
+    mesh bounds nothing"; it says the one true thing."""
+    v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], float) + 5
+    line = trimesh.Trimesh(v, [[0, 1, 2], [1, 2, 3], [0, 2, 3], [0, 1, 3]], process=False)
+    assert line.area == 0 and len(line.faces) == 4  # faces kept, none of any area
+    scene = trimesh.Scene()
+    scene.add_geometry(trimesh.creation.box(), node_name="box", geom_name="box")
+    scene.add_geometry(line, node_name="line", geom_name="line")
+    path = tmp_path / "scene.glb"
+    scene.export(path)
+    assert main(["voxelize", str(path), "--split", "--resolution", "16", "-o", str(tmp_path / "s.npz")]) == 0
+    err = capsys.readouterr().err
+    noted = [n for n in err.splitlines() if f"note: {path}:line:" in n]
+    assert len(noted) == 1, err
+    assert "bounds nothing" in noted[0] and "bounds a solid" not in noted[0], noted[0]
+    assert np.count_nonzero(np.load(tmp_path / "s.npz")["volume"] == 2) == 0  # and no voxel has its label

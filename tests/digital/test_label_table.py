@@ -266,7 +266,7 @@ def test_bool_image_is_label_1(method):
     assert row_report(table, 0) == analyze_report(image, 6)
     # label 2 is not True: a bool image holds none of it, so its row is empty
     for image_nd in (image, image[6]):
-        asked = label_table(image_nd, labels=[2, np.True_], method=method)
+        asked = label_table(image_nd, labels=[2, 1], method=method)
         assert asked["label"].tolist() == [2, 1]
         assert asked["voxels"].tolist() == [0, np.count_nonzero(image_nd)]
 
@@ -501,3 +501,30 @@ def test_pieces_beyond_the_budget_are_refused_naming_the_layers_that_fit(monkeyp
     fit = int(found.group(1))
     table = label_table(vol[:fit], method="compiled")
     assert 1 <= fit < 40 and list(table["voxels"]) == np.bincount(vol[:fit].reshape(-1))[1:].tolist()
+
+
+@pytest.mark.parametrize("label", [1.0, True, np.True_, np.float64(1.0), np.float32(1.0)])
+def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
+    """``labels=[1.0]`` and ``labels=[True]`` were taken as label 1: a
+    choice of labels is integers, and the refusal names the value."""
+    image = np.zeros((4, 4, 4), np.uint8)
+    image[1:3, 1:3, 1:3] = 1
+    assert label == 1  # equal to label 1, which is why it was read as that label
+    with pytest.raises(ValueError, match=re.escape(f"label {label!r} is not an integer")):
+        label_table(image, labels=[label])
+    # an integer of NumPy's is one
+    assert label_table(image, labels=[np.int64(1)])["voxels"].tolist() == [np.count_nonzero(image == 1)]
+
+
+@pytest.mark.parametrize("pitch", [(1, 1, np.inf), (1, 1, np.nan), np.inf, (1, -np.inf, 1)])
+def test_a_pitch_that_is_not_finite_is_said_to_be_one(pitch):
+    """``pitch=(1, 1, inf)`` was refused as "must be 3 numbers, one per
+    axis", which three numbers are: the line says the voxel size must be
+    finite and positive, naming the value."""
+    assert not np.isfinite(pitch).all() and np.size(pitch) in (1, 3)
+    with pytest.raises(IsoflowError) as info:
+        label_table(np.ones((2, 2, 2), np.uint8), pitch=pitch)
+    said = str(info.value)
+    assert "'pitch' must be finite and positive" in said and "one per axis, got" not in said.split("(")[0]
+    assert said.endswith("got " + ("inf" if np.ndim(pitch) == 0 else
+                                   "[" + ", ".join(f"{x:g}" for x in np.asarray(pitch, float)) + "]"))

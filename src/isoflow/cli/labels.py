@@ -29,7 +29,8 @@ PLANAR_TERMINAL_COLUMNS = (("label", "label", 8), ("pixels", "voxels", 10), ("ar
                            ("perimeter", "perimeter", 11), ("chi", "euler_characteristic", 6), ("b0", "b0", 4),
                            ("b1", "b1", 5))
 
-_RANGE = re.compile(r"\s*(-?\d+)\s*(?:(?:-|\.\.)\s*(-?\d+)\s*)?")
+#: a label or a range A-B (A..B); ASCII digits only, as Python's int() would read "٣" (an Arabic-Indic 3) as 3
+_RANGE = re.compile(r"\s*(-?[0-9]+)\s*(?:(?:-|\.\.)\s*(-?[0-9]+)\s*)?", re.ASCII)
 
 
 def add_labels_option(p: argparse.ArgumentParser) -> None:
@@ -520,12 +521,6 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
     every label's mesh in its box, boxes meshed many at a time
     (:func:`isoflow.digital.label_meshes.label_batches`), the glTF's
     columns computed per batch."""
-    from ..digital.label_meshes import label_batches
-    from ..mesh.export import float32_transform_problem, float64_move_note
-    from ..mesh.float32 import float64_moved
-    from ..mesh.outputs import check_output_path
-    from .progress import TimeNote, progress_bar
-
     if args.png:
         raise IsoflowError(f"{args.input}: --png draws one surface, not --labels")
     target = surface_outputs(args)
@@ -534,6 +529,60 @@ def cmd_surface_labels(args: argparse.Namespace) -> int:
                            "triangles in binary")
     if args.ascii and target[2] != ".ply":
         raise IsoflowError(f"{target[1]}: --ascii applies to .ply files only, not --suffix {target[2]}")
+    if target[0] == "glb":
+        return surface_labels(args, target)
+    with label_directory(target[1]):
+        return surface_labels(args, target)
+
+
+@contextlib.contextmanager
+def label_directory(directory: Path) -> Iterator[None]:
+    """The directory of ``surface --labels -o DIR/`` made before the work:
+    ``os.access`` answers for root as if it could write anywhere, so
+    making it (``/sys/out/``, a read-only mount) is the one test that a
+    file per label can be written there. A failure is one line naming the
+    directory; a directory made here is removed again, if still empty,
+    when the work fails.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> d = Path(tempfile.mkdtemp()) / "labels"
+    >>> with label_directory(d):
+    ...     d.is_dir()
+    True
+    >>> try:
+    ...     with label_directory(d / "more"):
+    ...         raise IsoflowError("failed")
+    ... except IsoflowError:
+    ...     (d / "more").exists()
+    False
+    """
+    from ..mesh.outputs import make_output_dir
+
+    try:
+        made = make_output_dir(directory)
+    except OSError as exc:
+        raise IsoflowError(f"{directory}/: cannot make the directory for a file per label "
+                           f"({exc.strerror or type(exc).__name__})") from None
+    try:
+        yield
+    except BaseException:
+        if made:  # the directory this run made, left empty: a file of the set written keeps it
+            with contextlib.suppress(OSError):
+                directory.rmdir()
+        raise
+
+
+def surface_labels(args: argparse.Namespace, target) -> int:
+    """:func:`cmd_surface_labels` once its outputs are checked (and
+    ``-o DIR/`` made): the table, the meshes, the files."""
+    from ..digital.label_meshes import label_batches
+    from ..mesh.export import float32_transform_problem, float64_move_note
+    from ..mesh.float32 import float64_moved
+    from ..mesh.outputs import check_output_path
+    from .progress import TimeNote, progress_bar
+
     about, conn, table, image, _ = read_table(args)
     check_surfaces_fit(args.input, table, image.spacing, args.labels == "all")
     corners = about["corners"]  # read_table checks the placement's corners before it counts the table
@@ -792,9 +841,8 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
-    from ..mesh.outputs import make_output_dir, output_set
+    from ..mesh.outputs import output_set
 
-    made = make_output_dir(target[1])
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
@@ -808,33 +856,28 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
               f"({_some([f.name for f in kept])}); "
               + ("--force makes the directory hold this run's alone" if args.labels == "all" else
                  "a choice of labels replaces those labels' files alone, with --force too"), file=sys.stderr)
-    try:
-        # one set: a folder holding some labels' new files beside others' old ones would look complete
-        with output_set(f"{target[1]}/", retire=retire):
-            for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
-                path = target[1] / f"{name}{target[2]}"
-                written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
-                                               force=args.force, comments=(f"isoflow surface --labels: {name}",))
-                count += written["face_count"]
-                framed += bool(written.get("framed"))
-                kinds[written["faces"]] = None
-                if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
-                    moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
-                welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
-                if welded:
-                    welds[path.name] = welded
-                if not args.no_check:
-                    with reading_back(path):
-                        check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
-                    if check.get("agree") is False:
-                        problems.append(check["problem"])
-                if progress is not None:
-                    progress(done, len(meshes))
-    except BaseException:
-        if made:  # the directory this run made, left empty
-            with contextlib.suppress(OSError):
-                target[1].rmdir()
-        raise
+    # one set: a folder holding some labels' new files beside others' old ones would look complete
+    # (the directory is made before the work, by label_directory, which removes it if the work fails)
+    with output_set(f"{target[1]}/", retire=retire):
+        for done, (name, mesh, obj, comps) in enumerate(meshes, 1):
+            path = target[1] / f"{name}{target[2]}"
+            written = export.write_mesh_file(path, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
+                                           force=args.force, comments=(f"isoflow surface --labels: {name}",))
+            count += written["face_count"]
+            framed += bool(written.get("framed"))
+            kinds[written["faces"]] = None
+            if (written.get("moved_voxels") or 0) > moved["moved_voxels"]:
+                moved = {"moved": written["moved"], "moved_voxels": written["moved_voxels"]}
+            welded = export.shared_positions(mesh) if target[2] == ".stl" else 0
+            if welded:
+                welds[path.name] = welded
+            if not args.no_check:
+                with reading_back(path):
+                    check = check_surface_file(path, mesh, obj, topology=not welded, components=comps)
+                if check.get("agree") is False:
+                    problems.append(check["problem"])
+            if progress is not None:
+                progress(done, len(meshes))
     if framed and not args.quiet:  # as surface says of one GLB file
         where = f"{target[1]}/" if len(meshes) > 1 else target[1] / f"{meshes[0][0]}{target[2]}"
         note = export.glb_transform_note(where, framed, len(meshes), "file", beyond=beyond,

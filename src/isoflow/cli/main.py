@@ -381,7 +381,8 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
     from ..mesh.outputs import refuse_unusable_output
 
     meshes = getattr(args, "mesh", None)
-    inputs = [getattr(args, "input", None)] + (meshes if isinstance(meshes, list) else [meshes])
+    meshes_given = meshes if isinstance(meshes, list) else [meshes]
+    inputs = [getattr(args, "input", None)] + meshes_given
     # (flow's --out too: a directory, which may be the input zarr store itself)
     for out in (getattr(args, key, None) for key in ("output", "csv", "png", "out")):
         if not out or out == "-":
@@ -391,7 +392,8 @@ def refuse_output_over_input(args: argparse.Namespace) -> None:
         for name in filter(None, inputs):
             in_file, in_set = split_dataset(name)
             # os.path's tests: an input that cannot be looked at is not the output, and its reader says why
-            if os.path.isdir(in_file) and in_file.resolve() in out_file.resolve().parents:
+            # (a directory is only ever an input as a zarr store: given as a mesh, its reader refuses it as such)
+            if name not in meshes_given and os.path.isdir(in_file) and in_file.resolve() in out_file.resolve().parents:
                 # a zarr store is a directory: files written into it (flow --out STORE/run, surface --labels
                 # -o STORE/) change the input, --force or not
                 raise IsoflowError(f"{out}: lies inside the input {name}; write the output elsewhere (--force "

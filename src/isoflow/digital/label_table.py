@@ -169,7 +169,8 @@ def label_table(
         World position of voxel (0, 0, 0)'s lowest corner (default 0).
     labels : sequence of int, optional
         The labels to report, in this order (default: every nonzero label
-        present, in increasing order). A label absent from the image gets
+        present, in increasing order); integers, Python's or NumPy's (a
+        float, even 1.0, or a bool is refused). A label absent from the image gets
         a row of zeros (NaN box and centroid), as ``analyze`` of an empty
         mask.
     surfaces : bool
@@ -463,17 +464,19 @@ def every_other_boxes(vol: np.ndarray) -> int:
 
 
 def wanted_labels(labels, dtype) -> np.ndarray:
-    """The labels asked for, as values of the image's type: each one a
-    whole number the type holds, none twice."""
+    """The labels asked for, as values of the image's type: each one an
+    integer (not a float or a bool) the type holds, none twice."""
     if isinstance(labels, Iterable) and not isinstance(labels, (str, bytes, np.ndarray)):
         # a generator, a set, dict keys: their labels in their order (NumPy holds such an object as one value)
         labels = list(labels)
     asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
     info = np.iinfo(label_dtype(dtype))
     for value in asked:
-        whole = isinstance(value, (int, np.integer, np.bool_)) or (
-            isinstance(value, (float, np.floating)) and float(value).is_integer())
-        if not whole or not info.min <= int(value) <= info.max:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+            # 1.0 or True taken as label 1 would hide a slip (a float column, a mask's values) behind a row
+            raise IsoflowError(f"label {value!r} is not an integer: labels are asked for as integers (Python or "
+                               "NumPy ints)")
+        if not info.min <= int(value) <= info.max:
             raise IsoflowError(f"label {value!r} is not a value the labels of this image hold: they are "
                                f"{np.dtype(dtype)} ({info.min} to {info.max})")
     values = [int(v) for v in asked]

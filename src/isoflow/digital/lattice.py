@@ -472,6 +472,9 @@ def _pitch(value, ndim: int):
         items = [v.item() if isinstance(v, np.generic) else v for v in given.flat]
         shown = f"an array of shape {arr.shape}" if given is arr else repr(items[0] if arr.ndim == 0 else items)
         raise IsoflowError(f"'pitch' must be a number (one, or one per axis), not True or False, got {shown}")
+    if arr.dtype.kind in "iuf" and not np.isfinite(arr).all():
+        # named as what a voxel size must be: _field's "3 numbers, one per axis" reads as a count that is wrong
+        raise IsoflowError(f"'pitch' must be finite and positive (one number, or one per axis), got {number_text(arr)}")
     if arr.dtype.kind in "biuf" and arr.size == 1 and arr.ndim <= 1:
         pitch = _field(arr.reshape(()), "pitch", None)
     else:
@@ -513,7 +516,9 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     if (arr.size != 1) if length is None else (arr.shape != (length,)):
         raise bad()
     f = arr.astype(np.float64)
-    if not np.isfinite(f).all() or (integral and (f != np.round(f)).any()):
+    if not np.isfinite(f).all():  # the count is right: say what is wrong with the value
+        raise IsoflowError(f"'{name}' must be finite, got {shown()}")
+    if integral and (f != np.round(f)).any():
         raise bad()
     if bound is not None and (np.abs(f) > bound).any():
         raise IsoflowError(f"'{name}' {shown()} is out of range (beyond +-{bound})")

@@ -46,7 +46,18 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IsoflowError
-from .load import check_mesh, check_mesh_file, is_scene, load_mesh, mesh_arrays, mesh_bbox, reading_mesh, trimesh_load, weld
+from .load import (
+    ARCHIVE_TYPES,
+    check_mesh,
+    check_mesh_file,
+    is_scene,
+    load_mesh,
+    mesh_arrays,
+    mesh_bbox,
+    reading_mesh,
+    trimesh_load,
+    weld,
+)
 
 #: suffixes whose files are scenes of named nodes (split per node)
 SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".zip", ".tar.gz", ".tar.bz2", ".bz2")
@@ -105,10 +116,6 @@ def file_bodies(path, split: bool) -> list[Body]:
     return connected_bodies(*load_mesh(path), str(name))
 
 
-#: archives of mesh files (trimesh's file types), read member by member
-ARCHIVE_TYPES = {".zip": "zip", ".tar.gz": "tar.gz", ".tar.bz2": "tar.bz2"}
-
-
 def node_bodies(path: Path) -> list[Body]:
     """One body per node of a scene file that holds a triangle mesh, in
     world coordinates, in the file's order (:func:`scene_bodies`)."""
@@ -142,6 +149,9 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
             data = archive[member].read()
             scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
                                        process=False)
+            if not scene.geometry:  # nothing read at all (a point cloud or a path is something): refused as alone
+                raise IsoflowError(f"{path}:{member}: no triangles read (empty mesh, or not a valid "
+                                   f"{member_kind.upper()} file)")
             order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
             meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
                                                                             trimesh.Trimesh)]

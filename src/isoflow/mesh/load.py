@@ -579,14 +579,91 @@ def check_mesh_file(p: Path) -> None:
     library is installed, or one line saying which is not."""
     if not p.exists():
         raise missing(p)
+    if p.is_dir():  # (a directory given among meshes: `voxelize a.stl . -o out.nii.gz`)
+        raise IsoflowError(f"{p}: is a directory, not a mesh file")
     if not p.is_file():
         raise IsoflowError(f"{p}: not a regular file")
     refuse_cad(p)
     if p.stat().st_size == 0:  # a download or copy that failed: trimesh's readers raise IndexError and the like
-        kind = p.suffix.lstrip(".").upper() or "mesh"
-        raise IsoflowError(f"{p}: an empty file (0 bytes), not a readable {kind} file")
+        raise IsoflowError(empty_file_line(p, p.name))
     refuse_zipped_store(p)
+    refuse_empty_members(p)
     check_format_libraries(p)
+
+
+def empty_file_line(where: str | os.PathLike, name: str) -> str:
+    """The line for a mesh file of 0 bytes (``where``: the file, or an
+    archive's member as ``ARCHIVE:MEMBER``; ``name``: the file's name,
+    whose suffix names the format).
+
+    Examples
+    --------
+    >>> empty_file_line("parts.zip:lid.stl", "lid.stl")
+    'parts.zip:lid.stl: an empty file (0 bytes), not a readable STL file'
+    """
+    kind = Path(name).suffix.lstrip(".").upper() or "mesh"
+    return f"{where}: an empty file (0 bytes), not a readable {kind} file"
+
+
+#: the archives whose members trimesh reads as meshes, by their suffix, as trimesh names their type
+ARCHIVE_TYPES = {".zip": "zip", ".tar.gz": "tar.gz", ".tar.bz2": "tar.bz2"}
+
+
+def refuse_empty_members(p: Path) -> None:
+    """Refuse an archive (:data:`ARCHIVE_TYPES`) that holds a mesh file of
+    0 bytes, as that file given alone is refused: trimesh reads it as a
+    scene of no geometry, and the archive's other meshes would be taken
+    without a word on the one left out.
+
+    Parameters
+    ----------
+    p : pathlib.Path
+        A mesh input, by its name; only an archive is looked into.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the first empty mesh member, ``ARCHIVE:MEMBER``.
+
+    Examples
+    --------
+    A tar archive of an empty readme (no mesh) and an empty STL (each
+    ``TarInfo`` of size 0):
+
+    >>> import tarfile, tempfile
+    >>> p = Path(tempfile.mkdtemp()) / "parts.tar.gz"
+    >>> with tarfile.open(p, "w:gz") as t:
+    ...     t.addfile(tarfile.TarInfo("readme.txt")); t.addfile(tarfile.TarInfo("lid.stl"))
+    >>> refuse_empty_members(p)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: ...parts.tar.gz:lid.stl: an empty file (0 bytes), not a readable STL file
+    """
+    import tarfile
+    import zipfile
+
+    name = p.name.lower()
+    if not any(name.endswith(s) for s in ARCHIVE_TYPES):
+        return
+    try:
+        if name.endswith(".zip"):
+            with zipfile.ZipFile(p) as z:
+                sizes = [(i.filename, i.file_size) for i in z.infolist() if not i.is_dir()]
+        else:
+            with tarfile.open(p) as t:
+                sizes = [(m.name, m.size) for m in t.getmembers() if m.isfile()]
+    except (OSError, EOFError, zipfile.BadZipFile, tarfile.TarError):
+        return  # trimesh's reader says what is wrong with the archive
+    empty = [member for member, size in sizes if size == 0]
+    if not empty:
+        return
+    from trimesh.exchange.load import mesh_formats
+    from trimesh.util import split_extension
+
+    formats = mesh_formats()
+    # (an empty readme or material file is no mesh left out)
+    meshes = [member for member in empty if split_extension(member).lower() in formats]
+    if meshes:
+        raise IsoflowError(empty_file_line(f"{p}:{meshes[0]}", meshes[0]))
 
 
 #: the metadata files that make a directory a zarr store (v3, v2)

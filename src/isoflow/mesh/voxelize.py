@@ -821,7 +821,11 @@ def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch:
         if thin and solid.strict:
             raise IsoflowError.worded(f"voxelize: {thin}; without strict=True the winding rule's answer is kept",
                                       f"voxelize: {thin}; without --strict the winding rule's answer is kept")
-        notes.append(thin)
+        if thin == NO_AREA:
+            # no area bounds nothing: the defects' rule ("its edges balance, so it bounds a solid") would contradict it
+            notes = [thin]
+        else:
+            notes.append(thin)
     note = "; ".join(n for n in notes if n) or None
     return Voxelization(volume=vol, origin=np.asarray(origin, dtype=np.float64), pitch=float(pitch),
                         fill=solid.fill, voxels=int(voxels), defects=solid.defects, flipped_faces=solid.flipped,
