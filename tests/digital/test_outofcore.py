@@ -837,14 +837,14 @@ print(json.dumps({"peak": peak, "estimate": need}))
 """
 
 
-def porous_store(tmp_path, chunk: int) -> tuple[str, np.ndarray]:
-    """A porous field of 384^3 voxels (a smoothed random field, upsampled
-    4x) stored as bools in chunks of ``chunk``^3: its path and volume.
-    Skips where the kernel's peak cannot be reset, which the tests that
-    take it read."""
+def porous_store(tmp_path, chunk: int, size: int = 384, seed: int = 0) -> tuple[str, np.ndarray]:
+    """A porous field of ``size``^3 voxels (a smoothed random field,
+    upsampled 4x) stored as bools in chunks of ``chunk``^3: its path and
+    volume. Skips where the kernel's peak cannot be reset, which the tests
+    that take it read."""
     if not os.access("/proc/self/clear_refs", os.W_OK):
         pytest.skip("the kernel's peak cannot be reset here")
-    field = gaussian_filter(np.random.default_rng(0).standard_normal((96, 96, 96)).astype(np.float32), 2)
+    field = gaussian_filter(np.random.default_rng(seed).standard_normal((size // 4,) * 3).astype(np.float32), 2)
     v = np.repeat(np.repeat(np.repeat(field > 0, 4, 0), 4, 1), 4, 2)
     path = str(tmp_path / "porous.zarr")
     zarr.create_array(store=path, shape=v.shape, chunks=(chunk,) * 3, dtype=bool)[...] = v
@@ -918,6 +918,46 @@ def test_info_of_a_store_runs_under_a_memory_limit_just_above_its_peak(tmp_path)
     assert got["code"] == 0, got["error"]  # main: "summing its blocks (1 at a time) needs about 21.2 MiB"
     assert got["peak"] <= limit
     assert json.loads(got["report"])["euler_characteristic"] == euler_number(np.pad(v, 1), connectivity=1)
+
+
+PROCESSES_PEAK = PEAK_PRELUDE + """
+import resource
+from isoflow import IsoflowError
+from isoflow.digital.outofcore import analyze_zarr_volume
+from isoflow.scale import memory
+
+analyze_zarr_volume(small, 6, scheduler="sync")  # the compiled passes in numba's cache, which the workers load
+before = reset()
+report = analyze_zarr_volume(sys.argv[1], 6, scheduler="processes", threads=1)
+parent = status("VmHWM") - before
+# a worker process's own peak: its resident peak less the libraries' pages it shares with this process
+worker = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * 1024 - status("RssFile")
+memory.default_budget = lambda: 1
+try:
+    analyze_zarr_volume(sys.argv[1], 6, scheduler="processes", threads=1)
+except IsoflowError as exc:
+    need = float(re.search(r"needs about ([0-9.]+) MiB", str(exc)).group(1)) * 2**20
+print(json.dumps({"parent": parent, "worker": worker, "estimate": need, "voxels": report.voxels}))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the peak is read from /proc/self/status")
+def test_the_estimate_on_worker_processes_counts_each_ones_python(tmp_path):
+    """On dask's processes scheduler each worker process is a fresh Python
+    that imports NumPy, zarr, dask, numba and isoflow before it sums a
+    block: 80 MiB and more of its own, which the check left out (a 128^3
+    store in chunks of 64^3 was estimated at 3.1 MiB), so a budget the
+    estimate passed could not hold the run. What the check counts covers
+    the calling process's rise (VmHWM over its resident memory before the
+    run) and the worker process's own peak (its resident peak less the
+    libraries' file pages, which it shares), and the report's voxels are
+    NumPy's count."""
+    path, v = porous_store(tmp_path, 64, size=128, seed=1)
+    p = subprocess.run([sys.executable, "-c", PROCESSES_PEAK, path], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    got = json.loads(p.stdout)
+    assert got["voxels"] == np.count_nonzero(v)
+    assert got["estimate"] >= got["parent"] + got["worker"], got
 
 
 def test_a_2d_block_is_counted_by_its_extent_sums(monkeypatch):

@@ -418,8 +418,13 @@ def _tasks_at_once(threads: int, is_zarr: bool, scheduler) -> int:
     second task per thread sweeps another block meanwhile, so the cores
     are not left idle. Worker processes are not doubled: each holds a
     Python of its own."""
-    processes = scheduler in ("processes", "multiprocessing") or getattr(scheduler, "__module__", "") == "dask.multiprocessing"
-    return threads * (2 if is_zarr and not processes else 1)
+    return threads * (2 if is_zarr and not _in_processes(scheduler) else 1)
+
+
+def _in_processes(scheduler) -> bool:
+    """Whether ``scheduler`` (as dask.compute takes it) is dask's processes
+    scheduler, by its name or its function."""
+    return scheduler in ("processes", "multiprocessing") or getattr(scheduler, "__module__", "") == "dask.multiprocessing"
 
 
 #: bytes per voxel of a bool block at work: the block, zarr's decoded chunk it is copied from and the sweep's passes
@@ -446,28 +451,67 @@ KEPT_BLOCKS = 4
 #: its decompression buffer (a 256^3 store in 128^3 chunks summed in 64^3 blocks on 2 threads peaked at 21.0 MiB
 #: where one copy counted 20.0)
 DECODED_COPIES = 2
+#: bytes per voxel of the faces between the blocks of a layer that a dask.distributed worker holds: a block's
+#: summary carries about 3 per voxel of its faces that touch another block (nothing for a face on the volume's
+#: border, which needs no seam), and the worker holds the summaries of the layer its merges take, those of the
+#: next layer it makes and the records the merges give, with the merges' own arrays while they run: 3 to 7
+#: measured per voxel of these faces beside the blocks at work and WORKER_RUN_BYTES, 10 counted so that every
+#: store of benchmarks/bench_worker_memory.py is estimated at 1.08 to 1.40 times its peak. The 14 counted per
+#: voxel of every face of a layer here (two layers' summaries beside the merges) was twice a worker's peak
+WORKER_FACE_BYTES = 10
+#: what a dask.distributed worker holds over a run whatever the size of its blocks and faces: its records of
+#: the run's tasks and results, and the reader's buffers (a worker summing a 256^3 store in blocks of 64^3 rose
+#: 1.5 to 2.5 MiB above its blocks and faces from run to run)
+WORKER_RUN_BYTES = 3 << 20
+#: the memory of a worker process of dask's processes scheduler beside its blocks: dask starts a fresh Python
+#: for each layer's tasks, which imports NumPy, zarr, dask, numba and isoflow and loads the compiled passes
+#: from numba's cache (the libraries' code is shared with this process; 64 MiB of its own measured in a process
+#: that only merged, 80 to 93 MiB in those that read blocks of 64^3 and 128^3, benchmarks/bench_worker_memory.py)
+PROCESS_BYTES = 90 << 20
+#: blocks (or the larger chunks they are read from) that a worker process's allocator keeps once freed: it reads
+#: one layer's blocks at most, and kept 1 to 3 of 256^3 (its peak varied by up to 37 MiB between runs of one
+#: store); one beside PROCESS_BYTES and the faces its merges take covers the higher peaks too
+PROCESS_KEPT_BLOCKS = 1
+
+#: where the blocks are summed: this process's threads, dask's worker processes, dask.distributed's workers
+SCHEDULERS = ("threads", "processes", "distributed")
 
 
 class StoreMemory(NamedTuple):
     """What summing an array in blocks holds, in bytes: ``block``, one
-    block's task at work; ``faces``, the faces of the layers of blocks
-    held between the layers for the merges; ``kept``, the blocks freed
-    before that the C allocator keeps in its heaps in this process."""
+    block's task at work (on a worker process, all that the process holds
+    beside its share of the faces); ``faces``, the faces of the layers of
+    blocks held between the layers for the merges; ``kept``, the blocks
+    freed before that the C allocator keeps in its heaps in this
+    process."""
 
     block: int
     faces: int
     kept: int
 
 
-def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any, chunk_voxels: int = 0) -> StoreMemory:
+def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any, chunk_voxels: int = 0,
+                 scheduler: str = "threads") -> StoreMemory:
     """The memory that :func:`analyze_chunked` counts for an array summed in
-    blocks: what one block's task holds at work (:data:`BLOCK_BYTES` a
-    voxel of a bool block, twice the stored bytes and
+    blocks on ``scheduler``'s workers, ``threads * block + faces + kept``
+    in all (:class:`StoreMemory`).
+
+    On threads: what one block's task holds at work (:data:`BLOCK_BYTES`
+    a voxel of a bool block, twice the stored bytes and
     :data:`CHECK_BYTES` for another type, and the chunk it is read from,
     :data:`DECODED_COPIES` times, where that chunk is larger), the faces
     of a layer of blocks (:data:`FACE_BYTES` a face voxel), and the
     blocks freed before that the allocator keeps (:data:`KEPT_BLOCKS`,
-    as many as were read before the last).
+    as many as were read before the last). On worker processes (dask's
+    processes scheduler) each holds a Python of its own
+    (:data:`PROCESS_BYTES`) beside a block at work, the blocks its
+    allocator keeps (:data:`PROCESS_KEPT_BLOCKS`) and the faces its merges
+    take, while this process holds the faces. On a dask.distributed
+    worker (whose allocator keeps no freed block) a task holds the chunk
+    it decodes beside the block it copies out of it (and, for a type
+    other than bool, :data:`CHECK_BYTES` a voxel), and the worker the
+    faces between the blocks of a layer (:data:`WORKER_FACE_BYTES` a
+    voxel) and :data:`WORKER_RUN_BYTES`.
 
     Parameters
     ----------
@@ -482,14 +526,23 @@ def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any,
         The voxels of the chunk zarr decodes to give a block
         (:func:`~isoflow.scale.chunks.decoded_chunk_voxels`), counted where
         it is larger than the block; 0 where the blocks are the chunks.
+    scheduler : str
+        Where the blocks are summed: ``"threads"`` (or one at a time) in
+        this process, ``"processes"`` on dask's worker processes,
+        ``"distributed"`` on a dask.distributed worker.
 
     Returns
     -------
     StoreMemory
         ``(block, faces, kept)``. The check here holds ``threads * block +
-        faces + kept`` to the memory budget; a ``dask.distributed`` worker
-        (whose allocator gives freed blocks back) holds ``threads * block
-        + faces`` to its memory limit.
+        faces + kept`` to the memory budget (``threads`` worker processes
+        for ``"processes"``); on a dask.distributed cluster, ``threads *
+        block + faces + kept`` with a worker's threads to its memory limit.
+
+    Raises
+    ------
+    IsoflowError
+        A ``scheduler`` other than these three.
 
     Examples
     --------
@@ -497,23 +550,44 @@ def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any,
     StoreMemory(block=786432, faces=5505024, kept=1048576)
     >>> store_memory((4, 4, 4), (2, 64, 64), "uint8", chunk_voxels=4 * 256 * 256).block  # 4^3 blocks of larger chunks
     524608
+    >>> store_memory((128, 128, 128), (2, 2, 2), bool, scheduler="distributed")  # 256^3 in chunks of 128^3
+    StoreMemory(block=4194304, faces=5111808, kept=0)
     """
+    if scheduler not in SCHEDULERS:
+        raise IsoflowError(f"store_memory: scheduler must be one of {', '.join(SCHEDULERS)}, got {scheduler!r}")
     voxels = int(np.prod(block, dtype=np.int64))
     dtype = np.dtype(dtype)
+    sides = [int(s) for s in block]
+    areas = [int(np.prod(sides[:i] + sides[i + 1:], dtype=np.int64)) for i in range(len(sides))]
+    layer = int(np.prod(numblocks[1:], dtype=np.int64))
+    if scheduler == "distributed":
+        # the read is a task's largest moment: the chunk decoded beside the block copied out of it (32.5 MiB
+        # measured for a 256^3 block of bools); the sweep's passes come after the decoded chunk is let go
+        at_work = (max(voxels, chunk_voxels) + voxels) * dtype.itemsize + (0 if dtype.kind == "b" else CHECK_BYTES * voxels)
+        # the faces between blocks of the layer whose blocks have the most: both of their faces along the
+        # layers' axis where there are layers on either side
+        inner = sum(area * (min(n - 1, 2) * layer if axis == 0 else 2 * (n - 1) * layer // n)
+                    for axis, (area, n) in enumerate(zip(areas, (int(n) for n in numblocks))))
+        return StoreMemory(at_work, WORKER_FACE_BYTES * inner + WORKER_RUN_BYTES, 0)
     beyond = (DECODED_COPIES * chunk_voxels - voxels) * dtype.itemsize if chunk_voxels > voxels else 0
     at_work = voxels * (BLOCK_BYTES if dtype.kind == "b" else 2 * dtype.itemsize + CHECK_BYTES) + beyond
-    sides = [int(s) for s in block]
-    per_block = 2 * sum(int(np.prod(sides[:i] + sides[i + 1:], dtype=np.int64)) for i in range(len(sides)))
-    layer = int(np.prod(numblocks[1:], dtype=np.int64))
-    kept = min(KEPT_BLOCKS, int(np.prod(numblocks, dtype=np.int64)) - 1) * max(voxels, chunk_voxels) * dtype.itemsize
-    return StoreMemory(at_work, FACE_BYTES * per_block * layer, kept)
+    faces = FACE_BYTES * 2 * sum(areas) * layer
+    read_before = int(np.prod(numblocks, dtype=np.int64)) - 1
+    if scheduler == "processes":
+        # each worker process reads and sweeps its blocks, keeps freed ones in its own heaps and runs merges
+        # on the summaries pickled to it; this process holds the layers' summaries between the layers
+        kept = min(PROCESS_KEPT_BLOCKS, read_before) * max(voxels, chunk_voxels) * dtype.itemsize
+        return StoreMemory(PROCESS_BYTES + at_work + kept + faces, faces, 0)
+    return StoreMemory(at_work, faces, min(KEPT_BLOCKS, read_before) * max(voxels, chunk_voxels) * dtype.itemsize)
 
 
-def _grid_memory(grid: _Grid, dtype) -> StoreMemory:
+def _grid_memory(grid: _Grid, dtype, scheduler) -> StoreMemory:
     """:func:`store_memory` of ``grid``'s largest block (every block of
-    the grid counted as large, every face of it)."""
+    the grid counted as large, every face of it) on the workers of
+    ``scheduler`` (as dask.compute takes it)."""
     sides = tuple(max(b - a for a, b in bounds) for bounds in grid.bounds)
-    return store_memory(sides, grid.numblocks, dtype, decoded_chunk_voxels(grid.array))
+    on = "distributed" if distributed_client(scheduler) is not None else "processes" if _in_processes(scheduler) else "threads"
+    return store_memory(sides, grid.numblocks, dtype, decoded_chunk_voxels(grid.array), on)
 
 
 def _tasks_that_fit(workers: int, threads: int, need: StoreMemory, where: str, scheduler, is_zarr: bool,
@@ -528,7 +602,9 @@ def _tasks_that_fit(workers: int, threads: int, need: StoreMemory, where: str, s
     a time on the synchronous scheduler. On a ``dask.distributed`` cluster
     (its client, its ``get``, or the default client) the workers hold
     their own memory: a block times a worker's threads, beside a layer's
-    faces, is held to the workers' memory limit instead. ``blocks_help``: whether smaller blocks would take less
+    faces, is held to the workers' memory limit instead. On dask's worker
+    processes ``need.block`` is a whole worker process, counted once for
+    each. ``blocks_help``: whether smaller blocks would take less
     memory (:func:`~isoflow.scale.chunks.smaller_blocks_help`), else the
     refusal offers smaller chunks and more memory alone."""
     from dask.base import named_schedulers
@@ -541,11 +617,10 @@ def _tasks_that_fit(workers: int, threads: int, need: StoreMemory, where: str, s
     client = distributed_client(scheduler)
     if client is not None:
         # the client holds the layers' summaries between layers (compute gathers them); a worker holds
-        # those its merges take and give while they run, about one layer's faces where it is the only one.
-        # dask's nanny starts its workers with MALLOC_TRIM_THRESHOLD_ set: their allocator keeps no freed block
+        # those its merges take and give while they run (store_memory's worker terms)
         blocks = ", pass smaller blocks (block_shape)," if blocks_help else ","
         check_workers_fit(client, need.block, f"{where}: summing its blocks",
-                          hint=f"{smaller}{blocks} or give the workers more memory", held=need.faces)
+                          hint=f"{smaller}{blocks} or give the workers more memory", held=need.faces + need.kept)
         return workers
     if isinstance(scheduler, str):  # a name, as _scheduler leaves it once dask.distributed is imported
         scheduler = named_schedulers.get(scheduler.lower(), scheduler)
@@ -624,8 +699,9 @@ def analyze_chunked(
     scheduler : optional
         Passed to ``dask.compute``: default dask's configured one, threads;
         ``"processes"`` runs blocks in worker processes (only from code
-        under ``if __name__ == "__main__":``); a ``dask.distributed``
-        client's ``get`` runs them on its workers, a
+        under ``if __name__ == "__main__":``; the memory check counts a
+        Python of its own for each, :data:`PROCESS_BYTES`); a
+        ``dask.distributed`` client's ``get`` runs them on its workers, a
         ``concurrent.futures`` executor on its own. Anything else is
         refused naming it.
     where : str, optional
@@ -690,7 +766,7 @@ def analyze_chunked(
     scheduler = _scheduler(dask, scheduler)
     with using(threads):
         workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _grid_memory(grid, array.dtype), where, scheduler,
+        workers = _tasks_that_fit(workers, thread_count(), _grid_memory(grid, array.dtype, scheduler), where, scheduler,
                                   grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
 
     def compute(*tasks):

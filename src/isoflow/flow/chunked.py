@@ -230,9 +230,9 @@ def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
     """The memory a worker holds while the record's report sums the step's
     store in blocks of its chunks (``CHUNK_YZ`` across, a slab's layers
     along x), as :func:`isoflow.digital.outofcore.analyze_chunked` counts it
-    on a cluster (:func:`~isoflow.digital.outofcore.store_memory`: a block
-    at work beside one layer's faces): the part that grows with the
-    chunk's layers, per layer, and the rest."""
+    on a cluster (:func:`~isoflow.digital.outofcore.store_memory`'s
+    dask.distributed terms: a block at work beside one layer's faces): the
+    part that grows with the chunk's layers, per layer, and the rest."""
     from ..digital.outofcore import store_memory
 
     cy, cz = min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2])
@@ -240,7 +240,7 @@ def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
 
     def worker(layers: int) -> int:
         # the store's layers of blocks go along x, as many as its slabs
-        need = store_memory((layers, cy, cz), (2, *across), np.uint8)
+        need = store_memory((layers, cy, cz), (2, *across), np.uint8, scheduler="distributed")
         return need.block + need.faces
 
     # what the worker holds grows linearly with the chunk's layers: its slope and its value at none
