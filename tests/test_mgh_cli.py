@@ -4,6 +4,7 @@ them, label tables as scikit-image measures the stored array, surfaces read
 back by trimesh where the affine puts them, round trips read by nibabel,
 damaged files in one line."""
 
+import gc
 import gzip
 import json
 import warnings
@@ -53,6 +54,23 @@ def world_box(affine, low, high):
     corners = np.array([[(low, high)[b >> d & 1][d] - 0.5 for d in range(3)] for b in range(8)], np.float64)
     world = nib.affines.apply_affine(affine, corners)
     return world.min(0), world.max(0)
+
+
+@pytest.mark.parametrize("suffix", [".mgh", ".mgz"])
+def test_reading_an_mgh_leaves_no_file_open(tmp_path, rng, suffix):
+    """The file is closed once read (nibabel's own opening of an .mgh left
+    it open: a ResourceWarning in the user's program), and the voxels are
+    nibabel's."""
+    data = (rng.random((5, 6, 7)) < 0.4).astype(np.uint8)
+    path = tmp_path / f"s{suffix}"
+    nib.save(nib.MGHImage(data, LIA), path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ResourceWarning)
+        labels = isoflow.read_labels(path)
+        obj = isoflow.read_volume(path)
+        gc.collect()  # an unclosed file warns when it is collected
+    assert [str(w.message) for w in caught if issubclass(w.category, ResourceWarning)] == []
+    assert int(np.count_nonzero(labels.array)) == obj.voxels == int(np.count_nonzero(data))
 
 
 @pytest.mark.parametrize("dtype", [np.uint8, np.int16, np.int32, np.float32])

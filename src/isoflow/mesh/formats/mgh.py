@@ -57,10 +57,13 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     nib = import_library("nibabel", "MGH")
     where = str(path)
     with reading(path, "MGH"), quiet_logs("nibabel.global"):
-        img = nib.MGHImage.from_file_map(nib.MGHImage.make_file_map({"image": str(path)}))
-        check_shape(img.shape, img.get_data_dtype(), where)
-        data = np.asanyarray(img.dataobj)
-        affine = np.asarray(img.affine, np.float64)
+        # the file opened here and closed here: nibabel's own opening of an
+        # .mgh (from_file_map, nib.load) leaves it open (ResourceWarning)
+        with nib.openers.ImageOpener(str(path), "rb") as fileobj:
+            img = nib.MGHImage.from_file_map({"image": nib.FileHolder(fileobj=fileobj)})
+            check_shape(img.shape, img.get_data_dtype(), where)
+            data = np.asanyarray(img.dataobj)
+            affine = np.asarray(img.affine, np.float64)
     # big-endian in the file: the kernels take the machine's order
     data = data.astype(data.dtype.newbyteorder("="), copy=False)
     return placed_by_affine(data, affine, where, "mm")
