@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import isoflow
 from isoflow.cli import main
 from isoflow.digital.lattice import DigitalObject
 from isoflow.errors import IsoflowError
@@ -948,6 +949,23 @@ def test_a_missing_input_is_worded_alike_by_every_command(command, tmp_path, cap
         line = fails(capsys, command, f"{tmp_path}/{given}", *after)
         assert line == f"isoflow {command}: error: {tmp_path / named}: no such file or directory", given
     assert sorted(p.name for p in tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize("given", sorted(MISSING_INPUTS))
+def test_a_missing_input_is_a_file_not_found_error_in_python(given, tmp_path):
+    """In Python the same line is also a FileNotFoundError, what open()
+    raises, so that ``except FileNotFoundError`` (or OSError) catches a
+    missing input of every kind, as ``except IsoflowError`` does."""
+    path = f"{tmp_path}/{given}"
+    with pytest.raises(FileNotFoundError) as caught:
+        open(path.split(":")[0], "rb")  # the error the standard library gives
+    mesh, points = given.endswith((".stl", ".ply", ".off")), given.endswith(".txt")
+    for read in [isoflow.read_object] + ([isoflow.read_points] if points else [] if mesh else [isoflow.read_volume]):
+        with pytest.raises(IsoflowError) as mine:
+            read(path)
+        assert isinstance(mine.value, type(caught.value)), (read.__name__, given)
+        assert str(mine.value) == f"{tmp_path / MISSING_INPUTS[given]}: no such file or directory"
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("command", ["info", "voxelize", "surface", "genus", "flow"])

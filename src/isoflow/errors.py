@@ -39,18 +39,19 @@ def missing(path: object) -> IsoflowError:
     Returns
     -------
     IsoflowError
-        The one-line error to raise.
+        The one-line error to raise: a :class:`NoSuchFile` (also a
+        ``FileNotFoundError``) for a local path.
 
     Examples
     --------
-    >>> str(missing("scan.npy"))
-    'scan.npy: no such file or directory'
+    >>> str(missing("scan.npy")), isinstance(missing("scan.npy"), FileNotFoundError)
+    ('scan.npy: no such file or directory', True)
     >>> str(missing("s3:/bucket/scan.zarr"))  # doctest: +ELLIPSIS
     's3://bucket/scan.zarr: a URL; isoflow reads local files and directories: ...'
     """
     m = _URL.match(str(path))
     if m is None:
-        return IsoflowError(f"{path}: {MISSING}")
+        return NoSuchFile(f"{path}: {MISSING}")
     return IsoflowError(f"{m['scheme']}://{m['rest']}: a URL; isoflow reads local files and directories: "
                         "download it, or mount the bucket (s3fs, gcsfuse, rclone mount) and give the path")
 
@@ -400,6 +401,22 @@ class NotAPath(IsoflowError, TypeError):
     --------
     >>> issubclass(NotAPath, IsoflowError), issubclass(NotAPath, TypeError)
     (True, True)
+    """
+
+
+class NoSuchFile(IsoflowError, FileNotFoundError):
+    """An input that is not there (:func:`missing`): one line as every
+    :class:`IsoflowError`, and a ``FileNotFoundError``, so that code written
+    for ``open()``'s error catches it too.
+
+    Examples
+    --------
+    >>> import isoflow
+    >>> try:
+    ...     isoflow.read_volume("no-such-volume.npy")
+    ... except FileNotFoundError as exc:
+    ...     print(exc)
+    no-such-volume.npy: no such file or directory
     """
 
 
