@@ -320,5 +320,12 @@ def format_surfaces(r: Report) -> list[str]:
         boundary = "closed curves" if r.dimension == 2 else "a 3-manifold"
         lines.append(f"  closed surfaces        not applicable in {r['dimension']}D (the boundary is {boundary})")
     if r.get("pinched_vertices"):
-        lines.append(f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)")
+        said = f"  pinched vertices       {r['pinched_vertices']} (split in the mesh, joined by the connectivity)"
+        genera = sum(s["genus"] for s in r["surfaces"]) if r.surfaces is not None else None
+        if genera is not None and genera != r["betti"][1]:
+            # the surfaces' genus counts the sheets apart at a pinch, b1
+            # counts the tunnels the connectivity makes through it
+            said = said[:-1] + (f": the surfaces' genus, {genera} in all, counts the sheets apart there, where "
+                                f"the connectivity makes {counted(r['betti'][1], 'tunnel')})")
+        lines.append(said)
     return lines

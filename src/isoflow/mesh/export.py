@@ -343,12 +343,14 @@ def write_obj(
 
 
 def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarray, *, force: bool = False,
-              sync: bool = True) -> Path:
+              sync: bool = True, header: str = "") -> Path:
     """Write a binary STL: one record per triangle with its normal and three
     corner positions; STL keeps no shared vertices.
 
-    The bytes are those of trimesh's exporter (``trimesh.exchange.stl``),
-    made :data:`STL_BATCH_TRIANGLES` triangles at a time.
+    The records are those of trimesh's exporter (``trimesh.exchange.stl``),
+    made :data:`STL_BATCH_TRIANGLES` triangles at a time; the 80-byte
+    header holds ``header`` (ASCII, cut at 80 bytes, padded with spaces;
+    zero bytes where it is empty, as trimesh writes it).
 
     Parameters
     ----------
@@ -362,6 +364,9 @@ def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarr
         Replace an existing file.
     sync : bool
         ``fsync`` the file before it is renamed into place.
+    header : str
+        What the header says: ``isoflow surface`` writes what it wrote and
+        at which connectivity, which ``isoflow genus`` reads back.
 
     Returns
     -------
@@ -372,8 +377,10 @@ def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarr
     --------
     >>> import tempfile
     >>> out = Path(tempfile.mkdtemp()) / "t.stl"
-    >>> write_stl(out, np.eye(3), np.array([[0, 1, 2]])).stat().st_size
+    >>> write_stl(out, np.eye(3), np.array([[0, 1, 2]]), header="a triangle").stat().st_size
     134
+    >>> out.read_bytes()[:12]
+    b'a triangle  '
     """
     import trimesh
 
@@ -383,7 +390,10 @@ def write_stl(path: str | os.PathLike, vertices: np.ndarray, triangles: np.ndarr
         # trimesh's exporter makes the float64 corners, normals and records of every triangle it is given at
         # once; its header (80 zero bytes and the count) and its records are written here a batch at a time,
         # each record by trimesh's arithmetic (its face normals: zero where a triangle has none)
-        fh.write(bytes(80) + np.array(len(triangles), "<u4").tobytes())
+        # a header starting "solid" would read as ASCII STL to some readers
+        text = header.encode("ascii", "replace")[:80].ljust(80, b" ") if header and not header.startswith("solid") \
+            else bytes(80)
+        fh.write(text + np.array(len(triangles), "<u4").tobytes())
         for start in range(0, len(triangles), STL_BATCH_TRIANGLES):
             corners = vertices[triangles[start:start + STL_BATCH_TRIANGLES]]
             with np.errstate(over="ignore"):  # said below, in one line
@@ -646,7 +656,7 @@ def write_mesh_file(
         effect = float32_effect(xyz, obj.spacing)
         if effect["merged"] != 0:  # a reader's weld would not give the surface back: nothing written
             raise IsoflowError(stl_refusal(path, effect, obj.spacing))
-        write_stl(path, xyz, faces, force=force, sync=sync)
+        write_stl(path, xyz, faces, force=force, sync=sync, header=comments[0] if comments else "")
         return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
                 "moved_voxels": effect["moved_voxels"]}
     else:

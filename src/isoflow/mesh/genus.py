@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Sequence
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -747,7 +747,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
 
     The verdict compares the digital genus (b1 of the voxelised solid) with
     the solid's genus (manifold3d's union) where components overlap, touch
-    or nest, and with the mesh's own genus otherwise. It is ``agree`` only
+    or nest, and with the mesh's own genus otherwise; a surface isoflow
+    wrote (its file says so) that touches itself at its voxels' edge or
+    vertex contacts, which those rows read otherwise, is compared with its
+    voxels at its own grid (:func:`voxel_contacts`). It is ``agree`` only
     when the digital Betti numbers are the same at the last two resolutions
     tried (:func:`digital_steps` doubles the resolution until they are),
     and never for a self-intersecting mesh: its surface bounds no
@@ -864,6 +867,16 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     filled = filled_genus(w, fill)
     target = reference if filled is None else filled
     bodies = reference_bodies(w, fill)
+    source: Literal["mesh", "solid", "voxels"] = "solid" if w["overlap"] else "mesh"
+    contacts = voxel_contacts(w, v, f, connectivity, fill, mesh)
+    if contacts is not None and (reference, bodies) == (contacts["betti"][1], contacts["betti"][0]):
+        contacts = None  # the rows read the contacts as the connectivity does: nothing to say
+    if contacts is not None:
+        # a voxel surface touching itself at edge or vertex contacts: the
+        # mesh's genus and manifold3d's solid read those points as neither
+        # connectivity does, the voxels at the surface's own grid do
+        reference = target = contacts["betti"][1]
+        bodies, source = contacts["betti"][0], "voxels"
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
             *given, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
@@ -878,10 +891,56 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
         self_intersecting_faces=w["self_intersecting_faces"],
         faces_crossing_other_components=w["faces_crossing_other_components"],
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
-        kind=kind, reference=reference, reference_source="solid" if w["overlap"] else "mesh",
+        kind=kind, reference=reference, reference_source=source,
         stop=stop, bodies=bodies, filled_genus=filled,
-        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill) + rounding_notes(v, f, w, stats)
+        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill, contacts) + rounding_notes(v, f, w, stats)
                     + digital_notes(w, digital, target, stable, fill, bodies)))
+
+
+def voxel_contacts(w: dict, v: np.ndarray, f: np.ndarray, connectivity: int, fill: Fill,
+                   mesh: MeshInput | None = None) -> dict | None:
+    """The facts of the ``voxel_contacts`` note, or None: where a closed,
+    oriented mesh that crosses nowhere is a voxel surface
+    (:func:`~isoflow.mesh.voxel_object.voxel_lattice`) touching itself
+    along edges or at vertices (the edge and vertex contacts of its voxels,
+    which ``isoflow surface`` splits and a reader's weld joins) and the
+    file ``mesh`` records the connectivity it was written at
+    (:func:`~isoflow.mesh.voxel_object.written_connectivity`): the voxels
+    it bounds at its own grid, their Betti numbers at ``connectivity``
+    (the digital rows') and at the other one, the non-manifold ``edges``
+    and ``vertices`` the contacts make, and ``written``, the file's
+    connectivity. Only the winding fill's voxels are the solid compared.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from isoflow.mesh.export import write_surface
+    >>> vol = np.zeros((4, 4, 3), bool); vol[1, 1, 1] = vol[2, 2, 1] = True   # an edge contact
+    >>> path = write_surface(vol, pathlib.Path(tempfile.mkdtemp()) / "s.ply", 6)
+    >>> _, v, f = mesh_input(path)
+    >>> facts = voxel_contacts(witnesses(v, f), v, f, 6, "winding", path)
+    >>> facts["betti"], facts["other"], facts["edges"], facts["written"]
+    ([2, 0, 0], [1, 0, 0], 1, 6)
+    """
+    import os
+
+    from .voxel_object import voxel_object, written_connectivity
+
+    m = w["mesh"]
+    touch = m["nonmanifold_edges"] or m["nonmanifold_vertices"] or m["shared_vertices"]
+    if fill != "winding" or connectivity not in (6, 26) or not touch or not w["balanced"] or w["crossing_self"]:
+        return None
+    # only a file isoflow wrote says that its faces are voxels' and at which
+    # connectivity they touch: boxes a user stacks on a lattice are solids
+    # that touch, whose reference stays manifold3d's union
+    written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
+    if written is None:
+        return None
+    found = voxel_object(v, f, connectivity)
+    if found is None:
+        return None
+    return {**found, "edges": int(m["nonmanifold_edges"]), "vertices": int(m["nonmanifold_vertices"]),
+            "solid_genus": w["solid_genus"], "written": written}
 
 
 def _refuse_as_voxelize(name: str, v: np.ndarray, f: np.ndarray, fill: Fill) -> None:
@@ -1098,11 +1157,16 @@ def load_notes(stats: dict) -> list[Note]:
     return notes
 
 
-def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding") -> list[Note]:
+def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding", contacts: dict | None = None) -> list[Note]:
     """What the mesh is: double-sided, open or inconsistently oriented
     (with the ``fill`` whose voxels were compared instead),
     non-manifold, nested or overlapping, and,
-    where the verdict does not start with it, self-intersecting."""
+    where the verdict does not start with it, self-intersecting. A voxel
+    surface touching itself (``contacts``: :func:`voxel_contacts`) has one
+    note for its non-manifold edges and vertices, which says how each row
+    reads them."""
+    if contacts is not None:
+        return [Note("voxel_contacts", contacts)]
     mesh = w["mesh"]
     notes = []
     if w["double_sided"]:

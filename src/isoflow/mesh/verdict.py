@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap"]
+                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap", "voxel_contacts"]
 
 
 @dataclass(frozen=True)
@@ -68,7 +68,9 @@ class GenusVerdict(Result):
     ``reference`` is the genus the digital genus is compared with, taken
     from ``reference_source`` (``"mesh"``: the mesh's own genus; ``"solid"``:
     the genus of the solid manifold3d builds, where components overlap,
-    touch or nest). ``bodies`` is the number of bodies the digital
+    touch or nest; ``"voxels"``: b1 of the voxels a voxel surface that
+    touches itself bounds at its own grid, at the digital rows'
+    connectivity, its b0 being ``bodies``). ``bodies`` is the number of bodies the digital
     components (b0) are compared with: the solid's (None where not
     compared: no solid, ``fill="shell"``; for a flood fill of a solid with
     cavities, the filled solid's); a verdict with other digital components
@@ -101,7 +103,7 @@ class GenusVerdict(Result):
     agree: bool
     kind: VerdictKind
     reference: int | None
-    reference_source: Literal["mesh", "solid"]
+    reference_source: Literal["mesh", "solid", "voxels"]
     stop: Stop | None = None
     notes: tuple[Note, ...] = ()
     bodies: int | None = None
@@ -203,7 +205,7 @@ def verdict_text(v: GenusVerdict) -> str:
 def head_text(v: GenusVerdict) -> str:
     """What the verdict says first."""
     digital, stop = v.digital, (f"; stopped by {stop_text(v.stop)}" if v.stop else "")
-    ref_name = f"{v.reference_source} genus"
+    ref_name = "voxel genus" if v.reference_source == "voxels" else f"{v.reference_source} genus"
     if v.kind == "self_intersecting":
         return (f"self-intersecting: {_NOTE_WORDS['self_intersecting'](v.self_intersecting_faces)}, "
                 "so the surface bounds no well-defined solid and no finer grid settles its genus")
@@ -222,10 +224,12 @@ def head_text(v: GenusVerdict) -> str:
     if v.kind == "agree":
         if v.filled_genus is not None:
             return f"agree: {_filled_words(v)}"
-        return f"agree: {'solid genus' if v.reference_source == 'solid' else 'genus'} {v.reference}"
+        return f"agree: {ref_name if v.reference_source != 'mesh' else 'genus'} {v.reference}"
     same = f"(the same at {digital[-2]['resolution']} and {digital[-1]['resolution']})"
     b0 = digital[-1]["betti"][0]
     solid = "the solid" if v.filled_genus is None else "the filled solid"
+    if v.reference_source == "voxels":
+        solid = "the voxels the mesh bounds"
     parts = ([f"{solid} has {counted(v.bodies, 'body', 'bodies')}, the digital solid "
               f"{counted(b0, 'component')}"] if v.bodies is not None and b0 != v.bodies else [])
     target = v.reference if v.filled_genus is None else v.filled_genus
@@ -351,6 +355,27 @@ def _corner_join_words(bodies: int, components: int, by: str = "connectivity") -
             "enough grid, as manifold3d does")
 
 
+def _betti_words(betti) -> str:
+    b0, b1, b2 = betti
+    return f"{counted(b0, 'component')}, {counted(b1, 'tunnel')}, {counted(b2, 'cavity', 'cavities')}"
+
+
+def _voxel_contact_words(pitch: float, shape, voxels: int, connectivity: int, betti, other, edges: int,
+                         vertices: int, solid_genus: int | None = None, written: int | None = None, **_) -> str:
+    where = " and ".join(([f"along {counted(edges, 'edge')}"] if edges else [])
+                         + ([f"at {counted(vertices, 'vertex', 'vertices')}"] if vertices else [])) or "at shared vertices"
+    said = (f"the mesh is the surface of {counted(voxels, 'voxel')} at its own grid (pitch {pitch:.6g}, "
+            f"{'x'.join(map(str, shape))}) that touch {where} (edge and vertex contacts, which isoflow surface "
+            f"splits and a reader's weld joins): {connectivity}-connected, as the digital rows read them, the voxels "
+            f"are {_betti_words(betti)}, the reference; {32 - connectivity}-connected, {_betti_words(other)}; "
+            "the mesh has no genus of its own there, and manifold3d pairs the faces at each contact by their order "
+            "in the file, as neither connectivity does"
+            + (f" (its solid: genus {solid_genus})" if solid_genus is not None else ""))
+    if written is not None and written != connectivity:
+        said += (f"; the file was written {written}-connected (--connectivity {written} reads it as written)")
+    return said
+
+
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
@@ -393,6 +418,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         "and the crevice around the lens, narrower than a voxel over a band many voxels wide, leaves pockets and "
         "tunnels of outside that change with the grid"),
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
+    "voxel_contacts": _voxel_contact_words,
 }
 
 
