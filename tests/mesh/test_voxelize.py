@@ -634,6 +634,22 @@ def test_open_mesh_refused_only_when_strict():
     assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
 
+@needs_meshes
+def test_strict_refusal_counts_one_edge_in_the_singular():
+    """wallhole.obj, its corners merged by position as the manifest's
+    convention does, has exactly one edge with more than two faces (counted
+    here from trimesh's edges): the line said "1 non-manifold edges"."""
+    v, f = load_mesh(MESH_DIR / "wallhole.obj")
+    m = trimesh.load(MESH_DIR / "wallhole.obj", force="mesh", process=False)
+    merged = trimesh.Trimesh(m.vertices, m.faces, process=True)
+    _, uses = np.unique(np.sort(merged.edges, axis=1), axis=0, return_counts=True)
+    assert int((uses > 2).sum()) == 1 and int((uses == 1).sum()) == 0
+    with pytest.raises(IsoflowError) as e:
+        voxelize(v, f, resolution=16, strict=True)
+    line = _oneline(e)
+    assert "0 boundary edges, 1 non-manifold edge, 0 inconsistently oriented edges" in line, line
+
+
 def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
     """Two closed spheres that overlap: watertight, but the voxels where
     they overlap are inside two layers (trimesh says those centres are in

@@ -288,8 +288,8 @@ class Solid:
         d = self.defects
         if d["watertight"] and not self.double_sided:
             return None
-        what = [f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
-                f"{d['inconsistent_edges']} inconsistently oriented edges"]
+        what = [", ".join([counted(d["boundary_edges"], "boundary edge"), counted(d["nonmanifold_edges"], "non-manifold edge"),
+                           counted(d["inconsistent_edges"], "inconsistently oriented edge")])]
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
