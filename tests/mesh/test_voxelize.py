@@ -650,6 +650,30 @@ def test_strict_refusal_counts_one_edge_in_the_singular():
     assert "0 boundary edges, 1 non-manifold edge, 0 inconsistently oriented edges" in line, line
 
 
+def test_strict_refusal_of_a_zero_area_mesh_says_it_bounds_nothing():
+    """Two tetrahedra flattened onto one line, sharing an edge: every face
+    has zero area (trimesh's areas) and that edge has four faces, so strict
+    refuses it; the line said "its edges balance, so it bounds a solid" of a
+    mesh that bounds nothing, which voxelize without strict shows (no voxel)."""
+    from isoflow.mesh.genus import verify_genus
+
+    v = np.array([[i, 0.0, 0.0] for i in range(6)])
+    tet = [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]
+    f = np.array(tet + [[{2: 4, 3: 5}.get(i, i) for i in t] for t in tet])
+    flat = trimesh.Trimesh(v, f, process=False)
+    assert not flat.area_faces.any()
+    _, uses = np.unique(np.sort(flat.edges, axis=1), axis=0, return_counts=True)
+    assert int((uses > 2).sum()) == 1
+    assert voxelize(v, f, resolution=8, details=True).voxels == 0  # bounds nothing, as said
+    for refuse in (lambda: voxelize(v, f, resolution=8, strict=True),
+                   lambda: verify_genus((v, f), resolutions=(8,), strict=True)):
+        with pytest.raises(IsoflowError) as e:
+            refuse()
+        line = _oneline(e)
+        assert "1 non-manifold edge" in line and "bounds nothing" in line, line
+        assert "bounds a solid" not in line and "edges balance" not in line, line
+
+
 def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
     """Two closed spheres that overlap: watertight, but the voxels where
     they overlap are inside two layers (trimesh says those centres are in
