@@ -168,8 +168,26 @@ STAGE = "run"
 def refuse_file_suffix(out: Path) -> None:
     """Refuse a directory to be made whose name ends in a mesh or volume
     suffix: ``flow --out X.ply`` meant a file, and a directory of that name
-    is not what the user asked for (an existing directory is the user's own
-    and is taken as it is)."""
+    is not what the user asked for (:func:`check_output_dir` calls it only
+    where the directory is not there: an existing one is the user's own).
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The output directory as given.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``out`` and the name without the suffix.
+
+    Examples
+    --------
+    >>> refuse_file_suffix(Path("run"))
+    >>> refuse_file_suffix(Path("steps.nii.gz"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: steps.nii.gz: the flow's files (...) go into a directory, and .nii.gz is a volume ...
+    """
     from ..mesh.formats.registry import volume_suffixes
     from ..mesh.load import MESH_SUFFIXES
 
