@@ -190,6 +190,23 @@ def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
 
 
 
+@pytest.mark.parametrize("name", ["X.ply", "steps.nii.gz", "run.STL", "out.zarr"])
+def test_flow_out_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, name):
+    # --out X.ply made a directory named X.ply and filled it with the run's files, exit 0
+    box = np.zeros((5, 6, 7), bool)
+    box[1:4, 1:5, 1:6] = True
+    np.save(tmp_path / "box.npy", box)
+    p = run("flow", tmp_path / "box.npy", "--out", tmp_path / name, "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.count("\n") == 1 and str(tmp_path / name) in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["box.npy"]  # nothing made
+    # a directory of that name that the user made is theirs, taken as a directory is
+    (tmp_path / name).mkdir()
+    p = run("flow", tmp_path / "box.npy", "--out", tmp_path / name, "-q")
+    assert p.returncode == 0, p.stderr
+    assert "flow.csv" in os.listdir(tmp_path / name)
+
+
 def test_flow_out_empty_is_refused_not_ignored(tmp_path):
     # --out "" (an unset shell variable) ran the flow, wrote nothing and exited 0
     box = np.zeros((5, 6, 7), bool)

@@ -370,6 +370,34 @@ def test_split_of_an_archive_refuses_a_member_without_triangles(tmp_path, capsys
           words=(f"{archive}:zero.stl: no triangles read",))
 
 
+@pytest.mark.parametrize("member, data", [("zero.stl", b"\0" * 80 + b"\0\0\0\0"),  # a header, 0 facets
+                                          ("points.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\n")],  # v lines alone
+                         ids=["stl_of_no_facet", "obj_of_points"])
+def test_an_archive_without_split_refuses_a_member_without_triangles(tmp_path, capsys, member, data):
+    """trimesh merges an archive's meshes into one, and a member of bytes
+    but no triangle was left out of it without a word (the merge has the
+    ball's faces alone), where --split refuses it: without --split it is
+    refused too, in one line naming the member."""
+    import zipfile
+
+    ball(tmp_path, "p10.stl", 1.0, (0, 0, 0))
+    (tmp_path / member).write_bytes(data)
+    read = trimesh.load_scene(tmp_path / member).geometry.values()
+    assert not any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in read)  # trimesh reads no triangle
+    archive = tmp_path / "a4.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(tmp_path / "p10.stl", "p10.stl")
+        z.write(tmp_path / member, member)
+    merged = trimesh.load(archive, force="mesh", process=False)
+    assert len(merged.faces) == len(trimesh.load(tmp_path / "p10.stl", process=False).faces)
+    for split in (["--split"], []):
+        line = fails(capsys, "voxelize", archive, *split, "--resolution", "16", "-o", tmp_path / "z.npz",
+                     words=(f"{archive}:{member}: no triangles read",))
+        assert "\n" not in line
+        assert not (tmp_path / "z.npz").exists()
+    fails(capsys, "genus", archive, "--resolution", "8", words=(f"{archive}:{member}: no triangles read",))
+
+
 def test_a_directory_among_the_meshes_is_said_to_be_one(tmp_path, capsys, monkeypatch):
     """``voxelize b1.stl . -o l2.nii.gz`` said the output "lies inside the
     input ." (the test for a zarr store given as input): a directory is

@@ -25,7 +25,7 @@ from scipy import ndimage
 from isoflow.cli import main
 from isoflow.errors import IsoflowError, MeshNote
 from isoflow.mesh.census import census, one_face_per_pair, opposite_pairs
-from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization
+from isoflow.mesh.fills import THIN_SHARE, UNBOUNDED_SHARE, Voxelization, flood_adds_nothing, thin_solid
 from isoflow.mesh.genus import verify_genus
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.shell import ShellGrid, fill_shell, grid_planes, surface_area
@@ -688,3 +688,11 @@ def test_flood_fill_names_the_cavities_it_fills():
     assert "--fill flood fills the solid's 1 cavity (manifold3d)" in flood.verdict
     winding = verify_genus((mesh.vertices, mesh.faces), (24, 48), step=False)
     assert winding.kind == "agree" and "flood_cavities" not in {n.kind for n in winding.notes}
+
+
+def test_fill_notes_count_one_in_the_singular():
+    # "(1 voxels)", "(1 boundary edges)", "1 double-sided faces read as one"
+    flood = flood_adds_nothing(1, 1, 1, 4096)
+    assert "(1 voxel)" in flood and "(1 boundary edge)" in flood, flood
+    thin = thin_solid(0, 120, 1.0, 1)
+    assert "1 double-sided face read as one" in thin, thin

@@ -352,6 +352,28 @@ def test_the_shell_of_a_closed_mesh_gives_its_genus(name):
     assert v.kind == "agree" and v.reference == genus and v.verdict == f"agree: genus {genus}"
 
 
+def test_the_shell_of_solids_with_walls_between_them_gives_the_union_genus():
+    """not_convex.obj is eight solids stacked face to face, its walls
+    inside the union. Their shell is the surface and the walls thickened: a
+    cavity per solid (8), and b1 the union's genus, not twice it, so halving
+    b1 said "disagree: solid genus 2, digital genus 1" and stepped to 1024.
+    The reference is manifold3d's union of the pieces it splits the mesh
+    into, counted here."""
+    import manifold3d
+    import trimesh
+
+    path = Path(__file__).resolve().parents[2] / "meshes" / "not_convex.obj"
+    m = trimesh.load(path, process=True)
+    pieces = manifold3d.Manifold(manifold3d.Mesh(vert_properties=np.asarray(m.vertices, np.float32),
+                                                 tri_verts=np.asarray(m.faces, np.uint32))).decompose()
+    union = manifold3d.Manifold.batch_boolean(pieces, manifold3d.OpType.Add)
+    assert len(pieces) == 8 and len(union.decompose()) == 1 and union.genus() == 2
+    v = verify_genus(path, (128, 256), fill="shell", step=False)
+    assert [d["betti"] for d in v.digital] == [[1, 2, 8], [1, 2, 8]]  # eight cavities: walls inside
+    assert [d["genus"] for d in v.digital] == [union.genus()] * 2
+    assert v.kind == "agree" and v.reference == union.genus()
+
+
 def test_a_mesh_in_memory_gets_the_verdict_of_its_file(tmp_path):
     """verify_genus takes a trimesh object or a (vertices, faces) pair, welded
     as a file is: the same verdict as the file written from it, and

@@ -634,6 +634,46 @@ def test_open_mesh_refused_only_when_strict():
     assert "341 boundary edges" in report["note"] and "|w| > 1/2" in report["note"]
 
 
+@needs_meshes
+def test_strict_refusal_counts_one_edge_in_the_singular():
+    """wallhole.obj, its corners merged by position as the manifest's
+    convention does, has exactly one edge with more than two faces (counted
+    here from trimesh's edges): the line said "1 non-manifold edges"."""
+    v, f = load_mesh(MESH_DIR / "wallhole.obj")
+    m = trimesh.load(MESH_DIR / "wallhole.obj", force="mesh", process=False)
+    merged = trimesh.Trimesh(m.vertices, m.faces, process=True)
+    _, uses = np.unique(np.sort(merged.edges, axis=1), axis=0, return_counts=True)
+    assert int((uses > 2).sum()) == 1 and int((uses == 1).sum()) == 0
+    with pytest.raises(IsoflowError) as e:
+        voxelize(v, f, resolution=16, strict=True)
+    line = _oneline(e)
+    assert "0 boundary edges, 1 non-manifold edge, 0 inconsistently oriented edges" in line, line
+
+
+def test_strict_refusal_of_a_zero_area_mesh_says_it_bounds_nothing():
+    """Two tetrahedra flattened onto one line, sharing an edge: every face
+    has zero area (trimesh's areas) and that edge has four faces, so strict
+    refuses it; the line said "its edges balance, so it bounds a solid" of a
+    mesh that bounds nothing, which voxelize without strict shows (no voxel)."""
+    from isoflow.mesh.genus import verify_genus
+
+    v = np.array([[i, 0.0, 0.0] for i in range(6)])
+    tet = [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]
+    f = np.array(tet + [[{2: 4, 3: 5}.get(i, i) for i in t] for t in tet])
+    flat = trimesh.Trimesh(v, f, process=False)
+    assert not flat.area_faces.any()
+    _, uses = np.unique(np.sort(flat.edges, axis=1), axis=0, return_counts=True)
+    assert int((uses > 2).sum()) == 1
+    assert voxelize(v, f, resolution=8, details=True).voxels == 0  # bounds nothing, as said
+    for refuse in (lambda: voxelize(v, f, resolution=8, strict=True),
+                   lambda: verify_genus((v, f), resolutions=(8,), strict=True)):
+        with pytest.raises(IsoflowError) as e:
+            refuse()
+        line = _oneline(e)
+        assert "1 non-manifold edge" in line and "bounds nothing" in line, line
+        assert "bounds a solid" not in line and "edges balance" not in line, line
+
+
 def test_overlapping_shells_refused_only_when_strict(tmp_path, capsys):
     """Two closed spheres that overlap: watertight, but the voxels where
     they overlap are inside two layers (trimesh says those centres are in

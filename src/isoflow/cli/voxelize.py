@@ -86,7 +86,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
                                       details=True)
     say_note(args, args.mesh, details.note)
     shape = "x".join(map(str, z.shape))
-    print(f"{out}: {z.voxels} voxels in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
+    print(f"{out}: {counted(z.voxels, 'voxel')} in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
           f"pitch {z.pitch:.6g}, origin {coordinates(z.origin, step=z.pitch)}")
     return 0
 

@@ -165,6 +165,49 @@ def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str
 STAGE = "run"
 
 
+def refuse_file_suffix(out: Path) -> None:
+    """Refuse a directory to be made whose name ends in a mesh or volume
+    suffix: ``flow --out X.ply`` meant a file, and a directory of that name
+    is not what the user asked for (:func:`check_output_dir` calls it only
+    where the directory is not there: an existing one is the user's own).
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The output directory as given.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``out`` and the name without the suffix.
+
+    Examples
+    --------
+    >>> refuse_file_suffix(Path("run"))
+    >>> refuse_file_suffix(Path("steps.nii.gz"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: steps.nii.gz: the flow's files (...) go into a directory, and .nii.gz is a volume ...
+    """
+    from ..mesh.formats.registry import volume_suffixes
+    from ..mesh.load import MESH_SUFFIXES
+
+    name = out.name.lower()
+    suffixes = (*MESH_SUFFIXES, *volume_suffixes())
+    suffix = max((s for s in suffixes if name.endswith(s) and name != s), key=len, default=None)
+    if suffix is None:
+        return
+    files = "step_NNN.ply, flow.csv, flow.png, shapes.png"
+    kind = "mesh" if suffix in MESH_SUFFIXES else "volume"
+    given, other = out.name[-len(suffix):], out.with_name(out.name[: -len(suffix)])
+    # a volume per step is what --volumes writes: the likelier wish behind --out steps.nii.gz
+    hint = f" (--volumes {suffix} adds every step's volume)" if suffix in volume_suffixes(writable=True) else ""
+    raise IsoflowError.worded(
+        f"{out}: the flow's files ({files}) go into a directory, and {given} is a {kind} suffix; "
+        f"give a directory such as {other}",
+        f"{out}: --out names the directory for the run's files ({files}), and {given} is a {kind} suffix; "
+        f"give --out {other}{hint}")
+
+
 def check_output_dir(directory, force: bool = False):
     """The output directory as a Path; refuses a file, a directory that
     already holds files unless ``force``, one that cannot be written, or one
@@ -173,6 +216,8 @@ def check_output_dir(directory, force: bool = False):
     out = Path(directory)
     if out.exists() and not out.is_dir():
         raise IsoflowError(f"{out}: exists and is not a directory")
+    if not out.is_dir():
+        refuse_file_suffix(out)
     if not out.exists() and out.parent.exists() and not out.parent.is_dir():  # the OS's own word, as mkdir would say it
         raise IsoflowError(f"{out.parent}: not a directory, a file (for the output directory {out.name})")
     if not out.exists() and not out.parent.is_dir():

@@ -54,6 +54,7 @@ from .load import (
     load_mesh,
     mesh_arrays,
     mesh_bbox,
+    mesh_members,
     reading_mesh,
     trimesh_load,
     weld,
@@ -135,28 +136,14 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
     (``geometry_0f7d...``), so that order, the labels', would change from
     one run to the next."""
     import trimesh
-    from trimesh.exchange.load import mesh_formats
 
     check_mesh_file(path)
     bodies: list[Body] = []
-    with reading_mesh(path), open(path, "rb") as f:
-        archive = trimesh.util.decompress(f, file_type=kind)
-        resolver = trimesh.resolvers.ZipResolver(archive)
-        for member in sorted(archive, key=natural_key):
-            member_kind = trimesh.util.split_extension(member).lower()
-            if member_kind not in mesh_formats():
-                continue  # a texture, a material, metadata
-            data = archive[member].read()
-            scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
-                                       process=False)
-            if not scene.geometry:  # nothing read at all (a point cloud or a path is something): refused as alone
-                raise IsoflowError(f"{path}:{member}: no triangles read (empty mesh, or not a valid "
-                                   f"{member_kind.upper()} file)")
+    with reading_mesh(path):
+        for member, member_kind, data, scene in mesh_members(path, kind, key=natural_key):
             order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
             meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
                                                                             trimesh.Trimesh)]
-            if not meshes:
-                continue  # a point cloud or a path: nothing to fill
             named = scene_bodies(scene, f"{path}:{member}", order)
             bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
     if not bodies:

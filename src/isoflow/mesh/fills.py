@@ -263,7 +263,7 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
     why = []
     if double_sided:
-        why.append(f"{double_sided} double-sided faces read as one")
+        why.append(f"{counted(double_sided, 'double-sided face')} read as one")
     if share > 0:
         why.append(f"{100 * share:.0f} % of the area bounds no voxel on either side "
                    "(zero-thickness parts, or parts thinner than a voxel)")
@@ -296,7 +296,7 @@ def flood_adds_nothing(voxels: int, shell_voxels: int | None, boundary_edges: in
     """
     if not voxels or voxels != shell_voxels or voxels == grid_voxels:
         return None
-    how = (f"through the gaps of the open surface ({boundary_edges} boundary edges)" if boundary_edges
+    how = (f"through the gaps of the open surface ({counted(boundary_edges, 'boundary edge')})" if boundary_edges
            else "past it (parts thinner than a voxel enclose nothing)")
-    return (f"the flood fill encloses no voxel beyond the shell ({voxels} voxels): the outside reaches every "
+    return (f"the flood fill encloses no voxel beyond the shell ({counted(voxels, 'voxel')}): the outside reaches every "
             f"other voxel {how}; --fill winding closes holes as a soap film would (fill='winding')")

@@ -26,7 +26,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable, check_switch, counted
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
-from .fills import Fill, check_strict
+from .fills import Fill, Voxelization, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .t_junctions import close_t_junctions
@@ -686,6 +686,54 @@ def next_resolution(done: list, target: int | None, *, step: bool, max_resolutio
     return res, None
 
 
+def shell_genus(vertices: np.ndarray, faces: np.ndarray, shell: Voxelization, connectivity: int) -> int:
+    """The genus of the solid a shell with cavities shows: b1 of the shell
+    with the cavities that lie in the solid filled, those voxels the
+    winding rule puts in on the same grid.
+
+    A cavity of the shell holds no point of the surface, so the winding
+    number is the same all over it: it is solid or empty as a whole.
+    Filling a cavity takes its own tunnels from the shell's b1 (Alexander
+    duality): the inside of a closed surface of genus g is a handlebody of
+    g tunnels, so a shell that resolves it has b1 = 2g, and halving b1 held
+    only there. Walls inside the solid (solids stacked face to face) cut it
+    into cells without tunnels, which leave b1 the solid's genus; a shell
+    that fills a thin part, with no cavity there, has the part's b1; and an
+    empty cavity (a hole inside a hollow ball) keeps the tunnels that go
+    around it.
+
+    Parameters
+    ----------
+    vertices, faces : numpy.ndarray
+        The mesh as voxelised.
+    shell : Voxelization
+        Its shell (``fill="shell"``), with its volume.
+    connectivity : int
+        6 or 26, as the Betti numbers are counted.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    A torus's shell at 32 across has one cavity, its inside, and two
+    tunnels; filled by the winding rule there, one:
+
+    >>> import trimesh
+    >>> from isoflow.mesh.voxelize import voxelize
+    >>> t = trimesh.creation.torus(1.0, 0.4)
+    >>> s = voxelize(t.vertices, t.faces, resolution=32, fill="shell", details=True)
+    >>> shell_genus(np.asarray(t.vertices), np.asarray(t.faces), s, 6)
+    1
+    """
+    vol = shell.volume
+    assert vol is not None, "an in-memory voxelisation has its volume"
+    inside = voxelize(vertices, faces, pitch=shell.pitch, grid=(shell.origin, vol.shape), fill="winding",
+                      details=True).volume
+    return int(betti_numbers(vol | inside, connectivity)[1])
+
+
 def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict: bool = False,
                   fill: Fill = "winding", progress=None, finest: bool = True) -> dict:
     """The solid voxelised at ``resolution`` and its Betti numbers: one
@@ -723,9 +771,9 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
     vol, pitch = solid.volume, solid.pitch
     assert vol is not None, "an in-memory voxelisation has its volume"
     betti = betti_numbers(vol, connectivity)
-    # a shell is the surface thickened: each handle of a closed surface
-    # gives it two tunnels (a torus's shell: b1 = 2), a solid's one
-    genus = betti[1] // 2 if fill == "shell" and betti[1] is not None else betti[1]
+    genus = betti[1]
+    if fill == "shell" and betti[1] is not None and betti[2]:
+        genus = shell_genus(vertices, faces, solid, connectivity)
     return {"resolution": int(resolution), "pitch": pitch, "shape": list(vol.shape), "voxels": int(vol.sum()),
             "connectivity": connectivity, "betti": betti, "genus": genus,
             "seconds": round(time.monotonic() - t, 3)}

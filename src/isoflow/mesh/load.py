@@ -14,6 +14,7 @@ import math
 import os
 import re
 import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -349,8 +350,30 @@ def _point_cloud_line(path: Path, vertices: np.ndarray) -> str | None:
     n = len(np.asarray(vertices).reshape(-1, 3)) if np.size(vertices) else _points_held(path)
     if not n:
         return None
-    return (f"{path}: no triangles read: it holds {counted(n, 'point')} and no faces, a point cloud, not a surface; "
-            "reconstruct a surface from it first (MeshLab's Screened Poisson, Open3D's "
+    return point_cloud_line(path, n)
+
+
+def point_cloud_line(where: str | os.PathLike, points: int) -> str:
+    """The line for a mesh input that holds ``points`` points and no face.
+
+    Parameters
+    ----------
+    where : str or os.PathLike
+        The file, or an archive's member as ``ARCHIVE:MEMBER``.
+    points : int
+        The points it holds.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> point_cloud_line("scan.zip:scan.obj", 3)[:68]
+    'scan.zip:scan.obj: no triangles read: it holds 3 points and no faces'
+    """
+    return (f"{where}: no triangles read: it holds {counted(points, 'point')} and no faces, a point cloud, not a "
+            "surface; reconstruct a surface from it first (MeshLab's Screened Poisson, Open3D's "
             "create_from_point_cloud_poisson) and give that mesh")
 
 
@@ -541,6 +564,9 @@ def _read(p: Path, ext: str):
     if (simple := _read_simple(p)) is not None:
         return simple
     try:
+        if kind := next((k for s, k in ARCHIVE_TYPES.items() if p.name.lower().endswith(s)), None):
+            for _ in mesh_members(p, kind):  # the merge below would leave a member of no triangle out
+                pass
         mesh = trimesh_load(p, "mesh")
     except IsoflowError:
         if ext == "obj":  # trimesh's IndexError on an index past the vertices, its ValueError on a word: the line
@@ -664,6 +690,99 @@ def refuse_empty_members(p: Path) -> None:
     meshes = [member for member in empty if split_extension(member).lower() in formats]
     if meshes:
         raise IsoflowError(empty_file_line(f"{p}:{meshes[0]}", meshes[0]))
+
+
+def faceless_member_line(where: str, kind: str, scene: Any) -> str | None:
+    """The line for an archive's mesh member that holds no triangle, as
+    that file given alone is refused: a point cloud's, or "no triangles
+    read"; None where some geometry of it is a mesh with faces.
+
+    Parameters
+    ----------
+    where : str
+        The member as ``ARCHIVE:MEMBER``.
+    kind : str
+        Its format, as trimesh names it (``stl``, ``obj``).
+    scene : trimesh.Scene
+        The member as ``trimesh.load_scene`` reads it.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> faceless_member_line("parts.zip:lid.stl", "stl", trimesh.Scene())
+    'parts.zip:lid.stl: no triangles read (empty mesh, or not a valid STL file)'
+    >>> faceless_member_line("parts.zip:box.stl", "stl", trimesh.Scene(trimesh.creation.box())) is None
+    True
+    """
+    import trimesh
+
+    geometry = list(scene.geometry.values())
+    if any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in geometry):
+        return None
+    points = sum(len(g.vertices) for g in geometry if isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)))
+    if points:
+        return point_cloud_line(where, points)
+    return f"{where}: no triangles read (empty mesh, or not a valid {kind.upper()} file)"
+
+
+def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) -> Iterator[tuple[str, str, bytes, Any]]:
+    """The mesh files of an archive, each read on its own: trimesh merges a
+    whole archive's meshes into one, and a member of no triangle (a binary
+    STL of a header and no facet, an OBJ of ``v`` lines alone) would be
+    left out of it without a word; here it is refused, as that file given
+    alone is.
+
+    Parameters
+    ----------
+    p : pathlib.Path
+        The archive.
+    kind : str
+        Its type, a value of :data:`ARCHIVE_TYPES` (``"zip"``).
+    key : callable, optional
+        The order of the member names (default: sorted as strings).
+
+    Yields
+    ------
+    tuple
+        ``(member, format, data, scene)``: the member's name, its format as
+        trimesh names it (``"stl"``), its bytes, and ``trimesh.Scene``.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the first member of no triangle, ``ARCHIVE:MEMBER``
+        (:func:`faceless_member_line`).
+
+    Examples
+    --------
+    >>> import tempfile, zipfile
+    >>> p = Path(tempfile.mkdtemp()) / "parts.zip"
+    >>> with zipfile.ZipFile(p, "w") as z:
+    ...     z.writestr("readme.txt", "notes"); z.writestr("points.obj", "v 0 0 0\\nv 1 0 0\\n")
+    >>> list(mesh_members(p, "zip"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: ...parts.zip:points.obj: no triangles read: it holds 2 points and no faces, ...
+    """
+    import trimesh
+    from trimesh.exchange.load import mesh_formats
+
+    with open(p, "rb") as f:
+        archive = trimesh.util.decompress(f, file_type=kind)
+    resolver = trimesh.resolvers.ZipResolver(archive)
+    for member in sorted(archive, key=key):
+        member_kind = trimesh.util.split_extension(member).lower()
+        if member_kind not in mesh_formats():
+            continue  # a texture, a material, metadata
+        data = archive[member].read()
+        scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
+                                   process=False)
+        if (line := faceless_member_line(f"{p}:{member}", member_kind, scene)) is not None:
+            raise IsoflowError(line)
+        yield member, member_kind, data, scene
 
 
 #: the metadata files that make a directory a zarr store (v3, v2)

@@ -259,7 +259,7 @@ _READ_AS = {"winding": "its solid is read by the generalised winding number (|w|
 
 
 def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "winding") -> str:
-    return (f"the mesh is open ({boundary_edges} boundary edges"
+    return (f"the mesh is open ({counted(boundary_edges, 'boundary edge')}"
             + (f", {inconsistent_edges} inconsistently oriented" if inconsistent_edges else "")
             + "): it bounds no solid, so it has no genus as a closed surface; " + _READ_AS[fill])
 
@@ -330,7 +330,8 @@ def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int
              "component without crossing (solids face to face)") if touching else ""
     if touching and not crossing and not shared:
         return f"{touch}: the solid the mesh bounds is their union, {union}"
-    return (f"the mesh's {components} components overlap or touch ({crossing} faces cross other components, "
+    crosses = counted(crossing, "face") + (" crosses" if crossing == 1 else " cross")
+    return (f"the mesh's {components} components overlap or touch ({crosses} other components, "
             f"{counted(shared, 'vertex', 'vertices')} shared{'; ' + touch if touch else ''}): the solid they bound "
             f"is their union, {union}")
 

@@ -288,19 +288,29 @@ class Solid:
         d = self.defects
         if d["watertight"] and not self.double_sided:
             return None
-        what = [f"{d['boundary_edges']} boundary edges, {d['nonmanifold_edges']} non-manifold edges, "
-                f"{d['inconsistent_edges']} inconsistently oriented edges"]
+        what = [", ".join([counted(d["boundary_edges"], "boundary edge"), counted(d["nonmanifold_edges"], "non-manifold edge"),
+                           counted(d["inconsistent_edges"], "inconsistently oriented edge")])]
         if self.double_sided:
             what.append(counted(self.double_sided, "double-sided face") + " (coincident faces of opposite "
                         "orientation)")
         if self.fill != "winding":
             rule = f"the {self.fill} fill takes its faces as they are"
+        elif self.no_area():  # edges that balance or a chain bound nothing without area: NO_AREA's reading
+            rule = ("the winding rule leaves no voxel in, as every face has zero area (its corners in a line or at "
+                    "one point) and the mesh bounds nothing")
         elif self.chain_edges:
             rule = "it is read by the generalised winding number"
         else:  # double-sided faces read as one, coincident corners joined, T-junctions split: closed
             split = f" once split at its {counted(self.t_junctions['points'], 'T-junction')}" if self.t_junctions else ""
             rule = f"its edges balance{split}, so it bounds a solid: it is read by the exact nonzero winding number"
         return "; ".join(what), rule
+
+    def no_area(self) -> bool:
+        """Whether every face has zero area, as :meth:`VoxelPlan.thin_note`
+        finds it (:data:`~isoflow.mesh.fills.NO_AREA`)."""
+        from .shell import surface_area
+
+        return not surface_area(np.asarray(self.v, np.float64)[self.faces]) > 0
 
     def prepare(self, frame, origin_s, pitch_s, shape, start=(0, 0, 0)) -> VoxelPlan:
         """The :class:`VoxelPlan` of the grid ``origin_s``, ``pitch_s`` (in
