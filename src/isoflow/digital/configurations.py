@@ -242,7 +242,7 @@ def configurations_at(volume: np.ndarray, vertices: ArrayLike) -> np.ndarray:
     return code
 
 
-def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: Method = "auto") -> np.ndarray:
+def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = None, method: Method = "auto") -> np.ndarray:
     """How many vertices have each configuration: the counts behind eq. 4.9.
 
     Parameters

@@ -67,7 +67,7 @@ def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
 # --------------------------------------------------------------------------
 
 
-def euler_lut(ndim: int = 3, connectivity: int | None = None) -> np.ndarray:
+def euler_lut(ndim: int | np.integer = 3, connectivity: int | np.integer | None = None) -> np.ndarray:
     """``2^n`` times every configuration's share of chi: the vector ``a``.
 
     Summed over all vertices the table gives ``2^n chi`` on every image,
@@ -354,7 +354,7 @@ def f_lut() -> np.ndarray:
     return read_only(s.sum(axis=1) * np.abs(s).sum(axis=1))  # cached: shared with every later caller
 
 
-def a_lut(connectivity: int | None = 6) -> np.ndarray:
+def a_lut(connectivity: int | np.integer | None = 6) -> np.ndarray:
     """The Gauss-Bonnet weight ``a`` of eq. 4.10 of every 3D configuration.
 
     ``a = 8 x`` the vertex's share of the Euler characteristic, so that

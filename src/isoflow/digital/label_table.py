@@ -140,14 +140,14 @@ class LabelImage:
 
 def label_table(
     image: ArrayLike | LabelImage,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     *,
     pitch: float | ArrayLike | None = None,
     origin: ArrayLike | None = None,
-    labels: Iterable[int] | None = None,
+    labels: Iterable[int | np.integer] | None = None,
     surfaces: bool = True,
     method: Literal["auto", "numpy", "compiled"] = "auto",
-    threads: int | None = None,
+    threads: int | np.integer | None = None,
 ) -> dict[str, np.ndarray]:
     """The shape report of every label of a 3D or 2D label image, as columns.
 

@@ -111,7 +111,8 @@ class DigitalObject:
     if TYPE_CHECKING:
         # what the constructor takes (__post_init__ checks and converts it),
         # beside the fields' types, which say what the object then holds
-        def __init__(self, volume: ArrayLike, offset: Sequence[int] | np.ndarray | None = None, parity: int = 0,
+        def __init__(self, volume: ArrayLike, offset: Sequence[int | np.integer] | np.ndarray | None = None,
+                     parity: int | np.integer = 0,
                      pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None,
                      unit: str | None = None) -> None: ...
 
@@ -228,8 +229,8 @@ class DigitalObject:
         return cls(vol, offset=tuple(lo), **kw)
 
     @classmethod
-    def placement(cls, ndim: int, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
-                  offset: ArrayLike | None = None, parity: int | None = None) -> DigitalObject:
+    def placement(cls, ndim: int | np.integer, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
+                  offset: ArrayLike | None = None, parity: int | np.integer | None = None) -> DigitalObject:
         """An empty object of one voxel that holds a place only: ``pitch``,
         ``origin``, ``offset`` and ``parity`` (None: the defaults) checked
         as every object's are, so that a table or a file written without a

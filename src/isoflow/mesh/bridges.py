@@ -119,7 +119,7 @@ def cube_union(voxels):
 # --------------------------------------------------------------------------
 
 
-def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> Manifold:
+def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | None = 6) -> Manifold:
     """The union of the object's voxels as a ``manifold3d.Manifold`` in world
     coordinates.
 

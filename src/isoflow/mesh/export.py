@@ -734,7 +734,7 @@ def stl_weld_note(out: Path, welded: int) -> str:
 def write_surface(
     obj: DigitalObject | ArrayLike,
     path: str | os.PathLike,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     *,
     mesh: QuadMesh | None = None,
     ascii: bool = False,

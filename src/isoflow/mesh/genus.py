@@ -736,9 +736,9 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 # --------------------------------------------------------------------------
 
 
-def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
-                 connectivity: int = 6, progress: Callable[[int, int | None], object] | None = None, *,
-                 step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
+def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFAULT_RESOLUTIONS,
+                 connectivity: int | np.integer = 6, progress: Callable[[int, int | None], object] | None = None, *,
+                 step: bool = True, max_resolution: int | np.integer = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
                  fill: Fill = "winding") -> GenusVerdict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
@@ -837,6 +837,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
             or max_resolution < 1:
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {max_resolution!r}")
+    # the verdict's rows and its JSON hold Python ints, whatever the caller's type
+    max_resolution = int(max_resolution)
+    if isinstance(connectivity, np.integer):
+        connectivity = int(connectivity)
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {time_limit!r}")

@@ -578,21 +578,21 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
 
 
 @overload
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[False] = False) -> tuple[np.ndarray, np.ndarray, float]: ...
 
 
 @overload
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[True]) -> Voxelization: ...
 
 
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: bool = False) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
     """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
@@ -842,18 +842,21 @@ def say_note(note: str | None) -> None:
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:
     """A triangle mesh as a digital object: its solid, shell or flood fill.
@@ -913,18 +916,18 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
 
 
 @overload
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:

@@ -48,9 +48,12 @@ import contextvars
 import os
 from collections.abc import Iterator
 from functools import cache
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from ..errors import IsoflowError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: host volumes with at least this many voxels (126^3 and up) use the compiled
 #: passes (the histogram, the Betti numbers)
@@ -277,7 +280,7 @@ def thread_count(voxels: int | None = None) -> int:
 
 
 @contextlib.contextmanager
-def using(threads: int | None):
+def using(threads: int | np.integer | None):
     """Run the enclosed passes on ``threads`` threads (None: the default)."""
     if threads is None:
         yield
