@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, number_text
+from ..errors import IsoflowError, given_text, number_text
 from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary
 from .units import unit_given
@@ -131,7 +131,7 @@ class DigitalObject:
         if parity not in (0, 1):
             # the value as written: _field gives it back as a float
             given = np.asarray(self.parity).item()
-            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given!r}")
+            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given_text(given)}")
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
@@ -245,7 +245,7 @@ class DigitalObject:
         if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
             # named here, as Python's own error for (1,) * ndim names no argument; another
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
-            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")
+            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {given_text(ndim)}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
         return cls(np.zeros((1,) * int(ndim), bool), **{k: v for k, v in given.items() if v is not None})
 

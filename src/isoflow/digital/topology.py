@@ -15,7 +15,7 @@ from typing import Any, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, counted, given_text
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -244,7 +244,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = Non
     # b1 = b0 + b2 - chi is a count only for an integer chi
     if chi is not None:
         if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
-            raise IsoflowError(f"chi must be an integer, got {chi!r}")
+            raise IsoflowError(f"chi must be an integer, got {given_text(chi)}")
         chi = int(chi)  # a NumPy integer gives a list of plain ints, as chi computed here does
     else:
         chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..digital.measures import unheld_dropped
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, given_text
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -255,7 +255,7 @@ def check_count(name: str, value) -> None:
     isoflow.errors.IsoflowError: steps must be an integer >= 0, got 1.5
     """
     if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
-        raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
+        raise IsoflowError(f"{name} must be an integer >= 0, got {given_text(value)}")
 
 
 def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason,

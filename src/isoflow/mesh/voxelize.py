@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, warn
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -550,7 +550,7 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
             raise IsoflowError(
                 f"voxelize: grid must be (origin, shape), three numbers each, got {grid!r}") from None
         if len(shape) != 3 or min(shape) < 1:
-            raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {grid[1]!r}")
+            raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {given_text(grid[1])}")
         with np.errstate(over="ignore", invalid="ignore"):
             origin_s = np.ldexp(origin - shift, -e)
         if not np.all(np.isfinite(origin_s)):
@@ -784,7 +784,7 @@ def check_write_bytes(write_bytes: object) -> float:
     """
     ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
     if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
-        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {write_bytes!r}")
+        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")
     return float(write_bytes)  # type: ignore[arg-type]
 
 
