@@ -999,3 +999,27 @@ def test_a_numpy_scalar_is_said_as_its_number(call, tmp_path, monkeypatch):
         eval(code, {"isoflow": isoflow, "np": np, "vol": vol, "dask": dask})
     message = str(info.value)
     assert said in message and "np." not in message, message
+
+
+@pytest.mark.parametrize(("call", "voxeliser"), [
+    ("isoflow.analyze(trimesh.Scene([box]))", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.analyze(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.to_manifold(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.euler_characteristic(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.label_table(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.analyze(isoflow.to_manifold(np.ones((2, 2, 2), bool)))", "isoflow.from_manifold(manifold"),
+    ("isoflow.analyze(isoflow.boundary_mesh(np.ones((2, 2, 2), bool), 6))", "the volume whose surface it is"),
+])
+def test_a_mesh_given_for_a_volume_is_named_with_its_voxeliser(call, voxeliser):
+    """NumPy makes a mesh a 0D array of type object, which was refused as
+    'array of type object is not a binary volume'."""
+    import trimesh
+
+    box = trimesh.creation.box()
+    with pytest.raises(IsoflowError) as info:
+        eval(call, {"isoflow": isoflow, "np": np, "trimesh": trimesh, "box": box})
+    message = str(info.value)
+    assert ("a mesh (" in message or "Manifold" in message) and voxeliser in message and "type object" not in message
+    # what the message says to do works: the voxels' surface has the box's Euler characteristic
+    solid = isoflow.voxelize_mesh(box, resolution=8)
+    assert isoflow.boundary_mesh(solid.volume, 6).euler_characteristic == box.euler_number == 2
