@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import as_array, binary
+from ..scale.arrays import as_array, binary, refuse_object
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import is_face_connectivity, resolve_connectivity
 
@@ -519,10 +519,13 @@ def planar_index(points: ArrayLike) -> np.ndarray:
     [[2, 0, 0, 2]]
     """
     # a 2D mask of 0/1 only, as every mask of the API: another shape has no
-    # planar index, and 0.5 or NaN are no lattice points
-    grid = binary(points, "points")
-    if grid.ndim != 2:
-        raise IsoflowError(f"points: planar_index takes a 2D array, got a {grid.ndim}D array")
+    # planar index, and 0.5 or NaN are no lattice points. The shape is
+    # checked first: [1, 2, 3] is a 1D list, which no values make a mask of
+    refuse_object(points, "points")
+    given = as_array(points, "points")
+    if given.ndim != 2:
+        raise IsoflowError(f"points: planar_index takes a 2D array, got a {given.ndim}D array of shape {given.shape}")
+    grid = binary(given, "points")
     f = np.pad(grid, 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.
