@@ -804,6 +804,22 @@ def test_a_label_image_names_a_bad_spacing_or_origin(spacing, origin, words):
         isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), spacing, origin)
 
 
+@pytest.mark.parametrize(("ndim", "origin", "written"), [(3, 0.0, "(0, 0, 0)"), (2, np.float32(1.5), "(1.5, 1.5)")])
+def test_one_number_for_an_origin_is_refused_saying_what_to_write(ndim, origin, written):
+    """``LabelImage(arr, 1.0, 0.0)``: the spacing takes one number for every
+    axis, the origin (a point) one per axis; the refusal says so and what
+    to write, which is then taken, as write_labels takes it."""
+    labels = np.ones((2,) * ndim, np.uint8)
+    with pytest.raises(IsoflowError) as info:
+        isoflow.LabelImage(labels, 1.0, origin)
+    message = str(info.value)
+    assert f"'origin' must be {ndim} numbers, one per axis" in message and f"origin={written}" in message
+    point = eval(written)
+    assert isoflow.LabelImage(labels, 1.0, point).origin.tolist() == [float(origin)] * ndim
+    with pytest.raises(IsoflowError, match=re.escape(f"origin={written}")):
+        isoflow.DigitalObject(labels.astype(bool), origin=origin)
+
+
 @pytest.mark.parametrize("ndim", ["a", 3.0, True])
 def test_placement_names_an_ndim_that_is_no_integer(ndim):
     # (1,) * ndim: Python's "can't multiply sequence by non-int of type 'str'"

@@ -506,7 +506,13 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     def bad() -> IsoflowError:
         want = ("an integer" if integral else "a number") if length is None else (
             f"{length} {'integers' if integral else 'numbers'}, one per axis")
-        return IsoflowError(f"'{name}' must be {want}, got {shown()}")
+        hint = ""
+        if length is not None and given.ndim == 0 and given.dtype.kind in "iuf":
+            # the voxel size takes one number for every axis, so one number looks
+            # as if it should do for a point too: say what to write instead
+            hint = (f" (unlike the voxel size, one number does not stand for every axis): "
+                    f"{name}=({', '.join([shown()] * length)})")
+        return IsoflowError(f"'{name}' must be {want}, got {shown()}{hint}")
 
     if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
         # numbers held as Python objects (a list of ints and floats through
