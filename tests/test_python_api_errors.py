@@ -964,6 +964,21 @@ def test_an_object_of_voxel_indices_is_the_mask_they_come_from_an_empty_one_too(
     assert isoflow.DigitalObject.from_points(np.zeros((1, mask.ndim), int)).voxels == 0
 
 
+@pytest.mark.parametrize("empty", [[], (), np.array([])])
+@pytest.mark.parametrize("build", ["from_points", "from_voxels"])
+def test_an_empty_list_of_points_is_said_to_have_no_dimension(build, empty):
+    """``from_points([])`` said "got shape (0,)": an empty list says no
+    dimension, which the refusal says, with what to pass for the empty 3D
+    object, which is then the object with no voxel that an empty mask
+    gives."""
+    with pytest.raises(IsoflowError) as info:
+        getattr(isoflow.DigitalObject, build)(empty)
+    message = str(info.value)
+    assert "no dimension" in message and "np.empty((0, 3))" in message and "shape (0,)" not in message
+    obj = getattr(isoflow.DigitalObject, build)(np.empty((0, 3)))
+    assert obj.ndim == 3 and obj.voxels == np.count_nonzero(np.zeros((2, 2, 2), bool)) == 0
+
+
 # NumPy scalars as a user takes them from an array or np.unique: the message
 # says the number as written (time=5), not NumPy 2's repr (np.int64(5))
 NUMPY_SCALAR_CALLS = {

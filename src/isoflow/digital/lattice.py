@@ -212,7 +212,11 @@ class DigitalObject:
         >>> DigitalObject.from_points(points).voxels
         2
 
-        No points (shape ``(0, n)``) are the empty object, as one point is.
+        No points (shape ``(0, n)``) are the empty object, as one point is;
+        ``[]`` says no dimension, and is refused:
+
+        >>> DigitalObject.from_points(np.empty((0, 3))).voxels
+        0
         """
         pts = _integer_points(points, "lattice point")
         if not len(pts):  # np.argwhere of an all-zero mask: no cube has its corners
@@ -432,7 +436,11 @@ MAX_COORDINATE = 2**40
 
 def _integer_points(points, what: str) -> np.ndarray:
     arr = as_array(points, f"{what} coordinates")
-    if arr.ndim != 2 or arr.shape[1] not in (2, 3):  # (0, n): none, which still says its dimension
+    if arr.size == 0 and arr.ndim < 2:
+        # (0, n): no points, which still says its dimension; [] says none
+        raise IsoflowError(f"an empty list of {what} coordinates has no dimension: pass np.empty((0, 3)) for the "
+                           "empty 3D object (np.empty((0, 2)) in 2D)")
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3):
         raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
     if arr.dtype.kind not in "biuf":
         raise IsoflowError(f"{what} coordinates must be integers, got an array of type {arr.dtype}")
