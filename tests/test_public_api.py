@@ -228,6 +228,80 @@ def test_the_script_s_calls_run(tmp_path, monkeypatch):
     obj = isoflow.DigitalObject(vol.tolist(), pitch=(0.5, 0.5, 1.0), origin=[1, 2, 3])
     assert obj.spacing.tolist() == [0.5, 0.5, 1.0] and obj.world(np.zeros((1, 3))).tolist() == [[1.0, 2.0, 3.0]]
 
+# counts, labels and connectivities as NumPy integers, as a user takes them
+# from np.unique or an array: each call beside the same call with Python
+# ints (``same``), which mypy refused though the functions take them
+NUMPY_INT_SCRIPT = """
+import json
+
+import nibabel
+import numpy as np
+import trimesh
+
+import isoflow
+
+
+def same(a: object, b: object) -> None:
+    assert a == b or json.dumps(a) == json.dumps(b), (a, b)
+
+
+vol = np.zeros((6, 6, 6), dtype=bool)
+vol[1:4, 1:4, 1:4] = True
+labels = vol.astype(np.uint8)
+labels[0, 0, 0] = 3
+np.save("v.npy", labels)
+nibabel.save(nibabel.Nifti1Image(np.stack([labels, labels], axis=-1), np.eye(4)), "t.nii.gz")  # two time points
+trimesh.creation.box().export("box.stl")
+c, k = np.unique(np.array([6, 26]))[1], np.int64(3)
+same(isoflow.euler_characteristic(vol, np.int64(26)), isoflow.euler_characteristic(vol, 26))
+same(isoflow.analyze(vol, c, threads=np.int64(1)), isoflow.analyze(vol, 26, threads=1))
+same(isoflow.betti_numbers(vol, c, chi=np.int64(1)), isoflow.betti_numbers(vol, 26, chi=1))
+same(isoflow.boundary_mesh(vol, c), isoflow.boundary_mesh(vol, 26))
+same(isoflow.closed_surfaces(vol, c)["surfaces"], isoflow.closed_surfaces(vol, 26)["surfaces"])
+same(isoflow.a_lut(c).tolist(), isoflow.a_lut(26).tolist())
+same(isoflow.euler_lut(k, c).tolist(), isoflow.euler_lut(3, 26).tolist())
+same(isoflow.configuration_histogram(vol, slab=np.int64(2)).tolist(), isoflow.configuration_histogram(vol, slab=2).tolist())
+same(isoflow.flow_step(vol, c).voxels, isoflow.flow_step(vol, 26).voxels)
+same(isoflow.run_flow(vol, steps=np.int64(2), connectivity=c)["steps"], isoflow.run_flow(vol, steps=2, connectivity=26)["steps"])
+same(isoflow.run_flow(vol, max_steps=np.int64(1))["steps"], isoflow.run_flow(vol, max_steps=1)["steps"])
+same(isoflow.to_manifold(vol, c).volume(), isoflow.to_manifold(vol, 26).volume())
+same(isoflow.write_surface(vol, "a.ply", c).read_bytes(), isoflow.write_surface(vol, "b.ply", 26).read_bytes())
+same(isoflow.label_table(labels, c, labels=np.unique(labels)[1:], threads=np.int64(1))["voxels"].tolist(),
+     isoflow.label_table(labels, 26, labels=[1, 3], threads=1)["voxels"].tolist())
+same(isoflow.label_table(labels, labels=[np.int64(3)])["voxels"].tolist(),
+     isoflow.label_table(labels, labels=[3])["voxels"].tolist())
+same(isoflow.read_volume("v.npy", label=k).voxels, isoflow.read_volume("v.npy", label=3).voxels)
+same(isoflow.read_object("v.npy", label=k).voxels, isoflow.read_object("v.npy", label=3).voxels)
+same(isoflow.read_volume("t.nii.gz", label=k, time=np.int64(1)).voxels, isoflow.read_volume("t.nii.gz", label=3, time=1).voxels)
+same(isoflow.read_labels("t.nii.gz", time=np.int64(1)).array.tolist(), isoflow.read_labels("t.nii.gz", time=1).array.tolist())
+same(isoflow.voxelize_file("box.stl", resolution=np.int64(8)).voxels, isoflow.voxelize_file("box.stl", resolution=8).voxels)
+same(isoflow.voxelize_meshes(["box.stl"], resolution=np.int64(8), max_bytes=np.int64(1 << 30)).voxels,
+     isoflow.voxelize_meshes(["box.stl"], resolution=8, max_bytes=1 << 30).voxels)
+isoflow.voxelize_to_zarr("box.stl", "a.zarr", resolution=np.int64(8), chunks=(np.int64(4), 4, 4),
+                         max_bytes=np.int64(1 << 30))
+same(isoflow.analyze_zarr("a.zarr", c, block_shape=(np.int64(4), 4, 4), threads=np.int64(1)).voxels,
+     isoflow.voxelize_file("box.stl", resolution=8).voxels)
+same(isoflow.DigitalObject(vol, offset=(np.int64(1), 0, 0), parity=np.int64(1)),
+     isoflow.DigitalObject(vol, offset=(1, 0, 0), parity=1))
+same(isoflow.DigitalObject.placement(k, parity=np.int64(1)), isoflow.DigitalObject.placement(3, parity=1))
+verdict = isoflow.verify_genus("box.stl", resolutions=[np.int64(8)], connectivity=c, max_resolution=np.int64(16))
+same(verdict.digital[0]["connectivity"], 26)
+json.dumps(verdict.digital)
+"""
+
+
+@pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
+                    reason="mypy not installed (pip install -e '.[test]')")
+def test_mypy_takes_numpy_integers_for_counts_labels_and_connectivities(tmp_path):
+    p = mypy(tmp_path, NUMPY_INT_SCRIPT)
+    assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
+
+
+def test_numpy_integers_give_what_python_ints_give(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    exec(compile(NUMPY_INT_SCRIPT, "user.py", "exec"), {})
+
+
 def public_functions() -> list[tuple[str, object]]:
     """Every public function: the names of ``__all__`` and of the public
     subpackages' ``__all__``."""

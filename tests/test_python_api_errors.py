@@ -300,7 +300,8 @@ def test_betti_numbers_refuses_a_chi_that_is_no_integer(chi):
     # a cube with a tunnel (chi 0): chi=0.5 gave b1 = 0.5, 1.0 gave [1, 0.0, 0], "1" NumPy's TypeError
     tunnel = np.ones((3, 3, 3), bool)
     tunnel[1, 1, :] = False
-    with pytest.raises(IsoflowError, match=re.escape(f"chi must be an integer, got {chi!r}")):
+    shown = repr(chi.item() if isinstance(chi, np.generic) else chi)  # a NumPy scalar as the number it holds
+    with pytest.raises(IsoflowError, match=re.escape(f"chi must be an integer, got {shown}")):
         isoflow.betti_numbers(tunnel, chi=chi)
     result = isoflow.betti_numbers(tunnel, chi=np.int64(0))
     assert result == [1, 1, 0] and all(type(b) is int for b in result)
@@ -803,6 +804,22 @@ def test_a_label_image_names_a_bad_spacing_or_origin(spacing, origin, words):
         isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), spacing, origin)
 
 
+@pytest.mark.parametrize(("ndim", "origin", "written"), [(3, 0.0, "(0, 0, 0)"), (2, np.float32(1.5), "(1.5, 1.5)")])
+def test_one_number_for_an_origin_is_refused_saying_what_to_write(ndim, origin, written):
+    """``LabelImage(arr, 1.0, 0.0)``: the spacing takes one number for every
+    axis, the origin (a point) one per axis; the refusal says so and what
+    to write, which is then taken, as write_labels takes it."""
+    labels = np.ones((2,) * ndim, np.uint8)
+    with pytest.raises(IsoflowError) as info:
+        isoflow.LabelImage(labels, 1.0, origin)
+    message = str(info.value)
+    assert f"'origin' must be {ndim} numbers, one per axis" in message and f"origin={written}" in message
+    point = eval(written)
+    assert isoflow.LabelImage(labels, 1.0, point).origin.tolist() == [float(origin)] * ndim
+    with pytest.raises(IsoflowError, match=re.escape(f"origin={written}")):
+        isoflow.DigitalObject(labels.astype(bool), origin=origin)
+
+
 @pytest.mark.parametrize("ndim", ["a", 3.0, True])
 def test_placement_names_an_ndim_that_is_no_integer(ndim):
     # (1,) * ndim: Python's "can't multiply sequence by non-int of type 'str'"
@@ -945,3 +962,95 @@ def test_an_object_of_voxel_indices_is_the_mask_they_come_from_an_empty_one_too(
     # no lattice point gives the object that one point gives: no cube has all its corners
     assert isoflow.DigitalObject.from_points(np.zeros((0, mask.ndim), int)).voxels == 0
     assert isoflow.DigitalObject.from_points(np.zeros((1, mask.ndim), int)).voxels == 0
+
+
+@pytest.mark.parametrize("empty", [[], (), np.array([])])
+@pytest.mark.parametrize("build", ["from_points", "from_voxels"])
+def test_an_empty_list_of_points_is_said_to_have_no_dimension(build, empty):
+    """``from_points([])`` said "got shape (0,)": an empty list says no
+    dimension, which the refusal says, with what to pass for the empty 3D
+    object, which is then the object with no voxel that an empty mask
+    gives."""
+    with pytest.raises(IsoflowError) as info:
+        getattr(isoflow.DigitalObject, build)(empty)
+    message = str(info.value)
+    assert "no dimension" in message and "np.empty((0, 3))" in message and "shape (0,)" not in message
+    obj = getattr(isoflow.DigitalObject, build)(np.empty((0, 3)))
+    assert obj.ndim == 3 and obj.voxels == np.count_nonzero(np.zeros((2, 2, 2), bool)) == 0
+
+
+# NumPy scalars as a user takes them from an array or np.unique: the message
+# says the number as written (time=5), not NumPy 2's repr (np.int64(5))
+NUMPY_SCALAR_CALLS = {
+    "time of a series": ('isoflow.read_volume("t.nii.gz", label=1, time=np.int64(5))', "time=5 "),
+    "time of a 3D volume": ('isoflow.read_volume("v.npy", time=np.int64(0))', "time=0 "),
+    "read_labels time": ('isoflow.read_labels("t.nii.gz", time=np.True_)', "time=True "),
+    "label": ('isoflow.read_volume("v.npy", label=np.float64("nan"))', "got nan"),
+    "steps": ("isoflow.run_flow(vol, steps=np.int64(-1))", "got -1"),
+    "max_steps": ("isoflow.run_flow(vol, max_steps=np.float64(1.5))", "got 1.5"),
+    "threads": ("isoflow.analyze(vol, threads=np.int64(0))", "got 0"),
+    "slab": ("isoflow.configuration_histogram(vol, slab=np.int64(0))", "got 0"),
+    "chi": ("isoflow.betti_numbers(vol, chi=np.float64(1.5))", "got 1.5"),
+    "ndim": ("isoflow.euler_lut(np.float32(3.5))", "got 3.5"),
+    "parity": ("isoflow.DigitalObject(vol, parity=np.int64(2))", "got 2"),
+    "placement ndim": ("isoflow.DigitalObject.placement(np.float64(2.5))", "got 2.5"),
+    "a label beyond the type": ("isoflow.label_table(vol.astype(np.uint8), labels=[np.int64(300)])", "label 300 "),
+    "a label not whole": ("isoflow.label_table(vol.astype(np.uint8), labels=[np.float64(1.5)])", "label 1.5 "),
+    "connectivity beside a mesh": ('isoflow.write_surface(vol, "s.ply", np.int64(26), mesh=isoflow.boundary_mesh(vol, 6))',
+                                   "connectivity=26 "),
+    "a switch": ('isoflow.write_volume(vol, "w.npy", force=np.int64(1))', "got 1"),
+    "a callback": ("isoflow.run_flow(vol, steps=1, progress=np.int64(1))", "got 1"),
+    "resolution": ('isoflow.voxelize_file("box.stl", resolution=np.int64(0))', "got 0"),
+    "pitch": ('isoflow.voxelize_file("box.stl", pitch=np.str_("0.5"))', "got '0.5'"),
+    "max_bytes": ('isoflow.voxelize_meshes(["box.stl"], resolution=4, max_bytes=np.int64(0))', "got 0"),
+    "write_bytes": ('isoflow.voxelize_file("box.stl", resolution=4, write_bytes=np.int64(-1))', "got -1"),
+    "resolutions": ('isoflow.verify_genus("box.stl", resolutions=[np.int64(0)])', "got 0 in [0]"),
+    "a lone resolution": ('isoflow.verify_genus("box.stl", resolutions=np.int64(8))', "got 8; one resolution is [8]"),
+    "max_resolution": ('isoflow.verify_genus("box.stl", max_resolution=np.int64(0))', "got 0"),
+    "time_limit": ('isoflow.verify_genus("box.stl", time_limit=np.float64(-1.0))', "got -1.0"),
+    "block_shape": ("isoflow.analyze_chunked(dask.array.from_array(vol, chunks=2), block_shape=(np.int64(0), 2, 2))",
+                    "block_shape (0, 2, 2) "),
+}
+
+
+@pytest.mark.parametrize("call", NUMPY_SCALAR_CALLS, ids=list(NUMPY_SCALAR_CALLS))
+def test_a_numpy_scalar_is_said_as_its_number(call, tmp_path, monkeypatch):
+    import dask.array
+    import nibabel
+    import trimesh
+
+    code, said = NUMPY_SCALAR_CALLS[call]
+    monkeypatch.chdir(tmp_path)
+    vol = np.zeros((4, 4, 4), bool)
+    vol[1:3, 1:3, 1:3] = True
+    np.save("v.npy", vol)
+    nibabel.save(nibabel.Nifti1Image(np.stack([vol, vol], axis=-1).astype(np.uint8), np.eye(4)), "t.nii.gz")
+    trimesh.creation.box().export("box.stl")
+    with pytest.raises((IsoflowError, TypeError)) as info:
+        eval(code, {"isoflow": isoflow, "np": np, "vol": vol, "dask": dask})
+    message = str(info.value)
+    assert said in message and "np." not in message, message
+
+
+@pytest.mark.parametrize(("call", "voxeliser"), [
+    ("isoflow.analyze(trimesh.Scene([box]))", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.analyze(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.to_manifold(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.euler_characteristic(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.label_table(box)", "isoflow.voxelize_mesh(mesh"),
+    ("isoflow.analyze(isoflow.to_manifold(np.ones((2, 2, 2), bool)))", "isoflow.from_manifold(manifold"),
+    ("isoflow.analyze(isoflow.boundary_mesh(np.ones((2, 2, 2), bool), 6))", "the volume whose surface it is"),
+])
+def test_a_mesh_given_for_a_volume_is_named_with_its_voxeliser(call, voxeliser):
+    """NumPy makes a mesh a 0D array of type object, which was refused as
+    'array of type object is not a binary volume'."""
+    import trimesh
+
+    box = trimesh.creation.box()
+    with pytest.raises(IsoflowError) as info:
+        eval(call, {"isoflow": isoflow, "np": np, "trimesh": trimesh, "box": box})
+    message = str(info.value)
+    assert ("a mesh (" in message or "Manifold" in message) and voxeliser in message and "type object" not in message
+    # what the message says to do works: the voxels' surface has the box's Euler characteristic
+    solid = isoflow.voxelize_mesh(box, resolution=8)
+    assert isoflow.boundary_mesh(solid.volume, 6).euler_characteristic == box.euler_number == 2

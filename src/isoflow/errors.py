@@ -108,6 +108,39 @@ def number_text(value: object) -> str:
     return str(value) if isinstance(value, int) else repr(value)
 
 
+def given_text(value: object) -> str:
+    """A value given to a function, as a message says it: its repr, a NumPy
+    scalar's as the Python value it holds (NumPy 2's repr names the type,
+    ``np.int64(0)``, where the user wrote or took the number ``0``), a list
+    or tuple element by element.
+
+    Parameters
+    ----------
+    value : object
+        The value given.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> given_text(np.int64(0)), given_text(np.True_), given_text(np.float32(0.1)), given_text(1.0), given_text("x")
+    ('0', 'True', '0.1', '1.0', "'x'")
+    >>> given_text((np.int64(3), 0.5)), given_text([np.uint8(7)]), given_text((np.int64(2),))
+    ('(3, 0.5)', '[7]', '(2,)')
+    """
+    if type(value) in (list, tuple):
+        inner = ", ".join(given_text(v) for v in value)  # type: ignore[attr-defined]
+        return f"[{inner}]" if isinstance(value, list) else f"({inner},)" if len(value) == 1 else f"({inner})"  # type: ignore[arg-type]
+    if type(value).__module__ == "numpy" and getattr(value, "shape", None) == ():
+        # NumPy's str of a float32 is its shortest (0.1), which item() widens to 0.10000000149011612
+        kind = value.dtype.kind  # type: ignore[attr-defined]
+        value = float(str(value)) if kind == "f" else value.item()  # type: ignore[attr-defined]
+    return repr(value)
+
+
 def path_text(path: str | os.PathLike) -> str:
     """A path as text that every reader of UTF-8 takes: a byte of the name
     that the file system's encoding does not decode is written ``\\xNN``.
@@ -248,7 +281,7 @@ def check_callable(value: object, name: str, call: str) -> None:
     TypeError: progress must be a callable, progress(done, total), or None; got 5
     """
     if value is not None and not callable(value):
-        raise TypeError(f"{name} must be a callable, {call}, or None; got {value!r}")
+        raise TypeError(f"{name} must be a callable, {call}, or None; got {given_text(value)}")
 
 
 def value_kind(value: object, width: int = 60) -> str:
@@ -519,5 +552,5 @@ def check_switch(value: object, name: str, where: str) -> bool:
     import numpy as np
 
     if not isinstance(value, (bool, np.bool_)):
-        raise IsoflowError(f"{where}: {name} must be True or False, got {value!r}")
+        raise IsoflowError(f"{where}: {name} must be True or False, got {given_text(value)}")
     return bool(value)

@@ -178,6 +178,20 @@ def test_planar_index_refuses_what_is_no_2d_set_of_points():
     for value in (0.5, np.nan):
         with pytest.raises(IsoflowError, match=f"points: not a binary image .* e.g. {value}"):
             I.planar_index(np.full((3, 3), value))
+
+
+@pytest.mark.parametrize("points", [[1, 2, 3], np.arange(8).reshape(2, 2, 2), [[[0.5]]], 7])
+def test_planar_index_says_the_shape_before_the_values(points):
+    """``planar_index([1, 2, 3])`` said "not a binary volume (2 voxels ...)":
+    a list that is not 2D is refused for its dimension, which no values
+    mend, whatever it holds."""
+    from isoflow.errors import IsoflowError
+
+    with pytest.raises(IsoflowError) as info:
+        I.planar_index(points)
+    message = str(info.value)
+    assert f"takes a 2D array, got a {np.ndim(points)}D array of shape {np.shape(points)}" in message
+    assert "binary" not in message
     square = I.planar_index(np.ones((3, 3), np.float32))  # 0/1 of any type is a set of points
     assert square.shape == (3, 3) and int(square.sum()) == 4
 

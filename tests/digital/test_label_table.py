@@ -510,7 +510,8 @@ def test_a_label_asked_for_as_a_float_or_a_bool_is_refused(label):
     image = np.zeros((4, 4, 4), np.uint8)
     image[1:3, 1:3, 1:3] = 1
     assert label == 1  # equal to label 1, which is why it was read as that label
-    with pytest.raises(ValueError, match=re.escape(f"label {label!r} is not an integer")):
+    shown = repr(label.item() if isinstance(label, np.generic) else label)  # a NumPy scalar as the value it holds
+    with pytest.raises(ValueError, match=re.escape(f"label {shown} is not an integer")):
         label_table(image, labels=[label])
     # an integer of NumPy's is one
     assert label_table(image, labels=[np.int64(1)])["voxels"].tolist() == [np.count_nonzero(image == 1)]

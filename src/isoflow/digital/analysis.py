@@ -41,9 +41,9 @@ from .units import unit_given
 
 def analyze(
     obj: DigitalObject | ArrayLike,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     surfaces: bool = True,
-    threads: int | None = None,
+    threads: int | np.integer | None = None,
     method: Method = "auto",
     *,
     pitch: float | ArrayLike | None = None,

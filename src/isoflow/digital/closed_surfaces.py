@@ -141,7 +141,7 @@ def surfaces_from_counts(vertices: np.ndarray, quarters: np.ndarray) -> list[dic
     ]
 
 
-def closed_surfaces(volume: ArrayLike, connectivity: int | None = 6, method: Method = "auto") -> SurfaceCensus:
+def closed_surfaces(volume: ArrayLike, connectivity: int | np.integer | None = 6, method: Method = "auto") -> SurfaceCensus:
     """The closed surfaces of the boundary of a 3D host volume and their genus.
 
     The surfaces are read off the labels of the object and background

@@ -32,7 +32,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 from ..results import read_only
 from ..scale import arrays
 from ..scale.compiled import Method, use_compiled
@@ -47,7 +47,7 @@ def check_dimension(n: object, name: str = "dimension n") -> int:
     """The dimension of a window, an integer 1..4, or one line saying why
     not, naming it as its caller's parameter ``name``."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
-        raise IsoflowError(f"{name} must be an integer 1..{MAX_DIM}, got {n!r}")
+        raise IsoflowError(f"{name} must be an integer 1..{MAX_DIM}, got {given_text(n)}")
     if not 1 <= int(n) <= MAX_DIM:
         raise IsoflowError(f"{name} must be 1..{MAX_DIM}, got {n}")
     return int(n)
@@ -242,7 +242,7 @@ def configurations_at(volume: np.ndarray, vertices: ArrayLike) -> np.ndarray:
     return code
 
 
-def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: Method = "auto") -> np.ndarray:
+def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = None, method: Method = "auto") -> np.ndarray:
     """How many vertices have each configuration: the counts behind eq. 4.9.
 
     Parameters
@@ -283,7 +283,7 @@ def configuration_histogram(volume: ArrayLike, slab: int | None = None, method: 
     # checked before any pass: the NumPy passes step through the volume by
     # it, and the compiled kernel, which takes no slab, would not look at it
     if slab is not None and (isinstance(slab, (bool, np.bool_)) or not isinstance(slab, (int, np.integer)) or slab < 1):
-        raise IsoflowError(f"slab must be an integer >= 1, got {slab!r}")
+        raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     size = 1 << (1 << v.ndim)
     if use_compiled(v, method=method, record=v.ndim == 3) and v.ndim == 3:

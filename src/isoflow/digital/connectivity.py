@@ -10,13 +10,18 @@ other one, so that a closed object separates its inside from its outside.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from ..errors import IsoflowError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: (face adjacency 2n, full adjacency 3^n - 1) per dimension
 VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
 
 
-def check_connectivity(ndim: int, connectivity: int) -> int:
+def check_connectivity(ndim: int, connectivity: int | np.integer) -> int:
     """The object's connectivity, checked against the dimension.
 
     Examples
@@ -39,7 +44,7 @@ def default_connectivity(ndim: int) -> int:
     return VALID[ndim][0]
 
 
-def resolve_connectivity(ndim: int, connectivity: int | None) -> int:
+def resolve_connectivity(ndim: int, connectivity: int | np.integer | None) -> int:
     """The connectivity asked (checked), or the paper's default when None.
 
     Examples

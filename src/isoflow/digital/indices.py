@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError
-from ..scale.arrays import as_array, binary
+from ..scale.arrays import as_array, binary, refuse_object
 from .configurations import check_dimension, face_connected, full_window, octants, read_only, window_faces
 from .connectivity import is_face_connectivity, resolve_connectivity
 
@@ -67,7 +67,7 @@ def _halves(ndim: int, axis: int, side: int) -> tuple[int, ...]:
 # --------------------------------------------------------------------------
 
 
-def euler_lut(ndim: int = 3, connectivity: int | None = None) -> np.ndarray:
+def euler_lut(ndim: int | np.integer = 3, connectivity: int | np.integer | None = None) -> np.ndarray:
     """``2^n`` times every configuration's share of chi: the vector ``a``.
 
     Summed over all vertices the table gives ``2^n chi`` on every image,
@@ -354,7 +354,7 @@ def f_lut() -> np.ndarray:
     return read_only(s.sum(axis=1) * np.abs(s).sum(axis=1))  # cached: shared with every later caller
 
 
-def a_lut(connectivity: int | None = 6) -> np.ndarray:
+def a_lut(connectivity: int | np.integer | None = 6) -> np.ndarray:
     """The Gauss-Bonnet weight ``a`` of eq. 4.10 of every 3D configuration.
 
     ``a = 8 x`` the vertex's share of the Euler characteristic, so that
@@ -519,10 +519,13 @@ def planar_index(points: ArrayLike) -> np.ndarray:
     [[2, 0, 0, 2]]
     """
     # a 2D mask of 0/1 only, as every mask of the API: another shape has no
-    # planar index, and 0.5 or NaN are no lattice points
-    grid = binary(points, "points")
-    if grid.ndim != 2:
-        raise IsoflowError(f"points: planar_index takes a 2D array, got a {grid.ndim}D array")
+    # planar index, and 0.5 or NaN are no lattice points. The shape is
+    # checked first: [1, 2, 3] is a 1D list, which no values make a mask of
+    refuse_object(points, "points")
+    given = as_array(points, "points")
+    if given.ndim != 2:
+        raise IsoflowError(f"points: planar_index takes a 2D array, got a {given.ndim}D array of shape {given.shape}")
+    grid = binary(given, "points")
     f = np.pad(grid, 1).astype(np.int8)
     c = f[1:-1, 1:-1]
     # x1..x8 anticlockwise from (m+1, n): eq. 4.1 with diagonals in between.

@@ -41,7 +41,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_switch
+from ..errors import IsoflowError, check_switch, given_text
 from ..results import fields_repr, same_fields
 from ..scale.arrays import as_array, refuse_object
 from ..scale.memory import check_fits
@@ -140,14 +140,14 @@ class LabelImage:
 
 def label_table(
     image: ArrayLike | LabelImage,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     *,
     pitch: float | ArrayLike | None = None,
     origin: ArrayLike | None = None,
-    labels: Iterable[int] | None = None,
+    labels: Iterable[int | np.integer] | None = None,
     surfaces: bool = True,
     method: Literal["auto", "numpy", "compiled"] = "auto",
-    threads: int | None = None,
+    threads: int | np.integer | None = None,
 ) -> dict[str, np.ndarray]:
     """The shape report of every label of a 3D or 2D label image, as columns.
 
@@ -474,10 +474,10 @@ def wanted_labels(labels, dtype) -> np.ndarray:
     for value in asked:
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
             # 1.0 or True taken as label 1 would hide a slip (a float column, a mask's values) behind a row
-            raise IsoflowError(f"label {value!r} is not an integer: labels are asked for as integers (Python or "
+            raise IsoflowError(f"label {given_text(value)} is not an integer: labels are asked for as integers (Python or "
                                "NumPy ints)")
         if not info.min <= int(value) <= info.max:
-            raise IsoflowError(f"label {value!r} is not a value the labels of this image hold: they are "
+            raise IsoflowError(f"label {given_text(value)} is not a value the labels of this image hold: they are "
                                f"{np.dtype(dtype)} ({info.min} to {info.max})")
     values = [int(v) for v in asked]
     if len(set(values)) != len(values):

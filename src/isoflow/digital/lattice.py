@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, number_text
+from ..errors import IsoflowError, given_text, number_text
 from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary
 from .units import unit_given
@@ -111,7 +111,8 @@ class DigitalObject:
     if TYPE_CHECKING:
         # what the constructor takes (__post_init__ checks and converts it),
         # beside the fields' types, which say what the object then holds
-        def __init__(self, volume: ArrayLike, offset: Sequence[int] | np.ndarray | None = None, parity: int = 0,
+        def __init__(self, volume: ArrayLike, offset: Sequence[int | np.integer] | np.ndarray | None = None,
+                     parity: int | np.integer = 0,
                      pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None,
                      unit: str | None = None) -> None: ...
 
@@ -130,7 +131,7 @@ class DigitalObject:
         if parity not in (0, 1):
             # the value as written: _field gives it back as a float
             given = np.asarray(self.parity).item()
-            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given!r}")
+            raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given_text(given)}")
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
@@ -211,7 +212,11 @@ class DigitalObject:
         >>> DigitalObject.from_points(points).voxels
         2
 
-        No points (shape ``(0, n)``) are the empty object, as one point is.
+        No points (shape ``(0, n)``) are the empty object, as one point is;
+        ``[]`` says no dimension, and is refused:
+
+        >>> DigitalObject.from_points(np.empty((0, 3))).voxels
+        0
         """
         pts = _integer_points(points, "lattice point")
         if not len(pts):  # np.argwhere of an all-zero mask: no cube has its corners
@@ -228,8 +233,8 @@ class DigitalObject:
         return cls(vol, offset=tuple(lo), **kw)
 
     @classmethod
-    def placement(cls, ndim: int, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
-                  offset: ArrayLike | None = None, parity: int | None = None) -> DigitalObject:
+    def placement(cls, ndim: int | np.integer, pitch: ArrayLike | None = None, origin: ArrayLike | None = None,
+                  offset: ArrayLike | None = None, parity: int | np.integer | None = None) -> DigitalObject:
         """An empty object of one voxel that holds a place only: ``pitch``,
         ``origin``, ``offset`` and ``parity`` (None: the defaults) checked
         as every object's are, so that a table or a file written without a
@@ -244,7 +249,7 @@ class DigitalObject:
         if isinstance(ndim, (bool, np.bool_)) or not isinstance(ndim, (int, np.integer)):
             # named here, as Python's own error for (1,) * ndim names no argument; another
             # integer than 2, 3, 4 is refused by the constructor, as the array of a file would be
-            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {ndim!r}")
+            raise IsoflowError(f"placement: ndim must be 2, 3 or 4, got {given_text(ndim)}")
         given: dict[str, Any] = {"pitch": pitch, "origin": origin, "offset": offset, "parity": parity}
         return cls(np.zeros((1,) * int(ndim), bool), **{k: v for k, v in given.items() if v is not None})
 
@@ -431,7 +436,11 @@ MAX_COORDINATE = 2**40
 
 def _integer_points(points, what: str) -> np.ndarray:
     arr = as_array(points, f"{what} coordinates")
-    if arr.ndim != 2 or arr.shape[1] not in (2, 3):  # (0, n): none, which still says its dimension
+    if arr.size == 0 and arr.ndim < 2:
+        # (0, n): no points, which still says its dimension; [] says none
+        raise IsoflowError(f"an empty list of {what} coordinates has no dimension: pass np.empty((0, 3)) for the "
+                           "empty 3D object (np.empty((0, 2)) in 2D)")
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3):
         raise IsoflowError(f"expected a list of 2D or 3D {what} coordinates, got shape {arr.shape}")
     if arr.dtype.kind not in "biuf":
         raise IsoflowError(f"{what} coordinates must be integers, got an array of type {arr.dtype}")
@@ -505,7 +514,13 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
     def bad() -> IsoflowError:
         want = ("an integer" if integral else "a number") if length is None else (
             f"{length} {'integers' if integral else 'numbers'}, one per axis")
-        return IsoflowError(f"'{name}' must be {want}, got {shown()}")
+        hint = ""
+        if length is not None and given.ndim == 0 and given.dtype.kind in "iuf":
+            # the voxel size takes one number for every axis, so one number looks
+            # as if it should do for a point too: say what to write instead
+            hint = (f" (unlike the voxel size, one number does not stand for every axis): "
+                    f"{name}=({', '.join([shown()] * length)})")
+        return IsoflowError(f"'{name}' must be {want}, got {shown()}{hint}")
 
     if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
         # numbers held as Python objects (a list of ints and floats through

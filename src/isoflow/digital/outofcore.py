@@ -671,14 +671,14 @@ def _scheduler(dask, scheduler):
 
 def analyze_chunked(
     array: Any,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     *,
-    block_shape: tuple[int, ...] | None = None,
+    block_shape: tuple[int | np.integer, ...] | None = None,
     scheduler: Callable | None = None,
     where: str | None = None,
     progress: Callable[[int, int], object] | None = None,
     surfaces: bool = True,
-    threads: int | None = None,
+    threads: int | np.integer | None = None,
     pitch: float | ArrayLike | None = None,
     origin: ArrayLike | None = None,
     unit: str | None = None,

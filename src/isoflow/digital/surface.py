@@ -534,7 +534,7 @@ def row_tables(connectivity: int = 6) -> tuple[np.ndarray, ...]:
     return tables
 
 
-def boundary_mesh(volume: ArrayLike, connectivity: int | None = 6, method: Method = "auto") -> QuadMesh:
+def boundary_mesh(volume: ArrayLike, connectivity: int | np.integer | None = 6, method: Method = "auto") -> QuadMesh:
     """The closed quad mesh of a 3D object's boundary (docs/mathematics.md).
 
     Parameters

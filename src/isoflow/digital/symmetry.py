@@ -15,7 +15,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 from .configurations import check_dimension, octants, read_only
 
 
@@ -123,7 +123,7 @@ def apply_symmetry(volume: ArrayLike, g: int) -> np.ndarray:
     # an index that is no integer (2.5, True, "3") would be cut or read as
     # another element, or fail in NumPy's indexing
     if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= int(g) < len(group):
-        raise IsoflowError(f"symmetry index must be an integer 0..{len(group) - 1}, got {g!r}")
+        raise IsoflowError(f"symmetry index must be an integer 0..{len(group) - 1}, got {given_text(g)}")
     flip_axes = tuple(int(i) for i in np.flatnonzero(group.flips[g]))
     y = np.flip(x, axis=flip_axes) if flip_axes else x
     return np.transpose(y, tuple(int(i) for i in group.axis_permutations[g]))

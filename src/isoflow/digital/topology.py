@@ -15,7 +15,7 @@ from typing import Any, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, counted, given_text
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -33,7 +33,7 @@ def euler_from_histogram(hist: np.ndarray, ndim: int, connectivity: int) -> int:
     return total // scale
 
 
-def euler_characteristic(volume: ArrayLike, connectivity: int | None = None) -> int:
+def euler_characteristic(volume: ArrayLike, connectivity: int | np.integer | None = None) -> int:
     """The Euler characteristic of a 1D to 4D binary volume (eqs. 4.12-4.13).
 
     chi is the digital Gauss-Bonnet sum ``a^T n / 2^n`` (Theorems 10-11 in
@@ -167,15 +167,15 @@ AtMost3D = np.ndarray[tuple[int], Any] | np.ndarray[tuple[int, int], Any] | np.n
 # it: ints in 1D to 3D, so that ``b0 + b1`` type-checks, b1 and b2 None in
 # 4D; a volume whose type does not say (nested lists) Any
 @overload
-def betti_numbers(volume: AtMost3D, connectivity: int | None = None, chi: int | None = None,
+def betti_numbers(volume: AtMost3D, connectivity: int | np.integer | None = None, chi: int | np.integer | None = None,
                   method: Method = "auto") -> list[int]: ...
 @overload
-def betti_numbers(volume: np.ndarray[tuple[int, int, int, int], Any], connectivity: int | None = None,
-                  chi: int | None = None, method: Method = "auto") -> list[int | None]: ...
+def betti_numbers(volume: np.ndarray[tuple[int, int, int, int], Any], connectivity: int | np.integer | None = None,
+                  chi: int | np.integer | None = None, method: Method = "auto") -> list[int | None]: ...
 @overload
-def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
+def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = None, chi: int | np.integer | None = None,
                   method: Method = "auto") -> list[Any]: ...
-def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int | None = None,
+def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = None, chi: int | np.integer | None = None,
                   method: Method = "auto") -> list[int] | list[int | None]:
     """The Betti numbers of a 1D to 4D binary volume.
 
@@ -244,7 +244,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | None = None, chi: int |
     # b1 = b0 + b2 - chi is a count only for an integer chi
     if chi is not None:
         if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
-            raise IsoflowError(f"chi must be an integer, got {chi!r}")
+            raise IsoflowError(f"chi must be an integer, got {given_text(chi)}")
         chi = int(chi)  # a NumPy integer gives a list of plain ints, as chi computed here does
     else:
         chi = euler_from_histogram(configuration_histogram(v, method=method), v.ndim, conn)

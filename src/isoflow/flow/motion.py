@@ -93,7 +93,7 @@ _FLAT = 4
 # --------------------------------------------------------------------------
 
 
-def flow_connectivity(ndim: int, connectivity: int | None) -> int:
+def flow_connectivity(ndim: int, connectivity: int | np.integer | None) -> int:
     """The object's connectivity for this dimension. In 2D, 6 and 26 (the 3D
     names of the smaller and the larger adjacency) read as 4 and 8."""
     if ndim not in (2, 3):
@@ -101,7 +101,7 @@ def flow_connectivity(ndim: int, connectivity: int | None) -> int:
     if connectivity is None:
         connectivity = 6
     if ndim == 2 and connectivity in (6, 26):
-        connectivity = {6: 4, 26: 8}[connectivity]
+        connectivity = {6: 4, 26: 8}[int(connectivity)]
     return check_connectivity(ndim, connectivity)
 
 
@@ -143,7 +143,7 @@ def motion_luts(connectivity: int = 6):
 
 
 
-def flow_moves(obj: DigitalObject, connectivity: int | None = 6) -> tuple[np.ndarray, np.ndarray]:
+def flow_moves(obj: DigitalObject, connectivity: int | np.integer | None = 6) -> tuple[np.ndarray, np.ndarray]:
     """Configurations and outward moves of every lattice vertex (3D or 2D).
 
     Returns ``(cfg, keep)``, both shaped ``volume.shape + 1``: ``keep`` is
@@ -160,7 +160,7 @@ def flow_moves(obj: DigitalObject, connectivity: int | None = 6) -> tuple[np.nda
     return cfg, keep
 
 
-def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> DigitalObject:
+def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | None = 6) -> DigitalObject:
     """One step of the digital curvature flow (Definition 18, eq. 5.15).
 
     Every lattice vertex becomes a voxel of the new object on the dual

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..digital.measures import unheld_dropped
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, given_text
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -255,7 +255,7 @@ def check_count(name: str, value) -> None:
     isoflow.errors.IsoflowError: steps must be an integer >= 0, got 1.5
     """
     if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
-        raise IsoflowError(f"{name} must be an integer >= 0, got {value!r}")
+        raise IsoflowError(f"{name} must be an integer >= 0, got {given_text(value)}")
 
 
 def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason,
@@ -331,13 +331,13 @@ def _limit(trace: _Trace, reached: bool) -> dict:
 
 def run_flow(
     obj: DigitalObject | ArrayLike,
-    steps: int | None = None,
+    steps: int | np.integer | None = None,
     guard: bool = False,
-    connectivity: int | None = 6,
+    connectivity: int | np.integer | None = 6,
     until_topology_change: bool = False,
     progress: Callable[[int, DigitalObject], object] | None = None,
     *,
-    max_steps: int | None = None,
+    max_steps: int | np.integer | None = None,
     keep_states: bool = True,
     method: Method = "auto",
 ) -> FlowResult:
@@ -403,7 +403,7 @@ def run_flow(
     guard, until_topology_change, keep_states = (
         check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
         check_switch(keep_states, "keep_states", "run_flow"))
-    cap: int | None = steps if steps is not None else (default_max_steps(obj) if max_steps is None else max_steps)
+    cap: int | None = int(steps) if steps is not None else (default_max_steps(obj) if max_steps is None else int(max_steps))
     if guard and steps is None and max_steps is None:
         cap = None  # a guarded run reaches its fixed point (guard.py): no cap needed
     engine = flow_engine(method, obj, conn, cap, guard)

@@ -17,7 +17,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.surface import boundary_mesh
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 from .voxelize import say_note, voxelize
 
 if TYPE_CHECKING:
@@ -98,7 +98,7 @@ def lattice_box(verts: np.ndarray, pitch: float, corner: np.ndarray) -> tuple[np
     lo, hi = np.floor((verts.min(axis=0) - corner) / pitch), np.ceil((verts.max(axis=0) - corner) / pitch)
     far = float(np.max(np.abs(np.concatenate([lo, hi]))))
     if not far <= MAX_COORDINATE:
-        raise IsoflowError(f"from_manifold: pitch={pitch!r} and origin={corner.tolist()} put the manifold's voxels "
+        raise IsoflowError(f"from_manifold: pitch={given_text(pitch)} and origin={corner.tolist()} put the manifold's voxels "
                            f"at index {far:.3g}, beyond the +-{MAX_COORDINATE} a DigitalObject holds; "
                            "give a coarser pitch, or an origin nearer the manifold")
     return lo.astype(np.int64), hi.astype(np.int64)
@@ -119,7 +119,7 @@ def cube_union(voxels):
 # --------------------------------------------------------------------------
 
 
-def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | None = 6) -> Manifold:
+def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | None = 6) -> Manifold:
     """The union of the object's voxels as a ``manifold3d.Manifold`` in world
     coordinates.
 

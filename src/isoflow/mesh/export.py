@@ -49,7 +49,7 @@ import numpy as np
 
 from ..digital.float64 import lost_axes_reasons, placement_words
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, check_switch, warn
+from ..errors import IsoflowError, check_switch, given_text, warn
 from .float32 import float32_effect, float64_corners, float64_moved
 from .outputs import atomic_write, check_output_path, output_set
 
@@ -744,7 +744,7 @@ def stl_weld_note(out: Path, welded: int) -> str:
 def write_surface(
     obj: DigitalObject | ArrayLike,
     path: str | os.PathLike,
-    connectivity: int | None = None,
+    connectivity: int | np.integer | None = None,
     *,
     mesh: QuadMesh | None = None,
     ascii: bool = False,
@@ -913,7 +913,7 @@ def check_mesh_fits(path: Path, mesh: QuadMesh, obj: DigitalObject, connectivity
         raise IsoflowError(f"{path}: mesh= takes the QuadMesh of boundary_mesh(obj.volume), got "
                            f"{type(mesh).__name__}")
     if connectivity is not None and connectivity != mesh.connectivity:
-        raise IsoflowError(f"{path}: the mesh is {mesh.connectivity}-connected, connectivity={connectivity!r} "
+        raise IsoflowError(f"{path}: the mesh is {mesh.connectivity}-connected, connectivity={given_text(connectivity)} "
                            "was asked")
     if len(mesh.faces) == 0:
         raise IsoflowError(f"{path}: the mesh is empty, there is no surface to write")

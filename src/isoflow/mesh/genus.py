@@ -23,7 +23,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable, check_switch, counted
+from ..errors import IsoflowError, check_callable, check_switch, counted, given_text
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
 from .fills import Fill, Voxelization, check_strict
@@ -784,9 +784,9 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 # --------------------------------------------------------------------------
 
 
-def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIONS,
-                 connectivity: int = 6, progress: Callable[[int, int | None], object] | None = None, *,
-                 step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
+def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFAULT_RESOLUTIONS,
+                 connectivity: int | np.integer = 6, progress: Callable[[int, int | None], object] | None = None, *,
+                 step: bool = True, max_resolution: int | np.integer = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
                  fill: Fill = "winding") -> GenusVerdict:
     """The mesh's topology, manifold3d's and pymeshlab's, its self-
@@ -876,21 +876,25 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int] = DEFAULT_RESOLUTIO
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     strict = check_strict(strict, "verify_genus")
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
-        hint = f"; one resolution is [{resolutions!r}]" if isinstance(resolutions, (int, np.integer)) else ""
-        raise IsoflowError(f"resolutions must be a sequence of integers, got {resolutions!r}{hint}")
+        hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
+        raise IsoflowError(f"resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")
     resolutions = list(resolutions)
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
     for r in resolutions:  # int() took "32" and 32.5 (as 32) in silence
         if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer, float, np.floating)) \
                 or not (math.isfinite(r) and r == int(r) and r >= 1):
-            raise IsoflowError(f"resolutions must be integers >= 1, got {r!r} in {resolutions!r}")
+            raise IsoflowError(f"resolutions must be integers >= 1, got {given_text(r)} in {given_text(resolutions)}")
     if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
             or max_resolution < 1:
-        raise IsoflowError(f"max_resolution must be an integer >= 1, got {max_resolution!r}")
+        raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
+    # the verdict's rows and its JSON hold Python ints, whatever the caller's type
+    max_resolution = int(max_resolution)
+    if isinstance(connectivity, np.integer):
+        connectivity = int(connectivity)
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
-        raise IsoflowError(f"time_limit must be a positive number of seconds, got {time_limit!r}")
+        raise IsoflowError(f"time_limit must be a positive number of seconds, got {given_text(time_limit)}")
     step = check_switch(step, "step", "verify_genus")
     stats: dict = {}
     name, v, f = mesh_input(mesh, stats=stats)

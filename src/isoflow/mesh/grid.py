@@ -51,7 +51,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import IsoflowError, number_text
+from ..errors import IsoflowError, given_text, number_text
 from ..scale import memory
 from ..scale.memory import sized
 from .load import mesh_bbox
@@ -111,12 +111,12 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     if resolution is not None:
         if isinstance(resolution, (bool, np.bool_)) or not isinstance(
                 resolution, (int, np.integer, float, np.floating)):
-            raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {resolution!r}")
+            raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {given_text(resolution)}")
         if not (math.isfinite(resolution) and resolution == int(resolution)
                 and 1 <= resolution <= MAX_RESOLUTION):
             raise IsoflowError(
                 f"voxelize: resolution must be an integer from 1 to {MAX_RESOLUTION}, "
-                f"got {resolution!r}")
+                f"got {given_text(resolution)}")
         res = int(resolution)
         pitch_s = float(ext_s.max()) / res
         pitch = math.ldexp(pitch_s, e)
@@ -126,16 +126,16 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
         # float() reads "0.5" and True as numbers: a pitch given as text or a bool is refused
         # by name, as a resolution is, not taken for the number it spells
         if isinstance(pitch, (str, bytes, bool, np.bool_)):
-            raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}")
+            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
         try:
             given, pitch = pitch, float(pitch)
         except (TypeError, ValueError, OverflowError):
-            raise IsoflowError(f"voxelize: pitch must be a positive number, got {pitch!r}") from None
+            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}") from None
         if not (math.isfinite(pitch) and pitch > 0):
             raise IsoflowError(f"voxelize: pitch must be a positive finite number, got {number_text(given)}")
         if pitch > _MAX_PITCH_RATIO * longest:
             raise IsoflowError(
-                f"voxelize: pitch={pitch!r} is more than 2**40 times the mesh's size (longest "
+                f"voxelize: pitch={given_text(pitch)} is more than 2**40 times the mesh's size (longest "
                 f"bounding-box side {longest:.6g}): the whole mesh would lie inside one voxel")
         res = None
         pitch_s = math.ldexp(pitch, -e)  # may underflow: then the grid is refused as too big

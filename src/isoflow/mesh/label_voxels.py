@@ -304,10 +304,10 @@ def refuse_labels(bodies: list[Body], shape, what: str, itemsize: int, write_byt
                         beyond="" if need > budget else "more than one array can index")
 
 
-def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, resolution: int | np.integer | None = None,
                     fill: Fill = "winding",
                     overlap: Overlap = "later", split: bool = False, strict: bool = False,
-                    max_bytes: int | None = None, write_bytes: float = 0,
+                    max_bytes: int | np.integer | None = None, write_bytes: float = 0,
                     progress: Callable[[int, int], object] | None = None) -> LabelVoxelization:
     """Several meshes voxelised into one label image on one grid.
 

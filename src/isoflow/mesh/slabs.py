@@ -152,24 +152,27 @@ Progress = Callable[[int, int], object]
 
 @overload
 def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
-                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
-                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
-                     max_bytes: int | None = None, progress: Progress | None = None,
+                     resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                     force: bool = False, chunks: tuple[int | np.integer, int | np.integer, int | np.integer] | None = None,
+                     scheduler: Callable | None = None,
+                     max_bytes: int | np.integer | None = None, progress: Progress | None = None,
                      details: Literal[False] = False) -> ZarrStore: ...
 
 
 @overload
 def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
-                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
-                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
-                     max_bytes: int | None = None, progress: Progress | None = None,
+                     resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                     force: bool = False, chunks: tuple[int | np.integer, int | np.integer, int | np.integer] | None = None,
+                     scheduler: Callable | None = None,
+                     max_bytes: int | np.integer | None = None, progress: Progress | None = None,
                      details: Literal[True]) -> tuple[ZarrStore, Voxelization]: ...
 
 
 def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: float | None = None,
-                     resolution: int | None = None, fill: Fill = "winding", strict: bool = False, force: bool = False,
-                     chunks: tuple[int, int, int] | None = None, scheduler: Callable | None = None,
-                     max_bytes: int | None = None, progress: Progress | None = None,
+                     resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                     force: bool = False, chunks: tuple[int | np.integer, int | np.integer, int | np.integer] | None = None,
+                     scheduler: Callable | None = None,
+                     max_bytes: int | np.integer | None = None, progress: Progress | None = None,
                      details: bool = False) -> ZarrStore | tuple[ZarrStore, Voxelization]:
     """Voxelise a mesh into a chunked zarr array at ``path`` without holding
     the volume.

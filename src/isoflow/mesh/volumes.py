@@ -78,7 +78,8 @@ def is_volume(path) -> bool:
     return format_for(split_dataset(path)[0]) is not None
 
 
-def read_volume(path: str | os.PathLike, label: int | float | None = None, *, time: int | None = None) -> DigitalObject:
+def read_volume(path: str | os.PathLike, label: int | np.integer | float | None = None, *,
+                time: int | np.integer | None = None) -> DigitalObject:
     """A 2D, 3D (or 4D) volume from any format of :mod:`isoflow.mesh.formats`,
     with its voxel size and origin where the format has them.
 
@@ -141,8 +142,8 @@ def read_volume(path: str | os.PathLike, label: int | float | None = None, *, ti
     return read_volume_with_unit(path, label, time=time)[0]
 
 
-def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = None, *,
-                          time: int | None = None) -> tuple[DigitalObject, str | None]:
+def read_volume_with_unit(path: str | os.PathLike, label: int | np.integer | float | None = None, *,
+                          time: int | np.integer | None = None) -> tuple[DigitalObject, str | None]:
     """:func:`read_volume`'s object and the length unit of its ``pitch`` and
     ``origin`` as the file says it, in one spelling per unit (``mm``,
     ``µm``, ``nm``, ``m``, ``cm``, ...: see docs/formats.md): NIfTI's xyzt
@@ -185,8 +186,8 @@ def read_volume_with_unit(path: str | os.PathLike, label: int | float | None = N
     return obj, unit
 
 
-def read_volume_as_stored(path: str | os.PathLike, label: int | float | None = None, *,
-                          time: int | None = None) -> tuple[DigitalObject, str | None, np.dtype]:
+def read_volume_as_stored(path: str | os.PathLike, label: int | np.integer | float | None = None, *,
+                          time: int | np.integer | None = None) -> tuple[DigitalObject, str | None, np.dtype]:
     """:func:`read_volume_with_unit`'s object and unit, and the type of the
     values the file holds: the object is boolean whatever they were (a
     uint8 mask, a float map of 0 and 1), and ``isoflow info --json`` says
@@ -271,7 +272,7 @@ def refuse_inside_store(file: Path, shown: str | os.PathLike) -> None:
         raise IsoflowError(f"{shown}: inside the zarr store {store}; name it as {store}:{file.relative_to(store).as_posix()}")
 
 
-def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | None = None) -> RawVolume:
+def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.integer | None = None) -> RawVolume:
     """What the format of ``path`` (``FILE:dataset`` too) reads, once the
     suffix, the file and the dataset named are checked: the one prologue of
     :func:`read_volume` and :func:`read_labels`.
@@ -438,7 +439,7 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim, kind=exc.kind)
 
 
-def read_labels(path: str | os.PathLike, *, time: int | None = None) -> LabelImage:
+def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None) -> LabelImage:
     """A 3D or 2D label image from a file, with its voxel size and origin.
 
     Parameters
@@ -707,7 +708,8 @@ def _point(path: Path, lineno: int, line: str, width: int | None) -> list[int]:
 PointsAre = Literal["corners", "voxels"]
 
 
-def read_object(path: str | os.PathLike, points_are: PointsAre = "corners", label: int | float | None = None) -> DigitalObject:
+def read_object(path: str | os.PathLike, points_are: PointsAre = "corners",
+                label: int | np.integer | float | None = None) -> DigitalObject:
     """A digital object from a volume file (any format of :func:`read_volume`,
     ``label`` selecting one value of a label image) or a point list.
 

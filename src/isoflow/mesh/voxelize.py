@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, warn
+from ..errors import IsoflowError, MeshNote, check_callable, check_path, check_switch, counted, given_text, warn
 from ..scale import memory
 from .fills import (
     NO_AREA,
@@ -560,7 +560,7 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
             raise IsoflowError(
                 f"voxelize: grid must be (origin, shape), three numbers each, got {grid!r}") from None
         if len(shape) != 3 or min(shape) < 1:
-            raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {grid[1]!r}")
+            raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {given_text(grid[1])}")
         with np.errstate(over="ignore", invalid="ignore"):
             origin_s = np.ldexp(origin - shift, -e)
         if not np.all(np.isfinite(origin_s)):
@@ -588,21 +588,21 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
 
 
 @overload
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[False] = False) -> tuple[np.ndarray, np.ndarray, float]: ...
 
 
 @overload
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: Literal[True]) -> Voxelization: ...
 
 
-def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | None = None,
-             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | None = None,
+def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
+             fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
              details: bool = False) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
     """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
@@ -794,7 +794,7 @@ def check_write_bytes(write_bytes: object) -> float:
     """
     ok = isinstance(write_bytes, (int, float, np.integer, np.floating)) and not isinstance(write_bytes, (bool, np.bool_))
     if not ok or not 0 <= float(write_bytes) < float("inf"):  # type: ignore[arg-type]
-        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {write_bytes!r}")
+        raise IsoflowError(f"voxelize: write_bytes must be a number of bytes per voxel from 0 on, got {given_text(write_bytes)}")
     return float(write_bytes)  # type: ignore[arg-type]
 
 
@@ -852,18 +852,21 @@ def say_note(note: str | None) -> None:
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
 def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, pitch: float | None = None,
-                  resolution: int | None = None, fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
+                  resolution: int | np.integer | None = None, fill: Fill = "winding", strict: bool = False,
+                  write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:
     """A triangle mesh as a digital object: its solid, shell or flood fill.
@@ -923,18 +926,18 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
 
 
 @overload
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[False] = False) -> DigitalObject: ...
 
 
 @overload
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None, details: Literal[True]) -> tuple[DigitalObject, Voxelization]: ...
 
 
-def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | None = None,
+def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
                   fill: Fill = "winding", strict: bool = False, write_bytes: float = 0,
                   progress: Progress | None = None,
                   details: bool = False) -> DigitalObject | tuple[DigitalObject, Voxelization]:

@@ -52,8 +52,9 @@ def is_host(xp) -> bool:
 
 def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read_object") -> None:
     """Refuse a :class:`~isoflow.digital.lattice.DigitalObject`, a
-    :class:`~isoflow.digital.label_table.LabelImage` or a path where an
-    array is taken: NumPy would make each a 0D array, refused for its
+    :class:`~isoflow.digital.label_table.LabelImage`, a triangle mesh (a
+    ``trimesh.Trimesh`` or ``Scene``, a ``manifold3d.Manifold``) or a path
+    where an array is taken: NumPy would make each a 0D array, refused for its
     shape or type rather than named (an object is known by its fields:
     this layer cannot import the classes). ``then``: what to do with
     the result to place it as the object is placed; ``reader``: the
@@ -66,6 +67,18 @@ def refuse_object(array, where: str, then: str = "", reader: str = "isoflow.read
         raise IsoflowError(f"{where}: a LabelImage, not a binary volume; pass one label's mask, "
                            "DigitalObject(image.array == N, pitch=image.spacing, origin=image.origin) "
                            "(label_table reports every label)")
+    # a mesh in memory (a trimesh.Trimesh, a trimesh.Scene, a manifold3d.Manifold), known by its fields as
+    # isoflow.mesh knows one: NumPy makes it a 0D array of type object, whose refusal names no mesh
+    scene = all(hasattr(array, name) for name in ("graph", "geometry", "to_mesh"))
+    if scene or (hasattr(array, "vertices") and hasattr(array, "faces")):
+        # the voxeliser takes triangles; a QuadMesh is the surface of a volume, which is what to pass
+        triangles = scene or np.shape(array.faces)[1:] == (3,)
+        how = ("voxelise it first: isoflow.voxelize_mesh(mesh, resolution=N) (or voxelize_file(path) for its file)"
+               if triangles else "pass the volume whose surface it is")
+        raise IsoflowError(f"{where}: a mesh ({type(array).__name__}), not an array of voxels; {how}")
+    if type(array).__name__ == "Manifold" and hasattr(array, "to_mesh"):
+        raise IsoflowError(f"{where}: a manifold3d.Manifold, not an array of voxels; voxelise it first: "
+                           "isoflow.from_manifold(manifold, pitch=P)")
 
 
 def as_array(array, where: str = "volume") -> np.ndarray:

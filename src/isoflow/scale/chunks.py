@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, missing, warn
+from ..errors import IsoflowError, given_text, missing, warn
 
 #: zarr chunks smaller than this (voxels) are grouped into larger blocks when
 #: the grid would otherwise have more than MAX_BLOCKS blocks: per-task
@@ -364,7 +364,7 @@ def checked_block_shape(block_shape, shape) -> tuple[int, ...]:
     except (TypeError, ValueError, OverflowError):
         block, whole = (), False
     if not whole or len(block) != len(shape) or any(b < 1 for b in block):
-        raise IsoflowError(f"block_shape {block_shape!r} does not fit a {len(shape)}D array "
+        raise IsoflowError(f"block_shape {given_text(block_shape)} does not fit a {len(shape)}D array "
                            f"(one integer >= 1 per axis)")
     return block
 

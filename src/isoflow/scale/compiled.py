@@ -48,9 +48,12 @@ import contextvars
 import os
 from collections.abc import Iterator
 from functools import cache
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
+
+if TYPE_CHECKING:
+    import numpy as np
 
 #: host volumes with at least this many voxels (126^3 and up) use the compiled
 #: passes (the histogram, the Betti numbers)
@@ -230,7 +233,7 @@ def check_threads(n, where: str = "threads") -> int:
     except (TypeError, ValueError):
         value = 0
     if value < 1 or str(n).strip() != str(value):
-        raise IsoflowError(f"{where} must be a positive integer, got {n!r}")
+        raise IsoflowError(f"{where} must be a positive integer, got {given_text(n)}")
     return value
 
 
@@ -277,7 +280,7 @@ def thread_count(voxels: int | None = None) -> int:
 
 
 @contextlib.contextmanager
-def using(threads: int | None):
+def using(threads: int | np.integer | None):
     """Run the enclosed passes on ``threads`` threads (None: the default)."""
     if threads is None:
         yield
@@ -285,7 +288,7 @@ def using(threads: int | None):
     if isinstance(threads, (str, bytes)):
         # a text is a count in the environment and on the command line; an
         # argument is a number, as the message says
-        raise IsoflowError(f"threads must be a positive integer, got {threads!r}")
+        raise IsoflowError(f"threads must be a positive integer, got {given_text(threads)}")
     token = _asked.set(check_threads(threads))
     try:
         yield

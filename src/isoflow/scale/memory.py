@@ -14,7 +14,7 @@ import os
 import numpy as np
 from numpy.typing import DTypeLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 
 
 def default_budget() -> int:
@@ -65,7 +65,7 @@ def budget_of(max_bytes: object, where: str = "voxelize") -> int:
     whole = isinstance(max_bytes, (int, np.integer)) or (
         isinstance(max_bytes, (float, np.floating)) and float(max_bytes).is_integer())
     if isinstance(max_bytes, (bool, np.bool_)) or not whole or max_bytes < 1:
-        raise IsoflowError(f"{where}: max_bytes must be a positive whole number of bytes, got {max_bytes!r}")
+        raise IsoflowError(f"{where}: max_bytes must be a positive whole number of bytes, got {given_text(max_bytes)}")
     return int(max_bytes)
 
 

@@ -324,9 +324,9 @@ def store_place(store: StoreArray, path: str | os.PathLike) -> dict[str, Any]:
     return {"pitch": at.spacing, "origin": at.origin, "unit": store.unit()}
 
 
-def analyze_zarr(path: str | os.PathLike, connectivity: int | None = None, *,
-                 block_shape: tuple[int, ...] | None = None, scheduler: Callable | None = None,
-                 surfaces: bool = True, threads: int | None = None,
+def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None = None, *,
+                 block_shape: tuple[int | np.integer, ...] | None = None, scheduler: Callable | None = None,
+                 surfaces: bool = True, threads: int | np.integer | None = None,
                  progress: Callable[[int, int], object] | None = None, pitch: float | ArrayLike | None = None,
                  origin: ArrayLike | None = None, unit: str | None = None) -> Report:
     """The report of a zarr store's volume, read block by block and placed

@@ -31,7 +31,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...digital.units import length_unit
-from ...errors import IsoflowError, number_text, warn
+from ...errors import IsoflowError, given_text, number_text, warn
 from ...scale.chunks import spatial_axes, split_store
 
 #: the extra that brings every format library (pip install 'isoflow[formats]')
@@ -575,11 +575,11 @@ def check_time(time, shape, where: str) -> None:
     cells.ome.zarr: time=3 is no time point of this time series of 3 (0 to 2)
     """
     if len(shape) != 4:
-        raise IsoflowError(f"{where}: time={time!r} picks a time point of a 4D volume (x, y, z, t), this one is "
+        raise IsoflowError(f"{where}: time={given_text(time)} picks a time point of a 4D volume (x, y, z, t), this one is "
                            f"{len(shape)}D with shape {'x'.join(map(str, shape))}: it has no time points")
     count = int(shape[3])
     if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, np.integer)) or not 0 <= time < count:
-        raise IsoflowError(f"{where}: time={time!r} is no time point of this time series of {count} "
+        raise IsoflowError(f"{where}: time={given_text(time)} is no time point of this time series of {count} "
                            f"(0 to {count - 1})")
 
 
@@ -611,14 +611,14 @@ def check_label(label, dtype, where: str) -> int | float:
     if np.dtype(dtype).kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
     if not np.isscalar(label) or isinstance(label, (str, bytes)):
-        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+        raise IsoflowError(f"{where}: label must be a number, got {given_text(label)}")
     dtype = np.dtype(dtype)
     try:
         value = float(label)
     except OverflowError:  # an int beyond every float
         value = np.inf if label > 0 else -np.inf
     if not np.isfinite(value) and not isinstance(label, (int, np.integer)):
-        raise IsoflowError(f"{where}: label must be a number, got {label!r}")
+        raise IsoflowError(f"{where}: label must be a number, got {given_text(label)}")
     whole = not np.isfinite(value) or value.is_integer()  # (an int beyond every float is whole)
     if dtype.kind in "iu" and whole:
         info = np.iinfo(dtype)
