@@ -265,7 +265,8 @@ def test_work_that_does_not_fit_is_refused_up_front(tmp_path, rng, monkeypatch):
     from isoflow.scale import memory
 
     v = seam_volume(rng)
-    monkeypatch.setattr(memory, "default_budget", lambda: 150_000)
+    # beside the run's own records (a fixed amount), room for a few blocks but not 4
+    monkeypatch.setattr(memory, "default_budget", lambda: surface_blocks.RUN_BYTES + 150_000)
     with pytest.raises(IsoflowError, match=r"\(4 at a time\).*; run [123] at a time \(--threads [123]\)"):
         write_surface_blocks(v, tmp_path / "s.ply", 6, block_shape=CHUNKS, threads=4)
     monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
@@ -386,6 +387,9 @@ def test_a_label_store_beyond_memory_is_told_what_reads_it_block_by_block(tmp_pa
     path = tmp_path / "labels.zarr"
     zarr.open_array(str(path), mode="w", shape=lab.shape, chunks=(15, 15, 15), dtype=np.uint8)[:] = lab
     monkeypatch.setattr(memory, "default_budget", lambda: lab.size * 2)  # less than the volume and its copies
+    # the run's own records (a fixed few MiB) outweigh a volume this small: left out, so that the budget
+    # weighs the volume's copies in memory against its blocks
+    monkeypatch.setattr(surface_blocks, "RUN_BYTES", 0)
     assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "all.glb"), "-q"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and "use a .zarr store" not in err[0]
@@ -412,6 +416,8 @@ def test_a_chunk_larger_than_the_blocks_is_counted_whole(tmp_path, monkeypatch):
     from isoflow.scale import memory
 
     monkeypatch.setattr(memory, "default_budget", lambda: 1_000)
+    # the run's own records (a fixed few MiB, whatever the chunks) left out: the refusals compare the chunks
+    monkeypatch.setattr(surface_blocks, "RUN_BYTES", 0)
     chunk = 4 * 256 * 256  # bytes of a bool chunk
 
     def refusal(chunks, block_shape, scheduler=None):

@@ -67,12 +67,14 @@ STL_HEADER = 84
 #: position, configuration and sheet (26), and a PLY's vertex table made
 #: from them (world positions, columns, records: 67 at its peak), measured
 #: with tracemalloc on the largest 128^3 block of a 256^3 porous field
-#: (``benchmarks/bench_worker_memory.py``'s); the rest is the allocator's
-#: slack that the kernel's peak of a dask.distributed worker shows
-BYTES_PER_ITEM = 112
+#: (``benchmarks/bench_worker_memory.py``'s); the kernel's peak of that
+#: task alone, and of the largest 256^3 block of a 512^3 field, is within
+#: 2 % of these terms, so the slack around them is counted once per run
+#: (:data:`RUN_BYTES`), not per item
+BYTES_PER_ITEM = 93
 #: ... per face (quad): its corners and midpoints (int32) and its normal
 #: (35), and its PLY quad record (17), on the same block
-BYTES_PER_FACE = 64
+BYTES_PER_FACE = 52
 #: ... per triangle of a PLY of triangles: the int64 rows that
 #: ``triangle_rows`` cuts and their records (48.5 on the same block)
 BYTES_PER_TRIANGLE = 56
@@ -86,10 +88,18 @@ BYTES_PER_STL_TRIANGLE = 8
 #: measured on the same block and on a 64^3 block of the same field)
 STL_BATCH_BYTES = 3 * 2**20
 #: copies of a decoded chunk at the peak of a read through zarr: the
-#: compressed and decoded buffers and the array zarr gives (the kernel's
-#: peak of the counting pass on a worker: 6.5 MiB for a block of 64^3 in
-#: chunks of 128^3, 2 MiB each, and 8.2 MiB for a block of 128^3)
-DECODED_COPIES = 3
+#: decoded buffer and the array zarr gives (a block's read spans up to 8
+#: chunks, decoded one after another, each let go before the next: a
+#: dask.distributed worker writing blocks of 64^3 from chunks of 128^3,
+#: 2 MiB each, peaked at 6.5 to 8.1 MiB in all, its mesh and records
+#: 4.2 of it)
+DECODED_COPIES = 2
+#: what a run holds beside its blocks at work, whatever their size: the
+#: tasks' records and results, the layout's counts per block and the
+#: allocator's pages around the largest task (a dask.distributed worker
+#: writing blocks of 64^3 peaked 1.6 to 3.7 MiB above the task's own
+#: terms, from chunks of 64^3 and of 128^3)
+RUN_BYTES = 4 << 20
 
 
 class EmptySurface(IsoflowError):
@@ -772,14 +782,17 @@ def _read_bytes(array, grid: BlockGrid) -> int:
 
 
 def _write_bytes(read: int, layout: Layout, triangles: int, index, suffix: str) -> int:
-    """Peak bytes of block ``index``'s write task: its read, its mesh and
-    its records (``triangles``: the block's, written where the layout
-    writes triangles; an STL's cost the most)."""
+    """Peak bytes of block ``index``'s write task: the larger of its read
+    and its mesh with its records (``triangles``: the block's, written
+    where the layout writes triangles; an STL's cost the most). The two
+    do not add up: the decoded chunks are let go before the mesh is made,
+    and the voxels and bit rows it is made from (under 1.2 bytes a voxel)
+    before its records, so the mesh is held beside less than the read."""
     if suffix == ".stl":
         records = triangles * BYTES_PER_STL_TRIANGLE + STL_BATCH_BYTES
     else:
         records = triangles * BYTES_PER_TRIANGLE if layout.kind == "triangles" else 0
-    return read + layout.items[index] * BYTES_PER_ITEM + layout.quads[index] * BYTES_PER_FACE + records
+    return max(read, layout.items[index] * BYTES_PER_ITEM + layout.quads[index] * BYTES_PER_FACE + records)
 
 
 def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int = 0, scheduler=None,
@@ -804,12 +817,16 @@ def _check_memory(where: str, workers: int, per_task: int, what: str, cache: int
         # per_task counts the chunk it decodes, whole where it is larger
         # than the block
         check_workers_fit(client, per_task, f"{where}: {what} the surface's blocks",
-                          hint=f"{smaller}, or give the workers more memory")
+                          hint=f"{smaller}, or give the workers more memory", held=RUN_BYTES)
         return
-    fit = (default_budget() - cache) // max(per_task, 1)
+    # the cache is counted at its limit, which a volume smaller than the limit does not fill: this process's
+    # allocator keeps chunks and records freed before in its heaps (not trimmed, unlike a dask.distributed
+    # worker's), and the peak of one store varies between runs by as much as the unfilled part
+    fit = (default_budget() - cache - RUN_BYTES) // max(per_task, 1)
     hint = (f"run {fit} at a time (--threads {fit})" if fit >= 1 else
             smaller if blocks_help else f"{smaller}, or make more memory available")
-    check_fits(workers * per_task + cache, f"{where}: {what} the surface's blocks ({workers} at a time)", hint=hint)
+    check_fits(workers * per_task + cache + RUN_BYTES, f"{where}: {what} the surface's blocks ({workers} at a time)",
+               hint=hint)
 
 
 def _cache_bytes(grid: BlockGrid, chunks, itemsize: int) -> int:

@@ -110,6 +110,8 @@ class ChunkReader:
             if all(h > low for low, h in zip(lo, hi)):
                 out[tuple(slice(low - a, h - a) for low, h, (a, _) in zip(lo, hi, bounds))] = \
                     chunk[tuple(slice(low - s, h - s) for low, h, s in zip(lo, hi, start))]
+            # a chunk that is not kept is let go before the next is decoded, not held beside its buffers
+            del chunk
         return out if self.label is None else out == self.label
 
     def _chunk(self, index) -> tuple[np.ndarray, list[int]]:
