@@ -109,20 +109,27 @@ reveal_type(isoflow.from_manifold(isoflow.to_manifold(obj)))  # (manifold3d has 
 reveal_type(isoflow.data.bob())
 '''
 
-def mypy(tmp_path: Path, script: str) -> subprocess.CompletedProcess:
+@pytest.fixture(scope="module")
+def mypy_cache(tmp_path_factory) -> Path:
+    """One mypy cache for this module's runs: each run then reads NumPy's
+    and isoflow's types from it rather than analysing them again."""
+    return tmp_path_factory.mktemp("mypy-cache")
+
+
+def mypy(tmp_path: Path, script: str, cache: Path, *options: str) -> subprocess.CompletedProcess:
     """mypy run on ``script`` as a user's ``user.py``, isoflow found by its stub."""
     path = tmp_path / "user.py"
     path.write_text(script)
     env = {"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"}
-    return subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--ignore-missing-imports",
-                           "--cache-dir", str(tmp_path / "cache"), str(path)],
+    return subprocess.run([sys.executable, "-m", "mypy", *options, "--follow-imports=silent", "--ignore-missing-imports",
+                           "--cache-dir", str(cache), str(path)],
                           capture_output=True, text=True, cwd=tmp_path, env=env)
 
 
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
-def test_mypy_sees_concrete_types_in_a_user_script(tmp_path):
-    p = mypy(tmp_path, USER_SCRIPT)
+def test_mypy_sees_concrete_types_in_a_user_script(tmp_path, mypy_cache):
+    p = mypy(tmp_path, USER_SCRIPT, mypy_cache)
     revealed = re.findall(r"user\.py:(\d+): note: Revealed type is \"(.*)\"", p.stdout)
     calls = [line for line in USER_SCRIPT.splitlines() if line.startswith("reveal_type")]
     assert len(revealed) == len(calls), p.stdout + p.stderr
@@ -179,8 +186,8 @@ isoflow.a_lut(None)
 
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
-def test_mypy_takes_the_arguments_the_functions_take(tmp_path):
-    p = mypy(tmp_path, TAKEN_SCRIPT)
+def test_mypy_takes_the_arguments_the_functions_take(tmp_path, mypy_cache):
+    p = mypy(tmp_path, TAKEN_SCRIPT, mypy_cache)
     assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
 
 
@@ -196,9 +203,9 @@ MISSPELT = [
 
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
-def test_mypy_refuses_a_word_outside_a_closed_set(tmp_path):
+def test_mypy_refuses_a_word_outside_a_closed_set(tmp_path, mypy_cache):
     head = "import numpy as np\nimport isoflow\n\nvol = np.zeros((4, 4, 4), dtype=bool)\n"
-    p = mypy(tmp_path, head + "\n".join(MISSPELT) + "\n")
+    p = mypy(tmp_path, head + "\n".join(MISSPELT) + "\n", mypy_cache)
     first = head.count("\n") + 1
     lines = {int(n) for n in re.findall(r"user\.py:(\d+): error:", p.stdout)}
     assert lines == set(range(first, first + len(MISSPELT))), p.stdout + p.stderr
@@ -292,8 +299,8 @@ json.dumps(verdict.digital)
 
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
-def test_mypy_takes_numpy_integers_for_counts_labels_and_connectivities(tmp_path):
-    p = mypy(tmp_path, NUMPY_INT_SCRIPT)
+def test_mypy_takes_numpy_integers_for_counts_labels_and_connectivities(tmp_path, mypy_cache):
+    p = mypy(tmp_path, NUMPY_INT_SCRIPT, mypy_cache)
     assert p.returncode == 0 and "error" not in p.stdout, p.stdout + p.stderr
 
 
@@ -366,17 +373,13 @@ reveal_type(isoflow.betti_numbers(np.zeros((2, 2, 2, 2), dtype=bool)))
 
 @pytest.mark.skipif(shutil.which("mypy") is None and importlib.util.find_spec("mypy") is None,
                     reason="mypy not installed (pip install -e '.[test]')")
-def test_the_betti_numbers_of_a_3d_or_2d_array_add_up_under_mypy_strict(tmp_path):
+def test_the_betti_numbers_of_a_3d_or_2d_array_add_up_under_mypy_strict(tmp_path, mypy_cache):
     """``b0, b1, b2 = isoflow.betti_numbers(v)`` then ``b0 + b1`` was an
     error under ``mypy --strict`` (the return was ``list[int | None]``, None
     only in 4D): mypy finds no error in 2D and 3D, and still types a 4D
     array's result with its None; at run time a 4D volume keeps b1 and b2
     None."""
-    (tmp_path / "user.py").write_text(BETTI_SCRIPT)
-    p = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--follow-imports=silent", "--ignore-missing-imports",
-                        "--cache-dir", str(tmp_path / "cache"), str(tmp_path / "user.py")],
-                       capture_output=True, text=True, cwd=tmp_path,
-                       env={"MYPYPATH": str(PACKAGE.parent), "PATH": "/usr/bin:/bin"})
+    p = mypy(tmp_path, BETTI_SCRIPT, mypy_cache, "--strict")
     assert "error" not in p.stdout and 'Revealed type is "list[int | None]"' in p.stdout, p.stdout + p.stderr
     four = np.zeros((3, 3, 3, 3), bool)
     four[1, 1, 1, 1] = True
