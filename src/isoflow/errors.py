@@ -444,12 +444,9 @@ class NoSuchFile(IsoflowError, FileNotFoundError):
 
     Examples
     --------
-    >>> import isoflow
-    >>> try:
-    ...     isoflow.read_volume("no-such-volume.npy")
-    ... except FileNotFoundError as exc:
-    ...     print(exc)
-    no-such-volume.npy: no such file or directory
+    >>> e = missing("scan.npy")
+    >>> type(e).__name__, isinstance(e, FileNotFoundError), isinstance(e, IsoflowError)
+    ('NoSuchFile', True, True)
     """
 
 
