@@ -114,3 +114,36 @@ def test_info_says_why_the_surfaces_genus_is_not_b1(tmp_path):
     assert r.returncode == 0, r.stderr
     assert ("pinched vertices       1 (split in the mesh, joined by the connectivity: the surfaces' genus, 0 in all, "
             "counts the sheets apart there, where the connectivity makes 1 tunnel)") in r.stdout
+
+
+@pytest.mark.parametrize("suffix", ["ply", "stl"])
+@pytest.mark.parametrize("seed", [3, 4])
+def test_genus_reads_a_file_at_the_connectivity_it_was_written(tmp_path, capsys, suffix, seed):
+    import json
+
+    from isoflow.cli import main
+
+    vol = random_volume(seed)
+    np.save(tmp_path / "v.npy", vol)
+    out = tmp_path / f"s.{suffix}"
+    assert main(["surface", str(tmp_path / "v.npy"), "--connectivity", "26", "-o", str(out), "-q"]) == 0
+    capsys.readouterr()
+
+    def genus(*extra: str) -> dict:
+        assert main(["genus", str(out), "--resolution", "8", "16", "--no-step", "--json", *extra]) == 0
+        return json.loads(capsys.readouterr().out)
+
+    as_written = genus()
+    want = betti(vol, 26)
+    assert [(d["connectivity"], d["betti"]) for d in as_written["digital"]] == [(26, want)] * 2
+    assert (as_written["kind"], as_written["reference"], as_written["bodies"]) == ("agree", want[1], want[0])
+    assert {"kind": "written_connectivity", "facts": {"connectivity": 26}} in as_written["notes"]
+    assert "digital rows 26-connected, as the file was written" in as_written["verdict"]
+    # an explicit connectivity wins over the file's
+    asked = genus("--connectivity", "6")
+    want = betti(vol, 6)
+    assert [(d["connectivity"], d["betti"]) for d in asked["digital"]] == [(6, want)] * 2
+    assert (asked["kind"], asked["reference"]) == ("agree", want[1])
+    assert "written_connectivity" not in [n["kind"] for n in asked["notes"]]
+    # the Python default reads the file as the command line does
+    assert [d["betti"] for d in verify_genus(out, resolutions=[8, 16], step=False).digital] == [betti(vol, 26)] * 2

@@ -24,7 +24,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="stop doubling when the next resolution would end past this (default 60)")
     p.add_argument("--no-step", action="store_true", help="only the resolutions given, no doubling")
     add_mesh_rule(p)
-    p.add_argument("--connectivity", type=int, choices=(6, 26), default=None, help="digital connectivity (default 6)")
+    p.add_argument("--connectivity", type=int, choices=(6, 26), default=None,
+                   help="digital connectivity (default: the one the file records where isoflow wrote it, else 6)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_genus)
 
@@ -40,7 +41,6 @@ def cmd_genus(args: argparse.Namespace) -> int:
     from ..mesh.genus import DEFAULT_RESOLUTIONS, verify_genus
 
     check_limits(args)
-    conn = args.connectivity or 6
     res = args.resolution or list(DEFAULT_RESOLUTIONS)
     kw = {k: v for k, v in (("max_resolution", args.max_resolution), ("time_limit", args.time_limit)) if v is not None}
     with progress_bar(args, "genus") as show:
@@ -50,7 +50,7 @@ def cmd_genus(args: argparse.Namespace) -> int:
                 print(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
                       f"({entry['seconds']:.1f} s)", file=sys.stderr)
 
-        report = verify_genus(args.mesh, res, conn, progress=show, step=not args.no_step, on_resolution=stepped,
+        report = verify_genus(args.mesh, res, args.connectivity, progress=show, step=not args.no_step, on_resolution=stepped,
                               strict=args.strict, fill=mesh_fill(args), **kw)
     if args.json:
         print(json.dumps(report.to_dict()))

@@ -785,7 +785,7 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
 
 
 def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFAULT_RESOLUTIONS,
-                 connectivity: int | np.integer = 6, progress: Callable[[int, int | None], object] | None = None, *,
+                 connectivity: int | np.integer | None = None, progress: Callable[[int, int | None], object] | None = None, *,
                  step: bool = True, max_resolution: int | np.integer = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                  on_resolution: Callable[[dict], object] | None = None, strict: bool = False,
                  fill: Fill = "winding") -> GenusVerdict:
@@ -829,8 +829,11 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         :func:`~isoflow.mesh.load.mesh_input`).
     resolutions : sequence of int
         Voxels along the longest side, tried first.
-    connectivity : {6, 26}
-        The digital solid's.
+    connectivity : {6, 26}, optional
+        The digital solid's. None (the default): the one a surface isoflow
+        wrote records in its file
+        (:func:`~isoflow.mesh.voxel_object.written_connectivity`), which a
+        ``written_connectivity`` note then names, else 6.
     progress : callable, optional
         ``progress(done, total)`` per resolution.
     step : bool
@@ -890,8 +893,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
     # the verdict's rows and its JSON hold Python ints, whatever the caller's type
     max_resolution = int(max_resolution)
-    if isinstance(connectivity, np.integer):
-        connectivity = int(connectivity)
+    connectivity, recorded = _connectivity_of(mesh, connectivity)
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {given_text(time_limit)}")
@@ -945,8 +947,27 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         solid_genus=w["solid_genus"], fill=fill, digital=digital, solid=w["solid"], converged=stable, agree=kind == "agree",
         kind=kind, reference=reference, reference_source=source,
         stop=stop, bodies=bodies, filled_genus=filled,
-        notes=tuple(load_notes(stats) + shape_notes(w, kind, fill, contacts) + rounding_notes(v, f, w, stats)
+        notes=tuple(recorded + load_notes(stats) + shape_notes(w, kind, fill, contacts) + rounding_notes(v, f, w, stats)
                     + digital_notes(w, digital, target, stable, fill, bodies)))
+
+
+def _connectivity_of(mesh: MeshInput, connectivity: int | np.integer | None) -> tuple[int, list[Note]]:
+    """The digital rows' connectivity, checked: the one asked, else the one
+    the file records where isoflow wrote it, else 6; with the
+    ``written_connectivity`` note where the file's was taken. A surface
+    isoflow wrote splits its voxels' edge and vertex contacts at that
+    connectivity, so read at the other one its rows count other voxels."""
+    import os
+
+    from ..digital.connectivity import check_connectivity
+    from .voxel_object import written_connectivity
+
+    if connectivity is not None:
+        return check_connectivity(3, connectivity), []
+    written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
+    if written is None:
+        return 6, []
+    return written, [Note("written_connectivity", {"connectivity": written})]
 
 
 def voxel_contacts(w: dict, v: np.ndarray, f: np.ndarray, connectivity: int, fill: Fill,

@@ -29,7 +29,8 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap", "voxel_contacts"]
+                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap", "voxel_contacts",
+                   "written_connectivity"]
 
 
 @dataclass(frozen=True)
@@ -420,6 +421,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         "tunnels of outside that change with the grid"),
     "no_mesh_genus": lambda: "the mesh is not a closed oriented manifold, so it has no genus",
     "voxel_contacts": _voxel_contact_words,
+    "written_connectivity": lambda connectivity: f"digital rows {connectivity}-connected, as the file was written",
 }
 
 
