@@ -471,9 +471,8 @@ def test_analyze_chunked_runs_on_an_executor():
     assert report.betti[0] == ndimage.label(volume)[1] and report == isoflow.analyze(volume, 6)
 
 
-@pytest.mark.parametrize("connectivity", [26.0, np.int64(26), np.float32(26)])
-def test_a_connectivity_that_equals_a_valid_one_is_reported_as_an_int(connectivity):
-    # 26.0 passed the check and was reported as given ("connectivity": 26.0)
+@pytest.mark.parametrize("connectivity", [26, np.int64(26), np.uint8(26)])
+def test_an_integer_connectivity_is_reported_as_an_int(connectivity):
     volume = np.ones((2, 2, 2), bool)
     values = [isoflow.analyze(volume, connectivity).to_dict()["connectivity"],
               isoflow.run_flow(volume, connectivity=connectivity, steps=1).to_dict()["connectivity"],
@@ -1054,3 +1053,47 @@ def test_a_mesh_given_for_a_volume_is_named_with_its_voxeliser(call, voxeliser):
     # what the message says to do works: the voxels' surface has the box's Euler characteristic
     solid = isoflow.voxelize_mesh(box, resolution=8)
     assert isoflow.boundary_mesh(solid.volume, 6).euler_characteristic == box.euler_number == 2
+
+
+@pytest.mark.parametrize(("connectivity", "shown"), [(6.0, "6.0"), (np.float64(6), "6.0"), (np.float32(26), "26.0"),
+                                                     (True, "True"), (np.True_, "True")])
+def test_a_connectivity_that_is_no_integer_is_refused(connectivity, shown):
+    # 6.0 equals 6 and True equals 1: 6.0 was taken as 6, a connectivity is a count of neighbours
+    from skimage.measure import euler_number
+
+    rng = np.random.default_rng(5)
+    volume = rng.random((6, 6, 6)) < 0.5
+    assert isoflow.analyze(volume, 6).euler_characteristic == euler_number(volume, connectivity=1)
+    said = f"connectivity {shown} is not valid in 3D: it must be an integer (use 6 or 26)"
+    for call in (lambda: isoflow.analyze(volume, connectivity), lambda: isoflow.boundary_mesh(volume, connectivity),
+                 lambda: isoflow.run_flow(volume, connectivity=connectivity, steps=1)):
+        with pytest.raises(IsoflowError) as info:
+            call()
+        assert str(info.value) == said
+    with pytest.raises(IsoflowError) as info:
+        isoflow.run_flow(volume[0], connectivity=connectivity, steps=1)
+    assert str(info.value) == f"connectivity {shown} is not valid in 2D: it must be an integer (use 4 or 8)"
+
+
+@pytest.mark.parametrize("parity", [True, np.True_, False])
+def test_digital_object_refuses_a_bool_parity(parity):
+    # True equals 1: parity=True was taken as the dual lattice
+    volume = np.ones((2, 2, 2), bool)
+    assert isoflow.DigitalObject(volume, parity=1).parity == 1
+    with pytest.raises(IsoflowError) as info:
+        isoflow.DigitalObject(volume, parity=parity)
+    assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
+
+
+@pytest.mark.parametrize("label", [True, np.True_])
+def test_read_volume_refuses_a_bool_label(tmp_path, label):
+    # True equals 1: label=True picked the voxels of label 1
+    labels = np.zeros((4, 4, 4), np.uint8)
+    labels[:2] = 1
+    labels[2:, :3] = 2
+    path = tmp_path / "labels.npy"
+    np.save(path, labels)
+    assert isoflow.read_volume(path, label=1).voxels == np.count_nonzero(labels == 1)
+    with pytest.raises(IsoflowError) as info:
+        isoflow.read_volume(path, label=label)
+    assert str(info.value) == f"{path}: label must be a number, not True or False, got True"

@@ -10,12 +10,9 @@ other one, so that a closed object separates its inside from its outside.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+import numpy as np
 
-from ..errors import IsoflowError
-
-if TYPE_CHECKING:
-    import numpy as np
+from ..errors import IsoflowError, given_text
 
 #: (face adjacency 2n, full adjacency 3^n - 1) per dimension
 VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
@@ -24,18 +21,27 @@ VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
 def check_connectivity(ndim: int, connectivity: int | np.integer) -> int:
     """The object's connectivity, checked against the dimension.
 
+    A connectivity counts neighbours: an integer, never a bool (``True``
+    equals 1) or a float (``6.0`` equals 6 but is no count).
+
     Examples
     --------
     >>> check_connectivity(3, 26)
     26
+    >>> check_connectivity(3, 6.0)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: connectivity 6.0 is not valid in 3D: it must be an integer (use 6 or 26)
     """
+    allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
+    if isinstance(connectivity, bool) or not isinstance(connectivity, (int, np.integer)):
+        # text quoted: "connectivity 6 is not valid in 3D" of '6' contradicts itself
+        raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D: it must be an integer "
+                           f"(use {allowed})")
     if connectivity not in VALID.get(ndim, ()):
-        allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
-        # text quoted: "connectivity 6 is not valid in 3D (use 6 or 26)" of '6' contradicts itself
-        shown = repr(connectivity) if isinstance(connectivity, str) else connectivity
-        raise IsoflowError(f"connectivity {shown} is not valid in {ndim}D (use {allowed})")
-    # a Python int: 6.0 or numpy.int64(6) pass the test above, and the
-    # value returned is what reports and JSON show
+        raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D (use {allowed})")
+    # a Python int: numpy.int64(6) passes the test above, and the value
+    # returned is what reports and JSON show
     return int(connectivity)
 
 

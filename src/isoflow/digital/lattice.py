@@ -127,10 +127,13 @@ class DigitalObject:
         object.__setattr__(self, "offset", tuple(int(o) for o in offset))
         origin = np.zeros(n) if self.origin is None else _field(self.origin, "origin", n)
         object.__setattr__(self, "origin", read_only(origin))
-        parity = _field(self.parity, "parity", None, integral=True)
+        # True equals 1: taken as the dual lattice unasked
+        bool_given = np.asarray(self.parity).dtype.kind == "b"
+        parity = None if bool_given else _field(self.parity, "parity", None, integral=True)
         if parity not in (0, 1):
             # the value as written: _field gives it back as a float
-            given = np.asarray(self.parity).item()
+            given = np.asarray(self.parity)
+            given = given.item() if given.size == 1 else given.tolist()
             raise IsoflowError(f"'parity' must be 0 (lattice) or 1 (dual lattice), got {given_text(given)}")
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))

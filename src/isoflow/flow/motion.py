@@ -100,7 +100,7 @@ def flow_connectivity(ndim: int, connectivity: int | np.integer | None) -> int:
         raise IsoflowError(f"the digital curvature flow is defined for 2D and 3D objects, not {ndim}D")
     if connectivity is None:
         connectivity = 6
-    if ndim == 2 and connectivity in (6, 26):
+    if ndim == 2 and isinstance(connectivity, (int, np.integer)) and connectivity in (6, 26):
         connectivity = {6: 4, 26: 8}[int(connectivity)]
     return check_connectivity(ndim, connectivity)
 

@@ -612,6 +612,8 @@ def check_label(label, dtype, where: str) -> int | float:
         raise IsoflowError(f"{where}: array of type {dtype} holds no labels")
     if not np.isscalar(label) or isinstance(label, (str, bytes)):
         raise IsoflowError(f"{where}: label must be a number, got {given_text(label)}")
+    if isinstance(label, (bool, np.bool_)):  # True equals 1: it would pick label 1 unasked
+        raise IsoflowError(f"{where}: label must be a number, not True or False, got {given_text(label)}")
     dtype = np.dtype(dtype)
     try:
         value = float(label)
