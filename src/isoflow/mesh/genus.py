@@ -833,7 +833,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         The digital solid's. None (the default): the one a surface isoflow
         wrote records in its file
         (:func:`~isoflow.mesh.voxel_object.written_connectivity`), which a
-        ``written_connectivity`` note then names, else 6.
+        ``written_connectivity`` note names where it is 26, else 6.
     progress : callable, optional
         ``progress(done, total)`` per resolution.
     step : bool
@@ -954,7 +954,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
 def _connectivity_of(mesh: MeshInput, connectivity: int | np.integer | None) -> tuple[int, list[Note]]:
     """The digital rows' connectivity, checked: the one asked, else the one
     the file records where isoflow wrote it, else 6; with the
-    ``written_connectivity`` note where the file's was taken. A surface
+    ``written_connectivity`` note where the file's, 26, was taken. A surface
     isoflow wrote splits its voxels' edge and vertex contacts at that
     connectivity, so read at the other one its rows count other voxels."""
     import os
@@ -965,7 +965,7 @@ def _connectivity_of(mesh: MeshInput, connectivity: int | np.integer | None) -> 
     if connectivity is not None:
         return check_connectivity(3, connectivity), []
     written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
-    if written is None:
+    if written is None or written == 6:  # (6 is every other file's: nothing to say)
         return 6, []
     return written, [Note("written_connectivity", {"connectivity": written})]
 
