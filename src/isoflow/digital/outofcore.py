@@ -456,8 +456,8 @@ DECODED_COPIES = 2
 #: border, which needs no seam), and the worker holds the summaries of the layer its merges take, those of the
 #: next layer it makes and the records the merges give, with the merges' own arrays while they run: 3 to 7
 #: measured per voxel of these faces beside the blocks at work and WORKER_RUN_BYTES, 10 counted so that every
-#: store of benchmarks/bench_worker_memory.py is estimated at 1.08 to 1.40 times its peak. The 14 counted per
-#: voxel of every face of a layer here (two layers' summaries beside the merges) was twice a worker's peak
+#: store of benchmarks/bench_worker_memory.py is estimated at 1.08 to 1.40 times its peak. The threads' term
+#: (FACE_BYTES a voxel of every face of a layer: two layers' summaries beside the merges) is twice a worker's peak
 WORKER_FACE_BYTES = 10
 #: what a dask.distributed worker holds over a run whatever the size of its blocks and faces: its records of
 #: the run's tasks and results, and the reader's buffers (a worker summing a 256^3 store in blocks of 64^3 rose
