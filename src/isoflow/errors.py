@@ -94,9 +94,7 @@ def number_text(value: object) -> str:
     """
     if getattr(value, "shape", None):  # a NumPy array: its elements (or rows) are NumPy's scalars
         return "[" + ", ".join(number_text(v) for v in value) + "]"  # type: ignore[attr-defined]
-    if hasattr(value, "dtype"):
-        # NumPy's str of a float32 is its shortest (0.1), which float() widens to 0.10000000149011612
-        value = float(str(value)) if value.dtype.kind == "f" else value.item()  # type: ignore[attr-defined]
+    value = _python_scalar(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(number_text(v) for v in value) + "]"
     if isinstance(value, bool):  # a mask's values: 0 and 1
@@ -134,11 +132,16 @@ def given_text(value: object) -> str:
     if type(value) in (list, tuple):
         inner = ", ".join(given_text(v) for v in value)  # type: ignore[attr-defined]
         return f"[{inner}]" if isinstance(value, list) else f"({inner},)" if len(value) == 1 else f"({inner})"  # type: ignore[arg-type]
-    if type(value).__module__ == "numpy" and getattr(value, "shape", None) == ():
+    return repr(_python_scalar(value))
+
+
+def _python_scalar(value: object) -> object:
+    """A NumPy scalar (or 0D array) as the Python value it holds; anything
+    else as it is."""
+    if getattr(value, "shape", None) == () and hasattr(value, "dtype"):
         # NumPy's str of a float32 is its shortest (0.1), which item() widens to 0.10000000149011612
-        kind = value.dtype.kind  # type: ignore[attr-defined]
-        value = float(str(value)) if kind == "f" else value.item()  # type: ignore[attr-defined]
-    return repr(value)
+        return float(str(value)) if value.dtype.kind == "f" else value.item()  # type: ignore[attr-defined]
+    return value
 
 
 def path_text(path: str | os.PathLike) -> str:
