@@ -17,6 +17,7 @@ this is its number of tunnels b1.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Literal
 
@@ -31,6 +32,7 @@ from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_ne
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .t_junctions import close_t_junctions
 from .verdict import GenusVerdict, Note, Stop, VerdictKind, strict_refusal
+from .voxel_object import voxel_object, written_connectivity
 from .voxelize import Solid, in_memory, plan_voxels, voxelize
 
 # --------------------------------------------------------------------------
@@ -893,7 +895,10 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")
     # the verdict's rows and its JSON hold Python ints, whatever the caller's type
     max_resolution = int(max_resolution)
-    connectivity, recorded = _connectivity_of(mesh, connectivity)
+    # the connectivity a surface isoflow wrote records in its file, read once
+    # for the default connectivity and the voxel-contact reference
+    written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
+    connectivity, recorded = _connectivity_of(connectivity, written)
     if isinstance(time_limit, (bool, np.bool_)) or not isinstance(time_limit, (int, float, np.integer, np.floating)) \
             or not time_limit > 0:
         raise IsoflowError(f"time_limit must be a positive number of seconds, got {given_text(time_limit)}")
@@ -922,7 +927,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     target = reference if filled is None else filled
     bodies = reference_bodies(w, fill)
     source: Literal["mesh", "solid", "voxels"] = "solid" if w["overlap"] else "mesh"
-    contacts = voxel_contacts(w, v, f, connectivity, fill, mesh)
+    contacts = voxel_contacts(w, v, f, connectivity, fill, written)
     if contacts is not None and (reference, bodies) == (contacts["betti"][1], contacts["betti"][0]):
         contacts = None  # the rows read the contacts as the connectivity does: nothing to say
     if contacts is not None:
@@ -951,34 +956,32 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
                     + digital_notes(w, digital, target, stable, fill, bodies)))
 
 
-def _connectivity_of(mesh: MeshInput, connectivity: int | np.integer | None) -> tuple[int, list[Note]]:
-    """The digital rows' connectivity, checked: the one asked, else the one
-    the file records where isoflow wrote it, else 6; with the
-    ``written_connectivity`` note where the file's, 26, was taken. A surface
-    isoflow wrote splits its voxels' edge and vertex contacts at that
-    connectivity, so read at the other one its rows count other voxels."""
-    import os
-
+def _connectivity_of(connectivity: int | np.integer | None, written: int | None) -> tuple[int, list[Note]]:
+    """The digital rows' connectivity, checked: the one asked, else
+    ``written``, the one the file records where isoflow wrote it, else 6;
+    with the ``written_connectivity`` note where the file's, 26, was taken.
+    A surface isoflow wrote splits its voxels' edge and vertex contacts at
+    that connectivity, so read at the other one its rows count other
+    voxels."""
     from ..digital.connectivity import check_connectivity
-    from .voxel_object import written_connectivity
 
     if connectivity is not None:
         return check_connectivity(3, connectivity), []
-    written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
     if written is None or written == 6:  # (6 is every other file's: nothing to say)
         return 6, []
     return written, [Note("written_connectivity", {"connectivity": written})]
 
 
 def voxel_contacts(w: dict, v: np.ndarray, f: np.ndarray, connectivity: int, fill: Fill,
-                   mesh: MeshInput | None = None) -> dict | None:
+                   written: int | None = None) -> dict | None:
     """The facts of the ``voxel_contacts`` note, or None: where a closed,
     oriented mesh that crosses nowhere is a voxel surface
     (:func:`~isoflow.mesh.voxel_object.voxel_lattice`) touching itself
     along edges or at vertices (the edge and vertex contacts of its voxels,
-    which ``isoflow surface`` splits and a reader's weld joins) and the
-    file ``mesh`` records the connectivity it was written at
-    (:func:`~isoflow.mesh.voxel_object.written_connectivity`): the voxels
+    which ``isoflow surface`` splits and a reader's weld joins) and its
+    file records ``written``, the connectivity it was written at
+    (:func:`~isoflow.mesh.voxel_object.written_connectivity`; None: no
+    record, another program's file or a mesh in memory): the voxels
     it bounds at its own grid, their Betti numbers at ``connectivity``
     (the digital rows') and at the other one, the non-manifold ``edges``
     and ``vertices`` the contacts make, and ``written``, the file's
@@ -991,14 +994,11 @@ def voxel_contacts(w: dict, v: np.ndarray, f: np.ndarray, connectivity: int, fil
     >>> vol = np.zeros((4, 4, 3), bool); vol[1, 1, 1] = vol[2, 2, 1] = True   # an edge contact
     >>> path = write_surface(vol, pathlib.Path(tempfile.mkdtemp()) / "s.ply", 6)
     >>> _, v, f = mesh_input(path)
-    >>> facts = voxel_contacts(witnesses(v, f), v, f, 6, "winding", path)
+    >>> from isoflow.mesh.voxel_object import written_connectivity
+    >>> facts = voxel_contacts(witnesses(v, f), v, f, 6, "winding", written_connectivity(path))
     >>> facts["betti"], facts["other"], facts["edges"], facts["written"]
     ([2, 0, 0], [1, 0, 0], 1, 6)
     """
-    import os
-
-    from .voxel_object import voxel_object, written_connectivity
-
     m = w["mesh"]
     touch = m["nonmanifold_edges"] or m["nonmanifold_vertices"] or m["shared_vertices"]
     if fill != "winding" or connectivity not in (6, 26) or not touch or not w["balanced"] or w["crossing_self"]:
@@ -1006,7 +1006,6 @@ def voxel_contacts(w: dict, v: np.ndarray, f: np.ndarray, connectivity: int, fil
     # only a file isoflow wrote says that its faces are voxels' and at which
     # connectivity they touch: boxes a user stacks on a lattice are solids
     # that touch, whose reference stays manifold3d's union
-    written = written_connectivity(mesh) if isinstance(mesh, (str, os.PathLike)) else None
     if written is None:
         return None
     found = voxel_object(v, f, connectivity)
