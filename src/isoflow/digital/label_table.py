@@ -43,7 +43,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, check_switch, given_text
 from ..results import fields_repr, same_fields
-from ..scale.arrays import as_array, refuse_object
+from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
 from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
@@ -324,9 +324,7 @@ def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -
             where = ", ".join(str(int(i) + (first_layer if d == axis else 0)) for d, i in enumerate(voxel))
             if _is_fill(flat[at], fill):
                 # a store written sparsely holds the value in voxels nobody wrote: the value alone would not say why
-                raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}, the array's fill value, which zarr "
-                                   f"reads for a chunk never written: {why}; write the store with fill_value=0, "
-                                   "which a chunk never written then reads as 0")
+                raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}, {FILL_READ}: {why}; {FILL_ZERO}")
             raise IsoflowError(f"voxel ({where}) holds {flat[at].item()!r}: {why}")
     return flat.astype(kind).reshape(vol.shape)
 
@@ -334,12 +332,8 @@ def as_labels(array, first_layer: int = 0, axis: int = 0, fill: object = None) -
 def _is_fill(value: np.floating, fill: object) -> bool:
     """Whether a float voxel's ``value`` is the array's fill value ``fill``
     (NaN matching NaN), in the voxel's own type."""
-    if fill is None:
-        return False
-    try:
-        with np.errstate(all="ignore"):
-            same = np.asarray(fill).astype(np.asarray(value).dtype)[()]
-    except (TypeError, ValueError):
+    same = fill_as(fill, np.asarray(value).dtype)
+    if same is None:
         return False
     return bool(value == same or (np.isnan(value) and np.isnan(same)))
 

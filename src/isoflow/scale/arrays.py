@@ -292,6 +292,42 @@ def threshold_example(arr: np.ndarray, kind: str) -> str:
     return "0.5" if 0 <= low and high <= 1 else f"{(low + high) / 2:.3g}"
 
 
+#: what a zarr array's fill value is, said after a value that is it
+FILL_READ = "the array's fill value, which zarr reads for a chunk never written"
+#: the store that a value other than a label or 0 and 1 in chunks never written asks for
+FILL_ZERO = "write the store with fill_value=0, which a chunk never written then reads as 0"
+
+
+def fill_as(fill: object, dtype: object):
+    """A zarr array's fill value as a value of ``dtype`` (the type a voxel
+    was printed or compared in), or None where there is none or it has no
+    such value.
+
+    Parameters
+    ----------
+    fill : object
+        The array's ``fill_value`` (None: not a zarr array).
+    dtype : numpy dtype
+        The voxels' type.
+
+    Returns
+    -------
+    numpy scalar or None
+
+    Examples
+    --------
+    >>> fill_as(float("nan"), np.float32), fill_as(None, np.uint8), fill_as("x", np.float64)
+    (np.float32(nan), None, None)
+    """
+    if fill is None:
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            return np.asarray(fill).astype(dtype)[()]
+    except (TypeError, ValueError):
+        return None
+
+
 def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     """``exc`` of a block read from a zarr array, saying so where its example
     value is the array's fill value: zarr reads every voxel of a chunk that
@@ -336,11 +372,8 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
     >>> other.every, str(other).split("; ")[1]
     (False, "zarr reads a chunk never written as the array's fill value, nan, which is no label)")
     """
-    if fill is None:
-        return exc
-    try:
-        value = np.asarray(fill).astype(dtype)[()]
-    except (TypeError, ValueError):
+    value = fill_as(fill, dtype)
+    if value is None:
         return exc
     example = f"e.g. {value})"
     label = bool(np.isfinite(value) and value == np.round(value)) if np.asarray(value).dtype.kind == "f" else True
@@ -352,12 +385,12 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
         told = f"; zarr reads a chunk never written as the array's fill value, {value}, which is no label); "
         unlabelled = exc.bare.replace("); ", told, 1)  # (the end of binary's example)
         return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
-    named = f"{example[:-1]}, the array's fill value, which zarr reads for a chunk never written)"
+    named = f"{example[:-1]}, {FILL_READ})"
     bare = exc.bare.replace(example, named, 1)
     if label:
         return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim, exc.kind)
     # a label table refuses the value as it does here: a store with fill 0 is read either way
-    unlabelled = bare + ", or write the store with fill_value=0, which a chunk never written then reads as 0"
+    unlabelled = bare + f", or {FILL_ZERO}"
     return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
 
 
