@@ -1097,3 +1097,27 @@ def test_read_volume_refuses_a_bool_label(tmp_path, label):
     with pytest.raises(IsoflowError) as info:
         isoflow.read_volume(path, label=label)
     assert str(info.value) == f"{path}: label must be a number, not True or False, got True"
+
+
+_WORD_OPTIONS = [
+    (lambda w: isoflow.analyze(np.ones((3, 3, 3), bool), 6, method=w), "method"),
+    (lambda w: isoflow.run_flow(np.ones((3, 3, 3), bool), 6, method=w), "method"),
+    (lambda w: isoflow.label_table(np.ones((3, 3, 3), np.uint8), 6, method=w), "method"),
+    (lambda w: isoflow.voxelize_mesh(np.eye(3), [[0, 1, 2]], resolution=8, fill=w), "fill"),
+    (lambda w: isoflow.voxelize_meshes([(np.eye(3), [[0, 1, 2]])], resolution=8, overlap=w), "overlap"),
+]
+
+
+@pytest.mark.parametrize("call, name", _WORD_OPTIONS)
+def test_a_word_option_given_as_a_numpy_string_is_named_as_written(call, name):
+    # a word read from a NumPy array (a column of a table of runs) is a
+    # np.str_, whose repr under NumPy 2 is np.str_('fast'): the message
+    # says the word as the user wrote it, as it says numbers
+    with pytest.raises(isoflow.IsoflowError, match=rf"{name} must be one of .*, got 'fast'$"):
+        call(np.str_("fast"))
+
+
+def test_a_word_option_given_as_a_numpy_string_is_taken_as_the_word():
+    ring = np.pad(np.ones((3, 3, 3), bool), 1)
+    ring[2, 2, :] = False
+    assert isoflow.analyze(ring, 6, method=np.str_("numpy")) == isoflow.analyze(ring, 6, method="numpy")

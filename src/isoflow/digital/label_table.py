@@ -409,7 +409,7 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     from ..scale.compiled import METHODS, add_to_tally, have_numba, tallied
 
     if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba: pip install numba")
     if method != "auto" or not have_numba():

@@ -32,7 +32,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 from ..results import read_only
 from .configurations import (
     check_dimension,
@@ -462,7 +462,7 @@ def curvature_code(config, n: int, rule: str = "paper") -> np.ndarray:
     if n < 2:
         raise IsoflowError("curvature codes need n >= 2 (a 1D boundary point has no curvature)")
     if rule not in CODE_RULES:
-        raise IsoflowError(f"rule must be one of {CODE_RULES}, got {rule!r}")
+        raise IsoflowError(f"rule must be one of {CODE_RULES}, got {given_text(rule)}")
     c = _check_configs(config, n)
     return _code_table(n, rule)[c]
 
@@ -479,7 +479,7 @@ def curvature_index(config, n: int, equation: str = "6.1", rule: str = "paper") 
         return index_61(codes)
     if equation == "4.8":
         return index_48(codes)
-    raise IsoflowError(f"equation must be '6.1' or '4.8', got {equation!r}")
+    raise IsoflowError(f"equation must be '6.1' or '4.8', got {given_text(equation)}")
 
 
 def format_codes(codes: ArrayLike) -> str:

@@ -62,7 +62,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, given_text
 from ..scale.arrays import NotBinary, binary, fill_value_named
 from ..scale.chunks import (
     BlockTicks,
@@ -554,7 +554,7 @@ def store_memory(block: tuple[int, ...], numblocks: tuple[int, ...], dtype: Any,
     StoreMemory(block=4194304, faces=5111808, kept=0)
     """
     if scheduler not in SCHEDULERS:
-        raise IsoflowError(f"store_memory: scheduler must be one of {', '.join(SCHEDULERS)}, got {scheduler!r}")
+        raise IsoflowError(f"store_memory: scheduler must be one of {', '.join(SCHEDULERS)}, got {given_text(scheduler)}")
     voxels = int(np.prod(block, dtype=np.int64))
     dtype = np.dtype(dtype)
     sides = [int(s) for s in block]
@@ -657,7 +657,7 @@ def _scheduler(dask, scheduler):
     if not (scheduler is None or known or callable(scheduler) or hasattr(scheduler, "get")
             or isinstance(scheduler, Executor)):
         raise IsoflowError(f"scheduler must be a dask scheduler's name ({', '.join(sorted(named_schedulers))}, "
-                           f"distributed), a get function, a client or executor, or None, got {scheduler!r}")
+                           f"distributed), a get function, a client or executor, or None, got {given_text(scheduler)}")
     if "distributed" in sys.modules or not (scheduler is None or isinstance(scheduler, str)):
         return scheduler
     name = scheduler or dask.config.get("scheduler", None) or "threads"

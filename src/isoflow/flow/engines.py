@@ -13,7 +13,7 @@ import numpy as np
 
 from ..digital.analysis import analyze
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError
+from ..errors import IsoflowError, given_text
 from ..results import read_only
 from ..scale.compiled import METHODS, Method, add_to_tally, have_numba, tallied
 from . import guard as control
@@ -404,7 +404,7 @@ def flow_engine(method: Method, obj: DigitalObject, conn: int, cap: int | None =
     'ArrayFlow'
     """
     if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba (pip install numba)")
     if method == "compiled":

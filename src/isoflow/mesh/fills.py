@@ -30,7 +30,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_switch, counted
+from ..errors import IsoflowError, check_switch, counted, given_text
 from ..results import Result
 
 #: the rule that decides which voxels a mesh fills
@@ -149,7 +149,7 @@ def check_fill(fill: object) -> Fill:
     'shell'
     """
     if fill not in FILLS:
-        raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {fill!r}")
+        raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {given_text(fill)}")
     return fill  # type: ignore[return-value]
 
 

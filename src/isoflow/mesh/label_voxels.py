@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable, check_switch
+from ..errors import IsoflowError, check_callable, check_switch, given_text
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
@@ -137,7 +137,7 @@ class LabelVoxelization(Result):
 def check_overlap(overlap: object) -> Overlap:
     """``overlap`` if it names a rule, else an IsoflowError naming them."""
     if overlap not in OVERLAPS:
-        raise IsoflowError(f"voxelize: overlap must be one of {', '.join(OVERLAPS)}, got {overlap!r}")
+        raise IsoflowError(f"voxelize: overlap must be one of {', '.join(OVERLAPS)}, got {given_text(overlap)}")
     return overlap  # type: ignore[return-value]
 
 

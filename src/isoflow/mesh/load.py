@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, missing
+from ..errors import IsoflowError, counted, given_text, missing
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -447,7 +447,7 @@ def weld_tolerance(merge_rtol) -> float:
     except (TypeError, ValueError):
         rtol = math.nan
     if not 0 <= rtol < 1:
-        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {merge_rtol!r}")
+        raise IsoflowError(f"load_mesh: merge_rtol must be a number in [0, 1), got {given_text(merge_rtol)}")
     return rtol
 
 

@@ -558,7 +558,7 @@ def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
             shape = tuple(int(n) for n in grid[1])
         except (TypeError, ValueError, IndexError, OverflowError):
             raise IsoflowError(
-                f"voxelize: grid must be (origin, shape), three numbers each, got {grid!r}") from None
+                f"voxelize: grid must be (origin, shape), three numbers each, got {given_text(grid)}") from None
         if len(shape) != 3 or min(shape) < 1:
             raise IsoflowError(f"voxelize: grid shape must be three positive integers, got {given_text(grid[1])}")
         with np.errstate(over="ignore", invalid="ignore"):
@@ -583,7 +583,7 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
         ok = False
     if not ok or len(lo) != 3 or len(hi) != 3 or not all(0 <= a < b <= n for a, b, n in zip(lo, hi, shape)):
         raise IsoflowError(f"voxelize: window must be (start, stop), three indices each with "
-                           f"0 <= start < stop <= {tuple(shape)}, got {window!r}")
+                           f"0 <= start < stop <= {tuple(shape)}, got {given_text(window)}")
     return lo, tuple(b - a for a, b in zip(lo, hi))
 
 

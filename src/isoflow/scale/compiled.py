@@ -192,7 +192,7 @@ def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto"
     import numpy as np
 
     if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
     if method == "numpy":
         return False
     host = isinstance(volume, np.ndarray) and volume.ndim in (2, 3)
