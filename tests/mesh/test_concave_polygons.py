@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from isoflow.cli.main import main
 from isoflow.mesh import ply, readers
 from isoflow.mesh.load import load_mesh
 from isoflow.mesh.readers import triangulate
@@ -97,9 +98,10 @@ def run(*args):
 
 
 def voxels(path: Path, fill: str) -> np.ndarray:
+    """``isoflow voxelize`` of the file, run in this process (the console
+    entry point itself is run by the genus tests)."""
     out = path.with_name(f"{path.name}.{fill}.npz")
-    r = run("voxelize", path, "--resolution", "12", "--fill", fill, "-o", out, "-q")
-    assert r.returncode == 0, r.stderr
+    assert main(["voxelize", str(path), "--resolution", "12", "--fill", fill, "-o", str(out), "-q"]) == 0
     return np.load(out)["volume"]
 
 

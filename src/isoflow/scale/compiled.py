@@ -29,7 +29,8 @@ pass ran there, so numba's start is paid:
 The passes release the GIL, so plain Python threads run them in parallel
 (no OpenMP pool, no parallel compile). Each pass splits the volume into as
 many slabs along its first axis as there are threads and joins what crosses
-the seams afterwards.
+the seams afterwards. The threads are started once per calling thread and
+kept for its next passes (:func:`run`).
 
 The number of threads is, in order of precedence: the ``threads`` given to
 :func:`using` (``isoflow info --threads N``, ``analyze(..., threads=N)``),
@@ -46,6 +47,7 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import os
+import threading
 from collections.abc import Iterator
 from functools import cache
 from typing import TYPE_CHECKING, Literal
@@ -304,17 +306,60 @@ def slabs(n: int, parts: int) -> list[tuple[int, int]]:
     return [(a, b) for a, b in zip(cuts, cuts[1:]) if b > a]
 
 
-def run(calls: list) -> list:
-    """Run ``(fn, *args)`` calls, each on its own thread when there are
-    several; results in order. The calls are compiled passes that release
-    the GIL; one call runs on the calling thread."""
-    if len(calls) <= 1:
-        return [fn(*args) for fn, *args in calls]
+#: each calling thread's pool of pass threads, kept between its calls of :func:`run`
+_pools = threading.local()
+
+
+def _pool(size: int):
+    """The calling thread's pool of at least ``size`` threads, started
+    once and kept: a pass over a small volume takes less time than
+    starting its threads, and a volume swept slab by slab runs many
+    passes. Each calling thread has its own pool, which it waits on
+    until its calls are done, so each call still has a thread of its own
+    whatever other threads run; a forked child starts its own pool (the
+    parent's threads are not in it)."""
     from concurrent.futures import ThreadPoolExecutor
 
-    with ThreadPoolExecutor(max_workers=len(calls)) as pool:
-        futures = [pool.submit(fn, *args) for fn, *args in calls]
-        return [f.result() for f in futures]
+    held = getattr(_pools, "held", None)
+    if held is None or held[0] != os.getpid() or held[1] < size:
+        if held is not None and held[0] == os.getpid():
+            held[2].shutdown(wait=False)  # its threads end once idle
+        held = (os.getpid(), size, ThreadPoolExecutor(max_workers=size, thread_name_prefix="isoflow-pass"))
+        _pools.held = held
+    return held[2]
+
+
+def run(calls: list) -> list:
+    """Run ``(fn, *args)`` calls, each on its own thread when there are
+    several; results in order, once every call is done. The calls are
+    compiled passes that release the GIL; one call runs on the calling
+    thread, several on threads the calling thread keeps for its next
+    calls.
+
+    Parameters
+    ----------
+    calls : list of tuple
+        ``(fn, *args)`` for each call.
+
+    Returns
+    -------
+    list
+        ``fn(*args)`` of each call, in order; the first call's error (in
+        order) is raised once all are done.
+
+    Examples
+    --------
+    >>> run([(pow, 2, k) for k in range(4)])
+    [1, 2, 4, 8]
+    """
+    if len(calls) <= 1:
+        return [fn(*args) for fn, *args in calls]
+    from concurrent.futures import wait
+
+    pool = _pool(len(calls))
+    futures = [pool.submit(fn, *args) for fn, *args in calls]
+    wait(futures)  # no call left running when one fails, as a pool of its own would wait
+    return [f.result() for f in futures]
 
 
 def run_ahead(calls: list, threads: int | None = None) -> Iterator:

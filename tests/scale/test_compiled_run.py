@@ -1,0 +1,68 @@
+"""compiled.run, which runs a pass's slabs on threads: each call on a
+thread of its own at once, its threads kept between the calling thread's
+calls (starting them cost more than a small volume's pass: the random
+volumes of tests/digital/test_closed_surfaces.py spent two thirds of their
+time starting threads), and an error raised only once every call is done."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from isoflow.scale import compiled
+
+
+def _here(barrier: threading.Barrier | None = None) -> threading.Thread:
+    if barrier is not None:
+        barrier.wait()  # every call of the run waits for the others: each must have a thread at once
+    return threading.current_thread()
+
+
+def test_the_threads_are_kept_between_a_threads_calls():
+    first = compiled.run([(_here,)] * 3)
+    second = compiled.run([(_here,)] * 3)
+    assert threading.current_thread() not in first  # several calls run on threads of their own
+    assert {id(t) for t in second} <= {id(t) for t in first}  # the same thread objects, none started anew
+    more = compiled.run([(_here,)] * 5)  # more calls than the threads kept: still one thread each at once
+    assert threading.current_thread() not in more
+
+
+@pytest.mark.parametrize("calls", [2, 3, 7])
+def test_each_call_has_a_thread_of_its_own_at_once(calls):
+    barrier = threading.Barrier(calls, timeout=30)
+    threads = compiled.run([(_here, barrier)] * calls)
+    assert len({id(t) for t in threads}) == calls and not barrier.broken
+
+
+def test_calling_threads_at_once_each_have_their_calls_threads():
+    # two threads (as a dask worker's) run passes at the same time: neither waits for the other's calls
+    barriers = [threading.Barrier(3, timeout=30) for _ in range(2)]
+    got: dict[int, list] = {}
+
+    def caller(k):
+        got[k] = compiled.run([(_here, barriers[k])] * 3)
+
+    callers = [threading.Thread(target=caller, args=(k,)) for k in range(2)]
+    for t in callers:
+        t.start()
+    for t in callers:
+        t.join(60)
+    assert sorted(got) == [0, 1] and not any(b.broken for b in barriers)
+    assert not {id(t) for t in got[0]} & {id(t) for t in got[1]}
+
+
+def test_an_error_is_raised_once_every_call_is_done():
+    done = []
+
+    def slow():
+        time.sleep(0.3)
+        done.append(True)
+
+    def fails():
+        raise ValueError("a pass failed")
+
+    with pytest.raises(ValueError, match="a pass failed"):
+        compiled.run([(fails,), (slow,)])
+    assert done == [True]  # nothing of the run left running behind the error
