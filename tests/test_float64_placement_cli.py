@@ -40,7 +40,7 @@ def isoflow(*args) -> subprocess.CompletedProcess:
 def isoflow_here(*args) -> subprocess.CompletedProcess:
     """The command run in this process, for the runs beside the one whose
     line is tested (a file at the origin to compare with, a read-back): a
-    fresh process costs a second."""
+    process of its own adds nothing to what is tested."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([*map(str, args)])

@@ -1,6 +1,7 @@
 """Output paths as a user gives them, run as the user runs the command (a
 subprocess): a suffix in any case, an existing output replaced with
---force, outputs that collide; the file is read back by its own library."""
+--force, outputs that collide; the file is read back by its own library.
+The runs before and beside the one tested run in this process."""
 
 import contextlib
 import io
@@ -31,7 +32,7 @@ def run_here(*args) -> subprocess.CompletedProcess:
     """The command line run in this process, where what is tested comes
     after it or does not depend on the shell (a run that fills the compiled
     passes' cache, a store to write into, the run that succeeds beside a
-    refusal run in the shell): a fresh process costs a second."""
+    refusal run in the shell), which need no process of their own."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         code = main([*map(str, args)])

@@ -23,9 +23,9 @@ zarr = pytest.importorskip("zarr")
 def isoflow(*args, code: str | None = None):
     """stdout, and the warning lines about chunks never written, of the
     command line ARGS (or of the Python ``code``), run in this process:
-    a fresh process per command cost a second and is not what is tested
-    (one test runs its command in the shell too). Every warning is kept
-    (``always``), so a line said twice is seen twice."""
+    the shell is not what is tested (one test runs its command in the
+    shell too). Every warning is kept (``always``), so a line said twice
+    is seen twice."""
     out, err = io.StringIO(), io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         if code:
