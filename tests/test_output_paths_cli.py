@@ -56,7 +56,7 @@ def test_a_nifti_suffix_in_mixed_case_is_the_file_written(tmp_path, suffix):
     nib = pytest.importorskip("nibabel")
     out = tmp_path / f"torus{suffix}"
     out.write_bytes(b"old")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "--force", "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", out, "--force", "-q")
     assert p.returncode == 0, p.stderr
     assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]  # no stray or temporary file
     img = nib.Nifti1Image.from_file_map(nib.Nifti1Image.make_file_map({"image": str(out)}))
@@ -161,7 +161,7 @@ def test_a_file_per_label_failing_midway_on_a_full_disk_keeps_the_earlier_set(tm
 def test_a_long_output_name_that_fits_is_written(tmp_path):
     # a 240-byte name fits (255), but its temporary name beside it did not: "File name too long", exit 2
     out = tmp_path / ("a" * 236 + ".npz")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
     assert p.returncode == 0, p.stderr
     with np.load(out) as back:
         assert back["volume"].sum() > 0
@@ -268,7 +268,7 @@ def test_a_file_output_given_as_a_directory_is_refused(tmp_path, command):
 def test_a_zarr_store_given_as_a_directory_is_written(tmp_path):
     # a store is a directory: -o out.zarr/ names it, unlike a file's name with a slash
     pytest.importorskip("zarr")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", f"{tmp_path / 'out.zarr'}/", "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", f"{tmp_path / 'out.zarr'}/", "-q")
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "out.zarr").is_dir()
 
