@@ -1,7 +1,10 @@
 """Output paths as a user gives them, run as the user runs the command (a
 subprocess): a suffix in any case, an existing output replaced with
---force, outputs that collide; the file is read back by its own library."""
+--force, outputs that collide; the file is read back by its own library.
+The runs before and beside the one tested run in this process."""
 
+import contextlib
+import io
 import os
 import resource
 import shutil
@@ -14,6 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from isoflow.cli import main
+
 ROOT = Path(__file__).resolve().parents[1]
 TORUS = ROOT / "meshes" / "torus.obj"
 
@@ -21,6 +26,17 @@ TORUS = ROOT / "meshes" / "torus.obj"
 def run(*args) -> subprocess.CompletedProcess:
     """The command line in a subprocess, as a user runs it."""
     return subprocess.run([sys.executable, "-m", "isoflow", *map(str, args)], capture_output=True, text=True)
+
+
+def run_here(*args) -> subprocess.CompletedProcess:
+    """The command line run in this process, where what is tested comes
+    after it or does not depend on the shell (a run that fills the compiled
+    passes' cache, a store to write into, the run that succeeds beside a
+    refusal run in the shell), which need no process of their own."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main([*map(str, args)])
+    return subprocess.CompletedProcess(args, code, out.getvalue(), err.getvalue())
 
 
 def run_on_a_small_disk(limit: int, *args) -> subprocess.CompletedProcess:
@@ -40,12 +56,12 @@ def test_a_nifti_suffix_in_mixed_case_is_the_file_written(tmp_path, suffix):
     nib = pytest.importorskip("nibabel")
     out = tmp_path / f"torus{suffix}"
     out.write_bytes(b"old")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "--force", "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", out, "--force", "-q")
     assert p.returncode == 0, p.stderr
     assert sorted(f.name for f in tmp_path.iterdir()) == [out.name]  # no stray or temporary file
     img = nib.Nifti1Image.from_file_map(nib.Nifti1Image.make_file_map({"image": str(out)}))
     assert int(np.asarray(img.dataobj).sum()) > 0
-    back = run("info", out, "--json")  # and isoflow reads the file it wrote
+    back = run_here("info", out, "--json")  # and isoflow reads the file it wrote
     assert back.returncode == 0, back.stderr
 
 
@@ -54,7 +70,7 @@ def test_an_hdf5_write_that_fails_midway_is_one_line_and_keeps_the_old_file(tmp_
     pytest.importorskip("h5py")
     out = tmp_path / "torus.h5"
     args = ("voxelize", TORUS, "--resolution", 48, "-o", out, "-q")
-    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    first = run_here(*args)  # a full run first: the compiled passes' cache is written before the limit is set
     assert first.returncode == 0, first.stderr
     assert out.stat().st_size > 3000
     out.write_bytes(b"old")
@@ -89,15 +105,23 @@ def files_under(directory: Path) -> dict[str, bytes]:
     return {str(f.relative_to(directory)): f.read_bytes() for f in sorted(directory.rglob("*")) if f.is_file()}
 
 
+@pytest.fixture(scope="module")
+def torus_store(tmp_path_factory) -> Path:
+    """The torus voxelized into a zarr store, once for the tests that copy it."""
+    pytest.importorskip("zarr")
+    store = tmp_path_factory.mktemp("store") / "torus.zarr"
+    made = run_here("voxelize", TORUS, "--resolution", 16, "-o", store, "-q")
+    assert made.returncode == 0, made.stderr
+    return store
+
+
 @pytest.mark.parametrize("outputs", [("flow", "--out", "STORE", "--force"), ("flow", "--out", "STORE/run"),
                                      ("surface", "-o", "STORE/surface.ply"),
                                      ("surface", "--labels", "-o", "STORE/", "--suffix", ".ply")])
-def test_an_output_inside_the_input_zarr_store_is_refused(tmp_path, outputs):
+def test_an_output_inside_the_input_zarr_store_is_refused(tmp_path, torus_store, outputs):
     # a zarr store is a directory: flow --out STORE --force wrote its step files and pictures into the input
-    pytest.importorskip("zarr")
     store = tmp_path / "torus.zarr"
-    made = run("voxelize", TORUS, "--resolution", 16, "-o", store, "-q")
-    assert made.returncode == 0, made.stderr
+    shutil.copytree(torus_store, store)
     before = files_under(store)
     command, *rest = outputs
     p = run(command, store, *[str(store) + a[5:] if a.startswith("STORE") else a for a in rest], "-q")
@@ -121,7 +145,7 @@ def test_a_file_per_label_failing_midway_on_a_full_disk_keeps_the_earlier_set(tm
     labels[10:29, 1:11, 1:11] = 3  # the largest file, written last
     np.save(tmp_path / "labels.npy", labels)
     args = ("surface", tmp_path / "labels.npy", "--labels", "-o", f"{tmp_path / 'out'}/", "--suffix", ".ply", "-q")
-    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    first = run_here(*args)  # a full run first: the compiled passes' cache is written before the limit is set
     assert first.returncode == 0, first.stderr
     before = files_under(tmp_path / "out")
     assert max(len(before["label_1.ply"]), len(before["label_2.ply"])) < 4000 < len(before["label_3.ply"])
@@ -137,7 +161,7 @@ def test_a_file_per_label_failing_midway_on_a_full_disk_keeps_the_earlier_set(tm
 def test_a_long_output_name_that_fits_is_written(tmp_path):
     # a 240-byte name fits (255), but its temporary name beside it did not: "File name too long", exit 2
     out = tmp_path / ("a" * 236 + ".npz")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", out, "-q")
     assert p.returncode == 0, p.stderr
     with np.load(out) as back:
         assert back["volume"].sum() > 0
@@ -202,7 +226,7 @@ def test_flow_out_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, n
     assert sorted(os.listdir(tmp_path)) == ["box.npy"]  # nothing made
     # a directory of that name that the user made is theirs, taken as a directory is
     (tmp_path / name).mkdir()
-    p = run("flow", tmp_path / "box.npy", "--out", tmp_path / name, "-q")
+    p = run_here("flow", tmp_path / "box.npy", "--out", tmp_path / name, "-q")
     assert p.returncode == 0, p.stderr
     assert "flow.csv" in os.listdir(tmp_path / name)
 
@@ -244,7 +268,7 @@ def test_a_file_output_given_as_a_directory_is_refused(tmp_path, command):
 def test_a_zarr_store_given_as_a_directory_is_written(tmp_path):
     # a store is a directory: -o out.zarr/ names it, unlike a file's name with a slash
     pytest.importorskip("zarr")
-    p = run("voxelize", TORUS, "--resolution", 16, "-o", f"{tmp_path / 'out.zarr'}/", "-q")
+    p = run_here("voxelize", TORUS, "--resolution", 16, "-o", f"{tmp_path / 'out.zarr'}/", "-q")
     assert p.returncode == 0, p.stderr
     assert (tmp_path / "out.zarr").is_dir()
 
@@ -256,7 +280,7 @@ def test_a_short_write_says_why_not_only_numpys_byte_counts(tmp_path, suffix):
         pytest.importorskip("tifffile")
     out = tmp_path / f"torus{suffix}"
     args = ("voxelize", TORUS, "--resolution", 48, "-o", out, "-q")
-    first = run(*args)  # a full run first: the compiled passes' cache is written before the limit is set
+    first = run_here(*args)  # a full run first: the compiled passes' cache is written before the limit is set
     assert first.returncode == 0, first.stderr
     out.write_bytes(b"old")
     p = run_on_a_small_disk(3000, *args, "--force")
@@ -344,7 +368,7 @@ def test_a_gltf_output_names_the_glb_that_holds_the_same_scene(tmp_path):
     assert sorted(f.name for f in tmp_path.iterdir()) == ["cube.npy"]
     assert line.endswith("; write cube.glb (binary glTF, the same scene in one file)")
     # the file named is glTF as trimesh reads it: the cube's closed surface
-    done = run("surface", tmp_path / "cube.npy", "-o", tmp_path / "cube.glb", "-q")
+    done = run_here("surface", tmp_path / "cube.npy", "-o", tmp_path / "cube.glb", "-q")
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(tmp_path / "cube.glb", force="mesh")
     assert mesh.is_watertight and mesh.volume == pytest.approx(27.0)

@@ -5,23 +5,38 @@ nothing where every chunk is written or the fill value is 0."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import json
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
+
+from isoflow.cli import main
 
 zarr = pytest.importorskip("zarr")
 
 
 def isoflow(*args, code: str | None = None):
-    """stdout, and the warning lines about chunks never written, of
-    ``python -m isoflow ARGS`` (or of ``python -c CODE``)."""
-    command = [sys.executable, "-c", code] if code else [sys.executable, "-m", "isoflow", *map(str, args)]
-    p = subprocess.run(command, capture_output=True, text=True)
-    assert p.returncode == 0, p.stderr
-    return p.stdout, [line for line in p.stderr.splitlines() if "never written" in line]
+    """stdout, and the warning lines about chunks never written, of the
+    command line ARGS (or of the Python ``code``), run in this process:
+    the shell is not what is tested (one test runs its command in the
+    shell too). Every warning is kept (``always``), so a line said twice
+    is seen twice."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        if code:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                exec(code, {})
+            lines = [f"{w.category.__name__}: {w.message}" for w in caught]
+        else:
+            assert main([*map(str, args)]) == 0, err.getvalue()
+            lines = err.getvalue().splitlines()
+    return out.getvalue(), [line for line in lines if "never written" in line]
 
 
 def store(path, shape, fill, written):
@@ -42,7 +57,10 @@ def said(path, z, counted):
 def test_binary_store_of_fill_value_1_says_its_unwritten_chunks_are_voxels(tmp_path):
     z = store(tmp_path / "one.zarr", (8, 6, 6), 1, 2)
     assert (z.nchunks, z.nchunks_initialized) == (4, 2)
-    out, notes = isoflow("info", tmp_path / "one.zarr", "--json")
+    p = subprocess.run([sys.executable, "-m", "isoflow", "info", str(tmp_path / "one.zarr"), "--json"],
+                       capture_output=True, text=True)  # as a user's shell runs it
+    assert p.returncode == 0, p.stderr
+    out, notes = p.stdout, [line for line in p.stderr.splitlines() if "never written" in line]
     assert json.loads(out)["voxels"] == int(np.count_nonzero(z[...])) == 144
     assert notes == [f"isoflow info: warning: {said(tmp_path / 'one.zarr', z, 'voxels of the object')}"]
     out, notes = isoflow("surface", tmp_path / "one.zarr", "-o", tmp_path / "one.ply")
