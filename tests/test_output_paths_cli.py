@@ -348,3 +348,21 @@ def test_a_gltf_output_names_the_glb_that_holds_the_same_scene(tmp_path):
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(tmp_path / "cube.glb", force="mesh")
     assert mesh.is_watertight and mesh.volume == pytest.approx(27.0)
+
+
+@pytest.mark.parametrize("name", ["out.ply", "OUT.STL", "seg.nii.gz"])
+def test_a_file_per_label_into_a_name_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, name):
+    # -o out.ply/ --suffix .obj made a directory named out.ply of .obj files, exit 0
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "labels.npy", labels)
+    given = f"{tmp_path / name}/"
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", given, "--suffix", ".obj", "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.count("\n") == 1 and f"{given}: the slash asks for a directory" in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["labels.npy"]  # nothing made
+    # a directory of that name that the user made is theirs, written into as any directory is
+    (tmp_path / name).mkdir()
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", given, "--suffix", ".obj", "-q")
+    assert p.returncode == 0, p.stderr
+    assert os.listdir(tmp_path / name) == ["label_1.obj"]

@@ -495,6 +495,7 @@ def surface_outputs(args: argparse.Namespace):
 
     out = str(args.output)
     if out.endswith(("/", "\\")) or Path(out).is_dir():
+        refuse_suffixed_directory(out, args.suffix)
         suffix = (args.suffix or "").lower()
         suffix = suffix if suffix.startswith(".") or not suffix else "." + suffix
         if suffix not in SURFACE_SUFFIXES:
@@ -514,6 +515,46 @@ def surface_outputs(args: argparse.Namespace):
         raise IsoflowError(f"{path}: one file holds a surface per label only as .glb (a node per label); "
                            "write -o DIR/ --suffix .ply for a file per label")
     return "glb", path
+
+
+def refuse_suffixed_directory(out: str, suffix: str | None) -> None:
+    """Refuse ``-o out.ply/`` where no directory ``out.ply`` is there yet:
+    the slash asks for a directory, the name for a file, and a directory
+    named like a mesh file is what neither reading meant (a program that
+    opens or lists ``*.ply`` takes it for a file). A directory of that
+    name that is already there is the user's own and is written into.
+
+    Parameters
+    ----------
+    out : str
+        ``-o`` as given.
+    suffix : str or None
+        ``--suffix`` as given, for the way out the line names.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``out``, the suffix and both ways out.
+
+    Examples
+    --------
+    >>> refuse_suffixed_directory("/no/such/cells/", ".ply")
+    >>> refuse_suffixed_directory("/no/such/cells.ply/", None)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: /no/such/cells.ply/: the slash asks for a directory and .ply for a file; give ...
+    """
+    from ..mesh.export import SURFACE_SUFFIXES
+    from ..mesh.outputs import file_suffix
+
+    directory = Path(out)
+    given = file_suffix(directory.name)
+    if given is None or directory.is_dir():
+        return
+    stem = str(directory)[: -len(given)]
+    per_label = suffix or (given if given in SURFACE_SUFFIXES else ".ply")
+    raise IsoflowError(f"{out}: the slash asks for a directory and {directory.name[-len(given):]} for a file; "
+                       f"give -o {stem}{os.sep} --suffix {per_label} for a file per label, or -o {stem}.glb "
+                       "for one file of every label")
 
 
 def cmd_surface_labels(args: argparse.Namespace) -> int:
