@@ -638,7 +638,8 @@ def test_a_negative_choice_without_its_equals_sign_is_one_line_naming_the_form_t
 
 def test_surface_labels_needs_glb_or_a_directory(tmp_path, capsys, segmentation):
     np.save(tmp_path / "seg.npy", segmentation)
-    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply", words=(".glb", "DIR/"))
+    fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "s.ply",
+          words=(f"-o {tmp_path / 's'}.glb", f"-o {tmp_path / 's'}/ --suffix .ply"))
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", f"{tmp_path}/d/", words=("--suffix",))
     # --suffix with a new directory's name without its slash: the line says the slash makes it
     fails(capsys, "surface", tmp_path / "seg.npy", "--labels", "-o", tmp_path / "new", "--suffix", "ply",

@@ -372,3 +372,58 @@ def test_a_gltf_output_names_the_glb_that_holds_the_same_scene(tmp_path):
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(tmp_path / "cube.glb", force="mesh")
     assert mesh.is_watertight and mesh.volume == pytest.approx(27.0)
+
+
+@pytest.mark.parametrize("name", ["out.ply", "OUT.STL", "seg.nii.gz"])
+def test_a_file_per_label_into_a_name_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, name):
+    # -o out.ply/ --suffix .obj made a directory named out.ply of .obj files, exit 0
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "labels.npy", labels)
+    given = f"{tmp_path / name}/"
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", given, "--suffix", ".obj", "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.count("\n") == 1 and f"{given}: the slash asks for a directory" in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["labels.npy"]  # nothing made
+    # a directory of that name that the user made is theirs, written into as any directory is
+    (tmp_path / name).mkdir()
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", given, "--suffix", ".obj", "-q")
+    assert p.returncode == 0, p.stderr
+    assert os.listdir(tmp_path / name) == ["label_1.obj"]
+
+
+@pytest.mark.parametrize("name", ["cells", "cells.ply", "cells.STL", "cells.gltf", "cells.nii.gz"])
+def test_a_surface_per_label_into_a_name_that_is_no_glb_says_both_ways_that_work(tmp_path, name):
+    # -o cells was told to end in .ply or .obj or .stl or .glb, and -o cells.ply (there from an earlier
+    # run) to pass --force: following either line was refused again, as only .glb holds a surface per label
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    labels[3:5, 3:5, 3:5] = 2
+    np.save(tmp_path / "labels.npy", labels)
+    if name == "cells.ply":
+        (tmp_path / name).write_bytes(b"an earlier run's")
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", tmp_path / name, "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr.count("\n") == 1, p.stderr
+    ways = p.stderr.rstrip("\n").split("; give ")[-1].split(" or ")
+    assert len(ways) == 2, p.stderr
+    for way in ways:  # each way out the line gives is a command that writes every label's surface
+        done = run("surface", tmp_path / "labels.npy", "--labels", *way.split(), "-q")
+        assert done.returncode == 0, (way, done.stderr)
+    import trimesh
+
+    assert sorted(trimesh.load(tmp_path / "cells.glb").graph.nodes_geometry) == ["label_1", "label_2"]
+    files = sorted((tmp_path / "cells").iterdir())
+    assert [f.stem for f in files] == ["label_1", "label_2"]
+    assert all(trimesh.load(f).is_watertight for f in files)
+
+
+def test_a_suffix_that_is_no_format_of_a_file_per_label_is_named(tmp_path):
+    # -o out/ --suffix .gltf was told the suffixes taken, not that .gltf (as given) is not one of them
+    labels = np.zeros((6, 6, 6), np.uint8)
+    labels[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "labels.npy", labels)
+    p = run("surface", tmp_path / "labels.npy", "--labels", "-o", f"{tmp_path / 'out'}/", "--suffix", ".gltf", "-q")
+    assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
+    assert p.stderr.rstrip().endswith("not .gltf"), p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["labels.npy"]

@@ -491,14 +491,16 @@ def surface_outputs(args: argparse.Namespace):
     with a node per label, or ``("dir", directory, suffix)`` for a file per
     label (``-o DIR/`` with ``--suffix``), checked before any work."""
     from ..mesh.export import SURFACE_SUFFIXES
-    from ..mesh.outputs import check_output_path, check_writable_dir
+    from ..mesh.outputs import check_output_path, check_writable_dir, file_suffix
 
     out = str(args.output)
     if out.endswith(("/", "\\")) or Path(out).is_dir():
+        refuse_suffixed_directory(out, args.suffix)
         suffix = (args.suffix or "").lower()
         suffix = suffix if suffix.startswith(".") or not suffix else "." + suffix
         if suffix not in SURFACE_SUFFIXES:
-            raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}")
+            given = f", not {args.suffix}" if args.suffix else ""
+            raise IsoflowError(f"{out}: a file per label needs --suffix {'|'.join(SURFACE_SUFFIXES)}{given}")
         directory = Path(out)
         if not directory.is_dir() and (directory.exists() or directory.is_symlink()):  # mkdir would fail, after the work
             raise IsoflowError(f"{out}: exists and is not a directory; give a new or existing directory for a file per label")
@@ -509,11 +511,55 @@ def surface_outputs(args: argparse.Namespace):
         if not Path(out).suffix:  # a directory meant, not there yet: only the slash says so
             raise IsoflowError(f"{out}: no such directory; -o {out}/ makes it, for a file per label (--suffix)")
         raise IsoflowError(f"{out}: --suffix names the files of -o DIR/; one file holds every label as .glb")
-    path = check_output_path(out, args.force, suffixes=SURFACE_SUFFIXES, what="surface")
-    if path.suffix.lower() != ".glb":
-        raise IsoflowError(f"{path}: one file holds a surface per label only as .glb (a node per label); "
-                           "write -o DIR/ --suffix .ply for a file per label")
-    return "glb", path
+    given = file_suffix(Path(out).name) or Path(out).suffix
+    if given.lower() != ".glb":
+        # refused before check_output_path, whose list of one surface's suffixes (.ply, ...) and whose "exists;
+        # pass --force" of an earlier .ply would each lead to a second refusal, here
+        stem = out[: len(out) - len(given)]
+        per_label = given.lower() if given.lower() in SURFACE_SUFFIXES else ".ply"
+        raise IsoflowError(f"{out}: a surface per label is written into one .glb (a node per label) or into a "
+                           f"directory (a file per label); give -o {stem}.glb or -o {stem}/ --suffix {per_label}")
+    return "glb", check_output_path(out, args.force, suffixes=(".glb",), what="surface")
+
+
+def refuse_suffixed_directory(out: str, suffix: str | None) -> None:
+    """Refuse ``-o out.ply/`` where no directory ``out.ply`` is there yet:
+    the slash asks for a directory, the name for a file, and a directory
+    named like a mesh file is what neither reading meant (a program that
+    opens or lists ``*.ply`` takes it for a file). A directory of that
+    name that is already there is the user's own and is written into.
+
+    Parameters
+    ----------
+    out : str
+        ``-o`` as given.
+    suffix : str or None
+        ``--suffix`` as given, for the way out the line names.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``out``, the suffix and both ways out.
+
+    Examples
+    --------
+    >>> refuse_suffixed_directory("/no/such/cells/", ".ply")
+    >>> refuse_suffixed_directory("/no/such/cells.ply/", None)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    isoflow.errors.IsoflowError: /no/such/cells.ply/: the slash asks for a directory and .ply for a file; give ...
+    """
+    from ..mesh.export import SURFACE_SUFFIXES
+    from ..mesh.outputs import file_suffix
+
+    directory = Path(out)
+    given = file_suffix(directory.name)
+    if given is None or directory.is_dir():
+        return
+    stem = str(directory)[: -len(given)]
+    per_label = suffix or (given if given in SURFACE_SUFFIXES else ".ply")
+    raise IsoflowError(f"{out}: the slash asks for a directory and {directory.name[-len(given):]} for a file; "
+                       f"give -o {stem}{os.sep} --suffix {per_label} for a file per label, or -o {stem}.glb "
+                       "for one file of every label")
 
 
 def cmd_surface_labels(args: argparse.Namespace) -> int:

@@ -33,6 +33,7 @@ from ..mesh import export
 from ..mesh.outputs import (
     atomic_write,
     check_writable_dir,
+    file_suffix,
     interrupted_by_signal,
     make_output_dir,
     remove_abandoned,
@@ -191,9 +192,7 @@ def refuse_file_suffix(out: Path) -> None:
     from ..mesh.formats.registry import volume_suffixes
     from ..mesh.load import MESH_SUFFIXES
 
-    name = out.name.lower()
-    suffixes = (*MESH_SUFFIXES, *volume_suffixes())
-    suffix = max((s for s in suffixes if name.endswith(s) and name != s), key=len, default=None)
+    suffix = file_suffix(out.name)
     if suffix is None:
         return
     files = "step_NNN.ply, flow.csv, flow.png, shapes.png"
