@@ -190,7 +190,7 @@ def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
 
 
 
-@pytest.mark.parametrize("name", ["X.ply", "steps.nii.gz", "run.STL", "out.zarr"])
+@pytest.mark.parametrize("name", ["X.ply", "steps.nii.gz", "run.STL", "out.zarr", "flow.csv", "run.JSON"])
 def test_flow_out_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, name):
     # --out X.ply made a directory named X.ply and filled it with the run's files, exit 0
     box = np.zeros((5, 6, 7), bool)
@@ -348,3 +348,17 @@ def test_a_gltf_output_names_the_glb_that_holds_the_same_scene(tmp_path):
     assert done.returncode == 0, done.stderr
     mesh = trimesh.load(tmp_path / "cube.glb", force="mesh")
     assert mesh.is_watertight and mesh.volume == pytest.approx(27.0)
+
+
+def test_flow_out_named_as_its_table_names_the_directory_that_writes_it(tmp_path):
+    # --out flow.csv made a directory flow.csv holding flow.csv/flow.csv, exit 0
+    from PIL import Image
+
+    disc = np.zeros((12, 12), np.uint8)
+    disc[3:9, 2:10] = 255
+    Image.fromarray(disc).save(tmp_path / "disc.png")  # a 2D image: no step_NNN.ply is written for it
+    p = run("flow", tmp_path / "disc.png", "--out", tmp_path / "flow.csv", "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert f"give --out {tmp_path / 'flow'} (--out {tmp_path / 'flow'} writes {tmp_path / 'flow'}/flow.csv)" in p.stderr
+    assert "step_NNN.ply in 3D" in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["disc.png"]
