@@ -1061,3 +1061,21 @@ def test_an_8_bit_grey_image_is_offered_a_threshold_first_and_labels_as_a_condit
     fails(capsys, "info", tmp_path / "g.png",
           words=(f"threshold it first, e.g. image > {(low + high) // 2}, or, if its values are labels, select one "
                  "with --label N",))
+
+
+@pytest.mark.parametrize("command", ["flow", "info"])
+def test_the_threshold_offered_for_negative_labels_keeps_every_labelled_voxel(tmp_path, capsys, command):
+    """A label image whose labels are negative (an int16 segmentation
+    marking its regions -1 and -2) was offered ``volume > 0``, which keeps
+    none of them: following the advice gave an empty object. The test
+    offered, applied as NumPy reads it, keeps every voxel not 0."""
+    labels = np.zeros((10, 10, 10), np.int16)
+    labels[1:4, 1:4, 1:4] = -1
+    labels[5:9, 5:9, 5:9] = -2
+    np.save(tmp_path / "neg.npy", labels)
+    said = fails(capsys, command, tmp_path / "neg.npy", words=("neg.npy", "threshold it first, e.g. volume "))
+    test = re.search(r"e\.g\. volume (>|!=) (-?[\d.]+)", said)
+    assert test, said
+    op, value = test.group(1), float(test.group(2))
+    kept = labels > value if op == ">" else labels != value
+    assert np.count_nonzero(kept) == np.count_nonzero(labels) == 27 + 64

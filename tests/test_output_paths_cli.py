@@ -214,7 +214,7 @@ def test_flow_force_keeps_a_directory_named_like_a_step_file(tmp_path):
 
 
 
-@pytest.mark.parametrize("name", ["X.ply", "steps.nii.gz", "run.STL", "out.zarr"])
+@pytest.mark.parametrize("name", ["X.ply", "steps.nii.gz", "run.STL", "out.zarr", "flow.csv", "run.JSON"])
 def test_flow_out_with_a_file_suffix_is_refused_not_made_a_directory(tmp_path, name):
     # --out X.ply made a directory named X.ply and filled it with the run's files, exit 0
     box = np.zeros((5, 6, 7), bool)
@@ -427,3 +427,17 @@ def test_a_suffix_that_is_no_format_of_a_file_per_label_is_named(tmp_path):
     assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
     assert p.stderr.rstrip().endswith("not .gltf"), p.stderr
     assert sorted(os.listdir(tmp_path)) == ["labels.npy"]
+
+
+def test_flow_out_named_as_its_table_names_the_directory_that_writes_it(tmp_path):
+    # --out flow.csv made a directory flow.csv holding flow.csv/flow.csv, exit 0
+    from PIL import Image
+
+    disc = np.zeros((12, 12), np.uint8)
+    disc[3:9, 2:10] = 255
+    Image.fromarray(disc).save(tmp_path / "disc.png")  # a 2D image: no step_NNN.ply is written for it
+    p = run("flow", tmp_path / "disc.png", "--out", tmp_path / "flow.csv", "-q")
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert f"give --out {tmp_path / 'flow'} (--out {tmp_path / 'flow'} writes {tmp_path / 'flow'}/flow.csv)" in p.stderr
+    assert "step_NNN.ply in 3D" in p.stderr, p.stderr
+    assert sorted(os.listdir(tmp_path)) == ["disc.png"]

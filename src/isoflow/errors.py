@@ -214,7 +214,10 @@ def coordinates(values, digits: int = 6, step=None) -> str:
     the origin of a model in micrometres as 0 or -1e-06; with ``step`` (a
     voxel size: one number, or one per coordinate) to as many more as keep
     it within a 200th of a step, so that the origin of a model near 1e6 in
-    voxels of 0.04 is not printed seven voxels away, as 1e+06.
+    voxels of 0.04 is not printed seven voxels away, as 1e+06. With
+    ``step``, a coordinate within a billionth of a step of 0 is 0: that is
+    float64's rounding of ``origin + pitch * lattice`` (the centre of
+    voxels symmetric about 0 comes out as ``1.11022e-16``), not a place.
 
     Parameters
     ----------
@@ -236,6 +239,8 @@ def coordinates(values, digits: int = 6, step=None) -> str:
     ('[-1.3e-06, -3.25e-07, -0.273438]', '[1, 2, 3]')
     >>> coordinates([999998.7, 0.0, 999999.6953125]), coordinates([999998.7, 0.0, 999999.6953125], step=0.04)
     ('[999999, 0, 1e+06]', '[999998.7, 0, 999999.69531]')
+    >>> coordinates([1.1102230246251565e-16, -0.0002575, -5.551115123125783e-17], step=0.1)
+    '[0, -0.0002575, 0]'
 
     A coordinate that is not known (None: float64 cannot hold it,
     :mod:`isoflow.digital.float64`) is a ``?``:
@@ -245,7 +250,17 @@ def coordinates(values, digits: int = 6, step=None) -> str:
     """
     values = [None if x is None else float(x) for x in values]
     steps = [step] * len(values) if step is None or not hasattr(step, "__len__") else [float(s) for s in step]
+    values = [_without_noise(x, s) for x, s in zip(values, steps)]
     return "[" + ", ".join("?" if x is None else f"{x:.{_digits_for(x, s, digits)}g}" for x, s in zip(values, steps)) + "]"
+
+
+def _without_noise(x: float | None, step) -> float | None:
+    """``x``, or 0 where it lies within a billionth of ``step`` of 0 (the
+    rounding of a placement's float64 arithmetic, which a place that far
+    below a voxel cannot be told from)."""
+    if x is None or step is None or not (math.isfinite(step := float(step)) and step > 0):
+        return x
+    return 0.0 if abs(x) <= step * 1e-9 else x
 
 
 def _digits_for(x: float, step, digits: int) -> int:

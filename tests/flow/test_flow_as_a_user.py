@@ -247,3 +247,19 @@ def test_a_guarded_runs_table_names_each_steps_move_as_its_json_does(tmp_path):
     assert counts["partial"] + counts["thinning"] > 0
     said = [line for line in text.stdout.splitlines() if line.strip().startswith("moves:")]
     assert said == ["  moves: " + ", ".join(f"{counts[k]} {k}" for k in ("flow", "partial", "thinning"))]
+
+
+def test_the_limit_of_a_mesh_symmetric_about_0_prints_as_trimesh_places_its_centre():
+    """The sample torus is centred on the origin (trimesh's bounds), and so
+    are its voxels: the limit printed was ``[1.11022e-16, -1.38778e-17,
+    1.11022e-16]``, float64's rounding of ``origin + pitch * lattice``,
+    where a user reads the place trimesh gives, ``[0, 0, 0]``."""
+    trimesh = pytest.importorskip("trimesh")
+    from isoflow import data
+
+    centre = trimesh.load(data.torus(), force="mesh").bounds.mean(axis=0)
+    assert centre.tolist() == [0.0, 0.0, 0.0]
+    p = isoflow("flow", data.torus(), "--resolution", 24, "-q")
+    assert p.returncode == 0, p.stderr
+    (limit,) = [line for line in p.stdout.splitlines() if line.strip().startswith("limit:")]
+    assert limit.split(", the centre")[0].strip() == "limit: [0, 0, 0]", limit

@@ -40,8 +40,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                         "not taken; a guarded run never takes one)")
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
-                   help="also write every step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, ...); "
-                        "a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its "
+                   help="also write every non-empty step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, "
+                        "...); a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its "
                         "--out gets no surfaces or shapes.png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")

@@ -166,11 +166,19 @@ def flow_table(result: FlowResult, checks: dict | None = None) -> tuple[list[str
 STAGE = "run"
 
 
+#: the suffixes of the run's own outputs other than its step files: the
+#: table ``--out`` writes and the object ``--json`` prints, each with what
+#: gives that file
+RUN_FILE_SUFFIXES = {".csv": ("table", "--out {dir} writes {dir}/flow.csv"),
+                     ".json": ("JSON", "--json prints the run's JSON: > {dir}.json")}
+
+
 def refuse_file_suffix(out: Path) -> None:
-    """Refuse a directory to be made whose name ends in a mesh or volume
-    suffix: ``flow --out X.ply`` meant a file, and a directory of that name
-    is not what the user asked for (:func:`check_output_dir` calls it only
-    where the directory is not there: an existing one is the user's own).
+    """Refuse a directory to be made whose name ends in a mesh, volume,
+    table or JSON suffix: ``flow --out X.ply`` or ``--out flow.csv`` meant
+    a file, and a directory of that name is not what the user asked for
+    (:func:`check_output_dir` calls it only where the directory is not
+    there: an existing one is the user's own).
 
     Parameters
     ----------
@@ -192,14 +200,18 @@ def refuse_file_suffix(out: Path) -> None:
     from ..mesh.formats.registry import volume_suffixes
     from ..mesh.load import MESH_SUFFIXES
 
-    suffix = file_suffix(out.name)
+    name = out.name.lower()
+    suffix = file_suffix(out.name) or next((s for s in RUN_FILE_SUFFIXES if name.endswith(s) and name != s), None)
     if suffix is None:
         return
-    files = "step_NNN.ply, flow.csv, flow.png, shapes.png"
-    kind = "mesh" if suffix in MESH_SUFFIXES else "volume"
+    # the check runs before the input is read: a 2D run writes no surfaces
+    files = "step_NNN.ply in 3D, flow.csv, flow.png, shapes.png"
+    kind = "mesh" if suffix in MESH_SUFFIXES else RUN_FILE_SUFFIXES.get(suffix, ("volume",))[0]
     given, other = out.name[-len(suffix):], out.with_name(out.name[: -len(suffix)])
     # a volume per step is what --volumes writes: the likelier wish behind --out steps.nii.gz
     hint = f" (--volumes {suffix} adds every step's volume)" if suffix in volume_suffixes(writable=True) else ""
+    if suffix in RUN_FILE_SUFFIXES:
+        hint = " (" + RUN_FILE_SUFFIXES[suffix][1].format(dir=other) + ")"
     raise IsoflowError.worded(
         f"{out}: the flow's files ({files}) go into a directory, and {given} is a {kind} suffix; "
         f"give a directory such as {other}",

@@ -210,7 +210,7 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         kind = value_kind(values, labels)
         bare = (f"{where}: not a binary {thing} ({counted(nbad, cell)}{place} hold{'s' if nbad == 1 else ''} "
                 "values other than 0 and 1, "
-                f"e.g. {value}); threshold it first, e.g. {thing} > {threshold_example(arr, kind)}")
+                f"e.g. {value}); threshold it first, e.g. {thing} {threshold_example(arr, kind)}")
         # integers in memory are most often a label image, which has a table
         # (a command adds its own options to ``bare`` instead)
         table = near is None and arr.dtype.kind in "iu" and arr.ndim in (2, 3) and kind == "labels"
@@ -261,9 +261,10 @@ def value_kind(values: np.ndarray, whole: bool) -> str:
 
 
 def threshold_example(arr: np.ndarray, kind: str) -> str:
-    """The threshold a refusal suggests: 0 for labels (every label's
-    voxels), else half way through the values (a whole number for whole
-    values), 0.5 for a probability map (values from 0 to 1).
+    """The test a refusal suggests: ``> 0`` for labels (every label's
+    voxels; ``!= 0`` where a label is negative, which ``> 0`` would leave
+    out), else ``>`` half way through the values (a whole number for whole
+    values), ``> 0.5`` for a probability map (values from 0 to 1).
 
     Parameters
     ----------
@@ -275,21 +276,22 @@ def threshold_example(arr: np.ndarray, kind: str) -> str:
     Returns
     -------
     str
+        The comparison, operator and value.
 
     Examples
     --------
     >>> threshold_example(np.array([0, 2, 3]), "labels"), threshold_example(np.array([0.1, 0.9]), "fractions")
-    ('0', '0.5')
-    >>> threshold_example(np.array([0, 17, 255], np.uint8), "grey")
-    '127'
+    ('> 0', '> 0.5')
+    >>> threshold_example(np.array([0, 17, 255], np.uint8), "grey"), threshold_example(np.array([0, -1, -2]), "labels")
+    ('> 127', '!= 0')
     """
     finite = arr[np.isfinite(arr)] if arr.dtype.kind == "f" else arr
     if kind == "labels" or not finite.size:
-        return "0"
+        return "!= 0" if finite.size and finite.min() < 0 else "> 0"
     low, high = float(finite.min()), float(finite.max())
     if kind == "grey":  # whole values: a whole threshold
-        return str(int((low + high) // 2))
-    return "0.5" if 0 <= low and high <= 1 else f"{(low + high) / 2:.3g}"
+        return f"> {int((low + high) // 2)}"
+    return "> 0.5" if 0 <= low and high <= 1 else f"> {(low + high) / 2:.3g}"
 
 
 #: what a zarr array's fill value is, said after a value that is it
