@@ -20,10 +20,6 @@ da = pytest.importorskip("dask.array")
 zarr = pytest.importorskip("zarr")
 
 
-#: the worker's own memory monitor left out: it counts the worker's whole process, not what the check counts
-UNMONITORED = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
-
-
 @pytest.fixture(scope="module")
 def client():
     with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
@@ -121,7 +117,8 @@ def test_the_default_clients_worker_limit_holds_the_blocks():
     if default_budget() < 1 << 30:
         pytest.skip("the big block must fit this machine's memory, so that only the worker's limit refuses it")
     # the worker's own memory monitor left out: with processes=False it measures this whole test process
-    with dask.config.set(UNMONITORED), \
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set(unmonitored), \
             distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="200MB", processes=False,
                                      dashboard_address=None) as cluster, distributed.Client(cluster):
         with pytest.raises(IsoflowError) as err:
@@ -150,7 +147,8 @@ def test_the_surface_blocks_are_held_to_the_workers_memory_limit(tmp_path):
     v = ball(12, 30)
     small = zarr.open_array(str(tmp_path / "small.zarr"), mode="w", shape=v.shape, chunks=(11, 7, 13), dtype=bool)
     small[:] = v
-    with dask.config.set(UNMONITORED), \
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
+    with dask.config.set(unmonitored), \
             distributed.LocalCluster(n_workers=1, threads_per_worker=1, memory_limit="50MB", processes=False,
                                      dashboard_address=None) as cluster, distributed.Client(cluster):
         with pytest.raises(IsoflowError) as err:
@@ -161,23 +159,6 @@ def test_the_surface_blocks_are_held_to_the_workers_memory_limit(tmp_path):
     assert "smaller chunks" in message  # what would fit: not even one block at a time does
     assert not (tmp_path / "big.ply").exists() and not list(tmp_path.glob(".big*"))
     assert got["voxels"] == np.count_nonzero(v) and got["euler_characteristic"] == 2  # a ball's surface, a sphere
-
-
-@pytest.fixture(scope="module")
-def measuring_client():
-    """A cluster of one worker process of one thread whose memory limit
-    (16 GB) holds every run here, its own monitor left out: the peaks the
-    kernel measures on it (each taken from :func:`_reset_peak`, which
-    gives back the heap of the runs before) for the tests that read them
-    (starting a worker and loading the compiled passes on it costs a few
-    seconds a cluster)."""
-    import dask
-
-    with dask.config.set(UNMONITORED):  # read as the worker starts
-        cluster = distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit="16GB",
-                                           dashboard_address=None)
-    with cluster, distributed.Client(cluster) as client:
-        yield client
 
 
 def _reset_peak() -> int:
@@ -228,7 +209,7 @@ def _porous_store(tmp_path, monkeypatch) -> tuple:
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the peak is read from /proc/self/status")
-def test_the_worker_estimate_covers_the_workers_measured_peak(tmp_path, monkeypatch, measuring_client):
+def test_the_worker_estimate_covers_the_workers_measured_peak(tmp_path, monkeypatch):
     """On a worker process each block's task unpickles a copy of the store's
     chunk reader, and the worker holds every copy until the layer of
     blocks is done: copies that kept the chunks their block and halo
@@ -245,27 +226,27 @@ def test_the_worker_estimate_covers_the_workers_measured_peak(tmp_path, monkeypa
     if not os.access("/proc/self/clear_refs", os.W_OK):
         pytest.skip("the kernel's peak cannot be reset here")
     path, small, counted = _porous_store(tmp_path, monkeypatch)
-    client = measuring_client
-    write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / "small.ply", scheduler=client)
-    analyze_chunked(zarr.open_array(small, mode="r"), 6, scheduler=client)
-    got = {}
-    for what in ("surface", "info"):
-        counted.clear()
-        (before,) = client.run(_reset_peak).values()
-        z = zarr.open_array(path, mode="r")
-        if what == "surface":
-            write_surface_blocks(z, tmp_path / "porous.ply", scheduler=client, block_shape=(64, 64, 64))
-        else:
-            analyze_chunked(z, 6, scheduler=client, block_shape=(64, 64, 64))
-        (after,) = client.run(_status, "VmHWM").values()
-        got[what] = {"peak": after - before, "estimate": max(counted)}
+    with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit="8GB",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / "small.ply", scheduler=client)
+        analyze_chunked(zarr.open_array(small, mode="r"), 6, scheduler=client)
+        got = {}
+        for what in ("surface", "info"):
+            counted.clear()
+            (before,) = client.run(_reset_peak).values()
+            z = zarr.open_array(path, mode="r")
+            if what == "surface":
+                write_surface_blocks(z, tmp_path / "porous.ply", scheduler=client, block_shape=(64, 64, 64))
+            else:
+                analyze_chunked(z, 6, scheduler=client, block_shape=(64, 64, 64))
+            (after,) = client.run(_status, "VmHWM").values()
+            got[what] = {"peak": after - before, "estimate": max(counted)}
     for what, numbers in got.items():
         assert 0.95 * numbers["peak"] <= numbers["estimate"] <= 2 * numbers["peak"], (what, got)
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the peak is read from /proc/self/status")
-def test_the_surface_estimate_of_blocks_as_large_as_the_chunks_is_near_the_workers_peak(tmp_path, monkeypatch,
-                                                                                         measuring_client):
+def test_the_surface_estimate_of_blocks_as_large_as_the_chunks_is_near_the_workers_peak(tmp_path, monkeypatch):
     """The writing pass counted 160 bytes per mesh vertex and 200 per face
     whatever the file: blocks of 128^3 (the chunks of a 256^3 porous
     store) were estimated at 3.1 times the peak the kernel measures for a
@@ -282,20 +263,21 @@ def test_the_surface_estimate_of_blocks_as_large_as_the_chunks_is_near_the_worke
         pytest.skip("the kernel's peak cannot be reset here")
     path, small, counted = _porous_store(tmp_path, monkeypatch)
     got = {}
-    client = measuring_client
-    for suffix in (".ply", ".stl"):
-        write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / f"small{suffix}", scheduler=client)
-        counted.clear()
-        (before,) = client.run(_reset_peak).values()
-        write_surface_blocks(zarr.open_array(path, mode="r"), tmp_path / f"porous{suffix}", scheduler=client)
-        (after,) = client.run(_status, "VmHWM").values()
-        got[suffix] = {"peak": after - before, "estimate": max(counted)}
+    with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit="8GB",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        for suffix in (".ply", ".stl"):
+            write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / f"small{suffix}", scheduler=client)
+            counted.clear()
+            (before,) = client.run(_reset_peak).values()
+            write_surface_blocks(zarr.open_array(path, mode="r"), tmp_path / f"porous{suffix}", scheduler=client)
+            (after,) = client.run(_status, "VmHWM").values()
+            got[suffix] = {"peak": after - before, "estimate": max(counted)}
     for suffix, numbers in got.items():
         assert 0.95 * numbers["peak"] <= numbers["estimate"] <= 2.5 * numbers["peak"], (suffix, got)
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the peak is read from /proc/self/status")
-def test_info_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path, measuring_client):
+def test_info_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path):
     """A dask.distributed worker's check counted a block at work as this
     process's threads do (3 bytes a voxel) and 14 bytes a voxel of every
     face of a layer: a 512^3 store in chunks of 128^3, whose peak on a
@@ -309,26 +291,27 @@ def test_info_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path, meas
     if not os.access("/proc/self/clear_refs", os.W_OK):
         pytest.skip("the kernel's peak cannot be reset here")
     path, small, v = _porous(tmp_path, 512)
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
 
-    def info(client):
-        analyze_chunked(zarr.open_array(small, mode="r"), 6, scheduler=client)
-        (before,) = client.run(_reset_peak).values()
-        got = analyze_chunked(zarr.open_array(path, mode="r"), 6, scheduler=client)
-        (after,) = client.run(_status, "VmHWM").values()
+    def info(limit):
+        with dask.config.set(unmonitored), \
+                distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit=limit,
+                                         dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            analyze_chunked(zarr.open_array(small, mode="r"), 6, scheduler=client)
+            (before,) = client.run(_reset_peak).values()
+            got = analyze_chunked(zarr.open_array(path, mode="r"), 6, scheduler=client)
+            (after,) = client.run(_status, "VmHWM").values()
         return got, after - before
 
-    _, peak = info(measuring_client)
+    _, peak = info("16GB")
     limit = int(1.5 * peak)
-    with dask.config.set(UNMONITORED), \
-            distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit=limit,
-                                     dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        got, peak_there = info(client)  # main: "needs about 27.0 MiB on a dask.distributed worker"
+    got, peak_there = info(limit)  # main: "needs about 27.0 MiB on a dask.distributed worker"
     assert peak_there <= limit
     assert got.voxels == np.count_nonzero(v)
 
 
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="the peak is read from /proc/self/status")
-def test_surface_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path, measuring_client):
+def test_surface_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path):
     """The writing pass counted a block's read beside its mesh and records,
     and 112 bytes per mesh vertex and 64 per face: the surface of a porous
     store in chunks of 128^3, whose peak on a worker of one thread the
@@ -350,20 +333,22 @@ def test_surface_runs_on_a_worker_whose_limit_is_half_again_its_peak(tmp_path, m
     v = v[:128]  # four of its blocks: the same blocks at a time, a quarter of the work
     path = str(tmp_path / "slab.zarr")
     zarr.create_array(store=path, shape=v.shape, chunks=(128, 128, 128), dtype=bool)[...] = v
+    unmonitored = {f"distributed.worker.memory.{k}": False for k in ("target", "spill", "pause", "terminate")}
 
-    def surface(client, out):
-        write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / "small.ply", scheduler=client, force=True)
-        (before,) = client.run(_reset_peak).values()
-        write_surface_blocks(zarr.open_array(path, mode="r"), out, scheduler=client)
-        (after,) = client.run(_status, "VmHWM").values()
+    def surface(limit, out):
+        with dask.config.set(unmonitored), \
+                distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit=limit,
+                                         dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            write_surface_blocks(zarr.open_array(small, mode="r"), tmp_path / "small.ply", scheduler=client,
+                                 force=True)
+            (before,) = client.run(_reset_peak).values()
+            write_surface_blocks(zarr.open_array(path, mode="r"), out, scheduler=client)
+            (after,) = client.run(_status, "VmHWM").values()
         return after - before
 
-    peak = surface(measuring_client, tmp_path / "first.ply")
+    peak = surface("16GB", tmp_path / "first.ply")
     limit = int(1.5 * peak)
-    with dask.config.set(UNMONITORED), \
-            distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1, memory_limit=limit,
-                                     dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        peak_there = surface(client, tmp_path / "porous.ply")  # main: "needs about 47.2 MiB on a dask.distributed worker"
+    peak_there = surface(limit, tmp_path / "porous.ply")  # main: "needs about 47.2 MiB on a dask.distributed worker"
     assert peak_there <= limit
     got = trimesh.load(tmp_path / "porous.ply", process=False)
     want = trimesh.load(write_mesh_file(tmp_path / "memory.ply", boundary_mesh(v, 6), DigitalObject(v))["path"],
