@@ -374,3 +374,27 @@ def test_overlapping_meshes_stay_within_the_budget_they_were_accepted_in():
         tracemalloc.stop()
     assert r.overlap_voxels > 0.6 * r.labels.size
     assert peak <= budget, (peak, budget)
+
+
+def test_a_small_box_on_a_grid_shared_with_a_larger_mesh_is_not_called_thin():
+    # a cube 4 voxels across, its sides on the planes between voxels, beside a
+    # larger box: its shell on the shared grid took in the voxels past each
+    # side that only touch it (208 against its 64 voxels), so it was told the
+    # winding rule "leaves 64 voxels in" a surface that "bounds little volume",
+    # and offered --fill flood (216 voxels); voxelised alone, it had no note
+    pitch = 0.25
+    big = trimesh.creation.box(extents=(4, 4, 4))
+    # the cubes' lowest corners on voxel corners of the shared grid (its origin is the big box's, -2)
+    small = {n: trimesh.creation.box(extents=(n * pitch,) * 3, transform=trimesh.transformations.translation_matrix(
+        np.array((4, 4 * k, 0)) + n * pitch / 2)) for k, n in enumerate((2, 3, 4, 6))}
+    r = voxelize_meshes([big, *small.values()], pitch=pitch)
+    for label, (n, box) in enumerate(small.items(), 2):
+        centres = r.origin + pitch * (np.argwhere(np.ones(r.labels.shape, bool)) + 0.5)
+        assert r.voxels[label - 1] == int(box.contains(centres).sum()) == n**3  # trimesh's count: the whole cube
+        assert r.notes[label - 1] is None, (n, r.notes[label - 1])
+        one = voxelize(box.vertices, box.faces, pitch=pitch, details=True)  # on a grid of its own
+        assert one.voxels == n**3 and one.note is None
+    # a closed plate thinner than a voxel still gets the note on the shared grid
+    plate = trimesh.creation.box(extents=(3, 3, 0.05), transform=trimesh.transformations.translation_matrix((0, -4, 0)))
+    thin = voxelize_meshes([big, plate], pitch=pitch)
+    assert thin.voxels[1] == 0 and "the winding rule leaves no voxel in" in thin.notes[1]

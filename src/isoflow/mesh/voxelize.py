@@ -496,13 +496,31 @@ class VoxelPlan:
         return [(a, min(a + rows, nx)) for a in range(0, nx, rows)]
 
     def shellcounted(self) -> int:
-        """Voxels of the mesh's shell on this grid, counted slab by slab (a
-        slab's volume at a time)."""
+        """Voxels of the mesh's shell on this grid that hold some of the
+        inside of the mesh's bounding box, counted slab by slab (a slab's
+        volume at a time). A voxel past the box that only touches it (a side
+        of the box on the plane between voxels) is not counted: on a grid
+        of the mesh's own there is none, and on a grid shared with larger
+        meshes, it would make a box a few voxels across read as thin
+        against its shell (64 voxels against 208 for a cube of 4)."""
         from .shell import ShellGrid, grid_planes
 
-        shell = ShellGrid(self.Tm, grid_planes(self.origin, self.pitch, self.shape, self.start))
+        planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
+        shell = ShellGrid(self.Tm, planes)
+        corners = self.Tm.reshape(-1, 3)
+        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        box = []
+        for a in range(3):
+            held = np.flatnonzero((planes[a][1:] > lo[a]) & (planes[a][:-1] < hi[a]))
+            box.append((int(held[0]), int(held[-1]) + 1) if len(held) else (0, 0))
+        (x0, x1), (y0, y1), (z0, z1) = box
         _, ny, nz = self.shape
-        return sum(shell.fill(a, b, np.zeros((b - a, ny, nz), dtype=bool), threads=2) for a, b in self.slabs())
+        count = 0
+        for a, b in self.slabs():
+            out = np.zeros((b - a, ny, nz), dtype=bool)
+            shell.fill(a, b, out, threads=2)
+            count += int(np.count_nonzero(out[max(x0 - a, 0):max(x1 - a, 0), y0:y1, z0:z1]))
+        return count
 
     def sampled_points(self) -> tuple[np.ndarray, np.ndarray] | None:
         """:func:`~isoflow.mesh.fills.sampled_points` on this grid: the
