@@ -398,3 +398,20 @@ def test_a_small_box_on_a_grid_shared_with_a_larger_mesh_is_not_called_thin():
     plate = trimesh.creation.box(extents=(3, 3, 0.05), transform=trimesh.transformations.translation_matrix((0, -4, 0)))
     thin = voxelize_meshes([big, plate], pitch=pitch)
     assert thin.voxels[1] == 0 and "the winding rule leaves no voxel in" in thin.notes[1]
+
+
+def test_the_split_bodies_of_one_file_that_overlap_are_said_to_be_bodies(tmp_path):
+    # two interpenetrating balls written as one file: with --split each is a
+    # body of the file, and the note and the refusal called them "meshes"
+    a, b = sphere(1.0, (0, 0, 0)), sphere(0.8, (1.1, 0.3, -0.2))
+    trimesh.util.concatenate([a, b]).export(tmp_path / "two.stl")
+    r = voxelize_meshes([tmp_path / "two.stl"], resolution=48, split=True)
+    centres = r.origin + r.pitch * (np.argwhere(np.ones(r.labels.shape, bool)) + 0.5)
+    shared = int((a.contains(centres) & b.contains(centres)).sum())  # trimesh's count of the voxels in both
+    assert r.overlap_voxels == shared > 100
+    assert f"{shared} voxels lie inside two or more bodies (labels 1 and 2: {shared})" in r.note
+    assert "the later body's label wins" in r.note and "mesh" not in r.note
+    with pytest.raises(IsoflowError, match=rf"the bodies overlap: {shared} voxels lie inside two or more bodies"):
+        voxelize_meshes([tmp_path / "two.stl"], resolution=48, split=True, overlap="error")
+    # meshes given as meshes keep their word
+    assert "inside two or more meshes" in voxelize_meshes([a, b], resolution=48).note

@@ -417,10 +417,11 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         # nothing is written or listed: the line says which mesh each label it names is
         shown = sorted({k for i, j, _ in result.overlaps[:NAMED_PAIRS] for k in (i, j)})
         which = ", ".join(f"{k} {names[k - 1]}" for k in shown)
-        said = f"the meshes overlap: {overlap_text(result)}, label {which}; "
-        raise IsoflowError.worded(f"voxelize: {said}overlap='later' gives a shared voxel the later mesh's label",
-                                  f"{said}--overlap later gives a shared voxel the later mesh's label")
-    return _with_note(result)
+        things, thing = _things(split)
+        said = f"the {things} overlap: {overlap_text(result, things)}, label {which}; "
+        raise IsoflowError.worded(f"voxelize: {said}overlap='later' gives a shared voxel the later {thing}'s label",
+                                  f"{said}--overlap later gives a shared voxel the later {thing}'s label")
+    return _with_note(result, split)
 
 
 class _Share:
@@ -438,27 +439,36 @@ class _Share:
         tell_rule(self.progress, solid_angles)
 
 
-def overlap_text(r: LabelVoxelization) -> str:
-    """The overlaps in words: how many voxels, the first pairs and counts."""
+def overlap_text(r: LabelVoxelization, things: str = "meshes") -> str:
+    """The overlaps in words: how many voxels, the first pairs and counts;
+    ``things``: what the labels are (``"bodies"`` of files split)."""
     said = [f"{i} and {j}: {c}" for i, j, c in r.overlaps[:NAMED_PAIRS]]
     more = len(r.overlaps) - NAMED_PAIRS
     if more > 0:
         said.append(f"and {more} more pairs")
     voxels = "voxel lies" if r.overlap_voxels == 1 else "voxels lie"
-    return f"{r.overlap_voxels} {voxels} inside two or more meshes (labels {', '.join(said)})"
+    return f"{r.overlap_voxels} {voxels} inside two or more {things} (labels {', '.join(said)})"
 
 
-def _with_note(r: LabelVoxelization) -> LabelVoxelization:
-    """The result with its one line on overlaps and empty labels."""
+def _things(split: bool) -> tuple[str, str]:
+    """What the labels are, in the plural and the singular: the meshes
+    given, or with ``split`` the bodies of each."""
+    return ("bodies", "body") if split else ("meshes", "mesh")
+
+
+def _with_note(r: LabelVoxelization, split: bool = False) -> LabelVoxelization:
+    """The result with its one line on overlaps and empty labels (of the
+    bodies of files, with ``split``)."""
     import dataclasses
 
     parts = []
+    things, thing = _things(split)
     if r.overlaps:
-        parts.append(overlap_text(r) + "; the later mesh's label wins (--overlap error / overlap='error' "
-                                       "refuses)")
+        parts.append(overlap_text(r, things) + f"; the later {thing}'s label wins (--overlap error / "
+                                               "overlap='error' refuses)")
     empty = [i for i, c in enumerate(r.voxels, 1) if c == 0]
     if empty:
         which = ", ".join(f"{i} ({r.names[i - 1]})" for i in empty[:NAMED_PAIRS])
         parts.append(f"label{'s' if len(empty) > 1 else ''} {which} got no voxel (smaller than a voxel, no "
-                     "solid, or covered by later meshes)")
+                     f"solid, or covered by later {things})")
     return dataclasses.replace(r, note="; ".join(parts) or None)
