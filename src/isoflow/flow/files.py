@@ -200,8 +200,7 @@ def refuse_file_suffix(out: Path) -> None:
     from ..mesh.formats.registry import volume_suffixes
     from ..mesh.load import MESH_SUFFIXES
 
-    name = out.name.lower()
-    suffix = file_suffix(out.name) or next((s for s in RUN_FILE_SUFFIXES if name.endswith(s) and name != s), None)
+    suffix = file_suffix(out.name, others=RUN_FILE_SUFFIXES)
     if suffix is None:
         return
     # the check runs before the input is read: a 2D run writes no surfaces

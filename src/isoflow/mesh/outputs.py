@@ -119,24 +119,27 @@ def refuse_directory_spelling(path: str | os.PathLike, what: str = "output") -> 
                            "give its file name without the slash")
 
 
-def file_suffix(name: str) -> str | None:
-    """The mesh or volume suffix that ``name`` ends in (the longest, in
-    lower case), None where it ends in none or is the suffix alone: a
-    directory to be made under such a name (``flow --out X.ply``, ``surface
-    --labels -o out.ply/``) was most likely meant as a file, and a program
-    that lists ``*.ply`` would take it for one.
+def file_suffix(name: str, others: Iterable[str] = ()) -> str | None:
+    """The mesh or volume suffix (or one of ``others``, lower case) that
+    ``name`` ends in (the longest, in lower case), None where it ends in
+    none or is the suffix alone: a directory to be made under such a name
+    (``flow --out X.ply``, ``surface --labels -o out.ply/``) was most
+    likely meant as a file, and a program that lists ``*.ply`` would take
+    it for one.
 
     Examples
     --------
     >>> file_suffix("steps.nii.gz"), file_suffix("OUT.PLY"), file_suffix("run"), file_suffix(".ply")
     ('.nii.gz', '.ply', None, None)
+    >>> file_suffix("flow.CSV"), file_suffix("flow.CSV", others=(".csv",))
+    (None, '.csv')
     """
     from .formats.registry import volume_suffixes
     from .load import MESH_SUFFIXES
 
     lower = name.lower()
-    return max((s for s in (*MESH_SUFFIXES, *volume_suffixes()) if lower.endswith(s) and lower != s), key=len,
-               default=None)
+    return max((s for s in (*MESH_SUFFIXES, *volume_suffixes(), *others) if lower.endswith(s) and lower != s),
+               key=len, default=None)
 
 
 def refuse_unusable_output(path: str | os.PathLike) -> None:
