@@ -193,6 +193,16 @@ def test_voxelize_refuses_an_unknown_suffix_before_working(tmp_path, capsys):
           words=("v.xyz", ".nii.gz", ".binvox"))
 
 
+@pytest.mark.parametrize("meshes", [1, 2])
+def test_voxelize_refuses_a_png_before_working(tmp_path, capsys, meshes):
+    """PNG is written for 2D images (a 2D flow's steps); a voxelisation is
+    3D, so ``-o v.png`` is refused before the mesh is even read (it is not
+    there), for one mesh and for a label image of several."""
+    missing = [tmp_path / f"missing{k}.stl" for k in range(meshes)]
+    fails(capsys, "voxelize", *missing, "--resolution", "8", "-o", tmp_path / "v.png",
+          words=("v.png", "PNG holds 2D images, this volume is 3D", ".tif"))
+
+
 def test_flow_writes_step_volumes(tmp_path, capsys):
     obj = isoflow.DigitalObject(np.ones((3, 4, 5), bool), pitch=[0.5, 1.0, 2.0], origin=[1.0, 2.0, 3.0])
     isoflow.write_volume(obj, tmp_path / "box.nii.gz")

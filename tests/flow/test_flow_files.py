@@ -724,3 +724,94 @@ def test_2d_flow_text_names_its_last_state_a_rectangle_or_not(tmp_path):
     rc, out, err = run("flow", tmp_path / "checker.npy")
     assert rc == 0, err
     assert "(step 0: not a rectangle)" in out and "cuboid" not in out
+
+
+@pytest.mark.parametrize(("steps", "last"), [(["--steps", "5"], "flow: 100%|"), (["--steps", "3"], "flow: 100%|"),
+                                             ([], "flow: 3 steps [")])
+def test_a_short_run_shows_its_full_count_before_the_bar_is_cleared(tmp_path, steps, last):
+    """On a terminal the bar of a short run was cleared at the count its
+    first step showed (33 %: tqdm draws at most every 0.1 s), and that of
+    a run that vanished before --steps at its share of --steps (20 %): the
+    last state drawn before the clearing is the whole run. The 3x4x5 box
+    vanishes at step 3 (60, 24, 6, 0 voxels: docs/flow.md)."""
+    np.save(tmp_path / "box.npy", np.ones((3, 4, 5), bool))
+    err = _Terminal()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        assert main(["flow", str(tmp_path / "box.npy"), *steps]) == 0
+    shown = [part for part in err.getvalue().split("\r") if part.strip()]
+    assert shown and shown[-1].startswith(last), shown
+
+
+def test_flow_png_ticks_its_counts_in_whole_numbers(tmp_path, monkeypatch):
+    """flow.png's voxel axis of a run of one voxel (1 voxel, then none)
+    was ticked 0.2, 0.4, ...: voxel counts, energies (sums of whole
+    weights over vertex classes, eq. 5.22), Betti numbers and steps are
+    whole numbers, and so is every tick of every axis of the picture."""
+    from isoflow.flow import pictures
+
+    drawn = []
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append(fig) or path)
+    result = isoflow.run_flow(isoflow.DigitalObject(np.ones((1, 1, 1), bool)))
+    assert [s["voxels"] for s in result.steps] == [1, 0]
+    pictures.render_flow(result, tmp_path / "flow.png")
+    drawn[0].canvas.draw()
+    for axis in drawn[0].axes:
+        for ticks, (low, high) in ((axis.get_xticks(), axis.get_xlim()), (axis.get_yticks(), axis.get_ylim())):
+            shown = [t for t in ticks if low <= t <= high]
+            assert shown and all(float(t).is_integer() for t in shown), (axis.get_ylabel(), shown)
+        labels = [t.get_text().replace("\N{MINUS SIGN}", "-") for t in axis.get_yticklabels() if t.get_text()]
+        assert labels and all(re.fullmatch(r"-?\d+", text) for text in labels), (axis.get_ylabel(), labels)
+
+
+def test_a_2d_flow_writes_its_steps_as_png_masks_read_back_as_written(tmp_path):
+    """A 2D flow could not write its steps as PNG (``--volumes .png``: PNG
+    was read only). Each step is a lossless 8-bit grey PNG of 0 and 255,
+    rows its y as isoflow reads a PNG: Pillow reads every step file as
+    the state's pixels transposed, and isoflow reads it back as the state,
+    pixel for pixel (its place, which PNG does not keep, said once)."""
+    from PIL import Image
+
+    mask = np.zeros((12, 20), np.uint8)  # rows y, columns x; an L, not symmetric
+    mask[2:9, 3:15] = 255
+    mask[5:9, 3:6] = 0
+    Image.fromarray(mask).save(tmp_path / "l.png")
+    result = isoflow.run_flow(isoflow.read_volume(tmp_path / "l.png"), connectivity=4)
+    out = tmp_path / "run"
+    rc, _, err = run("flow", tmp_path / "l.png", "--out", out, "--volumes", ".png")
+    assert rc == 0, err
+    states = [s for s in result.states if s.voxels]
+    assert sorted(p.name for p in out.glob("step_*")) == [f"step_{k:03d}.png" for k in range(len(states))]
+    with Image.open(out / "step_000.png") as png:  # the input as Pillow reads it, cropped to the L: same way up
+        assert np.array_equal(np.asarray(png), mask[2:9, 3:15])
+    for k, state in enumerate(states):
+        with Image.open(out / f"step_{k:03d}.png") as png:
+            assert png.mode == "L" and png.format == "PNG"
+            pixels = np.asarray(png)
+        assert set(np.unique(pixels)) <= {0, 255}
+        assert np.array_equal(pixels.T > 0, state.volume)
+        assert np.array_equal(isoflow.read_volume(out / f"step_{k:03d}.png").volume, state.volume)
+    dropped = [line for line in err.splitlines() if "PNG keeps no pixel size or origin" in line]
+    assert len(dropped) == 1 and "warning:" in dropped[0], err
+
+
+def test_2d_shapes_png_ticks_pixel_coordinates_in_whole_pixels(tmp_path, monkeypatch):
+    """shapes.png of a small PNG mask (pixel size 1: its coordinates count
+    pixels) was ticked -0.5, 0.5, 1.5, ...; every tick label of its
+    panels is a whole number, in matplotlib's own axes."""
+    from PIL import Image
+
+    from isoflow.flow import pictures
+
+    drawn, save = [], pictures.save_figure
+    monkeypatch.setattr(pictures, "save_figure", lambda fig, path: drawn.append((path.name, fig)) or save(fig, path))
+    mask = np.zeros((6, 6), np.uint8)
+    mask[2:4, 2:4] = 255
+    Image.fromarray(mask).save(tmp_path / "dot.png")
+    rc, _, err = run("flow", tmp_path / "dot.png", "--out", tmp_path / "run")
+    assert rc == 0, err
+    fig = dict(drawn)["shapes.png"]
+    fig.canvas.draw()
+    for axis in fig.axes:
+        labels = [t.get_text().replace("\N{MINUS SIGN}", "-") for t in axis.get_xticklabels() + axis.get_yticklabels()]
+        labels = [text for text in labels if text]
+        assert labels and all(re.fullmatch(r"-?\d+", text) for text in labels), (axis.get_title(), labels)

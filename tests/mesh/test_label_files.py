@@ -180,7 +180,12 @@ def kept_by_the_docs() -> dict[str, tuple[str, str]]:
 
 
 #: every format write_labels writes, by one suffix each
-WRITTEN = [".npz", ".nii", ".nii.gz", ".mgz", ".mgh", ".nrrd", ".h5", ".zarr", ".tif", ".npy", ".binvox", ".vox"]
+WRITTEN = [".npz", ".nii", ".nii.gz", ".mgz", ".mgh", ".nrrd", ".h5", ".zarr", ".tif", ".npy", ".binvox", ".vox", ".png"]
+
+
+def flat_only(suffix: str) -> bool:
+    """Whether docs/labels.md says the format holds 2D images only (PNG)."""
+    return docs_rows().get(suffix, ["", ""])[1] == "only"
 
 
 def test_the_docs_list_every_format_write_labels_writes():
@@ -201,17 +206,19 @@ def test_each_format_keeps_the_voxel_size_and_origin_the_docs_say_and_warns_of_t
     pitch = (0.5, 0.5, 0.5) if suffix == ".binvox" else (0.5, 0.25, 2.0)
     origin = (1.0, -2.0, 3.5)
     image = (LABELS > 0).astype(np.uint8) if suffix == ".binvox" else LABELS
+    if flat_only(suffix):  # a slice of the same labels, placed by two numbers
+        image, pitch, origin = LABELS[:, :, 2], pitch[:2], origin[:2]
     with warnings.catch_warnings(record=True) as said:
         warnings.simplefilter("always")
         path = isoflow.write_labels(image, tmp_path / f"labels{suffix}", pitch=pitch, origin=origin)
     back = isoflow.read_labels(path)
-    x, y, z = image.shape
-    assert np.array_equal(back.array[:x, :y, :z], image) and not back.array[x:, y:, z:].any()
+    corner = tuple(slice(0, n) for n in image.shape)
+    assert np.array_equal(back.array[corner], image) and back.array.sum() == image.sum()
     size, place = kept_by_the_docs().get(suffix, ("(no row)", "(no row)"))
     assert np.allclose(back.spacing, pitch) == size.startswith("kept"), (size, back.spacing)
     assert np.allclose(back.origin, origin) == place.startswith("kept"), (place, back.origin)
     if not place.startswith("kept"):
-        assert back.origin.tolist() == [0.0, 0.0, 0.0]
+        assert back.origin.tolist() == [0.0] * image.ndim
     lost = [str(w.message) for w in said if issubclass(w.category, IsoflowWarning)]
     assert bool(lost) == ("not kept" in (size, place)), lost
     if place == "not kept":
@@ -225,23 +232,27 @@ def test_each_format_keeps_the_labels_and_2d_images_the_docs_say(tmp_path, suffi
     read back, one more is refused; a 2D image is written or refused."""
     labels, flat = docs_rows().get(suffix, ["(no row)", "(no row)"])[:2]
     top = {"any": 2**64 - 1, "one": 1}.get(labels) or int(labels.removeprefix("up to ").replace(",", ""))
-    image = np.zeros((3, 4, 5), np.uint64)
-    image[1, 2, 3] = top
+    image = np.zeros((3, 4) if flat == "only" else (3, 4, 5), np.uint64)
+    at = (1, 2, 3)[:image.ndim]
+    image[at] = top
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IsoflowWarning)
         back = isoflow.read_labels(isoflow.write_labels(image, tmp_path / f"top{suffix}"))
-        assert int(back.array.max()) == top and tuple(np.argwhere(back.array)[0]) == (1, 2, 3)
+        assert int(back.array.max()) == top and tuple(np.argwhere(back.array)[0]) == at
         if labels != "any":
-            image[1, 2, 3] = top + 1
+            image[at] = top + 1
             with pytest.raises(IsoflowError, match=f"keeps (one label|labels up to {top})"):
                 isoflow.write_labels(image, tmp_path / f"more{suffix}")
         cells = np.array([[0, 1, 1], [0, 0, 1]], np.uint8)
-        if flat == "yes":
+        if flat in ("yes", "only"):
             assert np.array_equal(isoflow.read_labels(isoflow.write_labels(cells, tmp_path / f"c{suffix}")).array, cells)
         else:
             assert flat == "no"
             with pytest.raises(IsoflowError, match="this object is 2D"):
                 isoflow.write_labels(cells, tmp_path / f"c{suffix}")
+        if flat == "only":
+            with pytest.raises(IsoflowError, match="holds a 2D image, this object is 3D"):
+                isoflow.write_labels(LABELS, tmp_path / f"v{suffix}")
 
 
 @pytest.mark.parametrize(("pitch", "origin", "named"), [

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import IsoflowError, coordinates, path_text
 from .inputs import (
@@ -25,6 +27,9 @@ from .inputs import (
 )
 from .progress import progress_bar, writing_line
 
+if TYPE_CHECKING:
+    from ..flow.run import FlowResult
+
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p = add_command(sub, "flow", "run the digital curvature flow (section 5), its topology changes reported, "
@@ -41,8 +46,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--out", metavar="DIR", help="write step_NNN.ply surfaces (3D), flow.csv, flow.png and shapes.png into DIR")
     p.add_argument("--volumes", metavar="SUFFIX",
                    help="also write every non-empty step's volume as step_NNN.SUFFIX into --out (.npz, .nii.gz, .tif, .h5, "
-                        "...); a .zarr input with --volumes .zarr is flowed block by block, never read into memory (its "
-                        "--out gets no surfaces or shapes.png)")
+                        "..., .png for a 2D run); a .zarr input with --volumes .zarr is flowed block by block, never read "
+                        "into memory (its --out gets no surfaces or shapes.png)")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
@@ -207,6 +212,7 @@ def flow_store(args: argparse.Namespace) -> int:
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   until_topology_change=args.until_topology_change,
                                   progress=None if show is None else (lambda step, state: show(step, total)))
+            show_whole_run(show, result, total)
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))
             writer.finish(result)
     except KeyboardInterrupt as exc:
@@ -297,6 +303,7 @@ def run_with_files(args: argparse.Namespace, obj, writer):
                               until_topology_change=args.until_topology_change,
                               progress=progress if writer is not None or show is not None else None,
                               keep_states=False)
+            show_whole_run(show, result, total)
         if writer is not None:  # the last surfaces' read-back and the pictures: a line while they take
             with writing_line(args, writer.out):
                 writer.finish(result)
@@ -325,6 +332,37 @@ def bar_total(steps: int | None, shape: tuple[int, ...]) -> int | None:
     from ..flow.run import reachable_steps
 
     return steps if steps is not None and reachable_steps(steps, shape) == steps else None
+
+
+def show_whole_run(show: Callable[[int, int | None], None] | None, result: FlowResult, total: int | None) -> None:
+    """Tell the progress bar ``show`` (None: no bar) that the run is whole:
+    a run that vanishes or converges before ``--steps`` ends its bar at
+    100 %, the total becoming the last step taken, not at that step's
+    share of ``--steps``; a counter (``total`` None) ends at the steps
+    taken.
+
+    Parameters
+    ----------
+    show : callable or None
+        The bar's ``show(done, total)``, as
+        :func:`~isoflow.cli.progress.progress_bar` yields it.
+    result : isoflow.FlowResult
+        The run, ended.
+    total : int or None
+        The bar's length (:func:`bar_total`), None for a counter.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from isoflow import run_flow
+    >>> shown = []
+    >>> show_whole_run(lambda done, total: shown.append((done, total)), run_flow(np.ones((3, 4, 5), bool)), 5)
+    >>> shown
+    [(3, 3)]
+    """
+    if show is not None:
+        last = result.steps[-1]["step"]
+        show(last, None if total is None else last)
 
 
 def say_read_back(args: argparse.Namespace, writer) -> int:

@@ -73,8 +73,10 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
     ``--quiet`` is given or stderr is not a terminal, so that logs and pipes
     get no carriage returns. The bar appears at the first report (not while
     a mesh is still being read) and is cleared when the work ends, so the
-    terminal keeps only the results. A ``total`` of None gives a counter
-    (the flow, whose length is not known in advance). With ``estimate``
+    terminal keeps only the results; work that ends (not work stopped by
+    an error or an interrupt) has its last count drawn before the
+    clearing. A ``total`` of None gives a counter (the flow, whose length
+    is not known in advance). With ``estimate``
     (work whose shares are alike, as the voxeliser's pieces), a pipe gets
     a :class:`TimeNote` instead of nothing, with ``hint`` (what would take
     less) after its estimate where the core says its rule sums solid angles.
@@ -103,10 +105,17 @@ def progress_bar(args: argparse.Namespace, label: str, unit: str = "it",
             bars[0].set_description_str(desc, refresh=False)
         bars[0].update(done - bars[0].n)
 
+    finished = False
     try:
         yield show
+        finished = True
     finally:
         for bar in bars:
+            if finished and bar.n != bar.last_print_n:
+                # tqdm draws at most every tenth of a second: the last count of
+                # work that ended between two draws is drawn before the clearing,
+                # so that the bar is not seen to stop short of its end
+                bar.refresh()
             bar.close()
 
 

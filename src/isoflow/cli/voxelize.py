@@ -60,7 +60,7 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
                            "or --strict to refuse a mesh whose own shells overlap")
     if Path(args.output).suffix.lower() == ".zarr":
         return voxelize_to_store(args)
-    check_volume_output(args.output, args.force)  # suffix, library and path before the voxelisation
+    check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the voxelisation
     try:
         obj = voxelize_input(args.mesh, args, write_bytes_per_voxel(args.output))
     except GridTooLarge as exc:
@@ -97,7 +97,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     from ..mesh.label_voxels import voxelize_meshes
     from ..mesh.volumes import check_label_output, check_volume_output, write_bytes_per_voxel, write_labels
 
-    check_volume_output(args.output, args.force)  # suffix, library and path before the meshes are read
+    check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
     check_label_output(args.output, len(bodies), args.force)  # and the format's labels, before the voxels
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:

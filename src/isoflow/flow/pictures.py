@@ -46,7 +46,10 @@ def render_flow_shapes(frames, path: Path, connectivity: int, panels: int = 6,
 def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
     """:func:`render_flow_shapes` of a 2D flow: each state's pixels in the
     first state's box, widened by a pixel, since a state can grow half a
-    pixel past its input before it shrinks."""
+    pixel past its input before it shrinks; an axis whose pixel size is 1
+    counts pixels and is ticked in whole numbers."""
+    from matplotlib.ticker import MaxNLocator
+
     cols = min(3, len(frames))
     rows = -(-len(frames) // cols)
     fig = plt.figure(figsize=(3.2 * cols, 3.2 * rows), dpi=100)
@@ -56,6 +59,9 @@ def _render_planar_shapes(plt, frames, box, path: Path) -> Path:
         draw_pixels(ax, state)
         ax.set_xlim(box[0][0] - pad[0], box[1][0] + pad[0])
         ax.set_ylim(box[1][1] + pad[1], box[0][1] - pad[1])  # y down, as draw_pixels draws it
+        for axis, size in zip((ax.xaxis, ax.yaxis), pad):
+            if size == 1:  # coordinates in pixels (a PNG's, an uncalibrated image's): not ticked in half pixels
+                axis.set_major_locator(MaxNLocator(integer=True))
         ax.set_aspect("equal")
         ax.tick_params(labelsize=6)
         ax.set_title(f"step {rec['step']}: {counted(rec['voxels'], 'pixel')}, betti {tuple(rec['betti'])}", fontsize=8)
@@ -132,7 +138,10 @@ def draw_betti(ax, steps: list, betti: np.ndarray) -> None:
 def render_flow(result, path: Path, title: str = "") -> Path:
     """Write a PNG of a digital curvature flow (:class:`isoflow.flow.run.FlowResult`):
     voxels, energy ``E = k^T n`` and Betti numbers against the step, with the
-    steps where the Betti numbers changed marked."""
+    steps where the Betti numbers changed marked; every axis, all of whole
+    numbers, is ticked in whole numbers."""
+    from matplotlib.ticker import MaxNLocator
+
     plt = pyplot()
     steps = [s["step"] for s in result.steps]
     betti = np.array([s["betti"] for s in result.steps])
@@ -141,10 +150,10 @@ def render_flow(result, path: Path, title: str = "") -> Path:
     axes[0].set_ylabel("pixels" if len(result.steps[0]["betti"]) == 2 else "voxels")
     axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", ms=3, color="tab:red")
     axes[1].set_ylabel("energy E = k^T n")
+    for ax in axes[:2]:  # counts and sums of whole weights: a few voxels would be ticked 0.2, 0.4, ...
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     draw_betti(axes[2], steps, betti)
     axes[2].set_xlabel("step")
-    from matplotlib.ticker import MaxNLocator
-
     axes[2].xaxis.set_major_locator(MaxNLocator(integer=True))
     if len(steps) == 1:  # a range of no length: the locator ticks it in fractions of a step
         axes[2].set_xticks(steps)

@@ -822,10 +822,21 @@ def write_bytes_per_voxel(path: str | os.PathLike, labels: bool = False) -> floa
     return float(fmt.write_bytes if not labels or fmt.label_bytes is None else fmt.label_bytes)
 
 
-def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[Path, str | None]:
+def check_volume_output(path: str | os.PathLike, force: bool = False, ndim: int | None = None) -> tuple[Path, str | None]:
     """The file (and dataset) a volume will be written to, checked before
     any work: a suffix isoflow writes, its library installed, the path free
-    (or ``force``). Returns ``(file, dataset)``."""
+    (or ``force``), and with ``ndim`` a format that holds images of that
+    dimension (``voxelize -o seg.png`` is refused before the voxelisation,
+    not after it). Returns ``(file, dataset)``.
+
+    Examples
+    --------
+    >>> check_volume_output("nowhere/seg.png", ndim=3)
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: nowhere/seg.png: PNG holds 2D images, this volume is 3D; write .tif, .nii.gz, .nrrd, \
+.h5 or .npz
+    """
     check_switch(force, "force", str(path))
     file, dataset = split_dataset(path)
     fmt = format_for(file, writing=True)
@@ -834,6 +845,9 @@ def check_volume_output(path: str | os.PathLike, force: bool = False) -> tuple[P
                            f"{', '.join(volume_suffixes(writable=True))}")
     if fmt is None:
         raise IsoflowError(f"{path}: volumes are written as {', '.join(volume_suffixes(writable=True))}")
+    if ndim is not None and ndim not in fmt.ndims:
+        raise IsoflowError(f"{path}: {fmt.name} holds {' and '.join(f'{n}D' for n in fmt.ndims)} images, this volume is "
+                           f"{ndim}D; write .tif, .nii.gz, .nrrd, .h5 or .npz")
     if dataset is None and not fmt.directory:  # split_dataset's Path dropped a trailing slash: check the path given
         refuse_directory_spelling(path, "volume")
     if dataset is not None and not fmt.datasets:
@@ -1017,8 +1031,9 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     labels : array_like
         Integers from 0 on in (x, y, z) order, or (x, y) for a 2D image (a
         cell segmentation, a section's grain map: the formats that hold 2D,
-        not binvox or MagicaVoxel); 0 is the background; or a bool image,
-        or a float image of whole numbers from 0 on. Not 4D:
+        not binvox or MagicaVoxel; PNG holds 2D only); 0 is the
+        background; or a bool image, or a float image of whole numbers
+        from 0 on. Not 4D:
         :func:`read_labels` would not read it back. Or a
         :class:`~isoflow.LabelImage`, as :func:`read_labels` gives it, with
         its voxel size, origin and length unit.
@@ -1055,9 +1070,9 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         For an existing file without ``force``, an array that is not 2D or
         3D integers, bools or floats, a negative label, a float that is no
         whole number (NaN, 1.5: its voxel named), a 2D image for a format
-        of 3D only (binvox, MagicaVoxel), a format that keeps fewer labels
-        than the image has (:func:`check_label_output`), a ``unit`` that is
-        no length unit.
+        of 3D only (binvox, MagicaVoxel), a 3D image for PNG (2D only), a
+        format that keeps fewer labels than the image has
+        (:func:`check_label_output`), a ``unit`` that is no length unit.
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""PNG: 2D masks and label images (Pillow), read only.
+"""PNG: 2D masks and label images (Pillow).
 
 PNG is what many 2D segmentations are saved as: Cellpose's ``_cp_masks.png``
 (16-bit cell numbers), palette PNGs whose indices are the classes (PASCAL
@@ -17,6 +17,12 @@ grey with alpha at 16 bits a channel, which Pillow reads as 8 (label 300
 would be 1, labels 1 to 255 would be 0). An animated PNG
 (several frames) is refused. The pixel size is 1: PNG's ``pHYs`` is a
 print resolution (pixels per metre), not a microscope's calibration.
+
+Written (2D only) as a lossless 8-bit grey PNG, a mask as 0 and 255 so
+that any viewer shows it black and white, labels in 8-bit grey up to 255
+and in 16-bit grey up to 65,535; rows are y, as it is read. No pixel size,
+origin or length unit is written (a warning says what is dropped): a flow
+step's place on the half-pixel grid, for one, is not kept.
 """
 
 from __future__ import annotations
@@ -25,8 +31,20 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_alpha, check_shape, colours_refused, import_library, reading
+from .registry import (
+    LabelVolume,
+    RawVolume,
+    check_alpha,
+    check_shape,
+    colours_refused,
+    import_library,
+    note,
+    placement,
+    reading,
+    refuse_empty,
+)
 
 #: Pillow's modes read as they are (their integer type)
 GREY = {"1": np.bool_, "L": np.uint8, "P": np.uint8, "I;16": np.uint16, "I;16B": np.uint16, "I;16L": np.uint16,
@@ -61,6 +79,81 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         data = grey
     data = np.asarray(data, dtype=GREY.get(mode, np.uint8))
     return RawVolume(np.ascontiguousarray(data.T), np.ones(2))
+
+
+def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, unit: str | None = None) -> None:
+    """Refuse what a PNG cannot hold of ``obj`` (a 3D object, no pixels a
+    side; labels past 16 bits are refused by the format's ``max_label``)
+    and say what it drops (the pixel size, origin and length unit), before
+    anything is written.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The PNG to be written, named in the messages.
+    obj : DigitalObject or LabelVolume
+        The image.
+    dataset : str, optional
+        Unused: a PNG holds one image.
+    unit : str, optional
+        The length unit of its pixel size and origin, said as dropped.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming ``path``.
+
+    Examples
+    --------
+    >>> check(Path("stack.png"), DigitalObject(np.ones((2, 2, 2), bool)))
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: stack.png: a PNG holds a 2D image, this object is 3D; write .tif, .nii.gz, .nrrd, \
+.h5 or .npz, which hold 3D
+    """
+    if obj.ndim != 2:
+        raise IsoflowError(f"{path}: a PNG holds a 2D image, this object is {obj.ndim}D; write .tif, .nii.gz, "
+                           ".nrrd, .h5 or .npz, which hold 3D")
+    refuse_empty(path, obj.volume.shape, "PNG")
+    spacing, corner = placement(obj)
+    if (spacing != 1).any() or corner.any() or unit is not None:
+        note(f"{path}: PNG keeps no pixel size or origin; pitch {np.round(obj.pitch, 9).tolist()} and origin "
+             f"{np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit} are not written")
+
+
+def write(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, name: str | None = None,
+          unit: str | None = None) -> None:
+    """Write the 2D ``obj`` that :func:`check` let through as a lossless
+    grey PNG: a mask as 8-bit 0 and 255, labels as 8- or 16-bit grey
+    (their own type), row ``j``, column ``i`` holding pixel ``(i, j)``.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file written (a temporary name beside the output: the format
+        is named, not taken from the suffix).
+    obj : DigitalObject or LabelVolume
+        The image: a mask, or labels in uint8 or uint16.
+    dataset, name, unit : optional
+        Unused: a PNG holds one image and no place.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from PIL import Image
+    >>> path = Path(tempfile.mkdtemp()) / "l.png"
+    >>> write(path, DigitalObject(np.array([[True, True], [False, True]])))
+    >>> np.asarray(Image.open(path)).tolist()  # rows are y: pixel (0, 1) is row 1, column 0
+    [[255, 0], [255, 255]]
+    """
+    pil = import_library("PIL.Image", "PNG", "pillow")
+    rows = obj.volume.T  # row j, column i is pixel (i, j), as read() reads it
+    if rows.dtype == np.bool_:
+        rows = rows.view(np.uint8) * np.uint8(255)  # black and white in any viewer; read back as one mask
+    if rows.dtype not in (np.uint8, np.uint16):  # write_labels narrows labels to the format's 16 bits first
+        raise IsoflowError(f"{path}: a PNG holds 8- or 16-bit grey, and this image is {rows.dtype}")
+    # Pillow takes uint8 as mode L and uint16 as I;16: grey of the labels' own width
+    pil.fromarray(np.ascontiguousarray(rows)).save(path, format="PNG")
 
 
 def _alpha_as_grey(where: str) -> str:

@@ -59,6 +59,8 @@ class VolumeFormat:
     directory: bool = False
     #: the largest label a label image written in it keeps (None: any unsigned integer)
     max_label: int | None = None
+    #: the dimensions of the images it writes, where not both 2D and 3D
+    ndims: tuple[int, ...] = (2, 3)
     #: bytes per voxel that its writer holds beside a mask of a byte per
     #: voxel, at most (its own copies, a library's, a compressed stream
     #: kept in memory; a writer that works through a buffer of fixed size
@@ -99,15 +101,17 @@ FORMATS = (
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
                  label_bytes=2.5),
     # a bit per voxel; run-length coded a slab at a time
-    VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1),
+    VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1, ndims=(3,)),
     # colour indices; its voxels are listed by their coordinates (at most 256 a side), built a slab at a time
     # into a byte each of x, y, z and colour (4 bytes a voxel set) beside one slab's indices
-    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=4.5),
+    VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=4.5, ndims=(3,)),
     # a z, y, x copy (a byte a byte), and the chunks zarr encodes at once (a few, of 128^3 voxels each)
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True,
                  write_bytes=1.6),
     # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
-    VolumeFormat("PNG", (".png",), "png", None, imports="PIL", read_only=(".png",)),
+    # its 2D images only, in 8- or 16-bit grey; the array turned to rows and
+    # its mask made 0/255 are copies, and Pillow holds one more
+    VolumeFormat("PNG", (".png",), "png", None, imports="PIL", max_label=2**16 - 1, write_bytes=2, ndims=(2,)),
 )
 
 
