@@ -25,8 +25,12 @@ Rows (benchmarks/results/fills.json and fills.md):
 ``--thresholds`` runs the sweep that sets the note's thresholds
 (:data:`isoflow.mesh.fills.THIN_SHARE`, ``UNBOUNDED_SHARE``): every mesh of
 meshes/, pymeshlab's sample meshes and six trimesh primitives at 64, 128
-and 256 across: winding voxels, shell voxels, their ratio and the share of
-the area that bounds no voxel (benchmarks/results/fills_thresholds.json).
+and 256 across: winding voxels, shell voxels, their ratio, the winding
+voxels against the mesh's own volume where its winding number is 0 or 1,
+and the share of the area that bounds no voxel; then small closed solids
+(boxes, cubes, spheres and cylinders 1 to 7 voxels across, and plates
+thinner than a voxel) at random sub-voxel offsets on a shared grid, the
+sweep behind ``VOLUME_BAND`` (benchmarks/results/fills_thresholds.json).
 """
 
 from __future__ import annotations
@@ -187,16 +191,70 @@ def thresholds() -> int:
             _, _, _, _, frame, _, _ = plan_voxels(v, f, resolution=res)
             T = np.ldexp(v - frame[0], -frame[1])[f]
             share = unbounded_area(T, r.volume, frame[2], frame[3])
+            own = own_volume(v, f, r)
             rows.append({"mesh": name, "resolution": res, "winding": r.voxels, "shell": shell,
-                         "ratio": r.voxels / max(shell, 1), "unbounded_share": share,
-                         "note": bool(r.note and "winding rule leaves" in r.note)})
-            print(f"{name:<26}{res:>5}{r.voxels:>10}{shell:>9}{rows[-1]['ratio']:>8.3f}{share:>7.3f}"
+                         "ratio": r.voxels / max(shell, 1), "volume_ratio": None if own is None else r.voxels / own,
+                         "unbounded_share": share, "note": bool(r.note and "winding rule leaves" in r.note)})
+            by_volume = "" if own is None else f"{r.voxels / own:>8.3f}"
+            print(f"{name:<26}{res:>5}{r.voxels:>10}{shell:>9}{rows[-1]['ratio']:>8.3f}{share:>7.3f}{by_volume:>8}"
                   f"{'  note' if rows[-1]['note'] else ''}", flush=True)
+    small = small_solids()
     out = ROOT / "benchmarks" / "results" / "fills_thresholds.json"
-    out.write_text(json.dumps({"benchmark": "winding voxels / shell voxels and unbounded area share", "rows": rows},
-                              indent=1))
+    out.write_text(json.dumps({"benchmark": "winding voxels / shell voxels and unbounded area share", "rows": rows,
+                               "small_solids": small}, indent=1))
     print(f"wrote {out.relative_to(ROOT)}")
     return 0
+
+
+def own_volume(v, f, r) -> float | None:
+    """The mesh's volume in voxels of ``r`` (its voxelisation), where its
+    edges balance and no voxel lies inside two layers; None otherwise."""
+    from isoflow.mesh.bodies import signed_volume
+
+    solid = Solid(v, f)
+    if solid.chain_edges or r.overlap_voxels:
+        return None
+    own = abs(signed_volume(np.asarray(solid.v, np.float64)[solid.faces])) / r.pitch**3
+    return own if own > 0 else None
+
+
+def small_solids(trials: int = 200) -> dict:
+    """Small closed solids at random sub-voxel offsets on a shared grid
+    (pitch 1): their winding voxels against their volume, for those the
+    shell's share flags as thin (fewer than THIN_SHARE of the shell's
+    voxels), and plates thinner than half a voxel, which have no voxel or a
+    layer over twice their volume."""
+    import trimesh
+
+    from isoflow.mesh.fills import THIN_SHARE, VOLUME_BAND
+
+    rng = np.random.default_rng(1)
+    grid = (np.zeros(3), (24, 24, 24))
+    flagged, plates, noted = [], [], []
+    for _ in range(trials):
+        t = rng.uniform(0.02, 0.5)
+        shapes = [trimesh.creation.box(rng.uniform(1.0, 6.0, 3)), trimesh.creation.box([rng.uniform(1.0, 6.0)] * 3),
+                  trimesh.creation.icosphere(3, radius=rng.uniform(0.7, 3.5)),
+                  trimesh.creation.cylinder(rng.uniform(0.6, 3.0), rng.uniform(1.0, 6.0), sections=32),
+                  trimesh.creation.box((10, 10, t))]
+        for k, m in enumerate(shapes):
+            m.apply_translation(12 + rng.random(3) - m.bounds.mean(axis=0))
+            r = voxelize(m.vertices, m.faces, pitch=1.0, grid=grid, details=True)
+            ratio = r.voxels / m.volume
+            if k == 4:
+                plates.append(ratio)
+                noted.append(bool(r.note and "winding rule leaves" in r.note))
+            elif r.shell_voxels is not None and r.voxels < THIN_SHARE * r.shell_voxels:
+                flagged.append(ratio)
+    a, lo, hi = np.array(flagged), *VOLUME_BAND
+    out = {"trials": trials, "flagged_by_shell": len(a), "ratio_min": float(a.min()), "ratio_max": float(a.max()),
+           "ratio_percentiles_1_5_50_95_99": np.percentile(a, [1, 5, 50, 95, 99]).tolist(),
+           "in_band": float(np.mean((a >= lo) & (a <= hi))), "plates": len(plates),
+           "plates_in_band": int(sum(lo <= x <= hi for x in plates)), "plates_noted": int(sum(noted))}
+    print(f"small solids the shell flags: {len(a)}, voxels / volume {a.min():.2f} to {a.max():.2f}, "
+          f"{100 * out['in_band']:.0f} % within {lo:g} to {hi:g}; plates under half a voxel thick: "
+          f"{out['plates_in_band']} of {len(plates)} within, {out['plates_noted']} noted", flush=True)
+    return out
 
 
 def sphere_only(resolutions, repeat: int) -> int:

@@ -5,6 +5,8 @@ on the same grid; bodies against trimesh's split and a scene's nodes."""
 
 import json
 import struct
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -415,3 +417,72 @@ def test_the_split_bodies_of_one_file_that_overlap_are_said_to_be_bodies(tmp_pat
         voxelize_meshes([tmp_path / "two.stl"], resolution=48, split=True, overlap="error")
     # meshes given as meshes keep their word
     assert "inside two or more meshes" in voxelize_meshes([a, b], resolution=48).note
+
+
+def centre_count(mesh: trimesh.Trimesh, origin, pitch: float, shape) -> int:
+    """trimesh's count of the voxel centres of the grid inside ``mesh``."""
+    return int(mesh.contains(origin + pitch * (np.argwhere(np.ones(shape, bool)) + 0.5)).sum())
+
+
+@pytest.mark.parametrize("n", [2, 3, 4])
+@pytest.mark.parametrize("off", [0.5, 0.3])
+def test_a_closed_cube_off_the_planes_is_judged_by_its_own_volume(n, off):
+    # a closed cube n voxels across, off of a voxel off the planes between
+    # voxels, on a grid shared with a larger box: its shell is about as large
+    # as the cube however it lies (56 against 27 for n = 3), yet its voxels
+    # are its volume (n**3 voxel volumes), and the fills would add the shell
+    pitch = 0.25
+    big = trimesh.creation.box(extents=(4, 4, 4))  # the shared grid's planes at -2 + k * pitch
+    cube = trimesh.creation.box(extents=(n * pitch,) * 3,
+                                transform=trimesh.transformations.translation_matrix([3 + (off + n / 2) * pitch] * 3))
+    r = voxelize_meshes([big, cube], pitch=pitch)
+    assert r.voxels[1] == centre_count(cube, r.origin, pitch, r.labels.shape) == n**3
+    assert r.notes[1] is None, r.notes[1]
+    # alone, on the shared grid (a grid where it is small) and on its own
+    alone = voxelize(cube.vertices, cube.faces, pitch=pitch, grid=(r.origin, r.labels.shape), details=True)
+    assert alone.voxels == n**3 and alone.note is None, alone.note
+    own = voxelize(cube.vertices, cube.faces, pitch=pitch, details=True)
+    assert own.voxels == centre_count(cube, own.origin, pitch, own.volume.shape) == n**3 and own.note is None
+
+
+@pytest.mark.parametrize("lift", [0.35, 0.1])
+def test_a_closed_plate_thinner_than_a_voxel_keeps_the_note(lift):
+    # 0.3 of a voxel thick, its lower side lift voxels above a plane: across
+    # the centres of a layer (twelve by twelve voxels, over three times its
+    # volume) or between two layers (none)
+    pitch = 0.25
+    big = trimesh.creation.box(extents=(4, 4, 4))
+    plate = trimesh.creation.box(extents=(3, 3, 0.3 * pitch), transform=trimesh.transformations.translation_matrix(
+        (3 + 0.3 * pitch + 1.5, 0.3 * pitch, (lift + 0.15) * pitch)))
+    r = voxelize_meshes([big, plate], pitch=pitch)
+    assert r.voxels[1] == centre_count(plate, r.origin, pitch, r.labels.shape) == (144 if lift == 0.35 else 0)
+    assert r.voxels[1] > 2 * plate.volume / pitch**3 or r.voxels[1] == 0
+    assert r.notes[1] is not None and "the winding rule leaves" in r.notes[1] and "--fill flood" in r.notes[1]
+    alone = voxelize(plate.vertices, plate.faces, pitch=pitch, grid=(r.origin, r.labels.shape), details=True)
+    assert alone.voxels == r.voxels[1] and alone.note == r.notes[1]
+
+
+def test_the_shell_command_says_no_thin_note_for_a_small_cube_beside_a_big_box(tmp_path):
+    # isoflow voxelize big.stl small.stl --pitch P: the cube 3 voxels across,
+    # half a voxel off the planes, has its 27 voxels and no note; a plate 0.3
+    # of a voxel thick across a layer of centres keeps it
+    pitch = 0.25
+    big = trimesh.creation.box(extents=(4, 4, 4))
+    cube = trimesh.creation.box(extents=(3 * pitch,) * 3, transform=trimesh.transformations.translation_matrix(
+        [3 + 2 * pitch] * 3))
+    plate = trimesh.creation.box(extents=(3, 3, 0.3 * pitch), transform=trimesh.transformations.translation_matrix(
+        (0, -4, 0.5 * pitch)))
+    names = []
+    for name, mesh in (("big", big), ("small", cube), ("plate", plate)):
+        mesh.export(tmp_path / f"{name}.stl")
+        names.append(str(tmp_path / f"{name}.stl"))
+    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", *names[:2], "--pitch", str(pitch), "-o",
+                        str(tmp_path / "out.npz")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert "winding rule leaves" not in p.stderr and "small.stl" not in p.stderr, p.stderr
+    labels = np.load(tmp_path / "out.npz")["volume"]
+    assert int((labels == 2).sum()) == 27
+    p = subprocess.run([sys.executable, "-m", "isoflow", "voxelize", names[0], names[2], "--pitch", str(pitch), "-o",
+                        str(tmp_path / "plate.npz")], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert "plate.stl" in p.stderr and "the winding rule leaves" in p.stderr, p.stderr

@@ -53,7 +53,8 @@ def add_mesh_rule(p: argparse.ArgumentParser) -> None:
     p.add_argument("--strict", action="store_true",
                    help="refuse a mesh that is not watertight as written (neither genus nor voxelize mends a "
                         "T-junction for it, nor genus a repeated face) or has double-sided faces, whose voxels lie "
-                        "in overlapping layers, or whose winding solid is thin or empty against its shell (by "
+                        "in overlapping layers, or whose winding solid is thin or empty against its shell (a closed "
+                        "mesh's: against its own volume; by "
                         "default it is read by the generalised winding number)")
 
 

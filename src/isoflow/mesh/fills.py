@@ -52,6 +52,20 @@ SAMPLED_FACES = 8192
 #: the shell is counted only where the solid has fewer voxels than this
 #: many times the area in voxel faces (a shell has 1.5 to 3 of them).
 THIN_TRIGGER = 2.0
+#: A mesh whose winding number is 0 or 1 (or 0 or -1) at every voxel
+#: centre is judged against its own volume instead of its shell: its solid
+#: counts as thin when its voxels lie outside this band of its volume in
+#: voxels.  A small solid has a shell about its own size however it lies on
+#: the grid, but its voxels stay near its volume: of the boxes, cubes,
+#: spheres and cylinders 1 to 7 voxels across at random sub-voxel offsets
+#: that the shell's share calls thin, 98 % have 0.5 to 2 times it (0.17 to
+#: 1.68 in all), and the fills would add their shell to them
+#: (benchmarks/bench_fills.py --thresholds, its small solids; its closed
+#: models give 0.94 to 1.56).  A plate thinner than half a voxel has no
+#: voxel or a layer over twice its volume, whichever way it lies, so it
+#: keeps the note (the sweep's 10 x 10 x 0.05 box at 64 across, a third of
+#: a voxel thick, has 3.1 times its volume).
+VOLUME_BAND = (0.5, 2.0)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -241,13 +255,34 @@ def unbounded_area(T: np.ndarray, volume: np.ndarray, origin, pitch: float) -> f
     return unbounded_share(area, look_up(volume, idx))
 
 
-def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided: int) -> str | None:
-    """One line where the winding rule's solid (``voxels``) is thin or empty
-    against the surface's shell (``shell_voxels``, None where not counted:
-    then it is not thin), or leaves much of the area bounding nothing
-    (``share``, :func:`unbounded_area`), with the reasons found
-    (``double_sided``: faces read as one) and the fills that give the model;
-    None otherwise.
+def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided: int,
+               volume: float | None = None) -> str | None:
+    """One line where the winding rule's solid is thin or empty, or leaves
+    much of the area bounding nothing, with the reasons found and the fills
+    that give the model; None otherwise.
+
+    Parameters
+    ----------
+    voxels : int
+        The winding rule's voxels.
+    shell_voxels : int or None
+        The surface's shell, where it was counted; the solid is thin
+        against it when it has fewer than :data:`THIN_SHARE` of them (not
+        thin where it was not counted).
+    share : float
+        The share of the area that bounds no voxel (:func:`unbounded_area`).
+    double_sided : int
+        Double-sided faces read as one.
+    volume : float or None
+        The mesh's own volume in voxels where it is known (a closed mesh
+        whose winding number is 0 or 1 at every voxel centre, on a grid
+        that holds all of it): then the solid is thin when its voxels lie
+        outside :data:`VOLUME_BAND` of it, whatever the shell.
+
+    Returns
+    -------
+    str or None
+        The line, or None.
 
     Examples
     --------
@@ -255,19 +290,39 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     'the winding rule leaves no voxel in (the'
     >>> thin_solid(1, 120, 1.0, 0)[:39]
     'the winding rule leaves 1 voxel in (the'
+
+    A cube 3 voxels across, half a voxel off the planes, has 27 voxels
+    against a shell of 56, and a volume of 27 voxels:
+
+    >>> thin_solid(27, 56, 0.0, 0) is None, thin_solid(27, 56, 0.0, 0, volume=27.0) is None
+    (False, True)
+    >>> thin_solid(100, 100, 0.0, 0, volume=30.0)[:72]
+    "the winding rule leaves 100 voxels in (the mesh's volume is 30 voxels): "
     """
-    thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
+    if volume is not None:
+        thin = not VOLUME_BAND[0] * volume <= voxels <= VOLUME_BAND[1] * volume
+    else:
+        thin = shell_voxels is not None and voxels < THIN_SHARE * shell_voxels
     if not thin and share < UNBOUNDED_SHARE:
         return None
     what = "no voxel" if voxels == 0 else counted(voxels, "voxel")
-    against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
+    if volume is not None:
+        held = f"{volume:.0f}" if volume >= 9.5 else f"{volume:.2g}"  # a whole number, as the count, past ten
+        against = f" (the mesh's volume is {held} voxels)"
+    else:
+        against = f" (the surface's shell has {shell_voxels})" if shell_voxels is not None else ""
     why = []
     if double_sided:
         why.append(f"{counted(double_sided, 'double-sided face')} read as one")
     if share > 0:
         why.append(f"{100 * share:.0f} % of the area bounds no voxel on either side "
                    "(zero-thickness parts, or parts thinner than a voxel)")
-    reason = "; ".join(why) if why else "the surface bounds little volume at this resolution"
+    if why:
+        reason = "; ".join(why)
+    elif volume is not None and voxels > VOLUME_BAND[1] * volume:
+        reason = f"its voxels are over {VOLUME_BAND[1]:g} times its volume (parts thinner than a voxel)"
+    else:
+        reason = "the surface bounds little volume at this resolution"
     return (f"the winding rule leaves {what} in{against}: {reason}; "
             "--fill flood gives the shell and what it encloses, --fill shell the surface's voxels "
             "(fill='flood' / 'shell')")

@@ -522,6 +522,15 @@ class VoxelPlan:
             count += int(np.count_nonzero(out[max(x0 - a, 0):max(x1 - a, 0), y0:y1, z0:z1]))
         return count
 
+    def holds_mesh(self) -> bool:
+        """Whether the block holds every corner of the mesh, so that every
+        voxel inside the mesh is one of its voxels (a ``window`` or a
+        ``grid`` may cut the mesh)."""
+        corners = self.Tm.reshape(-1, 3)
+        lo = self.origin + self.pitch * np.asarray(self.start)
+        hi = lo + self.pitch * np.asarray(self.shape)
+        return bool(len(corners)) and bool(np.all(corners.min(axis=0) >= lo) and np.all(corners.max(axis=0) <= hi))
+
     def sampled_points(self) -> tuple[np.ndarray, np.ndarray] | None:
         """:func:`~isoflow.mesh.fills.sampled_points` on this grid: the
         voxels (indices in the grid) the share of unbounded area looks up."""
@@ -529,13 +538,16 @@ class VoxelPlan:
         return sampled_points(self.Tm, corner, self.pitch)
 
     def thin_note(self, volume: np.ndarray | None, voxels: int, double_sided: int,
-                  found: np.ndarray | None = None) -> tuple[int | None, str | None]:
+                  found: np.ndarray | None = None, own: float | None = None) -> tuple[int | None, str | None]:
         """The shell's voxels (counted only where the winding rule's solid
         is small against the area and a bound on the shell does not already
         show it is at least :data:`~isoflow.mesh.fills.THIN_SHARE` of it,
         else None) and :func:`~isoflow.mesh.fills.thin_solid`'s line.
         ``found``: where the grid is not held (``volume`` None), whether each
-        of :meth:`sampled_points` is in, looked up as it was written."""
+        of :meth:`sampled_points` is in, looked up as it was written.
+        ``own``: the mesh's volume in voxels where it is known
+        (:func:`winding_volume`), which the solid is judged against instead
+        of the shell."""
         from .shell import grid_planes, surface_area
         from .shell_bound import shell_voxels_at_most
 
@@ -556,7 +568,52 @@ class VoxelPlan:
             planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
             if share >= UNBOUNDED_SHARE or shell_voxels_at_most(Tm, planes, int(voxels / THIN_SHARE)) is None:
                 shell = self.shellcounted()
-        return shell, thin_solid(voxels, shell, share, double_sided)
+        return shell, thin_solid(voxels, shell, share, double_sided, own)
+
+
+def winding_volume(T: np.ndarray, pitch: float, balanced: bool, stats) -> float | None:
+    """The volume the triangles bound, in voxels, where the winding number
+    is 0 or 1 (or 0 or -1) at every voxel centre, so that the volume is the
+    solid's; None otherwise.
+
+    Parameters
+    ----------
+    T : float64 ndarray (M, 3, 3)
+        The triangles' corners, as the winding rule read them.
+    pitch : float
+        The voxels' side, in the triangles' units.
+    balanced : bool
+        Whether every edge is used as often one way as the other (no
+        boundary chain: the winding number is an integer off the surface).
+    stats : int sequence
+        The fill's counts (``scanline._sweep``'s): voxels inside two or
+        more layers, voxels of positive and of negative winding number.
+
+    Returns
+    -------
+    float or None
+        The signed volume (:func:`~isoflow.mesh.bodies.signed_volume`) over
+        ``pitch**3``, of the sign of the winding numbers seen; None where
+        the edges do not balance, a voxel lies inside two layers, both
+        signs are seen or the volume has the other sign (overlapping or
+        self-intersecting shells).
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> T = trimesh.creation.box((3, 3, 3)).triangles
+    >>> winding_volume(T, 1.0, True, [0, 27, 0, 0])
+    27.0
+    >>> winding_volume(T, 1.0, True, [0, 0, 27, 0]) is None  # inside out, yet the volume is positive
+    True
+    """
+    from .bodies import signed_volume
+
+    layered, positive, negative = (int(n) for n in stats[:3])
+    if not balanced or layered or (positive and negative) or len(T) == 0:
+        return None
+    own = signed_volume(np.asarray(T, dtype=np.float64)) / pitch**3 * (-1 if negative else 1)
+    return own if own > 0 else None
 
 
 def plan_voxels(vertices, faces, *, pitch=None, resolution=None, grid=None):
@@ -652,7 +709,8 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         inside two or more layers or have winding numbers of both signs
         (overlapping or self-intersecting shells, as far as the voxel
         centres see them), and one whose solid is thin or empty against its
-        shell (:func:`~isoflow.mesh.fills.thin_solid`).
+        shell, or a closed mesh's against its own volume
+        (:func:`~isoflow.mesh.fills.thin_solid`).
     grid
         Optional ``(origin, shape)``: sample on this grid (with ``pitch``)
         instead of the one centred on the bounding box, e.g. to put voxel
@@ -845,7 +903,9 @@ def voxelization(solid: Solid, plan: VoxelPlan, vol, voxels: int, origin, pitch:
         notes.append(flood_adds_nothing(voxels, shell_before, solid.census["boundary_edges"],
                                         int(np.prod(plan.shape))))
     if solid.fill == "winding":
-        shell, thin = plan.thin_note(vol, voxels, solid.double_sided, found)
+        # a block that cuts the mesh holds only part of its volume
+        own = winding_volume(plan.Tm, plan.pitch, not solid.chain_edges, stats) if plan.holds_mesh() else None
+        shell, thin = plan.thin_note(vol, voxels, solid.double_sided, found, own)
         if thin and solid.strict:
             raise IsoflowError.worded(f"voxelize: {thin}; without strict=True the winding rule's answer is kept",
                                       f"voxelize: {thin}; without --strict the winding rule's answer is kept")
