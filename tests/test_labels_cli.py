@@ -1076,6 +1076,31 @@ def test_a_choice_of_millions_of_labels_filters_the_table(tmp_path, capsys):
     assert peak < 80e6, peak
 
 
+def test_a_range_of_millions_is_parsed_filtered_and_listed_absent_as_arrays():
+    """``--labels 7,1-3000000``: the choice, its rows and its absent labels
+    are NumPy arrays, not a Python integer per label asked, in the order
+    asked, each label once."""
+    import tracemalloc
+
+    from isoflow.cli.labels import chosen_rows, in_order_asked, label_choice
+
+    table = {"label": np.array([3, 7], np.uint32), "voxels": np.array([27, 27])}
+    tracemalloc.start()
+    try:
+        asked = label_choice("7,1-3000000")
+        rows, missing = chosen_rows(table, asked)
+        absent = in_order_asked(missing, asked[:0], asked)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert rows["label"].tolist() == [7, 3]  # in the order asked
+    expected = np.r_[1:3, 4:7, 8:3000001]  # 1 to 3,000,000 but the two labels present, 7 asked once
+    assert len(absent) == 3000000 - 2 and np.array_equal(absent, expected)
+    # the bound catches a Python integer per label asked (28 bytes, and 8 more for its
+    # place in a list: 108 MB at 3 million labels); an array of them is 8 bytes a label
+    assert peak < 100e6, peak
+
+
 def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):
     # it said "not a volume file (volumes end in .npy, ...)", as for any file,
     # and not how a label image of meshes is made

@@ -428,3 +428,93 @@ def test_a_degenerate_node_is_noted_as_bounding_nothing_alone(tmp_path, capsys):
     assert len(noted) == 1, err
     assert "bounds nothing" in noted[0] and "bounds a solid" not in noted[0], noted[0]
     assert np.count_nonzero(np.load(tmp_path / "s.npz")["volume"] == 2) == 0  # and no voxel has its label
+
+
+def ascii_solids(path, solids):
+    """An ASCII STL of several solids, each ``(name, mesh)`` written as
+    ``solid NAME`` ... ``endsolid NAME`` by trimesh's ASCII writer."""
+    text = ""
+    for name, mesh in solids:
+        facets = trimesh.exchange.stl.export_stl_ascii(mesh).split("\n", 1)[1].rsplit("endsolid", 1)[0]
+        text += f"solid {name}\n{facets}endsolid {name}\n"
+    path.write_text(text)
+    return path
+
+
+@pytest.fixture
+def named_solids(tmp_path):
+    """Two overlapping boxes and a ball apart, as the named solids of one
+    ASCII STL (none sharing an edge with another: every one a connected
+    body of its own too)."""
+    bracket = trimesh.creation.box((1.3137, 0.7071, 0.9173)).apply_translation((0.0523, 0.1147, -0.0689))
+    plate = trimesh.creation.box((0.8117, 1.1213, 0.6029)).apply_translation((0.6131, 0.3719, 0.1303))
+    bolt = trimesh.creation.icosphere(3, 0.4513).apply_translation((2.2071, 0.1039, 0.0517))
+    return ascii_solids(tmp_path / "parts.stl", [("bracket", bracket), ("plate", plate), ("bolt", bolt)])
+
+
+def test_split_of_an_ascii_stl_of_named_solids_gives_a_label_per_solid(named_solids):
+    """``--split`` of an ASCII STL of named solids gave a label per
+    connected body, ``parts.stl:1``, ``:2``, ``:3``, the solids' names
+    unsaid. Label i is the file's i-th solid, ``parts.stl:NAME`` as
+    trimesh names the solids it reads, and holds the voxel centres that
+    trimesh's ``contains`` finds in that solid alone, less those a later
+    solid takes."""
+    from isoflow import voxelize_meshes
+
+    scene = trimesh.load_scene(named_solids)  # the solids by name, in the file's order
+    assert list(scene.geometry) == ["bracket", "plate", "bolt"]
+    r = voxelize_meshes([named_solids], pitch=0.05, split=True)
+    assert r.names == tuple(f"{named_solids}:{name}" for name in scene.geometry)
+    centres = r.origin + r.pitch * (np.indices(r.labels.shape).reshape(3, -1).T + 0.5)
+    painted = np.zeros(len(centres), np.int64)
+    inside = []
+    for label, solid in enumerate(scene.geometry.values(), 1):
+        inside.append(solid.contains(centres))
+        painted[inside[-1]] = label  # the later solid's label wins
+    assert np.array_equal(r.labels.ravel(), painted)
+    lost = {(i, j): n for i, j, n in r.overlaps}
+    assert lost.get((1, 2), 0) == np.count_nonzero(inside[0] & inside[1]) > 0  # the boxes overlap
+    for label, own in enumerate(inside, 1):
+        taken = sum(n for (i, _), n in lost.items() if i == label)
+        assert r.voxels[label - 1] + taken == np.count_nonzero(own), label
+
+
+def test_voxelize_split_prints_the_names_of_the_solids(tmp_path, capsys, named_solids):
+    """The command's table names each label's solid, in the file's order."""
+    out = tmp_path / "parts.npz"
+    table = _run(capsys, "voxelize", named_solids, "--split", "--pitch", "0.05", "-o", out)
+    rows = [line.split() for line in table.splitlines() if line.split()[:1] in (["1"], ["2"], ["3"])]
+    assert [(int(r[0]), r[-1]) for r in rows] == [(1, f"{named_solids}:bracket"), (2, f"{named_solids}:plate"),
+                                                  (3, f"{named_solids}:bolt")]
+    assert set(np.unique(read_labels(out).array).tolist()) == {0, 1, 2, 3}
+
+
+def test_named_solids_keep_their_bodies_together_and_repeated_names_are_made_unique(tmp_path):
+    """A solid of two bodies is one label; a name two solids share is
+    made unique as trimesh names the solids (``lid``, ``lid_1``)."""
+    from isoflow import voxelize_meshes
+
+    balls = trimesh.util.concatenate([trimesh.creation.icosphere(2, 0.3).apply_translation((x, 0, 0))
+                                      for x in (0, 1)])
+    assert len(balls.split(only_watertight=False)) == 2
+    lids = [trimesh.creation.box((0.5, 0.5, 0.2)).apply_translation((x, 1.5, 0)) for x in (0, 1.5)]
+    path = ascii_solids(tmp_path / "kit.stl", [("pair", balls), ("lid", lids[0]), ("lid", lids[1])])
+    names = list(trimesh.load_scene(path).geometry)
+    assert names == ["pair", "lid", "lid_1"]
+    r = voxelize_meshes([path], pitch=0.05, split=True)
+    assert r.names == tuple(f"{path}:{name}" for name in names)
+    assert analyze(r.labels == 1)["betti"][0] == 2  # the pair's two balls, one label
+
+
+def test_split_of_an_ascii_stl_of_unnamed_solids_keeps_a_label_per_body(tmp_path):
+    """Solids that name nothing keep the labels of connected bodies,
+    ``FILE:1`` ... in the order of their first face, however the solids
+    group them: here three solids, one of two balls, are four bodies."""
+    from isoflow import voxelize_meshes
+
+    balls = [trimesh.creation.icosphere(2, 0.3).apply_translation((x, 0, 0)) for x in (0, 1, 2, 3)]
+    solids = [("", balls[0]), ("", trimesh.util.concatenate(balls[1:3])), ("", balls[3])]
+    path = ascii_solids(tmp_path / "unnamed.stl", solids)
+    bodies = len(trimesh.load(path, force="mesh").split(only_watertight=False))
+    r = voxelize_meshes([path], pitch=0.05, split=True)
+    assert bodies == 4 and r.names == tuple(f"{path}:{k}" for k in range(1, bodies + 1))

@@ -5,6 +5,7 @@ closed surface per label)."""
 from __future__ import annotations
 
 import argparse
+import bisect
 import contextlib
 import json
 import os
@@ -40,13 +41,28 @@ def add_labels_option(p: argparse.ArgumentParser) -> None:
                         "nonzero label, or those of SPEC, e.g. 3,7,10-20")
 
 
-def label_choice(text: str) -> list[int] | None:
+def label_choice(text: str) -> np.ndarray | None:
     """The labels of ``--labels SPEC`` in order, each once (None: every
     nonzero label). ``A-B`` (or ``A..B``) is the range of A to B.
 
+    The labels are one NumPy array (:func:`choice_array`), never a Python
+    integer each: a range of millions costs 8 bytes a label.
+
+    Parameters
+    ----------
+    text : str
+        The option's value (``"all"`` for ``--labels`` alone).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        int64 where every label asked fits it, else uint64 where every
+        one is at least 0 and fits that, else Python integers (an object
+        array: a choice no one 64-bit type holds).
+
     Examples
     --------
-    >>> label_choice("3,7,10-12,7")
+    >>> label_choice("3,7,10-12,7").tolist()
     [3, 7, 10, 11, 12]
     >>> label_choice("")
     Traceback (most recent call last):
@@ -59,7 +75,9 @@ def label_choice(text: str) -> list[int] | None:
     if not text.replace(",", "").strip():  # --labels "" or --labels= (a variable that came out empty)
         raise IsoflowError(f"--labels {text!r}: an empty choice; give labels and ranges, comma-separated "
                            "(--labels 3,7,10-20), or --labels alone for every nonzero label")
-    chosen: dict[int, None] = {}
+    runs: list[tuple[int, int]] = []  # the labels not asked before, as ranges in the order asked
+    los: list[int] = []  # the labels asked so far: disjoint ranges that do not touch, in increasing order
+    his: list[int] = []
     for part in text.split(","):
         match = _RANGE.fullmatch(part)
         if not match:
@@ -69,8 +87,74 @@ def label_choice(text: str) -> list[int] | None:
             raise IsoflowError(f"--labels {text}: the range {part.strip()} runs backwards")
         if last - first > 10_000_000:
             raise IsoflowError(f"--labels {text}: the range {part.strip()} has more than 10 million labels")
-        chosen.update(dict.fromkeys(range(first, last + 1)))
-    return list(chosen)
+        runs += _new_runs(first, last, los, his)
+    return choice_array(runs)
+
+
+def _new_runs(first: int, last: int, los: list[int], his: list[int]) -> list[tuple[int, int]]:
+    """The runs of ``first..last`` that the ranges ``los[i]..his[i]``
+    (disjoint, not touching, increasing) do not hold, in increasing order;
+    ``first..last`` is then merged into those ranges. The runs of a choice
+    whose labels repeat (``7,1-3000000``) are found from its ranges alone,
+    as many steps as ranges and no set of its labels.
+
+    Examples
+    --------
+    >>> los, his = [5], [9]
+    >>> _new_runs(1, 12, los, his), los, his
+    ([(1, 4), (10, 12)], [1], [12])
+    """
+    i = bisect.bisect_left(his, first - 1)  # the first range that reaches first - 1 (touches or overlaps)
+    j, at, runs = i, first, []
+    while j < len(los) and los[j] <= last + 1:
+        if los[j] > at:
+            runs.append((at, min(los[j] - 1, last)))
+        at = max(at, his[j] + 1)
+        j += 1
+    if at <= last:
+        runs.append((at, last))
+    lo, hi = (min(first, los[i]), max(last, his[j - 1])) if j > i else (first, last)
+    los[i:j], his[i:j] = [lo], [hi]
+    return runs
+
+
+def choice_array(runs: list[tuple[int, int]]) -> np.ndarray:
+    """The labels of ``runs`` (``(first, last)`` each, in order) as one
+    array: int64 where they fit it, else uint64 where they are all at least
+    0 and fit it, else an object array of Python integers.
+
+    Parameters
+    ----------
+    runs : list of tuple of int
+        The ranges of labels, each ``first <= last``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Every label of every run, in order.
+
+    Examples
+    --------
+    >>> choice_array([(7, 7), (1, 3)]).tolist()
+    [7, 1, 2, 3]
+    >>> choice_array([(2**63 - 1, 2**63)]).dtype.name
+    'uint64'
+    """
+    lo, hi = min(a for a, _ in runs), max(b for _, b in runs)
+    kind = next((np.dtype(t) for t in (np.int64, np.uint64)
+                 if np.iinfo(t).min <= lo and hi <= np.iinfo(t).max), np.dtype(object))
+    sizes = np.array([b - a + 1 for a, b in runs], dtype=np.int64)
+    if kind.kind == "O":  # a choice no 64-bit type holds: Python's integers, as few as such a choice asks
+        return np.array([v for a, b in runs for v in range(a, b + 1)], dtype=object)
+    # each label is the one before plus 1, but where a run starts: one array, summed in place
+    # (the steps between runs wrap around in the 64-bit type as the sums do, so they come out exact)
+    out = np.ones(int(sizes.sum()), dtype=kind)
+    starts = np.array([a for a, _ in runs], dtype=kind)
+    ends = np.array([b for _, b in runs], dtype=kind)
+    at = np.cumsum(sizes) - sizes
+    out[0] = starts[0]
+    out[at[1:]] = starts[1:] - ends[:-1]
+    return np.cumsum(out, out=out)
 
 
 def reads_as_choice(text: str) -> bool:
@@ -149,13 +233,14 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
         cells = "pixels" if len(about["shape"]) == 2 else "voxels"
         raise IsoflowError(f"{args.input}: the image has no {cells} (shape {'x'.join(map(str, about['shape']))})")
-    within, beyond = ([], []) if asked is None else _by_type(args.input, asked, about["dtype"])
+    none = np.zeros(0, np.int64)
+    within, beyond = (none, none) if asked is None else _by_type(args.input, asked, about["dtype"])
     if every:
         table, missing = chosen_rows(table, within)
     present = table["voxels"] > 0
-    absent: list[int] = []
-    if every or not present.all() or beyond:
-        absent = in_order_asked((missing if every else table["label"][~present].tolist()), beyond, asked)
+    absent = none
+    if every or not present.all() or len(beyond):
+        absent = in_order_asked((missing if every else table["label"][~present]), beyond, asked)
         if not present.any():
             raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
         # a warning, which --quiet keeps: the table lacks rows that were asked for
@@ -216,20 +301,32 @@ def say_segments(args: argparse.Namespace) -> None:
         print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
 
 
-def in_order_asked(missing: list[int], beyond: list[int], asked: list[int]) -> list[int]:
+def in_order_asked(missing: np.ndarray, beyond: np.ndarray, asked: np.ndarray) -> np.ndarray:
     """The labels asked for that have no row, in the order asked: those
     the image's type holds but no voxel has (``missing``, in that order)
     and those it cannot hold (``beyond``, in that order too).
 
+    Parameters
+    ----------
+    missing, beyond : numpy.ndarray
+        Labels of ``asked``, each in the order asked.
+    asked : numpy.ndarray
+        The choice (:func:`label_choice`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Those of ``asked`` that are in either, in ``asked``'s type.
+
     Examples
     --------
-    >>> in_order_asked([7, 9], [300], [7, 300, 3, 9])
+    >>> in_order_asked(np.array([7, 9]), np.array([300]), np.array([7, 300, 3, 9])).tolist()
     [7, 300, 9]
     """
-    if not beyond or not missing:  # each already in the order asked
-        return missing + beyond
-    gone = set(missing).union(beyond)
-    return [v for v in asked if v in gone]
+    if not len(beyond) or not len(missing):  # each already in the order asked
+        return beyond if not len(missing) else missing
+    # (missing's labels are asked's, so asked's type holds them)
+    return asked[np.isin(asked, missing.astype(asked.dtype)) | np.isin(asked, beyond)]
 
 
 def is_store(path) -> bool:
@@ -274,15 +371,15 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
 CHOICE_ROWS = 1 << 16
 
 
-def chosen_rows(table: dict, chosen: list[int]) -> tuple[dict, list[int]]:
+def chosen_rows(table: dict, chosen: np.ndarray) -> tuple[dict, np.ndarray]:
     """The rows of ``table`` (every label present, in increasing order)
     whose labels are ``chosen``, in the order chosen, and the labels
     chosen that have no row (in that order too).
 
     Examples
     --------
-    >>> rows, missing = chosen_rows({"label": np.array([2, 5, 9]), "voxels": np.array([4, 1, 7])}, [9, 3, 2])
-    >>> rows["label"].tolist(), rows["voxels"].tolist(), missing
+    >>> rows, missing = chosen_rows({"label": np.array([2, 5, 9]), "voxels": np.array([4, 1, 7])}, np.array([9, 3, 2]))
+    >>> rows["label"].tolist(), rows["voxels"].tolist(), missing.tolist()
     ([9, 2], [7, 4], [3])
     """
     labels = table["label"]
@@ -294,10 +391,10 @@ def chosen_rows(table: dict, chosen: list[int]) -> tuple[dict, list[int]]:
     rows = np.flatnonzero(hit)[np.argsort(place, kind="stable")]
     found = np.zeros(len(wanted), bool)
     found[place] = True
-    return {k: v[rows] for k, v in table.items()}, wanted[~found].tolist()
+    return {k: v[rows] for k, v in table.items()}, wanted[~found]
 
 
-def _by_type(name, asked: list[int], dtype) -> tuple[list[int], list[int]]:
+def _by_type(name, asked: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
     """The labels asked for that the image's type can hold, and those it
     cannot (they cannot occur), each in the order asked; an error when it
     holds none of them.
@@ -306,41 +403,45 @@ def _by_type(name, asked: list[int], dtype) -> tuple[list[int], list[int]]:
     ----------
     name : str
         The image, as the error names it.
-    asked : list of int
-        The labels asked for.
+    asked : numpy.ndarray
+        The labels asked for (:func:`label_choice`).
     dtype : numpy.dtype
         The image's type (a float image's labels are read as integers:
         :func:`~isoflow.digital.label_table.label_dtype`).
 
     Returns
     -------
-    tuple of list of int
-        ``(within, beyond)``.
+    tuple of numpy.ndarray
+        ``(within, beyond)``: ``within`` in the labels' type, ``beyond``
+        in ``asked``'s.
 
     Examples
     --------
-    >>> _by_type("cells.tif", [3, 300, -1, 255], np.uint8)
-    ([3, 255], [300, -1])
+    >>> within, beyond = _by_type("cells.tif", np.array([3, 300, -1, 255]), np.uint8)
+    >>> within.tolist(), within.dtype.name, beyond.tolist()
+    ([3, 255], 'uint8', [300, -1])
     """
     from ..digital.label_table import label_dtype
 
     kind = label_dtype(dtype)
     info = np.iinfo(kind)
-    lo, hi = int(info.min), int(info.max)  # (looked up once: a choice may hold millions)
-    within: list[int] = []
-    beyond: list[int] = []
-    for v in asked:
-        (within if lo <= v <= hi else beyond).append(v)
-    if not within:
+    lo, hi = int(info.min), int(info.max)
+    if asked.dtype.kind != "O":  # the bounds as asked's type holds them, so that NumPy compares them exactly
+        held = np.iinfo(asked.dtype)
+        lo, hi = max(lo, int(held.min)), min(hi, int(held.max))
+    keep = np.zeros(len(asked), bool) if lo > hi else \
+        (asked >= np.asarray(lo, asked.dtype)) & (asked <= np.asarray(hi, asked.dtype))
+    if not keep.any():
         raise IsoflowError(f"{name}: none of the labels asked for occur ({_some(asked)}): its labels are "
                            f"{kind} ({info.min} to {info.max})")
-    return within, beyond
+    return asked[keep].astype(kind, copy=False), asked[~keep]
 
 
 def _some(values, most: int = 8) -> str:
     # each value as it is: NumPy makes float64 of ints that no one integer type
     # holds together (2**63 beside 5, or beside -1), which would print 9.223372036854776e+18
-    shown = ", ".join(str(v) for v in list(values[:most]))
+    first = values[:most]
+    shown = ", ".join(str(v) for v in (first.tolist() if isinstance(first, np.ndarray) else list(first)))
     return shown + (f", ... ({len(values) - most} more)" if len(values) > most else "")
 
 
@@ -411,18 +512,52 @@ def draw_table(args: argparse.Namespace, about: dict, conn: int, table: dict) ->
     render_label_table(table, args.png, name=name, connectivity=conn, unit=about["unit"])
 
 
-def json_text(name, about: dict, conn: int, table: dict, absent: list[int]) -> Iterator[str]:
+def json_text(name, about: dict, conn: int, table: dict, absent: np.ndarray) -> Iterator[str]:
     """What ``--json`` prints, in pieces: one object, the image, ``absent``
-    (the labels asked for that have no row) and then ``labels``, one
-    object per label (NaN as null)."""
+    (the labels asked for that have no row: :func:`json_list`) and then
+    ``labels``, one object per label (NaN as null)."""
     # the type by its name, in any byte order: a big-endian file's labels (NRRD's
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
     head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
-            "connectivity": conn, "absent": absent}
-    yield json.dumps(head)[:-1] + ', "labels": '
+            "connectivity": conn}
+    yield json.dumps(head)[:-1] + ', "absent": '
+    yield from json_list(absent)
+    yield ', "labels": '
     yield from json_rows(table)
     yield "}"
+
+
+#: labels :func:`json_list` makes text of at a time
+JSON_LIST_CHUNK = 1 << 16
+
+
+def json_list(values: np.ndarray) -> Iterator[str]:
+    """The JSON text of a list of integers, in pieces, as ``json.dumps``
+    writes the list (``[7, 300, 9]``, ``[]``), a chunk of them at a time:
+    an ``absent`` of millions never becomes a Python integer each at once.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        Integers (any integer type, or Python's in an object array).
+
+    Returns
+    -------
+    Iterator of str
+        Pieces whose concatenation is the list's JSON.
+
+    Examples
+    --------
+    >>> "".join(json_list(np.array([7, 300, 9], np.uint16)))
+    '[7, 300, 9]'
+    >>> "".join(json_list(np.zeros(0, np.int64)))
+    '[]'
+    """
+    yield "["
+    for start in range(0, len(values), JSON_LIST_CHUNK):
+        yield (", " if start else "") + ", ".join(map(str, values[start:start + JSON_LIST_CHUNK].tolist()))
+    yield "]"
 
 
 def write_csv(path, table: dict, force: bool) -> None:
@@ -814,7 +949,7 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     return sorted(found)
 
 
-def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | None,
+def retired_label_files(earlier: list[Path], suffix: str, asked: np.ndarray | None,
                         force: bool) -> tuple[list[Path], list[Path]]:
     """Which of an earlier run's label files (:func:`earlier_label_files`)
     a run removes and which it keeps, as ``(retire, kept)``.
@@ -831,8 +966,9 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
         The label files of the directory that this run does not write.
     suffix : str
         Their suffix (``.ply``).
-    asked : list of int or None
-        The labels of ``--labels SPEC``; None for every label.
+    asked : numpy.ndarray or None
+        The labels of ``--labels SPEC`` (:func:`label_choice`); None for
+        every label.
     force : bool
         Whether ``--force`` was given.
 
@@ -844,7 +980,7 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
     Examples
     --------
     >>> files = [Path("out/label_5.ply"), Path("out/label_7.ply")]
-    >>> [[f.name for f in part] for part in retired_label_files(files, ".ply", [3, 5], True)]
+    >>> [[f.name for f in part] for part in retired_label_files(files, ".ply", np.array([3, 5]), True)]
     [['label_5.ply'], ['label_7.ply']]
     >>> [[f.name for f in part] for part in retired_label_files(files, ".ply", None, True)]
     [['label_5.ply', 'label_7.ply'], []]
@@ -853,9 +989,19 @@ def retired_label_files(earlier: list[Path], suffix: str, asked: list[int] | Non
         return [], list(earlier)
     if asked is None:
         return list(earlier), []
-    chosen = set(asked)
-    retire = [f for f in earlier if int(f.name[len("label_"): -len(suffix)]) in chosen]
-    return retire, [f for f in earlier if f not in retire]
+    chosen = _asked_among([int(f.name[len("label_"): -len(suffix)]) for f in earlier], asked)
+    return [f for f, c in zip(earlier, chosen) if c], [f for f, c in zip(earlier, chosen) if not c]
+
+
+def _asked_among(values: list[int], asked: np.ndarray) -> list[bool]:
+    """Whether each of a few labels (Python integers) is one of ``asked``
+    (:func:`label_choice`), with no Python integer made per label asked."""
+    if asked.dtype.kind == "O":
+        return np.isin(np.array(values, dtype=object), asked).tolist()
+    held = np.iinfo(asked.dtype)
+    fits = [int(held.min) <= v <= int(held.max) for v in values]  # one asked's type cannot hold is not asked
+    found = np.isin(np.array([v if ok else 0 for v, ok in zip(values, fits)], dtype=asked.dtype), asked)
+    return [ok and hit for ok, hit in zip(fits, found.tolist())]
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,

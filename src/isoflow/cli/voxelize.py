@@ -37,7 +37,8 @@ def add_label_options(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("--split", action="store_true",
                    help="a label per body: per node of a scene (glTF/GLB, 3MF, DAE, ...; a glTF's in its file's "
-                        "order), per connected body of any other mesh (an STL's solids; a cavity stays with its body)")
+                        "order), per solid of an ASCII STL of named solids (FILE:NAME, in its order), per connected "
+                        "body of any other mesh (a cavity stays with its body)")
     p.add_argument("--overlap", choices=OVERLAPS, default="later",
                    help="a voxel inside several meshes (or bodies of --split): later (default: the later mesh's "
                         "label wins) or error (refuse, naming the pairs and counts); one mesh without --split has "

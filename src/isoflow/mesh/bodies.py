@@ -13,7 +13,12 @@ meshes joined, as every command reads it). With ``split``:
   (``part2`` before ``part10``);
   an archive's nodes are named by its files, ``FILE:MEMBER``
   (:func:`archive_bodies`);
-* any other mesh (STL with one or several solids, OBJ, PLY, OFF, or
+* an ASCII STL of several solids that name themselves (``solid bracket``
+  ... ``endsolid bracket``) gives one body per solid, named
+  ``FILE:bracket``, in the file's order (:func:`solid_bodies`): a solid of
+  several bodies is one;
+* any other mesh (a binary STL, an STL of one solid or of solids none of
+  which is named, OBJ, PLY, OFF, or
   arrays) gives one body per **connected body**, named ``FILE:1``,
   ``FILE:2``, ... in the order of their first face. Faces are joined
   across the edges of the mesh after the weld: across an edge of one or
@@ -66,8 +71,9 @@ SCENE_SUFFIXES = (".glb", ".gltf", ".3mf", ".dae", ".zae", ".3dxml", ".xaml", ".
 
 @dataclass(frozen=True)
 class Body:
-    """One mesh of a label image: its name (file, file:node, file:k, or
-    mesh k for arrays) and its triangles (welded when read from a file)."""
+    """One mesh of a label image: its name (file, file:node, file:solid,
+    file:k, or mesh k for arrays) and its triangles (welded when read from
+    a file)."""
 
     name: str
     vertices: np.ndarray
@@ -107,14 +113,80 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
 
 
 def file_bodies(path, split: bool) -> list[Body]:
-    """A file's bodies: itself, or with ``split`` its nodes (a scene) or
-    its connected bodies."""
+    """A file's bodies: itself, or with ``split`` its nodes (a scene), its
+    named solids (an ASCII STL: :func:`solid_bodies`) or its connected
+    bodies."""
     name = os.fspath(path)
     if not split:
         return [Body(str(name), *load_mesh(path))]
     if is_scene_path(path):
         return node_bodies(Path(name))
-    return connected_bodies(*load_mesh(path), str(name))
+    solids = solid_bodies(Path(name))
+    return solids if solids is not None else connected_bodies(*load_mesh(path), str(name))
+
+
+#: the suffixes of STL files, whose named solids :func:`solid_bodies` reads
+STL_SUFFIXES = (".stl", ".stl_ascii")
+
+
+def solid_bodies(path: Path) -> list[Body] | None:
+    """One body per solid of an ASCII STL file of several solids some of
+    which are named (``solid bracket`` ... ``endsolid bracket``), named
+    ``FILE:NAME`` in the file's order, each solid welded alone as a scene's
+    node is (a solid of several bodies stays one); None for any other file
+    (a binary STL, one solid, solids none of which is named: their
+    connected bodies are the labels).
+
+    An unnamed solid among named ones is named by its number among the
+    file's solids (``FILE:2``); a name given before is made unique as
+    trimesh names the solids of such a file (``bolt``, ``bolt_1``). A
+    solid without a facet gives no body, as a scene's empty node.
+
+    Parameters
+    ----------
+    path : Path
+        The mesh file.
+
+    Returns
+    -------
+    list of Body or None
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> facet = "facet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\nvertex 0 1 0\\nendloop\\nendfacet\\n"
+    >>> p = Path(tempfile.mkdtemp()) / "parts.stl"
+    >>> _ = p.write_text("".join(f"solid {n}\\n{facet}endsolid {n}\\n" for n in ("bolt", "", "bolt")))
+    >>> [b.name[len(str(p)):] for b in solid_bodies(p)]
+    [':bolt', ':2', ':bolt_1']
+    """
+    from .readers import stl_solids
+
+    if not path.name.lower().endswith(STL_SUFFIXES):
+        return None
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(84)
+            if len(head) == 84 and path.stat().st_size == 84 + 50 * int.from_bytes(head[80:], "little"):
+                return None  # a binary STL (no solid names), not read twice
+            data = head + fh.read()
+    except OSError:
+        return None  # load_mesh says what is wrong with the file
+    solids = stl_solids(data)
+    if solids is None or len(solids) < 2 or not any(name for name, _ in solids):
+        return None
+    from trimesh.util import unique_name
+
+    taken: dict[str, None] = {}
+    bodies = []
+    for k, (name, (v, f)) in enumerate(solids, 1):
+        name = unique_name(name or str(k), taken)
+        taken[name] = None
+        where = f"{path}:{name}"
+        v, f = weld(*check_mesh(v, f, where), where=where)
+        if len(f):  # (every face degenerate: nothing to fill)
+            bodies.append(Body(where, v, f))
+    return bodies
 
 
 def node_bodies(path: Path) -> list[Body]:

@@ -72,7 +72,8 @@ class LabelVoxelization(Result):
     pitch : float
     names : tuple of str
         Label i's mesh is ``names[i - 1]``: its file, ``FILE:NODE`` for a
-        scene's node, ``FILE:K`` for a connected body, ``mesh K`` for arrays.
+        scene's node, ``FILE:SOLID`` for a named solid of an ASCII STL,
+        ``FILE:K`` for a connected body, ``mesh K`` for arrays.
     voxels : tuple of int
         Label i's voxels, ``voxels[i - 1]``, after overlaps are resolved.
     fill : {"winding", "shell", "flood"}
@@ -327,8 +328,9 @@ def voxelize_meshes(meshes: Sequence[object], *, pitch: float | None = None, res
         overlap is refused (IsoflowError naming the pairs and counts, and
         the mesh of each label it names).
     split
-        One label per body instead of per file: a scene's nodes, a mesh's
-        connected bodies (:mod:`isoflow.mesh.bodies`).
+        One label per body instead of per file: a scene's nodes, an ASCII
+        STL's named solids, any other mesh's connected bodies
+        (:mod:`isoflow.mesh.bodies`).
     strict
         As :func:`~isoflow.mesh.voxelize.voxelize`, for every mesh.
     max_bytes

@@ -88,6 +88,56 @@ def read_stl(data: bytes) -> Mesh | None:
     return _read_stl_ascii(data)
 
 
+#: a ``solid NAME`` or ``endsolid NAME`` line of an ASCII STL: its keyword and the rest of the line
+_SOLID_LINE = re.compile(rb"^[ \t]*(end)?solid(?=[ \t\r\n]|$)([^\r\n]*)", re.MULTILINE | re.IGNORECASE)
+
+
+def stl_solids(data: bytes) -> list[tuple[str, Mesh]] | None:
+    """The solids of an ASCII STL file, in the file's order: each one's
+    name as its ``solid`` line gives it (``""`` where it gives none) and
+    its triangles as :func:`read_stl` reads a file of that solid alone. A
+    solid without a facet is left out, as trimesh leaves it out.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+
+    Returns
+    -------
+    list of (str, (ndarray, ndarray)) or None
+        None for a binary STL, and where the file is not ``solid`` ...
+        ``endsolid`` blocks alone or a solid's facets are not read as
+        :func:`read_stl` reads them (trimesh's reading of the whole file
+        is then the one to take).
+
+    Examples
+    --------
+    >>> facet = b"facet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\nvertex 0 1 0\\nendloop\\nendfacet\\n"
+    >>> solids = stl_solids(b"solid lid\\n" + facet + b"endsolid lid\\nsolid\\n" + facet * 2 + b"endsolid\\n")
+    >>> [(name, len(f)) for name, (v, f) in solids]
+    [('lid', 1), ('', 2)]
+    """
+    if len(data) >= 84 and len(data) == 84 + 50 * int(np.frombuffer(data, "<u4", 1, 80)[0]):
+        return None  # binary, as read_stl reads it: a binary STL has no solid names
+    lines = list(_SOLID_LINE.finditer(data))
+    if not lines or [bool(m[1]) for m in lines] != [False, True] * ((len(lines) + 1) // 2):
+        return None  # not solid, endsolid, solid, endsolid, ... (a solid left unended too)
+    ends = [0] + [m.end() for m in lines[1::2]]
+    if any(data[a:b].strip() for a, b in zip(ends, [m.start() for m in lines[::2]] + [len(data)])):
+        return None  # text between the solids
+    solids = []
+    for start, end in zip(lines[::2], lines[1::2]):
+        body = data[start.end():end.start()]
+        if b"vertex" not in body.lower():
+            continue
+        mesh = _read_stl_ascii(b"solid\n" + body + b"\nendsolid\n")
+        if mesh is None:
+            return None
+        solids.append((start[2].strip().decode("utf-8", "replace"), mesh))
+    return solids
+
+
 def stl_size_error(path, data: bytes) -> str | None:
     """Why a file that is no ASCII STL gave no triangles as a binary one:
     the line naming its size against the 84 bytes plus 50 per facet that
