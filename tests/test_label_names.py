@@ -179,3 +179,17 @@ def test_voxelize_into_nifti_notes_once_that_the_names_are_not_written(tmp_path,
     assert "warning:" not in err  # the names are the command's own: a note, which -q drops
     assert main(["voxelize", a, b, "--resolution", "16", "-o", str(out), "--force", "-q"]) == 0
     assert "label names" not in capsys.readouterr().err
+
+
+def test_surface_labels_glb_keeps_node_names_label_n_and_records_the_name_in_extras(tmp_path, capsys, image):
+    import struct
+
+    path = isoflow.write_labels(image, tmp_path / "seg.h5", names=NAMES)
+    out = tmp_path / "s.glb"
+    assert main(["surface", str(path), "--labels", "-o", str(out)]) == 0
+    data = out.read_bytes()
+    # the GLB's JSON chunk, as the glTF 2.0 specification lays it out: header, chunk length, "JSON"
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert kind == b"JSON"
+    nodes = json.loads(data[20:20 + length])["nodes"]
+    assert [(n["name"], n["extras"]["name"]) for n in nodes] == [(f"label_{k}", v) for k, v in NAMES.items()]

@@ -751,7 +751,9 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
     from ..mesh.export import batch_glb_parts
 
     if target[0] == "glb":
-        glb_parts.append((batch_glb_parts(batch, names, lo, image.spacing, image.origin), batch.rows))
+        # a label's name (where the file records it) in its node's extras: the node keeps its name label_N
+        named = table["name"].tolist() if "name" in table else None
+        glb_parts.append((batch_glb_parts(batch, names, lo, image.spacing, image.origin, named), batch.rows))
     for s, r in enumerate(batch.rows):
         mesh = batch.part(s)
         if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike
