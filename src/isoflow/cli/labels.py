@@ -225,7 +225,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         try:
             table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                surfaces=surfaces, threads=getattr(args, "threads", None))
+                                surfaces=surfaces, threads=getattr(args, "threads", None), names=image.names)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
@@ -342,7 +342,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array)."""
     from ..digital.label_blocks import label_table_blocks
-    from ..digital.label_table import label_dtype
+    from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import LabelSlabs
     from ..scale.compiled import using
@@ -364,7 +364,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
-            "unit": slabs.unit}, table
+            "unit": slabs.unit}, with_names(table, slabs.names)
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)
@@ -592,17 +592,26 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     rows = range(min(n, SHOWN_ROWS))
     shown = tuple((h, c, max([w] + [len(_cell(table[c][r], 0)) + 1 for r in rows])) for h, c, w in shown)
     head = "".join(f"{h:>{w}}" for h, _, w in shown)
-    lines.append(head + ("  surfaces (genera)" if surfaces else ""))
+    # the genera's cells padded to one width where a name follows them, so that the names line up
+    cells = [f"  {table['surfaces'][r]} ({_genera(table['genera'][r])})" for r in rows] if surfaces else []
+    wide = max([len("  surfaces (genera)")] + [len(c) for c in cells]) if "name" in table else 0
+    lines.append(head + (f"{'  surfaces (genera)':<{wide}}" if surfaces else "") + ("  name" if "name" in table else ""))
     for r in rows:
         row = "".join(_cell(table[c][r], w) for _, c, w in shown)
         if surfaces:
-            genera = ",".join(map(str, table["genera"][r][:6])) + (",..." if len(table["genera"][r]) > 6 else "")
-            row += f"  {table['surfaces'][r]} ({genera})"
-        lines.append(row)
+            row += f"{cells[r]:<{wide}}"
+        if "name" in table:
+            row += f"  {table['name'][r]}"
+        lines.append(row.rstrip())
     if n > SHOWN_ROWS:
         lines.append(f"  ... {n - SHOWN_ROWS} more labels (--json, or --csv FILE, for the full table)")
     lines.append(summary(table))
     return "\n".join(lines)
+
+
+def _genera(genera: tuple) -> str:
+    """A label's genera as the terminal table shows them: the first six."""
+    return ",".join(map(str, genera[:6])) + (",..." if len(genera) > 6 else "")
 
 
 def summary(table: dict) -> str:
@@ -877,7 +886,9 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
     from ..mesh.export import batch_glb_parts
 
     if target[0] == "glb":
-        glb_parts.append((batch_glb_parts(batch, names, lo, image.spacing, image.origin), batch.rows))
+        # a label's name (where the file records it) in its node's extras: the node keeps its name label_N
+        named = table["name"].tolist() if "name" in table else None
+        glb_parts.append((batch_glb_parts(batch, names, lo, image.spacing, image.origin, named), batch.rows))
     for s, r in enumerate(batch.rows):
         mesh = batch.part(s)
         if mesh.euler_characteristic != table["surface_euler"][r]:  # the table and the mesh count alike

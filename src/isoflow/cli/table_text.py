@@ -54,7 +54,19 @@ def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> li
     ['true', 'false']
     >>> cell_texts(np.array([(0, 2), ()], dtype=object), ";", ("False", "True"))
     ['0;2', '']
+
+    Text (a label's name) as a JSON string, or as CSV writes it (quoted
+    where it holds a comma, a quote or a line break):
+
+    >>> cell_texts(np.array(['a.stl', 'b, "c".obj']), ";", ("False", "True"))
+    ['a.stl', '"b, ""c"".obj"']
+    >>> cell_texts(np.array(['a.stl']), ", ", ("false", "true"))
+    ['"a.stl"']
     """
+    if column.dtype.kind == "U":
+        if joined != ";":
+            return [json.dumps(v) for v in column.tolist()]
+        return ['"' + v.replace('"', '""') + '"' if any(c in v for c in ',"\r\n') else v for v in column.tolist()]
     if column.dtype == object:
         values = column.tolist()
         # the texts of the distinct tuples (a table's genera repeat a few)
@@ -217,7 +229,8 @@ def _blocks(table: dict, before: list[bytes], missing: str, joined: str, boolean
     joins release the GIL), the next ones while the caller writes one out;
     Python's text of a small table on the calling thread."""
     n = len(next(iter(table.values()))) if table else 0
-    rows = _plain_rows if plain(n) else _rows
+    # text (a name column) may hold any character: Python's rows, not the compiled ASCII ones
+    rows = _plain_rows if plain(n) or any(c.dtype.kind == "U" for c in table.values()) else _rows
     calls = [(rows, table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
              for lo in range(0, n, BLOCK_ROWS)]
     if rows is _plain_rows:
@@ -255,7 +268,8 @@ def csv_rows(table: dict) -> Iterator[str]:
     """The table as CSV text (what :mod:`csv`'s writer writes with
     ``lineterminator="\\r\\n"``: the header, then a line per row; NaN
     empty, a tuple of integers as ``0;1``), in blocks of rows. The names
-    and cells hold no comma, quote or line break, so none is quoted.
+    and cells hold no comma, quote or line break, so none is quoted, but
+    for a text column's (a label's name), quoted as :mod:`csv` quotes it.
 
     Examples
     --------

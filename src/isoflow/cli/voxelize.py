@@ -96,11 +96,19 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     """Several meshes (or one split into bodies) into one label image."""
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
-    from ..mesh.volumes import check_label_output, check_volume_output, write_bytes_per_voxel, write_labels
+    from ..mesh.volumes import (
+        check_label_output,
+        check_volume_output,
+        keeps_names,
+        names_not_kept,
+        write_bytes_per_voxel,
+        write_labels,
+    )
 
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
-    check_label_output(args.output, len(bodies), args.force)  # and the format's labels, before the voxels
+    # and the format's labels and names (each label's mesh), before the voxels
+    check_label_output(args.output, len(bodies), args.force, dict(enumerate((b.name for b in bodies), 1)))
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                             overlap=args.overlap, strict=args.strict,
@@ -108,10 +116,15 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
     for body, note in zip(bodies, r.notes):
         say_note(args, body.name, note)
+    # each label's mesh named in the file where its format has a place for names; where it has none, a note
+    # (the names are the command's own, not asked for: no warning, as write_labels gives of names given)
+    kept = keeps_names(args.output)
     with coarser_for_magicavoxel(), writing_line(args, args.output):
-        out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force),
-                      args.output)
+        out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force,
+                                   names=r.names if kept else None), args.output)
     say_note(args, out, r.note)
+    if not kept:
+        say_note(args, out, names_not_kept(args.output, len(r.names)))
     print(label_summary(out, r))
     return 0
 

@@ -101,18 +101,28 @@ class LabelImage:
     ``µm``, ...; None where it says none). :func:`label_table` takes it in
     place of the array and its ``pitch`` and ``origin``; its world columns
     are in that unit (areas and volumes in its square and cube).
+    ``names``: what each label is, label value to name, as the file records
+    it (a 3D Slicer segment's name, an OME-Zarr label's ``properties``;
+    docs/labels.md lists the formats), or None where it records none; a
+    sequence is read as label ``i + 1`` named ``names[i]``.
+    :func:`label_table` gives them as its ``name`` column, and
+    :func:`~isoflow.mesh.volumes.write_labels` writes them again.
 
     Examples
     --------
     >>> image = LabelImage(np.array([[1, 1, 1], [0, 2, 2]]), np.array([0.5, 2.0]), np.zeros(2))
     >>> label_table(image)["area"].tolist()  # pixels of 0.5 x 2
     [3.0, 2.0]
+    >>> named = LabelImage(image.array, image.spacing, image.origin, names=["bone", "muscle"])
+    >>> named.names, label_table(named)["name"].tolist()
+    ({1: 'bone', 2: 'muscle'}, ['bone', 'muscle'])
     """
 
     array: np.ndarray
     spacing: np.ndarray
     origin: np.ndarray
     unit: str | None = None
+    names: Mapping[int, str] | None = None
 
     # equal when the three arrays (and the unit) are, by their elements (the generated
     # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
@@ -136,6 +146,74 @@ class LabelImage:
             object.__setattr__(self, "spacing", place.spacing)
             object.__setattr__(self, "origin", place.origin)
         object.__setattr__(self, "unit", unit_given(self.unit, "LabelImage"))
+        object.__setattr__(self, "names", label_names(self.names, "LabelImage"))
+
+
+def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> dict[int, str] | None:
+    """The names of labels as one mapping, label value to name, checked:
+    a sequence names labels 1, 2, ... in order; None (or none given) where
+    there are none.
+
+    Parameters
+    ----------
+    names : mapping of int to str, or sequence of str, or None
+        The names; a label value is an integer from 1 on (0 is the
+        background), a name a string of one line.
+    where : str
+        What a refusal names (the file, or the function).
+
+    Returns
+    -------
+    dict of int to str, or None
+        In increasing order of label.
+
+    Raises
+    ------
+    IsoflowError
+        A label that is no integer from 1 on, a name that is no string or
+        holds a line break.
+
+    Examples
+    --------
+    >>> label_names(["liver", "spleen"], "seg.nrrd")
+    {1: 'liver', 2: 'spleen'}
+    >>> label_names({np.uint8(7): "tumour"}, "seg.nrrd"), label_names({}, "seg.nrrd")
+    ({7: 'tumour'}, None)
+    """
+    if names is None:
+        return None
+    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)):
+        raise IsoflowError(f"{where}: names are a mapping of label to name or a sequence of names (label i + 1 for "
+                           f"the i-th), not {given_text(names)}")
+    pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
+    found: dict[int, str] = {}
+    for label, name in pairs:
+        if isinstance(label, (bool, np.bool_)) or not isinstance(label, (int, np.integer)) or label < 1:
+            raise IsoflowError(f"{where}: a label name is given for {given_text(label)}, and labels are named "
+                               "from 1 on (integers; 0 is the background)")
+        if not isinstance(name, str) or "\n" in name or "\r" in name:
+            raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
+                               "one line")
+        found[int(label)] = name
+    return dict(sorted(found.items())) or None
+
+
+def with_names(table: dict[str, np.ndarray], names: Mapping[int, str] | None) -> dict[str, np.ndarray]:
+    """``table`` with a ``name`` column after ``label`` (each row's name,
+    ``""`` for a label without one) where ``names`` are given; as it is
+    where they are None.
+
+    Examples
+    --------
+    >>> with_names({"label": np.array([1, 3]), "voxels": np.array([8, 2])}, {3: "tumour"})["name"].tolist()
+    ['', 'tumour']
+    """
+    if not names:
+        return table
+    column = np.array([names.get(v, "") for v in table["label"].tolist()], dtype=str)
+    out = {"label": table["label"], "name": column}
+    out.update((k, v) for k, v in table.items() if k != "label")
+    return out
 
 
 def label_table(
@@ -148,6 +226,7 @@ def label_table(
     surfaces: bool = True,
     method: Literal["auto", "numpy", "compiled"] = "auto",
     threads: int | np.integer | None = None,
+    names: Mapping[int, str] | Sequence[str] | None = None,
 ) -> dict[str, np.ndarray]:
     """The shape report of every label of a 3D or 2D label image, as columns.
 
@@ -188,6 +267,11 @@ def label_table(
     threads : int, optional
         Threads for the compiled passes (default: ``ISOFLOW_THREADS``,
         else every CPU).
+    names : mapping of int to str, or sequence of str, optional
+        What each label is (label value to name, or the names of labels
+        1, 2, ... in order), given as the ``name`` column; default: a
+        :class:`LabelImage`'s ``names``. Without names the table has no
+        ``name`` column.
 
     Returns
     -------
@@ -210,7 +294,8 @@ def label_table(
         ``bbox-0`` .. ``bbox-3``, ``centroid-0`` .. ``centroid-1``,
         ``euler_characteristic``, ``b0``, ``b1`` (holes), ``n-0`` ..
         ``n-2`` (convex, flat, concave, eq. 4.9), ``non_well_composed``,
-        ``energy``.
+        ``energy``. With ``names``: ``name`` after ``label``, each row's
+        name (``""`` for a label without one).
 
     Raises
     ------
@@ -249,9 +334,11 @@ def label_table(
     """
     from ..scale.compiled import using
 
-    if isinstance(image, LabelImage):  # the file's place, unless given
+    names = label_names(names, "label_table")
+    if isinstance(image, LabelImage):  # the file's place and names, unless given
         pitch = image.spacing.tolist() if pitch is None else pitch
         origin = image.origin.tolist() if origin is None else origin
+        names = image.names if names is None else names
         image = image.array
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
@@ -266,11 +353,12 @@ def label_table(
         from .planar_labels import planar_table
 
         _use_compiled(vol, "numpy" if method == "auto" else method)  # the method checked as in 3D
-        return unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
-                              place.spacing, vol.shape)
+        return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
+                                         place.spacing, vol.shape), names)
     with using(threads):
         found = (piece_rows if _use_compiled(vol, method) else box_rows)(vol, conn, wanted, surfaces)
-    return unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin, place.spacing, vol.shape)
+    return with_names(unheld_columns(columns(found, place.spacing, place.origin, surfaces), place.origin,
+                                     place.spacing, vol.shape), names)
 
 
 def checked_image(image) -> np.ndarray:

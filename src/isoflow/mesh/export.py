@@ -576,14 +576,16 @@ def glb_columns(mesh, obj: DigitalObject) -> tuple[dict[str, np.ndarray], tuple 
     return table, None if table["x"].dtype == np.float32 else grid_frame(mesh, obj)
 
 
-def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin):
+def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing, origin,
+                    label_names: list[str] | None = None):
     """The glTF parts (:class:`isoflow.mesh.gltf.SceneParts`) of every box
     of a batch of :func:`isoflow.digital.label_meshes.label_batches`
     (``names`` and ``offsets``, the boxes' first voxels, per label index),
     in the batch's order: for each part what :func:`glb_part` gives for it
     and its box, computed once over the batch. A part whose world
     positions float32 cannot hold stores voxel units under its node's
-    transform (:func:`grid_frame`)."""
+    transform (:func:`grid_frame`). ``label_names``, per label index, go
+    into the nodes' ``extras`` as ``name`` (none where empty)."""
     from ..digital.surface import triangle_rows
     from .gltf import SceneParts
 
@@ -610,7 +612,9 @@ def batch_glb_parts(batch: Batch, names: list[str], offsets: np.ndarray, spacing
     return SceneParts(names=[names[t] for t in batch.rows], positions=positions, colors=_rgba(table),
                       attributes=_glb_attributes(table), vfirst=np.asarray(batch.vfirst, np.int64),
                       triangles=triangles[order], tfirst=np.searchsorted(of_face[order], np.arange(parts + 1)),
-                      matrices={int(s): grid_transform(spacing, origin + spacing * corner[s]) for s in framed})
+                      matrices={int(s): grid_transform(spacing, origin + spacing * corner[s]) for s in framed},
+                      extras={s: {"name": label_names[t]} for s, t in enumerate(batch.rows)
+                              if label_names is not None and label_names[t]})
 
 
 def surface_faces(mesh, suffix: str, *, ascii: bool = False, triangulate: bool = False) -> tuple[str, np.ndarray]:

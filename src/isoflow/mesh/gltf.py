@@ -15,7 +15,8 @@ the specification asks of it alone; no other accessor carries them),
 custom attribute under a name starting with ``_``, its rows padded with
 zeros to a multiple of 4 bytes (the specification's alignment of vertex
 attributes), float64 stored as float32; each mesh's ``extras`` may hold a
-comment. Each kind of array of every mesh lies in one buffer view (a
+comment, and a node's ``extras`` what its part's says (a label's name).
+Each kind of array of every mesh lies in one buffer view (a
 vertex attribute's with its ``byteStride``), each mesh's part an accessor
 at its offset there; the indices in two, one uint16 and one uint32, so
 that no accessor's offset needs padding to its component size (the
@@ -91,6 +92,7 @@ class SceneParts:
     triangles: np.ndarray  # (m, 3)
     tfirst: np.ndarray
     matrices: dict[int, np.ndarray] = field(default_factory=dict)  # part -> its node's 4x4 transform
+    extras: dict[int, dict] = field(default_factory=dict)  # part -> its node's extras (a label's name)
 
     def counts(self) -> np.ndarray:
         """Vertices of each part."""
@@ -254,9 +256,10 @@ def scene_chunks(sets: list[SceneParts], order: np.ndarray | None = None, commen
             bounds = low[order].tolist(), high[order].tolist()
         accessors.append(_vertex_accessors(head, (first * row * dtype.itemsize)[order], counts[order], bounds))
     names = [json.dumps(name) for s in sets for name in s.names]
-    matrices = {}
+    matrices, node_extras = {}, {}
     for base, s in zip(np.concatenate([[0], np.cumsum([len(s.names) for s in sets])]).tolist(), sets):
         matrices.update({base + p: m for p, m in s.matrices.items()})
+        node_extras.update({base + p: e for p, e in s.extras.items()})
     extras = f',"extras":{json.dumps({"isoflow": comment}, separators=(",", ":"))}' if comment else ""
     meshes, nodes = [], []
     for t, p in enumerate(order.tolist()):
@@ -265,6 +268,8 @@ def scene_chunks(sets: list[SceneParts], order: np.ndarray | None = None, commen
                       f'{extras}}}')
         matrix = matrices.get(p)
         node = f',"matrix":{json.dumps(np.asarray(matrix, np.float64).T.reshape(-1).tolist())}' if matrix is not None else ""
+        if p in node_extras:
+            node += f',"extras":{json.dumps(node_extras[p], separators=(",", ":"))}'
         nodes.append(f'{{"name":{names[p]},"mesh":{t}{node}}}')
     head = json.dumps({"asset": {"version": "2.0", "generator": "isoflow"}, "scene": 0,
                        "scenes": [{"nodes": list(range(n))}]}, separators=(",", ":"))

@@ -12,16 +12,17 @@ import errno
 import os
 import re
 import stat
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, get_args
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..digital.label_table import LabelImage, as_labels
+from ..digital.label_table import LabelImage, as_labels, label_names
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, check_path, check_switch, given_text, missing, warn
+from ..errors import IsoflowError, check_path, check_switch, counted, given_text, missing, warn
 from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -458,8 +459,12 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         float array whose values are all whole numbers, as NIfTI scaling
         may give, becomes int64); ``spacing`` and ``origin`` as
         :func:`read_volume` gives them, and ``unit``, their length unit as
-        the file says it (:func:`read_volume_with_unit`). :func:`isoflow.label_table`
-        takes it as it is, in the file's units.
+        the file says it (:func:`read_volume_with_unit`); ``names``, label
+        value to name, where the file records them (3D Slicer's segments in
+        a NRRD, OME-Zarr's ``image-label`` properties, the ``label_names``
+        that :func:`write_labels` writes into HDF5 and ``.npz``), else
+        None. :func:`isoflow.label_table` takes it as it is, in the file's
+        units.
 
     Raises
     ------
@@ -500,7 +505,8 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
     except IsoflowError as exc:
         raise exc.at(path) from None
     never_written(str(path), raw.unwritten, table=True)
-    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0], raw.unit)
+    return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0], raw.unit,
+                      raw.names)
 
 
 def select_label(array, label, where: str) -> np.ndarray:
@@ -1004,21 +1010,31 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
     return file
 
 
-def check_label_output(path: str | os.PathLike, count: int, force: bool = False) -> tuple[Path, str | None]:
+def check_label_output(path: str | os.PathLike, count: int, force: bool = False,
+                       names: Mapping[int, str] | None = None) -> tuple[Path, str | None]:
     """:func:`check_volume_output` for a label image of labels 1 .. ``count``:
     also refused, before any work, where the format keeps fewer labels
-    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
+    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits),
+    or where it keeps ``names`` (label to name) in ASCII text only (a NRRD
+    header) and a name is not."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and count > fmt.max_label:
         keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
         raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
                            ".nii.gz, .nrrd, .h5 or .npz")
+    wide = [(k, v) for k, v in (names or {}).items() if not v.isascii()]
+    if fmt is not None and fmt.name == "NRRD" and wide:
+        # pynrrd writes and reads the header as ASCII: a name past it could be neither written nor read back
+        raise IsoflowError(f"{path}: a NRRD header holds ASCII text, and the name of label {wide[0][0]} "
+                           f"({wide[0][1]!r}) is not; write .h5, .zarr or .npz, which keep any name, or give "
+                           "ASCII names")
     return file, dataset
 
 
 def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,
-                 origin: ArrayLike | None = None, force: bool = False, unit: str | None = None) -> Path:
+                 origin: ArrayLike | None = None, force: bool = False, unit: str | None = None,
+                 names: Mapping[int, str] | Sequence[str] | None = None) -> Path:
     """Save a label image in the format its suffix names, in its own integer type
     (a signed one as the unsigned type of its width).
 
@@ -1058,11 +1074,20 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         LabelImage's, as ``pitch`` and ``origin`` do. Written where the
         format has room for it (docs/formats.md, "Length unit"), else said
         in a warning.
+    names : mapping of int to str, or sequence of str, optional
+        What each label is: label value to name, or the names of labels 1,
+        2, ... in order (if None: a LabelImage's ``names``). Written where
+        the format has a place for them: a NRRD as 3D Slicer's segments
+        (``Segment{k}_Name``, ``Segment{k}_LabelValue``, ...), OME-Zarr as
+        the ``image-label`` ``properties``, HDF5 as the dataset's
+        attribute ``label_names`` and ``.npz`` as the array
+        ``label_names`` (both JSON: label to name); the other formats have
+        none, which a warning says.
 
     Returns
     -------
     Path
-        The file written; :func:`read_labels` reads it back.
+        The file written; :func:`read_labels` reads it back, with its names.
 
     Raises
     ------
@@ -1072,7 +1097,9 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         whole number (NaN, 1.5: its voxel named), a 2D image for a format
         of 3D only (binvox, MagicaVoxel), a 3D image for PNG (2D only), a
         format that keeps fewer labels than the image has
-        (:func:`check_label_output`), a ``unit`` that is no length unit.
+        (:func:`check_label_output`), a ``unit`` that is no length unit, a
+        name that is no string of one line or a label named that is no
+        integer from 1 on.
 
     Examples
     --------
@@ -1102,15 +1129,23 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     >>> first = read_labels(write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.tif", unit="micron"))
     >>> first.unit, read_labels(write_labels(first, pathlib.Path(tempfile.mkdtemp()) / "cells.nrrd")).unit
     ('\u00b5m', '\u00b5m')
+
+    With the names of its labels, which the file keeps:
+
+    >>> named = write_labels(cells, pathlib.Path(tempfile.mkdtemp()) / "cells.nrrd", names=["nucleus", "cytoplasm"])
+    >>> read_labels(named).names
+    {1: 'nucleus', 2: 'cytoplasm'}
     """
     check_path(path, "path", "write_labels",
                hint="the labels come first: write_labels(labels, path)" if isinstance(labels, (str, os.PathLike)) else "")
     unit = unit_given(unit, str(path))
-    if isinstance(labels, LabelImage):  # its place, unless given, as label_table takes it
+    names = label_names(names, str(path))
+    if isinstance(labels, LabelImage):  # its place and names, unless given, as label_table takes it
         pitch = labels.spacing if pitch is None else pitch
         origin = labels.origin if origin is None else origin
         # a unit read from a file is kept as the file spelled it where isoflow knows no other spelling
         unit = length_unit(labels.unit) if unit is None else unit
+        names = labels.names if names is None else names
         labels = labels.array
     pitch = 1.0 if pitch is None else pitch
     arr = as_array(labels, f"{path}: labels")
@@ -1127,13 +1162,46 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
     # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
     check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
-    file = check_label_output(path, int(arr.max(initial=0)), force)[0]
+    file = check_label_output(path, int(arr.max(initial=0)), force, names)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
-    return write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim), path, force, unit=unit)
+    written = write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim, names=names), path,
+                           force, unit=unit)
+    if names and not keeps_names(file):
+        # said once the file is there, as what a format drops of the placement is
+        warn(f"{path}: {names_not_kept(path, len(names))}")
+    return written
+
+
+def keeps_names(path: str | os.PathLike) -> bool:
+    """Whether the label image file ``path`` (its suffix) has a place for
+    label names (docs/labels.md, "Label files").
+
+    Examples
+    --------
+    >>> keeps_names("seg.nrrd"), keeps_names("seg.h5:/labels"), keeps_names("seg.nii.gz"), keeps_names("seg.npy")
+    (True, True, False, False)
+    """
+    file = split_dataset(path)[0]
+    fmt = format_for(file, writing=True)
+    return fmt is not None and file.name.lower().endswith(fmt.names_in)
+
+
+def names_not_kept(path: str | os.PathLike, count: int) -> str:
+    """What is said of the file ``path`` where names of ``count`` labels
+    are given and its format has no place for them (:func:`keeps_names`).
+
+    Examples
+    --------
+    >>> names_not_kept("seg.nii.gz", 2)
+    'NIfTI has no place for label names; the names of 2 labels are not written (.nrrd, .h5, .zarr and .npz keep them)'
+    """
+    fmt = format_for(split_dataset(path)[0], writing=True)
+    return (f"{fmt.name if fmt is not None else 'this format'} has no place for label names; the names of "
+            f"{counted(count, 'label')} are not written (.nrrd, .h5, .zarr and .npz keep them)")
 
 
 def _unsigned_labels(arr: np.ndarray, path: str | os.PathLike) -> np.ndarray:

@@ -12,7 +12,9 @@ dataset axis) is read as the voxel size when ``pitch`` is absent, in µm.
 The length unit: isoflow's attribute ``unit`` (a string) where present, else
 µm where ``element_size_um`` gives the voxel size. A unit given is written
 as ``unit``; and, where it is µm, ``element_size_um`` too (the pitch per
-dataset axis), for Fiji and ilastik.
+dataset axis), for Fiji and ilastik. A label image's names are the
+attribute ``label_names``, JSON text of an object of label value to name
+(``{"1": "a.stl", "2": "b.obj"}``).
 
 Written as uint8 0/1, gzip-compressed and chunked. ``FILE.h5`` names the
 file: a new one (``--force`` replaces it). ``FILE.h5:/group/name`` names one
@@ -36,7 +38,16 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, import_library, length_unit, reading, stored_values
+from .registry import (
+    RawVolume,
+    check_shape,
+    import_library,
+    length_unit,
+    names_from_json,
+    names_json,
+    reading,
+    stored_values,
+)
 
 DEFAULT_DATASET = "volume"
 #: copies of an existing file that adding a dataset to it holds: the file
@@ -64,7 +75,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     unit = "\u00b5m" if "pitch" not in attrs and "element_size_um" in attrs else None
     if "unit" in attrs:
         unit = length_unit(attrs["unit"])
-    return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit)
+    names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
+    return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit,
+                     names=names)
 
 
 def _element_size(value, ndim: int, where: str) -> np.ndarray:
@@ -197,6 +210,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
             ds.attrs["unit"] = unit
         if unit == "\u00b5m":
             ds.attrs["element_size_um"] = obj.spacing
+        names = getattr(obj, "names", None)  # a label image's
+        if names:
+            ds.attrs["label_names"] = names_json(names)
         f.flush()
         image = f.id.get_file_image()
     with open(path, "wb") as fh:

@@ -4,8 +4,10 @@ The array's axes are isoflow's (axis 0 is x). An ``.npz`` written by isoflow
 carries ``volume`` plus ``offset``, ``parity``, ``pitch`` (one number or one
 per axis) and ``origin``, and ``unit``, their length unit (a string, where
 one is given), so that it round-trips exactly, the lattice parity
-of a flow's step included; any other ``.npz`` must hold exactly one array
-(or one named ``volume``). A ``.npy`` holds the array alone.
+of a flow's step included, and a label image's names as ``label_names``
+(a string: JSON of label value to name); any other ``.npz`` must hold
+exactly one array (or one named ``volume``). A ``.npy`` holds the array
+alone.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, content_hint, length_unit, note
+from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -33,7 +35,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                     arr = z[dataset]
                 elif "volume" in names:
                     arr = z["volume"]
-                    for key in ("offset", "parity", "pitch", "origin", "unit"):
+                    for key in ("offset", "parity", "pitch", "origin", "unit", "label_names"):
                         if key in names:
                             meta[key] = z[key]
                 elif len(names) == 1:
@@ -62,8 +64,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             raise IsoflowError(pickled_objects(path)) from None
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     unit = length_unit(str(meta["unit"])) if "unit" in meta else None
+    names = names_from_json(meta["label_names"], str(path), "array 'label_names'") if "label_names" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
-                     unit=unit)
+                     unit=unit, names=names)
 
 
 def _holds_objects(path: Path) -> bool:
@@ -159,6 +162,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         if path.name.lower().endswith(".npy"):
             np.save(fh, obj.volume)
             return
+        names = getattr(obj, "names", None)  # a label image's
         np.savez_compressed(
             fh,
             volume=obj.volume,
@@ -168,4 +172,5 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
             origin=obj.origin,
             # a string array, which np.load reads without pickle
             **({} if unit is None else {"unit": np.str_(unit)}),
+            **({"label_names": np.str_(names_json(names))} if names else {}),
         )

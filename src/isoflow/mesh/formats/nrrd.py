@@ -25,7 +25,10 @@ Written with ``space dimension``, diagonal ``space directions`` (the voxel
 sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
 float64 in the text header, so pitch and origin are kept exactly; and,
 where a length unit is given, ``space units`` (one per axis, in ASCII:
-``um`` for \u00b5m, as ImageJ and ITK write it).
+``um`` for \u00b5m, as ImageJ and ITK write it). A label image with names
+is written as a 3D Slicer segmentation of one layer, a segment per name
+(:func:`~isoflow.mesh.formats.slicer.segment_fields`); reading it gives
+them back (``RawVolume.names``).
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
-from .slicer import layer_of, remember_segments
+from .slicer import layer_names, layer_of, remember_segments, segment_fields
 
 
 def _check_data_file(header: dict, path: Path) -> None:
@@ -77,7 +80,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         data = nrrd.read_data(header, fh, str(path), index_order="F")
     remember_segments(path, header)  # named after the read (isoflow info --labels's note) from this header
     # a 3D Slicer segmentation: the layer named (FILE.seg.nrrd:N), placed as any NRRD
+    full = header
     data, header = layer_of(data, header, dataset, where)
+    names = layer_names(full, dataset, where)  # (of the whole header: its layers are counted on axis 0)
     directions = header.get("space directions")
     if directions is not None:
         directions = _field(header, "space directions", (data.ndim, None), where)
@@ -89,7 +94,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             note(f"{where}: space origin {origin.tolist()} is not finite; the origin is taken as 0")
             origin = np.zeros(dim)
         vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
-        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where))
+        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where), names=names)
     # without space directions, only "kinds" tells a component axis (an
     # RGB colour, a vector, a list of layers) from a domain axis
     kinds = _kinds(header, data.ndim)
@@ -103,7 +108,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         pitch = np.abs(spacings[placed])
     if len(placed) < data.ndim:
         data = _scalar_axes(data, placed, "spacing", where, kinds)
-    return RawVolume(data, pitch, unit=_unit(header, "units", placed if "spacings" in header else None, where))
+    return RawVolume(data, pitch, unit=_unit(header, "units", placed if "spacings" in header else None, where),
+                     names=names)
 
 
 def _kinds(header: dict, ndim: int) -> list | None:
@@ -178,4 +184,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     }
     if unit is not None:
         header["space units"] = [ascii_unit(unit)] * obj.ndim
+    names = getattr(obj, "names", None)  # a label image's: Slicer's segments
+    if names:
+        header.update(segment_fields(names, obj.volume.shape))
     nrrd.write(str(path), stored_values(obj.volume), header, index_order="F", compression_level=GZIP_LEVEL)

@@ -26,7 +26,10 @@ Written as NGFF 0.4 (zarr format 2, which the most viewers read): one level
 ``0`` of uint8 0/1 in (z, y, x) order, chunks of at most 128 a side, with
 the scale and translation that put every voxel where it was, and a length
 unit given as each axis's ``unit`` in its UDUNITS name (``micrometer``,
-``millimeter``, ...).
+``millimeter``, ...). A label image's names are written as NGFF's
+``image-label`` metadata, its ``properties`` a ``{"label-value": v,
+"name": ...}`` per label, and read back from there (under ``ome`` in
+0.5), of the image read or of a segmentation in its ``labels/`` group.
 """
 
 from __future__ import annotations
@@ -164,7 +167,49 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
     return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank,
-                     unit=axis_unit(multiscale, xyz, where))
+                     unit=axis_unit(multiscale, xyz, where), names=label_properties(array))
+
+
+def label_properties(array) -> dict[int, str] | None:
+    """The names of an OME-Zarr label image's labels: the ``name`` of each
+    entry of its ``image-label`` ``properties`` (NGFF 0.4; under ``ome``
+    in 0.5) with a whole ``label-value``, from the group that holds the
+    level ``array``; None where it names none.
+
+    Parameters
+    ----------
+    array : zarr.Array
+        A level of the image, as :func:`~isoflow.scale.chunks.open_zarr_node` opens it.
+
+    Returns
+    -------
+    dict of int to str, or None
+        Label value to name.
+
+    Examples
+    --------
+    >>> import tempfile, zarr
+    >>> g = zarr.open_group(tempfile.mkdtemp() + "/l.zarr", mode="w")
+    >>> level = g.create_array("0", shape=(2, 2, 2), dtype="u1")
+    >>> g.attrs["image-label"] = {"properties": [{"label-value": 2, "name": "tumour"}, {"label-value": 1}]}
+    >>> label_properties(level)
+    {2: 'tumour'}
+    """
+    zarr = import_library("zarr", "OME-Zarr")
+    try:
+        group = zarr.open_group(store=array.store, path=array.path.rpartition("/")[0], mode="r")
+        attrs = dict(group.attrs)
+    except Exception:  # (a store zarr opens no group of: the image reads without names)
+        return None
+    ome = attrs.get("ome")
+    label = attrs.get("image-label") or (ome.get("image-label") if isinstance(ome, dict) else None)
+    properties = label.get("properties") if isinstance(label, dict) else None
+    found = {}
+    for entry in properties if isinstance(properties, list) else []:
+        value = entry.get("label-value") if isinstance(entry, dict) else None
+        if isinstance(value, int) and not isinstance(value, bool) and value >= 1 and isinstance(entry.get("name"), str):
+            found[value] = entry["name"]
+    return dict(sorted(found.items())) or None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -558,6 +603,10 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     root = zarr.open_group(str(path), mode="w", zarr_format=2)
     root.create_array("0", data=data, chunks=tuple(max(1, min(s, CHUNK)) for s in data.shape))
     root.attrs["multiscales"] = multiscales(name or path.name, spacing, corner, unit=unit)
+    names = getattr(obj, "names", None)  # a label image's
+    if names:
+        root.attrs["image-label"] = {"version": NGFF_VERSION,
+                                     "properties": [{"label-value": v, "name": n} for v, n in names.items()]}
 
 
 def multiscales(name: str, spacing, corner, stored: str = "zyx", unit: str | None = None) -> list[dict]:
@@ -595,7 +644,8 @@ class LabelSlabs:
     report block by block reads a volume) and ``layers`` the chunks along
     ``axes[0]``; ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest
     corner), ``unit`` their length unit (:func:`axis_unit`), ``fill_value``
-    the array's (what zarr reads for a chunk never written)."""
+    the array's (what zarr reads for a chunk never written); ``names``
+    those of its labels where it records them (:func:`label_properties`)."""
 
     def __init__(self, path):
         from ...scale.chunks import layer_axes, zarr_blocks
@@ -635,6 +685,8 @@ class LabelSlabs:
         self.axes = layer_axes(tuple(len(blocks[i]) for i in self.xyz))
         self.layers = list(blocks[self.xyz[self.axes[0]]])
         self.pitch, self.origin, self.unit = pitch, origin, store.unit()
+        #: label value to name, where the image's ``image-label`` names them (:func:`label_properties`)
+        self.names = None if store.multiscale is None else label_properties(array)
         never_written(self.where, unwritten_fill(array), table=True)
 
     def __getitem__(self, region):

@@ -23,7 +23,7 @@ import contextlib
 import importlib
 import logging
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -70,6 +70,8 @@ class VolumeFormat:
     #: ... beside a label image, per byte of its labels, where that differs
     #: (None: ``write_bytes``)
     label_bytes: float | None = None
+    #: the suffixes of its files that keep label names (docs/labels.md)
+    names_in: tuple[str, ...] = ()
 
     def load(self):
         """The format's module (its library is imported only when used)."""
@@ -83,7 +85,7 @@ class VolumeFormat:
 
 
 FORMATS = (
-    VolumeFormat("NumPy", (".npy", ".npz"), "npy", None, read_datasets=True),
+    VolumeFormat("NumPy", (".npy", ".npz"), "npy", None, read_datasets=True, names_in=(".npz",)),
     # ImageJ: 8 or 16 bits; tifffile writes a z, y, x copy
     VolumeFormat("TIFF", (".tif", ".tiff"), "tiff", "tifffile", max_label=2**16 - 1, write_bytes=1.05),
     VolumeFormat("NIfTI", (".nii", ".nii.gz"), "nifti", "nibabel"),
@@ -94,12 +96,12 @@ FORMATS = (
     VolumeFormat("Analyze", (".hdr", ".img"), "analyze", "nibabel", read_only=(".hdr", ".img")),
     # pynrrd copies the bytes in Fortran order (a byte a byte) and gzips that copy into the file a piece at a time
     VolumeFormat("NRRD", (".nrrd", ".nhdr"), "nrrd", "pynrrd", read_datasets=True, imports="nrrd",
-                 read_only=(".nhdr",), write_bytes=1.3),
+                 read_only=(".nhdr",), write_bytes=1.3, names_in=(".nrrd",)),
     # the file is built in memory (HDF5's core driver) and copied out whole: its gzip stream is held two to
     # three times, as the image grows and as its copy; a random mask's bytes shrink to a sixth, random
     # labels' not at all
     VolumeFormat("HDF5", (".h5", ".hdf5", ".he5"), "hdf5", "h5py", datasets=True, write_bytes=0.6,
-                 label_bytes=2.5),
+                 label_bytes=2.5, names_in=(".h5", ".hdf5", ".he5")),
     # a bit per voxel; run-length coded a slab at a time
     VolumeFormat("binvox", (".binvox",), "binvox", None, max_label=1, ndims=(3,)),
     # colour indices; its voxels are listed by their coordinates (at most 256 a side), built a slab at a time
@@ -107,7 +109,7 @@ FORMATS = (
     VolumeFormat("MagicaVoxel", (".vox",), "magicavoxel", None, max_label=255, write_bytes=4.5, ndims=(3,)),
     # a z, y, x copy (a byte a byte), and the chunks zarr encodes at once (a few, of 128^3 voxels each)
     VolumeFormat("OME-Zarr", (".zarr", ".ome.zarr"), "omezarr", "zarr", datasets=True, directory=True,
-                 write_bytes=1.6),
+                 write_bytes=1.6, names_in=(".zarr",)),
     # 2D masks and label images as many segmentations save them; Pillow comes with matplotlib
     # its 2D images only, in 8- or 16-bit grey; the array turned to rows and
     # its mask made 0/255 are copies, and Pillow holds one more
@@ -354,6 +356,8 @@ class RawVolume:
     #: one spelling (:func:`length_unit`); None where the file says none
     unit: str | None = None
     said: Callable[[object], str | None] | None = None
+    #: what each label is, label value to name, where the file records it
+    names: dict[int, str] | None = None
 
 
 def shared_unit(units, where: str, what: str) -> str | None:
@@ -408,13 +412,15 @@ def unit_not_kept(path, fmt: str, unit: str | None, keeps: str = "no length unit
 class LabelVolume:
     """A label image placed in the world, as the writers take it in place
     of a :class:`DigitalObject`: unsigned integers in (x, y, z) order, voxel
-    ``v`` at ``origin + spacing * v`` (no lattice offset, parity 0)."""
+    ``v`` at ``origin + spacing * v`` (no lattice offset, parity 0);
+    ``names``, label value to name, for the formats that keep them."""
 
     volume: np.ndarray
     pitch: float | np.ndarray
     origin: np.ndarray
     offset: tuple[int, ...] = (0, 0, 0)
     parity: int = 0
+    names: Mapping[int, str] | None = None
 
     @property
     def ndim(self) -> int:
@@ -645,6 +651,43 @@ def no_such_label(label, values, where: str, ndim: int = 3) -> IsoflowError:
         return IsoflowError(f"{where}: no {cell} has label {number_text(label)}: the array has no {cell}s")
     shown = ", ".join(number_text(v) for v in values[:20]) + (", ..." if len(values) > 20 else "")
     return IsoflowError(f"{where}: no {cell} has label {number_text(label)} (values present: {shown})")
+
+
+def names_json(names: Mapping[int, str]) -> str:
+    """Label names as the JSON text that HDF5's attribute and an ``.npz``'s
+    array ``label_names`` hold: an object of label value (as text) to name.
+
+    Examples
+    --------
+    >>> names_json({1: "a.stl", 2: "b.obj"})
+    '{"1": "a.stl", "2": "b.obj"}'
+    """
+    import json
+
+    return json.dumps({str(k): v for k, v in names.items()}, ensure_ascii=False)
+
+
+def names_from_json(text, where: str, field: str) -> dict[int, str] | None:
+    """Label names from :func:`names_json`'s text (bytes or a NumPy string
+    too); text that is no such object is said in one warning and left out,
+    as the image reads without it.
+
+    Examples
+    --------
+    >>> names_from_json('{"2": "b.obj", "1": "a.stl"}', "l.h5", "label_names")
+    {1: 'a.stl', 2: 'b.obj'}
+    """
+    import json
+
+    try:
+        text = text.decode("utf-8") if isinstance(text, bytes) else str(text)
+        found = {int(k): v for k, v in json.loads(text).items()}
+        if all(isinstance(v, str) and k >= 1 for k, v in found.items()):
+            return dict(sorted(found.items())) or None
+    except (ValueError, AttributeError, TypeError):
+        pass
+    note(f"{where}: {field} {str(text)[:80]!r} is no JSON object of label to name; the labels are read without names")
+    return None
 
 
 def note(message: str) -> None:

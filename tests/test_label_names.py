@@ -1,0 +1,195 @@
+"""Label names travel with the label image (issue: a label image written by
+isoflow forgot which label is which mesh): ``write_labels(..., names=)``
+records them where the format has a place for them, each checked with
+the format's own library (pynrrd's header keys, zarr's JSON metadata,
+h5py's attributes, NumPy's arrays), and ``read_labels`` gives them back;
+``voxelize A B -o OUT`` writes each label's mesh, and ``info OUT --labels``
+shows it; a format without such a place says so once."""
+
+import csv
+import io
+import json
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+import isoflow
+from isoflow.cli import main
+from isoflow.errors import IsoflowError, IsoflowWarning
+
+NAMES = {1: "liver", 2: "spleen, left", 5: "tumour \u00e9"}
+#: a NRRD header is ASCII text
+ASCII_NAMES = {1: "liver", 2: "spleen, left", 5: 'tumour "b"'}
+
+
+@pytest.fixture
+def image():
+    labels = np.zeros((6, 5, 4), np.uint8)
+    labels[:2], labels[3:, :2], labels[4:, 3:] = 1, 2, 5
+    return labels
+
+
+def test_nrrd_keeps_the_names_as_3d_slicer_segments(tmp_path, image):
+    import nrrd
+
+    path = isoflow.write_labels(image, tmp_path / "seg.seg.nrrd", names=ASCII_NAMES)
+    header = nrrd.read_header(str(path))
+    segments = {}
+    k = 0
+    while f"Segment{k}_ID" in header:  # Slicer's reader stops at the first index without an ID
+        segments[int(header[f"Segment{k}_LabelValue"])] = header[f"Segment{k}_Name"]
+        assert header[f"Segment{k}_Layer"] == "0"
+        # the extent of the whole image, in voxel indices (x0 x1 y0 y1 z0 z1)
+        assert header[f"Segment{k}_Extent"] == "0 5 0 4 0 3"
+        k += 1
+    assert segments == ASCII_NAMES
+    assert header["Segmentation_MasterRepresentation"] == "Binary labelmap"
+    assert header["Segmentation_ReferenceImageExtentOffset"] == "0 0 0"
+    data, _ = nrrd.read(str(path), index_order="F")
+    assert np.array_equal(data, image)
+    back = isoflow.read_labels(path)
+    assert back.names == ASCII_NAMES and np.array_equal(back.array, image)
+    # isoflow's own reading of a segmentation's layer names them alike
+    from isoflow.mesh.formats.slicer import layer_segments
+
+    assert layer_segments(path, None) == 'liver (label 1), spleen, left (label 2), tumour "b" (label 5)'
+
+
+def test_a_name_past_ascii_is_refused_for_nrrd_before_anything_is_written(tmp_path, image):
+    with pytest.raises(IsoflowError, match="NRRD header holds ASCII text, and the name of label 5"):
+        isoflow.write_labels(image, tmp_path / "seg.nrrd", names=NAMES)
+    assert not (tmp_path / "seg.nrrd").exists()
+
+
+def test_ome_zarr_keeps_the_names_as_image_label_properties(tmp_path, image):
+    path = isoflow.write_labels(image, tmp_path / "seg.zarr", names=NAMES)
+    attrs = json.loads((path / ".zattrs").read_text())
+    assert sorted((p["label-value"], p["name"]) for p in attrs["image-label"]["properties"]) == sorted(NAMES.items())
+    assert isoflow.read_labels(path).names == NAMES
+
+
+def test_hdf5_keeps_the_names_as_a_dataset_attribute(tmp_path, image):
+    import h5py
+
+    path = isoflow.write_labels(image, tmp_path / "seg.h5", names=NAMES)
+    with h5py.File(path) as f:
+        text = f["volume"].attrs["label_names"]
+    assert {int(k): v for k, v in json.loads(text).items()} == NAMES
+    assert isoflow.read_labels(path).names == NAMES
+
+
+def test_npz_keeps_the_names_as_a_second_array(tmp_path, image):
+    path = isoflow.write_labels(image, tmp_path / "seg.npz", names=NAMES)
+    with np.load(path) as z:
+        assert {int(k): v for k, v in json.loads(str(z["label_names"])).items()} == NAMES
+        assert np.array_equal(z["volume"], image)
+    assert isoflow.read_labels(path).names == NAMES
+
+
+def test_a_sequence_names_labels_from_one_and_a_label_image_passes_its_names_on(tmp_path, image):
+    first = isoflow.read_labels(isoflow.write_labels(image, tmp_path / "a.nrrd", names=["a", "b", "c", "d", "e"]))
+    assert first.names == {1: "a", 2: "b", 3: "c", 4: "d", 5: "e"}
+    again = isoflow.read_labels(isoflow.write_labels(first, tmp_path / "b.h5"))
+    assert again.names == first.names
+    # names given replace the image's, as pitch and origin do
+    other = isoflow.read_labels(isoflow.write_labels(first, tmp_path / "c.npz", names={2: "x"}))
+    assert other.names == {2: "x"}
+
+
+def test_a_file_without_names_reads_as_none_and_its_table_has_no_name_column(tmp_path, image):
+    for suffix in (".nrrd", ".h5", ".npz", ".zarr"):
+        back = isoflow.read_labels(isoflow.write_labels(image, tmp_path / f"plain{suffix}"))
+        assert back.names is None
+        assert "name" not in isoflow.label_table(back)
+
+
+def test_label_table_gains_a_name_column_only_where_given_names(image):
+    plain = isoflow.label_table(image, surfaces=False)
+    named = isoflow.label_table(image, surfaces=False, names={5: "tumour"})
+    assert list(named) == ["label", "name"] + list(plain)[1:]
+    assert named["name"].tolist() == ["", "", "tumour"]
+    for column in plain:
+        assert np.array_equal(named[column], plain[column])
+    image_named = isoflow.LabelImage(image, np.ones(3), np.zeros(3), names=NAMES)
+    assert isoflow.label_table(image_named, surfaces=False)["name"].tolist() == ["liver", "spleen, left", "tumour \u00e9"]
+
+
+def test_nifti_says_once_that_it_keeps_no_names_and_nothing_without_names(tmp_path, image):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        isoflow.write_labels(image, tmp_path / "seg.nii.gz", names=NAMES)
+    said = [str(w.message) for w in caught if issubclass(w.category, IsoflowWarning)]
+    assert len(said) == 1 and "label names" in said[0] and "not written" in said[0], said
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        isoflow.write_labels(image, tmp_path / "plain.nii.gz")
+    assert isoflow.read_labels(tmp_path / "seg.nii.gz").names is None
+
+
+@pytest.mark.parametrize("names", [{0: "background"}, {1.0: "a"}, {1: 3}, ["a\nb"], "ab"])
+def test_names_that_are_no_label_names_are_refused(tmp_path, image, names):
+    with pytest.raises(IsoflowError):
+        isoflow.write_labels(image, tmp_path / "seg.nrrd", names=names)
+    assert not (tmp_path / "seg.nrrd").exists()
+
+
+def _meshes(tmp_path):
+    box = trimesh.creation.box(extents=(2, 2, 2))
+    box.export(tmp_path / "a.stl")
+    ball = trimesh.creation.icosphere(radius=1.0)
+    ball.apply_translation((3, 0, 0))
+    ball.export(tmp_path / "b.obj")
+    return str(tmp_path / "a.stl"), str(tmp_path / "b.obj")
+
+
+@pytest.mark.parametrize("suffix", [".nrrd", ".zarr"])
+def test_voxelize_writes_each_labels_mesh_and_info_shows_it(tmp_path, capsys, suffix):
+    a, b = _meshes(tmp_path)
+    out = str(tmp_path / f"x{suffix}")
+    assert main(["voxelize", a, b, "--resolution", "16", "-o", out]) == 0
+    capsys.readouterr()
+    assert main(["info", out, "--labels", "--json", "--no-surfaces"]) == 0
+    rows = json.loads(capsys.readouterr().out)["labels"]
+    assert [(r["label"], r["name"]) for r in rows] == [(1, a), (2, b)]
+    assert main(["info", out, "--labels", "--csv", "-", "--no-surfaces"]) == 0
+    table = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert [(r["label"], r["name"]) for r in table] == [("1", a), ("2", b)]
+    assert main(["info", out, "--labels"]) == 0
+    text = capsys.readouterr().out.splitlines()
+    assert text[1].split()[-1] == "name" and text[2].endswith(f"  {a}") and text[3].endswith(f"  {b}")
+
+
+def test_csv_quotes_a_name_as_the_csv_module_reads_it(tmp_path, capsys, image):
+    path = isoflow.write_labels(image, tmp_path / "seg.h5", names=NAMES)
+    assert main(["info", str(path), "--labels", "--csv", "-", "--no-surfaces"]) == 0
+    table = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert {int(r["label"]): r["name"] for r in table} == NAMES
+
+
+def test_voxelize_into_nifti_notes_once_that_the_names_are_not_written(tmp_path, capsys):
+    a, b = _meshes(tmp_path)
+    out = tmp_path / "x.nii.gz"
+    assert main(["voxelize", a, b, "--resolution", "16", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert [line for line in err.splitlines() if "label names" in line] == [
+        f"isoflow voxelize: note: {out}: NIfTI has no place for label names; the names of 2 labels are not "
+        "written (.nrrd, .h5, .zarr and .npz keep them)"]
+    assert "warning:" not in err  # the names are the command's own: a note, which -q drops
+    assert main(["voxelize", a, b, "--resolution", "16", "-o", str(out), "--force", "-q"]) == 0
+    assert "label names" not in capsys.readouterr().err
+
+
+def test_surface_labels_glb_keeps_node_names_label_n_and_records_the_name_in_extras(tmp_path, capsys, image):
+    import struct
+
+    path = isoflow.write_labels(image, tmp_path / "seg.h5", names=NAMES)
+    out = tmp_path / "s.glb"
+    assert main(["surface", str(path), "--labels", "-o", str(out)]) == 0
+    data = out.read_bytes()
+    # the GLB's JSON chunk, as the glTF 2.0 specification lays it out: header, chunk length, "JSON"
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert kind == b"JSON"
+    nodes = json.loads(data[20:20 + length])["nodes"]
+    assert [(n["name"], n["extras"]["name"]) for n in nodes] == [(f"label_{k}", v) for k, v in NAMES.items()]
