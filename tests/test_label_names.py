@@ -10,6 +10,7 @@ import csv
 import io
 import json
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -57,10 +58,27 @@ def test_nrrd_keeps_the_names_as_3d_slicer_segments(tmp_path, image):
     assert layer_segments(path, None) == 'liver (label 1), spleen, left (label 2), tumour "b" (label 5)'
 
 
-def test_a_name_past_ascii_is_refused_for_nrrd_before_anything_is_written(tmp_path, image):
-    with pytest.raises(IsoflowError, match="NRRD header holds ASCII text, and the name of label 5"):
-        isoflow.write_labels(image, tmp_path / "seg.nrrd", names=NAMES)
-    assert not (tmp_path / "seg.nrrd").exists()
+def test_a_name_past_ascii_is_written_escaped_into_nrrd_with_one_warning(tmp_path, image):
+    import nrrd
+
+    with pytest.warns(IsoflowWarning, match="1 label name written with escapes") as said:
+        path = isoflow.write_labels(image, tmp_path / "seg.nrrd", names=NAMES)
+    assert len([w for w in said if "escapes" in str(w.message)]) == 1
+    header = nrrd.read_header(str(path))
+    # the escape Python's backslashreplace writes for U+00E9, read back by pynrrd as it is
+    assert header["Segment2_Name"] == "tumour \\xe9" and header["Segment1_Name"] == NAMES[2]
+    back = isoflow.read_labels(path)
+    assert back.names == {**NAMES, 5: "tumour \\xe9"} and np.array_equal(back.array, image)
+
+
+def test_voxelize_of_a_mesh_named_past_ascii_into_nrrd_is_written(tmp_path, capsys):
+    a, b = _meshes(tmp_path)
+    named = tmp_path / "t\u00f4rus.stl"
+    Path(a).rename(named)
+    out = tmp_path / "x.nrrd"
+    assert main(["voxelize", str(named), b, "--resolution", "16", "-o", str(out)]) == 0
+    assert "written with escapes" in capsys.readouterr().err
+    assert isoflow.read_labels(out).names == {1: str(named).encode("ascii", "backslashreplace").decode(), 2: b}
 
 
 def test_ome_zarr_keeps_the_names_as_image_label_properties(tmp_path, image):

@@ -1010,25 +1010,16 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
     return file
 
 
-def check_label_output(path: str | os.PathLike, count: int, force: bool = False,
-                       names: Mapping[int, str] | None = None) -> tuple[Path, str | None]:
+def check_label_output(path: str | os.PathLike, count: int, force: bool = False) -> tuple[Path, str | None]:
     """:func:`check_volume_output` for a label image of labels 1 .. ``count``:
     also refused, before any work, where the format keeps fewer labels
-    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits),
-    or where it keeps ``names`` (label to name) in ASCII text only (a NRRD
-    header) and a name is not."""
+    (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and count > fmt.max_label:
         keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
         raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
                            ".nii.gz, .nrrd, .h5 or .npz")
-    wide = [(k, v) for k, v in (names or {}).items() if not v.isascii()]
-    if fmt is not None and fmt.name == "NRRD" and wide:
-        # pynrrd writes and reads the header as ASCII: a name past it could be neither written nor read back
-        raise IsoflowError(f"{path}: a NRRD header holds ASCII text, and the name of label {wide[0][0]} "
-                           f"({wide[0][1]!r}) is not; write .h5, .zarr or .npz, which keep any name, or give "
-                           "ASCII names")
     return file, dataset
 
 
@@ -1162,7 +1153,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
     # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
     check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
-    file = check_label_output(path, int(arr.max(initial=0)), force, names)[0]
+    file = check_label_output(path, int(arr.max(initial=0)), force)[0]
     fmt = format_for(file, writing=True)
     if fmt is not None and fmt.max_label is not None and arr.dtype.itemsize > np.min_scalar_type(fmt.max_label).itemsize:
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError
+from ...errors import IsoflowError, counted
 from .affine import axis_aligned, centre_affine
 from .registry import (
     RawVolume,
@@ -51,7 +51,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
-from .slicer import layer_names, layer_of, remember_segments, segment_fields
+from .slicer import ascii_name, layer_names, layer_of, remember_segments, segment_fields
 
 
 def _check_data_file(header: dict, path: Path) -> None:
@@ -187,4 +187,9 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     names = getattr(obj, "names", None)  # a label image's: Slicer's segments
     if names:
         header.update(segment_fields(names, obj.volume.shape))
+        wide = [(k, v) for k, v in names.items() if not v.isascii()]
+        if wide:
+            note(f"{path.name if name is None else name}: a NRRD header holds ASCII text: "
+                 f"{counted(len(wide), 'label name')} written with escapes ({wide[0][1]!r} as "
+                 f"{ascii_name(wide[0][1])!r}); .h5, .zarr and .npz keep any name")
     nrrd.write(str(path), stored_values(obj.volume), header, index_order="F", compression_level=GZIP_LEVEL)
