@@ -89,7 +89,7 @@ def test_colours_animations_damaged_files_and_writing_are_refused(tmp_path, cell
     from isoflow import data
 
     one_line_exit_2(run("voxelize", data.bob(), "--resolution", "8", "-o", "m.png", cwd=tmp_path),
-                    "m.png: volumes are written as")  # read only: PNG keeps no pixel size
+                    "m.png: PNG holds 2D images, this volume is 3D")  # refused before the voxelisation
     assert not (tmp_path / "m.png").exists()
 
 

@@ -399,8 +399,8 @@ def layer_names(header: dict, layer: str | None, where: str) -> dict[int, str] |
 
 
 def ascii_name(name: str) -> str:
-    """A segment's name as a NRRD header holds it: ASCII, each character
-    past it written as Python's escape (``\\xf4``, ``\\u00e9``), since
+    r"""A segment's name as a NRRD header holds it: ASCII, each character
+    past it written as Python's escape (``\xf4``, ``\u00e9``), since
     pynrrd writes the header as ASCII and reads it dropping any other byte.
 
     Parameters
