@@ -271,7 +271,10 @@ def teem_file(path, stack, names, layered):
     """A segmentation as 3D Slicer writes it through teem (as ITK's
     NrrdIO writes a key/value pair): the header's values in UTF-8, a
     backslash escaped as two; raw uint8 data, fastest axis first.
-    ``layered``: segment k in layer k % 2 of a 4D file."""
+    ``layered``: ``stack`` is (layer, z, y, x), the layers on the file's
+    first axis, segment k in layer k % 2."""
+    if layered:  # the layer axis is the file's fastest
+        stack = np.moveaxis(stack, 0, -1)
     sizes = stack.shape[::-1]
     lines = ["NRRD0004", "type: unsigned char", f"dimension: {stack.ndim}", "space: left-posterior-superior",
              "sizes: " + " ".join(map(str, sizes)),
@@ -307,6 +310,8 @@ def test_a_slicer_segmentations_utf8_names_are_read_whole(tmp_path, capsys):
     said = ", ".join(f"{name} (label {k})" for k, name in enumerate(WIDE, 1))
     assert f"3D Slicer segments {said}\n" in capsys.readouterr().err
     four = teem_file(tmp_path / "four.seg.nrrd", np.stack([stack, stack]), WIDE, layered=True)
-    fails(capsys, "info", four, "--labels",
-          words=(f"layer 0: {WIDE[0]} (label 1), {WIDE[2]} (label 3); layer 1: {WIDE[1]} (label 2), {WIDE[3]} (label 4)",))
-    assert isoflow.read_labels(f"{four}:1").names == {2: WIDE[1], 4: WIDE[3]}
+    fails(capsys, "info", four, "--labels", words=(
+        f"2 layers, whose segments may overlap: read one layer as {four}:N (layer 0: {WIDE[0]} (label 1), "
+        f"{WIDE[2]} (label 3); layer 1: {WIDE[1]} (label 2), {WIDE[3]} (label 4))",))
+    layer = isoflow.read_labels(f"{four}:1")
+    assert layer.names == {2: WIDE[1], 4: WIDE[3]} and np.array_equal(layer.array, stack.T)  # x fastest
