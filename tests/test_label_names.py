@@ -21,7 +21,7 @@ from isoflow.cli import main
 from isoflow.errors import IsoflowError, IsoflowWarning
 
 NAMES = {1: "liver", 2: "spleen, left", 5: "tumour \u00e9"}
-#: a NRRD header is ASCII text
+#: names pynrrd reads whole (it drops every byte of a header past ASCII)
 ASCII_NAMES = {1: "liver", 2: "spleen, left", 5: 'tumour "b"'}
 
 
@@ -58,27 +58,38 @@ def test_nrrd_keeps_the_names_as_3d_slicer_segments(tmp_path, image):
     assert layer_segments(path, None) == 'liver (label 1), spleen, left (label 2), tumour "b" (label 5)'
 
 
-def test_a_name_past_ascii_is_written_escaped_into_nrrd_with_one_warning(tmp_path, image):
-    import nrrd
+def header_names(path):
+    """Each ``Segment{k}_Name`` of a NRRD header as teem (3D Slicer's
+    writer and reader) reads it: the bytes after ``:=`` as UTF-8, ``\\\\``
+    a backslash."""
+    head = Path(path).read_bytes().split(b"\n\n", 1)[0]
+    return [line.split(b":=", 1)[1].decode("utf-8").replace("\\\\", "\\")
+            for line in head.split(b"\n") if line.startswith(b"Segment") and b"_Name:=" in line]
 
-    with pytest.warns(IsoflowWarning, match="1 label name written with escapes") as said:
-        path = isoflow.write_labels(image, tmp_path / "seg.nrrd", names=NAMES)
-    assert len([w for w in said if "escapes" in str(w.message)]) == 1
-    header = nrrd.read_header(str(path))
-    # the escape Python's backslashreplace writes for U+00E9, read back by pynrrd as it is
-    assert header["Segment2_Name"] == "tumour \\xe9" and header["Segment1_Name"] == NAMES[2]
+
+def test_a_name_past_ascii_is_written_into_nrrd_in_utf8_as_slicer_writes_it(tmp_path, image):
+    """A name past ASCII was written as Python's escape (``tumour \\xe9``),
+    which 3D Slicer shows as it is, with a warning: it is written as
+    Slicer writes it, UTF-8 (a backslash as two, teem's escape), and read
+    back as it was given."""
+    names = {**NAMES, 2: "C:\\scans\\spleen", 5: "\u809d\u81d3 tumour \u00e9"}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        path = isoflow.write_labels(image, tmp_path / "seg.nrrd", names=names)
+    assert header_names(path) == list(names.values())
     back = isoflow.read_labels(path)
-    assert back.names == {**NAMES, 5: "tumour \\xe9"} and np.array_equal(back.array, image)
+    assert back.names == names and np.array_equal(back.array, image)
 
 
-def test_voxelize_of_a_mesh_named_past_ascii_into_nrrd_is_written(tmp_path, capsys):
+def test_voxelize_of_a_mesh_named_past_ascii_into_nrrd_keeps_its_name(tmp_path, capsys):
     a, b = _meshes(tmp_path)
     named = tmp_path / "t\u00f4rus.stl"
     Path(a).rename(named)
     out = tmp_path / "x.nrrd"
     assert main(["voxelize", str(named), b, "--resolution", "16", "-o", str(out)]) == 0
-    assert "written with escapes" in capsys.readouterr().err
-    assert isoflow.read_labels(out).names == {1: str(named).encode("ascii", "backslashreplace").decode(), 2: b}
+    assert capsys.readouterr().err == ""
+    assert header_names(out) == [str(named), b]
+    assert isoflow.read_labels(out).names == {1: str(named), 2: b}
 
 
 def test_ome_zarr_keeps_the_names_as_image_label_properties(tmp_path, image):
@@ -211,3 +222,46 @@ def test_surface_labels_glb_keeps_node_names_label_n_and_records_the_name_in_ext
     assert kind == b"JSON"
     nodes = json.loads(data[20:20 + length])["nodes"]
     assert [(n["name"], n["extras"]["name"]) for n in nodes] == [(f"label_{k}", v) for k, v in NAMES.items()]
+
+
+def test_a_name_with_a_line_break_or_a_control_character_in_a_file_is_read_as_one_line(tmp_path, capsys, image):
+    """HDF5's and an ``.npz``'s JSON, and NGFF's ``properties``, hold any
+    name: a name with a line break, written by h5py, made the file
+    unreadable (``LabelImage: the name of label 1 is 'a\\nb', not a string
+    of one line``), and a name holding a terminal's escape was printed for
+    the terminal to act on. The file is read, each name one line that
+    ``write_labels`` writes again, and the table's rows are one line each,
+    of printable text."""
+    import h5py
+
+    given = {1: "left\nlobe", 2: "\x1b[31mred\x1b[0m", 5: "tab\there"}
+    path = tmp_path / "foreign.h5"
+    with h5py.File(path, "w") as f:
+        f.create_dataset("volume", data=image).attrs["label_names"] = json.dumps(given)
+    names = isoflow.read_labels(path).names
+    assert sorted(names) == sorted(given) and not any("\n" in n or "\r" in n for n in names.values())
+    assert names[2] == given[2] and names[5] == given[5]
+    again = isoflow.read_labels(isoflow.write_labels(isoflow.read_labels(path), tmp_path / "again.zarr"))
+    assert again.names == names
+    assert main(["info", str(path), "--labels", "--no-surfaces"]) == 0
+    out = capsys.readouterr().out
+    lines = out.splitlines()
+    assert len(lines) == 2 + len(given) + 1 and all(line.isprintable() for line in lines)
+    assert main(["info", str(path), "--labels", "--json", "--no-surfaces"]) == 0
+    assert {r["label"]: r["name"] for r in json.loads(capsys.readouterr().out)["labels"]} == names
+
+
+def test_surface_labels_of_a_named_image_notes_which_label_file_is_which(tmp_path, capsys, image):
+    """``surface LABELS.h5 --labels -o DIR/`` writes ``label_N`` files,
+    which keep no name: a note says each label's name, as a 3D Slicer
+    segmentation's note does; ``-q`` drops it."""
+    import h5py
+
+    path = tmp_path / "seg.h5"
+    with h5py.File(path, "w") as f:
+        f.create_dataset("volume", data=image).attrs["label_names"] = json.dumps(NAMES)
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "out") + "/", "--suffix", ".ply"]) == 0
+    said = ", ".join(f"{name} (label {label})" for label, name in NAMES.items())
+    assert f"isoflow surface: note: {path}: label names {said}\n" in capsys.readouterr().err
+    assert main(["surface", str(path), "--labels", "-q", "-o", str(tmp_path / "q") + "/", "--suffix", ".ply"]) == 0
+    assert "label names" not in capsys.readouterr().err

@@ -204,8 +204,11 @@ def test_the_segments_names_are_said_with_their_label_values(tmp_path, capsys, l
     """``info SEG.seg.nrrd --labels`` printed a table of label values
     whose names (liver, tumor: the ``Segment{i}_Name`` of the header)
     were said only when the file was refused for holding several layers:
-    the values of one layer read alone had no names. A note says the
-    segments of the layer read, by the names and values pynrrd reads."""
+    the values of one layer read alone had no names. ``surface --labels``
+    says the segments of the layer read in a note, by the names and values
+    pynrrd reads, as its files are named ``label_N``; ``info``'s table
+    gives them in its ``name`` column, and a note that said them again is
+    no more."""
     one = write(tmp_path / "one.seg.nrrd", layers[0], header(3, [("liver", 1, 0), ("tumor", 2, 0)]))
     two = write(tmp_path / "two.seg.nrrd", layers, header(4, [("liver", 1, 0), ("tumor", 2, 0), ("vessel", 1, 1)]))
     named = {}
@@ -215,16 +218,22 @@ def test_the_segments_names_are_said_with_their_label_values(tmp_path, capsys, l
             if f"Segment{i}_Name" in hdr:
                 named.setdefault(str(path), []).append(
                     (hdr[f"Segment{i}_Name"], hdr[f"Segment{i}_LabelValue"], hdr[f"Segment{i}_Layer"]))
-    assert main(["info", str(one), "--labels"]) == 0
+    assert main(["surface", str(one), "--labels", "-o", str(tmp_path / "a.glb")]) == 0
     err = capsys.readouterr().err
     said = ", ".join(f"{name} (label {value})" for name, value, _ in named[str(one)])
-    assert err == f"isoflow info: note: {one}: 3D Slicer segments {said}\n"
-    assert main(["info", f"{two}:1", "--labels"]) == 0
+    assert f"isoflow surface: note: {one}: 3D Slicer segments {said}\n" in err
+    assert main(["surface", f"{two}:1", "--labels", "-o", str(tmp_path / "b.glb")]) == 0
     err = capsys.readouterr().err
     said = ", ".join(f"{name} (label {value})" for name, value, layer in named[str(two)] if layer == "1")
-    assert err == f"isoflow info: note: {two}:1: 3D Slicer segments {said}\n"
-    assert main(["info", str(one), "--labels", "-q"]) == 0
-    assert capsys.readouterr().err == ""
+    assert f"isoflow surface: note: {two}:1: 3D Slicer segments {said}\n" in err
+    assert main(["surface", str(one), "--labels", "-q", "-o", str(tmp_path / "c.glb")]) == 0
+    assert "3D Slicer segments" not in capsys.readouterr().err
+    for read, path, layer in ((str(one), one, "0"), (f"{two}:1", two, "1")):
+        assert main(["info", read, "--labels"]) == 0
+        out, err = capsys.readouterr()
+        assert "3D Slicer segments" not in err
+        rows = [line.split() for line in out.splitlines()[2:-1]]
+        assert {(r[0], r[-1]) for r in rows} == {(v, n) for n, v, at in named[str(path)] if at == layer}
 
 
 def test_the_note_on_segments_takes_the_header_the_read_parsed(tmp_path, capsys, monkeypatch, layers):
@@ -243,11 +252,66 @@ def test_the_note_on_segments_takes_the_header_the_read_parsed(tmp_path, capsys,
 
     monkeypatch.setattr(nrrd.reader, "read_header", counted)
     monkeypatch.setattr(nrrd, "read_header", counted)
-    assert main(["info", str(path), "--labels"]) == 0
-    assert capsys.readouterr().err == f"isoflow info: note: {path}: 3D Slicer segments liver (label 1), tumor (label 2)\n"
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "s.glb")]) == 0
+    said = "3D Slicer segments liver (label 1), tumor (label 2)"
+    assert f"isoflow surface: note: {path}: {said}\n" in capsys.readouterr().err
     assert len(parsed) == 1
     from isoflow.mesh.formats.slicer import layer_segments
 
     isoflow.read_labels(path)
     write(path, layers[0], header(3, [("spleen", 1, 0), ("kidney", 2, 0)]))
     assert layer_segments(path, None) == "spleen (label 1), kidney (label 2)"
+
+
+#: segment names as 3D Slicer saves them, past ASCII and with a backslash
+WIDE = ["Vena cava \u00f8", "Leber", "\u809d\u81d3", "C:\\scans\\a"]
+
+
+def teem_file(path, stack, names, layered):
+    """A segmentation as 3D Slicer writes it through teem (as ITK's
+    NrrdIO writes a key/value pair): the header's values in UTF-8, a
+    backslash escaped as two; raw uint8 data, fastest axis first.
+    ``layered``: ``stack`` is (layer, z, y, x), the layers on the file's
+    first axis, segment k in layer k % 2."""
+    if layered:  # the layer axis is the file's fastest
+        stack = np.moveaxis(stack, 0, -1)
+    sizes = stack.shape[::-1]
+    lines = ["NRRD0004", "type: unsigned char", f"dimension: {stack.ndim}", "space: left-posterior-superior",
+             "sizes: " + " ".join(map(str, sizes)),
+             "space directions: " + ("none " if layered else "") + "(1,0,0) (0,1,0) (0,0,1)",
+             "kinds: " + ("list " if layered else "") + "domain domain domain", "encoding: raw", "space origin: (0,0,0)"]
+    for k, name in enumerate(names):
+        lines += [f"Segment{k}_ID:=Segment_{k + 1}", f"Segment{k}_LabelValue:={k + 1}",
+                  f"Segment{k}_Layer:={k % 2 if layered else 0}", f"Segment{k}_Name:=" + name.replace("\\", "\\\\")]
+    path.write_bytes(("\n".join(lines) + "\n\n").encode("utf-8") + stack.tobytes())
+    return path
+
+
+def test_a_slicer_segmentations_utf8_names_are_read_whole(tmp_path, capsys):
+    """3D Slicer writes segment names in UTF-8, and pynrrd reads a header
+    line as ASCII, dropping every other byte: ``Vena cava \u00f8`` was read
+    as ``Vena cava`` and a Japanese name as nothing, so as its ID
+    ``Segment_3`` (the file was read; its names were wrong). The names are
+    the ones written, in ``read_labels``, ``info --labels`` (text, JSON,
+    CSV), the note of ``surface --labels`` and the listing of a 4D file's
+    layers."""
+    stack = np.zeros((3, 4, 5), np.uint8)  # z, y, x: written x fastest
+    for k in range(len(WIDE)):
+        stack.flat[k * 7] = k + 1
+    path = teem_file(tmp_path / "wide.seg.nrrd", stack, WIDE, layered=False)
+    dropped = nrrd.read_header(str(path))
+    assert dropped["Segment0_Name"] == "Vena cava" and dropped["Segment2_Name"] == ""  # what pynrrd reads
+    assert isoflow.read_labels(path).names == dict(enumerate(WIDE, 1))
+    rows = json.loads(run(capsys, "info", path, "--labels", "--json", "--no-surfaces"))["labels"]
+    assert [r["name"] for r in rows] == WIDE
+    text = run(capsys, "info", path, "--labels", "--no-surfaces").splitlines()
+    assert [line.split("  ")[-1] for line in text[2:-1]] == WIDE
+    assert main(["surface", str(path), "--labels", "-o", str(tmp_path / "wide.glb")]) == 0
+    said = ", ".join(f"{name} (label {k})" for k, name in enumerate(WIDE, 1))
+    assert f"3D Slicer segments {said}\n" in capsys.readouterr().err
+    four = teem_file(tmp_path / "four.seg.nrrd", np.stack([stack, stack]), WIDE, layered=True)
+    fails(capsys, "info", four, "--labels", words=(
+        f"2 layers, whose segments may overlap: read one layer as {four}:N (layer 0: {WIDE[0]} (label 1), "
+        f"{WIDE[2]} (label 3); layer 1: {WIDE[1]} (label 2), {WIDE[3]} (label 4))",))
+    layer = isoflow.read_labels(f"{four}:1")
+    assert layer.names == {2: WIDE[1], 4: WIDE[3]} and np.array_equal(layer.array, stack.T)  # x fastest

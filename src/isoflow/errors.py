@@ -13,6 +13,7 @@ import math
 import os
 import re
 import sys
+import unicodedata
 import warnings
 from types import FrameType
 
@@ -172,6 +173,33 @@ def path_text(path: str | os.PathLike) -> str:
         return os.fsencode(text).decode("utf-8", "backslashreplace")
     except UnicodeEncodeError:  # a surrogate that no file system byte gave (written in the string itself)
         return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def line_text(text: str) -> str:
+    r"""A name read from a file (a label's, a segment's) as a terminal
+    line shows it: each control character (a tab, a line break, an
+    escape that a terminal would act on) as Python writes it escaped,
+    ``\t``, ``\x1b``; any other character as it is.
+
+    Parameters
+    ----------
+    text : str
+        The name.
+
+    Returns
+    -------
+    str
+        One line of printable text.
+
+    Examples
+    --------
+    >>> line_text("tab\there"), line_text("\x1b[31mred"), line_text("Leber \u00f8") == "Leber \u00f8"
+    ('tab\\there', '\\x1b[31mred', True)
+    """
+    if text.isprintable():
+        return text
+    return "".join(c.encode("unicode_escape").decode("ascii") if unicodedata.category(c) == "Cc" else c
+                   for c in text)
 
 
 #: the nouns of the Betti numbers b0, b1, ... of a volume of each dimension

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, path_text
+from ..errors import IsoflowError, counted, line_text, path_text
 from .table_text import csv_rows, json_rows
 
 #: rows the terminal shows before the summary
@@ -199,7 +199,9 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
     say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
-    say_segments(args)
+    if getattr(args, "command", "") == "surface" or image is None or not image.names:
+        # info's table gives each label's name in its name column; surface's files are label_N
+        say_segments(args, None if image is None else image.names)
     ndim = 3 if image is None else image.array.ndim
     corners = None
     if image is not None and getattr(args, "command", "") == "surface":
@@ -279,26 +281,35 @@ def say_declared_labels(args: argparse.Namespace) -> None:
               f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
 
 
-def say_segments(args: argparse.Namespace) -> None:
+def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None) -> None:
     """A note where the input is a 3D Slicer segmentation (``.seg.nrrd``,
     a layer of it read): which label value is which structure, the names
-    its header gives the segments, since the table and the ``label_N``
-    surfaces go by value.
+    its header gives the segments, since the ``label_N`` surfaces go by
+    value; for ``surface``, a note of the ``names`` of any other label
+    image that records them. ``info``'s table says them in its ``name``
+    column, and has the note only where it has no such column (a layer of
+    no segment).
 
     Parameters
     ----------
     args : argparse.Namespace
         The command's arguments: ``command``, ``input`` and ``quiet``.
+    names : dict of int to str, optional
+        The image's label names, where its file records them.
     """
     from ..mesh.formats.registry import split_dataset
-    from ..mesh.formats.slicer import layer_segments
+    from ..mesh.formats.slicer import Segment, layer_segments, segment_names
 
     path, layer = split_dataset(args.input)
-    if args.quiet or not path.name.lower().endswith(".seg.nrrd"):
+    if args.quiet:
         return
-    said = layer_segments(path, layer)
-    if said:
-        print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
+    if path.name.lower().endswith(".seg.nrrd"):
+        said = layer_segments(path, layer)
+        if said:
+            print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
+    elif names and getattr(args, "command", "") == "surface":
+        said = segment_names([Segment(name, 0, label) for label, name in names.items()], 0)
+        print(f"isoflow {args.command}: note: {args.input}: label names {said}", file=sys.stderr)
 
 
 def in_order_asked(missing: np.ndarray, beyond: np.ndarray, asked: np.ndarray) -> np.ndarray:
@@ -601,7 +612,7 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
         if surfaces:
             row += f"{cells[r]:<{wide}}"
         if "name" in table:
-            row += f"  {table['name'][r]}"
+            row += f"  {line_text(str(table['name'][r]))}"  # a tab or an escape of a file's name is not acted on
         lines.append(row.rstrip())
     if n > SHOWN_ROWS:
         lines.append(f"  ... {n - SHOWN_ROWS} more labels (--json, or --csv FILE, for the full table)")

@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from ...digital.lattice import DigitalObject
-from ...errors import IsoflowError, counted
+from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
 from .registry import (
     RawVolume,
@@ -51,7 +51,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
-from .slicer import ascii_name, layer_names, layer_of, remember_segments, segment_fields
+from .slicer import NamedHeader, layer_names, layer_of, read_header, remember_segments, segment_fields
 
 
 def _check_data_file(header: dict, path: Path) -> None:
@@ -73,7 +73,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     with reading(path, "NRRD"), open(path, "rb") as fh:
         # the header parsed once (a segmentation's holds ten fields a
         # segment), checked, then the data read on from the same handle
-        header = nrrd.read_header(fh)
+        header = read_header(fh)  # pynrrd's, a 3D Slicer segment's UTF-8 name read whole
         sizes = [int(s) for s in header["sizes"]]
         check_shape(sizes, np.uint8, where)
         _check_data_file(header, path)
@@ -185,11 +185,13 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     if unit is not None:
         header["space units"] = [ascii_unit(unit)] * obj.ndim
     names = getattr(obj, "names", None)  # a label image's: Slicer's segments
+    texts = {}
     if names:
-        header.update(segment_fields(names, obj.volume.shape))
-        wide = [(k, v) for k, v in names.items() if not v.isascii()]
-        if wide:
-            note(f"{path.name if name is None else name}: a NRRD header holds ASCII text: "
-                 f"{counted(len(wide), 'label name')} written with escapes ({wide[0][1]!r} as "
-                 f"{ascii_name(wide[0][1])!r}); .h5, .zarr and .npz keep any name")
-    nrrd.write(str(path), stored_values(obj.volume), header, index_order="F", compression_level=GZIP_LEVEL)
+        fields = segment_fields(names, obj.volume.shape)
+        # pynrrd writes a header as ASCII: it is given a placeholder for each name, which
+        # NamedHeader writes as Slicer does, UTF-8
+        texts = {k: v for k, v in fields.items() if k.endswith("_Name")}
+        header.update({k: "?" if k in texts else v for k, v in fields.items()})
+    with open(path, "wb") as fh:
+        nrrd.write(NamedHeader(fh, texts), stored_values(obj.volume), header, index_order="F",
+                   compression_level=GZIP_LEVEL)

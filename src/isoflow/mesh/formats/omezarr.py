@@ -56,6 +56,7 @@ from .registry import (
     check_time,
     import_library,
     no_such_label,
+    one_line_name,
     one_time_point_labels,
     placement,
     reading,
@@ -174,7 +175,9 @@ def label_properties(array) -> dict[int, str] | None:
     """The names of an OME-Zarr label image's labels: the ``name`` of each
     entry of its ``image-label`` ``properties`` (NGFF 0.4; under ``ome``
     in 0.5) with a whole ``label-value``, from the group that holds the
-    level ``array``; None where it names none.
+    level ``array``, a line break in it escaped
+    (:func:`~isoflow.mesh.formats.registry.one_line_name`); None where it
+    names none.
 
     Parameters
     ----------
@@ -208,7 +211,7 @@ def label_properties(array) -> dict[int, str] | None:
     for entry in properties if isinstance(properties, list) else []:
         value = entry.get("label-value") if isinstance(entry, dict) else None
         if isinstance(value, int) and not isinstance(value, bool) and value >= 1 and isinstance(entry.get("name"), str):
-            found[value] = entry["name"]
+            found[value] = one_line_name(entry["name"])  # one line, as a table's row and write_labels take it
     return dict(sorted(found.items())) or None
 
 

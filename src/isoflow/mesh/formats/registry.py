@@ -667,10 +667,36 @@ def names_json(names: Mapping[int, str]) -> str:
     return json.dumps({str(k): v for k, v in names.items()}, ensure_ascii=False)
 
 
+def one_line_name(name: str) -> str:
+    r"""A label's name read from a file, as one line: a line break in it
+    (which JSON and NGFF's ``properties`` hold, and a name given to
+    :func:`isoflow.write_labels` may not) as its escape, ``\n`` or ``\r``,
+    so that the image is read and written again with its names, and a
+    table's row stays one line.
+
+    Parameters
+    ----------
+    name : str
+        The name as the file holds it.
+
+    Returns
+    -------
+    str
+        ``name``, each line break escaped.
+
+    Examples
+    --------
+    >>> one_line_name("liver"), one_line_name("left\nlobe")
+    ('liver', 'left\\nlobe')
+    """
+    return name.replace("\r", "\\r").replace("\n", "\\n")
+
+
 def names_from_json(text, where: str, field: str) -> dict[int, str] | None:
     """Label names from :func:`names_json`'s text (bytes or a NumPy string
     too); text that is no such object is said in one warning and left out,
-    as the image reads without it.
+    as the image reads without it. A line break in a name is read as its
+    escape (:func:`one_line_name`).
 
     Examples
     --------
@@ -683,7 +709,7 @@ def names_from_json(text, where: str, field: str) -> dict[int, str] | None:
         text = text.decode("utf-8") if isinstance(text, bytes) else str(text)
         found = {int(k): v for k, v in json.loads(text).items()}
         if all(isinstance(v, str) and k >= 1 for k, v in found.items()):
-            return dict(sorted(found.items())) or None
+            return {k: one_line_name(v) for k, v in sorted(found.items())} or None
     except (ValueError, AttributeError, TypeError):
         pass
     note(f"{where}: {field} {str(text)[:80]!r} is no JSON object of label to name; the labels are read without names")

@@ -19,18 +19,27 @@ A label image written with names (:func:`isoflow.write_labels`) is written
 as a segmentation of one layer (:func:`segment_fields`): a segment per
 name, which Slicer loads by name and isoflow reads back
 (:func:`layer_names`).
+
+Slicer writes a segment's name as UTF-8 text, through teem, which escapes
+a backslash as ``\\\\`` (and a line break as ``\\n``). pynrrd decodes
+every header line as ASCII, dropping the other bytes (``Vena cava \u00f8``
+comes back as ``Vena cava``, a Japanese name as nothing, so as its ID):
+:func:`read_header` reads each segment's name and ID again from the
+header's bytes, and :class:`NamedHeader` writes them so.
 """
 
 from __future__ import annotations
 
 import colorsys
+import io
 import os
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import IsoflowError
+from ...errors import IsoflowError, line_text
 
 #: the keys of a NRRD header's per-axis fields, which lose the layer axis
 AXIS_FIELDS = ("sizes", "space directions", "kinds", "spacings", "thicknesses", "axis mins", "axis maxs",
@@ -223,12 +232,11 @@ def layer_segments(path, layer: str | None) -> str | None:
     >>> layer_segments(path, None)
     'liver (label 1)'
     """
-    import nrrd
-
     known = _read.get(file_identity(path))
     try:
         if known is None:
-            header = nrrd.read_header(str(path))
+            with open(path, "rb") as fh:
+                header = read_header(fh)
             known = segments(header, str(path)), layer_count(header)
         found, count = known
         _check_layers(found, count, str(path))
@@ -336,7 +344,7 @@ def segment_names(found: list[Segment], layer: int) -> str:
     >>> segment_names([Segment("liver", 0, 1), Segment("tumor", 0, 2), Segment("vessel", 1, 1)], 0)
     'liver (label 1), tumor (label 2)'
     """
-    held = [f"{s.name} (label {s.label})" for s in found if s.layer == layer]
+    held = [f"{line_text(s.name)} (label {s.label})" for s in found if s.layer == layer]
     more = f", and {len(held) - SHOWN} more" if len(held) > SHOWN else ""
     return ", ".join(held[:SHOWN]) + more if held else "no segment"
 
@@ -398,27 +406,138 @@ def layer_names(header: dict, layer: str | None, where: str) -> dict[int, str] |
     return dict(sorted((s.label, s.name) for s in found if s.layer == index)) or None
 
 
-def ascii_name(name: str) -> str:
-    r"""A segment's name as a NRRD header holds it: ASCII, each character
-    past it written as Python's escape (``\xf4``, ``\u00e9``), since
-    pynrrd writes the header as ASCII and reads it dropping any other byte.
+#: a header line that holds a segment's name or ID (``Segment3_Name:=liver``)
+_NAME_LINE = re.compile(rb"(Segment[0-9]+_(?:Name|ID)):=(.*?)\r?", re.DOTALL)
+
+
+def read_header(fh) -> dict:
+    r"""A NRRD header as pynrrd reads it from ``fh``, with each segment's
+    name and ID (``Segment{k}_Name``, ``Segment{k}_ID``) as 3D Slicer
+    writes them: UTF-8 text, a backslash escaped as ``\\`` (teem's
+    escape). pynrrd drops every byte past ASCII from a header line and
+    keeps the escape; a name is read again from the header's bytes here.
+    Bytes that are no UTF-8 are read as Latin-1, one character a byte.
 
     Parameters
     ----------
-    name : str
-        The name.
+    fh : binary file
+        The NRRD file, open at its start; left at its data, as pynrrd's
+        ``read_header`` leaves it.
 
     Returns
     -------
-    str
-        ``name`` where it is ASCII, else its escaped spelling.
+    dict
+        The header, pynrrd's fields parsed as pynrrd parses them.
 
     Examples
     --------
-    >>> ascii_name("liver"), ascii_name("t\u00f4rus.obj")
-    ('liver', 't\\xf4rus.obj')
+    >>> head = b"NRRD0004\ntype: uint8\ndimension: 1\nsizes: 1\nencoding: raw\nSegment0_ID:=Segment_1\n"
+    >>> head += "Segment0_Name:=Vena cava \u00f8 \\\\ 2\n\n".encode("utf-8")
+    >>> read_header(io.BytesIO(head + b"\x01"))["Segment0_Name"] == "Vena cava \u00f8 \\ 2"
+    True
     """
-    return name.encode("ascii", "backslashreplace").decode("ascii")
+    import nrrd
+
+    start = fh.tell()
+    header = nrrd.read_header(fh)
+    end = fh.tell()
+    fh.seek(start)
+    lines = fh.read(end - start).split(b"\n")
+    fh.seek(end)
+    for line in lines[1:]:
+        match = _NAME_LINE.fullmatch(line)
+        key = match and match[1].decode("ascii")
+        if key in header:
+            header[key] = header_text(match[2])
+    return header
+
+
+def header_text(raw: bytes) -> str:
+    r"""The text of a key/value pair's value as teem writes it: UTF-8 (a
+    value that is no UTF-8 read as Latin-1), ``\\`` a backslash. A ``\n``
+    (teem's escaped line break) is kept as written: a label's name is one
+    line.
+
+    Examples
+    --------
+    >>> header_text("Leber \u00f8 a\\\\b".encode("utf-8")) == "Leber \u00f8 a\\b"
+    True
+    >>> header_text(b"Vena cava \xf8") == "Vena cava \u00f8"  # no UTF-8: Latin-1
+    True
+    """
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    return re.sub(r"\\\\", r"\\", text)
+
+
+def header_escape(text: str) -> str:
+    r"""``text`` as teem writes a key/value pair's value, which
+    :func:`header_text` reads back: a backslash as ``\\``.
+
+    Examples
+    --------
+    >>> header_escape("C:\\scans\\liver.stl")
+    'C:\\\\scans\\\\liver.stl'
+    """
+    return text.replace("\\", "\\\\")
+
+
+class NamedHeader(io.RawIOBase):
+    r"""A binary file that pynrrd writes a segmentation into: the lines of
+    its header that hold a segment's name are written as 3D Slicer (teem)
+    writes them, UTF-8 with :func:`header_escape`, since pynrrd writes a
+    header as ASCII; the rest passes through as written.
+
+    Parameters
+    ----------
+    fh : binary file
+        The file written to (left open).
+    names : mapping of str to str
+        Header key (``Segment0_Name``) to its text; pynrrd is given the
+        key with any ASCII value, which this replaces.
+
+    Examples
+    --------
+    >>> import nrrd
+    >>> out = io.BytesIO()
+    >>> nrrd.write(NamedHeader(out, {"Segment0_Name": "t\u00f4rus"}), np.zeros(2, np.uint8),
+    ...            {"encoding": "raw", "Segment0_Name": "?"})
+    >>> [line for line in out.getvalue().split(b"\n") if line.startswith(b"Segment")]
+    [b'Segment0_Name:=t\xc3\xb4rus']
+    """
+
+    def __init__(self, fh, names: Mapping[str, str]) -> None:
+        super().__init__()
+        self._fh = fh
+        self._lines = {key.encode("ascii"): header_escape(text).encode("utf-8") for key, text in names.items()}
+        self._head: bytearray | None = bytearray()  # the header as written so far; None once it is out
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, data) -> int:
+        data = bytes(data)
+        if self._head is None:
+            return self._fh.write(data) or len(data)
+        self._head += data
+        end = self._head.find(b"\n\n")  # the blank line that ends a NRRD header
+        if end >= 0:
+            head, rest = bytes(self._head[:end + 2]), bytes(self._head[end + 2:])
+            self._head = None
+            self._fh.write(b"\n".join(self._line(line) for line in head.split(b"\n")) + rest)
+        return len(data)
+
+    def _line(self, line: bytes) -> bytes:
+        key, sep, _ = line.partition(b":=")
+        return key + sep + self._lines[key] if sep and key in self._lines else line
+
+    def flush(self) -> None:
+        if self._head is not None:  # a header never ended (pynrrd always ends it): written as it is
+            self._fh.write(bytes(self._head))
+            self._head = None
+        self._fh.flush()
 
 
 def segment_fields(names: Mapping[int, str], shape: tuple[int, ...]) -> dict[str, str]:
@@ -427,7 +546,8 @@ def segment_fields(names: Mapping[int, str], shape: tuple[int, ...]) -> dict[str
     segment ``k`` its ``Segment{k}_ID``, ``_Name``, ``_LabelValue``,
     ``_Layer`` (0), ``_Extent`` (the whole image) and a ``_Color``, and the
     segmentation's representation and extent offset, which Slicer's reader
-    looks for. A name past ASCII is written escaped (:func:`ascii_name`).
+    looks for. A name is given as it is: :class:`NamedHeader` writes it as
+    Slicer does.
 
     Parameters
     ----------
@@ -454,7 +574,7 @@ def segment_fields(names: Mapping[int, str], shape: tuple[int, ...]) -> dict[str
     for k, (label, name) in enumerate(names.items()):
         # hues a golden angle apart: neighbouring labels in colours far apart, as Slicer's own table does
         rgb = colorsys.hsv_to_rgb((k * 0.618034) % 1.0, 0.6, 0.9)
-        fields.update({f"Segment{k}_ID": f"Segment_{label}", f"Segment{k}_Name": ascii_name(name),
+        fields.update({f"Segment{k}_ID": f"Segment_{label}", f"Segment{k}_Name": name,
                        f"Segment{k}_NameAutoGenerated": "0", f"Segment{k}_LabelValue": str(label),
                        f"Segment{k}_Layer": "0", f"Segment{k}_Extent": extent,
                        f"Segment{k}_Color": " ".join(f"{c:.6g}" for c in rgb), f"Segment{k}_ColorAutoGenerated": "1",
