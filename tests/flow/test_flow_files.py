@@ -790,8 +790,9 @@ def test_a_2d_flow_writes_its_steps_as_png_masks_read_back_as_written(tmp_path):
         assert set(np.unique(pixels)) <= {0, 255}
         assert np.array_equal(pixels.T > 0, state.volume)
         assert np.array_equal(isoflow.read_volume(out / f"step_{k:03d}.png").volume, state.volume)
-    dropped = [line for line in err.splitlines() if "PNG keeps no pixel size or origin" in line]
+    dropped = [line for line in err.splitlines() if "PNG keeps no pixel size, origin or unit" in line]
     assert len(dropped) == 1 and "warning:" in dropped[0], err
+    assert "; origin [" in dropped[0] and "pitch" not in dropped[0]  # a pixel size of 1 is read back as it was
 
 
 def test_2d_shapes_png_ticks_pixel_coordinates_in_whole_pixels(tmp_path, monkeypatch):

@@ -116,9 +116,13 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
                            ".nrrd, .h5 or .npz, which hold 3D")
     refuse_empty(path, obj.volume.shape, "PNG")
     spacing, corner = placement(obj)
-    if (spacing != 1).any() or corner.any() or unit is not None:
-        note(f"{path}: PNG keeps no pixel size or origin; pitch {np.round(obj.pitch, 9).tolist()} and origin "
-             f"{np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit} are not written")
+    # said where what is read back differs: a pixel size not 1, an origin not 0, a unit
+    lost = ([f"pitch {np.round(obj.pitch, 9).tolist()}"] if (spacing != 1).any() else []) + (
+        [f"origin {np.round(corner, 9).tolist()}"] if corner.any() else []) + (
+        [f"unit {unit}"] if unit is not None else [])
+    if lost:
+        note(f"{path}: PNG keeps no pixel size, origin or unit; {' and '.join(lost)} "
+             f"{'are' if len(lost) > 1 else 'is'} not written (read back as pixel size 1, origin 0)")
 
 
 def write(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, name: str | None = None,
