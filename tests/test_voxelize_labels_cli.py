@@ -281,9 +281,12 @@ def test_overlap_error_on_one_mesh_is_refused_and_with_split_compares_its_bodies
     assert "--overlap error compares several meshes" in line and "--split" in line and "--strict" in line
     p = run("--overlap", "error", "--split")
     assert p.returncode == 2 and not out.exists()
-    assert "the meshes overlap" in p.stderr and "(labels 1 and 2: " in p.stderr
+    # the labels are the file's bodies, and are said to be (the shell said "meshes", as for files given)
+    assert "the bodies overlap" in p.stderr and "(labels 1 and 2: " in p.stderr and "meshes" not in p.stderr
     p = run("--overlap", "later")
     assert p.returncode == 0 and out.exists(), p.stderr
+    p = run("--split", "--force")
+    assert p.returncode == 0 and "inside two or more bodies" in p.stderr and "later body's label wins" in p.stderr
 
 
 def test_split_of_a_glb_labels_its_nodes_in_the_files_order(tmp_path, capsys):

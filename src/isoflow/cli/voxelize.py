@@ -111,7 +111,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     check_label_output(args.output, len(bodies), args.force)
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
-                            overlap=args.overlap, strict=args.strict,
+                            overlap=args.overlap, split=args.split, strict=args.strict,
                             write_bytes=write_bytes_per_voxel(args.output, labels=True), progress=show)
     assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
     for body, note in zip(bodies, r.notes):
