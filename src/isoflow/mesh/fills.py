@@ -296,8 +296,9 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
 
     >>> thin_solid(27, 56, 0.0, 0) is None, thin_solid(27, 56, 0.0, 0, volume=27.0) is None
     (False, True)
-    >>> thin_solid(100, 100, 0.0, 0, volume=30.0)[:72]
-    "the winding rule leaves 100 voxels in (the mesh's volume is 30 voxels): "
+    >>> thin_solid(100, 100, 0.0, 0, volume=30.0)[72:]
+    'its voxels are over 2 times its volume, parts thinner than a voxel taken whole or not at all as they lie \
+on the grid; a finer grid follows them (--pitch / --resolution, pitch= / resolution=)'
     """
     if volume is not None:
         thin = not VOLUME_BAND[0] * volume <= voxels <= VOLUME_BAND[1] * volume
@@ -320,7 +321,11 @@ def thin_solid(voxels: int, shell_voxels: int | None, share: float, double_sided
     if why:
         reason = "; ".join(why)
     elif volume is not None and voxels > VOLUME_BAND[1] * volume:
-        reason = f"its voxels are over {VOLUME_BAND[1]:g} times its volume (parts thinner than a voxel)"
+        # a layer of voxels where the part is thinner than one: the fills would give that layer
+        # too, so the line offers the finer grid that follows the part instead
+        return (f"the winding rule leaves {what} in{against}: its voxels are over {VOLUME_BAND[1]:g} times its "
+                "volume, parts thinner than a voxel taken whole or not at all as they lie on the grid; a finer "
+                "grid follows them (--pitch / --resolution, pitch= / resolution=)")
     else:
         reason = "the surface bounds little volume at this resolution"
     return (f"the winding rule leaves {what} in{against}: {reason}; "
