@@ -211,6 +211,33 @@ def test_progress_bars_on_a_terminal_only(tmp_path, monkeypatch):
         assert stderr_of(monkeypatch, io.StringIO(), argv) == "", argv  # a pipe or a log file
 
 
+def screen_lines(text: str) -> list[str]:
+    """The lines a terminal shows for ``text``: a carriage return moves
+    back to the line's start, and what follows overwrites it."""
+    shown = []
+    for line in text.split("\n"):
+        cells: list[str] = []
+        at = 0
+        for ch in line:
+            if ch == "\r":
+                at = 0
+                continue
+            cells[at:at + 1] = [ch]
+            at += 1
+        shown.append("".join(cells).rstrip())
+    return shown
+
+
+def test_genus_resolution_lines_have_a_terminal_line_of_their_own(monkeypatch, capsys):
+    """On a terminal each resolution's line was printed after the bar, on
+    the bar's own line (``genus:  11%|███ | [00:00<?]genus: resolution
+    16: ...``). Each one starts its line, with no bar before it."""
+    shown = screen_lines(stderr_of(monkeypatch, Terminal(), ["genus", TORUS, "--resolution", 16, 24, "--no-step"]))
+    said = [ln for ln in shown if "resolution" in ln]
+    assert len(said) == 2 and all(ln.startswith("genus: resolution ") for ln in said), said
+    assert "genus 1" in capsys.readouterr().out
+
+
 def test_flow_counter_says_its_steps_in_words(tmp_path, monkeypatch):
     """The flow's counter from its first step (docs/flow.md): ``1 step``,
     not tqdm's ``1 steps`` and a rate."""

@@ -898,6 +898,23 @@ def test_a_face_far_from_the_rest_is_named_when_the_weld_leaves_no_face(tmp_path
     assert "far from the others" not in line
 
 
+def test_a_float32_file_that_holds_one_point_is_not_blamed_on_a_far_face(tmp_path, capsys):
+    """A torus of radius 1.3 saved as float32 at 1e9, where float32 numbers
+    lie 64 apart: every corner is the same point in the file (trimesh reads
+    one position back). The line blamed a face far from the others
+    stretching a box that has no size; it names the one position and the
+    float32 spacing there."""
+    torus = trimesh.creation.torus(1.0, 0.3)
+    torus.apply_translation([1e9, 1e9, 1e9])
+    torus.export(tmp_path / "far.ply")  # trimesh writes float32 coordinates
+    read = trimesh.load(tmp_path / "far.ply", process=False)
+    assert len(np.unique(read.vertices, axis=0)) == 1 and np.spacing(np.float32(1e9)) == 64
+    line = fails(capsys, "genus", tmp_path / "far.ply", "--resolution", 8,
+                 words=("far.ply: empty mesh", "one position, [1000000000.0, 1000000000.0, 1000000000.0]",
+                        "float32 coordinates are 64 apart there"))
+    assert "far from the others" not in line
+
+
 def test_a_refused_info_leaves_no_thread_warming_up(tmp_path, capsys, monkeypatch):
     """info loads numba on a second thread while it reads a large input; on
     a refusal that thread was left running after the command, and numba's

@@ -330,3 +330,22 @@ def test_genus_of_a_t_junction_box_agrees_and_names_the_sliver(tmp_path, capsys)
     assert report["self_intersecting_faces"] == 0 and report["agree"] and report["solid_genus"] == 0
     assert "1 zero-area face (corners in a line)" in report["verdict"]
     assert "2 face pairs meet along it where it closes a split edge" in report["verdict"]
+
+
+def test_a_union_not_built_is_not_said_to_be_manifold3ds_failure():
+    """``wallhole.obj`` crosses itself, so genus builds no solid for it;
+    the note on its faces that touch said the union was one "which
+    manifold3d could not build (not computed)", though manifold3d takes
+    the mesh (no error, as trimesh welds it) and was never asked."""
+    import manifold3d as m3
+
+    from isoflow.mesh.genus import verify_genus
+
+    loaded = trimesh.load(MESHES / "wallhole.obj", force="mesh")
+    welded = trimesh.Trimesh(loaded.vertices, loaded.faces, process=True)  # equal positions merged
+    made = m3.Manifold(m3.Mesh(np.asarray(welded.vertices, np.float32), np.asarray(welded.faces, np.uint32)))
+    assert made.status() == m3.Error.NoError
+    verdict = verify_genus(MESHES / "wallhole.obj", resolutions=[16], step=False)
+    assert verdict.kind == "self_intersecting" and "error" not in verdict.manifold3d
+    assert "manifold3d could not build" not in verdict.verdict
+    assert "which is not built for a mesh that is open, inconsistently oriented or crosses itself" in verdict.verdict

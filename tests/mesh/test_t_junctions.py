@@ -122,6 +122,56 @@ def test_genus_says_what_it_split_for_which_rows(tmp_path):
         verify_genus(str(path), resolutions=[16], step=False, strict=True)
 
 
+def test_a_face_with_no_area_is_not_closed_on_itself():
+    """A face whose third corner lies on its own edge (no area) was split
+    there, as at a T-junction: a piece with a corner twice and one on the
+    face's own edges, which closed the face on itself, and a box with such
+    a sliver beside it counted as closed. The mesh stays open, with the
+    boundary edges trimesh and pymeshlab count."""
+    import pymeshlab
+
+    box = trimesh.creation.box()
+    v = np.vstack([box.vertices, [[3, 0, 0], [4, 0, 0], [5, 0, 0]]])
+    f = np.vstack([box.faces, [[8, 9, 10]]])
+    assert close_t_junctions(v, f)[2] is None
+    given = trimesh.Trimesh(v, f, process=False)
+    open_edges = len(trimesh.grouping.group_rows(given.edges_sorted, require_count=1))
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(v, f))
+    assert ms.get_topological_measures()["boundary_edges"] == open_edges == 3 and not given.is_watertight
+    verdict = verify_genus((v, f), resolutions=[16], step=False)
+    assert not verdict.mesh["watertight"] and verdict.mesh["boundary_edges"] == open_edges
+    assert not any(n.kind == "t_junctions" for n in verdict.notes)
+
+
+@pytest.mark.parametrize("copy", [False, True])
+def test_genus_searches_for_t_junctions_alike_at_any_number_of_resolutions(monkeypatch, copy):
+    """The digital rows read the mesh split at its T-junctions as the
+    voxeliser splits it; genus split it once for the mesh rows and then
+    once more at every resolution. It is searched as often whatever the
+    resolutions asked, and the rows still see the closed torus (trimesh's
+    genus) with the voxels that voxelize counts on the faces as loaded."""
+    from isoflow.mesh import t_junctions
+    from isoflow.mesh.voxelize import voxelize
+
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    genus = (2 - torus.euler_number) // 2
+    v, f, twice, _ = repeated_on_a_crack(torus, "whole")
+    faces = twice if copy else f
+    searched = []
+    split = t_junctions.split_t_junctions
+    monkeypatch.setattr(t_junctions, "split_t_junctions", lambda *a: searched.append(1) or split(*a))
+    counts = []
+    for resolutions in ([16], [16, 24, 32]):
+        searched.clear()
+        verdict = verify_genus((v, faces), resolutions=resolutions, step=False)
+        counts.append(len(searched))
+        assert [d["genus"] for d in verdict.digital] == [genus] * len(resolutions)
+    assert counts[0] == counts[1]
+    assert [d["voxels"] for d in verdict.digital] == [
+        int(voxelize(v, faces, resolution=r)[0].sum()) for r in (16, 24, 32)]
+
+
 @pytest.mark.parametrize("pairs", [0, 1 << 40])
 def test_the_vertices_on_edges_are_found_alike_with_and_without_a_kd_tree(monkeypatch, pairs):
     """Below ``ALL_PAIRS`` every (edge, corner) pair is tried, above it a KD

@@ -47,8 +47,12 @@ def cmd_genus(args: argparse.Namespace) -> int:
 
         def stepped(entry: dict) -> None:  # the automatic stepping, one line per resolution on a terminal
             if show is not None:
-                print(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
-                      f"({entry['seconds']:.1f} s)", file=sys.stderr)
+                from tqdm import tqdm
+
+                # through the bar's writer: a plain print continued the bar's
+                # line, which the bar then drew again below it
+                tqdm.write(f"genus: resolution {entry['resolution']}: Betti numbers {tuple(entry['betti'])} "
+                           f"({entry['seconds']:.1f} s)", file=sys.stderr)
 
         report = verify_genus(args.mesh, res, args.connectivity, progress=show, step=not args.no_step, on_resolution=stepped,
                               strict=args.strict, fill=mesh_fill(args), **kw)

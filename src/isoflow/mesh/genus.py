@@ -909,16 +909,21 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         _refuse_as_voxelize(name, v, f, fill)
     # the digital rows voxelise the faces as loaded, as isoflow voxelize
     # reads the same file: a copy of a face adds its winding (a wall listed
-    # twice parts the solid), which the surface counted below has not; the
-    # voxeliser splits T-junctions itself, so that it reads the same mesh
-    given = v, f
+    # twice parts the solid), which the surface counted below has not
+    given = voxelised = v, f
     f = _drop_repeated_faces(v, f, stats)
     v, f = _split_t_junctions(v, f, stats)
-    if "repeated_faces" in stats and "t_junctions" in stats:
-        # the digital rows' voxeliser splits the faces as loaded, each copy
-        # too: the note says how many it split, not the mesh rows' count
-        split = close_t_junctions(*given)[2]
-        stats["t_junctions"] = dict(stats["t_junctions"], digital_faces=0 if split is None else split["faces"])
+    if "t_junctions" in stats:
+        # the digital rows read the faces as loaded split at the T-junctions
+        # as the voxeliser splits them, each copy too: split once here, the
+        # voxeliser then finds the cracks closed at every resolution
+        if "repeated_faces" in stats:
+            vx, fx, split = close_t_junctions(*given)
+            voxelised = vx, fx
+            # the note says how many faces the voxeliser split, not the mesh rows' count
+            stats["t_junctions"] = dict(stats["t_junctions"], digital_faces=0 if split is None else split["faces"])
+        else:  # no face dropped: the mesh rows' split is the voxeliser's
+            voxelised = v, f
     w = witnesses(v, f)
     # the header says the faces the digital rows read beside the mesh's
     w["mesh"] = dict(w["mesh"], faces_as_loaded=len(given[1]))
@@ -938,7 +943,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         bodies, source = contacts["betti"][0], "voxels"
     try:  # with strict, a mesh that is not watertight is refused here
         digital, stop = digital_steps(
-            *given, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
+            *voxelised, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
             strict=strict, fill=fill, bodies=bodies)
     except IsoflowError as exc:

@@ -407,17 +407,29 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
     """The line for a mesh the weld left without a face (``faces``: as
     read): every face degenerate as read, or faces that had three corners
     until the weld's tolerance (``rtol`` times the bounding box's diagonal)
-    merged them, because a face far from the rest stretches the box.
+    merged them, because a face far from the rest stretches the box; or
+    every corner at one position as read (a float32 file far from the
+    origin, whose spacing there is coarser than the mesh).
 
     Examples
     --------
     >>> v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1e300, 0, 0], [1e300, 1, 0], [1e300, 0, 1]], float)
     >>> why_no_face(v, np.array([[0, 1, 2], [3, 4, 5]]), 1e-10, "m.obj")[-103:]
     'to [1e+300, 1.0, 1.0], and so no face kept three corners (a face far from the others stretches the box)'
+    >>> why_no_face(np.full((3, 3), 1e9), np.array([[0, 1, 2]]), 1e-10, "m.ply").split(" (")[1]
+    'float32 coordinates are 64 apart there, coarser than a mesh smaller than that); no face has area'
     """
     if not np.count_nonzero(~_repeats_a_corner(faces)):
         return f"{where}: empty mesh (every face is degenerate)"
     used = vertices[np.unique(faces)]
+    if not np.ptp(used, axis=0).any():
+        # no box to stretch: the file holds one point, which a float32 file
+        # far from the origin makes of any mesh smaller than its spacing there
+        at = [float(f"{x:.6g}") for x in used[0]]
+        spacing = float(np.spacing(np.float32(np.abs(used[0]).max())))
+        coarse = (f" (float32 coordinates are {spacing:g} apart there, coarser than a mesh smaller than that)"
+                  if np.array_equal(used[0], used[0].astype(np.float32)) else "")
+        return f"{where}: empty mesh: every corner of every face lies at one position, {at}{coarse}; no face has area"
     lo, hi = ([float(f"{x:.3g}") for x in p] for p in (used.min(axis=0), used.max(axis=0)))
     return (f"{where}: empty mesh: the weld makes one point of positions closer than {rtol:g} of the bounding "
             f"box's diagonal, the box runs from {lo} to {hi}, and so no face kept three corners (a face far from "

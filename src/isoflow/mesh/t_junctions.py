@@ -194,15 +194,20 @@ PAIR_BLOCK = 1 << 16
 
 def _points_on_edges(v: np.ndarray, slots: np.ndarray, open_slots: np.ndarray, tol: float) -> dict:
     """Per open edge slot, the boundary vertices strictly inside it (within
-    ``tol`` of the segment), in order from its first corner."""
+    ``tol`` of the segment), in order from its first corner; never its own
+    face's third corner (the face has no area: split there, it would be
+    cut into a piece with a corner twice and a piece on its own edges,
+    which closes the face on itself)."""
     ends = slots[open_slots]
+    # edge j of a face is slot 3 i + j; its third corner ends edge j + 1
+    apex = slots[3 * (open_slots // 3) + (open_slots % 3 + 1) % 3, 1]
     points = np.unique(ends)
     if len(ends) * len(points) <= ALL_PAIRS:
         step = max(1, PAIR_BLOCK // max(len(points), 1))
-        found = [_on_edges(v, ends, np.repeat(np.arange(lo, min(lo + step, len(ends))), len(points)),
+        found = [_on_edges(v, ends, apex, np.repeat(np.arange(lo, min(lo + step, len(ends))), len(points)),
                            np.tile(points, min(step, len(ends) - lo)), tol) for lo in range(0, len(ends), step)]
     else:
-        found = [_on_edges(v, ends, *_near_pairs(v, ends, points, tol), tol)]
+        found = [_on_edges(v, ends, apex, *_near_pairs(v, ends, points, tol), tol)]
     k = np.concatenate([f[0] for f in found]) if found else np.zeros(0, np.int64)
     c = np.concatenate([f[1] for f in found]) if found else np.zeros(0, np.int64)
     t = np.concatenate([f[2] for f in found]) if found else np.zeros(0)
@@ -230,12 +235,13 @@ def _near_pairs(v: np.ndarray, ends: np.ndarray, points: np.ndarray, tol: float)
     return np.repeat(busy, lengths), points[np.concatenate([np.asarray(n, dtype=np.int64) for n in near])]
 
 
-def _on_edges(v: np.ndarray, ends: np.ndarray, k: np.ndarray, c: np.ndarray, tol: float
+def _on_edges(v: np.ndarray, ends: np.ndarray, apex: np.ndarray, k: np.ndarray, c: np.ndarray, tol: float
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Of the pairs of edge ``k`` and corner ``c``, those whose corner lies
-    strictly inside the edge within ``tol`` (not one of its own corners):
-    the edges, the corners and where along the edge (0 to 1)."""
-    other = (c != ends[k, 0]) & (c != ends[k, 1])
+    strictly inside the edge within ``tol`` (not one of its own corners nor
+    ``apex[k]``, the third corner of its face): the edges, the corners and
+    where along the edge (0 to 1)."""
+    other = (c != ends[k, 0]) & (c != ends[k, 1]) & (c != apex[k])
     k, c = k[other], c[other]
     a = v[ends[k, 0]]
     d = v[ends[k, 1]] - a

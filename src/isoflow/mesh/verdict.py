@@ -321,10 +321,20 @@ def _double_sided_words(n: int, corners, genus: int | None, walls: int = 0, unio
                    if genus is not None else "")
 
 
+def _union_words(solid_genus: int | None, error: str | None) -> str:
+    """The union's genus, or why there is none: manifold3d's error, or
+    that it was not asked (``"not computed"``: the solid is built only for
+    a mesh that is closed, consistently oriented and crosses nowhere)."""
+    if solid_genus is not None:
+        return f"genus {solid_genus} (manifold3d)"
+    if error == "not computed":
+        return "which is not built for a mesh that is open, inconsistently oriented or crosses itself"
+    return f"which manifold3d could not build ({error})"
+
+
 def _overlap_words(components: int, crossing: int, shared: int, solid_genus: int | None, error: str | None,
                    touching: int = 0) -> str:
-    union = (f"genus {solid_genus} (manifold3d)" if solid_genus is not None
-             else f"which manifold3d could not build ({error})")
+    union = _union_words(solid_genus, error)
     # touching faces of one component (solids stacked face to face on
     # shared corners): they meet without crossing, which is no overlap
     touch = (f"{counted(touching, 'face')} {'touch faces of their' if touching > 1 else 'touches faces of its'} own "
@@ -342,7 +352,7 @@ def _nonmanifold_edge_words(n: int, solid_genus: int | None = None, error: str |
     if solid_genus is None and error is None:
         return said + ": not a 2-manifold, genus undefined"
     # closed sheets meeting along the edges: solids touching there, whose union is the reference
-    union = f"genus {solid_genus} (manifold3d)" if solid_genus is not None else f"which manifold3d could not build ({error})"
+    union = _union_words(solid_genus, error)
     return said + f" where solids touch along an edge: the solid the mesh bounds is their union, {union}"
 
 
