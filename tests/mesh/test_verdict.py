@@ -532,3 +532,42 @@ def test_boundary_loops_and_genus_with_them_as_trimesh_counts(name):
     assert r["boundary_loops"] == loops > 0
     assert r["genus_with_boundary"] == (2 - tm.euler_number - loops) // 2
 
+
+
+def _band(twists: int, n: int = 60, w: float = 0.3):
+    """A band of n quads around a circle, its strip turned ``twists`` half
+    turns on the way round: a Moebius band for one, an annulus for none."""
+    import trimesh
+
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    rows = []
+    for a in t:
+        for s in (-w, w):
+            turn = twists * a / 2
+            rows.append([(1 + s * np.cos(turn)) * np.cos(a), (1 + s * np.cos(turn)) * np.sin(a), s * np.sin(turn)])
+    faces = []
+    for i in range(n):
+        j = (i + 1) % n
+        c, d = (2 * j, 2 * j + 1) if j or twists % 2 == 0 else (1, 0)  # an odd twist joins each side to the other
+        faces += [[2 * i, c, 2 * i + 1], [2 * i + 1, c, d]]
+    return trimesh.Trimesh(np.array(rows), np.array(faces), process=False)
+
+
+@pytest.mark.parametrize("twists", [1, 0])
+def test_a_moebius_band_is_said_to_be_non_orientable(tmp_path, capsys, twists):
+    """A Moebius band's verdict said "the mesh is open (120 boundary edges,
+    1 inconsistently oriented)": that no turning of its faces can agree was
+    not said. trimesh's fix_winding leaves its winding inconsistent (and
+    makes the annulus's consistent): the mesh report counts it, and the
+    note says it is non-orientable."""
+    band = _band(twists)
+    fixed = band.copy()
+    fixed.fix_normals()
+    assert fixed.is_winding_consistent is (twists == 0)  # trimesh: the band cannot be oriented, the annulus can
+    band.export(tmp_path / "band.obj")
+    mesh = json_of(tmp_path / "band.obj", "--resolution", 16, "--no-step", "-q")["mesh"]
+    assert mesh["non_orientable"] == (0 if fixed.is_winding_consistent else 1)
+    assert main(["genus", str(tmp_path / "band.obj"), "--resolution", "16", "--no-step", "-q"]) == 0
+    verdict = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  verdict"))
+    assert ("one component is non-orientable" in verdict) == (twists == 1)
+    assert "1 inconsistently oriented)" not in verdict

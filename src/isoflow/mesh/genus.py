@@ -157,6 +157,8 @@ def mesh_topology(vertices, faces, return_components: bool = False):
         "genus_with_boundary": sum(known_b) if genus_b and len(known_b) == len(genus_b) else None,
         "nonmanifold_edges": int(defects["nonmanifold_edges"]),
         "inconsistent_edges": int(defects["inconsistent_edges"]),
+        # components that no turning of faces makes consistent (a Moebius band): no surface genus at all
+        "non_orientable": int(np.count_nonzero(~orientable)),
         "nonmanifold_vertices": int(np.count_nonzero(fans_per_vertex[~on_nonmanifold_edge] > 1)),
         "vertices": int(used),
         "faces": int(nf),
@@ -1246,13 +1248,16 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding", contacts: di
         return [Note("voxel_contacts", contacts)]
     mesh = w["mesh"]
     notes = []
+    # a component no turning of its faces makes consistent: said where its edges are (a report read back
+    # from JSON written before the count was kept has none)
+    odd = {"non_orientable": mesh["non_orientable"]} if mesh.get("non_orientable") else {}
     if w["double_sided"]:
         notes.append(Note("double_sided", w["double_sided"]))
     if mesh["boundary_edges"]:
         notes.append(Note("open", {"boundary_edges": mesh["boundary_edges"],
-                                   "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill}))
+                                   "inconsistent_edges": mesh["inconsistent_edges"], "fill": fill, **odd}))
     elif not w["balanced"]:  # every edge has two faces or more: not open, but not oriented as a solid's boundary
-        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill,
+        notes.append(Note("inconsistent", {"edges": mesh["inconsistent_edges"], "fill": fill, **odd,
                                            **({"genus": mesh["genus"]} if mesh["genus"] is not None else {})}))
     if mesh["nonmanifold_edges"]:
         joined = {"solid_genus": w["solid_genus"], "error": w["solid"].get("error")} if w["edge_joined"] else {}

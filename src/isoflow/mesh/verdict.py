@@ -259,21 +259,30 @@ _READ_AS = {"winding": "its solid is read by the generalised winding number (|w|
             "flood": "its voxels are its flood fill (--fill flood: the shell and what it encloses)"}
 
 
-def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "winding") -> str:
+def _non_orientable_words(n: int) -> str:
+    """The components no turning of faces makes consistent, as a clause."""
+    which = "one component is" if n == 1 else f"{n} components are"
+    return (f"; {which} non-orientable (no turning of its faces agrees across every edge, as a Moebius band's): "
+            "no surface genus, and no inside")
+
+
+def _open_words(boundary_edges: int, inconsistent_edges: int, fill: str = "winding", non_orientable: int = 0) -> str:
     return (f"the mesh is open ({counted(boundary_edges, 'boundary edge')}"
-            + (f", {inconsistent_edges} inconsistently oriented" if inconsistent_edges else "")
-            + "): it bounds no solid, so it has no genus as a closed surface; " + _READ_AS[fill])
+            + (f", {counted(inconsistent_edges, 'edge')} inconsistently oriented" if inconsistent_edges else "")
+            + "): it bounds no solid, so it has no genus as a closed surface"
+            + (_non_orientable_words(non_orientable) if non_orientable else "") + "; " + _READ_AS[fill])
 
 
-def _inconsistent_words(edges: int, fill: str = "winding", genus: int | None = None) -> str:
+def _inconsistent_words(edges: int, fill: str = "winding", genus: int | None = None, non_orientable: int = 0) -> str:
     if genus is None:
         surface = "so it has no genus as a closed surface; " + _READ_AS[fill]
     else:  # the voxeliser turns a closed component's faces to agree (isoflow.mesh.orientation): the edges balance
         read = ("its solid is read by the exact nonzero winding number, the faces turned so" if fill == "winding"
                 else _READ_AS[fill])
         surface = f"its faces turned consistently make a closed surface of genus {genus}; {read}"
+    odd = _non_orientable_words(non_orientable) if non_orientable else ""
     return (f"the mesh has no boundary edge, but {edges} edge{'s' if edges > 1 else ''} inconsistently oriented "
-            f"(used more often one way than the other): it bounds no solid as given, {surface}")
+            f"(used more often one way than the other){odd}: it bounds no solid as given, {surface}")
 
 
 def _point(p) -> str:
