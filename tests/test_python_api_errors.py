@@ -849,6 +849,54 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     call(np.int64(2))
 
 
+@pytest.mark.parametrize("given", [np.array(["numpy", "auto"]), np.zeros(0), np.zeros((3, 3))])
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda v: isoflow.analyze(CUBE, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.label_table(CUBE.astype(np.uint8), method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.label_table(CUBE[2].astype(np.uint8), method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.configuration_histogram(CUBE, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.run_flow(CUBE, 1, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.voxelize_mesh(_box(), resolution=4, fill=v), "fill must be one of winding, shell, flood"),
+    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v), "overlap must be one of later, error"),
+    (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "fill must be one of winding, shell, flood"),
+    (lambda v: isoflow.read_object(isoflow.data.example19(), points_are=v), "points_are must be 'corners' or 'voxels'"),
+])
+def test_an_array_where_a_word_is_taken_is_refused_naming_the_argument(call, words, given):
+    # ``given in ("auto", ...)`` compared the array element by element: NumPy's ValueError on the
+    # truth of an array, naming no argument
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as e:
+        call(given)
+    assert str(e.value).endswith(f"{words}, got ndarray of shape {given.shape}"), str(e.value)
+
+
+def test_a_word_given_as_a_0d_array_is_kept_as_the_plain_string():
+    # the result kept the array where a string was taken; its fields are the plain words
+    pytest.importorskip("trimesh")
+    r = isoflow.voxelize_meshes([_box()], resolution=4, fill=np.array("shell"), overlap=np.array("error"))
+    assert (type(r.fill), type(r.overlap)) == (str, str) and (r.fill, r.overlap) == ("shell", "error")
+
+
+@pytest.mark.parametrize("threads", [float("inf"), np.float64("-inf")])
+@pytest.mark.parametrize("call", [
+    lambda t: isoflow.analyze(CUBE, threads=t),
+    lambda t: isoflow.label_table(CUBE.astype(np.uint8), threads=t),
+])
+def test_an_infinite_thread_count_is_refused_naming_it(call, threads):
+    # int(inf) raised Python's OverflowError from inside the thread check
+    with pytest.raises(IsoflowError, match=f"^threads must be a positive integer, got {re.escape(repr(float(threads)))}$"):
+        call(threads)
+
+
+@pytest.mark.parametrize(("array", "ndim"), [(np.array(3), 0), (np.arange(4), 1)])
+def test_label_table_of_a_label_image_neither_2d_nor_3d_names_its_dimension(array, ndim):
+    # a LabelImage keeps the spacing as given where its array is no image: label_table read it
+    # as an array (spacing.tolist()) and raised AttributeError
+    image = isoflow.LabelImage(array, 1.0, (0.0, 0.0, 0.0))
+    with pytest.raises(IsoflowError, match=f"^a label table needs a 3D or 2D label image, got a {ndim}D array$"):
+        isoflow.label_table(image)
+
+
 @pytest.mark.parametrize(("ndim", "words"), [(5, "ndim must be 1..4, got 5"), ("3", "ndim must be an integer 1..4, got '3'")])
 def test_euler_lut_names_its_ndim(ndim, words):
     # the message spoke of a "dimension n" that euler_lut has no parameter of

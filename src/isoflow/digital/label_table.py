@@ -332,12 +332,13 @@ def label_table(
     >>> label_table(cells > 0)["b1"].tolist()  # one label: the ring holds a hole
     [1]
     """
-    from ..scale.compiled import using
+    from ..scale.compiled import check_method, using
 
     names = label_names(names, "label_table")
     if isinstance(image, LabelImage):  # the file's place and names, unless given
-        pitch = image.spacing.tolist() if pitch is None else pitch
-        origin = image.origin.tolist() if origin is None else origin
+        # as arrays only where the image is 2D or 3D (LabelImage): of any other, checked_image names the array
+        pitch = np.asarray(image.spacing).tolist() if pitch is None else pitch
+        origin = np.asarray(image.origin).tolist() if origin is None else origin
         names = image.names if names is None else names
         image = image.array
     vol = checked_image(image)
@@ -352,7 +353,7 @@ def label_table(
     if vol.ndim == 2:
         from .planar_labels import planar_table
 
-        _use_compiled(vol, "numpy" if method == "auto" else method)  # the method checked as in 3D
+        _use_compiled(vol, "numpy" if check_method(method) == "auto" else method)  # the method checked as in 3D
         return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
                                          place.spacing, vol.shape), names)
     with using(threads):
@@ -494,10 +495,9 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     ``"auto"`` takes before numba is imported is counted in :data:`TALLY`."""
     import sys
 
-    from ..scale.compiled import METHODS, add_to_tally, have_numba, tallied
+    from ..scale.compiled import add_to_tally, check_method, have_numba, tallied
 
-    if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
+    method = check_method(method)
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba: pip install numba")
     if method != "auto" or not have_numba():

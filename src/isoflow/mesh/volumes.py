@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels, label_names
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, check_path, check_switch, counted, given_text, missing, warn
+from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, warn
 from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -752,8 +752,10 @@ def read_object(path: str | os.PathLike, points_are: PointsAre = "corners",
     (4, 20)
     """
     check_path(path, "path", "read_object", "an array in memory: DigitalObject(array)")
-    if points_are not in get_args(PointsAre):  # the annotation binds type checkers only
+    chosen = choice_of(points_are, get_args(PointsAre))  # the annotation binds type checkers only
+    if chosen is None:
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {given_text(points_are)}")
+    points_are = chosen  # type: ignore[assignment]  # one of PointsAre, as just checked
     if is_volume(path):
         if points_are != "corners":  # the default, kept for any path; "voxels" would be ignored
             raise IsoflowError(f"{path}: points_are={points_are!r} applies to point lists (x y z per line, .txt), "
