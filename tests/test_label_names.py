@@ -211,3 +211,18 @@ def test_surface_labels_glb_keeps_node_names_label_n_and_records_the_name_in_ext
     assert kind == b"JSON"
     nodes = json.loads(data[20:20 + length])["nodes"]
     assert [(n["name"], n["extras"]["name"]) for n in nodes] == [(f"label_{k}", v) for k, v in NAMES.items()]
+
+
+def test_an_array_of_names_gives_plain_strings(tmp_path, image):
+    # NumPy's np.str_ was kept: the names printed as np.str_('liver') in the image's repr
+    named = isoflow.LabelImage(image, 1.0, (0, 0, 0), names=np.array(["liver", "spleen"]))
+    assert named.names == {1: "liver", 2: "spleen"}
+    assert all(type(name) is str for name in named.names.values())
+    assert "np.str_" not in repr(named)
+
+
+@pytest.mark.parametrize("names", [np.array("liver"), np.array([["liver"]])])
+def test_an_array_of_names_that_is_not_one_row_is_refused_naming_them(image, names):
+    # a 0D array raised NumPy's TypeError "iteration over a 0-d array", naming no argument
+    with pytest.raises(IsoflowError, match=r"^label_table: names are a mapping of label to name or a sequence"):
+        isoflow.label_table(image, names=names)

@@ -877,6 +877,16 @@ def test_a_word_given_as_a_0d_array_is_kept_as_the_plain_string():
     assert (type(r.fill), type(r.overlap)) == (str, str) and (r.fill, r.overlap) == ("shell", "error")
 
 
+@pytest.mark.parametrize("read", [isoflow.read_labels, lambda path, time: isoflow.read_volume(path, 1, time=time)])
+def test_a_time_point_given_as_a_0d_array_is_read(tmp_path, read):
+    # a 0D integer array was refused as "time=1 is no time point of this time series of 2 (0 to 1)"
+    series = np.zeros((3, 3, 3, 2), np.uint8)
+    series[1, 1, 1, 1] = 1
+    np.save(tmp_path / "t.npy", series)
+    got = read(tmp_path / "t.npy", time=np.array(1))
+    assert np.array_equal(np.asarray(got.array if hasattr(got, "array") else got.volume), series[..., 1])
+
+
 @pytest.mark.parametrize("threads", [float("inf"), np.float64("-inf")])
 @pytest.mark.parametrize("call", [
     lambda t: isoflow.analyze(CUBE, threads=t),

@@ -182,7 +182,8 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     """
     if names is None:
         return None
-    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)):
+    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)) \
+            or (isinstance(names, np.ndarray) and names.ndim != 1):
         raise IsoflowError(f"{where}: names are a mapping of label to name or a sequence of names (label i + 1 for "
                            f"the i-th), not {given_text(names)}")
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
@@ -194,7 +195,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
         if not isinstance(name, str) or "\n" in name or "\r" in name:
             raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
                                "one line")
-        found[int(label)] = name
+        found[int(label)] = str(name)  # a np.str_ (of an array of names) as the plain string
     return dict(sorted(found.items())) or None
 
 

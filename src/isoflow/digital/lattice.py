@@ -390,7 +390,26 @@ class DigitalObject:
         vertex ``w``. ``vertex_volume`` has this volume's shape plus one per
         axis, as :func:`isoflow.digital.configurations.configurations` gives;
         ``parity' = 1 - parity``, and ``offset' = offset - 1`` from parity 0,
-        ``offset' = offset`` from parity 1. Not cropped."""
+        ``offset' = offset`` from parity 1. Not cropped.
+
+        Parameters
+        ----------
+        vertex_volume : numpy.ndarray
+            Bool, one per lattice vertex of this object's volume.
+
+        Returns
+        -------
+        DigitalObject
+            On the other lattice, with this one's pitch and origin.
+
+        Examples
+        --------
+        >>> from isoflow import configurations
+        >>> cube = DigitalObject(np.ones((2, 2, 2), bool))
+        >>> touched = cube.on_dual_lattice(configurations(cube.volume) > 0)  # the vertices a voxel touches
+        >>> touched.volume.shape, touched.offset, touched.parity, touched.voxels
+        ((3, 3, 3), (-1, -1, -1), 1, 27)
+        """
         offset = tuple(o - 1 for o in self.offset) if self.parity == 0 else self.offset
         return replace(self, volume=vertex_volume, offset=offset, parity=1 - self.parity)
 

@@ -317,7 +317,7 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
     if fmt.module == "omezarr":  # only that time point's chunks: a time-lapse store may not fit in memory
         return fmt.load().read(file, dataset, time=time)
     raw = fmt.load().read(file, dataset)
-    check_time(time, np.shape(raw.array), str(path))
+    time = check_time(time, np.shape(raw.array), str(path))
     space = {k: v if v is None or not np.ndim(v) else v[:3] for k, v in
              {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset}.items()}
     return dataclasses.replace(raw, array=raw.array[..., time], **space)
