@@ -1143,6 +1143,37 @@ def test_digital_object_refuses_a_bool_parity(parity):
     assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
 
 
+@pytest.mark.parametrize(("field", "value", "kind"), [
+    ("origin", (True, 0, 0), "numbers"), ("origin", np.ones(3, bool), "numbers"), ("origin", (np.True_, 0.5, 2.0), "numbers"),
+    ("offset", (0, 0, True), "integers"), ("offset", np.zeros(3, bool), "integers"),
+])
+def test_digital_object_refuses_a_bool_origin_or_offset(field, value, kind):
+    # True equals 1: origin=(True, 0, 0) placed the object at x = 1, as pitch=True and parity=True are not taken
+    volume = np.ones((2, 2, 2), bool)
+    with pytest.raises(IsoflowError, match=rf"^'{field}' must be {kind}, not True or False, got \["):
+        isoflow.DigitalObject(volume, **{field: value})
+    if field == "origin":  # the functions that take a place check it as the object does
+        for call in (lambda: isoflow.label_table(volume.astype(np.uint8), origin=value),
+                     lambda: isoflow.analyze(volume, origin=value)):
+            with pytest.raises(IsoflowError, match=r"'origin' must be numbers, not True or False"):
+                call()
+
+
+@pytest.mark.parametrize(("given", "words"), [
+    ([[1, 2], [3]], "nested sequences of uneven lengths are no array"),
+    (np.ma.masked_array([1.0, 2.0, 3.0], [0, 1, 0]), "a masked array with 1 masked element"),
+])
+@pytest.mark.parametrize("field", ["pitch", "origin"])
+def test_a_ragged_or_masked_place_is_refused_naming_the_field(field, given, words):
+    # a ragged list raised NumPy's ValueError; a masked element was read as the number stored under the mask
+    volume = np.ones((2, 2, 2), bool)
+    for call in (lambda: isoflow.DigitalObject(volume, **{field: given}),
+                 lambda: isoflow.analyze(volume, **{field: given}),
+                 lambda: isoflow.label_table(volume.astype(np.uint8), **{field: given})):
+        with pytest.raises(IsoflowError, match=f"^'{field}': {words}"):
+            call()
+
+
 @pytest.mark.parametrize("label", [True, np.True_])
 def test_read_volume_refuses_a_bool_label(tmp_path, label):
     # True equals 1: label=True picked the voxels of label 1

@@ -345,11 +345,10 @@ def label_table(
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     surfaces = check_switch(surfaces, "surfaces", "label_table")
-    # the pitch and origin checked as every object's are
-    # (without a dtype: a float conversion here would raise NumPy's
-    # ValueError on a string before the check could name the field)
-    place = DigitalObject.placement(vol.ndim, pitch=None if pitch is None else np.asarray(pitch),
-                                    origin=None if origin is None else np.asarray(origin))
+    # the pitch and origin checked as every object's are, as given (an
+    # array of them would make a string's ValueError NumPy's, and a bool
+    # among numbers a number)
+    place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin)
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table

@@ -1152,7 +1152,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     arr = _unsigned_labels(arr, path)
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin)
     # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
     check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]
