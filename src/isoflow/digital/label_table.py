@@ -134,6 +134,10 @@ class LabelImage:
         # the spacing and origin as float arrays, one number per axis, checked
         # as an object's pitch and origin are, so that label_table can take
         # a list or one number as it takes an array
+        if isinstance(self.array, (list, tuple)):
+            # nested lists held as an array, as ``array`` says (``image.array.shape``); an array of
+            # another library (zarr, dask) is kept as it is, not read into memory here
+            object.__setattr__(self, "array", as_array(self.array, "LabelImage array"))
         try:
             n = np.ndim(self.array)
         except ValueError:  # nested lists of uneven lengths: label_table names them
