@@ -1210,3 +1210,13 @@ def test_a_word_option_given_as_a_numpy_string_is_taken_as_the_word():
     ring = np.pad(np.ones((3, 3, 3), bool), 1)
     ring[2, 2, :] = False
     assert isoflow.analyze(ring, 6, method=np.str_("numpy")) == isoflow.analyze(ring, 6, method="numpy")
+
+
+@pytest.mark.parametrize("labels", [np.array([[0, 1], [2, 3]], np.uint8), np.array([[0, 1], [2, 3]], float)])
+def test_write_volume_of_a_label_image_offers_write_labels(tmp_path, labels):
+    # the refusal offered isoflow.label_table(volume), which writes no file
+    with pytest.raises(IsoflowError) as e:
+        isoflow.write_volume(labels, tmp_path / "cells.png")
+    assert str(e.value).endswith("or write its labels with isoflow.write_labels(labels, path)")
+    assert not (tmp_path / "cells.png").exists()
+    assert isoflow.read_labels(isoflow.write_labels(labels, tmp_path / "cells.png")).array.tolist() == labels.tolist()

@@ -980,7 +980,14 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     """
     check_path(path, "path", "write_volume",
                hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
-    obj = DigitalObject.of(obj)
+    try:
+        obj = DigitalObject.of(obj)
+    except NotBinary as exc:
+        if exc.kind != "labels" or not exc.every or np.ndim(obj) not in (2, 3):
+            raise
+        # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
+        raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
+                        every=exc.every, ndim=exc.ndim, kind=exc.kind) from None
     return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)))
 
 
