@@ -983,7 +983,7 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     try:
         obj = DigitalObject.of(obj)
     except NotBinary as exc:
-        if exc.kind != "labels" or not exc.every or np.ndim(obj) not in (2, 3):
+        if exc.kind != "labels" or not exc.every or isinstance(obj, DigitalObject) or np.ndim(obj) not in (2, 3):
             raise
         # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
         raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
