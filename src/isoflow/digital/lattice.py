@@ -496,9 +496,10 @@ def _pitch(value, ndim: int):
     are all equal becomes one number, so that isotropic stays a scalar."""
     _unmasked(value, "pitch")
     arr = as_array(value, "'pitch'")  # nested lists of uneven lengths named, not NumPy's ValueError
-    # _field takes bools (a parity of True is 1), but pitch=True is a slip,
-    # not a voxel size of 1; a bool among floats, (True, 2.0, 1.0), becomes
-    # 1.0 in asarray, so the elements are looked at as given
+    # pitch=True is a slip, not a voxel size of 1, refused here in a voxel
+    # size's words (as _field refuses a bool origin or offset); a bool among
+    # floats, (True, 2.0, 1.0), becomes 1.0 in asarray, so the elements are
+    # looked at as given
     given = np.asarray(value, dtype=object) if arr.size <= 8 else arr
     if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in given.flat):
         items = [v.item() if isinstance(v, np.generic) else v for v in given.flat]
