@@ -1220,3 +1220,14 @@ def test_write_volume_of_a_label_image_offers_write_labels(tmp_path, labels):
     assert str(e.value).endswith("or write its labels with isoflow.write_labels(labels, path)")
     assert not (tmp_path / "cells.png").exists()
     assert isoflow.read_labels(isoflow.write_labels(labels, tmp_path / "cells.png")).array.tolist() == labels.tolist()
+
+
+def test_label_table_of_scipy_s_labels_and_count_says_to_pass_the_labels():
+    # the pair was refused as "nested sequences of uneven lengths", which a notebook user did not write
+    ndimage = pytest.importorskip("scipy.ndimage")
+    mask = np.zeros((6, 6, 6), bool)
+    mask[1:3, 1:3, 1:3] = mask[4:6, 4:6, 4:6] = True
+    labels, count = ndimage.label(mask)
+    with pytest.raises(IsoflowError, match=r"^label_table: a \(labels, count\) pair, as scipy\.ndimage\.label gives"):
+        isoflow.label_table((labels, count))
+    assert isoflow.label_table(labels)["label"].tolist() == list(range(1, count + 1))

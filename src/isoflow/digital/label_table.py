@@ -370,6 +370,12 @@ def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
     refuse_object(image, "label_table", reader="isoflow.read_labels")
+    if isinstance(image, tuple) and len(image) == 2 and isinstance(image[0], np.ndarray) \
+            and isinstance(image[1], (int, np.integer)) and not isinstance(image[1], (bool, np.bool_)):
+        # scipy.ndimage.label's answer, which as_array would call nested lists of uneven lengths
+        raise IsoflowError(f"label_table: a (labels, count) pair, as scipy.ndimage.label gives, of an array of shape "
+                           f"{image[0].shape} and the count {int(image[1])}; pass its labels: "
+                           "labels, count = ndimage.label(mask); label_table(labels)")
     vol = as_array(image, "label_table image")
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
