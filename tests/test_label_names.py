@@ -265,3 +265,17 @@ def test_surface_labels_of_a_named_image_notes_which_label_file_is_which(tmp_pat
     assert f"isoflow surface: note: {path}: label names {said}\n" in capsys.readouterr().err
     assert main(["surface", str(path), "--labels", "-q", "-o", str(tmp_path / "q") + "/", "--suffix", ".ply"]) == 0
     assert "label names" not in capsys.readouterr().err
+
+def test_an_array_of_names_gives_plain_strings(tmp_path, image):
+    # NumPy's np.str_ was kept: the names printed as np.str_('liver') in the image's repr
+    named = isoflow.LabelImage(image, 1.0, (0, 0, 0), names=np.array(["liver", "spleen"]))
+    assert named.names == {1: "liver", 2: "spleen"}
+    assert all(type(name) is str for name in named.names.values())
+    assert "np.str_" not in repr(named)
+
+
+@pytest.mark.parametrize("names", [np.array("liver"), np.array([["liver"]])])
+def test_an_array_of_names_that_is_not_one_row_is_refused_naming_them(image, names):
+    # a 0D array raised NumPy's TypeError "iteration over a 0-d array", naming no argument
+    with pytest.raises(IsoflowError, match=r"^label_table: names are a mapping of label to name or a sequence"):
+        isoflow.label_table(image, names=names)

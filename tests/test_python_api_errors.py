@@ -849,6 +849,64 @@ def test_a_thread_count_given_as_text_is_refused_as_the_message_says(call):
     call(np.int64(2))
 
 
+@pytest.mark.parametrize("given", [np.array(["numpy", "auto"]), np.zeros(0), np.zeros((3, 3))])
+@pytest.mark.parametrize(("call", "words"), [
+    (lambda v: isoflow.analyze(CUBE, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.label_table(CUBE.astype(np.uint8), method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.label_table(CUBE[2].astype(np.uint8), method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.configuration_histogram(CUBE, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.run_flow(CUBE, 1, method=v), "method must be one of auto, numpy, compiled"),
+    (lambda v: isoflow.voxelize_mesh(_box(), resolution=4, fill=v), "fill must be one of winding, shell, flood"),
+    (lambda v: isoflow.voxelize_meshes([_box()], resolution=4, overlap=v), "overlap must be one of later, error"),
+    (lambda v: isoflow.verify_genus(_box(), [8], fill=v), "fill must be one of winding, shell, flood"),
+    (lambda v: isoflow.read_object(isoflow.data.example19(), points_are=v), "points_are must be 'corners' or 'voxels'"),
+])
+def test_an_array_where_a_word_is_taken_is_refused_naming_the_argument(call, words, given):
+    # ``given in ("auto", ...)`` compared the array element by element: NumPy's ValueError on the
+    # truth of an array, naming no argument
+    pytest.importorskip("trimesh")
+    with pytest.raises(IsoflowError) as e:
+        call(given)
+    assert str(e.value).endswith(f"{words}, got ndarray of shape {given.shape}"), str(e.value)
+
+
+def test_a_word_given_as_a_0d_array_is_kept_as_the_plain_string():
+    # the result kept the array where a string was taken; its fields are the plain words
+    pytest.importorskip("trimesh")
+    r = isoflow.voxelize_meshes([_box()], resolution=4, fill=np.array("shell"), overlap=np.array("error"))
+    assert (type(r.fill), type(r.overlap)) == (str, str) and (r.fill, r.overlap) == ("shell", "error")
+
+
+@pytest.mark.parametrize("read", [isoflow.read_labels, lambda path, time: isoflow.read_volume(path, 1, time=time)])
+def test_a_time_point_given_as_a_0d_array_is_read(tmp_path, read):
+    # a 0D integer array was refused as "time=1 is no time point of this time series of 2 (0 to 1)"
+    series = np.zeros((3, 3, 3, 2), np.uint8)
+    series[1, 1, 1, 1] = 1
+    np.save(tmp_path / "t.npy", series)
+    got = read(tmp_path / "t.npy", time=np.array(1))
+    assert np.array_equal(np.asarray(got.array if hasattr(got, "array") else got.volume), series[..., 1])
+
+
+@pytest.mark.parametrize("threads", [float("inf"), np.float64("-inf")])
+@pytest.mark.parametrize("call", [
+    lambda t: isoflow.analyze(CUBE, threads=t),
+    lambda t: isoflow.label_table(CUBE.astype(np.uint8), threads=t),
+])
+def test_an_infinite_thread_count_is_refused_naming_it(call, threads):
+    # int(inf) raised Python's OverflowError from inside the thread check
+    with pytest.raises(IsoflowError, match=f"^threads must be a positive integer, got {re.escape(repr(float(threads)))}$"):
+        call(threads)
+
+
+@pytest.mark.parametrize(("array", "ndim"), [(np.array(3), 0), (np.arange(4), 1)])
+def test_label_table_of_a_label_image_neither_2d_nor_3d_names_its_dimension(array, ndim):
+    # a LabelImage keeps the spacing as given where its array is no image: label_table read it
+    # as an array (spacing.tolist()) and raised AttributeError
+    image = isoflow.LabelImage(array, 1.0, (0.0, 0.0, 0.0))
+    with pytest.raises(IsoflowError, match=f"^a label table needs a 3D or 2D label image, got a {ndim}D array$"):
+        isoflow.label_table(image)
+
+
 @pytest.mark.parametrize(("ndim", "words"), [(5, "ndim must be 1..4, got 5"), ("3", "ndim must be an integer 1..4, got '3'")])
 def test_euler_lut_names_its_ndim(ndim, words):
     # the message spoke of a "dimension n" that euler_lut has no parameter of
@@ -1085,6 +1143,37 @@ def test_digital_object_refuses_a_bool_parity(parity):
     assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
 
 
+@pytest.mark.parametrize(("field", "value", "kind"), [
+    ("origin", (True, 0, 0), "numbers"), ("origin", np.ones(3, bool), "numbers"), ("origin", (np.True_, 0.5, 2.0), "numbers"),
+    ("offset", (0, 0, True), "integers"), ("offset", np.zeros(3, bool), "integers"),
+])
+def test_digital_object_refuses_a_bool_origin_or_offset(field, value, kind):
+    # True equals 1: origin=(True, 0, 0) placed the object at x = 1, as pitch=True and parity=True are not taken
+    volume = np.ones((2, 2, 2), bool)
+    with pytest.raises(IsoflowError, match=rf"^'{field}' must be {kind}, not True or False, got \["):
+        isoflow.DigitalObject(volume, **{field: value})
+    if field == "origin":  # the functions that take a place check it as the object does
+        for call in (lambda: isoflow.label_table(volume.astype(np.uint8), origin=value),
+                     lambda: isoflow.analyze(volume, origin=value)):
+            with pytest.raises(IsoflowError, match=r"'origin' must be numbers, not True or False"):
+                call()
+
+
+@pytest.mark.parametrize(("given", "words"), [
+    ([[1, 2], [3]], "nested sequences of uneven lengths are no array"),
+    (np.ma.masked_array([1.0, 2.0, 3.0], [0, 1, 0]), "a masked array with 1 masked element"),
+])
+@pytest.mark.parametrize("field", ["pitch", "origin"])
+def test_a_ragged_or_masked_place_is_refused_naming_the_field(field, given, words):
+    # a ragged list raised NumPy's ValueError; a masked element was read as the number stored under the mask
+    volume = np.ones((2, 2, 2), bool)
+    for call in (lambda: isoflow.DigitalObject(volume, **{field: given}),
+                 lambda: isoflow.analyze(volume, **{field: given}),
+                 lambda: isoflow.label_table(volume.astype(np.uint8), **{field: given})):
+        with pytest.raises(IsoflowError, match=f"^'{field}': {words}"):
+            call()
+
+
 @pytest.mark.parametrize("label", [True, np.True_])
 def test_read_volume_refuses_a_bool_label(tmp_path, label):
     # True equals 1: label=True picked the voxels of label 1
@@ -1121,3 +1210,24 @@ def test_a_word_option_given_as_a_numpy_string_is_taken_as_the_word():
     ring = np.pad(np.ones((3, 3, 3), bool), 1)
     ring[2, 2, :] = False
     assert isoflow.analyze(ring, 6, method=np.str_("numpy")) == isoflow.analyze(ring, 6, method="numpy")
+
+
+@pytest.mark.parametrize("labels", [np.array([[0, 1], [2, 3]], np.uint8), np.array([[0, 1], [2, 3]], float)])
+def test_write_volume_of_a_label_image_offers_write_labels(tmp_path, labels):
+    # the refusal offered isoflow.label_table(volume), which writes no file
+    with pytest.raises(IsoflowError) as e:
+        isoflow.write_volume(labels, tmp_path / "cells.png")
+    assert str(e.value).endswith("or write its labels with isoflow.write_labels(labels, path)")
+    assert not (tmp_path / "cells.png").exists()
+    assert isoflow.read_labels(isoflow.write_labels(labels, tmp_path / "cells.png")).array.tolist() == labels.tolist()
+
+
+def test_label_table_of_scipy_s_labels_and_count_says_to_pass_the_labels():
+    # the pair was refused as "nested sequences of uneven lengths", which a notebook user did not write
+    ndimage = pytest.importorskip("scipy.ndimage")
+    mask = np.zeros((6, 6, 6), bool)
+    mask[1:3, 1:3, 1:3] = mask[4:6, 4:6, 4:6] = True
+    labels, count = ndimage.label(mask)
+    with pytest.raises(IsoflowError, match=r"^label_table: a \(labels, count\) pair, as scipy\.ndimage\.label gives"):
+        isoflow.label_table((labels, count))
+    assert isoflow.label_table(labels)["label"].tolist() == list(range(1, count + 1))

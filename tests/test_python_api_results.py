@@ -271,6 +271,15 @@ def test_the_repr_of_a_small_mesh_or_label_image_is_one_short_line():
                     "origin=array([0., 0., 0.]), unit='mm', names=None)")
 
 
+def test_a_label_image_of_nested_lists_holds_them_as_an_array():
+    # the lists were kept: image.array.shape failed, and the repr printed every label
+    cells = [[1, 1, 0], [0, 2, 2]]
+    image = isoflow.LabelImage(cells, [0.5, 2.0], (0, 0))
+    assert isinstance(image.array, np.ndarray) and image.array.shape == (2, 3)
+    assert image.array.tolist() == cells
+    assert repr(image).startswith("LabelImage(array=array(..., shape=(2, 3)")
+
+
 def test_a_report_comes_back_from_what_info_json_printed(tmp_path, capsys):
     """``Report.from_dict`` of the object ``isoflow info FILE --json``
     printed refused it ("Report has no fields ['input', 'origin',

@@ -129,7 +129,11 @@ def given_text(value: object) -> str:
     ('0', 'True', '0.1', '1.0', "'x'")
     >>> given_text((np.int64(3), 0.5)), given_text([np.uint8(7)]), given_text((np.int64(2),))
     ('(3, 0.5)', '[7]', '(2,)')
+    >>> given_text(np.zeros((3, 3)))  # an array's repr runs over lines: its type and shape
+    'ndarray of shape (3, 3)'
     """
+    if isinstance(getattr(value, "shape", None), tuple) and value.shape != () and hasattr(value, "dtype"):  # type: ignore[attr-defined]
+        return value_kind(value)
     if type(value) in (list, tuple):
         inner = ", ".join(given_text(v) for v in value)  # type: ignore[attr-defined]
         return f"[{inner}]" if isinstance(value, list) else f"({inner},)" if len(value) == 1 else f"({inner})"  # type: ignore[arg-type]
@@ -562,6 +566,35 @@ class MeshNote(IsoflowWarning):
     :class:`~isoflow.mesh.voxelize.Voxelization`, issued as a warning
     when the caller did not ask for the details. The command line prints it
     as one ``note:`` line."""
+
+
+def choice_of(value: object, choices: tuple[str, ...]) -> str | None:
+    """``value`` as the plain ``str`` of ``choices`` it names (a
+    ``np.str_``, or a 0D array of one, too), else None. An array is none
+    of them: ``value in choices`` compares it element by element, and
+    NumPy refuses the truth of the comparison (a ValueError where the
+    caller meant to say which argument is wrong).
+
+    Parameters
+    ----------
+    value : object
+        What was given.
+    choices : tuple of str
+        The words it may be.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> choice_of(np.str_("shell"), ("winding", "shell")), choice_of(np.array(["shell"]), ("winding", "shell"))
+    ('shell', None)
+    """
+    if getattr(value, "shape", None) == () and hasattr(value, "dtype"):
+        value = value.item()  # type: ignore[attr-defined]
+    return str(value) if isinstance(value, str) and value in choices else None
 
 
 def check_switch(value: object, name: str, where: str) -> bool:

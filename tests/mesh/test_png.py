@@ -118,3 +118,16 @@ def test_16_bit_colour_is_refused_not_cut_to_8_bits(tmp_path, cells):
     sixteen_bit_png(tmp_path / "grey.png", cells, 0)  # 16-bit grey is read whole
     proc = run("info", "grey.png", "--labels", "--json", cwd=tmp_path)
     assert [row["label"] for row in json.loads(proc.stdout)["labels"]] == [7, 300, 600, 900], proc.stderr
+
+
+@pytest.mark.parametrize("dtype", [">u2", ">i2"])
+def test_big_endian_labels_are_written_as_their_values(tmp_path, cells, dtype):
+    """Labels in a big-endian type (as a NRRD or HDF5 file gives them) are
+    the same labels: Pillow reads the file back as the values given."""
+    from isoflow import write_labels
+
+    labels = cells.T.astype(dtype)  # (x, y): row j, column i of the file is pixel (i, j)
+    path = write_labels(labels, tmp_path / "cells.png")
+    with Image.open(path) as image:
+        assert image.mode == "I;16"
+        assert np.array_equal(np.asarray(image), cells)

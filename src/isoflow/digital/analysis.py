@@ -176,8 +176,8 @@ def placed(obj, ndim: int, given: Place) -> tuple[np.ndarray, np.ndarray, str | 
     own = obj if isinstance(obj, DigitalObject) else DigitalObject.placement(ndim)
     pitch = own.pitch if given.pitch is None else given.pitch
     origin = own.origin if given.origin is None else given.origin
-    # (without a dtype: a float conversion here would raise NumPy's ValueError on a string before the check)
-    place = DigitalObject.placement(ndim, pitch=np.asarray(pitch), origin=np.asarray(origin), offset=own.offset,
+    # as given: the object's check names a string, and a bool among numbers, which an array would make a number
+    place = DigitalObject.placement(ndim, pitch=pitch, origin=origin, offset=own.offset,
                                     parity=own.parity)
     return place.spacing, place.world(np.zeros(ndim)), unit_given(own.unit if given.unit is None else given.unit,
                                                                    "analyze")

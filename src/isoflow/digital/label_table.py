@@ -134,6 +134,10 @@ class LabelImage:
         # the spacing and origin as float arrays, one number per axis, checked
         # as an object's pitch and origin are, so that label_table can take
         # a list or one number as it takes an array
+        if isinstance(self.array, (list, tuple)):
+            # nested lists held as an array, as ``array`` says (``image.array.shape``); an array of
+            # another library (zarr, dask) is kept as it is, not read into memory here
+            object.__setattr__(self, "array", as_array(self.array, "LabelImage array"))
         try:
             n = np.ndim(self.array)
         except ValueError:  # nested lists of uneven lengths: label_table names them
@@ -182,7 +186,8 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     """
     if names is None:
         return None
-    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)):
+    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)) \
+            or (isinstance(names, np.ndarray) and names.ndim != 1):
         raise IsoflowError(f"{where}: names are a mapping of label to name or a sequence of names (label i + 1 for "
                            f"the i-th), not {given_text(names)}")
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
@@ -194,7 +199,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
         if not isinstance(name, str) or "\n" in name or "\r" in name:
             raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
                                "one line")
-        found[int(label)] = name
+        found[int(label)] = str(name)  # a np.str_ (of an array of names) as the plain string
     return dict(sorted(found.items())) or None
 
 
@@ -332,27 +337,27 @@ def label_table(
     >>> label_table(cells > 0)["b1"].tolist()  # one label: the ring holds a hole
     [1]
     """
-    from ..scale.compiled import using
+    from ..scale.compiled import check_method, using
 
     names = label_names(names, "label_table")
     if isinstance(image, LabelImage):  # the file's place and names, unless given
-        pitch = image.spacing.tolist() if pitch is None else pitch
-        origin = image.origin.tolist() if origin is None else origin
+        # as arrays only where the image is 2D or 3D (LabelImage): of any other, checked_image names the array
+        pitch = np.asarray(image.spacing).tolist() if pitch is None else pitch
+        origin = np.asarray(image.origin).tolist() if origin is None else origin
         names = image.names if names is None else names
         image = image.array
     vol = checked_image(image)
     conn = resolve_connectivity(vol.ndim, connectivity)
     surfaces = check_switch(surfaces, "surfaces", "label_table")
-    # the pitch and origin checked as every object's are
-    # (without a dtype: a float conversion here would raise NumPy's
-    # ValueError on a string before the check could name the field)
-    place = DigitalObject.placement(vol.ndim, pitch=None if pitch is None else np.asarray(pitch),
-                                    origin=None if origin is None else np.asarray(origin))
+    # the pitch and origin checked as every object's are, as given (an
+    # array of them would make a string's ValueError NumPy's, and a bool
+    # among numbers a number)
+    place = DigitalObject.placement(vol.ndim, pitch=pitch, origin=origin)
     wanted = None if labels is None else wanted_labels(labels, vol.dtype)
     if vol.ndim == 2:
         from .planar_labels import planar_table
 
-        _use_compiled(vol, "numpy" if method == "auto" else method)  # the method checked as in 3D
+        _use_compiled(vol, "numpy" if check_method(method) == "auto" else method)  # the method checked as in 3D
         return with_names(unheld_columns(planar_table(vol, conn, place.spacing, place.origin, wanted), place.origin,
                                          place.spacing, vol.shape), names)
     with using(threads):
@@ -365,6 +370,12 @@ def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
     refuse_object(image, "label_table", reader="isoflow.read_labels")
+    if isinstance(image, tuple) and len(image) == 2 and isinstance(image[0], np.ndarray) \
+            and isinstance(image[1], (int, np.integer)) and not isinstance(image[1], (bool, np.bool_)):
+        # scipy.ndimage.label's answer, which as_array would call nested lists of uneven lengths
+        raise IsoflowError(f"label_table: a (labels, count) pair, as scipy.ndimage.label gives, of an array of shape "
+                           f"{image[0].shape} and the count {int(image[1])}; pass its labels: "
+                           "labels, count = ndimage.label(mask); label_table(labels)")
     vol = as_array(image, "label_table image")
     if vol.ndim not in (2, 3):
         raise IsoflowError(f"a label table needs a 3D or 2D label image, got a {vol.ndim}D array")
@@ -494,10 +505,9 @@ def _use_compiled(vol: np.ndarray, method: str) -> bool:
     ``"auto"`` takes before numba is imported is counted in :data:`TALLY`."""
     import sys
 
-    from ..scale.compiled import METHODS, add_to_tally, have_numba, tallied
+    from ..scale.compiled import add_to_tally, check_method, have_numba, tallied
 
-    if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
+    method = check_method(method)
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba: pip install numba")
     if method != "auto" or not have_numba():

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, given_text, number_text
+from ..errors import IsoflowError, counted, given_text, number_text
 from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary
 from .units import unit_given
@@ -390,7 +390,26 @@ class DigitalObject:
         vertex ``w``. ``vertex_volume`` has this volume's shape plus one per
         axis, as :func:`isoflow.digital.configurations.configurations` gives;
         ``parity' = 1 - parity``, and ``offset' = offset - 1`` from parity 0,
-        ``offset' = offset`` from parity 1. Not cropped."""
+        ``offset' = offset`` from parity 1. Not cropped.
+
+        Parameters
+        ----------
+        vertex_volume : numpy.ndarray
+            Bool, one per lattice vertex of this object's volume.
+
+        Returns
+        -------
+        DigitalObject
+            On the other lattice, with this one's pitch and origin.
+
+        Examples
+        --------
+        >>> from isoflow import configurations
+        >>> cube = DigitalObject(np.ones((2, 2, 2), bool))
+        >>> touched = cube.on_dual_lattice(configurations(cube.volume) > 0)  # the vertices a voxel touches
+        >>> touched.volume.shape, touched.offset, touched.parity, touched.voxels
+        ((3, 3, 3), (-1, -1, -1), 1, 27)
+        """
         offset = tuple(o - 1 for o in self.offset) if self.parity == 0 else self.offset
         return replace(self, volume=vertex_volume, offset=offset, parity=1 - self.parity)
 
@@ -475,10 +494,12 @@ def _pitch(value, ndim: int):
     """A positive float, or a vector of ``ndim`` positive floats (a
     read-only array) when the voxels are anisotropic; a vector whose entries
     are all equal becomes one number, so that isotropic stays a scalar."""
-    arr = np.asarray(value)
-    # _field takes bools (a parity of True is 1), but pitch=True is a slip,
-    # not a voxel size of 1; a bool among floats, (True, 2.0, 1.0), becomes
-    # 1.0 in asarray, so the elements are looked at as given
+    _unmasked(value, "pitch")
+    arr = as_array(value, "'pitch'")  # nested lists of uneven lengths named, not NumPy's ValueError
+    # pitch=True is a slip, not a voxel size of 1, refused here in a voxel
+    # size's words (as _field refuses a bool origin or offset); a bool among
+    # floats, (True, 2.0, 1.0), becomes 1.0 in asarray, so the elements are
+    # looked at as given
     given = np.asarray(value, dtype=object) if arr.size <= 8 else arr
     if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in given.flat):
         items = [v.item() if isinstance(v, np.generic) else v for v in given.flat]
@@ -502,11 +523,28 @@ def _pitch(value, ndim: int):
     return pitch
 
 
+def _unmasked(value, name: str) -> None:
+    """Refuse a masked array with masked elements as a field's value: NumPy
+    reads the number stored under the mask, which is missing data.
+
+    Examples
+    --------
+    >>> _unmasked(np.ma.masked_array([1.0, 2.0, 3.0], [0, 1, 0]), "pitch")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: 'pitch': a masked array with 1 masked element; pass its numbers (a.data, or a.filled(x))
+    """
+    if isinstance(value, np.ma.MaskedArray) and np.ma.count_masked(value):
+        raise IsoflowError(f"'{name}': a masked array with {counted(int(np.ma.count_masked(value)), 'masked element')}; "
+                           "pass its numbers (a.data, or a.filled(x))")
+
+
 def _field(value, name: str, length: int | None, integral: bool = False, bound: float | None = None):
     """A finite number (``length`` None; a one-element array will do) or a
     vector of ``length`` numbers, integers where ``integral``, within
     ``+-bound``; otherwise an error naming the field and the value."""
-    arr = given = np.asarray(value)
+    _unmasked(value, name)
+    arr = given = as_array(value, f"'{name}'")  # nested lists of uneven lengths named, not NumPy's ValueError
 
     def shown() -> str:
         if given.size > 8:
@@ -525,6 +563,13 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
                     f"{name}=({', '.join([shown()] * length)})")
         return IsoflowError(f"'{name}' must be {want}, got {shown()}{hint}")
 
+    # True or False is a slip, not the number 1 or 0 (as pitch=True and parity=True are refused);
+    # a bool among numbers, (True, 0, 0), becomes 1 in asarray, so the elements are looked at as given
+    held = np.asarray(value, dtype=object) if arr.size <= 8 else arr
+    if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in held.flat):
+        items = [v.item() if isinstance(v, np.generic) else v for v in held.flat]
+        what = f"an array of shape {arr.shape}" if held is arr else repr(items[0] if arr.ndim == 0 else items)
+        raise IsoflowError(f"'{name}' must be {'integers' if integral else 'numbers'}, not True or False, got {what}")
     if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
         # numbers held as Python objects (a list of ints and floats through
         # np.array(..., dtype=object), a pandas column): numbers all the same

@@ -279,9 +279,24 @@ class QuadMesh:
         return np.where(self.sheet == 0, a_lut(self.connectivity)[self.config], 0)
 
     def polygons(self) -> np.ndarray:
-        """Faces with their midpoints (docs/formats.md, "Surface files"): (F, 4) when there are
-        none, else (F, 8) cyclic rows of corner, midpoint or -1, corner, ...
-        (see :func:`polygon_rows`)."""
+        """Faces with their midpoints (docs/formats.md, "Surface files").
+
+        Returns
+        -------
+        numpy.ndarray
+            (F, 4) corner indices when no edge has a midpoint, else (F, 8)
+            cyclic rows of corner, midpoint or -1, corner, ... (see
+            :func:`polygon_rows`).
+
+        Examples
+        --------
+        >>> boundary_mesh(np.ones((2, 2, 2), bool)).polygons().shape  # 24 quads, no doubled edge
+        (24, 4)
+        >>> pair = np.zeros((2, 2, 1), bool)
+        >>> pair[0, 0], pair[1, 1] = True, True  # two cubes sharing an edge, joined under 26
+        >>> boundary_mesh(pair, 26).polygons().shape  # the edge's midpoint in the faces along it
+        (12, 8)
+        """
         return polygon_rows(self.faces, self.edge_midpoint)
 
     def triangles(self) -> np.ndarray:

@@ -13,9 +13,9 @@ import numpy as np
 
 from ..digital.analysis import analyze
 from ..digital.lattice import DigitalObject
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError
 from ..results import read_only
-from ..scale.compiled import METHODS, Method, add_to_tally, have_numba, tallied
+from ..scale.compiled import Method, add_to_tally, check_method, have_numba, tallied
 from . import guard as control
 from .motion import flow_moves
 
@@ -403,8 +403,7 @@ def flow_engine(method: Method, obj: DigitalObject, conn: int, cap: int | None =
     >>> type(flow_engine("numpy", DigitalObject(np.ones((2, 2, 2), bool)), 6)).__name__
     'ArrayFlow'
     """
-    if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
+    method = check_method(method)
     if method == "compiled" and not have_numba():
         raise IsoflowError("method='compiled' needs numba (pip install numba)")
     if method == "compiled":

@@ -68,7 +68,7 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     if not callable(getattr(manifold, "to_mesh", None)):
         raise IsoflowError(f"from_manifold takes a manifold3d.Manifold, got {type(manifold).__name__}"
                            "; a mesh: voxelize_mesh, an array: DigitalObject")
-    place = DigitalObject.placement(3, pitch=np.asarray(pitch), origin=np.asarray(origin))
+    place = DigitalObject.placement(3, pitch=pitch, origin=origin)  # as given: checked as every object's are
     if np.ndim(place.pitch):
         raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {np.asarray(pitch).tolist()!r}")
     pitch, corner = float(place.pitch), place.origin

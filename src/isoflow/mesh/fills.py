@@ -30,7 +30,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_switch, counted, given_text
+from ..errors import IsoflowError, check_switch, choice_of, counted, given_text
 from ..results import Result
 
 #: the rule that decides which voxels a mesh fills
@@ -162,9 +162,10 @@ def check_fill(fill: object) -> Fill:
     >>> check_fill("shell")
     'shell'
     """
-    if fill not in FILLS:
+    chosen = choice_of(fill, FILLS)  # the plain string, which the result keeps
+    if chosen is None:
         raise IsoflowError(f"voxelize: fill must be one of {', '.join(FILLS)}, got {given_text(fill)}")
-    return fill  # type: ignore[return-value]
+    return chosen  # type: ignore[return-value]
 
 
 def check_strict(strict: object, where: str = "voxelize") -> bool:

@@ -27,7 +27,7 @@ from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
 from ..errors import IsoflowError, check_callable, check_switch, counted, given_text
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
-from .fills import Fill, Voxelization, check_strict
+from .fills import Fill, Voxelization, check_fill, check_strict
 from .grid import GridTooLarge, finest_fit, float64_rounding, grid_fits, grid_need, grid_words, near_origin
 from .load import MeshInput, check_mesh, mesh_defects, mesh_input, repeated_faces
 from .t_junctions import close_t_junctions
@@ -882,6 +882,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     check_callable(progress, "progress", "progress(done, total)")
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     strict = check_strict(strict, "verify_genus")
+    fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")

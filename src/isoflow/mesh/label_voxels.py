@@ -36,7 +36,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from ..errors import IsoflowError, check_callable, check_switch, given_text
+from ..errors import IsoflowError, check_callable, check_switch, choice_of, given_text
 from ..results import Result
 from ..scale import memory
 from .bodies import Body, mesh_bodies
@@ -137,9 +137,10 @@ class LabelVoxelization(Result):
 
 def check_overlap(overlap: object) -> Overlap:
     """``overlap`` if it names a rule, else an IsoflowError naming them."""
-    if overlap not in OVERLAPS:
+    chosen = choice_of(overlap, OVERLAPS)  # the plain string, which the result keeps
+    if chosen is None:
         raise IsoflowError(f"voxelize: overlap must be one of {', '.join(OVERLAPS)}, got {given_text(overlap)}")
-    return overlap  # type: ignore[return-value]
+    return chosen  # type: ignore[return-value]
 
 
 def label_dtype(count: int) -> np.dtype:

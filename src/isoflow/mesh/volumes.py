@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels, label_names
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, check_path, check_switch, counted, given_text, missing, warn
+from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, warn
 from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -317,7 +317,7 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
     if fmt.module == "omezarr":  # only that time point's chunks: a time-lapse store may not fit in memory
         return fmt.load().read(file, dataset, time=time)
     raw = fmt.load().read(file, dataset)
-    check_time(time, np.shape(raw.array), str(path))
+    time = check_time(time, np.shape(raw.array), str(path))
     space = {k: v if v is None or not np.ndim(v) else v[:3] for k, v in
              {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset}.items()}
     return dataclasses.replace(raw, array=raw.array[..., time], **space)
@@ -752,8 +752,10 @@ def read_object(path: str | os.PathLike, points_are: PointsAre = "corners",
     (4, 20)
     """
     check_path(path, "path", "read_object", "an array in memory: DigitalObject(array)")
-    if points_are not in get_args(PointsAre):  # the annotation binds type checkers only
+    chosen = choice_of(points_are, get_args(PointsAre))  # the annotation binds type checkers only
+    if chosen is None:
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {given_text(points_are)}")
+    points_are = chosen  # type: ignore[assignment]  # one of PointsAre, as just checked
     if is_volume(path):
         if points_are != "corners":  # the default, kept for any path; "voxels" would be ignored
             raise IsoflowError(f"{path}: points_are={points_are!r} applies to point lists (x y z per line, .txt), "
@@ -978,7 +980,14 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     """
     check_path(path, "path", "write_volume",
                hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
-    obj = DigitalObject.of(obj)
+    try:
+        obj = DigitalObject.of(obj)
+    except NotBinary as exc:
+        if exc.kind != "labels" or not exc.every or isinstance(obj, DigitalObject) or np.ndim(obj) not in (2, 3):
+            raise
+        # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
+        raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
+                        every=exc.every, ndim=exc.ndim, kind=exc.kind) from None
     return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)))
 
 
@@ -1150,7 +1159,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     arr = _unsigned_labels(arr, path)
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
-    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=None if origin is None else np.asarray(origin))
+    place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin)
     # a 2D image is refused as 2D by the formats that hold 3D only, before its labels are counted against theirs
     check_volume_holds(path, LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim))
     file = check_label_output(path, int(arr.max(initial=0)), force)[0]

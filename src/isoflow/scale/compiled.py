@@ -52,7 +52,7 @@ from collections.abc import Iterator
 from functools import cache
 from typing import TYPE_CHECKING, Literal
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, choice_of, given_text
 
 if TYPE_CHECKING:
     import numpy as np
@@ -126,6 +126,23 @@ Method = Literal["auto", "numpy", "compiled"]
 METHODS = ("auto", "numpy", "compiled")
 
 
+def check_method(method: object) -> Method:
+    """``method`` as the plain string of :data:`METHODS` it names, else
+    one IsoflowError naming them (an array too, whose comparison with
+    them NumPy would refuse with its own ValueError).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> check_method(np.str_("numpy"))
+    'numpy'
+    """
+    chosen = choice_of(method, METHODS)
+    if chosen is None:
+        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
+    return chosen  # type: ignore[return-value]
+
+
 #: the voxels that ``"auto"`` has weighed below the threshold in this
 #: process, per threshold (True: with the surfaces): those it sent down
 #: the NumPy passes, and then the volume that took it past the threshold
@@ -193,8 +210,7 @@ def use_compiled(volume: object, surfaces: bool = False, method: Method = "auto"
     """
     import numpy as np
 
-    if method not in METHODS:
-        raise IsoflowError(f"method must be one of {', '.join(METHODS)}, got {given_text(method)}")
+    method = check_method(method)
     if method == "numpy":
         return False
     host = isinstance(volume, np.ndarray) and volume.ndim in (2, 3)
@@ -232,7 +248,7 @@ def check_threads(n, where: str = "threads") -> int:
     """A thread count: a positive integer, or a clear error."""
     try:
         value = int(n)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an infinite float
         value = 0
     if value < 1 or str(n).strip() != str(value):
         raise IsoflowError(f"{where} must be a positive integer, got {given_text(n)}")

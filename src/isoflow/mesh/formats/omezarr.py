@@ -135,7 +135,7 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     at = None
     if time is not None:
         xyz = list(range(array.ndim)) if names is None else spatial_axes(names, array.shape, where, time=True)[0]
-        check_time(time, [array.shape[i] for i in xyz], where)
+        time = check_time(time, [array.shape[i] for i in xyz], where)
         # the time axis kept, of length 1, so that the axes stay as stored
         index = tuple(slice(int(time), int(time) + 1) if i == xyz[3] else slice(None) for i in range(array.ndim))
         shape = tuple(1 if i == xyz[3] else n for i, n in enumerate(shape))

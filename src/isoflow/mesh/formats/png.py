@@ -154,6 +154,9 @@ def write(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
     rows = obj.volume.T  # row j, column i is pixel (i, j), as read() reads it
     if rows.dtype == np.bool_:
         rows = rows.view(np.uint8) * np.uint8(255)  # black and white in any viewer; read back as one mask
+    # labels read from a big-endian file (NRRD, HDF5, ``>u2``) keep their byte order, which Pillow takes
+    # for no grey mode: the same values in the machine's order
+    rows = rows.astype(rows.dtype.newbyteorder("="), copy=False)
     if rows.dtype not in (np.uint8, np.uint16):  # write_labels narrows labels to the format's 16 bits first
         raise IsoflowError(f"{path}: a PNG holds 8- or 16-bit grey, and this image is {rows.dtype}")
     # Pillow takes uint8 as mode L and uint16 as I;16: grey of the labels' own width

@@ -570,14 +570,16 @@ def check_shape(shape, dtype, where: str, hint: str = READ_HINT) -> None:
     )
 
 
-def check_time(time, shape, where: str) -> None:
-    """Refuse a ``time`` that picks no time point of a volume of ``shape``
-    (isoflow's order: x, y, z, t for a time series): the volume is not 4D,
-    or ``time`` is not a whole number from 0 to the count less 1.
+def check_time(time, shape, where: str) -> int:
+    """``time`` as the int of the time point it picks of a volume of
+    ``shape`` (isoflow's order: x, y, z, t for a time series); refused
+    where the volume is not 4D, or ``time`` is not an integer (Python's,
+    NumPy's or a 0D array of one) from 0 to the count less 1.
 
     Examples
     --------
-    >>> check_time(2, (8, 8, 8, 3), "cells.ome.zarr")  # nothing to refuse
+    >>> check_time(2, (8, 8, 8, 3), "cells.ome.zarr"), check_time(np.array(2), (8, 8, 8, 3), "cells.ome.zarr")
+    (2, 2)
     >>> try:
     ...     check_time(3, (8, 8, 8, 3), "cells.ome.zarr")
     ... except IsoflowError as error:
@@ -588,9 +590,12 @@ def check_time(time, shape, where: str) -> None:
         raise IsoflowError(f"{where}: time={given_text(time)} picks a time point of a 4D volume (x, y, z, t), this one is "
                            f"{len(shape)}D with shape {'x'.join(map(str, shape))}: it has no time points")
     count = int(shape[3])
+    if isinstance(time, np.ndarray) and time.ndim == 0:
+        time = time[()]  # NumPy's scalar, as an integer's 0D array indexes like it
     if isinstance(time, (bool, np.bool_)) or not isinstance(time, (int, np.integer)) or not 0 <= time < count:
         raise IsoflowError(f"{where}: time={given_text(time)} is no time point of this time series of {count} "
                            f"(0 to {count - 1})")
+    return int(time)
 
 
 def one_time_point_labels(path: str | os.PathLike) -> str:
