@@ -131,8 +131,12 @@ def given_text(value: object) -> str:
     ('(3, 0.5)', '[7]', '(2,)')
     >>> given_text(np.zeros((3, 3)))  # an array's repr runs over lines: its type and shape
     'ndarray of shape (3, 3)'
+    >>> given_text(np.array([6, 26]))  # a few numbers, as a list
+    '[6, 26]'
     """
     if isinstance(getattr(value, "shape", None), tuple) and value.shape != () and hasattr(value, "dtype"):  # type: ignore[attr-defined]
+        if value.ndim == 1 and 0 < value.size <= 8 and value.dtype.kind in "biuf":  # type: ignore[attr-defined]
+            return given_text(value.tolist())  # type: ignore[attr-defined]
         return value_kind(value)
     if type(value) in (list, tuple):
         inner = ", ".join(given_text(v) for v in value)  # type: ignore[attr-defined]
