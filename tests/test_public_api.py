@@ -102,6 +102,7 @@ reveal_type(isoflow.voxelize_to_zarr("m.stl", "v.zarr", resolution=4, details=Tr
 reveal_type(isoflow.read_volume("v.npy"))
 reveal_type(isoflow.read_object("v.npy"))
 reveal_type(isoflow.read_points("p.txt"))
+reveal_type(isoflow.read_label_names("lut.txt"))
 reveal_type(isoflow.write_volume(obj, "v.npz"))
 reveal_type(isoflow.write_labels(np.zeros((2, 2, 2), np.uint8), "l.npz", pitch=0.5))
 reveal_type(isoflow.write_surface(obj, "s.ply", 6, mesh=isoflow.boundary_mesh(vol, 6), ascii=True))

@@ -930,6 +930,7 @@ def test_a_surface_path_that_is_no_path_is_named(bad):
 PATH_CALLS = {
     "read_volume": lambda bad: isoflow.read_volume(bad),
     "read_labels": lambda bad: isoflow.read_labels(bad),
+    "read_label_names": lambda bad: isoflow.read_label_names(bad),
     "read_object": lambda bad: isoflow.read_object(bad),
     "read_points": lambda bad: isoflow.read_points(bad),
     "write_volume": lambda bad: isoflow.write_volume(np.ones((2, 2, 2), bool), bad),

@@ -51,6 +51,7 @@ _WHERE = {
     "GenusVerdict": ".mesh.verdict",
     "read_volume": ".mesh.volumes",
     "read_labels": ".mesh.volumes",
+    "read_label_names": ".mesh.formats.label_names",
     "read_object": ".mesh.volumes",
     "read_points": ".mesh.volumes",
     "write_volume": ".mesh.volumes",

@@ -58,6 +58,7 @@ from .flow.run import run_flow as run_flow
 from .mesh.bridges import from_manifold as from_manifold
 from .mesh.bridges import to_manifold as to_manifold
 from .mesh.export import write_surface as write_surface
+from .mesh.formats.label_names import read_label_names as read_label_names
 from .mesh.formats.omezarr import analyze_zarr as analyze_zarr
 from .mesh.genus import verify_genus as verify_genus
 from .mesh.label_voxels import voxelize_meshes as voxelize_meshes

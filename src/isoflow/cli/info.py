@@ -26,7 +26,7 @@ from .inputs import (
     thread_count,
     why_empty,
 )
-from .labels import add_labels_option
+from .labels import add_labels_option, refuse_names_without_labels
 from .progress import progress_bar
 
 
@@ -64,6 +64,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     if args.png and args.labels is None:  # one object's report has no distribution to draw
         raise IsoflowError(f"{args.input}: --png draws the table of --labels (info {args.input} --labels --png "
                            f"{args.png}); one object's report has no picture")
+    refuse_names_without_labels(args)
     if args.labels is not None:
         from .labels import cmd_info_labels
 

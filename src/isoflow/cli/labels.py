@@ -39,6 +39,68 @@ def add_labels_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--labels", nargs="?", const="all", metavar="SPEC",
                    help="a label image: one row (info; 3D or 2D) or one surface (surface; 3D) per label; every "
                         "nonzero label, or those of SPEC, e.g. 3,7,10-20")
+    p.add_argument("--names", metavar="FILE",
+                   help="with --labels: the labels' names from a side file (a FreeSurfer or 3D Slicer colour "
+                        "table, an ITK-SNAP label description, CSV/TSV of label and name, JSON or nnU-Net's "
+                        "dataset.json), over any the image's file records")
+
+
+def refuse_names_without_labels(args: argparse.Namespace) -> None:
+    """One line for ``--names FILE`` without ``--labels``: one object has
+    no labels to name."""
+    if getattr(args, "names", None) is not None and args.labels is None:
+        raise IsoflowError(f"{args.input}: --names names the labels of --labels ({args.command} {args.input} "
+                           f"--labels --names {args.names}); one object has no labels to name")
+
+
+def given_names(args: argparse.Namespace) -> dict[int, str] | None:
+    """The names of ``--names FILE`` (None without it), read before the
+    image so that a file that is no list of names is refused before any
+    work."""
+    from ..mesh.formats.label_names import read_label_names
+
+    if getattr(args, "names", None) is None:
+        return None
+    try:
+        return read_label_names(args.names)
+    except IsoflowError as exc:  # the line names the file; the option says it is the names' file, not the image
+        raise IsoflowError(f"--names {exc}") from None
+
+
+def merged_names(args: argparse.Namespace, own: dict[int, str] | None,
+                 given: dict[int, str] | None) -> dict[int, str] | None:
+    """The image file's own names with those of ``--names`` over them,
+    and a note (not with ``-q``) where the two name a label differently.
+
+    Examples
+    --------
+    >>> args = argparse.Namespace(command="info", input="seg.nrrd", names="lut.txt", quiet=True)
+    >>> merged_names(args, {1: "liver", 2: "spleen"}, {2: "Spleen", 3: "kidney"})
+    {1: 'liver', 2: 'Spleen', 3: 'kidney'}
+    """
+    if given is None:
+        return own
+    own = own or {}
+    changed = [f"label {k} {line_text(own[k])!r} as {line_text(v)!r}" for k, v in given.items()
+               if k in own and own[k] != v]
+    if changed and not args.quiet:
+        print(f"isoflow {args.command}: note: {args.input}: the names of --names {args.names} replace those the file "
+              f"records for {counted(len(changed), 'label')} ({_some(changed, 4)})", file=sys.stderr)
+    return dict(sorted({**own, **given}.items()))
+
+
+def say_unused_names(args: argparse.Namespace, given: dict[int, str] | None, table: dict) -> None:
+    """A note (not with ``-q``) counting the labels ``--names`` names
+    that the image does not have: a colour table such as FreeSurfer's
+    names over a thousand structures, of which a segmentation holds a few.
+    Only where every label was read: with a choice, the labels not chosen
+    are not looked for."""
+    if given is None or args.quiet or args.labels != "all":
+        return
+    unused = len(set(given) - set(table["label"].tolist()))
+    if unused:
+        print(f"isoflow {args.command}: note: {args.names}: {unused:,} of its {counted(len(given), 'label name')} "
+              f"{'is for a label' if unused == 1 else 'are for labels'} the image does not have (not used)", file=sys.stderr)
 
 
 def label_choice(text: str) -> np.ndarray | None:
@@ -197,9 +259,11 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # surfaces are written, whole (as a file is, refused up front where it
     # would not fit)
     blocks = is_store(args.input) and getattr(args, "command", "") != "surface" and stored_ndim(args.input) != 2
+    given = given_names(args)
     say_declared_labels(args)
     image = None if blocks else read_labels(args.input)
-    if getattr(args, "command", "") == "surface" or image is None or not image.names:
+    names = None if image is None else merged_names(args, image.names, given)
+    if given is None and (getattr(args, "command", "") == "surface" or image is None or not image.names):
         # info's table gives each label's name in its name column; surface's files are label_N
         say_segments(args, None if image is None else image.names)
     ndim = 3 if image is None else image.array.ndim
@@ -220,14 +284,14 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # a row of zeros per label asked would cost more than the image
     every = asked is not None and len(asked) > CHOICE_ROWS
     if image is None:
-        about, table = table_of_store(args, conn, None if every else asked, surfaces)
+        about, table = table_of_store(args, conn, None if every else asked, surfaces, given)
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin, "unit": image.unit, **({} if corners is None else {"corners": corners})}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         try:
             table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                surfaces=surfaces, threads=getattr(args, "threads", None), names=image.names)
+                                surfaces=surfaces, threads=getattr(args, "threads", None), names=names)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
@@ -257,6 +321,10 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         # label_table's and regionprops_table's, and a warning (kept by --quiet) says why
         print(f"isoflow {args.command}: warning: {args.input}: no nonzero label: the image is all 0; the table has "
               "no row", file=sys.stderr)
+    say_unused_names(args, given, table)
+    if given is not None and args.command == "surface" and "name" in table:
+        # the label_N files' names, of the labels written alone (a colour table names hundreds)
+        say_segments(args, {k: v for k, v in zip(table["label"].tolist(), table["name"].tolist()) if v}, True)
     return about, conn, table, image, absent
 
 
@@ -281,7 +349,7 @@ def say_declared_labels(args: argparse.Namespace) -> None:
               f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
 
 
-def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None) -> None:
+def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None, given: bool = False) -> None:
     """A note where the input is a 3D Slicer segmentation (``.seg.nrrd``,
     a layer of it read): which label value is which structure, the names
     its header gives the segments, since the ``label_N`` surfaces go by
@@ -296,6 +364,9 @@ def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None) 
         The command's arguments: ``command``, ``input`` and ``quiet``.
     names : dict of int to str, optional
         The image's label names, where its file records them.
+    given : bool, optional
+        Whether ``names`` include those of ``--names FILE``, which take
+        the place of a 3D Slicer segmentation's own.
     """
     from ..mesh.formats.registry import split_dataset
     from ..mesh.formats.slicer import Segment, layer_segments, segment_names
@@ -303,7 +374,7 @@ def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None) 
     path, layer = split_dataset(args.input)
     if args.quiet:
         return
-    if path.name.lower().endswith(".seg.nrrd"):
+    if path.name.lower().endswith(".seg.nrrd") and not given:
         said = layer_segments(path, layer)
         if said:
             print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
@@ -348,10 +419,11 @@ def is_store(path) -> bool:
     return split_dataset(path)[0].suffix.lower() == ".zarr"
 
 
-def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
+def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, given: dict[int, str] | None = None):
     """The table of a zarr store, one layer of blocks at a time (never the
     whole image in memory), with a progress bar; the image as read (its
-    shape, type and placement, no array)."""
+    shape, type and placement, no array); ``given``, the names of
+    ``--names``, over the store's own."""
     from ..digital.label_blocks import label_table_blocks
     from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
@@ -375,7 +447,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool):
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
-            "unit": slabs.unit}, with_names(table, slabs.names)
+            "unit": slabs.unit}, with_names(table, merged_names(args, slabs.names, given))
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)

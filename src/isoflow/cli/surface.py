@@ -22,7 +22,7 @@ from .inputs import (
     thread_count,
     why_empty,
 )
-from .labels import add_labels_option
+from .labels import add_labels_option, refuse_names_without_labels
 
 
 def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
@@ -63,6 +63,7 @@ def surface_of(args: argparse.Namespace) -> int:
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path, output_set
 
+    refuse_names_without_labels(args)
     if args.labels is not None:
         from .labels import cmd_surface_labels
 

@@ -1,0 +1,245 @@
+"""Label names from a side file.
+
+NIfTI and FreeSurfer MGH have no place for label names, so the
+segmentations held in them (TotalSegmentator's, nnU-Net's, FreeSurfer's
+``aseg.mgz``, ITK-SNAP's) keep their names in a file beside the image.
+:func:`read_label_names` reads the common ones, the kind told from the
+content (the suffix only breaks a tie):
+
+* a FreeSurfer colour table (``FreeSurferColorLUT.txt``), as 3D Slicer's
+  colour tables (``.ctbl``, ``.txt``) are too: lines ``index name R G B
+  A``;
+* an ITK-SNAP label description file: lines ``IDX R G B A VIS MSH
+  "LABEL"``;
+* CSV or TSV whose header names a label column (``label``, ``index``,
+  ``value``, ``labelvalue``) and a name column (``name``, ``label_name``),
+  as 3D Slicer's ``.csv`` colour tables do;
+* JSON: an object of label to name (``{"1": "spleen"}``, the
+  ``label_names`` isoflow writes), or an nnU-Net ``dataset.json`` whose
+  ``labels`` map name to label (``{"background": 0, "spleen": 1}``).
+
+``#`` starts a comment line and blank lines are skipped in the text
+kinds. Label 0 is the background and is not named; a label named twice is
+refused naming the line.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import re
+from pathlib import Path
+
+from ...errors import IsoflowError, check_path, line_text
+
+#: what a file of label names is, for the refusal of one that is none
+EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
+            "description (lines 'IDX R G B A VIS MSH \"LABEL\"'), CSV or TSV with a header naming a label column "
+            "(label, index, value) and a name column (name, label_name), or JSON of label to name "
+            "({\"1\": \"spleen\"}, or a dataset.json's \"labels\")")
+
+#: header cells that name the label column, and the name column, of a CSV or TSV (lower case)
+LABEL_COLUMNS = ("label", "index", "value", "labelvalue", "label_value", "id")
+NAME_COLUMNS = ("name", "label_name", "labelname")
+
+#: an ITK-SNAP line: IDX R G B A VIS MSH "LABEL" (A a number from 0 to 1)
+_ITKSNAP = re.compile(r'\s*(-?[0-9]+)\s+[0-9]+\s+[0-9]+\s+[0-9]+\s+[0-9.eE+-]+\s+[0-9]+\s+[0-9]+\s+"(.*)"\s*',
+                      re.ASCII)
+#: a colour table line: index name R G B [A] (FreeSurfer's names have no space; Slicer's may)
+_LUT = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s+[0-9]+\s+[0-9]+\s+[0-9]+(?:\s+[0-9]+)?\s*", re.ASCII)
+#: a label value in a CSV cell or a JSON key
+_INTEGER = re.compile(r"\s*(-?[0-9]+)\s*", re.ASCII)
+
+
+def read_label_names(path: str | os.PathLike) -> dict[int, str]:
+    """What each label is, from a side file of label names: a FreeSurfer
+    or 3D Slicer colour table, an ITK-SNAP label description file, a CSV
+    or TSV table, or JSON (label to name, or an nnU-Net ``dataset.json``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file. Its kind is told from its content, its suffix only
+        where the content fits two (``.json``, ``.csv``, ``.tsv``).
+
+    Returns
+    -------
+    dict of int to str
+        Label value to name, in increasing order of label, label 0 (the
+        background) left out. :func:`isoflow.label_table` and
+        :func:`isoflow.write_labels` take it as ``names=``.
+
+    Raises
+    ------
+    IsoflowError
+        One line naming the file: unreadable, none of these kinds (the
+        line says what was expected), a label named twice (naming the
+        line), no label but the background.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> lut = pathlib.Path(tempfile.mkdtemp()) / "FreeSurferColorLUT.txt"
+    >>> _ = lut.write_text("# index name R G B A\\n0 Unknown 0 0 0 0\\n17 Left-Hippocampus 220 216 20 0\\n")
+    >>> read_label_names(lut)
+    {17: 'Left-Hippocampus'}
+    >>> _ = lut.write_text('{"labels": {"background": 0, "spleen": 1, "kidney_right": 2}}')
+    >>> read_label_names(lut)
+    {1: 'spleen', 2: 'kidney_right'}
+    """
+    check_path(path, "path", "read_label_names")
+    where = str(path)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise IsoflowError(f"{where}: cannot read the label names ({exc.strerror or type(exc).__name__})") from None
+    if b"\0" in data[:1 << 16]:  # a volume given for its names (seg.nii.gz), or any binary file
+        raise IsoflowError(f"{where}: not a file of label names (it holds binary data); {EXPECTED}")
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError:  # an older tool's Latin-1 names: a character a byte, as NRRD names are read
+        text = data.decode("latin-1")
+    return label_names_of(text, where, Path(path).suffix.lower())
+
+
+def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
+    """The label names of a side file's text (:func:`read_label_names`).
+
+    Parameters
+    ----------
+    text : str
+        The file's content.
+    where : str
+        The file, as a refusal names it.
+    suffix : str, optional
+        Its suffix in lower case, which settles JSON against the text
+        kinds and CSV against a colour table.
+
+    Returns
+    -------
+    dict of int to str
+        Label to name, increasing, without label 0.
+
+    Examples
+    --------
+    >>> label_names_of('0 0 0 0 0 0 0 "Clear Label"\\n1 255 0 0 1 1 1 "Liver"\\n', "seg.label")
+    {1: 'Liver'}
+    >>> label_names_of("label,name\\n2,spleen\\n1,liver\\n", "names.csv")
+    {1: 'liver', 2: 'spleen'}
+    """
+    if text.lstrip().startswith(("{", "[")) or suffix == ".json":
+        pairs = _json_pairs(text, where)
+    else:
+        rows = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip()
+                and not line.lstrip().startswith("#")]
+        if not rows:
+            raise IsoflowError(f"{where}: holds no label names (no line but comments); {EXPECTED}")
+        pairs = _text_pairs(rows, where, suffix)
+    found: dict[int, str] = {}
+    first: dict[int, str] = {}
+    for label, name, at in pairs:
+        if label == 0:  # the background (FreeSurfer's Unknown, ITK-SNAP's Clear Label) is no structure
+            continue
+        if label < 0:
+            raise IsoflowError(f"{where}: {at}: label {label}: labels are named from 1 on (0 is the background)")
+        if label in found:
+            raise IsoflowError(f"{where}: {at}: label {label} is named again (first on {first[label]})")
+        name = name.replace("\r", "\\r").replace("\n", "\\n")  # a name is one line, as the image readers keep it
+        if name:
+            found[label], first[label] = name, at
+    if not found:
+        raise IsoflowError(f"{where}: names no label but the background (0)")
+    return dict(sorted(found.items()))
+
+
+def _text_pairs(rows: list[tuple[int, str]], where: str, suffix: str) -> list[tuple[int, str, str]]:
+    """(label, name, where it is) of each data line of a colour table,
+    an ITK-SNAP file or a CSV/TSV table."""
+    number, head = rows[0]
+    delimiter = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
+    cells = [c.strip().lower() for c in next(csv.reader([head], delimiter=delimiter))]
+    name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
+    label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
+    if name_at is not None and label_at is not None:
+        return _table_pairs(rows[1:], where, delimiter, label_at, name_at)
+    if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
+        raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
+                           f"and a name column ({', '.join(NAME_COLUMNS)}) is expected, not {_shown(head)}")
+    for pattern, kind in ((_ITKSNAP, "an ITK-SNAP line 'IDX R G B A VIS MSH \"LABEL\"'"),
+                          (_LUT, "a colour table line 'index name R G B A'")):
+        if pattern.fullmatch(head):
+            pairs = []
+            for n, line in rows:
+                match = pattern.fullmatch(line)
+                if match is None:
+                    raise IsoflowError(f"{where}: line {n}: {kind} is expected, as line {number} is, not "
+                                       f"{_shown(line)}")
+                pairs.append((int(match[1]), match[2].strip(), f"line {n}"))
+            return pairs
+    raise IsoflowError(f"{where}: not a file of label names (line {number} reads {_shown(head)}); {EXPECTED}")
+
+
+def _table_pairs(rows: list[tuple[int, str]], where: str, delimiter: str, label_at: int,
+                 name_at: int) -> list[tuple[int, str, str]]:
+    """(label, name, where it is) of each row of a CSV or TSV table."""
+    pairs = []
+    for n, line in rows:
+        cells = next(csv.reader([line], delimiter=delimiter))
+        if len(cells) <= max(label_at, name_at):
+            raise IsoflowError(f"{where}: line {n}: {len(cells)} cells, the header's label and name columns "
+                               f"need {max(label_at, name_at) + 1}: {_shown(line)}")
+        match = _INTEGER.fullmatch(cells[label_at])
+        if match is None:
+            raise IsoflowError(f"{where}: line {n}: the label {_shown(cells[label_at])} is no integer")
+        pairs.append((int(match[1]), cells[name_at].strip(), f"line {n}"))
+    return pairs
+
+
+def _json_pairs(text: str, where: str) -> list[tuple[int, str, str]]:
+    """(label, name, where it is) of a JSON object of label to name, or
+    of the name to label of an nnU-Net ``dataset.json``'s ``labels``."""
+    try:
+        data = json.loads(text, object_pairs_hook=list)
+    except ValueError as exc:
+        raise IsoflowError(f"{where}: not a file of label names (no JSON: {exc}); {EXPECTED}") from None
+    if not isinstance(data, list) or (data and not isinstance(data[0], tuple)):
+        raise IsoflowError(f"{where}: JSON of label names is an object, not {type(data).__name__}; {EXPECTED}")
+    inner = next((v for k, v in data if k == "labels" and isinstance(v, list) and all(
+        isinstance(p, tuple) for p in v)), None)
+    pairs = data if inner is None else inner
+    seen: dict[str, int] = {}
+    out = []
+    by_label = all(_INTEGER.fullmatch(k) for k, _ in pairs)  # isoflow's label_names, nnU-Net v1's "labels"
+    for key, value in pairs:
+        at = _json_line(text, key, seen.setdefault(key, 0))
+        seen[key] += 1
+        if by_label:
+            if not isinstance(value, str):
+                raise IsoflowError(f"{where}: {at}: the name of label {key.strip()} is {json.dumps(value)}, not a "
+                                   "string")
+            out.append((int(key), value, at))
+            continue
+        # name to label: a dataset.json's "labels"
+        if isinstance(value, list) and all(isinstance(v, int) for v in value):
+            raise IsoflowError(f"{where}: {at}: {json.dumps(key)} is a region of labels {value} (nnU-Net's "
+                               "region-based training), not one label")
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise IsoflowError(f"{where}: {at}: {json.dumps(key)}: {json.dumps(value)} is no label; {EXPECTED}")
+        out.append((value, key, at))
+    return out
+
+
+def _json_line(text: str, key: str, occurrence: int) -> str:
+    """``line N`` of the ``occurrence``-th (from 0) place where ``key`` is
+    a JSON key, for a refusal."""
+    spots = [m.start() for m in re.finditer(re.escape(json.dumps(key)) + r"\s*:", text)]
+    if occurrence >= len(spots):  # written with escapes json.dumps does not use
+        return f"key {json.dumps(key)}"
+    return f"line {text.count(chr(10), 0, spots[occurrence]) + 1}"
+
+
+def _shown(line: str, width: int = 60) -> str:
+    """A line of the file as a refusal quotes it: one line, cut short."""
+    text = line_text(line.strip())
+    return repr(text if len(text) <= width else text[:width - 3] + "...")

@@ -1,0 +1,190 @@
+"""Label names from a side file (issue: the label images most people hold
+are NIfTI or MGH, which keep no names; the names live in a file beside
+them): ``isoflow.read_label_names`` reads a FreeSurfer or 3D Slicer colour
+table, an ITK-SNAP label description file, CSV/TSV and JSON (nnU-Net's
+``dataset.json`` too), each written here by hand in the tool's own layout
+and compared with the names written; ``info --labels --names FILE`` and
+``surface --labels --names FILE`` put them in the table and the GLB's node
+extras; a file that is none of these is one line, exit 2."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+
+import isoflow
+from isoflow.cli import main
+from isoflow.errors import IsoflowError
+
+#: FreeSurferColorLUT.txt's own lines (its header, label 0 and a few structures)
+FREESURFER = """#$Id: FreeSurferColorLUT.txt,v 1.70.2.7 2012/08/27 17:20:08 mreuter Exp $
+
+#No. Label Name:                            R   G   B   A
+
+0   Unknown                                 0   0   0   0
+2   Left-Cerebral-White-Matter              245 245 245 0
+3   Left-Cerebral-Cortex                    205 62  78  0
+
+17  Left-Hippocampus                        220 216 20  0
+53  Right-Hippocampus                       220 216 20  0
+"""
+FREESURFER_NAMES = {2: "Left-Cerebral-White-Matter", 3: "Left-Cerebral-Cortex", 17: "Left-Hippocampus",
+                    53: "Right-Hippocampus"}
+
+#: a 3D Slicer colour table (GenericAnatomyColors.ctbl's layout)
+SLICER = """# Color table file /tmp/GenericAnatomyColors.ctbl
+# 3 values
+0 background 0 0 0 0
+1 tissue 128 174 128 255
+2 bone 241 214 145 255
+"""
+SLICER_NAMES = {1: "tissue", 2: "bone"}
+
+#: ITK-SNAP's label description file as it saves one
+ITKSNAP = """################################################
+# ITK-SnAP Label Description File
+# File format:
+# IDX   -R-  -G-  -B-  -A--  VIS MSH  LABEL
+# Fields:
+#    IDX:   Zero-based index
+#    -R-:   Red color component (0..255)
+#    -G-:   Green color component (0..255)
+#    -B-:   Blue color component (0..255)
+#    -A-:   Label transparency (0.00 .. 1.00)
+#    VIS:   Label visibility (0 or 1)
+#    IDX:   Label mesh visibility (0 or 1)
+#  LABEL:   Label description
+################################################
+    0     0    0    0        0  0  0    "Clear Label"
+    1   255    0    0        1  1  1    "Label 1"
+    2     0  255    0        1  1  1    "Left lung"
+    7     0    0  255     0.75  1  0    "Tumour, core"
+"""
+ITKSNAP_NAMES = {1: "Label 1", 2: "Left lung", 7: "Tumour, core"}
+
+#: nnU-Net v2's dataset.json (TotalSegmentator's models are nnU-Net's)
+DATASET_JSON = json.dumps({"channel_names": {"0": "CT"},
+                           "labels": {"background": 0, "spleen": 1, "kidney_right": 2, "liver": 5},
+                           "numTraining": 10, "file_ending": ".nii.gz"}, indent=4)
+DATASET_NAMES = {1: "spleen", 2: "kidney_right", 5: "liver"}
+
+FILES = {
+    "FreeSurferColorLUT.txt": (FREESURFER, FREESURFER_NAMES),
+    "GenericAnatomyColors.ctbl": (SLICER, SLICER_NAMES),
+    "labels.txt": (ITKSNAP, ITKSNAP_NAMES),
+    "names.csv": ("label,name\n0,background\n1,liver\n3,\"spleen, left\"\n", {1: "liver", 3: "spleen, left"}),
+    "names.tsv": ("index\tname\n4\tkidney\n2\tleft lung\n", {2: "left lung", 4: "kidney"}),
+    "values.csv": ("value,label_name,volume\n1,liver,20\n2,spleen,3\n", {1: "liver", 2: "spleen"}),
+    # 3D Slicer's CSV colour table
+    "slicer.csv": ("LabelValue,Name,Color_R,Color_G,Color_B,Color_A\n1,tissue,128,174,128,255\n",
+                   {1: "tissue"}),
+    "label_names.json": ('{"1": "spleen", "2": "kidney_right"}', {1: "spleen", 2: "kidney_right"}),
+    "dataset.json": (DATASET_JSON, DATASET_NAMES),
+    # nnU-Net v1's dataset.json, label to name
+    "dataset_v1.json": ('{"name": "Task09_Spleen", "labels": {"0": "background", "1": "spleen"}}', {1: "spleen"}),
+}
+
+
+@pytest.mark.parametrize("name", sorted(FILES))
+def test_each_kind_of_side_file_reads_as_the_names_written(tmp_path, name):
+    text, names = FILES[name]
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    assert isoflow.read_label_names(path) == names
+    # the content tells the kind, not the name: a colour table or JSON under another suffix too
+    if not name.endswith((".csv", ".tsv")):
+        other = tmp_path / "names.lut"
+        other.write_text(text, encoding="utf-8")
+        assert isoflow.read_label_names(other) == names
+    # label_table and write_labels take what it gives
+    assert isoflow.label_table(np.array([[0, 1]]), names=isoflow.read_label_names(path))["name"].tolist() == [
+        names.get(1, "")]
+
+
+def test_a_path_given_for_names_names_the_reader(tmp_path):
+    with pytest.raises(IsoflowError, match=r"read_label_names\(path\)"):
+        isoflow.label_table(np.array([[0, 1]]), names=str(tmp_path / "lut.txt"))
+
+
+@pytest.fixture
+def seg(tmp_path):
+    """A NIfTI label image of FreeSurfer's labels 2, 17 and 53 (NIfTI keeps no names)."""
+    labels = np.zeros((10, 8, 6), np.int16)
+    labels[1:4, 1:4, 1:4], labels[5:9, 1:3, 1:5], labels[5:8, 4:7, 2:4] = 2, 17, 53
+    return isoflow.write_labels(labels, tmp_path / "seg.nii.gz", pitch=1.0)
+
+
+def said(capsys, *args):
+    code = main([*map(str, args)])
+    out, err = capsys.readouterr()
+    return code, out, [line for line in err.splitlines() if "numba is compiling" not in line]
+
+
+def test_info_labels_names_each_row_from_the_side_file(tmp_path, capsys, seg):
+    lut = tmp_path / "FreeSurferColorLUT.txt"
+    lut.write_text(FREESURFER)
+    code, out, err = said(capsys, "info", seg, "--labels", "--names", lut, "--json", "--no-surfaces")
+    assert code == 0, err
+    rows = json.loads(out)["labels"]
+    assert [(r["label"], r["name"]) for r in rows] == [(k, FREESURFER_NAMES[k]) for k in (2, 17, 53)]
+    # the LUT's name for label 3, which the image has not, is counted in a note that -q drops
+    assert err == [f"isoflow info: note: {lut}: 1 of its 4 label names is for a label the image does not have "
+                   "(not used)"]
+    code, out, err = said(capsys, "info", seg, "--labels", "--names", lut, "--json", "--no-surfaces", "-q")
+    assert code == 0 and err == []
+
+
+def test_names_given_replace_the_files_own_with_a_note(tmp_path, capsys):
+    labels = np.zeros((6, 5, 4), np.uint8)
+    labels[:2], labels[3:] = 1, 2
+    path = isoflow.write_labels(labels, tmp_path / "seg.npz", names={1: "liver", 2: "spleen"})
+    names = tmp_path / "names.csv"
+    names.write_text("label,name\n2,Spleen\n")
+    code, out, err = said(capsys, "info", path, "--labels", "--names", names, "--json", "--no-surfaces")
+    assert code == 0
+    assert [r["name"] for r in json.loads(out)["labels"]] == ["liver", "Spleen"]
+    assert len(err) == 1 and "replace those the file records for 1 label (label 2 'spleen' as 'Spleen')" in err[0]
+
+
+def test_surface_labels_glb_records_the_side_files_names_in_node_extras(tmp_path, capsys, seg):
+    lut = tmp_path / "labels.txt"
+    lut.write_text(ITKSNAP.replace("    1   255", "   17   255").replace("    2     0", "   53     0")
+                   .replace("    7     0", "    2     0"))
+    out = tmp_path / "seg.glb"
+    code, _, err = said(capsys, "surface", seg, "--labels", "-o", out, "--names", lut)
+    assert code == 0, err
+    data = out.read_bytes()
+    # the GLB's JSON chunk, as the glTF 2.0 specification lays it out: header, chunk length, "JSON"
+    length, kind = struct.unpack_from("<I4s", data, 12)
+    assert kind == b"JSON"
+    nodes = json.loads(data[20:20 + length])["nodes"]
+    assert [(n["name"], n["extras"]["name"]) for n in nodes] == [
+        ("label_2", "Tumour, core"), ("label_17", "Label 1"), ("label_53", "Left lung")]
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("just some words\n", "not a file of label names (line 1 reads 'just some words'); expected a FreeSurfer"),
+    ("0 Unknown 0 0 0 0\n17 Left-Hippocampus 220 216 20 0\n17 Right 1 2 3 0\n",
+     "line 3: label 17 is named again (first on line 2)"),
+    ('{"1": "spleen",\n "1": "liver"}', "line 2: label 1 is named again (first on line 1)"),
+    ('{"labels": {"background": 0, "tumour": [1, 2]}}', "is a region of labels [1, 2]"),
+    ("0 Unknown 0 0 0 0\n", "names no label but the background (0)"),
+    ("a,b\n1,liver\n", "a header naming a label column"),
+    ("", "holds no label names"),
+])
+def test_a_file_that_is_no_list_of_names_is_one_line_exit_2(tmp_path, capsys, seg, text, words):
+    bad = tmp_path / ("bad.csv" if text.startswith("a,b") else "bad.txt")
+    bad.write_text(text)
+    code, out, err = said(capsys, "info", seg, "--labels", "--names", bad)
+    assert code == 2 and out == "" and len(err) == 1, err
+    assert err[0].startswith(f"isoflow info: error: --names {bad}: ") and words in err[0], err[0]
+    with pytest.raises(IsoflowError, match=r"^" + str(bad).replace("\\", r"\\")):
+        isoflow.read_label_names(bad)
+
+
+def test_a_volume_given_for_its_names_and_names_without_labels_are_refused(tmp_path, capsys, seg):
+    code, _, err = said(capsys, "surface", seg, "--labels", "-o", tmp_path / "s.glb", "--names", seg)
+    assert code == 2 and len(err) == 1 and "it holds binary data" in err[0] and not (tmp_path / "s.glb").exists()
+    code, _, err = said(capsys, "info", seg, "--names", seg)
+    assert code == 2 and len(err) == 1 and "--names names the labels of --labels" in err[0]
