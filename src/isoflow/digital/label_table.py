@@ -187,15 +187,11 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     """
     if names is None:
         return None
-<<<<<<< HEAD
     if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)) \
             or (isinstance(names, np.ndarray) and names.ndim != 1):
-=======
-    if isinstance(names, (str, bytes)) or not isinstance(names, (Mapping, Sequence, np.ndarray)):
         # a side file's path given for its names (lut.txt): the reader that takes it is named
         read = ("; a file of names (a colour table, ITK-SNAP's labels, CSV, JSON) is read by "
                 "isoflow.read_label_names(path)") if isinstance(names, (str, os.PathLike)) else ""
->>>>>>> lut
         raise IsoflowError(f"{where}: names are a mapping of label to name or a sequence of names (label i + 1 for "
                            f"the i-th), not {given_text(names)}{read}")
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
