@@ -8,6 +8,7 @@ and compared with the names written; ``info --labels --names FILE`` and
 extras; a file that is none of these is one line, exit 2."""
 
 import json
+import re
 import struct
 
 import numpy as np
@@ -188,3 +189,20 @@ def test_a_volume_given_for_its_names_and_names_without_labels_are_refused(tmp_p
     assert code == 2 and len(err) == 1 and "it holds binary data" in err[0] and not (tmp_path / "s.glb").exists()
     code, _, err = said(capsys, "info", seg, "--names", seg)
     assert code == 2 and len(err) == 1 and "--names names the labels of --labels" in err[0]
+
+
+def test_a_plain_list_of_index_and_name_reads_as_written(tmp_path):
+    names = tmp_path / "labels.txt"
+    names.write_text("# label name\n1 liver\n2\tleft kidney  \n\n0 background\n")
+    assert isoflow.read_label_names(names) == {1: "liver", 2: "left kidney"}
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("1 liver\n2 spleen 255 0 0 0\n", "line 2: a line 'index name' is expected, as line 1 is, not one with colour"),
+    ("1 liver\nspleen\n", "line 2: a line 'index name' is expected, as line 1 is, not 'spleen'"),
+])
+def test_a_plain_list_with_a_line_of_another_kind_is_refused_naming_it(tmp_path, text, words):
+    bad = tmp_path / "labels.txt"
+    bad.write_text(text)
+    with pytest.raises(IsoflowError, match=re.escape(words)):
+        isoflow.read_label_names(bad)

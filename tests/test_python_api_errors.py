@@ -1232,3 +1232,20 @@ def test_label_table_of_scipy_s_labels_and_count_says_to_pass_the_labels():
     with pytest.raises(IsoflowError, match=r"^label_table: a \(labels, count\) pair, as scipy\.ndimage\.label gives"):
         isoflow.label_table((labels, count))
     assert isoflow.label_table(labels)["label"].tolist() == list(range(1, count + 1))
+
+
+def test_voxelize_meshes_of_one_pair_not_in_a_list_names_the_fix():
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float64)
+    faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    with pytest.raises(IsoflowError, match=re.escape("pass [(vertices, faces)]")):
+        isoflow.voxelize_meshes((vertices, faces), resolution=4)
+    with pytest.raises(IsoflowError, match=re.escape("pass [(vertices, faces)]")):
+        isoflow.voxelize_meshes((vertices.tolist(), faces.tolist()), resolution=4)
+
+
+def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():
+    report = isoflow.analyze(np.ones((3, 3, 3), bool))
+    with pytest.raises(IsoflowError) as info:
+        isoflow.label_table(report)
+    text = str(info.value)
+    assert "Report" in text and "one object" in text and "label image" in text and "1D" not in text

@@ -51,6 +51,7 @@ from .connectivity import check_connectivity, resolve_connectivity
 from .float64 import unheld_columns
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
+from .report import Report
 from .surface import face_slots, pinch_lut, slot_octants
 from .units import unit_given
 
@@ -151,13 +152,14 @@ class LabelImage:
             object.__setattr__(self, "spacing", place.spacing)
             object.__setattr__(self, "origin", place.origin)
         object.__setattr__(self, "unit", unit_given(self.unit, "LabelImage"))
-        object.__setattr__(self, "names", label_names(self.names, "LabelImage"))
+        object.__setattr__(self, "names", label_names(self.names, "LabelImage") or None)
 
 
 def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> dict[int, str] | None:
     """The names of labels as one mapping, label value to name, checked:
-    a sequence names labels 1, 2, ... in order; None (or none given) where
-    there are none.
+    a sequence names labels 1, 2, ... in order; None where ``names`` is
+    None, and an empty mapping where an empty mapping or sequence is given
+    (no names: an image's own are not taken in their place).
 
     Parameters
     ----------
@@ -170,7 +172,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     Returns
     -------
     dict of int to str, or None
-        In increasing order of label.
+        In increasing order of label; empty for no names given as such.
 
     Raises
     ------
@@ -183,7 +185,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     >>> label_names(["liver", "spleen"], "seg.nrrd")
     {1: 'liver', 2: 'spleen'}
     >>> label_names({np.uint8(7): "tumour"}, "seg.nrrd"), label_names({}, "seg.nrrd")
-    ({7: 'tumour'}, None)
+    ({7: 'tumour'}, {})
     """
     if names is None:
         return None
@@ -204,7 +206,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
             raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
                                "one line")
         found[int(label)] = str(name)  # a np.str_ (of an array of names) as the plain string
-    return dict(sorted(found.items())) or None
+    return dict(sorted(found.items()))
 
 
 def with_names(table: dict[str, np.ndarray], names: Mapping[int, str] | None) -> dict[str, np.ndarray]:
@@ -278,9 +280,10 @@ def label_table(
         else every CPU).
     names : mapping of int to str, or sequence of str, optional
         What each label is (label value to name, or the names of labels
-        1, 2, ... in order), given as the ``name`` column; default: a
-        :class:`LabelImage`'s ``names``. Without names the table has no
-        ``name`` column.
+        1, 2, ... in order), given as the ``name`` column; default (None):
+        a :class:`LabelImage`'s ``names``. An empty mapping means no names,
+        a LabelImage's too. Without names the table has no ``name``
+        column.
 
     Returns
     -------
@@ -374,6 +377,10 @@ def checked_image(image) -> np.ndarray:
     """The label image as an array of :func:`label_dtype` (see
     :func:`as_labels`): 3D or 2D."""
     refuse_object(image, "label_table", reader="isoflow.read_labels")
+    if isinstance(image, Report):  # a Mapping, which NumPy would make a 1D array of its keys
+        raise IsoflowError("label_table: a Report (isoflow.analyze's result), which describes one object, not a label "
+                           "image; label_table takes the label image itself (an integer array or isoflow.read_labels's "
+                           "LabelImage)")
     if isinstance(image, tuple) and len(image) == 2 and isinstance(image[0], np.ndarray) \
             and isinstance(image[1], (int, np.integer)) and not isinstance(image[1], (bool, np.bool_)):
         # scipy.ndimage.label's answer, which as_array would call nested lists of uneven lengths

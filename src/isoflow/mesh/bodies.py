@@ -95,6 +95,9 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     empty list or a bad mesh."""
     if isinstance(meshes, (str, os.PathLike)) or hasattr(meshes, "faces") or is_scene(meshes):
         meshes = [meshes]  # one file or one mesh given alone
+    if is_bare_pair(meshes):  # read as two meshes its vertices and its faces would be refused as neither
+        raise IsoflowError("voxelize: meshes is one (vertices, faces) pair, not a list of meshes: "
+                           "pass [(vertices, faces)]")
     bodies: list[Body] = []
     for n, mesh in enumerate(meshes, 1):
         if isinstance(mesh, Body):  # read already
@@ -110,6 +113,56 @@ def mesh_bodies(meshes, split: bool = False) -> list[Body]:
     if not bodies:
         raise IsoflowError("voxelize: no meshes given")
     return bodies
+
+
+def is_rows(values: object) -> bool:
+    """Whether ``values`` is a table of numbers (a 2D numeric array, or a
+    non-empty list of lists of numbers), as a mesh's vertices or faces are
+    and no mesh is.
+
+    Parameters
+    ----------
+    values : object
+        One item of what was given as the list of meshes.
+
+    Returns
+    -------
+    bool
+        True for a table of numbers.
+
+    Examples
+    --------
+    >>> is_rows(np.zeros((3, 3))), is_rows([[0, 1, 2]]), is_rows("part.stl")
+    (True, True, False)
+    """
+    if isinstance(values, np.ndarray):
+        return values.ndim == 2 and values.dtype.kind in "iuf"
+    return (isinstance(values, (list, tuple)) and len(values) > 0
+            and all(isinstance(row, (list, tuple)) and all(isinstance(x, (int, float, np.number)) for x in row)
+                    for row in values))
+
+
+def is_bare_pair(meshes: object) -> bool:
+    """Whether ``meshes`` is a single ``(vertices, faces)`` pair rather than
+    a list of meshes.
+
+    Parameters
+    ----------
+    meshes : object
+        What was given as the list of meshes.
+
+    Returns
+    -------
+    bool
+        True where both of its two items are tables of numbers.
+
+    Examples
+    --------
+    >>> v, f = [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]]
+    >>> is_bare_pair((v, f)), is_bare_pair([(v, f)])
+    (True, False)
+    """
+    return isinstance(meshes, (tuple, list)) and len(meshes) == 2 and all(is_rows(m) for m in meshes)
 
 
 def file_bodies(path, split: bool) -> list[Body]:

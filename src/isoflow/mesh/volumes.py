@@ -1076,7 +1076,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         in a warning.
     names : mapping of int to str, or sequence of str, optional
         What each label is: label value to name, or the names of labels 1,
-        2, ... in order (if None: a LabelImage's ``names``). Written where
+        2, ... in order (if None: a LabelImage's ``names``; an empty
+        mapping means no names, a LabelImage's too). Written where
         the format has a place for them: a NRRD as 3D Slicer's segments
         (``Segment{k}_Name``, ``Segment{k}_LabelValue``, ...), OME-Zarr as
         the ``image-label`` ``properties``, HDF5 as the dataset's
@@ -1168,7 +1169,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         # a format of few labels stores them in its own type (ImageJ TIFF: 8 or
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
-    written = write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim, names=names), path,
+    written = write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim, names=names or None), path,
                            force, unit=unit)
     if names and not keeps_names(file):
         # said once the file is there, as what a format drops of the placement is

@@ -11,6 +11,8 @@ content (the suffix only breaks a tie):
   A``;
 * an ITK-SNAP label description file: lines ``IDX R G B A VIS MSH
   "LABEL"``;
+* a plain list of lines ``index name`` (``1 liver``, ``2 left kidney``:
+  the name is the rest of the line), where no line has colour columns;
 * CSV or TSV whose header names a label column (``label``, ``index``,
   ``value``, ``labelvalue``) and a name column (``name``, ``label_name``),
   as 3D Slicer's ``.csv`` colour tables do;
@@ -35,8 +37,8 @@ from ...errors import IsoflowError, check_path, line_text
 
 #: what a file of label names is, for the refusal of one that is none
 EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
-            "description (lines 'IDX R G B A VIS MSH \"LABEL\"'), CSV or TSV with a header naming a label column "
-            "(label, index, value) and a name column (name, label_name), or JSON of label to name "
+            "description (lines 'IDX R G B A VIS MSH \"LABEL\"'), lines 'index name', CSV or TSV with a header "
+            "naming a label column (label, index, value) and a name column (name, label_name), or JSON of label to name "
             "({\"1\": \"spleen\"}, or a dataset.json's \"labels\")")
 
 #: header cells that name the label column, and the name column, of a CSV or TSV (lower case)
@@ -48,14 +50,17 @@ _ITKSNAP = re.compile(r'\s*(-?[0-9]+)\s+[0-9]+\s+[0-9]+\s+[0-9]+\s+[0-9.eE+-]+\s
                       re.ASCII)
 #: a colour table line: index name R G B [A] (FreeSurfer's names have no space; Slicer's may)
 _LUT = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s+[0-9]+\s+[0-9]+\s+[0-9]+(?:\s+[0-9]+)?\s*", re.ASCII)
+#: a line of a plain list: index name (the name the rest of the line)
+_PAIR = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s*", re.ASCII)
 #: a label value in a CSV cell or a JSON key
 _INTEGER = re.compile(r"\s*(-?[0-9]+)\s*", re.ASCII)
 
 
 def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     """What each label is, from a side file of label names: a FreeSurfer
-    or 3D Slicer colour table, an ITK-SNAP label description file, a CSV
-    or TSV table, or JSON (label to name, or an nnU-Net ``dataset.json``).
+    or 3D Slicer colour table, an ITK-SNAP label description file, a plain
+    list of lines ``index name``, a CSV or TSV table, or JSON (label to
+    name, or an nnU-Net ``dataset.json``).
 
     Parameters
     ----------
@@ -87,6 +92,9 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     >>> _ = lut.write_text('{"labels": {"background": 0, "spleen": 1, "kidney_right": 2}}')
     >>> read_label_names(lut)
     {1: 'spleen', 2: 'kidney_right'}
+    >>> _ = lut.write_text("1 liver\\n2 left kidney\\n")
+    >>> read_label_names(lut)
+    {1: 'liver', 2: 'left kidney'}
     """
     check_path(path, "path", "read_label_names")
     where = str(path)
@@ -155,7 +163,8 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
 
 def _text_pairs(rows: list[tuple[int, str]], where: str, suffix: str) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each data line of a colour table,
-    an ITK-SNAP file or a CSV/TSV table."""
+    an ITK-SNAP file, a plain list of lines ``index name`` or a CSV/TSV
+    table."""
     number, head = rows[0]
     delimiter = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
     cells = [c.strip().lower() for c in next(csv.reader([head], delimiter=delimiter))]
@@ -177,7 +186,27 @@ def _text_pairs(rows: list[tuple[int, str]], where: str, suffix: str) -> list[tu
                                        f"{_shown(line)}")
                 pairs.append((int(match[1]), match[2].strip(), f"line {n}"))
             return pairs
+    if _PAIR.fullmatch(head):
+        return _plain_pairs(rows, where)
     raise IsoflowError(f"{where}: not a file of label names (line {number} reads {_shown(head)}); {EXPECTED}")
+
+
+def _plain_pairs(rows: list[tuple[int, str]], where: str) -> list[tuple[int, str, str]]:
+    """(label, name, where it is) of each line of a plain list of lines
+    ``index name``, the first of which is one; a line with colour columns
+    is refused, as it would make the colours part of a name."""
+    number = rows[0][0]
+    pairs = []
+    for n, line in rows:
+        if _ITKSNAP.fullmatch(line) or _LUT.fullmatch(line):
+            raise IsoflowError(f"{where}: line {n}: a line 'index name' is expected, as line {number} is, not one "
+                               f"with colour columns: {_shown(line)}; a colour table gives each line its colour")
+        match = _PAIR.fullmatch(line)
+        if match is None:
+            raise IsoflowError(f"{where}: line {n}: a line 'index name' is expected, as line {number} is, not "
+                               f"{_shown(line)}")
+        pairs.append((int(match[1]), match[2], f"line {n}"))
+    return pairs
 
 
 def _table_pairs(rows: list[tuple[int, str]], where: str, delimiter: str, label_at: int,

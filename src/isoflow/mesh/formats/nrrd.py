@@ -26,9 +26,10 @@ sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
 float64 in the text header, so pitch and origin are kept exactly; and,
 where a length unit is given, ``space units`` (one per axis, in ASCII:
 ``um`` for \u00b5m, as ImageJ and ITK write it). A label image with names
-is written as a 3D Slicer segmentation of one layer, a segment per name
+is written as a 3D Slicer segmentation of one layer, a segment per label
+in the image, unnamed ones ``label_N``
 (:func:`~isoflow.mesh.formats.slicer.segment_fields`); reading it gives
-them back (``RawVolume.names``).
+the names given back (``RawVolume.names``).
 """
 
 from __future__ import annotations
@@ -51,7 +52,7 @@ from .registry import (
     shared_unit,
     stored_values,
 )
-from .slicer import NamedHeader, layer_names, layer_of, read_header, remember_segments, segment_fields
+from .slicer import NamedHeader, layer_names, layer_of, present_labels, read_header, remember_segments, segment_fields
 
 
 def _check_data_file(header: dict, path: Path) -> None:
@@ -187,7 +188,7 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     names = getattr(obj, "names", None)  # a label image's: Slicer's segments
     texts = {}
     if names:
-        fields = segment_fields(names, obj.volume.shape)
+        fields = segment_fields(names, obj.volume.shape, present_labels(obj.volume))
         # pynrrd writes a header as ASCII: it is given a placeholder for each name, which
         # NamedHeader writes as Slicer does, UTF-8
         texts = {k: v for k, v in fields.items() if k.endswith("_Name")}
