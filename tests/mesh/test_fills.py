@@ -43,7 +43,7 @@ CLOSED = sorted({e["mesh"] for e in DIGESTS["volumes"]})
 
 
 # ---------------------------------------------------------------------------
-# an exact reference: Akenine-Moeller's 13 separating axes, in fractions
+# an exact reference: Akenine-Moeller's 13 separating axes, in integers
 # ---------------------------------------------------------------------------
 
 def _overlap(tri, lo, hi) -> bool:
@@ -53,25 +53,36 @@ def _overlap(tri, lo, hi) -> bool:
         return [p[1] * q[2] - p[2] * q[1], p[2] * q[0] - p[0] * q[2], p[0] * q[1] - p[1] * q[0]]
 
     axes = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]
-    c = [(lo[a] + hi[a]) / 2 for a in range(3)]
-    h = [(hi[a] - lo[a]) / 2 for a in range(3)]
+    # the box's centre and half sides, doubled: integers stay integers
+    c2 = [lo[a] + hi[a] for a in range(3)]
+    h2 = [hi[a] - lo[a] for a in range(3)]
     for L in axes + [cross(e[0], e[1])] + [cross(ek, ax) for ek in e for ax in axes]:
         if not any(L):
             continue
-        t = [sum(L[a] * p[a] for a in range(3)) for p in tri]
-        r = sum(abs(L[a]) * h[a] for a in range(3))
-        m = sum(L[a] * c[a] for a in range(3))
-        if max(t) < m - r or m + r < min(t):
+        t2 = [2 * sum(L[a] * p[a] for a in range(3)) for p in tri]
+        r2 = sum(abs(L[a]) * h2[a] for a in range(3))
+        m2 = sum(L[a] * c2[a] for a in range(3))
+        if max(t2) < m2 - r2 or m2 + r2 < min(t2):
             return False
     return True
 
 
 def shell_reference(T, planes) -> np.ndarray:
-    """Every voxel whose closed cube meets a closed triangle, exactly."""
-    P = [[F(float(x)) for x in p] for p in planes]
+    """Every voxel whose closed cube meets a closed triangle, exactly: every
+    float is a dyadic rational, so all of them times their largest
+    denominator (a power of two) are integers, whose arithmetic is exact
+    and much quicker than ``Fraction``'s."""
+    T = np.asarray(T, dtype=float)
+    scale = max(F(float(x)).denominator for x in [*np.concatenate([np.ravel(p) for p in planes]), *T.ravel()])
+
+    def exact(x) -> int:
+        n, d = float(x).as_integer_ratio()
+        return n * (scale // d)
+
+    P = [[exact(x) for x in p] for p in planes]
     out = np.zeros(tuple(len(p) - 1 for p in planes), dtype=bool)
-    for tri in np.asarray(T, dtype=float):
-        tr = [[F(float(x)) for x in p] for p in tri]
+    for tri in T:
+        tr = [[exact(x) for x in p] for p in tri]
         rng = []
         for a in range(3):
             lo, hi = min(p[a] for p in tr), max(p[a] for p in tr)
