@@ -34,7 +34,7 @@ FREESURFER_NAMES = {2: "Left-Cerebral-White-Matter", 3: "Left-Cerebral-Cortex", 
                     53: "Right-Hippocampus"}
 
 #: a 3D Slicer colour table (GenericAnatomyColors.ctbl's layout)
-SLICER = """# Color table file /tmp/GenericAnatomyColors.ctbl
+SLICER = """# Color table file C:/Slicer/GenericAnatomyColors.ctbl
 # 3 values
 0 background 0 0 0 0
 1 tissue 128 174 128 255

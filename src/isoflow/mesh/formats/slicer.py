@@ -628,9 +628,20 @@ def present_labels(volume: np.ndarray) -> list[int]:
     flat = np.asarray(volume).reshape(-1)
     if flat.size == 0:
         return []
-    if flat.dtype.kind in "bu" and flat.dtype.itemsize <= 4 and int(flat.max()) < 1 << 24:
-        # counting is a pass where sorting (np.unique) is several
-        found = np.flatnonzero(np.bincount(flat))
-    else:
-        found = np.unique(flat)
-    return [int(v) for v in found if v != 0]
+    # a slab of voxels at a time: np.bincount reads its input as 8-byte
+    # integers, np.unique sorts a copy, each of the whole image at once
+    # would be several times the image beside it (the write's budget)
+    held: set[int] = set()
+    for start in range(0, flat.size, PRESENT_BLOCK):
+        part = flat[start:start + PRESENT_BLOCK]
+        if part.dtype.kind in "bu" and part.dtype.itemsize <= 2:
+            found = np.flatnonzero(np.bincount(part))  # counting is a pass where sorting is several
+        else:
+            found = np.unique(part)
+        held.update(found.tolist())
+    held.discard(0)
+    return sorted(int(v) for v in held)
+
+
+#: voxels :func:`present_labels` looks at at a time
+PRESENT_BLOCK = 1 << 16
