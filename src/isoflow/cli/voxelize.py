@@ -107,7 +107,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
 
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
-    # and the format's labels and names (each label's mesh), before the voxels
+    # and the labels the format keeps, before the voxels
     check_label_output(args.output, len(bodies), args.force)
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),

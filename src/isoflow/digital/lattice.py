@@ -496,15 +496,8 @@ def _pitch(value, ndim: int):
     are all equal becomes one number, so that isotropic stays a scalar."""
     _unmasked(value, "pitch")
     arr = as_array(value, "'pitch'")  # nested lists of uneven lengths named, not NumPy's ValueError
-    # pitch=True is a slip, not a voxel size of 1, refused here in a voxel
-    # size's words (as _field refuses a bool origin or offset); a bool among
-    # floats, (True, 2.0, 1.0), becomes 1.0 in asarray, so the elements are
-    # looked at as given
-    given = np.asarray(value, dtype=object) if arr.size <= 8 else arr
-    if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in given.flat):
-        items = [v.item() if isinstance(v, np.generic) else v for v in given.flat]
-        shown = f"an array of shape {arr.shape}" if given is arr else repr(items[0] if arr.ndim == 0 else items)
-        raise IsoflowError(f"'pitch' must be a number (one, or one per axis), not True or False, got {shown}")
+    # in a voxel size's words, before _field's
+    _refuse_bools(value, arr, "pitch", "a number (one, or one per axis)")
     if arr.dtype.kind in "iuf" and not np.isfinite(arr).all():
         # named as what a voxel size must be: _field's "3 numbers, one per axis" reads as a count that is wrong
         raise IsoflowError(f"'pitch' must be finite and positive (one number, or one per axis), got {number_text(arr)}")
@@ -521,6 +514,26 @@ def _pitch(value, ndim: int):
     pitch = pitch.copy()
     pitch.flags.writeable = False
     return pitch
+
+
+def _refuse_bools(value, arr: np.ndarray, name: str, want: str) -> None:
+    """Refuse True or False as a field's value or among its elements
+    (``arr``: ``value`` as an array): a slip, not the number 1 or 0. A bool
+    among numbers, ``(True, 0, 0)``, becomes 1 in ``asarray``, so the
+    elements of a small value are looked at as given.
+
+    Examples
+    --------
+    >>> _refuse_bools((True, 2.0, 1.0), np.asarray((True, 2.0, 1.0)), "pitch", "numbers")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: 'pitch' must be numbers, not True or False, got [True, 2.0, 1.0]
+    """
+    held = np.asarray(value, dtype=object) if arr.size <= 8 else arr
+    if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in held.flat):
+        items = [v.item() if isinstance(v, np.generic) else v for v in held.flat]
+        what = f"an array of shape {arr.shape}" if held is arr else repr(items[0] if arr.ndim == 0 else items)
+        raise IsoflowError(f"'{name}' must be {want}, not True or False, got {what}")
 
 
 def _unmasked(value, name: str) -> None:
@@ -563,13 +576,7 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
                     f"{name}=({', '.join([shown()] * length)})")
         return IsoflowError(f"'{name}' must be {want}, got {shown()}{hint}")
 
-    # True or False is a slip, not the number 1 or 0 (as pitch=True and parity=True are refused);
-    # a bool among numbers, (True, 0, 0), becomes 1 in asarray, so the elements are looked at as given
-    held = np.asarray(value, dtype=object) if arr.size <= 8 else arr
-    if arr.dtype.kind == "b" or any(isinstance(v, (bool, np.bool_)) for v in held.flat):
-        items = [v.item() if isinstance(v, np.generic) else v for v in held.flat]
-        what = f"an array of shape {arr.shape}" if held is arr else repr(items[0] if arr.ndim == 0 else items)
-        raise IsoflowError(f"'{name}' must be {'integers' if integral else 'numbers'}, not True or False, got {what}")
+    _refuse_bools(value, arr, name, "integers" if integral else "numbers")
     if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
         # numbers held as Python objects (a list of ints and floats through
         # np.array(..., dtype=object), a pandas column): numbers all the same

@@ -214,13 +214,14 @@ def solid_bodies(path: Path) -> list[Body] | None:
     [':bolt', ':2', ':bolt_1']
     """
     from .readers import stl_solids
+    from .sniff import sniff_mesh_format
 
     if not path.name.lower().endswith(STL_SUFFIXES):
         return None
     try:
         with open(path, "rb") as fh:
             head = fh.read(84)
-            if len(head) == 84 and path.stat().st_size == 84 + 50 * int.from_bytes(head[80:], "little"):
+            if sniff_mesh_format(head, path.stat().st_size) == "stl-binary":
                 return None  # a binary STL (no solid names), not read twice
             data = head + fh.read()
     except OSError:

@@ -1249,9 +1249,8 @@ def shape_notes(w: dict, kind: VerdictKind, fill: Fill = "winding", contacts: di
         return [Note("voxel_contacts", contacts)]
     mesh = w["mesh"]
     notes = []
-    # a component no turning of its faces makes consistent: said where its edges are (a report read back
-    # from JSON written before the count was kept has none)
-    odd = {"non_orientable": mesh["non_orientable"]} if mesh.get("non_orientable") else {}
+    # components no turning of their faces makes consistent: said in the note on their edges
+    odd = {"non_orientable": mesh["non_orientable"]} if mesh["non_orientable"] else {}
     if w["double_sided"]:
         notes.append(Note("double_sided", w["double_sided"]))
     if mesh["boundary_edges"]:

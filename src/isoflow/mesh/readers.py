@@ -78,14 +78,24 @@ def read_stl(data: bytes) -> Mesh | None:
     whenever the size says so, as trimesh does) or an ASCII STL of one solid
     (its "endsolid" line may be missing after a whole last facet): three
     corners per facet, none shared."""
+    n = _binary_facets(data)
+    if n is not None:
+        if n == 0:
+            return None
+        rec = np.frombuffer(data, _STL_RECORD, n, 84)
+        return _soup(rec["corners"].reshape(-1, 3).astype(np.float64))
+    return _read_stl_ascii(data)
+
+
+def _binary_facets(data: bytes) -> int | None:
+    """The facets of a binary STL, where the file's size is its header,
+    count and 50-byte records (as trimesh tells a binary STL); None for any
+    other file."""
     if len(data) >= 84:
         n = int(np.frombuffer(data, "<u4", 1, 80)[0])
         if len(data) == 84 + 50 * n:
-            if n == 0:
-                return None
-            rec = np.frombuffer(data, _STL_RECORD, n, 84)
-            return _soup(rec["corners"].reshape(-1, 3).astype(np.float64))
-    return _read_stl_ascii(data)
+            return n
+    return None
 
 
 #: a ``solid NAME`` or ``endsolid NAME`` line of an ASCII STL: its keyword and the rest of the line
@@ -118,7 +128,7 @@ def stl_solids(data: bytes) -> list[tuple[str, Mesh]] | None:
     >>> [(name, len(f)) for name, (v, f) in solids]
     [('lid', 1), ('', 2)]
     """
-    if len(data) >= 84 and len(data) == 84 + 50 * int(np.frombuffer(data, "<u4", 1, 80)[0]):
+    if _binary_facets(data) is not None:
         return None  # binary, as read_stl reads it: a binary STL has no solid names
     lines = list(_SOLID_LINE.finditer(data))
     if not lines or [bool(m[1]) for m in lines] != [False, True] * ((len(lines) + 1) // 2):

@@ -34,6 +34,7 @@ import re
 from pathlib import Path
 
 from ...errors import IsoflowError, check_path, line_text
+from .registry import one_line_name
 
 #: what a file of label names is, for the refusal of one that is none
 EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
@@ -153,7 +154,7 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
             raise IsoflowError(f"{where}: {at}: label {label}: labels are named from 1 on (0 is the background)")
         if label in found:
             raise IsoflowError(f"{where}: {at}: label {label} is named again (first on {first[label]})")
-        name = name.replace("\r", "\\r").replace("\n", "\\n")  # a name is one line, as the image readers keep it
+        name = one_line_name(name)  # a name is one line, as the image readers keep it
         if name:
             found[label], first[label] = name, at
     if not found:
