@@ -801,28 +801,61 @@ def test_a_terminal_of_columns_and_no_rows_sees_the_bar(tmp_path):
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
-def test_a_signal_during_a_stores_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("when", ["check_streamed", "never_written"])
+def test_a_signal_during_a_stores_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch, when):
     """Ctrl-C while a store's surface, written block by block, is read back
-    in chunks: exit 130 and one line saying the file is there and only its
-    check was cut short, as for a volume in memory (it said only
-    "interrupted"); the file is the whole surface, as trimesh reads it."""
+    in chunks, or once it is in place before that (while the store is
+    looked over for chunks never written): exit 130 and one line saying
+    the file is there and only its check was cut short, as for a volume
+    in memory (it said only "interrupted"); the file is the whole surface,
+    as trimesh reads it."""
     import trimesh
 
     zarr = pytest.importorskip("zarr")
     from isoflow.mesh import streamed_readback
+    from isoflow.scale import chunks
 
     v = np.pad(np.ones((3, 4, 5), bool), 1)
     zarr.create_array(store=str(tmp_path / "v.zarr"), shape=v.shape, chunks=(2, 3, 4), dtype=bool)[...] = v
-    check = streamed_readback.check_streamed
+    module = streamed_readback if when == "check_streamed" else chunks
+    work = getattr(module, when)
 
     def interrupted(*args, **kw):
         os.kill(os.getpid(), signal.SIGINT)
-        return check(*args, **kw)
+        return work(*args, **kw)
 
-    monkeypatch.setattr(streamed_readback, "check_streamed", interrupted)
+    monkeypatch.setattr(module, when, interrupted)
     out = tmp_path / "s.ply"
     assert main(["surface", str(tmp_path / "v.zarr"), "-o", str(out), "-q"]) == 130
     assert capsys.readouterr().err.strip().splitlines() == [
         f"isoflow: interrupted: {out} is written, not read back (--no-check skips the read-back)"]
     mesh = trimesh.load(out, process=False)
     assert mesh.is_watertight and mesh.volume == pytest.approx(60)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.parametrize("check", [True, False])
+def test_a_signal_between_the_write_and_the_read_back_says_the_file_is_written(tmp_path, capsys, monkeypatch, check):
+    """Ctrl-C after the surface is renamed into place but before its
+    read-back begins (while its closed surfaces are counted): the file is
+    whole, so the last line says it is written (it said only
+    "interrupted"), and names --no-check only where the check was asked."""
+    import trimesh
+
+    from isoflow.digital.surface import QuadMesh
+
+    np.save(tmp_path / "v.npy", np.pad(np.ones((3, 3, 3), bool), 1))
+    components = QuadMesh.components
+
+    def interrupted(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        return components(self)
+
+    monkeypatch.setattr(QuadMesh, "components", interrupted)
+    out = tmp_path / "s.ply"
+    assert main(["surface", str(tmp_path / "v.npy"), "-o", str(out), "-q", *([] if check else ["--no-check"])]) == 130
+    hint = " (--no-check skips the read-back)" if check else ""
+    assert capsys.readouterr().err.strip().splitlines() == [f"isoflow: interrupted: {out} is written, not read back{hint}"]
+    mesh = trimesh.load(out, process=False)
+    assert mesh.is_watertight and mesh.volume == pytest.approx(27)
+

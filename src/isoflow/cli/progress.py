@@ -169,15 +169,28 @@ NOTE_LONG = 30.0
 
 
 @contextlib.contextmanager
-def reading_back(path) -> Iterator[None]:
-    """The read-back check of a file already written: interrupted, the
-    command's last line says the file is there and only its check was cut
-    short (``isoflow: interrupted: PATH is written, not read back``), not
-    a bare "interrupted" that leaves the user guessing."""
+def reading_back(path: str | os.PathLike, check: bool = True) -> Iterator[None]:
+    """The read-back check of a file already written, and what runs between
+    its rename and the check: interrupted, the command's last line says the
+    file is there and only its check was cut short (``isoflow: interrupted:
+    PATH is written, not read back``), not a bare "interrupted" that leaves
+    the user guessing; ``check=False`` (``--no-check``) leaves out the hint
+    to pass it.
+
+    Examples
+    --------
+    >>> try:
+    ...     with reading_back("s.ply", check=False):
+    ...         raise KeyboardInterrupt
+    ... except KeyboardInterrupt as exc:
+    ...     print(exc)
+    s.ply is written, not read back
+    """
     try:
         yield
     except KeyboardInterrupt:
-        raise KeyboardInterrupt(f"{path} is written, not read back (--no-check skips the read-back)") from None
+        hint = " (--no-check skips the read-back)" if check else ""
+        raise KeyboardInterrupt(f"{path} is written, not read back{hint}") from None
 
 
 class TimeNote:

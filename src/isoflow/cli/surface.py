@@ -62,6 +62,7 @@ def surface_of(args: argparse.Namespace) -> int:
     from ..digital.connectivity import default_connectivity
     from ..mesh import export
     from ..mesh.outputs import check_output_path, check_picture_path, output_set
+    from .progress import reading_back
 
     refuse_names_without_labels(args)
     if args.labels is not None:
@@ -100,20 +101,10 @@ def surface_of(args: argparse.Namespace) -> int:
     with output_set(out) if args.png else contextlib.nullcontext():
         written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                        force=args.force, comments=comments, name=input_stem(args.input))
-        comps = mesh.components()
-        print(
-            f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
-            f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
-            + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
-        )
-        if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
-            print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
-        moved = export.float64_move_note(out, corners)
-        if moved:  # nor where float64 itself moves the corners
-            print(f"isoflow surface: warning: {moved}", file=sys.stderr)
-        if written.get("framed") and not args.quiet:  # MeshLab reads such a GLB in voxel units
-            print(f"isoflow surface: note: {export.glb_transform_note(out, beyond=written['beyond'])}", file=sys.stderr)
-        status = read_back(args, out, mesh, obj, comps)
+        # alone, the file is in place from here: an interrupt before or during
+        # its check says so (in a set with the picture, nothing is replaced)
+        with contextlib.nullcontext() if args.png else reading_back(out, check=not args.no_check):
+            status = report_written(args, out, mesh, obj, written, corners)
         if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
             from ..mesh.render import render_surface
 
@@ -121,6 +112,27 @@ def surface_of(args: argparse.Namespace) -> int:
     if args.png:
         print(f"{args.png}: picture of the surface coloured by vertex angle")
     return status
+
+
+def report_written(args: argparse.Namespace, out: Path, mesh, obj, written: dict, corners: dict) -> int:
+    """The lines on a surface written from memory, and its read-back (the
+    status of :func:`read_back`)."""
+    from ..mesh import export
+
+    comps = mesh.components()
+    print(
+        f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
+        f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
+        + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
+    )
+    if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
+        print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
+    moved = export.float64_move_note(out, corners)
+    if moved:  # nor where float64 itself moves the corners
+        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+    if written.get("framed") and not args.quiet:  # MeshLab reads such a GLB in voxel units
+        print(f"isoflow surface: note: {export.glb_transform_note(out, beyond=written['beyond'])}", file=sys.stderr)
+    return read_back(args, out, mesh, obj, comps)
 
 
 def input_stem(name: str) -> str:
@@ -199,13 +211,9 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
     block, then read back in chunks."""
     from ..digital.connectivity import default_connectivity
     from ..digital.lattice import DigitalObject
-    from ..mesh.export import check_float64_corners, float64_move_note, stl_weld_note
-    from ..mesh.float32 import float64_moved
-    from ..mesh.formats.omezarr import label_absent, open_store, store_volume
-    from ..mesh.readback import agreed_volume_words
-    from ..mesh.streamed_readback import check_streamed
+    from ..mesh.export import check_float64_corners
+    from ..mesh.formats.omezarr import label_absent, store_volume
     from ..mesh.surface_blocks import EmptySurface, write_surface_blocks
-    from ..scale.chunks import never_written, unwritten_fill
     from .progress import progress_bar, reading_back
 
     refuse_mesh_options(args, ".zarr")
@@ -226,8 +234,24 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
             # the label's voxels are none: say that no voxel has it and what
             # the store holds (as in memory), not "the object is empty"
             raise label_absent(args.input, args.label) from None
-    never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
     out = written["path"]
+    # the file is in place from here: an interrupt before or during its check says so
+    with reading_back(out, check=not args.no_check):
+        return report_store_written(args, array, frame, written, corners)
+
+
+def report_store_written(args: argparse.Namespace, array, frame, written: dict, corners: dict) -> int:
+    """The lines on a surface written block by block, and its read-back in
+    chunks (0, or 1 when the file does not read back as written)."""
+    from ..mesh.export import float64_move_note, stl_weld_note
+    from ..mesh.float32 import float64_moved
+    from ..mesh.formats.omezarr import open_store
+    from ..mesh.readback import agreed_volume_words
+    from ..mesh.streamed_readback import check_streamed
+    from ..scale.chunks import never_written, unwritten_fill
+
+    out = written["path"]
+    never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
     print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
           f"V-E+F = {written['euler_characteristic']}"
           + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
@@ -239,8 +263,7 @@ def cmd_surface_store(args: argparse.Namespace) -> int:
         print(f"isoflow surface: warning: {stl_weld_note(out, written['shared'])}", file=sys.stderr)
     if args.no_check:
         return 0
-    with reading_back(out):
-        check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
+    check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
     if not check["agree"]:
         print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
         return 1
