@@ -850,6 +850,20 @@ def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, co
     fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid STL file)",))
 
 
+@pytest.mark.parametrize("name, magic", [("junk.ply", "b'ply'"), ("junk.glb", "b'glTF'")])
+@pytest.mark.parametrize("content", [b"hello\nworld\n", bytes(range(256)) * 20], ids=["text", "bytes"])
+def test_a_file_without_its_formats_magic_word_says_so(tmp_path, capsys, name, magic, content):
+    """The PLY and glTF specifications open every file with 'ply' and
+    'glTF'; a file named so without them (of text or bytes of no mesh
+    format) is said to lack that word, not by trimesh's "IndexError: list
+    index out of range" on a PLY of text."""
+    path = tmp_path / name
+    path.write_bytes(content)
+    fmt = name.rsplit(".")[-1].upper()
+    line = fails(capsys, "genus", path, words=(f"{path}: not a {fmt} file: it starts with {content[:8]!r}, not {fmt}'s {magic}",))
+    assert "Error" not in line
+
+
 def test_a_file_in_its_suffix_format_without_triangles_says_what_it_holds(tmp_path, capsys):
     """A PLY of its format holding the tetrahedron's 4 points and no face
     is named a point cloud, not another format, nor a broken file."""
