@@ -730,6 +730,19 @@ def test_an_obj_face_index_that_names_no_vertex_is_one_line_naming_it(tmp_path, 
     assert not any(tmp_path.glob("out.*"))
 
 
+@pytest.mark.parametrize("text, words", [
+    ("f 1 2 3\n", ":1: face 'f 1 2 3' uses vertex index 1, but the file has no vertices"),  # was "no triangles read"
+    ("v 0 0 0\nf 1 2 3\n", ":2: face 'f 1 2 3' uses vertex index 2, past the file's only vertex"),  # "1 vertices"
+    ("v 0 0 0\nf -1 -1 -2\n", ":2: face 'f -1 -1 -2' uses vertex index -2, before the first vertex (1 vertex comes "
+                             "before the face")])
+def test_an_obj_whose_faces_name_no_vertex_it_has_says_which(tmp_path, capsys, text, words):
+    """Faces of an OBJ with no vertex, or with one, name indices past them
+    (trimesh reads the first file as an empty mesh without a word)."""
+    path = tmp_path / "bad.obj"
+    path.write_text(text)
+    fails(capsys, "genus", path, words=(f"{path}{words}",))
+
+
 @pytest.mark.parametrize(
     "line, words",  # each was "cannot read as a mesh (ValueError: string or file could not be read to its end ...)"
     [("v 0,5 1 1", ("'v 0,5 1 1': '0,5' is not a coordinate", "decimals with a point: 0.5")),

@@ -590,7 +590,9 @@ def _read(p: Path, ext: str):
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if ext == "obj":
-        _check_obj_indices(p)
+        # trimesh leaves out, without a word, a face whose indices name no
+        # vertex: where none is left, the first such face is the line
+        _check_obj_indices(p, failed=not faces.size)
         if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
             _check_obj_numbers(p)
     return vertices, faces
