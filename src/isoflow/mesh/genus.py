@@ -1337,7 +1337,8 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
             notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
                                                "by": "flood" if fill == "flood" else "connectivity"}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
-            notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
+            notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"],
+                                           "solid": w["solid"].get("cavities")}))
         lens = w["solid"].get("thinnest_lens")
         if not stable and lens is not None and lens["thickness"] < THIN_LENS_VOXELS * last["pitch"]:
             notes.append(Note("thin_overlap", {**lens, "voxels": lens["thickness"] / last["pitch"],
