@@ -730,6 +730,19 @@ def test_an_obj_face_index_that_names_no_vertex_is_one_line_naming_it(tmp_path, 
     assert not any(tmp_path.glob("out.*"))
 
 
+@pytest.mark.parametrize("text, words", [
+    ("f 1 2 3\n", ":1: face 'f 1 2 3' uses vertex index 1, but the file has no vertices"),  # was "no triangles read"
+    ("v 0 0 0\nf 1 2 3\n", ":2: face 'f 1 2 3' uses vertex index 2, past the file's only vertex"),  # "1 vertices"
+    ("v 0 0 0\nf -1 -1 -2\n", ":2: face 'f -1 -1 -2' uses vertex index -2, before the first vertex (1 vertex comes "
+                             "before the face")])
+def test_an_obj_whose_faces_name_no_vertex_it_has_says_which(tmp_path, capsys, text, words):
+    """Faces of an OBJ with no vertex, or with one, name indices past them
+    (trimesh reads the first file as an empty mesh without a word)."""
+    path = tmp_path / "bad.obj"
+    path.write_text(text)
+    fails(capsys, "genus", path, words=(f"{path}{words}",))
+
+
 @pytest.mark.parametrize(
     "line, words",  # each was "cannot read as a mesh (ValueError: string or file could not be read to its end ...)"
     [("v 0,5 1 1", ("'v 0,5 1 1': '0,5' is not a coordinate", "decimals with a point: 0.5")),
@@ -848,6 +861,20 @@ def test_a_mesh_file_that_is_no_format_keeps_the_plain_line(tmp_path, capsys, co
     path = tmp_path / "junk.stl"
     path.write_bytes(content)
     fails(capsys, "genus", path, words=(f"{path}: no triangles read (empty mesh, or not a valid STL file)",))
+
+
+@pytest.mark.parametrize("name, magic", [("junk.ply", "b'ply'"), ("junk.glb", "b'glTF'")])
+@pytest.mark.parametrize("content", [b"hello\nworld\n", bytes(range(256)) * 20], ids=["text", "bytes"])
+def test_a_file_without_its_formats_magic_word_says_so(tmp_path, capsys, name, magic, content):
+    """The PLY and glTF specifications open every file with 'ply' and
+    'glTF'; a file named so without them (of text or bytes of no mesh
+    format) is said to lack that word, not by trimesh's "IndexError: list
+    index out of range" on a PLY of text."""
+    path = tmp_path / name
+    path.write_bytes(content)
+    fmt = name.rsplit(".")[-1].upper()
+    line = fails(capsys, "genus", path, words=(f"{path}: not a {fmt} file: it starts with {content[:8]!r}, not {fmt}'s {magic}",))
+    assert "Error" not in line
 
 
 def test_a_file_in_its_suffix_format_without_triangles_says_what_it_holds(tmp_path, capsys):

@@ -144,32 +144,57 @@ def test_a_face_with_no_area_is_not_closed_on_itself():
     assert not any(n.kind == "t_junctions" for n in verdict.notes)
 
 
+def searched_alike(monkeypatch, v: np.ndarray, faces: np.ndarray) -> list:
+    """The verdicts of genus at one resolution and at three, having checked
+    that it looks for T-junctions as often at both, and that each row's
+    voxels are those voxelize counts on the faces as loaded (where it
+    looks for itself)."""
+    from isoflow.mesh import t_junctions
+    from isoflow.mesh.voxelize import voxelize
+
+    searched = []
+    split = t_junctions.split_t_junctions
+    monkeypatch.setattr(t_junctions, "split_t_junctions", lambda *a: searched.append(1) or split(*a))
+    counts, verdicts = [], []
+    for resolutions in ([16], [16, 24, 32]):
+        searched.clear()
+        verdicts.append(verify_genus((v, faces), resolutions=resolutions, step=False))
+        counts.append(len(searched))
+    assert counts[0] == counts[1]
+    monkeypatch.undo()
+    assert [d["voxels"] for d in verdicts[-1].digital] == [
+        int(voxelize(v, faces, resolution=r)[0].sum()) for r in (16, 24, 32)]
+    return verdicts
+
+
 @pytest.mark.parametrize("copy", [False, True])
 def test_genus_searches_for_t_junctions_alike_at_any_number_of_resolutions(monkeypatch, copy):
     """The digital rows read the mesh split at its T-junctions as the
     voxeliser splits it; genus split it once for the mesh rows and then
     once more at every resolution. It is searched as often whatever the
     resolutions asked, and the rows still see the closed torus (trimesh's
-    genus) with the voxels that voxelize counts on the faces as loaded."""
-    from isoflow.mesh import t_junctions
-    from isoflow.mesh.voxelize import voxelize
-
+    genus)."""
     torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
     genus = (2 - torus.euler_number) // 2
     v, f, twice, _ = repeated_on_a_crack(torus, "whole")
-    faces = twice if copy else f
-    searched = []
-    split = t_junctions.split_t_junctions
-    monkeypatch.setattr(t_junctions, "split_t_junctions", lambda *a: searched.append(1) or split(*a))
-    counts = []
-    for resolutions in ([16], [16, 24, 32]):
-        searched.clear()
-        verdict = verify_genus((v, faces), resolutions=resolutions, step=False)
-        counts.append(len(searched))
-        assert [d["genus"] for d in verdict.digital] == [genus] * len(resolutions)
-    assert counts[0] == counts[1]
-    assert [d["voxels"] for d in verdict.digital] == [
-        int(voxelize(v, faces, resolution=r)[0].sum()) for r in (16, 24, 32)]
+    for verdict in searched_alike(monkeypatch, v, twice if copy else f):
+        assert [d["genus"] for d in verdict.digital] == [genus] * len(verdict.digital)
+
+
+@pytest.mark.parametrize("cracked", [False, True])
+def test_genus_searches_an_open_mesh_for_t_junctions_alike_at_any_number_of_resolutions(monkeypatch, cracked):
+    """An open mesh (a torus less a face, with or without cracks at
+    T-junctions elsewhere) stays open once split: the voxeliser looked
+    for T-junctions in it again at every resolution. It is searched as
+    often whatever the resolutions asked."""
+    torus = trimesh.creation.torus(1.0, 0.4, 24, 12)
+    v, f = with_t_junctions(torus) if cracked else (torus.vertices, torus.faces)
+    f = f[1:]  # a hole: the first face is one with_t_junctions leaves whole
+    assert not trimesh.Trimesh(v, f, process=False).is_watertight
+    verdict = searched_alike(monkeypatch, v, f)[-1]
+    # a triangle's hole: three open edges, one loop
+    assert verdict.mesh["boundary_edges"] == 3 and verdict.mesh["boundary_loops"] == 1
+    assert any(n.kind == "t_junctions" for n in verdict.notes) == cracked
 
 
 @pytest.mark.parametrize("pairs", [0, 1 << 40])
@@ -286,3 +311,19 @@ def test_strict_genus_of_an_open_mesh_says_it_is_taken_as_it_stands(tmp_path):
     with pytest.raises(IsoflowError, match=r"3 boundary edges.*\(without strict=True genus gives its verdict on the "
                                            r"mesh as it stands: it is read by the generalised winding number\)$"):
         verify_genus(str(tmp_path / "open.ply"), resolutions=[16], step=False, strict=True)
+
+
+def test_voxelize_takes_t_junctions_as_a_switch():
+    """``t_junctions=False`` leaves a cracked box's cracks open (its note
+    counts the boundary edges trimesh counts); a word such as "no", which
+    Python reads as true, is refused naming the argument."""
+    from isoflow.mesh.voxelize import voxelize
+
+    v, f = with_t_junctions(trimesh.creation.box(), every=2)
+    open_edges = len(trimesh.grouping.group_rows(trimesh.Trimesh(v, f, process=False).edges_sorted, require_count=1))
+    left = voxelize(v, f, resolution=8, details=True, t_junctions=False)
+    split = voxelize(v, f, resolution=8, details=True)
+    assert f"{open_edges} boundary edges" in left.note and "closed at T-junctions" not in left.note
+    assert "closed at T-junctions" in split.note
+    with pytest.raises(IsoflowError, match="t_junctions"):
+        voxelize(v, f, resolution=8, t_junctions="no")

@@ -13,7 +13,7 @@ import pytest
 
 from isoflow.cli import main
 from isoflow.mesh.genus import verify_genus
-from isoflow.mesh.verdict import GenusVerdict, Note, Stop, option_flag, verdict_text
+from isoflow.mesh.verdict import GenusVerdict, Note, Stop, note_text, option_flag, verdict_text
 
 MESHES = Path(__file__).resolve().parents[2] / "meshes"
 
@@ -571,3 +571,32 @@ def test_a_moebius_band_is_said_to_be_non_orientable(tmp_path, capsys, twists):
     verdict = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("  verdict"))
     assert ("one component is non-orientable" in verdict) == (twists == 1)
     assert "1 inconsistently oriented)" not in verdict
+
+
+def test_cavities_of_the_grid_that_the_solid_has_not_are_not_called_nested_shells():
+    """rabbit.obj's nine primitives, united by manifold3d, bound no cavity
+    (no shell of its union has negative volume); at 256 across the
+    voxels hold 2, pockets of outside in the crevice where a foot meets the
+    torso. The note said "the solid has 2 cavities (nested shells)"; a
+    hollow ball's cavity, which its union has, still reads so."""
+    import manifold3d as m3
+    import trimesh
+
+    rabbit = trimesh.load(MESHES / "rabbit.obj", force="mesh")
+    parts = [m3.Manifold(m3.Mesh(vert_properties=np.asarray(p.vertices, np.float32),
+                                 tri_verts=np.asarray(p.faces, np.uint32))) for p in rabbit.split(only_watertight=False)]
+    union = m3.Manifold.batch_boolean(parts, m3.OpType.Add)
+    assert not [p for p in union.decompose() if p.volume() < 0]
+    v = verify_genus(MESHES / "rabbit.obj", (256,), step=False)
+    holes = v.digital[-1]["betti"][2]
+    assert holes > 0
+    said = note_text(next(n for n in v.notes if n.kind == "cavities"))
+    assert "nested shells" not in said and f"the digital solid has {holes} cavities" in said
+    assert "manifold3d builds has none" in said
+
+    outer, inner = trimesh.creation.icosphere(3, 1.0), trimesh.creation.icosphere(3, 0.5)
+    hollow = np.vstack([outer.vertices, inner.vertices]), np.vstack([outer.faces, inner.faces[:, ::-1] + len(outer.vertices)])
+    v = verify_genus(hollow, (16, 32), step=False)
+    assert v.digital[-1]["betti"][2] == 1
+    said = note_text(next(n for n in v.notes if n.kind == "cavities"))
+    assert said == "the solid has 1 cavity (nested shells) at resolution 32"

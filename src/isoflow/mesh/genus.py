@@ -605,7 +605,8 @@ DIGITAL_BYTES_PER_VOXEL = 1 + 4 + LABEL_BYTES_PER_VOXEL
 def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity: int = 6, *,
                   step: bool = True, max_resolution: int = MAX_RESOLUTION, time_limit: float = TIME_LIMIT,
                   target: int | None = None, progress=None, on_resolution=None,
-                  strict: bool = False, fill: Fill = "winding", bodies: int | None = None) -> tuple[list, Stop | None]:
+                  strict: bool = False, fill: Fill = "winding", bodies: int | None = None,
+                  t_junctions: bool = True) -> tuple[list, Stop | None]:
     """Digital topology of the voxelised solid at ``resolutions`` and then,
     while ``step`` and the Betti numbers of the last two differ (or agree on
     a genus other than ``target``, or on components other than ``bodies``:
@@ -620,7 +621,9 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
     only grows: each resolution tried weighs ``resolution**3`` (what its grid
     costs), and ``total`` grows by that weight when the stepping adds a
     resolution. ``on_resolution(entry)`` is called after each. ``fill``
-    is the voxels compared (:mod:`isoflow.mesh.fills`).
+    is the voxels compared (:mod:`isoflow.mesh.fills`); ``t_junctions``
+    False: the mesh's T-junctions are split already, or none closes
+    (:func:`~isoflow.mesh.voxelize.voxelize` looks for none).
     """
     import time
 
@@ -646,7 +649,8 @@ def digital_steps(vertices, faces, resolutions=DEFAULT_RESOLUTIONS, connectivity
 
         try:
             entry = digital_entry(vertices, faces, res, connectivity, strict=strict, fill=fill,
-                                  progress=None if progress is None else rung, finest=not stepped)
+                                  progress=None if progress is None else rung, finest=not stepped,
+                                  t_junctions=t_junctions)
         except GridTooLarge as exc:
             if stepped:  # the estimate let it through, the exact count did not: the memory stops the stepping
                 return out, Stop("memory", resolution=res, estimate=grid_need(exc.shape, DIGITAL_BYTES_PER_VOXEL))
@@ -739,11 +743,12 @@ def shell_genus(vertices: np.ndarray, faces: np.ndarray, shell: Voxelization, co
 
 
 def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict: bool = False,
-                  fill: Fill = "winding", progress=None, finest: bool = True) -> dict:
+                  fill: Fill = "winding", progress=None, finest: bool = True, t_junctions: bool = True) -> dict:
     """The solid voxelised at ``resolution`` and its Betti numbers: one
     entry of :func:`digital_steps`. A grid whose voxels and labelling do not
     fit in the memory budget is refused (:class:`~isoflow.mesh.grid.GridTooLarge`),
-    naming the finest one that does where ``finest``."""
+    naming the finest one that does where ``finest``. ``t_junctions``: as
+    :func:`~isoflow.mesh.voxelize.voxelize` takes it."""
     import time
 
     t = time.monotonic()
@@ -761,13 +766,13 @@ def digital_entry(vertices, faces, resolution: int, connectivity: int, *, strict
             need = grid_need(shape, DIGITAL_BYTES_PER_VOXEL)
             raise GridTooLarge(what, f"{grid_words(shape, need)} for its Betti numbers", budget, shape=shape)
         solid = voxelize(vertices, faces, resolution=resolution, strict=strict, fill=fill, progress=progress,
-                         details=True)
+                         details=True, t_junctions=t_junctions)
     except GridTooLarge as exc:
         if not finest:
             raise
         # the finest grid whose Betti numbers fit by both counts; the Betti
         # numbers need the volume in memory: a zarr store is no way out
-        made = Solid(vertices, faces, strict=strict, fill=fill)
+        made = Solid(vertices, faces, strict=strict, fill=fill, t_junctions=t_junctions)
         fit = finest_fit(vertices, faces, what, shape, lambda s, fr: grid_fits(s, DIGITAL_BYTES_PER_VOXEL, 0, budget)
                          and in_memory(made, fr, s, budget)[0])
         # verify_genus takes no max_bytes: its budget is the memory available
@@ -927,6 +932,12 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
             stats["t_junctions"] = dict(stats["t_junctions"], digital_faces=0 if split is None else split["faces"])
         else:  # no face dropped: the mesh rows' split is the voxeliser's
             voxelised = v, f
+    # the voxeliser would look for T-junctions in an open mesh at each
+    # resolution: where the mesh rows' search closed nothing it finds
+    # nothing in the same faces, and where that search closed some, one
+    # search of the split mesh, here, says whether it finds more (only
+    # then is it left to look)
+    t_junctions = "t_junctions" in stats and close_t_junctions(*voxelised)[2] is not None
     w = witnesses(v, f)
     # the header says the faces the digital rows read beside the mesh's
     w["mesh"] = dict(w["mesh"], faces_as_loaded=len(given[1]))
@@ -948,7 +959,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         digital, stop = digital_steps(
             *voxelised, resolutions, connectivity, step=step and not w["crossing_self"], max_resolution=max_resolution,
             time_limit=time_limit, target=target, progress=progress, on_resolution=on_resolution,
-            strict=strict, fill=fill, bodies=bodies)
+            strict=strict, fill=fill, bodies=bodies, t_junctions=t_junctions)
     except IsoflowError as exc:
         raise exc.at(name) from None  # a refused grid keeps its command-line words
     stable = len(digital) >= 2 and digital[-1]["betti"] == digital[-2]["betti"]
@@ -1326,7 +1337,8 @@ def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, f
             notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
                                                "by": "flood" if fill == "flood" else "connectivity"}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
-            notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"]}))
+            notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"],
+                                           "solid": w["solid"].get("cavities")}))
         lens = w["solid"].get("thinnest_lens")
         if not stable and lens is not None and lens["thickness"] < THIN_LENS_VOXELS * last["pitch"]:
             notes.append(Note("thin_overlap", {**lens, "voxels": lens["thickness"] / last["pitch"],

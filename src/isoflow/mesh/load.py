@@ -590,7 +590,9 @@ def _read(p: Path, ext: str):
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
     if ext == "obj":
-        _check_obj_indices(p)
+        # trimesh leaves out, without a word, a face whose indices name no
+        # vertex: where none is left, the first such face is the line
+        _check_obj_indices(p, failed=not faces.size)
         if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
             _check_obj_numbers(p)
     return vertices, faces
@@ -888,10 +890,18 @@ triangle meshes (a text point list, x y z per line, is read by isoflow info, sur
             "(a text point list, x y z per line, is read by isoflow info, surface and flow)")
 
 
+#: the words that files of these suffixes start with, by their formats' specifications
+MAGIC_WORDS = {".ply": b"ply", ".glb": b"glTF"}
+
+
 def misnamed_mesh(p: Path) -> str | None:
     """The line for a mesh file that gave no triangles when its first
     bytes say it holds another format than its suffix names
-    (:func:`isoflow.mesh.sniff.sniff_mesh_format`), or ``None``.
+    (:func:`isoflow.mesh.sniff.sniff_mesh_format`), or, where its suffix
+    names a format whose files start with a magic word (PLY's ``ply``,
+    GLB's ``glTF``), when they say no mesh format and lack that word (the
+    reader's own error, such as trimesh's ``IndexError: list index out of
+    range`` on a PLY file of text, says nothing of it); else ``None``.
 
     Examples
     --------
@@ -900,6 +910,10 @@ def misnamed_mesh(p: Path) -> str | None:
     >>> _ = p.write_text("v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nf 1 2 3\\n")
     >>> print(misnamed_mesh(p).replace(str(p.parent), "DIR"))
     DIR/model.stl: no triangles read: its content is an OBJ file (lines 'v x y z' and 'f ...'), not STL; rename it model.obj
+    >>> q = p.with_name("scan.ply")
+    >>> _ = q.write_text("not a mesh")
+    >>> print(misnamed_mesh(q).replace(str(p.parent), "DIR"))
+    DIR/scan.ply: not a PLY file: it starts with b'not a me', not PLY's b'ply'
     """
     from .sniff import FORMATS, SNIFF_BYTES, sniff_mesh_format
 
@@ -912,11 +926,15 @@ def misnamed_mesh(p: Path) -> str | None:
     except OSError:
         return None
     kind = sniff_mesh_format(head, size)
-    if not kind:
-        return None
-    what, suffix = FORMATS[kind]
     name = p.name
     written = next((s for s in MESH_SUFFIXES if name.lower().endswith(s)), p.suffix.lower())
+    if not kind:
+        magic = MAGIC_WORDS.get(written)
+        if magic is None or not head or head.startswith(magic):  # (an empty file has its own line)
+            return None
+        fmt = written.lstrip(".").upper()
+        return f"{p}: not a {fmt} file: it starts with {head[:8]!r}, not {fmt}'s {magic!r}"
+    what, suffix = FORMATS[kind]
     if suffix == {".stl_ascii": ".stl"}.get(written, written):
         return None  # the format the suffix says: the reader's own line says what is wrong
     stem = name[:len(name) - len(written)]

@@ -492,9 +492,11 @@ def obj_index_error(path, data: bytes) -> str | None:
                     continue
                 shown = shown_line(line)
                 if k > 0:
-                    why = f"past the file's {total} vertices"
+                    why = ("but the file has no vertices (no 'v x y z' line)" if not total else
+                           "past the file's " + ("only vertex" if total == 1 else f"{total} vertices"))
                 elif k < 0:
-                    why = f"before the first vertex ({seen} vertices come before the face; -1 is the last of them)"
+                    before = "1 vertex comes" if seen == 1 else f"{seen} vertices come"
+                    why = f"before the first vertex ({before} before the face; -1 is the last of them)"
                 else:
                     why = "but OBJ numbers vertices from 1 (-1 for the last)"
                 return f"{path}:{lineno}: face {shown!r} uses vertex index {written.decode()}, {why}"

@@ -397,6 +397,31 @@ def _voxel_contact_words(pitch: float, shape, voxels: int, connectivity: int, be
     return said
 
 
+def _cavity_words(n: int, resolution: int, solid: int | None = None) -> str:
+    """The ``cavities`` note: the digital solid's cavities (b2) at the
+    finest grid, beside those of the solid manifold3d builds (``solid``;
+    None where it built none). Where it has fewer, the grid's cavities are
+    not nested shells of the mesh but pockets of outside that the grid
+    closes off (where surfaces meet almost tangentially).
+
+    Examples
+    --------
+    >>> _cavity_words(2, 64, 2)
+    'the solid has 2 cavities (nested shells) at resolution 64'
+    >>> _cavity_words(3, 1024, 0)
+    'the digital solid has 3 cavities at resolution 1024, where the solid manifold3d builds has none: pockets of \
+outside that the grid closes off'
+    """
+    found = counted(n, "cavity", "cavities")
+    if solid is None:
+        return f"the digital solid has {found} at resolution {resolution}"
+    if solid == n:
+        return f"the solid has {found} (nested shells) at resolution {resolution}"
+    built = counted(solid, "cavity", "cavities") if solid else "none"
+    return (f"the digital solid has {found} at resolution {resolution}, where the solid manifold3d builds has "
+            f"{built}: pockets of outside that the grid closes off")
+
+
 _NOTE_WORDS: dict[str, Callable[..., str]] = {
     "dropped_faces": lambda n: f"{n} degenerate face{'s' if n > 1 else ''} (two corners at one position) dropped",
     "welded": lambda n: (f"{counted(n, 'vertex', 'vertices')} that differ only by rounding noise were welded before counting "
@@ -423,8 +448,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
            "no crossing" if along else "")),
     "float64_rounding": lambda near, spacing, median_edge, share, defects=(), precision="float64": rounding_words(
         near, spacing, median_edge, share, tuple(defects), " above", precision),
-    "cavities": lambda n, resolution: (f"the solid has {counted(n, 'cavity', 'cavities')} (nested shells) "
-                                       f"at resolution {resolution}"),
+    "cavities": _cavity_words,
     "flood_cavities": lambda n: (
         f"--fill flood fills the solid's {counted(n, 'cavity', 'cavities')} (manifold3d) and the surfaces "
         "inside, whose handles its digital genus lacks; the default --fill winding keeps them"),

@@ -178,7 +178,8 @@ class Solid:
     surface drawn is the same, each repeated face kept and split as its
     first) and double-sided faces are read as one (``double_sided`` pairs, see
     :func:`~isoflow.mesh.census.one_face_per_pair`) ``census`` recounts
-    them; ``walls`` pairs lay in walls between solids or inside the solid
+    them (with ``t_junctions`` False the caller has made that split: it is
+    not looked for); ``walls`` pairs lay in walls between solids or inside the solid
     (solids glued face to face, a tetrahedral mesh's cells) and were
     dropped, both faces, whose windings cancel.  ``repeated`` faces list
     the same three corners the same way round as an earlier face (on the
@@ -190,7 +191,8 @@ class Solid:
     (0: the exact scanline alone decides).
     """
 
-    def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False, fill: Fill = "winding"):
+    def __init__(self, v: np.ndarray, f: np.ndarray, *, strict: bool = False, fill: Fill = "winding",
+                 t_junctions: bool = True):
         from .census import census, one_face_per_pair  # compiled: loaded when a mesh is voxelised
         from .orientation import orient_faces
 
@@ -221,7 +223,7 @@ class Solid:
             edges = census(faces, len(v))
             self.census = defect_counts(*edges[2:])
             self.joined = max(0, self.defects["boundary_edges"] - self.census["boundary_edges"])
-        if self.census["boundary_edges"]:
+        if self.census["boundary_edges"] and t_junctions:
             # a CAD export's faces tessellated apart leave cracks at
             # T-junctions: split there, the surface drawn is the same (and so
             # is w off it), but the edges balance and the exact scanline reads
@@ -666,20 +668,20 @@ def grid_block(shape, window) -> tuple[tuple[int, int, int], tuple[int, ...]]:
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: Literal[False] = False) -> tuple[np.ndarray, np.ndarray, float]: ...
+             details: Literal[False] = False, t_junctions: bool = True) -> tuple[np.ndarray, np.ndarray, float]: ...
 
 
 @overload
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: Literal[True]) -> Voxelization: ...
+             details: Literal[True], t_junctions: bool = True) -> Voxelization: ...
 
 
 def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = None, resolution: int | np.integer | None = None,
              fill: Fill = "winding", strict: bool = False, grid=None, window=None, max_bytes: int | np.integer | None = None,
              write_bytes: float = 0, progress: Callable[[int, int], object] | None = None,
-             details: bool = False) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
+             details: bool = False, t_junctions: bool = True) -> tuple[np.ndarray, np.ndarray, float] | Voxelization:
     """Voxelise a triangle mesh: the solid it bounds, its shell, or both.
 
     Parameters
@@ -746,6 +748,15 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
         what was found in the mesh) instead of ``(volume, origin, pitch)``;
         without it, the note, if any, is issued as a
         :class:`~isoflow.errors.MeshNote` warning.
+    t_junctions
+        Split boundary edges at the vertices of other faces that lie on
+        them (T-junctions) where that closes them, as
+        :func:`~isoflow.mesh.t_junctions.close_t_junctions` does (the
+        default). False where the caller has made that split already, or
+        knows it splits nothing: the search (a sort of the edges, then the
+        boundary vertices tried against the open edges) is not made again;
+        :func:`~isoflow.mesh.genus.verify_genus` makes it once for all its
+        resolutions.
 
     Returns
     -------
@@ -783,6 +794,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     (64, 56)
     """
     fill, strict = check_fill(fill), check_strict(strict)
+    t_junctions = check_switch(t_junctions, "t_junctions", "voxelize")
     check_callable(progress, "progress", "progress(done, total)")
     v, f, shape, what, frame, origin, pitch = plan_voxels(
         vertices, faces, pitch=pitch, resolution=resolution, grid=grid)
@@ -795,7 +807,7 @@ def voxelize(vertices: ArrayLike, faces: ArrayLike, *, pitch: float | None = Non
     def made() -> Solid:  # the mesh made ready once, for the grid asked and for those a refusal tries
         nonlocal solid
         if solid is None:
-            solid = Solid(v, f, strict=strict, fill=fill)
+            solid = Solid(v, f, strict=strict, fill=fill, t_junctions=t_junctions)
         return solid
 
     def refuse(extra: int):
