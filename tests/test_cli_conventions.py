@@ -282,6 +282,40 @@ def test_info_imports_no_progress_or_completion_library(tmp_path):
     assert got.returncode == 0 and got.stdout.splitlines()[-1] == "[]"
 
 
+def test_info_of_a_small_volume_imports_no_masked_arrays_nor_openssl(tmp_path):
+    # numpy.ma (imported on the first use of np.ma) and secrets (whose hmac
+    # loads OpenSSL) are a few milliseconds each of a command that sees no
+    # masked array and writes no file
+    np.save(tmp_path / "t.npy", torus(4, 1.5))
+    code = ("import sys; from isoflow.cli import main; main(['info', sys.argv[1]]); "
+            "print(sorted(m for m in ('numpy.ma', 'secrets', '_hashlib') if m in sys.modules))")
+    got = subprocess.run([sys.executable, "-c", code, str(tmp_path / "t.npy")], capture_output=True, text=True)
+    assert got.returncode == 0 and got.stdout.splitlines()[-1] == "[]", got.stderr
+
+
+def test_the_command_freezes_what_numba_imported(tmp_path):
+    # numba's modules live until the command exits: once imported they are
+    # frozen, out of what the collector walks (gc.get_objects), so that no
+    # collection of the oldest generation walks them again while the
+    # command works (looked at when the output is opened, after numba ran)
+    pytest.importorskip("numba")
+    code = ("import gc, sys\n"
+            "seen = []\n"
+            "def opened(event, args):\n"
+            "    if event == 'open' and str(args[0]).endswith('.npz') and 'numba' in sys.modules:\n"
+            "        namespace = sys.modules['numba'].__dict__\n"
+            "        seen.append(any(o is namespace for o in gc.get_objects()))\n"
+            "sys.addaudithook(opened)\n"
+            "from isoflow.cli import console\n"
+            "sys.argv = ['isoflow', 'voxelize', sys.argv[1], '--resolution', '16', '-o', sys.argv[2]]\n"
+            "try:\n"
+            "    console()\n"
+            "except SystemExit as exc:\n"
+            "    print(exc.code, sorted(set(seen)))\n")
+    got = subprocess.run([sys.executable, "-c", code, TORUS, tmp_path / "ring.npz"], capture_output=True, text=True)
+    assert got.stdout.splitlines()[-1] == "0 [False]", got.stderr
+
+
 @pytest.mark.skipif(shutil.which("bash") is None, reason="needs bash")
 def test_bash_completion_completes(tmp_path):
     script = isoflow_cmd("completion", "bash")

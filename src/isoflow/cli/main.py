@@ -618,9 +618,20 @@ def main(argv: list[str] | None = None) -> int:
 def console() -> None:
     """The ``isoflow`` command: :func:`main`, then exit without the
     interpreter's last garbage collection, which walks every object (numba's
-    many, once it is loaded) only to find nothing to collect."""
+    many, once it is loaded) only to find nothing to collect.
+
+    What the start-up imports (Python's modules, NumPy, isoflow's, then
+    numba's when a command loads it) lives until the process exits, so it
+    is frozen as soon as it is made: otherwise each collection of the oldest
+    generation walks all of it again (numba's, once loaded, most of all),
+    and whether a short command pays one more such collection turns on a
+    few allocations anywhere in it."""
     import gc
 
+    from ..scale import compiled
+
+    gc.freeze()
+    compiled.on_numba_import = gc.freeze
     code = main()
     gc.freeze()
     sys.exit(code)

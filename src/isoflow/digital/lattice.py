@@ -31,7 +31,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import IsoflowError, counted, given_text, number_text
 from ..results import read_only, same_fields
-from ..scale.arrays import as_array, binary
+from ..scale.arrays import as_array, binary, is_masked_array
 from .units import unit_given
 
 
@@ -547,7 +547,7 @@ def _unmasked(value, name: str) -> None:
     ...
     isoflow.errors.IsoflowError: 'pitch': a masked array with 1 masked element; pass its numbers (a.data, or a.filled(x))
     """
-    if isinstance(value, np.ma.MaskedArray) and np.ma.count_masked(value):
+    if is_masked_array(value) and np.ma.count_masked(value):
         raise IsoflowError(f"'{name}': a masked array with {counted(int(np.ma.count_masked(value)), 'masked element')}; "
                            "pass its numbers (a.data, or a.filled(x))")
 

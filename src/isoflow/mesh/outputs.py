@@ -27,7 +27,6 @@ import contextlib
 import errno
 import os
 import re
-import secrets
 import shutil
 import stat
 import sys
@@ -264,6 +263,8 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
     with the usual permissions (0666 less the umask), or the directory made,
     so that no other writer can take it. What killed writers left beside
     ``path`` is removed first (:func:`remove_abandoned`)."""
+    import secrets  # (imported here: its hmac loads OpenSSL, which a command that writes nothing need not)
+
     remove_abandoned(path)
     prefix, suffix = _temp_parts(path)
     for _ in range(100):

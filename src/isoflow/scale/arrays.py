@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sys
 
 import numpy as np
 
@@ -133,6 +134,32 @@ def as_array(array, where: str = "volume") -> np.ndarray:
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
 
 
+def is_masked_array(value: object) -> bool:
+    """Whether ``value`` is a :class:`numpy.ma.MaskedArray`, without
+    importing :mod:`numpy.ma`.
+
+    ``np.ma`` is imported on its first use, a noticeable share of a light
+    command's start (``isoflow info`` of a small ``.npy``); no masked array
+    can exist before it is, so until then the answer is no.
+
+    Parameters
+    ----------
+    value : object
+        Anything.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> is_masked_array(np.zeros(3)), is_masked_array(np.ma.masked_equal([1, 0], 0))
+    (False, True)
+    """
+    ma = sys.modules.get("numpy.ma")
+    return ma is not None and isinstance(value, ma.MaskedArray)
+
+
 def refuse_masked(array: object, where: str = "volume") -> None:
     """Refuse a masked array with masked elements in one line: its masked
     elements are missing data, and NumPy's conversions read whatever value
@@ -160,7 +187,7 @@ def refuse_masked(array: object, where: str = "volume") -> None:
     ...     print(str(error).split(";")[0])
     labels: a masked array with 1 masked element
     """
-    if not isinstance(array, np.ma.MaskedArray):
+    if not is_masked_array(array):
         return
     masked = int(np.ma.count_masked(array))
     if masked:

@@ -95,6 +95,13 @@ COMPILE_NOTE = ("numba is compiling isoflow's passes for this CPU, once after in
 on_first_compile = None
 _compile_noted = False
 
+#: called once numba is imported (by :mod:`isoflow.scale.jit`), when set:
+#: the command line freezes what the import made (``gc.freeze``), objects
+#: that live until the process ends, so that the collector does not walk
+#: them again each time it collects the oldest generation; a library's
+#: caller keeps the collector as it set it
+on_numba_import = None
+
 
 def note_compile() -> None:
     """Say :data:`COMPILE_NOTE` once per process (called by

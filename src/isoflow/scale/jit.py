@@ -19,11 +19,17 @@ It also listens for numba's compile events: numba compiles a function only
 where its disk cache has none, so the first one of isoflow's says
 :data:`isoflow.scale.compiled.COMPILE_NOTE` (the command line prints it;
 the first run after installing otherwise waits in silence).
+
+Once numba is imported it calls
+:data:`isoflow.scale.compiled.on_numba_import` where that is set (the
+command line freezes numba's objects there, which live until it exits).
 """
 
 from __future__ import annotations
 
 from numba import njit
+
+from . import compiled
 
 __all__ = ["njit"]
 
@@ -99,3 +105,5 @@ def _plain_error_messages() -> None:
 _import_arraymath_without_blas_probe()
 _note_compiles()
 _plain_error_messages()
+if compiled.on_numba_import is not None:
+    compiled.on_numba_import()
