@@ -32,6 +32,7 @@ import csv
 import json
 import os
 import re
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ...errors import IsoflowError, check_path, line_text
@@ -143,10 +144,9 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     else:
         rows = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.strip()
                 and not line.lstrip().startswith("#")]
-        lines = text.splitlines(keepends=True)  # a CSV cell may hold a line break
         if not rows:
             raise IsoflowError(f"{where}: holds no label names (no line but comments); {EXPECTED}")
-        pairs = _text_pairs(rows, lines, where, suffix)
+        pairs = _text_pairs(rows, text, where, suffix)
     found: dict[int, str] = {}
     first: dict[int, str] = {}
     for label, name, at in pairs:
@@ -164,18 +164,18 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
-def _text_pairs(rows: list[tuple[int, str]], lines: list[str], where: str, suffix: str) -> list[tuple[int, str, str]]:
+def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each data line of a colour table,
     an ITK-SNAP file, a plain list of lines ``index name`` or a CSV/TSV
-    table; ``rows`` the lines that are neither blank nor comments (number,
-    text), ``lines`` every line with its line break."""
+    table; ``rows`` the lines of the file ``text`` that are neither blank
+    nor comments (number, text)."""
     number, head = rows[0]
     delimiter = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
-    cells = [c.strip().lower() for c in _csv_records([head], number, where, delimiter)[0][1]]
+    cells = [c.strip().lower() for c in next(_csv_records(rows[:1], text, where, delimiter))[1]]
     name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
     label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
     if name_at is not None and label_at is not None:
-        return _table_pairs(_csv_records(lines[number:], number + 1, where, delimiter), where, label_at, name_at)
+        return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
     if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
         raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
                            f"and a name column ({', '.join(NAME_COLUMNS)}) is expected, not {_shown(head)}")
@@ -213,13 +213,26 @@ def _plain_pairs(rows: list[tuple[int, str]], where: str) -> list[tuple[int, str
     return pairs
 
 
-def _csv_records(lines: list[str], first: int, where: str, delimiter: str) -> list[tuple[int, list[str], str]]:
-    """(line number, cells, text) of each record of CSV or TSV ``lines``
-    (each with its line break; the first is line ``first``), as Python's
-    csv module reads them: a quoted cell may hold line breaks, so a record
-    may span lines. Blank and comment lines between records are skipped.
-    A cell past the csv module's field limit, and a quoted cell still open
-    at the end of the file, are refused naming the line."""
+def _csv_records(rows: list[tuple[int, str]], text: str, where: str,
+                 delimiter: str) -> Iterator[tuple[int, list[str], str]]:
+    """(line number, cells, text) of each record of a CSV or TSV table
+    whose lines that are neither blank nor comments, from its first record
+    on, are ``rows`` (number, text) of the file ``text``, as Python's csv
+    module reads them: a quoted cell may hold line breaks, so a record may
+    span lines (a ``#`` at the start of a cell's second line is no
+    comment). A cell past the csv module's field limit, and a quoted cell
+    still open at the end of the file, are refused naming the line."""
+    if not any(line.count('"') % 2 for _, line in rows):
+        # no line ends inside a quoted cell (that takes an odd count of quotes): a record a line
+        reader = csv.reader([line for _, line in rows], delimiter=delimiter)
+        try:
+            for (n, line), cells in zip(rows, reader):
+                yield n, cells, line
+        except csv.Error as exc:
+            raise _csv_refusal(exc, where, rows[reader.line_num - 1][0]) from None
+        return
+    first = rows[0][0]
+    lines = text.splitlines(keepends=True)[first - 1:]
     at = 0
     fresh = True  # the reader asks for a record's first line: a comment or blank line is skipped there
 
@@ -234,28 +247,31 @@ def _csv_records(lines: list[str], first: int, where: str, delimiter: str) -> li
             yield line
 
     reader = csv.reader(feed(), delimiter=delimiter)
-    records = []
     while True:
         fresh, begin = True, at
         try:
             cells = next(reader)
         except StopIteration:
-            return records
+            return
         except csv.Error as exc:
-            n = first + at - 1
-            if "field limit" in str(exc):
-                raise IsoflowError(f"{where}: line {n}: a cell of more than {csv.field_size_limit():,} characters, "
-                                   "the most Python's csv module reads in one cell") from None
-            raise IsoflowError(f"{where}: line {n}: not read as CSV ({exc})") from None
+            raise _csv_refusal(exc, where, first + at - 1) from None
         begin = next(k for k in range(begin, at) if lines[k].strip() and not lines[k].lstrip().startswith("#"))
-        text = "".join(lines[begin:at])
-        if at - begin > 1 and at == len(lines) and text.count('"') % 2:
+        record = "".join(lines[begin:at])
+        if at - begin > 1 and at == len(lines) and record.count('"') % 2:
             raise IsoflowError(f"{where}: line {first + begin}: a quoted cell opened here is not closed before the "
                                "end of the file")
-        records.append((first + begin, cells, text.rstrip("\r\n")))
+        yield first + begin, cells, record.rstrip("\r\n")
 
 
-def _table_pairs(records: list[tuple[int, list[str], str]], where: str, label_at: int,
+def _csv_refusal(exc: csv.Error, where: str, line: int) -> IsoflowError:
+    """The one line for the csv module's error on ``line``."""
+    if "field limit" in str(exc):
+        return IsoflowError(f"{where}: line {line}: a cell of more than {csv.field_size_limit():,} characters, the "
+                            "most Python's csv module reads in one cell")
+    return IsoflowError(f"{where}: line {line}: not read as CSV ({exc})")
+
+
+def _table_pairs(records: Iterable[tuple[int, list[str], str]], where: str, label_at: int,
                  name_at: int) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each record of a CSV or TSV table
     (:func:`_csv_records`)."""
