@@ -7,6 +7,8 @@ and compared with the names written; ``info --labels --names FILE`` and
 ``surface --labels --names FILE`` put them in the table and the GLB's node
 extras; a file that is none of these is one line, exit 2."""
 
+import csv
+import io
 import json
 import re
 import struct
@@ -206,3 +208,42 @@ def test_a_plain_list_with_a_line_of_another_kind_is_refused_naming_it(tmp_path,
     bad.write_text(text)
     with pytest.raises(IsoflowError, match=re.escape(words)):
         isoflow.read_label_names(bad)
+
+
+def test_a_csv_cell_quoted_across_lines_reads_as_the_csv_module_reads_it(tmp_path):
+    """A quoted cell may hold a line break (legal CSV, as a spreadsheet
+    writes a cell with Alt+Enter); the table was split into lines before
+    the csv module saw it, so the cell's second line was refused as a row
+    of one cell. Each name is the csv module's cell, its line break
+    escaped as any name's is."""
+    text = 'label,name\n1,"left\n# lobe, no comment"\n2,"a ""quoted"" name"\n3,spleen\n'
+    path = tmp_path / "names.csv"
+    path.write_text(text)
+    want = {int(row["label"]): row["name"].replace("\n", "\\n") for row in csv.DictReader(io.StringIO(text))}
+    assert isoflow.read_label_names(path) == want
+
+
+def test_a_csv_cell_past_the_csv_module_s_limit_is_one_line_exit_2(tmp_path, capsys, seg):
+    """A cell longer than the csv module's field limit raised its
+    ``_csv.Error`` through the command line as a traceback."""
+    path = tmp_path / "names.csv"
+    path.write_text("label,name\n1,liver\n2," + "x" * (csv.field_size_limit() + 1) + "\n")
+    code, out, err = said(capsys, "info", seg, "--labels", "--names", path)
+    assert code == 2 and out == "" and len(err) == 1, err
+    assert err[0].startswith(f"isoflow info: error: --names {path}: line 3: ") and "Traceback" not in err[0]
+
+
+@pytest.mark.parametrize("lines", [
+    # the label's name is also a key of the outer object, on an earlier line
+    ['{"name": "kits",', ' "labels": {"background": 0,', '  "kidney": 1,', '  "name": 1}}'],
+    # the key's text, quotes and colon, ends another key
+    ['{"labels": {"background": 0,', '  "kidney \\"tumour": 1,', '  "tumour": 1}}'],
+])
+def test_a_json_label_named_twice_is_refused_naming_the_line_of_its_key(tmp_path, lines):
+    path = tmp_path / "dataset.json"
+    path.write_text("\n".join(lines))
+    labels = json.loads(path.read_text(), object_pairs_hook=list)
+    assert dict(labels)["labels"][-1][1] == 1  # the last label repeats label 1, on the file's last line
+    with pytest.raises(IsoflowError, match=re.escape(f"line {len(lines)}: label 1 is named again (first on line "
+                                                     f"{len(lines) - 1})")):
+        isoflow.read_label_names(path)

@@ -99,6 +99,29 @@ def test_ome_zarr_keeps_the_names_as_image_label_properties(tmp_path, image):
     assert isoflow.read_labels(path).names == NAMES
 
 
+def test_ome_zarr_properties_that_name_no_label_are_said_not_dropped(tmp_path, image, capsys):
+    """An ``image-label`` ``properties`` entry whose label-value is no
+    whole number from 1 on, or whose name is no text, was dropped without
+    a word. A name that is a JSON number is kept as its JSON text; the
+    others are said in one warning naming each entry and what it holds."""
+    path = isoflow.write_labels(image, tmp_path / "seg.zarr")
+    attrs = json.loads((path / ".zattrs").read_text())
+    entries = [{"label-value": 1, "name": "liver"}, {"label-value": 2, "name": 7},
+               {"label-value": "5", "name": "tumour"}, {"label-value": 5.0, "name": ["a"]}]
+    attrs["image-label"] = {"version": "0.4", "properties": entries}
+    (path / ".zattrs").write_text(json.dumps(attrs))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        names = isoflow.read_labels(path).names
+    assert names == {1: "liver", 2: json.dumps(entries[1]["name"])}
+    [said] = [str(w.message) for w in caught if issubclass(w.category, IsoflowWarning)]
+    assert said.startswith(f"{path}: 2 image-label properties entries")
+    assert json.dumps(entries[2]["label-value"]) in said and json.dumps(entries[3]["name"]) in said
+    assert main(["info", str(path), "--labels"]) == 0
+    assert [line for line in capsys.readouterr().err.splitlines() if "warning:" in line] == [
+        f"isoflow info: warning: {said}"]
+
+
 def test_hdf5_keeps_the_names_as_a_dataset_attribute(tmp_path, image):
     import h5py
 

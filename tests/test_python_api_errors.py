@@ -1144,6 +1144,19 @@ def test_digital_object_refuses_a_bool_parity(parity):
     assert str(info.value) == f"'parity' must be 0 (lattice) or 1 (dual lattice), got {bool(parity)}"
 
 
+@pytest.mark.parametrize("shape", [(2, 3, 4), (3, 4, 4), (3, 4), (4, 5, 6)])
+def test_on_dual_lattice_refuses_a_vertex_volume_of_another_shape(shape):
+    # a volume of the object's own shape (or another) was placed on the dual lattice as if it had one
+    # value per lattice vertex: each voxel half a voxel off, the far vertices missing
+    obj = isoflow.DigitalObject(np.ones((2, 3, 4), bool))
+    vertices = tuple(n + 1 for n in obj.volume.shape)  # a box of n voxels has n + 1 vertices a side
+    assert obj.on_dual_lattice(np.ones(vertices, bool)).volume.shape == vertices
+    with pytest.raises(IsoflowError) as info:
+        obj.on_dual_lattice(np.ones(shape, bool))
+    assert str(info.value).count("\n") == 0
+    assert f"shape {shape}, not {vertices}" in str(info.value)
+
+
 @pytest.mark.parametrize(("field", "value", "kind"), [
     ("origin", (True, 0, 0), "numbers"), ("origin", np.ones(3, bool), "numbers"), ("origin", (np.True_, 0.5, 2.0), "numbers"),
     ("offset", (0, 0, True), "integers"), ("offset", np.zeros(3, bool), "integers"),

@@ -492,6 +492,28 @@ def test_voxelize_split_prints_the_names_of_the_solids(tmp_path, capsys, named_s
     assert set(np.unique(read_labels(out).array).tolist()) == {0, 1, 2, 3}
 
 
+def test_voxelize_split_of_an_archive_follows_each_stl_s_order_of_solids(tmp_path, capsys, named_solids):
+    """In an archive, an STL's named solids were labelled in the order of
+    their names (trimesh's scene of the member holds them by name), the
+    same file given alone in the file's order. Labels follow the members'
+    natural order, then each member's solids as its text lists them."""
+    import re
+    import zipfile
+
+    archive = tmp_path / "parts.zip"
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(named_solids, "b_parts.stl")
+        trimesh.creation.box((0.5, 0.5, 0.5)).apply_translation((4.0, 0, 0)).export(tmp_path / "a_box.stl")
+        z.write(tmp_path / "a_box.stl", "a_box.stl")
+    solids = re.findall(r"^solid (\S+)$", named_solids.read_text(), re.MULTILINE)
+    assert solids != sorted(solids)  # the file's order is not that of the names
+    out = tmp_path / "parts.npz"
+    _run(capsys, "voxelize", archive, "--split", "--pitch", "0.05", "-o", out)
+    names = read_labels(out).names
+    assert list(names.values()) == [f"{archive}:a_box.stl", *(f"{archive}:b_parts.stl:{s}" for s in solids)]
+    assert list(names) == list(range(1, len(solids) + 2))
+
+
 def test_named_solids_keep_their_bodies_together_and_repeated_names_are_made_unique(tmp_path):
     """A solid of two bodies is one label; a name two solids share is
     made unique as trimesh names the solids (``lid``, ``lid_1``)."""

@@ -262,7 +262,11 @@ def label_table(
         present, in increasing order); integers, Python's or NumPy's (a
         float, even 1.0, or a bool is refused). A label absent from the image gets
         a row of zeros (NaN box and centroid), as ``analyze`` of an empty
-        mask.
+        mask. Label 0 is the background, which the default leaves out;
+        asked for, it gets its row as any label does, ``analyze(image ==
+        0)``: the space around the labels as a shape (a porous medium's
+        pores where 0 marks them), the labels it encloses its cavities,
+        never named (as ``info --labels 0,3`` gives it).
     surfaces : bool
         Count the closed surfaces of every label's boundary mesh (the
         columns of :data:`SURFACE_COLUMNS`; 3D only).
@@ -332,6 +336,13 @@ def label_table(
     >>> t = label_table(image)
     >>> t["label"].tolist(), t["voxels"].tolist(), t["b2"].tolist(), t["genera"].tolist()
     ([3, 7], [8, 56], [0, 1], [(0,), (0, 0)])
+
+    The background asked for: every voxel but the labels', the labelled
+    block one cavity in it
+
+    >>> t = label_table(image, labels=[0, 3])
+    >>> t["voxels"].tolist(), int((image == 0).sum()), t["b2"].tolist()
+    ([152, 8], 152, [1, 0])
 
     A 2D segmentation: a ring of four cells around a fifth
 

@@ -384,7 +384,7 @@ class DigitalObject:
             offset=tuple(int(o + a) for o, a in zip(self.offset, lo)),
         )
 
-    def on_dual_lattice(self, vertex_volume: np.ndarray) -> DigitalObject:
+    def on_dual_lattice(self, vertex_volume: np.ndarray | None = None) -> DigitalObject:
         """A volume indexed by this object's lattice vertices, as an object on
         the other lattice (eq. 5.1): its voxel ``w`` is the cube centred at
         vertex ``w``. ``vertex_volume`` has this volume's shape plus one per
@@ -394,13 +394,22 @@ class DigitalObject:
 
         Parameters
         ----------
-        vertex_volume : numpy.ndarray
-            Bool, one per lattice vertex of this object's volume.
+        vertex_volume : numpy.ndarray of bool, optional
+            One per lattice vertex of this object's volume: its shape that
+            volume's plus one per axis. Omitted, the result is the
+            placement alone, an empty volume (where a step's voxels are
+            placed before they are known).
 
         Returns
         -------
         DigitalObject
             On the other lattice, with this one's pitch and origin.
+
+        Raises
+        ------
+        IsoflowError
+            ``vertex_volume`` of another shape, naming the shape expected
+            and the one given.
 
         Examples
         --------
@@ -409,7 +418,17 @@ class DigitalObject:
         >>> touched = cube.on_dual_lattice(configurations(cube.volume) > 0)  # the vertices a voxel touches
         >>> touched.volume.shape, touched.offset, touched.parity, touched.voxels
         ((3, 3, 3), (-1, -1, -1), 1, 27)
+        >>> cube.on_dual_lattice().volume.shape, cube.on_dual_lattice().offset
+        ((0, 0, 0), (-1, -1, -1))
         """
+        if vertex_volume is None:
+            vertex_volume = np.zeros((0,) * self.ndim, bool)
+        else:
+            expected = tuple(n + 1 for n in self.volume.shape)
+            if np.shape(vertex_volume) != expected:
+                raise IsoflowError(f"on_dual_lattice: vertex_volume has shape {np.shape(vertex_volume)}, not "
+                                   f"{expected}: one per lattice vertex of this object's volume of shape "
+                                   f"{self.volume.shape}, its shape plus one per axis")
         offset = tuple(o - 1 for o in self.offset) if self.parity == 0 else self.offset
         return replace(self, volume=vertex_volume, offset=offset, parity=1 - self.parity)
 

@@ -177,7 +177,7 @@ def packed_step(state: PackedObject, connectivity: int) -> PackedObject:
     (2, 3, 4)
     """
     if not state.voxels:
-        return replace(state, place=state.place.on_dual_lattice(state.place.volume))
+        return replace(state, place=state.place.on_dual_lattice())
     return from_vertex_rows(state, vertex_rows(state, connectivity))
 
 
@@ -237,7 +237,7 @@ def from_vertex_rows(state: PackedObject, rows: np.ndarray) -> PackedObject:
     """
     nd = state.ndim
     bits, shape, lo, runs, gaps = flowbits.crop(rows, vertex_shape(state))
-    place = state.place.on_dual_lattice(state.place.volume)
+    place = state.place.on_dual_lattice()
     lo = lo[3 - nd:]
     if shape[0]:
         shape = shape[3 - nd:]

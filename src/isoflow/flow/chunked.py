@@ -349,7 +349,7 @@ class ChunkedFlow(ArrayFlow):
             boxes = [b for b in self._compute(*(
                 delayed(_slab_keep, pure=False)(state.path, shape, a, b, table, below[s], above[s], str(scratch))
                 for s, (a, b) in enumerate(parts))) if b is not None]
-            place = state.place.on_dual_lattice(state.place.volume)
+            place = state.place.on_dual_lattice()
             if not boxes:
                 self._step += 1
                 return StoredObject(None, (0, 0, 0), place, 0)

@@ -213,7 +213,6 @@ def solid_bodies(path: Path) -> list[Body] | None:
     >>> [b.name[len(str(p)):] for b in solid_bodies(p)]
     [':bolt', ':2', ':bolt_1']
     """
-    from .readers import stl_solids
     from .sniff import sniff_mesh_format
 
     if not path.name.lower().endswith(STL_SUFFIXES):
@@ -226,17 +225,45 @@ def solid_bodies(path: Path) -> list[Body] | None:
             data = head + fh.read()
     except OSError:
         return None  # load_mesh says what is wrong with the file
+    return stl_solid_bodies(data, str(path))
+
+
+def stl_solid_bodies(data: bytes, name: str) -> list[Body] | None:
+    """:func:`solid_bodies` of an STL file's bytes (an archive's member),
+    each body named ``name:SOLID``, in the file's order; None where the
+    file is no ASCII STL of several solids some of which are named.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's content.
+    name : str
+        The file, as the bodies' names start.
+
+    Returns
+    -------
+    list of Body or None
+
+    Examples
+    --------
+    >>> facet = b"facet normal 0 0 1\\nouter loop\\nvertex 0 0 0\\nvertex 1 0 0\\nvertex 0 1 0\\nendloop\\nendfacet\\n"
+    >>> [b.name for b in stl_solid_bodies(b"solid zeta\\n" + facet + b"endsolid\\nsolid alpha\\n" + facet + b"endsolid\\n",
+    ...                                   "parts.zip:a.stl")]
+    ['parts.zip:a.stl:zeta', 'parts.zip:a.stl:alpha']
+    """
+    from .readers import stl_solids
+
     solids = stl_solids(data)
-    if solids is None or len(solids) < 2 or not any(name for name, _ in solids):
+    if solids is None or len(solids) < 2 or not any(solid for solid, _ in solids):
         return None
     from trimesh.util import unique_name
 
     taken: dict[str, None] = {}
     bodies = []
-    for k, (name, (v, f)) in enumerate(solids, 1):
-        name = unique_name(name or str(k), taken)
-        taken[name] = None
-        where = f"{path}:{name}"
+    for k, (solid, (v, f)) in enumerate(solids, 1):
+        solid = unique_name(solid or str(k), taken)
+        taken[solid] = None
+        where = f"{name}:{solid}"
         v, f = weld(*check_mesh(v, f, where), where=where)
         if len(f):  # (every face degenerate: nothing to fill)
             bodies.append(Body(where, v, f))
@@ -257,16 +284,25 @@ def node_bodies(path: Path) -> list[Body]:
 def archive_bodies(path: Path, kind: str) -> list[Body]:
     """One body per node of each mesh file in an archive, named
     ``FILE:MEMBER`` (``FILE:MEMBER:NODE`` where the member is a scene of
-    several), in the natural order of the member names. trimesh's scene of
-    a whole archive names the nodes of its members at random
+    several, ``FILE:MEMBER:SOLID`` for the named solids of an ASCII STL),
+    in the natural order of the member names, then in each member's own
+    order (an STL's solids as the file lists them, as
+    :func:`solid_bodies` takes a file's). trimesh's scene of a whole
+    archive names the nodes of its members at random
     (``geometry_0f7d...``), so that order, the labels', would change from
-    one run to the next."""
+    one run to the next; the order of the names is the one the files have
+    unpacked, whichever archiver stored them."""
     import trimesh
 
     check_mesh_file(path)
     bodies: list[Body] = []
     with reading_mesh(path):
         for member, member_kind, data, scene in mesh_members(path, kind, key=natural_key):
+            # trimesh's scene holds an STL's solids by name: the file's order is read from its text
+            solids = stl_solid_bodies(data, f"{path}:{member}") if member_kind == "stl" else None
+            if solids is not None:
+                bodies += solids
+                continue
             order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
             meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
                                                                             trimesh.Trimesh)]

@@ -27,10 +27,12 @@ refused naming the line.
 
 from __future__ import annotations
 
+import bisect
 import csv
 import json
 import os
 import re
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ...errors import IsoflowError, check_path, line_text
@@ -144,7 +146,7 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
                 and not line.lstrip().startswith("#")]
         if not rows:
             raise IsoflowError(f"{where}: holds no label names (no line but comments); {EXPECTED}")
-        pairs = _text_pairs(rows, where, suffix)
+        pairs = _text_pairs(rows, text, where, suffix)
     found: dict[int, str] = {}
     first: dict[int, str] = {}
     for label, name, at in pairs:
@@ -162,17 +164,18 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
-def _text_pairs(rows: list[tuple[int, str]], where: str, suffix: str) -> list[tuple[int, str, str]]:
+def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each data line of a colour table,
     an ITK-SNAP file, a plain list of lines ``index name`` or a CSV/TSV
-    table."""
+    table; ``rows`` the lines of the file ``text`` that are neither blank
+    nor comments (number, text)."""
     number, head = rows[0]
     delimiter = "\t" if suffix == ".tsv" or ("\t" in head and "," not in head) else ","
-    cells = [c.strip().lower() for c in next(csv.reader([head], delimiter=delimiter))]
+    cells = [c.strip().lower() for c in next(_csv_records(rows[:1], text, where, delimiter))[1]]
     name_at = next((cells.index(c) for c in NAME_COLUMNS if c in cells), None)
     label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
     if name_at is not None and label_at is not None:
-        return _table_pairs(rows[1:], where, delimiter, label_at, name_at)
+        return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
     if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
         raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
                            f"and a name column ({', '.join(NAME_COLUMNS)}) is expected, not {_shown(head)}")
@@ -210,12 +213,70 @@ def _plain_pairs(rows: list[tuple[int, str]], where: str) -> list[tuple[int, str
     return pairs
 
 
-def _table_pairs(rows: list[tuple[int, str]], where: str, delimiter: str, label_at: int,
+def _csv_records(rows: list[tuple[int, str]], text: str, where: str,
+                 delimiter: str) -> Iterator[tuple[int, list[str], str]]:
+    """(line number, cells, text) of each record of a CSV or TSV table
+    whose lines that are neither blank nor comments, from its first record
+    on, are ``rows`` (number, text) of the file ``text``, as Python's csv
+    module reads them: a quoted cell may hold line breaks, so a record may
+    span lines (a ``#`` at the start of a cell's second line is no
+    comment). A cell past the csv module's field limit, and a quoted cell
+    still open at the end of the file, are refused naming the line."""
+    if not any(line.count('"') % 2 for _, line in rows):
+        # no line ends inside a quoted cell (that takes an odd count of quotes): a record a line
+        reader = csv.reader([line for _, line in rows], delimiter=delimiter)
+        try:
+            for (n, line), cells in zip(rows, reader):
+                yield n, cells, line
+        except csv.Error as exc:
+            raise _csv_refusal(exc, where, rows[reader.line_num - 1][0]) from None
+        return
+    first = rows[0][0]
+    lines = text.splitlines(keepends=True)[first - 1:]
+    at = 0
+    fresh = True  # the reader asks for a record's first line: a comment or blank line is skipped there
+
+    def feed():
+        nonlocal at, fresh
+        while at < len(lines):
+            line = lines[at]
+            at += 1
+            if fresh and (not line.strip() or line.lstrip().startswith("#")):
+                continue
+            fresh = False
+            yield line
+
+    reader = csv.reader(feed(), delimiter=delimiter)
+    while True:
+        fresh, begin = True, at
+        try:
+            cells = next(reader)
+        except StopIteration:
+            return
+        except csv.Error as exc:
+            raise _csv_refusal(exc, where, first + at - 1) from None
+        begin = next(k for k in range(begin, at) if lines[k].strip() and not lines[k].lstrip().startswith("#"))
+        record = "".join(lines[begin:at])
+        if at - begin > 1 and at == len(lines) and record.count('"') % 2:
+            raise IsoflowError(f"{where}: line {first + begin}: a quoted cell opened here is not closed before the "
+                               "end of the file")
+        yield first + begin, cells, record.rstrip("\r\n")
+
+
+def _csv_refusal(exc: csv.Error, where: str, line: int) -> IsoflowError:
+    """The one line for the csv module's error on ``line``."""
+    if "field limit" in str(exc):
+        return IsoflowError(f"{where}: line {line}: a cell of more than {csv.field_size_limit():,} characters, the "
+                            "most Python's csv module reads in one cell")
+    return IsoflowError(f"{where}: line {line}: not read as CSV ({exc})")
+
+
+def _table_pairs(records: Iterable[tuple[int, list[str], str]], where: str, label_at: int,
                  name_at: int) -> list[tuple[int, str, str]]:
-    """(label, name, where it is) of each row of a CSV or TSV table."""
+    """(label, name, where it is) of each record of a CSV or TSV table
+    (:func:`_csv_records`)."""
     pairs = []
-    for n, line in rows:
-        cells = next(csv.reader([line], delimiter=delimiter))
+    for n, cells, line in records:
         if len(cells) <= max(label_at, name_at):
             raise IsoflowError(f"{where}: line {n}: {len(cells)} cells, the header's label and name columns "
                                f"need {max(label_at, name_at) + 1}: {_shown(line)}")
@@ -235,15 +296,15 @@ def _json_pairs(text: str, where: str) -> list[tuple[int, str, str]]:
         raise IsoflowError(f"{where}: not a file of label names (no JSON: {exc}); {EXPECTED}") from None
     if not isinstance(data, list) or (data and not isinstance(data[0], tuple)):
         raise IsoflowError(f"{where}: JSON of label names is an object, not {type(data).__name__}; {EXPECTED}")
-    inner = next((v for k, v in data if k == "labels" and isinstance(v, list) and all(
+    inner = next((i for i, (k, v) in enumerate(data) if k == "labels" and isinstance(v, list) and all(
         isinstance(p, tuple) for p in v)), None)
-    pairs = data if inner is None else inner
-    seen: dict[str, int] = {}
+    pairs = data if inner is None else data[inner][1]
+    keys, children = _json_keys(text)
+    lines = keys[0] if inner is None else keys[children[(0, inner)]]
     out = []
     by_label = all(_INTEGER.fullmatch(k) for k, _ in pairs)  # isoflow's label_names, nnU-Net v1's "labels"
-    for key, value in pairs:
-        at = _json_line(text, key, seen.setdefault(key, 0))
-        seen[key] += 1
+    for (key, value), line in zip(pairs, lines):
+        at = f"line {line}"
         if by_label:
             if not isinstance(value, str):
                 raise IsoflowError(f"{where}: {at}: the name of label {key.strip()} is {json.dumps(value)}, not a "
@@ -260,13 +321,33 @@ def _json_pairs(text: str, where: str) -> list[tuple[int, str, str]]:
     return out
 
 
-def _json_line(text: str, key: str, occurrence: int) -> str:
-    """``line N`` of the ``occurrence``-th (from 0) place where ``key`` is
-    a JSON key, for a refusal."""
-    spots = [m.start() for m in re.finditer(re.escape(json.dumps(key)) + r"\s*:", text)]
-    if occurrence >= len(spots):  # written with escapes json.dumps does not use
-        return f"key {json.dumps(key)}"
-    return f"line {text.count(chr(10), 0, spots[occurrence]) + 1}"
+def _json_keys(text: str) -> tuple[list[list[int]], dict[tuple[int, int], int]]:
+    """Where the keys of valid JSON ``text`` are: the line of each key of
+    each object (objects numbered in the order they open, the outermost 0),
+    and the object that is the value of key ``k`` of object ``o`` by
+    ``(o, k)``. Keys are told by their place, after ``{`` or ``,`` in an
+    object, so a key's text inside a string or as a key of another object
+    is not taken for it."""
+    breaks = [m.start() for m in re.finditer("\n", text)]
+    keys: list[list[int]] = []
+    children: dict[tuple[int, int], int] = {}
+    stack: list[int | None] = []  # the open containers: an object's number, None for an array
+    previous = ""
+    for match in re.finditer(r'"(?:[^"\\]|\\.)*"|[{}\[\]:,]', text):
+        token = match.group()
+        if token == "{":
+            if previous == ":" and stack and stack[-1] is not None:
+                children[(stack[-1], len(keys[stack[-1]]) - 1)] = len(keys)
+            stack.append(len(keys))
+            keys.append([])
+        elif token == "[":
+            stack.append(None)
+        elif token in "]}":
+            stack.pop()
+        elif token.startswith('"') and previous in ("{", ",") and stack and stack[-1] is not None:
+            keys[stack[-1]].append(bisect.bisect(breaks, match.start()) + 1)
+        previous = token if not token.startswith('"') else '"'
+    return keys, children
 
 
 def _shown(line: str, width: int = 60) -> str:

@@ -35,6 +35,7 @@ unit given as each axis's ``unit`` in its UDUNITS name (``micrometer``,
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import shutil
 from collections.abc import Callable
@@ -46,7 +47,7 @@ from numpy.typing import ArrayLike
 
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
-from ...errors import IsoflowError, check_path
+from ...errors import IsoflowError, check_path, counted, warn
 from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
 from .registry import (
     UDUNITS,
@@ -168,21 +169,32 @@ def read(path: Path, dataset: str | None = None, time: int | None = None) -> Raw
     if len(xyz) == 4:  # time keeps step 1 from 0, as a 4D NIfTI's does: a lattice axis, not seconds
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
     return RawVolume(to_xyz(data, names, where), pitch, origin, fill=fill, unwritten=blank,
-                     unit=axis_unit(multiscale, xyz, where), names=label_properties(array))
+                     unit=axis_unit(multiscale, xyz, where), names=label_properties(array, where))
 
 
-def label_properties(array) -> dict[int, str] | None:
+def label_properties(array, where: str | None = None) -> dict[int, str] | None:
     """The names of an OME-Zarr label image's labels: the ``name`` of each
     entry of its ``image-label`` ``properties`` (NGFF 0.4; under ``ome``
-    in 0.5) with a whole ``label-value``, from the group that holds the
-    level ``array``, a line break in it escaped
+    in 0.5) with a whole ``label-value`` (``2`` or ``2.0``), from the group
+    that holds the level ``array``, a line break in it escaped
     (:func:`~isoflow.mesh.formats.registry.one_line_name`); None where it
     names none.
+
+    A name that is a JSON number (``"name": 7``) is kept as its text
+    (``'7'``), as the name a viewer shows; an entry without a ``name`` (or
+    with ``null``) leaves its label unnamed, and one for label 0, the
+    background, is left out. An entry whose ``name`` is anything else
+    (true, a list, an object), or whose ``label-value`` is no whole number
+    from 1 on (``"3"``, ``2.5``, -1, missing), is left out with one
+    :class:`~isoflow.errors.IsoflowWarning` naming each such entry and what
+    it holds, rather than dropped without a word.
 
     Parameters
     ----------
     array : zarr.Array
         A level of the image, as :func:`~isoflow.scale.chunks.open_zarr_node` opens it.
+    where : str, optional
+        The image as the warning names it; the store's path by default.
 
     Returns
     -------
@@ -197,6 +209,9 @@ def label_properties(array) -> dict[int, str] | None:
     >>> g.attrs["image-label"] = {"properties": [{"label-value": 2, "name": "tumour"}, {"label-value": 1}]}
     >>> label_properties(level)
     {2: 'tumour'}
+    >>> g.attrs["image-label"] = {"properties": [{"label-value": 1, "name": 7}, {"label-value": 2.0, "name": "spleen"}]}
+    >>> label_properties(level)
+    {1: '7', 2: 'spleen'}
     """
     zarr = import_library("zarr", "OME-Zarr")
     try:
@@ -208,11 +223,45 @@ def label_properties(array) -> dict[int, str] | None:
     label = attrs.get("image-label") or (ome.get("image-label") if isinstance(ome, dict) else None)
     properties = label.get("properties") if isinstance(label, dict) else None
     found = {}
-    for entry in properties if isinstance(properties, list) else []:
-        value = entry.get("label-value") if isinstance(entry, dict) else None
-        if isinstance(value, int) and not isinstance(value, bool) and value >= 1 and isinstance(entry.get("name"), str):
-            found[value] = one_line_name(entry["name"])  # one line, as a table's row and write_labels take it
+    skipped = []
+    for n, entry in enumerate(properties if isinstance(properties, list) else [], 1):
+        if not isinstance(entry, dict):
+            skipped.append(f"entry {n} is {_json_text(entry)}, not an object")
+            continue
+        value, name = entry.get("label-value"), entry.get("name")
+        if name is None:  # a label described (colour, class) but not named
+            continue
+        number = _number(value)
+        label = int(number) if number is not None and number.is_integer() else None
+        if label == 0:  # the background, which no table row or file names
+            continue
+        if label is None or label < 0:
+            skipped.append(f"entry {n} (name {_json_text(name)}) has label-value {_json_text(value)}, not a whole "
+                           "number from 1 on")
+        elif isinstance(name, str):
+            found[label] = one_line_name(name)  # one line, as a table's row and write_labels take it
+        elif _number(name) is not None:  # "name": 7, as a viewer shows it
+            found[label] = json.dumps(name)
+        else:
+            skipped.append(f"label {label}'s name is {_json_text(name)}, not text")
+    if skipped:
+        shown = "; ".join(skipped[:3]) + (f"; and {len(skipped) - 3} more" if len(skipped) > 3 else "")
+        entries = counted(len(skipped), "image-label properties entry", "image-label properties entries")
+        warn(f"{where or array.store}: {entries} not read as a label name: {shown}")
     return dict(sorted(found.items())) or None
+
+
+def _number(value: object) -> float | None:
+    """A JSON number as a float (not true or false), else None."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value):
+        return float(value)
+    return None
+
+
+def _json_text(value: object, width: int = 40) -> str:
+    """A metadata value as a warning quotes it: its JSON, cut short."""
+    text = json.dumps(value, ensure_ascii=False, default=str)
+    return text if len(text) <= width else text[:width - 3] + "..."
 
 
 @dataclasses.dataclass(frozen=True)
@@ -689,7 +738,7 @@ class LabelSlabs:
         self.layers = list(blocks[self.xyz[self.axes[0]]])
         self.pitch, self.origin, self.unit = pitch, origin, store.unit()
         #: label value to name, where the image's ``image-label`` names them (:func:`label_properties`)
-        self.names = None if store.multiscale is None else label_properties(array)
+        self.names = None if store.multiscale is None else label_properties(array, self.where)
         never_written(self.where, unwritten_fill(array), table=True)
 
     def __getitem__(self, region):
