@@ -122,6 +122,16 @@ def test_ome_zarr_properties_that_name_no_label_are_said_not_dropped(tmp_path, i
         f"isoflow info: warning: {said}"]
 
 
+def test_ome_zarr_names_a_64_bit_label_past_a_float(tmp_path):
+    """A ``label-value`` past 2**53 names that label, not the float
+    nearest it (uint64 label images hold such values)."""
+    big = 2**60 + 1
+    labels = np.zeros((2, 2, 2), np.uint64)
+    labels[0, 0, 0] = big
+    path = isoflow.write_labels(labels, tmp_path / "seg.zarr", names={big: "cell"})
+    assert isoflow.read_labels(path).names == {big: "cell"}
+
+
 def test_hdf5_keeps_the_names_as_a_dataset_attribute(tmp_path, image):
     import h5py
 

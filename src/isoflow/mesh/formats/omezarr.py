@@ -232,7 +232,9 @@ def label_properties(array, where: str | None = None) -> dict[int, str] | None:
         if name is None:  # a label described (colour, class) but not named
             continue
         number = _number(value)
-        label = int(number) if number is not None and number.is_integer() else None
+        # an integer as it is (a float would round labels past 2**53), a whole float as its integer
+        label = (value if isinstance(value, int) and not isinstance(value, bool)
+                 else int(number) if number is not None and number.is_integer() else None)
         if label == 0:  # the background, which no table row or file names
             continue
         if label is None or label < 0:
