@@ -629,17 +629,23 @@ def _spill_all(pairs, near):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _add(pairs, near, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp):
+def _packed(sheets, quarters):
+    """Sheets and their quarters of faces in one word of the pair table."""
+    return sheets | (quarters << 32)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _add(pairs, near, p, q, how, pq, qp):
     """Add to the pair of pieces p != q: the closer ``how`` they touch, the
     sheets (and their quarters of faces) whose object voxel is in p and
-    background voxel in q, and those the other way, each direction in one
-    word (sheets in the low half, quarters in the high). The sums gather
-    in the near cache (``near``: a small pair table, one slot per hash),
-    whose slot's pair, if another, goes to the pair table first. Returns
-    the new pairs of the pair table (0 or 1)."""
+    background voxel in q (``pq``), and those the other way (``qp``), each
+    direction in one word (sheets in the low half, quarters in the high:
+    :func:`_packed`). The sums gather in the near cache (``near``: a small
+    pair table, one slot per hash), whose slot's pair, if another, goes to
+    the pair table first. Returns the new pairs of the pair table (0 or
+    1)."""
     if p > q:
-        p, q = q, p
-        sheets_pq, quarters_pq, sheets_qp, quarters_qp = sheets_qp, quarters_qp, sheets_pq, quarters_pq
+        p, q, pq, qp = q, p, qp, pq
     key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
     c = ((key * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)) & np.uint64(len(near) - 1)
     new = 0
@@ -652,8 +658,8 @@ def _add(pairs, near, p, q, how, sheets_pq, quarters_pq, sheets_qp, quarters_qp)
         near[c, 3] = 0
     if how < near[c, 1]:
         near[c, 1] = how
-    near[c, 2] += np.uint64(sheets_pq | (quarters_pq << 32))
-    near[c, 3] += np.uint64(sheets_qp | (quarters_qp << 32))
+    near[c, 2] += np.uint64(pq)
+    near[c, 3] += np.uint64(qp)
     return new
 
 
@@ -749,11 +755,11 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, base, features, tab
 @njit(cache=True, nogil=True, inline="always")
 def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table, nsheet, sheet_obj, sheet_bg,
              quarter, spokes, doubled, contact, pairs, near, pid, pmask, pval, slot, local, same):
-    """A block of three pieces or more: every label of the block (its
-    pieces' octants together), its sheets summed per pair of the block's
-    pieces in ``local`` (m x m x 2; ``slot[o]``: the index among them of
-    octant o's piece), then one entry per pair; ``w`` vertices have this
-    block. The pieces and labels come from masks of equal octants
+    """A block of any number of pieces (:func:`_block` gives it those of
+    four or more): every label of the block (its pieces' octants
+    together), its sheets summed per pair of the block's pieces in
+    ``local`` (m x m x 2; ``slot[o]``: the index among them of octant o's
+    piece), then one entry per pair; ``w`` vertices have this block. The pieces and labels come from masks of equal octants
     (``same[o]``: the octants that hold octant o's piece), compared all at
     once rather than searched for. Returns the number of new pairs."""
     for o in range(8):
@@ -801,8 +807,8 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
         for t in range(u + 1, m):
             how = contact[pmask[u], pmask[t]]
             if how < NONE or local[u, t, 0] != 0 or local[t, u, 0] != 0:
-                new += _add(pairs, near, pid[u], pid[t], how, local[u, t, 0], local[u, t, 1], local[t, u, 0],
-                            local[t, u, 1])
+                new += _add(pairs, near, pid[u], pid[t], how, _packed(local[u, t, 0], local[u, t, 1]),
+                            _packed(local[t, u, 0], local[t, u, 1]))
     return new
 
 
@@ -834,6 +840,90 @@ def _value(pvalues, vbase, piece):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _slot3(m1, m2, o):
+    """Which of a block's three pieces holds octant o: 0, 1 (the octants
+    of mask ``m1``) or 2 (of ``m2``)."""
+    return ((m1 >> o) & 1) + 2 * ((m2 >> o) & 1)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sheets3(c, w, m1, m2, nsheet, sheet_obj, sheet_bg, quarter, s01, s10, s02, s20, s12, s21):
+    """The sheets of configuration c at ``w`` vertices added to the sums
+    ``s<u><t>`` (:func:`_packed`) of the ordered pairs (u, t) of a block's
+    three pieces (:func:`_slot3`). Each sheet adds to the one sum its
+    octants pick, the others add zero: no branch per sheet."""
+    for s_ in range(nsheet[c]):
+        at = 3 * _slot3(m1, m2, sheet_obj[c, s_]) + _slot3(m1, m2, sheet_bg[c, s_])
+        add = _packed(w, w * quarter[c, s_])
+        s01 += add * (at == 1)
+        s02 += add * (at == 2)
+        s10 += add * (at == 3)
+        s12 += add * (at == 5)
+        s20 += add * (at == 6)
+        s21 += add * (at == 7)
+    return s01, s10, s02, s20, s12, s21
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _three(pa, pb, pc, m0, m1, m2, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, base, features, table,
+           nsheet, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near):
+    """A block of three pieces, which ``w`` vertices (i, j, k .. k + w - 1)
+    have: ``pa`` holds the octants of mask ``m0`` (octant 0 among them),
+    ``pb`` those of ``m1`` (the first octant outside ``m0``), ``pc`` the
+    rest (``m2``). What :func:`_several` does for any number of pieces,
+    written out for three, the most common of them (on a map of small
+    grains, most blocks of more than two pieces): the pieces' order is
+    known, so each label's octants and the pair of each sheet come from
+    the three masks, and the six sums stay in registers. Returns the
+    number of new pairs."""
+    va, vb, vc = _value(pvalues, vbase, pa), _value(pvalues, vbase, pb), _value(pvalues, vbase, pc)
+    # two pieces of one label (the outside, piece 0, holds none)
+    ab = pa != 0 and pb != 0 and va == vb
+    ac = pa != 0 and pc != 0 and va == vc
+    bc = pb != 0 and pc != 0 and vb == vc
+    s01, s10, s02, s20, s12, s21 = 0, 0, 0, 0, 0, 0
+    # each label at its first piece, with the octants of all of its pieces
+    if pa != 0 and want[pa - base]:
+        c = m0 | (m1 if ab else 0) | (m2 if ac else 0)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pa, c, va, base, features, table, doubled, spokes)
+        s01, s10, s02, s20, s12, s21 = _sheets3(c, w, m1, m2, nsheet, sheet_obj, sheet_bg, quarter, s01, s10, s02,
+                                                s20, s12, s21)
+    if pb != 0 and not ab and want[pb - base]:
+        c = m1 | (m2 if bc else 0)
+        _label(flat, ny, nz, a, nx, i, j, k, w, pb, c, vb, base, features, table, doubled, spokes)
+        s01, s10, s02, s20, s12, s21 = _sheets3(c, w, m1, m2, nsheet, sheet_obj, sheet_bg, quarter, s01, s10, s02,
+                                                s20, s12, s21)
+    if pc != 0 and not ac and not bc and want[pc - base]:
+        _label(flat, ny, nz, a, nx, i, j, k, w, pc, m2, vc, base, features, table, doubled, spokes)
+        s01, s10, s02, s20, s12, s21 = _sheets3(m2, w, m1, m2, nsheet, sheet_obj, sheet_bg, quarter, s01, s10, s02,
+                                                s20, s12, s21)
+    new = 0
+    how = contact[m0, m1]
+    if how < NONE or s01 != 0 or s10 != 0:
+        new += _add(pairs, near, pa, pb, how, s01, s10)
+    how = contact[m0, m2]
+    if how < NONE or s02 != 0 or s20 != 0:
+        new += _add(pairs, near, pa, pc, how, s02, s20)
+    how = contact[m1, m2]
+    if how < NONE or s12 != 0 or s21 != 0:
+        new += _add(pairs, near, pb, pc, how, s12, s21)
+    return new
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _outside(m, a1, a2, a3, b0, b1, b2, b3):
+    """The piece of the first octant (1 .. 7) outside mask ``m`` (which
+    holds octant 0 and not all eight; no branches)."""
+    q = b3
+    q = b2 if not (m >> 6) & 1 else q
+    q = b1 if not (m >> 5) & 1 else q
+    q = b0 if not (m >> 4) & 1 else q
+    q = a3 if not (m >> 3) & 1 else q
+    q = a2 if not (m >> 2) & 1 else q
+    return a1 if not (m >> 1) & 1 else q
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase, features,
            table, sheets, doubled, contact, pairs, near, deferred, count):
     """A block of two pieces or more (octant ``q`` of the column at dz = 0
@@ -841,9 +931,11 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     vertices (i, j, k .. k + w - 1) have. Two pieces, the common case, are
     read from the ids as they are: each piece is its label's whole
     configuration there, and all of its sheets separate it from the other.
-    A block of three pieces or more is put off (its ids, k and w appended
-    to ``deferred``, ``count[0]`` of them) for :func:`_deferred`, so that
-    the vertex rows' loop holds the common case only. ``sheets``: the sheet
+    Three pieces, the next most common (where three grains meet along a
+    line), are read from their three masks (:func:`_three`). A block of
+    four pieces or more is put off (its ids, k and w appended to
+    ``deferred``, ``count[0]`` of them) for :func:`_deferred`, so that the
+    vertex rows' loop holds no loop over a block's pieces. ``sheets``: the sheet
     tables (``nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes``).
     Returns the number of new pairs."""
     nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
@@ -852,6 +944,11 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     pb = _other(pa, a1, a2, a3, b0, b1, b2, b3)
     m1 = _mask8(pb, a0, a1, a2, a3, b0, b1, b2, b3)
     if (m0 | m1) != 255:
+        pc = _outside(m0 | m1, a1, a2, a3, b0, b1, b2, b3)
+        m2 = _mask8(pc, a0, a1, a2, a3, b0, b1, b2, b3)
+        if (m0 | m1 | m2) == 255:
+            return _three(pa, pb, pc, m0, m1, m2, pvalues, vbase, flat, ny, nz, a, nx, i, j, k, w, want, fbase,
+                          features, table, nsheet, sheet_obj, sheet_bg, quarter, spokes, doubled, contact, pairs, near)
         d = count[0]
         deferred[d, 0], deferred[d, 1], deferred[d, 2], deferred[d, 3] = a0, a1, a2, a3
         deferred[d, 4], deferred[d, 5], deferred[d, 6], deferred[d, 7] = b0, b1, b2, b3
@@ -860,7 +957,7 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
         return 0
     if pa != 0 and pb != 0 and pvalues[pa - vbase] == pvalues[pb - vbase]:
         # one label, two pieces touching by an edge or a vertex
-        return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0, 0, 0)
+        return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0)
     na, nb = 0, 0
     if pa != 0 and want[pa - fbase]:
         na = w * nsheet[m0]
@@ -868,7 +965,8 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     if pb != 0 and want[pb - fbase]:
         nb = w * nsheet[m1]
         _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues[pb - vbase], fbase, features, table, doubled, spokes)
-    return _add(pairs, near, pa, pb, contact[m0, m1], na, w * qsum[m0] if na else 0, nb, w * qsum[m1] if nb else 0)
+    return _add(pairs, near, pa, pb, contact[m0, m1], _packed(na, w * qsum[m0] if na else 0),
+                _packed(nb, w * qsum[m1] if nb else 0))
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -971,7 +1069,7 @@ def _vertex_rows(flat, offsets, starts, runs, pvalues, ny, nz, a, nx, i0, i1, j0
 @njit(cache=True, nogil=True, _nrt=False)
 def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, fbase, features, table, sheets,
               doubled, contact, pairs, near, scratch):
-    """The blocks of three pieces or more that :func:`_block` put off in
+    """The blocks of four pieces or more that :func:`_block` put off in
     vertex row (i, j), each by :func:`_several`; ``scratch``: ``val8, id8,
     pid, pmask, pval, slot, local, same``. Returns the number of new pairs.
 
