@@ -933,6 +933,49 @@ def test_nrrd_spacings_and_origin_that_are_not_numbers(tmp_path, capsys, recwarn
     assert any("space origin" in str(w.message) and "not finite" in str(w.message) for w in recwarn)
 
 
+@pytest.mark.parametrize("fields, step, centre", [
+    # teem's rule (nrrdAxisInfoPos): a cell-centred sample i (the default)
+    # at min + (i + 0.5) * step, a node-centred one at min + i * step; the
+    # step is the spacing, or (max - min) over the cells (the gaps between nodes)
+    ("spacings: 0.5 1 2\naxis mins: 10 20 30", [0.5, 1, 2], lambda i: [10, 20, 30] + (i + 0.5) * [0.5, 1, 2]),
+    ("spacings: 0.5 1 2\naxis mins: 10 20 30\ncenterings: node node node", [0.5, 1, 2],
+     lambda i: [10, 20, 30] + i * np.array([0.5, 1, 2])),
+    ("axis mins: 10 20 30\naxis maxs: 13 26 38", [0.5, 1, 2], lambda i: [10, 20, 30] + (i + 0.5) * [0.5, 1, 2]),
+    ("axis mins: 10 20 30\naxis maxs: 12.5 25 36\ncenterings: node node node", [0.5, 1, 2],
+     lambda i: [10, 20, 30] + i * np.array([0.5, 1, 2])),
+    ("spacings: -0.5 1 2\naxis mins: 10 20 30", [0.5, 1, 2], lambda i: [10, 20, 30] + (i + 0.5) * [-0.5, 1, 2]),
+])
+
+
+def test_nrrd_without_a_space_is_placed_by_its_axis_mins(tmp_path, fields, step, centre):
+    """A file without a space places its samples by ``axis mins`` (and
+    ``axis maxs``), cell-centred unless ``centerings`` says node: they
+    were dropped, every such file read at origin 0 (and at voxel size 1
+    where ``axis maxs`` gave the size)."""
+    pytest.importorskip("nrrd")
+    at = np.array([2, 3, 1])  # file axes (x fastest): sizes 6 6 4
+    vol = np.zeros((4, 6, 6), np.uint8)  # C order: z, y, x
+    vol[at[2], at[1], at[0]] = 1
+    obj = isoflow.read_volume(nrrd_file(tmp_path / "m.nrrd", fields, vol))
+    corner = np.argwhere(obj.volume)[0]
+    c = np.asarray(centre(at.astype(float)), float)
+    np.testing.assert_allclose(obj.world([corner, corner + 1]), [c - np.array(step) / 2, c + np.array(step) / 2])
+
+
+def test_an_nrrd_negative_spacing_runs_its_axis_backwards(tmp_path):
+    """A negative spacing puts each sample below the one before it, as a
+    negative space direction does: its sign was dropped, the volume
+    mirrored along that axis."""
+    pytest.importorskip("nrrd")
+    x = {}
+    for i in (1, 4):
+        vol = np.zeros((2, 2, 6), np.uint8)
+        vol[0, 0, i] = 1
+        obj = isoflow.read_volume(nrrd_file(tmp_path / f"v{i}.nrrd", "spacings: -0.5 1 2", vol))
+        x[i] = obj.world(np.argwhere(obj.volume))[0, 0]
+    assert x[4] == pytest.approx(x[1] - 3 * 0.5)
+
+
 @pytest.mark.parametrize("chunk, content", [(b"SIZE", b"\x02\x00\x00\x00\x02\x00\x00\x00"), (b"XYZI", b"\x01\x00")])
 
 

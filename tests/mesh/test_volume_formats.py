@@ -444,6 +444,39 @@ def test_oblique_nifti_keeps_the_voxel_sizes_and_warns(tmp_path):
     np.testing.assert_allclose(obj.pitch, [2.0, 3.0, 4.0])
 
 
+def test_nifti_whose_sform_and_qform_disagree_says_so(tmp_path, rng):
+    """A header with a valid sform (code 2, aligned) and a valid qform
+    (code 1, scanner) that put the voxels in different places: the volume
+    is placed where nibabel's affine (the sform) puts it, and a warning
+    says how far the qform, which other readers take, is from it. The
+    choice was silent."""
+    nib = pytest.importorskip("nibabel")
+    data = (rng.random((4, 5, 6)) < 0.5).astype(np.uint8)
+    sform = np.diag([2.0, 2.0, 2.0, 1.0])
+    sform[:3, 3] = [-50, 0, 0]
+    qform = np.eye(4)
+    qform[:3, 3] = [100, 100, 100]
+    img = nib.Nifti1Image(data, None)
+    img.set_sform(sform, code=2)
+    img.set_qform(qform, code=1)
+    img.header.set_xyzt_units("mm")
+    nib.save(img, tmp_path / "d.nii.gz")
+    with pytest.warns(IsoflowWarning, match=r"d\.nii\.gz: its sform \(code 'aligned'\) and qform \(code 'scanner'\)") as seen:
+        obj = isoflow.read_volume(tmp_path / "d.nii.gz")
+    said = float(re.search(r"up to (\S+) mm apart", str(seen[0].message)).group(1))
+    box = np.argwhere(np.ones((2, 2, 2))) * (np.array(data.shape) - 1)
+    apart = np.linalg.norm(nib.affines.apply_affine(sform, box) - nib.affines.apply_affine(qform, box), axis=1).max()
+    assert said == pytest.approx(apart, rel=1e-5)
+    mine = obj.world(np.argwhere(obj.volume) + 0.5)
+    theirs = nib.affines.apply_affine(nib.load(tmp_path / "d.nii.gz").affine, np.argwhere(data))
+    np.testing.assert_allclose(np.sort(mine, axis=0), np.sort(theirs, axis=0))
+    img.set_qform(sform, code=1)  # the two agreeing: nothing to say
+    nib.save(img, tmp_path / "same.nii.gz")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        isoflow.read_volume(tmp_path / "same.nii.gz")
+
+
 def test_tiff_stack_from_tifffile(tmp_path, vol):
     tifffile = pytest.importorskip("tifffile")
     stack = vol.transpose(2, 1, 0).astype(np.uint8)  # z, y, x

@@ -6,6 +6,8 @@ Axes: the data array's axes (i, j, k) are placed by the image's affine
 an image with neither (both codes 0) by the standard's method 1 (the
 voxel sizes alone, voxel 0 centred at 0: :func:`method_1_affine`), with a
 warning.
+Both present (codes above 0) and placing the voxels apart: the sform,
+with a warning of how far the qform is from it (:func:`forms_disagree`).
 isoflow turns the array so that axis 0 runs along world x, 1 along y, 2
 along z, each with a positive step (:mod:`isoflow.mesh.formats.affine`:
 flips and permutations are exact, a rotation or shear is kept as its axis-
@@ -101,7 +103,57 @@ def image_volume(img, where: str) -> RawVolume:
         note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
              "at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0)")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
+    forms_disagree(img.header, img.shape, where, unit)
     return placed_by_affine(data, affine, where, unit)
+
+
+def forms_disagree(header, shape, where: str, unit: str | None) -> float:
+    """Warn where a NIfTI header holds both a valid sform and a valid qform
+    (codes above 0) that place its voxels apart: isoflow, as nibabel and
+    FSL, takes the sform, but a reader that prefers the qform (ITK's, as
+    3D Slicer and ITK-SNAP use, for some such files) shows the image
+    elsewhere, and the file alone cannot tell which is meant.
+
+    Parameters
+    ----------
+    header : nibabel.Nifti1Header
+        The image's header (``Nifti2Header`` too).
+    shape : tuple of int
+        The image's shape; its first three axes are placed.
+    where : str
+        The file, named in the warning.
+    unit : str or None
+        The length unit of the world coordinates, named in the warning.
+
+    Returns
+    -------
+    float
+        How far apart the two place a voxel centre, at most (0 where
+        either code is 0).
+
+    Examples
+    --------
+    >>> import nibabel
+    >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.eye(4))
+    >>> img.set_qform(np.eye(4), code=1)
+    >>> forms_disagree(img.header, img.shape, "a.nii", "mm")
+    0.0
+    """
+    if int(header["sform_code"]) <= 0 or int(header["qform_code"]) <= 0:
+        return 0.0
+    sform, qform = header.get_sform().astype(np.float64), header.get_qform().astype(np.float64)
+    last = np.maximum(np.asarray((tuple(shape) + (1, 1, 1))[:3], np.float64) - 1, 0)
+    # the affine maps are apart at most at the box's corners
+    box = np.array([[x, y, z, 1.0] for x in (0, last[0]) for y in (0, last[1]) for z in (0, last[2])])
+    apart = float(np.linalg.norm(box @ (sform - qform).T, axis=1).max())
+    voxel = float(np.linalg.norm(sform[:3, :3], axis=0).min())
+    if not np.isfinite(apart) or apart <= FLOAT32_SLACK * voxel:
+        return apart
+    s_code, q_code = (header.get_value_label(k) for k in ("sform_code", "qform_code"))
+    note(f"{where}: its sform (code '{s_code}') and qform (code '{q_code}') place the voxels up to {apart:.6g} "
+         f"{unit or 'units'} apart; isoflow takes the sform, as nibabel and FSL do (a reader that prefers the "
+         "qform shows the image elsewhere)")
+    return apart
 
 
 def method_1_affine(zooms) -> np.ndarray:

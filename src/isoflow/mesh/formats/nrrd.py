@@ -7,14 +7,19 @@ sample), as NIfTI's affine is (:mod:`isoflow.mesh.formats.affine`: turned to
 isoflow's x, y, z with positive steps; a rotation is kept as its axis-aligned
 part with a warning). World coordinates are the file's ``space`` (3D Slicer
 writes LPS). Axes without a direction (``none``: a vector or list axis) must
-have length 1. A file with ``spacings`` instead of a space keeps them as the
-voxel sizes, origin 0; an axis whose spacing is ``nan`` (the format's "not
+have length 1. A file without a space is placed per axis by teem's rule
+(:func:`axis_samples`): ``spacings`` (or ``axis maxs`` less ``axis mins``
+over the cells) the step, a negative one running the axis backwards, and
+``axis mins`` the first sample, cell-centred unless ``centerings`` says
+``node``; without ``axis mins`` sample 0's edge is at 0. An axis whose
+spacing is ``nan`` (the format's "not
 a space axis"), or, without a space, whose ``kinds`` entry is a component
 kind (``vector``, ``RGB-color``, ``list``, ...), must have length 1 too. A header whose lists do not fit the
 array (fewer directions than axes, an origin of another dimension) is
 refused; a non-finite ``space origin`` is read as 0 with a warning.
 The length unit is ``space units`` (with a space) or ``units`` of the
-axes with ``spacings``, where every axis has the same one.
+placed axes (with ``spacings``, ``axis mins`` or ``axis maxs``), where
+every axis has the same one.
 
 A 3D Slicer segmentation (``.seg.nrrd``, :mod:`isoflow.mesh.formats.slicer`)
 of one layer is a label image; of several (4D, the layers on axis 0),
@@ -102,15 +107,68 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     placed = list(range(data.ndim))
     if kinds is not None:
         placed = [i for i in placed if str(kinds[i]).lower() in DOMAIN_KINDS]
-    pitch = 1.0
     if "spacings" in header:
         spacings = _field(header, "spacings", (data.ndim,), where)
         placed = [i for i in placed if np.isfinite(spacings[i])]
-        pitch = np.abs(spacings[placed])
+    sizes = data.shape
     if len(placed) < data.ndim:
         data = _scalar_axes(data, placed, "spacing", where, kinds)
-    return RawVolume(data, pitch, unit=_unit(header, "units", placed if "spacings" in header else None, where),
-                     names=names)
+    said = [f for f in ("spacings", "axis mins", "axis maxs") if f in header]
+    if not said or not placed:
+        return RawVolume(data, 1.0, unit=None, names=names)
+    step, centre0 = axis_samples(header, sizes, placed, where)
+    vol, pitch, corner = axis_aligned(data, np.diag(step), centre0, where)
+    return RawVolume(vol, pitch, corner, unit=_unit(header, "units", placed, where), names=names)
+
+
+def axis_samples(header: dict, sizes: tuple[int, ...], placed: list[int], where: str) -> tuple[np.ndarray, np.ndarray]:
+    """The step and the place of sample 0's centre along each ``placed``
+    axis of a NRRD without a space, by teem's rule (``nrrdAxisInfoPos``).
+
+    Sample ``i`` of a cell-centred axis (the format's default) lies at
+    ``min + (i + 0.5) * step``, of a node-centred one at ``min + i * step``;
+    the step is ``spacings``, else ``(max - min)`` over the cells (the gaps
+    between nodes), else 1. A negative step runs the axis backwards. An axis
+    without ``axis mins`` (nor ``axis maxs``) has sample 0's lowest edge at 0.
+
+    Parameters
+    ----------
+    header : dict
+        pynrrd's header.
+    sizes : tuple of int
+        The length of each file axis.
+    placed : list of int
+        The file axes (fastest first) that are placed.
+    where : str
+        The file, as refusals name it.
+
+    Returns
+    -------
+    step, centre0 : numpy.ndarray
+        One entry per placed axis.
+
+    Examples
+    --------
+    >>> step, centre0 = axis_samples({"axis mins": [10.0], "axis maxs": [13.0]}, (6,), [0], "a.nrrd")
+    >>> step.tolist(), centre0.tolist()
+    ([0.5], [10.25])
+    """
+    n = len(sizes)
+    given = {f: _field(header, f, (n,), where)[placed] for f in ("spacings", "axis mins", "axis maxs") if f in header}
+    nan = np.full(len(placed), np.nan)
+    spacing, low, high = (given.get(f, nan) for f in ("spacings", "axis mins", "axis maxs"))
+    centerings = header.get("centerings")
+    node = np.array([centerings is not None and len(centerings) == n and str(centerings[i]).lower() == "node"
+                     for i in placed])
+    size = np.asarray(sizes, np.float64)[placed]
+    cells = np.where(node, np.maximum(size - 1, 1), size)
+    step = np.where(np.isfinite(spacing), spacing,
+                    np.where(np.isfinite(low) & np.isfinite(high), (high - low) / cells, 1.0))
+    # sample 0's centre: half a step past a cell-centred axis's min, at a node-centred one's;
+    # from the max where only it is given; half a step past 0 where neither is
+    half = np.where(node, 0.0, step / 2)
+    centre0 = np.where(np.isfinite(low), low + half, np.where(np.isfinite(high), high - step * cells + half, step / 2))
+    return step, centre0
 
 
 def _kinds(header: dict, ndim: int) -> list | None:
