@@ -4,6 +4,7 @@ one closed surface per label read back by trimesh and pymeshlab."""
 
 import csv
 import json
+import math
 import subprocess
 import sys
 import warnings
@@ -665,20 +666,24 @@ def test_a_4d_label_image_given_for_a_mask_offers_label_n_not_labels(tmp_path, c
 
 def assert_text_as_json_and_csv_write(table: dict) -> None:
     """json_rows and csv_rows of ``table`` equal the standard library's
-    writers on the same cells (NaN and infinities as null / empty, an
-    object column's tuples as lists / ``0;1``)."""
+    writers on the same cells (NaN as null / empty; an infinity as null in
+    JSON, which has none, and as csv writes it, ``inf``, which float() and
+    pandas read back; an object column's tuples as lists / ``0;1``)."""
     import io
 
     from isoflow.cli import table_text
 
-    cells = [[list(v) if isinstance(v, tuple) else None if isinstance(v, float) and not np.isfinite(v) else v
-              for v in column.tolist()] for column in table.values()]
-    want = json.dumps([dict(zip(table, row)) for row in zip(*cells)])
+    def cells(gone) -> list:
+        return [[list(v) if isinstance(v, tuple) else None if isinstance(v, float) and gone(v) else v
+                 for v in column.tolist()] for column in table.values()]
+
+    want = json.dumps([dict(zip(table, row)) for row in zip(*cells(lambda v: not np.isfinite(v)))])
     assert "".join(table_text.json_rows(table)) == want
     fh = io.StringIO()
     writer = csv.writer(fh)
     writer.writerow(list(table))
-    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column] for column in cells]))
+    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column]
+                           for column in cells(np.isnan)]))
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
 
 
@@ -883,6 +888,26 @@ def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentat
     assert printed.encode() == (tmp_path / "t.csv").read_bytes() and not (tmp_path / "-").exists()
     assert [int(r["label"]) for r in csv.DictReader(printed.splitlines())] == [1, 2, 3, 4, 5, 9]
     fails(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-", "--json", words=("--csv -", "--json"))
+
+
+def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_empty(tmp_path, capsys):
+    """Voxels of 1e150: a volume of 8e450 is past float64 (inf, as the
+    terminal table prints it), an area of 24e300 is not. The CSV writes
+    the infinity as csv writes it, ``inf``, which float() and pandas read
+    back as inf, not empty, which they read as "unknown" (NaN); JSON has
+    no infinity and writes null. A box past float64's reach stays empty."""
+    from isoflow import write_labels
+
+    image = np.zeros((4, 4, 4), np.uint8)
+    image[1:3, 1:3, 1:3] = 5
+    write_labels(image, tmp_path / "huge.npz", pitch=(1e150,) * 3)
+    row, = csv.DictReader(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--csv", "-").splitlines())
+    assert 8 * 1e150 * 1e150 * 1e150 == math.inf and float(row["volume"]) == math.inf  # 8 voxels of 1e450 each
+    assert float(row["surface_area"]) == 24 * 1e150 * 1e150
+    assert json.loads(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--json"))["labels"][0]["volume"] is None
+    write_labels(image, tmp_path / "far.npz", origin=(1.7e308, 0, 0))  # corners a voxel apart are one float64
+    row, = csv.DictReader(run(capsys, "info", tmp_path / "far.npz", "--labels", "--csv", "-").splitlines())
+    assert row["bbox-0"] == "" and float(row["bbox-1"]) == 1.0 and float(row["volume"]) == 8.0
 
 
 def test_the_terminal_table_keeps_its_columns_with_64_bit_labels(tmp_path, capsys):
