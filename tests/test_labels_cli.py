@@ -17,6 +17,7 @@ from test_input_errors import fails  # one line on stderr, exit 2
 
 from isoflow import analyze, label_table
 from isoflow.cli import main
+from isoflow.errors import IsoflowError
 
 
 def run(capsys, *args):
@@ -1124,6 +1125,23 @@ def test_a_range_of_millions_is_parsed_filtered_and_listed_absent_as_arrays():
     # the bound catches a Python integer per label asked (28 bytes, and 8 more for its
     # place in a list: 108 MB at 3 million labels); an array of them is 8 bytes a label
     assert peak < 100e6, peak
+
+
+def test_a_choice_of_more_than_ten_million_labels_is_refused_however_it_is_split():
+    """The bound on a choice counted each range alone, and one too few: a
+    range of 10,000,001 labels passed, and so did several ranges of ten
+    million each, which the choice then held together (about 40 bytes a
+    label at the peak: 400 MB at ten million, without bound as ranges are
+    added). The labels of A-B are B - A + 1; a label asked twice counts
+    once."""
+    from isoflow.cli.labels import label_choice
+
+    with pytest.raises(IsoflowError, match="has more than 10 million labels"):
+        label_choice("1-10000001")  # 10,000,001 labels
+    with pytest.raises(IsoflowError, match="more than 10 million labels"):
+        label_choice("1-6000000,6000001-12000000")  # two ranges, 12 million labels together
+    # 10 million distinct labels: the repeats of the second range are not counted again
+    assert len(label_choice("5000001-10000000,1-10000000")) == 10_000_000
 
 
 def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):
