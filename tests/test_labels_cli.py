@@ -911,6 +911,29 @@ def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_
     assert row["bbox-0"] == "" and float(row["bbox-1"]) == 1.0 and float(row["volume"]) == 8.0
 
 
+@pytest.mark.parametrize("odd", ["\n", "\t", "\x1b[31m"])
+def test_a_file_name_with_a_control_character_keeps_the_reports_lines(tmp_path, capsys, odd):
+    """A line break in a file's name split the first line of the report
+    (a script reading "NAME: ..." from it got two lines), and an escape
+    reached the terminal as a command: the name is written escaped, as a
+    label's name is, so the report has the lines it has under a plain
+    name, for one object and for a label table with its --csv line."""
+    image = np.zeros((6, 6, 6), np.uint8)
+    image[1:3, 1:3, 1:3], image[3:5, 3:5, 3:5] = 1, 2
+    escaped = odd.encode("unicode_escape").decode("ascii")  # as Python writes it: \n, \t, \x1b[31m
+    for labels in ([], ["--labels"]):
+        one = image if labels else (image == 1).astype(np.uint8)
+        np.save(tmp_path / "plain.npy", one)
+        np.save(tmp_path / f"a{odd}b.npy", one)
+        csv_out = ["--csv", str(tmp_path / f"t{odd}.csv"), "--force"] if labels else []
+        plain = run(capsys, "info", tmp_path / "plain.npy", *labels, *csv_out).splitlines()
+        odd_lines = run(capsys, "info", tmp_path / f"a{odd}b.npy", *labels, *csv_out).splitlines()
+        assert len(odd_lines) == len(plain)
+        assert odd_lines[0] == plain[0].replace("plain.npy", f"a{escaped}b.npy")
+        assert all(odd not in line for line in odd_lines)
+        assert "\x1b" not in "".join(odd_lines)
+
+
 def test_the_terminal_table_keeps_its_columns_with_64_bit_labels(tmp_path, capsys):
     image = np.zeros((5, 5, 5), np.uint64)
     image[1, 1, 1], image[3, 3, 3] = 7, np.iinfo(np.uint64).max
