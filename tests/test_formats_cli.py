@@ -808,6 +808,24 @@ def test_a_tiff_stack_cut_short_is_refused_not_read_as_fewer_slices(tmp_path, ca
     fails(capsys, "info", cut, words=(f"cut_{how}.tif: not a readable TIFF file (cut short or damaged: ",))
 
 
+@pytest.mark.parametrize("name, what", [("scan.nii.gz", "NIfTI"), ("aseg.mgz", "MGH")])
+@pytest.mark.parametrize("labels", [[], ["--labels"]])
+def test_a_gzip_file_whose_deflate_data_is_damaged_is_one_line(tmp_path, capsys, name, what, labels):
+    """A gzip member whose header is whole but whose deflate data is not
+    (a bad disk block, a copy cut and spliced): zlib says "invalid block
+    type" (its own exception, not OSError), which the look at the content
+    for a hint let through as a traceback after the reader's refusal."""
+    import gzip
+    import zlib
+
+    damaged = tmp_path / name
+    # gzip's 10-byte header, then a first deflate block of the reserved type 3
+    damaged.write_bytes(b"\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\xff" + b"\xff" * 64)
+    with pytest.raises(zlib.error), gzip.open(damaged) as fh:
+        fh.read(352)
+    fails(capsys, "info", damaged, *labels, words=(f"{name}: not a readable {what} file (zlib.error: ",))
+
+
 def test_a_tiff_whose_private_tag_points_past_its_end_still_reads(tmp_path, capsys, rng):
     """tifffile logs the tag it cannot read as an error, as it does a page
     cut off; a vendor's private tag is no part of the volume, so the file

@@ -4,6 +4,7 @@ one closed surface per label read back by trimesh and pymeshlab."""
 
 import csv
 import json
+import math
 import subprocess
 import sys
 import warnings
@@ -16,6 +17,7 @@ from test_input_errors import fails  # one line on stderr, exit 2
 
 from isoflow import analyze, label_table
 from isoflow.cli import main
+from isoflow.errors import IsoflowError
 
 
 def run(capsys, *args):
@@ -665,20 +667,24 @@ def test_a_4d_label_image_given_for_a_mask_offers_label_n_not_labels(tmp_path, c
 
 def assert_text_as_json_and_csv_write(table: dict) -> None:
     """json_rows and csv_rows of ``table`` equal the standard library's
-    writers on the same cells (NaN and infinities as null / empty, an
-    object column's tuples as lists / ``0;1``)."""
+    writers on the same cells (NaN as null / empty; an infinity as null in
+    JSON, which has none, and as csv writes it, ``inf``, which float() and
+    pandas read back; an object column's tuples as lists / ``0;1``)."""
     import io
 
     from isoflow.cli import table_text
 
-    cells = [[list(v) if isinstance(v, tuple) else None if isinstance(v, float) and not np.isfinite(v) else v
-              for v in column.tolist()] for column in table.values()]
-    want = json.dumps([dict(zip(table, row)) for row in zip(*cells)])
+    def cells(gone) -> list:
+        return [[list(v) if isinstance(v, tuple) else None if isinstance(v, float) and gone(v) else v
+                 for v in column.tolist()] for column in table.values()]
+
+    want = json.dumps([dict(zip(table, row)) for row in zip(*cells(lambda v: not np.isfinite(v)))])
     assert "".join(table_text.json_rows(table)) == want
     fh = io.StringIO()
     writer = csv.writer(fh)
     writer.writerow(list(table))
-    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column] for column in cells]))
+    writer.writerows(zip(*[[";".join(map(str, v)) if isinstance(v, list) else v for v in column]
+                           for column in cells(np.isnan)]))
     assert "".join(table_text.csv_rows(table)) == fh.getvalue()
 
 
@@ -883,6 +889,49 @@ def test_info_labels_csv_dash_prints_the_table_alone(tmp_path, capsys, segmentat
     assert printed.encode() == (tmp_path / "t.csv").read_bytes() and not (tmp_path / "-").exists()
     assert [int(r["label"]) for r in csv.DictReader(printed.splitlines())] == [1, 2, 3, 4, 5, 9]
     fails(capsys, "info", tmp_path / "seg.npy", "--labels", "--csv", "-", "--json", words=("--csv -", "--json"))
+
+
+def test_info_labels_csv_writes_a_volume_past_float64_as_inf_and_an_unknown_box_empty(tmp_path, capsys):
+    """Voxels of 1e150: a volume of 8e450 is past float64 (inf, as the
+    terminal table prints it), an area of 24e300 is not. The CSV writes
+    the infinity as csv writes it, ``inf``, which float() and pandas read
+    back as inf, not empty, which they read as "unknown" (NaN); JSON has
+    no infinity and writes null. A box past float64's reach stays empty."""
+    from isoflow import write_labels
+
+    image = np.zeros((4, 4, 4), np.uint8)
+    image[1:3, 1:3, 1:3] = 5
+    write_labels(image, tmp_path / "huge.npz", pitch=(1e150,) * 3)
+    row, = csv.DictReader(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--csv", "-").splitlines())
+    assert 8 * 1e150 * 1e150 * 1e150 == math.inf and float(row["volume"]) == math.inf  # 8 voxels of 1e450 each
+    assert float(row["surface_area"]) == 24 * 1e150 * 1e150
+    assert json.loads(run(capsys, "info", tmp_path / "huge.npz", "--labels", "--json"))["labels"][0]["volume"] is None
+    write_labels(image, tmp_path / "far.npz", origin=(1.7e308, 0, 0))  # corners a voxel apart are one float64
+    row, = csv.DictReader(run(capsys, "info", tmp_path / "far.npz", "--labels", "--csv", "-").splitlines())
+    assert row["bbox-0"] == "" and float(row["bbox-1"]) == 1.0 and float(row["volume"]) == 8.0
+
+
+@pytest.mark.parametrize("odd", ["\n", "\t", "\x1b[31m"])
+def test_a_file_name_with_a_control_character_keeps_the_reports_lines(tmp_path, capsys, odd):
+    """A line break in a file's name split the first line of the report
+    (a script reading "NAME: ..." from it got two lines), and an escape
+    reached the terminal as a command: the name is written escaped, as a
+    label's name is, so the report has the lines it has under a plain
+    name, for one object and for a label table with its --csv line."""
+    image = np.zeros((6, 6, 6), np.uint8)
+    image[1:3, 1:3, 1:3], image[3:5, 3:5, 3:5] = 1, 2
+    escaped = odd.encode("unicode_escape").decode("ascii")  # as Python writes it: \n, \t, \x1b[31m
+    for labels in ([], ["--labels"]):
+        one = image if labels else (image == 1).astype(np.uint8)
+        np.save(tmp_path / "plain.npy", one)
+        np.save(tmp_path / f"a{odd}b.npy", one)
+        csv_out = ["--csv", str(tmp_path / f"t{odd}.csv"), "--force"] if labels else []
+        plain = run(capsys, "info", tmp_path / "plain.npy", *labels, *csv_out).splitlines()
+        odd_lines = run(capsys, "info", tmp_path / f"a{odd}b.npy", *labels, *csv_out).splitlines()
+        assert len(odd_lines) == len(plain)
+        assert odd_lines[0] == plain[0].replace("plain.npy", f"a{escaped}b.npy")
+        assert all(odd not in line for line in odd_lines)
+        assert "\x1b" not in "".join(odd_lines)
 
 
 def test_the_terminal_table_keeps_its_columns_with_64_bit_labels(tmp_path, capsys):
@@ -1099,6 +1148,23 @@ def test_a_range_of_millions_is_parsed_filtered_and_listed_absent_as_arrays():
     # the bound catches a Python integer per label asked (28 bytes, and 8 more for its
     # place in a list: 108 MB at 3 million labels); an array of them is 8 bytes a label
     assert peak < 100e6, peak
+
+
+def test_a_choice_of_more_than_ten_million_labels_is_refused_however_it_is_split():
+    """The bound on a choice counted each range alone, and one too few: a
+    range of 10,000,001 labels passed, and so did several ranges of ten
+    million each, which the choice then held together (about 40 bytes a
+    label at the peak: 400 MB at ten million, without bound as ranges are
+    added). The labels of A-B are B - A + 1; a label asked twice counts
+    once."""
+    from isoflow.cli.labels import label_choice
+
+    with pytest.raises(IsoflowError, match="has more than 10 million labels"):
+        label_choice("1-10000001")  # 10,000,001 labels
+    with pytest.raises(IsoflowError, match="more than 10 million labels"):
+        label_choice("1-6000000,6000001-12000000")  # two ranges, 12 million labels together
+    # 10 million distinct labels: the repeats of the second range are not counted again
+    assert len(label_choice("5000001-10000000,1-10000000")) == 10_000_000
 
 
 def test_a_mesh_given_for_a_label_image_is_named_a_mesh(capsys):

@@ -32,6 +32,9 @@ PLANAR_TERMINAL_COLUMNS = (("label", "label", 8), ("pixels", "voxels", 10), ("ar
 
 #: a label or a range A-B (A..B); ASCII digits only, as Python's int() would read "٣" (an Arabic-Indic 3) as 3
 _RANGE = re.compile(r"\s*(-?[0-9]+)\s*(?:(?:-|\.\.)\s*(-?[0-9]+)\s*)?", re.ASCII)
+#: the most labels a choice may hold, its ranges together (each label once): its parse, filter and list of
+#: absent labels hold about 40 bytes a label at their peak, 400 MB at this many
+MOST_CHOSEN = 10_000_000
 
 
 def add_labels_option(p: argparse.ArgumentParser) -> None:
@@ -140,6 +143,7 @@ def label_choice(text: str) -> np.ndarray | None:
     runs: list[tuple[int, int]] = []  # the labels not asked before, as ranges in the order asked
     los: list[int] = []  # the labels asked so far: disjoint ranges that do not touch, in increasing order
     his: list[int] = []
+    chosen = 0  # the labels of runs
     for part in text.split(","):
         match = _RANGE.fullmatch(part)
         if not match:
@@ -147,9 +151,14 @@ def label_choice(text: str) -> np.ndarray | None:
         first, last = int(match[1]), int(match[2] if match[2] is not None else match[1])
         if last < first:
             raise IsoflowError(f"--labels {text}: the range {part.strip()} runs backwards")
-        if last - first > 10_000_000:
-            raise IsoflowError(f"--labels {text}: the range {part.strip()} has more than 10 million labels")
-        runs += _new_runs(first, last, los, his)
+        most = f"more than {MOST_CHOSEN / 1e6:g} million labels"
+        if last - first + 1 > MOST_CHOSEN:
+            raise IsoflowError(f"--labels {text}: the range {part.strip()} has {most}")
+        new = _new_runs(first, last, los, his)
+        chosen += sum(b - a + 1 for a, b in new)
+        if chosen > MOST_CHOSEN:  # ranges each within the bound, together past it
+            raise IsoflowError(f"--labels {text}: the choice has {most}, its ranges together")
+        runs += new
     return choice_array(runs)
 
 
@@ -560,11 +569,12 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
             sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
         sys.stdout.write("\n")
         return 0
-    print(format_table(path_text(args.input), about, conn, table))
+    # the names escaped as a label's name is: a line break would split the report's lines, an escape act on the terminal
+    print(format_table(line_text(path_text(args.input)), about, conn, table))
     if args.csv:
-        print(f"{args.csv}: {len(table['label'])} rows, {len(table)} columns")
+        print(f"{line_text(path_text(args.csv))}: {len(table['label'])} rows, {len(table)} columns")
     if args.png:
-        print(f"{args.png}: picture of {counted(len(table['label']), 'label')} (Betti numbers, "
+        print(f"{line_text(path_text(args.png))}: picture of {counted(len(table['label']), 'label')} (Betti numbers, "
               f"{'area, perimeter' if len(about['shape']) == 2 else 'volume, surface area'})")
     return 0
 

@@ -78,6 +78,38 @@ def cell_texts(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> li
     return [booleans[v] for v in column.tolist()]
 
 
+def non_finite_text(value: float, missing: str, joined: str) -> str:
+    """The text of a float that is no finite number: NaN as ``missing``
+    (``null`` in JSON, empty in CSV), and an infinity (a volume past
+    float64: voxels of 1e150) as ``missing`` in JSON, which has no
+    infinity, but in CSV (``joined`` ``";"``) as :mod:`csv` writes it,
+    ``inf`` or ``-inf``, which ``float``, pandas' ``read_csv`` and R read
+    back as the infinity (empty, they would read "unknown").
+
+    Parameters
+    ----------
+    value : float
+        NaN or an infinity.
+    missing : str
+        The text of NaN.
+    joined : str
+        What joins a tuple's values: ``";"`` in CSV.
+
+    Returns
+    -------
+    str
+        The cell's text.
+
+    Examples
+    --------
+    >>> non_finite_text(float("-inf"), "", ";"), non_finite_text(float("nan"), "", ";")
+    ('-inf', '')
+    >>> non_finite_text(float("inf"), "null", ", ")
+    'null'
+    """
+    return repr(value) if joined == ";" and not math.isnan(value) else missing
+
+
 def _fill_texts(texts: list[str], chars: np.ndarray, lengths: np.ndarray) -> None:
     """ASCII texts right-aligned in the rows of ``chars`` (uint8, (n, at
     least the longest)); their lengths in ``lengths``."""
@@ -110,16 +142,17 @@ def _int_parts(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.where(negative, (-wide).astype(np.uint64), wide.astype(np.uint64)), negative
 
 
-def _float_cells(values: np.ndarray, missing: str, chars: np.ndarray, lengths: np.ndarray) -> None:
+def _float_cells(values: np.ndarray, missing: str, joined: str, chars: np.ndarray, lengths: np.ndarray) -> None:
     """Float64 ``values`` as ``repr`` writes them (NaN and infinities as
-    ``missing``) into ``chars`` ((n, FLOAT_WIDTH) uint8) and ``lengths``:
-    compiled, but for the subnormal floats, which go through ``repr``."""
+    :func:`non_finite_text` writes them) into ``chars`` ((n, FLOAT_WIDTH)
+    uint8) and ``lengths``: compiled, but for the subnormal floats, which
+    go through ``repr``."""
     from ..scale.float_text import FLOAT_WIDTH, power_table, shortest_cells
 
     shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
     left = np.flatnonzero(lengths == 0)  # NaN, infinities, subnormal floats
     if len(left):
-        texts = [repr(v) if np.isfinite(v) else missing for v in values[left].tolist()]
+        texts = [repr(v) if math.isfinite(v) else non_finite_text(v, missing, joined) for v in values[left].tolist()]
         some, their = _text_cells(texts)
         chars[left, FLOAT_WIDTH - some.shape[1]:] = some
         lengths[left] = their
@@ -137,7 +170,7 @@ def _cells(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, s
     if column.dtype.kind == "f":
         from ..scale.float_text import FLOAT_WIDTH
 
-        return FLOAT_WIDTH, partial(_float_cells, np.ascontiguousarray(column, dtype=np.float64), missing)
+        return FLOAT_WIDTH, partial(_float_cells, np.ascontiguousarray(column, dtype=np.float64), missing, joined)
     texts = cell_texts(column, joined, booleans)
     return max(map(len, texts), default=0), partial(_fill_texts, texts)
 
@@ -146,7 +179,7 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
                booleans: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
     """Every value of a column as :mod:`json` (``missing`` for NaN and
     infinities, ``joined`` between a tuple's values, ``booleans``) or
-    :mod:`csv` write it, in ASCII right-aligned in the rows of a (n,
+    :mod:`csv` (``missing`` for NaN, ``joined`` ``";"``) write it, in ASCII right-aligned in the rows of a (n,
     longest) uint8 matrix, and each value's length.
 
     Examples
@@ -180,7 +213,8 @@ def _plain_rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str
         if part.dtype.kind in "iu":
             columns.append(list(map(str, part.tolist())))
         elif part.dtype.kind == "f":
-            columns.append([repr(v) if math.isfinite(v) else missing for v in part.astype(np.float64).tolist()])
+            columns.append([repr(v) if math.isfinite(v) else non_finite_text(v, missing, joined)
+                            for v in part.astype(np.float64).tolist()])
         else:
             columns.append(cell_texts(part, joined, booleans))
     seps = [b.decode("ascii") for b in before]
@@ -245,8 +279,8 @@ def _blocks(table: dict, before: list[bytes], missing: str, joined: str, boolean
 
 def json_rows(table: dict) -> Iterator[str]:
     """The table as the text of a JSON array of one object per row (what
-    ``json.dumps([dict(zip(table, row)) for row in ...])`` writes, NaN as
-    null), in blocks of rows.
+    ``json.dumps([dict(zip(table, row)) for row in ...])`` writes, NaN and
+    infinities as null), in blocks of rows.
 
     Examples
     --------
@@ -267,7 +301,8 @@ def json_rows(table: dict) -> Iterator[str]:
 def csv_rows(table: dict) -> Iterator[str]:
     """The table as CSV text (what :mod:`csv`'s writer writes with
     ``lineterminator="\\r\\n"``: the header, then a line per row; NaN
-    empty, a tuple of integers as ``0;1``), in blocks of rows. The names
+    empty, infinities ``inf`` and ``-inf``, a tuple of integers as
+    ``0;1``), in blocks of rows. The names
     and cells hold no comma, quote or line break, so none is quoted, but
     for a text column's (a label's name), quoted as :mod:`csv` quotes it.
 

@@ -195,6 +195,7 @@ def sniff_volume_format(path) -> tuple[str, str] | None:
     ('TIFF', '.tif')
     """
     import gzip
+    import zlib
 
     try:
         with open(path, "rb") as fh:
@@ -203,7 +204,9 @@ def sniff_volume_format(path) -> tuple[str, str] | None:
             with gzip.open(path, "rb") as fh:
                 inner = fh.read(352)
             return ("NIfTI", ".nii.gz") if _nifti(inner) else ("MGH", ".mgz") if _mgh(inner) else None
-    except (OSError, EOFError):  # unreadable, or a gzip stream cut short in its header
+    # unreadable, a gzip stream cut short in its header, or damaged deflate
+    # data (zlib's own error, no OSError): no content to name
+    except (OSError, EOFError, zlib.error):
         return None
     if _nifti(head):
         return ("NIfTI", ".nii")
@@ -291,8 +294,11 @@ def reading(path, what: str):
             # what a library says of no bytes at all rarely names it (pynrrd: "StopIteration")
             raise IsoflowError(f"{path}: an empty file (0 bytes), not a readable {what} file") from None
         detail = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        kind = exc.__class__.__name__
+        if kind == "error":  # zlib's (damaged deflate data) and the like: "error" alone says nothing
+            kind = f"{exc.__class__.__module__}.{kind}"
         raise IsoflowError(
-            f"{path}: not a readable {what} file ({exc.__class__.__name__}{': ' + detail if detail else ''})"
+            f"{path}: not a readable {what} file ({kind}{': ' + detail if detail else ''})"
             + content_hint(path, what)
         ) from None
 
