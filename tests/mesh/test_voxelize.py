@@ -1061,3 +1061,24 @@ def test_cli_voxelize_prints_a_micrometre_origin(tmp_path, capsys):
     # the grid's corner is at or below the mesh's, within a voxel
     assert np.all(np.asarray(printed) <= torus.bounds[0] * (1 - 1e-6))
     assert np.all(np.asarray(printed) > torus.bounds[0] - 2.6e-6 / 16)
+
+
+@pytest.mark.parametrize("jitter", [1e-10, 1e-8])
+def test_soup_with_corners_rounded_apart_is_not_split_at_its_own_corners(jitter):
+    """A triangle soup whose copies of each corner differ by rounding (more
+    than the weld's 1e-10 of the diagonal, less than the T-junction split's
+    1e-6) was split at the copies, as if each lay inside the edges at that
+    corner: slivers of no width, read as double-sided faces and walls, a
+    note of T-junctions and walls the sphere has not, and at 1e-8 voxels
+    lost. It is a closed sphere drawn with unwelded corners: the solid is
+    trimesh's ``contains`` of the sphere, and the note names its open
+    edges only."""
+    sphere = trimesh.creation.icosphere(3)
+    corners = sphere.vertices[sphere.faces].reshape(-1, 3)
+    corners = corners + np.random.default_rng(0).uniform(-jitter, jitter, corners.shape)
+    faces = np.arange(len(corners)).reshape(-1, 3)
+    v = voxelize(corners, faces, resolution=32, details=True)
+    inside = sphere.contains(centres(v.volume, v.origin, v.pitch))
+    assert np.array_equal(v.volume.reshape(-1), inside)
+    assert "T-junction" not in v.note and "double-sided" not in v.note and "walls" not in v.note
+    assert v.double_sided_faces == 0
