@@ -543,3 +543,20 @@ def test_split_of_an_ascii_stl_of_unnamed_solids_keeps_a_label_per_body(tmp_path
     bodies = len(trimesh.load(path, force="mesh").split(only_watertight=False))
     r = voxelize_meshes([path], pitch=0.05, split=True)
     assert bodies == 4 and r.names == tuple(f"{path}:{k}" for k in range(1, bodies + 1))
+
+
+@pytest.mark.parametrize("several", [False, True])
+def test_a_grid_past_memory_for_magicavoxel_is_refused_for_the_formats_side(tmp_path, capsys, several):
+    """A MagicaVoxel output asked of a grid past the memory budget was
+    refused for memory, naming the finest grid that fits there (thousands
+    across), which the format then refuses at 256 a side once voxelised.
+    The refusal names the format's side, and its advice works when
+    followed."""
+    a = ball(tmp_path, "a.stl", 1.0, (0, 0, 0))
+    meshes = [a, ball(tmp_path, "b.stl", 0.5, (3, 0, 0))] if several else [a]
+    out = tmp_path / "big.vox"
+    line = fails(capsys, "voxelize", *meshes, "--resolution", "1000000", "-o", out)
+    assert "MagicaVoxel models are at most 256 voxels a side" in line and line.endswith("(--resolution 256)")
+    assert "fits in" not in line and not out.exists()
+    assert main(["voxelize", *map(str, meshes), "--resolution", "256", "-o", str(out)]) == 0
+    assert max(read_volume(out).volume.shape) <= 256

@@ -63,7 +63,8 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         return voxelize_to_store(args)
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the voxelisation
     try:
-        obj = voxelize_input(args.mesh, args, write_bytes_per_voxel(args.output))
+        with coarser_for_magicavoxel(args.output):
+            obj = voxelize_input(args.mesh, args, write_bytes_per_voxel(args.output))
     except GridTooLarge as exc:
         if exc.store:  # the one way to keep the grid asked: a store, written slab by slab
             raise exc.but(hints=(exc.facts["hints"][0], "or write it slab by slab: -o OUT.zarr")) from None
@@ -109,7 +110,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     bodies = mesh_bodies(args.mesh, args.split)
     # and the labels the format keeps, before the voxels
     check_label_output(args.output, len(bodies), args.force)
-    with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
+    with coarser_for_magicavoxel(args.output), progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                             overlap=args.overlap, split=args.split, strict=args.strict,
                             write_bytes=write_bytes_per_voxel(args.output, labels=True), progress=show)
@@ -130,27 +131,44 @@ def voxelize_labels(args: argparse.Namespace) -> int:
 
 
 @contextlib.contextmanager
-def coarser_for_magicavoxel() -> Iterator[None]:
+def coarser_for_magicavoxel(output: str | None = None) -> Iterator[None]:
     """MagicaVoxel's refusal of a grid past its side, with voxelize's
     remedy: a coarser grid (the format states its limit only, as a flow
-    that grew past it needs another remedy).
+    that grew past it needs another remedy). With ``output``, a ``.vox``,
+    a grid refused for memory is refused for the format's side too: the
+    finest grid that fits in memory is far past that side.
 
     Examples
     --------
     >>> from isoflow.mesh.formats.magicavoxel import ModelTooLarge
+    >>> from isoflow.mesh.grid import GridTooLarge
     >>> try:
     ...     with coarser_for_magicavoxel():
     ...         raise ModelTooLarge("big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2")
     ... except IsoflowError as exc:
     ...     print(exc)
     big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 300x2x2; voxelise it coarser (--resolution 256)
+    >>> try:
+    ...     with coarser_for_magicavoxel("big.vox"):
+    ...         raise GridTooLarge("resolution=4096", "a lot", 2**30, shape=(4096, 20, 10), fit=1900)
+    ... except IsoflowError as exc:
+    ...     print(exc)
+    big.vox: MagicaVoxel models are at most 256 voxels a side, this object is 4096x20x10; voxelise it coarser (--resolution 256)
     """
     from ..mesh.formats.magicavoxel import MAX_SIDE, ModelTooLarge
+    from ..mesh.formats.registry import split_dataset
+    from ..mesh.grid import GridTooLarge
 
     try:
         yield
     except ModelTooLarge as exc:
         raise IsoflowError(f"{exc}; voxelise it coarser (--resolution {MAX_SIDE})") from None
+    except GridTooLarge as exc:
+        vox = output is not None and Path(split_dataset(output)[0]).suffix.lower() == ".vox"
+        if not vox or not exc.shape or max(exc.shape) <= MAX_SIDE:
+            raise
+        raise IsoflowError(f"{output}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
+                           f"{'x'.join(map(str, exc.shape))}; voxelise it coarser (--resolution {MAX_SIDE})") from None
 
 
 #: the labels listed by name after a label image is written; the rest are counted

@@ -42,8 +42,8 @@ from .load import repeated_faces
 #: below this: turned to agree, they bend by less than 60 degrees
 SMOOTH_SEAM = -0.5
 
-#: a sharp seam is followed where the seam edges between its two patches
-#: are at least this share of the rim of the patch with less area
+#: a sharp seam is followed where the seam edges of the patch with less area
+#: (with every patch) are at least this share of its rim
 WIDE_SEAM = 0.5
 
 
@@ -198,13 +198,31 @@ def followed_seams(corners: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
 
 def wide_seams(seams: np.ndarray, length: np.ndarray, rim: np.ndarray, area: np.ndarray) -> np.ndarray:
     """Whether each seam (a pair of patches, with its edge's length) is
-    wide: the seam edges between its two patches at least ``WIDE_SEAM`` of
-    the rim length of the patch with less area, the one that would be
-    turned."""
+    wide: the seam edges of the patch with less area, the one that would be
+    turned, at least ``WIDE_SEAM`` of its rim length.
+
+    Its seams with every patch count, not only those with the other patch
+    of this seam: a face turned over inside an open box meets one patch
+    flat and others at its sides, and each of those seams tells which way
+    it faces (followed only where they were the one patch's, the patches
+    beyond were left out and a box whose two halves have equal area kept
+    half its faces turned). A join's remnant is still no wide seam: most of
+    each side's rim is open.
+
+    Examples
+    --------
+    Patch 0 (area 1, rim 3) meets patch 1 along one edge and patch 2 along
+    the other two: bounded by seams, each of its seams is wide. Patch 3
+    (area 5, rim 10) meets patch 4 along one edge of 1: not wide.
+
+    >>> wide_seams(np.array([[0, 1], [0, 2], [0, 2], [3, 4]]), np.array([1.0, 1, 1, 1]),
+    ...            np.array([3.0, 8, 8, 10, 10]), np.array([1.0, 4, 4, 5, 5])).tolist()
+    [True, True, True, False]
+    """
     lo, hi = seams.min(axis=1), seams.max(axis=1)
-    _, pair = np.unique(lo * len(rim) + hi, return_inverse=True)
-    joint = np.bincount(pair.reshape(-1), weights=length)[pair.reshape(-1)]
-    return joint >= WIDE_SEAM * np.where(area[lo] <= area[hi], rim[lo], rim[hi])
+    turned = np.where(area[lo] <= area[hi], lo, hi)
+    seamed = np.bincount(seams.reshape(-1), weights=np.repeat(length, 2), minlength=len(rim))
+    return seamed[turned] >= WIDE_SEAM * rim[turned]
 
 
 def turned_patches(seams: np.ndarray, area: np.ndarray) -> np.ndarray:

@@ -248,7 +248,11 @@ def _on_edges(v: np.ndarray, ends: np.ndarray, apex: np.ndarray, k: np.ndarray, 
     with np.errstate(invalid="ignore", divide="ignore"):  # (a zero-length edge holds no point inside)
         t = np.einsum("ij,ij->i", v[c] - a, d) / np.einsum("ij,ij->i", d, d)
     off = np.linalg.norm(a + t[:, None] * d - v[c], axis=1)
-    on = (t > 0) & (t < 1) & (off <= tol)
+    # a corner within tol of an end of the edge is a copy of that end the weld left apart (positions rounded
+    # apart by less than this tolerance), not a point inside the edge: split there, a face would get a sliver
+    # of no width whose edges pair with nothing drawn
+    length = np.sqrt(np.einsum("ij,ij->i", d, d))
+    on = (t * length > tol) & ((1 - t) * length > tol) & (off <= tol)
     return k[on], c[on], t[on]
 
 
