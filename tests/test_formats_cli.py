@@ -38,10 +38,10 @@ def topology(report: dict) -> dict:
 
 def info(capsys, *args):
     """The report of ``info --json``, less the file's name, type of values
-    and calibration (``pitch``, ``origin``, ``unit``: the same volume's differ by format;
-    tests/test_units_cli.py checks them) and what it places."""
+    and calibration (``pitch``, ``origin``, ``unit``, ``space``: the same volume's differ by format;
+    tests/test_units_cli.py and tests/test_space_frames.py check them) and what it places."""
     report = json.loads(run(capsys, "info", *args, "--json"))
-    for key in ("input", "dtype", "pitch", "origin"):
+    for key in ("input", "dtype", "pitch", "origin", "space"):
         report.pop(key, None)
     return topology(report)
 

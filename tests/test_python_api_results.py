@@ -268,7 +268,7 @@ def test_the_repr_of_a_small_mesh_or_label_image_is_one_short_line():
     text = repr(isoflow.LabelImage(labels, np.full(3, 0.5), np.zeros(3), "mm"))
     assert "\n" not in text and len(text) < 200, text
     assert text == ("LabelImage(array=array(..., shape=(10, 10, 10), dtype=int64), spacing=array([0.5, 0.5, 0.5]), "
-                    "origin=array([0., 0., 0.]), unit='mm', names=None)")
+                    "origin=array([0., 0., 0.]), unit='mm', names=None, space=None)")
 
 
 def test_a_label_image_of_nested_lists_holds_them_as_an_array():

@@ -79,7 +79,9 @@ def test_info_text_says_voxel_size_origin_and_unit(tmp_path):
     head = second_line("mm.nii.gz", "--label", "1")[1]
     assert head.split()[:2] == ["voxel", "size"]
     assert "0.5 x 0.75 x 1.25 mm, origin [-0.25, -0.375, -0.625] mm" in head
-    assert second_line("bare.nii.gz", "--label", "1")[1].endswith("origin [-0.25, -0.375, -0.625] (the file says no unit)")
+    # a NIfTI's world is RAS (nifti1.h), unit or none
+    assert second_line("bare.nii.gz", "--label", "1")[1].endswith(
+        "origin [-0.25, -0.375, -0.625] (the file says no unit), frame RAS")
     assert "voxel 0.5x0.75x1.25 mm," in second_line("mm.nii.gz", "--labels")[0]
     assert "voxel 0.5x0.75x1.25," in second_line("bare.nii.gz", "--labels")[0]
 
@@ -105,7 +107,7 @@ def test_info_text_gives_the_unit_to_the_three_spatial_axes_of_a_4d_file(tmp_pat
                           capture_output=True, text=True).stdout.splitlines()[1]
     sizes = " x ".join(f"{p:g}" for p in got["pitch"][:3])
     assert f"{sizes} mm, origin [" in text and text.endswith(
-        f"] mm (4th axis: size {got['pitch'][3]:g}, origin {got['origin'][3]:g})"), text
+        f"] mm (4th axis: size {got['pitch'][3]:g}, origin {got['origin'][3]:g}), frame RAS"), text
 
 
 # ------------------------------------------------------------------ TIFF

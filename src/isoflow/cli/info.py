@@ -89,16 +89,18 @@ def cmd_info(args: argparse.Namespace) -> int:
 def calibration(obj, unit: str | None, dtype) -> dict:
     """A volume file's type of values by NumPy's name (``uint8``, ``bool``:
     the object is boolean whatever the file held), its voxel size per axis,
-    the world position of voxel 0's lowest corner and their length unit
-    (None where the file says none): what ``info`` says it read, so that a
-    calibration can be checked."""
+    the world position of voxel 0's lowest corner, their length unit
+    (None where the file says none) and the anatomical frame of the world
+    axes (``space``: ``"RAS"``, ``"LPS"``, ...; None where the file says
+    none): what ``info`` says it read, so that a calibration can be
+    checked."""
     import numpy as np
 
     from ..mesh.formats.registry import placement
 
     spacing, corner = placement(obj)
     return {"dtype": np.dtype(dtype).name, "pitch": [float(p) for p in spacing],
-            "origin": [float(c) + 0.0 for c in corner], "unit": unit}
+            "origin": [float(c) + 0.0 for c in corner], "unit": unit, "space": obj.space}
 
 
 def store_placement(path) -> dict:
@@ -251,7 +253,7 @@ def format_info(r: Report, name: str, grid: dict | None = None, placed: dict | N
         origin = coordinates(placed["origin"][:space], step=placed["pitch"][:space])
         lines.append(f"  {size:<23}{' x '.join(f'{p:.6g}' for p in placed['pitch'][:space])}{unit}, "
                      f"origin {origin}{unit}{'' if unit else ' (the file says no unit)'}"
-                     + fourth)
+                     + fourth + (f", frame {placed['space']}" if placed.get("space") else ""))
     lines += format_measures(r, placed["pitch"][:3] if placed else grid["pitch"] if grid else None)
     lines += [
         f"  Euler characteristic   {r['euler_characteristic']}",

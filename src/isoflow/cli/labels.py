@@ -251,7 +251,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     """The label image named on the command line and its table, with only
     the labels that occur (a warning names those asked for that do not):
     ``(about, connectivity, table, image, absent)``, ``about`` its shape,
-    type, voxel size, origin and their length unit (and for ``surface``,
+    type, voxel size, origin, their length unit and anatomical frame
+    (``space``) (and for ``surface``,
     ``corners``: :func:`isoflow.mesh.export.check_float64_corners` of the
     image, which refused a placement no surface file holds), ``image``
     None for a zarr store (read block by block), ``absent`` the labels
@@ -296,7 +297,8 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
         about, table = table_of_store(args, conn, None if every else asked, surfaces, given)
     else:
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
-                 "origin": image.origin, "unit": image.unit, **({} if corners is None else {"corners": corners})}
+                 "origin": image.origin, "unit": image.unit, "space": image.space,
+                 **({} if corners is None else {"corners": corners})}
         wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
         try:
             table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
@@ -456,7 +458,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
     kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
-            "unit": slabs.unit}, with_names(table, merged_names(args, slabs.names, given))
+            "unit": slabs.unit, "space": None}, with_names(table, merged_names(args, slabs.names, given))
 
 
 #: a choice of more labels than this is read as a filter on the table of every label (:func:`chosen_rows`)
@@ -613,7 +615,7 @@ def json_text(name, about: dict, conn: int, table: dict, absent: np.ndarray) -> 
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
     head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
-            "connectivity": conn}
+            "space": about["space"], "connectivity": conn}
     yield json.dumps(head)[:-1] + ', "absent": '
     yield from json_list(absent)
     yield ', "labels": '
@@ -673,7 +675,8 @@ def format_table(name, about: dict, conn: int, table: dict) -> str:
     """The compact table: the first rows, then a summary of all."""
     n = len(table["label"])
     # the unit of the world columns (bbox, centroid; area, volume in its square, cube), where the file says it
-    pitch = "x".join(f"{p:g}" for p in about["spacing"]) + (f" {about['unit']}" if about["unit"] else "")
+    pitch = "x".join(f"{p:g}" for p in about["spacing"]) + (f" {about['unit']}" if about["unit"] else "") + (
+        f", frame {about['space']}" if about["space"] else "")
     shape = "x".join(map(str, about["shape"]))
     planar = len(about["shape"]) == 2
     lines = [f"{name}: {counted(n, 'label')}, shape {shape}, {'pixel' if planar else 'voxel'} {pitch}, "

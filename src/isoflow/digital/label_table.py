@@ -49,6 +49,7 @@ from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
 from .float64 import unheld_columns
+from .frames import space_given
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
 from .report import Report
@@ -109,6 +110,10 @@ class LabelImage:
     sequence is read as label ``i + 1`` named ``names[i]``.
     :func:`label_table` gives them as its ``name`` column, and
     :func:`~isoflow.mesh.volumes.write_labels` writes them again.
+    ``space``: the anatomical frame of the world axes (``"RAS"``,
+    ``"LPS"``, ...; :mod:`isoflow.digital.frames`), as the file says it,
+    or None; a writer of another frame negates the axes that point the
+    other way.
 
     Examples
     --------
@@ -125,6 +130,7 @@ class LabelImage:
     origin: np.ndarray
     unit: str | None = None
     names: Mapping[int, str] | None = None
+    space: str | None = None
 
     # equal when the three arrays (and the unit) are, by their elements (the generated
     # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
@@ -153,6 +159,7 @@ class LabelImage:
             object.__setattr__(self, "origin", place.origin)
         object.__setattr__(self, "unit", unit_given(self.unit, "LabelImage"))
         object.__setattr__(self, "names", label_names(self.names, "LabelImage") or None)
+        object.__setattr__(self, "space", space_given(self.space, "LabelImage"))
 
 
 def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> dict[int, str] | None:

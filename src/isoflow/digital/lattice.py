@@ -12,7 +12,10 @@ cubes. Here it is a boolean array plus where that array sits:
   digital topology never looks at it, the exported coordinates do;
 * ``unit``: the length unit of ``pitch`` and ``origin`` (``mm``, ``µm``,
   ...; None for none), as the file read said it, kept by every step and
-  written with the object.
+  written with the object;
+* ``space``: the anatomical frame of the world axes (``"RAS"``,
+  ``"LPS"``, ...: :mod:`isoflow.digital.frames`; None for none), kept and
+  written as ``unit`` is.
 
 Array voxel ``v`` is the cube whose lowest corner has lattice coordinates
 ``offset + v + parity/2`` and world coordinates ``origin + pitch * (that)``
@@ -32,6 +35,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError, counted, given_text, number_text
 from ..results import read_only, same_fields
 from ..scale.arrays import as_array, binary, is_masked_array
+from .frames import space_given
 from .units import unit_given
 
 
@@ -67,12 +71,21 @@ class DigitalObject:
         default) for none. :func:`~isoflow.mesh.volumes.read_volume` sets
         it from the file, every step that keeps the object's place keeps
         it, and :func:`~isoflow.mesh.volumes.write_volume` writes it.
+    space : str, optional
+        The anatomical frame of the world axes: where +x, +y, +z point, as
+        three letters (``"RAS"``: to the patient's Right, Anterior,
+        Superior, as NIfTI and MGH mean; ``"LPS"``, as a 3D Slicer NRRD
+        says), in any case, held in capitals; None (the default) for none.
+        Set, kept and written as ``unit`` is: a writer of another frame
+        negates the axes that point the other way
+        (:mod:`isoflow.digital.frames`).
 
     Raises
     ------
     IsoflowError
         When the volume is not binary or not 2D to 4D, or a field is not
-        what it must be (a ``unit`` that is no length unit among them).
+        what it must be (a ``unit`` that is no length unit, a ``space`` that
+        is no anatomical frame among them).
 
     Examples
     --------
@@ -92,6 +105,11 @@ class DigitalObject:
     >>> scan = DigitalObject(np.ones((4, 4, 2), bool), pitch=(0.5, 0.5, 2.0), unit="millimetre")
     >>> scan.unit, scan.cropped().unit
     ('mm', 'mm')
+
+    ... and in the frame of a 3D Slicer scan:
+
+    >>> DigitalObject(np.ones((4, 4, 2), bool), space="lps").cropped().space
+    'LPS'
     """
 
     volume: np.ndarray
@@ -100,6 +118,7 @@ class DigitalObject:
     pitch: float | np.ndarray = 1.0
     origin: np.ndarray = field(default=None)  # type: ignore[arg-type]
     unit: str | None = None
+    space: str | None = None
 
     # equal when every field is, the volume by its elements: the generated
     # __eq__ compared the arrays with ==, whose truth NumPy refuses; and
@@ -114,7 +133,7 @@ class DigitalObject:
         def __init__(self, volume: ArrayLike, offset: Sequence[int | np.integer] | np.ndarray | None = None,
                      parity: int | np.integer = 0,
                      pitch: float | ArrayLike = 1.0, origin: ArrayLike | None = None,
-                     unit: str | None = None) -> None: ...
+                     unit: str | None = None, space: str | None = None) -> None: ...
 
     def __post_init__(self):
         vol = binary(self.volume, "DigitalObject volume")
@@ -138,6 +157,7 @@ class DigitalObject:
         object.__setattr__(self, "parity", int(parity))
         object.__setattr__(self, "pitch", _pitch(self.pitch, n))
         object.__setattr__(self, "unit", unit_given(self.unit, "DigitalObject"))
+        object.__setattr__(self, "space", space_given(self.space, "DigitalObject"))
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         # pickle restores the fields without __post_init__, and NumPy
@@ -163,7 +183,7 @@ class DigitalObject:
         indices : array_like of int, shape (N, 2) or (N, 3)
             The voxels' lattice indices (repeats are one voxel).
         **kw
-            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+            ``pitch``, ``origin``, ``parity``, ``unit``, ``space`` of the object.
 
         Returns
         -------
@@ -201,7 +221,7 @@ class DigitalObject:
         points : array_like of int, shape (N, 2) or (N, 3)
             The lattice points.
         **kw
-            ``pitch``, ``origin``, ``parity``, ``unit`` of the object.
+            ``pitch``, ``origin``, ``parity``, ``unit``, ``space`` of the object.
 
         Returns
         -------
@@ -436,7 +456,8 @@ class DigitalObject:
         return (
             f"DigitalObject(shape={self.volume.shape}, voxels={self.voxels}, "
             f"offset={self.offset}, parity={self.parity}, pitch={_significant(self.pitch)}, "
-            f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}") + ")"
+            f"origin={self.origin.tolist()}" + ("" if self.unit is None else f", unit={self.unit!r}")
+            + ("" if self.space is None else f", space={self.space!r}") + ")"
         )
 
 

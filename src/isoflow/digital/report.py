@@ -34,9 +34,9 @@ class ClosedSurface(TypedDict):
 
 
 #: what ``isoflow info --json`` prints beside a report's fields: the input
-#: as given, a volume file's type of values, voxel size and origin, a
-#: mesh's voxel grid (docs/cli.md)
-INFO_INPUT_KEYS = ("input", "dtype", "pitch", "origin", "voxelised")
+#: as given, a volume file's type of values, voxel size, origin and
+#: anatomical frame, a mesh's voxel grid (docs/cli.md)
+INFO_INPUT_KEYS = ("input", "dtype", "pitch", "origin", "space", "voxelised")
 
 
 # eq=False: the equality is Result's, a mapping's (a generated one would

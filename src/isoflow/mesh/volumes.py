@@ -357,7 +357,7 @@ def as_object(raw: RawVolume, where: str, label=None) -> DigitalObject:
     meta: dict[str, Any] = {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset, "parity": raw.parity,
                             # a unit isoflow cannot write (free text of NRRD or ImageJ) is not carried:
                             # read_volume_with_unit gives it as the file says it
-                            "unit": raw.unit if raw.unit in LENGTH_UNITS else None}
+                            "unit": raw.unit if raw.unit in LENGTH_UNITS else None, "space": raw.space}
     try:  # DigitalObject checks the metadata fields; its errors get the file's name
         # handed over read-only: an object copies a volume someone else could still write
         return DigitalObject(read_only(vol), **{k: v for k, v in meta.items() if v is not None})
@@ -459,7 +459,9 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         float array whose values are all whole numbers, as NIfTI scaling
         may give, becomes int64); ``spacing`` and ``origin`` as
         :func:`read_volume` gives them, and ``unit``, their length unit as
-        the file says it (:func:`read_volume_with_unit`); ``names``, label
+        the file says it (:func:`read_volume_with_unit`); ``space``, the
+        anatomical frame of the world axes (``"RAS"`` for NIfTI and MGH, a
+        NRRD's ``space``; None where the file says none); ``names``, label
         value to name, where the file records them (3D Slicer's segments in
         a NRRD, OME-Zarr's ``image-label`` properties, the ``label_names``
         that :func:`write_labels` writes into HDF5 and ``.npz``), else
@@ -506,7 +508,7 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         raise exc.at(path) from None
     never_written(str(path), raw.unwritten, table=True)
     return LabelImage(np.ascontiguousarray(arr), obj.spacing, obj.world(np.zeros((1, arr.ndim)))[0], raw.unit,
-                      raw.names)
+                      raw.names, space=raw.space)
 
 
 def select_label(array, label, where: str) -> np.ndarray:
@@ -922,8 +924,13 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     Refuses an existing file (or dataset) unless ``force``. Returns the
     file's path.
 
-    ``.npz`` keeps everything (offset and parity too); the other formats
-    keep the world position of every voxel (see the table of docs/formats.md).
+    ``.npz`` keeps everything (offset and parity too) but the anatomical
+    frame; the other formats keep the world position of every voxel (see
+    the table of docs/formats.md). An object's ``space`` (its anatomical
+    frame, ``"LPS"`` as a 3D Slicer NRRD's) is written in the format's own:
+    NIfTI and MGH in RAS, the world axes that point the other way negated;
+    NRRD as its ``space`` field; a warning names it where the format has no
+    place for one.
     The file is written beside the target and renamed when complete, so an
     interrupted write leaves any previous file as it was.
 
@@ -988,13 +995,17 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
         # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
         raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
                         every=exc.every, ndim=exc.ndim, kind=exc.kind) from None
-    return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)))
+    return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)),
+                        space=obj.space)
 
 
 def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, force: bool = False,
-                 unit: str | None = None) -> Path:
+                 unit: str | None = None, space: str | None = None) -> Path:
     """:func:`write_volume` of a digital object or a placed label image,
-    ``unit`` in isoflow's spelling (:func:`~isoflow.digital.units.length_unit`)."""
+    ``unit`` in isoflow's spelling (:func:`~isoflow.digital.units.length_unit`),
+    ``space`` the anatomical frame of its world axes
+    (:func:`~isoflow.digital.frames.space_given`), which the format's writer
+    turns into its own frame or says it does not keep."""
     file, dataset = check_volume_output(path, force)
     fmt = format_for(file, writing=True)
     assert fmt is not None, "check_volume_output refuses a suffix that no format writes"
@@ -1007,13 +1018,13 @@ def write_placed(obj: DigitalObject | LabelVolume, path: str | os.PathLike, forc
     with warnings.catch_warnings(record=True) as dropped:
         warnings.simplefilter("always")
         if hasattr(module, "check"):
-            module.check(file, obj, dataset, unit=unit)
+            module.check(file, obj, dataset, unit=unit, space=space)
     # whole or not at all: written beside the target, renamed when complete
     with atomic_path(file, directory=file.suffix.lower() == ".zarr") as tmp:
         if fmt.datasets and dataset is not None:  # FILE.h5:/name: the file's other datasets are kept
-            module.write(tmp, obj, dataset, name=file.name, into=file, unit=unit)
+            module.write(tmp, obj, dataset, name=file.name, into=file, unit=unit, space=space)
         else:
-            module.write(tmp, obj, dataset, name=file.name, unit=unit)
+            module.write(tmp, obj, dataset, name=file.name, unit=unit, space=space)
     for w in dropped:
         warn(str(w.message), w.category)
     return file
@@ -1052,7 +1063,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         from 0 on. Not 4D:
         :func:`read_labels` would not read it back. Or a
         :class:`~isoflow.LabelImage`, as :func:`read_labels` gives it, with
-        its voxel size, origin and length unit.
+        its voxel size, origin, length unit and anatomical frame (written
+        as :func:`write_volume` writes an object's ``space``).
     path : str or PathLike
         The file; its suffix names the format (NIfTI, NRRD, HDF5, TIFF,
         OME-Zarr, ``.npz``, ...).
@@ -1121,7 +1133,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
 
     A label image read from one file, written to another with its place:
 
-    >>> again = read_labels(write_labels(back, pathlib.Path(tempfile.mkdtemp()) / "cells.h5"))
+    >>> again = read_labels(write_labels(back, pathlib.Path(tempfile.mkdtemp()) / "cells.nrrd"))
     >>> np.array_equal(again.array, cells), again.spacing.tolist()
     (True, [0.5, 0.25])
 
@@ -1147,7 +1159,11 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         # a unit read from a file is kept as the file spelled it where isoflow knows no other spelling
         unit = length_unit(labels.unit) if unit is None else unit
         names = labels.names if names is None else names
+        # the frame goes with the place it is of: a pitch and origin given replace the image's, not its frame
+        space = labels.space
         labels = labels.array
+    else:
+        space = None
     pitch = 1.0 if pitch is None else pitch
     arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
@@ -1170,7 +1186,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         # 16 bits, whatever the array's); they fit, as just checked
         arr = arr.astype(np.min_scalar_type(fmt.max_label))
     written = write_placed(LabelVolume(arr, place.pitch, place.origin, offset=(0,) * arr.ndim, names=names or None), path,
-                           force, unit=unit)
+                           force, unit=unit, space=space)
     if names and not keeps_names(file):
         # said once the file is there, as what a format drops of the placement is
         warn(f"{path}: {names_not_kept(path, len(names))}")

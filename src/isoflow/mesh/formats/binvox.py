@@ -30,7 +30,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, check_shape, placement, reading, unit_not_kept
+from .registry import RawVolume, check_shape, placement, reading, space_not_kept, unit_not_kept
 
 MAX_HEADER_LINES = 32
 
@@ -76,13 +76,15 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, scale / side, np.array(translate))
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: binvox holds 3D voxels, this object is {obj.ndim}D")
     if np.ndim(obj.pitch):
         raise IsoflowError(f"{path}: binvox holds one voxel size and this object's pitch is "
                            f"{np.round(obj.pitch, 9).tolist()}; write .nii.gz, .nrrd or .h5 to keep it")
     unit_not_kept(path, "binvox", unit)
+    space_not_kept(path, "binvox", space)
 
 
 #: the cube is run-length coded about this many voxels at a time
@@ -90,7 +92,7 @@ SLAB_VOXELS = 1 << 20
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     spacing, corner = placement(obj)
     side = max(obj.volume.shape)
     # scale is the cube's side in world units; the reader divides it by the side, or by 1 for an empty cube (0

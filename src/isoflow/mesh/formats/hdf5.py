@@ -46,6 +46,7 @@ from .registry import (
     names_from_json,
     names_json,
     reading,
+    space_not_kept,
     stored_values,
 )
 
@@ -165,9 +166,12 @@ def check_output(path: str | Path, force: bool = False, dataset: str | None = No
     return path
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     """Refuse, before the file is copied, a dataset added to an existing
-    file whose copies in memory, with the dataset's, would not fit."""
+    file whose copies in memory, with the dataset's, would not fit; warn
+    that the anatomical frame is not written."""
+    space_not_kept(path, "HDF5", space)
     if _kept(path, dataset):
         _check_held(path, _name(dataset), DATASET_BYTES * int(np.asarray(obj.volume).size))
 
@@ -186,7 +190,7 @@ def _check_held(path: Path, name: str, extra: int) -> None:
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          into: Path | None = None, unit: str | None = None) -> None:
+          into: Path | None = None, unit: str | None = None, space: str | None = None) -> None:
     """Write ``obj`` as the dataset; ``into``: the existing file whose other
     datasets the written file keeps (``path`` is then a copy of it)."""
     h5py = import_library("h5py", "HDF5")

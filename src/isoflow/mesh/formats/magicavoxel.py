@@ -22,7 +22,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, note, placement, reading
+from .registry import RawVolume, frame_text, note, placement, reading
 
 MAX_SIDE = 256
 VERSION = 150
@@ -99,20 +99,22 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(vol, paint=True)
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     if obj.ndim != 3:
         raise IsoflowError(f"{path}: MagicaVoxel holds 3D models, this object is {obj.ndim}D")
     if max(obj.volume.shape, default=0) > MAX_SIDE:
         raise ModelTooLarge(f"{path}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
                             f"{'x'.join(map(str, obj.volume.shape))}")
     spacing, corner = placement(obj)
-    if (spacing != 1).any() or corner.any() or unit is not None:
+    if (spacing != 1).any() or corner.any() or unit is not None or space is not None:
         note(f"{path}: MagicaVoxel keeps no voxel size or origin; pitch {np.round(obj.pitch, 9).tolist()} "
-             f"and origin {np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit} are not written")
+             f"and origin {np.round(corner, 9).tolist()}{'' if unit is None else ' in ' + unit}"
+             f"{'' if space is None else ', ' + frame_text(space) + ','} are not written")
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     xyzi = voxel_list(obj.volume)
     size = struct.pack("<3i", *obj.volume.shape)
     voxels = 4 + xyzi.nbytes  # the count, then (x, y, z, colour) a byte each

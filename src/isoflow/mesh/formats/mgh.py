@@ -5,7 +5,8 @@ images), ``brainmask.mgz``, ``T1.mgz``. nibabel reads them as ``MGHImage``.
 
 Axes: the header's direction cosines, voxel sizes and centre (``Mdc``,
 ``delta``, ``Pxyz_c``) make the vox2ras affine (nibabel's ``img.affine``),
-which maps a voxel's *centre* index to RAS millimetres, as NIfTI's does:
+which maps a voxel's *centre* index to RAS millimetres, as NIfTI's does
+(the volume's ``space`` is ``"RAS"``):
 isoflow turns and places the array by it exactly as a NIfTI image's
 (:func:`isoflow.mesh.formats.nifti.placed_by_affine`: flips and
 permutations exact, a rotation kept as its axis-aligned part with a
@@ -19,7 +20,9 @@ along the frames, as NIfTI's; one frame is 3D.
 
 Written as ``.mgz`` or ``.mgh`` (uint8 0/1; a label image in the smallest
 of uint8, int16 and int32 that holds it, the types every FreeSurfer
-version reads) with a diagonal affine; MGH stores its header in float32,
+version reads) with a diagonal affine into RAS (the axes of a volume in
+another frame, an LPS NRRD's, negated where they point the other way, as
+NIfTI's writer does); MGH stores its header in float32,
 and stores the volume's centre, not its first voxel (nibabel builds the
 affine from it in float32), so an origin comes back within float32
 rounding of the centre's coordinates and of voxel 0's (a warning says
@@ -66,10 +69,11 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             affine = np.asarray(img.affine, np.float64)
     # big-endian in the file: the kernels take the machine's order
     data = data.astype(data.dtype.newbyteorder("="), copy=False)
-    return placed_by_affine(data, affine, where, "mm")
+    return placed_by_affine(data, affine, where, "mm", "RAS")
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     """Refuse what MGH cannot hold (a 2D object, a side of length 0; labels
     beyond int32 are refused by the format's ``max_label``); warn of a unit
     other than mm, of voxels that float32 moves, and of a fourth axis's
@@ -85,9 +89,9 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     nib = import_library("nibabel", "MGH")
-    img = nib.MGHImage(mgh_values(stored_values(obj.volume)), diagonal_affine(obj))
+    img = nib.MGHImage(mgh_values(stored_values(obj.volume)), diagonal_affine(obj, space))
     # the file named exactly: nibabel gzips by the name's suffix, which a temporary name keeps
     img.to_file_map(img.make_file_map({"image": str(path)}))
 

@@ -16,7 +16,11 @@ image is read as 4D (``info`` only) with voxel size 1 along the fourth axis;
 a 4D object written with another voxel size or origin along it is warned of.
 
 Written as NIfTI-1 (uint8 0/1; a label image in its unsigned type) with a diagonal affine (the voxel sizes)
-whose translation is voxel 0's centre, sform and qform code 1 (scanner).
+whose translation is voxel 0's centre, sform and qform code 1 (scanner). The
+world read is RAS (the volume's ``space``; none for method 1); a volume in
+another frame (an LPS NRRD's) is written with the rows of its world axes
+that point the other way negated (:func:`diagonal_affine`), so every voxel
+keeps its anatomical place.
 NIfTI stores the affine in float32: pitch and origin are kept to float32
 precision, and where that moves a voxel centre by more than
 :data:`FLOAT32_SLACK` of a voxel (a model far from the origin: float32's
@@ -34,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import axes_against
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
 from .affine import axis_aligned, centre_affine
@@ -92,19 +97,21 @@ def image_volume(img, where: str) -> RawVolume:
     >>> img = nibabel.Nifti1Image(np.ones((2, 2, 2), np.uint8), np.diag([0.5, 0.5, 2, 1]))
     >>> img.header.set_xyzt_units("mm")
     >>> raw = image_volume(img, "a.nii")
-    >>> raw.pitch.tolist(), raw.origin.tolist(), raw.unit
-    ([0.5, 0.5, 2.0], [-0.25, -0.25, -1.0], 'mm')
+    >>> raw.pitch.tolist(), raw.origin.tolist(), raw.unit, raw.space
+    ([0.5, 0.5, 2.0], [-0.25, -0.25, -1.0], 'mm', 'RAS')
     """
     check_shape(img.shape, img.get_data_dtype(), where)
     data = np.asanyarray(img.dataobj)  # the stored type (scaled to float only if the file says so)
     affine = np.asarray(img.affine, np.float64)
+    # the standard's world of an sform or qform is RAS; method 1's voxel grid has no anatomical frame
+    space: str | None = "RAS"
     if int(img.header["qform_code"]) == 0 and int(img.header["sform_code"]) == 0:
-        affine = method_1_affine(img.header.get_zooms())
+        affine, space = method_1_affine(img.header.get_zooms()), None
         note(f"{where}: no qform or sform (both codes 0): placed by the NIfTI standard's method 1, voxel (i, j, k) "
              "at (i dx, j dy, k dz), not by nibabel's fallback affine (x mirrored, centred on 0)")
     unit = length_unit(img.header.get_xyzt_units()[0])  # 'mm', 'micron', 'meter' or 'unknown' (none)
     forms_disagree(img.header, img.shape, where, unit)
-    return placed_by_affine(data, affine, where, unit)
+    return placed_by_affine(data, affine, where, unit, space)
 
 
 def forms_disagree(header, shape, where: str, unit: str | None) -> float:
@@ -175,7 +182,8 @@ def method_1_affine(zooms) -> np.ndarray:
     return affine
 
 
-def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str | None) -> RawVolume:
+def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str | None,
+                     space: str | None = None) -> RawVolume:
     """The volume of an image placed by a 4x4 voxel-to-world ``affine`` (of
     voxel centres, as NIfTI's and FreeSurfer MGH's), on isoflow's grid.
 
@@ -190,6 +198,9 @@ def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str
         The file, as refusals name it.
     unit : str or None
         The length unit of the world coordinates.
+    space : str, optional
+        Their anatomical frame (``"RAS"`` for NIfTI's and MGH's), None
+        for none.
 
     Returns
     -------
@@ -212,10 +223,11 @@ def placed_by_affine(data: np.ndarray, affine: np.ndarray, where: str, unit: str
     vol, pitch, origin = axis_aligned(data, affine[:3, :spatial], affine[:3, 3], where)
     if data.ndim == 4:
         pitch, origin = np.append(pitch, 1.0), np.append(origin, 0.0)
-    return RawVolume(vol, pitch, origin, unit=unit)
+    return RawVolume(vol, pitch, origin, unit=unit, space=space)
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     """Refuse an array with a side of length 0; warn of a fourth axis's
     placement, which the affine has no room for (read back as voxel size 1
     from 0), as every format says what of the placement it drops."""
@@ -254,9 +266,9 @@ def fourth_axis_dropped(path: Path, obj: DigitalObject, fmt: str) -> None:
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     nib = import_library("nibabel", "NIfTI")
-    affine = diagonal_affine(obj)
+    affine = diagonal_affine(obj, space)
     values = stored_values(obj.volume)
     # the type named: nibabel refuses int64 and uint64 data unless it is (64-bit labels)
     img = nib.Nifti1Image(values, affine, dtype=values.dtype)
@@ -292,15 +304,36 @@ def _load(nib, path: Path):
         return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
 
 
-def diagonal_affine(obj: DigitalObject) -> np.ndarray:
-    """The 4x4 voxel-to-world map of ``obj``'s spatial axes: its voxel sizes
-    on the diagonal, voxel 0's centre as the translation (what NIfTI and
-    FreeSurfer MGH store).
+def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
+    """The 4x4 voxel-to-world map of ``obj``'s spatial axes into RAS: its
+    voxel sizes on the diagonal, voxel 0's centre as the translation (what
+    NIfTI and FreeSurfer MGH store), each row of a world axis that
+    ``space`` points the other way (L for R, P for A, I for S) negated, so
+    that every voxel keeps its anatomical place.
+
+    Parameters
+    ----------
+    obj : DigitalObject
+        The object (or a placed label image).
+    space : str, optional
+        The anatomical frame of its world coordinates
+        (:func:`~isoflow.digital.frames.space_given`); None: written as
+        they are.
+
+    Returns
+    -------
+    numpy.ndarray
+        The 4x4 affine.
 
     Examples
     --------
     >>> diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)).tolist()[0]
     [0.5, 0.0, 0.0, 0.25]
+
+    A voxel 10 mm to the patient's left in LPS is at x = -10 in RAS:
+
+    >>> diagonal_affine(DigitalObject(np.ones((1, 1, 1), bool), origin=(9.5, 0, 0)), "LPS").tolist()[0]
+    [-1.0, 0.0, 0.0, -10.0]
     """
     spacing, corner = placement_3d(obj)
     steps, centre0 = centre_affine(spacing, corner)
@@ -308,6 +341,9 @@ def diagonal_affine(obj: DigitalObject) -> np.ndarray:
     n = len(spacing)
     affine[:n, :n] = steps
     affine[:n, 3] = centre0
+    if space is not None:
+        flipped = [axis for axis in axes_against(space) if axis < n]
+        affine[flipped] = 0.0 - affine[flipped]  # (0.0 - x keeps a 0 as 0.0; * -1 would give -0.0)
     return affine
 
 

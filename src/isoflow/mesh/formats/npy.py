@@ -18,7 +18,7 @@ import numpy as np
 
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note
+from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note, space_not_kept
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -140,7 +140,10 @@ def _header(path: Path) -> tuple | None:
         return None
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
+    # said apart from the rest: .npz, which keeps the rest, has no place for it either
+    space_not_kept(path, ".npy" if path.name.lower().endswith(".npy") else ".npz", space)
     if not path.name.lower().endswith(".npy"):
         return
     # only what this object holds beyond the defaults, with its value: a
@@ -157,7 +160,7 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     with open(path, "wb") as fh:
         if path.name.lower().endswith(".npy"):
             np.save(fh, obj.volume)

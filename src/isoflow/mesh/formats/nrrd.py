@@ -6,8 +6,11 @@ Axes: the file's axes in its own order, fastest first (pynrrd's
 sample), as NIfTI's affine is (:mod:`isoflow.mesh.formats.affine`: turned to
 isoflow's x, y, z with positive steps; a rotation is kept as its axis-aligned
 part with a warning). World coordinates are the file's ``space`` (3D Slicer
-writes LPS). Axes without a direction (``none``: a vector or list axis) must
-have length 1. A file without a space is placed per axis by teem's rule
+writes LPS), which the volume's ``space`` names by its three letters
+(:func:`space_code`: ``left-posterior-superior`` is ``"LPS"``; None for
+``scanner-xyz``, ``3D-right-handed`` and a file without a space). Axes
+without a direction (``none``: a vector or list axis) must have length 1.
+A file without a space is placed per axis by teem's rule
 (:func:`axis_samples`): ``spacings`` (or ``axis maxs`` less ``axis mins``
 over the cells) the step, a negative one running the axis backwards, and
 ``axis mins`` the first sample, cell-centred unless ``centerings`` says
@@ -26,8 +29,12 @@ of one layer is a label image; of several (4D, the layers on axis 0),
 ``FILE.seg.nrrd:N`` reads layer ``N`` and the file alone is refused with
 a line listing each layer's segments.
 
-Written with ``space dimension``, diagonal ``space directions`` (the voxel
-sizes), ``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
+Written with ``space`` where the volume's anatomical frame is known (the
+NRRD name of ``RAS``, ``LPS`` or ``LAS``, ``-time`` added in 4D; another
+frame is written as RAS, its axes that point the other way negated; a 2D
+image in its z = 0 plane, as NRRD's anatomical spaces have three axes), else
+``space dimension``; diagonal ``space directions`` (the voxel sizes),
+``space origin`` (voxel 0's centre), uint8 0/1, gzip encoding;
 float64 in the text header, so pitch and origin are kept exactly; and,
 where a length unit is given, ``space units`` (one per axis, in ASCII:
 ``um`` for \u00b5m, as ImageJ and ITK write it). A label image with names
@@ -43,6 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import axes_against
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
@@ -100,7 +108,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             note(f"{where}: space origin {origin.tolist()} is not finite; the origin is taken as 0")
             origin = np.zeros(dim)
         vol, pitch, corner = axis_aligned(data, directions[placed].T, origin, where)
-        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where), names=names)
+        return RawVolume(vol, pitch, corner, unit=_unit(header, "space units", None, where), names=names,
+                         space=space_code(header.get("space")))
     # without space directions, only "kinds" tells a component axis (an
     # RGB colour, a vector, a list of layers) from a domain axis
     kinds = _kinds(header, data.ndim)
@@ -171,6 +180,43 @@ def axis_samples(header: dict, sizes: tuple[int, ...], placed: list[int], where:
     return step, centre0
 
 
+#: NRRD's anatomical spaces (teem's airEnum names, and its abbreviations)
+#: by the three letters of where +x, +y, +z point
+SPACES = {"RAS": "right-anterior-superior", "LAS": "left-anterior-superior", "LPS": "left-posterior-superior"}
+
+
+def space_code(space: object) -> str | None:
+    """The three letters of a NRRD ``space`` field's anatomical frame, for
+    3D and, ``-time`` added, 4D; None for no field and for the spaces of no
+    anatomy (``scanner-xyz``, ``3D-right-handed``, ...), whose axes no
+    patient's direction names.
+
+    Parameters
+    ----------
+    space : str or None
+        The field as the header holds it, in any case.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> space_code("left-posterior-superior"), space_code("RAS-time"), space_code("LPST")
+    ('LPS', 'RAS', 'LPS')
+    >>> space_code("scanner-xyz") is None, space_code(None) is None
+    (True, True)
+    """
+    if not isinstance(space, str):
+        return None
+    name = space.strip().lower()
+    name = name.removesuffix("-time")
+    for code, full in SPACES.items():
+        if name in (full, code.lower(), code.lower() + "t"):
+            return code
+    return None
+
+
 def _kinds(header: dict, ndim: int) -> list | None:
     """The header's ``kinds``, one per axis, or None where it has none that fit."""
     kinds = header.get("kinds")
@@ -224,13 +270,54 @@ def _scalar_axes(data: np.ndarray, placed: list[int], what: str, where: str, kin
     return np.transpose(data, placed + others).reshape([data.shape[i] for i in placed])
 
 
+def named_space(space: str, steps: np.ndarray, centre0: np.ndarray, ndim: int) -> dict:
+    """The header fields ``space``, ``space directions`` and ``space
+    origin`` of a volume of ``ndim`` axes in the anatomical frame
+    ``space``: its own NRRD name where it has one, else RAS with the world
+    axes that point the other way negated (the voxels keep their
+    anatomical places).
+
+    Parameters
+    ----------
+    space : str
+        The frame's three letters (:func:`~isoflow.digital.frames.space_given`).
+    steps : numpy.ndarray
+        Row ``i``: the world step of array axis ``i``, in three world
+        axes (four with time).
+    centre0 : numpy.ndarray
+        The world position of voxel 0's centre.
+    ndim : int
+        The array's axes: 2 or 3, or 4 for a time series (``-time`` added
+        to the name).
+
+    Returns
+    -------
+    dict
+        The three fields (pynrrd then leaves out ``space dimension``).
+
+    Examples
+    --------
+    >>> fields = named_space("RPS", np.eye(3), np.array([1.0, 2.0, 3.0]), 3)
+    >>> fields["space"], fields["space origin"].tolist()
+    ('right-anterior-superior', [1.0, -2.0, 3.0])
+    """
+    steps, centre0 = steps.copy(), centre0.copy()
+    if space not in SPACES:
+        flipped = axes_against(space)
+        steps[:, flipped] = 0.0 - steps[:, flipped]  # (0.0 - x keeps a 0 as 0.0; * -1 would give -0.0)
+        centre0[flipped] = 0.0 - centre0[flipped]
+        space = "RAS"
+    return {"space": SPACES[space] + ("-time" if ndim == 4 else ""), "space directions": steps,
+            "space origin": centre0}
+
+
 # zlib's own default, as gzip(1) writes: pynrrd's default, 9, takes 2.5-4
 # times as long for files 7-14 % smaller (benchmarks/bench_gzip_levels.py)
 GZIP_LEVEL = 6
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     nrrd = import_library("nrrd", "NRRD", "pynrrd")
     spacing, corner = placement(obj)
     steps, centre0 = centre_affine(spacing, corner)
@@ -241,8 +328,14 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         "kinds": ["domain"] * obj.ndim,
         "encoding": "gzip",
     }
+    if space is not None:
+        if obj.ndim == 2:
+            # NRRD's anatomical spaces have three axes: a 2D image lies in their z = 0 plane,
+            # as NIfTI's writer places it
+            steps, centre0 = np.hstack([steps, np.zeros((2, 1))]), np.append(centre0, 0.0)
+        header.update(named_space(space, steps, centre0, obj.ndim))
     if unit is not None:
-        header["space units"] = [ascii_unit(unit)] * obj.ndim
+        header["space units"] = [ascii_unit(unit)] * len(header["space origin"])
     names = getattr(obj, "names", None)  # a label image's: Slicer's segments
     texts = {}
     if names:

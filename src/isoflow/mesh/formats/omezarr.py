@@ -62,6 +62,7 @@ from .registry import (
     placement,
     reading,
     shared_unit,
+    space_not_kept,
     split_dataset,
     stored_values,
     to_xyz,
@@ -636,17 +637,19 @@ def check_output(path, force: bool = False, dataset: str | None = None) -> Path:
     return path
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     if dataset is not None:
         raise IsoflowError(f"{path}:{dataset}: a level is named to read an OME-Zarr image; write to {path}")
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: OME-Zarr images here are 2D or 3D, this object is {obj.ndim}D")
     if unit is not None and unit not in UDUNITS:
         unit_not_kept(path, "OME-Zarr", unit, "the UDUNITS length units of NGFF only")
+    space_not_kept(path, "OME-Zarr", space)
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     zarr = import_library("zarr", "OME-Zarr")
     spacing, corner = placement(obj)
     data = stored_values(np.ascontiguousarray(obj.volume.T))  # (x, y, z) -> (z, y, x)

@@ -39,6 +39,7 @@ from .registry import (
     check_alpha,
     check_shape,
     colours_refused,
+    frame_text,
     import_library,
     note,
     placement,
@@ -81,7 +82,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     return RawVolume(np.ascontiguousarray(data.T), np.ones(2))
 
 
-def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     """Refuse what a PNG cannot hold of ``obj`` (a 3D object, no pixels a
     side; labels past 16 bits are refused by the format's ``max_label``)
     and say what it drops (the pixel size, origin and length unit), before
@@ -97,6 +99,8 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
         Unused: a PNG holds one image.
     unit : str, optional
         The length unit of its pixel size and origin, said as dropped.
+    space : str, optional
+        The anatomical frame of its world axes, said as dropped.
 
     Raises
     ------
@@ -119,14 +123,15 @@ def check(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = No
     # said where what is read back differs: a pixel size not 1, an origin not 0, a unit
     lost = ([f"pitch {np.round(obj.pitch, 9).tolist()}"] if (spacing != 1).any() else []) + (
         [f"origin {np.round(corner, 9).tolist()}"] if corner.any() else []) + (
-        [f"unit {unit}"] if unit is not None else [])
+        [f"unit {unit}"] if unit is not None else []) + (
+        [frame_text(space)] if space is not None else [])
     if lost:
         note(f"{path}: PNG keeps no pixel size, origin or unit; {' and '.join(lost)} "
              f"{'are' if len(lost) > 1 else 'is'} not written (read back as pixel size 1, origin 0)")
 
 
 def write(path: Path, obj: DigitalObject | LabelVolume, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     """Write the 2D ``obj`` that :func:`check` let through as a lossless
     grey PNG: a mask as 8-bit 0 and 255, labels as 8- or 16-bit grey
     (their own type), row ``j``, column ``i`` holding pixel ``(i, j)``.

@@ -361,6 +361,9 @@ class RawVolume:
     #: the length unit of ``pitch`` and ``origin`` as the file says it, in
     #: one spelling (:func:`length_unit`); None where the file says none
     unit: str | None = None
+    #: the anatomical frame of the world axes (``"RAS"``, ``"LPS"``, ...:
+    #: :func:`~isoflow.digital.frames.space_given`); None where the file says none
+    space: str | None = None
     said: Callable[[object], str | None] | None = None
     #: what each label is, label value to name, where the file records it
     names: dict[int, str] | None = None
@@ -412,6 +415,33 @@ def unit_not_kept(path, fmt: str, unit: str | None, keeps: str = "no length unit
     None), as a format says what of the placement it drops."""
     if unit is not None:
         note(f"{path}: {fmt} keeps {keeps}; the unit {unit} of the voxel size and origin is not written")
+
+
+def space_not_kept(path, fmt: str, space: str | None) -> None:
+    """Warn that the format of ``path`` has no place for the anatomical
+    frame ``space`` (nothing for None), as a format says what of the
+    placement it drops: a reader of the file cannot tell left from right.
+
+    Examples
+    --------
+    >>> space_not_kept("a.h5", "HDF5", None)  # nothing to say
+    """
+    if space is not None:
+        note(f"{path}: {fmt} keeps no anatomical frame; {frame_text(space)} is not written (.nii.gz, .mgz and "
+             ".nrrd keep it)")
+
+
+def frame_text(space: str) -> str:
+    """The anatomical frame ``space`` in words, for a warning.
+
+    Examples
+    --------
+    >>> frame_text("LPS")
+    'the frame LPS (x to the left, y posterior, z superior)'
+    """
+    words = {"R": "right", "L": "left", "A": "anterior", "P": "posterior", "S": "superior", "I": "inferior"}
+    x, y, z = (words[c] for c in space)
+    return f"the frame {space} (x to the {x}, y {y}, z {z})"
 
 
 @dataclass(frozen=True)

@@ -114,6 +114,7 @@ from .registry import (
     quiet_logs,
     reading,
     refuse_empty,
+    space_not_kept,
     stored_values,
     to_xyz,
 )
@@ -816,10 +817,12 @@ def _check_resolution(path: Path, obj: DigitalObject) -> None:
                                "which keep it, or use another length unit")
 
 
-def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None) -> None:
+def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
+          space: str | None = None) -> None:
     if obj.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a TIFF holds a 2D image or a 3D stack, this object is {obj.ndim}D")
     refuse_empty(path, obj.volume.shape, "TIFF")  # tifffile fails on it with a ValueError of its own
+    space_not_kept(path, "TIFF", space)
     if not is_ome_name(path.name):  # OME-XML writes the sizes as decimals, not as TIFF rationals
         _check_resolution(path, obj)
     elif obj.ndim == 3 and obj.volume.shape[2] == 1:
@@ -843,7 +846,7 @@ def is_ome_name(name: str) -> bool:
 
 
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
-          unit: str | None = None) -> None:
+          unit: str | None = None, space: str | None = None) -> None:
     tifffile = import_library("tifffile", "TIFF")
     if is_ome_name(name or path.name):
         _write_ome(tifffile, path, obj, unit)

@@ -1,0 +1,84 @@
+"""Anatomical frames: where a volume's world axes +x, +y, +z point, as a
+three-letter code (``"RAS"``: x to the patient's Right, y Anterior, z
+Superior), so that a volume read in one format's frame (NRRD's LPS, as 3D
+Slicer and ITK write) is written in another's (NIfTI's and MGH's RAS)
+without mirroring the patient. :func:`space_given` checks a code that a
+:class:`~isoflow.digital.lattice.DigitalObject` or a writer is given;
+:func:`axes_against` names the world axes a writer negates to change frame.
+"""
+
+from __future__ import annotations
+
+from ..errors import IsoflowError
+
+#: the two directions each world axis may point, in x, y, z order: a code
+#: takes one letter of each pair in turn (a permuted code such as "ASR"
+#: would reorder the axes, which a per-axis sign cannot say)
+AXIS_LETTERS = ("RL", "AP", "SI")
+
+
+def space_given(space: object, where: str) -> str | None:
+    """An anatomical frame as its three-letter code in capitals, None for
+    None; one line naming it where it is no such code.
+
+    Parameters
+    ----------
+    space : str or None
+        Where +x, +y, +z point: ``R`` or ``L``, then ``A`` or ``P``, then
+        ``S`` or ``I`` (``"RAS"``, ``"LPS"``, ``"LAS"``, ...), in any case.
+    where : str
+        What a refusal names (the object, the file).
+
+    Returns
+    -------
+    str or None
+        The code in capitals.
+
+    Raises
+    ------
+    IsoflowError
+        Where ``space`` is not such a code.
+
+    Examples
+    --------
+    >>> space_given("lps", "a.nii"), space_given(None, "a.nii") is None
+    ('LPS', True)
+    >>> space_given("scanner-xyz", "a.nii")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: a.nii: space 'scanner-xyz' is not an anatomical frame (three letters: R or L, \
+A or P, S or I, as 'RAS' or 'LPS')
+    """
+    if space is None:
+        return None
+    code = space.upper() if isinstance(space, str) else None
+    if code is None or len(code) != 3 or any(c not in pair for c, pair in zip(code, AXIS_LETTERS)):
+        raise IsoflowError(f"{where}: space {space!r} is not an anatomical frame (three letters: R or L, A or P, S or "
+                           "I, as 'RAS' or 'LPS')")
+    return code
+
+
+def axes_against(space: str, frame: str = "RAS") -> list[int]:
+    """The world axes along which ``space`` points opposite to ``frame``:
+    a coordinate in ``space`` is negated along them to give the same
+    anatomical place in ``frame``.
+
+    Parameters
+    ----------
+    space, frame : str
+        Three-letter codes (:func:`space_given`).
+
+    Returns
+    -------
+    list of int
+        Axis numbers, 0 for x.
+
+    Examples
+    --------
+    A point 10 mm to the patient's left is at x = 10 in LPS and at
+    x = -10 in RAS:
+
+    >>> axes_against("LPS"), axes_against("LAS"), axes_against("LPS", "LPS")
+    ([0, 1], [0], [])
+    """
+    return [axis for axis, (a, b) in enumerate(zip(space, frame)) if a != b]
