@@ -134,9 +134,23 @@ def test_a_format_without_a_frame_says_it_is_not_written(tmp_path):
     obj = DigitalObject(np.ones((2, 2, 2), bool), space="lps")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        isoflow.write_volume(obj, tmp_path / "a.h5")
-        isoflow.write_volume(DigitalObject(np.ones((2, 2, 2), bool)), tmp_path / "b.h5")
-    assert [str(w.message).split(";")[0] for w in caught] == [f"{tmp_path / 'a.h5'}: HDF5 keeps no anatomical frame"]
+        isoflow.write_volume(obj, tmp_path / "a.tif")
+        isoflow.write_volume(DigitalObject(np.ones((2, 2, 2), bool)), tmp_path / "b.tif")
+    assert [str(w.message).split(";")[0] for w in caught] == [f"{tmp_path / 'a.tif'}: TIFF keeps no anatomical frame"]
+
+
+@pytest.mark.parametrize("suffix", [".npz", ".h5"])
+def test_isoflows_own_formats_keep_the_frame_for_a_later_nifti(tmp_path, suffix):
+    """An LPS NRRD kept as ``.npz`` or ``.h5`` between two runs, then
+    written as NIfTI: the same anatomy as written straight away."""
+    lps = lps_nrrd(tmp_path / "scan.nrrd", DIRECTIONS["diagonal"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # nothing is lost on the way
+        kept = isoflow.write_volume(isoflow.read_volume(tmp_path / "scan.nrrd"), tmp_path / f"scan{suffix}")
+    again = isoflow.read_volume(kept)
+    assert again.space == "LPS"
+    out = isoflow.write_volume(again, tmp_path / "scan.nii.gz")
+    assert np.allclose(nibabel_place(out), lps * LPS_TO_RAS)
 
 
 def test_a_space_that_is_no_anatomical_frame_is_refused():

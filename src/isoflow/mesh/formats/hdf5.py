@@ -12,7 +12,9 @@ dataset axis) is read as the voxel size when ``pitch`` is absent, in µm.
 The length unit: isoflow's attribute ``unit`` (a string) where present, else
 µm where ``element_size_um`` gives the voxel size. A unit given is written
 as ``unit``; and, where it is µm, ``element_size_um`` too (the pitch per
-dataset axis), for Fiji and ilastik. A label image's names are the
+dataset axis), for Fiji and ilastik. An anatomical frame known (a volume
+read from NIfTI, MGH or a NRRD with a space) is isoflow's attribute
+``space`` (``"LPS"``), read back with it. A label image's names are the
 attribute ``label_names``, JSON text of an object of label value to name
 (``{"1": "a.stl", "2": "b.obj"}``).
 
@@ -36,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .registry import (
@@ -46,7 +49,6 @@ from .registry import (
     names_from_json,
     names_json,
     reading,
-    space_not_kept,
     stored_values,
 )
 
@@ -77,8 +79,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
     if "unit" in attrs:
         unit = length_unit(attrs["unit"])
     names = names_from_json(attrs["label_names"], where, "attribute 'label_names'") if "label_names" in attrs else None
+    space = space_given(str(attrs["space"]), f"{where}: attribute 'space'") if "space" in attrs else None
     return RawVolume(np.asarray(array), pitch, attrs.get("origin"), offset, attrs.get("parity", 0), unit=unit,
-                     names=names)
+                     space=space, names=names)
 
 
 def _element_size(value, ndim: int, where: str) -> np.ndarray:
@@ -169,9 +172,7 @@ def check_output(path: str | Path, force: bool = False, dataset: str | None = No
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
           space: str | None = None) -> None:
     """Refuse, before the file is copied, a dataset added to an existing
-    file whose copies in memory, with the dataset's, would not fit; warn
-    that the anatomical frame is not written."""
-    space_not_kept(path, "HDF5", space)
+    file whose copies in memory, with the dataset's, would not fit."""
     if _kept(path, dataset):
         _check_held(path, _name(dataset), DATASET_BYTES * int(np.asarray(obj.volume).size))
 
@@ -212,6 +213,8 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
         ds.attrs["parity"] = np.int64(obj.parity)
         if unit is not None:
             ds.attrs["unit"] = unit
+        if space is not None:  # isoflow's own attribute, as unit: no HDF5 convention names a frame
+            ds.attrs["space"] = space
         if unit == "\u00b5m":
             ds.attrs["element_size_um"] = obj.spacing
         names = getattr(obj, "names", None)  # a label image's

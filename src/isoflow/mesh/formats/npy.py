@@ -3,7 +3,8 @@
 The array's axes are isoflow's (axis 0 is x). An ``.npz`` written by isoflow
 carries ``volume`` plus ``offset``, ``parity``, ``pitch`` (one number or one
 per axis) and ``origin``, and ``unit``, their length unit (a string, where
-one is given), so that it round-trips exactly, the lattice parity
+one is given), and ``space``, their anatomical frame (``"LPS"``, where one
+is known), so that it round-trips exactly, the lattice parity
 of a flow's step included, and a label image's names as ``label_names``
 (a string: JSON of label value to name); any other ``.npz`` must hold
 exactly one array (or one named ``volume``). A ``.npy`` holds the array
@@ -16,9 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import space_given
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
-from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note, space_not_kept
+from .registry import RawVolume, content_hint, length_unit, names_from_json, names_json, note
 
 
 def read(path: Path, dataset: str | None = None) -> RawVolume:
@@ -35,7 +37,7 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
                     arr = z[dataset]
                 elif "volume" in names:
                     arr = z["volume"]
-                    for key in ("offset", "parity", "pitch", "origin", "unit", "label_names"):
+                    for key in ("offset", "parity", "pitch", "origin", "unit", "space", "label_names"):
                         if key in names:
                             meta[key] = z[key]
                 elif len(names) == 1:
@@ -65,8 +67,9 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
         raise IsoflowError(f"{path}: not a readable numpy file ({exc.__class__.__name__}: {exc})") from None
     unit = length_unit(str(meta["unit"])) if "unit" in meta else None
     names = names_from_json(meta["label_names"], str(path), "array 'label_names'") if "label_names" in meta else None
+    space = space_given(str(meta["space"]), f"{path}: array 'space'") if "space" in meta else None
     return RawVolume(arr, meta.get("pitch", 1.0), meta.get("origin"), meta.get("offset"), meta.get("parity", 0),
-                     unit=unit, names=names)
+                     unit=unit, space=space, names=names)
 
 
 def _holds_objects(path: Path) -> bool:
@@ -142,8 +145,6 @@ def _header(path: Path) -> tuple | None:
 
 def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str | None = None,
           space: str | None = None) -> None:
-    # said apart from the rest: .npz, which keeps the rest, has no place for it either
-    space_not_kept(path, ".npy" if path.name.lower().endswith(".npy") else ".npz", space)
     if not path.name.lower().endswith(".npy"):
         return
     # only what this object holds beyond the defaults, with its value: a
@@ -153,7 +154,8 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
         ("origin", coordinates(obj.origin, step=obj.spacing), obj.origin.any()),
         ("lattice offset", coordinates(obj.offset), any(obj.offset)),
         ("parity", str(obj.parity), obj.parity),
-        ("unit", str(unit), unit is not None)) if held]
+        ("unit", str(unit), unit is not None),
+        ("anatomical frame", str(space), space is not None)) if held]
     if lost:
         note(f"{path}: a .npy holds the array alone; its {', '.join(lost)} {'is' if len(lost) == 1 else 'are'} "
              "not kept (use .npz to keep them)")
@@ -175,5 +177,6 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
             origin=obj.origin,
             # a string array, which np.load reads without pickle
             **({} if unit is None else {"unit": np.str_(unit)}),
+            **({} if space is None else {"space": np.str_(space)}),
             **({"label_names": np.str_(names_json(names))} if names else {}),
         )

@@ -427,8 +427,8 @@ def space_not_kept(path, fmt: str, space: str | None) -> None:
     >>> space_not_kept("a.h5", "HDF5", None)  # nothing to say
     """
     if space is not None:
-        note(f"{path}: {fmt} keeps no anatomical frame; {frame_text(space)} is not written (.nii.gz, .mgz and "
-             ".nrrd keep it)")
+        note(f"{path}: {fmt} keeps no anatomical frame; {frame_text(space)} is not written (.nii.gz, .mgz, "
+             ".nrrd, .npz and .h5 keep it)")
 
 
 def frame_text(space: str) -> str:
