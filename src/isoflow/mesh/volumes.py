@@ -924,13 +924,13 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     Refuses an existing file (or dataset) unless ``force``. Returns the
     file's path.
 
-    ``.npz`` keeps everything (offset and parity too) but the anatomical
-    frame; the other formats keep the world position of every voxel (see
+    ``.npz`` keeps everything (offset and parity too); the other formats keep the world position of every voxel (see
     the table of docs/formats.md). An object's ``space`` (its anatomical
     frame, ``"LPS"`` as a 3D Slicer NRRD's) is written in the format's own:
     NIfTI and MGH in RAS, the world axes that point the other way negated;
-    NRRD as its ``space`` field; a warning names it where the format has no
-    place for one.
+    NRRD as its ``space`` field; ``.npz`` and HDF5 as isoflow's ``space``
+    beside ``unit``; a warning names it where the format has no place for
+    one.
     The file is written beside the target and renamed when complete, so an
     interrupted write leaves any previous file as it was.
 
