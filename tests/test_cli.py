@@ -845,3 +845,56 @@ def test_info_json_of_voxels_of_1e150_is_json_and_prints_no_numpy_warning(tmp_pa
     assert report["volume"] is None  # ... so null
     assert report["surface_area"] == 54 * (1e150 * 1e150)
     assert report["bbox"] == [0.0, 0.0, 0.0] + [3 * 1e150] * 3
+
+
+def test_quiet_before_the_command_means_what_it_means_after_it(tmp_path, capsys):
+    """`isoflow -q info x.npy` was refused as an unrecognized argument:
+    -q/--quiet, which every command takes, is taken before the command's
+    name too, with the same effect (the plate's note dropped, the same
+    report), and `isoflow --help` lists it."""
+    np.save(tmp_path / "plate.npy", np.ones((1, 9, 8), bool))  # one voxel along x: a note on stderr
+    plate = str(tmp_path / "plate.npy")
+    assert main(["info", plate, "--json"]) == 0
+    loud = capsys.readouterr()
+    assert "one voxel along x" in loud.err  # what --quiet drops
+    for argv in (["info", plate, "--json", "-q"], ["-q", "info", plate, "--json"], ["--quiet", "info", plate, "--json"]):
+        assert main(argv) == 0, argv
+        out, err = capsys.readouterr()
+        assert (out, err) == (loud.out, ""), argv
+    p = run("--help")
+    assert p.returncode == 0 and "-q, --quiet" in p.stdout, p.stdout
+
+
+@pytest.mark.parametrize("odd", ["\t", "\x1b[31m"])
+def test_a_file_name_with_a_control_character_is_printed_escaped_by_every_command(tmp_path, capsys, odd):
+    """surface, flow, voxelize and genus printed file names raw on stdout,
+    and the error line escaped only line breaks: a tab or an escape
+    sequence in a name reached the terminal, which acts on it. Each is
+    written as Python escapes it (as info writes names), so that every
+    line is the plain name's line with the name escaped; --json keeps
+    the name as it is."""
+    escaped = odd.encode("unicode_escape").decode("ascii")
+    cube = np.zeros((6, 6, 6), np.uint8)
+    cube[1:5, 1:5, 1:5] = 1
+
+    def lines(*argv):
+        assert main([*map(str, argv)]) == 0
+        out, err = capsys.readouterr()
+        return out.splitlines(), err
+
+    said = {}
+    for tag in ("plain", odd):
+        np.save(tmp_path / f"a{tag}.npy", cube)
+        said[tag] = [
+            lines("surface", tmp_path / f"a{tag}.npy", "-o", tmp_path / f"s{tag}.ply", "--force"),
+            lines("flow", tmp_path / f"a{tag}.npy", "--steps", "1", "--out", tmp_path / f"f{tag}", "--force"),
+            lines("voxelize", tmp_path / f"s{tag}.ply", "-o", tmp_path / f"v{tag}.npz", "--pitch", "1", "--force"),
+            lines("genus", tmp_path / f"s{tag}.ply", "--resolution", "8", "--no-step"),
+        ]
+    for (plain, _), (odd_lines, odd_err) in zip(said["plain"], said[odd]):
+        assert odd_lines == [line.replace("plain", escaped) for line in plain]
+        assert "\x1b" not in "".join(odd_lines) + odd_err and "\t" not in "".join(odd_lines) + odd_err
+    assert main(["flow", str(tmp_path / f"a{odd}.npy"), "--steps", "1", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["input"] == str(tmp_path / f"a{odd}.npy")  # JSON: the name itself
+    assert main(["info", str(tmp_path / f"gone{odd}.npy")]) == 2
+    assert capsys.readouterr().err == f"isoflow info: error: {tmp_path}/gone{escaped}.npy: no such file or directory\n"

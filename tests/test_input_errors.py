@@ -319,12 +319,13 @@ def test_a_label_image_refusal_names_only_options_the_command_takes(tmp_path, ca
     extra = ["-o", tmp_path / "s.ply"] if command == "surface" else []
     line = fails(capsys, command, tmp_path / "l.npy", *extra, words=("l.npy", "not a binary volume", "--label N"))
     assert ("--labels" in line) == names_labels
-    # a store, checked block by block, says the same (it named no option at all)
+    # a store, checked block by block, says the same (it named no option at all); a block of one label
+    # (these blocks of 3 voxels hold one each) is offered that label, as a 0/255 mask's block is 255
     zarr = pytest.importorskip("zarr")
     zarr.create_array(str(tmp_path / "l.zarr"), data=labels, chunks=(3, 3, 3), zarr_format=2)
     extra = ["--out", tmp_path / "run", "--volumes", ".zarr"] if command == "flow" else extra
     line = fails(capsys, command, tmp_path / "l.zarr", *extra,
-                 words=("l.zarr", "not a binary volume", "in the block at voxel", "--label N"))
+                 words=("l.zarr", "not a binary volume", "in the block at voxel", "select one label with --label "))
     assert ("--labels" in line) == names_labels
 
 

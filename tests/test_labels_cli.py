@@ -963,7 +963,7 @@ def test_a_label_no_voxel_has_is_named_in_all_its_digits(tmp_path, capsys):
     """--label N on a label image without N lists the values present as
     they are: 2**40 and 2**40 + 1 are two labels (%g wrote both
     1.09951e+12), a 64-bit label keeps its 20 digits; an image without
-    voxels has none to list."""
+    voxels has none to list (its --labels table: below)."""
     image = np.zeros((4, 4, 4), np.uint64)
     image[1, 1, 1], image[2, 2, 2] = 2**40, 2**64 - 1
     np.save(tmp_path / "big.npy", image)
@@ -973,7 +973,6 @@ def test_a_label_no_voxel_has_is_named_in_all_its_digits(tmp_path, capsys):
           words=(f"no voxel has label {2**40 + 1} (values present: {present})",))
     np.save(tmp_path / "none.npy", np.zeros((0, 3, 3), np.uint8))
     fails(capsys, "info", tmp_path / "none.npy", "--label", 1, words=("no voxel has label 1: the array has no voxels",))
-    fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no voxels (shape 0x3x3)",))
 
 
 def test_surface_labels_into_a_file_named_as_a_directory_is_refused_up_front(tmp_path, capsys, segmentation):
@@ -1654,7 +1653,8 @@ def test_a_2d_label_image_s_refusals_count_pixels(tmp_path, capsys):
     does: a PNG label map without --label says how many pixels (as Pillow
     reads the file) hold values other than 0 and 1, a label no pixel has
     lists the values Pillow reads, a 2D store read block by block names
-    the pixel its block starts at, and an image of no pixels says so."""
+    the pixel its block starts at, and the table of an image of no pixels
+    says so."""
     from PIL import Image
 
     cells = np.zeros((6, 9), np.uint8)
@@ -1671,7 +1671,9 @@ def test_a_2d_label_image_s_refusals_count_pixels(tmp_path, capsys):
     # (a store's --label is selected block by block, the values read in a second pass)
     fails(capsys, "info", tmp_path / "cells.zarr", "--label", 99, words=(f"no pixel has label 99 (values present: {present})",))
     np.save(tmp_path / "none.npy", np.zeros((0, 5), np.uint8))
-    fails(capsys, "info", tmp_path / "none.npy", "--labels", words=("none.npy: the image has no pixels (shape 0x5)",))
+    code, out, err = said(capsys, "info", tmp_path / "none.npy", "--labels")  # its table of no row, as label_table's
+    assert code == 0 and err == [f"isoflow info: warning: {tmp_path / 'none.npy'}: the image has no pixels (shape 0x5); "
+                                 "the table has no row"]
 
 
 @pytest.mark.parametrize("suffix", [".png", ".tif"])
@@ -1737,3 +1739,38 @@ def test_surface_labels_directory_made_up_front_is_removed_when_the_work_fails(t
                  "--suffix", ".ply"]) == 2
     assert "none of the labels asked for occur" in capsys.readouterr().err.strip().splitlines()[-1]
     assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize("command", ["info", "surface"])
+def test_a_directory_given_with_labels_is_said_to_be_one(tmp_path, capsys, command):
+    """`info DIR --labels` said "not a volume file" where `info DIR` says
+    the path is a directory: the same one line with --labels or without,
+    for surface too."""
+    (tmp_path / "adir").mkdir()
+    one, every = ([], []) if command == "info" else (["-o", tmp_path / "s.ply"], ["-o", f"{tmp_path}/s/", "--suffix", "ply"])
+    for argv in ([*one], [*every, "--labels"]):
+        code, out, err = said(capsys, command, tmp_path / "adir", *argv)
+        assert (code, out, err) == (2, "", [f"isoflow {command}: error: {tmp_path / 'adir'}: is a directory, not a "
+                                            "volume or point list"]), argv
+
+
+def test_an_image_without_voxels_gets_the_empty_table_as_label_table_does(tmp_path, capsys):
+    """A zero-size array (0x3x3) holds no voxel, so no label: info gave its
+    empty report and isoflow.label_table its empty table, while info
+    --labels refused it. It gets the table of no row, as an all-0 image
+    does: a warning line saying why, [] in --json, the header alone in
+    --csv; a choice of labels none of which can occur is refused, and
+    surface --labels, with no surface to write, says why."""
+    empty = np.zeros((0, 3, 3), np.uint8)
+    np.save(tmp_path / "none.npy", empty)
+    none = tmp_path / "none.npy"
+    assert all(len(column) == 0 for column in label_table(empty).values())  # the Python answer
+    code, out, err = said(capsys, "info", none, "--labels")
+    assert code == 0 and "0 labels, shape 0x3x3" in out.splitlines()[0]
+    assert err == [f"isoflow info: warning: {none}: the image has no voxels (shape 0x3x3); the table has no row"]
+    assert json.loads(run(capsys, "info", none, "--labels", "--json"))["labels"] == []
+    header, *rows = run(capsys, "info", none, "--labels", "--csv", "-").splitlines()
+    assert rows == [] and header.split(",") == list(label_table(empty))
+    fails(capsys, "info", none, "--labels=3", words=("none of the labels asked for occur (3)", "has no voxels"))
+    fails(capsys, "surface", none, "--labels", "-o", f"{tmp_path}/s/", "--suffix", "ply",
+          words=("none.npy: the image has no voxels (shape 0x3x3)",))

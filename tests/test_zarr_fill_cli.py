@@ -249,3 +249,26 @@ def test_one_time_point_says_how_many_of_its_own_chunks_were_never_written(tmp_p
             assert len(notes) == 1 and notes[0].endswith(said + counted), notes
     assert int(np.count_nonzero(at(0))) == 8
     assert read(0) == ("8\n", [])
+
+
+def test_a_0_255_mask_read_block_by_block_is_offered_its_value_as_the_label(tmp_path, capsys):
+    """A 0/255 mask in a .zarr store is read block by block, which takes
+    0/1 alone (docs/formats.md): the refusal said "--label N", where the
+    one value, 255, is the label that selects the mask; it names it (as
+    the block's), and --label 255 then counts the mask's voxels. A block
+    of two labels still says N."""
+    mask = np.zeros((8, 6, 6), np.uint8)
+    mask[2:6, 1:5, 1:5] = 255
+    zarr.create_array(str(tmp_path / "m.zarr"), shape=mask.shape, chunks=(4, 6, 6), dtype="u1")[:] = mask
+    for command in (["info"], ["surface", "-o", str(tmp_path / "m.ply")]):
+        assert main([command[0], str(tmp_path / "m.zarr"), *command[1:]]) == 2
+        err = capsys.readouterr().err
+        assert "select one label with --label 255 (label=255; 255 is the one value other than 0 in that block)" in err
+        assert "--label N" not in err, err
+    assert main(["info", str(tmp_path / "m.zarr"), "--label", "255", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["voxels"] == np.count_nonzero(mask == 255)
+    two = mask // 255 * 2
+    two[2, 1, 1] = 3
+    zarr.create_array(str(tmp_path / "two.zarr"), shape=two.shape, chunks=(4, 6, 6), dtype="u1")[:] = two
+    assert main(["info", str(tmp_path / "two.zarr")]) == 2
+    assert "select one label with --label N (label=N)" in capsys.readouterr().err

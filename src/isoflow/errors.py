@@ -210,6 +210,32 @@ def line_text(text: str) -> str:
                    for c in text)
 
 
+def terminal_text(text: str | os.PathLike) -> str:
+    r"""A line that names files (a report's, a message's), or a file's name
+    alone, as a terminal shows it: a byte of a name that is not UTF-8 as
+    ``\xNN`` (:func:`path_text`), and each control character escaped
+    (:func:`line_text`), so that a name holding a line break or an escape
+    sequence neither splits the line nor acts on the terminal. JSON keeps
+    the name as it is.
+
+    Parameters
+    ----------
+    text : str or os.PathLike
+        A whole line of a report or message (each is one line), or a path.
+
+    Returns
+    -------
+    str
+        ``text`` as valid UTF-8 with no control character in it.
+
+    Examples
+    --------
+    >>> terminal_text("\x1b[2Jscan.npy: 64 voxels"), terminal_text(os.fsdecode(b"a\tb\xe9.npy"))
+    ('\\x1b[2Jscan.npy: 64 voxels', 'a\\tb\\xe9.npy')
+    """
+    return line_text(path_text(text))
+
+
 #: the nouns of the Betti numbers b0, b1, ... of a volume of each dimension
 #: (singular, plural); a 4-D volume's b1 and b2 have no everyday name
 _BETTI_NOUNS = {

@@ -198,20 +198,25 @@ def test_a_value_that_is_no_label_in_slabs_across_x_is_named_at_its_voxel(tmp_pa
 def test_a_store_without_layers_gives_the_empty_images_table(tmp_path, capsys):
     """A store of shape (0, y, x) holds no voxel: label_table_blocks gives
     label_table's table of that empty image (a zero row per label asked
-    for), and info --labels says it has no voxels in one line (was
+    for), and info --labels gives that table, with a warning that says it
+    has no voxels, or refuses a choice none of whose labels can occur (was
     ValueError from min() of no layers)."""
     zarr = pytest.importorskip("zarr")
     empty = np.zeros((0, 4, 5), np.uint16)
-    for layers in (None, []):
+    for layers in (None, []):  # (a table of no row: info --labels gives it, as of an .npy without voxels)
         same_tables(label_table_blocks(empty, layers=layers), label_table(empty))
     asked = label_table_blocks(empty, labels=[3], pitch=(1, 2, 3))
     same_tables(asked, label_table(empty, labels=[3], pitch=(1, 2, 3)))
     assert asked["voxels"].tolist() == [0] and np.isnan(asked["bbox-0"]).all()
     zarr.create_array(str(tmp_path / "e.zarr"), shape=(0, 4, 5), chunks=(2, 2, 2), dtype="uint16")
-    for spec in ("--labels", "--labels=3"):
-        assert main(["info", str(tmp_path / "e.zarr"), spec]) == 2
-        err = capsys.readouterr().err
-        assert err.splitlines() == [f"isoflow info: error: {tmp_path / 'e.zarr'}: the image has no voxels (shape 0x4x5)"]
+    no_voxels = f"{tmp_path / 'e.zarr'}: the image has no voxels (shape 0x4x5)"
+    assert main(["info", str(tmp_path / "e.zarr"), "--labels", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["labels"] == [] and err.splitlines() == [f"isoflow info: warning: {no_voxels}; the table has no row"]
+    assert main(["info", str(tmp_path / "e.zarr"), "--labels=3"]) == 2
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"isoflow info: error: {tmp_path / 'e.zarr'}: none of the labels asked for occur (3): "
+                                f"the image has no voxels (shape 0x4x5)"]
 
 
 def test_info_labels_json_of_a_float_store_is_the_float_files(tmp_path, capsys, rng):

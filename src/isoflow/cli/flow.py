@@ -9,7 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import IsoflowError, coordinates, path_text
+from ..errors import IsoflowError, coordinates, path_text, terminal_text
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -77,19 +77,19 @@ def cmd_flow(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"input": path_text(args.input), **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input), pitch=obj.spacing, unit=obj.unit))
+        print(format_flow(result, terminal_text(args.input), pitch=obj.spacing, unit=obj.unit))
         if args.out:
             written = (["surfaces (step_*.ply)"] if obj.ndim == 3 else []) + [
                 "flow.csv", "flow.png (figures)", "shapes.png (the object at a few steps)"]
-            print(f"{args.out}: {', '.join(written)}"
-                  + (f", volumes (step_*{args.volumes})" if args.volumes is not None else ""))
+            print(terminal_text(f"{args.out}: {', '.join(written)}"
+                                + (f", volumes (step_*{args.volumes})" if args.volumes is not None else "")))
     from ..mesh.export import float64_move_note
 
     # the step surfaces' corners, or without --out the world coordinates printed
     moved = None if corners is None else (float64_move_note(args.out, corners) if args.out else
                                           float64_move_note(args.input, corners, "the boxes and the limit point printed"))
     if moved:  # moved by float64 itself
-        print(f"isoflow flow: warning: {moved}", file=sys.stderr)
+        print(terminal_text(f"isoflow flow: warning: {moved}"), file=sys.stderr)
     return 0 if writer is None else say_read_back(args, writer)
 
 
@@ -225,11 +225,11 @@ def flow_store(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"input": path_text(args.input), **result.to_dict()}))
     else:
-        print(format_flow(result, str(args.input), pitch=place.spacing, unit=unit))
-        print(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)")
+        print(format_flow(result, terminal_text(args.input), pitch=place.spacing, unit=unit))
+        print(terminal_text(f"{args.out}: volumes (step_*.zarr, read block by block), flow.csv, flow.png (figures)"))
     note = float64_move_note(args.out, corners, moved)
     if note:  # moved by float64 itself, as in memory
-        print(f"isoflow flow: warning: {note}", file=sys.stderr)
+        print(terminal_text(f"isoflow flow: warning: {note}"), file=sys.stderr)
     return 0
 
 
@@ -371,12 +371,12 @@ def say_read_back(args: argparse.Namespace, writer) -> int:
     read = [c for c in writer.checks.values() if not c.get("skipped")]
     skipped = [c["skipped"] for c in writer.checks.values() if c.get("skipped")]
     if read and not args.json:
-        print(f"{args.out}: {len(read) - len(writer.problems)} of {len(read)} step surfaces "
-              "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)")
+        print(terminal_text(f"{args.out}: {len(read) - len(writer.problems)} of {len(read)} step surfaces "
+                            "read back by trimesh as isoflow counts them (flow.csv: trimesh_* columns)"))
     if skipped and not args.quiet:
-        print(f"isoflow flow: note: {len(skipped)} step files not read back ({skipped[0]})", file=sys.stderr)
+        print(terminal_text(f"isoflow flow: note: {len(skipped)} step files not read back ({skipped[0]})"), file=sys.stderr)
     for line in writer.problems:
-        print(f"isoflow flow: error: {line}", file=sys.stderr)
+        print(terminal_text(f"isoflow flow: error: {line}"), file=sys.stderr)
     return 1 if writer.problems else 0
 
 

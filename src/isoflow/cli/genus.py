@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from ..errors import IsoflowError, betti_words, counted, number_text
+from ..errors import IsoflowError, betti_words, counted, number_text, terminal_text
 from .inputs import add_mesh_rule, mesh_fill, resolution_value
 from .progress import progress_bar
 
@@ -59,7 +59,7 @@ def cmd_genus(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(report.to_dict()))
     else:
-        print(format_genus(report, args.mesh))
+        print(format_genus(report, terminal_text(args.mesh)))
     return 0
 
 

@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import IsoflowError, IsoflowWarning
+from ..errors import IsoflowError, IsoflowWarning, terminal_text
 from .progress import progress_bar
 
 if TYPE_CHECKING:
@@ -185,7 +185,7 @@ def say_note(args: argparse.Namespace, path: object, note: str | None) -> None:
     """What is unusual about a mesh, and the rule used: one line on stderr
     (dropped by --quiet)."""
     if note and not args.quiet:
-        print(f"isoflow {args.command}: note: {path}: {note}", file=sys.stderr)
+        print(terminal_text(f"isoflow {args.command}: note: {path}: {note}"), file=sys.stderr)
 
 
 def voxelize_input(path: str | Path, args: argparse.Namespace, write_bytes: float = 0):
@@ -367,8 +367,8 @@ def say_plate(args: argparse.Namespace, shape: tuple[int, ...]) -> None:
     if any(n < 2 for k, n in enumerate(shape) if k != thin[0]):
         return
     labels = getattr(args, "labels", None) is not None
-    print(f"isoflow {args.command}: note: {args.input}: "
-          f"{slice_as_2d(args.input, shape, thin[0], getattr(args, 'label', None), labels=labels)}", file=sys.stderr)
+    note = slice_as_2d(args.input, shape, thin[0], getattr(args, "label", None), labels=labels)
+    print(terminal_text(f"isoflow {args.command}: note: {args.input}: {note}"), file=sys.stderr)
 
 
 def slice_as_2d(path: str | Path, shape: tuple[int, ...], axis: int, label: float | None = None, *,
@@ -535,8 +535,12 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
     except NotBinary as exc:
         if block_wise:
             # a probability map has no label to select
-            raise NotBinary(exc.bare + ("" if exc.kind == "fractions" else BLOCK_LABEL), bare=exc.bare, every=False,
-                            kind=exc.kind) from None
+            from ..mesh.volumes import label_option
+
+            # (a 0/255 mask: --label 255)
+            label = BLOCK_LABEL.replace("--label N", label_option(exc.value).split(" (")[0], 1)
+            raise NotBinary(exc.bare + ("" if exc.kind == "fractions" else label), bare=exc.bare, every=False,
+                            kind=exc.kind, value=exc.value) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
 
         if args.command == "surface" and exc.ndim == 2:

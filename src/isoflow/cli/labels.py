@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, line_text, path_text
+from ..errors import IsoflowError, counted, line_text, path_text, terminal_text
 from .table_text import csv_rows, json_rows
 
 #: rows the terminal shows before the summary
@@ -87,8 +87,9 @@ def merged_names(args: argparse.Namespace, own: dict[int, str] | None,
     changed = [f"label {k} {line_text(own[k])!r} as {line_text(v)!r}" for k, v in given.items()
                if k in own and own[k] != v]
     if changed and not args.quiet:
-        print(f"isoflow {args.command}: note: {args.input}: the names of --names {args.names} replace those the file "
-              f"records for {counted(len(changed), 'label')} ({_some(changed, 4)})", file=sys.stderr)
+        line = (f"isoflow {args.command}: note: {args.input}: the names of --names {args.names} replace those the "
+                f"file records for {counted(len(changed), 'label')} ({_some(changed, 4)})")
+        print(terminal_text(line), file=sys.stderr)
     return dict(sorted({**own, **given}.items()))
 
 
@@ -102,8 +103,9 @@ def say_unused_names(args: argparse.Namespace, given: dict[int, str] | None, tab
         return
     unused = len(set(given) - set(table["label"].tolist()))
     if unused:
-        print(f"isoflow {args.command}: note: {args.names}: {unused:,} of its {counted(len(given), 'label name')} "
-              f"{'is for a label' if unused == 1 else 'are for labels'} the image does not have (not used)", file=sys.stderr)
+        line = (f"isoflow {args.command}: note: {args.names}: {unused:,} of its {counted(len(given), 'label name')} "
+                f"{'is for a label' if unused == 1 else 'are for labels'} the image does not have (not used)")
+        print(terminal_text(line), file=sys.stderr)
 
 
 def label_choice(text: str) -> np.ndarray | None:
@@ -307,9 +309,12 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
             raise exc.at(args.input) from None
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
-    if 0 in about["shape"]:  # not "all 0": there is no voxel to hold a label
-        cells = "pixels" if len(about["shape"]) == 2 else "voxels"
-        raise IsoflowError(f"{args.input}: the image has no {cells} (shape {'x'.join(map(str, about['shape']))})")
+    # an image without voxels (shape 0x3x3) has no label, as an all-0 one has none: the same empty table, as
+    # label_table gives, and the warning says which it is (not "all 0": there is no voxel to hold a label)
+    cells = "pixels" if len(about["shape"]) == 2 else "voxels"
+    empty = 0 in about["shape"]
+    why = (f"the image has no {cells} (shape {'x'.join(map(str, about['shape']))})" if empty else
+           "no nonzero label: the image is all 0")
     none = np.zeros(0, np.int64)
     within, beyond = (none, none) if asked is None else _by_type(args.input, asked, about["dtype"])
     if every:
@@ -319,19 +324,19 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     if every or not present.all() or len(beyond):
         absent = in_order_asked((missing if every else table["label"][~present]), beyond, asked)
         if not present.any():
-            raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})")
+            raise IsoflowError(f"{args.input}: none of the labels asked for occur ({_some(absent)})"
+                               + (f": {why}" if empty else ""))
         # a warning, which --quiet keeps: the table lacks rows that were asked for
         verb = "does" if len(absent) == 1 else "do"
-        print(f"isoflow {args.command}: warning: {args.input}: {len(absent)} of the labels asked for {verb} not "
-              f"occur ({_some(absent)})", file=sys.stderr)
+        print(terminal_text(f"isoflow {args.command}: warning: {args.input}: {len(absent)} of the labels asked for {verb} not "
+                            f"occur ({_some(absent)})"), file=sys.stderr)
         table = {k: v[present] for k, v in table.items()}
     if not len(table["label"]):
         if args.command == "surface":  # no surface to write
-            raise IsoflowError(f"{args.input}: no nonzero label: the image is all 0")
+            raise IsoflowError(f"{args.input}: {why}")
         # an empty segmentation (no lesion found) is an answer: its table has no row, as
         # label_table's and regionprops_table's, and a warning (kept by --quiet) says why
-        print(f"isoflow {args.command}: warning: {args.input}: no nonzero label: the image is all 0; the table has "
-              "no row", file=sys.stderr)
+        print(terminal_text(f"isoflow {args.command}: warning: {args.input}: {why}; the table has no row"), file=sys.stderr)
     say_unused_names(args, given, table)
     if given is not None and args.command == "surface" and "name" in table:
         # the label_N files' names, of the labels written alone (a colour table names hundreds)
@@ -355,9 +360,9 @@ def say_declared_labels(args: argparse.Namespace) -> None:
     names = declared_labels(args.input) if is_store(args.input) and not args.quiet else []
     if names:
         store = str(args.input).rstrip("/")
-        print(f"isoflow {args.command}: note: {args.input}: an OME-Zarr image whose labels/ group holds "
-              f"{counted(len(names), 'segmentation')} ({_some(names)}); this reads the image itself: for a "
-              f"segmentation's labels, give {store}:labels/{names[0]}", file=sys.stderr)
+        print(terminal_text(f"isoflow {args.command}: note: {args.input}: an OME-Zarr image whose labels/ group holds "
+                            f"{counted(len(names), 'segmentation')} ({_some(names)}); this reads the image itself: for a "
+                            f"segmentation's labels, give {store}:labels/{names[0]}"), file=sys.stderr)
 
 
 def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None, given: bool = False) -> None:
@@ -388,10 +393,10 @@ def say_segments(args: argparse.Namespace, names: dict[int, str] | None = None, 
     if path.name.lower().endswith(".seg.nrrd") and not given:
         said = layer_segments(path, layer)
         if said:
-            print(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}", file=sys.stderr)
+            print(terminal_text(f"isoflow {args.command}: note: {args.input}: 3D Slicer segments {said}"), file=sys.stderr)
     elif names and getattr(args, "command", "") == "surface":
         said = segment_names([Segment(name, 0, label) for label, name in names.items()], 0)
-        print(f"isoflow {args.command}: note: {args.input}: label names {said}", file=sys.stderr)
+        print(terminal_text(f"isoflow {args.command}: note: {args.input}: label names {said}"), file=sys.stderr)
 
 
 def in_order_asked(missing: np.ndarray, beyond: np.ndarray, asked: np.ndarray) -> np.ndarray:
@@ -901,13 +906,13 @@ def surface_labels(args: argparse.Namespace, target) -> int:
             show.phase()
         problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
-    print(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
-          + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else ""))
+    print(terminal_text(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
+                        + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else "")))
     moved = float64_move_note(target[1], corners)
     if moved:  # every file's corners moved by float64 itself
-        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
     for line in problems:
-        print(f"isoflow surface: error: {line}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: error: {line}"), file=sys.stderr)
     return 1 if problems else 0
 
 
@@ -1136,7 +1141,7 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         if framed and not args.quiet:  # MeshLab reads those nodes in voxel units
             note = export.glb_transform_note(target[1], framed, len(rows), beyond=beyond,
                                              instead="-o DIR/ --suffix .ply or .obj")
-            print(f"isoflow surface: note: {note}", file=sys.stderr)
+            print(terminal_text(f"isoflow surface: note: {note}"), file=sys.stderr)
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
@@ -1151,10 +1156,10 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     asked = label_choice(args.labels) if earlier and args.force else None
     retire, kept = retired_label_files(earlier, target[2], asked, args.force)
     if kept and not args.quiet:
-        print(f"isoflow surface: note: {target[1]}/: {counted(len(kept), 'label file')} of an earlier run kept "
-              f"({_some([f.name for f in kept])}); "
-              + ("--force makes the directory hold this run's alone" if args.labels == "all" else
-                 "a choice of labels replaces those labels' files alone, with --force too"), file=sys.stderr)
+        print(terminal_text(f"isoflow surface: note: {target[1]}/: {counted(len(kept), 'label file')} of an earlier run kept "
+                            f"({_some([f.name for f in kept])}); "
+                            + ("--force makes the directory hold this run's alone" if args.labels == "all" else
+                               "a choice of labels replaces those labels' files alone, with --force too")), file=sys.stderr)
     # one set: a folder holding some labels' new files beside others' old ones would look complete
     # (the directory is made before the work, by label_directory, which removes it if the work fails)
     with output_set(f"{target[1]}/", retire=retire):
@@ -1181,11 +1186,12 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
         where = f"{target[1]}/" if len(meshes) > 1 else target[1] / f"{meshes[0][0]}{target[2]}"
         note = export.glb_transform_note(where, framed, len(meshes), "file", beyond=beyond,
                                          instead="--suffix .ply or .obj")
-        print(f"isoflow surface: note: {note}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: note: {note}"), file=sys.stderr)
     if moved["moved_voxels"] > export.STL_NOTE_VOXELS:  # as surface says of one STL file, under --quiet too
-        print(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {export.stl_move_note(f'{target[1]}/', moved)}"), file=sys.stderr)
     if welds:  # as surface says of one STL file, under --quiet too
-        print(f"isoflow surface: warning: {target[1]}/: STL keeps no shared vertices, so readers weld the split copies "
-              f"at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} ({_some(list(welds))}) "
-              "into non-manifold points; PLY, OBJ or GLB keep them apart", file=sys.stderr)
+        line = (f"isoflow surface: warning: {target[1]}/: STL keeps no shared vertices, so readers weld the split "
+                f"copies at {sum(welds.values())} edge/vertex contacts of {counted(len(welds), 'file')} "
+                f"({_some(list(welds))}) into non-manifold points; PLY, OBJ or GLB keep them apart")
+        print(terminal_text(line), file=sys.stderr)
     return problems, f"{count} faces ({', '.join(kinds)})"

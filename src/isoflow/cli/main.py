@@ -17,7 +17,7 @@ import difflib
 import sys
 from collections.abc import Iterator
 
-from ..errors import IsoflowError, path_text
+from ..errors import IsoflowError, terminal_text
 from . import completion, flow, genus, info, surface, voxelize
 
 #: the commands in the order ``isoflow`` lists them
@@ -162,6 +162,11 @@ def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> arg
     return sub.add_parser(name, help=summary, description=summary, allow_abbrev=False)
 
 
+#: the help of -q/--quiet, which every command takes, after its name or before it
+QUIET_HELP = ("no progress bars or notes on stderr (errors, and warnings that the result differs from what was "
+              "asked, are still printed)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``isoflow`` parser with every command's options (the docs' command
     line page is generated from it)."""
@@ -171,14 +176,15 @@ def build_parser() -> argparse.ArgumentParser:
         allow_abbrev=False,
     )
     parser.add_argument("--version", action=VersionAction, help="print the installed version and exit")
+    # the options every command shares are taken before the command too (`isoflow -q info x.npy`), meaning the same
+    parser.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands", parser_class=CommandParser)
     parser.commands = sub.choices  # type: ignore[attr-defined]  # name -> sub-command parser, in order
     for command in COMMANDS:
         command.add_parser(sub, add_command)
     for p in sub.choices.values():
-        p.add_argument("-q", "--quiet", action="store_true",
-                       help="no progress bars or notes on stderr (errors, and warnings that the result differs from "
-                            "what was asked, are still printed)")
+        # no default of its own: a command's parser sets every default it has over what came before the command
+        p.add_argument("-q", "--quiet", action="store_true", default=argparse.SUPPRESS, help=QUIET_HELP)
     return parser
 
 
@@ -229,7 +235,7 @@ def log_records_as_notes(args: argparse.Namespace) -> Iterator[None]:
             text = log_note(record)
             if not args.quiet and text not in self.said:
                 self.said.add(text)
-                print(f"isoflow {args.command}: note: {text}", file=sys.stderr)
+                print(f"isoflow {args.command}: note: {terminal_text(text)}", file=sys.stderr)
 
     handler = Notes()
     logging.root.addHandler(handler)
@@ -341,9 +347,9 @@ def warnings_as_lines(args: argparse.Namespace) -> Iterator[None]:
 
         def show(message, category, filename, lineno, file=None, line=None):
             if issubclass(category, MeshNote):
-                print(f"isoflow {args.command}: note: {message}", file=sys.stderr)
+                print(f"isoflow {args.command}: note: {terminal_text(str(message))}", file=sys.stderr)
             elif issubclass(category, IsoflowWarning):
-                print(f"isoflow {args.command}: warning: {message}", file=sys.stderr)
+                print(f"isoflow {args.command}: warning: {terminal_text(str(message))}", file=sys.stderr)
             else:
                 shown(message, category, filename, lineno, file, line)
 
@@ -425,7 +431,7 @@ def interrupted(signals: list, what: str) -> int:
 
     sig = signals[0] if signals else signal.SIGINT
     how = "interrupted" if sig == signal.SIGINT else "terminated"
-    print(f"isoflow: {how}" + (f": {what}" if what else ""), file=sys.stderr)
+    print(f"isoflow: {how}" + (f": {terminal_text(what)}" if what else ""), file=sys.stderr)
     forget_escaped_interrupt()
     return 128 + int(sig)
 
@@ -583,14 +589,13 @@ def main(argv: list[str] | None = None) -> int:
                 raise KeyboardInterrupt
             return status
     except IsoflowError as exc:  # in the command line's words (its options) where they differ from Python's
-        # one line, as the exit status 2 promises: a path given with a line break in it is shown escaped
-        line = str(exc.command_line or exc).replace("\r", "\\r").replace("\n", "\\n")
-        line = path_text(line)  # a name's byte that is not UTF-8 as \xNN, as the reports write it
-        print(f"isoflow {args.command}: error: {line}", file=sys.stderr)
+        # one line, as the exit status 2 promises: a path's line break, tab or escape sequence is shown escaped,
+        # not acted on by the terminal, and a name's byte that is not UTF-8 as \xNN, as the reports write it
+        print(f"isoflow {args.command}: error: {terminal_text(str(exc.command_line or exc))}", file=sys.stderr)
         return 2
     except MemoryError:
         name = getattr(args, "input", None) or getattr(args, "mesh", "")
-        print(f"isoflow {args.command}: error: out of memory on {name}", file=sys.stderr)
+        print(f"isoflow {args.command}: error: out of memory on {terminal_text(name)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt as exc:  # a write names its file (mesh.outputs)
         return interrupted(terminated, str(exc))

@@ -9,7 +9,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 
-from ..errors import counted
+from ..errors import counted, terminal_text
 
 #: the bar once the total is known: the share done and the time left (the
 #: core's units, chunks of columns or layers of blocks, mean nothing to a user)
@@ -279,8 +279,8 @@ class TimeNote:
         whole = elapsed + (now - t0) / (done - d0) * (total - done)
         if whole >= NOTE_LONG:
             hint = self.hint if self.solid_angles else None
-            print(f"isoflow {self.command}: note: {self.label} will take about {duration(whole)} in all "
-                  f"({100 * done / total:.0f} % done in {duration(elapsed)})" + (f"; {hint}" if hint else ""),
+            print(terminal_text(f"isoflow {self.command}: note: {self.label} will take about {duration(whole)} in all "
+                                f"({100 * done / total:.0f} % done in {duration(elapsed)})" + (f"; {hint}" if hint else "")),
                   file=sys.stderr, flush=True)
 
 

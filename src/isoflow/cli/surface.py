@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IsoflowError, counted
+from ..errors import IsoflowError, counted, terminal_text
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -110,7 +110,7 @@ def surface_of(args: argparse.Namespace) -> int:
 
             render_surface(mesh, obj, Path(args.png), title=Path(args.input).name)
     if args.png:
-        print(f"{args.png}: picture of the surface coloured by vertex angle")
+        print(terminal_text(f"{args.png}: picture of the surface coloured by vertex angle"))
     return status
 
 
@@ -121,17 +121,18 @@ def report_written(args: argparse.Namespace, out: Path, mesh, obj, written: dict
 
     comps = mesh.components()
     print(
-        f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
-        f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
-        + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else "")
+        terminal_text(f"{out}: {len(mesh.vertices)} vertices, {written['face_count']} faces ({written['faces']}), "
+                      f"{counted(len(comps), 'closed surface')}, V-E+F = {mesh.euler_characteristic}"
+                      + (f", {counted(mesh.pinched, 'pinched vertex', 'pinched vertices')}" if mesh.pinched else ""))
     )
     if written.get("moved_voxels", 0) > export.STL_NOTE_VOXELS:  # the file's surface is not the one asked for
-        print(f"isoflow surface: warning: {export.stl_move_note(out, written)}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {export.stl_move_note(out, written)}"), file=sys.stderr)
     moved = export.float64_move_note(out, corners)
     if moved:  # nor where float64 itself moves the corners
-        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
     if written.get("framed") and not args.quiet:  # MeshLab reads such a GLB in voxel units
-        print(f"isoflow surface: note: {export.glb_transform_note(out, beyond=written['beyond'])}", file=sys.stderr)
+        note = export.glb_transform_note(out, beyond=written["beyond"])
+        print(terminal_text(f"isoflow surface: note: {note}"), file=sys.stderr)
     return read_back(args, out, mesh, obj, comps)
 
 
@@ -171,30 +172,30 @@ def read_back(args: argparse.Namespace, out: Path, mesh, obj, comps) -> int:
     shared = export.shared_positions(mesh)
     welded = shared if out.suffix.lower() == ".stl" else 0
     if welded:  # readers see other topology than the one written: said under --quiet too
-        print(f"isoflow surface: warning: {export.stl_weld_note(out, welded)}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {export.stl_weld_note(out, welded)}"), file=sys.stderr)
     if args.no_check:
         return 0
     with reading_back(out):
         check = check_surface_file(out, mesh, obj, topology=not welded, components=comps)
     if check.get("skipped"):
         if not args.quiet:
-            print(f"isoflow surface: note: {out}: not read back ({check['skipped']})", file=sys.stderr)
+            print(terminal_text(f"isoflow surface: note: {out}: not read back ({check['skipped']})"), file=sys.stderr)
         return 0
     if not check["agree"]:
-        print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: error: {check['problem']}"), file=sys.stderr)
         return 1
     t = check["trimesh"]
     volume = agreed_volume_words(t["volume_units"], obj.voxels, obj.spacing)
     if welded:
-        print(f"{out}: trimesh reads back volume {volume} after its weld, as isoflow counts "
-              "(the welded contacts leave no manifold to compare)")
+        print(terminal_text(f"{out}: trimesh reads back volume {volume} after its weld, as isoflow counts "
+                            "(the welded contacts leave no manifold to compare)"))
     else:
         # trimesh.load merges equal positions by default, which joins the
         # split copies into non-manifold points: say how it was read
         how = (f" with process=False (its default merge joins the split copies at {shared} edge/vertex contacts "
                "into non-manifold points)" if shared else "")
-        print(f"{out}: trimesh reads it back watertight{how}, V-E+F = {t['euler_number']}, genus {t['genus']}, "
-              f"volume {volume}: as isoflow counts")
+        print(terminal_text(f"{out}: trimesh reads it back watertight{how}, V-E+F = {t['euler_number']}, genus {t['genus']}, "
+                            f"volume {volume}: as isoflow counts"))
     return 0
 
 
@@ -252,25 +253,25 @@ def report_store_written(args: argparse.Namespace, array, frame, written: dict, 
 
     out = written["path"]
     never_written(str(args.input), unwritten_fill(open_store(args.input).array, args.label), args.label)
-    print(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
-          f"V-E+F = {written['euler_characteristic']}"
-          + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
-          + " (written block by block; isoflow info counts its closed surfaces)")
+    print(terminal_text(f"{out}: {written['vertices']} vertices, {written['faces']} faces ({written['kind']}), "
+                        f"V-E+F = {written['euler_characteristic']}"
+                        + (f", {counted(written['pinched'], 'pinched vertex', 'pinched vertices')}" if written["pinched"] else "")
+                        + " (written block by block; isoflow info counts its closed surfaces)"))
     moved = float64_move_note(out, corners)
     if moved:  # the corners moved by float64 itself
-        print(f"isoflow surface: warning: {moved}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {moved}"), file=sys.stderr)
     if written["shared"]:  # readers see other topology than the one written: said under --quiet too, as in memory
-        print(f"isoflow surface: warning: {stl_weld_note(out, written['shared'])}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: warning: {stl_weld_note(out, written['shared'])}"), file=sys.stderr)
     if args.no_check:
         return 0
     check = check_streamed(out, dict(written, centre=np.asarray(array.shape) / 2, moved=float64_moved(corners)), frame)
     if not check["agree"]:
-        print(f"isoflow surface: error: {check['problem']}", file=sys.stderr)
+        print(terminal_text(f"isoflow surface: error: {check['problem']}"), file=sys.stderr)
         return 1
-    print(f"{out}: read back in chunks (every face): closed and consistently wound, volume "
-          f"{agreed_volume_words(check['figures']['volume_units'], written['voxels'], frame.spacing)}"
-          + ("" if out.suffix.lower() == ".stl" else f", V-E+F = {check['figures']['euler_number']}, "
-             "sum of a = 8 chi") + ": as isoflow counts")
+    print(terminal_text(f"{out}: read back in chunks (every face): closed and consistently wound, volume "
+                        f"{agreed_volume_words(check['figures']['volume_units'], written['voxels'], frame.spacing)}"
+                        + ("" if out.suffix.lower() == ".stl" else f", V-E+F = {check['figures']['euler_number']}, "
+                           "sum of a = 8 chi") + ": as isoflow counts"))
     return 0
 
 

@@ -7,7 +7,7 @@ import contextlib
 from collections.abc import Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError, coordinates, counted
+from ..errors import IsoflowError, coordinates, counted, terminal_text
 from .inputs import add_mesh_rule, fill_hint, mesh_fill, pitch_value, resolution_value, say_note, voxelize_input
 from .progress import progress_bar, writing_line
 
@@ -72,8 +72,8 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_volume(obj, args.output, force=args.force), args.output)
     shape = "x".join(map(str, obj.volume.shape))
-    print(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, "
-          f"origin {coordinates(obj.origin, step=obj.pitch)}")
+    print(terminal_text(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, "
+                        f"origin {coordinates(obj.origin, step=obj.pitch)}"))
     return 0
 
 
@@ -88,8 +88,8 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
                                       details=True)
     say_note(args, args.mesh, details.note)
     shape = "x".join(map(str, z.shape))
-    print(f"{out}: {counted(z.voxels, 'voxel')} in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
-          f"pitch {z.pitch:.6g}, origin {coordinates(z.origin, step=z.pitch)}")
+    print(terminal_text(f"{out}: {counted(z.voxels, 'voxel')} in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
+                        f"pitch {z.pitch:.6g}, origin {coordinates(z.origin, step=z.pitch)}"))
     return 0
 
 
@@ -188,12 +188,12 @@ def label_summary(out: str | Path, r) -> str:
     """The written label image in words: grid, type, pitch, origin, and a
     row per label (label, voxels, mesh)."""
     shape = "x".join(map(str, r.labels.shape))
-    lines = [f"{out}: {counted(len(r.names), 'label')} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
+    lines = [f"{terminal_text(out)}: {counted(len(r.names), 'label')} in a {shape} grid ({r.labels.dtype}), pitch {r.pitch:.6g}, "
              f"origin {coordinates(r.origin, step=r.pitch)}"]
     width = max(6, len(f"{max(r.voxels, default=0):,}"))
     lines.append(f"{'label':>6}  {'voxels':>{width}}  mesh")
     for i, (name, n) in enumerate(zip(r.names[:LISTED_LABELS], r.voxels), 1):
-        lines.append(f"{i:>6}  {n:>{width},}  {name}")
+        lines.append(f"{i:>6}  {n:>{width},}  {terminal_text(name)}")
     if len(r.names) > LISTED_LABELS:
         lines.append(f"{'':>6}  ... and {len(r.names) - LISTED_LABELS} more labels")
     return "\n".join(lines)

@@ -781,7 +781,7 @@ def analyze_chunked(
         # names the options that select labels, and which of them can)
         message = str(exc.args[0]) if exc.args else str(exc)
         if isinstance(exc, NotBinary):
-            raise NotBinary(message, exc.bare, exc.every, exc.ndim, exc.kind) from None
+            raise NotBinary(message, exc.bare, exc.every, exc.ndim, exc.kind, exc.value) from None
         raise IsoflowError(message) from None
     return Report.from_dict(_finish(len(shape), conn, list(shape), surfaces, merged, place, axes))
 

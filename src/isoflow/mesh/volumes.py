@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from ..digital.label_table import LabelImage, as_labels, label_names
 from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
-from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, warn
+from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, number_text, warn
 from ..results import read_only
 from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
 from ..scale.chunks import never_written
@@ -308,6 +308,8 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
 
         if mesh is not None and is_mesh_path(file):
             raise IsoflowError(f"{path}: {mesh}")
+        if file.is_dir():  # the line `info DIR` gives, with --labels too: a directory is not "not a volume file"
+            _check_readable(file)
         refuse_inside_store(file, path)
         raise IsoflowError(f"{path}: not a volume file (volumes end in {', '.join(VOLUME_SUFFIXES)})")
     _check_readable(file, directory_ok=fmt.module == "omezarr")
@@ -430,14 +432,43 @@ def with_label_options(exc: NotBinary, every: bool = True, *, surfaces: bool = F
     ndim = exc.ndim if ndim is None else ndim
     table = exc.every if every else False
     if exc.kind == "fractions":  # a probability map: its threshold, which ``bare`` says, and no label
-        return NotBinary(exc.bare, bare=exc.bare, every=False, ndim=ndim, kind=exc.kind)
+        return NotBinary(exc.bare, bare=exc.bare, every=False, ndim=ndim, kind=exc.kind, value=exc.value)
     offer = SURFACE_PER_LABEL if surfaces else EVERY_LABEL
     if table is None:  # (not known: said as a condition, not a promise)
         offer = offer.replace("or ", "or, if every voxel holds a whole number, ", 1)
     # many whole values are most often a grey image: its labels said as a condition
     one = ", or, if its values are labels, select one" if exc.kind == "grey" else ", or select one label"
-    options = f"{one} with --label N (label=N)" + (f", {offer}" if table is not False else "")
-    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim, kind=exc.kind)
+    options = f"{one} with {label_option(exc.value)}" + (f", {offer}" if table is not False else "")
+    return NotBinary(exc.bare + options, bare=exc.bare, every=table, ndim=ndim, kind=exc.kind, value=exc.value)
+
+
+def label_option(value: object = None) -> str:
+    """The option that selects one label, as a refusal offers it: with
+    the value where the block read holds 0 and that value alone, a mask
+    of it (a 0/255 mask read block by block), said to be the block's (a
+    label image's other blocks hold other labels), else ``N``.
+
+    Parameters
+    ----------
+    value : number, optional
+        The one value other than 0 (:attr:`NotBinary.value`), or None.
+
+    Returns
+    -------
+    str
+        ``--label V (label=V...)``.
+
+    Examples
+    --------
+    >>> label_option(np.uint8(255))
+    '--label 255 (label=255; 255 is the one value other than 0 in that block)'
+    >>> label_option(255.0).split(" (")[0], label_option()
+    ('--label 255', '--label N (label=N)')
+    """
+    if value is None:
+        return "--label N (label=N)"
+    shown = number_text(value)
+    return f"--label {shown} (label={shown}; {shown} is the one value other than 0 in that block)"
 
 
 def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None) -> LabelImage:
@@ -994,7 +1025,7 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
             raise
         # a label image (2D or 3D, as write_labels takes it) is written as one by write_labels: a table is no file
         raise NotBinary(f"{exc.bare}, or write its labels with isoflow.write_labels(labels, path)", exc.bare,
-                        every=exc.every, ndim=exc.ndim, kind=exc.kind) from None
+                        every=exc.every, ndim=exc.ndim, kind=exc.kind, value=exc.value) from None
     return write_placed(obj, path, force, unit=obj.unit if unit is None else unit_given(unit, str(path)),
                         space=obj.space)
 

@@ -244,8 +244,11 @@ def binary(array, where: str = "volume", near=None, canonical: bool = True) -> n
         # a float block's whole values say nothing of the blocks not read,
         # which a label table reads too: whether it takes them is not known
         every = None if labels and near is not None and arr.dtype.kind == "f" else labels
+        # a block of 0 and one other value (a 0/255 mask read block by block): the label that selects it is
+        # that value (a whole array of one value is read as its mask by the file readers, never refused)
+        one = near is not None and labels and bool(np.all(values == value)) and not bool((arr == 1).any())
         raise NotBinary(bare + (", or give every label its row with isoflow.label_table(volume)" if table else ""),
-                        bare, every=every, kind=kind)
+                        bare, every=every, kind=kind, value=value if one else None)
     return arr.astype(bool)
 
 
@@ -413,14 +416,16 @@ def fill_value_named(exc: NotBinary, fill: object, dtype: object) -> NotBinary:
         # label table refuses: --labels is not offered, and the line says why
         told = f"; zarr reads a chunk never written as the array's fill value, {value}, which is no label); "
         unlabelled = exc.bare.replace("); ", told, 1)  # (the end of binary's example)
-        return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
+        return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind,
+                         exc.value)
     named = f"{example[:-1]}, {FILL_READ})"
     bare = exc.bare.replace(example, named, 1)
     if label:
-        return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim, exc.kind)
+        return NotBinary(str(exc.args[0]).replace(exc.bare, bare, 1), bare, exc.every, exc.ndim, exc.kind, exc.value)
     # a label table refuses the value as it does here: a store with fill 0 is read either way
     unlabelled = bare + f", or {FILL_ZERO}"
-    return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind)
+    return NotBinary(str(exc.args[0]).replace(exc.bare, unlabelled, 1), unlabelled, False, exc.ndim, exc.kind,
+                     exc.value)
 
 
 class NotBinary(IsoflowError):
@@ -434,11 +439,15 @@ class NotBinary(IsoflowError):
     is offered on that condition;
     ``ndim``: the image's dimension where known (``surface --labels`` takes
     3D images only); ``kind``: what the values look like
-    (:func:`value_kind`), so that a probability map is offered no label."""
+    (:func:`value_kind`), so that a probability map is offered no label;
+    ``value``: the one value other than 0 where the block read holds no
+    other, a mask of it (0/255), which ``--label`` then names (``--label
+    255``), else None."""
 
     def __init__(self, message: str, bare: str | None = None, every: bool | None = True, ndim: int | None = None,
-                 kind: str = "labels"):
+                 kind: str = "labels", value: object = None):
         super().__init__(message)
+        self.value = value
         self.bare = message if bare is None else bare
         self.every = every
         self.ndim = ndim
