@@ -184,6 +184,35 @@ def test_split_of_a_multi_body_stl_gives_a_label_per_body(tmp_path, capsys):
     assert capsys.readouterr().out.startswith(f"{tmp_path / 'one.npz'}: 1 label in a ")
 
 
+def test_split_of_a_soup_whose_corners_were_rounded_apart_gives_a_label_per_solid(tmp_path, capsys, rng):
+    """Two icospheres written face by face, each copy of a corner moved by
+    ~1e-8 of the diagonal (rounded apart): one label per sphere, as
+    trimesh counts after merging vertices to 6 digits (the corners are
+    first put on that grid, so its rounding joins every copy), each of the
+    welded sphere's voxels; the welded spheres give the same labels."""
+    spheres = [trimesh.creation.icosphere(3).apply_translation(t) for t in ((0, 0, 0), (3, 0, 0))]
+    welded = trimesh.util.concatenate(spheres)
+    welded.vertices = np.round(welded.vertices, 6)
+    soup = welded.vertices[welded.faces].reshape(-1, 3)
+    soup = soup + rng.uniform(-1e-8, 1e-8, soup.shape) * np.linalg.norm(welded.extents)
+    path, exact = tmp_path / "soup.ply", tmp_path / "exact.ply"
+    trimesh.Trimesh(soup, np.arange(len(soup)).reshape(-1, 3), process=False).export(path)
+    welded.export(exact)
+    read = trimesh.load(path, process=False)
+    assert len(np.unique(read.vertices, axis=0)) > 3 * len(welded.vertices)  # the copies of a corner mostly apart
+    read.merge_vertices(digits_vertex=6)
+    bodies = len(read.split(only_watertight=False))
+    assert bodies == 2
+    counts = {}
+    for name, mesh in (("soup", path), ("exact", exact)):
+        out = tmp_path / f"{name}.npz"
+        assert main(["voxelize", str(mesh), "--split", "--resolution", "48", "-o", str(out)]) == 0
+        assert f"{bodies} labels" in capsys.readouterr().out
+        counts[name] = np.bincount(read_labels(out).array.ravel())
+    assert len(counts["exact"]) == bodies + 1 and counts["exact"][1:].min() > 0
+    assert counts["soup"].tolist() == counts["exact"].tolist()
+
+
 def test_split_parts_two_boxes_that_touch_along_an_edge(tmp_path, capsys):
     """Two unit cubes sharing an edge (an STL of them, welded when read):
     a label each, of one cube's voxels each."""

@@ -21,7 +21,10 @@ meshes joined, as every command reads it). With ``split``:
   which is named, OBJ, PLY, OFF, or
   arrays) gives one body per **connected body**, named ``FILE:1``,
   ``FILE:2``, ... in the order of their first face. Faces are joined
-  across the edges of the mesh after the weld: across an edge of one or
+  across the edges of the mesh after the weld, corners within the
+  T-junction split's tolerance counting as one (:func:`near_roots`: a
+  soup whose copies of a corner were rounded apart is one body per solid,
+  its faces kept as written): across an edge of one or
   two faces always, and across a non-manifold edge only where they bound
   one wedge of solid around it (:func:`radial_pairs`: the faces in the
   order of their angle around the edge, their orientation saying which
@@ -397,9 +400,11 @@ def natural_key(name) -> list:
 
 def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
     """The connected bodies of a welded mesh (faces joined as
-    :func:`body_roots` joins them), each cavity's inward shell kept with
-    the body that holds it, in the order of their first face."""
-    root = body_roots(v, f)  # each face's component: its smallest face
+    :func:`body_roots` joins them, corners within the T-junction split's
+    tolerance counting as one: :func:`near_roots`), each cavity's inward
+    shell kept with the body that holds it, in the order of their first
+    face. Each body keeps its faces and corners as given."""
+    root = near_roots(v, f, name)  # each face's component: its smallest face
     _, comp = np.unique(root, return_inverse=True)  # numbered by first face
     parts = [np.nonzero(comp == c)[0] for c in range(int(comp.max()) + 1)]
     if len(parts) == 1:
@@ -416,6 +421,89 @@ def connected_bodies(v: np.ndarray, f: np.ndarray, name: str) -> list[Body]:
         used, faces = np.unique(faces, return_inverse=True)
         bodies.append(Body(f"{name}:{k}", v[used], faces.reshape(-1, 3)))
     return bodies
+
+
+def near_roots(v: np.ndarray, f: np.ndarray, where: str = "mesh") -> np.ndarray:
+    """Each face's body as :func:`body_roots` finds it, corners closer than
+    the T-junction split's tolerance
+    (:data:`~isoflow.mesh.t_junctions.T_JUNCTION_RTOL` of the diagonal)
+    counting as one corner.
+
+    A soup whose copies of a corner were rounded apart (an exporter's
+    float32, a mesh written face by face) shares no corner at the weld's
+    1e-10, so each triangle would be a body; at the tolerance the split of
+    T-junctions already trusts, the copies meet and a solid is one body.
+    Only the corners of open edges (used by one face) are looked at, as
+    that split looks, and only the count merges them: the faces are not
+    moved. A face that the merge collapses (a sliver narrower than the
+    tolerance) goes with a face that shares one of its corners.
+
+    Parameters
+    ----------
+    v : numpy.ndarray
+        ``(n, 3)`` vertex positions.
+    f : numpy.ndarray
+        ``(m, 3)`` triangles.
+    where : str
+        The mesh's name in an error.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(m,)`` each face's body, as its smallest face index.
+
+    Examples
+    --------
+    Two triangles of a square whose shared corners are 1e-9 apart are one
+    body; 0.1 apart, two.
+
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [1e-9, 0, 0], [1, 1 + 1e-9, 0], [0, 1, 0]])
+    >>> near_roots(v, np.array([[0, 1, 2], [3, 4, 5]])).tolist()
+    [0, 0]
+    >>> near_roots(v + np.repeat([[0, 0, 0], [0, 0, 0.1]], 3, axis=0), np.array([[0, 1, 2], [3, 4, 5]])).tolist()
+    [0, 1]
+    """
+    from .census import edge_table
+    from .load import weld_groups
+    from .t_junctions import T_JUNCTION_RTOL
+
+    f = np.asarray(f, dtype=np.int64).reshape(-1, 3)
+    lo, hi, fwd, bwd, _, _ = edge_table(f, len(v))
+    # copies rounded apart leave open edges, as the T-junction split looks only at those:
+    # a mesh with none (a closed one) is counted as welded, at no cost
+    edge_open = fwd + bwd == 1
+    if not edge_open.any():
+        return body_roots(v, f)
+    group = weld_groups(v, f, T_JUNCTION_RTOL, where, among=np.r_[lo[edge_open], hi[edge_open]])
+    g = group[f]
+    used = np.zeros(len(v), dtype=bool)
+    used[f] = True
+    merged = np.zeros(int(group.max()) + 1, dtype=bool)
+    merged[group[used]] = True
+    if np.count_nonzero(merged) == np.count_nonzero(used):  # no corners merged: the mesh as welded
+        return body_roots(v, f)
+    first = np.full(int(group.max()) + 1, len(v), dtype=np.int64)
+    np.minimum.at(first, group, np.arange(len(v)))
+    flat = (g[:, 0] == g[:, 1]) | (g[:, 1] == g[:, 2]) | (g[:, 2] == g[:, 0])
+    kept = np.flatnonzero(~flat)
+    root = np.arange(len(f), dtype=np.int64)
+    if len(kept):
+        root[kept] = kept[body_roots(v[first], g[kept])]
+    # a collapsed face: with the body of a face sharing one of its corners, else its own
+    body_of = np.full(len(first), -1, dtype=np.int64)
+    body_of[g[kept].ravel()] = np.repeat(root[kept], 3)
+    owners = body_of[g[flat]]
+    owners = np.where(owners >= 0, owners, len(f)).min(axis=1, initial=len(f))
+    root[flat] = np.where(owners < len(f), owners, root[flat])
+    return _smallest(root)
+
+
+def _smallest(root: np.ndarray) -> np.ndarray:
+    """Component labels as each component's smallest face index."""
+    _, label = np.unique(root, return_inverse=True)
+    smallest = np.full(int(label.max()) + 1 if len(label) else 0, len(root), dtype=np.int64)
+    np.minimum.at(smallest, label, np.arange(len(root)))
+    return smallest[label]
 
 
 #: faces around an edge whose angles differ by less than this (radians)

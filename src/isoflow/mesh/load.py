@@ -176,19 +176,39 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
 # loading
 # ---------------------------------------------------------------------------
 
-def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "mesh",
-         stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
+def weld_groups(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "mesh",
+                stats: dict | None = None, among: np.ndarray | None = None) -> np.ndarray:
+    """Each vertex's group in :func:`weld`: vertices closer than ``rtol``
+    times the bounding box's diagonal (of the vertices ``f`` uses), in a
+    chain, share one group number.
 
-    Rounding coordinates to a grid (trimesh's approach) misses pairs that
-    straddle a rounding boundary, however close they are; a k-d tree radius
-    query plus connected components cannot.  Faces that lose a corner to the
-    weld have zero area: they are removed, and vertices no face uses are
-    dropped.  Output vertices keep the order of their first occurrence.
-    ``stats`` receives ``welded``: the distinct positions of the faces'
-    corners merged into others by the tolerance (not exact duplicates), and
-    ``dropped_faces``: faces left with two equal corners (by the weld, or
-    as read).
+    Parameters
+    ----------
+    v : numpy.ndarray
+        ``(n, 3)`` vertex positions.
+    f : numpy.ndarray
+        ``(m, 3)`` triangles (their vertices give the bounding box).
+    rtol : float
+        The distance, as a share of the diagonal.
+    where : str
+        The mesh's name in an error.
+    stats : dict, optional
+        Receives ``welded``, as :func:`weld` says.
+    among : numpy.ndarray, optional
+        The indices of the vertices to merge; the others are merged only
+        with copies at the same position. All of them when not given.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(n,)`` int64 group numbers (equal positions always share one).
+
+    Examples
+    --------
+    >>> v = np.array([[0, 0, 0], [1, 0, 0], [1 + 1e-9, 0, 0], [0, 1, 0]])
+    >>> g = weld_groups(v, np.array([[0, 1, 3], [0, 2, 3]]), 1e-6)
+    >>> bool(g[1] == g[2]), len(set(g.tolist()))
+    (True, 3)
     """
     from ..scale.graphs import components  # numba: imported where a mesh is welded
     from .close_pairs import close_pairs
@@ -208,6 +228,8 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
             w = np.ldexp(uniq - lo, -e)
         tol = rtol * float(np.linalg.norm(np.ldexp(ext, -e)))
         near = np.nonzero(np.all(np.abs(w) <= 2.0**40, axis=1))[0]
+        if among is not None:
+            near = np.intersect1d(near, inverse[among])
         pairs = close_pairs(w[near], tol, cell=2.0**-20)  # cells far finer than any mesh's spacing
         if len(pairs):
             pairs = near[pairs]
@@ -216,6 +238,24 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
                 used = np.unique(inverse[f])
                 stats["welded"] = int(len(used) - len(np.unique(lab[used])))
             inverse = lab[inverse]
+    return inverse
+
+
+def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "mesh",
+         stats: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
+
+    Rounding coordinates to a grid (trimesh's approach) misses pairs that
+    straddle a rounding boundary, however close they are; a k-d tree radius
+    query plus connected components cannot.  Faces that lose a corner to the
+    weld have zero area: they are removed, and vertices no face uses are
+    dropped.  Output vertices keep the order of their first occurrence.
+    ``stats`` receives ``welded``: the distinct positions of the faces'
+    corners merged into others by the tolerance (not exact duplicates), and
+    ``dropped_faces``: faces left with two equal corners (by the weld, or
+    as read).
+    """
+    inverse = weld_groups(v, f, rtol, where, stats)
     f = inverse[f]
     keep = ~_repeats_a_corner(f)
     f = f[keep]

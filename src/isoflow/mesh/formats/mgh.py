@@ -20,6 +20,7 @@ along the frames, as NIfTI's; one frame is 3D.
 
 Written as ``.mgz`` or ``.mgh`` (uint8 0/1; a label image in the smallest
 of uint8, int16 and int32 that holds it, the types every FreeSurfer
+<<<<<<< HEAD
 version reads) with a diagonal affine into RAS (the axes of a volume in
 another frame, an LPS NRRD's, negated where they point the other way, as
 NIfTI's writer does); MGH stores its header in float32,
@@ -27,6 +28,16 @@ and stores the volume's centre, not its first voxel (nibabel builds the
 affine from it in float32), so an origin comes back within float32
 rounding of the centre's coordinates and of voxel 0's (a warning says
 where that moves a voxel by more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
+=======
+version reads) with a diagonal affine; MGH stores its header in float32,
+and stores the volume's centre, not its first voxel. The centre is
+written measured with the float32 voxel size, and read back from the
+stored numbers in float64 (:func:`mgh_affine`; nibabel's ``img.affine``
+is built in float32 arithmetic), so an origin comes back exactly where
+the centre's coordinates are float32 numbers, and otherwise within
+float32 rounding of them (a warning says where that moves a voxel by
+more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
+>>>>>>> roundoff
 and 4D volumes only, labels up to 2**31 - 1, in mm: a unit other than mm
 is not written (a warning says so; the numbers are kept, read back as
 mm), and a volume without one is read back in mm.
@@ -66,7 +77,8 @@ def read(path: Path, dataset: str | None = None) -> RawVolume:
             img = nib.MGHImage.from_file_map({"image": nib.FileHolder(fileobj=fileobj)})
             check_shape(img.shape, img.get_data_dtype(), where)
             data = np.asanyarray(img.dataobj)
-            affine = np.asarray(img.affine, np.float64)
+            hdr = img.header
+            affine = mgh_affine(hdr["Mdc"], hdr["delta"], hdr["Pxyz_c"], hdr["dims"][:3])
     # big-endian in the file: the kernels take the machine's order
     data = data.astype(data.dtype.newbyteorder("="), copy=False)
     return placed_by_affine(data, affine, where, "mm", "RAS")
@@ -94,6 +106,43 @@ def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str 
     img = nib.MGHImage(mgh_values(stored_values(obj.volume)), diagonal_affine(obj, space))
     # the file named exactly: nibabel gzips by the name's suffix, which a temporary name keeps
     img.to_file_map(img.make_file_map({"image": str(path)}))
+
+
+def mgh_affine(mdc, delta, centre, dims) -> np.ndarray:
+    """The 4x4 voxel-to-world map (RAS mm) that an MGH header's float32
+    fields mean, computed in float64 from them.
+
+    nibabel's ``img.affine`` builds the same map in float32 arithmetic,
+    which adds rounding the file does not hold (an origin of 0 read back as
+    3.7e-09); here only the stored numbers' own rounding remains.
+
+    Parameters
+    ----------
+    mdc : array_like
+        The direction cosines ``Mdc`` (3x3, one row per voxel axis).
+    delta : array_like
+        The voxel sizes.
+    centre : array_like
+        ``Pxyz_c`` (FreeSurfer's ``c_ras``): the world position of voxel
+        index ``dims / 2``.
+    dims : array_like
+        The volume's first three dimensions.
+
+    Returns
+    -------
+    numpy.ndarray
+        The affine mapping a voxel's centre index to world coordinates.
+
+    Examples
+    --------
+    >>> mgh_affine(np.eye(3), np.float32([0.1, 0.1, 0.1]), np.float32([0.6, 0, 0]), [11, 2, 2])[0].tolist()
+    [0.10000000149011612, 0.0, 0.0, 0.050000015646219254]
+    """
+    steps = np.asarray(mdc, np.float64).T * np.asarray(delta, np.float64)
+    affine = np.eye(4)
+    affine[:3, :3] = steps
+    affine[:3, 3] = np.asarray(centre, np.float64) - steps @ (np.asarray(dims, np.float64) / 2)
+    return affine
 
 
 def mgh_values(values: np.ndarray) -> np.ndarray:

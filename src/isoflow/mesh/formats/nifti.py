@@ -304,6 +304,7 @@ def _load(nib, path: Path):
         return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
 
 
+<<<<<<< HEAD
 def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
     """The 4x4 voxel-to-world map of ``obj``'s spatial axes into RAS: its
     voxel sizes on the diagonal, voxel 0's centre as the translation (what
@@ -324,19 +325,33 @@ def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
     -------
     numpy.ndarray
         The 4x4 affine.
+=======
+def diagonal_affine(obj: DigitalObject) -> np.ndarray:
+    """The 4x4 voxel-to-world map of ``obj``'s spatial axes: its voxel sizes
+    on the diagonal, voxel 0's centre as the translation (what NIfTI and
+    FreeSurfer MGH store). The voxel sizes are the float32 ones the file
+    keeps, and the translation is measured with them: a reader subtracts
+    those sizes from the stored float32 position, so an origin that float32
+    holds (0, small integers and halves) reads back exactly.
+>>>>>>> roundoff
 
     Examples
     --------
     >>> diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)).tolist()[0]
     [0.5, 0.0, 0.0, 0.25]
+<<<<<<< HEAD
 
     A voxel 10 mm to the patient's left in LPS is at x = -10 in RAS:
 
     >>> diagonal_affine(DigitalObject(np.ones((1, 1, 1), bool), origin=(9.5, 0, 0)), "LPS").tolist()[0]
     [-1.0, 0.0, 0.0, -10.0]
+=======
+    >>> bool(diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.1))[0, 3] == np.float32(0.1) / 2)
+    True
+>>>>>>> roundoff
     """
     spacing, corner = placement_3d(obj)
-    steps, centre0 = centre_affine(spacing, corner)
+    steps, centre0 = centre_affine(np.asarray(spacing, np.float64).astype(np.float32), corner)
     affine = np.eye(4)
     n = len(spacing)
     affine[:n, :n] = steps
@@ -411,9 +426,10 @@ def float32_moved(spacing, corner, shape, anchor=0) -> tuple[float, np.ndarray]:
     steps, centre0 = centre_affine(spacing, corner)
     pitch = np.diag(steps)
     pitch32 = pitch.astype(np.float32).astype(np.float64)
-    stored32 = (centre0 + pitch * anchor).astype(np.float32).astype(np.float64)
-    # voxel 0's centre as nibabel reads it: it builds MGH's affine in float32 too (a no-op for NIfTI's)
-    centre32 = (stored32 - pitch32 * anchor).astype(np.float32).astype(np.float64)
+    # the stored position is measured with the stored voxel sizes (diagonal_affine),
+    # and read back from them in float64 (mgh_affine)
+    stored32 = (corner + pitch32 / 2 + pitch32 * anchor).astype(np.float32).astype(np.float64)
+    centre32 = stored32 - pitch32 * anchor
     last = np.asarray(shape, np.float64) - 1
     moved = np.maximum(np.abs(centre32 - centre0), np.abs(centre32 + pitch32 * last - centre0 - pitch * last))
     return float((moved / pitch).max()), centre32 - pitch32 / 2
