@@ -998,7 +998,7 @@ def _take_batch(args: argparse.Namespace, target, batch, table: dict, names: lis
         if target[0] == "glb":  # the scene is read back against the table's figures (scene_expected)
             continue
         obj = DigitalObject(batch.masks[s], offset=tuple(int(v) for v in lo[r]), pitch=image.spacing,
-                            origin=image.origin)  # (a file's world positions)
+                            origin=image.origin, space=image.space)  # (a file's world positions, their frame)
         # the read-back compares the file's genus with the table's surfaces
         # (counted from the pieces, not from this mesh), as info --labels prints them
         surfaces = None if args.no_check else [{"genus": g} for g in table["genera"][r]]

@@ -36,6 +36,12 @@ float32 keeps the surface's distinct positions distinct, so that the weld
 gives back the same closed surface, and refused (nothing written) only
 where float32 would merge some, with the numbers; :func:`~isoflow.mesh.float32.float32_effect`
 says how far float32 moves the positions.
+
+Positions are in the volume's own world frame (RAS for NIfTI, a NRRD's
+``space``); where that frame is RAS or LPS the file's header says so as 3D
+Slicer writes and reads it (:func:`space_tag`: ``SPACE=RAS`` in a PLY
+comment, an OBJ comment, the STL header), since Slicer reads an untagged
+mesh as LPS. GLB has no such convention.
 """
 
 from __future__ import annotations
@@ -649,7 +655,8 @@ def write_mesh_file(
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
     kind, faces = surface_faces(mesh, suffix, ascii=ascii, triangulate=triangulate)
-    comments = (*comments, f"faces: {kind}")
+    tag = space_tag(obj.space)
+    comments = (*comments, f"faces: {kind}", *((tag,) if tag else ()))
     if suffix == ".ply":
         write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments, sync=sync)
     elif suffix == ".obj":
@@ -660,16 +667,82 @@ def write_mesh_file(
         effect = float32_effect(xyz, obj.spacing)
         if effect["merged"] != 0:  # a reader's weld would not give the surface back: nothing written
             raise IsoflowError(stl_refusal(path, effect, obj.spacing))
-        write_stl(path, xyz, faces, force=force, sync=sync, header=comments[0] if comments else "")
+        write_stl(path, xyz, faces, force=force, sync=sync, header=stl_header(comments[0], obj.space))
         return {"path": path, "faces": kind, "face_count": len(faces), "moved": effect["moved"],
                 "moved_voxels": effect["moved_voxels"]}
     else:
         table, frame = glb_columns(mesh, obj)
-        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame, name=name)
+        # glTF has no frame tag that 3D Slicer reads: the comment keeps what isoflow wrote, not the tag
+        write_glb(path, table, faces, force=force, comment="; ".join(comments[:-1] if tag else comments), sync=sync,
+                  frame=frame, name=name)
         beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
         return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
                 "beyond": beyond}
     return {"path": path, "faces": kind, "face_count": len(faces)}
+
+
+#: the anatomical frames 3D Slicer reads from a mesh file's header (its
+#: ``vtkMRMLModelStorageNode``); a mesh without one it reads as LPS
+SLICER_SPACES = ("RAS", "LPS")
+
+
+def space_tag(space: str | None) -> str | None:
+    """The text that tells 3D Slicer a mesh file's frame: ``SPACE=RAS`` or
+    ``SPACE=LPS``, as Slicer writes it, found anywhere in an STL's header,
+    a PLY comment or an OBJ's leading comments. Slicer reads a file without
+    it as LPS, so a surface of a NIfTI (RAS) without it opens mirrored in
+    x and y.
+
+    Parameters
+    ----------
+    space : str or None
+        The object's anatomical frame (:attr:`DigitalObject.space`).
+
+    Returns
+    -------
+    str or None
+        The tag; None for no frame or one Slicer has no tag for (``"LAS"``).
+
+    Examples
+    --------
+    >>> space_tag("RAS"), space_tag("LPS"), space_tag("LAS"), space_tag(None)
+    ('SPACE=RAS', 'SPACE=LPS', None, None)
+    """
+    return f"SPACE={space}" if space in SLICER_SPACES else None
+
+
+def stl_header(text: str, space: str | None = None) -> str:
+    """A binary STL's 80-byte header text: ``text`` with the frame's
+    :func:`space_tag` after it, ``text`` cut short where both do not fit
+    (the tag is what a reader acts on; no reader makes anything else of
+    the header).
+
+    Parameters
+    ----------
+    text : str
+        What the header says (ASCII; other characters are written as ``?``).
+    space : str or None
+        The object's anatomical frame.
+
+    Returns
+    -------
+    str
+        At most 80 ASCII characters.
+
+    Examples
+    --------
+    >>> stl_header("isoflow surface of s.nii.gz, 6-connectivity", "RAS")
+    'isoflow surface of s.nii.gz, 6-connectivity SPACE=RAS'
+    >>> len(stl_header("x" * 100, "LPS")), stl_header("x" * 100, "LPS")[-10:]
+    (80, ' SPACE=LPS')
+    >>> stl_header("a triangle", "LAS")
+    'a triangle'
+    """
+    text = text.encode("ascii", "replace").decode("ascii")
+    tag = space_tag(space)
+    if tag is None:
+        return text[:80]
+    return f"{text[:80 - len(tag) - 1]} {tag}" if text else tag
 
 
 #: an STL's float32 positions are said to move the surface when they move a

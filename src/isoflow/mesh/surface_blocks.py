@@ -51,7 +51,7 @@ from ..scale.arrays import NotBinary, binary, fill_value_named, index_dtype
 from ..scale.chunkcache import ChunkReader
 from ..scale.chunks import BlockTicks, decoded_chunk_voxels, is_zarr_array, smaller_blocks_help
 from ..scale.compiled import using
-from .export import STL_DTYPE, float32_holds, mesh_vertex_table, ply_header, shared_positions
+from .export import STL_DTYPE, float32_holds, mesh_vertex_table, ply_header, shared_positions, space_tag, stl_header
 
 #: the suffixes whose files are written block by block
 STREAM_SUFFIXES = (".ply", ".stl")
@@ -612,7 +612,9 @@ def write_surface_blocks(array, path, connectivity: int | None = None, *, frame:
         The object's connectivity (default 6).
     frame : DigitalObject, optional
         Gives the voxel size and the origin of the world positions (its
-        volume is not read); default: unit voxels at the origin.
+        volume is not read), and their anatomical frame, which the header
+        records where it is RAS or LPS (:func:`~isoflow.mesh.export.space_tag`);
+        default: unit voxels at the origin, no frame.
     block_shape : tuple of int, optional
         Blocks of this shape instead of the array's chunks.
     scheduler : optional
@@ -736,7 +738,7 @@ def _prepared(out: Path, layout: Layout, frame: DigitalObject, comments, conn: i
     front where the format or the disk cannot hold it."""
     suffix = out.suffix.lower()
     position = _checked_position(out, suffix, layout, layout.grid, frame)
-    header = _header(suffix, layout, position, comments, conn, where)
+    header = _header(suffix, layout, position, comments, conn, where, frame.space)
     size = _file_size(suffix, layout, position, len(header))
     _check_disk(out, size)
     faces_at = len(header) + (layout.vertices * _vertex_dtype(position).itemsize if suffix == ".ply" else 0)
@@ -853,13 +855,15 @@ def _checked_position(out: Path, suffix: str, layout: Layout, grid: BlockGrid, f
     return position
 
 
-def _header(suffix: str, layout: Layout, position, comments: tuple[str, ...], conn: int, where: str) -> bytes:
+def _header(suffix: str, layout: Layout, position, comments: tuple[str, ...], conn: int, where: str,
+            space: str | None) -> bytes:
     if suffix == ".stl":
-        text = f"isoflow surface of {Path(where).name}, {conn}-connectivity".encode("ascii", "replace")[:80]
+        text = stl_header(f"isoflow surface of {Path(where).name}, {conn}-connectivity", space).encode("ascii")
         return text.ljust(80, b" ") + np.uint32(layout.faces).tobytes()
     vdt = _vertex_dtype(position)
+    tag = space_tag(space)
     return ply_header({k: vdt[k] for k in vdt.names}, layout.vertices, layout.faces,
-                      (*comments, f"faces: {layout.kind}"))
+                      (*comments, f"faces: {layout.kind}", *((tag,) if tag else ())))
 
 
 def _file_size(suffix: str, layout: Layout, position, header: int) -> int:
