@@ -20,16 +20,9 @@ along the frames, as NIfTI's; one frame is 3D.
 
 Written as ``.mgz`` or ``.mgh`` (uint8 0/1; a label image in the smallest
 of uint8, int16 and int32 that holds it, the types every FreeSurfer
-<<<<<<< HEAD
 version reads) with a diagonal affine into RAS (the axes of a volume in
 another frame, an LPS NRRD's, negated where they point the other way, as
 NIfTI's writer does); MGH stores its header in float32,
-and stores the volume's centre, not its first voxel (nibabel builds the
-affine from it in float32), so an origin comes back within float32
-rounding of the centre's coordinates and of voxel 0's (a warning says
-where that moves a voxel by more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
-=======
-version reads) with a diagonal affine; MGH stores its header in float32,
 and stores the volume's centre, not its first voxel. The centre is
 written measured with the float32 voxel size, and read back from the
 stored numbers in float64 (:func:`mgh_affine`; nibabel's ``img.affine``
@@ -37,7 +30,6 @@ is built in float32 arithmetic), so an origin comes back exactly where
 the centre's coordinates are float32 numbers, and otherwise within
 float32 rounding of them (a warning says where that moves a voxel by
 more than NIfTI's ``FLOAT32_SLACK``). It holds 3D
->>>>>>> roundoff
 and 4D volumes only, labels up to 2**31 - 1, in mm: a unit other than mm
 is not written (a warning says so; the numbers are kept, read back as
 mm), and a volume without one is read back in mm.

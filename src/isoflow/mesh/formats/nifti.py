@@ -304,13 +304,16 @@ def _load(nib, path: Path):
         return nib.Nifti2Image.from_file_map(nib.Nifti2Image.make_file_map({"image": str(path)}))
 
 
-<<<<<<< HEAD
 def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
     """The 4x4 voxel-to-world map of ``obj``'s spatial axes into RAS: its
     voxel sizes on the diagonal, voxel 0's centre as the translation (what
     NIfTI and FreeSurfer MGH store), each row of a world axis that
     ``space`` points the other way (L for R, P for A, I for S) negated, so
-    that every voxel keeps its anatomical place.
+    that every voxel keeps its anatomical place. The voxel sizes are the
+    float32 ones the file keeps, and the translation is measured with
+    them: a reader subtracts those sizes from the stored float32 position,
+    so an origin that float32 holds (0, small integers and halves) reads
+    back exactly.
 
     Parameters
     ----------
@@ -325,30 +328,18 @@ def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
     -------
     numpy.ndarray
         The 4x4 affine.
-=======
-def diagonal_affine(obj: DigitalObject) -> np.ndarray:
-    """The 4x4 voxel-to-world map of ``obj``'s spatial axes: its voxel sizes
-    on the diagonal, voxel 0's centre as the translation (what NIfTI and
-    FreeSurfer MGH store). The voxel sizes are the float32 ones the file
-    keeps, and the translation is measured with them: a reader subtracts
-    those sizes from the stored float32 position, so an origin that float32
-    holds (0, small integers and halves) reads back exactly.
->>>>>>> roundoff
 
     Examples
     --------
     >>> diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5)).tolist()[0]
     [0.5, 0.0, 0.0, 0.25]
-<<<<<<< HEAD
 
     A voxel 10 mm to the patient's left in LPS is at x = -10 in RAS:
 
     >>> diagonal_affine(DigitalObject(np.ones((1, 1, 1), bool), origin=(9.5, 0, 0)), "LPS").tolist()[0]
     [-1.0, 0.0, 0.0, -10.0]
-=======
     >>> bool(diagonal_affine(DigitalObject(np.ones((2, 2, 2), bool), pitch=0.1))[0, 3] == np.float32(0.1) / 2)
     True
->>>>>>> roundoff
     """
     spacing, corner = placement_3d(obj)
     steps, centre0 = centre_affine(np.asarray(spacing, np.float64).astype(np.float32), corner)
