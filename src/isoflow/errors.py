@@ -503,6 +503,15 @@ class IsoflowError(ValueError):
             out.command_line = f"{where}: {self.command_line}"
         return out
 
+    def __reduce__(self):
+        # pickle's own recipe for an exception (the class called with its
+        # args, then its attributes), given as this class's: tblib, which
+        # dask.distributed installs on a worker's error, rebuilds an error
+        # whose class has a custom __init__ and no __reduce__ through
+        # cls.__new__, which NoSuchFile (a ValueError and an OSError)
+        # refuses; distributed then sends a plain Exception of its repr
+        return type(self), self.args, self.__dict__ or None
+
 
 class NotAPath(IsoflowError, TypeError):
     """A path argument that is no ``str`` or ``os.PathLike`` (an array, a

@@ -70,6 +70,21 @@ def test_a_bad_block_is_one_line_from_a_worker(client):
     assert "\n" not in message and "not a binary volume" in message and "(14, 0, 0)" in message
 
 
+def test_a_file_missing_on_a_worker_is_the_error_raised_here(client, tmp_path):
+    # a worker that does not see the file (a store on no shared file system)
+    # raises what read_volume raises here, not a plain Exception of its repr,
+    # which distributed sends where the error's copy does not load
+    from isoflow import read_volume
+
+    gone = str(tmp_path / "gone.npy")
+    with pytest.raises(FileNotFoundError) as here:
+        read_volume(gone)
+    with pytest.raises(FileNotFoundError) as there:
+        client.submit(read_volume, gone, pure=False).result()
+    assert type(there.value) is type(here.value) and isinstance(there.value, IsoflowError)
+    assert str(there.value) == str(here.value)
+
+
 @pytest.mark.parametrize("conn", [6, 26])
 def test_surface_blocks_on_process_workers(client, tmp_path, conn):
     # the surface of a zarr store written block by block on two worker
