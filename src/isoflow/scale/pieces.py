@@ -147,24 +147,33 @@ def _join_rows(flat, nz, starts, parent, a0, a1, row_a, b0, b1, row_b):
     the runs [b0, b1) of the row at ``row_b`` that they touch by a face and
     share a value with. Both rows cut [0, nz) into runs, so walking them
     together, always stepping past the run that ends first, meets every
-    overlapping pair once."""
+    overlapping pair once. Each run's end is read once, when the walk
+    reaches it, and a step where both runs end at once steps both rows:
+    fewer loads and branches per step than testing each row's end at every
+    step, the part of the labelling that grows with the runs."""
     ia, ib = a0, b0
+    ea = starts[ia + 1] if ia + 1 < a1 else nz
+    eb = starts[ib + 1] if ib + 1 < b1 else nz
     va, vb = flat[row_a + starts[ia]], flat[row_b + starts[ib]]
     while True:
         if va == vb:
             union(parent, ia, ib)
-        ea = starts[ia + 1] if ia + 1 < a1 else nz
-        eb = starts[ib + 1] if ib + 1 < b1 else nz
-        if ea <= eb:
+        if ea < eb:
             ia += 1
-            if ia == a1:
-                return
-            va = flat[row_a + starts[ia]]
-        if eb <= ea:
+            va = flat[row_a + ea]
+            ea = starts[ia + 1] if ia + 1 < a1 else nz
+        elif eb < ea:
             ib += 1
-            if ib == b1:
+            vb = flat[row_b + eb]
+            eb = starts[ib + 1] if ib + 1 < b1 else nz
+        else:  # both runs end here: at nz, both rows are done
+            if ea == nz:
                 return
-            vb = flat[row_b + starts[ib]]
+            ia += 1
+            ib += 1
+            va, vb = flat[row_a + ea], flat[row_b + eb]
+            ea = starts[ia + 1] if ia + 1 < a1 else nz
+            eb = starts[ib + 1] if ib + 1 < b1 else nz
 
 
 @njit(cache=True, nogil=True)
