@@ -117,6 +117,20 @@ def test_flow_volumes_of_an_lps_nrrd_are_ras_correct_nifti(tmp_path, capsys):
     assert nib.aff2axcodes(nib.load(str(tmp_path / "run" / "step_001.nii.gz")).affine) == ("L", "P", "S")
 
 
+def test_flow_json_reports_the_frame(tmp_path, capsys):
+    """``flow --json`` names the frame of its world coordinates (its
+    ``bbox``, ``limit.center``), as ``info --json`` does: the NRRD's own
+    ``space``, and null for a ``.npy``."""
+    values = np.zeros(SHAPE, np.uint8)
+    values[1:4, 1:5, 1:6] = 1
+    lps_nrrd(tmp_path / "box.nrrd", DIRECTIONS["diagonal"], values)
+    np.save(tmp_path / "box.npy", values.astype(bool))
+    _, header = nrrd.read(str(tmp_path / "box.nrrd"))
+    assert header["space"] == "left-posterior-superior"
+    assert json.loads(run(capsys, "flow", tmp_path / "box.nrrd", "--steps", "1", "--json"))["space"] == "LPS"
+    assert json.loads(run(capsys, "flow", tmp_path / "box.npy", "--steps", "1", "--json"))["space"] is None
+
+
 def test_write_labels_of_an_lps_label_image_keeps_the_anatomy(tmp_path):
     values = np.zeros(SHAPE, np.uint8)
     values[0, 0, 0] = 1

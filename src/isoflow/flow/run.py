@@ -98,6 +98,10 @@ class FlowResult(Result):
     unit : str or None
         The length unit of the world coordinates (``bbox``, ``where``,
         ``center``): the input object's, None where it has none.
+    space : str or None
+        The anatomical frame of those coordinates (``"RAS"``, ``"LPS"``:
+        :mod:`isoflow.digital.frames`): the input object's, None where it
+        has none.
 
     Examples
     --------
@@ -122,12 +126,13 @@ class FlowResult(Result):
     reversed_moves: int = 0
     guard_steps: dict | None = None
     unit: str | None = None
+    space: str | None = None
 
     def _keys(self) -> list[str]:
         # what ``isoflow flow --json`` prints (without ``input``), in its
         # order: the states are an attribute only, the guard's counts only
         # for guarded runs
-        keys = ["unit", "connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
+        keys = ["unit", "space", "connectivity", "guard", "stop_reason", "steps", "limit", "topology_changes", "reversed_moves"]
         return keys + ["guard_steps"] if self.guard else keys
 
     @classmethod
@@ -409,7 +414,8 @@ def run_flow(
     engine = flow_engine(method, obj, conn, cap, guard)
     result = run_engine(engine, engine.start(obj), cap=cap, capped="steps" if steps is not None else "max-steps",
                         guard=guard, until_topology_change=until_topology_change,
-                        allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit)
+                        allowance=default_max_steps(obj), progress=progress, keep_states=keep_states, unit=obj.unit,
+                        space=obj.space)
     return held_boxes(result, obj)
 
 
@@ -453,7 +459,7 @@ def held_boxes(result: FlowResult, obj: DigitalObject) -> FlowResult:
 def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason, guard: bool = False,
                until_topology_change: bool = False, allowance: int = 0,
                progress: Callable[[int, Any], object] | None = None, keep_states: bool = False,
-               unit: str | None = None) -> FlowResult:
+               unit: str | None = None, space: str | None = None) -> FlowResult:
     """The run of :func:`run_flow` from a first state that ``engine`` holds
     (one of :mod:`isoflow.flow.engines`, or the stores of
     :mod:`isoflow.flow.chunked`): records, stops and the result.
@@ -474,6 +480,8 @@ def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason,
         Guarded runs: flow steps that may leave the object as large.
     unit : str, optional
         The length unit of the first state's world coordinates.
+    space : str, optional
+        Their anatomical frame (``"LPS"``).
 
     Returns
     -------
@@ -508,4 +516,5 @@ def run_engine(engine: ArrayFlow, state, *, cap: int | None, capped: StopReason,
         reversed_moves=tally.reversed_moves,
         guard_steps=tally.kinds if guard else None,
         unit=unit,
+        space=space,
     )
