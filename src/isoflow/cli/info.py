@@ -11,7 +11,7 @@ import threading
 from pathlib import Path
 
 from ..digital.report import Report
-from ..errors import IsoflowError, betti_words, coordinates, counted, line_text, path_text
+from ..errors import IsoflowError, betti_words, coordinates, counted, path_text, terminal_text
 from .inputs import (
     add_connectivity,
     add_input_arguments,
@@ -82,7 +82,7 @@ def cmd_info(args: argparse.Namespace) -> int:
                                          "input": path_text(args.input)})))
         return 0
     # escaped as a label's name is: a line break in it would split the report's first line
-    print(format_info(report, line_text(path_text(args.input)), grid, placed))
+    print(format_info(report, terminal_text(args.input), grid, placed))
     return 0
 
 

@@ -577,11 +577,11 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
         sys.stdout.write("\n")
         return 0
     # the names escaped as a label's name is: a line break would split the report's lines, an escape act on the terminal
-    print(format_table(line_text(path_text(args.input)), about, conn, table))
+    print(format_table(terminal_text(args.input), about, conn, table))
     if args.csv:
-        print(f"{line_text(path_text(args.csv))}: {len(table['label'])} rows, {len(table)} columns")
+        print(f"{terminal_text(args.csv)}: {len(table['label'])} rows, {len(table)} columns")
     if args.png:
-        print(f"{line_text(path_text(args.png))}: picture of {counted(len(table['label']), 'label')} (Betti numbers, "
+        print(f"{terminal_text(args.png)}: picture of {counted(len(table['label']), 'label')} (Betti numbers, "
               f"{'area, perimeter' if len(about['shape']) == 2 else 'volume, surface area'})")
     return 0
 
