@@ -4,10 +4,13 @@ Superior), so that a volume read in one format's frame (NRRD's LPS, as 3D
 Slicer and ITK write) is written in another's (NIfTI's and MGH's RAS)
 without mirroring the patient. :func:`space_given` checks a code that a
 :class:`~isoflow.digital.lattice.DigitalObject` or a writer is given;
-:func:`axes_against` names the world axes a writer negates to change frame.
+:func:`axes_against` names the world axes a writer negates to change frame,
+:func:`grid_in_frame` negates them in a grid's steps and voxel 0's centre.
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from ..errors import IsoflowError
 
@@ -82,3 +85,38 @@ def axes_against(space: str, frame: str = "RAS") -> list[int]:
     ([0, 1], [0], [])
     """
     return [axis for axis, (a, b) in enumerate(zip(space, frame)) if a != b]
+
+
+def grid_in_frame(steps: np.ndarray, centre0: np.ndarray, space: str,
+                  frame: str = "RAS") -> tuple[np.ndarray, np.ndarray]:
+    """A grid's world steps and voxel 0's centre, given in ``space``, in
+    ``frame``: each world axis that points the other way
+    (:func:`axes_against`; only those the grid has) negated, so that every
+    voxel keeps its anatomical place.
+
+    Parameters
+    ----------
+    steps : numpy.ndarray
+        Row ``i``: the world step of array axis ``i`` (a column per world
+        axis).
+    centre0 : numpy.ndarray
+        Voxel 0's centre, one entry per world axis.
+    space, frame : str
+        Three-letter codes (:func:`space_given`).
+
+    Returns
+    -------
+    steps, centre0 : numpy.ndarray
+        New arrays; a coordinate of 0 stays 0.0, not -0.0.
+
+    Examples
+    --------
+    >>> steps, centre0 = grid_in_frame(np.diag([0.5, 0.5, 2.0]), np.array([9.5, 0.0, 1.0]), "LPS")
+    >>> steps.diagonal().tolist(), centre0.tolist()
+    ([-0.5, -0.5, 2.0], [-9.5, 0.0, 1.0])
+    """
+    flipped = [axis for axis in axes_against(space, frame) if axis < len(centre0)]
+    steps, centre0 = np.array(steps, np.float64), np.array(centre0, np.float64)
+    steps[:, flipped] = 0.0 - steps[:, flipped]  # (0.0 - x keeps a 0 as 0.0; * -1 would give -0.0)
+    centre0[flipped] = 0.0 - centre0[flipped]
+    return steps, centre0

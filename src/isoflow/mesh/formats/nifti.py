@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...digital.frames import axes_against
+from ...digital.frames import grid_in_frame
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError, coordinates
 from .affine import axis_aligned, centre_affine
@@ -343,13 +343,12 @@ def diagonal_affine(obj: DigitalObject, space: str | None = None) -> np.ndarray:
     """
     spacing, corner = placement_3d(obj)
     steps, centre0 = centre_affine(np.asarray(spacing, np.float64).astype(np.float32), corner)
+    if space is not None:
+        steps, centre0 = grid_in_frame(steps, centre0, space)
     affine = np.eye(4)
     n = len(spacing)
-    affine[:n, :n] = steps
+    affine[:n, :n] = steps.T  # (diagonal: an affine's row is a world axis, a column an array axis)
     affine[:n, 3] = centre0
-    if space is not None:
-        flipped = [axis for axis in axes_against(space) if axis < n]
-        affine[flipped] = 0.0 - affine[flipped]  # (0.0 - x keeps a 0 as 0.0; * -1 would give -0.0)
     return affine
 
 

@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...digital.frames import axes_against
+from ...digital.frames import grid_in_frame
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .affine import axis_aligned, centre_affine
@@ -301,11 +301,8 @@ def named_space(space: str, steps: np.ndarray, centre0: np.ndarray, ndim: int) -
     >>> fields["space"], fields["space origin"].tolist()
     ('right-anterior-superior', [1.0, -2.0, 3.0])
     """
-    steps, centre0 = steps.copy(), centre0.copy()
     if space not in SPACES:
-        flipped = axes_against(space)
-        steps[:, flipped] = 0.0 - steps[:, flipped]  # (0.0 - x keeps a 0 as 0.0; * -1 would give -0.0)
-        centre0[flipped] = 0.0 - centre0[flipped]
+        steps, centre0 = grid_in_frame(steps, centre0, space)
         space = "RAS"
     return {"space": SPACES[space] + ("-time" if ndim == 4 else ""), "space directions": steps,
             "space origin": centre0}
