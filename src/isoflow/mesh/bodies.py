@@ -499,11 +499,10 @@ def near_roots(v: np.ndarray, f: np.ndarray, where: str = "mesh") -> np.ndarray:
 
 
 def _smallest(root: np.ndarray) -> np.ndarray:
-    """Component labels as each component's smallest face index."""
-    _, label = np.unique(root, return_inverse=True)
-    smallest = np.full(int(label.max()) + 1 if len(label) else 0, len(root), dtype=np.int64)
-    np.minimum.at(smallest, label, np.arange(len(root)))
-    return smallest[label]
+    """Component labels as each component's smallest face index (its first
+    occurrence, as :func:`components_roots` numbers them)."""
+    _, first, label = np.unique(root, return_index=True, return_inverse=True)
+    return first[label]
 
 
 #: faces around an edge whose angles differ by less than this (radians)
