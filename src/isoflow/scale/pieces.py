@@ -831,18 +831,6 @@ def _mask8(p, a0, a1, a2, a3, b0, b1, b2, b3):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _other(p, a1, a2, a3, b0, b1, b2, b3):
-    """The piece of the first octant (1 .. 7) that does not hold p."""
-    q = b3
-    q = b2 if b2 != p else q
-    q = b1 if b1 != p else q
-    q = b0 if b0 != p else q
-    q = a3 if a3 != p else q
-    q = a2 if a2 != p else q
-    return a1 if a1 != p else q
-
-
-@njit(cache=True, nogil=True, inline="always")
 def _value(pvalues, vbase, piece):
     """The value of a piece (0 for the outside)."""
     return pvalues[piece - vbase] if piece != 0 else np.uint64(0)
@@ -921,8 +909,9 @@ def _three(pa, pb, pc, m0, m1, m2, pvalues, vbase, flat, ny, nz, a, nx, i, j, k,
 
 @njit(cache=True, nogil=True, inline="always")
 def _outside(m, a1, a2, a3, b0, b1, b2, b3):
-    """The piece of the first octant (1 .. 7) outside mask ``m`` (which
-    holds octant 0 and not all eight; no branches)."""
+    """The piece of the first octant (1 .. 7) outside mask ``m``, which
+    holds octant 0 (``b3`` where it holds all eight; no branches): of
+    :func:`_mask8` of octant 0's piece, the first other piece."""
     q = b3
     q = b2 if not (m >> 6) & 1 else q
     q = b1 if not (m >> 5) & 1 else q
@@ -950,7 +939,7 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
     pa = a0
     m0 = _mask8(pa, a0, a1, a2, a3, b0, b1, b2, b3)
-    pb = _other(pa, a1, a2, a3, b0, b1, b2, b3)
+    pb = _outside(m0, a1, a2, a3, b0, b1, b2, b3)
     m1 = _mask8(pb, a0, a1, a2, a3, b0, b1, b2, b3)
     if (m0 | m1) != 255:
         pc = _outside(m0 | m1, a1, a2, a3, b0, b1, b2, b3)
