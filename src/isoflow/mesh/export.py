@@ -655,12 +655,13 @@ def write_mesh_file(
     path = check_output_path(path, force, suffixes=SURFACE_SUFFIXES, what="surface")
     suffix = path.suffix.lower()
     kind, faces = surface_faces(mesh, suffix, ascii=ascii, triangulate=triangulate)
+    comments = (*comments, f"faces: {kind}")
     tag = space_tag(obj.space)
-    comments = (*comments, f"faces: {kind}", *((tag,) if tag else ()))
+    tagged = (*comments, tag) if tag else comments  # the frame where 3D Slicer reads it (STL: in its header)
     if suffix == ".ply":
-        write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=comments, sync=sync)
+        write_ply(path, mesh_vertex_table(mesh, obj), faces, ascii=ascii, force=force, comments=tagged, sync=sync)
     elif suffix == ".obj":
-        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=comments, sync=sync,
+        write_obj(path, obj.world(mesh.vertices), faces, force=force, comments=tagged, sync=sync,
                   spacing=obj.spacing)
     elif suffix == ".stl":
         xyz = obj.world(mesh.vertices)
@@ -672,9 +673,8 @@ def write_mesh_file(
                 "moved_voxels": effect["moved_voxels"]}
     else:
         table, frame = glb_columns(mesh, obj)
-        # glTF has no frame tag that 3D Slicer reads: the comment keeps what isoflow wrote, not the tag
-        write_glb(path, table, faces, force=force, comment="; ".join(comments[:-1] if tag else comments), sync=sync,
-                  frame=frame, name=name)
+        # glTF has no frame tag that 3D Slicer reads: the comment is isoflow's, untagged
+        write_glb(path, table, faces, force=force, comment="; ".join(comments), sync=sync, frame=frame, name=name)
         beyond = float32_transform_problem(obj.spacing, obj.volume.shape, obj.world(np.zeros((1, 3)))[0])
         return {"path": path, "faces": kind, "face_count": len(faces), "framed": frame is not None,
                 "beyond": beyond}
