@@ -105,6 +105,44 @@ def assert_failed_cleanly(rc, err, target: Path, before: dict, cause: str, code:
     assert not [p for p in target.parent.iterdir() if outputs.TEMP_MARK in p.name]
 
 
+def interrupted_as_made(monkeypatch, module):
+    """A signal handled in the instant a temporary is made, as the making
+    returns: before its writer's ``try`` (which removes it) begins."""
+    real = outputs.temp_sibling
+
+    def made_then_interrupted(*args, **kwargs):
+        real(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(module, "temp_sibling", made_then_interrupted)
+
+
+def test_an_interrupt_as_a_temporary_is_made_leaves_nothing(tmp_path, monkeypatch):
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / "out.ply"
+    out.write_bytes(b"old")
+    before = listing(tmp_path)
+    interrupted_as_made(monkeypatch, outputs)
+    rc, _, err = run("surface", tmp_path / "t.npy", "-o", out, "--force")
+    assert rc == 130, err
+    assert listing(tmp_path) == before  # the old file byte for byte, no temporary beside it
+    assert not [p for p in tmp_path.iterdir() if outputs.TEMP_MARK in p.name]
+
+
+def test_an_interrupt_as_the_flows_staging_directory_is_made_leaves_nothing(tmp_path, monkeypatch):
+    import isoflow.flow.files
+
+    np.save(tmp_path / "t.npy", torus(6, 2))
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "flow.csv").write_text("the previous run")
+    interrupted_as_made(monkeypatch, isoflow.flow.files)
+    rc, _, err = run("flow", tmp_path / "t.npy", "--out", out, "--force", "--steps", 2)
+    assert rc == 130, err
+    assert sorted(p.name for p in out.iterdir()) == ["flow.csv"]
+    assert (out / "flow.csv").read_text() == "the previous run"
+
+
 # ------------------------------------------------------------ a full disk
 
 

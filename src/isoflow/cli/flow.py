@@ -203,8 +203,8 @@ def flow_store(args: argparse.Namespace) -> int:
         check_input_connectivity(args, 3)
     conn = flow_connectivity(3, args.connectivity)
     last = reachable_steps(args.steps, volume.shape)
-    writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     total = bar_total(args.steps, volume.shape)
+    writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
             if show is not None:  # step 0, the store's analysis block by block, takes as long as a step
@@ -274,17 +274,21 @@ def flow_writer(args: argparse.Namespace, obj):
         return None
     conn = flow_connectivity(obj.ndim, args.connectivity)
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=not args.no_check)
-    if args.volumes is not None:
-        writer.write_volumes(args.volumes)
+    try:  # the staging directory is made: an interrupt from here on removes it
+        if args.volumes is not None:
+            writer.write_volumes(args.volumes)
+    except BaseException:
+        writer.abort()
+        raise
     return writer
 
 
 def run_with_files(args: argparse.Namespace, obj, writer):
     """The flow, each state handed to the writer as it comes."""
-    from ..flow.run import run_flow
-
-    total = bar_total(args.steps, obj.volume.shape)
     try:  # the writer's staging directory is made: an interrupt anywhere (an import, a bar) removes it
+        from ..flow.run import run_flow
+
+        total = bar_total(args.steps, obj.volume.shape)
         with progress_bar(args, "flow", unit=" steps", noun="step") as show:
 
             def progress(step, state):

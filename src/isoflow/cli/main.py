@@ -554,6 +554,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run one ``isoflow`` command line; returns its exit status (0 done,
     1 a written file did not read back as counted, 2 bad input, 128 + the
     signal's number when interrupted)."""
+    from ..mesh import outputs
     from ..mesh.outputs import SIGNALS
     from ..scale import compiled
     from ..scale.cancel import clear_stop
@@ -571,6 +572,7 @@ def main(argv: list[str] | None = None) -> int:
     terminated = SIGNALS  # the signals received (what the writers look at before renaming)
     terminated.clear()
     clear_stop()
+    outputs.MADE = set()  # removed as the command ends where no writer's clean-up reached them
 
     def compiling(message):  # numba's first run after installing: a note, not silence
         print(f"isoflow {args.command}: note: {message}", file=sys.stderr, flush=True)
@@ -615,6 +617,7 @@ def main(argv: list[str] | None = None) -> int:
         # command ends as signalled whatever the exception
         return interrupted(terminated, "")
     finally:
+        outputs.remove_temporaries_left()
         compiled.on_first_compile = before
         terminated.clear()  # said: later writes in this process (a library's caller) are not held back
         clear_stop()

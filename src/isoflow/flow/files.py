@@ -304,11 +304,6 @@ class FlowWriter:
         out = check_output_dir(directory, force)
         self.created = not out.exists()
         self.had_files = not self.created and any(out.iterdir())  # (a killed run's staging is gone: check_output_dir)
-        try:
-            make_output_dir(out)
-            self.stage = temp_sibling(out / STAGE, directory=True)
-        except OSError as exc:
-            raise write_error(out, exc, existed=not self.created) from None
         self.out, self.connectivity = out, connectivity
         self.volume_suffix = None  # set by write_volumes
         self._said: set[str] = set()  # warnings said already (see _named)
@@ -322,6 +317,13 @@ class FlowWriter:
         self.frames: list = []  # (step, state), every `stride`-th step
         self.stride = 1
         self.last = None  # the last non-empty (step, state)
+        # the staging directory made last: until the constructor returns the
+        # caller holds no writer whose abort() would remove it
+        try:
+            make_output_dir(out)
+            self.stage = temp_sibling(out / STAGE, directory=True)
+        except OSError as exc:
+            raise write_error(out, exc, existed=not self.created) from None
 
     def add(self, step: int, state: DigitalObject) -> None:
         if not state.voxels:

@@ -269,6 +269,8 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
     prefix, suffix = _temp_parts(path)
     for _ in range(100):
         tmp = path.with_name(f"{prefix}{_owner()}-{secrets.token_hex(4)}{suffix}")
+        if MADE is not None:  # recorded before it exists: see MADE
+            MADE.add(tmp)
         try:
             if directory:
                 tmp.mkdir()
@@ -276,6 +278,8 @@ def temp_sibling(path: Path, directory: bool = False) -> Path:
                 os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
             return tmp
         except FileExistsError:
+            if MADE is not None:
+                MADE.discard(tmp)
             continue
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(path))
 
@@ -408,6 +412,43 @@ def short_write_cause(cause: str, directory: Path) -> str | None:
 #: imports with ``except BaseException``), so no file is renamed into place
 #: once a signal has come: the previous one stays, as the signal asks.
 SIGNALS: list[int] = []
+
+#: the temporaries :func:`temp_sibling` made while a command runs (None
+#: outside one). A writer removes its own on an error or an interrupt, but
+#: a signal handled in the instant between a temporary's making and the
+#: writer's ``try`` (as the making returns) reaches no clean-up; the
+#: command removes what is left of them as it ends
+#: (:func:`remove_temporaries_left`). Their names hold this process's id
+#: and a random part, so what exists under one is this command's.
+MADE: set[Path] | None = None
+
+
+def remove_temporaries_left() -> list[Path]:
+    """Remove the temporaries of :data:`MADE` that still exist (a file,
+    or a directory with what is in it) and stop recording them. Returns
+    those removed.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from isoflow.mesh import outputs
+    >>> outputs.MADE = set()
+    >>> left = temp_sibling(Path(tempfile.mkdtemp()) / "out.ply")
+    >>> remove_temporaries_left() == [left], left.exists(), outputs.MADE
+    (True, False, None)
+    """
+    global MADE
+    made, MADE = MADE or set(), None
+    removed = []
+    for tmp in sorted(made):
+        try:
+            shutil.rmtree(tmp) if tmp.is_dir() and not tmp.is_symlink() else tmp.unlink()
+        except FileNotFoundError:  # renamed into place, or removed by its writer
+            continue
+        except OSError:
+            continue  # (what cannot be removed stays for the next run's remove_abandoned)
+        removed.append(tmp)
+    return removed
 
 
 def interrupted_by_signal() -> None:
