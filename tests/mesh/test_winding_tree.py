@@ -16,6 +16,7 @@ import signal
 import subprocess
 import sys
 import time
+from concurrent.futures import wait
 from pathlib import Path
 
 import numpy as np
@@ -515,3 +516,40 @@ def test_block_models_bound_the_cap_at_each_point_s_distance(rng):
                     assert abs(x - (ww + g[:3] @ (p - q) + wn)) <= err + var + 0.5 * rr * hh + 1e-9
             checked += 1
     assert checked > 50
+
+
+def test_an_interrupt_inside_submit_still_waits_for_that_worker(monkeypatch):
+    """The signal lands while :func:`run_pieces` submits its second
+    worker: the work is queued, its future never comes back. That worker
+    must still be waited for, and must not go on once the flag is cleared
+    (seen in the test above under load: the command hung at exit on it)."""
+    from isoflow.scale import cancel
+
+    real, submitted = cancel.pool(), []
+
+    class LosesTheSecondFuture:
+        def submit(self, fn):
+            submitted.append(real.submit(fn))
+            if len(submitted) == 2:
+                raise KeyboardInterrupt
+            return submitted[-1]
+
+    begun, ended = [], []
+
+    def work(i):
+        begun.append(i)
+        while not STOP[0]:
+            time.sleep(0.001)
+        time.sleep(0.05)  # a block of work that ends at its next poll
+        ended.append(i)
+
+    monkeypatch.setattr(cancel, "pool", LosesTheSecondFuture)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            run_pieces(work, 10, threads=2)
+        assert sorted(ended) == sorted(begun)  # nothing left running
+        assert not STOP[0]
+    finally:  # a worker left running would spin until the flag is set again
+        STOP[0] = 1
+        wait(submitted)
+        STOP[0] = 0

@@ -99,20 +99,25 @@ def run_pieces(work: Callable[[int], object], n: int, threads: int = 2,
         return
     counter = itertools.count()
     done = [0]
-    lock = threading.Lock()
+    crew = _Crew()
 
     def worker() -> None:
-        while not STOP[0]:
-            with lock:
-                i = next(counter)
-            if i >= n:
-                return
-            work(i)
-            with lock:
-                done[0] += 1
+        if not crew.join():
+            return
+        try:
+            while not STOP[0] and not crew.over:
+                with crew.lock:
+                    i = next(counter)
+                if i >= n:
+                    return
+                work(i)
+                with crew.lock:
+                    done[0] += 1
+        finally:
+            crew.leave()
 
     futures: list = []
-    try:  # an interrupt between two submissions still waits for the first
+    try:
         for _ in range(max(1, min(2, threads, n))):
             futures.append(pool().submit(worker))
         while True:
@@ -126,7 +131,7 @@ def run_pieces(work: Callable[[int], object], n: int, threads: int = 2,
     except BaseException:
         ours = not STOP[0]  # a signal handler may have set it already, for other work too
         STOP[0] = 1
-        _wait_out(futures)
+        crew.wait_out()
         if ours:
             STOP[0] = 0
         raise
@@ -134,30 +139,48 @@ def run_pieces(work: Callable[[int], object], n: int, threads: int = 2,
         raise Stopped
 
 
-def _wait_out(futures: list) -> None:
-    """Wait until every one of ``futures`` is done, whatever interrupts the
-    wait meanwhile.
+class _Crew:
+    """The workers of one :func:`run_pieces` call, counted as they begin
+    and end rather than by their futures: an interrupt that lands inside
+    ``submit``, after the work was queued and before its future came
+    back, leaves a worker no future names, and waiting on the futures
+    would let it run on once :data:`STOP` is cleared."""
 
-    A second interrupt comes often: ``timeout`` sends its signal to the
-    command and then to the command's process group, and people press
-    Ctrl-C twice. Let through, it would end the wait with workers still
-    running; the command then clears :data:`STOP` and, at exit, waits for
-    those workers, which go on through all their pieces (minutes to hours
-    after saying ``terminated``). The workers poll :data:`STOP`, so the wait
-    is one block of work.
+    def __init__(self) -> None:
+        self.lock = threading.Condition()
+        self.running = 0
+        self.over = False  # the call has ended: a worker that begins now returns at once
 
-    Examples
-    --------
-    >>> from concurrent.futures import ThreadPoolExecutor
-    >>> with ThreadPoolExecutor(1) as threads:
-    ...     futures = [threads.submit(sum, [1, 2])]
-    ...     _wait_out(futures)
-    >>> futures[0].result()
-    3
-    """
-    while True:
-        try:
-            wait(futures)
-            return
-        except KeyboardInterrupt:
-            continue
+    def join(self) -> bool:
+        """Count a worker in; False once the call is over."""
+        with self.lock:
+            if self.over:
+                return False
+            self.running += 1
+            return True
+
+    def leave(self) -> None:
+        with self.lock:
+            self.running -= 1
+            self.lock.notify_all()
+
+    def wait_out(self) -> None:
+        """End the call and wait until every worker that began has
+        returned, whatever interrupts the wait meanwhile.
+
+        A second interrupt comes often: ``timeout`` sends its signal to the
+        command and then to the command's process group, and people press
+        Ctrl-C twice. Let through, it would end the wait with workers still
+        running; the command then clears :data:`STOP` and, at exit, waits for
+        those workers, which go on through all their pieces (minutes to hours
+        after saying ``terminated``). The workers poll :data:`STOP`, so the wait
+        is one block of work."""
+        while True:
+            try:
+                with self.lock:
+                    self.over = True
+                    while self.running:
+                        self.lock.wait()
+                return
+            except KeyboardInterrupt:
+                continue
