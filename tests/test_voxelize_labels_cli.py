@@ -650,3 +650,18 @@ def test_a_grid_past_memory_for_magicavoxel_is_refused_for_the_formats_side(tmp_
     assert "fits in" not in line and not out.exists()
     assert main(["voxelize", *map(str, meshes), "--resolution", "256", "-o", str(out)]) == 0
     assert max(read_volume(out).volume.shape) <= 256
+
+
+@pytest.mark.parametrize("several", [False, True])
+def test_a_grid_past_float64_for_magicavoxel_names_its_sides_in_a_short_line(tmp_path, capsys, several):
+    """``--pitch 1e-200`` over a ball 2 across asks for a grid of 2e200
+    voxels a side. The MagicaVoxel refusal wrote each side as every one of
+    its 201 digits (a line of over 600 characters); a reader wants the
+    size, as every other refusal of a grid writes it (``2.000e+200``)."""
+    a = ball(tmp_path, "a.stl", 1.0, (0, 0, 0))
+    meshes = [a, ball(tmp_path, "b.stl", 0.5, (0.2, 0, 0))] if several else [a]
+    line = fails(capsys, "voxelize", *meshes, "--pitch", "1e-200", "-o", tmp_path / "big.vox",
+                 words=("MagicaVoxel models are at most 256 voxels a side",))
+    sides = line.split("this object is ")[1].split(";")[0].split("x")
+    assert len(sides) == 3 and all(len(side) < 12 and float(side) > 1e199 for side in sides), line
+
