@@ -349,6 +349,67 @@ def test_split_of_a_glb_labels_its_nodes_in_the_files_order(tmp_path, capsys):
         assert np.all(lo <= centre) and np.all(centre <= hi), (i, name, centre)
 
 
+def _glb(path, nodes, meshes):
+    """A GLB written by hand: ``nodes`` of ``(name, mesh index,
+    translation)``, ``meshes`` each a list of primitives ``(vertices,
+    faces)`` (trimesh writes one primitive per mesh, so it cannot make
+    such a file)."""
+    import struct
+
+    blob, views, accessors, gltf_meshes = b"", [], [], []
+    for primitives in meshes:
+        written = []
+        for v, f in primitives:
+            for array, kind, component in ((np.asarray(v, np.float32), "VEC3", 5126),
+                                           (np.asarray(f, np.uint32).ravel(), "SCALAR", 5125)):
+                views.append({"buffer": 0, "byteOffset": len(blob), "byteLength": array.nbytes})
+                accessor = {"bufferView": len(views) - 1, "componentType": component, "count": len(array), "type": kind}
+                if kind == "VEC3":
+                    accessor.update(min=array.min(0).tolist(), max=array.max(0).tolist())
+                accessors.append(accessor)
+                blob += array.tobytes()
+            written.append({"attributes": {"POSITION": len(accessors) - 2}, "indices": len(accessors) - 1})
+        gltf_meshes.append({"primitives": written})
+    header = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": list(range(len(nodes)))}],
+              "nodes": [{"name": n, "mesh": m, "translation": t} for n, m, t in nodes], "meshes": gltf_meshes,
+              "buffers": [{"byteLength": len(blob)}], "bufferViews": views, "accessors": accessors}
+    text = json.dumps(header).encode()
+    text += b" " * (-len(text) % 4)
+    path.write_bytes(b"glTF" + struct.pack("<II", 2, 28 + len(text) + len(blob)) + struct.pack("<I", len(text))
+                     + b"JSON" + text + struct.pack("<I", len(blob)) + b"BIN\0" + blob)
+    return path
+
+
+def test_split_of_a_glb_keeps_a_node_of_several_primitives_one_closed_label(tmp_path, capsys):
+    """A glTF mesh of two materials is two primitives of one node: a cube
+    whose top face is the second. ``--split`` gave each primitive a label,
+    named by trimesh's random suffix (``cube_3f9a1c``, another each run),
+    each an open piece of the cube: 62 and 2 voxels. The node is one label,
+    ``FILE:cube``, and its voxels are the whole cube's: (1 / 0.25)^3 = 64,
+    those whose centres trimesh's ``contains`` finds inside the cube. In an
+    archive the scene of that one node is named by its member alone."""
+    import zipfile
+
+    box = trimesh.creation.box((1, 1, 1))
+    path = _glb(tmp_path / "mat.glb", [("cube", 0, [0, 0, 0]), ("crate", 1, [3, 0, 0])],
+                [[(box.vertices, box.faces[2:]), (box.vertices, box.faces[:2])], [(box.vertices, box.faces)]])
+    out = tmp_path / "labels.npz"
+    table = _run(capsys, "voxelize", path, "--split", "--pitch", "0.25", "-o", out)
+    rows = [line.split() for line in table.splitlines()[2:]]
+    assert [(r[0], r[1], r[2]) for r in rows] == [("1", "64", f"{path}:cube"), ("2", "64", f"{path}:crate")]
+    saved = np.load(out)
+    labels, pitch, origin = saved["volume"], float(saved["pitch"]), saved["origin"]
+    centres = origin + pitch * (np.indices(labels.shape).reshape(3, -1).T + 0.5)
+    inside = box.contains(centres).reshape(labels.shape)
+    assert inside.sum() == 64 and np.array_equal(labels == 1, inside)
+    archive = tmp_path / "arch.zip"
+    _glb(tmp_path / "one.glb", [("cube", 0, [0, 0, 0])], [[(box.vertices, box.faces[2:]), (box.vertices, box.faces[:2])]])
+    with zipfile.ZipFile(archive, "w") as z:
+        z.write(tmp_path / "one.glb", "one.glb")
+    table = _run(capsys, "voxelize", archive, "--split", "--pitch", "0.25", "-o", tmp_path / "arch.npz")
+    assert [line.split()[:3] for line in table.splitlines()[2:]] == [["1", "64", f"{archive}:one.glb"]]
+
+
 @pytest.mark.parametrize("kind", ["zip", "tar.gz"])
 def test_split_of_an_archive_refuses_an_empty_mesh_member_as_given_alone(tmp_path, capsys, kind):
     """An empty STL in an archive was dropped without a word: ``--split``
@@ -589,3 +650,18 @@ def test_a_grid_past_memory_for_magicavoxel_is_refused_for_the_formats_side(tmp_
     assert "fits in" not in line and not out.exists()
     assert main(["voxelize", *map(str, meshes), "--resolution", "256", "-o", str(out)]) == 0
     assert max(read_volume(out).volume.shape) <= 256
+
+
+@pytest.mark.parametrize("several", [False, True])
+def test_a_grid_past_float64_for_magicavoxel_names_its_sides_in_a_short_line(tmp_path, capsys, several):
+    """``--pitch 1e-200`` over a ball 2 across asks for a grid of 2e200
+    voxels a side. The MagicaVoxel refusal wrote each side as every one of
+    its 201 digits (a line of over 600 characters); a reader wants the
+    size, as every other refusal of a grid writes it (``2.000e+200``)."""
+    a = ball(tmp_path, "a.stl", 1.0, (0, 0, 0))
+    meshes = [a, ball(tmp_path, "b.stl", 0.5, (0.2, 0, 0))] if several else [a]
+    line = fails(capsys, "voxelize", *meshes, "--pitch", "1e-200", "-o", tmp_path / "big.vox",
+                 words=("MagicaVoxel models are at most 256 voxels a side",))
+    sides = line.split("this object is ")[1].split(";")[0].split("x")
+    assert len(sides) == 3 and all(len(side) < 12 and float(side) > 1e199 for side in sides), line
+

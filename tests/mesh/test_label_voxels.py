@@ -332,6 +332,26 @@ def test_too_big_is_refused_before_any_mesh_is_voxelised(monkeypatch):
         voxelize_meshes([a, b], resolution=fit + 1, max_bytes=budget)
 
 
+@pytest.mark.parametrize("split", [False, True])
+def test_a_pitch_whose_grid_is_past_float64_is_refused_as_for_one_mesh(split):
+    """``--pitch 1e-300`` over two unit boxes asks for a grid of about
+    1e300 voxels a side: one mesh alone is refused in one line
+    (GridTooLarge), but several meshes (or one with ``split``) raised
+    Python's OverflowError from the count of the bytes of a block. They are
+    refused as one mesh is, with the same finest pitch that fits."""
+    a, b = trimesh.creation.box((1, 1, 1)), trimesh.creation.box((1, 1, 1))
+    b.apply_translation((3, 0, 0))
+    budget = 10**8
+    with pytest.raises(IsoflowError, match=r"^voxelize: pitch=1e-300 needs a .*grid") as one:
+        voxelize(trimesh.util.concatenate([a, b]).vertices, trimesh.util.concatenate([a, b]).faces, pitch=1e-300,
+                 max_bytes=budget)
+    meshes = [trimesh.util.concatenate([a, b])] if split else [a, b]
+    with pytest.raises(IsoflowError, match=r"^voxelize: pitch=1e-300 needs a .*grid") as several:
+        voxelize_meshes(meshes, pitch=1e-300, split=split, max_bytes=budget)
+    assert "\n" not in str(several.value)
+    assert several.value.fit > 0 and one.value.fit > 0
+
+
 def test_bad_input_is_one_line_naming_it(tmp_path):
     with pytest.raises(IsoflowError, match="overlap must be one of later, error"):
         voxelize_meshes([sphere(1, (0, 0, 0))], overlap="first")

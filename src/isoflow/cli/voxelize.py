@@ -157,7 +157,7 @@ def coarser_for_magicavoxel(output: str | None = None) -> Iterator[None]:
     """
     from ..mesh.formats.magicavoxel import MAX_SIDE, ModelTooLarge
     from ..mesh.formats.registry import split_dataset
-    from ..mesh.grid import GridTooLarge
+    from ..mesh.grid import GridTooLarge, fmt_count
 
     try:
         yield
@@ -167,8 +167,10 @@ def coarser_for_magicavoxel(output: str | None = None) -> Iterator[None]:
         vox = output is not None and Path(split_dataset(output)[0]).suffix.lower() == ".vox"
         if not vox or not exc.shape or max(exc.shape) <= MAX_SIDE:
             raise
+        # the sides as a grid's refusal writes them: 2.000e+200, not its 201 digits
         raise IsoflowError(f"{output}: MagicaVoxel models are at most {MAX_SIDE} voxels a side, this object is "
-                           f"{'x'.join(map(str, exc.shape))}; voxelise it coarser (--resolution {MAX_SIDE})") from None
+                           f"{'x'.join(fmt_count(n, sep=False) for n in exc.shape)}; voxelise it coarser "
+                           f"(--resolution {MAX_SIDE})") from None
 
 
 #: the labels listed by name after a label image is written; the rest are counted

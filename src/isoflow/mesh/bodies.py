@@ -9,7 +9,8 @@ meshes joined, as every command reads it). With ``split``:
   node's transform applied; a geometry placed by two nodes is two bodies),
   named ``FILE:NODE`` and taken in the file's order: a glTF/GLB file's
   ``nodes`` (trimesh's scene graph holds them in another order, its
-  traversal's), any other scene's in the natural order of the node names
+  traversal's; a node of several primitives is one body), any other
+  scene's in the natural order of the node names
   (``part2`` before ``part10``);
   an archive's nodes are named by its files, ``FILE:MEMBER``
   (:func:`archive_bodies`);
@@ -307,8 +308,9 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
                 bodies += solids
                 continue
             order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
-            meshes = [n for n in scene.graph.nodes_geometry if isinstance(scene.geometry.get(scene.graph[n][1]),
-                                                                            trimesh.Trimesh)]
+            # the file's nodes that hold a mesh (a glTF node of several primitives is one)
+            meshes = {_file_node(scene.graph, n, order) for n in scene.graph.nodes_geometry
+                      if isinstance(scene.geometry.get(scene.graph[n][1]), trimesh.Trimesh)}
             named = scene_bodies(scene, f"{path}:{member}", order)
             bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
     if not bodies:
@@ -320,20 +322,39 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
     """One body per node of a ``trimesh.Scene`` (named ``name:node``) that
     holds a triangle mesh, as :func:`node_bodies` reads a file's: in the
     order of the file's nodes where ``order`` gives each node's index by
-    its name (:func:`gltf_node_order`; a node trimesh adds under one, a
-    primitive of a mesh of several, goes with it in trimesh's order), else
-    in the natural order of the node names."""
+    its name (:func:`gltf_node_order`), else in the natural order of the
+    node names. A node trimesh adds under a node of ``order`` (one per
+    primitive of a glTF mesh of several, such as a mesh of two materials,
+    named with a random suffix) is that node's: the primitives are joined
+    and welded as one body, as the pieces of one closed mesh.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> scene, box = trimesh.Scene(), trimesh.creation.box()
+    >>> scene.graph.update(frame_to="cube", frame_from=scene.graph.base_frame)
+    >>> for node, faces in (("cube_1a2b3c", box.faces[2:]), ("cube_4d5e6f", box.faces[:2])):
+    ...     _ = scene.add_geometry(trimesh.Trimesh(box.vertices, faces), node_name=node, parent_node_name="cube")
+    >>> [(b.name, len(b.faces)) for b in scene_bodies(scene, "f.glb", {"cube": 0})]
+    [('f.glb:cube', 12)]
+    """
     import trimesh
 
-    bodies = []
+    groups: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
     for node in _scene_order(scene.graph, order):
         transform, geometry = scene.graph[node]
         mesh = scene.geometry.get(geometry)
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
-        where = f"{name}:{node}"
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
-        v, f = weld(*check_mesh(v, mesh.faces, where), where=where)
+        groups.setdefault(_file_node(scene.graph, node, order), []).append((v, np.asarray(mesh.faces)))
+    bodies = []
+    for node, parts in groups.items():
+        where = f"{name}:{node}"
+        starts = np.cumsum([0] + [len(v) for v, _ in parts[:-1]])
+        v = np.concatenate([v for v, _ in parts])
+        f = np.concatenate([f + s for (_, f), s in zip(parts, starts)])
+        v, f = weld(*check_mesh(v, f, where), where=where)
         if len(f):  # (every face degenerate: nothing to fill)
             bodies.append(Body(where, v, f))
     if not bodies:
@@ -382,14 +403,20 @@ def _scene_order(graph, order: dict[str, int] | None) -> list:
     nodes = list(graph.nodes_geometry)
     if not order:
         return sorted(nodes, key=natural_key)
-    parents = graph.transforms.parents
+    index = [order.get(_file_node(graph, n, order), len(order)) for n in nodes]
+    return [n for _, _, n in sorted(zip(index, range(len(nodes)), nodes))]
 
-    def index(node) -> int:
-        while node not in order and node in parents:
-            node = parents[node]
-        return order.get(node, len(order))
 
-    return [n for _, _, n in sorted((index(n), i, n) for i, n in enumerate(nodes))]
+def _file_node(graph, node, order: dict[str, int] | None):
+    """The node of the file that ``node`` of trimesh's graph is: the
+    nearest of it and the nodes above it that ``order`` names (a node
+    trimesh added for a primitive is its glTF node's), else itself."""
+    if not order:
+        return node
+    parents, at = graph.transforms.parents, node
+    while at not in order and at in parents:
+        at = parents[at]
+    return at if at in order else node
 
 
 def natural_key(name) -> list:

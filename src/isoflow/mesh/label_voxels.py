@@ -227,7 +227,8 @@ def place_bytes(window, itemsize: int, voxels: int = PLACE_VOXELS) -> int:
     ny = ey - sy
     za, zb = packed_span(sz, ez - sz)
     rows = min(place_rows(ny, zb - za, voxels), nx - window[0][0])
-    return math.ceil(rows * ny * 8 * (zb - za) * (11.125 + itemsize))
+    # 11.125 bytes as 89 eighths: whole numbers, as a grid past float64 (a pitch of 1e-300) has blocks past it too
+    return -(-rows * ny * 8 * (zb - za) * (89 + 8 * itemsize) // 8)
 
 
 def place(labels: np.ndarray, shared: np.ndarray, vol: np.ndarray, start, label: int, taken: np.ndarray,
