@@ -1,8 +1,10 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import os
 import re
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -972,6 +974,87 @@ def test_a_path_that_is_no_path_is_refused_in_one_line_naming_it(name, bad, show
     # still the TypeError os.fspath raised, for code that catches that
     assert isinstance(caught.value, TypeError)
     assert list(tmp_path.iterdir()) == []
+
+
+class FsPath:
+    """An os.PathLike as PEP 519 makes one, that is no pathlib.Path: only
+    ``__fspath__`` gives its path, its str() is the default repr."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def __fspath__(self) -> str:
+        return self.path
+
+
+def test_every_path_argument_takes_an_os_pathlike_that_is_no_pathlib_path(tmp_path, monkeypatch):
+    """The readers and writers of volumes, analyze_zarr and read_label_names
+    took a path by its str(): an os.PathLike other than pathlib.Path (the
+    os.DirEntry of os.scandir) was "<... object at 0x...>: not a volume
+    file", and a mesh was named by that repr in a verdict and in the store
+    written. Each takes one as it takes the str of its path, and names that
+    path."""
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("zarr")
+    monkeypatch.chdir(tmp_path)
+    cube = np.zeros((4, 4, 4), bool)
+    cube[1:3, 1:3, 1:3] = True
+    np.save("cube.npy", cube)
+    np.save("labels.npy", 3 * cube.astype(np.uint8))
+    Path("corners.txt").write_text("".join(f"{x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1)))
+    Path("names.txt").write_text("3 liver\n")
+    trimesh.creation.box().export("box.stl")
+    torus = str(isoflow.data.torus())
+    # one unit cube of 8 voxels, its 8 corners one cube (Definitions 1-2), a box: chi 2
+    assert isoflow.read_volume(FsPath("cube.npy")).voxels == 8
+    assert [isoflow.read_volume(e).voxels for e in os.scandir(".") if e.name == "cube.npy"] == [8]
+    assert np.array_equal(isoflow.read_labels(FsPath("labels.npy")).array, 3 * cube)
+    assert isoflow.read_label_names(FsPath("names.txt")) == {3: "liver"}
+    assert isoflow.read_object(FsPath("cube.npy")).voxels == 8
+    assert isoflow.read_object(FsPath("corners.txt")).voxels == 1
+    assert isoflow.read_points(FsPath("corners.txt")).shape == (8, 3)
+    isoflow.write_volume(cube, FsPath("written.npy"))
+    assert np.array_equal(np.load("written.npy"), cube)
+    isoflow.write_labels(3 * cube.astype(np.uint8), FsPath("written_labels.npy"))
+    assert np.array_equal(np.load("written_labels.npy"), 3 * cube)
+    isoflow.write_surface(cube, FsPath("cube.ply"))
+    assert trimesh.load("cube.ply").euler_number == 2
+    assert isoflow.voxelize_file(FsPath("box.stl"), resolution=4).voxels == 4**3
+    isoflow.write_volume(cube, "cube.zarr")
+    assert isoflow.analyze_zarr(FsPath("cube.zarr")).betti == [1, 0, 0]
+    isoflow.voxelize_to_zarr(FsPath(torus), FsPath("torus.zarr"), resolution=16)
+    assert isoflow.analyze_zarr("torus.zarr").betti == [1, 1, 0]
+    assert isoflow.verify_genus(FsPath("box.stl"), resolutions=[8], step=False).input == "box.stl"
+    assert isoflow.voxelize_meshes([FsPath("box.stl")], resolution=4).names == ("box.stl",)
+    for call in (isoflow.read_volume, isoflow.read_labels, isoflow.read_object):
+        with pytest.raises(IsoflowError, match=r"^gone\.npy: no such file or directory$"):
+            call(FsPath("gone.npy"))
+    with pytest.raises(IsoflowError, match=r"^gone\.txt: "):
+        isoflow.read_label_names(FsPath("gone.txt"))
+
+
+@pytest.mark.parametrize("name", ["box.obj", "box.stl", "box.ply", "part.igs"])
+@pytest.mark.parametrize("read", [isoflow.read_points, isoflow.read_object])
+def test_a_mesh_file_given_for_points_is_named_a_mesh(read, name, tmp_path):
+    """read_points and read_object read a file of no volume suffix as a
+    point list: a mesh under its own suffix was "its content is an OBJ
+    file ..., but meshes are read by their suffix: rename it box.obj",
+    the name it has, a binary STL or PLY "binary data, not a text point
+    list; volumes are read by their suffix", and a CAD file a point list
+    whose first line is no number. Each is named a mesh (or CAD) file, with
+    what reads it."""
+    trimesh = pytest.importorskip("trimesh")
+    path = tmp_path / name
+    if name.endswith(".igs"):
+        path.write_text("IGES header" + " " * 61 + "S      1\n")
+    else:
+        trimesh.creation.box().export(path)
+    with pytest.raises(IsoflowError) as caught:
+        read(path)
+    message = str(caught.value)
+    assert "\n" not in message and "rename" not in message and "point list" not in message
+    assert message.startswith(f"{path}: a CAD file" if name.endswith(".igs") else f"{path}: a mesh file")
+    assert "voxelize_file" in message or "export it" in message
 
 
 @pytest.mark.parametrize(("call", "words"), [

@@ -548,7 +548,8 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     isoflow.errors.IsoflowError: mesh: faces must have shape (M, 3) (triangles), got (12, 2)
     """
     if isinstance(mesh, (str, os.PathLike)):
-        return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
+        # the str the path stands for: str() of an os.DirEntry (os.scandir) is a repr
+        return os.fsdecode(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
     vertices, faces = mesh_arrays(mesh, "mesh")
     v, f = check_mesh(vertices, faces, where="mesh")
     rtol = weld_tolerance(merge_rtol)

@@ -99,7 +99,7 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     >>> read_label_names(lut)
     {1: 'liver', 2: 'left kidney'}
     """
-    check_path(path, "path", "read_label_names")
+    path = check_path(path, "path", "read_label_names")
     where = str(path)
     try:
         data = Path(path).read_bytes()

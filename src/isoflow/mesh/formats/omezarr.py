@@ -475,7 +475,7 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
     >>> report.volume, report.surface_area, report.unit
     (1.0, 6.0, 'mm')
     """
-    check_path(path, "path", "analyze_zarr", "an array in memory: analyze(array), or a dask array: analyze_chunked(array)")
+    path = check_path(path, "path", "analyze_zarr", "an array in memory: analyze(array), or a dask array: analyze_chunked(array)")
     from ...digital.outofcore import analyze_zarr_volume
 
     import_library("zarr", "OME-Zarr")
