@@ -1339,6 +1339,62 @@ def test_voxelize_meshes_of_one_pair_not_in_a_list_names_the_fix():
         isoflow.voxelize_meshes((vertices.tolist(), faces.tolist()), resolution=4)
 
 
+def results_that_are_no_array(tmp_path) -> dict:
+    """isoflow's results that hold an array, or none: mappings, which NumPy
+    makes an array of their keys."""
+    box = tmp_path / "box.stl"
+    pytest.importorskip("trimesh").creation.box().export(box)
+    return {"LabelVoxelization": (isoflow.voxelize_meshes([box], resolution=4), "labels"),
+            "Voxelization": (isoflow.voxelize_file(box, resolution=4, details=True)[1], "volume"),
+            "ZarrStore": (isoflow.voxelize_to_zarr(box, tmp_path / "box.zarr", resolution=4), None),
+            "Report": (isoflow.analyze(np.ones((2, 2, 2), bool)), None)}
+
+
+@pytest.mark.parametrize("call", [
+    lambda r, p: isoflow.analyze(r),
+    lambda r, p: isoflow.euler_characteristic(r),
+    lambda r, p: isoflow.DigitalObject(r),
+    lambda r, p: isoflow.write_volume(r, p / "v.npz"),
+    lambda r, p: isoflow.write_labels(r, p / "l.nrrd"),
+    lambda r, p: isoflow.label_table(r),
+], ids=["analyze", "euler_characteristic", "DigitalObject", "write_volume", "write_labels", "label_table"])
+def test_a_result_given_for_an_array_is_named_with_the_field_that_holds_one(call, tmp_path):
+    """A result given where an array is taken (``label_table(r)`` of
+    ``r = voxelize_meshes(...)``, the Voxelization that ``details=True``
+    gives beside the object) is a Mapping, which NumPy made a 1D array of
+    its keys: "array of type <U14 is not a binary volume", "a label table
+    needs a 3D or 2D label image, got a 1D array". Each names the result,
+    and the field that holds its array where one does; nothing is written."""
+    for name, (result, field) in results_that_are_no_array(tmp_path).items():
+        with pytest.raises(IsoflowError) as caught:
+            call(result, tmp_path)
+        message = str(caught.value)
+        assert name in message and "<U" not in message and "1D" not in message, message
+        assert field is None or f".{field}" in message, message
+    assert not list(tmp_path.glob("[vl].*"))
+
+
+@pytest.mark.parametrize(("given", "words"), [
+    (lambda v: isoflow.DigitalObject(v, pitch=0.5), ("a DigitalObject", ".volume", "write_volume")),
+    (lambda v: "labels.npy", ("labels.npy: a path", "isoflow.read_labels")),
+    (lambda v: pytest.importorskip("trimesh").creation.box(), ("a mesh (Trimesh)", "voxelize")),
+    (lambda v: isoflow.to_manifold(v), ("manifold3d.Manifold",)),
+], ids=["DigitalObject", "path", "Trimesh", "Manifold"])
+def test_write_labels_names_an_object_a_path_or_a_mesh_given_for_its_labels(given, words, tmp_path):
+    """write_labels of a DigitalObject, a mesh or the path of a label image
+    said "a label image is a 3D or 2D array of integers ..., got 0D
+    object" (or "0D <U10"), which names none of them; each is named, with
+    what to pass, as the other functions that take an array name them."""
+    cube = np.zeros((3, 3, 3), bool)
+    cube[1, 1, 1] = True
+    np.save(tmp_path / "labels.npy", cube.astype(np.uint8))
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.write_labels(given(cube), tmp_path / "out.nrrd")
+    message = str(caught.value)
+    assert "0D" not in message and all(w in message for w in words), message
+    assert not (tmp_path / "out.nrrd").exists()
+
+
 def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():
     report = isoflow.analyze(np.ones((3, 3, 3), bool))
     with pytest.raises(IsoflowError) as info:

@@ -24,7 +24,7 @@ from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
 from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, number_text, warn
 from ..results import read_only
-from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
+from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, refuse_object
 from ..scale.chunks import never_written
 from ..scale.memory import check_fits
 from .formats.registry import (
@@ -1205,6 +1205,9 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     else:
         space = None
     pitch = 1.0 if pitch is None else pitch
+    # an object, a mesh or a path, which NumPy would make a 0D array refused as "got 0D object"
+    refuse_object(labels, f"{path}: labels", reader="isoflow.read_labels",
+                  then="and its place, pitch=obj.spacing, origin=obj.origin; or write_volume(obj, path) writes it")
     arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back
