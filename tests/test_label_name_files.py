@@ -110,6 +110,25 @@ def test_a_path_given_for_names_names_the_reader(tmp_path):
         isoflow.label_table(np.array([[0, 1]]), names=str(tmp_path / "lut.txt"))
 
 
+def test_a_missing_file_of_names_is_said_missing_as_every_missing_input_is(tmp_path, capsys):
+    """read_label_names of a file that is not there said "cannot read the
+    label names (No such file or directory)", an IsoflowError only, where
+    every other reader of a missing input says "no such file or directory"
+    in a FileNotFoundError, what open() raises; the command line's --names
+    said it so too."""
+    gone = tmp_path / "gone.txt"
+    with pytest.raises(FileNotFoundError) as caught:
+        open(gone, "rb")  # the error the standard library gives
+    with pytest.raises(IsoflowError) as mine:
+        isoflow.read_label_names(gone)
+    assert isinstance(mine.value, type(caught.value))
+    assert str(mine.value) == f"{gone}: no such file or directory"
+    labels = tmp_path / "labels.npy"
+    np.save(labels, np.ones((2, 2, 2), np.uint8))
+    code, out, err = said(capsys, "info", labels, "--labels", "--names", gone)
+    assert code == 2 and err == [f"isoflow info: error: --names {gone}: no such file or directory"]
+
+
 @pytest.fixture
 def seg(tmp_path):
     """A NIfTI label image of FreeSurfer's labels 2, 17 and 53 (NIfTI keeps no names)."""

@@ -35,7 +35,7 @@ import re
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ...errors import IsoflowError, check_path, line_text
+from ...errors import IsoflowError, check_path, line_text, missing
 from .registry import one_line_name
 
 #: what a file of label names is, for the refusal of one that is none
@@ -104,6 +104,8 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
+        if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
+            raise missing(where) from None
         raise IsoflowError(f"{where}: cannot read the label names ({exc.strerror or type(exc).__name__})") from None
     if b"\0" in data[:1 << 16]:  # a volume given for its names (seg.nii.gz), or any binary file
         raise IsoflowError(f"{where}: not a file of label names (it holds binary data); {EXPECTED}")
