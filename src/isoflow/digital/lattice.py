@@ -169,9 +169,31 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
-    def of(cls, x) -> DigitalObject:
+    def of(cls, x: DigitalObject | ArrayLike) -> DigitalObject:
         """``x`` itself if it is a DigitalObject, else the object of the
-        binary array ``x`` at the origin: the API takes either."""
+        binary array ``x`` at the origin: the API takes either.
+
+        Parameters
+        ----------
+        x : DigitalObject or array_like of bool
+            An object, or a 0/1 array.
+
+        Returns
+        -------
+        DigitalObject
+            ``x`` itself, or a new object of unit voxels at the origin.
+
+        Raises
+        ------
+        IsoflowError
+            An array that is not binary, or not 2D, 3D or 4D.
+
+        Examples
+        --------
+        >>> obj = DigitalObject(np.ones((2, 2), bool), pitch=0.5)
+        >>> DigitalObject.of(obj) is obj, DigitalObject.of([[1, 0], [1, 1]]).voxels
+        (True, 3)
+        """
         return x if isinstance(x, cls) else cls(x)
 
     @classmethod
