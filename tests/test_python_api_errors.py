@@ -4,6 +4,8 @@ and its value, never NumPy's own error nor a file written as given."""
 import os
 import re
 import warnings
+from decimal import Decimal
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -528,6 +530,29 @@ def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
         with pytest.raises(IsoflowError) as info:
             isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=bad)
         assert str(info.value) == f"'pitch' must be 3 numbers, one per axis, got {shown}"
+
+
+@pytest.mark.parametrize("one", [Fraction(1, 2), np.array(0.5, dtype=object), np.array([Fraction(1, 2)], dtype=object)],
+                         ids=["Fraction", "0D object array", "one-element object array"])
+def test_one_number_held_as_an_object_is_the_voxel_size_of_every_axis(one):
+    """One number stands for every axis (``pitch=0.5``), and numbers held as
+    Python objects are numbers (``[Fraction(1, 2)] * 3`` was taken); one
+    such number alone was refused as "'pitch' must be 3 numbers, one per
+    axis, got Fraction(1, 2)"."""
+    cube = np.ones((2, 2, 2), bool)
+    assert isoflow.DigitalObject(cube, pitch=one).spacing.tolist() == [0.5, 0.5, 0.5]
+    assert isoflow.analyze(cube, pitch=one).volume == 8 * 0.5**3
+    assert isoflow.label_table(cube, pitch=one)["volume"].tolist() == [8 * 0.5**3]
+
+
+@pytest.mark.parametrize(("pitch", "shown"), [("0.25", "'0.25'"), (Decimal("0.5"), "Decimal('0.5')"), (None, "None")])
+def test_one_pitch_that_is_no_number_is_refused_as_no_number(pitch, shown):
+    """A voxel size is one number or one per axis: one value that is no
+    number was refused as "must be 3 numbers, one per axis", a count,
+    which reads as if one number were not taken."""
+    with pytest.raises(IsoflowError) as info:
+        isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch)
+    assert str(info.value) == f"'pitch' must be a number (one, or one per axis), got {shown}"
 
 
 @pytest.mark.parametrize(("kwargs", "words"), [
