@@ -194,7 +194,7 @@ class DigitalObject:
         >>> DigitalObject.of(obj) is obj, DigitalObject.of([[1, 0], [1, 1]]).voxels
         (True, 3)
         """
-        return x if isinstance(x, cls) else cls(x)
+        return x if isinstance(x, DigitalObject) else cls(x)
 
     @classmethod
     def from_voxels(cls, indices: ArrayLike, **kw: Any) -> DigitalObject:
