@@ -1420,6 +1420,26 @@ def test_write_labels_names_an_object_a_path_or_a_mesh_given_for_its_labels(give
     assert not (tmp_path / "out.nrrd").exists()
 
 
+@pytest.mark.parametrize(("chunks", "shown"), [
+    (4, "4"), ((2.5, 4, 4), "(2.5, 4, 4)"), (("4", 4, 4), "('4', 4, 4)"), ((True, 4, 4), "(True, 4, 4)"),
+    ((np.nan, 4, 4), "(nan, 4, 4)"), ((4, 4), "(4, 4)"), ((0, 4, 4), "(0, 4, 4)"),
+])
+def test_voxelize_to_zarr_names_chunks_that_are_not_three_positive_integers(chunks, shown, tmp_path):
+    """``chunks=(2.5, 4, 4)`` wrote chunks of 2 in silence (int() of each
+    side), ``chunks=4`` (one side, as zarr takes it) was Python's
+    "TypeError: 'int' object is not iterable" and ``("4", 4, 4)`` took the
+    string as a number; each is refused as the message says, three
+    positive integers, naming what was given, and no store is written."""
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8, chunks=chunks)
+    assert str(caught.value).endswith(f"chunks must be three positive integers, got {shown}")
+    assert not (tmp_path / "t.zarr").exists()
+    # sides given as whole floats or NumPy integers are those integers
+    store = isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8,
+                                     chunks=(4.0, np.int64(4), 4))
+    assert store.chunks == (4, 4, 4) and all(type(c) is int for c in store.chunks)
+
+
 def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():
     report = isoflow.analyze(np.ones((3, 3, 3), bool))
     with pytest.raises(IsoflowError) as info:
