@@ -439,10 +439,11 @@ def test_vertices_of_objects_or_strings_are_refused_as_volumes_are(voxelize, kin
     assert "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
+@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2), ("2", 2, 2), (True, 2, 2), (2, b"2", 2)])
 def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
     # a dask array was rechunked as given: ZeroDivisionError, dask's
-    # ValueError, or 2.5 read as 2 (a zarr array was checked already)
+    # ValueError, or 2.5 read as 2 (a zarr array was checked already);
+    # "2" and True passed the check as the integers int() makes of them
     da = pytest.importorskip("dask.array")
     array = da.from_array(np.ones((5, 5, 5), bool), chunks=2)
     with pytest.raises(IsoflowError, match=r"block_shape .* does not fit a 3D array"):
