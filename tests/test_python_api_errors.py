@@ -559,6 +559,8 @@ def test_one_pitch_that_is_no_number_is_refused_as_no_number(pitch, shown):
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"pitch": 0}, "'pitch' must be positive"),
     ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),
+    # a count of numbers other than one per axis was "must be 3 numbers", which from_manifold does not take
+    ({"pitch": (1, 2)}, "'pitch' must be one number (cubic voxels), got [1, 2]"),
     ({"origin": (1, 2)}, "'origin' must be 3 numbers, one per axis, got [1, 2]"),
 ])
 def test_from_manifold_checks_its_grid_first(kwargs, words):
