@@ -32,6 +32,7 @@ import csv
 import json
 import os
 import re
+import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -102,6 +103,9 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     path = check_path(path, "path", "read_label_names")
     where = str(path)
     try:
+        if not (stat.S_ISREG(mode := os.stat(path).st_mode) or stat.S_ISDIR(mode)):
+            # read whole, a pipe would be read until a writer came, /dev/zero until memory ran out
+            raise IsoflowError(f"{where}: not a regular file (a device, pipe or socket)")
         data = Path(path).read_bytes()
     except OSError as exc:
         if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
