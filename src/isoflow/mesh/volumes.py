@@ -590,9 +590,8 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     _check_readable(path)
     from .load import is_mesh_path, refuse_cad
 
-    # a mesh is read by its suffix, as the command line reads it: the point
-    # reader named one a point list that is no number, or told an OBJ to be
-    # renamed to the name it has
+    # a mesh is known by its suffix, as the command line knows it, and is no
+    # point list: the point reader would blame its first line, or its bytes
     refuse_cad(path)
     if is_mesh_path(path):
         raise IsoflowError(f"{path}: a mesh file, not a volume or a list of lattice points; "
@@ -1205,7 +1204,7 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     else:
         space = None
     pitch = 1.0 if pitch is None else pitch
-    # an object, a mesh or a path, which NumPy would make a 0D array refused as "got 0D object"
+    # an object, a mesh or a path: NumPy would make each a 0D array, refused for its shape, not named
     refuse_object(labels, f"{path}: labels", reader="isoflow.read_labels",
                   then="and its place, pitch=obj.spacing, origin=obj.origin; or write_volume(obj, path) writes it")
     arr = as_array(labels, f"{path}: labels")

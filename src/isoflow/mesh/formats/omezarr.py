@@ -481,8 +481,8 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
 
     file = split_store(path)[0]
     if not file.name.lower().endswith(".zarr"):
-        # a level or array by its folder (IMG.zarr/0) opens without the image's scale and unit: its
-        # measures came in voxels, where read_volume and info refuse the path and name IMG.zarr:0
+        # a level or array by its folder (IMG.zarr/0) opens without the image's scale and unit, which
+        # would give its measures in voxels; read_volume and info refuse it too, naming IMG.zarr:0
         refuse_inside_store(file, path)
     import_library("zarr", "OME-Zarr")
     own = store_place(open_store(path), path)
