@@ -1085,6 +1085,26 @@ def test_a_mesh_file_given_for_points_is_named_a_mesh(read, name, tmp_path):
     assert "voxelize_file" in message or "export it" in message
 
 
+EMPTY_PATH_CALLS = {**PATH_CALLS, "verify_genus": lambda bad: isoflow.verify_genus(bad, [8]),
+                    "voxelize_meshes": lambda bad: isoflow.voxelize_meshes([bad], resolution=4),
+                    "voxelize_to_zarr source": lambda bad: isoflow.voxelize_to_zarr(bad, "v.zarr", resolution=4)}
+
+
+@pytest.mark.parametrize("name", sorted(EMPTY_PATH_CALLS))
+def test_an_empty_path_is_refused_as_empty(name, tmp_path, monkeypatch):
+    """An empty string for a path (an unset setting, ``os.environ.get("OUT",
+    "")``) was read as the current directory: ".: is a directory, not a
+    volume or point list", ": is a directory; give a file name" or ".: a
+    zarr store must end in .zarr", which name neither the argument nor what
+    was wrong with it. Each says the path is empty; nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(IsoflowError) as caught:
+        EMPTY_PATH_CALLS[name]("")
+    message = str(caught.value)
+    assert "path is '', an empty file name" in message and "directory" not in message, message
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize(("call", "words"), [
     (lambda p: isoflow.write_volume(p, np.ones((2, 2, 2), bool)), "the object comes first: write_volume(obj, path)"),
     (lambda p: isoflow.write_labels(p, np.ones((2, 2, 2), np.uint8)), "the labels come first: write_labels(labels, path)"),

@@ -435,6 +435,8 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
     NotAPath
         If ``value`` is neither a str nor an os.PathLike: an
         :class:`IsoflowError` and a ``TypeError``.
+    IsoflowError
+        If it is the empty path, ``""``.
 
     Examples
     --------
@@ -451,7 +453,37 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
             hint = array_hint
         raise NotAPath(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
                        + (f"; {hint}" if hint else ""))
+    refuse_empty_path(value, f"{where}: {name}")
     return value if isinstance(value, (str, PurePath)) else os.fsdecode(value)
+
+
+def refuse_empty_path(value: str | os.PathLike, named: str) -> None:
+    """Refuse the empty path ``""`` (an unset setting), which ``Path``
+    reads as the current directory: a reader or a writer then refused a
+    directory, naming neither the argument nor what was wrong with it.
+
+    Parameters
+    ----------
+    value : str or os.PathLike
+        The path given.
+    named : str
+        The argument as the message names it.
+
+    Raises
+    ------
+    IsoflowError
+        If ``value`` is the empty path.
+
+    Examples
+    --------
+    >>> refuse_empty_path("scan.npy", "read_volume: path")
+    >>> refuse_empty_path("", "read_volume: path")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: read_volume: path is '', an empty file name; give the file's name
+    """
+    if not os.fsdecode(value):
+        raise IsoflowError(f"{named} is '', an empty file name; give the file's name")
 
 
 class IsoflowError(ValueError):

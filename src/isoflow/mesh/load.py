@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, given_text, missing
+from ..errors import IsoflowError, counted, given_text, missing, refuse_empty_path
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -366,6 +366,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     coordinates whose extent overflows, out-of-range faces and a
     ``merge_rtol`` outside [0, 1).
     """
+    refuse_empty_path(path, "mesh path")
     p = Path(os.fspath(path))
     rtol = weld_tolerance(merge_rtol)
     refuse_volume(path)
