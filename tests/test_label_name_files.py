@@ -10,8 +10,11 @@ extras; a file that is none of these is one line, exit 2."""
 import csv
 import io
 import json
+import os
 import re
 import struct
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -108,6 +111,38 @@ def test_each_kind_of_side_file_reads_as_the_names_written(tmp_path, name):
 def test_a_path_given_for_names_names_the_reader(tmp_path):
     with pytest.raises(IsoflowError, match=r"read_label_names\(path\)"):
         isoflow.label_table(np.array([[0, 1]]), names=str(tmp_path / "lut.txt"))
+
+
+def test_a_missing_file_of_names_is_said_missing_as_every_missing_input_is(tmp_path, capsys):
+    """read_label_names of a file that is not there said "cannot read the
+    label names (No such file or directory)", an IsoflowError only, where
+    every other reader of a missing input says "no such file or directory"
+    in a FileNotFoundError, what open() raises; the command line's --names
+    said it so too."""
+    gone = tmp_path / "gone.txt"
+    with pytest.raises(FileNotFoundError) as caught:
+        open(gone, "rb")  # the error the standard library gives
+    with pytest.raises(IsoflowError) as mine:
+        isoflow.read_label_names(gone)
+    assert isinstance(mine.value, type(caught.value))
+    assert str(mine.value) == f"{gone}: no such file or directory"
+    labels = tmp_path / "labels.npy"
+    np.save(labels, np.ones((2, 2, 2), np.uint8))
+    code, out, err = said(capsys, "info", labels, "--labels", "--names", gone)
+    assert code == 2 and err == [f"isoflow info: error: --names {gone}: no such file or directory"]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="a named pipe is POSIX's")
+def test_a_pipe_given_for_names_is_refused_not_read_forever(tmp_path):
+    """read_label_names read its file whole: a named pipe (or a device,
+    /dev/zero) was read until a writer came or memory ran out, where the
+    volume and point readers refuse "not a regular file". Run in a child
+    process, so that a reader that waits fails the test by its timeout."""
+    pipe = tmp_path / "names.txt"
+    os.mkfifo(pipe)
+    code = f"import isoflow\ntry:\n    isoflow.read_label_names({str(pipe)!r})\nexcept isoflow.IsoflowError as e:\n    print(e)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert done.stdout.strip() == f"{pipe}: not a regular file (a device, pipe or socket)", done.stderr[-2000:]
 
 
 @pytest.fixture

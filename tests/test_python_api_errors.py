@@ -1,8 +1,12 @@
 """Bad arguments to the Python API: one IsoflowError naming the parameter
 and its value, never NumPy's own error nor a file written as given."""
 
+import os
 import re
 import warnings
+from decimal import Decimal
+from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -435,10 +439,11 @@ def test_vertices_of_objects_or_strings_are_refused_as_volumes_are(voxelize, kin
     assert "\n" not in str(e.value)
 
 
-@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2)])
+@pytest.mark.parametrize("block_shape", [(0, 2, 2), (2, 2), (2.5, 2, 2), ("2", 2, 2), (True, 2, 2), (2, b"2", 2)])
 def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(block_shape):
     # a dask array was rechunked as given: ZeroDivisionError, dask's
-    # ValueError, or 2.5 read as 2 (a zarr array was checked already)
+    # ValueError, or 2.5 read as 2 (a zarr array was checked already);
+    # "2" and True passed the check as the integers int() makes of them
     da = pytest.importorskip("dask.array")
     array = da.from_array(np.ones((5, 5, 5), bool), chunks=2)
     with pytest.raises(IsoflowError, match=r"block_shape .* does not fit a 3D array"):
@@ -528,9 +533,34 @@ def test_numbers_held_as_objects_place_an_object_as_the_same_numbers_do():
         assert str(info.value) == f"'pitch' must be 3 numbers, one per axis, got {shown}"
 
 
+@pytest.mark.parametrize("one", [Fraction(1, 2), np.array(0.5, dtype=object), np.array([Fraction(1, 2)], dtype=object)],
+                         ids=["Fraction", "0D object array", "one-element object array"])
+def test_one_number_held_as_an_object_is_the_voxel_size_of_every_axis(one):
+    """One number stands for every axis (``pitch=0.5``), and numbers held as
+    Python objects are numbers (``[Fraction(1, 2)] * 3`` was taken); one
+    such number alone was refused as "'pitch' must be 3 numbers, one per
+    axis, got Fraction(1, 2)"."""
+    cube = np.ones((2, 2, 2), bool)
+    assert isoflow.DigitalObject(cube, pitch=one).spacing.tolist() == [0.5, 0.5, 0.5]
+    assert isoflow.analyze(cube, pitch=one).volume == 8 * 0.5**3
+    assert isoflow.label_table(cube, pitch=one)["volume"].tolist() == [8 * 0.5**3]
+
+
+@pytest.mark.parametrize(("pitch", "shown"), [("0.25", "'0.25'"), (Decimal("0.5"), "Decimal('0.5')"), (None, "None")])
+def test_one_pitch_that_is_no_number_is_refused_as_no_number(pitch, shown):
+    """A voxel size is one number or one per axis: one value that is no
+    number was refused as "must be 3 numbers, one per axis", a count,
+    which reads as if one number were not taken."""
+    with pytest.raises(IsoflowError) as info:
+        isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=pitch)
+    assert str(info.value) == f"'pitch' must be a number (one, or one per axis), got {shown}"
+
+
 @pytest.mark.parametrize(("kwargs", "words"), [
     ({"pitch": 0}, "'pitch' must be positive"),
     ({"pitch": (1, 2, 3)}, "'pitch' must be one number (cubic voxels), got [1, 2, 3]"),
+    # a count of numbers other than one per axis was "must be 3 numbers", which from_manifold does not take
+    ({"pitch": (1, 2)}, "'pitch' must be one number (cubic voxels), got [1, 2]"),
     ({"origin": (1, 2)}, "'origin' must be 3 numbers, one per axis, got [1, 2]"),
 ])
 def test_from_manifold_checks_its_grid_first(kwargs, words):
@@ -974,6 +1004,107 @@ def test_a_path_that_is_no_path_is_refused_in_one_line_naming_it(name, bad, show
     assert list(tmp_path.iterdir()) == []
 
 
+class FsPath:
+    """An os.PathLike as PEP 519 makes one, that is no pathlib.Path: only
+    ``__fspath__`` gives its path, its str() is the default repr."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def __fspath__(self) -> str:
+        return self.path
+
+
+def test_every_path_argument_takes_an_os_pathlike_that_is_no_pathlib_path(tmp_path, monkeypatch):
+    """The readers and writers of volumes, analyze_zarr and read_label_names
+    took a path by its str(): an os.PathLike other than pathlib.Path (the
+    os.DirEntry of os.scandir) was "<... object at 0x...>: not a volume
+    file", and a mesh was named by that repr in a verdict and in the store
+    written. Each takes one as it takes the str of its path, and names that
+    path."""
+    trimesh = pytest.importorskip("trimesh")
+    pytest.importorskip("zarr")
+    monkeypatch.chdir(tmp_path)
+    cube = np.zeros((4, 4, 4), bool)
+    cube[1:3, 1:3, 1:3] = True
+    np.save("cube.npy", cube)
+    np.save("labels.npy", 3 * cube.astype(np.uint8))
+    Path("corners.txt").write_text("".join(f"{x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1)))
+    Path("names.txt").write_text("3 liver\n")
+    trimesh.creation.box().export("box.stl")
+    torus = str(isoflow.data.torus())
+    # one unit cube of 8 voxels, its 8 corners one cube (Definitions 1-2), a box: chi 2
+    assert isoflow.read_volume(FsPath("cube.npy")).voxels == 8
+    assert [isoflow.read_volume(e).voxels for e in os.scandir(".") if e.name == "cube.npy"] == [8]
+    assert np.array_equal(isoflow.read_labels(FsPath("labels.npy")).array, 3 * cube)
+    assert isoflow.read_label_names(FsPath("names.txt")) == {3: "liver"}
+    assert isoflow.read_object(FsPath("cube.npy")).voxels == 8
+    assert isoflow.read_object(FsPath("corners.txt")).voxels == 1
+    assert isoflow.read_points(FsPath("corners.txt")).shape == (8, 3)
+    isoflow.write_volume(cube, FsPath("written.npy"))
+    assert np.array_equal(np.load("written.npy"), cube)
+    isoflow.write_labels(3 * cube.astype(np.uint8), FsPath("written_labels.npy"))
+    assert np.array_equal(np.load("written_labels.npy"), 3 * cube)
+    isoflow.write_surface(cube, FsPath("cube.ply"))
+    assert trimesh.load("cube.ply").euler_number == 2
+    assert isoflow.voxelize_file(FsPath("box.stl"), resolution=4).voxels == 4**3
+    isoflow.write_volume(cube, "cube.zarr")
+    assert isoflow.analyze_zarr(FsPath("cube.zarr")).betti == [1, 0, 0]
+    isoflow.voxelize_to_zarr(FsPath(torus), FsPath("torus.zarr"), resolution=16)
+    assert isoflow.analyze_zarr("torus.zarr").betti == [1, 1, 0]
+    assert isoflow.verify_genus(FsPath("box.stl"), resolutions=[8], step=False).input == "box.stl"
+    assert isoflow.voxelize_meshes([FsPath("box.stl")], resolution=4).names == ("box.stl",)
+    for call in (isoflow.read_volume, isoflow.read_labels, isoflow.read_object):
+        with pytest.raises(IsoflowError, match=r"^gone\.npy: no such file or directory$"):
+            call(FsPath("gone.npy"))
+    with pytest.raises(IsoflowError, match=r"^gone\.txt: "):
+        isoflow.read_label_names(FsPath("gone.txt"))
+
+
+@pytest.mark.parametrize("name", ["box.obj", "box.stl", "box.ply", "part.igs"])
+@pytest.mark.parametrize("read", [isoflow.read_points, isoflow.read_object])
+def test_a_mesh_file_given_for_points_is_named_a_mesh(read, name, tmp_path):
+    """read_points and read_object read a file of no volume suffix as a
+    point list: a mesh under its own suffix was "its content is an OBJ
+    file ..., but meshes are read by their suffix: rename it box.obj",
+    the name it has, a binary STL or PLY "binary data, not a text point
+    list; volumes are read by their suffix", and a CAD file a point list
+    whose first line is no number. Each is named a mesh (or CAD) file, with
+    what reads it."""
+    trimesh = pytest.importorskip("trimesh")
+    path = tmp_path / name
+    if name.endswith(".igs"):
+        path.write_text("IGES header" + " " * 61 + "S      1\n")
+    else:
+        trimesh.creation.box().export(path)
+    with pytest.raises(IsoflowError) as caught:
+        read(path)
+    message = str(caught.value)
+    assert "\n" not in message and "rename" not in message and "point list" not in message
+    assert message.startswith(f"{path}: a CAD file" if name.endswith(".igs") else f"{path}: a mesh file")
+    assert "voxelize_file" in message or "export it" in message
+
+
+EMPTY_PATH_CALLS = {**PATH_CALLS, "verify_genus": lambda bad: isoflow.verify_genus(bad, [8]),
+                    "voxelize_meshes": lambda bad: isoflow.voxelize_meshes([bad], resolution=4),
+                    "voxelize_to_zarr source": lambda bad: isoflow.voxelize_to_zarr(bad, "v.zarr", resolution=4)}
+
+
+@pytest.mark.parametrize("name", sorted(EMPTY_PATH_CALLS))
+def test_an_empty_path_is_refused_as_empty(name, tmp_path, monkeypatch):
+    """An empty string for a path (an unset setting, ``os.environ.get("OUT",
+    "")``) was read as the current directory: ".: is a directory, not a
+    volume or point list", ": is a directory; give a file name" or ".: a
+    zarr store must end in .zarr", which name neither the argument nor what
+    was wrong with it. Each says the path is empty; nothing is written."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(IsoflowError) as caught:
+        EMPTY_PATH_CALLS[name]("")
+    message = str(caught.value)
+    assert "path is '', an empty file name" in message and "directory" not in message, message
+    assert list(tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize(("call", "words"), [
     (lambda p: isoflow.write_volume(p, np.ones((2, 2, 2), bool)), "the object comes first: write_volume(obj, path)"),
     (lambda p: isoflow.write_labels(p, np.ones((2, 2, 2), np.uint8)), "the labels come first: write_labels(labels, path)"),
@@ -1254,6 +1385,82 @@ def test_voxelize_meshes_of_one_pair_not_in_a_list_names_the_fix():
         isoflow.voxelize_meshes((vertices, faces), resolution=4)
     with pytest.raises(IsoflowError, match=re.escape("pass [(vertices, faces)]")):
         isoflow.voxelize_meshes((vertices.tolist(), faces.tolist()), resolution=4)
+
+
+def results_that_are_no_array(tmp_path) -> dict:
+    """isoflow's results that hold an array, or none: mappings, which NumPy
+    makes an array of their keys."""
+    box = tmp_path / "box.stl"
+    pytest.importorskip("trimesh").creation.box().export(box)
+    return {"LabelVoxelization": (isoflow.voxelize_meshes([box], resolution=4), "labels"),
+            "Voxelization": (isoflow.voxelize_file(box, resolution=4, details=True)[1], "volume"),
+            "ZarrStore": (isoflow.voxelize_to_zarr(box, tmp_path / "box.zarr", resolution=4), None),
+            "Report": (isoflow.analyze(np.ones((2, 2, 2), bool)), None)}
+
+
+@pytest.mark.parametrize("call", [
+    lambda r, p: isoflow.analyze(r),
+    lambda r, p: isoflow.euler_characteristic(r),
+    lambda r, p: isoflow.DigitalObject(r),
+    lambda r, p: isoflow.write_volume(r, p / "v.npz"),
+    lambda r, p: isoflow.write_labels(r, p / "l.nrrd"),
+    lambda r, p: isoflow.label_table(r),
+], ids=["analyze", "euler_characteristic", "DigitalObject", "write_volume", "write_labels", "label_table"])
+def test_a_result_given_for_an_array_is_named_with_the_field_that_holds_one(call, tmp_path):
+    """A result given where an array is taken (``label_table(r)`` of
+    ``r = voxelize_meshes(...)``, the Voxelization that ``details=True``
+    gives beside the object) is a Mapping, which NumPy made a 1D array of
+    its keys: "array of type <U14 is not a binary volume", "a label table
+    needs a 3D or 2D label image, got a 1D array". Each names the result,
+    and the field that holds its array where one does; nothing is written."""
+    for name, (result, field) in results_that_are_no_array(tmp_path).items():
+        with pytest.raises(IsoflowError) as caught:
+            call(result, tmp_path)
+        message = str(caught.value)
+        assert name in message and "<U" not in message and "1D" not in message, message
+        assert field is None or f".{field}" in message, message
+    assert not list(tmp_path.glob("[vl].*"))
+
+
+@pytest.mark.parametrize(("given", "words"), [
+    (lambda v: isoflow.DigitalObject(v, pitch=0.5), ("a DigitalObject", ".volume", "write_volume")),
+    (lambda v: "labels.npy", ("labels.npy: a path", "isoflow.read_labels")),
+    (lambda v: pytest.importorskip("trimesh").creation.box(), ("a mesh (Trimesh)", "voxelize")),
+    (lambda v: isoflow.to_manifold(v), ("manifold3d.Manifold",)),
+], ids=["DigitalObject", "path", "Trimesh", "Manifold"])
+def test_write_labels_names_an_object_a_path_or_a_mesh_given_for_its_labels(given, words, tmp_path):
+    """write_labels of a DigitalObject, a mesh or the path of a label image
+    said "a label image is a 3D or 2D array of integers ..., got 0D
+    object" (or "0D <U10"), which names none of them; each is named, with
+    what to pass, as the other functions that take an array name them."""
+    cube = np.zeros((3, 3, 3), bool)
+    cube[1, 1, 1] = True
+    np.save(tmp_path / "labels.npy", cube.astype(np.uint8))
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.write_labels(given(cube), tmp_path / "out.nrrd")
+    message = str(caught.value)
+    assert "0D" not in message and all(w in message for w in words), message
+    assert not (tmp_path / "out.nrrd").exists()
+
+
+@pytest.mark.parametrize(("chunks", "shown"), [
+    (4, "4"), ((2.5, 4, 4), "(2.5, 4, 4)"), (("4", 4, 4), "('4', 4, 4)"), ((True, 4, 4), "(True, 4, 4)"),
+    ((np.nan, 4, 4), "(nan, 4, 4)"), ((4, 4), "(4, 4)"), ((0, 4, 4), "(0, 4, 4)"),
+])
+def test_voxelize_to_zarr_names_chunks_that_are_not_three_positive_integers(chunks, shown, tmp_path):
+    """``chunks=(2.5, 4, 4)`` wrote chunks of 2 in silence (int() of each
+    side), ``chunks=4`` (one side, as zarr takes it) was Python's
+    "TypeError: 'int' object is not iterable" and ``("4", 4, 4)`` took the
+    string as a number; each is refused as the message says, three
+    positive integers, naming what was given, and no store is written."""
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8, chunks=chunks)
+    assert str(caught.value).endswith(f"chunks must be three positive integers, got {shown}")
+    assert not (tmp_path / "t.zarr").exists()
+    # sides given as whole floats or NumPy integers are those integers
+    store = isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8,
+                                     chunks=(4.0, np.int64(4), 4))
+    assert store.chunks == (4, 4, 4) and all(type(c) is int for c in store.chunks)
 
 
 def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():

@@ -1,11 +1,13 @@
 """The results of the Python API round-trip through their JSON."""
 
 import json
+import re
 
 import numpy as np
 import pytest
 
 import isoflow
+from isoflow.errors import IsoflowError
 
 
 def test_a_flow_result_comes_back_from_its_json():
@@ -250,6 +252,23 @@ def test_analyze_zarr_places_an_ome_zarr_image_as_its_metadata_and_info_do(tmp_p
     given = isoflow.analyze_zarr(tmp_path / "img.zarr", 6, pitch=1.0, origin=(0, 0, 0))
     np.testing.assert_allclose(given.bbox, list(props.bbox))
     assert given.unit == "mm" and given.volume == props.area
+
+
+@pytest.mark.parametrize("inside", ["0", "0/"])
+def test_analyze_zarr_of_a_level_named_by_its_folder_is_refused_as_read_volume_refuses_it(tmp_path, inside):
+    """``analyze_zarr("IMG.zarr/0")``, the level's folder inside an
+    OME-Zarr image, read the array without the image's scale and unit:
+    a cube of eight 0.5 mm voxels gave a volume of 8 (voxels, no unit)
+    where its volume is 1 mm^3, in silence, while read_volume, read_labels
+    and ``isoflow info`` refuse that path and name ``IMG.zarr:0``, which
+    analyze_zarr reads placed."""
+    pytest.importorskip("zarr")
+    obj = isoflow.DigitalObject(np.ones((2, 2, 2), bool), pitch=0.5, unit="mm")
+    store = isoflow.write_volume(obj, tmp_path / "img.zarr")
+    assert isoflow.analyze_zarr(f"{store}:0").volume == 8 * 0.5**3 == 1.0  # eight voxels of 0.125 mm^3
+    for read in (isoflow.read_volume, isoflow.analyze_zarr):
+        with pytest.raises(IsoflowError, match=re.escape(f"inside the zarr store {store}; name it as {store}:0")):
+            read(f"{store}/{inside}")
 
 
 def test_the_repr_of_a_small_mesh_or_label_image_is_one_short_line():

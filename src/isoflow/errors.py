@@ -15,6 +15,7 @@ import re
 import sys
 import unicodedata
 import warnings
+from pathlib import PurePath
 from types import FrameType
 
 #: what every reader says of an input that is not there (a volume, a mesh,
@@ -399,12 +400,15 @@ def value_kind(value: object, width: int = 60) -> str:
     return text if text.startswith(name + "(") else f"{name} {text}"  # DigitalObject(...) names its type
 
 
-def check_path(value: object, name: str, where: str, array_hint: str = "", hint: str = "") -> None:
+def check_path(value: object, name: str, where: str, array_hint: str = "", hint: str = "") -> str | os.PathLike:
     """Refuse, before any work, a path that is not a str or os.PathLike (the
     arguments swapped, an array or a mesh where its file is taken, None):
     ``Path()`` and ``open()`` raise a TypeError that names neither the
     argument nor the function, and a message built on ``str(path)`` printed
-    a whole array.
+    a whole array. A path taken is returned as the readers and the messages
+    use it: an os.PathLike that is no :class:`pathlib.PurePath` as the str
+    it stands for (``os.fspath``), since the ``str()`` of such an object
+    need not be its path (an ``os.DirEntry`` of ``os.scandir`` gives a repr).
 
     Parameters
     ----------
@@ -420,16 +424,25 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
     hint : str, optional
         What to do instead, said whatever ``value`` is.
 
+    Returns
+    -------
+    str or os.PathLike
+        ``value``, a str or a :class:`pathlib.PurePath` as given, any other
+        os.PathLike as ``os.fsdecode`` gives it.
+
     Raises
     ------
     NotAPath
         If ``value`` is neither a str nor an os.PathLike: an
         :class:`IsoflowError` and a ``TypeError``.
+    IsoflowError
+        If it is the empty path, ``""``.
 
     Examples
     --------
     >>> import numpy as np
     >>> check_path("scan.npy", "path", "read_volume")
+    'scan.npy'
     >>> check_path(np.zeros((3, 3, 3), bool), "path", "read_volume", "give the array to DigitalObject")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
@@ -440,6 +453,37 @@ def check_path(value: object, name: str, where: str, array_hint: str = "", hint:
             hint = array_hint
         raise NotAPath(f"{where}: {name} must be a str or os.PathLike, got {value_kind(value)}"
                        + (f"; {hint}" if hint else ""))
+    refuse_empty_path(value, f"{where}: {name}")
+    return value if isinstance(value, (str, PurePath)) else os.fsdecode(value)
+
+
+def refuse_empty_path(value: str | os.PathLike, named: str) -> None:
+    """Refuse the empty path ``""`` (an unset setting), which ``Path``
+    reads as the current directory: a reader or a writer then refused a
+    directory, naming neither the argument nor what was wrong with it.
+
+    Parameters
+    ----------
+    value : str or os.PathLike
+        The path given.
+    named : str
+        The argument as the message names it.
+
+    Raises
+    ------
+    IsoflowError
+        If ``value`` is the empty path.
+
+    Examples
+    --------
+    >>> refuse_empty_path("scan.npy", "read_volume: path")
+    >>> refuse_empty_path("", "read_volume: path")
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: read_volume: path is '', an empty file name; give the file's name
+    """
+    if not os.fsdecode(value):
+        raise IsoflowError(f"{named} is '', an empty file name; give the file's name")
 
 
 class IsoflowError(ValueError):

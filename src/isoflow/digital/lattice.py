@@ -169,10 +169,32 @@ class DigitalObject:
 
     # ------------------------------------------------------------ builders
     @classmethod
-    def of(cls, x) -> DigitalObject:
+    def of(cls, x: DigitalObject | ArrayLike) -> DigitalObject:
         """``x`` itself if it is a DigitalObject, else the object of the
-        binary array ``x`` at the origin: the API takes either."""
-        return x if isinstance(x, cls) else cls(x)
+        binary array ``x`` at the origin: the API takes either.
+
+        Parameters
+        ----------
+        x : DigitalObject or array_like of bool
+            An object, or a 0/1 array.
+
+        Returns
+        -------
+        DigitalObject
+            ``x`` itself, or a new object of unit voxels at the origin.
+
+        Raises
+        ------
+        IsoflowError
+            An array that is not binary, or not 2D, 3D or 4D.
+
+        Examples
+        --------
+        >>> obj = DigitalObject(np.ones((2, 2), bool), pitch=0.5)
+        >>> DigitalObject.of(obj) is obj, DigitalObject.of([[1, 0], [1, 1]]).voxels
+        (True, 3)
+        """
+        return x if isinstance(x, DigitalObject) else cls(x)
 
     @classmethod
     def from_voxels(cls, indices: ArrayLike, **kw: Any) -> DigitalObject:
@@ -538,6 +560,10 @@ def _pitch(value, ndim: int):
     arr = as_array(value, "'pitch'")  # nested lists of uneven lengths named, not NumPy's ValueError
     # in a voxel size's words, before _field's
     _refuse_bools(value, arr, "pitch", "a number (one, or one per axis)")
+    arr = _object_numbers(arr)
+    if arr.ndim == 0 and arr.dtype.kind not in "biuf":
+        # one value, no number: _field's "3 numbers, one per axis" reads as if one number were not taken
+        raise IsoflowError(f"'pitch' must be a number (one, or one per axis), got {given_text(arr.item())}")
     if arr.dtype.kind in "iuf" and not np.isfinite(arr).all():
         # named as what a voxel size must be: _field's "3 numbers, one per axis" reads as a count that is wrong
         raise IsoflowError(f"'pitch' must be finite and positive (one number, or one per axis), got {number_text(arr)}")
@@ -554,6 +580,22 @@ def _pitch(value, ndim: int):
     pitch = pitch.copy()
     pitch.flags.writeable = False
     return pitch
+
+
+def _object_numbers(arr: np.ndarray) -> np.ndarray:
+    """``arr`` as float64 where it holds numbers as Python objects (a list
+    of ints and floats through ``np.array(..., dtype=object)``, a pandas
+    column, a ``Fraction``): numbers all the same; else ``arr`` itself.
+
+    Examples
+    --------
+    >>> from fractions import Fraction
+    >>> _object_numbers(np.array(Fraction(1, 2), dtype=object)).item(), _object_numbers(np.array("1")).dtype.kind
+    (0.5, 'U')
+    """
+    if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
+        return arr.astype(np.float64)
+    return arr
 
 
 def _refuse_bools(value, arr: np.ndarray, name: str, want: str) -> None:
@@ -617,10 +659,7 @@ def _field(value, name: str, length: int | None, integral: bool = False, bound: 
         return IsoflowError(f"'{name}' must be {want}, got {shown()}{hint}")
 
     _refuse_bools(value, arr, name, "integers" if integral else "numbers")
-    if arr.dtype == object and all(isinstance(v, Real) and not isinstance(v, (bool, np.bool_)) for v in arr.flat):
-        # numbers held as Python objects (a list of ints and floats through
-        # np.array(..., dtype=object), a pandas column): numbers all the same
-        arr = arr.astype(np.float64)
+    arr = _object_numbers(arr)
     if arr.dtype.kind not in "biuf":  # strings, complex, other objects
         raise bad()
     if (arr.size != 1) if length is None else (arr.shape != (length,)):

@@ -68,6 +68,9 @@ def from_manifold(manifold: Manifold, pitch: float = 1.0,
     if not callable(getattr(manifold, "to_mesh", None)):
         raise IsoflowError(f"from_manifold takes a manifold3d.Manifold, got {type(manifold).__name__}"
                            "; a mesh: voxelize_mesh, an array: DigitalObject")
+    if isinstance(pitch, (list, tuple, np.ndarray)) and getattr(pitch, "ndim", 1) == 1 and len(pitch) not in (1, 3):
+        # the object's check would ask for one number per axis, which this takes only when they are equal
+        raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {given_text(list(pitch))}")
     place = DigitalObject.placement(3, pitch=pitch, origin=origin)  # as given: checked as every object's are
     if np.ndim(place.pitch):
         raise IsoflowError(f"'pitch' must be one number (cubic voxels), got {np.asarray(pitch).tolist()!r}")

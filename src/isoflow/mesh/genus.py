@@ -848,6 +848,13 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     step : bool
         Double the resolution until the Betti numbers of the last two agree,
         within ``max_resolution``, ``time_limit`` (seconds) and the memory.
+    max_resolution : int
+        The doubling stops before a resolution beyond this (the verdict's
+        ``stop`` says so); it caps only the doubling: ``resolutions`` past
+        it are tried, and then end the stepping.
+    time_limit : float
+        Seconds: the doubling stops before a resolution whose predicted time
+        (eight times the last one's) would end the run past this.
     on_resolution : callable, optional
         Called with each resolution's entry as it is done.
     strict : bool

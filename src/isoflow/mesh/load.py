@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, given_text, missing
+from ..errors import IsoflowError, counted, given_text, missing, refuse_empty_path
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -366,6 +366,7 @@ def load_mesh(path, *, merge_rtol: float = MERGE_RTOL, stats: dict | None = None
     coordinates whose extent overflows, out-of-range faces and a
     ``merge_rtol`` outside [0, 1).
     """
+    refuse_empty_path(path, "mesh path")
     p = Path(os.fspath(path))
     rtol = weld_tolerance(merge_rtol)
     refuse_volume(path)
@@ -548,7 +549,8 @@ def mesh_input(mesh: MeshInput, *, merge_rtol: float = MERGE_RTOL,
     isoflow.errors.IsoflowError: mesh: faces must have shape (M, 3) (triangles), got (12, 2)
     """
     if isinstance(mesh, (str, os.PathLike)):
-        return str(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
+        # the str the path stands for: str() of an os.DirEntry (os.scandir) is a repr
+        return os.fsdecode(mesh), *load_mesh(mesh, merge_rtol=merge_rtol, stats=stats)
     vertices, faces = mesh_arrays(mesh, "mesh")
     v, f = check_mesh(vertices, faces, where="mesh")
     rtol = weld_tolerance(merge_rtol)

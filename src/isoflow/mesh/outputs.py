@@ -33,7 +33,7 @@ import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ..errors import IsoflowError, NotAPath, check_switch, value_kind
+from ..errors import IsoflowError, NotAPath, check_switch, refuse_empty_path, value_kind
 
 #: marks temporary files and directories (``.NAME.isoflow-tmp-HOST-PID-RANDOM.SUFFIX``)
 TEMP_MARK = ".isoflow-tmp-"
@@ -50,6 +50,7 @@ def check_output_path(
     not exist unless ``force``, and its directory exists and is writable."""
     if not isinstance(path, (str, os.PathLike)):  # (os.fspath's TypeError names no argument)
         raise NotAPath(f"the {what} path must be a str or os.PathLike, got {value_kind(path)}")
+    refuse_empty_path(path, f"the {what} path")
     check_switch(force, "force", str(path))
     refuse_directory_spelling(path, what)  # before Path(), which drops the slash
     path = Path(path)

@@ -233,9 +233,9 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
 
     fill, strict = check_fill(fill), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")
-    check_path(path, "path", "voxelize_to_zarr")
+    path = check_path(path, "path", "voxelize_to_zarr")
     path = check_store_path(path, force)
-    where = str(source) if isinstance(source, (str, os.PathLike)) else "mesh"
+    where = os.fsdecode(source) if isinstance(source, (str, os.PathLike)) else "mesh"
     # a file names itself in its errors
     v, f = load_mesh(source) if isinstance(source, (str, os.PathLike)) else mesh_arrays(source, where)
     try:

@@ -6,7 +6,11 @@ grid that memory does not, to say so when it refuses one).
 
 from __future__ import annotations
 
-from ..errors import IsoflowError
+import math
+
+import numpy as np
+
+from ..errors import IsoflowError, given_text
 from .fills import Fill
 
 #: a slab (and so a zarr chunk's first side) holds at most this many voxels
@@ -26,10 +30,12 @@ def slab_chunks(shape, chunks=None) -> tuple[int, int, int]:
         rows = max(1, min(64, SLAB_BYTES // max(1, ny * nz)))
         rows = 1 << (rows.bit_length() - 1)
         chunks = (min(rows, nx), min(CHUNK_YZ, ny), min(CHUNK_YZ, nz))
-    chunks = tuple(int(c) for c in chunks)
-    if len(chunks) != 3 or min(chunks) < 1:
-        raise IsoflowError(f"chunks must be three positive integers, got {chunks}")
-    return chunks  # type: ignore[return-value]
+    sides = list(chunks) if isinstance(chunks, (tuple, list, np.ndarray)) else []
+    # each side a whole number >= 1 (a NumPy integer too): 2.5 is no side, and "4" no number
+    if len(sides) != 3 or not all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
+                                  and math.isfinite(c) and c == int(c) and c >= 1 for c in sides):
+        raise IsoflowError(f"chunks must be three positive integers, got {given_text(chunks)}")
+    return int(sides[0]), int(sides[1]), int(sides[2])
 
 
 def slab_layout(shape, chunks=None) -> tuple[tuple[int, int, int], list[tuple[int, int]]]:

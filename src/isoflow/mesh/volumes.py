@@ -24,7 +24,7 @@ from ..digital.lattice import MAX_COORDINATE, DigitalObject
 from ..digital.units import LENGTH_UNITS, length_unit, unit_given
 from ..errors import IsoflowError, check_path, check_switch, choice_of, counted, given_text, missing, number_text, warn
 from ..results import read_only
-from ..scale.arrays import NotBinary, as_array, binary, fill_value_named
+from ..scale.arrays import NotBinary, as_array, binary, fill_value_named, refuse_object
 from ..scale.chunks import never_written
 from ..scale.memory import check_fits
 from .formats.registry import (
@@ -139,7 +139,7 @@ def read_volume(path: str | os.PathLike, label: int | np.integer | float | None 
     >>> frame.volume.shape, frame.voxels
     ((4, 4, 4), 56)
     """
-    check_path(path, "path", "read_volume", "an array in memory: DigitalObject(array)")
+    path = check_path(path, "path", "read_volume", "an array in memory: DigitalObject(array)")
     return read_volume_with_unit(path, label, time=time)[0]
 
 
@@ -517,7 +517,7 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
     >>> image.spacing.tolist(), label_table(image)["volume"].tolist()
     ([0.5, 0.5, 2.0], [8.0, 16.0])
     """
-    check_path(path, "path", "read_labels", "an array in memory: label_table(array)")
+    path = check_path(path, "path", "read_labels", "an array in memory: label_table(array)")
     # a mesh voxelises to one object; a label image of meshes is voxelize's
     raw = _read_raw(path, mesh="a mesh, not a label image; voxelize A.stl B.obj --resolution R -o LABELS.nii.gz "
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
@@ -585,9 +585,17 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     >>> read_points(data.example19()).shape  # the paper's 20 points of Example 19
     (20, 3)
     """
-    check_path(path, "path", "read_points")
+    path = check_path(path, "path", "read_points")
     path = Path(path)
     _check_readable(path)
+    from .load import is_mesh_path, refuse_cad
+
+    # a mesh is known by its suffix, as the command line knows it, and is no
+    # point list: the point reader would blame its first line, or its bytes
+    refuse_cad(path)
+    if is_mesh_path(path):
+        raise IsoflowError(f"{path}: a mesh file, not a volume or a list of lattice points; "
+                           "isoflow.voxelize_file(path) voxelizes it")
     try:
         # look at the head first: any file of unknown type lands here, and
         # a big binary one should not be read whole before being refused
@@ -784,7 +792,7 @@ def read_object(path: str | os.PathLike, points_are: PointsAre = "corners",
     >>> read_object(data.example19()).voxels, read_object(data.example19(), points_are="voxels").voxels
     (4, 20)
     """
-    check_path(path, "path", "read_object", "an array in memory: DigitalObject(array)")
+    path = check_path(path, "path", "read_object", "an array in memory: DigitalObject(array)")
     chosen = choice_of(points_are, get_args(PointsAre))  # the annotation binds type checkers only
     if chosen is None:
         raise IsoflowError(f"points_are must be 'corners' or 'voxels', got {given_text(points_are)}")
@@ -1016,8 +1024,8 @@ def write_volume(obj: DigitalObject | ArrayLike, path: str | os.PathLike, force:
     >>> read_volume(write_volume(read_volume(path), pathlib.Path(tempfile.mkdtemp()) / "box.nrrd")).unit
     'mm'
     """
-    check_path(path, "path", "write_volume",
-               hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
+    path = check_path(path, "path", "write_volume",
+                      hint="the object comes first: write_volume(obj, path)" if isinstance(obj, (str, os.PathLike)) else "")
     try:
         obj = DigitalObject.of(obj)
     except NotBinary as exc:
@@ -1180,8 +1188,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     >>> read_labels(named).names
     {1: 'nucleus', 2: 'cytoplasm'}
     """
-    check_path(path, "path", "write_labels",
-               hint="the labels come first: write_labels(labels, path)" if isinstance(labels, (str, os.PathLike)) else "")
+    path = check_path(path, "path", "write_labels",
+                      hint="the labels come first: write_labels(labels, path)" if isinstance(labels, (str, os.PathLike)) else "")
     unit = unit_given(unit, str(path))
     names = label_names(names, str(path))
     if isinstance(labels, LabelImage):  # its place and names, unless given, as label_table takes it
@@ -1196,6 +1204,9 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
     else:
         space = None
     pitch = 1.0 if pitch is None else pitch
+    # an object, a mesh or a path: NumPy would make each a 0D array, refused for its shape, not named
+    refuse_object(labels, f"{path}: labels", reader="isoflow.read_labels",
+                  then="and its place, pitch=obj.spacing, origin=obj.origin; or write_volume(obj, path) writes it")
     arr = as_array(labels, f"{path}: labels")
     if arr.ndim == 4:
         # read_labels and label_table take 2D and 3D only: a file this wrote should read back

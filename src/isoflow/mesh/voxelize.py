@@ -1059,7 +1059,7 @@ def voxelize_file(path: str | os.PathLike, *, pitch: float | None = None, resolu
     (32, [1, 1, 0])
     """
     in_memory = hasattr(path, "vertices") or isinstance(path, tuple)  # a trimesh, or (vertices, faces)
-    check_path(path, "path", "voxelize_file", hint="a mesh in memory: voxelize_mesh(mesh)" if in_memory else "")
+    path = check_path(path, "path", "voxelize_file", hint="a mesh in memory: voxelize_mesh(mesh)" if in_memory else "")
     check_strict(strict)  # before the file is read, as the other arguments are checked by voxelize
     details = check_switch(details, "details", "voxelize")
     v, f = load_mesh(path)

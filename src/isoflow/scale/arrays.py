@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import os
 import sys
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -105,8 +106,8 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     Raises
     ------
     IsoflowError
-        For nested sequences of uneven lengths, and for a masked array with
-        masked elements.
+        For nested sequences of uneven lengths, for a masked array with
+        masked elements, and for a mapping (:func:`refuse_mapping`).
 
     Examples
     --------
@@ -126,12 +127,48 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     'ndarray'
     """
     refuse_masked(array, where)
+    refuse_mapping(array, where)
     try:
         return np.asarray(array)
     except ValueError as error:
         if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
             raise
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
+def refuse_mapping(array: object, where: str = "volume") -> None:
+    """Refuse a mapping where an array is taken, naming it: NumPy makes an
+    isoflow result (a Report, the LabelVoxelization of ``voxelize_meshes``)
+    a 1D array of its keys, refused as "array of type <U14" or as 1D, and a
+    dict a 0D array of type object. A result's field that holds an array
+    (``labels``, ``volume``) is named as what to pass.
+
+    Parameters
+    ----------
+    array : object
+        Anything; only a :class:`collections.abc.Mapping` is refused.
+    where : str
+        The argument's name, for the message.
+
+    Raises
+    ------
+    IsoflowError
+        Naming ``where``, the mapping's type and the field to pass.
+
+    Examples
+    --------
+    >>> refuse_mapping(np.zeros(3))
+    >>> try:
+    ...     refuse_mapping({"volume": np.ones((2, 2))}, "volume")
+    ... except IsoflowError as error:
+    ...     print(error)
+    volume: a dict, not an array
+    """
+    if not isinstance(array, Mapping):
+        return
+    held = [k for k in array if isinstance(k, str) and isinstance(value := getattr(array, k, None), np.ndarray)
+            and value.ndim >= 2]
+    raise IsoflowError(f"{where}: a {type(array).__name__}, not an array" + (f"; pass its .{held[0]}" if held else ""))
 
 
 def is_masked_array(value: object) -> bool:

@@ -360,7 +360,9 @@ def checked_block_shape(block_shape, shape) -> tuple[int, ...]:
     """
     try:
         block = tuple(int(b) for b in block_shape)
-        whole = all(b == float(c) for b, c in zip(block, block_shape))
+        # numbers only: int() and float() read "2" and True as 2 and 1 too
+        whole = all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
+                    and b == float(c) for b, c in zip(block, block_shape))
     except (TypeError, ValueError, OverflowError):
         block, whole = (), False
     if not whole or len(block) != len(shape) or any(b < 1 for b in block):

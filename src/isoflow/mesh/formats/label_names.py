@@ -32,10 +32,11 @@ import csv
 import json
 import os
 import re
+import stat
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
-from ...errors import IsoflowError, check_path, line_text
+from ...errors import IsoflowError, check_path, line_text, missing
 from .registry import one_line_name
 
 #: what a file of label names is, for the refusal of one that is none
@@ -99,11 +100,16 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     >>> read_label_names(lut)
     {1: 'liver', 2: 'left kidney'}
     """
-    check_path(path, "path", "read_label_names")
+    path = check_path(path, "path", "read_label_names")
     where = str(path)
     try:
+        if not (stat.S_ISREG(mode := os.stat(path).st_mode) or stat.S_ISDIR(mode)):
+            # read whole, a pipe would be read until a writer came, /dev/zero until memory ran out
+            raise IsoflowError(f"{where}: not a regular file (a device, pipe or socket)")
         data = Path(path).read_bytes()
     except OSError as exc:
+        if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
+            raise missing(where) from None
         raise IsoflowError(f"{where}: cannot read the label names ({exc.strerror or type(exc).__name__})") from None
     if b"\0" in data[:1 << 16]:  # a volume given for its names (seg.nii.gz), or any binary file
         raise IsoflowError(f"{where}: not a file of label names (it holds binary data); {EXPECTED}")

@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike
 from ...digital.lattice import DigitalObject
 from ...digital.report import Report
 from ...errors import IsoflowError, check_path, counted, warn
-from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, unwritten_fill
+from ...scale.chunks import axis_names, never_written, open_zarr_node, spatial_axes, split_store, unwritten_fill
 from .registry import (
     UDUNITS,
     RawVolume,
@@ -475,9 +475,15 @@ def analyze_zarr(path: str | os.PathLike, connectivity: int | np.integer | None 
     >>> report.volume, report.surface_area, report.unit
     (1.0, 6.0, 'mm')
     """
-    check_path(path, "path", "analyze_zarr", "an array in memory: analyze(array), or a dask array: analyze_chunked(array)")
+    path = check_path(path, "path", "analyze_zarr", "an array in memory: analyze(array), or a dask array: analyze_chunked(array)")
     from ...digital.outofcore import analyze_zarr_volume
+    from ..volumes import refuse_inside_store
 
+    file = split_store(path)[0]
+    if not file.name.lower().endswith(".zarr"):
+        # a level or array by its folder (IMG.zarr/0) opens without the image's scale and unit, which
+        # would give its measures in voxels; read_volume and info refuse it too, naming IMG.zarr:0
+        refuse_inside_store(file, path)
     import_library("zarr", "OME-Zarr")
     own = store_place(open_store(path), path)
     given = {"pitch": pitch, "origin": origin, "unit": unit}
