@@ -187,9 +187,18 @@ class Report(Result):
     unit: str | None = dataclasses.field(default=None, metadata=omitted_with("volume", "area"))
 
     @property
-    def genus(self) -> list[int]:
-        """The genus of each closed surface (3D, when the surfaces were asked)."""
-        return [s["genus"] for s in self.surfaces or []]
+    def genus(self) -> list[int] | None:
+        """The genus of each closed surface, as ``surfaces`` holds them;
+        None where they were not counted (2D, 4D, ``surfaces=False``), as
+        ``surfaces`` is: an empty list would say the boundary has none.
+
+        Examples
+        --------
+        >>> from isoflow import analyze
+        >>> analyze(np.ones((3, 3, 3), bool)).genus, analyze(np.ones((3, 3), bool)).genus
+        ([0], None)
+        """
+        return None if self.surfaces is None else [s["genus"] for s in self.surfaces]
 
     @classmethod
     def from_dict(cls, values: Mapping[str, Any]) -> Report:
