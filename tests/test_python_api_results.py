@@ -421,3 +421,13 @@ def test_results_and_objects_hold_read_only_arrays_when_made_and_when_unpickled(
             arrays = [v for v in vars(held).values() if isinstance(v, np.ndarray)]
             arrays += [s.volume for s in getattr(held, "states", [])]
             assert arrays and all(a.flags.writeable is False for a in arrays), type(held).__name__
+
+
+def test_a_label_images_voxel_size_cannot_be_changed_in_place():
+    # frozen as its origin is: a write into the spacing would change every
+    # world column of the table silently
+    image = isoflow.LabelImage(np.ones((2, 2, 2), np.uint8), [1.0, 2.0, 3.0], [0.0, 0.0, 0.0])
+    for field in (image.spacing, image.origin):
+        with pytest.raises(ValueError, match="read-only"):
+            field[0] = 5.0
+    assert isoflow.label_table(image)["volume"].tolist() == [48.0]  # 8 voxels of 1 x 2 x 3

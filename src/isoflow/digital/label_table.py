@@ -133,7 +133,8 @@ class LabelImage:
     space: str | None = None
 
     # equal when the three arrays (and the unit) are, by their elements (the generated
-    # __eq__ raised NumPy's ValueError); unhashable, as the arrays can change
+    # __eq__ raised NumPy's ValueError); unhashable, as the label array can change: it is
+    # the caller's, not copied (a label image of gigabytes would be held twice)
     __eq__ = same_fields
     __hash__ = None  # type: ignore[assignment]
     __repr__ = fields_repr  # the array by its shape: the generated repr printed every voxel of a small image
@@ -155,7 +156,9 @@ class LabelImage:
                 place = DigitalObject.placement(n, pitch=self.spacing, origin=self.origin)
             except IsoflowError as exc:
                 raise IsoflowError("LabelImage: " + str(exc).replace("'pitch'", "'spacing'")) from None
-            object.__setattr__(self, "spacing", place.spacing)
+            spacing = place.spacing  # (a fresh copy) read-only as the origin is: the image is frozen
+            spacing.flags.writeable = False
+            object.__setattr__(self, "spacing", spacing)
             object.__setattr__(self, "origin", place.origin)
         object.__setattr__(self, "unit", unit_given(self.unit, "LabelImage"))
         object.__setattr__(self, "names", label_names(self.names, "LabelImage") or None)
