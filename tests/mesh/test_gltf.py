@@ -367,3 +367,61 @@ def test_a_gltf_without_its_buffer_file_names_it(tmp_path, capsys):
     assert main(["genus", str(tmp_path / "model.gltf")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"model.gltf: buffer 0 is the file '{uri}', which is not there ({tmp_path / uri})" in err[0]
+
+
+def fan_capped_box_glb(path) -> None:
+    """A GLB of a unit box whose top is a primitive of its own drawn as a
+    triangle fan (glTF mode 6) of its four corners, the other ten
+    triangles a primitive of mode 4."""
+    box = trimesh.creation.box()
+    v = box.vertices.astype(np.float32)
+    top = np.all(v[box.faces][:, :, 2] > 0, axis=1)
+    sides = box.faces[~top].astype(np.uint32)
+    corners = np.flatnonzero(v[:, 2] > 0)
+    # the four top corners around the centre, counter-clockwise seen from above (outward)
+    fan = corners[np.argsort(np.arctan2(v[corners, 1], v[corners, 0]))].astype(np.uint32)
+    binary = v.tobytes() + sides.tobytes() + fan.tobytes()
+    views = [(0, v.nbytes), (v.nbytes, sides.nbytes), (v.nbytes + sides.nbytes, fan.nbytes)]
+    tree = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "box"}],
+        "meshes": [{"name": "capped", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "mode": 4},
+                                                     {"attributes": {"POSITION": 0}, "indices": 2, "mode": 6}]}],
+        "buffers": [{"byteLength": len(binary)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": o, "byteLength": n} for o, n in views],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": len(v), "type": "VEC3",
+                       "min": v.min(0).tolist(), "max": v.max(0).tolist()},
+                      {"bufferView": 1, "componentType": 5125, "count": sides.size, "type": "SCALAR"},
+                      {"bufferView": 2, "componentType": 5125, "count": fan.size, "type": "SCALAR"}],
+    }
+    text = json.dumps(tree).encode()
+    text += b" " * (-len(text) % 4)
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    path.write_bytes(b"glTF" + struct.pack("<II", 2, total) + struct.pack("<I", len(text)) + b"JSON" + text
+                     + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
+
+
+@pytest.mark.parametrize("archived", [False, True], ids=["file", "in a zip"])
+@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
+                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, archived):
+    """trimesh reads a glTF primitive of mode 6 as nothing: the box comes
+    back open, its top missing, and was voxelised and counted so."""
+    import zipfile
+
+    from isoflow.cli import main
+
+    path = tmp_path / "capped.glb"
+    fan_capped_box_glb(path)
+    read = trimesh.load(path, force="mesh", process=False)
+    assert len(read.faces) == 10 and not read.is_watertight  # the fan's two triangles are not read
+    where = str(path)
+    if archived:
+        with zipfile.ZipFile(tmp_path / "model.zip", "w") as z:
+            z.write(path, "capped.glb")
+        path, where = tmp_path / "model.zip", f"{tmp_path / 'model.zip'}:capped.glb"
+    out = tmp_path / "out.npz"
+    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in err[0]
+    assert not out.exists()

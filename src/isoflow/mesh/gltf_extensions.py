@@ -7,7 +7,9 @@ instanced boxes would be voxelised and counted as one box.
 ``EXT_meshopt_compression`` (and its ``KHR_`` successor) stores buffer
 views compressed; trimesh reads the compressed bytes as if they were the
 data.  A file that uses either is refused in one line naming the node or
-extension, rather than read as another model; so is a ``.gltf`` whose
+extension, rather than read as another model; so is a primitive drawn
+as a triangle fan (mode 6), which trimesh's reader skips (a model read
+without those faces; :func:`skipped_primitive`), and a ``.gltf`` whose
 buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
 "FileNotFoundError: model.bin", no more).  The file's JSON is looked at only (a
 GLB's first chunk), never its buffers.
@@ -52,15 +54,48 @@ def gltf_json(path: Path) -> dict | None:
     try:
         with open(path, "rb") as fh:
             if path.suffix.lower() != ".glb":
-                text = fh.read()
-            else:
-                magic, _, _ = _GLB_HEAD.unpack(fh.read(_GLB_HEAD.size))
-                length, kind = _CHUNK_HEAD.unpack(fh.read(_CHUNK_HEAD.size))
-                if magic != b"glTF" or kind != b"JSON":
-                    return None
-                text = fh.read(length)
-        tree = json.loads(text)
-    except (OSError, struct.error, ValueError):
+                return json_of(fh.read(), glb=False)
+            head = fh.read(_GLB_HEAD.size + _CHUNK_HEAD.size)
+            if len(head) < _GLB_HEAD.size + _CHUNK_HEAD.size:
+                return None
+            length, _ = _CHUNK_HEAD.unpack_from(head, _GLB_HEAD.size)
+            return json_of(head + fh.read(length), glb=True)
+    except OSError:
+        return None
+
+
+def json_of(data: bytes, glb: bool) -> dict | None:
+    """The JSON of a glTF file's bytes (a GLB's first chunk where ``glb``),
+    or None where they hold none (the reader then says what is wrong).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes (of a GLB, at least its headers and first chunk).
+    glb : bool
+        Whether they are a GLB file's.
+
+    Returns
+    -------
+    dict or None
+        The parsed JSON object.
+
+    Examples
+    --------
+    >>> json_of(b'{"asset": {"version": "2.0"}}', glb=False)
+    {'asset': {'version': '2.0'}}
+    >>> json_of(b"solid cube", glb=True) is None
+    True
+    """
+    try:
+        if glb:
+            magic, _, _ = _GLB_HEAD.unpack_from(data)
+            length, kind = _CHUNK_HEAD.unpack_from(data, _GLB_HEAD.size)
+            if magic != b"glTF" or kind != b"JSON":
+                return None
+            data = data[_GLB_HEAD.size + _CHUNK_HEAD.size:_GLB_HEAD.size + _CHUNK_HEAD.size + length]
+        tree = json.loads(data)
+    except (struct.error, ValueError):
         return None
     return tree if isinstance(tree, dict) else None
 
@@ -92,20 +127,87 @@ def unapplied_extension(path: Path) -> str | None:
     if path.suffix.lower() not in (".gltf", ".glb"):
         return None
     tree = gltf_json(path)
-    if tree is None:
-        return None
+    return None if tree is None else unapplied_in(tree, str(path))
+
+
+def unapplied_in(tree: dict, where: str) -> str | None:
+    """:func:`unapplied_extension` of a glTF file's JSON (an archive's
+    member, named ``where``).
+
+    Parameters
+    ----------
+    tree : dict
+        The file's JSON (:func:`json_of`).
+    where : str
+        The file as the line names it (``ARCHIVE:MEMBER``).
+
+    Returns
+    -------
+    str or None
+        The refusal, or None.
+
+    Examples
+    --------
+    >>> unapplied_in({"extensionsUsed": ["EXT_meshopt_compression"]}, "m.zip:a.glb")[:67]
+    'm.zip:a.glb: its buffers are compressed by the glTF extension EXT_m'
+    """
     used = [name for name in COMPRESSIONS if name in _names(tree.get("extensionsUsed"))]
     if used:
-        return (f"{path}: its buffers are compressed by the glTF extension {used[0]}, which isoflow's reader "
+        return (f"{where}: its buffers are compressed by the glTF extension {used[0]}, which isoflow's reader "
                 "(trimesh) does not decompress: it would read the compressed bytes as the model; export it "
                 "without meshopt compression (gltfpack without -c, Blender's glTF exporter)")
     for index, node in enumerate(_list(tree.get("nodes"))):
         instances = _instances(node, tree)
         if instances is not None:
-            return (f"{path}: node {index} draws its mesh {instances} times by the glTF extension "
+            return (f"{where}: node {index} draws its mesh {instances} times by the glTF extension "
                     "EXT_mesh_gpu_instancing, which isoflow's reader (trimesh) does not apply: it would read "
                     "one copy; export the model with each instance as a node of its own (Blender: "
                     "Realize Instances before the glTF export)")
+    return skipped_primitive(where, tree)
+
+
+#: glTF's primitive mode of triangle fans, which trimesh's reader skips
+#: (it reads points, lines, triangles and triangle strips)
+TRIANGLE_FAN = 6
+
+
+def skipped_primitive(where: str | Path, tree: dict) -> str | None:
+    """The one line refusing a glTF file with a primitive that holds faces
+    trimesh's reader skips (a triangle fan: it reads the other primitives
+    and says nothing, so the model lacks those faces), or None.
+
+    Parameters
+    ----------
+    where : str or pathlib.Path
+        The file, as the line names it.
+    tree : dict
+        Its JSON (:func:`json_of`).
+
+    Returns
+    -------
+    str or None
+        ``PATH: mesh 0 ('fan') primitive 0 is drawn as a triangle fan ...``.
+
+    Examples
+    --------
+    >>> tree = {"meshes": [{"name": "cap", "primitives": [{"mode": 4}, {"mode": 6}]}]}
+    >>> print(skipped_primitive(Path("a.glb"), tree))  # doctest: +ELLIPSIS
+    a.glb: mesh 0 ('cap') primitive 1 is drawn as a triangle fan (glTF mode 6), which ...
+    >>> skipped_primitive(Path("a.glb"), {"meshes": [{"primitives": [{}]}]}) is None  # mode 4 by default
+    True
+    """
+    for index, mesh in enumerate(_list(tree.get("meshes"))):
+        primitives = _list(mesh.get("primitives")) if isinstance(mesh, dict) else []
+        for at, primitive in enumerate(primitives):
+            if isinstance(primitive, dict) and primitive.get("mode") == TRIANGLE_FAN:
+                name = mesh.get("name")
+                named = f" ({name!r})" if isinstance(name, str) and name else ""
+                fans = sum(isinstance(q, dict) and q.get("mode") == TRIANGLE_FAN
+                           for m in _list(tree.get("meshes")) if isinstance(m, dict) for q in _list(m.get("primitives")))
+                more = f" (and {fans - 1} more)" if fans > 1 else ""
+                return (f"{where}: mesh {index}{named} primitive {at} is drawn as a triangle fan (glTF mode 6)"
+                        f"{more}, which isoflow's reader (trimesh) skips: the model would be read without its "
+                        "faces; export it with triangles (mode 4, the default of Blender's and most exporters)")
     return None
 
 

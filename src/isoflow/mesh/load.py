@@ -826,6 +826,8 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
     import trimesh
     from trimesh.exchange.load import mesh_formats
 
+    from .gltf_extensions import json_of, unapplied_in
+
     with open(p, "rb") as f:
         archive = trimesh.util.decompress(f, file_type=kind)
     resolver = trimesh.resolvers.ZipResolver(archive)
@@ -834,6 +836,9 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
         if member_kind not in mesh_formats():
             continue  # a texture, a material, metadata
         data = archive[member].read()
+        if member_kind in ("gltf", "glb") and (tree := json_of(data, glb=member_kind == "glb")) is not None:
+            if (refusal := unapplied_in(tree, f"{p}:{member}")) is not None:  # as for a file of its own
+                raise IsoflowError(refusal)
         scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
                                    process=False)
         if (line := faceless_member_line(f"{p}:{member}", member_kind, scene)) is not None:
