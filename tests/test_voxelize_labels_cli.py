@@ -665,3 +665,22 @@ def test_a_grid_past_float64_for_magicavoxel_names_its_sides_in_a_short_line(tmp
     sides = line.split("this object is ")[1].split(";")[0].split("x")
     assert len(sides) == 3 and all(len(side) < 12 and float(side) > 1e199 for side in sides), line
 
+
+
+def test_a_flat_mesh_on_a_plane_between_voxels_names_the_shell_it_touches(tmp_path, capsys):
+    """A unit cube and a unit square lying on its bottom face, on a shared
+    grid of pitch 0.1 from the cube's corner: the square lies on the grid's
+    plane z = 0, and the voxels it touches are the 10 x 10 of the bottom
+    layer. The note said the surface's shell had 0 voxels, while --fill
+    shell gave those 100."""
+    cube = trimesh.creation.box(extents=(1, 1, 1))
+    cube.apply_translation((0.5, 0.5, 0.5))
+    cube.export(tmp_path / "cube.obj")
+    square = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    square.export(tmp_path / "square.obj")
+    args = ["voxelize", str(tmp_path / "cube.obj"), str(tmp_path / "square.obj"), "--pitch", "0.1"]
+    assert main([*args, "-o", str(tmp_path / "winding.npz")]) == 0
+    note = next(line for line in capsys.readouterr().err.splitlines() if "square.obj: mesh has" in line)
+    assert "(the surface's shell has 100)" in note, note
+    assert main([*args, "--fill", "shell", "-o", str(tmp_path / "shell.npz")]) == 0
+    assert int(np.count_nonzero(read_labels(tmp_path / "shell.npz").array == 2)) == 100

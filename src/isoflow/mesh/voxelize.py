@@ -504,7 +504,9 @@ class VoxelPlan:
         of the box on the plane between voxels) is not counted: on a grid
         of the mesh's own there is none, and on a grid shared with larger
         meshes, it would make a box a few voxels across read as thin
-        against its shell (64 voxels against 208 for a cube of 4)."""
+        against its shell (64 voxels against 208 for a cube of 4). Across
+        a box of no thickness (a flat mesh on a plane between voxels) every
+        shell voxel only touches it: there those on both sides count."""
         from .shell import ShellGrid, grid_planes
 
         planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
@@ -514,6 +516,8 @@ class VoxelPlan:
         box = []
         for a in range(3):
             held = np.flatnonzero((planes[a][1:] > lo[a]) & (planes[a][:-1] < hi[a]))
+            if not len(held) and lo[a] == hi[a]:  # flat on a plane between voxels: the voxels it touches
+                held = np.flatnonzero((planes[a][1:] >= lo[a]) & (planes[a][:-1] <= hi[a]))
             box.append((int(held[0]), int(held[-1]) + 1) if len(held) else (0, 0))
         (x0, x1), (y0, y1), (z0, z1) = box
         _, ny, nz = self.shape
