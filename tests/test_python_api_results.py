@@ -431,3 +431,13 @@ def test_a_label_images_voxel_size_cannot_be_changed_in_place():
         with pytest.raises(ValueError, match="read-only"):
             field[0] = 5.0
     assert isoflow.label_table(image)["volume"].tolist() == [48.0]  # 8 voxels of 1 x 2 x 3
+
+
+def test_voxelize_takes_a_pitch_of_one_number_in_an_array_as_the_object_does():
+    import trimesh
+
+    box = trimesh.creation.box()  # a unit cube: (1 / 0.25)^3 voxels
+    for pitch in (np.array([0.25]), [0.25], (0.25,)):
+        solid = isoflow.voxelize_mesh(box, pitch=pitch)
+        assert solid.voxels == 64 and solid.pitch == 0.25
+        assert isoflow.DigitalObject(np.ones((1, 1, 1), bool), pitch=pitch).pitch == 0.25
