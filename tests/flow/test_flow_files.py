@@ -198,12 +198,14 @@ def test_a_failed_first_run_does_not_speak_of_a_previous_run(tmp_path, monkeypat
     assert {p.name: p.read_bytes() for p in (tmp_path / "empty").iterdir()} == before
 
 
+@pytest.mark.parametrize("at", ["progress_bar", "bar_total"])
 @pytest.mark.parametrize("store", [False, True])
-def test_an_interrupt_as_the_run_begins_leaves_no_staging_directory(tmp_path, monkeypatch, store):
+def test_an_interrupt_as_the_run_begins_leaves_no_staging_directory(tmp_path, monkeypatch, store, at):
     """Between the staging directory's making and the flow's first step (the
-    progress bar's start, an import), an interrupt left the directory behind
-    (and, over an earlier run, a hidden directory beside its files): it is
-    removed wherever the interrupt comes, and an earlier run stays."""
+    progress bar's start, the bar's size, an import), an interrupt left the
+    directory behind (and, over an earlier run, a hidden directory beside
+    its files): it is removed wherever the interrupt comes, and an earlier
+    run stays."""
     import isoflow.cli.flow as cli_flow
 
     v = np.zeros((6, 6, 6), bool)
@@ -219,7 +221,10 @@ def test_an_interrupt_as_the_run_begins_leaves_no_staging_directory(tmp_path, mo
         raise KeyboardInterrupt
         yield
 
-    monkeypatch.setattr(cli_flow, "progress_bar", interrupted_bar)
+    def interrupted_size(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_flow, at, interrupted_bar if at == "progress_bar" else interrupted_size)
     for out in (tmp_path / "new", tmp_path / "run"):
         rc, _, err = run("flow", tmp_path / name, "--out", out, "--force", *extra)
         assert rc == 130 and err.strip().splitlines()[-1].startswith("isoflow: interrupted"), err

@@ -82,33 +82,3 @@ def test_a_killed_runs_staging_directory_is_removed_by_the_next_run(tmp_path):
     assert stages(out) == []
     assert sorted(p.name for p in out.glob("step_*.ply")) == ["step_000.ply", "step_001.ply", "step_002.ply"]
 
-
-@pytest.mark.parametrize("store", [False, True], ids=["in memory", "block by block"])
-def test_an_interrupt_before_the_flow_starts_leaves_no_staging_directory(tmp_path, monkeypatch, store):
-    # a signal that lands after the writer made its staging directory and
-    # before the first step (while the flow's modules are imported, the bar
-    # sized): the run is interrupted as anywhere else, and nothing of it stays
-    import isoflow.cli.flow
-    from isoflow.cli.main import main
-
-    if store:
-        zarr = pytest.importorskip("zarr")
-        source = tmp_path / "ball.zarr"
-        zarr.open_array(str(source), mode="w", shape=(48, 48, 48), chunks=(16, 16, 16), dtype=np.uint8)[...] = ball()
-        extra = ["--volumes", ".zarr"]
-    else:
-        source = tmp_path / "ball.npy"
-        np.save(source, ball())
-        extra = []
-    out = tmp_path / "run"
-    out.mkdir()
-    (out / "flow.csv").write_text("the previous run\n")
-
-    def signalled(*args, **kwargs):
-        raise KeyboardInterrupt
-
-    monkeypatch.setattr(isoflow.cli.flow, "bar_total", signalled)
-    assert main(["flow", str(source), "--out", str(out), "--force", "-q", *extra]) == 128 + signal.SIGINT
-    assert stages(out) == []
-    assert sorted(p.name for p in out.iterdir()) == ["flow.csv"]
-    assert (out / "flow.csv").read_text() == "the previous run\n"
