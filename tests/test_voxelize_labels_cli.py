@@ -684,3 +684,18 @@ def test_a_flat_mesh_on_a_plane_between_voxels_names_the_shell_it_touches(tmp_pa
     assert "(the surface's shell has 100)" in note, note
     assert main([*args, "--fill", "shell", "-o", str(tmp_path / "shell.npz")]) == 0
     assert int(np.count_nonzero(read_labels(tmp_path / "shell.npz").array == 2)) == 100
+
+
+def test_split_of_a_scene_given_in_python_keeps_a_node_of_several_primitives_one_label(tmp_path):
+    """The scene trimesh loads from such a file, given to voxelize_meshes:
+    without the file's order the primitives of one node are still the
+    node's one closed label (64 voxels of 0.25), named by the node."""
+    from isoflow import voxelize_meshes
+
+    box = trimesh.creation.box((1, 1, 1))
+    path = _glb(tmp_path / "mat.glb", [("cube", 0, [0, 0, 0]), ("crate", 1, [3, 0, 0])],
+                [[(box.vertices, box.faces[2:]), (box.vertices, box.faces[:2])], [(box.vertices, box.faces)]])
+    scene = trimesh.load(path, force="scene")
+    assert len(scene.graph.nodes_geometry) == 3  # the cube's two primitives and the crate
+    result = voxelize_meshes([scene], pitch=0.25, split=True)
+    assert sorted(result.names) == ["mesh 1:crate", "mesh 1:cube"] and result.voxels == (64, 64)

@@ -347,7 +347,8 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
-        groups.setdefault(_file_node(scene.graph, node, order), []).append((v, np.asarray(mesh.faces)))
+        owner = _file_node(scene.graph, node, order) if order else _primitive_owner(scene, node, mesh)
+        groups.setdefault(owner, []).append((v, np.asarray(mesh.faces)))
     bodies = []
     for node, parts in groups.items():
         where = f"{name}:{node}"
@@ -417,6 +418,19 @@ def _file_node(graph, node, order: dict[str, int] | None):
     while at not in order and at in parents:
         at = parents[at]
     return at if at in order else node
+
+
+def _primitive_owner(scene, node, mesh) -> object:
+    """The glTF node a node of trimesh's graph is a primitive of, for a
+    scene without its file's order (one given in Python): trimesh marks
+    the geometry it reads from a glTF primitive (``from_gltf_primitive``)
+    and hangs a node of a mesh of several primitives under the glTF node,
+    which holds no geometry itself; else the node itself."""
+    parent = scene.graph.transforms.parents.get(node)
+    if (not getattr(mesh, "metadata", {}).get("from_gltf_primitive") or parent is None
+            or parent == scene.graph.base_frame or parent in scene.graph.nodes_geometry):
+        return node
+    return parent
 
 
 def natural_key(name) -> list:
