@@ -248,6 +248,42 @@ def test_flow_export_forced_over_a_longer_run_keeps_only_its_own_steps(tmp_path)
         assert np.isclose(volume, s["voxels"] * solid.pitch ** 3)
 
 
+def test_flow_export_draws_equal_betti_numbers_both_visible(tmp_path, monkeypatch):
+    """The torus keeps b0 = b1 = 1 to its last non-empty step: in flow.png a
+    line drawn over an equal one must be narrower than it, or the one below
+    is hidden (as isoflow flow's flow.png draws them), and the Betti numbers,
+    whole numbers, are ticked in whole numbers."""
+    import runpy
+
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    matplotlib.use("Agg")
+    drawn = []
+    save = Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        drawn.append(fig)
+        return save(fig, *args, **kwargs)
+
+    out = tmp_path / "out"
+    monkeypatch.setattr(Figure, "savefig", keep)
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    monkeypatch.setattr(sys, "argv", ["flow_export.py", str(out)])
+    runpy.run_path(str(EXAMPLES / "flow_export.py"), run_name="__main__")
+    betti = next(ax for fig in drawn for ax in fig.axes if ax.get_title() == "Betti numbers")
+    lines = betti.get_lines()
+    assert [line.get_label() for line in lines] == ["b0", "b1", "b2"]
+    equal = [(i, j) for i in range(3) for j in range(i + 1, 3)
+             if np.array_equal(lines[i].get_ydata(), lines[j].get_ydata())]
+    assert (0, 1) in equal  # b0 = b1 at every step of the torus's run
+    for i, j in equal:
+        assert lines[j].get_linewidth() < lines[i].get_linewidth()
+    low, high = betti.get_ylim()
+    ticks = [y for y in betti.get_yticks() if low <= y <= high]
+    assert ticks and all(float(y).is_integer() for y in ticks)
+
+
 def test_genus_table(example_run):
     out, _ = example_run("genus_table")
     with open(out / "genus.csv") as fh:
@@ -258,6 +294,8 @@ def test_genus_table(example_run):
         m = data.info(name)
         assert rows[name]["genus"] == ("-" if m["genus"] is None else str(m["genus"])), name
         assert rows[name]["components"] == str(m["components"]), name
+        for tool in ("manifold3d", "pymeshlab"):  # a genus counts handles: a tool that gives none is "-", never below 0
+            assert rows[name][tool] == "-" or int(rows[name][tool]) >= 0, (name, tool)
     for name in ("bob_small.ply", "torus.obj", "eight.off", "spot.ply"):
         assert rows[name]["digital_64"] == str(genus(name)) and rows[name]["agree"] == "True"
     assert rows["plane_holes.obj"]["agree"] == "False"  # open: no genus to agree with
@@ -278,6 +316,8 @@ def test_zarr_cluster(example_run):
     assert euler_number(volume, 1) == 1 - g == report["chunked"]["euler_characteristic"]
     assert int(volume.sum()) == report["chunked"]["voxels"]
     assert "identical" in printed and "2 worker processes" in printed
+    # a solid in one piece without cavities is bounded by b0 + b2 = 1 closed surface, said in the singular
+    assert printed.count("energy") == 2 and printed.count(", 1 closed surface\n") == 2
 
 
 
