@@ -375,7 +375,7 @@ def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
     Euler number (at 2n-connectivity)."""
     with open(out / f"{stem}.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    image = np.load(out / f"{stem}.npy")
+    image = isoflow.read_labels(out / f"{stem}.npz").array
     assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
     masks = [image == int(row["label"]) for row in rows]
     assert [int(r["euler_characteristic"]) for r in rows] == [euler_number(m, 1) for m in masks]
@@ -434,6 +434,28 @@ def test_label_table(example_run):
     assert (out / "labels.png").stat().st_size > 0
 
 
+@pytest.mark.parametrize(("name", "stem", "cell"), [("label_table", "labels", 0.5 ** 3), ("cell_table", "cells", 0.25 ** 2)])
+def test_a_table_example_s_image_gives_its_table_to_isoflow_info(example_run, capsys, name, stem, cell):
+    """The docstring's ``isoflow info OUT/STEM.npz --labels`` gives the table
+    the script wrote: each label's volume (2D: area) is its voxels times the
+    voxel the script measured in, not in unit voxels, as a .npy would."""
+    import ast
+
+    from isoflow.cli.main import main
+
+    doc = " ".join(ast.get_docstring(ast.parse((EXAMPLES / f"{name}.py").read_text())).split())
+    assert f"``isoflow info OUT/{stem}.npz --labels`` gives the same table" in doc
+    out, _ = example_run(name)
+    capsys.readouterr()
+    assert main(["info", str(out / f"{stem}.npz"), "--labels", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["labels"]
+    key = "volume" if stem == "labels" else "area"
+    assert rows and all(r[key] == r["voxels"] * cell for r in rows)
+    with open(out / f"{stem}.csv", newline="") as fh:
+        written = list(csv.DictReader(fh))
+    assert [(int(w["label"]), float(w[key])) for w in written] == [(r["label"], r[key]) for r in rows]
+
+
 def test_cell_table_draws_the_cells_as_a_viewer_shows_their_png(tmp_path, monkeypatch):
     """The picture's cells are the label image as tifffile reads the TIFF
     that ``write_labels`` makes of it (rows are y, columns x): x across and
@@ -458,7 +480,7 @@ def test_cell_table_draws_the_cells_as_a_viewer_shows_their_png(tmp_path, monkey
     monkeypatch.syspath_prepend(str(EXAMPLES))
     monkeypatch.setattr(sys, "argv", ["cell_table.py", str(out), "--cells", "5", "--size", "24"])
     runpy.run_path(str(EXAMPLES / "cell_table.py"), run_name="__main__")
-    image = np.load(out / "cells.npy")
+    image = isoflow.read_labels(out / "cells.npz").array
     assert image.shape == (24, 24) and not np.array_equal(image, image.T)
     isoflow.write_labels(image, tmp_path / "cells.tif")
     np.testing.assert_array_equal(np.asarray(drawn[0]), tifffile.imread(tmp_path / "cells.tif"))
