@@ -16,8 +16,8 @@ Prints every step's figures and writes ``OUT/flow.csv`` (voxels, parity,
 Betti numbers, chi and energy per step), ``OUT/step_NNN.ply`` (each step's
 boundary surface, in the mesh's coordinates), ``OUT/flow.png`` (the figures
 against the step) and ``OUT/shapes.png`` (the object at a few steps).
-``isoflow flow MESH --out DIR`` writes the same from the command line,
-while the flow runs.
+``isoflow flow MESH --resolution 24 --out DIR`` writes the same from the
+command line, while the flow runs (its default resolution is 64).
 
 .. code-block:: bash
 
