@@ -12,8 +12,9 @@ energy. Every row equals :func:`isoflow.analyze` of that cell's mask. A
 hole that reaches its cell's edge, or the image's, is no hole: the table
 says which cells hold one.
 
-Writes the table (``OUT/cells.csv``), the image (``OUT/cells.npy``, for
-``isoflow info OUT/cells.npy --labels``) and a picture (``OUT/cells.png``).
+Writes the table (``OUT/cells.csv``), the image with its pixel size
+(``OUT/cells.npz``: ``isoflow info OUT/cells.npz --labels`` gives the same
+table) and a picture (``OUT/cells.png``).
 
 .. code-block:: bash
 
@@ -53,7 +54,7 @@ def cell_map(size: int, cells: int, seed: int = 3) -> np.ndarray:
 
 def main():
     args = parse_args("Every cell of a 2D segmentation at once.", arguments)
-    table_path, image_path, picture = outputs(args, "cells.csv", "cells.npy", "cells.png")
+    table_path, image_path, picture = outputs(args, "cells.csv", "cells.npz", "cells.png")
     image = cell_map(args.size, args.cells)
     table = isoflow.label_table(image, 4, pitch=0.25)  # 0.25 units (say micrometres) per pixel
     holes = table["b1"]
@@ -69,7 +70,7 @@ def main():
         writer = csv.writer(fh)
         writer.writerow(list(table))
         writer.writerows(zip(*[column.tolist() for column in table.values()]))
-    np.save(image_path, image)
+    isoflow.write_labels(image, image_path, pitch=0.25, force=True)  # a .npy would keep no pixel size
 
     # the cells, those with holes outlined in red, x across and y down as an
     # image viewer shows the image's PNG or TIFF (and isoflow flow's

@@ -12,8 +12,8 @@ the vertices is the digital Gauss-Bonnet theorem, ``8 chi`` (Theorem 10).
 Writes ``OUT/surface.ply`` in the mesh's own coordinates, with those
 columns and a colour by ``gamma`` (blue concave, white flat, red convex),
 through trimesh, and ``OUT/surface.png``, the picture below.
-``isoflow surface MESH -o OUT.ply --png OUT.png`` writes the same from the
-command line, as quads.
+``isoflow surface MESH --resolution 40 -o OUT.ply --png OUT.png`` writes
+the same from the command line, as quads (its default resolution is 64).
 
 .. code-block:: bash
 

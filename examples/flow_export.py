@@ -16,8 +16,8 @@ Prints every step's figures and writes ``OUT/flow.csv`` (voxels, parity,
 Betti numbers, chi and energy per step), ``OUT/step_NNN.ply`` (each step's
 boundary surface, in the mesh's coordinates), ``OUT/flow.png`` (the figures
 against the step) and ``OUT/shapes.png`` (the object at a few steps).
-``isoflow flow MESH --out DIR`` writes the same from the command line,
-while the flow runs.
+``isoflow flow MESH --resolution 24 --out DIR`` writes the same from the
+command line, while the flow runs (its default resolution is 64).
 
 .. code-block:: bash
 
@@ -52,18 +52,23 @@ def write_table(result, path):
 
 
 def plot_figures(result):
+    from matplotlib.ticker import MaxNLocator
+
     steps = [s["step"] for s in result.steps]
     fig, axes = plt.subplots(1, 3, figsize=(12, 3.5))
     axes[0].plot(steps, [s["voxels"] for s in result.steps], "o-")
     axes[0].set_title("voxels")
     axes[1].plot(steps, [s["energy"] for s in result.steps], "o-", color="tab:red")
     axes[1].set_title("energy E = k^T n")
-    for i in range(3):
-        axes[2].plot(steps, [s["betti"][i] for s in result.steps], "o-", label=f"b{i}")
+    for i in range(3):  # each line narrower than the one below it: the torus's b0 = b1 = 1 would hide b0
+        width = 5.0 - 2.0 * i
+        axes[2].plot(steps, [s["betti"][i] for s in result.steps], "o-", lw=width, ms=2.5 + width, label=f"b{i}")
     axes[2].legend()
     axes[2].set_title("Betti numbers")
-    for ax in axes:
+    for ax in axes:  # steps, counts and Betti numbers are whole numbers, not 0.2, 0.4, ...
         ax.set_xlabel("step")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     fig.tight_layout()
     return fig
 

@@ -69,8 +69,10 @@ def main():
     for path in paths:
         r = isoflow.verify_genus(path, args.resolution, connectivity=6, max_resolution=args.max_resolution)
         digital = {d["resolution"]: d["genus"] for d in r["digital"]}
+        # pymeshlab's genus -1 says the mesh is no 2-manifold (r["pymeshlab"]["error"]): no genus, not -1 handles
+        pymeshlab = None if "error" in r["pymeshlab"] else r["pymeshlab"].get("genus")
         rows.append([path.name, r["mesh"]["faces"], r["mesh"]["components"], show(r["mesh"]["genus"]),
-                     show(r["manifold3d"].get("genus")), show(r["pymeshlab"].get("genus")),
+                     show(r["manifold3d"].get("genus")), show(pymeshlab),
                      *(show(digital.get(res)) for res in args.resolution), r["agree"], r["verdict"]])
     with open(table, "w", newline="") as fh:
         csv.writer(fh).writerows([header, *rows])

@@ -9,8 +9,9 @@ surface area in world units, Euler characteristic, Betti numbers and the
 genera of its closed surfaces. Every row equals :func:`isoflow.analyze` of
 that label's mask; the columns go into pandas or a CSV as they are.
 
-Writes the table (``OUT/labels.csv``), the image (``OUT/labels.npy``, for
-``isoflow info OUT/labels.npy --labels``) and a picture (``OUT/labels.png``).
+Writes the table (``OUT/labels.csv``), the image with its voxel size
+(``OUT/labels.npz``: ``isoflow info OUT/labels.npz --labels`` gives the
+same table) and a picture (``OUT/labels.png``).
 
 .. code-block:: bash
 
@@ -55,7 +56,7 @@ def grain_map(size: int, grains: int, seed: int = 7) -> np.ndarray:
 
 def main():
     args = parse_args("Every label of a label image at once.", arguments)
-    table_path, image_path, picture = outputs(args, "labels.csv", "labels.npy", "labels.png")
+    table_path, image_path, picture = outputs(args, "labels.csv", "labels.npz", "labels.png")
     image = grain_map(args.size, args.grains)
     table = isoflow.label_table(image, 6, pitch=0.5)  # 0.5 units per voxel
     print(f"{len(table['label'])} labels in a {args.size}^3 grain map, 6-connectivity, voxel 0.5")
@@ -70,7 +71,7 @@ def main():
         writer.writerow(list(table))
         for r in range(len(table["label"])):
             writer.writerow([";".join(map(str, v[r])) if k == "genera" else v[r] for k, v in table.items()])
-    np.save(image_path, image)
+    isoflow.write_labels(image, image_path, pitch=0.5, force=True)  # a .npy would keep no voxel size
 
     # the middle slice of the grain map, and each grain's area against its
     # volume, the grains whose topology is not a ball's marked

@@ -11,8 +11,9 @@ paper's nine curvature classes (eq. 4.9).
 
 Writes the volume (``OUT/solid.npz``, with its pitch and origin: read it
 back with :func:`isoflow.read_volume` or ``isoflow info OUT/solid.npz``),
-the report (``OUT/report.json``, what ``isoflow info --json`` prints) and
-a picture of a slice and the class counts (``OUT/topology.png``).
+the report (``OUT/report.json``, what ``isoflow info --json`` prints, less
+the input file's keys) and a picture of a slice and the class counts
+(``OUT/topology.png``).
 
 .. code-block:: bash
 

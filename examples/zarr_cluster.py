@@ -96,8 +96,9 @@ def main():
     blocks = math.prod(math.ceil(s / c) for s, c in zip(shape, CHUNKS))
     print(f"{store.name}: shape {shape}, {blocks} blocks of up to {CHUNKS}, 2 worker processes")
     for name, r in (("out of core", chunked), ("in memory", in_memory)):
+        surfaces = len(r["surfaces"])
         print(f"  {name:<12} voxels {r['voxels']}, chi {r['euler_characteristic']}, betti {r['betti']}, "
-              f"energy {r['energy']}, {len(r['surfaces'])} closed surfaces")
+              f"energy {r['energy']}, {surfaces} closed surface{'s' * (surfaces != 1)}")
     print(f"  the two reports are {'identical' if chunked == in_memory else 'DIFFERENT'}")
     print(f"wrote {report_path.name} and {picture.name} to {args.out}")
     if chunked != in_memory or int(np.count_nonzero(volume)) != written.voxels:

@@ -551,3 +551,36 @@ def test_large_volumes_md_gives_the_first_compile_as_measured():
     assert said, "large-volumes.md: the first compile's range, load and machine"
     low, high, _, load_low, load_high, cached_low, cached_high = map(float, said.groups())
     assert low < high and load_low <= load_high and cached_low <= cached_high < low / 10
+
+
+def synopses(page: Path) -> list[tuple[str, str]]:
+    """(command, text) of every synopsis in the page's fenced blocks: a line
+    ``isoflow CMD ... [--option ...]`` with the indented lines of brackets
+    that go on with it."""
+    found: list[tuple[str, str]] = []
+    for block in re.findall(r"```[^\n]*\n(.*?)```", page.read_text(), re.S):
+        going_on = False
+        for line in block.splitlines():
+            match = COMMAND.match(line)
+            if match and "[" in line:
+                found.append((match.group(1), line))
+                going_on = True
+            elif going_on and line.startswith(" ") and line.strip().startswith("["):
+                found[-1] = (found[-1][0], found[-1][1] + " " + line.strip())
+            else:
+                going_on = False
+    return found
+
+
+@pytest.mark.parametrize("page", [p for p in PAGES if synopses(p)], ids=lambda p: p.name)
+def test_a_synopsis_lists_every_option_of_its_command(page):
+    """A synopsis a page gives (genus.md's) names each option of the command
+    in one of its spellings, and no option the command lacks (-h aside)."""
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    for command, text in synopses(page):
+        named = set(re.findall(r"(?<![\w-])--?[a-z][a-z0-9-]*", text))
+        spellings = [set(a.option_strings) for a in commands[command]._actions
+                     if a.option_strings and "--help" not in a.option_strings]
+        assert named <= set().union(*spellings), (command, sorted(named - set().union(*spellings)))
+        assert all(named & s for s in spellings), (command, [sorted(s) for s in spellings if not named & s])

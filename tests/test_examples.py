@@ -248,6 +248,42 @@ def test_flow_export_forced_over_a_longer_run_keeps_only_its_own_steps(tmp_path)
         assert np.isclose(volume, s["voxels"] * solid.pitch ** 3)
 
 
+def test_flow_export_draws_equal_betti_numbers_both_visible(tmp_path, monkeypatch):
+    """The torus keeps b0 = b1 = 1 to its last non-empty step: in flow.png a
+    line drawn over an equal one must be narrower than it, or the one below
+    is hidden (as isoflow flow's flow.png draws them), and the Betti numbers,
+    whole numbers, are ticked in whole numbers."""
+    import runpy
+
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    matplotlib.use("Agg")
+    drawn = []
+    save = Figure.savefig
+
+    def keep(fig, *args, **kwargs):
+        drawn.append(fig)
+        return save(fig, *args, **kwargs)
+
+    out = tmp_path / "out"
+    monkeypatch.setattr(Figure, "savefig", keep)
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+    monkeypatch.setattr(sys, "argv", ["flow_export.py", str(out)])
+    runpy.run_path(str(EXAMPLES / "flow_export.py"), run_name="__main__")
+    betti = next(ax for fig in drawn for ax in fig.axes if ax.get_title() == "Betti numbers")
+    lines = betti.get_lines()
+    assert [line.get_label() for line in lines] == ["b0", "b1", "b2"]
+    equal = [(i, j) for i in range(3) for j in range(i + 1, 3)
+             if np.array_equal(lines[i].get_ydata(), lines[j].get_ydata())]
+    assert (0, 1) in equal  # b0 = b1 at every step of the torus's run
+    for i, j in equal:
+        assert lines[j].get_linewidth() < lines[i].get_linewidth()
+    low, high = betti.get_ylim()
+    ticks = [y for y in betti.get_yticks() if low <= y <= high]
+    assert ticks and all(float(y).is_integer() for y in ticks)
+
+
 def test_genus_table(example_run):
     out, _ = example_run("genus_table")
     with open(out / "genus.csv") as fh:
@@ -258,6 +294,8 @@ def test_genus_table(example_run):
         m = data.info(name)
         assert rows[name]["genus"] == ("-" if m["genus"] is None else str(m["genus"])), name
         assert rows[name]["components"] == str(m["components"]), name
+        for tool in ("manifold3d", "pymeshlab"):  # a genus counts handles: a tool that gives none is "-", never below 0
+            assert rows[name][tool] == "-" or int(rows[name][tool]) >= 0, (name, tool)
     for name in ("bob_small.ply", "torus.obj", "eight.off", "spot.ply"):
         assert rows[name]["digital_64"] == str(genus(name)) and rows[name]["agree"] == "True"
     assert rows["plane_holes.obj"]["agree"] == "False"  # open: no genus to agree with
@@ -278,6 +316,8 @@ def test_zarr_cluster(example_run):
     assert euler_number(volume, 1) == 1 - g == report["chunked"]["euler_characteristic"]
     assert int(volume.sum()) == report["chunked"]["voxels"]
     assert "identical" in printed and "2 worker processes" in printed
+    # a solid in one piece without cavities is bounded by b0 + b2 = 1 closed surface, said in the singular
+    assert printed.count("energy") == 2 and printed.count(", 1 closed surface\n") == 2
 
 
 
@@ -335,7 +375,7 @@ def table_example_rows(out, stem: str) -> list[tuple[dict, np.ndarray]]:
     Euler number (at 2n-connectivity)."""
     with open(out / f"{stem}.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    image = np.load(out / f"{stem}.npy")
+    image = isoflow.read_labels(out / f"{stem}.npz").array
     assert [int(r["label"]) for r in rows] == sorted(set(np.unique(image).tolist()) - {0})
     masks = [image == int(row["label"]) for row in rows]
     assert [int(r["euler_characteristic"]) for r in rows] == [euler_number(m, 1) for m in masks]
@@ -394,6 +434,28 @@ def test_label_table(example_run):
     assert (out / "labels.png").stat().st_size > 0
 
 
+@pytest.mark.parametrize(("name", "stem", "cell"), [("label_table", "labels", 0.5 ** 3), ("cell_table", "cells", 0.25 ** 2)])
+def test_a_table_example_s_image_gives_its_table_to_isoflow_info(example_run, capsys, name, stem, cell):
+    """The docstring's ``isoflow info OUT/STEM.npz --labels`` gives the table
+    the script wrote: each label's volume (2D: area) is its voxels times the
+    voxel the script measured in, not in unit voxels, as a .npy would."""
+    import ast
+
+    from isoflow.cli.main import main
+
+    doc = " ".join(ast.get_docstring(ast.parse((EXAMPLES / f"{name}.py").read_text())).split())
+    assert f"``isoflow info OUT/{stem}.npz --labels`` gives the same table" in doc
+    out, _ = example_run(name)
+    capsys.readouterr()
+    assert main(["info", str(out / f"{stem}.npz"), "--labels", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["labels"]
+    key = "volume" if stem == "labels" else "area"
+    assert rows and all(r[key] == r["voxels"] * cell for r in rows)
+    with open(out / f"{stem}.csv", newline="") as fh:
+        written = list(csv.DictReader(fh))
+    assert [(int(w["label"]), float(w[key])) for w in written] == [(r["label"], r[key]) for r in rows]
+
+
 def test_cell_table_draws_the_cells_as_a_viewer_shows_their_png(tmp_path, monkeypatch):
     """The picture's cells are the label image as tifffile reads the TIFF
     that ``write_labels`` makes of it (rows are y, columns x): x across and
@@ -418,7 +480,7 @@ def test_cell_table_draws_the_cells_as_a_viewer_shows_their_png(tmp_path, monkey
     monkeypatch.syspath_prepend(str(EXAMPLES))
     monkeypatch.setattr(sys, "argv", ["cell_table.py", str(out), "--cells", "5", "--size", "24"])
     runpy.run_path(str(EXAMPLES / "cell_table.py"), run_name="__main__")
-    image = np.load(out / "cells.npy")
+    image = isoflow.read_labels(out / "cells.npz").array
     assert image.shape == (24, 24) and not np.array_equal(image, image.T)
     isoflow.write_labels(image, tmp_path / "cells.tif")
     np.testing.assert_array_equal(np.asarray(drawn[0]), tifffile.imread(tmp_path / "cells.tif"))
