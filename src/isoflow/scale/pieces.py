@@ -610,21 +610,25 @@ NEAR_SLOTS = 1 << 10
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _into(pairs, key, how, pq, qp):
+    """Add to the pair ``key`` in the pair table (as :func:`_add`, ``pq``
+    and ``qp`` as uint64). Returns 1 for a new pair."""
+    s = _slot(pairs, key)
+    new = np.int64(pairs[s, 0] == EMPTY)
+    pairs[s, 0] = key
+    pairs[s, 1] = min(pairs[s, 1], how)
+    pairs[s, 2] += pq
+    pairs[s, 3] += qp
+    return new
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _spill(pairs, near, c):
     """Slot c of the near cache added into the pair table (and emptied).
     Returns 1 for a new pair."""
     key = near[c, 0]
-    s = _slot(pairs, key)
-    new = 0
-    if pairs[s, 0] == EMPTY:
-        pairs[s, 0] = key
-        new = 1
-    if near[c, 1] < pairs[s, 1]:
-        pairs[s, 1] = near[c, 1]
-    pairs[s, 2] += near[c, 2]
-    pairs[s, 3] += near[c, 3]
     near[c, 0] = EMPTY
-    return new
+    return _into(pairs, key, near[c, 1], near[c, 2], near[c, 3])
 
 
 @njit(cache=True, nogil=True)
@@ -644,31 +648,38 @@ def _packed(sheets, quarters):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _add(pairs, near, p, q, how, pq, qp):
+def _add(pairs, near, p, q, how, pq, qp, evict):
     """Add to the pair of pieces p != q: the closer ``how`` they touch, the
     sheets (and their quarters of faces) whose object voxel is in p and
     background voxel in q (``pq``), and those the other way (``qp``), each
     direction in one word (sheets in the low half, quarters in the high:
     :func:`_packed`). The sums gather in the near cache (``near``: a small
     pair table, one slot per hash), whose slot's pair, if another, goes to
-    the pair table first. Returns the new pairs of the pair table (0 or
-    1)."""
-    if p > q:
-        p, q, pq, qp = q, p, qp, pq
-    key = (np.uint64(p) << np.uint64(32)) | np.uint64(q)
+    the pair table first; without ``evict`` (a pair of a block of four
+    pieces or more, which mostly touch only there, by an edge or a vertex)
+    the pair goes to the pair table itself and leaves the near cache's
+    pair, which the next blocks are likely to meet, where it is. Returns
+    the new pairs of the pair table (0 or 1)."""
+    # the smaller piece first, picked rather than branched on: which one
+    # comes first is a coin toss from one block to the next
+    swap = p > q
+    lo, hi = min(p, q), max(p, q)
+    pq, qp = np.uint64(qp) if swap else np.uint64(pq), np.uint64(pq) if swap else np.uint64(qp)
+    key = (np.uint64(lo) << np.uint64(32)) | np.uint64(hi)
     c = ((key * np.uint64(0x9E3779B97F4A7C15)) >> np.uint64(32)) & np.uint64(len(near) - 1)
     new = 0
     if near[c, 0] != key:
         if near[c, 0] != EMPTY:
+            if not evict:
+                return _into(pairs, key, np.uint64(how), pq, qp)
             new = _spill(pairs, near, c)
         near[c, 0] = key
         near[c, 1] = NONE
         near[c, 2] = 0
         near[c, 3] = 0
-    if how < near[c, 1]:
-        near[c, 1] = how
-    near[c, 2] += np.uint64(pq)
-    near[c, 3] += np.uint64(qp)
+    near[c, 1] = min(near[c, 1], np.uint64(how))
+    near[c, 2] += pq
+    near[c, 3] += qp
     return new
 
 
@@ -697,6 +708,23 @@ def contact_table() -> np.ndarray:
         hit = (((masks[:, None] >> o1) & 1) & ((masks[None, :] >> o2) & 1)) | (
             ((masks[:, None] >> o2) & 1) & ((masks[None, :] >> o1) & 1))
         out[(hit == 1) & (out > how)] = how
+    return out
+
+
+def _halves(group, nsheet, quarter, spokes):
+    """What the vertex pass reads for a block of two pieces, per octant
+    mask ``m`` of one of them (the other holds the rest), in one row of
+    four int64: how the two touch (:func:`contact_table` of ``m`` and
+    ``255 - m``), the sheets of configuration ``m`` at one vertex with
+    their quarters of faces packed as the pair table adds them
+    (:func:`_packed`), its group of configurations (``group``: the
+    feature table's row per configuration) and its spokes."""
+    m = np.arange(256)
+    out = np.empty((256, 4), np.int64)
+    out[:, 0] = contact_table()[m, 255 - m]
+    out[:, 1] = nsheet | (quarter.sum(axis=1) << 32)
+    out[:, 2] = group
+    out[:, 3] = spokes
     return out
 
 
@@ -755,10 +783,17 @@ def _label(flat, ny, nz, a, nx, i, j, k, w, piece, c, value, base, features, tab
     have this block; and the doubled edges where a spoke is doubled (which
     depend on the next vertices' blocks, so are counted one vertex at a
     time)."""
-    features[piece - base, table[c]] += w
-    if spokes[c] != 0:
+    _counted(flat, ny, nz, a, nx, i, j, k, w, piece, table[c], spokes[c], value, base, features, doubled, spokes)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _counted(flat, ny, nz, a, nx, i, j, k, w, piece, group, sp, value, base, features, doubled, spokes):
+    """:func:`_label` of a configuration of group ``group`` and spokes
+    ``sp`` (read from the tables by the caller)."""
+    features[piece - base, group] += w
+    if sp != 0:
         for kk in range(k, k + w):
-            doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, spokes[c], spokes)
+            doubled[piece - base] += _doubled(flat, ny, nz, a, nx, i, j, kk, value, sp, spokes)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -817,7 +852,7 @@ def _several(val8, id8, flat, ny, nz, a, nx, i, j, k, w, want, base, features, t
             how = contact[pmask[u], pmask[t]]
             if how < NONE or local[u, t, 0] != 0 or local[t, u, 0] != 0:
                 new += _add(pairs, near, pid[u], pid[t], how, _packed(local[u, t, 0], local[u, t, 1]),
-                            _packed(local[t, u, 0], local[t, u, 1]))
+                            _packed(local[t, u, 0], local[t, u, 1]), False)
     return new
 
 
@@ -897,13 +932,13 @@ def _three(pa, pb, pc, m0, m1, m2, pvalues, vbase, flat, ny, nz, a, nx, i, j, k,
     new = 0
     how = contact[m0, m1]
     if how < NONE or s01 != 0 or s10 != 0:
-        new += _add(pairs, near, pa, pb, how, s01, s10)
+        new += _add(pairs, near, pa, pb, how, s01, s10, True)
     how = contact[m0, m2]
     if how < NONE or s02 != 0 or s20 != 0:
-        new += _add(pairs, near, pa, pc, how, s02, s20)
+        new += _add(pairs, near, pa, pc, how, s02, s20, True)
     how = contact[m1, m2]
     if how < NONE or s12 != 0 or s21 != 0:
-        new += _add(pairs, near, pb, pc, how, s12, s21)
+        new += _add(pairs, near, pb, pc, how, s12, s21, True)
     return new
 
 
@@ -934,9 +969,9 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
     four pieces or more is put off (its ids, k and w appended to
     ``deferred``, ``count[0]`` of them) for :func:`_deferred`, so that the
     vertex rows' loop holds no loop over a block's pieces. ``sheets``: the sheet
-    tables (``nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes``).
-    Returns the number of new pairs."""
-    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    tables (``nsheet, halves, sheet_obj, sheet_bg, quarter, spokes``;
+    ``halves``: :func:`_halves` of them). Returns the number of new pairs."""
+    nsheet, halves, sheet_obj, sheet_bg, quarter, spokes = sheets
     pa = a0
     m0 = _mask8(pa, a0, a1, a2, a3, b0, b1, b2, b3)
     pb = _outside(m0, a1, a2, a3, b0, b1, b2, b3)
@@ -955,16 +990,19 @@ def _block(a0, a1, a2, a3, b0, b1, b2, b3, pvalues, vbase, flat, ny, nz, a, nx, 
         return 0
     if pa != 0 and pb != 0 and pvalues[pa - vbase] == pvalues[pb - vbase]:
         # one label, two pieces touching by an edge or a vertex
-        return _add(pairs, near, pa, pb, contact[m0, m1], 0, 0)
-    na, nb = 0, 0
+        return _add(pairs, near, pa, pb, halves[m0, 0], 0, 0, True)
+    # one row of _halves per piece, not a read from each of five tables (the
+    # contact table alone is 64 KiB): most blocks of more than one piece have two
+    pq, qp = np.uint64(0), np.uint64(0)
     if pa != 0 and want[pa - fbase]:
-        na = w * nsheet[m0]
-        _label(flat, ny, nz, a, nx, i, j, k, w, pa, m0, pvalues[pa - vbase], fbase, features, table, doubled, spokes)
+        pq = np.uint64(w) * np.uint64(halves[m0, 1])
+        _counted(flat, ny, nz, a, nx, i, j, k, w, pa, halves[m0, 2], halves[m0, 3], pvalues[pa - vbase], fbase,
+                 features, doubled, spokes)
     if pb != 0 and want[pb - fbase]:
-        nb = w * nsheet[m1]
-        _label(flat, ny, nz, a, nx, i, j, k, w, pb, m1, pvalues[pb - vbase], fbase, features, table, doubled, spokes)
-    return _add(pairs, near, pa, pb, contact[m0, m1], _packed(na, w * qsum[m0] if na else 0),
-                _packed(nb, w * qsum[m1] if nb else 0))
+        qp = np.uint64(w) * np.uint64(halves[m1, 1])
+        _counted(flat, ny, nz, a, nx, i, j, k, w, pb, halves[m1, 2], halves[m1, 3], pvalues[pb - vbase], fbase,
+                 features, doubled, spokes)
+    return _add(pairs, near, pa, pb, halves[m0, 0], pq, qp, True)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -1074,7 +1112,7 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
     Called once per vertex row, so compiled on its own rather than inline
     (as :func:`_vertex_rows`, without reference counting): a shorter first
     compile of the vertex rows, at the same speed."""
-    nsheet, qsum, sheet_obj, sheet_bg, quarter, spokes = sheets
+    nsheet, halves, sheet_obj, sheet_bg, quarter, spokes = sheets
     val8, id8, pid, pmask, pval, slot, local, same = scratch
     new = 0
     for d in range(count[0]):
@@ -1135,7 +1173,7 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     args = (value_bytes(flat), found["offsets"], found["starts"], found["runs"],
             found["values"].astype(np.uint64, copy=False), ny, nz, x0, nx)
     table_of = group.reshape(-1).astype(np.int64)
-    sheets = (nsheet, quarter.sum(axis=1), sheet_obj, sheet_bg, quarter, spokes)
+    sheets = (nsheet, _halves(table_of, nsheet, quarter, spokes), sheet_obj, sheet_bg, quarter, spokes)
     contact = contact_table()
     wanted = want.astype(np.bool_)
 
