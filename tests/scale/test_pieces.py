@@ -78,6 +78,36 @@ def test_pieces_of_long_rows_on_several_threads(rng, nz):
         assert (found[0]["lo"][1:, d] == lo[1:]).all() and (found[0]["hi"][1:, d] == hi[1:]).all()
 
 
+@pytest.mark.parametrize("nz", [64, 100])
+def test_pieces_when_the_runs_outgrow_their_buffers_between_layers(rng, nz):
+    """A slab whose runs fill their buffers after some of its layers (noise
+    of a few values: a run every other voxel) stops there and goes on with
+    larger buffers, its layers' run starts kept for the joins with the
+    next layer: cc3d's components of each value, in one slab and in three."""
+    import cc3d
+
+    from isoflow.scale import pieces
+    from isoflow.scale.compiled import using
+
+    image = rng.integers(0, 3, (40, 30, nz)).astype(np.uint8)
+    image[10:30, 5:25, 10:50] = 3  # one block across the layers where the buffers fill
+    # the first buffers hold about two batches of rows, so that they fill once a batch of layers is done
+    assert pieces.MARK_VOXELS // nz < 40 * 30 and 40 * 30 * nz // 16 < 2 * (pieces.MARK_VOXELS // nz) * nz
+    for threads in (1, 3):
+        with using(threads):
+            found = pieces.label_pieces(image)
+        ids = found["ids"]
+        count = 0
+        for value in np.unique(image):
+            theirs, n = cc3d.connected_components((image == value).astype(np.uint8), connectivity=6,
+                                                  return_N=True)
+            pairs = np.unique(np.stack([ids[image == value], theirs[image == value]]), axis=1)
+            assert len(np.unique(pairs[0])) == len(np.unique(pairs[1])) == pairs.shape[1] == n
+            count += n
+        assert found["n"] == count
+        assert (found["counts"][1:] == np.bincount(ids.ravel())[1:]).all()
+
+
 def test_a_growable_buffer_keeps_its_entries_moved_or_copied(rng):
     """A buffer grown, with no array of it held, keeps its entries and is
     zero beyond them; grown while an array of it is held (it cannot move

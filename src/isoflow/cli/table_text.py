@@ -22,12 +22,12 @@ from one block to the next.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import sys
 import threading
 from collections.abc import Callable, Iterator
-from functools import partial
 
 import numpy as np
 
@@ -130,18 +130,6 @@ def _text_cells(texts: list[str]) -> tuple[np.ndarray, np.ndarray]:
     return chars, lengths
 
 
-def _int_parts(column: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """An integer column (any width, signed or not) as its magnitudes
-    (uint64) and signs."""
-    if column.dtype.kind == "u":
-        return column.astype(np.uint64), np.zeros(len(column), np.bool_)
-    wide = column.astype(np.int64)
-    negative = wide < 0
-    # two's complement: -v as uint64 is |v|, for the most negative int64 too
-    # (whose negation wraps to itself, 2**63 as uint64)
-    return np.where(negative, (-wide).astype(np.uint64), wide.astype(np.uint64)), negative
-
-
 def _float_cells(values: np.ndarray, missing: str, joined: str, chars: np.ndarray, lengths: np.ndarray) -> None:
     """Float64 ``values`` as ``repr`` writes them (NaN and infinities as
     :func:`non_finite_text` writes them) into ``chars`` ((n, FLOAT_WIDTH)
@@ -158,21 +146,55 @@ def _float_cells(values: np.ndarray, missing: str, joined: str, chars: np.ndarra
         lengths[left] = their
 
 
+def _distinct_cells(column: np.ndarray, joined: str, booleans: tuple[str, str]) -> tuple[np.ndarray, ...]:
+    """The cells of a column that are not numbers (a tuple, a boolean, a
+    name) as the text of each distinct value (:func:`cell_texts`), made
+    once: the texts right-aligned in a (values, longest) uint8 matrix,
+    their lengths, and each row's value among them. A label table's genera
+    are a few distinct tuples over many rows."""
+    values = column.tolist()
+    # each row's first row of its value (no Python loop of our own), then
+    # those first rows numbered in order
+    first = np.fromiter(map({}.setdefault, values, itertools.count()), np.intp, len(values))
+    seen = np.zeros(len(values), bool)
+    seen[first] = True
+    kinds = np.empty(int(seen.sum()), column.dtype)
+    for k, row in enumerate(np.flatnonzero(seen).tolist()):  # one by one: a tuple is one object cell
+        kinds[k] = values[row]
+    chars, lengths = _text_cells(cell_texts(kinds, joined, booleans))
+    return chars, lengths, (np.cumsum(seen) - 1)[first]
+
+
 def _cells(column: np.ndarray, missing: str, joined: str, booleans: tuple[str, str]) -> tuple[int, Callable]:
     """A column's cells before they are written: their width, and a call
-    ``write(chars, lengths)`` that writes them right-aligned into the rows
-    of a (n, width) uint8 matrix and their lengths into ``lengths``."""
+    ``write(lo, hi, chars, lengths)`` that writes those of rows lo .. hi -
+    1 right-aligned into the rows of a (hi - lo, width) uint8 matrix and
+    their lengths into ``lengths``. What a pass over the whole column
+    gives (the widest integer, the text of each distinct tuple) is found
+    here once, not again for each block of rows."""
     if column.dtype.kind in "iu":
-        from ..scale.text_rows import decimal_cells, decimal_width  # numba: not for a command without a table
+        from ..scale.text_rows import integer_cells  # numba: not for a command without a table
 
-        magnitude, negative = _int_parts(column)
-        return decimal_width(magnitude) + bool(negative.any()), partial(decimal_cells, magnitude, negative)
+        # two compiled kinds: uint64, and int64, which holds every narrower integer
+        kind = np.uint64 if column.dtype == np.uint64 else np.int64
+        width = max(len(str(column.min())), len(str(column.max()))) if len(column) else 1
+
+        def integers(lo: int, hi: int, chars: np.ndarray, lengths: np.ndarray) -> None:
+            integer_cells(np.ascontiguousarray(column[lo:hi], kind), chars, lengths)
+
+        return width, integers
     if column.dtype.kind == "f":
         from ..scale.float_text import FLOAT_WIDTH
 
-        return FLOAT_WIDTH, partial(_float_cells, np.ascontiguousarray(column, dtype=np.float64), missing, joined)
-    texts = cell_texts(column, joined, booleans)
-    return max(map(len, texts), default=0), partial(_fill_texts, texts)
+        values = np.ascontiguousarray(column, dtype=np.float64)
+        return FLOAT_WIDTH, lambda lo, hi, chars, lengths: _float_cells(values[lo:hi], missing, joined, chars, lengths)
+    texts, sizes, which = _distinct_cells(column, joined, booleans)
+
+    def distinct(lo: int, hi: int, chars: np.ndarray, lengths: np.ndarray) -> None:
+        np.take(texts, which[lo:hi], axis=0, out=chars)
+        np.take(sizes, which[lo:hi], out=lengths)
+
+    return texts.shape[1], distinct
 
 
 def cell_bytes(column: np.ndarray, missing: str, joined: str,
@@ -194,7 +216,7 @@ def cell_bytes(column: np.ndarray, missing: str, joined: str,
     width, write = _cells(column, missing, joined, booleans)
     chars = np.zeros((len(column), width), np.uint8)
     lengths = np.zeros(len(column), np.int64)
-    write(chars, lengths)
+    write(0, len(column), chars, lengths)
     return chars[:, width - int(lengths.max(initial=0)):], lengths
 
 
@@ -232,24 +254,23 @@ def _scratch(held: threading.local, name: str, size: int, dtype: type) -> np.nda
     return buffers[name][:size]
 
 
-def _rows(table: dict, lo: int, hi: int, before: list[bytes], missing: str, joined: str,
-          booleans: tuple[str, str], held: threading.local | None = None) -> str:
+def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.local | None = None) -> str:
     """Rows lo .. hi - 1 as one text, each cell after its column's
     ``before[c]`` (the first column's holds the end of the row before):
-    each column's cells written into their own part of one buffer, then
-    the rows joined from them. The buffers are the calling thread's in
-    ``held`` (new ones where None)."""
+    each column's cells (``columns``: its :func:`_cells`, made once for
+    every block) written into their own part of one buffer, then the rows
+    joined from them. The buffers are the calling thread's in ``held``
+    (new ones where None)."""
     from ..scale.text_rows import join_cells
 
     held = threading.local() if held is None else held
     n = hi - lo
-    columns = [_cells(column[lo:hi], missing, joined, booleans) for column in table.values()]
     widths = np.array([width for width, _ in columns], np.int64)
     starts = np.cumsum(widths * n) - widths * n
     cells = _scratch(held, "cells", int(widths.sum()) * n, np.uint8)
     lengths = _scratch(held, "lengths", len(columns) * n, np.int64).reshape(len(columns), n)
     for c, (width, write) in enumerate(columns):
-        write(cells[starts[c]:starts[c] + width * n].reshape(n, width), lengths[c])
+        write(lo, hi, cells[starts[c]:starts[c] + width * n].reshape(n, width), lengths[c])
     seps = np.frombuffer(b"".join(before), np.uint8)
     out = _scratch(held, "out", int(lengths.sum()) + n * len(seps), np.uint8)
     size = join_cells(cells, starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
@@ -264,17 +285,16 @@ def _blocks(table: dict, before: list[bytes], missing: str, joined: str, boolean
     Python's text of a small table on the calling thread."""
     n = len(next(iter(table.values()))) if table else 0
     # text (a name column) may hold any character: Python's rows, not the compiled ASCII ones
-    rows = _plain_rows if plain(n) or any(c.dtype.kind == "U" for c in table.values()) else _rows
-    calls = [(rows, table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
-             for lo in range(0, n, BLOCK_ROWS)]
-    if rows is _plain_rows:
-        for fn, *args in calls:
-            yield fn(*args)
+    if plain(n) or any(c.dtype.kind == "U" for c in table.values()):
+        for lo in range(0, n, BLOCK_ROWS):
+            yield _plain_rows(table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
         return
     from ..scale.compiled import run_ahead
 
+    columns = [_cells(column, missing, joined, booleans) for column in table.values()]
     held = threading.local()  # each thread's buffers, let go with the text
-    yield from run_ahead([(*call, held) for call in calls])
+    yield from run_ahead([(_rows, columns, lo, min(lo + BLOCK_ROWS, n), before, held)
+                          for lo in range(0, n, BLOCK_ROWS)])
 
 
 def json_rows(table: dict) -> Iterator[str]:

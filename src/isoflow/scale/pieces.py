@@ -16,9 +16,13 @@ parent is a run before it), each run with the runs of the two rows before
 it that it touches by a face and shares a value with; so the labelling
 costs 8 bytes per run, not per voxel, and a grain map has few runs per
 row. The run starts are found as a bit per voxel (vector compares, 64
-voxels a word). A second pass in C order numbers the roots 1..n and gives
-each piece its value; then every slab of layers adds its runs to the voxel
-count, coordinate sums and bounding box of their pieces, on its thread.
+voxels a word), and so are the joins of two rows of many runs: where
+either row begins a run and both hold one value there (a bit per voxel
+too), the two runs there are joined, each found by counting its row's run
+starts up to that place. A second pass in C order numbers the roots 1..n
+and gives each piece its value; then every slab of layers adds its runs to
+the voxel count, coordinate sums and bounding box of their pieces, on its
+thread.
 
 :func:`vertex_pass` walks every vertex row along the runs of its four
 voxel rows: between two places where one of them begins a run, every
@@ -43,7 +47,7 @@ from functools import cache
 import numpy as np
 
 from ..errors import counted
-from .bitrows import trailing_zeros
+from .bitrows import popcount, trailing_zeros
 from .compiled import run, slabs, thread_count
 from .jit import njit
 from .kernels import union
@@ -205,7 +209,111 @@ MARK_VOXELS = 1 << 13
 
 
 @njit(cache=True, nogil=True)
-def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words):
+def _equal_bits(flat, a, b, n, words):
+    """Bit p of ``words`` (p < n): whether voxels a + p and b + p of the
+    flattened image hold one value; the bits from n on clear. Vector
+    compares, as :func:`_change_bits`."""
+    full = n // 64
+    for k in range(full):
+        x, y = flat[a + 64 * k:a + 64 * k + 64], flat[b + 64 * k:b + 64 * k + 64]
+        w = np.uint64(0)
+        for t in range(64):
+            w |= np.uint64(x[t] == y[t]) << np.uint64(t)
+        words[k] = w
+    if n % 64:
+        w = np.uint64(0)
+        for p in range(64 * full, n):
+            w |= np.uint64(flat[a + p] == flat[b + p]) << np.uint64(p - 64 * full)
+        words[full] = w
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_bits(starts_a, layer, yb, equal, a0, b0, parent):
+    """Join the runs of two voxel rows that overlap and share a value,
+    from bits: ``starts_a`` and ``layer[yb]`` mark where each row begins a
+    run (its first voxel too), ``equal`` where the rows hold one value; the
+    rows' runs are numbered from ``a0`` and ``b0``. Where either row begins
+    a run, the two runs there overlap on up to the next such place; they
+    are joined where the rows agree there, each run found by counting the
+    run starts of its row up to that place. The same joins in the same
+    order as a walk along the two rows' runs (:func:`_join_rows`), without
+    its branch on which run ends first, which a map of many small labels
+    mispredicts at about every other step."""
+    one = np.uint64(1)
+    ra, rb = a0 - 1, b0 - 1  # the runs that began before the word
+    for k in range(len(starts_a)):
+        wa, wb = starts_a[k], layer[yb, k]
+        m = (wa | wb) & equal[k]
+        while m != 0:
+            g = trailing_zeros(m)
+            m &= m - one
+            upto = (np.uint64(2) << g) - one  # bits 0 .. g (g = 63: all, the shift wrapping to 0)
+            union(parent, ra + np.int64(popcount(wa & upto)), rb + np.int64(popcount(wb & upto)))
+        ra += np.int64(popcount(wa))
+        rb += np.int64(popcount(wb))
+
+
+#: a row of more than one run per this many voxels is busy: its joins
+#: with a busy row before it are found from bits (:func:`_join_bits`), the
+#: others by a walk along the two rows' runs (:func:`_join_rows`), which
+#: costs a step per run where the bits cost passes over the rows
+BITS_VOXELS_PER_RUN = 8
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _row_bits(words, at, nz, out):
+    """Bits at .. at + nz - 1 of ``words`` into ``out`` from bit 0 on, the
+    bits from nz on clear."""
+    k0, shift = at >> 6, np.uint64(at & 63)
+    for k in range(len(out)):
+        w = words[k0 + k] >> shift
+        if shift != 0 and k0 + k + 1 < len(words):
+            w |= words[k0 + k + 1] << (np.uint64(64) - shift)
+        out[k] = w
+    if nz % 64:
+        out[len(out) - 1] &= (np.uint64(1) << np.uint64(nz % 64)) - np.uint64(1)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_pair(flat, nz, starts, parent, first, used, row, b0, b1, row_b, busy, row_bits, layer, yb, equal):
+    """Join the runs [first, used) of the row at flat index ``row`` with
+    the runs [b0, b1) of the row at ``row_b``: from bits where both rows
+    are busy (``row_bits`` and ``layer[yb]``: where each begins runs), else
+    by a walk along their runs."""
+    if busy and (b1 - b0) * BITS_VOXELS_PER_RUN > nz:
+        _equal_bits(flat, row, row_b, nz, equal)
+        _join_bits(row_bits, layer, yb, equal, first, b0, parent)
+    else:
+        _join_rows(flat, nz, starts, parent, first, used, row, b0, b1, row_b)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent, words, at, layer, row_bits, equal):
+    """Join the runs [first, used) of row r = x * ny + y with those of rows
+    (x, y - 1) and (x - 1, y) (within the slab). ``words`` holds where row
+    r begins runs from bit ``at`` on; ``layer[y]`` holds where the busy
+    rows of the layer before begin runs and takes row r's where it is
+    busy (:data:`BITS_VOXELS_PER_RUN`); ``row_bits`` and ``equal``: scratch
+    of a row's words."""
+    x, y = r // ny, r % ny
+    row = r * nz
+    busy = (used - first) * BITS_VOXELS_PER_RUN > nz
+    if busy:
+        _row_bits(words, at, nz, row_bits)
+    if y > 0:
+        _join_pair(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz, busy, row_bits,
+                   layer, y - 1, equal)
+    if x > x_lo:
+        _join_pair(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz,
+                   busy, row_bits, layer, y, equal)
+    if busy:
+        for k in range(len(row_bits)):
+            layer[y, k] = row_bits[k]
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, used, words, layer, row_bits,
+               equal):
     """The runs of the voxel rows (x, y), x_lo <= x < x_hi, from (x_at,
     y_at) on, appended at ``used`` with slab-local indices: ``starts`` (z of
     each run's first voxel), ``offsets[x * ny + y]`` (the row's first run);
@@ -213,12 +321,19 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
     (x - 1, y) it touches by a face and shares a value with (x - 1 within
     the slab only). Returns ``(used, x, y)``: where it stopped because the
     buffers might not hold the next rows (``x == x_hi`` when done).
+    ``layer``: (ny, words of a row), where the busy rows of the last layer
+    begin runs, kept from one call to the next (:func:`_join_row`);
+    ``row_bits`` and ``equal``: scratch of a row's words.
 
     The rows are read a batch at a time: first a bit per voxel that says
     whether it begins a run (every row's first voxel does), in one vector
     pass over the batch (:func:`_change_bits`); then the set bits, each
     found by its word's trailing zeros: a row of long runs costs its runs
-    and a word per 64 voxels, not a step per voxel."""
+    and a word per 64 voxels, not a step per voxel. The joins of two busy
+    rows with each other are found from bits too (:func:`_join_bits`).
+    Nothing is allocated here: compiled without reference counting, whose
+    counts on the arrays passed down cost more per row than a row of few
+    runs does."""
     batch = max(1, (64 * len(words) - 64) // nz)
     r = x_at * ny + y_at
     r_end = x_hi * ny
@@ -240,7 +355,8 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
                 w &= w - np.uint64(1)
                 if g == row_end:  # the next row begins: the last one is complete
                     if rr >= r:
-                        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+                        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words,
+                                  (rr - r) * nz, layer, row_bits, equal)
                     rr += 1
                     row_end += nz
                     first = used
@@ -248,21 +364,10 @@ def _slab_runs(flat, ny, nz, x_lo, x_hi, x_at, y_at, offsets, starts, parent, us
                 starts[used] = g - (row_end - nz)
                 parent[used] = used
                 used += 1
-        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent)
+        _join_row(flat, ny, nz, x_lo, rr, first, used, offsets, starts, parent, words, (rr - r) * nz, layer,
+                  row_bits, equal)
         r += b
     return used, x_hi, 0
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _join_row(flat, ny, nz, x_lo, r, first, used, offsets, starts, parent):
-    """Join the runs [first, used) of row r = x * ny + y with the runs of
-    rows (x, y - 1) and (x - 1, y) (within the slab)."""
-    x, y = r // ny, r % ny
-    row = r * nz
-    if y > 0:
-        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - 1], first, row - nz)
-    if x > x_lo:
-        _join_rows(flat, nz, starts, parent, first, used, row, offsets[r - ny], offsets[r - ny + 1], row - ny * nz)
 
 
 @njit(cache=True, nogil=True)
@@ -337,18 +442,15 @@ def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape
                 layers: tuple[int, int], x0: int, parts: list) -> tuple[np.ndarray, ...]:
     """Per piece (n + 1): voxel count, coordinate sums and bounding box of
     its runs in the voxel layers ``layers`` (at global x offset ``x0``),
-    each slab of ``parts`` on a thread of its own: a slab adds into arrays
-    over the range of pieces its runs hold (pieces are numbered in C order,
-    so mostly a narrow one), added into the whole after."""
+    each slab of ``parts`` on a thread of its own: the first slab adds into
+    the whole statistics, each other one into arrays over the range of
+    pieces its runs hold (pieces are numbered in C order, so mostly a
+    narrow one), added into the whole after."""
     _, ny, nz = shape
     rows = [(max(a, layers[0]) * ny, min(b, layers[1]) * ny) for a, b in parts]
     rows = [(r0, r1) for r0, r1 in rows if r0 < r1]
     counts, sums, lo, hi = _empty_stats(n + 1)
-    if len(rows) <= 1:
-        for r0, r1 in rows:
-            _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, 0, counts, sums, lo, hi)
-        return counts, sums, lo, hi
-    windows = [pieces_held(offsets, runs, r0, r1) for r0, r1 in rows]
+    windows = [pieces_held(offsets, runs, r0, r1) for r0, r1 in rows[1:]]
     # one thread adds into the whole statistics, which fit (checked before): no share of its own
     check_fits(STAT_BYTES * sum(b - a for a, b in windows), f"the statistics of {n:,} pieces, per thread",
                hint="one thread adds them into the whole statistics, which fit (threads=1, isoflow info --labels "
@@ -359,7 +461,10 @@ def piece_stats(offsets: np.ndarray, starts: np.ndarray, runs: np.ndarray, shape
         _add_stats(offsets, starts, runs, ny, nz, r0, r1, x0, p0, *part)
         return part
 
-    for (p0, p1), (c, s, a, b) in zip(windows, run([(slab, *r, *w) for r, w in zip(rows, windows)])):
+    # the first slab's pieces need no share of their own: the whole is theirs while the others fill their shares
+    first = [(_add_stats, offsets, starts, runs, ny, nz, *rows[0], x0, 0, counts, sums, lo, hi)] if rows else []
+    added = run(first + [(slab, *r, *w) for r, w in zip(rows[1:], windows)])
+    for (p0, p1), (c, s, a, b) in zip(windows, added[1:]):
         counts[p0:p1] += c
         sums[p0:p1] += s
         np.minimum(lo[p0:p1], a, out=lo[p0:p1])
@@ -447,10 +552,13 @@ def _slab_pieces(flat: np.ndarray, ny: int, nz: int, x_lo: int, x_hi: int, offse
     size = max(nz, (x_hi - x_lo) * ny * nz // 16)
     buffers = Growable(size, np.int32), Growable(size, np.uint32)
     words = np.zeros(max(MARK_VOXELS, nz) // 64 + 2, np.uint64)
+    layer = np.zeros((ny, (nz + 63) // 64), np.uint64)  # a bit per voxel of a layer
+    row_bits, equal = np.zeros(layer.shape[1], np.uint64), np.zeros(layer.shape[1], np.uint64)
     used, x, y = 0, x_lo, 0
     while True:
         starts, parent = (buffer.array() for buffer in buffers)
-        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words)
+        used, x, y = _slab_runs(flat, ny, nz, x_lo, x_hi, x, y, offsets, starts, parent, used, words, layer,
+                                row_bits, equal)
         del starts, parent  # no array of the buffers held: they grow in place
         if x == x_hi:
             return (*buffers, used)

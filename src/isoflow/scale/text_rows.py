@@ -17,43 +17,38 @@ import numpy as np
 from .jit import njit
 
 
-def decimal_width(magnitude: np.ndarray) -> int:
-    """Digits of the largest of ``magnitude`` (uint64), at least 1.
-
-    Examples
-    --------
-    >>> decimal_width(np.array([0, 999, 1000], np.uint64))
-    4
-    """
-    return len(str(int(magnitude.max()))) if len(magnitude) else 1
-
-
 @njit(cache=True, nogil=True)
-def decimal_cells(magnitude, negative, chars, lengths):
-    """Integer ``r`` (``magnitude[r]``, uint64, and ``negative[r]``) as
-    its decimal digits, ``-`` before them where negative, right-aligned in
-    row ``r`` of ``chars`` (uint8, wide enough: :func:`decimal_width` plus
-    the sign); its length in ``lengths[r]``.
+def integer_cells(values, chars, lengths):
+    """Integer ``values[r]`` (int64 or uint64) as its decimal digits,
+    ``-`` before them where negative, right-aligned in row ``r`` of
+    ``chars`` (uint8, wide enough: the longest ``str`` of a value); its
+    length in ``lengths[r]``. The sign and the magnitude are taken here,
+    value by value, so that a block of a column needs no arrays made for
+    them.
 
     Examples
     --------
-    >>> chars, lengths = np.zeros((2, 3), np.uint8), np.zeros(2, np.int64)
-    >>> decimal_cells(np.array([7, 120], np.uint64), np.array([True, False]), chars, lengths)
-    >>> [bytes(row[3 - n:]).decode() for row, n in zip(chars, lengths)]
-    ['-7', '120']
+    >>> chars, lengths = np.zeros((3, 20), np.uint8), np.zeros(3, np.int64)
+    >>> integer_cells(np.array([-7, 120, -(2**63)]), chars, lengths)
+    >>> [bytes(row[20 - n:]).decode() for row, n in zip(chars, lengths)]
+    ['-7', '120', '-9223372036854775808']
     """
     width = chars.shape[1]
     ten = np.uint64(10)
-    for r in range(len(magnitude)):
+    for r in range(len(values)):
         at = width
-        v = magnitude[r]
-        while True:  # uint64 with uint64 only: with an int numba would divide floats
+        v = values[r]
+        negative = v < v - v  # zero of the values' own type: no float comparison for uint64
+        # uint64 with uint64 only (with an int numba would divide floats); the
+        # magnitude of a negative int64 in two's complement, 2**63 for the least
+        m = np.uint64(0) - np.uint64(v) if negative else np.uint64(v)
+        while True:
             at -= 1
-            chars[r, at] = np.uint64(48) + v % ten
-            v //= ten
-            if v == 0:
+            chars[r, at] = np.uint64(48) + m % ten
+            m //= ten
+            if m == 0:
                 break
-        if negative[r]:
+        if negative:
             at -= 1
             chars[r, at] = 45  # "-"
         lengths[r] = width - at
