@@ -11,11 +11,13 @@ import json
 import os
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
 from conftest import ball, torus
 from scipy.ndimage import gaussian_filter
+from skimage.measure import euler_number
 
 from isoflow import DigitalObject, IsoflowError, IsoflowWarning, analyze
 from isoflow.cli import main
@@ -25,6 +27,7 @@ zarr = pytest.importorskip("zarr")
 from isoflow.digital import outofcore  # noqa: E402
 from isoflow.digital.outofcore import analyze_chunked  # noqa: E402
 from isoflow.digital.outofcore import analyze_zarr_volume as analyze_zarr  # noqa: E402
+from isoflow.scale import arrays  # noqa: E402
 from isoflow.scale import chunks as chunks_mod  # noqa: E402
 
 CHUNKS3 = (7, 5, 9)
@@ -158,6 +161,19 @@ def test_2d(rng, conn):
     ring = ((yy - 16) ** 2 + (xx - 17) ** 2 <= 13**2) & ((yy - 16) ** 2 + (xx - 17) ** 2 > 6**2)
     r = check(ring, conn)
     assert r["betti"] == [1, 1]
+
+
+def test_a_block_is_read_while_another_task_imports_numpy_ma(monkeypatch):
+    # np.unique imports numpy.ma on its first use, inside a 2D block's task;
+    # meanwhile another task checks its block for a mask and finds the module
+    # in sys.modules before its MaskedArray is defined
+    for name in ("numpy.ma", "numpy.ma.core"):
+        monkeypatch.setitem(sys.modules, name, types.ModuleType(name))
+    block = np.eye(5, dtype=np.uint8)
+    assert not arrays.is_masked_array(block)
+    got = arrays.binary(block, "block", near=(0, 0))
+    assert got.dtype == bool and (got == (block == 1)).all()
+    assert euler_number(got, connectivity=2) == 1  # one 8-connected diagonal: skimage's count of the same pixels
 
 
 def test_irregular_and_thin_chunks(rng):

@@ -177,7 +177,10 @@ def is_masked_array(value: object) -> bool:
 
     ``np.ma`` is imported on its first use, a noticeable share of a light
     command's start (``isoflow info`` of a small ``.npy``); no masked array
-    can exist before it is, so until then the answer is no.
+    can exist before it is, so until then the answer is no. Nor while
+    another thread is importing it (NumPy's ``np.unique`` does, in a
+    block's task): the module is in :data:`sys.modules` before its
+    ``MaskedArray`` is defined.
 
     Parameters
     ----------
@@ -193,8 +196,8 @@ def is_masked_array(value: object) -> bool:
     >>> is_masked_array(np.zeros(3)), is_masked_array(np.ma.masked_equal([1, 0], 0))
     (False, True)
     """
-    ma = sys.modules.get("numpy.ma")
-    return ma is not None and isinstance(value, ma.MaskedArray)
+    masked = getattr(sys.modules.get("numpy.ma.core"), "MaskedArray", None)
+    return masked is not None and isinstance(value, masked)
 
 
 def refuse_masked(array: object, where: str = "volume") -> None:
