@@ -784,6 +784,24 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
     assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
 
 
+def test_a_store_that_does_not_fit_is_refused_before_its_first_chunk_is_read(tmp_path, monkeypatch):
+    """A store of numbers (not bools) has its first chunk checked for 0
+    and 1 before the pass; that chunk, decoded whole, may be what does not
+    fit. The memory check comes first: a first chunk that cannot be read
+    (here a damaged one) is not reached where the blocks are refused."""
+    from isoflow.scale import memory
+
+    v = np.zeros((40, 40, 40), np.uint8)
+    v[5:30, 5:30, 5:30] = 1
+    path = tmp_path / "one.zarr"
+    zarr.create_array(store=str(path), shape=v.shape, chunks=v.shape, dtype=np.uint8, zarr_format=2)[...] = v
+    (path / "0.0.0").write_bytes(b"not a chunk")
+    monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
+    with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks \\(1 at a time\\) needs about") as exc:
+        analyze_zarr(str(path), 6, threads=1)
+    assert "\n" not in str(exc.value) and "cannot read" not in str(exc.value)
+
+
 def test_blocks_smaller_than_the_chunks_are_not_told_to_shrink(tmp_path, monkeypatch):
     """Each block holds the chunk it reads decoded whole: below a budget
     smaller than one chunk's stored bytes (as NumPy counts them) no block
