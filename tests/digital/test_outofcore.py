@@ -802,6 +802,31 @@ def test_a_store_that_does_not_fit_is_refused_before_its_first_chunk_is_read(tmp
     assert "\n" not in str(exc.value) and "cannot read" not in str(exc.value)
 
 
+def test_a_dask_or_zarr_array_beyond_memory_is_refused_by_the_in_memory_functions(tmp_path, monkeypatch):
+    """isoflow.analyze and isoflow.label_table read a dask or zarr array
+    whole (NumPy's asarray); one beyond memory raised NumPy's MemoryError
+    with a traceback, or made the machine swap. It is refused in one line
+    naming analyze_chunked, which reads it block by block to the same
+    report (chi: scikit-image's)."""
+    import isoflow
+    from isoflow.scale import memory
+
+    v = (np.random.default_rng(4).random((20, 20, 20)) < 0.4).astype(np.uint8)
+    z = zarr.create_array(store=str(tmp_path / "v.zarr"), shape=v.shape, chunks=(7, 7, 7), dtype=np.uint8)
+    z[...] = v
+    for array in (da.from_array(v, chunks=(7, 7, 7)), z):
+        monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
+        for call, where in ((analyze, "volume"), (isoflow.label_table, "label_table image")):
+            with pytest.raises(IsoflowError, match=f"^{where}: reading a 20x20x20 (dask|zarr) array of uint8 into "
+                                                   "memory needs about .*; isoflow.analyze_chunked reads") as exc:
+                call(array, 6)
+            assert "\n" not in str(exc.value)
+        monkeypatch.setattr(memory, "default_budget", lambda: 1 << 30)
+        got = analyze_chunked(array, 6, threads=1)
+        assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+        assert analyze(array, 6) == got
+
+
 def test_blocks_smaller_than_the_chunks_are_not_told_to_shrink(tmp_path, monkeypatch):
     """Each block holds the chunk it reads decoded whole: below a budget
     smaller than one chunk's stored bytes (as NumPy counts them) no block

@@ -128,12 +128,57 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     """
     refuse_masked(array, where)
     refuse_mapping(array, where)
+    refuse_beyond_memory(array, where)
     try:
         return np.asarray(array)
     except ValueError as error:
         if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
             raise
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
+def refuse_beyond_memory(array: object, where: str = "volume") -> None:
+    """Refuse, before it is read, a dask or zarr array whose voxels would
+    not fit in memory (:func:`~isoflow.scale.memory.check_fits`): NumPy
+    reads it whole, and one beyond memory raised NumPy's MemoryError with
+    a traceback, or made the machine swap, where the functions that read
+    it block by block were meant.
+
+    Parameters
+    ----------
+    array : object
+        Anything; only an array of the dask or zarr library is looked at.
+    where : str
+        The argument's name, for the message.
+
+    Raises
+    ------
+    IsoflowError
+        Naming ``where``, the array's shape and type, the memory it needs
+        and the functions that read it block by block.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> try:
+    ...     refuse_beyond_memory(da.zeros((1 << 16,) * 3, dtype=np.uint8, chunks=256), "volume")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(" needs")[0])
+    volume: reading a 65536x65536x65536 dask array of uint8 into memory
+    """
+    from .memory import check_fits
+
+    library = type(array).__module__.split(".")[0]
+    if library not in ("dask", "zarr") or not hasattr(array, "shape") or not hasattr(array, "dtype"):
+        return
+    shape = tuple(array.shape)
+    if any(not np.isfinite(s) for s in shape):  # a dask array of unknown chunk sizes: its size is not known
+        return
+    need = int(np.prod([int(s) for s in shape], dtype=object)) * np.dtype(array.dtype).itemsize
+    check_fits(need, f"{where}: reading a {'x'.join(str(int(s)) for s in shape)} {library} array of "
+               f"{np.dtype(array.dtype)} into memory",
+               hint="isoflow.analyze_chunked reads a dask or zarr array block by block "
+                    "(a label image in a zarr store: isoflow info STORE.zarr --labels)")
 
 
 def refuse_mapping(array: object, where: str = "volume") -> None:
