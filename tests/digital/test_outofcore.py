@@ -187,6 +187,18 @@ def test_irregular_and_thin_chunks(rng):
         check(img, conn, ((5, 1, 24), (2, 23)))
 
 
+def test_chunks_of_no_voxel_are_left_out(rng):
+    """dask allows a chunk of length 0 along an axis (chunks=((0, 5, 5),
+    ...)); its blocks hold no voxel and add nothing, where their sweep
+    raised ZeroDivisionError."""
+    v = rng.random((10, 9, 8)) < 0.5
+    for chunks in (((0, 5, 5), (9,), (4, 0, 4)), ((3, 7, 0), (0, 9), (8, 0))):
+        for conn, full in ((6, 1), (26, 3)):
+            got = analyze_chunked(da.from_array(v, chunks=chunks), conn)
+            assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=full)
+            assert got == reference(v, conn)
+
+
 def test_trivial_volumes():
     for v in (np.zeros((9, 8, 10), bool), np.ones((9, 8, 10), bool), np.ones((1, 1, 1), bool)):
         for conn in (6, 26):

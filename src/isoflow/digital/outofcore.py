@@ -339,6 +339,8 @@ def _grid(array, block_shape, where: str) -> _Grid:
             array = array.rechunk(checked_block_shape(block_shape, array.shape))
         if any(np.isnan(c) for sizes in array.chunks for c in sizes):
             raise IsoflowError(f"{where}: chunk sizes are not known (call compute_chunk_sizes first)")
+        if any(0 in sizes for sizes in array.chunks):  # a block of no voxel, which the sweep cannot take, adds nothing
+            array = array.rechunk(tuple(tuple(c for c in sizes if c) for sizes in array.chunks))
         chunks = array.chunks
     if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << SHIFT:
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
