@@ -11,11 +11,13 @@ import json
 import os
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
 from conftest import ball, torus
 from scipy.ndimage import gaussian_filter
+from skimage.measure import euler_number
 
 from isoflow import DigitalObject, IsoflowError, IsoflowWarning, analyze
 from isoflow.cli import main
@@ -25,6 +27,7 @@ zarr = pytest.importorskip("zarr")
 from isoflow.digital import outofcore  # noqa: E402
 from isoflow.digital.outofcore import analyze_chunked  # noqa: E402
 from isoflow.digital.outofcore import analyze_zarr_volume as analyze_zarr  # noqa: E402
+from isoflow.scale import arrays  # noqa: E402
 from isoflow.scale import chunks as chunks_mod  # noqa: E402
 
 CHUNKS3 = (7, 5, 9)
@@ -160,6 +163,19 @@ def test_2d(rng, conn):
     assert r["betti"] == [1, 1]
 
 
+def test_a_block_is_read_while_another_task_imports_numpy_ma(monkeypatch):
+    # np.unique imports numpy.ma on its first use, inside a 2D block's task;
+    # meanwhile another task checks its block for a mask and finds the module
+    # in sys.modules before its MaskedArray is defined
+    for name in ("numpy.ma", "numpy.ma.core"):
+        monkeypatch.setitem(sys.modules, name, types.ModuleType(name))
+    block = np.eye(5, dtype=np.uint8)
+    assert not arrays.is_masked_array(block)
+    got = arrays.binary(block, "block", near=(0, 0))
+    assert got.dtype == bool and (got == (block == 1)).all()
+    assert euler_number(got, connectivity=2) == 1  # one 8-connected diagonal: skimage's count of the same pixels
+
+
 def test_irregular_and_thin_chunks(rng):
     v = smooth(rng, (24, 20, 18))
     for chunks in (((3, 10, 11), (7, 1, 12), (18,)), (1, 20, 6), (24, 20, 1), (5, 3, 4)):
@@ -169,6 +185,18 @@ def test_irregular_and_thin_chunks(rng):
     for conn in (4, 8):
         check(img, conn, (1, 25))
         check(img, conn, ((5, 1, 24), (2, 23)))
+
+
+def test_chunks_of_no_voxel_are_left_out(rng):
+    """dask allows a chunk of length 0 along an axis (chunks=((0, 5, 5),
+    ...)); its blocks hold no voxel and add nothing, where their sweep
+    raised ZeroDivisionError."""
+    v = rng.random((10, 9, 8)) < 0.5
+    for chunks in (((0, 5, 5), (9,), (4, 0, 4)), ((3, 7, 0), (0, 9), (8, 0))):
+        for conn, full in ((6, 1), (26, 3)):
+            got = analyze_chunked(da.from_array(v, chunks=chunks), conn)
+            assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=full)
+            assert got == reference(v, conn)
 
 
 def test_trivial_volumes():
@@ -766,6 +794,49 @@ def test_blocks_beyond_the_memory_budget_are_refused_up_front(tmp_path, monkeypa
     monkeypatch.setattr(memory, "default_budget", lambda: 2 * per_block + held)
     got = analyze_zarr(path, 6, threads=2)
     assert got == want and got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+
+
+def test_a_store_that_does_not_fit_is_refused_before_its_first_chunk_is_read(tmp_path, monkeypatch):
+    """A store of numbers (not bools) has its first chunk checked for 0
+    and 1 before the pass; that chunk, decoded whole, may be what does not
+    fit. The memory check comes first: a first chunk that cannot be read
+    (here a damaged one) is not reached where the blocks are refused."""
+    from isoflow.scale import memory
+
+    v = np.zeros((40, 40, 40), np.uint8)
+    v[5:30, 5:30, 5:30] = 1
+    path = tmp_path / "one.zarr"
+    zarr.create_array(store=str(path), shape=v.shape, chunks=v.shape, dtype=np.uint8, zarr_format=2)[...] = v
+    (path / "0.0.0").write_bytes(b"not a chunk")
+    monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
+    with pytest.raises(IsoflowError, match=f"^{path}: summing its blocks \\(1 at a time\\) needs about") as exc:
+        analyze_zarr(str(path), 6, threads=1)
+    assert "\n" not in str(exc.value) and "cannot read" not in str(exc.value)
+
+
+def test_a_dask_or_zarr_array_beyond_memory_is_refused_by_the_in_memory_functions(tmp_path, monkeypatch):
+    """isoflow.analyze and isoflow.label_table read a dask or zarr array
+    whole (NumPy's asarray); one beyond memory raised NumPy's MemoryError
+    with a traceback, or made the machine swap. It is refused in one line
+    naming analyze_chunked, which reads it block by block to the same
+    report (chi: scikit-image's)."""
+    import isoflow
+    from isoflow.scale import memory
+
+    v = (np.random.default_rng(4).random((20, 20, 20)) < 0.4).astype(np.uint8)
+    z = zarr.create_array(store=str(tmp_path / "v.zarr"), shape=v.shape, chunks=(7, 7, 7), dtype=np.uint8)
+    z[...] = v
+    for array in (da.from_array(v, chunks=(7, 7, 7)), z):
+        monkeypatch.setattr(memory, "default_budget", lambda: v.nbytes // 2)
+        for call, where in ((analyze, "volume"), (isoflow.label_table, "label_table image")):
+            with pytest.raises(IsoflowError, match=f"^{where}: reading a 20x20x20 (dask|zarr) array of uint8 into "
+                                                   "memory needs about .*; isoflow.analyze_chunked reads") as exc:
+                call(array, 6)
+            assert "\n" not in str(exc.value)
+        monkeypatch.setattr(memory, "default_budget", lambda: 1 << 30)
+        got = analyze_chunked(array, 6, threads=1)
+        assert got.euler_characteristic == euler_number(np.pad(v, 1), connectivity=1)
+        assert analyze(array, 6) == got
 
 
 def test_blocks_smaller_than_the_chunks_are_not_told_to_shrink(tmp_path, monkeypatch):

@@ -339,6 +339,8 @@ def _grid(array, block_shape, where: str) -> _Grid:
             array = array.rechunk(checked_block_shape(block_shape, array.shape))
         if any(np.isnan(c) for sizes in array.chunks for c in sizes):
             raise IsoflowError(f"{where}: chunk sizes are not known (call compute_chunk_sizes first)")
+        if any(0 in sizes for sizes in array.chunks):  # a block of no voxel, which the sweep cannot take, adds nothing
+            array = array.rechunk(tuple(tuple(c for c in sizes if c) for sizes in array.chunks))
         chunks = array.chunks
     if max(int(np.prod([max(c) for c in chunks])), 1) >= 1 << SHIFT:
         raise IsoflowError(f"{where}: blocks of {tuple(max(c) for c in chunks)} voxels are too large; use smaller chunks")
@@ -640,6 +642,20 @@ def _tasks_that_fit(workers: int, threads: int, need: StoreMemory, where: str, s
     return int(fit)
 
 
+def _fitted(array, block_shape, where: str, scheduler, threads) -> tuple[_Grid, Any, int]:
+    """The blocks of ``array``, the scheduler and the blocks summed at a
+    time (:func:`_tasks_that_fit`): blocks that would not fit in memory
+    are refused here, before any chunk is read."""
+    dask, _ = import_dask(array=False)
+    grid = _grid(array, block_shape, where)
+    scheduler = _scheduler(dask, scheduler)
+    with using(threads):
+        workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
+        workers = _tasks_that_fit(workers, thread_count(), _grid_memory(grid, array.dtype, scheduler), where, scheduler,
+                                  grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
+    return grid, scheduler, workers
+
+
 def _scheduler(dask, scheduler):
     """The scheduler's function where it is named (or dask's configured one,
     by default threads), found without importing dask.distributed as dask
@@ -754,7 +770,7 @@ def analyze_chunked(
     """
     check_callable(progress, "progress", "progress(done, total)")
     surfaces = check_switch(surfaces, "surfaces", "analyze_chunked")
-    dask, _ = import_dask(array=False)
+    import_dask(array=False)
     shape, where = _checked(array, where)
     conn = resolve_connectivity(len(shape), connectivity)
     place = placed(None, len(shape), Place(pitch, origin, unit))
@@ -762,12 +778,7 @@ def analyze_chunked(
         from .analysis import analyze
 
         return analyze(np.zeros(shape, bool), conn, surfaces=surfaces, pitch=place[0], origin=place[1], unit=place[2])
-    grid = _grid(array, block_shape, where)
-    scheduler = _scheduler(dask, scheduler)
-    with using(threads):
-        workers = _tasks_at_once(thread_count(), grid.is_zarr, scheduler)
-        workers = _tasks_that_fit(workers, thread_count(), _grid_memory(grid, array.dtype, scheduler), where, scheduler,
-                                  grid.is_zarr, smaller_blocks_help(grid.bounds, grid.array))
+    grid, scheduler, workers = _fitted(array, block_shape, where, scheduler, threads)
 
     def compute(*tasks):
         return compute_tasks(*tasks, scheduler=scheduler, workers=workers, traverse=False)
@@ -864,9 +875,10 @@ def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None
 
     Notes
     -----
-    Before the full pass, the dtype and the first block's values are
-    checked, so that a non-binary volume fails at once with the path in the
-    message (every block is checked again as it is read).
+    Before the full pass, the blocks are checked against the memory budget,
+    then the dtype and the first block's values, so that a non-binary
+    volume fails at once with the path in the message (every block is
+    checked again as it is read).
 
     Examples
     --------
@@ -886,6 +898,8 @@ def analyze_zarr_volume(path: str | os.PathLike, connectivity: int | None = None
     if dtype.kind not in "biuf":
         raise IsoflowError(f"{where}: array of type {dtype} is not a binary {'image' if z.ndim == 2 else 'volume'}")
     if dtype.kind != "b" and 0 not in z.shape:
+        # the memory check first: the first chunk, decoded whole, may be what does not fit
+        _fitted(z, block_shape, where, scheduler, threads)
         try:
             first = np.asarray(z[tuple(slice(0, int(c)) for c in z.chunks)])
         except Exception as exc:  # a damaged or missing chunk, as _read_zarr_block says

@@ -128,12 +128,57 @@ def as_array(array, where: str = "volume") -> np.ndarray:
     """
     refuse_masked(array, where)
     refuse_mapping(array, where)
+    refuse_beyond_memory(array, where)
     try:
         return np.asarray(array)
     except ValueError as error:
         if "inhomogeneous" not in str(error):  # another failure of the object's own conversion: as it is
             raise
         raise IsoflowError(f"{where}: nested sequences of uneven lengths are no array ({error})") from None
+
+
+def refuse_beyond_memory(array: object, where: str = "volume") -> None:
+    """Refuse, before it is read, a dask or zarr array whose voxels would
+    not fit in memory (:func:`~isoflow.scale.memory.check_fits`): NumPy
+    reads it whole, and one beyond memory raised NumPy's MemoryError with
+    a traceback, or made the machine swap, where the functions that read
+    it block by block were meant.
+
+    Parameters
+    ----------
+    array : object
+        Anything; only an array of the dask or zarr library is looked at.
+    where : str
+        The argument's name, for the message.
+
+    Raises
+    ------
+    IsoflowError
+        Naming ``where``, the array's shape and type, the memory it needs
+        and the functions that read it block by block.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> try:
+    ...     refuse_beyond_memory(da.zeros((1 << 16,) * 3, dtype=np.uint8, chunks=256), "volume")
+    ... except IsoflowError as error:
+    ...     print(str(error).split(" needs")[0])
+    volume: reading a 65536x65536x65536 dask array of uint8 into memory
+    """
+    from .memory import check_fits
+
+    library = type(array).__module__.split(".")[0]
+    if library not in ("dask", "zarr") or not hasattr(array, "shape") or not hasattr(array, "dtype"):
+        return
+    shape = tuple(array.shape)
+    if any(not np.isfinite(s) for s in shape):  # a dask array of unknown chunk sizes: its size is not known
+        return
+    need = int(np.prod([int(s) for s in shape], dtype=object)) * np.dtype(array.dtype).itemsize
+    check_fits(need, f"{where}: reading a {'x'.join(str(int(s)) for s in shape)} {library} array of "
+               f"{np.dtype(array.dtype)} into memory",
+               hint="isoflow.analyze_chunked reads a dask or zarr array block by block "
+                    "(a label image in a zarr store: isoflow info STORE.zarr --labels)")
 
 
 def refuse_mapping(array: object, where: str = "volume") -> None:
@@ -177,7 +222,10 @@ def is_masked_array(value: object) -> bool:
 
     ``np.ma`` is imported on its first use, a noticeable share of a light
     command's start (``isoflow info`` of a small ``.npy``); no masked array
-    can exist before it is, so until then the answer is no.
+    can exist before it is, so until then the answer is no. Nor while
+    another thread is importing it (NumPy's ``np.unique`` does, in a
+    block's task): the module is in :data:`sys.modules` before its
+    ``MaskedArray`` is defined.
 
     Parameters
     ----------
@@ -193,8 +241,8 @@ def is_masked_array(value: object) -> bool:
     >>> is_masked_array(np.zeros(3)), is_masked_array(np.ma.masked_equal([1, 0], 0))
     (False, True)
     """
-    ma = sys.modules.get("numpy.ma")
-    return ma is not None and isinstance(value, ma.MaskedArray)
+    masked = getattr(sys.modules.get("numpy.ma.core"), "MaskedArray", None)
+    return masked is not None and isinstance(value, masked)
 
 
 def refuse_masked(array: object, where: str = "volume") -> None:
