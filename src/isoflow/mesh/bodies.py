@@ -377,18 +377,13 @@ def gltf_node_order(data: bytes) -> dict[str, int]:
     >>> gltf_node_order(b'{"nodes": [{"name": "b"}, {"name": "a"}, {"name": "b"}, {}]}')
     {'b': 0, 'a': 1, 'b_1': 2, '3': 3}
     """
-    import json
-    import struct
-
     from trimesh.util import unique_name
 
-    try:
-        if data[:4] == b"glTF":  # GLB: a 12-byte header, then the JSON chunk's length and type
-            length = struct.unpack_from("<I", data, 12)[0]
-            data = data[20:20 + length]
-        nodes = json.loads(data).get("nodes", [])
-    except (ValueError, struct.error, AttributeError):  # trimesh reads it or says why; no order to follow then
-        return {}
+    from .gltf_extensions import json_of
+
+    tree = json_of(data, glb=data[:4] == b"glTF")  # (trimesh reads it or says why; no order to follow then)
+    nodes = tree.get("nodes") if tree is not None else None
+    nodes = nodes if isinstance(nodes, list) else []
     names: dict[str, int] = {}
     counts: dict = {}
     for i, node in enumerate(nodes):
