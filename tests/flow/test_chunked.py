@@ -168,7 +168,8 @@ def test_command_counts_a_slab_of_one_layer_in_the_singular(tmp_path, capsys, mo
     from isoflow.scale import memory
 
     plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
-    monkeypatch.setattr(memory, "default_budget", lambda: 1)
+    # the input's chunks of 8^3 fit (about 8 KiB two at a time), two slabs of one layer do not
+    monkeypatch.setattr(memory, "default_budget", lambda: 12_000)
     assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and "slabs of 1 layer of " in line and "1 layers" not in line, line
@@ -483,7 +484,7 @@ def test_slabs_are_thinned_to_a_workers_memory_limit(tmp_path, small_worker):
     v = np.zeros((200, 200, 200), np.uint8)
     v[:, 0, 0] = 1  # a bar along x, across every slab
     v[-1, -1, -1] = 1
-    plain_store(tmp_path / "in.zarr", v, (50, 200, 200))
+    plain_store(tmp_path / "in.zarr", v, (20, 200, 200))  # chunks the worker reads (chunks of 50 layers do not fit)
     mem, expected = in_memory(tmp_path / "in.zarr", 6, steps=1)
     out = tmp_path / "run"
     out.mkdir()
@@ -492,3 +493,88 @@ def test_slabs_are_thinned_to_a_workers_memory_limit(tmp_path, small_worker):
     check_states(mem, out)
     thick = zarr.open_group(str(out / "step_000.zarr"), mode="r")["0"].chunks[0]
     assert (min(thick, 201) + 2) * 2 * 201 * 201 <= 8_000_000
+
+
+
+def refused_under(tmp_path, monkeypatch, v, chunks, budget: int) -> tuple[str, object]:
+    """The one-line refusal of flowing ``v`` stored in ``chunks`` under a
+    memory budget of ``budget`` bytes, which names the input and leaves no
+    step written; with the run's directory."""
+    from isoflow.scale import memory
+
+    plain_store(tmp_path / "in.zarr", v, chunks)
+    monkeypatch.setattr(memory, "default_budget", lambda: budget)
+    out = tmp_path / "run"
+    out.mkdir()
+    with pytest.raises(IsoflowError) as err:
+        flow_chunked(tmp_path / "in.zarr", out, steps=1)
+    message = str(err.value)
+    assert "\n" not in message and message.startswith(str(tmp_path / "in.zarr")), message
+    assert "step_" not in message and not list(out.glob("step_*"))
+    return message, out
+
+
+def flows_as_in_memory(path, v, chunks, out) -> None:
+    """``v`` stored in ``chunks`` at ``path`` flows (a step) into ``out``
+    as in memory, under the budget in force."""
+    plain_store(path, v, chunks)
+    mem, expected = in_memory(path, 6, steps=1)
+    assert flow_chunked(path, out, steps=1).to_dict() == expected
+    check_states(mem, out)
+
+
+def test_an_input_chunk_beyond_the_budget_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    """The memory check counted the slabs and the records, never the
+    input's chunks, which the first pass decodes whole: a store of one
+    chunk larger than the budget was read anyway (one past the memory
+    ended as 'cannot read a chunk ... (MemoryError ...)'). It is refused
+    in one line naming the chunks, before any step is written, and the
+    chunks it says fit do: the same object so stored flows under that
+    budget as in memory."""
+    import re
+
+    v = np.zeros((64, 64, 64), np.uint8)
+    v[2:6, 2:6, 2:6] = 1  # a small object: its slabs and records fit where the chunk does not
+    message, out = refused_under(tmp_path, monkeypatch, v, (64, 64, 64), 1_000_000)
+    assert "chunks of 64 x 64 x 64 voxels" in message
+    side = int(re.search(r"smaller chunks, of \d+ voxels or fewer \(e\.g\. (\d+) x \1 x \1\)", message)[1])
+    assert 1 <= side < 64
+    flows_as_in_memory(tmp_path / "fits.zarr", v, (side,) * 3, out)
+
+
+def test_slabs_are_thinned_to_fit_each_step_s_report(monkeypatch, tmp_path):
+    """The slabs were sized for the flow's step alone, and the step stores
+    are chunked as thick as they are: each step's record, which sums a
+    store in blocks of those chunks, was refused after step 0 was
+    written, naming the hidden staging store. The slabs are now thin
+    enough for the record too, and the run equals the in-memory flow."""
+    from isoflow.scale import memory
+
+    v = np.zeros((20, 200, 200), np.uint8)
+    v[:, 0, 0] = 1  # a bar along x, across every slab
+    v[-1, -1, -1] = 1
+    monkeypatch.setattr(memory, "default_budget", lambda: 4_000_000)
+    out = tmp_path / "run"
+    out.mkdir()
+    flows_as_in_memory(tmp_path / "in.zarr", v, (10, 100, 100), out)
+
+
+def test_a_report_beyond_the_budget_is_refused_before_any_step(monkeypatch, tmp_path):
+    """A cross-section whose report (the faces of a layer of blocks) does
+    not fit the budget however thin the slabs: the run wrote step 0 and
+    then failed naming the hidden staging store, advising smaller chunks
+    of a store it wrote itself. It is refused up front naming the input,
+    and the cross-section it says fits does: the object cropped to it
+    flows under that budget as in memory."""
+    import re
+
+    v = np.zeros((20, 300, 300), np.uint8)
+    v[:, 0, 0] = 1
+    v[-1, -1, -1] = 1  # the object spans the whole cross-section
+    message, out = refused_under(tmp_path, monkeypatch, v, (10, 100, 100), 4_000_000)
+    assert "report of each step" in message
+    ny, nz = map(int, re.search(r"crop the volume across x to (\d+) x (\d+) voxels or less", message).groups())
+    assert ny < 300 and nz < 300
+    w = v[:, :ny, :nz].copy()
+    w[-1, -1, -1] = 1
+    flows_as_in_memory(tmp_path / "fits.zarr", w, (10, 100, 100), out)

@@ -27,7 +27,10 @@ is None. For the same reason the guarded flow is not done block by block
 (:func:`guard_refusal`).
 
 Memory is a few slabs per worker (two bytes per voxel of a slab, and its
-bit rows) and faces; the slabs are as thick as fits :data:`SLAB_VOXELS`.
+bit rows) and faces; the slabs are as thick as fits :data:`SLAB_VOXELS`,
+and thin enough that each step's record can sum the step's store, chunked
+as thick as they are. The input's chunks, each decoded whole, are checked
+before any is read (:func:`check_chunks_fit`).
 The tasks take paths, so they run on a ``dask.distributed`` cluster
 (``scheduler=client.get``, or the default client where the scheduler is
 None, for the slabs and the records alike) where the stores are on a
@@ -38,6 +41,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -46,7 +50,7 @@ import numpy as np
 
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_callable, check_switch, counted
-from ..scale.chunks import compute, import_dask, import_zarr
+from ..scale.chunks import compute, decoded_chunk_voxels, import_dask, import_zarr
 from ..scale.memory import check_fits, default_budget, sized
 from .engines import ArrayFlow
 
@@ -149,12 +153,15 @@ def _create_store(path: Path, shape, chunks, place: DigitalObject, unit: str | N
     root.attrs["multiscales"] = multiscales(path.name, place.spacing, corner, stored="xyz", unit=unit)
 
 
-def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, scheduler: Any = "threads") -> int:
+def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, scheduler: Any = "threads",
+                   where: str | None = None) -> int:
     """Vertex layers per slab: ``slab``, or as many as fit
     :data:`SLAB_VOXELS` and the memory budget on ``workers`` at a time; on
     a ``dask.distributed`` cluster, as many as fit a worker's memory limit
     as many at a time as it has threads (the workers hold their own
-    memory, which this machine's says nothing of).
+    memory, which this machine's says nothing of). The step stores are
+    chunked as thick as the slabs, and each step's record sums its store
+    in blocks of those chunks: the slabs are thin enough for that too.
 
     Parameters
     ----------
@@ -168,6 +175,8 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
         What the slabs' tasks are computed with (default: dask's threads
         here; a client or its ``get`` runs them on its workers, and None
         on dask's configured scheduler, a default client's too).
+    where : str, optional
+        The input, named where the records' report would not fit.
 
     Returns
     -------
@@ -176,9 +185,11 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
     Raises
     ------
     IsoflowError
-        The workers' slabs would not fit in memory (up front), saying how
-        many workers one layer per slab would fit, how thick a slab would
-        fit a cluster's worker, or ``slab`` is not positive.
+        The workers' slabs, or the report of a step's store in chunks of
+        their layers, would not fit in memory (up front), saying how many
+        workers one layer per slab would fit, how thick a slab would fit a
+        cluster's worker, what cross-section the report holds, or ``slab``
+        is not positive.
 
     Examples
     --------
@@ -205,6 +216,8 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
         # thinner slabs where the budget is short: the flow is the same, in more tasks
         thick = SLAB_VOXELS // layer if budget is None else budget // max(workers * per_layer, 1) - 2
         thick = max(1, min(SLAB_VOXELS // layer, thick))
+        if client is None and budget is not None:  # thin enough for the records' report of the step's store
+            thick = _thickest(thick, lambda t: _record_need(shape, t, workers, scheduler)[0] <= budget)
     else:
         thick = int(slab)
     if thick < 1:
@@ -223,7 +236,77 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
             f"slabs of one layer fit {fit} at a time (flow_chunked(..., workers={fit}))" if fit >= 1 else
             f"{across}: crop the volume across them")
     check_fits(workers * (thick + 2) * per_layer, f"{what} on {workers} workers", hint=hint, budget=budget)
+    _check_record_fits(shape, thick, workers, scheduler, budget, where)
     return thick
+
+
+def _at_once(workers: int, scheduler: Any) -> int:
+    """The tasks a local ``scheduler`` runs at a time: one on dask's
+    synchronous scheduler, else ``workers``."""
+    return 1 if scheduler in ("sync", "synchronous", "single-threaded") else workers
+
+
+def _thickest(most: int, fits: Callable[[int], bool]) -> int:
+    """A thickness from ``most`` down to 1 that ``fits``, within a
+    sixteenth of the largest (1 where none does: its refusal names what
+    would fit). Not a bisection: thinner chunks may be grouped into larger
+    blocks (:func:`~isoflow.scale.chunks.zarr_blocks`), so a thinner slab
+    may not fit where a thicker one does."""
+    thick = most
+    while thick > 1 and not fits(thick):
+        thick -= max(1, thick // 16)
+    return max(thick, 1)
+
+
+def _record_need(shape: tuple[int, int, int], thick: int, workers: int, scheduler: Any) -> tuple[int, int, int, tuple]:
+    """What the records' report holds on this machine summing a step's
+    store of ``shape`` in chunks of ``thick`` layers (``CHUNK_YZ`` across),
+    as :func:`isoflow.digital.outofcore.analyze_chunked` counts it before
+    it reads a block: its blocks (the chunks, grouped where they are many
+    and small) at ``workers`` threads, beside the faces of a layer of them
+    and the blocks the allocator keeps. ``(need, per block, held, block
+    sides in x, y, z)``."""
+    from types import SimpleNamespace
+
+    from ..digital.outofcore import store_memory
+    from ..scale.chunks import layer_axes, zarr_blocks
+
+    chunks = (thick, min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
+    blocks = zarr_blocks(SimpleNamespace(shape=tuple(shape), chunks=chunks), None)
+    axes = layer_axes(tuple(len(b) for b in blocks))
+    local = "processes" if scheduler in ("processes", "multiprocessing") else "threads"
+    need = store_memory(tuple(max(blocks[i]) for i in axes), tuple(len(blocks[i]) for i in axes), np.uint8,
+                        int(np.prod(chunks)), local)
+    threads = _at_once(workers, scheduler)
+    held = need.faces + need.kept
+    return threads * need.block + held, need.block, held, tuple(max(b) for b in blocks)
+
+
+def _check_record_fits(shape: tuple[int, int, int], thick: int, workers: int, scheduler: Any, budget: int,
+                       where: str | None) -> None:
+    """Refuse, before any step's store is written, slabs of ``thick``
+    layers whose step stores the records' report could not sum in memory
+    (:func:`_record_need`), saying what would fit: thinner slabs, fewer
+    workers, or a narrower cross-section."""
+    need, block, held, sides = _record_need(shape, thick, workers, scheduler)
+    if need <= budget:
+        return
+    _, ny, nz = shape
+    thinner = _thickest(thick, lambda t: _record_need(shape, t, workers, scheduler)[0] <= budget)
+    fit = max(budget - held, 0) // max(block, 1)
+    if _record_need(shape, thinner, workers, scheduler)[0] <= budget:
+        hint = f"give thinner slabs (slab={thinner})"
+    elif fit >= 1:
+        hint = f"it fits {fit} at a time (flow_chunked(..., workers={fit}))"
+    else:
+        side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], s, s), 1, workers, scheduler)[0] <= budget)
+        fits = _record_need((shape[0], side, side), 1, workers, scheduler)[0] <= budget
+        hint = (f"it holds the faces of a whole cross-section of {ny} x {nz} voxels: crop the volume across x"
+                + (f" to {side} x {side} voxels or less" if fits else ""))
+    threads = _at_once(workers, scheduler)
+    what = (f"{where + ': ' if where else ''}the report of each step (its store summed in blocks of "
+            f"{' x '.join(map(str, sides))} voxels, {threads} at a time)")
+    check_fits(need, what, hint=hint, budget=budget)
 
 
 def _record_bytes(shape: tuple[int, int, int]) -> tuple[int, int]:
@@ -267,6 +350,7 @@ class ChunkedFlow(ArrayFlow):
         self.written: list[str] = []
         self.source_shape: tuple[int, ...] = ()
         self.unit: str | None = None  # the input's length unit, which every step's store keeps
+        self.where: str | None = None  # the input, as refusals name it
         self._step = 0
 
     def _compute(self, *tasks):
@@ -289,8 +373,11 @@ class ChunkedFlow(ArrayFlow):
         from ..mesh.formats.omezarr import open_store
 
         volume, place, fill = source_volume(source)
-        self.unit = open_store(source).unit()
+        store = open_store(source)
+        self.unit, self.where = store.unit(), str(source)
         self.source_shape = tuple(int(s) for s in volume.shape)
+        # its chunks are read whole, workers at a time, before any step's slabs or record is sized
+        check_chunks_fit(volume, decoded_chunk_voxels(store.array), self.where, self.workers, self.scheduler)
         _, da = import_dask()
         checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
         extents = self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
@@ -307,7 +394,7 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         shape = tuple(int(s) for s in box.shape)
         path = self._name()
-        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler)
+        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler, where=self.where)
         chunks = (thick, min(CHUNK_YZ, shape[1]), min(CHUNK_YZ, shape[2]))
         _create_store(path, shape, chunks, place, self.unit)
         target = import_zarr().open_group(str(path), mode="r+")["0"]
@@ -338,7 +425,7 @@ class ChunkedFlow(ArrayFlow):
         _, da = import_dask()
         table = step_table(3, self.conn)
         shape = state.shape
-        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler)
+        thick = slab_thickness(shape, self.slab, self.workers, self.scheduler, where=self.where)
         parts = [(a, min(a + thick, shape[0] + 1)) for a in range(0, shape[0] + 1, thick)]
         ends = self._compute(*(delayed(_slab_ends, pure=False)(state.path, shape, a, b, table) for a, b in parts))
         below, above = _hand_on(list(ends))
@@ -382,6 +469,76 @@ class ChunkedFlow(ArrayFlow):
 
     def is_cuboid(self, state: StoredObject) -> bool:
         return state.voxels == int(np.prod(state.shape))
+
+
+def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, scheduler: Any = None) -> None:
+    """Refuse, before any is read, an input whose chunks would not fit in
+    memory read ``workers`` at a time (or on a ``dask.distributed``
+    worker, its threads at a time): each is decoded whole and checked to
+    be 0/1 (:func:`isoflow.digital.outofcore.store_memory` counts them as
+    the report's blocks), saying how many would fit at a time, or how
+    small the chunks would have to be.
+
+    Parameters
+    ----------
+    volume : dask.array.Array
+        The input as :func:`source_volume` reads it (x, y, z), along its
+        chunks.
+    chunk_voxels : int
+        The voxels of the stored chunk a read decodes whole
+        (:func:`~isoflow.scale.chunks.decoded_chunk_voxels`; larger than a
+        chunk of ``volume`` where the store has other axes), or 0.
+    where : str
+        The input, for the message.
+    workers : int
+        Chunks read at a time on dask's local schedulers.
+    scheduler : optional
+        As :func:`slab_thickness` takes it.
+
+    Raises
+    ------
+    IsoflowError
+        In one line, naming the chunks' shape and what would fit.
+
+    Examples
+    --------
+    >>> import dask.array as da
+    >>> check_chunks_fit(da.zeros((64, 64, 64), dtype=np.uint8, chunks=32), 0, "small.zarr", 2)
+    >>> big = da.zeros((1 << 20, 1 << 20, 1 << 20), dtype=np.uint8, chunks=1 << 20)
+    >>> check_chunks_fit(big, 0, "big.zarr", 2)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: big.zarr: reading its chunks of 1048576 x 1048576 x 1048576 voxels (uint8, 2 at a ...
+    """
+    from ..digital.outofcore import KEPT_BLOCKS, store_memory
+    from ..scale.chunks import distributed_client
+    from ..scale.memory import check_workers_fit, default_budget
+
+    sides = tuple(max(int(c) for c in sizes) for sizes in volume.chunks)
+    numblocks = tuple(len(sizes) for sizes in volume.chunks)
+    voxels = max(int(np.prod(sides, dtype=np.int64)), chunk_voxels, 1)
+    smaller = "write the store with smaller chunks"
+    client = distributed_client(scheduler)
+    if client is not None:
+        need = store_memory(sides, numblocks, volume.dtype, chunk_voxels, "distributed")
+        check_workers_fit(client, need.block, f"{where}: reading its chunks of {' x '.join(map(str, sides))} voxels "
+                          f"({volume.dtype})", hint=f"{smaller}, or give the workers more memory")
+        return
+    need = store_memory(sides, numblocks, volume.dtype, chunk_voxels)
+    threads = _at_once(workers, scheduler)
+    budget = default_budget()
+    fit = max(budget - need.kept, 0) // max(need.block, 1)
+    if fit >= 1:
+        hint = f"they fit {fit} at a time (flow_chunked(..., workers={fit})), or {smaller}"
+    else:  # per voxel: the workers' chunks at work and the chunks the allocator keeps (KEPT_BLOCKS at most)
+        per_voxel = threads * need.block / voxels + KEPT_BLOCKS * np.dtype(volume.dtype).itemsize
+        most = int(budget // per_voxel)
+        side = int(round(most ** (1 / 3)))
+        side -= side ** 3 > most
+        hint = (f"{smaller}, of {most} voxels or fewer (e.g. {side} x {side} x {side})" if side >= 1 else
+                "make more memory available")
+    check_fits(threads * need.block + need.kept, f"{where}: reading its chunks of {' x '.join(map(str, sides))} voxels "
+               f"({volume.dtype}, {threads} at a time)", hint=hint, budget=budget)
 
 
 def _binary_block(block: np.ndarray, where: str = "volume", fill=None, block_info=None) -> np.ndarray:
