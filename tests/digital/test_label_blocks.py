@@ -326,13 +326,90 @@ def test_layers_beyond_the_pieces_numbers_name_the_axes_across_them(tmp_path, ca
 
 
 def test_the_pieces_of_a_slab_beyond_memory_name_the_axis_it_is_read_along(tmp_path, capsys, monkeypatch):
-    # the slab fits (two layers of 6 x 5 voxels, 120 bytes as read) but the runs and pieces found in it do
-    # not: the layers they are counted in go along z, which the refusal names
+    # the slab fits (two layers of 6 x 5 voxels, 120 bytes as read, and the two chunks of 6 x 5 x 1 that its
+    # read decodes, 60) but the runs and pieces found in it do not: the layers they are counted in go along z,
+    # which the refusal names
     from isoflow.scale import memory
 
     store = thin_along_z(tmp_path)
-    monkeypatch.setattr(memory, "default_budget", lambda: 150)
+    monkeypatch.setattr(memory, "default_budget", lambda: 180)
     assert main(["info", str(store), "--labels"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and re.search(r"crop the image (along|across) z$", err[0]), err
     assert "first axis" not in err[0], err
+
+
+class CountedChunks:
+    """A zarr array whose reads (``array[a:b]``) count, per chunk along axis
+    0, how often a read crossed it: each read decodes every chunk it
+    crosses whole."""
+
+    def __init__(self, array):
+        self.array, self.shape, self.dtype, self.chunks = array, array.shape, array.dtype, array.chunks
+        self.decoded = np.zeros(-(-array.shape[0] // array.chunks[0]), np.int64)
+
+    def __getitem__(self, layers):
+        step = self.chunks[0]
+        self.decoded[layers.start // step:(layers.stop - 1) // step + 1] += 1
+        return self.array[layers]
+
+
+@pytest.mark.parametrize("chunks", [(20, 10, 10), (10, 10, 10)])
+def test_a_layer_of_chunks_cut_into_thin_slabs_is_decoded_once(tmp_path, rng, chunks, monkeypatch):
+    """A layer of chunks thicker than the slabs its pieces' numbers allow
+    (a 4096^3 chunk: 17 slabs) was read slab by slab, each read decoding
+    the whole chunk again. Here the numbering is lowered to 300 voxels, so
+    that 10 x 10 layers go one a slab: each chunk is decoded for its own
+    layer and once for each neighbouring layer's voxel layer, and the rows
+    are the in-memory table's and scikit-image's voxels and boxes."""
+    zarr = pytest.importorskip("zarr")
+    from skimage.measure import regionprops
+
+    from isoflow.scale import pieces
+
+    image = rng.integers(0, 4, (20, 10, 10)).astype(np.uint16)
+    z = zarr.create_array(str(tmp_path / "l.zarr"), shape=image.shape, chunks=chunks, dtype=image.dtype)
+    z[...] = image
+    want = label_table(image)
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 300)
+    counted = CountedChunks(z)
+    table = label_table_blocks(counted, layers=[chunks[0]] * (20 // chunks[0]))
+    own = 1 if chunks[0] == 20 else 2  # its layer's read, and the neighbouring layer's voxel layer
+    assert counted.decoded.tolist() == [own] * len(counted.decoded)
+    same_tables(table, want)
+    props = regionprops(image.astype(np.int64))
+    assert table["voxels"].tolist() == [p.area for p in props]
+    assert [tuple(table[f"bbox-{d}"][row] for d in range(6)) for row in range(len(props))] == [p.bbox for p in props]
+
+
+def test_a_chunk_beyond_the_budget_is_refused_naming_it_and_what_fits(tmp_path, capsys, monkeypatch):
+    """A slab that fits the budget was read from a chunk that does not:
+    the read decodes the chunk whole (20 x 10 x 10 voxels of 8 bytes here,
+    read in slabs of three layers of 10 x 10), and the check counted the
+    slab alone. The one line names the chunk and the largest that fits; a
+    store in chunks of that size gives the in-memory table under the same
+    budget, each label's voxels NumPy's count."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.scale import memory, pieces
+
+    image = np.zeros((20, 10, 10), np.uint64)
+    image[2:18, 2:8, 2:8] = 1
+    image[5:15, 4:6, 4:6] = 2
+    want = label_table(image)
+    z = zarr.create_array(str(tmp_path / "one.zarr"), shape=image.shape, chunks=image.shape, dtype=image.dtype)
+    z[...] = image
+    monkeypatch.setattr(pieces, "MAX_PIECE_VOXELS", 300)
+    monkeypatch.setattr(memory, "default_budget", lambda: 8_000)  # a slab's 2,700 bytes, not the chunk's 16,000
+    assert main(["info", str(tmp_path / "one.zarr"), "--labels"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "chunk of 20x10x10 voxels" in err[0] and "budget" in err[0], err
+    found = re.search(r"chunks of at most ([\d,]+) voxels fit", err[0])
+    assert found, err
+    fit = int(found.group(1).replace(",", ""))
+    assert 2_000 > fit >= 100  # below the chunk, at least a layer
+    layers = fit // 100
+    z = zarr.create_array(str(tmp_path / "fit.zarr"), shape=image.shape, chunks=(layers, 10, 10), dtype=image.dtype)
+    z[...] = image
+    got = label_table_blocks(z, layers=[layers] * (20 // layers) + ([20 % layers] if 20 % layers else []))
+    same_tables(got, want)
+    assert got["voxels"].tolist() == [np.count_nonzero(image == 1), np.count_nonzero(image == 2)]

@@ -16,7 +16,9 @@ edges). A piece cut by a seam gets a number in each slab; the two voxel
 layers both slabs read name the same voxels under both numbers, and a
 connected-components pass over those pairs makes them one before the graph
 of pieces is walked. Memory: two slabs' voxels and pieces, and tables per
-piece and per pair of pieces.
+piece and per pair of pieces; a layer of chunks cut into thinner slabs
+(more voxels than the pieces' numbers reach) is held whole where it fits,
+since each read decodes the chunks it crosses whole.
 """
 
 from __future__ import annotations
@@ -130,6 +132,9 @@ class _Across:
         self.array, self.axes = array, axes
         self.shape = tuple(int(array.shape[i]) for i in axes)
         self.dtype = array.dtype
+        chunks = None if isinstance(array, np.ndarray) else getattr(array, "chunks", None)
+        # the chunks a read decodes whole, in the order read (SlabStream counts them)
+        self.chunks = tuple(chunks[i] for i in axes) if chunks else None
 
     def __getitem__(self, layers: slice) -> np.ndarray:
         index = [slice(None)] * 3

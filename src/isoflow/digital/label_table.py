@@ -687,13 +687,21 @@ def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes
     would hold more voxels than the pieces are numbered in), with
     ``progress(done, total)`` after each slab; ``axes``: the image's axes
     in the order the array reads them, which its refusals name."""
-    sizes = slab_sizes(sizes, array.shape, axes)
+    # every layer's cuts first: a layer too wide for the pieces' numbers is refused before any read
+    cuts = [slab_sizes([n], array.shape, axes) for n in sizes]
     stream = SlabStream(array, conn, wanted, surfaces, axes)
-    stops = np.cumsum(sizes)
-    for t, (x0, x1) in enumerate(zip(stops - sizes, stops)):
-        stream.slab(int(x0), int(x1))
-        if progress is not None:
-            progress(t + 1, len(sizes))
+    stream.thickest = min(max((max(parts, default=0) for parts in cuts), default=0) + 2, stream.nx)
+    total, done, x0 = sum(len(parts) for parts in cuts), 0, 0
+    for parts in cuts:
+        if len(parts) > 1:  # a layer of chunks cut into thinner slabs: read once where it fits, not once a slab
+            stream.hold(x0, x0 + sum(parts), max(parts))
+        for part in parts:
+            stream.slab(x0, x0 + part)
+            x0 += part
+            done += 1
+            if progress is not None:
+                progress(done, total)
+        stream.held = None
     return rows_of_pieces(*stream.joined(), label_dtype(array.dtype), conn, wanted)
 
 
@@ -843,6 +851,25 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
             "surface_faces": found[4]}
 
 
+def decoded_at_once() -> int:
+    """The chunks that one read of a zarr array decodes at a time: zarr's
+    ``async.concurrency`` (10 unless configured), each decoded whole
+    before its part is copied out.
+
+    Examples
+    --------
+    >>> decoded_at_once() >= 1
+    True
+    """
+    import sys
+
+    zarr = sys.modules.get("zarr")
+    try:
+        return max(int(zarr.config.get("async.concurrency")), 1) if zarr is not None else 10
+    except (AttributeError, KeyError, TypeError, ValueError):  # zarr 2, without that setting, decodes one at a time
+        return 1
+
+
 def slab_sizes(sizes: list[int], shape, axes: Sequence[int] = (0, 1, 2)) -> list[int]:
     """The slabs cut where one, with its voxel layer either side, would hold
     more voxels than the pieces' 32-bit numbers reach: a store whose chunks
@@ -875,6 +902,78 @@ class SlabStream:
         self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
                                                        "doubled", "keys", "kind", "sums_pairs", "same")}
         self.tail: np.ndarray | None = None  # the previous slab's last two voxel layers, numbered across slabs
+        #: the voxel layers read for the slabs of one layer of chunks (its first layer, the labels), or None
+        self.held: tuple[int, np.ndarray] | None = None
+        #: the voxel layers of the thickest slab's read (:func:`slab_rows` sets it), for what chunks would fit
+        self.thickest = self.nx
+
+    def in_image_order(self, sides: Sequence[int]) -> list[int]:
+        """Sides given along the axes as the array reads them, in the image's (x, y, z) order."""
+        return [int(sides[self.axes.index(axis)]) for axis in range(3)]
+
+    def read_bytes(self) -> int:
+        """Bytes a voxel of a read holds as read: its stored value and, for
+        a float image, its int64 copy."""
+        stored = np.dtype(self.array.dtype)
+        return stored.itemsize + (label_dtype(stored).itemsize if stored.kind == "f" else 0)
+
+    def decoded(self, a: int, b: int) -> tuple[int, int, list[int]]:
+        """What a read of voxel layers a .. b - 1 decodes beside the voxels
+        it gives: the chunks decoded at a time, their bytes, and a chunk's
+        sides as the array reads them (0, 0, [] for an array in memory)."""
+        from ..scale.chunks import decoded_chunk_voxels
+
+        chunks = None if isinstance(self.array, np.ndarray) else getattr(self.array, "chunks", None)
+        if not chunks or not decoded_chunk_voxels(self.array):
+            return 0, 0, []
+        sides = [max(int(c) for c in side) if isinstance(side, tuple) else int(side) for side in chunks]
+        crossed = ((b - 1) // sides[0] - a // sides[0] + 1) * int(np.prod(
+            [-(-int(n) // s) for n, s in zip(self.array.shape[1:], sides[1:])], dtype=np.int64))
+        at_once = min(crossed, decoded_at_once())
+        chunk = decoded_chunk_voxels(self.array) * np.dtype(self.array.dtype).itemsize
+        return at_once, at_once * chunk, sides
+
+    def check_read(self, a: int, b: int, need: int, what: str) -> None:
+        """Refuse a read of voxel layers a .. b - 1 whose ``need`` bytes,
+        with the chunks it decodes whole, would not fit the budget; where
+        the voxels fit and the chunks do not, the line names the chunks
+        and the largest that would fit."""
+        from ..scale import memory
+
+        at_once, decoded, sides = self.decoded(a, b)
+        budget = memory.default_budget()
+        along = "xyz"[self.axes[0]]
+        hint = f"write the store with smaller chunks along {along}"
+        if decoded and need + decoded > budget:
+            # smaller chunks: the thickest slab's read may cross two layers of them, every chunk of each decoded
+            thickest = need // max(b - a, 1) * max(self.thickest, b - a)
+            across = int(np.prod([-(-int(n) // s) for n, s in zip(self.array.shape[1:], sides[1:])], dtype=np.int64))
+            fit = (budget - thickest) // (min(2 * across, decoded_at_once()) * np.dtype(self.array.dtype).itemsize)
+            what += (f" and the {'chunk' if at_once == 1 else f'{at_once} chunks'} of "
+                     f"{'x'.join(map(str, self.in_image_order(sides)))} voxels its read decodes whole")
+            if fit >= 1:
+                hint = f"chunks of at most {fit:,} voxels fit: write the store with smaller chunks"
+        check_fits(need + decoded, what, hint=hint, budget=budget)
+
+    def hold(self, x0: int, x1: int, most: int) -> None:
+        """Read voxel layers x0 .. x1 - 1 (a layer of chunks cut into slabs
+        of at most ``most`` layers) with one voxel layer of each neighbour,
+        once for all its slabs, where they fit beside the chunks the read
+        decodes and one slab's passes and copy: a read of each thin slab
+        decodes every chunk it crosses whole again. Where they do not fit
+        each slab reads its own layers (and is checked as it does)."""
+        from ..scale import memory
+
+        self.held = None
+        if isinstance(self.array, np.ndarray):  # a view of it costs nothing: the slabs take theirs
+            return
+        a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
+        area = int(np.prod([int(s) for s in self.array.shape[1:]], dtype=np.int64))
+        slab = (most + 2) * area * (PIECE_BYTES_PER_VOXEL + label_dtype(self.array.dtype).itemsize)
+        if (b - a) * area * self.read_bytes() + self.decoded(a, b)[1] + slab > memory.default_budget():
+            return
+        vol = as_labels(np.asarray(self.array[a:b]), first_layer=a, fill=getattr(self.array, "fill_value", None))
+        self.held = (a, vol)
 
     def slab(self, x0: int, x1: int) -> None:
         """The pieces and the vertex pass of voxel layers x0 .. x1 - 1."""
@@ -882,16 +981,19 @@ class SlabStream:
 
         a, b = max(x0 - 1, 0), min(x1 + 1, self.nx)
         shape = (b - a,) + tuple(int(s) for s in self.array.shape[1:])
-        stored = np.dtype(self.array.dtype)
-        converted = label_dtype(stored).itemsize if stored.kind == "f" else 0  # a float slab's int64 copy
+        voxels = int(np.prod(shape, dtype=np.int64))
         # refusals name the image's axes as the user has them: the slab's layers go along axes[0]
         along = "xyz"[self.axes[0]]
-        seen = [shape[self.axes.index(axis)] for axis in range(3)]
-        check_fits((PIECE_BYTES_PER_VOXEL + stored.itemsize + converted) * int(np.prod(shape)),
-                   f"a slab of {'x'.join(map(str, seen))} voxels of the label image",
-                   hint=f"write the store with smaller chunks along {along}")
-        vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a,
-                                             fill=getattr(self.array, "fill_value", None)))
+        what = f"a slab of {'x'.join(map(str, self.in_image_order(shape)))} voxels of the label image"
+        if self.held is not None and self.held[0] <= a and b <= self.held[0] + len(self.held[1]):
+            view = self.held[1][a - self.held[0]:b - self.held[0]]  # read with its layer of chunks
+            copy = 0 if view.flags.c_contiguous else view.nbytes
+            check_fits(PIECE_BYTES_PER_VOXEL * voxels + copy, what, hint=f"write the store with smaller chunks along {along}")
+            vol = np.ascontiguousarray(view)
+        else:
+            self.check_read(a, b, (PIECE_BYTES_PER_VOXEL + self.read_bytes()) * voxels, what)
+            vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a,
+                                                 fill=getattr(self.array, "fill_value", None)))
         pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),

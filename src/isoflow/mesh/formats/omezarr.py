@@ -707,7 +707,8 @@ class LabelSlabs:
     report block by block reads a volume) and ``layers`` the chunks along
     ``axes[0]``; ``pitch`` and ``origin`` (voxel (0, 0, 0)'s lowest
     corner), ``unit`` their length unit (:func:`axis_unit`), ``fill_value``
-    the array's (what zarr reads for a chunk never written); ``names``
+    the array's (what zarr reads for a chunk never written), ``chunks``
+    its chunks' sides in (x, y, z) order; ``names``
     those of its labels where it records them (:func:`label_properties`)."""
 
     def __init__(self, path):
@@ -743,6 +744,8 @@ class LabelSlabs:
         self.array, self.guarded = array, Guarded(array, self.where)
         self.shape = tuple(int(array.shape[i]) for i in self.xyz)
         self.dtype = array.dtype
+        # the chunks (a shard's inner chunks) in (x, y, z) order: a read decodes each it crosses whole
+        self.chunks = tuple(int(array.chunks[i]) for i in self.xyz)
         self.fill_value = getattr(array, "fill_value", None)  # what zarr reads for a chunk never written
         blocks = zarr_blocks(array, None)
         self.axes = layer_axes(tuple(len(blocks[i]) for i in self.xyz))
