@@ -140,9 +140,8 @@ def as_array(array, where: str = "volume") -> np.ndarray:
 def refuse_beyond_memory(array: object, where: str = "volume") -> None:
     """Refuse, before it is read, a dask or zarr array whose voxels would
     not fit in memory (:func:`~isoflow.scale.memory.check_fits`): NumPy
-    reads it whole, and one beyond memory raised NumPy's MemoryError with
-    a traceback, or made the machine swap, where the functions that read
-    it block by block were meant.
+    would read it whole, raising its MemoryError or making the machine
+    swap, where the functions that read it block by block are meant.
 
     Parameters
     ----------
