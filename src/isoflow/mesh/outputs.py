@@ -812,6 +812,8 @@ def _replace(tmp: Path, path: Path, directory: bool) -> None:
     # aside, move the new one in, then delete the old one
     old = temp_sibling(path, directory=True)
     old.rmdir()
+    if MADE is not None:  # it is to hold the old output, which the command's end must not remove
+        MADE.discard(old)
     os.replace(path, old)
     try:
         os.replace(tmp, path)
