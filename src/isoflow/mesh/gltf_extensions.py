@@ -11,7 +11,8 @@ extension, rather than read as another model; so is a primitive drawn
 as a triangle fan (mode 6), which trimesh's reader skips (a model read
 without those faces; :func:`skipped_primitive`), and a ``.gltf`` whose
 buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
-"FileNotFoundError: model.bin", no more).  The file's JSON is looked at only (a
+"FileNotFoundError: model.bin", no more); :func:`gltf_refusal` says
+either, the file's JSON read once.  The file's JSON is looked at only (a
 GLB's first chunk), never its buffers.
 """
 
@@ -100,9 +101,11 @@ def json_of(data: bytes, glb: bool) -> dict | None:
     return tree if isinstance(tree, dict) else None
 
 
-def unapplied_extension(path: Path) -> str | None:
-    """The one line refusing a glTF or GLB file that uses a geometry
-    extension trimesh does not apply (see the module's text), or None.
+def gltf_refusal(path: Path) -> str | None:
+    """The one line refusing a glTF or GLB file that trimesh would read as
+    another model (:func:`unapplied_in`), or a ``.gltf`` whose buffer file
+    is not there (:func:`missing_buffer`), or None; the file's JSON is
+    read once for both.
 
     Parameters
     ----------
@@ -121,18 +124,23 @@ def unapplied_extension(path: Path) -> str | None:
     >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
     >>> node = {"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0}}}}
     >>> _ = p.write_text(json.dumps({"nodes": [node], "accessors": [{"count": 3}]}))
-    >>> print(unapplied_extension(p).replace(str(p), "a.gltf"))  # doctest: +ELLIPSIS
+    >>> print(gltf_refusal(p).replace(str(p), "a.gltf"))  # doctest: +ELLIPSIS
     a.gltf: node 0 draws its mesh 3 times by the glTF extension EXT_mesh_gpu_instancing, which ...
+    >>> _ = p.write_text(json.dumps({"buffers": [{"uri": "a.bin", "byteLength": 4}]}))
+    >>> print(gltf_refusal(p).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
+    DIR/a.gltf: buffer 0 is the file 'a.bin', which is not there (DIR/a.bin); ...
     """
     if path.suffix.lower() not in (".gltf", ".glb"):
         return None
     tree = gltf_json(path)
-    return None if tree is None else unapplied_in(tree, str(path))
+    if tree is None:
+        return None
+    return unapplied_in(tree, str(path)) or (missing_buffer(path, tree) if path.suffix.lower() == ".gltf" else None)
 
 
 def unapplied_in(tree: dict, where: str) -> str | None:
-    """:func:`unapplied_extension` of a glTF file's JSON (an archive's
-    member, named ``where``).
+    """:func:`gltf_refusal`'s checks of the extensions and the fans, on a
+    glTF file's JSON (an archive's member, named ``where``).
 
     Parameters
     ----------
@@ -211,7 +219,7 @@ def skipped_primitive(where: str | Path, tree: dict) -> str | None:
     return None
 
 
-def missing_buffer(path: Path) -> str | None:
+def missing_buffer(path: Path, tree: dict) -> str | None:
     """The one line refusing a ``.gltf`` file whose buffer names a file
     that is not there, or None (images are not looked at: a model reads
     without its textures).
@@ -219,7 +227,9 @@ def missing_buffer(path: Path) -> str | None:
     Parameters
     ----------
     path : pathlib.Path
-        The mesh file; any other suffix than ``.gltf`` gives None.
+        The ``.gltf`` file, beside which its buffer files are.
+    tree : dict
+        Its JSON (:func:`gltf_json`).
 
     Returns
     -------
@@ -229,16 +239,11 @@ def missing_buffer(path: Path) -> str | None:
 
     Examples
     --------
-    >>> import tempfile
-    >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
-    >>> _ = p.write_text(json.dumps({"buffers": [{"uri": "a.bin", "byteLength": 4}]}))
-    >>> print(missing_buffer(p).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
-    DIR/a.gltf: buffer 0 is the file 'a.bin', which is not there (DIR/a.bin); ...
+    >>> tree = {"buffers": [{"uri": "data:application/octet-stream;base64,AAAA"}]}
+    >>> missing_buffer(Path("a.gltf"), tree) is None  # a buffer held in the file itself
+    True
     """
-    if path.suffix.lower() != ".gltf":
-        return None
-    tree = gltf_json(path)
-    for index, buffer in enumerate(_list((tree or {}).get("buffers"))):
+    for index, buffer in enumerate(_list(tree.get("buffers"))):
         uri = buffer.get("uri") if isinstance(buffer, dict) else None
         if not isinstance(uri, str) or uri.startswith("data:"):
             continue

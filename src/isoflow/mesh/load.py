@@ -996,11 +996,11 @@ def trimesh_load(p: Path, force: str):
     merged (the weld merges what trimesh leaves split); a PLY's concave
     polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
     uses a geometry extension trimesh does not apply is refused
-    (:func:`~isoflow.mesh.gltf_extensions.unapplied_extension`)."""
-    from .gltf_extensions import missing_buffer, unapplied_extension
+    (:func:`~isoflow.mesh.gltf_extensions.gltf_refusal`)."""
+    from .gltf_extensions import gltf_refusal
 
     check_mesh_file(p)
-    if (refusal := unapplied_extension(p) or missing_buffer(p)) is not None:  # trimesh: another model, or its bare error
+    if (refusal := gltf_refusal(p)) is not None:  # trimesh: another model, or its bare error
         raise IsoflowError(refusal)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
