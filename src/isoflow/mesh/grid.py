@@ -125,13 +125,11 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     else:
         # float() reads "0.5" and True as numbers: a pitch given as text or a bool is refused
         # by name, as a resolution is, not taken for the number it spells
-        if isinstance(pitch, (str, bytes, bool, np.bool_)):
-            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
         if isinstance(pitch, (np.ndarray, list, tuple)) and np.size(pitch) == 1 and np.ndim(pitch) == 1:
             # one number in a one-element array, as DigitalObject takes a pitch (float() refuses it)
             (pitch,) = pitch
-            if isinstance(pitch, (str, bytes, bool, np.bool_)):
-                raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
+        if isinstance(pitch, (str, bytes, bool, np.bool_)):
+            raise IsoflowError(f"voxelize: pitch must be a positive number, got {given_text(pitch)}")
         try:
             given, pitch = pitch, float(pitch)
         except (TypeError, ValueError, OverflowError):
