@@ -917,21 +917,32 @@ class SlabStream:
         stored = np.dtype(self.array.dtype)
         return stored.itemsize + (label_dtype(stored).itemsize if stored.kind == "f" else 0)
 
+    def chunk_layout(self) -> tuple[list[int], int, int] | None:
+        """The array's chunks as a read decodes them: a chunk's sides as
+        the array reads them, the chunks across one layer of them, and a
+        chunk's voxels decoded whole; None for an array in memory."""
+        from ..scale.chunks import decoded_chunk_voxels
+
+        chunks = None if isinstance(self.array, np.ndarray) else getattr(self.array, "chunks", None)
+        if not chunks:
+            return None
+        voxels = decoded_chunk_voxels(self.array)
+        if not voxels:
+            return None
+        sides = [max(int(c) for c in side) if isinstance(side, tuple) else int(side) for side in chunks]
+        across = int(np.prod([-(-int(n) // s) for n, s in zip(self.array.shape[1:], sides[1:])], dtype=np.int64))
+        return sides, across, voxels
+
     def decoded(self, a: int, b: int) -> tuple[int, int, list[int]]:
         """What a read of voxel layers a .. b - 1 decodes beside the voxels
         it gives: the chunks decoded at a time, their bytes, and a chunk's
         sides as the array reads them (0, 0, [] for an array in memory)."""
-        from ..scale.chunks import decoded_chunk_voxels
-
-        chunks = None if isinstance(self.array, np.ndarray) else getattr(self.array, "chunks", None)
-        if not chunks or not decoded_chunk_voxels(self.array):
+        layout = self.chunk_layout()
+        if layout is None:
             return 0, 0, []
-        sides = [max(int(c) for c in side) if isinstance(side, tuple) else int(side) for side in chunks]
-        crossed = ((b - 1) // sides[0] - a // sides[0] + 1) * int(np.prod(
-            [-(-int(n) // s) for n, s in zip(self.array.shape[1:], sides[1:])], dtype=np.int64))
-        at_once = min(crossed, decoded_at_once())
-        chunk = decoded_chunk_voxels(self.array) * np.dtype(self.array.dtype).itemsize
-        return at_once, at_once * chunk, sides
+        sides, across, voxels = layout
+        at_once = min(((b - 1) // sides[0] - a // sides[0] + 1) * across, decoded_at_once())
+        return at_once, at_once * voxels * np.dtype(self.array.dtype).itemsize, sides
 
     def check_read(self, a: int, b: int, need: int, what: str) -> None:
         """Refuse a read of voxel layers a .. b - 1 whose ``need`` bytes,
@@ -941,13 +952,14 @@ class SlabStream:
         from ..scale import memory
 
         at_once, decoded, sides = self.decoded(a, b)
+        layout = self.chunk_layout()
         budget = memory.default_budget()
         along = "xyz"[self.axes[0]]
         hint = f"write the store with smaller chunks along {along}"
-        if decoded and need + decoded > budget:
+        if layout is not None and need + decoded > budget:
             # smaller chunks: the thickest slab's read may cross two layers of them, every chunk of each decoded
             thickest = need // max(b - a, 1) * max(self.thickest, b - a)
-            across = int(np.prod([-(-int(n) // s) for n, s in zip(self.array.shape[1:], sides[1:])], dtype=np.int64))
+            across = layout[1]
             fit = (budget - thickest) // (min(2 * across, decoded_at_once()) * np.dtype(self.array.dtype).itemsize)
             what += (f" and the {'chunk' if at_once == 1 else f'{at_once} chunks'} of "
                      f"{'x'.join(map(str, self.in_image_order(sides)))} voxels its read decodes whole")
