@@ -84,9 +84,14 @@ def test_threads_help_says_what_the_docs_say_it_sets():
     assert "would fit (`--threads N`)" in page("surface.md") and "how many blocks at a time" in page("surface.md")
     assert ("`surface --threads N` sets the threads of the compiled passes too, and for a 3D `.zarr` store written "
             "block by block the blocks meshed at a time") in page("cli.md")
+    assert ("`flow --threads N` sets the threads of the compiled passes too, and for a `.zarr` store flowed block "
+            "by block (`--volumes .zarr`) the threads of dask's threaded scheduler, each slab's passes on one "
+            "(default 2, as `flow_chunked(..., workers=2)` in Python)") in page("cli.md")
     claims = {"info": ["threads for the compiled passes", ".zarr store", "threads of dask's threaded scheduler",
                        "each block's passes on one", "$ISOFLOW_THREADS"],
-              "surface": ["threads for the compiled passes", "the blocks meshed at a time", "$ISOFLOW_THREADS"]}
+              "surface": ["threads for the compiled passes", "the blocks meshed at a time", "$ISOFLOW_THREADS"],
+              "flow": ["threads for the compiled passes", "$ISOFLOW_THREADS", "--volumes .zarr",
+                       "threads of dask's threaded scheduler", "each slab's passes on one", "(default: 2)"]}
     commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
     helps = {name: " ".join(action.help.split()) for name, sub in commands.items() for action in sub._actions
              if "--threads" in action.option_strings}
@@ -115,8 +120,33 @@ def test_a_bad_isoflow_threads_is_refused_whatever_the_input_size(tmp_path, caps
     assert err == [f"isoflow {command}: error: the environment variable ISOFLOW_THREADS must be a positive integer, "
                    "got 'abc'"]
     assert not (tmp_path / "s.ply").exists()
-    if command != "flow":  # --threads, where a command takes it, is what is asked: the variable is not read
-        assert main([command, str(path), *extra, "--threads", "2"]) == 0
+    # --threads is what is asked: the variable is not read
+    assert main([command, str(path), *extra, "--threads", "2"]) == 0
+
+
+def test_flow_threads_sets_the_compiled_passes_threads(tmp_path, capsys, monkeypatch):
+    """``flow --threads N`` in memory: the run's compiled passes take N
+    threads, as ``info`` and ``surface`` do (flow took no --threads);
+    block by block it is the flow's dask threads (tests/flow/test_chunked.py)."""
+    import inspect
+
+    from isoflow.flow import chunked, run
+    from isoflow.scale import compiled
+
+    asked = []
+    plain = run.run_flow
+
+    def counted(*args, **kwargs):
+        asked.append(compiled.thread_count())
+        return plain(*args, **kwargs)
+
+    monkeypatch.setattr(run, "run_flow", counted)
+    monkeypatch.delenv("ISOFLOW_THREADS", raising=False)
+    np.save(tmp_path / "t.npy", torus(5, 2))
+    assert main(["flow", str(tmp_path / "t.npy"), "--steps", "2", "--threads", "7"]) == 0, capsys.readouterr().err
+    assert asked == [7]
+    # the default the help gives for a store block by block is flow_chunked's
+    assert inspect.signature(chunked.flow_chunked).parameters["workers"].default == 2
 
 
 def test_surface_threads_sets_the_compiled_passes_threads(tmp_path, capsys, monkeypatch):
@@ -334,6 +364,7 @@ def test_bash_completion_completes(tmp_path):
     assert complete("info", "--connectivity", "2") == ["26"]
     assert complete("genus", "ri") == ["ring.obj"]  # paths complete as files
     assert "--quiet" in complete("flow", "--q")
+    assert complete("flow", "--thr") == ["--threads"]  # what the hints of flow block by block name
 
 
 def test_zsh_and_tcsh_scripts(capsys):

@@ -146,7 +146,8 @@ def test_slabs_are_thinned_to_fit_the_memory_budget(monkeypatch):
     available, `isoflow flow STORE --volumes .zarr` was refused, telling a
     command-line user to pass `slab=`, which only Python takes; the slabs
     are now as thick as the budget holds, and only a slab of one layer
-    that does not fit is refused, saying how many workers would fit."""
+    that does not fit is refused, saying how many workers would fit (in
+    the words of the command line and of Python), and they do."""
     from isoflow.scale import memory
 
     layer = 1024 * 1024  # the vertices of a layer of a (1023, 1023) plane
@@ -154,9 +155,44 @@ def test_slabs_are_thinned_to_fit_the_memory_budget(monkeypatch):
     monkeypatch.setattr(memory, "default_budget", lambda: 12 * per_layer)
     thick = slab_thickness((100, 1023, 1023), None, 2)
     assert thick == 4 and 2 * (thick + 2) * per_layer <= memory.default_budget()  # two workers' slabs with a seam each
+    # a cross-section whose step records are small beside its slabs' layers
+    layer = 4001 * 4001
+    per_layer = 2 * layer + 6 * layer // 8
     monkeypatch.setattr(memory, "default_budget", lambda: 5 * per_layer)
-    with pytest.raises(IsoflowError, match="slabs of 1 layer .*; slabs of one layer fit 1 at a time"):
-        slab_thickness((100, 1023, 1023), None, 2)
+    with pytest.raises(IsoflowError, match=r"slabs of 1 layer .*; slabs of one layer fit 1 at a time "
+                                           r"\(--threads 1, workers=1\)"):
+        slab_thickness((10, 4000, 4000), None, 2)
+    assert slab_thickness((10, 4000, 4000), None, 1) >= 1
+
+
+@pytest.mark.parametrize("shape", [(100, 1023, 1023), (10, 4000, 4000), (20, 200, 200)])
+def test_the_workers_a_slab_refusal_names_flow(monkeypatch, shape):
+    """A slab refusal named the workers whose slabs of one layer fit
+    without asking whether each step's report of those slabs fits them
+    too: on a 1023 x 1023 cross-section it said they fit 1 at a time, and
+    one worker was then refused for the report. Under every budget, the
+    workers a refusal names (`--threads N`, `workers=N`) are sized
+    without a refusal, and a refusal naming none says what else to do."""
+    import re
+
+    from isoflow.scale import memory
+
+    layer = (shape[1] + 1) * (shape[2] + 1)
+    named = set()
+    for budget in np.geomspace(layer, 40 * layer, 60).astype(int):
+        monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
+        try:
+            slab_thickness(shape, None, 4)
+            continue
+        except IsoflowError as err:
+            message = str(err)
+        fit = re.search(r"\(--threads (\d+), workers=\1\)", message)
+        if fit is None:
+            assert "crop the volume" in message and "workers=" not in message, message
+            continue
+        named.add(int(fit[1]))
+        assert 1 <= int(fit[1]) < 4 and slab_thickness(shape, None, int(fit[1])) >= 1, message
+    assert named  # some budget is refused naming fewer workers
 
 
 def test_command_counts_a_slab_of_one_layer_in_the_singular(tmp_path, capsys, monkeypatch):
@@ -168,8 +204,9 @@ def test_command_counts_a_slab_of_one_layer_in_the_singular(tmp_path, capsys, mo
     from isoflow.scale import memory
 
     plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
-    # the input's chunks of 8^3 fit (about 8 KiB two at a time), two slabs of one layer do not
-    monkeypatch.setattr(memory, "default_budget", lambda: 12_000)
+    # the input's chunks of 8^3 fit (about 8 KiB two at a time), one slab of one layer does not (its
+    # 18 x 69 vertices and their seams: 3 x 3415 bytes)
+    monkeypatch.setattr(memory, "default_budget", lambda: 10_000)
     assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and "slabs of 1 layer of " in line and "1 layers" not in line, line
@@ -578,3 +615,93 @@ def test_a_report_beyond_the_budget_is_refused_before_any_step(monkeypatch, tmp_
     w = v[:, :ny, :nz].copy()
     w[-1, -1, -1] = 1
     flows_as_in_memory(tmp_path / "fits.zarr", w, (10, 100, 100), out)
+
+
+def test_command_threads_flow_a_store_as_without(tmp_path, capsys):
+    """``isoflow flow STORE --out DIR --volumes .zarr --threads 1`` (the
+    slabs and records one at a time) gives the records, flow.csv and
+    states the in-memory flow gives, as the run without --threads does;
+    the command took no --threads."""
+    v = crossing_volume(2)
+    plain_store(tmp_path / "in.zarr", v, (5, 7, 11))
+    mem, expected = in_memory(tmp_path / "in.zarr", 6, steps=5)
+    runs = {}
+    for name, extra in (("default", []), ("one", ["--threads", "1"])):
+        out = tmp_path / name
+        assert main(["flow", str(tmp_path / "in.zarr"), "--out", str(out), "--volumes", ".zarr", "--steps", "5",
+                     "--json", *extra]) == 0, capsys.readouterr().err
+        got = json.loads(capsys.readouterr().out)
+        assert {k: got[k] for k in expected} == expected
+        check_states(mem, out)
+        runs[name] = (out / "flow.csv").read_text()
+    assert runs["one"] == runs["default"]
+
+
+@pytest.mark.parametrize("case", ["chunks", "report"])
+def test_a_command_refusal_names_the_threads_that_flow(tmp_path, capsys, monkeypatch, case):
+    """Where memory is short, `isoflow flow STORE --volumes .zarr` was
+    refused with "they fit 1 at a time (flow_chunked(..., workers=1))",
+    which the command line could not give. The refusal (of the input's
+    chunks, of each step's report) names `--threads N` beside Python's
+    `workers=N`, and the same command with `--threads N` under the same
+    budget flows as in memory."""
+    import re
+
+    from isoflow.scale import memory
+
+    if case == "chunks":  # a small object in one chunk of 64^3, which two threads decode at once
+        v = np.zeros((64, 64, 64), np.uint8)
+        v[2:6, 2:6, 2:6] = 1
+        chunks, budget = (64, 64, 64), 2_000_000
+    else:  # each step's report of a 17 x 68 cross-section, two blocks at a time
+        v, chunks, budget = crossing_volume(), (8, 8, 8), 50_000
+    plain_store(tmp_path / "in.zarr", v, chunks)
+    mem, expected = in_memory(tmp_path / "in.zarr", 6, steps=2)
+    monkeypatch.setattr(memory, "default_budget", lambda: budget)
+    command = ["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr", "--steps", "2",
+               "--json"]
+    assert main(command) == 2
+    err = capsys.readouterr().err.strip()
+    fit = re.search(r"fits? (\d+) at a time \(--threads \1, workers=\1\)", err)
+    assert "\n" not in err and fit is not None and "flow_chunked(" not in err, err
+    assert not (tmp_path / "run").exists()
+    assert main([*command, "--threads", fit[1]]) == 0, capsys.readouterr().err
+    got = json.loads(capsys.readouterr().out)
+    assert {k: got[k] for k in expected} == expected
+    monkeypatch.undo()  # the states read back into memory
+    check_states(mem, tmp_path / "run")
+
+
+def test_no_command_refusal_names_what_only_python_takes(tmp_path, capsys, monkeypatch):
+    """The command line sizes the slabs itself and takes no `slab=` or
+    `workers=` alone: under every budget, a refusal of `isoflow flow STORE
+    --volumes .zarr` names neither slab= nor flow_chunked(...), and any
+    workers it names come with `--threads`."""
+    from isoflow.scale import memory
+
+    plain_store(tmp_path / "in.zarr", crossing_volume(), (8, 8, 8))
+    refused = 0
+    for budget in np.geomspace(4_000, 200_000, 24).astype(int):
+        monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
+        status = main(["flow", str(tmp_path / "in.zarr"), "--out", str(tmp_path / f"run{budget}"), "--volumes", ".zarr",
+                       "--steps", "1", "-q"])
+        err = capsys.readouterr().err
+        if status:
+            refused += 1
+            assert status == 2 and len(err.strip().splitlines()) == 1, err
+            assert "slab=" not in err and "flow_chunked(" not in err, err
+            assert err.count("workers=") == err.count("--threads "), err
+    assert refused >= 6  # the sweep reaches the refusals
+
+
+@pytest.mark.parametrize("bad", ["0", "x", "-1", "1.5"])
+def test_command_threads_must_be_a_positive_integer(tmp_path, capsys, bad):
+    """`flow --threads` is refused as `info --threads` is: one line, exit
+    status 2, before the store is read."""
+    with pytest.raises(SystemExit) as refused:
+        main(["flow", str(tmp_path / "missing.zarr"), "--out", str(tmp_path / "run"), "--volumes", ".zarr", "--threads",
+              bad])
+    assert refused.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"isoflow flow: error: argument --threads: N must be a positive integer, got '{bad}'"]
+    assert not (tmp_path / "run").exists()

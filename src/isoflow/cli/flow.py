@@ -23,6 +23,7 @@ from .inputs import (
     refuse_time_series_store,
     say_plate,
     step_count,
+    thread_count,
     why_empty,
 )
 from .progress import progress_bar, writing_line
@@ -51,10 +52,25 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-check", action="store_true", help="do not read the step files back with trimesh")
     p.add_argument("--force", action="store_true", help="overwrite files in a non-empty --out directory")
+    p.add_argument("--threads", type=thread_count, metavar="N",
+                   help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU); for a .zarr "
+                        "store flowed block by block (--volumes .zarr), the threads of dask's threaded scheduler, "
+                        "slabs and records alike, each slab's passes on one (default: 2), the memory sized for as "
+                        "many at a time")
     p.set_defaults(func=cmd_flow)
 
 
 def cmd_flow(args: argparse.Namespace) -> int:
+    """``isoflow flow``, its compiled passes on ``--threads`` threads (a
+    store flowed block by block takes them as its dask threads)."""
+    from ..scale.compiled import using
+
+    with using(args.threads):
+        return flow_of(args)
+
+
+def flow_of(args: argparse.Namespace) -> int:
+    """``isoflow flow`` of a file, or of a store block by block."""
     if args.out == "":  # (an unset shell variable): no run's files were asked for in silence, nor into "."
         raise IsoflowError("--out '': an empty directory name; give --out DIR for the run's files")
     refuse_options_without(args, "out", {"force": "overwrites files in a non-empty --out directory",
@@ -178,7 +194,8 @@ def flow_store(args: argparse.Namespace) -> int:
     """The plain flow of a zarr store block by block
     (:func:`isoflow.flow.chunked.flow_chunked`), its states written into
     ``--out`` as step_NNN.zarr with flow.csv and flow.png; the previous
-    run's files stay until this one is complete."""
+    run's files stay until this one is complete; ``--threads`` is its
+    ``workers``."""
     from ..flow.chunked import flow_chunked, guard_refusal, source_volume
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
@@ -211,6 +228,8 @@ def flow_store(args: argparse.Namespace) -> int:
                 show(0, total)
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   until_topology_change=args.until_topology_change,
+                                  # without --threads, flow_chunked's own default (the help's 2)
+                                  **({} if args.threads is None else {"workers": args.threads}),
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             show_whole_run(show, result, total)
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))

@@ -187,9 +187,9 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
     IsoflowError
         The workers' slabs, or the report of a step's store in chunks of
         their layers, would not fit in memory (up front), saying how many
-        workers one layer per slab would fit, how thick a slab would fit a
-        cluster's worker, what cross-section the report holds, or ``slab``
-        is not positive.
+        workers (``--threads N, workers=N``) slabs of one layer and their
+        reports would fit, how thick a slab would fit a cluster's worker,
+        what cross-section the report holds, or ``slab`` is not positive.
 
     Examples
     --------
@@ -231,13 +231,34 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
         check_workers_fit(client, (thick + 2) * per_layer, what, hint=f"{hint}, or give the workers more memory",
                           held=held)
         return thick
+    need = workers * (thick + 2) * per_layer
     fit = budget // (3 * per_layer)  # the workers whose slabs of one layer fit
-    hint = ("give thinner slabs (slab=)" if thick > 1 else
-            f"slabs of one layer fit {fit} at a time (flow_chunked(..., workers={fit}))" if fit >= 1 else
+    if need > budget and fit >= 1 and (slab is None or thick == 1):
+        # fewer workers are named only where each step's report of such slabs
+        # fits them too: else following the hint meets the report's refusal
+        fit = next((n for n in range(min(fit, workers), 0, -1) if _record_need(shape, 1, n, scheduler)[0] <= budget), 0)
+        if not fit:  # not even one at a time: what the report needs (a narrower cross-section)
+            _check_record_fits(shape, 1, 1, scheduler, budget, where)
+    # slabs sized here (slab None, as the command line's always are) are as
+    # thick as fit: only a slab asked for is too thick, and only Python asks
+    hint = ("give thinner slabs (slab=)" if slab is not None and thick > 1 else
+            f"slabs of one layer fit {fit} at a time ({_workers_words(fit)})" if fit >= 1 else
             f"{across}: crop the volume across them")
-    check_fits(workers * (thick + 2) * per_layer, f"{what} on {workers} workers", hint=hint, budget=budget)
-    _check_record_fits(shape, thick, workers, scheduler, budget, where)
+    check_fits(need, f"{what} ({workers} at a time)", hint=hint, budget=budget)
+    _check_record_fits(shape, thick, workers, scheduler, budget, where, asked=slab is not None)
     return thick
+
+
+def _workers_words(n: int) -> str:
+    """How a refusal names ``n`` slabs or chunks at a time that would fit,
+    in the words of both of its callers, ``isoflow flow STORE --volumes
+    .zarr --threads N`` and ``flow_chunked(..., workers=N)``, as the
+    refusals of a label name ``--label N (label=N)``:
+
+    >>> _workers_words(1)
+    '--threads 1, workers=1'
+    """
+    return f"--threads {n}, workers={n}"
 
 
 def _at_once(workers: int, scheduler: Any) -> int:
@@ -283,21 +304,23 @@ def _record_need(shape: tuple[int, int, int], thick: int, workers: int, schedule
 
 
 def _check_record_fits(shape: tuple[int, int, int], thick: int, workers: int, scheduler: Any, budget: int,
-                       where: str | None) -> None:
+                       where: str | None, asked: bool = False) -> None:
     """Refuse, before any step's store is written, slabs of ``thick``
     layers whose step stores the records' report could not sum in memory
-    (:func:`_record_need`), saying what would fit: thinner slabs, fewer
-    workers, or a narrower cross-section."""
+    (:func:`_record_need`), saying what would fit: thinner slabs where
+    their thickness was ``asked`` (``slab=``, which the command line does
+    not take: slabs it sizes are as thin as the report needs already),
+    fewer workers, or a narrower cross-section."""
     need, block, held, sides = _record_need(shape, thick, workers, scheduler)
     if need <= budget:
         return
     _, ny, nz = shape
     thinner = _thickest(thick, lambda t: _record_need(shape, t, workers, scheduler)[0] <= budget)
     fit = max(budget - held, 0) // max(block, 1)
-    if _record_need(shape, thinner, workers, scheduler)[0] <= budget:
+    if asked and _record_need(shape, thinner, workers, scheduler)[0] <= budget:
         hint = f"give thinner slabs (slab={thinner})"
     elif fit >= 1:
-        hint = f"it fits {fit} at a time (flow_chunked(..., workers={fit}))"
+        hint = f"it fits {fit} at a time ({_workers_words(fit)})"
     else:
         side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], s, s), 1, workers, scheduler)[0] <= budget)
         fits = _record_need((shape[0], side, side), 1, workers, scheduler)[0] <= budget
@@ -529,7 +552,7 @@ def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, s
     budget = default_budget()
     fit = max(budget - need.kept, 0) // max(need.block, 1)
     if fit >= 1:
-        hint = f"they fit {fit} at a time (flow_chunked(..., workers={fit})), or {smaller}"
+        hint = f"they fit {fit} at a time ({_workers_words(fit)}), or {smaller}"
     else:  # per voxel: the workers' chunks at work and the chunks the allocator keeps (KEPT_BLOCKS at most)
         per_voxel = threads * need.block / voxels + KEPT_BLOCKS * np.dtype(volume.dtype).itemsize
         most = int(budget // per_voxel)
@@ -659,7 +682,8 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
         each step's record (:func:`isoflow.digital.outofcore.analyze_chunked`)
         run on it alike.
     workers : int
-        Tasks in flight on the local schedulers (memory is sized for them).
+        Tasks in flight on the local schedulers (memory is sized for them;
+        ``isoflow flow --threads N`` on the command line).
     force : bool
         Replace the ``step_*.zarr`` stores of an earlier run in
         ``directory`` (removed before this run starts); without it they
