@@ -64,6 +64,7 @@ from .load import (
     mesh_arrays,
     mesh_bbox,
     mesh_members,
+    point_cloud_line,
     reading_mesh,
     trimesh_load,
     weld,
@@ -359,7 +360,11 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
         if len(f):  # (every face degenerate: nothing to fill)
             bodies.append(Body(where, v, f))
     if not bodies:
-        raise IsoflowError(f"{name}: no node of the scene holds a triangle mesh")
+        points = sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
+        # a scene of points alone is a scan's point cloud, refused as the merged read refuses it
+        raise IsoflowError(point_cloud_line(name, points) if points and all(
+            isinstance(g, trimesh.PointCloud) for g in scene.geometry.values())
+            else f"{name}: no node of the scene holds a triangle mesh")
     return bodies
 
 

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, given_text, missing, refuse_empty_path
+from ..errors import IsoflowError, MeshNote, counted, given_text, missing, refuse_empty_path, warn
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -826,7 +826,7 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
     import trimesh
     from trimesh.exchange.load import mesh_formats
 
-    from .gltf_extensions import json_of, unapplied_in
+    from .gltf_extensions import faceless_note, json_of, unapplied_in
 
     with open(p, "rb") as f:
         archive = trimesh.util.decompress(f, file_type=kind)
@@ -839,6 +839,8 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
         if member_kind in ("gltf", "glb") and (tree := json_of(data, glb=member_kind == "glb")) is not None:
             if (refusal := unapplied_in(tree, f"{p}:{member}")) is not None:  # as for a file of its own
                 raise IsoflowError(refusal)
+            if (note := faceless_note(f"{p}:{member}", tree)) is not None:
+                warn(note, MeshNote)
         scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
                                    process=False)
         if (line := faceless_member_line(f"{p}:{member}", member_kind, scene)) is not None:
@@ -996,12 +998,18 @@ def trimesh_load(p: Path, force: str):
     merged (the weld merges what trimesh leaves split); a PLY's concave
     polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
     uses a geometry extension trimesh does not apply is refused
-    (:func:`~isoflow.mesh.gltf_extensions.gltf_refusal`)."""
-    from .gltf_extensions import gltf_refusal
+    (:func:`~isoflow.mesh.gltf_extensions.gltf_refusal`), and its
+    primitives of points or lines beside faces, which trimesh leaves out,
+    are named in a :class:`~isoflow.errors.MeshNote`
+    (:func:`~isoflow.mesh.gltf_extensions.faceless_note`)."""
+    from .gltf_extensions import faceless_note, gltf_json, refusal_in
 
     check_mesh_file(p)
-    if (refusal := gltf_refusal(p)) is not None:  # trimesh: another model, or its bare error
+    tree = gltf_json(p) if p.suffix.lower() in (".gltf", ".glb") else None
+    if (refusal := refusal_in(p, tree)) is not None:  # trimesh: another model, or its bare error
         raise IsoflowError(refusal)
+    if tree is not None and (note := faceless_note(p, tree)) is not None:  # trimesh leaves them out without a word
+        warn(note, MeshNote)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}
