@@ -939,10 +939,6 @@ triangle meshes (a text point list, x y z per line, is read by isoflow info, sur
             "(a text point list, x y z per line, is read by isoflow info, surface and flow)")
 
 
-#: the words that files of these suffixes start with, by their formats' specifications
-MAGIC_WORDS = {".ply": b"ply", ".glb": b"glTF"}
-
-
 def misnamed_mesh(p: Path) -> str | None:
     """The line for a mesh file that gave no triangles when its first
     bytes say it holds another format than its suffix names
@@ -964,7 +960,7 @@ def misnamed_mesh(p: Path) -> str | None:
     >>> print(misnamed_mesh(q).replace(str(p.parent), "DIR"))
     DIR/scan.ply: not a PLY file: it starts with b'not a me', not PLY's b'ply'
     """
-    from .sniff import FORMATS, SNIFF_BYTES, sniff_mesh_format
+    from .sniff import FORMATS, MAGIC_WORDS, SNIFF_BYTES, sniff_mesh_format
 
     try:
         if not p.is_file():  # (a FIFO would block the read)
@@ -978,7 +974,7 @@ def misnamed_mesh(p: Path) -> str | None:
     name = p.name
     written = next((s for s in MESH_SUFFIXES if name.lower().endswith(s)), p.suffix.lower())
     if not kind:
-        magic = MAGIC_WORDS.get(written)
+        magic = MAGIC_WORDS.get(written.lstrip("."))  # (.glb, .ply: the format is the suffix's name)
         if magic is None or not head or head.startswith(magic):  # (an empty file has its own line)
             return None
         fmt = written.lstrip(".").upper()
