@@ -296,6 +296,24 @@ def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):
 
 # ------------------------------------------------ extensions trimesh ignores
 
+#: the commands that read a mesh, OUT the output where they write one
+MESH_COMMANDS = [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
+                 ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]]
+
+
+def refusal(capsys, tmp_path, command, path) -> str:
+    """The one line, no traceback, of ``command`` (of :data:`MESH_COMMANDS`)
+    refusing the mesh ``path`` with exit status 2, nothing written."""
+    from isoflow.cli import main
+
+    out = tmp_path / "out.npz"
+    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    assert not out.exists()
+    return err[0]
+
+
 def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing",)) -> None:
     """A GLB of one unit box drawn at each of ``offsets`` by
     EXT_mesh_gpu_instancing (its TRANSLATION accessor, one row each)."""
@@ -323,8 +341,7 @@ def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing
                      + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
 
 
-@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
-                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+@pytest.mark.parametrize("command", MESH_COMMANDS)
 def test_instanced_gltf_is_refused_not_read_as_one_copy(tmp_path, capsys, command):
     """Three unit boxes, 3 apart, drawn by EXT_mesh_gpu_instancing: trimesh
     reads one box (volume 1, not 3), which isoflow counted as the model."""
@@ -401,14 +418,11 @@ def fan_capped_box_glb(path) -> None:
 
 
 @pytest.mark.parametrize("archived", [False, True], ids=["file", "in a zip"])
-@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
-                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+@pytest.mark.parametrize("command", MESH_COMMANDS)
 def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, archived):
     """trimesh reads a glTF primitive of mode 6 as nothing: the box comes
     back open, its top missing, and was voxelised and counted so."""
     import zipfile
-
-    from isoflow.cli import main
 
     path = tmp_path / "capped.glb"
     fan_capped_box_glb(path)
@@ -419,12 +433,8 @@ def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, arch
         with zipfile.ZipFile(tmp_path / "model.zip", "w") as z:
             z.write(path, "capped.glb")
         path, where = tmp_path / "model.zip", f"{tmp_path / 'model.zip'}:capped.glb"
-    out = tmp_path / "out.npz"
-    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "Traceback" not in err[0], err
-    assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in err[0]
-    assert not out.exists()
+    line = refusal(capsys, tmp_path, command, path)
+    assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in line
 
 
 def box_gltf(path, modes) -> None:
@@ -464,25 +474,19 @@ def box_gltf(path, modes) -> None:
 
 
 @pytest.mark.parametrize("mode", [1, 2, 3], ids=["LINES", "LINE_LOOP", "LINE_STRIP"])
-@pytest.mark.parametrize("command", [["genus"], ["info"], ["voxelize", "--resolution", "8", "-o", "OUT"],
-                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+@pytest.mark.parametrize("command", [*MESH_COMMANDS, ["info"]])
 def test_a_gltf_of_lines_is_refused_naming_them(tmp_path, capsys, command, mode):
     """A box's edges or corners drawn as glTF lines: trimesh reads no
     face; the line said "no triangles read (empty mesh, or not a
     valid GLTF file)", or, split, "no node of the scene holds a triangle
     mesh", neither saying what the file holds."""
-    from isoflow.cli import main
 
     path = tmp_path / "edges.gltf"
     box_gltf(path, [mode])
     read = trimesh.load(path, force="scene")  # a path of the lines (of a loop or strip: nothing)
     assert not any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in read.geometry.values())
-    out = tmp_path / "out.npz"
-    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "Traceback" not in err[0], err
-    assert f"{path}: no triangles read: its primitives are lines (glTF mode {mode}), not triangles" in err[0]
-    assert not out.exists()
+    line = refusal(capsys, tmp_path, command, path)
+    assert f"{path}: no triangles read: its primitives are lines (glTF mode {mode}), not triangles" in line
 
 
 @pytest.mark.parametrize("split", [False, True])
