@@ -174,6 +174,39 @@ def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkey
     assert files_in(tmp_path / "out") == before  # byte for byte, and no temporary left
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+@pytest.mark.parametrize("earlier", [False, True], ids=["new", "--force"])
+def test_surface_png_interrupted_while_drawn_names_both_files(tmp_path, capsys, monkeypatch, earlier):
+    """Ctrl-C while the picture is drawn, after the mesh's lines are
+    printed: exit 130, no picture, mesh or temporary left (the earlier
+    pair byte for byte), and the line names the set, the mesh and its
+    picture (it named the mesh alone: "t.ply: nothing was replaced")."""
+    import signal
+
+    from test_labels_cli import files_in
+
+    from isoflow.mesh import render
+
+    if earlier:
+        assert surface_with_picture(tmp_path, torus(5, 2)) == 0
+    else:
+        (tmp_path / "out").mkdir()
+    before = files_in(tmp_path / "out")
+    capsys.readouterr()
+    draw = render.render_surface
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(render, "render_surface", interrupted)
+    assert surface_with_picture(tmp_path, torus(6, 2), *(["--force"] if earlier else [])) == 130
+    out = tmp_path / "out"
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"isoflow: interrupted: {out / 't.ply'} and {out / 't.png'}: nothing was replaced"]
+    assert files_in(out) == before
+
+
 def test_surface_png_force_replaces_the_picture_also_where_the_mesh_reads_back_otherwise(tmp_path, capsys, monkeypatch):
     # the new mesh was put in place and the picture not drawn: the old picture stayed beside it
     from isoflow.mesh import readback

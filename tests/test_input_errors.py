@@ -1054,7 +1054,8 @@ def test_a_zipped_zarr_store_is_said_to_be_one(command, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("suffix", [".ply", ".glb", ".obj"])
-@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"]])
+@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"],
+                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT.npy"]])
 def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, command):
     """A scan's point cloud given where a surface is taken: one line that
     says it holds points and no faces (as many points as trimesh reads from

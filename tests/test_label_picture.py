@@ -184,6 +184,32 @@ def test_a_failed_picture_leaves_the_csv_as_it_was(tmp_path, capsys, monkeypatch
     assert sorted(f.name for f in tmp_path.iterdir()) == ["seg.npy", "t.csv", "t.png"]
 
 
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_an_interrupted_picture_names_the_csv_and_the_picture(tmp_path, capsys, monkeypatch, cells):
+    """Ctrl-C while the picture of ``--csv`` and ``--png`` is drawn: exit
+    130, both files as they were and no temporary, and the line names
+    both (it named the picture alone: "t.png: nothing was replaced")."""
+    import os
+    import signal
+
+    np.save(tmp_path / "seg.npy", cells)
+    (tmp_path / "t.csv").write_text("old\n")
+    (tmp_path / "t.png").write_bytes(b"old")
+    draw = label_picture.render_label_table
+
+    def interrupted(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(label_picture, "render_label_table", interrupted)
+    assert main(["info", str(tmp_path / "seg.npy"), "--labels", "--csv", str(tmp_path / "t.csv"), "--png",
+                 str(tmp_path / "t.png"), "--force"]) == 130
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"isoflow: interrupted: {tmp_path / 't.csv'} and {tmp_path / 't.png'}: nothing was replaced"]
+    assert (tmp_path / "t.csv").read_text() == "old\n" and (tmp_path / "t.png").read_bytes() == b"old"
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["seg.npy", "t.csv", "t.png"]
+
+
 def drawn_figure_problems(fig) -> list[str]:
     """What a reader could not read in a drawn figure: tick labels of one
     axis that run into each other, scatter points under the legend, a count

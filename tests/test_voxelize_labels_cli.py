@@ -380,6 +380,21 @@ def _glb(path, nodes, meshes):
     return path
 
 
+def _two_whole_cubes(capsys, path, box, out):
+    """``voxelize PATH --split --pitch 0.25 -o OUT`` gives the labels
+    ``FILE:cube`` and ``FILE:crate``, each of the unit cube's
+    (1 / 0.25)^3 = 64 voxels, label 1 those whose centres trimesh's
+    ``contains`` finds inside ``box``."""
+    table = _run(capsys, "voxelize", path, "--split", "--pitch", "0.25", "-o", out)
+    rows = [line.split() for line in table.splitlines()[2:]]
+    assert [(r[0], r[1], r[2]) for r in rows] == [("1", "64", f"{path}:cube"), ("2", "64", f"{path}:crate")]
+    saved = np.load(out)
+    labels, pitch, origin = saved["volume"], float(saved["pitch"]), saved["origin"]
+    centres = origin + pitch * (np.indices(labels.shape).reshape(3, -1).T + 0.5)
+    inside = box.contains(centres).reshape(labels.shape)
+    assert inside.sum() == 64 and np.array_equal(labels == 1, inside)
+
+
 def test_split_of_a_glb_keeps_a_node_of_several_primitives_one_closed_label(tmp_path, capsys):
     """A glTF mesh of two materials is two primitives of one node: a cube
     whose top face is the second. ``--split`` gave each primitive a label,
@@ -393,21 +408,62 @@ def test_split_of_a_glb_keeps_a_node_of_several_primitives_one_closed_label(tmp_
     box = trimesh.creation.box((1, 1, 1))
     path = _glb(tmp_path / "mat.glb", [("cube", 0, [0, 0, 0]), ("crate", 1, [3, 0, 0])],
                 [[(box.vertices, box.faces[2:]), (box.vertices, box.faces[:2])], [(box.vertices, box.faces)]])
-    out = tmp_path / "labels.npz"
-    table = _run(capsys, "voxelize", path, "--split", "--pitch", "0.25", "-o", out)
-    rows = [line.split() for line in table.splitlines()[2:]]
-    assert [(r[0], r[1], r[2]) for r in rows] == [("1", "64", f"{path}:cube"), ("2", "64", f"{path}:crate")]
-    saved = np.load(out)
-    labels, pitch, origin = saved["volume"], float(saved["pitch"]), saved["origin"]
-    centres = origin + pitch * (np.indices(labels.shape).reshape(3, -1).T + 0.5)
-    inside = box.contains(centres).reshape(labels.shape)
-    assert inside.sum() == 64 and np.array_equal(labels == 1, inside)
+    _two_whole_cubes(capsys, path, box, tmp_path / "labels.npz")
     archive = tmp_path / "arch.zip"
     _glb(tmp_path / "one.glb", [("cube", 0, [0, 0, 0])], [[(box.vertices, box.faces[2:]), (box.vertices, box.faces[:2])]])
     with zipfile.ZipFile(archive, "w") as z:
         z.write(tmp_path / "one.glb", "one.glb")
     table = _run(capsys, "voxelize", archive, "--split", "--pitch", "0.25", "-o", tmp_path / "arch.npz")
     assert [line.split()[:3] for line in table.splitlines()[2:]] == [["1", "64", f"{archive}:one.glb"]]
+
+
+def _dae(path, box, nodes):
+    """A COLLADA file written as its schema spells it: the geometry
+    ``cubegeo`` of ``box``'s corners in two ``<triangles>`` of two
+    materials (its first two faces the second), placed by each of
+    ``nodes`` (name, x offset)."""
+    points = " ".join(f"{c:g}" for c in box.vertices.ravel())
+    parts = "".join(f'<triangles count="{len(f)}" material="{m}"><input semantic="VERTEX" source="#cubeverts" '
+                    f'offset="0"/><p>{" ".join(map(str, f.ravel()))}</p></triangles>'
+                    for m, f in (("side", box.faces[2:]), ("top", box.faces[:2])))
+    placed = "".join(f'<node id="{n}" name="{n}"><translate>{x} 0 0</translate>'
+                     '<instance_geometry url="#cubegeo"/></node>' for n, x in nodes)
+    path.write_text(
+        '<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">'
+        '<library_geometries><geometry id="cubegeo"><mesh><source id="cubepos">'
+        f'<float_array id="cubepos-array" count="{box.vertices.size}">{points}</float_array><technique_common>'
+        f'<accessor source="#cubepos-array" count="{len(box.vertices)}" stride="3"><param name="X" type="float"/>'
+        '<param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>'
+        '<vertices id="cubeverts"><input semantic="POSITION" source="#cubepos"/></vertices>'
+        f'{parts}</mesh></geometry></library_geometries><library_visual_scenes><visual_scene id="scene">{placed}'
+        '</visual_scene></library_visual_scenes><scene><instance_visual_scene url="#scene"/></scene></COLLADA>')
+    return path
+
+
+def test_split_of_a_dae_keeps_a_placed_geometry_of_several_primitives_one_closed_label(tmp_path, capsys):
+    """A COLLADA geometry of two materials is two ``<triangles>`` of one
+    geometry: a cube whose top face is the second, placed by the nodes
+    ``cube`` and ``crate``. trimesh reads a mesh per primitive, named by the
+    geometry's id (``cubegeo``, ``cubegeo_1``, ...), and ``--split`` gave
+    each a label, an open piece of a cube. Each node is one label,
+    ``FILE:NODE``, and its voxels are the whole cube's: (1 / 0.25)^3 = 64,
+    those whose centres trimesh's ``contains`` finds inside the cube. In a
+    ZAE (a zip of the DAE) as well."""
+    import zipfile
+
+    pytest.importorskip("collada")
+    box = trimesh.creation.box((1, 1, 1))
+    path = _dae(tmp_path / "mat.dae", box, [("cube", 0), ("crate", 3)])
+    read = trimesh.load_scene(path)
+    assert sorted(len(g.faces) for g in read.geometry.values()) == [2, 2, 10, 10]  # a piece per primitive
+    assert not any(g.is_watertight for g in read.geometry.values())
+    _two_whole_cubes(capsys, path, box, tmp_path / "labels.npz")
+    zae = tmp_path / "mat.zae"
+    with zipfile.ZipFile(zae, "w") as z:
+        z.write(path, "mat.dae")
+    table = _run(capsys, "voxelize", zae, "--split", "--pitch", "0.25", "-o", tmp_path / "zae.npz")
+    assert [line.split()[:3] for line in table.splitlines()[2:]] == [["1", "64", f"{zae}:cube"],
+                                                                    ["2", "64", f"{zae}:crate"]]
 
 
 @pytest.mark.parametrize("kind", ["zip", "tar.gz"])

@@ -296,6 +296,24 @@ def test_sets_of_parts_read_back_node_by_node_in_the_order_asked(tmp_path, rng):
 
 # ------------------------------------------------ extensions trimesh ignores
 
+#: the commands that read a mesh, OUT the output where they write one
+MESH_COMMANDS = [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
+                 ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]]
+
+
+def refusal(capsys, tmp_path, command, path) -> str:
+    """The one line, no traceback, of ``command`` (of :data:`MESH_COMMANDS`)
+    refusing the mesh ``path`` with exit status 2, nothing written."""
+    from isoflow.cli import main
+
+    out = tmp_path / "out.npz"
+    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    assert not out.exists()
+    return err[0]
+
+
 def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing",)) -> None:
     """A GLB of one unit box drawn at each of ``offsets`` by
     EXT_mesh_gpu_instancing (its TRANSLATION accessor, one row each)."""
@@ -323,8 +341,7 @@ def instanced_boxes_glb(path, offsets, extensions_used=("EXT_mesh_gpu_instancing
                      + struct.pack("<I", len(binary)) + b"BIN\0" + binary)
 
 
-@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
-                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+@pytest.mark.parametrize("command", MESH_COMMANDS)
 def test_instanced_gltf_is_refused_not_read_as_one_copy(tmp_path, capsys, command):
     """Three unit boxes, 3 apart, drawn by EXT_mesh_gpu_instancing: trimesh
     reads one box (volume 1, not 3), which isoflow counted as the model."""
@@ -401,14 +418,11 @@ def fan_capped_box_glb(path) -> None:
 
 
 @pytest.mark.parametrize("archived", [False, True], ids=["file", "in a zip"])
-@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT"],
-                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT"]])
+@pytest.mark.parametrize("command", MESH_COMMANDS)
 def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, archived):
     """trimesh reads a glTF primitive of mode 6 as nothing: the box comes
     back open, its top missing, and was voxelised and counted so."""
     import zipfile
-
-    from isoflow.cli import main
 
     path = tmp_path / "capped.glb"
     fan_capped_box_glb(path)
@@ -419,9 +433,80 @@ def test_a_triangle_fan_trimesh_skips_is_refused(tmp_path, capsys, command, arch
         with zipfile.ZipFile(tmp_path / "model.zip", "w") as z:
             z.write(path, "capped.glb")
         path, where = tmp_path / "model.zip", f"{tmp_path / 'model.zip'}:capped.glb"
+    line = refusal(capsys, tmp_path, command, path)
+    assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in line
+
+
+def box_gltf(path, modes) -> None:
+    """A ``.gltf`` (its buffer embedded as base64) of a unit box's eight
+    corners drawn by one primitive per mode of ``modes``: mode 4 its twelve
+    triangles, 1 its edges as lines, 2 and 3 its corners as a line loop
+    and strip, 0 its corners as points."""
+    import base64
+
+    box = trimesh.creation.box()
+    v = box.vertices.astype(np.float32)
+    by_mode = {4: box.faces.astype(np.uint32).ravel(), 1: box.edges_unique.astype(np.uint32).ravel(),
+               2: np.arange(8, dtype=np.uint32), 3: np.arange(8, dtype=np.uint32), 0: None}
+    blobs = [v.tobytes()]
+    accessors = [{"bufferView": 0, "componentType": 5126, "count": len(v), "type": "VEC3",
+                  "min": v.min(0).tolist(), "max": v.max(0).tolist()}]
+    primitives = []
+    for mode in modes:
+        primitive = {"attributes": {"POSITION": 0}, "mode": mode}
+        if by_mode[mode] is not None:
+            blobs.append(by_mode[mode].tobytes())
+            accessors.append({"bufferView": len(blobs) - 1, "componentType": 5125, "count": by_mode[mode].size,
+                              "type": "SCALAR"})
+            primitive["indices"] = len(accessors) - 1
+        primitives.append(primitive)
+    starts = np.cumsum([0] + [len(b) for b in blobs])
+    data = b"".join(blobs)
+    tree = {
+        "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0, "name": "box"}],
+        "meshes": [{"name": "edged", "primitives": primitives}],
+        "buffers": [{"byteLength": len(data), "uri": "data:application/octet-stream;base64,"
+                     + base64.b64encode(data).decode()}],
+        "bufferViews": [{"buffer": 0, "byteOffset": int(o), "byteLength": len(b)} for o, b in zip(starts, blobs)],
+        "accessors": accessors,
+    }
+    path.write_text(json.dumps(tree))
+
+
+@pytest.mark.parametrize("mode", [1, 2, 3], ids=["LINES", "LINE_LOOP", "LINE_STRIP"])
+@pytest.mark.parametrize("command", [*MESH_COMMANDS, ["info"]])
+def test_a_gltf_of_lines_is_refused_naming_them(tmp_path, capsys, command, mode):
+    """A box's edges or corners drawn as glTF lines: trimesh reads no
+    face; the line said "no triangles read (empty mesh, or not a
+    valid GLTF file)", or, split, "no node of the scene holds a triangle
+    mesh", neither saying what the file holds."""
+
+    path = tmp_path / "edges.gltf"
+    box_gltf(path, [mode])
+    read = trimesh.load(path, force="scene")  # a path of the lines (of a loop or strip: nothing)
+    assert not any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in read.geometry.values())
+    line = refusal(capsys, tmp_path, command, path)
+    assert f"{path}: no triangles read: its primitives are lines (glTF mode {mode}), not triangles" in line
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_lines_beside_triangles_are_named_in_a_note(tmp_path, capsys, split):
+    """A box's triangles and, as primitives of the same mesh, its edges as
+    lines and its corners as points (as CAD exporters add edges): trimesh
+    reads the triangles and leaves the others out without a word; the box
+    is voxelised whole (volume 1, as trimesh's volume of the triangles),
+    and a note names what was left out."""
+    from isoflow import read_volume
+    from isoflow.cli import main
+
+    path = tmp_path / "edged.gltf"
+    box_gltf(path, [4, 1, 0])
+    read = trimesh.load(path, force="mesh", process=False)
+    assert len(read.faces) == 12 and read.volume == pytest.approx(1.0)
     out = tmp_path / "out.npz"
-    assert main([command[0], str(path), *[str(out) if w == "OUT" else w for w in command[1:]]]) == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "Traceback" not in err[0], err
-    assert f"{where}: mesh 0 ('capped') primitive 1 is drawn as a triangle fan (glTF mode 6)" in err[0]
-    assert not out.exists()
+    assert main(["voxelize", str(path), "--resolution", "8", "-o", str(out), *(["--split"] if split else [])]) == 0
+    err = capsys.readouterr().err
+    assert (f"note: {path}: read without 2 primitives of lines (glTF mode 1) and points (glTF mode 0), mesh 0 "
+            "('edged') primitive 1 the first: they hold no face and bound no solid") in err, err
+    obj = read_volume(out)
+    assert np.count_nonzero(np.asarray(obj.volume)) * float(np.prod(np.broadcast_to(obj.pitch, 3))) == pytest.approx(read.volume)

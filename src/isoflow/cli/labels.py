@@ -560,8 +560,9 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
             raise IsoflowError(f"{args.png}: --csv and --png name one file; give each its own")
     about, conn, table, _, absent = read_table(args, surfaces=not args.no_surfaces)
     threads = getattr(args, "threads", None)
-    # the table and its picture replaced together: a failure between them leaves both as they were
-    with output_set(args.png) if args.png and args.csv and not to_stdout else contextlib.nullcontext():
+    # the table and its picture replaced together: a failure between them leaves both as they were, and an
+    # interrupt's line names both
+    with output_set(f"{args.csv} and {args.png}") if args.png and args.csv and not to_stdout else contextlib.nullcontext():
         if args.csv and not to_stdout:
             with using(threads):  # a large table's text is made on the passes' threads too
                 write_csv(args.csv, table, args.force)

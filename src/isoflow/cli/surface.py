@@ -97,8 +97,9 @@ def surface_of(args: argparse.Namespace) -> int:
     conn = args.connectivity or default_connectivity(3)
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
-    # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were
-    with output_set(out) if args.png else contextlib.nullcontext():
+    # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were,
+    # and an interrupt's line names both (the picture is drawn after the mesh's lines are printed)
+    with output_set(f"{out} and {args.png}") if args.png else contextlib.nullcontext():
         written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                        force=args.force, comments=comments, name=input_stem(args.input))
         # alone, the file is in place from here: an interrupt before or during

@@ -98,10 +98,10 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     from ..mesh.bodies import mesh_bodies
     from ..mesh.label_voxels import voxelize_meshes
     from ..mesh.volumes import (
-        check_label_output,
         check_volume_output,
         keeps_names,
         names_not_kept,
+        refuse_label_count,
         write_bytes_per_voxel,
         write_labels,
     )
@@ -109,7 +109,7 @@ def voxelize_labels(args: argparse.Namespace) -> int:
     check_volume_output(args.output, args.force, ndim=3)  # suffix, library and path before the meshes are read
     bodies = mesh_bodies(args.mesh, args.split)
     # and the labels the format keeps, before the voxels
-    check_label_output(args.output, len(bodies), args.force)
+    refuse_label_count(args.output, len(bodies))
     with coarser_for_magicavoxel(args.output), progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         r = voxelize_meshes(bodies, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                             overlap=args.overlap, split=args.split, strict=args.strict,

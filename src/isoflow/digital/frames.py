@@ -5,7 +5,8 @@ Slicer and ITK write) is written in another's (NIfTI's and MGH's RAS)
 without mirroring the patient. :func:`space_given` checks a code that a
 :class:`~isoflow.digital.lattice.DigitalObject` or a writer is given;
 :func:`axes_against` names the world axes a writer negates to change frame,
-:func:`grid_in_frame` negates them in a grid's steps and voxel 0's centre.
+:func:`grid_in_frame` negates them in a grid's steps and voxel 0's centre;
+:func:`frame_text` says a frame in words.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ from ..errors import IsoflowError
 #: takes one letter of each pair in turn (a permuted code such as "ASR"
 #: would reorder the axes, which a per-axis sign cannot say)
 AXIS_LETTERS = ("RL", "AP", "SI")
+#: the directions of :data:`AXIS_LETTERS` in words, letter by letter
+AXIS_WORDS = (("right", "left"), ("anterior", "posterior"), ("superior", "inferior"))
 
 
 def space_given(space: object, where: str) -> str | None:
@@ -59,6 +62,27 @@ A or P, S or I, as 'RAS' or 'LPS')
         raise IsoflowError(f"{where}: space {space!r} is not an anatomical frame (three letters: R or L, A or P, S or "
                            "I, as 'RAS' or 'LPS')")
     return code
+
+
+def frame_text(space: str) -> str:
+    """The anatomical frame ``space`` in words, for a warning.
+
+    Parameters
+    ----------
+    space : str
+        A three-letter code (:func:`space_given`).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> frame_text("LPS")
+    'the frame LPS (x to the left, y posterior, z superior)'
+    """
+    x, y, z = (words[pair.index(c)] for c, pair, words in zip(space, AXIS_LETTERS, AXIS_WORDS))
+    return f"the frame {space} (x to the {x}, y {y}, z {z})"
 
 
 def axes_against(space: str, frame: str = "RAS") -> list[int]:

@@ -64,6 +64,7 @@ from .load import (
     mesh_arrays,
     mesh_bbox,
     mesh_members,
+    point_cloud_line,
     reading_mesh,
     trimesh_load,
     weld,
@@ -281,8 +282,8 @@ def node_bodies(path: Path) -> list[Body]:
     if kind is not None:
         return archive_bodies(path, kind)
     scene = trimesh_load(path, "scene")
-    order = gltf_node_order(path.read_bytes()) if path.suffix.lower() in GLTF_SUFFIXES else None
-    return scene_bodies(scene, str(path), order)
+    order, owners = file_order(path.read_bytes(), path.suffix.lower().lstrip("."))
+    return scene_bodies(scene, str(path), order, owners)
 
 
 def archive_bodies(path: Path, kind: str) -> list[Body]:
@@ -307,18 +308,20 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
             if solids is not None:
                 bodies += solids
                 continue
-            order = gltf_node_order(data) if f".{member_kind}" in GLTF_SUFFIXES else None
-            # the file's nodes that hold a mesh (a glTF node of several primitives is one)
-            meshes = {_file_node(scene.graph, n, order) for n in scene.graph.nodes_geometry
+            order, owners = file_order(data, member_kind)
+            # the file's nodes that hold a mesh (a glTF node of several primitives is one, as is a
+            # COLLADA geometry of several placed once)
+            meshes = {owners.get(n, n) if owners else _file_node(scene.graph, n, order) for n in scene.graph.nodes_geometry
                       if isinstance(scene.geometry.get(scene.graph[n][1]), trimesh.Trimesh)}
-            named = scene_bodies(scene, f"{path}:{member}", order)
+            named = scene_bodies(scene, f"{path}:{member}", order, owners)
             bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
     if not bodies:
         raise IsoflowError(f"{path}: no file of the archive holds a triangle mesh")
     return bodies
 
 
-def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[Body]:
+def scene_bodies(scene, name: str, order: dict[str, int] | None = None,
+                 owners: dict[str, str] | None = None) -> list[Body]:
     """One body per node of a ``trimesh.Scene`` (named ``name:node``) that
     holds a triangle mesh, as :func:`node_bodies` reads a file's: in the
     order of the file's nodes where ``order`` gives each node's index by
@@ -326,7 +329,10 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
     node names. A node trimesh adds under a node of ``order`` (one per
     primitive of a glTF mesh of several, such as a mesh of two materials,
     named with a random suffix) is that node's: the primitives are joined
-    and welded as one body, as the pieces of one closed mesh.
+    and welded as one body, as the pieces of one closed mesh. ``owners``
+    names the body each node of trimesh's graph is a piece of, where the
+    graph keeps no node of the file (a COLLADA file's: trimesh makes a
+    node of each primitive, :func:`collada_placements`).
 
     Examples
     --------
@@ -347,7 +353,8 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
-        owner = _file_node(scene.graph, node, order) if order else _primitive_owner(scene, node, mesh)
+        owner = (owners.get(node, node) if owners else _file_node(scene.graph, node, order) if order
+                 else _primitive_owner(scene, node, mesh))
         groups.setdefault(owner, []).append((v, np.asarray(mesh.faces)))
     bodies = []
     for node, parts in groups.items():
@@ -359,7 +366,11 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None) -> list[
         if len(f):  # (every face degenerate: nothing to fill)
             bodies.append(Body(where, v, f))
     if not bodies:
-        raise IsoflowError(f"{name}: no node of the scene holds a triangle mesh")
+        points = sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
+        # a scene of points alone is a scan's point cloud, refused as the merged read refuses it
+        raise IsoflowError(point_cloud_line(name, points) if points and all(
+            isinstance(g, trimesh.PointCloud) for g in scene.geometry.values())
+            else f"{name}: no node of the scene holds a triangle mesh")
     return bodies
 
 
@@ -389,6 +400,128 @@ def gltf_node_order(data: bytes) -> dict[str, int]:
     for i, node in enumerate(nodes):
         names[unique_name(str(node.get("name", i)) if isinstance(node, dict) else str(i), names, counts=counts)] = i
     return names
+
+
+def file_order(data: bytes, kind: str) -> tuple[dict[str, int] | None, dict[str, str] | None]:
+    """The order of a scene file's nodes and the body each node of
+    trimesh's graph is a piece of (:func:`scene_bodies`), by its format as
+    trimesh names it (``glb``, ``dae``): a glTF's nodes
+    (:func:`gltf_node_order`), a COLLADA file's placed geometries
+    (:func:`collada_placements`); None, None for another format.
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+    kind : str
+        Its format, as its suffix without the dot.
+
+    Returns
+    -------
+    tuple
+        ``(order, owners)``, each a dict or None.
+
+    Examples
+    --------
+    >>> file_order(b'{"nodes": [{"name": "lid"}]}', "gltf")
+    ({'lid': 0}, None)
+    >>> file_order(b"solid", "stl")
+    (None, None)
+    """
+    if f".{kind}" in GLTF_SUFFIXES:
+        return gltf_node_order(data), None
+    if kind in ("dae", "zae"):
+        placed = collada_placements(data, zae=kind == "zae")
+        return {node: index for node, (index, _) in placed.items()}, {node: body for node, (_, body) in placed.items()}
+    return None, None
+
+
+def collada_placements(data: bytes, zae: bool = False) -> dict[str, tuple[int, str]]:
+    """Each node of trimesh's scene of a COLLADA file (DAE, or a ZAE: a zip
+    of one) by its name there, as the placed geometry it is a piece of:
+    ``(index, name)``, the placement's index in the file's order and the
+    name of the node that places it (the geometry's id where no node has
+    a name), made unique as trimesh makes names.  trimesh makes a node of
+    each primitive of a placed geometry, named by the geometry's id made
+    unique (``cubegeo``, ``cubegeo_1``), and keeps no node of the file: a
+    geometry of two materials, placed once, would be two open pieces.  The
+    file is walked as trimesh's reader walks it (pycollada), to give each
+    primitive the name trimesh gives it; empty where pycollada cannot read
+    the file (trimesh then says why).
+
+    Parameters
+    ----------
+    data : bytes
+        The file's bytes.
+    zae : bool, optional
+        Whether they are a ZAE's (its first ``.dae`` member is read, as
+        trimesh reads it).
+
+    Returns
+    -------
+    dict
+        ``{trimesh node: (index, name)}``.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> data = trimesh.exchange.dae.export_collada(trimesh.creation.box())
+    >>> list(collada_placements(data).values())  # the geometry placed by trimesh's node0
+    [(0, 'node0')]
+    """
+    try:
+        import collada
+        from trimesh.util import decompress, unique_name, wrap_as_stream
+
+        stream = wrap_as_stream(data)
+        if zae:
+            archive = decompress(stream, file_type="zip")
+            stream = archive[next(name for name in archive if name.lower().endswith(".dae"))]
+        # the errors trimesh's reader lets pass (ignore_broken)
+        ignore = [collada.common.DaeError, collada.common.DaeIncompleteError, collada.common.DaeMalformedError,
+                  collada.common.DaeBrokenRefError, collada.common.DaeUnsupportedError]
+        scene = collada.Collada(stream, ignore=ignore).scene
+        walk = _Walk(collada, unique_name)
+        for top in (scene.nodes if scene is not None else []):
+            walk.place(top, None)
+        return walk.placed
+    except Exception:  # (trimesh reads it or says why; no placement to follow then)
+        return {}
+
+
+class _Walk:
+    """:func:`collada_placements`' walk of a COLLADA scene, in the order of
+    trimesh's ``_parse_node``: the names trimesh gives the primitives, and
+    the bodies' names, each made unique as trimesh makes them."""
+
+    def __init__(self, collada, unique_name) -> None:
+        self.collada, self.unique_name = collada, unique_name
+        self.placed: dict[str, tuple[int, str]] = {}
+        self.pieces: set[str] = set()
+        self.piece_counts: dict = {}
+        self.bodies: list[str] = []
+        self.body_counts: dict = {}
+
+    def place(self, node, holder: str | None) -> None:
+        """``node`` and the nodes below it, ``holder`` the name of the
+        nearest named node above (or None)."""
+        collada = self.collada
+        if isinstance(node, collada.scene.GeometryNode):
+            geometry, kept = node.geometry, []
+            for primitive in geometry.primitives:
+                if isinstance(primitive, collada.polylist.Polylist):
+                    primitive = primitive.triangleset()
+                if isinstance(primitive, collada.triangleset.TriangleSet) and primitive.vertex is not None:
+                    kept.append(self.unique_name(geometry.id, contains=self.pieces, counts=self.piece_counts))
+                    self.pieces.add(kept[-1])
+            if kept:
+                body = self.unique_name(holder or geometry.id, contains=set(self.bodies), counts=self.body_counts)
+                self.bodies.append(body)
+                self.placed.update((piece, (len(self.bodies) - 1, body)) for piece in kept)
+        elif isinstance(node, collada.scene.Node) and node.children is not None:
+            name = getattr(node, "name", None) or getattr(node, "id", None)
+            for child in node.children:
+                self.place(child, name if isinstance(name, str) and name else holder)
 
 
 def _scene_order(graph, order: dict[str, int] | None) -> list:

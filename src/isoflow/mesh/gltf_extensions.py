@@ -9,11 +9,15 @@ views compressed; trimesh reads the compressed bytes as if they were the
 data.  A file that uses either is refused in one line naming the node or
 extension, rather than read as another model; so is a primitive drawn
 as a triangle fan (mode 6), which trimesh's reader skips (a model read
-without those faces; :func:`skipped_primitive`), and a ``.gltf`` whose
+without those faces; :func:`skipped_primitive`), a file whose primitives
+are all points or lines, of no face (:func:`faceless_model`), and a
+``.gltf`` whose
 buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
 "FileNotFoundError: model.bin", no more); :func:`gltf_refusal` says
-either, the file's JSON read once.  The file's JSON is looked at only (a
-GLB's first chunk), never its buffers.
+either, the file's JSON read once.  Points and lines beside triangles,
+which trimesh leaves out of the mesh, are named in a note
+(:func:`faceless_note`).  The file's JSON is looked at only (a GLB's
+first chunk), never its buffers.
 """
 
 from __future__ import annotations
@@ -132,15 +136,40 @@ def gltf_refusal(path: Path) -> str | None:
     """
     if path.suffix.lower() not in (".gltf", ".glb"):
         return None
-    tree = gltf_json(path)
+    return refusal_in(path, gltf_json(path))
+
+
+def refusal_in(path: Path, tree: dict | None) -> str | None:
+    """:func:`gltf_refusal` of a glTF file's JSON already read (``tree``,
+    None where the file holds none: its reader then says what is wrong).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The ``.gltf`` or ``.glb`` file.
+    tree : dict or None
+        Its JSON (:func:`gltf_json`).
+
+    Returns
+    -------
+    str or None
+        The refusal, or None.
+
+    Examples
+    --------
+    >>> refusal_in(Path("a.glb"), {"meshes": [{"primitives": [{"mode": 1}]}]})[:50]
+    'a.glb: no triangles read: its primitives are lines'
+    >>> refusal_in(Path("a.glb"), None) is None
+    True
+    """
     if tree is None:
         return None
     return unapplied_in(tree, str(path)) or (missing_buffer(path, tree) if path.suffix.lower() == ".gltf" else None)
 
 
 def unapplied_in(tree: dict, where: str) -> str | None:
-    """:func:`gltf_refusal`'s checks of the extensions and the fans, on a
-    glTF file's JSON (an archive's member, named ``where``).
+    """:func:`gltf_refusal`'s checks of the extensions, the fans and the
+    primitives of no face, on a glTF file's JSON (an archive's member, named ``where``).
 
     Parameters
     ----------
@@ -171,7 +200,7 @@ def unapplied_in(tree: dict, where: str) -> str | None:
                     "EXT_mesh_gpu_instancing, which isoflow's reader (trimesh) does not apply: it would read "
                     "one copy; export the model with each instance as a node of its own (Blender: "
                     "Realize Instances before the glTF export)")
-    return skipped_primitive(where, tree)
+    return skipped_primitive(where, tree) or faceless_model(where, tree)
 
 
 #: glTF's primitive mode of triangle fans, which trimesh's reader skips
@@ -204,19 +233,126 @@ def skipped_primitive(where: str | Path, tree: dict) -> str | None:
     >>> skipped_primitive(Path("a.glb"), {"meshes": [{"primitives": [{}]}]}) is None  # mode 4 by default
     True
     """
+    fans = [(index, at, name) for index, at, name, mode in _modes(tree) if mode == TRIANGLE_FAN]
+    if not fans:
+        return None
+    index, at, name = fans[0]
+    more = f" (and {len(fans) - 1} more)" if len(fans) > 1 else ""
+    return (f"{where}: mesh {index}{_named(name)} primitive {at} is drawn as a triangle fan (glTF mode 6)"
+            f"{more}, which isoflow's reader (trimesh) skips: the model would be read without its "
+            "faces; export it with triangles (mode 4, the default of Blender's and most exporters)")
+
+
+#: glTF's primitive modes of no face (points, lines, line loops, line
+#: strips), which trimesh reads as a point cloud or a path, not as the mesh
+FACELESS = {0: "points", 1: "lines", 2: "lines", 3: "lines"}
+#: the modes of faces: triangles (the default), strips, fans
+_FACES = (4, 5, TRIANGLE_FAN)
+
+
+def _modes(tree: dict) -> list[tuple[int, int, object, object]]:
+    """``(mesh, primitive, name, mode)`` of each primitive of a glTF
+    file's meshes, a mode left out being triangles (4)."""
+    found = []
     for index, mesh in enumerate(_list(tree.get("meshes"))):
         primitives = _list(mesh.get("primitives")) if isinstance(mesh, dict) else []
         for at, primitive in enumerate(primitives):
-            if isinstance(primitive, dict) and primitive.get("mode") == TRIANGLE_FAN:
-                name = mesh.get("name")
-                named = f" ({name!r})" if isinstance(name, str) and name else ""
-                fans = sum(isinstance(q, dict) and q.get("mode") == TRIANGLE_FAN
-                           for m in _list(tree.get("meshes")) if isinstance(m, dict) for q in _list(m.get("primitives")))
-                more = f" (and {fans - 1} more)" if fans > 1 else ""
-                return (f"{where}: mesh {index}{named} primitive {at} is drawn as a triangle fan (glTF mode 6)"
-                        f"{more}, which isoflow's reader (trimesh) skips: the model would be read without its "
-                        "faces; export it with triangles (mode 4, the default of Blender's and most exporters)")
-    return None
+            if isinstance(primitive, dict):
+                found.append((index, at, mesh.get("name"), primitive.get("mode", 4)))
+    return found
+
+
+def _named(name: object) -> str:
+    """`` ('NAME')`` of a mesh's name, as a line names it after its index;
+    nothing where the mesh has none."""
+    return f" ({name!r})" if isinstance(name, str) and name else ""
+
+
+def _kinds(modes: list[int]) -> str:
+    """The kinds of faceless primitives ``modes`` are, with their modes:
+    ``lines (glTF mode 1)``, ``lines (glTF modes 1, 3) and points (glTF
+    mode 0)``."""
+    said = []
+    for kind in ("lines", "points"):
+        of = sorted({m for m in modes if FACELESS.get(m) == kind})
+        if of:
+            said.append(f"{kind} (glTF mode{'s' if len(of) > 1 else ''} {', '.join(map(str, of))})")
+    return " and ".join(said)
+
+
+def faceless_model(where: str | Path, tree: dict) -> str | None:
+    """The one line refusing a glTF file whose primitives are lines (and
+    points), none of faces: trimesh reads them as a path, and the mesh
+    asked for has no triangle.  A file of points alone is None here: the
+    reader's point-cloud line says how many it holds.
+
+    Parameters
+    ----------
+    where : str or pathlib.Path
+        The file, as the line names it.
+    tree : dict
+        Its JSON (:func:`json_of`).
+
+    Returns
+    -------
+    str or None
+        ``PATH: no triangles read: its primitives are lines (glTF mode
+        2), not triangles: ...``.
+
+    Examples
+    --------
+    >>> tree = {"meshes": [{"primitives": [{"mode": 2}, {"mode": 0}]}]}
+    >>> print(faceless_model("edges.gltf", tree))  # doctest: +ELLIPSIS
+    edges.gltf: no triangles read: its primitives are lines (glTF mode 2) and points (glTF mode 0), not ...
+    >>> faceless_model("a.gltf", {"meshes": [{"primitives": [{"mode": 1}, {}]}]}) is None  # triangles too
+    True
+    """
+    modes = [mode for *_, mode in _modes(tree)]
+    if not modes or not all(m in FACELESS for m in modes) or all(FACELESS[m] == "points" for m in modes):
+        return None
+    return (f"{where}: no triangles read: its primitives are {_kinds(modes)}, not triangles: they bound no "
+            "solid, and there is nothing to voxelise; export the model's faces (a mesh of triangles), not its "
+            "edges or curves")
+
+
+def faceless_note(where: str | Path, tree: dict) -> str | None:
+    """The note naming the primitives of points or lines of a glTF file
+    that also has faces: trimesh reads the faces as the mesh and leaves
+    those out, without a word; they bound no solid, so the model is read
+    whole.  None where there is no such primitive, or no face.
+
+    Parameters
+    ----------
+    where : str or pathlib.Path
+        The file, as the note names it.
+    tree : dict
+        Its JSON (:func:`json_of`).
+
+    Returns
+    -------
+    str or None
+        ``PATH: read without mesh 0 ('box') primitive 1, drawn as lines
+        (glTF mode 1): it holds no face and bounds no solid``.
+
+    Examples
+    --------
+    >>> tree = {"meshes": [{"name": "box", "primitives": [{}, {"mode": 1}, {"mode": 3}]}]}
+    >>> print(faceless_note("a.glb", tree))  # doctest: +ELLIPSIS
+    a.glb: read without 2 primitives of lines (glTF modes 1, 3), mesh 0 ('box') primitive 1 the first: they ...
+    >>> faceless_note("a.glb", {"meshes": [{"primitives": [{}]}]}) is None
+    True
+    """
+    found = _modes(tree)
+    skipped = [(index, at, name, mode) for index, at, name, mode in found if mode in FACELESS]
+    if not skipped or not any(mode in _FACES for *_, mode in found):
+        return None
+    index, at, name, mode = skipped[0]
+    named = _named(name)
+    if len(skipped) == 1:
+        return (f"{where}: read without mesh {index}{named} primitive {at}, drawn as {_kinds([mode])}: it holds no "
+                "face and bounds no solid")
+    return (f"{where}: read without {len(skipped)} primitives of {_kinds([m for *_, m in skipped])}, mesh "
+            f"{index}{named} primitive {at} the first: they hold no face and bound no solid")
 
 
 def missing_buffer(path: Path, tree: dict) -> str | None:

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import IsoflowError, counted, given_text, missing, refuse_empty_path
+from ..errors import IsoflowError, MeshNote, counted, given_text, missing, refuse_empty_path, warn
 from ..scale.arrays import as_array, refuse_masked
 
 #: Default relative tolerance (times the bounding-box diagonal) below which two
@@ -826,7 +826,7 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
     import trimesh
     from trimesh.exchange.load import mesh_formats
 
-    from .gltf_extensions import json_of, unapplied_in
+    from .gltf_extensions import faceless_note, json_of, unapplied_in
 
     with open(p, "rb") as f:
         archive = trimesh.util.decompress(f, file_type=kind)
@@ -839,6 +839,8 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
         if member_kind in ("gltf", "glb") and (tree := json_of(data, glb=member_kind == "glb")) is not None:
             if (refusal := unapplied_in(tree, f"{p}:{member}")) is not None:  # as for a file of its own
                 raise IsoflowError(refusal)
+            if (note := faceless_note(f"{p}:{member}", tree)) is not None:
+                warn(note, MeshNote)
         scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
                                    process=False)
         if (line := faceless_member_line(f"{p}:{member}", member_kind, scene)) is not None:
@@ -937,10 +939,6 @@ triangle meshes (a text point list, x y z per line, is read by isoflow info, sur
             "(a text point list, x y z per line, is read by isoflow info, surface and flow)")
 
 
-#: the words that files of these suffixes start with, by their formats' specifications
-MAGIC_WORDS = {".ply": b"ply", ".glb": b"glTF"}
-
-
 def misnamed_mesh(p: Path) -> str | None:
     """The line for a mesh file that gave no triangles when its first
     bytes say it holds another format than its suffix names
@@ -962,7 +960,7 @@ def misnamed_mesh(p: Path) -> str | None:
     >>> print(misnamed_mesh(q).replace(str(p.parent), "DIR"))
     DIR/scan.ply: not a PLY file: it starts with b'not a me', not PLY's b'ply'
     """
-    from .sniff import FORMATS, SNIFF_BYTES, sniff_mesh_format
+    from .sniff import FORMATS, MAGIC_WORDS, SNIFF_BYTES, sniff_mesh_format
 
     try:
         if not p.is_file():  # (a FIFO would block the read)
@@ -976,7 +974,7 @@ def misnamed_mesh(p: Path) -> str | None:
     name = p.name
     written = next((s for s in MESH_SUFFIXES if name.lower().endswith(s)), p.suffix.lower())
     if not kind:
-        magic = MAGIC_WORDS.get(written)
+        magic = MAGIC_WORDS.get(written.lstrip("."))  # (.glb, .ply: the format is the suffix's name)
         if magic is None or not head or head.startswith(magic):  # (an empty file has its own line)
             return None
         fmt = written.lstrip(".").upper()
@@ -996,12 +994,18 @@ def trimesh_load(p: Path, force: str):
     merged (the weld merges what trimesh leaves split); a PLY's concave
     polygons are cut by ears (:func:`_ply_polygons_cut`); a glTF file that
     uses a geometry extension trimesh does not apply is refused
-    (:func:`~isoflow.mesh.gltf_extensions.gltf_refusal`)."""
-    from .gltf_extensions import gltf_refusal
+    (:func:`~isoflow.mesh.gltf_extensions.gltf_refusal`), and its
+    primitives of points or lines beside faces, which trimesh leaves out,
+    are named in a :class:`~isoflow.errors.MeshNote`
+    (:func:`~isoflow.mesh.gltf_extensions.faceless_note`)."""
+    from .gltf_extensions import faceless_note, gltf_json, refusal_in
 
     check_mesh_file(p)
-    if (refusal := gltf_refusal(p)) is not None:  # trimesh: another model, or its bare error
+    tree = gltf_json(p) if p.suffix.lower() in (".gltf", ".glb") else None
+    if (refusal := refusal_in(p, tree)) is not None:  # trimesh: another model, or its bare error
         raise IsoflowError(refusal)
+    if tree is not None and (note := faceless_note(p, tree)) is not None:  # trimesh leaves them out without a word
+        warn(note, MeshNote)
     import trimesh  # lazy: keeps `import isoflow` cheap
 
     kwargs: dict = {"process": False}

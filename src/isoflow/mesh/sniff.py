@@ -29,6 +29,10 @@ FORMATS: dict[str, tuple[str, str]] = {
     "gltf": ("a glTF JSON file (an object with \"asset\")", ".gltf"),
 }
 
+#: the words that files of these formats start with, by their specifications
+#: (the other formats have none)
+MAGIC_WORDS: dict[str, bytes] = {"glb": b"glTF", "ply": b"ply"}
+
 _OFF = re.compile(rb"(ST)?C?N?4?n?OFF")  # the header keywords isoflow.mesh.off takes (and the n-D ones)
 _OBJ_KEYS = frozenset((b"v", b"vt", b"vn", b"vp", b"f", b"l", b"p", b"o", b"g", b"s", b"usemtl", b"mtllib"))
 
@@ -74,9 +78,10 @@ def sniff_mesh_format(head: bytes, size: int | None = None) -> str:
     ''
     """
     head = bytes(head[:SNIFF_BYTES])
-    if head[:4] == b"glTF":
+    if head.startswith(MAGIC_WORDS["glb"]):
         return "glb"
-    if head[:3] == b"ply" and head[3:4] in (b"\n", b"\r", b" ", b""):
+    ply = MAGIC_WORDS["ply"]
+    if head.startswith(ply) and head[len(ply):len(ply) + 1] in (b"\n", b"\r", b" ", b""):
         return "ply"
     if size is not None and size >= 134 and len(head) >= 84:
         n = int.from_bytes(head[80:84], "little")

@@ -1074,12 +1074,42 @@ def check_label_output(path: str | os.PathLike, count: int, force: bool = False)
     also refused, before any work, where the format keeps fewer labels
     (binvox a bit per voxel, MagicaVoxel 255 colours, ImageJ TIFF 16 bits)."""
     file, dataset = check_volume_output(path, force)
-    fmt = format_for(file, writing=True)
+    refuse_label_count(path, count)
+    return file, dataset
+
+
+def refuse_label_count(path: str | os.PathLike, count: int) -> None:
+    """Refuse, in one line, a label image of labels 1 .. ``count`` where
+    the format of ``path`` keeps fewer labels (binvox a bit per voxel,
+    MagicaVoxel 255 colours, ImageJ TIFF 16 bits): the part of
+    :func:`check_label_output` left once the path itself is checked
+    (:func:`check_volume_output`, before the labels are counted).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The output; its suffix names the format.
+    count : int
+        The largest label.
+
+    Raises
+    ------
+    IsoflowError
+        Where the format keeps fewer labels.
+
+    Examples
+    --------
+    >>> refuse_label_count("cells.vox", 12)
+    >>> refuse_label_count("cells.binvox", 2)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: cells.binvox: binvox keeps one label (a bit per voxel), this image's labels go up to 2; ...
+    """
+    fmt = format_for(split_dataset(path)[0], writing=True)
     if fmt is not None and fmt.max_label is not None and count > fmt.max_label:
         keeps = "one label (a bit per voxel)" if fmt.max_label == 1 else f"labels up to {fmt.max_label}"
         raise IsoflowError(f"{path}: {fmt.name} keeps {keeps}, this image's labels go up to {count}; write "
                            ".nii.gz, .nrrd, .h5 or .npz")
-    return file, dataset
 
 
 def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pitch: float | ArrayLike | None = None,

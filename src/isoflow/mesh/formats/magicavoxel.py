@@ -20,9 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
-from .registry import RawVolume, frame_text, note, placement, reading
+from .registry import RawVolume, note, placement, reading
 
 MAX_SIDE = 256
 VERSION = 150

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...errors import IsoflowError
 from .registry import (
@@ -39,7 +40,6 @@ from .registry import (
     check_alpha,
     check_shape,
     colours_refused,
-    frame_text,
     import_library,
     note,
     placement,

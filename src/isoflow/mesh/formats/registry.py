@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...digital.frames import frame_text
 from ...digital.lattice import DigitalObject
 from ...digital.units import length_unit
 from ...errors import IsoflowError, given_text, number_text, warn
@@ -429,19 +430,6 @@ def space_not_kept(path, fmt: str, space: str | None) -> None:
     if space is not None:
         note(f"{path}: {fmt} keeps no anatomical frame; {frame_text(space)} is not written (.nii.gz, .mgz, "
              ".nrrd, .npz and .h5 keep it)")
-
-
-def frame_text(space: str) -> str:
-    """The anatomical frame ``space`` in words, for a warning.
-
-    Examples
-    --------
-    >>> frame_text("LPS")
-    'the frame LPS (x to the left, y posterior, z superior)'
-    """
-    words = {"R": "right", "L": "left", "A": "anterior", "P": "posterior", "S": "superior", "I": "inferior"}
-    x, y, z = (words[c] for c in space)
-    return f"the frame {space} (x to the {x}, y {y}, z {z})"
 
 
 @dataclass(frozen=True)

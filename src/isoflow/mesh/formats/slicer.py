@@ -26,8 +26,8 @@ Slicer writes a segment's name as UTF-8 text, through teem, which escapes
 a backslash as ``\\\\`` (and a line break as ``\\n``). pynrrd decodes
 every header line as ASCII, dropping the other bytes (``Vena cava \u00f8``
 comes back as ``Vena cava``, a Japanese name as nothing, so as its ID):
-:func:`read_header` reads each segment's name and ID again from the
-header's bytes, and :class:`NamedHeader` writes them so.
+:func:`read_header` reads each segment's name and ID from the header's
+lines, read once and given to pynrrd too, and :class:`NamedHeader` writes them so.
 """
 
 from __future__ import annotations
@@ -427,7 +427,8 @@ def read_header(fh) -> dict:
     name and ID (``Segment{k}_Name``, ``Segment{k}_ID``) as 3D Slicer
     writes them: UTF-8 text, a backslash escaped as ``\\`` (teem's
     escape). pynrrd drops every byte past ASCII from a header line and
-    keeps the escape; a name is read again from the header's bytes here.
+    keeps the escape; a name is read from the header's lines here, the
+    lines pynrrd is given (the header is read from the file once).
     Bytes that are no UTF-8 are read as Latin-1, one character a byte.
 
     Parameters
@@ -450,14 +451,14 @@ def read_header(fh) -> dict:
     """
     import nrrd
 
-    start = fh.tell()
-    header = nrrd.read_header(fh)
-    end = fh.tell()
-    fh.seek(start)
-    lines = fh.read(end - start).split(b"\n")
-    fh.seek(end)
+    # the header's lines read once, up to the blank line that ends it (or the
+    # end of a detached header), as pynrrd reads them; fh is left at the data
+    lines = [fh.readline()]
+    while (line := fh.readline()) and line.rstrip():
+        lines.append(line)
+    header = nrrd.read_header(lines + [line])
     for line in lines[1:]:
-        match = _NAME_LINE.fullmatch(line)
+        match = _NAME_LINE.fullmatch(line.rstrip(b"\n"))
         key = match and match[1].decode("ascii")
         if key in header:
             header[key] = header_text(match[2])
