@@ -75,16 +75,24 @@ def join_cells(cells, starts, widths, lengths, seps, sep_ends, out):
     >>> bytes(out[:n]).decode()
     ';a=1,b=x;a=23,b=y'
     """
-    at = 0
+    # unsigned places: numba checks a signed index for a negative one (counted from the end) at every byte,
+    # which here, a byte at a time, costs as much as the copy itself
+    one = np.uint64(1)
+    at = np.uint64(0)
     for r in range(lengths.shape[1]):
-        s = 0
+        s = np.uint64(0)
         for c in range(len(starts)):
-            for q in range(s, sep_ends[c]):
+            e = np.uint64(sep_ends[c])
+            q = s
+            while q < e:
                 out[at] = seps[q]
-                at += 1
-            s = sep_ends[c]
-            end = starts[c] + (r + 1) * widths[c]
-            for q in range(end - lengths[c, r], end):
+                at += one
+                q += one
+            s = e
+            end = np.uint64(starts[c] + (r + 1) * widths[c])
+            q = end - np.uint64(lengths[c, r])
+            while q < end:
                 out[at] = cells[q]
-                at += 1
-    return at
+                at += one
+                q += one
+    return np.int64(at)
