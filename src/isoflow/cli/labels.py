@@ -623,7 +623,17 @@ def json_text(name, about: dict, conn: int, table: dict, absent: np.ndarray, bin
     (the labels asked for that have no row: :func:`json_list`) and then
     ``labels``, one object per label (NaN as null); str, or with
     ``binary`` the text's ASCII bytes (bytes-like: JSON escapes every other
-    character)."""
+    character).
+
+    Examples
+    --------
+    >>> about = {"shape": (2, 2, 2), "dtype": np.uint8, "spacing": np.ones(3), "origin": np.zeros(3), "unit": None,
+    ...          "space": None}
+    >>> text = "".join(json_text("a.npy", about, 6, {"label": np.array([1])}, np.zeros(0, np.int64)))
+    >>> json.loads(text)["labels"], b"".join(json_text("a.npy", about, 6, {"label": np.array([1])},
+    ...                                                np.zeros(0, np.int64), binary=True)) == text.encode()
+    ([{'label': 1}], True)
+    """
     # the type by its name, in any byte order: a big-endian file's labels (NRRD's
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
     head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
