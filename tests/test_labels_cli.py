@@ -666,10 +666,11 @@ def test_a_4d_label_image_given_for_a_mask_offers_label_n_not_labels(tmp_path, c
 
 
 def assert_text_as_json_and_csv_write(table: dict) -> None:
-    """json_rows and csv_rows of ``table`` equal the standard library's
-    writers on the same cells (NaN as null / empty; an infinity as null in
-    JSON, which has none, and as csv writes it, ``inf``, which float() and
-    pandas read back; an object column's tuples as lists / ``0;1``)."""
+    """json_rows (as text and as ASCII bytes) and csv_rows of ``table``
+    equal the standard library's writers on the same cells (NaN as null /
+    empty; an infinity as null in JSON, which has none, and as csv writes
+    it, ``inf``, which float() and pandas read back; an object column's
+    tuples as lists / ``0;1``)."""
     import io
 
     from isoflow.cli import table_text
@@ -680,6 +681,8 @@ def assert_text_as_json_and_csv_write(table: dict) -> None:
 
     want = json.dumps([dict(zip(table, row)) for row in zip(*cells(lambda v: not np.isfinite(v)))])
     assert "".join(table_text.json_rows(table)) == want
+    # as bytes for standard output: the same text in ASCII (json escapes every other character)
+    assert b"".join(table_text.json_rows(table, binary=True)) == want.encode("ascii")
     fh = io.StringIO()
     writer = csv.writer(fh)
     writer.writerow(list(table))

@@ -573,8 +573,14 @@ def cmd_info_labels(args: argparse.Namespace) -> int:
             sys.stdout.writelines(csv_rows(table))
         return 0
     if args.json:
+        # as bytes where standard output takes them (a table of millions of rows is tens of megabytes of text)
+        binary = hasattr(sys.stdout, "write_ascii")
         with using(threads):
-            sys.stdout.writelines(json_text(args.input, about, conn, table, absent))
+            pieces = json_text(args.input, about, conn, table, absent, binary)
+            if binary:
+                sys.stdout.write_ascii(pieces)
+            else:
+                sys.stdout.writelines(pieces)
         sys.stdout.write("\n")
         return 0
     # the names escaped as a label's name is: a line break would split the report's lines, an escape act on the terminal
@@ -613,20 +619,31 @@ def draw_table(args: argparse.Namespace, about: dict, conn: int, table: dict) ->
     render_label_table(table, args.png, name=name, connectivity=conn, unit=about["unit"])
 
 
-def json_text(name, about: dict, conn: int, table: dict, absent: np.ndarray) -> Iterator[str]:
+def json_text(name, about: dict, conn: int, table: dict, absent: np.ndarray, binary: bool = False) -> Iterator:
     """What ``--json`` prints, in pieces: one object, the image, ``absent``
     (the labels asked for that have no row: :func:`json_list`) and then
-    ``labels``, one object per label (NaN as null)."""
+    ``labels``, one object per label (NaN as null); str, or with
+    ``binary`` the text's ASCII bytes (bytes-like: JSON escapes every other
+    character).
+
+    Examples
+    --------
+    >>> about = {"shape": (2, 2, 2), "dtype": np.uint8, "spacing": np.ones(3), "origin": np.zeros(3), "unit": None,
+    ...          "space": None}
+    >>> text = "".join(json_text("a.npy", about, 6, {"label": np.array([1])}, np.zeros(0, np.int64)))
+    >>> json.loads(text)["labels"], b"".join(json_text("a.npy", about, 6, {"label": np.array([1])},
+    ...                                                np.zeros(0, np.int64), binary=True)) == text.encode()
+    ([{'label': 1}], True)
+    """
     # the type by its name, in any byte order: a big-endian file's labels (NRRD's
     # "endian: big", an old Analyze/NIfTI) are int16 as a little-endian file's are, not ">i2"
     head = {"input": path_text(name), "shape": [int(s) for s in about["shape"]], "dtype": np.dtype(about["dtype"]).name,
             "pitch": about["spacing"].tolist(), "origin": about["origin"].tolist(), "unit": about["unit"],
             "space": about["space"], "connectivity": conn}
-    yield json.dumps(head)[:-1] + ', "absent": '
-    yield from json_list(absent)
-    yield ', "labels": '
-    yield from json_rows(table)
-    yield "}"
+    texts = [json.dumps(head)[:-1] + ', "absent": ', *json_list(absent), ', "labels": ']
+    yield from (text.encode("ascii") for text in texts) if binary else texts
+    yield from json_rows(table, binary)
+    yield b"}" if binary else "}"
 
 
 #: labels :func:`json_list` makes text of at a time

@@ -14,8 +14,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import difflib
+import functools
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 
 from ..errors import IsoflowError, terminal_text
 from . import completion, flow, genus, info, surface, voxelize
@@ -473,6 +474,21 @@ class NamedStdout:
         for line in lines:
             self.write(line)
 
+    def write_ascii(self, pieces: Iterable) -> None:
+        """Pieces of ASCII text, each bytes-like, written as they are to
+        the stream's buffer of bytes where its encoding writes ASCII as
+        ASCII (after the text written before them), else decoded and
+        written as text; each piece is written before the next is asked
+        for."""
+        buffer = getattr(self.stream, "buffer", None)
+        if buffer is None or not ascii_as_itself(getattr(self.stream, "encoding", None)):
+            for piece in pieces:
+                self.write(str(piece, "ascii"))
+            return
+        self.flush()
+        for piece in pieces:
+            guard_stdout(buffer.write, piece)
+
     def flush(self) -> None:
         guard_stdout(self.stream.flush)
 
@@ -494,6 +510,23 @@ class ClosedStdout:
         pass
 
     def isatty(self) -> bool:
+        return False
+
+
+@functools.cache
+def ascii_as_itself(encoding: str | None) -> bool:
+    """Whether text in ``encoding`` holds printable ASCII as those bytes
+    (UTF-8, Latin-1, cp1252; not UTF-16).
+
+    Examples
+    --------
+    >>> ascii_as_itself("utf-8"), ascii_as_itself("utf-16"), ascii_as_itself(None)
+    (True, False, False)
+    """
+    printable = bytes(range(32, 127))
+    try:
+        return encoding is not None and printable.decode("ascii").encode(encoding) == printable
+    except (LookupError, UnicodeError):
         return False
 
 

@@ -16,8 +16,9 @@ pass. So a table of a million rows is neither a million dicts for the
 JSON encoder nor a Python string per number, and the text is written a
 block of rows at a time rather than held whole. The blocks are made on
 the compiled passes' threads (the digits and the joins release the GIL),
-the next ones while one is written out, each thread in buffers it keeps
-from one block to the next.
+the next ones while one is written out, each thread's cells in buffers it
+keeps from one block to the next. A block's text is ASCII bytes, which
+``--json`` writes as they are to standard output's buffer of bytes.
 """
 
 from __future__ import annotations
@@ -138,8 +139,8 @@ def _float_cells(values: np.ndarray, missing: str, joined: str, chars: np.ndarra
     from ..scale.float_text import FLOAT_WIDTH, power_table, shortest_cells
 
     shortest_cells(values.view(np.uint64), power_table(), chars, lengths)
-    left = np.flatnonzero(lengths == 0)  # NaN, infinities, subnormal floats
-    if len(left):
+    if lengths.min(initial=1) == 0:  # NaN, infinities, subnormal floats (seldom: looked for only then)
+        left = np.flatnonzero(lengths == 0)
         texts = [repr(v) if math.isfinite(v) else non_finite_text(v, missing, joined) for v in values[left].tolist()]
         some, their = _text_cells(texts)
         chars[left, FLOAT_WIDTH - some.shape[1]:] = some
@@ -254,13 +255,16 @@ def _scratch(held: threading.local, name: str, size: int, dtype: type) -> np.nda
     return buffers[name][:size]
 
 
-def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.local | None = None) -> str:
-    """Rows lo .. hi - 1 as one text, each cell after its column's
+def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.local | None = None) -> np.ndarray:
+    """Rows lo .. hi - 1 as one ASCII text, in an array of bytes (uint8)
+    of its own, each cell after its column's
     ``before[c]`` (the first column's holds the end of the row before):
     each column's cells (``columns``: its :func:`_cells`, made once for
     every block) written into their own part of one buffer, then the rows
-    joined from them. The buffers are the calling thread's in ``held``
-    (new ones where None)."""
+    joined from them. The cells' buffers are the calling thread's in
+    ``held`` (new ones where None); the text's is new, as the caller holds
+    it while the next block is made (freed blocks of its size come back
+    from the allocator, not as pages touched anew)."""
     from ..scale.text_rows import join_cells
 
     held = threading.local() if held is None else held
@@ -272,14 +276,17 @@ def _rows(columns: list, lo: int, hi: int, before: list[bytes], held: threading.
     for c, (width, write) in enumerate(columns):
         write(lo, hi, cells[starts[c]:starts[c] + width * n].reshape(n, width), lengths[c])
     seps = np.frombuffer(b"".join(before), np.uint8)
-    out = _scratch(held, "out", int(lengths.sum()) + n * len(seps), np.uint8)
+    out = np.empty(int(lengths.sum()) + n * len(seps), np.uint8)
     size = join_cells(cells, starts, widths, lengths, seps, np.cumsum([len(b) for b in before]), out)
-    return str(out[:size], "ascii")
+    return out[:size]
 
 
-def _blocks(table: dict, before: list[bytes], missing: str, joined: str, booleans: tuple[str, str]) -> Iterator[str]:
+def _blocks(table: dict, before: list[bytes], missing: str, joined: str, booleans: tuple[str, str],
+            binary: bool = False) -> Iterator:
     """The rows' text a block of :data:`BLOCK_ROWS` rows at a time, in
-    order. The compiled blocks are made on the threads of the compiled
+    order: as str, or with ``binary`` (where every cell is ASCII: JSON's)
+    as its ASCII bytes (bytes-like). The compiled blocks are made on the
+    threads of the compiled
     passes (:func:`isoflow.scale.compiled.run_ahead`: their digits and
     joins release the GIL), the next ones while the caller writes one out;
     Python's text of a small table on the calling thread."""
@@ -287,35 +294,42 @@ def _blocks(table: dict, before: list[bytes], missing: str, joined: str, boolean
     # text (a name column) may hold any character: Python's rows, not the compiled ASCII ones
     if plain(n) or any(c.dtype.kind == "U" for c in table.values()):
         for lo in range(0, n, BLOCK_ROWS):
-            yield _plain_rows(table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
+            text = _plain_rows(table, lo, min(lo + BLOCK_ROWS, n), before, missing, joined, booleans)
+            yield text.encode("ascii") if binary else text
         return
     from ..scale.compiled import run_ahead
 
     columns = [_cells(column, missing, joined, booleans) for column in table.values()]
     held = threading.local()  # each thread's buffers, let go with the text
-    yield from run_ahead([(_rows, columns, lo, min(lo + BLOCK_ROWS, n), before, held)
-                          for lo in range(0, n, BLOCK_ROWS)])
+    for text in run_ahead([(_rows, columns, lo, min(lo + BLOCK_ROWS, n), before, held)
+                           for lo in range(0, n, BLOCK_ROWS)]):
+        yield text if binary else str(text, "ascii")
 
 
-def json_rows(table: dict) -> Iterator[str]:
+def json_rows(table: dict, binary: bool = False) -> Iterator:
     """The table as the text of a JSON array of one object per row (what
     ``json.dumps([dict(zip(table, row)) for row in ...])`` writes, NaN and
-    infinities as null), in blocks of rows.
+    infinities as null), in blocks of rows: str, or with ``binary`` the
+    text's ASCII bytes (bytes-like pieces, for a stream of bytes: no
+    string made and encoded again).
 
     Examples
     --------
     >>> table = {"label": np.array([1, 2]), "volume": np.array([8.0, np.nan])}
     >>> "".join(json_rows(table))
     '[{"label": 1, "volume": 8.0}, {"label": 2, "volume": null}]'
+    >>> b"".join(json_rows(table, binary=True))
+    b'[{"label": 1, "volume": 8.0}, {"label": 2, "volume": null}]'
     """
-    keys = [json.dumps(str(k)) for k in table]
+    keys = [json.dumps(str(k)) for k in table]  # ASCII: json escapes any other character
     before = [("}, {" + keys[0] + ": ").encode()] + [(", " + k + ": ").encode() for k in keys[1:]]
-    yield "["
+    yield b"[" if binary else "["
     n = 0
-    for text in _blocks(table, before, "null", ", ", ("false", "true")):
+    for text in _blocks(table, before, "null", ", ", ("false", "true"), binary):
         yield text if n else text[3:]  # the first row has no "}, " before it
         n += 1
-    yield "}]" if n else "]"
+    end = "}]" if n else "]"
+    yield end.encode() if binary else end
 
 
 def csv_rows(table: dict) -> Iterator[str]:

@@ -823,10 +823,13 @@ def label_sums(pieces: dict, piece_label: np.ndarray, passed: dict, nlabels: int
     hi = np.full((nlabels, 3), -1, np.int64)
     box_by_label(of, pieces["lo"][1:], pieces["hi"][1:], lo, hi)
     totals = {key: np.zeros((nlabels,) + column.shape[1:], np.int64)
-              for key, column in (("voxels", pieces["counts"]), ("sums", pieces["sums"]),
-                                  ("features", passed["features"]), ("doubled", passed["doubled"]))}
+              for key, column in (("voxels", pieces["counts"]), ("sums", pieces["sums"]), ("doubled", passed["doubled"]))}
+    # a feature per row and a label per column, seen transposed: each feature's column of the table (n-0 ..,
+    # energy) is then one contiguous run, which its text (--json, --csv) reads a block at a time, rather than
+    # every 17th number of the whole table
+    totals["features"] = np.zeros((passed["features"].shape[1], nlabels), np.int64).T
     add_by_label(of, pieces["counts"][1:], pieces["sums"][1:], passed["features"][1:], passed["doubled"][1:],
-                 *totals.values())
+                 totals["voxels"], totals["sums"], totals["features"], totals["doubled"])
     return {**totals, "lo": lo, "hi": hi}
 
 
@@ -1130,21 +1133,32 @@ def _report_features(report: Mapping, box: np.ndarray) -> np.ndarray:
 
 def genera_column(rows: np.ndarray, genera: np.ndarray, n: int) -> np.ndarray:
     """Per row of ``n``, the tuple of the genera of its surfaces
-    (``rows``: each surface's row, in order). Rows of one surface, the
-    common case, share one tuple per genus, put in place all at once."""
-    out = np.empty(n, object)
-    out.fill(())
+    (``rows``: each surface's row, in order). Rows of none or one surface,
+    the common case, share one tuple per genus (and the empty one), taken
+    for all rows at once.
+
+    Examples
+    --------
+    >>> genera_column(np.array([0, 2, 2]), np.array([1, 0, 3]), 4).tolist()
+    [(1,), (), (0, 3), ()]
+    """
     count = np.bincount(rows, minlength=n)
     cuts = np.concatenate([np.zeros(1, np.int64), np.cumsum(count)])
     one = np.flatnonzero(count == 1)
     kinds, which = distinct(genera[cuts[one]])
-    shared = np.empty(len(kinds), object)
+    shared = np.empty(len(kinds) + 1, object)  # the empty tuple, then each genus's
+    shared[0] = ()
     for k, genus in enumerate(kinds.tolist()):
-        shared[k] = (genus,)
-    out[one] = shared[which]
-    every, cuts = genera.tolist(), cuts.tolist()
-    for r in np.flatnonzero(count > 1).tolist():
-        out[r] = tuple(every[cuts[r]:cuts[r + 1]])
+        shared[k + 1] = (genus,)
+    pick = np.zeros(n, np.intp)
+    pick[one] = which + 1
+    out = shared[pick]
+    several = count > 1
+    if several.any():  # the genera of those rows alone as Python's integers, not every row's
+        every = genera[several[rows]].tolist()
+        ends = np.cumsum(count[several]).tolist()
+        for r, a, b in zip(np.flatnonzero(several).tolist(), [0] + ends[:-1], ends):
+            out[r] = tuple(every[a:b])
     return out
 
 
@@ -1162,16 +1176,26 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
         out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
                                                 spacing[0] * spacing[1]])
     present = voxels > 0
+    every = bool(present.all())  # the rows of labels that occur, the common case: no NaN to put in
+
+    def world(index: np.ndarray, d: int) -> np.ndarray:
+        """``origin + spacing * index`` along axis d (in place on the
+        product, the same sums), NaN in the rows of absent labels."""
+        at = index * spacing[d]
+        at += origin[d]
+        return at if every else np.where(present, at, np.nan)
+
     # an absent label's box is NaN (0 / 0), and a corner past float64 (an
     # origin near 1.8e308) is inf, as ``analyze`` gives it, not a NumPy warning
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for d in range(3):
-            out[f"bbox-{d}"] = np.where(present, origin[d] + spacing[d] * found["lo"][:, d], np.nan)
+            out[f"bbox-{d}"] = world(found["lo"][:, d], d)
         for d in range(3):
-            out[f"bbox-{d + 3}"] = np.where(present, origin[d] + spacing[d] * (found["hi"][:, d] + 1), np.nan)
+            out[f"bbox-{d + 3}"] = world(found["hi"][:, d] + 1, d)
         for d in range(3):
             mean = found["sums"][:, d] / voxels
-            out[f"centroid-{d}"] = np.where(present, origin[d] + spacing[d] * (mean + 0.5), np.nan)
+            mean += 0.5
+            out[f"centroid-{d}"] = world(mean, d)
     chi = features[:, _EULER] // 8
     out["euler_characteristic"] = chi
     out["b0"], out["b1"], out["b2"] = found["b0"], found["b0"] + found["b2"] - chi, found["b2"]

@@ -31,6 +31,9 @@ from __future__ import annotations
 from functools import cache
 
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
 
 from .jit import njit
 
@@ -74,14 +77,19 @@ def power_table() -> np.ndarray:
     return out
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _mulhi(a, b):
-    """The high 64 bits of the 128-bit product of two uint64."""
-    m32 = np.uint64(0xFFFFFFFF)
-    a0, a1, b0, b1 = a & m32, a >> np.uint64(32), b & m32, b >> np.uint64(32)
-    p00, p01, p10 = a0 * b0, a0 * b1, a1 * b0
-    mid = (p00 >> np.uint64(32)) + (p01 & m32) + (p10 & m32)
-    return a1 * b1 + (p01 >> np.uint64(32)) + (p10 >> np.uint64(32)) + (mid >> np.uint64(32))
+@intrinsic
+def _mulhi(typingctx, a, b):
+    """The high 64 bits of the 128-bit product of two uint64: one
+    multiplication of the processor, in LLVM's 128-bit integers (numba has
+    none: four 32-bit products and their carries would stand for it)."""
+    sig = types.uint64(types.uint64, types.uint64)
+
+    def codegen(context, builder, signature, args):
+        wide = ir.IntType(128)
+        product = builder.mul(builder.zext(args[0], wide), builder.zext(args[1], wide))
+        return builder.trunc(builder.lshr(product, ir.Constant(wide, 64)), ir.IntType(64))
+
+    return sig, codegen
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -136,7 +144,8 @@ def _digits(c, q, powers):
 @njit(cache=True, nogil=True, inline="always")
 def _put(chars, r, at, byte):
     """Byte ``byte`` before place ``at`` of row ``r``; returns the new place."""
-    chars[r, at - 1] = byte
+    # unsigned places: numba checks a signed index for a negative one at every byte written
+    chars[np.uint64(r), np.uint64(at - 1)] = byte
     return at - 1
 
 
@@ -181,10 +190,10 @@ def shortest_cells(bits, powers, chars, lengths):
             while f % ten == np.uint64(0):
                 f //= ten
                 e += 1
-            rest = f // ten
-            while rest != np.uint64(0):
-                rest //= ten
+            power = ten  # the digits counted against the powers of ten, not by a chain of divisions
+            while n < 19 and f >= power:
                 n += 1
+                power *= ten
         point = n + e  # the decimal point after this many digits
         at = FLOAT_WIDTH
         if not -4 < point <= 16:  # d.ddde+XX
