@@ -341,7 +341,8 @@ def targets(results: list[dict]) -> dict:
     """The issue's three ratios and the memory per voxel, from this run:
     label_table over one binary analyze of the same volume (at most 3),
     regionprops_table over info --labels as whole commands (at least 3),
-    label_table at the most labels over the fewest, same size (at most 2),
+    label_table at the most labels over the fewest, same size, in process and
+    as whole commands (at most 2),
     and label_table's extra peak bytes per voxel (at most 8)."""
     def seconds(tool, count):
         return next((r["seconds"] for r in results if r["tool"] == tool and r["labels"] == count), None)
@@ -376,6 +377,12 @@ def targets(results: list[dict]) -> dict:
         ratio = seconds("isoflow.label_table", counts[-1]) / seconds("isoflow.label_table", counts[0])
         ratios[f"label_table {counts[-1]}/{counts[0]}"] = ratio
         lines.append(f"label_table at {counts[-1]:,} labels {ratio:.2f}x its time at {counts[0]:,} (target <= 2)")
+        whole = {r["labels"]: r["isoflow_seconds"] for r in results if r["tool"] == "commands"}
+        if counts[0] in whole and counts[-1] in whole:  # what a user waits for, start-up and the JSON text included
+            ratio = whole[counts[-1]] / whole[counts[0]]
+            ratios[f"commands isoflow {counts[-1]}/{counts[0]}"] = ratio
+            lines.append(f"info --labels --json at {counts[-1]:,} labels {ratio:.2f}x its time at {counts[0]:,} as whole "
+                         "commands (target <= 2)")
         grown = [r for r in results if r["tool"] == "census" and r["labels"] in (counts[0], counts[-1])]
         if len(grown) == 2:
             few, many = sorted(grown, key=lambda r: r["labels"])
