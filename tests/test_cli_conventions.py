@@ -86,12 +86,13 @@ def test_threads_help_says_what_the_docs_say_it_sets():
             "block by block the blocks meshed at a time") in page("cli.md")
     assert ("`flow --threads N` sets the threads of the compiled passes too, and for a `.zarr` store flowed block "
             "by block (`--volumes .zarr`) the threads of dask's threaded scheduler, each slab's passes on one "
-            "(default 2, as `flow_chunked(..., workers=2)` in Python)") in page("cli.md")
+            "(default `ISOFLOW_THREADS`, else 2, as `flow_chunked(..., workers=2)` in Python)") in page("cli.md")
     claims = {"info": ["threads for the compiled passes", ".zarr store", "threads of dask's threaded scheduler",
                        "each block's passes on one", "$ISOFLOW_THREADS"],
               "surface": ["threads for the compiled passes", "the blocks meshed at a time", "$ISOFLOW_THREADS"],
               "flow": ["threads for the compiled passes", "$ISOFLOW_THREADS", "--volumes .zarr",
-                       "threads of dask's threaded scheduler", "each slab's passes on one", "(default: 2)"]}
+                       "threads of dask's threaded scheduler", "each slab's passes on one",
+                       "(default: $ISOFLOW_THREADS, else 2)"]}
     commands = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction)).choices
     helps = {name: " ".join(action.help.split()) for name, sub in commands.items() for action in sub._actions
              if "--threads" in action.option_strings}

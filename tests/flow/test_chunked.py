@@ -644,7 +644,9 @@ def test_a_command_refusal_names_the_threads_that_flow(tmp_path, capsys, monkeyp
     which the command line could not give. The refusal (of the input's
     chunks, of each step's report) names `--threads N` beside Python's
     `workers=N`, and the same command with `--threads N` under the same
-    budget flows as in memory."""
+    budget flows as in memory, as it does with the environment's
+    ISOFLOW_THREADS=N for the default (it ran 2 at a time whatever that
+    said)."""
     import re
 
     from isoflow.scale import memory
@@ -665,11 +667,16 @@ def test_a_command_refusal_names_the_threads_that_flow(tmp_path, capsys, monkeyp
     fit = re.search(r"fits? (\d+) at a time \(--threads \1, workers=\1\)", err)
     assert "\n" not in err and fit is not None and "flow_chunked(" not in err, err
     assert not (tmp_path / "run").exists()
+    monkeypatch.setenv("ISOFLOW_THREADS", fit[1])
+    assert main([*command[:3], str(tmp_path / "run_env"), *command[4:]]) == 0, capsys.readouterr().err
+    assert {k: v for k, v in json.loads(capsys.readouterr().out).items() if k in expected} == expected
+    monkeypatch.delenv("ISOFLOW_THREADS")
     assert main([*command, "--threads", fit[1]]) == 0, capsys.readouterr().err
     got = json.loads(capsys.readouterr().out)
     assert {k: got[k] for k in expected} == expected
     monkeypatch.undo()  # the states read back into memory
     check_states(mem, tmp_path / "run")
+    check_states(mem, tmp_path / "run_env")
 
 
 def test_no_command_refusal_names_what_only_python_takes(tmp_path, capsys, monkeypatch):

@@ -55,7 +55,8 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
     p.add_argument("--threads", type=thread_count, metavar="N",
                    help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU); for a .zarr "
                         "store flowed block by block (--volumes .zarr), the threads of dask's threaded scheduler, "
-                        "slabs and records alike, each slab's passes on one (default: 2), the memory sized for as "
+                        "slabs and records alike, each slab's passes on one (default: $ISOFLOW_THREADS, else 2), the "
+                        "memory sized for as "
                         "many at a time")
     p.set_defaults(func=cmd_flow)
 
@@ -194,14 +195,15 @@ def flow_store(args: argparse.Namespace) -> int:
     """The plain flow of a zarr store block by block
     (:func:`isoflow.flow.chunked.flow_chunked`), its states written into
     ``--out`` as step_NNN.zarr with flow.csv and flow.png; the previous
-    run's files stay until this one is complete; ``--threads`` is its
-    ``workers``."""
+    run's files stay until this one is complete; ``--threads`` (else
+    ``$ISOFLOW_THREADS``) is its ``workers``."""
     from ..flow.chunked import flow_chunked, guard_refusal, source_volume
     from ..flow.files import FlowWriter
     from ..flow.motion import flow_connectivity
     from ..flow.run import reachable_steps
     from ..mesh.export import check_float64_corners, float64_move_note
     from ..mesh.formats.omezarr import open_store
+    from ..scale.compiled import asked_threads
 
     refuse_mesh_options(args, ".zarr")
     refuse_points_option(args, "volume")
@@ -221,6 +223,7 @@ def flow_store(args: argparse.Namespace) -> int:
     conn = flow_connectivity(3, args.connectivity)
     last = reachable_steps(args.steps, volume.shape)
     total = bar_total(args.steps, volume.shape)
+    workers = asked_threads()  # --threads (cmd_flow's), else the environment's, as info's store is read
     writer = FlowWriter(args.out, conn, args.force, last_step=last, check=False)
     try:  # from the staging directory's making on: an interrupt anywhere (an import, a bar) removes it
         with progress_bar(args, "flow", unit=" steps", noun="step") as show, label_options(args, block_wise=True):
@@ -228,8 +231,8 @@ def flow_store(args: argparse.Namespace) -> int:
                 show(0, total)
             result = flow_chunked(args.input, writer.stage, steps=args.steps, connectivity=conn, width=writer.width,
                                   until_topology_change=args.until_topology_change,
-                                  # without --threads, flow_chunked's own default (the help's 2)
-                                  **({} if args.threads is None else {"workers": args.threads}),
+                                  # neither --threads nor $ISOFLOW_THREADS: flow_chunked's own default (the help's 2)
+                                  **({} if workers is None else {"workers": workers}),
                                   progress=None if show is None else (lambda step, state: show(step, total)))
             show_whole_run(show, result, total)
             writer.staged.extend(sorted(p.name for p in writer.stage.glob("step_*.zarr")))

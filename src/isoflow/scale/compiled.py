@@ -289,16 +289,37 @@ def available_cpus() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def thread_count(voxels: int | None = None) -> int:
-    """The number of threads the compiled passes use now (see the module
-    docs): for a pass over ``voxels`` voxels, when given, no more than one
-    per :data:`VOXELS_PER_THREAD` unless asked."""
+def asked_threads() -> int | None:
+    """The threads asked for now: :func:`using`'s count (``--threads N``),
+    else the environment variable :data:`ENV`'s; None where neither is
+    set, and each pass takes its own default (every CPU for the compiled
+    passes, :func:`thread_count`).
+
+    Returns
+    -------
+    int or None
+        The count asked for, or None.
+
+    Examples
+    --------
+    >>> with using(3):
+    ...     asked_threads()
+    3
+    """
     asked = _asked.get()
     if asked is not None:
         return asked
     env = os.environ.get(ENV, "").strip()
-    if env:
-        return check_threads(env, f"the environment variable {ENV}")
+    return check_threads(env, f"the environment variable {ENV}") if env else None
+
+
+def thread_count(voxels: int | None = None) -> int:
+    """The number of threads the compiled passes use now (see the module
+    docs): for a pass over ``voxels`` voxels, when given, no more than one
+    per :data:`VOXELS_PER_THREAD` unless asked."""
+    asked = asked_threads()
+    if asked is not None:
+        return asked
     if voxels is not None:
         return max(1, min(available_cpus(), voxels // VOXELS_PER_THREAD))
     return available_cpus()
