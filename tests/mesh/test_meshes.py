@@ -588,6 +588,80 @@ def test_distinct_rows_and_counts_equal_numpys_unique(rng, monkeypatch, hashed):
         assert np.array_equal(distinct_counts(first, 9, second, 11), np.bincount(pairs[:, 0], minlength=9))
 
 
+def test_column_bounds_equal_numpys_reductions_along_the_first_axis(rng):
+    """A column at a time, the bounds of a mesh's vertices are what
+    ``min(axis=0)`` and ``max(axis=0)`` give, in the array's dtype, NaN
+    where a column holds one."""
+    from isoflow.mesh.load import column_bounds
+
+    for dtype in (np.float64, np.float32, np.int64):
+        rows = (rng.normal(size=(int(rng.integers(1, 300)), 3)) * 1e3).astype(dtype)
+        lo, hi = column_bounds(rows)
+        assert lo.dtype == dtype and np.array_equal(lo, rows.min(axis=0)) and np.array_equal(hi, rows.max(axis=0))
+    rows = rng.normal(size=(50, 3))
+    rows[7, 1] = np.nan
+    lo, hi = column_bounds(rows)
+    assert np.array_equal(lo, rows.min(axis=0), equal_nan=True) and np.isnan(hi[1]) and not np.isnan(hi[[0, 2]]).any()
+
+
+def test_an_stl_s_exact_copies_are_hashed_and_welded_as_trimesh_merges_them(tmp_path, monkeypatch):
+    """An STL stores each corner once per facet, bit for bit: from
+    WELD_HASHED_ROWS corners on the weld finds those copies by hashing,
+    without a sort (numba runs the weld's close pairs anyway), and gives
+    the vertices and faces trimesh's ``merge_vertices`` gives, its
+    unsorted groups those of ``np.unique``. Copies a few units in the last
+    place apart (corners rounded differently) are still welded, as the
+    tolerance says."""
+    from isoflow.mesh import equal_rows, load
+
+    ball = trimesh.creation.icosphere(5, 1.0)  # 20,480 facets: 61,440 corners written
+    assert 3 * len(ball.faces) >= load.WELD_HASHED_ROWS
+    hashed = []
+    monkeypatch.setattr(equal_rows, "first_equal", lambda p, f=equal_rows.first_equal: hashed.append(len(p)) or f(p))
+    path = tmp_path / "ball.stl"
+    ball.export(path)
+    v, f = load_mesh(path)
+    assert hashed == [3 * len(ball.faces)]
+    corners = trimesh.load(path, process=False).vertices.view(np.ndarray).astype(np.float64)
+    distinct, inverse = load.unsorted_rows(corners)
+    _, want = np.unique(corners, axis=0, return_inverse=True)
+    assert np.array_equal(distinct[inverse], corners) and len(distinct) == want.max() + 1
+    assert len(np.unique(np.stack([inverse, want.reshape(-1)], axis=1), axis=0)) == len(distinct)  # one partition
+    merged = trimesh.load(path, process=False)
+    merged.merge_vertices()
+    assert len(v) == len(merged.vertices) and len(f) == len(merged.faces)
+    assert {tuple(r) for r in v.tolist()} == {tuple(r) for r in merged.vertices.tolist()}
+    assert np.array_equal(np.sort(np.sort(v[f], axis=1).reshape(len(f), -1), axis=0),
+                          np.sort(np.sort(merged.vertices[merged.faces], axis=1).reshape(len(f), -1), axis=0))
+    # the same facets as a soup in float64, each copy of a corner nudged by 0 to 2 units in
+    # the last place: most copies are no longer equal, the close pairs weld them all the same
+    soup = ball.vertices[ball.faces].reshape(-1, 3)
+    nudged = soup + np.spacing(soup) * (np.arange(len(soup)) % 3).reshape(-1, 1)
+    assert len(np.unique(nudged, axis=0)) > len(ball.vertices)
+    hashed.clear()
+    v2, f2 = load.weld(nudged, np.arange(len(nudged)).reshape(-1, 3))
+    assert hashed == [len(nudged)] and len(v2) == len(ball.vertices) and len(f2) == len(ball.faces)
+    assert np.abs(np.sort(v2, axis=0) - np.sort(ball.vertices, axis=0)).max() <= 4 * np.spacing(1.0)
+
+
+def test_the_stored_precision_is_looked_at_only_for_a_mesh_float64_may_round(monkeypatch):
+    """float64_rounding asks whether the coordinates were stored as float32
+    (a look at every used coordinate) only where some edge is short
+    against even float32's spacing: a mesh near the origin stops before,
+    and one far from it still gets float32's spacing (np.spacing of the
+    largest coordinate as a float32)."""
+    from isoflow.mesh import grid
+
+    looked = []
+    monkeypatch.setattr(grid, "stored_precision", lambda v, f, s=grid.stored_precision: looked.append(1) or s(v, f))
+    ball = trimesh.creation.icosphere(3, 1.0)
+    assert grid.float64_rounding(ball.vertices, ball.faces) is None and not looked
+    far = (ball.vertices * 1e-3 + [3e5, 0, 0]).astype(np.float32).astype(np.float64)
+    r = grid.float64_rounding(far, ball.faces)
+    assert looked and r is not None and r["precision"] == "float32"
+    assert r["spacing"] == float(np.spacing(np.float32(np.abs(far).max())))
+
+
 def test_many_bodies_are_parted_without_manifold3d_s_quadratic_decompose(monkeypatch):
     """manifold3d's ``decompose()`` takes time quadratic in the parts (a
     3000-ball mesh of a million faces took minutes in genus); the parts

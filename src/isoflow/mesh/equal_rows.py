@@ -1,6 +1,7 @@
 """Rows of equal values found by hashing (numba): each row's first equal
 row, in one pass, for :func:`isoflow.mesh.load.distinct_rows` on large
-arrays.
+arrays and :func:`isoflow.mesh.load.unsorted_rows` (a weld's positions,
+where the distinct rows need no sort).
 
 An STL stores every corner of every triangle, so its positions are six
 copies, about, of each distinct one; sorting every row (``np.lexsort`` over

@@ -633,19 +633,32 @@ def float64_rounding(v: np.ndarray, f: np.ndarray) -> dict | None:
         return None
     lo, hi, _ = mesh_bbox(v, f, "mesh")
     near = float(np.maximum(np.abs(lo), np.abs(hi)).max())
+    # every face's edges 01, then 12, then 20; the rows gathered by np.take
+    # and the squares summed a column at a time, in np.linalg.norm's order
+    # (NumPy's fancy index and its sum along a short last axis take slower,
+    # general loops)
+    a, b = f.T.reshape(-1), f[:, [1, 2, 0]].T.reshape(-1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        d = np.take(v, a, axis=0) - np.take(v, b, axis=0)
+        d *= d
+        lengths = np.sqrt(d[:, 0] + d[:, 1] + d[:, 2])
+        wide = float(np.spacing(np.float32(near)))
+    # the median of the distinct edges is above the bound where no edge is
+    # below it: most meshes, near the origin, stop here, before the
+    # precision the file stored (a look at every coordinate) is asked; the
+    # larger of the two spacings bounds either (float32's is NaN past its
+    # range, where no coordinate is a float32)
+    widest = max(float(np.spacing(near)), wide if math.isfinite(wide) else 0.0)
+    if not np.any(lengths <= widest / ROUNDING_SHARE):
+        return None
     precision = stored_precision(v, f)
     spacing = float(np.spacing(np.float32(near) if precision == "float32" else near))
     if not spacing > 0:
         return None
-    pairs = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-    with np.errstate(over="ignore", invalid="ignore"):
-        lengths = np.linalg.norm(v[pairs[:, 0]] - v[pairs[:, 1]], axis=1)
-    # the median of the distinct edges is above the bound where no edge
-    # is below it: most meshes, near the origin, stop here without a sort
     bound = spacing / ROUNDING_SHARE
     if not np.any(lengths <= bound):
         return None
-    pairs.sort(axis=1)
+    pairs = np.sort(np.stack([a, b], axis=1), axis=1)
     _, first = np.unique(pairs, axis=0, return_index=True)
     median = float(np.median(lengths[first]))
     if not (median > 0 and spacing >= ROUNDING_SHARE * median):
@@ -666,7 +679,9 @@ def stored_precision(v: np.ndarray, f: np.ndarray) -> str:
     >>> stored_precision(np.array([[2e6 + 0.1, 0.25, 1.5]]), np.array([[0, 0, 0]]))
     'float64'
     """
-    used = v[np.unique(f)]
+    mark = np.zeros(len(v), dtype=bool)
+    mark[f.reshape(-1)] = True  # the vertices used, in their order (as np.unique's), without a sort
+    used = v[mark]
     with np.errstate(over="ignore", invalid="ignore"):
         held = used.astype(np.float32).astype(np.float64) == used
     return "float32" if len(used) and bool(held.all()) else "float64"

@@ -101,13 +101,41 @@ def refuse_cad(path) -> None:
                        f"the CAD tool as STL, OBJ, PLY or GLB{how}")
 
 
+def column_bounds(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The least and the greatest value of each column of ``points``: what
+    ``points.min(axis=0)`` and ``points.max(axis=0)`` give.
+
+    NumPy reduces a C-ordered ``(n, 3)`` array along its first axis three
+    values at a time; a column at a time it takes its vector loop.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        ``(n, k)`` numbers, ``n > 0``.
+
+    Returns
+    -------
+    lo, hi : numpy.ndarray
+        ``(k,)`` each, of the points' dtype (NaN where a column holds one).
+
+    Examples
+    --------
+    >>> lo, hi = column_bounds(np.array([[0.0, 5.0, -1.0], [2.0, 3.0, -4.0]]))
+    >>> lo.tolist(), hi.tolist()
+    ([0.0, 3.0, -4.0], [2.0, 5.0, -1.0])
+    """
+    p = np.asarray(points)
+    return (np.array([p[:, c].min() for c in range(p.shape[1])], dtype=p.dtype),
+            np.array([p[:, c].max() for c in range(p.shape[1])], dtype=p.dtype))
+
+
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
     """Lower corner, upper corner and extent of the vertices the faces use;
     IsoflowError if the extent overflows to infinity."""
     mark = np.zeros(len(v), dtype=bool)
     mark[f.reshape(-1)] = True  # a mask, not np.unique: linear, no sort
     used = v if mark.all() else v[mark]
-    lo, hi = used.min(axis=0), used.max(axis=0)
+    lo, hi = column_bounds(used)
     with np.errstate(over="ignore"):
         ext = hi - lo
     if not np.all(np.isfinite(ext)):
@@ -177,7 +205,7 @@ def check_mesh(vertices, faces, where: str = "mesh") -> tuple[np.ndarray, np.nda
 # ---------------------------------------------------------------------------
 
 def weld_groups(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "mesh",
-                stats: dict | None = None, among: np.ndarray | None = None) -> np.ndarray:
+                stats: dict | None = None, among: np.ndarray | None = None, sort: bool = True) -> np.ndarray:
     """Each vertex's group in :func:`weld`: vertices closer than ``rtol``
     times the bounding box's diagonal (of the vertices ``f`` uses), in a
     chain, share one group number.
@@ -197,6 +225,11 @@ def weld_groups(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: s
     among : numpy.ndarray, optional
         The indices of the vertices to merge; the others are merged only
         with copies at the same position. All of them when not given.
+    sort : bool
+        Find the equal positions by sorting them (:func:`distinct_rows`),
+        or, False, as :func:`unsorted_rows` finds them (by hashing, for a
+        caller to whom the groups' numbers say nothing: the same groups,
+        numbered otherwise).
 
     Returns
     -------
@@ -214,8 +247,8 @@ def weld_groups(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: s
     from .close_pairs import close_pairs
 
     lo, _, ext = mesh_bbox(v, f, where)  # refuses an extent that overflows
-    uniq, inverse = distinct_rows(v)
     longest = float(ext.max())
+    uniq, inverse = distinct_rows(v) if sort else unsorted_rows(v)
     if rtol > 0 and longest > 0 and len(uniq) > 1:
         # Distances are taken relative to the bounding box's lower corner and
         # in units of a power of two near its longest side (so the tolerance
@@ -246,8 +279,11 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     """Merge vertices closer than ``rtol * bbox diagonal``; drop collapsed faces.
 
     Rounding coordinates to a grid (trimesh's approach) misses pairs that
-    straddle a rounding boundary, however close they are; a k-d tree radius
-    query plus connected components cannot.  Faces that lose a corner to the
+    straddle a rounding boundary, however close they are; the pairs within
+    the distance (:func:`~isoflow.mesh.close_pairs.close_pairs`) plus
+    connected components cannot.  Exact copies (an STL's corners) are found
+    first, by hashing from :data:`WELD_HASHED_ROWS` rows on
+    (:func:`unsorted_rows`).  Faces that lose a corner to the
     weld have zero area: they are removed, and vertices no face uses are
     dropped.  Output vertices keep the order of their first occurrence.
     ``stats`` receives ``welded``: the distinct positions of the faces'
@@ -255,7 +291,8 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
     ``dropped_faces``: faces left with two equal corners (by the weld, or
     as read).
     """
-    inverse = weld_groups(v, f, rtol, where, stats)
+    # the output is numbered by first use, whatever the groups' numbers
+    inverse = weld_groups(v, f, rtol, where, stats, sort=False)
     f = inverse[f]
     keep = ~_repeats_a_corner(f)
     f = f[keep]
@@ -280,6 +317,10 @@ def weld(v: np.ndarray, f: np.ndarray, rtol: float = MERGE_RTOL, where: str = "m
 #: (compiled) before it sorts; below, its sort alone answers before numba
 #: would have started
 HASHED_ROWS = 1 << 20
+#: rows from which :func:`unsorted_rows` hashes: a weld runs numba's
+#: compiled code anyway (its close pairs), and from here the hash and its
+#: load from numba's cache take less than the sort
+WELD_HASHED_ROWS = 1 << 14
 
 
 def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -326,6 +367,45 @@ def distinct_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         slot[once] = at
         return distinct, slot[first]
     return _sorted_distinct(p)
+
+
+def unsorted_rows(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``points`` and each row's number among them, as
+    :func:`distinct_rows` gives them but in no stated order: from
+    :data:`WELD_HASHED_ROWS` float rows on, each row's first copy found by
+    hashing and the distinct rows in the order of their first row, with
+    no sort (an STL's corners, six copies of each position, about); below,
+    or for other numbers, :func:`distinct_rows`.
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, K)
+        Rows to compare (floats: NaN is unequal to anything; ``-0.0`` is
+        ``0.0``).
+
+    Returns
+    -------
+    distinct : ndarray, shape (D, K)
+        The distinct rows.
+    inverse : int64 ndarray, shape (N,)
+        ``distinct[inverse]`` equals ``points``.
+
+    Examples
+    --------
+    >>> d, i = unsorted_rows(np.array([[1.0, 2.0], [0.0, 5.0], [1.0, 2.0]]))
+    >>> bool(np.array_equal(d[i], [[1.0, 2.0], [0.0, 5.0], [1.0, 2.0]])), len(d)
+    (True, 2)
+    """
+    p = np.asarray(points)
+    if len(p) < WELD_HASHED_ROWS or p.dtype.kind != "f" or p.dtype.itemsize > 8:
+        return distinct_rows(p)
+    from .equal_rows import first_equal
+
+    first = first_equal(p)
+    (once,) = np.nonzero(first == np.arange(len(p)))
+    slot = np.empty(len(p), np.int64)
+    slot[once] = np.arange(len(once))
+    return p[once], slot[first]
 
 
 def _sorted_distinct(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

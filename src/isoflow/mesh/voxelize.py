@@ -76,6 +76,7 @@ from .grid import (
 from .load import (  # noqa: F401
     chain_of,
     check_mesh,
+    column_bounds,
     defect_counts,
     is_scene,
     load_mesh,
@@ -322,7 +323,7 @@ class Solid:
         shift, e, _, _ = frame
         with np.errstate(over="ignore", invalid="ignore"):
             vs = np.ldexp(self.v - shift, -e)  # unused far-off vertices may overflow: never read
-        Tm = vs[self.faces]
+        Tm = np.take(vs, self.faces, axis=0)  # vs[faces]: np.take copies rows, the fancy index takes a general loop
         return VoxelPlan(Tm, close_mesh(vs, self.faces, *self.chain), origin_s, pitch_s, shape, self.fill, start)
 
     def check_layers(self, stats) -> None:
@@ -512,7 +513,7 @@ class VoxelPlan:
         planes = grid_planes(self.origin, self.pitch, self.shape, self.start)
         shell = ShellGrid(self.Tm, planes)
         corners = self.Tm.reshape(-1, 3)
-        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        lo, hi = column_bounds(corners)
         box = []
         for a in range(3):
             held = np.flatnonzero((planes[a][1:] > lo[a]) & (planes[a][:-1] < hi[a]))
@@ -535,7 +536,10 @@ class VoxelPlan:
         corners = self.Tm.reshape(-1, 3)
         lo = self.origin + self.pitch * np.asarray(self.start)
         hi = lo + self.pitch * np.asarray(self.shape)
-        return bool(len(corners)) and bool(np.all(corners.min(axis=0) >= lo) and np.all(corners.max(axis=0) <= hi))
+        if not len(corners):
+            return False
+        least, most = column_bounds(corners)
+        return bool(np.all(least >= lo) and np.all(most <= hi))
 
     def sampled_points(self) -> tuple[np.ndarray, np.ndarray] | None:
         """:func:`~isoflow.mesh.fills.sampled_points` on this grid: the
