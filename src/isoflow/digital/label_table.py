@@ -1032,9 +1032,11 @@ class SlabStream:
     def joined(self) -> tuple[dict, dict]:
         """The pieces and the vertex pass's findings of the whole image:
         pieces named in two slabs made one (numbered 1.. in order of their
-        first number), their sums added, their boxes joined."""
-        from ..scale.pieces import merge_pairs
-
+        first number), their sums added, their boxes joined. A pair of
+        pieces met in two slabs keeps an entry from each, as a pair met by
+        two threads does: the graph of pieces adds them up
+        (:func:`~isoflow.scale.piece_graph.pair_graph`), so they are not
+        sorted into one here (a sort of every pair, and its copies)."""
         one = same_pieces(self.total, self.parts["same"])
         n = int(one.max(initial=0))
         cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.parts.items() if k != "same"}
@@ -1059,7 +1061,7 @@ class SlabStream:
         sums = np.where(flip[:, None], sums[:, ::-1], sums)
         lo, hi = np.minimum(p, q), np.maximum(p, q)
         keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
-        keys, kind, sums = merge_pairs(keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep])
+        keys, kind, sums = keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep]
         return pieces, {"features": features, "doubled": doubled, "keys": keys, "kind": kind, "sums": sums}
 
 

@@ -1253,8 +1253,8 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     background voxel in the larger, plus their quarters of faces times
     2^32; then the same the other way; each count below 2^32, so that
     sums of entries add them both).
-    A pair met by two threads has an entry from each (:func:`merge_pairs`
-    makes them one). A refusal names the image's first axis as ``axis``
+    A pair met by two threads has an entry from each (the graph of pieces
+    adds them up: :func:`isoflow.scale.piece_graph.pair_graph`). A refusal names the image's first axis as ``axis``
     (:func:`check_layers`). Without ``keep_runs`` the runs of ``found``
     (``starts`` and ``runs``) are let go once the sweep is done, before
     the pairs are read out.
@@ -1452,15 +1452,3 @@ def doubled_of(doubled: list[np.ndarray], windows: list, npieces: int) -> np.nda
     for (lo, hi), part in zip(windows, doubled):
         out[lo:hi] += part
     return out
-
-
-def merge_pairs(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Entries of several pair tables, one entry per key: the closest
-    kind, the sums added (sorted by key, reduced per run of equal keys)."""
-    if not len(keys):
-        return keys, kind, sums
-    order = np.argsort(keys, kind="stable")
-    keys = keys[order]
-    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
-    return (keys[starts], np.minimum.reduceat(kind[order], starts),
-            np.add.reduceat(sums[order], starts, axis=0))
