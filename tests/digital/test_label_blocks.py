@@ -382,6 +382,32 @@ def test_a_layer_of_chunks_cut_into_thin_slabs_is_decoded_once(tmp_path, rng, ch
     assert [tuple(table[f"bbox-{d}"][row] for d in range(6)) for row in range(len(props))] == [p.bbox for p in props]
 
 
+@pytest.mark.parametrize("thick", [2, 5])
+def test_each_layer_of_chunks_is_decoded_once(tmp_path, rng, thick):
+    """A slab's read takes a voxel layer of each neighbouring slab beside
+    its own, and each layer of chunks was decoded for its own slab and
+    again for each neighbour's voxel layer (three times between two
+    others). The slabs' boundaries sit one layer below the chunks' and a
+    read begins with the two layers the slab before read last: each chunk
+    is decoded once, and the rows are the in-memory table's (random labels
+    touching by faces, edges and vertices, at both connectivities) and
+    scikit-image's voxels and boxes."""
+    zarr = pytest.importorskip("zarr")
+    from skimage.measure import regionprops
+
+    image = rng.integers(0, 4, (4 * thick, 9, 8)).astype(np.uint16)
+    z = zarr.create_array(str(tmp_path / "l.zarr"), shape=image.shape, chunks=(thick, 9, 8), dtype=image.dtype)
+    z[...] = image
+    for conn in (6, 26):
+        counted = CountedChunks(z)
+        table = label_table_blocks(counted, conn, layers=[thick] * 4)
+        assert counted.decoded.tolist() == [1, 1, 1, 1]
+        same_tables(table, label_table(image, conn))
+    props = regionprops(image.astype(np.int64))
+    assert table["voxels"].tolist() == [p.area for p in props]
+    assert [tuple(table[f"bbox-{d}"][row] for d in range(6)) for row in range(len(props))] == [p.bbox for p in props]
+
+
 def test_a_chunk_beyond_the_budget_is_refused_naming_it_and_what_fits(tmp_path, capsys, monkeypatch):
     """A slab that fits the budget was read from a chunk that does not:
     the read decodes the chunk whole (20 x 10 x 10 voxels of 8 bytes here,

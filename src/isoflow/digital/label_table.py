@@ -684,11 +684,21 @@ def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes
               progress: Callable[[int, int], object] | None = None, axes: Sequence[int] = (0, 1, 2)) -> dict:
     """The rows of a 3D label array read in slabs of ``sizes`` voxel layers
     along axis 0 (``array[a:b]``, never whole; cut further where a slab
-    would hold more voxels than the pieces are numbered in), with
+    would hold more voxels than the pieces are numbered in; for an array
+    that is not in memory, each boundary a layer lower,
+    :func:`one_read_sizes`), with
     ``progress(done, total)`` after each slab; ``axes``: the image's axes
     in the order the array reads them, which its refusals name."""
     # every layer's cuts first: a layer too wide for the pieces' numbers is refused before any read
     cuts = [slab_sizes([n], array.shape, axes) for n in sizes]
+    if not isinstance(array, np.ndarray):
+        # each slab one layer less at its top, so that its read (a voxel layer beyond it on either side)
+        # ends where its layer of chunks ends and begins with the two layers the slab before read last
+        # (SlabStream.carry): every layer of chunks decoded once, not once more for each neighbour's layer
+        shifted = one_read_sizes(sizes)
+        shifted_cuts = [slab_sizes([n], array.shape, axes) for n in shifted]
+        if all(len(parts) == 1 for parts in shifted_cuts):  # (a layer cut into thinner slabs is held whole)
+            cuts = shifted_cuts
     stream = SlabStream(array, conn, wanted, surfaces, axes)
     stream.thickest = min(max((max(parts, default=0) for parts in cuts), default=0) + 2, stream.nx)
     total, done, x0 = sum(len(parts) for parts in cuts), 0, 0
@@ -703,6 +713,36 @@ def slab_rows(array, conn: int, wanted: np.ndarray | None, surfaces: bool, sizes
                 progress(done, total)
         stream.held = None
     return rows_of_pieces(*stream.joined(), label_dtype(array.dtype), conn, wanted)
+
+
+def one_read_sizes(sizes: Sequence[int]) -> list[int]:
+    """Slab sizes (voxel layers) that move each boundary between slabs one
+    layer down: a slab's read (:meth:`SlabStream.slab`: a voxel layer of
+    each neighbour beside its own) then ends where the layer of ``sizes``
+    ends, and begins with the two layers the slab before it read last.
+    Unchanged where there is one slab or the first is one layer thick.
+
+    Parameters
+    ----------
+    sizes : sequence of int
+        The layers of the slabs, in order (a store's layers of chunks).
+
+    Returns
+    -------
+    list of int
+        The same number of slabs over the same layers.
+
+    Examples
+    --------
+    >>> one_read_sizes([64, 64, 64, 64])
+    [63, 64, 64, 65]
+    >>> one_read_sizes([1, 5]), one_read_sizes([256])
+    ([1, 5], [256])
+    """
+    sizes = [int(n) for n in sizes]
+    if len(sizes) < 2 or sizes[0] < 2:
+        return sizes
+    return [sizes[0] - 1, *sizes[1:-1], sizes[-1] + 1]
 
 
 def label_bits(labels: np.ndarray, dtype) -> np.ndarray:
@@ -905,6 +945,9 @@ class SlabStream:
         self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
                                                        "doubled", "keys", "kind", "sums_pairs", "same")}
         self.tail: np.ndarray | None = None  # the previous slab's last two voxel layers, numbered across slabs
+        #: the previous slab's read's last two voxel layers (the first of them, the labels), which the next
+        #: slab's read begins with: taken from here, not read (and their chunks decoded) again
+        self.carry: tuple[int, np.ndarray] | None = None
         #: the voxel layers read for the slabs of one layer of chunks (its first layer, the labels), or None
         self.held: tuple[int, np.ndarray] | None = None
         #: the voxel layers of the thickest slab's read (:func:`slab_rows` sets it), for what chunks would fit
@@ -1006,9 +1049,13 @@ class SlabStream:
             check_fits(PIECE_BYTES_PER_VOXEL * voxels + copy, what, hint=f"write the store with smaller chunks along {along}")
             vol = np.ascontiguousarray(view)
         else:
-            self.check_read(a, b, (PIECE_BYTES_PER_VOXEL + self.read_bytes()) * voxels, what)
-            vol = np.ascontiguousarray(as_labels(np.asarray(self.array[a:b]), first_layer=a,
-                                                 fill=getattr(self.array, "fill_value", None)))
+            carried = self.carry[1] if self.carry is not None and self.carry[0] == a and b - a > 2 else None
+            start = a if carried is None else a + len(carried)
+            self.check_read(start, b, (PIECE_BYTES_PER_VOXEL + self.read_bytes()) * voxels, what)
+            read = as_labels(np.asarray(self.array[start:b]), first_layer=start,
+                             fill=getattr(self.array, "fill_value", None))
+            vol = np.ascontiguousarray(read if carried is None else np.concatenate([carried, read]))
+        self.carry = None if b == self.nx or isinstance(self.array, np.ndarray) else (b - 2, vol[-2:].copy())
         pieces = piece_runs(vol, first=x0 - a, last=x1 - a, x0=a, axis=along)
         want = wanted_pieces(pieces["values"], vol.dtype, self.wanted)
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
