@@ -72,11 +72,53 @@ def info_rows(capsys, path, *options):
     return json.loads(capsys.readouterr().out)["labels"]
 
 
-def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng):
+@pytest.mark.parametrize("grouped", [True, False])
+def test_info_labels_of_zarr_stores_read_block_by_block(tmp_path, capsys, rng, monkeypatch, grouped):
+    # the layers of chunks read together (a small image: one slab), or a slab each (GROUP_VOXELS 1: every seam)
+    from isoflow.digital import label_blocks
+
+    if not grouped:
+        monkeypatch.setattr(label_blocks, "GROUP_VOXELS", 1)
     nested_stores(tmp_path, rng, (7, 9, 17), (5, 9, 11))
     want = info_rows(capsys, tmp_path / "n.npy", "--connectivity", "26")
     assert info_rows(capsys, tmp_path / "plain.zarr", "--connectivity", "26") == want
     assert info_rows(capsys, tmp_path / "ome.zarr", "--connectivity", "26") == want
+
+
+def test_thin_layers_of_chunks_are_read_a_few_at_a_time(tmp_path, capsys, rng, monkeypatch):
+    """A store of thin chunks (a layer of them 2,048 voxels here) was read
+    one layer of chunks a slab: a slab under a million voxels runs its
+    passes on one thread and pays their set-up and a seam for each layer
+    (at 256^3 in chunks 16 layers thick, twice the time of chunks of 64).
+    Layers are read together up to GROUP_VOXELS (lowered here to three
+    layers), each read within its layers of chunks (the slab before's last
+    two voxel layers kept, not read again), and the rows are the in-memory
+    table's, random labels touching by faces, edges and vertices, at 6 and
+    26."""
+    zarr = pytest.importorskip("zarr")
+    from isoflow.digital import label_blocks
+    from isoflow.mesh.formats.omezarr import LabelSlabs
+
+    image = rng.integers(0, 4, (40, 32, 64)).astype(np.uint16)
+    np.save(tmp_path / "r.npy", image)
+    z = zarr.create_array(str(tmp_path / "r.zarr"), shape=image.shape, chunks=(2, 32, 64), dtype=image.dtype)
+    z[...] = image
+    monkeypatch.setattr(label_blocks, "GROUP_VOXELS", 3 * 2 * 32 * 64)
+    reads = []
+    read = LabelSlabs.__getitem__
+
+    def recorded(self, region):
+        reads.append((region.start, region.stop))
+        return read(self, region)
+
+    monkeypatch.setattr(LabelSlabs, "__getitem__", recorded)
+    for conn in ("6", "26"):
+        reads.clear()
+        assert info_rows(capsys, tmp_path / "r.zarr", "--connectivity", conn) == info_rows(
+            capsys, tmp_path / "r.npy", "--connectivity", conn)
+        assert len(reads) == 7  # 20 layers of chunks, three at a time
+        assert all(a % 2 == 0 and (b % 2 == 0 or b == 40) for a, b in reads), reads  # within layers of chunks
+        assert sum(b - a for a, b in reads) == 40  # each voxel layer read once
 
 
 @pytest.mark.parametrize("conn", [6, 26])
@@ -95,8 +137,10 @@ def test_info_labels_of_stores_thin_along_z_reads_slabs_along_z(tmp_path, capsys
     was the whole image. The slabs follow the chunks as the report block
     by block does, along z, each a layer of chunks and a voxel layer either
     side; the rows are the in-memory table's."""
+    from isoflow.digital import label_blocks
     from isoflow.mesh.formats.omezarr import LabelSlabs
 
+    monkeypatch.setattr(label_blocks, "GROUP_VOXELS", 1)  # a slab a layer of chunks, as the test reads them
     nested_stores(tmp_path, rng, (30, 18, 2), (2, 18, 30))
     reads = []
     read = LabelSlabs.__getitem__

@@ -440,7 +440,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
     whole image in memory), with a progress bar; the image as read (its
     shape, type and placement, no array); ``given``, the names of
     ``--names``, over the store's own."""
-    from ..digital.label_blocks import label_table_blocks
+    from ..digital.label_blocks import grouped_layers, label_table_blocks
     from ..digital.label_table import label_dtype, with_names
     from ..digital.lattice import DigitalObject
     from ..mesh.formats.omezarr import LabelSlabs
@@ -455,8 +455,11 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
     wanted = None if asked is None else _by_type(args.input, asked, slabs.dtype)[0]
     with using(getattr(args, "threads", None)), progress_bar(args, "layers of blocks") as show:
         try:
-            table = label_table_blocks(slabs, conn, layers=slabs.layers, axes=slabs.axes, pitch=place.spacing,
-                                       origin=place.origin, labels=wanted, surfaces=surfaces, progress=show)
+            # layers of thin chunks read a few at a time: slabs of a million voxels or more, on threads
+            area = int(np.prod([slabs.shape[a] for a in slabs.axes[1:]], dtype=np.int64))
+            table = label_table_blocks(slabs, conn, layers=grouped_layers(slabs.layers, area), axes=slabs.axes,
+                                       pitch=place.spacing, origin=place.origin, labels=wanted, surfaces=surfaces,
+                                       progress=show)
         except IsoflowError as exc:  # a voxel that is no label, a slab that would not fit
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None

@@ -123,6 +123,60 @@ def label_table_blocks(
                           tuple(int(n) for n in array.shape))
 
 
+#: voxels up to which layers of blocks are read together as one slab
+#: (:func:`grouped_layers`): a slab below a million voxels runs its passes
+#: on one thread and pays their set-up and a seam for each layer of blocks
+GROUP_VOXELS = 1 << 23
+#: bytes a voxel a slab of a label table may take at the most (its copy,
+#: runs, pieces and pairs on a map of many small labels), for the share of
+#: memory a group of layers is held to (:func:`grouped_layers`)
+GROUP_BYTES_PER_VOXEL = 16
+
+
+def grouped_layers(layers: Sequence[int], area: int, most: int | None = None, budget: int | None = None) -> list[int]:
+    """Consecutive layers of blocks (a store's chunks along the axis it is
+    read across) joined into slabs of up to ``most`` voxels, each at most
+    a quarter of the memory ``budget`` at :data:`GROUP_BYTES_PER_VOXEL`
+    (default: the memory available now); a layer larger than that stays a
+    slab of its own. A slab ends where a layer of blocks ends, so each
+    chunk is still decoded once (:func:`~isoflow.digital.label_table.one_read_sizes`).
+
+    Parameters
+    ----------
+    layers : sequence of int
+        The voxel layers of each layer of blocks, in order.
+    area : int
+        The voxels of one voxel layer (the cross-section).
+    most : int, optional
+        The most voxels of a group (default :data:`GROUP_VOXELS`).
+    budget : int, optional
+        Bytes of memory (default :func:`isoflow.scale.memory.default_budget`).
+
+    Returns
+    -------
+    list of int
+        The voxel layers of each slab, the same layers in all.
+
+    Examples
+    --------
+    >>> grouped_layers([16] * 16, 256 * 256, budget=1 << 30)   # chunks 16 layers thick on a 256^2 cross-section
+    [128, 128]
+    >>> grouped_layers([16] * 4, 256 * 256, budget=32 << 20)  # 32 MiB: a quarter holds half a million voxels
+    [16, 16, 16, 16]
+    """
+    from ..scale.memory import default_budget
+
+    budget = default_budget() if budget is None else int(budget)
+    cap = max(1, min(GROUP_VOXELS if most is None else int(most), budget // (4 * GROUP_BYTES_PER_VOXEL)))
+    out: list[int] = []
+    for n in (int(n) for n in layers):
+        if out and (out[-1] + n) * area <= cap:
+            out[-1] += n
+        else:
+            out.append(n)
+    return out
+
+
 class _Across:
     """A 3D array read in slabs along its axis ``axes[0]``, its axes in
     the order ``axes``: ``shape``, ``dtype`` and ``[a:b]`` as
