@@ -105,16 +105,20 @@ def json_of(data: bytes, glb: bool) -> dict | None:
     return tree if isinstance(tree, dict) else None
 
 
-def gltf_refusal(path: Path) -> str | None:
+def gltf_refusal(path: Path, tree: dict | None) -> str | None:
     """The one line refusing a glTF or GLB file that trimesh would read as
     another model (:func:`unapplied_in`), or a ``.gltf`` whose buffer file
-    is not there (:func:`missing_buffer`), or None; the file's JSON is
-    read once for both.
+    is not there (:func:`missing_buffer`), or None; from the file's JSON,
+    read once (:func:`gltf_json`) for these and for the note of what
+    trimesh leaves out (:func:`faceless_note`).
 
     Parameters
     ----------
     path : pathlib.Path
-        The mesh file; any other suffix than ``.gltf`` or ``.glb`` gives None.
+        The ``.gltf`` or ``.glb`` file.
+    tree : dict or None
+        Its JSON (:func:`gltf_json`); None where the file holds none (its
+        reader then says what is wrong): no refusal here.
 
     Returns
     -------
@@ -127,39 +131,15 @@ def gltf_refusal(path: Path) -> str | None:
     >>> import tempfile
     >>> p = Path(tempfile.mkdtemp()) / "a.gltf"
     >>> node = {"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 0}}}}
-    >>> _ = p.write_text(json.dumps({"nodes": [node], "accessors": [{"count": 3}]}))
-    >>> print(gltf_refusal(p).replace(str(p), "a.gltf"))  # doctest: +ELLIPSIS
+    >>> print(gltf_refusal(p, {"nodes": [node], "accessors": [{"count": 3}]}).replace(str(p), "a.gltf"))
+    ... # doctest: +ELLIPSIS
     a.gltf: node 0 draws its mesh 3 times by the glTF extension EXT_mesh_gpu_instancing, which ...
-    >>> _ = p.write_text(json.dumps({"buffers": [{"uri": "a.bin", "byteLength": 4}]}))
-    >>> print(gltf_refusal(p).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
+    >>> tree = {"buffers": [{"uri": "a.bin", "byteLength": 4}]}
+    >>> print(gltf_refusal(p, tree).replace(str(p.parent), "DIR"))  # doctest: +ELLIPSIS
     DIR/a.gltf: buffer 0 is the file 'a.bin', which is not there (DIR/a.bin); ...
-    """
-    if path.suffix.lower() not in (".gltf", ".glb"):
-        return None
-    return refusal_in(path, gltf_json(path))
-
-
-def refusal_in(path: Path, tree: dict | None) -> str | None:
-    """:func:`gltf_refusal` of a glTF file's JSON already read (``tree``,
-    None where the file holds none: its reader then says what is wrong).
-
-    Parameters
-    ----------
-    path : pathlib.Path
-        The ``.gltf`` or ``.glb`` file.
-    tree : dict or None
-        Its JSON (:func:`gltf_json`).
-
-    Returns
-    -------
-    str or None
-        The refusal, or None.
-
-    Examples
-    --------
-    >>> refusal_in(Path("a.glb"), {"meshes": [{"primitives": [{"mode": 1}]}]})[:50]
+    >>> gltf_refusal(Path("a.glb"), {"meshes": [{"primitives": [{"mode": 1}]}]})[:50]
     'a.glb: no triangles read: its primitives are lines'
-    >>> refusal_in(Path("a.glb"), None) is None
+    >>> gltf_refusal(Path("a.glb"), None) is None
     True
     """
     if tree is None:

@@ -1078,11 +1078,11 @@ def trimesh_load(p: Path, force: str):
     primitives of points or lines beside faces, which trimesh leaves out,
     are named in a :class:`~isoflow.errors.MeshNote`
     (:func:`~isoflow.mesh.gltf_extensions.faceless_note`)."""
-    from .gltf_extensions import faceless_note, gltf_json, refusal_in
+    from .gltf_extensions import faceless_note, gltf_json, gltf_refusal
 
     check_mesh_file(p)
     tree = gltf_json(p) if p.suffix.lower() in (".gltf", ".glb") else None
-    if (refusal := refusal_in(p, tree)) is not None:  # trimesh: another model, or its bare error
+    if (refusal := gltf_refusal(p, tree)) is not None:  # trimesh: another model, or its bare error
         raise IsoflowError(refusal)
     if tree is not None and (note := faceless_note(p, tree)) is not None:  # trimesh leaves them out without a word
         warn(note, MeshNote)
