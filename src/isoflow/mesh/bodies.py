@@ -311,8 +311,8 @@ def archive_bodies(path: Path, kind: str) -> list[Body]:
             order, owners = file_order(data, member_kind)
             # the file's nodes that hold a mesh (a glTF node of several primitives is one, as is a
             # COLLADA geometry of several placed once)
-            meshes = {owners.get(n, n) if owners else _file_node(scene.graph, n, order) for n in scene.graph.nodes_geometry
-                      if isinstance(scene.geometry.get(scene.graph[n][1]), trimesh.Trimesh)}
+            meshes = {_body_of(scene, n, mesh, order, owners) for n in scene.graph.nodes_geometry
+                      if isinstance(mesh := scene.geometry.get(scene.graph[n][1]), trimesh.Trimesh)}
             named = scene_bodies(scene, f"{path}:{member}", order, owners)
             bodies += [Body(f"{path}:{member}", b.vertices, b.faces) for b in named] if len(meshes) == 1 else named
     if not bodies:
@@ -353,9 +353,7 @@ def scene_bodies(scene, name: str, order: dict[str, int] | None = None,
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             continue  # a point cloud, a path, an empty mesh: nothing to fill
         v = trimesh.transform_points(np.asarray(mesh.vertices, dtype=np.float64), transform)
-        owner = (owners.get(node, node) if owners else _file_node(scene.graph, node, order) if order
-                 else _primitive_owner(scene, node, mesh))
-        groups.setdefault(owner, []).append((v, np.asarray(mesh.faces)))
+        groups.setdefault(_body_of(scene, node, mesh, order, owners), []).append((v, np.asarray(mesh.faces)))
     bodies = []
     for node, parts in groups.items():
         where = f"{name}:{node}"
@@ -534,6 +532,17 @@ def _scene_order(graph, order: dict[str, int] | None) -> list:
         return sorted(nodes, key=natural_key)
     index = [order.get(_file_node(graph, n, order), len(order)) for n in nodes]
     return [n for _, _, n in sorted(zip(index, range(len(nodes)), nodes))]
+
+
+def _body_of(scene, node, mesh, order: dict[str, int] | None, owners: dict[str, str] | None):
+    """The body (:func:`scene_bodies`) that ``node`` of trimesh's graph,
+    holding ``mesh``, is a piece of: its placed geometry's where
+    ``owners`` names them (COLLADA), else its node of the file where
+    ``order`` names those (glTF: :func:`_file_node`), else the node whose
+    primitive it is (:func:`_primitive_owner`)."""
+    if owners:
+        return owners.get(node, node)
+    return _file_node(scene.graph, node, order) if order else _primitive_owner(scene, node, mesh)
 
 
 def _file_node(graph, node, order: dict[str, int] | None):
