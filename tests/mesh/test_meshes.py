@@ -604,6 +604,17 @@ def test_column_bounds_equal_numpys_reductions_along_the_first_axis(rng):
     assert np.array_equal(lo, rows.min(axis=0), equal_nan=True) and np.isnan(hi[1]) and not np.isnan(hi[[0, 2]]).any()
 
 
+def test_used_vertices_are_numpys_unique_rows_of_the_faces(rng):
+    """The vertices a mesh's faces use, by a mask: the rows ``v[np.unique(f)]``
+    names, in that order, whether or not every vertex is used."""
+    from isoflow.mesh.load import used_vertices
+
+    for _ in range(20):
+        v = rng.normal(size=(int(rng.integers(3, 60)), 3))
+        f = rng.integers(0, len(v), (int(rng.integers(1, 40)), 3))
+        assert np.array_equal(used_vertices(v, f), v[np.unique(f)])
+
+
 def test_an_stl_s_exact_copies_are_hashed_and_welded_as_trimesh_merges_them(tmp_path, monkeypatch):
     """An STL stores each corner once per facet, bit for bit: from
     WELD_HASHED_ROWS corners on the weld finds those copies by hashing,

@@ -54,7 +54,7 @@ import numpy as np
 from ..errors import IsoflowError, given_text, number_text
 from ..scale import memory
 from ..scale.memory import sized
-from .load import mesh_bbox
+from .load import mesh_bbox, used_vertices
 
 #: Largest ``resolution=`` accepted (voxels along the longest side).
 MAX_RESOLUTION = 2**31 - 1
@@ -679,9 +679,7 @@ def stored_precision(v: np.ndarray, f: np.ndarray) -> str:
     >>> stored_precision(np.array([[2e6 + 0.1, 0.25, 1.5]]), np.array([[0, 0, 0]]))
     'float64'
     """
-    mark = np.zeros(len(v), dtype=bool)
-    mark[f.reshape(-1)] = True  # the vertices used, in their order (as np.unique's), without a sort
-    used = v[mark]
+    used = used_vertices(v, f)
     with np.errstate(over="ignore", invalid="ignore"):
         held = used.astype(np.float32).astype(np.float64) == used
     return "float32" if len(used) and bool(held.all()) else "float64"

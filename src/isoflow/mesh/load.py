@@ -129,13 +129,37 @@ def column_bounds(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             np.array([p[:, c].max() for c in range(p.shape[1])], dtype=p.dtype))
 
 
+def used_vertices(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The vertices the faces use, in their order (as ``v[np.unique(f)]``
+    gives them, by a mask rather than a sort); ``v`` itself where every
+    vertex is used.
+
+    Parameters
+    ----------
+    v : numpy.ndarray
+        ``(n, 3)`` vertices.
+    f : numpy.ndarray
+        Faces, indices into ``v``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The rows of ``v`` that ``f`` names.
+
+    Examples
+    --------
+    >>> used_vertices(np.array([[0.0, 0, 0], [9, 9, 9], [1, 0, 0], [0, 1, 0]]), np.array([[3, 0, 2]])).tolist()
+    [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+    """
+    mark = np.zeros(len(v), dtype=bool)
+    mark[f.reshape(-1)] = True
+    return v if mark.all() else v[mark]
+
+
 def mesh_bbox(v: np.ndarray, f: np.ndarray, where: str):
     """Lower corner, upper corner and extent of the vertices the faces use;
     IsoflowError if the extent overflows to infinity."""
-    mark = np.zeros(len(v), dtype=bool)
-    mark[f.reshape(-1)] = True  # a mask, not np.unique: linear, no sort
-    used = v if mark.all() else v[mark]
-    lo, hi = column_bounds(used)
+    lo, hi = column_bounds(used_vertices(v, f))
     with np.errstate(over="ignore"):
         ext = hi - lo
     if not np.all(np.isfinite(ext)):
