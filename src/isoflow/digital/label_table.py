@@ -36,7 +36,7 @@ from __future__ import annotations
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from functools import cache
+from functools import cache, cached_property
 from typing import Literal
 
 import numpy as np
@@ -963,10 +963,12 @@ class SlabStream:
         stored = np.dtype(self.array.dtype)
         return stored.itemsize + (label_dtype(stored).itemsize if stored.kind == "f" else 0)
 
+    @cached_property
     def chunk_layout(self) -> tuple[list[int], int, int] | None:
         """The array's chunks as a read decodes them: a chunk's sides as
         the array reads them, the chunks across one layer of them, and a
-        chunk's voxels decoded whole; None for an array in memory."""
+        chunk's voxels decoded whole; None for an array in memory (the
+        array's metadata, read once for every slab's reads)."""
         from ..scale.chunks import decoded_chunk_voxels
 
         chunks = None if isinstance(self.array, np.ndarray) else getattr(self.array, "chunks", None)
@@ -983,7 +985,7 @@ class SlabStream:
         """What a read of voxel layers a .. b - 1 decodes beside the voxels
         it gives: the chunks decoded at a time, their bytes, and a chunk's
         sides as the array reads them (0, 0, [] for an array in memory)."""
-        layout = self.chunk_layout()
+        layout = self.chunk_layout
         if layout is None:
             return 0, 0, []
         sides, across, voxels = layout
@@ -998,7 +1000,7 @@ class SlabStream:
         from ..scale import memory
 
         at_once, decoded, sides = self.decoded(a, b)
-        layout = self.chunk_layout()
+        layout = self.chunk_layout
         budget = memory.default_budget()
         along = "xyz"[self.axes[0]]
         hint = f"write the store with smaller chunks along {along}"
