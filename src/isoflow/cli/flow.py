@@ -56,8 +56,7 @@ def add_parser(sub: argparse._SubParsersAction, add_command) -> None:
                    help="threads for the compiled passes (default: $ISOFLOW_THREADS, else every CPU); for a .zarr "
                         "store flowed block by block (--volumes .zarr), the threads of dask's threaded scheduler, "
                         "slabs and records alike, each slab's passes on one (default: $ISOFLOW_THREADS, else 2), the "
-                        "memory sized for as "
-                        "many at a time")
+                        "memory sized for as many at a time")
     p.set_defaults(func=cmd_flow)
 
 
