@@ -566,7 +566,7 @@ def why_no_face(vertices: np.ndarray, faces: np.ndarray, rtol: float, where: str
     """
     if not np.count_nonzero(~_repeats_a_corner(faces)):
         return f"{where}: empty mesh (every face is degenerate)"
-    used = vertices[np.unique(faces)]
+    used = used_vertices(vertices, faces)
     if not np.ptp(used, axis=0).any():
         # no box to stretch: the file holds one point, which a float32 file
         # far from the origin makes of any mesh smaller than its spacing there

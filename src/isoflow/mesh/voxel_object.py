@@ -26,6 +26,7 @@ from ..digital.topology import betti_numbers
 from ..errors import MeshNote
 from ..scale import memory
 from .grid import grid_fits
+from .load import used_vertices
 from .voxelize import voxelize
 
 #: a lattice coordinate is taken as on the lattice within this share of a pitch
@@ -78,7 +79,7 @@ def voxel_lattice(vertices: np.ndarray, faces: np.ndarray) -> tuple[float, np.nd
     if len(f) == 0 or f.ndim != 2 or f.shape[1] != 3:
         return None
     corners = v[f]
-    used = v[np.unique(f)]
+    used = used_vertices(v, f)
     lo, hi = used.min(axis=0), used.max(axis=0)
     steps = np.abs(corners[:, [1, 2, 0]] - corners).max()
     if not np.isfinite(steps) or not steps > 0:
