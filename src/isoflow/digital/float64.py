@@ -74,11 +74,8 @@ def beyond_float64_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
 
     Parameters
     ----------
-    origin, spacing : array_like
-        The world position of voxel 0's lowest corner and the voxel size,
-        per axis (or one number for every axis).
-    shape : sequence of int
-        Voxels per axis.
+    origin, spacing, shape
+        The grid, as :func:`merged_axes` takes it.
 
     Returns
     -------
@@ -103,6 +100,15 @@ def beyond_axes_reasons(origin, spacing, shape: Sequence[int]) -> str | None:
     (:func:`beyond_float64_axes`): each such axis with the farthest
     corner's magnitude, in exact decimal arithmetic (float64 makes it
     inf); None where every corner is a float64.
+
+    Parameters
+    ----------
+    origin, spacing, shape
+        The grid, as :func:`merged_axes` takes it.
+
+    Returns
+    -------
+    str or None
 
     Examples
     --------

@@ -326,7 +326,8 @@ def weld_equal_positions(tm):
     return trimesh.Trimesh(points, at.reshape(-1)[np.asarray(tm.faces)], process=False)
 
 
-def volumes_agree(read, counted, slack=0.0):
+def volumes_agree(read: float | np.ndarray | list, counted: float | np.ndarray | list,
+                  slack: float | np.ndarray | list = 0.0) -> np.ndarray:
     """Whether the volumes read back agree with isoflow's counts, within
     :data:`VOLUME_RTOL` and ``slack`` (absolute), all in the same unit
     cubed. A volume that is not finite agrees with nothing: ``np.isclose``
@@ -342,8 +343,8 @@ def volumes_agree(read, counted, slack=0.0):
 
     Returns
     -------
-    bool or numpy.ndarray
-        Per volume, whether the two agree.
+    numpy.ndarray
+        Per volume, whether the two agree (0-d for two floats).
 
     Examples
     --------
