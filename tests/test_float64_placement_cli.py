@@ -100,6 +100,30 @@ def test_corners_float64_cannot_keep_apart_are_refused_before_anything_is_writte
     assert f"{np.spacing(1e43):.3g} apart (np.spacing)" in line
 
 
+@pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["surface", "-o", "s.obj"],
+                                     ["surface", "-o", "s.glb"], ["surface", "--labels", "-o", "s.glb"],
+                                     ["flow", "--steps", "1", "--out", "run"]])
+def test_corners_past_float64s_largest_are_refused_before_anything_is_written(tmp_path, command):
+    """Voxels of 1e306 from 1.75e308: the grid's far corners are past
+    float64's largest value (Python's integers say so), so every format
+    would hold inf there. The file was written with inf corners, then the
+    read-back said "trimesh reads volume NaN", exit 1."""
+    from decimal import Decimal
+
+    import isoflow as iso
+
+    origin, pitch = 1.75e308, 1e306
+    far = int(origin) + int(pitch) * MASK.shape[0]
+    assert far > int(sys.float_info.max)  # the far corner is no float64
+    iso.write_volume(iso.DigitalObject(MASK.astype(bool), pitch=pitch, origin=(origin, 0, 0)), tmp_path / "far.npz")
+    args = [tmp_path / a if a in ("s.ply", "s.obj", "s.glb", "run") else a for a in command[1:]]
+    p = isoflow(command[0], tmp_path / "far.npz", *args)
+    line = one_line(p)
+    assert p.returncode == 2 and sorted(f.name for f in tmp_path.iterdir()) == ["far.npz"]
+    assert f"past float64's largest value ({sys.float_info.max:.3g})" in line and "along axis 0" in line
+    assert f"up to {Decimal(far):.3g}" in line
+
+
 def test_a_zarr_store_read_block_by_block_is_refused_too(tmp_path):
     import isoflow as iso
 

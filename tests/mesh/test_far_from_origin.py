@@ -124,6 +124,38 @@ def test_a_volume_beyond_float64_is_compared_in_voxel_units(tmp_path, suffix):
     assert "volume inf" not in p.stdout
 
 
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")  # trimesh's face normals of the file
+@pytest.mark.parametrize("suffix", [".ply", ".obj", ".glb"])
+def test_a_surface_near_float64s_largest_coordinates_is_read_back(tmp_path, suffix):
+    """A 4^3 cube of voxels 1e306 across at 1e307: every coordinate is a
+    float64 (at most 1.5e307), but the corners' sum is past float64's
+    largest (1.8e308), and the read-back, which measures the volume about
+    the corners' mean, made the mean inf and the volume NaN: "trimesh reads
+    volume NaN", exit 1, for a file that holds the cube. The volume is the
+    exact 6.4e919 (Python integers), genus 0, as trimesh reads the file
+    scaled by an exact power of two."""
+    from fractions import Fraction
+
+    import trimesh
+
+    import isoflow as api
+
+    volume = np.zeros((6, 6, 6), bool)
+    volume[1:5, 1:5, 1:5] = True
+    obj = api.DigitalObject(volume, pitch=1e306, origin=(1e307, 1e307, 1e307))
+    source = api.write_volume(obj, tmp_path / "cube.npz")
+    out = tmp_path / f"cube{suffix}"
+    p = isoflow("surface", source, "-o", out)
+    assert p.returncode == 0, p.stderr
+    exact = 64 * int(1e306) ** 3
+    mantissa = float(Fraction(exact, 10**919))
+    assert f"genus 0, volume {mantissa:.6g}e+919 (beyond float64: compared in voxel units, " in p.stdout
+    read = trimesh.load(out, force="mesh", process=False)  # its merge rounds positions times 1e8: inf here
+    scaled = trimesh.Trimesh(np.asarray(read.vertices) / 2.0 ** 1000, read.faces)  # exact: a power of two
+    assert scaled.is_watertight and scaled.euler_number == 2
+    assert math.isclose(scaled.volume, exact / 2 ** 3000, rel_tol=1e-9)
+
+
 def far_torus_obj(path, offset: float) -> None:
     """trimesh's torus (radii 1 and 0.3) moved by ``offset`` along x, written
     with every float64 digit: far out, the file's coordinates are the

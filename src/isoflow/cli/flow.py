@@ -122,12 +122,13 @@ def out_placement(args: argparse.Namespace, obj) -> dict | None:
     does, its coordinates along such an axis None (``?``, ``null``),
     said in the run's one warning
     (:func:`isoflow.flow.run.held_boxes`)."""
-    from ..digital.float64 import merged_axes
+    from ..digital.float64 import beyond_float64_axes, merged_axes
     from ..mesh.export import check_float64_corners
 
     if not args.out:
         # the flow works on the voxels: only the world coordinates printed are lost there, not its numbers
-        if any(merged_axes(obj.origin, obj.spacing, obj.volume.shape)):
+        if any(merged_axes(obj.origin, obj.spacing, obj.volume.shape)) or any(
+                beyond_float64_axes(obj.origin, obj.spacing, obj.volume.shape)):
             return None
         return check_float64_corners(args.input, obj.origin, obj.spacing, obj.volume.shape,
                                      "the boxes and the limit point it prints")

@@ -67,6 +67,70 @@ def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     return merged
 
 
+def beyond_float64_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
+    """Per axis, whether a voxel corner ``origin + spacing * i`` (``i``
+    from 0 to the shape, as :meth:`isoflow.DigitalObject.world` computes
+    them) is past float64's largest value, so that float64 makes it inf.
+
+    Parameters
+    ----------
+    origin, spacing, shape
+        The grid, as :func:`merged_axes` takes it.
+
+    Returns
+    -------
+    list of bool
+
+    Examples
+    --------
+    >>> beyond_float64_axes((1.75e308, 0.0), 1e306, (6, 6))
+    [True, False]
+    >>> beyond_float64_axes((1e307, -1e307), 1e306, (6, 6))
+    [False, False]
+    """
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    with np.errstate(over="ignore", invalid="ignore"):
+        # the corners are monotone along an axis: its two ends are the farthest
+        return [not (np.isfinite(o + s * int(n)) and np.isfinite(o)) for o, s, n in zip(origin.tolist(), spacing.tolist(), shape)]
+
+
+def beyond_axes_reasons(origin, spacing, shape: Sequence[int]) -> str | None:
+    """Where the voxel corners pass float64's largest value, axis by axis
+    (:func:`beyond_float64_axes`): each such axis with the farthest
+    corner's magnitude, in exact decimal arithmetic (float64 makes it
+    inf); None where every corner is a float64.
+
+    Parameters
+    ----------
+    origin, spacing, shape
+        The grid, as :func:`merged_axes` takes it.
+
+    Returns
+    -------
+    str or None
+
+    Examples
+    --------
+    >>> print(beyond_axes_reasons((1.75e308, 0, 0), 1e306, (6, 6, 6)))
+    along axis 0 the voxel corners reach up to 1.81e+308, past float64's largest value (1.8e+308)
+    >>> beyond_axes_reasons((0, 0), 1.0, (2, 2)) is None
+    True
+    """
+    from decimal import Decimal
+
+    beyond = beyond_float64_axes(origin, spacing, shape)
+    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
+    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    clauses = []
+    for axis in (a for a, b in enumerate(beyond) if b):
+        o, s = Decimal(float(origin[axis])), Decimal(float(spacing[axis]))
+        far = max(abs(o), abs(o + s * int(shape[axis])))
+        clauses.append(f"along axis {axis} the voxel corners reach up to {far:.3g}, past float64's largest value "
+                       f"({np.finfo(np.float64).max:.3g})")
+    return ", and ".join(clauses) or None
+
+
 def lost_axes_reasons(origin, spacing, shape: Sequence[int], merged: Sequence[bool] | None = None) -> str | None:
     """Why float64 cannot keep the voxel corners apart, axis by axis,
     along the axes of :func:`merged_axes` (``merged``, where the caller

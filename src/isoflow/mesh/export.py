@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..digital.float64 import lost_axes_reasons, placement_words
+from ..digital.float64 import beyond_axes_reasons, lost_axes_reasons, placement_words
 from ..digital.lattice import DigitalObject
 from ..errors import IsoflowError, check_switch, given_text, warn
 from .float32 import float32_effect, float64_corners, float64_moved
@@ -126,7 +126,9 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     where float64 itself cannot keep its voxel corners apart (a voxel size
     of 1 at an origin of 1e43): every format holds world positions in
     float64 at most, so the surface would collapse onto fewer corners in
-    every file, its faces without area and its volume lost.
+    every file, its faces without area and its volume lost; and a grid
+    whose corners pass float64's largest value (voxels of 1e306 from
+    1.75e308), which every file would hold as inf.
 
     Parameters
     ----------
@@ -151,7 +153,8 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     IsoflowError
         One line naming the origin, the voxel size and, for every axis
         float64 cannot keep apart, float64's spacing at that axis'
-        coordinates (``np.spacing``).
+        coordinates (``np.spacing``), or for every axis past float64's
+        largest value, its farthest corner.
 
     Examples
     --------
@@ -163,6 +166,12 @@ def check_float64_corners(where, origin, spacing, shape, collapses: str = "every
     >>> check_float64_corners("near.npz", (0, 0, 0), (1.0, 1.0, 1.0), (2, 2, 2))["merged"]
     False
     """
+    beyond = beyond_axes_reasons(origin, spacing, shape)
+    if beyond:  # float64 makes those corners inf: no format holds them
+        raise IsoflowError(
+            f"{where}: the voxel corners are past float64 at this placement ({placement_words(origin, spacing)}): "
+            f"{beyond}; so {collapses} would hold inf there; place the object nearer the origin (subtract its "
+            "origin)")
     corners = {**float64_corners(origin, spacing, shape), "origin": origin, "spacing": spacing}
     if corners["merged"]:
         raise IsoflowError(

@@ -979,7 +979,7 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
         kind=kind, reference=reference, reference_source=source,
         stop=stop, bodies=bodies, filled_genus=filled,
         notes=tuple(recorded + load_notes(stats) + shape_notes(w, kind, fill, contacts) + rounding_notes(v, f, w, stats)
-                    + digital_notes(w, digital, target, stable, fill, bodies)))
+                    + digital_notes(w, digital, target, stable, fill, bodies, source)))
 
 
 def _connectivity_of(connectivity: int | np.integer | None, written: int | None) -> tuple[int, list[Note]]:
@@ -1331,18 +1331,25 @@ THIN_LENS_VOXELS = 2
 
 
 def digital_notes(w: dict, digital: list, reference: int | None, stable: bool, fill: Fill = "winding",
-                  bodies: int | None = None) -> list[Note]:
+                  bodies: int | None = None, source: str = "mesh") -> list[Note]:
     """What the grids showed (cavities, resolutions too coarse, 26-connected
-    voxels joining solids that touch, fewer components than ``bodies``)
-    and what the peers could not say; where the Betti numbers do not
-    settle, the thinnest overlap of crossing components, if the finest
-    grid does not resolve it."""
+    voxels joining solids that touch, fewer components than ``bodies``,
+    other components than ``bodies`` where the solid's are compared:
+    ``source`` not ``"voxels"``) and what the peers could not say; where
+    the Betti numbers do not settle, the thinnest overlap of crossing
+    components, if the finest grid does not resolve it."""
     notes = []
     if digital:
         last = digital[-1]
         if _corner_joined(w, last, bodies, fill):
             notes.append(Note("corner_joins", {"bodies": bodies, "components": last["betti"][0],
                                                "by": "flood" if fill == "flood" else "connectivity"}))
+        elif bodies is not None and last["betti"][0] != bodies and source != "voxels":
+            # a grid joins bodies closer than a voxel and breaks parts thinner
+            # than one: the count alone (a disagree's words, or none where the
+            # tunnels have not settled) does not say that a finer grid may mend it
+            notes.append(Note("body_count", {"bodies": bodies, "components": last["betti"][0],
+                                             "resolution": last["resolution"], "pitch": last["pitch"]}))
         if last["betti"][2] and fill != "shell":  # (a shell encloses the inside of each closed surface)
             notes.append(Note("cavities", {"n": last["betti"][2], "resolution": last["resolution"],
                                            "solid": w["solid"].get("cavities")}))

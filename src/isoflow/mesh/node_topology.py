@@ -160,23 +160,26 @@ def _volumes(vertices, faces, vfirst, ffirst, units, out):
     """:func:`node_volumes` into ``out``."""
     for t in range(len(vfirst) - 1):
         v0, v1 = vfirst[t], vfirst[t + 1]
+        u = units[t]
+        # the mean of the positions in the unit, not in world units: near
+        # float64's largest coordinates their world sum is inf (a power-of-two
+        # unit, as the read-back's, divides exactly, so the differences are the same)
         mx, my, mz = 0.0, 0.0, 0.0
         for v in range(v0, v1):
-            mx += vertices[v, 0]
-            my += vertices[v, 1]
-            mz += vertices[v, 2]
+            mx += vertices[v, 0] / u
+            my += vertices[v, 1] / u
+            mz += vertices[v, 2] / u
         n = max(v1 - v0, 1)
         mx, my, mz = mx / n, my / n, mz / n
-        u = units[t]
         total = 0.0
         for f in range(ffirst[t], ffirst[t + 1]):
             a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
             if min(a, b, c) < v0 or max(a, b, c) >= v1:
                 total = np.nan
                 break
-            ax, ay, az = (vertices[a, 0] - mx) / u, (vertices[a, 1] - my) / u, (vertices[a, 2] - mz) / u
-            bx, by, bz = (vertices[b, 0] - mx) / u, (vertices[b, 1] - my) / u, (vertices[b, 2] - mz) / u
-            cx, cy, cz = (vertices[c, 0] - mx) / u, (vertices[c, 1] - my) / u, (vertices[c, 2] - mz) / u
+            ax, ay, az = vertices[a, 0] / u - mx, vertices[a, 1] / u - my, vertices[a, 2] / u - mz
+            bx, by, bz = vertices[b, 0] / u - mx, vertices[b, 1] / u - my, vertices[b, 2] / u - mz
+            cx, cy, cz = vertices[c, 0] / u - mx, vertices[c, 1] / u - my, vertices[c, 2] / u - mz
             total += ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz) + az * (bx * cy - by * cx)
         out[t] = total / 6.0
 

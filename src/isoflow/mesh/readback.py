@@ -296,7 +296,8 @@ def mesh_figures(tm, unit: float = 1.0, area: bool = False) -> dict:
     area_units = None
     if area:
         with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-            local = (v - (v.mean(axis=0) if len(v) else 0.0)) / unit
+            local = v / unit  # before the mean: near float64's largest coordinates their world sum is inf
+            local = local - (local.mean(axis=0) if len(v) else 0.0)
             area_units = float(np.linalg.norm(np.cross(local[faces[:, 1]] - local[faces[:, 0]],
                                                        local[faces[:, 2]] - local[faces[:, 0]]), axis=1).sum() / 2)
     return figures(bool(topology["closed"][0]), euler, bodies, units, unit, area_units)
@@ -323,6 +324,35 @@ def weld_equal_positions(tm):
 
     points, at = distinct_rows(np.asarray(tm.vertices))
     return trimesh.Trimesh(points, at.reshape(-1)[np.asarray(tm.faces)], process=False)
+
+
+def volumes_agree(read: float | np.ndarray | list, counted: float | np.ndarray | list,
+                  slack: float | np.ndarray | list = 0.0) -> np.ndarray:
+    """Whether the volumes read back agree with isoflow's counts, within
+    :data:`VOLUME_RTOL` and ``slack`` (absolute), all in the same unit
+    cubed. A volume that is not finite agrees with nothing: ``np.isclose``
+    takes inf as close to inf, which would pass a read-back whose arithmetic
+    overflowed as a check.
+
+    Parameters
+    ----------
+    read, counted : float or array_like
+        The volumes read back and counted.
+    slack : float or array_like
+        How far they may differ besides the relative tolerance.
+
+    Returns
+    -------
+    numpy.ndarray
+        Per volume, whether the two agree (0-d for two floats).
+
+    Examples
+    --------
+    >>> bool(volumes_agree(8.0, 8.0)), bool(volumes_agree(float("inf"), float("inf")))
+    (True, False)
+    """
+    read, counted = np.asarray(read, np.float64), np.asarray(counted, np.float64)
+    return np.isclose(read, counted, rtol=VOLUME_RTOL, atol=slack) & np.isfinite(read) & np.isfinite(counted)
 
 
 def check_surface_file(path, mesh, obj, *, topology: bool = True, components: list | None = None) -> dict:
@@ -365,7 +395,7 @@ def check_surface_file(path, mesh, obj, *, topology: bool = True, components: li
     if path.suffix.lower() == ".stl":
         moved = max(moved, float32_effect(obj.world(mesh.vertices), obj.spacing)["moved"] or 0.0)
     slack = 2 * moved / volume_unit(obj) * theirs["area_units"] if moved else 0.0
-    if not np.isclose(theirs["volume_units"], ours["volume_units"], rtol=VOLUME_RTOL, atol=slack):
+    if not volumes_agree(theirs["volume_units"], ours["volume_units"], slack):
         unit = volume_unit(obj)
         problems.append(f"volume {volume_words(theirs['volume_units'], unit, 9)} "
                         f"(isoflow: {volume_words(ours['volume_units'], unit, 9)})")
@@ -402,9 +432,9 @@ def check_scene_figures(path, expected: list, progress=None) -> list[str]:
         found.append((name, ours, unit))
     measured = scene_figures(placed, progress)
     # every node's volume in one comparison: a call per node costs more than measuring the node
-    close = np.isclose([theirs["volume_units"] for theirs in measured],
-                       [ours["volume_units"] for _, ours, _ in found], rtol=VOLUME_RTOL,
-                       atol=[ours.get("slack_units", 0.0) for _, ours, _ in found]) if found else []
+    close = volumes_agree([theirs["volume_units"] for theirs in measured],
+                          [ours["volume_units"] for _, ours, _ in found],
+                          [ours.get("slack_units", 0.0) for _, ours, _ in found]) if found else []
     for (name, ours, unit), theirs, volume_agrees in zip(found, measured, close):
         wrong = [f"{k} {theirs[k]} (isoflow: {ours[k]})" for k in ("watertight", "euler_number", "genus")
                  if theirs[k] != ours[k]]

@@ -29,7 +29,7 @@ StopKind = Literal["asked", "max_resolution", "time_limit", "memory"]
 NoteKind = Literal["dropped_faces", "welded", "repeated_faces", "double_sided", "open", "inconsistent",
                    "nonmanifold_edges", "nonmanifold_vertices", "nested", "overlap", "self_intersecting",
                    "zero_area_faces", "float64_rounding", "cavities", "flood_cavities", "coarse", "manifold3d_refused",
-                   "no_mesh_genus", "t_junctions", "corner_joins", "thin_overlap", "voxel_contacts",
+                   "no_mesh_genus", "t_junctions", "corner_joins", "body_count", "thin_overlap", "voxel_contacts",
                    "written_connectivity"]
 
 
@@ -376,6 +376,25 @@ def _corner_join_words(bodies: int, components: int, by: str = "connectivity") -
             "enough grid, as manifold3d does")
 
 
+def _body_count_words(bodies: int, components: int, resolution: int, pitch: float) -> str:
+    """The ``body_count`` note: the finest grid's digital components are
+    not the solid's bodies, and the likely cause, which a finer grid may
+    mend.
+
+    Examples
+    --------
+    >>> _body_count_words(2, 1, 128, 0.0344813)
+    "1 digital component for the solid's 2 bodies at resolution 128 (pitch 0.03448): bodies closer than a voxel \
+merge at this resolution; a finer --resolution (above 128) may part them"
+    """
+    said = (f"{counted(components, 'digital component')} for the solid's {counted(bodies, 'body', 'bodies')} at "
+            f"resolution {resolution} (pitch {pitch:.4g}): ")
+    finer = f"a finer --resolution (above {resolution})"
+    if components < bodies:
+        return said + f"bodies closer than a voxel merge at this resolution; {finer} may part them"
+    return said + f"parts thinner than a voxel break apart at this resolution; {finer} may join them"
+
+
 def _betti_words(betti) -> str:
     b0, b1, b2 = betti
     return f"{counted(b0, 'component')}, {counted(b1, 'tunnel')}, {counted(b2, 'cavity', 'cavities')}"
@@ -457,6 +476,7 @@ _NOTE_WORDS: dict[str, Callable[..., str]] = {
         f"(pitch {pitch:.4g}; handles thinner than a voxel close or open)"),
     "manifold3d_refused": lambda error: f"manifold3d refused the mesh ({error})",
     "corner_joins": _corner_join_words,
+    "body_count": _body_count_words,
     "thin_overlap": lambda thickness, at, voxels, resolution: (
         f"two components overlap in a lens {thickness:.2g} thick on average at {_point(at)}, {voxels:.2g} "
         f"voxel{'s' if voxels >= 1.5 else ''} at resolution {resolution}: their surfaces meet almost tangentially, "
