@@ -172,7 +172,9 @@ def test_the_workers_a_slab_refusal_names_flow(monkeypatch, shape):
     too: on a 1023 x 1023 cross-section it said they fit 1 at a time, and
     one worker was then refused for the report. Under every budget, the
     workers a refusal names (`--threads N`, `workers=N`) are sized
-    without a refusal, and a refusal naming none says what else to do."""
+    without a refusal, and a refusal naming none says what else to do: a
+    cross-section to crop to, at one thread a wider one, which is sized
+    without a refusal at one thread."""
     import re
 
     from isoflow.scale import memory
@@ -188,6 +190,10 @@ def test_the_workers_a_slab_refusal_names_flow(monkeypatch, shape):
             message = str(err)
         fit = re.search(r"\(--threads (\d+), workers=\1\)", message)
         if fit is None:
+            alone = re.search(r", or (\d+) x \1 at --threads 1, workers=1$", message)
+            if alone is not None:
+                assert slab_thickness((shape[0], int(alone[1]), int(alone[1])), None, 1) >= 1, message
+                message = message[:alone.start()]
             assert "crop the volume" in message and "workers=" not in message, message
             continue
         named.add(int(fit[1]))
@@ -677,6 +683,94 @@ def test_a_command_refusal_names_the_threads_that_flow(tmp_path, capsys, monkeyp
     monkeypatch.undo()  # the states read back into memory
     check_states(mem, tmp_path / "run")
     check_states(mem, tmp_path / "run_env")
+
+
+@pytest.mark.parametrize("case", ["chunks", "report"])
+def test_a_size_a_refusal_names_at_fewer_threads_flows(tmp_path, capsys, monkeypatch, case):
+    """The chunks (`of N voxels or fewer`) and the cross-section (`crop
+    the volume across x to S x S`) that a refusal named were sized for
+    the threads asked (`--threads 4`) alone, though one thread holds
+    larger ones. The line names those too, at `--threads 1`, and they
+    are what it says: refused at four threads under the same budget, the
+    same command at one thread flows to the in-memory flow's records."""
+    import re
+
+    from isoflow.scale import memory
+
+    if case == "chunks":  # a small object in one chunk of 64^3
+        v = np.zeros((64, 64, 64), np.uint8)
+        v[2:6, 2:6, 2:6] = 1
+        chunks, budget = (64, 64, 64), 1_000_000
+        sizes = r"of \d+ voxels or fewer \(e\.g\. (\d+) x \1 x \1\), or \d+ or fewer at --threads 1, workers=1 " \
+                r"\(e\.g\. (\d+) x \2 x \2\)"
+    else:  # each step's report of a 300 x 300 cross-section
+        v = np.zeros((20, 300, 300), np.uint8)
+        v[:, 0, 0] = 1
+        v[-1, -1, -1] = 1
+        chunks, budget = (10, 100, 100), 3_000_000
+        sizes = r"crop the volume across x to (\d+) x \1 voxels or less, or (\d+) x \2 at --threads 1, workers=1"
+    plain_store(tmp_path / "in.zarr", v, chunks)
+    monkeypatch.setattr(memory, "default_budget", lambda: budget)
+    command = ["flow", "--volumes", ".zarr", "--steps", "1", "--json", "-q"]
+    assert main([*command, str(tmp_path / "in.zarr"), "--out", str(tmp_path / "four"), "--threads", "4"]) == 2
+    err = capsys.readouterr().err.strip()
+    found = re.search(sizes, err)
+    assert "\n" not in err and found is not None, err
+    four, one = map(int, found.groups())
+    assert one > four
+    if case == "chunks":
+        plain_store(tmp_path / "fits.zarr", v, (one,) * 3)
+    else:
+        fits = v[:, :one, :one].copy()
+        fits[-1, -1, -1] = 1
+        plain_store(tmp_path / "fits.zarr", fits, chunks)
+    assert main([*command, str(tmp_path / "fits.zarr"), "--out", str(tmp_path / "refused"), "--threads", "4"]) == 2
+    capsys.readouterr()
+    assert main([*command, str(tmp_path / "fits.zarr"), "--out", str(tmp_path / "one"), "--threads", "1"]) == 0, \
+        capsys.readouterr().err
+    got = json.loads(capsys.readouterr().out)
+    monkeypatch.undo()
+    mem, expected = in_memory(tmp_path / "fits.zarr", 6, steps=1)
+    assert {k: got[k] for k in expected} == expected
+    check_states(mem, tmp_path / "one")
+
+
+def test_the_threads_a_chunk_refusal_names_flow(tmp_path, capsys, monkeypatch):
+    """The refusal of the input's chunks named the threads that decode
+    them at a time within the budget, without asking whether the slabs and
+    each step's report fit as many: on a 300 x 300 cross-section read in
+    chunks of 4 layers it said "they fit 2 at a time", and `--threads 2`
+    was then refused for the report. Under every budget, the threads a
+    chunk refusal names run the same command to the in-memory flow's
+    records, and the line that names none says what else to do."""
+    import re
+
+    from isoflow.scale import memory
+
+    v = np.zeros((20, 300, 300), np.uint8)
+    v[:, 0, 0] = 1
+    v[-1, -1, -1] = 1  # the object spans the whole cross-section
+    plain_store(tmp_path / "in.zarr", v, (4, 300, 300))
+    mem, expected = in_memory(tmp_path / "in.zarr", 6, steps=1)
+    command = ["flow", str(tmp_path / "in.zarr"), "--volumes", ".zarr", "--steps", "1", "--json", "-q"]
+    named = set()
+    for budget in (6_000_000, 7_800_000, 8_200_000, 8_500_000):
+        monkeypatch.setattr(memory, "default_budget", lambda b=budget: b)
+        assert main([*command, "--out", str(tmp_path / f"four{budget}"), "--threads", "4"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err, err
+        fit = re.search(r"they fit (\d+) at a time \(--threads \1, workers=\1\)", err)
+        if fit is None:  # the slabs or the report fit no count of threads: their refusal
+            assert "workers=" not in err and "crop the volume across x" in err, err
+            continue
+        named.add(int(fit[1]))
+        out = tmp_path / f"fit{budget}"
+        assert main([*command, "--out", str(out), "--threads", fit[1]]) == 0, capsys.readouterr().err
+        got = json.loads(capsys.readouterr().out)
+        assert {k: got[k] for k in expected} == expected
+    assert named  # some budget names fewer threads
+    monkeypatch.undo()
+    check_states(mem, out)
 
 
 def test_no_command_refusal_names_what_only_python_takes(tmp_path, capsys, monkeypatch):

@@ -249,6 +249,16 @@ def slab_thickness(shape: tuple[int, int, int], slab: int | None, workers: int, 
     return thick
 
 
+def _slabs_fit(shape: tuple[int, int, int], slab: int | None, workers: int, scheduler: Any) -> bool:
+    """Whether :func:`slab_thickness` sizes the slabs of a state of
+    ``shape`` on ``workers`` without a refusal."""
+    try:
+        slab_thickness(shape, slab, workers, scheduler)
+    except IsoflowError:
+        return False
+    return True
+
+
 def _workers_words(n: int) -> str:
     """How a refusal names ``n`` slabs or chunks at a time that would fit,
     in the words of both of its callers, ``isoflow flow STORE --volumes
@@ -310,7 +320,8 @@ def _check_record_fits(shape: tuple[int, int, int], thick: int, workers: int, sc
     (:func:`_record_need`), saying what would fit: thinner slabs where
     their thickness was ``asked`` (``slab=``, which the command line does
     not take: slabs it sizes are as thin as the report needs already),
-    fewer workers, or a narrower cross-section."""
+    fewer workers, or a narrower cross-section (and the wider one that a
+    single worker's report holds)."""
     need, block, held, sides = _record_need(shape, thick, workers, scheduler)
     if need <= budget:
         return
@@ -322,10 +333,16 @@ def _check_record_fits(shape: tuple[int, int, int], thick: int, workers: int, sc
     elif fit >= 1:
         hint = f"it fits {fit} at a time ({_workers_words(fit)})"
     else:
-        side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], s, s), 1, workers, scheduler)[0] <= budget)
-        fits = _record_need((shape[0], side, side), 1, workers, scheduler)[0] <= budget
+        def widest(n: int) -> int:  # the side of the square cross-section whose report fits n at a time, or 0
+            side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], s, s), 1, n, scheduler)[0] <= budget)
+            return side if _record_need((shape[0], side, side), 1, n, scheduler)[0] <= budget else 0
+
+        side, alone = widest(workers), widest(1) if _at_once(workers, scheduler) > 1 else 0
+        # one thread holds a wider cross-section, which the line names (never the whole one: this
+        # branch is where one block's report does not fit it)
         hint = (f"it holds the faces of a whole cross-section of {ny} x {nz} voxels: crop the volume across x"
-                + (f" to {side} x {side} voxels or less" if fits else ""))
+                + (f" to {side} x {side} voxels or less" if side else "")
+                + (f"{', or' if side else ' to'} {alone} x {alone} at {_workers_words(1)}" if alone > side else ""))
     threads = _at_once(workers, scheduler)
     what = (f"{where + ': ' if where else ''}the report of each step (its store summed in blocks of "
             f"{' x '.join(map(str, sides))} voxels, {threads} at a time)")
@@ -400,7 +417,8 @@ class ChunkedFlow(ArrayFlow):
         self.unit, self.where = store.unit(), str(source)
         self.source_shape = tuple(int(s) for s in volume.shape)
         # its chunks are read whole, workers at a time, before any step's slabs or record is sized
-        check_chunks_fit(volume, decoded_chunk_voxels(store.array), self.where, self.workers, self.scheduler)
+        check_chunks_fit(volume, decoded_chunk_voxels(store.array), self.where, self.workers, self.scheduler,
+                         self.slab)
         _, da = import_dask()
         checked = volume.map_blocks(_binary_block, dtype=bool, where=str(source), fill=fill)
         extents = self._compute(*(da.flatnonzero(checked.any(axis=tuple(a for a in range(3) if a != axis)))
@@ -494,13 +512,18 @@ class ChunkedFlow(ArrayFlow):
         return state.voxels == int(np.prod(state.shape))
 
 
-def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, scheduler: Any = None) -> None:
+def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, scheduler: Any = None,
+                     slab: int | None = None) -> None:
     """Refuse, before any is read, an input whose chunks would not fit in
     memory read ``workers`` at a time (or on a ``dask.distributed``
     worker, its threads at a time): each is decoded whole and checked to
     be 0/1 (:func:`isoflow.digital.outofcore.store_memory` counts them as
     the report's blocks), saying how many would fit at a time, or how
-    small the chunks would have to be.
+    small the chunks would have to be (and how small at one at a time,
+    where that holds larger ones). The workers it names are as many as
+    the flow's slabs and each step's report of a volume of the input's
+    shape fit too (:func:`slab_thickness`); where no count of them does,
+    the refusal of those is raised instead.
 
     Parameters
     ----------
@@ -517,6 +540,8 @@ def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, s
         Chunks read at a time on dask's local schedulers.
     scheduler : optional
         As :func:`slab_thickness` takes it.
+    slab : int, optional
+        The slabs' thickness asked for, as :func:`slab_thickness` takes it.
 
     Raises
     ------
@@ -551,15 +576,30 @@ def check_chunks_fit(volume: Any, chunk_voxels: int, where: str, workers: int, s
     threads = _at_once(workers, scheduler)
     budget = default_budget()
     fit = max(budget - need.kept, 0) // max(need.block, 1)
+    if threads * need.block + need.kept > budget and fit >= 1:
+        # fewer workers are named only where the steps' slabs and reports fit
+        # them too, else following the hint meets their refusal; at one
+        # worker that refusal is the one raised
+        shape = tuple(int(s) for s in volume.shape)
+        fit = next((n for n in range(min(fit, threads), 1, -1) if _slabs_fit(shape, slab, n, scheduler)), 1)
+        if fit == 1:
+            slab_thickness(shape, slab, 1, scheduler, where=where)
     if fit >= 1:
         hint = f"they fit {fit} at a time ({_workers_words(fit)}), or {smaller}"
-    else:  # per voxel: the workers' chunks at work and the chunks the allocator keeps (KEPT_BLOCKS at most)
-        per_voxel = threads * need.block / voxels + KEPT_BLOCKS * np.dtype(volume.dtype).itemsize
-        most = int(budget // per_voxel)
-        side = int(round(most ** (1 / 3)))
-        side -= side ** 3 > most
-        hint = (f"{smaller}, of {most} voxels or fewer (e.g. {side} x {side} x {side})" if side >= 1 else
-                "make more memory available")
+    else:
+        def largest(n: int) -> tuple[int, int]:  # the voxels of a chunk that fits n at a time, and a cube's side
+            # per voxel: the chunks at work and the chunks the allocator keeps (KEPT_BLOCKS at most)
+            most = int(budget // (n * need.block / voxels + KEPT_BLOCKS * np.dtype(volume.dtype).itemsize))
+            side = int(round(most ** (1 / 3)))
+            return most, side - (side ** 3 > most)
+
+        (most, side), (alone, one) = largest(threads), largest(1)
+        # one thread holds larger chunks, which the line names (never the ones there are: this branch
+        # is where one of them does not fit)
+        fewer = f"{alone} or fewer at {_workers_words(1)} (e.g. {one} x {one} x {one})"
+        hint = (f"{smaller}, of {most} voxels or fewer (e.g. {side} x {side} x {side})"
+                + (f", or {fewer}" if threads > 1 and one > side else "") if side >= 1 else
+                f"{smaller}, of {fewer}" if one >= 1 else "make more memory available")
     check_fits(threads * need.block + need.kept, f"{where}: reading its chunks of {' x '.join(map(str, sides))} voxels "
                f"({volume.dtype}, {threads} at a time)", hint=hint, budget=budget)
 
