@@ -50,6 +50,42 @@ def test_slabs_of_any_size_give_the_whole_images_table(rng, conn):
                     label_table(image, conn, pitch=(1, 2, 3), labels=[4, 1, 99]))
 
 
+def test_pairs_renumbered_across_seams_as_each_pair_is_read(rng):
+    from isoflow.scale.piece_graph import renumbered_pairs
+
+    one = np.concatenate([[0], rng.integers(1, 40, 60)])  # 60 pieces made 39, many of them one
+    a = rng.integers(1, 60, 500)
+    b = rng.integers(a + 1, 61)  # the smaller piece first, as the vertex pass keys them
+    keys = (a.astype(np.uint64) << np.uint64(32)) | b.astype(np.uint64)
+    kind = rng.integers(0, 5, 500).astype(np.uint8)
+    sums = rng.integers(0, 1 << 40, (500, 2)).astype(np.uint64)
+    want = []  # pair by pair: the smaller new number first, its column of sums first; one piece touches nothing
+    for p, q, k, (s0, s1) in zip(one[a].tolist(), one[b].tolist(), kind.tolist(), sums.tolist()):
+        if p != q:
+            want.append((min(p, q), max(p, q), k, [s0, s1] if p < q else [s1, s0]))
+    out = np.zeros(600, np.uint64), np.zeros(600, np.uint8), np.zeros((600, 2), np.uint64)
+    end = renumbered_pairs(one, keys, kind, sums, *out, 100)  # written after 100 entries already there
+    got = [(int(k) >> 32, int(k) & 0xFFFFFFFF, c, x)
+           for k, c, x in zip(out[0][100:end], out[1][100:end].tolist(), out[2][100:end].tolist())]
+    assert got == want
+    assert len(want) < 500 and not out[0][:100].any()
+
+
+def test_a_joined_stream_lets_go_of_its_slabs_and_gives_the_whole_images_table(rng):
+    from isoflow.digital.label_table import SlabStream, rows_of_pieces
+
+    image = nested(rng)
+    stream = SlabStream(image, 6, None, True)
+    for x0, x1 in ((0, 7), (7, 8), (8, image.shape[0])):
+        stream.slab(x0, x1)
+    pieces, passed = stream.joined()
+    assert not any(stream.parts.values())  # what the slabs found is held by the whole image's findings alone
+    rows = rows_of_pieces(pieces, passed, image.dtype, 6, None)
+    whole = label_table(image, 6)
+    assert np.array_equal(rows["voxels"], whole["voxels"]) and np.array_equal(rows["b0"], whole["b0"])
+    assert np.array_equal(rows["b2"], whole["b2"])
+
+
 def nested_stores(tmp_path, rng, chunks, ome_chunks):
     """A nested label image as n.npy, as plain.zarr in ``chunks`` and as
     an OME-Zarr image stored z, y, x (ome.zarr) in ``ome_chunks``."""

@@ -944,7 +944,9 @@ class SlabStream:
         self.total = 0  # pieces numbered so far (0: the outside)
         self.parts: dict[str, list] = {k: [] for k in ("values", "counts", "sums", "lo", "hi", "features",
                                                        "doubled", "keys", "kind", "sums_pairs", "same")}
-        self.tail: np.ndarray | None = None  # the previous slab's last two voxel layers, numbered across slabs
+        #: the previous slab's last two voxel layers, numbered as that slab numbers its pieces (uint32), and the
+        #: number before its first piece across slabs
+        self.tail: tuple[int, np.ndarray] | None = None
         #: the previous slab's read's last two voxel layers (the first of them, the labels), which the next
         #: slab's read begins with: taken from here, not read (and their chunks decoded) again
         self.carry: tuple[int, np.ndarray] | None = None
@@ -1063,12 +1065,18 @@ class SlabStream:
         passed = vertex_pass(vol, pieces, want, feature_table(self.conn), pass_tables(self.conn, self.surfaces),
                              layers=(x0, x1 + (x1 == self.nx)), nx=self.nx, x0=a, base=self.total, axis=along)
         if self.tail is not None:  # voxel layers x0 - 1 and x0, read by both slabs: one piece, two numbers
-            head = piece_ids(pieces, vol.shape, (0, 2)).astype(np.int64) + self.total
-            pairs = np.stack([self.tail.reshape(-1), head.reshape(-1)], axis=1)
-            self.parts["same"].append(np.unique(pairs, axis=0))
+            base, tail = self.tail
+            # each pair as one 64-bit number (the slabs' own 32-bit numbers, which fit): sorted as numbers, in the
+            # pairs' order, where unique over rows would sort them as records, element by element
+            packed = np.unique((tail.reshape(-1).astype(np.uint64) << np.uint64(32))
+                               | piece_ids(pieces, vol.shape, (0, 2)).reshape(-1))
+            pairs = np.empty((len(packed), 2), np.int64)
+            pairs[:, 0] = (packed >> np.uint64(32)).astype(np.int64) + base
+            pairs[:, 1] = (packed & np.uint64(0xFFFFFFFF)).astype(np.int64) + self.total
+            self.parts["same"].append(pairs)
         self.tail = None
-        if x1 < self.nx:
-            self.tail = piece_ids(pieces, vol.shape, (x1 - 1 - a, x1 + 1 - a)).astype(np.int64) + self.total
+        if x1 < self.nx:  # the slab's own numbers (uint32) and what makes them the image's
+            self.tail = (self.total, piece_ids(pieces, vol.shape, (x1 - 1 - a, x1 + 1 - a)))
         for key in ("values", "counts", "sums", "lo", "hi"):
             self.parts[key].append(pieces[key][1:])
         self.parts["features"].append(passed["features"][1:])
@@ -1085,33 +1093,41 @@ class SlabStream:
         pieces met in two slabs keeps an entry from each, as a pair met by
         two threads does: the graph of pieces adds them up
         (:func:`~isoflow.scale.piece_graph.pair_graph`), so they are not
-        sorted into one here (a sort of every pair, and its copies)."""
+        sorted into one here (a sort of every pair, and its copies). Each
+        slab's findings are let go once added: a stream is joined once."""
+        from ..scale.memory import mapped
+        from ..scale.piece_graph import add_by_label, box_by_label, renumbered_pairs
+
         one = same_pieces(self.total, self.parts["same"])
         n = int(one.max(initial=0))
-        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.parts.items() if k != "same"}
-        at = one[1:]
+        parts, self.parts = self.parts, {k: [] for k in self.parts}
+        width = parts["features"][0].shape[1] if parts["features"] else 0
         pieces = {"values": np.zeros(n + 1, np.uint64), "counts": np.zeros(n + 1, np.int64),
                   "sums": np.zeros((n + 1, 3), np.int64), "lo": np.full((n + 1, 3), np.iinfo(np.int64).max),
                   "hi": np.full((n + 1, 3), -1, np.int64)}
-        pieces["values"][at] = cat["values"]
-        np.add.at(pieces["counts"], at, cat["counts"])
-        np.add.at(pieces["sums"], at, cat["sums"])
-        np.minimum.at(pieces["lo"], at, cat["lo"])
-        np.maximum.at(pieces["hi"], at, cat["hi"])
-        features = np.zeros((n + 1, cat["features"].shape[1]), np.int64)
-        np.add.at(features, at, cat["features"])
-        doubled = np.bincount(at, cat["doubled"], n + 1).astype(np.int64)
-        keys = cat["keys"].astype(np.uint64)
-        p = one[(keys >> np.uint64(32)).astype(np.int64)]
-        q = one[(keys & np.uint64(0xFFFFFFFF)).astype(np.int64)]
-        sums = cat["sums_pairs"].astype(np.uint64).reshape(-1, 2)
-        keep = p != q  # pairs within one piece (named in two slabs) touch nothing else
-        flip = p > q
-        sums = np.where(flip[:, None], sums[:, ::-1], sums)
-        lo, hi = np.minimum(p, q), np.maximum(p, q)
-        keys = (lo.astype(np.uint64) << np.uint64(32)) | hi.astype(np.uint64)
-        keys, kind, sums = keys[keep], cat["kind"][keep].astype(np.uint8), sums[keep]
-        return pieces, {"features": features, "doubled": doubled, "keys": keys, "kind": kind, "sums": sums}
+        features, doubled = np.zeros((n + 1, width), np.int64), np.zeros(n + 1, np.int64)
+        # each slab's findings added into the whole image's by compiled passes (a piece's new number in place
+        # of a label): no copy of all slabs' together, no array for each step of the renumbering
+        first = 1
+        for s, values in enumerate(parts["values"]):
+            at = one[first:first + len(values)]
+            first += len(values)
+            pieces["values"][at] = values
+            add_by_label(at, parts["counts"][s], parts["sums"][s], parts["features"][s].astype(np.int64, copy=False),
+                         parts["doubled"][s].astype(np.int64, copy=False), pieces["counts"], pieces["sums"], features,
+                         doubled)
+            box_by_label(at, parts["lo"][s], parts["hi"][s], pieces["lo"], pieces["hi"])
+        entries = sum(len(keys) for keys in parts["keys"])
+        keys, kind, sums = mapped(entries, np.uint64), mapped(entries, np.uint8), mapped((entries, 2), np.uint64)
+        kept = 0
+        for s in range(len(parts["keys"])):
+            kept = renumbered_pairs(one, parts["keys"][s].astype(np.uint64, copy=False),
+                                    parts["kind"][s].astype(np.uint8, copy=False),
+                                    parts["sums_pairs"][s].astype(np.uint64, copy=False).reshape(-1, 2), keys, kind,
+                                    sums, kept)
+            parts["keys"][s] = parts["kind"][s] = parts["sums_pairs"][s] = None  # the whole image's hold them now
+        return pieces, {"features": features, "doubled": doubled, "keys": keys[:kept], "kind": kind[:kept],
+                        "sums": sums[:kept]}
 
 
 def same_pieces(total: int, same: list) -> np.ndarray:

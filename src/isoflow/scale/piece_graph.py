@@ -479,6 +479,40 @@ def _pair_degrees(keys, kind, sums, none, adj_start):
     return touching
 
 
+@njit(cache=True, nogil=True)
+def renumbered_pairs(one: np.ndarray, keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, out_keys: np.ndarray,
+                     out_kind: np.ndarray, out_sums: np.ndarray, at: int) -> int:
+    """The pairs of pieces of the vertex pass (``keys``: the smaller piece
+    in the high 32 bits; ``kind``; ``sums``, two columns, one each way)
+    with piece ``p`` renumbered ``one[p]``, written to the ``out_`` arrays
+    from entry ``at`` on, in order: the smaller number high again (the two
+    columns of ``sums`` swapped where the order turns), a pair whose two
+    pieces become one left out (it touches nothing else). Returns the
+    entry after the last one written.
+
+    Examples
+    --------
+    >>> keys = np.array([(1 << 32) | 2, (1 << 32) | 3, (2 << 32) | 3], np.uint64)
+    >>> sums = np.array([[5, 6], [7, 8], [9, 10]], np.uint64)
+    >>> out = np.zeros(3, np.uint64), np.zeros(3, np.uint8), np.zeros((3, 2), np.uint64)
+    >>> renumbered_pairs(np.array([0, 3, 1, 1]), keys, np.array([1, 2, 3], np.uint8), sums, *out, 0)  # 2, 3 one
+    2
+    >>> [(int(k) >> 32, int(k) & 0xFFFFFFFF) for k in out[0][:2]], out[1][:2].tolist(), out[2][:2].tolist()
+    ([(1, 3), (1, 3)], [1, 2], [[6, 5], [8, 7]])
+    """
+    low = np.uint64(0xFFFFFFFF)
+    for r in range(len(keys)):
+        p, q = one[np.int64(keys[r] >> np.uint64(32))], one[np.int64(keys[r] & low)]
+        if p == q:
+            continue
+        turn = 1 if p > q else 0
+        out_keys[at] = (np.uint64(min(p, q)) << np.uint64(32)) | np.uint64(max(p, q))
+        out_kind[at] = kind[r]
+        out_sums[at, 0], out_sums[at, 1] = sums[r, turn], sums[r, 1 - turn]
+        at += 1
+    return at
+
+
 def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
                none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
