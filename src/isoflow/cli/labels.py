@@ -1034,13 +1034,13 @@ def scene_expected(table: dict, names: list[str], spacing, moved: float = 0.0) -
     corners, :func:`isoflow.mesh.float32.float64_moved`) times twice its
     surface's area; with the unit the volumes are compared in
     (:func:`isoflow.mesh.readback.check_scene_figures`)."""
-    from ..mesh.readback import expected_figures, unit_of
+    from ..mesh.readback import expected_figures_each, unit_of
 
     unit = unit_of(spacing)
-    areas = table["surface_area"].tolist() if moved else [0.0] * len(names)
-    return [(name, expected_figures(euler, sum(genera), voxels, spacing, slack=2 * moved * area), unit)
-            for name, euler, genera, voxels, area
-            in zip(names, table["surface_euler"].tolist(), table["genera"], table["voxels"].tolist(), areas)]
+    slack = [2 * moved * area for area in table["surface_area"].tolist()] if moved else None
+    found = expected_figures_each(table["surface_euler"].tolist(), [sum(genera) for genera in table["genera"]],
+                                  table["voxels"].tolist(), spacing, slack)
+    return [(name, figures, unit) for name, figures in zip(names, found)]
 
 
 def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[str]) -> list[Path]:

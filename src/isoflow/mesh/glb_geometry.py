@@ -12,12 +12,22 @@ reader turns into an array without fail, so that the file still reads back
 as unreadable where trimesh cannot read it whole. A file of any other
 layout (materials, extensions, sparse accessors, URIs, several binary
 chunks) is left as it is: trimesh reads all of it.
+
+The binary chunk of a file on disk is given to the reader as a view of
+the file mapped into memory, not as bytes read: the reader takes each
+buffer view as a slice of the chunk (a copy of bytes, none of a view)
+and copies only the positions out of it, so the triangles are read from
+the file's pages where they lie and the other attributes (most of the
+chunk) are not read at all. Read as bytes, the chunk and the copy of
+each of its views would be most of the memory a scene's read-back
+touches.
 """
 
 from __future__ import annotations
 
 import io
 import json
+import mmap
 import struct
 from typing import BinaryIO
 
@@ -57,7 +67,9 @@ def geometry_glb(fh: BinaryIO) -> io.RawIOBase | None:
     -------
     binary file or None
         The new header and JSON chunk, then ``fh``'s binary chunk read on
-        from where it is (not copied): read it while ``fh`` is open.
+        from where it is (not copied; a view of the file mapped into
+        memory where ``fh`` is a file on disk): read it while ``fh`` is
+        open.
 
     Examples
     --------
@@ -211,19 +223,34 @@ def _readable(accessor: dict, views: list, sizes: list) -> bool:
 
 
 class _Joined(io.RawIOBase):
-    """The bytes ``head``, then ``rest`` read on from where it is."""
+    """The bytes ``head``, then ``rest`` read on from where it is: as
+    views of ``rest`` mapped into memory where it is a file on disk (see
+    the module docs), else as bytes read from it."""
 
     def __init__(self, head: bytes, rest: BinaryIO):
         super().__init__()
         self._head, self._rest, self._at = head, rest, 0
+        self._mapped: memoryview | None = None
+        try:
+            whole = mmap.mmap(rest.fileno(), 0, access=mmap.ACCESS_READ)
+        except (AttributeError, OSError, ValueError):  # not a file on disk (a stream, an empty file): read it
+            return
+        self._mapped, self._from = memoryview(whole), rest.tell()
 
     def readable(self) -> bool:
         return True
 
-    def read(self, size: int = -1) -> bytes:
+    def read(self, size: int = -1) -> bytes | memoryview:
         part = self._head[self._at:] if size < 0 else self._head[self._at:self._at + size]
         if size < 0 or len(part) < size:
-            part += self._rest.read(-1 if size < 0 else size - len(part))
+            more = -1 if size < 0 else size - len(part)
+            if self._mapped is None:
+                part += self._rest.read(more)
+            else:
+                at = self._from + self._at + len(part) - len(self._head)
+                rest = self._mapped[at:] if more < 0 else self._mapped[at:at + more]
+                # a read within the chunk (the reader's) is its view alone, not copied
+                part = rest if not part else part + rest.tobytes()
         self._at += len(part)
         return part
 

@@ -9,8 +9,9 @@ of a ``surface --labels`` scene. trimesh's own figures (``is_watertight``,
 ``is_winding_consistent``, ``euler_number``, ``body_count``) sort every
 edge of a mesh object built per node, most of a large file's read-back,
 and of a scene of thousands of labels. Here every node is measured in
-place, its edges grouped by their first vertex (a counting sort: a closed
-surface's vertices have a few edges each), with the same definitions:
+place, its edges grouped by their smaller vertex (a counting sort) and
+told apart by a mark per vertex and direction (each edge looked at once,
+not against every other edge of its vertex), with the same definitions:
 
 * *closed*: every edge of the node lies in exactly two of its triangles,
   which run along it in opposite directions (trimesh's watertight and
@@ -33,11 +34,21 @@ from ..scale.kernels import find
 
 
 @njit(cache=True, nogil=True)
-def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
+def _node(faces, v0, nv, f0, f1, start, keys, mark, parent, used):
     """``(closed, used vertices, bodies, edges)`` of one node: its
     triangles ``faces[f0:f1]`` on the vertices ``v0 .. v0 + nv - 1`` (-1s
-    where a triangle names a vertex outside them). ``start``, ``heads``,
-    ``parent`` and ``used``: scratch of the largest node's size."""
+    where a triangle names a vertex outside them). ``start``, ``keys``,
+    ``parent`` and ``used``: scratch of the largest node's size; ``mark``:
+    two per vertex of the largest node, none of them ``v0`` or more.
+
+    Each edge ``a -> b`` is kept at its smaller vertex as ``2 max(a, b) +
+    (a > b)``: the edges of a vertex that are one edge whichever way they
+    run differ in the last bit alone. A mark per such key, the vertex's
+    own number (``v0`` on: unique across the nodes of a call, so no mark
+    is ever cleared), finds each key's repeats. The node is closed where
+    no triangle repeats a vertex, no directed edge repeats (``3F`` keys
+    apart) and every edge runs both ways (twice as many directed edges
+    as edges)."""
     for v in range(nv + 1):
         start[v] = 0
     for v in range(nv):
@@ -45,42 +56,42 @@ def _node(faces, v0, nv, f0, f1, start, heads, parent, used):
         used[v] = False
     for f in range(f0, f1):
         for c in range(3):
-            a = faces[f, c] - v0
+            a, b = faces[f, c] - v0, faces[f, (c + 1) % 3] - v0
             if a < 0 or a >= nv:
                 return False, -1, -1, -1
-            start[a + 1] += 1
+            start[min(a, b) + 1] += 1
             used[a] = True
     for v in range(nv):
         start[v + 1] += start[v]
-    # the heads of every vertex's edges, after its start (start[a] moves
+    # the keys of every vertex's edges, after its start (start[a] moves
     # past them while they are placed, and is moved back after)
     closed = f1 > f0
     for f in range(f0, f1):
         for c in range(3):
             a, b = faces[f, c] - v0, faces[f, (c + 1) % 3] - v0
             closed = closed and a != b
-            heads[start[a]] = b
-            start[a] += 1
-            ra, rb = find(parent, a), find(parent, b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
+            low = min(a, b)
+            keys[start[low]] = 2 * max(a, b) + (a > b)
+            start[low] += 1
     for v in range(nv, 0, -1):
         start[v] = start[v - 1]
     start[0] = 0
-    edges = 0
+    edges, directed = 0, 0
     for a in range(nv):
+        here = v0 + a
         for e in range(start[a], start[a + 1]):
-            b = heads[e]
-            once, first, back = 0, True, 0
-            for g in range(start[a], start[a + 1]):
-                if heads[g] == b:
-                    once += 1
-                    first = first and g >= e
-            for g in range(start[b], start[b + 1]):
-                back += heads[g] == a
-            # an edge counted once: at its smaller end, or at the only end it runs from
-            edges += first and (a <= b or back == 0)
-            closed = closed and once == 1 and back == 1
+            k = keys[e]
+            if mark[k] == here:  # this directed edge again
+                closed = False
+                continue
+            mark[k] = here
+            directed += 1
+            if mark[k ^ 1] != here:  # an edge not seen the other way: a new one
+                edges += 1
+                ra, rb = find(parent, a), find(parent, k >> 1)
+                if ra != rb:
+                    parent[max(ra, rb)] = min(ra, rb)
+    closed = closed and directed == 3 * (f1 - f0) and directed == 2 * edges
     vertices, bodies = 0, 0
     for v in range(nv):
         if used[v]:
@@ -99,12 +110,13 @@ def _nodes(faces, vfirst, ffirst, closed, vertices, bodies, edges):
         most_v = max(most_v, vfirst[t + 1] - vfirst[t])
         most_f = max(most_f, ffirst[t + 1] - ffirst[t])
     start = np.empty(most_v + 1, np.int64)
-    heads = np.empty(3 * most_f, np.int64)
+    keys = np.empty(3 * most_f, np.int64)
+    mark = np.full(2 * most_v, -1, np.int64)
     parent = np.empty(most_v, np.int64)
     used = np.empty(most_v, np.bool_)
     for t in range(n):
         closed[t], vertices[t], bodies[t], edges[t] = _node(faces, vfirst[t], vfirst[t + 1] - vfirst[t], ffirst[t],
-                                                            ffirst[t + 1], start, heads, parent, used)
+                                                            ffirst[t + 1], start, keys, mark, parent, used)
 
 
 def node_topology(faces: np.ndarray, vfirst: np.ndarray, ffirst: np.ndarray) -> dict[str, np.ndarray]:

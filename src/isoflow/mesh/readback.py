@@ -27,7 +27,10 @@ caller says so.
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -180,13 +183,45 @@ def expected_figures(euler: int, genus: int, voxels: int, spacing, slack: float 
     >>> expected_figures(2, 0, 8, (0.5, 0.5, 2.0))["volume"]
     4.0
     """
+    return expected_figures_each([euler], [genus], [voxels], spacing, [slack])[0]
+
+
+def expected_figures_each(euler: list[int], genus: list[int], voxels: list[int], spacing,
+                          slack: list[float] | None = None) -> list[dict]:
+    """:func:`expected_figures` of many objects of one voxel size (a
+    label image's), the voxel's volume and unit found once for all of
+    them: found per object, NumPy's calls for them outweigh the rest of
+    each object's figures.
+
+    Parameters
+    ----------
+    euler, genus, voxels : list of int
+        Per object: its surface's Euler characteristic, its total genus,
+        its voxels.
+    spacing : array_like
+        The voxel size per axis, the same for every object.
+    slack : list of float, optional
+        Per object, how far its volume may differ, in world units cubed;
+        none by default.
+
+    Returns
+    -------
+    list of dict
+        Per object, what :func:`expected_figures` gives.
+
+    Examples
+    --------
+    >>> [f["volume"] for f in expected_figures_each([2, 0], [0, 1], [8, 20], (0.5, 0.5, 2.0))]
+    [4.0, 10.0]
+    """
     spacing = np.asarray(spacing, np.float64)
     unit = unit_of(spacing)
     with np.errstate(over="ignore", under="ignore"):
-        volume = float(voxels) * float(np.prod(spacing))
-    return {"watertight": True, "euler_number": int(euler), "genus": int(genus), "volume": volume,
-            "volume_units": float(voxels) * float(np.prod(spacing / unit)),
-            "slack_units": float(slack / unit ** 3) if slack else 0.0}
+        voxel, voxel_units = float(np.prod(spacing)), float(np.prod(spacing / unit))
+    slack = [0.0] * len(voxels) if slack is None else slack
+    return [{"watertight": True, "euler_number": int(e), "genus": int(g), "volume": float(n) * voxel,
+             "volume_units": float(n) * voxel_units, "slack_units": float(s / unit ** 3) if s else 0.0}
+            for e, g, n, s in zip(euler, genus, voxels, slack)]
 
 
 def trimesh_figures(path, weld: bool = False, unit: float = 1.0, area: bool = False) -> dict:
@@ -420,7 +455,7 @@ def check_scene_figures(path, expected: list, progress=None) -> list[str]:
     in (:func:`unit_of`)."""
     path = Path(path)
     try:
-        nodes = scene_nodes(staged(path))
+        nodes = scene_nodes(staged(path), as_read=True)
     except Exception as exc:
         return [f"{path}: trimesh cannot read it ({type(exc).__name__}: {exc})"]
     problems, found, placed = [], [], []
@@ -446,7 +481,7 @@ def check_scene_figures(path, expected: list, progress=None) -> list[str]:
     return problems
 
 
-def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def scene_nodes(path: str | os.PathLike, as_read: bool = False) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Every node of a binary glTF that holds a mesh, as trimesh's glTF
     reader parses it. The reader's arrays are taken as they are, without
     the mesh object per node that ``trimesh.load`` builds (most of a
@@ -459,12 +494,19 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
     ----------
     path : str or os.PathLike
         A ``.glb`` file.
+    as_read : bool
+        Give the arrays in the reader's types (the file's float32
+        positions, its 16- or 32-bit indices), for a caller that casts
+        many nodes' at once (:func:`union_figures`) rather than paying a
+        NumPy call per node for each cast.
 
     Returns
     -------
     dict
         ``name -> (vertices, triangles)``: float64 vertices placed by the
-        node's transform and those of the nodes above it, int64 triangles.
+        node's transform and those of the nodes above it, int64 triangles
+        of three columns; with ``as_read``, the vertices of a node that
+        no transform moves and the triangles as the reader gives them.
 
     Examples
     --------
@@ -478,6 +520,41 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
     >>> vertices.mean(axis=0).tolist(), triangles.shape
     ([5.0, 0.0, 0.0], (12, 3))
     """
+    # the parse makes containers by the hundred thousand (the JSON's
+    # accessors, trimesh's per node) that live until it is done and are
+    # freed by their counts; the collector, run each few hundred new
+    # containers, would walk all of them again and again
+    with collector_paused():
+        return _scene_nodes(path, as_read)
+
+
+@contextlib.contextmanager
+def collector_paused() -> Iterator[None]:
+    """Python's cyclic garbage collector paused for the block, and
+    resumed after it where it ran before (a caller that had paused it
+    keeps it paused): for work that makes many containers that are freed
+    by their counts, none in a cycle.
+
+    Examples
+    --------
+    >>> import gc
+    >>> with collector_paused():
+    ...     gc.isenabled()
+    False
+    >>> gc.isenabled()
+    True
+    """
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+
+
+def _scene_nodes(path: str | os.PathLike, as_read: bool) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """:func:`scene_nodes`, the collector as the caller has it."""
     from trimesh.exchange.gltf import load_glb
 
     from .glb_geometry import geometry_glb
@@ -507,11 +584,13 @@ def scene_nodes(path: str | os.PathLike) -> dict[str, tuple[np.ndarray, np.ndarr
         if "geometry" not in edge:
             continue
         geometry = read["geometry"][edge["geometry"]]
-        vertices = np.asarray(geometry["vertices"], np.float64)
+        vertices, triangles = geometry["vertices"], geometry["faces"]
         transform = placement(frame)
         if transform is not None and not np.array_equal(transform, np.eye(4)):
-            vertices = vertices @ transform[:3, :3].T + transform[:3, 3]
-        nodes[frame] = (vertices, np.asarray(geometry["faces"], np.int64).reshape(-1, 3))
+            vertices = np.asarray(vertices, np.float64) @ transform[:3, :3].T + transform[:3, 3]
+        elif not as_read:
+            vertices = np.asarray(vertices, np.float64)
+        nodes[frame] = (vertices, triangles if as_read else np.asarray(triangles, np.int64).reshape(-1, 3))
     return nodes
 
 
@@ -547,14 +626,21 @@ def union_figures(placed: list) -> list[dict]:
 
     from .node_topology import node_topology, node_volumes
 
+    # the nodes' arrays cast and renumbered together, in a few numpy calls
+    # whatever their number: a scene of thousands of small nodes would
+    # otherwise pay a call per node for each
+    triangles = [np.reshape(f, (-1, 3)) for _, f, _ in placed]
     counts = np.array([len(v) for v, _, _ in placed], np.int64)
-    sizes = np.array([len(f) for _, f, _ in placed], np.int64)
+    sizes = np.array([len(f) for f in triangles], np.int64)
     vfirst, ffirst = np.concatenate([[0], np.cumsum(counts)]), np.concatenate([[0], np.cumsum(sizes)])
-    faces = np.concatenate([np.asarray(f, np.int64).reshape(-1, 3) + at for (_, f, _), at in zip(placed, vfirst)])
+    faces = np.concatenate(triangles, dtype=np.int64)
+    faces += np.repeat(vfirst[:-1], sizes)[:, None]
     topology = node_topology(faces, vfirst, ffirst)
     units = np.array([unit for _, _, unit in placed], np.float64)
-    volume_units = node_volumes(np.concatenate([v for v, _, _ in placed]), faces, vfirst, ffirst, units)
-    closed, euler, bodies = topology["closed"], topology["euler"], topology["bodies"]
-    return [figures(bool(closed[t]), int(euler[t]), int(bodies[t]), volume_units[t], units[t]) if bodies[t] >= 0
+    volume_units = node_volumes(np.concatenate([v for v, _, _ in placed], dtype=np.float64), faces, vfirst, ffirst,
+                                units)
+    closed, euler, bodies = topology["closed"].tolist(), topology["euler"].tolist(), topology["bodies"].tolist()
+    volume_units, unit_list = volume_units.tolist(), units.tolist()
+    return [figures(closed[t], euler[t], bodies[t], volume_units[t], unit_list[t]) if bodies[t] >= 0
             else mesh_figures(trimesh.Trimesh(v, f, process=False), unit)
             for t, (v, f, unit) in enumerate(placed)]
