@@ -67,6 +67,23 @@ def test_a_triangle_naming_another_nodes_vertex_is_not_closed():
     assert volumes[0] == pytest.approx(1 / 6) and np.isnan(volumes[1])
 
 
+def test_a_triangle_naming_a_vertex_far_below_its_node_writes_nothing_outside_the_scratch():
+    """A corner before the node's first vertex, met as the second end of an
+    edge, is refused before it indexes the scratch: the pass as Python runs
+    it (whose indexing raises where the compiled pass would write outside
+    the array) gives the node as not closed, as trimesh's check would."""
+    from isoflow.mesh.node_topology import _node
+
+    tet = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    faces = np.concatenate([tet, tet + 4, tet + 8])
+    faces[8, 1] = 0  # the third node's triangle on the first node's vertex 0, eight below its own
+    scratch = (np.empty(5, np.int64), np.empty(12, np.int64), np.full(8, -1, np.int64), np.empty(4, np.int64),
+               np.empty(4, np.bool_))
+    start, keys, mark, parent, used = scratch
+    assert _node.py_func(faces, 8, 4, 8, 12, start, keys, mark, parent, used) == (False, -1, -1, -1)
+    assert node_topology(faces, np.array([0, 4, 8, 12]), np.array([0, 4, 8, 12]))["bodies"].tolist() == [1, 1, -1]
+
+
 @pytest.mark.parametrize("nested", [False, True])
 def test_scene_nodes_placed_as_trimesh_places_them(tmp_path, nested):
     scene = trimesh.Scene()

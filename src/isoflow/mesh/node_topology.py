@@ -57,7 +57,9 @@ def _node(faces, v0, nv, f0, f1, start, keys, mark, parent, used):
     for f in range(f0, f1):
         for c in range(3):
             a, b = faces[f, c] - v0, faces[f, (c + 1) % 3] - v0
-            if a < 0 or a >= nv:
+            # both ends checked before either is an index: b is this face's next
+            # corner, checked as a on the next turn, but indexes start first
+            if a < 0 or a >= nv or b < 0 or b >= nv:
                 return False, -1, -1, -1
             start[min(a, b) + 1] += 1
             used[a] = True
