@@ -333,16 +333,23 @@ def _check_record_fits(shape: tuple[int, int, int], thick: int, workers: int, sc
     elif fit >= 1:
         hint = f"it fits {fit} at a time ({_workers_words(fit)})"
     else:
-        def widest(n: int) -> int:  # the side of the square cross-section whose report fits n at a time, or 0
-            side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], s, s), 1, n, scheduler)[0] <= budget)
-            return side if _record_need((shape[0], side, side), 1, n, scheduler)[0] <= budget else 0
+        def crop(s: int) -> tuple[int, int]:  # a square of side s, within the cross-section there is
+            return min(s, ny), min(s, nz)
+
+        def widest(n: int) -> int:  # the side of the square crop whose report fits n at a time, or 0
+            side = _thickest(max(ny, nz), lambda s: _record_need((shape[0], *crop(s)), 1, n, scheduler)[0] <= budget)
+            return side if _record_need((shape[0], *crop(side)), 1, n, scheduler)[0] <= budget else 0
+
+        def words(s: int) -> str:  # a narrow cross-section is cropped along its long side alone
+            return " x ".join(map(str, crop(s)))
 
         side, alone = widest(workers), widest(1) if _at_once(workers, scheduler) > 1 else 0
         # one thread holds a wider cross-section, which the line names (never the whole one: this
         # branch is where one block's report does not fit it)
+        wider = alone > side and crop(alone) != crop(side)
         hint = (f"it holds the faces of a whole cross-section of {ny} x {nz} voxels: crop the volume across x"
-                + (f" to {side} x {side} voxels or less" if side else "")
-                + (f"{', or' if side else ' to'} {alone} x {alone} at {_workers_words(1)}" if alone > side else ""))
+                + (f" to {words(side)} voxels or less" if side else "")
+                + (f"{', or' if side else ' to'} {words(alone)} at {_workers_words(1)}" if wider else ""))
     threads = _at_once(workers, scheduler)
     what = (f"{where + ': ' if where else ''}the report of each step (its store summed in blocks of "
             f"{' x '.join(map(str, sides))} voxels, {threads} at a time)")
