@@ -33,6 +33,13 @@ def placement_words(origin, spacing) -> str:
     return f"origin {listed(origin)}, voxel size {listed(spacing)}"
 
 
+def _per_axis(origin, spacing, shape: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+    """``origin`` and ``spacing`` as float64 arrays of one value per axis
+    of ``shape`` (a scalar voxel size is the same along every axis)."""
+    return (np.broadcast_to(np.asarray(origin, np.float64), (len(shape),)),
+            np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),)))
+
+
 def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     """Per axis, whether two voxel corners next to each other along it,
     ``origin + spacing * i`` for ``i`` from 0 to the shape (as
@@ -58,8 +65,7 @@ def merged_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     >>> merged_axes((1e6, 0.0), 1e-9, (6, 6))
     [False, False]
     """
-    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin, spacing = _per_axis(origin, spacing, shape)
     merged = []
     for o, s, n in zip(origin.tolist(), spacing.tolist(), shape):
         with np.errstate(over="ignore", invalid="ignore"):
@@ -88,8 +94,7 @@ def beyond_float64_axes(origin, spacing, shape: Sequence[int]) -> list[bool]:
     >>> beyond_float64_axes((1e307, -1e307), 1e306, (6, 6))
     [False, False]
     """
-    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin, spacing = _per_axis(origin, spacing, shape)
     with np.errstate(over="ignore", invalid="ignore"):
         # the corners are monotone along an axis: its two ends are the farthest
         return [not (np.isfinite(o + s * int(n)) and np.isfinite(o)) for o, s, n in zip(origin.tolist(), spacing.tolist(), shape)]
@@ -120,8 +125,7 @@ def beyond_axes_reasons(origin, spacing, shape: Sequence[int]) -> str | None:
     from decimal import Decimal
 
     beyond = beyond_float64_axes(origin, spacing, shape)
-    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin, spacing = _per_axis(origin, spacing, shape)
     clauses = []
     for axis in (a for a, b in enumerate(beyond) if b):
         o, s = Decimal(float(origin[axis])), Decimal(float(spacing[axis]))
@@ -161,8 +165,7 @@ def lost_axes_reasons(origin, spacing, shape: Sequence[int], merged: Sequence[bo
     True
     """
     merged = merged_axes(origin, spacing, shape) if merged is None else merged
-    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin, spacing = _per_axis(origin, spacing, shape)
     clauses = []
     for axis in (a for a, m in enumerate(merged) if m):
         # each axis' own farthest corner from 0, where float64's values are sparsest along it
@@ -193,8 +196,7 @@ def unheld_line(what: str, origin, spacing, shape: Sequence[int], unknown: str =
     reasons = lost_axes_reasons(origin, spacing, shape, merged)
     if reasons is None:
         return None
-    origin = np.broadcast_to(np.asarray(origin, np.float64), (len(shape),))
-    spacing = np.broadcast_to(np.asarray(spacing, np.float64), (len(shape),))
+    origin, spacing = _per_axis(origin, spacing, shape)
     return (f"{what} cannot be held in float64 at this placement ({placement_words(origin, spacing)}): {reasons}; "
             f"the coordinates along {'it' if sum(map(bool, merged)) == 1 else 'them'} are unknown ({unknown}), the "
             "other values do not depend on the placement; place the object nearer the origin (subtract its origin) "
