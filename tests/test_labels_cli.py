@@ -1777,3 +1777,102 @@ def test_an_image_without_voxels_gets_the_empty_table_as_label_table_does(tmp_pa
     fails(capsys, "info", none, "--labels=3", words=("none of the labels asked for occur (3)", "has no voxels"))
     fails(capsys, "surface", none, "--labels", "-o", f"{tmp_path}/s/", "--suffix", "ply",
           words=("none.npy: the image has no voxels (shape 0x3x3)",))
+
+
+#: ``python -c`` code running the command line with trimesh's import
+#: watched: which thread begins it (a line on stderr), and, where
+#: ``sys.argv[1]`` is not 0, the import held up that many seconds halfway
+#: (``trimesh`` half made, ``trimesh.util`` about to run) on a thread other
+#: than the main one, the hold marked by the file ``sys.argv[2]`` (held in
+#: the module's run, not in the finder, which runs under the lock every
+#: import takes)
+WATCHED_TRIMESH = """\
+import importlib.machinery, sys, threading, time
+from pathlib import Path
+
+slow, marker = float(sys.argv[1]), Path(sys.argv[2])
+
+class Held:
+    def __init__(self, loader):
+        self.loader = loader
+
+    def create_module(self, spec):
+        return self.loader.create_module(spec)
+
+    def exec_module(self, module):
+        marker.touch()
+        time.sleep(slow)
+        self.loader.exec_module(module)
+
+class Watch:
+    def find_spec(self, name, path=None, target=None):
+        main = threading.current_thread() is threading.main_thread()
+        if name == "trimesh":
+            print("trimesh imported on the", "main thread" if main else "other thread", file=sys.stderr, flush=True)
+        if name == "trimesh.util" and slow and not main:
+            spec = importlib.machinery.PathFinder.find_spec(name, path, target)
+            spec.loader = Held(spec.loader)
+            return spec
+        return None
+
+sys.meta_path.insert(0, Watch())
+from isoflow.cli import main
+sys.exit(main(sys.argv[3:]))
+"""
+
+
+def watched(tmp_path, *args, slow=0.0):
+    """A command run under :data:`WATCHED_TRIMESH`, its output read when it ends."""
+    return subprocess.run([sys.executable, "-c", WATCHED_TRIMESH, str(slow), str(tmp_path / "held"), *map(str, args)],
+                          capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("target", ["glb", "dir"])
+def test_surface_labels_imports_trimesh_while_the_labels_are_meshed(tmp_path, segmentation, target):
+    """trimesh, for the read-back, is imported on a thread of its own as
+    the labels are meshed, not on the main thread after they are written
+    (a share of the command's time); with --no-check it is not imported;
+    and the read-back, held up until the import is whole, still reads every
+    label's surface back (a package half made on the other thread would
+    fail the main thread's ``from trimesh.exchange.gltf import``)."""
+    np.save(tmp_path / "seg.npy", segmentation)
+    labels = np.unique(segmentation[segmentation > 0]).size  # NumPy's count
+    out = ["-o", tmp_path / "seg.glb"] if target == "glb" else ["-o", f"{tmp_path}/seg/", "--suffix", ".obj"]
+    for slow in (0.0, 2.0):
+        p = watched(tmp_path, "surface", tmp_path / "seg.npy", "--labels", *out, "--force", slow=slow)
+        assert p.returncode == 0, p.stderr
+        assert p.stderr.splitlines() == ["trimesh imported on the other thread"]
+        assert f"{labels} labels" in p.stdout and "each read back by trimesh as isoflow counts it" in p.stdout
+    assert (tmp_path / "held").exists()  # the held-up import was the other thread's
+    p = watched(tmp_path, "surface", tmp_path / "seg.npy", "--labels", *out, "--force", "--no-check")
+    assert (p.returncode, p.stderr) == (0, "")
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+def test_a_signal_while_the_read_back_waits_for_trimesh_ends_the_command(tmp_path, segmentation):
+    """SIGTERM while the read-back waits for trimesh's import on the other
+    thread (held up for minutes here) ends the command at once as any
+    signal during the read-back does (128 + 15, the file named as written,
+    not read back): the wait is interrupted, and the importing thread does
+    not hold up the exit."""
+    import signal
+    import time
+
+    np.save(tmp_path / "seg.npy", segmentation)
+    glb = tmp_path / "seg.glb"
+    proc = subprocess.Popen([sys.executable, "-c", WATCHED_TRIMESH, "600", str(tmp_path / "held"), "surface",
+                             str(tmp_path / "seg.npy"), "--labels", "-o", str(glb)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        for _ in range(1200):  # the import held up, and the file in place (the main thread then waits)
+            if (tmp_path / "held").exists() and glb.exists() or proc.poll() is not None:
+                break
+            time.sleep(0.05)
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGTERM)
+        out, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert err.splitlines()[-1] == f"isoflow: terminated: {glb} is written, not read back (--no-check skips the read-back)"
+    assert trimesh.load(glb).geometry  # the whole file, as written

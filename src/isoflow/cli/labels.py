@@ -11,6 +11,7 @@ import json
 import os
 import re
 import sys
+import threading
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -893,6 +894,7 @@ def surface_labels(args: argparse.Namespace, target) -> int:
     from ..mesh.export import float32_transform_problem, float64_move_note
     from ..mesh.float32 import float64_moved
     from ..mesh.outputs import check_output_path
+    from .imports_ahead import import_ahead
     from .progress import TimeNote, progress_bar
 
     about, conn, table, image, _ = read_table(args)
@@ -913,6 +915,8 @@ def surface_labels(args: argparse.Namespace, target) -> int:
         # one count: each label meshed, then each written (a file each) or read back
         total = len(names) * (2 if target[0] == "dir" or not args.no_check else 1)
         report = None if show is None else (lambda done, _: show(len(names) + done, total))
+        # trimesh, for the read-back, imported while the labels are meshed
+        ahead = None if args.no_check else import_ahead("trimesh")
         meshed = 0
         for batch in label_batches(image.array, table["label"], lo, hi, conn):
             meshed += len(batch.rows)
@@ -925,7 +929,7 @@ def surface_labels(args: argparse.Namespace, target) -> int:
         beyond = float32_transform_problem(image.spacing, image.array.shape, image.origin)
         if isinstance(show, TimeNote):  # the writing (or the read-back) paces the rest, from its first label on
             show.phase()
-        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond)
+        problems, faces = write_label_surfaces(args, target, meshes, glb_parts, report, expected, beyond, ahead)
     where = target[1] if target[0] == "glb" else f"{target[1]}/ ({counted(len(meshes), target[2] + ' file')})"
     print(terminal_text(f"{where}: {counted(len(meshes), 'label')}, {faces}, one closed surface mesh per label"
                         + ("" if args.no_check else ", each read back by trimesh as isoflow counts it" if not problems else "")))
@@ -1138,7 +1142,8 @@ def _asked_among(values: list[int], asked: np.ndarray) -> list[bool]:
 
 
 def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_parts: list,
-                         progress=None, expected: list | None = None, beyond: str | None = None) -> tuple[list[str], str]:
+                         progress=None, expected: list | None = None, beyond: str | None = None,
+                         ahead: threading.Thread | None = None) -> tuple[list[str], str]:
     """Write every label's surface (a glTF node each, in the labels'
     order, from the batches' parts in ``glb_parts``, and read back against
     ``expected``, :func:`scene_expected`; or a file each, read back
@@ -1147,7 +1152,10 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
     the problems found and the faces written in words (``18944 faces
     (triangles)``: as the files hold them, as surface says of one).
     ``beyond``: what of the image's placement a GLB node's transform
-    cannot hold in float32, said in the note on the transforms."""
+    cannot hold in float32, said in the note on the transforms.
+    ``ahead``: the thread importing trimesh
+    (:func:`isoflow.cli.imports_ahead.import_ahead`), joined before
+    trimesh is first used."""
     from ..mesh import export
     from ..mesh.readback import check_scene_figures, check_surface_file
     from .progress import reading_back
@@ -1165,9 +1173,13 @@ def write_label_surfaces(args: argparse.Namespace, target, meshes: list, glb_par
             print(terminal_text(f"isoflow surface: note: {note}"), file=sys.stderr)
         glb_parts.clear()  # written: let the columns go before trimesh reads the file back
         with reading_back(target[1]):
+            if ahead is not None:  # (the file is in place: a signal during the wait says so)
+                ahead.join()
             return ([] if expected is None else check_scene_figures(target[1], expected, progress)), faces
     from ..mesh.outputs import output_set
 
+    if ahead is not None:  # each file is read back as soon as it is written (and an STL is written by trimesh)
+        ahead.join()
     problems = []
     count, kinds = 0, {}  # faces written, of each kind (a label with edge midpoints: triangles in PLY)
     welds = {}  # label file -> the contacts STL cannot keep apart
