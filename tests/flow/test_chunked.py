@@ -369,6 +369,29 @@ def test_command_on_a_label_image_names_the_way_to_one_label(tmp_path, capsys):
     assert json.loads(capsys.readouterr().out)["steps"][0]["voxels"] == np.count_nonzero(v == 2) == 30
 
 
+@pytest.mark.parametrize("dtype", [np.uint8, np.float32])
+def test_command_on_a_mask_of_one_value_names_the_flow_in_memory_without_an_option(tmp_path, capsys, dtype):
+    """A 0/255 mask flowed block by block was refused with "select one
+    label with --label 255 in the flow in memory", but the flow in memory
+    reads a store of 0 and 255 alone as its mask with no option; the line
+    now says so (and keeps --label 255 for a label image), and the flow in
+    memory it names flows the mask as the 0/1 store of the same voxels."""
+    v = crossing_volume()[:8, :8, :8]
+    store = tmp_path / "mask.zarr"
+    plain_store(store, (v * 255).astype(dtype), (4, 8, 8))
+    assert main(["flow", str(store), "--out", str(tmp_path / "run"), "--volumes", ".zarr"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].endswith(
+        "or flow it in memory (without --volumes .zarr), which reads a store of 0 and 255 alone as its mask (and "
+        "--label 255 there selects 255 of a label image), or write its voxels as a store of their own"), err
+    plain_store(tmp_path / "ones.zarr", v.astype(np.uint8), (4, 8, 8))
+    flows = []
+    for name in ("mask.zarr", "ones.zarr"):
+        assert main(["flow", str(tmp_path / name), "--steps", "2", "--json"]) == 0
+        flows.append([step["voxels"] for step in json.loads(capsys.readouterr().out)["steps"]])
+    assert flows[0] == flows[1] and flows[0][0] == np.count_nonzero(v)
+
+
 def test_help_names_the_flow_block_by_block(capsys):
     """``flow --help`` said nothing of the flow of a store block by block:
     its --volumes and --out read as if every run wrote surfaces and

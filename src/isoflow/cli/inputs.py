@@ -12,7 +12,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import IsoflowError, IsoflowWarning, terminal_text
+from ..errors import IsoflowError, IsoflowWarning, number_text, terminal_text
 from .progress import progress_bar
 
 if TYPE_CHECKING:
@@ -517,6 +517,11 @@ def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:
 #: takes no --label, so the way to one label is the flow in memory
 BLOCK_LABEL = (", or select one label with --label N in the flow in memory (without --volumes .zarr), or write "
                "its voxels as a store of their own")
+#: the same for a block of 0 and one other value V: the flow in memory reads
+#: a store of 0 and V alone as its mask, with no option (--label V there
+#: selects V where other labels lie in blocks not read yet)
+BLOCK_MASK = (", or flow it in memory (without --volumes .zarr), which reads a store of 0 and {v} alone as its mask "
+              "(and --label {v} there selects {v} of a label image), or write its voxels as a store of their own")
 
 
 @contextlib.contextmanager
@@ -527,7 +532,7 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
     not flow, which flows one object; surface's writes a surface per label;
     a 2D image is no surface's, whatever its labels); ``block_wise``: the
     flow of a store block by block, which takes neither
-    (:data:`BLOCK_LABEL`)."""
+    (:data:`BLOCK_LABEL`, :data:`BLOCK_MASK`)."""
     from ..scale.arrays import NotBinary
 
     try:
@@ -535,10 +540,7 @@ def label_options(args: argparse.Namespace, block_wise: bool = False) -> Iterato
     except NotBinary as exc:
         if block_wise:
             # a probability map has no label to select
-            from ..mesh.volumes import label_option
-
-            # (a 0/255 mask: --label 255)
-            label = BLOCK_LABEL.replace("--label N", label_option(exc.value).split(" (")[0], 1)
+            label = BLOCK_LABEL if exc.value is None else BLOCK_MASK.format(v=number_text(exc.value))
             raise NotBinary(exc.bare + ("" if exc.kind == "fractions" else label), bare=exc.bare, every=False,
                             kind=exc.kind, value=exc.value) from None
         from ..mesh.volumes import with_label_options  # (imported where needed: a command's work is not held up)
