@@ -89,3 +89,22 @@ def test_a_closed_standard_output_is_one_line(inputs, argv):
     assert done.returncode == 2, done.stderr
     assert done.stderr == (f"isoflow {argv[0]}: error: standard output: cannot be written "
                            f"({os.strerror(errno.EBADF)})\n")
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("argv", [[], ["--version"], ["-h"], ["info", "-h"]], ids=lambda a: " ".join(a) or "alone")
+def test_what_is_printed_before_a_command_runs_fails_as_a_command_does(tmp_path, argv):
+    """``isoflow`` alone and ``--version`` ended in a traceback (exit
+    status 1) where standard output could not take them, and ``-h``, whose
+    failure argparse drops, in exit status 0 with the help lost."""
+    prog = " ".join(["isoflow", *argv[:1]]) if argv[:1] == ["info"] else "isoflow"
+    with open("/dev/full", "w") as full:
+        done = isoflow(tmp_path, argv, full)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr == f"{prog}: error: standard output: cannot be written ({os.strerror(errno.ENOSPC)})\n"
+    env = {**os.environ, "PYTHONPATH": SRC}
+    line = " ".join(map(shlex.quote, [sys.executable, "-m", "isoflow", *argv]))
+    closed = subprocess.run(["/bin/sh", "-c", f"exec {line} >&-"], cwd=tmp_path, env=env, capture_output=True,
+                            text=True, timeout=300)
+    assert closed.returncode == 2, closed.stderr
+    assert closed.stderr == f"{prog}: error: standard output: cannot be written ({os.strerror(errno.EBADF)})\n"

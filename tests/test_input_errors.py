@@ -1077,6 +1077,35 @@ def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, comman
     assert not (tmp_path / "OUT.npy").exists()
 
 
+@pytest.mark.parametrize("suffix", [".obj", ".ply"])
+@pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"],
+                                     ["voxelize", "--split", "--resolution", "8", "-o", "OUT.npy"]])
+def test_a_wireframe_is_named_a_wireframe_not_a_point_cloud(tmp_path, capsys, suffix, command):
+    """A model's edges saved without its faces (OBJ ``l`` lines, a PLY
+    ``edge`` element) was called a point cloud and sent to a surface
+    reconstruction; it is named by its points and lines (a cube's 8 corners
+    and the 18 edges trimesh counts on its triangles), as a glTF of lines
+    is, exit 2, nothing written."""
+    cube = trimesh.creation.box()
+    edges = cube.edges_unique
+    assert (len(cube.vertices), len(edges)) == (8, 18)
+    wire = tmp_path / f"cage{suffix}"
+    if suffix == ".obj":
+        wire.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in cube.vertices)
+                        + "".join(f"l {a + 1} {b + 1}\n" for a, b in edges))
+    else:
+        wire.write_text("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                        "property float z\nelement edge 18\nproperty int vertex1\nproperty int vertex2\n"
+                        "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in cube.vertices)
+                        + "".join(f"{a} {b}\n" for a, b in edges))
+    args = [str(tmp_path / a) if a == "OUT.npy" else a for a in command]
+    assert main([args[0], str(wire), *args[1:]]) == 2
+    err = capsys.readouterr().err
+    assert "holds 8 points joined by 18 lines and no faces, a wireframe, not a surface" in err, err
+    assert "point cloud" not in err and len(err.splitlines()) == 1
+    assert not (tmp_path / "OUT.npy").exists()
+
+
 @pytest.mark.parametrize("command", ["info", "surface", "flow"])
 def test_a_probability_map_is_offered_a_threshold_not_a_label(tmp_path, capsys, command):
     """A probability map refused as a mask was offered ``--label N``, which

@@ -59,7 +59,33 @@ def command_list(parser: argparse.ArgumentParser) -> str:
     return "\n".join(lines)
 
 
-class CommandParser(argparse.ArgumentParser):
+class StdoutParser(argparse.ArgumentParser):
+    """A parser whose help (``-h``) fails as the commands' output does.
+
+    argparse drops an error writing its help and still ends with exit
+    status 0, so ``isoflow info -h > /dev/full`` lost the help without a
+    word; written to standard output here, the failure reaches
+    :func:`main`, which names standard output in one line (exit status 2).
+    Its messages to stderr are written as argparse writes them.
+
+    Examples
+    --------
+    >>> import contextlib, io
+    >>> out = io.StringIO()
+    >>> with contextlib.redirect_stdout(out):
+    ...     StdoutParser(prog="tool").print_help()
+    >>> out.getvalue().splitlines()[0]
+    'usage: tool [-h]'
+    """
+
+    def _print_message(self, message, file=None):
+        if message and file is not None and file is sys.stdout:
+            file.write(message)
+            return
+        super()._print_message(message, file)
+
+
+class CommandParser(StdoutParser):
     """A command's parser. A bad value of an option (argparse's
     ``argument --resolution: ...``: a type, a choice, options that exclude
     each other) is one line on stderr and exit status 2, as every other bad
@@ -171,7 +197,7 @@ QUIET_HELP = ("no progress bars or notes on stderr (errors, and warnings that th
 def build_parser() -> argparse.ArgumentParser:
     """The ``isoflow`` parser with every command's options (the docs' command
     line page is generated from it)."""
-    parser = argparse.ArgumentParser(
+    parser = StdoutParser(
         prog="isoflow",
         description="Digital curvature, Euler characteristic, genus and curvature flow of voxel objects (Imiya 2013).",
         allow_abbrev=False,
@@ -574,6 +600,77 @@ def stdout_named() -> Iterator[None]:
             stream.reconfigure(errors=errors)
 
 
+class SparedStderr:
+    """Standard error whose write failures are dropped, and which drops
+    what it is given where the process started without one.
+
+    A note, a warning or an error line that stderr cannot take (a full
+    disk or quota under ``2> log``, a descriptor closed by ``2>&-``) is
+    lost; raised where it was printed, it ended a command that had nothing
+    wrong with its input or its result in a traceback, exit status 1 and
+    no output (the report comes after a note). Where Python has no stderr
+    at all (``sys.stderr`` None), ``print(file=sys.stderr)`` writes to
+    standard output, into a ``--json`` report: that is dropped too.
+
+    Examples
+    --------
+    >>> import io
+    >>> class Full(io.StringIO):
+    ...     def write(self, text):
+    ...         raise OSError(28, "No space left on device")
+    >>> SparedStderr(Full()).write("a note"), SparedStderr(None).write("a note"), SparedStderr(None).isatty()
+    (6, 6, False)
+    """
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        if self.stream is None:
+            return len(text)
+        try:
+            return self.stream.write(text)
+        except OSError:
+            self.lost()
+            return len(text)
+
+    def flush(self) -> None:
+        if self.stream is None:
+            return
+        try:
+            self.stream.flush()
+        except OSError:
+            self.lost()
+
+    def isatty(self) -> bool:
+        return self.stream is not None and self.stream.isatty()
+
+    def lost(self) -> None:
+        """Point the stream's descriptor at the null device: what the
+        stream still buffers would fail again as the interpreter exits."""
+        import os
+
+        with contextlib.suppress(OSError, ValueError, AttributeError):  # a stand-in without a descriptor
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self.stream.fileno())
+            os.close(null)
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
+@contextlib.contextmanager
+def stderr_spared() -> Iterator[None]:
+    """Run with :class:`SparedStderr` in place of ``sys.stderr``, put back
+    afterwards (for callers of :func:`main` in-process)."""
+    stream = sys.stderr
+    sys.stderr = SparedStderr(stream)
+    try:
+        yield
+    finally:
+        sys.stderr = stream
+
+
 def drop_stdout() -> None:
     """Point standard output at the null device: what it still buffers
     would fail again as the interpreter exits, with a second message."""
@@ -583,24 +680,73 @@ def drop_stdout() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
+def parse_command_line(parser: argparse.ArgumentParser,
+                       argv: list[str] | None) -> tuple[argparse.Namespace, list[str]] | int:
+    """``parser.parse_known_args(argv)``, or the exit status where the
+    command line is answered before any command runs: ``isoflow`` alone
+    lists the commands (0), and what ``isoflow``, ``-h`` or ``--version``
+    print that standard output cannot take (a full disk, ``>&-``) is one
+    line naming standard output (2), as a command's output is, not a
+    traceback nor a silent exit status 0. ``-h`` and ``--version`` end in
+    SystemExit(0), as argparse ends them, once what they printed is
+    flushed (block-buffered output fails only then).
+
+    Examples
+    --------
+    >>> parser = build_parser()
+    >>> args, extra = parse_command_line(parser, ["info", "x.npy", "--json"])
+    >>> args.command, args.input, extra
+    ('info', 'x.npy', [])
+    """
+    words = sys.argv[1:] if argv is None else argv
+    named = next((word for word in words if word in parser.commands), None)  # type: ignore[attr-defined]
+    try:
+        with stdout_named():
+            try:
+                args, extra = parser.parse_known_args(argv)
+            except SystemExit as done:
+                if not done.code:
+                    sys.stdout.flush()
+                raise
+            if args.command is None and not extra:  # `isoflow` alone: what it can do, not an error
+                print(command_list(parser))
+                return 0
+    except BrokenPipeError:  # `isoflow -h | head`: not an error
+        drop_stdout()
+        return 0
+    except StdoutError as exc:
+        prog = "isoflow" if named is None else f"isoflow {named}"
+        print(f"{prog}: error: standard output: cannot be written ({exc.strerror})", file=sys.stderr)
+        drop_stdout()
+        return 2
+    return args, extra
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run one ``isoflow`` command line; returns its exit status (0 done,
     1 a written file did not read back as counted, 2 bad input, 128 + the
-    signal's number when interrupted)."""
+    signal's number when interrupted). What standard error cannot take is
+    dropped (:class:`SparedStderr`): the exit status is the command's."""
+    with stderr_spared():
+        return command_line(argv)
+
+
+def command_line(argv: list[str] | None) -> int:
+    """:func:`main` with standard error as :func:`stderr_spared` leaves it."""
     from ..mesh import outputs
     from ..mesh.outputs import SIGNALS
     from ..scale import compiled
     from ..scale.cancel import clear_stop
 
     parser = build_parser()
-    args, extra = parser.parse_known_args(argv)
+    parsed = parse_command_line(parser, argv)
+    if isinstance(parsed, int):
+        return parsed
+    args, extra = parsed
     if extra:  # the command's usage, not isoflow's, and the option meant where one is close
         command = parser.commands.get(args.command) if args.command else None  # type: ignore[attr-defined]
         refuse_negative_choice(command, args, extra)
         (command or parser).error(unrecognized(command or parser, extra))
-    if args.command is None:  # `isoflow` alone: what it can do, not an error
-        print(command_list(parser))
-        return 0
     args.parser = parser
     terminated = SIGNALS  # the signals received (what the writers look at before renaming)
     terminated.clear()

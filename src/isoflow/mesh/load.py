@@ -495,7 +495,56 @@ def _point_cloud_line(path: Path, vertices: np.ndarray) -> str | None:
     n = len(np.asarray(vertices).reshape(-1, 3)) if np.size(vertices) else _points_held(path)
     if not n:
         return None
-    return point_cloud_line(path, n)
+    lines = _lines_held(path)
+    return wireframe_line(path, n, lines) if lines else point_cloud_line(path, n)
+
+
+def wireframe_line(where: str | os.PathLike, points: int, lines: int) -> str:
+    """The line for a mesh input that holds ``points`` points joined by
+    ``lines`` lines (an OBJ's ``l`` elements, a PLY's ``edge`` element: a
+    model's wireframe or curves) and no face. Its lines bound no solid, and
+    no surface is reconstructed from them as from a scan's point cloud: the
+    model's faces are what to export, as for a glTF file of lines.
+
+    Parameters
+    ----------
+    where : str or os.PathLike
+        The file.
+    points : int
+        The points it holds.
+    lines : int
+        The lines joining them.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> print(wireframe_line("cage.obj", 8, 12))  # doctest: +ELLIPSIS
+    cage.obj: no triangles read: it holds 8 points joined by 12 lines and no faces, a wireframe, not a surface: ...
+    """
+    return (f"{where}: no triangles read: it holds {counted(points, 'point')} joined by {counted(lines, 'line')} "
+            "and no faces, a wireframe, not a surface: its lines bound no solid, and there is nothing to "
+            "voxelise; export the model's faces (a mesh of triangles), not its edges or curves")
+
+
+def _lines_held(path: Path) -> int:
+    """The lines of a file whose reader gave no face: an OBJ's ``l`` lines,
+    the rows of a PLY's ``edge`` element; 0 otherwise (and for a file that
+    cannot be read again: the point-cloud line is said then)."""
+    ext = path.suffix.lower()
+    try:
+        if ext == ".obj":
+            return len(re.findall(rb"^l\s", path.read_bytes(), flags=re.M))
+        if ext == ".ply":
+            from .ply import header_elements
+
+            parsed = header_elements(path.read_bytes(), str(path))
+            return 0 if parsed is None else sum(e.rows for e in parsed[2] if e.name == "edge")
+    except (OSError, IsoflowError):
+        return 0
+    return 0
 
 
 def point_cloud_line(where: str | os.PathLike, points: int) -> str:
