@@ -205,27 +205,63 @@ def with_tree(path, tree: dict) -> None:
     path.write_bytes(struct.pack("<4sIII4s", b"glTF", 2, 20 + len(text) + len(rest), len(text), b"JSON") + text + rest)
 
 
-def test_scene_read_back_gives_trimesh_the_geometry_accessors_alone(tmp_path, rng, monkeypatch):
+def other_reader(monkeypatch):
+    """trimesh's step from a parsed glTF to its meshes (its private
+    ``_read_buffers``) as a trimesh might have it that takes other
+    arguments: the read-back then gives the file to ``load_glb``."""
+    import trimesh.exchange.gltf as gltf
+
+    real = gltf._read_buffers
+    monkeypatch.setattr(gltf, "_read_buffers", lambda *args, **kwargs: real(*args, **kwargs))
+
+
+@pytest.mark.parametrize("reader", ["parsed", "load_glb"])
+def test_scene_read_back_gives_trimesh_the_geometry_accessors_alone(tmp_path, rng, monkeypatch, reader):
     """trimesh's glTF reader makes an array of every accessor, 8 a node in
     isoflow's scenes, and the read-back measures two: the reader is given
     those alone, and each node reads as trimesh reads it from the whole
-    file (its triangles, its positions placed by its transform)."""
+    file (its triangles, its positions placed by its transform). The JSON
+    is handed to trimesh's step after its parse as parsed, not written out
+    again for ``load_glb`` to parse (through ``load_glb`` where trimesh's
+    step takes other arguments), with the file's binary chunk as its
+    buffer; the positions' view without its stride, the row of every
+    position."""
     import trimesh.exchange.gltf as gltf
 
     parts, written = scene_parts(rng, 6)
     path = export.write_glb_scene(tmp_path / "s.glb", parts)
-    assert len(glb_tree(path.read_bytes())["accessors"]) == 8 * len(parts)
+    data = path.read_bytes()
+    tree = glb_tree(data)
+    assert len(tree["accessors"]) == 8 * len(parts)
+    chunk = data[20 + struct.unpack_from("<I", data, 12)[0] + 8:]
     scene = trimesh.load(path, force="scene", process=False)
-    given, real = [], gltf.load_glb
+    if reader == "load_glb":
+        other_reader(monkeypatch)
+    given, loaded, step, load = [], [], gltf._read_buffers, gltf.load_glb
 
-    def spy(fh, *args, **kwargs):
-        data = fh.read()
-        given.append(glb_tree(data))
-        return real(io.BytesIO(data), *args, **kwargs)
+    def spy_step(header, buffers, mesh_kwargs, resolver, **kwargs):
+        given.append((header, [bytes(b) for b in buffers]))
+        return step(header=header, buffers=buffers, mesh_kwargs=mesh_kwargs, resolver=resolver, **kwargs)
 
-    monkeypatch.setattr(gltf, "load_glb", spy)
+    def spy_load(fh, *args, **kwargs):
+        loaded.append(fh.read())
+        return load(io.BytesIO(loaded[-1]), *args, **kwargs)
+
+    monkeypatch.setattr(gltf, "load_glb", spy_load)
+    if reader == "parsed":
+        monkeypatch.setattr(gltf, "_read_buffers", spy_step)
     nodes = scene_nodes(path)
-    assert len(given) == 1 and len(given[0]["accessors"]) == 2 * len(parts)
+    if reader == "parsed":
+        assert loaded == [] and len(given) == 1 and given[0][1] == [chunk]
+        header = given[0][0]
+    else:
+        assert len(loaded) == 1 and loaded[0].endswith(chunk)
+        header = glb_tree(loaded[0])
+    assert len(header["accessors"]) == 2 * len(parts)
+    positions = {header["accessors"][m["primitives"][0]["attributes"]["POSITION"]]["bufferView"]
+                 for m in header["meshes"]}
+    assert len(positions) == 1 and "byteStride" not in header["bufferViews"][positions.pop()]
+    assert [v.get("byteStride") for v in tree["bufferViews"]].count(12) == 1  # the file's own: the positions'
     assert sorted(nodes) == sorted(scene.graph.nodes_geometry)
     for name, (vertices, triangles) in nodes.items():
         transform, geometry = scene.graph[name]
@@ -233,6 +269,34 @@ def test_scene_read_back_gives_trimesh_the_geometry_accessors_alone(tmp_path, rn
         np.testing.assert_allclose(vertices, trimesh.transform_points(scene.geometry[geometry].vertices, transform),
                                    rtol=1e-12, atol=0)
     assert check_scene_file(path, written) == []
+
+
+@pytest.mark.parametrize("reader", ["parsed", "load_glb"])
+def test_a_node_whose_triangles_the_file_holds_altered_is_refused(tmp_path, rng, monkeypatch, reader):
+    """One node's triangle turned over in the file's binary chunk, as
+    written: trimesh reads that node (and no other) as not consistently
+    wound, and the read-back names it, whichever way trimesh is given the
+    file."""
+    parts, written = scene_parts(rng, 5)
+    path = export.write_glb_scene(tmp_path / "s.glb", parts)
+    assert check_scene_file(path, written) == []
+    data = bytearray(path.read_bytes())
+    tree = glb_tree(bytes(data))
+    at = 20 + struct.unpack_from("<I", data, 12)[0] + 8  # the binary chunk
+    node = tree["nodes"][2]
+    indices = tree["accessors"][tree["meshes"][node["mesh"]]["primitives"][0]["indices"]]
+    size = COMPONENT_BYTES[indices["componentType"]]
+    first = at + tree["bufferViews"][indices["bufferView"]].get("byteOffset", 0) + indices.get("byteOffset", 0)
+    data[first:first + size], data[first + size:first + 2 * size] = (data[first + size:first + 2 * size],
+                                                                     data[first:first + size])
+    path.write_bytes(bytes(data))
+    scene = trimesh.load(path, force="scene", process=False)
+    wound = {name: scene.geometry[scene.graph[name][1]].is_winding_consistent for name in scene.graph.nodes_geometry}
+    assert [name for name, ok in wound.items() if not ok] == [node["name"]]
+    if reader == "load_glb":
+        other_reader(monkeypatch)
+    problems = check_scene_file(path, written)
+    assert len(problems) == 1 and f"node {node['name']}:" in problems[0] and "watertight False" in problems[0], problems
 
 
 def test_scene_read_back_reads_the_binary_chunk_where_it_lies(tmp_path, rng):
@@ -278,8 +342,9 @@ def _past_its_view(tree, at):
     lambda t, m: m["attributes"].update(_config=len(t["accessors"])),
     lambda t, m: _past_its_view(t, m["attributes"]["POSITION"]),
     lambda t, m: t["bufferViews"][0].update(byteLength=10 ** 9),
+    lambda t, m: t["accessors"][m["attributes"]["POSITION"]].update(byteOffset=-12),
 ], ids=["attribute-past-its-view", "unknown-component-type", "count-past-its-view", "unknown-type",
-        "attribute-of-no-accessor", "positions-past-their-view", "view-past-the-buffer"])
+        "attribute-of-no-accessor", "positions-past-their-view", "view-past-the-buffer", "positions-before-their-view"])
 def test_a_scene_trimesh_cannot_read_reads_back_as_unreadable(tmp_path, rng, corrupt):
     """A scene whose accessor trimesh's reader fails on, one the figures
     use or not, is still refused as unreadable: trimesh.load of the whole

@@ -5,26 +5,39 @@ measure.
 trimesh's glTF reader turns every accessor of the file into an array, some
 20 microseconds each, before it looks at a mesh; isoflow's scenes hold 8
 accessors a node (indices, positions, colours and five curvature
-attributes), and a read-back measures two of them. :func:`geometry_glb`
-gives trimesh the file with the other accessors left out of its JSON (the
-binary chunk as it is), once each of them is checked to be one trimesh's
-reader turns into an array without fail, so that the file still reads back
-as unreadable where trimesh cannot read it whole. A file of any other
-layout (materials, extensions, sparse accessors, URIs, several binary
+attributes), and a read-back measures two of them. :func:`geometry_parts`
+gives trimesh's reader the file's JSON with the other accessors left out
+(the binary chunk as it is), once each of them is checked to be one
+trimesh's reader turns into an array without fail, so that the file still
+reads back as unreadable where trimesh cannot read it whole. A file of any
+other layout (materials, extensions, sparse accessors, URIs, several binary
 chunks) is left as it is: trimesh reads all of it.
+
+:func:`read_geometry` hands that JSON, as parsed, and the binary chunk to
+the reader's own step from a parsed glTF to its meshes (the one trimesh's
+``load_glb`` takes once it has parsed the file's JSON): written out again
+as JSON for ``load_glb`` to parse, a scene of thousands of nodes would be
+serialised and parsed a second time. Where trimesh has no such step (a
+private function of its own) ``load_glb`` is given that JSON written out
+as the file's, with the file's binary chunk.
 
 The binary chunk of a file on disk is given to the reader as a view of
 the file mapped into memory, not as bytes read: the reader takes each
 buffer view as a slice of the chunk (a copy of bytes, none of a view)
-and copies only the positions out of it, so the triangles are read from
+and reads the positions and triangles out of it, so they are read from
 the file's pages where they lie and the other attributes (most of the
 chunk) are not read at all. Read as bytes, the chunk and the copy of
 each of its views would be most of the memory a scene's read-back
-touches.
+touches. A buffer view whose ``byteStride`` is the row of every accessor
+the reader is given on it (the positions', rows of three float32 packed
+one after another) is given without it: its rows are the same bytes, the
+glTF specification's tightly packed rows, which trimesh reads where they
+lie instead of copying them row by row.
 """
 
 from __future__ import annotations
 
+import inspect
 import io
 import json
 import mmap
@@ -50,13 +63,12 @@ PLAIN_PRIMITIVE = frozenset(("attributes", "indices", "mode"))
 TRIANGLES = 4
 
 
-def geometry_glb(fh: BinaryIO) -> io.RawIOBase | None:
-    """A binary glTF (``fh``, at its start) with its accessors other than
-    each triangle primitive's ``POSITION`` and ``indices`` left out, as a
-    file for trimesh's ``load_glb``, which then reads the same nodes,
-    positions and triangles from it; or None where the file is of another
-    layout or an accessor left out is one trimesh's reader would fail on
-    (``fh`` is then anywhere: seek to its start to read it whole).
+def geometry_parts(fh: BinaryIO) -> tuple[dict, memoryview | bytes] | None:
+    """A binary glTF (``fh``, at its start) as trimesh's reader is given it
+    for a read-back: its JSON as :func:`geometry_tree` leaves it, and its
+    binary chunk; None where the file is of another layout or an accessor
+    left out is one trimesh's reader would fail on (``fh`` is then
+    anywhere: seek to its start to read it whole).
 
     Parameters
     ----------
@@ -65,24 +77,20 @@ def geometry_glb(fh: BinaryIO) -> io.RawIOBase | None:
 
     Returns
     -------
-    binary file or None
-        The new header and JSON chunk, then ``fh``'s binary chunk read on
-        from where it is (not copied; a view of the file mapped into
-        memory where ``fh`` is a file on disk): read it while ``fh`` is
-        open.
+    tuple or None
+        The JSON (a dict) and the binary chunk: a view of the file mapped
+        into memory where ``fh`` is a file on disk, else its bytes.
 
     Examples
     --------
     >>> import trimesh
-    >>> from trimesh.exchange.gltf import load_glb
     >>> box = trimesh.creation.box()
     >>> box.visual.vertex_colors = [200, 20, 20, 255]
-    >>> data = io.BytesIO(box.export(file_type="glb"))
-    >>> len(json.loads(data.getvalue()[20:20 + struct.unpack_from("<I", data.getvalue(), 12)[0]])["accessors"])
-    3
-    >>> read = load_glb(geometry_glb(data))
-    >>> [(len(g["vertices"]), len(g["faces"]), "vertex_colors" in g) for g in read["geometry"].values()]
-    [(8, 12, False)]
+    >>> tree, chunk = geometry_parts(io.BytesIO(box.export(file_type="glb")))
+    >>> len(tree["accessors"]), tree["meshes"][0]["primitives"][0]["attributes"]
+    (2, {'POSITION': 0})
+    >>> len(chunk) >= 8 * 12 + 12 * 3 * 4  # the box's positions and triangles lie in it
+    True
     """
     head = fh.read(GLB_HEAD.size)
     if len(head) != GLB_HEAD.size:
@@ -104,18 +112,99 @@ def geometry_glb(fh: BinaryIO) -> io.RawIOBase | None:
     kept = geometry_tree(tree, bin_length)
     if kept is None:
         return None
-    text = json.dumps(kept, separators=(",", ":")).encode()
+    data = _binary_chunk(fh, bin_length)
+    return None if data is None else (kept, data)
+
+
+#: the arguments of trimesh's step from a parsed glTF to its meshes
+#: (``trimesh.exchange.gltf._read_buffers``, private) that
+#: :func:`read_geometry` gives it, by name
+READER_ARGUMENTS = frozenset(("header", "buffers", "mesh_kwargs", "resolver"))
+
+
+def read_geometry(fh: BinaryIO) -> dict:
+    """What trimesh's ``load_glb`` reads from the binary glTF ``fh`` (at
+    its start) for a read-back: the nodes' graph and each mesh's
+    ``vertices`` and ``faces``, of :func:`geometry_parts` where it gives
+    them (the JSON handed over as parsed, see the module docs), else of
+    the whole file.
+
+    Parameters
+    ----------
+    fh : binary file
+        The GLB, open for reading at its first byte; a file on disk is
+        mapped into memory (see the module docs), a stream read.
+
+    Returns
+    -------
+    dict
+        ``load_glb``'s keyword arguments of a scene (``"geometry"``,
+        ``"graph"``); trimesh's reader raises where it cannot read the
+        file.
+
+    Examples
+    --------
+    >>> import trimesh
+    >>> box = trimesh.creation.box()
+    >>> read = read_geometry(io.BytesIO(box.export(file_type="glb")))
+    >>> [(len(g["vertices"]), len(g["faces"])) for g in read["geometry"].values()]
+    [(8, 12)]
+    """
+    from trimesh.exchange import gltf
+
+    parts = geometry_parts(fh)
+    if parts is None:
+        fh.seek(0)
+        return gltf.load_glb(fh)
+    tree, data = parts
+    reader = getattr(gltf, "_read_buffers", None)
+    if not _takes(reader, READER_ARGUMENTS):  # a trimesh without that step: the file, through load_glb
+        return gltf.load_glb(_as_glb(tree, data))
+    # as load_glb gives them: no options, the one binary chunk as its buffer
+    return reader(header=tree, buffers=[data], mesh_kwargs={}, resolver=None)
+
+
+def _as_glb(tree: dict, data: memoryview | bytes) -> io.RawIOBase:
+    """A GLB file of the JSON ``tree`` and the binary chunk ``data`` (not
+    copied: read, a view of it)."""
+    text = json.dumps(tree, separators=(",", ":")).encode()
     text += b" " * (-len(text) % 4)  # the chunk's padding, as the specification pads JSON
-    new_head = GLB_HEAD.pack(b"glTF", 2, GLB_HEAD.size + len(text) + CHUNK_HEAD.size + bin_length, len(text), b"JSON")
-    return _Joined(new_head + text + chunk, fh)
+    size = GLB_HEAD.size + len(text) + CHUNK_HEAD.size + len(data)
+    return _Joined(GLB_HEAD.pack(b"glTF", 2, size, len(text), b"JSON") + text + CHUNK_HEAD.pack(len(data), b"BIN\x00"),
+                   data)
+
+
+def _takes(function: object, names: frozenset) -> bool:
+    """Whether ``function`` is a callable that takes all of ``names`` by name."""
+    if not callable(function):
+        return False
+    try:
+        parameters = inspect.signature(function).parameters
+    except (TypeError, ValueError):
+        return False
+    return names <= {name for name, p in parameters.items()
+                     if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+
+
+def _binary_chunk(fh: BinaryIO, size: int) -> memoryview | bytes | None:
+    """The ``size`` bytes of ``fh`` from where it is: a view of the file
+    mapped into memory where it is a file on disk, else read; None where
+    the file holds fewer."""
+    at = fh.tell()
+    try:
+        data = memoryview(mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ))[at:at + size]
+    except (AttributeError, OSError, ValueError):  # not a file on disk (a stream, an empty file): read it
+        data = fh.read(size)
+    return data if len(data) == size else None
 
 
 def geometry_tree(tree: object, bin_length: int) -> dict | None:
-    """The JSON of :func:`geometry_glb`: ``tree`` (a GLB's, whose binary
+    """The JSON of :func:`geometry_parts`: ``tree`` (a GLB's, whose binary
     chunk holds ``bin_length`` bytes) with only the accessors of its
-    triangle primitives' positions and indices, renumbered; None where it
-    is of another layout or where an accessor left out is not one trimesh
-    turns into an array without fail.
+    triangle primitives' positions and indices, renumbered, and without
+    the ``byteStride`` of a buffer view that is the row of each of those
+    on it; None where it is of another layout or where an accessor left
+    out is not one trimesh turns into an array without fail.
 
     Parameters
     ----------
@@ -133,12 +222,13 @@ def geometry_tree(tree: object, bin_length: int) -> dict | None:
     Examples
     --------
     >>> tree = {"asset": {"version": "2.0"}, "buffers": [{"byteLength": 36}],
-    ...         "bufferViews": [{"buffer": 0, "byteLength": 36}],
+    ...         "bufferViews": [{"buffer": 0, "byteLength": 36, "byteStride": 12}],
     ...         "accessors": [{"bufferView": 0, "componentType": 5126, "type": "VEC3", "count": 3},
     ...                       {"bufferView": 0, "componentType": 5121, "type": "VEC4", "count": 3}],
     ...         "meshes": [{"primitives": [{"attributes": {"COLOR_0": 1, "POSITION": 0}}]}]}
-    >>> geometry_tree(tree, 36)["meshes"]
-    [{'primitives': [{'attributes': {'POSITION': 0}}]}]
+    >>> kept = geometry_tree(tree, 36)
+    >>> kept["meshes"], kept["bufferViews"]
+    ([{'primitives': [{'attributes': {'POSITION': 0}}]}], [{'buffer': 0, 'byteLength': 36}])
     >>> tree["accessors"][1]["byteOffset"] = 28  # 12 colour bytes from byte 28 of a 36-byte view
     >>> geometry_tree(tree, 36) is None
     True
@@ -152,47 +242,62 @@ def geometry_tree(tree: object, bin_length: int) -> dict | None:
     sizes = [_view_size(view, bin_length) for view in views]
     if None in sizes:
         return None
+    count = len(accessors)
     new: dict[int, int] = {}  # an accessor kept -> its place among those kept
     out_meshes = []
+    # (one loop over every primitive, its checks written out: a scene's
+    # thousands of primitives would otherwise pay a call per check)
     for mesh in meshes:
         primitives = mesh.get("primitives")
-        if not _list_of_dicts(primitives) or "extensions" in mesh:
+        if type(primitives) is not list or "extensions" in mesh:
             return None
         out = []
         for p in primitives:
-            attributes = p.get("attributes")
-            if (not PLAIN_PRIMITIVE.issuperset(p) or p.get("mode", TRIANGLES) != TRIANGLES
-                    or not isinstance(attributes, dict) or "POSITION" not in attributes
-                    or not all(_index(a, len(accessors)) for a in attributes.values())
-                    or ("indices" in p and not _index(p["indices"], len(accessors)))):
+            if type(p) is not dict or not PLAIN_PRIMITIVE.issuperset(p) or p.get("mode", TRIANGLES) != TRIANGLES:
                 return None
+            attributes = p.get("attributes")
+            if type(attributes) is not dict or "POSITION" not in attributes:
+                return None
+            for at in attributes.values():
+                if type(at) is not int or not 0 <= at < count:
+                    return None
             kept = {"attributes": {"POSITION": new.setdefault(attributes["POSITION"], len(new))}}
             if "indices" in p:
-                kept["indices"] = new.setdefault(p["indices"], len(new))
+                at = p["indices"]
+                if type(at) is not int or not 0 <= at < count:
+                    return None
+                kept["indices"] = new.setdefault(at, len(new))
             if "mode" in p:
                 kept["mode"] = p["mode"]
             out.append(kept)
         out_meshes.append({**mesh, "primitives": out})
     # every accessor left out must be one trimesh's reader turns into an
     # array without fail, as it would read it: its failure is the file's
-    if not all(_readable(a, views, sizes) for i, a in enumerate(accessors) if i not in new):
+    if not _all_readable([a for i, a in enumerate(accessors) if i not in new], views, sizes):
         return None
-    return {**tree, "meshes": out_meshes, "accessors": [accessors[i] for i in sorted(new, key=new.__getitem__)]}
+    given = [accessors[i] for i in sorted(new, key=new.__getitem__)]
+    return {**tree, "meshes": out_meshes, "accessors": given, "bufferViews": _packed_views(given, views, sizes)}
+
+
+def _packed_views(given: list[dict], views: list[dict], sizes: list[int]) -> list[dict]:
+    """``views`` without the ``byteStride`` of those whose stride is the
+    row of every accessor ``given`` on them, where each of those reads
+    within its view (read with the stride or without, the same bytes)."""
+    strides = [view.get("byteStride") for view in views]
+    rows: dict[int, set] = {}  # a view with a stride -> the rows of the accessors on it, None for one it fails on
+    for a in given:
+        at = a.get("bufferView")
+        if type(at) is not int or not 0 <= at < len(views):
+            return views  # (a view named otherwise than by its place, or none: each left as it is)
+        if strides[at] is not None:
+            rows.setdefault(at, set()).add(_row(a, strides, sizes))
+    return [{k: v for k, v in view.items() if k != "byteStride"}
+            if strides[at] is not None and rows.get(at) == {strides[at]} else view
+            for at, view in enumerate(views)]
 
 
 def _list_of_dicts(value: object) -> bool:
     return isinstance(value, list) and all(isinstance(v, dict) for v in value)
-
-
-def _whole(value: object) -> bool:
-    """A JSON whole number (not a float or a boolean, which trimesh's
-    reader may take otherwise)."""
-    return type(value) is int
-
-
-def _index(value: object, count: int) -> bool:
-    """An index into a list of ``count`` (not one from its end)."""
-    return _whole(value) and 0 <= value < count
 
 
 def _view_size(view: dict, bin_length: int) -> int | None:
@@ -200,57 +305,65 @@ def _view_size(view: dict, bin_length: int) -> int | None:
     does not lie within the chunk or has a stride that is no step."""
     offset, size = view.get("byteOffset", 0), view.get("byteLength")
     stride = view.get("byteStride", 1)
-    if not (view.get("buffer") == 0 and _whole(view.get("buffer")) and _whole(offset) and _whole(size)
-            and _whole(stride) and offset >= 0 and size >= 0 and stride > 0 and offset + size <= bin_length):
+    if not (view.get("buffer") == 0 and type(view.get("buffer")) is int and type(offset) is int
+            and type(size) is int and type(stride) is int and offset >= 0 and size >= 0 and stride > 0
+            and offset + size <= bin_length):
         return None
     return size
 
 
-def _readable(accessor: dict, views: list, sizes: list) -> bool:
-    """Whether trimesh's glTF reader turns the accessor into an array
-    without fail: a known component type and type, at least one element,
-    every byte it reads within its buffer view (with the view's stride
-    where it has one), no sparse part."""
-    count, width = accessor.get("count"), TYPE_COMPONENTS.get(accessor.get("type"))
-    itemsize, at = COMPONENT_BYTES.get(accessor.get("componentType")), accessor.get("bufferView")
-    offset = accessor.get("byteOffset", 0)
-    if (width is None or itemsize is None or not _whole(accessor.get("componentType")) or "sparse" in accessor
-            or not (_whole(count) and count > 0 and _index(at, len(views)) and _whole(offset) and offset >= 0)):
-        return False
+def _all_readable(accessors: list[dict], views: list[dict], sizes: list[int]) -> bool:
+    """Whether trimesh's glTF reader turns each of the accessors into an
+    array without fail (:func:`_row`), their buffer views ``views`` of
+    ``sizes`` bytes."""
+    strides = [view.get("byteStride") for view in views]
+    for a in accessors:
+        if _row(a, strides, sizes) is None:
+            return False
+    return True
+
+
+def _row(accessor: dict, strides: list, sizes: list[int]) -> int | None:
+    """The bytes of a row of the accessor where trimesh's glTF reader
+    turns it into an array without fail, else None: a known component type
+    and type, at least one element, every byte it reads within its buffer
+    view (of ``sizes`` bytes; rows ``strides`` apart where the view has a
+    stride), no sparse part. JSON's whole numbers alone pass (not a float
+    or a boolean, which trimesh's reader may take otherwise), and a buffer
+    view by its place (not from the end)."""
+    # (its checks written out: a scene's tens of thousands of accessors
+    # would otherwise pay a call per check)
+    count, at, offset = accessor.get("count"), accessor.get("bufferView"), accessor.get("byteOffset", 0)
+    component, kind = accessor.get("componentType"), accessor.get("type")
+    if (type(count) is not int or type(at) is not int or type(offset) is not int or type(component) is not int
+            or type(kind) is not str or "sparse" in accessor or count <= 0 or offset < 0 or not 0 <= at < len(sizes)):
+        return None
+    width, itemsize = TYPE_COMPONENTS.get(kind), COMPONENT_BYTES.get(component)
+    if width is None or itemsize is None:
+        return None
     row = width * itemsize
-    stride = views[at].get("byteStride", row)  # (trimesh reads rows apart by the view's stride)
-    return offset + (count - 1) * stride + row <= sizes[at]
+    # (trimesh reads rows apart by the view's stride)
+    return row if offset + (count - 1) * (strides[at] or row) + row <= sizes[at] else None
 
 
 class _Joined(io.RawIOBase):
-    """The bytes ``head``, then ``rest`` read on from where it is: as
-    views of ``rest`` mapped into memory where it is a file on disk (see
-    the module docs), else as bytes read from it."""
+    """The bytes ``head``, then ``data`` (bytes or a view of a mapped
+    file): a read within ``data`` is a view of it, not copied (see the
+    module docs)."""
 
-    def __init__(self, head: bytes, rest: BinaryIO):
+    def __init__(self, head: bytes, data: memoryview | bytes):
         super().__init__()
-        self._head, self._rest, self._at = head, rest, 0
-        self._mapped: memoryview | None = None
-        try:
-            whole = mmap.mmap(rest.fileno(), 0, access=mmap.ACCESS_READ)
-        except (AttributeError, OSError, ValueError):  # not a file on disk (a stream, an empty file): read it
-            return
-        self._mapped, self._from = memoryview(whole), rest.tell()
+        self._head, self._data, self._at = head, memoryview(data), 0
 
     def readable(self) -> bool:
         return True
 
     def read(self, size: int = -1) -> bytes | memoryview:
-        part = self._head[self._at:] if size < 0 else self._head[self._at:self._at + size]
-        if size < 0 or len(part) < size:
-            more = -1 if size < 0 else size - len(part)
-            if self._mapped is None:
-                part += self._rest.read(more)
-            else:
-                at = self._from + self._at + len(part) - len(self._head)
-                rest = self._mapped[at:] if more < 0 else self._mapped[at:at + more]
-                # a read within the chunk (the reader's) is its view alone, not copied
-                part = rest if not part else part + rest.tobytes()
+        known = len(self._head)
+        end = known + len(self._data) if size < 0 else self._at + size
+        head = self._head[self._at:end] if self._at < known else b""
+        rest = self._data[max(self._at - known, 0):max(end - known, 0)]
+        part = head + rest.tobytes() if head and len(rest) else head or rest
         self._at += len(part)
         return part
 

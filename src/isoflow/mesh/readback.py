@@ -488,7 +488,7 @@ def scene_nodes(path: str | os.PathLike, as_read: bool = False) -> dict[str, tup
     scene's read-back where it has thousands of nodes), and the reader is
     given the positions' and triangles' accessors alone where the others
     are ones it would read without fail
-    (:func:`isoflow.mesh.glb_geometry.geometry_glb`).
+    (:func:`isoflow.mesh.glb_geometry.read_geometry`).
 
     Parameters
     ----------
@@ -555,27 +555,33 @@ def collector_paused() -> Iterator[None]:
 
 def _scene_nodes(path: str | os.PathLike, as_read: bool) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """:func:`scene_nodes`, the collector as the caller has it."""
-    from trimesh.exchange.gltf import load_glb
-
-    from .glb_geometry import geometry_glb
+    from .glb_geometry import read_geometry
 
     with open(path, "rb") as fh:
         # the accessors the figures do not use are checked, not made arrays
         # (most of trimesh's parse of a scene of thousands of nodes)
-        geometry = geometry_glb(fh)
-        if geometry is None:
-            fh.seek(0)
-        read = load_glb(fh if geometry is None else geometry)
+        read = read_geometry(fh)
     edges = {edge["frame_to"]: edge for edge in read["graph"]}
+    moving: dict[int, bool] = {}  # a matrix (by id) -> whether it is other than the identity
+
+    def moves(matrix) -> bool:
+        """Whether the matrix is other than the identity: found once for
+        each array trimesh gives (one for all the nodes of a file that
+        gives them none, rather than a comparison per node)."""
+        key = id(matrix)  # (each lives in the graph until the nodes are taken)
+        if key not in moving:
+            moving[key] = not np.array_equal(np.asarray(matrix, np.float64), np.eye(4))
+        return moving[key]
 
     def placement(frame: str) -> np.ndarray | None:
-        """The node's transform and those above it, None where none has
-        one (most nodes of isoflow's scenes: no matrix per node to make)."""
+        """The node's transform and those above it, None where none of
+        them moves it (most nodes of isoflow's scenes: no matrix per node
+        to make)."""
         edge = edges.get(frame)
         if edge is None:  # the root
             return None
         above = placement(edge["frame_from"])
-        if "matrix" not in edge:
+        if "matrix" not in edge or not moves(edge["matrix"]):
             return above
         return (np.eye(4) if above is None else above) @ np.asarray(edge["matrix"], np.float64)
 
