@@ -15,6 +15,7 @@ from skimage.measure import euler_number
 from isoflow.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
+MESHES = ROOT / "meshes"
 
 
 def run(*args, cwd=None):
@@ -897,6 +898,39 @@ def test_quiet_before_the_command_means_what_it_means_after_it(tmp_path, capsys)
         assert (out, err) == (loud.out, ""), argv
     p = run("--help")
     assert p.returncode == 0 and "-q, --quiet" in p.stdout, p.stdout
+
+
+def test_quiet_keeps_the_reason_a_result_is_empty(tmp_path, capsys):
+    """-q silences progress and notes, not the reason a result came out
+    empty for an input that is not: a lone triangle (bounding no volume, as
+    trimesh says) voxelises to no voxel, and -q dropped the note saying why from
+    voxelize (to a file, a store, a label image), info and surface; a point
+    list in which no unit cube has its 8 corners likewise from info. The
+    note of a result that is not empty is still dropped."""
+    tri = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert not tri.is_watertight and not tri.is_volume
+    mesh = str(tmp_path / "tri.obj")
+    tri.export(mesh)
+
+    def said(*argv, status=0):
+        assert main(["-q", *map(str, argv)]) == status, argv
+        out, err = capsys.readouterr()
+        return err
+
+    for out in ("q.npz", "q.zarr"):
+        err = said("voxelize", mesh, "--resolution", 8, "-o", tmp_path / out)
+        assert "note:" in err and "leaves no voxel in" in err, out
+    assert int(np.load(tmp_path / "q.npz")["volume"].sum()) == 0  # the file as written: empty indeed
+    err = said("voxelize", mesh, MESHES / "cube_no_bottom.obj", "--resolution", 8, "-o", tmp_path / "l.npz")
+    assert "leaves no voxel in" in err and f"label 1 ({mesh}) got no voxel" in err
+    assert "leaves no voxel in" in said("info", mesh, "--resolution", 8)
+    assert "leaves no voxel in" in said("surface", mesh, "--resolution", 8, "-o", tmp_path / "t.ply", status=2)
+    (tmp_path / "p.txt").write_text("0 0 0\n1 0 0\n5 5 5\n")  # 3 points: no cube has 8 corners among them
+    assert "no unit cube has all 8 of its corners" in said("info", tmp_path / "p.txt")
+    assert main(["voxelize", str(MESHES / "cube_no_bottom.obj"), "--resolution", "8", "-o", str(tmp_path / "b.npz")]) == 0
+    assert "note:" in capsys.readouterr().err  # an open box: a note, and voxels
+    assert said("voxelize", MESHES / "cube_no_bottom.obj", "--resolution", 8, "-o", tmp_path / "c.npz") == ""
+    assert int(np.load(tmp_path / "c.npz")["volume"].sum()) > 0
 
 
 @pytest.mark.parametrize("odd", ["\t", "\x1b[31m"])
