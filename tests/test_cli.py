@@ -144,11 +144,17 @@ def test_surface_says_how_trimesh_reads_split_contacts_back(tmp_path, capsys):
     assert "reads it back watertight, V-E+F = 2" in capsys.readouterr().out
 
 
-def test_surface_png(tmp_path):
+def test_surface_png(tmp_path, capsys):
     np.save(tmp_path / "t.npy", torus(5, 2))
     assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.ply"),
                  "--png", str(tmp_path / "t.png")]) == 0
     assert (tmp_path / "t.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the mesh's lines, held until both files are in place, are printed then, before the picture's
+    lines = capsys.readouterr().out.splitlines()
+    mesh = trimesh.load(tmp_path / "t.ply", process=False)
+    assert lines[0].startswith(f"{tmp_path / 't.ply'}: {len(mesh.vertices)} vertices, ")
+    assert lines[1].startswith(f"{tmp_path / 't.ply'}: trimesh reads it back watertight")
+    assert lines[2:] == [f"{tmp_path / 't.png'}: picture of the surface coloured by vertex angle"]
 
 
 def surface_with_picture(tmp_path, volume, *more) -> int:
@@ -161,7 +167,8 @@ def surface_with_picture(tmp_path, volume, *more) -> int:
 
 @pytest.mark.parametrize("how, status", [("disk full", 2), ("SIGTERM", 128 + 15)])
 def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkeypatch, how, status):
-    # the new mesh was in place beside the old picture when the picture's write failed
+    # the new mesh was in place beside the old picture when the picture's write failed; then, with the earlier
+    # pair kept, stdout still said the new mesh was written and read back
     from test_labels_cli import fail_at, files_in
 
     assert surface_with_picture(tmp_path, torus(5, 2)) == 0
@@ -169,19 +176,21 @@ def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkey
     capsys.readouterr()
     fail_at(monkeypatch, "t.png", how)
     code = surface_with_picture(tmp_path, torus(6, 2), "--force")
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert code == status, err
     assert err.count("\n") == 1 and err.rstrip().endswith("nothing was replaced"), err
     assert files_in(tmp_path / "out") == before  # byte for byte, and no temporary left
+    assert out == ""  # no line describes a file that is not there
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 @pytest.mark.parametrize("earlier", [False, True], ids=["new", "--force"])
 def test_surface_png_interrupted_while_drawn_names_both_files(tmp_path, capsys, monkeypatch, earlier):
-    """Ctrl-C while the picture is drawn, after the mesh's lines are
-    printed: exit 130, no picture, mesh or temporary left (the earlier
+    """Ctrl-C while the picture is drawn, after the mesh is written and
+    read back: exit 130, no picture, mesh or temporary left (the earlier
     pair byte for byte), and the line names the set, the mesh and its
-    picture (it named the mesh alone: "t.ply: nothing was replaced")."""
+    picture (it named the mesh alone: "t.ply: nothing was replaced");
+    stdout says nothing of the mesh that is not there."""
     import signal
 
     from test_labels_cli import files_in
@@ -203,8 +212,10 @@ def test_surface_png_interrupted_while_drawn_names_both_files(tmp_path, capsys, 
     monkeypatch.setattr(render, "render_surface", interrupted)
     assert surface_with_picture(tmp_path, torus(6, 2), *(["--force"] if earlier else [])) == 130
     out = tmp_path / "out"
-    assert capsys.readouterr().err.strip().splitlines() == [
+    said = capsys.readouterr()
+    assert said.err.strip().splitlines() == [
         f"isoflow: interrupted: {out / 't.ply'} and {out / 't.png'}: nothing was replaced"]
+    assert said.out == ""
     assert files_in(out) == before
 
 
