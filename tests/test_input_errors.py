@@ -1116,6 +1116,43 @@ def test_a_wireframe_is_named_a_wireframe_not_a_point_cloud(tmp_path, capsys, su
     assert not (tmp_path / "OUT.npy").exists()
 
 
+@pytest.mark.parametrize("zipped", [False, True], ids=["file", "zip"])
+@pytest.mark.parametrize("suffix", [".obj", ".ply"])
+def test_lines_beside_faces_are_named_in_a_note(tmp_path, capsys, suffix, zipped):
+    """A cube's faces with its 18 edges beside them (OBJ ``l`` lines, a
+    PLY ``edge`` element): the readers take the faces and leave the lines
+    out, as trimesh does, and said nothing, where a glTF file's lines
+    beside faces are named in a note. The note now names them in the
+    glTF note's words; the voxels are the cube's without its lines."""
+    cube = trimesh.creation.box()
+    edges = cube.edges_unique
+    assert len(edges) == 18
+    plain, lined = tmp_path / f"cube{suffix}", tmp_path / f"cage{suffix}"
+    if suffix == ".obj":
+        cube.export(plain)
+        lined.write_text(plain.read_text() + "".join(f"l {a + 1} {b + 1}\n" for a, b in edges))
+    else:
+        cube.export(plain, encoding="ascii")
+        head, body = plain.read_text().split("end_header\n")
+        lined.write_text(head + "element edge 18\nproperty int vertex1\nproperty int vertex2\nend_header\n" + body
+                         + "".join(f"{a} {b}\n" for a, b in edges))
+    loaded = trimesh.load(lined, process=False)
+    assert len(loaded.faces) == len(cube.faces) == 12  # trimesh reads the faces alone too
+    name = str(lined)
+    if zipped:
+        with zipfile.ZipFile(tmp_path / "cage.zip", "w") as z:
+            z.write(lined, lined.name)
+        name = f"{tmp_path / 'cage.zip'}:{lined.name}"
+        lined = tmp_path / "cage.zip"
+    assert main(["voxelize", str(plain), "--resolution", "8", "-o", str(tmp_path / "plain.npz")]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["voxelize", str(lined), "--resolution", "8", "-o", str(tmp_path / "lined.npz")]) == 0
+    what = "18 lines (OBJ l lines)" if suffix == ".obj" else "18 edges (the PLY edge element)"
+    assert f"isoflow voxelize: note: {name}: read without its {what}: they hold no face and bound no solid\n" \
+        in capsys.readouterr().err
+    assert np.array_equal(np.load(tmp_path / "lined.npz")["volume"], np.load(tmp_path / "plain.npz")["volume"])
+
+
 @pytest.mark.parametrize("command", ["info", "surface", "flow"])
 def test_a_probability_map_is_offered_a_threshold_not_a_label(tmp_path, capsys, command):
     """A probability map refused as a mask was offered ``--label N``, which

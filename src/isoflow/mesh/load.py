@@ -786,6 +786,8 @@ def _read(p: Path, ext: str):
         check_mesh_file(p)
         return read_off(p)
     if (simple := _read_simple(p)) is not None:
+        if ext == "ply" and simple[1].size:  # (an OBJ of l lines is never read here: trimesh reads it)
+            _say_lines_left_out(p, ext)
         return simple
     try:
         if kind := next((k for s, k in ARCHIVE_TYPES.items() if p.name.lower().endswith(s)), None):
@@ -801,6 +803,8 @@ def _read(p: Path, ext: str):
         raise
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
+    if ext in ("obj", "ply") and faces.size:  # (of no face, the line refusing a wireframe says them)
+        _say_lines_left_out(p, ext)
     if ext == "obj":
         # trimesh leaves out, without a word, a face whose indices name no
         # vertex: where none is left, the first such face is the line
@@ -808,6 +812,41 @@ def _read(p: Path, ext: str):
         if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
             _check_obj_numbers(p)
     return vertices, faces
+
+
+#: a PLY header is looked for in the file's first bytes up to this many
+PLY_HEADER_BYTES = 1 << 20
+
+
+def _say_lines_left_out(p: Path, ext: str) -> None:
+    """Name in a :class:`~isoflow.errors.MeshNote` the lines of a mesh file
+    read with faces (an OBJ's ``l`` lines, a PLY's ``edge`` element) that
+    its reader leaves out without a word, as a glTF file's lines beside
+    faces are named (:func:`_lines_left_out`). A PLY's header alone is
+    read again, not its body."""
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read() if ext == "obj" else fh.read(PLY_HEADER_BYTES)
+    except OSError:
+        return
+    if (note := _lines_left_out(p, ext, data)) is not None:
+        warn(note, MeshNote)
+
+
+def _lines_left_out(where: str | os.PathLike, kind: str, data: bytes) -> str | None:
+    """The note on the lines of an OBJ's or a PLY's bytes (``kind`` as
+    trimesh names the format) that a reader of its faces leaves out, in
+    the words of a glTF file's
+    (:func:`~isoflow.mesh.gltf_extensions.read_without`); None where it
+    holds none."""
+    lines = _lines_in(data, kind, str(where))
+    if not lines:
+        return None
+    from .gltf_extensions import read_without
+
+    what = f"its {counted(lines, 'line')} (OBJ l lines)" if kind == "obj" else \
+        f"its {counted(lines, 'edge')} (the PLY edge element)"
+    return read_without(where, what, lines)
 
 
 def _read_simple(p: Path):
@@ -1027,6 +1066,8 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
                                    process=False)
         if (line := faceless_member_line(f"{p}:{member}", member_kind, scene, data)) is not None:
             raise IsoflowError(line)
+        if (note := _lines_left_out(f"{p}:{member}", member_kind, data)) is not None:  # lines beside its faces
+            warn(note, MeshNote)
         yield member, member_kind, data, scene
 
 
