@@ -82,9 +82,23 @@ def outputs(args: argparse.Namespace, *names: str) -> list[Path]:
 def run(main) -> None:
     """Run an example's ``main``; bad input (an existing output without
     --force, a mesh that is not closed ...) is one line and exit status 2,
-    as from the ``isoflow`` command."""
+    as from the ``isoflow`` command, and so is standard output that cannot
+    take what the example prints (``> /dev/full``, ``>&-``), which the
+    command's own handling of standard output names; a closed pipe
+    (``| head``) is no error."""
+    # the command line's standard output: its failed writes are StdoutError, flushed before the example ends
+    from isoflow.cli.main import StdoutError, drop_stdout, stdout_named
+
+    name = Path(sys.argv[0]).name
     try:
-        main()
+        with stdout_named():
+            main()
     except isoflow.IsoflowError as exc:
-        print(f"{Path(sys.argv[0]).name}: error: {exc}", file=sys.stderr)
+        print(f"{name}: error: {exc}", file=sys.stderr)
+        sys.exit(2)
+    except BrokenPipeError:
+        drop_stdout()
+    except StdoutError as exc:
+        print(f"{name}: error: standard output: cannot be written ({exc.strerror})", file=sys.stderr)
+        drop_stdout()
         sys.exit(2)

@@ -15,6 +15,7 @@ from skimage.measure import euler_number
 from isoflow.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
+MESHES = ROOT / "meshes"
 
 
 def run(*args, cwd=None):
@@ -143,11 +144,17 @@ def test_surface_says_how_trimesh_reads_split_contacts_back(tmp_path, capsys):
     assert "reads it back watertight, V-E+F = 2" in capsys.readouterr().out
 
 
-def test_surface_png(tmp_path):
+def test_surface_png(tmp_path, capsys):
     np.save(tmp_path / "t.npy", torus(5, 2))
     assert main(["surface", str(tmp_path / "t.npy"), "-o", str(tmp_path / "t.ply"),
                  "--png", str(tmp_path / "t.png")]) == 0
     assert (tmp_path / "t.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # the mesh's lines, held until both files are in place, are printed then, before the picture's
+    lines = capsys.readouterr().out.splitlines()
+    mesh = trimesh.load(tmp_path / "t.ply", process=False)
+    assert lines[0].startswith(f"{tmp_path / 't.ply'}: {len(mesh.vertices)} vertices, ")
+    assert lines[1].startswith(f"{tmp_path / 't.ply'}: trimesh reads it back watertight")
+    assert lines[2:] == [f"{tmp_path / 't.png'}: picture of the surface coloured by vertex angle"]
 
 
 def surface_with_picture(tmp_path, volume, *more) -> int:
@@ -160,7 +167,8 @@ def surface_with_picture(tmp_path, volume, *more) -> int:
 
 @pytest.mark.parametrize("how, status", [("disk full", 2), ("SIGTERM", 128 + 15)])
 def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkeypatch, how, status):
-    # the new mesh was in place beside the old picture when the picture's write failed
+    # the new mesh was in place beside the old picture when the picture's write failed; then, with the earlier
+    # pair kept, stdout still said the new mesh was written and read back
     from test_labels_cli import fail_at, files_in
 
     assert surface_with_picture(tmp_path, torus(5, 2)) == 0
@@ -168,19 +176,21 @@ def test_surface_png_failing_keeps_the_earlier_mesh_too(tmp_path, capsys, monkey
     capsys.readouterr()
     fail_at(monkeypatch, "t.png", how)
     code = surface_with_picture(tmp_path, torus(6, 2), "--force")
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert code == status, err
     assert err.count("\n") == 1 and err.rstrip().endswith("nothing was replaced"), err
     assert files_in(tmp_path / "out") == before  # byte for byte, and no temporary left
+    assert out == ""  # no line describes a file that is not there
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 @pytest.mark.parametrize("earlier", [False, True], ids=["new", "--force"])
 def test_surface_png_interrupted_while_drawn_names_both_files(tmp_path, capsys, monkeypatch, earlier):
-    """Ctrl-C while the picture is drawn, after the mesh's lines are
-    printed: exit 130, no picture, mesh or temporary left (the earlier
+    """Ctrl-C while the picture is drawn, after the mesh is written and
+    read back: exit 130, no picture, mesh or temporary left (the earlier
     pair byte for byte), and the line names the set, the mesh and its
-    picture (it named the mesh alone: "t.ply: nothing was replaced")."""
+    picture (it named the mesh alone: "t.ply: nothing was replaced");
+    stdout says nothing of the mesh that is not there."""
     import signal
 
     from test_labels_cli import files_in
@@ -202,8 +212,10 @@ def test_surface_png_interrupted_while_drawn_names_both_files(tmp_path, capsys, 
     monkeypatch.setattr(render, "render_surface", interrupted)
     assert surface_with_picture(tmp_path, torus(6, 2), *(["--force"] if earlier else [])) == 130
     out = tmp_path / "out"
-    assert capsys.readouterr().err.strip().splitlines() == [
+    said = capsys.readouterr()
+    assert said.err.strip().splitlines() == [
         f"isoflow: interrupted: {out / 't.ply'} and {out / 't.png'}: nothing was replaced"]
+    assert said.out == ""
     assert files_in(out) == before
 
 
@@ -897,6 +909,39 @@ def test_quiet_before_the_command_means_what_it_means_after_it(tmp_path, capsys)
         assert (out, err) == (loud.out, ""), argv
     p = run("--help")
     assert p.returncode == 0 and "-q, --quiet" in p.stdout, p.stdout
+
+
+def test_quiet_keeps_the_reason_a_result_is_empty(tmp_path, capsys):
+    """-q silences progress and notes, not the reason a result came out
+    empty for an input that is not: a lone triangle (bounding no volume, as
+    trimesh says) voxelises to no voxel, and -q dropped the note saying why from
+    voxelize (to a file, a store, a label image), info and surface; a point
+    list in which no unit cube has its 8 corners likewise from info. The
+    note of a result that is not empty is still dropped."""
+    tri = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    assert not tri.is_watertight and not tri.is_volume
+    mesh = str(tmp_path / "tri.obj")
+    tri.export(mesh)
+
+    def said(*argv, status=0):
+        assert main(["-q", *map(str, argv)]) == status, argv
+        out, err = capsys.readouterr()
+        return err
+
+    for out in ("q.npz", "q.zarr"):
+        err = said("voxelize", mesh, "--resolution", 8, "-o", tmp_path / out)
+        assert "note:" in err and "leaves no voxel in" in err, out
+    assert int(np.load(tmp_path / "q.npz")["volume"].sum()) == 0  # the file as written: empty indeed
+    err = said("voxelize", mesh, MESHES / "cube_no_bottom.obj", "--resolution", 8, "-o", tmp_path / "l.npz")
+    assert "leaves no voxel in" in err and f"label 1 ({mesh}) got no voxel" in err
+    assert "leaves no voxel in" in said("info", mesh, "--resolution", 8)
+    assert "leaves no voxel in" in said("surface", mesh, "--resolution", 8, "-o", tmp_path / "t.ply", status=2)
+    (tmp_path / "p.txt").write_text("0 0 0\n1 0 0\n5 5 5\n")  # 3 points: no cube has 8 corners among them
+    assert "no unit cube has all 8 of its corners" in said("info", tmp_path / "p.txt")
+    assert main(["voxelize", str(MESHES / "cube_no_bottom.obj"), "--resolution", "8", "-o", str(tmp_path / "b.npz")]) == 0
+    assert "note:" in capsys.readouterr().err  # an open box: a note, and voxels
+    assert said("voxelize", MESHES / "cube_no_bottom.obj", "--resolution", 8, "-o", tmp_path / "c.npz") == ""
+    assert int(np.load(tmp_path / "c.npz")["volume"].sum()) > 0
 
 
 @pytest.mark.parametrize("odd", ["\t", "\x1b[31m"])

@@ -412,6 +412,28 @@ def test_cell_table_says_one_cell_and_one_hole_in_the_singular(tmp_path):
     assert "1 cell with holes, 1 hole in all" in done.stdout
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("stdout", ["full", "closed"])
+def test_an_example_whose_stdout_cannot_be_written_says_so_in_one_line(tmp_path, stdout):
+    """Standard output that cannot take what an example prints (a full disk
+    under a redirection, ``> /dev/full``; a descriptor closed by ``>&-``)
+    ended it in a traceback and exit status 1, where _common promises one
+    line and exit status 2, as the isoflow command gives."""
+    import errno
+
+    command = [sys.executable, str(EXAMPLES / "cell_table.py"), str(tmp_path / "out"), "--cells", "3", "--size", "32"]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    if stdout == "full":
+        with open("/dev/full", "w") as full:
+            done = subprocess.run(command, stdout=full, stderr=subprocess.PIPE, text=True, env=env)
+        cause = os.strerror(errno.ENOSPC)
+    else:
+        done = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env,
+                              preexec_fn=lambda: os.close(1))
+        cause = os.strerror(errno.EBADF)
+    assert (done.returncode, done.stderr) == (2, f"cell_table.py: error: standard output: cannot be written ({cause})\n")
+
+
 def test_four_d_says_one_frame_in_the_singular(tmp_path):
     """One frame: the moving solid is the solid itself, and the line says
     "1 frame"; the frames in moving.npy are the one asked for."""

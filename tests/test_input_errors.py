@@ -4,6 +4,7 @@ traceback, no silently wrong value, nothing written."""
 import json
 import os
 import re
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -1079,15 +1080,17 @@ def test_a_point_cloud_is_named_with_its_points(tmp_path, capsys, suffix, comman
     assert not (tmp_path / "OUT.npy").exists()
 
 
+@pytest.mark.parametrize("zipped", [False, True], ids=["file", "zip"])
 @pytest.mark.parametrize("suffix", [".obj", ".ply"])
 @pytest.mark.parametrize("command", [["genus"], ["voxelize", "--resolution", "8", "-o", "OUT.npy"],
                                      ["voxelize", "--split", "--resolution", "8", "-o", "OUT.npy"]])
-def test_a_wireframe_is_named_a_wireframe_not_a_point_cloud(tmp_path, capsys, suffix, command):
+def test_a_wireframe_is_named_a_wireframe_not_a_point_cloud(tmp_path, capsys, suffix, command, zipped):
     """A model's edges saved without its faces (OBJ ``l`` lines, a PLY
     ``edge`` element) was called a point cloud and sent to a surface
     reconstruction; it is named by its points and lines (a cube's 8 corners
     and the 18 edges trimesh counts on its triangles), as a glTF of lines
-    is, exit 2, nothing written."""
+    is, exit 2, nothing written. Inside a zip archive too, where it was
+    still a point cloud (an OBJ) or "no triangles read" (a PLY)."""
     cube = trimesh.creation.box()
     edges = cube.edges_unique
     assert (len(cube.vertices), len(edges)) == (8, 18)
@@ -1100,12 +1103,54 @@ def test_a_wireframe_is_named_a_wireframe_not_a_point_cloud(tmp_path, capsys, su
                         "property float z\nelement edge 18\nproperty int vertex1\nproperty int vertex2\n"
                         "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in cube.vertices)
                         + "".join(f"{a} {b}\n" for a, b in edges))
+    if zipped:
+        with zipfile.ZipFile(tmp_path / "cage.zip", "w") as z:
+            z.write(wire, wire.name)
+        wire = tmp_path / "cage.zip"
     args = [str(tmp_path / a) if a == "OUT.npy" else a for a in command]
     assert main([args[0], str(wire), *args[1:]]) == 2
     err = capsys.readouterr().err
     assert "holds 8 points joined by 18 lines and no faces, a wireframe, not a surface" in err, err
+    assert err.startswith(f"isoflow {args[0]}: error: {wire}:cage{suffix}: " if zipped else f"isoflow {args[0]}: error: {wire}: ")
     assert "point cloud" not in err and len(err.splitlines()) == 1
     assert not (tmp_path / "OUT.npy").exists()
+
+
+@pytest.mark.parametrize("zipped", [False, True], ids=["file", "zip"])
+@pytest.mark.parametrize("suffix", [".obj", ".ply"])
+def test_lines_beside_faces_are_named_in_a_note(tmp_path, capsys, suffix, zipped):
+    """A cube's faces with its 18 edges beside them (OBJ ``l`` lines, a
+    PLY ``edge`` element): the readers take the faces and leave the lines
+    out, as trimesh does, and said nothing, where a glTF file's lines
+    beside faces are named in a note. The note now names them in the
+    glTF note's words; the voxels are the cube's without its lines."""
+    cube = trimesh.creation.box()
+    edges = cube.edges_unique
+    assert len(edges) == 18
+    plain, lined = tmp_path / f"cube{suffix}", tmp_path / f"cage{suffix}"
+    if suffix == ".obj":
+        cube.export(plain)
+        lined.write_text(plain.read_text() + "".join(f"l {a + 1} {b + 1}\n" for a, b in edges))
+    else:
+        cube.export(plain, encoding="ascii")
+        head, body = plain.read_text().split("end_header\n")
+        lined.write_text(head + "element edge 18\nproperty int vertex1\nproperty int vertex2\nend_header\n" + body
+                         + "".join(f"{a} {b}\n" for a, b in edges))
+    loaded = trimesh.load(lined, process=False)
+    assert len(loaded.faces) == len(cube.faces) == 12  # trimesh reads the faces alone too
+    name = str(lined)
+    if zipped:
+        with zipfile.ZipFile(tmp_path / "cage.zip", "w") as z:
+            z.write(lined, lined.name)
+        name = f"{tmp_path / 'cage.zip'}:{lined.name}"
+        lined = tmp_path / "cage.zip"
+    assert main(["voxelize", str(plain), "--resolution", "8", "-o", str(tmp_path / "plain.npz")]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["voxelize", str(lined), "--resolution", "8", "-o", str(tmp_path / "lined.npz")]) == 0
+    what = "18 lines (OBJ l lines)" if suffix == ".obj" else "18 edges (the PLY edge element)"
+    assert f"isoflow voxelize: note: {name}: read without its {what}: they hold no face and bound no solid\n" \
+        in capsys.readouterr().err
+    assert np.array_equal(np.load(tmp_path / "lined.npz")["volume"], np.load(tmp_path / "plain.npz")["volume"])
 
 
 @pytest.mark.parametrize("command", ["info", "surface", "flow"])

@@ -154,7 +154,7 @@ def info_in_memory(args: argparse.Namespace) -> tuple[Report, dict | None, dict 
     check_input_connectivity(args, obj.ndim)
     # an empty report is an answer, but of a point list with points it needs
     # the reason
-    say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None)
+    say_note(args, args.input, why_empty(args, obj) if obj.voxels == 0 else None, why=True)
     grid = mesh_grid(args, obj)
     placed = calibration(obj, unit, dtype) if grid is None and is_volume(args.input) else None
     if args.gpu:

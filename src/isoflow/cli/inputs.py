@@ -181,10 +181,33 @@ def thread_count(text: str) -> int:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
-def say_note(args: argparse.Namespace, path: object, note: str | None) -> None:
-    """What is unusual about a mesh, and the rule used: one line on stderr
-    (dropped by --quiet)."""
-    if note and not args.quiet:
+def say_note(args: argparse.Namespace, path: object, note: str | None, why: bool = False) -> None:
+    """What is unusual about an input, and the rule used: one ``note:``
+    line on stderr, dropped by --quiet unless it is ``why`` a result came
+    out empty for an input that is not: --quiet silences progress and
+    notes, and an empty result without its reason reads as a wrong one.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's arguments: ``command`` and ``quiet``.
+    path : object
+        The input the note is about, as the line names it.
+    note : str or None
+        The note; None says nothing.
+    why : bool, optional
+        The note is the reason the result is empty: said under --quiet too.
+
+    Examples
+    --------
+    >>> import contextlib
+    >>> quiet = argparse.Namespace(command="voxelize", quiet=True)
+    >>> with contextlib.redirect_stderr(sys.stdout):
+    ...     say_note(quiet, "a.obj", "mesh has 3 boundary edges")
+    ...     say_note(quiet, "a.obj", "the winding rule leaves no voxel in", why=True)
+    isoflow voxelize: note: a.obj: the winding rule leaves no voxel in
+    """
+    if note and (why or not args.quiet):
         print(terminal_text(f"isoflow {args.command}: note: {path}: {note}"), file=sys.stderr)
 
 
@@ -197,7 +220,7 @@ def voxelize_input(path: str | Path, args: argparse.Namespace, write_bytes: floa
     with progress_bar(args, "voxelize", estimate=True, hint=fill_hint(args)) as show:
         obj, details = voxelize_file(path, pitch=args.pitch, resolution=args.resolution, fill=mesh_fill(args),
                                      strict=args.strict, write_bytes=write_bytes, progress=show, details=True)
-    say_note(args, path, details.note)
+    say_note(args, path, details.note, why=obj.voxels == 0)
     return obj
 
 

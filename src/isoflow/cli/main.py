@@ -190,8 +190,8 @@ def add_command(sub: argparse._SubParsersAction, name: str, summary: str) -> arg
 
 
 #: the help of -q/--quiet, which every command takes, after its name or before it
-QUIET_HELP = ("no progress bars or notes on stderr (errors, and warnings that the result differs from what was "
-              "asked, are still printed)")
+QUIET_HELP = ("no progress bars or notes on stderr (errors, warnings that the result differs from what was "
+              "asked, and the note saying why a result is empty, are still printed)")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import io
 import sys
 from pathlib import Path
 
@@ -98,19 +99,23 @@ def surface_of(args: argparse.Namespace) -> int:
     mesh = checked_mesh(args.input, obj, conn)
     comments = surface_comments(args.input, conn)
     # the mesh and its picture replaced together: a failure or a signal between them leaves both as they were,
-    # and an interrupt's line names both (the picture is drawn after the mesh's lines are printed)
+    # and an interrupt's line names both. The mesh's lines on stdout are held until both are in place: a
+    # picture that cannot be written leaves no mesh, and no line may have said it was written and read back
+    held = io.StringIO()
     with output_set(f"{out} and {args.png}") if args.png else contextlib.nullcontext():
         written = export.write_mesh_file(out, mesh, obj, ascii=args.ascii, triangulate=args.triangulate,
                                        force=args.force, comments=comments, name=input_stem(args.input))
         # alone, the file is in place from here: an interrupt before or during
         # its check says so (in a set with the picture, nothing is replaced)
-        with contextlib.nullcontext() if args.png else reading_back(out, check=not args.no_check):
+        with contextlib.nullcontext() if args.png else reading_back(out, check=not args.no_check), \
+                contextlib.redirect_stdout(held) if args.png else contextlib.nullcontext():
             status = report_written(args, out, mesh, obj, written, corners)
         if args.png:  # drawn from isoflow's mesh, so also where the file reads back otherwise: the set stays whole
             from ..mesh.render import render_surface
 
             render_surface(mesh, obj, Path(args.png), title=Path(args.input).name)
     if args.png:
+        sys.stdout.write(held.getvalue())
         print(terminal_text(f"{args.png}: picture of the surface coloured by vertex angle"))
     return status
 

@@ -86,7 +86,7 @@ def voxelize_to_store(args: argparse.Namespace) -> int:
         z, details = voxelize_to_zarr(args.mesh, out, pitch=args.pitch, resolution=args.resolution,
                                       fill=mesh_fill(args), strict=args.strict, force=args.force, progress=show,
                                       details=True)
-    say_note(args, args.mesh, details.note)
+    say_note(args, args.mesh, details.note, why=z.voxels == 0)
     shape = "x".join(map(str, z.shape))
     print(terminal_text(f"{out}: {counted(z.voxels, 'voxel')} in a {shape} zarr array (chunks {'x'.join(map(str, z.chunks))}), "
                         f"pitch {z.pitch:.6g}, origin {coordinates(z.origin, step=z.pitch)}"))
@@ -115,15 +115,15 @@ def voxelize_labels(args: argparse.Namespace) -> int:
                             overlap=args.overlap, split=args.split, strict=args.strict,
                             write_bytes=write_bytes_per_voxel(args.output, labels=True), progress=show)
     assert r.labels is not None  # voxelize_meshes keeps its labels; only from_dict's JSON has none
-    for body, note in zip(bodies, r.notes):
-        say_note(args, body.name, note)
+    for body, note, voxels in zip(bodies, r.notes, r.voxels):
+        say_note(args, body.name, note, why=voxels == 0)
     # each label's mesh named in the file where its format has a place for names; where it has none, a note
     # (the names are the command's own, not asked for: no warning, as write_labels gives of names given)
     kept = keeps_names(args.output)
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_labels(r.labels, args.output, pitch=r.pitch, origin=r.origin, force=args.force,
                                    names=r.names if kept else None), args.output)
-    say_note(args, out, r.note)
+    say_note(args, out, r.note, why=0 in r.voxels)  # (it names the labels that got no voxel)
     if not kept:
         say_note(args, out, names_not_kept(args.output, len(r.names)))
     print(label_summary(out, r))

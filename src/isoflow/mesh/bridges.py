@@ -131,9 +131,13 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
     at a corner follows no digital connectivity (a 3x3x3 checkerboard of 14
     cubes comes out as 8 components) and leaves zero-volume slivers. From the
     boundary mesh, manifold3d sees exactly the surface of the connectivity
-    asked: its ``decompose()`` gives the components of that connectivity (edge
-    contacts joined under 26, split under 6) and ``volume()`` the voxel volume.
-    Vertex contacts are split in the mesh (docs/mathematics.md, "The boundary mesh").
+    asked, and ``volume()`` is the voxel volume. Its ``decompose()`` gives
+    the closed surfaces of that mesh (the ``surfaces`` of
+    :func:`isoflow.analyze`), not the object's components: edge contacts
+    are joined under 26 and split under 6, but vertex contacts are split in
+    the mesh under either (docs/mathematics.md, "The boundary mesh"), so two
+    voxels that meet at a corner are one component at 26 and two pieces; a
+    cavity's surface is a piece of its own too.
 
     Parameters
     ----------
@@ -160,6 +164,14 @@ def to_manifold(obj: DigitalObject | ArrayLike, connectivity: int | np.integer |
     >>> v[0, 0, 0] = v[1, 1, 0] = True
     >>> len(to_manifold(v, 6).decompose()), len(to_manifold(v, 26).decompose()), to_manifold(v).volume()
     (2, 1, 2.0)
+
+    Two voxels sharing a corner: one 26-component, two pieces.
+
+    >>> import isoflow
+    >>> w = np.zeros((2, 2, 2), bool)
+    >>> w[0, 0, 0] = w[1, 1, 1] = True
+    >>> len(to_manifold(w, 26).decompose()), isoflow.betti_numbers(w, 26)[0]
+    (2, 1)
     """
     import manifold3d as m3
 

@@ -16,7 +16,8 @@ buffer file is not beside it (:func:`missing_buffer`: trimesh's error is
 "FileNotFoundError: model.bin", no more); :func:`gltf_refusal` says
 either, the file's JSON read once.  Points and lines beside triangles,
 which trimesh leaves out of the mesh, are named in a note
-(:func:`faceless_note`).  The file's JSON is looked at only (a GLB's
+(:func:`faceless_note`, in the words of :func:`read_without`, which
+names an OBJ's ``l`` lines and a PLY's edges beside faces too).  The file's JSON is looked at only (a GLB's
 first chunk), never its buffers.
 """
 
@@ -329,10 +330,38 @@ def faceless_note(where: str | Path, tree: dict) -> str | None:
     index, at, name, mode = skipped[0]
     named = _named(name)
     if len(skipped) == 1:
-        return (f"{where}: read without mesh {index}{named} primitive {at}, drawn as {_kinds([mode])}: it holds no "
-                "face and bounds no solid")
-    return (f"{where}: read without {len(skipped)} primitives of {_kinds([m for *_, m in skipped])}, mesh "
-            f"{index}{named} primitive {at} the first: they hold no face and bound no solid")
+        return read_without(where, f"mesh {index}{named} primitive {at}, drawn as {_kinds([mode])}", 1)
+    return read_without(where, f"{len(skipped)} primitives of {_kinds([m for *_, m in skipped])}, mesh "
+                               f"{index}{named} primitive {at} the first", len(skipped))
+
+
+def read_without(where: str | Path, what: str, count: int) -> str:
+    """The note naming what a mesh file holds beside its faces that its
+    reader leaves out without a word: primitives of points or lines of a
+    glTF file (:func:`faceless_note`), an OBJ's ``l`` lines, a PLY's
+    ``edge`` element. They hold no face and bound no solid, so the model
+    is read whole; the note says what was not read.
+
+    Parameters
+    ----------
+    where : str or pathlib.Path
+        The file, as the note names it.
+    what : str
+        What was left out, in words.
+    count : int
+        How many things ``what`` names: one is said in the singular.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> read_without("cage.ply", "its 18 edges (the PLY edge element)", 18)
+    'cage.ply: read without its 18 edges (the PLY edge element): they hold no face and bound no solid'
+    """
+    held = "it holds no face and bounds" if count == 1 else "they hold no face and bound"
+    return f"{where}: read without {what}: {held} no solid"
 
 
 def missing_buffer(path: Path, tree: dict) -> str | None:

@@ -533,16 +533,26 @@ def _lines_held(path: Path) -> int:
     """The lines of a file whose reader gave no face: an OBJ's ``l`` lines,
     the rows of a PLY's ``edge`` element; 0 otherwise (and for a file that
     cannot be read again: the point-cloud line is said then)."""
-    ext = path.suffix.lower()
+    if path.suffix.lower() not in (".obj", ".ply"):
+        return 0
     try:
-        if ext == ".obj":
-            return len(re.findall(rb"^l\s", path.read_bytes(), flags=re.M))
-        if ext == ".ply":
+        return _lines_in(path.read_bytes(), path.suffix.lower().lstrip("."), str(path))
+    except OSError:
+        return 0
+
+
+def _lines_in(data: bytes, kind: str, where: str) -> int:
+    """:func:`_lines_held` of a file's bytes, ``kind`` its format as
+    trimesh names it (``obj``, ``ply``): an archive's member too."""
+    try:
+        if kind == "obj":
+            return len(re.findall(rb"^l\s", data, flags=re.M))
+        if kind == "ply":
             from .ply import header_elements
 
-            parsed = header_elements(path.read_bytes(), str(path))
+            parsed = header_elements(data, where)
             return 0 if parsed is None else sum(e.rows for e in parsed[2] if e.name == "edge")
-    except (OSError, IsoflowError):
+    except IsoflowError:
         return 0
     return 0
 
@@ -578,15 +588,8 @@ def _points_held(path: Path) -> int:
     its scene; 0 otherwise."""
     ext = path.suffix.lower()
     try:
-        if ext == ".ply":
-            from .ply import header_elements
-
-            parsed = header_elements(path.read_bytes(), str(path))
-            rows = {} if parsed is None else {e.name: e.rows for e in parsed[2]}
-            return 0 if rows.get("face") else rows.get("vertex", 0)
-        if ext == ".obj":
-            text = path.read_bytes()
-            return 0 if re.search(rb"^f\s", text, flags=re.M) else len(re.findall(rb"^v\s", text, flags=re.M))
+        if ext in (".ply", ".obj"):
+            return _points_in(path.read_bytes(), ext.lstrip("."), str(path))
         if ext in (".glb", ".gltf"):
             import trimesh
 
@@ -594,6 +597,20 @@ def _points_held(path: Path) -> int:
             return sum(len(g.vertices) for g in scene.geometry.values() if isinstance(g, trimesh.PointCloud))
     except Exception:  # (the plain "no triangles read" line is said then)
         return 0
+    return 0
+
+
+def _points_in(data: bytes, kind: str, where: str) -> int:
+    """:func:`_points_held` of a PLY's or an OBJ's bytes, ``kind`` its
+    format as trimesh names it: an archive's member too."""
+    if kind == "ply":
+        from .ply import header_elements
+
+        parsed = header_elements(data, where)
+        rows = {} if parsed is None else {e.name: e.rows for e in parsed[2]}
+        return 0 if rows.get("face") else rows.get("vertex", 0)
+    if kind == "obj":
+        return 0 if re.search(rb"^f\s", data, flags=re.M) else len(re.findall(rb"^v\s", data, flags=re.M))
     return 0
 
 
@@ -769,6 +786,8 @@ def _read(p: Path, ext: str):
         check_mesh_file(p)
         return read_off(p)
     if (simple := _read_simple(p)) is not None:
+        if ext == "ply" and simple[1].size:  # (an OBJ of l lines is never read here: trimesh reads it)
+            _say_lines_left_out(p, ext)
         return simple
     try:
         if kind := next((k for s, k in ARCHIVE_TYPES.items() if p.name.lower().endswith(s)), None):
@@ -784,6 +803,8 @@ def _read(p: Path, ext: str):
         raise
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     faces = np.asarray(mesh.faces)
+    if ext in ("obj", "ply") and faces.size:  # (of no face, the line refusing a wireframe says them)
+        _say_lines_left_out(p, ext)
     if ext == "obj":
         # trimesh leaves out, without a word, a face whose indices name no
         # vertex: where none is left, the first such face is the line
@@ -791,6 +812,41 @@ def _read(p: Path, ext: str):
         if vertices.ndim != 2 or vertices.shape[1] != 3:  # v lines of two numbers: name the first
             _check_obj_numbers(p)
     return vertices, faces
+
+
+#: a PLY header is looked for in the file's first bytes up to this many
+PLY_HEADER_BYTES = 1 << 20
+
+
+def _say_lines_left_out(p: Path, ext: str) -> None:
+    """Name in a :class:`~isoflow.errors.MeshNote` the lines of a mesh file
+    read with faces (an OBJ's ``l`` lines, a PLY's ``edge`` element) that
+    its reader leaves out without a word, as a glTF file's lines beside
+    faces are named (:func:`_lines_left_out`). A PLY's header alone is
+    read again, not its body."""
+    try:
+        with open(p, "rb") as fh:
+            data = fh.read() if ext == "obj" else fh.read(PLY_HEADER_BYTES)
+    except OSError:
+        return
+    if (note := _lines_left_out(p, ext, data)) is not None:
+        warn(note, MeshNote)
+
+
+def _lines_left_out(where: str | os.PathLike, kind: str, data: bytes) -> str | None:
+    """The note on the lines of an OBJ's or a PLY's bytes (``kind`` as
+    trimesh names the format) that a reader of its faces leaves out, in
+    the words of a glTF file's
+    (:func:`~isoflow.mesh.gltf_extensions.read_without`); None where it
+    holds none."""
+    lines = _lines_in(data, kind, str(where))
+    if not lines:
+        return None
+    from .gltf_extensions import read_without
+
+    what = f"its {counted(lines, 'line')} (OBJ l lines)" if kind == "obj" else \
+        f"its {counted(lines, 'edge')} (the PLY edge element)"
+    return read_without(where, what, lines)
 
 
 def _read_simple(p: Path):
@@ -901,10 +957,12 @@ def refuse_empty_members(p: Path) -> None:
         raise IsoflowError(empty_file_line(f"{p}:{meshes[0]}", meshes[0]))
 
 
-def faceless_member_line(where: str, kind: str, scene: Any) -> str | None:
+def faceless_member_line(where: str, kind: str, scene: Any, data: bytes = b"") -> str | None:
     """The line for an archive's mesh member that holds no triangle, as
-    that file given alone is refused: a point cloud's, or "no triangles
-    read"; None where some geometry of it is a mesh with faces.
+    that file given alone is refused: a wireframe's (an OBJ's ``l`` lines,
+    a PLY's ``edge`` element, :func:`wireframe_line`), a point cloud's, or
+    "no triangles read"; None where some geometry of it is a mesh with
+    faces.
 
     Parameters
     ----------
@@ -914,6 +972,10 @@ def faceless_member_line(where: str, kind: str, scene: Any) -> str | None:
         Its format, as trimesh names it (``stl``, ``obj``).
     scene : trimesh.Scene
         The member as ``trimesh.load_scene`` reads it.
+    data : bytes, optional
+        The member's bytes, where its lines are counted (trimesh reads no
+        OBJ ``l`` line, and a PLY's edges as a path); without them a
+        wireframe is named by its points alone.
 
     Returns
     -------
@@ -926,12 +988,18 @@ def faceless_member_line(where: str, kind: str, scene: Any) -> str | None:
     'parts.zip:lid.stl: no triangles read (empty mesh, or not a valid STL file)'
     >>> faceless_member_line("parts.zip:box.stl", "stl", trimesh.Scene(trimesh.creation.box())) is None
     True
+    >>> cage = b"v 0 0 0\\nv 1 0 0\\nv 0 1 0\\nl 1 2\\nl 2 3\\n"
+    >>> print(faceless_member_line("parts.zip:cage.obj", "obj", trimesh.Scene(), cage))  # doctest: +ELLIPSIS
+    parts.zip:cage.obj: no triangles read: it holds 3 points joined by 2 lines and no faces, a wireframe, ...
     """
     import trimesh
 
     geometry = list(scene.geometry.values())
     if any(isinstance(g, trimesh.Trimesh) and len(g.faces) for g in geometry):
         return None
+    lines = _lines_in(data, kind, where)
+    if lines and (points := _points_in(data, kind, where)):
+        return wireframe_line(where, points, lines)
     points = sum(len(g.vertices) for g in geometry if isinstance(g, (trimesh.PointCloud, trimesh.Trimesh)))
     if points:
         return point_cloud_line(where, points)
@@ -996,8 +1064,10 @@ def mesh_members(p: Path, kind: str, key: Callable[[str], Any] | None = None) ->
                 warn(note, MeshNote)
         scene = trimesh.load_scene(trimesh.util.wrap_as_stream(data), file_type=member_kind, resolver=resolver,
                                    process=False)
-        if (line := faceless_member_line(f"{p}:{member}", member_kind, scene)) is not None:
+        if (line := faceless_member_line(f"{p}:{member}", member_kind, scene, data)) is not None:
             raise IsoflowError(line)
+        if (note := _lines_left_out(f"{p}:{member}", member_kind, data)) is not None:  # lines beside its faces
+            warn(note, MeshNote)
         yield member, member_kind, data, scene
 
 
