@@ -947,3 +947,26 @@ def test_an_nrrd_voxel_size_far_from_1_is_read_as_pynrrd_reads_it(tmp_path, size
     back = isoflow.read_volume(path)
     np.testing.assert_allclose(back.spacing, np.abs(np.diag(header["space directions"])), rtol=1e-12)
     assert back.volume.shape == (2, 3, 4)
+
+
+@pytest.mark.parametrize("extents", [(4, 5, 6), (6, 6, 6)])
+def test_voxelize_to_binvox_names_the_grid_a_reader_finds(tmp_path, capsys, extents):
+    """``voxelize -o x.binvox`` said "in a 4x5x6 grid" of a file whose
+    header gives a 6x6x6 cube (binvox holds a cube; the shorter axes are
+    padded): the line names the grid trimesh's binvox reader finds too."""
+    import trimesh
+    from trimesh.exchange.binvox import parse_binvox
+
+    from isoflow.cli.main import main
+
+    trimesh.creation.box(extents=extents).export(tmp_path / "b.stl")
+    assert main(["voxelize", str(tmp_path / "b.stl"), "--pitch", "1", "-o", str(tmp_path / "b.binvox")]) == 0
+    line = capsys.readouterr().out.strip()
+    with open(tmp_path / "b.binvox", "rb") as fh:
+        dims = tuple(int(d) for d in parse_binvox(fh).shape)
+    grid = "x".join(map(str, extents))
+    if dims == extents:
+        assert f"in a {grid} grid, pitch 1" in line, line
+    else:
+        assert f"in a {grid} grid (written as {'x'.join(map(str, dims))}: binvox holds a cube" in line, line
+    assert f"{np.prod(extents)} voxels" in line

@@ -71,8 +71,14 @@ def cmd_voxelize(args: argparse.Namespace) -> int:
         raise
     with coarser_for_magicavoxel(), writing_line(args, args.output):
         out = written(write_volume(obj, args.output, force=args.force), args.output)
-    shape = "x".join(map(str, obj.volume.shape))
-    print(terminal_text(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid, pitch {obj.pitch:.6g}, "
+    shape, padded = "x".join(map(str, obj.volume.shape)), ""
+    if Path(args.output).suffix.lower() == ".binvox":  # the grid as a reader finds it, not only as voxelised
+        from ..mesh.formats.binvox import written_shape
+
+        cube = written_shape(obj.volume.shape)
+        if cube != obj.volume.shape:
+            padded = f" (written as {'x'.join(map(str, cube))}: binvox holds a cube, padded with empty voxels)"
+    print(terminal_text(f"{out}: {counted(obj.voxels, 'voxel')} in a {shape} grid{padded}, pitch {obj.pitch:.6g}, "
                         f"origin {coordinates(obj.origin, step=obj.pitch)}"))
     return 0
 

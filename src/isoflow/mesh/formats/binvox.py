@@ -87,6 +87,30 @@ def check(path: Path, obj: DigitalObject, dataset: str | None = None, unit: str 
     space_not_kept(path, "binvox", space)
 
 
+def written_shape(shape: tuple[int, ...]) -> tuple[int, int, int]:
+    """The grid a volume of ``shape`` is written in: a cube of its longest
+    side (the spec wants equal ``dim``; the shorter axes are padded with
+    empty voxels at their high end, so the origin and every voxel keep
+    their place).
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The volume's shape, (x, y, z).
+
+    Returns
+    -------
+    tuple of int
+
+    Examples
+    --------
+    >>> written_shape((4, 5, 6)), written_shape((0, 0, 0))
+    ((6, 6, 6), (0, 0, 0))
+    """
+    side = max(shape)
+    return side, side, side
+
+
 #: the cube is run-length coded about this many voxels at a time
 SLAB_VOXELS = 1 << 20
 
@@ -94,7 +118,7 @@ SLAB_VOXELS = 1 << 20
 def write(path: Path, obj: DigitalObject, dataset: str | None = None, name: str | None = None,
           unit: str | None = None, space: str | None = None) -> None:
     spacing, corner = placement(obj)
-    side = max(obj.volume.shape)
+    side = written_shape(obj.volume.shape)[0]
     # scale is the cube's side in world units; the reader divides it by the side, or by 1 for an empty cube (0
     # voxels a side), whose scale must still be the voxel size: a scale of 0 is refused as damaged on reading
     header = (f"#binvox 1\ndim {side} {side} {side}\n"
