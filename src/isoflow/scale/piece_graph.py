@@ -510,7 +510,7 @@ def renumbered_pairs(one: np.ndarray, keys: np.ndarray, kind: np.ndarray, sums: 
     return at
 
 
-#: pairs per thread of :func:`pair_graph` at the least (fewer: one thread,
+#: pairs per thread of :func:`entries_graph` at the least (fewer: one thread,
 #: which places them sooner than threads start)
 PAIRS_PER_THREAD = 1 << 16
 
