@@ -529,3 +529,19 @@ def test_a_pitch_that_is_not_finite_is_said_to_be_one(pitch):
     assert "'pitch' must be finite and positive" in said and "one per axis, got" not in said.split("(")[0]
     assert said.endswith("got " + ("inf" if np.ndim(pitch) == 0 else
                                    "[" + ", ".join(f"{x:g}" for x in np.asarray(pitch, float)) + "]"))
+
+
+@needs_numba
+@pytest.mark.parametrize("conn", [6, 26])
+def test_the_graph_of_pieces_placed_on_threads_in_runs_of_pairs_equals_analyze(rng, conn, monkeypatch):
+    """The graph of pieces is counted and placed from runs of the vertex
+    pass' pairs, a run per thread (a run of one pair here, so that every
+    block of pairs is cut): each row still equals ``analyze`` of its label,
+    on labels touching by faces, edges and vertices, nested and wrapped."""
+    from isoflow.scale import piece_graph
+
+    monkeypatch.setattr(piece_graph, "PAIRS_PER_THREAD", 1)
+    for trial in range(8):
+        image = nested(rng) if trial == 0 else rng.choice(5, size=tuple(rng.integers(3, 11, 3)),
+                                                           p=[0.4, 0.15, 0.15, 0.15, 0.15]).astype(np.uint16)
+        assert_rows_equal_analyze(image, conn, method="compiled", threads=2 + trial % 2)

@@ -641,7 +641,9 @@ def piece_rows(vol: np.ndarray, conn: int, wanted: np.ndarray | None, surfaces: 
         return slab_rows(np.ascontiguousarray(vol), conn, wanted, surfaces, [vol.shape[0]])
     pieces = piece_runs(vol)
     want = wanted_pieces(pieces["values"], vol.dtype, wanted)
-    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False)
+    # the pairs' blocks read where they are by the graph of pieces, not copied into one set of arrays first
+    passed = vertex_pass(vol, pieces, want, feature_table(conn), pass_tables(conn, surfaces), keep_runs=False,
+                         joined=False)
     return rows_of_pieces(pieces, passed, vol.dtype, conn, wanted)
 
 
@@ -877,13 +879,16 @@ def graph_topology(pieces: dict, piece_label: np.ndarray, rows: np.ndarray, pass
                    lab_start: np.ndarray, lab_pieces: np.ndarray) -> dict:
     """b0, b2 and the surfaces of every row from the graph of pieces (each
     label's pieces: ``lab_pieces[lab_start[l]:lab_start[l + 1]]``)."""
-    from ..scale.piece_graph import label_topology, pair_graph
+    from ..scale.piece_graph import entries_graph, label_topology
     from ..scale.pieces import NONE
 
     n = len(piece_label)
-    graph = pair_graph(passed["keys"], passed["kind"], passed["sums"], n, NONE)
-    for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
-        passed[key] = passed[key][:0].copy()  # (a view would keep them)
+    if "entries" in passed:  # the vertex pass' blocks of pairs as they are (vertex_pass(..., joined=False))
+        graph = entries_graph(passed.pop("entries"), n, NONE)
+    else:
+        graph = entries_graph([(passed["keys"], passed["kind"], passed["sums"])], n, NONE)
+        for key in ("keys", "kind", "sums"):  # the graph holds them now, in less
+            passed[key] = passed[key][:0].copy()  # (a view would keep them)
     present = np.flatnonzero(rows >= 0)
     obj_kind, b0_kind, bg_kind, cc_kind = JOINS[conn]
     found = label_topology(rows[present].astype(np.int64), lab_start, lab_pieces, piece_label, pieces["lo"],

@@ -355,7 +355,7 @@ def label_topology(rows, lab_start, lab_pieces, piece_label, plo, phi, adj_start
         stamps = [np.zeros(npieces if k < 2 or other else 1, np.int32) for k in range(4)]  # stamp, comp, stamp2, comp2
         small = [np.zeros(3, np.int64) for _ in range(2)] + [np.zeros(most, np.int64) for _ in range(4)]
         b0, b2 = np.zeros(len(part), np.int64), np.zeros(len(part), np.int64)
-        surf = [np.zeros(total, np.int64) for _ in range(3)]
+        surf = [np.empty(total, np.int64) for _ in range(3)]  # written up to the surfaces found, read no further
         nsurf = _label_loop(part, lab_start, lab_pieces, piece_label, plo, phi, adj_start, adj_to, adj_kind, adj_n,
                             adj_q, obj_kind, b0_kind, bg_kind, cc_kind, local, *stamps, queue, parent,
                             parent0, *small, b0, b2, *surf)
@@ -445,12 +445,9 @@ def _listed(kind, sums, r, none):
 
 
 @njit(cache=True, nogil=True)
-def _fill_pair_graph(keys, kind, sums, none, adj_start, adj_to, adj_kind, adj_n, adj_q):
-    """The edges of :func:`pair_graph` grouped by piece (``adj_start``
-    holds each piece's count, shifted by one, on entry)."""
-    for g in range(len(adj_start) - 1):
-        adj_start[g + 1] += adj_start[g]
-    adj_fill = adj_start[:-1].copy()
+def _fill_pair_graph(keys, kind, sums, none, adj_fill, adj_to, adj_kind, adj_n, adj_q):
+    """The edges of :func:`pair_graph` of these pairs, each at its piece's
+    next place ``adj_fill[piece]`` (which moves past it)."""
     low = np.uint64(0xFFFFFFFF)
     for r in range(len(keys)):
         if not _listed(kind, sums, r, none):
@@ -513,6 +510,11 @@ def renumbered_pairs(one: np.ndarray, keys: np.ndarray, kind: np.ndarray, sums: 
     return at
 
 
+#: pairs per thread of :func:`entries_graph` at the least (fewer: one thread,
+#: which places them sooner than threads start)
+PAIRS_PER_THREAD = 1 << 16
+
+
 def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
                none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The graph of pieces from the vertex pass' pairs (keys: the smaller
@@ -523,7 +525,7 @@ def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
     (``adj_q``) of the mesh of its piece as the object where the other is
     the background, so that a label's surfaces are summed over the edges
     its walks read. Piece numbers and counts are held in 32 bits (the pass
-    packs them so).
+    packs them so). :func:`entries_graph` of the pairs in one set of arrays.
 
     Examples
     --------
@@ -533,9 +535,68 @@ def pair_graph(keys: np.ndarray, kind: np.ndarray, sums: np.ndarray, n: int,
     >>> start.tolist(), to.tolist(), sheets.tolist(), quarters.tolist()
     ([0, 0, 2, 3, 4], [2, 3, 1, 1], [2, 0, 0, 0], [4, 0, 0, 0])
     """
-    adj_start = np.zeros(n + 1, np.int64)
-    touching = _pair_degrees(keys, kind, sums, none, adj_start)
+    return entries_graph([(keys, kind, sums)], n, none)
+
+
+def entries_graph(entries: list, n: int, none: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`pair_graph` of pairs held in several sets of arrays
+    (``entries``: ``(keys, kind, sums)`` each, in order; the blocks of
+    entries that the vertex pass writes out, read where they are rather
+    than copied into one set first). The pairs are cut into runs of about
+    equal length, each counted and then placed on a thread of its own; a
+    piece's edges from an earlier run come first, as one pass over all of
+    them would place them.
+
+    Examples
+    --------
+    >>> keys = np.array([(1 << 32) | 2, (1 << 32) | 3], np.uint64)
+    >>> sums = np.array([[(4 << 32) | 2, 0], [0, 0]], np.uint64)
+    >>> kind = np.array([1, 2], np.uint8)
+    >>> one = entries_graph([(keys, kind, sums)], 4, 4)
+    >>> two = entries_graph([(keys[:1], kind[:1], sums[:1]), (keys[1:], kind[1:], sums[1:])], 4, 4)
+    >>> all((a == b).all() for a, b in zip(one, two))
+    True
+    """
+    from .compiled import run, thread_count
+
+    sizes = [len(keys) for keys, _, _ in entries]
+    total = sum(sizes)
+    threads = max(1, min(thread_count(), total // PAIRS_PER_THREAD))
+    parts = _cut_entries(entries, sizes, [total * t // threads for t in range(threads + 1)])
+    degrees = [np.zeros(n + 1, np.int64) for _ in parts]
+
+    def count(part: list, counts: np.ndarray) -> int:
+        """The edges of a run of pairs, counted per piece."""
+        return sum(_pair_degrees(keys, kind, sums, none, counts) for keys, kind, sums in part)
+
+    touching = sum(run([(count, part, counts) for part, counts in zip(parts, degrees)]))
+    adj_start = np.cumsum(degrees[0] if len(degrees) == 1 else np.sum(degrees, axis=0))
+    fills = [adj_start[:-1].copy()]
+    for counts in degrees[:-1]:  # a run's edges of a piece after those of the runs before
+        fills.append(fills[-1] + counts[1:])
+    del degrees
     adj = (adj_start, mapped(touching, np.uint32), mapped(touching, np.uint8), mapped(touching, np.uint32),
            mapped(touching, np.uint32))
-    _fill_pair_graph(keys, kind, sums, none, *adj)
+
+    def place(part: list, fill: np.ndarray) -> None:
+        """The edges of a run of pairs at their pieces' places."""
+        for keys, kind, sums in part:
+            _fill_pair_graph(keys, kind, sums, none, fill, *adj[1:])
+
+    run([(place, part, fill) for part, fill in zip(parts, fills)])
     return adj
+
+
+def _cut_entries(entries: list, sizes: list[int], cuts: list[int]) -> list[list]:
+    """``entries`` (of ``sizes`` pairs each) cut at the pairs ``cuts``
+    (counted over all of them, in order): per run between two cuts, the
+    slices of the arrays that it holds."""
+    parts: list[list] = [[] for _ in cuts[1:]]
+    at = 0
+    for (keys, kind, sums), size in zip(entries, sizes):
+        for t, (a, b) in enumerate(zip(cuts[:-1], cuts[1:])):
+            lo, hi = max(a, at) - at, min(b, at + size) - at
+            if lo < hi:
+                parts[t].append((keys[lo:hi], kind[lo:hi], sums[lo:hi]))
+        at += size
+    return parts

@@ -1236,7 +1236,7 @@ def _deferred(deferred, count, pvalues, vbase, flat, ny, nz, a, nx, i, j, want, 
 
 def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.ndarray, sheet_tables,
                 layers: tuple[int, int] | None = None, nx: int | None = None, x0: int = 0, base: int = 0,
-                keep_runs: bool = True, axis: str = "its first axis") -> dict:
+                keep_runs: bool = True, axis: str = "its first axis", joined: bool = True) -> dict:
     """The vertex pass (see the module docs) over a slab of a label image.
 
     ``values``: the slab (voxel layers ``x0 ..`` of a volume of ``nx``
@@ -1257,7 +1257,10 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     adds them up: :func:`isoflow.scale.piece_graph.pair_graph`). A refusal names the image's first axis as ``axis``
     (:func:`check_layers`). Without ``keep_runs`` the runs of ``found``
     (``starts`` and ``runs``) are let go once the sweep is done, before
-    the pairs are read out.
+    the pairs are read out. Without ``joined`` the entries are given as the
+    blocks the threads wrote them out in, not copied into one set of
+    arrays: ``entries``, a list of ``(keys, kind, sums)`` in place of the
+    three (:func:`isoflow.scale.piece_graph.entries_graph` reads them so).
     """
     flat = unsigned(values)
     nxs, ny, nz = flat.shape
@@ -1310,9 +1313,12 @@ def vertex_pass(values: np.ndarray, found: dict, want: np.ndarray, table: np.nda
     if not keep_runs:
         for key in ("starts", "runs"):
             found[key] = found[key][:0].copy()  # a view would keep the buffer
-    keys, kind, sums = read_out(filled, npieces, nxs, axis)
-    return {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces),
-            "keys": keys, "kind": kind, "sums": sums}
+    out = {"features": features_of(features, windows, npieces, rows), "doubled": doubled_of(doubled, windows, npieces)}
+    if not joined:
+        out["entries"] = [(k[:n], c[:n], v[:n]) for thread in filled for k, c, v, n in thread]
+        return out
+    out["keys"], out["kind"], out["sums"] = read_out(filled, npieces, nxs, axis)
+    return out
 
 
 #: the pair table's first size (slots), and entries per block of the pairs
@@ -1424,13 +1430,21 @@ def pieces_held(offsets: np.ndarray, runs: np.ndarray, r0: int, r1: int) -> tupl
 def features_of(counts: list[np.ndarray], windows: list, npieces: int, rows: np.ndarray) -> np.ndarray:
     """Per piece, the features of its vertices: each thread's counts of
     each group of configurations (over its window of pieces) times the
-    group's row of features, added up; each thread's counts let go as soon
-    as they are added."""
+    group's row of features, added up, each range of pieces on a thread of
+    its own (from every window that reaches it); the counts let go once
+    added."""
     out = mapped((npieces, rows.shape[1]), np.int64)
     weights = np.ascontiguousarray(rows, np.int64)
-    while counts:
-        lo, _ = windows[len(windows) - len(counts)]
-        _add_features(counts.pop(0), weights, out[lo:])
+
+    def add(a: int, b: int) -> None:
+        """Pieces a .. b - 1, from every window that holds some of them."""
+        for (lo, hi), part in zip(windows, counts):
+            x, y = max(a, lo), min(b, hi)
+            if x < y:
+                _add_features(part[x - lo:y - lo], weights, out[x:y])
+
+    run([(add, a, b) for a, b in slabs(npieces, len(counts))])
+    counts.clear()
     return out
 
 
