@@ -1876,3 +1876,33 @@ def test_a_signal_while_the_read_back_waits_for_trimesh_ends_the_command(tmp_pat
     assert proc.returncode == 128 + signal.SIGTERM, err
     assert err.splitlines()[-1] == f"isoflow: terminated: {glb} is written, not read back (--no-check skips the read-back)"
     assert trimesh.load(glb).geometry  # the whole file, as written
+
+
+def test_labels_of_a_channel_axis_of_one_entry(capsys, tmp_path):
+    """A 3D segmentation saved with a last axis of one entry (ilastik's HDF5
+    export, (z, y, x, 1); an .npy of (X, Y, Z, 1)) holds one 3D label image:
+    ``info --labels`` gives its table, each row scikit-image's area, box and
+    Euler number of that 3D image (no time series to pick a point of)."""
+    h5py = pytest.importorskip("h5py")
+    from skimage.measure import regionprops
+
+    image = np.zeros((9, 8, 7), np.uint8)
+    image[1:4, 1:4, 1:4] = 1
+    image[4:7, 1:4, 1:4] = 2  # touches label 1 by a face
+    image[2:8, 4:8, 1:6] = 3
+    image[4:6, 5:7, 2:4] = 0  # a cavity in label 3
+    with h5py.File(tmp_path / "seg.h5", "w") as f:
+        f["exported_data"] = image[..., None]
+    np.save(tmp_path / "seg.npy", image[..., None])
+    expected = {p.label: p for p in regionprops(image)}
+    for name in ("seg.h5", "seg.npy"):
+        code, out, err = said(capsys, "info", tmp_path / name, "--labels", "--json", "--connectivity", "26")
+        assert code == 0, err
+        report = json.loads(out)
+        assert report["shape"] == list(image.shape)
+        assert [row["label"] for row in report["labels"]] == sorted(expected)
+        for row in report["labels"]:
+            prop = expected[row["label"]]
+            assert row["voxels"] == prop.area
+            assert [row[f"bbox-{i}"] for i in range(6)] == list(prop.bbox)
+            assert row["euler_characteristic"] == prop.euler_number

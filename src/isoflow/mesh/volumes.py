@@ -319,7 +319,12 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
     if fmt.module == "omezarr":  # only that time point's chunks: a time-lapse store may not fit in memory
         return fmt.load().read(file, dataset, time=time)
     raw = fmt.load().read(file, dataset)
-    time = check_time(time, np.shape(raw.array), str(path))
+    return _time_point(raw, check_time(time, np.shape(raw.array), str(path)))
+
+
+def _time_point(raw: RawVolume, time: int) -> RawVolume:
+    """Time point ``time`` of a 4D ``raw`` volume, as 3D: its array's last
+    axis and the placement's fourth entries dropped."""
     space = {k: v if v is None or not np.ndim(v) else v[:3] for k, v in
              {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset}.items()}
     return dataclasses.replace(raw, array=raw.array[..., time], **space)
@@ -481,7 +486,8 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
         NIfTI, NRRD, TIFF, HDF5, zarr, ...), optionally ``:dataset``.
     time : int, optional
         One time point of a time series of label images (4D, read as x, y,
-        z, t), as :func:`read_volume` takes it.
+        z, t), as :func:`read_volume` takes it. A file's last axis of one
+        entry (ilastik's HDF5 ``(z, y, x, 1)``) is read as 3D without it.
 
     Returns
     -------
@@ -523,6 +529,12 @@ def read_labels(path: str | os.PathLike, *, time: int | np.integer | None = None
                                "makes one of several meshes (isoflow.voxelize_meshes)", time=time)
     said_of(raw)
     arr = np.asarray(raw.array)
+    if time is None and arr.ndim == 4 and arr.shape[3] == 1:
+        # a 3D segmentation saved with a channel axis of one entry (ilastik's
+        # HDF5 (z, y, x, 1), an .npy of shape (X, Y, Z, 1)) has one 3D image
+        # to read, as NIfTI's reader drops such an axis
+        raw = _time_point(dataclasses.replace(raw, array=arr), 0)
+        arr = np.asarray(raw.array)
     if arr.ndim not in (2, 3):
         raise IsoflowError(f"{path}: a label image is read in 3D or 2D, this array is {arr.ndim}D with shape "
                            f"{arr.shape}" + (one_time_point_labels(path) if arr.ndim == 4 else ""))
