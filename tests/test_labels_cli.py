@@ -1906,3 +1906,30 @@ def test_labels_of_a_channel_axis_of_one_entry(capsys, tmp_path):
             assert row["voxels"] == prop.area
             assert [row[f"bbox-{i}"] for i in range(6)] == list(prop.bbox)
             assert row["euler_characteristic"] == prop.euler_number
+
+
+def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
+    """A choice of more labels than the table is asked for label by label
+    (a range of millions) that holds 0 gives the background's row, as a
+    short one does, in a file and in a zarr store read block by block: its
+    voxels are the image's zeros, its Euler number scikit-image's, and 0 is
+    not called absent."""
+    from skimage.measure import euler_number
+
+    image = rng.choice([0, 1, 2, 7], size=(12, 11, 10), p=[0.4, 0.2, 0.2, 0.2]).astype(np.uint32)
+    np.save(tmp_path / "seg.npy", image)
+    paths = [tmp_path / "seg.npy"]
+    zarr = pytest.importorskip("zarr")
+    store = zarr.create_array(tmp_path / "seg.zarr", shape=image.shape, chunks=(5, 4, 3), dtype=image.dtype)
+    store[:] = image
+    paths.append(tmp_path / "seg.zarr")
+    background = image == 0
+    for path in paths:
+        code, out, err = said(capsys, "info", path, "--labels", "0-200000", "--json", "--connectivity", "26")
+        assert code == 0, err
+        report = json.loads(out)
+        assert [row["label"] for row in report["labels"]] == [0, 1, 2, 7]
+        assert 0 not in report["absent"] and len(report["absent"]) == 200001 - 4
+        row = report["labels"][0]
+        assert row["voxels"] == np.count_nonzero(background)
+        assert row["euler_characteristic"] == euler_number(background, connectivity=3)

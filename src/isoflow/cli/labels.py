@@ -296,18 +296,26 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     # a long choice (a range of millions) is a filter on the whole table:
     # a row of zeros per label asked would cost more than the image
     every = asked is not None and len(asked) > CHOICE_ROWS
-    if image is None:
-        about, table = table_of_store(args, conn, None if every else asked, surfaces, given)
-    else:
+
+    def table_of(chosen):
+        if image is None:
+            return table_of_store(args, conn, chosen, surfaces, given)
         about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
                  "origin": image.origin, "unit": image.unit, "space": image.space,
                  **({} if corners is None else {"corners": corners})}
-        wanted = None if asked is None or every else _by_type(args.input, asked, image.array.dtype)[0]
+        wanted = None if chosen is None else _by_type(args.input, chosen, image.array.dtype)[0]
         try:
-            table = label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
-                                surfaces=surfaces, threads=getattr(args, "threads", None), names=names)
+            return about, label_table(image.array, conn, pitch=image.spacing, origin=image.origin, labels=wanted,
+                                      surfaces=surfaces, threads=getattr(args, "threads", None), names=names)
         except IsoflowError as exc:  # work that would not fit: the line names the file, as a store's does
             raise exc.at(args.input) from None
+
+    about, table = table_of(None if every else asked)
+    if every and (asked == 0).any():
+        # the table of every label has no row of the background, which a choice of 0 asks for
+        zero = table_of(np.zeros(1, asked.dtype))[1]
+        if zero["voxels"][0] > 0:
+            table = {k: np.concatenate([v, zero[k]]) for k, v in table.items()}
     # a slice saved as (X, Y, 1) is a plate here: info's note gives the line that saves its 2D table's image
     say_plate(args, tuple(about["shape"]))
     # an image without voxels (shape 0x3x3) has no label, as an all-0 one has none: the same empty table, as
