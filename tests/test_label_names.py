@@ -349,3 +349,32 @@ def test_an_empty_mapping_of_names_means_no_names_not_the_images(tmp_path, image
     assert "name" not in isoflow.label_table(named, surfaces=False, names={})
     # None still takes the image's
     assert isoflow.label_table(named, surfaces=False)["name"].tolist() == list(NAMES.values())
+
+
+def test_a_signed_images_negative_labels_take_their_names(tmp_path, capsys):
+    """An int16 segmentation's negative labels have rows, so a side file or
+    an OME-Zarr ``image-label`` entry names them as it names the others
+    (the names are the file's own text); a file that write_labels writes
+    holds no negative label, so it refuses a name for one."""
+    import zarr
+
+    image = np.zeros((6, 5, 4), np.int16)
+    image[0:2] = -4
+    image[3:5] = 1
+    side = tmp_path / "names.txt"
+    side.write_text("-4 vessel\n1 liver\n")
+    np.save(tmp_path / "seg.npy", image)
+    assert main(["info", str(tmp_path / "seg.npy"), "--labels", "--names", str(side), "--csv", "-"]) == 0
+    rows = list(csv.DictReader(io.StringIO(capsys.readouterr().out)))
+    assert [(row["label"], row["name"]) for row in rows] == [("-4", "vessel"), ("1", "liver")]
+
+    store = zarr.open_group(tmp_path / "seg.zarr", mode="w", zarr_format=2)
+    store.create_array("0", shape=image.shape[::-1], dtype=image.dtype)[:] = image.T
+    store.attrs["multiscales"] = [{"version": "0.4", "axes": ["z", "y", "x"], "datasets": [{"path": "0"}]}]
+    store.attrs["image-label"] = {"version": "0.4", "properties": [{"label-value": -4, "name": "vessel"}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert isoflow.read_labels(tmp_path / "seg.zarr").names == {-4: "vessel"}
+    with pytest.raises(IsoflowError, match="a label name is given for -4"):
+        isoflow.write_labels(np.abs(image), tmp_path / "out.h5", names={-4: "vessel"})
+    assert not (tmp_path / "out.h5").exists()

@@ -174,8 +174,8 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     Parameters
     ----------
     names : mapping of int to str, or sequence of str, or None
-        The names; a label value is an integer from 1 on (0 is the
-        background), a name a string of one line.
+        The names; a label value is a nonzero integer (negative in a
+        signed image; 0 is the background), a name a string of one line.
     where : str
         What a refusal names (the file, or the function).
 
@@ -187,7 +187,7 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     Raises
     ------
     IsoflowError
-        A label that is no integer from 1 on, a name that is no string or
+        A label that is no nonzero integer, a name that is no string or
         holds a line break.
 
     Examples
@@ -209,9 +209,9 @@ def label_names(names: Mapping[int, str] | Sequence[str] | None, where: str) -> 
     pairs = names.items() if isinstance(names, Mapping) else enumerate(list(names), 1)
     found: dict[int, str] = {}
     for label, name in pairs:
-        if isinstance(label, (bool, np.bool_)) or not isinstance(label, (int, np.integer)) or label < 1:
+        if isinstance(label, (bool, np.bool_)) or not isinstance(label, (int, np.integer)) or label == 0:
             raise IsoflowError(f"{where}: a label name is given for {given_text(label)}, and labels are named "
-                               "from 1 on (integers; 0 is the background)")
+                               "by nonzero integers (0 is the background)")
         if not isinstance(name, str) or "\n" in name or "\r" in name:
             raise IsoflowError(f"{where}: the name of label {int(label)} is {given_text(name)}, not a string of "
                                "one line")

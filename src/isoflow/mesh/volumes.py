@@ -1193,7 +1193,8 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         format that keeps fewer labels than the image has
         (:func:`check_label_output`), a ``unit`` that is no length unit, a
         name that is no string of one line or a label named that is no
-        integer from 1 on.
+        integer from 1 on (read_labels names a signed image's negative
+        labels; this writes none).
 
     Examples
     --------
@@ -1258,6 +1259,10 @@ def write_labels(labels: ArrayLike | LabelImage, path: str | os.PathLike, *, pit
         raise IsoflowError(f"{path}: a label image is a 3D or 2D array of integers (or bools, or floats of whole "
                            f"numbers), got {arr.ndim}D {arr.dtype}")
     arr = _unsigned_labels(arr, path)
+    if names and min(names) < 0:
+        # read_labels names a signed image's negative labels; a file written here holds none of them
+        raise IsoflowError(f"{path}: a label name is given for {min(names)}, and write_labels writes labels from 0 "
+                           "on (a negative label is refused)")
     # the pitch and origin checked as every object's are, before the file
     # is written: the format stores whatever it is given
     place = DigitalObject.placement(arr.ndim, pitch=pitch, origin=origin)

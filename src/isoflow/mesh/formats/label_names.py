@@ -158,8 +158,6 @@ def label_names_of(text: str, where: str, suffix: str = "") -> dict[int, str]:
     for label, name, at in pairs:
         if label == 0:  # the background (FreeSurfer's Unknown, ITK-SNAP's Clear Label) is no structure
             continue
-        if label < 0:
-            raise IsoflowError(f"{where}: {at}: label {label}: labels are named from 1 on (0 is the background)")
         if label in found:
             raise IsoflowError(f"{where}: {at}: label {label} is named again (first on {first[label]})")
         name = one_line_name(name)  # a name is one line, as the image readers keep it

@@ -186,7 +186,7 @@ def label_properties(array, where: str | None = None) -> dict[int, str] | None:
     with ``null``) leaves its label unnamed, and one for label 0, the
     background, is left out. An entry whose ``name`` is anything else
     (true, a list, an object), or whose ``label-value`` is no whole number
-    from 1 on (``"3"``, ``2.5``, -1, missing), is left out with one
+    (``"3"``, ``2.5``, missing), is left out with one
     :class:`~isoflow.errors.IsoflowWarning` naming each such entry and what
     it holds, rather than dropped without a word.
 
@@ -238,9 +238,9 @@ def label_properties(array, where: str | None = None) -> dict[int, str] | None:
                  else int(number) if number is not None and number.is_integer() else None)
         if label == 0:  # the background, which no table row or file names
             continue
-        if label is None or label < 0:
+        if label is None:
             skipped.append(f"entry {n} (name {_json_text(name)}) has label-value {_json_text(value)}, not a whole "
-                           "number from 1 on")
+                           "number")
         elif isinstance(name, str):
             found[label] = one_line_name(name)  # one line, as a table's row and write_labels take it
         elif _number(name) is not None:  # "name": 7, as a viewer shows it
