@@ -325,9 +325,11 @@ def _read_raw(path: str | os.PathLike, mesh: str | None = None, time: int | np.i
 def _time_point(raw: RawVolume, time: int) -> RawVolume:
     """Time point ``time`` of a 4D ``raw`` volume, as 3D: its array's last
     axis and the placement's fourth entries dropped."""
-    space = {k: v if v is None or not np.ndim(v) else v[:3] for k, v in
-             {"pitch": raw.pitch, "origin": raw.origin, "offset": raw.offset}.items()}
-    return dataclasses.replace(raw, array=raw.array[..., time], **space)
+    def spatial(value):  # a per-axis entry loses its fourth; one number for all axes stays
+        return value if value is None or not np.ndim(value) else value[:3]
+
+    return dataclasses.replace(raw, array=raw.array[..., time], pitch=spatial(raw.pitch), origin=spatial(raw.origin),
+                               offset=spatial(raw.offset))
 
 
 def check_dataset_read(path, fmt, dataset: str | None) -> None:
