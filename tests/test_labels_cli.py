@@ -1933,3 +1933,23 @@ def test_a_long_choice_of_labels_takes_the_background(capsys, tmp_path, rng):
         row = report["labels"][0]
         assert row["voxels"] == np.count_nonzero(background)
         assert row["euler_characteristic"] == euler_number(background, connectivity=3)
+
+
+def test_surface_labels_force_leaves_names_past_every_64_bit_label(tmp_path, capsys):
+    """``label_N`` files whose N no 64-bit integer type holds (2**64 and
+    past, below -2**63) are names this command never writes, so a --force
+    run of every label keeps them; ``label_18446744073709551615.ply``
+    (uint64's largest, an earlier run's of another image) goes."""
+    out = tmp_path / "out"
+    out.mkdir()
+    theirs = {f"label_{v}.ply": str(v).encode() for v in
+              (int(np.iinfo(np.uint64).max) + 1, int(np.iinfo(np.int64).min) - 1, 10**30)}
+    for name, data in theirs.items():
+        (out / name).write_bytes(data)
+    (out / f"label_{np.iinfo(np.uint64).max}.ply").write_bytes(b"an earlier run's")
+    image = np.zeros((4, 4, 4), np.uint8)
+    image[1:3, 1:3, 1:3] = 1
+    np.save(tmp_path / "seg.npy", image)
+    assert main(["surface", str(tmp_path / "seg.npy"), "--labels", "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
+    capsys.readouterr()
+    assert files_in(out) == {**theirs, "label_1.ply": files_in(out)["label_1.ply"]}

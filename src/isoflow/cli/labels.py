@@ -1059,7 +1059,8 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     """The label files (``label_N`` with ``suffix``) in ``directory`` that
     are not among ``names``: an earlier run's, of labels this run has not.
     ``N`` is a label as this command writes it (no leading zero, ASCII
-    digits): ``label_007.ply`` is another program's file, not label 7's.
+    digits, a value of a 64-bit integer type): ``label_007.ply`` and
+    ``label_18446744073709551616.ply`` (2**64) are another program's files.
 
     Parameters
     ----------
@@ -1079,7 +1080,7 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     --------
     >>> import tempfile
     >>> d = Path(tempfile.mkdtemp())
-    >>> for f in ("label_1.ply", "label_9.ply", "label_9.obj", "label_09.ply", "notes.ply"):
+    >>> for f in ("label_1.ply", "label_9.ply", "label_9.obj", "label_09.ply", "label_18446744073709551616.ply"):
     ...     _ = (d / f).write_bytes(b"")
     >>> [f.name for f in earlier_label_files(d, ".ply", ["label_1"])]
     ['label_9.ply']
@@ -1089,7 +1090,8 @@ def earlier_label_files(directory: str | os.PathLike, suffix: str, names: list[s
     for f in Path(directory).glob(f"label_*{suffix}"):
         stem = f.name[: -len(suffix)]
         # the names this command writes, str(label): label_07 (or digits other than ASCII) is another program's file
-        if re.fullmatch(r"label_(0|-?[1-9][0-9]*)", stem) and stem not in wanted and not f.is_dir():
+        if re.fullmatch(r"label_(0|-?[1-9][0-9]*)", stem) and stem not in wanted and not f.is_dir() \
+                and -(1 << 63) <= int(stem[6:]) < 1 << 64:  # no label image holds another value
             found.append(f)
     return sorted(found)
 
