@@ -1085,6 +1085,24 @@ def test_a_mesh_file_given_for_points_is_named_a_mesh(read, name, tmp_path):
     assert "voxelize_file" in message or "export it" in message
 
 
+@pytest.mark.parametrize("suffix", [".npy", ".npz", ".nii.gz", ".tif", ".nrrd", ".binvox", ".vox", ".zarr"])
+def test_a_volume_file_given_for_points_is_named_a_volume(suffix, tmp_path):
+    """read_points of a volume under its own suffix said "its content is
+    NumPy, but volumes are read by their suffix: rename it v.npy", the name
+    it has ("v.nii.nii.gz" for a .nii.gz), a .binvox that its suffix "names
+    no volume or mesh format", and a .zarr store "a directory, not a volume
+    or point list". Each is named a volume file, with the function that
+    reads it, and that function reads it."""
+    if suffix in (".nii.gz", ".nrrd", ".tif", ".zarr"):
+        pytest.importorskip({".nii.gz": "nibabel", ".nrrd": "nrrd", ".tif": "tifffile", ".zarr": "zarr"}[suffix])
+    path = isoflow.write_volume(np.ones((2, 2, 2), bool), tmp_path / f"v{suffix}")
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.read_points(path)
+    message = str(caught.value)
+    assert message == f"{path}: a volume file, not a list of lattice points; isoflow.read_volume(path) reads it"
+    assert isoflow.read_volume(path).voxels == 8
+
+
 EMPTY_PATH_CALLS = {**PATH_CALLS, "verify_genus": lambda bad: isoflow.verify_genus(bad, [8]),
                     "voxelize_meshes": lambda bad: isoflow.voxelize_meshes([bad], resolution=4),
                     "voxelize_to_zarr source": lambda bad: isoflow.voxelize_to_zarr(bad, "v.zarr", resolution=4)}
