@@ -1487,3 +1487,71 @@ def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():
         isoflow.label_table(report)
     text = str(info.value)
     assert "Report" in text and "one object" in text and "label image" in text and "1D" not in text
+
+
+def _edge_pair() -> np.ndarray:
+    """Two voxels that share only an edge: two components under 6, one
+    under 26 (scikit-image's label at connectivity 1 and 3 says so)."""
+    v = np.zeros((2, 2, 1), bool)
+    v[0, 0, 0] = v[1, 1, 0] = True
+    return v
+
+
+ZERO_D_CONNECTIVITY = {
+    "analyze": lambda v, c: isoflow.analyze(v, c)["betti"][0],
+    "euler_characteristic": lambda v, c: isoflow.euler_characteristic(v, c),
+    "betti_numbers": lambda v, c: isoflow.betti_numbers(v, c)[0],
+    "label_table": lambda v, c: int(isoflow.label_table(v, c)["b0"][0]),
+    "boundary_mesh": lambda v, c: len(isoflow.boundary_mesh(v, c).components()),
+    "closed_surfaces": lambda v, c: len(isoflow.closed_surfaces(v, c).surfaces),
+    "a_lut": lambda v, c: int(isoflow.configuration_histogram(v) @ isoflow.a_lut(c)) // 8,
+    "euler_lut": lambda v, c: int(isoflow.configuration_histogram(v) @ isoflow.euler_lut(3, c)) // 8,
+}
+
+
+@pytest.mark.parametrize("name", sorted(ZERO_D_CONNECTIVITY))
+def test_a_0d_integer_array_is_the_integer_it_holds(name):
+    """A number saved with np.savez comes back from np.load as a 0D array,
+    which NumPy indexes by as the integer it holds. Given for the
+    connectivity it was refused as "connectivity 6 is not valid in 3D: it
+    must be an integer", a line that contradicts itself (steps, slab, chi,
+    resolution, resolutions, max_resolution and labels said the same). It
+    is now the integer: two voxels meeting at an edge are two components
+    under 6 and one under 26, as scikit-image labels them."""
+    measure = pytest.importorskip("skimage.measure")
+    v = _edge_pair()
+    call = ZERO_D_CONNECTIVITY[name]
+    for conn, sk in ((6, 1), (26, 3)):
+        expected = int(measure.label(v, connectivity=sk).max())
+        assert call(v, np.array(conn)) == call(v, conn) == expected
+    with pytest.raises(IsoflowError, match=r"^connectivity True is not valid in 3D: it must be an integer"):
+        call(v, np.array(True))  # a 0D bool is refused as the bool is
+
+
+def test_0d_integer_arrays_for_counts_and_sizes(tmp_path):
+    """steps, slab, chi, ndim, resolution, resolutions, max_resolution and
+    labels take a 0D integer array as the integer it holds (they refused
+    it naming its value, "steps must be an integer >= 0, got 2"), and
+    refuse a 0D float or bool array as they refuse the float or bool."""
+    trimesh = pytest.importorskip("trimesh")
+    box = trimesh.creation.box((2, 2, 2))
+    cube = np.ones((3, 3, 3), bool)
+    # the flow peels a 3x3x3 cube to 2x2x2 (8 voxels) and then one voxel (eq. 5.1's lattices in turn)
+    run = isoflow.run_flow(cube, steps=np.array(2), max_steps=np.array(5))
+    assert [s["voxels"] for s in run.steps] == [27, 8, 1] and run.to_dict()["steps"][-1]["step"] == 2
+    assert int(isoflow.configuration_histogram(cube, slab=np.array(1)).sum()) == 4 ** 3  # one per lattice vertex
+    assert isoflow.betti_numbers(cube, chi=np.array(1)) == [1, 0, 0]
+    assert len(isoflow.euler_lut(np.array(2))) == 2 ** 4
+    assert isoflow.voxelize_mesh(box, resolution=np.array(4)).voxels == 4 ** 3  # the box fills its 4^3 grid
+    verdict = isoflow.verify_genus(box, np.array([8]), max_resolution=np.array(16))
+    assert verdict.agree and verdict.reference == 0
+    assert isoflow.label_table(7 * cube.astype(np.uint8), labels=[np.array(7)])["voxels"].tolist() == [27]
+    for call, words in [
+        (lambda: isoflow.run_flow(cube, steps=np.array(2.0)), "steps must be an integer >= 0, got 2.0"),
+        (lambda: isoflow.configuration_histogram(cube, slab=np.array(True)), "slab must be an integer >= 1, got True"),
+        (lambda: isoflow.label_table(cube, labels=[np.array(1.0)]), "label 1.0 is not an integer"),
+        (lambda: isoflow.verify_genus(box, np.array(8)), "resolutions must be a sequence of integers, got 8; "
+                                                           "one resolution is [8]"),
+    ]:
+        with pytest.raises(IsoflowError, match=re.escape(words)):
+            call()
