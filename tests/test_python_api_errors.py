@@ -1555,3 +1555,23 @@ def test_0d_integer_arrays_for_counts_and_sizes(tmp_path):
     ]:
         with pytest.raises(IsoflowError, match=re.escape(words)):
             call()
+
+
+@pytest.mark.parametrize("suffix", [".nrrd", ".zarr", ".npz", ".h5"])
+def test_a_label_image_given_for_its_names_says_where_they_are(suffix, tmp_path):
+    """read_label_names of a label image that records its names (a 3D
+    Slicer .nrrd, an OME-Zarr store, HDF5, .npz) said "not a file of label
+    names (it holds binary data)" and of a .zarr store "cannot read the
+    label names (Is a directory)", neither saying that read_labels gives
+    those names. It now says so, and read_labels gives them."""
+    if suffix != ".npz":
+        pytest.importorskip({".nrrd": "nrrd", ".zarr": "zarr", ".h5": "h5py"}[suffix])
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[0, 0, 0], labels[2, 2, 2] = 1, 2
+    path = isoflow.write_labels(labels, tmp_path / f"seg{suffix}", names={1: "liver", 2: "spleen"})
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.read_label_names(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: a label image, not a side file of label names; ")
+    assert "isoflow.read_labels(path).names" in message and "\n" not in message
+    assert isoflow.read_labels(path).names == {1: "liver", 2: "spleen"}
