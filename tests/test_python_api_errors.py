@@ -1575,3 +1575,32 @@ def test_a_label_image_given_for_its_names_says_where_they_are(suffix, tmp_path)
     assert message.startswith(f"{path}: a label image, not a side file of label names; ")
     assert "isoflow.read_labels(path).names" in message and "\n" not in message
     assert isoflow.read_labels(path).names == {1: "liver", 2: "spleen"}
+
+
+MESH_CALLS = {
+    "voxelize_mesh": lambda mesh, tmp: isoflow.voxelize_mesh(mesh, resolution=4),
+    "voxelize_meshes": lambda mesh, tmp: isoflow.voxelize_meshes([mesh], resolution=4),
+    "voxelize_to_zarr": lambda mesh, tmp: isoflow.voxelize_to_zarr(mesh, tmp / "m.zarr", resolution=4),
+    "verify_genus": lambda mesh, tmp: isoflow.verify_genus(mesh, [4]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MESH_CALLS))
+def test_a_manifold_given_for_a_mesh_names_its_bridge(name, tmp_path):
+    """A manifold3d.Manifold given where a triangle mesh is taken said
+    "faces are missing: voxelize_mesh(vertices, faces) ..." (voxelize_mesh)
+    or "a mesh is a file, ... got Manifold", naming neither
+    isoflow.from_manifold nor where the Manifold's triangles are, as a
+    Manifold given for a volume does. The line names both, nothing is
+    written, and the triangles it names voxelise to the unit cube's 4^3
+    voxels."""
+    manifold3d = pytest.importorskip("manifold3d")
+    cube = manifold3d.Manifold.cube((1, 1, 1))
+    with pytest.raises(IsoflowError) as caught:
+        MESH_CALLS[name](cube, tmp_path)
+    message = str(caught.value)
+    assert "a manifold3d.Manifold, not a triangle mesh: isoflow.from_manifold(manifold, pitch=P) voxelises it" in message
+    assert "faces are missing" not in message and "\n" not in message and list(tmp_path.iterdir()) == []
+    m = cube.to_mesh()
+    assert isoflow.voxelize_mesh((m.vert_properties[:, :3], m.tri_verts), resolution=4).voxels == 4 ** 3
+    assert isoflow.from_manifold(cube, pitch=0.25).voxels == 4 ** 3
