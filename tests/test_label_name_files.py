@@ -223,7 +223,8 @@ def test_a_file_that_is_no_list_of_names_is_one_line_exit_2(tmp_path, capsys, se
 
 def test_a_volume_given_for_its_names_and_names_without_labels_are_refused(tmp_path, capsys, seg):
     code, _, err = said(capsys, "surface", seg, "--labels", "-o", tmp_path / "s.glb", "--names", seg)
-    assert code == 2 and len(err) == 1 and "it holds binary data" in err[0] and not (tmp_path / "s.glb").exists()
+    assert code == 2 and len(err) == 1 and "a label image, not a side file of label names" in err[0]
+    assert not (tmp_path / "s.glb").exists()
     code, _, err = said(capsys, "info", seg, "--names", seg)
     assert code == 2 and len(err) == 1 and "--names names the labels of --labels" in err[0]
 

@@ -1085,6 +1085,24 @@ def test_a_mesh_file_given_for_points_is_named_a_mesh(read, name, tmp_path):
     assert "voxelize_file" in message or "export it" in message
 
 
+@pytest.mark.parametrize("suffix", [".npy", ".npz", ".nii.gz", ".tif", ".nrrd", ".binvox", ".vox", ".zarr"])
+def test_a_volume_file_given_for_points_is_named_a_volume(suffix, tmp_path):
+    """read_points of a volume under its own suffix said "its content is
+    NumPy, but volumes are read by their suffix: rename it v.npy", the name
+    it has ("v.nii.nii.gz" for a .nii.gz), a .binvox that its suffix "names
+    no volume or mesh format", and a .zarr store "a directory, not a volume
+    or point list". Each is named a volume file, with the function that
+    reads it, and that function reads it."""
+    if suffix in (".nii.gz", ".nrrd", ".tif", ".zarr"):
+        pytest.importorskip({".nii.gz": "nibabel", ".nrrd": "nrrd", ".tif": "tifffile", ".zarr": "zarr"}[suffix])
+    path = isoflow.write_volume(np.ones((2, 2, 2), bool), tmp_path / f"v{suffix}")
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.read_points(path)
+    message = str(caught.value)
+    assert message == f"{path}: a volume file, not a list of lattice points; isoflow.read_volume(path) reads it"
+    assert isoflow.read_volume(path).voxels == 8
+
+
 EMPTY_PATH_CALLS = {**PATH_CALLS, "verify_genus": lambda bad: isoflow.verify_genus(bad, [8]),
                     "voxelize_meshes": lambda bad: isoflow.voxelize_meshes([bad], resolution=4),
                     "voxelize_to_zarr source": lambda bad: isoflow.voxelize_to_zarr(bad, "v.zarr", resolution=4)}
@@ -1469,3 +1487,120 @@ def test_label_table_of_an_analyze_report_says_it_takes_the_label_image():
         isoflow.label_table(report)
     text = str(info.value)
     assert "Report" in text and "one object" in text and "label image" in text and "1D" not in text
+
+
+def _edge_pair() -> np.ndarray:
+    """Two voxels that share only an edge: two components under 6, one
+    under 26 (scikit-image's label at connectivity 1 and 3 says so)."""
+    v = np.zeros((2, 2, 1), bool)
+    v[0, 0, 0] = v[1, 1, 0] = True
+    return v
+
+
+ZERO_D_CONNECTIVITY = {
+    "analyze": lambda v, c: isoflow.analyze(v, c)["betti"][0],
+    "euler_characteristic": lambda v, c: isoflow.euler_characteristic(v, c),
+    "betti_numbers": lambda v, c: isoflow.betti_numbers(v, c)[0],
+    "label_table": lambda v, c: int(isoflow.label_table(v, c)["b0"][0]),
+    "boundary_mesh": lambda v, c: len(isoflow.boundary_mesh(v, c).components()),
+    "closed_surfaces": lambda v, c: len(isoflow.closed_surfaces(v, c).surfaces),
+    "a_lut": lambda v, c: int(isoflow.configuration_histogram(v) @ isoflow.a_lut(c)) // 8,
+    "euler_lut": lambda v, c: int(isoflow.configuration_histogram(v) @ isoflow.euler_lut(3, c)) // 8,
+}
+
+
+@pytest.mark.parametrize("name", sorted(ZERO_D_CONNECTIVITY))
+def test_a_0d_integer_array_is_the_integer_it_holds(name):
+    """A number saved with np.savez comes back from np.load as a 0D array,
+    which NumPy indexes by as the integer it holds. Given for the
+    connectivity it was refused as "connectivity 6 is not valid in 3D: it
+    must be an integer", a line that contradicts itself (steps, slab, chi,
+    resolution, resolutions, max_resolution and labels said the same). It
+    is now the integer: two voxels meeting at an edge are two components
+    under 6 and one under 26, as scikit-image labels them."""
+    measure = pytest.importorskip("skimage.measure")
+    v = _edge_pair()
+    call = ZERO_D_CONNECTIVITY[name]
+    for conn, sk in ((6, 1), (26, 3)):
+        expected = int(measure.label(v, connectivity=sk).max())
+        assert call(v, np.array(conn)) == call(v, conn) == expected
+    with pytest.raises(IsoflowError, match=r"^connectivity True is not valid in 3D: it must be an integer"):
+        call(v, np.array(True))  # a 0D bool is refused as the bool is
+
+
+def test_0d_integer_arrays_for_counts_and_sizes(tmp_path):
+    """steps, slab, chi, ndim, resolution, resolutions, max_resolution and
+    labels take a 0D integer array as the integer it holds (they refused
+    it naming its value, "steps must be an integer >= 0, got 2"), and
+    refuse a 0D float or bool array as they refuse the float or bool."""
+    trimesh = pytest.importorskip("trimesh")
+    box = trimesh.creation.box((2, 2, 2))
+    cube = np.ones((3, 3, 3), bool)
+    # the flow peels a 3x3x3 cube to 2x2x2 (8 voxels) and then one voxel (eq. 5.1's lattices in turn)
+    run = isoflow.run_flow(cube, steps=np.array(2), max_steps=np.array(5))
+    assert [s["voxels"] for s in run.steps] == [27, 8, 1] and run.to_dict()["steps"][-1]["step"] == 2
+    assert int(isoflow.configuration_histogram(cube, slab=np.array(1)).sum()) == 4 ** 3  # one per lattice vertex
+    assert isoflow.betti_numbers(cube, chi=np.array(1)) == [1, 0, 0]
+    assert len(isoflow.euler_lut(np.array(2))) == 2 ** 4
+    assert isoflow.voxelize_mesh(box, resolution=np.array(4)).voxels == 4 ** 3  # the box fills its 4^3 grid
+    verdict = isoflow.verify_genus(box, np.array([8]), max_resolution=np.array(16))
+    assert verdict.agree and verdict.reference == 0
+    assert isoflow.label_table(7 * cube.astype(np.uint8), labels=[np.array(7)])["voxels"].tolist() == [27]
+    for call, words in [
+        (lambda: isoflow.run_flow(cube, steps=np.array(2.0)), "steps must be an integer >= 0, got 2.0"),
+        (lambda: isoflow.configuration_histogram(cube, slab=np.array(True)), "slab must be an integer >= 1, got True"),
+        (lambda: isoflow.label_table(cube, labels=[np.array(1.0)]), "label 1.0 is not an integer"),
+        (lambda: isoflow.verify_genus(box, np.array(8)), "resolutions must be a sequence of integers, got 8; "
+                                                           "one resolution is [8]"),
+    ]:
+        with pytest.raises(IsoflowError, match=re.escape(words)):
+            call()
+
+
+@pytest.mark.parametrize("suffix", [".nrrd", ".zarr", ".npz", ".h5"])
+def test_a_label_image_given_for_its_names_says_where_they_are(suffix, tmp_path):
+    """read_label_names of a label image that records its names (a 3D
+    Slicer .nrrd, an OME-Zarr store, HDF5, .npz) said "not a file of label
+    names (it holds binary data)" and of a .zarr store "cannot read the
+    label names (Is a directory)", neither saying that read_labels gives
+    those names. It now says so, and read_labels gives them."""
+    if suffix != ".npz":
+        pytest.importorskip({".nrrd": "nrrd", ".zarr": "zarr", ".h5": "h5py"}[suffix])
+    labels = np.zeros((3, 3, 3), np.uint8)
+    labels[0, 0, 0], labels[2, 2, 2] = 1, 2
+    path = isoflow.write_labels(labels, tmp_path / f"seg{suffix}", names={1: "liver", 2: "spleen"})
+    with pytest.raises(IsoflowError) as caught:
+        isoflow.read_label_names(path)
+    message = str(caught.value)
+    assert message.startswith(f"{path}: a label image, not a side file of label names; ")
+    assert "isoflow.read_labels(path).names" in message and "\n" not in message
+    assert isoflow.read_labels(path).names == {1: "liver", 2: "spleen"}
+
+
+MESH_CALLS = {
+    "voxelize_mesh": lambda mesh, tmp: isoflow.voxelize_mesh(mesh, resolution=4),
+    "voxelize_meshes": lambda mesh, tmp: isoflow.voxelize_meshes([mesh], resolution=4),
+    "voxelize_to_zarr": lambda mesh, tmp: isoflow.voxelize_to_zarr(mesh, tmp / "m.zarr", resolution=4),
+    "verify_genus": lambda mesh, tmp: isoflow.verify_genus(mesh, [4]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(MESH_CALLS))
+def test_a_manifold_given_for_a_mesh_names_its_bridge(name, tmp_path):
+    """A manifold3d.Manifold given where a triangle mesh is taken said
+    "faces are missing: voxelize_mesh(vertices, faces) ..." (voxelize_mesh)
+    or "a mesh is a file, ... got Manifold", naming neither
+    isoflow.from_manifold nor where the Manifold's triangles are, as a
+    Manifold given for a volume does. The line names both, nothing is
+    written, and the triangles it names voxelise to the unit cube's 4^3
+    voxels."""
+    manifold3d = pytest.importorskip("manifold3d")
+    cube = manifold3d.Manifold.cube((1, 1, 1))
+    with pytest.raises(IsoflowError) as caught:
+        MESH_CALLS[name](cube, tmp_path)
+    message = str(caught.value)
+    assert "a manifold3d.Manifold, not a triangle mesh: isoflow.from_manifold(manifold, pitch=P) voxelises it" in message
+    assert "faces are missing" not in message and "\n" not in message and list(tmp_path.iterdir()) == []
+    m = cube.to_mesh()
+    assert isoflow.voxelize_mesh((m.vert_properties[:, :3], m.tri_verts), resolution=4).voxels == 4 ** 3
+    assert isoflow.from_manifold(cube, pitch=0.25).voxels == 4 ** 3

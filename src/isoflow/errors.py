@@ -145,6 +145,39 @@ def given_text(value: object) -> str:
     return repr(_python_scalar(value))
 
 
+def scalar_given(value: object) -> object:
+    """A 0D array given for a number as the NumPy scalar it holds; anything
+    else as it is.
+
+    ``np.load`` of a number saved with ``np.savez``, an HDF5 scalar dataset
+    and ``np.asarray(6)`` give a 0D array, which NumPy's own indexing takes
+    as the integer it holds. The checks of integer arguments take the
+    scalar: given the array, they refused ``array(6)`` as "connectivity 6
+    ... must be an integer", a line that contradicts itself.
+
+    Parameters
+    ----------
+    value : object
+        What the caller passed.
+
+    Returns
+    -------
+    object
+        ``value[()]`` for a 0D array (a NumPy scalar: an integer passes the
+        checks that take NumPy's integers, a bool or a float is refused as
+        before), ``value`` for anything else.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> scalar_given(np.array(6)), scalar_given(6), scalar_given([6])
+    (np.int64(6), 6, [6])
+    """
+    if getattr(value, "shape", None) == () and hasattr(value, "dtype") and hasattr(value, "__getitem__"):
+        return value[()]
+    return value
+
+
 def _python_scalar(value: object) -> object:
     """A NumPy scalar (or 0D array) as the Python value it holds; anything
     else as it is."""

@@ -32,7 +32,7 @@ from functools import cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, scalar_given
 from ..results import read_only
 from ..scale import arrays
 from ..scale.compiled import Method, use_compiled
@@ -46,6 +46,7 @@ DIMENSIONS = (1, 2, 3, 4)
 def check_dimension(n: object, name: str = "dimension n") -> int:
     """The dimension of a window, an integer 1..4, or one line saying why
     not, naming it as its caller's parameter ``name``."""
+    n = scalar_given(n)
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)):
         raise IsoflowError(f"{name} must be an integer 1..{MAX_DIM}, got {given_text(n)}")
     if not 1 <= int(n) <= MAX_DIM:
@@ -282,6 +283,7 @@ def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = N
     """
     # checked before any pass: the NumPy passes step through the volume by
     # it, and the compiled kernel, which takes no slab, would not look at it
+    slab = scalar_given(slab)  # type: ignore[assignment]  # a 0D array of an integer is that integer
     if slab is not None and (isinstance(slab, (bool, np.bool_)) or not isinstance(slab, (int, np.integer)) or slab < 1):
         raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text
+from ..errors import IsoflowError, given_text, scalar_given
 
 #: (face adjacency 2n, full adjacency 3^n - 1) per dimension
 VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
@@ -21,19 +21,21 @@ VALID = {1: (2, 2), 2: (4, 8), 3: (6, 26), 4: (8, 80)}
 def check_connectivity(ndim: int, connectivity: int | np.integer) -> int:
     """The object's connectivity, checked against the dimension.
 
-    A connectivity counts neighbours: an integer, never a bool (``True``
-    equals 1) or a float (``6.0`` equals 6 but is no count).
+    A connectivity counts neighbours: an integer (Python's, NumPy's, or a
+    0D array of one, as ``np.load`` gives a saved number), never a bool
+    (``True`` equals 1) or a float (``6.0`` equals 6 but is no count).
 
     Examples
     --------
-    >>> check_connectivity(3, 26)
-    26
+    >>> check_connectivity(3, 26), check_connectivity(3, np.array(26))
+    (26, 26)
     >>> check_connectivity(3, 6.0)
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: connectivity 6.0 is not valid in 3D: it must be an integer (use 6 or 26)
     """
     allowed = " or ".join(map(str, sorted(set(VALID.get(ndim, ())))))
+    connectivity = scalar_given(connectivity)  # type: ignore[assignment]  # checked below as any value
     if isinstance(connectivity, bool) or not isinstance(connectivity, (int, np.integer)):
         # text quoted: "connectivity 6 is not valid in 3D" of '6' contradicts itself
         raise IsoflowError(f"connectivity {given_text(connectivity)} is not valid in {ndim}D: it must be an integer "

@@ -37,12 +37,12 @@ import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cache, cached_property
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_switch, given_text
+from ..errors import IsoflowError, check_switch, given_text, scalar_given
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
 from ..scale.memory import check_fits
@@ -593,7 +593,8 @@ def wanted_labels(labels, dtype) -> np.ndarray:
     if isinstance(labels, Iterable) and not isinstance(labels, (str, bytes, np.ndarray)):
         # a generator, a set, dict keys: their labels in their order (NumPy holds such an object as one value)
         labels = list(labels)
-    asked = list(np.atleast_1d(np.asarray(labels, dtype=object)).ravel())
+    # a 0D array of an integer (np.load of a saved label) is that integer
+    asked: list[Any] = [scalar_given(value) for value in np.atleast_1d(np.asarray(labels, dtype=object)).ravel()]
     info = np.iinfo(label_dtype(dtype))
     for value in asked:
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):

@@ -15,7 +15,7 @@ from typing import Any, overload
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, counted, given_text
+from ..errors import IsoflowError, counted, given_text, scalar_given
 from ..scale import arrays
 from ..scale.arrays import is_host
 from ..scale.compiled import Method, use_compiled
@@ -242,6 +242,7 @@ def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = Non
     conn = resolve_connectivity(v.ndim, connectivity)
     method = _chosen(v, method)  # one choice for the histogram and the labellings
     # b1 = b0 + b2 - chi is a count only for an integer chi
+    chi = scalar_given(chi)  # type: ignore[assignment]  # a 0D array of an integer is that integer
     if chi is not None:
         if isinstance(chi, (bool, np.bool_)) or not isinstance(chi, (int, np.integer)):
             raise IsoflowError(f"chi must be an integer, got {given_text(chi)}")

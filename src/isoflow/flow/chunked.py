@@ -772,8 +772,7 @@ def flow_chunked(source, directory, steps: int | None = None, connectivity: int 
     # as run_flow refuses them, and before the input is cropped into the
     # first store: a bad one failed after it (progress, workers, width),
     # or ran another flow (steps=-1 none, 1.5 two steps, "no" stopped at a change)
-    check_count("steps", steps)
-    check_count("max_steps", max_steps)
+    steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)
     until_topology_change = check_switch(until_topology_change, "until_topology_change", "flow_chunked")
     check_callable(progress, "progress", "progress(step, state)")
     workers, width = check_threads(workers, "workers"), check_threads(width, "width")

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 
 from ..digital.lattice import DigitalObject
 from ..digital.measures import unheld_dropped
-from ..errors import IsoflowError, check_callable, check_switch, given_text
+from ..errors import IsoflowError, check_callable, check_switch, given_text, scalar_given
 from ..results import Result
 from .engines import ArrayFlow, Method, flow_engine
 from .motion import flow_connectivity
@@ -235,9 +235,11 @@ class _Guarded:
     reversed_moves: int = 0
 
 
-def check_count(name: str, value) -> None:
-    """Refuse a count of steps that is not None or an integer >= 0 (a
-    bool, a float, a negative number), naming the argument.
+def check_count(name: str, value) -> int | None:
+    """A count of steps as a Python int (None as None), refused where it
+    is not an integer >= 0 (a bool, a float, a negative number), naming
+    the argument. A 0D array of an integer (``np.load`` of a saved number)
+    is the integer it holds.
 
     Parameters
     ----------
@@ -246,6 +248,10 @@ def check_count(name: str, value) -> None:
     value : object
         What was given.
 
+    Returns
+    -------
+    int or None
+
     Raises
     ------
     IsoflowError
@@ -253,14 +259,17 @@ def check_count(name: str, value) -> None:
 
     Examples
     --------
-    >>> check_count("steps", 3)
+    >>> check_count("steps", 3), check_count("steps", np.array(3)), check_count("steps", None)
+    (3, 3, None)
     >>> check_count("steps", 1.5)
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: steps must be an integer >= 0, got 1.5
     """
+    value = scalar_given(value)
     if value is not None and (isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0):
         raise IsoflowError(f"{name} must be an integer >= 0, got {given_text(value)}")
+    return None if value is None else int(value)  # an integer, as just checked
 
 
 def _plain(engine: ArrayFlow, state, trace: _Trace, cap: int | None, capped: StopReason,
@@ -403,8 +412,7 @@ def run_flow(
     obj = DigitalObject.of(obj)
     conn = flow_connectivity(obj.ndim, connectivity)
     check_callable(progress, "progress", "progress(step, state)")
-    check_count("steps", steps)
-    check_count("max_steps", max_steps)
+    steps, max_steps = check_count("steps", steps), check_count("max_steps", max_steps)
     guard, until_topology_change, keep_states = (
         check_switch(guard, "guard", "run_flow"), check_switch(until_topology_change, "until_topology_change", "run_flow"),
         check_switch(keep_states, "keep_states", "run_flow"))

@@ -24,7 +24,7 @@ from typing import Any, Literal
 import numpy as np
 
 from ..digital.topology import LABEL_BYTES_PER_VOXEL, betti_numbers
-from ..errors import IsoflowError, check_callable, check_switch, counted, given_text
+from ..errors import IsoflowError, check_callable, check_switch, counted, given_text, scalar_given
 from ..scale import memory
 from .crossings import CubeGrid, find_crossings
 from .fills import Fill, Voxelization, check_fill, check_strict
@@ -895,16 +895,19 @@ def verify_genus(mesh: MeshInput, resolutions: Sequence[int | np.integer] = DEFA
     check_callable(on_resolution, "on_resolution", "on_resolution(entry)")
     strict = check_strict(strict, "verify_genus")
     fill = check_fill(fill)  # before any resolution runs: the verdict compares by it as a string
+    # a 0D array is iterable by its type and not by NumPy, which raised TypeError from list()
+    resolutions = scalar_given(resolutions)  # type: ignore[assignment]  # refused below as one number
     if isinstance(resolutions, (str, bytes)) or not isinstance(resolutions, Iterable):
         hint = f"; one resolution is [{given_text(resolutions)}]" if isinstance(resolutions, (int, np.integer)) else ""
         raise IsoflowError(f"resolutions must be a sequence of integers, got {given_text(resolutions)}{hint}")
-    resolutions = list(resolutions)
+    resolutions = [scalar_given(r) for r in resolutions]  # type: ignore[misc]  # a 0D array of a number is that number
     if not resolutions:
         raise IsoflowError("verify_genus needs at least one resolution")
     for r in resolutions:  # int() took "32" and 32.5 (as 32) in silence
         if isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer, float, np.floating)) \
                 or not (math.isfinite(r) and r == int(r) and r >= 1):
             raise IsoflowError(f"resolutions must be integers >= 1, got {given_text(r)} in {given_text(resolutions)}")
+    max_resolution = scalar_given(max_resolution)  # type: ignore[assignment]  # checked below as any value
     if isinstance(max_resolution, (bool, np.bool_)) or not isinstance(max_resolution, (int, np.integer)) \
             or max_resolution < 1:
         raise IsoflowError(f"max_resolution must be an integer >= 1, got {given_text(max_resolution)}")

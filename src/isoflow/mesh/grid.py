@@ -51,7 +51,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import IsoflowError, given_text, number_text
+from ..errors import IsoflowError, given_text, number_text, scalar_given
 from ..scale import memory
 from ..scale.memory import sized
 from .load import mesh_bbox, used_vertices
@@ -109,6 +109,7 @@ def voxel_grid(v: np.ndarray, f: np.ndarray, pitch, resolution):
     lo_s, hi_s = np.ldexp(lo - shift, -e), np.ldexp(hi - shift, -e)
     ext_s = np.ldexp(ext, -e)
     if resolution is not None:
+        resolution = scalar_given(resolution)  # a 0D array of a number is that number
         if isinstance(resolution, (bool, np.bool_)) or not isinstance(
                 resolution, (int, np.integer, float, np.floating)):
             raise IsoflowError(f"voxelize: resolution must be an integer >= 1, got {given_text(resolution)}")

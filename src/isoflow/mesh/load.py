@@ -736,6 +736,13 @@ def is_scene(mesh: object) -> bool:
     return hasattr(mesh, "graph") and hasattr(mesh, "geometry") and hasattr(mesh, "to_mesh")
 
 
+def is_manifold(mesh: object) -> bool:
+    """Whether ``mesh`` is a ``manifold3d.Manifold``, known by its type's
+    name and ``to_mesh`` (as :func:`isoflow.to_manifold` makes one), so
+    that manifold3d is not imported to ask."""
+    return type(mesh).__name__ == "Manifold" and hasattr(mesh, "to_mesh")
+
+
 def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     """The vertices and faces of a mesh in memory, as given (unchecked): a
     ``(vertices, faces)`` pair or an object with ``vertices`` and ``faces``
@@ -751,6 +758,15 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
     Traceback (most recent call last):
     ...
     isoflow.errors.IsoflowError: mesh 2: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, got int
+
+    A ``manifold3d.Manifold`` is named, with what voxelises it and where
+    its triangles are:
+
+    >>> import manifold3d
+    >>> mesh_arrays(manifold3d.Manifold.cube((1, 1, 1)), "mesh")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: mesh: a manifold3d.Manifold, not a triangle mesh: isoflow.from_manifold(manifold, ...
     """
     if is_scene(mesh):
         mesh = mesh.to_mesh()  # type: ignore[attr-defined]
@@ -758,6 +774,10 @@ def mesh_arrays(mesh: object, where: str) -> tuple[Any, Any]:
         return mesh.vertices, mesh.faces
     if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
         return mesh[0], mesh[1]
+    if is_manifold(mesh):  # "got Manifold" named neither isoflow's bridge nor the triangles it holds
+        raise IsoflowError(f"{where}: a manifold3d.Manifold, not a triangle mesh: isoflow.from_manifold(manifold, "
+                           "pitch=P) voxelises it; its triangles are m.vert_properties[:, :3] and m.tri_verts of "
+                           "m = manifold.to_mesh()")
     raise IsoflowError(f"{where}: a mesh is a file, a (vertices, faces) pair, a trimesh.Trimesh or a trimesh.Scene, "
                        f"got {type(mesh).__name__}")
 

@@ -593,6 +593,13 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     numpy.ndarray
         int64 points, shape ``(N, 2)`` or ``(N, 3)``.
 
+    Raises
+    ------
+    IsoflowError
+        A file that is no point list: a mesh or a volume under its own
+        suffix (named so, with the function that reads it), or a line that
+        is not 2 or 3 integers (naming the line).
+
     Examples
     --------
     >>> from isoflow import data
@@ -601,6 +608,12 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
     """
     path = check_path(path, "path", "read_points")
     path = Path(path)
+    # a volume under a volume suffix is no point list: the reader below would
+    # name its format and ask for the name it already has ("rename it
+    # v.npy"), a .binvox's header line would be "no number", and a .zarr
+    # store "a directory"; a missing one is said missing below
+    if is_volume(path) and os.path.exists(path):
+        raise IsoflowError(f"{path}: a volume file, not a list of lattice points; isoflow.read_volume(path) reads it")
     _check_readable(path)
     from .load import is_mesh_path, refuse_cad
 

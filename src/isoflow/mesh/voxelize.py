@@ -78,6 +78,7 @@ from .load import (  # noqa: F401
     check_mesh,
     column_bounds,
     defect_counts,
+    is_manifold,
     is_scene,
     load_mesh,
     merge_coincident,
@@ -1007,7 +1008,8 @@ def voxelize_mesh(vertices: ArrayLike | Any, faces: ArrayLike | None = None, *, 
     """
     details = check_switch(details, "details", "voxelize")
     if faces is None:
-        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices)):
+        # a Manifold goes to mesh_arrays, which names it: it has no faces, and "faces are missing" misled
+        if not (isinstance(vertices, tuple) or hasattr(vertices, "faces") or is_scene(vertices) or is_manifold(vertices)):
             raise IsoflowError("voxelize: faces are missing: voxelize_mesh(vertices, faces), or a mesh with vertices "
                                "and faces (a trimesh.Trimesh or Scene) alone; a file: voxelize_file(path)")
         vertices, faces = mesh_arrays(vertices, "voxelize")

@@ -37,7 +37,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ...errors import IsoflowError, check_path, line_text, missing
-from .registry import one_line_name
+from .registry import format_for, one_line_name
 
 #: what a file of label names is, for the refusal of one that is none
 EXPECTED = ("expected a FreeSurfer or 3D Slicer colour table (lines 'index name R G B A'), an ITK-SNAP label "
@@ -82,7 +82,8 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
     Raises
     ------
     IsoflowError
-        One line naming the file: unreadable, none of these kinds (the
+        One line naming the file: unreadable, a label image (whose
+        names :func:`isoflow.read_labels` reads), none of these kinds (the
         line says what was expected), a label named twice (naming the
         line), no label but the background.
 
@@ -106,6 +107,11 @@ def read_label_names(path: str | os.PathLike) -> dict[int, str]:
         if not (stat.S_ISREG(mode := os.stat(path).st_mode) or stat.S_ISDIR(mode)):
             # read whole, a pipe would be read until a writer came, /dev/zero until memory ran out
             raise IsoflowError(f"{where}: not a regular file (a device, pipe or socket)")
+        if format_for(path) is not None:
+            # a label image given for its names (seg.nrrd, labels.zarr): its bytes were "binary data" and
+            # an OME-Zarr store "cannot be read (Is a directory)", neither saying where its names are
+            raise IsoflowError(f"{where}: a label image, not a side file of label names; the names a label image "
+                               "records are read with it (isoflow.read_labels(path).names; --labels without --names)")
         data = Path(path).read_bytes()
     except OSError as exc:
         if isinstance(exc, (FileNotFoundError, NotADirectoryError)):  # said as every reader says a missing input
