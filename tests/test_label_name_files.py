@@ -283,3 +283,24 @@ def test_a_json_label_named_twice_is_refused_naming_the_line_of_its_key(tmp_path
     with pytest.raises(IsoflowError, match=re.escape(f"line {len(lines)}: label 1 is named again (first on line "
                                                      f"{len(lines) - 1})")):
         isoflow.read_label_names(path)
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("0 0 0\n1 1 1\n", "looks like a point list (lines of three numbers, line 1 reads '0 0 0')"),
+    ("# x y z\n0,0,0\n1, 2, 3\n", "looks like a point list (lines of three numbers, line 2 reads '0,0,0')"),
+    ("1 0.5 2\n2 1 1 1\n", "holds numbers, not label names"),
+    ("1 liver\n2 255 0 0\n", "line 2: a line 'index name' is expected, not one whose name is numbers alone"),
+])
+def test_numbers_given_for_names_are_refused_not_read_as_labels(tmp_path, text, words):
+    """A point list given for the names read "0 0 0\\n1 1 1" as label 1
+    named '1 1': each line of numbers alone took its first as the label and
+    the rest as the name. It is one line saying what the file looks like;
+    the point list is what numpy reads it as, and a named line still reads."""
+    bad = tmp_path / "labels.txt"
+    bad.write_text(text)
+    if "point list" in words:
+        assert np.loadtxt(bad, delimiter="," if "," in text else None).shape[1] == 3
+    with pytest.raises(IsoflowError, match=re.escape(words)):
+        isoflow.read_label_names(bad)
+    bad.write_text("1 liver\n2 17\n")  # one number may be a name (a region's code)
+    assert isoflow.read_label_names(bad) == {1: "liver", 2: "17"}

@@ -22,7 +22,10 @@ content (the suffix only breaks a tie):
 
 ``#`` starts a comment line and blank lines are skipped in the text
 kinds. Label 0 is the background and is not named; a label named twice is
-refused naming the line.
+refused naming the line. A file of numbers alone (a point list, ``0 0 0``
+per line, given for the names) is refused, not read as labels named by
+their numbers, and so is a line ``index name`` whose name is several
+numbers (colour columns without a name).
 """
 
 from __future__ import annotations
@@ -58,6 +61,9 @@ _LUT = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s+[0-9]+\s+[0-9]+\s+[0-9]+(?:\s+[0-9
 _PAIR = re.compile(r"\s*(-?[0-9]+)\s+(\S.*?)\s*", re.ASCII)
 #: a label value in a CSV cell or a JSON key
 _INTEGER = re.compile(r"\s*(-?[0-9]+)\s*", re.ASCII)
+#: a line of numbers alone, blanks or commas between them (a point list's "0 0 0", "1.5, 2, 3")
+_NUMBERS = re.compile(r"\s*[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                      r"(?:(?:\s*,\s*|\s+)[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?)*\s*", re.ASCII)
 
 
 def read_label_names(path: str | os.PathLike) -> dict[int, str]:
@@ -186,6 +192,7 @@ def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str)
     label_at = next((cells.index(c) for c in LABEL_COLUMNS if c in cells and cells.index(c) != name_at), None)
     if name_at is not None and label_at is not None:
         return _table_pairs(_csv_records(rows[1:], text, where, delimiter), where, label_at, name_at)
+    _refuse_numbers(rows, where)
     if suffix in (".csv", ".tsv") and not _ITKSNAP.fullmatch(head) and not _LUT.fullmatch(head):
         raise IsoflowError(f"{where}: line {number}: a header naming a label column ({', '.join(LABEL_COLUMNS)}) "
                            f"and a name column ({', '.join(NAME_COLUMNS)}) is expected, not {_shown(head)}")
@@ -205,6 +212,22 @@ def _text_pairs(rows: list[tuple[int, str]], text: str, where: str, suffix: str)
     raise IsoflowError(f"{where}: not a file of label names (line {number} reads {_shown(head)}); {EXPECTED}")
 
 
+def _refuse_numbers(rows: list[tuple[int, str]], where: str) -> None:
+    """Refuse a file whose lines are numbers alone: each would read as a
+    label whose "name" is the numbers after the first (``0 0 0`` as label
+    0, ``1 1 1`` as label 1 named ``1 1``), a silently wrong answer for a
+    point list or a table of values given for the names."""
+    if not all(_NUMBERS.fullmatch(line) for _, line in rows):
+        return
+    number, head = rows[0]
+    counts = {len(re.split(r"\s*,\s*|\s+", line.strip())) for _, line in rows}
+    if counts in ({2}, {3}):  # x y z (or x y) on each line
+        raise IsoflowError(f"{where}: looks like a point list (lines of {('two', 'three')[counts.pop() - 2]} numbers, "
+                           f"line {number} reads {_shown(head)}), not label names; {EXPECTED}")
+    raise IsoflowError(f"{where}: holds numbers, not label names (no line names a label; line {number} reads "
+                       f"{_shown(head)}); {EXPECTED}")
+
+
 def _plain_pairs(rows: list[tuple[int, str]], where: str) -> list[tuple[int, str, str]]:
     """(label, name, where it is) of each line of a plain list of lines
     ``index name``, the first of which is one; a line with colour columns
@@ -219,6 +242,10 @@ def _plain_pairs(rows: list[tuple[int, str]], where: str) -> list[tuple[int, str
         if match is None:
             raise IsoflowError(f"{where}: line {n}: a line 'index name' is expected, as line {number} is, not "
                                f"{_shown(line)}")
+        if _NUMBERS.fullmatch(match[2]) and len(match[2].split()) > 1:
+            # "2 255 0 0": colour columns without a name, or a row of values (one number may be a name: "1 17")
+            raise IsoflowError(f"{where}: line {n}: a line 'index name' is expected, not one whose name is "
+                               f"numbers alone: {_shown(line)}; a colour table line is 'index name R G B A'")
         pairs.append((int(match[1]), match[2], f"line {n}"))
     return pairs
 
