@@ -170,6 +170,30 @@ def test_point_list_fields_are_plain_numbers(tmp_path, capsys, text, words):
     fails(capsys, "info", path, words=words)
 
 
+def test_point_list_with_a_header_of_column_names_reads_its_points(tmp_path, capsys):
+    """A CSV written with a header line (csv.DictWriter's, pandas'
+    to_csv's: ``x,y,z``) was refused, "not a number: 'x'". The header is
+    skipped where the next line holds as many numbers, on either reader
+    (the blanks and commas of the second file need the line reader); the
+    points are those written, and a line of names before no numbers is
+    still refused naming it."""
+    import csv
+
+    rng = np.random.default_rng(5)
+    points = rng.integers(-50, 50, size=(40, 3))
+    with open(tmp_path / "points.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=["x", "y", "z"])
+        writer.writeheader()
+        writer.writerows({"x": int(a), "y": int(b), "z": int(c)} for a, b, c in points)
+    assert read_points(tmp_path / "points.csv").tolist() == points.tolist()
+    (tmp_path / "points.txt").write_text("# scanned\n\nX Y Z\n" + "".join(f"{a}, {b} {c}\n" for a, b, c in points))
+    assert read_points(tmp_path / "points.txt").tolist() == points.tolist()
+    assert main(["info", str(tmp_path / "points.csv"), "--points-are", "voxels", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["voxels"] == len(np.unique(points, axis=0))
+    (tmp_path / "words.txt").write_text("x,y,z\nthe points follow\n")
+    fails(capsys, "info", tmp_path / "words.txt", words=("words.txt:1", "not a number: 'x'"))
+
+
 def test_point_list_read_whole_equals_line_by_line(tmp_path):
     """numpy's reader (the fast path) and the line-by-line one read the
     same points, with comments, blank lines, signs, exponents and every

@@ -577,7 +577,9 @@ _NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 
 def read_points(path: str | os.PathLike) -> np.ndarray:
     """Integer lattice points from a text file: ``x y z`` (or ``x y``) per
-    line, ``#`` starts a comment, blanks or commas separate the numbers.
+    line, ``#`` starts a comment, blanks or commas separate the numbers. A
+    first line of column names (``x,y,z``, as pandas' ``to_csv`` writes
+    it) is skipped where the next line holds as many numbers.
 
     numpy's compiled reader takes the file when it can; a file it refuses,
     or whose numbers are not all integers in range, is read again line by
@@ -642,8 +644,9 @@ def read_points(path: str | os.PathLike) -> np.ndarray:
         check_fits(6 * path.stat().st_size, f"reading the point list {path}",
                    hint="a volume file (.npy, .zarr) holds points far more compactly")
         try:
-            points = _read_points_fast(path, b"," in head)
-            return points if points is not None else _read_points_by_line(path)
+            header = _header_line(path)
+            points = _read_points_fast(path, b"," in head, header)
+            return points if points is not None else _read_points_by_line(path, header)
         except IsoflowError as exc:
             raise IsoflowError(not_points(path, str(exc))) from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -705,13 +708,39 @@ volume or mesh format)
     return said
 
 
-def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
+def _header_line(path: Path) -> int:
+    """The number of the line that is a header of column names (``x,y,z``,
+    as pandas' ``to_csv`` writes one), 0 where there is none: the first
+    line that is neither blank nor a comment, where none of its fields is
+    a number and the next such line is as many numbers (a file of words is
+    still refused naming its first line)."""
+    lines = []
+    with open(path, encoding="utf-8-sig") as fh:
+        for lineno, line in enumerate(fh, 1):
+            line = line.split("#", 1)[0].strip()
+            if line:
+                lines.append((lineno, line))
+                if len(lines) == 2:
+                    break
+    if len(lines) < 2:
+        return 0
+    (lineno, first), (_, second) = lines
+    # a header's names are split at commas where it has them ("x (mm), y (mm), z (mm)"), else at blanks
+    names = [f.strip() for f in first.split(",")] if "," in first else first.split()
+    numbers = _SPLIT.split(second)
+    if (len(names) != len(numbers) or len(names) not in (2, 3) or any(_NUMBER.fullmatch(f) for f in names)
+            or not all(_NUMBER.fullmatch(f) for f in numbers)):
+        return 0
+    return lineno
+
+
+def _read_points_fast(path: Path, commas: bool, header: int = 0) -> np.ndarray | None:
     """The points by ``np.loadtxt`` (as integers, else as decimals that
     must be integers: "1e3", "2.0"), or None where the file needs the
     line-by-line reader: to be refused with its line, or for separators
     loadtxt does not take (blanks and commas mixed). loadtxt's own parser
     refuses empty fields and "1_000"; it takes "nan" and "inf", refused
-    here."""
+    here. The lines up to ``header`` (:func:`_header_line`) are skipped."""
     import warnings
 
     for dtype in (np.int64, np.float64):
@@ -719,7 +748,7 @@ def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # "empty input file": said by the line reader
                 values = np.loadtxt(path, comments="#", delimiter="," if commas else None, ndmin=2, dtype=dtype,
-                                    encoding="utf-8-sig")
+                                    encoding="utf-8-sig", skiprows=header)
             break
         except (ValueError, UnicodeDecodeError):
             continue
@@ -734,14 +763,17 @@ def _read_points_fast(path: Path, commas: bool) -> np.ndarray | None:
     return values.astype(np.int64, copy=False)
 
 
-def _read_points_by_line(path: Path) -> np.ndarray:
+def _read_points_by_line(path: Path, header: int = 0) -> np.ndarray:
     """The points, read line by line as a stream (8 bytes a coordinate, as
-    loadtxt); the first bad line is refused with its number."""
+    loadtxt); the first bad line is refused with its number. The lines up
+    to ``header`` (:func:`_header_line`) are skipped."""
     from array import array
 
     coords, width = array("q"), None
     with open(path, encoding="utf-8-sig") as fh:  # a byte-order mark (Windows editors) is no coordinate
         for lineno, line in enumerate(fh, 1):
+            if lineno <= header:
+                continue
             point = _point(path, lineno, line, width)
             if point:
                 width = len(point)
