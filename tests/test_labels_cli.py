@@ -1953,3 +1953,37 @@ def test_surface_labels_force_leaves_names_past_every_64_bit_label(tmp_path, cap
     assert main(["surface", str(tmp_path / "seg.npy"), "--labels", "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
     capsys.readouterr()
     assert files_in(out) == {**theirs, "label_1.ply": files_in(out)["label_1.ply"]}
+
+
+def test_labels_of_a_zarr_store_with_a_last_axis_of_one_entry(capsys, tmp_path):
+    """A zarr array of shape (X, Y, Z, 1), read block by block by ``info
+    --labels``, was refused as a time series, while the same labels in an
+    .npy of that shape are read as 3D: the store's table is the .npy's
+    (each row scikit-image's area of the 3D image), placed by the store's
+    pitch and origin attributes without their fourth entries."""
+    zarr = pytest.importorskip("zarr")
+    from skimage.measure import regionprops
+
+    image = np.zeros((20, 18, 16), np.uint8)
+    image[3:10, 4:12, 5:9] = 1
+    image[12:17, 2:8, 2:14] = 2
+    image[13:16, 3:7, 4:8] = 0  # a cavity in label 2
+    store = zarr.create_array(str(tmp_path / "seg.zarr"), shape=image.shape + (1,), chunks=(8, 8, 8, 1),
+                              dtype=image.dtype)
+    store[...] = image[..., None]
+    np.save(tmp_path / "seg.npy", image[..., None])
+    reports = {}
+    for name in ("seg.zarr", "seg.npy"):
+        code, out, err = said(capsys, "info", tmp_path / name, "--labels", "--json")
+        assert code == 0, err
+        reports[name] = json.loads(out)
+        assert reports[name]["shape"] == list(image.shape)
+        assert [(row["label"], row["voxels"]) for row in reports[name]["labels"]] == [
+            (p.label, p.area) for p in regionprops(image)]
+    assert reports["seg.zarr"]["labels"] == reports["seg.npy"]["labels"]
+    store.attrs.update(pitch=[0.5, 0.5, 2.0, 1.0], origin=[1.0, 2.0, 3.0, 0.0])
+    code, out, err = said(capsys, "info", tmp_path / "seg.zarr", "--labels", "--json")
+    assert code == 0, err
+    report = json.loads(out)
+    assert (report["pitch"], report["origin"]) == ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0])
+    assert [row["volume"] for row in report["labels"]] == [p.area * 0.5 for p in regionprops(image)]

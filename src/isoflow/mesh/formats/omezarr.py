@@ -722,16 +722,24 @@ class LabelSlabs:
             pitch, origin = attrs.get("pitch", 1.0), attrs.get("origin")
         else:
             pitch, origin = store.placement()
-        if store.multiscale is None and array.ndim not in (2, 3):
+        xyz, other = store.xyz, store.other
+        if store.multiscale is None and array.ndim == 4 and array.shape[3] == 1:
+            # a 3D label image saved with a last axis of one entry (an array
+            # of shape (X, Y, Z, 1)) is read as 3D, as read_labels reads a
+            # file's: that axis is indexed at 0, and the placement's fourth
+            # entries (where the attributes give four) dropped
+            xyz, other = [0, 1, 2], [3]
+            pitch, origin = (v[:3] if np.ndim(v) == 1 and len(v) == 4 else v for v in (pitch, origin))
+        elif store.multiscale is None and array.ndim not in (2, 3):
             # as a file's: no label table is 4D, whether read whole or by blocks
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is {array.ndim}D "
                                f"with shape {tuple(array.shape)}"
                                + (one_time_point_labels(self.where) if array.ndim == 4 else ""))
-        if store.multiscale is None and array.ndim != 3:
+        if store.multiscale is None and len(xyz) != 3:
             raise IsoflowError(f"{self.where}: a label table of a .zarr store (read block by block) needs a 3D "
                                f"volume, this array is {array.ndim}D" + ("; a 2D table reads the image whole "
                                                                         "(label_table)" if array.ndim == 2 else ""))
-        self.xyz, self.other = store.xyz, store.other
+        self.xyz, self.other = xyz, other
         if len(self.xyz) == 4:
             shape = tuple(int(array.shape[i]) for i in self.xyz)
             raise IsoflowError(f"{self.where}: a label image is read in 3D or 2D, this array is 4D with shape "
