@@ -451,6 +451,22 @@ def test_analyze_chunked_names_a_block_shape_that_does_not_fit_a_dask_array(bloc
     assert isoflow.analyze_chunked(array, 6, block_shape=(3, 3, 3)).betti == [1, 0, 0]
 
 
+@pytest.mark.parametrize("where", [3, b"v.zarr", ["v.zarr"]])
+def test_analyze_chunked_refuses_a_where_that_names_no_input(where, tmp_path):
+    """``where`` names the input in messages: ``where=3`` was taken
+    without a word, to be printed as the input's name ("3: ...") in any
+    later refusal. Anything but a str, a path or None is one line naming
+    the argument; a path names the input as its text."""
+    da = pytest.importorskip("dask.array")
+    array = da.from_array(np.ones((4, 4, 4), bool), chunks=2)
+    with pytest.raises(IsoflowError, match=r"^analyze_chunked: where names the input in messages"):
+        isoflow.analyze_chunked(array, where=where)
+    counted = da.from_array(np.full((4, 4, 4), 7, np.uint8), chunks=2)  # no binary volume: refused naming the input
+    with pytest.raises(IsoflowError, match=r"^" + re.escape(str(tmp_path / "v.zarr")) + ": "):
+        isoflow.analyze_chunked(counted, where=tmp_path / "v.zarr")
+    assert isoflow.analyze_chunked(array, where="v.zarr").voxels == 64
+
+
 @pytest.mark.parametrize("scheduler", [5, "thread", "x"])
 def test_analyze_chunked_names_a_scheduler_dask_does_not_know(scheduler):
     # dask's ValueError ("Unexpected scheduler: 5", "Expected one of [...]") named neither the argument nor isoflow
@@ -1474,6 +1490,8 @@ def test_voxelize_to_zarr_names_chunks_that_are_not_three_positive_integers(chun
     with pytest.raises(IsoflowError) as caught:
         isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8, chunks=chunks)
     assert str(caught.value).endswith(f"chunks must be three positive integers, got {shown}")
+    # named as the argument of voxelize_to_zarr, not under the mesh's name ("mesh: chunks ...")
+    assert str(caught.value).startswith("voxelize_to_zarr: chunks")
     assert not (tmp_path / "t.zarr").exists()
     # sides given as whole floats or NumPy integers are those integers
     store = isoflow.voxelize_to_zarr(isoflow.data.torus(), tmp_path / "t.zarr", resolution=8,

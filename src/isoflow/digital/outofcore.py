@@ -288,6 +288,12 @@ def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
         raise IsoflowError(f"analyze_chunked needs a dask or zarr array, got {type(array).__name__}; {_instead(array)}")
     if where is None:
         where = str(getattr(array, "store_path", None) or getattr(array, "path", "zarr array")) if is_zarr else "dask array"
+    elif isinstance(where, os.PathLike):
+        where = os.fsdecode(where)
+    elif not isinstance(where, str):
+        # a number or a list would be printed as the input's name in every later message
+        raise IsoflowError(f"analyze_chunked: where names the input in messages, a str (or a path) or None; got "
+                           f"{given_text(where)}")
     if any(np.isnan(s) for s in array.shape):
         raise IsoflowError(f"{where}: array shape {array.shape} is not known (call compute_chunk_sizes first)")
     shape = tuple(int(s) for s in array.shape)
@@ -721,7 +727,8 @@ def analyze_chunked(
         ``concurrent.futures`` executor on its own. Anything else is
         refused naming it.
     where : str, optional
-        The input's name in error messages.
+        The input's name in error messages (a path is taken as its text;
+        anything else is refused).
     progress : callable, optional
         ``progress(done, total)``, called as each block is summed and
         merged (``total`` twice the blocks; on a ``dask.distributed``

@@ -42,7 +42,7 @@ from .formats.omezarr import multiscales
 from .grid import GridTooLarge, finest_fit, fmt_count, grid_words
 from .load import load_mesh, mesh_arrays
 from .outputs import atomic_path, check_writable_dir
-from .store_plan import WORKERS, in_store, slab_chunks, slab_layout, store_need
+from .store_plan import WORKERS, check_chunks, in_store, slab_chunks, slab_layout, store_need
 
 
 def check_store_path(path, force: bool) -> Path:
@@ -234,6 +234,11 @@ def voxelize_to_zarr(source: MeshSource, path: str | os.PathLike, *, pitch: floa
     fill, strict = check_fill(fill), check_strict(strict)
     check_callable(progress, "progress", "progress(done, total)")
     path = check_path(path, "path", "voxelize_to_zarr")
+    if chunks is not None:
+        try:
+            chunks = check_chunks(chunks)
+        except IsoflowError as exc:  # before the mesh is read, whose name the errors below carry
+            raise exc.at("voxelize_to_zarr") from None
     path = check_store_path(path, force)
     where = os.fsdecode(source) if isinstance(source, (str, os.PathLike)) else "mesh"
     # a file names itself in its errors

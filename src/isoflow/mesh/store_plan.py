@@ -30,6 +30,38 @@ def slab_chunks(shape, chunks=None) -> tuple[int, int, int]:
         rows = max(1, min(64, SLAB_BYTES // max(1, ny * nz)))
         rows = 1 << (rows.bit_length() - 1)
         chunks = (min(rows, nx), min(CHUNK_YZ, ny), min(CHUNK_YZ, nz))
+    return check_chunks(chunks)
+
+
+def check_chunks(chunks: object) -> tuple[int, int, int]:
+    """A store's chunks given as three sides, each a whole number of at
+    least 1 (a whole float or a NumPy integer too), as three ints.
+
+    Parameters
+    ----------
+    chunks : object
+        What was given for the chunks.
+
+    Returns
+    -------
+    tuple of int
+        The three sides.
+
+    Raises
+    ------
+    IsoflowError
+        ``chunks must be three positive integers, got ...``: 2.5 is no
+        side, ``"4"`` no number and ``4`` not three sides.
+
+    Examples
+    --------
+    >>> check_chunks((4.0, np.int64(8), 16))
+    (4, 8, 16)
+    >>> check_chunks((0, 3, 3))
+    Traceback (most recent call last):
+    ...
+    isoflow.errors.IsoflowError: chunks must be three positive integers, got (0, 3, 3)
+    """
     sides = list(chunks) if isinstance(chunks, (tuple, list, np.ndarray)) else []
     # each side a whole number >= 1 (a NumPy integer too): 2.5 is no side, and "4" no number
     if len(sides) != 3 or not all(isinstance(c, (int, float, np.integer, np.floating)) and not isinstance(c, (bool, np.bool_))
