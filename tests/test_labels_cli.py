@@ -1953,3 +1953,18 @@ def test_surface_labels_force_leaves_names_past_every_64_bit_label(tmp_path, cap
     assert main(["surface", str(tmp_path / "seg.npy"), "--labels", "-o", f"{out}/", "--suffix", "ply", "--force"]) == 0
     capsys.readouterr()
     assert files_in(out) == {**theirs, "label_1.ply": files_in(out)["label_1.ply"]}
+
+
+def test_info_labels_json_names_a_bool_image_as_its_uint8_labels(tmp_path, capsys):
+    # docs/labels.md: a bool image is labels 0 and 1, read as uint8, in memory and from a store alike
+    import zarr
+
+    mask = np.zeros((4, 4, 4), bool)
+    mask[1:3, 1:3, 1:3] = True
+    np.save(tmp_path / "mask.npy", mask)
+    store = zarr.create_array(str(tmp_path / "mask.zarr"), shape=mask.shape, chunks=(2, 4, 4), dtype=bool)
+    store[...] = mask
+    for name in ("mask.npy", "mask.zarr"):
+        out = json.loads(run(capsys, "info", tmp_path / name, "--labels", "--json"))
+        assert out["dtype"] == np.dtype(np.uint8).name
+        assert [row["label"] for row in out["labels"]] == [1] and out["labels"][0]["voxels"] == mask.sum()
