@@ -267,7 +267,7 @@ def unheld_columns(table: dict, origin, spacing, shape: Sequence[int]) -> dict:
     return table
 
 
-def scaled_counts(counts: ArrayLike, factors: Sequence[float]) -> np.ndarray:
+def scaled_counts(counts: ArrayLike, factors: ArrayLike) -> np.ndarray:
     """``counts * prod(factors)`` in float64, the product kept as a mantissa
     and a power of two so that it neither underflows nor overflows on the
     way: a value that float64 holds is given, however small or large each
@@ -279,7 +279,7 @@ def scaled_counts(counts: ArrayLike, factors: Sequence[float]) -> np.ndarray:
     ----------
     counts : array_like of int
         Voxels, faces: how many cells of the product.
-    factors : sequence of float
+    factors : array_like of float
         The voxel size along the axes that the cells span.
 
     Returns
@@ -296,8 +296,8 @@ def scaled_counts(counts: ArrayLike, factors: Sequence[float]) -> np.ndarray:
     (0.0, inf)
     """
     mantissa, exponent = 1.0, 0
-    for factor in factors:
-        m, e = math.frexp(float(factor))
+    for factor in np.asarray(factors, np.float64).ravel().tolist():
+        m, e = math.frexp(factor)
         mantissa, shift = math.frexp(mantissa * m)
         exponent += e + shift
     # ldexp rounds once where the result is subnormal, inf past float64: no
@@ -306,7 +306,7 @@ def scaled_counts(counts: ArrayLike, factors: Sequence[float]) -> np.ndarray:
         return np.ldexp(np.asarray(counts, np.float64) * mantissa, exponent)
 
 
-def underflow_line(what: str, spacing: Sequence[float]) -> str:
+def underflow_line(what: str, spacing: ArrayLike) -> str:
     """The warning that ``what`` (a volume, an area) of cells of this voxel
     size is below float64's smallest number, and so given as 0.
 

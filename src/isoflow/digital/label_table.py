@@ -1247,7 +1247,10 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
                                   "volume": scaled_counts(voxels, spacing)}
     faces = features[:, _FACES] // 4
     with np.errstate(over="ignore"):
-        out["surface_area"] = sum(scaled_counts(faces[:, axis], np.delete(spacing, axis)) for axis in range(3))
+        area = scaled_counts(faces[:, 0], spacing[1:])
+        for axis in (1, 2):  # in the order analyze sums them: the two agree to the last bit
+            area = area + scaled_counts(faces[:, axis], np.delete(spacing, axis))
+        out["surface_area"] = area
     lost = [what for what, values, counts in (("volumes", out["volume"], voxels),
                                               ("surface areas", out["surface_area"], faces.sum(axis=1)))
             if bool(((values == 0) & (counts > 0)).any())]
