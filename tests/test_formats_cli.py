@@ -700,7 +700,7 @@ def test_a_time_series_given_to_surface_or_flow_says_how_to_take_one_time_point(
     p = subprocess.run([sys.executable, "-m", "isoflow", command[0], name, *command[1:]],
                        capture_output=True, text=True, cwd=tmp_path)
     assert p.returncode == 2 and p.stderr.count("\n") == 1 and name in p.stderr, p.stderr
-    assert "4D, shape 8x7x6x3 (a time series of 3 volumes" in p.stderr
+    assert "4D, shape 8x7x6x3 (a 4th axis of 3 entries, time points or channels" in p.stderr
     line = p.stderr.split("give that: ", 1)[1].strip()
     assert line.startswith("python -c ")
     shell = subprocess.run(sys.executable + line[len("python"):], shell=True, capture_output=True, text=True,
@@ -770,8 +770,8 @@ def test_a_time_series_store_too_large_to_read_whole_says_how_to_take_one_time_p
     monkeypatch.chdir(tmp_path)
     line = fails(capsys, command[0], "ts.ome.zarr", *command[1:])
     assert line.startswith(f"isoflow {command[0]}: error: ts.ome.zarr: {needs}, this one is 4D, shape 8x7x6x3 "
-                           "(a time series of 3 volumes, read as x, y, z, t); save one time point as 3D and give "
-                           "that: python -c "), line
+                           "(a 4th axis of 3 entries, time points or channels, read as x, y, z, t); save one entry "
+                           "as 3D and give that: python -c "), line
     assert not list(tmp_path.glob("s.*")) and not (tmp_path / "f").exists()
 
 
@@ -1724,3 +1724,21 @@ def test_the_command_that_saves_an_ome_tiffs_channels_as_slices_names_a_clean_om
     with tifffile.TiffFile(tmp_path / "c_stack.ome.tif") as tif:
         assert tif.is_ome and tif.series[0].axes == "ZYX"
         assert np.array_equal(tif.asarray(), tifffile.imread(tmp_path / "c.ome.tif"))
+
+
+@pytest.mark.parametrize("command", [["surface", "-o", "s.ply"], ["info", "--labels"]])
+def test_a_4d_array_of_channels_is_not_called_a_time_series(tmp_path, command):
+    """A .npy of shape (X, Y, Z, 3) may hold RGB channels as well as three
+    time points: the file does not say, so neither does the refusal, and
+    its way out (time=0) still gives a 3D file every command reads."""
+    rgb = np.zeros((6, 5, 4, 3), np.uint8)
+    rgb[1:4, 1:3, 1:3, 0] = 1
+    np.save(tmp_path / "rgb.npy", rgb)
+    p = subprocess.run([sys.executable, "-m", "isoflow", command[0], "rgb.npy", *command[1:]],
+                       capture_output=True, text=True, cwd=tmp_path)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1, p.stderr
+    assert "time series" not in p.stderr and "time points or channels" in p.stderr, p.stderr
+    line = p.stderr.split("give that: ", 1)[1].strip()
+    subprocess.run(sys.executable + line[len("python"):], shell=True, check=True, cwd=tmp_path)
+    with np.load(tmp_path / "t0.npz") as saved:
+        assert saved[saved.files[0]].shape == rgb.shape[:3]

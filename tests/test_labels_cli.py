@@ -1987,3 +1987,18 @@ def test_labels_of_a_zarr_store_with_a_last_axis_of_one_entry(capsys, tmp_path):
     report = json.loads(out)
     assert (report["pitch"], report["origin"]) == ([0.5, 0.5, 2.0], [1.0, 2.0, 3.0])
     assert [row["volume"] for row in report["labels"]] == [p.area * 0.5 for p in regionprops(image)]
+
+
+def test_info_labels_json_names_a_bool_image_as_its_uint8_labels(tmp_path, capsys):
+    # docs/labels.md: a bool image is labels 0 and 1, read as uint8, in memory and from a store alike
+    import zarr
+
+    mask = np.zeros((4, 4, 4), bool)
+    mask[1:3, 1:3, 1:3] = True
+    np.save(tmp_path / "mask.npy", mask)
+    store = zarr.create_array(str(tmp_path / "mask.zarr"), shape=mask.shape, chunks=(2, 4, 4), dtype=bool)
+    store[...] = mask
+    for name in ("mask.npy", "mask.zarr"):
+        out = json.loads(run(capsys, "info", tmp_path / name, "--labels", "--json"))
+        assert out["dtype"] == np.dtype(np.uint8).name
+        assert [row["label"] for row in out["labels"]] == [1] and out["labels"][0]["voxels"] == mask.sum()

@@ -464,9 +464,10 @@ isoflow.write_volume(isoflow.DigitalObject(v.volume[:, :, :, 0], pitch=v.spacing
 
 
 def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None = None) -> str:
-    """What to do with a 4D volume (a time series, read as x, y, z, t)
-    given to a command that takes one 3D volume: save one time point as a
-    3D file, voxel size and origin kept, and give that.
+    """What to do with a 4D volume (read as x, y, z, t) given to a command
+    that takes one 3D volume: save one entry of its 4th axis as a 3D file,
+    voxel size and origin kept, and give that. A .npy or TIFF does not say
+    whether that axis is time or channels (RGB), so the line names both.
 
     There is no option that picks a time point: the one line of Python is
     the way, and it names the file as given. It reads that time point
@@ -490,16 +491,16 @@ def one_time_point(path: str | Path, shape: tuple[int, ...], label: float | None
     Examples
     --------
     >>> print(one_time_point("cells.ome.tif", (8, 8, 8, 3)))
-    , shape 8x8x8x3 (a time series of 3 volumes, read as x, y, z, t); save one time point as 3D and give that: \
-python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.ome.tif", time=0), "t0.npz")'
+    , shape 8x8x8x3 (a 4th axis of 3 entries, time points or channels, read as x, y, z, t); save one entry as 3D \
+and give that: python -c 'import isoflow; isoflow.write_volume(isoflow.read_volume("cells.ome.tif", time=0), "t0.npz")'
     """
     import json
     import shlex
 
     label_arg = "" if label is None else f", label={label!r}"
     code = f'import isoflow; isoflow.write_volume(isoflow.read_volume({json.dumps(str(path))}{label_arg}, time=0), "t0.npz")'
-    return (f", shape {'x'.join(map(str, shape))} (a time series of {shape[-1]} volumes, read as x, y, z, t); "
-            f"save one time point as 3D and give that: python -c {shlex.quote(code)}")
+    return (f", shape {'x'.join(map(str, shape))} (a 4th axis of {shape[-1]} entries, time points or channels, read "
+            f"as x, y, z, t); save one entry as 3D and give that: python -c {shlex.quote(code)}")
 
 
 def refuse_time_series_store(args: argparse.Namespace, needs: str) -> None:

@@ -261,7 +261,7 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     None for a zarr store (read block by block), ``absent`` the labels
     asked for that have no row, in the order asked."""
     from ..digital.connectivity import resolve_connectivity
-    from ..digital.label_table import label_table
+    from ..digital.label_table import label_dtype, label_table
     from ..mesh.formats.omezarr import stored_ndim
     from ..mesh.volumes import read_labels
     from .inputs import say_plate
@@ -300,7 +300,9 @@ def read_table(args: argparse.Namespace, surfaces: bool = True):
     def table_of(chosen):
         if image is None:
             return table_of_store(args, conn, chosen, surfaces, given)
-        about = {"shape": image.array.shape, "dtype": image.array.dtype, "spacing": image.spacing,
+        # the labels' type, as label_table reads them: a bool image as uint8
+        kind = label_dtype(image.array.dtype) if image.array.dtype == np.bool_ else image.array.dtype
+        about = {"shape": image.array.shape, "dtype": kind, "spacing": image.spacing,
                  "origin": image.origin, "unit": image.unit, "space": image.space,
                  **({} if corners is None else {"corners": corners})}
         wanted = None if chosen is None else _by_type(args.input, chosen, image.array.dtype)[0]
@@ -473,7 +475,7 @@ def table_of_store(args: argparse.Namespace, conn: int, asked, surfaces: bool, g
             named = str(exc).startswith(f"{slabs.where}: ")  # (a damaged chunk's line names the store already)
             raise (exc if named else exc.at(args.input)) from None
     # a float store's labels are int64, as a float file's are read (read_labels): the same --json
-    kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind == "f" else slabs.dtype
+    kind = label_dtype(slabs.dtype) if np.dtype(slabs.dtype).kind in "fb" else slabs.dtype
     return {"shape": slabs.shape, "dtype": kind, "spacing": place.spacing, "origin": place.origin,
             "unit": slabs.unit, "space": None}, with_names(table, merged_names(args, slabs.names, given))
 

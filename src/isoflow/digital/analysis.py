@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike
 from ..errors import IsoflowError, check_switch
 from ..scale import arrays
 from ..scale.compiled import Method, using
-from .closed_surfaces import closed_surfaces, compiled_census, small_census, use_census
+from .closed_surfaces import closed_surfaces, compiled_census, empty_census, small_census, use_census
 from .configurations import configuration_histogram
 from .connectivity import resolve_connectivity
 from .indices import (
@@ -230,6 +230,8 @@ def _census(vol, conn: int, surfaces: bool, compiled: bool) -> dict | None:
     :func:`~isoflow.digital.closed_surfaces.use_census`), or from one
     configuration array and its labellings (``vol`` then 0/1 bytes); None
     where the passes go one by one."""
+    if vol.size == 0 and vol.ndim == 3 and isinstance(vol, np.ndarray):
+        return empty_census(vol.shape)
     if compiled:
         return compiled_census(vol, conn, surfaces)
     if vol.ndim == 3 and surfaces and isinstance(vol, np.ndarray):

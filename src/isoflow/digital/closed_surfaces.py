@@ -64,7 +64,7 @@ from ..errors import IsoflowError
 from ..scale.arrays import binary, refuse_object
 from ..scale.compiled import Method, thread_count, use_compiled
 from ..scale.memory import check_fits
-from .configurations import configurations
+from .configurations import configurations, empty_histogram
 from .connectivity import check_connectivity, resolve_connectivity
 from .measures import extent_of_rows
 from .report import SurfaceCensus
@@ -192,8 +192,11 @@ def closed_surfaces(volume: ArrayLike, connectivity: int | np.integer | None = 6
     if vol.ndim != 3:
         raise IsoflowError(f"closed_surfaces needs a 3D volume, got a {vol.ndim}D array")
     connectivity = resolve_connectivity(3, connectivity)  # as an int
-    compiled = use_census(vol, method=method, record=True)
-    census = compiled_census(vol, connectivity) if compiled else small_census(vol, connectivity)
+    if vol.size == 0:
+        census = empty_census(vol.shape)
+    else:
+        compiled = use_census(vol, method=method, record=True)
+        census = compiled_census(vol, connectivity) if compiled else small_census(vol, connectivity)
     return SurfaceCensus(surfaces=census["surfaces"], pinched_vertices=census["pinched_vertices"],
                          doubled_edges=census["doubled_edges"], hist=census["hist"],
                          betti_counts=tuple(census["betti_counts"]))
@@ -472,6 +475,31 @@ def _pair_keys(obj: np.ndarray, bg: np.ndarray, quarter: np.ndarray, lo_o: int, 
     key *= QUARTER_SPAN
     key += quarter
     return key
+
+
+def empty_census(shape: tuple[int, ...]) -> dict:
+    """What :func:`compiled_census` gives for a volume of no voxel (an axis
+    of length 0), without the padded copies its passes make.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The volume's shape (3 axes, one of them 0).
+
+    Returns
+    -------
+    dict
+        No surfaces, pinches, doubled edges or components; the histogram
+        of an all-background volume of ``shape``; extent None.
+
+    Examples
+    --------
+    >>> c = empty_census((0, 2, 2))
+    >>> c["surfaces"], c["betti_counts"], int(c["hist"][0])
+    ([], (0, 0), 9)
+    """
+    return {"surfaces": [], "pinched_vertices": 0, "doubled_edges": 0, "hist": empty_histogram(shape),
+            "betti_counts": (0, 0), "extent": None}
 
 
 def compiled_census(vol: np.ndarray, conn: int, surfaces: bool = True) -> dict:

@@ -243,6 +243,34 @@ def configurations_at(volume: np.ndarray, vertices: ArrayLike) -> np.ndarray:
     return code
 
 
+def empty_histogram(shape: Sequence[int]) -> np.ndarray:
+    """The configuration histogram of an all-background volume of ``shape``.
+
+    Every vertex of the padded grid, ``prod(s + 1)`` of them, sees
+    configuration 0; the volume need not exist, so an empty one (an axis
+    of length 0) is answered without a pass.
+
+    Parameters
+    ----------
+    shape : sequence of int
+        The volume's shape, 1 to 4 axes.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``2^(2^n)`` int64 counts, all in configuration 0.
+
+    Examples
+    --------
+    >>> h = empty_histogram((0, 3, 4))
+    >>> int(h[0]), int(h[1:].sum()), len(h)
+    (20, 0, 256)
+    """
+    hist = np.zeros(1 << (1 << len(shape)), dtype=np.int64)
+    hist[0] = math.prod(int(s) + 1 for s in shape)
+    return hist
+
+
 def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = None, method: Method = "auto") -> np.ndarray:
     """How many vertices have each configuration: the counts behind eq. 4.9.
 
@@ -288,6 +316,10 @@ def configuration_histogram(volume: ArrayLike, slab: int | np.integer | None = N
         raise IsoflowError(f"slab must be an integer >= 1, got {given_text(slab)}")
     xp, v = arrays.as_volume(volume, dims=DIMENSIONS)
     size = 1 << (1 << v.ndim)
+    if v.size == 0:
+        # no voxel: no padded copy of a volume that may be empty along one
+        # axis only, and long along the others
+        return empty_histogram(v.shape)
     if use_compiled(v, method=method, record=v.ndim == 3) and v.ndim == 3:
         from ..scale.kernels import histogram3d
 

@@ -12,9 +12,11 @@ the report and the flow; the surface writers refuse such a placement
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import warn
 
@@ -263,3 +265,58 @@ def unheld_columns(table: dict, origin, spacing, shape: Sequence[int]) -> dict:
         for key in (f"bbox-{axis}", f"bbox-{axis + n}", f"centroid-{axis}") if lost[axis] else ():
             table[key] = np.full(len(table[key]), np.nan)
     return table
+
+
+def scaled_counts(counts: ArrayLike, factors: ArrayLike) -> np.ndarray:
+    """``counts * prod(factors)`` in float64, the product kept as a mantissa
+    and a power of two so that it neither underflows nor overflows on the
+    way: a value that float64 holds is given, however small or large each
+    factor (voxels of 1e-200 x 1e-200 x 1e200 have a volume of 1e-200,
+    which ``np.prod`` makes 0). A value past float64 is inf, one below its
+    smallest number (about 4.9e-324) is 0.
+
+    Parameters
+    ----------
+    counts : array_like of int
+        Voxels, faces: how many cells of the product.
+    factors : array_like of float
+        The voxel size along the axes that the cells span.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, of ``counts``'s shape.
+
+    Examples
+    --------
+    >>> tiny, huge = 2.0**-700, 2.0**700
+    >>> float(scaled_counts(8, [tiny, tiny, huge])) == 8 * tiny, float(np.prod([tiny, tiny, huge]))
+    (True, 0.0)
+    >>> float(scaled_counts(1, [1e-200] * 3)), float(scaled_counts(1, [1e150] * 3))
+    (0.0, inf)
+    """
+    mantissa, exponent = 1.0, 0
+    for factor in np.asarray(factors, np.float64).ravel().tolist():
+        m, e = math.frexp(factor)
+        mantissa, shift = math.frexp(mantissa * m)
+        exponent += e + shift
+    # ldexp rounds once where the result is subnormal, inf past float64: no
+    # NumPy warning on the user's terminal, the callers say what was lost
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(np.asarray(counts, np.float64) * mantissa, exponent)
+
+
+def underflow_line(what: str, spacing: ArrayLike) -> str:
+    """The warning that ``what`` (a volume, an area) of cells of this voxel
+    size is below float64's smallest number, and so given as 0.
+
+    Examples
+    --------
+    >>> underflow_line("the volume", [1e-200] * 3)
+    "the volume is below float64's smallest number (4.9e-324) at voxel size (1e-200, 1e-200, 1e-200): \
+given as 0; give the voxel size in a larger unit (pitch=, --pitch)"
+    """
+    size = ", ".join(f"{float(x):.6g}" for x in np.asarray(spacing, np.float64).ravel())
+    verb = "are" if " and " in what or what.split(" of ")[0].endswith("s") else "is"
+    return (f"{what} {verb} below float64's smallest number (4.9e-324) at voxel size ({size}): given as 0; give the "
+            f"voxel size in a larger unit (pitch=, --pitch)")

@@ -42,13 +42,13 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..errors import IsoflowError, check_switch, given_text, scalar_given
+from ..errors import IsoflowError, check_switch, given_text, scalar_given, warn
 from ..results import fields_repr, same_fields
 from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_object
 from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
-from .float64 import unheld_columns
+from .float64 import scaled_counts, underflow_line, unheld_columns
 from .frames import space_given
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
@@ -1239,15 +1239,23 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     """The table's columns (see :func:`label_table`) from the rows' sums."""
     voxels = found["voxels"]
     features = found["features"]
-    # a voxel size of 1e150 (or 1e-150) makes volumes and areas past
-    # float64: inf (or 0) in the float columns, not a NumPy warning on
-    # the user's terminal
-    with np.errstate(over="ignore", under="ignore"):
-        out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
-                                      "volume": voxels * float(np.prod(spacing))}
-        faces = features[:, _FACES] // 4
-        out["surface_area"] = faces @ np.array([spacing[1] * spacing[2], spacing[0] * spacing[2],
-                                                spacing[0] * spacing[1]])
+    # a voxel size of 1e150 makes volumes and areas past float64: inf in
+    # the float columns, not a NumPy warning on the user's terminal; the
+    # products are formed so that a value float64 holds is given whatever
+    # the voxel size, and one below its smallest number is 0 with a warning
+    out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
+                                  "volume": scaled_counts(voxels, spacing)}
+    faces = features[:, _FACES] // 4
+    with np.errstate(over="ignore"):
+        area = scaled_counts(faces[:, 0], spacing[1:])
+        for axis in (1, 2):  # in the order analyze sums them: the two agree to the last bit
+            area = area + scaled_counts(faces[:, axis], np.delete(spacing, axis))
+        out["surface_area"] = area
+    lost = [what for what, values, counts in (("volumes", out["volume"], voxels),
+                                              ("surface areas", out["surface_area"], faces.sum(axis=1)))
+            if bool(((values == 0) & (counts > 0)).any())]
+    if lost:
+        warn(underflow_line(f"the {' and the '.join(lost)} of labels", spacing))
     present = voxels > 0
     every = bool(present.all())  # the rows of labels that occur, the common case: no NaN to put in
 

@@ -31,9 +31,10 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..errors import warn
 from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
-from .float64 import held, lost_axes
+from .float64 import held, lost_axes, scaled_counts, underflow_line
 
 #: what a far placement's warning says float64 cannot hold of a report
 BOX_AND_CENTROID = "the bounding box and centroid"
@@ -201,16 +202,23 @@ def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Ext
         return {}
     size, boundary = MEASURE_NAMES[ndim]
     spacing = np.asarray(spacing, np.float64)
-    # a voxel size of 1e150 (or 1e-150) puts a volume past float64: inf
-    # (or 0), as the label table's columns, without a NumPy warning on the
-    # user's terminal (``info --json`` writes inf as null)
+    # a voxel size of 1e150 puts a volume past float64: inf, as the label
+    # table's columns, without a NumPy warning on the user's terminal
+    # (``info --json`` writes inf as null); the products are formed so that
+    # a measure float64 holds is given whatever the voxel size, and one
+    # below its smallest number is 0 with a warning, not silently
+    faces = np.asarray(faces, np.int64)
+    measure = float(scaled_counts(voxels, spacing))
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        areas = np.array([np.prod(np.delete(spacing, axis)) for axis in range(ndim)])
-        out: dict = {size: voxels * float(np.prod(spacing)), boundary: float(np.asarray(faces, np.int64) @ areas),
-                     "bbox": None, "centroid": None, "unit": unit}
+        border = float(sum(scaled_counts(faces[axis], np.delete(spacing, axis)) for axis in range(ndim)))
+        out: dict = {size: measure, boundary: border, "bbox": None, "centroid": None, "unit": unit}
         if extent is not None:
             out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()
             out["centroid"] = (corner + spacing * (extent.sums / voxels + 0.5)).tolist()
+    lost = [what for what, value, count in ((size, measure, voxels), (boundary, border, faces.sum()))
+            if value == 0 and count > 0]
+    if lost:
+        warn(underflow_line(f"the {' and the '.join(lost).replace('_', ' ')}", spacing))
     if out["bbox"] is not None and shape is not None:
         out["bbox"], out["centroid"] = unheld_dropped([out["bbox"], out["centroid"]], BOX_AND_CENTROID, corner,
                                                       spacing, shape)

@@ -27,7 +27,9 @@ from typing import Literal, cast
 
 import numpy as np
 
+from ..errors import warn
 from ..scale.memory import check_fits
+from .float64 import scaled_counts, underflow_line
 from .indices import NOT_WELL_COMPOSED, PLANAR_LABELS, euler_lut, planar_class_lut
 
 #: the columns of a 2D table, in order ("bbox", "centroid" and "n" stand for
@@ -105,13 +107,18 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
         rows = np.where(values[at] == wanted, at + 1, 0)  # row 0: an absent label's zeros
         labels = np.asarray(wanted, dtype=values.dtype)
     chi = features[:, 0] // 4
-    # a pixel size of 1e200 (or 1e-200) makes areas and perimeters past
-    # float64: inf (or 0) in the float columns, as a 3D table's volumes,
-    # not a NumPy warning on the user's terminal
+    # a pixel size of 1e200 makes areas and perimeters past float64: inf
+    # in the float columns, as a 3D table's volumes, not a NumPy warning on
+    # the user's terminal; an area below float64's smallest number is 0
+    # with a warning, as a 3D table's volume
     with np.errstate(over="ignore", under="ignore"):
         out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
-                                      "area": counts[rows] * float(spacing[0] * spacing[1]),
-                                      "perimeter": edges[rows] @ np.array([spacing[1], spacing[0]])}
+                                      "area": scaled_counts(counts[rows], spacing),
+                                      # summed as analyze sums them, so that the two agree to the last bit
+                                      "perimeter": sum(scaled_counts(edges[rows][:, axis], np.delete(spacing, axis))
+                                                       for axis in range(2))}
+    if bool(((out["area"] == 0) & (out["voxels"] > 0)).any()):
+        warn(underflow_line("the areas of labels", spacing))
     present = counts[rows] > 0
     # an absent label's box is NaN (0 / 0), and a corner past float64 (an
     # origin near 1.8e308) is inf, as ``analyze`` gives it, not a NumPy warning

@@ -601,6 +601,8 @@ def boundary_mesh(volume: ArrayLike, connectivity: int | np.integer | None = 6, 
     # object; the bit rows read any nonzero byte of a bool array as set, so
     # only the NumPy faces need its bytes made 0/1
     vol = binary(vol, canonical=how == "numpy")
+    if vol.size == 0:
+        return _empty_mesh(connectivity)  # no voxel: no padded copy of the long axes
     if how == "compiled":
         return _mesh_from_rows(vol, connectivity)
     return _mesh_numpy(vol, connectivity)

@@ -257,16 +257,21 @@ def betti_numbers(volume: ArrayLike, connectivity: int | np.integer | None = Non
             raise IsoflowError(f"chi={chi} is not this volume's Euler characteristic ({counted(runs, 'run')}); "
                                "leave chi out to compute it")
         return [runs]
-    # the volume is checked once here; one host copy where the library cannot label
-    xp, v, label = _labeller(xp, v, method)
-    method = _chosen(v, method)  # (a device volume copied to the host)
-    if use_compiled(v, method=method):
-        from ..scale.kernels import count_object_and_enclosed
-
-        b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))
+    if v.size == 0:
+        # no voxel and no cell of background inside: nothing to label (the
+        # labellers pad the volume, which may be long along its other axes)
+        b0 = enclosed = 0
     else:
-        b0 = _count_components(xp, v, label, conn, method)
-        enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn), method)
+        # the volume is checked once here; one host copy where the library cannot label
+        xp, v, label = _labeller(xp, v, method)
+        method = _chosen(v, method)  # (a device volume copied to the host)
+        if use_compiled(v, method=method):
+            from ..scale.kernels import count_object_and_enclosed
+
+            b0, enclosed = count_object_and_enclosed(v, conn, complement(v.ndim, conn))
+        else:
+            b0 = _count_components(xp, v, label, conn, method)
+            enclosed = _count_enclosed(xp, v, label, complement(v.ndim, conn), method)
     if v.ndim == 4:
         return [b0, None, None, enclosed]
     # a ``chi`` given that is not the volume's: in 2D chi = b0 - b1 exactly,

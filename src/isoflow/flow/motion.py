@@ -209,5 +209,10 @@ def flow_step(obj: DigitalObject | ArrayLike, connectivity: int | np.integer | N
     True
     """
     obj = DigitalObject.of(obj)
+    if obj.volume.size == 0:
+        # no voxel, so no vertex that stays: the empty object on the other
+        # lattice, without the configurations of a volume long along its other axes
+        flow_connectivity(obj.ndim, connectivity)  # refused as for any object
+        return obj.on_dual_lattice().cropped()
     cfg, keep = flow_moves(obj, connectivity)
     return obj.on_dual_lattice(read_only(keep)).cropped()  # handed over: no copy

@@ -623,23 +623,24 @@ def check_time(time, shape, where: str) -> int:
 
 
 def one_time_point_labels(path: str | os.PathLike) -> str:
-    """The end of the refusal of a 4D label image (a time series, read as
-    x, y, z, t): how to take one time point, in Python and as a 3D file
-    that every command reads.
+    """The end of the refusal of a 4D label image (read as x, y, z, t; its
+    4th axis time points or channels, which a .npy or TIFF does not say):
+    how to take one entry of it, in Python and as a 3D file that every
+    command reads.
 
     Examples
     --------
     >>> print(one_time_point_labels("cells.zarr"))  # doctest: +NORMALIZE_WHITESPACE
-     (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save it as 3D and
-     give that: python -c 'import isoflow; isoflow.write_labels(isoflow.read_labels("cells.zarr", time=0),
+     (a 4th axis of time points or channels, read as x, y, z, t): read one entry with read_labels(path, time=0),
+     or save it as 3D and give that: python -c 'import isoflow; isoflow.write_labels(isoflow.read_labels("cells.zarr", time=0),
      "t0.npz")'
     """
     import json
     import shlex
 
     code = f'import isoflow; isoflow.write_labels(isoflow.read_labels({json.dumps(str(path))}, time=0), "t0.npz")'
-    return (f" (a time series, read as x, y, z, t): read one time point with read_labels(path, time=0), or save "
-            f"it as 3D and give that: python -c {shlex.quote(code)}")
+    return (f" (a 4th axis of time points or channels, read as x, y, z, t): read one entry with read_labels(path, "
+            f"time=0), or save it as 3D and give that: python -c {shlex.quote(code)}")
 
 
 def check_label(label, dtype, where: str) -> int | float:
