@@ -295,15 +295,64 @@ def scaled_counts(counts: ArrayLike, factors: ArrayLike) -> np.ndarray:
     >>> float(scaled_counts(1, [1e-200] * 3)), float(scaled_counts(1, [1e150] * 3))
     (0.0, inf)
     """
+    mantissa, exponent = _scale(factors)
+    # ldexp rounds once where the result is subnormal, inf past float64: no
+    # NumPy warning on the user's terminal, the callers say what was lost
+    with np.errstate(over="ignore", under="ignore"):
+        return np.ldexp(np.asarray(counts, np.float64) * mantissa, exponent)
+
+
+def _scale(factors) -> tuple[float, int]:
+    """The product of ``factors`` as (mantissa, power of two), rounded as
+    ``np.prod`` rounds it where that neither underflows nor overflows."""
     mantissa, exponent = 1.0, 0
     for factor in np.asarray(factors, np.float64).ravel().tolist():
         m, e = math.frexp(factor)
         mantissa, shift = math.frexp(mantissa * m)
         exponent += e + shift
-    # ldexp rounds once where the result is subnormal, inf past float64: no
-    # NumPy warning on the user's terminal, the callers say what was lost
-    with np.errstate(over="ignore", under="ignore"):
-        return np.ldexp(np.asarray(counts, np.float64) * mantissa, exponent)
+    return mantissa, exponent
+
+
+def scaled_faces(faces: ArrayLike, spacing: ArrayLike) -> np.ndarray:
+    """The boundary measure (area in 3D, perimeter in 2D) of ``faces``
+    counted per normal axis (last axis of ``faces``): each axis's count
+    times the product of the voxel size along the other axes, as
+    :func:`scaled_counts` forms it. Axes whose faces are of one size (all
+    of them, for cubic voxels) are counted together before the one
+    product, so that 54 faces of a cube are ``54 * s * s`` exactly, not
+    three products of 18 added up with two roundings more.
+
+    Parameters
+    ----------
+    faces : array_like of int
+        Face counts, the last axis one entry per normal axis.
+    spacing : array_like of float
+        The voxel size per axis.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64, of ``faces``'s shape without its last axis.
+
+    Examples
+    --------
+    >>> s = 1e150
+    >>> float(scaled_faces([18, 18, 18], [s, s, s])) == 54 * (s * s)
+    True
+    >>> scaled_faces([[2, 4, 6]], [1.0, 2.0, 3.0]).tolist()  # 2*6 + 4*3 + 6*2
+    [36.0]
+    """
+    faces = np.asarray(faces, np.int64)
+    spacing = np.asarray(spacing, np.float64)
+    groups: dict[tuple[float, int], np.ndarray] = {}  # a face's size -> the faces of that size, in axis order
+    for axis in range(faces.shape[-1]):
+        key = _scale(np.delete(spacing, axis))
+        groups[key] = groups[key] + faces[..., axis] if key in groups else faces[..., axis]
+    total = np.zeros(faces.shape[:-1], np.float64)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        for (mantissa, exponent), count in groups.items():
+            total = total + np.ldexp(np.asarray(count, np.float64) * mantissa, exponent)
+    return total
 
 
 def underflow_line(what: str, spacing: ArrayLike) -> str:

@@ -48,7 +48,7 @@ from ..scale.arrays import FILL_READ, FILL_ZERO, as_array, fill_as, refuse_objec
 from ..scale.memory import check_fits
 from .closed_surfaces import sweep_tables, use_census
 from .connectivity import check_connectivity, resolve_connectivity
-from .float64 import scaled_counts, underflow_line, unheld_columns
+from .float64 import scaled_counts, scaled_faces, underflow_line, unheld_columns
 from .frames import space_given
 from .indices import NOT_WELL_COMPOSED, a_lut, class_lut, euler_lut
 from .lattice import DigitalObject
@@ -1246,11 +1246,8 @@ def columns(found: dict, spacing: np.ndarray, origin: np.ndarray, surfaces: bool
     out: dict[str, np.ndarray] = {"label": found["label"], "voxels": voxels,
                                   "volume": scaled_counts(voxels, spacing)}
     faces = features[:, _FACES] // 4
-    with np.errstate(over="ignore"):
-        area = scaled_counts(faces[:, 0], spacing[1:])
-        for axis in (1, 2):  # in the order analyze sums them: the two agree to the last bit
-            area = area + scaled_counts(faces[:, axis], np.delete(spacing, axis))
-        out["surface_area"] = area
+    # as analyze sums them (scaled_faces): the two agree to the last bit
+    out["surface_area"] = scaled_faces(faces, spacing)
     lost = [what for what, values, counts in (("volumes", out["volume"], voxels),
                                               ("surface areas", out["surface_area"], faces.sum(axis=1)))
             if bool(((values == 0) & (counts > 0)).any())]

@@ -34,7 +34,7 @@ import numpy as np
 from ..errors import warn
 from ..scale.arrays import is_host, namespace, to_host
 from .configurations import octants
-from .float64 import held, lost_axes, scaled_counts, underflow_line
+from .float64 import held, lost_axes, scaled_counts, scaled_faces, underflow_line
 
 #: what a far placement's warning says float64 cannot hold of a report
 BOX_AND_CENTROID = "the bounding box and centroid"
@@ -210,7 +210,7 @@ def world_measures(ndim: int, voxels: int, faces: np.ndarray | None, extent: Ext
     faces = np.asarray(faces, np.int64)
     measure = float(scaled_counts(voxels, spacing))
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-        border = float(sum(scaled_counts(faces[axis], np.delete(spacing, axis)) for axis in range(ndim)))
+        border = float(scaled_faces(faces, spacing))
         out: dict = {size: measure, boundary: border, "bbox": None, "centroid": None, "unit": unit}
         if extent is not None:
             out["bbox"] = (corner + spacing * extent.lo).tolist() + (corner + spacing * (extent.hi + 1)).tolist()

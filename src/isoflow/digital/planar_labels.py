@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import warn
 from ..scale.memory import check_fits
-from .float64 import scaled_counts, underflow_line
+from .float64 import scaled_counts, scaled_faces, underflow_line
 from .indices import NOT_WELL_COMPOSED, PLANAR_LABELS, euler_lut, planar_class_lut
 
 #: the columns of a 2D table, in order ("bbox", "centroid" and "n" stand for
@@ -115,8 +115,7 @@ def planar_table(image: np.ndarray, conn: int, spacing: np.ndarray, origin: np.n
         out: dict[str, np.ndarray] = {"label": labels, "voxels": counts[rows],
                                       "area": scaled_counts(counts[rows], spacing),
                                       # summed as analyze sums them, so that the two agree to the last bit
-                                      "perimeter": sum(scaled_counts(edges[rows][:, axis], np.delete(spacing, axis))
-                                                       for axis in range(2))}
+                                      "perimeter": scaled_faces(edges[rows], spacing)}
     if bool(((out["area"] == 0) & (out["voxels"] > 0)).any()):
         warn(underflow_line("the areas of labels", spacing))
     present = counts[rows] > 0
