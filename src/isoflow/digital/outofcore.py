@@ -280,7 +280,7 @@ def _finish(ndim: int, conn: int, shape, surfaces: bool, merged, place: tuple, a
 # --------------------------------------------------------------------------
 
 
-def _checked(array, where: str | None) -> tuple[tuple[int, ...], str]:
+def _checked(array, where: str | os.PathLike | None) -> tuple[tuple[int, ...], str]:
     """The shape of a dask or zarr array fit for the report, and the name
     of the input in messages; one-line errors for anything else."""
     is_zarr = is_zarr_array(array)
@@ -697,7 +697,7 @@ def analyze_chunked(
     *,
     block_shape: tuple[int | np.integer, ...] | None = None,
     scheduler: Callable | None = None,
-    where: str | None = None,
+    where: str | os.PathLike | None = None,
     progress: Callable[[int, int], object] | None = None,
     surfaces: bool = True,
     threads: int | np.integer | None = None,
@@ -726,7 +726,7 @@ def analyze_chunked(
         ``dask.distributed`` client's ``get`` runs them on its workers, a
         ``concurrent.futures`` executor on its own. Anything else is
         refused naming it.
-    where : str, optional
+    where : str or os.PathLike, optional
         The input's name in error messages (a path is taken as its text;
         anything else is refused).
     progress : callable, optional
