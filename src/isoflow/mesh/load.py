@@ -546,6 +546,10 @@ def _lines_in(data: bytes, kind: str, where: str) -> int:
     trimesh names it (``obj``, ``ply``): an archive's member too."""
     try:
         if kind == "obj":
+            # every OBJ trimesh reads is looked at for the note: a byte search
+            # first, the line pattern only where a line may begin with l
+            if not data.startswith(b"l") and b"\nl" not in data:
+                return 0
             return len(re.findall(rb"^l\s", data, flags=re.M))
         if kind == "ply":
             from .ply import header_elements
