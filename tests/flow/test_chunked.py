@@ -166,6 +166,20 @@ def test_slabs_are_thinned_to_fit_the_memory_budget(monkeypatch):
     assert slab_thickness((10, 4000, 4000), None, 1) >= 1
 
 
+def slab_refusals(monkeypatch, shape, workers, budgets):
+    """The refusal of ``slab_thickness(shape, None, workers)`` under each
+    memory budget (bytes) that refuses it, the budget still set while the
+    caller looks at the message."""
+    from isoflow.scale import memory
+
+    for budget in np.asarray(budgets).astype(int):
+        monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
+        try:
+            slab_thickness(shape, None, workers)
+        except IsoflowError as err:
+            yield str(err)
+
+
 @pytest.mark.parametrize("shape", [(100, 1023, 1023), (10, 4000, 4000), (20, 200, 200)])
 def test_the_workers_a_slab_refusal_names_flow(monkeypatch, shape):
     """A slab refusal named the workers whose slabs of one layer fit
@@ -178,17 +192,10 @@ def test_the_workers_a_slab_refusal_names_flow(monkeypatch, shape):
     without a refusal at one thread."""
     import re
 
-    from isoflow.scale import memory
 
     layer = (shape[1] + 1) * (shape[2] + 1)
     named = set()
-    for budget in np.geomspace(layer, 40 * layer, 60).astype(int):
-        monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
-        try:
-            slab_thickness(shape, None, 4)
-            continue
-        except IsoflowError as err:
-            message = str(err)
+    for message in slab_refusals(monkeypatch, shape, 4, np.geomspace(layer, 40 * layer, 60)):
         fit = re.search(r"\(--threads (\d+), workers=\1\)", message)
         if fit is None:
             alone = re.search(r", or (\d+) x \1 at --threads 1, workers=1$", message)
@@ -670,17 +677,10 @@ def test_a_narrow_cross_section_is_cropped_along_its_long_side(monkeypatch):
     without a refusal."""
     import re
 
-    from isoflow.scale import memory
 
     shape = (20, 40, 3000)
     named = []
-    for budget in np.geomspace(1_000_000, 4_000_000, 12).astype(int):
-        monkeypatch.setattr(memory, "default_budget", lambda b=budget: int(b))
-        try:
-            slab_thickness(shape, None, 1)
-            continue
-        except IsoflowError as err:
-            message = str(err)
+    for message in slab_refusals(monkeypatch, shape, 1, np.geomspace(1_000_000, 4_000_000, 12)):
         found = re.search(r"crop the volume across x to (\d+) x (\d+) voxels or less", message)
         if found is None:
             continue
